@@ -1,0 +1,563 @@
+"""Mechanism file reader and validator (CONTRACT §1, `format = 1`).
+
+`load(path)` returns an immutable :class:`Mechanism` or raises :class:`InputError` naming the file,
+the line, the entry and the fix. Nothing in the file is executed: TOML is parsed by `tomllib` and
+expression strings by the whitelist parser of :mod:`symkin.expressions`.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import re
+import tomllib
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import sympy as sp
+
+from . import expressions
+from .errors import InputError, suggest
+from .hinge_models import HINGE_KEYS, MODEL_KEYS, MODELS, PRBM_PRESETS, ModelParameter
+
+FORMAT = 1
+TOP_KEYS = ("format", "name", "ground", "chords", "basic_chain", "parameters", "defaults",
+            "link", "hinge", "point")
+LINK_KEYS = ("name",)
+POINT_KEYS = ("name", "link", "at")
+DEFAULT_KEYS = tuple(k for k in HINGE_KEYS if k not in ("name", "links", "at")) + MODEL_KEYS
+DEFAULT_MODEL = "circular_arc"
+THETA = sp.Symbol("theta", real=True)
+PLATE_LENGTH = sp.Symbol("l", positive=True)
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """A named symbol; `expr` is its default in terms of earlier parameters, `value` that number."""
+
+    name: str
+    symbol: sp.Symbol
+    expr: sp.Expr
+    value: sp.Expr
+    line: int | None = None
+
+
+@dataclass(frozen=True)
+class Link:
+    name: str
+    index: int                      # position among the file's [[link]] entries
+    line: int | None = None
+
+
+@dataclass(frozen=True)
+class Hinge:
+    """A flexure hinge joining links[0] = P and links[1] = M (the plate runs from P to M)."""
+
+    name: str
+    index: int
+    links: tuple[str, str]
+    at: tuple[sp.Expr, sp.Expr]
+    plate_angle: sp.Expr
+    length: sp.Expr
+    model: str
+    model_params: tuple[tuple[str, object], ...] = ()
+    input: bool = False
+    line: int | None = None
+
+    def param(self, key: str, default: object = None) -> object:
+        return dict(self.model_params).get(key, default)
+
+
+@dataclass(frozen=True)
+class Point:
+    name: str
+    index: int
+    link: str
+    at: tuple[sp.Expr, sp.Expr]
+    line: int | None = None
+
+
+@dataclass(frozen=True)
+class Mechanism:
+    """A validated mechanism file: names, exact numbers and sympy expressions, in file order."""
+
+    path: str
+    name: str
+    ground: str
+    parameters: tuple[Parameter, ...]
+    links: tuple[Link, ...]
+    hinges: tuple[Hinge, ...]
+    points: tuple[Point, ...]
+    chords: tuple[str, ...] | None = None
+    basic_chain: tuple[str, ...] | None = None
+    _index: dict = field(default_factory=dict, repr=False, compare=False)
+
+    @property
+    def inputs(self) -> tuple[str, ...]:
+        """Names of the input hinges (generalized coordinates), in file order."""
+        return tuple(h.name for h in self.hinges if h.input)
+
+    @property
+    def mobility(self) -> int:
+        """Grübler mobility 3n - 2m (n moving links, m revolute hinges)."""
+        return 3 * (len(self.links) - 1) - 2 * len(self.hinges)
+
+    @property
+    def loop_count(self) -> int:
+        """Number of independent loops m - n."""
+        return len(self.hinges) - (len(self.links) - 1)
+
+    @property
+    def defaults(self) -> dict[sp.Symbol, sp.Expr]:
+        """Exact default value of every parameter symbol."""
+        return {p.symbol: p.value for p in self.parameters}
+
+    def hinge(self, name: str) -> Hinge:
+        return next(h for h in self.hinges if h.name == name)
+
+    def link(self, name: str) -> Link:
+        return next(lk for lk in self.links if lk.name == name)
+
+    def point(self, name: str) -> Point:
+        return next(p for p in self.points if p.name == name)
+
+
+def load(path: str | Path) -> Mechanism:
+    """Read and validate a mechanism file; raise InputError (exit 2) on anything wrong with it."""
+    path = Path(path)
+    shown = str(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise InputError(f"cannot read the file ({exc.strerror or exc})", file=shown,
+                         hint="check the path") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise InputError(f"not UTF-8 text (byte {exc.start})", file=shown,
+                         hint="save the file as UTF-8") from None
+    return loads(text, shown, base_dir=path.parent)
+
+
+def loads(text: str, file: str = "<string>", base_dir: Path | None = None) -> Mechanism:
+    """Validate a mechanism given as TOML text; `file` is the name used in error messages."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        line = _line_from_toml_error(str(exc))
+        raise InputError(f"TOML syntax error: {exc}", file=file, line=line,
+                         hint="fix the TOML syntax at that line") from None
+    return _Reader(text, file, base_dir or Path(".")).read(data)
+
+
+def _line_from_toml_error(message: str) -> int | None:
+    match = re.search(r"line (\d+)", message)
+    return int(match.group(1)) if match else None
+
+
+class _Locator:
+    """Finds the line of an entry in the TOML text (tomllib keeps no positions)."""
+
+    def __init__(self, text: str) -> None:
+        self.lines = text.splitlines()
+
+    def header(self, array: str, index: int) -> int | None:
+        pattern = re.compile(r"\s*\[\[\s*" + re.escape(array) + r"\s*\]\]")
+        hits = [i + 1 for i, line in enumerate(self.lines) if pattern.match(line)]
+        return hits[index] if index < len(hits) else None
+
+    def key(self, key: str, table: str | None = None, after: int | None = None) -> int | None:
+        start = after or 0
+        if table is not None:
+            pattern = re.compile(r"\s*\[\s*" + re.escape(table) + r"\s*\]")
+            start = next((i + 1 for i, line in enumerate(self.lines) if pattern.match(line)), 0)
+        keypat = re.compile(r"\s*[\"']?" + re.escape(key) + r"[\"']?\s*=")
+        for i in range(start, len(self.lines)):
+            if i > start and table is not None and self.lines[i].lstrip().startswith("["):
+                break
+            if keypat.match(self.lines[i]):
+                return i + 1
+        return None
+
+
+class _Reader:
+    """One pass over the parsed TOML, building the Mechanism and raising on the first problem."""
+
+    def __init__(self, text: str, file: str, base_dir: Path) -> None:
+        self.file = file
+        self.base_dir = base_dir
+        self.where = _Locator(text)
+        self.names: dict[str, sp.Expr] = {}
+        self.defaults: dict[sp.Symbol, sp.Expr] = {}
+
+    # -- helpers -------------------------------------------------------------------------------
+    def error(self, message: str, entry: str | None = None, line: int | None = None,
+              hint: str | None = None) -> InputError:
+        return InputError(message, file=self.file, line=line, entry=entry, hint=hint)
+
+    def check_keys(self, table: Mapping, allowed: Sequence[str], entry: str,
+                   line: int | None) -> None:
+        for key in table:
+            if key not in allowed:
+                near = suggest(key, allowed)
+                raise self.error(f"unknown key '{key}'", entry, line,
+                                 near or "allowed keys: " + ", ".join(allowed))
+
+    def expr(self, value: object, entry: str, key: str, line: int | None,
+             names: Mapping[str, sp.Expr] | None = None) -> sp.Expr:
+        """A number or an expression string, as an exact sympy expression."""
+        try:
+            if isinstance(value, str):
+                return expressions.parse(value, self.names if names is None else names)
+            return expressions.number(value)  # type: ignore[arg-type]
+        except expressions.ExpressionError as exc:
+            raise self.error(f"'{key}': {exc}", entry, line,
+                             "use a number or an expression over the parameters") from None
+
+    def finite(self, expr: sp.Expr, entry: str, key: str, line: int | None) -> sp.Expr:
+        """Check that `expr` evaluates to a finite real number with the default parameters."""
+        value = sp.N(expr.subs(self.defaults), 30)
+        if not (value.is_real and value.is_finite):
+            raise self.error(f"'{key}' evaluates to {value}, not a finite real number", entry,
+                             line, "change the expression or the parameters it uses")
+        return value
+
+    def text(self, table: Mapping, key: str, entry: str, line: int | None,
+             required: bool = True) -> str | None:
+        if key not in table:
+            if required:
+                raise self.error(f"missing required key '{key}'", entry, line,
+                                 f"add {key} = \"...\"")
+            return None
+        value = table[key]
+        if not isinstance(value, str) or not value.strip():
+            raise self.error(f"'{key}' must be a non-empty string, got {value!r}", entry, line)
+        return value
+
+    def array_of_tables(self, data: Mapping, key: str) -> list[Mapping]:
+        value = data.get(key, [])
+        if not isinstance(value, list) or not all(isinstance(t, dict) for t in value):
+            raise self.error(f"'{key}' must be an array of tables written as [[{key}]]",
+                             f"[[{key}]]", self.where.key(key))
+        return value
+
+    def unique(self, kind: str, names: list[str], lines: list[int | None]) -> None:
+        seen: dict[str, int] = {}
+        for i, name in enumerate(names):
+            if name in seen:
+                raise self.error(f"duplicate {kind} name '{name}' (also {kind} #{seen[name] + 1})",
+                                 f"[[{kind}]] #{i + 1} '{name}'", lines[i],
+                                 f"give every {kind} its own name")
+            seen[name] = i
+
+    def vector(self, value: object, entry: str, key: str, line: int | None) -> tuple:
+        if not isinstance(value, list) or len(value) != 2:
+            raise self.error(f"'{key}' must be a list of two coordinates [x, y], got {value!r}",
+                             entry, line)
+        vec = tuple(self.expr(v, entry, key, line) for v in value)
+        for v in vec:
+            self.finite(v, entry, key, line)
+        return vec
+
+    # -- the file ------------------------------------------------------------------------------
+    def read(self, data: Mapping) -> Mechanism:
+        self.check_keys(data, TOP_KEYS, "top level", None)
+        fmt = data.get("format")
+        if fmt is None:
+            raise self.error("missing required key 'format'", "top level", None,
+                             f"add 'format = {FORMAT}' as the first line")
+        if fmt != FORMAT or isinstance(fmt, bool):
+            raise self.error(f"unsupported format {fmt!r}", "format", self.where.key("format"),
+                             f"this symkin reads format = {FORMAT}")
+        name = self.text(data, "name", "top level", None)
+        if not expressions.IDENTIFIER.match(name):
+            raise self.error(f"name '{name}' is not identifier-safe", "name",
+                             self.where.key("name"),
+                             "use letters, digits and '_' only, not starting with a digit")
+        parameters = self.parameters(data.get("parameters", {}))
+        defaults = self.hinge_defaults(data.get("defaults", {}))
+        links = self.links(self.array_of_tables(data, "link"))
+        link_names = [lk.name for lk in links]
+        ground = data.get("ground", link_names[0])
+        if not isinstance(ground, str) or ground not in link_names:
+            raise self.error(f"ground {ground!r} is not a [[link]]", "ground",
+                             self.where.key("ground"),
+                             suggest(str(ground), link_names) or "name one of the links")
+        hinges = self.hinges(self.array_of_tables(data, "hinge"), defaults, link_names)
+        points = self.points(self.array_of_tables(data, "point"), link_names)
+        mech = Mechanism(
+            path=self.file, name=name, ground=ground, parameters=parameters, links=links,
+            hinges=hinges, points=points,
+            chords=self.name_list(data, "chords", [h.name for h in hinges], "hinge"),
+            basic_chain=self.name_list(data, "basic_chain", link_names, "link"),
+        )
+        self.check_connected(mech)
+        self.check_mobility(mech)
+        return mech
+
+    def parameters(self, table: object) -> tuple[Parameter, ...]:
+        if not isinstance(table, dict):
+            raise self.error("[parameters] must be a table", "[parameters]", None)
+        out = []
+        for key, value in table.items():
+            line = self.where.key(key, table="parameters")
+            entry = f"[parameters] '{key}'"
+            if not expressions.IDENTIFIER.match(key):
+                raise self.error("parameter names must be identifiers", entry, line,
+                                 "use letters, digits and '_' only, not starting with a digit")
+            if key in expressions.RESERVED:
+                raise self.error(f"'{key}' is a built-in name", entry, line,
+                                 "rename the parameter")
+            expr = self.expr(value, entry, key, line)
+            value_ = self.finite(expr, entry, key, line)
+            symbol = sp.Symbol(key, real=True)
+            exact = expr.subs(self.defaults)
+            out.append(Parameter(key, symbol, expr, exact if exact.is_number else value_, line))
+            self.names[key] = symbol
+            self.defaults[symbol] = out[-1].value
+        return tuple(out)
+
+    def hinge_defaults(self, table: object) -> dict:
+        if not isinstance(table, dict):
+            raise self.error("[defaults] must be a table", "[defaults]", None)
+        self.check_keys(table, DEFAULT_KEYS, "[defaults]", self.where.key("defaults"))
+        return dict(table)
+
+    def links(self, tables: list[Mapping]) -> tuple[Link, ...]:
+        if len(tables) < 2:
+            raise self.error(f"a mechanism needs at least two [[link]] entries, found {len(tables)}",
+                             "[[link]]", None, "add the ground link and the moving links")
+        out = []
+        for i, table in enumerate(tables):
+            line = self.where.header("link", i)
+            entry = f"[[link]] #{i + 1}"
+            self.check_keys(table, LINK_KEYS, entry, line)
+            out.append(Link(self.text(table, "name", entry, line), i, line))
+        self.unique("link", [lk.name for lk in out], [lk.line for lk in out])
+        return tuple(out)
+
+    def hinges(self, tables: list[Mapping], defaults: Mapping,
+               link_names: list[str]) -> tuple[Hinge, ...]:
+        if not tables:
+            raise self.error("a mechanism needs at least one [[hinge]]", "[[hinge]]", None)
+        out = [self.hinge(i, table, defaults, link_names) for i, table in enumerate(tables)]
+        self.unique("hinge", [h.name for h in out], [h.line for h in out])
+        return tuple(out)
+
+    def hinge(self, i: int, table: Mapping, defaults: Mapping, link_names: list[str]) -> Hinge:
+        line = self.where.header("hinge", i)
+        entry = f"[[hinge]] #{i + 1}"
+        name = self.text(table, "name", entry, line)
+        entry = f"[[hinge]] #{i + 1} '{name}'"
+        model = table.get("model", defaults.get("model", DEFAULT_MODEL))
+        if model not in MODELS:
+            raise self.error(f"unknown hinge model {model!r}", entry, line,
+                             suggest(str(model), MODELS) or "models: " + ", ".join(MODELS))
+        spec = MODELS[model]
+        allowed = HINGE_KEYS + tuple(p.name for p in spec.parameters)
+        for key in table:
+            if key not in allowed:
+                if key in MODEL_KEYS:
+                    raise self.error(f"'{key}' is not a parameter of model '{model}'", entry,
+                                     line, f"remove it, or choose a model that takes '{key}'")
+        self.check_keys(table, allowed, entry, line)
+        links = table.get("links")
+        if (not isinstance(links, list) or len(links) != 2
+                or not all(isinstance(x, str) for x in links)):
+            raise self.error("'links' must name the two links it joins, e.g. "
+                             "links = [\"frame\", \"crank\"]", entry, line)
+        for link in links:
+            if link not in link_names:
+                raise self.error(f"links names an unknown link '{link}'", entry, line,
+                                 suggest(link, link_names) or "declare it as a [[link]]")
+        if links[0] == links[1]:
+            raise self.error(f"joins the link '{links[0]}' to itself", entry, line,
+                             "a hinge joins two different links")
+        if "at" not in table:
+            raise self.error("missing required key 'at'", entry, line,
+                             "add at = [x, y], the plate's midpoint in the as-fabricated pose")
+        at = self.vector(table["at"], entry, "at", line)
+        merged = {**defaults, **table}
+        plate_angle = self.expr(merged.get("plate_angle", 0), entry, "plate_angle", line)
+        self.finite(plate_angle, entry, "plate_angle", line)
+        if "length" not in merged:
+            raise self.error("no plate length", entry, line,
+                             "set length in the hinge or in [defaults]")
+        length = self.expr(merged["length"], entry, "length", line)
+        if not self.finite(length, entry, "length", line) > 0:
+            raise self.error(f"plate length must be positive, got {length}", entry, line,
+                             "give the plate a positive length")
+        is_input = merged.get("input", False)
+        if not isinstance(is_input, bool):
+            raise self.error(f"'input' must be true or false, got {is_input!r}", entry, line)
+        params = self.model_params(spec, table, defaults, entry, line, length)
+        return Hinge(name, i, (links[0], links[1]), at, plate_angle, length, model, params,
+                     is_input, line)
+
+    def model_params(self, spec, table: Mapping, defaults: Mapping, entry: str,
+                     line: int | None, length: sp.Expr) -> tuple[tuple[str, object], ...]:
+        values: dict[str, object] = {}
+        given = {k: v for k, v in defaults.items() if spec.parameter(k)}
+        given.update({k: v for k, v in table.items() if spec.parameter(k)})
+        if spec.name == "prbm" and "preset" in given:
+            preset = given["preset"]
+            if preset not in PRBM_PRESETS:
+                raise self.error(f"unknown prbm preset {preset!r}", entry, line,
+                                 "presets: " + ", ".join(sorted(PRBM_PRESETS)))
+            given = {**PRBM_PRESETS[preset], **{k: v for k, v in given.items()
+                                                if k in table or k not in PRBM_PRESETS[preset]}}
+        for p in spec.parameters:
+            if p.name not in given:
+                if p.required:
+                    raise self.error(f"model '{spec.name}' needs '{p.name}'", entry, line,
+                                     f"add {p.name} = ... to the hinge")
+                if p.default is None:
+                    continue
+                raw = p.default
+            else:
+                raw = given[p.name]
+            values[p.name] = self.model_value(p, raw, entry, line)
+        if spec.name == "table":
+            values["rows"] = self.table_rows(values["file"], values["degree"], entry, line)
+        if spec.name == "expr":
+            self.check_expr_model(values["f"], values["g"], entry, line, length)
+        return tuple(sorted(values.items()))
+
+    def model_value(self, p: ModelParameter, raw: object, entry: str, line: int | None) -> object:
+        if p.kind in ("number", "fraction"):
+            value = self.expr(raw, entry, p.name, line)
+            num = self.finite(value, entry, p.name, line)
+            ok = num > 0 and (p.kind == "number" or num <= 1)
+            if not ok:
+                rng = "in (0, 1]" if p.kind == "fraction" else "positive"
+                raise self.error(f"'{p.name}' must be {rng}, got {num}", entry, line)
+            return value
+        if p.kind == "choice":
+            if raw not in p.choices:
+                raise self.error(f"'{p.name}' must be one of {', '.join(p.choices)}, got {raw!r}",
+                                 entry, line)
+            return raw
+        if p.kind == "int":
+            if isinstance(raw, bool) or not isinstance(raw, int) or not 1 <= raw <= 12:
+                raise self.error(f"'{p.name}' must be an integer from 1 to 12, got {raw!r}",
+                                 entry, line)
+            return raw
+        if p.kind == "text":
+            if not isinstance(raw, str) or not raw:
+                raise self.error(f"'{p.name}' must be a file name string, got {raw!r}", entry,
+                                 line)
+            return raw
+        # "expr": an expression in theta, l and the parameters
+        names = {**self.names, "theta": THETA, "l": PLATE_LENGTH}
+        if not isinstance(raw, str):
+            raise self.error(f"'{p.name}' must be an expression string in theta and l", entry,
+                             line)
+        return self.expr(raw, entry, p.name, line, names)
+
+    def check_expr_model(self, f: sp.Expr, g: sp.Expr, entry: str, line: int | None,
+                         length: sp.Expr) -> None:
+        """The plate must be straight at θ = 0: f(0) = l, g(0) = 0 (the as-fabricated pose)."""
+        subs = {**self.defaults, PLATE_LENGTH: length.subs(self.defaults)}
+        lval = sp.N(subs[PLATE_LENGTH], 30)
+        for key, expr, want in (("f", f, lval), ("g", g, 0)):
+            at0 = sp.N(expr.subs(subs).subs(THETA, sp.Rational(1, 10**12)), 30)
+            if not (at0.is_real and at0.is_finite) or abs(at0 - want) > 1e-6 * lval:
+                raise self.error(f"expression model gives {key}(0) = {at0}, expected {want}",
+                                 entry, line,
+                                 "at theta = 0 the plate is straight: f(0) = l and g(0) = 0")
+
+    def table_rows(self, name: str, degree: int, entry: str, line: int | None) -> tuple:
+        path = (self.base_dir / name)
+        try:
+            content = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise self.error(f"cannot read table file '{name}' ({exc})", entry, line,
+                             "give a CSV path relative to the mechanism file") from None
+        rows = []
+        for k, row in enumerate(csv.reader(io.StringIO(content)), start=1):
+            if not row or not "".join(row).strip() or row[0].lstrip().startswith("#"):
+                continue
+            try:
+                values = [float(x) for x in row]
+            except ValueError:
+                if not rows and k == 1:
+                    continue                  # a header row
+                raise self.error(f"{name}:{k}: not three numbers: {row!r}", entry, line,
+                                 "each row is theta, f/l, g/l") from None
+            if len(values) != 3 or not all(math.isfinite(v) for v in values):
+                raise self.error(f"{name}:{k}: need three finite numbers theta, f/l, g/l",
+                                 entry, line)
+            rows.append(tuple(values))
+        if len({r[0] for r in rows}) < degree + 1:
+            raise self.error(f"table '{name}' has {len(rows)} rows with distinct theta; a degree "
+                             f"{degree} fit needs at least {degree + 1}", entry, line,
+                             "add rows or lower 'degree'")
+        return tuple(rows)
+
+    def points(self, tables: list[Mapping], link_names: list[str]) -> tuple[Point, ...]:
+        out = []
+        for i, table in enumerate(tables):
+            line = self.where.header("point", i)
+            entry = f"[[point]] #{i + 1}"
+            self.check_keys(table, POINT_KEYS, entry, line)
+            name = self.text(table, "name", entry, line)
+            entry = f"[[point]] #{i + 1} '{name}'"
+            link = self.text(table, "link", entry, line)
+            if link not in link_names:
+                raise self.error(f"point on an unknown link '{link}'", entry, line,
+                                 suggest(link, link_names) or "name one of the [[link]] entries")
+            if "at" not in table:
+                raise self.error("missing required key 'at'", entry, line, "add at = [x, y]")
+            out.append(Point(name, i, link, self.vector(table["at"], entry, "at", line), line))
+        self.unique("point", [p.name for p in out], [p.line for p in out])
+        return tuple(out)
+
+    def name_list(self, data: Mapping, key: str, known: list[str],
+                  kind: str) -> tuple[str, ...] | None:
+        if key not in data:
+            return None
+        value = data[key]
+        line = self.where.key(key)
+        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+            raise self.error(f"'{key}' must be a list of {kind} names", key, line)
+        for v in value:
+            if v not in known:
+                raise self.error(f"unknown {kind} '{v}'", key, line,
+                                 suggest(v, known) or f"name one of the [[{kind}]] entries")
+        if len(set(value)) != len(value):
+            raise self.error(f"'{key}' names a {kind} twice", key, line)
+        return tuple(value)
+
+    def check_connected(self, mech: Mechanism) -> None:
+        reached = {mech.ground}
+        frontier = [mech.ground]
+        while frontier:
+            link = frontier.pop()
+            for h in mech.hinges:
+                if link in h.links:
+                    other = h.links[1] if h.links[0] == link else h.links[0]
+                    if other not in reached:
+                        reached.add(other)
+                        frontier.append(other)
+        lost = [lk for lk in mech.links if lk.name not in reached]
+        if lost:
+            names = ", ".join(f"'{lk.name}'" for lk in lost)
+            raise self.error(f"the mechanism is disconnected: {names} cannot be reached from the "
+                             f"ground '{mech.ground}' through hinges", f"[[link]] '{lost[0].name}'",
+                             lost[0].line, "add the missing hinge or remove the link")
+
+    def check_mobility(self, mech: Mechanism) -> None:
+        n, m = len(mech.links) - 1, len(mech.hinges)
+        dof = mech.mobility
+        formula = f"3n - 2m = 3*{n} - 2*{m} = {dof}, with {mech.loop_count} loop(s)"
+        if dof < 1:
+            raise self.error(f"the mechanism cannot move: Grübler mobility {formula}", "[[hinge]]",
+                             None, "remove hinges or add links")
+        if len(mech.inputs) != dof:
+            given = ", ".join(mech.inputs) or "none"
+            raise self.error(
+                f"{len(mech.inputs)} input hinge(s) ({given}) but the Grübler mobility is "
+                f"{formula}", "input", None,
+                f"mark exactly {dof} hinge(s) with input = true")

@@ -1,0 +1,74 @@
+"""Plain-text and JSON reports of a mechanism's structure (`symkin check`, `symkin matrices`)."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+
+import numpy as np
+
+from .structure import Structure
+from .templating import render
+
+
+def grid(row_labels: Sequence[str], col_labels: Sequence[str], matrix: np.ndarray) -> list[str]:
+    """Right-aligned text table with row and column labels."""
+    cells = [[str(int(v)) for v in row] for row in matrix]
+    width = max([len(c) for c in col_labels] + [len(c) for row in cells for c in row] + [1])
+    lead = max([len(r) for r in row_labels] + [0])
+    head = " " * lead + "".join(f" {c:>{width}}" for c in col_labels)
+    body = [f"{r:<{lead}}" + "".join(f" {c:>{width}}" for c in row)
+            for r, row in zip(row_labels, cells)]
+    return [head.rstrip()] + body
+
+
+def loop_text(s: Structure, chord: int) -> str:
+    """The fundamental loop of `chord` as a signed sum of hinge names, e.g. 'A0 + A - B0 + B'."""
+    row = s.loops[chord - s.n - 1]
+    terms = [("+ " if v > 0 else "- ") + s.hinges[b] for b, v in enumerate(row) if v]
+    text = " ".join(terms)
+    return text[2:] if text.startswith("+ ") else "-" + text[2:]
+
+
+def check_text(s: Structure) -> str:
+    """Human summary printed by `symkin check`."""
+    mech = s.mechanism
+    models = [mech.hinge(name).model for name in s.hinges]
+    loops = {c: loop_text(s, c) for c in range(s.n + 1, s.m + 1)}
+    return render("text/check.txt.j2", mech=mech, s=s, models=models, loop_text=loops)
+
+
+def matrices_text(s: Structure) -> str:
+    """Pretty-printed I, I+, Φ, Ψ and T with link and hinge names (`symkin matrices`)."""
+    links = [f"s{i} {name}" for i, name in enumerate(s.links)]
+    hinge_cols = [f"u{a + 1}" for a in range(s.m)]
+    hinge_rows = [f"u{a + 1} {name}" for a, name in enumerate(s.hinges)]
+    chord_rows = [f"u{c + 1} {s.hinges[c]}" for c in range(s.n, s.m)]
+    link_cols = [f"s{i}" for i in range(1, s.n + 1)]
+    labeling = [f"u{a + 1} {name}: i+ = s{s.i_plus[a]} {s.links[s.i_plus[a]]}, "
+                f"i- = s{s.i_minus[a]} {s.links[s.i_minus[a]]}"
+                + ("  (chord)" if a >= s.n else "") for a, name in enumerate(s.hinges)]
+    tables = [
+        ("incidence I (rows: links, columns: hinges)", grid(links, hinge_cols, s.incidence)),
+        ("I+ (reference links)", grid(links, hinge_cols, s.incidence_plus)),
+        ("cyclomatic Phi (rows: chords' loops, columns: hinges)",
+         grid(chord_rows, hinge_cols, s.loops) if s.m > s.n else ["(no loops: an open chain)"]),
+        ("direct paths Psi = [T; 0] (rows: hinges, columns: links)",
+         grid(hinge_rows, link_cols, s.paths)),
+    ]
+    return render("text/matrices.txt.j2", mech=s.mechanism, s=s, labeling=labeling,
+                  tables=tables)
+
+
+def matrices_json(s: Structure) -> str:
+    """The CONTRACT §4 JSON of `symkin matrices --json`."""
+    data = {
+        "links": list(s.links),
+        "hinges": list(s.hinges),
+        "i_plus": list(s.i_plus),
+        "i_minus": list(s.i_minus),
+        "incidence": s.incidence.tolist(),
+        "loops": s.loops.tolist(),
+        "paths": s.paths.tolist(),
+    }
+    return json.dumps(data, ensure_ascii=False) + "\n"
