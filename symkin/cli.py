@@ -11,7 +11,7 @@ import traceback
 from collections.abc import Sequence
 
 from . import __version__, load
-from .errors import SymkinError
+from .errors import InputError, SymkinError
 from .reports import check_text, matrices_json, matrices_text
 from .structure import build
 
@@ -23,6 +23,34 @@ def _check(args: argparse.Namespace) -> str:
 def _matrices(args: argparse.Namespace) -> str:
     structure = build(load(args.file))
     return matrices_json(structure) if args.json else matrices_text(structure)
+
+
+def _pairs(items: Sequence[str] | None, option: str) -> dict[str, str]:
+    """NAME=VALUE options as a dict; a malformed one is bad input (exit 2)."""
+    out: dict[str, str] = {}
+    for item in items or ():
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip() or not value.strip():
+            raise InputError(f"'{item}' is not NAME=VALUE", entry=option,
+                             hint=f"write e.g. {option} A0=0.2")
+        if name.strip() in out:
+            raise InputError(f"'{name.strip()}' given twice", entry=option)
+        out[name.strip()] = value.strip()
+    return out
+
+
+def _eval(args: argparse.Namespace) -> str:
+    from .analysis import Analysis
+    from .reports import evaluation_json, evaluation_text
+
+    if args.backend != "sympy":
+        raise InputError(f"the {args.backend} backend is not available yet (it comes with the "
+                         "code generation of `symkin derive`)", entry="--backend",
+                         hint="use --backend sympy")
+    analysis = Analysis(build(load(args.file)))
+    result = analysis.evaluate(_pairs(args.input, "--input"), level=args.level,
+                               params=_pairs(args.param, "--param"))
+    return evaluation_json(result) if args.json else evaluation_text(result)
 
 
 def parser() -> argparse.ArgumentParser:
@@ -40,6 +68,15 @@ def parser() -> argparse.ArgumentParser:
     matrices.add_argument("file", metavar="FILE")
     matrices.add_argument("--json", action="store_true", help="machine-readable output")
     matrices.set_defaults(run=_matrices)
+    ev = sub.add_parser("eval", help="deviation of the points in one configuration")
+    ev.add_argument("file", metavar="FILE")
+    ev.add_argument("--input", action="append", metavar="H=V",
+                    help="input hinge angle in radians (an expression such as 10*deg is fine)")
+    ev.add_argument("--param", action="append", metavar="K=V", help="override a parameter")
+    ev.add_argument("--level", choices=("paper", "first_order", "exact"), default="exact")
+    ev.add_argument("--backend", choices=("sympy", "numpy", "c"), default="sympy")
+    ev.add_argument("--json", action="store_true", help="machine-readable output")
+    ev.set_defaults(run=_eval)
     return top
 
 

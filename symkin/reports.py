@@ -72,3 +72,13 @@ def matrices_json(s: Structure) -> str:
         "paths": s.paths.tolist(),
     }
     return json.dumps(data, ensure_ascii=False) + "\n"
+
+
+def evaluation_json(result) -> str:
+    """The CONTRACT §4 JSON of `symkin eval --json`."""
+    return json.dumps(result.as_json(), indent=2) + "\n"
+
+
+def evaluation_text(result) -> str:
+    """Human summary of `symkin eval`: angles, points, deviations and dyad toggle margins."""
+    return render("text/eval.txt.j2", r=result, norm=lambda v: float(np.hypot(*v)))

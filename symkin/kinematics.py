@@ -1,0 +1,176 @@
+"""Kinematics of the rigid and the compliant mechanism (paper §3–§5), as sympy expressions.
+
+Frames: every link frame is parallel to the absolute frame in the as-fabricated pose and has its
+origin C_i at the absolute origin, so q*_a = 0, the paper's q_a is the hinge rotation from the
+as-fabricated pose, and c_ia is the as-fabricated absolute position of hinge a's clamp on link i.
+φ_i, the rotation of link i, is the sum of the (paper-oriented) hinge angles on the direct path
+[s_0, s_i]. A hinge whose file order is [i-(a), i+(a)] has paper angle q_a = -θ_a.
+
+The rigid position of a point fixed in link k is Σ_i Rot(φ_i) W_i with constant vectors W_i between
+hinge centres (an ideal revolute sits at the plate midpoint); the compliant one adds Σ Δz_b over the
+direct path (4.7)–(4.8). Loop closure (5.1)/(5.3) for the chord c reads
+    Σ_b Φ_cb q_b = 0,     Σ_i Rot(φ_i) V^c_i + Σ_b Φ_cb Δz_b = 0,   V^c_i = Σ_b S_ib Φ_cb centre_b.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import sympy as sp
+
+from . import vectors as V
+from . import hinge_models
+from .mechanism import THETA, Hinge
+from .structure import Structure
+from .vectors import Vec
+
+
+@dataclass(frozen=True)
+class HingeGeometry:
+    """One hinge in the labeled mechanism: its plate, its model and its orientation."""
+
+    label: int
+    hinge: Hinge
+    P: int                  # label of the file's links[0]: the plate frame is fixed in P
+    M: int                  # label of links[1]
+    sign: int               # +1 when P = i+(a): paper angle q_a = sign * θ_a
+    centre: Vec
+    angle: sp.Expr
+    length: sp.Expr
+    f: sp.Expr              # model functions of THETA (plate length substituted)
+    g: sp.Expr
+    df: sp.Expr             # f - f_rigid, g - g_rigid in cancellation-free form
+    dg: sp.Expr
+
+    @property
+    def name(self) -> str:
+        return self.hinge.name
+
+    @property
+    def is_input(self) -> bool:
+        return self.hinge.input
+
+    @property
+    def u(self) -> Vec:
+        return V.unit(self.angle)
+
+    def clamp(self, link: int) -> Vec:
+        """As-fabricated position of the plate end fixed in `link` (P's end or M's end)."""
+        half = V.scale(self.length / 2, self.u)
+        return V.sub(self.centre, half) if link == self.P else V.add(self.centre, half)
+
+    def delta_z(self, theta: sp.Expr, phi_p: sp.Expr) -> Vec:
+        """Paper-oriented Δz_a (3.3): z_a - z_a^r at hinge angle θ, with P rotated by phi_p."""
+        local = V.add(V.scale(self.df.subs(THETA, theta), self.u),
+                      V.scale(self.dg.subs(THETA, theta), V.perp(self.u)))
+        return V.scale(self.sign, V.rot(phi_p, local))
+
+    def z(self, theta: sp.Expr, phi_p: sp.Expr, rigid: bool = False) -> Vec:
+        """Paper-oriented hinge vector z_a = C_{i+(a)a} -> C_{i-(a)a} (3.1)/(3.2)."""
+        if rigid:
+            f = self.length / 2 * (1 + sp.cos(theta))
+            g = self.length / 2 * sp.sin(theta)
+        else:
+            f, g = self.f.subs(THETA, theta), self.g.subs(THETA, theta)
+        local = V.add(V.scale(f, self.u), V.scale(g, V.perp(self.u)))
+        return V.scale(self.sign, V.rot(phi_p, local))
+
+
+class Kinematics:
+    """Symbolic kinematics of a labeled mechanism: link rotations, point positions, loop closure."""
+
+    def __init__(self, structure: Structure) -> None:
+        self.structure = s = structure
+        mech = s.mechanism
+        self.mechanism = mech
+        label = {name: i for i, name in enumerate(s.links)}
+        self.theta = {a: sp.Symbol(f"theta_{a}", real=True) for a in range(1, s.m + 1)}
+        self.delta = {a: sp.Symbol(f"delta_{a}", real=True) for a in range(1, s.m + 1)}
+        hinges = {}
+        for a, name in enumerate(s.hinges, start=1):
+            h = mech.hinge(name)
+            plate = hinge_models.plate_functions(h)
+            P, M = label[h.links[0]], label[h.links[1]]
+            hinges[a] = HingeGeometry(a, h, P, M, 1 if P == s.i_plus[a - 1] else -1, h.at,
+                                      h.plate_angle, h.length, plate.f, plate.g, plate.df,
+                                      plate.dg)
+        self.hinges = hinges
+        self.inputs = tuple(a for a in hinges if hinges[a].is_input)
+        self.unknowns = tuple(a for a in hinges if not hinges[a].is_input)
+
+    # -- angles ----------------------------------------------------------------------------------
+    def q(self, a: int, angles: dict[int, sp.Expr] | None = None) -> sp.Expr:
+        """Paper-oriented angle of hinge a (q_a = sign * θ_a)."""
+        theta = (angles or self.theta)[a]
+        return self.hinges[a].sign * theta
+
+    def phi(self, link: int, angles: dict[int, sp.Expr] | None = None) -> sp.Expr:
+        """Rotation of `link` from the as-fabricated pose: Σ q_b over the direct path."""
+        return sp.Add(*(self.q(b, angles) for b in self.structure.tree_path(link)))
+
+    # -- positions -------------------------------------------------------------------------------
+    def weights(self, link: int, point: Vec) -> dict[int, Vec]:
+        """W_i such that the rigid position of `point` (fixed in `link`) is Σ Rot(φ_i) W_i."""
+        path = self.structure.tree_path(link)
+        out: dict[int, Vec] = {}
+        previous: Vec = V.ZERO
+        for i, b in zip((0,) + path, path):
+            out[i] = V.sub(self.hinges[b].centre, previous)
+            previous = self.hinges[b].centre
+        out[link] = V.sub(point, previous)
+        return out
+
+    def loop_weights(self, chord: int) -> dict[int, Vec]:
+        """V^c_i = Σ_b S_ib Φ_cb centre_b: the rigid part of the loop of `chord` is Σ Rot(φ_i) V_i."""
+        s = self.structure
+        row = s.loops[chord - s.n - 1]
+        out: dict[int, Vec] = {}
+        for b in range(1, s.m + 1):
+            coeff = int(row[b - 1])
+            if coeff:
+                centre = V.scale(coeff, self.hinges[b].centre)
+                for i, sign in ((s.i_plus[b - 1], 1), (s.i_minus[b - 1], -1)):
+                    out[i] = V.add(out.get(i, V.ZERO), V.scale(sign, centre))
+        return out
+
+    def rigid_position(self, link: int, point: Vec,
+                       angles: dict[int, sp.Expr] | None = None) -> Vec:
+        """Rigid position Σ Rot(φ_i) W_i of a point fixed in `link`."""
+        return V.add(*(V.rot(self.phi(i, angles), w) for i, w in self.weights(link, point).items()))
+
+    def path_deviation(self, link: int, angles: dict[int, sp.Expr] | None = None) -> Vec:
+        """Σ Δz_b over the direct path to `link` (4.8) at the given hinge angles."""
+        angles = angles or self.theta
+        terms = [self.hinges[b].delta_z(angles[b], self.phi(self.hinges[b].P, angles))
+                 for b in self.structure.tree_path(link)]
+        return V.add(*terms) if terms else V.ZERO
+
+    # -- loop closure ----------------------------------------------------------------------------
+    @cached_property
+    def chords(self) -> tuple[int, ...]:
+        return tuple(range(self.structure.n + 1, self.structure.m + 1))
+
+    def angular_closure(self, chord: int, angles: dict[int, sp.Expr] | None = None) -> sp.Expr:
+        """(5.1): Σ_b Φ_cb q_b for the loop of `chord` (zero when the loop closes)."""
+        row = self.structure.loops[chord - self.structure.n - 1]
+        return sp.Add(*(int(row[b - 1]) * self.q(b, angles) for b in range(1, self.structure.m + 1)
+                        if row[b - 1]))
+
+    def positional_closure(self, chord: int, angles: dict[int, sp.Expr] | None = None,
+                           rigid: bool = False) -> Vec:
+        """(5.3) in full: Σ_i Rot(φ_i) V^c_i + Σ_b Φ_cb Δz_b (the Δz part dropped when rigid)."""
+        angles = angles or self.theta
+        rigid_part = [V.rot(self.phi(i, angles), w) for i, w in self.loop_weights(chord).items()]
+        if rigid:
+            return V.add(*rigid_part)
+        return V.add(*rigid_part, self.loop_deviation(chord, angles))
+
+    def loop_deviation(self, chord: int, angles: dict[int, sp.Expr] | None = None) -> Vec:
+        """Φ_c Δz: the plate deviations summed around the loop of `chord` (left side of 5.3)."""
+        angles = angles or self.theta
+        row = self.structure.loops[chord - self.structure.n - 1]
+        terms = [V.scale(int(row[b - 1]), self.hinges[b].delta_z(
+            angles[b], self.phi(self.hinges[b].P, angles)))
+            for b in range(1, self.structure.m + 1) if row[b - 1]]
+        return V.add(*terms)
