@@ -335,6 +335,9 @@ class Analysis:
         f = self._fn("residual", list(self.residual), args_d)
         jac = self._fn("jacobian", self.jacobian.tolist(), args_d)
         x = mpmath.matrix([delta[a] for a in self.kin.unknowns])
+        tight = mpmath.mpf(10) ** (-mpmath.mp.dps + 4)
+        loose = mpmath.mpf(10) ** (-(mpmath.mp.dps // 2))
+        previous = None
         for _ in range(40):
             vals = [*values, *x]
             try:
@@ -343,10 +346,12 @@ class Analysis:
                 raise AssemblyError(f"{self.mechanism.path}: singular compliant loop Jacobian "
                                     "(toggle position) for these inputs") from None
             x = x - step
-            size = mpmath.norm(x, mpmath.inf)
-            if mpmath.norm(step, mpmath.inf) <= mpmath.mpf(10) ** (-mpmath.mp.dps + 4) * size \
-                    or size == 0:
+            size, change = mpmath.norm(x, mpmath.inf), mpmath.norm(step, mpmath.inf)
+            # Converged, or stalled at the working precision's noise floor far below float64.
+            if change <= tight * size or size == 0 or (
+                    previous is not None and change >= previous / 2 and change <= loose * size):
                 return {a: x[k] for k, a in enumerate(self.kin.unknowns)}
+            previous = change
         raise AssemblyError(f"{self.mechanism.path}: the compliant loops did not converge "
                             "(no convergence in 40 Newton steps)")
 

@@ -174,3 +174,34 @@ class Kinematics:
             angles[b], self.phi(self.hinges[b].P, angles)))
             for b in range(1, self.structure.m + 1) if row[b - 1]]
         return V.add(*terms)
+
+
+def c_symbol(i: int, a: int) -> sp.Symbol:
+    """Abstract hinge-point vector c_ia (the paper's notation), for the matrix forms."""
+    return sp.Symbol(f"c_{{{i},{a}}}")
+
+
+def z_symbol(a: int) -> sp.Symbol:
+    """Abstract hinge vector z_a."""
+    return sp.Symbol(f"z_{{{a}}}")
+
+
+def paper_matrices(structure: Structure) -> tuple[sp.Matrix, sp.Matrix]:
+    """J = (S_ia c_ia) (4.3) and J* = (S+_ia z_a) (4.4), over abstract vector symbols."""
+    s = structure
+    J = sp.zeros(s.n + 1, s.m)
+    Jstar = sp.zeros(s.n + 1, s.m)
+    for i in range(s.n + 1):
+        for a in range(1, s.m + 1):
+            if s.incidence[i, a - 1]:
+                J[i, a - 1] = int(s.incidence[i, a - 1]) * c_symbol(i, a)
+            if s.incidence_plus[i, a - 1]:
+                Jstar[i, a - 1] = z_symbol(a)
+    return J, Jstar
+
+
+def paper_positions(structure: Structure) -> sp.Matrix:
+    """R = -Ψᵀ (J + J*)ᵀ 1_{n+1} (4.7): link positions over the abstract c_ia and z_a."""
+    J, Jstar = paper_matrices(structure)
+    psi = sp.Matrix(structure.paths.tolist())
+    return -psi.T * (J + Jstar).T * sp.ones(structure.n + 1, 1)
