@@ -1,10 +1,14 @@
 """symkin: how far a flexure-hinge mechanism strays from its ideal rigid linkage, in closed form.
 
-Start with :func:`load` (a validated :class:`Mechanism`), then :func:`structure` for the paper's
-labeling and structure matrices I, Φ, Ψ.
+    mech = symkin.load("examples/four_bar.toml")     # validated Mechanism (names, exact numbers)
+    s = symkin.structure(mech)                        # labeling and I, I+, Φ, Ψ = [T; 0]
+    an = symkin.analyze(mech)                         # symbolic deviation at every level
+    an.evaluate({"A0": 0.2}, level="exact")           # one configuration, mpmath at 40 digits
 """
 
 from __future__ import annotations
+
+from pathlib import Path
 
 from .errors import AssemblyError, InputError, SymkinError
 from .mechanism import Mechanism, load, loads
@@ -12,5 +16,14 @@ from .structure import Structure, build as structure
 
 __version__ = "0.1.0"
 
-__all__ = ["AssemblyError", "InputError", "Mechanism", "Structure", "SymkinError", "load", "loads",
-           "structure", "__version__"]
+
+def analyze(mechanism: Mechanism | str | Path, points: list[str] | None = None):
+    """The :class:`symkin.analysis.Analysis` of a mechanism (or of the file at that path)."""
+    from .analysis import Analysis
+
+    mech = mechanism if isinstance(mechanism, Mechanism) else load(mechanism)
+    return Analysis(structure(mech), points)
+
+
+__all__ = ["AssemblyError", "InputError", "Mechanism", "Structure", "SymkinError", "analyze",
+           "load", "loads", "structure", "__version__"]

@@ -99,6 +99,24 @@ class Kinematics:
         self.inputs = tuple(a for a in hinges if hinges[a].is_input)
         self.unknowns = tuple(a for a in hinges if not hinges[a].is_input)
 
+    # -- geometry in the paper's terms ---------------------------------------------------------
+    def c_vector(self, link: int, a: int) -> Vec:
+        """c_ia: hinge point C_ia (the plate end fixed in `link`) from C_i (the origin), as fabricated."""
+        h = self.hinges[a]
+        if link not in (h.P, h.M):
+            raise ValueError(f"hinge {a} does not touch link {link}")
+        return h.clamp(link)
+
+    def plate_data(self, a: int) -> dict[str, sp.Expr]:
+        """Plate frame data of hinge a: α+ and α- (angles of e_1^{i±(a)a} in the link frames),
+        the as-fabricated angle q*_a = α+ - α- (zero: link frames are parallel when fabricated),
+        the plate length and the clamp vectors c_{i+(a)a}, c_{i-(a)a}."""
+        s, h = self.structure, self.hinges[a]
+        alpha = h.angle if h.sign > 0 else h.angle + sp.pi
+        return {"alpha_plus": alpha, "alpha_minus": alpha, "q_star": sp.Integer(0),
+                "length": h.length, "c_plus": self.c_vector(s.i_plus[a - 1], a),
+                "c_minus": self.c_vector(s.i_minus[a - 1], a)}
+
     # -- angles ----------------------------------------------------------------------------------
     def q(self, a: int, angles: dict[int, sp.Expr] | None = None) -> sp.Expr:
         """Paper-oriented angle of hinge a (q_a = sign * θ_a)."""

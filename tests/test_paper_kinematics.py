@@ -79,3 +79,26 @@ def test_paper_level_deviation_is_dz1_plus_dz2(name, point):
     for k in range(2):
         assert sp.simplify(sp.expand_trig(dz2[k] - (local[0] * rotated_u[k]
                                                     + local[1] * normal[k]))) == 0
+
+
+@pytest.mark.parametrize("name", sorted(PAPER_R))
+def test_plate_data_and_hinge_vectors_in_the_as_fabricated_pose(name):
+    """With every θ = 0, z_a (3.2) of each model equals c_{i-(a)a} - c_{i+(a)a}, the plate."""
+    from symkin.analysis import Analysis
+
+    an = Analysis(structure(name))
+    kin = an.kin
+    mech = kin.mechanism
+    for a, h in kin.hinges.items():
+        data = kin.plate_data(a)
+        assert data["q_star"] == 0
+        plate = [sp.nsimplify(v) for v in (data["c_minus"][0] - data["c_plus"][0],
+                                           data["c_minus"][1] - data["c_plus"][1])]
+        z0 = h.z(sp.Rational(1, 10**30), 0)      # θ → 0 (the model's f, g at a tiny angle)
+        for k in range(2):
+            assert abs(sp.N((z0[k] - plate[k]).subs(mech.defaults), 30)) < 1e-25
+        # the plate direction e_1^{i+(a)a} points from C_{i+(a)a} to C_{i-(a)a}
+        length = sp.N(h.length.subs(mech.defaults), 30)
+        e1 = (sp.cos(data["alpha_plus"]), sp.sin(data["alpha_plus"]))
+        for k in range(2):
+            assert abs(sp.N((length * e1[k] - plate[k]).subs(mech.defaults), 30)) < 1e-25

@@ -1,0 +1,84 @@
+"""`symkin eval` (CONTRACT §4): JSON shape, levels, exit codes 2 and 3, and no tracebacks."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+import mechanisms as M
+from conftest import EXAMPLES
+from symkin.cli import main
+
+FOUR_BAR = str(EXAMPLES / "four_bar.toml")
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.mark.parametrize("level", ["paper", "first_order", "exact"])
+def test_json_has_the_contract_keys(capsys, level):
+    code, out, err = run(capsys, "eval", FOUR_BAR, "--input", "A0=0.2", "--level", level,
+                         "--json")
+    assert code == 0, err
+    data = json.loads(out)
+    assert set(data) == {"level", "backend", "inputs", "angles", "points"}
+    assert data["level"] == level and data["backend"] == "sympy"
+    assert data["inputs"] == {"A0": 0.2}
+    assert set(data["angles"]) == {"rigid", "compliant"}
+    assert set(data["angles"]["rigid"]) == {"A0", "A", "B0", "B"}
+    c = data["points"]["C"]
+    assert set(c) == {"rigid", "compliant", "deviation"}
+    for k in range(2):
+        assert c["compliant"][k] == pytest.approx(c["rigid"][k] + c["deviation"][k],
+                                                  rel=1e-15, abs=1e-18)
+    assert 1e-7 < abs(c["deviation"][0]) < 1e-4
+
+
+def test_text_output_names_points_and_dyads(capsys):
+    code, out, _ = run(capsys, "eval", FOUR_BAR, "--input", "A0=10*deg")
+    assert code == 0
+    assert "point C" in out and "deviation" in out and "toggle margin" in out
+
+
+def test_param_override_changes_the_deviation(capsys):
+    _, base, _ = run(capsys, "eval", FOUR_BAR, "--input", "A0=0.2", "--json")
+    _, bigger, _ = run(capsys, "eval", FOUR_BAR, "--input", "A0=0.2", "--param", "l=2e-3",
+                       "--json")
+    d0 = json.loads(base)["points"]["C"]["deviation"]
+    d1 = json.loads(bigger)["points"]["C"]["deviation"]
+    assert d1[0] / d0[0] == pytest.approx(2.0, rel=0.05)   # Δz scales with the plate length
+
+
+@pytest.mark.parametrize("level", ["paper", "first_order", "exact"])
+def test_out_of_assembly_range_exits_3_naming_the_loop(tmp_path, level):
+    path = tmp_path / "non_grashof.toml"
+    path.write_text(M.NON_GRASHOF)
+    proc = subprocess.run([sys.executable, "-m", "symkin", "eval", str(path), "--input",
+                           "A0=2.5", "--level", level], capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 3, proc.stderr
+    assert "Traceback" not in proc.stderr
+    assert "loop of hinge 'B'" in proc.stderr and "non_grashof.toml" in proc.stderr
+
+
+@pytest.mark.parametrize("argv, fragment", [
+    (["--input", "A0=0.2", "--backend", "numpy"], "numpy backend is not available yet"),
+    (["--input", "A0=0.2", "--backend", "c"], "c backend is not available yet"),
+    (["--input", "A0"], "not NAME=VALUE"),
+    (["--input", "B=0.2"], "'B' is not an input hinge"),
+    ([], "no value for the input(s) A0"),
+    (["--input", "A0=0.2", "--param", "L=1"], "unknown parameter 'L'"),
+    (["--input", "A0=__import__('os')"], "not allowed"),
+    (["--input", "A0=0.2", "--input", "A0=0.3"], "given twice"),
+])
+def test_bad_options_exit_2(capsys, argv, fragment):
+    code, out, err = run(capsys, "eval", FOUR_BAR, *argv)
+    assert code == 2
+    assert fragment in err and out == ""
+    assert "Traceback" not in err
