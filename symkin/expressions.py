@@ -30,7 +30,9 @@ RESERVED = frozenset(FUNCTIONS) | frozenset(CONSTANTS)
 
 IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 MAX_LENGTH = 2000      # characters in one expression
-MAX_EXPONENT = 64      # |literal exponent| allowed in a**b, so no expression can blow up memory
+MAX_EXPONENT = 64      # |exponent| allowed in a**b, so no expression can blow up memory
+MAX_BITS = 4096        # |log2| of any exact number an expression may build (10**+-1233)
+SHOWN = 60             # characters of an expression quoted in an error message
 
 _BINARY = {ast.Add: sp.Add, ast.Sub: None, ast.Mult: sp.Mul, ast.Div: None, ast.Pow: None}
 
@@ -50,8 +52,20 @@ def number(value: int | float) -> sp.Expr:
     return sp.Rational(repr(value))
 
 
-def parse(text: str, names: Mapping[str, sp.Expr]) -> sp.Expr:
-    """Parse `text` into a sympy expression; `names` maps the allowed variable names to symbols."""
+def _shown(text: str) -> str:
+    """`text` as quoted in an error message: long expressions are cut short."""
+    text = text.strip()
+    return text if len(text) <= SHOWN else text[: SHOWN - 3] + "..."
+
+
+def parse(text: str, names: Mapping[str, sp.Expr],
+          values: Mapping[sp.Symbol, sp.Expr] | None = None) -> sp.Expr:
+    """Parse `text` into a sympy expression; `names` maps the allowed variable names to symbols.
+
+    `values` (symbol -> default value) lets the size limits on powers and exp() see the values of
+    parameters too, so that substituting the defaults can never build an astronomically large
+    number either.
+    """
     if not isinstance(text, str):
         raise ExpressionError(f"expected an expression string, got {text!r}")
     if len(text) > MAX_LENGTH:
@@ -62,19 +76,36 @@ def parse(text: str, names: Mapping[str, sp.Expr]) -> sp.Expr:
         tree = ast.parse(text.strip(), mode="eval")
     except (SyntaxError, ValueError, RecursionError, MemoryError) as exc:
         detail = getattr(exc, "msg", None) or type(exc).__name__
-        raise ExpressionError(f"'{text}' is not a valid expression ({detail})") from None
+        raise ExpressionError(f"'{_shown(text)}' is not a valid expression ({detail})") from None
     try:
-        return _Converter(text, names).visit(tree.body)
+        return _Converter(text, names, values or {}).visit(tree.body)
     except RecursionError:
-        raise ExpressionError(f"'{text}' is nested too deeply") from None
+        raise ExpressionError(f"'{_shown(text)}' is nested too deeply") from None
 
 
 class _Converter:
     """Turns an allowed syntax tree into sympy; raises ExpressionError on anything else."""
 
-    def __init__(self, text: str, names: Mapping[str, sp.Expr]) -> None:
-        self.text = text
+    def __init__(self, text: str, names: Mapping[str, sp.Expr],
+                 values: Mapping[sp.Symbol, sp.Expr]) -> None:
+        self.text = _shown(text)
         self.names = names
+        self.values = values
+
+    def approx(self, expr: sp.Expr) -> sp.Expr | None:
+        """A floating value of `expr` (parameters at their defaults), or None if it has none."""
+        if expr.free_symbols - set(self.values):
+            return None
+        value = expr.evalf(15, subs=dict(self.values)) if expr.free_symbols else expr.evalf(15)
+        return value if value.is_number and value.is_finite else None
+
+    def sized(self, expr: sp.Expr) -> sp.Expr:
+        """Reject an exact number with more than MAX_BITS bits (a product of huge literals)."""
+        for atom in expr.atoms(sp.Rational):
+            if max(abs(atom.p).bit_length(), atom.q.bit_length()) > MAX_BITS:
+                raise self.reject(f"a number beyond 2**(+-{MAX_BITS})",
+                                  "use smaller numbers, or exp() and log()")
+        return expr
 
     def reject(self, what: str, hint: str = "") -> ExpressionError:
         allowed = ("numbers, parameter names, pi, deg, + - * / **, and calls of "
@@ -89,7 +120,7 @@ class _Converter:
             try:
                 return number(node.value)
             except ExpressionError as exc:
-                raise self.reject(str(exc)) from None
+                raise ExpressionError(f"'{self.text}': {exc}") from None
         if isinstance(node, ast.Name):
             if node.id in self.names:
                 return self.names[node.id]
@@ -105,9 +136,9 @@ class _Converter:
             operand = self.visit(node.operand)
             return -operand if isinstance(node.op, ast.USub) else operand
         if isinstance(node, ast.BinOp) and type(node.op) in _BINARY:
-            return self.binary(node)
+            return self.sized(self.binary(node))
         if isinstance(node, ast.Call):
-            return self.call(node)
+            return self.sized(self.call(node))
         if isinstance(node, ast.Attribute):
             raise self.reject("attribute access ('.')")
         if isinstance(node, ast.Lambda):
@@ -126,9 +157,19 @@ class _Converter:
                    for n in ast.walk(node.right)):
                 raise self.reject("a power in an exponent", "write the exponent out")
             right = self.visit(node.right)
-            if right.is_number and abs(right) > MAX_EXPONENT:
+            # The exponent's value (parameters at their defaults) is bounded, and so is the size
+            # of the power when its base has a value too: checked before sympy builds it, since
+            # sympy evaluates powers of exact numbers at once, e.g. (9**64)**64.
+            exponent = self.approx(right)
+            if exponent is not None and abs(exponent) > MAX_EXPONENT:
                 raise self.reject(f"an exponent of magnitude above {MAX_EXPONENT}",
                                   "use exp() and log() instead")
+            base = self.approx(left)
+            if exponent is not None and base is not None and not base.is_zero:
+                bits = abs(sp.re(exponent)) * abs(sp.log(abs(base), 2))
+                if bits > MAX_BITS:
+                    raise self.reject(f"a power beyond 2**(+-{MAX_BITS})",
+                                      "use exp() and log(), or smaller numbers")
             return sp.Pow(left, right)
         right = self.visit(node.right)
         if isinstance(node.op, ast.Add):
@@ -158,4 +199,11 @@ class _Converter:
         if len(node.args) != arity:
             raise self.reject(f"calling '{name}' with {len(node.args)} argument(s)",
                               f"'{name}' takes {arity}")
-        return func(*(self.visit(a) for a in node.args))
+        args = [self.visit(a) for a in node.args]
+        if name == "exp":
+            # sympy turns exp(k*log(b)) into b**k at once: bound the argument like a power.
+            value = self.approx(args[0])
+            if value is not None and abs(sp.re(value)) > MAX_BITS * math.log(2):
+                raise self.reject(f"exp() of an argument beyond {MAX_BITS}*log(2)",
+                                  "the value would not fit any number format")
+        return func(*args)

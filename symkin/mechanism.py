@@ -149,7 +149,24 @@ def loads(text: str, file: str = "<string>", base_dir: Path | None = None) -> Me
         line = _line_from_toml_error(str(exc))
         raise InputError(f"TOML syntax error: {exc}", file=file, line=line,
                          hint="fix the TOML syntax at that line") from None
+    except RecursionError:
+        raise InputError("TOML nesting too deep (arrays or tables inside each other)", file=file,
+                         hint="a mechanism file needs at most a few levels of nesting") from None
     return _Reader(text, file, base_dir or Path(".")).read(data)
+
+
+def _entry(kind: str, i: int, table: Mapping) -> str:
+    """How an error names the i-th [[kind]] entry: by number, and by name once it has one."""
+    name = table.get("name")
+    return f"[[{kind}]] #{i + 1}" + (f" '{name}'" if isinstance(name, str) and name else "")
+
+
+def _short(value: object) -> str:
+    """A number as an error message shows it: 6 significant digits, not sympy's 30."""
+    try:
+        return f"{float(value):.6g}"  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return str(value)
 
 
 def _line_from_toml_error(message: str) -> int | None:
@@ -202,7 +219,8 @@ class _Reader:
         for key in table:
             if key not in allowed:
                 near = suggest(key, allowed)
-                raise self.error(f"unknown key '{key}'", entry, line,
+                raise self.error(f"unknown key '{key}'", entry,
+                                 line if line is not None else self.where.key(key),
                                  near or "allowed keys: " + ", ".join(allowed))
 
     def expr(self, value: object, entry: str, key: str, line: int | None,
@@ -210,7 +228,8 @@ class _Reader:
         """A number or an expression string, as an exact sympy expression."""
         try:
             if isinstance(value, str):
-                return expressions.parse(value, self.names if names is None else names)
+                return expressions.parse(value, self.names if names is None else names,
+                                         self.defaults)
             return expressions.number(value)  # type: ignore[arg-type]
         except expressions.ExpressionError as exc:
             raise self.error(f"'{key}': {exc}", entry, line,
@@ -332,7 +351,7 @@ class _Reader:
         out = []
         for i, table in enumerate(tables):
             line = self.where.header("link", i)
-            entry = f"[[link]] #{i + 1}"
+            entry = _entry("link", i, table)
             self.check_keys(table, LINK_KEYS, entry, line)
             out.append(Link(self.text(table, "name", entry, line), i, line))
         self.unique("link", [lk.name for lk in out], [lk.line for lk in out])
@@ -432,7 +451,7 @@ class _Reader:
             ok = num > 0 and (p.kind == "number" or num <= 1)
             if not ok:
                 rng = "in (0, 1]" if p.kind == "fraction" else "positive"
-                raise self.error(f"'{p.name}' must be {rng}, got {num}", entry, line)
+                raise self.error(f"'{p.name}' must be {rng}, got {_short(num)}", entry, line)
             return value
         if p.kind == "choice":
             if raw not in p.choices:
@@ -464,7 +483,8 @@ class _Reader:
         for key, expr, want in (("f", f, lval), ("g", g, 0)):
             at0 = sp.N(expr.subs(subs).subs(THETA, sp.Rational(1, 10**12)), 30)
             if not (at0.is_real and at0.is_finite) or abs(at0 - want) > 1e-6 * lval:
-                raise self.error(f"expression model gives {key}(0) = {at0}, expected {want}",
+                raise self.error(f"expression model gives {key}(0) = {_short(at0)}, expected "
+                                 f"{_short(want)}",
                                  entry, line,
                                  "at theta = 0 the plate is straight: f(0) = l and g(0) = 0")
 
@@ -473,7 +493,8 @@ class _Reader:
         try:
             content = path.read_text(encoding="utf-8")
         except (OSError, UnicodeDecodeError) as exc:
-            raise self.error(f"cannot read table file '{name}' ({exc})", entry, line,
+            reason = getattr(exc, "strerror", None) or exc
+            raise self.error(f"cannot read table file '{name}' ({reason})", entry, line,
                              "give a CSV path relative to the mechanism file") from None
         rows = []
         for k, row in enumerate(csv.reader(io.StringIO(content)), start=1):
@@ -500,7 +521,7 @@ class _Reader:
         out = []
         for i, table in enumerate(tables):
             line = self.where.header("point", i)
-            entry = f"[[point]] #{i + 1}"
+            entry = _entry("point", i, table)
             self.check_keys(table, POINT_KEYS, entry, line)
             name = self.text(table, "name", entry, line)
             entry = f"[[point]] #{i + 1} '{name}'"
