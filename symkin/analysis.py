@@ -177,10 +177,23 @@ class Analysis:
                                  entry="--param", hint="parameters: " + (", ".join(sorted(known))
                                                                           or "none"))
         values: dict[sp.Symbol, sp.Expr] = {}
+        changed = False
         for p in self.mechanism.parameters:
             raw = overrides.get(p.name)
-            values[p.symbol] = (_exact(raw, f"--param {p.name}", self.mechanism.path)
-                                if raw is not None else p.expr.subs(values))
+            if raw is not None:
+                values[p.symbol] = _exact(raw, f"--param {p.name}", self.mechanism.path)
+                changed = True
+            elif not changed:
+                values[p.symbol] = p.value
+            else:
+                # A default re-evaluated with overridden values: numerically (60 digits), so an
+                # override can never make sympy build a huge exact number (e.g. l**n, n = 1e9).
+                value = p.expr.evalf(60, subs=values)
+                if not (value.is_real and value.is_finite):
+                    raise InputError(f"parameter '{p.name}' = {p.expr} evaluates to {value} with "
+                                     "the overrides", file=self.mechanism.path, entry="--param",
+                                     hint="choose override values that keep it finite")
+                values[p.symbol] = value
         return values
 
     def _inputs(self, inputs: Mapping[str, object]) -> dict[int, sp.Expr]:

@@ -287,7 +287,7 @@ class _Reader:
         if fmt is None:
             raise self.error("missing required key 'format'", "top level", None,
                              f"add 'format = {FORMAT}' as the first line")
-        if fmt != FORMAT or isinstance(fmt, bool):
+        if not isinstance(fmt, int) or isinstance(fmt, bool) or fmt != FORMAT:
             raise self.error(f"unsupported format {fmt!r}", "format", self.where.key("format"),
                              f"this symkin reads format = {FORMAT}")
         name = self.text(data, "name", "top level", None)

@@ -31,6 +31,7 @@ EXPECTED: dict[str, tuple] = {
     "unknown_top_level_key": ("author",),
     "missing_format": ("'format'",),
     "wrong_format": ("format", "2"),
+    "format_float": ("format", "1.0"),
     "missing_name": ("'name'",),
     "name_not_identifier": ("four-bar v2",),
     "ground_unknown_link": ("ground", "frme", "frame"),

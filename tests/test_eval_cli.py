@@ -82,3 +82,18 @@ def test_bad_options_exit_2(capsys, argv, fragment):
     assert code == 2
     assert fragment in err and out == ""
     assert "Traceback" not in err
+
+
+def test_param_override_cannot_build_a_huge_number(tmp_path, capsys):
+    """A default that depends on an overridden parameter is re-evaluated numerically."""
+    import time
+
+    text = (EXAMPLES / "four_bar.toml").read_text().replace(
+        "[defaults]\n", 'n = 2\nq = "l**n"\n\n[defaults]\n')
+    path = tmp_path / "bomb.toml"
+    path.write_text(text)
+    start = time.perf_counter()
+    code, out, err = run(capsys, "eval", str(path), "--input", "A0=0.2", "--param", "n=1e9",
+                         "--level", "paper")
+    assert code == 0, err
+    assert time.perf_counter() - start < 20
