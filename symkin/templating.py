@@ -12,7 +12,7 @@ import jinja2
 def environment() -> jinja2.Environment:
     """Strict environment over the packaged templates: a missing variable is an error, not ''."""
     root = resources.files("symkin.templates")
-    return jinja2.Environment(
+    env = jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(root)),
         undefined=jinja2.StrictUndefined,
         trim_blocks=True,
@@ -20,6 +20,24 @@ def environment() -> jinja2.Environment:
         keep_trailing_newline=True,
         autoescape=False,
     )
+    # Names from a mechanism file reach generated code only through these escaping filters.
+    env.filters["pyrepr"] = repr
+    env.filters["cstring"] = c_string
+    return env
+
+
+def c_string(text: str) -> str:
+    """A C string literal for any text: printable ASCII kept, everything else escaped."""
+    out = []
+    for byte in text.encode("utf-8"):
+        ch = chr(byte)
+        if ch in '"\\?':
+            out.append("\\" + ch)
+        elif 32 <= byte < 127:
+            out.append(ch)
+        else:
+            out.append(f"\\{byte:03o}")
+    return '"' + "".join(out) + '"'
 
 
 def render(name: str, **context: object) -> str:

@@ -1,0 +1,95 @@
+"""The routines a generated evaluator is made of, derived from an :class:`Analysis`.
+
+    rigid        inputs, params        -> φ_M - φ_P of every hinge, dyad reach and margin
+                                          (closed form; absent when a group is not a dyad)
+    rigid_res    theta, params         -> rigid loop closure relative to the as-fabricated pose,
+                                          Σ (Rot(φ_i) - I) V_i and Φ q (polish / continuation)
+    linear       theta, params         -> A (rigid loop Jacobian), r = Φ Δz at the rigid pose
+    newton       theta, delta, params  -> F, ∂F/∂δ of the exact compliant closure
+    rigid_points theta, params         -> rigid x, y of every requested point
+    dev_<level>  theta, delta, params  -> deviation x, y of every requested point
+
+Only what the requested points and levels need is derived: a point whose direct path holds only
+input hinges needs no loop solved at any level.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import sympy as sp
+
+from .. import vectors as V
+from ..analysis import LEVELS, Analysis
+from .routines import Argument, Routine, flatten, optimize
+
+
+@dataclass(frozen=True)
+class Plan:
+    """Everything a backend template needs, backend-neutral."""
+
+    analysis: Analysis
+    points: tuple[str, ...]
+    levels: tuple[str, ...]
+    needs_loops: bool                  # some requested level/point needs the loop solution
+    closed_form: bool                  # rigid solution by dyads (else Newton + continuation)
+    routines: dict[str, Routine]
+    n_unknowns: int                    # k = number of non-input hinges (size of δ)
+
+    @property
+    def mechanism(self):
+        return self.analysis.mechanism
+
+
+def plan(analysis: Analysis, points: Sequence[str] | None = None,
+         levels: Sequence[str] | None = None, cse: bool = True) -> Plan:
+    """Derive the routines for the requested points and levels (all by default)."""
+    an, kin = analysis, analysis.kin
+    names = tuple(p.name for p in an.points if points is None or p.name in points)
+    levels = tuple(lv for lv in LEVELS if levels is None or lv in levels)
+    inputs = Argument("inputs", tuple(kin.theta[a] for a in kin.inputs))
+    params = Argument("params", an.params)
+    theta = Argument("theta", an.thetas)
+    delta = Argument("delta", an.deltas)
+
+    def moved_by_loops(name: str) -> bool:
+        link = an.link[an.mechanism.point(name).link]
+        return any(b in kin.unknowns for b in an.structure.tree_path(link))
+
+    needs_loops = bool(an.deltas) and any(lv != "paper" for lv in levels) and any(
+        moved_by_loops(n) for n in names)
+    routines: dict[str, Routine] = {}
+    sol = an.rigid
+    if sol.closed_form:
+        outs = [sol.phi[kin.hinges[a].M] - sol.phi[kin.hinges[a].P] for a in kin.unknowns]
+        outs += [d.reach for d in sol.dyads] + [d.margin for d in sol.dyads]
+        routines["rigid"] = Routine("rigid", (inputs, params), sol.assignments, tuple(outs),
+                                    "closed-form rigid solution (dyads)")
+    if kin.unknowns:
+        rows: list[sp.Expr] = []
+        for c in kin.chords:
+            rows.append(kin.angular_closure(c))
+            rows.extend(V.add(*(V.rot_minus_identity(kin.phi(i), w)
+                                for i, w in kin.loop_weights(c).items())))
+        routines["rigid_res"] = Routine("rigid_res", (theta, params), (), tuple(rows),
+                                        "rigid loop closure relative to the as-fabricated pose")
+        a_lin, r_lin = an.linear_system
+        routines["linear"] = Routine("linear", (theta, params), (),
+                                     flatten(a_lin.tolist()) + tuple(r_lin),
+                                     "rigid loop Jacobian A and r = Phi dz")
+    if needs_loops and "exact" in levels:
+        routines["newton"] = Routine("newton", (theta, delta, params), (),
+                                     tuple(an.residual) + flatten(an.jacobian.tolist()),
+                                     "exact compliant closure F(delta) and dF/ddelta")
+    routines["rigid_points"] = Routine(
+        "rigid_points", (theta, params), (),
+        tuple(e for n in names for e in an.point_rigid(n)), "rigid positions of the points")
+    for lv in levels:
+        args = (theta, delta, params) if lv != "paper" else (theta, params)
+        routines[f"dev_{lv}"] = Routine(
+            f"dev_{lv}", args, (), tuple(e for n in names for e in an.point_deviation(n, lv)),
+            f"deviation of the points at level {lv}")
+    if cse:
+        routines = {k: optimize(r) for k, r in routines.items()}
+    return Plan(an, names, levels, needs_loops, sol.closed_form, routines, len(an.deltas))

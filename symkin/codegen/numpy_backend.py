@@ -1,0 +1,60 @@
+"""numpy backend: a module `<name>.py` that imports only numpy and the standard library."""
+
+from __future__ import annotations
+
+import sympy as sp
+from sympy.printing.numpy import NumPyPrinter
+
+from .. import special
+from ..templating import render
+from .build import Plan
+from .common import header_lines, parameter_symbols, renamed, special_functions, with_dependencies
+
+
+class Printer(NumPyPrinter):
+    """NumPyPrinter that calls symkin's stable kernels by their generated names."""
+
+    def _print_Function(self, expr):  # noqa: N802 - sympy's printer protocol
+        name = type(expr).__name__
+        if name in special.NUMPY_SOURCE:
+            return f"{name}({', '.join(self._print(a) for a in expr.args)})"
+        return super()._print_Function(expr)
+
+
+def routine_source(routine, printer: Printer) -> dict:
+    """Template data for one routine: unpacking lines, assignment lines and the outputs."""
+    unpack = []
+    for arg in routine.arguments:
+        if arg.symbols:
+            names = ", ".join(s.name for s in arg.symbols)
+            unpack.append(f"{names}{',' if len(arg.symbols) == 1 else ''} = {arg.name}")
+    lines = [f"{s.name} = {printer.doprint(e)}" for s, e in routine.assignments]
+    outputs = [printer.doprint(sp.sympify(e)) for e in routine.outputs]
+    return {"name": routine.name, "args": [a.name for a in routine.arguments], "doc": routine.doc,
+            "unpack": unpack, "lines": lines, "outputs": outputs, "ops": routine.ops}
+
+
+def emit(plan: Plan, source: str) -> str:
+    """The numpy module's text."""
+    an = plan.analysis
+    kin = an.kin
+    names = parameter_symbols(plan)
+    printer = Printer({"fully_qualified_modules": True})
+    routines = [routine_source(renamed(r, names), printer) for r in plan.routines.values()]
+    defaults = []
+    for p in an.mechanism.parameters:
+        defaults.append({"name": p.name, "symbol": names[p.symbol].name,
+                         "expr": printer.doprint(p.expr.xreplace(names)),
+                         "value": repr(float(p.value))})
+    kernels = with_dependencies(special_functions(plan))
+    return render(
+        "numpy/module.py.j2",
+        header=header_lines(plan, source),
+        inputs=[kin.hinges[a].name for a in kin.inputs],
+        points=list(plan.points), levels=list(plan.levels), parameters=defaults,
+        n_theta=len(an.thetas),
+        input_index=[a - 1 for a in kin.inputs], unknown_index=[a - 1 for a in kin.unknowns],
+        n_dyads=len(an.rigid.dyads), closed_form=plan.closed_form,
+        needs_loops=plan.needs_loops, n_loops=len(kin.chords),
+        routines=routines, kernels=[special.NUMPY_SOURCE[k] for k in kernels],
+    )

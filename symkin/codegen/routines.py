@@ -1,0 +1,75 @@
+"""Routines: the functions every backend emits, as CSE'd straight-line programs of sympy assignments.
+
+A routine has named array arguments (inputs, params, theta, delta, ...), an ordered list of named
+intermediates (already named as they were built, OpenSYMORO style) and outputs. `optimize` runs one
+CSE pass over the whole routine and schedules each temporary just before its first use, so the
+named intermediates keep their order and nothing is computed twice.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import sympy as sp
+
+
+@dataclass(frozen=True)
+class Argument:
+    """An array argument of a routine: its name and the symbols of its entries, in order."""
+
+    name: str
+    symbols: tuple[sp.Symbol, ...]
+
+
+@dataclass(frozen=True)
+class Routine:
+    """A straight-line program: arguments, assignments (symbol, expr) in order, outputs."""
+
+    name: str
+    arguments: tuple[Argument, ...]
+    assignments: tuple[tuple[sp.Symbol, sp.Expr], ...]
+    outputs: tuple[sp.Expr, ...]
+    doc: str = ""
+
+    @property
+    def ops(self) -> int:
+        """Operation count (sympy count_ops) of the assignments and outputs."""
+        return int(sum(sp.count_ops(e) for _, e in self.assignments)
+                   + sum(sp.count_ops(e) for e in self.outputs))
+
+
+def optimize(routine: Routine, prefix: str = "_tmp") -> Routine:
+    """One CSE pass over the routine; temporaries are scheduled just before their first use."""
+    named = [s for s, _ in routine.assignments]
+    exprs = [e for _, e in routine.assignments] + list(routine.outputs)
+    symbols = sp.numbered_symbols(prefix, real=True)
+    replacements, reduced = sp.cse(exprs, symbols=symbols, order="canonical")
+    temps = dict(replacements)
+    done: set[sp.Symbol] = set()
+    lines: list[tuple[sp.Symbol, sp.Expr]] = []
+
+    def need(expr: sp.Expr) -> None:
+        for symbol in sorted(expr.free_symbols & set(temps), key=_index):
+            if symbol not in done:
+                need(temps[symbol])
+                done.add(symbol)
+                lines.append((symbol, temps[symbol]))
+
+    for symbol, expr in zip(named, reduced[: len(named)]):
+        need(expr)
+        lines.append((symbol, expr))
+    outputs = tuple(reduced[len(named):])
+    for expr in outputs:
+        need(expr)
+    return Routine(routine.name, routine.arguments, tuple(lines), outputs, routine.doc)
+
+
+def _index(symbol: sp.Symbol) -> tuple[int, str]:
+    digits = "".join(ch for ch in symbol.name if ch.isdigit())
+    return (int(digits) if digits else 0, symbol.name)
+
+
+def flatten(rows: Sequence[Sequence[sp.Expr]]) -> tuple[sp.Expr, ...]:
+    """Row-major flattening of a matrix given as rows."""
+    return tuple(e for row in rows for e in row)
