@@ -41,16 +41,29 @@ def _pairs(items: Sequence[str] | None, option: str) -> dict[str, str]:
 
 def _eval(args: argparse.Namespace) -> str:
     from .analysis import Analysis
+    from .backends import evaluate
     from .reports import evaluation_json, evaluation_text
 
-    if args.backend != "sympy":
-        raise InputError(f"the {args.backend} backend is not available yet (it comes with the "
-                         "code generation of `symkin derive`)", entry="--backend",
-                         hint="use --backend sympy")
     analysis = Analysis(build(load(args.file)))
-    result = analysis.evaluate(_pairs(args.input, "--input"), level=args.level,
-                               params=_pairs(args.param, "--param"))
+    result = evaluate(analysis, _pairs(args.input, "--input"), args.level,
+                      _pairs(args.param, "--param"), args.backend)
     return evaluation_json(result) if args.json else evaluation_text(result)
+
+
+def _derive(args: argparse.Namespace) -> str:
+    from .derive import EMITTERS, derive, parse_list
+    from .analysis import LEVELS
+
+    emit = parse_list(args.emit, EMITTERS, "--emit") or list(EMITTERS)
+    levels = parse_list(args.levels, LEVELS, "--levels")
+    points = parse_list(args.points, None, "--points")
+
+    def progress(message: str) -> None:
+        if not args.quiet:
+            print(f"symkin: {message}", file=sys.stderr, flush=True)
+
+    written = derive(args.file, args.output, emit, points, levels, args.appendix, progress)
+    return "".join(f"{path}\n" for path in written)
 
 
 def parser() -> argparse.ArgumentParser:
@@ -77,6 +90,16 @@ def parser() -> argparse.ArgumentParser:
     ev.add_argument("--backend", choices=("sympy", "numpy", "c"), default="sympy")
     ev.add_argument("--json", action="store_true", help="machine-readable output")
     ev.set_defaults(run=_eval)
+    de = sub.add_parser("derive", help="write the LaTeX report and the C99 and numpy evaluators")
+    de.add_argument("file", metavar="FILE")
+    de.add_argument("-o", "--output", default=".", metavar="DIR", help="output folder (.)")
+    de.add_argument("--emit", metavar="LIST", help="latex,c,numpy (all by default)")
+    de.add_argument("--points", metavar="LIST", help="only these points (all by default)")
+    de.add_argument("--levels", metavar="LIST", help="paper,first_order,exact (all by default)")
+    de.add_argument("--appendix", action="store_true",
+                    help="LaTeX body only, to \\input into a paper")
+    de.add_argument("--quiet", action="store_true", help="no progress messages")
+    de.set_defaults(run=_derive)
     return top
 
 

@@ -25,6 +25,14 @@ def renamed(routine: Routine, names: dict[sp.Symbol, sp.Symbol]) -> Routine:
     return Routine(routine.name, args, lines, outs, routine.doc)
 
 
+def used_symbols(routine: Routine) -> set[sp.Symbol]:
+    """Symbols the routine's assignments and outputs read."""
+    free: set[sp.Symbol] = set()
+    for e in [e for _, e in routine.assignments] + list(routine.outputs):
+        free |= sp.sympify(e).free_symbols
+    return free
+
+
 def special_functions(plan: Plan) -> list[str]:
     """Names of the special kernels used by any routine (sorted, for determinism)."""
     used: set[str] = set()

@@ -8,7 +8,8 @@ from sympy.printing.numpy import NumPyPrinter
 from .. import special
 from ..templating import render
 from .build import Plan
-from .common import header_lines, parameter_symbols, renamed, special_functions, with_dependencies
+from .common import (header_lines, parameter_symbols, renamed, special_functions, used_symbols,
+                     with_dependencies)
 
 
 class Printer(NumPyPrinter):
@@ -23,10 +24,11 @@ class Printer(NumPyPrinter):
 
 def routine_source(routine, printer: Printer) -> dict:
     """Template data for one routine: unpacking lines, assignment lines and the outputs."""
+    free = used_symbols(routine)
     unpack = []
     for arg in routine.arguments:
-        if arg.symbols:
-            names = ", ".join(s.name for s in arg.symbols)
+        if set(arg.symbols) & free:
+            names = ", ".join(s.name if s in free else "_" for s in arg.symbols)
             unpack.append(f"{names}{',' if len(arg.symbols) == 1 else ''} = {arg.name}")
     lines = [f"{s.name} = {printer.doprint(e)}" for s, e in routine.assignments]
     outputs = [printer.doprint(sp.sympify(e)) for e in routine.outputs]
@@ -51,6 +53,7 @@ def emit(plan: Plan, source: str) -> str:
         "numpy/module.py.j2",
         header=header_lines(plan, source),
         inputs=[kin.hinges[a].name for a in kin.inputs],
+        hinges=[kin.hinges[a].name for a in sorted(kin.hinges)],
         points=list(plan.points), levels=list(plan.levels), parameters=defaults,
         n_theta=len(an.thetas),
         input_index=[a - 1 for a in kin.inputs], unknown_index=[a - 1 for a in kin.unknowns],

@@ -1,0 +1,69 @@
+"""C99 backend: `<name>.h` / `<name>.c`, libm only, no allocation, no globals but constants."""
+
+from __future__ import annotations
+
+import sympy as sp
+from sympy.printing.c import C99CodePrinter
+
+from .. import special
+from ..templating import render
+from .build import Plan
+from .common import (header_lines, parameter_symbols, renamed, special_functions, used_symbols,
+                     with_dependencies)
+
+LEVEL_CODES = {"paper": 0, "first_order": 1, "exact": 2}
+
+
+class Printer(C99CodePrinter):
+    """C99 printer without the non-standard M_PI / M_SQRT2 ... macros (strict -std=c99 has none)."""
+
+    def __init__(self, settings=None) -> None:
+        super().__init__(settings)
+        self.math_macros = {}
+
+    def _print_Pi(self, expr):  # noqa: N802 - sympy's printer protocol
+        return "3.141592653589793238462643383279503"
+
+    def _print_Exp1(self, expr):  # noqa: N802
+        return "2.718281828459045235360287471352662"
+
+
+def routine_source(routine, printer: Printer) -> dict:
+    """Template data for one routine as a static C function writing into `out`."""
+    free = used_symbols(routine)
+    unpack = []
+    for arg in routine.arguments:
+        for k, s in enumerate(arg.symbols):
+            if s in free:
+                unpack.append(f"const double {s.name} = {arg.name}[{k}];")
+    lines = [f"const double {s.name} = {printer.doprint(e)};" for s, e in routine.assignments]
+    outputs = [printer.doprint(sp.sympify(e)) for e in routine.outputs]
+    used = {a.name for a in routine.arguments if set(a.symbols) & free}
+    return {"name": routine.name, "doc": routine.doc, "ops": routine.ops,
+            "args": [(a.name, a.name in used) for a in routine.arguments],
+            "unpack": unpack, "lines": lines, "outputs": outputs}
+
+
+def emit(plan: Plan, source: str) -> tuple[str, str]:
+    """The header and source texts."""
+    an = plan.analysis
+    kin = an.kin
+    name = plan.mechanism.name
+    names = parameter_symbols(plan)
+    printer = Printer()
+    routines = [routine_source(renamed(r, names), printer) for r in plan.routines.values()]
+    kernels = with_dependencies(special_functions(plan))
+    context = dict(
+        header=header_lines(plan, source), name=name, NAME=name.upper(),
+        inputs=[kin.hinges[a].name for a in kin.inputs],
+        hinges=[kin.hinges[a].name for a in sorted(kin.hinges)],
+        parameters=[(p.name, repr(float(p.value))) for p in an.mechanism.parameters],
+        points=list(plan.points), levels=[LEVEL_CODES[lv] for lv in plan.levels],
+        level_names=list(plan.levels),
+        n_theta=len(an.thetas), input_index=[a - 1 for a in kin.inputs],
+        unknown_index=[a - 1 for a in kin.unknowns], k=len(kin.unknowns),
+        n_dyads=len(an.rigid.dyads), closed_form=plan.closed_form,
+        needs_loops=plan.needs_loops, routines={r["name"]: r for r in routines},
+        kernels=[special.C_SOURCE[k] for k in kernels],
+    )
+    return render("c/header.h.j2", **context), render("c/source.c.j2", **context)
