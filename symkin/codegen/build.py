@@ -61,7 +61,7 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
         moved_by_loops(n) for n in names)
     routines: dict[str, Routine] = {}
     sol = an.rigid
-    if sol.closed_form:
+    if sol.closed_form and kin.unknowns:
         outs = [sol.phi[kin.hinges[a].M] - sol.phi[kin.hinges[a].P] for a in kin.unknowns]
         outs += [d.reach for d in sol.dyads] + [d.margin for d in sol.dyads]
         routines["rigid"] = Routine("rigid", (inputs, params), sol.assignments, tuple(outs),
