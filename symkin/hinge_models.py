@@ -1,12 +1,24 @@
-"""Hinge models (CONTRACT §2): the names the file may use and the parameters each one takes.
+"""Hinge models (CONTRACT §2): the names the file may use, the parameters each one takes, and the
+model functions.
 
-A model gives (f(θ), g(θ)), the position of M's clamp in the plate frame fixed in P. This module
-holds what the reader needs to validate a file; the formulas themselves are attached per model.
+A model gives (f(θ), g(θ)), the position of M's clamp in the plate frame fixed in P. The registry
+(MODELS, PRBM_PRESETS, HINGE_KEYS, MODEL_KEYS) is what the reader needs to validate a file;
+:func:`plate_functions` gives a hinge's f, g and its deviation from the ideal revolute
+df = f - f_rigid, dg = g - g_rigid as sympy expressions in mechanism.THETA, the deviation written
+with the cancellation-free kernels of :mod:`symkin.special` so that float64 keeps full relative
+accuracy for tiny θ (DESIGN.md, "Numerics").  :func:`model_latex` gives the formulas for reports.
 """
 
 from __future__ import annotations
 
+import math as _math
 from dataclasses import dataclass
+
+import numpy as _np
+import sympy as _sp
+
+from . import special as _special
+from .special import DomainError  # noqa: F401  (re-exported: the elastica's out-of-range error)
 
 #: PRBM presets (Howell): characteristic radius factor γ and stiffness/angle factor c_θ.
 PRBM_PRESETS: dict[str, dict[str, str]] = {
@@ -63,3 +75,243 @@ MODELS: dict[str, ModelSpec] = {spec.name: spec for spec in (
 HINGE_KEYS = ("name", "links", "at", "plate_angle", "length", "model", "input")
 #: Every key a model may take, over all models (allowed in [defaults]).
 MODEL_KEYS = tuple(sorted({p.name for spec in MODELS.values() for p in spec.parameters}))
+
+
+# =============================================================================================
+# Model functions f(θ), g(θ) and their cancellation-free deviations from the rigid hinge
+# =============================================================================================
+
+
+@dataclass(frozen=True)
+class TableFit:
+    """Least-squares polynomial fit of a `table` hinge's rows (numpy.polynomial, power basis).
+
+    Residuals are of f/l and g/l at the rows (dimensionless): RMS and max |residual|."""
+
+    degree: int
+    coeffs_f: tuple[float, ...]          # f/l = sum coeffs_f[k] θ^k
+    coeffs_g: tuple[float, ...]          # g/l = sum coeffs_g[k] θ^k
+    rms_f: float
+    max_f: float
+    rms_g: float
+    max_g: float
+    theta_range: tuple[float, float]     # the rows' θ span: the fit is data only inside it
+    rows: int
+
+
+@dataclass(frozen=True)
+class PlateFunctions:
+    """A hinge model's functions of THETA with the plate length substituted (CONTRACT §2).
+
+    f, g:        position of M's clamp in the plate frame fixed in P.
+    df, dg:      f - f_rigid, g - g_rigid, in cancellation-free form when `stable` is True: a
+                 float64 evaluation (special.FLOAT64 / NUMPY / C_SOURCE for the kernels) keeps full
+                 relative accuracy for every θ down to 1e-300 and up to `limit`.
+    f_rigid, g_rigid: the ideal revolute at the plate midpoint, l/2 (1 + cos θ), l/2 sin θ.
+    limit:       models defined only for |θ| < limit (elastica_force: π/2), else None.
+    fit:         the table model's fit and its residuals, else None.
+    """
+
+    model: str
+    length: _sp.Expr
+    f: _sp.Expr
+    g: _sp.Expr
+    df: _sp.Expr
+    dg: _sp.Expr
+    f_rigid: _sp.Expr
+    g_rigid: _sp.Expr
+    limit: _sp.Expr | None = None
+    stable: bool = True
+    fit: TableFit | None = None
+
+    @property
+    def theta(self) -> _sp.Symbol:
+        return _theta()
+
+    def derivatives(self) -> tuple[_sp.Expr, _sp.Expr]:
+        """(d df/dθ, d dg/dθ), through the kernels' stable derivatives."""
+        t = _theta()
+        return _sp.diff(self.df, t), _sp.diff(self.dg, t)
+
+    def special_names(self) -> list[str]:
+        """Registry names of the special functions in f, g, df, dg and their θ-derivatives."""
+        return _special.used_names(self.f, self.g, self.df, self.dg, *self.derivatives())
+
+    def check_angle(self, theta: object) -> None:
+        """Raise DomainError (a ValueError) when |θ| reaches the model's limit."""
+        if self.limit is None:
+            return
+        value = _sp.sympify(theta)
+        if value.is_number and (_sp.Abs(value) - self.limit).is_nonnegative:
+            raise DomainError(f"hinge model '{self.model}' is defined for |theta| < "
+                              f"{self.limit} only, got theta = {value}")
+
+    @property
+    def residual_rms(self) -> float | None:
+        """Table fit: the larger RMS residual of f/l and g/l (None for other models)."""
+        return None if self.fit is None else max(self.fit.rms_f, self.fit.rms_g)
+
+    @property
+    def residual_max(self) -> float | None:
+        """Table fit: the largest |residual| of f/l and g/l (None for other models)."""
+        return None if self.fit is None else max(self.fit.max_f, self.fit.max_g)
+
+
+def _theta() -> _sp.Symbol:
+    from .mechanism import THETA
+    return THETA
+
+
+def _plate_length() -> _sp.Symbol:
+    from .mechanism import PLATE_LENGTH
+    return PLATE_LENGTH
+
+
+def plate_functions(hinge) -> PlateFunctions:
+    """f, g, df = f - f_rigid, dg = g - g_rigid of `hinge` (a mechanism.Hinge) as sympy
+    expressions in THETA, with the plate length replaced by ``hinge.length``."""
+    model = hinge.model
+    if model not in MODELS:
+        raise ValueError(f"unknown hinge model {model!r}")
+    t = _theta()
+    l = hinge.length
+    half = _sp.Rational(1, 2)
+    f_rigid = l * (1 + _sp.cos(t)) / 2
+    g_rigid = l * _sp.sin(t) / 2
+    sinr, cosr = _special.sinr, _special.cosr
+    if model == "rigid":
+        return PlateFunctions(model, l, f_rigid, g_rigid, _sp.S.Zero, _sp.S.Zero, f_rigid,
+                              g_rigid)
+    if model == "circular_arc":
+        # f = l sin θ/θ, g = l (1 - cos θ)/θ; deviation l u^2 K(u) (cos u, sin u), u = θ/2
+        u = t / 2
+        f = l * sinr(0)(t)
+        g = -l * t * cosr(1)(t)
+        df = l * _sp.cos(u) * u ** 2 * _special.arck(u)
+        dg = l * _sp.sin(u) * u ** 2 * _special.arck(u)
+        return PlateFunctions(model, l, f, g, df, dg, f_rigid, g_rigid)
+    if model == "small_deflection":
+        # f = l, g = l θ/2; df = l sin^2(θ/2) = -l θ^2/2 c1(θ), dg = l (θ - sin θ)/2
+        return PlateFunctions(model, l, l, l * t / 2, -l * t ** 2 / 2 * cosr(1)(t),
+                              -l * t ** 3 / 2 * sinr(1)(t), f_rigid, g_rigid)
+    if model == "prbm":
+        gamma = _sp.sympify(hinge.param("gamma", _sp.Rational(PRBM_PRESETS["force"]["gamma"])))
+        c = _sp.sympify(hinge.param("c_theta", _sp.Rational(PRBM_PRESETS["force"]["c_theta"])))
+        big = t / c
+        f = l * (1 + gamma * big ** 2 * cosr(1)(big))
+        g = gamma * l * _sp.sin(big)
+        # df/l = sin^2(θ/2) - 2γ sin^2(Θ/2) = (a - b)(a + b), a = sin u, b = sqrt(2γ) sin(u/c),
+        # u = θ/2, k = sqrt(2γ)/c:  a - b = u [(1 - k) + u^2 (s1(u) - k/c^2 s1(u/c))],
+        # 1 - k = (c^2 - 2γ)/(c (c + sqrt(2γ))) (exact when γ, c are numbers).
+        # dg/l = γ sin Θ - sin(θ)/2 = θ [(2γ - c)/(2c) + θ^2 (γ/c^3 s1(Θ) - s1(θ)/2)].
+        u = t / 2
+        root = _sp.sqrt(2 * gamma)
+        one_minus_k = (c ** 2 - 2 * gamma) / (c * (c + root))
+        a_minus_b = u * (one_minus_k + u ** 2 * (sinr(1)(u) - root / c ** 3 * sinr(1)(u / c)))
+        a_plus_b = _sp.sin(u) + root * _sp.sin(u / c)
+        df = l * a_minus_b * a_plus_b
+        k_g = (2 * gamma - c) / (2 * c)
+        dg = l * t * (k_g + t ** 2 * (gamma / c ** 3 * sinr(1)(big) - sinr(1)(t) / 2))
+        return PlateFunctions(model, l, f, g, df, dg, f_rigid, g_rigid)
+    if model == "elastica_force":
+        e = _special
+        return PlateFunctions(model, l, l * e.elastica_x(t), l * e.elastica_y(t),
+                              l * e.elastica_dx(t), l * e.elastica_dy(t), f_rigid, g_rigid,
+                              limit=e.ELASTICA_LIMIT)
+    if model == "table":
+        return _table_functions(hinge, t, l, f_rigid, g_rigid)
+    # "expr": the user's own functions; the deviation is a plain difference
+    ell = _plate_length()
+    f = _sp.sympify(hinge.param("f")).subs(ell, l)
+    g = _sp.sympify(hinge.param("g")).subs(ell, l)
+    return PlateFunctions(model, l, f, g, f - f_rigid, g - g_rigid, f_rigid, g_rigid,
+                          stable=False)
+
+
+def _table_functions(hinge, t, l, f_rigid, g_rigid) -> PlateFunctions:
+    """Polynomial fit p(θ) ≈ f/l, r(θ) ≈ g/l; deviations with the rigid Taylor terms subtracted
+    exactly, coefficient by coefficient:
+        cos^2(θ/2) = 1/2 + 1/2 sum_{k<n} (-1)^k θ^(2k)/(2k)! + θ^(2n)/2 c_n(θ),   2n > degree
+        sin(θ)/2  = 1/2 sum_{k<m} (-1)^k θ^(2k+1)/(2k+1)! + θ^(2m+1)/2 s_m(θ),    2m+1 > degree
+    so df/l = sum (p_k - ρ_k) θ^k - θ^(2n)/2 c_n(θ) with exact rational coefficients."""
+    rows = hinge.param("rows")
+    degree = int(hinge.param("degree", 3))
+    if not rows:
+        raise ValueError(f"hinge '{hinge.name}': table model without rows")
+    th = _np.array([r[0] for r in rows], dtype=float)
+    fl = _np.array([r[1] for r in rows], dtype=float)
+    gl = _np.array([r[2] for r in rows], dtype=float)
+
+    def fit(values):
+        poly = _np.polynomial.Polynomial.fit(th, values, degree).convert()
+        coef = _np.zeros(degree + 1)
+        coef[: len(poly.coef)] = poly.coef
+        resid = values - _np.polynomial.polynomial.polyval(th, coef)
+        return coef, float(_np.sqrt(_np.mean(resid ** 2))), float(_np.max(_np.abs(resid)))
+
+    cf, rms_f, max_f = fit(fl)
+    cg, rms_g, max_g = fit(gl)
+    n = degree // 2 + 1
+    m = (degree + 1) // 2
+    rho = {0: _sp.Integer(1)}
+    for k in range(1, n):
+        rho[2 * k] = _sp.Rational((-1) ** k, 2 * _math.factorial(2 * k))
+    sigma = {2 * k + 1: _sp.Rational((-1) ** k, 2 * _math.factorial(2 * k + 1)) for k in range(m)}
+    p = [_sp.Rational(float(c)) for c in cf]
+    r = [_sp.Rational(float(c)) for c in cg]
+    top_f = max(degree, 2 * n - 2)
+    top_g = max(degree, 2 * m - 1)
+    coef_df = [(p[k] if k <= degree else 0) - rho.get(k, 0) for k in range(top_f + 1)]
+    coef_dg = [(r[k] if k <= degree else 0) - sigma.get(k, 0) for k in range(top_g + 1)]
+    poly = lambda cs: _sp.Add(*(c * t ** k for k, c in enumerate(cs)))  # noqa: E731
+    f = l * poly(p)
+    g = l * poly(r)
+    df = l * (poly(coef_df) - t ** (2 * n) / 2 * _special.cosr(n)(t))
+    dg = l * (poly(coef_dg) - t ** (2 * m + 1) / 2 * _special.sinr(m)(t))
+    table_fit = TableFit(degree, tuple(float(c) for c in cf), tuple(float(c) for c in cg),
+                         rms_f, max_f, rms_g, max_g, (float(th.min()), float(th.max())),
+                         len(rows))
+    return PlateFunctions("table", l, f, g, df, dg, f_rigid, g_rigid, fit=table_fit)
+
+
+#: LaTeX of each model's f, g and of its deviation from the rigid hinge (for reports).
+_MODEL_LATEX = {
+    "rigid": (r"f = \tfrac{l}{2}(1+\cos\theta),\quad g = \tfrac{l}{2}\sin\theta,\quad "
+              r"\Delta f = \Delta g = 0"),
+    "circular_arc": (r"f = l\,\frac{\sin\theta}{\theta},\quad g = l\,\frac{1-\cos\theta}{\theta},"
+                     r"\quad \begin{pmatrix}\Delta f\\ \Delta g\end{pmatrix} = l\,u^{2}"
+                     r"\operatorname{K}(u)\begin{pmatrix}\cos u\\ \sin u\end{pmatrix},\ "
+                     r"u = \tfrac{\theta}{2},\ \operatorname{K}(u) = "
+                     r"\frac{\sin u - u\cos u}{u^{3}}"),
+    "prbm": (r"f = l\bigl(1-\gamma(1-\cos\Theta)\bigr),\quad g = \gamma l\sin\Theta,\quad "
+             r"\Theta = \theta/c_\theta,\quad \Delta f = l\,u\Bigl[\frac{c_\theta^{2}-2\gamma}"
+             r"{c_\theta(c_\theta+\sqrt{2\gamma})} + u^{2}\Bigl(\operatorname{s}_1(u) - "
+             r"\frac{\sqrt{2\gamma}}{c_\theta^{3}}\operatorname{s}_1\bigl(\tfrac{u}{c_\theta}\bigr)"
+             r"\Bigr)\Bigr]\bigl(\sin u + \sqrt{2\gamma}\sin\tfrac{u}{c_\theta}\bigr),\ "
+             r"u = \tfrac{\theta}{2},\quad "
+             r"\Delta g = l\theta\Bigl[\frac{2\gamma-c_\theta}{2c_\theta} + \theta^{2}\Bigl("
+             r"\frac{\gamma}{c_\theta^{3}}\operatorname{s}_1(\Theta) - \tfrac12"
+             r"\operatorname{s}_1(\theta)\Bigr)\Bigr]"),
+    "small_deflection": (r"f = l,\quad g = \tfrac{l\theta}{2},\quad \Delta f = l\sin^{2}"
+                         r"\tfrac{\theta}{2},\quad \Delta g = \tfrac{l}{2}(\theta - \sin\theta)"),
+    "elastica_force": (r"f = \frac{l}{R_F(1-s,\,1+s,\,c^{2})},\quad g = l s\Bigl(1-\frac{C}{A}"
+                       r"\Bigr),\quad A = R_F(1-s,1+s,c^{2}),\ C = \tfrac{c^{2}}{3}R_D(1-s,1+s,"
+                       r"c^{2}),\ s = \sin\theta,\ c = \cos\theta,\ |\theta| < \tfrac{\pi}{2};"
+                       r"\quad \Delta f = l s^{2}\Bigl(\frac{1}{2(1+c)} - \frac{A-1}{s^{2}A}"
+                       r"\Bigr),\quad \Delta g = l s\Bigl(\tfrac12 - \frac{C}{A}\Bigr)"),
+    "table": (r"f = l\sum_k p_k\theta^{k},\quad g = l\sum_k r_k\theta^{k}\ "
+              r"\text{(least-squares fit of the table)}"),
+    "expr": r"f,\ g\ \text{as given in the mechanism file}",
+}
+
+#: Definitions of the kernels the formulas above use.
+KERNEL_LATEX = (r"\operatorname{s}_n(x) = \frac{\sin x - \sum_{k<n}(-1)^k x^{2k+1}/(2k+1)!}"
+                r"{x^{2n+1}},\quad \operatorname{c}_n(x) = \frac{\cos x - \sum_{k<n}(-1)^k "
+                r"x^{2k}/(2k)!}{x^{2n}}")
+
+
+def model_latex(hinge_model_name: str) -> str:
+    """LaTeX (math mode, no delimiters) of a model's f, g and its deviation from rigid."""
+    if hinge_model_name not in _MODEL_LATEX:
+        raise ValueError(f"unknown hinge model {hinge_model_name!r}")
+    return _MODEL_LATEX[hinge_model_name]

@@ -2,6 +2,13 @@
 
 from __future__ import annotations
 
+import json
+
+
+def q(name: str) -> str:
+    """A TOML basic string for any name (JSON's escapes are TOML's)."""
+    return json.dumps(name)
+
 HEADER = """format = 1
 name = "{name}"
 [parameters]
@@ -17,17 +24,17 @@ def text(name: str, body: str, l: str = "1e-3", model: str = "circular_arc") -> 
 
 
 def links(*names: str) -> str:
-    return "".join(f'[[link]]\nname = "{n}"\n' for n in names)
+    return "".join(f'[[link]]\nname = {q(n)}\n' for n in names)
 
 
 def hinge(name: str, p: str, m: str, x: float, y: float, angle: str = "0", extra: str = "",
           input: bool = False) -> str:
-    return (f'[[hinge]]\nname = "{name}"\nlinks = ["{p}", "{m}"]\nat = [{x}, {y}]\n'
+    return (f'[[hinge]]\nname = {q(name)}\nlinks = [{q(p)}, {q(m)}]\nat = [{x}, {y}]\n'
             f'plate_angle = "{angle}"\n' + ("input = true\n" if input else "") + extra)
 
 
 def point(name: str, link: str, x: float, y: float) -> str:
-    return f'[[point]]\nname = "{name}"\nlink = "{link}"\nat = [{x}, {y}]\n'
+    return f'[[point]]\nname = {q(name)}\nlink = {q(link)}\nat = [{x}, {y}]\n'
 
 
 SERIAL_ARM = text("serial_arm", links("base", "upper", "fore")
