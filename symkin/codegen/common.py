@@ -62,9 +62,9 @@ def with_dependencies(names: list[str]) -> list[str]:
 
 
 def comment_safe(text: str) -> str:
-    """Text that can sit in any comment or docstring: printable ASCII without quotes or
-    backslashes (so it can neither close a docstring nor splice a C comment line)."""
-    return "".join(ch if 32 <= ord(ch) < 127 and ch not in '"\\`' else "?" for ch in text)
+    """Text that can sit in any comment or docstring: printable ASCII without quotes, backslashes
+    or '*' (so it can neither close a docstring or a C comment nor splice a comment line)."""
+    return "".join(ch if 32 <= ord(ch) < 127 and ch not in '"\\`*' else "?" for ch in text)
 
 
 def header_lines(plan: Plan, source: str) -> list[str]:

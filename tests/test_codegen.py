@@ -1,0 +1,309 @@
+"""Generated numpy and C evaluators against the sympy backend and the independent solver.
+
+Relative error of the deviation <= 1e-9 in float64 at ordinary and extreme inputs: tiny plates
+(l/L = 1e-9), tiny angles (1e-8) and near a toggle position.
+"""
+
+from __future__ import annotations
+
+import ast
+import os
+import shutil
+import subprocess
+import sys
+
+import mpmath
+import numpy as np
+import pytest
+
+import mechanisms as M
+import symkin
+from conftest import EXAMPLES, ROOT
+from reference_solver import Reference
+from symkin.codegen import c_backend, c_runtime, numpy_backend
+from symkin.codegen.build import plan
+from symkin.derive import import_numpy_module
+
+SOURCES = {
+    "four_bar": EXAMPLES / "four_bar.toml",
+    "six_bar": EXAMPLES / "stephenson_six_bar.toml",
+    "nine_bar": EXAMPLES / "nine_bar_platform.toml",
+    "serial_arm": M.SERIAL_ARM,
+    "five_bar": M.FIVE_BAR,
+    "watt_ii": M.WATT_II,
+    "triad": M.TRIAD_SIX_BAR,
+    "non_grashof": M.NON_GRASHOF,
+}
+INPUTS = {
+    "four_bar": {"A0": "0.2"},
+    "six_bar": {"O_A": "0.2"},
+    "nine_bar": {"O": "0.05", "A": "0.03", "B": "-0.02", "K": "0.04"},
+    "serial_arm": {"S": "0.3", "E": "-0.2"},
+    "five_bar": {"O1": "0.15", "O2": "-0.1"},
+    "watt_ii": {"O1": "0.25"},
+    "triad": {"O1": "0.1"},
+    "non_grashof": {"A0": "0.3"},
+}
+LEVEL_CODE = {"paper": 0, "first_order": 1, "exact": 2}
+
+
+def require_compiler():
+    if shutil.which(os.environ.get("CC", "cc")) is None:
+        if os.environ.get("CI") == "true":
+            pytest.fail("no C compiler on the CI machine: .ci/run must install gcc")
+        pytest.skip("no C compiler")
+
+
+class Generated:
+    """A mechanism with its analysis, numpy module and compiled C library."""
+
+    def __init__(self, key):
+        source = SOURCES[key]
+        self.mech = symkin.load(source) if not isinstance(source, str) else symkin.loads(source)
+        self.analysis = symkin.analyze(self.mech)
+        self.plan = plan(self.analysis)
+        self.numpy = import_numpy_module(numpy_backend.emit(self.plan, "test"), self.mech.name)
+        self._lib = None
+
+    @property
+    def lib(self):
+        if self._lib is None:
+            require_compiler()
+            header, code = c_backend.emit(self.plan, "test")
+            kin = self.analysis.kin
+            self._lib = c_runtime.Library(
+                c_runtime.build(self.mech.name, header, code), self.mech.name,
+                len(kin.inputs), len(self.analysis.params), len(self.plan.points), len(kin.hinges))
+        return self._lib
+
+    def params(self, overrides=None):
+        values = self.analysis.parameter_values(overrides)
+        return [float(mpmath.mpf(str(values[s].evalf(30)))) for s in self.analysis.params]
+
+    def run_numpy(self, inputs, level, overrides=None):
+        p = dict(zip((q.name for q in self.mech.parameters), self.params(overrides)))
+        res = self.numpy.evaluate({k: float(v) for k, v in inputs.items()}, level, p)
+        return {n: tuple(float(v) for v in res["points"][n]["deviation"]) for n in self.plan.points}
+
+    def run_c(self, inputs, level, overrides=None):
+        x = [float(inputs[self.analysis.kin.hinges[a].name]) for a in self.analysis.kin.inputs]
+        status, out, _ = self.lib.evaluate(x, self.params(overrides), LEVEL_CODE[level])
+        assert status == 0
+        return {n: (out[6 * i + 4], out[6 * i + 5]) for i, n in enumerate(self.plan.points)}
+
+
+_CACHE: dict[str, Generated] = {}
+
+
+def generated(key) -> Generated:
+    if key not in _CACHE:
+        _CACHE[key] = Generated(key)
+    return _CACHE[key]
+
+
+def rel_err(got, want) -> float:
+    with mpmath.workdps(50):
+        diff = mpmath.sqrt(sum((mpmath.mpf(g) - mpmath.mpf(w)) ** 2 for g, w in zip(got, want)))
+        return float(diff / mpmath.sqrt(sum(mpmath.mpf(w) ** 2 for w in want)))
+
+
+@pytest.mark.parametrize("key", sorted(SOURCES))
+@pytest.mark.parametrize("backend", ["numpy", "c"])
+def test_exact_level_against_independent_solver(key, backend):
+    g = generated(key)
+    ref = Reference(g.mech).deviation(INPUTS[key])
+    got = (g.run_numpy if backend == "numpy" else g.run_c)(INPUTS[key], "exact")
+    for name, dev in got.items():
+        assert rel_err(dev, ref["points"][name]["deviation"]) <= 1e-9, name
+
+
+@pytest.mark.parametrize("key", ["four_bar", "six_bar", "nine_bar", "five_bar", "triad"])
+@pytest.mark.parametrize("backend", ["numpy", "c"])
+@pytest.mark.parametrize("level", ["paper", "first_order", "exact"])
+def test_every_level_matches_the_sympy_backend(key, backend, level):
+    g = generated(key)
+    want = g.analysis.evaluate(INPUTS[key], level)
+    got = (g.run_numpy if backend == "numpy" else g.run_c)(INPUTS[key], level)
+    for name, dev in got.items():
+        assert rel_err(dev, want.points[name].deviation) <= 1e-12, name
+
+
+@pytest.mark.parametrize("key", ["four_bar", "six_bar", "five_bar", "triad"])
+@pytest.mark.parametrize("backend", ["numpy", "c"])
+def test_tiny_plates(key, backend):
+    g = generated(key)
+    overrides = {"l": "5e-11"}                 # l/L about 1e-9
+    ref = Reference(g.mech, overrides).deviation(INPUTS[key])
+    got = (g.run_numpy if backend == "numpy" else g.run_c)(INPUTS[key], "exact", overrides)
+    for name, dev in got.items():
+        assert rel_err(dev, ref["points"][name]["deviation"]) <= 1e-9
+
+
+@pytest.mark.parametrize("key, inputs", [
+    ("four_bar", {"A0": "1e-8"}),
+    ("six_bar", {"O_A": "-1e-8"}),
+    ("five_bar", {"O1": "1e-8", "O2": "2e-8"}),
+    ("serial_arm", {"S": "1e-8", "E": "-1e-8"}),
+])
+@pytest.mark.parametrize("backend", ["numpy", "c"])
+def test_tiny_angles(key, inputs, backend):
+    g = generated(key)
+    ref = Reference(g.mech).deviation(inputs)
+    got = (g.run_numpy if backend == "numpy" else g.run_c)(inputs, "exact")
+    for name, dev in got.items():
+        assert rel_err(dev, ref["points"][name]["deviation"]) <= 1e-9
+
+
+def toggle_input(g) -> float:
+    """The non-Grashof four-bar's rigid assembly limit for A0 > 0, by bisection on the dyad."""
+    lo, hi = 0.3, 3.0
+    for _ in range(60):
+        mid = (lo + hi) / 2
+        try:
+            g.analysis.evaluate({"A0": repr(mid)}, "paper", dps=20)
+            lo = mid
+        except symkin.AssemblyError:
+            hi = mid
+    return lo
+
+
+@pytest.mark.parametrize("margin", ["1e-2", "1e-3"])
+@pytest.mark.parametrize("backend", ["numpy", "c"])
+def test_near_a_toggle_position(margin, backend):
+    g = generated("non_grashof")
+    limit = toggle_input(g)
+    inputs = {"A0": repr(limit - float(margin))}
+    ref = Reference(g.mech).deviation(inputs)
+    got = (g.run_numpy if backend == "numpy" else g.run_c)(inputs, "exact")
+    assert rel_err(got["C"], ref["points"]["C"]["deviation"]) <= 1e-9
+
+
+def test_numpy_broadcasts_and_masks_what_cannot_assemble():
+    g = generated("five_bar")
+    o1 = np.array([[0.1], [0.2], [float("nan")]])
+    o2 = np.array([[-0.1, 0.0, 0.05, 3.0]])
+    res = g.numpy.evaluate({"O1": o1, "O2": o2}, "exact")
+    assert res["ok"].shape == (3, 4)
+    assert res["points"]["P_tip"]["deviation"].shape == (2, 3, 4)
+    assert not res["ok"][2].any()                      # NaN input
+    for i in range(2):
+        for j in range(3):
+            assert res["ok"][i, j]
+            want = g.analysis.evaluate({"O1": repr(float(o1[i, 0])), "O2": repr(float(o2[0, j]))},
+                                       "exact").points["P_tip"].deviation
+            assert rel_err(res["points"]["P_tip"]["deviation"][:, i, j], want) <= 1e-12
+    bad = ~res["ok"]
+    assert np.isnan(res["points"]["P_tip"]["deviation"][:, bad]).all()
+
+
+def test_out_of_range_is_nan_in_numpy_and_status_1_in_c():
+    g = generated("non_grashof")
+    res = g.numpy.evaluate({"A0": np.array([0.3, 2.5])}, "exact")
+    assert res["ok"].tolist() == [True, False]
+    assert np.isnan(res["points"]["C"]["compliant"][:, 1]).all()
+    status, _, _ = g.lib.evaluate([2.5], None, 2)
+    assert status == 1
+
+
+def test_c_rejects_bad_arguments():
+    g = generated("four_bar")
+    assert g.lib.evaluate([float("nan")], None, 2)[0] == 3
+    assert g.lib.evaluate([0.1], None, 5)[0] == 3
+    assert g.lib.evaluate([0.1], [float("inf")], 2)[0] == 3
+
+
+def test_numpy_module_imports_only_numpy_and_the_standard_library():
+    g = generated("four_bar")
+    tree = ast.parse(numpy_backend.emit(g.plan, "test"))
+    modules = {alias.name.split(".")[0] for node in ast.walk(tree)
+               if isinstance(node, ast.Import) for alias in node.names}
+    modules |= {node.module.split(".")[0] for node in ast.walk(tree)
+                if isinstance(node, ast.ImportFrom)}
+    assert modules <= {"numpy", "math"} | set(sys.stdlib_module_names)
+
+
+HARNESS = r"""
+#include <math.h>
+#include <stdio.h>
+#include "NAME.h"
+int main(void)
+{
+    double out[6 * NAME_UPPER_N_POINTS + 6], angles[2 * NAME_UPPER_N_HINGES];
+    double in[NAME_UPPER_N_INPUTS];
+    int i, level, status, bad = 0;
+    for (level = 0; level < 3; ++level) {
+        for (i = 0; i < NAME_UPPER_N_INPUTS; ++i) in[i] = 0.05 * (i + 1);
+        status = NAME_evaluate(in, NULL, level, out);
+        if (status != 0 || !isfinite(out[4])) bad = 1;
+        status = NAME_evaluate_angles(in, NAME_default_params, level, out, angles);
+        if (status != 0) bad = 1;
+    }
+    in[0] = NAN;
+    if (NAME_evaluate(in, NULL, 2, out) != 3) bad = 1;
+    if (NAME_evaluate(NULL, NULL, 2, out) != 3) bad = 1;
+    printf("%s\n", bad ? "FAIL" : "OK");
+    return bad;
+}
+"""
+
+
+@pytest.mark.parametrize("key", ["four_bar", "triad"])
+def test_c_harness_under_address_and_undefined_sanitizers(tmp_path, key):
+    require_compiler()
+    g = generated(key)
+    name = g.mech.name
+    header, code = c_backend.emit(g.plan, "test")
+    (tmp_path / f"{name}.h").write_text(header)
+    (tmp_path / f"{name}.c").write_text(code)
+    (tmp_path / "main.c").write_text(HARNESS.replace("NAME_UPPER", name.upper())
+                                     .replace("NAME", name))
+    cc = os.environ.get("CC", "cc")
+    flags = ["-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O1", "-g",
+             "-fsanitize=address,undefined", "-fno-sanitize-recover=all"]
+    subprocess.run([cc, *flags, "main.c", f"{name}.c", "-o", "harness", "-lm"], cwd=tmp_path,
+                   check=True)
+    proc = subprocess.run(["./harness"], cwd=tmp_path, capture_output=True, text=True,
+                          env={**os.environ, "ASAN_OPTIONS": "detect_leaks=1"})
+    assert proc.returncode == 0 and proc.stdout.strip() == "OK", proc.stdout + proc.stderr
+    assert "runtime error" not in proc.stderr
+
+
+def test_derive_is_deterministic_across_hash_seeds(tmp_path):
+    outputs = []
+    for seed in ("1", "12345"):
+        out = tmp_path / f"out{seed}"
+        env = {**os.environ, "PYTHONHASHSEED": seed}
+        subprocess.run([sys.executable, "-m", "symkin", "derive", "--quiet", "--emit", "c,numpy",
+                        str(EXAMPLES / "stephenson_six_bar.toml"), "-o", str(out)], env=env,
+                       check=True, cwd=ROOT)
+        outputs.append({p.name: p.read_bytes() for p in sorted(out.iterdir())})
+    assert outputs[0] == outputs[1]
+
+
+HOSTILE = M.text("hostile", M.links("int", "a-b", r"\input{/etc/passwd}", '"; system("true")')
+                 + M.hinge("int", "int", "a-b", 0.0, 0.0, "pi/2", input=True)
+                 + M.hinge("*/ x; /*", "a-b", r"\input{/etc/passwd}", 0.015, 0.026)
+                 + M.hinge('""" + __import__("os").system("touch PWNED") + """', "int",
+                           '"; system("true")', 0.1, 0.0, "pi/2")
+                 + M.hinge("\\\\\n#include <x>", r"\input{/etc/passwd}", '"; system("true")',
+                           0.085, 0.068)
+                 + M.point("'; exit(1); '", r"\input{/etc/passwd}", 0.06, 0.09))
+
+
+def test_hostile_names_give_safe_compiling_code(tmp_path):
+    require_compiler()
+    mech = symkin.loads(HOSTILE)
+    an = symkin.analyze(mech)
+    p = plan(an)
+    source = numpy_backend.emit(p, 'x"""y.toml')
+    module = import_numpy_module(source, mech.name)
+    assert module.INPUTS == ("int",)
+    assert module.POINTS == ("'; exit(1); '",)
+    res = module.evaluate({"int": 0.2}, "exact")
+    want = an.evaluate({"int": "0.2"}, "exact").points["'; exit(1); '"].deviation
+    assert rel_err(res["points"]["'; exit(1); '"]["deviation"], want) <= 1e-12
+    assert not (ROOT / "PWNED").exists() and not (tmp_path / "PWNED").exists()
+    header, code = c_backend.emit(p, 'x*/y.toml')
+    lib = c_runtime.Library(c_runtime.build(mech.name, header, code), mech.name, 1, 1, 1, 4)
+    status, out, _ = lib.evaluate([0.2], None, 2)
+    assert status == 0 and rel_err(out[4:6], want) <= 1e-12
