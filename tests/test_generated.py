@@ -1,0 +1,44 @@
+"""generated/ holds `symkin derive` output for every example, byte for byte (SymForce style).
+
+On a difference the test fails with a unified diff; `pytest --update` rewrites generated/.
+"""
+
+from __future__ import annotations
+
+import difflib
+
+import pytest
+
+import symkin
+from conftest import EXAMPLES, ROOT
+from symkin.derive import generate, write_atomically
+
+GENERATED = ROOT / "generated"
+
+
+@pytest.mark.parametrize("example", sorted(p.stem for p in EXAMPLES.glob("*.toml")))
+def test_generated_matches_derive(example, request):
+    files = generate(symkin.load(EXAMPLES / f"{example}.toml"))
+    folder = GENERATED / example
+    if request.config.getoption("--update"):
+        write_atomically(files, folder)
+        return
+    problems = []
+    for name, content in sorted(files.items()):
+        path = folder / name
+        if not path.exists():
+            problems.append(f"{path} is missing (run pytest --update)")
+            continue
+        old = path.read_bytes()
+        if old != content:
+            if name.endswith((".pdf", ".png")):
+                problems.append(f"{path} differs (binary)")
+                continue
+            diff = difflib.unified_diff(old.decode().splitlines(), content.decode().splitlines(),
+                                        f"{path} (committed)", f"{name} (derived now)",
+                                        lineterm="", n=2)
+            problems.append("\n".join(list(diff)[:80]))
+    stale = sorted(set(p.name for p in folder.iterdir()) - set(files)) if folder.exists() else []
+    problems += [f"{folder / s} is not produced any more" for s in stale]
+    assert not problems, "generated/ is out of date (pytest --update rewrites it):\n" + \
+        "\n".join(problems)
