@@ -222,7 +222,9 @@ class Analysis:
             pvals = [mpmath.mpf(sp.N(exact_params[s], dps + 5)) for s in self.params]
             ivals = {a: mpmath.mpf(sp.N(v, dps + 5)) for a, v in given.items()}
             theta, dyads = self._rigid_angles(pvals, ivals)
+            self._check_limits(theta, ivals)
             delta = self._deltas(level, pvals, theta)
+            self._check_limits({a: theta[a] + delta.get(a, 0) for a in theta}, ivals)
             args = [*self.params, *self.thetas, *self.deltas]
             values = [*pvals, *(theta[a] for a in sorted(theta)),
                       *(delta.get(a, mpmath.mpf(0)) for a in self.kin.unknowns)]
@@ -271,6 +273,17 @@ class Analysis:
             h = kin.hinges[a]
             theta[a] = _wrap(phi[h.M] - phi[h.P])
         return theta, dyads
+
+    def _check_limits(self, theta: dict, ivals: dict) -> None:
+        """A hinge model valid only for |θ| < limit (elastica_force) must not be driven past it."""
+        for a, h in self.kin.hinges.items():
+            if h.limit is not None and not abs(theta[a]) < mpmath.mpf(sp.N(h.limit, 30)):
+                at = ", ".join(f"{self.kin.hinges[b].name}={float(v):g}"
+                               for b, v in sorted(ivals.items()))
+                raise AssemblyError(
+                    f"{self.mechanism.path}: at {at} the hinge '{h.name}' would bend to "
+                    f"{float(theta[a]):.6g} rad, beyond its model '{h.hinge.model}', which holds "
+                    f"for |theta| < {float(sp.N(h.limit)):.6g} rad")
 
     def _cannot_close(self, dyad, ivals) -> AssemblyError:
         kin = self.kin

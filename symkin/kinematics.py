@@ -42,6 +42,7 @@ class HingeGeometry:
     g: sp.Expr
     df: sp.Expr             # f - f_rigid, g - g_rigid in cancellation-free form
     dg: sp.Expr
+    limit: sp.Expr | None = None    # the model holds for |θ| < limit (elastica_force: π/2)
 
     @property
     def name(self) -> str:
@@ -94,7 +95,7 @@ class Kinematics:
             P, M = label[h.links[0]], label[h.links[1]]
             hinges[a] = HingeGeometry(a, h, P, M, 1 if P == s.i_plus[a - 1] else -1, h.at,
                                       h.plate_angle, h.length, plate.f, plate.g, plate.df,
-                                      plate.dg)
+                                      plate.dg, plate.limit)
         self.hinges = hinges
         self.inputs = tuple(a for a in hinges if hinges[a].is_input)
         self.unknowns = tuple(a for a in hinges if not hinges[a].is_input)

@@ -40,6 +40,6 @@ def c_string(text: str) -> str:
     return '"' + "".join(out) + '"'
 
 
-def render(name: str, **context: object) -> str:
-    """Render the template `name` (a path under templates/) with `context`."""
-    return environment().get_template(name).render(**context)
+def render(template: str, **context: object) -> str:
+    """Render `template` (a path under templates/) with `context`."""
+    return environment().get_template(template).render(**context)

@@ -58,14 +58,17 @@ WATT_II = text("watt_ii", links("ground", "crank", "coupler", "rocker", "coupler
                + hinge("O3", "ground", "rocker", 0.1, 0.0, "pi/2")
                + hinge("B", "coupler", "rocker", 0.09, 0.065, "pi/3", 'model = "prbm"\n')
                + hinge("C", "rocker", "coupler2", 0.13, 0.05, "0", 'model = "rigid"\n')
-               + hinge("O5", "ground", "output", 0.2, 0.0, "pi/2")
+               + hinge("O5", "ground", "output", 0.2, 0.0, "pi/2",
+                       'model = "expr"\nf = "l*sin(theta)/theta"\n'
+                       'g = "l*(1 - cos(theta))/theta"\n')
                + hinge("D", "coupler2", "output", 0.19, 0.07, "pi/2")
                + point("Q", "coupler2", 0.16, 0.09))
 
 TRIAD_SIX_BAR = text("triad_six_bar", links("ground", "crank", "link1", "tri", "link2", "link3")
                      + hinge("O1", "ground", "crank", 0.0, 0.0, "pi/2", input=True)
                      + hinge("A", "crank", "link1", 0.02, 0.02, "0")
-                     + hinge("B", "link1", "tri", 0.06, 0.05, "pi/4")
+                     + hinge("B", "link1", "tri", 0.06, 0.05, "pi/4",
+                             'model = "elastica_force"\n')
                      + hinge("C", "tri", "link2", 0.1, 0.07, "0")
                      + hinge("O4", "ground", "link2", 0.14, 0.01, "pi/2")
                      + hinge("D", "tri", "link3", 0.08, 0.1, "pi/2")

@@ -68,8 +68,6 @@ def test_out_of_assembly_range_exits_3_naming_the_loop(tmp_path, level):
 
 
 @pytest.mark.parametrize("argv, fragment", [
-    (["--input", "A0=0.2", "--backend", "numpy"], "numpy backend is not available yet"),
-    (["--input", "A0=0.2", "--backend", "c"], "c backend is not available yet"),
     (["--input", "A0"], "not NAME=VALUE"),
     (["--input", "B=0.2"], "'B' is not an input hinge"),
     ([], "no value for the input(s) A0"),
@@ -97,3 +95,36 @@ def test_param_override_cannot_build_a_huge_number(tmp_path, capsys):
                          "--level", "paper")
     assert code == 0, err
     assert time.perf_counter() - start < 20
+
+
+@pytest.mark.parametrize("backend", ["sympy", "numpy", "c"])
+def test_model_limit_exits_3_in_every_backend(tmp_path, backend):
+    path = tmp_path / "elastica.toml"
+    path.write_text((EXAMPLES / "four_bar.toml").read_text().replace(
+        'model = "circular_arc"', 'model = "elastica_force"'))
+    proc = subprocess.run([sys.executable, "-m", "symkin", "eval", str(path), "--input",
+                           "A0=1.7", "--backend", backend], capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 3, proc.stderr
+    assert "hinge 'A0'" in proc.stderr and "elastica_force" in proc.stderr
+
+
+@pytest.mark.parametrize("level", ["paper", "first_order", "exact"])
+def test_all_backends_print_the_same_json(capsys, level):
+    outputs = {}
+    for backend in ("sympy", "numpy", "c"):
+        code, out, err = run(capsys, "eval", str(EXAMPLES / "stephenson_six_bar.toml"),
+                             "--input", "O_A=0.15", "--param", "l=1.2e-3", "--level", level,
+                             "--backend", backend, "--json")
+        assert code == 0, err
+        outputs[backend] = json.loads(out)
+    ref = outputs.pop("sympy")
+    for backend, data in outputs.items():
+        assert data["backend"] == backend
+        assert list(data["angles"]["rigid"]) == list(ref["angles"]["rigid"])
+        for kind in ("rigid", "compliant"):
+            for h, v in ref["angles"][kind].items():
+                assert data["angles"][kind][h] == pytest.approx(v, rel=1e-13, abs=1e-15)
+        for key in ("rigid", "compliant", "deviation"):
+            for got, want in zip(data["points"]["D"][key], ref["points"]["D"][key]):
+                assert got == pytest.approx(want, rel=1e-12)

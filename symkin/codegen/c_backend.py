@@ -57,6 +57,8 @@ def emit(plan: Plan, source: str) -> tuple[str, str]:
         header=header_lines(plan, source), name=name, NAME=name.upper(),
         inputs=[kin.hinges[a].name for a in kin.inputs],
         hinges=[kin.hinges[a].name for a in sorted(kin.hinges)],
+        limits=[(a - 1, repr(float(sp.N(h.limit, 20)))) for a, h in sorted(kin.hinges.items())
+                if h.limit is not None],
         parameters=[(p.name, repr(float(p.value))) for p in an.mechanism.parameters],
         points=list(plan.points), levels=[LEVEL_CODES[lv] for lv in plan.levels],
         level_names=list(plan.levels),
