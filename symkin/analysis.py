@@ -78,10 +78,11 @@ def _namespace() -> dict:
 class Analysis:
     """The symbolic deviation of a mechanism's points at every level, and its evaluation."""
 
-    def __init__(self, structure: Structure, points: Sequence[str] | None = None) -> None:
+    def __init__(self, structure: Structure, points: Sequence[str] | None = None,
+                 plate=None) -> None:
         self.structure = structure
         self.mechanism = mech = structure.mechanism
-        self.kin = kin = Kinematics(structure)
+        self.kin = kin = Kinematics(structure, plate)
         self.rigid = rigid_solver.solve(kin)
         names = [p.name for p in mech.points]
         for p in points or ():

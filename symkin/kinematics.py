@@ -81,8 +81,10 @@ class HingeGeometry:
 class Kinematics:
     """Symbolic kinematics of a labeled mechanism: link rotations, point positions, loop closure."""
 
-    def __init__(self, structure: Structure) -> None:
+    def __init__(self, structure: Structure, plate=None) -> None:
+        """`plate(hinge) -> PlateFunctions` overrides the hinge models (variants use it)."""
         self.structure = s = structure
+        plate_of = plate or hinge_models.plate_functions
         mech = s.mechanism
         self.mechanism = mech
         label = {name: i for i, name in enumerate(s.links)}
@@ -91,7 +93,7 @@ class Kinematics:
         hinges = {}
         for a, name in enumerate(s.hinges, start=1):
             h = mech.hinge(name)
-            plate = hinge_models.plate_functions(h)
+            plate = plate_of(h)
             P, M = label[h.links[0]], label[h.links[1]]
             hinges[a] = HingeGeometry(a, h, P, M, 1 if P == s.i_plus[a - 1] else -1, h.at,
                                       h.plate_angle, h.length, plate.f, plate.g, plate.df,

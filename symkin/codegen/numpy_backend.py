@@ -36,8 +36,8 @@ def routine_source(routine, printer: Printer) -> dict:
             "unpack": unpack, "lines": lines, "outputs": outputs, "ops": routine.ops}
 
 
-def emit(plan: Plan, source: str) -> str:
-    """The numpy module's text."""
+def emit(plan: Plan, source: str, dtype: str = "float64") -> str:
+    """The numpy module's text; `dtype` float32 gives the single-precision variant."""
     an = plan.analysis
     kin = an.kin
     names = parameter_symbols(plan)
@@ -61,5 +61,5 @@ def emit(plan: Plan, source: str) -> str:
         input_index=[a - 1 for a in kin.inputs], unknown_index=[a - 1 for a in kin.unknowns],
         n_dyads=len(an.rigid.dyads), closed_form=plan.closed_form,
         needs_loops=plan.needs_loops, n_loops=len(kin.chords),
-        routines=routines, kernels=[special.NUMPY_SOURCE[k] for k in kernels],
+        routines=routines, kernels=[special.NUMPY_SOURCE[k] for k in kernels], dtype=dtype,
     )
