@@ -62,8 +62,31 @@ def _derive(args: argparse.Namespace) -> str:
         if not args.quiet:
             print(f"symkin: {message}", file=sys.stderr, flush=True)
 
-    written = derive(args.file, args.output, emit, points, levels, args.appendix, progress)
+    if args.tolerance is not None and not args.tolerance > 0:
+        raise InputError(f"tolerance must be positive, got {args.tolerance}", entry="--tolerance")
+    written = derive(args.file, args.output, emit, points, levels, args.appendix, progress,
+                     args.tolerance, args.range)
     return "".join(f"{path}\n" for path in written)
+
+
+def _tradeoff(args: argparse.Namespace) -> str:
+    import json
+
+    from . import tradeoff
+
+    mech = load(args.file)
+    if args.samples < 3:
+        raise InputError(f"--samples must be at least 3, got {args.samples}", entry="--samples")
+    spans = tradeoff.parse_ranges(args.range, mech.inputs, mech.path)
+
+    def progress(message: str) -> None:
+        if not args.quiet:
+            print(f"symkin: {message}", file=sys.stderr, flush=True)
+
+    table = tradeoff.run(mech, spans, args.samples, progress=progress)
+    if args.plot:
+        tradeoff.plot(table, args.plot)
+    return json.dumps(table.as_json(), indent=2) + "\n" if args.json else tradeoff.text(table)
 
 
 def parser() -> argparse.ArgumentParser:
@@ -99,7 +122,20 @@ def parser() -> argparse.ArgumentParser:
     de.add_argument("--appendix", action="store_true",
                     help="LaTeX body only, to \\input into a paper")
     de.add_argument("--quiet", action="store_true", help="no progress messages")
+    de.add_argument("--tolerance", type=float, metavar="TOL",
+                    help="derive the cheapest variant whose worst relative error meets TOL")
+    de.add_argument("--range", action="append", metavar="H=LO:HI",
+                    help="input range for --tolerance (default -0.2:0.2 rad)")
     de.set_defaults(run=_derive)
+    tr = sub.add_parser("tradeoff", help="speed and accuracy of every variant over a range")
+    tr.add_argument("file", metavar="FILE")
+    tr.add_argument("--range", action="append", metavar="H=LO:HI",
+                    help="input range (default -0.2:0.2 rad for every input)")
+    tr.add_argument("--samples", type=int, default=25, metavar="N", help="samples (25)")
+    tr.add_argument("--json", action="store_true", help="machine-readable output")
+    tr.add_argument("--plot", metavar="FILE.png", help="error against time, log-log")
+    tr.add_argument("--quiet", action="store_true", help="no progress messages")
+    tr.set_defaults(run=_tradeoff)
     return top
 
 

@@ -39,17 +39,25 @@ def parse_list(text: str | None, allowed: Sequence[str] | None, option: str) -> 
 
 def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[str] | None = None,
              levels: Sequence[str] | None = None, appendix: bool = False,
-             progress: Callable[[str], None] | None = None) -> dict[str, bytes]:
-    """File name -> content of every requested artifact (nothing is written)."""
+             progress: Callable[[str], None] | None = None, variant=None,
+             notes: Sequence[str] = ()) -> dict[str, bytes]:
+    """File name -> content of every requested artifact (nothing is written). A `variant`
+    (symkin.variants.Variant) derives that cheaper variant instead of the file's models."""
     from .codegen import c_backend, numpy_backend
     from .codegen.build import plan
 
     say = progress or (lambda message: None)
     source = Path(mech.path).name
     say(f"deriving {mech.name}: structure and kinematics")
-    analysis = Analysis(build(mech), points)
+    if variant is not None:
+        from .variants import analysis_for
+
+        analysis = analysis_for(mech, variant, points)
+        levels = [variant.level]
+    else:
+        analysis = Analysis(build(mech), points)
     say("deriving the routines (CSE)")
-    p = plan(analysis, points, levels or LEVELS)
+    p = plan(analysis, points, levels or LEVELS, notes=notes)
     files: dict[str, bytes] = {}
     if "numpy" in emit:
         say("emitting numpy")
@@ -96,9 +104,31 @@ def write_atomically(files: dict[str, bytes], out_dir: Path) -> list[Path]:
 
 def derive(path: str | Path, out_dir: str | Path = ".", emit: Sequence[str] = EMITTERS,
            points: Sequence[str] | None = None, levels: Sequence[str] | None = None,
-           appendix: bool = False, progress: Callable[[str], None] | None = None) -> list[Path]:
-    """Load, generate and write; returns the written paths."""
-    files = generate(load(path), emit, points, levels, appendix, progress)
+           appendix: bool = False, progress: Callable[[str], None] | None = None,
+           tolerance: float | None = None, ranges: Sequence[str] | None = None) -> list[Path]:
+    """Load, generate and write; returns the written paths. With a `tolerance`, the cheapest
+    variant whose measured worst error over `ranges` meets it is derived instead."""
+    mech = load(path)
+    variant, notes = None, []
+    if tolerance is not None:
+        from . import tradeoff
+
+        say = progress or (lambda message: None)
+        spans = tradeoff.parse_ranges(ranges, mech.inputs, mech.path)
+        say(f"measuring the variants for tolerance {tolerance:g}")
+        table = tradeoff.run(mech, spans, with_c="c" in emit, progress=say)
+        row = tradeoff.choose(table, tolerance, points)
+        variant = row.variant
+        span = ", ".join(f"{k} in [{a:g}, {b:g}]" for k, (a, b) in spans.items())
+        notes = [f"Tolerance {tolerance:g} over {span}: variant {variant.name} chosen, the "
+                 "cheapest whose measured worst relative error meets it;"]
+        notes += [f"  point {p}: worst relative error {e:.3g} (against mpmath, 30 digits)"
+                  for p, e in row.errors.items() if points is None or p in points]
+        say(notes[0])
+    elif ranges:
+        raise InputError("--range needs --tolerance", entry="--range",
+                         hint="add --tolerance, e.g. --tolerance 1e-6")
+    files = generate(mech, emit, points, levels, appendix, progress, variant, notes)
     return write_atomically(files, Path(out_dir))
 
 

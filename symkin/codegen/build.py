@@ -36,6 +36,7 @@ class Plan:
     closed_form: bool                  # rigid solution by dyads (else Newton + continuation)
     routines: dict[str, Routine]
     n_unknowns: int                    # k = number of non-input hinges (size of δ)
+    notes: tuple[str, ...] = ()        # e.g. the variant a tolerance chose, for the headers
 
     @property
     def mechanism(self):
@@ -43,7 +44,8 @@ class Plan:
 
 
 def plan(analysis: Analysis, points: Sequence[str] | None = None,
-         levels: Sequence[str] | None = None, cse: bool = True) -> Plan:
+         levels: Sequence[str] | None = None, cse: bool = True,
+         notes: Sequence[str] = ()) -> Plan:
     """Derive the routines for the requested points and levels (all by default)."""
     an, kin = analysis, analysis.kin
     names = tuple(p.name for p in an.points if points is None or p.name in points)
@@ -92,4 +94,5 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
             f"deviation of the points at level {lv}")
     if cse:
         routines = {k: optimize(r) for k, r in routines.items()}
-    return Plan(an, names, levels, needs_loops, sol.closed_form, routines, len(an.deltas))
+    return Plan(an, names, levels, needs_loops, sol.closed_form, routines, len(an.deltas),
+                tuple(notes))

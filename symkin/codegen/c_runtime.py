@@ -30,10 +30,13 @@ def cache_dir() -> Path:
     return Path(base)
 
 
-def build(name: str, header: str, source: str, flags: tuple[str, ...] = CFLAGS) -> Path:
-    """Shared library of the generated pair; rebuilt only when the text or flags change."""
+def build(name: str, header: str, source: str, flags: tuple[str, ...] = CFLAGS,
+          extra: str = "") -> Path:
+    """Shared library of the generated pair (and an `extra` C file, e.g. a timer); rebuilt
+    only when the texts or flags change."""
     cc = compiler()
-    digest = hashlib.sha256("\0".join((cc, *flags, header, source)).encode()).hexdigest()[:20]
+    digest = hashlib.sha256("\0".join((cc, *flags, header, source, extra)).encode()
+                            ).hexdigest()[:20]
     target = cache_dir() / f"{name}-{digest}.so"
     if target.exists():
         return target
@@ -41,8 +44,12 @@ def build(name: str, header: str, source: str, flags: tuple[str, ...] = CFLAGS) 
     with tempfile.TemporaryDirectory() as tmp:
         (Path(tmp) / f"{name}.h").write_text(header)
         (Path(tmp) / f"{name}.c").write_text(source)
+        files = [f"{name}.c"]
+        if extra:
+            (Path(tmp) / "extra.c").write_text(extra)
+            files.append("extra.c")
         built = Path(tmp) / "lib.so"
-        proc = subprocess.run([cc, *flags, f"{name}.c", "-o", str(built), "-lm"], cwd=tmp,
+        proc = subprocess.run([cc, *flags, *files, "-o", str(built), "-lm"], cwd=tmp,
                               capture_output=True, text=True)
         if proc.returncode != 0:
             raise RuntimeError(f"the generated C did not compile:\n{proc.stderr}")
@@ -72,3 +79,58 @@ class Library:
         angles = (ctypes.c_double * (2 * self.n_hinges))()
         status = self.fn(x, p, level, out, angles)
         return status, list(out)[: 6 * self.n_points], list(angles)
+
+
+TIMER = r"""
+#define _POSIX_C_SOURCE 199309L
+#include <stddef.h>
+#include <time.h>
+#include "NAME.h"
+
+/* Evaluate n configurations `repeats` times; the elapsed seconds, measured inside C. */
+double symkin_time(const double *inputs, int n, int repeats, int level, double *sink)
+{
+    struct timespec t0, t1;
+    double out[6 * UPPER_N_POINTS + 6];
+    double acc = 0.0;
+    int r, i;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    for (r = 0; r < repeats; ++r) {
+        for (i = 0; i < n; ++i) {
+            if (NAME_evaluate(inputs + (size_t)i * UPPER_N_INPUTS, NULL, level, out) == 0) {
+                acc += out[4];
+            }
+        }
+    }
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    *sink = acc;
+    return (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+}
+"""
+
+
+def time_per_evaluation(name: str, header: str, source: str, inputs: list[float], n: int,
+                        level: int, budget: float = 0.2) -> float:
+    """Seconds per call of the generated evaluator over `n` input rows, timed inside C."""
+    mech_name = _evaluate_prefix(header)
+    extra = TIMER.replace("UPPER", mech_name.upper()).replace("NAME", mech_name)
+    lib = ctypes.CDLL(str(build(mech_name, header, source, CFLAGS, extra)))
+    fn = lib.symkin_time
+    fn.restype = ctypes.c_double
+    fn.argtypes = [ctypes.POINTER(ctypes.c_double), ctypes.c_int, ctypes.c_int, ctypes.c_int,
+                   ctypes.POINTER(ctypes.c_double)]
+    data = (ctypes.c_double * max(1, len(inputs)))(*inputs)
+    sink = ctypes.c_double()
+    repeats = 1
+    while True:
+        elapsed = fn(data, n, repeats, level, ctypes.byref(sink))
+        if elapsed >= budget or repeats >= 1 << 20:
+            return elapsed / (n * repeats)
+        repeats *= 2 if elapsed <= 0 else max(2, int(budget / elapsed) + 1)
+
+
+def _evaluate_prefix(header: str) -> str:
+    """The mechanism name a generated header declares (<name>_evaluate)."""
+    import re
+
+    return re.search(r"int (\w+)_evaluate\(", header).group(1)

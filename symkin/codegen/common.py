@@ -81,4 +81,5 @@ def header_lines(plan: Plan, source: str) -> list[str]:
         "Operation counts after CSE: " + ", ".join(f"{k} {r.ops}"
                                                    for k, r in plan.routines.items()) + ".",
     ]
+    lines += list(plan.notes)
     return [comment_safe(line) for line in lines]

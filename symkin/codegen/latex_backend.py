@@ -1,0 +1,787 @@
+"""LaTeX backend: a report `<name>.tex` (standalone or appendix body) and its figure PDFs.
+
+The report restates the paper's derivation for one mechanism: the labeled graph (i± table, arcs),
+I, Φ, Ψ, the plate data c_ia, α±, l_a, J and J*, the link positions (4.7), the hinge models with
+their cancellation-free Δf, Δg, the loop equations (5.1)/(5.3) with their scalar, squared and
+solved forms, the closed-form rigid solution (dyads, branch signs), the deviation of every point
+at the levels paper and first_order (and the exact closure it approximates) and a plot of |ΔR|
+over an input range evaluated with the generated numpy module.
+
+Every expression is printed by sympy's LatexPrinter (:class:`latex_text.Tex`) and long ones are
+broken over lines; every name from the mechanism file passes :func:`escape_latex`. Output is
+deterministic: sorted or file-ordered data only, no timestamps, figures with fixed metadata.
+Packages used: amsmath, amssymb, graphicx, booktabs (and geometry in the standalone document),
+all in TeX Live's latex-recommended set.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cache
+from importlib import resources
+
+import jinja2
+import numpy as np
+import sympy as sp
+
+from .. import hinge_models
+from .. import special
+from .. import vectors as V
+from ..mechanism import PLATE_LENGTH, THETA
+from .build import Plan
+from .common import header_lines
+from .latex_figures import (PoseData, Sweep, deviation_figure, graph_figure, pose_figure, sub)
+from .latex_text import (LINE_WIDTH_EM, Tex, align_lines, escape_latex, math_name, pack,
+                         plain_name, width)
+
+__all__ = ["emit", "escape_latex", "environment", "SWEEP_RANGE", "SWEEP_SAMPLES"]
+
+#: Default input range of the deviation plot: every input equal to t, |t| <= SWEEP_RANGE (rad).
+SWEEP_RANGE = 0.3
+SWEEP_SAMPLES = 241
+#: Matrices wider than this many columns are printed in column blocks.
+MAX_MATRIX_COLS = 14
+
+LEVEL_TITLES = {"paper": "paper", "first_order": "first order", "exact": "exact"}
+
+
+# -- Jinja environment with LaTeX-friendly delimiters (SymForce style) ----------------------------
+
+@cache
+def environment() -> jinja2.Environment:
+    r"""Strict environment over the packaged templates with ``\VAR{...}``, ``\BLOCK{...}`` and
+    ``\#{...}`` delimiters, so TeX's braces never clash with Jinja's."""
+    root = resources.files("symkin.templates")
+    env = jinja2.Environment(
+        loader=jinja2.FileSystemLoader(str(root)),
+        undefined=jinja2.StrictUndefined,
+        trim_blocks=True,
+        lstrip_blocks=True,
+        keep_trailing_newline=True,
+        autoescape=False,
+        block_start_string=r"\BLOCK{",
+        block_end_string="}",
+        variable_start_string=r"\VAR{",
+        variable_end_string="}",
+        comment_start_string=r"\#{",
+        comment_end_string="}",
+        line_statement_prefix=None,
+        line_comment_prefix=None,
+    )
+    env.filters["tex"] = escape_latex
+    env.filters["mathname"] = math_name
+    return env
+
+
+# -- small formatting helpers -----------------------------------------------------------------------
+
+def sci(x: float, digits: int = 3) -> str:
+    r"""A float as LaTeX math text: ``1.23\times 10^{-6}`` (or plain for moderate magnitudes)."""
+    if x is None or not math.isfinite(x):
+        return r"\text{--}"
+    if x == 0:
+        return "0"
+    exponent = int(math.floor(math.log10(abs(x))))
+    if -2 <= exponent <= 3:
+        return f"{x:.{max(digits - 1 - exponent, 0)}f}"
+    mantissa = x / 10 ** exponent
+    text = f"{mantissa:.{digits - 1}f}"
+    if text.startswith(("10.", "-10.")):
+        mantissa /= 10
+        exponent += 1
+        text = f"{mantissa:.{digits - 1}f}"
+    return rf"{text}\times 10^{{{exponent}}}"
+
+
+def _num(expr: sp.Expr, defaults: dict) -> float:
+    return float(sp.N(sp.sympify(expr).subs(defaults), 30))
+
+
+def _chunks(items: list, size: int) -> list[list]:
+    return [items[k:k + size] for k in range(0, len(items), size)] or [[]]
+
+
+def _rotation_tex(tex: Tex, angle: sp.Expr) -> str:
+    r"""``\mathbf{G}(\varphi)``: the rotation matrix of the paper's (5.2)."""
+    return r"\mathbf{G}\!\left(" + tex(angle) + r"\right)"
+
+
+# -- the report ----------------------------------------------------------------------------------
+
+class Report:
+    """Builds the template context of one plan."""
+
+    def __init__(self, plan: Plan, source: str) -> None:
+        self.plan = plan
+        self.source = source
+        self.an = an = plan.analysis
+        self.kin = an.kin
+        self.s = an.structure
+        self.mech = an.mechanism
+        self.defaults = dict(self.mech.defaults)
+        self.tex = Tex(self._symbol_names())
+
+    # -- symbols -------------------------------------------------------------------------------
+    def _symbol_names(self) -> dict[sp.Symbol, str]:
+        kin = self.kin
+        names: dict[sp.Symbol, str] = {}
+        for a in kin.theta:
+            names[kin.theta[a]] = rf"\theta_{{{a}}}"
+            names[kin.delta[a]] = rf"\delta_{{{a}}}"
+        names[THETA] = r"\theta"
+        names[PLATE_LENGTH] = "l"
+        sol = self.an.rigid
+        for d in sol.dyads:
+            h1, h2, h3 = d.hinges
+            roots = (min(d.bodies[0]), min(d.bodies[1]))
+            suffix = {"ax": rf"X_{{{h1}}}", "ay": rf"Y_{{{h1}}}", "cx": rf"X_{{{h3}}}",
+                      "cy": rf"Y_{{{h3}}}", "bx": rf"X_{{{h2}}}", "by": rf"Y_{{{h2}}}",
+                      "dsq": rf"D_{{{d.index}}}", "along": rf"\lambda_{{{d.index}}}",
+                      "reach": rf"\rho_{{{d.index}}}", "across": rf"\eta_{{{d.index}}}",
+                      "margin": rf"\mu_{{{d.index}}}", "phi1": rf"\varphi_{{{roots[0]}}}",
+                      "phi2": rf"\varphi_{{{roots[1]}}}"}
+            for symbol, _ in sol.assignments:
+                prefix = f"dyad{d.index}_"
+                if symbol.name.startswith(prefix) and symbol.name[len(prefix):] in suffix:
+                    names[symbol] = suffix[symbol.name[len(prefix):]]
+        # Parameters print as sympy prints their names (l, gamma_B -> \gamma_{B}) unless the
+        # name is unusual or would look like one of the report's own symbols.
+        reserved = set(names.values()) | {r"\theta", r"\delta", "r", r"\beta", "a", "X", "Y",
+                                           "S", "C", "D"}
+        printer = Tex()
+        for p in self.mech.parameters:
+            default = printer(p.symbol)
+            simple = (p.name[0].isalpha() and p.name.count("_") <= 1
+                      and not p.name.endswith("_") and p.name.replace("_", "").isalnum())
+            if not simple or default in reserved or default.split("_")[0] in (
+                    r"\theta", r"\delta", "r", r"\beta", "a", "X", "Y", "D", r"\varphi",
+                    r"\lambda", r"\rho", r"\eta", r"\mu"):
+                names[p.symbol] = r"\text{\itshape " + escape_latex(p.name) + "}"
+        return names
+
+    def link_name(self, i: int) -> str:
+        return escape_latex(self.s.links[i])
+
+    def hinge_name(self, a: int) -> str:
+        return escape_latex(self.s.hinges[a - 1])
+
+    # -- sections ------------------------------------------------------------------------------
+    def context(self, appendix: bool) -> dict:
+        mech, s, kin, an = self.mech, self.s, self.kin, self.an
+        name = mech.name
+        ctx = {
+            "appendix": appendix,
+            "header": header_lines(self.plan, self.source),
+            "name": escape_latex(name),
+            "label": "symkin:" + "".join(ch if ch.isalnum() else "-" for ch in name),
+            "source": escape_latex(self.source),
+            "figure_pose": f"{name}-pose.pdf",
+            "figure_graph": f"{name}-graph.pdf",
+            "n": s.n, "m": s.m, "loops": s.m - s.n, "mobility": mech.mobility,
+            "inputs": [escape_latex(n) for n in mech.inputs],
+            "input_labels": [a for a in kin.inputs],
+            "unknown_labels": list(kin.unknowns),
+            "point_names": [escape_latex(p) for p in self.plan.points],
+            "levels": [LEVEL_TITLES[lv] for lv in self.plan.levels],
+            "closed_form": self.plan.closed_form,
+            "relabeled": s.relabeled,
+            "links": [{"label": i, "name": self.link_name(i),
+                       "ground": i == 0} for i in range(s.n + 1)],
+            "parameters": self.parameters(),
+        }
+        ctx["hinges"] = self.hinge_rows()
+        ctx["ipm"] = self.ipm_table()
+        ctx["matrices"] = self.structure_matrices()
+        ctx["plates"] = self.plate_rows()
+        ctx["rotations"] = self.rotation_lines()
+        ctx["dz"] = self.delta_z_lines()
+        ctx["jmat"] = self.j_matrices()
+        ctx["positions"] = self.position_lines()
+        ctx["models"], ctx["kernels"] = self.models()
+        ctx["loop_eqs"] = self.loops()
+        ctx["rigid"] = self.rigid_solution()
+        ctx["linear"] = self.linear_system()
+        ctx["points"] = self.points()
+        ctx["first_order_lines"] = [ln for p in ctx["points"] for ln in p["first_order"]]
+        ctx["exact_lines"] = [ln for p in ctx["points"] for ln in p["exact"]]
+        ctx["matrix_cols"] = max(10, s.m, s.n + 1)
+        return ctx
+
+    def parameters(self) -> list[dict]:
+        rows = []
+        for p in self.mech.parameters:
+            rows.append({"name": escape_latex(p.name), "symbol": self.tex(p.symbol),
+                         "expr": self.tex(p.expr), "value": sci(_num(p.value, {}), 6)})
+        return rows
+
+    def hinge_rows(self) -> list[dict]:
+        s, kin = self.s, self.kin
+        rows = []
+        for a in range(1, s.m + 1):
+            h = kin.hinges[a]
+            params = [f"{escape_latex(k)} = {escape_latex(str(v))}" for k, v in
+                      h.hinge.model_params if k not in ("rows",)]
+            rows.append({
+                "a": a, "name": self.hinge_name(a),
+                "plus": s.i_plus[a - 1], "minus": s.i_minus[a - 1],
+                "chord": a > s.n, "input": h.is_input, "sign": h.sign,
+                "model": escape_latex(h.hinge.model),
+                "params": ", ".join(params),
+            })
+        return rows
+
+    def ipm_table(self) -> list[list[dict]]:
+        s = self.s
+        cols = [{"a": a, "plus": s.i_plus[a - 1], "minus": s.i_minus[a - 1]}
+                for a in range(1, s.m + 1)]
+        return _chunks(cols, 12)
+
+    def _int_matrix(self, lhs: str, rows: list[list[int]], col0: int = 1) -> list[str]:
+        """Display lines of an integer matrix, in column blocks when it is wide."""
+        ncol = len(rows[0]) if rows else 0
+        out = []
+        blocks = _chunks(list(range(ncol)), MAX_MATRIX_COLS) if ncol else [[]]
+        for block in blocks:
+            sub_rows = [[r[c] for c in block] for r in rows]
+            body = self.tex.matrix(sub_rows) if block else r"\mathbf{0}"
+            if len(blocks) > 1:
+                tag = rf"{lhs}_{{:,\,{block[0] + col0}..{block[-1] + col0}}}"
+            else:
+                tag = lhs
+            out.append(f"{tag} = {body}")
+        return out
+
+    def structure_matrices(self) -> dict:
+        s = self.s
+        return {
+            "I": self._int_matrix(r"\underline{I}", s.incidence.tolist()),
+            "Phi": self._int_matrix(r"\underline{\Phi}", s.loops.tolist()),
+            "Psi": self._int_matrix(r"\underline{\Psi}", s.paths.tolist()),
+            "Iplus": self._int_matrix(r"\underline{I}^{+}", s.incidence_plus.tolist()),
+        }
+
+    def plate_rows(self) -> list[dict]:
+        kin, s = self.kin, self.s
+        rows = []
+        for a in range(1, s.m + 1):
+            data = kin.plate_data(a)
+            rows.append({
+                "a": a, "name": self.hinge_name(a),
+                "plus": s.i_plus[a - 1], "minus": s.i_minus[a - 1],
+                "centre": self.tex.small_vector(kin.hinges[a].centre),
+                "c_plus": self.tex.small_vector(data["c_plus"]),
+                "c_minus": self.tex.small_vector(data["c_minus"]),
+                "alpha_plus": self.tex(data["alpha_plus"]),
+                "alpha_minus": self.tex(data["alpha_minus"]),
+                "q_star": self.tex(data["q_star"]),
+                "length": self.tex(data["length"]),
+                "model": escape_latex(kin.hinges[a].hinge.model),
+            })
+        return rows
+
+    def rotation_lines(self) -> list[str]:
+        """φ_i = Σ q_b over the direct path, q_b = σ_b θ_b."""
+        lines = []
+        for i in range(1, self.s.n + 1):
+            lines += self.tex.equation(rf"\varphi_{{{i}}}", self.kin.phi(i))
+        return lines
+
+    def delta_z_lines(self) -> list[str]:
+        """Δz_a = σ_a G(φ_P) (Δf_a(θ_a) u_a + Δg_a(θ_a) u_a^⊥) for every hinge."""
+        kin, tex = self.kin, self.tex
+        lines = []
+        for a in range(1, self.s.m + 1):
+            h = kin.hinges[a]
+            phi_p = kin.phi(h.P)
+            u = V.unit(h.angle)
+            body = (rf"\Delta f_{{{a}}}(\theta_{{{a}}})\,{tex.vector(u)} + "
+                    rf"\Delta g_{{{a}}}(\theta_{{{a}}})\,{tex.vector(V.perp(u))}")
+            rot = "" if phi_p == 0 else _rotation_tex(tex, phi_p)
+            sign = "-" if h.sign < 0 else ""
+            if rot or sign:
+                rhs = rf"{sign}{rot}\Bigl[{body}\Bigr]"
+            else:
+                rhs = body
+            lines.append(rf"\Delta\mathbf{{z}}_{{{a}}} &= {rhs}")
+        return lines
+
+    def _abstract_names(self, exprs) -> Tex:
+        """Printer naming the abstract c_{i,a}, z_{a} symbols of paper_matrices in bold."""
+        names = {}
+        for e in exprs:
+            for symbol in sorted(sp.sympify(e).free_symbols, key=lambda x: x.name):
+                if symbol.name.startswith(("c_{", "z_{")):
+                    names[symbol] = r"\mathbf{" + symbol.name[0] + "}" + symbol.name[1:]
+        names[sp.Symbol("O_bold")] = r"\mathbf{0}"
+        return self.tex.with_names(names)
+
+    def j_matrices(self) -> dict:
+        from ..kinematics import paper_matrices
+
+        J, Jstar = paper_matrices(self.s)
+        zero = sp.Symbol("O_bold")
+        out = {}
+        for key, lhs, M in (("J", r"\underline{\mathbf{J}}", J),
+                            ("Jstar", r"\underline{\mathbf{J}}^{*}", Jstar)):
+            rows = [[zero if M[i, j] == 0 else M[i, j] for j in range(M.cols)]
+                    for i in range(M.rows)]
+            tex = self._abstract_names(list(M))
+            blocks = _chunks(list(range(M.cols)), 10)
+            lines = []
+            for block in blocks:
+                body = tex.matrix([[r[c] for c in block] for r in rows])
+                tag = lhs if len(blocks) == 1 else rf"{lhs}_{{:,\,{block[0] + 1}..{block[-1] + 1}}}"
+                lines.append(f"{tag} = {body}")
+            out[key] = lines
+        return out
+
+    def position_lines(self) -> list[str]:
+        from ..kinematics import paper_positions
+
+        R = paper_positions(self.s)
+        tex = self._abstract_names(list(R))
+        lines = []
+        for i in range(R.rows):
+            lines += tex.equation(rf"\mathbf{{R}}_{{{i + 1}}}", R[i])
+        return lines
+
+    # -- hinge models ----------------------------------------------------------------------------
+    def models(self) -> tuple[list[dict], list[str]]:
+        kin = self.kin
+        used: dict[str, list[int]] = {}
+        for a in range(1, self.s.m + 1):
+            used.setdefault(kin.hinges[a].hinge.model, []).append(a)
+        out = []
+        kernels: list = []
+        t = THETA
+        for model in sorted(used, key=lambda m: min(used[m])):
+            hinges = used[model]
+            spec = hinge_models.MODELS[model]
+            entry = {"model": escape_latex(model), "description": escape_latex(spec.description),
+                     "hinges": ", ".join(rf"$u_{{{a}}}$ ({self.hinge_name(a)})" for a in hinges),
+                     "lines": [], "param_values": [], "note": ""}
+            generic = _generic_functions(model)
+            if generic is not None:
+                f, g, df, dg = generic
+                exprs = [f, g, df, dg]
+                tex = self.tex.with_names({sp.Symbol("gamma", positive=True): r"\gamma",
+                                           sp.Symbol("c_theta", positive=True): r"c_{\theta}"})
+                for lhs, e, elementary in ((r"f(\theta)", f, True), (r"g(\theta)", g, True),
+                                           (r"\Delta f(\theta)", df, False),
+                                           (r"\Delta g(\theta)", dg, False)):
+                    lines = tex.equation(lhs, e)
+                    if elementary and _has_kernel(e):
+                        plain = special.expand_special(e)
+                        if not _has_kernel(plain) and not plain.has(*special.ELASTICA_FUNCTIONS):
+                            lines += align_lines("", "=", tex.lines(plain, LINE_WIDTH_EM - 4))
+                    entry["lines"] += lines
+                if model == "prbm":
+                    for a in hinges:
+                        h = kin.hinges[a].hinge
+                        gamma = sp.sympify(h.param("gamma", hinge_models.PRBM_PRESETS["force"][
+                            "gamma"]))
+                        c = sp.sympify(h.param("c_theta", hinge_models.PRBM_PRESETS["force"][
+                            "c_theta"]))
+                        entry["param_values"].append(
+                            rf"$u_{{{a}}}$: $\gamma = {self.tex(sp.N(gamma, 6))}$, "
+                            rf"$c_{{\theta}} = {self.tex(sp.N(c, 6))}$")
+                if model == "elastica_force":
+                    entry["note"] = ("$X_e$, $Y_e$ are the tip coordinates over $l$ of the "
+                                     "Bisshopp--Drucker elastica (Carlson forms, "
+                                     "$|\\theta| < \\pi/2$), "
+                                     "$\\Delta X_e = X_e - \\cos^2\\frac{\\theta}{2}$, "
+                                     "$\\Delta Y_e = Y_e - \\frac{1}{2}\\sin\\theta$ evaluated "
+                                     "without cancellation.")
+            else:
+                # table / expr: the hinge's own functions (numbers rounded for print)
+                for a in hinges:
+                    h = kin.hinges[a]
+                    for lhs, e in ((rf"f_{{{a}}}(\theta)", h.f), (rf"g_{{{a}}}(\theta)", h.g),
+                                   (rf"\Delta f_{{{a}}}(\theta)", h.df),
+                                   (rf"\Delta g_{{{a}}}(\theta)", h.dg)):
+                        e = _rounded(e) if model == "table" else e
+                        entry["lines"] += self.tex.equation(lhs, e)
+                exprs = [kin.hinges[a].df for a in hinges] + [kin.hinges[a].dg for a in hinges]
+                if model == "expr":
+                    entry["note"] = ("The deviation of an \\texttt{expr} model is the plain "
+                                     "difference from the ideal revolute (not cancellation-free).")
+            for e in exprs:
+                for fn in sorted(sp.sympify(e).atoms(sp.Function), key=lambda x: type(x).__name__):
+                    if isinstance(fn, special.StableKernel) and type(fn) not in kernels:
+                        kernels.append(type(fn))
+            out.append(entry)
+        kernel_lines = []
+        x = sp.Symbol("x")
+        for cls in sorted(kernels, key=lambda c: c.__name__):
+            series = sp.Add(*(cls.coeff(k) * x ** (2 * k) for k in range(3))) + sp.O(x ** 6)
+            lhs = self.tex(cls(x))
+            kernel_lines.append(f"{lhs} &= {self.tex(cls.elementary(x))} "
+                                f"= {self.tex(series)}")
+        return out, kernel_lines
+
+    # -- loops -----------------------------------------------------------------------------------
+    def loops(self) -> list[dict]:
+        from .. import loop_equations as le_mod
+        import dataclasses
+
+        kin, s, tex = self.kin, self.s, self.tex
+        out = []
+        for eq in le_mod.loop_equations(kin):
+            c = eq.chord
+            hinges = s.loop_hinges(c)
+            r = {t.link: sp.Symbol(f"r_{t.link}", positive=True) for t in eq.terms}
+            beta = {t.link: sp.Symbol(f"beta_{t.link}", real=True) for t in eq.terms}
+            names = {r[i]: rf"r_{{{i}}}" for i in r}
+            names.update({beta[i]: rf"\beta_{{{i}}}" for i in beta})
+            ltex = tex.with_names(names)
+            sym_terms = tuple(le_mod.Term(t.link, r[t.link], beta[t.link]) for t in eq.terms)
+            sym = dataclasses.replace(eq, terms=sym_terms)
+            x = sp.Add(*(t.r * sp.cos(p + t.beta) for t, p in zip(sym.terms, sym.phi)))
+            y = sp.Add(*(t.r * sp.sin(p + t.beta) for t, p in zip(sym.terms, sym.phi)))
+            row = s.loops[c - s.n - 1]
+            dz = sp.Add(*(int(row[b - 1]) * sp.Symbol(f"DZ_{b}") for b in range(1, s.m + 1)
+                          if row[b - 1]))
+            dz_names = {sp.Symbol(f"DZ_{b}"): rf"\Delta\mathbf{{z}}_{{{b}}}"
+                        for b in range(1, s.m + 1)}
+            entry = {
+                "chord": c, "name": self.hinge_name(c),
+                "hinges": ", ".join(rf"$u_{{{b}}}$" for b in hinges),
+                "links": ", ".join(rf"$s_{{{i}}}$" for i in sorted(
+                    {s.i_plus[b - 1] for b in hinges} | {s.i_minus[b - 1] for b in hinges})),
+                "angular": tex(eq.angular) + " = 0",
+                "phi_dz": tex.with_names(dz_names)(dz) + r" = \mathbf{0}",
+                "weights": [],
+                "terms": [],
+                "x": ltex.equation("0", x), "y": ltex.equation("0", y),
+                "squared": [], "solved": [], "eliminated": eq.eliminated,
+            }
+            for i, w in sorted(kin.loop_weights(c).items()):
+                entry["weights"].append({"link": i, "vec": tex.small_vector(w)})
+            for t in eq.terms:
+                entry["terms"].append({
+                    "link": t.link, "r": tex(t.r), "beta": tex(t.beta),
+                    "r_num": sci(_num(t.r, self.defaults), 6),
+                    "beta_num": f"{_num(t.beta, self.defaults):.6f}",
+                    "phi": tex(dict(zip(eq.links, eq.phi))[t.link]),
+                })
+            if eq.eliminated is not None:
+                elim = sym.eliminating(eq.eliminated)
+                entry["squared"] = _relation_lines(ltex, elim.squared.lhs, elim.squared.rhs)
+                j = eq.eliminated
+                others = [(t, p) for t, p in zip(sym.terms, sym.phi) if t.link != j]
+                S = sp.Add(*(t.r * sp.sin(p + t.beta) for t, p in others))
+                C = sp.Add(*(t.r * sp.cos(p + t.beta) for t, p in others))
+                S_sym, C_sym = sp.Symbol("S_elim"), sp.Symbol("C_elim")
+                stex = ltex.with_names({S_sym: rf"S_{{{j}}}", C_sym: rf"C_{{{j}}}"})
+                lhs = stex(elim.solved_angle.lhs)
+                entry["solved"] = (
+                    stex.equation(rf"S_{{{j}}}", S) + stex.equation(rf"C_{{{j}}}", C)
+                    + [f"{lhs} &= {stex(sp.atan2(-S_sym, -C_sym))}"])
+            out.append(entry)
+        return out
+
+    # -- rigid solution --------------------------------------------------------------------------
+    def rigid_solution(self) -> dict:
+        sol, kin, tex = self.an.rigid, self.kin, self.tex
+        dyads = []
+        for d in sol.dyads:
+            h1, h2, h3 = d.hinges
+            dyads.append({
+                "k": d.index,
+                "hinges": [(a, self.hinge_name(a)) for a in d.hinges],
+                "bodies": [", ".join(f"$s_{{{i}}}$" for i in body) for body in d.bodies],
+                "chord": d.chord, "chord_name": self.hinge_name(d.chord),
+                "branch": "+1" if d.branch > 0 else "-1",
+                "h1": h1, "h2": h2, "h3": h3,
+                "roots": (min(d.bodies[0]), min(d.bodies[1])),
+            })
+        steps = []
+        for symbol, expr in sol.assignments:
+            steps += tex.equation(tex(symbol), expr)
+        phi = []
+        thetas = []
+        if sol.closed_form:
+            for i in range(1, self.s.n + 1):
+                e = sol.phi[i]
+                if tex(e) != rf"\varphi_{{{i}}}":
+                    phi += tex.equation(rf"\varphi_{{{i}}}", e)
+            for a in kin.unknowns:
+                h = kin.hinges[a]
+                thetas.append(rf"\theta_{{{a}}} &= \varphi_{{{h.M}}} - \varphi_{{{h.P}}}")
+        return {"closed_form": sol.closed_form, "dyads": dyads, "steps": steps, "phi": phi,
+                "thetas": thetas}
+
+    # -- first order ---------------------------------------------------------------------------
+    def linear_system(self) -> dict | None:
+        an, kin, s = self.an, self.kin, self.s
+        if not an.deltas or not self.plan.needs_loops:
+            return None
+        A, r = an.linear_system
+        entries = []
+        named = []
+        for i in range(A.rows):
+            row = []
+            for k in range(A.cols):
+                e = A[i, k]
+                if e.is_number:
+                    row.append(e)
+                else:
+                    symbol = sp.Symbol(f"A_{i + 1}_{k + 1}")
+                    row.append(symbol)
+                    named.append((i + 1, k + 1, symbol, e))
+            entries.append(row)
+        names = {sym: rf"a_{{{i},{k}}}" for i, k, sym, _ in named}
+        atex = self.tex.with_names(names)
+        matrix = atex.matrix(entries)
+        defs = []
+        for i, k, sym, e in named:
+            defs += self.tex.equation(rf"a_{{{i},{k}}}", e)
+        rows_r = []
+        dz_names = {sp.Symbol(f"DZ_{b}"): rf"\Delta\mathbf{{z}}_{{{b}}}" for b in range(1, s.m + 1)}
+        for c in kin.chords:
+            row = s.loops[c - s.n - 1]
+            dz = sp.Add(*(int(row[b - 1]) * sp.Symbol(f"DZ_{b}") for b in range(1, s.m + 1)
+                          if row[b - 1]))
+            rows_r.append({"chord": c, "sum": self.tex.with_names(dz_names)(dz)})
+        delta = self.tex.vector(an.deltas)
+        return {"matrix": matrix, "defs": defs, "rows": rows_r, "delta": delta,
+                "size": len(an.deltas), "nrows": A.rows}
+
+    # -- points ----------------------------------------------------------------------------------
+    def points(self) -> list[dict]:
+        an, kin, s, tex = self.an, self.kin, self.s, self.tex
+        out = []
+        for name in self.plan.points:
+            point = self.mech.point(name)
+            k = an.link[point.link]
+            path = s.tree_path(k)
+            moved = any(b in kin.unknowns for b in path)
+            sub_name = math_name(name)
+            entry = {"name": escape_latex(name), "link": k, "link_name": self.link_name(k),
+                     "at": tex.small_vector(point.at), "path": path, "moved": moved,
+                     "levels": {}}
+            rigid = an.point_rigid(name)
+            entry["rigid"] = (tex.equation(rf"X_{{{sub_name}}}", rigid[0])
+                              + tex.equation(rf"Y_{{{sub_name}}}", rigid[1]))
+            dz_sum = " + ".join(rf"\Delta\mathbf{{z}}_{{{b}}}" for b in path) or r"\mathbf{0}"
+            entry["paper_sum"] = (rf"\Delta\mathbf{{R}}_{{{sub_name}}}^{{\mathrm{{paper}}}} = "
+                                  rf"{dz_sum}")
+            dev = an.point_deviation(name, "paper")
+            entry["paper"] = (
+                tex.equation(rf"\Delta X_{{{sub_name}}}^{{\mathrm{{paper}}}}", dev[0])
+                + tex.equation(rf"\Delta Y_{{{sub_name}}}^{{\mathrm{{paper}}}}", dev[1]))
+            weights = kin.weights(k, point.at)
+            terms_lin, terms_exact = [], []
+            for i, w in weights.items():
+                dphi = an.delta_phi(i)
+                if dphi == 0:
+                    continue
+                rot = "" if kin.phi(i) == 0 else _rotation_tex(tex, kin.phi(i))
+                factor = tex(dphi)
+                if dphi.is_Add:
+                    factor = r"\left(" + factor + r"\right)"
+                terms_lin.append(rf"{factor}\,{rot}{tex.vector(V.perp(w))}")
+                terms_exact.append(rf"{rot}\Bigl(\mathbf{{G}}\!\left({tex(dphi)}\right) - "
+                                   rf"\mathbf{{E}}\Bigr){tex.vector(w)}")
+            lhs1 = rf"\Delta\mathbf{{R}}_{{{sub_name}}}^{{(1)}}"
+            base = rf"\Delta\mathbf{{R}}_{{{sub_name}}}^{{\mathrm{{paper}}}}"
+            toks = [base] + [f"+ {t}" for t in terms_lin]
+            lead = width(lhs1) + 1.5
+            entry["first_order"] = align_lines(lhs1, "=", pack(toks, LINE_WIDTH_EM - lead,
+                                                               LINE_WIDTH_EM - lead - 1))
+            lhs2 = rf"\Delta\mathbf{{R}}_{{{sub_name}}}"
+            dzc = " + ".join(rf"\Delta\mathbf{{z}}_{{{b}}}(\theta_{{{b}}}"
+                             + (rf" + \delta_{{{b}}}" if b in kin.unknowns else "") + ")"
+                             for b in path) or r"\mathbf{0}"
+            toks = terms_exact[:1] + [f"+ {t}" for t in terms_exact[1:]] + [f"+ {dzc}"]
+            entry["exact"] = align_lines(lhs2, "=", pack(toks, LINE_WIDTH_EM - lead,
+                                                         LINE_WIDTH_EM - lead - 1))
+            out.append(entry)
+        return out
+
+
+class _Generic:
+    """A stand-in hinge with symbolic plate length and model parameters, for the formulas."""
+
+    def __init__(self, model: str, params: dict) -> None:
+        self.model = model
+        self.name = model
+        self.length = PLATE_LENGTH
+        self._params = params
+
+    def param(self, key: str, default: object = None) -> object:
+        return self._params.get(key, default)
+
+
+def _generic_functions(model: str) -> tuple | None:
+    if model in ("table", "expr"):
+        return None
+    params = {}
+    if model == "prbm":
+        params = {"gamma": sp.Symbol("gamma", positive=True),
+                  "c_theta": sp.Symbol("c_theta", positive=True)}
+    plate = hinge_models.plate_functions(_Generic(model, params))
+    return plate.f, plate.g, plate.df, plate.dg
+
+
+def _has_kernel(expr: sp.Expr) -> bool:
+    return any(isinstance(f, (special.StableKernel, special.ElasticaFunction))
+               for f in sp.sympify(expr).atoms(sp.Function))
+
+
+def _rounded(expr: sp.Expr) -> sp.Expr:
+    """Rationals of a fitted table model shown as 6-digit floats."""
+    return sp.sympify(expr).xreplace({q: sp.Float(q, 6) for q in sp.sympify(expr).atoms(
+        sp.Rational) if q.q > 1000})
+
+
+def _relation_lines(tex: Tex, lhs: sp.Expr, rhs: sp.Expr) -> list[str]:
+    """``lhs = rhs`` with both sides possibly long: lhs lines, then ``&= rhs`` lines."""
+    left = tex.lines(lhs, LINE_WIDTH_EM - 4, LINE_WIDTH_EM - 4)
+    right = tex.lines(rhs, LINE_WIDTH_EM - 4, LINE_WIDTH_EM - 5)
+    if len(left) == 1 and width(left[0]) + width(right[0]) < LINE_WIDTH_EM - 3 and \
+            len(right) == 1:
+        return [f"{left[0]} &= {right[0]}"]
+    out = [f"&{left[0]}"] + [r"&\quad {}" + ln for ln in left[1:]]
+    out.append(f"&= {right[0]}")
+    out += [r"&\quad {}" + ln for ln in right[1:]]
+    return out
+
+
+# -- numbers for the figures ---------------------------------------------------------------------
+
+def pose_data(report: Report) -> PoseData:
+    kin, s, defaults = report.kin, report.s, report.defaults
+    num = lambda v: (_num(v[0], defaults), _num(v[1], defaults))  # noqa: E731
+    attachments: dict[int, list[tuple[float, float]]] = {i: [] for i in range(s.n + 1)}
+    plates = []
+    for a in range(1, s.m + 1):
+        h = kin.hinges[a]
+        p, m = num(h.clamp(h.P)), num(h.clamp(h.M))
+        attachments[h.P].append(p)
+        attachments[h.M].append(m)
+        plates.append((a, s.hinges[a - 1], p, m, h.is_input))
+    links = tuple((i, s.links[i], tuple(attachments[i])) for i in range(s.n + 1))
+    points = tuple((p.name, report.an.link[p.link], num(p.at)) for p in report.mech.points
+                   if p.name in report.plan.points)
+    return PoseData(links, 0, tuple(plates), points)
+
+
+def graph_positions(report: Report) -> dict[int, tuple[float, float]]:
+    """Vertex positions: each link's mean hinge centre, nudged apart when two coincide."""
+    kin, s, defaults = report.kin, report.s, report.defaults
+    sums: dict[int, list[tuple[float, float]]] = {i: [] for i in range(s.n + 1)}
+    for a in range(1, s.m + 1):
+        h = kin.hinges[a]
+        c = (_num(h.centre[0], defaults), _num(h.centre[1], defaults))
+        sums[h.P].append(c)
+        sums[h.M].append(c)
+    pos = {}
+    for i in range(s.n + 1):
+        pts = sums[i] or [(0.0, 0.0)]
+        pos[i] = (sum(p[0] for p in pts) / len(pts), sum(p[1] for p in pts) / len(pts))
+    if s.n >= 1:
+        # the ground below everything else, as in the paper's graphs
+        xs = [p[0] for p in pos.values()]
+        ys = [p[1] for p in pos.values()]
+        span = max(max(xs) - min(xs), max(ys) - min(ys), 1e-9)
+        pos[0] = (pos[0][0], min(min(ys) - 0.25 * span, pos[0][1]))
+        for _ in range(3):
+            for i in range(s.n + 1):
+                for j in range(i):
+                    dx, dy = pos[i][0] - pos[j][0], pos[i][1] - pos[j][1]
+                    if math.hypot(dx, dy) < 0.15 * span:
+                        pos[i] = (pos[i][0] + 0.12 * span, pos[i][1] + 0.12 * span)
+    return pos
+
+
+def sweep(report: Report, numpy_module) -> tuple[Sweep, tuple[float, float], dict]:
+    """|ΔR| of the points over every input = t, |t| <= SWEEP_RANGE, evaluated with numpy."""
+    t = np.linspace(-SWEEP_RANGE, SWEEP_RANGE, SWEEP_SAMPLES)
+    inputs = {name: t for name in numpy_module.INPUTS}
+    magnitude: dict[str, dict[str, np.ndarray]] = {p: {} for p in report.plan.points}
+    deviation: dict[str, dict[str, np.ndarray]] = {p: {} for p in report.plan.points}
+    ok = np.ones(t.shape, dtype=bool)
+    for lv in report.plan.levels:
+        result = numpy_module.evaluate(inputs, level=lv)
+        ok &= np.asarray(result["ok"], dtype=bool)
+        for p in report.plan.points:
+            d = np.asarray(result["points"][p]["deviation"], dtype=float)
+            deviation[p][lv] = d
+    for p in report.plan.points:
+        for lv in report.plan.levels:
+            d = np.where(ok, deviation[p][lv], np.nan)
+            deviation[p][lv] = d
+            magnitude[p][lv] = np.hypot(d[0], d[1])
+    step = t[1] - t[0]
+    if ok.any():
+        idx = np.flatnonzero(ok)
+        lo, hi = max(-SWEEP_RANGE, t[idx[0]] - 2 * step), min(SWEEP_RANGE, t[idx[-1]] + 2 * step)
+    else:
+        lo, hi = -SWEEP_RANGE, SWEEP_RANGE
+    summary = {"samples": int(len(t)), "failed": int((~ok).sum()),
+               "range": f"{SWEEP_RANGE:g}", "lo": f"{lo:.3f}", "hi": f"{hi:.3f}",
+               "rows": []}
+    for p in report.plan.points:
+        exact = deviation[p].get("exact")
+        for lv in report.plan.levels:
+            mag = magnitude[p][lv]
+            if np.isfinite(mag).any():
+                k = int(np.nanargmax(mag))
+                peak, at = float(mag[k]), float(t[k])
+            else:
+                peak, at = float("nan"), float("nan")
+            rel = None
+            if exact is not None and lv != "exact":
+                diff = np.hypot(*(deviation[p][lv] - exact))
+                ref = np.nanmax(np.hypot(*exact)) if np.isfinite(exact).any() else float("nan")
+                if np.isfinite(diff).any() and ref > 0:
+                    rel = float(np.nanmax(diff) / ref)
+            summary["rows"].append({"point": escape_latex(p), "level": LEVEL_TITLES[lv],
+                                    "peak": sci(peak), "at": f"{at:+.3f}",
+                                    "rel": sci(rel, 2) if rel is not None else r"\text{--}"})
+    return Sweep(t, ok, magnitude, deviation), (lo, hi), summary
+
+
+# -- emit ----------------------------------------------------------------------------------------
+
+def emit(plan: Plan, source: str, appendix: bool = False) -> dict[str, bytes]:
+    """`<name>.tex` (standalone, or the body alone with `appendix`) and its figure PDFs."""
+    from ..derive import import_numpy_module
+    from . import numpy_backend
+
+    report = Report(plan, source)
+    name = report.mech.name
+    ctx = report.context(appendix)
+    files: dict[str, bytes] = {}
+    files[f"{name}-pose.pdf"] = pose_figure(pose_data(report), plain_name)
+    arcs = [(a, report.s.i_plus[a - 1], report.s.i_minus[a - 1], a > report.s.n)
+            for a in range(1, report.s.m + 1)]
+    files[f"{name}-graph.pdf"] = graph_figure(graph_positions(report), arcs)
+    ctx["deviation_figures"] = []
+    ctx["sweep"] = None
+    if plan.points:
+        module = import_numpy_module(numpy_backend.emit(plan, source), name)
+        data, xlim, summary = sweep(report, module)
+        inputs = report.mech.inputs
+        if len(inputs) == 1:
+            xlabel = f"input θ of {plain_name(inputs[0])} (rad)"
+        else:
+            xlabel = "t (rad): every input angle = t"
+        points = list(plan.points)
+        for k, chunk in enumerate(_chunks(points, 3)):
+            fname = f"{name}-deviation.pdf" if k == 0 else f"{name}-deviation-{k + 1}.pdf"
+            files[fname] = deviation_figure(data, chunk, list(plan.levels), plain_name, xlim,
+                                            xlabel)
+            ctx["deviation_figures"].append({"file": fname,
+                                             "points": [escape_latex(p) for p in chunk]})
+        summary["single_input"] = len(inputs) == 1
+        summary["inputs"] = [escape_latex(n) for n in inputs]
+        ctx["sweep"] = summary
+    body = environment().get_template("latex/body.tex.j2").render(**ctx)
+    if appendix:
+        text = body
+    else:
+        text = environment().get_template("latex/report.tex.j2").render(body=body, **ctx)
+    files[f"{name}.tex"] = text.encode()
+    return dict(sorted(files.items()))

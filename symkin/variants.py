@@ -1,0 +1,122 @@
+"""Cheaper variants of a derivation: the speed/accuracy choices a user can trade (issue: tradeoff).
+
+A variant is a level (paper, first_order, exact), a hinge model choice and a precision:
+
+- model ``file``: the mechanism's own models (the most faithful);
+- ``prbm`` / ``small_deflection``: those models in place of circular_arc and elastica_force;
+- ``taylorN``: each hinge's Δf, Δg replaced by its Taylor polynomial of degree N in θ
+  (circular arc: Δf/l = θ²/12 - θ⁴/80 + ..., Δg/l = θ³/24 - θ⁵/360 + ...);
+- precision ``float64`` or ``float32`` (numpy only).
+
+The plate length enters Δz linearly, so its Taylor series is the level: ``first_order`` is the
+first-order term in l/L, ``exact`` all orders.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import mpmath
+import sympy as sp
+
+from . import hinge_models
+from .analysis import LEVELS, Analysis
+from .mechanism import THETA, Mechanism
+from .structure import build
+
+FAITHFUL_MODELS = ("circular_arc", "elastica_force")
+MODEL_CHOICES = ("file", "taylor2", "taylor3", "taylor4", "taylor6", "prbm", "small_deflection")
+PRBM_DEFAULT = (("c_theta", sp.Rational("1.2385")), ("gamma", sp.Rational("0.8517")))
+
+
+@dataclass(frozen=True, order=True)
+class Variant:
+    """One speed/accuracy choice."""
+
+    level: str
+    model: str = "file"
+    precision: str = "float64"
+
+    @property
+    def name(self) -> str:
+        parts = [self.level]
+        if self.model != "file":
+            parts.append(self.model)
+        if self.precision != "float64":
+            parts.append("f32")
+        return "/".join(parts)
+
+    @classmethod
+    def parse(cls, text: str) -> Variant:
+        parts = text.split("/")
+        level, model, precision = parts[0], "file", "float64"
+        for part in parts[1:]:
+            if part == "f32":
+                precision = "float32"
+            else:
+                model = part
+        if level not in LEVELS or model not in MODEL_CHOICES:
+            raise ValueError(f"unknown variant '{text}'")
+        return cls(level, model, precision)
+
+
+def default_variants() -> list[Variant]:
+    """Every level with every model choice in float64, and the file's models in float32."""
+    out = [Variant(lv, m) for m in MODEL_CHOICES for lv in LEVELS]
+    out += [Variant(lv, "file", "float32") for lv in LEVELS]
+    return out
+
+
+def substituted(mech: Mechanism, model: str) -> Mechanism:
+    """The mechanism with `model` (prbm or small_deflection) in place of the faithful models."""
+    if model not in ("prbm", "small_deflection"):
+        return mech
+    params = PRBM_DEFAULT if model == "prbm" else ()
+    hinges = tuple(dataclasses.replace(h, model=model, model_params=params)
+                   if h.model in FAITHFUL_MODELS else h for h in mech.hinges)
+    return dataclasses.replace(mech, hinges=hinges)
+
+
+def truncated(degree: int):
+    """A plate-function provider whose Δf, Δg are Taylor polynomials of `degree` in θ."""
+
+    def provider(hinge):
+        pf = hinge_models.plate_functions(hinge)
+        df, dg = (_taylor(e, degree) for e in (pf.df, pf.dg))
+        return dataclasses.replace(pf, df=df, dg=dg, f=pf.f_rigid + df, g=pf.g_rigid + dg)
+
+    return provider
+
+
+def _taylor(expr: sp.Expr, degree: int) -> sp.Expr:
+    """Taylor polynomial of `expr` in θ: symbolic where sympy can, else numeric (mpmath, 40
+    digits) coefficients of the expression with its parameters at their values."""
+    numeric_only = any(type(f).__name__.startswith(("elastica", "carlson"))
+                       for f in expr.atoms(sp.Function))
+    if not numeric_only:
+        series = sp.series(expr, THETA, 0, degree + 1).removeO()
+        if not series.has(sp.nan) and series.is_polynomial(THETA):
+            return sp.expand(series)
+    # Elastica kernels have no symbolic series: differentiate numerically at high precision,
+    # keeping the (symbolic) plate length as a factor.
+    length = next(iter(expr.free_symbols - {THETA}), None)
+    unit = expr.subs(length, 1) if length is not None else expr
+    fn = sp.lambdify(THETA, unit, modules=[hinge_models_mpmath(), "mpmath"])
+    with mpmath.workdps(40):
+        coeffs = mpmath.taylor(fn, 0, degree)
+    poly = sum(sp.Float(str(c), 30) * THETA ** k for k, c in enumerate(coeffs) if abs(c) > 1e-30)
+    return sp.expand(poly * (length if length is not None else 1))
+
+
+def hinge_models_mpmath() -> dict:
+    from . import special
+
+    return dict(special.MPMATH)
+
+
+def analysis_for(mech: Mechanism, variant: Variant, points=None) -> Analysis:
+    """The Analysis that derives `variant` of `mech`."""
+    mech_v = substituted(mech, variant.model)
+    plate = truncated(int(variant.model[6:])) if variant.model.startswith("taylor") else None
+    return Analysis(build(mech_v), points, plate)
