@@ -50,12 +50,13 @@ class Tradeoff:
     samples: int
     skipped: int                          # samples the mechanism cannot assemble
     rows: tuple[Row, ...] = field(default=())
+    inputs: tuple[dict, ...] = field(default=())   # the samples measured (assembled ones)
 
     def as_json(self) -> dict:
         return {
             "reference": "mpmath, 30 digits, exact level, the file's hinge models",
             "ranges": {k: list(v) for k, v in self.ranges.items()},
-            "samples": self.samples, "skipped": self.skipped,
+            "samples": self.samples, "skipped": self.skipped, "inputs": list(self.inputs),
             "variants": [{"name": r.variant.name, "level": r.variant.level,
                           "model": r.variant.model, "precision": r.variant.precision,
                           "worst_error": r.worst, "errors": r.errors,
@@ -194,7 +195,8 @@ def run(mech: Mechanism, ranges: Mapping[str, tuple[float, float]], n: int = 25,
         rows.append(measure(mech, v, kept, ref, with_c))
     rows = pareto(rows)
     rows.sort(key=lambda r: (r.time, r.worst, r.variant))
-    return Tradeoff(dict(ranges), len(samples), len(samples) - len(kept), tuple(rows))
+    return Tradeoff(dict(ranges), len(samples), len(samples) - len(kept), tuple(rows),
+                    tuple(kept))
 
 
 def choose(table: Tradeoff, tolerance: float, points: Sequence[str] | None = None) -> Row:
