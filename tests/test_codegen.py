@@ -8,104 +8,20 @@ from __future__ import annotations
 
 import ast
 import os
-import shutil
 import subprocess
 import sys
 
-import mpmath
 import numpy as np
 import pytest
 
 import mechanisms as M
 import symkin
 from conftest import EXAMPLES, ROOT
+from evaluators import INPUTS, SOURCES, generated, rel_err, require_compiler
 from reference_solver import Reference
 from symkin.codegen import c_backend, c_runtime, numpy_backend
 from symkin.codegen.build import plan
 from symkin.derive import import_numpy_module
-
-SOURCES = {
-    "four_bar": EXAMPLES / "four_bar.toml",
-    "six_bar": EXAMPLES / "stephenson_six_bar.toml",
-    "nine_bar": EXAMPLES / "nine_bar_platform.toml",
-    "serial_arm": M.SERIAL_ARM,
-    "five_bar": M.FIVE_BAR,
-    "watt_ii": M.WATT_II,
-    "triad": M.TRIAD_SIX_BAR,
-    "non_grashof": M.NON_GRASHOF,
-}
-INPUTS = {
-    "four_bar": {"A0": "0.2"},
-    "six_bar": {"O_A": "0.2"},
-    "nine_bar": {"O": "0.05", "A": "0.03", "B": "-0.02", "K": "0.04"},
-    "serial_arm": {"S": "0.3", "E": "-0.2"},
-    "five_bar": {"O1": "0.15", "O2": "-0.1"},
-    "watt_ii": {"O1": "0.25"},
-    "triad": {"O1": "0.1"},
-    "non_grashof": {"A0": "0.3"},
-}
-LEVEL_CODE = {"paper": 0, "first_order": 1, "exact": 2}
-
-
-def require_compiler():
-    if shutil.which(os.environ.get("CC", "cc")) is None:
-        if os.environ.get("CI") == "true":
-            pytest.fail("no C compiler on the CI machine: .ci/run must install gcc")
-        pytest.skip("no C compiler")
-
-
-class Generated:
-    """A mechanism with its analysis, numpy module and compiled C library."""
-
-    def __init__(self, key):
-        source = SOURCES[key]
-        self.mech = symkin.load(source) if not isinstance(source, str) else symkin.loads(source)
-        self.analysis = symkin.analyze(self.mech)
-        self.plan = plan(self.analysis)
-        self.numpy = import_numpy_module(numpy_backend.emit(self.plan, "test"), self.mech.name)
-        self._lib = None
-
-    @property
-    def lib(self):
-        if self._lib is None:
-            require_compiler()
-            header, code = c_backend.emit(self.plan, "test")
-            kin = self.analysis.kin
-            self._lib = c_runtime.Library(
-                c_runtime.build(self.mech.name, header, code), self.mech.name,
-                len(kin.inputs), len(self.analysis.params), len(self.plan.points), len(kin.hinges))
-        return self._lib
-
-    def params(self, overrides=None):
-        values = self.analysis.parameter_values(overrides)
-        return [float(mpmath.mpf(str(values[s].evalf(30)))) for s in self.analysis.params]
-
-    def run_numpy(self, inputs, level, overrides=None):
-        p = dict(zip((q.name for q in self.mech.parameters), self.params(overrides)))
-        res = self.numpy.evaluate({k: float(v) for k, v in inputs.items()}, level, p)
-        return {n: tuple(float(v) for v in res["points"][n]["deviation"]) for n in self.plan.points}
-
-    def run_c(self, inputs, level, overrides=None):
-        x = [float(inputs[self.analysis.kin.hinges[a].name]) for a in self.analysis.kin.inputs]
-        status, out, _ = self.lib.evaluate(x, self.params(overrides), LEVEL_CODE[level])
-        assert status == 0
-        return {n: (out[6 * i + 4], out[6 * i + 5]) for i, n in enumerate(self.plan.points)}
-
-
-_CACHE: dict[str, Generated] = {}
-
-
-def generated(key) -> Generated:
-    if key not in _CACHE:
-        _CACHE[key] = Generated(key)
-    return _CACHE[key]
-
-
-def rel_err(got, want) -> float:
-    with mpmath.workdps(50):
-        diff = mpmath.sqrt(sum((mpmath.mpf(g) - mpmath.mpf(w)) ** 2 for g, w in zip(got, want)))
-        return float(diff / mpmath.sqrt(sum(mpmath.mpf(w) ** 2 for w in want)))
-
 
 @pytest.mark.parametrize("key", sorted(SOURCES))
 @pytest.mark.parametrize("backend", ["numpy", "c"])

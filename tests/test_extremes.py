@@ -1,0 +1,86 @@
+"""Stability audit of the generated evaluators at the extremes (float64 and float32).
+
+Grids over the input angle (1e-12 .. 1 rad), the plate ratio l/L (1e-9 .. 0.1) and the approach
+to a toggle position, against the independent solver. float64: <= 1e-9 relative error of the
+deviation everywhere. float32: the error is reported and must stay within the bound README
+documents (1e-4 relative, about 1000 float32 epsilons).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from evaluators import generated, rel_err
+from reference_solver import Reference
+from symkin.codegen import numpy_backend
+from symkin.derive import import_numpy_module
+
+ANGLES = ["1e-12", "1e-10", "1e-8", "1e-6", "1e-4", "1e-2", "0.1", "0.3", "0.6", "1.0"]
+RATIOS = ["1e-9", "1e-7", "1e-5", "1e-3", "1e-2", "0.1"]
+FLOAT32_BOUND = 1e-4
+
+
+@pytest.mark.parametrize("key, hinge", [("four_bar", "A0"), ("six_bar", "O_A")])
+def test_angle_grid_float64(key, hinge):
+    g = generated(key)
+    ref = Reference(g.mech)
+    for angle in ANGLES + ["-" + a for a in ANGLES[::3]]:
+        want = ref.deviation({hinge: angle})["points"]
+        for backend in (g.run_numpy, g.run_c):
+            got = backend({hinge: angle}, "exact")
+            for name, dev in got.items():
+                assert rel_err(dev, want[name]["deviation"]) <= 1e-9, (key, angle, name)
+
+
+@pytest.mark.parametrize("key", ["four_bar", "five_bar"])
+def test_plate_ratio_grid_float64(key):
+    g = generated(key)
+    inputs = {"four_bar": {"A0": "0.25"}, "five_bar": {"O1": "0.15", "O2": "-0.1"}}[key]
+    length_scale = 0.05                          # the links are about 5 cm
+    for ratio in RATIOS:
+        overrides = {"l": f"{float(ratio) * length_scale:.6e}"}
+        want = Reference(g.mech, overrides).deviation(inputs)["points"]
+        for backend in (g.run_numpy, g.run_c):
+            got = backend(inputs, "exact", overrides)
+            for name, dev in got.items():
+                assert rel_err(dev, want[name]["deviation"]) <= 1e-9, (key, ratio, name)
+
+
+def test_approaching_a_toggle_position():
+    """Error of the exact level as the margin to the toggle (in input angle) shrinks."""
+    from test_codegen import toggle_input
+
+    g = generated("non_grashof")
+    limit = toggle_input(g)
+    report = []
+    for margin in (1e-1, 1e-2, 1e-3, 1e-4, 1e-5):
+        inputs = {"A0": repr(limit - margin)}
+        want = Reference(g.mech).deviation(inputs)["points"]["C"]["deviation"]
+        errs = [rel_err(b(inputs, "exact")["C"], want) for b in (g.run_numpy, g.run_c)]
+        report.append((margin, max(errs)))
+        assert max(errs) <= 1e-9, (margin, errs)
+    # The rounding error grows as the loop Jacobian degenerates, but slowly.
+    print("toggle margin -> worst relative error:", report)
+
+
+@pytest.mark.parametrize("key", ["four_bar", "six_bar", "nine_bar"])
+def test_float32_error_is_bounded(key):
+    g = generated(key)
+    module = import_numpy_module(numpy_backend.emit(g.plan, "f32", "float32"), f"{key}_f32")
+    inputs = {"four_bar": {"A0": ["1e-6", "0.05", "0.2", "0.5"]},
+              "six_bar": {"O_A": ["1e-6", "0.05", "0.2", "0.5"]},
+              "nine_bar": {"O": ["0.05", "0.01"], "A": ["0.03", "-0.02"], "B": ["-0.02", "0.01"],
+                           "K": ["0.04", "0.02"]}}[key]
+    n = len(next(iter(inputs.values())))
+    res = module.evaluate({k: np.array([float(v) for v in vs]) for k, vs in inputs.items()},
+                          "exact")
+    assert res["ok"].all()
+    ref = Reference(g.mech)
+    worst = 0.0
+    for j in range(n):
+        want = ref.deviation({k: vs[j] for k, vs in inputs.items()})["points"]
+        for name in module.POINTS:
+            worst = max(worst, rel_err(res["points"][name]["deviation"][:, j].astype(float),
+                                       want[name]["deviation"]))
+    assert worst <= FLOAT32_BOUND, worst
