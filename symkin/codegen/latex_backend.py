@@ -30,7 +30,8 @@ from .. import vectors as V
 from ..mechanism import PLATE_LENGTH, THETA
 from .build import Plan
 from .common import header_lines
-from .latex_figures import (PoseData, Sweep, deviation_figure, graph_figure, pose_figure, sub)
+from .latex_figures import (FIG_WIDTH, PoseData, Sweep, deviation_figure, differs,
+                             graph_figure, plate_scale, pose_figure, pose_size, tree_layout)
 from .latex_text import (LINE_WIDTH_EM, Tex, align_lines, escape_latex, math_name, pack,
                          plain_name, width)
 
@@ -93,6 +94,16 @@ def sci(x: float, digits: int = 3) -> str:
     return rf"{text}\times 10^{{{exponent}}}"
 
 
+def gnum(x: float) -> str:
+    """A float with up to 6 significant digits as LaTeX math text."""
+    text = f"{x:.6g}"
+    if "e" in text:
+        mantissa, exponent = text.split("e")
+        lead = "" if mantissa == "1" else mantissa + r"\times "
+        return rf"{lead}10^{{{int(exponent)}}}"
+    return text
+
+
 def _num(expr: sp.Expr, defaults: dict) -> float:
     return float(sp.N(sp.sympify(expr).subs(defaults), 30))
 
@@ -129,7 +140,6 @@ class Report:
             names[kin.theta[a]] = rf"\theta_{{{a}}}"
             names[kin.delta[a]] = rf"\delta_{{{a}}}"
         names[THETA] = r"\theta"
-        names[PLATE_LENGTH] = "l"
         sol = self.an.rigid
         for d in sol.dyads:
             h1, h2, h3 = d.hinges
@@ -167,7 +177,7 @@ class Report:
 
     # -- sections ------------------------------------------------------------------------------
     def context(self, appendix: bool) -> dict:
-        mech, s, kin, an = self.mech, self.s, self.kin, self.an
+        mech, s, kin = self.mech, self.s, self.kin
         name = mech.name
         ctx = {
             "appendix": appendix,
@@ -179,20 +189,18 @@ class Report:
             "figure_graph": f"{name}-graph.pdf",
             "n": s.n, "m": s.m, "loops": s.m - s.n, "mobility": mech.mobility,
             "inputs": [escape_latex(n) for n in mech.inputs],
-            "input_labels": [a for a in kin.inputs],
-            "unknown_labels": list(kin.unknowns),
+            "input_labels": list(kin.inputs),
             "point_names": [escape_latex(p) for p in self.plan.points],
             "levels": [LEVEL_TITLES[lv] for lv in self.plan.levels],
-            "closed_form": self.plan.closed_form,
             "relabeled": s.relabeled,
             "links": [{"label": i, "name": self.link_name(i),
                        "ground": i == 0} for i in range(s.n + 1)],
             "parameters": self.parameters(),
         }
         ctx["hinges"] = self.hinge_rows()
-        ctx["ipm"] = self.ipm_table()
         ctx["matrices"] = self.structure_matrices()
         ctx["plates"] = self.plate_rows()
+        ctx["alpha_equal"] = all(p["alpha_plus"] == p["alpha_minus"] for p in ctx["plates"])
         ctx["rotations"] = self.rotation_lines()
         ctx["dz"] = self.delta_z_lines()
         ctx["jmat"] = self.j_matrices()
@@ -210,8 +218,11 @@ class Report:
     def parameters(self) -> list[dict]:
         rows = []
         for p in self.mech.parameters:
-            rows.append({"name": escape_latex(p.name), "symbol": self.tex(p.symbol),
-                         "expr": self.tex(p.expr), "value": sci(_num(p.value, {}), 6)})
+            value = gnum(_num(p.value, {}))
+            expr = value if sp.sympify(p.expr).is_number else self.tex(p.expr)
+            symbol = self.tex(p.symbol)
+            rows.append({"name": escape_latex(p.name) if symbol != p.name else "",
+                         "symbol": symbol, "expr": expr, "value": value})
         return rows
 
     def hinge_rows(self) -> list[dict]:
@@ -219,22 +230,12 @@ class Report:
         rows = []
         for a in range(1, s.m + 1):
             h = kin.hinges[a]
-            params = [f"{escape_latex(k)} = {escape_latex(str(v))}" for k, v in
-                      h.hinge.model_params if k not in ("rows",)]
             rows.append({
                 "a": a, "name": self.hinge_name(a),
                 "plus": s.i_plus[a - 1], "minus": s.i_minus[a - 1],
                 "chord": a > s.n, "input": h.is_input, "sign": h.sign,
-                "model": escape_latex(h.hinge.model),
-                "params": ", ".join(params),
             })
         return rows
-
-    def ipm_table(self) -> list[list[dict]]:
-        s = self.s
-        cols = [{"a": a, "plus": s.i_plus[a - 1], "minus": s.i_minus[a - 1]}
-                for a in range(1, s.m + 1)]
-        return _chunks(cols, 12)
 
     def _int_matrix(self, lhs: str, rows: list[list[int]], col0: int = 1) -> list[str]:
         """Display lines of an integer matrix, in column blocks when it is wide."""
@@ -245,10 +246,8 @@ class Report:
             sub_rows = [[r[c] for c in block] for r in rows]
             body = self.tex.matrix(sub_rows) if block else r"\mathbf{0}"
             if len(blocks) > 1:
-                tag = rf"{lhs}_{{:,\,{block[0] + col0}..{block[-1] + col0}}}"
-            else:
-                tag = lhs
-            out.append(f"{tag} = {body}")
+                body += rf"\quad\text{{(columns {block[0] + col0}--{block[-1] + col0})}}"
+            out.append(f"{lhs} = {body}")
         return out
 
     def structure_matrices(self) -> dict:
@@ -257,7 +256,6 @@ class Report:
             "I": self._int_matrix(r"\underline{I}", s.incidence.tolist()),
             "Phi": self._int_matrix(r"\underline{\Phi}", s.loops.tolist()),
             "Psi": self._int_matrix(r"\underline{\Psi}", s.paths.tolist()),
-            "Iplus": self._int_matrix(r"\underline{I}^{+}", s.incidence_plus.tolist()),
         }
 
     def plate_rows(self) -> list[dict]:
@@ -266,15 +264,12 @@ class Report:
         for a in range(1, s.m + 1):
             data = kin.plate_data(a)
             rows.append({
-                "a": a, "name": self.hinge_name(a),
-                "plus": s.i_plus[a - 1], "minus": s.i_minus[a - 1],
-                "centre": self.tex.small_vector(kin.hinges[a].centre),
-                "c_plus": self.tex.small_vector(data["c_plus"]),
-                "c_minus": self.tex.small_vector(data["c_minus"]),
-                "alpha_plus": self.tex(data["alpha_plus"]),
-                "alpha_minus": self.tex(data["alpha_minus"]),
-                "q_star": self.tex(data["q_star"]),
-                "length": self.tex(data["length"]),
+                "a": a, "plus": s.i_plus[a - 1], "minus": s.i_minus[a - 1],
+                "c_plus": self.tex.table_vector(data["c_plus"]),
+                "c_minus": self.tex.table_vector(data["c_minus"]),
+                "alpha_plus": self.tex.inline(data["alpha_plus"]),
+                "alpha_minus": self.tex.inline(data["alpha_minus"]),
+                "length": self.tex.inline(data["length"]),
                 "model": escape_latex(kin.hinges[a].hinge.model),
             })
         return rows
@@ -294,8 +289,8 @@ class Report:
             h = kin.hinges[a]
             phi_p = kin.phi(h.P)
             u = V.unit(h.angle)
-            body = (rf"\Delta f_{{{a}}}(\theta_{{{a}}})\,{tex.vector(u)} + "
-                    rf"\Delta g_{{{a}}}(\theta_{{{a}}})\,{tex.vector(V.perp(u))}")
+            body = (rf"\Delta f_{{{a}}}(\theta_{{{a}}})\,{tex.table_vector(u)} + "
+                    rf"\Delta g_{{{a}}}(\theta_{{{a}}})\,{tex.table_vector(V.perp(u))}")
             rot = "" if phi_p == 0 else _rotation_tex(tex, phi_p)
             sign = "-" if h.sign < 0 else ""
             if rot or sign:
@@ -330,8 +325,9 @@ class Report:
             lines = []
             for block in blocks:
                 body = tex.matrix([[r[c] for c in block] for r in rows])
-                tag = lhs if len(blocks) == 1 else rf"{lhs}_{{:,\,{block[0] + 1}..{block[-1] + 1}}}"
-                lines.append(f"{tag} = {body}")
+                if len(blocks) > 1:
+                    body += rf"\quad\text{{(columns {block[0] + 1}--{block[-1] + 1})}}"
+                lines.append(f"{lhs} = {body}")
             out[key] = lines
         return out
 
@@ -353,7 +349,6 @@ class Report:
             used.setdefault(kin.hinges[a].hinge.model, []).append(a)
         out = []
         kernels: list = []
-        t = THETA
         for model in sorted(used, key=lambda m: min(used[m])):
             hinges = used[model]
             spec = hinge_models.MODELS[model]
@@ -366,11 +361,12 @@ class Report:
                 exprs = [f, g, df, dg]
                 tex = self.tex.with_names({sp.Symbol("gamma", positive=True): r"\gamma",
                                            sp.Symbol("c_theta", positive=True): r"c_{\theta}"})
-                for lhs, e, elementary in ((r"f(\theta)", f, True), (r"g(\theta)", g, True),
-                                           (r"\Delta f(\theta)", df, False),
-                                           (r"\Delta g(\theta)", dg, False)):
-                    lines = tex.equation(lhs, e)
-                    if elementary and _has_kernel(e):
+                for lhs, e, elementary, prefix in (
+                        (r"f(\theta)", f, True, "F"), (r"g(\theta)", g, True, "G"),
+                        (r"\Delta f(\theta)", df, False, "P"),
+                        (r"\Delta g(\theta)", dg, False, "Q")):
+                    lines = tex.named_equation(lhs, e, prefix)
+                    if elementary and _has_kernel(e) and model != "elastica_force":
                         plain = special.expand_special(e)
                         if not _has_kernel(plain) and not plain.has(*special.ELASTICA_FUNCTIONS):
                             lines += align_lines("", "=", tex.lines(plain, LINE_WIDTH_EM - 4))
@@ -386,12 +382,14 @@ class Report:
                             rf"$u_{{{a}}}$: $\gamma = {self.tex(sp.N(gamma, 6))}$, "
                             rf"$c_{{\theta}} = {self.tex(sp.N(c, 6))}$")
                 if model == "elastica_force":
-                    entry["note"] = ("$X_e$, $Y_e$ are the tip coordinates over $l$ of the "
-                                     "Bisshopp--Drucker elastica (Carlson forms, "
-                                     "$|\\theta| < \\pi/2$), "
-                                     "$\\Delta X_e = X_e - \\cos^2\\frac{\\theta}{2}$, "
-                                     "$\\Delta Y_e = Y_e - \\frac{1}{2}\\sin\\theta$ evaluated "
-                                     "without cancellation.")
+                    entry["lines"] += _elastica_lines(self.tex)
+                    entry["note"] = ("$X_e$, $Y_e$ are the coordinates over $l$ of the tip of a "
+                                     "cantilever bent by a transverse end force (Bisshopp--Drucker), "
+                                     "in Carlson's symmetric elliptic integrals $R_F$, $R_D$; they "
+                                     "exist for $|\\theta| < \\pi/2$. The differences "
+                                     "$\\Delta X_e = X_e - \\cos^2\\frac{\\theta}{2}$ and "
+                                     "$\\Delta Y_e = Y_e - \\frac{1}{2}\\sin\\theta$ are "
+                                     "evaluated as written, without cancellation.")
             else:
                 # table / expr: the hinge's own functions (numbers rounded for print)
                 for a in hinges:
@@ -443,40 +441,49 @@ class Report:
                           if row[b - 1]))
             dz_names = {sp.Symbol(f"DZ_{b}"): rf"\Delta\mathbf{{z}}_{{{b}}}"
                         for b in range(1, s.m + 1)}
+            psi = {t.link: sp.Symbol(f"psi_{t.link}", real=True) for t in eq.terms}
+            ptex = ltex.with_names({psi[i]: rf"\psi_{{{i}}}" for i in psi})
+            angular = tex.equation("0", eq.angular)
+            angular[-1] += r" \tag*{(5.1)}"
+            compliant = tex.with_names(dz_names).equation(r"\mathbf{0}", dz)
+            compliant[-1] += r" \tag*{(5.3)}"
             entry = {
                 "chord": c, "name": self.hinge_name(c),
                 "hinges": ", ".join(rf"$u_{{{b}}}$" for b in hinges),
                 "links": ", ".join(rf"$s_{{{i}}}$" for i in sorted(
                     {s.i_plus[b - 1] for b in hinges} | {s.i_minus[b - 1] for b in hinges})),
-                "angular": tex(eq.angular) + " = 0",
-                "phi_dz": tex.with_names(dz_names)(dz) + r" = \mathbf{0}",
-                "weights": [],
+                "constraints": angular + compliant,
                 "terms": [],
                 "x": ltex.equation("0", x), "y": ltex.equation("0", y),
                 "squared": [], "solved": [], "eliminated": eq.eliminated,
             }
-            for i, w in sorted(kin.loop_weights(c).items()):
-                entry["weights"].append({"link": i, "vec": tex.small_vector(w)})
+            weights = kin.loop_weights(c)
+            phis = dict(zip(eq.links, eq.phi))
             for t in eq.terms:
                 entry["terms"].append({
-                    "link": t.link, "r": tex(t.r), "beta": tex(t.beta),
+                    "link": t.link, "vec": tex.table_vector(weights[t.link]),
+                    "r": tex.inline(t.r), "beta": tex.inline(t.beta),
                     "r_num": sci(_num(t.r, self.defaults), 6),
                     "beta_num": f"{_num(t.beta, self.defaults):.6f}",
-                    "phi": tex(dict(zip(eq.links, eq.phi))[t.link]),
+                    "phi": tex(phis[t.link]),
                 })
             if eq.eliminated is not None:
-                elim = sym.eliminating(eq.eliminated)
-                entry["squared"] = _relation_lines(ltex, elim.squared.lhs, elim.squared.rhs)
                 j = eq.eliminated
-                others = [(t, p) for t, p in zip(sym.terms, sym.phi) if t.link != j]
-                S = sp.Add(*(t.r * sp.sin(p + t.beta) for t, p in others))
-                C = sp.Add(*(t.r * sp.cos(p + t.beta) for t, p in others))
+                # the same loop over ψ_i = φ_i + β_i: r_j² - Σ r_i² = 2 Σ r_i r_k cos(ψ_i - ψ_k)
+                polar = dataclasses.replace(
+                    eq, terms=tuple(le_mod.Term(t.link, r[t.link], psi[t.link]) for t in eq.terms),
+                    phi=tuple(sp.Integer(0) for _ in eq.terms))
+                elim = polar.eliminating(j)
+                entry["squared"] = _relation_lines(ptex, elim.squared.lhs, elim.squared.rhs)
+                others = [t for t in polar.terms if t.link != j]
+                S = sp.Add(*(t.r * sp.sin(t.beta) for t in others))
+                C = sp.Add(*(t.r * sp.cos(t.beta) for t in others))
                 S_sym, C_sym = sp.Symbol("S_elim"), sp.Symbol("C_elim")
-                stex = ltex.with_names({S_sym: rf"S_{{{j}}}", C_sym: rf"C_{{{j}}}"})
-                lhs = stex(elim.solved_angle.lhs)
+                stex = ptex.with_names({S_sym: rf"S_{{{j}}}", C_sym: rf"C_{{{j}}}"})
                 entry["solved"] = (
                     stex.equation(rf"S_{{{j}}}", S) + stex.equation(rf"C_{{{j}}}", C)
-                    + [f"{lhs} &= {stex(sp.atan2(-S_sym, -C_sym))}"])
+                    + [rf"\psi_{{{j}}} &= {stex(sp.atan2(-S_sym, -C_sym))}",
+                       rf"\varphi_{{{j}}} &= \psi_{{{j}}} - \beta_{{{j}}}"])
             out.append(entry)
         return out
 
@@ -505,16 +512,21 @@ class Report:
                 e = sol.phi[i]
                 if tex(e) != rf"\varphi_{{{i}}}":
                     phi += tex.equation(rf"\varphi_{{{i}}}", e)
+            varphi = {i: sp.Symbol(f"varphi_{i}") if i else sp.Integer(0)
+                      for i in range(self.s.n + 1)}
+            vtex = tex.with_names({v: rf"\varphi_{{{i}}}" for i, v in varphi.items() if i})
             for a in kin.unknowns:
                 h = kin.hinges[a]
-                thetas.append(rf"\theta_{{{a}}} &= \varphi_{{{h.M}}} - \varphi_{{{h.P}}}")
+                thetas.append(rf"\theta_{{{a}}} &= {vtex(varphi[h.M] - varphi[h.P])}")
         return {"closed_form": sol.closed_form, "dyads": dyads, "steps": steps, "phi": phi,
                 "thetas": thetas}
 
     # -- first order ---------------------------------------------------------------------------
     def linear_system(self) -> dict | None:
         an, kin, s = self.an, self.kin, self.s
-        if not an.deltas or not self.plan.needs_loops:
+        moved = any(b in kin.unknowns for name in self.plan.points
+                    for b in s.tree_path(an.link[self.mech.point(name).link]))
+        if not an.deltas or not moved:
             return None
         A, r = an.linear_system
         entries = []
@@ -543,7 +555,7 @@ class Report:
             dz = sp.Add(*(int(row[b - 1]) * sp.Symbol(f"DZ_{b}") for b in range(1, s.m + 1)
                           if row[b - 1]))
             rows_r.append({"chord": c, "sum": self.tex.with_names(dz_names)(dz)})
-        delta = self.tex.vector(an.deltas)
+        delta = r"\left(" + ", ".join(self.tex(d) for d in an.deltas) + r"\right)^{T}"
         return {"matrix": matrix, "defs": defs, "rows": rows_r, "delta": delta,
                 "size": len(an.deltas), "nrows": A.rows}
 
@@ -558,7 +570,7 @@ class Report:
             moved = any(b in kin.unknowns for b in path)
             sub_name = math_name(name)
             entry = {"name": escape_latex(name), "link": k, "link_name": self.link_name(k),
-                     "at": tex.small_vector(point.at), "path": path, "moved": moved,
+                     "at": tex.row_vector(point.at), "path": path, "moved": moved,
                      "levels": {}}
             rigid = an.point_rigid(name)
             entry["rigid"] = (tex.equation(rf"X_{{{sub_name}}}", rigid[0])
@@ -566,7 +578,8 @@ class Report:
             dz_sum = " + ".join(rf"\Delta\mathbf{{z}}_{{{b}}}" for b in path) or r"\mathbf{0}"
             entry["paper_sum"] = (rf"\Delta\mathbf{{R}}_{{{sub_name}}}^{{\mathrm{{paper}}}} = "
                                   rf"{dz_sum}")
-            dev = an.point_deviation(name, "paper")
+            # multiplied out (trigonometric functions kept): one term per hinge and kernel
+            dev = [sp.expand(e) for e in an.point_deviation(name, "paper")]
             entry["paper"] = (
                 tex.equation(rf"\Delta X_{{{sub_name}}}^{{\mathrm{{paper}}}}", dev[0])
                 + tex.equation(rf"\Delta Y_{{{sub_name}}}^{{\mathrm{{paper}}}}", dev[1]))
@@ -580,9 +593,9 @@ class Report:
                 factor = tex(dphi)
                 if dphi.is_Add:
                     factor = r"\left(" + factor + r"\right)"
-                terms_lin.append(rf"{factor}\,{rot}{tex.vector(V.perp(w))}")
+                terms_lin.append(rf"{factor}\,{rot}{tex.table_vector(V.perp(w))}")
                 terms_exact.append(rf"{rot}\Bigl(\mathbf{{G}}\!\left({tex(dphi)}\right) - "
-                                   rf"\mathbf{{E}}\Bigr){tex.vector(w)}")
+                                   rf"\mathbf{{E}}\Bigr){tex.table_vector(w)}")
             lhs1 = rf"\Delta\mathbf{{R}}_{{{sub_name}}}^{{(1)}}"
             base = rf"\Delta\mathbf{{R}}_{{{sub_name}}}^{{\mathrm{{paper}}}}"
             toks = [base] + [f"+ {t}" for t in terms_lin]
@@ -593,7 +606,8 @@ class Report:
             dzc = " + ".join(rf"\Delta\mathbf{{z}}_{{{b}}}(\theta_{{{b}}}"
                              + (rf" + \delta_{{{b}}}" if b in kin.unknowns else "") + ")"
                              for b in path) or r"\mathbf{0}"
-            toks = terms_exact[:1] + [f"+ {t}" for t in terms_exact[1:]] + [f"+ {dzc}"]
+            toks = terms_exact[:1] + [f"+ {t}" for t in terms_exact[1:]] + [
+                f"+ {dzc}" if terms_exact else dzc]
             entry["exact"] = align_lines(lhs2, "=", pack(toks, LINE_WIDTH_EM - lead,
                                                          LINE_WIDTH_EM - lead - 1))
             out.append(entry)
@@ -622,6 +636,25 @@ def _generic_functions(model: str) -> tuple | None:
                   "c_theta": sp.Symbol("c_theta", positive=True)}
     plate = hinge_models.plate_functions(_Generic(model, params))
     return plate.f, plate.g, plate.df, plate.dg
+
+
+def _elastica_lines(tex: Tex) -> list[str]:
+    """The tip-force elastica's functions in Carlson form (as symkin.special evaluates them)."""
+    t = THETA
+    A, C = sp.Symbol("A"), sp.Symbol("C")
+    RF, RD = sp.Function("R_F"), sp.Function("R_D")
+    s = sp.Abs(sp.sin(t))
+    args = (1 - s, 1 + s, sp.cos(t) ** 2)
+    lines = []
+    for lhs, rhs in ((r"X_e(\theta)", 1 / A),
+                     (r"Y_e(\theta)", sp.sin(t) * (1 - C / A)),
+                     (r"\Delta X_e(\theta)", sp.Mul(sp.sin(t) ** 2, sp.Add(
+                         1 / (2 * (1 + sp.cos(t))), -(A - 1) / (sp.sin(t) ** 2 * A),
+                         evaluate=False), evaluate=False)),
+                     (r"\Delta Y_e(\theta)", sp.sin(t) * (sp.Rational(1, 2) - C / A)),
+                     ("A", RF(*args)), ("C", sp.cos(t) ** 2 / 3 * RD(*args))):
+        lines += tex.equation(lhs, rhs)
+    return lines
 
 
 def _has_kernel(expr: sp.Expr) -> bool:
@@ -667,34 +700,6 @@ def pose_data(report: Report) -> PoseData:
     return PoseData(links, 0, tuple(plates), points)
 
 
-def graph_positions(report: Report) -> dict[int, tuple[float, float]]:
-    """Vertex positions: each link's mean hinge centre, nudged apart when two coincide."""
-    kin, s, defaults = report.kin, report.s, report.defaults
-    sums: dict[int, list[tuple[float, float]]] = {i: [] for i in range(s.n + 1)}
-    for a in range(1, s.m + 1):
-        h = kin.hinges[a]
-        c = (_num(h.centre[0], defaults), _num(h.centre[1], defaults))
-        sums[h.P].append(c)
-        sums[h.M].append(c)
-    pos = {}
-    for i in range(s.n + 1):
-        pts = sums[i] or [(0.0, 0.0)]
-        pos[i] = (sum(p[0] for p in pts) / len(pts), sum(p[1] for p in pts) / len(pts))
-    if s.n >= 1:
-        # the ground below everything else, as in the paper's graphs
-        xs = [p[0] for p in pos.values()]
-        ys = [p[1] for p in pos.values()]
-        span = max(max(xs) - min(xs), max(ys) - min(ys), 1e-9)
-        pos[0] = (pos[0][0], min(min(ys) - 0.25 * span, pos[0][1]))
-        for _ in range(3):
-            for i in range(s.n + 1):
-                for j in range(i):
-                    dx, dy = pos[i][0] - pos[j][0], pos[i][1] - pos[j][1]
-                    if math.hypot(dx, dy) < 0.15 * span:
-                        pos[i] = (pos[i][0] + 0.12 * span, pos[i][1] + 0.12 * span)
-    return pos
-
-
 def sweep(report: Report, numpy_module) -> tuple[Sweep, tuple[float, float], dict]:
     """|ΔR| of the points over every input = t, |t| <= SWEEP_RANGE, evaluated with numpy."""
     t = np.linspace(-SWEEP_RANGE, SWEEP_RANGE, SWEEP_SAMPLES)
@@ -713,10 +718,13 @@ def sweep(report: Report, numpy_module) -> tuple[Sweep, tuple[float, float], dic
             d = np.where(ok, deviation[p][lv], np.nan)
             deviation[p][lv] = d
             magnitude[p][lv] = np.hypot(d[0], d[1])
-    step = t[1] - t[0]
+    # clipped to the assembling samples, with a margin (10 % of the range) showing where
+    # assembly stops
+    margin = 0.1 * SWEEP_RANGE
     if ok.any():
         idx = np.flatnonzero(ok)
-        lo, hi = max(-SWEEP_RANGE, t[idx[0]] - 2 * step), min(SWEEP_RANGE, t[idx[-1]] + 2 * step)
+        lo = -SWEEP_RANGE if idx[0] == 0 else max(-SWEEP_RANGE, t[idx[0]] - margin)
+        hi = SWEEP_RANGE if idx[-1] == len(t) - 1 else min(SWEEP_RANGE, t[idx[-1]] + margin)
     else:
         lo, hi = -SWEEP_RANGE, SWEEP_RANGE
     summary = {"samples": int(len(t)), "failed": int((~ok).sum()),
@@ -754,10 +762,24 @@ def emit(plan: Plan, source: str, appendix: bool = False) -> dict[str, bytes]:
     name = report.mech.name
     ctx = report.context(appendix)
     files: dict[str, bytes] = {}
-    files[f"{name}-pose.pdf"] = pose_figure(pose_data(report), plain_name)
+    pose = pose_data(report)
+    files[f"{name}-pose.pdf"] = pose_figure(pose, plain_name)
+    scale = plate_scale(pose)
+    ctx["pose_width"] = f"{min(1.0, pose_size(pose)[0] / FIG_WIDTH):.2f}"
+    plates = ("the flexure plates as thick black segments"
+              + (" to scale" if scale == 1 else f", drawn {scale:g} times their length"))
+    ctx["pose_caption"] = (plates + ", the fixed link $s_0$ as ground anchors; characteristic "
+                           "points in red.")
     arcs = [(a, report.s.i_plus[a - 1], report.s.i_minus[a - 1], a > report.s.n)
             for a in range(1, report.s.m + 1)]
-    files[f"{name}-graph.pdf"] = graph_figure(graph_positions(report), arcs)
+    layout = tree_layout(report.s.parent, report.s.n)
+    files[f"{name}-graph.pdf"] = graph_figure(layout, arcs)
+    depth = max(x for x, _ in layout.values())
+    # a shallow tree beside the hinge table, a deep one (a long chain) above it
+    ctx["graph_beside"] = depth <= 3
+    ctx["graph_width"] = f"{0.16 + 0.1 * depth:.2f}" if depth <= 3 else \
+        f"{min(0.9, 0.13 * (depth + 1)):.2f}"
+    ctx["table_width"] = f"{min(0.58, 0.96 - float(ctx['graph_width'])):.2f}"
     ctx["deviation_figures"] = []
     ctx["sweep"] = None
     if plan.points:
@@ -774,7 +796,8 @@ def emit(plan: Plan, source: str, appendix: bool = False) -> dict[str, bytes]:
             files[fname] = deviation_figure(data, chunk, list(plan.levels), plain_name, xlim,
                                             xlabel)
             ctx["deviation_figures"].append({"file": fname,
-                                             "points": [escape_latex(p) for p in chunk]})
+                                             "points": [escape_latex(p) for p in chunk],
+                                             "compare": differs(data, chunk, plan.levels)})
         summary["single_input"] = len(inputs) == 1
         summary["inputs"] = [escape_latex(n) for n in inputs]
         ctx["sweep"] = summary

@@ -1,8 +1,10 @@
 """The report's figures, drawn with matplotlib (Agg canvas, PDF output, byte-deterministic).
 
 - :func:`pose_figure`: the mechanism as fabricated: links between their hinge clamps (a link with
-  three or more attachments as a filled polygon), plates as short thick segments from clamp to
-  clamp, the ground as hatched anchors, the characteristic points, every name labelled.
+  three or more attachments as a filled polygon), plates as short thick segments along the plate
+  (magnified by :func:`plate_scale` when they would be invisible), the ground as hatched anchors,
+  the characteristic points, every name labelled; labels are placed greedily where they overlap
+  no other label, marker or line (:func:`_place_labels`).
 - :func:`graph_figure`: the oriented graph, vertices s_i, arcs u_a from i+(a) to i-(a).
 - :func:`deviation_figure`: |ΔR| of each point over an input range at every level, and the
   difference of the approximate levels from the exact one.
@@ -113,6 +115,126 @@ def _hull(pts: Sequence[tuple[float, float]]) -> list[tuple[float, float]]:
     return lower[:-1] + upper[:-1]
 
 
+def plate_scale(data: PoseData) -> float:
+    """Magnification that draws the longest plate at about 4 % of the drawing (1, 2, 5 x 10^k;
+    never below 1): flexure plates are tiny next to the links."""
+    every = [p for _, _, att in data.links for p in att] + [p for _, _, p in data.points]
+    xs = [p[0] for p in every] or [0.0]
+    ys = [p[1] for p in every] or [0.0]
+    span = max(max(xs) - min(xs), max(ys) - min(ys), 1e-12)
+    longest = max([math.hypot(m[0] - p[0], m[1] - p[1]) for _, _, p, m, _ in data.plates] + [0])
+    if longest <= 0:
+        return 1.0
+    want = 0.04 * span / longest
+    if want <= 1.5:
+        return 1.0
+    k = 10 ** math.floor(math.log10(want))
+    for step in (1, 2, 5, 10):
+        if step * k >= want / 1.6:
+            return float(step * k)
+    return float(10 * k)
+
+
+def pose_size(data: PoseData) -> tuple[float, float]:
+    """Figure (width, height) in inches: equal axes, at most 3.3 in high."""
+    every = [p for _, _, att in data.links for p in att] + [p for _, _, p in data.points]
+    xs = [p[0] for p in every] or [0.0]
+    ys = [p[1] for p in every] or [0.0]
+    span = max(max(xs) - min(xs), max(ys) - min(ys), 1e-12)
+    w = max(xs) - min(xs) + 0.5 * span
+    h = max(ys) - min(ys) + 0.36 * span
+    axes_w = FIG_WIDTH - 0.75
+    height = axes_w * h / w + 0.55
+    if height <= 3.3:
+        return FIG_WIDTH, max(height, 1.8)
+    height = 3.3
+    return min(FIG_WIDTH, (height - 0.55) * w / h + 0.75), height
+
+
+@dataclass
+class _Label:
+    """A label to place: anchor points (data), text, style, preferred direction (dx, dy)."""
+
+    anchors: list[tuple[float, float]]
+    text: str
+    style: dict
+    prefer: tuple[float, float]
+    distance: float = 7.0
+    centred: bool = False          # the anchor itself is a candidate (text over a filled area)
+
+
+def _segment_hits_box(p, q, box) -> bool:
+    """Whether the segment p-q (display coordinates) meets the rectangle `box`."""
+    x0, y0, x1, y1 = box.x0, box.y0, box.x1, box.y1
+    (px, py), (qx, qy) = p, q
+    t0, t1 = 0.0, 1.0
+    dx, dy = qx - px, qy - py
+    for pk, qk in ((-dx, px - x0), (dx, x1 - px), (-dy, py - y0), (dy, y1 - py)):
+        if pk == 0:
+            if qk < 0:
+                return False
+            continue
+        r = qk / pk
+        if pk < 0:
+            t0 = max(t0, r)
+        else:
+            t1 = min(t1, r)
+        if t0 > t1:
+            return False
+    return True
+
+
+def _candidates(label: _Label) -> list[tuple[float, float]]:
+    """Offsets in points: the preferred direction first, then the others by angle from it."""
+    px, py = label.prefer
+    base = math.atan2(py, px) if (px or py) else math.pi / 4
+    dirs = []
+    for k in range(16):
+        ang = base + (k + 1) // 2 * (math.pi / 8) * (1 if k % 2 else -1) if k else base
+        dirs.append(ang)
+    out = [(0.0, 0.0)] if label.centred else []
+    for dist in (label.distance, 2.2 * label.distance):
+        out += [(dist * math.cos(a), dist * math.sin(a)) for a in dirs]
+    return out
+
+
+def _place_labels(fig, ax, labels: Sequence[_Label], segments, markers) -> None:
+    """Greedy placement: for each label the first candidate (anchor x offset) that overlaps no
+    placed label or marker, crosses the fewest drawn segments and stays inside the axes."""
+    renderer = fig.canvas.get_renderer()
+    to_px = ax.transData.transform
+    segs = [(tuple(to_px(p)), tuple(to_px(q))) for p, q in segments]
+    marks = [tuple(to_px(m)) for m in markers]
+    frame = ax.get_window_extent(renderer)
+    placed = []
+    for label in labels:
+        best = None
+        for ai, anchor in enumerate(label.anchors):
+            own = tuple(to_px(anchor))
+            for rank, (dx, dy) in enumerate(_candidates(label)):
+                ha = "left" if dx > 0.5 else ("right" if dx < -0.5 else "center")
+                va = "bottom" if dy > 0.5 else ("top" if dy < -0.5 else "center")
+                text = ax.annotate(label.text, anchor, xytext=(dx, dy),
+                                   textcoords="offset points", ha=ha, va=va, parse_math=False,
+                                   **label.style)
+                box = text.get_window_extent(renderer).expanded(1.04, 1.12)
+                text.remove()
+                cost = rank + 0.5 * ai
+                cost += 1000 * sum(box.overlaps(b) for b in placed)
+                cost += 300 * sum(box.x0 - 3 < mx < box.x1 + 3 and box.y0 - 3 < my < box.y1 + 3
+                                  for mx, my in marks if (mx, my) != own)
+                cost += 40 * sum(_segment_hits_box(p, q, box) for p, q in segs)
+                if not (frame.x0 <= box.x0 and box.x1 <= frame.x1 and frame.y0 <= box.y0
+                        and box.y1 <= frame.y1):
+                    cost += 500
+                if best is None or cost < best[0]:
+                    best = (cost, anchor, dx, dy, ha, va, box)
+        _, anchor, dx, dy, ha, va, box = best
+        ax.annotate(label.text, anchor, xytext=(dx, dy), textcoords="offset points", ha=ha,
+                    va=va, parse_math=False, **label.style)
+        placed.append(box)
+
+
 def pose_figure(data: PoseData, plain) -> bytes:
     """PDF of the as-fabricated pose; `plain` makes a name safe for matplotlib text."""
     from matplotlib.patches import Polygon
@@ -121,98 +243,130 @@ def pose_figure(data: PoseData, plain) -> bytes:
     xs = [p[0] for p in every] or [0.0]
     ys = [p[1] for p in every] or [0.0]
     span = max(max(xs) - min(xs), max(ys) - min(ys), 1e-12)
-    cx, cy = (max(xs) + min(xs)) / 2, (max(ys) + min(ys)) / 2
-    aspect = (max(ys) - min(ys) + 0.3 * span) / (max(xs) - min(xs) + 0.3 * span)
-    height = min(max(FIG_WIDTH * aspect, 2.2), 4.6)
+    cx = sum(xs) / len(xs)
+    cy = sum(ys) / len(ys)
+    width, height = pose_size(data)
+    scale = plate_scale(data)
+    segments: list = []
+    markers: list = []
+    labels: list[_Label] = []
+    link_labels: list[_Label] = []
+    ground_label: list[_Label] = []
+
+    def away(x: float, y: float) -> tuple[float, float]:
+        dx, dy = x - cx, y - cy
+        norm = math.hypot(dx, dy)
+        return (dx / norm, dy / norm) if norm > 1e-12 * span else (1.0, 1.0)
+
     with rc_context():
-        fig = _figure(FIG_WIDTH, height)
-        ax = fig.add_axes((0.11, 0.1, 0.86, 0.86))
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.grid(True, lw=0.3, color="0.88", zorder=0)
+        fig = _figure(width, height)
+        ax = fig.add_axes((0.6 / width, 0.42 / height, 1 - 0.75 / width, 1 - 0.55 / height))
+        ax.grid(True, lw=0.3, color="0.9", zorder=0)
         ax.set_axisbelow(True)
-        anchor = 0.035 * span
+        anchor = 0.03 * span
         for label, name, att in data.links:
             colour = LINK_COLOURS[(label - 1) % len(LINK_COLOURS)] if label else "0.3"
+            text = f"{plain(name)} (s{sub(label)})"
             if label == data.ground:
                 for x, y in att:
-                    tri = Polygon([(x, y), (x - anchor / 2, y - anchor), (x + anchor / 2, y - anchor)],
-                                  closed=True, facecolor="white", edgecolor="0.25", lw=0.7,
-                                  zorder=2)
-                    ax.add_patch(tri)
+                    ax.add_patch(Polygon([(x, y), (x - anchor / 2, y - anchor),
+                                          (x + anchor / 2, y - anchor)], closed=True,
+                                         facecolor="white", edgecolor="0.25", lw=0.7, zorder=2))
                     ax.add_patch(Polygon([(x - anchor, y - anchor), (x + anchor, y - anchor),
-                                          (x + anchor, y - 1.45 * anchor),
-                                          (x - anchor, y - 1.45 * anchor)], closed=True,
-                                         facecolor="none", edgecolor="0.25", hatch="////",
+                                          (x + anchor, y - 1.5 * anchor),
+                                          (x - anchor, y - 1.5 * anchor)], closed=True,
+                                         facecolor="none", edgecolor="0.35", hatch="//////",
                                          lw=0.0, zorder=2))
                     ax.plot([x - anchor, x + anchor], [y - anchor, y - anchor], color="0.25",
                             lw=0.8, zorder=2)
+                    segments.append(((x - anchor, y - 1.5 * anchor), (x + anchor, y - anchor)))
+                    segments.append(((x - anchor, y - anchor), (x + anchor, y - 1.5 * anchor)))
                 if att:
-                    gx, gy = min(att)
-                    ax.annotate(f"{plain(name)} (s{sub(label)})", (gx, gy),
-                                xytext=(gx, gy - 1.6 * anchor), textcoords="data",
-                                ha="center", va="top", fontsize=7, color="0.25",
-                                annotation_clip=False, parse_math=False)
+                    ground_label.append(_Label(
+                        [(x, y - 1.5 * anchor) for x, y in sorted(att, key=lambda p: (p[1], p[0]))],
+                        text, {"fontsize": 7, "color": "0.25", "zorder": 6}, (0.0, -1.0),
+                        distance=3.0))
                 continue
             pts = list(att) + [p for _, lk, p in data.points if lk == label]
             hull = _hull(pts)
+            style = {"fontsize": 7, "color": colour, "zorder": 6,
+                     "bbox": {"boxstyle": "round,pad=0.12", "fc": "white", "ec": "none",
+                              "alpha": 0.8}}
             if len(hull) >= 3:
-                ax.add_patch(Polygon(hull, closed=True, facecolor=colour, alpha=0.16,
+                ax.add_patch(Polygon(hull, closed=True, facecolor=colour, alpha=0.15,
                                      edgecolor="none", zorder=2))
                 ring = hull + [hull[0]]
                 ax.plot([p[0] for p in ring], [p[1] for p in ring], color=colour, lw=1.4,
                         solid_joinstyle="round", zorder=3)
+                segments += list(zip(ring[:-1], ring[1:]))
                 lx = sum(p[0] for p in hull) / len(hull)
                 ly = sum(p[1] for p in hull) / len(hull)
-                offset = (0, 0)
+                link_labels.append(_Label([(lx, ly)], text, style, away(lx, ly), centred=True))
             elif len(hull) == 2:
                 (x0, y0), (x1, y1) = hull
                 ax.plot([x0, x1], [y0, y1], color=colour, lw=1.8, solid_capstyle="round",
                         zorder=3)
-                lx, ly = (x0 + x1) / 2, (y0 + y1) / 2
+                segments.append(((x0, y0), (x1, y1)))
                 nx, ny = -(y1 - y0), x1 - x0
                 norm = math.hypot(nx, ny) or 1.0
-                # label on the side away from the mechanism's centre
-                side = 1.0 if (lx - cx) * nx + (ly - cy) * ny >= 0 else -1.0
-                offset = (side * 9 * nx / norm, side * 9 * ny / norm)
-            else:
-                if not hull:
-                    continue
-                lx, ly = hull[0]
-                offset = (8, 8)
-            ax.annotate(f"{plain(name)} (s{sub(label)})", (lx, ly), xytext=offset,
-                        textcoords="offset points", ha="center", va="center", fontsize=7,
-                        color=colour, parse_math=False, zorder=6,
-                        bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none",
-                              "alpha": 0.75})
+                mx, my = (x0 + x1) / 2, (y0 + y1) / 2
+                side = 1.0 if (mx - cx) * nx + (my - cy) * ny >= 0 else -1.0
+                anchors = [(x0 + f * (x1 - x0), y0 + f * (y1 - y0)) for f in (0.5, 0.35, 0.65)]
+                link_labels.append(_Label(anchors, text, style,
+                                          (side * nx / norm, side * ny / norm)))
+            elif hull:
+                link_labels.append(_Label([hull[0]], text, style, away(*hull[0])))
         for a, name, p, m, is_input in data.plates:
-            ax.plot([p[0], m[0]], [p[1], m[1]], color="black", lw=3.2, solid_capstyle="butt",
-                    zorder=5)
             hx, hy = (p[0] + m[0]) / 2, (p[1] + m[1]) / 2
-            ax.plot([hx], [hy], marker="o", ms=7.5, mfc="none", mec="black", mew=0.6,
-                    zorder=5)
-            dx, dy = hx - cx, hy - cy
-            norm = math.hypot(dx, dy) or 1.0
-            text = f"{plain(name)} (u{sub(a)})" + (", input" if is_input else "")
-            ax.annotate(text, (hx, hy), xytext=(12 * dx / norm, 12 * dy / norm),
-                        textcoords="offset points", ha="left" if dx > 0.2 * norm else (
-                            "right" if dx < -0.2 * norm else "center"),
-                        va="bottom" if dy > 0 else "top", fontsize=7, parse_math=False,
-                        zorder=6)
+            ux, uy = (m[0] - p[0]) / 2 * scale, (m[1] - p[1]) / 2 * scale
+            ax.plot([hx - ux, hx + ux], [hy - uy, hy + uy], color="black", lw=3.0,
+                    solid_capstyle="butt", zorder=5)
+            markers.append((hx, hy))
+            text = f"{plain(name)} (u{sub(a)}" + (", input)" if is_input else ")")
+            labels.append(_Label([(hx, hy)], text, {"fontsize": 7, "zorder": 6}, away(hx, hy),
+                                 distance=6.0))
         for name, link, (x, y) in data.points:
             ax.plot([x], [y], marker="o", ms=4.0, color="#c62828", zorder=7)
-            ax.annotate(plain(name), (x, y), xytext=(5, 5), textcoords="offset points",
-                        fontsize=8, color="#c62828", fontweight="bold", parse_math=False,
-                        zorder=7)
-        pad = 0.14 * span
-        ax.set_xlim(min(xs) - pad, max(xs) + pad)
-        ax.set_ylim(min(ys) - pad - 1.6 * anchor, max(ys) + pad)
+            markers.append((x, y))
+            labels.append(_Label([(x, y)], plain(name),
+                                 {"fontsize": 8, "color": "#c62828", "fontweight": "bold",
+                                  "zorder": 7}, away(x, y), distance=4.0))
+        pad = 0.18 * span
+        ax.set_xlim(min(xs) - 1.4 * pad, max(xs) + 1.4 * pad)
+        ax.set_ylim(min(ys) - pad, max(ys) + pad)
+        ax.set_aspect("equal", adjustable="box")
         ax.set_xlabel("x")
         ax.set_ylabel("y")
         ax.tick_params(direction="in")
+        ax.apply_aspect()
+        _place_labels(fig, ax, labels + link_labels + ground_label, segments, markers)
         return _render(fig)
 
 
 # -- oriented graph ----------------------------------------------------------------------------
+
+def tree_layout(parent: Sequence[int], n: int) -> dict[int, tuple[float, float]]:
+    """Layered drawing of the skeleton tree: x = depth from s_0, leaves spread along y
+    (children in label order), a parent centred on its children."""
+    children: dict[int, list[int]] = {i: [] for i in range(n + 1)}
+    for i in range(1, n + 1):
+        children[parent[i - 1]].append(i)
+    pos: dict[int, tuple[float, float]] = {}
+    counter = [0.0]
+
+    def place(i: int, depth: int) -> float:
+        if not children[i]:
+            y = counter[0]
+            counter[0] += 1.0
+        else:
+            ys = [place(c, depth + 1) for c in sorted(children[i])]
+            y = sum(ys) / len(ys)
+        pos[i] = (float(depth), -y)
+        return y
+
+    place(0, 0)
+    return pos
+
 
 def graph_figure(positions: dict[int, tuple[float, float]],
                  arcs: Sequence[tuple[int, int, int, bool]]) -> bytes:
@@ -222,47 +376,57 @@ def graph_figure(positions: dict[int, tuple[float, float]],
     labels = sorted(positions)
     xs = [positions[i][0] for i in labels]
     ys = [positions[i][1] for i in labels]
-    span = max(max(xs) - min(xs), max(ys) - min(ys), 1e-12)
-    aspect = (max(ys) - min(ys) + 0.35 * span) / (max(xs) - min(xs) + 0.35 * span)
-    width = 2.6
-    height = min(max(width * aspect, 1.5), 3.0)
-    radius = 0.055 * span
+    w = max(xs) - min(xs) + 1.0
+    h = max(ys) - min(ys) + 1.0
+    unit = min(2.6 / w, 2.2 / h, 0.75)
+    radius = 0.2
     with rc_context():
-        fig = _figure(width, height)
-        ax = fig.add_axes((0.01, 0.01, 0.98, 0.98))
-        ax.set_aspect("equal", adjustable="datalim")
+        fig = _figure(unit * w + 0.1, unit * h + 0.1)
+        ax = fig.add_axes((0, 0, 1, 1))
         ax.set_axis_off()
         for i in labels:
             x, y = positions[i]
             ax.add_patch(Circle((x, y), radius, facecolor="white", edgecolor="black", lw=0.7,
                                 zorder=3))
-            ax.text(x, y, f"s{sub(i)}", ha="center", va="center", fontsize=7, zorder=4,
-                    parse_math=False)
+            ax.text(x, y, f"$s_{{{i}}}$", ha="center", va="center", fontsize=8, zorder=4)
+        centre = (sum(xs) / len(xs), sum(ys) / len(ys))
         seen: dict[tuple[int, int], int] = {}
         for a, ip, im, chord in arcs:
             key = (min(ip, im), max(ip, im))
             k = seen.get(key, 0)
             seen[key] = k + 1
-            rad = 0.0 if k == 0 else 0.35 * (1 if k % 2 else -1) * ((k + 1) // 2)
             p, q = positions[ip], positions[im]
-            arrow = FancyArrowPatch(p, q, arrowstyle="-|>,head_length=3.5,head_width=1.8",
-                                    connectionstyle=f"arc3,rad={rad}", shrinkA=0, shrinkB=0,
-                                    patchA=None, patchB=None, lw=0.8,
-                                    linestyle="--" if chord else "-", color="black", zorder=2)
-            # shrink to the circles' edges in data units
             dx, dy = q[0] - p[0], q[1] - p[1]
             d = math.hypot(dx, dy) or 1.0
             ux, uy = dx / d, dy / d
-            arrow.set_positions((p[0] + radius * ux, p[1] + radius * uy),
-                                (q[0] - radius * ux, q[1] - radius * uy))
+            rad = 0.0 if (k == 0 and not chord) else 0.3 * (1 if k % 2 == 0 else -1) * (1 + k // 2)
+            mid = ((p[0] + q[0]) / 2, (p[1] + q[1]) / 2)
+            if rad and uy * (mid[0] - centre[0]) - ux * (mid[1] - centre[1]) < 0:
+                rad = -rad          # curve away from the middle of the drawing
+            arrow = FancyArrowPatch((p[0] + radius * ux, p[1] + radius * uy),
+                                    (q[0] - radius * ux, q[1] - radius * uy),
+                                    arrowstyle="-|>,head_length=3.5,head_width=1.8",
+                                    connectionstyle=f"arc3,rad={rad}", shrinkA=0, shrinkB=0,
+                                    lw=0.8, linestyle="--" if chord else "-", color="black",
+                                    zorder=2)
             ax.add_patch(arrow)
-            mx, my = (p[0] + q[0]) / 2 - rad * dy / 2, (p[1] + q[1]) / 2 + rad * dx / 2
-            ax.text(mx - 0.5 * radius * uy * 1.6, my + 0.5 * radius * ux * 1.6, f"u{sub(a)}",
-                    ha="center", va="center", fontsize=6.5, zorder=4, parse_math=False,
-                    bbox={"boxstyle": "round,pad=0.08", "fc": "white", "ec": "none"})
-        pad = 0.12 * span + radius
-        ax.set_xlim(min(xs) - pad, max(xs) + pad)
-        ax.set_ylim(min(ys) - pad, max(ys) + pad)
+            # label beside the arc's midpoint (arc3 bulges by rad * d / 2 to the right):
+            # chords on the inner side of their curve, tree arcs away from the graph's centre
+            bulge = rad * d / 2
+            mx = (p[0] + q[0]) / 2 + bulge * uy
+            my = (p[1] + q[1]) / 2 - bulge * ux
+            nx, ny = uy, -ux
+            if rad != 0:
+                side = -1.0 if rad > 0 else 1.0
+            else:
+                side = 1.0 if nx * (mx - centre[0]) + ny * (my - centre[1]) >= 0 else -1.0
+            off = 0.17 * side
+            ax.text(mx + off * nx, my + off * ny, f"$u_{{{a}}}$", ha="center", va="center",
+                    fontsize=7, zorder=4,
+                    bbox={"boxstyle": "round,pad=0.05", "fc": "white", "ec": "none"})
+        ax.set_xlim(min(xs) - 0.5, max(xs) + 0.5)
+        ax.set_ylim(min(ys) - 0.5, max(ys) + 0.5)
+        ax.set_aspect("equal", adjustable="box")
         return _render(fig)
 
 
@@ -299,12 +463,20 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return out
 
 
+def differs(sweep: Sweep, points: Sequence[str], levels: Sequence[str]) -> bool:
+    """Whether some level differs from the exact one for some point (then it is plotted)."""
+    return "exact" in levels and len(levels) > 1 and any(
+        np.nanmax(np.abs(sweep.deviation[p][lv] - sweep.deviation[p]["exact"]),
+                  initial=0.0) > 0 for p in points for lv in levels)
+
+
 def deviation_figure(sweep: Sweep, points: Sequence[str], levels: Sequence[str], plain,
                      xlim: tuple[float, float], xlabel: str) -> bytes:
-    """PDF with one row per point: |ΔR| at every level, and |ΔR_level - ΔR_exact|."""
+    """PDF with one row per point: |ΔR| at every level, and |ΔR_level - ΔR_exact| when some
+    level differs from the exact one."""
     from matplotlib.patches import Patch
 
-    compare = "exact" in levels and len(levels) > 1
+    compare = differs(sweep, points, levels)
     rows = len(points)
     ncols = 2 if compare else 1
     height = 0.55 + 1.75 * rows
@@ -324,15 +496,21 @@ def deviation_figure(sweep: Sweep, points: Sequence[str], levels: Sequence[str],
                 ax.set_xlim(*xlim)
                 ax.grid(True, lw=0.3, color="0.9")
                 ax.tick_params(direction="in", which="both")
+            peak = max([float(np.nanmax(sweep.magnitude[name][lv])) for lv in levels
+                        if np.isfinite(sweep.magnitude[name][lv]).any()] + [0.0])
+            power = int(math.floor(math.log10(peak))) if peak > 0 else 0
+            unit = 10.0 ** power
             for lv in levels:
                 st = LEVEL_STYLE[lv]
-                line, = axes[0].plot(t, sweep.magnitude[name][lv], color=st["color"],
+                line, = axes[0].plot(t, sweep.magnitude[name][lv] / unit, color=st["color"],
                                      ls=st["ls"], label=st["label"])
                 if r == 0:
                     handles.append(line)
-            axes[0].set_ylabel("|ΔR|")
-            axes[0].ticklabel_format(axis="y", style="sci", scilimits=(-2, 3), useMathText=True)
-            axes[0].set_title(f"point {plain(name)}: deviation", loc="left", parse_math=False)
+            axes[0].set_ylabel(r"$|\Delta R|$" + ("" if power == 0 else
+                                                 rf" / $10^{{{power}}}$"))
+            axes[0].set_ylim(bottom=0)
+            axes[0].set_title(plain(name), loc="left", parse_math=False, fontsize=8,
+                              fontweight="bold")
             if compare:
                 exact = sweep.deviation[name]["exact"]
                 for lv in levels:
@@ -342,9 +520,13 @@ def deviation_figure(sweep: Sweep, points: Sequence[str], levels: Sequence[str],
                     diff = np.where(diff > 0, diff, np.nan)
                     st = LEVEL_STYLE[lv]
                     axes[1].semilogy(t, diff, color=st["color"], ls=st["ls"])
-                axes[1].set_ylabel("|ΔR − ΔR_exact|")
-                axes[1].set_title(f"point {plain(name)}: error of the approximations",
-                                  loc="left", parse_math=False)
+                axes[1].set_ylabel(r"$|\Delta R - \Delta R_{\mathrm{exact}}|$")
+                # nine decades below the largest difference: the dip at t = 0 goes to zero
+                finite = [float(np.nanmax(line.get_ydata())) for line in axes[1].get_lines()
+                          if np.isfinite(line.get_ydata()).any()]
+                if finite and max(finite) > 0:
+                    top = 10.0 ** math.ceil(math.log10(max(finite)) + 0.3)
+                    axes[1].set_ylim(top * 1e-9, top)
             if r == rows - 1:
                 for ax in axes:
                     ax.set_xlabel(xlabel)

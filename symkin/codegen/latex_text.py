@@ -18,24 +18,28 @@ from sympy.printing.latex import LatexPrinter
 #: Width the equations are broken for, in ems of the 10 pt body font (345 pt = article's
 #: one-column \textwidth; the standalone report is wider, an appendix may be this narrow).
 LINE_WIDTH_EM = 31.0
+#: Width reserved for the left side of an align line (a longer left side takes its own width).
+LHS_EM = 5.0
 
 # -- escaping ------------------------------------------------------------------------------------
 
 _TEXT_SPECIALS = {
-    "\\": r"\textbackslash{}",
-    "{": r"\{",
-    "}": r"\}",
-    "$": r"\$",
+    # typewriter glyphs (OT1 cmtt has the ASCII layout): literal, and no TS1 bitmap fonts
+    "\\": r"{\ttfamily\char92}",
+    "{": r"{\ttfamily\char123}",
+    "}": r"{\ttfamily\char125}",
+    "$": r"{\ttfamily\char36}",
+    "^": r"{\ttfamily\char94}",
+    "~": r"{\ttfamily\char126}",
+    "<": r"{\ttfamily\char60}",
+    ">": r"{\ttfamily\char62}",
+    "|": r"{\ttfamily\char124}",
+    '"': r"{\ttfamily\char34}",
     "&": r"\&",
     "#": r"\#",
     "%": r"\%",
-    "_": r"\_",
-    "^": r"\textasciicircum{}",
-    "~": r"\textasciitilde{}",
-    "<": r"\textless{}",
-    ">": r"\textgreater{}",
-    "|": r"\textbar{}",
-    '"': r"{\ttfamily\char34}",
+    "_": r"\_\penalty0{}",
+    "/": r"/\penalty0{}",
     # characters that would form ligatures (--, ``, '', !`, ?`) are kept apart
     "-": "-{}",
     "`": "`{}",
@@ -151,10 +155,18 @@ class Tex:
         """A column vector in parentheses."""
         return self.matrix([[e] for e in v], "pmatrix")
 
-    def small_vector(self, v: Iterable[object]) -> str:
-        r"""A column vector for tables: ``\left(\begin{smallmatrix}...\end{smallmatrix}\right)``."""
-        body = r" \\ ".join(self(e) for e in v)
-        return r"\left(\begin{smallmatrix}" + body + r"\end{smallmatrix}\right)"
+    def inline(self, expr: object) -> str:
+        """`expr` with short fractions folded (a/b), for tables and running text."""
+        return self._printer(fold_short_frac=True).doprint(sp.sympify(expr))
+
+    def table_vector(self, v: Iterable[object]) -> str:
+        """A column vector for tables: a pmatrix with folded fractions."""
+        body = r" \\ ".join(self.inline(e) for e in v)
+        return r"\begin{pmatrix}" + body + r"\end{pmatrix}"
+
+    def row_vector(self, v: Iterable[object]) -> str:
+        """(x, y) inline, fractions folded."""
+        return r"\left(" + r",\ ".join(self.inline(e) for e in v) + r"\right)"
 
     # -- breaking --------------------------------------------------------------------------------
     def signed_terms(self, expr: sp.Expr) -> list[tuple[str, sp.Expr]]:
@@ -254,9 +266,29 @@ class Tex:
         rest = self.width - 1.5 if rest is None else rest
         return pack(self.tokens(expr, min(first, rest)), first, rest)
 
+    def named_equation(self, lhs: str, rhs: sp.Expr, prefix: str) -> list[str]:
+        """Like :meth:`equation`, but a product too wide for one line has its sums named
+        ``prefix_1, prefix_2, ...`` and defined on the following lines (OpenSYMORO style)."""
+        rhs = sp.sympify(rhs)
+        lead = max(width(lhs), LHS_EM) + 1.5
+        if width(self(rhs)) <= self.width - lead or not rhs.is_Mul:
+            return self.equation(lhs, rhs)
+        sums = [f for f in rhs.args if f.is_Add and width(self(f)) > 5]
+        if not sums:
+            return self.equation(lhs, rhs)
+        symbols = [sp.Symbol(f"zz_{prefix}_{k}") for k in range(1, len(sums) + 1)]
+        names = {s: rf"{prefix}_{{{k}}}" for k, s in enumerate(symbols, start=1)}
+        short = rhs.xreplace(dict(zip(sums, symbols)))
+        out = self.with_names(names).equation(lhs, short)
+        for s, f in zip(symbols, sums):
+            out += self.equation(names[s], f)
+        return out
+
     def equation(self, lhs: str, rhs: sp.Expr, relation: str = "=") -> list[str]:
         """Lines of an ``align*`` for ``lhs = rhs``: ``lhs &= ...`` then ``&\\quad {}+ ...``."""
-        lead = width(lhs) + 1.5
+        # the left column of an align is as wide as its widest left side: budget for at
+        # least LHS_EM so that lines with short and long left sides can share a block
+        lead = max(width(lhs), LHS_EM) + 1.5
         body = self.lines(rhs, self.width - lead, self.width - lead - 1.0)
         return align_lines(lhs, relation, body)
 
