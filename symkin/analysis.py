@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import mpmath
 import sympy as sp
@@ -29,6 +29,7 @@ from . import rigid as rigid_solver
 from . import vectors as V
 from .errors import AssemblyError, InputError
 from .kinematics import Kinematics
+from .mechanism import THETA
 from .structure import Structure
 
 LEVELS = ("paper", "first_order", "exact")
@@ -121,24 +122,61 @@ class Analysis:
 
     @cached_property
     def jacobian(self) -> sp.Matrix:
-        return self.residual.jacobian(self.deltas)
+        """∂F/∂δ of the exact closure, built from its structure rather than by differentiating:
+        rigid part: column a gets s_a Rot(φ_i + δφ_i) J V_i from each link i whose path holds a;
+        plates: Δz_b gives its model derivative (a = b) and J Δz_b (a on the path of P_b)."""
+        return self._closure_jacobian(exact=True)
 
     @cached_property
     def linear_system(self) -> tuple[sp.Matrix, sp.Matrix]:
-        """(A, r): the first-order closure A δ + r = 0; A is the rigid loop Jacobian."""
-        kin = self.kin
-        rows_a, rows_r = [], []
-        zero = {d: 0 for d in self.deltas}
-        for c in kin.chords:
-            rows_a.append(kin.angular_closure(c, {a: self.compliant_angles()[a] - kin.theta[a]
-                                                  for a in kin.theta}))
+        """(A, r): the first-order closure A δ + r = 0; A is the rigid loop Jacobian at δ = 0,
+        r = Φ Δz at the rigid pose."""
+        rows_r: list[sp.Expr] = []
+        for c in self.kin.chords:
             rows_r.append(sp.Integer(0))
-            lin = [V.scale(self.delta_phi(i), V.rot(kin.phi(i), V.perp(w)))
-                   for i, w in kin.loop_weights(c).items()]
-            rows_a.extend(V.add(*lin))
-            rows_r.extend(kin.loop_deviation(c))
-        a_lin = sp.Matrix(rows_a).jacobian(self.deltas).subs(zero)
-        return a_lin, sp.Matrix(rows_r)
+            rows_r.extend(self.kin.loop_deviation(c))
+        return self._closure_jacobian(exact=False), sp.Matrix(rows_r)
+
+    def _closure_jacobian(self, exact: bool) -> sp.Matrix:
+        kin, s = self.kin, self.structure
+        col = {a: k for k, a in enumerate(kin.unknowns)}
+        on_path = {i: set(s.tree_path(i)) & set(col) for i in range(s.n + 1)}
+        angles = self.compliant_angles() if exact else kin.theta
+        rows: list[list[sp.Expr]] = []
+        for c in kin.chords:
+            loop = s.loops[c - s.n - 1]
+            angular = [sp.Integer(0)] * len(col)
+            px, py = [sp.Integer(0)] * len(col), [sp.Integer(0)] * len(col)
+
+            def add(a: int, vec: V.Vec) -> None:
+                px[col[a]] += vec[0]
+                py[col[a]] += vec[1]
+
+            for b in range(1, s.m + 1):
+                if loop[b - 1] and b in col:
+                    angular[col[b]] += int(loop[b - 1]) * kin.hinges[b].sign
+            for i, w in kin.loop_weights(c).items():
+                turn = kin.phi(i) + (self.delta_phi(i) if exact else 0)
+                d = V.rot(turn, V.perp(w))
+                for a in on_path[i]:
+                    add(a, V.scale(kin.hinges[a].sign, d))
+            if exact:
+                for b in range(1, s.m + 1):
+                    coeff = int(loop[b - 1])
+                    if not coeff:
+                        continue
+                    h = kin.hinges[b]
+                    phi_p = kin.phi(h.P) + self.delta_phi(h.P)
+                    dz = h.delta_z(angles[b], phi_p)
+                    for a in on_path[h.P]:
+                        add(a, V.scale(coeff * kin.hinges[a].sign, V.perp(dz)))
+                    if b in col:
+                        rate = V.add(V.scale(_theta_derivative(h.df).subs(THETA, angles[b]), h.u),
+                                     V.scale(_theta_derivative(h.dg).subs(THETA, angles[b]),
+                                             V.perp(h.u)))
+                        add(b, V.scale(coeff * h.sign, V.rot(phi_p, rate)))
+            rows.extend([angular, px, py])
+        return sp.Matrix(rows) if rows else sp.zeros(0, len(col))
 
     def point_deviation(self, name: str, level: str) -> V.Vec:
         """ΔX of the named point at `level`, in θ (rigid angles), δ and the parameters."""
@@ -381,6 +419,12 @@ class Analysis:
             previous = change
         raise AssemblyError(f"{self.mechanism.path}: the compliant loops did not converge "
                             "(no convergence in 40 Newton steps)")
+
+
+@lru_cache(maxsize=None)
+def _theta_derivative(expr: sp.Expr) -> sp.Expr:
+    """d/dθ of a hinge model's Δf or Δg (its kernels differentiate into stable kernels)."""
+    return sp.diff(expr, THETA)
 
 
 def _wrap(angle):

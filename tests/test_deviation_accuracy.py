@@ -134,3 +134,30 @@ def test_paper_differs_from_exact_in_a_closed_loop(analyses):
     paper = an.evaluate({"A0": "0.2"}, "paper").points["C"].deviation
     exact = an.evaluate({"A0": "0.2"}, "exact").points["C"].deviation
     assert rel_err(paper, [mpmath.mpf(x) for x in exact]) > 0.1
+
+
+@pytest.mark.parametrize("case", ["four_bar", "six_bar", "five_bar", "watt_ii", "triad"])
+def test_structured_jacobian_equals_the_derivative_of_the_closure(case, analyses):
+    """The Jacobian built from the closure's structure equals sympy's derivative of it, and A
+    of the first-order system equals it at δ = 0 without the plate terms' rates."""
+    import random
+
+    import sympy as sp
+
+    source, _ = CASES[case]
+    mech, an = analysis(analyses, case, source)
+    rng = random.Random(3)
+    values = {s: sp.Rational(rng.randint(-3000, 3000), 10000) for s in an.thetas}
+    values.update({s: sp.Rational(rng.randint(-1000, 1000), 10**6) for s in an.deltas})
+    values.update(mech.defaults)
+    numeric = an.residual.jacobian(an.deltas).subs(values).evalf(30)
+    assert (an.jacobian.subs(values).evalf(30) - numeric).norm() <= 1e-25 * (1 + numeric.norm())
+    zero = {**values, **{s: 0 for s in an.deltas}}
+    a_lin, _ = an.linear_system
+    lin = []
+    for c in an.kin.chords:
+        lin.append(an.kin.angular_closure(c, {a: an.compliant_angles()[a] - an.kin.theta[a]
+                                              for a in an.kin.theta}))
+        lin.extend(an.kin.positional_closure(c, an.compliant_angles(), rigid=True))
+    expected = sp.Matrix(lin).jacobian(an.deltas).subs(zero).evalf(30)
+    assert (a_lin.subs(zero).evalf(30) - expected).norm() <= 1e-25 * (1 + expected.norm())

@@ -3,7 +3,7 @@
  * Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 92, rigid_res 50, linear 102, newton 316, rigid_points 27, dev_paper 40, dev_first_order 58, dev_exact 68.
+ * Operation counts after CSE: rigid 92, rigid_res 50, linear 102, newton 269, rigid_points 27, dev_paper 40, dev_first_order 58, dev_exact 68.
  */
 #include "four_bar.h"
 
@@ -200,7 +200,7 @@ static void sk_linear(const double *theta, const double *params, double *out)
     out[11] = -_tmp10*_tmp6*_tmp8*cos(_tmp9) + _tmp12*_tmp15*_tmp2 + _tmp16*_tmp17 + _tmp18*_tmp28 + _tmp26*_tmp27 + _tmp7*cos(_tmp5);
 }
 
-/* exact compliant closure F(delta) and dF/ddelta (316 operations) */
+/* exact compliant closure F(delta) and dF/ddelta (269 operations) */
 static void sk_newton(const double *theta, const double *delta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -217,98 +217,92 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp3 = sin(theta_3);
     const double _tmp4 = sin(delta_3);
     const double _tmp5 = (1.0/2.0)*delta_3;
-    const double _tmp6 = sin(_tmp5);
-    const double _tmp7 = pow(_tmp6, 2);
-    const double _tmp8 = (3.0/200.0)*_tmp4 + (17.0/125.0)*_tmp7;
-    const double _tmp9 = cos(theta_3);
-    const double _tmp10 = (17.0/250.0)*_tmp4 - 3.0/100.0*_tmp7;
-    const double _tmp11 = theta_1 + theta_2;
-    const double _tmp12 = sin(_tmp11);
-    const double _tmp13 = sin(delta_2);
-    const double _tmp14 = (1.0/2.0)*delta_2;
-    const double _tmp15 = sin(_tmp14);
-    const double _tmp16 = pow(_tmp15, 2);
-    const double _tmp17 = (7.0/100.0)*_tmp13 - 21.0/250.0*_tmp16;
-    const double _tmp18 = cos(_tmp11);
-    const double _tmp19 = -21.0/500.0*_tmp13 - 7.0/50.0*_tmp16;
-    const double _tmp20 = pow(delta_3 + theta_3, 2);
-    const double _tmp21 = _tmp5 + (1.0/2.0)*theta_3;
-    const double _tmp22 = sin(_tmp21);
-    const double _tmp23 = symkin_arck(_tmp21);
-    const double _tmp24 = pow(delta_4 + theta_4, 2);
-    const double _tmp28 = (1.0/2.0)*delta_4 + (1.0/2.0)*theta_4;
-    const double _tmp30 = symkin_arck(_tmp28);
-    const double _tmp25 = _tmp11 + delta_2;
-    const double _tmp26 = sin(_tmp25);
-    const double _tmp27 = _tmp24*_tmp26;
-    const double _tmp29 = sin(_tmp28);
+    const double _tmp6 = pow(sin(_tmp5), 2);
+    const double _tmp7 = (3.0/200.0)*_tmp4 + (17.0/125.0)*_tmp6;
+    const double _tmp8 = cos(theta_3);
+    const double _tmp9 = (17.0/250.0)*_tmp4 - 3.0/100.0*_tmp6;
+    const double _tmp10 = theta_1 + theta_2;
+    const double _tmp11 = sin(_tmp10);
+    const double _tmp12 = sin(delta_2);
+    const double _tmp13 = (1.0/2.0)*delta_2;
+    const double _tmp14 = pow(sin(_tmp13), 2);
+    const double _tmp15 = (7.0/100.0)*_tmp12 - 21.0/250.0*_tmp14;
+    const double _tmp16 = cos(_tmp10);
+    const double _tmp17 = -21.0/500.0*_tmp12 - 7.0/50.0*_tmp14;
+    const double _tmp18 = delta_3 + theta_3;
+    const double _tmp19 = pow(_tmp18, 2);
+    const double _tmp20 = _tmp5 + (1.0/2.0)*theta_3;
+    const double _tmp21 = sin(_tmp20);
+    const double _tmp22 = symkin_arck(_tmp20);
+    const double _tmp23 = (1.0/2.0)*delta_4 + (1.0/2.0)*theta_4;
+    const double _tmp24 = symkin_arck(_tmp23);
+    const double _tmp29 = delta_4 + theta_4;
+    const double _tmp30 = pow(_tmp29, 2);
+    const double _tmp25 = sin(_tmp23);
+    const double _tmp26 = _tmp24*_tmp25;
+    const double _tmp27 = _tmp10 + delta_2;
+    const double _tmp28 = sin(_tmp27);
     const double _tmp31 = _tmp1*_tmp30;
-    const double _tmp32 = _tmp29*_tmp31;
-    const double _tmp33 = _tmp27*_tmp32;
-    const double _tmp34 = cos(_tmp25);
-    const double _tmp35 = cos(_tmp28);
+    const double _tmp32 = _tmp28*_tmp31;
+    const double _tmp33 = _tmp26*_tmp32;
+    const double _tmp34 = cos(_tmp27);
+    const double _tmp35 = cos(_tmp23);
     const double _tmp36 = sin(theta_1);
-    const double _tmp39 = (1.0/8.0)*p_0;
-    const double _tmp40 = pow(delta_2 + theta_2, 2);
-    const double _tmp37 = _tmp14 + (1.0/2.0)*theta_2;
-    const double _tmp41 = symkin_arck(_tmp37);
-    const double _tmp42 = _tmp40*_tmp41;
-    const double _tmp43 = _tmp39*_tmp42;
+    const double _tmp37 = _tmp13 + (1.0/2.0)*theta_2;
     const double _tmp38 = sin(_tmp37);
-    const double _tmp44 = _tmp38*_tmp43;
-    const double _tmp45 = sqrt(3);
-    const double _tmp46 = cos(_tmp37);
-    const double _tmp47 = _tmp43*_tmp45*_tmp46 + _tmp44;
-    const double _tmp48 = cos(theta_1);
-    const double _tmp49 = (1.0/8.0)*_tmp40*_tmp41*_tmp46*p_0 - _tmp44*_tmp45;
-    const double _tmp50 = cos(_tmp21);
-    const double _tmp51 = _tmp20*_tmp23;
-    const double _tmp52 = _tmp31*_tmp35;
-    const double _tmp53 = _tmp24*_tmp34;
-    const double _tmp54 = _tmp27*_tmp52 + _tmp32*_tmp53;
-    const double _tmp55 = cos(delta_2);
-    const double _tmp56 = _tmp15*cos(_tmp14);
-    const double _tmp57 = (7.0/100.0)*_tmp55 - 21.0/250.0*_tmp56;
-    const double _tmp58 = (1.0/16.0)*p_0;
-    const double _tmp59 = _tmp42*_tmp58;
-    const double _tmp60 = _tmp46*_tmp59;
-    const double _tmp61 = 2*delta_2 + 2*theta_2;
-    const double _tmp62 = _tmp39*_tmp41*_tmp61;
-    const double _tmp63 = _tmp38*_tmp62;
-    const double _tmp64 = _tmp38*_tmp59;
-    const double _tmp65 = 3*symkin_cosr2(_tmp37) + symkin_sinr1(_tmp37) - 3*symkin_sinr2(_tmp37);
-    const double _tmp66 = _tmp37*_tmp40*_tmp58*_tmp65;
-    const double _tmp67 = _tmp38*_tmp66;
-    const double _tmp68 = _tmp45*_tmp46*_tmp62 + _tmp45*_tmp46*_tmp66 - _tmp45*_tmp64 + _tmp60 + _tmp63 + _tmp67;
-    const double _tmp69 = -21.0/500.0*_tmp55 - 7.0/50.0*_tmp56;
-    const double _tmp70 = (1.0/16.0)*_tmp37*_tmp40*_tmp46*_tmp65*p_0 + (1.0/8.0)*_tmp41*_tmp46*_tmp61*p_0 - _tmp45*_tmp60 - _tmp45*_tmp63 - _tmp45*_tmp67 - _tmp64;
-    const double _tmp71 = cos(delta_3);
-    const double _tmp72 = _tmp6*cos(_tmp5);
-    const double _tmp73 = (17.0/250.0)*_tmp71 - 3.0/100.0*_tmp72;
-    const double _tmp74 = (3.0/200.0)*_tmp71 + (17.0/125.0)*_tmp72;
-    const double _tmp75 = _tmp39*_tmp51;
-    const double _tmp76 = _tmp1*_tmp23*(2*delta_3 + 2*theta_3);
-    const double _tmp77 = _tmp20*_tmp21*_tmp39*(3*symkin_cosr2(_tmp21) + symkin_sinr1(_tmp21) - 3*symkin_sinr2(_tmp21));
-    const double _tmp78 = _tmp30*_tmp39;
-    const double _tmp79 = _tmp53*_tmp78;
-    const double _tmp80 = _tmp27*_tmp78;
-    const double _tmp81 = 2*delta_4 + 2*theta_4;
-    const double _tmp82 = _tmp26*_tmp81;
-    const double _tmp83 = 3*symkin_cosr2(_tmp28) + symkin_sinr1(_tmp28) - 3*symkin_sinr2(_tmp28);
-    const double _tmp84 = _tmp28*_tmp39*_tmp83;
-    const double _tmp85 = _tmp27*_tmp84;
+    const double _tmp39 = delta_2 + theta_2;
+    const double _tmp40 = pow(_tmp39, 2);
+    const double _tmp41 = symkin_arck(_tmp37);
+    const double _tmp42 = _tmp41*p_0;
+    const double _tmp43 = _tmp40*_tmp42;
+    const double _tmp44 = (1.0/8.0)*_tmp43;
+    const double _tmp45 = _tmp38*_tmp44;
+    const double _tmp46 = sqrt(3);
+    const double _tmp47 = cos(_tmp37);
+    const double _tmp48 = _tmp44*_tmp47;
+    const double _tmp49 = _tmp45 + _tmp46*_tmp48;
+    const double _tmp50 = cos(theta_1);
+    const double _tmp51 = (1.0/8.0)*_tmp40*_tmp41*_tmp47*p_0 - _tmp45*_tmp46;
+    const double _tmp52 = cos(_tmp20);
+    const double _tmp53 = _tmp22*_tmp52;
+    const double _tmp54 = _tmp24*_tmp35;
+    const double _tmp55 = _tmp31*_tmp34;
+    const double _tmp56 = _tmp26*_tmp55 + _tmp32*_tmp54;
+    const double _tmp57 = _tmp39*_tmp42;
+    const double _tmp58 = (1.0/4.0)*_tmp57;
+    const double _tmp59 = pow(_tmp39, 3)*p_0*(3*symkin_cosr2(_tmp37) + symkin_sinr1(_tmp37) - 3*symkin_sinr2(_tmp37));
+    const double _tmp60 = (1.0/2.0)*_tmp57;
+    const double _tmp61 = _tmp47*_tmp59;
+    const double _tmp62 = (1.0/2.0)*_tmp46;
+    const double _tmp63 = _tmp38*_tmp58 + (1.0/32.0)*_tmp38*_tmp59 + (1.0/16.0)*_tmp43*_tmp47 + _tmp62*(-_tmp45 + _tmp47*_tmp60 + (1.0/16.0)*_tmp61);
+    const double _tmp64 = (1.0/16.0)*_tmp38;
+    const double _tmp65 = -_tmp43*_tmp64 + _tmp47*_tmp58 + (1.0/32.0)*_tmp61 - _tmp62*(_tmp38*_tmp60 + _tmp48 + _tmp59*_tmp64);
+    const double _tmp66 = sin(_tmp18);
+    const double _tmp67 = cos(_tmp18);
+    const double _tmp68 = _tmp21*_tmp22;
+    const double _tmp69 = (1.0/2.0)*p_0;
+    const double _tmp70 = _tmp18*_tmp69;
+    const double _tmp71 = (1.0/8.0)*p_0;
+    const double _tmp72 = _tmp19*_tmp71;
+    const double _tmp73 = (1.0/16.0)*p_0;
+    const double _tmp74 = pow(_tmp18, 3)*_tmp73*(3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20) - 3*symkin_sinr2(_tmp20));
+    const double _tmp75 = _tmp29*_tmp69;
+    const double _tmp76 = _tmp30*_tmp71;
+    const double _tmp77 = pow(_tmp29, 3)*_tmp73*(3*symkin_cosr2(_tmp23) + symkin_sinr1(_tmp23) - 3*symkin_sinr2(_tmp23));
+    const double _tmp78 = _tmp25*_tmp77 + _tmp26*_tmp75 + _tmp54*_tmp76;
+    const double _tmp79 = -_tmp26*_tmp76 + _tmp35*_tmp77 + _tmp54*_tmp75;
     out[0] = delta_2 - delta_3 + delta_4;
-    out[1] = _tmp10*_tmp9 - _tmp12*_tmp17 + _tmp18*_tmp19 - _tmp2*sin(_tmp0) + (1.0/4.0)*_tmp20*_tmp22*_tmp23*p_0 + (1.0/4.0)*_tmp24*_tmp30*_tmp34*_tmp35*p_0 - _tmp3*_tmp8 - _tmp33 - _tmp36*_tmp47 + _tmp48*_tmp49;
-    out[2] = -_tmp1*_tmp50*_tmp51 + _tmp10*_tmp3 + _tmp12*_tmp19 + _tmp17*_tmp18 + _tmp2*cos(_tmp0) + _tmp36*_tmp49 + _tmp47*_tmp48 + _tmp54 + _tmp8*_tmp9;
+    out[1] = -_tmp11*_tmp15 + _tmp16*_tmp17 + (1.0/4.0)*_tmp19*_tmp21*_tmp22*p_0 - _tmp2*sin(_tmp0) + (1.0/4.0)*_tmp24*_tmp30*_tmp34*_tmp35*p_0 - _tmp3*_tmp7 - _tmp33 - _tmp36*_tmp49 + _tmp50*_tmp51 + _tmp8*_tmp9;
+    out[2] = -_tmp1*_tmp19*_tmp53 + _tmp11*_tmp17 + _tmp15*_tmp16 + _tmp2*cos(_tmp0) + _tmp3*_tmp9 + _tmp36*_tmp51 + _tmp49*_tmp50 + _tmp56 + _tmp7*_tmp8;
     out[3] = 1;
     out[4] = -1;
     out[5] = 1;
-    out[6] = -_tmp12*_tmp57 + _tmp18*_tmp69 - _tmp36*_tmp68 + _tmp48*_tmp70 - _tmp54;
-    out[7] = _tmp22*_tmp76 + _tmp22*_tmp77 - _tmp3*_tmp74 + _tmp50*_tmp75 + _tmp73*_tmp9;
-    out[8] = (1.0/8.0)*_tmp24*_tmp28*_tmp34*_tmp35*_tmp83*p_0 - _tmp29*_tmp79 - _tmp29*_tmp85 + (1.0/4.0)*_tmp30*_tmp34*_tmp35*_tmp81*p_0 - _tmp32*_tmp82 - _tmp35*_tmp80;
-    out[9] = _tmp12*_tmp69 + _tmp18*_tmp57 - _tmp33 + _tmp36*_tmp70 + _tmp48*_tmp68 + _tmp52*_tmp53;
-    out[10] = _tmp22*_tmp75 + _tmp3*_tmp73 - _tmp50*_tmp76 - _tmp50*_tmp77 + _tmp74*_tmp9;
-    out[11] = _tmp29*_tmp53*_tmp84 - _tmp29*_tmp80 + _tmp32*_tmp34*_tmp81 + _tmp35*_tmp79 + _tmp35*_tmp85 + _tmp52*_tmp82;
+    out[6] = -7.0/100.0*_tmp28 - 21.0/500.0*_tmp34 - _tmp36*_tmp63 + _tmp50*_tmp65 - _tmp56;
+    out[7] = _tmp21*_tmp74 + _tmp53*_tmp72 - 3.0/200.0*_tmp66 + (17.0/250.0)*_tmp67 + _tmp68*_tmp70;
+    out[8] = -_tmp28*_tmp78 + _tmp34*_tmp79;
+    out[9] = -21.0/500.0*_tmp28 - _tmp33 + (7.0/100.0)*_tmp34 + _tmp36*_tmp65 + _tmp50*_tmp63 + _tmp54*_tmp55;
+    out[10] = -_tmp52*_tmp74 - _tmp53*_tmp70 + (17.0/250.0)*_tmp66 + (3.0/200.0)*_tmp67 + _tmp68*_tmp72;
+    out[11] = _tmp28*_tmp79 + _tmp34*_tmp78;
 }
 
 /* rigid positions of the points (27 operations) */

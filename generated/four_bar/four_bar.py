@@ -2,7 +2,7 @@
 Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
 Points: C; levels: paper, first_order, exact.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 92, rigid_res 50, linear 102, newton 316, rigid_points 27, dev_paper 40, dev_first_order 58, dev_exact 68.
+Operation counts after CSE: rigid 92, rigid_res 50, linear 102, newton 269, rigid_points 27, dev_paper 40, dev_first_order 58, dev_exact 68.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -198,7 +198,7 @@ def _linear(theta, params):
 
 
 def _newton(theta, delta, params):
-    """exact compliant closure F(delta) and dF/ddelta (316 operations)."""
+    """exact compliant closure F(delta) and dF/ddelta (269 operations)."""
     theta_1, theta_2, theta_3, theta_4 = theta
     delta_2, delta_3, delta_4 = delta
     p_0, = params
@@ -208,99 +208,93 @@ def _newton(theta, delta, params):
     _tmp3 = numpy.sin(theta_3)
     _tmp4 = numpy.sin(delta_3)
     _tmp5 = (1/2)*delta_3
-    _tmp6 = numpy.sin(_tmp5)
-    _tmp7 = _tmp6**2
-    _tmp8 = (3/200)*_tmp4 + (17/125)*_tmp7
-    _tmp9 = numpy.cos(theta_3)
-    _tmp10 = (17/250)*_tmp4 - 3/100*_tmp7
-    _tmp11 = theta_1 + theta_2
-    _tmp12 = numpy.sin(_tmp11)
-    _tmp13 = numpy.sin(delta_2)
-    _tmp14 = (1/2)*delta_2
-    _tmp15 = numpy.sin(_tmp14)
-    _tmp16 = _tmp15**2
-    _tmp17 = (7/100)*_tmp13 - 21/250*_tmp16
-    _tmp18 = numpy.cos(_tmp11)
-    _tmp19 = -21/500*_tmp13 - 7/50*_tmp16
-    _tmp20 = (delta_3 + theta_3)**2
-    _tmp21 = _tmp5 + (1/2)*theta_3
-    _tmp22 = numpy.sin(_tmp21)
-    _tmp23 = arck(_tmp21)
-    _tmp24 = (delta_4 + theta_4)**2
-    _tmp28 = (1/2)*delta_4 + (1/2)*theta_4
-    _tmp30 = arck(_tmp28)
-    _tmp25 = _tmp11 + delta_2
-    _tmp26 = numpy.sin(_tmp25)
-    _tmp27 = _tmp24*_tmp26
-    _tmp29 = numpy.sin(_tmp28)
+    _tmp6 = numpy.sin(_tmp5)**2
+    _tmp7 = (3/200)*_tmp4 + (17/125)*_tmp6
+    _tmp8 = numpy.cos(theta_3)
+    _tmp9 = (17/250)*_tmp4 - 3/100*_tmp6
+    _tmp10 = theta_1 + theta_2
+    _tmp11 = numpy.sin(_tmp10)
+    _tmp12 = numpy.sin(delta_2)
+    _tmp13 = (1/2)*delta_2
+    _tmp14 = numpy.sin(_tmp13)**2
+    _tmp15 = (7/100)*_tmp12 - 21/250*_tmp14
+    _tmp16 = numpy.cos(_tmp10)
+    _tmp17 = -21/500*_tmp12 - 7/50*_tmp14
+    _tmp18 = delta_3 + theta_3
+    _tmp19 = _tmp18**2
+    _tmp20 = _tmp5 + (1/2)*theta_3
+    _tmp21 = numpy.sin(_tmp20)
+    _tmp22 = arck(_tmp20)
+    _tmp23 = (1/2)*delta_4 + (1/2)*theta_4
+    _tmp24 = arck(_tmp23)
+    _tmp29 = delta_4 + theta_4
+    _tmp30 = _tmp29**2
+    _tmp25 = numpy.sin(_tmp23)
+    _tmp26 = _tmp24*_tmp25
+    _tmp27 = _tmp10 + delta_2
+    _tmp28 = numpy.sin(_tmp27)
     _tmp31 = _tmp1*_tmp30
-    _tmp32 = _tmp29*_tmp31
-    _tmp33 = _tmp27*_tmp32
-    _tmp34 = numpy.cos(_tmp25)
-    _tmp35 = numpy.cos(_tmp28)
+    _tmp32 = _tmp28*_tmp31
+    _tmp33 = _tmp26*_tmp32
+    _tmp34 = numpy.cos(_tmp27)
+    _tmp35 = numpy.cos(_tmp23)
     _tmp36 = numpy.sin(theta_1)
-    _tmp39 = (1/8)*p_0
-    _tmp40 = (delta_2 + theta_2)**2
-    _tmp37 = _tmp14 + (1/2)*theta_2
-    _tmp41 = arck(_tmp37)
-    _tmp42 = _tmp40*_tmp41
-    _tmp43 = _tmp39*_tmp42
+    _tmp37 = _tmp13 + (1/2)*theta_2
     _tmp38 = numpy.sin(_tmp37)
-    _tmp44 = _tmp38*_tmp43
-    _tmp45 = numpy.sqrt(3)
-    _tmp46 = numpy.cos(_tmp37)
-    _tmp47 = _tmp43*_tmp45*_tmp46 + _tmp44
-    _tmp48 = numpy.cos(theta_1)
-    _tmp49 = (1/8)*_tmp40*_tmp41*_tmp46*p_0 - _tmp44*_tmp45
-    _tmp50 = numpy.cos(_tmp21)
-    _tmp51 = _tmp20*_tmp23
-    _tmp52 = _tmp31*_tmp35
-    _tmp53 = _tmp24*_tmp34
-    _tmp54 = _tmp27*_tmp52 + _tmp32*_tmp53
-    _tmp55 = numpy.cos(delta_2)
-    _tmp56 = _tmp15*numpy.cos(_tmp14)
-    _tmp57 = (7/100)*_tmp55 - 21/250*_tmp56
-    _tmp58 = (1/16)*p_0
-    _tmp59 = _tmp42*_tmp58
-    _tmp60 = _tmp46*_tmp59
-    _tmp61 = 2*delta_2 + 2*theta_2
-    _tmp62 = _tmp39*_tmp41*_tmp61
-    _tmp63 = _tmp38*_tmp62
-    _tmp64 = _tmp38*_tmp59
-    _tmp65 = 3*cosr2(_tmp37) + sinr1(_tmp37) - 3*sinr2(_tmp37)
-    _tmp66 = _tmp37*_tmp40*_tmp58*_tmp65
-    _tmp67 = _tmp38*_tmp66
-    _tmp68 = _tmp45*_tmp46*_tmp62 + _tmp45*_tmp46*_tmp66 - _tmp45*_tmp64 + _tmp60 + _tmp63 + _tmp67
-    _tmp69 = -21/500*_tmp55 - 7/50*_tmp56
-    _tmp70 = (1/16)*_tmp37*_tmp40*_tmp46*_tmp65*p_0 + (1/8)*_tmp41*_tmp46*_tmp61*p_0 - _tmp45*_tmp60 - _tmp45*_tmp63 - _tmp45*_tmp67 - _tmp64
-    _tmp71 = numpy.cos(delta_3)
-    _tmp72 = _tmp6*numpy.cos(_tmp5)
-    _tmp73 = (17/250)*_tmp71 - 3/100*_tmp72
-    _tmp74 = (3/200)*_tmp71 + (17/125)*_tmp72
-    _tmp75 = _tmp39*_tmp51
-    _tmp76 = _tmp1*_tmp23*(2*delta_3 + 2*theta_3)
-    _tmp77 = _tmp20*_tmp21*_tmp39*(3*cosr2(_tmp21) + sinr1(_tmp21) - 3*sinr2(_tmp21))
-    _tmp78 = _tmp30*_tmp39
-    _tmp79 = _tmp53*_tmp78
-    _tmp80 = _tmp27*_tmp78
-    _tmp81 = 2*delta_4 + 2*theta_4
-    _tmp82 = _tmp26*_tmp81
-    _tmp83 = 3*cosr2(_tmp28) + sinr1(_tmp28) - 3*sinr2(_tmp28)
-    _tmp84 = _tmp28*_tmp39*_tmp83
-    _tmp85 = _tmp27*_tmp84
+    _tmp39 = delta_2 + theta_2
+    _tmp40 = _tmp39**2
+    _tmp41 = arck(_tmp37)
+    _tmp42 = _tmp41*p_0
+    _tmp43 = _tmp40*_tmp42
+    _tmp44 = (1/8)*_tmp43
+    _tmp45 = _tmp38*_tmp44
+    _tmp46 = numpy.sqrt(3)
+    _tmp47 = numpy.cos(_tmp37)
+    _tmp48 = _tmp44*_tmp47
+    _tmp49 = _tmp45 + _tmp46*_tmp48
+    _tmp50 = numpy.cos(theta_1)
+    _tmp51 = (1/8)*_tmp40*_tmp41*_tmp47*p_0 - _tmp45*_tmp46
+    _tmp52 = numpy.cos(_tmp20)
+    _tmp53 = _tmp22*_tmp52
+    _tmp54 = _tmp24*_tmp35
+    _tmp55 = _tmp31*_tmp34
+    _tmp56 = _tmp26*_tmp55 + _tmp32*_tmp54
+    _tmp57 = _tmp39*_tmp42
+    _tmp58 = (1/4)*_tmp57
+    _tmp59 = _tmp39**3*p_0*(3*cosr2(_tmp37) + sinr1(_tmp37) - 3*sinr2(_tmp37))
+    _tmp60 = (1/2)*_tmp57
+    _tmp61 = _tmp47*_tmp59
+    _tmp62 = (1/2)*_tmp46
+    _tmp63 = _tmp38*_tmp58 + (1/32)*_tmp38*_tmp59 + (1/16)*_tmp43*_tmp47 + _tmp62*(-_tmp45 + _tmp47*_tmp60 + (1/16)*_tmp61)
+    _tmp64 = (1/16)*_tmp38
+    _tmp65 = -_tmp43*_tmp64 + _tmp47*_tmp58 + (1/32)*_tmp61 - _tmp62*(_tmp38*_tmp60 + _tmp48 + _tmp59*_tmp64)
+    _tmp66 = numpy.sin(_tmp18)
+    _tmp67 = numpy.cos(_tmp18)
+    _tmp68 = _tmp21*_tmp22
+    _tmp69 = (1/2)*p_0
+    _tmp70 = _tmp18*_tmp69
+    _tmp71 = (1/8)*p_0
+    _tmp72 = _tmp19*_tmp71
+    _tmp73 = (1/16)*p_0
+    _tmp74 = _tmp18**3*_tmp73*(3*cosr2(_tmp20) + sinr1(_tmp20) - 3*sinr2(_tmp20))
+    _tmp75 = _tmp29*_tmp69
+    _tmp76 = _tmp30*_tmp71
+    _tmp77 = _tmp29**3*_tmp73*(3*cosr2(_tmp23) + sinr1(_tmp23) - 3*sinr2(_tmp23))
+    _tmp78 = _tmp25*_tmp77 + _tmp26*_tmp75 + _tmp54*_tmp76
+    _tmp79 = -_tmp26*_tmp76 + _tmp35*_tmp77 + _tmp54*_tmp75
     return [
         delta_2 - delta_3 + delta_4,
-        _tmp10*_tmp9 - _tmp12*_tmp17 + _tmp18*_tmp19 - _tmp2*numpy.sin(_tmp0) + (1/4)*_tmp20*_tmp22*_tmp23*p_0 + (1/4)*_tmp24*_tmp30*_tmp34*_tmp35*p_0 - _tmp3*_tmp8 - _tmp33 - _tmp36*_tmp47 + _tmp48*_tmp49,
-        -_tmp1*_tmp50*_tmp51 + _tmp10*_tmp3 + _tmp12*_tmp19 + _tmp17*_tmp18 + _tmp2*numpy.cos(_tmp0) + _tmp36*_tmp49 + _tmp47*_tmp48 + _tmp54 + _tmp8*_tmp9,
+        -_tmp11*_tmp15 + _tmp16*_tmp17 + (1/4)*_tmp19*_tmp21*_tmp22*p_0 - _tmp2*numpy.sin(_tmp0) + (1/4)*_tmp24*_tmp30*_tmp34*_tmp35*p_0 - _tmp3*_tmp7 - _tmp33 - _tmp36*_tmp49 + _tmp50*_tmp51 + _tmp8*_tmp9,
+        -_tmp1*_tmp19*_tmp53 + _tmp11*_tmp17 + _tmp15*_tmp16 + _tmp2*numpy.cos(_tmp0) + _tmp3*_tmp9 + _tmp36*_tmp51 + _tmp49*_tmp50 + _tmp56 + _tmp7*_tmp8,
         1,
         -1,
         1,
-        -_tmp12*_tmp57 + _tmp18*_tmp69 - _tmp36*_tmp68 + _tmp48*_tmp70 - _tmp54,
-        _tmp22*_tmp76 + _tmp22*_tmp77 - _tmp3*_tmp74 + _tmp50*_tmp75 + _tmp73*_tmp9,
-        (1/8)*_tmp24*_tmp28*_tmp34*_tmp35*_tmp83*p_0 - _tmp29*_tmp79 - _tmp29*_tmp85 + (1/4)*_tmp30*_tmp34*_tmp35*_tmp81*p_0 - _tmp32*_tmp82 - _tmp35*_tmp80,
-        _tmp12*_tmp69 + _tmp18*_tmp57 - _tmp33 + _tmp36*_tmp70 + _tmp48*_tmp68 + _tmp52*_tmp53,
-        _tmp22*_tmp75 + _tmp3*_tmp73 - _tmp50*_tmp76 - _tmp50*_tmp77 + _tmp74*_tmp9,
-        _tmp29*_tmp53*_tmp84 - _tmp29*_tmp80 + _tmp32*_tmp34*_tmp81 + _tmp35*_tmp79 + _tmp35*_tmp85 + _tmp52*_tmp82,
+        -7/100*_tmp28 - 21/500*_tmp34 - _tmp36*_tmp63 + _tmp50*_tmp65 - _tmp56,
+        _tmp21*_tmp74 + _tmp53*_tmp72 - 3/200*_tmp66 + (17/250)*_tmp67 + _tmp68*_tmp70,
+        -_tmp28*_tmp78 + _tmp34*_tmp79,
+        -21/500*_tmp28 - _tmp33 + (7/100)*_tmp34 + _tmp36*_tmp65 + _tmp50*_tmp63 + _tmp54*_tmp55,
+        -_tmp52*_tmp74 - _tmp53*_tmp70 + (17/250)*_tmp66 + (3/200)*_tmp67 + _tmp68*_tmp72,
+        _tmp28*_tmp79 + _tmp34*_tmp78,
     ]
 
 

@@ -2,7 +2,7 @@
 Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
 Points: D; levels: paper, first_order, exact.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 173, rigid_res 94, linear 233, newton 725, rigid_points 23, dev_paper 40, dev_first_order 56, dev_exact 67.
+Operation counts after CSE: rigid 173, rigid_res 94, linear 233, newton 589, rigid_points 23, dev_paper 40, dev_first_order 56, dev_exact 67.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -306,7 +306,7 @@ def _linear(theta, params):
 
 
 def _newton(theta, delta, params):
-    """exact compliant closure F(delta) and dF/ddelta (725 operations)."""
+    """exact compliant closure F(delta) and dF/ddelta (589 operations)."""
     theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7 = theta
     delta_2, delta_3, delta_4, delta_5, delta_6, delta_7 = delta
     p_0, = params
@@ -316,206 +316,181 @@ def _newton(theta, delta, params):
     _tmp3 = numpy.sin(_tmp0)
     _tmp4 = (1/2)*delta_3
     _tmp5 = (1/2)*delta_5
-    _tmp6 = _tmp4 + _tmp5
-    _tmp7 = numpy.sin(_tmp6)
-    _tmp8 = _tmp7**2
-    _tmp9 = (9/125)*_tmp3 - 3/50*_tmp8
-    _tmp10 = numpy.sin(theta_3)
-    _tmp11 = numpy.sin(delta_3)
-    _tmp12 = (1/50)*_tmp11
-    _tmp13 = numpy.sin(_tmp4)
-    _tmp14 = _tmp13**2
-    _tmp15 = _tmp12 + (3/25)*_tmp14
-    _tmp16 = numpy.cos(_tmp1)
-    _tmp17 = -3/100*_tmp3 - 18/125*_tmp8
-    _tmp18 = numpy.cos(theta_3)
-    _tmp19 = (1/25)*_tmp14
-    _tmp20 = (3/50)*_tmp11 - _tmp19
-    _tmp21 = delta_5 + theta_5
-    _tmp22 = delta_3 + theta_3
-    _tmp23 = numpy.sin(_tmp22)
-    _tmp24 = _tmp21**2
-    _tmp25 = (2500/3791)*delta_5 + (2500/3791)*theta_5
-    _tmp26 = -1/2*sinr1(_tmp21) + (11478125000/54483042671)*sinr1(_tmp25)
-    _tmp27 = _tmp24*_tmp26 - 59/3791
-    _tmp28 = numpy.cos(_tmp22)
-    _tmp29 = _tmp28*p_0
-    _tmp30 = (1/2)*_tmp21
-    _tmp31 = numpy.sqrt(3673)
-    _tmp32 = _tmp5 + (1/2)*theta_5
-    _tmp33 = (1250/3791)*delta_5 + (1250/3791)*theta_5
-    _tmp34 = -312500000/54483042671*_tmp31*sinr1(_tmp33) + sinr1(_tmp32)
-    _tmp35 = (1/4)*_tmp24
-    _tmp36 = _tmp34*_tmp35 + (5189181/6250000)/((3791/125000)*_tmp31 + 14371681/6250000)
-    _tmp37 = (1/50)*_tmp31*numpy.sin(_tmp33) + numpy.sin(_tmp32)
-    _tmp38 = _tmp36*_tmp37
-    _tmp39 = _tmp30*_tmp38
-    _tmp40 = _tmp29*_tmp39
-    _tmp41 = (delta_6 + theta_6)**2
-    _tmp42 = (1/2)*delta_6 + (1/2)*theta_6
-    _tmp43 = numpy.sin(_tmp42)
-    _tmp44 = _tmp41*_tmp43
-    _tmp45 = numpy.cos(theta_1)
-    _tmp46 = arck(_tmp42)
-    _tmp47 = (1/4)*p_0
-    _tmp48 = _tmp46*_tmp47
-    _tmp49 = _tmp45*_tmp48
-    _tmp50 = numpy.sin(theta_1)
-    _tmp51 = _tmp48*_tmp50
-    _tmp52 = numpy.cos(_tmp42)
-    _tmp53 = _tmp41*_tmp52
-    _tmp54 = _tmp22**2
-    _tmp55 = _tmp4 + (1/2)*theta_3
-    _tmp56 = numpy.sin(_tmp55)
-    _tmp57 = arck(_tmp55)
-    _tmp58 = (1/2)*theta_1
-    _tmp59 = _tmp47*theta_1**2*arck(_tmp58)
-    _tmp60 = -1/4*_tmp54*_tmp56*_tmp57*p_0 + _tmp59*numpy.sin(_tmp58)
-    _tmp61 = _tmp27*p_0
-    _tmp62 = _tmp28*_tmp61
-    _tmp63 = _tmp21*_tmp62
-    _tmp64 = _tmp23*p_0
-    _tmp65 = _tmp39*_tmp64
-    _tmp66 = numpy.cos(_tmp55)
-    _tmp67 = _tmp54*_tmp57
-    _tmp68 = -_tmp47*_tmp66*_tmp67 + _tmp59*numpy.cos(_tmp58)
-    _tmp69 = theta_1 + theta_2
-    _tmp70 = numpy.sin(_tmp69)
-    _tmp71 = numpy.sin(delta_2)
-    _tmp72 = (1/2)*delta_2
-    _tmp73 = numpy.sin(_tmp72)
-    _tmp74 = _tmp73**2
-    _tmp75 = (1/25)*_tmp71 - 7/50*_tmp74
-    _tmp76 = -_tmp12 + (1/10)*_tmp14
-    _tmp77 = theta_3 + theta_4
-    _tmp78 = numpy.sin(_tmp77)
-    _tmp79 = delta_3 + delta_4
-    _tmp80 = numpy.sin(_tmp79)
-    _tmp81 = (1/2)*delta_4
-    _tmp82 = _tmp4 + _tmp81
-    _tmp83 = numpy.sin(_tmp82)
-    _tmp84 = _tmp83**2
-    _tmp85 = (1/20)*_tmp80 + (2/25)*_tmp84
-    _tmp88 = (1/8)*p_0
-    _tmp86 = _tmp72 + (1/2)*theta_2
-    _tmp89 = arck(_tmp86)
-    _tmp90 = numpy.sqrt(2)
-    _tmp91 = (delta_2 + theta_2)**2
-    _tmp92 = _tmp90*_tmp91
-    _tmp93 = _tmp89*_tmp92
-    _tmp94 = _tmp88*_tmp93
-    _tmp87 = numpy.sin(_tmp86)
-    _tmp95 = _tmp87*_tmp94
-    _tmp96 = numpy.cos(_tmp86)
-    _tmp97 = _tmp94*_tmp96 + _tmp95
-    _tmp98 = numpy.cos(_tmp69)
-    _tmp99 = -7/100*_tmp71 - 2/25*_tmp74
-    _tmp100 = numpy.cos(_tmp77)
-    _tmp101 = (1/25)*_tmp80 - 1/10*_tmp84
-    _tmp102 = (1/20)*_tmp11 + _tmp19
-    _tmp103 = (1/8)*_tmp89*_tmp90*_tmp91*_tmp96*p_0 - _tmp95
-    _tmp104 = (delta_4 + theta_4)**2
-    _tmp105 = _tmp81 + (1/2)*theta_4
-    _tmp106 = numpy.sin(_tmp105)
-    _tmp107 = arck(_tmp105)
-    _tmp108 = (delta_7 + theta_7)**2
-    _tmp109 = _tmp69 + delta_2
+    _tmp6 = numpy.sin(_tmp4 + _tmp5)**2
+    _tmp7 = (9/125)*_tmp3 - 3/50*_tmp6
+    _tmp8 = numpy.sin(theta_3)
+    _tmp9 = numpy.sin(delta_3)
+    _tmp10 = (1/50)*_tmp9
+    _tmp11 = numpy.sin(_tmp4)**2
+    _tmp12 = _tmp10 + (3/25)*_tmp11
+    _tmp13 = numpy.cos(_tmp1)
+    _tmp14 = -3/100*_tmp3 - 18/125*_tmp6
+    _tmp15 = numpy.cos(theta_3)
+    _tmp16 = (1/25)*_tmp11
+    _tmp17 = -_tmp16 + (3/50)*_tmp9
+    _tmp18 = delta_5 + theta_5
+    _tmp19 = delta_3 + theta_3
+    _tmp20 = numpy.sin(_tmp19)
+    _tmp21 = _tmp18**2
+    _tmp22 = (2500/3791)*delta_5 + (2500/3791)*theta_5
+    _tmp23 = -1/2*sinr1(_tmp18) + (11478125000/54483042671)*sinr1(_tmp22)
+    _tmp24 = _tmp21*_tmp23 - 59/3791
+    _tmp25 = numpy.cos(_tmp19)
+    _tmp26 = numpy.sqrt(3673)
+    _tmp27 = _tmp5 + (1/2)*theta_5
+    _tmp28 = (1250/3791)*delta_5 + (1250/3791)*theta_5
+    _tmp29 = -312500000/54483042671*_tmp26*sinr1(_tmp28) + sinr1(_tmp27)
+    _tmp30 = (1/4)*_tmp21
+    _tmp31 = _tmp29*_tmp30 + (5189181/6250000)/((3791/125000)*_tmp26 + 14371681/6250000)
+    _tmp32 = (1/50)*_tmp26*numpy.sin(_tmp28) + numpy.sin(_tmp27)
+    _tmp33 = _tmp31*_tmp32
+    _tmp34 = (1/2)*_tmp18
+    _tmp35 = _tmp34*p_0
+    _tmp36 = _tmp33*_tmp35
+    _tmp37 = _tmp25*_tmp36
+    _tmp38 = numpy.cos(theta_1)
+    _tmp39 = (1/2)*delta_6 + (1/2)*theta_6
+    _tmp40 = arck(_tmp39)
+    _tmp41 = numpy.sin(_tmp39)
+    _tmp42 = _tmp40*_tmp41
+    _tmp43 = delta_6 + theta_6
+    _tmp44 = _tmp43**2
+    _tmp45 = (1/4)*p_0
+    _tmp46 = _tmp44*_tmp45
+    _tmp47 = _tmp42*_tmp46
+    _tmp48 = numpy.sin(theta_1)
+    _tmp49 = numpy.cos(_tmp39)
+    _tmp50 = _tmp40*_tmp49
+    _tmp51 = _tmp46*_tmp50
+    _tmp52 = _tmp19**2
+    _tmp53 = _tmp4 + (1/2)*theta_3
+    _tmp54 = numpy.sin(_tmp53)
+    _tmp55 = arck(_tmp53)
+    _tmp56 = (1/2)*theta_1
+    _tmp57 = _tmp45*theta_1**2*arck(_tmp56)
+    _tmp58 = -1/4*_tmp52*_tmp54*_tmp55*p_0 + _tmp57*numpy.sin(_tmp56)
+    _tmp59 = _tmp24*p_0
+    _tmp60 = _tmp18*_tmp59
+    _tmp61 = _tmp25*_tmp60
+    _tmp62 = _tmp20*_tmp36
+    _tmp63 = numpy.cos(_tmp53)
+    _tmp64 = _tmp55*_tmp63
+    _tmp65 = -_tmp45*_tmp52*_tmp64 + _tmp57*numpy.cos(_tmp56)
+    _tmp66 = theta_1 + theta_2
+    _tmp67 = numpy.sin(_tmp66)
+    _tmp68 = numpy.sin(delta_2)
+    _tmp69 = (1/2)*delta_2
+    _tmp70 = numpy.sin(_tmp69)**2
+    _tmp71 = (1/25)*_tmp68 - 7/50*_tmp70
+    _tmp72 = -_tmp10 + (1/10)*_tmp11
+    _tmp73 = theta_3 + theta_4
+    _tmp74 = numpy.sin(_tmp73)
+    _tmp75 = numpy.sin(delta_3 + delta_4)
+    _tmp76 = (1/2)*delta_4
+    _tmp77 = numpy.sin(_tmp4 + _tmp76)**2
+    _tmp78 = (1/20)*_tmp75 + (2/25)*_tmp77
+    _tmp79 = numpy.sqrt(2)
+    _tmp80 = _tmp69 + (1/2)*theta_2
+    _tmp81 = arck(_tmp80)
+    _tmp82 = numpy.sin(_tmp80)
+    _tmp83 = _tmp81*_tmp82
+    _tmp84 = delta_2 + theta_2
+    _tmp85 = _tmp84**2
+    _tmp86 = (1/8)*p_0
+    _tmp87 = _tmp85*_tmp86
+    _tmp88 = _tmp83*_tmp87
+    _tmp89 = _tmp79*_tmp88
+    _tmp90 = numpy.cos(_tmp80)
+    _tmp91 = _tmp81*_tmp90
+    _tmp92 = _tmp87*_tmp91
+    _tmp93 = _tmp79*_tmp92 + _tmp89
+    _tmp94 = numpy.cos(_tmp66)
+    _tmp95 = -7/100*_tmp68 - 2/25*_tmp70
+    _tmp96 = numpy.cos(_tmp73)
+    _tmp97 = (1/25)*_tmp75 - 1/10*_tmp77
+    _tmp98 = _tmp16 + (1/20)*_tmp9
+    _tmp99 = (1/8)*_tmp79*_tmp81*_tmp85*_tmp90*p_0 - _tmp89
+    _tmp100 = delta_4 + theta_4
+    _tmp101 = _tmp100**2
+    _tmp102 = _tmp76 + (1/2)*theta_4
+    _tmp103 = numpy.sin(_tmp102)
+    _tmp104 = arck(_tmp102)
+    _tmp105 = delta_7 + theta_7
+    _tmp106 = _tmp105**2
+    _tmp107 = _tmp66 + delta_2
+    _tmp108 = numpy.cos(_tmp107)
+    _tmp109 = (1/2)*delta_7 + (1/2)*theta_7
     _tmp110 = numpy.cos(_tmp109)
-    _tmp111 = (1/2)*delta_7 + (1/2)*theta_7
-    _tmp112 = numpy.cos(_tmp111)
-    _tmp113 = arck(_tmp111)
-    _tmp114 = _tmp104*_tmp29
-    _tmp115 = numpy.cos(_tmp105)
-    _tmp116 = (1/4)*_tmp107
-    _tmp117 = _tmp115*_tmp116
-    _tmp118 = _tmp114*_tmp117
-    _tmp119 = numpy.sin(_tmp109)
-    _tmp120 = _tmp108*_tmp119
-    _tmp121 = numpy.sin(_tmp111)
-    _tmp122 = _tmp113*_tmp47
-    _tmp123 = _tmp121*_tmp122
-    _tmp124 = _tmp120*_tmp123
-    _tmp125 = _tmp106*_tmp116
-    _tmp126 = _tmp114*_tmp125
-    _tmp127 = _tmp104*_tmp64
-    _tmp128 = _tmp117*_tmp127
-    _tmp129 = _tmp112*_tmp122
-    _tmp130 = _tmp108*_tmp110
-    _tmp131 = _tmp120*_tmp129 + _tmp123*_tmp130
-    _tmp132 = numpy.cos(_tmp0)
-    _tmp133 = _tmp7*numpy.cos(_tmp6)
-    _tmp134 = -3/100*_tmp132 - 18/125*_tmp133
-    _tmp135 = numpy.cos(delta_3)
-    _tmp136 = _tmp13*numpy.cos(_tmp4)
-    _tmp137 = (1/25)*_tmp136
-    _tmp138 = (3/50)*_tmp135 - _tmp137
-    _tmp139 = (1/50)*_tmp135
-    _tmp140 = (3/25)*_tmp136 + _tmp139
-    _tmp141 = (9/125)*_tmp132 - 3/50*_tmp133
-    _tmp142 = _tmp141*_tmp2
-    _tmp143 = _tmp47*_tmp57*(2*delta_3 + 2*theta_3)
-    _tmp144 = _tmp67*_tmp88
-    _tmp145 = _tmp54*_tmp55*_tmp88*(3*cosr2(_tmp55) + sinr1(_tmp55) - 3*sinr2(_tmp55))
-    _tmp146 = _tmp143*_tmp56 + _tmp144*_tmp66 + _tmp145*_tmp56
-    _tmp147 = (1/2)*_tmp38
-    _tmp148 = _tmp29*_tmp30
-    _tmp149 = _tmp36*((25/3791)*_tmp31*numpy.cos(_tmp33) + (1/2)*numpy.cos(_tmp32))
-    _tmp150 = 2*delta_5 + 2*theta_5
-    _tmp151 = _tmp150*_tmp26 + _tmp24*((28695312500000/206545214765761)*_tmp25*(cosr2(_tmp25) - 3*sinr2(_tmp25)) - _tmp30*(cosr2(_tmp21) - 3*sinr2(_tmp21)))
-    _tmp152 = _tmp37*((1/4)*_tmp150*_tmp34 + _tmp35*(-390625000000/206545214765761*_tmp31*_tmp33*(cosr2(_tmp33) - 3*sinr2(_tmp33)) + (1/2)*_tmp32*(cosr2(_tmp32) - 3*sinr2(_tmp32))))
-    _tmp153 = _tmp46*_tmp88
-    _tmp154 = _tmp153*_tmp45
-    _tmp155 = 2*delta_6 + 2*theta_6
-    _tmp156 = _tmp155*_tmp43
-    _tmp157 = 3*cosr2(_tmp42) + sinr1(_tmp42) - 3*sinr2(_tmp42)
-    _tmp158 = _tmp157*_tmp42*_tmp88
-    _tmp159 = _tmp158*_tmp44
-    _tmp160 = -_tmp143*_tmp66 + _tmp144*_tmp56 - _tmp145*_tmp66
-    _tmp161 = _tmp30*_tmp64
-    _tmp162 = numpy.cos(delta_2)
-    _tmp163 = _tmp73*numpy.cos(_tmp72)
-    _tmp164 = (1/25)*_tmp162 - 7/50*_tmp163
-    _tmp165 = (1/16)*p_0
-    _tmp166 = _tmp165*_tmp93
-    _tmp167 = _tmp166*_tmp87
-    _tmp168 = 2*delta_2 + 2*theta_2
-    _tmp169 = _tmp168*_tmp88*_tmp89*_tmp90
-    _tmp170 = 3*cosr2(_tmp86) + sinr1(_tmp86) - 3*sinr2(_tmp86)
-    _tmp171 = _tmp165*_tmp170*_tmp86*_tmp92
-    _tmp172 = _tmp166*_tmp96 + _tmp169*_tmp87 + _tmp171*_tmp87
-    _tmp173 = -_tmp167 + _tmp169*_tmp96 + _tmp171*_tmp96 + _tmp172
-    _tmp174 = -7/100*_tmp162 - 2/25*_tmp163
-    _tmp175 = -_tmp167 + (1/8)*_tmp168*_tmp89*_tmp90*_tmp96*p_0 + (1/16)*_tmp170*_tmp86*_tmp90*_tmp91*_tmp96*p_0 - _tmp172
-    _tmp176 = (1/20)*_tmp135 + _tmp137
-    _tmp177 = (1/10)*_tmp136 - _tmp139
-    _tmp178 = numpy.cos(_tmp79)
-    _tmp179 = _tmp83*numpy.cos(_tmp82)
-    _tmp180 = (1/25)*_tmp178 - 1/10*_tmp179
-    _tmp181 = (1/20)*_tmp178 + (2/25)*_tmp179
-    _tmp182 = _tmp100*_tmp180 - _tmp181*_tmp78
-    _tmp183 = 2*delta_4 + 2*theta_4
-    _tmp184 = _tmp183*_tmp29
-    _tmp185 = _tmp183*_tmp64
-    _tmp186 = (1/8)*_tmp107
-    _tmp187 = _tmp114*_tmp186
-    _tmp188 = (1/8)*_tmp105*(3*cosr2(_tmp105) + sinr1(_tmp105) - 3*sinr2(_tmp105))
-    _tmp189 = _tmp114*_tmp188
-    _tmp190 = _tmp127*_tmp188
-    _tmp191 = _tmp113*_tmp88
-    _tmp192 = _tmp130*_tmp191
-    _tmp193 = _tmp120*_tmp191
-    _tmp194 = 2*delta_7 + 2*theta_7
-    _tmp195 = _tmp119*_tmp194
-    _tmp196 = 3*cosr2(_tmp111) + sinr1(_tmp111) - 3*sinr2(_tmp111)
-    _tmp197 = _tmp111*_tmp196*_tmp88
-    _tmp198 = _tmp120*_tmp197
+    _tmp111 = arck(_tmp109)
+    _tmp112 = numpy.cos(_tmp102)
+    _tmp113 = _tmp104*_tmp112
+    _tmp114 = _tmp101*_tmp45
+    _tmp115 = _tmp114*_tmp25
+    _tmp116 = _tmp113*_tmp115
+    _tmp117 = numpy.sin(_tmp109)
+    _tmp118 = _tmp111*_tmp117
+    _tmp119 = numpy.sin(_tmp107)
+    _tmp120 = _tmp106*_tmp45
+    _tmp121 = _tmp119*_tmp120
+    _tmp122 = _tmp118*_tmp121
+    _tmp123 = _tmp103*_tmp104
+    _tmp124 = _tmp115*_tmp123
+    _tmp125 = _tmp114*_tmp20
+    _tmp126 = _tmp113*_tmp125
+    _tmp127 = _tmp110*_tmp111
+    _tmp128 = _tmp108*_tmp120
+    _tmp129 = _tmp118*_tmp128 + _tmp121*_tmp127
+    _tmp130 = _tmp0 + _tmp1
+    _tmp131 = numpy.sin(_tmp130)
+    _tmp132 = (9/125)*_tmp131
+    _tmp133 = numpy.cos(_tmp130)
+    _tmp134 = (3/100)*_tmp133
+    _tmp135 = (1/50)*_tmp20
+    _tmp136 = _tmp54*_tmp55
+    _tmp137 = (1/2)*p_0
+    _tmp138 = _tmp137*_tmp19
+    _tmp139 = _tmp52*_tmp86
+    _tmp140 = (1/16)*p_0
+    _tmp141 = _tmp140*_tmp19**3*(3*cosr2(_tmp53) + sinr1(_tmp53) - 3*sinr2(_tmp53))
+    _tmp142 = _tmp136*_tmp138 + _tmp139*_tmp64 + _tmp141*_tmp54
+    _tmp143 = _tmp18*p_0*(2*_tmp18*_tmp23 + _tmp21*((71738281250000000/783012909176999951)*_tmp18*(cosr2(_tmp22) - 3*sinr2(_tmp22)) - _tmp34*(cosr2(_tmp18) - 3*sinr2(_tmp18)))) + _tmp59
+    _tmp144 = _tmp137*_tmp33 + _tmp31*_tmp35*((25/3791)*_tmp26*numpy.cos(_tmp28) + (1/2)*numpy.cos(_tmp27)) + _tmp32*_tmp35*(_tmp29*_tmp34 + _tmp30*(-488281250000000/783012909176999951*_tmp18*_tmp26*(cosr2(_tmp28) - 3*sinr2(_tmp28)) + (1/4)*_tmp18*(cosr2(_tmp27) - 3*sinr2(_tmp27))))
+    _tmp145 = _tmp137*_tmp43
+    _tmp146 = _tmp44*_tmp86
+    _tmp147 = _tmp140*_tmp43**3*(3*cosr2(_tmp39) + sinr1(_tmp39) - 3*sinr2(_tmp39))
+    _tmp148 = -_tmp145*_tmp42 - _tmp146*_tmp50 - _tmp147*_tmp41
+    _tmp149 = _tmp145*_tmp50 - _tmp146*_tmp42 + _tmp147*_tmp49
+    _tmp150 = (3/100)*_tmp131
+    _tmp151 = (1/50)*_tmp25
+    _tmp152 = _tmp136*_tmp139 - _tmp138*_tmp64 - _tmp141*_tmp63
+    _tmp155 = (1/2)*_tmp79
+    _tmp153 = _tmp137*_tmp84
+    _tmp154 = _tmp140*_tmp84**3*(3*cosr2(_tmp80) + sinr1(_tmp80) - 3*sinr2(_tmp80))
+    _tmp156 = _tmp155*(_tmp153*_tmp83 + _tmp154*_tmp82 + _tmp92)
+    _tmp157 = _tmp153*_tmp91 + _tmp154*_tmp90 - _tmp88
+    _tmp158 = _tmp155*_tmp157 + _tmp156
+    _tmp159 = -_tmp156 + (1/2)*_tmp157*_tmp79
+    _tmp160 = _tmp100 + _tmp19
+    _tmp161 = numpy.sin(_tmp160)
+    _tmp162 = numpy.cos(_tmp160)
+    _tmp163 = -1/20*_tmp161 + (1/25)*_tmp162
+    _tmp164 = _tmp100*_tmp137
+    _tmp165 = _tmp101*_tmp86
+    _tmp166 = _tmp100**3*_tmp140*(3*cosr2(_tmp102) + sinr1(_tmp102) - 3*sinr2(_tmp102))
+    _tmp167 = _tmp103*_tmp166 + _tmp113*_tmp165 + _tmp123*_tmp164
+    _tmp168 = _tmp112*_tmp166 + _tmp113*_tmp164 - _tmp123*_tmp165
+    _tmp169 = _tmp105*_tmp137
+    _tmp170 = _tmp106*_tmp86
+    _tmp171 = _tmp105**3*_tmp140*(3*cosr2(_tmp109) + sinr1(_tmp109) - 3*sinr2(_tmp109))
+    _tmp172 = _tmp117*_tmp171 + _tmp118*_tmp169 + _tmp127*_tmp170
+    _tmp173 = _tmp110*_tmp171 - _tmp118*_tmp170 + _tmp127*_tmp169
     return [
         -_tmp0 + delta_6,
-        -_tmp10*_tmp15 + _tmp16*_tmp17 + _tmp18*_tmp20 - _tmp2*_tmp9 + _tmp21*_tmp23*_tmp27*p_0 - _tmp40 - _tmp44*_tmp49 - _tmp51*_tmp53 - _tmp60,
-        _tmp10*_tmp20 + _tmp15*_tmp18 + _tmp16*_tmp9 + _tmp17*_tmp2 - _tmp44*_tmp51 + _tmp49*_tmp53 - _tmp63 - _tmp65 + _tmp68,
+        -_tmp12*_tmp8 + _tmp13*_tmp14 + _tmp15*_tmp17 + _tmp18*_tmp20*_tmp24*p_0 - _tmp2*_tmp7 - _tmp37 - _tmp38*_tmp47 - _tmp48*_tmp51 - _tmp58,
+        _tmp12*_tmp15 + _tmp13*_tmp7 + _tmp14*_tmp2 + _tmp17*_tmp8 + _tmp38*_tmp51 - _tmp47*_tmp48 - _tmp61 - _tmp62 + _tmp65,
         delta_2 - delta_3 - delta_4 + delta_7,
-        -_tmp10*_tmp76 + _tmp100*_tmp101 + _tmp102*_tmp18 + _tmp103*_tmp45 + (1/4)*_tmp104*_tmp106*_tmp107*_tmp23*p_0 + (1/4)*_tmp108*_tmp110*_tmp112*_tmp113*p_0 - _tmp118 - _tmp124 - _tmp50*_tmp97 - _tmp60 - _tmp70*_tmp75 - _tmp78*_tmp85 + _tmp98*_tmp99,
-        _tmp10*_tmp102 + _tmp100*_tmp85 + _tmp101*_tmp78 + _tmp103*_tmp50 - _tmp126 - _tmp128 + _tmp131 + _tmp18*_tmp76 + _tmp45*_tmp97 + _tmp68 + _tmp70*_tmp99 + _tmp75*_tmp98,
+        (1/4)*_tmp101*_tmp103*_tmp104*_tmp20*p_0 + (1/4)*_tmp106*_tmp108*_tmp110*_tmp111*p_0 - _tmp116 - _tmp122 + _tmp15*_tmp98 + _tmp38*_tmp99 - _tmp48*_tmp93 - _tmp58 - _tmp67*_tmp71 - _tmp72*_tmp8 - _tmp74*_tmp78 + _tmp94*_tmp95 + _tmp96*_tmp97,
+        -_tmp124 - _tmp126 + _tmp129 + _tmp15*_tmp72 + _tmp38*_tmp93 + _tmp48*_tmp99 + _tmp65 + _tmp67*_tmp95 + _tmp71*_tmp94 + _tmp74*_tmp97 + _tmp78*_tmp96 + _tmp8*_tmp98,
         0,
         -1,
         0,
@@ -523,16 +498,16 @@ def _newton(theta, delta, params):
         1,
         0,
         0,
-        -_tmp10*_tmp140 + _tmp134*_tmp16 + _tmp138*_tmp18 - _tmp142 + _tmp146 + _tmp63 + _tmp65,
+        -_tmp132 - _tmp134 - _tmp135 + _tmp142 + (3/50)*_tmp25 + _tmp61 + _tmp62,
         0,
-        _tmp134*_tmp16 - _tmp142 - _tmp147*_tmp29 - _tmp148*_tmp149 - _tmp148*_tmp152 + _tmp151*_tmp21*_tmp23*p_0 + _tmp23*_tmp27*p_0,
-        -_tmp154*_tmp53 - _tmp155*_tmp51*_tmp52 - _tmp156*_tmp49 - _tmp158*_tmp50*_tmp53 - _tmp159*_tmp45 + (1/8)*_tmp41*_tmp43*_tmp46*_tmp50*p_0,
+        -_tmp132 - _tmp134 + _tmp143*_tmp20 - _tmp144*_tmp25,
+        _tmp148*_tmp38 - _tmp149*_tmp48,
         0,
         0,
-        _tmp10*_tmp138 + _tmp134*_tmp2 + _tmp140*_tmp18 + _tmp141*_tmp16 + _tmp160 + _tmp21*_tmp23*_tmp61 - _tmp40,
+        (9/125)*_tmp133 - _tmp150 + _tmp151 + _tmp152 + _tmp20*_tmp60 + (3/50)*_tmp20 - _tmp37,
         0,
-        _tmp134*_tmp2 + _tmp141*_tmp16 - _tmp147*_tmp64 - _tmp149*_tmp161 - _tmp151*_tmp21*_tmp29 - _tmp152*_tmp161 - _tmp62,
-        -_tmp153*_tmp50*_tmp53 - _tmp154*_tmp44 + (1/4)*_tmp155*_tmp45*_tmp46*_tmp52*p_0 - _tmp156*_tmp51 + (1/8)*_tmp157*_tmp41*_tmp42*_tmp45*_tmp52*p_0 - _tmp159*_tmp50,
+        (9/125)*_tmp133 - _tmp143*_tmp25 - _tmp144*_tmp20 - _tmp150,
+        _tmp148*_tmp48 + _tmp149*_tmp38,
         0,
         1,
         -1,
@@ -540,18 +515,18 @@ def _newton(theta, delta, params):
         0,
         0,
         1,
-        -_tmp131 - _tmp164*_tmp70 - _tmp173*_tmp50 + _tmp174*_tmp98 + _tmp175*_tmp45,
-        -_tmp10*_tmp177 + _tmp126 + _tmp128 + _tmp146 + _tmp176*_tmp18 + _tmp182,
-        _tmp106*_tmp187 + _tmp106*_tmp190 + _tmp115*_tmp127*_tmp186 - _tmp115*_tmp189 - _tmp117*_tmp184 + _tmp125*_tmp185 + _tmp182,
+        -7/100*_tmp108 - 1/25*_tmp119 - _tmp129 - _tmp158*_tmp48 + _tmp159*_tmp38,
+        _tmp124 + _tmp126 + _tmp135 + _tmp142 + _tmp163 + (1/20)*_tmp25,
+        _tmp163 + _tmp167*_tmp20 - _tmp168*_tmp25,
         0,
         0,
-        (1/8)*_tmp108*_tmp110*_tmp111*_tmp112*_tmp196*p_0 + (1/4)*_tmp110*_tmp112*_tmp113*_tmp194*p_0 - _tmp112*_tmp193 - _tmp121*_tmp192 - _tmp121*_tmp198 - _tmp123*_tmp195,
-        -_tmp124 + _tmp129*_tmp130 + _tmp164*_tmp98 + _tmp173*_tmp45 + _tmp174*_tmp70 + _tmp175*_tmp50,
-        _tmp10*_tmp176 + _tmp100*_tmp181 - _tmp118 + _tmp125*_tmp127 + _tmp160 + _tmp177*_tmp18 + _tmp180*_tmp78,
-        _tmp100*_tmp181 + (1/8)*_tmp104*_tmp106*_tmp107*_tmp23*p_0 - _tmp106*_tmp189 - _tmp115*_tmp187 - _tmp115*_tmp190 - _tmp117*_tmp185 - _tmp125*_tmp184 + _tmp180*_tmp78,
+        _tmp108*_tmp173 - _tmp119*_tmp172,
+        (1/25)*_tmp108 - 7/100*_tmp119 - _tmp122 + _tmp127*_tmp128 + _tmp158*_tmp38 + _tmp159*_tmp48,
+        -_tmp116 + _tmp123*_tmp125 - _tmp151 + _tmp152 + (1/25)*_tmp161 + (1/20)*_tmp162 + (1/20)*_tmp20,
+        (1/25)*_tmp161 + (1/20)*_tmp162 - _tmp167*_tmp25 - _tmp168*_tmp20,
         0,
         0,
-        _tmp110*_tmp123*_tmp194 + _tmp112*_tmp192 + _tmp112*_tmp198 + _tmp121*_tmp130*_tmp197 - _tmp121*_tmp193 + _tmp129*_tmp195,
+        _tmp108*_tmp172 + _tmp119*_tmp173,
     ]
 
 
