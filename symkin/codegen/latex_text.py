@@ -9,6 +9,7 @@ page of :data:`LINE_WIDTH_EM` ems (a one-column article's 345 pt text width at 1
 from __future__ import annotations
 
 import re
+from functools import lru_cache
 import unicodedata
 from collections.abc import Iterable, Mapping
 
@@ -133,6 +134,7 @@ class Tex:
         self.symbol_names = dict(symbol_names or {})
         self.width = width
         self.printer = self._printer()
+        self._printed: dict[sp.Basic, str] = {}   # line breaking prints the same pieces often
 
     def _printer(self, **extra) -> ReportPrinter:
         settings = {"symbol_names": self.symbol_names, "inv_trig_style": "full",
@@ -144,7 +146,11 @@ class Tex:
         return Tex({**self.symbol_names, **names}, self.width)
 
     def __call__(self, expr: object) -> str:
-        return self.printer.doprint(sp.sympify(expr))
+        expr = sp.sympify(expr)
+        tex = self._printed.get(expr)
+        if tex is None:
+            tex = self._printed[expr] = self.printer.doprint(expr)
+        return tex
 
     def matrix(self, rows: Iterable[Iterable[object]], style: str = "bmatrix") -> str:
         """A matrix environment of the given rows (each entry printed by sympy)."""
@@ -303,15 +309,16 @@ def align_lines(lhs: str, relation: str, body: list[str]) -> list[str]:
 def pack(tokens: list[str], first: float, rest: float) -> list[str]:
     """Greedy line filling of `tokens` (joined by spaces)."""
     lines: list[str] = []
-    current = ""
+    current, current_width = "", 0.0
     for tok in tokens:
         budget = first if not lines else rest
-        candidate = (current + " " + tok) if current else tok
-        if current and width(candidate) > budget:
+        tok_width = width(tok)        # widths add over a space-joined line
+        if current and current_width + tok_width > budget:
             lines.append(current)
-            current = tok
+            current, current_width = tok, tok_width
         else:
-            current = candidate
+            current = (current + " " + tok) if current else tok
+            current_width += tok_width
     lines.append(current)
     return lines
 
@@ -335,6 +342,7 @@ _CHAR_WIDTH = {"+": 1.25, "-": 1.25, "=": 1.35, "<": 1.35, ">": 1.35, "(": 0.4, 
                " ": 0.0, "&": 0.0, "~": 0.33}
 
 
+@lru_cache(maxsize=65536)
 def width(tex: str) -> float:
     """Rough width in ems of a LaTeX math string set in display style at the body font size."""
     return _Scanner(tex).group_width()
