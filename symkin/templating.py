@@ -8,9 +8,18 @@ from importlib import resources
 import jinja2
 
 
+#: Jinja delimiters for LaTeX templates (SymForce style), so TeX's braces never clash with Jinja's.
+LATEX_DELIMITERS = {
+    "block_start_string": r"\BLOCK{", "block_end_string": "}",
+    "variable_start_string": r"\VAR{", "variable_end_string": "}",
+    "comment_start_string": r"\#{", "comment_end_string": "}",
+}
+
+
 @cache
-def environment() -> jinja2.Environment:
-    """Strict environment over the packaged templates: a missing variable is an error, not ''."""
+def environment(latex: bool = False) -> jinja2.Environment:
+    """Strict environment over the packaged templates: a missing variable is an error, not ''.
+    `latex=True` uses the \\VAR{...} / \\BLOCK{...} delimiters of the LaTeX templates."""
     root = resources.files("symkin.templates")
     env = jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(root)),
@@ -19,6 +28,7 @@ def environment() -> jinja2.Environment:
         lstrip_blocks=True,
         keep_trailing_newline=True,
         autoescape=False,
+        **(LATEX_DELIMITERS if latex else {}),
     )
     # Names from a mechanism file reach generated code only through these escaping filters.
     env.filters["pyrepr"] = repr

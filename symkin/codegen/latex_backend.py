@@ -18,13 +18,12 @@ from __future__ import annotations
 
 import math
 from functools import cache
-from importlib import resources
 
 import jinja2
 import numpy as np
 import sympy as sp
 
-from .. import hinge_models
+from .. import hinge_models, templating
 from .. import special
 from .. import vectors as V
 from ..mechanism import PLATE_LENGTH, THETA
@@ -50,25 +49,9 @@ LEVEL_TITLES = {"paper": "paper", "first_order": "first order", "exact": "exact"
 
 @cache
 def environment() -> jinja2.Environment:
-    r"""Strict environment over the packaged templates with ``\VAR{...}``, ``\BLOCK{...}`` and
-    ``\#{...}`` delimiters, so TeX's braces never clash with Jinja's."""
-    root = resources.files("symkin.templates")
-    env = jinja2.Environment(
-        loader=jinja2.FileSystemLoader(str(root)),
-        undefined=jinja2.StrictUndefined,
-        trim_blocks=True,
-        lstrip_blocks=True,
-        keep_trailing_newline=True,
-        autoescape=False,
-        block_start_string=r"\BLOCK{",
-        block_end_string="}",
-        variable_start_string=r"\VAR{",
-        variable_end_string="}",
-        comment_start_string=r"\#{",
-        comment_end_string="}",
-        line_statement_prefix=None,
-        line_comment_prefix=None,
-    )
+    r"""The shared strict environment with the ``\VAR{...}``/``\BLOCK{...}`` delimiters, plus
+    the LaTeX escaping filters."""
+    env = templating.environment(latex=True).overlay()
     env.filters["tex"] = escape_latex
     env.filters["mathname"] = math_name
     return env
