@@ -24,7 +24,7 @@ from functools import cached_property, lru_cache
 import mpmath
 import sympy as sp
 
-from . import expressions
+from . import expressions, special
 from . import rigid as rigid_solver
 from . import vectors as V
 from .errors import AssemblyError, InputError
@@ -65,15 +65,6 @@ class Evaluation:
             "points": {name: {"rigid": list(p.rigid), "compliant": list(p.compliant),
                               "deviation": list(p.deviation)} for name, p in self.points.items()},
         }
-
-
-def _namespace() -> dict:
-    """mpmath implementations of symkin's special functions, for lambdify."""
-    try:
-        from . import special
-    except ImportError:  # pragma: no cover - special functions not present
-        return {}
-    return dict(getattr(special, "MPMATH", {}))
 
 
 class Analysis:
@@ -118,6 +109,18 @@ class Analysis:
             rigid_part = [V.rot(kin.phi(i), V.rot_minus_identity(self.delta_phi(i), w))
                           for i, w in kin.loop_weights(c).items()]
             rows.extend(V.add(*rigid_part, kin.loop_deviation(c, angles)))
+        return sp.Matrix(rows)
+
+    @cached_property
+    def rigid_residual(self) -> sp.Matrix:
+        """Rigid loop closure relative to the as-fabricated pose, in the rigid angles θ:
+        Φ q and Σ_i (Rot(φ_i) - I) V_i per loop, exact there since the fabricated pose closes."""
+        kin = self.kin
+        rows: list[sp.Expr] = []
+        for c in kin.chords:
+            rows.append(kin.angular_closure(c))
+            rows.extend(V.add(*(V.rot_minus_identity(kin.phi(i), w)
+                                for i, w in kin.loop_weights(c).items())))
         return sp.Matrix(rows)
 
     @cached_property
@@ -203,7 +206,7 @@ class Analysis:
         """Lambdified (mpmath) function, cached per key."""
         cache = self.__dict__.setdefault("_lambdas", {})
         if key not in cache:
-            cache[key] = sp.lambdify(args, exprs, modules=[_namespace(), "mpmath"])
+            cache[key] = sp.lambdify(args, exprs, modules=[special.mpmath_namespace(), "mpmath"])
         return cache[key]
 
     def parameter_values(self, overrides: Mapping[str, object] | None = None) -> dict:
@@ -337,16 +340,10 @@ class Analysis:
     def _rigid_newton(self, pvals: list, ivals: dict) -> dict:
         """Rigid angles by Newton with continuation from the as-fabricated pose (non-dyad groups)."""
         kin = self.kin
-        unknown = [kin.theta[a] for a in kin.unknowns]
-        rows: list[sp.Expr] = []
-        for c in kin.chords:
-            rows.append(kin.angular_closure(c))
-            rows.extend(V.add(*(V.rot_minus_identity(kin.phi(i), w)
-                                for i, w in kin.loop_weights(c).items())))
-        res = sp.Matrix(rows)
         args = [*self.params, *self.thetas]
-        f = self._fn("rigid_residual", list(res), args)
-        jac = self._fn("rigid_jacobian", res.jacobian(unknown).tolist(), args)
+        f = self._fn("rigid_residual", list(self.rigid_residual), args)
+        # ∂/∂θ of the rigid closure is A of the first-order system (the same structure).
+        jac = self._fn("rigid_jacobian", self.linear_system[0].tolist(), args)
         steps = max(1, int(max([abs(v) for v in ivals.values()] + [0]) / 0.05) + 1)
         x = {a: mpmath.mpf(0) for a in kin.unknowns}
         for step in range(1, steps + 1):

@@ -7,7 +7,6 @@ the same exit code (3) and the same message naming the loop.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 
 import sympy as sp
@@ -82,6 +81,3 @@ def _explain(analysis: Analysis, inputs, level, params) -> None:
                         "configuration (no convergence in float64), although the 40-digit "
                         "derivation can")
 
-
-def finite(values) -> bool:
-    return all(math.isfinite(v) for v in values)

@@ -175,7 +175,6 @@ def plate_functions(hinge) -> PlateFunctions:
         raise ValueError(f"unknown hinge model {model!r}")
     t = _theta()
     l = hinge.length
-    half = _sp.Rational(1, 2)
     f_rigid = l * (1 + _sp.cos(t)) / 2
     g_rigid = l * _sp.sin(t) / 2
     sinr, cosr = _special.sinr, _special.cosr

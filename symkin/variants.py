@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import mpmath
 import sympy as sp
 
-from . import hinge_models
+from . import hinge_models, special
 from .analysis import LEVELS, Analysis
 from .mechanism import THETA, Mechanism
 from .structure import build
@@ -102,17 +102,11 @@ def _taylor(expr: sp.Expr, degree: int) -> sp.Expr:
     # keeping the (symbolic) plate length as a factor.
     length = next(iter(expr.free_symbols - {THETA}), None)
     unit = expr.subs(length, 1) if length is not None else expr
-    fn = sp.lambdify(THETA, unit, modules=[hinge_models_mpmath(), "mpmath"])
+    fn = sp.lambdify(THETA, unit, modules=[special.mpmath_namespace(), "mpmath"])
     with mpmath.workdps(40):
         coeffs = mpmath.taylor(fn, 0, degree)
     poly = sum(sp.Float(str(c), 30) * THETA ** k for k, c in enumerate(coeffs) if abs(c) > 1e-30)
     return sp.expand(poly * (length if length is not None else 1))
-
-
-def hinge_models_mpmath() -> dict:
-    from . import special
-
-    return dict(special.MPMATH)
 
 
 def analysis_for(mech: Mechanism, variant: Variant, points=None) -> Analysis:

@@ -18,9 +18,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-import sympy as sp
 
-from .. import vectors as V
 from ..analysis import LEVELS, Analysis
 from .routines import Argument, Routine, flatten, optimize
 
@@ -69,12 +67,8 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
         routines["rigid"] = Routine("rigid", (inputs, params), sol.assignments, tuple(outs),
                                     "closed-form rigid solution (dyads)")
     if kin.unknowns:
-        rows: list[sp.Expr] = []
-        for c in kin.chords:
-            rows.append(kin.angular_closure(c))
-            rows.extend(V.add(*(V.rot_minus_identity(kin.phi(i), w)
-                                for i, w in kin.loop_weights(c).items())))
-        routines["rigid_res"] = Routine("rigid_res", (theta, params), (), tuple(rows),
+        routines["rigid_res"] = Routine("rigid_res", (theta, params), (),
+                                        tuple(an.rigid_residual),
                                         "rigid loop closure relative to the as-fabricated pose")
         a_lin, r_lin = an.linear_system
         routines["linear"] = Routine("linear", (theta, params), (),
