@@ -168,7 +168,20 @@ def _from_mp(value, prec: int) -> sp.Expr:
 # Kernels
 # =============================================================================================
 
-class StableKernel(sp.Function):
+class _RegistryPrinting:
+    """Code printers call a symkin function by its registry name: symkin_<name>(x) in C (the
+    definitions come from C_SOURCE), <name>(x) in Python and numpy (from *_SOURCE)."""
+
+    def _ccode(self, printer):
+        return f"symkin_{type(self).__name__}({printer._print(self.args[0])})"
+
+    def _pythoncode(self, printer):
+        return f"{type(self).__name__}({printer._print(self.args[0])})"
+
+    _mpmathcode = _lambdacode = _numpycode = _scipycode = _cupycode = _jaxcode = _pythoncode
+
+
+class StableKernel(_RegistryPrinting, sp.Function):
     """Base of the even, entire kernels: exact Taylor coefficients, a stable float algorithm.
 
     A subclass defines ``coeff(k)`` (the exact coefficient of x^(2k)), ``elementary(x)``, the
@@ -250,15 +263,6 @@ class StableKernel(sp.Function):
         arg = printer._print(self.args[0])
         base = rf"{self._latex_symbol}\!\left({arg}\right)"
         return base if exp is None else rf"{self._latex_symbol}^{{{exp}}}\!\left({arg}\right)"
-
-    def _ccode(self, printer):
-        return f"symkin_{type(self).__name__}({printer._print(self.args[0])})"
-
-    def _pythoncode(self, printer):
-        """Python / numpy printers (pycode, lambdify): a call of the registry name."""
-        return f"{type(self).__name__}({printer._print(self.args[0])})"
-
-    _mpmathcode = _lambdacode = _numpycode = _scipycode = _cupycode = _jaxcode = _pythoncode
 
     # -- numerics --------------------------------------------------------------------------------
     @classmethod
@@ -972,7 +976,7 @@ def _closed_d1(name: str, t: sp.Expr, X: sp.Expr, Y: sp.Expr) -> sp.Expr:
     return c / 2 * (1 + q * (A + C - A1) / (c ** 2 * A)) * C / A
 
 
-class ElasticaFunction(sp.Function):
+class ElasticaFunction(_RegistryPrinting, sp.Function):
     """Base of the tip-force elastica functions of the tip angle θ (|θ| < π/2; see module doc)."""
 
     nargs = 1
@@ -1031,15 +1035,6 @@ class ElasticaFunction(sp.Function):
         arg = printer._print(self.args[0])
         base = rf"{self._latex_symbol}\!\left({arg}\right)"
         return base if exp is None else rf"\left({base}\right)^{{{exp}}}"
-
-    def _ccode(self, printer):
-        return f"symkin_{type(self).__name__}({printer._print(self.args[0])})"
-
-    def _pythoncode(self, printer):
-        """Python / numpy printers (pycode, lambdify): a call of the registry name."""
-        return f"{type(self).__name__}({printer._print(self.args[0])})"
-
-    _mpmathcode = _lambdacode = _numpycode = _scipycode = _cupycode = _jaxcode = _pythoncode
 
     @classmethod
     def numeric(cls, t: float) -> float:

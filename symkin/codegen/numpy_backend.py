@@ -13,13 +13,7 @@ from .common import (header_lines, parameter_symbols, renamed, special_functions
 
 
 class Printer(NumPyPrinter):
-    """NumPyPrinter that calls symkin's stable kernels by their generated names."""
-
-    def _print_Function(self, expr):  # noqa: N802 - sympy's printer protocol
-        name = type(expr).__name__
-        if name in special.NUMPY_SOURCE:
-            return f"{name}({', '.join(self._print(a) for a in expr.args)})"
-        return super()._print_Function(expr)
+    """NumPyPrinter; symkin's special functions print themselves by their registry names."""
 
 
 def routine_source(routine, printer: Printer) -> dict:
