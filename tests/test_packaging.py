@@ -1,34 +1,68 @@
-"""A built wheel, installed in a fresh venv, runs `symkin matrices` and finds its templates."""
+"""A fresh venv (no system site packages) runs README's first command literally, from a copy of
+the project, and the installed wheel derives and evaluates through every backend.
+
+This is what a newcomer does first; it once failed because pyproject listed packages by hand and
+left symkin.codegen out of the wheel.
+"""
 
 from __future__ import annotations
 
 import json
+import os
+import pathlib
+import shutil
 import subprocess
-import sys
 import venv
 
-from conftest import EXAMPLES, ROOT
+from conftest import ROOT
+from test_readme import readme_commands
+
+IGNORED = shutil.ignore_patterns(".git", "build", "dist", "*.egg-info", "__pycache__", ".venv*",
+                                 ".hypothesis", ".pytest_cache", "generated")
 
 
-def test_wheel_installs_and_runs(tmp_path):
-    wheels = tmp_path / "wheels"
-    subprocess.run([sys.executable, "-m", "pip", "wheel", str(ROOT), "--no-deps",
-                    "-q", "-w", str(wheels)], check=True)
-    wheel = next(wheels.glob("symkin-*.whl"))
+def test_readme_first_command_in_a_fresh_venv(tmp_path):
+    project = tmp_path / "symkin"
+    shutil.copytree(ROOT, project, ignore=IGNORED)
     env_dir = tmp_path / "venv"
-    # System site packages supply sympy/numpy/jinja2 without a download; symkin itself must
-    # come from the wheel, which the venv's own site-packages puts first.
-    venv.EnvBuilder(system_site_packages=True, with_pip=True).create(env_dir)
-    py = env_dir / "bin" / "python"
-    subprocess.run([str(py), "-m", "pip", "install", "-q", "--no-deps", str(wheel)], check=True)
-    where = subprocess.run([str(py), "-c", "import symkin, sys; print(symkin.__file__)"],
-                           capture_output=True, text=True, check=True, cwd=tmp_path).stdout
-    assert where.startswith(str(env_dir)), where
-    out = subprocess.run([str(env_dir / "bin" / "symkin"), "matrices", "--json",
-                          str(EXAMPLES / "four_bar.toml")],
-                         capture_output=True, text=True, check=True, cwd=tmp_path).stdout
-    assert json.loads(out)["loops"] == [[1, 1, -1, 1]]
-    text = subprocess.run([str(env_dir / "bin" / "symkin"), "matrices",
-                           str(EXAMPLES / "four_bar.toml")],
-                          capture_output=True, text=True, check=True, cwd=tmp_path).stdout
-    assert "incidence I" in text          # rendered from the packaged Jinja template
+    venv.EnvBuilder(system_site_packages=False, with_pip=True).create(env_dir)
+    bin_dir = env_dir / "bin"
+    env = {**os.environ, "PATH": f"{bin_dir}{os.pathsep}{os.environ['PATH']}",
+           "SYMKIN_CACHE": str(tmp_path / "cache"), "VIRTUAL_ENV": str(env_dir)}
+    env.pop("PYTHONPATH", None)
+    first, _ = readme_commands()
+    run = subprocess.run(["bash", "-c", first], cwd=project, env=env, capture_output=True,
+                         text=True)
+    assert run.returncode == 0, run.stderr[-3000:]
+    assert "point C" in run.stdout and "deviation" in run.stdout
+
+    def symkin(*args: str) -> str:
+        proc = subprocess.run([str(bin_dir / "symkin"), *args], cwd=tmp_path, env=env,
+                              capture_output=True, text=True)
+        assert proc.returncode == 0, (args, proc.stderr[-3000:])
+        return proc.stdout
+
+    # The package came from the built wheel, not from the source tree.
+    where = subprocess.run([str(bin_dir / "python"), "-c", "import symkin; print(symkin.__file__)"],
+                           cwd=tmp_path, env=env, capture_output=True, text=True, check=True)
+    assert where.stdout.startswith(str(env_dir)), where.stdout
+    # Every module and template of the source tree is in the installed package.
+    installed = pathlib.Path(where.stdout.strip()).parent
+    for pattern, root in (("*.py", ROOT / "symkin"), ("*.j2", ROOT / "templates")):
+        for f in root.rglob(pattern):
+            target = installed / ("templates" if root.name == "templates" else "") / \
+                f.relative_to(root)
+            assert target.is_file(), f"{f.relative_to(ROOT)} is missing from the wheel"
+    example = str(project / "examples" / "four_bar.toml")
+    written = symkin("derive", example, "-o", str(tmp_path / "out"), "--quiet").split()
+    assert {os.path.basename(p) for p in written} >= {"four_bar.c", "four_bar.h", "four_bar.py",
+                                                       "four_bar.tex"}
+    results = {b: json.loads(symkin("eval", example, "--input", "A0=0.2", "--backend", b,
+                                    "--json"))["points"]["C"]["deviation"]
+               for b in ("sympy", "numpy", "c")}
+    for backend in ("numpy", "c"):
+        assert all(abs(a - b) <= 1e-15 * abs(b) + 1e-22
+                   for a, b in zip(results[backend], results["sympy"])), backend
+    # The templates (package data of symkin.templates) ship inside the wheel.
+    matrices = symkin("matrices", example)
+    assert "incidence I" in matrices

@@ -1,0 +1,14 @@
+"""Package discovery for setuptools: every package under symkin/ is found, not listed.
+
+The Jinja templates live in the top-level templates/ folder and ship inside the wheel as the
+package symkin.templates (package_dir maps it), so a plain, non-editable install finds them.
+Everything else (metadata, dependencies, scripts) is in pyproject.toml.
+"""
+
+from setuptools import find_packages, setup
+
+setup(
+    packages=find_packages(include=["symkin", "symkin.*"]) + ["symkin.templates"],
+    package_dir={"symkin.templates": "templates"},
+    package_data={"symkin.templates": ["**/*.j2"]},
+)
