@@ -22,3 +22,27 @@ def test_ci_runs_exactly_readmes_test_command():
     _, test = readme_commands()
     ci = (ROOT / ".ci" / "run").read_text().splitlines()
     assert test in ci, "the last step of .ci/run must be README's test command, verbatim"
+
+
+def test_ci_builds_a_fresh_venv_before_the_test_command():
+    lines = (ROOT / ".ci" / "run").read_text().splitlines()
+    _, test = readme_commands()
+    venv_line = next(i for i, ln in enumerate(lines) if "-m venv" in ln)
+    activate = next(i for i, ln in enumerate(lines) if "/bin/activate" in ln)
+    assert "--system-site-packages" not in lines[venv_line]
+    assert venv_line < activate < lines.index(test)
+
+
+def test_under_ci_the_tests_run_in_a_venv_without_system_site_packages():
+    """What .ci/run promises, checked from inside the test process itself."""
+    import os
+    import sys
+    from pathlib import Path
+
+    if os.environ.get("CI") != "true":
+        return
+    cfg = Path(sys.prefix) / "pyvenv.cfg"
+    assert sys.prefix != sys.base_prefix and cfg.is_file(), "CI must run the tests in a venv"
+    settings = {key.strip(): value.strip() for key, value in
+                (line.split("=", 1) for line in cfg.read_text().splitlines() if "=" in line)}
+    assert settings.get("include-system-site-packages") == "false"
