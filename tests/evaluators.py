@@ -48,9 +48,11 @@ def require_compiler():
 class Generated:
     """A mechanism with its analysis, numpy module and compiled C library."""
 
-    def __init__(self, key):
-        source = SOURCES[key]
-        self.mech = symkin.load(source) if not isinstance(source, str) else symkin.loads(source)
+    def __init__(self, key=None, mech=None):
+        if mech is None:
+            source = SOURCES[key]
+            mech = symkin.load(source) if not isinstance(source, str) else symkin.loads(source)
+        self.mech = mech
         self.analysis = symkin.analyze(self.mech)
         self.plan = plan(self.analysis)
         self.numpy = import_numpy_module(numpy_backend.emit(self.plan, "test"), self.mech.name)

@@ -3,7 +3,7 @@
  * Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 92, rigid_res 50, linear 102, newton 269, rigid_points 27, dev_paper 40, dev_first_order 58, dev_exact 68.
+ * Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, dev_paper 38, dev_first_order 52, dev_exact 62.
  */
 #include "four_bar.h"
 
@@ -98,29 +98,29 @@ static double symkin_sinr2(double x)
     return b;
 }
 
-/* closed-form rigid solution (dyads) (92 operations) */
+/* closed-form rigid solution (dyads) (65 operations) */
 static void sk_rigid(const double *inputs, const double *params, double *out)
 {
     (void)params;
     const double theta_1 = inputs[0];
     const double _tmp0 = sin(theta_1);
     const double _tmp1 = cos(theta_1);
-    const double dyad1_ax = -13.0/500.0*_tmp0 + (3.0/200.0)*_tmp1;
-    const double dyad1_ay = (3.0/200.0)*_tmp0 + (13.0/500.0)*_tmp1;
-    const double dyad1_cx = 1.0/10.0;
+    const double dyad1_ax = -0.026*_tmp0 + 0.015*_tmp1;
+    const double dyad1_ay = 0.015*_tmp0 + 0.026*_tmp1;
+    const double dyad1_cx = 0.1;
     const double dyad1_cy = 0;
     const double _tmp2 = -dyad1_ax + dyad1_cx;
     const double _tmp3 = -dyad1_ay + dyad1_cy;
     const double dyad1_dsq = pow(_tmp2, 2) + pow(_tmp3, 2);
     const double _tmp4 = 1.0/dyad1_dsq;
-    const double dyad1_along = (1.0/2.0)*_tmp4*(dyad1_dsq + 363.0/200000.0);
-    const double dyad1_reach = (833.0/125000.0)*_tmp4 - pow(dyad1_along, 2);
+    const double dyad1_along = 0.5*_tmp4*(dyad1_dsq + 0.001815);
+    const double dyad1_reach = 0.006664*_tmp4 - pow(dyad1_along, 2);
     const double dyad1_across = sqrt(dyad1_reach);
     const double dyad1_bx = _tmp2*dyad1_along - _tmp3*dyad1_across + dyad1_ax;
     const double dyad1_by = _tmp2*dyad1_across + _tmp3*dyad1_along + dyad1_ay;
-    const double dyad1_margin = (250000.0/577031.0)*sqrt(164866)*dyad1_dsq*fabs(dyad1_across);
-    const double dyad1_phi1 = atan2((21.0/500.0)*dyad1_ax - 7.0/100.0*dyad1_ay - 21.0/500.0*dyad1_bx + (7.0/100.0)*dyad1_by, -7.0/100.0*dyad1_ax - 21.0/500.0*dyad1_ay + (7.0/100.0)*dyad1_bx + (21.0/500.0)*dyad1_by);
-    const double dyad1_phi2 = atan2(-17.0/250.0*dyad1_bx - 3.0/200.0*dyad1_by + (17.0/250.0)*dyad1_cx + (3.0/200.0)*dyad1_cy, -3.0/200.0*dyad1_bx + (17.0/250.0)*dyad1_by + (3.0/200.0)*dyad1_cx - 17.0/250.0*dyad1_cy);
+    const double dyad1_margin = 175.91643435618488*dyad1_dsq*fabs(dyad1_across);
+    const double dyad1_phi1 = atan2(0.042*dyad1_ax - 0.07*dyad1_ay - 0.042*dyad1_bx + 0.07*dyad1_by, -0.07*dyad1_ax - 0.042*dyad1_ay + 0.07*dyad1_bx + 0.042*dyad1_by);
+    const double dyad1_phi2 = atan2(-0.068*dyad1_bx - 0.015*dyad1_by + 0.068*dyad1_cx + 0.015*dyad1_cy, -0.015*dyad1_bx + 0.068*dyad1_by + 0.015*dyad1_cx - 0.068*dyad1_cy);
     out[0] = dyad1_phi1 - theta_1;
     out[1] = dyad1_phi2;
     out[2] = -dyad1_phi1 + dyad1_phi2;
@@ -128,7 +128,7 @@ static void sk_rigid(const double *inputs, const double *params, double *out)
     out[4] = dyad1_margin;
 }
 
-/* rigid loop closure relative to the as-fabricated pose (50 operations) */
+/* rigid loop closure relative to the as-fabricated pose (38 operations) */
 static void sk_rigid_res(const double *theta, const double *params, double *out)
 {
     (void)params;
@@ -140,16 +140,16 @@ static void sk_rigid_res(const double *theta, const double *params, double *out)
     const double _tmp1 = sin(theta_1);
     const double _tmp2 = sin(theta_3);
     const double _tmp3 = sin(_tmp0);
-    const double _tmp4 = (1.0/2.0)*theta_1;
+    const double _tmp4 = 0.5*theta_1;
     const double _tmp5 = pow(sin(_tmp4), 2);
-    const double _tmp6 = pow(sin((1.0/2.0)*theta_3), 2);
-    const double _tmp7 = pow(sin(_tmp4 + (1.0/2.0)*theta_2), 2);
+    const double _tmp6 = pow(sin(0.5*theta_3), 2);
+    const double _tmp7 = pow(sin(_tmp4 + 0.5*theta_2), 2);
     out[0] = _tmp0 - theta_3 + theta_4;
-    out[1] = -13.0/500.0*_tmp1 + (17.0/250.0)*_tmp2 - 21.0/500.0*_tmp3 - 3.0/100.0*_tmp5 - 3.0/100.0*_tmp6 - 7.0/50.0*_tmp7;
-    out[2] = (3.0/200.0)*_tmp1 + (3.0/200.0)*_tmp2 + (7.0/100.0)*_tmp3 - 13.0/250.0*_tmp5 + (17.0/125.0)*_tmp6 - 21.0/250.0*_tmp7;
+    out[1] = -0.026*_tmp1 + 0.068*_tmp2 - 0.042*_tmp3 - 0.03*_tmp5 - 0.03*_tmp6 - 0.14*_tmp7;
+    out[2] = 0.015*_tmp1 + 0.015*_tmp2 + 0.07*_tmp3 - 0.052*_tmp5 + 0.136*_tmp6 - 0.084*_tmp7;
 }
 
-/* rigid loop Jacobian A and r = Phi dz (102 operations) */
+/* rigid loop Jacobian A and r = Phi dz (92 operations) */
 static void sk_linear(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -162,45 +162,44 @@ static void sk_linear(const double *theta, const double *params, double *out)
     const double _tmp2 = cos(_tmp0);
     const double _tmp3 = sin(theta_3);
     const double _tmp4 = cos(theta_3);
-    const double _tmp5 = (1.0/2.0)*theta_1;
-    const double _tmp6 = (1.0/4.0)*p_0;
+    const double _tmp5 = 0.5*theta_1;
+    const double _tmp6 = 0.25*p_0;
     const double _tmp7 = _tmp6*pow(theta_1, 2)*symkin_arck(_tmp5);
     const double _tmp8 = pow(theta_3, 2);
-    const double _tmp9 = (1.0/2.0)*theta_3;
+    const double _tmp9 = 0.5*theta_3;
     const double _tmp10 = symkin_arck(_tmp9);
-    const double _tmp11 = (1.0/2.0)*theta_4;
-    const double _tmp12 = sin(_tmp11);
-    const double _tmp13 = pow(theta_4, 2);
-    const double _tmp14 = symkin_arck(_tmp11);
-    const double _tmp15 = _tmp13*_tmp14*_tmp6;
-    const double _tmp16 = _tmp1*_tmp15;
-    const double _tmp17 = cos(_tmp11);
-    const double _tmp18 = sin(theta_1);
+    const double _tmp12 = pow(theta_4, 2);
+    const double _tmp11 = 0.5*theta_4;
+    const double _tmp13 = symkin_arck(_tmp11);
+    const double _tmp14 = _tmp12*_tmp13*_tmp6;
+    const double _tmp15 = _tmp14*sin(_tmp11);
+    const double _tmp16 = cos(_tmp11);
+    const double _tmp17 = sin(theta_1);
+    const double _tmp18 = 0.5*theta_2;
+    const double _tmp19 = sin(_tmp18);
     const double _tmp20 = pow(theta_2, 2);
-    const double _tmp19 = (1.0/2.0)*theta_2;
-    const double _tmp21 = symkin_arck(_tmp19);
-    const double _tmp22 = (1.0/8.0)*_tmp20*_tmp21*p_0;
-    const double _tmp23 = _tmp22*sin(_tmp19);
-    const double _tmp24 = sqrt(3);
-    const double _tmp25 = cos(_tmp19);
-    const double _tmp26 = _tmp22*_tmp24*_tmp25 + _tmp23;
-    const double _tmp27 = cos(theta_1);
-    const double _tmp28 = (1.0/8.0)*_tmp20*_tmp21*_tmp25*p_0 - _tmp23*_tmp24;
+    const double _tmp21 = symkin_arck(_tmp18);
+    const double _tmp22 = _tmp20*_tmp21*p_0;
+    const double _tmp23 = cos(_tmp18);
+    const double _tmp24 = 0.21650635094610965*_tmp22;
+    const double _tmp25 = 0.125*_tmp19*_tmp22 + _tmp23*_tmp24;
+    const double _tmp26 = cos(theta_1);
+    const double _tmp27 = -_tmp19*_tmp24 + 0.125*_tmp20*_tmp21*_tmp23*p_0;
     out[0] = 1;
     out[1] = -1;
     out[2] = 1;
-    out[3] = -7.0/100.0*_tmp1 - 21.0/500.0*_tmp2;
-    out[4] = -3.0/200.0*_tmp3 + (17.0/250.0)*_tmp4;
+    out[3] = -0.07*_tmp1 - 0.042*_tmp2;
+    out[4] = -0.015*_tmp3 + 0.068*_tmp4;
     out[5] = 0;
-    out[6] = -21.0/500.0*_tmp1 + (7.0/100.0)*_tmp2;
-    out[7] = (17.0/250.0)*_tmp3 + (3.0/200.0)*_tmp4;
+    out[6] = -0.042*_tmp1 + 0.07*_tmp2;
+    out[7] = 0.068*_tmp3 + 0.015*_tmp4;
     out[8] = 0;
     out[9] = 0;
-    out[10] = (1.0/4.0)*_tmp10*_tmp8*p_0*sin(_tmp9) - _tmp12*_tmp16 + (1.0/4.0)*_tmp13*_tmp14*_tmp17*_tmp2*p_0 - _tmp18*_tmp26 + _tmp27*_tmp28 - _tmp7*sin(_tmp5);
-    out[11] = -_tmp10*_tmp6*_tmp8*cos(_tmp9) + _tmp12*_tmp15*_tmp2 + _tmp16*_tmp17 + _tmp18*_tmp28 + _tmp26*_tmp27 + _tmp7*cos(_tmp5);
+    out[10] = -_tmp1*_tmp15 + 0.25*_tmp10*_tmp8*p_0*sin(_tmp9) + 0.25*_tmp12*_tmp13*_tmp16*_tmp2*p_0 - _tmp17*_tmp25 + _tmp26*_tmp27 - _tmp7*sin(_tmp5);
+    out[11] = _tmp1*_tmp14*_tmp16 - _tmp10*_tmp6*_tmp8*cos(_tmp9) + _tmp15*_tmp2 + _tmp17*_tmp27 + _tmp25*_tmp26 + _tmp7*cos(_tmp5);
 }
 
-/* exact compliant closure F(delta) and dF/ddelta (269 operations) */
+/* exact compliant closure F(delta) and dF/ddelta (259 operations) */
 static void sk_newton(const double *theta, const double *delta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -211,101 +210,98 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double delta_3 = delta[1];
     const double delta_4 = delta[2];
     const double p_0 = params[0];
-    const double _tmp0 = (1.0/2.0)*theta_1;
-    const double _tmp1 = (1.0/4.0)*p_0;
+    const double _tmp0 = 0.5*theta_1;
+    const double _tmp1 = 0.25*p_0;
     const double _tmp2 = _tmp1*pow(theta_1, 2)*symkin_arck(_tmp0);
     const double _tmp3 = sin(theta_3);
     const double _tmp4 = sin(delta_3);
-    const double _tmp5 = (1.0/2.0)*delta_3;
+    const double _tmp5 = 0.5*delta_3;
     const double _tmp6 = pow(sin(_tmp5), 2);
-    const double _tmp7 = (3.0/200.0)*_tmp4 + (17.0/125.0)*_tmp6;
+    const double _tmp7 = 0.015*_tmp4 + 0.136*_tmp6;
     const double _tmp8 = cos(theta_3);
-    const double _tmp9 = (17.0/250.0)*_tmp4 - 3.0/100.0*_tmp6;
+    const double _tmp9 = 0.068*_tmp4 - 0.03*_tmp6;
     const double _tmp10 = theta_1 + theta_2;
     const double _tmp11 = sin(_tmp10);
     const double _tmp12 = sin(delta_2);
-    const double _tmp13 = (1.0/2.0)*delta_2;
+    const double _tmp13 = 0.5*delta_2;
     const double _tmp14 = pow(sin(_tmp13), 2);
-    const double _tmp15 = (7.0/100.0)*_tmp12 - 21.0/250.0*_tmp14;
+    const double _tmp15 = 0.07*_tmp12 - 0.084*_tmp14;
     const double _tmp16 = cos(_tmp10);
-    const double _tmp17 = -21.0/500.0*_tmp12 - 7.0/50.0*_tmp14;
+    const double _tmp17 = -0.042*_tmp12 - 0.14*_tmp14;
     const double _tmp18 = delta_3 + theta_3;
     const double _tmp19 = pow(_tmp18, 2);
-    const double _tmp20 = _tmp5 + (1.0/2.0)*theta_3;
+    const double _tmp20 = _tmp5 + 0.5*theta_3;
     const double _tmp21 = sin(_tmp20);
     const double _tmp22 = symkin_arck(_tmp20);
-    const double _tmp23 = (1.0/2.0)*delta_4 + (1.0/2.0)*theta_4;
-    const double _tmp24 = symkin_arck(_tmp23);
-    const double _tmp29 = delta_4 + theta_4;
-    const double _tmp30 = pow(_tmp29, 2);
-    const double _tmp25 = sin(_tmp23);
-    const double _tmp26 = _tmp24*_tmp25;
-    const double _tmp27 = _tmp10 + delta_2;
-    const double _tmp28 = sin(_tmp27);
+    const double _tmp25 = 0.5*delta_4 + 0.5*theta_4;
+    const double _tmp27 = symkin_arck(_tmp25);
+    const double _tmp28 = delta_4 + theta_4;
+    const double _tmp29 = pow(_tmp28, 2);
+    const double _tmp23 = _tmp10 + delta_2;
+    const double _tmp24 = sin(_tmp23);
+    const double _tmp26 = sin(_tmp25);
+    const double _tmp30 = _tmp27*_tmp29;
     const double _tmp31 = _tmp1*_tmp30;
-    const double _tmp32 = _tmp28*_tmp31;
-    const double _tmp33 = _tmp26*_tmp32;
-    const double _tmp34 = cos(_tmp27);
-    const double _tmp35 = cos(_tmp23);
+    const double _tmp32 = _tmp26*_tmp31;
+    const double _tmp33 = _tmp24*_tmp32;
+    const double _tmp34 = cos(_tmp23);
+    const double _tmp35 = cos(_tmp25);
     const double _tmp36 = sin(theta_1);
-    const double _tmp37 = _tmp13 + (1.0/2.0)*theta_2;
-    const double _tmp38 = sin(_tmp37);
-    const double _tmp39 = delta_2 + theta_2;
-    const double _tmp40 = pow(_tmp39, 2);
-    const double _tmp41 = symkin_arck(_tmp37);
-    const double _tmp42 = _tmp41*p_0;
-    const double _tmp43 = _tmp40*_tmp42;
-    const double _tmp44 = (1.0/8.0)*_tmp43;
-    const double _tmp45 = _tmp38*_tmp44;
-    const double _tmp46 = sqrt(3);
-    const double _tmp47 = cos(_tmp37);
-    const double _tmp48 = _tmp44*_tmp47;
-    const double _tmp49 = _tmp45 + _tmp46*_tmp48;
-    const double _tmp50 = cos(theta_1);
-    const double _tmp51 = (1.0/8.0)*_tmp40*_tmp41*_tmp47*p_0 - _tmp45*_tmp46;
-    const double _tmp52 = cos(_tmp20);
-    const double _tmp53 = _tmp22*_tmp52;
-    const double _tmp54 = _tmp24*_tmp35;
-    const double _tmp55 = _tmp31*_tmp34;
-    const double _tmp56 = _tmp26*_tmp55 + _tmp32*_tmp54;
-    const double _tmp57 = _tmp39*_tmp42;
-    const double _tmp58 = (1.0/4.0)*_tmp57;
-    const double _tmp59 = pow(_tmp39, 3)*p_0*(3*symkin_cosr2(_tmp37) + symkin_sinr1(_tmp37) - 3*symkin_sinr2(_tmp37));
-    const double _tmp60 = (1.0/2.0)*_tmp57;
-    const double _tmp61 = _tmp47*_tmp59;
-    const double _tmp62 = (1.0/2.0)*_tmp46;
-    const double _tmp63 = _tmp38*_tmp58 + (1.0/32.0)*_tmp38*_tmp59 + (1.0/16.0)*_tmp43*_tmp47 + _tmp62*(-_tmp45 + _tmp47*_tmp60 + (1.0/16.0)*_tmp61);
-    const double _tmp64 = (1.0/16.0)*_tmp38;
-    const double _tmp65 = -_tmp43*_tmp64 + _tmp47*_tmp58 + (1.0/32.0)*_tmp61 - _tmp62*(_tmp38*_tmp60 + _tmp48 + _tmp59*_tmp64);
-    const double _tmp66 = sin(_tmp18);
-    const double _tmp67 = cos(_tmp18);
-    const double _tmp68 = _tmp21*_tmp22;
-    const double _tmp69 = (1.0/2.0)*p_0;
-    const double _tmp70 = _tmp18*_tmp69;
-    const double _tmp71 = (1.0/8.0)*p_0;
-    const double _tmp72 = _tmp19*_tmp71;
-    const double _tmp73 = (1.0/16.0)*p_0;
-    const double _tmp74 = pow(_tmp18, 3)*_tmp73*(3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20) - 3*symkin_sinr2(_tmp20));
-    const double _tmp75 = _tmp29*_tmp69;
-    const double _tmp76 = _tmp30*_tmp71;
-    const double _tmp77 = pow(_tmp29, 3)*_tmp73*(3*symkin_cosr2(_tmp23) + symkin_sinr1(_tmp23) - 3*symkin_sinr2(_tmp23));
-    const double _tmp78 = _tmp25*_tmp77 + _tmp26*_tmp75 + _tmp54*_tmp76;
-    const double _tmp79 = -_tmp26*_tmp76 + _tmp35*_tmp77 + _tmp54*_tmp75;
+    const double _tmp37 = delta_2 + theta_2;
+    const double _tmp38 = pow(_tmp37, 2);
+    const double _tmp39 = _tmp13 + 0.5*theta_2;
+    const double _tmp40 = symkin_arck(_tmp39);
+    const double _tmp41 = _tmp38*_tmp40;
+    const double _tmp42 = p_0*sin(_tmp39);
+    const double _tmp43 = cos(_tmp39);
+    const double _tmp44 = _tmp43*p_0;
+    const double _tmp45 = 0.21650635094610965*_tmp41;
+    const double _tmp46 = 0.125*_tmp41*_tmp42 + _tmp44*_tmp45;
+    const double _tmp47 = cos(theta_1);
+    const double _tmp48 = 0.125*_tmp38*_tmp40*_tmp43*p_0 - _tmp42*_tmp45;
+    const double _tmp49 = cos(_tmp20);
+    const double _tmp50 = _tmp19*_tmp22;
+    const double _tmp51 = _tmp31*_tmp35;
+    const double _tmp52 = _tmp24*_tmp51 + _tmp32*_tmp34;
+    const double _tmp53 = _tmp37*_tmp40;
+    const double _tmp54 = 0.4330127018922193*_tmp53;
+    const double _tmp55 = 0.10825317547305482*_tmp41;
+    const double _tmp56 = 0.0625*_tmp41;
+    const double _tmp57 = pow(_tmp37, 3);
+    const double _tmp58 = 3*symkin_cosr2(_tmp39) + symkin_sinr1(_tmp39) - 3*symkin_sinr2(_tmp39);
+    const double _tmp59 = _tmp57*_tmp58;
+    const double _tmp60 = 0.05412658773652741*_tmp59;
+    const double _tmp61 = 0.25*_tmp42*_tmp53 - _tmp42*_tmp55 + 0.03125*_tmp42*_tmp59 + _tmp44*_tmp54 + _tmp44*_tmp56 + _tmp44*_tmp60;
+    const double _tmp62 = 0.25*_tmp37*_tmp40*_tmp43*p_0 - _tmp42*_tmp54 - _tmp42*_tmp56 - _tmp42*_tmp60 + 0.03125*_tmp43*_tmp57*_tmp58*p_0 - _tmp44*_tmp55;
+    const double _tmp63 = sin(_tmp18);
+    const double _tmp64 = cos(_tmp18);
+    const double _tmp65 = _tmp21*p_0;
+    const double _tmp66 = 0.5*_tmp18*_tmp22;
+    const double _tmp67 = 0.125*p_0;
+    const double _tmp68 = 0.0625*pow(_tmp18, 3)*(3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20) - 3*symkin_sinr2(_tmp20));
+    const double _tmp69 = 0.5*_tmp27*_tmp28;
+    const double _tmp70 = _tmp26*p_0;
+    const double _tmp71 = _tmp30*_tmp67;
+    const double _tmp72 = 0.0625*pow(_tmp28, 3)*(3*symkin_cosr2(_tmp25) + symkin_sinr1(_tmp25) - 3*symkin_sinr2(_tmp25));
+    const double _tmp73 = _tmp35*_tmp71 + _tmp69*_tmp70 + _tmp70*_tmp72;
+    const double _tmp74 = _tmp35*p_0;
+    const double _tmp75 = -_tmp26*_tmp71 + _tmp69*_tmp74 + _tmp72*_tmp74;
+    const double _tmp76 = _tmp49*p_0;
     out[0] = delta_2 - delta_3 + delta_4;
-    out[1] = -_tmp11*_tmp15 + _tmp16*_tmp17 + (1.0/4.0)*_tmp19*_tmp21*_tmp22*p_0 - _tmp2*sin(_tmp0) + (1.0/4.0)*_tmp24*_tmp30*_tmp34*_tmp35*p_0 - _tmp3*_tmp7 - _tmp33 - _tmp36*_tmp49 + _tmp50*_tmp51 + _tmp8*_tmp9;
-    out[2] = -_tmp1*_tmp19*_tmp53 + _tmp11*_tmp17 + _tmp15*_tmp16 + _tmp2*cos(_tmp0) + _tmp3*_tmp9 + _tmp36*_tmp51 + _tmp49*_tmp50 + _tmp56 + _tmp7*_tmp8;
+    out[1] = -_tmp11*_tmp15 + _tmp16*_tmp17 + 0.25*_tmp19*_tmp21*_tmp22*p_0 - _tmp2*sin(_tmp0) + 0.25*_tmp27*_tmp29*_tmp34*_tmp35*p_0 - _tmp3*_tmp7 - _tmp33 - _tmp36*_tmp46 + _tmp47*_tmp48 + _tmp8*_tmp9;
+    out[2] = -_tmp1*_tmp49*_tmp50 + _tmp11*_tmp17 + _tmp15*_tmp16 + _tmp2*cos(_tmp0) + _tmp3*_tmp9 + _tmp36*_tmp48 + _tmp46*_tmp47 + _tmp52 + _tmp7*_tmp8;
     out[3] = 1;
     out[4] = -1;
     out[5] = 1;
-    out[6] = -7.0/100.0*_tmp28 - 21.0/500.0*_tmp34 - _tmp36*_tmp63 + _tmp50*_tmp65 - _tmp56;
-    out[7] = _tmp21*_tmp74 + _tmp53*_tmp72 - 3.0/200.0*_tmp66 + (17.0/250.0)*_tmp67 + _tmp68*_tmp70;
-    out[8] = -_tmp28*_tmp78 + _tmp34*_tmp79;
-    out[9] = -21.0/500.0*_tmp28 - _tmp33 + (7.0/100.0)*_tmp34 + _tmp36*_tmp65 + _tmp50*_tmp63 + _tmp54*_tmp55;
-    out[10] = -_tmp52*_tmp74 - _tmp53*_tmp70 + (17.0/250.0)*_tmp66 + (3.0/200.0)*_tmp67 + _tmp68*_tmp72;
-    out[11] = _tmp28*_tmp79 + _tmp34*_tmp78;
+    out[6] = -0.07*_tmp24 - 0.042*_tmp34 - _tmp36*_tmp61 + _tmp47*_tmp62 - _tmp52;
+    out[7] = _tmp49*_tmp50*_tmp67 - 0.015*_tmp63 + 0.068*_tmp64 + _tmp65*_tmp66 + _tmp65*_tmp68;
+    out[8] = -_tmp24*_tmp73 + _tmp34*_tmp75;
+    out[9] = -0.042*_tmp24 - _tmp33 + _tmp34*_tmp51 + 0.07*_tmp34 + _tmp36*_tmp62 + _tmp47*_tmp61;
+    out[10] = 0.125*_tmp50*_tmp65 + 0.068*_tmp63 + 0.015*_tmp64 - _tmp66*_tmp76 - _tmp68*_tmp76;
+    out[11] = _tmp24*_tmp75 + _tmp34*_tmp73;
 }
 
-/* rigid positions of the points (27 operations) */
+/* rigid positions of the points (19 operations) */
 static void sk_rigid_points(const double *theta, const double *params, double *out)
 {
     (void)params;
@@ -316,88 +312,88 @@ static void sk_rigid_points(const double *theta, const double *params, double *o
     const double _tmp2 = theta_1 + theta_2;
     const double _tmp3 = sin(_tmp2);
     const double _tmp4 = cos(_tmp2);
-    out[0] = -13.0/500.0*_tmp0 + (3.0/200.0)*_tmp1 - 8.0/125.0*_tmp3 + (9.0/200.0)*_tmp4;
-    out[1] = (3.0/200.0)*_tmp0 + (13.0/500.0)*_tmp1 + (9.0/200.0)*_tmp3 + (8.0/125.0)*_tmp4;
+    out[0] = -0.026*_tmp0 + 0.015*_tmp1 - 0.064*_tmp3 + 0.045*_tmp4;
+    out[1] = 0.015*_tmp0 + 0.026*_tmp1 + 0.045*_tmp3 + 0.064*_tmp4;
 }
 
-/* deviation of the points at level paper (40 operations) */
+/* deviation of the points at level paper (38 operations) */
 static void sk_dev_paper(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
     const double theta_2 = theta[1];
     const double p_0 = params[0];
-    const double _tmp0 = (1.0/2.0)*theta_1;
-    const double _tmp1 = (1.0/4.0)*p_0*pow(theta_1, 2)*symkin_arck(_tmp0);
+    const double _tmp0 = 0.5*theta_1;
+    const double _tmp1 = 0.25*p_0*pow(theta_1, 2)*symkin_arck(_tmp0);
     const double _tmp2 = sin(theta_1);
-    const double _tmp4 = pow(theta_2, 2);
-    const double _tmp3 = (1.0/2.0)*theta_2;
-    const double _tmp5 = symkin_arck(_tmp3);
-    const double _tmp6 = (1.0/8.0)*_tmp4*_tmp5*p_0;
-    const double _tmp7 = _tmp6*sin(_tmp3);
-    const double _tmp8 = sqrt(3);
-    const double _tmp9 = cos(_tmp3);
-    const double _tmp10 = _tmp6*_tmp8*_tmp9 + _tmp7;
+    const double _tmp3 = 0.5*theta_2;
+    const double _tmp4 = sin(_tmp3);
+    const double _tmp5 = pow(theta_2, 2);
+    const double _tmp6 = symkin_arck(_tmp3);
+    const double _tmp7 = _tmp5*_tmp6*p_0;
+    const double _tmp8 = cos(_tmp3);
+    const double _tmp9 = 0.21650635094610965*_tmp7;
+    const double _tmp10 = 0.125*_tmp4*_tmp7 + _tmp8*_tmp9;
     const double _tmp11 = cos(theta_1);
-    const double _tmp12 = (1.0/8.0)*_tmp4*_tmp5*_tmp9*p_0 - _tmp7*_tmp8;
+    const double _tmp12 = -_tmp4*_tmp9 + 0.125*_tmp5*_tmp6*_tmp8*p_0;
     out[0] = -_tmp1*sin(_tmp0) - _tmp10*_tmp2 + _tmp11*_tmp12;
     out[1] = _tmp1*cos(_tmp0) + _tmp10*_tmp11 + _tmp12*_tmp2;
 }
 
-/* deviation of the points at level first_order (58 operations) */
+/* deviation of the points at level first_order (52 operations) */
 static void sk_dev_first_order(const double *theta, const double *delta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
     const double theta_2 = theta[1];
     const double delta_2 = delta[0];
     const double p_0 = params[0];
-    const double _tmp0 = (1.0/2.0)*theta_1;
-    const double _tmp1 = (1.0/4.0)*p_0*pow(theta_1, 2)*symkin_arck(_tmp0);
+    const double _tmp0 = 0.5*theta_1;
+    const double _tmp1 = 0.25*p_0*pow(theta_1, 2)*symkin_arck(_tmp0);
     const double _tmp2 = theta_1 + theta_2;
     const double _tmp3 = sin(_tmp2);
     const double _tmp4 = cos(_tmp2);
     const double _tmp5 = cos(theta_1);
-    const double _tmp6 = pow(theta_2, 2);
-    const double _tmp7 = (1.0/2.0)*theta_2;
-    const double _tmp8 = cos(_tmp7);
-    const double _tmp9 = symkin_arck(_tmp7);
-    const double _tmp10 = sqrt(3);
-    const double _tmp11 = (1.0/8.0)*_tmp6*_tmp9*p_0;
-    const double _tmp12 = _tmp11*sin(_tmp7);
-    const double _tmp13 = -_tmp10*_tmp12 + (1.0/8.0)*_tmp6*_tmp8*_tmp9*p_0;
+    const double _tmp6 = 0.5*theta_2;
+    const double _tmp7 = sin(_tmp6);
+    const double _tmp8 = pow(theta_2, 2);
+    const double _tmp9 = symkin_arck(_tmp6);
+    const double _tmp10 = _tmp8*_tmp9*p_0;
+    const double _tmp11 = 0.21650635094610965*_tmp10;
+    const double _tmp12 = cos(_tmp6);
+    const double _tmp13 = -_tmp11*_tmp7 + 0.125*_tmp12*_tmp8*_tmp9*p_0;
     const double _tmp14 = sin(theta_1);
-    const double _tmp15 = _tmp10*_tmp11*_tmp8 + _tmp12;
-    out[0] = -_tmp1*sin(_tmp0) + _tmp13*_tmp5 - _tmp14*_tmp15 + delta_2*(-9.0/200.0*_tmp3 - 8.0/125.0*_tmp4);
-    out[1] = _tmp1*cos(_tmp0) + _tmp13*_tmp14 + _tmp15*_tmp5 + delta_2*(-8.0/125.0*_tmp3 + (9.0/200.0)*_tmp4);
+    const double _tmp15 = 0.125*_tmp10*_tmp7 + _tmp11*_tmp12;
+    out[0] = -_tmp1*sin(_tmp0) + _tmp13*_tmp5 - _tmp14*_tmp15 + delta_2*(-0.045*_tmp3 - 0.064*_tmp4);
+    out[1] = _tmp1*cos(_tmp0) + _tmp13*_tmp14 + _tmp15*_tmp5 + delta_2*(-0.064*_tmp3 + 0.045*_tmp4);
 }
 
-/* deviation of the points at level exact (68 operations) */
+/* deviation of the points at level exact (62 operations) */
 static void sk_dev_exact(const double *theta, const double *delta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
     const double theta_2 = theta[1];
     const double delta_2 = delta[0];
     const double p_0 = params[0];
-    const double _tmp0 = (1.0/2.0)*theta_1;
-    const double _tmp1 = (1.0/4.0)*p_0*pow(theta_1, 2)*symkin_arck(_tmp0);
+    const double _tmp0 = 0.5*theta_1;
+    const double _tmp1 = 0.25*p_0*pow(theta_1, 2)*symkin_arck(_tmp0);
     const double _tmp2 = theta_1 + theta_2;
     const double _tmp3 = sin(_tmp2);
     const double _tmp4 = sin(delta_2);
-    const double _tmp5 = (1.0/2.0)*delta_2;
+    const double _tmp5 = 0.5*delta_2;
     const double _tmp6 = pow(sin(_tmp5), 2);
-    const double _tmp7 = (9.0/200.0)*_tmp4 - 16.0/125.0*_tmp6;
+    const double _tmp7 = 0.045*_tmp4 - 0.128*_tmp6;
     const double _tmp8 = cos(_tmp2);
-    const double _tmp9 = -8.0/125.0*_tmp4 - 9.0/100.0*_tmp6;
+    const double _tmp9 = -0.064*_tmp4 - 0.09*_tmp6;
     const double _tmp10 = sin(theta_1);
-    const double _tmp12 = pow(delta_2 + theta_2, 2);
-    const double _tmp11 = _tmp5 + (1.0/2.0)*theta_2;
-    const double _tmp13 = symkin_arck(_tmp11);
-    const double _tmp14 = (1.0/8.0)*_tmp12*_tmp13*p_0;
-    const double _tmp15 = _tmp14*sin(_tmp11);
-    const double _tmp16 = sqrt(3);
-    const double _tmp17 = cos(_tmp11);
-    const double _tmp18 = _tmp14*_tmp16*_tmp17 + _tmp15;
+    const double _tmp11 = _tmp5 + 0.5*theta_2;
+    const double _tmp12 = sin(_tmp11);
+    const double _tmp13 = pow(delta_2 + theta_2, 2);
+    const double _tmp14 = symkin_arck(_tmp11);
+    const double _tmp15 = _tmp13*_tmp14*p_0;
+    const double _tmp16 = cos(_tmp11);
+    const double _tmp17 = 0.21650635094610965*_tmp15;
+    const double _tmp18 = 0.125*_tmp12*_tmp15 + _tmp16*_tmp17;
     const double _tmp19 = cos(theta_1);
-    const double _tmp20 = (1.0/8.0)*_tmp12*_tmp13*_tmp17*p_0 - _tmp15*_tmp16;
+    const double _tmp20 = -_tmp12*_tmp17 + 0.125*_tmp13*_tmp14*_tmp16*p_0;
     out[0] = -_tmp1*sin(_tmp0) - _tmp10*_tmp18 + _tmp19*_tmp20 - _tmp3*_tmp7 + _tmp8*_tmp9;
     out[1] = _tmp1*cos(_tmp0) + _tmp10*_tmp20 + _tmp18*_tmp19 + _tmp3*_tmp9 + _tmp7*_tmp8;
 }

@@ -3,7 +3,7 @@
  * Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 92, rigid_res 50, linear 102, newton 269, rigid_points 27, dev_paper 40, dev_first_order 58, dev_exact 68.
+ * Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, dev_paper 38, dev_first_order 52, dev_exact 62.
  */
 #ifndef SYMKIN_FOUR_BAR_H
 #define SYMKIN_FOUR_BAR_H

@@ -2,7 +2,7 @@
 Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
 Points: C; levels: paper, first_order, exact.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 92, rigid_res 50, linear 102, newton 269, rigid_points 27, dev_paper 40, dev_first_order 58, dev_exact 68.
+Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, dev_paper 38, dev_first_order 52, dev_exact 62.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -96,31 +96,31 @@ def _parameters(given):
     unknown = sorted(set(given) - set(PARAMETERS))
     if unknown:
         raise ValueError(f"unknown parameter(s) {unknown}; parameters: {sorted(PARAMETERS)}")
-    p_0 = float(given['l']) if 'l' in given else 1/1000
+    p_0 = float(given['l']) if 'l' in given else 0.001
     return [p_0]
 
 
 def _rigid(inputs, params):
-    """closed-form rigid solution (dyads) (92 operations)."""
+    """closed-form rigid solution (dyads) (65 operations)."""
     theta_1, = inputs
     _tmp0 = numpy.sin(theta_1)
     _tmp1 = numpy.cos(theta_1)
-    dyad1_ax = -13/500*_tmp0 + (3/200)*_tmp1
-    dyad1_ay = (3/200)*_tmp0 + (13/500)*_tmp1
-    dyad1_cx = 1/10
+    dyad1_ax = -0.026*_tmp0 + 0.015*_tmp1
+    dyad1_ay = 0.015*_tmp0 + 0.026*_tmp1
+    dyad1_cx = 0.1
     dyad1_cy = 0
     _tmp2 = -dyad1_ax + dyad1_cx
     _tmp3 = -dyad1_ay + dyad1_cy
     dyad1_dsq = _tmp2**2 + _tmp3**2
     _tmp4 = dyad1_dsq**(-1.0)
-    dyad1_along = (1/2)*_tmp4*(dyad1_dsq + 363/200000)
-    dyad1_reach = (833/125000)*_tmp4 - dyad1_along**2
+    dyad1_along = 0.5*_tmp4*(dyad1_dsq + 0.001815)
+    dyad1_reach = 0.006664*_tmp4 - dyad1_along**2
     dyad1_across = numpy.sqrt(dyad1_reach)
     dyad1_bx = _tmp2*dyad1_along - _tmp3*dyad1_across + dyad1_ax
     dyad1_by = _tmp2*dyad1_across + _tmp3*dyad1_along + dyad1_ay
-    dyad1_margin = (250000/577031)*numpy.sqrt(164866)*dyad1_dsq*abs(dyad1_across)
-    dyad1_phi1 = numpy.arctan2((21/500)*dyad1_ax - 7/100*dyad1_ay - 21/500*dyad1_bx + (7/100)*dyad1_by, -7/100*dyad1_ax - 21/500*dyad1_ay + (7/100)*dyad1_bx + (21/500)*dyad1_by)
-    dyad1_phi2 = numpy.arctan2(-17/250*dyad1_bx - 3/200*dyad1_by + (17/250)*dyad1_cx + (3/200)*dyad1_cy, -3/200*dyad1_bx + (17/250)*dyad1_by + (3/200)*dyad1_cx - 17/250*dyad1_cy)
+    dyad1_margin = 175.91643435618488*dyad1_dsq*abs(dyad1_across)
+    dyad1_phi1 = numpy.arctan2(0.042*dyad1_ax - 0.07*dyad1_ay - 0.042*dyad1_bx + 0.07*dyad1_by, -0.07*dyad1_ax - 0.042*dyad1_ay + 0.07*dyad1_bx + 0.042*dyad1_by)
+    dyad1_phi2 = numpy.arctan2(-0.068*dyad1_bx - 0.015*dyad1_by + 0.068*dyad1_cx + 0.015*dyad1_cy, -0.015*dyad1_bx + 0.068*dyad1_by + 0.015*dyad1_cx - 0.068*dyad1_cy)
     return [
         dyad1_phi1 - theta_1,
         dyad1_phi2,
@@ -131,25 +131,25 @@ def _rigid(inputs, params):
 
 
 def _rigid_res(theta, params):
-    """rigid loop closure relative to the as-fabricated pose (50 operations)."""
+    """rigid loop closure relative to the as-fabricated pose (38 operations)."""
     theta_1, theta_2, theta_3, theta_4 = theta
     _tmp0 = theta_1 + theta_2
     _tmp1 = numpy.sin(theta_1)
     _tmp2 = numpy.sin(theta_3)
     _tmp3 = numpy.sin(_tmp0)
-    _tmp4 = (1/2)*theta_1
+    _tmp4 = 0.5*theta_1
     _tmp5 = numpy.sin(_tmp4)**2
-    _tmp6 = numpy.sin((1/2)*theta_3)**2
-    _tmp7 = numpy.sin(_tmp4 + (1/2)*theta_2)**2
+    _tmp6 = numpy.sin(0.5*theta_3)**2
+    _tmp7 = numpy.sin(_tmp4 + 0.5*theta_2)**2
     return [
         _tmp0 - theta_3 + theta_4,
-        -13/500*_tmp1 + (17/250)*_tmp2 - 21/500*_tmp3 - 3/100*_tmp5 - 3/100*_tmp6 - 7/50*_tmp7,
-        (3/200)*_tmp1 + (3/200)*_tmp2 + (7/100)*_tmp3 - 13/250*_tmp5 + (17/125)*_tmp6 - 21/250*_tmp7,
+        -0.026*_tmp1 + 0.068*_tmp2 - 0.042*_tmp3 - 0.03*_tmp5 - 0.03*_tmp6 - 0.14*_tmp7,
+        0.015*_tmp1 + 0.015*_tmp2 + 0.07*_tmp3 - 0.052*_tmp5 + 0.136*_tmp6 - 0.084*_tmp7,
     ]
 
 
 def _linear(theta, params):
-    """rigid loop Jacobian A and r = Phi dz (102 operations)."""
+    """rigid loop Jacobian A and r = Phi dz (92 operations)."""
     theta_1, theta_2, theta_3, theta_4 = theta
     p_0, = params
     _tmp0 = theta_1 + theta_2
@@ -157,149 +157,145 @@ def _linear(theta, params):
     _tmp2 = numpy.cos(_tmp0)
     _tmp3 = numpy.sin(theta_3)
     _tmp4 = numpy.cos(theta_3)
-    _tmp5 = (1/2)*theta_1
-    _tmp6 = (1/4)*p_0
+    _tmp5 = 0.5*theta_1
+    _tmp6 = 0.25*p_0
     _tmp7 = _tmp6*theta_1**2*arck(_tmp5)
     _tmp8 = theta_3**2
-    _tmp9 = (1/2)*theta_3
+    _tmp9 = 0.5*theta_3
     _tmp10 = arck(_tmp9)
-    _tmp11 = (1/2)*theta_4
-    _tmp12 = numpy.sin(_tmp11)
-    _tmp13 = theta_4**2
-    _tmp14 = arck(_tmp11)
-    _tmp15 = _tmp13*_tmp14*_tmp6
-    _tmp16 = _tmp1*_tmp15
-    _tmp17 = numpy.cos(_tmp11)
-    _tmp18 = numpy.sin(theta_1)
+    _tmp12 = theta_4**2
+    _tmp11 = 0.5*theta_4
+    _tmp13 = arck(_tmp11)
+    _tmp14 = _tmp12*_tmp13*_tmp6
+    _tmp15 = _tmp14*numpy.sin(_tmp11)
+    _tmp16 = numpy.cos(_tmp11)
+    _tmp17 = numpy.sin(theta_1)
+    _tmp18 = 0.5*theta_2
+    _tmp19 = numpy.sin(_tmp18)
     _tmp20 = theta_2**2
-    _tmp19 = (1/2)*theta_2
-    _tmp21 = arck(_tmp19)
-    _tmp22 = (1/8)*_tmp20*_tmp21*p_0
-    _tmp23 = _tmp22*numpy.sin(_tmp19)
-    _tmp24 = numpy.sqrt(3)
-    _tmp25 = numpy.cos(_tmp19)
-    _tmp26 = _tmp22*_tmp24*_tmp25 + _tmp23
-    _tmp27 = numpy.cos(theta_1)
-    _tmp28 = (1/8)*_tmp20*_tmp21*_tmp25*p_0 - _tmp23*_tmp24
+    _tmp21 = arck(_tmp18)
+    _tmp22 = _tmp20*_tmp21*p_0
+    _tmp23 = numpy.cos(_tmp18)
+    _tmp24 = 0.21650635094610965*_tmp22
+    _tmp25 = 0.125*_tmp19*_tmp22 + _tmp23*_tmp24
+    _tmp26 = numpy.cos(theta_1)
+    _tmp27 = -_tmp19*_tmp24 + 0.125*_tmp20*_tmp21*_tmp23*p_0
     return [
         1,
         -1,
         1,
-        -7/100*_tmp1 - 21/500*_tmp2,
-        -3/200*_tmp3 + (17/250)*_tmp4,
+        -0.07*_tmp1 - 0.042*_tmp2,
+        -0.015*_tmp3 + 0.068*_tmp4,
         0,
-        -21/500*_tmp1 + (7/100)*_tmp2,
-        (17/250)*_tmp3 + (3/200)*_tmp4,
+        -0.042*_tmp1 + 0.07*_tmp2,
+        0.068*_tmp3 + 0.015*_tmp4,
         0,
         0,
-        (1/4)*_tmp10*_tmp8*p_0*numpy.sin(_tmp9) - _tmp12*_tmp16 + (1/4)*_tmp13*_tmp14*_tmp17*_tmp2*p_0 - _tmp18*_tmp26 + _tmp27*_tmp28 - _tmp7*numpy.sin(_tmp5),
-        -_tmp10*_tmp6*_tmp8*numpy.cos(_tmp9) + _tmp12*_tmp15*_tmp2 + _tmp16*_tmp17 + _tmp18*_tmp28 + _tmp26*_tmp27 + _tmp7*numpy.cos(_tmp5),
+        -_tmp1*_tmp15 + 0.25*_tmp10*_tmp8*p_0*numpy.sin(_tmp9) + 0.25*_tmp12*_tmp13*_tmp16*_tmp2*p_0 - _tmp17*_tmp25 + _tmp26*_tmp27 - _tmp7*numpy.sin(_tmp5),
+        _tmp1*_tmp14*_tmp16 - _tmp10*_tmp6*_tmp8*numpy.cos(_tmp9) + _tmp15*_tmp2 + _tmp17*_tmp27 + _tmp25*_tmp26 + _tmp7*numpy.cos(_tmp5),
     ]
 
 
 def _newton(theta, delta, params):
-    """exact compliant closure F(delta) and dF/ddelta (269 operations)."""
+    """exact compliant closure F(delta) and dF/ddelta (259 operations)."""
     theta_1, theta_2, theta_3, theta_4 = theta
     delta_2, delta_3, delta_4 = delta
     p_0, = params
-    _tmp0 = (1/2)*theta_1
-    _tmp1 = (1/4)*p_0
+    _tmp0 = 0.5*theta_1
+    _tmp1 = 0.25*p_0
     _tmp2 = _tmp1*theta_1**2*arck(_tmp0)
     _tmp3 = numpy.sin(theta_3)
     _tmp4 = numpy.sin(delta_3)
-    _tmp5 = (1/2)*delta_3
+    _tmp5 = 0.5*delta_3
     _tmp6 = numpy.sin(_tmp5)**2
-    _tmp7 = (3/200)*_tmp4 + (17/125)*_tmp6
+    _tmp7 = 0.015*_tmp4 + 0.136*_tmp6
     _tmp8 = numpy.cos(theta_3)
-    _tmp9 = (17/250)*_tmp4 - 3/100*_tmp6
+    _tmp9 = 0.068*_tmp4 - 0.03*_tmp6
     _tmp10 = theta_1 + theta_2
     _tmp11 = numpy.sin(_tmp10)
     _tmp12 = numpy.sin(delta_2)
-    _tmp13 = (1/2)*delta_2
+    _tmp13 = 0.5*delta_2
     _tmp14 = numpy.sin(_tmp13)**2
-    _tmp15 = (7/100)*_tmp12 - 21/250*_tmp14
+    _tmp15 = 0.07*_tmp12 - 0.084*_tmp14
     _tmp16 = numpy.cos(_tmp10)
-    _tmp17 = -21/500*_tmp12 - 7/50*_tmp14
+    _tmp17 = -0.042*_tmp12 - 0.14*_tmp14
     _tmp18 = delta_3 + theta_3
     _tmp19 = _tmp18**2
-    _tmp20 = _tmp5 + (1/2)*theta_3
+    _tmp20 = _tmp5 + 0.5*theta_3
     _tmp21 = numpy.sin(_tmp20)
     _tmp22 = arck(_tmp20)
-    _tmp23 = (1/2)*delta_4 + (1/2)*theta_4
-    _tmp24 = arck(_tmp23)
-    _tmp29 = delta_4 + theta_4
-    _tmp30 = _tmp29**2
-    _tmp25 = numpy.sin(_tmp23)
-    _tmp26 = _tmp24*_tmp25
-    _tmp27 = _tmp10 + delta_2
-    _tmp28 = numpy.sin(_tmp27)
+    _tmp25 = 0.5*delta_4 + 0.5*theta_4
+    _tmp27 = arck(_tmp25)
+    _tmp28 = delta_4 + theta_4
+    _tmp29 = _tmp28**2
+    _tmp23 = _tmp10 + delta_2
+    _tmp24 = numpy.sin(_tmp23)
+    _tmp26 = numpy.sin(_tmp25)
+    _tmp30 = _tmp27*_tmp29
     _tmp31 = _tmp1*_tmp30
-    _tmp32 = _tmp28*_tmp31
-    _tmp33 = _tmp26*_tmp32
-    _tmp34 = numpy.cos(_tmp27)
-    _tmp35 = numpy.cos(_tmp23)
+    _tmp32 = _tmp26*_tmp31
+    _tmp33 = _tmp24*_tmp32
+    _tmp34 = numpy.cos(_tmp23)
+    _tmp35 = numpy.cos(_tmp25)
     _tmp36 = numpy.sin(theta_1)
-    _tmp37 = _tmp13 + (1/2)*theta_2
-    _tmp38 = numpy.sin(_tmp37)
-    _tmp39 = delta_2 + theta_2
-    _tmp40 = _tmp39**2
-    _tmp41 = arck(_tmp37)
-    _tmp42 = _tmp41*p_0
-    _tmp43 = _tmp40*_tmp42
-    _tmp44 = (1/8)*_tmp43
-    _tmp45 = _tmp38*_tmp44
-    _tmp46 = numpy.sqrt(3)
-    _tmp47 = numpy.cos(_tmp37)
-    _tmp48 = _tmp44*_tmp47
-    _tmp49 = _tmp45 + _tmp46*_tmp48
-    _tmp50 = numpy.cos(theta_1)
-    _tmp51 = (1/8)*_tmp40*_tmp41*_tmp47*p_0 - _tmp45*_tmp46
-    _tmp52 = numpy.cos(_tmp20)
-    _tmp53 = _tmp22*_tmp52
-    _tmp54 = _tmp24*_tmp35
-    _tmp55 = _tmp31*_tmp34
-    _tmp56 = _tmp26*_tmp55 + _tmp32*_tmp54
-    _tmp57 = _tmp39*_tmp42
-    _tmp58 = (1/4)*_tmp57
-    _tmp59 = _tmp39**3*p_0*(3*cosr2(_tmp37) + sinr1(_tmp37) - 3*sinr2(_tmp37))
-    _tmp60 = (1/2)*_tmp57
-    _tmp61 = _tmp47*_tmp59
-    _tmp62 = (1/2)*_tmp46
-    _tmp63 = _tmp38*_tmp58 + (1/32)*_tmp38*_tmp59 + (1/16)*_tmp43*_tmp47 + _tmp62*(-_tmp45 + _tmp47*_tmp60 + (1/16)*_tmp61)
-    _tmp64 = (1/16)*_tmp38
-    _tmp65 = -_tmp43*_tmp64 + _tmp47*_tmp58 + (1/32)*_tmp61 - _tmp62*(_tmp38*_tmp60 + _tmp48 + _tmp59*_tmp64)
-    _tmp66 = numpy.sin(_tmp18)
-    _tmp67 = numpy.cos(_tmp18)
-    _tmp68 = _tmp21*_tmp22
-    _tmp69 = (1/2)*p_0
-    _tmp70 = _tmp18*_tmp69
-    _tmp71 = (1/8)*p_0
-    _tmp72 = _tmp19*_tmp71
-    _tmp73 = (1/16)*p_0
-    _tmp74 = _tmp18**3*_tmp73*(3*cosr2(_tmp20) + sinr1(_tmp20) - 3*sinr2(_tmp20))
-    _tmp75 = _tmp29*_tmp69
-    _tmp76 = _tmp30*_tmp71
-    _tmp77 = _tmp29**3*_tmp73*(3*cosr2(_tmp23) + sinr1(_tmp23) - 3*sinr2(_tmp23))
-    _tmp78 = _tmp25*_tmp77 + _tmp26*_tmp75 + _tmp54*_tmp76
-    _tmp79 = -_tmp26*_tmp76 + _tmp35*_tmp77 + _tmp54*_tmp75
+    _tmp37 = delta_2 + theta_2
+    _tmp38 = _tmp37**2
+    _tmp39 = _tmp13 + 0.5*theta_2
+    _tmp40 = arck(_tmp39)
+    _tmp41 = _tmp38*_tmp40
+    _tmp42 = p_0*numpy.sin(_tmp39)
+    _tmp43 = numpy.cos(_tmp39)
+    _tmp44 = _tmp43*p_0
+    _tmp45 = 0.21650635094610965*_tmp41
+    _tmp46 = 0.125*_tmp41*_tmp42 + _tmp44*_tmp45
+    _tmp47 = numpy.cos(theta_1)
+    _tmp48 = 0.125*_tmp38*_tmp40*_tmp43*p_0 - _tmp42*_tmp45
+    _tmp49 = numpy.cos(_tmp20)
+    _tmp50 = _tmp19*_tmp22
+    _tmp51 = _tmp31*_tmp35
+    _tmp52 = _tmp24*_tmp51 + _tmp32*_tmp34
+    _tmp53 = _tmp37*_tmp40
+    _tmp54 = 0.4330127018922193*_tmp53
+    _tmp55 = 0.10825317547305482*_tmp41
+    _tmp56 = 0.0625*_tmp41
+    _tmp57 = _tmp37**3
+    _tmp58 = 3*cosr2(_tmp39) + sinr1(_tmp39) - 3*sinr2(_tmp39)
+    _tmp59 = _tmp57*_tmp58
+    _tmp60 = 0.05412658773652741*_tmp59
+    _tmp61 = 0.25*_tmp42*_tmp53 - _tmp42*_tmp55 + 0.03125*_tmp42*_tmp59 + _tmp44*_tmp54 + _tmp44*_tmp56 + _tmp44*_tmp60
+    _tmp62 = 0.25*_tmp37*_tmp40*_tmp43*p_0 - _tmp42*_tmp54 - _tmp42*_tmp56 - _tmp42*_tmp60 + 0.03125*_tmp43*_tmp57*_tmp58*p_0 - _tmp44*_tmp55
+    _tmp63 = numpy.sin(_tmp18)
+    _tmp64 = numpy.cos(_tmp18)
+    _tmp65 = _tmp21*p_0
+    _tmp66 = 0.5*_tmp18*_tmp22
+    _tmp67 = 0.125*p_0
+    _tmp68 = 0.0625*_tmp18**3*(3*cosr2(_tmp20) + sinr1(_tmp20) - 3*sinr2(_tmp20))
+    _tmp69 = 0.5*_tmp27*_tmp28
+    _tmp70 = _tmp26*p_0
+    _tmp71 = _tmp30*_tmp67
+    _tmp72 = 0.0625*_tmp28**3*(3*cosr2(_tmp25) + sinr1(_tmp25) - 3*sinr2(_tmp25))
+    _tmp73 = _tmp35*_tmp71 + _tmp69*_tmp70 + _tmp70*_tmp72
+    _tmp74 = _tmp35*p_0
+    _tmp75 = -_tmp26*_tmp71 + _tmp69*_tmp74 + _tmp72*_tmp74
+    _tmp76 = _tmp49*p_0
     return [
         delta_2 - delta_3 + delta_4,
-        -_tmp11*_tmp15 + _tmp16*_tmp17 + (1/4)*_tmp19*_tmp21*_tmp22*p_0 - _tmp2*numpy.sin(_tmp0) + (1/4)*_tmp24*_tmp30*_tmp34*_tmp35*p_0 - _tmp3*_tmp7 - _tmp33 - _tmp36*_tmp49 + _tmp50*_tmp51 + _tmp8*_tmp9,
-        -_tmp1*_tmp19*_tmp53 + _tmp11*_tmp17 + _tmp15*_tmp16 + _tmp2*numpy.cos(_tmp0) + _tmp3*_tmp9 + _tmp36*_tmp51 + _tmp49*_tmp50 + _tmp56 + _tmp7*_tmp8,
+        -_tmp11*_tmp15 + _tmp16*_tmp17 + 0.25*_tmp19*_tmp21*_tmp22*p_0 - _tmp2*numpy.sin(_tmp0) + 0.25*_tmp27*_tmp29*_tmp34*_tmp35*p_0 - _tmp3*_tmp7 - _tmp33 - _tmp36*_tmp46 + _tmp47*_tmp48 + _tmp8*_tmp9,
+        -_tmp1*_tmp49*_tmp50 + _tmp11*_tmp17 + _tmp15*_tmp16 + _tmp2*numpy.cos(_tmp0) + _tmp3*_tmp9 + _tmp36*_tmp48 + _tmp46*_tmp47 + _tmp52 + _tmp7*_tmp8,
         1,
         -1,
         1,
-        -7/100*_tmp28 - 21/500*_tmp34 - _tmp36*_tmp63 + _tmp50*_tmp65 - _tmp56,
-        _tmp21*_tmp74 + _tmp53*_tmp72 - 3/200*_tmp66 + (17/250)*_tmp67 + _tmp68*_tmp70,
-        -_tmp28*_tmp78 + _tmp34*_tmp79,
-        -21/500*_tmp28 - _tmp33 + (7/100)*_tmp34 + _tmp36*_tmp65 + _tmp50*_tmp63 + _tmp54*_tmp55,
-        -_tmp52*_tmp74 - _tmp53*_tmp70 + (17/250)*_tmp66 + (3/200)*_tmp67 + _tmp68*_tmp72,
-        _tmp28*_tmp79 + _tmp34*_tmp78,
+        -0.07*_tmp24 - 0.042*_tmp34 - _tmp36*_tmp61 + _tmp47*_tmp62 - _tmp52,
+        _tmp49*_tmp50*_tmp67 - 0.015*_tmp63 + 0.068*_tmp64 + _tmp65*_tmp66 + _tmp65*_tmp68,
+        -_tmp24*_tmp73 + _tmp34*_tmp75,
+        -0.042*_tmp24 - _tmp33 + _tmp34*_tmp51 + 0.07*_tmp34 + _tmp36*_tmp62 + _tmp47*_tmp61,
+        0.125*_tmp50*_tmp65 + 0.068*_tmp63 + 0.015*_tmp64 - _tmp66*_tmp76 - _tmp68*_tmp76,
+        _tmp24*_tmp75 + _tmp34*_tmp73,
     ]
 
 
 def _rigid_points(theta, params):
-    """rigid positions of the points (27 operations)."""
+    """rigid positions of the points (19 operations)."""
     theta_1, theta_2, _, _ = theta
     _tmp0 = numpy.sin(theta_1)
     _tmp1 = numpy.cos(theta_1)
@@ -307,28 +303,28 @@ def _rigid_points(theta, params):
     _tmp3 = numpy.sin(_tmp2)
     _tmp4 = numpy.cos(_tmp2)
     return [
-        -13/500*_tmp0 + (3/200)*_tmp1 - 8/125*_tmp3 + (9/200)*_tmp4,
-        (3/200)*_tmp0 + (13/500)*_tmp1 + (9/200)*_tmp3 + (8/125)*_tmp4,
+        -0.026*_tmp0 + 0.015*_tmp1 - 0.064*_tmp3 + 0.045*_tmp4,
+        0.015*_tmp0 + 0.026*_tmp1 + 0.045*_tmp3 + 0.064*_tmp4,
     ]
 
 
 def _dev_paper(theta, params):
-    """deviation of the points at level paper (40 operations)."""
+    """deviation of the points at level paper (38 operations)."""
     theta_1, theta_2, _, _ = theta
     p_0, = params
-    _tmp0 = (1/2)*theta_1
-    _tmp1 = (1/4)*p_0*theta_1**2*arck(_tmp0)
+    _tmp0 = 0.5*theta_1
+    _tmp1 = 0.25*p_0*theta_1**2*arck(_tmp0)
     _tmp2 = numpy.sin(theta_1)
-    _tmp4 = theta_2**2
-    _tmp3 = (1/2)*theta_2
-    _tmp5 = arck(_tmp3)
-    _tmp6 = (1/8)*_tmp4*_tmp5*p_0
-    _tmp7 = _tmp6*numpy.sin(_tmp3)
-    _tmp8 = numpy.sqrt(3)
-    _tmp9 = numpy.cos(_tmp3)
-    _tmp10 = _tmp6*_tmp8*_tmp9 + _tmp7
+    _tmp3 = 0.5*theta_2
+    _tmp4 = numpy.sin(_tmp3)
+    _tmp5 = theta_2**2
+    _tmp6 = arck(_tmp3)
+    _tmp7 = _tmp5*_tmp6*p_0
+    _tmp8 = numpy.cos(_tmp3)
+    _tmp9 = 0.21650635094610965*_tmp7
+    _tmp10 = 0.125*_tmp4*_tmp7 + _tmp8*_tmp9
     _tmp11 = numpy.cos(theta_1)
-    _tmp12 = (1/8)*_tmp4*_tmp5*_tmp9*p_0 - _tmp7*_tmp8
+    _tmp12 = -_tmp4*_tmp9 + 0.125*_tmp5*_tmp6*_tmp8*p_0
     return [
         -_tmp1*numpy.sin(_tmp0) - _tmp10*_tmp2 + _tmp11*_tmp12,
         _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp11 + _tmp12*_tmp2,
@@ -336,58 +332,58 @@ def _dev_paper(theta, params):
 
 
 def _dev_first_order(theta, delta, params):
-    """deviation of the points at level first_order (58 operations)."""
+    """deviation of the points at level first_order (52 operations)."""
     theta_1, theta_2, _, _ = theta
     delta_2, _, _ = delta
     p_0, = params
-    _tmp0 = (1/2)*theta_1
-    _tmp1 = (1/4)*p_0*theta_1**2*arck(_tmp0)
+    _tmp0 = 0.5*theta_1
+    _tmp1 = 0.25*p_0*theta_1**2*arck(_tmp0)
     _tmp2 = theta_1 + theta_2
     _tmp3 = numpy.sin(_tmp2)
     _tmp4 = numpy.cos(_tmp2)
     _tmp5 = numpy.cos(theta_1)
-    _tmp6 = theta_2**2
-    _tmp7 = (1/2)*theta_2
-    _tmp8 = numpy.cos(_tmp7)
-    _tmp9 = arck(_tmp7)
-    _tmp10 = numpy.sqrt(3)
-    _tmp11 = (1/8)*_tmp6*_tmp9*p_0
-    _tmp12 = _tmp11*numpy.sin(_tmp7)
-    _tmp13 = -_tmp10*_tmp12 + (1/8)*_tmp6*_tmp8*_tmp9*p_0
+    _tmp6 = 0.5*theta_2
+    _tmp7 = numpy.sin(_tmp6)
+    _tmp8 = theta_2**2
+    _tmp9 = arck(_tmp6)
+    _tmp10 = _tmp8*_tmp9*p_0
+    _tmp11 = 0.21650635094610965*_tmp10
+    _tmp12 = numpy.cos(_tmp6)
+    _tmp13 = -_tmp11*_tmp7 + 0.125*_tmp12*_tmp8*_tmp9*p_0
     _tmp14 = numpy.sin(theta_1)
-    _tmp15 = _tmp10*_tmp11*_tmp8 + _tmp12
+    _tmp15 = 0.125*_tmp10*_tmp7 + _tmp11*_tmp12
     return [
-        -_tmp1*numpy.sin(_tmp0) + _tmp13*_tmp5 - _tmp14*_tmp15 + delta_2*(-9/200*_tmp3 - 8/125*_tmp4),
-        _tmp1*numpy.cos(_tmp0) + _tmp13*_tmp14 + _tmp15*_tmp5 + delta_2*(-8/125*_tmp3 + (9/200)*_tmp4),
+        -_tmp1*numpy.sin(_tmp0) + _tmp13*_tmp5 - _tmp14*_tmp15 + delta_2*(-0.045*_tmp3 - 0.064*_tmp4),
+        _tmp1*numpy.cos(_tmp0) + _tmp13*_tmp14 + _tmp15*_tmp5 + delta_2*(-0.064*_tmp3 + 0.045*_tmp4),
     ]
 
 
 def _dev_exact(theta, delta, params):
-    """deviation of the points at level exact (68 operations)."""
+    """deviation of the points at level exact (62 operations)."""
     theta_1, theta_2, _, _ = theta
     delta_2, _, _ = delta
     p_0, = params
-    _tmp0 = (1/2)*theta_1
-    _tmp1 = (1/4)*p_0*theta_1**2*arck(_tmp0)
+    _tmp0 = 0.5*theta_1
+    _tmp1 = 0.25*p_0*theta_1**2*arck(_tmp0)
     _tmp2 = theta_1 + theta_2
     _tmp3 = numpy.sin(_tmp2)
     _tmp4 = numpy.sin(delta_2)
-    _tmp5 = (1/2)*delta_2
+    _tmp5 = 0.5*delta_2
     _tmp6 = numpy.sin(_tmp5)**2
-    _tmp7 = (9/200)*_tmp4 - 16/125*_tmp6
+    _tmp7 = 0.045*_tmp4 - 0.128*_tmp6
     _tmp8 = numpy.cos(_tmp2)
-    _tmp9 = -8/125*_tmp4 - 9/100*_tmp6
+    _tmp9 = -0.064*_tmp4 - 0.09*_tmp6
     _tmp10 = numpy.sin(theta_1)
-    _tmp12 = (delta_2 + theta_2)**2
-    _tmp11 = _tmp5 + (1/2)*theta_2
-    _tmp13 = arck(_tmp11)
-    _tmp14 = (1/8)*_tmp12*_tmp13*p_0
-    _tmp15 = _tmp14*numpy.sin(_tmp11)
-    _tmp16 = numpy.sqrt(3)
-    _tmp17 = numpy.cos(_tmp11)
-    _tmp18 = _tmp14*_tmp16*_tmp17 + _tmp15
+    _tmp11 = _tmp5 + 0.5*theta_2
+    _tmp12 = numpy.sin(_tmp11)
+    _tmp13 = (delta_2 + theta_2)**2
+    _tmp14 = arck(_tmp11)
+    _tmp15 = _tmp13*_tmp14*p_0
+    _tmp16 = numpy.cos(_tmp11)
+    _tmp17 = 0.21650635094610965*_tmp15
+    _tmp18 = 0.125*_tmp12*_tmp15 + _tmp16*_tmp17
     _tmp19 = numpy.cos(theta_1)
-    _tmp20 = (1/8)*_tmp12*_tmp13*_tmp17*p_0 - _tmp15*_tmp16
+    _tmp20 = -_tmp12*_tmp17 + 0.125*_tmp13*_tmp14*_tmp16*p_0
     return [
         -_tmp1*numpy.sin(_tmp0) - _tmp10*_tmp18 + _tmp19*_tmp20 - _tmp3*_tmp7 + _tmp8*_tmp9,
         _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp20 + _tmp18*_tmp19 + _tmp3*_tmp9 + _tmp7*_tmp8,

@@ -3,7 +3,7 @@
  * Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
  * Points: F; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 178, rigid_res 121, linear 224, rigid_points 19, dev_paper 33, dev_first_order 33, dev_exact 33.
+ * Operation counts after CSE: rigid 158, rigid_res 114, linear 222, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33.
  */
 #include "nine_bar_platform.h"
 
@@ -67,7 +67,7 @@ static double symkin_arck(double x)
     return b;
 }
 
-/* closed-form rigid solution (dyads) (178 operations) */
+/* closed-form rigid solution (dyads) (158 operations) */
 static void sk_rigid(const double *inputs, const double *params, double *out)
 {
     (void)params;
@@ -77,49 +77,49 @@ static void sk_rigid(const double *inputs, const double *params, double *out)
     const double theta_4 = inputs[3];
     const double _tmp0 = theta_1 + theta_2;
     const double _tmp1 = _tmp0 + theta_3;
-    const double _tmp2 = sin(_tmp1);
-    const double _tmp3 = cos(_tmp1);
-    const double _tmp4 = _tmp1 + theta_4;
-    const double _tmp5 = cos(_tmp4);
-    const double _tmp6 = sin(_tmp4);
-    const double _tmp7 = sin(_tmp0);
-    const double _tmp8 = cos(_tmp0);
-    const double _tmp9 = -1.0/50.0*_tmp7 + (1.0/20.0)*_tmp8 - 3.0/50.0*sin(theta_1);
-    const double dyad1_ax = -1.0/100.0*_tmp2 + (1.0/20.0)*_tmp3 + (1.0/20.0)*_tmp5 + (1.0/50.0)*_tmp6 + _tmp9;
-    const double _tmp10 = (1.0/20.0)*_tmp7 + (1.0/50.0)*_tmp8 + (3.0/50.0)*cos(theta_1);
-    const double dyad1_ay = _tmp10 + (1.0/20.0)*_tmp2 + (1.0/100.0)*_tmp3 - 1.0/50.0*_tmp5 + (1.0/20.0)*_tmp6;
-    const double dyad1_cx = 4.0/25.0;
+    const double _tmp2 = cos(_tmp1);
+    const double _tmp3 = _tmp1 + theta_4;
+    const double _tmp4 = cos(_tmp3);
+    const double _tmp5 = sin(_tmp3);
+    const double _tmp6 = sin(_tmp1);
+    const double _tmp7 = cos(_tmp0);
+    const double _tmp8 = sin(_tmp0);
+    const double _tmp9 = 0.05*_tmp7 - 0.02*_tmp8 - 0.06*sin(theta_1);
+    const double dyad1_ax = 0.05*_tmp2 + 0.05*_tmp4 + 0.02*_tmp5 - 0.01*_tmp6 + _tmp9;
+    const double _tmp10 = 0.02*_tmp7 + 0.05*_tmp8 + 0.06*cos(theta_1);
+    const double dyad1_ay = _tmp10 + 0.01*_tmp2 - 0.02*_tmp4 + 0.05*_tmp5 + 0.05*_tmp6;
+    const double dyad1_cx = 0.16;
     const double dyad1_cy = 0;
     const double _tmp11 = -dyad1_ax + dyad1_cx;
     const double _tmp12 = -dyad1_ay + dyad1_cy;
     const double dyad1_dsq = pow(_tmp11, 2) + pow(_tmp12, 2);
     const double _tmp13 = 1.0/dyad1_dsq;
-    const double dyad1_along = (1.0/2.0)*_tmp13*(dyad1_dsq - 3.0/2500.0);
-    const double dyad1_reach = (29.0/10000.0)*_tmp13 - pow(dyad1_along, 2);
+    const double dyad1_along = 0.5*_tmp13*(dyad1_dsq - 0.0012);
+    const double dyad1_reach = 0.0029*_tmp13 - pow(dyad1_along, 2);
     const double dyad1_across = sqrt(dyad1_reach);
     const double dyad1_bx = _tmp11*dyad1_along - _tmp12*dyad1_across + dyad1_ax;
     const double dyad1_by = _tmp11*dyad1_across + _tmp12*dyad1_along + dyad1_ay;
-    const double dyad1_margin = (10000.0/1189.0)*sqrt(1189)*dyad1_dsq*fabs(dyad1_across);
-    const double _tmp14 = (1.0/20.0)*dyad1_bx;
-    const double dyad1_phi1 = atan2(-1.0/50.0*dyad1_ax - 1.0/20.0*dyad1_ay + (1.0/50.0)*dyad1_bx + (1.0/20.0)*dyad1_by, _tmp14 - 1.0/20.0*dyad1_ax + (1.0/50.0)*dyad1_ay - 1.0/50.0*dyad1_by);
-    const double dyad1_phi2 = atan2(-_tmp14 + (1.0/25.0)*dyad1_by + (1.0/20.0)*dyad1_cx - 1.0/25.0*dyad1_cy, (1.0/25.0)*dyad1_bx + (1.0/20.0)*dyad1_by - 1.0/25.0*dyad1_cx - 1.0/20.0*dyad1_cy);
-    const double dyad2_ax = (1.0/25.0)*_tmp2 + (1.0/50.0)*_tmp3 + _tmp9;
-    const double dyad2_ay = _tmp10 + (1.0/50.0)*_tmp2 - 1.0/25.0*_tmp3;
-    const double dyad2_cx = 17.0/200.0;
+    const double dyad1_margin = 290.0073952828708*dyad1_dsq*fabs(dyad1_across);
+    const double _tmp14 = 0.05*dyad1_bx;
+    const double dyad1_phi1 = atan2(-0.02*dyad1_ax - 0.05*dyad1_ay + 0.02*dyad1_bx + 0.05*dyad1_by, _tmp14 - 0.05*dyad1_ax + 0.02*dyad1_ay - 0.02*dyad1_by);
+    const double dyad1_phi2 = atan2(-_tmp14 + 0.04*dyad1_by + 0.05*dyad1_cx - 0.04*dyad1_cy, 0.04*dyad1_bx + 0.05*dyad1_by - 0.04*dyad1_cx - 0.05*dyad1_cy);
+    const double dyad2_ax = 0.02*_tmp2 + 0.04*_tmp6 + _tmp9;
+    const double dyad2_ay = _tmp10 - 0.04*_tmp2 + 0.02*_tmp6;
+    const double dyad2_cx = 0.085;
     const double dyad2_cy = 0;
     const double _tmp15 = -dyad2_ax + dyad2_cx;
     const double _tmp16 = -dyad2_ay + dyad2_cy;
     const double dyad2_dsq = pow(_tmp15, 2) + pow(_tmp16, 2);
     const double _tmp17 = 1.0/dyad2_dsq;
-    const double dyad2_along = (1.0/2.0)*_tmp17*(dyad2_dsq - 9.0/40000.0);
-    const double dyad2_reach = (13.0/8000.0)*_tmp17 - pow(dyad2_along, 2);
+    const double dyad2_along = 0.5*_tmp17*(dyad2_dsq - 0.000225);
+    const double dyad2_reach = 0.001625*_tmp17 - pow(dyad2_along, 2);
     const double dyad2_across = sqrt(dyad2_reach);
     const double dyad2_bx = _tmp15*dyad2_along - _tmp16*dyad2_across + dyad2_ax;
     const double dyad2_by = _tmp15*dyad2_across + _tmp16*dyad2_along + dyad2_ay;
-    const double dyad2_margin = (4000.0/481.0)*sqrt(4810)*dyad2_dsq*fabs(dyad2_across);
-    const double dyad2_phi1 = atan2(-1.0/200.0*dyad2_ax - 1.0/25.0*dyad2_ay + (1.0/200.0)*dyad2_bx + (1.0/25.0)*dyad2_by, -1.0/25.0*dyad2_ax + (1.0/200.0)*dyad2_ay + (1.0/25.0)*dyad2_bx - 1.0/200.0*dyad2_by);
-    const double dyad2_phi2 = atan2(-7.0/200.0*dyad2_bx + (1.0/40.0)*dyad2_by + (7.0/200.0)*dyad2_cx - 1.0/40.0*dyad2_cy, (1.0/40.0)*dyad2_bx + (7.0/200.0)*dyad2_by - 1.0/40.0*dyad2_cx - 7.0/200.0*dyad2_cy);
-    out[0] = -_tmp4 + dyad1_phi1;
+    const double dyad2_margin = 576.7498007284725*dyad2_dsq*fabs(dyad2_across);
+    const double dyad2_phi1 = atan2(-0.005*dyad2_ax - 0.04*dyad2_ay + 0.005*dyad2_bx + 0.04*dyad2_by, -0.04*dyad2_ax + 0.005*dyad2_ay + 0.04*dyad2_bx - 0.005*dyad2_by);
+    const double dyad2_phi2 = atan2(-0.035*dyad2_bx + 0.025*dyad2_by + 0.035*dyad2_cx - 0.025*dyad2_cy, 0.025*dyad2_bx + 0.035*dyad2_by - 0.025*dyad2_cx - 0.035*dyad2_cy);
+    out[0] = -_tmp3 + dyad1_phi1;
     out[1] = -dyad1_phi1 + dyad1_phi2;
     out[2] = -_tmp1 + dyad2_phi1;
     out[3] = -dyad2_phi1 + dyad2_phi2;
@@ -131,7 +131,7 @@ static void sk_rigid(const double *inputs, const double *params, double *out)
     out[9] = dyad2_margin;
 }
 
-/* rigid loop closure relative to the as-fabricated pose (121 operations) */
+/* rigid loop closure relative to the as-fabricated pose (114 operations) */
 static void sk_rigid_res(const double *theta, const double *params, double *out)
 {
     (void)params;
@@ -150,39 +150,39 @@ static void sk_rigid_res(const double *theta, const double *params, double *out)
     const double _tmp2 = _tmp1 + theta_4;
     const double _tmp3 = _tmp2 + theta_5;
     const double _tmp4 = _tmp3 + theta_6;
-    const double _tmp5 = (1.0/2.0)*theta_1;
-    const double _tmp6 = _tmp5 + (1.0/2.0)*theta_2;
-    const double _tmp7 = _tmp6 + (1.0/2.0)*theta_3;
-    const double _tmp8 = _tmp7 + (1.0/2.0)*theta_4;
-    const double _tmp9 = _tmp8 + (1.0/2.0)*theta_5;
-    const double _tmp10 = pow(sin(_tmp9 + (1.0/2.0)*theta_6), 2);
-    const double _tmp11 = sin(_tmp4);
-    const double _tmp12 = sin(_tmp2);
-    const double _tmp13 = sin(_tmp3);
-    const double _tmp14 = pow(sin(_tmp7), 2);
-    const double _tmp15 = pow(sin(_tmp8), 2);
-    const double _tmp16 = pow(sin(_tmp9), 2);
-    const double _tmp17 = sin(_tmp1);
+    const double _tmp5 = 0.5*theta_1;
+    const double _tmp6 = _tmp5 + 0.5*theta_2;
+    const double _tmp7 = _tmp6 + 0.5*theta_3;
+    const double _tmp8 = pow(sin(_tmp7), 2);
+    const double _tmp9 = _tmp7 + 0.5*theta_4;
+    const double _tmp10 = pow(sin(_tmp9), 2);
+    const double _tmp11 = _tmp9 + 0.5*theta_5;
+    const double _tmp12 = pow(sin(_tmp11), 2);
+    const double _tmp13 = sin(_tmp1);
+    const double _tmp14 = sin(_tmp4);
+    const double _tmp15 = sin(_tmp2);
+    const double _tmp16 = sin(_tmp3);
+    const double _tmp17 = pow(sin(_tmp11 + 0.5*theta_6), 2);
     const double _tmp18 = pow(sin(_tmp6), 2);
     const double _tmp19 = sin(_tmp0);
-    const double _tmp20 = (1.0/10.0)*_tmp18 + (1.0/50.0)*_tmp19 + (3.0/50.0)*sin(theta_1);
-    const double _tmp21 = -1.0/25.0*_tmp18 + (1.0/20.0)*_tmp19 - 3.0/25.0*pow(sin(_tmp5), 2);
+    const double _tmp20 = 0.1*_tmp18 + 0.02*_tmp19 + 0.06*sin(theta_1);
+    const double _tmp21 = -0.04*_tmp18 + 0.05*_tmp19 - 0.12*pow(sin(_tmp5), 2);
     const double _tmp22 = _tmp1 + theta_7;
     const double _tmp23 = _tmp22 + theta_8;
-    const double _tmp24 = sin(_tmp23);
-    const double _tmp25 = _tmp7 + (1.0/2.0)*theta_7;
-    const double _tmp26 = pow(sin(_tmp25 + (1.0/2.0)*theta_8), 2);
-    const double _tmp27 = sin(_tmp22);
-    const double _tmp28 = pow(sin(_tmp25), 2);
+    const double _tmp24 = _tmp7 + 0.5*theta_7;
+    const double _tmp25 = pow(sin(_tmp24), 2);
+    const double _tmp26 = sin(_tmp23);
+    const double _tmp27 = pow(sin(_tmp24 + 0.5*theta_8), 2);
+    const double _tmp28 = sin(_tmp22);
     out[0] = -_tmp4 + theta_9;
-    out[1] = -2.0/25.0*_tmp10 - 1.0/20.0*_tmp11 - 1.0/50.0*_tmp12 - 1.0/50.0*_tmp13 + (1.0/10.0)*_tmp14 + (1.0/10.0)*_tmp15 + (1.0/10.0)*_tmp16 + (1.0/100.0)*_tmp17 + _tmp20;
-    out[2] = -1.0/10.0*_tmp10 + (1.0/25.0)*_tmp11 - 1.0/20.0*_tmp12 - 1.0/20.0*_tmp13 + (1.0/50.0)*_tmp14 - 1.0/25.0*_tmp15 - 1.0/25.0*_tmp16 - 1.0/20.0*_tmp17 - _tmp21;
+    out[1] = 0.1*_tmp10 + 0.1*_tmp12 + 0.01*_tmp13 - 0.05*_tmp14 - 0.02*_tmp15 - 0.02*_tmp16 - 0.08*_tmp17 + _tmp20 + 0.1*_tmp8;
+    out[2] = -0.04*_tmp10 - 0.04*_tmp12 - 0.05*_tmp13 + 0.04*_tmp14 - 0.05*_tmp15 - 0.05*_tmp16 - 0.1*_tmp17 - _tmp21 + 0.02*_tmp8;
     out[3] = -_tmp23 + theta_10;
-    out[4] = (1.0/25.0)*_tmp14 - 1.0/25.0*_tmp17 + _tmp20 - 7.0/200.0*_tmp24 - 1.0/20.0*_tmp26 - 1.0/200.0*_tmp27 + (2.0/25.0)*_tmp28;
-    out[5] = -2.0/25.0*_tmp14 - 1.0/50.0*_tmp17 - _tmp21 + (1.0/40.0)*_tmp24 - 7.0/100.0*_tmp26 - 1.0/25.0*_tmp27 - 1.0/100.0*_tmp28;
+    out[4] = -0.04*_tmp13 + _tmp20 + 0.08*_tmp25 - 0.035*_tmp26 - 0.05*_tmp27 - 0.005*_tmp28 + 0.04*_tmp8;
+    out[5] = -0.02*_tmp13 - _tmp21 - 0.01*_tmp25 + 0.025*_tmp26 - 0.07*_tmp27 - 0.04*_tmp28 - 0.08*_tmp8;
 }
 
-/* rigid loop Jacobian A and r = Phi dz (224 operations) */
+/* rigid loop Jacobian A and r = Phi dz (222 operations) */
 static void sk_linear(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -200,83 +200,90 @@ static void sk_linear(const double *theta, const double *params, double *out)
     const double _tmp1 = _tmp0 + theta_3;
     const double _tmp2 = _tmp1 + theta_4;
     const double _tmp3 = _tmp2 + theta_5;
-    const double _tmp4 = sin(_tmp3);
-    const double _tmp5 = cos(_tmp3);
+    const double _tmp4 = cos(_tmp3);
+    const double _tmp5 = sin(_tmp3);
     const double _tmp6 = _tmp3 + theta_6;
     const double _tmp7 = sin(_tmp6);
     const double _tmp8 = cos(_tmp6);
-    const double _tmp9 = (1.0/25.0)*_tmp7 + (1.0/20.0)*_tmp8;
-    const double _tmp10 = (1.0/20.0)*_tmp7 - 1.0/25.0*_tmp8;
+    const double _tmp9 = 0.04*_tmp7 + 0.05*_tmp8;
+    const double _tmp10 = 0.05*_tmp7 - 0.04*_tmp8;
     const double _tmp11 = _tmp1 + theta_7;
-    const double _tmp12 = sin(_tmp11);
-    const double _tmp13 = cos(_tmp11);
+    const double _tmp12 = cos(_tmp11);
+    const double _tmp13 = sin(_tmp11);
     const double _tmp14 = _tmp11 + theta_8;
     const double _tmp15 = sin(_tmp14);
     const double _tmp16 = cos(_tmp14);
-    const double _tmp17 = (1.0/40.0)*_tmp15 + (7.0/200.0)*_tmp16;
-    const double _tmp18 = (7.0/200.0)*_tmp15 - 1.0/40.0*_tmp16;
-    const double _tmp19 = (1.0/2.0)*theta_9;
+    const double _tmp17 = 0.025*_tmp15 + 0.035*_tmp16;
+    const double _tmp18 = 0.035*_tmp15 - 0.025*_tmp16;
+    const double _tmp19 = 0.5*theta_9;
     const double _tmp20 = pow(theta_9, 2);
     const double _tmp21 = symkin_arck(_tmp19);
-    const double _tmp22 = (1.0/4.0)*p_0;
-    const double _tmp23 = _tmp22*cos(_tmp1);
-    const double _tmp24 = (1.0/2.0)*theta_4;
-    const double _tmp25 = pow(theta_4, 2)*symkin_arck(_tmp24);
-    const double _tmp26 = _tmp25*cos(_tmp24);
-    const double _tmp27 = cos(_tmp2);
-    const double _tmp28 = (1.0/2.0)*theta_5;
-    const double _tmp29 = _tmp22*pow(theta_5, 2)*symkin_arck(_tmp28);
-    const double _tmp30 = _tmp29*cos(_tmp28);
-    const double _tmp31 = _tmp22*sin(_tmp1);
-    const double _tmp32 = _tmp25*sin(_tmp24);
-    const double _tmp33 = sin(_tmp2);
-    const double _tmp34 = _tmp29*sin(_tmp28);
-    const double _tmp36 = pow(theta_6, 2);
-    const double _tmp35 = (1.0/2.0)*theta_6;
-    const double _tmp37 = symkin_arck(_tmp35);
-    const double _tmp38 = _tmp22*_tmp36*_tmp37;
-    const double _tmp39 = _tmp38*cos(_tmp35);
-    const double _tmp40 = sin(_tmp35);
-    const double _tmp41 = (1.0/2.0)*theta_1;
-    const double _tmp42 = _tmp22*pow(theta_1, 2)*symkin_arck(_tmp41);
-    const double _tmp43 = (1.0/2.0)*theta_2;
-    const double _tmp44 = cos(_tmp43);
-    const double _tmp45 = _tmp22*pow(theta_2, 2)*symkin_arck(_tmp43);
-    const double _tmp46 = _tmp45*cos(theta_1);
-    const double _tmp47 = cos(_tmp0);
-    const double _tmp48 = (1.0/2.0)*theta_3;
-    const double _tmp49 = _tmp22*pow(theta_3, 2)*symkin_arck(_tmp48);
-    const double _tmp50 = _tmp49*cos(_tmp48);
-    const double _tmp51 = sin(_tmp43);
-    const double _tmp52 = _tmp45*sin(theta_1);
-    const double _tmp53 = sin(_tmp0);
-    const double _tmp54 = _tmp49*sin(_tmp48);
-    const double _tmp55 = _tmp42*sin(_tmp41) - _tmp44*_tmp46 - _tmp47*_tmp50 + _tmp51*_tmp52 + _tmp53*_tmp54;
-    const double _tmp56 = _tmp42*cos(_tmp41) + _tmp44*_tmp52 + _tmp46*_tmp51 + _tmp47*_tmp54 + _tmp50*_tmp53;
-    const double _tmp57 = (1.0/2.0)*theta_10;
-    const double _tmp58 = pow(theta_10, 2);
-    const double _tmp59 = symkin_arck(_tmp57);
-    const double _tmp60 = (1.0/2.0)*theta_7;
-    const double _tmp61 = pow(theta_7, 2)*symkin_arck(_tmp60);
-    const double _tmp62 = _tmp61*cos(_tmp60);
-    const double _tmp63 = (1.0/2.0)*theta_8;
-    const double _tmp64 = _tmp22*pow(theta_8, 2)*symkin_arck(_tmp63);
-    const double _tmp65 = _tmp64*cos(_tmp63);
-    const double _tmp66 = _tmp61*sin(_tmp60);
-    const double _tmp67 = _tmp64*sin(_tmp63);
+    const double _tmp22 = 0.25*p_0;
+    const double _tmp23 = 0.5*theta_4;
+    const double _tmp24 = sin(_tmp23);
+    const double _tmp25 = _tmp22*sin(_tmp1);
+    const double _tmp26 = pow(theta_4, 2)*symkin_arck(_tmp23);
+    const double _tmp27 = _tmp25*_tmp26;
+    const double _tmp28 = 0.5*theta_5;
+    const double _tmp29 = sin(_tmp28);
+    const double _tmp30 = _tmp22*pow(theta_5, 2)*symkin_arck(_tmp28);
+    const double _tmp31 = _tmp30*sin(_tmp2);
+    const double _tmp32 = 0.5*theta_6;
+    const double _tmp33 = cos(_tmp32);
+    const double _tmp34 = pow(theta_6, 2);
+    const double _tmp35 = symkin_arck(_tmp32);
+    const double _tmp36 = _tmp22*_tmp34*_tmp35;
+    const double _tmp37 = sin(_tmp32);
+    const double _tmp38 = _tmp36*_tmp4;
+    const double _tmp39 = cos(_tmp23);
+    const double _tmp40 = _tmp22*cos(_tmp1);
+    const double _tmp41 = _tmp26*_tmp40;
+    const double _tmp42 = cos(_tmp28);
+    const double _tmp43 = _tmp30*cos(_tmp2);
+    const double _tmp44 = 0.5*theta_1;
+    const double _tmp45 = _tmp22*pow(theta_1, 2)*symkin_arck(_tmp44);
+    const double _tmp46 = sin(theta_1);
+    const double _tmp47 = 0.5*theta_2;
+    const double _tmp48 = _tmp22*pow(theta_2, 2)*symkin_arck(_tmp47);
+    const double _tmp49 = _tmp48*sin(_tmp47);
+    const double _tmp50 = 0.5*theta_3;
+    const double _tmp51 = sin(_tmp50);
+    const double _tmp52 = _tmp22*pow(theta_3, 2)*symkin_arck(_tmp50);
+    const double _tmp53 = _tmp52*sin(_tmp0);
+    const double _tmp54 = cos(theta_1);
+    const double _tmp55 = _tmp48*cos(_tmp47);
+    const double _tmp56 = cos(_tmp50);
+    const double _tmp57 = _tmp52*cos(_tmp0);
+    const double _tmp58 = _tmp45*sin(_tmp44) + _tmp46*_tmp49 + _tmp51*_tmp53 - _tmp54*_tmp55 - _tmp56*_tmp57;
+    const double _tmp59 = _tmp45*cos(_tmp44) + _tmp46*_tmp55 + _tmp49*_tmp54 + _tmp51*_tmp57 + _tmp53*_tmp56;
+    const double _tmp60 = 0.5*theta_10;
+    const double _tmp61 = pow(theta_10, 2);
+    const double _tmp62 = symkin_arck(_tmp60);
+    const double _tmp63 = 0.5*theta_7;
+    const double _tmp64 = sin(_tmp63);
+    const double _tmp65 = pow(theta_7, 2)*symkin_arck(_tmp63);
+    const double _tmp66 = _tmp25*_tmp65;
+    const double _tmp67 = 0.5*theta_8;
+    const double _tmp68 = sin(_tmp67);
+    const double _tmp69 = _tmp22*pow(theta_8, 2)*symkin_arck(_tmp67);
+    const double _tmp70 = _tmp13*_tmp69;
+    const double _tmp71 = cos(_tmp63);
+    const double _tmp72 = _tmp40*_tmp65;
+    const double _tmp73 = cos(_tmp67);
+    const double _tmp74 = _tmp12*_tmp69;
     out[0] = -1;
     out[1] = -1;
     out[2] = 0;
     out[3] = 0;
     out[4] = 1;
     out[5] = 0;
-    out[6] = (1.0/20.0)*_tmp4 - 1.0/50.0*_tmp5 - _tmp9;
+    out[6] = -0.02*_tmp4 + 0.05*_tmp5 - _tmp9;
     out[7] = -_tmp9;
     out[8] = 0;
     out[9] = 0;
     out[10] = 0;
     out[11] = 0;
-    out[12] = -_tmp10 - 1.0/50.0*_tmp4 - 1.0/20.0*_tmp5;
+    out[12] = -_tmp10 - 0.05*_tmp4 - 0.02*_tmp5;
     out[13] = -_tmp10;
     out[14] = 0;
     out[15] = 0;
@@ -290,35 +297,35 @@ static void sk_linear(const double *theta, const double *params, double *out)
     out[23] = 1;
     out[24] = 0;
     out[25] = 0;
-    out[26] = (1.0/25.0)*_tmp12 - 1.0/200.0*_tmp13 - _tmp17;
+    out[26] = -0.005*_tmp12 + 0.04*_tmp13 - _tmp17;
     out[27] = -_tmp17;
     out[28] = 0;
     out[29] = 0;
     out[30] = 0;
     out[31] = 0;
-    out[32] = -1.0/200.0*_tmp12 - 1.0/25.0*_tmp13 - _tmp18;
+    out[32] = -0.04*_tmp12 - 0.005*_tmp13 - _tmp18;
     out[33] = -_tmp18;
     out[34] = 0;
     out[35] = 0;
     out[36] = 0;
-    out[37] = -_tmp20*_tmp21*_tmp22*sin(_tmp19) - _tmp23*_tmp26 - _tmp27*_tmp30 + _tmp31*_tmp32 + _tmp33*_tmp34 + _tmp38*_tmp40*_tmp5 + _tmp39*_tmp4 + _tmp55;
-    out[38] = (1.0/4.0)*_tmp20*_tmp21*p_0*cos(_tmp19) - _tmp23*_tmp32 - _tmp26*_tmp31 - _tmp27*_tmp34 - _tmp30*_tmp33 + (1.0/4.0)*_tmp36*_tmp37*_tmp4*_tmp40*p_0 - _tmp39*_tmp5 - _tmp56;
+    out[37] = -_tmp20*_tmp21*_tmp22*sin(_tmp19) + _tmp24*_tmp27 + _tmp29*_tmp31 + _tmp33*_tmp36*_tmp5 + _tmp37*_tmp38 - _tmp39*_tmp41 - _tmp42*_tmp43 + _tmp58;
+    out[38] = 0.25*_tmp20*_tmp21*p_0*cos(_tmp19) - _tmp24*_tmp41 - _tmp27*_tmp39 - _tmp29*_tmp43 - _tmp31*_tmp42 - _tmp33*_tmp38 + 0.25*_tmp34*_tmp35*_tmp37*_tmp5*p_0 - _tmp59;
     out[39] = 0;
-    out[40] = _tmp12*_tmp67 - _tmp13*_tmp65 - _tmp22*_tmp58*_tmp59*sin(_tmp57) - _tmp23*_tmp62 + _tmp31*_tmp66 + _tmp55;
-    out[41] = -_tmp12*_tmp65 - _tmp13*_tmp67 - _tmp23*_tmp66 - _tmp31*_tmp62 - _tmp56 + (1.0/4.0)*_tmp58*_tmp59*p_0*cos(_tmp57);
+    out[40] = -_tmp22*_tmp61*_tmp62*sin(_tmp60) + _tmp58 + _tmp64*_tmp66 + _tmp68*_tmp70 - _tmp71*_tmp72 - _tmp73*_tmp74;
+    out[41] = -_tmp59 + 0.25*_tmp61*_tmp62*p_0*cos(_tmp60) - _tmp64*_tmp72 - _tmp66*_tmp71 - _tmp68*_tmp74 - _tmp70*_tmp73;
 }
 
-/* rigid positions of the points (19 operations) */
+/* rigid positions of the points (14 operations) */
 static void sk_rigid_points(const double *theta, const double *params, double *out)
 {
     (void)params;
     const double theta_1 = theta[0];
     const double theta_2 = theta[1];
     const double _tmp0 = theta_1 + theta_2;
-    const double _tmp1 = (3.0/100.0)*sin(_tmp0);
+    const double _tmp1 = 0.03*sin(_tmp0);
     const double _tmp2 = cos(_tmp0);
-    out[0] = -_tmp1 + (3.0/100.0)*_tmp2 - 3.0/50.0*sin(theta_1);
-    out[1] = _tmp1 + (3.0/100.0)*_tmp2 + (3.0/50.0)*cos(theta_1);
+    out[0] = -_tmp1 + 0.03*_tmp2 - 0.06*sin(theta_1);
+    out[1] = _tmp1 + 0.03*_tmp2 + 0.06*cos(theta_1);
 }
 
 /* deviation of the points at level paper (33 operations) */
@@ -327,19 +334,19 @@ static void sk_dev_paper(const double *theta, const double *params, double *out)
     const double theta_1 = theta[0];
     const double theta_2 = theta[1];
     const double p_0 = params[0];
-    const double _tmp0 = (1.0/2.0)*theta_1;
-    const double _tmp1 = (1.0/4.0)*p_0;
+    const double _tmp0 = 0.5*theta_1;
+    const double _tmp1 = 0.25*p_0;
     const double _tmp2 = _tmp1*pow(theta_1, 2)*symkin_arck(_tmp0);
-    const double _tmp3 = sin(theta_1);
+    const double _tmp3 = 0.5*theta_2;
+    const double _tmp4 = sin(_tmp3);
     const double _tmp5 = pow(theta_2, 2);
-    const double _tmp4 = (1.0/2.0)*theta_2;
-    const double _tmp6 = symkin_arck(_tmp4);
+    const double _tmp6 = symkin_arck(_tmp3);
     const double _tmp7 = _tmp1*_tmp5*_tmp6;
-    const double _tmp8 = _tmp7*sin(_tmp4);
+    const double _tmp8 = _tmp7*sin(theta_1);
     const double _tmp9 = cos(theta_1);
-    const double _tmp10 = cos(_tmp4);
-    out[0] = (1.0/4.0)*_tmp10*_tmp5*_tmp6*_tmp9*p_0 - _tmp2*sin(_tmp0) - _tmp3*_tmp8;
-    out[1] = _tmp10*_tmp3*_tmp7 + _tmp2*cos(_tmp0) + _tmp8*_tmp9;
+    const double _tmp10 = cos(_tmp3);
+    out[0] = 0.25*_tmp10*_tmp5*_tmp6*_tmp9*p_0 - _tmp2*sin(_tmp0) - _tmp4*_tmp8;
+    out[1] = _tmp10*_tmp8 + _tmp2*cos(_tmp0) + _tmp4*_tmp7*_tmp9;
 }
 
 /* deviation of the points at level first_order (33 operations) */
@@ -349,19 +356,19 @@ static void sk_dev_first_order(const double *theta, const double *delta, const d
     const double theta_1 = theta[0];
     const double theta_2 = theta[1];
     const double p_0 = params[0];
-    const double _tmp0 = (1.0/2.0)*theta_1;
-    const double _tmp1 = (1.0/4.0)*p_0;
+    const double _tmp0 = 0.5*theta_1;
+    const double _tmp1 = 0.25*p_0;
     const double _tmp2 = _tmp1*pow(theta_1, 2)*symkin_arck(_tmp0);
-    const double _tmp3 = sin(theta_1);
+    const double _tmp3 = 0.5*theta_2;
+    const double _tmp4 = sin(_tmp3);
     const double _tmp5 = pow(theta_2, 2);
-    const double _tmp4 = (1.0/2.0)*theta_2;
-    const double _tmp6 = symkin_arck(_tmp4);
+    const double _tmp6 = symkin_arck(_tmp3);
     const double _tmp7 = _tmp1*_tmp5*_tmp6;
-    const double _tmp8 = _tmp7*sin(_tmp4);
+    const double _tmp8 = _tmp7*sin(theta_1);
     const double _tmp9 = cos(theta_1);
-    const double _tmp10 = cos(_tmp4);
-    out[0] = (1.0/4.0)*_tmp10*_tmp5*_tmp6*_tmp9*p_0 - _tmp2*sin(_tmp0) - _tmp3*_tmp8;
-    out[1] = _tmp10*_tmp3*_tmp7 + _tmp2*cos(_tmp0) + _tmp8*_tmp9;
+    const double _tmp10 = cos(_tmp3);
+    out[0] = 0.25*_tmp10*_tmp5*_tmp6*_tmp9*p_0 - _tmp2*sin(_tmp0) - _tmp4*_tmp8;
+    out[1] = _tmp10*_tmp8 + _tmp2*cos(_tmp0) + _tmp4*_tmp7*_tmp9;
 }
 
 /* deviation of the points at level exact (33 operations) */
@@ -371,19 +378,19 @@ static void sk_dev_exact(const double *theta, const double *delta, const double 
     const double theta_1 = theta[0];
     const double theta_2 = theta[1];
     const double p_0 = params[0];
-    const double _tmp0 = (1.0/2.0)*theta_1;
-    const double _tmp1 = (1.0/4.0)*p_0;
+    const double _tmp0 = 0.5*theta_1;
+    const double _tmp1 = 0.25*p_0;
     const double _tmp2 = _tmp1*pow(theta_1, 2)*symkin_arck(_tmp0);
-    const double _tmp3 = sin(theta_1);
+    const double _tmp3 = 0.5*theta_2;
+    const double _tmp4 = sin(_tmp3);
     const double _tmp5 = pow(theta_2, 2);
-    const double _tmp4 = (1.0/2.0)*theta_2;
-    const double _tmp6 = symkin_arck(_tmp4);
+    const double _tmp6 = symkin_arck(_tmp3);
     const double _tmp7 = _tmp1*_tmp5*_tmp6;
-    const double _tmp8 = _tmp7*sin(_tmp4);
+    const double _tmp8 = _tmp7*sin(theta_1);
     const double _tmp9 = cos(theta_1);
-    const double _tmp10 = cos(_tmp4);
-    out[0] = (1.0/4.0)*_tmp10*_tmp5*_tmp6*_tmp9*p_0 - _tmp2*sin(_tmp0) - _tmp3*_tmp8;
-    out[1] = _tmp10*_tmp3*_tmp7 + _tmp2*cos(_tmp0) + _tmp8*_tmp9;
+    const double _tmp10 = cos(_tmp3);
+    out[0] = 0.25*_tmp10*_tmp5*_tmp6*_tmp9*p_0 - _tmp2*sin(_tmp0) - _tmp4*_tmp8;
+    out[1] = _tmp10*_tmp8 + _tmp2*cos(_tmp0) + _tmp4*_tmp7*_tmp9;
 }
 
 /* Gaussian elimination with partial pivoting on the n x n row-major a, in place; x -> b. */

@@ -3,7 +3,7 @@
  * Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
  * Points: F; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 178, rigid_res 121, linear 224, rigid_points 19, dev_paper 33, dev_first_order 33, dev_exact 33.
+ * Operation counts after CSE: rigid 158, rigid_res 114, linear 222, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33.
  */
 #ifndef SYMKIN_NINE_BAR_PLATFORM_H
 #define SYMKIN_NINE_BAR_PLATFORM_H

@@ -2,7 +2,7 @@
 Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
 Points: F; levels: paper, first_order, exact.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 178, rigid_res 121, linear 224, rigid_points 19, dev_paper 33, dev_first_order 33, dev_exact 33.
+Operation counts after CSE: rigid 158, rigid_res 114, linear 222, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -56,59 +56,59 @@ def _parameters(given):
     unknown = sorted(set(given) - set(PARAMETERS))
     if unknown:
         raise ValueError(f"unknown parameter(s) {unknown}; parameters: {sorted(PARAMETERS)}")
-    p_0 = float(given['l']) if 'l' in given else 3/5000
+    p_0 = float(given['l']) if 'l' in given else 0.0006
     return [p_0]
 
 
 def _rigid(inputs, params):
-    """closed-form rigid solution (dyads) (178 operations)."""
+    """closed-form rigid solution (dyads) (158 operations)."""
     theta_1, theta_2, theta_3, theta_4 = inputs
     _tmp0 = theta_1 + theta_2
     _tmp1 = _tmp0 + theta_3
-    _tmp2 = numpy.sin(_tmp1)
-    _tmp3 = numpy.cos(_tmp1)
-    _tmp4 = _tmp1 + theta_4
-    _tmp5 = numpy.cos(_tmp4)
-    _tmp6 = numpy.sin(_tmp4)
-    _tmp7 = numpy.sin(_tmp0)
-    _tmp8 = numpy.cos(_tmp0)
-    _tmp9 = -1/50*_tmp7 + (1/20)*_tmp8 - 3/50*numpy.sin(theta_1)
-    dyad1_ax = -1/100*_tmp2 + (1/20)*_tmp3 + (1/20)*_tmp5 + (1/50)*_tmp6 + _tmp9
-    _tmp10 = (1/20)*_tmp7 + (1/50)*_tmp8 + (3/50)*numpy.cos(theta_1)
-    dyad1_ay = _tmp10 + (1/20)*_tmp2 + (1/100)*_tmp3 - 1/50*_tmp5 + (1/20)*_tmp6
-    dyad1_cx = 4/25
+    _tmp2 = numpy.cos(_tmp1)
+    _tmp3 = _tmp1 + theta_4
+    _tmp4 = numpy.cos(_tmp3)
+    _tmp5 = numpy.sin(_tmp3)
+    _tmp6 = numpy.sin(_tmp1)
+    _tmp7 = numpy.cos(_tmp0)
+    _tmp8 = numpy.sin(_tmp0)
+    _tmp9 = 0.05*_tmp7 - 0.02*_tmp8 - 0.06*numpy.sin(theta_1)
+    dyad1_ax = 0.05*_tmp2 + 0.05*_tmp4 + 0.02*_tmp5 - 0.01*_tmp6 + _tmp9
+    _tmp10 = 0.02*_tmp7 + 0.05*_tmp8 + 0.06*numpy.cos(theta_1)
+    dyad1_ay = _tmp10 + 0.01*_tmp2 - 0.02*_tmp4 + 0.05*_tmp5 + 0.05*_tmp6
+    dyad1_cx = 0.16
     dyad1_cy = 0
     _tmp11 = -dyad1_ax + dyad1_cx
     _tmp12 = -dyad1_ay + dyad1_cy
     dyad1_dsq = _tmp11**2 + _tmp12**2
     _tmp13 = dyad1_dsq**(-1.0)
-    dyad1_along = (1/2)*_tmp13*(dyad1_dsq - 3/2500)
-    dyad1_reach = (29/10000)*_tmp13 - dyad1_along**2
+    dyad1_along = 0.5*_tmp13*(dyad1_dsq - 0.0012)
+    dyad1_reach = 0.0029*_tmp13 - dyad1_along**2
     dyad1_across = numpy.sqrt(dyad1_reach)
     dyad1_bx = _tmp11*dyad1_along - _tmp12*dyad1_across + dyad1_ax
     dyad1_by = _tmp11*dyad1_across + _tmp12*dyad1_along + dyad1_ay
-    dyad1_margin = (10000/1189)*numpy.sqrt(1189)*dyad1_dsq*abs(dyad1_across)
-    _tmp14 = (1/20)*dyad1_bx
-    dyad1_phi1 = numpy.arctan2(-1/50*dyad1_ax - 1/20*dyad1_ay + (1/50)*dyad1_bx + (1/20)*dyad1_by, _tmp14 - 1/20*dyad1_ax + (1/50)*dyad1_ay - 1/50*dyad1_by)
-    dyad1_phi2 = numpy.arctan2(-_tmp14 + (1/25)*dyad1_by + (1/20)*dyad1_cx - 1/25*dyad1_cy, (1/25)*dyad1_bx + (1/20)*dyad1_by - 1/25*dyad1_cx - 1/20*dyad1_cy)
-    dyad2_ax = (1/25)*_tmp2 + (1/50)*_tmp3 + _tmp9
-    dyad2_ay = _tmp10 + (1/50)*_tmp2 - 1/25*_tmp3
-    dyad2_cx = 17/200
+    dyad1_margin = 290.0073952828708*dyad1_dsq*abs(dyad1_across)
+    _tmp14 = 0.05*dyad1_bx
+    dyad1_phi1 = numpy.arctan2(-0.02*dyad1_ax - 0.05*dyad1_ay + 0.02*dyad1_bx + 0.05*dyad1_by, _tmp14 - 0.05*dyad1_ax + 0.02*dyad1_ay - 0.02*dyad1_by)
+    dyad1_phi2 = numpy.arctan2(-_tmp14 + 0.04*dyad1_by + 0.05*dyad1_cx - 0.04*dyad1_cy, 0.04*dyad1_bx + 0.05*dyad1_by - 0.04*dyad1_cx - 0.05*dyad1_cy)
+    dyad2_ax = 0.02*_tmp2 + 0.04*_tmp6 + _tmp9
+    dyad2_ay = _tmp10 - 0.04*_tmp2 + 0.02*_tmp6
+    dyad2_cx = 0.085
     dyad2_cy = 0
     _tmp15 = -dyad2_ax + dyad2_cx
     _tmp16 = -dyad2_ay + dyad2_cy
     dyad2_dsq = _tmp15**2 + _tmp16**2
     _tmp17 = dyad2_dsq**(-1.0)
-    dyad2_along = (1/2)*_tmp17*(dyad2_dsq - 9/40000)
-    dyad2_reach = (13/8000)*_tmp17 - dyad2_along**2
+    dyad2_along = 0.5*_tmp17*(dyad2_dsq - 0.000225)
+    dyad2_reach = 0.001625*_tmp17 - dyad2_along**2
     dyad2_across = numpy.sqrt(dyad2_reach)
     dyad2_bx = _tmp15*dyad2_along - _tmp16*dyad2_across + dyad2_ax
     dyad2_by = _tmp15*dyad2_across + _tmp16*dyad2_along + dyad2_ay
-    dyad2_margin = (4000/481)*numpy.sqrt(4810)*dyad2_dsq*abs(dyad2_across)
-    dyad2_phi1 = numpy.arctan2(-1/200*dyad2_ax - 1/25*dyad2_ay + (1/200)*dyad2_bx + (1/25)*dyad2_by, -1/25*dyad2_ax + (1/200)*dyad2_ay + (1/25)*dyad2_bx - 1/200*dyad2_by)
-    dyad2_phi2 = numpy.arctan2(-7/200*dyad2_bx + (1/40)*dyad2_by + (7/200)*dyad2_cx - 1/40*dyad2_cy, (1/40)*dyad2_bx + (7/200)*dyad2_by - 1/40*dyad2_cx - 7/200*dyad2_cy)
+    dyad2_margin = 576.7498007284725*dyad2_dsq*abs(dyad2_across)
+    dyad2_phi1 = numpy.arctan2(-0.005*dyad2_ax - 0.04*dyad2_ay + 0.005*dyad2_bx + 0.04*dyad2_by, -0.04*dyad2_ax + 0.005*dyad2_ay + 0.04*dyad2_bx - 0.005*dyad2_by)
+    dyad2_phi2 = numpy.arctan2(-0.035*dyad2_bx + 0.025*dyad2_by + 0.035*dyad2_cx - 0.025*dyad2_cy, 0.025*dyad2_bx + 0.035*dyad2_by - 0.025*dyad2_cx - 0.035*dyad2_cy)
     return [
-        -_tmp4 + dyad1_phi1,
+        -_tmp3 + dyad1_phi1,
         -dyad1_phi1 + dyad1_phi2,
         -_tmp1 + dyad2_phi1,
         -dyad2_phi1 + dyad2_phi2,
@@ -122,119 +122,126 @@ def _rigid(inputs, params):
 
 
 def _rigid_res(theta, params):
-    """rigid loop closure relative to the as-fabricated pose (121 operations)."""
+    """rigid loop closure relative to the as-fabricated pose (114 operations)."""
     theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7, theta_8, theta_9, theta_10 = theta
     _tmp0 = theta_1 + theta_2
     _tmp1 = _tmp0 + theta_3
     _tmp2 = _tmp1 + theta_4
     _tmp3 = _tmp2 + theta_5
     _tmp4 = _tmp3 + theta_6
-    _tmp5 = (1/2)*theta_1
-    _tmp6 = _tmp5 + (1/2)*theta_2
-    _tmp7 = _tmp6 + (1/2)*theta_3
-    _tmp8 = _tmp7 + (1/2)*theta_4
-    _tmp9 = _tmp8 + (1/2)*theta_5
-    _tmp10 = numpy.sin(_tmp9 + (1/2)*theta_6)**2
-    _tmp11 = numpy.sin(_tmp4)
-    _tmp12 = numpy.sin(_tmp2)
-    _tmp13 = numpy.sin(_tmp3)
-    _tmp14 = numpy.sin(_tmp7)**2
-    _tmp15 = numpy.sin(_tmp8)**2
-    _tmp16 = numpy.sin(_tmp9)**2
-    _tmp17 = numpy.sin(_tmp1)
+    _tmp5 = 0.5*theta_1
+    _tmp6 = _tmp5 + 0.5*theta_2
+    _tmp7 = _tmp6 + 0.5*theta_3
+    _tmp8 = numpy.sin(_tmp7)**2
+    _tmp9 = _tmp7 + 0.5*theta_4
+    _tmp10 = numpy.sin(_tmp9)**2
+    _tmp11 = _tmp9 + 0.5*theta_5
+    _tmp12 = numpy.sin(_tmp11)**2
+    _tmp13 = numpy.sin(_tmp1)
+    _tmp14 = numpy.sin(_tmp4)
+    _tmp15 = numpy.sin(_tmp2)
+    _tmp16 = numpy.sin(_tmp3)
+    _tmp17 = numpy.sin(_tmp11 + 0.5*theta_6)**2
     _tmp18 = numpy.sin(_tmp6)**2
     _tmp19 = numpy.sin(_tmp0)
-    _tmp20 = (1/10)*_tmp18 + (1/50)*_tmp19 + (3/50)*numpy.sin(theta_1)
-    _tmp21 = -1/25*_tmp18 + (1/20)*_tmp19 - 3/25*numpy.sin(_tmp5)**2
+    _tmp20 = 0.1*_tmp18 + 0.02*_tmp19 + 0.06*numpy.sin(theta_1)
+    _tmp21 = -0.04*_tmp18 + 0.05*_tmp19 - 0.12*numpy.sin(_tmp5)**2
     _tmp22 = _tmp1 + theta_7
     _tmp23 = _tmp22 + theta_8
-    _tmp24 = numpy.sin(_tmp23)
-    _tmp25 = _tmp7 + (1/2)*theta_7
-    _tmp26 = numpy.sin(_tmp25 + (1/2)*theta_8)**2
-    _tmp27 = numpy.sin(_tmp22)
-    _tmp28 = numpy.sin(_tmp25)**2
+    _tmp24 = _tmp7 + 0.5*theta_7
+    _tmp25 = numpy.sin(_tmp24)**2
+    _tmp26 = numpy.sin(_tmp23)
+    _tmp27 = numpy.sin(_tmp24 + 0.5*theta_8)**2
+    _tmp28 = numpy.sin(_tmp22)
     return [
         -_tmp4 + theta_9,
-        -2/25*_tmp10 - 1/20*_tmp11 - 1/50*_tmp12 - 1/50*_tmp13 + (1/10)*_tmp14 + (1/10)*_tmp15 + (1/10)*_tmp16 + (1/100)*_tmp17 + _tmp20,
-        -1/10*_tmp10 + (1/25)*_tmp11 - 1/20*_tmp12 - 1/20*_tmp13 + (1/50)*_tmp14 - 1/25*_tmp15 - 1/25*_tmp16 - 1/20*_tmp17 - _tmp21,
+        0.1*_tmp10 + 0.1*_tmp12 + 0.01*_tmp13 - 0.05*_tmp14 - 0.02*_tmp15 - 0.02*_tmp16 - 0.08*_tmp17 + _tmp20 + 0.1*_tmp8,
+        -0.04*_tmp10 - 0.04*_tmp12 - 0.05*_tmp13 + 0.04*_tmp14 - 0.05*_tmp15 - 0.05*_tmp16 - 0.1*_tmp17 - _tmp21 + 0.02*_tmp8,
         -_tmp23 + theta_10,
-        (1/25)*_tmp14 - 1/25*_tmp17 + _tmp20 - 7/200*_tmp24 - 1/20*_tmp26 - 1/200*_tmp27 + (2/25)*_tmp28,
-        -2/25*_tmp14 - 1/50*_tmp17 - _tmp21 + (1/40)*_tmp24 - 7/100*_tmp26 - 1/25*_tmp27 - 1/100*_tmp28,
+        -0.04*_tmp13 + _tmp20 + 0.08*_tmp25 - 0.035*_tmp26 - 0.05*_tmp27 - 0.005*_tmp28 + 0.04*_tmp8,
+        -0.02*_tmp13 - _tmp21 - 0.01*_tmp25 + 0.025*_tmp26 - 0.07*_tmp27 - 0.04*_tmp28 - 0.08*_tmp8,
     ]
 
 
 def _linear(theta, params):
-    """rigid loop Jacobian A and r = Phi dz (224 operations)."""
+    """rigid loop Jacobian A and r = Phi dz (222 operations)."""
     theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7, theta_8, theta_9, theta_10 = theta
     p_0, = params
     _tmp0 = theta_1 + theta_2
     _tmp1 = _tmp0 + theta_3
     _tmp2 = _tmp1 + theta_4
     _tmp3 = _tmp2 + theta_5
-    _tmp4 = numpy.sin(_tmp3)
-    _tmp5 = numpy.cos(_tmp3)
+    _tmp4 = numpy.cos(_tmp3)
+    _tmp5 = numpy.sin(_tmp3)
     _tmp6 = _tmp3 + theta_6
     _tmp7 = numpy.sin(_tmp6)
     _tmp8 = numpy.cos(_tmp6)
-    _tmp9 = (1/25)*_tmp7 + (1/20)*_tmp8
-    _tmp10 = (1/20)*_tmp7 - 1/25*_tmp8
+    _tmp9 = 0.04*_tmp7 + 0.05*_tmp8
+    _tmp10 = 0.05*_tmp7 - 0.04*_tmp8
     _tmp11 = _tmp1 + theta_7
-    _tmp12 = numpy.sin(_tmp11)
-    _tmp13 = numpy.cos(_tmp11)
+    _tmp12 = numpy.cos(_tmp11)
+    _tmp13 = numpy.sin(_tmp11)
     _tmp14 = _tmp11 + theta_8
     _tmp15 = numpy.sin(_tmp14)
     _tmp16 = numpy.cos(_tmp14)
-    _tmp17 = (1/40)*_tmp15 + (7/200)*_tmp16
-    _tmp18 = (7/200)*_tmp15 - 1/40*_tmp16
-    _tmp19 = (1/2)*theta_9
+    _tmp17 = 0.025*_tmp15 + 0.035*_tmp16
+    _tmp18 = 0.035*_tmp15 - 0.025*_tmp16
+    _tmp19 = 0.5*theta_9
     _tmp20 = theta_9**2
     _tmp21 = arck(_tmp19)
-    _tmp22 = (1/4)*p_0
-    _tmp23 = _tmp22*numpy.cos(_tmp1)
-    _tmp24 = (1/2)*theta_4
-    _tmp25 = theta_4**2*arck(_tmp24)
-    _tmp26 = _tmp25*numpy.cos(_tmp24)
-    _tmp27 = numpy.cos(_tmp2)
-    _tmp28 = (1/2)*theta_5
-    _tmp29 = _tmp22*theta_5**2*arck(_tmp28)
-    _tmp30 = _tmp29*numpy.cos(_tmp28)
-    _tmp31 = _tmp22*numpy.sin(_tmp1)
-    _tmp32 = _tmp25*numpy.sin(_tmp24)
-    _tmp33 = numpy.sin(_tmp2)
-    _tmp34 = _tmp29*numpy.sin(_tmp28)
-    _tmp36 = theta_6**2
-    _tmp35 = (1/2)*theta_6
-    _tmp37 = arck(_tmp35)
-    _tmp38 = _tmp22*_tmp36*_tmp37
-    _tmp39 = _tmp38*numpy.cos(_tmp35)
-    _tmp40 = numpy.sin(_tmp35)
-    _tmp41 = (1/2)*theta_1
-    _tmp42 = _tmp22*theta_1**2*arck(_tmp41)
-    _tmp43 = (1/2)*theta_2
-    _tmp44 = numpy.cos(_tmp43)
-    _tmp45 = _tmp22*theta_2**2*arck(_tmp43)
-    _tmp46 = _tmp45*numpy.cos(theta_1)
-    _tmp47 = numpy.cos(_tmp0)
-    _tmp48 = (1/2)*theta_3
-    _tmp49 = _tmp22*theta_3**2*arck(_tmp48)
-    _tmp50 = _tmp49*numpy.cos(_tmp48)
-    _tmp51 = numpy.sin(_tmp43)
-    _tmp52 = _tmp45*numpy.sin(theta_1)
-    _tmp53 = numpy.sin(_tmp0)
-    _tmp54 = _tmp49*numpy.sin(_tmp48)
-    _tmp55 = _tmp42*numpy.sin(_tmp41) - _tmp44*_tmp46 - _tmp47*_tmp50 + _tmp51*_tmp52 + _tmp53*_tmp54
-    _tmp56 = _tmp42*numpy.cos(_tmp41) + _tmp44*_tmp52 + _tmp46*_tmp51 + _tmp47*_tmp54 + _tmp50*_tmp53
-    _tmp57 = (1/2)*theta_10
-    _tmp58 = theta_10**2
-    _tmp59 = arck(_tmp57)
-    _tmp60 = (1/2)*theta_7
-    _tmp61 = theta_7**2*arck(_tmp60)
-    _tmp62 = _tmp61*numpy.cos(_tmp60)
-    _tmp63 = (1/2)*theta_8
-    _tmp64 = _tmp22*theta_8**2*arck(_tmp63)
-    _tmp65 = _tmp64*numpy.cos(_tmp63)
-    _tmp66 = _tmp61*numpy.sin(_tmp60)
-    _tmp67 = _tmp64*numpy.sin(_tmp63)
+    _tmp22 = 0.25*p_0
+    _tmp23 = 0.5*theta_4
+    _tmp24 = numpy.sin(_tmp23)
+    _tmp25 = _tmp22*numpy.sin(_tmp1)
+    _tmp26 = theta_4**2*arck(_tmp23)
+    _tmp27 = _tmp25*_tmp26
+    _tmp28 = 0.5*theta_5
+    _tmp29 = numpy.sin(_tmp28)
+    _tmp30 = _tmp22*theta_5**2*arck(_tmp28)
+    _tmp31 = _tmp30*numpy.sin(_tmp2)
+    _tmp32 = 0.5*theta_6
+    _tmp33 = numpy.cos(_tmp32)
+    _tmp34 = theta_6**2
+    _tmp35 = arck(_tmp32)
+    _tmp36 = _tmp22*_tmp34*_tmp35
+    _tmp37 = numpy.sin(_tmp32)
+    _tmp38 = _tmp36*_tmp4
+    _tmp39 = numpy.cos(_tmp23)
+    _tmp40 = _tmp22*numpy.cos(_tmp1)
+    _tmp41 = _tmp26*_tmp40
+    _tmp42 = numpy.cos(_tmp28)
+    _tmp43 = _tmp30*numpy.cos(_tmp2)
+    _tmp44 = 0.5*theta_1
+    _tmp45 = _tmp22*theta_1**2*arck(_tmp44)
+    _tmp46 = numpy.sin(theta_1)
+    _tmp47 = 0.5*theta_2
+    _tmp48 = _tmp22*theta_2**2*arck(_tmp47)
+    _tmp49 = _tmp48*numpy.sin(_tmp47)
+    _tmp50 = 0.5*theta_3
+    _tmp51 = numpy.sin(_tmp50)
+    _tmp52 = _tmp22*theta_3**2*arck(_tmp50)
+    _tmp53 = _tmp52*numpy.sin(_tmp0)
+    _tmp54 = numpy.cos(theta_1)
+    _tmp55 = _tmp48*numpy.cos(_tmp47)
+    _tmp56 = numpy.cos(_tmp50)
+    _tmp57 = _tmp52*numpy.cos(_tmp0)
+    _tmp58 = _tmp45*numpy.sin(_tmp44) + _tmp46*_tmp49 + _tmp51*_tmp53 - _tmp54*_tmp55 - _tmp56*_tmp57
+    _tmp59 = _tmp45*numpy.cos(_tmp44) + _tmp46*_tmp55 + _tmp49*_tmp54 + _tmp51*_tmp57 + _tmp53*_tmp56
+    _tmp60 = 0.5*theta_10
+    _tmp61 = theta_10**2
+    _tmp62 = arck(_tmp60)
+    _tmp63 = 0.5*theta_7
+    _tmp64 = numpy.sin(_tmp63)
+    _tmp65 = theta_7**2*arck(_tmp63)
+    _tmp66 = _tmp25*_tmp65
+    _tmp67 = 0.5*theta_8
+    _tmp68 = numpy.sin(_tmp67)
+    _tmp69 = _tmp22*theta_8**2*arck(_tmp67)
+    _tmp70 = _tmp13*_tmp69
+    _tmp71 = numpy.cos(_tmp63)
+    _tmp72 = _tmp40*_tmp65
+    _tmp73 = numpy.cos(_tmp67)
+    _tmp74 = _tmp12*_tmp69
     return [
         -1,
         -1,
@@ -242,13 +249,13 @@ def _linear(theta, params):
         0,
         1,
         0,
-        (1/20)*_tmp4 - 1/50*_tmp5 - _tmp9,
+        -0.02*_tmp4 + 0.05*_tmp5 - _tmp9,
         -_tmp9,
         0,
         0,
         0,
         0,
-        -_tmp10 - 1/50*_tmp4 - 1/20*_tmp5,
+        -_tmp10 - 0.05*_tmp4 - 0.02*_tmp5,
         -_tmp10,
         0,
         0,
@@ -262,34 +269,34 @@ def _linear(theta, params):
         1,
         0,
         0,
-        (1/25)*_tmp12 - 1/200*_tmp13 - _tmp17,
+        -0.005*_tmp12 + 0.04*_tmp13 - _tmp17,
         -_tmp17,
         0,
         0,
         0,
         0,
-        -1/200*_tmp12 - 1/25*_tmp13 - _tmp18,
+        -0.04*_tmp12 - 0.005*_tmp13 - _tmp18,
         -_tmp18,
         0,
         0,
         0,
-        -_tmp20*_tmp21*_tmp22*numpy.sin(_tmp19) - _tmp23*_tmp26 - _tmp27*_tmp30 + _tmp31*_tmp32 + _tmp33*_tmp34 + _tmp38*_tmp40*_tmp5 + _tmp39*_tmp4 + _tmp55,
-        (1/4)*_tmp20*_tmp21*p_0*numpy.cos(_tmp19) - _tmp23*_tmp32 - _tmp26*_tmp31 - _tmp27*_tmp34 - _tmp30*_tmp33 + (1/4)*_tmp36*_tmp37*_tmp4*_tmp40*p_0 - _tmp39*_tmp5 - _tmp56,
+        -_tmp20*_tmp21*_tmp22*numpy.sin(_tmp19) + _tmp24*_tmp27 + _tmp29*_tmp31 + _tmp33*_tmp36*_tmp5 + _tmp37*_tmp38 - _tmp39*_tmp41 - _tmp42*_tmp43 + _tmp58,
+        0.25*_tmp20*_tmp21*p_0*numpy.cos(_tmp19) - _tmp24*_tmp41 - _tmp27*_tmp39 - _tmp29*_tmp43 - _tmp31*_tmp42 - _tmp33*_tmp38 + 0.25*_tmp34*_tmp35*_tmp37*_tmp5*p_0 - _tmp59,
         0,
-        _tmp12*_tmp67 - _tmp13*_tmp65 - _tmp22*_tmp58*_tmp59*numpy.sin(_tmp57) - _tmp23*_tmp62 + _tmp31*_tmp66 + _tmp55,
-        -_tmp12*_tmp65 - _tmp13*_tmp67 - _tmp23*_tmp66 - _tmp31*_tmp62 - _tmp56 + (1/4)*_tmp58*_tmp59*p_0*numpy.cos(_tmp57),
+        -_tmp22*_tmp61*_tmp62*numpy.sin(_tmp60) + _tmp58 + _tmp64*_tmp66 + _tmp68*_tmp70 - _tmp71*_tmp72 - _tmp73*_tmp74,
+        -_tmp59 + 0.25*_tmp61*_tmp62*p_0*numpy.cos(_tmp60) - _tmp64*_tmp72 - _tmp66*_tmp71 - _tmp68*_tmp74 - _tmp70*_tmp73,
     ]
 
 
 def _rigid_points(theta, params):
-    """rigid positions of the points (19 operations)."""
+    """rigid positions of the points (14 operations)."""
     theta_1, theta_2, _, _, _, _, _, _, _, _ = theta
     _tmp0 = theta_1 + theta_2
-    _tmp1 = (3/100)*numpy.sin(_tmp0)
+    _tmp1 = 0.03*numpy.sin(_tmp0)
     _tmp2 = numpy.cos(_tmp0)
     return [
-        -_tmp1 + (3/100)*_tmp2 - 3/50*numpy.sin(theta_1),
-        _tmp1 + (3/100)*_tmp2 + (3/50)*numpy.cos(theta_1),
+        -_tmp1 + 0.03*_tmp2 - 0.06*numpy.sin(theta_1),
+        _tmp1 + 0.03*_tmp2 + 0.06*numpy.cos(theta_1),
     ]
 
 
@@ -297,20 +304,20 @@ def _dev_paper(theta, params):
     """deviation of the points at level paper (33 operations)."""
     theta_1, theta_2, _, _, _, _, _, _, _, _ = theta
     p_0, = params
-    _tmp0 = (1/2)*theta_1
-    _tmp1 = (1/4)*p_0
+    _tmp0 = 0.5*theta_1
+    _tmp1 = 0.25*p_0
     _tmp2 = _tmp1*theta_1**2*arck(_tmp0)
-    _tmp3 = numpy.sin(theta_1)
+    _tmp3 = 0.5*theta_2
+    _tmp4 = numpy.sin(_tmp3)
     _tmp5 = theta_2**2
-    _tmp4 = (1/2)*theta_2
-    _tmp6 = arck(_tmp4)
+    _tmp6 = arck(_tmp3)
     _tmp7 = _tmp1*_tmp5*_tmp6
-    _tmp8 = _tmp7*numpy.sin(_tmp4)
+    _tmp8 = _tmp7*numpy.sin(theta_1)
     _tmp9 = numpy.cos(theta_1)
-    _tmp10 = numpy.cos(_tmp4)
+    _tmp10 = numpy.cos(_tmp3)
     return [
-        (1/4)*_tmp10*_tmp5*_tmp6*_tmp9*p_0 - _tmp2*numpy.sin(_tmp0) - _tmp3*_tmp8,
-        _tmp10*_tmp3*_tmp7 + _tmp2*numpy.cos(_tmp0) + _tmp8*_tmp9,
+        0.25*_tmp10*_tmp5*_tmp6*_tmp9*p_0 - _tmp2*numpy.sin(_tmp0) - _tmp4*_tmp8,
+        _tmp10*_tmp8 + _tmp2*numpy.cos(_tmp0) + _tmp4*_tmp7*_tmp9,
     ]
 
 
@@ -318,20 +325,20 @@ def _dev_first_order(theta, delta, params):
     """deviation of the points at level first_order (33 operations)."""
     theta_1, theta_2, _, _, _, _, _, _, _, _ = theta
     p_0, = params
-    _tmp0 = (1/2)*theta_1
-    _tmp1 = (1/4)*p_0
+    _tmp0 = 0.5*theta_1
+    _tmp1 = 0.25*p_0
     _tmp2 = _tmp1*theta_1**2*arck(_tmp0)
-    _tmp3 = numpy.sin(theta_1)
+    _tmp3 = 0.5*theta_2
+    _tmp4 = numpy.sin(_tmp3)
     _tmp5 = theta_2**2
-    _tmp4 = (1/2)*theta_2
-    _tmp6 = arck(_tmp4)
+    _tmp6 = arck(_tmp3)
     _tmp7 = _tmp1*_tmp5*_tmp6
-    _tmp8 = _tmp7*numpy.sin(_tmp4)
+    _tmp8 = _tmp7*numpy.sin(theta_1)
     _tmp9 = numpy.cos(theta_1)
-    _tmp10 = numpy.cos(_tmp4)
+    _tmp10 = numpy.cos(_tmp3)
     return [
-        (1/4)*_tmp10*_tmp5*_tmp6*_tmp9*p_0 - _tmp2*numpy.sin(_tmp0) - _tmp3*_tmp8,
-        _tmp10*_tmp3*_tmp7 + _tmp2*numpy.cos(_tmp0) + _tmp8*_tmp9,
+        0.25*_tmp10*_tmp5*_tmp6*_tmp9*p_0 - _tmp2*numpy.sin(_tmp0) - _tmp4*_tmp8,
+        _tmp10*_tmp8 + _tmp2*numpy.cos(_tmp0) + _tmp4*_tmp7*_tmp9,
     ]
 
 
@@ -339,20 +346,20 @@ def _dev_exact(theta, delta, params):
     """deviation of the points at level exact (33 operations)."""
     theta_1, theta_2, _, _, _, _, _, _, _, _ = theta
     p_0, = params
-    _tmp0 = (1/2)*theta_1
-    _tmp1 = (1/4)*p_0
+    _tmp0 = 0.5*theta_1
+    _tmp1 = 0.25*p_0
     _tmp2 = _tmp1*theta_1**2*arck(_tmp0)
-    _tmp3 = numpy.sin(theta_1)
+    _tmp3 = 0.5*theta_2
+    _tmp4 = numpy.sin(_tmp3)
     _tmp5 = theta_2**2
-    _tmp4 = (1/2)*theta_2
-    _tmp6 = arck(_tmp4)
+    _tmp6 = arck(_tmp3)
     _tmp7 = _tmp1*_tmp5*_tmp6
-    _tmp8 = _tmp7*numpy.sin(_tmp4)
+    _tmp8 = _tmp7*numpy.sin(theta_1)
     _tmp9 = numpy.cos(theta_1)
-    _tmp10 = numpy.cos(_tmp4)
+    _tmp10 = numpy.cos(_tmp3)
     return [
-        (1/4)*_tmp10*_tmp5*_tmp6*_tmp9*p_0 - _tmp2*numpy.sin(_tmp0) - _tmp3*_tmp8,
-        _tmp10*_tmp3*_tmp7 + _tmp2*numpy.cos(_tmp0) + _tmp8*_tmp9,
+        0.25*_tmp10*_tmp5*_tmp6*_tmp9*p_0 - _tmp2*numpy.sin(_tmp0) - _tmp4*_tmp8,
+        _tmp10*_tmp8 + _tmp2*numpy.cos(_tmp0) + _tmp4*_tmp7*_tmp9,
     ]
 
 

@@ -3,7 +3,7 @@
  * Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
  * Points: D; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 173, rigid_res 94, linear 233, newton 589, rigid_points 23, dev_paper 40, dev_first_order 56, dev_exact 67.
+ * Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60.
  */
 #ifndef SYMKIN_STEPHENSON_SIX_BAR_H
 #define SYMKIN_STEPHENSON_SIX_BAR_H

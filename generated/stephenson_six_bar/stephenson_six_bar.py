@@ -2,7 +2,7 @@
 Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
 Points: D; levels: paper, first_order, exact.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 173, rigid_res 94, linear 233, newton 589, rigid_points 23, dev_paper 40, dev_first_order 56, dev_exact 67.
+Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -96,51 +96,51 @@ def _parameters(given):
     unknown = sorted(set(given) - set(PARAMETERS))
     if unknown:
         raise ValueError(f"unknown parameter(s) {unknown}; parameters: {sorted(PARAMETERS)}")
-    p_0 = float(given['l']) if 'l' in given else 1/1250
+    p_0 = float(given['l']) if 'l' in given else 0.0008
     return [p_0]
 
 
 def _rigid(inputs, params):
-    """closed-form rigid solution (dyads) (173 operations)."""
+    """closed-form rigid solution (dyads) (142 operations)."""
     theta_1, = inputs
-    dyad1_ax = 1/10
+    dyad1_ax = 0.1
     dyad1_ay = 0
     _tmp0 = numpy.sin(theta_1)
-    _tmp1 = (3/100)*_tmp0
+    _tmp1 = 0.03*_tmp0
     _tmp2 = numpy.cos(theta_1)
-    dyad1_cx = -_tmp1 + (1/125)*_tmp2
-    dyad1_cy = (1/125)*_tmp0 + (3/100)*_tmp2
+    dyad1_cx = -_tmp1 + 0.008*_tmp2
+    dyad1_cy = 0.008*_tmp0 + 0.03*_tmp2
     _tmp3 = -dyad1_ax + dyad1_cx
     _tmp4 = -dyad1_ay + dyad1_cy
     dyad1_dsq = _tmp3**2 + _tmp4**2
     _tmp5 = dyad1_dsq**(-1.0)
-    dyad1_along = (1/2)*_tmp5*(dyad1_dsq - 521/250000)
-    dyad1_reach = (1/250)*_tmp5 - dyad1_along**2
+    dyad1_along = 0.5*_tmp5*(dyad1_dsq - 0.002084)
+    dyad1_reach = 0.004*_tmp5 - dyad1_along**2
     dyad1_across = -numpy.sqrt(dyad1_reach)
     dyad1_bx = _tmp3*dyad1_along - _tmp4*dyad1_across + dyad1_ax
     dyad1_by = _tmp3*dyad1_across + _tmp4*dyad1_along + dyad1_ay
-    dyad1_margin = (2500/39)*numpy.sqrt(10)*dyad1_dsq*abs(dyad1_across)
-    dyad1_phi1 = numpy.arctan2((3/50)*dyad1_ax + (1/50)*dyad1_ay - 3/50*dyad1_bx - 1/50*dyad1_by, (1/50)*dyad1_ax - 3/50*dyad1_ay - 1/50*dyad1_bx + (3/50)*dyad1_by)
-    dyad1_phi2 = numpy.arctan2(-3/100*dyad1_bx + (9/125)*dyad1_by + (3/100)*dyad1_cx - 9/125*dyad1_cy, (9/125)*dyad1_bx + (3/100)*dyad1_by - 9/125*dyad1_cx - 3/100*dyad1_cy)
-    dyad2_ax = -1/50*_tmp0 + (3/100)*_tmp2
-    dyad2_ay = _tmp1 + (1/50)*_tmp2
+    dyad1_margin = 202.71010642104994*dyad1_dsq*abs(dyad1_across)
+    dyad1_phi1 = numpy.arctan2(0.06*dyad1_ax + 0.02*dyad1_ay - 0.06*dyad1_bx - 0.02*dyad1_by, 0.02*dyad1_ax - 0.06*dyad1_ay - 0.02*dyad1_bx + 0.06*dyad1_by)
+    dyad1_phi2 = numpy.arctan2(-0.03*dyad1_bx + 0.072*dyad1_by + 0.03*dyad1_cx - 0.072*dyad1_cy, 0.072*dyad1_bx + 0.03*dyad1_by - 0.072*dyad1_cx - 0.03*dyad1_cy)
+    dyad2_ax = -0.02*_tmp0 + 0.03*_tmp2
+    dyad2_ay = _tmp1 + 0.02*_tmp2
     _tmp6 = numpy.sin(dyad1_phi1)
     _tmp7 = numpy.cos(dyad1_phi1)
-    dyad2_cx = -1/20*_tmp6 + (1/50)*_tmp7 + dyad1_ax
-    dyad2_cy = (1/50)*_tmp6 + (1/20)*_tmp7 + dyad1_ay
+    dyad2_cx = -0.05*_tmp6 + 0.02*_tmp7 + dyad1_ax
+    dyad2_cy = 0.02*_tmp6 + 0.05*_tmp7 + dyad1_ay
     _tmp8 = -dyad2_ax + dyad2_cx
     _tmp9 = -dyad2_ay + dyad2_cy
     dyad2_dsq = _tmp8**2 + _tmp9**2
     _tmp10 = dyad2_dsq**(-1.0)
-    dyad2_along = (1/2)*_tmp10*(dyad2_dsq + 3/1250)
-    dyad2_reach = (13/2000)*_tmp10 - dyad2_along**2
+    dyad2_along = 0.5*_tmp10*(dyad2_dsq + 0.0024)
+    dyad2_reach = 0.0065*_tmp10 - dyad2_along**2
     dyad2_across = numpy.sqrt(dyad2_reach)
     dyad2_bx = _tmp8*dyad2_along - _tmp9*dyad2_across + dyad2_ax
     dyad2_by = _tmp8*dyad2_across + _tmp9*dyad2_along + dyad2_ay
-    dyad2_margin = (2000/533)*numpy.sqrt(2665)*dyad2_dsq*abs(dyad2_across)
-    _tmp11 = (1/25)*dyad2_bx
-    dyad2_phi1 = numpy.arctan2((7/100)*dyad2_ax - 1/25*dyad2_ay - 7/100*dyad2_bx + (1/25)*dyad2_by, _tmp11 - 1/25*dyad2_ax - 7/100*dyad2_ay + (7/100)*dyad2_by)
-    dyad2_phi2 = numpy.arctan2(-_tmp11 - 1/20*dyad2_by + (1/25)*dyad2_cx + (1/20)*dyad2_cy, -1/20*dyad2_bx + (1/25)*dyad2_by + (1/20)*dyad2_cx - 1/25*dyad2_cy)
+    dyad2_margin = 193.70971105651492*dyad2_dsq*abs(dyad2_across)
+    _tmp11 = 0.04*dyad2_bx
+    dyad2_phi1 = numpy.arctan2(0.07*dyad2_ax - 0.04*dyad2_ay - 0.07*dyad2_bx + 0.04*dyad2_by, _tmp11 - 0.04*dyad2_ax - 0.07*dyad2_ay + 0.07*dyad2_by)
+    dyad2_phi2 = numpy.arctan2(-_tmp11 - 0.05*dyad2_by + 0.04*dyad2_cx + 0.05*dyad2_cy, -0.05*dyad2_bx + 0.04*dyad2_by + 0.05*dyad2_cx - 0.04*dyad2_cy)
     _tmp12 = -theta_1
     _tmp13 = -dyad2_phi2
     return [
@@ -158,107 +158,104 @@ def _rigid(inputs, params):
 
 
 def _rigid_res(theta, params):
-    """rigid loop closure relative to the as-fabricated pose (94 operations)."""
+    """rigid loop closure relative to the as-fabricated pose (81 operations)."""
     theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7 = theta
     _tmp0 = -theta_3
     _tmp1 = numpy.sin(theta_1)
-    _tmp2 = (3/100)*_tmp1
+    _tmp2 = 0.03*_tmp1
     _tmp3 = numpy.sin(theta_3)
     _tmp4 = numpy.sin(theta_3 + theta_5)
-    _tmp5 = (1/2)*theta_1
+    _tmp5 = 0.5*theta_1
     _tmp6 = numpy.sin(_tmp5)**2
-    _tmp7 = (1/2)*theta_3
+    _tmp7 = 0.5*theta_3
     _tmp8 = numpy.sin(_tmp7)**2
-    _tmp9 = (1/25)*_tmp8
-    _tmp10 = numpy.sin(_tmp7 + (1/2)*theta_5)**2
-    _tmp11 = (1/50)*_tmp3
-    _tmp12 = (3/50)*_tmp6
+    _tmp9 = 0.04*_tmp8
+    _tmp10 = numpy.sin(_tmp7 + 0.5*theta_5)**2
+    _tmp11 = 0.02*_tmp3
+    _tmp12 = 0.06*_tmp6
     _tmp13 = theta_1 + theta_2
     _tmp14 = numpy.sin(_tmp13)
     _tmp15 = numpy.sin(theta_3 + theta_4)
-    _tmp16 = numpy.sin(_tmp5 + (1/2)*theta_2)**2
-    _tmp17 = numpy.sin(_tmp7 + (1/2)*theta_4)**2
+    _tmp16 = numpy.sin(_tmp5 + 0.5*theta_2)**2
+    _tmp17 = numpy.sin(_tmp7 + 0.5*theta_4)**2
     return [
         _tmp0 + theta_1 - theta_5 + theta_6,
-        -18/125*_tmp10 - _tmp2 + (3/50)*_tmp3 - 3/100*_tmp4 - 2/125*_tmp6 - _tmp9,
-        (1/125)*_tmp1 - 3/50*_tmp10 + _tmp11 - _tmp12 + (9/125)*_tmp4 + (3/25)*_tmp8,
+        -0.144*_tmp10 - _tmp2 + 0.06*_tmp3 - 0.03*_tmp4 - 0.016*_tmp6 - _tmp9,
+        0.008*_tmp1 - 0.06*_tmp10 + _tmp11 - _tmp12 + 0.072*_tmp4 + 0.12*_tmp8,
         _tmp0 + _tmp13 - theta_4 + theta_7,
-        -1/50*_tmp1 - _tmp12 - 7/100*_tmp14 + (1/25)*_tmp15 - 2/25*_tmp16 - 1/10*_tmp17 + (1/20)*_tmp3 + _tmp9,
-        -_tmp11 + (1/25)*_tmp14 + (1/20)*_tmp15 - 7/50*_tmp16 + (2/25)*_tmp17 + _tmp2 - 1/25*_tmp6 + (1/10)*_tmp8,
+        -0.02*_tmp1 - _tmp12 - 0.07*_tmp14 + 0.04*_tmp15 - 0.08*_tmp16 - 0.1*_tmp17 + 0.05*_tmp3 + _tmp9,
+        -_tmp11 + 0.04*_tmp14 + 0.05*_tmp15 - 0.14*_tmp16 + 0.08*_tmp17 + _tmp2 - 0.04*_tmp6 + 0.1*_tmp8,
     ]
 
 
 def _linear(theta, params):
-    """rigid loop Jacobian A and r = Phi dz (233 operations)."""
+    """rigid loop Jacobian A and r = Phi dz (208 operations)."""
     theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7 = theta
     p_0, = params
-    _tmp0 = numpy.cos(theta_3)
-    _tmp1 = numpy.sin(theta_3)
-    _tmp2 = (1/50)*_tmp1
+    _tmp0 = numpy.sin(theta_3)
+    _tmp1 = 0.02*_tmp0
+    _tmp2 = numpy.cos(theta_3)
     _tmp3 = theta_3 + theta_5
     _tmp4 = numpy.sin(_tmp3)
     _tmp5 = numpy.cos(_tmp3)
-    _tmp6 = (9/125)*_tmp4 + (3/100)*_tmp5
-    _tmp7 = (1/50)*_tmp0
-    _tmp8 = (3/100)*_tmp4
+    _tmp6 = 0.072*_tmp4 + 0.03*_tmp5
+    _tmp7 = 0.02*_tmp2
+    _tmp8 = 0.03*_tmp4
     _tmp9 = theta_1 + theta_2
     _tmp10 = numpy.sin(_tmp9)
     _tmp11 = numpy.cos(_tmp9)
     _tmp12 = theta_3 + theta_4
     _tmp13 = numpy.sin(_tmp12)
-    _tmp14 = (1/20)*_tmp13
+    _tmp14 = 0.05*_tmp13
     _tmp15 = numpy.cos(_tmp12)
-    _tmp16 = (1/25)*_tmp13 + (1/20)*_tmp15
+    _tmp16 = 0.04*_tmp13 + 0.05*_tmp15
     _tmp17 = theta_5**2
-    _tmp18 = _tmp17*((11478125000/54483042671)*sinr1((2500/3791)*theta_5) - 1/2*sinr1(theta_5)) - 59/3791
-    _tmp19 = _tmp0*p_0
-    _tmp20 = numpy.sqrt(3673)
-    _tmp21 = (1/2)*theta_5
-    _tmp22 = (1250/3791)*theta_5
-    _tmp23 = _tmp21*((1/4)*_tmp17*(-312500000/54483042671*_tmp20*sinr1(_tmp22) + sinr1(_tmp21)) + (5189181/6250000)/((3791/125000)*_tmp20 + 14371681/6250000))*((1/50)*_tmp20*numpy.sin(_tmp22) + numpy.sin(_tmp21))
-    _tmp24 = numpy.cos(theta_1)
-    _tmp26 = theta_6**2
-    _tmp25 = (1/2)*theta_6
-    _tmp27 = arck(_tmp25)
-    _tmp28 = (1/4)*p_0
-    _tmp29 = _tmp26*_tmp27*_tmp28
-    _tmp30 = _tmp29*numpy.sin(_tmp25)
-    _tmp31 = numpy.sin(theta_1)
-    _tmp32 = numpy.cos(_tmp25)
-    _tmp33 = theta_3**2
-    _tmp34 = (1/2)*theta_3
-    _tmp35 = arck(_tmp34)
-    _tmp36 = (1/2)*theta_1
-    _tmp37 = theta_1**2
-    _tmp38 = arck(_tmp36)
-    _tmp39 = _tmp28*_tmp37*_tmp38
-    _tmp40 = -1/4*_tmp33*_tmp35*p_0*numpy.sin(_tmp34) + _tmp39*numpy.sin(_tmp36)
-    _tmp41 = numpy.cos(_tmp36)
-    _tmp42 = _tmp28*_tmp33*_tmp35*numpy.cos(_tmp34)
-    _tmp43 = _tmp1*p_0
-    _tmp45 = numpy.sqrt(2)
-    _tmp46 = theta_2**2
-    _tmp44 = (1/2)*theta_2
-    _tmp47 = arck(_tmp44)
-    _tmp48 = (1/8)*_tmp45*_tmp46*_tmp47*p_0
-    _tmp49 = _tmp48*numpy.sin(_tmp44)
-    _tmp50 = numpy.cos(_tmp44)
-    _tmp51 = _tmp48*_tmp50 + _tmp49
-    _tmp52 = (1/8)*_tmp45*_tmp46*_tmp47*_tmp50*p_0 - _tmp49
+    _tmp18 = _tmp17*(0.21067334783983213*sinr1(0.6594566077552098*theta_5) - 0.5*sinr1(theta_5)) - 0.01556317594302295
+    _tmp19 = 0.5*theta_6
+    _tmp20 = numpy.sin(_tmp19)
+    _tmp21 = numpy.cos(theta_1)
+    _tmp22 = theta_6**2
+    _tmp23 = arck(_tmp19)
+    _tmp24 = 0.25*p_0
+    _tmp25 = _tmp22*_tmp23*_tmp24
+    _tmp26 = numpy.cos(_tmp19)
+    _tmp27 = numpy.sin(theta_1)
+    _tmp28 = _tmp25*_tmp27
+    _tmp29 = _tmp2*p_0
+    _tmp30 = 0.3297283038776049*theta_5
+    _tmp31 = 0.5*theta_5
+    _tmp32 = _tmp31*(0.25*_tmp17*(-0.347615499514091*sinr1(_tmp30) + sinr1(_tmp31)) + 0.20066894885245268)*(1.2121056059601407*numpy.sin(_tmp30) + numpy.sin(_tmp31))
+    _tmp33 = 0.5*theta_1
+    _tmp34 = theta_1**2
+    _tmp35 = arck(_tmp33)
+    _tmp36 = _tmp24*_tmp34*_tmp35
+    _tmp37 = theta_3**2
+    _tmp38 = 0.5*theta_3
+    _tmp39 = arck(_tmp38)
+    _tmp40 = _tmp36*numpy.sin(_tmp33) - 0.25*_tmp37*_tmp39*p_0*numpy.sin(_tmp38)
+    _tmp41 = numpy.cos(_tmp33)
+    _tmp42 = _tmp24*_tmp37*_tmp39*numpy.cos(_tmp38)
+    _tmp43 = _tmp0*p_0
+    _tmp45 = theta_2**2
+    _tmp44 = 0.5*theta_2
+    _tmp46 = arck(_tmp44)
+    _tmp47 = 0.1767766952966369*_tmp45*_tmp46*p_0
+    _tmp48 = _tmp47*numpy.sin(_tmp44)
+    _tmp49 = numpy.cos(_tmp44)
+    _tmp50 = _tmp47*_tmp49 + _tmp48
+    _tmp51 = 0.1767766952966369*_tmp45*_tmp46*_tmp49*p_0 - _tmp48
     _tmp53 = theta_4**2
-    _tmp54 = (1/2)*theta_4
-    _tmp55 = numpy.sin(_tmp54)
-    _tmp56 = arck(_tmp54)
-    _tmp57 = theta_7**2
-    _tmp58 = (1/2)*theta_7
-    _tmp59 = numpy.cos(_tmp58)
-    _tmp60 = arck(_tmp58)
-    _tmp61 = numpy.cos(_tmp54)
-    _tmp62 = (1/4)*_tmp53*_tmp56
-    _tmp63 = _tmp19*_tmp62
-    _tmp64 = numpy.sin(_tmp58)
-    _tmp65 = _tmp28*_tmp57*_tmp60
-    _tmp66 = _tmp10*_tmp65
+    _tmp52 = 0.5*theta_4
+    _tmp54 = arck(_tmp52)
+    _tmp55 = 0.25*_tmp53*_tmp54
+    _tmp56 = _tmp55*numpy.cos(_tmp52)
+    _tmp58 = theta_7**2
+    _tmp57 = 0.5*theta_7
+    _tmp59 = arck(_tmp57)
+    _tmp60 = _tmp24*_tmp58*_tmp59
+    _tmp61 = _tmp60*numpy.sin(_tmp57)
+    _tmp62 = numpy.sin(_tmp52)
+    _tmp63 = numpy.cos(_tmp57)
     return [
         0,
         -1,
@@ -267,15 +264,15 @@ def _linear(theta, params):
         1,
         0,
         0,
-        (3/50)*_tmp0 - _tmp2 - _tmp6,
+        -_tmp1 + 0.06*_tmp2 - _tmp6,
         0,
         -_tmp6,
         0,
         0,
         0,
-        (3/50)*_tmp1 + (9/125)*_tmp5 + _tmp7 - _tmp8,
+        0.06*_tmp0 + 0.072*_tmp5 + _tmp7 - _tmp8,
         0,
-        (9/125)*_tmp5 - _tmp8,
+        0.072*_tmp5 - _tmp8,
         0,
         0,
         1,
@@ -284,213 +281,212 @@ def _linear(theta, params):
         0,
         0,
         1,
-        -1/25*_tmp10 - 7/100*_tmp11,
-        (1/20)*_tmp0 - _tmp14 + (1/25)*_tmp15 + _tmp2,
-        -_tmp14 + (1/25)*_tmp15,
+        -0.04*_tmp10 - 0.07*_tmp11,
+        _tmp1 - _tmp14 + 0.04*_tmp15 + 0.05*_tmp2,
+        -_tmp14 + 0.04*_tmp15,
         0,
         0,
         0,
-        -7/100*_tmp10 + (1/25)*_tmp11,
-        (1/20)*_tmp1 + _tmp16 - _tmp7,
+        -0.07*_tmp10 + 0.04*_tmp11,
+        0.05*_tmp0 + _tmp16 - _tmp7,
         _tmp16,
         0,
         0,
         0,
         0,
-        _tmp1*_tmp18*p_0*theta_5 - _tmp19*_tmp23 - _tmp24*_tmp30 - _tmp29*_tmp31*_tmp32 - _tmp40,
-        -_tmp18*_tmp19*theta_5 - _tmp23*_tmp43 + (1/4)*_tmp24*_tmp26*_tmp27*_tmp32*p_0 - _tmp30*_tmp31 + (1/4)*_tmp37*_tmp38*_tmp41*p_0 - _tmp42,
+        _tmp0*_tmp18*p_0*theta_5 - _tmp20*_tmp21*_tmp25 - _tmp26*_tmp28 - _tmp29*_tmp32 - _tmp40,
+        -_tmp18*_tmp29*theta_5 - _tmp20*_tmp28 + 0.25*_tmp21*_tmp22*_tmp23*_tmp26*p_0 - _tmp32*_tmp43 + 0.25*_tmp34*_tmp35*_tmp41*p_0 - _tmp42,
         0,
-        (1/4)*_tmp1*_tmp53*_tmp55*_tmp56*p_0 + (1/4)*_tmp11*_tmp57*_tmp59*_tmp60*p_0 + _tmp24*_tmp52 - _tmp31*_tmp51 - _tmp40 - _tmp61*_tmp63 - _tmp64*_tmp66,
-        _tmp11*_tmp64*_tmp65 + _tmp24*_tmp51 + _tmp31*_tmp52 + _tmp39*_tmp41 - _tmp42 - _tmp43*_tmp61*_tmp62 - _tmp55*_tmp63 + _tmp59*_tmp66,
+        0.25*_tmp0*_tmp53*_tmp54*_tmp62*p_0 - _tmp10*_tmp61 + 0.25*_tmp11*_tmp58*_tmp59*_tmp63*p_0 + _tmp21*_tmp51 - _tmp27*_tmp50 - _tmp29*_tmp56 - _tmp40,
+        _tmp10*_tmp60*_tmp63 + _tmp11*_tmp61 + _tmp21*_tmp50 + _tmp27*_tmp51 - _tmp29*_tmp55*_tmp62 + _tmp36*_tmp41 - _tmp42 - _tmp43*_tmp56,
     ]
 
 
 def _newton(theta, delta, params):
-    """exact compliant closure F(delta) and dF/ddelta (589 operations)."""
+    """exact compliant closure F(delta) and dF/ddelta (556 operations)."""
     theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7 = theta
     delta_2, delta_3, delta_4, delta_5, delta_6, delta_7 = delta
     p_0, = params
     _tmp0 = delta_3 + delta_5
-    _tmp1 = theta_3 + theta_5
-    _tmp2 = numpy.sin(_tmp1)
-    _tmp3 = numpy.sin(_tmp0)
-    _tmp4 = (1/2)*delta_3
-    _tmp5 = (1/2)*delta_5
-    _tmp6 = numpy.sin(_tmp4 + _tmp5)**2
-    _tmp7 = (9/125)*_tmp3 - 3/50*_tmp6
-    _tmp8 = numpy.sin(theta_3)
-    _tmp9 = numpy.sin(delta_3)
-    _tmp10 = (1/50)*_tmp9
-    _tmp11 = numpy.sin(_tmp4)**2
-    _tmp12 = _tmp10 + (3/25)*_tmp11
-    _tmp13 = numpy.cos(_tmp1)
-    _tmp14 = -3/100*_tmp3 - 18/125*_tmp6
-    _tmp15 = numpy.cos(theta_3)
-    _tmp16 = (1/25)*_tmp11
-    _tmp17 = -_tmp16 + (3/50)*_tmp9
+    _tmp1 = numpy.sin(theta_3)
+    _tmp2 = numpy.sin(delta_3)
+    _tmp3 = 0.02*_tmp2
+    _tmp4 = 0.5*delta_3
+    _tmp5 = numpy.sin(_tmp4)**2
+    _tmp6 = _tmp3 + 0.12*_tmp5
+    _tmp7 = theta_3 + theta_5
+    _tmp8 = numpy.sin(_tmp7)
+    _tmp9 = numpy.sin(_tmp0)
+    _tmp10 = 0.5*delta_5
+    _tmp11 = numpy.sin(_tmp10 + _tmp4)**2
+    _tmp12 = -0.06*_tmp11 + 0.072*_tmp9
+    _tmp13 = numpy.cos(theta_3)
+    _tmp14 = 0.04*_tmp5
+    _tmp15 = -_tmp14 + 0.06*_tmp2
+    _tmp16 = numpy.cos(_tmp7)
+    _tmp17 = -0.144*_tmp11 - 0.03*_tmp9
     _tmp18 = delta_5 + theta_5
     _tmp19 = delta_3 + theta_3
     _tmp20 = numpy.sin(_tmp19)
     _tmp21 = _tmp18**2
-    _tmp22 = (2500/3791)*delta_5 + (2500/3791)*theta_5
-    _tmp23 = -1/2*sinr1(_tmp18) + (11478125000/54483042671)*sinr1(_tmp22)
-    _tmp24 = _tmp21*_tmp23 - 59/3791
-    _tmp25 = numpy.cos(_tmp19)
-    _tmp26 = numpy.sqrt(3673)
-    _tmp27 = _tmp5 + (1/2)*theta_5
-    _tmp28 = (1250/3791)*delta_5 + (1250/3791)*theta_5
-    _tmp29 = -312500000/54483042671*_tmp26*sinr1(_tmp28) + sinr1(_tmp27)
-    _tmp30 = (1/4)*_tmp21
-    _tmp31 = _tmp29*_tmp30 + (5189181/6250000)/((3791/125000)*_tmp26 + 14371681/6250000)
-    _tmp32 = (1/50)*_tmp26*numpy.sin(_tmp28) + numpy.sin(_tmp27)
+    _tmp22 = 0.6594566077552098*delta_5 + 0.6594566077552098*theta_5
+    _tmp23 = -0.5*sinr1(_tmp18) + 0.21067334783983213*sinr1(_tmp22)
+    _tmp24 = _tmp21*_tmp23 - 0.01556317594302295
+    _tmp25 = 0.5*delta_6 + 0.5*theta_6
+    _tmp26 = numpy.sin(_tmp25)
+    _tmp27 = arck(_tmp25)
+    _tmp28 = _tmp26*_tmp27
+    _tmp29 = numpy.cos(theta_1)
+    _tmp30 = delta_6 + theta_6
+    _tmp31 = _tmp30**2
+    _tmp32 = 0.25*p_0
     _tmp33 = _tmp31*_tmp32
-    _tmp34 = (1/2)*_tmp18
-    _tmp35 = _tmp34*p_0
-    _tmp36 = _tmp33*_tmp35
-    _tmp37 = _tmp25*_tmp36
-    _tmp38 = numpy.cos(theta_1)
-    _tmp39 = (1/2)*delta_6 + (1/2)*theta_6
-    _tmp40 = arck(_tmp39)
-    _tmp41 = numpy.sin(_tmp39)
-    _tmp42 = _tmp40*_tmp41
-    _tmp43 = delta_6 + theta_6
-    _tmp44 = _tmp43**2
-    _tmp45 = (1/4)*p_0
+    _tmp34 = _tmp29*_tmp33
+    _tmp35 = numpy.cos(_tmp25)
+    _tmp36 = _tmp27*_tmp35
+    _tmp37 = numpy.sin(theta_1)
+    _tmp38 = _tmp33*_tmp37
+    _tmp39 = numpy.cos(_tmp19)
+    _tmp40 = 0.3297283038776049*delta_5 + 0.3297283038776049*theta_5
+    _tmp41 = _tmp10 + 0.5*theta_5
+    _tmp42 = -0.347615499514091*sinr1(_tmp40) + sinr1(_tmp41)
+    _tmp43 = 0.25*_tmp21
+    _tmp44 = _tmp42*_tmp43 + 0.20066894885245268
+    _tmp45 = 1.2121056059601407*numpy.sin(_tmp40) + numpy.sin(_tmp41)
     _tmp46 = _tmp44*_tmp45
-    _tmp47 = _tmp42*_tmp46
-    _tmp48 = numpy.sin(theta_1)
-    _tmp49 = numpy.cos(_tmp39)
-    _tmp50 = _tmp40*_tmp49
-    _tmp51 = _tmp46*_tmp50
-    _tmp52 = _tmp19**2
-    _tmp53 = _tmp4 + (1/2)*theta_3
-    _tmp54 = numpy.sin(_tmp53)
-    _tmp55 = arck(_tmp53)
-    _tmp56 = (1/2)*theta_1
-    _tmp57 = _tmp45*theta_1**2*arck(_tmp56)
-    _tmp58 = -1/4*_tmp52*_tmp54*_tmp55*p_0 + _tmp57*numpy.sin(_tmp56)
-    _tmp59 = _tmp24*p_0
-    _tmp60 = _tmp18*_tmp59
-    _tmp61 = _tmp25*_tmp60
-    _tmp62 = _tmp20*_tmp36
-    _tmp63 = numpy.cos(_tmp53)
-    _tmp64 = _tmp55*_tmp63
-    _tmp65 = -_tmp45*_tmp52*_tmp64 + _tmp57*numpy.cos(_tmp56)
-    _tmp66 = theta_1 + theta_2
-    _tmp67 = numpy.sin(_tmp66)
-    _tmp68 = numpy.sin(delta_2)
-    _tmp69 = (1/2)*delta_2
-    _tmp70 = numpy.sin(_tmp69)**2
-    _tmp71 = (1/25)*_tmp68 - 7/50*_tmp70
-    _tmp72 = -_tmp10 + (1/10)*_tmp11
-    _tmp73 = theta_3 + theta_4
-    _tmp74 = numpy.sin(_tmp73)
-    _tmp75 = numpy.sin(delta_3 + delta_4)
-    _tmp76 = (1/2)*delta_4
-    _tmp77 = numpy.sin(_tmp4 + _tmp76)**2
-    _tmp78 = (1/20)*_tmp75 + (2/25)*_tmp77
-    _tmp79 = numpy.sqrt(2)
-    _tmp80 = _tmp69 + (1/2)*theta_2
-    _tmp81 = arck(_tmp80)
-    _tmp82 = numpy.sin(_tmp80)
-    _tmp83 = _tmp81*_tmp82
-    _tmp84 = delta_2 + theta_2
-    _tmp85 = _tmp84**2
-    _tmp86 = (1/8)*p_0
-    _tmp87 = _tmp85*_tmp86
-    _tmp88 = _tmp83*_tmp87
-    _tmp89 = _tmp79*_tmp88
-    _tmp90 = numpy.cos(_tmp80)
-    _tmp91 = _tmp81*_tmp90
-    _tmp92 = _tmp87*_tmp91
-    _tmp93 = _tmp79*_tmp92 + _tmp89
-    _tmp94 = numpy.cos(_tmp66)
-    _tmp95 = -7/100*_tmp68 - 2/25*_tmp70
-    _tmp96 = numpy.cos(_tmp73)
-    _tmp97 = (1/25)*_tmp75 - 1/10*_tmp77
-    _tmp98 = _tmp16 + (1/20)*_tmp9
-    _tmp99 = (1/8)*_tmp79*_tmp81*_tmp85*_tmp90*p_0 - _tmp89
+    _tmp47 = 0.5*_tmp18
+    _tmp48 = _tmp47*p_0
+    _tmp49 = _tmp46*_tmp48
+    _tmp50 = _tmp39*_tmp49
+    _tmp51 = 0.5*theta_1
+    _tmp52 = _tmp32*theta_1**2*arck(_tmp51)
+    _tmp53 = _tmp19**2
+    _tmp54 = _tmp4 + 0.5*theta_3
+    _tmp55 = numpy.sin(_tmp54)
+    _tmp56 = arck(_tmp54)
+    _tmp57 = _tmp52*numpy.sin(_tmp51) - 0.25*_tmp53*_tmp55*_tmp56*p_0
+    _tmp58 = _tmp24*p_0
+    _tmp59 = _tmp18*_tmp58
+    _tmp60 = _tmp39*_tmp59
+    _tmp61 = _tmp20*_tmp49
+    _tmp62 = numpy.cos(_tmp54)
+    _tmp63 = _tmp56*_tmp62
+    _tmp64 = -_tmp32*_tmp53*_tmp63 + _tmp52*numpy.cos(_tmp51)
+    _tmp65 = theta_3 + theta_4
+    _tmp66 = numpy.sin(_tmp65)
+    _tmp67 = numpy.sin(delta_3 + delta_4)
+    _tmp68 = 0.5*delta_4
+    _tmp69 = numpy.sin(_tmp4 + _tmp68)**2
+    _tmp70 = 0.05*_tmp67 + 0.08*_tmp69
+    _tmp71 = -_tmp3 + 0.1*_tmp5
+    _tmp72 = theta_1 + theta_2
+    _tmp73 = numpy.sin(_tmp72)
+    _tmp74 = numpy.sin(delta_2)
+    _tmp75 = 0.5*delta_2
+    _tmp76 = numpy.sin(_tmp75)**2
+    _tmp77 = 0.04*_tmp74 - 0.14*_tmp76
+    _tmp78 = delta_2 + theta_2
+    _tmp79 = _tmp78**2
+    _tmp80 = 0.1767766952966369*_tmp79
+    _tmp81 = _tmp75 + 0.5*theta_2
+    _tmp82 = arck(_tmp81)
+    _tmp83 = p_0*numpy.sin(_tmp81)
+    _tmp84 = _tmp82*_tmp83
+    _tmp85 = _tmp80*_tmp84
+    _tmp86 = numpy.cos(_tmp81)
+    _tmp87 = _tmp86*p_0
+    _tmp88 = _tmp82*_tmp87
+    _tmp89 = _tmp80*_tmp88 + _tmp85
+    _tmp90 = _tmp14 + 0.05*_tmp2
+    _tmp91 = numpy.cos(_tmp65)
+    _tmp92 = 0.04*_tmp67 - 0.1*_tmp69
+    _tmp93 = numpy.cos(_tmp72)
+    _tmp94 = -0.07*_tmp74 - 0.08*_tmp76
+    _tmp95 = 0.1767766952966369*_tmp79*_tmp82*_tmp86*p_0 - _tmp85
+    _tmp96 = _tmp68 + 0.5*theta_4
+    _tmp97 = arck(_tmp96)
     _tmp100 = delta_4 + theta_4
     _tmp101 = _tmp100**2
-    _tmp102 = _tmp76 + (1/2)*theta_4
-    _tmp103 = numpy.sin(_tmp102)
-    _tmp104 = arck(_tmp102)
-    _tmp105 = delta_7 + theta_7
-    _tmp106 = _tmp105**2
-    _tmp107 = _tmp66 + delta_2
-    _tmp108 = numpy.cos(_tmp107)
-    _tmp109 = (1/2)*delta_7 + (1/2)*theta_7
-    _tmp110 = numpy.cos(_tmp109)
-    _tmp111 = arck(_tmp109)
-    _tmp112 = numpy.cos(_tmp102)
-    _tmp113 = _tmp104*_tmp112
-    _tmp114 = _tmp101*_tmp45
-    _tmp115 = _tmp114*_tmp25
-    _tmp116 = _tmp113*_tmp115
-    _tmp117 = numpy.sin(_tmp109)
-    _tmp118 = _tmp111*_tmp117
-    _tmp119 = numpy.sin(_tmp107)
-    _tmp120 = _tmp106*_tmp45
-    _tmp121 = _tmp119*_tmp120
-    _tmp122 = _tmp118*_tmp121
-    _tmp123 = _tmp103*_tmp104
-    _tmp124 = _tmp115*_tmp123
-    _tmp125 = _tmp114*_tmp20
-    _tmp126 = _tmp113*_tmp125
-    _tmp127 = _tmp110*_tmp111
-    _tmp128 = _tmp108*_tmp120
-    _tmp129 = _tmp118*_tmp128 + _tmp121*_tmp127
-    _tmp130 = _tmp0 + _tmp1
-    _tmp131 = numpy.sin(_tmp130)
-    _tmp132 = (9/125)*_tmp131
-    _tmp133 = numpy.cos(_tmp130)
-    _tmp134 = (3/100)*_tmp133
-    _tmp135 = (1/50)*_tmp20
-    _tmp136 = _tmp54*_tmp55
-    _tmp137 = (1/2)*p_0
+    _tmp98 = numpy.cos(_tmp96)
+    _tmp99 = _tmp97*_tmp98
+    _tmp102 = _tmp101*_tmp32
+    _tmp103 = _tmp102*_tmp99
+    _tmp104 = _tmp103*_tmp39
+    _tmp107 = 0.5*delta_7 + 0.5*theta_7
+    _tmp108 = arck(_tmp107)
+    _tmp111 = delta_7 + theta_7
+    _tmp112 = _tmp111**2
+    _tmp105 = _tmp72 + delta_2
+    _tmp106 = numpy.sin(_tmp105)
+    _tmp109 = numpy.sin(_tmp107)
+    _tmp110 = _tmp108*_tmp109
+    _tmp113 = _tmp112*_tmp32
+    _tmp114 = _tmp110*_tmp113
+    _tmp115 = _tmp106*_tmp114
+    _tmp116 = numpy.sin(_tmp96)
+    _tmp117 = numpy.cos(_tmp105)
+    _tmp118 = numpy.cos(_tmp107)
+    _tmp119 = _tmp116*_tmp97
+    _tmp120 = _tmp102*_tmp119
+    _tmp121 = _tmp120*_tmp39
+    _tmp122 = _tmp103*_tmp20
+    _tmp123 = _tmp108*_tmp118
+    _tmp124 = _tmp113*_tmp123
+    _tmp125 = _tmp106*_tmp124 + _tmp114*_tmp117
+    _tmp126 = _tmp0 + _tmp7
+    _tmp127 = numpy.cos(_tmp126)
+    _tmp128 = 0.03*_tmp127
+    _tmp129 = numpy.sin(_tmp126)
+    _tmp130 = 0.072*_tmp129
+    _tmp131 = 0.02*_tmp20
+    _tmp132 = 0.0625*p_0
+    _tmp133 = _tmp132*_tmp19**3*(3*cosr2(_tmp54) + sinr1(_tmp54) - 3*sinr2(_tmp54))
+    _tmp134 = 0.125*p_0
+    _tmp135 = _tmp134*_tmp53
+    _tmp136 = _tmp55*_tmp56
+    _tmp137 = 0.5*p_0
     _tmp138 = _tmp137*_tmp19
-    _tmp139 = _tmp52*_tmp86
-    _tmp140 = (1/16)*p_0
-    _tmp141 = _tmp140*_tmp19**3*(3*cosr2(_tmp53) + sinr1(_tmp53) - 3*sinr2(_tmp53))
-    _tmp142 = _tmp136*_tmp138 + _tmp139*_tmp64 + _tmp141*_tmp54
-    _tmp143 = _tmp18*p_0*(2*_tmp18*_tmp23 + _tmp21*((71738281250000000/783012909176999951)*_tmp18*(cosr2(_tmp22) - 3*sinr2(_tmp22)) - _tmp34*(cosr2(_tmp18) - 3*sinr2(_tmp18)))) + _tmp59
-    _tmp144 = _tmp137*_tmp33 + _tmp31*_tmp35*((25/3791)*_tmp26*numpy.cos(_tmp28) + (1/2)*numpy.cos(_tmp27)) + _tmp32*_tmp35*(_tmp29*_tmp34 + _tmp30*(-488281250000000/783012909176999951*_tmp18*_tmp26*(cosr2(_tmp28) - 3*sinr2(_tmp28)) + (1/4)*_tmp18*(cosr2(_tmp27) - 3*sinr2(_tmp27))))
-    _tmp145 = _tmp137*_tmp43
-    _tmp146 = _tmp44*_tmp86
-    _tmp147 = _tmp140*_tmp43**3*(3*cosr2(_tmp39) + sinr1(_tmp39) - 3*sinr2(_tmp39))
-    _tmp148 = -_tmp145*_tmp42 - _tmp146*_tmp50 - _tmp147*_tmp41
-    _tmp149 = _tmp145*_tmp50 - _tmp146*_tmp42 + _tmp147*_tmp49
-    _tmp150 = (3/100)*_tmp131
-    _tmp151 = (1/50)*_tmp25
-    _tmp152 = _tmp136*_tmp139 - _tmp138*_tmp64 - _tmp141*_tmp63
-    _tmp155 = (1/2)*_tmp79
-    _tmp153 = _tmp137*_tmp84
-    _tmp154 = _tmp140*_tmp84**3*(3*cosr2(_tmp80) + sinr1(_tmp80) - 3*sinr2(_tmp80))
-    _tmp156 = _tmp155*(_tmp153*_tmp83 + _tmp154*_tmp82 + _tmp92)
-    _tmp157 = _tmp153*_tmp91 + _tmp154*_tmp90 - _tmp88
-    _tmp158 = _tmp155*_tmp157 + _tmp156
-    _tmp159 = -_tmp156 + (1/2)*_tmp157*_tmp79
-    _tmp160 = _tmp100 + _tmp19
-    _tmp161 = numpy.sin(_tmp160)
-    _tmp162 = numpy.cos(_tmp160)
-    _tmp163 = -1/20*_tmp161 + (1/25)*_tmp162
-    _tmp164 = _tmp100*_tmp137
-    _tmp165 = _tmp101*_tmp86
-    _tmp166 = _tmp100**3*_tmp140*(3*cosr2(_tmp102) + sinr1(_tmp102) - 3*sinr2(_tmp102))
-    _tmp167 = _tmp103*_tmp166 + _tmp113*_tmp165 + _tmp123*_tmp164
-    _tmp168 = _tmp112*_tmp166 + _tmp113*_tmp164 - _tmp123*_tmp165
-    _tmp169 = _tmp105*_tmp137
-    _tmp170 = _tmp106*_tmp86
-    _tmp171 = _tmp105**3*_tmp140*(3*cosr2(_tmp109) + sinr1(_tmp109) - 3*sinr2(_tmp109))
-    _tmp172 = _tmp117*_tmp171 + _tmp118*_tmp169 + _tmp127*_tmp170
-    _tmp173 = _tmp110*_tmp171 - _tmp118*_tmp170 + _tmp127*_tmp169
+    _tmp139 = _tmp133*_tmp55 + _tmp135*_tmp63 + _tmp136*_tmp138
+    _tmp140 = _tmp18*p_0*(2*_tmp18*_tmp23 + _tmp21*(0.09161826121794318*_tmp18*(cosr2(_tmp22) - 3*sinr2(_tmp22)) - _tmp47*(cosr2(_tmp18) - 3*sinr2(_tmp18)))) + _tmp58
+    _tmp141 = _tmp137*_tmp46 + _tmp44*_tmp48*(0.39966552557377366*numpy.cos(_tmp40) + 0.5*numpy.cos(_tmp41)) + _tmp45*_tmp48*(_tmp42*_tmp47 + _tmp43*(-0.037793019340658006*_tmp18*(cosr2(_tmp40) - 3*sinr2(_tmp40)) + 0.25*_tmp18*(cosr2(_tmp41) - 3*sinr2(_tmp41))))
+    _tmp142 = _tmp137*_tmp30
+    _tmp143 = _tmp134*_tmp31
+    _tmp144 = _tmp132*_tmp30**3*(3*cosr2(_tmp25) + sinr1(_tmp25) - 3*sinr2(_tmp25))
+    _tmp145 = -_tmp142*_tmp28 - _tmp143*_tmp36 - _tmp144*_tmp26
+    _tmp146 = _tmp142*_tmp36 - _tmp143*_tmp28 + _tmp144*_tmp35
+    _tmp147 = 0.02*_tmp39
+    _tmp148 = 0.03*_tmp129
+    _tmp149 = -_tmp133*_tmp62 + _tmp135*_tmp136 - _tmp138*_tmp63
+    _tmp150 = _tmp78**3
+    _tmp151 = 3*cosr2(_tmp81) + sinr1(_tmp81) - 3*sinr2(_tmp81)
+    _tmp152 = 0.04419417382415922*_tmp150*_tmp151
+    _tmp153 = 0.3535533905932738*_tmp78
+    _tmp154 = 0.08838834764831845*_tmp79
+    _tmp155 = _tmp154*_tmp84
+    _tmp156 = _tmp152*_tmp83 + _tmp153*_tmp84 + _tmp154*_tmp88
+    _tmp157 = _tmp152*_tmp87 + _tmp153*_tmp88 - _tmp155 + _tmp156
+    _tmp158 = 0.04419417382415922*_tmp150*_tmp151*_tmp86*p_0 - _tmp155 - _tmp156 + 0.3535533905932738*_tmp78*_tmp82*_tmp86*p_0
+    _tmp159 = _tmp100 + _tmp19
+    _tmp160 = numpy.cos(_tmp159)
+    _tmp161 = numpy.sin(_tmp159)
+    _tmp162 = 0.04*_tmp160 - 0.05*_tmp161
+    _tmp163 = _tmp100*_tmp137
+    _tmp164 = _tmp101*_tmp134
+    _tmp165 = _tmp100**3*_tmp132*(3*cosr2(_tmp96) + sinr1(_tmp96) - 3*sinr2(_tmp96))
+    _tmp166 = _tmp116*_tmp165 + _tmp119*_tmp163 + _tmp164*_tmp99
+    _tmp167 = -_tmp119*_tmp164 + _tmp163*_tmp99 + _tmp165*_tmp98
+    _tmp168 = _tmp111*_tmp137
+    _tmp169 = _tmp112*_tmp134
+    _tmp170 = _tmp111**3*_tmp132*(3*cosr2(_tmp107) + sinr1(_tmp107) - 3*sinr2(_tmp107))
+    _tmp171 = _tmp109*_tmp170 + _tmp110*_tmp168 + _tmp123*_tmp169
+    _tmp172 = -_tmp110*_tmp169 + _tmp118*_tmp170 + _tmp123*_tmp168
     return [
         -_tmp0 + delta_6,
-        -_tmp12*_tmp8 + _tmp13*_tmp14 + _tmp15*_tmp17 + _tmp18*_tmp20*_tmp24*p_0 - _tmp2*_tmp7 - _tmp37 - _tmp38*_tmp47 - _tmp48*_tmp51 - _tmp58,
-        _tmp12*_tmp15 + _tmp13*_tmp7 + _tmp14*_tmp2 + _tmp17*_tmp8 + _tmp38*_tmp51 - _tmp47*_tmp48 - _tmp61 - _tmp62 + _tmp65,
+        -_tmp1*_tmp6 - _tmp12*_tmp8 + _tmp13*_tmp15 + _tmp16*_tmp17 + _tmp18*_tmp20*_tmp24*p_0 - _tmp28*_tmp34 - _tmp36*_tmp38 - _tmp50 - _tmp57,
+        _tmp1*_tmp15 + _tmp12*_tmp16 + _tmp13*_tmp6 + _tmp17*_tmp8 - _tmp28*_tmp38 + _tmp34*_tmp36 - _tmp60 - _tmp61 + _tmp64,
         delta_2 - delta_3 - delta_4 + delta_7,
-        (1/4)*_tmp101*_tmp103*_tmp104*_tmp20*p_0 + (1/4)*_tmp106*_tmp108*_tmp110*_tmp111*p_0 - _tmp116 - _tmp122 + _tmp15*_tmp98 + _tmp38*_tmp99 - _tmp48*_tmp93 - _tmp58 - _tmp67*_tmp71 - _tmp72*_tmp8 - _tmp74*_tmp78 + _tmp94*_tmp95 + _tmp96*_tmp97,
-        -_tmp124 - _tmp126 + _tmp129 + _tmp15*_tmp72 + _tmp38*_tmp93 + _tmp48*_tmp99 + _tmp65 + _tmp67*_tmp95 + _tmp71*_tmp94 + _tmp74*_tmp97 + _tmp78*_tmp96 + _tmp8*_tmp98,
+        -_tmp1*_tmp71 + 0.25*_tmp101*_tmp116*_tmp20*_tmp97*p_0 - _tmp104 + 0.25*_tmp108*_tmp112*_tmp117*_tmp118*p_0 - _tmp115 + _tmp13*_tmp90 + _tmp29*_tmp95 - _tmp37*_tmp89 - _tmp57 - _tmp66*_tmp70 - _tmp73*_tmp77 + _tmp91*_tmp92 + _tmp93*_tmp94,
+        _tmp1*_tmp90 - _tmp121 - _tmp122 + _tmp125 + _tmp13*_tmp71 + _tmp29*_tmp89 + _tmp37*_tmp95 + _tmp64 + _tmp66*_tmp92 + _tmp70*_tmp91 + _tmp73*_tmp94 + _tmp77*_tmp93,
         0,
         -1,
         0,
@@ -498,16 +494,16 @@ def _newton(theta, delta, params):
         1,
         0,
         0,
-        -_tmp132 - _tmp134 - _tmp135 + _tmp142 + (3/50)*_tmp25 + _tmp61 + _tmp62,
+        -_tmp128 - _tmp130 - _tmp131 + _tmp139 + 0.06*_tmp39 + _tmp60 + _tmp61,
         0,
-        -_tmp132 - _tmp134 + _tmp143*_tmp20 - _tmp144*_tmp25,
-        _tmp148*_tmp38 - _tmp149*_tmp48,
+        -_tmp128 - _tmp130 + _tmp140*_tmp20 - _tmp141*_tmp39,
+        _tmp145*_tmp29 - _tmp146*_tmp37,
         0,
         0,
-        (9/125)*_tmp133 - _tmp150 + _tmp151 + _tmp152 + _tmp20*_tmp60 + (3/50)*_tmp20 - _tmp37,
+        0.072*_tmp127 + _tmp147 - _tmp148 + _tmp149 + _tmp20*_tmp59 + 0.06*_tmp20 - _tmp50,
         0,
-        (9/125)*_tmp133 - _tmp143*_tmp25 - _tmp144*_tmp20 - _tmp150,
-        _tmp148*_tmp48 + _tmp149*_tmp38,
+        0.072*_tmp127 - _tmp140*_tmp39 - _tmp141*_tmp20 - _tmp148,
+        _tmp145*_tmp37 + _tmp146*_tmp29,
         0,
         1,
         -1,
@@ -515,23 +511,23 @@ def _newton(theta, delta, params):
         0,
         0,
         1,
-        -7/100*_tmp108 - 1/25*_tmp119 - _tmp129 - _tmp158*_tmp48 + _tmp159*_tmp38,
-        _tmp124 + _tmp126 + _tmp135 + _tmp142 + _tmp163 + (1/20)*_tmp25,
-        _tmp163 + _tmp167*_tmp20 - _tmp168*_tmp25,
+        -0.04*_tmp106 - 0.07*_tmp117 - _tmp125 - _tmp157*_tmp37 + _tmp158*_tmp29,
+        _tmp121 + _tmp122 + _tmp131 + _tmp139 + _tmp162 + 0.05*_tmp39,
+        _tmp162 + _tmp166*_tmp20 - _tmp167*_tmp39,
         0,
         0,
-        _tmp108*_tmp173 - _tmp119*_tmp172,
-        (1/25)*_tmp108 - 7/100*_tmp119 - _tmp122 + _tmp127*_tmp128 + _tmp158*_tmp38 + _tmp159*_tmp48,
-        -_tmp116 + _tmp123*_tmp125 - _tmp151 + _tmp152 + (1/25)*_tmp161 + (1/20)*_tmp162 + (1/20)*_tmp20,
-        (1/25)*_tmp161 + (1/20)*_tmp162 - _tmp167*_tmp25 - _tmp168*_tmp20,
+        -_tmp106*_tmp171 + _tmp117*_tmp172,
+        -0.07*_tmp106 - _tmp115 + _tmp117*_tmp124 + 0.04*_tmp117 + _tmp157*_tmp29 + _tmp158*_tmp37,
+        -_tmp104 + _tmp120*_tmp20 - _tmp147 + _tmp149 + 0.05*_tmp160 + 0.04*_tmp161 + 0.05*_tmp20,
+        0.05*_tmp160 + 0.04*_tmp161 - _tmp166*_tmp39 - _tmp167*_tmp20,
         0,
         0,
-        _tmp108*_tmp172 + _tmp119*_tmp173,
+        _tmp106*_tmp172 + _tmp117*_tmp171,
     ]
 
 
 def _rigid_points(theta, params):
-    """rigid positions of the points (23 operations)."""
+    """rigid positions of the points (19 operations)."""
     theta_1, theta_2, _, _, _, _, _ = theta
     _tmp0 = numpy.sin(theta_1)
     _tmp1 = numpy.cos(theta_1)
@@ -539,90 +535,87 @@ def _rigid_points(theta, params):
     _tmp3 = numpy.sin(_tmp2)
     _tmp4 = numpy.cos(_tmp2)
     return [
-        -1/50*_tmp0 + (3/100)*_tmp1 - 7/100*_tmp3 + (1/25)*_tmp4,
-        (3/100)*_tmp0 + (1/50)*_tmp1 + (1/25)*_tmp3 + (7/100)*_tmp4,
+        -0.02*_tmp0 + 0.03*_tmp1 - 0.07*_tmp3 + 0.04*_tmp4,
+        0.03*_tmp0 + 0.02*_tmp1 + 0.04*_tmp3 + 0.07*_tmp4,
     ]
 
 
 def _dev_paper(theta, params):
-    """deviation of the points at level paper (40 operations)."""
+    """deviation of the points at level paper (36 operations)."""
     theta_1, theta_2, _, _, _, _, _ = theta
     p_0, = params
-    _tmp0 = (1/2)*theta_1
-    _tmp1 = (1/4)*p_0*theta_1**2*arck(_tmp0)
+    _tmp0 = 0.5*theta_1
+    _tmp1 = 0.25*p_0*theta_1**2*arck(_tmp0)
     _tmp2 = numpy.sin(theta_1)
-    _tmp4 = numpy.sqrt(2)
-    _tmp5 = theta_2**2
-    _tmp3 = (1/2)*theta_2
-    _tmp6 = arck(_tmp3)
-    _tmp7 = (1/8)*_tmp4*_tmp5*_tmp6*p_0
-    _tmp8 = _tmp7*numpy.sin(_tmp3)
-    _tmp9 = numpy.cos(_tmp3)
-    _tmp10 = _tmp7*_tmp9 + _tmp8
-    _tmp11 = numpy.cos(theta_1)
-    _tmp12 = (1/8)*_tmp4*_tmp5*_tmp6*_tmp9*p_0 - _tmp8
+    _tmp4 = theta_2**2
+    _tmp3 = 0.5*theta_2
+    _tmp5 = arck(_tmp3)
+    _tmp6 = 0.1767766952966369*_tmp4*_tmp5*p_0
+    _tmp7 = _tmp6*numpy.sin(_tmp3)
+    _tmp8 = numpy.cos(_tmp3)
+    _tmp9 = _tmp6*_tmp8 + _tmp7
+    _tmp10 = numpy.cos(theta_1)
+    _tmp11 = 0.1767766952966369*_tmp4*_tmp5*_tmp8*p_0 - _tmp7
     return [
-        -_tmp1*numpy.sin(_tmp0) - _tmp10*_tmp2 + _tmp11*_tmp12,
-        _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp11 + _tmp12*_tmp2,
+        -_tmp1*numpy.sin(_tmp0) + _tmp10*_tmp11 - _tmp2*_tmp9,
+        _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp9 + _tmp11*_tmp2,
     ]
 
 
 def _dev_first_order(theta, delta, params):
-    """deviation of the points at level first_order (56 operations)."""
+    """deviation of the points at level first_order (50 operations)."""
     theta_1, theta_2, _, _, _, _, _ = theta
     delta_2, _, _, _, _, _ = delta
     p_0, = params
-    _tmp0 = (1/2)*theta_1
-    _tmp1 = (1/4)*p_0*theta_1**2*arck(_tmp0)
+    _tmp0 = 0.5*theta_1
+    _tmp1 = 0.25*p_0*theta_1**2*arck(_tmp0)
     _tmp2 = theta_1 + theta_2
     _tmp3 = numpy.sin(_tmp2)
     _tmp4 = numpy.cos(_tmp2)
     _tmp5 = numpy.cos(theta_1)
-    _tmp7 = numpy.sqrt(2)
-    _tmp8 = theta_2**2
-    _tmp6 = (1/2)*theta_2
-    _tmp9 = arck(_tmp6)
-    _tmp10 = (1/8)*_tmp7*_tmp8*_tmp9*p_0
-    _tmp11 = _tmp10*numpy.sin(_tmp6)
-    _tmp12 = numpy.cos(_tmp6)
-    _tmp13 = -_tmp11 + (1/8)*_tmp12*_tmp7*_tmp8*_tmp9*p_0
-    _tmp14 = numpy.sin(theta_1)
-    _tmp15 = _tmp10*_tmp12 + _tmp11
+    _tmp7 = theta_2**2
+    _tmp6 = 0.5*theta_2
+    _tmp8 = arck(_tmp6)
+    _tmp9 = 0.1767766952966369*_tmp7*_tmp8*p_0
+    _tmp10 = _tmp9*numpy.sin(_tmp6)
+    _tmp11 = numpy.cos(_tmp6)
+    _tmp12 = -_tmp10 + 0.1767766952966369*_tmp11*_tmp7*_tmp8*p_0
+    _tmp13 = numpy.sin(theta_1)
+    _tmp14 = _tmp10 + _tmp11*_tmp9
     return [
-        -_tmp1*numpy.sin(_tmp0) + _tmp13*_tmp5 - _tmp14*_tmp15 + delta_2*(-1/25*_tmp3 - 7/100*_tmp4),
-        _tmp1*numpy.cos(_tmp0) + _tmp13*_tmp14 + _tmp15*_tmp5 + delta_2*(-7/100*_tmp3 + (1/25)*_tmp4),
+        -_tmp1*numpy.sin(_tmp0) + _tmp12*_tmp5 - _tmp13*_tmp14 + delta_2*(-0.04*_tmp3 - 0.07*_tmp4),
+        _tmp1*numpy.cos(_tmp0) + _tmp12*_tmp13 + _tmp14*_tmp5 + delta_2*(-0.07*_tmp3 + 0.04*_tmp4),
     ]
 
 
 def _dev_exact(theta, delta, params):
-    """deviation of the points at level exact (67 operations)."""
+    """deviation of the points at level exact (60 operations)."""
     theta_1, theta_2, _, _, _, _, _ = theta
     delta_2, _, _, _, _, _ = delta
     p_0, = params
-    _tmp0 = (1/2)*theta_1
-    _tmp1 = (1/4)*p_0*theta_1**2*arck(_tmp0)
+    _tmp0 = 0.5*theta_1
+    _tmp1 = 0.25*p_0*theta_1**2*arck(_tmp0)
     _tmp2 = theta_1 + theta_2
     _tmp3 = numpy.sin(_tmp2)
     _tmp4 = numpy.sin(delta_2)
-    _tmp5 = (1/2)*delta_2
+    _tmp5 = 0.5*delta_2
     _tmp6 = numpy.sin(_tmp5)**2
-    _tmp7 = (1/25)*_tmp4 - 7/50*_tmp6
+    _tmp7 = 0.04*_tmp4 - 0.14*_tmp6
     _tmp8 = numpy.cos(_tmp2)
-    _tmp9 = -7/100*_tmp4 - 2/25*_tmp6
+    _tmp9 = -0.07*_tmp4 - 0.08*_tmp6
     _tmp10 = numpy.sin(theta_1)
-    _tmp12 = numpy.sqrt(2)
-    _tmp13 = (delta_2 + theta_2)**2
-    _tmp11 = _tmp5 + (1/2)*theta_2
-    _tmp14 = arck(_tmp11)
-    _tmp15 = (1/8)*_tmp12*_tmp13*_tmp14*p_0
-    _tmp16 = _tmp15*numpy.sin(_tmp11)
-    _tmp17 = numpy.cos(_tmp11)
-    _tmp18 = _tmp15*_tmp17 + _tmp16
-    _tmp19 = numpy.cos(theta_1)
-    _tmp20 = (1/8)*_tmp12*_tmp13*_tmp14*_tmp17*p_0 - _tmp16
+    _tmp12 = (delta_2 + theta_2)**2
+    _tmp11 = _tmp5 + 0.5*theta_2
+    _tmp13 = arck(_tmp11)
+    _tmp14 = 0.1767766952966369*_tmp12*_tmp13*p_0
+    _tmp15 = _tmp14*numpy.sin(_tmp11)
+    _tmp16 = numpy.cos(_tmp11)
+    _tmp17 = _tmp14*_tmp16 + _tmp15
+    _tmp18 = numpy.cos(theta_1)
+    _tmp19 = 0.1767766952966369*_tmp12*_tmp13*_tmp16*p_0 - _tmp15
     return [
-        -_tmp1*numpy.sin(_tmp0) - _tmp10*_tmp18 + _tmp19*_tmp20 - _tmp3*_tmp7 + _tmp8*_tmp9,
-        _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp20 + _tmp18*_tmp19 + _tmp3*_tmp9 + _tmp7*_tmp8,
+        -_tmp1*numpy.sin(_tmp0) - _tmp10*_tmp17 + _tmp18*_tmp19 - _tmp3*_tmp7 + _tmp8*_tmp9,
+        _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp19 + _tmp17*_tmp18 + _tmp3*_tmp9 + _tmp7*_tmp8,
     ]
 
 

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 
 from ..analysis import LEVELS, Analysis
+from .literals import float_literals
 from .routines import Argument, Routine, flatten, optimize
 
 
@@ -86,6 +87,11 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
         routines[f"dev_{lv}"] = Routine(
             f"dev_{lv}", args, (), tuple(e for n in names for e in an.point_deviation(n, lv)),
             f"deviation of the points at level {lv}")
+    # Numbers reach the printers as correctly rounded doubles (exact rationals stay in mpmath).
+    routines = {k: Routine(r.name, r.arguments,
+                           tuple((s, float_literals(e)) for s, e in r.assignments),
+                           tuple(float_literals(e) for e in r.outputs), r.doc)
+                for k, r in routines.items()}
     if cse:
         routines = {k: optimize(r) for k, r in routines.items()}
     return Plan(an, names, levels, needs_loops, sol.closed_form, routines, len(an.deltas),

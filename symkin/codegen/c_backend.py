@@ -8,6 +8,7 @@ from sympy.printing.c import C99CodePrinter
 from .. import special
 from ..templating import render
 from .build import Plan
+from .literals import to_double
 from .common import (header_lines, parameter_symbols, renamed, special_functions, used_symbols,
                      with_dependencies)
 
@@ -26,6 +27,10 @@ class Printer(C99CodePrinter):
 
     def _print_Exp1(self, expr):  # noqa: N802
         return "2.718281828459045235360287471352662"
+
+    def _print_Float(self, expr):  # noqa: N802
+        # literals.float_literals made every Float a double: print the shortest exact decimal.
+        return repr(float(expr))
 
 
 def routine_source(routine, printer: Printer) -> dict:
@@ -59,7 +64,7 @@ def emit(plan: Plan, source: str) -> tuple[str, str]:
         hinges=[kin.hinges[a].name for a in sorted(kin.hinges)],
         limits=[(a - 1, repr(float(sp.N(h.limit, 20)))) for a, h in sorted(kin.hinges.items())
                 if h.limit is not None],
-        parameters=[(p.name, repr(float(p.value))) for p in an.mechanism.parameters],
+        parameters=[(p.name, repr(to_double(p.value))) for p in an.mechanism.parameters],
         points=list(plan.points), levels=[LEVEL_CODES[lv] for lv in plan.levels],
         level_names=list(plan.levels),
         n_theta=len(an.thetas), input_index=[a - 1 for a in kin.inputs],

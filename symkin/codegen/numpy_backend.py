@@ -8,12 +8,18 @@ from sympy.printing.numpy import NumPyPrinter
 from .. import special
 from ..templating import render
 from .build import Plan
+from .literals import float_literals, to_double
 from .common import (header_lines, parameter_symbols, renamed, special_functions, used_symbols,
                      with_dependencies)
 
 
 class Printer(NumPyPrinter):
     """NumPyPrinter; symkin's special functions print themselves by their registry names."""
+
+    def _print_Float(self, expr):  # noqa: N802
+        # NumPyPrinter prints 15 digits; every Float here is a double (literals.float_literals):
+        # print the shortest decimal that reads back to it exactly.
+        return repr(float(expr))
 
 
 def routine_source(routine, printer: Printer) -> dict:
@@ -40,8 +46,8 @@ def emit(plan: Plan, source: str, dtype: str = "float64") -> str:
     defaults = []
     for p in an.mechanism.parameters:
         defaults.append({"name": p.name, "symbol": names[p.symbol].name,
-                         "expr": printer.doprint(p.expr.xreplace(names)),
-                         "value": repr(float(p.value))})
+                         "expr": printer.doprint(float_literals(p.expr.xreplace(names))),
+                         "value": repr(to_double(p.value))})
     kernels = with_dependencies(special_functions(plan))
     return render(
         "numpy/module.py.j2",

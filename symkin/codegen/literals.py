@@ -1,0 +1,97 @@
+"""Numbers as generated code must see them: correctly rounded float64 literals.
+
+The derivation keeps exact arithmetic (a coordinate of 0.0851234567 m is the rational
+851234567/10^10, and the dyad formulas hold square roots of huge integers built from such
+rationals), which is what the 40-digit mpmath evaluation wants. A C or numpy printer would print
+those integers as they are (`integer constant is too large` in C, object arrays in numpy), so
+every numeric subexpression is folded here, once, into the double nearest to its exact value
+(evaluated with 40 digits, then rounded), and the printers write each double as the shortest
+decimal that reads back to it (`repr`).
+
+Small integers stay integers (exponents, signs, `2*x`), and rational exponents stay exact, so
+`x**(1/2)` still prints as `sqrt(x)`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import sympy as sp
+
+from ..errors import InputError
+
+#: Integers up to this magnitude are exact in a double and stay integers.
+EXACT_INT = 2 ** 53
+#: Digits of the evaluation that is rounded to a double (far beyond double's 17).
+DIGITS = 40
+
+
+def to_double(value: sp.Expr | float | int) -> float:
+    """The double nearest to a real numeric expression (evaluated with DIGITS digits first)."""
+    number = sp.N(sp.sympify(value), DIGITS)
+    if not (number.is_real and number.is_finite):
+        raise InputError(f"the constant {sp.sstr(value)[:60]} evaluates to {number}, which no "
+                         "float64 can hold", hint="keep parameters and geometry within float64 "
+                         "range (|x| < 1.8e308)")
+    result = float(number)
+    if not math.isfinite(result):
+        raise InputError(f"the constant {sp.sstr(value)[:60]} = {sp.N(number, 6)} overflows "
+                         "float64", hint="keep parameters and geometry within float64 range "
+                         "(|x| < 1.8e308)")
+    return result
+
+
+def _double(value: sp.Expr) -> sp.Float:
+    return sp.Float(to_double(value), 17) if to_double(value) != 0 else sp.Integer(0)
+
+
+def _simple(e: sp.Expr) -> bool:
+    """A number the printers already write exactly: a small integer."""
+    return e.is_Integer and abs(int(e)) < EXACT_INT
+
+
+def float_literals(expr: sp.Expr) -> sp.Expr:
+    """`expr` with every numeric subexpression replaced by its correctly rounded double.
+
+    The numeric factors of a product (and terms of a sum) are folded together, so the product of
+    two constants is rounded once, not twice."""
+    expr = sp.sympify(expr)
+    if not isinstance(expr, sp.Basic) or expr.is_Atom and not expr.is_number:
+        return expr
+    mapping: dict[sp.Expr, sp.Expr] = {}
+
+    def fold(e: sp.Expr) -> sp.Expr:
+        if e in mapping:
+            return mapping[e]
+        new = _fold(e)
+        mapping[e] = new
+        return new
+
+    def _fold(e: sp.Expr) -> sp.Expr:
+        if not e.free_symbols:
+            if not e.is_number or _simple(e):
+                return e
+            return _double(e)
+        if e.is_Atom:
+            return e
+        if e.is_Pow:
+            base, exp = e.args
+            new_exp = exp if exp.is_Rational and _simple_rational(exp) else fold(exp)
+            return sp.Pow(fold(base), new_exp)
+        if e.is_Mul or e.is_Add:
+            numeric = [a for a in e.args if not a.free_symbols]
+            rest = [fold(a) for a in e.args if a.free_symbols]
+            if numeric:
+                constant = e.func(*numeric)
+                if not _simple(constant):
+                    constant = _double(constant)
+                rest.append(constant)
+            return e.func(*rest)
+        args = [fold(a) for a in e.args]
+        return e.func(*args) if args != list(e.args) else e
+
+    return fold(expr)
+
+
+def _simple_rational(q: sp.Rational) -> bool:
+    return abs(q.p) < EXACT_INT and q.q < EXACT_INT
