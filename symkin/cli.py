@@ -12,8 +12,12 @@ from collections.abc import Sequence
 
 from . import __version__, load
 from .errors import InputError, SymkinError
+from .paths import output_dir, output_file
 from .reports import check_text, matrices_json, matrices_text
 from .structure import build
+
+#: File types `tradeoff --plot` can write (matplotlib picks the format from the suffix).
+PLOT_SUFFIXES = (".png", ".pdf", ".svg")
 
 
 def _check(args: argparse.Namespace) -> str:
@@ -64,6 +68,7 @@ def _derive(args: argparse.Namespace) -> str:
 
     if args.tolerance is not None and not args.tolerance > 0:
         raise InputError(f"tolerance must be positive, got {args.tolerance}", entry="--tolerance")
+    output_dir(args.output, "-o")
     written = derive(args.file, args.output, emit, points, levels, args.appendix, progress,
                      args.tolerance, args.range)
     return "".join(f"{path}\n" for path in written)
@@ -77,6 +82,8 @@ def _tradeoff(args: argparse.Namespace) -> str:
     mech = load(args.file)
     if args.samples < 3:
         raise InputError(f"--samples must be at least 3, got {args.samples}", entry="--samples")
+    if args.plot:
+        output_file(args.plot, "--plot", PLOT_SUFFIXES)
     spans = tradeoff.parse_ranges(args.range, mech.inputs, mech.path)
 
     def progress(message: str) -> None:
@@ -85,7 +92,11 @@ def _tradeoff(args: argparse.Namespace) -> str:
 
     table = tradeoff.run(mech, spans, args.samples, progress=progress)
     if args.plot:
-        tradeoff.plot(table, args.plot)
+        try:
+            tradeoff.plot(table, args.plot)
+        except OSError as exc:
+            raise InputError(f"cannot write '{args.plot}' ({exc.strerror or exc})",
+                             entry="--plot", hint="choose a path you can write to") from None
     return json.dumps(table.as_json(), indent=2) + "\n" if args.json else tradeoff.text(table)
 
 
@@ -96,15 +107,23 @@ def parser() -> argparse.ArgumentParser:
         description="Closed-form accuracy of planar compliant mechanisms (Hasan & Lilov, 2008).")
     top.add_argument("--version", action="version", version=f"symkin {__version__}")
     top.add_argument("--debug", action="store_true", help="show a traceback on errors")
+    # --debug after the command too; SUPPRESS keeps a top-level --debug from being reset.
+    debug = argparse.ArgumentParser(add_help=False)
+    debug.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                       help="show a traceback on errors")
     sub = top.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    check = sub.add_parser("check", help="validate a mechanism file and summarize it")
+
+    def command(name: str, help: str) -> argparse.ArgumentParser:
+        return sub.add_parser(name, help=help, parents=[debug])
+
+    check = command("check", "validate a mechanism file and summarize it")
     check.add_argument("file", metavar="FILE")
     check.set_defaults(run=_check)
-    matrices = sub.add_parser("matrices", help="labeling and structure matrices I, Phi, Psi")
+    matrices = command("matrices", "labeling and structure matrices I, Phi, Psi")
     matrices.add_argument("file", metavar="FILE")
     matrices.add_argument("--json", action="store_true", help="machine-readable output")
     matrices.set_defaults(run=_matrices)
-    ev = sub.add_parser("eval", help="deviation of the points in one configuration")
+    ev = command("eval", "deviation of the points in one configuration")
     ev.add_argument("file", metavar="FILE")
     ev.add_argument("--input", action="append", metavar="H=V",
                     help="input hinge angle in radians (an expression such as 10*deg is fine)")
@@ -113,7 +132,7 @@ def parser() -> argparse.ArgumentParser:
     ev.add_argument("--backend", choices=("sympy", "numpy", "c"), default="sympy")
     ev.add_argument("--json", action="store_true", help="machine-readable output")
     ev.set_defaults(run=_eval)
-    de = sub.add_parser("derive", help="write the LaTeX report and the C99 and numpy evaluators")
+    de = command("derive", "write the LaTeX report and the C99 and numpy evaluators")
     de.add_argument("file", metavar="FILE")
     de.add_argument("-o", "--output", default=".", metavar="DIR", help="output folder (.)")
     de.add_argument("--emit", metavar="LIST", help="latex,c,numpy (all by default)")
@@ -127,13 +146,14 @@ def parser() -> argparse.ArgumentParser:
     de.add_argument("--range", action="append", metavar="H=LO:HI",
                     help="input range for --tolerance (default -0.2:0.2 rad)")
     de.set_defaults(run=_derive)
-    tr = sub.add_parser("tradeoff", help="speed and accuracy of every variant over a range")
+    tr = command("tradeoff", "speed and accuracy of every variant over a range")
     tr.add_argument("file", metavar="FILE")
     tr.add_argument("--range", action="append", metavar="H=LO:HI",
                     help="input range (default -0.2:0.2 rad for every input)")
     tr.add_argument("--samples", type=int, default=25, metavar="N", help="samples (25)")
     tr.add_argument("--json", action="store_true", help="machine-readable output")
-    tr.add_argument("--plot", metavar="FILE.png", help="error against time, log-log")
+    tr.add_argument("--plot", metavar="FILE.png",
+                    help="error against time, log-log (.png, .pdf or .svg)")
     tr.add_argument("--quiet", action="store_true", help="no progress messages")
     tr.set_defaults(run=_tradeoff)
     return top
@@ -144,6 +164,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser().parse_args(argv)
     try:
         output = args.run(args)
+    except KeyboardInterrupt:
+        print("symkin: interrupted", file=sys.stderr)
+        return 130
     except SymkinError as exc:
         if args.debug:
             traceback.print_exc()

@@ -129,7 +129,11 @@ def derive(path: str | Path, out_dir: str | Path = ".", emit: Sequence[str] = EM
         raise InputError("--range needs --tolerance", entry="--range",
                          hint="add --tolerance, e.g. --tolerance 1e-6")
     files = generate(mech, emit, points, levels, appendix, progress, variant, notes)
-    return write_atomically(files, Path(out_dir))
+    try:
+        return write_atomically(files, Path(out_dir))
+    except OSError as exc:
+        raise InputError(f"cannot write into '{out_dir}' ({exc.strerror or exc})", entry="-o",
+                         hint="choose a folder you can write to") from None
 
 
 def import_numpy_module(source: str, name: str):
