@@ -45,6 +45,9 @@ BENCH = ROOT / "benchmarks"
 sys.path.insert(0, str(BENCH))
 
 import families  # noqa: E402
+from symkin.levels import LEVELS, get as level  # noqa: E402
+
+EXACT = level("exact").code
 
 EXAMPLES = {
     # example -> input ranges (radians) sampled uniformly; all inside the assembly range
@@ -53,7 +56,6 @@ EXAMPLES = {
     "nine_bar_platform": {"O": (-0.1, 0.1), "A": (-0.1, 0.1), "B": (-0.1, 0.1),
                           "K": (-0.1, 0.1)},
 }
-LEVEL_CODE = {"paper": 0, "first_order": 1, "exact": 2}
 # Compile flags for every timed C / C++ build: the same optimisation level symkin's runtime uses.
 C_FLAGS = ["-std=c99", "-pedantic", "-Wall", "-Wextra", "-O2", "-fPIC"]
 CXX_FLAGS = ["-std=c++14", "-O2", "-DNDEBUG", "-fPIC", "-w"]
@@ -233,7 +235,7 @@ class CBench:
                               ctypes.POINTER(ctypes.c_int)]
         self.n_inputs, self.n_points = n_inputs, n_points
 
-    def run(self, x: np.ndarray, level: int = 2, reps: int = 1) -> tuple[float, np.ndarray, int]:
+    def run(self, x: np.ndarray, level: int = EXACT, reps: int = 1) -> tuple[float, np.ndarray, int]:
         """(seconds for reps x len(x) calls, measured in C; out (N, n_points, 6); failures)."""
         x = np.ascontiguousarray(x, dtype=float).reshape(-1, self.n_inputs)
         out = np.zeros((len(x), self.n_points, 6))
@@ -243,7 +245,7 @@ class CBench:
                          ctypes.byref(fails))
         return secs, out, fails.value
 
-    def per_point(self, x: np.ndarray, level: int = 2, min_time: float = 0.3,
+    def per_point(self, x: np.ndarray, level: int = EXACT, min_time: float = 0.3,
                   repeat: int = 3) -> float:
         secs, _, _ = self.run(x, level, 1)
         reps = max(1, int(min_time / max(secs, 1e-9)))
@@ -668,7 +670,7 @@ def bench_example(example: str, quick: bool, sf: dict, workroot: Path) -> dict:
 
     # the C evaluator, checked against the mpmath reference (40 digits)
     check_x = sample(5)
-    _, c_out, fails = cb.run(check_x, 2)
+    _, c_out, fails = cb.run(check_x, EXACT)
     assert fails == 0, f"{example}: C evaluator failed on the check points"
     c_dev = c_out[:, 0, 4:6]
     errs = []
@@ -679,10 +681,10 @@ def bench_example(example: str, quick: bool, sf: dict, workroot: Path) -> dict:
 
     n_c = 10 ** 4
     xs = sample(n_c)
-    _, _, fails = cb.run(xs, 2)
+    _, _, fails = cb.run(xs, EXACT)
     assert fails == 0, f"{example}: C evaluator failed on {fails} of the sample points"
-    for level, code_ in LEVEL_CODE.items():
-        res["per_point_s"][f"c_{level}"] = cb.per_point(xs, code_, 0.1 if quick else 0.3)
+    for level in LEVELS:
+        res["per_point_s"][f"c_{level.name}"] = cb.per_point(xs, level.code, 0.1 if quick else 0.3)
     t_c = res["per_point_s"]["c"] = res["per_point_s"]["c_exact"]
 
     # numpy module, vectorized over 10^4 points
@@ -744,12 +746,12 @@ def bench_example(example: str, quick: bool, sf: dict, workroot: Path) -> dict:
     res["verified"] = {k: v <= TOL.get(k, 1e-12) for k, v in res["checks"].items()}
     res["verified"]["c_vs_mpmath"] = res["checks"]["c_vs_mpmath"] <= 1e-12
     res["ratios"] = {k: v / t_c for k, v in res["per_point_s"].items()
-                     if k not in ("c", "c_paper", "c_first_order", "c_exact")}
+                     if k != "c" and not k.startswith("c_")}
 
     # throughput: numpy on 10^6 points vs the C loop over the same 10^6 points
     n_big = 10 ** 5 if quick else 10 ** 6
     big = sample(n_big)
-    c_secs = min(cb.run(big, 2)[0] for _ in range(2))
+    c_secs = min(cb.run(big, EXACT)[0] for _ in range(2))
     big_in = {k: big[:, j] for j, k in enumerate(names)}
     t0 = time.perf_counter()
     out = npmod.evaluate(big_in, "exact")

@@ -24,7 +24,7 @@ from functools import cached_property, lru_cache
 import mpmath
 import sympy as sp
 
-from . import expressions, special
+from . import expressions, levels, special
 from . import rigid as rigid_solver
 from . import vectors as V
 from .errors import AssemblyError, InputError
@@ -32,7 +32,6 @@ from .kinematics import Kinematics
 from .mechanism import THETA
 from .structure import Structure
 
-LEVELS = ("paper", "first_order", "exact")
 BACKENDS = ("sympy", "numpy", "c")
 
 
@@ -255,9 +254,7 @@ class Analysis:
     def evaluate(self, inputs: Mapping[str, object], level: str = "exact",
                  params: Mapping[str, object] | None = None, dps: int = 40) -> Evaluation:
         """Evaluate one configuration with mpmath at `dps` digits (the `sympy` backend)."""
-        if level not in LEVELS:
-            raise InputError(f"unknown level '{level}'", entry="--level",
-                             hint="levels: " + ", ".join(LEVELS))
+        levels.get(level)
         given = self._inputs(inputs)
         exact_params = self.parameter_values(params)
         with mpmath.workdps(dps):
@@ -378,7 +375,7 @@ class Analysis:
 
     def _deltas(self, level: str, pvals: list, theta: dict) -> dict:
         """δ of the non-input hinges: zero (paper), linear (first_order) or Newton (exact)."""
-        if level == "paper" or not self.deltas:
+        if not levels.get(level).needs_delta or not self.deltas:
             return {}
         args = [*self.params, *self.thetas]
         values = [*pvals, *(theta[a] for a in sorted(theta))]

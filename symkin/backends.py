@@ -11,6 +11,7 @@ from collections.abc import Mapping
 
 import sympy as sp
 
+from . import levels
 from .analysis import Analysis, Evaluation, PointResult
 from .errors import AssemblyError, InputError
 
@@ -52,8 +53,7 @@ def evaluate(analysis: Analysis, inputs: Mapping[str, object], level: str,
         name = analysis.mechanism.name
         lib = c_runtime.Library(c_runtime.build(name, header, code), name, len(x), len(pfloat),
                                 len(p.points), len(hinges))
-        status, out, angles = lib.evaluate(x, pfloat, {"paper": 0, "first_order": 1,
-                                                       "exact": 2}[level])
+        status, out, angles = lib.evaluate(x, pfloat, levels.get(level).code)
         if status == 3:
             raise InputError("the C evaluator rejected the arguments", entry="--input")
         if status:

@@ -10,7 +10,7 @@ import sys
 import traceback
 from collections.abc import Sequence
 
-from . import __version__, load
+from . import __version__, levels, load
 from .errors import InputError, SymkinError
 from .paths import output_dir, output_file
 from .reports import check_text, matrices_json, matrices_text
@@ -56,10 +56,10 @@ def _eval(args: argparse.Namespace) -> str:
 
 def _derive(args: argparse.Namespace) -> str:
     from .derive import EMITTERS, derive, parse_list
-    from .analysis import LEVELS
+    from .levels import NAMES
 
     emit = parse_list(args.emit, EMITTERS, "--emit") or list(EMITTERS)
-    levels = parse_list(args.levels, LEVELS, "--levels")
+    levels = parse_list(args.levels, NAMES, "--levels")
     points = parse_list(args.points, None, "--points")
 
     def progress(message: str) -> None:
@@ -128,7 +128,7 @@ def parser() -> argparse.ArgumentParser:
     ev.add_argument("--input", action="append", metavar="H=V",
                     help="input hinge angle in radians (an expression such as 10*deg is fine)")
     ev.add_argument("--param", action="append", metavar="K=V", help="override a parameter")
-    ev.add_argument("--level", choices=("paper", "first_order", "exact"), default="exact")
+    ev.add_argument("--level", choices=levels.NAMES, default=levels.DEFAULT)
     ev.add_argument("--backend", choices=("sympy", "numpy", "c"), default="sympy")
     ev.add_argument("--json", action="store_true", help="machine-readable output")
     ev.set_defaults(run=_eval)

@@ -14,7 +14,7 @@ import tempfile
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from .analysis import LEVELS, Analysis
+from .analysis import Analysis
 from .errors import InputError
 from .mechanism import Mechanism, load
 from .structure import build
@@ -57,7 +57,7 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
     else:
         analysis = Analysis(build(mech), points)
     say("deriving the routines (CSE)")
-    p = plan(analysis, points, levels or LEVELS, notes=notes)
+    p = plan(analysis, points, levels, notes=notes)
     files: dict[str, bytes] = {}
     if "numpy" in emit:
         say("emitting numpy")

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import levels
 from .analysis import Analysis
 from .errors import AssemblyError, InputError
 from .mechanism import Mechanism
@@ -21,6 +22,8 @@ from .variants import Variant, analysis_for, default_variants
 
 DEFAULT_RANGE = (-0.2, 0.2)
 TIMING_POINTS = 10_000
+#: What every variant is measured against: the most faithful kinematic level.
+REFERENCE = levels.reference()
 
 
 @dataclass(frozen=True)
@@ -115,7 +118,7 @@ def reference(analysis: Analysis, samples: list[dict[str, float]]):
     kept, devs = [], []
     for s in samples:
         try:
-            ev = analysis.evaluate({k: repr(v) for k, v in s.items()}, "exact", dps=30)
+            ev = analysis.evaluate({k: repr(v) for k, v in s.items()}, REFERENCE.name, dps=30)
         except AssemblyError:
             continue
         kept.append(s)
@@ -159,8 +162,7 @@ def measure(mech: Mechanism, variant: Variant, samples: list[dict[str, float]],
         header, code = c_backend.emit(p, "tradeoff")
         flat = [s[n] for s in samples for n in names]
         time_c = c_runtime.time_per_evaluation(tag, header, code, flat, len(samples),
-                                               {"paper": 0, "first_order": 1,
-                                                "exact": 2}[variant.level])
+                                               levels.get(variant.level).code)
     ops = sum(r.ops for r in p.routines.values())
     return Row(variant, errors, time_numpy, time_c, ops)
 

@@ -21,7 +21,8 @@ import mpmath
 import sympy as sp
 
 from . import hinge_models, special
-from .analysis import LEVELS, Analysis
+from .analysis import Analysis
+from .levels import NAMES as LEVELS
 from .mechanism import THETA, Mechanism
 from .structure import build
 

@@ -11,6 +11,7 @@ import pytest
 import mechanisms as M
 import symkin
 from conftest import EXAMPLES
+from symkin import levels
 from symkin.codegen import c_backend, c_runtime, numpy_backend
 from symkin.codegen.build import plan
 from symkin.derive import import_numpy_module
@@ -35,7 +36,6 @@ INPUTS = {
     "triad": {"O1": "0.1"},
     "non_grashof": {"A0": "0.3"},
 }
-LEVEL_CODE = {"paper": 0, "first_order": 1, "exact": 2}
 
 
 def require_compiler():
@@ -80,7 +80,7 @@ class Generated:
 
     def run_c(self, inputs, level, overrides=None):
         x = [float(inputs[self.analysis.kin.hinges[a].name]) for a in self.analysis.kin.inputs]
-        status, out, _ = self.lib.evaluate(x, self.params(overrides), LEVEL_CODE[level])
+        status, out, _ = self.lib.evaluate(x, self.params(overrides), levels.get(level).code)
         assert status == 0
         return {n: (out[6 * i + 4], out[6 * i + 5]) for i, n in enumerate(self.plan.points)}
 

@@ -69,7 +69,7 @@ def write(files: dict[str, bytes], folder: Path) -> Path:
 @pytest.fixture(scope="module")
 def reports() -> dict[str, tuple[dict[str, bytes], dict[str, bytes]]]:
     """example -> (standalone files, appendix files), generated once in this process."""
-    from symkin.analysis import LEVELS, Analysis
+    from symkin.analysis import Analysis
     from symkin.codegen import latex_backend
     from symkin.codegen.build import plan
     from symkin.structure import build
@@ -77,7 +77,7 @@ def reports() -> dict[str, tuple[dict[str, bytes], dict[str, bytes]]]:
     out = {}
     for name in EXAMPLE_NAMES:
         mech = symkin.load(EXAMPLES / f"{name}.toml")
-        p = plan(Analysis(build(mech)), None, LEVELS)
+        p = plan(Analysis(build(mech)))
         source = Path(mech.path).name
         out[name] = (latex_backend.emit(p, source), latex_backend.emit(p, source, appendix=True))
     return out

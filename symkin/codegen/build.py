@@ -19,7 +19,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 
-from ..analysis import LEVELS, Analysis
+from .. import levels as level_table
+from ..analysis import Analysis
+from ..levels import Level
 from .literals import float_literals
 from .routines import Argument, Routine, flatten, optimize
 
@@ -30,7 +32,7 @@ class Plan:
 
     analysis: Analysis
     points: tuple[str, ...]
-    levels: tuple[str, ...]
+    levels: tuple[Level, ...]
     needs_loops: bool                  # some requested level/point needs the loop solution
     closed_form: bool                  # rigid solution by dyads (else Newton + continuation)
     routines: dict[str, Routine]
@@ -48,7 +50,7 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
     """Derive the routines for the requested points and levels (all by default)."""
     an, kin = analysis, analysis.kin
     names = tuple(p.name for p in an.points if points is None or p.name in points)
-    levels = tuple(lv for lv in LEVELS if levels is None or lv in levels)
+    levels = tuple(lv for lv in level_table.LEVELS if levels is None or lv.name in levels)
     inputs = Argument("inputs", tuple(kin.theta[a] for a in kin.inputs))
     params = Argument("params", an.params)
     theta = Argument("theta", an.thetas)
@@ -58,7 +60,7 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
         link = an.link[an.mechanism.point(name).link]
         return any(b in kin.unknowns for b in an.structure.tree_path(link))
 
-    needs_loops = bool(an.deltas) and any(lv != "paper" for lv in levels) and any(
+    needs_loops = bool(an.deltas) and any(lv.needs_delta for lv in levels) and any(
         moved_by_loops(n) for n in names)
     routines: dict[str, Routine] = {}
     sol = an.rigid
@@ -75,7 +77,7 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
         routines["linear"] = Routine("linear", (theta, params), (),
                                      flatten(a_lin.tolist()) + tuple(r_lin),
                                      "rigid loop Jacobian A and r = Phi dz")
-    if needs_loops and "exact" in levels:
+    if needs_loops and any(lv.name == "exact" for lv in levels):
         routines["newton"] = Routine("newton", (theta, delta, params), (),
                                      tuple(an.residual) + flatten(an.jacobian.tolist()),
                                      "exact compliant closure F(delta) and dF/ddelta")
@@ -83,10 +85,11 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
         "rigid_points", (theta, params), (),
         tuple(e for n in names for e in an.point_rigid(n)), "rigid positions of the points")
     for lv in levels:
-        args = (theta, delta, params) if lv != "paper" else (theta, params)
-        routines[f"dev_{lv}"] = Routine(
-            f"dev_{lv}", args, (), tuple(e for n in names for e in an.point_deviation(n, lv)),
-            f"deviation of the points at level {lv}")
+        args = (theta, delta, params) if lv.needs_delta else (theta, params)
+        routines[f"dev_{lv.name}"] = Routine(
+            f"dev_{lv.name}", args, (),
+            tuple(e for n in names for e in an.point_deviation(n, lv.name)),
+            f"deviation of the points at level {lv.name}")
     # Numbers reach the printers as correctly rounded doubles (exact rationals stay in mpmath).
     routines = {k: Routine(r.name, r.arguments,
                            tuple((s, float_literals(e)) for s, e in r.assignments),

@@ -5,14 +5,13 @@ from __future__ import annotations
 import sympy as sp
 from sympy.printing.c import C99CodePrinter
 
+from .. import levels as level_table
 from .. import special
 from ..templating import render
 from .build import Plan
 from .literals import to_double
 from .common import (header_lines, parameter_symbols, renamed, special_functions, used_symbols,
                      with_dependencies)
-
-LEVEL_CODES = {"paper": 0, "first_order": 1, "exact": 2}
 
 
 class Printer(C99CodePrinter):
@@ -65,8 +64,7 @@ def emit(plan: Plan, source: str) -> tuple[str, str]:
         limits=[(a - 1, repr(float(sp.N(h.limit, 20)))) for a, h in sorted(kin.hinges.items())
                 if h.limit is not None],
         parameters=[(p.name, repr(to_double(p.value))) for p in an.mechanism.parameters],
-        points=list(plan.points), levels=[LEVEL_CODES[lv] for lv in plan.levels],
-        level_names=list(plan.levels),
+        points=list(plan.points), levels=plan.levels, all_levels=level_table.LEVELS,
         n_theta=len(an.thetas), input_index=[a - 1 for a in kin.inputs],
         unknown_index=[a - 1 for a in kin.unknowns], k=len(kin.unknowns),
         n_dyads=len(an.rigid.dyads), closed_form=plan.closed_form,

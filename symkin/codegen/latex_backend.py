@@ -42,8 +42,6 @@ SWEEP_SAMPLES = 241
 #: Matrices wider than this many columns are printed in column blocks.
 MAX_MATRIX_COLS = 14
 
-LEVEL_TITLES = {"paper": "paper", "first_order": "first order", "exact": "exact"}
-
 
 # -- Jinja environment with LaTeX-friendly delimiters (SymForce style) ----------------------------
 
@@ -174,7 +172,7 @@ class Report:
             "inputs": [escape_latex(n) for n in mech.inputs],
             "input_labels": list(kin.inputs),
             "point_names": [escape_latex(p) for p in self.plan.points],
-            "levels": [LEVEL_TITLES[lv] for lv in self.plan.levels],
+            "levels": [lv.title for lv in self.plan.levels],
             "relabeled": s.relabeled,
             "links": [{"label": i, "name": self.link_name(i),
                        "ground": i == 0} for i in range(s.n + 1)],
@@ -690,14 +688,15 @@ def sweep(report: Report, numpy_module) -> tuple[Sweep, tuple[float, float], dic
     magnitude: dict[str, dict[str, np.ndarray]] = {p: {} for p in report.plan.points}
     deviation: dict[str, dict[str, np.ndarray]] = {p: {} for p in report.plan.points}
     ok = np.ones(t.shape, dtype=bool)
-    for lv in report.plan.levels:
+    names = [lv.name for lv in report.plan.levels]
+    for lv in names:
         result = numpy_module.evaluate(inputs, level=lv)
         ok &= np.asarray(result["ok"], dtype=bool)
         for p in report.plan.points:
             d = np.asarray(result["points"][p]["deviation"], dtype=float)
             deviation[p][lv] = d
     for p in report.plan.points:
-        for lv in report.plan.levels:
+        for lv in names:
             d = np.where(ok, deviation[p][lv], np.nan)
             deviation[p][lv] = d
             magnitude[p][lv] = np.hypot(d[0], d[1])
@@ -715,7 +714,8 @@ def sweep(report: Report, numpy_module) -> tuple[Sweep, tuple[float, float], dic
                "rows": []}
     for p in report.plan.points:
         exact = deviation[p].get("exact")
-        for lv in report.plan.levels:
+        for level in report.plan.levels:
+            lv = level.name
             mag = magnitude[p][lv]
             if np.isfinite(mag).any():
                 k = int(np.nanargmax(mag))
@@ -728,7 +728,7 @@ def sweep(report: Report, numpy_module) -> tuple[Sweep, tuple[float, float], dic
                 ref = np.nanmax(np.hypot(*exact)) if np.isfinite(exact).any() else float("nan")
                 if np.isfinite(diff).any() and ref > 0:
                     rel = float(np.nanmax(diff) / ref)
-            summary["rows"].append({"point": escape_latex(p), "level": LEVEL_TITLES[lv],
+            summary["rows"].append({"point": escape_latex(p), "level": level.title,
                                     "peak": sci(peak), "at": f"{at:+.3f}",
                                     "rel": sci(rel, 2) if rel is not None else r"\text{--}"})
     return Sweep(t, ok, magnitude, deviation), (lo, hi), summary
@@ -776,8 +776,7 @@ def emit(plan: Plan, source: str, appendix: bool = False) -> dict[str, bytes]:
         points = list(plan.points)
         for k, chunk in enumerate(_chunks(points, 3)):
             fname = f"{name}-deviation.pdf" if k == 0 else f"{name}-deviation-{k + 1}.pdf"
-            files[fname] = deviation_figure(data, chunk, list(plan.levels), plain_name, xlim,
-                                            xlabel)
+            files[fname] = deviation_figure(data, chunk, plan.levels, plain_name, xlim, xlabel)
             ctx["deviation_figures"].append({"file": fname,
                                              "points": [escape_latex(p) for p in chunk],
                                              "compare": differs(data, chunk, plan.levels)})

@@ -23,6 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..levels import Level
+
 _SUB = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
 
 RC = {
@@ -442,11 +444,14 @@ class Sweep:
     deviation: dict[str, dict[str, np.ndarray]]      # point -> level -> (2, N)
 
 
-LEVEL_STYLE = {
-    "paper": {"color": "#c62828", "ls": "--", "label": "paper (4.8)"},
-    "first_order": {"color": "#1f5fa8", "ls": "-.", "label": "first order"},
-    "exact": {"color": "black", "ls": "-", "label": "exact"},
-}
+#: Colour and dash of each level's curve, by level code (fixed, so figures are deterministic).
+LEVEL_STYLES = (("#c62828", "--"), ("#1f5fa8", "-."), ("black", "-"), ("#2e7d32", ":"),
+                ("#8e24aa", (0, (5, 1, 1, 1))))
+
+
+def _style(level) -> dict:
+    color, dash = LEVEL_STYLES[level.code % len(LEVEL_STYLES)]
+    return {"color": color, "ls": dash, "label": level.label}
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
@@ -463,14 +468,15 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return out
 
 
-def differs(sweep: Sweep, points: Sequence[str], levels: Sequence[str]) -> bool:
+def differs(sweep: Sweep, points: Sequence[str], levels: Sequence[Level]) -> bool:
     """Whether some level differs from the exact one for some point (then it is plotted)."""
-    return "exact" in levels and len(levels) > 1 and any(
+    names = [lv.name for lv in levels]
+    return "exact" in names and len(names) > 1 and any(
         np.nanmax(np.abs(sweep.deviation[p][lv] - sweep.deviation[p]["exact"]),
-                  initial=0.0) > 0 for p in points for lv in levels)
+                  initial=0.0) > 0 for p in points for lv in names)
 
 
-def deviation_figure(sweep: Sweep, points: Sequence[str], levels: Sequence[str], plain,
+def deviation_figure(sweep: Sweep, points: Sequence[str], levels: Sequence[Level], plain,
                      xlim: tuple[float, float], xlabel: str) -> bytes:
     """PDF with one row per point: |ΔR| at every level, and |ΔR_level - ΔR_exact| when some
     level differs from the exact one."""
@@ -496,13 +502,13 @@ def deviation_figure(sweep: Sweep, points: Sequence[str], levels: Sequence[str],
                 ax.set_xlim(*xlim)
                 ax.grid(True, lw=0.3, color="0.9")
                 ax.tick_params(direction="in", which="both")
-            peak = max([float(np.nanmax(sweep.magnitude[name][lv])) for lv in levels
-                        if np.isfinite(sweep.magnitude[name][lv]).any()] + [0.0])
+            peak = max([float(np.nanmax(sweep.magnitude[name][lv.name])) for lv in levels
+                        if np.isfinite(sweep.magnitude[name][lv.name]).any()] + [0.0])
             power = int(math.floor(math.log10(peak))) if peak > 0 else 0
             unit = 10.0 ** power
-            for lv in levels:
-                st = LEVEL_STYLE[lv]
-                line, = axes[0].plot(t, sweep.magnitude[name][lv] / unit, color=st["color"],
+            for level in levels:
+                st = _style(level)
+                line, = axes[0].plot(t, sweep.magnitude[name][level.name] / unit, color=st["color"],
                                      ls=st["ls"], label=st["label"])
                 if r == 0:
                     handles.append(line)
@@ -513,12 +519,12 @@ def deviation_figure(sweep: Sweep, points: Sequence[str], levels: Sequence[str],
                               fontweight="bold")
             if compare:
                 exact = sweep.deviation[name]["exact"]
-                for lv in levels:
-                    if lv == "exact":
+                for level in levels:
+                    if level.name == "exact":
                         continue
-                    diff = np.hypot(*(sweep.deviation[name][lv] - exact))
+                    diff = np.hypot(*(sweep.deviation[name][level.name] - exact))
                     diff = np.where(diff > 0, diff, np.nan)
-                    st = LEVEL_STYLE[lv]
+                    st = _style(level)
                     axes[1].semilogy(t, diff, color=st["color"], ls=st["ls"])
                 axes[1].set_ylabel(r"$|\Delta R - \Delta R_{\mathrm{exact}}|$")
                 # nine decades below the largest difference: the dip at t = 0 goes to zero

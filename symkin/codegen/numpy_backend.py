@@ -56,7 +56,7 @@ def emit(plan: Plan, source: str, dtype: str = "float64") -> str:
         hinges=[kin.hinges[a].name for a in sorted(kin.hinges)],
         limits=[(a - 1, repr(float(sp.N(h.limit, 20)))) for a, h in sorted(kin.hinges.items())
                 if h.limit is not None],
-        points=list(plan.points), levels=list(plan.levels), parameters=defaults,
+        points=list(plan.points), levels=plan.levels, parameters=defaults,
         n_theta=len(an.thetas),
         input_index=[a - 1 for a in kin.inputs], unknown_index=[a - 1 for a in kin.unknowns],
         n_dyads=len(an.rigid.dyads), closed_form=plan.closed_form,

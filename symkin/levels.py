@@ -1,0 +1,60 @@
+"""The deviation levels (docs/levels.md): one table that every layer reads.
+
+A level is how faithfully the compliant mechanism is modelled. Its `name` is what a user types
+(`--level`, the numpy module's `LEVELS`, the JSON), its `code` the generated C's `level`
+argument. The command line, the evaluators, the templates, `tradeoff`, the tests and the
+benchmarks take names and codes from :data:`LEVELS` only; adding a level is one row here, its
+math (analysis, evaluation) and one block per template.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .errors import InputError
+
+
+@dataclass(frozen=True)
+class Level:
+    """One row of the level table."""
+
+    name: str                       # --level, numpy LEVELS, JSON "level"
+    code: int                       # the generated C's `level` argument
+    title: str                      # how reports and plots name it
+    needs_delta: bool               # compliant angles differ from rigid ones: the loops are solved
+    equation: str = ""              # the paper's equation it restates, e.g. "(4.8)"
+    needs_stiffness: bool = False   # needs E, thickness and width of every compliant plate
+    closed_form: bool = True        # generated C and numpy exist; else mpmath only
+
+    @property
+    def label(self) -> str:
+        """The title with the paper's equation, for legends: 'paper (4.8)'."""
+        return f"{self.title} {self.equation}" if self.equation else self.title
+
+
+#: Every level, in order of fidelity (and of code).
+LEVELS: tuple[Level, ...] = (
+    Level("paper", 0, "paper", needs_delta=False, equation="(4.8)"),
+    Level("first_order", 1, "first order", needs_delta=True),
+    Level("exact", 2, "exact", needs_delta=True),
+)
+
+NAMES: tuple[str, ...] = tuple(lv.name for lv in LEVELS)
+#: The level `eval` and the generated `evaluate` use when none is given.
+DEFAULT = "exact"
+
+_BY_NAME = {lv.name: lv for lv in LEVELS}
+
+
+def get(name: str, entry: str = "--level") -> Level:
+    """The level called `name`; an unknown name is bad input (exit 2) naming the choices."""
+    try:
+        return _BY_NAME[name]
+    except KeyError:
+        raise InputError(f"unknown level '{name}'", entry=entry,
+                         hint="levels: " + ", ".join(NAMES)) from None
+
+
+def reference(stiffness: bool = False) -> Level:
+    """The most faithful level the data allows: what accuracy is measured against."""
+    return [lv for lv in LEVELS if stiffness or not lv.needs_stiffness][-1]
