@@ -645,7 +645,7 @@ def bench_example(example: str, quick: bool, sf: dict, workroot: Path) -> dict:
     import symkin
     from symkin.codegen import c_backend, numpy_backend
     from symkin.codegen.build import plan as make_plan
-    from symkin.derive import import_numpy_module
+    from symkin.codegen.runtime import import_numpy_module
 
     log(f"evaluators: {example}")
     mech = symkin.load(ROOT / "examples" / f"{example}.toml")

@@ -29,7 +29,7 @@ from . import rigid as rigid_solver
 from . import vectors as V
 from .errors import AssemblyError, InputError
 from .kinematics import Kinematics
-from .mechanism import THETA
+from .hinge_models import THETA
 from .structure import Structure
 
 BACKENDS = ("sympy", "numpy", "c")

@@ -33,10 +33,9 @@ def evaluate(analysis: Analysis, inputs: Mapping[str, object], level: str,
     source = analysis.mechanism.path
     hinges = [kin.hinges[a].name for a in sorted(kin.hinges)]
     if backend == "numpy":
-        from .codegen import numpy_backend
-        from .derive import import_numpy_module
+        from .codegen import numpy_backend, runtime
 
-        module = import_numpy_module(numpy_backend.emit(p, source), analysis.mechanism.name)
+        module = runtime.import_numpy_module(numpy_backend.emit(p, source), analysis.mechanism.name)
         res = module.evaluate(dict(zip(names, x)), level,
                               {q.name: v for q, v in zip(analysis.mechanism.parameters, pfloat)})
         if not bool(res["ok"]):
@@ -47,11 +46,11 @@ def evaluate(analysis: Analysis, inputs: Mapping[str, object], level: str,
         rigid = {h: float(res["angles"]["rigid"][h]) for h in hinges}
         compliant = {h: float(res["angles"]["compliant"][h]) for h in hinges}
     elif backend == "c":
-        from .codegen import c_backend, c_runtime
+        from .codegen import c_backend, runtime
 
         header, code = c_backend.emit(p, source)
         name = analysis.mechanism.name
-        lib = c_runtime.Library(c_runtime.build(name, header, code), name, len(x), len(pfloat),
+        lib = runtime.Library(runtime.build(name, header, code), name, len(x), len(pfloat),
                                 len(p.points), len(hinges))
         status, out, angles = lib.evaluate(x, pfloat, levels.get(level).code)
         if status == 3:

@@ -6,10 +6,8 @@ order, no timestamps, headers name the source file by its base name only).
 
 from __future__ import annotations
 
-import importlib.util
 import os
 import shutil
-import sys
 import tempfile
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -135,25 +133,3 @@ def derive(path: str | Path, out_dir: str | Path = ".", emit: Sequence[str] = EM
         raise InputError(f"cannot write into '{out_dir}' ({exc.strerror or exc})", entry="-o",
                          hint="choose a folder you can write to") from None
 
-
-def import_numpy_module(source: str, name: str):
-    """Import a generated numpy module from its text (our own generated code, names escaped)."""
-    from .codegen.c_runtime import cache_dir
-    import hashlib
-
-    digest = hashlib.sha256(source.encode()).hexdigest()[:20]
-    folder = cache_dir() / "numpy"
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / f"{name}_{digest}.py"
-    if not path.exists():
-        tmp = path.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text(source)
-        os.replace(tmp, path)
-    module_name = f"symkin_generated_{name}_{digest}"
-    if module_name in sys.modules:
-        return sys.modules[module_name]
-    spec = importlib.util.spec_from_file_location(module_name, path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    sys.modules[module_name] = module
-    return module

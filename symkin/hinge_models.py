@@ -4,7 +4,7 @@ model functions.
 A model gives (f(θ), g(θ)), the position of M's clamp in the plate frame fixed in P. The registry
 (MODELS, PRBM_PRESETS, HINGE_KEYS, MODEL_KEYS) is what the reader needs to validate a file;
 :func:`plate_functions` gives a hinge's f, g and its deviation from the ideal revolute
-df = f - f_rigid, dg = g - g_rigid as sympy expressions in mechanism.THETA, the deviation written
+df = f - f_rigid, dg = g - g_rigid as sympy expressions in THETA, the deviation written
 with the cancellation-free kernels of :mod:`symkin.special` so that float64 keeps full relative
 accuracy for tiny θ (DESIGN.md, "Numerics").  :func:`model_latex` gives the formulas for reports.
 """
@@ -19,6 +19,11 @@ import sympy as _sp
 
 from . import special as _special
 from .special import DomainError  # noqa: F401  (re-exported: the elastica's out-of-range error)
+
+#: The hinge angle θ and the plate length l, the variables of every model's f(θ), g(θ) (and of
+#: `expr` models' expressions).
+THETA = _sp.Symbol("theta", real=True)
+PLATE_LENGTH = _sp.Symbol("l", positive=True)
 
 #: PRBM presets (Howell): characteristic radius factor γ and stiffness/angle factor c_θ.
 PRBM_PRESETS: dict[str, dict[str, str]] = {
@@ -126,11 +131,11 @@ class PlateFunctions:
 
     @property
     def theta(self) -> _sp.Symbol:
-        return _theta()
+        return THETA
 
     def derivatives(self) -> tuple[_sp.Expr, _sp.Expr]:
         """(d df/dθ, d dg/dθ), through the kernels' stable derivatives."""
-        t = _theta()
+        t = THETA
         return _sp.diff(self.df, t), _sp.diff(self.dg, t)
 
     def special_names(self) -> list[str]:
@@ -157,23 +162,13 @@ class PlateFunctions:
         return None if self.fit is None else max(self.fit.max_f, self.fit.max_g)
 
 
-def _theta() -> _sp.Symbol:
-    from .mechanism import THETA
-    return THETA
-
-
-def _plate_length() -> _sp.Symbol:
-    from .mechanism import PLATE_LENGTH
-    return PLATE_LENGTH
-
-
 def plate_functions(hinge) -> PlateFunctions:
     """f, g, df = f - f_rigid, dg = g - g_rigid of `hinge` (a mechanism.Hinge) as sympy
     expressions in THETA, with the plate length replaced by ``hinge.length``."""
     model = hinge.model
     if model not in MODELS:
         raise ValueError(f"unknown hinge model {model!r}")
-    t = _theta()
+    t = THETA
     l = hinge.length
     f_rigid = l * (1 + _sp.cos(t)) / 2
     g_rigid = l * _sp.sin(t) / 2
@@ -220,7 +215,7 @@ def plate_functions(hinge) -> PlateFunctions:
     if model == "table":
         return _table_functions(hinge, t, l, f_rigid, g_rigid)
     # "expr": the user's own functions; the deviation is a plain difference
-    ell = _plate_length()
+    ell = PLATE_LENGTH
     f = _sp.sympify(hinge.param("f")).subs(ell, l)
     g = _sp.sympify(hinge.param("g")).subs(ell, l)
     return PlateFunctions(model, l, f, g, f - f_rigid, g - g_rigid, f_rigid, g_rigid,

@@ -21,7 +21,8 @@ import sympy as sp
 
 from . import vectors as V
 from . import hinge_models
-from .mechanism import THETA, Hinge
+from .hinge_models import THETA
+from .mechanism import Hinge
 from .structure import Structure
 from .vectors import Vec
 

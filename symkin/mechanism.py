@@ -20,7 +20,8 @@ import sympy as sp
 
 from . import expressions
 from .errors import InputError, suggest
-from .hinge_models import HINGE_KEYS, MODEL_KEYS, MODELS, PRBM_PRESETS, ModelParameter
+from .hinge_models import (HINGE_KEYS, MODEL_KEYS, MODELS, PLATE_LENGTH, PRBM_PRESETS, THETA,
+                           ModelParameter)
 
 FORMAT = 1
 TOP_KEYS = ("format", "name", "ground", "chords", "basic_chain", "parameters", "defaults",
@@ -29,8 +30,6 @@ LINK_KEYS = ("name",)
 POINT_KEYS = ("name", "link", "at")
 DEFAULT_KEYS = tuple(k for k in HINGE_KEYS if k not in ("name", "links", "at")) + MODEL_KEYS
 DEFAULT_MODEL = "circular_arc"
-THETA = sp.Symbol("theta", real=True)
-PLATE_LENGTH = sp.Symbol("l", positive=True)
 
 
 @dataclass(frozen=True)

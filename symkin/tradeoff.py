@@ -129,14 +129,14 @@ def reference(analysis: Analysis, samples: list[dict[str, float]]):
 def measure(mech: Mechanism, variant: Variant, samples: list[dict[str, float]],
             ref: list[dict], with_c: bool = True) -> Row:
     """Derive, emit and run one variant; its errors against `ref` and its times."""
-    from .codegen import c_backend, c_runtime, numpy_backend
+    from .codegen import c_backend, numpy_backend, runtime
     from .codegen.build import plan
-    from .derive import import_numpy_module
-
+    
     analysis = analysis_for(mech, variant)
     p = plan(analysis, levels=[variant.level])
     tag = f"{mech.name}_{variant.name.replace('/', '_')}"
-    module = import_numpy_module(numpy_backend.emit(p, "tradeoff", variant.precision), tag)
+    module = runtime.import_numpy_module(numpy_backend.emit(p, "tradeoff", variant.precision),
+                                         tag)
     names = list(module.INPUTS)
     arrays = {n: np.array([s[n] for s in samples]) for n in names}
     res = module.evaluate(arrays, variant.level)
@@ -161,7 +161,7 @@ def measure(mech: Mechanism, variant: Variant, samples: list[dict[str, float]],
     if with_c and variant.precision == "float64":
         header, code = c_backend.emit(p, "tradeoff")
         flat = [s[n] for s in samples for n in names]
-        time_c = c_runtime.time_per_evaluation(tag, header, code, flat, len(samples),
+        time_c = runtime.time_per_evaluation(tag, header, code, flat, len(samples),
                                                levels.get(variant.level).code)
     ops = sum(r.ops for r in p.routines.values())
     return Row(variant, errors, time_numpy, time_c, ops)

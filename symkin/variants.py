@@ -23,7 +23,8 @@ import sympy as sp
 from . import hinge_models, special
 from .analysis import Analysis
 from .levels import NAMES as LEVELS
-from .mechanism import THETA, Mechanism
+from .hinge_models import THETA
+from .mechanism import Mechanism
 from .structure import build
 
 FAITHFUL_MODELS = ("circular_arc", "elastica_force")

@@ -12,9 +12,9 @@ import mechanisms as M
 import symkin
 from conftest import EXAMPLES
 from symkin import levels
-from symkin.codegen import c_backend, c_runtime, numpy_backend
+from symkin.codegen import c_backend, runtime, numpy_backend
 from symkin.codegen.build import plan
-from symkin.derive import import_numpy_module
+from symkin.codegen.runtime import import_numpy_module
 
 SOURCES = {
     "four_bar": EXAMPLES / "four_bar.toml",
@@ -64,8 +64,8 @@ class Generated:
             require_compiler()
             header, code = c_backend.emit(self.plan, "test")
             kin = self.analysis.kin
-            self._lib = c_runtime.Library(
-                c_runtime.build(self.mech.name, header, code), self.mech.name,
+            self._lib = runtime.Library(
+                runtime.build(self.mech.name, header, code), self.mech.name,
                 len(kin.inputs), len(self.analysis.params), len(self.plan.points), len(kin.hinges))
         return self._lib
 

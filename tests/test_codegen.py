@@ -19,9 +19,9 @@ import symkin
 from conftest import EXAMPLES, ROOT
 from evaluators import INPUTS, SOURCES, generated, rel_err, require_compiler
 from reference_solver import Reference
-from symkin.codegen import c_backend, c_runtime, numpy_backend
+from symkin.codegen import c_backend, runtime, numpy_backend
 from symkin.codegen.build import plan
-from symkin.derive import import_numpy_module
+from symkin.codegen.runtime import import_numpy_module
 
 @pytest.mark.parametrize("key", sorted(SOURCES))
 @pytest.mark.parametrize("backend", ["numpy", "c"])
@@ -220,6 +220,6 @@ def test_hostile_names_give_safe_compiling_code(tmp_path):
     assert rel_err(res["points"]["'; exit(1); '"]["deviation"], want) <= 1e-12
     assert not (ROOT / "PWNED").exists() and not (tmp_path / "PWNED").exists()
     header, code = c_backend.emit(p, 'x*/y.toml')
-    lib = c_runtime.Library(c_runtime.build(mech.name, header, code), mech.name, 1, 1, 1, 4)
+    lib = runtime.Library(runtime.build(mech.name, header, code), mech.name, 1, 1, 1, 4)
     status, out, _ = lib.evaluate([0.2], None, 2)
     assert status == 0 and rel_err(out[4:6], want) <= 1e-12

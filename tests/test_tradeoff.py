@@ -17,7 +17,7 @@ import symkin
 from conftest import EXAMPLES
 from reference_solver import Reference
 from symkin.cli import main
-from symkin.derive import import_numpy_module
+from symkin.codegen.runtime import import_numpy_module
 from symkin.tradeoff import Variant, choose, run, sample
 from symkin.variants import analysis_for
 

@@ -26,7 +26,7 @@ import sympy as sp
 from .. import hinge_models, templating
 from .. import special
 from .. import vectors as V
-from ..mechanism import PLATE_LENGTH, THETA
+from ..hinge_models import PLATE_LENGTH, THETA
 from .build import Plan
 from .common import header_lines
 from .latex_figures import (FIG_WIDTH, PoseData, Sweep, deviation_figure, differs,
@@ -738,7 +738,7 @@ def sweep(report: Report, numpy_module) -> tuple[Sweep, tuple[float, float], dic
 
 def emit(plan: Plan, source: str, appendix: bool = False) -> dict[str, bytes]:
     """`<name>.tex` (standalone, or the body alone with `appendix`) and its figure PDFs."""
-    from ..derive import import_numpy_module
+    from .runtime import import_numpy_module
     from . import numpy_backend
 
     report = Report(plan, source)

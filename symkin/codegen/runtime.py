@@ -1,14 +1,19 @@
-"""Compile generated C with the system compiler (cached by content hash) and call it via ctypes."""
+"""Running generated code: C compiled with the system compiler and called via ctypes, numpy
+modules imported from their text; both cached by content hash under :func:`cache_dir`."""
 
 from __future__ import annotations
 
 import ctypes
 import hashlib
+import importlib.util
 import os
+import re
 import shutil
 import subprocess
+import sys
 import tempfile
 from pathlib import Path
+from types import ModuleType
 
 from ..errors import InputError
 
@@ -25,6 +30,7 @@ def compiler() -> str:
 
 
 def cache_dir() -> Path:
+    """$SYMKIN_CACHE, else $XDG_CACHE_HOME/symkin, else ~/.cache/symkin."""
     base = os.environ.get("SYMKIN_CACHE") or os.path.join(
         os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "symkin")
     return Path(base)
@@ -131,6 +137,24 @@ def time_per_evaluation(name: str, header: str, source: str, inputs: list[float]
 
 def _evaluate_prefix(header: str) -> str:
     """The mechanism name a generated header declares (<name>_evaluate)."""
-    import re
-
     return re.search(r"int (\w+)_evaluate\(", header).group(1)
+
+
+def import_numpy_module(source: str, name: str) -> ModuleType:
+    """Import a generated numpy module from its text (our own generated code, names escaped)."""
+    digest = hashlib.sha256(source.encode()).hexdigest()[:20]
+    folder = cache_dir() / "numpy"
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"{name}_{digest}.py"
+    if not path.exists():
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text(source)
+        os.replace(tmp, path)
+    module_name = f"symkin_generated_{name}_{digest}"
+    if module_name in sys.modules:
+        return sys.modules[module_name]
+    spec = importlib.util.spec_from_file_location(module_name, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    sys.modules[module_name] = module
+    return module
