@@ -128,7 +128,7 @@ def check(sizes_serial=SERIAL_SIZES, sizes_ladder=LADDER_SIZES, angle: float = 0
             s = symkin.structure(mech)
             an = symkin.analyze(mech)
             inputs = {name: angle for name in mech.inputs}
-            ev = an.evaluate(inputs, "paper", dps=20)
+            ev = symkin.evaluate(an, inputs, "paper", dps=20)
             dev = next(iter(ev.points.values())).deviation
             print(f"{kind:6} {n:3}: links {s.n + 1:3}, hinges {s.m:3}, loops {s.m - s.n:2}, "
                   f"inputs {len(mech.inputs):2}, dyads {len(an.rigid.dyads):2}, "

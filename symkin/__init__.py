@@ -3,7 +3,7 @@
     mech = symkin.load("examples/four_bar.toml")     # validated Mechanism (names, exact numbers)
     s = symkin.structure(mech)                        # labeling and I, I+, Φ, Ψ = [T; 0]
     an = symkin.analyze(mech)                         # symbolic deviation at every level
-    an.evaluate({"A0": 0.2}, level="exact")           # one configuration, mpmath at 40 digits
+    symkin.evaluate(an, {"A0": 0.2}, level="exact")   # one configuration, mpmath at 40 digits
 """
 
 from __future__ import annotations
@@ -11,6 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .errors import AssemblyError, InputError, SymkinError
+from .levels import DEFAULT
 from .mechanism import Mechanism, load, loads
 from .structure import Structure, build as structure
 
@@ -25,5 +26,14 @@ def analyze(mechanism: Mechanism | str | Path, points: list[str] | None = None):
     return Analysis(structure(mech), points)
 
 
+def evaluate(analysis, inputs, level: str = DEFAULT, params=None, backend: str = "sympy",
+             dps: int = 40):
+    """One configuration of an analysis (:func:`symkin.evaluation.evaluate`): the derivation with
+    mpmath at `dps` digits (backend sympy) or the generated numpy / C evaluators."""
+    from .evaluation import evaluate as run
+
+    return run(analysis, inputs, level, params, backend, dps)
+
+
 __all__ = ["AssemblyError", "InputError", "Mechanism", "Structure", "SymkinError", "analyze",
-           "load", "loads", "structure", "__version__"]
+           "evaluate", "load", "loads", "structure", "__version__"]

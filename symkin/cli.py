@@ -45,7 +45,7 @@ def _pairs(items: Sequence[str] | None, option: str) -> dict[str, str]:
 
 def _eval(args: argparse.Namespace) -> str:
     from .analysis import Analysis
-    from .backends import evaluate
+    from .evaluation import evaluate
     from .reports import evaluation_json, evaluation_text
 
     analysis = Analysis(build(load(args.file)))

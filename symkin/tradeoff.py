@@ -17,6 +17,7 @@ import numpy as np
 from . import levels
 from .analysis import Analysis
 from .errors import AssemblyError, InputError
+from .evaluation import evaluate, exact_value
 from .mechanism import Mechanism
 from .variants import Variant, analysis_for, default_variants
 
@@ -71,8 +72,6 @@ class Tradeoff:
 def parse_ranges(items: Sequence[str] | None, inputs: Sequence[str],
                  file: str) -> dict[str, tuple[float, float]]:
     """H=LO:HI options (expressions allowed), every input defaulting to DEFAULT_RANGE."""
-    from .analysis import _exact
-
     ranges = {name: DEFAULT_RANGE for name in inputs}
     for item in items or ():
         name, sep, span = item.partition("=")
@@ -80,7 +79,7 @@ def parse_ranges(items: Sequence[str] | None, inputs: Sequence[str],
         if not sep or not colon or name.strip() not in ranges:
             raise InputError(f"'{item}' is not INPUT=LO:HI for an input hinge", file=file,
                              entry="--range", hint="inputs: " + ", ".join(inputs))
-        a, b = (float(_exact(v.strip(), "--range", file)) for v in (lo, hi))
+        a, b = (float(exact_value(v.strip(), "--range", file)) for v in (lo, hi))
         if not a < b:
             raise InputError(f"empty range {a}:{b}", file=file, entry="--range",
                              hint="give LO < HI")
@@ -118,7 +117,7 @@ def reference(analysis: Analysis, samples: list[dict[str, float]]):
     kept, devs = [], []
     for s in samples:
         try:
-            ev = analysis.evaluate({k: repr(v) for k, v in s.items()}, REFERENCE.name, dps=30)
+            ev = evaluate(analysis, {k: repr(v) for k, v in s.items()}, REFERENCE.name, dps=30)
         except AssemblyError:
             continue
         kept.append(s)

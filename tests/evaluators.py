@@ -12,6 +12,7 @@ import mechanisms as M
 import symkin
 from conftest import EXAMPLES
 from symkin import levels
+from symkin.evaluation import parameter_values
 from symkin.codegen import c_backend, runtime, numpy_backend
 from symkin.codegen.build import plan
 from symkin.codegen.runtime import import_numpy_module
@@ -70,7 +71,7 @@ class Generated:
         return self._lib
 
     def params(self, overrides=None):
-        values = self.analysis.parameter_values(overrides)
+        values = parameter_values(self.mech, overrides)
         return [float(mpmath.mpf(str(values[s].evalf(30)))) for s in self.analysis.params]
 
     def run_numpy(self, inputs, level, overrides=None):

@@ -43,7 +43,8 @@ def cad_text(scale_mm: bool = False) -> str:
 def run_all(mech, inputs: dict[str, str], level: str = "exact") -> dict[str, dict]:
     """Deviation of every point by every backend: sympy (mpmath), numpy and C."""
     g = Generated(mech=mech)
-    return {"sympy": {n: p.deviation for n, p in g.analysis.evaluate(inputs, level).points.items()},
+    sympy = symkin.evaluate(g.analysis, inputs, level).points
+    return {"sympy": {n: p.deviation for n, p in sympy.items()},
             "numpy": g.run_numpy(inputs, level), "c": g.run_c(inputs, level)}
 
 

@@ -426,16 +426,17 @@ def test_squared_form_is_implied_by_the_positional_pair():
 @pytest.mark.parametrize("name", sorted(GENERIC))
 def test_equations_vanish_at_the_rigid_solution(name):
     from symkin.analysis import Analysis
+    from symkin.evaluation import parameter_values
 
     text, cases = GENERIC[name]
     structure = symkin.structure(symkin.loads(text))
     analysis = Analysis(structure)
     kin = analysis.kin
-    params = analysis.parameter_values()
+    params = parameter_values(structure.mechanism)
     eqs = loop_equations(kin)
     assert eqs
     for inputs in cases:
-        rigid = analysis.evaluate(inputs, "paper").angles_rigid
+        rigid = symkin.evaluate(analysis, inputs, "paper").angles_rigid
         with mpmath.workdps(30):
             values = {kin.theta[structure.hinge_label(n)]: mpmath.mpf(v) for n, v in rigid.items()}
             values.update({s: mpmath.mpf(sp.N(v, 35)) for s, v in params.items()})

@@ -1,0 +1,392 @@
+"""One configuration evaluated (`symkin eval`): the derivation with mpmath, or the generated code.
+
+The `sympy` backend evaluates the expressions of :class:`~symkin.analysis.Analysis` with mpmath
+at `dps` digits (40 by default), so its float64 results are correctly rounded references for the
+generated evaluators: the rigid angles from the closed-form dyads (or Newton with continuation
+from the as-fabricated pose), δ from the linear system A δ = −Φ Δz (`first_order`) or Newton on
+the exact closure from there (`exact`), then the point positions and deviations (docs/levels.md).
+The `numpy` and `c` backends run the generated evaluators; when one of them cannot assemble a
+configuration, the mpmath evaluation is asked why, so every backend fails with the same exit code
+(3) and the same message naming the loop (docs/cli.md).
+"""
+
+from __future__ import annotations
+
+import weakref
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import mpmath
+import sympy as sp
+
+from . import expressions, levels, special
+from .analysis import Analysis
+from .errors import AssemblyError, InputError
+from .mechanism import Mechanism
+from .reports import loop_text
+
+BACKENDS = ("sympy", "numpy", "c")
+
+
+@dataclass(frozen=True)
+class PointResult:
+    rigid: tuple[float, float]
+    compliant: tuple[float, float]
+    deviation: tuple[float, float]
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """One configuration evaluated at one level (the `eval --json` of docs/cli.md via
+    :meth:`as_json`)."""
+
+    level: str
+    backend: str
+    inputs: dict[str, float]
+    angles_rigid: dict[str, float]
+    angles_compliant: dict[str, float]
+    points: dict[str, PointResult]
+    dyads: tuple[dict, ...] = field(default=())
+
+    def as_json(self) -> dict:
+        return {
+            "level": self.level,
+            "backend": self.backend,
+            "inputs": dict(self.inputs),
+            "angles": {"rigid": dict(self.angles_rigid),
+                       "compliant": dict(self.angles_compliant)},
+            "points": {name: {"rigid": list(p.rigid), "compliant": list(p.compliant),
+                              "deviation": list(p.deviation)} for name, p in self.points.items()},
+        }
+
+
+def evaluate(analysis: Analysis, inputs: Mapping[str, object], level: str = levels.DEFAULT,
+             params: Mapping[str, object] | None = None, backend: str = "sympy",
+             dps: int = 40) -> Evaluation:
+    """Evaluate one configuration at `level` through `backend` (sympy: mpmath at `dps` digits)."""
+    if backend == "sympy":
+        return _solver(analysis).evaluate(inputs, level, params, dps)
+    if backend in ("numpy", "c"):
+        return _generated(analysis, inputs, level, params, backend)
+    raise InputError(f"unknown backend '{backend}'", entry="--backend",
+                     hint="backends: " + ", ".join(BACKENDS))
+
+
+# -- values from the user -----------------------------------------------------------------------
+
+def exact_value(value: object, entry: str, file: str) -> sp.Expr:
+    """An input or parameter value (number or whitelisted expression string) as an exact number."""
+    try:
+        expr = (expressions.parse(value, {}) if isinstance(value, str)
+                else expressions.number(value))  # type: ignore[arg-type]
+    except expressions.ExpressionError as exc:
+        raise InputError(str(exc), file=file, entry=entry,
+                         hint="give a number or an expression such as 10*deg") from None
+    if not (expr.is_real and expr.is_finite):
+        raise InputError(f"{value!r} is not a finite real number", file=file, entry=entry)
+    return expr
+
+
+def parameter_values(mechanism: Mechanism,
+                     overrides: Mapping[str, object] | None = None) -> dict[sp.Symbol, sp.Expr]:
+    """Exact values of every parameter: overrides, then defaults re-evaluated in file order."""
+    overrides = dict(overrides or {})
+    known = {p.name for p in mechanism.parameters}
+    for key in overrides:
+        if key not in known:
+            raise InputError(f"unknown parameter '{key}'", file=mechanism.path,
+                             entry="--param", hint="parameters: " + (", ".join(sorted(known))
+                                                                      or "none"))
+    values: dict[sp.Symbol, sp.Expr] = {}
+    changed = False
+    for p in mechanism.parameters:
+        raw = overrides.get(p.name)
+        if raw is not None:
+            values[p.symbol] = exact_value(raw, f"--param {p.name}", mechanism.path)
+            changed = True
+        elif not changed:
+            values[p.symbol] = p.value
+        else:
+            # A default re-evaluated with overridden values: numerically (60 digits), so an
+            # override can never make sympy build a huge exact number (e.g. l**n, n = 1e9).
+            value = p.expr.evalf(60, subs=values)
+            if not (value.is_real and value.is_finite):
+                raise InputError(f"parameter '{p.name}' = {p.expr} evaluates to {value} with "
+                                 "the overrides", file=mechanism.path, entry="--param",
+                                 hint="choose override values that keep it finite")
+            values[p.symbol] = value
+    return values
+
+
+def input_values(analysis: Analysis, inputs: Mapping[str, object]) -> dict[int, sp.Expr]:
+    """Exact input angles by hinge label; every input hinge, and nothing else, must be given."""
+    kin, mech = analysis.kin, analysis.mechanism
+    names = {kin.hinges[a].name: a for a in kin.inputs}
+    for key in inputs:
+        if key not in names:
+            raise InputError(f"'{key}' is not an input hinge", file=mech.path,
+                             entry="--input", hint="inputs: " + ", ".join(names))
+    missing = [n for n in names if n not in inputs]
+    if missing:
+        raise InputError(f"no value for the input(s) {', '.join(missing)}", file=mech.path,
+                         entry="--input", hint="give every input, e.g. --input "
+                         + " --input ".join(f"{n}=0.1" for n in missing))
+    return {names[k]: exact_value(v, f"--input {k}", mech.path) for k, v in inputs.items()}
+
+
+# -- the sympy backend: mpmath ---------------------------------------------------------------------
+
+_SOLVERS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _solver(analysis: Analysis) -> _Mpmath:
+    """The mpmath evaluator of `analysis`, kept as long as the analysis (its lambdas are cached)."""
+    solver = _SOLVERS.get(analysis)
+    if solver is None:
+        solver = _SOLVERS[analysis] = _Mpmath(analysis)
+    return solver
+
+
+class _Mpmath:
+    """The derivation of one Analysis evaluated with mpmath; lambdified functions cached by key."""
+
+    def __init__(self, analysis: Analysis) -> None:
+        self.an = analysis
+        self.kin = analysis.kin
+        self.mechanism = analysis.mechanism
+        self._lambdas: dict[str, object] = {}
+
+    def _fn(self, key: str, exprs, args) -> object:
+        """Lambdified (mpmath) function, cached per key."""
+        if key not in self._lambdas:
+            self._lambdas[key] = sp.lambdify(args, exprs,
+                                             modules=[special.mpmath_namespace(), "mpmath"])
+        return self._lambdas[key]
+
+    def evaluate(self, inputs: Mapping[str, object], level: str,
+                 params: Mapping[str, object] | None, dps: int) -> Evaluation:
+        an = self.an
+        levels.get(level)
+        given = input_values(an, inputs)
+        exact_params = parameter_values(self.mechanism, params)
+        with mpmath.workdps(dps):
+            pvals = [mpmath.mpf(sp.N(exact_params[s], dps + 5)) for s in an.params]
+            ivals = {a: mpmath.mpf(sp.N(v, dps + 5)) for a, v in given.items()}
+            theta, dyads = self._rigid_angles(pvals, ivals)
+            self._check_limits(theta, ivals)
+            delta = self._deltas(level, pvals, theta)
+            self._check_limits({a: theta[a] + delta.get(a, 0) for a in theta}, ivals)
+            args = [*an.params, *an.thetas, *an.deltas]
+            values = [*pvals, *(theta[a] for a in sorted(theta)),
+                      *(delta.get(a, mpmath.mpf(0)) for a in self.kin.unknowns)]
+            points = {}
+            for p in an.points:
+                rig = self._fn(f"rigid:{p.name}", list(an.point_rigid(p.name)), args)(*values)
+                dev = self._fn(f"{level}:{p.name}", list(an.point_deviation(p.name, level)),
+                               args)(*values)
+                points[p.name] = PointResult(
+                    (float(rig[0]), float(rig[1])),
+                    (float(rig[0] + dev[0]), float(rig[1] + dev[1])),
+                    (float(dev[0]), float(dev[1])))
+            names = {a: self.kin.hinges[a].name for a in self.kin.hinges}
+            return Evaluation(
+                level=level, backend="sympy",
+                inputs={names[a]: float(ivals[a]) for a in sorted(ivals)},
+                angles_rigid={names[a]: float(theta[a]) for a in sorted(theta)},
+                angles_compliant={names[a]: float(theta[a] + delta.get(a, 0))
+                                  for a in sorted(theta)},
+                points=points, dyads=tuple(dyads))
+
+    def _rigid_angles(self, pvals: list, ivals: dict) -> tuple[dict, list]:
+        """Rigid hinge angles θ^r (file orientation) for the given inputs, and dyad states."""
+        an, kin, sol = self.an, self.kin, self.an.rigid
+        env = dict(zip(an.params, pvals))
+        env.update({kin.theta[a]: v for a, v in ivals.items()})
+        dyads = []
+        if not sol.closed_form:
+            return self._rigid_newton(pvals, ivals), dyads
+        for symbol, expr in sol.assignments:
+            fn = self._fn(f"assign:{symbol.name}", expr, sorted(expr.free_symbols, key=str))
+            env[symbol] = fn(*(env[s] for s in sorted(expr.free_symbols, key=str)))
+            dyad = next((d for d in sol.dyads if d.reach == symbol), None)
+            if dyad is not None and env[symbol] < 0:
+                raise self._cannot_close(dyad, ivals)
+        for d in sol.dyads:
+            dyads.append({"hinges": [kin.hinges[a].name for a in d.hinges],
+                          "loop": kin.hinges[d.chord].name, "branch": d.branch,
+                          "toggle_margin": float(env[d.margin])})
+        phi = {}
+        for link, expr in sol.phi.items():
+            fn = self._fn(f"phi:{link}", expr, sorted(expr.free_symbols, key=str))
+            phi[link] = fn(*(env[s] for s in sorted(expr.free_symbols, key=str)))
+        theta = dict(ivals)
+        for a in kin.unknowns:
+            h = kin.hinges[a]
+            theta[a] = _wrap(phi[h.M] - phi[h.P])
+        return theta, dyads
+
+    def _check_limits(self, theta: dict, ivals: dict) -> None:
+        """A hinge model valid only for |θ| < limit (elastica_force) must not be driven past it."""
+        for a, h in self.kin.hinges.items():
+            if h.limit is not None and not abs(theta[a]) < mpmath.mpf(sp.N(h.limit, 30)):
+                at = ", ".join(f"{self.kin.hinges[b].name}={float(v):g}"
+                               for b, v in sorted(ivals.items()))
+                raise AssemblyError(
+                    f"{self.mechanism.path}: at {at} the hinge '{h.name}' would bend to "
+                    f"{float(theta[a]):.6g} rad, beyond its model '{h.hinge.model}', which holds "
+                    f"for |theta| < {float(sp.N(h.limit)):.6g} rad")
+
+    def _cannot_close(self, dyad, ivals) -> AssemblyError:
+        kin = self.kin
+        at = ", ".join(f"{kin.hinges[a].name}={float(v):g}" for a, v in sorted(ivals.items()))
+        return AssemblyError(
+            f"{self.mechanism.path}: the loop of hinge '{kin.hinges[dyad.chord].name}' "
+            f"({loop_text(self.an.structure, dyad.chord)}) cannot close at {at}: the dyad "
+            f"{'-'.join(kin.hinges[a].name for a in dyad.hinges)} is beyond its toggle position "
+            "(outside the assembly range)")
+
+    def _rigid_newton(self, pvals: list, ivals: dict) -> dict:
+        """Rigid angles by Newton with continuation from the as-fabricated pose (non-dyad groups)."""
+        an, kin = self.an, self.kin
+        args = [*an.params, *an.thetas]
+        f = self._fn("rigid_residual", list(an.rigid_residual), args)
+        # ∂/∂θ of the rigid closure is A of the first-order system (the same structure).
+        jac = self._fn("rigid_jacobian", an.linear_system[0].tolist(), args)
+        steps = max(1, int(max([abs(v) for v in ivals.values()] + [0]) / 0.05) + 1)
+        x = {a: mpmath.mpf(0) for a in kin.unknowns}
+        for step in range(1, steps + 1):
+            t = mpmath.mpf(step) / steps
+            theta = {**{a: v * t for a, v in ivals.items()}, **x}
+            x = self._newton(f, jac, pvals, theta, kin.unknowns)
+            if x is None:
+                at = ", ".join(f"{kin.hinges[a].name}={float(v * t):g}" for a, v in
+                               sorted(ivals.items()))
+                raise AssemblyError(f"{self.mechanism.path}: the rigid loops cannot close at {at} "
+                                    "(no convergence: outside the assembly range or at a toggle "
+                                    "position)")
+        return {**ivals, **{a: _wrap(v) for a, v in x.items()}}
+
+    def _newton(self, f, jac, pvals: list, theta: dict, unknowns: Sequence[int]) -> dict | None:
+        """Newton iteration on the θ of `unknowns`; None when it does not converge."""
+        x = mpmath.matrix([theta[a] for a in unknowns])
+        tol = mpmath.mpf(10) ** (-mpmath.mp.dps + 6)
+        for _ in range(60):
+            values = [*pvals, *(theta[a] for a in sorted(theta))]
+            try:
+                step = mpmath.lu_solve(mpmath.matrix(jac(*values)), mpmath.matrix(f(*values)))
+            except ZeroDivisionError:
+                return None
+            x = x - step
+            for k, a in enumerate(unknowns):
+                theta[a] = x[k]
+            if mpmath.norm(step, mpmath.inf) <= tol * (1 + mpmath.norm(x, mpmath.inf)):
+                return {a: x[k] for k, a in enumerate(unknowns)}
+        return None
+
+    def _deltas(self, level: str, pvals: list, theta: dict) -> dict:
+        """δ of the non-input hinges: zero (paper), linear (first_order) or Newton (exact)."""
+        an = self.an
+        if not levels.get(level).needs_delta or not an.deltas:
+            return {}
+        args = [*an.params, *an.thetas]
+        values = [*pvals, *(theta[a] for a in sorted(theta))]
+        a_lin, r_lin = an.linear_system
+        A = mpmath.matrix(self._fn("lin_A", a_lin.tolist(), args)(*values))
+        r = mpmath.matrix(self._fn("lin_r", list(r_lin), args)(*values))
+        try:
+            d = -mpmath.lu_solve(A, r)
+        except ZeroDivisionError:
+            raise AssemblyError(f"{self.mechanism.path}: the mechanism is at a toggle position "
+                                "(singular loop Jacobian) for these inputs") from None
+        delta = {a: d[k] for k, a in enumerate(self.kin.unknowns)}
+        if level == "first_order":
+            return delta
+        args_d = [*args, *an.deltas]
+        f = self._fn("residual", list(an.residual), args_d)
+        jac = self._fn("jacobian", an.jacobian.tolist(), args_d)
+        x = mpmath.matrix([delta[a] for a in self.kin.unknowns])
+        tight = mpmath.mpf(10) ** (-mpmath.mp.dps + 4)
+        loose = mpmath.mpf(10) ** (-(mpmath.mp.dps // 2))
+        previous = None
+        for _ in range(40):
+            vals = [*values, *x]
+            try:
+                step = mpmath.lu_solve(mpmath.matrix(jac(*vals)), mpmath.matrix(f(*vals)))
+            except ZeroDivisionError:
+                raise AssemblyError(f"{self.mechanism.path}: singular compliant loop Jacobian "
+                                    "(toggle position) for these inputs") from None
+            x = x - step
+            size, change = mpmath.norm(x, mpmath.inf), mpmath.norm(step, mpmath.inf)
+            # Converged, or stalled at the working precision's noise floor far below float64.
+            if change <= tight * size or size == 0 or (
+                    previous is not None and change >= previous / 2 and change <= loose * size):
+                return {a: x[k] for k, a in enumerate(self.kin.unknowns)}
+            previous = change
+        raise AssemblyError(f"{self.mechanism.path}: the compliant loops did not converge "
+                            "(no convergence in 40 Newton steps)")
+
+
+def _wrap(angle):
+    """Angle wrapped into (-π, π]: hinge angles are rotations from the as-fabricated pose."""
+    two_pi = 2 * mpmath.pi
+    return angle - two_pi * mpmath.nint(angle / two_pi)
+
+
+# -- the numpy and c backends: the generated evaluators ---------------------------------------------
+
+def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
+               params: Mapping[str, object] | None, backend: str) -> Evaluation:
+    """One configuration through the generated `backend` ('numpy' or 'c')."""
+    from .codegen import c_backend, numpy_backend, runtime
+    from .codegen.build import plan
+
+    given = input_values(analysis, inputs)
+    kin = analysis.kin
+    names = [kin.hinges[a].name for a in kin.inputs]
+    x = [float(sp.N(given[a], 20)) for a in kin.inputs]
+    pvals = parameter_values(analysis.mechanism, params)
+    pfloat = [float(sp.N(pvals[s], 20)) for s in analysis.params]
+    p = plan(analysis)
+    source = analysis.mechanism.path
+    hinges = [kin.hinges[a].name for a in sorted(kin.hinges)]
+    if backend == "numpy":
+        module = runtime.import_numpy_module(numpy_backend.emit(p, source),
+                                             analysis.mechanism.name)
+        res = module.evaluate(dict(zip(names, x)), level,
+                              {q.name: v for q, v in zip(analysis.mechanism.parameters, pfloat)})
+        if not bool(res["ok"]):
+            _explain(analysis, inputs, level, params)
+        points = {n: PointResult(*(tuple(float(v) for v in res["points"][n][key])
+                                   for key in ("rigid", "compliant", "deviation")))
+                  for n in p.points}
+        rigid = {h: float(res["angles"]["rigid"][h]) for h in hinges}
+        compliant = {h: float(res["angles"]["compliant"][h]) for h in hinges}
+    else:
+        header, code = c_backend.emit(p, source)
+        name = analysis.mechanism.name
+        lib = runtime.Library(runtime.build(name, header, code), name, len(x), len(pfloat),
+                              len(p.points), len(hinges))
+        status, out, angles = lib.evaluate(x, pfloat, levels.get(level).code)
+        if status == 3:
+            raise InputError("the C evaluator rejected the arguments", entry="--input")
+        if status:
+            _explain(analysis, inputs, level, params)
+        points = {n: PointResult((out[6 * i], out[6 * i + 1]), (out[6 * i + 2], out[6 * i + 3]),
+                                 (out[6 * i + 4], out[6 * i + 5])) for i, n in enumerate(p.points)}
+        m = len(hinges)
+        rigid = dict(zip(hinges, angles[:m]))
+        compliant = dict(zip(hinges, angles[m:]))
+    order = {kin.hinges[a].name: a for a in kin.hinges}
+    return Evaluation(
+        level=level, backend=backend, inputs=dict(zip(names, x)),
+        angles_rigid={h: rigid[h] for h in sorted(rigid, key=order.get)},
+        angles_compliant={h: compliant[h] for h in sorted(compliant, key=order.get)},
+        points=points)
+
+
+def _explain(analysis: Analysis, inputs, level, params) -> None:
+    """Raise the sympy backend's error for a configuration a generated evaluator refused."""
+    evaluate(analysis, inputs, level, params)
+    raise AssemblyError(f"{analysis.mechanism.path}: the generated evaluator could not solve this "
+                        "configuration (no convergence in float64), although the 40-digit "
+                        "derivation can")
