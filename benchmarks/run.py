@@ -334,10 +334,12 @@ def lambdify_alternative(plan, cse: bool, polish: int = POLICY["polish"]):
     small systems)."""
     import sympy as sp
     from symkin import special
+    from symkin.codegen.backends.c import kernels as c_kernels
+    from symkin.codegen.backends.numpy import kernels as np_kernels
 
     # conjugate: substituting the dyad assignments turns Abs(x)**2 into x*conjugate(x), which
     # `math` lacks; for real floats it is the identity.
-    modules = [dict(special.float64_namespace(), conjugate=lambda z: z.conjugate()), "math"]
+    modules = [dict(np_kernels.float64_namespace(), conjugate=lambda z: z.conjugate()), "math"]
     fns = {}
     for key in ("rigid", "rigid_res", "linear", "newton", "rigid_points", "dev_exact"):
         r = plan.routines.get(key)
@@ -359,9 +361,11 @@ def scipy_alternative(an):
     import sympy as sp
     from scipy.optimize import root
     from symkin import special
+    from symkin.codegen.backends.c import kernels as c_kernels
+    from symkin.codegen.backends.numpy import kernels as np_kernels
 
     kin = an.kin
-    modules = [special.numpy_namespace(), "numpy"]
+    modules = [np_kernels.numpy_namespace(), "numpy"]
     params = list(an.params)
     thetas = list(an.thetas)
     rows_r, rows_c = [], []
@@ -566,6 +570,8 @@ def symforce_build(plan, workdir: Path) -> tuple[Path, float]:
     from symforce.codegen import Codegen, CppConfig
     from symforce.values import Values
     from symkin import special
+    from symkin.codegen.backends.c import kernels as c_kernels
+    from symkin.codegen.backends.numpy import kernels as np_kernels
 
     an = plan.analysis
     kin = an.kin
@@ -584,7 +590,7 @@ def symforce_build(plan, workdir: Path) -> tuple[Path, float]:
             if type(f).__name__ in kernels:
                 overrides[type(f)] = f"symkin_{type(f).__name__}"
     (workdir / "kernels.h").write_text("#pragma once\n#include <math.h>\n"
-                                       + special.c_support(kernels) + "\n")
+                                       + c_kernels.support(kernels) + "\n")
     includes = []
     for key, r in raw.items():
         inputs = Values()

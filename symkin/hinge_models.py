@@ -18,7 +18,7 @@ import numpy as _np
 import sympy as _sp
 
 from . import special as _special
-from .special import DomainError  # noqa: F401  (re-exported: the elastica's out-of-range error)
+from .special import DomainError
 
 #: The hinge angle θ and the plate length l, the variables of every model's f(θ), g(θ) (and of
 #: `expr` models' expressions).
@@ -110,7 +110,7 @@ class PlateFunctions:
 
     f, g:        position of M's clamp in the plate frame fixed in P.
     df, dg:      f - f_rigid, g - g_rigid, in cancellation-free form when `stable` is True: a
-                 float64 evaluation (special.FLOAT64 / NUMPY / C_SOURCE for the kernels) keeps full
+                 float64 evaluation (the kernels as every backend writes them) keeps full
                  relative accuracy for every θ down to 1e-300 and up to `limit`.
     f_rigid, g_rigid: the ideal revolute at the plate midpoint, l/2 (1 + cos θ), l/2 sin θ.
     limit:       models defined only for |θ| < limit (elastica_force: π/2), else None.

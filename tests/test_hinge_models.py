@@ -19,6 +19,9 @@ import sympy as sp
 
 from symkin import hinge_models as hm
 from symkin import special
+from symkin.codegen.backends.c import kernels as c_kernels
+from symkin.codegen.backends.numpy import kernels as np_kernels
+from symkin.codegen.c_backend import Printer as CPrinter
 from symkin.mechanism import PLATE_LENGTH, THETA, Hinge
 
 DPS = 90                       # reference precision (digits)
@@ -208,7 +211,8 @@ def test_kernel_evalf_high_precision(name):
 def test_kernel_float64_numpy_mpmath(name):
     cls = kernel_class(name)
     xs = np.concatenate([[1e-300, 1e-160, 1e-20], np.logspace(-8, 0, 41), np.linspace(1, 8, 141)])
-    f64, fnp, fmp = special.FLOAT64[name], special.NUMPY[name], special.MPMATH[name]
+    f64, fnp = np_kernels.float64_namespace()[name], np_kernels.numpy_namespace()[name]
+    fmp = special.mpmath_namespace()[name]
     vec = fnp(xs)
     worst = 0.0
     for x, v in zip(xs, vec):
@@ -221,26 +225,27 @@ def test_kernel_float64_numpy_mpmath(name):
             worst = max(worst, err)
             assert rel(fmp(mp.mpf(x)), want) < 1e-55
     assert worst < 10 * ULP, (name, worst / ULP)
-    assert cls.numeric(0.0) == float(cls.coeff(0))
+    assert f64(0.0) == float(cls.coeff(0))
 
 
 def test_kernel_series_threshold_rule():
     """The first dropped Taylor term at the threshold is below the unit roundoff."""
     for name in KERNEL_DEFS:
         cls = kernel_class(name)
-        coeffs, n = special._kernel_series(cls)
+        coeffs, n = cls.float_series()
         dropped = abs(float(cls.coeff(n))) * cls.threshold ** (2 * n)
         assert dropped < 2.0 ** -53 * abs(float(cls.coeff(0)))
 
 
 def test_higher_order_kernels_are_created_lazily():
     cls = special.sinr(7)
-    assert "sinr7" in special.FLOAT64 and "sinr7" in special.C_SOURCE
+    assert "sinr7" in np_kernels.float64_namespace()
+    assert "symkin_sinr7(" in c_kernels.source("sinr7")
     assert cls(0) == sp.Rational(-1, math.factorial(15))
     d = sp.diff(cls(X), X)                      # creates cosr8, sinr8
-    assert {"cosr8", "sinr8"} <= set(special.FLOAT64)
-    assert abs(special.FLOAT64["sinr7"](0.5) - float(cls(sp.Rational(1, 2)).evalf(20))) < \
-        1e-15 * abs(float(cls.coeff(0)))
+    assert {"cosr8", "sinr8"} <= set(np_kernels.float64_namespace())
+    assert abs(np_kernels.float64_namespace()["sinr7"](0.5)
+               - float(cls(sp.Rational(1, 2)).evalf(20))) < 1e-15 * abs(float(cls.coeff(0)))
     assert d.subs(X, 0) == 0
 
 
@@ -329,7 +334,7 @@ def test_elastica_carlson_equals_legendre_rewrite():
     with mp.workdps(40):
         for cls in (special.elastica_dx_d1, special.elastica_dy_d1):
             d2 = sp.diff(cls(THETA), THETA).subs(THETA, sp.Rational(1, 2)).evalf(30)
-            num = mp.diff(special.MPMATH[cls.__name__], mp.mpf("0.5"))
+            num = mp.diff(special.mpmath_namespace()[cls.__name__], mp.mpf("0.5"))
             assert abs(d2 - sp.Float(num, 40)) < 1e-25
 
 
@@ -349,15 +354,16 @@ def test_elastica_parity_and_domain():
         with pytest.raises(ValueError):            # DomainError is a ValueError
             pf.check_angle(bad)
     with pytest.raises(special.DomainError, match="pi/2"):
-        special.FLOAT64["elastica_dx"](1.5707963267948968)
+        np_kernels.float64_namespace()["elastica_dx"](1.5707963267948968)
     with pytest.raises(special.DomainError):
-        special.FLOAT64["elastica_y"](-2.0)
+        np_kernels.float64_namespace()["elastica_y"](-2.0)
     with pytest.raises(special.DomainError):
-        special.MPMATH["elastica_x"](mp.mpf(2))
-    assert np.isnan(special.NUMPY["elastica_dx"](np.array([0.1, 1.6, np.nan]))[1:]).all()
+        special.mpmath_namespace()["elastica_x"](mp.mpf(2))
+    vector = np_kernels.numpy_namespace()["elastica_dx"]
+    assert np.isnan(vector(np.array([0.1, 1.6, np.nan]))[1:]).all()
     pf.check_angle(sp.Rational(3, 2))
     # the largest double below π/2 is still inside the domain
-    assert 0 < special.FLOAT64["elastica_x"](math.pi / 2) < 0.2
+    assert 0 < np_kernels.float64_namespace()["elastica_x"](math.pi / 2) < 0.2
 
 
 def test_length_substitution_and_special_names():
@@ -369,7 +375,7 @@ def test_length_substitution_and_special_names():
     assert set(pf.special_names()) >= {"arck", "sinr0", "cosr1"}
     assert plate("elastica_force").special_names() == sorted(
         c.__name__ for c in special.ELASTICA_FUNCTIONS)
-    src = special.c_support(plate("elastica_force").special_names())
+    src = c_kernels.support(plate("elastica_force").special_names())
     assert src.index("symkin_carlson_rf(") < src.index("symkin_elastica_core(")
     assert src.index("symkin_elastica_core(") < src.index("symkin_elastica_dx(")
 
@@ -407,14 +413,14 @@ FLOAT64_WORST: dict = {}
 
 @pytest.mark.parametrize("key", sorted(MODELS))
 def test_float64_lambdify(key):
-    """df, dg and d/dθ lambdified with special.FLOAT64 ("math") and special.NUMPY ("numpy"):
+    """df, dg and d/dθ lambdified with the float64 ("math") and numpy kernels of backends/numpy:
     relative error <= 1e-12 (measured: a few 1e-15, see FLOAT64_WORST)."""
     pf = plate(key)
     ddf, ddg = pf.derivatives()
     exprs = [pf.f, pf.g, pf.df, pf.dg, ddf, ddg]
     want_idx = [0, 1, 2, 3, 6, 7]
-    scalar = sp.lambdify(THETA, exprs, modules=[special.float64_namespace(), "math"])
-    vector = sp.lambdify(THETA, exprs, modules=[special.numpy_namespace(), "numpy"])
+    scalar = sp.lambdify(THETA, exprs, modules=[np_kernels.float64_namespace(), "math"])
+    vector = sp.lambdify(THETA, exprs, modules=[np_kernels.numpy_namespace(), "numpy"])
     grid = GRID[key]
     vec = [np.broadcast_to(v, (len(grid),)) for v in vector(np.array(grid))]
     worst = {}
@@ -451,7 +457,7 @@ def test_scaled_length():
     """A tiny plate (l = 1e-6 in exact rational form) scales the deviation exactly."""
     key = "circular_arc"
     pf = plate(key, sp.Rational(1, 10 ** 6))
-    fn = sp.lambdify(THETA, [pf.df, pf.dg], modules=[special.float64_namespace(), "math"])
+    fn = sp.lambdify(THETA, [pf.df, pf.dg], modules=[np_kernels.float64_namespace(), "math"])
     for theta in (1e-10, 0.3):
         want = ref(key, theta)
         got = fn(theta)
@@ -471,7 +477,7 @@ ARC_TABLE = {10: (0.99493, 0.08705), 30: (0.95493, 0.25587), 90: (0.63662, 0.636
 
 def test_circular_arc_published_tip_positions():
     pf = plate("circular_arc")
-    fn = sp.lambdify(THETA, [pf.f, pf.g], modules=[special.float64_namespace(), "math"])
+    fn = sp.lambdify(THETA, [pf.f, pf.g], modules=[np_kernels.float64_namespace(), "math"])
     for deg, (x, y) in ARC_TABLE.items():
         t = math.radians(deg)
         fx, gy = fn(t)
@@ -526,7 +532,7 @@ def test_bisshopp_drucker_tip_positions(alpha):
     fx, gy = pf.f.subs(THETA, t).evalf(30), pf.g.subs(THETA, t).evalf(30)
     assert abs(fx - (1 - sp.Rational(dx_ode))) < 1e-14 and abs(gy - sp.Rational(dy_ode)) < 1e-14
     assert abs(special.elastica_load(t).evalf(30) - alpha) < 1e-13
-    f64 = sp.lambdify(THETA, [pf.f, pf.g], modules=[special.float64_namespace(), "math"])
+    f64 = sp.lambdify(THETA, [pf.f, pf.g], modules=[np_kernels.float64_namespace(), "math"])
     got = f64(theta)
     assert abs(got[0] - x) < 1e-11 and abs(got[1] - y) < 1e-11
 
@@ -574,7 +580,7 @@ def test_table_fit_residuals_and_accuracy():
     # float64 df, dg to full relative accuracy down to tiny θ (reference: the exact polynomial
     # minus the rigid functions at 90 digits)
     fn = sp.lambdify(THETA, [pf.df, pf.dg, *pf.derivatives()],
-                     modules=[special.float64_namespace(), "math"])
+                     modules=[np_kernels.float64_namespace(), "math"])
     with mp.workdps(DPS):
         cf = [mp.mpf(c) for c in fit.coeffs_f]
         cg = [mp.mpf(c) for c in fit.coeffs_g]
@@ -612,14 +618,14 @@ def test_c_snippets_compile_and_agree(tmp_path):
     cc = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
     if cc is None:
         pytest.skip("no C compiler")
-    names = [n for n in special.FLOAT64 if n not in ("carlson_rf", "carlson_rd",
-                                                     "elastica_core")]
+    f64 = np_kernels.float64_namespace()
+    names = [n for n in f64 if n not in ("carlson_rf", "carlson_rd", "elastica_core")]
     xs = [1e-300, 1e-12, 3e-7, 0.01, 0.24, 0.5, 0.9, 1.3, 1.55, -0.8, 2.2, 4.7, 7.5]
     calls = "\n".join(
         f'    for (i = 0; i < n; ++i) printf("%s %.17g\\n", "{n}", symkin_{n}(xs[i]));'
         for n in names)
     driver = (
-        "#include <math.h>\n#include <stdio.h>\n" + special.c_support(names) +
+        "#include <math.h>\n#include <stdio.h>\n" + c_kernels.support(names) +
         "\nint main(void)\n{\n    static const double xs[] = {"
         + ", ".join(repr(x) for x in xs) + "};\n    const int n = "
         + str(len(xs)) + ";\n    int i;\n" + calls + "\n    return 0;\n}\n")
@@ -636,7 +642,7 @@ def test_c_snippets_compile_and_agree(tmp_path):
             assert label == name
             value = float(value)
             try:
-                want = special.FLOAT64[name](x)
+                want = f64[name](x)
             except special.DomainError:
                 assert math.isnan(value), (name, x)
                 continue
@@ -644,8 +650,8 @@ def test_c_snippets_compile_and_agree(tmp_path):
 
 
 def test_model_expressions_in_generated_c(tmp_path):
-    """sympy.ccode of df, dg and their derivatives (printing symkin_<kernel>(...)) compiles with
-    the snippets of special.c_support and meets the float64 accuracy bound."""
+    """The C backend's printing of df, dg and their derivatives (calling symkin_<kernel>(...))
+    compiles with the kernels' C source and meets the float64 accuracy bound."""
     cc = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
     if cc is None:
         pytest.skip("no C compiler")
@@ -657,13 +663,13 @@ def test_model_expressions_in_generated_c(tmp_path):
         names.update(special.used_names(*exprs))    # only what is called: -Werror=unused
         for j, e in enumerate(exprs):
             funcs.append(f"static double {key}_{j}(double theta)\n{{\n"
-                         f"    return {sp.ccode(e)};\n}}\n")
+                         f"    return {CPrinter().doprint(e)};\n}}\n")
     thetas = [1e-12, 1e-7, 0.01, 0.3, 1.0, 1.5, -0.4]
     body = "\n".join(
         f'    for (i = 0; i < n; ++i) printf("%.17g\\n", {key}_{j}(ts[i]));'
         for key in keys for j in range(4))
     src = tmp_path / "models.c"
-    src.write_text("#include <math.h>\n#include <stdio.h>\n" + special.c_support(names)
+    src.write_text("#include <math.h>\n#include <stdio.h>\n" + c_kernels.support(names)
                    + "\n".join(funcs) + "\nint main(void)\n{\n    static const double ts[] = {"
                    + ", ".join(repr(t) for t in thetas) + "};\n    const int n = "
                    + str(len(thetas)) + ";\n    int i;\n" + body + "\n    return 0;\n}\n")

@@ -10,8 +10,8 @@ from .. import special
 from ..templating import render
 from .build import Plan
 from .literals import to_double
-from .common import (header_lines, parameter_symbols, renamed, special_functions, used_symbols,
-                     with_dependencies)
+from .backends.c import kernels
+from .common import header_lines, parameter_symbols, renamed, special_functions, used_symbols
 
 
 class Printer(C99CodePrinter):
@@ -30,6 +30,13 @@ class Printer(C99CodePrinter):
     def _print_Float(self, expr):  # noqa: N802
         # literals.float_literals made every Float a double: print the shortest exact decimal.
         return repr(float(expr))
+
+    def _print_Function(self, expr):  # noqa: N802
+        """symkin's special functions are the static `symkin_<name>` of backends/c/kernels."""
+        if special.is_special(expr):
+            args = ", ".join(self._print(a) for a in expr.args)
+            return f"symkin_{type(expr).__name__}({args})"
+        return super()._print_Function(expr)
 
 
 def routine_source(routine, printer: Printer) -> dict:
@@ -56,7 +63,6 @@ def emit(plan: Plan, source: str) -> tuple[str, str]:
     names = parameter_symbols(plan)
     printer = Printer()
     routines = [routine_source(renamed(r, names), printer) for r in plan.routines.values()]
-    kernels = with_dependencies(special_functions(plan))
     context = dict(
         header=header_lines(plan, source), name=name, NAME=name.upper(),
         inputs=[kin.hinges[a].name for a in kin.inputs],
@@ -69,6 +75,6 @@ def emit(plan: Plan, source: str) -> tuple[str, str]:
         unknown_index=[a - 1 for a in kin.unknowns], k=len(kin.unknowns),
         n_dyads=len(an.rigid.dyads), closed_form=plan.closed_form,
         needs_loops=plan.needs_loops, routines={r["name"]: r for r in routines},
-        kernels=[special.C_SOURCE[k] for k in kernels],
+        kernels=[kernels.source(k) for k in special_functions(plan)],
     )
     return render("c/header.h.j2", **context), render("c/source.c.j2", **context)

@@ -5,7 +5,9 @@ from __future__ import annotations
 import sympy as sp
 
 from .. import special
+from ..special.kernels import StableKernel
 from .build import Plan
+from .literals import literal
 from .routines import Routine
 
 
@@ -34,31 +36,11 @@ def used_symbols(routine: Routine) -> set[sp.Symbol]:
 
 
 def special_functions(plan: Plan) -> list[str]:
-    """Names of the special kernels used by any routine (sorted, for determinism)."""
-    used: set[str] = set()
-    for r in plan.routines.values():
-        exprs = [e for _, e in r.assignments] + list(r.outputs)
-        for e in exprs:
-            for f in sp.sympify(e).atoms(sp.Function):
-                if type(f).__name__ in special.C_SOURCE:
-                    used.add(type(f).__name__)
-    return sorted(used)
-
-
-def with_dependencies(names: list[str]) -> list[str]:
-    """`names` and the kernels they call, dependencies first."""
-    order: list[str] = []
-
-    def visit(n: str) -> None:
-        if n in order:
-            return
-        for d in special.DEPENDS.get(n, ()):
-            visit(d)
-        order.append(n)
-
-    for n in sorted(names):
-        visit(n)
-    return order
+    """Names of the special functions the routines call and the helpers those call, every
+    helper before its callers (deterministic)."""
+    exprs = [e for r in plan.routines.values() for e in [*(e for _, e in r.assignments),
+                                                         *r.outputs]]
+    return special.with_dependencies(special.used_names(*exprs))
 
 
 def comment_safe(text: str) -> str:
@@ -83,3 +65,17 @@ def header_lines(plan: Plan, source: str) -> list[str]:
     ]
     lines += list(plan.notes)
     return [comment_safe(line) for line in lines]
+
+
+def kernel_recurrence(cls: type[StableKernel], x2: str) -> list[str]:
+    """The steps b <- (b - a_j)/x^2 of a kernel's recurrence, as statements valid in Python
+    and C (without the C semicolon)."""
+    out = []
+    for a in (float(a) for a in cls.float_subtract):
+        if a == 0:
+            out.append(f"b = b / {x2}")
+        elif a > 0:
+            out.append(f"b = (b - {literal(a)}) / {x2}")
+        else:
+            out.append(f"b = (b + {literal(-a)}) / {x2}")
+    return out

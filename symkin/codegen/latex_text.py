@@ -16,6 +16,8 @@ from collections.abc import Iterable, Mapping
 import sympy as sp
 from sympy.printing.latex import LatexPrinter
 
+from .. import special
+
 #: Width the equations are broken for, in ems of the 10 pt body font (345 pt = article's
 #: one-column \textwidth; the standalone report is wider, an appendix may be this narrow).
 LINE_WIDTH_EM = 31.0
@@ -117,13 +119,43 @@ def plain_name(text: str) -> str:
 
 # -- the printer ---------------------------------------------------------------------------------
 
+#: How the report writes the elastica functions (kernels: see :func:`special_symbol`).
+_ELASTICA_SYMBOLS = {
+    "elastica_x": r"X_{e}", "elastica_y": r"Y_{e}", "elastica_dx": r"\Delta X_{e}",
+    "elastica_dy": r"\Delta Y_{e}", "elastica_dx_d1": r"\Delta X_{e}'",
+    "elastica_dy_d1": r"\Delta Y_{e}'",
+}
+
+
+def special_symbol(name: str) -> str:
+    """The report's symbol of a special function: s_n, c_n, K, X_e, ..."""
+    if name in _ELASTICA_SYMBOLS:
+        return _ELASTICA_SYMBOLS[name]
+    if name == "arck":
+        return r"\operatorname{K}"
+    letter = {"sinr": "s", "cosr": "c"}[name[:4]]
+    return rf"\operatorname{{{letter}}}_{{{name[4:]}}}"
+
+
 class ReportPrinter(LatexPrinter):
-    """sympy's LatexPrinter with atan2 written as one operator."""
+    """sympy's LatexPrinter with atan2 written as one operator and symkin's special functions
+    written with the report's symbols."""
 
     def _print_atan2(self, expr, exp=None):  # noqa: N802 - sympy's printer protocol
         y, x = expr.args
         tex = r"\operatorname{atan2}\left(%s, %s\right)" % (self._print(y), self._print(x))
         return tex if exp is None else r"\left(%s\right)^{%s}" % (tex, exp)
+
+    def _print_Function(self, expr, exp=None):  # noqa: N802
+        if not special.is_special(expr):
+            return super()._print_Function(expr, exp)
+        symbol = special_symbol(type(expr).__name__)
+        call = rf"\!\left({self._print(expr.args[0])}\right)"
+        if exp is None:
+            return symbol + call
+        if isinstance(expr, special.ElasticaFunction):
+            return rf"\left({symbol}{call}\right)^{{{exp}}}"
+        return rf"{symbol}^{{{exp}}}{call}"
 
 
 class Tex:

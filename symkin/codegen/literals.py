@@ -95,3 +95,22 @@ def float_literals(expr: sp.Expr) -> sp.Expr:
 
 def _simple_rational(q: sp.Rational) -> bool:
     return abs(q.p) < EXACT_INT and q.q < EXACT_INT
+
+
+def literal(value: float) -> str:
+    """A C and Python literal that reads back as exactly `value` (the shortest round-trip
+    decimal, with a '.0' where repr would print an integer)."""
+    text = repr(float(value))
+    if text in ("inf", "-inf", "nan"):
+        raise ValueError(f"non-finite constant {text}")
+    if "." not in text and "e" not in text:
+        text += ".0"
+    return text
+
+
+def horner(coeffs: list[float], var: str) -> str:
+    """Source text of sum coeffs[k] var^k in Horner form (valid Python and C)."""
+    text = literal(coeffs[-1])
+    for c in reversed(coeffs[:-1]):
+        text = f"{literal(c)} + {var} * ({text})"
+    return text

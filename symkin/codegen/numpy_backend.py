@@ -9,17 +9,23 @@ from .. import special
 from ..templating import render
 from .build import Plan
 from .literals import float_literals, to_double
-from .common import (header_lines, parameter_symbols, renamed, special_functions, used_symbols,
-                     with_dependencies)
+from .backends.numpy import kernels
+from .common import header_lines, parameter_symbols, renamed, special_functions, used_symbols
 
 
 class Printer(NumPyPrinter):
-    """NumPyPrinter; symkin's special functions print themselves by their registry names."""
+    """NumPyPrinter that writes every Float as its shortest round-trip decimal and calls
+    symkin's special functions by their names (defined in the module from backends/numpy)."""
 
     def _print_Float(self, expr):  # noqa: N802
         # NumPyPrinter prints 15 digits; every Float here is a double (literals.float_literals):
         # print the shortest decimal that reads back to it exactly.
         return repr(float(expr))
+
+    def _print_Function(self, expr):  # noqa: N802
+        if special.is_special(expr):
+            return f"{type(expr).__name__}({', '.join(self._print(a) for a in expr.args)})"
+        return super()._print_Function(expr)
 
 
 def routine_source(routine, printer: Printer) -> dict:
@@ -48,7 +54,6 @@ def emit(plan: Plan, source: str, dtype: str = "float64") -> str:
         defaults.append({"name": p.name, "symbol": names[p.symbol].name,
                          "expr": printer.doprint(float_literals(p.expr.xreplace(names))),
                          "value": repr(to_double(p.value))})
-    kernels = with_dependencies(special_functions(plan))
     return render(
         "numpy/module.py.j2",
         header=header_lines(plan, source),
@@ -61,5 +66,5 @@ def emit(plan: Plan, source: str, dtype: str = "float64") -> str:
         input_index=[a - 1 for a in kin.inputs], unknown_index=[a - 1 for a in kin.unknowns],
         n_dyads=len(an.rigid.dyads), closed_form=plan.closed_form,
         needs_loops=plan.needs_loops, n_loops=len(kin.chords),
-        routines=routines, kernels=[special.NUMPY_SOURCE[k] for k in kernels], dtype=dtype,
+        routines=routines, kernels=[kernels.source(k) for k in special_functions(plan)], dtype=dtype,
     )

@@ -1,0 +1,293 @@
+"""numpy source of symkin's special functions (:mod:`symkin.special`), beside the numpy backend,
+and its scalar twin (the `math` module only) for ``sympy.lambdify(..., [float64_namespace(),
+"math"])``.
+
+Vectorised functions return NaN out of their domain; the scalar ones raise
+:class:`symkin.special.DomainError`. Both run the same float algorithm as the C backend's
+source, and :func:`numpy_namespace` / :func:`float64_namespace` execute exactly these texts.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cache
+
+import numpy as np
+
+from ....special import registry
+from ....special.elastica import (A1_SERIES, HALF_PI_FLOAT, OUTPUTS, Q_SERIES, RD_DOC, RD_STOP,
+                                  RF_DOC, RF_STOP)
+from ....special.kernels import StableKernel
+from ...common import kernel_recurrence
+from ...literals import horner, literal
+
+
+def source(name: str, scalar: bool = False) -> str:
+    """The numpy (or, with `scalar`, the math-module) definition of one function or helper."""
+    if name in _FIXED:
+        return _FIXED[name][scalar].lstrip()
+    if name in OUTPUTS:
+        return _elastica_output(name, scalar)
+    cls = registry.FUNCTIONS[name]
+    if not issubclass(cls, StableKernel):
+        raise KeyError(f"no numpy source for '{name}'")
+    return _kernel(cls, scalar)
+
+
+def numpy_namespace() -> dict:
+    """Module dict for ``sympy.lambdify(..., modules=[numpy_namespace(), "numpy"])``."""
+    return {n: _compiled(n, False) for n in registry.names()}
+
+
+def float64_namespace() -> dict:
+    """Module dict for ``sympy.lambdify(..., modules=[float64_namespace(), "math"])``."""
+    return {n: _compiled(n, True) for n in registry.names()}
+
+
+# One namespace per dialect, so helpers and their callers see each other.
+_NAMESPACES: tuple[dict, dict] = ({"np": np}, {"math": math, "DomainError": registry.DomainError})
+
+
+@cache
+def _compiled(name: str, scalar: bool):
+    """The function `name` defined by executing its source text."""
+    namespace = _NAMESPACES[scalar]
+    for helper in registry.DEPENDS.get(name, ()):
+        _compiled(helper, scalar)
+    kind = "scalar" if scalar else "numpy"
+    exec(compile(source(name, scalar), f"<symkin {kind} {name}>", "exec"), namespace)
+    return namespace[name]
+
+
+def _kernel(cls: type[StableKernel], scalar: bool) -> str:
+    """A kernel's float algorithm: Taylor series below its threshold, else the recurrence."""
+    name = cls.__name__
+    coeffs, n = cls.float_series()
+    threshold = literal(cls.threshold)
+    series = horner(coeffs, "x2")
+    doc = (f"{cls.definition}; Taylor series ({n} terms) for |x| < {threshold}, "
+           f"else the nested elementary formula")
+    if scalar:
+        base = {"sinc": "math.sin(x) / x", "cosr1": "-2.0 * (math.sin(0.5 * x) / x) ** 2",
+                "sinc_minus_cos": "math.sin(x) / x - math.cos(x)"}[cls.float_base]
+        return (
+            f"def {name}(x):\n"
+            f"    \"\"\"{doc}.\"\"\"\n"
+            f"    x2 = x * x\n"
+            f"    if abs(x) < {threshold}:\n"
+            f"        return {series}\n"
+            f"    b = {base}\n"
+            + "".join(f"    {step}\n" for step in kernel_recurrence(cls, "x2"))
+            + "    return b\n")
+    base = {"sinc": "np.sin(xs) / xs", "cosr1": "-2.0 * (np.sin(0.5 * xs) / xs) ** 2",
+            "sinc_minus_cos": "np.sin(xs) / xs - np.cos(xs)"}[cls.float_base]
+    return (
+        f"def {name}(x):\n"
+        f"    \"\"\"{doc} (vectorised).\"\"\"\n"
+        f"    x = np.asarray(x, dtype=float)\n"
+        f"    x2 = x * x\n"
+        f"    small = np.abs(x) < {threshold}\n"
+        f"    series = {series}\n"
+        f"    xs = np.where(small, 1.0, x)\n"
+        f"    xs2 = xs * xs\n"
+        f"    b = {base}\n"
+        + "".join(f"    {step}\n" for step in kernel_recurrence(cls, "xs2"))
+        + "    return np.where(small, series, b)\n")
+
+
+# The float constants of the algorithms, as literals.
+_A1 = horner(A1_SERIES, "q")
+_QS = literal(Q_SERIES)
+_HP = literal(HALF_PI_FLOAT)
+_RF_Q = literal(RF_STOP)
+_RD_Q = literal(RD_STOP)
+
+_SCALAR_RF = f'''
+def carlson_rf(x, y, z):
+    """{RF_DOC}."""
+    x0 = x
+    y0 = y
+    a0 = (x + y + z) / 3.0
+    q = max(abs(a0 - x), abs(a0 - y), abs(a0 - z)) * {_RF_Q}
+    an = a0
+    fac = 1.0
+    while fac * q >= abs(an):
+        sx = math.sqrt(x)
+        sy = math.sqrt(y)
+        sz = math.sqrt(z)
+        lam = sx * sy + sx * sz + sy * sz
+        x = 0.25 * (x + lam)
+        y = 0.25 * (y + lam)
+        z = 0.25 * (z + lam)
+        an = 0.25 * (an + lam)
+        fac = 0.25 * fac
+    X = fac * (a0 - x0) / an
+    Y = fac * (a0 - y0) / an
+    Z = -X - Y
+    e2 = X * Y - Z * Z
+    e3 = X * Y * Z
+    return (1.0 - e2 / 10.0 + e3 / 14.0 + e2 * e2 / 24.0 - 3.0 * e2 * e3 / 44.0) / math.sqrt(an)
+'''
+
+_SCALAR_RD = f'''
+def carlson_rd(x, y, z):
+    """{RD_DOC}."""
+    x0 = x
+    y0 = y
+    a0 = (x + y + 3.0 * z) / 5.0
+    q = max(abs(a0 - x), abs(a0 - y), abs(a0 - z)) * {_RD_Q}
+    an = a0
+    fac = 1.0
+    total = 0.0
+    while fac * q >= abs(an):
+        sx = math.sqrt(x)
+        sy = math.sqrt(y)
+        sz = math.sqrt(z)
+        lam = sx * sy + sx * sz + sy * sz
+        total = total + fac / (sz * (z + lam))
+        x = 0.25 * (x + lam)
+        y = 0.25 * (y + lam)
+        z = 0.25 * (z + lam)
+        an = 0.25 * (an + lam)
+        fac = 0.25 * fac
+    X = fac * (a0 - x0) / an
+    Y = fac * (a0 - y0) / an
+    Z = -(X + Y) / 3.0
+    e2 = X * Y - 6.0 * Z * Z
+    e3 = (3.0 * X * Y - 8.0 * Z * Z) * Z
+    e4 = 3.0 * (X * Y - Z * Z) * Z * Z
+    e5 = X * Y * Z * Z * Z
+    poly = (1.0 - 3.0 * e2 / 14.0 + e3 / 6.0 + 9.0 * e2 * e2 / 88.0 - 3.0 * e4 / 22.0
+            - 9.0 * e2 * e3 / 52.0 + 3.0 * e5 / 26.0)
+    return fac / (an * math.sqrt(an)) * poly + 3.0 * total
+'''
+
+_NUMPY_RF = f'''
+def carlson_rf(x, y, z):
+    """{RF_DOC} (vectorised)."""
+    x, y, z = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float),
+                                  np.asarray(z, dtype=float))
+    x0 = x
+    y0 = y
+    a0 = (x + y + z) / 3.0
+    q = np.maximum(np.maximum(np.abs(a0 - x), np.abs(a0 - y)), np.abs(a0 - z)) * {_RF_Q}
+    an = a0
+    fac = np.ones_like(a0)
+    active = fac * q >= np.abs(an)
+    while np.any(active):
+        sx = np.sqrt(x)
+        sy = np.sqrt(y)
+        sz = np.sqrt(z)
+        lam = sx * sy + sx * sz + sy * sz
+        x = np.where(active, 0.25 * (x + lam), x)
+        y = np.where(active, 0.25 * (y + lam), y)
+        z = np.where(active, 0.25 * (z + lam), z)
+        an = np.where(active, 0.25 * (an + lam), an)
+        fac = np.where(active, 0.25 * fac, fac)
+        active = fac * q >= np.abs(an)
+    X = fac * (a0 - x0) / an
+    Y = fac * (a0 - y0) / an
+    Z = -X - Y
+    e2 = X * Y - Z * Z
+    e3 = X * Y * Z
+    return (1.0 - e2 / 10.0 + e3 / 14.0 + e2 * e2 / 24.0 - 3.0 * e2 * e3 / 44.0) / np.sqrt(an)
+'''
+
+_NUMPY_RD = f'''
+def carlson_rd(x, y, z):
+    """{RD_DOC} (vectorised)."""
+    x, y, z = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float),
+                                  np.asarray(z, dtype=float))
+    x0 = x
+    y0 = y
+    a0 = (x + y + 3.0 * z) / 5.0
+    q = np.maximum(np.maximum(np.abs(a0 - x), np.abs(a0 - y)), np.abs(a0 - z)) * {_RD_Q}
+    an = a0
+    fac = np.ones_like(a0)
+    total = np.zeros_like(a0)
+    active = fac * q >= np.abs(an)
+    while np.any(active):
+        sx = np.sqrt(x)
+        sy = np.sqrt(y)
+        sz = np.sqrt(z)
+        lam = sx * sy + sx * sz + sy * sz
+        total = np.where(active, total + fac / (sz * (z + lam)), total)
+        x = np.where(active, 0.25 * (x + lam), x)
+        y = np.where(active, 0.25 * (y + lam), y)
+        z = np.where(active, 0.25 * (z + lam), z)
+        an = np.where(active, 0.25 * (an + lam), an)
+        fac = np.where(active, 0.25 * fac, fac)
+        active = fac * q >= np.abs(an)
+    X = fac * (a0 - x0) / an
+    Y = fac * (a0 - y0) / an
+    Z = -(X + Y) / 3.0
+    e2 = X * Y - 6.0 * Z * Z
+    e3 = (3.0 * X * Y - 8.0 * Z * Z) * Z
+    e4 = 3.0 * (X * Y - Z * Z) * Z * Z
+    e5 = X * Y * Z * Z * Z
+    poly = (1.0 - 3.0 * e2 / 14.0 + e3 / 6.0 + 9.0 * e2 * e2 / 88.0 - 3.0 * e4 / 22.0
+            - 9.0 * e2 * e3 / 52.0 + 3.0 * e5 / 26.0)
+    return fac / (an * np.sqrt(an)) * poly + 3.0 * total
+'''
+
+_SCALAR_CORE = f'''
+def elastica_core(t):
+    """(s, c, q, A, C, A1) of the tip-force elastica at tip angle t (|t| < pi/2)."""
+    if not abs(t) <= {_HP}:
+        raise DomainError("elastica_force: tip angle |theta| = %r reaches pi/2, the largest tip "
+                          "angle a transverse end force can produce" % (abs(t),))
+    s = math.sin(t)
+    c = math.cos(t)
+    q = s * s
+    z = c * c
+    y = 1.0 + abs(s)
+    x = z / y
+    A = carlson_rf(x, y, z)
+    C = z * carlson_rd(x, y, z) / 3.0
+    if q < {_QS}:
+        A1 = {_A1}
+    else:
+        A1 = (A - 1.0) / q
+    return s, c, q, A, C, A1
+'''
+
+_NUMPY_CORE = f'''
+def elastica_core(t):
+    """(s, c, q, A, C, A1, ok) of the tip-force elastica (vectorised; NaN where |t| >= pi/2)."""
+    t = np.asarray(t, dtype=float)
+    ok = np.abs(t) <= {_HP}
+    t = np.where(ok, t, np.nan)
+    s = np.sin(t)
+    c = np.cos(t)
+    q = s * s
+    z = c * c
+    y = 1.0 + np.abs(s)
+    x = z / y
+    A = carlson_rf(x, y, z)
+    C = z * carlson_rd(x, y, z) / 3.0
+    small = q < {_QS}
+    qs = np.where(small, 1.0, q)
+    A1 = np.where(small, {_A1}, (A - 1.0) / qs)
+    return s, c, q, A, C, A1
+'''
+
+#: Each output of the elastica in terms of (s, c, q, A, C, A1) from elastica_core.
+_OUTPUTS = {
+    "elastica_x": "1.0 / A",
+    "elastica_y": "s * (1.0 - C / A)",
+    "elastica_dx": "q * (0.5 / (1.0 + c) - A1 / A)",
+    "elastica_dy": "s * (0.5 - C / A)",
+    "elastica_dx_d1": "s * (0.5 - (A + C - A1) / (2.0 * c * A * A))",
+    "elastica_dy_d1": "0.5 * c * (1.0 + q * (A + C - A1) / (c * c * A)) * C / A",
+}
+
+
+def _elastica_output(name: str, scalar: bool) -> str:
+    note = "" if scalar else " (vectorised, NaN out of domain)"
+    return (f'def {name}(t):\n    """Tip-force elastica: {OUTPUTS[name]}{note}."""\n'
+            f"    s, c, q, A, C, A1 = elastica_core(t)\n    return {_OUTPUTS[name]}\n")
+
+
+#: name -> (numpy source, scalar source)
+_FIXED = {"carlson_rf": (_NUMPY_RF, _SCALAR_RF), "carlson_rd": (_NUMPY_RD, _SCALAR_RD),
+          "elastica_core": (_NUMPY_CORE, _SCALAR_CORE)}
