@@ -649,8 +649,9 @@ class SFBench:
 # ------------------------------------------------------------------------------------------------
 def bench_example(example: str, quick: bool, sf: dict, workroot: Path) -> dict:
     import symkin
-    from symkin.codegen import c_backend, numpy_backend
-    from symkin.codegen.build import plan as make_plan
+    from symkin.codegen.backends.c import backend as c_backend
+    from symkin.codegen.backends.numpy import backend as numpy_backend
+    from symkin.codegen.plan import plan as make_plan
     from symkin.codegen.runtime import import_numpy_module
 
     log(f"evaluators: {example}")
@@ -773,10 +774,9 @@ def bench_example(example: str, quick: bool, sf: dict, workroot: Path) -> dict:
 # 3: derivation, one fresh process per case
 # ------------------------------------------------------------------------------------------------
 def emitters() -> list[str]:
-    out = ["c", "numpy"]
-    if importlib.util.find_spec("symkin.codegen.latex_backend") is not None:
-        out.insert(0, "latex")
-    return out
+    from symkin.derive import EMITTERS
+
+    return list(EMITTERS)
 
 
 def peak_rss_mb() -> float:
@@ -797,10 +797,9 @@ def derive_child(kind: str, arg: str) -> None:
     import symkin
     from symkin.derive import generate
 
-    import symkin.codegen.build  # noqa: F401 - the emitters' imports are start-up, not derivation
-    for module in ("numpy_backend", "c_backend", "latex_backend"):
-        if importlib.util.find_spec(f"symkin.codegen.{module}") is not None:
-            importlib.import_module(f"symkin.codegen.{module}")
+    import symkin.codegen.plan  # noqa: F401 - the emitters' imports are start-up, not derivation
+    for module in ("numpy.backend", "c.backend", "latex.report"):
+        importlib.import_module(f"symkin.codegen.backends.{module}")
     rss0 = peak_rss_mb()
     t_import = time.perf_counter() - t_start
     if kind == "example":

@@ -41,8 +41,9 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
              notes: Sequence[str] = ()) -> dict[str, bytes]:
     """File name -> content of every requested artifact (nothing is written). A `variant`
     (symkin.variants.Variant) derives that cheaper variant instead of the file's models."""
-    from .codegen import c_backend, numpy_backend
-    from .codegen.build import plan
+    from .codegen.backends.c import backend as c_backend
+    from .codegen.backends.numpy import backend as numpy_backend
+    from .codegen.plan import plan
 
     say = progress or (lambda message: None)
     source = Path(mech.path).name
@@ -67,7 +68,7 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
         files[f"{mech.name}.c"] = code.encode()
     if "latex" in emit:
         say("emitting the LaTeX report")
-        from .codegen import latex_backend
+        from .codegen.backends.latex import report as latex_backend
 
         files.update(latex_backend.emit(p, source, appendix=appendix))
     return files

@@ -337,8 +337,10 @@ def _wrap(angle):
 def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
                params: Mapping[str, object] | None, backend: str) -> Evaluation:
     """One configuration through the generated `backend` ('numpy' or 'c')."""
-    from .codegen import c_backend, numpy_backend, runtime
-    from .codegen.build import plan
+    from .codegen import runtime
+    from .codegen.backends.c import backend as c_backend
+    from .codegen.backends.numpy import backend as numpy_backend
+    from .codegen.plan import plan
 
     given = input_values(analysis, inputs)
     kin = analysis.kin

@@ -128,8 +128,10 @@ def reference(analysis: Analysis, samples: list[dict[str, float]]):
 def measure(mech: Mechanism, variant: Variant, samples: list[dict[str, float]],
             ref: list[dict], with_c: bool = True) -> Row:
     """Derive, emit and run one variant; its errors against `ref` and its times."""
-    from .codegen import c_backend, numpy_backend, runtime
-    from .codegen.build import plan
+    from .codegen import runtime
+    from .codegen.backends.c import backend as c_backend
+    from .codegen.backends.numpy import backend as numpy_backend
+    from .codegen.plan import plan
     
     analysis = analysis_for(mech, variant)
     p = plan(analysis, levels=[variant.level])

@@ -19,8 +19,10 @@ import symkin
 from conftest import EXAMPLES, ROOT
 from evaluators import INPUTS, SOURCES, generated, rel_err, require_compiler
 from reference_solver import Reference
-from symkin.codegen import c_backend, runtime, numpy_backend
-from symkin.codegen.build import plan
+from symkin.codegen import runtime
+from symkin.codegen.backends.c import backend as c_backend
+from symkin.codegen.backends.numpy import backend as numpy_backend
+from symkin.codegen.plan import plan
 from symkin.codegen.runtime import import_numpy_module
 
 @pytest.mark.parametrize("key", sorted(SOURCES))

@@ -9,7 +9,7 @@ import mechanisms as M
 import symkin
 from conftest import EXAMPLES
 from symkin.analysis import Analysis
-from symkin.codegen.build import plan
+from symkin.codegen.plan import plan
 from symkin.cli import main
 
 

@@ -17,7 +17,7 @@ import pytest
 
 import symkin
 from conftest import EXAMPLES, ROOT
-from symkin.codegen.latex_text import escape_latex, math_name
+from symkin.codegen.backends.latex.text import escape_latex, math_name
 from symkin.derive import generate
 
 EXAMPLE_NAMES = sorted(p.stem for p in EXAMPLES.glob("*.toml"))
@@ -70,8 +70,8 @@ def write(files: dict[str, bytes], folder: Path) -> Path:
 def reports() -> dict[str, tuple[dict[str, bytes], dict[str, bytes]]]:
     """example -> (standalone files, appendix files), generated once in this process."""
     from symkin.analysis import Analysis
-    from symkin.codegen import latex_backend
-    from symkin.codegen.build import plan
+    from symkin.codegen.backends.latex import report as latex_backend
+    from symkin.codegen.plan import plan
     from symkin.structure import build
 
     out = {}

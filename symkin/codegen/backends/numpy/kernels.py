@@ -18,7 +18,7 @@ from ....special import registry
 from ....special.elastica import (A1_SERIES, HALF_PI_FLOAT, OUTPUTS, Q_SERIES, RD_DOC, RD_STOP,
                                   RF_DOC, RF_STOP)
 from ....special.kernels import StableKernel
-from ...common import kernel_recurrence
+from ..common import kernel_recurrence
 from ...literals import horner, literal
 
 

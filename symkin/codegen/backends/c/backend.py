@@ -5,13 +5,13 @@ from __future__ import annotations
 import sympy as sp
 from sympy.printing.c import C99CodePrinter
 
-from .. import levels as level_table
-from .. import special
-from ..templating import render
-from .build import Plan
-from .literals import to_double
-from .backends.c import kernels
-from .common import header_lines, parameter_symbols, renamed, special_functions, used_symbols
+from .... import levels as level_table
+from .... import special
+from ....templating import render
+from ...literals import to_double
+from ...plan import Plan
+from ..common import header_lines, parameter_symbols, renamed, special_functions, used_symbols
+from . import kernels
 
 
 class Printer(C99CodePrinter):

@@ -23,15 +23,14 @@ import jinja2
 import numpy as np
 import sympy as sp
 
-from .. import hinge_models, templating
-from .. import special
-from .. import vectors as V
-from ..hinge_models import PLATE_LENGTH, THETA
-from .build import Plan
-from .common import header_lines
-from .latex_figures import (FIG_WIDTH, PoseData, Sweep, deviation_figure, differs,
+from .... import hinge_models, special, templating
+from .... import vectors as V
+from ....hinge_models import PLATE_LENGTH, THETA
+from ...plan import Plan
+from ..common import header_lines
+from .figures import (FIG_WIDTH, PoseData, Sweep, deviation_figure, differs,
                              graph_figure, plate_scale, pose_figure, pose_size, tree_layout)
-from .latex_text import (LINE_WIDTH_EM, Tex, align_lines, escape_latex, math_name, pack,
+from .text import (LINE_WIDTH_EM, Tex, align_lines, escape_latex, math_name, pack,
                          plain_name, width)
 
 __all__ = ["emit", "escape_latex", "environment", "SWEEP_RANGE", "SWEEP_SAMPLES"]
@@ -292,7 +291,7 @@ class Report:
         return self.tex.with_names(names)
 
     def j_matrices(self) -> dict:
-        from ..kinematics import paper_matrices
+        from ....kinematics import paper_matrices
 
         J, Jstar = paper_matrices(self.s)
         zero = sp.Symbol("O_bold")
@@ -313,7 +312,7 @@ class Report:
         return out
 
     def position_lines(self) -> list[str]:
-        from ..kinematics import paper_positions
+        from ....kinematics import paper_positions
 
         R = paper_positions(self.s)
         tex = self._abstract_names(list(R))
@@ -400,7 +399,7 @@ class Report:
 
     # -- loops -----------------------------------------------------------------------------------
     def loops(self) -> list[dict]:
-        from .. import loop_equations as le_mod
+        from .... import loop_equations as le_mod
         import dataclasses
 
         kin, s, tex = self.kin, self.s, self.tex
@@ -738,8 +737,8 @@ def sweep(report: Report, numpy_module) -> tuple[Sweep, tuple[float, float], dic
 
 def emit(plan: Plan, source: str, appendix: bool = False) -> dict[str, bytes]:
     """`<name>.tex` (standalone, or the body alone with `appendix`) and its figure PDFs."""
-    from .runtime import import_numpy_module
-    from . import numpy_backend
+    from ...runtime import import_numpy_module
+    from ..numpy import backend as numpy_backend
 
     report = Report(plan, source)
     name = report.mech.name

@@ -5,12 +5,12 @@ from __future__ import annotations
 import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
 
-from .. import special
-from ..templating import render
-from .build import Plan
-from .literals import float_literals, to_double
-from .backends.numpy import kernels
-from .common import header_lines, parameter_symbols, renamed, special_functions, used_symbols
+from .... import special
+from ....templating import render
+from ...literals import float_literals, to_double
+from ...plan import Plan
+from ..common import header_lines, parameter_symbols, renamed, special_functions, used_symbols
+from . import kernels
 
 
 class Printer(NumPyPrinter):

@@ -16,7 +16,7 @@ from collections.abc import Iterable, Mapping
 import sympy as sp
 from sympy.printing.latex import LatexPrinter
 
-from .. import special
+from .... import special
 
 #: Width the equations are broken for, in ems of the 10 pt body font (345 pt = article's
 #: one-column \textwidth; the standalone report is wider, an appendix may be this narrow).

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import sympy as sp
 
-from .. import special
-from ..special.kernels import StableKernel
-from .build import Plan
-from .literals import literal
-from .routines import Routine
+from ... import special
+from ...special.kernels import StableKernel
+from ..literals import literal
+from ..plan import Plan
+from ..routines import Routine
 
 
 def parameter_symbols(plan: Plan) -> dict[sp.Symbol, sp.Symbol]:
@@ -18,7 +18,7 @@ def parameter_symbols(plan: Plan) -> dict[sp.Symbol, sp.Symbol]:
 
 def renamed(routine: Routine, names: dict[sp.Symbol, sp.Symbol]) -> Routine:
     """The routine with parameter symbols renamed (arguments, assignments and outputs)."""
-    from .routines import Argument
+    from ..routines import Argument
 
     args = tuple(Argument(a.name, tuple(names.get(s, s) for s in a.symbols))
                  for a in routine.arguments)
