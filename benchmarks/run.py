@@ -271,17 +271,15 @@ class Pipeline:
     closed-form rigid angles, [rigid polish], first-order δ, Newton on δ, point positions."""
 
     def __init__(self, plan, fns: dict, polish: int = POLICY["polish"]):
-        an = plan.analysis
-        kin = an.kin
         self.fns = fns
-        self.m = len(an.thetas)
-        self.k = len(an.deltas)
-        self.nd = len(an.rigid.dyads)
-        self.input_index = [a - 1 for a in kin.inputs]
-        self.unknown_index = [a - 1 for a in kin.unknowns]
+        self.m = len(plan.hinges)
+        self.k = len(plan.unknown_index)
+        self.nd = plan.n_dyads
+        self.input_index = list(plan.input_index)
+        self.unknown_index = list(plan.unknown_index)
         self.needs_loops = plan.needs_loops
         self.polish = polish
-        self.params = [float(p.value) for p in an.mechanism.parameters]
+        self.params = [p.value for p in plan.parameters]
 
     def __call__(self, x) -> list[float]:
         k, p = self.k, self.params
@@ -573,11 +571,9 @@ def symforce_build(plan, workdir: Path) -> tuple[Path, float]:
     from symkin.codegen.backends.c import kernels as c_kernels
     from symkin.codegen.backends.numpy import kernels as np_kernels
 
-    an = plan.analysis
-    kin = an.kin
     t0 = time.perf_counter()
     needed = ["rigid_points", "dev_exact"]
-    if kin.unknowns:
+    if plan.unknown_index:
         needed += ["rigid", "rigid_res", "linear"]
     if plan.needs_loops:
         needed += ["newton"]
@@ -603,12 +599,12 @@ def symforce_build(plan, workdir: Path) -> tuple[Path, float]:
                              skip_directory_nesting=True)
         includes.append(f'#include "{key}.h"')
     gen_seconds = time.perf_counter() - t0
-    body = (SF_RIGID if kin.unknowns else "") + (SF_LOOPS if plan.needs_loops else "")
+    body = (SF_RIGID if plan.unknown_index else "") + (SF_LOOPS if plan.needs_loops else "")
     src = SF_DRIVER.format(
-        includes="\n".join(includes), m=len(an.thetas), k=len(an.deltas),
-        nin=len(kin.inputs), np_=len(plan.points), npar=len(an.params),
-        nd=len(an.rigid.dyads), in_idx=", ".join(str(a - 1) for a in kin.inputs) or "0",
-        unk_idx=", ".join(str(a - 1) for a in kin.unknowns) or "0", body=body,
+        includes="\n".join(includes), m=len(plan.hinges), k=len(plan.unknown_index),
+        nin=len(plan.inputs), np_=len(plan.points), npar=len(plan.parameters),
+        nd=plan.n_dyads, in_idx=", ".join(map(str, plan.input_index)) or "0",
+        unk_idx=", ".join(map(str, plan.unknown_index)) or "0", body=body,
         polish=POLICY["polish"], stop=POLICY["stop"])
     (workdir / "sf_driver.cc").write_text(src)
     lib = workdir / "libsf_bench.so"

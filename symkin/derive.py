@@ -41,9 +41,10 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
              notes: Sequence[str] = ()) -> dict[str, bytes]:
     """File name -> content of every requested artifact (nothing is written). A `variant`
     (symkin.variants.Variant) derives that cheaper variant instead of the file's models."""
+    from .codegen import runtime
     from .codegen.backends.c import backend as c_backend
     from .codegen.backends.numpy import backend as numpy_backend
-    from .codegen.plan import plan
+    from .codegen.plan import plan, with_derivation
 
     say = progress or (lambda message: None)
     source = Path(mech.path).name
@@ -58,9 +59,11 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
     say("deriving the routines (CSE)")
     p = plan(analysis, points, levels, notes=notes)
     files: dict[str, bytes] = {}
+    numpy_text = None
     if "numpy" in emit:
         say("emitting numpy")
-        files[f"{mech.name}.py"] = numpy_backend.emit(p, source).encode()
+        numpy_text = numpy_backend.emit(p, source)
+        files[f"{mech.name}.py"] = numpy_text.encode()
     if "c" in emit:
         say("emitting C99")
         header, code = c_backend.emit(p, source)
@@ -68,9 +71,14 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
         files[f"{mech.name}.c"] = code.encode()
     if "latex" in emit:
         say("emitting the LaTeX report")
-        from .codegen.backends.latex import report as latex_backend
+        from .codegen.backends.latex import report
 
-        files.update(latex_backend.emit(p, source, appendix=appendix))
+        # the report's deviation plot runs the generated numpy module
+        evaluator = None
+        if p.points:
+            numpy_text = numpy_text or numpy_backend.emit(p, source)
+            evaluator = runtime.import_numpy_module(numpy_text, mech.name)
+        files.update(report.emit(with_derivation(p, analysis), source, appendix, evaluator))
     return files
 
 

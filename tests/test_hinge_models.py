@@ -21,7 +21,7 @@ from symkin import hinge_models as hm
 from symkin import special
 from symkin.codegen.backends.c import kernels as c_kernels
 from symkin.codegen.backends.numpy import kernels as np_kernels
-from symkin.codegen.backends.c.backend import Printer as CPrinter
+from symkin.codegen.backends.c.printer import CPrinter
 from symkin.mechanism import PLATE_LENGTH, THETA, Hinge
 
 DPS = 90                       # reference precision (digits)

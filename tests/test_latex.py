@@ -70,16 +70,20 @@ def write(files: dict[str, bytes], folder: Path) -> Path:
 def reports() -> dict[str, tuple[dict[str, bytes], dict[str, bytes]]]:
     """example -> (standalone files, appendix files), generated once in this process."""
     from symkin.analysis import Analysis
-    from symkin.codegen.backends.latex import report as latex_backend
+    from symkin.codegen.backends.latex import report
+    from symkin.codegen.backends.numpy import backend as numpy_backend
     from symkin.codegen.plan import plan
+    from symkin.codegen.runtime import import_numpy_module
     from symkin.structure import build
 
     out = {}
     for name in EXAMPLE_NAMES:
         mech = symkin.load(EXAMPLES / f"{name}.toml")
-        p = plan(Analysis(build(mech)))
+        p = plan(Analysis(build(mech)), report=True)
         source = Path(mech.path).name
-        out[name] = (latex_backend.emit(p, source), latex_backend.emit(p, source, appendix=True))
+        module = import_numpy_module(numpy_backend.emit(p, source), mech.name)
+        out[name] = (report.emit(p, source, evaluator=module),
+                     report.emit(p, source, appendix=True, evaluator=module))
     return out
 
 

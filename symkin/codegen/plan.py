@@ -1,4 +1,4 @@
-"""The routines a generated evaluator is made of, derived from an :class:`Analysis`.
+"""The plan of a generated evaluator: its routines and the neutral data every template reads.
 
     rigid        inputs, params        -> φ_M - φ_P of every hinge, dyad reach and margin
                                           (closed form; absent when a group is not a dyad)
@@ -10,58 +10,76 @@
     dev_<level>  theta, delta, params  -> deviation x, y of every requested point
 
 Only what the requested points and levels need is derived: a point whose direct path holds only
-input hinges needs no loop solved at any level.
+input hinges needs no loop solved at any level. Parameters are renamed p_0, p_1, ... so no name
+from the mechanism file can clash with generated code. A :class:`Plan` is the emitters' only
+input: the C and numpy backends read its fields and routines, the LaTeX report its
+:class:`~symkin.codegen.derivation.Derivation`.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import sympy as sp
 
 from .. import levels as level_table
 from ..analysis import Analysis
 from ..levels import Level
-from .literals import float_literals
+from .derivation import Derivation, derivation
+from .literals import float_literals, to_double
 from .routines import Argument, Routine, flatten, optimize
 
 
 @dataclass(frozen=True)
+class Parameter:
+    """A file parameter as generated code sees it."""
+
+    name: str               # the file's name (for tables and keyword arguments)
+    symbol: sp.Symbol       # p_k in the routines
+    default: sp.Expr        # its default over the earlier p_k, numbers as doubles
+    value: float            # the default's value, correctly rounded
+
+
+@dataclass(frozen=True, eq=False)
 class Plan:
     """Everything a backend template needs, backend-neutral."""
 
-    analysis: Analysis
+    name: str                          # the mechanism's identifier-safe name
+    links: tuple[str, ...]             # link names by label 0..n
+    hinges: tuple[str, ...]            # hinge names by label 1..m
+    inputs: tuple[str, ...]            # input hinge names, the order of the `inputs` array
+    input_index: tuple[int, ...]       # position of each input in θ (label - 1)
+    unknown_index: tuple[int, ...]     # position in θ of each non-input hinge (the order of δ)
+    parameters: tuple[Parameter, ...]
     points: tuple[str, ...]
     levels: tuple[Level, ...]
+    limits: tuple[tuple[int, float], ...]   # (θ index, L): the hinge's model holds for |θ| < L
+    n_dyads: int
+    n_loops: int
     needs_loops: bool                  # some requested level/point needs the loop solution
     closed_form: bool                  # rigid solution by dyads (else Newton + continuation)
     routines: dict[str, Routine]
-    n_unknowns: int                    # k = number of non-input hinges (size of δ)
     notes: tuple[str, ...] = ()        # e.g. the variant a tolerance chose, for the headers
-
-    @property
-    def mechanism(self):
-        return self.analysis.mechanism
+    derivation: Derivation | None = None    # what a report restates (plan(..., report=True))
 
 
 def plan(analysis: Analysis, points: Sequence[str] | None = None,
          levels: Sequence[str] | None = None, cse: bool = True,
-         notes: Sequence[str] = ()) -> Plan:
-    """Derive the routines for the requested points and levels (all by default)."""
+         notes: Sequence[str] = (), report: bool = False) -> Plan:
+    """Derive the routines for the requested points and levels (all by default); with `report`,
+    also the statement of the derivation a LaTeX report prints."""
     an, kin = analysis, analysis.kin
+    mech = an.mechanism
     names = tuple(p.name for p in an.points if points is None or p.name in points)
     levels = tuple(lv for lv in level_table.LEVELS if levels is None or lv.name in levels)
     inputs = Argument("inputs", tuple(kin.theta[a] for a in kin.inputs))
     params = Argument("params", an.params)
     theta = Argument("theta", an.thetas)
     delta = Argument("delta", an.deltas)
-
-    def moved_by_loops(name: str) -> bool:
-        link = an.link[an.mechanism.point(name).link]
-        return any(b in kin.unknowns for b in an.structure.tree_path(link))
-
-    needs_loops = bool(an.deltas) and any(lv.needs_delta for lv in levels) and any(
-        moved_by_loops(n) for n in names)
+    moved = moved_points(an, names)
+    needs_loops = bool(an.deltas) and any(lv.needs_delta for lv in levels) and bool(moved)
     routines: dict[str, Routine] = {}
     sol = an.rigid
     if sol.closed_form and kin.unknowns:
@@ -97,5 +115,44 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
                 for k, r in routines.items()}
     if cse:
         routines = {k: optimize(r) for k, r in routines.items()}
-    return Plan(an, names, levels, needs_loops, sol.closed_form, routines, len(an.deltas),
-                tuple(notes))
+    rename = {s: sp.Symbol(f"p_{k}", real=True) for k, s in enumerate(an.params)}
+    routines = {k: _renamed(r, rename) for k, r in routines.items()}
+    parameters = tuple(Parameter(p.name, rename[p.symbol],
+                                 float_literals(p.expr.xreplace(rename)), to_double(p.value))
+                       for p in mech.parameters)
+    limits = tuple((a - 1, float(sp.N(h.limit, 20))) for a, h in sorted(kin.hinges.items())
+                   if h.limit is not None)
+    s = an.structure
+    result = Plan(
+        name=mech.name, links=s.links, hinges=s.hinges, inputs=mech.inputs,
+        input_index=tuple(a - 1 for a in kin.inputs),
+        unknown_index=tuple(a - 1 for a in kin.unknowns), parameters=parameters, points=names,
+        levels=levels, limits=limits, n_dyads=len(sol.dyads), n_loops=len(kin.chords),
+        needs_loops=needs_loops, closed_form=sol.closed_form, routines=routines,
+        notes=tuple(notes))
+    return with_derivation(result, an) if report else result
+
+
+def with_derivation(plan: Plan, analysis: Analysis) -> Plan:
+    """`plan` with the statement of its derivation, for a report (the plan's points)."""
+    return dataclasses.replace(
+        plan, derivation=derivation(analysis, plan.points, moved_points(analysis, plan.points)))
+
+
+def moved_points(analysis: Analysis, points: Sequence[str]) -> frozenset[str]:
+    """The points the loops move: those whose direct path holds a hinge that is not an input
+    (the others need no loop solved at any level)."""
+    an = analysis
+    return frozenset(
+        n for n in points
+        if any(b in an.kin.unknowns
+               for b in an.structure.tree_path(an.link[an.mechanism.point(n).link])))
+
+
+def _renamed(routine: Routine, names: dict[sp.Symbol, sp.Symbol]) -> Routine:
+    """The routine with parameter symbols renamed (arguments, assignments and outputs)."""
+    args = tuple(Argument(a.name, tuple(names.get(s, s) for s in a.symbols))
+                 for a in routine.arguments)
+    lines = tuple((s, e.xreplace(names)) for s, e in routine.assignments)
+    outs = tuple(sp.sympify(e).xreplace(names) for e in routine.outputs)
+    return Routine(routine.name, args, lines, outs, routine.doc)

@@ -1,38 +1,77 @@
-"""What every backend shares: symbol renaming, the header, special-function dependencies."""
+"""What the generated-code backends share: the template context of a plan, the routines as
+template data, the 'generated, do not edit' header.
+
+A backend is a :class:`Backend` subclass that only sets attributes (its printer, its templates,
+where its kernels' source comes from), PyDy style; the templates in `templates/<lang>/` do the
+rest.
+"""
 
 from __future__ import annotations
 
-import sympy as sp
+from collections.abc import Callable
+from typing import ClassVar
 
-from ... import special
+import sympy as sp
+from sympy.printing.codeprinter import CodePrinter
+
+from ... import levels, special
 from ...special.kernels import StableKernel
+from ...templating import render
 from ..literals import literal
 from ..plan import Plan
 from ..routines import Routine
 
 
-def parameter_symbols(plan: Plan) -> dict[sp.Symbol, sp.Symbol]:
-    """Parameters are renamed p_0, p_1, ... so no user name can clash with generated code."""
-    return {s: sp.Symbol(f"p_{k}", real=True) for k, s in enumerate(plan.analysis.params)}
+class Backend:
+    """Renders a plan with one language's printer and templates."""
+
+    printer_class: ClassVar[type[CodePrinter]]
+    printer_settings: ClassVar[dict] = {}
+    templates: ClassVar[tuple[str, ...]]                 # paths under templates/
+    kernel_source: ClassVar[Callable[[str], str]]        # a special function's definition
+
+    def __init__(self) -> None:
+        self.printer = self.printer_class(dict(self.printer_settings))
+
+    def render(self, plan: Plan, source: str, **extra: object) -> list[str]:
+        """Every template of the backend rendered for `plan` (generated from file `source`)."""
+        context = {**self.context(plan, source), **extra}
+        return [render(template, **context) for template in self.templates]
+
+    def context(self, plan: Plan, source: str) -> dict:
+        """The template variables: the plan's fields, printed."""
+        print_ = self.printer.doprint
+        return dict(
+            header=header_lines(plan, source), name=plan.name, NAME=plan.name.upper(),
+            inputs=list(plan.inputs), hinges=list(plan.hinges), points=list(plan.points),
+            levels=plan.levels, all_levels=levels.LEVELS,
+            parameters=[{"name": p.name, "symbol": p.symbol.name, "expr": print_(p.default),
+                         "value": repr(p.value)} for p in plan.parameters],
+            limits=[(i, repr(limit)) for i, limit in plan.limits],
+            n_theta=len(plan.hinges), input_index=list(plan.input_index),
+            unknown_index=list(plan.unknown_index), k=len(plan.unknown_index),
+            n_dyads=plan.n_dyads, n_loops=plan.n_loops, closed_form=plan.closed_form,
+            needs_loops=plan.needs_loops,
+            routines=[routine_data(r, self.printer) for r in plan.routines.values()],
+            kernels=[type(self).kernel_source(n) for n in special_functions(plan)],
+        )
 
 
-def renamed(routine: Routine, names: dict[sp.Symbol, sp.Symbol]) -> Routine:
-    """The routine with parameter symbols renamed (arguments, assignments and outputs)."""
-    from ..routines import Argument
-
-    args = tuple(Argument(a.name, tuple(names.get(s, s) for s in a.symbols))
-                 for a in routine.arguments)
-    lines = tuple((s, e.xreplace(names)) for s, e in routine.assignments)
-    outs = tuple(sp.sympify(e).xreplace(names) for e in routine.outputs)
-    return Routine(routine.name, args, lines, outs, routine.doc)
-
-
-def used_symbols(routine: Routine) -> set[sp.Symbol]:
-    """Symbols the routine's assignments and outputs read."""
+def routine_data(routine: Routine, printer: CodePrinter) -> dict:
+    """Template data of one routine: its arguments (and whether it reads them), the entries it
+    unpacks ('_' for unread ones), its assignments and outputs, printed."""
     free: set[sp.Symbol] = set()
     for e in [e for _, e in routine.assignments] + list(routine.outputs):
         free |= sp.sympify(e).free_symbols
-    return free
+    used = [bool(set(a.symbols) & free) for a in routine.arguments]
+    return {
+        "name": routine.name, "doc": routine.doc, "ops": routine.ops,
+        "args": [(a.name, u) for a, u in zip(routine.arguments, used)],
+        "unpack": [(a.name, [s.name if s in free else "_" for s in a.symbols])
+                   for a, u in zip(routine.arguments, used) if u],
+        "lines": [(s.name, printer.doprint(e)) for s, e in routine.assignments],
+        "outputs": [printer.doprint(sp.sympify(e)) for e in routine.outputs],
+    }
 
 
 def special_functions(plan: Plan) -> list[str]:
@@ -51,13 +90,13 @@ def comment_safe(text: str) -> str:
 
 def header_lines(plan: Plan, source: str) -> list[str]:
     """The 'generated, do not edit' header, the mechanism summary and the op counts."""
-    mech = plan.mechanism
-    s = plan.analysis.structure
+    n, m = len(plan.links) - 1, len(plan.hinges)
     lines = [
         f"Generated by symkin from {source} - do not edit.",
-        f"Mechanism '{mech.name}': {s.n + 1} links, {s.m} hinges, {s.m - s.n} loop(s); "
-        f"inputs {', '.join(mech.inputs)}.",
-        f"Points: {', '.join(plan.points) or 'none'}; levels: {', '.join(lv.name for lv in plan.levels)}.",
+        f"Mechanism '{plan.name}': {n + 1} links, {m} hinges, {m - n} loop(s); "
+        f"inputs {', '.join(plan.inputs)}.",
+        f"Points: {', '.join(plan.points) or 'none'}; "
+        f"levels: {', '.join(lv.name for lv in plan.levels)}.",
         "Rigid solution: " + ("closed form (dyads)" if plan.closed_form
                               else "Newton with continuation (not all groups are dyads)") + ".",
         "Operation counts after CSE: " + ", ".join(f"{k} {r.ops}"

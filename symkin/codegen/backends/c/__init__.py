@@ -1,0 +1,1 @@
+"""C99 backend: printer, kernels' source, backend (templates/c)."""

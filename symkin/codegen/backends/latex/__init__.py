@@ -1,0 +1,1 @@
+"""LaTeX report: text (escaping, printer, line breaking), figures, report (templates/latex)."""

@@ -5,9 +5,10 @@ I, Φ, Ψ, the plate data c_ia, α±, l_a, J and J*, the link positions (4.7), t
 their cancellation-free Δf, Δg, the loop equations (5.1)/(5.3) with their scalar, squared and
 solved forms, the closed-form rigid solution (dyads, branch signs), the deviation of every point
 at the levels paper and first_order (and the exact closure it approximates) and a plot of |ΔR|
-over an input range evaluated with the generated numpy module.
+over an input range evaluated with the generated numpy module. It reads the plan only: every
+expression comes from the plan's :class:`~symkin.codegen.derivation.Derivation`.
 
-Every expression is printed by sympy's LatexPrinter (:class:`latex_text.Tex`) and long ones are
+Every expression is printed by sympy's LatexPrinter (:class:`.text.Tex`) and long ones are
 broken over lines; every name from the mechanism file passes :func:`escape_latex`. Output is
 deterministic: sorted or file-ordered data only, no timestamps, figures with fixed metadata.
 Packages used: amsmath, amssymb, graphicx, booktabs (and geometry in the standalone document),
@@ -16,16 +17,17 @@ all in TeX Live's latex-recommended set.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from functools import cache
+from types import ModuleType
 
 import jinja2
 import numpy as np
 import sympy as sp
 
-from .... import hinge_models, special, templating
+from .... import templating
 from .... import vectors as V
-from ....hinge_models import PLATE_LENGTH, THETA
 from ...plan import Plan
 from ..common import header_lines
 from .figures import (FIG_WIDTH, PoseData, Sweep, deviation_figure, differs,
@@ -97,30 +99,41 @@ def _rotation_tex(tex: Tex, angle: sp.Expr) -> str:
     return r"\mathbf{G}\!\left(" + tex(angle) + r"\right)"
 
 
+def _dz_names(m: int) -> dict[sp.Symbol, str]:
+    """LaTeX names of the placeholders DZ_b of Δz_b (b = 1..m), for printing sums of them."""
+    return {sp.Symbol(f"DZ_{b}"): rf"\Delta\mathbf{{z}}_{{{b}}}" for b in range(1, m + 1)}
+
+
+def _dz_sum(signs) -> sp.Expr:
+    """Φ_c Δz = Σ Φ_cb Δz_b over the placeholders DZ_b, from a loop's (b, Φ_cb) pairs."""
+    return sp.Add(*(coeff * sp.Symbol(f"DZ_{b}") for b, coeff in signs))
+
+
 # -- the report ----------------------------------------------------------------------------------
 
 class Report:
     """Builds the template context of one plan."""
 
     def __init__(self, plan: Plan, source: str) -> None:
+        if plan.derivation is None:
+            raise ValueError("a report needs a plan made with plan(..., report=True)")
         self.plan = plan
         self.source = source
-        self.an = an = plan.analysis
-        self.kin = an.kin
-        self.s = an.structure
-        self.mech = an.mechanism
+        self.d = plan.derivation
+        self.s = self.d.structure
+        self.mech = self.s.mechanism
         self.defaults = dict(self.mech.defaults)
         self.tex = Tex(self._symbol_names())
 
     # -- symbols -------------------------------------------------------------------------------
     def _symbol_names(self) -> dict[sp.Symbol, str]:
-        kin = self.kin
+        d = self.d
         names: dict[sp.Symbol, str] = {}
-        for a in kin.theta:
-            names[kin.theta[a]] = rf"\theta_{{{a}}}"
-            names[kin.delta[a]] = rf"\delta_{{{a}}}"
-        names[THETA] = r"\theta"
-        sol = self.an.rigid
+        for a in d.theta:
+            names[d.theta[a]] = rf"\theta_{{{a}}}"
+            names[d.delta[a]] = rf"\delta_{{{a}}}"
+        names[d.variable] = r"\theta"
+        sol = d.rigid
         for d in sol.dyads:
             h1, h2, h3 = d.hinges
             roots = (min(d.bodies[0]), min(d.bodies[1]))
@@ -157,7 +170,7 @@ class Report:
 
     # -- sections ------------------------------------------------------------------------------
     def context(self, appendix: bool) -> dict:
-        mech, s, kin = self.mech, self.s, self.kin
+        mech, s = self.mech, self.s
         name = mech.name
         ctx = {
             "appendix": appendix,
@@ -169,7 +182,7 @@ class Report:
             "figure_graph": f"{name}-graph.pdf",
             "n": s.n, "m": s.m, "loops": s.m - s.n, "mobility": mech.mobility,
             "inputs": [escape_latex(n) for n in mech.inputs],
-            "input_labels": list(kin.inputs),
+            "input_labels": list(self.d.inputs),
             "point_names": [escape_latex(p) for p in self.plan.points],
             "levels": [lv.title for lv in self.plan.levels],
             "relabeled": s.relabeled,
@@ -206,10 +219,10 @@ class Report:
         return rows
 
     def hinge_rows(self) -> list[dict]:
-        s, kin = self.s, self.kin
+        s = self.s
         rows = []
         for a in range(1, s.m + 1):
-            h = kin.hinges[a]
+            h = self.d.hinges[a]
             rows.append({
                 "a": a, "name": self.hinge_name(a),
                 "plus": s.i_plus[a - 1], "minus": s.i_minus[a - 1],
@@ -239,10 +252,10 @@ class Report:
         }
 
     def plate_rows(self) -> list[dict]:
-        kin, s = self.kin, self.s
+        s = self.s
         rows = []
         for a in range(1, s.m + 1):
-            data = kin.plate_data(a)
+            data = self.d.plates[a]
             rows.append({
                 "a": a, "plus": s.i_plus[a - 1], "minus": s.i_minus[a - 1],
                 "c_plus": self.tex.table_vector(data["c_plus"]),
@@ -250,7 +263,7 @@ class Report:
                 "alpha_plus": self.tex.inline(data["alpha_plus"]),
                 "alpha_minus": self.tex.inline(data["alpha_minus"]),
                 "length": self.tex.inline(data["length"]),
-                "model": escape_latex(kin.hinges[a].hinge.model),
+                "model": escape_latex(self.d.hinges[a].hinge.model),
             })
         return rows
 
@@ -258,17 +271,17 @@ class Report:
         """φ_i = Σ q_b over the direct path, q_b = σ_b θ_b."""
         lines = []
         for i in range(1, self.s.n + 1):
-            lines += self.tex.equation(rf"\varphi_{{{i}}}", self.kin.phi(i))
+            lines += self.tex.equation(rf"\varphi_{{{i}}}", self.d.phi[i])
         return lines
 
     def delta_z_lines(self) -> list[str]:
         """Δz_a = σ_a G(φ_P) (Δf_a(θ_a) u_a + Δg_a(θ_a) u_a^⊥) for every hinge."""
-        kin, tex = self.kin, self.tex
+        tex = self.tex
         lines = []
         for a in range(1, self.s.m + 1):
-            h = kin.hinges[a]
-            phi_p = kin.phi(h.P)
-            u = V.unit(h.angle)
+            h = self.d.hinges[a]
+            phi_p = self.d.phi[h.P]
+            u = h.u
             body = (rf"\Delta f_{{{a}}}(\theta_{{{a}}})\,{tex.table_vector(u)} + "
                     rf"\Delta g_{{{a}}}(\theta_{{{a}}})\,{tex.table_vector(V.perp(u))}")
             rot = "" if phi_p == 0 else _rotation_tex(tex, phi_p)
@@ -291,9 +304,7 @@ class Report:
         return self.tex.with_names(names)
 
     def j_matrices(self) -> dict:
-        from ....kinematics import paper_matrices
-
-        J, Jstar = paper_matrices(self.s)
+        J, Jstar = self.d.J, self.d.Jstar
         zero = sp.Symbol("O_bold")
         out = {}
         for key, lhs, M in (("J", r"\underline{\mathbf{J}}", J),
@@ -312,9 +323,7 @@ class Report:
         return out
 
     def position_lines(self) -> list[str]:
-        from ....kinematics import paper_positions
-
-        R = paper_positions(self.s)
+        R = self.d.R
         tex = self._abstract_names(list(R))
         lines = []
         for i in range(R.rows):
@@ -323,46 +332,33 @@ class Report:
 
     # -- hinge models ----------------------------------------------------------------------------
     def models(self) -> tuple[list[dict], list[str]]:
-        kin = self.kin
-        used: dict[str, list[int]] = {}
-        for a in range(1, self.s.m + 1):
-            used.setdefault(kin.hinges[a].hinge.model, []).append(a)
         out = []
-        kernels: list = []
-        for model in sorted(used, key=lambda m: min(used[m])):
-            hinges = used[model]
-            spec = hinge_models.MODELS[model]
-            entry = {"model": escape_latex(model), "description": escape_latex(spec.description),
-                     "hinges": ", ".join(rf"$u_{{{a}}}$ ({self.hinge_name(a)})" for a in hinges),
+        kernels: set = set()
+        for md in self.d.models:
+            model = md.model
+            entry = {"model": escape_latex(model), "description": escape_latex(md.description),
+                     "hinges": ", ".join(rf"$u_{{{a}}}$ ({self.hinge_name(a)})"
+                                         for a in md.hinges),
                      "lines": [], "param_values": [], "note": ""}
-            generic = _generic_functions(model)
-            if generic is not None:
-                f, g, df, dg = generic
-                exprs = [f, g, df, dg]
+            if md.generic is not None:
+                f, g, df, dg = md.generic
                 tex = self.tex.with_names({sp.Symbol("gamma", positive=True): r"\gamma",
                                            sp.Symbol("c_theta", positive=True): r"c_{\theta}"})
-                for lhs, e, elementary, prefix in (
-                        (r"f(\theta)", f, True, "F"), (r"g(\theta)", g, True, "G"),
-                        (r"\Delta f(\theta)", df, False, "P"),
-                        (r"\Delta g(\theta)", dg, False, "Q")):
+                for key, lhs, e, prefix in (
+                        ("f", r"f(\theta)", f, "F"), ("g", r"g(\theta)", g, "G"),
+                        ("", r"\Delta f(\theta)", df, "P"),
+                        ("", r"\Delta g(\theta)", dg, "Q")):
                     lines = tex.named_equation(lhs, e, prefix)
-                    if elementary and _has_kernel(e) and model != "elastica_force":
-                        plain = special.expand_special(e)
-                        if not _has_kernel(plain) and not plain.has(*special.ELASTICA_FUNCTIONS):
-                            lines += align_lines("", "=", tex.lines(plain, LINE_WIDTH_EM - 4))
+                    if key in md.elementary:
+                        lines += align_lines("", "=", tex.lines(md.elementary[key],
+                                                                LINE_WIDTH_EM - 4))
                     entry["lines"] += lines
-                if model == "prbm":
-                    for a in hinges:
-                        h = kin.hinges[a].hinge
-                        gamma = sp.sympify(h.param("gamma", hinge_models.PRBM_PRESETS["force"][
-                            "gamma"]))
-                        c = sp.sympify(h.param("c_theta", hinge_models.PRBM_PRESETS["force"][
-                            "c_theta"]))
-                        entry["param_values"].append(
-                            rf"$u_{{{a}}}$: $\gamma = {self.tex(sp.N(gamma, 6))}$, "
-                            rf"$c_{{\theta}} = {self.tex(sp.N(c, 6))}$")
+                for a, gamma, c in md.prbm:
+                    entry["param_values"].append(
+                        rf"$u_{{{a}}}$: $\gamma = {self.tex(sp.N(gamma, 6))}$, "
+                        rf"$c_{{\theta}} = {self.tex(sp.N(c, 6))}$")
                 if model == "elastica_force":
-                    entry["lines"] += _elastica_lines(self.tex)
+                    entry["lines"] += _elastica_lines(self.tex, self.d.variable)
                     entry["note"] = ("$X_e$, $Y_e$ are the coordinates over $l$ of the tip of a "
                                      "cantilever bent by a transverse end force (Bisshopp--Drucker), "
                                      "in Carlson's symmetric elliptic integrals $R_F$, $R_D$; they "
@@ -372,21 +368,17 @@ class Report:
                                      "evaluated as written, without cancellation.")
             else:
                 # table / expr: the hinge's own functions (numbers rounded for print)
-                for a in hinges:
-                    h = kin.hinges[a]
+                for a in md.hinges:
+                    h = self.d.hinges[a]
                     for lhs, e in ((rf"f_{{{a}}}(\theta)", h.f), (rf"g_{{{a}}}(\theta)", h.g),
                                    (rf"\Delta f_{{{a}}}(\theta)", h.df),
                                    (rf"\Delta g_{{{a}}}(\theta)", h.dg)):
                         e = _rounded(e) if model == "table" else e
                         entry["lines"] += self.tex.equation(lhs, e)
-                exprs = [kin.hinges[a].df for a in hinges] + [kin.hinges[a].dg for a in hinges]
                 if model == "expr":
                     entry["note"] = ("The deviation of an \\texttt{expr} model is the plain "
                                      "difference from the ideal revolute (not cancellation-free).")
-            for e in exprs:
-                for fn in sorted(sp.sympify(e).atoms(sp.Function), key=lambda x: type(x).__name__):
-                    if isinstance(fn, special.StableKernel) and type(fn) not in kernels:
-                        kernels.append(type(fn))
+            kernels.update(md.kernels)
             out.append(entry)
         kernel_lines = []
         x = sp.Symbol("x")
@@ -399,45 +391,36 @@ class Report:
 
     # -- loops -----------------------------------------------------------------------------------
     def loops(self) -> list[dict]:
-        from .... import loop_equations as le_mod
-        import dataclasses
-
-        kin, s, tex = self.kin, self.s, self.tex
+        s, tex = self.s, self.tex
         out = []
-        for eq in le_mod.loop_equations(kin):
-            c = eq.chord
-            hinges = s.loop_hinges(c)
+        dz_tex = tex.with_names(_dz_names(s.m))
+        for lp in self.d.loops:
+            eq, c, hinges = lp.equations, lp.chord, lp.hinges
             r = {t.link: sp.Symbol(f"r_{t.link}", positive=True) for t in eq.terms}
             beta = {t.link: sp.Symbol(f"beta_{t.link}", real=True) for t in eq.terms}
             names = {r[i]: rf"r_{{{i}}}" for i in r}
             names.update({beta[i]: rf"\beta_{{{i}}}" for i in beta})
             ltex = tex.with_names(names)
-            sym_terms = tuple(le_mod.Term(t.link, r[t.link], beta[t.link]) for t in eq.terms)
-            sym = dataclasses.replace(eq, terms=sym_terms)
+            sym = dataclasses.replace(eq, terms=tuple(
+                t._replace(r=r[t.link], beta=beta[t.link]) for t in eq.terms))
             x = sp.Add(*(t.r * sp.cos(p + t.beta) for t, p in zip(sym.terms, sym.phi)))
             y = sp.Add(*(t.r * sp.sin(p + t.beta) for t, p in zip(sym.terms, sym.phi)))
-            row = s.loops[c - s.n - 1]
-            dz = sp.Add(*(int(row[b - 1]) * sp.Symbol(f"DZ_{b}") for b in range(1, s.m + 1)
-                          if row[b - 1]))
-            dz_names = {sp.Symbol(f"DZ_{b}"): rf"\Delta\mathbf{{z}}_{{{b}}}"
-                        for b in range(1, s.m + 1)}
             psi = {t.link: sp.Symbol(f"psi_{t.link}", real=True) for t in eq.terms}
             ptex = ltex.with_names({psi[i]: rf"\psi_{{{i}}}" for i in psi})
             angular = tex.equation("0", eq.angular)
             angular[-1] += r" \tag*{(5.1)}"
-            compliant = tex.with_names(dz_names).equation(r"\mathbf{0}", dz)
+            compliant = dz_tex.equation(r"\mathbf{0}", _dz_sum(lp.signs))
             compliant[-1] += r" \tag*{(5.3)}"
             entry = {
                 "chord": c, "name": self.hinge_name(c),
                 "hinges": ", ".join(rf"$u_{{{b}}}$" for b in hinges),
-                "links": ", ".join(rf"$s_{{{i}}}$" for i in sorted(
-                    {s.i_plus[b - 1] for b in hinges} | {s.i_minus[b - 1] for b in hinges})),
+                "links": ", ".join(rf"$s_{{{i}}}$" for i in lp.links),
                 "constraints": angular + compliant,
                 "terms": [],
                 "x": ltex.equation("0", x), "y": ltex.equation("0", y),
                 "squared": [], "solved": [], "eliminated": eq.eliminated,
             }
-            weights = kin.loop_weights(c)
+            weights = lp.weights
             phis = dict(zip(eq.links, eq.phi))
             for t in eq.terms:
                 entry["terms"].append({
@@ -451,7 +434,7 @@ class Report:
                 j = eq.eliminated
                 # the same loop over ψ_i = φ_i + β_i: r_j² - Σ r_i² = 2 Σ r_i r_k cos(ψ_i - ψ_k)
                 polar = dataclasses.replace(
-                    eq, terms=tuple(le_mod.Term(t.link, r[t.link], psi[t.link]) for t in eq.terms),
+                    eq, terms=tuple(t._replace(r=r[t.link], beta=psi[t.link]) for t in eq.terms),
                     phi=tuple(sp.Integer(0) for _ in eq.terms))
                 elim = polar.eliminating(j)
                 entry["squared"] = _relation_lines(ptex, elim.squared.lhs, elim.squared.rhs)
@@ -469,7 +452,7 @@ class Report:
 
     # -- rigid solution --------------------------------------------------------------------------
     def rigid_solution(self) -> dict:
-        sol, kin, tex = self.an.rigid, self.kin, self.tex
+        sol, tex = self.d.rigid, self.tex
         dyads = []
         for d in sol.dyads:
             h1, h2, h3 = d.hinges
@@ -495,20 +478,17 @@ class Report:
             varphi = {i: sp.Symbol(f"varphi_{i}") if i else sp.Integer(0)
                       for i in range(self.s.n + 1)}
             vtex = tex.with_names({v: rf"\varphi_{{{i}}}" for i, v in varphi.items() if i})
-            for a in kin.unknowns:
-                h = kin.hinges[a]
+            for a in self.d.unknowns:
+                h = self.d.hinges[a]
                 thetas.append(rf"\theta_{{{a}}} &= {vtex(varphi[h.M] - varphi[h.P])}")
         return {"closed_form": sol.closed_form, "dyads": dyads, "steps": steps, "phi": phi,
                 "thetas": thetas}
 
     # -- first order ---------------------------------------------------------------------------
     def linear_system(self) -> dict | None:
-        an, kin, s = self.an, self.kin, self.s
-        moved = any(b in kin.unknowns for name in self.plan.points
-                    for b in s.tree_path(an.link[self.mech.point(name).link]))
-        if not an.deltas or not moved:
+        if self.d.linear is None:
             return None
-        A, r = an.linear_system
+        A, _ = self.d.linear
         entries = []
         named = []
         for i in range(A.rows):
@@ -528,48 +508,36 @@ class Report:
         defs = []
         for i, k, sym, e in named:
             defs += self.tex.equation(rf"a_{{{i},{k}}}", e)
-        rows_r = []
-        dz_names = {sp.Symbol(f"DZ_{b}"): rf"\Delta\mathbf{{z}}_{{{b}}}" for b in range(1, s.m + 1)}
-        for c in kin.chords:
-            row = s.loops[c - s.n - 1]
-            dz = sp.Add(*(int(row[b - 1]) * sp.Symbol(f"DZ_{b}") for b in range(1, s.m + 1)
-                          if row[b - 1]))
-            rows_r.append({"chord": c, "sum": self.tex.with_names(dz_names)(dz)})
-        delta = r"\left(" + ", ".join(self.tex(d) for d in an.deltas) + r"\right)^{T}"
+        dz_tex = self.tex.with_names(_dz_names(self.s.m))
+        rows_r = [{"chord": lp.chord, "sum": dz_tex(_dz_sum(lp.signs))} for lp in self.d.loops]
+        delta = r"\left(" + ", ".join(self.tex(d) for d in self.d.deltas) + r"\right)^{T}"
         return {"matrix": matrix, "defs": defs, "rows": rows_r, "delta": delta,
-                "size": len(an.deltas), "nrows": A.rows}
+                "size": len(self.d.deltas), "nrows": A.rows}
 
     # -- points ----------------------------------------------------------------------------------
     def points(self) -> list[dict]:
-        an, kin, s, tex = self.an, self.kin, self.s, self.tex
+        tex = self.tex
         out = []
-        for name in self.plan.points:
-            point = self.mech.point(name)
-            k = an.link[point.link]
-            path = s.tree_path(k)
-            moved = any(b in kin.unknowns for b in path)
+        for pt in self.d.points:
+            name, k, path = pt.name, pt.link, pt.path
             sub_name = math_name(name)
             entry = {"name": escape_latex(name), "link": k, "link_name": self.link_name(k),
-                     "at": tex.row_vector(point.at), "path": path, "moved": moved,
+                     "at": tex.row_vector(pt.at), "path": path, "moved": pt.moved,
                      "levels": {}}
-            rigid = an.point_rigid(name)
+            rigid = pt.rigid
             entry["rigid"] = (tex.equation(rf"X_{{{sub_name}}}", rigid[0])
                               + tex.equation(rf"Y_{{{sub_name}}}", rigid[1]))
             dz_sum = " + ".join(rf"\Delta\mathbf{{z}}_{{{b}}}" for b in path) or r"\mathbf{0}"
             entry["paper_sum"] = (rf"\Delta\mathbf{{R}}_{{{sub_name}}}^{{\mathrm{{paper}}}} = "
                                   rf"{dz_sum}")
             # multiplied out (trigonometric functions kept): one term per hinge and kernel
-            dev = [sp.expand(e) for e in an.point_deviation(name, "paper")]
+            dev = [sp.expand(e) for e in pt.paper]
             entry["paper"] = (
                 tex.equation(rf"\Delta X_{{{sub_name}}}^{{\mathrm{{paper}}}}", dev[0])
                 + tex.equation(rf"\Delta Y_{{{sub_name}}}^{{\mathrm{{paper}}}}", dev[1]))
-            weights = kin.weights(k, point.at)
             terms_lin, terms_exact = [], []
-            for i, w in weights.items():
-                dphi = an.delta_phi(i)
-                if dphi == 0:
-                    continue
-                rot = "" if kin.phi(i) == 0 else _rotation_tex(tex, kin.phi(i))
+            for i, w, dphi, phi in pt.turns:
+                rot = "" if phi == 0 else _rotation_tex(tex, phi)
                 factor = tex(dphi)
                 if dphi.is_Add:
                     factor = r"\left(" + factor + r"\right)"
@@ -584,7 +552,7 @@ class Report:
                                                                LINE_WIDTH_EM - lead - 1))
             lhs2 = rf"\Delta\mathbf{{R}}_{{{sub_name}}}"
             dzc = " + ".join(rf"\Delta\mathbf{{z}}_{{{b}}}(\theta_{{{b}}}"
-                             + (rf" + \delta_{{{b}}}" if b in kin.unknowns else "") + ")"
+                             + (rf" + \delta_{{{b}}}" if b in self.d.unknowns else "") + ")"
                              for b in path) or r"\mathbf{0}"
             toks = terms_exact[:1] + [f"+ {t}" for t in terms_exact[1:]] + [
                 f"+ {dzc}" if terms_exact else dzc]
@@ -594,33 +562,9 @@ class Report:
         return out
 
 
-class _Generic:
-    """A stand-in hinge with symbolic plate length and model parameters, for the formulas."""
-
-    def __init__(self, model: str, params: dict) -> None:
-        self.model = model
-        self.name = model
-        self.length = PLATE_LENGTH
-        self._params = params
-
-    def param(self, key: str, default: object = None) -> object:
-        return self._params.get(key, default)
-
-
-def _generic_functions(model: str) -> tuple | None:
-    if model in ("table", "expr"):
-        return None
-    params = {}
-    if model == "prbm":
-        params = {"gamma": sp.Symbol("gamma", positive=True),
-                  "c_theta": sp.Symbol("c_theta", positive=True)}
-    plate = hinge_models.plate_functions(_Generic(model, params))
-    return plate.f, plate.g, plate.df, plate.dg
-
-
-def _elastica_lines(tex: Tex) -> list[str]:
-    """The tip-force elastica's functions in Carlson form (as symkin.special evaluates them)."""
-    t = THETA
+def _elastica_lines(tex: Tex, t: sp.Symbol) -> list[str]:
+    """The tip-force elastica's functions of the tip angle `t` in Carlson form (as
+    symkin.special.elastica evaluates them)."""
     A, C = sp.Symbol("A"), sp.Symbol("C")
     RF, RD = sp.Function("R_F"), sp.Function("R_D")
     s = sp.Abs(sp.sin(t))
@@ -635,11 +579,6 @@ def _elastica_lines(tex: Tex) -> list[str]:
                      ("A", RF(*args)), ("C", sp.cos(t) ** 2 / 3 * RD(*args))):
         lines += tex.equation(lhs, rhs)
     return lines
-
-
-def _has_kernel(expr: sp.Expr) -> bool:
-    return any(isinstance(f, (special.StableKernel, special.ElasticaFunction))
-               for f in sp.sympify(expr).atoms(sp.Function))
 
 
 def _rounded(expr: sp.Expr) -> sp.Expr:
@@ -664,19 +603,18 @@ def _relation_lines(tex: Tex, lhs: sp.Expr, rhs: sp.Expr) -> list[str]:
 # -- numbers for the figures ---------------------------------------------------------------------
 
 def pose_data(report: Report) -> PoseData:
-    kin, s, defaults = report.kin, report.s, report.defaults
+    d, s, defaults = report.d, report.s, report.defaults
     num = lambda v: (_num(v[0], defaults), _num(v[1], defaults))  # noqa: E731
     attachments: dict[int, list[tuple[float, float]]] = {i: [] for i in range(s.n + 1)}
     plates = []
     for a in range(1, s.m + 1):
-        h = kin.hinges[a]
+        h = d.hinges[a]
         p, m = num(h.clamp(h.P)), num(h.clamp(h.M))
         attachments[h.P].append(p)
         attachments[h.M].append(m)
         plates.append((a, s.hinges[a - 1], p, m, h.is_input))
     links = tuple((i, s.links[i], tuple(attachments[i])) for i in range(s.n + 1))
-    points = tuple((p.name, report.an.link[p.link], num(p.at)) for p in report.mech.points
-                   if p.name in report.plan.points)
+    points = tuple((pt.name, pt.link, num(pt.at)) for pt in d.points)
     return PoseData(links, 0, tuple(plates), points)
 
 
@@ -735,11 +673,11 @@ def sweep(report: Report, numpy_module) -> tuple[Sweep, tuple[float, float], dic
 
 # -- emit ----------------------------------------------------------------------------------------
 
-def emit(plan: Plan, source: str, appendix: bool = False) -> dict[str, bytes]:
-    """`<name>.tex` (standalone, or the body alone with `appendix`) and its figure PDFs."""
-    from ...runtime import import_numpy_module
-    from ..numpy import backend as numpy_backend
-
+def emit(plan: Plan, source: str, appendix: bool = False,
+         evaluator: ModuleType | None = None) -> dict[str, bytes]:
+    """`<name>.tex` (standalone, or the body alone with `appendix`) and its figure PDFs; the
+    deviation plot is evaluated with `evaluator`, the plan's generated numpy module (needed when
+    the plan has points)."""
     report = Report(plan, source)
     name = report.mech.name
     ctx = report.context(appendix)
@@ -765,8 +703,9 @@ def emit(plan: Plan, source: str, appendix: bool = False) -> dict[str, bytes]:
     ctx["deviation_figures"] = []
     ctx["sweep"] = None
     if plan.points:
-        module = import_numpy_module(numpy_backend.emit(plan, source), name)
-        data, xlim, summary = sweep(report, module)
+        if evaluator is None:
+            raise ValueError("the deviation plot needs the plan's generated numpy module")
+        data, xlim, summary = sweep(report, evaluator)
         inputs = report.mech.inputs
         if len(inputs) == 1:
             xlabel = f"input θ of {plain_name(inputs[0])} (rad)"

@@ -1,0 +1,1 @@
+"""numpy backend: printer, kernels' source, backend (templates/numpy)."""

@@ -1,0 +1,33 @@
+"""The C99 printer of generated code."""
+
+from __future__ import annotations
+
+from sympy.printing.c import C99CodePrinter
+
+from .... import special
+
+
+class CPrinter(C99CodePrinter):
+    """C99 printer without the non-standard M_PI / M_SQRT2 ... macros (strict -std=c99 has none),
+    writing every Float as its shortest round-trip decimal and symkin's special functions as the
+    static `symkin_<name>` of backends/c/kernels.py."""
+
+    def __init__(self, settings=None) -> None:
+        super().__init__(settings)
+        self.math_macros = {}
+
+    def _print_Pi(self, expr):  # noqa: N802 - sympy's printer protocol
+        return "3.141592653589793238462643383279503"
+
+    def _print_Exp1(self, expr):  # noqa: N802
+        return "2.718281828459045235360287471352662"
+
+    def _print_Float(self, expr):  # noqa: N802
+        # literals.float_literals made every Float a double: print the shortest exact decimal.
+        return repr(float(expr))
+
+    def _print_Function(self, expr):  # noqa: N802
+        if special.is_special(expr):
+            args = ", ".join(self._print(a) for a in expr.args)
+            return f"symkin_{type(expr).__name__}({args})"
+        return super()._print_Function(expr)
