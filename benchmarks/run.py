@@ -46,6 +46,7 @@ sys.path.insert(0, str(BENCH))
 
 import families  # noqa: E402
 from symkin.levels import LEVELS, get as level  # noqa: E402
+from symkin.solver import SOLVER  # noqa: E402
 
 EXACT = level("exact").code
 
@@ -65,29 +66,11 @@ TOL = {"numpy": 1e-12, "lambdify": 1e-9, "lambdify_cse": 1e-9, "lambdify_cse_no_
 START, END = "<!-- benchmarks:start -->", "<!-- benchmarks:end -->"
 
 
-def c_algorithm() -> dict:
-    """The iteration policy of symkin's generated C, read from its template, so the lambdify and
-    SymForce drivers below take exactly the same steps: the number of rigid Newton polish steps
-    after the closed-form dyads and the relative step size that ends the exact-level Newton."""
-    import re
-
-    policy = {"polish": 2, "stop": 8.881784197001252e-16}
-    try:
-        text = (ROOT / "templates" / "c" / "source.c.j2").read_text()
-        closed = text[text.index("{% if closed_form %}"):text.index("{% else %}",
-                                                                    text.index("{% if closed_form %}"))]
-        m = re.search(r"sk_rigid_newton\(theta, params, (\d+)\)", closed)
-        if m:
-            policy["polish"] = int(m.group(1))
-        m = re.search(r"converged = change <= ([0-9.eE+-]+) \* size", text)
-        if m:
-            policy["stop"] = float(m.group(1))
-    except (OSError, ValueError):
-        pass
-    return policy
-
-
-POLICY = c_algorithm()
+#: The generated evaluators' iteration policy, which the lambdify and SymForce drivers below
+#: follow step for step: symkin's solver settings in float64.
+POLICY = {"polish": SOLVER.float64.polish, "stop": SOLVER.float64.converged,
+          "stall": SOLVER.float64.stalled, "stall_ratio": SOLVER.stall_ratio,
+          "iterations": SOLVER.exact_iterations}
 
 
 def log(message: str) -> None:
@@ -307,7 +290,7 @@ class Pipeline:
             a = np.array(lin[:k * k], dtype=float).reshape(k, k)
             delta = list(np.linalg.solve(a, -np.array(lin[k * k:], dtype=float)))
             previous = math.inf
-            for _ in range(40):
+            for _ in range(POLICY["iterations"]):
                 nw = self.fns["newton"](*theta, *delta, *p)
                 step = np.linalg.solve(np.array(nw[k:], dtype=float).reshape(k, k),
                                        np.array(nw[:k], dtype=float))
@@ -315,7 +298,8 @@ class Pipeline:
                 size = max(abs(d) for d in delta)
                 change = float(np.max(np.abs(step)))
                 if (change <= POLICY["stop"] * size or size == 0.0
-                        or (change >= previous / 2 and change <= 1e-12 * size)):
+                        or (change >= POLICY["stall_ratio"] * previous
+                            and change <= POLICY["stall"] * size)):
                     break
                 previous = change
             else:
@@ -426,8 +410,8 @@ const int M = {m}, K = {k}, NIN = {nin}, NP = {np_}, NPAR = {npar}, ND = {nd};
 const int in_idx[NIN > 0 ? NIN : 1] = {{ {in_idx} }};
 const int unk_idx[K > 0 ? K : 1] = {{ {unk_idx} }};
 const double two_pi = 6.283185307179586476925286766559006;
-const int POLISH = {polish};
-const double STOP = {stop!r};
+const int POLISH = {polish}, ITERATIONS = {iterations};
+const double STOP = {stop!r}, STALL = {stall!r}, STALL_RATIO = {stall_ratio!r};
 typedef Eigen::Matrix<double, NIN, 1> InVec;
 typedef Eigen::Matrix<double, NPAR, 1> ParVec;
 typedef Eigen::Matrix<double, M, 1> ThVec;
@@ -531,7 +515,7 @@ SF_LOOPS = r"""
         for (i = 0; i < K; ++i) delta(i) = d[i];
         double previous = HUGE_VAL;
         int it, converged = 0;
-        for (it = 0; it < 40 && !converged; ++it) {
+        for (it = 0; it < ITERATIONS && !converged; ++it) {
             const auto nw = sk::Newton<double>(theta, delta, p);
             double jac[K * K > 0 ? K * K : 1], f[K > 0 ? K : 1];
             double size = 0.0, change = 0.0;
@@ -544,7 +528,7 @@ SF_LOOPS = r"""
                 if (std::fabs(f[i]) > change) change = std::fabs(f[i]);
             }
             converged = change <= STOP * size || size == 0.0
-                        || (change >= previous / 2 && change <= 1e-12 * size);
+                        || (change >= STALL_RATIO * previous && change <= STALL * size);
             previous = change;
         }
         if (!converged) return 2;
@@ -605,7 +589,7 @@ def symforce_build(plan, workdir: Path) -> tuple[Path, float]:
         nin=len(plan.inputs), np_=len(plan.points), npar=len(plan.parameters),
         nd=plan.n_dyads, in_idx=", ".join(map(str, plan.input_index)) or "0",
         unk_idx=", ".join(map(str, plan.unknown_index)) or "0", body=body,
-        polish=POLICY["polish"], stop=POLICY["stop"])
+        **POLICY)
     (workdir / "sf_driver.cc").write_text(src)
     lib = workdir / "libsf_bench.so"
     proc = subprocess.run(["c++", *CXX_FLAGS, f"-I{EIGEN}", "-I.", "-shared", "sf_driver.cc",
@@ -1036,7 +1020,7 @@ def render(results: dict) -> str:
         "point position. *SymForce* — the same routines generated by SymForce's C++ codegen "
         "(its own CSE, Eigen types, symkin's kernels via `override_methods`), driven by a C++ "
         "copy of symkin's algorithm (the same polish step(s), first-order start and Newton "
-        "stopping rule, read from the C template), timed like the C. Each alternative's deviation is first checked "
+        "stopping rule, from symkin.solver), timed like the C. Each alternative's deviation is first checked "
         "against the C evaluator on 5 points (relative tolerance: numpy 1e-12, lambdify and "
         "SymForce 1e-9, scipy 1e-5), and the C against symkin's 40-digit mpmath evaluation.")
     return "\n".join(lines)
@@ -1127,7 +1111,7 @@ def main() -> None:
         return
     t_start = time.perf_counter()
     results: dict = {"quick": args.quick, "date": datetime.date.today().isoformat(),
-                     "machine": machine(), "c_algorithm": POLICY,
+                     "machine": machine(), "solver": POLICY,
                      "symkin_commit": first_line(["git", "-C", str(ROOT), "rev-parse",
                                                   "--short", "HEAD"]),
                      "symkin_dirty": bool(subprocess.run(

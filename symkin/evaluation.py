@@ -24,6 +24,7 @@ from .analysis import Analysis
 from .errors import AssemblyError, InputError
 from .mechanism import Mechanism
 from .reports import loop_text
+from .solver import SOLVER
 
 BACKENDS = ("sympy", "numpy", "c")
 
@@ -136,14 +137,14 @@ def input_values(analysis: Analysis, inputs: Mapping[str, object]) -> dict[int, 
 
 # -- the sympy backend: mpmath ---------------------------------------------------------------------
 
-_SOLVERS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_EVALUATORS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def _solver(analysis: Analysis) -> _Mpmath:
     """The mpmath evaluator of `analysis`, kept as long as the analysis (its lambdas are cached)."""
-    solver = _SOLVERS.get(analysis)
+    solver = _EVALUATORS.get(analysis)
     if solver is None:
-        solver = _SOLVERS[analysis] = _Mpmath(analysis)
+        solver = _EVALUATORS[analysis] = _Mpmath(analysis)
     return solver
 
 
@@ -252,7 +253,8 @@ class _Mpmath:
         f = self._fn("rigid_residual", list(an.rigid_residual), args)
         # ∂/∂θ of the rigid closure is A of the first-order system (the same structure).
         jac = self._fn("rigid_jacobian", an.linear_system[0].tolist(), args)
-        steps = max(1, int(max([abs(v) for v in ivals.values()] + [0]) / 0.05) + 1)
+        steps = max(1, int(max([abs(v) for v in ivals.values()] + [0])
+                           / SOLVER.continuation_step) + 1)
         x = {a: mpmath.mpf(0) for a in kin.unknowns}
         for step in range(1, steps + 1):
             t = mpmath.mpf(step) / steps
@@ -305,10 +307,9 @@ class _Mpmath:
         f = self._fn("residual", list(an.residual), args_d)
         jac = self._fn("jacobian", an.jacobian.tolist(), args_d)
         x = mpmath.matrix([delta[a] for a in self.kin.unknowns])
-        tight = mpmath.mpf(10) ** (-mpmath.mp.dps + 4)
-        loose = mpmath.mpf(10) ** (-(mpmath.mp.dps // 2))
+        tol = SOLVER.mpmath(mpmath.mp.dps)
         previous = None
-        for _ in range(40):
+        for _ in range(SOLVER.exact_iterations):
             vals = [*values, *x]
             try:
                 step = mpmath.lu_solve(mpmath.matrix(jac(*vals)), mpmath.matrix(f(*vals)))
@@ -318,12 +319,13 @@ class _Mpmath:
             x = x - step
             size, change = mpmath.norm(x, mpmath.inf), mpmath.norm(step, mpmath.inf)
             # Converged, or stalled at the working precision's noise floor far below float64.
-            if change <= tight * size or size == 0 or (
-                    previous is not None and change >= previous / 2 and change <= loose * size):
+            if change <= tol.converged * size or size == 0 or (
+                    previous is not None and change >= SOLVER.stall_ratio * previous
+                    and change <= tol.stalled * size):
                 return {a: x[k] for k, a in enumerate(self.kin.unknowns)}
             previous = change
         raise AssemblyError(f"{self.mechanism.path}: the compliant loops did not converge "
-                            "(no convergence in 40 Newton steps)")
+                            f"(no convergence in {SOLVER.exact_iterations} Newton steps)")
 
 
 def _wrap(angle):

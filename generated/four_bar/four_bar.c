@@ -470,6 +470,52 @@ static double sk_rigid_newton(double *theta, const double *params, int iteration
     return change;
 }
 
+/* Level first_order, and the start of every other loop-solving level: A delta = -Phi dz.
+   Returns 0, or 1 when A is singular. */
+static int sk_first_order(const double *theta, const double *params, double *delta)
+{
+    double lin[SK_K * SK_K + SK_K];
+    int i;
+    sk_linear(theta, params, lin);
+    for (i = 0; i < SK_K; ++i) {
+        delta[i] = -lin[SK_K * SK_K + i];
+    }
+    return sk_solve(SK_K, lin, delta);
+}
+
+/* Level exact: Newton on the compliant closure from the first-order delta, ending once a step
+   is below sqrt(eps) of delta (quadratic convergence leaves it exact) or stalls at rounding.
+   Returns 0, 1 when a Jacobian is singular, 2 without convergence. */
+static int sk_exact(const double *theta, const double *params, double *delta)
+{
+    double nw[SK_K + SK_K * SK_K];
+    double previous = HUGE_VAL;
+    int it, i, converged = 0;
+    if (sk_first_order(theta, params, delta)) {
+        return 1;
+    }
+    for (it = 0; it < 40 && !converged; ++it) {
+        double size = 0.0, change = 0.0;
+        sk_newton(theta, delta, params, nw);
+        if (sk_solve(SK_K, nw + SK_K, nw)) {
+            return 1;
+        }
+        for (i = 0; i < SK_K; ++i) {
+            delta[i] -= nw[i];
+            if (fabs(delta[i]) > size) {
+                size = fabs(delta[i]);
+            }
+            if (fabs(nw[i]) > change) {
+                change = fabs(nw[i]);
+            }
+        }
+        converged = change <= 1e-08 * size || size == 0.0
+                    || (change >= 0.5 * previous && change <= 1e-12 * size);
+        previous = change;
+    }
+    return converged ? 0 : 2;
+}
+
 int four_bar_evaluate(const double *inputs, const double *params, int level, double *out)
 {
     return four_bar_evaluate_angles(inputs, params, level, out, NULL);
@@ -522,46 +568,21 @@ int four_bar_evaluate_angles(const double *inputs, const double *params, int lev
         for (i = 0; i < SK_K; ++i) {
             theta[sk_unknown_index[i]] = remainder(sol[i], sk_two_pi);
         }
+        /* polish: the relative accuracy of small angles */
         if (sk_rigid_newton(theta, params, 1) < 0.0) {
             return 1;
         }
     }
-    if (level >= 1) {
-        double lin[SK_K * SK_K + SK_K];
-        sk_linear(theta, params, lin);
-        for (i = 0; i < SK_K; ++i) {
-            delta[i] = -lin[SK_K * SK_K + i];
+    {
+        int status = 0;
+        if (level == 1) {
+            status = sk_first_order(theta, params, delta);
         }
-        if (sk_solve(SK_K, lin, delta)) {
-            return 1;
+        else if (level == 2) {
+            status = sk_exact(theta, params, delta);
         }
-        if (level == 2) {
-            double nw[SK_K + SK_K * SK_K];
-            double previous = HUGE_VAL;
-            int it, converged = 0;
-            for (it = 0; it < 40 && !converged; ++it) {
-                double size = 0.0, change = 0.0;
-                sk_newton(theta, delta, params, nw);
-                if (sk_solve(SK_K, nw + SK_K, nw)) {
-                    return 1;
-                }
-                for (i = 0; i < SK_K; ++i) {
-                    delta[i] -= nw[i];
-                    if (fabs(delta[i]) > size) {
-                        size = fabs(delta[i]);
-                    }
-                    if (fabs(nw[i]) > change) {
-                        change = fabs(nw[i]);
-                    }
-                }
-                /* quadratic convergence: a step below sqrt(eps) of delta leaves it exact */
-                converged = change <= 1e-8 * size || size == 0.0
-                            || (change >= previous / 2 && change <= 1e-12 * size);
-                previous = change;
-            }
-            if (!converged) {
-                return 2;
-            }
+        if (status) {
+            return status;
         }
     }
     sk_rigid_points(theta, params, rigid);

@@ -517,6 +517,7 @@ int nine_bar_platform_evaluate_angles(const double *inputs, const double *params
         for (i = 0; i < SK_K; ++i) {
             theta[sk_unknown_index[i]] = remainder(sol[i], sk_two_pi);
         }
+        /* polish: the relative accuracy of small angles */
         if (sk_rigid_newton(theta, params, 1) < 0.0) {
             return 1;
         }

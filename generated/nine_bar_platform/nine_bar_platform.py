@@ -27,13 +27,13 @@ _INPUT_INDEX = (0, 1, 2, 3, )
 _UNKNOWN_INDEX = (4, 5, 6, 7, 8, 9, )
 _N_DYADS = 2
 _LIMITS = ()  # models valid for |theta| < limit
-_N_LOOPS = 2
-_CLOSED_FORM = True
 _NEEDS_LOOPS = False
 _DTYPE = numpy.float64
-_EPS = float(numpy.finfo(_DTYPE).eps)
-_QUADRATIC = 1e-8  # ~sqrt(eps): a step this small (relative) ends Newton
-_STALL = 1e-12  # a stalled Newton step this small (relative) is converged
+_POLISH = 1  # Newton steps after the rigid start: relative accuracy of small angles
+_EXACT_ITERATIONS = 40  # Newton cap of the exact level
+_CONVERGED = 1e-08  # ~sqrt(eps): a step this small (relative) ends Newton
+_STALL_RATIO = 0.5  # a step at least this fraction of the previous one has stalled
+_STALLED = 1e-12  # a stalled Newton step this small (relative) is converged
 _TWO_PI = 2.0 * math.pi
 
 
@@ -407,8 +407,7 @@ def _rigid_angles(x, params, ok):
         ok = ok & (numpy.broadcast_to(reach, shape) >= 0.0)
     for j, i in enumerate(_UNKNOWN_INDEX):
         theta[i] = numpy.where(ok, _wrap(numpy.broadcast_to(out[j], shape)), 0.0)
-    iterations = 1              # polish: relative accuracy of small angles
-    return _rigid_newton(theta, params, ok, iterations)
+    return _rigid_newton(theta, params, ok, _POLISH)
 
 
 def _rigid_newton(theta, params, ok, iterations):
@@ -427,17 +426,20 @@ def _rigid_newton(theta, params, ok, iterations):
 
 
 def _first_order(theta, params, ok):
+    """Level first_order, and the start of every other loop-solving level: A delta = -Phi dz."""
     k = len(_UNKNOWN_INDEX)
     lin = _linear(theta, params)
     delta, good = _solve(lin[:k * k], [-numpy.asarray(r) for r in lin[k * k:]], ok)
     return delta, ok & good
 
 
-def _exact(theta, delta, params, ok):
+def _exact(theta, params, ok):
+    """Level exact: Newton on the compliant closure from the first-order delta."""
+    delta, ok = _first_order(theta, params, ok)
     k = len(_UNKNOWN_INDEX)
     active = ok.copy()
     previous = numpy.full(ok.shape, numpy.inf)
-    for _ in range(40):
+    for _ in range(_EXACT_ITERATIONS):
         out = _newton(theta, delta, params)
         step, good = _solve(out[k:], out[:k], active)
         ok = ok & (good | ~active)
@@ -447,14 +449,17 @@ def _exact(theta, delta, params, ok):
         change = numpy.max(numpy.abs(numpy.array(step)), axis=0)
         # Quadratic convergence from the first-order start: once a step is below
         # sqrt(eps) of delta, the updated delta is accurate to rounding.
-        done = (change <= _QUADRATIC * size) | (size == 0) | (
-            (change >= previous / 2) & (change <= _STALL * size))
+        done = (change <= _CONVERGED * size) | (size == 0) | (
+            (change >= _STALL_RATIO * previous) & (change <= _STALLED * size))
         previous = numpy.where(active, change, previous)
         active = active & ~done
         if not active.any():
             break
     return delta, ok & ~active
 
+
+#: The levels that solve the loops, and how.
+_DELTA = {'first_order': _first_order, 'exact': _exact}
 
 _CHUNK = 8192   # elements per block: the temporaries of a block stay in the CPU cache
 
@@ -499,10 +504,8 @@ def _evaluate(arrays, level, p):
     with numpy.errstate(all="ignore"):
         theta, ok = _rigid_angles(x, p, ok)
         delta = [numpy.zeros(shape, dtype=_DTYPE) for _ in _UNKNOWN_INDEX]
-        if level != "paper" and _NEEDS_LOOPS:
-            delta, ok = _first_order(theta, p, ok)
-            if level == "exact":
-                delta, ok = _exact(theta, delta, p, ok)
+        if _NEEDS_LOOPS and level in _DELTA:
+            delta, ok = _DELTA[level](theta, p, ok)
         for i, limit in _LIMITS:
             ok = ok & (numpy.abs(theta[i]) < limit)
             if i in _UNKNOWN_INDEX:

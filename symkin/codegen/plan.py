@@ -27,6 +27,7 @@ import sympy as sp
 from .. import levels as level_table
 from ..analysis import Analysis
 from ..levels import Level
+from ..solver import SOLVER, SolverSettings
 from .derivation import Derivation, derivation
 from .literals import float_literals, to_double
 from .routines import Argument, Routine, flatten, optimize
@@ -57,11 +58,11 @@ class Plan:
     levels: tuple[Level, ...]
     limits: tuple[tuple[int, float], ...]   # (θ index, L): the hinge's model holds for |θ| < L
     n_dyads: int
-    n_loops: int
     needs_loops: bool                  # some requested level/point needs the loop solution
     closed_form: bool                  # rigid solution by dyads (else Newton + continuation)
     routines: dict[str, Routine]
     notes: tuple[str, ...] = ()        # e.g. the variant a tolerance chose, for the headers
+    solver: SolverSettings = SOLVER    # how the generated evaluators solve the loops
     derivation: Derivation | None = None    # what a report restates (plan(..., report=True))
 
 
@@ -127,7 +128,7 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
         name=mech.name, links=s.links, hinges=s.hinges, inputs=mech.inputs,
         input_index=tuple(a - 1 for a in kin.inputs),
         unknown_index=tuple(a - 1 for a in kin.unknowns), parameters=parameters, points=names,
-        levels=levels, limits=limits, n_dyads=len(sol.dyads), n_loops=len(kin.chords),
+        levels=levels, limits=limits, n_dyads=len(sol.dyads),
         needs_loops=needs_loops, closed_form=sol.closed_form, routines=routines,
         notes=tuple(notes))
     return with_derivation(result, an) if report else result

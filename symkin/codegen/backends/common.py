@@ -33,13 +33,14 @@ class Backend:
     def __init__(self) -> None:
         self.printer = self.printer_class(dict(self.printer_settings))
 
-    def render(self, plan: Plan, source: str, **extra: object) -> list[str]:
-        """Every template of the backend rendered for `plan` (generated from file `source`)."""
-        context = {**self.context(plan, source), **extra}
+    def render(self, plan: Plan, source: str, precision: str = "float64") -> list[str]:
+        """Every template of the backend rendered for `plan` (generated from file `source`) in
+        `precision` (float64 or float32)."""
+        context = self.context(plan, source, precision)
         return [render(template, **context) for template in self.templates]
 
-    def context(self, plan: Plan, source: str) -> dict:
-        """The template variables: the plan's fields, printed."""
+    def context(self, plan: Plan, source: str, precision: str = "float64") -> dict:
+        """The template variables: the plan's fields, printed, and the solver's settings."""
         print_ = self.printer.doprint
         return dict(
             header=header_lines(plan, source), name=plan.name, NAME=plan.name.upper(),
@@ -50,8 +51,8 @@ class Backend:
             limits=[(i, repr(limit)) for i, limit in plan.limits],
             n_theta=len(plan.hinges), input_index=list(plan.input_index),
             unknown_index=list(plan.unknown_index), k=len(plan.unknown_index),
-            n_dyads=plan.n_dyads, n_loops=plan.n_loops, closed_form=plan.closed_form,
-            needs_loops=plan.needs_loops,
+            n_dyads=plan.n_dyads, closed_form=plan.closed_form, needs_loops=plan.needs_loops,
+            dtype=precision, solver=plan.solver, tol=plan.solver.tolerances(precision),
             routines=[routine_data(r, self.printer) for r in plan.routines.values()],
             kernels=[type(self).kernel_source(n) for n in special_functions(plan)],
         )

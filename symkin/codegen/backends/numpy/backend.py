@@ -18,5 +18,5 @@ class NumpyBackend(Backend):
 
 def emit(plan: Plan, source: str, dtype: str = "float64") -> str:
     """The numpy module's text; `dtype` float32 gives the single-precision variant."""
-    (module,) = NumpyBackend().render(plan, source, dtype=dtype)
+    (module,) = NumpyBackend().render(plan, source, dtype)
     return module
