@@ -253,8 +253,7 @@ class _Mpmath:
         f = self._fn("rigid_residual", list(an.rigid_residual), args)
         # ∂/∂θ of the rigid closure is A of the first-order system (the same structure).
         jac = self._fn("rigid_jacobian", an.linear_system[0].tolist(), args)
-        steps = max(1, int(max([abs(v) for v in ivals.values()] + [0])
-                           / SOLVER.continuation_step) + 1)
+        steps = SOLVER.continuation_steps(max([abs(v) for v in ivals.values()] + [0]))
         x = {a: mpmath.mpf(0) for a in kin.unknowns}
         for step in range(1, steps + 1):
             t = mpmath.mpf(step) / steps
@@ -271,8 +270,8 @@ class _Mpmath:
     def _newton(self, f, jac, pvals: list, theta: dict, unknowns: Sequence[int]) -> dict | None:
         """Newton iteration on the θ of `unknowns`; None when it does not converge."""
         x = mpmath.matrix([theta[a] for a in unknowns])
-        tol = mpmath.mpf(10) ** (-mpmath.mp.dps + 6)
-        for _ in range(60):
+        tol = SOLVER.mpmath(mpmath.mp.dps).rigid
+        for _ in range(SOLVER.rigid_iterations):
             values = [*pvals, *(theta[a] for a in sorted(theta))]
             try:
                 step = mpmath.lu_solve(mpmath.matrix(jac(*values)), mpmath.matrix(f(*values)))
@@ -281,7 +280,7 @@ class _Mpmath:
             x = x - step
             for k, a in enumerate(unknowns):
                 theta[a] = x[k]
-            if mpmath.norm(step, mpmath.inf) <= tol * (1 + mpmath.norm(x, mpmath.inf)):
+            if mpmath.norm(step, mpmath.inf) <= tol:
                 return {a: x[k] for k, a in enumerate(unknowns)}
         return None
 

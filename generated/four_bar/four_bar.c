@@ -443,9 +443,11 @@ static int sk_solve(int n, double *a, double *b)
     return 0;
 }
 
-/* Newton on the rigid closure relative to the as-fabricated pose; returns the last step size,
-   or -1 when the loop Jacobian is singular. */
-static double sk_rigid_newton(double *theta, const double *params, int iterations)
+/* Newton on the rigid closure relative to the as-fabricated pose: at most `iterations` steps,
+   stopping once a step is at most `tolerance`; returns the last step size, or -1 when the loop
+   Jacobian is singular. */
+static double sk_rigid_newton(double *theta, const double *params, int iterations,
+                              double tolerance)
 {
     double lin[SK_K * SK_K + SK_K], res[SK_K];
     double change = 0.0;
@@ -465,6 +467,9 @@ static double sk_rigid_newton(double *theta, const double *params, int iteration
             if (fabs(res[i]) > change) {
                 change = fabs(res[i]);
             }
+        }
+        if (change <= tolerance) {
+            break;
         }
     }
     return change;
@@ -568,10 +573,10 @@ int four_bar_evaluate_angles(const double *inputs, const double *params, int lev
         for (i = 0; i < SK_K; ++i) {
             theta[sk_unknown_index[i]] = remainder(sol[i], sk_two_pi);
         }
-        /* polish: the relative accuracy of small angles */
-        if (sk_rigid_newton(theta, params, 1) < 0.0) {
-            return 1;
-        }
+    }
+    /* polish: the relative accuracy of small angles */
+    if (sk_rigid_newton(theta, params, 1, 0.0) < 0.0) {
+        return 1;
     }
     {
         int status = 0;

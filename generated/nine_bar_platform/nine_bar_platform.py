@@ -407,22 +407,31 @@ def _rigid_angles(x, params, ok):
         ok = ok & (numpy.broadcast_to(reach, shape) >= 0.0)
     for j, i in enumerate(_UNKNOWN_INDEX):
         theta[i] = numpy.where(ok, _wrap(numpy.broadcast_to(out[j], shape)), 0.0)
-    return _rigid_newton(theta, params, ok, _POLISH)
+    theta, ok, _ = _rigid_newton(theta, params, ok, _POLISH)
+    return theta, ok
 
 
-def _rigid_newton(theta, params, ok, iterations):
-    """Newton on the rigid closure (relative to the as-fabricated pose) in the unknown angles."""
+def _rigid_newton(theta, params, ok, iterations, tolerance=0.0):
+    """At most `iterations` Newton steps on the rigid closure (relative to the as-fabricated
+    pose) in the unknown angles, each element stopping once its step is at most `tolerance`:
+    the angles, ok (False where the loop Jacobian is singular) and where it stopped so."""
     k = len(_UNKNOWN_INDEX)
+    active = ok.copy()
     for _ in range(iterations):
         res = _rigid_res(theta, params)
         res = [numpy.broadcast_to(_wrap(r) if n % 3 == 0 else r, ok.shape)
                for n, r in enumerate(res)]
         lin = _linear(theta, params)
-        step, good = _solve(lin[:k * k], res, ok)
-        ok = ok & good
+        step, good = _solve(lin[:k * k], res, active)
+        ok = ok & (good | ~active)
+        active = active & good
         for j, i in enumerate(_UNKNOWN_INDEX):
-            theta[i] = numpy.where(ok, theta[i] - step[j], 0.0)
-    return theta, ok
+            theta[i] = numpy.where(active, theta[i] - step[j], theta[i])
+        change = numpy.max(numpy.abs(numpy.array(step)), axis=0)
+        active = active & (change > tolerance)
+        if not active.any():
+            break
+    return theta, ok, ~active
 
 
 def _first_order(theta, params, ok):
