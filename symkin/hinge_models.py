@@ -1,12 +1,13 @@
-"""Hinge models (CONTRACT §2): the names the file may use, the parameters each one takes, and the
-model functions.
+"""Hinge models (docs/file-format.md): the names the file may use, the parameters each one takes,
+and the model functions.
 
-A model gives (f(θ), g(θ)), the position of M's clamp in the plate frame fixed in P. The registry
-(MODELS, PRBM_PRESETS, HINGE_KEYS, MODEL_KEYS) is what the reader needs to validate a file;
-:func:`plate_functions` gives a hinge's f, g and its deviation from the ideal revolute
-df = f - f_rigid, dg = g - g_rigid as sympy expressions in THETA, the deviation written
-with the cancellation-free kernels of :mod:`symkin.special` so that float64 keeps full relative
-accuracy for tiny θ (DESIGN.md, "Numerics").  :func:`model_latex` gives the formulas for reports.
+A model gives (f(θ), g(θ)), the position of M's clamp in the plate frame fixed in P (the paper's
+(3.2); the ideal revolute is (3.1)). The registry (MODELS, PRBM_PRESETS, HINGE_KEYS, MODEL_KEYS)
+is what the reader needs to validate a file; :func:`plate_functions` gives a hinge's f, g and
+its deviation from the ideal revolute df = f - f_rigid, dg = g - g_rigid (3.3) as sympy
+expressions in THETA, the deviation written with the cancellation-free kernels of
+:mod:`symkin.special` so that float64 keeps full relative accuracy for tiny θ
+(docs/numerics.md).
 """
 
 from __future__ import annotations
@@ -129,37 +130,10 @@ class PlateFunctions:
     stable: bool = True
     fit: TableFit | None = None
 
-    @property
-    def theta(self) -> _sp.Symbol:
-        return THETA
-
     def derivatives(self) -> tuple[_sp.Expr, _sp.Expr]:
         """(d df/dθ, d dg/dθ), through the kernels' stable derivatives."""
         t = THETA
         return _sp.diff(self.df, t), _sp.diff(self.dg, t)
-
-    def special_names(self) -> list[str]:
-        """Registry names of the special functions in f, g, df, dg and their θ-derivatives."""
-        return _special.used_names(self.f, self.g, self.df, self.dg, *self.derivatives())
-
-    def check_angle(self, theta: object) -> None:
-        """Raise DomainError (a ValueError) when |θ| reaches the model's limit."""
-        if self.limit is None:
-            return
-        value = _sp.sympify(theta)
-        if value.is_number and (_sp.Abs(value) - self.limit).is_nonnegative:
-            raise DomainError(f"hinge model '{self.model}' is defined for |theta| < "
-                              f"{self.limit} only, got theta = {value}")
-
-    @property
-    def residual_rms(self) -> float | None:
-        """Table fit: the larger RMS residual of f/l and g/l (None for other models)."""
-        return None if self.fit is None else max(self.fit.rms_f, self.fit.rms_g)
-
-    @property
-    def residual_max(self) -> float | None:
-        """Table fit: the largest |residual| of f/l and g/l (None for other models)."""
-        return None if self.fit is None else max(self.fit.max_f, self.fit.max_g)
 
 
 def plate_functions(hinge) -> PlateFunctions:
@@ -266,46 +240,3 @@ def _table_functions(hinge, t, l, f_rigid, g_rigid) -> PlateFunctions:
                          rms_f, max_f, rms_g, max_g, (float(th.min()), float(th.max())),
                          len(rows))
     return PlateFunctions("table", l, f, g, df, dg, f_rigid, g_rigid, fit=table_fit)
-
-
-#: LaTeX of each model's f, g and of its deviation from the rigid hinge (for reports).
-_MODEL_LATEX = {
-    "rigid": (r"f = \tfrac{l}{2}(1+\cos\theta),\quad g = \tfrac{l}{2}\sin\theta,\quad "
-              r"\Delta f = \Delta g = 0"),
-    "circular_arc": (r"f = l\,\frac{\sin\theta}{\theta},\quad g = l\,\frac{1-\cos\theta}{\theta},"
-                     r"\quad \begin{pmatrix}\Delta f\\ \Delta g\end{pmatrix} = l\,u^{2}"
-                     r"\operatorname{K}(u)\begin{pmatrix}\cos u\\ \sin u\end{pmatrix},\ "
-                     r"u = \tfrac{\theta}{2},\ \operatorname{K}(u) = "
-                     r"\frac{\sin u - u\cos u}{u^{3}}"),
-    "prbm": (r"f = l\bigl(1-\gamma(1-\cos\Theta)\bigr),\quad g = \gamma l\sin\Theta,\quad "
-             r"\Theta = \theta/c_\theta,\quad \Delta f = l\,u\Bigl[\frac{c_\theta^{2}-2\gamma}"
-             r"{c_\theta(c_\theta+\sqrt{2\gamma})} + u^{2}\Bigl(\operatorname{s}_1(u) - "
-             r"\frac{\sqrt{2\gamma}}{c_\theta^{3}}\operatorname{s}_1\bigl(\tfrac{u}{c_\theta}\bigr)"
-             r"\Bigr)\Bigr]\bigl(\sin u + \sqrt{2\gamma}\sin\tfrac{u}{c_\theta}\bigr),\ "
-             r"u = \tfrac{\theta}{2},\quad "
-             r"\Delta g = l\theta\Bigl[\frac{2\gamma-c_\theta}{2c_\theta} + \theta^{2}\Bigl("
-             r"\frac{\gamma}{c_\theta^{3}}\operatorname{s}_1(\Theta) - \tfrac12"
-             r"\operatorname{s}_1(\theta)\Bigr)\Bigr]"),
-    "small_deflection": (r"f = l,\quad g = \tfrac{l\theta}{2},\quad \Delta f = l\sin^{2}"
-                         r"\tfrac{\theta}{2},\quad \Delta g = \tfrac{l}{2}(\theta - \sin\theta)"),
-    "elastica_force": (r"f = \frac{l}{R_F(1-s,\,1+s,\,c^{2})},\quad g = l s\Bigl(1-\frac{C}{A}"
-                       r"\Bigr),\quad A = R_F(1-s,1+s,c^{2}),\ C = \tfrac{c^{2}}{3}R_D(1-s,1+s,"
-                       r"c^{2}),\ s = \sin\theta,\ c = \cos\theta,\ |\theta| < \tfrac{\pi}{2};"
-                       r"\quad \Delta f = l s^{2}\Bigl(\frac{1}{2(1+c)} - \frac{A-1}{s^{2}A}"
-                       r"\Bigr),\quad \Delta g = l s\Bigl(\tfrac12 - \frac{C}{A}\Bigr)"),
-    "table": (r"f = l\sum_k p_k\theta^{k},\quad g = l\sum_k r_k\theta^{k}\ "
-              r"\text{(least-squares fit of the table)}"),
-    "expr": r"f,\ g\ \text{as given in the mechanism file}",
-}
-
-#: Definitions of the kernels the formulas above use.
-KERNEL_LATEX = (r"\operatorname{s}_n(x) = \frac{\sin x - \sum_{k<n}(-1)^k x^{2k+1}/(2k+1)!}"
-                r"{x^{2n+1}},\quad \operatorname{c}_n(x) = \frac{\cos x - \sum_{k<n}(-1)^k "
-                r"x^{2k}/(2k)!}{x^{2n}}")
-
-
-def model_latex(hinge_model_name: str) -> str:
-    """LaTeX (math mode, no delimiters) of a model's f, g and its deviation from rigid."""
-    if hinge_model_name not in _MODEL_LATEX:
-        raise ValueError(f"unknown hinge model {hinge_model_name!r}")
-    return _MODEL_LATEX[hinge_model_name]

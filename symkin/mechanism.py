@@ -13,7 +13,7 @@ import math
 import re
 import tomllib
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import sympy as sp
@@ -91,7 +91,6 @@ class Mechanism:
     points: tuple[Point, ...]
     chords: tuple[str, ...] | None = None
     basic_chain: tuple[str, ...] | None = None
-    _index: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def inputs(self) -> tuple[str, ...]:

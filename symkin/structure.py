@@ -57,17 +57,9 @@ class Structure:
     def chords(self) -> tuple[str, ...]:
         return self.hinges[self.n:]
 
-    def link_label(self, name: str) -> int:
-        return self.links.index(name)
-
     def hinge_label(self, name: str) -> int:
         """Label a (1-based) of the named hinge."""
         return self.hinges.index(name) + 1
-
-    def orientation(self, name: str) -> int:
-        """+1 if the file's links[0] (P) is i+(a), -1 if the file lists the links the other way."""
-        a = self.hinge_label(name)
-        return 1 if self.links[self.i_plus[a - 1]] == self.mechanism.hinge(name).links[0] else -1
 
     def tree_path(self, label: int) -> tuple[int, ...]:
         """Hinge labels on the direct path [s_0, s_label], from the ground outward."""

@@ -17,6 +17,7 @@ import pytest
 import mechanisms as M
 import symkin
 from conftest import EXAMPLES
+from evaluators import rel_err
 from reference_solver import Reference
 from symkin.analysis import Analysis
 
@@ -35,13 +36,6 @@ CASES = {
 
 def load(source):
     return symkin.load(source) if not isinstance(source, str) else symkin.loads(source)
-
-
-def rel_err(got, want) -> float:
-    with mpmath.workdps(50):
-        diff = mpmath.sqrt(sum((mpmath.mpf(g) - w) ** 2 for g, w in zip(got, want)))
-        size = mpmath.sqrt(sum(w ** 2 for w in want))
-        return float(diff / size)
 
 
 def reference(mech, inputs, params=None):
