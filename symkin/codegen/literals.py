@@ -114,3 +114,17 @@ def horner(coeffs: list[float], var: str) -> str:
     for c in reversed(coeffs[:-1]):
         text = f"{literal(c)} + {var} * ({text})"
     return text
+
+
+def recurrence(constants, var: str) -> list[str]:
+    """The steps b <- (b - a_j)/var of a kernel's float recurrence (docs/numerics.md), one per
+    constant a_j, as statements valid in Python and C (without the C semicolon)."""
+    out = []
+    for a in (float(a) for a in constants):
+        if a == 0:
+            out.append(f"b = b / {var}")
+        elif a > 0:
+            out.append(f"b = (b - {literal(a)}) / {var}")
+        else:
+            out.append(f"b = (b + {literal(-a)}) / {var}")
+    return out

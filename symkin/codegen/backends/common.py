@@ -15,9 +15,7 @@ import sympy as sp
 from sympy.printing.codeprinter import CodePrinter
 
 from ... import levels, special
-from ...special.kernels import StableKernel
 from ...templating import render
-from ..literals import literal
 from ..plan import Plan
 from ..routines import Routine
 
@@ -105,17 +103,3 @@ def header_lines(plan: Plan, source: str) -> list[str]:
     ]
     lines += list(plan.notes)
     return [comment_safe(line) for line in lines]
-
-
-def kernel_recurrence(cls: type[StableKernel], x2: str) -> list[str]:
-    """The steps b <- (b - a_j)/x^2 of a kernel's recurrence, as statements valid in Python
-    and C (without the C semicolon)."""
-    out = []
-    for a in (float(a) for a in cls.float_subtract):
-        if a == 0:
-            out.append(f"b = b / {x2}")
-        elif a > 0:
-            out.append(f"b = (b - {literal(a)}) / {x2}")
-        else:
-            out.append(f"b = (b + {literal(-a)}) / {x2}")
-    return out

@@ -15,8 +15,7 @@ from ....special import registry
 from ....special.elastica import (A1_SERIES, HALF_PI_FLOAT, OUTPUTS, Q_SERIES, RD_DOC, RD_STOP,
                                   RF_DOC, RF_STOP)
 from ....special.kernels import StableKernel
-from ..common import kernel_recurrence
-from ...literals import horner, literal
+from ...literals import horner, literal, recurrence
 
 
 def support(names: Iterable[str]) -> str:
@@ -46,7 +45,7 @@ def _kernel(cls: type[StableKernel]) -> str:
            f"else the nested elementary formula")
     base = {"sinc": "sin(x) / x", "cosr1": "-2.0 * (sin(0.5 * x) / x) * (sin(0.5 * x) / x)",
             "sinc_minus_cos": "sin(x) / x - cos(x)"}[cls.float_base]
-    steps = "".join(f"    {step};\n" for step in kernel_recurrence(cls, "x2"))
+    steps = "".join(f"    {step};\n" for step in recurrence(cls.float_subtract, "x2"))
     return (
         f"/* {name}(x): {doc}. */\n"
         f"static double symkin_{name}(double x)\n"

@@ -18,8 +18,7 @@ from ....special import registry
 from ....special.elastica import (A1_SERIES, HALF_PI_FLOAT, OUTPUTS, Q_SERIES, RD_DOC, RD_STOP,
                                   RF_DOC, RF_STOP)
 from ....special.kernels import StableKernel
-from ..common import kernel_recurrence
-from ...literals import horner, literal
+from ...literals import horner, literal, recurrence
 
 
 def source(name: str, scalar: bool = False) -> str:
@@ -77,7 +76,7 @@ def _kernel(cls: type[StableKernel], scalar: bool) -> str:
             f"    if abs(x) < {threshold}:\n"
             f"        return {series}\n"
             f"    b = {base}\n"
-            + "".join(f"    {step}\n" for step in kernel_recurrence(cls, "x2"))
+            + "".join(f"    {step}\n" for step in recurrence(cls.float_subtract, "x2"))
             + "    return b\n")
     base = {"sinc": "np.sin(xs) / xs", "cosr1": "-2.0 * (np.sin(0.5 * xs) / xs) ** 2",
             "sinc_minus_cos": "np.sin(xs) / xs - np.cos(xs)"}[cls.float_base]
@@ -91,7 +90,7 @@ def _kernel(cls: type[StableKernel], scalar: bool) -> str:
         f"    xs = np.where(small, 1.0, x)\n"
         f"    xs2 = xs * xs\n"
         f"    b = {base}\n"
-        + "".join(f"    {step}\n" for step in kernel_recurrence(cls, "xs2"))
+        + "".join(f"    {step}\n" for step in recurrence(cls.float_subtract, "xs2"))
         + "    return np.where(small, series, b)\n")
 
 
