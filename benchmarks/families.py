@@ -1,4 +1,4 @@
-"""Generated families of mechanisms for the derivation benchmarks (TOML texts, CONTRACT §1).
+"""Generated families of mechanisms for the derivation benchmarks (TOML texts, docs/file-format.md).
 
 - ``serial_chain(n)``: an open chain of n moving links on the ground, n hinges, every hinge an
   input, one point at the tip. No loops.

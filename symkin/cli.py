@@ -1,4 +1,4 @@
-"""Command line (CONTRACT §4): a thin shell over the Python API.
+"""Command line (docs/cli.md): a thin shell over the Python API.
 
 Exit codes: 0 success, 1 internal error (a bug), 2 bad input, 3 cannot reach the input.
 """

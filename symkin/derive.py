@@ -1,4 +1,5 @@
-"""`symkin derive`: all artifacts of a mechanism, generated in memory, then written atomically.
+"""`symkin derive` (docs/cli.md, docs/generated-code.md): all artifacts of a mechanism, generated
+in memory, then written atomically.
 
 Generation is deterministic: the same file gives byte-identical output (names sorted or in file
 order, no timestamps, headers name the source file by its base name only).

@@ -1,4 +1,4 @@
-"""Error types that map onto the command line's exit codes (CONTRACT §4).
+"""Error types that map onto the command line's exit codes (docs/cli.md).
 
 Every error a user can cause carries the file, the entry and what to change, so the CLI can print
 one or a few plain lines instead of a traceback.

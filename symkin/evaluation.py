@@ -247,7 +247,8 @@ class _Mpmath:
             "(outside the assembly range)")
 
     def _rigid_newton(self, pvals: list, ivals: dict) -> dict:
-        """Rigid angles by Newton with continuation from the as-fabricated pose (non-dyad groups)."""
+        """Rigid angles by Newton with continuation from the as-fabricated pose (no closed
+        form: a group is not a dyad)."""
         an, kin = self.an, self.kin
         args = [*an.params, *an.thetas]
         f = self._fn("rigid_residual", list(an.rigid_residual), args)
@@ -333,7 +334,7 @@ def _wrap(angle):
     return angle - two_pi * mpmath.nint(angle / two_pi)
 
 
-# -- the numpy and c backends: the generated evaluators ---------------------------------------------
+# -- the numpy and c backends: the generated evaluators --------------------------------------------
 
 def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
                params: Mapping[str, object] | None, backend: str) -> Evaluation:

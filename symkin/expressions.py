@@ -1,4 +1,4 @@
-"""Whitelist parser for the expression strings of a mechanism file (CONTRACT §1).
+"""Whitelist parser for the expression strings of a mechanism file (docs/file-format.md).
 
 The text is parsed with :func:`ast.parse` (parsing only, nothing is executed) and the syntax tree is
 walked node by node: numbers, the names the caller allows, + - * / **, unary minus and calls of the

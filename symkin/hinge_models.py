@@ -107,7 +107,7 @@ class TableFit:
 
 @dataclass(frozen=True)
 class PlateFunctions:
-    """A hinge model's functions of THETA with the plate length substituted (CONTRACT §2).
+    """A hinge model's functions of THETA with the plate length substituted (docs/file-format.md).
 
     f, g:        position of M's clamp in the plate frame fixed in P.
     df, dg:      f - f_rigid, g - g_rigid, in cancellation-free form when `stable` is True: a

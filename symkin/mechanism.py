@@ -1,4 +1,4 @@
-"""Mechanism file reader and validator (CONTRACT §1, `format = 1`).
+"""Mechanism file reader and validator (docs/file-format.md, `format = 1`).
 
 `load(path)` returns an immutable :class:`Mechanism` or raises :class:`InputError` naming the file,
 the line, the entry and the fix. Nothing in the file is executed: TOML is parsed by `tomllib` and

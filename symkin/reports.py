@@ -1,4 +1,5 @@
-"""Plain-text and JSON reports of a mechanism's structure (`symkin check`, `symkin matrices`)."""
+"""Plain-text and JSON reports (docs/cli.md): a mechanism's structure (`symkin check`,
+`symkin matrices`, the paper's I, Φ, Ψ of section 2) and one evaluation (`symkin eval`)."""
 
 from __future__ import annotations
 
@@ -61,7 +62,7 @@ def matrices_text(s: Structure) -> str:
 
 
 def matrices_json(s: Structure) -> str:
-    """The CONTRACT §4 JSON of `symkin matrices --json`."""
+    """The JSON of `symkin matrices --json` (docs/cli.md)."""
     data = {
         "links": list(s.links),
         "hinges": list(s.hinges),
@@ -75,7 +76,7 @@ def matrices_json(s: Structure) -> str:
 
 
 def evaluation_json(result) -> str:
-    """The CONTRACT §4 JSON of `symkin eval --json`."""
+    """The JSON of `symkin eval --json` (docs/cli.md)."""
     return json.dumps(result.as_json(), indent=2) + "\n"
 
 

@@ -1,4 +1,5 @@
-"""Rigid position solution: Assur-group (dyad) decomposition solved in closed form.
+"""Rigid position solution: Assur-group (dyad) decomposition solved in closed form
+(docs/levels.md, "Rigid solution"; it replaces the paper's angle elimination of section 5).
 
 Links joined by input hinges are welded into bodies (their relative angle is given). Starting from
 the ground's body, a dyad is a pair of unknown bodies joined by one hinge, each hinged once to a

@@ -1,8 +1,10 @@
-"""`symkin tradeoff`: every variant's worst error over an input range and its time per evaluation.
+"""`symkin tradeoff` (docs/cli.md): every variant's worst error over an input range and its time
+per evaluation.
 
 Errors are measured against an mpmath evaluation (30 digits) of the most faithful derivation:
-the file's own hinge models at the `exact` level. Times are measured in one run: the numpy
-evaluator vectorized over 10^4 points, the C evaluator in a loop timed inside C.
+the file's own hinge models at the reference level (`levels.reference()`, today `exact`). Times
+are measured in one run: the numpy evaluator vectorized over 10^4 points, the C evaluator in a
+loop timed inside C.
 """
 
 from __future__ import annotations

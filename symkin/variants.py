@@ -1,4 +1,5 @@
-"""Cheaper variants of a derivation: the speed/accuracy choices a user can trade (issue: tradeoff).
+"""Cheaper variants of a derivation: the speed/accuracy choices a user can trade (docs/levels.md,
+"Variants").
 
 A variant is a level (paper, first_order, exact), a hinge model choice and a precision:
 

@@ -1,4 +1,4 @@
-"""Mechanism files used by the tests beyond examples/: each a TOML text (CONTRACT §1)."""
+"""Mechanism files used by the tests beyond examples/: each a TOML text (docs/file-format.md)."""
 
 from __future__ import annotations
 

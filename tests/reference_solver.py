@@ -1,7 +1,7 @@
 """Independent high-precision reference solver for symkin mechanisms (a test oracle).
 
 This module is test support, not a test file. It re-implements the mechanism semantics of
-CONTRACT §1/§2 from scratch with mpmath, so that the tests can compare symkin's derivation with
+docs/file-format.md from scratch with mpmath, so that the tests can compare symkin's derivation with
 it. symkin is used ONLY to parse the mechanism file (``symkin.load`` / ``symkin.loads``): the
 exact sympy numbers of the file are evaluated here with mpmath. No graph theory, no incidence or
 loop matrices, nothing from ``symkin.structure``: every link gets a full planar pose and every
@@ -26,14 +26,15 @@ Jacobian and a dense LU with partial pivoting written here in plain mpmath.
 Branch (assembly mode)
 ----------------------
 The solution is the one reached continuously from the as-fabricated pose (all poses zero, all
-θ = 0, CONTRACT §1). ``solve`` steps the inputs along the straight line from 0 to the targets in
-increments of at most ``max_step`` rad (largest input change per step, default 0.05), starting
-each Newton run from a first-order (tangent) predictor built from the previous solution. A step
-is rejected, and halved, when Newton does not converge, when the correction from the predictor is
-large, or when the sign of det(J) changes (the path crossed a singular, i.e. toggle/fold,
-configuration, where the branch would otherwise be switched silently). When the step falls below
-``min_step`` a :class:`ReferenceAssemblyError` is raised: the input is outside the assembly range
-reached from the as-fabricated pose, or the path runs through a singular configuration.
+θ = 0, docs/file-format.md). ``solve`` steps the inputs along the straight line from 0 to the
+targets in increments of at most ``max_step`` rad (largest input change per step, default
+0.05), starting each Newton run from a first-order (tangent) predictor built from the previous
+solution. A step is rejected, and halved, when Newton does not converge, when the correction
+from the predictor is large, or when the sign of det(J) changes (the path crossed a singular,
+i.e. toggle/fold, configuration, where the branch would otherwise be switched silently). When
+the step falls below ``min_step`` a :class:`ReferenceAssemblyError` is raised: the input is
+outside the assembly range reached from the as-fabricated pose, or the path runs through a
+singular configuration.
 
 Precision
 ---------

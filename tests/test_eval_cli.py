@@ -1,4 +1,4 @@
-"""`symkin eval` (CONTRACT §4): JSON shape, levels, exit codes 2 and 3, and no tracebacks."""
+"""`symkin eval` (docs/cli.md): JSON shape, levels, exit codes 2 and 3, and no tracebacks."""
 
 from __future__ import annotations
 

@@ -1,9 +1,10 @@
-"""Hinge models (CONTRACT §2) and the cancellation-free special functions behind them.
+"""Hinge models (docs/file-format.md) and the cancellation-free special functions behind them.
 
 Every reference here is computed independently of the code under test, with mpmath at 90 digits
-straight from the defining formulas of CONTRACT §2 (the deviation as the plain difference
-f - f_rigid, which 90 digits make harmless), and for the elastica from the first integral of the
-elastica ODE by quadrature, cross-checked against a shooting solution of the ODE itself.
+straight from the models' defining formulas in docs/file-format.md (the deviation as the plain
+difference f - f_rigid, which 90 digits make harmless), and for the elastica from the first
+integral of the elastica ODE by quadrature, cross-checked against a shooting solution of the ODE
+itself.
 """
 
 from __future__ import annotations
@@ -279,7 +280,7 @@ def test_rigid_model_is_exactly_rigid():
 
 
 def test_limits_at_zero():
-    """Value and derivative at θ -> 0 and the leading series terms (DESIGN: circular arc
+    """Value and derivative at θ -> 0 and the leading series terms (docs/numerics.md: circular arc
     dx/l = θ²/12 - θ⁴/80, dy/l = θ³/24 - θ⁵/360)."""
     t = THETA
     circ = plate("circular_arc")

@@ -255,8 +255,8 @@ def test_six_bar_loop_2_squared_5_13_and_solved_5_14(six_bar):
                 + 2 * f * g * sp.cos(q4) - 2 * d * e * sp.cos(q1) + 2 * d * g * sp.cos(q3 + q4)
                 + 2 * d * f * sp.cos(q3))
 
-    # Found here (not in DESIGN.md's list): (5.13) prints cos(q1 + q3) in the e f term; squaring
-    # (5.11) gives cos(q1 - q3). The corrected form holds, the printed one does not.
+    # docs/errata.md, item 7: (5.13) prints cos(q1 + q3) in the e f term; squaring (5.11) gives
+    # cos(q1 - q3). The corrected form holds, the printed one does not.
     check_squared(paper, eq, lhs, rhs(q1 - q3))
     assert not vanishes(paper(lhs - rhs(q1 + q3)) - (eq.squared.lhs - eq.squared.rhs))
     # (5.14): h cos(q1 + q2) = -(e cos q1 - g cos(q3 + q4) - f cos q3 - d), so with atan2
