@@ -137,3 +137,13 @@ def test_the_check_sees_lazy_and_relative_imports():
     assert "special.registry" in edges["special.kernels"]   # from .registry import ...
     assert "analysis" in edges["codegen.plan"]              # from ..analysis import ...
     assert "hinge_models" in edges["mechanism"]
+
+
+def test_the_backends_read_the_plan_only():
+    """The emitters take everything from a Plan: no backend reaches back into the derivation."""
+    derivation_floors = {"mechanism", "structure", "kinematics", "rigid", "loop_equations",
+                         "analysis", "hinge_models", "variants", "evaluation"}
+    reach = [f"{name} imports {target}" for name, targets in graph().items()
+             if name.startswith("codegen.backends") for target in targets
+             if target in derivation_floors]
+    assert not reach, "\n".join(sorted(reach))

@@ -1,0 +1,53 @@
+"""The level table (symkin/levels.py) is the one place levels are defined: every layer reads
+names and codes from it (docs/levels.md)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import symkin
+from conftest import EXAMPLES
+from evaluators import require_compiler
+from symkin import levels
+from symkin.cli import parser
+from symkin.codegen import runtime
+from symkin.codegen.backends.c import backend as c_backend
+from symkin.codegen.backends.numpy import backend as numpy_backend
+from symkin.codegen.plan import plan
+
+
+def test_the_table():
+    codes = [lv.code for lv in levels.LEVELS]
+    assert codes == sorted(set(codes))                     # unique, in order of fidelity
+    assert len(set(levels.NAMES)) == len(levels.NAMES)
+    assert levels.DEFAULT in levels.NAMES
+    assert levels.reference().name == "exact"
+    assert not levels.get("paper").needs_delta and levels.get("exact").needs_delta
+    with pytest.raises(symkin.InputError, match="unknown level 'best'"):
+        levels.get("best")
+
+
+def test_cli_choices_come_from_the_table():
+    ev = parser()._subparsers._group_actions[0].choices["eval"]
+    level = next(a for a in ev._actions if a.dest == "level")
+    assert tuple(level.choices) == levels.NAMES and level.default == levels.DEFAULT
+
+
+@pytest.mark.parametrize("wanted", [["paper"], ["first_order", "exact"], None])
+def test_generated_code_takes_the_plans_levels_and_their_codes(wanted):
+    require_compiler()
+    an = symkin.analyze(symkin.load(EXAMPLES / "four_bar.toml"))
+    p = plan(an, levels=wanted)
+    names = tuple(lv.name for lv in p.levels)
+    module = runtime.import_numpy_module(numpy_backend.emit(p, "levels"),
+                                         "four_bar_" + "_".join(names))
+    assert module.LEVELS == names
+    default = module.evaluate({"A0": np.array([0.2])})          # the most faithful generated
+    given = module.evaluate({"A0": np.array([0.2])}, names[-1])
+    assert np.array_equal(default["points"]["C"]["deviation"], given["points"]["C"]["deviation"])
+    header, code = c_backend.emit(p, "levels")
+    lib = runtime.Library(runtime.build("four_bar", header, code), "four_bar", 1, 1, 1, 4)
+    for lv in levels.LEVELS:
+        status = lib.evaluate([0.2], None, lv.code)[0]
+        assert status == (0 if lv.name in names else 3), lv.name

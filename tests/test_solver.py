@@ -1,0 +1,69 @@
+"""One solver: the mpmath evaluation and the generated C and numpy evaluators all take their
+continuation, iteration caps and tolerances from symkin.solver (docs/numerics.md)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+import mechanisms as M
+import symkin
+from evaluators import require_compiler
+from symkin import evaluation
+from symkin.codegen import runtime
+from symkin.codegen.backends.c import backend as c_backend
+from symkin.codegen.backends.numpy import backend as numpy_backend
+from symkin.codegen.plan import plan
+from symkin.solver import SOLVER
+
+
+def test_continuation_steps():
+    assert SOLVER.continuation_steps(0.0) == 1
+    assert SOLVER.continuation_steps(SOLVER.continuation_step) == 1
+    assert SOLVER.continuation_steps(0.3) == 6
+    assert SOLVER.continuation_steps(0.3 + 1e-9) == 7
+
+
+def test_tolerances_by_arithmetic():
+    assert SOLVER.tolerances("float64") == SOLVER.float64
+    assert SOLVER.tolerances("float32").converged > SOLVER.float64.converged
+    assert SOLVER.mpmath(40).converged < SOLVER.float64.stalled
+    assert SOLVER.mpmath(40).polish == 0          # the closed form needs no polish at 40 digits
+
+
+@pytest.fixture(scope="module")
+def triad():
+    """The triad six-bar has no closed form: its rigid angles come from continuation."""
+    an = symkin.analyze(symkin.loads(M.TRIAD_SIX_BAR))
+    assert not an.rigid.closed_form
+    return an
+
+
+def evaluators(an, settings):
+    p = dataclasses.replace(plan(an), solver=settings)
+    module = runtime.import_numpy_module(numpy_backend.emit(p, "solver"),
+                                         f"triad_{settings.rigid_iterations}")
+    header, code = c_backend.emit(p, "solver")
+    lib = runtime.Library(runtime.build("triad_six_bar", header, code), "triad_six_bar", 1, 1,
+                          1, len(p.hinges))
+    return module, lib
+
+
+def test_generated_evaluators_follow_the_settings(triad):
+    require_compiler()
+    module, lib = evaluators(triad, SOLVER)
+    assert module.evaluate({"O1": np.array([0.3])}, "exact")["ok"].all()
+    assert lib.evaluate([0.3], None, 2)[0] == 0
+    # one Newton step per continuation step cannot converge: both report it
+    module, lib = evaluators(triad, dataclasses.replace(SOLVER, rigid_iterations=1))
+    assert not module.evaluate({"O1": np.array([0.3])}, "exact")["ok"].any()
+    assert lib.evaluate([0.3], None, 2)[0] == 2
+
+
+def test_mpmath_follows_the_settings(triad, monkeypatch):
+    assert symkin.evaluate(triad, {"O1": "0.3"}, "exact").points
+    monkeypatch.setattr(evaluation, "SOLVER", dataclasses.replace(SOLVER, rigid_iterations=1))
+    with pytest.raises(symkin.AssemblyError, match="cannot close"):
+        symkin.evaluate(triad, {"O1": "0.3"}, "exact")
