@@ -140,6 +140,35 @@ class Analysis:
             rows_r.extend(self.kin.loop_deviation(c))
         return self._closure_jacobian(exact=False), sp.Matrix(rows_r)
 
+    def check_fabricated_pose(self) -> None:
+        """Refuse (exit 2) input hinges that do not determine the pose: in the as-fabricated pose
+        (θ = 0, where every loop closes by construction) the rigid loop Jacobian A must be regular;
+        a singular A leaves some non-input hinges free, so no evaluation can succeed."""
+        kin = self.kin
+        if not kin.unknowns:
+            return
+        at_rest = {t: 0 for t in self.thetas}
+        rows = self.linear_system[0].xreplace(at_rest).subs(self.mechanism.defaults).tolist()
+        with mpmath.workdps(30):
+            a = mpmath.matrix([[mpmath.mpf(sp.N(e, 35)) for e in row] for row in rows])
+            for i in range(a.rows):         # angular rows are pure numbers, positional lengths
+                scale = max(abs(a[i, j]) for j in range(a.cols))
+                for j in range(a.cols):
+                    a[i, j] = a[i, j] / scale if scale else a[i, j]
+            _, sigma, vt = mpmath.svd_r(a)
+            k = min(range(len(sigma)), key=lambda i: sigma[i])
+            if sigma[k] > mpmath.mpf(10) ** -20 * max(sigma):
+                return
+            free = [kin.hinges[a_].name for j, a_ in enumerate(kin.unknowns)
+                    if abs(vt[k, j]) > mpmath.mpf(10) ** -10]
+        inputs = ", ".join(self.mechanism.inputs)
+        raise InputError(
+            f"the input hinges {inputs} do not determine the pose: in the as-fabricated pose the "
+            f"loops leave {', '.join(free)} free to move (singular loop Jacobian)",
+            file=self.mechanism.path, entry="input",
+            hint=f"mark other hinges as inputs, e.g. one of {', '.join(free)} instead of one of "
+                 f"{inputs}")
+
     def _closure_jacobian(self, exact: bool) -> sp.Matrix:
         kin, s = self.kin, self.structure
         col = {a: k for k, a in enumerate(kin.unknowns)}

@@ -56,6 +56,7 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
         levels = [variant.level]
     else:
         analysis = Analysis(build(mech), points)
+    analysis.check_fabricated_pose()
     say("deriving the routines (CSE)")
     p = plan(analysis, points, levels or LEVELS, notes=notes)
     files: dict[str, bytes] = {}

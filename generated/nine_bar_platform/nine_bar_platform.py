@@ -377,7 +377,8 @@ def _solve(a, b, ok):
         bm[..., i] = b[i]
         for j in range(k):
             am[..., i, j] = a[i * k + j]
-    good = ok & numpy.isfinite(am).all(axis=(-1, -2)) & numpy.isfinite(bm).all(axis=-1)
+    # numpy.array: a writable array even for 0-d input, where & gives a numpy.bool scalar
+    good = numpy.array(ok & numpy.isfinite(am).all(axis=(-1, -2)) & numpy.isfinite(bm).all(axis=-1))
     am[~good] = numpy.eye(k)
     bm[~good] = 0.0
     try:
