@@ -29,7 +29,7 @@ from . import rigid as rigid_solver
 from . import vectors as V
 from .errors import AssemblyError, InputError
 from .kinematics import Kinematics
-from .mechanism import THETA
+from .mechanism import THETA, check_values
 from .structure import Structure
 
 LEVELS = ("paper", "first_order", "exact")
@@ -265,6 +265,8 @@ class Analysis:
                                      "the overrides", file=self.mechanism.path, entry="--param",
                                      hint="choose override values that keep it finite")
                 values[p.symbol] = value
+        if changed:
+            check_values(self.mechanism, values, "--param")
         return values
 
     def _inputs(self, inputs: Mapping[str, object]) -> dict[int, sp.Expr]:
@@ -279,7 +281,19 @@ class Analysis:
             raise InputError(f"no value for the input(s) {', '.join(missing)}", file=mech.path,
                              entry="--input", hint="give every input, e.g. --input "
                              + " --input ".join(f"{n}=0.1" for n in missing))
-        return {names[k]: _exact(v, f"--input {k}", mech.path) for k, v in inputs.items()}
+        values = {names[k]: _exact(v, f"--input {k}", mech.path) for k, v in inputs.items()}
+        for a, value in values.items():
+            if (sp.Abs(value) - sp.pi).is_positive:
+                name = kin.hinges[a].name
+                same = ""
+                if abs(value) < 1e6:
+                    wrapped = value - 2 * sp.pi * sp.floor(value / (2 * sp.pi) + sp.Rational(1, 2))
+                    same = f"; the same pose is {name}={float(sp.N(wrapped, 20)):.9g}"
+                raise AssemblyError(
+                    f"{mech.path}: --input {name}={float(sp.N(value, 20)):.9g} rad: an input is "
+                    f"the rotation of its plate from the as-fabricated pose, |angle| <= pi"
+                    f"{same}")
+        return values
 
     def evaluate(self, inputs: Mapping[str, object], level: str = "exact",
                  params: Mapping[str, object] | None = None, dps: int = 40) -> Evaluation:
@@ -346,15 +360,17 @@ class Analysis:
         return theta, dyads
 
     def _check_limits(self, theta: dict, ivals: dict) -> None:
-        """A hinge model valid only for |θ| < limit (elastica_force) must not be driven past it."""
+        """No plate is driven past its bound: its model's limit (elastica_force: π/2) or π."""
         for a, h in self.kin.hinges.items():
             if h.limit is not None and not abs(theta[a]) < mpmath.mpf(sp.N(h.limit, 30)):
                 at = ", ".join(f"{self.kin.hinges[b].name}={float(v):g}"
                                for b, v in sorted(ivals.items()))
+                why = ("a plate cannot bend through more than half a turn" if h.limit == sp.pi
+                       else f"beyond its model '{h.hinge.model}', which holds for |theta| < "
+                            f"{float(sp.N(h.limit)):.6g} rad")
                 raise AssemblyError(
                     f"{self.mechanism.path}: at {at} the hinge '{h.name}' would bend to "
-                    f"{float(theta[a]):.6g} rad, beyond its model '{h.hinge.model}', which holds "
-                    f"for |theta| < {float(sp.N(h.limit)):.6g} rad")
+                    f"{float(theta[a]):.6g} rad: {why}")
 
     def _cannot_close(self, dyad, ivals) -> AssemblyError:
         kin = self.kin

@@ -29,11 +29,15 @@ def run(args, capsys):
     return (code, *capsys.readouterr())
 
 
-def test_coincident_hinges_refused_by_check_as_by_eval(tmp_path, capsys):
-    path = tmp_path / "coincident.toml"
-    path.write_text(FOUR_BAR.replace("at = [0.085, 0.068]", "at = [0.015, 0.026]"))
+@pytest.mark.parametrize("at, message", [
+    ("[0.015, 0.026]", "reach past each other"),     # B on top of A: plates overlap
+    ("[0.0575, 0.013]", "collinear"),                # B midway between A and B0: a toggle
+])
+def test_check_refuses_as_eval_does(tmp_path, capsys, at, message):
+    path = tmp_path / "four_bar.toml"
+    path.write_text(FOUR_BAR.replace("at = [0.085, 0.068]", f"at = {at}"))
     code, out, err = run(["check", str(path)], capsys)
-    assert code == 2 and "collinear" in err and "fix:" in err and "valid" not in out
+    assert code == 2 and message in err and "fix:" in err and "valid" not in out
     code, _, err_eval = run(["eval", str(path), "--input", "A0=0.1"], capsys)
     assert code == 2 and err_eval == err
 
