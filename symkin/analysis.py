@@ -17,6 +17,7 @@ its float64 results are correctly rounded references for the generated evaluator
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
@@ -42,6 +43,11 @@ class PointResult:
     compliant: tuple[float, float]
     deviation: tuple[float, float]
 
+    @property
+    def norm(self) -> float:
+        """|ΔR|, the length of the deviation."""
+        return math.hypot(*self.deviation)
+
 
 @dataclass(frozen=True)
 class Evaluation:
@@ -54,16 +60,22 @@ class Evaluation:
     angles_compliant: dict[str, float]
     points: dict[str, PointResult]
     dyads: tuple[dict, ...] = field(default=())
+    params: dict[str, float] = field(default_factory=dict)   # every parameter's value used
+    overrides: tuple[str, ...] = ()                           # the ones given with --param
 
     def as_json(self) -> dict:
+        """The `eval --json` document (docs/cli.md)."""
         return {
             "level": self.level,
             "backend": self.backend,
             "inputs": dict(self.inputs),
+            "params": dict(self.params),
             "angles": {"rigid": dict(self.angles_rigid),
                        "compliant": dict(self.angles_compliant)},
             "points": {name: {"rigid": list(p.rigid), "compliant": list(p.compliant),
-                              "deviation": list(p.deviation)} for name, p in self.points.items()},
+                              "deviation": list(p.deviation), "norm": p.norm}
+                       for name, p in self.points.items()},
+            "dyads": [dict(d) for d in self.dyads],
         }
 
 
@@ -329,7 +341,22 @@ class Analysis:
                 angles_rigid={names[a]: float(theta[a]) for a in sorted(theta)},
                 angles_compliant={names[a]: float(theta[a] + delta.get(a, 0))
                                   for a in sorted(theta)},
-                points=points, dyads=tuple(dyads))
+                points=points, dyads=tuple(dyads), params=self.parameter_floats(exact_params),
+                overrides=tuple(params or ()))
+
+    def parameter_floats(self, values: Mapping[sp.Symbol, sp.Expr]) -> dict[str, float]:
+        """Parameter values by name, as the doubles the generated evaluators receive."""
+        return {p.name: float(sp.N(values[p.symbol], 20)) for p in self.mechanism.parameters}
+
+    def dyad_states(self, inputs: Mapping[str, object],
+                    params: Mapping[str, object] | None = None) -> tuple[dict, ...]:
+        """Branch and toggle margin of every dyad of the rigid solution at these inputs."""
+        given = self._inputs(inputs)
+        exact_params = self.parameter_values(params)
+        with mpmath.workdps(30):
+            pvals = [mpmath.mpf(sp.N(exact_params[s], 35)) for s in self.params]
+            ivals = {a: mpmath.mpf(sp.N(v, 35)) for a, v in given.items()}
+            return tuple(self._rigid_angles(pvals, ivals)[1])
 
     def _rigid_angles(self, pvals: list, ivals: dict) -> tuple[dict, list]:
         """Rigid hinge angles θ^r (file orientation) for the given inputs, and dyad states."""

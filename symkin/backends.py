@@ -71,7 +71,8 @@ def evaluate(analysis: Analysis, inputs: Mapping[str, object], level: str,
         level=level, backend=backend, inputs=dict(zip(names, x)),
         angles_rigid={h: rigid[h] for h in sorted(rigid, key=order.get)},
         angles_compliant={h: compliant[h] for h in sorted(compliant, key=order.get)},
-        points=points)
+        points=points, dyads=analysis.dyad_states(inputs, params),
+        params=analysis.parameter_floats(pvals), overrides=tuple(params or ()))
 
 
 def _explain(analysis: Analysis, inputs, level, params) -> None:

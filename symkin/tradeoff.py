@@ -49,6 +49,7 @@ class Tradeoff:
     ranges: dict[str, tuple[float, float]]
     samples: int
     skipped: int                          # samples the mechanism cannot assemble
+    zero: int = 0                         # samples in the as-fabricated pose (see measure)
     rows: tuple[Row, ...] = field(default=())
     inputs: tuple[dict, ...] = field(default=())   # the samples measured (assembled ones)
 
@@ -56,7 +57,8 @@ class Tradeoff:
         return {
             "reference": "mpmath, 30 digits, exact level, the file's hinge models",
             "ranges": {k: list(v) for k, v in self.ranges.items()},
-            "samples": self.samples, "skipped": self.skipped, "inputs": list(self.inputs),
+            "samples": self.samples, "skipped": self.skipped, "zero_deviation": self.zero,
+            "inputs": list(self.inputs),
             "variants": [{"name": r.variant.name, "level": r.variant.level,
                           "model": r.variant.model, "precision": r.variant.precision,
                           "worst_error": r.worst, "errors": r.errors,
@@ -91,10 +93,7 @@ def sample(ranges: Mapping[str, tuple[float, float]], n: int) -> list[dict[str, 
     out = []
     if len(names) == 1:
         lo, hi = ranges[names[0]]
-        # (lo (n-1-k) + hi k) / (n-1) is exactly 0 where the grid crosses 0 symmetrically; a
-        # value within rounding of 0 is dropped too (the deviation vanishes there).
-        values = [(lo * (n - 1 - k) + hi * k) / (n - 1) for k in range(n)]
-        return [{names[0]: v} for v in values if abs(v) > 1e-12 * (hi - lo)]
+        return [{names[0]: (lo * (n - 1 - k) + hi * k) / (n - 1)} for k in range(n)]
     primes = [2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37]
     for k in range(1, n + 1):
         point = {}
@@ -108,6 +107,11 @@ def sample(ranges: Mapping[str, tuple[float, float]], n: int) -> list[dict[str, 
             point[name] = lo + (hi - lo) * x
         out.append(point)
     return out
+
+
+def at_rest(sample: Mapping[str, float]) -> bool:
+    """Every input zero: the as-fabricated pose, where every deviation vanishes exactly."""
+    return all(v == 0 for v in sample.values())
 
 
 def reference(analysis: Analysis, samples: list[dict[str, float]]):
@@ -141,11 +145,15 @@ def measure(mech: Mechanism, variant: Variant, samples: list[dict[str, float]],
     for point in p.points:
         worst = 0.0
         got = res["points"][point]["deviation"].astype(float)
+        # In the as-fabricated pose the deviation is exactly zero: there the error is measured
+        # against the largest deviation over the range, so no sample goes unchecked.
+        scale = max(math.hypot(*r[point]) for r in ref)
         for j, r in enumerate(ref):
-            size = math.hypot(*r[point])
+            want = (0.0, 0.0) if at_rest(samples[j]) else r[point]
+            size = scale if at_rest(samples[j]) else math.hypot(*want)
             if size == 0.0:
                 continue
-            err = math.hypot(got[0, j] - r[point][0], got[1, j] - r[point][1]) / size
+            err = math.hypot(got[0, j] - want[0], got[1, j] - want[1]) / size
             worst = max(worst, err if math.isfinite(err) else math.inf)
         errors[point] = worst
     reps = max(1, TIMING_POINTS // max(1, len(samples)))
@@ -195,7 +203,8 @@ def run(mech: Mechanism, ranges: Mapping[str, tuple[float, float]], n: int = 25,
         rows.append(measure(mech, v, kept, ref, with_c))
     rows = pareto(rows)
     rows.sort(key=lambda r: (r.time, r.worst, r.variant))
-    return Tradeoff(dict(ranges), len(samples), len(samples) - len(kept), tuple(rows),
+    zero = sum(at_rest(s) for s in kept)
+    return Tradeoff(dict(ranges), len(samples), len(samples) - len(kept), zero, tuple(rows),
                     tuple(kept))
 
 

@@ -61,12 +61,28 @@ def test_claimed_errors_match_an_independent_check(table):
             continue                          # rounding noise, checked in the next test
         an = analysis_for(mech, variant)
         worst = 0.0
+        # at A0 = 0 (the as-fabricated pose) the deviation is zero: measured against the largest
+        scale = max(math.hypot(float(w[0]), float(w[1])) for w in faithful)
         for s, want in zip(samples, faithful):
             got = an.evaluate({"A0": repr(s["A0"])}, variant.level, dps=30).points["C"].deviation
-            size = math.hypot(float(want[0]), float(want[1]))
+            size = math.hypot(float(want[0]), float(want[1])) if s["A0"] else scale
             worst = max(worst, math.hypot(got[0] - float(want[0]), got[1] - float(want[1])) / size)
         claimed = v["worst_error"]
         assert abs(claimed - worst) <= 0.1 * worst + 1e-13, (v["name"], claimed, worst)
+
+
+def test_every_sample_is_measured(table):
+    assert table["samples"] == 9 and table["skipped"] == 0 and len(table["inputs"]) == 9
+
+
+def test_a_sample_at_zero_deviation_is_measured_not_dropped():
+    """-0.2:0.2 with 5 samples holds A0 = 0 exactly, where every deviation vanishes."""
+    mech = symkin.load(FOUR_BAR)
+    table = run(mech, {"A0": (-0.2, 0.2)}, n=5, variants=[Variant("first_order")],
+                with_c=False)
+    assert table.samples == 5 and len(table.inputs) == 5 and table.zero == 1
+    assert {s["A0"] for s in table.inputs} >= {0.0}
+    assert 0 < table.rows[0].worst < 1e-2
 
 
 def test_float32_error_is_reported_and_bounded(table):
