@@ -21,7 +21,14 @@ PLOT_SUFFIXES = (".png", ".pdf", ".svg")
 
 
 def _check(args: argparse.Namespace) -> str:
-    return check_text(build(load(args.file)))
+    from .analysis import Analysis
+    from .evaluation import check_fabricated_pose
+
+    structure = build(load(args.file))
+    # What evaluation would refuse: a dyad at a toggle position as fabricated (raised while
+    # decomposing into dyads), inputs that leave the loops singular.
+    check_fabricated_pose(Analysis(structure))
+    return check_text(structure)
 
 
 def _matrices(args: argparse.Namespace) -> str:

@@ -46,6 +46,7 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
     from .codegen.backends.c import backend as c_backend
     from .codegen.backends.numpy import backend as numpy_backend
     from .codegen.plan import plan, with_derivation
+    from .evaluation import check_fabricated_pose
 
     say = progress or (lambda message: None)
     source = Path(mech.path).name
@@ -57,6 +58,7 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
         levels = [variant.level]
     else:
         analysis = Analysis(build(mech), points)
+    check_fabricated_pose(analysis)
     say("deriving the routines (CSE)")
     p = plan(analysis, points, levels, notes=notes)
     files: dict[str, bytes] = {}

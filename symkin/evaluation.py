@@ -12,6 +12,7 @@ configuration, the mpmath evaluation is asked why, so every backend fails with t
 
 from __future__ import annotations
 
+import math
 import weakref
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -22,7 +23,7 @@ import sympy as sp
 from . import expressions, levels, special
 from .analysis import Analysis
 from .errors import AssemblyError, InputError
-from .mechanism import Mechanism
+from .mechanism import Mechanism, check_values
 from .reports import loop_text
 from .solver import SOLVER
 
@@ -34,6 +35,11 @@ class PointResult:
     rigid: tuple[float, float]
     compliant: tuple[float, float]
     deviation: tuple[float, float]
+
+    @property
+    def norm(self) -> float:
+        """|ΔR|, the length of the deviation."""
+        return math.hypot(*self.deviation)
 
 
 @dataclass(frozen=True)
@@ -48,16 +54,22 @@ class Evaluation:
     angles_compliant: dict[str, float]
     points: dict[str, PointResult]
     dyads: tuple[dict, ...] = field(default=())
+    params: dict[str, float] = field(default_factory=dict)   # every parameter's value used
+    overrides: tuple[str, ...] = ()                           # the ones given with --param
 
     def as_json(self) -> dict:
+        """The `eval --json` document (docs/cli.md)."""
         return {
             "level": self.level,
             "backend": self.backend,
             "inputs": dict(self.inputs),
+            "params": dict(self.params),
             "angles": {"rigid": dict(self.angles_rigid),
                        "compliant": dict(self.angles_compliant)},
             "points": {name: {"rigid": list(p.rigid), "compliant": list(p.compliant),
-                              "deviation": list(p.deviation)} for name, p in self.points.items()},
+                              "deviation": list(p.deviation), "norm": p.norm}
+                       for name, p in self.points.items()},
+            "dyads": [dict(d) for d in self.dyads],
         }
 
 
@@ -116,7 +128,15 @@ def parameter_values(mechanism: Mechanism,
                                  "the overrides", file=mechanism.path, entry="--param",
                                  hint="choose override values that keep it finite")
             values[p.symbol] = value
+    if changed:
+        check_values(mechanism, values, "--param")
     return values
+
+
+def parameter_floats(mechanism: Mechanism,
+                     values: Mapping[sp.Symbol, sp.Expr]) -> dict[str, float]:
+    """Parameter values by name, as the doubles the generated evaluators receive."""
+    return {p.name: float(sp.N(values[p.symbol], 20)) for p in mechanism.parameters}
 
 
 def input_values(analysis: Analysis, inputs: Mapping[str, object]) -> dict[int, sp.Expr]:
@@ -132,7 +152,49 @@ def input_values(analysis: Analysis, inputs: Mapping[str, object]) -> dict[int, 
         raise InputError(f"no value for the input(s) {', '.join(missing)}", file=mech.path,
                          entry="--input", hint="give every input, e.g. --input "
                          + " --input ".join(f"{n}=0.1" for n in missing))
-    return {names[k]: exact_value(v, f"--input {k}", mech.path) for k, v in inputs.items()}
+    values = {names[k]: exact_value(v, f"--input {k}", mech.path) for k, v in inputs.items()}
+    for a, value in values.items():
+        if (sp.Abs(value) - sp.pi).is_positive:
+            name = kin.hinges[a].name
+            same = ""
+            if abs(value) < 1e6:
+                wrapped = value - 2 * sp.pi * sp.floor(value / (2 * sp.pi) + sp.Rational(1, 2))
+                same = f"; the same pose is {name}={float(sp.N(wrapped, 20)):.9g}"
+            raise AssemblyError(
+                f"{mech.path}: --input {name}={float(sp.N(value, 20)):.9g} rad: an input is "
+                f"the rotation of its plate from the as-fabricated pose, |angle| <= pi"
+                f"{same}")
+    return values
+
+
+def check_fabricated_pose(analysis: Analysis) -> None:
+    """Refuse (exit 2) input hinges that do not determine the pose: in the as-fabricated pose
+    (θ = 0, where every loop closes by construction) the rigid loop Jacobian A must be regular;
+    a singular A leaves some non-input hinges free, so no evaluation can succeed."""
+    kin = analysis.kin
+    if not kin.unknowns:
+        return
+    at_rest = {t: 0 for t in analysis.thetas}
+    rows = analysis.linear_system[0].xreplace(at_rest).subs(analysis.mechanism.defaults).tolist()
+    with mpmath.workdps(30):
+        a = mpmath.matrix([[mpmath.mpf(sp.N(e, 35)) for e in row] for row in rows])
+        for i in range(a.rows):         # angular rows are pure numbers, positional lengths
+            scale = max(abs(a[i, j]) for j in range(a.cols))
+            for j in range(a.cols):
+                a[i, j] = a[i, j] / scale if scale else a[i, j]
+        _, sigma, vt = mpmath.svd_r(a)
+        k = min(range(len(sigma)), key=lambda i: sigma[i])
+        if sigma[k] > mpmath.mpf(10) ** -20 * max(sigma):
+            return
+        free = [kin.hinges[a_].name for j, a_ in enumerate(kin.unknowns)
+                if abs(vt[k, j]) > mpmath.mpf(10) ** -10]
+    inputs = ", ".join(analysis.mechanism.inputs)
+    raise InputError(
+        f"the input hinges {inputs} do not determine the pose: in the as-fabricated pose the "
+        f"loops leave {', '.join(free)} free to move (singular loop Jacobian)",
+        file=analysis.mechanism.path, entry="input",
+        hint=f"mark other hinges as inputs, e.g. one of {', '.join(free)} instead of one of "
+             f"{inputs}")
 
 
 # -- the sympy backend: mpmath ---------------------------------------------------------------------
@@ -196,7 +258,19 @@ class _Mpmath:
                 angles_rigid={names[a]: float(theta[a]) for a in sorted(theta)},
                 angles_compliant={names[a]: float(theta[a] + delta.get(a, 0))
                                   for a in sorted(theta)},
-                points=points, dyads=tuple(dyads))
+                points=points, dyads=tuple(dyads),
+                params=parameter_floats(self.mechanism, exact_params),
+                overrides=tuple(params or ()))
+
+    def dyad_states(self, inputs: Mapping[str, object],
+                    params: Mapping[str, object] | None = None) -> tuple[dict, ...]:
+        """Branch and toggle margin of every dyad of the rigid solution at these inputs."""
+        given = input_values(self.an, inputs)
+        exact_params = parameter_values(self.mechanism, params)
+        with mpmath.workdps(30):
+            pvals = [mpmath.mpf(sp.N(exact_params[s], 35)) for s in self.an.params]
+            ivals = {a: mpmath.mpf(sp.N(v, 35)) for a, v in given.items()}
+            return tuple(self._rigid_angles(pvals, ivals)[1])
 
     def _rigid_angles(self, pvals: list, ivals: dict) -> tuple[dict, list]:
         """Rigid hinge angles θ^r (file orientation) for the given inputs, and dyad states."""
@@ -227,15 +301,17 @@ class _Mpmath:
         return theta, dyads
 
     def _check_limits(self, theta: dict, ivals: dict) -> None:
-        """A hinge model valid only for |θ| < limit (elastica_force) must not be driven past it."""
+        """No plate is driven past its bound: its model's limit (elastica_force: π/2) or π."""
         for a, h in self.kin.hinges.items():
             if h.limit is not None and not abs(theta[a]) < mpmath.mpf(sp.N(h.limit, 30)):
                 at = ", ".join(f"{self.kin.hinges[b].name}={float(v):g}"
                                for b, v in sorted(ivals.items()))
+                why = ("a plate cannot bend through more than half a turn" if h.limit == sp.pi
+                       else f"beyond its model '{h.hinge.model}', which holds for |theta| < "
+                            f"{float(sp.N(h.limit)):.6g} rad")
                 raise AssemblyError(
                     f"{self.mechanism.path}: at {at} the hinge '{h.name}' would bend to "
-                    f"{float(theta[a]):.6g} rad, beyond its model '{h.hinge.model}', which holds "
-                    f"for |theta| < {float(sp.N(h.limit)):.6g} rad")
+                    f"{float(theta[a]):.6g} rad: {why}")
 
     def _cannot_close(self, dyad, ivals) -> AssemblyError:
         kin = self.kin
@@ -385,7 +461,8 @@ def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
         level=level, backend=backend, inputs=dict(zip(names, x)),
         angles_rigid={h: rigid[h] for h in sorted(rigid, key=order.get)},
         angles_compliant={h: compliant[h] for h in sorted(compliant, key=order.get)},
-        points=points)
+        points=points, dyads=_solver(analysis).dyad_states(inputs, params),
+        params=parameter_floats(analysis.mechanism, pvals), overrides=tuple(params or ()))
 
 
 def _explain(analysis: Analysis, inputs, level, params) -> None:

@@ -43,7 +43,8 @@ class HingeGeometry:
     g: sp.Expr
     df: sp.Expr             # f - f_rigid, g - g_rigid in cancellation-free form
     dg: sp.Expr
-    limit: sp.Expr | None = None    # the model holds for |θ| < limit (elastica_force: π/2)
+    limit: sp.Expr | None = None    # |θ| < limit: the model's (elastica_force π/2), else π for
+    #                                 any plate (it cannot bend further); None for a rigid pin
 
     @property
     def name(self) -> str:
@@ -98,7 +99,7 @@ class Kinematics:
             P, M = label[h.links[0]], label[h.links[1]]
             hinges[a] = HingeGeometry(a, h, P, M, 1 if P == s.i_plus[a - 1] else -1, h.at,
                                       h.plate_angle, h.length, plate.f, plate.g, plate.df,
-                                      plate.dg, plate.limit)
+                                      plate.dg, plate_limit(h.model, plate.limit))
         self.hinges = hinges
         self.inputs = tuple(a for a in hinges if hinges[a].is_input)
         self.unknowns = tuple(a for a in hinges if not hinges[a].is_input)
@@ -196,6 +197,14 @@ class Kinematics:
             angles[b], self.phi(self.hinges[b].P, angles)))
             for b in range(1, self.structure.m + 1) if row[b - 1]]
         return V.add(*terms)
+
+
+def plate_limit(model: str, model_limit: sp.Expr | None) -> sp.Expr | None:
+    """|θ| bound of a hinge: its model's own limit, else π for any plate (a plate bent through
+    more than a half turn is not a flexure hinge); a rigid pin turns freely."""
+    if model_limit is not None:
+        return model_limit
+    return None if model == "rigid" else sp.pi
 
 
 def c_symbol(i: int, a: int) -> sp.Symbol:

@@ -16,6 +16,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+import mpmath
 import sympy as sp
 
 from . import expressions
@@ -312,6 +313,7 @@ class _Reader:
         )
         self.check_connected(mech)
         self.check_mobility(mech)
+        check_values(mech, self.defaults)
         return mech
 
     def parameters(self, table: object) -> tuple[Parameter, ...]:
@@ -580,3 +582,70 @@ class _Reader:
                 f"{len(mech.inputs)} input hinge(s) ({given}) but the Grübler mobility is "
                 f"{formula}", "input", None,
                 f"mark exactly {dof} hinge(s) with input = true")
+
+
+def _mp(expr: sp.Expr, values: Mapping[sp.Symbol, sp.Expr]) -> mpmath.mpf | None:
+    """`expr` at the parameter values, 30 digits; None when it is not a finite real number."""
+    value = sp.N(sp.sympify(expr).subs(values), 30)
+    if not (value.is_real and value.is_finite):
+        return None
+    return mpmath.mpf(str(value))
+
+
+def check_values(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr],
+                 option: str | None = None) -> None:
+    """Every numeric rule of the file at these parameter values: finite coordinates and angles,
+    positive plate lengths, model parameters in range, and plates shorter than the links between
+    them (on every link, two hinge centres lie farther apart than half the sum of the plate
+    lengths; plates that cross always break this). `option` names the command-line option that
+    set the values (e.g. "--param"); None means the file's own defaults."""
+    with mpmath.workdps(30):
+        def fail(message: str, entry: str, line: int | None, hint: str) -> InputError:
+            if option is None:
+                return InputError(message, file=mech.path, line=line, entry=entry, hint=hint)
+            return InputError(f"with these values, {entry}: {message}", file=mech.path,
+                              entry=option, hint="choose values that keep the mechanism valid: "
+                              + hint)
+
+        centres = {}
+        for h in mech.hinges:
+            entry = f"[[hinge]] '{h.name}'"
+            at = [_mp(v, values) for v in h.at]
+            angle = _mp(h.plate_angle, values)
+            length = _mp(h.length, values)
+            if None in at or angle is None:
+                raise fail("'at' or 'plate_angle' is not a finite number", entry, h.line,
+                           "keep coordinates and angles finite")
+            if length is None or not length > 0:
+                shown = "not finite" if length is None else mpmath.nstr(length, 6)
+                raise fail(f"plate length must be positive, got {shown}", entry, h.line,
+                           "give the plate a positive length")
+            for key, raw in h.model_params:
+                spec = MODELS[h.model].parameter(key)
+                if spec is None or spec.kind not in ("number", "fraction"):
+                    continue
+                value = _mp(raw, values)
+                if value is None or not value > 0 or (spec.kind == "fraction" and value > 1):
+                    rng = "in (0, 1]" if spec.kind == "fraction" else "positive"
+                    raise fail(f"'{key}' must be {rng}, got "
+                               f"{'not finite' if value is None else mpmath.nstr(value, 6)}",
+                               entry, h.line, f"keep '{key}' {rng}")
+            centres[h.name] = (at, length)
+        for p in mech.points:
+            if None in [_mp(v, values) for v in p.at]:
+                raise fail("'at' is not a finite number", f"[[point]] '{p.name}'", p.line,
+                           "keep coordinates finite")
+        for link in mech.links:
+            on_link = [h for h in mech.hinges if link.name in h.links]
+            for i, a in enumerate(on_link):
+                for b in on_link[i + 1:]:
+                    (pa, la), (pb, lb) = centres[a.name], centres[b.name]
+                    gap = mpmath.hypot(pa[0] - pb[0], pa[1] - pb[1])
+                    if not gap > (la + lb) / 2:
+                        raise fail(f"its plate and the plate of hinge '{b.name}' reach past each "
+                                   f"other on link '{link.name}': their centres are "
+                                   f"{mpmath.nstr(gap, 6)} apart, less than half the sum of the "
+                                   f"plate lengths, {mpmath.nstr((la + lb) / 2, 6)}",
+                                   f"[[hinge]] '{a.name}'", a.line,
+                                   "shorten the plates or move the hinges apart: on every link "
+                                   "the plates must be shorter than the link between them")

@@ -82,4 +82,4 @@ def evaluation_json(result) -> str:
 
 def evaluation_text(result) -> str:
     """Human summary of `symkin eval`: angles, points, deviations and dyad toggle margins."""
-    return render("text/eval.txt.j2", r=result, norm=lambda v: float(np.hypot(*v)))
+    return render("text/eval.txt.j2", r=result)

@@ -9,6 +9,7 @@ loop timed inside C.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Mapping, Sequence
@@ -38,7 +39,8 @@ class Row:
     time_numpy: float                   # seconds per point, vectorized
     time_c: float | None                # seconds per point, in a C loop (float64 variants)
     ops: int                            # operations of the generated routines (after CSE)
-    pareto: bool = False
+    pareto_c: bool = False              # on the front of the variants timed in C
+    pareto_numpy: bool = False          # on the front of the variants timed in numpy
 
     @property
     def worst(self) -> float:
@@ -55,19 +57,23 @@ class Tradeoff:
     ranges: dict[str, tuple[float, float]]
     samples: int
     skipped: int                          # samples the mechanism cannot assemble
+    zero: int = 0                         # samples in the as-fabricated pose (see measure)
     rows: tuple[Row, ...] = field(default=())
     inputs: tuple[dict, ...] = field(default=())   # the samples measured (assembled ones)
+    name: str = ""                                 # the mechanism's name
 
     def as_json(self) -> dict:
         return {
             "reference": "mpmath, 30 digits, exact level, the file's hinge models",
             "ranges": {k: list(v) for k, v in self.ranges.items()},
-            "samples": self.samples, "skipped": self.skipped, "inputs": list(self.inputs),
+            "samples": self.samples, "skipped": self.skipped, "zero_deviation": self.zero,
+            "inputs": list(self.inputs),
             "variants": [{"name": r.variant.name, "level": r.variant.level,
                           "model": r.variant.model, "precision": r.variant.precision,
                           "worst_error": r.worst, "errors": r.errors,
                           "time_numpy": r.time_numpy, "time_c": r.time_c, "ops": r.ops,
-                          "pareto": r.pareto} for r in self.rows],
+                          "pareto_c": r.pareto_c, "pareto_numpy": r.pareto_numpy}
+                         for r in self.rows],
         }
 
 
@@ -95,10 +101,7 @@ def sample(ranges: Mapping[str, tuple[float, float]], n: int) -> list[dict[str, 
     out = []
     if len(names) == 1:
         lo, hi = ranges[names[0]]
-        # (lo (n-1-k) + hi k) / (n-1) is exactly 0 where the grid crosses 0 symmetrically; a
-        # value within rounding of 0 is dropped too (the deviation vanishes there).
-        values = [(lo * (n - 1 - k) + hi * k) / (n - 1) for k in range(n)]
-        return [{names[0]: v} for v in values if abs(v) > 1e-12 * (hi - lo)]
+        return [{names[0]: (lo * (n - 1 - k) + hi * k) / (n - 1)} for k in range(n)]
     primes = [2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37]
     for k in range(1, n + 1):
         point = {}
@@ -112,6 +115,11 @@ def sample(ranges: Mapping[str, tuple[float, float]], n: int) -> list[dict[str, 
             point[name] = lo + (hi - lo) * x
         out.append(point)
     return out
+
+
+def at_rest(sample: Mapping[str, float]) -> bool:
+    """Every input zero: the as-fabricated pose, where every deviation vanishes exactly."""
+    return all(v == 0 for v in sample.values())
 
 
 def reference(analysis: Analysis, samples: list[dict[str, float]]):
@@ -147,11 +155,15 @@ def measure(mech: Mechanism, variant: Variant, samples: list[dict[str, float]],
     for point in p.points:
         worst = 0.0
         got = res["points"][point]["deviation"].astype(float)
+        # In the as-fabricated pose the deviation is exactly zero: there the error is measured
+        # against the largest deviation over the range, so no sample goes unchecked.
+        scale = max(math.hypot(*r[point]) for r in ref)
         for j, r in enumerate(ref):
-            size = math.hypot(*r[point])
+            want = (0.0, 0.0) if at_rest(samples[j]) else r[point]
+            size = scale if at_rest(samples[j]) else math.hypot(*want)
             if size == 0.0:
                 continue
-            err = math.hypot(got[0, j] - r[point][0], got[1, j] - r[point][1]) / size
+            err = math.hypot(got[0, j] - want[0], got[1, j] - want[1]) / size
             worst = max(worst, err if math.isfinite(err) else math.inf)
         errors[point] = worst
     reps = max(1, TIMING_POINTS // max(1, len(samples)))
@@ -170,14 +182,22 @@ def measure(mech: Mechanism, variant: Variant, samples: list[dict[str, float]],
     return Row(variant, errors, time_numpy, time_c, ops)
 
 
+def front(points: Sequence[tuple[float, float]]) -> list[bool]:
+    """For (time, error) points: True where no other point is both faster and at least as
+    accurate (the Pareto front)."""
+    return [not any(j != i and t2 <= t1 and e2 <= e1 and (t2 < t1 or e2 < e1)
+                    for j, (t2, e2) in enumerate(points))
+            for i, (t1, e1) in enumerate(points)]
+
+
 def pareto(rows: list[Row]) -> list[Row]:
-    """Rows marked when no other row is both faster and at least as accurate."""
-    out = []
-    for r in rows:
-        dominated = any(o is not r and o.time <= r.time and o.worst <= r.worst
-                        and (o.time < r.time or o.worst < r.worst) for o in rows)
-        out.append(Row(r.variant, r.errors, r.time_numpy, r.time_c, r.ops, not dominated))
-    return out
+    """Rows marked with the Pareto front of each backend they were timed with: C (float64
+    variants) and numpy (every variant, float32 ones too)."""
+    timed_c = [r for r in rows if r.time_c is not None]
+    on_c = dict(zip(map(id, timed_c), front([(r.time_c, r.worst) for r in timed_c])))
+    on_numpy = front([(r.time_numpy, r.worst) for r in rows])
+    return [dataclasses.replace(r, pareto_c=on_c.get(id(r), False), pareto_numpy=flag)
+            for r, flag in zip(rows, on_numpy)]
 
 
 def run(mech: Mechanism, ranges: Mapping[str, tuple[float, float]], n: int = 25,
@@ -200,8 +220,9 @@ def run(mech: Mechanism, ranges: Mapping[str, tuple[float, float]], n: int = 25,
         rows.append(measure(mech, v, kept, ref, with_c))
     rows = pareto(rows)
     rows.sort(key=lambda r: (r.time, r.worst, r.variant))
-    return Tradeoff(dict(ranges), len(samples), len(samples) - len(kept), tuple(rows),
-                    tuple(kept))
+    zero = sum(at_rest(s) for s in kept)
+    return Tradeoff(dict(ranges), len(samples), len(samples) - len(kept), zero, tuple(rows),
+                    tuple(kept), mech.name)
 
 
 def choose(table: Tradeoff, tolerance: float, points: Sequence[str] | None = None) -> Row:
@@ -223,28 +244,91 @@ def text(table: Tradeoff) -> str:
     return render("text/tradeoff.txt.j2", t=table)
 
 
-def plot(table: Tradeoff, path: str) -> None:
-    """Error against time, log-log, the Pareto front joined."""
+def figure(table: Tradeoff):
+    """The tradeoff figure: error against time per evaluation, log-log, one marker per variant and
+    backend, each backend's Pareto front joined, every variant numbered and listed beside it."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
 
-    fig, ax = plt.subplots(figsize=(7, 4.5))
-    for r in table.rows:
-        for t, marker, label in ((r.time_c, "o", "C"), (r.time_numpy, "s", "numpy")):
-            if t is None:
+    floor = 1e-17                       # an error of exactly 0 is drawn at the floor
+    fig = plt.figure(figsize=(11, 6))
+    ax = fig.add_axes((0.07, 0.1, 0.5, 0.76))
+    styles = {"C": ("o", "C0"), "numpy": ("s", "C1")}
+    markers: list[tuple[float, float, int]] = []      # (time ns, error, variant number)
+    for number, r in enumerate(table.rows, start=1):
+        for backend, seconds, on_front in (("C", r.time_c, r.pareto_c),
+                                           ("numpy", r.time_numpy, r.pareto_numpy)):
+            if seconds is None:
                 continue
-            ax.loglog(t * 1e9, max(r.worst, 1e-17), marker, color="C0" if label == "C" else "C1",
-                      alpha=0.9 if r.pareto else 0.35)
-    front = sorted((r for r in table.rows if r.pareto), key=lambda r: r.time)
-    ax.loglog([r.time * 1e9 for r in front], [max(r.worst, 1e-17) for r in front], "k--", lw=1)
-    for r in front:
-        ax.annotate(r.variant.name, (r.time * 1e9, max(r.worst, 1e-17)), fontsize=7,
-                    xytext=(4, 3), textcoords="offset points")
-    ax.set_xlabel("time per evaluation (ns): C (circles), numpy (squares)")
+            marker, color = styles[backend]
+            x, y = seconds * 1e9, max(r.worst, floor)
+            ax.loglog(x, y, marker, color=color, ms=6 if on_front else 4,
+                      alpha=1.0 if on_front else 0.35, markeredgewidth=0)
+            markers.append((x, y, number))
+    for backend, attr, seconds, line in (("C", "pareto_c", "time_c", "-"),
+                                         ("numpy", "pareto_numpy", "time_numpy", "--")):
+        rows = sorted((r for r in table.rows if getattr(r, attr)),
+                      key=lambda r: getattr(r, seconds))
+        ax.loglog([getattr(r, seconds) * 1e9 for r in rows], [max(r.worst, floor) for r in rows],
+                  line, color=styles[backend][1], lw=1)
+    ax.set_xlabel("time per evaluation (ns)")
     ax.set_ylabel("worst relative error of the deviation")
     ax.grid(True, which="both", lw=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    fig.legend(handles=[
+        Line2D([], [], marker="o", color="C0", ls="", label="C (float64)"),
+        Line2D([], [], marker="s", color="C1", ls="", label="numpy (float64, float32)"),
+        Line2D([], [], color="C0", ls="-", label="Pareto front in C"),
+        Line2D([], [], color="C1", ls="--", label="Pareto front in numpy"),
+    ], fontsize=7, loc="lower left", bbox_to_anchor=(0.6, 0.1), frameon=False)
+    _number_markers(fig, ax, markers)
+    span = ", ".join(f"{k} in [{a:g}, {b:g}]" for k, (a, b) in table.ranges.items())
+    fig.suptitle(f"{table.name}: speed and accuracy of every variant\n{span} rad, "
+                 f"{table.samples} samples; error against mpmath (30 digits)", fontsize=10)
+    width = max([len(r.variant.name) for r in table.rows] + [7])
+    lines = [f"  #  {'variant':<{width}}    error     C ns  numpy ns"]
+    for number, r in enumerate(table.rows, start=1):
+        c = f"{r.time_c * 1e9:8.0f}" if r.time_c is not None else "       -"
+        mark = ("c" if r.pareto_c else " ") + ("n" if r.pareto_numpy else " ")
+        lines.append(f"{number:3d}  {r.variant.name:<{width}} {r.worst:8.1e} {c} "
+                     f"{r.time_numpy * 1e9:8.0f} {mark}")
+    lines.append("c, n: on the Pareto front in C, in numpy")
+    fig.text(0.6, 0.86, "\n".join(lines), family="monospace", fontsize=6.5, va="top")
+    return fig
+
+
+def _number_markers(fig, ax, markers: list[tuple[float, float, int]]) -> None:
+    """Write each marker's variant number beside it where it overlaps no other number or marker
+    (greedy over eight positions); a crowded marker stays unlabelled, its variant listed."""
+    from matplotlib.transforms import Bbox
+
+    fig.canvas.draw()                   # final axis limits: display positions are now known
+    renderer = fig.canvas.get_renderer()
+    taken = [Bbox.from_bounds(*(ax.transData.transform((x, y)) - 3), 6, 6)
+             for x, y, _ in markers]
+    offsets = [(5, 3), (5, -9), (-11, 3), (-11, -9), (-3, 6), (-3, -13), (9, -3), (-15, -3)]
+    for x, y, number in sorted(markers, key=lambda m: (m[1], m[0])):
+        for dx, dy in offsets:
+            label = ax.annotate(str(number), (x, y), xytext=(dx, dy), textcoords="offset points",
+                                fontsize=6)
+            box = label.get_window_extent(renderer)
+            if not any(box.overlaps(other) for other in taken):
+                taken.append(box)
+                break
+            label.remove()
+
+
+def plot(table: Tradeoff, path: str) -> None:
+    """Save the tradeoff figure (the format follows the file's suffix)."""
+    import matplotlib.pyplot as plt
+
+    fig = figure(table)
+    fig.savefig(path, dpi=120, metadata=_PLOT_METADATA.get(path.rsplit(".", 1)[-1].lower()))
     plt.close(fig)
+
+
+#: No dates or versions in saved figures, so the same table gives the same file.
+_PLOT_METADATA = {"png": {"Software": None}, "pdf": {"CreationDate": None, "Producer": None},
+                  "svg": {"Date": None}}

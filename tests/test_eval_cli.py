@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 
@@ -27,13 +28,17 @@ def test_json_has_the_contract_keys(capsys, level):
                          "--json")
     assert code == 0, err
     data = json.loads(out)
-    assert set(data) == {"level", "backend", "inputs", "angles", "points"}
+    assert set(data) == {"level", "backend", "inputs", "params", "angles", "points", "dyads"}
     assert data["level"] == level and data["backend"] == "sympy"
-    assert data["inputs"] == {"A0": 0.2}
+    assert data["inputs"] == {"A0": 0.2} and data["params"] == {"l": 1e-3}
     assert set(data["angles"]) == {"rigid", "compliant"}
     assert set(data["angles"]["rigid"]) == {"A0", "A", "B0", "B"}
     c = data["points"]["C"]
-    assert set(c) == {"rigid", "compliant", "deviation"}
+    assert set(c) == {"rigid", "compliant", "deviation", "norm"}
+    assert c["norm"] == pytest.approx(math.hypot(*c["deviation"]), rel=1e-15)
+    (dyad,) = data["dyads"]
+    assert dyad["hinges"] == ["A", "B", "B0"] and dyad["loop"] == "B" and dyad["branch"] == 1
+    assert 0 < dyad["toggle_margin"] <= 1
     for k in range(2):
         assert c["compliant"][k] == pytest.approx(c["rigid"][k] + c["deviation"][k],
                                                   rel=1e-15, abs=1e-18)
@@ -128,3 +133,28 @@ def test_all_backends_print_the_same_json(capsys, level):
         for key in ("rigid", "compliant", "deviation"):
             for got, want in zip(data["points"]["D"][key], ref["points"]["D"][key]):
                 assert got == pytest.approx(want, rel=1e-12)
+
+
+def test_toggle_margin_against_an_independent_construction(capsys):
+    """|sin| of the angle at B between B->A and B->B0, from the rigid four-bar built here by
+    intersecting two circles (A on the crank turned by A0 about A0's centre, B0 fixed)."""
+    import mpmath
+
+    code, out, _ = run(capsys, "eval", FOUR_BAR, "--input", "A0=0.2", "--json", "--backend", "c")
+    assert code == 0
+    margin = json.loads(out)["dyads"][0]["toggle_margin"]
+    with mpmath.workdps(30):
+        t = mpmath.mpf("0.2")
+        a = (mpmath.mpf("0.015") * mpmath.cos(t) - mpmath.mpf("0.026") * mpmath.sin(t),
+             mpmath.mpf("0.015") * mpmath.sin(t) + mpmath.mpf("0.026") * mpmath.cos(t))
+        b0 = (mpmath.mpf("0.1"), mpmath.mpf(0))
+        r1 = mpmath.hypot(mpmath.mpf("0.07"), mpmath.mpf("0.042"))     # |B - A| as fabricated
+        r2 = mpmath.hypot(mpmath.mpf("-0.015"), mpmath.mpf("0.068"))   # |B - B0|
+        d = mpmath.hypot(b0[0] - a[0], b0[1] - a[1])
+        along = (r1 ** 2 - r2 ** 2 + d ** 2) / (2 * d)
+        h = mpmath.sqrt(r1 ** 2 - along ** 2)
+        ex, ey = (b0[0] - a[0]) / d, (b0[1] - a[1]) / d
+        b = (a[0] + along * ex - h * ey, a[1] + along * ey + h * ex)    # B lies left of A -> B0
+        u, v = (a[0] - b[0], a[1] - b[1]), (b0[0] - b[0], b0[1] - b[1])
+        sine = abs(u[0] * v[1] - u[1] * v[0]) / (r1 * r2)
+    assert margin == pytest.approx(float(sine), rel=1e-12)

@@ -18,7 +18,7 @@ from conftest import EXAMPLES
 from reference_solver import Reference
 from symkin.cli import main
 from symkin.codegen.runtime import import_numpy_module
-from symkin.tradeoff import Variant, choose, run, sample
+from symkin.tradeoff import Row, Tradeoff, Variant, choose, figure, pareto, plot, run, sample
 from symkin.variants import analysis_for
 
 FOUR_BAR = EXAMPLES / "four_bar.toml"
@@ -61,13 +61,29 @@ def test_claimed_errors_match_an_independent_check(table):
             continue                          # rounding noise, checked in the next test
         an = analysis_for(mech, variant)
         worst = 0.0
+        # at A0 = 0 (the as-fabricated pose) the deviation is zero: measured against the largest
+        scale = max(math.hypot(float(w[0]), float(w[1])) for w in faithful)
         for s, want in zip(samples, faithful):
             got = symkin.evaluate(an, {"A0": repr(s["A0"])}, variant.level,
                                   dps=30).points["C"].deviation
-            size = math.hypot(float(want[0]), float(want[1]))
+            size = math.hypot(float(want[0]), float(want[1])) if s["A0"] else scale
             worst = max(worst, math.hypot(got[0] - float(want[0]), got[1] - float(want[1])) / size)
         claimed = v["worst_error"]
         assert abs(claimed - worst) <= 0.1 * worst + 1e-13, (v["name"], claimed, worst)
+
+
+def test_every_sample_is_measured(table):
+    assert table["samples"] == 9 and table["skipped"] == 0 and len(table["inputs"]) == 9
+
+
+def test_a_sample_at_zero_deviation_is_measured_not_dropped():
+    """-0.2:0.2 with 5 samples holds A0 = 0 exactly, where every deviation vanishes."""
+    mech = symkin.load(FOUR_BAR)
+    table = run(mech, {"A0": (-0.2, 0.2)}, n=5, variants=[Variant("first_order")],
+                with_c=False)
+    assert table.samples == 5 and len(table.inputs) == 5 and table.zero == 1
+    assert {s["A0"] for s in table.inputs} >= {0.0}
+    assert 0 < table.rows[0].worst < 1e-2
 
 
 def test_float32_error_is_reported_and_bounded(table):
@@ -77,17 +93,55 @@ def test_float32_error_is_reported_and_bounded(table):
     assert f32["first_order/f32"] == pytest.approx(f64["first_order"], rel=1e-2)
 
 
-def test_pareto_front_is_non_dominated(table):
-    rows = table["variants"]
-
-    def t(v):
-        return v["time_c"] if v["time_c"] is not None else v["time_numpy"]
-
+@pytest.mark.parametrize("backend", ["c", "numpy"])
+def test_pareto_front_of_each_backend_is_non_dominated(table, backend):
+    rows = [v for v in table["variants"] if v[f"time_{backend}"] is not None]
+    time = f"time_{backend}"
     for v in rows:
-        dominated = any(o is not v and t(o) <= t(v) and o["worst_error"] <= v["worst_error"]
-                        and (t(o) < t(v) or o["worst_error"] < v["worst_error"]) for o in rows)
-        assert v["pareto"] == (not dominated), v["name"]
-    assert any(v["pareto"] for v in rows)
+        dominated = any(o is not v and o[time] <= v[time] and o["worst_error"] <= v["worst_error"]
+                        and (o[time] < v[time] or o["worst_error"] < v["worst_error"])
+                        for o in rows)
+        assert v[f"pareto_{backend}"] == (not dominated), v["name"]
+    assert any(v[f"pareto_{backend}"] for v in rows)
+    if backend == "c":          # float32 variants are timed in numpy only
+        assert not any(v["pareto_c"] for v in table["variants"] if v["precision"] == "float32")
+
+
+def crowded_table() -> Tradeoff:
+    """Every default variant with made-up, tightly clustered errors and times."""
+    from symkin.variants import default_variants
+
+    rows = []
+    for k, v in enumerate(default_variants()):
+        rows.append(Row(v, {"C": 10.0 ** (-2 - (k % 7)) * (1 + 0.01 * k)},
+                        time_numpy=(2000 + 13 * k) * 1e-9,
+                        time_c=None if v.precision == "float32" else (400 + 7 * k) * 1e-9,
+                        ops=100 + k))
+    return Tradeoff({"A0": (-0.2, 0.2)}, 25, 0, 1, tuple(pareto(rows)), (), "crowded_bar")
+
+
+def test_plot_lists_every_variant_and_no_labels_overlap(tmp_path):
+    import matplotlib.pyplot as plt
+
+    table = crowded_table()
+    fig = figure(table)
+    renderer = fig.canvas.get_renderer()
+    texts = [t.get_text() for t in fig.texts] + [fig._suptitle.get_text()]
+    listing = "\n".join(texts)
+    for r in table.rows:
+        assert r.variant.name in listing, r.variant.name
+    assert "crowded_bar" in fig._suptitle.get_text() and "A0 in [-0.2, 0.2]" in listing
+    (ax,) = fig.axes
+    (legend,) = fig.legends
+    assert len(legend.get_texts()) == 4
+    boxes = [a.get_window_extent(renderer) for a in ax.texts]
+    assert len(boxes) >= len(table.rows) // 2             # most markers carry their number
+    for i, a in enumerate(boxes):
+        assert not any(a.overlaps(b) for b in boxes[i + 1:])
+    plt.close(fig)
+    path = tmp_path / "t.png"
+    plot(table, str(path))
+    assert path.stat().st_size > 1000
 
 
 def test_tolerance_choice_meets_the_tolerance_on_fresh_inputs(tmp_path, capsys):

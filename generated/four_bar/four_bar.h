@@ -23,11 +23,15 @@ extern const char *const four_bar_hinge_names[FOUR_BAR_N_HINGES];
 
 /*
  * Deviation of the points for one configuration.
- *   inputs: FOUR_BAR_N_INPUTS input hinge angles (radians), in four_bar_input_names order.
+ *   inputs: FOUR_BAR_N_INPUTS input hinge angles (radians, |angle| <= pi: rotations from the
+ *           as-fabricated pose), in four_bar_input_names order.
  *   params: FOUR_BAR_N_PARAMS parameter values, or NULL for the defaults.
  *   level:  0 paper, 1 first_order, 2 exact (only the levels generated: paper, first_order, exact).
  *   out:    per point: rigid x, y, compliant x, y, deviation x, y (6 doubles).
- * Returns 0 on success, 1 cannot assemble, 2 no convergence, 3 bad argument.
+ * Returns 0 on success, 1 cannot assemble (or a plate bent past its limit), 2 no convergence
+ * (or a non-finite result), 3 bad argument (NULL, a level not generated, an input that is not
+ * finite or beyond +-pi, a parameter that is not finite). On any non-zero return every entry of
+ * out is NaN.
  * Pure function: no allocation, no global state, thread-safe.
  */
 int four_bar_evaluate(const double *inputs, const double *params, int level, double *out);

@@ -770,8 +770,28 @@ int stephenson_six_bar_evaluate(const double *inputs, const double *params, int 
     return stephenson_six_bar_evaluate_angles(inputs, params, level, out, NULL);
 }
 
+static int sk_evaluate(const double *inputs, const double *params, int level, double *out,
+                       double *angles);
+
 int stephenson_six_bar_evaluate_angles(const double *inputs, const double *params, int level, double *out,
                     double *angles)
+{
+    int i, status = sk_evaluate(inputs, params, level, out, angles);
+    if (status != 0) {
+        /* no partial result: every output is NaN */
+        for (i = 0; out != NULL && i < 6 * SK_NP; ++i) {
+            out[i] = NAN;
+        }
+        for (i = 0; angles != NULL && i < 2 * SK_M; ++i) {
+            angles[i] = NAN;
+        }
+    }
+    return status;
+}
+
+/* The evaluation; stephenson_six_bar_evaluate_angles turns a failure into NaN outputs. */
+static int sk_evaluate(const double *inputs, const double *params, int level, double *out,
+                       double *angles)
 {
     double theta[SK_M];
     double delta[SK_K1];
@@ -788,7 +808,8 @@ int stephenson_six_bar_evaluate_angles(const double *inputs, const double *param
         return 3;
     }
     for (i = 0; i < STEPHENSON_SIX_BAR_N_INPUTS; ++i) {
-        if (!isfinite(inputs[i])) {
+        /* an input is a plate's rotation from the as-fabricated pose: |angle| <= pi */
+        if (!isfinite(inputs[i]) || !(fabs(inputs[i]) <= 3.141592653589793)) {
             return 3;
         }
     }
@@ -834,6 +855,52 @@ int stephenson_six_bar_evaluate_angles(const double *inputs, const double *param
             return status;
         }
     }
+    /* hinge 1: its plate holds for |theta| < 3.141592653589793 only */
+    if (!(fabs(theta[0]) <= 3.141592653589793)) {
+        return 1;
+    }
+    /* hinge 2: its plate holds for |theta| < 3.141592653589793 only */
+    if (!(fabs(theta[1]) <= 3.141592653589793)) {
+        return 1;
+    }
+    if (!(fabs(theta[1] + delta[0]) <= 3.141592653589793)) {
+        return 1;
+    }
+    /* hinge 3: its plate holds for |theta| < 3.141592653589793 only */
+    if (!(fabs(theta[2]) <= 3.141592653589793)) {
+        return 1;
+    }
+    if (!(fabs(theta[2] + delta[1]) <= 3.141592653589793)) {
+        return 1;
+    }
+    /* hinge 4: its plate holds for |theta| < 3.141592653589793 only */
+    if (!(fabs(theta[3]) <= 3.141592653589793)) {
+        return 1;
+    }
+    if (!(fabs(theta[3] + delta[2]) <= 3.141592653589793)) {
+        return 1;
+    }
+    /* hinge 5: its plate holds for |theta| < 3.141592653589793 only */
+    if (!(fabs(theta[4]) <= 3.141592653589793)) {
+        return 1;
+    }
+    if (!(fabs(theta[4] + delta[3]) <= 3.141592653589793)) {
+        return 1;
+    }
+    /* hinge 6: its plate holds for |theta| < 3.141592653589793 only */
+    if (!(fabs(theta[5]) <= 3.141592653589793)) {
+        return 1;
+    }
+    if (!(fabs(theta[5] + delta[4]) <= 3.141592653589793)) {
+        return 1;
+    }
+    /* hinge 7: its plate holds for |theta| < 3.141592653589793 only */
+    if (!(fabs(theta[6]) <= 3.141592653589793)) {
+        return 1;
+    }
+    if (!(fabs(theta[6] + delta[5]) <= 3.141592653589793)) {
+        return 1;
+    }
     sk_rigid_points(theta, params, rigid);
     if (level == 0) {
         sk_dev_paper(theta, params, dev);
@@ -843,6 +910,11 @@ int stephenson_six_bar_evaluate_angles(const double *inputs, const double *param
     }
     else if (level == 2) {
         sk_dev_exact(theta, delta, params, dev);
+    }
+    for (i = 0; i < 2 * SK_NP; ++i) {
+        if (!isfinite(rigid[i]) || !isfinite(dev[i])) {
+            return 2;               /* a non-finite result is never a success */
+        }
     }
     for (i = 0; i < SK_NP; ++i) {
         out[6 * i + 0] = rigid[2 * i];

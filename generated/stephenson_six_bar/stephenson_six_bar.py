@@ -26,7 +26,7 @@ _N_THETA = 7
 _INPUT_INDEX = (0, )
 _UNKNOWN_INDEX = (1, 2, 3, 4, 5, 6, )
 _N_DYADS = 2
-_LIMITS = ()  # models valid for |theta| < limit
+_LIMITS = ((0, 3.141592653589793), (1, 3.141592653589793), (2, 3.141592653589793), (3, 3.141592653589793), (4, 3.141592653589793), (5, 3.141592653589793), (6, 3.141592653589793), )  # models valid for |theta| < limit
 _NEEDS_LOOPS = True
 _DTYPE = numpy.float64
 _POLISH = 1  # Newton steps after the rigid start: relative accuracy of small angles
@@ -633,7 +633,8 @@ def _solve(a, b, ok):
         bm[..., i] = b[i]
         for j in range(k):
             am[..., i, j] = a[i * k + j]
-    good = ok & numpy.isfinite(am).all(axis=(-1, -2)) & numpy.isfinite(bm).all(axis=-1)
+    # numpy.array: a writable array even for 0-d input, where & gives a numpy.bool scalar
+    good = numpy.array(ok & numpy.isfinite(am).all(axis=(-1, -2)) & numpy.isfinite(bm).all(axis=-1))
     am[~good] = numpy.eye(k)
     bm[~good] = 0.0
     try:
@@ -729,7 +730,7 @@ _DELTA = {'first_order': _first_order, 'exact': _exact}
 _CHUNK = 8192   # elements per block: the temporaries of a block stay in the CPU cache
 
 
-def evaluate(inputs, level="exact", params=None):
+def evaluate(inputs, level='exact', params=None):
     """Deviation of the points at `level` for broadcast input arrays (see the module docstring)."""
     if level not in LEVELS:
         raise ValueError(f"level must be one of {LEVELS}, got {level!r}")
@@ -764,7 +765,8 @@ def _evaluate(arrays, level, p):
     shape = arrays[0].shape
     ok = numpy.ones(shape, dtype=bool)
     for a in arrays:
-        ok &= numpy.isfinite(a)
+        # an input is a plate's rotation from the as-fabricated pose: |angle| <= pi
+        ok &= numpy.isfinite(a) & (numpy.abs(a) <= math.pi)
     x = [numpy.where(ok, a, 0.0) for a in arrays]
     with numpy.errstate(all="ignore"):
         theta, ok = _rigid_angles(x, p, ok)
@@ -772,9 +774,9 @@ def _evaluate(arrays, level, p):
         if _NEEDS_LOOPS and level in _DELTA:
             delta, ok = _DELTA[level](theta, p, ok)
         for i, limit in _LIMITS:
-            ok = ok & (numpy.abs(theta[i]) < limit)
+            ok = ok & (numpy.abs(theta[i]) <= limit)
             if i in _UNKNOWN_INDEX:
-                ok = ok & (numpy.abs(theta[i] + delta[_UNKNOWN_INDEX.index(i)]) < limit)
+                ok = ok & (numpy.abs(theta[i] + delta[_UNKNOWN_INDEX.index(i)]) <= limit)
         rigid = _rigid_points(theta, p)
         if level == 'paper':
             dev = _dev_paper(theta, p)
@@ -782,6 +784,10 @@ def _evaluate(arrays, level, p):
             dev = _dev_first_order(theta, delta, p)
         elif level == 'exact':
             dev = _dev_exact(theta, delta, p)
+    rigid = [numpy.broadcast_to(v, shape) for v in rigid]
+    dev = [numpy.broadcast_to(v, shape) for v in dev]
+    for v in rigid + dev:
+        ok = ok & numpy.isfinite(v)            # a non-finite result is never ok
     compliant = list(theta)
     for j, i in enumerate(_UNKNOWN_INDEX):
         compliant[i] = theta[i] + delta[j]
@@ -792,8 +798,8 @@ def _evaluate(arrays, level, p):
                                                 numpy.nan)
     result = {}
     for n, name in enumerate(POINTS):
-        r = numpy.stack([numpy.broadcast_to(v, shape) for v in rigid[2 * n:2 * n + 2]])
-        d = numpy.stack([numpy.broadcast_to(v, shape) for v in dev[2 * n:2 * n + 2]])
+        r = numpy.stack(rigid[2 * n:2 * n + 2])
+        d = numpy.stack(dev[2 * n:2 * n + 2])
         r = numpy.where(ok, r, numpy.nan).astype(_DTYPE)
         d = numpy.where(ok, d, numpy.nan).astype(_DTYPE)
         result[name] = {"rigid": r, "compliant": r + d, "deviation": d}
