@@ -45,7 +45,6 @@ def peak_rss_mb() -> float:
 def derive_child(kind: str, arg: str) -> None:
     """Runs in a fresh process: prints one JSON line with the derivation's time and memory."""
     t_start = time.perf_counter()
-    import symkin
     from symkin.derive import generate
 
     import symkin.codegen.plan  # noqa: F401 - the emitters' imports are start-up, not derivation
@@ -53,12 +52,8 @@ def derive_child(kind: str, arg: str) -> None:
         importlib.import_module(f"symkin.codegen.backends.{module}")
     rss0 = peak_rss_mb()
     t_import = time.perf_counter() - t_start
-    if kind == "example":
-        mech = symkin.load(ROOT / "examples" / f"{arg}.toml")
-    else:
-        mech = symkin.loads(families.family(kind, int(arg)), f"{kind}_{arg}.toml")
-    s = symkin.structure(mech)
-    paths = [len(s.tree_path(i)) for i in range(1, s.n + 1)]
+    mech = mechanism(kind, arg)
+    stats = sizes_of(mech)
     emit = emitters()
     marks = []
     t0 = time.perf_counter()
@@ -72,22 +67,30 @@ def derive_child(kind: str, arg: str) -> None:
             phases[prev[1]] = t - prev[0]
         prev = (t, msg)
     print(json.dumps({
-        "links": s.n + 1, "hinges": s.m, "loops": s.m - s.n, "inputs": len(mech.inputs),
-        "mean_path": sum(paths) / len(paths), "size": s.m * sum(paths) / len(paths),
-        "emit": emit, "derive_s": total, "import_s": t_import, "phases_s": phases,
+        **stats, "emit": emit, "derive_s": total, "import_s": t_import, "phases_s": phases,
         "without_latex_s": total - sum(v for k, v in phases.items() if "LaTeX" in k),
         "maxrss_mb": rss1, "baseline_rss_mb": rss0,
         "output_kb": sum(len(v) for v in files.values()) / 1024}))
 
 
-def structure_stats(kind: str, arg) -> dict:
-    """Links, hinges, loops and path sizes of one case (for cases that were not run)."""
+def mechanism(kind: str, arg):
+    """The mechanism of one case: an example by name, or a family member by size."""
     import symkin
 
     if kind == "example":
-        mech = symkin.load(ROOT / "examples" / f"{arg}.toml")
-    else:
-        mech = symkin.loads(families.family(kind, int(arg)), f"{kind}_{arg}.toml")
+        return symkin.load(ROOT / "examples" / f"{arg}.toml")
+    return symkin.loads(families.family(kind, int(arg)), f"{kind}_{arg}.toml")
+
+
+def structure_stats(kind: str, arg) -> dict:
+    """Links, hinges, loops and path sizes of one case (for the cases not run)."""
+    return sizes_of(mechanism(kind, arg))
+
+
+def sizes_of(mech) -> dict:
+    """Links, hinges, loops, inputs and path sizes of a mechanism."""
+    import symkin
+
     s = symkin.structure(mech)
     paths = [len(s.tree_path(i)) for i in range(1, s.n + 1)]
     return {"links": s.n + 1, "hinges": s.m, "loops": s.m - s.n, "inputs": len(mech.inputs),

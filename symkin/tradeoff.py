@@ -64,7 +64,7 @@ class Tradeoff:
 
     def as_json(self) -> dict:
         return {
-            "reference": "mpmath, 30 digits, exact level, the file's hinge models",
+            "reference": f"mpmath, 30 digits, {REFERENCE.name} level, the file's hinge models",
             "ranges": {k: list(v) for k, v in self.ranges.items()},
             "samples": self.samples, "skipped": self.skipped, "zero_deviation": self.zero,
             "inputs": list(self.inputs),
