@@ -8,17 +8,23 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from .errors import AssemblyError, InputError, SymkinError
 from .levels import DEFAULT
 from .mechanism import Mechanism, load, loads
 from .structure import Structure, build as structure
 
+if TYPE_CHECKING:                     # the heavy modules load on first use
+    from .analysis import Analysis
+    from .evaluation import Evaluation
+
 __version__ = "0.1.0"
 
 
-def analyze(mechanism: Mechanism | str | Path, points: list[str] | None = None):
+def analyze(mechanism: Mechanism | str | Path, points: list[str] | None = None) -> Analysis:
     """The :class:`symkin.analysis.Analysis` of a mechanism (or of the file at that path)."""
     from .analysis import Analysis
 
@@ -26,8 +32,9 @@ def analyze(mechanism: Mechanism | str | Path, points: list[str] | None = None):
     return Analysis(structure(mech), points)
 
 
-def evaluate(analysis, inputs, level: str = DEFAULT, params=None, backend: str = "sympy",
-             dps: int = 40):
+def evaluate(analysis: Analysis, inputs: Mapping[str, object], level: str = DEFAULT,
+             params: Mapping[str, object] | None = None, backend: str = "sympy",
+             dps: int = 40) -> Evaluation:
     """One configuration of an analysis (:func:`symkin.evaluation.evaluate`): the derivation with
     mpmath at `dps` digits (backend sympy) or the generated numpy / C evaluators."""
     from .evaluation import evaluate as run

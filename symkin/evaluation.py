@@ -78,7 +78,7 @@ def evaluate(analysis: Analysis, inputs: Mapping[str, object], level: str = leve
              dps: int = 40) -> Evaluation:
     """Evaluate one configuration at `level` through `backend` (sympy: mpmath at `dps` digits)."""
     if backend == "sympy":
-        return _solver(analysis).evaluate(inputs, level, params, dps)
+        return _mpmath_evaluator(analysis).evaluate(inputs, level, params, dps)
     if backend in ("numpy", "c"):
         return _generated(analysis, inputs, level, params, backend)
     raise InputError(f"unknown backend '{backend}'", entry="--backend",
@@ -202,7 +202,7 @@ def check_fabricated_pose(analysis: Analysis) -> None:
 _EVALUATORS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-def _solver(analysis: Analysis) -> _Mpmath:
+def _mpmath_evaluator(analysis: Analysis) -> _Mpmath:
     """The mpmath evaluator of `analysis`, kept as long as the analysis (its lambdas are cached)."""
     solver = _EVALUATORS.get(analysis)
     if solver is None:
@@ -461,7 +461,7 @@ def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
         level=level, backend=backend, inputs=dict(zip(names, x)),
         angles_rigid={h: rigid[h] for h in sorted(rigid, key=order.get)},
         angles_compliant={h: compliant[h] for h in sorted(compliant, key=order.get)},
-        points=points, dyads=_solver(analysis).dyad_states(inputs, params),
+        points=points, dyads=_mpmath_evaluator(analysis).dyad_states(inputs, params),
         params=parameter_floats(analysis.mechanism, pvals), overrides=tuple(params or ()))
 
 
