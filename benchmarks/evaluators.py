@@ -62,7 +62,7 @@ def bench_example(example: str, sizes: Sizes, sf: dict, workroot: Path) -> dict:
     _, _, fails = cb.run(xs, EXACT)
     assert fails == 0, f"{example}: C evaluator failed on {fails} of the sample points"
     for lv in LEVELS:
-        if lv.closed_form:
+        if lv.generated:
             res["per_point_s"][f"c_{lv.name}"] = cb.per_point(xs, lv.code, sizes.c_time)
     t_c = res["per_point_s"]["c"] = res["per_point_s"]["c_exact"]
 

@@ -63,10 +63,10 @@ def _eval(args: argparse.Namespace) -> str:
 
 def _derive(args: argparse.Namespace) -> str:
     from .derive import EMITTERS, derive, parse_list
-    from .levels import NAMES
+    from .levels import GENERATED
 
     emit = parse_list(args.emit, EMITTERS, "--emit") or list(EMITTERS)
-    levels = parse_list(args.levels, NAMES, "--levels")
+    levels = parse_list(args.levels, GENERATED, "--levels")
     points = parse_list(args.points, None, "--points")
 
     def progress(message: str) -> None:

@@ -415,6 +415,9 @@ def _wrap(angle):
 def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
                params: Mapping[str, object] | None, backend: str) -> Evaluation:
     """One configuration through the generated `backend` ('numpy' or 'c')."""
+    if not levels.get(level).generated:
+        raise InputError(f"level '{level}' has no generated evaluator", entry="--backend",
+                         hint="evaluate it with --backend sympy")
     from .codegen import runtime
     from .codegen.backends.c import backend as c_backend
     from .codegen.backends.numpy import backend as numpy_backend

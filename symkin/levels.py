@@ -24,7 +24,7 @@ class Level:
     needs_delta: bool               # compliant angles differ from rigid ones: the loops are solved
     equation: str = ""              # the paper's equation it restates, e.g. "(4.8)"
     needs_stiffness: bool = False   # needs E, thickness and width of every compliant plate
-    closed_form: bool = True        # generated C and numpy exist; else mpmath only
+    generated: bool = True          # the generated C and numpy hold it; else mpmath only
 
     @property
     def label(self) -> str:
@@ -40,6 +40,8 @@ LEVELS: tuple[Level, ...] = (
 )
 
 NAMES: tuple[str, ...] = tuple(lv.name for lv in LEVELS)
+#: The levels the generated C and numpy evaluators can hold (`derive --levels`).
+GENERATED: tuple[str, ...] = tuple(lv.name for lv in LEVELS if lv.generated)
 #: The level `eval` and the generated `evaluate` use when none is given.
 DEFAULT = "exact"
 

@@ -74,7 +74,8 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
     an, kin = analysis, analysis.kin
     mech = an.mechanism
     names = tuple(p.name for p in an.points if points is None or p.name in points)
-    levels = tuple(lv for lv in level_table.LEVELS if levels is None or lv.name in levels)
+    levels = tuple(lv for lv in level_table.LEVELS
+                   if lv.generated and (levels is None or lv.name in levels))
     inputs = Argument("inputs", tuple(kin.theta[a] for a in kin.inputs))
     params = Argument("params", an.params)
     theta = Argument("theta", an.thetas)
