@@ -19,7 +19,6 @@ import numpy as _np
 import sympy as _sp
 
 from . import special as _special
-from .special import DomainError
 
 #: The hinge angle θ and the plate length l, the variables of every model's f(θ), g(θ) (and of
 #: `expr` models' expressions).
