@@ -155,7 +155,8 @@ def parser() -> argparse.ArgumentParser:
     de.add_argument("--tolerance", type=float, metavar="TOL",
                     help="derive the cheapest variant whose worst relative error meets TOL")
     de.add_argument("--range", action="append", metavar="H=LO:HI",
-                    help="input range for --tolerance (default -0.2:0.2 rad)")
+                    help="input range of --tolerance (default -0.2:0.2 rad) and of the report's "
+                         "deviation plots (default -0.3:0.3 rad)")
     de.set_defaults(run=_derive)
     tr = command("tradeoff", "speed and accuracy of every variant over a range")
     tr.add_argument("file", metavar="FILE")

@@ -10,7 +10,7 @@ from __future__ import annotations
 import os
 import shutil
 import tempfile
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 from .analysis import Analysis
@@ -59,10 +59,12 @@ def parse_length(text: str, option: str = "--columnwidth") -> float:
 def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[str] | None = None,
              levels: Sequence[str] | None = None, appendix: bool = False,
              progress: Callable[[str], None] | None = None, variant=None,
-             notes: Sequence[str] = (), column_width: float | None = None) -> dict[str, bytes]:
+             notes: Sequence[str] = (), column_width: float | None = None,
+             spans: Mapping[str, tuple[float, float]] | None = None) -> dict[str, bytes]:
     """File name -> content of every requested artifact (nothing is written). A `variant`
     (symkin.variants.Variant) derives that cheaper variant instead of the file's models;
-    `column_width` (points) lays the LaTeX report out for that column."""
+    `column_width` (points) lays the LaTeX report out for that column and `spans` (input ->
+    (lo, hi) rad) sets its deviation plots' ranges."""
     from .codegen import runtime
     from .codegen.backends.c import backend as c_backend
     from .codegen.backends.numpy import backend as numpy_backend
@@ -103,7 +105,7 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
             numpy_text = numpy_text or numpy_backend.emit(p, source)
             evaluator = runtime.import_numpy_module(numpy_text, mech.name)
         files.update(report.emit(with_derivation(p, analysis), source, appendix, evaluator,
-                                 column_width or report.COLUMN_WIDTH))
+                                 column_width or report.COLUMN_WIDTH, spans))
     return files
 
 
@@ -142,7 +144,7 @@ def derive(path: str | Path, out_dir: str | Path = ".", emit: Sequence[str] = EM
     """Load, generate and write; returns the written paths. With a `tolerance`, the cheapest
     variant whose measured worst error over `ranges` meets it is derived instead."""
     mech = load(path)
-    variant, notes = None, []
+    variant, notes, spans = None, [], None
     if tolerance is not None:
         from . import tradeoff
 
@@ -159,10 +161,15 @@ def derive(path: str | Path, out_dir: str | Path = ".", emit: Sequence[str] = EM
                   for p, e in row.errors.items() if points is None or p in points]
         say(notes[0])
     elif ranges:
-        raise InputError("--range needs --tolerance", entry="--range",
-                         hint="add --tolerance, e.g. --tolerance 1e-6")
+        from . import tradeoff
+
+        if "latex" not in emit:
+            raise InputError("--range sets the ranges of --tolerance and of the report's "
+                             "deviation plots; neither is asked for", entry="--range",
+                             hint="add --tolerance TOL or --emit latex, or drop --range")
+        spans = tradeoff.parse_ranges(ranges, mech.inputs, mech.path, default=None)
     files = generate(mech, emit, points, levels, appendix, progress, variant, notes,
-                     column_width)
+                     column_width, spans)
     try:
         return write_atomically(files, Path(out_dir))
     except OSError as exc:

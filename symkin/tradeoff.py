@@ -77,10 +77,12 @@ class Tradeoff:
         }
 
 
-def parse_ranges(items: Sequence[str] | None, inputs: Sequence[str],
-                 file: str) -> dict[str, tuple[float, float]]:
-    """H=LO:HI options (expressions allowed), every input defaulting to DEFAULT_RANGE."""
-    ranges = {name: DEFAULT_RANGE for name in inputs}
+def parse_ranges(items: Sequence[str] | None, inputs: Sequence[str], file: str,
+                 default: tuple[float, float] | None = DEFAULT_RANGE
+                 ) -> dict[str, tuple[float, float]]:
+    """H=LO:HI options (expressions allowed), every other input at `default` (left out when
+    `default` is None)."""
+    ranges = {name: default for name in inputs}
     for item in items or ():
         name, sep, span = item.partition("=")
         lo, colon, hi = span.partition(":")
@@ -92,7 +94,7 @@ def parse_ranges(items: Sequence[str] | None, inputs: Sequence[str],
             raise InputError(f"empty range {a}:{b}", file=file, entry="--range",
                              hint="give LO < HI")
         ranges[name.strip()] = (a, b)
-    return ranges
+    return {name: span for name, span in ranges.items() if span is not None}
 
 
 def sample(ranges: Mapping[str, tuple[float, float]], n: int) -> list[dict[str, float]]:

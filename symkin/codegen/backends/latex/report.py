@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping, Sequence
 from functools import cache
 from types import ModuleType
 
@@ -192,6 +193,8 @@ class Report:
             "input_labels": list(self.d.inputs),
             "point_names": [escape_latex(p) for p in self.plan.points],
             "levels": [lv.title for lv in self.plan.levels],
+            "notes": [escape_latex(n.strip()) for n in self.plan.notes],
+            "four_bar": s.n == 3 and s.m == 4,
             "relabeled": s.relabeled,
             "links": [{"label": i, "name": self.link_name(i),
                        "ground": i == 0} for i in range(s.n + 1)],
@@ -636,67 +639,89 @@ def pose_data(report: Report) -> PoseData:
     return PoseData(links, 0, tuple(plates), points)
 
 
-def sweep(report: Report, numpy_module) -> tuple[Sweep, tuple[float, float], dict]:
-    """|ΔR| of the points over every input = t, |t| <= SWEEP_RANGE, evaluated with numpy."""
-    t = np.linspace(-SWEEP_RANGE, SWEEP_RANGE, SWEEP_SAMPLES)
-    inputs = {name: t for name in numpy_module.INPUTS}
-    magnitude: dict[str, dict[str, np.ndarray]] = {p: {} for p in report.plan.points}
-    deviation: dict[str, dict[str, np.ndarray]] = {p: {} for p in report.plan.points}
-    ok = np.ones(t.shape, dtype=bool)
+def sweep_spans(inputs: Sequence[str], given: Mapping[str, tuple[float, float]] | None = None
+                ) -> dict[str, tuple[float, float]]:
+    """Each input's plotted range: the `given` ones (derive --range), else ±SWEEP_RANGE."""
+    spans = {h: (-SWEEP_RANGE, SWEEP_RANGE) for h in inputs}
+    spans.update({h: (float(lo), float(hi)) for h, (lo, hi) in (given or {}).items()})
+    return spans
+
+
+def sweep(report: Report, numpy_module, spans: Mapping[str, tuple[float, float]]
+          ) -> tuple[list[tuple[str, Sweep, tuple[float, float]]], dict]:
+    """|ΔR| of the points at every level with each input in turn over its span (the others held
+    at the middle of theirs), evaluated with the generated numpy module.
+
+    Returns per input its sweep and the plot's clipped x range, and the report's summary (the
+    largest deviation per point and level over all sweeps, where it occurs, and the largest
+    distance of each level from the exact one relative to the largest exact deviation)."""
     names = [lv.name for lv in report.plan.levels]
-    for lv in names:
-        result = numpy_module.evaluate(inputs, level=lv)
-        ok &= np.asarray(result["ok"], dtype=bool)
-        for p in report.plan.points:
-            d = np.asarray(result["points"][p]["deviation"], dtype=float)
-            deviation[p][lv] = d
-    for p in report.plan.points:
+    held = {h: 0.5 * (lo + hi) for h, (lo, hi) in spans.items()}
+    single = len(spans) == 1
+    runs: list[tuple[str, Sweep, tuple[float, float]]] = []
+    summary: dict = {"samples": 0, "failed": 0, "spans": [], "rows": []}
+    for h, (lo, hi) in spans.items():
+        t = np.linspace(lo, hi, SWEEP_SAMPLES)
+        inputs = {n: (t if n == h else np.full_like(t, held[n])) for n in numpy_module.INPUTS}
+        magnitude: dict[str, dict[str, np.ndarray]] = {p: {} for p in report.plan.points}
+        deviation: dict[str, dict[str, np.ndarray]] = {p: {} for p in report.plan.points}
+        ok = np.ones(t.shape, dtype=bool)
         for lv in names:
-            d = np.where(ok, deviation[p][lv], np.nan)
-            deviation[p][lv] = d
-            magnitude[p][lv] = np.hypot(d[0], d[1])
-    # clipped to the assembling samples, with a margin (10 % of the range) showing where
-    # assembly stops
-    margin = 0.1 * SWEEP_RANGE
-    if ok.any():
-        idx = np.flatnonzero(ok)
-        lo = -SWEEP_RANGE if idx[0] == 0 else max(-SWEEP_RANGE, t[idx[0]] - margin)
-        hi = SWEEP_RANGE if idx[-1] == len(t) - 1 else min(SWEEP_RANGE, t[idx[-1]] + margin)
-    else:
-        lo, hi = -SWEEP_RANGE, SWEEP_RANGE
-    summary = {"samples": int(len(t)), "failed": int((~ok).sum()),
-               "range": f"{SWEEP_RANGE:g}", "lo": f"{lo:.3f}", "hi": f"{hi:.3f}",
-               "rows": []}
+            result = numpy_module.evaluate(inputs, level=lv)
+            ok &= np.asarray(result["ok"], dtype=bool)
+            for p in report.plan.points:
+                deviation[p][lv] = np.asarray(result["points"][p]["deviation"], dtype=float)
+        for p in report.plan.points:
+            for lv in names:
+                deviation[p][lv] = np.where(ok, deviation[p][lv], np.nan)
+                magnitude[p][lv] = np.hypot(*deviation[p][lv])
+        # clipped to the assembling samples, with a margin (10 % of the span) showing where
+        # assembly stops
+        margin = 0.1 * (hi - lo)
+        a, b = lo, hi
+        if ok.any():
+            idx = np.flatnonzero(ok)
+            a = lo if idx[0] == 0 else max(lo, t[idx[0]] - margin)
+            b = hi if idx[-1] == len(t) - 1 else min(hi, t[idx[-1]] + margin)
+        runs.append((h, Sweep(t, ok, magnitude, deviation), (a, b)))
+        summary["samples"] += len(t)
+        summary["failed"] += int((~ok).sum())
+        summary["spans"].append({"input": escape_latex(h), "lo": f"{lo:g}", "hi": f"{hi:g}",
+                                 "held": f"{held[h]:g}", "clip": f"[{a:.3f}, {b:.3f}]",
+                                 "clipped": bool(a > lo or b < hi)})
     for p in report.plan.points:
-        exact = deviation[p].get("exact")
         for level in report.plan.levels:
             lv = level.name
-            mag = magnitude[p][lv]
-            if np.isfinite(mag).any():
-                k = int(np.nanargmax(mag))
-                peak, at = float(mag[k]), float(t[k])
-            else:
-                peak, at = float("nan"), float("nan")
-            rel = None
-            if exact is not None and lv != "exact":
-                diff = np.hypot(*(deviation[p][lv] - exact))
-                ref = np.nanmax(np.hypot(*exact)) if np.isfinite(exact).any() else float("nan")
-                if np.isfinite(diff).any() and ref > 0:
-                    rel = float(np.nanmax(diff) / ref)
+            peak, at, diff, ref = float("nan"), "", float("nan"), float("nan")
+            for h, data, _ in runs:
+                mag = data.magnitude[p][lv]
+                if np.isfinite(mag).any() and not np.nanmax(mag) <= peak:
+                    k = int(np.nanargmax(mag))
+                    peak = float(mag[k])
+                    at = f"${data.t[k]:+.3f}$" if single else \
+                        f"{escape_latex(h)} ${data.t[k]:+.3f}$"
+                exact = data.deviation[p].get("exact")
+                if exact is not None and lv != "exact" and np.isfinite(exact).any():
+                    d = np.hypot(*(data.deviation[p][lv] - exact))
+                    diff = np.nanmax([diff, np.nanmax(d)])
+                    ref = np.nanmax([ref, np.nanmax(np.hypot(*exact))])
+            rel = float(diff / ref) if np.isfinite(diff) and ref > 0 else None
             summary["rows"].append({"point": escape_latex(p), "level": level.title,
-                                    "peak": sci(peak), "at": f"{at:+.3f}",
+                                    "peak": sci(peak), "at": at or r"\text{--}",
                                     "rel": sci(rel, 2) if rel is not None else r"\text{--}"})
-    return Sweep(t, ok, magnitude, deviation), (lo, hi), summary
+    return runs, summary
 
 
 # -- emit ----------------------------------------------------------------------------------------
 
 def emit(plan: Plan, source: str, appendix: bool = False,
          evaluator: ModuleType | None = None,
-         column_width: float = COLUMN_WIDTH) -> dict[str, bytes]:
+         column_width: float = COLUMN_WIDTH,
+         spans: Mapping[str, tuple[float, float]] | None = None) -> dict[str, bytes]:
     """`<name>.tex` (standalone, or the body alone with `appendix`) and its figure PDFs, laid out
-    for a column of `column_width` points; the deviation plot is evaluated with `evaluator`, the
-    plan's generated numpy module (needed when the plan has points)."""
+    for a column of `column_width` points; the deviation plots are evaluated with `evaluator`,
+    the plan's generated numpy module (needed when the plan has points), over `spans` (input ->
+    (lo, hi) in rad; ±SWEEP_RANGE for inputs not given)."""
     report = Report(plan, source, column_width)
     name = report.mech.name
     ctx = report.context(appendix)
@@ -721,24 +746,26 @@ def emit(plan: Plan, source: str, appendix: bool = False,
     ctx["table_width"] = f"{min(0.58, 0.96 - float(ctx['graph_width'])):.2f}"
     ctx["deviation_figures"] = []
     ctx["sweep"] = None
-    if plan.points:
+    if plan.points and report.mech.inputs:
         if evaluator is None:
             raise ValueError("the deviation plot needs the plan's generated numpy module")
-        data, xlim, summary = sweep(report, evaluator)
-        inputs = report.mech.inputs
-        if len(inputs) == 1:
-            xlabel = f"input θ of {plain_name(inputs[0])} (rad)"
-        else:
-            xlabel = "t (rad): every input angle = t"
+        runs, summary = sweep(report, evaluator, sweep_spans(report.mech.inputs, spans))
+        single = len(runs) == 1
         points = list(plan.points)
-        for k, chunk in enumerate(_chunks(points, 3)):
-            fname = f"{name}-deviation.pdf" if k == 0 else f"{name}-deviation-{k + 1}.pdf"
-            files[fname] = deviation_figure(data, chunk, plan.levels, plain_name, xlim, xlabel)
-            ctx["deviation_figures"].append({"file": fname,
-                                             "points": [escape_latex(p) for p in chunk],
-                                             "compare": differs(data, chunk, plan.levels)})
-        summary["single_input"] = len(inputs) == 1
-        summary["inputs"] = [escape_latex(n) for n in inputs]
+        for h, data, xlim in runs:
+            xlabel = f"input θ of {plain_name(h)} (rad)"
+            if not single:
+                xlabel += ", the other inputs held"
+            for chunk in _chunks(points, 3):
+                k = len(ctx["deviation_figures"])
+                fname = f"{name}-deviation.pdf" if k == 0 else f"{name}-deviation-{k + 1}.pdf"
+                files[fname] = deviation_figure(data, chunk, plan.levels, plain_name, xlim,
+                                                xlabel)
+                ctx["deviation_figures"].append({
+                    "file": fname, "points": [escape_latex(p) for p in chunk],
+                    "input": None if single else escape_latex(h),
+                    "compare": differs(data, chunk, plan.levels)})
+        summary["single_input"] = single
         ctx["sweep"] = summary
     body = environment().get_template("latex/body.tex.j2").render(**ctx)
     if appendix:
