@@ -24,7 +24,7 @@ FLOORS: tuple[tuple[str, ...], ...] = (
     ("kinematics", "reports"),
     ("rigid", "loop_equations"),
     ("analysis",),
-    ("variants",),
+    ("variants", "sensitivity"),
     # code generation: the plan, then each backend's printer and kernels, then the backends
     ("codegen.derivation", "codegen.plan"),
     ("codegen.backends.c.printer", "codegen.backends.c.kernels",
