@@ -19,6 +19,7 @@ from .structure import Structure, build as structure
 
 if TYPE_CHECKING:                     # the heavy modules load on first use
     from .analysis import Analysis
+    from .compiled import Compiled
     from .evaluation import Evaluation
 
 __version__ = "0.1.0"
@@ -42,5 +43,16 @@ def evaluate(analysis: Analysis, inputs: Mapping[str, object], level: str = DEFA
     return run(analysis, inputs, level, params, backend, dps)
 
 
+def compile(mechanism: Mechanism | Analysis | str | Path, backend: str = "c",  # noqa: A001
+            points: list[str] | None = None, levels: list[str] | None = None,
+            sensitivity: bool = True) -> Compiled:
+    """The generated evaluator of a mechanism, in memory, no files left behind
+    (:func:`symkin.compiled.compile`): `evaluate`, `sensitivity` and `sensitivity_full` on
+    arrays of inputs, one C call each."""
+    from .compiled import compile as build_evaluator
+
+    return build_evaluator(mechanism, backend, points, levels, sensitivity)
+
+
 __all__ = ["AssemblyError", "InputError", "Mechanism", "Structure", "SymkinError", "analyze",
-           "evaluate", "load", "loads", "structure", "__version__"]
+           "compile", "evaluate", "load", "loads", "structure", "__version__"]

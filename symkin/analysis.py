@@ -116,22 +116,27 @@ class Analysis:
     # with J = Rot(π/2) and φ_i = Σ s_a θ_a, δφ_i = Σ s_a δ_a over the direct path of link i.
     # Their partial derivatives by a hinge angle θ_a or a difference δ_a follow term by term
     # (below), stay free of cancellation (an O(l) quantity has O(l) derivatives written as such)
-    # and cost no symbolic differentiation of large expressions.
+    # and cost no symbolic differentiation of large expressions; by a parameter p, only the
+    # constant vectors U_i and the plates' Δz_b are differentiated, each a small expression.
 
     def chain_partials(self, weights: dict[int, V.Vec], plates: dict[int, int], form: str,
-                       wrt: str, columns: Sequence[int]) -> list[V.Vec]:
-        """∂X/∂θ_a (wrt 'theta') or ∂X/∂δ_a (wrt 'delta') for every hinge a of `columns`, X the
-        quantity of `form` with link vectors `weights` and plate coefficients `plates`."""
+                       wrt: str, columns: Sequence, relative: bool = False) -> list[V.Vec]:
+        """∂X/∂θ_a (wrt 'theta'), ∂X/∂δ_a (wrt 'delta') for every hinge a of `columns`, or
+        ∂X/∂p (wrt 'param') for every parameter symbol p of `columns`, X the quantity of `form`
+        with link vectors `weights` and plate coefficients `plates` (`relative`: the rigid form
+        is Σ (Rot(φ_i) - I) U_i, the closure relative to the as-fabricated pose)."""
         kin, s = self.kin, self.structure
         exact = form == "exact"
         col = {a: k for k, a in enumerate(columns)}
         out: list[list[sp.Expr]] = [[sp.Integer(0), sp.Integer(0)] for _ in columns]
 
-        def add(a: int, vec: V.Vec) -> None:
+        def add(a, vec: V.Vec) -> None:
             out[col[a]][0] += vec[0]
             out[col[a]][1] += vec[1]
 
-        if form != "paper":
+        if wrt == "param":
+            self._parameter_partials(weights, plates, form, columns, relative, add)
+        elif form != "paper":
             for i, w in weights.items():
                 hits = [a for a in s.tree_path(i) if a in col]
                 if not hits:
@@ -146,7 +151,7 @@ class Analysis:
                     d = V.rot(kin.phi(i), V.perp(V.rot_minus_identity(self.delta_phi(i), w)))
                 for a in hits:
                     add(a, V.scale(kin.hinges[a].sign, d))
-        if form != "rigid" and (wrt == "theta" or exact):
+        if form != "rigid" and (wrt == "theta" or (exact and wrt == "delta")):
             angles = self.compliant_angles() if exact else kin.theta
             for b, coeff in plates.items():
                 h = kin.hinges[b]
@@ -162,7 +167,39 @@ class Analysis:
                     add(b, V.scale(coeff * h.sign, V.rot(phi_p, rate)))
         return [(x, y) for x, y in out]
 
-    def closure_partials(self, form: str, wrt: str, columns: Sequence[int]) -> sp.Matrix:
+    def _parameter_partials(self, weights: dict[int, V.Vec], plates: dict[int, int], form: str,
+                            params: Sequence[sp.Symbol], relative: bool, add) -> None:
+        """chain_partials by the parameters: the link terms are linear in U_i, so they take
+        ∂U_i/∂p in place of U_i; each plate contributes ∂Δz_b/∂p."""
+        kin, exact = self.kin, form == "exact"
+        for i, w in weights.items():
+            free = sp.sympify(w[0]).free_symbols | sp.sympify(w[1]).free_symbols
+            for p in params:
+                if p not in free:
+                    continue
+                dw = (sp.diff(w[0], p), sp.diff(w[1], p))
+                if form == "rigid":
+                    d = V.rot_minus_identity(kin.phi(i), dw) if relative else V.rot(kin.phi(i), dw)
+                elif form == "first_order":
+                    d = V.scale(self.delta_phi(i), V.rot(kin.phi(i), V.perp(dw)))
+                elif exact:
+                    d = V.rot(kin.phi(i), V.rot_minus_identity(self.delta_phi(i), dw))
+                else:
+                    continue
+                add(p, d)
+        if form == "rigid":
+            return
+        angles = self.compliant_angles() if exact else kin.theta
+        for b, coeff in plates.items():
+            h = kin.hinges[b]
+            phi_p = kin.phi(h.P) + (self.delta_phi(h.P) if exact else 0)
+            dz = h.delta_z(angles[b], phi_p)
+            free = dz[0].free_symbols | dz[1].free_symbols
+            for p in params:
+                if p in free:
+                    add(p, V.scale(coeff, (sp.diff(dz[0], p), sp.diff(dz[1], p))))
+
+    def closure_partials(self, form: str, wrt: str, columns: Sequence) -> sp.Matrix:
         """Partial derivatives of the loop closure of `form` (rigid: the rigid closure relative
         to the as-fabricated pose; first_order: A δ + r; exact: the residual F) by θ_a or δ_a,
         a in `columns`: an angular row (5.1), then x, y rows (5.3) per loop."""
@@ -172,14 +209,15 @@ class Analysis:
             loop = s.loops[c - s.n - 1]
             # (5.1) is linear: Σ Φ_cb s_b θ_b (rigid) or Σ Φ_cb s_b δ_b (the others)
             angular = [sp.Integer(int(loop[a - 1]) * kin.hinges[a].sign)
-                       if (wrt == "delta") != (form == "rigid") else sp.Integer(0)
-                       for a in columns]
+                       if wrt != "param" and (wrt == "delta") != (form == "rigid")
+                       else sp.Integer(0) for a in columns]
             plates = {b: int(loop[b - 1]) for b in range(1, s.m + 1) if loop[b - 1]}
-            vecs = self.chain_partials(kin.loop_weights(c), plates, form, wrt, columns)
+            vecs = self.chain_partials(kin.loop_weights(c), plates, form, wrt, columns,
+                                       relative=True)
             rows.extend([angular, [v[0] for v in vecs], [v[1] for v in vecs]])
         return sp.Matrix(rows) if rows else sp.zeros(0, len(columns))
 
-    def point_partials(self, name: str, form: str, wrt: str, columns: Sequence[int]) -> sp.Matrix:
+    def point_partials(self, name: str, form: str, wrt: str, columns: Sequence) -> sp.Matrix:
         """2 × len(columns): partial derivatives of the named point's rigid position (form
         rigid) or of its deviation at the level `form` by θ_a or δ_a, a in `columns`."""
         point = self.mechanism.point(name)

@@ -561,8 +561,10 @@ def _wrap(angle):
 # -- the numpy and c backends: the generated evaluators --------------------------------------------
 
 def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
-               params: Mapping[str, object] | None, backend: str) -> Evaluation:
-    """One configuration through the generated `backend` ('numpy' or 'c')."""
+               params: Mapping[str, object] | None, backend: str,
+               sensitivity: bool = False) -> Evaluation:
+    """One configuration through the generated `backend` ('numpy' or 'c'); with `sensitivity`,
+    its generated sensitivity function too."""
     if not levels.get(level).generated:
         raise InputError(f"level '{level}' has no generated evaluator", entry="--backend",
                          hint="evaluate it with --backend sympy")
@@ -577,16 +579,27 @@ def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
     x = [float(sp.N(given[a], 20)) for a in kin.inputs]
     pvals = parameter_values(analysis.mechanism, params)
     pfloat = [float(sp.N(pvals[s], 20)) for s in analysis.params]
-    p = plan(analysis)
+    p = plan(analysis, sensitivity=sensitivity)
     source = analysis.mechanism.path
     hinges = [kin.hinges[a].name for a in sorted(kin.hinges)]
+    pnames = [q.name for q in analysis.mechanism.parameters]
+    sens = None
     if backend == "numpy":
         module = runtime.import_numpy_module(numpy_backend.emit(p, source),
                                              analysis.mechanism.name)
-        res = module.evaluate(dict(zip(names, x)), level,
-                              {q.name: v for q, v in zip(analysis.mechanism.parameters, pfloat)})
+        call = module.sensitivity_full if sensitivity else module.evaluate
+        res = call(dict(zip(names, x)), level, dict(zip(pnames, pfloat)))
         if not bool(res["ok"]):
-            _explain(analysis, inputs, level, params)
+            _explain(analysis, inputs, level, params, sensitivity)
+        if sensitivity:
+            def cols(kind: str, point: str) -> list:
+                table = res[kind][point]
+                return [table["params"][q] for q in pnames] + \
+                    [table["inputs"][h] for h in names]
+
+            sens = Sensitivity.from_columns(
+                p.points, pnames, names, [cols("deviation", n) for n in p.points],
+                [cols("rigid", n) for n in p.points])
         points = {n: PointResult(*(tuple(float(v) for v in res["points"][n][key])
                                    for key in ("rigid", "compliant", "deviation")))
                   for n in p.points}
@@ -600,8 +613,12 @@ def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
         status, out, angles = lib.evaluate(x, pfloat, levels.get(level).code)
         if status == 3:
             raise InputError("the C evaluator rejected the arguments", entry="--input")
+        if status == 0 and sensitivity:
+            rows = lib.sensitivity_rows([x], pfloat, levels.get(level).code)
+            status = int(rows[0][0])
+            sens = Sensitivity.from_columns(p.points, pnames, names, rows[2][0], rows[3][0])
         if status:
-            _explain(analysis, inputs, level, params)
+            _explain(analysis, inputs, level, params, sensitivity)
         points = {n: PointResult((out[6 * i], out[6 * i + 1]), (out[6 * i + 2], out[6 * i + 3]),
                                  (out[6 * i + 4], out[6 * i + 5])) for i, n in enumerate(p.points)}
         m = len(hinges)
@@ -613,12 +630,13 @@ def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
         angles_rigid={h: rigid[h] for h in sorted(rigid, key=order.get)},
         angles_compliant={h: compliant[h] for h in sorted(compliant, key=order.get)},
         points=points, dyads=_mpmath_evaluator(analysis).dyad_states(inputs, params),
-        params=parameter_floats(analysis.mechanism, pvals), overrides=tuple(params or ()))
+        params=parameter_floats(analysis.mechanism, pvals), overrides=tuple(params or ()),
+        sensitivity=sens)
 
 
-def _explain(analysis: Analysis, inputs, level, params) -> None:
+def _explain(analysis: Analysis, inputs, level, params, sensitivity: bool = False) -> None:
     """Raise the sympy backend's error for a configuration a generated evaluator refused."""
-    evaluate(analysis, inputs, level, params)
+    evaluate(analysis, inputs, level, params, sensitivity=sensitivity)
     raise AssemblyError(f"{analysis.mechanism.path}: the generated evaluator could not solve this "
                         "configuration (no convergence in float64), although the 40-digit "
                         "derivation can")

@@ -71,14 +71,15 @@ class Sensitivities:
         #: v: the parameters in file order, then the input angles in input order
         self.variables = self.params + self.inputs
 
-    def _by_parameters(self, exprs: Sequence[sp.Expr]) -> sp.Matrix:
-        """len(exprs) × n_params: ∂e/∂p by sympy (parameters enter geometry and models)."""
-        return sp.Matrix(len(exprs), len(self.params),
-                         lambda i, k: sp.diff(exprs[i], self.params[k]))
+    def _closure(self, an: Analysis, form: str) -> sp.Matrix:
+        """∂E/∂v of the closure of `form`: by the parameters, then by the inputs."""
+        return an.closure_partials(form, "param", self.params).row_join(
+            an.closure_partials(form, "theta", an.kin.inputs))
 
-    def _with_inputs(self, by_params: sp.Matrix, by_inputs: sp.Matrix) -> sp.Matrix:
-        return by_params.row_join(by_inputs) if by_params.rows else \
-            sp.zeros(by_inputs.rows, len(self.variables))
+    def _point(self, an: Analysis, name: str, form: str) -> sp.Matrix:
+        """∂/∂v of a point's rigid position (form rigid) or deviation at the level `form`."""
+        return an.point_partials(name, form, "param", self.params).row_join(
+            an.point_partials(name, form, "theta", an.kin.inputs))
 
     @cached_property
     def rigid_stage(self) -> Stage | None:
@@ -87,8 +88,7 @@ class Sensitivities:
         kin = an.kin
         if not kin.unknowns:
             return None
-        by_inputs = an.closure_partials("rigid", "theta", kin.inputs)
-        g_v = self._with_inputs(self._by_parameters(list(an.rigid_residual)), by_inputs)
+        g_v = self._closure(an, "rigid")
         return Stage(an.linear_system[0], sp.zeros(len(kin.unknowns), 0), g_v)
 
     @cached_property
@@ -98,9 +98,7 @@ class Sensitivities:
         kin = an.kin
         rows_v, rows_t = [], []
         for name in self.points:
-            value = list(an.point_rigid(name))
-            by_inputs = an.point_partials(name, "rigid", "theta", kin.inputs)
-            rows_v.append(self._with_inputs(self._by_parameters(value), by_inputs))
+            rows_v.append(self._point(an, name, "rigid"))
             rows_t.append(an.point_partials(name, "rigid", "theta", kin.unknowns))
         return self._stacked(rows_t, None, rows_v)
 
@@ -121,18 +119,12 @@ class Sensitivities:
             if not lv.generated or not lv.needs_delta or not kin.unknowns:
                 out[lv.name] = None
                 continue
-            if lv.name == "first_order":
-                a_lin, r_lin = an.linear_system
-                closure = a_lin * sp.Matrix(an.deltas) + r_lin
-                jacobian = a_lin
-            elif lv.name == "exact":
-                closure, jacobian = an.residual, an.jacobian
-            else:                                                 # pragma: no cover
+            # first_order: E = A δ + r, M = A; exact: E = F, M = its Jacobian (∂E/∂δ)
+            if lv.name not in ("first_order", "exact"):               # pragma: no cover
                 raise NotImplementedError(f"no sensitivity for level '{lv.name}'")
-            by_inputs = an.closure_partials(lv.name, "theta", kin.inputs)
-            out[lv.name] = Stage(
-                jacobian, an.closure_partials(lv.name, "theta", kin.unknowns),
-                self._with_inputs(self._by_parameters(list(closure)), by_inputs))
+            jacobian = an.closure_partials(lv.name, "delta", kin.unknowns)
+            out[lv.name] = Stage(jacobian, an.closure_partials(lv.name, "theta", kin.unknowns),
+                                 self._closure(an, lv.name))
         return out
 
     @cached_property
@@ -145,9 +137,7 @@ class Sensitivities:
                 continue
             rows_v, rows_t, rows_d = [], [], []
             for name in self.points:
-                value = list(an.point_deviation(name, lv.name))
-                by_inputs = an.point_partials(name, lv.name, "theta", kin.inputs)
-                rows_v.append(self._with_inputs(self._by_parameters(value), by_inputs))
+                rows_v.append(self._point(an, name, lv.name))
                 rows_t.append(an.point_partials(name, lv.name, "theta", kin.unknowns))
                 rows_d.append(an.point_partials(name, lv.name, "delta", kin.unknowns)
                               if lv.needs_delta else sp.zeros(2, len(kin.unknowns)))

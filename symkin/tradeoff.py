@@ -144,7 +144,7 @@ def measure(mech: Mechanism, variant: Variant, samples: list[dict[str, float]],
     from .codegen.plan import plan
     
     analysis = analysis_for(mech, variant)
-    p = plan(analysis, levels=[variant.level])
+    p = plan(analysis, levels=[variant.level], sensitivity=False)
     tag = f"{mech.name}_{variant.name.replace('/', '_')}"
     module = runtime.import_numpy_module(numpy_backend.emit(p, "tradeoff", variant.precision),
                                          tag)

@@ -35,6 +35,7 @@ FLOORS: tuple[tuple[str, ...], ...] = (
      "codegen.backends.latex.report"),
     # numbers and commands
     ("evaluation",),
+    ("compiled",),
     ("tradeoff",),
     ("derive",),
     ("",),                                  # the package itself: symkin.load, analyze, ...

@@ -15,6 +15,8 @@ import tempfile
 from pathlib import Path
 from types import ModuleType
 
+import numpy as np
+
 from ..errors import InputError
 
 CFLAGS = ("-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O2", "-fPIC", "-shared")
@@ -48,43 +50,115 @@ def build(name: str, header: str, source: str, flags: tuple[str, ...] = CFLAGS,
         return target
     target.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
-        (Path(tmp) / f"{name}.h").write_text(header)
-        (Path(tmp) / f"{name}.c").write_text(source)
-        files = [f"{name}.c"]
-        if extra:
-            (Path(tmp) / "extra.c").write_text(extra)
-            files.append("extra.c")
-        built = Path(tmp) / "lib.so"
-        proc = subprocess.run([cc, *flags, *files, "-o", str(built), "-lm"], cwd=tmp,
-                              capture_output=True, text=True)
-        if proc.returncode != 0:
-            raise RuntimeError(f"the generated C did not compile:\n{proc.stderr}")
+        built = _compile(cc, flags, name, header, source, extra, Path(tmp))
         os.replace(built, target)          # atomic: a concurrent build never sees half a file
     return target
 
 
-class Library:
-    """A loaded generated evaluator: `evaluate(inputs, params, level) -> (status, out)`."""
+def load_transient(name: str, header: str, source: str,
+                   flags: tuple[str, ...] = CFLAGS) -> ctypes.CDLL:
+    """The generated pair compiled in a temporary folder and loaded; the folder is removed
+    before returning (the loaded library stays mapped), so no file is left behind."""
+    with tempfile.TemporaryDirectory(prefix="symkin-") as tmp:
+        return ctypes.CDLL(str(_compile(compiler(), flags, name, header, source, "", Path(tmp))))
 
-    def __init__(self, path: Path, name: str, n_inputs: int, n_params: int, n_points: int,
-                 n_hinges: int):
-        self.lib = ctypes.CDLL(str(path))
-        self.fn = getattr(self.lib, f"{name}_evaluate_angles")
-        self.fn.restype = ctypes.c_int
-        dptr = ctypes.POINTER(ctypes.c_double)
-        self.fn.argtypes = [dptr, dptr, ctypes.c_int, dptr, dptr]
+
+def _compile(cc: str, flags: tuple[str, ...], name: str, header: str, source: str, extra: str,
+             folder: Path) -> Path:
+    """The shared library of the texts, built in `folder`."""
+    (folder / f"{name}.h").write_text(header)
+    (folder / f"{name}.c").write_text(source)
+    files = [f"{name}.c"]
+    if extra:
+        (folder / "extra.c").write_text(extra)
+        files.append("extra.c")
+    built = folder / "lib.so"
+    proc = subprocess.run([cc, *flags, *files, "-o", str(built), "-lm"], cwd=folder,
+                          capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise RuntimeError(f"the generated C did not compile:\n{proc.stderr}")
+    return built
+
+
+class Library:
+    """A loaded generated evaluator, called through its batch entry points (one ctypes call for
+    any number of configurations: docs/generated-code.md)."""
+
+    def __init__(self, path: Path | ctypes.CDLL, name: str, n_inputs: int, n_params: int,
+                 n_points: int, n_hinges: int):
+        self.lib = path if isinstance(path, ctypes.CDLL) else ctypes.CDLL(str(path))
+        dptr, iptr = ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_int)
+        self.batch = getattr(self.lib, f"{name}_evaluate_angles_batch")
+        self.batch.restype = ctypes.c_int
+        self.batch.argtypes = [ctypes.c_int, dptr, dptr, ctypes.c_int, dptr, dptr, iptr]
+        self.sensitivity = getattr(self.lib, f"{name}_sensitivity_batch", None)
+        if self.sensitivity is not None:
+            self.sensitivity.restype = ctypes.c_int
+            self.sensitivity.argtypes = [ctypes.c_int, dptr, dptr, ctypes.c_int, dptr, dptr, dptr,
+                                         iptr]
         self.n_inputs, self.n_params = n_inputs, n_params
         self.n_points, self.n_hinges = n_points, n_hinges
+        self.n_variables = n_params + n_inputs
 
     def evaluate(self, inputs, params=None, level: int = 2
                  ) -> tuple[int, list[float], list[float]]:
-        """(status, out: 6 doubles per point, angles: rigid then compliant per hinge)."""
-        x = (ctypes.c_double * max(1, self.n_inputs))(*inputs)
-        p = None if params is None else (ctypes.c_double * max(1, self.n_params))(*params)
-        out = (ctypes.c_double * max(1, 6 * self.n_points))()
-        angles = (ctypes.c_double * (2 * self.n_hinges))()
-        status = self.fn(x, p, level, out, angles)
-        return status, list(out)[: 6 * self.n_points], list(angles)
+        """One configuration: (status, out: 6 doubles per point, angles: rigid then compliant
+        per hinge)."""
+        status, out, angles = self.evaluate_rows(np.asarray([inputs], dtype=float).reshape(
+            1, self.n_inputs), params, level, angles=True)
+        return int(status[0]), out[0].tolist(), angles[0].tolist()
+
+    def evaluate_rows(self, inputs: np.ndarray, params=None, level: int = 2,
+                      angles: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """n configurations in one call: inputs (n, n_inputs); (status (n,), out (n, 6 n_points),
+        angles (n, 2 n_hinges) or None)."""
+        x = _rows(inputs, self.n_inputs)
+        n = x.shape[0]
+        out = np.empty((n, 6 * self.n_points))
+        ang = np.empty((n, 2 * self.n_hinges)) if angles else None
+        status = np.empty(n, dtype=np.intc)
+        self.batch(n, _ptr(x), self.params(params), level, _ptr(out), _ptr(ang), _iptr(status))
+        return status, out, ang
+
+    def sensitivity_rows(self, inputs: np.ndarray, params=None, level: int = 2
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Sensitivities of n configurations in one call: (status (n,), values (n, 6 n_points),
+        deviation and rigid (n, n_points, n_variables, 2))."""
+        if self.sensitivity is None:
+            raise RuntimeError("this evaluator was generated without sensitivities")
+        x = _rows(inputs, self.n_inputs)
+        n = x.shape[0]
+        values = np.empty((n, 6 * self.n_points))
+        dev = np.empty((n, self.n_points, self.n_variables, 2))
+        rig = np.empty((n, self.n_points, self.n_variables, 2))
+        status = np.empty(n, dtype=np.intc)
+        self.sensitivity(n, _ptr(x), self.params(params), level, _ptr(values), _ptr(dev),
+                         _ptr(rig), _iptr(status))
+        return status, values, dev, rig
+
+    def params(self, params) -> ctypes.Array | None:
+        """A parameter array for the C calls (None: the defaults)."""
+        if params is None:
+            return None
+        values = [float(v) for v in params]
+        if len(values) != self.n_params:
+            raise ValueError(f"expected {self.n_params} parameter values, got {len(values)}")
+        return (ctypes.c_double * max(1, self.n_params))(*values)
+
+
+def _rows(inputs, width: int) -> np.ndarray:
+    x = np.ascontiguousarray(inputs, dtype=np.float64)
+    if x.ndim != 2 or x.shape[1] != width:
+        raise ValueError(f"inputs must have shape (n, {width}), got {x.shape}")
+    return x
+
+
+def _ptr(array: np.ndarray | None):
+    return None if array is None else array.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
+
+
+def _iptr(array: np.ndarray):
+    return array.ctypes.data_as(ctypes.POINTER(ctypes.c_int))
 
 
 TIMER = r"""
@@ -138,6 +212,14 @@ def time_per_evaluation(name: str, header: str, source: str, inputs: list[float]
 def _evaluate_prefix(header: str) -> str:
     """The mechanism name a generated header declares (<name>_evaluate)."""
     return re.search(r"int (\w+)_evaluate\(", header).group(1)
+
+
+def numpy_module_in_memory(source: str, name: str) -> ModuleType:
+    """A generated numpy module executed from its text, with no file (our own generated code,
+    names escaped); it is not entered in sys.modules."""
+    module = ModuleType(f"symkin_compiled_{name}")
+    exec(compile(source, f"<symkin generated {name}>", "exec"), module.__dict__)  # noqa: S102
+    return module
 
 
 def import_numpy_module(source: str, name: str) -> ModuleType:
