@@ -57,7 +57,8 @@ def _eval(args: argparse.Namespace) -> str:
 
     analysis = Analysis(build(load(args.file)))
     result = evaluate(analysis, _pairs(args.input, "--input"), args.level,
-                      _pairs(args.param, "--param"), args.backend)
+                      _pairs(args.param, "--param"), args.backend,
+                      sensitivity=args.sensitivity)
     return evaluation_json(result) if args.json else evaluation_text(result)
 
 
@@ -137,6 +138,8 @@ def parser() -> argparse.ArgumentParser:
     ev.add_argument("--param", action="append", metavar="K=V", help="override a parameter")
     ev.add_argument("--level", choices=levels.NAMES, default=levels.DEFAULT)
     ev.add_argument("--backend", choices=("sympy", "numpy", "c"), default="sympy")
+    ev.add_argument("--sensitivity", action="store_true",
+                    help="also the derivatives by every parameter and input")
     ev.add_argument("--json", action="store_true", help="machine-readable output")
     ev.set_defaults(run=_eval)
     de = command("derive", "write the LaTeX report and the C99 and numpy evaluators")
