@@ -322,9 +322,13 @@ def _number_markers(fig, ax, markers: list[tuple[float, float, int]]) -> None:
 
 def plot(table: Tradeoff, path: str) -> None:
     """Save the tradeoff figure (the format follows the file's suffix)."""
+    save_figure(figure(table), path)
+
+
+def save_figure(fig, path: str) -> None:
+    """Save and close a matplotlib figure without dates or versions (format from the suffix)."""
     import matplotlib.pyplot as plt
 
-    fig = figure(table)
     fig.savefig(path, dpi=120, metadata=_PLOT_METADATA.get(path.rsplit(".", 1)[-1].lower()))
     plt.close(fig)
 

@@ -36,7 +36,7 @@ FLOORS: tuple[tuple[str, ...], ...] = (
     # numbers and commands
     ("evaluation",),
     ("compiled",),
-    ("tradeoff",),
+    ("variation", "tolerance", "tradeoff", "sweep"),
     ("derive",),
     ("",),                                  # the package itself: symkin.load, analyze, ...
     ("cli", "__main__"),

@@ -91,6 +91,9 @@ class Library:
         self.batch = getattr(self.lib, f"{name}_evaluate_angles_batch")
         self.batch.restype = ctypes.c_int
         self.batch.argtypes = [ctypes.c_int, dptr, dptr, ctypes.c_int, dptr, dptr, iptr]
+        self.grid = getattr(self.lib, f"{name}_evaluate_grid")
+        self.grid.restype = ctypes.c_int
+        self.grid.argtypes = [ctypes.c_int, dptr, ctypes.c_int, dptr, ctypes.c_int, dptr, iptr]
         self.sensitivity = getattr(self.lib, f"{name}_sensitivity_batch", None)
         if self.sensitivity is not None:
             self.sensitivity.restype = ctypes.c_int
@@ -119,6 +122,22 @@ class Library:
         status = np.empty(n, dtype=np.intc)
         self.batch(n, _ptr(x), self.params(params), level, _ptr(out), _ptr(ang), _iptr(status))
         return status, out, ang
+
+    def evaluate_grid(self, params: np.ndarray, inputs: np.ndarray, level: int = 2,
+                      out: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Every row of params (n_sets, n_params) at every row of inputs (n, n_inputs), one
+        call: (status (n_sets, n), out (n_sets, n, 6 n_points)); `out` may be given, to reuse."""
+        p = np.ascontiguousarray(params, dtype=np.float64)
+        if p.ndim != 2 or p.shape[1] != self.n_params:
+            raise ValueError(f"params must have shape (n_sets, {self.n_params}), got {p.shape}")
+        x = _rows(inputs, self.n_inputs)
+        shape = (p.shape[0], x.shape[0])
+        if out is None or out.shape != shape + (6 * self.n_points,) or not out.flags.c_contiguous:
+            out = np.empty(shape + (6 * self.n_points,))
+        status = np.empty(shape, dtype=np.intc)
+        self.grid(shape[0], _ptr(p) if self.n_params else None, shape[1], _ptr(x), level,
+                  _ptr(out), _iptr(status))
+        return status, out
 
     def sensitivity_rows(self, inputs: np.ndarray, params=None, level: int = 2
                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
