@@ -324,7 +324,7 @@ def connect(scheduler: Scheduler):
     from distributed import Client
 
     try:
-        return Client(scheduler.address, timeout="10s", set_as_default=False)
+        return Client(scheduler.address, timeout="5s", set_as_default=False)
     except (OSError, TimeoutError) as exc:
         raise InputError(f"cannot reach the scheduler at {scheduler.address} ({exc})",
                          entry="--scheduler", hint="start one (dask scheduler, then dask "
@@ -332,17 +332,17 @@ def connect(scheduler: Scheduler):
 
 
 def _distributed(client, task: Task, spans: Sequence[tuple[int, int]], progress: bool) -> list:
-    from distributed import as_completed
-
     shared = client.scatter(task, broadcast=True)
     futures = [client.submit(run_blocks, shared, a, b, pure=False) for a, b in spans]
-    done = 0
-    for _ in as_completed(futures):
-        done += 1
-        if progress:
-            print(f"\rsymkin: sweep {done}/{len(futures)} chunks", end="", file=sys.stderr,
-                  flush=True)
     if progress:
+        done = -1
+        while done < len(futures):
+            now = sum(f.done() for f in futures)
+            if now != done:
+                done = now
+                print(f"\rsymkin: sweep {done}/{len(futures)} chunks", end="", file=sys.stderr,
+                      flush=True)
+            time.sleep(0.2)
         print(file=sys.stderr)
     return client.gather(futures)
 
