@@ -247,3 +247,22 @@ sys.stdout.buffer.write(pickle.dumps((ev, res["points"]["C"]["deviation"], sens[
     assert np.array_equal(again, deviation)
     assert np.array_equal(ev.sensitivity({"A0": 0.2})["C"]["l"], dl)
     assert math.isfinite(float(dl[0]))
+
+
+def test_report_ranks_the_parameters():
+    """The LaTeX report's sensitivity table: every parameter once per point, ranked by the size
+    of the relative sensitivity, at the input where |ΔR| is largest."""
+    import re
+
+    from symkin.derive import generate
+
+    mech = symkin.loads(M.PARAM_FOUR_BAR, "param_four_bar.toml")
+    tex = generate(mech, emit=["latex"])["param_four_bar.tex"].decode()
+    table = tex[tex.index(r"\label{symkin:param-four-bar:sensitivity}"):]
+    table = table[:table.index(r"\bottomrule")]
+    rows = re.findall(r"^C & (\S+) & .* & \$([+-]\d\.\d{3})\$ & \$([+-]\d\.\d{3})\$ \\\\$",
+                      table, re.MULTILINE)
+    assert sorted(r[0] for r in rows) == sorted(p.name for p in mech.parameters)
+    relative = [abs(float(r[1])) for r in rows]
+    assert relative == sorted(relative, reverse=True)
+    assert len({r[2] for r in rows}) == 1

@@ -1180,6 +1180,19 @@ int four_bar_evaluate_batch(int n, const double *inputs, const double *params, i
     return four_bar_evaluate_angles_batch(n, inputs, params, level, out, NULL, status);
 }
 
+int four_bar_evaluate_grid(int n_sets, const double *params, int n, const double *inputs,
+                   int level, double *out, int *status)
+{
+    int s, failed = 0;
+    for (s = 0; s < n_sets; ++s) {
+        failed += four_bar_evaluate_angles_batch(
+            n, inputs, params == NULL ? NULL : params + (size_t)s * FOUR_BAR_N_PARAMS, level,
+            out == NULL ? NULL : out + (size_t)s * n * 6 * SK_NP, NULL,
+            status == NULL ? NULL : status + (size_t)s * n);
+    }
+    return failed;
+}
+
 /* c (m x n) += a (m x p) b (p x n), row-major. */
 static void sk_gemm(int m, int p, int n, const double *a, const double *b, double *c)
 {

@@ -95,18 +95,23 @@ def sinr2(x):
     return np.where(small, series, b)
 
 
+def _value(v):
+    """A parameter value: a float, or an array for many parameter sets at once."""
+    return float(v) if numpy.ndim(v) == 0 else numpy.asarray(v, dtype=_DTYPE)
+
+
 def parameters(given=None, shifts=None):
     """Parameter values in file order: given ones, defaults re-evaluated for the others; a shift
     (name -> amount) is added to a parameter after its value is set, so the parameters whose
-    defaults read it follow."""
+    defaults read it follow. Values and shifts may be arrays (many parameter sets at once)."""
     given = dict(given or {})
     shifts = dict(shifts or {})
     unknown = sorted((set(given) | set(shifts)) - set(PARAMETERS))
     if unknown:
         raise ValueError(f"unknown parameter(s) {unknown}; parameters: {sorted(PARAMETERS)}")
-    p_0 = float(given['l']) if 'l' in given else 0.001
+    p_0 = _value(given['l']) if 'l' in given else 0.001
     if 'l' in shifts:
-        p_0 = p_0 + float(shifts['l'])
+        p_0 = p_0 + _value(shifts['l'])
     return [p_0]
 
 

@@ -1120,6 +1120,19 @@ int nine_bar_platform_evaluate_batch(int n, const double *inputs, const double *
     return nine_bar_platform_evaluate_angles_batch(n, inputs, params, level, out, NULL, status);
 }
 
+int nine_bar_platform_evaluate_grid(int n_sets, const double *params, int n, const double *inputs,
+                   int level, double *out, int *status)
+{
+    int s, failed = 0;
+    for (s = 0; s < n_sets; ++s) {
+        failed += nine_bar_platform_evaluate_angles_batch(
+            n, inputs, params == NULL ? NULL : params + (size_t)s * NINE_BAR_PLATFORM_N_PARAMS, level,
+            out == NULL ? NULL : out + (size_t)s * n * 6 * SK_NP, NULL,
+            status == NULL ? NULL : status + (size_t)s * n);
+    }
+    return failed;
+}
+
 /* c (m x n) += a (m x p) b (p x n), row-major. */
 static void sk_gemm(int m, int p, int n, const double *a, const double *b, double *c)
 {

@@ -55,6 +55,15 @@ int nine_bar_platform_evaluate_batch(int n, const double *inputs, const double *
 int nine_bar_platform_evaluate_angles_batch(int n, const double *inputs, const double *params, int level,
                           double *out, double *angles, int *status);
 
+/*
+ * Every parameter set at every input row (a Monte Carlo sweep): params holds n_sets rows of
+ * NINE_BAR_PLATFORM_N_PARAMS values (NULL: the defaults, n_sets 1), inputs n rows; out and status
+ * are ordered set by set, row (s * n + i) for set s and input row i, as in
+ * nine_bar_platform_evaluate_batch. Returns the number of failed configurations.
+ */
+int nine_bar_platform_evaluate_grid(int n_sets, const double *params, int n, const double *inputs,
+                   int level, double *out, int *status);
+
 /* Variables of the sensitivities: the parameters in file order, then the inputs. */
 #define NINE_BAR_PLATFORM_N_VARIABLES (NINE_BAR_PLATFORM_N_PARAMS + NINE_BAR_PLATFORM_N_INPUTS)
 

@@ -671,6 +671,43 @@ def sweep(report: Report, numpy_module) -> tuple[Sweep, tuple[float, float], dic
     return Sweep(t, ok, magnitude, deviation), (lo, hi), summary
 
 
+def sensitivity_table(report: Report, numpy_module, data: Sweep) -> dict | None:
+    """The parameters ranked by their effect on each point's deviation (docs/sensitivity.md),
+    at the sampled input where the point's |ΔR| at the most faithful level is largest; None
+    without parameters or sensitivities."""
+    plan = report.plan
+    names = list(getattr(numpy_module, "PARAMETERS", {}))
+    if not names or not hasattr(numpy_module, "sensitivity_full"):
+        return None
+    level = plan.levels[-1].name
+    rows = []
+    for point in plan.points:
+        mag = data.magnitude[point][level]
+        if not np.isfinite(mag).any() or not np.nanmax(mag) > 0:
+            continue
+        t = float(data.t[int(np.nanargmax(mag))])
+        res = numpy_module.sensitivity_full({n: t for n in numpy_module.INPUTS}, level)
+        d = np.asarray(res["points"][point]["deviation"], dtype=float)
+        norm = float(np.hypot(d[0], d[1]))
+        entries = []
+        for name in names:
+            rate = np.asarray(res["deviation"][point]["params"][name], dtype=float)
+            d_norm = float((d[0] * rate[0] + d[1] * rate[1]) / norm)
+            value = float(numpy_module.PARAMETERS[name])
+            relative = value * d_norm / norm
+            entries.append((abs(relative), {
+                "point": escape_latex(point), "name": escape_latex(name), "value": gnum(value),
+                "dx": sci(float(rate[0])), "dy": sci(float(rate[1])), "norm": sci(d_norm),
+                "relative": f"{relative:+.3f}" if value else r"	ext{--}", "at": f"{t:+.3f}"}))
+        entries.sort(key=lambda e: -e[0])
+        rows += [e[1] for e in entries]
+    if not rows:
+        return None
+    return {"level": plan.levels[-1].title, "rows": rows,
+            "single_input": len(numpy_module.INPUTS) == 1,
+            "inputs": [escape_latex(n) for n in numpy_module.INPUTS]}
+
+
 # -- emit ----------------------------------------------------------------------------------------
 
 def emit(plan: Plan, source: str, appendix: bool = False,
@@ -702,6 +739,7 @@ def emit(plan: Plan, source: str, appendix: bool = False,
     ctx["table_width"] = f"{min(0.58, 0.96 - float(ctx['graph_width'])):.2f}"
     ctx["deviation_figures"] = []
     ctx["sweep"] = None
+    ctx["sensitivity"] = None
     if plan.points:
         if evaluator is None:
             raise ValueError("the deviation plot needs the plan's generated numpy module")
@@ -721,6 +759,7 @@ def emit(plan: Plan, source: str, appendix: bool = False,
         summary["single_input"] = len(inputs) == 1
         summary["inputs"] = [escape_latex(n) for n in inputs]
         ctx["sweep"] = summary
+        ctx["sensitivity"] = sensitivity_table(report, evaluator, data)
     body = environment().get_template("latex/body.tex.j2").render(**ctx)
     if appendix:
         text = body
