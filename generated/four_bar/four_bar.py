@@ -48,6 +48,8 @@ def arck(x):
     x2 = x * x
     small = np.abs(x) < 1.5
     series = 0.3333333333333333 + x2 * (-0.03333333333333333 + x2 * (0.0011904761904761906 + x2 * (-2.2045855379188714e-05 + x2 * (2.505210838544172e-07 + x2 * (-1.9270852604185937e-09 + x2 * (1.0706029224547743e-11 + x2 * (-4.498331606952833e-14 + x2 * (1.4797143443923793e-16 + x2 * (-3.9145882126782523e-19)))))))))
+    if small.all():
+        return series
     xs = np.where(small, 1.0, x)
     xs2 = xs * xs
     b = np.sin(xs) / xs - np.cos(xs)
@@ -61,6 +63,8 @@ def cosr2(x):
     x2 = x * x
     small = np.abs(x) < 3.0
     series = 0.041666666666666664 + x2 * (-0.001388888888888889 + x2 * (2.48015873015873e-05 + x2 * (-2.755731922398589e-07 + x2 * (2.08767569878681e-09 + x2 * (-1.1470745597729725e-11 + x2 * (4.779477332387385e-14 + x2 * (-1.5619206968586225e-16 + x2 * (4.110317623312165e-19 + x2 * (-8.896791392450574e-22 + x2 * (1.6117375710961184e-24 + x2 * (-2.4795962632247976e-27)))))))))))
+    if small.all():
+        return series
     xs = np.where(small, 1.0, x)
     xs2 = xs * xs
     b = -2.0 * (np.sin(0.5 * xs) / xs) ** 2
@@ -74,6 +78,8 @@ def sinr1(x):
     x2 = x * x
     small = np.abs(x) < 2.0
     series = -0.16666666666666666 + x2 * (0.008333333333333333 + x2 * (-0.0001984126984126984 + x2 * (2.7557319223985893e-06 + x2 * (-2.505210838544172e-08 + x2 * (1.6059043836821613e-10 + x2 * (-7.647163731819816e-13 + x2 * (2.8114572543455206e-15 + x2 * (-8.22063524662433e-18 + x2 * (1.9572941063391263e-20 + x2 * (-3.868170170630684e-23))))))))))
+    if small.all():
+        return series
     xs = np.where(small, 1.0, x)
     xs2 = xs * xs
     b = np.sin(xs) / xs
@@ -87,6 +93,8 @@ def sinr2(x):
     x2 = x * x
     small = np.abs(x) < 3.0
     series = 0.008333333333333333 + x2 * (-0.0001984126984126984 + x2 * (2.7557319223985893e-06 + x2 * (-2.505210838544172e-08 + x2 * (1.6059043836821613e-10 + x2 * (-7.647163731819816e-13 + x2 * (2.8114572543455206e-15 + x2 * (-8.22063524662433e-18 + x2 * (1.9572941063391263e-20 + x2 * (-3.868170170630684e-23 + x2 * (6.446950284384474e-26 + x2 * (-9.183689863795546e-29)))))))))))
+    if small.all():
+        return series
     xs = np.where(small, 1.0, x)
     xs2 = xs * xs
     b = np.sin(xs) / xs
@@ -818,10 +826,15 @@ def _matrix(entries, rows, cols, shape):
     return out
 
 
+_GAUSS_MAX = 12   # systems up to this size: elementwise elimination, as the C evaluator does
+
+
 def _solve(a, b, ok, m=1):
     """Batched dense solve a x = b (a row-major k*k list, b a row-major k*m list: m right-hand
     sides); bad elements -> ok False. The solution as a row-major k*m list."""
     k = len(b) // m
+    if k <= _GAUSS_MAX:
+        return _gauss(a, b, ok, k, m)
     shape = ok.shape
     am = _matrix(a, k, k, shape)
     bm = _matrix(b, k, m, shape)
@@ -841,6 +854,51 @@ def _solve(a, b, ok, m=1):
                 good[index] = False
     good &= numpy.isfinite(x).all(axis=(-1, -2))
     return [x[..., i, j] for i in range(k) for j in range(m)], good
+
+
+def _gauss(a, b, ok, k, m):
+    """_solve by Gaussian elimination with partial pivoting written out over the element
+    arrays, step for step the C evaluator's sk_solve (one small LAPACK call per element costs
+    more than the whole elimination)."""
+    shape = ok.shape
+    A = [[numpy.array(numpy.broadcast_to(a[i * k + j], shape), dtype=_DTYPE) for j in range(k)]
+         for i in range(k)]
+    B = [[numpy.array(numpy.broadcast_to(b[i * m + r], shape), dtype=_DTYPE) for r in range(m)]
+         for i in range(k)]
+    good = numpy.array(ok)
+    for c in range(k):
+        # the pivot: the first row i >= c with the largest |a[i][c]|
+        best = numpy.abs(A[c][c])
+        pivot = numpy.full(shape, c)
+        for i in range(c + 1, k):
+            size = numpy.abs(A[i][c])
+            larger = size > best
+            best = numpy.where(larger, size, best)
+            pivot = numpy.where(larger, i, pivot)
+        good &= (best > 0.0) & numpy.isfinite(best)
+        for i in range(c + 1, k):
+            swap = pivot == i
+            if swap.any():
+                for row in (A, B):
+                    for j in range(len(row[c])):
+                        row[c][j], row[i][j] = (numpy.where(swap, row[i][j], row[c][j]),
+                                                numpy.where(swap, row[c][j], row[i][j]))
+        for i in range(c + 1, k):
+            f = A[i][c] / A[c][c]
+            for j in range(c, k):
+                A[i][j] = A[i][j] - f * A[c][j]
+            for r in range(m):
+                B[i][r] = B[i][r] - f * B[c][r]
+    for r in range(m):
+        for i in range(k - 1, -1, -1):
+            s = B[i][r]
+            for j in range(i + 1, k):
+                s = s - A[i][j] * B[j][r]
+            B[i][r] = s / A[i][i]
+    x = [B[i][r] for i in range(k) for r in range(m)]
+    for v in x:
+        good &= numpy.isfinite(v)
+    return x, good
 
 
 def _rigid_angles(x, params, ok):
