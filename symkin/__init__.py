@@ -35,12 +35,13 @@ def analyze(mechanism: Mechanism | str | Path, points: list[str] | None = None) 
 
 def evaluate(analysis: Analysis, inputs: Mapping[str, object], level: str = DEFAULT,
              params: Mapping[str, object] | None = None, backend: str = "sympy",
-             dps: int = 40) -> Evaluation:
+             dps: int = 40, sensitivity: bool = False) -> Evaluation:
     """One configuration of an analysis (:func:`symkin.evaluation.evaluate`): the derivation with
-    mpmath at `dps` digits (backend sympy) or the generated numpy / C evaluators."""
+    mpmath at `dps` digits (backend sympy) or the generated numpy / C evaluators; with
+    `sensitivity`, the derivatives by every parameter and input too (docs/sensitivity.md)."""
     from .evaluation import evaluate as run
 
-    return run(analysis, inputs, level, params, backend, dps)
+    return run(analysis, inputs, level, params, backend, dps, sensitivity)
 
 
 def compile(mechanism: Mechanism | Analysis | str | Path, backend: str = "c",  # noqa: A001
