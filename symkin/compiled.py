@@ -11,7 +11,8 @@ can ship it to worker processes and to other machines; each process compiles it 
 once (the C needs a compiler there too).
 
 The results have the shapes of the generated numpy module's `evaluate`, `sensitivity` and
-`sensitivity_full`, whichever backend runs them.
+`sensitivity_full`, whichever backend runs them; the links' rotations are left out (the
+generated module's `evaluate` and `<name>_evaluate_pose` have them).
 """
 
 from __future__ import annotations
@@ -191,6 +192,7 @@ class Compiled:
             "angles": {kind: {h: angles[:, off + a].reshape(shape)
                               for a, h in enumerate(self.hinges)}
                        for kind, off in (("rigid", 0), ("compliant", m))},
+            "links": {},
         }
 
     def sensitivity(self, inputs: Mapping[str, object], level: str | None = None,
@@ -270,7 +272,7 @@ def compile(mechanism: Mechanism | Analysis | str | Path, backend: str = "c",
         analysis = Analysis(build(mech), points)
     check_fabricated_pose(analysis)
     mech = analysis.mechanism
-    p = plan(analysis, points, levels, sensitivity=sensitivity)
+    p = plan(analysis, points, levels, sensitivity=sensitivity, links=False)
     source = Path(mech.path).name
     header, code = c_backend.emit(p, source) if backend == "c" else ("", "")
     return Compiled(Sources(

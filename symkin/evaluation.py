@@ -81,6 +81,16 @@ class Sensitivity:
 
 
 @dataclass(frozen=True)
+class LinkResult:
+    """A link's rotation from the as-fabricated pose (radians): rigid (wrapped to (−π, π]),
+    compliant = rigid + deviation, and the deviation itself, computed from δ directly."""
+
+    rigid: float
+    compliant: float
+    deviation: float
+
+
+@dataclass(frozen=True)
 class Evaluation:
     """One configuration evaluated at one level (the `eval --json` of docs/cli.md via
     :meth:`as_json`)."""
@@ -94,6 +104,7 @@ class Evaluation:
     dyads: tuple[dict, ...] = field(default=())
     params: dict[str, float] = field(default_factory=dict)   # every parameter's value used
     overrides: tuple[str, ...] = ()                           # the ones given with --param
+    links: dict[str, LinkResult] = field(default_factory=dict)   # every link's rotation
     sensitivity: Sensitivity | None = None                    # with eval --sensitivity
 
     def as_json(self) -> dict:
@@ -109,6 +120,8 @@ class Evaluation:
             "points": {name: {"rigid": list(p.rigid), "compliant": list(p.compliant),
                               "deviation": list(p.deviation), "norm": p.norm}
                        for name, p in self.points.items()},
+            "links": {name: {"rigid": r.rigid, "compliant": r.compliant,
+                             "deviation": r.deviation} for name, r in self.links.items()},
             "dyads": [dict(d) for d in self.dyads],
             **extra,
         }
@@ -282,6 +295,14 @@ class _Mpmath:
                     (float(rig[0] + dev[0]), float(rig[1] + dev[1])),
                     (float(dev[0]), float(dev[1])))
             theta, delta, ivals = state.theta, state.delta, state.inputs
+            s = an.structure
+            args, values = self._arguments(state)
+            rot = self._fn(f"links:{level}", [an.link_rotation(i) for i in range(s.n + 1)]
+                           + [an.link_deviation(i, level) for i in range(s.n + 1)], args)(*values)
+            links = {}
+            for i in range(s.n + 1):
+                rigid, dev = _wrap(rot[i]), rot[s.n + 1 + i]
+                links[s.links[i]] = LinkResult(float(rigid), float(rigid + dev), float(dev))
             names = {a: self.kin.hinges[a].name for a in self.kin.hinges}
             return Evaluation(
                 level=level, backend="sympy",
@@ -291,7 +312,7 @@ class _Mpmath:
                                   for a in sorted(theta)},
                 points=points, dyads=tuple(state.dyads),
                 params=parameter_floats(self.mechanism, state.exact_params),
-                overrides=tuple(params or ()),
+                overrides=tuple(params or ()), links=links,
                 sensitivity=self._sensitivity(state) if sensitivity else None)
 
     def values(self, inputs: Mapping[str, object], level: str,
@@ -605,12 +626,15 @@ def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
                   for n in p.points}
         rigid = {h: float(res["angles"]["rigid"][h]) for h in hinges}
         compliant = {h: float(res["angles"]["compliant"][h]) for h in hinges}
+        links = {n: LinkResult(*(float(res["links"][n][key])
+                                 for key in ("rigid", "compliant", "deviation")))
+                 for n in p.reported_links}
     else:
         header, code = c_backend.emit(p, source)
         name = analysis.mechanism.name
         lib = runtime.Library(runtime.build(name, header, code), name, len(x), len(pfloat),
-                              len(p.points), len(hinges))
-        status, out, angles = lib.evaluate(x, pfloat, levels.get(level).code)
+                              len(p.points), len(hinges), len(p.reported_links))
+        status, out, angles, rot = lib.pose(x, pfloat, levels.get(level).code)
         if status == 3:
             raise InputError("the C evaluator rejected the arguments", entry="--input")
         if status == 0 and sensitivity:
@@ -624,6 +648,7 @@ def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
         m = len(hinges)
         rigid = dict(zip(hinges, angles[:m]))
         compliant = dict(zip(hinges, angles[m:]))
+        links = {n: LinkResult(*rot[3 * i:3 * i + 3]) for i, n in enumerate(p.reported_links)}
     order = {kin.hinges[a].name: a for a in kin.hinges}
     return Evaluation(
         level=level, backend=backend, inputs=dict(zip(names, x)),
@@ -631,7 +656,7 @@ def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
         angles_compliant={h: compliant[h] for h in sorted(compliant, key=order.get)},
         points=points, dyads=_mpmath_evaluator(analysis).dyad_states(inputs, params),
         params=parameter_floats(analysis.mechanism, pvals), overrides=tuple(params or ()),
-        sensitivity=sens)
+        links=links, sensitivity=sens)
 
 
 def _explain(analysis: Analysis, inputs, level, params, sensitivity: bool = False) -> None:

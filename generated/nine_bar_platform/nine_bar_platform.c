@@ -3,7 +3,7 @@
  * Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
  * Points: F; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 158, rigid_res 114, linear 222, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
+ * Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
  */
 #include "nine_bar_platform.h"
 
@@ -15,7 +15,8 @@ enum {
     SK_K = 6,          /* non-input hinges: size of the loop unknowns */
     SK_K1 = 7,
     SK_NDYAD = 2,
-    SK_NP = 1
+    SK_NP = 1,
+    SK_NL = 9            /* links whose rotation is reported */
 };
 
 const double nine_bar_platform_default_params[NINE_BAR_PLATFORM_N_PARAMS > 0 ? NINE_BAR_PLATFORM_N_PARAMS : 1] = {
@@ -35,6 +36,18 @@ const char *const nine_bar_platform_param_names[NINE_BAR_PLATFORM_N_PARAMS > 0 ?
 
 const char *const nine_bar_platform_point_names[NINE_BAR_PLATFORM_N_POINTS > 0 ? NINE_BAR_PLATFORM_N_POINTS : 1] = {
     "F"
+};
+
+const char *const nine_bar_platform_link_names[NINE_BAR_PLATFORM_N_LINKS > 0 ? NINE_BAR_PLATFORM_N_LINKS : 1] = {
+    "frame",
+    "b1",
+    "b2",
+    "b3",
+    "b4",
+    "b5",
+    "b6",
+    "b7",
+    "b8"
 };
 
 const char *const nine_bar_platform_hinge_names[NINE_BAR_PLATFORM_N_HINGES] = {
@@ -355,6 +368,247 @@ static void sk_linear(const double *theta, const double *params, double *out)
     out[41] = -_tmp59 + 0.25*_tmp61*_tmp62*p_0*cos(_tmp60) - _tmp64*_tmp72 - _tmp66*_tmp71 - _tmp68*_tmp74 - _tmp70*_tmp73;
 }
 
+/* exact compliant closure F(delta) and dF/ddelta (531 operations) */
+static void sk_newton(const double *theta, const double *delta, const double *params, double *out)
+{
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double theta_5 = theta[4];
+    const double theta_6 = theta[5];
+    const double theta_7 = theta[6];
+    const double theta_8 = theta[7];
+    const double theta_9 = theta[8];
+    const double theta_10 = theta[9];
+    const double delta_5 = delta[0];
+    const double delta_6 = delta[1];
+    const double delta_7 = delta[2];
+    const double delta_8 = delta[3];
+    const double delta_9 = delta[4];
+    const double delta_10 = delta[5];
+    const double p_0 = params[0];
+    const double _tmp0 = delta_5 + delta_6;
+    const double _tmp1 = theta_1 + theta_2;
+    const double _tmp2 = _tmp1 + theta_3;
+    const double _tmp3 = _tmp2 + theta_4;
+    const double _tmp4 = _tmp3 + theta_5;
+    const double _tmp5 = cos(_tmp4);
+    const double _tmp6 = sin(delta_5);
+    const double _tmp7 = 0.5*delta_5;
+    const double _tmp8 = pow(sin(_tmp7), 2);
+    const double _tmp9 = -0.02*_tmp6 + 0.1*_tmp8;
+    const double _tmp10 = _tmp4 + theta_6;
+    const double _tmp11 = cos(_tmp10);
+    const double _tmp12 = sin(_tmp0);
+    const double _tmp13 = 0.5*delta_6;
+    const double _tmp14 = pow(sin(_tmp13 + _tmp7), 2);
+    const double _tmp15 = -0.05*_tmp12 - 0.08*_tmp14;
+    const double _tmp16 = sin(_tmp10);
+    const double _tmp17 = 0.04*_tmp12 - 0.1*_tmp14;
+    const double _tmp18 = sin(_tmp4);
+    const double _tmp19 = -0.05*_tmp6 - 0.04*_tmp8;
+    const double _tmp20 = 0.5*delta_9 + 0.5*theta_9;
+    const double _tmp21 = sin(_tmp20);
+    const double _tmp22 = 0.25*p_0;
+    const double _tmp23 = delta_9 + theta_9;
+    const double _tmp24 = pow(_tmp23, 2);
+    const double _tmp25 = symkin_arck(_tmp20);
+    const double _tmp26 = _tmp24*_tmp25;
+    const double _tmp27 = 0.5*theta_4;
+    const double _tmp28 = sin(_tmp27);
+    const double _tmp29 = sin(_tmp2);
+    const double _tmp30 = _tmp22*_tmp29;
+    const double _tmp31 = pow(theta_4, 2)*symkin_arck(_tmp27);
+    const double _tmp32 = _tmp30*_tmp31;
+    const double _tmp33 = _tmp7 + 0.5*theta_5;
+    const double _tmp34 = sin(_tmp33);
+    const double _tmp35 = sin(_tmp3);
+    const double _tmp36 = delta_5 + theta_5;
+    const double _tmp37 = symkin_arck(_tmp33);
+    const double _tmp38 = pow(_tmp36, 2)*_tmp37;
+    const double _tmp39 = _tmp22*_tmp38;
+    const double _tmp40 = _tmp35*_tmp39;
+    const double _tmp41 = _tmp13 + 0.5*theta_6;
+    const double _tmp42 = cos(_tmp41);
+    const double _tmp43 = _tmp3 + _tmp36;
+    const double _tmp44 = sin(_tmp43);
+    const double _tmp45 = symkin_arck(_tmp41);
+    const double _tmp46 = delta_6 + theta_6;
+    const double _tmp47 = pow(_tmp46, 2);
+    const double _tmp48 = _tmp22*_tmp45*_tmp47;
+    const double _tmp49 = _tmp44*_tmp48;
+    const double _tmp50 = sin(_tmp41);
+    const double _tmp51 = cos(_tmp43);
+    const double _tmp52 = _tmp48*_tmp51;
+    const double _tmp53 = cos(_tmp27);
+    const double _tmp54 = cos(_tmp2);
+    const double _tmp55 = _tmp22*_tmp54;
+    const double _tmp56 = _tmp31*_tmp55;
+    const double _tmp57 = cos(_tmp33);
+    const double _tmp58 = cos(_tmp3);
+    const double _tmp59 = _tmp39*_tmp58;
+    const double _tmp60 = 0.5*theta_1;
+    const double _tmp61 = _tmp22*pow(theta_1, 2)*symkin_arck(_tmp60);
+    const double _tmp62 = sin(theta_1);
+    const double _tmp63 = 0.5*theta_2;
+    const double _tmp64 = _tmp22*pow(theta_2, 2)*symkin_arck(_tmp63);
+    const double _tmp65 = _tmp64*sin(_tmp63);
+    const double _tmp66 = 0.5*theta_3;
+    const double _tmp67 = sin(_tmp66);
+    const double _tmp68 = _tmp22*pow(theta_3, 2)*symkin_arck(_tmp66);
+    const double _tmp69 = _tmp68*sin(_tmp1);
+    const double _tmp70 = cos(theta_1);
+    const double _tmp71 = _tmp64*cos(_tmp63);
+    const double _tmp72 = cos(_tmp66);
+    const double _tmp73 = _tmp68*cos(_tmp1);
+    const double _tmp74 = _tmp61*sin(_tmp60) + _tmp62*_tmp65 + _tmp67*_tmp69 - _tmp70*_tmp71 - _tmp72*_tmp73;
+    const double _tmp75 = cos(_tmp20);
+    const double _tmp76 = _tmp42*_tmp52;
+    const double _tmp77 = _tmp49*_tmp50;
+    const double _tmp78 = _tmp61*cos(_tmp60) + _tmp62*_tmp71 + _tmp65*_tmp70 + _tmp67*_tmp73 + _tmp69*_tmp72;
+    const double _tmp79 = delta_7 + delta_8;
+    const double _tmp80 = _tmp2 + theta_7;
+    const double _tmp81 = cos(_tmp80);
+    const double _tmp82 = sin(delta_7);
+    const double _tmp83 = 0.5*delta_7;
+    const double _tmp84 = pow(sin(_tmp83), 2);
+    const double _tmp85 = -0.005*_tmp82 + 0.08*_tmp84;
+    const double _tmp86 = _tmp80 + theta_8;
+    const double _tmp87 = cos(_tmp86);
+    const double _tmp88 = sin(_tmp79);
+    const double _tmp89 = 0.5*delta_8;
+    const double _tmp90 = pow(sin(_tmp83 + _tmp89), 2);
+    const double _tmp91 = -0.035*_tmp88 - 0.05*_tmp90;
+    const double _tmp92 = sin(_tmp86);
+    const double _tmp93 = 0.025*_tmp88 - 0.07*_tmp90;
+    const double _tmp94 = sin(_tmp80);
+    const double _tmp95 = -0.04*_tmp82 - 0.01*_tmp84;
+    const double _tmp96 = 0.5*delta_10 + 0.5*theta_10;
+    const double _tmp97 = sin(_tmp96);
+    const double _tmp98 = delta_10 + theta_10;
+    const double _tmp99 = pow(_tmp98, 2);
+    const double _tmp100 = symkin_arck(_tmp96);
+    const double _tmp101 = _tmp100*_tmp99;
+    const double _tmp102 = _tmp83 + 0.5*theta_7;
+    const double _tmp103 = sin(_tmp102);
+    const double _tmp104 = delta_7 + theta_7;
+    const double _tmp105 = symkin_arck(_tmp102);
+    const double _tmp106 = pow(_tmp104, 2)*_tmp105;
+    const double _tmp107 = _tmp106*_tmp30;
+    const double _tmp108 = _tmp89 + 0.5*theta_8;
+    const double _tmp109 = sin(_tmp108);
+    const double _tmp110 = _tmp104 + _tmp2;
+    const double _tmp111 = sin(_tmp110);
+    const double _tmp112 = delta_8 + theta_8;
+    const double _tmp113 = pow(_tmp112, 2);
+    const double _tmp114 = symkin_arck(_tmp108);
+    const double _tmp115 = _tmp113*_tmp114;
+    const double _tmp116 = _tmp115*_tmp22;
+    const double _tmp117 = _tmp111*_tmp116;
+    const double _tmp118 = cos(_tmp102);
+    const double _tmp119 = _tmp106*_tmp55;
+    const double _tmp120 = cos(_tmp108);
+    const double _tmp121 = cos(_tmp110);
+    const double _tmp122 = _tmp116*_tmp121;
+    const double _tmp123 = _tmp120*_tmp122;
+    const double _tmp124 = cos(_tmp96);
+    const double _tmp125 = _tmp109*_tmp122 + _tmp117*_tmp120;
+    const double _tmp126 = _tmp57*p_0;
+    const double _tmp127 = 0.5*_tmp36*_tmp37;
+    const double _tmp128 = _tmp34*p_0;
+    const double _tmp129 = 0.125*_tmp38;
+    const double _tmp130 = 0.0625*pow(_tmp36, 3)*(3*symkin_cosr2(_tmp33) + symkin_sinr1(_tmp33) - 3*symkin_sinr2(_tmp33));
+    const double _tmp131 = _tmp126*_tmp127 + _tmp126*_tmp130 - _tmp128*_tmp129;
+    const double _tmp132 = _tmp126*_tmp129 + _tmp127*_tmp128 + _tmp128*_tmp130;
+    const double _tmp133 = _tmp0 + _tmp10;
+    const double _tmp134 = cos(_tmp133);
+    const double _tmp135 = sin(_tmp133);
+    const double _tmp136 = 0.05*_tmp134 + 0.04*_tmp135;
+    const double _tmp137 = 0.5*_tmp46;
+    const double _tmp138 = _tmp50*p_0;
+    const double _tmp139 = _tmp138*_tmp45;
+    const double _tmp140 = _tmp42*p_0;
+    const double _tmp141 = _tmp140*_tmp45;
+    const double _tmp142 = 0.125*_tmp47;
+    const double _tmp143 = 0.0625*pow(_tmp46, 3)*(3*symkin_cosr2(_tmp41) + symkin_sinr1(_tmp41) - 3*symkin_sinr2(_tmp41));
+    const double _tmp144 = -_tmp137*_tmp139 - _tmp138*_tmp143 - _tmp141*_tmp142;
+    const double _tmp145 = _tmp137*_tmp141 - _tmp139*_tmp142 + _tmp140*_tmp143;
+    const double _tmp146 = _tmp21*p_0;
+    const double _tmp147 = 0.5*_tmp23*_tmp25;
+    const double _tmp148 = _tmp75*p_0;
+    const double _tmp149 = 0.125*_tmp26;
+    const double _tmp150 = 0.0625*pow(_tmp23, 3)*(3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20) - 3*symkin_sinr2(_tmp20));
+    const double _tmp151 = -0.04*_tmp134 + 0.05*_tmp135;
+    const double _tmp152 = _tmp79 + _tmp86;
+    const double _tmp153 = cos(_tmp152);
+    const double _tmp154 = 0.035*_tmp153;
+    const double _tmp155 = sin(_tmp152);
+    const double _tmp156 = 0.025*_tmp155;
+    const double _tmp157 = _tmp103*p_0;
+    const double _tmp158 = 0.5*_tmp104*_tmp105;
+    const double _tmp159 = _tmp118*p_0;
+    const double _tmp160 = 0.125*_tmp106;
+    const double _tmp161 = 0.0625*pow(_tmp104, 3)*(3*symkin_cosr2(_tmp102) + symkin_sinr1(_tmp102) - 3*symkin_sinr2(_tmp102));
+    const double _tmp162 = _tmp157*_tmp158 + _tmp157*_tmp161 + _tmp159*_tmp160;
+    const double _tmp163 = -_tmp157*_tmp160 + _tmp158*_tmp159 + _tmp159*_tmp161;
+    const double _tmp164 = _tmp120*p_0;
+    const double _tmp165 = 0.5*_tmp112*_tmp114;
+    const double _tmp166 = _tmp109*p_0;
+    const double _tmp167 = 0.125*_tmp115;
+    const double _tmp168 = 0.0625*pow(_tmp112, 3)*(3*symkin_cosr2(_tmp108) + symkin_sinr1(_tmp108) - 3*symkin_sinr2(_tmp108));
+    const double _tmp169 = _tmp164*_tmp165 + _tmp164*_tmp168 - _tmp166*_tmp167;
+    const double _tmp170 = _tmp164*_tmp167 + _tmp165*_tmp166 + _tmp166*_tmp168;
+    const double _tmp171 = _tmp97*p_0;
+    const double _tmp172 = 0.5*_tmp100*_tmp98;
+    const double _tmp173 = _tmp124*p_0;
+    const double _tmp174 = 0.125*_tmp101;
+    const double _tmp175 = 0.0625*pow(_tmp98, 3)*(3*symkin_cosr2(_tmp96) + symkin_sinr1(_tmp96) - 3*symkin_sinr2(_tmp96));
+    const double _tmp176 = -0.025*_tmp153 + 0.035*_tmp155;
+    out[0] = -_tmp0 + delta_9;
+    out[1] = _tmp11*_tmp15 - _tmp16*_tmp17 - _tmp18*_tmp19 - _tmp21*_tmp22*_tmp26 + _tmp28*_tmp32 + _tmp34*_tmp40 + _tmp42*_tmp49 + _tmp5*_tmp9 + _tmp50*_tmp52 - _tmp53*_tmp56 - _tmp57*_tmp59 + _tmp74;
+    out[2] = _tmp11*_tmp17 + _tmp15*_tmp16 + _tmp18*_tmp9 + _tmp19*_tmp5 + 0.25*_tmp24*_tmp25*_tmp75*p_0 - _tmp28*_tmp56 - _tmp32*_tmp53 - _tmp34*_tmp59 - _tmp40*_tmp57 - _tmp76 + _tmp77 - _tmp78;
+    out[3] = -_tmp79 + delta_10;
+    out[4] = -_tmp101*_tmp22*_tmp97 + _tmp103*_tmp107 + _tmp109*_tmp117 - _tmp118*_tmp119 - _tmp123 + _tmp74 + _tmp81*_tmp85 + _tmp87*_tmp91 - _tmp92*_tmp93 - _tmp94*_tmp95;
+    out[5] = 0.25*_tmp100*_tmp124*_tmp99*p_0 - _tmp103*_tmp119 - _tmp107*_tmp118 - _tmp125 - _tmp78 + _tmp81*_tmp95 + _tmp85*_tmp94 + _tmp87*_tmp93 + _tmp91*_tmp92;
+    out[6] = -1;
+    out[7] = -1;
+    out[8] = 0;
+    out[9] = 0;
+    out[10] = 1;
+    out[11] = 0;
+    out[12] = -_tmp131*_tmp58 + _tmp132*_tmp35 - _tmp136 + 0.05*_tmp44 - 0.02*_tmp51 + _tmp76 - _tmp77;
+    out[13] = -_tmp136 - _tmp144*_tmp51 + _tmp145*_tmp44;
+    out[14] = 0;
+    out[15] = 0;
+    out[16] = -_tmp146*_tmp147 - _tmp146*_tmp150 - _tmp148*_tmp149;
+    out[17] = 0;
+    out[18] = -_tmp131*_tmp35 - _tmp132*_tmp58 - _tmp151 + 0.25*_tmp42*_tmp44*_tmp45*_tmp47*p_0 - 0.02*_tmp44 + 0.25*_tmp45*_tmp47*_tmp50*_tmp51*p_0 - 0.05*_tmp51;
+    out[19] = -_tmp144*_tmp44 - _tmp145*_tmp51 - _tmp151;
+    out[20] = 0;
+    out[21] = 0;
+    out[22] = -_tmp146*_tmp149 + _tmp147*_tmp148 + _tmp148*_tmp150;
+    out[23] = 0;
+    out[24] = 0;
+    out[25] = 0;
+    out[26] = -1;
+    out[27] = -1;
+    out[28] = 0;
+    out[29] = 1;
+    out[30] = 0;
+    out[31] = 0;
+    out[32] = 0.04*_tmp111 - 0.005*_tmp121 + _tmp125 - _tmp154 - _tmp156 + _tmp162*_tmp29 - _tmp163*_tmp54;
+    out[33] = _tmp111*_tmp170 - _tmp121*_tmp169 - _tmp154 - _tmp156;
+    out[34] = 0;
+    out[35] = -_tmp171*_tmp172 - _tmp171*_tmp175 - _tmp173*_tmp174;
+    out[36] = 0;
+    out[37] = 0;
+    out[38] = 0.25*_tmp109*_tmp111*_tmp113*_tmp114*p_0 - 0.005*_tmp111 - 0.04*_tmp121 - _tmp123 - _tmp162*_tmp54 - _tmp163*_tmp29 - _tmp176;
+    out[39] = -_tmp111*_tmp169 - _tmp121*_tmp170 - _tmp176;
+    out[40] = 0;
+    out[41] = -_tmp171*_tmp174 + _tmp172*_tmp173 + _tmp173*_tmp175;
+}
+
 /* rigid positions of the points (14 operations) */
 static void sk_rigid_points(const double *theta, const double *params, double *out)
 {
@@ -431,6 +685,46 @@ static void sk_dev_exact(const double *theta, const double *delta, const double 
     const double _tmp10 = cos(_tmp3);
     out[0] = 0.25*_tmp10*_tmp5*_tmp6*_tmp9*p_0 - _tmp2*sin(_tmp0) - _tmp4*_tmp8;
     out[1] = _tmp10*_tmp8 + _tmp2*cos(_tmp0) + _tmp4*_tmp7*_tmp9;
+}
+
+/* rotation of every link and how much further the compliant one turns (9 operations) */
+static void sk_links(const double *theta, const double *delta, double *out)
+{
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double theta_5 = theta[4];
+    const double theta_6 = theta[5];
+    const double theta_7 = theta[6];
+    const double theta_8 = theta[7];
+    const double delta_5 = delta[0];
+    const double delta_6 = delta[1];
+    const double delta_7 = delta[2];
+    const double delta_8 = delta[3];
+    const double _tmp0 = theta_1 + theta_2;
+    const double _tmp1 = _tmp0 + theta_3;
+    const double _tmp2 = _tmp1 + theta_4;
+    const double _tmp3 = _tmp2 + theta_5;
+    const double _tmp4 = _tmp1 + theta_7;
+    out[0] = 0;
+    out[1] = theta_1;
+    out[2] = _tmp0;
+    out[3] = _tmp1;
+    out[4] = _tmp2;
+    out[5] = _tmp3;
+    out[6] = _tmp3 + theta_6;
+    out[7] = _tmp4;
+    out[8] = _tmp4 + theta_8;
+    out[9] = 0;
+    out[10] = 0;
+    out[11] = 0;
+    out[12] = 0;
+    out[13] = 0;
+    out[14] = delta_5;
+    out[15] = delta_5 + delta_6;
+    out[16] = delta_7;
+    out[17] = delta_7 + delta_8;
 }
 
 /* rigid stage: A, dG/dv; rigid points: dR/dtheta, dR/dv (142 operations) */
@@ -906,10 +1200,57 @@ static double sk_rigid_newton(double *theta, const double *params, int iteration
     return change;
 }
 
+/* Level first_order, and the start of every other loop-solving level: A delta = -Phi dz.
+   Returns 0, or 1 when A is singular. */
+static int sk_first_order(const double *theta, const double *params, double *delta)
+{
+    double lin[SK_K * SK_K + SK_K];
+    int i;
+    sk_linear(theta, params, lin);
+    for (i = 0; i < SK_K; ++i) {
+        delta[i] = -lin[SK_K * SK_K + i];
+    }
+    return sk_solve(SK_K, lin, delta);
+}
+
+/* Level exact: Newton on the compliant closure from the first-order delta, ending once a step
+   is below sqrt(eps) of delta (quadratic convergence leaves it exact) or stalls at rounding.
+   Returns 0, 1 when a Jacobian is singular, 2 without convergence. */
+static int sk_exact(const double *theta, const double *params, double *delta)
+{
+    double nw[SK_K + SK_K * SK_K];
+    double previous = HUGE_VAL;
+    int it, i, converged = 0;
+    if (sk_first_order(theta, params, delta)) {
+        return 1;
+    }
+    for (it = 0; it < 40 && !converged; ++it) {
+        double size = 0.0, change = 0.0;
+        sk_newton(theta, delta, params, nw);
+        if (sk_solve(SK_K, nw + SK_K, nw)) {
+            return 1;
+        }
+        for (i = 0; i < SK_K; ++i) {
+            delta[i] -= nw[i];
+            if (fabs(delta[i]) > size) {
+                size = fabs(delta[i]);
+            }
+            if (fabs(nw[i]) > change) {
+                change = fabs(nw[i]);
+            }
+        }
+        converged = change <= 1e-08 * size || size == 0.0
+                    || (change >= 0.5 * previous && change <= 1e-12 * size);
+        previous = change;
+    }
+    return converged ? 0 : 2;
+}
+
 /* The configuration: the arguments checked, the rigid angles theta (every hinge) and, at the
-   levels that solve the loops, delta (the non-input hinges). Returns a status code. */
-static int sk_pose(const double *inputs, const double *params, int level, double *theta,
-                   double *delta)
+   levels that solve the loops, delta (the non-input hinges; solved for the links' rotations
+   only when want_links). Returns a status code. */
+static int sk_pose(const double *inputs, const double *params, int level, int want_links,
+                   double *theta, double *delta)
 {
     int i;
 
@@ -954,6 +1295,18 @@ static int sk_pose(const double *inputs, const double *params, int level, double
     /* polish: the relative accuracy of small angles */
     if (sk_rigid_newton(theta, params, 1, 0.0) < 0.0) {
         return 1;
+    }
+    if (want_links) {               /* only the links' rotations need the loops solved */
+        int status = 0;
+        if (level == 1) {
+            status = sk_first_order(theta, params, delta);
+        }
+        else if (level == 2) {
+            status = sk_exact(theta, params, delta);
+        }
+        if (status) {
+            return status;
+        }
     }
     /* hinge 1: its plate holds for |theta| < 3.141592653589793 only */
     if (!(fabs(theta[0]) <= 3.141592653589793)) {
@@ -1013,13 +1366,15 @@ static int sk_pose(const double *inputs, const double *params, int level, double
     if (!(fabs(theta[9] + delta[5]) <= 3.141592653589793)) {
         return 1;
     }
+    (void)want_links;
     return 0;
 }
 
 /* The points of a solved configuration: per point rigid x, y, compliant x, y, deviation x, y
-   into out and, when angles is not NULL, the rigid then the compliant hinge angles. */
+   into out; when angles is not NULL the rigid then the compliant hinge angles; when links is
+   not NULL every reported link's rigid rotation, compliant rotation and deviation. */
 static int sk_outputs(const double *theta, const double *delta, const double *params,
-                      int level, double *out, double *angles)
+                      int level, double *out, double *angles, double *links)
 {
     double rigid[2 * SK_NP + 1], dev[2 * SK_NP + 1];
     int i;
@@ -1057,6 +1412,20 @@ static int sk_outputs(const double *theta, const double *delta, const double *pa
             angles[SK_M + sk_unknown_index[i]] += delta[i];
         }
     }
+    if (links != NULL) {
+        double rot[2 * SK_NL];
+        sk_links(theta, delta, rot);
+        for (i = 0; i < 2 * SK_NL; ++i) {
+            if (!isfinite(rot[i])) {
+                return 2;
+            }
+        }
+        for (i = 0; i < SK_NL; ++i) {
+            links[3 * i + 0] = remainder(rot[i], sk_two_pi);
+            links[3 * i + 1] = links[3 * i + 0] + rot[SK_NL + i];
+            links[3 * i + 2] = rot[SK_NL + i];
+        }
+    }
     (void)delta;
     (void)level;
     return 0;
@@ -1071,8 +1440,8 @@ static void sk_nan(double *x, int n)
     }
 }
 
-int nine_bar_platform_evaluate_angles(const double *inputs, const double *params, int level, double *out,
-                    double *angles)
+int nine_bar_platform_evaluate_pose(const double *inputs, const double *params, int level, double *out,
+                    double *angles, double *links)
 {
     double theta[SK_M];
     double delta[SK_K1];
@@ -1081,20 +1450,27 @@ int nine_bar_platform_evaluate_angles(const double *inputs, const double *params
     if (params == NULL) {
         params = nine_bar_platform_default_params;
     }
-    status = out == NULL ? 3 : sk_pose(inputs, params, level, theta, delta);
+    status = out == NULL ? 3 : sk_pose(inputs, params, level, links != NULL, theta, delta);
     if (status == 0) {
-        status = sk_outputs(theta, delta, params, level, out, angles);
+        status = sk_outputs(theta, delta, params, level, out, angles, links);
     }
     if (status != 0) {
         sk_nan(out, 6 * SK_NP);
         sk_nan(angles, 2 * SK_M);
+        sk_nan(links, 3 * SK_NL);
     }
     return status;
 }
 
+int nine_bar_platform_evaluate_angles(const double *inputs, const double *params, int level, double *out,
+                    double *angles)
+{
+    return nine_bar_platform_evaluate_pose(inputs, params, level, out, angles, NULL);
+}
+
 int nine_bar_platform_evaluate(const double *inputs, const double *params, int level, double *out)
 {
-    return nine_bar_platform_evaluate_angles(inputs, params, level, out, NULL);
+    return nine_bar_platform_evaluate_pose(inputs, params, level, out, NULL, NULL);
 }
 
 int nine_bar_platform_evaluate_angles_batch(int n, const double *inputs, const double *params, int level,
@@ -1210,9 +1586,9 @@ int nine_bar_platform_sensitivity_full(const double *inputs, const double *param
     if (params == NULL) {
         params = nine_bar_platform_default_params;
     }
-    status = deviation == NULL ? 3 : sk_pose(inputs, params, level, theta, delta);
+    status = deviation == NULL ? 3 : sk_pose(inputs, params, level, 0, theta, delta);
     if (status == 0 && values != NULL) {
-        status = sk_outputs(theta, delta, params, level, values, NULL);
+        status = sk_outputs(theta, delta, params, level, values, NULL, NULL);
     }
     if (status == 0) {
         status = sk_sensitivity(theta, delta, params, level, dev, rig);

@@ -2,13 +2,15 @@
 Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
 Points: F; levels: paper, first_order, exact.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 158, rigid_res 114, linear 222, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
+Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
 shape (2, *broadcast_shape); entries that cannot be assembled (or do not converge) are NaN and
 False in ok. It also holds "angles": {"rigid": {H: a}, "compliant": {H: a}}, every hinge's
-angle (radians, the rotation of links[1] relative to links[0] from the as-fabricated pose).
+angle (radians, the rotation of links[1] relative to links[0] from the as-fabricated pose), and
+"links": {L: {"rigid": a, "compliant": a, "deviation": a}}, the rotation of every link in LINKS
+from the as-fabricated pose (rigid wrapped to (-pi, pi]; the deviation computed directly).
 
 sensitivity(inputs, level, params) gives {P: {p: a}}: d(dx, dy)/dp of every point's deviation
 by every parameter p, each a of shape (2, *broadcast_shape); sensitivity_full(...) adds the
@@ -24,6 +26,7 @@ import numpy as np
 INPUTS = ('O', 'A', 'B', 'K', )
 PARAMETERS = {'l': 0.0006}
 HINGES = ('O', 'A', 'B', 'K', 'G', 'H', 'C', 'D', 'I', 'E', )
+LINKS = ('frame', 'b1', 'b2', 'b3', 'b4', 'b5', 'b6', 'b7', 'b8', )
 POINTS = ('F', )
 LEVELS = ('paper', 'first_order', 'exact', )
 
@@ -33,6 +36,7 @@ _UNKNOWN_INDEX = (4, 5, 6, 7, 8, 9, )
 _N_DYADS = 2
 _LIMITS = ((0, 3.141592653589793), (1, 3.141592653589793), (2, 3.141592653589793), (3, 3.141592653589793), (4, 3.141592653589793), (5, 3.141592653589793), (6, 3.141592653589793), (7, 3.141592653589793), (8, 3.141592653589793), (9, 3.141592653589793), )  # models valid for |theta| < limit
 _NEEDS_LOOPS = False
+_LOOPS_FOR_LINKS = True  # the links' rotations alone need the loops solved
 _DTYPE = numpy.float64
 _POLISH = 1  # Newton steps after the rigid start: relative accuracy of small angles
 _EXACT_ITERATIONS = 40  # Newton cap of the exact level
@@ -351,6 +355,234 @@ def _linear(theta, params):
     ]
 
 
+def _newton(theta, delta, params):
+    """exact compliant closure F(delta) and dF/ddelta (531 operations)."""
+    theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7, theta_8, theta_9, theta_10 = theta
+    delta_5, delta_6, delta_7, delta_8, delta_9, delta_10 = delta
+    p_0, = params
+    _tmp0 = delta_5 + delta_6
+    _tmp1 = theta_1 + theta_2
+    _tmp2 = _tmp1 + theta_3
+    _tmp3 = _tmp2 + theta_4
+    _tmp4 = _tmp3 + theta_5
+    _tmp5 = numpy.cos(_tmp4)
+    _tmp6 = numpy.sin(delta_5)
+    _tmp7 = 0.5*delta_5
+    _tmp8 = numpy.sin(_tmp7)**2
+    _tmp9 = -0.02*_tmp6 + 0.1*_tmp8
+    _tmp10 = _tmp4 + theta_6
+    _tmp11 = numpy.cos(_tmp10)
+    _tmp12 = numpy.sin(_tmp0)
+    _tmp13 = 0.5*delta_6
+    _tmp14 = numpy.sin(_tmp13 + _tmp7)**2
+    _tmp15 = -0.05*_tmp12 - 0.08*_tmp14
+    _tmp16 = numpy.sin(_tmp10)
+    _tmp17 = 0.04*_tmp12 - 0.1*_tmp14
+    _tmp18 = numpy.sin(_tmp4)
+    _tmp19 = -0.05*_tmp6 - 0.04*_tmp8
+    _tmp20 = 0.5*delta_9 + 0.5*theta_9
+    _tmp21 = numpy.sin(_tmp20)
+    _tmp22 = 0.25*p_0
+    _tmp23 = delta_9 + theta_9
+    _tmp24 = _tmp23**2
+    _tmp25 = arck(_tmp20)
+    _tmp26 = _tmp24*_tmp25
+    _tmp27 = 0.5*theta_4
+    _tmp28 = numpy.sin(_tmp27)
+    _tmp29 = numpy.sin(_tmp2)
+    _tmp30 = _tmp22*_tmp29
+    _tmp31 = theta_4**2*arck(_tmp27)
+    _tmp32 = _tmp30*_tmp31
+    _tmp33 = _tmp7 + 0.5*theta_5
+    _tmp34 = numpy.sin(_tmp33)
+    _tmp35 = numpy.sin(_tmp3)
+    _tmp36 = delta_5 + theta_5
+    _tmp37 = arck(_tmp33)
+    _tmp38 = _tmp36**2*_tmp37
+    _tmp39 = _tmp22*_tmp38
+    _tmp40 = _tmp35*_tmp39
+    _tmp41 = _tmp13 + 0.5*theta_6
+    _tmp42 = numpy.cos(_tmp41)
+    _tmp43 = _tmp3 + _tmp36
+    _tmp44 = numpy.sin(_tmp43)
+    _tmp45 = arck(_tmp41)
+    _tmp46 = delta_6 + theta_6
+    _tmp47 = _tmp46**2
+    _tmp48 = _tmp22*_tmp45*_tmp47
+    _tmp49 = _tmp44*_tmp48
+    _tmp50 = numpy.sin(_tmp41)
+    _tmp51 = numpy.cos(_tmp43)
+    _tmp52 = _tmp48*_tmp51
+    _tmp53 = numpy.cos(_tmp27)
+    _tmp54 = numpy.cos(_tmp2)
+    _tmp55 = _tmp22*_tmp54
+    _tmp56 = _tmp31*_tmp55
+    _tmp57 = numpy.cos(_tmp33)
+    _tmp58 = numpy.cos(_tmp3)
+    _tmp59 = _tmp39*_tmp58
+    _tmp60 = 0.5*theta_1
+    _tmp61 = _tmp22*theta_1**2*arck(_tmp60)
+    _tmp62 = numpy.sin(theta_1)
+    _tmp63 = 0.5*theta_2
+    _tmp64 = _tmp22*theta_2**2*arck(_tmp63)
+    _tmp65 = _tmp64*numpy.sin(_tmp63)
+    _tmp66 = 0.5*theta_3
+    _tmp67 = numpy.sin(_tmp66)
+    _tmp68 = _tmp22*theta_3**2*arck(_tmp66)
+    _tmp69 = _tmp68*numpy.sin(_tmp1)
+    _tmp70 = numpy.cos(theta_1)
+    _tmp71 = _tmp64*numpy.cos(_tmp63)
+    _tmp72 = numpy.cos(_tmp66)
+    _tmp73 = _tmp68*numpy.cos(_tmp1)
+    _tmp74 = _tmp61*numpy.sin(_tmp60) + _tmp62*_tmp65 + _tmp67*_tmp69 - _tmp70*_tmp71 - _tmp72*_tmp73
+    _tmp75 = numpy.cos(_tmp20)
+    _tmp76 = _tmp42*_tmp52
+    _tmp77 = _tmp49*_tmp50
+    _tmp78 = _tmp61*numpy.cos(_tmp60) + _tmp62*_tmp71 + _tmp65*_tmp70 + _tmp67*_tmp73 + _tmp69*_tmp72
+    _tmp79 = delta_7 + delta_8
+    _tmp80 = _tmp2 + theta_7
+    _tmp81 = numpy.cos(_tmp80)
+    _tmp82 = numpy.sin(delta_7)
+    _tmp83 = 0.5*delta_7
+    _tmp84 = numpy.sin(_tmp83)**2
+    _tmp85 = -0.005*_tmp82 + 0.08*_tmp84
+    _tmp86 = _tmp80 + theta_8
+    _tmp87 = numpy.cos(_tmp86)
+    _tmp88 = numpy.sin(_tmp79)
+    _tmp89 = 0.5*delta_8
+    _tmp90 = numpy.sin(_tmp83 + _tmp89)**2
+    _tmp91 = -0.035*_tmp88 - 0.05*_tmp90
+    _tmp92 = numpy.sin(_tmp86)
+    _tmp93 = 0.025*_tmp88 - 0.07*_tmp90
+    _tmp94 = numpy.sin(_tmp80)
+    _tmp95 = -0.04*_tmp82 - 0.01*_tmp84
+    _tmp96 = 0.5*delta_10 + 0.5*theta_10
+    _tmp97 = numpy.sin(_tmp96)
+    _tmp98 = delta_10 + theta_10
+    _tmp99 = _tmp98**2
+    _tmp100 = arck(_tmp96)
+    _tmp101 = _tmp100*_tmp99
+    _tmp102 = _tmp83 + 0.5*theta_7
+    _tmp103 = numpy.sin(_tmp102)
+    _tmp104 = delta_7 + theta_7
+    _tmp105 = arck(_tmp102)
+    _tmp106 = _tmp104**2*_tmp105
+    _tmp107 = _tmp106*_tmp30
+    _tmp108 = _tmp89 + 0.5*theta_8
+    _tmp109 = numpy.sin(_tmp108)
+    _tmp110 = _tmp104 + _tmp2
+    _tmp111 = numpy.sin(_tmp110)
+    _tmp112 = delta_8 + theta_8
+    _tmp113 = _tmp112**2
+    _tmp114 = arck(_tmp108)
+    _tmp115 = _tmp113*_tmp114
+    _tmp116 = _tmp115*_tmp22
+    _tmp117 = _tmp111*_tmp116
+    _tmp118 = numpy.cos(_tmp102)
+    _tmp119 = _tmp106*_tmp55
+    _tmp120 = numpy.cos(_tmp108)
+    _tmp121 = numpy.cos(_tmp110)
+    _tmp122 = _tmp116*_tmp121
+    _tmp123 = _tmp120*_tmp122
+    _tmp124 = numpy.cos(_tmp96)
+    _tmp125 = _tmp109*_tmp122 + _tmp117*_tmp120
+    _tmp126 = _tmp57*p_0
+    _tmp127 = 0.5*_tmp36*_tmp37
+    _tmp128 = _tmp34*p_0
+    _tmp129 = 0.125*_tmp38
+    _tmp130 = 0.0625*_tmp36**3*(3*cosr2(_tmp33) + sinr1(_tmp33) - 3*sinr2(_tmp33))
+    _tmp131 = _tmp126*_tmp127 + _tmp126*_tmp130 - _tmp128*_tmp129
+    _tmp132 = _tmp126*_tmp129 + _tmp127*_tmp128 + _tmp128*_tmp130
+    _tmp133 = _tmp0 + _tmp10
+    _tmp134 = numpy.cos(_tmp133)
+    _tmp135 = numpy.sin(_tmp133)
+    _tmp136 = 0.05*_tmp134 + 0.04*_tmp135
+    _tmp137 = 0.5*_tmp46
+    _tmp138 = _tmp50*p_0
+    _tmp139 = _tmp138*_tmp45
+    _tmp140 = _tmp42*p_0
+    _tmp141 = _tmp140*_tmp45
+    _tmp142 = 0.125*_tmp47
+    _tmp143 = 0.0625*_tmp46**3*(3*cosr2(_tmp41) + sinr1(_tmp41) - 3*sinr2(_tmp41))
+    _tmp144 = -_tmp137*_tmp139 - _tmp138*_tmp143 - _tmp141*_tmp142
+    _tmp145 = _tmp137*_tmp141 - _tmp139*_tmp142 + _tmp140*_tmp143
+    _tmp146 = _tmp21*p_0
+    _tmp147 = 0.5*_tmp23*_tmp25
+    _tmp148 = _tmp75*p_0
+    _tmp149 = 0.125*_tmp26
+    _tmp150 = 0.0625*_tmp23**3*(3*cosr2(_tmp20) + sinr1(_tmp20) - 3*sinr2(_tmp20))
+    _tmp151 = -0.04*_tmp134 + 0.05*_tmp135
+    _tmp152 = _tmp79 + _tmp86
+    _tmp153 = numpy.cos(_tmp152)
+    _tmp154 = 0.035*_tmp153
+    _tmp155 = numpy.sin(_tmp152)
+    _tmp156 = 0.025*_tmp155
+    _tmp157 = _tmp103*p_0
+    _tmp158 = 0.5*_tmp104*_tmp105
+    _tmp159 = _tmp118*p_0
+    _tmp160 = 0.125*_tmp106
+    _tmp161 = 0.0625*_tmp104**3*(3*cosr2(_tmp102) + sinr1(_tmp102) - 3*sinr2(_tmp102))
+    _tmp162 = _tmp157*_tmp158 + _tmp157*_tmp161 + _tmp159*_tmp160
+    _tmp163 = -_tmp157*_tmp160 + _tmp158*_tmp159 + _tmp159*_tmp161
+    _tmp164 = _tmp120*p_0
+    _tmp165 = 0.5*_tmp112*_tmp114
+    _tmp166 = _tmp109*p_0
+    _tmp167 = 0.125*_tmp115
+    _tmp168 = 0.0625*_tmp112**3*(3*cosr2(_tmp108) + sinr1(_tmp108) - 3*sinr2(_tmp108))
+    _tmp169 = _tmp164*_tmp165 + _tmp164*_tmp168 - _tmp166*_tmp167
+    _tmp170 = _tmp164*_tmp167 + _tmp165*_tmp166 + _tmp166*_tmp168
+    _tmp171 = _tmp97*p_0
+    _tmp172 = 0.5*_tmp100*_tmp98
+    _tmp173 = _tmp124*p_0
+    _tmp174 = 0.125*_tmp101
+    _tmp175 = 0.0625*_tmp98**3*(3*cosr2(_tmp96) + sinr1(_tmp96) - 3*sinr2(_tmp96))
+    _tmp176 = -0.025*_tmp153 + 0.035*_tmp155
+    return [
+        -_tmp0 + delta_9,
+        _tmp11*_tmp15 - _tmp16*_tmp17 - _tmp18*_tmp19 - _tmp21*_tmp22*_tmp26 + _tmp28*_tmp32 + _tmp34*_tmp40 + _tmp42*_tmp49 + _tmp5*_tmp9 + _tmp50*_tmp52 - _tmp53*_tmp56 - _tmp57*_tmp59 + _tmp74,
+        _tmp11*_tmp17 + _tmp15*_tmp16 + _tmp18*_tmp9 + _tmp19*_tmp5 + 0.25*_tmp24*_tmp25*_tmp75*p_0 - _tmp28*_tmp56 - _tmp32*_tmp53 - _tmp34*_tmp59 - _tmp40*_tmp57 - _tmp76 + _tmp77 - _tmp78,
+        -_tmp79 + delta_10,
+        -_tmp101*_tmp22*_tmp97 + _tmp103*_tmp107 + _tmp109*_tmp117 - _tmp118*_tmp119 - _tmp123 + _tmp74 + _tmp81*_tmp85 + _tmp87*_tmp91 - _tmp92*_tmp93 - _tmp94*_tmp95,
+        0.25*_tmp100*_tmp124*_tmp99*p_0 - _tmp103*_tmp119 - _tmp107*_tmp118 - _tmp125 - _tmp78 + _tmp81*_tmp95 + _tmp85*_tmp94 + _tmp87*_tmp93 + _tmp91*_tmp92,
+        -1,
+        -1,
+        0,
+        0,
+        1,
+        0,
+        -_tmp131*_tmp58 + _tmp132*_tmp35 - _tmp136 + 0.05*_tmp44 - 0.02*_tmp51 + _tmp76 - _tmp77,
+        -_tmp136 - _tmp144*_tmp51 + _tmp145*_tmp44,
+        0,
+        0,
+        -_tmp146*_tmp147 - _tmp146*_tmp150 - _tmp148*_tmp149,
+        0,
+        -_tmp131*_tmp35 - _tmp132*_tmp58 - _tmp151 + 0.25*_tmp42*_tmp44*_tmp45*_tmp47*p_0 - 0.02*_tmp44 + 0.25*_tmp45*_tmp47*_tmp50*_tmp51*p_0 - 0.05*_tmp51,
+        -_tmp144*_tmp44 - _tmp145*_tmp51 - _tmp151,
+        0,
+        0,
+        -_tmp146*_tmp149 + _tmp147*_tmp148 + _tmp148*_tmp150,
+        0,
+        0,
+        0,
+        -1,
+        -1,
+        0,
+        1,
+        0,
+        0,
+        0.04*_tmp111 - 0.005*_tmp121 + _tmp125 - _tmp154 - _tmp156 + _tmp162*_tmp29 - _tmp163*_tmp54,
+        _tmp111*_tmp170 - _tmp121*_tmp169 - _tmp154 - _tmp156,
+        0,
+        -_tmp171*_tmp172 - _tmp171*_tmp175 - _tmp173*_tmp174,
+        0,
+        0,
+        0.25*_tmp109*_tmp111*_tmp113*_tmp114*p_0 - 0.005*_tmp111 - 0.04*_tmp121 - _tmp123 - _tmp162*_tmp54 - _tmp163*_tmp29 - _tmp176,
+        -_tmp111*_tmp169 - _tmp121*_tmp170 - _tmp176,
+        0,
+        -_tmp171*_tmp174 + _tmp172*_tmp173 + _tmp173*_tmp175,
+    ]
+
+
 def _rigid_points(theta, params):
     """rigid positions of the points (14 operations)."""
     theta_1, theta_2, _, _, _, _, _, _, _, _ = theta
@@ -423,6 +655,37 @@ def _dev_exact(theta, delta, params):
     return [
         0.25*_tmp10*_tmp5*_tmp6*_tmp9*p_0 - _tmp2*numpy.sin(_tmp0) - _tmp4*_tmp8,
         _tmp10*_tmp8 + _tmp2*numpy.cos(_tmp0) + _tmp4*_tmp7*_tmp9,
+    ]
+
+
+def _links(theta, delta):
+    """rotation of every link and how much further the compliant one turns (9 operations)."""
+    theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7, theta_8, _, _ = theta
+    delta_5, delta_6, delta_7, delta_8, _, _ = delta
+    _tmp0 = theta_1 + theta_2
+    _tmp1 = _tmp0 + theta_3
+    _tmp2 = _tmp1 + theta_4
+    _tmp3 = _tmp2 + theta_5
+    _tmp4 = _tmp1 + theta_7
+    return [
+        0,
+        theta_1,
+        _tmp0,
+        _tmp1,
+        _tmp2,
+        _tmp3,
+        _tmp3 + theta_6,
+        _tmp4,
+        _tmp4 + theta_8,
+        0,
+        0,
+        0,
+        0,
+        0,
+        delta_5,
+        delta_5 + delta_6,
+        delta_7,
+        delta_7 + delta_8,
     ]
 
 
@@ -937,15 +1200,15 @@ def _prepare(inputs, level, params):
     return arrays, [_DTYPE(v) for v in parameters(params)]
 
 
-def _blocks(run, arrays, level, p):
-    """run(arrays, level, p) over cache-sized blocks of the flattened inputs, its nested dict
-    of arrays (elements on the last axis) joined and shaped like the inputs."""
+def _blocks(run, arrays, *args):
+    """run(arrays, *args) over cache-sized blocks of the flattened inputs, its nested dict of
+    arrays (elements on the last axis) joined and shaped like the inputs."""
     shape = arrays[0].shape
     size = arrays[0].size
     if size <= _CHUNK:
-        return run(arrays, level, p)
+        return run(arrays, *args)
     flat = [a.reshape(-1) for a in arrays]
-    parts = [run([a[k:k + _CHUNK] for a in flat], level, p) for k in range(0, size, _CHUNK)]
+    parts = [run([a[k:k + _CHUNK] for a in flat], *args) for k in range(0, size, _CHUNK)]
 
     def join(items):
         if isinstance(items[0], dict):
@@ -955,20 +1218,22 @@ def _blocks(run, arrays, level, p):
     return join(parts)
 
 
-def evaluate(inputs, level='exact', params=None):
-    """Deviation of the points at `level` for broadcast input arrays (see the module docstring)."""
+def evaluate(inputs, level='exact', params=None, links=True):
+    """Deviation of the points at `level` for broadcast input arrays (see the module docstring);
+    `links=False` leaves out the links' rotations (and any loop solve only they need)."""
     arrays, p = _prepare(inputs, level, params)
-    return _blocks(_evaluate, arrays, level, p)
+    return _blocks(_evaluate, arrays, level, p, links)
 
 
-def _evaluate(arrays, level, p):
+def _evaluate(arrays, level, p, links):
     """evaluate() on one block of broadcast input arrays and parameter values p."""
-    theta, delta, ok = _pose(arrays, level, p)
-    return _points(theta, delta, ok, level, p)
+    theta, delta, ok = _pose(arrays, level, p, links)
+    return _points(theta, delta, ok, level, p, links)
 
 
-def _pose(arrays, level, p):
-    """The rigid angles theta (every hinge), delta (the non-input hinges) and the ok mask."""
+def _pose(arrays, level, p, links):
+    """The rigid angles theta (every hinge), delta (the non-input hinges; solved for the links'
+    rotations only when `links`) and the ok mask."""
     shape = arrays[0].shape
     ok = numpy.ones(shape, dtype=bool)
     for a in arrays:
@@ -978,7 +1243,7 @@ def _pose(arrays, level, p):
     with numpy.errstate(all="ignore"):
         theta, ok = _rigid_angles(x, p, ok)
         delta = [numpy.zeros(shape, dtype=_DTYPE) for _ in _UNKNOWN_INDEX]
-        if _NEEDS_LOOPS and level in _DELTA:
+        if (_NEEDS_LOOPS or (links and _LOOPS_FOR_LINKS)) and level in _DELTA:
             delta, ok = _DELTA[level](theta, p, ok)
         for i, limit in _LIMITS:
             ok = ok & (numpy.abs(theta[i]) <= limit)
@@ -987,8 +1252,9 @@ def _pose(arrays, level, p):
     return theta, delta, ok
 
 
-def _points(theta, delta, ok, level, p):
-    """The points (and angles) of solved configurations, NaN where not ok."""
+def _points(theta, delta, ok, level, p, links):
+    """The points, angles and (with `links`) the links' rotations of solved configurations, NaN
+    where not ok."""
     shape = ok.shape
     with numpy.errstate(all="ignore"):
         rigid = _rigid_points(theta, p)
@@ -998,9 +1264,10 @@ def _points(theta, delta, ok, level, p):
             dev = _dev_first_order(theta, delta, p)
         elif level == 'exact':
             dev = _dev_exact(theta, delta, p)
+        rot = [numpy.broadcast_to(v, shape) for v in _links(theta, delta)] if links else []
     rigid = [numpy.broadcast_to(v, shape) for v in rigid]
     dev = [numpy.broadcast_to(v, shape) for v in dev]
-    for v in rigid + dev:
+    for v in rigid + dev + rot:
         ok = ok & numpy.isfinite(v)            # a non-finite result is never ok
     compliant = list(theta)
     for j, i in enumerate(_UNKNOWN_INDEX):
@@ -1017,7 +1284,12 @@ def _points(theta, delta, ok, level, p):
         r = numpy.where(ok, r, numpy.nan).astype(_DTYPE)
         d = numpy.where(ok, d, numpy.nan).astype(_DTYPE)
         result[name] = {"rigid": r, "compliant": r + d, "deviation": d}
-    return {"points": result, "ok": ok, "angles": angles}
+    rotations = {}
+    for i, name in enumerate(LINKS if links else ()):
+        r = numpy.where(ok, _wrap(rot[i]), numpy.nan).astype(_DTYPE)
+        d = numpy.where(ok, rot[len(LINKS) + i], numpy.nan).astype(_DTYPE)
+        rotations[name] = {"rigid": r, "compliant": r + d, "deviation": d}
+    return {"points": result, "ok": ok, "angles": angles, "links": rotations}
 
 
 def sensitivity(inputs, level='exact', params=None):
@@ -1042,8 +1314,8 @@ def _times(a, b):
 
 def _sensitivity(arrays, level, p):
     """sensitivity_full() on one block: the implicit-function theorem on the closures."""
-    theta, delta, ok = _pose(arrays, level, p)
-    result = _points(theta, delta, ok, level, p)
+    theta, delta, ok = _pose(arrays, level, p, True)
+    result = _points(theta, delta, ok, level, p, True)
     ok = result["ok"]
     shape = ok.shape
     with numpy.errstate(all="ignore"):
@@ -1074,6 +1346,9 @@ def _sensitivity(arrays, level, p):
         for kind in result["angles"].values():
             for h in kind:
                 kind[h] = numpy.where(ok, kind[h], numpy.nan)
+        for link in result["links"].values():
+            for key in link:
+                link[key] = numpy.where(ok, link[key], numpy.nan)
     dev = numpy.where(ok[..., None, None], dev, numpy.nan)
     rig = numpy.where(ok[..., None, None], rig, numpy.nan)
     names = list(PARAMETERS)

@@ -3,7 +3,7 @@
  * Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
  * Points: D; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60, sens_rigid 70, sens_paper 118, sens_first_order 566, sens_exact 661.
+ * Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 566, sens_exact 661.
  */
 #include "stephenson_six_bar.h"
 
@@ -15,7 +15,8 @@ enum {
     SK_K = 6,          /* non-input hinges: size of the loop unknowns */
     SK_K1 = 7,
     SK_NDYAD = 2,
-    SK_NP = 1
+    SK_NP = 1,
+    SK_NL = 6            /* links whose rotation is reported */
 };
 
 const double stephenson_six_bar_default_params[STEPHENSON_SIX_BAR_N_PARAMS > 0 ? STEPHENSON_SIX_BAR_N_PARAMS : 1] = {
@@ -32,6 +33,15 @@ const char *const stephenson_six_bar_param_names[STEPHENSON_SIX_BAR_N_PARAMS > 0
 
 const char *const stephenson_six_bar_point_names[STEPHENSON_SIX_BAR_N_POINTS > 0 ? STEPHENSON_SIX_BAR_N_POINTS : 1] = {
     "D"
+};
+
+const char *const stephenson_six_bar_link_names[STEPHENSON_SIX_BAR_N_LINKS > 0 ? STEPHENSON_SIX_BAR_N_LINKS : 1] = {
+    "frame",
+    "input",
+    "coupler",
+    "rocker",
+    "link_ED",
+    "link_AB"
 };
 
 const char *const stephenson_six_bar_hinge_names[STEPHENSON_SIX_BAR_N_HINGES] = {
@@ -640,6 +650,32 @@ static void sk_dev_exact(const double *theta, const double *delta, const double 
     const double _tmp19 = 0.1767766952966369*_tmp12*_tmp13*_tmp16*p_0 - _tmp15;
     out[0] = -_tmp1*sin(_tmp0) - _tmp10*_tmp17 + _tmp18*_tmp19 - _tmp3*_tmp7 + _tmp8*_tmp9;
     out[1] = _tmp1*cos(_tmp0) + _tmp10*_tmp19 + _tmp17*_tmp18 + _tmp3*_tmp9 + _tmp7*_tmp8;
+}
+
+/* rotation of every link and how much further the compliant one turns (5 operations) */
+static void sk_links(const double *theta, const double *delta, double *out)
+{
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double theta_5 = theta[4];
+    const double delta_2 = delta[0];
+    const double delta_3 = delta[1];
+    const double delta_4 = delta[2];
+    const double delta_5 = delta[3];
+    out[0] = 0;
+    out[1] = theta_1;
+    out[2] = theta_1 + theta_2;
+    out[3] = theta_3;
+    out[4] = theta_3 + theta_4;
+    out[5] = theta_3 + theta_5;
+    out[6] = 0;
+    out[7] = 0;
+    out[8] = delta_2;
+    out[9] = delta_3;
+    out[10] = delta_3 + delta_4;
+    out[11] = delta_3 + delta_5;
 }
 
 /* rigid stage: A, dG/dv; rigid points: dR/dtheta, dR/dv (70 operations) */
@@ -1635,9 +1671,10 @@ static int sk_exact(const double *theta, const double *params, double *delta)
 }
 
 /* The configuration: the arguments checked, the rigid angles theta (every hinge) and, at the
-   levels that solve the loops, delta (the non-input hinges). Returns a status code. */
-static int sk_pose(const double *inputs, const double *params, int level, double *theta,
-                   double *delta)
+   levels that solve the loops, delta (the non-input hinges; solved for the links' rotations
+   only when want_links). Returns a status code. */
+static int sk_pose(const double *inputs, const double *params, int level, int want_links,
+                   double *theta, double *delta)
 {
     int i;
 
@@ -1741,13 +1778,15 @@ static int sk_pose(const double *inputs, const double *params, int level, double
     if (!(fabs(theta[6] + delta[5]) <= 3.141592653589793)) {
         return 1;
     }
+    (void)want_links;
     return 0;
 }
 
 /* The points of a solved configuration: per point rigid x, y, compliant x, y, deviation x, y
-   into out and, when angles is not NULL, the rigid then the compliant hinge angles. */
+   into out; when angles is not NULL the rigid then the compliant hinge angles; when links is
+   not NULL every reported link's rigid rotation, compliant rotation and deviation. */
 static int sk_outputs(const double *theta, const double *delta, const double *params,
-                      int level, double *out, double *angles)
+                      int level, double *out, double *angles, double *links)
 {
     double rigid[2 * SK_NP + 1], dev[2 * SK_NP + 1];
     int i;
@@ -1785,6 +1824,20 @@ static int sk_outputs(const double *theta, const double *delta, const double *pa
             angles[SK_M + sk_unknown_index[i]] += delta[i];
         }
     }
+    if (links != NULL) {
+        double rot[2 * SK_NL];
+        sk_links(theta, delta, rot);
+        for (i = 0; i < 2 * SK_NL; ++i) {
+            if (!isfinite(rot[i])) {
+                return 2;
+            }
+        }
+        for (i = 0; i < SK_NL; ++i) {
+            links[3 * i + 0] = remainder(rot[i], sk_two_pi);
+            links[3 * i + 1] = links[3 * i + 0] + rot[SK_NL + i];
+            links[3 * i + 2] = rot[SK_NL + i];
+        }
+    }
     (void)delta;
     (void)level;
     return 0;
@@ -1799,8 +1852,8 @@ static void sk_nan(double *x, int n)
     }
 }
 
-int stephenson_six_bar_evaluate_angles(const double *inputs, const double *params, int level, double *out,
-                    double *angles)
+int stephenson_six_bar_evaluate_pose(const double *inputs, const double *params, int level, double *out,
+                    double *angles, double *links)
 {
     double theta[SK_M];
     double delta[SK_K1];
@@ -1809,20 +1862,27 @@ int stephenson_six_bar_evaluate_angles(const double *inputs, const double *param
     if (params == NULL) {
         params = stephenson_six_bar_default_params;
     }
-    status = out == NULL ? 3 : sk_pose(inputs, params, level, theta, delta);
+    status = out == NULL ? 3 : sk_pose(inputs, params, level, links != NULL, theta, delta);
     if (status == 0) {
-        status = sk_outputs(theta, delta, params, level, out, angles);
+        status = sk_outputs(theta, delta, params, level, out, angles, links);
     }
     if (status != 0) {
         sk_nan(out, 6 * SK_NP);
         sk_nan(angles, 2 * SK_M);
+        sk_nan(links, 3 * SK_NL);
     }
     return status;
 }
 
+int stephenson_six_bar_evaluate_angles(const double *inputs, const double *params, int level, double *out,
+                    double *angles)
+{
+    return stephenson_six_bar_evaluate_pose(inputs, params, level, out, angles, NULL);
+}
+
 int stephenson_six_bar_evaluate(const double *inputs, const double *params, int level, double *out)
 {
-    return stephenson_six_bar_evaluate_angles(inputs, params, level, out, NULL);
+    return stephenson_six_bar_evaluate_pose(inputs, params, level, out, NULL, NULL);
 }
 
 int stephenson_six_bar_evaluate_angles_batch(int n, const double *inputs, const double *params, int level,
@@ -1962,9 +2022,9 @@ int stephenson_six_bar_sensitivity_full(const double *inputs, const double *para
     if (params == NULL) {
         params = stephenson_six_bar_default_params;
     }
-    status = deviation == NULL ? 3 : sk_pose(inputs, params, level, theta, delta);
+    status = deviation == NULL ? 3 : sk_pose(inputs, params, level, 0, theta, delta);
     if (status == 0 && values != NULL) {
-        status = sk_outputs(theta, delta, params, level, values, NULL);
+        status = sk_outputs(theta, delta, params, level, values, NULL, NULL);
     }
     if (status == 0) {
         status = sk_sensitivity(theta, delta, params, level, dev, rig);

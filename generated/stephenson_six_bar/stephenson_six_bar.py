@@ -2,13 +2,15 @@
 Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
 Points: D; levels: paper, first_order, exact.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60, sens_rigid 70, sens_paper 118, sens_first_order 566, sens_exact 661.
+Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 566, sens_exact 661.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
 shape (2, *broadcast_shape); entries that cannot be assembled (or do not converge) are NaN and
 False in ok. It also holds "angles": {"rigid": {H: a}, "compliant": {H: a}}, every hinge's
-angle (radians, the rotation of links[1] relative to links[0] from the as-fabricated pose).
+angle (radians, the rotation of links[1] relative to links[0] from the as-fabricated pose), and
+"links": {L: {"rigid": a, "compliant": a, "deviation": a}}, the rotation of every link in LINKS
+from the as-fabricated pose (rigid wrapped to (-pi, pi]; the deviation computed directly).
 
 sensitivity(inputs, level, params) gives {P: {p: a}}: d(dx, dy)/dp of every point's deviation
 by every parameter p, each a of shape (2, *broadcast_shape); sensitivity_full(...) adds the
@@ -24,6 +26,7 @@ import numpy as np
 INPUTS = ('O_A', )
 PARAMETERS = {'l': 0.0008}
 HINGES = ('O_A', 'C', 'O_B', 'E', 'B', 'A', 'D', )
+LINKS = ('frame', 'input', 'coupler', 'rocker', 'link_ED', 'link_AB', )
 POINTS = ('D', )
 LEVELS = ('paper', 'first_order', 'exact', )
 
@@ -33,6 +36,7 @@ _UNKNOWN_INDEX = (1, 2, 3, 4, 5, 6, )
 _N_DYADS = 2
 _LIMITS = ((0, 3.141592653589793), (1, 3.141592653589793), (2, 3.141592653589793), (3, 3.141592653589793), (4, 3.141592653589793), (5, 3.141592653589793), (6, 3.141592653589793), )  # models valid for |theta| < limit
 _NEEDS_LOOPS = True
+_LOOPS_FOR_LINKS = False  # the links' rotations alone need the loops solved
 _DTYPE = numpy.float64
 _POLISH = 1  # Newton steps after the rigid start: relative accuracy of small angles
 _EXACT_ITERATIONS = 40  # Newton cap of the exact level
@@ -639,6 +643,26 @@ def _dev_exact(theta, delta, params):
     return [
         -_tmp1*numpy.sin(_tmp0) - _tmp10*_tmp17 + _tmp18*_tmp19 - _tmp3*_tmp7 + _tmp8*_tmp9,
         _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp19 + _tmp17*_tmp18 + _tmp3*_tmp9 + _tmp7*_tmp8,
+    ]
+
+
+def _links(theta, delta):
+    """rotation of every link and how much further the compliant one turns (5 operations)."""
+    theta_1, theta_2, theta_3, theta_4, theta_5, _, _ = theta
+    delta_2, delta_3, delta_4, delta_5, _, _ = delta
+    return [
+        0,
+        theta_1,
+        theta_1 + theta_2,
+        theta_3,
+        theta_3 + theta_4,
+        theta_3 + theta_5,
+        0,
+        0,
+        delta_2,
+        delta_3,
+        delta_3 + delta_4,
+        delta_3 + delta_5,
     ]
 
 
@@ -1611,15 +1635,15 @@ def _prepare(inputs, level, params):
     return arrays, [_DTYPE(v) for v in parameters(params)]
 
 
-def _blocks(run, arrays, level, p):
-    """run(arrays, level, p) over cache-sized blocks of the flattened inputs, its nested dict
-    of arrays (elements on the last axis) joined and shaped like the inputs."""
+def _blocks(run, arrays, *args):
+    """run(arrays, *args) over cache-sized blocks of the flattened inputs, its nested dict of
+    arrays (elements on the last axis) joined and shaped like the inputs."""
     shape = arrays[0].shape
     size = arrays[0].size
     if size <= _CHUNK:
-        return run(arrays, level, p)
+        return run(arrays, *args)
     flat = [a.reshape(-1) for a in arrays]
-    parts = [run([a[k:k + _CHUNK] for a in flat], level, p) for k in range(0, size, _CHUNK)]
+    parts = [run([a[k:k + _CHUNK] for a in flat], *args) for k in range(0, size, _CHUNK)]
 
     def join(items):
         if isinstance(items[0], dict):
@@ -1629,20 +1653,22 @@ def _blocks(run, arrays, level, p):
     return join(parts)
 
 
-def evaluate(inputs, level='exact', params=None):
-    """Deviation of the points at `level` for broadcast input arrays (see the module docstring)."""
+def evaluate(inputs, level='exact', params=None, links=True):
+    """Deviation of the points at `level` for broadcast input arrays (see the module docstring);
+    `links=False` leaves out the links' rotations (and any loop solve only they need)."""
     arrays, p = _prepare(inputs, level, params)
-    return _blocks(_evaluate, arrays, level, p)
+    return _blocks(_evaluate, arrays, level, p, links)
 
 
-def _evaluate(arrays, level, p):
+def _evaluate(arrays, level, p, links):
     """evaluate() on one block of broadcast input arrays and parameter values p."""
-    theta, delta, ok = _pose(arrays, level, p)
-    return _points(theta, delta, ok, level, p)
+    theta, delta, ok = _pose(arrays, level, p, links)
+    return _points(theta, delta, ok, level, p, links)
 
 
-def _pose(arrays, level, p):
-    """The rigid angles theta (every hinge), delta (the non-input hinges) and the ok mask."""
+def _pose(arrays, level, p, links):
+    """The rigid angles theta (every hinge), delta (the non-input hinges; solved for the links'
+    rotations only when `links`) and the ok mask."""
     shape = arrays[0].shape
     ok = numpy.ones(shape, dtype=bool)
     for a in arrays:
@@ -1652,7 +1678,7 @@ def _pose(arrays, level, p):
     with numpy.errstate(all="ignore"):
         theta, ok = _rigid_angles(x, p, ok)
         delta = [numpy.zeros(shape, dtype=_DTYPE) for _ in _UNKNOWN_INDEX]
-        if _NEEDS_LOOPS and level in _DELTA:
+        if (_NEEDS_LOOPS or (links and _LOOPS_FOR_LINKS)) and level in _DELTA:
             delta, ok = _DELTA[level](theta, p, ok)
         for i, limit in _LIMITS:
             ok = ok & (numpy.abs(theta[i]) <= limit)
@@ -1661,8 +1687,9 @@ def _pose(arrays, level, p):
     return theta, delta, ok
 
 
-def _points(theta, delta, ok, level, p):
-    """The points (and angles) of solved configurations, NaN where not ok."""
+def _points(theta, delta, ok, level, p, links):
+    """The points, angles and (with `links`) the links' rotations of solved configurations, NaN
+    where not ok."""
     shape = ok.shape
     with numpy.errstate(all="ignore"):
         rigid = _rigid_points(theta, p)
@@ -1672,9 +1699,10 @@ def _points(theta, delta, ok, level, p):
             dev = _dev_first_order(theta, delta, p)
         elif level == 'exact':
             dev = _dev_exact(theta, delta, p)
+        rot = [numpy.broadcast_to(v, shape) for v in _links(theta, delta)] if links else []
     rigid = [numpy.broadcast_to(v, shape) for v in rigid]
     dev = [numpy.broadcast_to(v, shape) for v in dev]
-    for v in rigid + dev:
+    for v in rigid + dev + rot:
         ok = ok & numpy.isfinite(v)            # a non-finite result is never ok
     compliant = list(theta)
     for j, i in enumerate(_UNKNOWN_INDEX):
@@ -1691,7 +1719,12 @@ def _points(theta, delta, ok, level, p):
         r = numpy.where(ok, r, numpy.nan).astype(_DTYPE)
         d = numpy.where(ok, d, numpy.nan).astype(_DTYPE)
         result[name] = {"rigid": r, "compliant": r + d, "deviation": d}
-    return {"points": result, "ok": ok, "angles": angles}
+    rotations = {}
+    for i, name in enumerate(LINKS if links else ()):
+        r = numpy.where(ok, _wrap(rot[i]), numpy.nan).astype(_DTYPE)
+        d = numpy.where(ok, rot[len(LINKS) + i], numpy.nan).astype(_DTYPE)
+        rotations[name] = {"rigid": r, "compliant": r + d, "deviation": d}
+    return {"points": result, "ok": ok, "angles": angles, "links": rotations}
 
 
 def sensitivity(inputs, level='exact', params=None):
@@ -1716,8 +1749,8 @@ def _times(a, b):
 
 def _sensitivity(arrays, level, p):
     """sensitivity_full() on one block: the implicit-function theorem on the closures."""
-    theta, delta, ok = _pose(arrays, level, p)
-    result = _points(theta, delta, ok, level, p)
+    theta, delta, ok = _pose(arrays, level, p, True)
+    result = _points(theta, delta, ok, level, p, True)
     ok = result["ok"]
     shape = ok.shape
     with numpy.errstate(all="ignore"):
@@ -1762,6 +1795,9 @@ def _sensitivity(arrays, level, p):
         for kind in result["angles"].values():
             for h in kind:
                 kind[h] = numpy.where(ok, kind[h], numpy.nan)
+        for link in result["links"].values():
+            for key in link:
+                link[key] = numpy.where(ok, link[key], numpy.nan)
     dev = numpy.where(ok[..., None, None], dev, numpy.nan)
     rig = numpy.where(ok[..., None, None], rig, numpy.nan)
     names = list(PARAMETERS)

@@ -13,6 +13,7 @@
                                           for δ (where it does), ∂D/∂θ_u, ∂D/∂δ, ∂D/∂v of the
                                           points' deviations D (symkin.sensitivity)
     sens_chain   params                -> ∂(default of p_j)/∂p_k, when defaults read parameters
+    links        theta, delta          -> rotation φ of every reported link and its deviation δφ
 
 Only what the requested points and levels need is derived: a point whose direct path holds only
 input hinges needs no loop solved at any level. Parameters are renamed p_0, p_1, ... so no name
@@ -60,10 +61,12 @@ class Plan:
     unknown_index: tuple[int, ...]     # position in θ of each non-input hinge (the order of δ)
     parameters: tuple[Parameter, ...]
     points: tuple[str, ...]
+    reported_links: tuple[str, ...]    # links whose rotation the evaluators report
     levels: tuple[Level, ...]
     limits: tuple[tuple[int, float], ...]   # (θ index, L): the hinge's model holds for |θ| < L
     n_dyads: int
     needs_loops: bool                  # some requested level/point needs the loop solution
+    loops_for_links: bool              # the links' rotations need it (solved when asked for)
     closed_form: bool                  # rigid solution by dyads (else Newton + continuation)
     routines: dict[str, Routine]
     notes: tuple[str, ...] = ()        # e.g. the variant a tolerance chose, for the headers
@@ -79,10 +82,13 @@ class Plan:
 
 def plan(analysis: Analysis, points: Sequence[str] | None = None,
          levels: Sequence[str] | None = None, cse: bool = True,
-         notes: Sequence[str] = (), report: bool = False, sensitivity: bool = True) -> Plan:
+         notes: Sequence[str] = (), report: bool = False, links: bool | None = None,
+         sensitivity: bool = True) -> Plan:
     """Derive the routines for the requested points and levels (all by default); with `report`,
-    also the statement of the derivation a LaTeX report prints; with `sensitivity`, the
-    routines of the derivatives by the parameters and inputs (docs/sensitivity.md)."""
+    also the statement of the derivation a LaTeX report prints. `links`: report the rotation of
+    every link (default: when no points are singled out; their rotations need the loops). With
+    `sensitivity`, the routines of the derivatives by the parameters and inputs
+    (docs/sensitivity.md)."""
     an, kin = analysis, analysis.kin
     mech = an.mechanism
     names = tuple(p.name for p in an.points if points is None or p.name in points)
@@ -93,7 +99,10 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
     theta = Argument("theta", an.thetas)
     delta = Argument("delta", an.deltas)
     moved = moved_points(an, names)
-    needs_loops = bool(an.deltas) and any(lv.needs_delta for lv in levels) and bool(moved)
+    links = points is None if links is None else links
+    solves = bool(an.deltas) and any(lv.needs_delta for lv in levels)
+    needs_loops = solves and bool(moved)
+    loops_for_links = solves and links and not needs_loops
     routines: dict[str, Routine] = {}
     sol = an.rigid
     if sol.closed_form and kin.unknowns:
@@ -109,7 +118,7 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
         routines["linear"] = Routine("linear", (theta, params), (),
                                      flatten(a_lin.tolist()) + tuple(r_lin),
                                      "rigid loop Jacobian A and r = Phi dz")
-    if needs_loops and any(lv.name == "exact" for lv in levels):
+    if (needs_loops or loops_for_links) and any(lv.name == "exact" for lv in levels):
         routines["newton"] = Routine("newton", (theta, delta, params), (),
                                      tuple(an.residual) + flatten(an.jacobian.tolist()),
                                      "exact compliant closure F(delta) and dF/ddelta")
@@ -122,6 +131,14 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
             f"dev_{lv.name}", args, (),
             tuple(e for n in names for e in an.point_deviation(n, lv.name)),
             f"deviation of the points at level {lv.name}")
+    s = an.structure
+    reported = tuple(range(s.n + 1)) if links else ()
+    if reported:
+        routines["links"] = Routine(
+            "links", (theta, delta), (),
+            tuple(an.link_rotation(i) for i in reported)
+            + tuple(an.delta_phi(i) for i in reported),
+            "rotation of every link and how much further the compliant one turns")
     chain = False
     if sensitivity:
         chain = _sensitivity_routines(an, names, levels, needs_loops, routines,
@@ -140,13 +157,13 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
                        for p in mech.parameters)
     limits = tuple((a - 1, float(sp.N(h.limit, 20))) for a, h in sorted(kin.hinges.items())
                    if h.limit is not None)
-    s = an.structure
     result = Plan(
         name=mech.name, links=s.links, hinges=s.hinges, inputs=mech.inputs,
         input_index=tuple(a - 1 for a in kin.inputs),
         unknown_index=tuple(a - 1 for a in kin.unknowns), parameters=parameters, points=names,
-        levels=levels, limits=limits, n_dyads=len(sol.dyads),
-        needs_loops=needs_loops, closed_form=sol.closed_form, routines=routines,
+        reported_links=tuple(s.links[i] for i in reported), levels=levels, limits=limits, n_dyads=len(sol.dyads),
+        needs_loops=needs_loops, loops_for_links=loops_for_links, closed_form=sol.closed_form,
+        routines=routines,
         notes=tuple(notes), sensitivity=sensitivity, chain=chain)
     return with_derivation(result, an) if report else result
 

@@ -85,9 +85,12 @@ class Library:
     any number of configurations: docs/generated-code.md)."""
 
     def __init__(self, path: Path | ctypes.CDLL, name: str, n_inputs: int, n_params: int,
-                 n_points: int, n_hinges: int):
+                 n_points: int, n_hinges: int, n_links: int = 0):
         self.lib = path if isinstance(path, ctypes.CDLL) else ctypes.CDLL(str(path))
         dptr, iptr = ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_int)
+        self.fn = getattr(self.lib, f"{name}_evaluate_pose")
+        self.fn.restype = ctypes.c_int
+        self.fn.argtypes = [dptr, dptr, ctypes.c_int, dptr, dptr, dptr]
         self.batch = getattr(self.lib, f"{name}_evaluate_angles_batch")
         self.batch.restype = ctypes.c_int
         self.batch.argtypes = [ctypes.c_int, dptr, dptr, ctypes.c_int, dptr, dptr, iptr]
@@ -100,16 +103,27 @@ class Library:
             self.sensitivity.argtypes = [ctypes.c_int, dptr, dptr, ctypes.c_int, dptr, dptr, dptr,
                                          iptr]
         self.n_inputs, self.n_params = n_inputs, n_params
-        self.n_points, self.n_hinges = n_points, n_hinges
+        self.n_points, self.n_hinges, self.n_links = n_points, n_hinges, n_links
         self.n_variables = n_params + n_inputs
+
+    def pose(self, inputs, params=None, level: int = 2
+             ) -> tuple[int, list[float], list[float], list[float]]:
+        """One configuration in one call: (status, out: 6 doubles per point, angles: rigid then
+        compliant per hinge, links: rigid, compliant, deviation per link)."""
+        x = (ctypes.c_double * max(1, self.n_inputs))(*inputs)
+        out = (ctypes.c_double * max(1, 6 * self.n_points))()
+        angles = (ctypes.c_double * (2 * self.n_hinges))()
+        links = (ctypes.c_double * max(1, 3 * self.n_links))()
+        status = self.fn(x, self.params(params), level, out, angles,
+                         links if self.n_links else None)
+        return (status, list(out)[: 6 * self.n_points], list(angles),
+                list(links)[: 3 * self.n_links])
 
     def evaluate(self, inputs, params=None, level: int = 2
                  ) -> tuple[int, list[float], list[float]]:
         """One configuration: (status, out: 6 doubles per point, angles: rigid then compliant
         per hinge)."""
-        status, out, angles = self.evaluate_rows(np.asarray([inputs], dtype=float).reshape(
-            1, self.n_inputs), params, level, angles=True)
-        return int(status[0]), out[0].tolist(), angles[0].tolist()
+        return self.pose(inputs, params, level)[:3]
 
     def evaluate_rows(self, inputs: np.ndarray, params=None, level: int = 2,
                       angles: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:

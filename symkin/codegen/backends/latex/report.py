@@ -195,6 +195,7 @@ class Report:
         ctx["plates"] = self.plate_rows()
         ctx["alpha_equal"] = all(p["alpha_plus"] == p["alpha_minus"] for p in ctx["plates"])
         ctx["rotations"] = self.rotation_lines()
+        ctx["link_deviations"] = self.link_deviation_lines()
         ctx["dz"] = self.delta_z_lines()
         ctx["jmat"] = self.j_matrices()
         ctx["positions"] = self.position_lines()
@@ -272,6 +273,14 @@ class Report:
         lines = []
         for i in range(1, self.s.n + 1):
             lines += self.tex.equation(rf"\varphi_{{{i}}}", self.d.phi[i])
+        return lines
+
+    def link_deviation_lines(self) -> list[str]:
+        """δφ_i = Σ σ_b δ_b over the direct path, for the links the loops turn."""
+        lines = []
+        for i in range(1, self.s.n + 1):
+            if self.d.delta_phi[i] != 0:
+                lines += self.tex.equation(rf"\delta\varphi_{{{i}}}", self.d.delta_phi[i])
         return lines
 
     def delta_z_lines(self) -> list[str]:
