@@ -146,7 +146,7 @@ def measure(mech: Mechanism, variant: Variant, samples: list[dict[str, float]],
     from .codegen.plan import plan
     
     analysis = analysis_for(mech, variant)
-    p = plan(analysis, levels=[variant.level])
+    p = plan(analysis, levels=[variant.level], sensitivity=False)
     tag = f"{mech.name}_{variant.name.replace('/', '_')}"
     module = runtime.import_numpy_module(numpy_backend.emit(p, "tradeoff", variant.precision),
                                          tag)
@@ -324,9 +324,13 @@ def _number_markers(fig, ax, markers: list[tuple[float, float, int]]) -> None:
 
 def plot(table: Tradeoff, path: str) -> None:
     """Save the tradeoff figure (the format follows the file's suffix)."""
+    save_figure(figure(table), path)
+
+
+def save_figure(fig, path: str) -> None:
+    """Save and close a matplotlib figure without dates or versions (format from the suffix)."""
     import matplotlib.pyplot as plt
 
-    fig = figure(table)
     fig.savefig(path, dpi=120, metadata=_PLOT_METADATA.get(path.rsplit(".", 1)[-1].lower()))
     plt.close(fig)
 

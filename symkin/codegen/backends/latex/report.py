@@ -712,6 +712,52 @@ def sweep(report: Report, numpy_module, spans: Mapping[str, tuple[float, float]]
     return runs, summary
 
 
+def sensitivity_table(report: Report, numpy_module,
+                      runs: Sequence[tuple[str, Sweep, tuple[float, float]]]) -> dict | None:
+    """The parameters ranked by their effect on each point's deviation (docs/sensitivity.md),
+    at the swept input where the point's |ΔR| at the most faithful level is largest; None
+    without parameters or sensitivities."""
+    plan = report.plan
+    names = list(getattr(numpy_module, "PARAMETERS", {}))
+    if not names or not hasattr(numpy_module, "sensitivity_full"):
+        return None
+    level = plan.levels[-1].name
+    single = len(runs) == 1
+    held = {h: 0.5 * (data.t[0] + data.t[-1]) for h, data, _ in runs}
+    rows = []
+    for point in plan.points:
+        best = None                 # (|ΔR|, swept input, its value)
+        for h, data, _ in runs:
+            mag = data.magnitude[point][level]
+            if np.isfinite(mag).any() and np.nanmax(mag) > 0 and \
+                    (best is None or np.nanmax(mag) > best[0]):
+                best = (float(np.nanmax(mag)), h, float(data.t[int(np.nanargmax(mag))]))
+        if best is None:
+            continue
+        _, swept, t = best
+        inputs = {n: (t if n == swept else float(held[n])) for n in numpy_module.INPUTS}
+        at = f"${t:+.3f}$" if single else f"{escape_latex(swept)} ${t:+.3f}$"
+        res = numpy_module.sensitivity_full(inputs, level)
+        d = np.asarray(res["points"][point]["deviation"], dtype=float)
+        norm = float(np.hypot(d[0], d[1]))
+        entries = []
+        for name in names:
+            rate = np.asarray(res["deviation"][point]["params"][name], dtype=float)
+            d_norm = float((d[0] * rate[0] + d[1] * rate[1]) / norm)
+            value = float(numpy_module.PARAMETERS[name])
+            relative = value * d_norm / norm
+            entries.append((abs(relative), {
+                "point": escape_latex(point), "name": escape_latex(name), "value": gnum(value),
+                "dx": sci(float(rate[0])), "dy": sci(float(rate[1])), "norm": sci(d_norm),
+                "relative": f"{relative:+.3f}" if value else r"\text{--}", "at": at}))
+        entries.sort(key=lambda e: -e[0])
+        rows += [e[1] for e in entries]
+    if not rows:
+        return None
+    return {"level": plan.levels[-1].title, "rows": rows, "single_input": single,
+            "inputs": [escape_latex(n) for n in numpy_module.INPUTS]}
+
+
 # -- emit ----------------------------------------------------------------------------------------
 
 def emit(plan: Plan, source: str, appendix: bool = False,
@@ -746,6 +792,7 @@ def emit(plan: Plan, source: str, appendix: bool = False,
     ctx["table_width"] = f"{min(0.58, 0.96 - float(ctx['graph_width'])):.2f}"
     ctx["deviation_figures"] = []
     ctx["sweep"] = None
+    ctx["sensitivity"] = None
     if plan.points and report.mech.inputs:
         if evaluator is None:
             raise ValueError("the deviation plot needs the plan's generated numpy module")
@@ -767,6 +814,7 @@ def emit(plan: Plan, source: str, appendix: bool = False,
                     "compare": differs(data, chunk, plan.levels)})
         summary["single_input"] = single
         ctx["sweep"] = summary
+        ctx["sensitivity"] = sensitivity_table(report, evaluator, runs)
     body = environment().get_template("latex/body.tex.j2").render(**ctx)
     if appendix:
         text = body

@@ -300,8 +300,9 @@ class Tex:
             return self._mul_tokens(expr, budget, tex)
         if isinstance(expr, sp.Function) and expr.args:
             return self._function_tokens(expr, budget, tex)
-        if expr.is_Pow and expr.base.is_Add and expr.exp.is_Integer and expr.exp > 0:
-            inner = self.tokens(expr.base, budget - 2)
+        if expr.is_Pow and expr.base.is_Add and expr.exp.is_Rational and expr.exp != 1:
+            # (a sum)^e, a root or a reciprocal too: the sum breaks inside big parentheses
+            inner = self.tokens(expr.base, budget - 3)
             return self._wrap(inner, r"\Bigl(", r"\Bigr)^{%s}" % self(expr.exp))
         return [tex]
 
@@ -323,6 +324,13 @@ class Tex:
         num, den = sp.fraction(sp.Mul(coeff, *factors, evaluate=False))
         if den != 1:
             head = sign + self(1 / den)
+            if width(head) > budget / 2:
+                # a wide denominator: its factors as powers, each breaking where it must
+                out = [sign.strip()] if sign else []
+                for f in sp.Mul.make_args(sp.expand_power_base(den, force=True)):
+                    base, exp = f.as_base_exp()
+                    out += self.tokens(sp.Pow(base, -exp, evaluate=False), budget)
+                return out + self._wrap(self.tokens(num, budget - 2), r"\Bigl(", r"\Bigr)")
             inner = self.tokens(num, budget - width(head) - 2)
             return self._wrap(inner, head + r" \Bigl(", r"\Bigr)")
         factors = [f for f in sp.Mul.make_args(num) if f != 1]
@@ -332,7 +340,9 @@ class Tex:
         rest = [f for f in factors if f is not widest]
         if not rest and sign == "":
             return [tex]
-        head = sign + (self(sp.Mul(*rest)) if rest else "")
+        # a lone sum left over keeps its parentheses (printed alone it would lose them)
+        head = sign + (self._term(rest[0]) if len(rest) == 1 else
+                       self(sp.Mul(*rest)) if rest else "")
         if head.strip() == "1":
             head = ""
         if widest.is_Add:
@@ -342,7 +352,7 @@ class Tex:
         if rest and width(head) + width(inner[0]) > budget:
             # the product itself breaks between its factors, in the printer's order
             ordered = sp.Mul(*rest).as_ordered_factors()
-            pieces = [self(f) for f in ordered]
+            pieces = [self._term(f) for f in ordered]
             pieces[0] = (sign + pieces[0]).strip()
             return pieces + inner
         inner[0] = (head + " " + inner[0]).strip()
