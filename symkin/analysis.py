@@ -254,10 +254,17 @@ class Analysis:
 
     def evaluate(self, inputs: Mapping[str, object], level: str = "exact",
                  params: Mapping[str, object] | None = None, dps: int = 40) -> Evaluation:
-        """Evaluate one configuration with mpmath at `dps` digits (the `sympy` backend)."""
+        """Evaluate one configuration with mpmath at `dps` digits (the `sympy` backend); the
+        physical levels `loaded` and `equilibrium` are computed by symkin.physics."""
+        from .physics import LEVELS as PHYSICAL
+
+        if level in PHYSICAL:
+            from .physics import evaluate as physical
+
+            return physical(self, inputs, level, params)
         if level not in LEVELS:
             raise InputError(f"unknown level '{level}'", entry="--level",
-                             hint="levels: " + ", ".join(LEVELS))
+                             hint="levels: " + ", ".join(LEVELS + PHYSICAL))
         given = self._inputs(inputs)
         exact_params = self.parameter_values(params)
         with mpmath.workdps(dps):

@@ -20,8 +20,14 @@ def evaluate(analysis: Analysis, inputs: Mapping[str, object], level: str,
     """One configuration through the generated `backend` ('numpy' or 'c')."""
     from .codegen.build import plan
 
+    from .physics import LEVELS as PHYSICAL
+
     if backend == "sympy":
         return analysis.evaluate(inputs, level, params)
+    if level in PHYSICAL:
+        raise InputError(f"--level {level} is evaluated by the sympy backend only (the generated "
+                         "numpy and C evaluators do not hold it yet)", entry="--backend",
+                         hint="drop --backend or use --backend sympy")
     given = analysis._inputs(inputs)
     kin = analysis.kin
     names = [kin.hinges[a].name for a in kin.inputs]

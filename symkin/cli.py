@@ -47,7 +47,9 @@ def _eval(args: argparse.Namespace) -> str:
     analysis = Analysis(build(load(args.file)))
     result = evaluate(analysis, _pairs(args.input, "--input"), args.level,
                       _pairs(args.param, "--param"), args.backend)
-    return evaluation_json(result) if args.json else evaluation_text(result)
+    if args.json:
+        return evaluation_json(result)
+    return evaluation_text(result) + (result.text() if hasattr(result, "text") else "")
 
 
 def _derive(args: argparse.Namespace) -> str:
@@ -109,7 +111,9 @@ def parser() -> argparse.ArgumentParser:
     ev.add_argument("--input", action="append", metavar="H=V",
                     help="input hinge angle in radians (an expression such as 10*deg is fine)")
     ev.add_argument("--param", action="append", metavar="K=V", help="override a parameter")
-    ev.add_argument("--level", choices=("paper", "first_order", "exact"), default="exact")
+    ev.add_argument("--level", choices=("paper", "first_order", "exact", "loaded", "equilibrium"),
+                    default="exact", help="deviation level (loaded and equilibrium need the plates' "
+                    "E, thickness and width: docs/physics.md)")
     ev.add_argument("--backend", choices=("sympy", "numpy", "c"), default="sympy")
     ev.add_argument("--json", action="store_true", help="machine-readable output")
     ev.set_defaults(run=_eval)

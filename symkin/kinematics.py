@@ -35,7 +35,7 @@ class HingeGeometry:
     P: int                  # label of the file's links[0]: the plate frame is fixed in P
     M: int                  # label of links[1]
     sign: int               # +1 when P = i+(a): paper angle q_a = sign * θ_a
-    centre: Vec
+    centre: Vec             # the rigid reference pin (the plate midpoint unless pin = "prbm")
     angle: sp.Expr
     length: sp.Expr
     f: sp.Expr              # model functions of THETA (plate length substituted)
@@ -43,6 +43,7 @@ class HingeGeometry:
     df: sp.Expr             # f - f_rigid, g - g_rigid in cancellation-free form
     dg: sp.Expr
     limit: sp.Expr | None = None    # the model holds for |θ| < limit (elastica_force: π/2)
+    midpoint: Vec | None = None     # the plate midpoint `at` when the pin sits elsewhere
 
     @property
     def name(self) -> str:
@@ -59,7 +60,8 @@ class HingeGeometry:
     def clamp(self, link: int) -> Vec:
         """As-fabricated position of the plate end fixed in `link` (P's end or M's end)."""
         half = V.scale(self.length / 2, self.u)
-        return V.sub(self.centre, half) if link == self.P else V.add(self.centre, half)
+        mid = self.centre if self.midpoint is None else self.midpoint
+        return V.sub(mid, half) if link == self.P else V.add(mid, half)
 
     def delta_z(self, theta: sp.Expr, phi_p: sp.Expr) -> Vec:
         """Paper-oriented Δz_a (3.3): z_a - z_a^r at hinge angle θ, with P rotated by phi_p."""
@@ -95,9 +97,13 @@ class Kinematics:
             h = mech.hinge(name)
             plate = plate_of(h)
             P, M = label[h.links[0]], label[h.links[1]]
-            hinges[a] = HingeGeometry(a, h, P, M, 1 if P == s.i_plus[a - 1] else -1, h.at,
+            centre, midpoint = h.at, None
+            if plate.pivot is not None:         # the pin sits d from M's clamp, not at `at`
+                midpoint = h.at
+                centre = V.add(h.at, V.scale(h.length / 2 - plate.pivot, V.unit(h.plate_angle)))
+            hinges[a] = HingeGeometry(a, h, P, M, 1 if P == s.i_plus[a - 1] else -1, centre,
                                       h.plate_angle, h.length, plate.f, plate.g, plate.df,
-                                      plate.dg, plate.limit)
+                                      plate.dg, plate.limit, midpoint)
         self.hinges = hinges
         self.inputs = tuple(a for a in hinges if hinges[a].is_input)
         self.unknowns = tuple(a for a in hinges if not hinges[a].is_input)
