@@ -13,8 +13,9 @@ unloaded, as-fabricated pose at t = 0: a tangent predictor and Newton's method i
 the Jacobian by the complex step, the step halved when Newton fails or det J changes sign (a plate
 buckles or the path passes a limit point: exit 3 naming the hinge whose plate dominates the
 singular mode, and t). At t = 1 Newton polishes the solution in mpmath at a precision chosen from
-the digits the deviation loses against the positions, with the float64 Jacobian; the rigid
-reference (every hinge a pin at its pivot, hinge_models.pivot_distance) is solved the same way.
+the digits the deviation loses against the positions, with the float64 Jacobian. The rigid
+reference is the kinematic levels' rigid linkage (pins at hinge_models.pivot_distance), evaluated
+at the same precision; the deviation is the difference of the two positions.
 """
 
 from __future__ import annotations
@@ -39,6 +40,8 @@ COMPLEX_STEP = 1e-200
 MIN_STEP = 1e-7
 #: Largest input-angle change per continuation step, rad.
 MAX_TURN = 0.05
+#: Most continuation steps before giving up.
+MAX_STEPS = 2000
 
 
 @dataclass
@@ -199,9 +202,9 @@ class System:
 
 
 def build(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr], inputs: Mapping[str, sp.Expr],
-          stiffness: Mapping[str, PlateStiffness] | None, convert) -> System:
+          stiffness: Mapping[str, PlateStiffness], convert) -> System:
     """The System of `mech` with parameter `values`, the input angles by hinge name, EI of every
-    plate (None: every hinge a pin, the rigid reference) and `convert` (exact -> float or mpf)."""
+    plate and `convert` (exact number -> float or mpf)."""
     links = [lk.name for lk in mech.links if lk.name != mech.ground]
     index = {name: k for k, name in enumerate(links)}
     index[mech.ground] = -1
@@ -214,7 +217,7 @@ def build(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr], inputs: Mapping[
         length = sp.sympify(h.length)
         u = (sp.cos(h.plate_angle), sp.sin(h.plate_angle))
         d = pivot_distance(h)
-        plate = stiffness is not None and is_plate(h)
+        plate = is_plate(h)
         hinges.append(_Hinge(
             h.name, index[h.links[0]], index[h.links[1]],
             tuple(num(h.at[k] - length / 2 * u[k]) for k in range(2)),
@@ -224,7 +227,7 @@ def build(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr], inputs: Mapping[
             num(stiffness[h.name].EI) if plate else None, plate,
             num(inputs[h.name]) if h.input else None))
     s = mech.unit_scale
-    loads = [] if stiffness is None else [
+    loads = [
         _Load(index[ld.link], tuple(num(v) for v in ld.at), tuple(num(v) for v in ld.force),
               num(ld.moment / s)) for ld in mech.loads]
     centres = [(float(sp.N(h.at[0].subs(values))), float(sp.N(h.at[1].subs(values))))
@@ -259,7 +262,9 @@ def continuation(system: System, what: str, path: str) -> tuple[np.ndarray, np.n
     turn = max([abs(float(h.theta)) for h in system.hinges if h.theta is not None] + [0.0])
     largest = min(1.0, MAX_TURN / turn) if turn else 0.25
     t, dt = 0.0, largest
-    while t < 1:
+    for _ in range(MAX_STEPS):
+        if t >= 1:
+            break
         t1 = min(1.0, t + dt)
         jac, rate = system.jacobian(u, t, tol)
         guess = u - np.linalg.solve(jac, rate) * (t1 - t)
@@ -279,6 +284,10 @@ def continuation(system: System, what: str, path: str) -> tuple[np.ndarray, np.n
             continue
         u, t = new[0], t1
         dt = min(largest, dt * 1.5)
+    else:
+        raise AssemblyError(f"{path}: {what} did not reach the requested inputs and loads in "
+                            f"{MAX_STEPS} continuation steps (stopped at load factor t = {t:.6g}, "
+                            "near a toggle position or a limit point)")
     return u, system.jacobian(u, 1.0, tol)[0]
 
 
@@ -329,9 +338,10 @@ def _float(expr) -> float:
 
 
 def evaluate(analysis, inputs: Mapping[str, object], params: Mapping[str, object] | None = None):
-    """The `equilibrium` level for one configuration (CONTRACT §7): the mechanism's elastica
-    equilibrium and the rigid pin linkage, both at the inputs, and the points' deviation."""
+    """The `equilibrium` level for one configuration (CONTRACT §7): the elastica equilibrium of
+    the mechanism at the inputs, against the rigid pin linkage of the kinematic levels."""
     from ..analysis import PointResult
+    from . import bridge
     from .result import HingeLoad, PhysicalEvaluation
     from .stiffness import check_values, plate_stiffness
 
@@ -339,54 +349,62 @@ def evaluate(analysis, inputs: Mapping[str, object], params: Mapping[str, object
     stiffness = plate_stiffness(mech, "equilibrium")
     values = analysis.parameter_values(params)
     check_values(mech, values, "equilibrium")
-    given = {analysis.kin.hinges[a].name: v for a, v in analysis._inputs(inputs).items()}
-    points = [(p.name, p.link, p.at) for p in analysis.points]
+    given = bridge.inputs(analysis, inputs)
+    label = {h.name: a for a, h in analysis.kin.hinges.items()}
+    args = [*analysis.params, *analysis.thetas]
 
-    compliant_f = build(mech, values, given, stiffness, _float)
-    rigid_f = build(mech, values, given, None, _float)
-    u_c, jac_c = continuation(compliant_f, "the equilibrium", mech.path)
-    u_r, jac_r = continuation(rigid_f, "the rigid linkage", mech.path)
-    # Digits the deviation loses against the positions decide the working precision.
-    span = float(compliant_f.L)
-    smallest = min([math.hypot(*(np.array(_where(compliant_f, u_c, p)) -
-                                 np.array(_where(rigid_f, u_r, p)))) for p in points] + [span])
+    def rigid(dps: int) -> tuple[dict, dict]:
+        """Rigid hinge angles and point positions at `dps` digits (exit 3 if out of range)."""
+        with mpmath.workdps(dps):
+            pvals = bridge.mp_values([values[p] for p in analysis.params], dps)
+            ivals = {label[n]: v for n, v in zip(given, bridge.mp_values(given.values(), dps))}
+            theta = bridge.rigid_angles(analysis, pvals, ivals)
+            at = [*pvals, *(theta[a] for a in sorted(theta))]
+            return theta, {p.name: bridge.function(analysis, "rigid:" + p.name,
+                                                   list(analysis.point_rigid(p.name)), args)(*at)
+                           for p in analysis.points}
+
+    _, rigid_points = rigid(20)
+    system = build(mech, values, given, stiffness, _float)
+    u, jac = continuation(system, "the equilibrium", mech.path)
+    # The digits the deviation loses against the positions decide the working precision.
+    span = float(system.L)
+    smallest = min([math.hypot(*(np.array(_where(system, u, p), dtype=float)
+                                 - np.array(rigid_points[p.name], dtype=float)))
+                    for p in analysis.points] + [span])
     lost = max(0, math.ceil(math.log10(span / smallest))) if smallest > 0 else 0
     dps = min(400, 24 + lost)
+    theta, rigid_points = rigid(dps)
     with mpmath.workdps(dps):
-        convert = _mp_converter(dps)
-        compliant = polish(build(mech, values, given, stiffness, convert), u_c, jac_c, dps)
-        rigid = polish(build(mech, values, given, None, convert), u_r, jac_r, dps)
+        solution = polish(build(mech, values, given, stiffness, _mp_converter(dps)), u, jac, dps)
         report: dict = {}
-        compliant.system.residual(compliant.u[:, None], arith.mp_array([1]), compliant.tol,
-                                  report)
+        solution.system.residual(solution.u[:, None], arith.mp_array([1]), solution.tol, report)
+        # The last Newton step bounds the solution's error (Newton shrinks it further); the
+        # working precision bounds the rounding.
+        bound = (2 * solution.last_step + 10.0 ** (8 - dps)) * span
         results, error = {}, 0.0
-        for p in points:
-            xc, yc = _where(compliant.system, compliant.u, p)
-            xr, yr = _where(rigid.system, rigid.u, p)
+        for p in analysis.points:
+            xc, yc = _where(solution.system, solution.u, p)
+            xr, yr = rigid_points[p.name]
             dev = (xc - xr, yc - yr)
-            # The last Newton step bounds the error of both solves (Newton shrinks it further).
-            bound = (compliant.last_step + rigid.last_step) * 2 * float(compliant.system.L) \
-                + 10.0 ** (8 - dps) * float(compliant.system.L)
             size = float(mpmath.hypot(*dev))
             error = max(error, bound / size if size else 0.0)
-            results[p[0]] = PointResult((float(xr), float(yr)), (float(xc), float(yc)),
-                                        (float(dev[0]), float(dev[1])))
-        s = mech.unit_scale
-        loads = {name: HingeLoad((float(f[0][0]), float(f[1][0])), float(m[0] * s))
-                 for name, (f, m, _) in report.items()}
-        energy = float(sum(e[0] for name, (_, _, e) in report.items()
-                           if compliant.system.hinges[_position(compliant.system, name)].plate)
-                       * s)
-        order = [h.name for h in compliant.system.hinges]
-        names = {a: h.name for a, h in analysis.kin.hinges.items()}
+            results[p.name] = PointResult((float(xr), float(yr)), (float(xc), float(yc)),
+                                          (float(dev[0]), float(dev[1])))
+        s = mpmath.mpf(sp.N(mech.unit_scale, dps))
+        order = [h.name for h in mech.hinges]
+        plates = {h.name for h in solution.system.hinges if h.plate}
         return PhysicalEvaluation(
             level="equilibrium", backend="sympy",
-            inputs={n: _float(given[n]) for n in (names[a] for a in sorted(analysis.kin.inputs))},
-            angles_rigid={names[a]: float(_angle(rigid.system, rigid.u, names[a]))
-                          for a in sorted(names)},
-            angles_compliant={names[a]: float(_angle(compliant.system, compliant.u, names[a]))
-                              for a in sorted(names)},
-            points=results, hinges={n: loads[n] for n in order}, energy=energy,
+            inputs={n: _float(given[n]) for n in given},
+            angles_rigid={label_name: float(theta[a]) for label_name, a in
+                          sorted(label.items(), key=lambda kv: kv[1])},
+            angles_compliant={n: float(_angle(solution.system, solution.u, n)) for n, _ in
+                              sorted(label.items(), key=lambda kv: kv[1])},
+            points=results,
+            hinges={n: HingeLoad((float(report[n][0][0][0]), float(report[n][0][1][0])),
+                                 float(report[n][1][0] * s)) for n in order},
+            energy=float(sum(report[n][2][0] for n in plates) * s),
             error_estimate=error)
 
 
@@ -394,11 +412,11 @@ def _position(system: System, name: str) -> int:
     return next(k for k, h in enumerate(system.hinges) if h.name == name)
 
 
-def _where(system: System, u: np.ndarray, point: tuple):
-    """Position of a named point (name, link, as-fabricated position) in the solution u."""
-    link = system.links.index(point[1]) if point[1] in system.links else -1
-    at = tuple(system.hinges[0].cos_a * 0 + _float(v) if not arith.is_mp(u) else
-               mpmath.mpf(sp.N(v, mpmath.mp.dps + 5)) for v in point[2])
+def _where(system: System, u: np.ndarray, point):
+    """Position of a mechanism.Point in the solution u (float or mpf, as u)."""
+    link = system.links.index(point.link) if point.link in system.links else -1
+    at = tuple(mpmath.mpf(sp.N(v, mpmath.mp.dps + 5)) if arith.is_mp(u) else _float(v)
+               for v in point.at)
     x, y = system.place(u[:, None], link, at)
     return x[0], y[0]
 

@@ -8,25 +8,12 @@ from collections.abc import Mapping
 import mpmath
 import sympy as sp
 
-from .. import special
 from ..errors import AssemblyError
+from . import bridge
 from .statics import LoadedDerivation
 
 #: Working precision of the evaluation, decimal digits.
 DPS = 40
-
-
-class _Lambdas:
-    """mpmath functions of the derivation's expressions, built once per key."""
-
-    def __init__(self) -> None:
-        self.cache: dict = {}
-
-    def __call__(self, key: str, exprs, args):
-        if key not in self.cache:
-            self.cache[key] = sp.lambdify(args, exprs,
-                                          modules=[special.mpmath_namespace(), "mpmath"])
-        return self.cache[key]
 
 
 def derivation(analysis) -> LoadedDerivation:
@@ -48,15 +35,17 @@ def evaluate(analysis, inputs: Mapping[str, object], params: Mapping[str, object
     der = derivation(analysis)
     la = der.analysis
     kin = la.kin
-    fn = analysis.__dict__.setdefault("_physics_lambdas", _Lambdas())
+    def fn(key, exprs, args):
+        return bridge.function(analysis, "loaded:" + key, exprs, args)
+
     values = analysis.parameter_values(params)
     check_values(analysis.mechanism, values, "loaded")
-    given = analysis._inputs(inputs)
+    given = {kin.structure.hinge_label(n): v for n, v in bridge.inputs(analysis, inputs).items()}
     comp = [s for a in sorted(der.compliance) for s in der.compliance[a]]
     with mpmath.workdps(dps):
-        pvals = [mpmath.mpf(sp.N(values[s], dps + 5)) for s in la.params]
+        pvals = bridge.mp_values([values[s] for s in la.params], dps)
         ivals = {a: mpmath.mpf(sp.N(v, dps + 5)) for a, v in given.items()}
-        theta, _ = analysis._rigid_angles(pvals, ivals)
+        theta = bridge.rigid_angles(analysis, pvals, ivals)
         base = [*la.params, *la.thetas]
         at_rigid = [*pvals, *(theta[a] for a in sorted(theta))]
         a_t, q = der.statics
