@@ -12,6 +12,10 @@ import math
 import mpmath
 import numpy as np
 
+#: Size of the complex step: complex arrays hold value + i·COMPLEX_STEP·derivative, far below any
+#: unknown's scale, so the derivative is exact to float64 (nothing is subtracted).
+COMPLEX_STEP = 1e-200
+
 _MP_SIN = np.frompyfunc(mpmath.sin, 1, 1)
 _MP_COS = np.frompyfunc(mpmath.cos, 1, 1)
 _MP_SQRT = np.frompyfunc(mpmath.sqrt, 1, 1)
@@ -34,12 +38,15 @@ def sqrt(a: np.ndarray) -> np.ndarray:
 
 
 def magnitude(a) -> float:
-    """Largest |element| as a Python float (0 for an empty array)."""
+    """Largest |element| as a Python float (0 for an empty array); for a complex array the
+    larger of the values and the derivatives it carries (imaginary part / COMPLEX_STEP)."""
     a = np.asarray(a)
     if a.size == 0:
         return 0.0
     if is_mp(a):
         return float(max(abs(v) for v in a.flat))
+    if np.iscomplexobj(a):
+        return float(max(np.max(np.abs(a.real)), np.max(np.abs(a.imag)) / COMPLEX_STEP))
     return float(np.max(np.abs(a)))
 
 

@@ -52,7 +52,7 @@ class PlateEnd:
 def shoot(k0, lx, ly, tol: float, energy: bool = False) -> PlateEnd:
     """Integrate the elastica of every element of the (broadcast) arrays k0, λx, λy over s = 0..1."""
     k0, lx, ly = np.broadcast_arrays(*(np.asarray(v) for v in (k0, lx, ly)))
-    rate = arith.magnitude(abs(k0) + arith.sqrt(abs(lx) + abs(ly)))
+    rate = arith.magnitude(abs(k0.real) + arith.sqrt(abs(lx.real) + abs(ly.real)))
     steps = arith.steps_for(rate)
     while True:
         result = _steps(k0, lx, ly, steps, tol, energy)

@@ -34,8 +34,6 @@ from ..mechanism import Mechanism
 from . import arith, elastica
 from .stiffness import PlateStiffness, is_plate
 
-#: Size of the complex step: far below any unknown's scale, so the derivative is exact in float64.
-COMPLEX_STEP = 1e-200
 #: Smallest load-factor step before the continuation gives up.
 MIN_STEP = 1e-7
 #: Largest input-angle change per continuation step, rad.
@@ -181,11 +179,11 @@ class System:
         """(∂R/∂u, ∂R/∂t) at a float point, by the complex step: one batched residual."""
         n = self.size
         batch = np.tile(u.astype(complex)[:, None], (1, n + 1))
-        batch[np.arange(n), np.arange(n)] += 1j * COMPLEX_STEP
+        batch[np.arange(n), np.arange(n)] += 1j * arith.COMPLEX_STEP
         tt = np.full(n + 1, t, dtype=complex)
-        tt[n] += 1j * COMPLEX_STEP
+        tt[n] += 1j * arith.COMPLEX_STEP
         r = self.residual(batch, tt, tol)
-        d = r.imag / COMPLEX_STEP
+        d = r.imag / arith.COMPLEX_STEP
         return d[:, :n], d[:, n]
 
     def singular_hinge(self, jac: np.ndarray) -> str:
@@ -337,9 +335,11 @@ def _float(expr) -> float:
     return float(sp.N(expr, 20))
 
 
-def evaluate(analysis, inputs: Mapping[str, object], params: Mapping[str, object] | None = None):
+def evaluate(analysis, inputs: Mapping[str, object], params: Mapping[str, object] | None = None,
+             extra_digits: int = 0):
     """The `equilibrium` level for one configuration (CONTRACT §7): the elastica equilibrium of
-    the mechanism at the inputs, against the rigid pin linkage of the kinematic levels."""
+    the mechanism at the inputs, against the rigid pin linkage of the kinematic levels.
+    `extra_digits` raises the working precision (to check the error estimate)."""
     from ..analysis import PointResult
     from . import bridge
     from .result import HingeLoad, PhysicalEvaluation
@@ -373,7 +373,7 @@ def evaluate(analysis, inputs: Mapping[str, object], params: Mapping[str, object
                                  - np.array(rigid_points[p.name], dtype=float)))
                     for p in analysis.points] + [span])
     lost = max(0, math.ceil(math.log10(span / smallest))) if smallest > 0 else 0
-    dps = min(400, 24 + lost)
+    dps = min(400, 24 + lost) + extra_digits
     theta, rigid_points = rigid(dps)
     with mpmath.workdps(dps):
         solution = polish(build(mech, values, given, stiffness, _mp_converter(dps)), u, jac, dps)
