@@ -858,11 +858,513 @@ class Equilibrium(_Solver):
 
 def _with_error_estimate(low: dict, high: dict) -> dict:
     """``high`` with ``error_estimate`` = the relative change of the deviations from ``low``."""
+    err = 0.0
     with mpmath.workdps(high["dps"]):
-        num = den = mpmath.mpf(0)
         for name, p in high["points"].items():
             dh, dl = p["deviation"], low["points"][name]["deviation"]
-            num = max(num, mpmath.sqrt((dh[0] - dl[0]) ** 2 + (dh[1] - dl[1]) ** 2))
-            den = max(den, mpmath.sqrt(dh[0] ** 2 + dh[1] ** 2))
-        high["error_estimate"] = float(num / den) if den else float(num)
+            num = mpmath.sqrt((dh[0] - dl[0]) ** 2 + (dh[1] - dl[1]) ** 2)
+            den = mpmath.sqrt(dh[0] ** 2 + dh[1] ** 2)
+            err = max(err, float(num / den) if den else float(num))
+    high["error_estimate"] = err
     return high
+
+
+# ------------------------------------------------------------------------------------------
+# (b) Hencky chains, potential energy with Lagrange multipliers, Richardson over N
+# ------------------------------------------------------------------------------------------
+class ChainEquilibrium(_Solver):
+    """Method (b): every plate a chain of N rigid segments with springs EI/h (2EI/h at the
+    clamps); stationary potential energy under the closure constraints (KKT, Newton); the result
+    extrapolated over N = ``n0``·2^j, j = 0..``levels``−1 (error expansion in h², h⁴, ...).
+
+    Same constructor and result as :class:`Equilibrium` (``method`` = "chain"); the result also
+    holds ``"levels"``: the N used. Stability is the inertia of the KKT matrix (the reduced
+    stiffness positive definite), checked at every continuation step of the coarsest chain.
+    """
+
+    method = "chain"
+
+    def __init__(self, *args, n0: int = 16, levels: int = 4, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.n0, self.levels = n0, levels
+        self.N = n0
+
+    # -- layout: [poses (3 per moving link) | multipliers | ψ of every plate] ----------------
+    def _layout(self):
+        nums = self.nums
+        self.n_x = 3 * len(self.moving)
+        self.actuated = [r for r in nums.hinges if r.input and self.targets[r.name] is not None]
+        self.w_plate = self.n_x
+        self.w_pin = self.w_plate + 2 * len(nums.plates)
+        self.w_act = self.w_pin + 2 * len(nums.pins)
+        self.n_o = self.w_act + len(self.actuated)
+        self.n_c = self.n_o - self.n_x
+        self.psi0 = [self.n_o + i * self.N for i in range(len(nums.plates))]
+        self.n = self.n_o + self.N * len(nums.plates)
+
+    def _zero(self):
+        self._layout()
+        state = [mpmath.mpf(0)] * self.n
+        for i, r in enumerate(self.nums.plates):
+            for j in range(self.N):
+                state[self.psi0[i] + j] = +r.alpha
+        return state
+
+    def _pose(self, X, link):
+        if link == self.ground:
+            return mpmath.mpf(0), mpmath.mpf(0), mpmath.mpf(0)
+        c = 3 * self.link_index[link]
+        return X[c], X[c + 1], X[c + 2]
+
+    def _col(self, link):
+        return None if link == self.ground else 3 * self.link_index[link]
+
+    def _points(self, X):
+        return self._point_positions({lk.name: self._pose(X, lk.name) for lk in self.mech.links},
+                                     self.nums)
+
+    # -- one Newton step on the KKT system -----------------------------------------------------
+    def _kkt(self, Z, lam):
+        """Gradient g = ∇Π − Aᵀλ, constraints c, and the KKT blocks at Z, λ (continuation)."""
+        nums, N = self.nums, self.N
+        zero = mpmath.mpf(0)
+        n_o = self.n_o
+        S = [[zero] * n_o for _ in range(n_o)]         # outer block of K = [[H, Aᵀ], [A, 0]]
+        g = [zero] * n_o                               # [g_X | c] (the outer residual)
+        dg = [zero] * n_o                              # d/dλ of the outer residual
+        plates = []
+        s_load = lam * self.load_factor
+
+        def link_terms(link, point0, lam_vec, w_cols, sign):
+            """A closure term sign·((x, y) + Rot(φ)·point0) of constraints w_cols (x, y rows)
+            with multipliers lam_vec: its A entries, its −λ·∇²c, its −Aᵀλ in g_X, its value."""
+            c = self._col(link)
+            x, y, phi = self._pose(Z, link)
+            rp = _rot(phi, point0)
+            val = (sign * (x + rp[0]), sign * (y + rp[1]))
+            if c is None:
+                return val
+            dphi = (-rp[1] * sign, rp[0] * sign)
+            for k in range(2):
+                wc = w_cols[k]
+                S[wc][c + k] += sign
+                S[c + k][wc] += sign
+                S[wc][c + 2] += dphi[k]
+                S[c + 2][wc] += dphi[k]
+                g[c + k] -= lam_vec[k] * sign
+                g[c + 2] -= lam_vec[k] * dphi[k]
+            # −λ·∂²c/∂φ² with ∂²(Rot(φ)p)/∂φ² = −Rot(φ)p
+            S[c + 2][c + 2] += sign * (lam_vec[0] * rp[0] + lam_vec[1] * rp[1])
+            return val
+
+        for i, r in enumerate(nums.plates):
+            k = r.EI * N / r.l
+            h = r.l / N
+            wc = (self.w_plate + 2 * i, self.w_plate + 2 * i + 1)
+            lv = (Z[wc[0]], Z[wc[1]])
+            p0 = self.psi0[i]
+            psi = Z[p0:p0 + N]
+            phiP = self._pose(Z, r.p)[2]
+            phiM = self._pose(Z, r.m)[2]
+            ext = [phiP + r.alpha] + psi + [phiM + r.alpha]
+            kj = [2 * k] + [k] * (N - 1) + [2 * k]
+            mom = [kj[j] * (ext[j + 1] - ext[j]) for j in range(N + 1)]   # joint moments
+            cs = [(mpmath.cos(a), mpmath.sin(a)) for a in psi]
+            # chain closure c = start + h Σ t(ψ) − end
+            a = link_terms(r.p, r.cp0, lv, wc, 1)
+            b = link_terms(r.m, r.cm0, lv, wc, -1)
+            cx = a[0] + b[0] + h * mpmath.fsum(c for c, _ in cs)
+            cy = a[1] + b[1] + h * mpmath.fsum(s for _, s in cs)
+            g[wc[0]] += cx
+            g[wc[1]] += cy
+            # springs on the links: ∂E/∂φ_P = −m_0, ∂E/∂φ_M = m_N; ∂²E/∂φ² = 2k
+            cP, cM = self._col(r.p), self._col(r.m)
+            if cP is not None:
+                g[cP + 2] += -mom[0]
+                S[cP + 2][cP + 2] += 2 * k
+            if cM is not None:
+                g[cM + 2] += mom[N]
+                S[cM + 2][cM + 2] += 2 * k
+            # inner block: tridiagonal H_ψψ, gradient, couplings B (N × 4)
+            diag = [kj[j] + kj[j + 1] + h * (lv[0] * cs[j][0] + lv[1] * cs[j][1])
+                    for j in range(N)]
+            gpsi = [mom[j] - mom[j + 1] - h * (-lv[0] * cs[j][1] + lv[1] * cs[j][0])
+                    for j in range(N)]
+            cols = [None if cP is None else cP + 2, None if cM is None else cM + 2, wc[0], wc[1]]
+            plates.append((i, k, h, diag, gpsi, cs, cols, mom))
+        for i, r in enumerate(nums.pins):
+            wc = (self.w_pin + 2 * i, self.w_pin + 2 * i + 1)
+            lv = (Z[wc[0]], Z[wc[1]])
+            a = link_terms(r.p, r.at, lv, wc, 1)
+            b = link_terms(r.m, r.at, lv, wc, -1)
+            g[wc[0]] += a[0] + b[0]
+            g[wc[1]] += a[1] + b[1]
+        for i, r in enumerate(self.actuated):
+            wc = self.w_act + i
+            q = self.targets[r.name]
+            phiP = self._pose(Z, r.p)[2]
+            phiM = self._pose(Z, r.m)[2]
+            g[wc] += phiM - phiP - lam * q
+            dg[wc] += -q
+            for link, sgn in ((r.m, 1), (r.p, -1)):
+                c = self._col(link)
+                if c is not None:
+                    S[wc][c + 2] += sgn
+                    S[c + 2][wc] += sgn
+                    g[c + 2] -= Z[wc] * sgn
+        for link, p0, F, Mz in nums.loads:
+            c = self._col(link)
+            if c is None:
+                continue
+            x, y, phi = self._pose(Z, link)
+            rp = _rot(phi, p0)
+            # V = −s (F·r + Mz φ)
+            g[c] += -s_load * F[0]
+            g[c + 1] += -s_load * F[1]
+            g[c + 2] += -s_load * (_cross(rp, F) + Mz)
+            dg[c] += -self.load_factor * F[0]
+            dg[c + 1] += -self.load_factor * F[1]
+            dg[c + 2] += -self.load_factor * (_cross(rp, F) + Mz)
+            S[c + 2][c + 2] += s_load * (F[0] * rp[0] + F[1] * rp[1])
+        return S, g, dg, plates
+
+    @staticmethod
+    def _tridiag(diag, off):
+        """LDLᵀ of the symmetric tridiagonal matrix (diag, constant off-diagonal `off`):
+        returns (d, l, negatives)."""
+        d = [diag[0]]
+        lo = [None]
+        neg = 1 if d[0] < 0 else 0
+        for j in range(1, len(diag)):
+            lj = off / d[j - 1]
+            lo.append(lj)
+            d.append(diag[j] - lj * off)
+            if d[-1] < 0:
+                neg += 1
+        return d, lo, neg
+
+    @staticmethod
+    def _trisolve(d, lo, b):
+        n = len(d)
+        z = list(b)
+        for j in range(1, n):
+            z[j] -= lo[j] * z[j - 1]
+        x = [zz / dd for zz, dd in zip(z, d)]
+        for j in range(n - 2, -1, -1):
+            x[j] -= lo[j + 1] * x[j + 1]
+        return x
+
+    def _reduce(self, Z, lam):
+        """Eliminate every plate's ψ block: the reduced outer matrix, its right-hand sides and
+        what is needed to recover δψ and the inertia."""
+        S, g, dg, plates = self._kkt(Z, lam)
+        rhs = [-v for v in g]
+        drhs = [-v for v in dg]
+        neg_inner = {}
+        back = []
+        for (i, k, h, diag, gpsi, cs, cols, mom) in plates:
+            N = len(diag)
+            d, lo, neg = self._tridiag(diag, -k)
+            neg_inner[self.nums.plates[i].name] = neg
+            # B columns: φ_P (−2k at ψ_1), φ_M (−2k at ψ_N), w_x (−h sin ψ), w_y (h cos ψ)
+            zeros = [mpmath.mpf(0)] * N
+            Bc = []
+            for t, c in enumerate(cols):
+                if c is None:
+                    Bc.append(None)
+                    continue
+                if t == 0:
+                    col = list(zeros)
+                    col[0] = -2 * k
+                elif t == 1:
+                    col = list(zeros)
+                    col[N - 1] = -2 * k
+                elif t == 2:
+                    col = [-h * s for _, s in cs]
+                else:
+                    col = [h * c_ for c_, _ in cs]
+                Bc.append(col)
+            Y = [None if col is None else self._trisolve(d, lo, col) for col in Bc]
+            y = self._trisolve(d, lo, [-v for v in gpsi])
+            for a_, ca in enumerate(cols):
+                if ca is None:
+                    continue
+                Ba = Bc[a_]
+                rhs[ca] -= mpmath.fdot(Ba, y)
+                for b_, cb in enumerate(cols):
+                    if cb is None:
+                        continue
+                    S[ca][cb] -= mpmath.fdot(Ba, Y[b_])
+            back.append((i, d, lo, y, Y, cols, Bc))
+        return S, rhs, drhs, back, neg_inner
+
+    def _step(self, Z, lam):
+        """Newton step: (δZ, info)."""
+        S, rhs, drhs, back, neg_inner = self._reduce(Z, lam)
+        lu = _LU(S)
+        do = lu.solve(rhs)
+        dZ = list(do) + [mpmath.mpf(0)] * (self.n - self.n_o)
+        for (i, d, lo, y, Y, cols, Bc) in back:
+            p0 = self.psi0[i]
+            dpsi = list(y)
+            for t, c in enumerate(cols):
+                if c is not None:
+                    dpsi = [a - do[c] * b for a, b in zip(dpsi, Y[t])]
+            dZ[p0:p0 + len(dpsi)] = dpsi
+        # the outer unknowns hold w = −δλ for the multipliers
+        for j in range(self.n_x, self.n_o):
+            dZ[j] = -dZ[j]
+        return dZ, {"S": S, "lu": lu, "drhs": drhs, "back": back, "neg_inner": neg_inner}
+
+    def _norm(self, d):
+        L = self.nums.scale
+        out = mpmath.mpf(0)
+        for j in range(self.n_x):
+            out = max(out, abs(d[j]) / L if j % 3 != 2 else abs(d[j]))
+        for j in range(self.n_o, self.n):
+            out = max(out, abs(d[j]))
+        return out
+
+    def _newton(self, Z, lam, tol, max_iter=25):
+        Z = list(Z)
+        last = None
+        for it in range(max_iter):
+            try:
+                dZ, info = self._step(Z, lam)
+            except ZeroDivisionError:
+                return None
+            step = self._norm(dZ)
+            if step > 1:
+                return None
+            Z = [a + b for a, b in zip(Z, dZ)]
+            if step <= tol or (last is not None and step > last / 2 and it >= 2
+                               and step <= tol * 10 ** 6):
+                info["mark"] = self._inertia(info)
+                return Z, info
+            if last is not None and step > last and it >= 2:
+                return None
+            last = step
+        return None
+
+    def _inertia(self, info):
+        """Negative eigenvalues of the KKT matrix: every plate's H_ψψ (LDLᵀ pivots) plus the
+        reduced outer matrix (float64 eigenvalues after symmetric equilibration)."""
+        import numpy as np
+        S = np.array([[float(v) for v in row] for row in info["S"]])
+        D = np.ones(len(S))
+        for _ in range(8):                    # Ruiz: D S D with rows and columns of size ~1
+            M = np.abs(D[:, None] * S * D[None, :]).max(axis=1)
+            M[M == 0] = 1
+            D /= np.sqrt(M)
+        ev = np.linalg.eigvalsh(D[:, None] * S * D[None, :])
+        return int((ev < 0).sum()) + sum(info["neg_inner"].values())
+
+    def _stability(self, info):
+        return info["mark"]
+
+    def _describe(self, info, mark0):
+        return (f"{mark0} -> {info['mark']} negative eigenvalues of the KKT matrix, "
+                f"{self.n_c} for a stable equilibrium")
+
+    def _tangent(self, Z, lam, info):
+        do = info["lu"].solve(info["drhs"])
+        dZ = list(do) + [mpmath.mpf(0)] * (self.n - self.n_o)
+        for (i, d, lo, y, Y, cols, Bc) in info["back"]:
+            p0 = self.psi0[i]
+            dpsi = [mpmath.mpf(0)] * len(d)
+            for t, c in enumerate(cols):
+                if c is not None:
+                    dpsi = [a - do[c] * b for a, b in zip(dpsi, Y[t])]
+            dZ[p0:p0 + len(dpsi)] = dpsi
+        for j in range(self.n_x, self.n_o):
+            dZ[j] = -dZ[j]
+        return dZ
+
+    def _distance(self, a, b):
+        L = self.nums.scale
+        out = 0.0
+        for j, (x, y) in enumerate(zip(a, b)):
+            s = L if j < self.n_x and j % 3 != 2 else 1
+            out = max(out, float(abs(x - y) / s / (1 + abs(y) / s)))
+        return out
+
+    def _critical(self, Z, lam):
+        """A plate whose own block lost definiteness, else the plate holding most of the bending
+        energy of the (float64) eigenvector of the smallest eigenvalue of the reduced matrix."""
+        import numpy as np
+        try:
+            _, info = self._step(Z, lam)
+        except ZeroDivisionError:
+            return None
+        bad = [name for name, neg in info["neg_inner"].items() if neg]
+        if len(bad) == 1:
+            return bad[0]
+        S = np.array([[float(v) for v in row] for row in info["S"]])
+        ev, vec = np.linalg.eigh(S)
+        v = vec[:, int(np.argmin(np.abs(ev)))]
+        share = {}
+        for (i, d, lo, y, Y, cols, Bc) in info["back"]:
+            r = self.nums.plates[i]
+            N = len(d)
+            dpsi = np.zeros(N)
+            for t, c in enumerate(cols):
+                if c is not None:
+                    dpsi -= v[c] * np.array([float(e) for e in Y[t]])
+            ends = [v[cols[0]] if cols[0] is not None else 0.0,
+                    v[cols[1]] if cols[1] is not None else 0.0]
+            ext = np.concatenate([[ends[0]], dpsi, [ends[1]]])
+            kj = np.array([2.0] + [1.0] * (N - 1) + [2.0]) * float(r.EI * N / r.l)
+            share[r.name] = float((kj * np.diff(ext) ** 2).sum())
+        total = sum(share.values())
+        if not total:
+            return None
+        name = max(share, key=lambda k: share[k])
+        return name if share[name] > total / 2 else None
+
+    # -- refinement, Richardson extrapolation and the result -----------------------------------
+    def _refine(self, Z, N_old):
+        """The state for 2·N_old segments: every plate's angles linearly interpolated (in arc
+        length, the clamp angles as end values) from the N_old solution."""
+        nums = self.nums
+        old_psi0 = [self.n_o + i * N_old for i in range(len(nums.plates))]
+        out = list(Z[:self.n_o])
+        for i, r in enumerate(nums.plates):
+            psi = Z[old_psi0[i]:old_psi0[i] + N_old]
+            phiP = self._pose(Z, r.p)[2]
+            phiM = self._pose(Z, r.m)[2]
+            s = [mpmath.mpf(0)] + [(j + mpmath.mpf(1) / 2) / N_old for j in range(N_old)] + [1]
+            v = [phiP + r.alpha] + list(psi) + [phiM + r.alpha]
+            N = 2 * N_old
+            j = 0
+            for jj in range(N):
+                t = (jj + mpmath.mpf(1) / 2) / N
+                while s[j + 1] < t:
+                    j += 1
+                w = (t - s[j]) / (s[j + 1] - s[j])
+                out.append(v[j] + w * (v[j + 1] - v[j]))
+        return out
+
+    def _values(self, Z, targets, dps):
+        """Every reported quantity of one chain solution, flattened to {key: mpf}."""
+        nums = self.nums
+        S, g, dg, plates = self._kkt(Z, mpmath.mpf(1))
+        poses = {lk.name: self._pose(Z, lk.name) for lk in self.mech.links}
+        out = {}
+        for name, p in self._deviation(self._points(Z), self._rigid_cache)[0].items():
+            out[("points", name, "compliant", 0)] = p["compliant"][0]
+            out[("points", name, "compliant", 1)] = p["compliant"][1]
+            out[("points", name, "deviation", 0)] = p["deviation"][0]
+            out[("points", name, "deviation", 1)] = p["deviation"][1]
+        energy = mpmath.mpf(0)
+        for (i, k, h, diag, gpsi, cs, cols, mom) in plates:
+            r = nums.plates[i]
+            wc = self.w_plate + 2 * i
+            out[("hinges", r.name, "moment")] = mom[-1]
+            out[("hinges", r.name, "force", 0)] = Z[wc]
+            out[("hinges", r.name, "force", 1)] = Z[wc + 1]
+            kj = [2 * k] + [k] * (len(mom) - 2) + [2 * k]
+            energy += mpmath.fsum(m * m / (2 * kk) for m, kk in zip(mom, kj))
+        out[("energy",)] = energy
+        for i, r in enumerate(nums.pins):
+            wc = self.w_pin + 2 * i
+            out[("hinges", r.name, "moment")] = mpmath.mpf(0)
+            out[("hinges", r.name, "force", 0)] = Z[wc]
+            out[("hinges", r.name, "force", 1)] = Z[wc + 1]
+        for i, r in enumerate(self.actuated):
+            out[("actuators", r.name)] = Z[self.w_act + i]
+        for name, pose in poses.items():
+            for k in range(3):
+                out[("poses", name, k)] = pose[k]
+        for r in nums.hinges:
+            out[("angles", r.name)] = poses[r.m][2] - poses[r.p][2]
+        return out
+
+    def _final(self, state, inputs, load_factor, dps, cont):
+        targets = self._targets(inputs, dps)
+        levels = []
+        with mpmath.workdps(dps):
+            self._set(dps, targets, _mpf(load_factor, dps))
+            self._rigid_cache = self._rigid(targets, dps)
+            Z = [+x for x in state]
+            for j in range(self.levels):
+                if j:
+                    Z = self._refine(Z, self.N)
+                    self.N *= 2
+                self._layout()
+                res = self._newton(Z, mpmath.mpf(1), mpmath.mpf(10) ** (8 - dps))
+                if res is None:
+                    raise ContinuationError(f"{self.mech.name}: Newton failed for N = {self.N}",
+                                            1.0)
+                Z, info = res
+                if info["mark"] != self.n_c:
+                    raise InstabilityError(f"{self.mech.name}: chain with N = {self.N} is not a "
+                                           "stable equilibrium", 1.0, None)
+                levels.append(self._values(Z, targets, dps))
+            Ns = [self.n0 * 2 ** j for j in range(self.levels)]
+            self.N = self.n0
+            best, second = _richardson(levels)
+            res = _unflatten(best)
+            pts = {}
+            for name, rp in self._rigid_cache["points"].items():
+                pts[name] = {"rigid": rp, "compliant": res["points"][name]["compliant"],
+                             "deviation": res["points"][name]["deviation"]}
+            err = 0.0
+            for name in pts:
+                d1 = [best[("points", name, "deviation", k)] for k in range(2)]
+                d2 = [second[("points", name, "deviation", k)] for k in range(2)]
+                size = mpmath.sqrt(d1[0] ** 2 + d1[1] ** 2)
+                diff = mpmath.sqrt((d1[0] - d2[0]) ** 2 + (d1[1] - d2[1]) ** 2)
+                err = max(err, float(diff / size) if size else float(diff))
+            return {"method": self.method, "dps": dps, "inputs": dict(targets),
+                    "load_factor": self.load_factor, "points": pts, "poses": res["poses"],
+                    "angles": res["angles"], "hinges": res["hinges"],
+                    "actuators": res.get("actuators", {}), "energy": res["energy"],
+                    "error_estimate": err, "levels": Ns,
+                    "continuation": {**cont, "stable": True, "kkt_negative": self.n_c}}
+
+
+def _richardson(levels: list[dict]) -> tuple[dict, dict]:
+    """Richardson table over h_j = h_0/2^j for an error expansion in h², h⁴, ...: returns the
+    most extrapolated values T[J][J] and the next best T[J][J−1]."""
+    J = len(levels) - 1
+    table = [dict(levels[0])]
+    rows = [table]
+    for j in range(1, J + 1):
+        row = [dict(levels[j])]
+        for m in range(1, j + 1):
+            f = mpmath.mpf(4) ** m - 1
+            prev, lower = row[m - 1], rows[j - 1][m - 1]
+            row.append({k: prev[k] + (prev[k] - lower[k]) / f for k in prev})
+        rows.append(row)
+    last = rows[J]
+    return last[J], last[J - 1] if J else last[J]
+
+
+def _unflatten(flat: dict) -> dict:
+    out: dict = {}
+    for key, v in flat.items():
+        if key == ("energy",):
+            out["energy"] = v
+            continue
+        head, name, *rest = key
+        if head in ("actuators", "angles"):
+            out.setdefault(head, {})[name] = v
+        elif head == "poses":
+            out.setdefault("poses", {}).setdefault(name, [None] * 3)[rest[0]] = v
+        elif head == "hinges":
+            entry = out.setdefault("hinges", {}).setdefault(name, {"force": [None, None]})
+            if rest[0] == "moment":
+                entry["moment"] = v
+            else:
+                entry["force"][rest[1]] = v
+        elif head == "points":
+            out.setdefault("points", {}).setdefault(name, {}).setdefault(
+                rest[0], [None, None])[rest[1]] = v
+    for entry in out.get("hinges", {}).values():
+        entry["force"] = tuple(entry["force"])
+    for name, pose in out.get("poses", {}).items():
+        out["poses"][name] = tuple(pose)
+    for entry in out.get("points", {}).values():
+        for k in entry:
+            entry[k] = tuple(entry[k])
+    return out
