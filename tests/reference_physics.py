@@ -144,7 +144,8 @@ def _cross(a, b):
 
 
 class _Plate:
-    __slots__ = ("name", "p", "m", "alpha", "u", "l", "at", "cp0", "cm0", "EI", "pin", "input")
+    __slots__ = ("name", "p", "m", "alpha", "u", "l", "at", "cp0", "cm0", "EI", "eps", "pin",
+                 "input")
 
 
 class _Mech:
@@ -166,6 +167,9 @@ class _Mech:
                 r.cm0 = (r.at[0] + r.l / 2 * r.u[0], r.at[1] + r.l / 2 * r.u[1])
                 r.pin = h.model == "rigid"
                 r.EI = None if r.pin else num(owner._ei[h.name], dps)
+                # EI/(EA·l²) = t²/(12 l²) of an extensible plate, 0 when inextensible
+                r.eps = (num(owner._ea_ratio[h.name], dps) / r.l ** 2
+                         if owner.extensible and not r.pin else 0)
                 self.hinges.append(r)
             self.plates = [r for r in self.hinges if not r.pin]
             self.pins = [r for r in self.hinges if r.pin]
@@ -191,8 +195,9 @@ class _Base:
     method = "?"
 
     def __init__(self, mech, stiffness: Mapping | tuple, loads: Sequence = (),
-                 params: Mapping | None = None) -> None:
+                 params: Mapping | None = None, extensible: bool = False) -> None:
         self.mech = mech
+        self.extensible = extensible
         self.kinematic = Reference(mech, params)      # parameter values + the rigid pin linkage
         self.values = self.kinematic.values
         self.ground = mech.ground
@@ -201,7 +206,7 @@ class _Base:
         names = {p.name: p.symbol for p in mech.parameters}
         if isinstance(stiffness, tuple):
             stiffness = {h.name: stiffness for h in mech.hinges if h.model != "rigid"}
-        self._ei = {}
+        self._ei, self._ea_ratio = {}, {}
         for h in mech.hinges:
             if h.model == "rigid":
                 continue
@@ -209,6 +214,7 @@ class _Base:
                 raise KeyError(f"hinge {h.name!r} is a plate: give its (E, width, thickness)")
             E, b, t = (self._expr(v, names) for v in stiffness[h.name])
             self._ei[h.name] = E * b * t ** 3 / 12
+            self._ea_ratio[h.name] = t ** 2 / 12            # EI/EA
         unknown = set(stiffness) - set(self._ei)
         if unknown:
             raise KeyError(f"stiffness given for {sorted(unknown)}, which are not plates")
@@ -290,12 +296,14 @@ def _horner(cs: list, h: int, bits: int) -> int:
 
 
 def shoot(u0, mu0, fx, fy, bits: int, jac: bool = True, energy: bool = False,
-          kmax: int = 60) -> tuple:
-    """Integrate one plate over σ ∈ [0, 1]: ψ'' = f_x sin ψ − f_y cos ψ, (x, y)' = (cos ψ, sin ψ)
-    from ψ(0) = u0, ψ'(0) = mu0, x = y = 0.
+          eps=0, kmax: int = 60) -> tuple:
+    """Integrate one plate over σ ∈ [0, 1] from ψ(0) = u0, ψ'(0) = mu0, x = y = 0:
 
-    Returns ((ψ(1), x(1), y(1), ψ'(1)), J, ∫ψ'² dσ or None, steps) with J[i][j] the derivative
-    of output i with respect to (u0, mu0, fx, fy)[j] (from the variational equations). Numbers
+        ψ'' = (1 + e)(f_x sin ψ − f_y cos ψ),   (x, y)' = (1 + e)(cos ψ, sin ψ),
+
+    e = eps·(f_x cos ψ + f_y sin ψ) the axial strain N/EA (eps = EI/(EA·l²); 0: inextensible).
+    Returns ((ψ(1), x(1), y(1), ψ'(1)), J, ∫(ψ'² + eps·n_t²) dσ or None, steps), J[i][j] the
+    derivative of output i with respect to (u0, mu0, fx, fy)[j] (variational equations). Numbers
     are fixed-point integers scaled by 2^bits inside (exact convolutions, one rounding per
     coefficient); the truncation of every series is kept below 2^-(bits-12).
     """
@@ -303,17 +311,27 @@ def shoot(u0, mu0, fx, fy, bits: int, jac: bool = True, energy: bool = False,
     tolbits = bits - 12
     U, MU, X, Y = _fix(u0, bits), _fix(mu0, bits), 0, 0
     FX, FY = _fix(fx, bits), _fix(fy, bits)
+    EPS = _fix(eps, bits) if eps else 0
+    # ε-terms: ψ'' gets ε[(fx² − fy²) sc + fx fy (1 − 2 cc)], x' gets ε(fx cc + fy sc),
+    # y' gets ε(fx sc + fy (1 − cc)), with cc = cos²ψ, sc = sin ψ cos ψ
+    A2 = (FX * FX - FY * FY) >> bits
+    B2 = (FX * FY) >> bits
     nd = 4 if jac else 0
     V = [one if p == 0 else 0 for p in range(nd)]      # ∂ψ/∂p
     VP = [one if p == 1 else 0 for p in range(nd)]     # ∂ψ'/∂p
     DX, DY = [0] * nd, [0] * nd
-    W = 0                                              # ∫ψ'² dσ
+    W = 0                                              # ∫ψ'² + ε n_t² dσ
     sig, steps = 0, 0
+
+    def conv(a, b, k):
+        return sum(map(mul, a[:k + 1], b[k::-1])) >> bits
+
     while sig < one:
         H = one - sig
         lh = math.log2(H) - bits
         cu, su = mpmath.cos(_unfix(U, bits)), mpmath.sin(_unfix(U, bits))
         u, C, S = [U, MU], [_fix(cu, bits)], [_fix(su, bits)]
+        cc, sc = [], []                                # series of cos²ψ and sin ψ cos ψ
         ju = [0, MU]                                   # j·u_j
         xs, ys = [X], [Y]
         v = [[V[p], VP[p]] for p in range(nd)]
@@ -323,23 +341,51 @@ def shoot(u0, mu0, fx, fy, bits: int, jac: bool = True, energy: bool = False,
         while True:
             # order k gives u_{k+2}, x_{k+1}, y_{k+1}, C_{k+1}, S_{k+1} (and the variations)
             d = (k + 1) * (k + 2) << bits
-            u.append((FX * S[k] - FY * C[k]) // d)
+            delta = one if k == 0 else 0
+            num = FX * S[k] - FY * C[k]
+            dx_k, dy_k = C[k] << bits, S[k] << bits
+            if EPS:
+                cc.append(conv(C, C, k))
+                sc.append(conv(S, C, k))
+                num += (EPS * ((A2 * sc[k] + B2 * (delta - 2 * cc[k])) >> bits))
+                dx_k += EPS * ((FX * cc[k] + FY * sc[k]) >> bits)
+                dy_k += EPS * ((FX * sc[k] + FY * (delta - cc[k])) >> bits)
+            u.append(num // d)
             ju.append((k + 2) * u[k + 2])
-            xs.append(C[k] // (k + 1))
-            ys.append(S[k] // (k + 1))
+            xs.append(dx_k // ((k + 1) << bits))
+            ys.append(dy_k // ((k + 1) << bits))
             for p in range(nd):
                 vp = v[p]
-                rv = vp[k::-1]
-                P = sum(map(mul, C, rv)) >> bits       # (cos ψ · v)_k
-                Q = sum(map(mul, S, rv)) >> bits       # (sin ψ · v)_k
+                P = conv(C, vp, k)                     # (cos ψ · v)_k
+                Q = conv(S, vp, k)                     # (sin ψ · v)_k
                 num = FX * P + FY * Q
+                ddx, ddy = -Q << bits, P << bits
                 if p == 2:
                     num += S[k] << bits
                 elif p == 3:
                     num -= C[k] << bits
+                if EPS:
+                    Pc = conv(cc, vp, k)               # (cos²ψ · v)_k
+                    Ps = conv(sc, vp, k)               # (sin ψ cos ψ · v)_k
+                    dsc = 2 * Pc - vp[k]               # ∂(sin ψ cos ψ) = (2cos²ψ − 1) v
+                    dcc = -2 * Ps                      # ∂(cos²ψ) = −2 sin ψ cos ψ v
+                    e = A2 * dsc - 2 * B2 * dcc
+                    ex = FX * dcc + FY * dsc
+                    ey = FX * dsc - FY * dcc
+                    if p == 2:                         # ∂/∂fx of A2 = 2fx, B2 = fy
+                        e += 2 * FX * sc[k] + FY * (delta - 2 * cc[k])
+                        ex += cc[k] << bits
+                        ey += sc[k] << bits
+                    elif p == 3:
+                        e += -2 * FY * sc[k] + FX * (delta - 2 * cc[k])
+                        ex += sc[k] << bits
+                        ey += (delta - cc[k]) << bits
+                    num += (EPS * e) >> bits
+                    ddx += (EPS * ex) >> bits
+                    ddy += (EPS * ey) >> bits
                 vp.append(num // d)
-                dxs[p].append(-Q // (k + 1))
-                dys[p].append(P // (k + 1))
+                dxs[p].append(ddx // ((k + 1) << bits))
+                dys[p].append(ddy // ((k + 1) << bits))
             k += 1
             # (sin ψ)' = cos ψ · ψ',  (cos ψ)' = −sin ψ · ψ'
             C.append(-(sum(map(mul, ju[1:k + 1], reversed(S))) // (k << bits)))
@@ -373,8 +419,19 @@ def shoot(u0, mu0, fx, fy, bits: int, jac: bool = True, energy: bool = False,
             DX[p], DY[p] = _horner(dxs[p], h, bits), _horner(dys[p], h, bits)
         if energy:
             mu = ju[1:]
-            sq = [sum(map(mul, mu[:i + 1], reversed(mu[:i + 1]))) >> bits for i in range(len(mu))]
-            W += _horner([0] + [sq[i] // (i + 1) for i in range(len(sq))], h, bits)
+            n = len(mu)
+            sq = [conv(mu, mu, i) for i in range(n)]
+            if EPS:
+                # cos²ψ, sin ψ cos ψ to the order of C (higher terms are below the tolerance)
+                while len(cc) < len(C):
+                    cc.append(conv(C, C, len(cc)))
+                    sc.append(conv(S, C, len(sc)))
+                for i in range(min(n, len(C))):
+                    delta = one if i == 0 else 0
+                    nt2 = ((FX * FX >> bits) * cc[i] + 2 * B2 * sc[i]
+                           + (FY * FY >> bits) * (delta - cc[i])) >> bits
+                    sq[i] += (EPS * nt2) >> bits
+            W += _horner([0] + [sq[i] // (i + 1) for i in range(n)], h, bits)
         U, MU = Un, MUn
         sig += h
         steps += 1
@@ -459,6 +516,7 @@ class _Continuation:
                                     "solution (singular at λ = 0)", 0.0)
         state, info = res
         mark0 = self._stability(info)
+        self._check_start(info)
         dmax = min(self.max_dlam, 0.1 / span if span > 0 else 1.0)
         if has_loads:
             dmax = min(dmax, 0.25)
@@ -502,6 +560,9 @@ class _Continuation:
     def _describe(self, info, mark0) -> str:
         return f"{mark0} -> {self._stability(info)}"
 
+    def _check_start(self, info) -> None:
+        """Hook: raise if the as-fabricated pose is not a stable equilibrium (where checkable)."""
+
 
 def _fmt(x) -> str:
     return mpmath.nstr(x, 6)
@@ -515,7 +576,8 @@ class _Solver(_Base, _Continuation):
 
     def solve(self, inputs: Mapping, load_factor: Any = 1, min_digits: int = 20) -> dict:
         """Equilibrium at the input angles ``inputs`` (hinge → θ; missing inputs 0; None releases
-        the actuator) under ``load_factor`` × the loads. See the module docstring for the result."""
+        the actuator, and the rigid reference then keeps that hinge at 0) under ``load_factor`` ×
+        the loads. See the class docstring of :class:`Equilibrium` for the result."""
         dps = self.dps0
         targets = self._targets(inputs, dps)
         with mpmath.workdps(dps):
@@ -536,10 +598,12 @@ class _Solver(_Base, _Continuation):
 class Equilibrium(_Solver):
     """Method (a): elastica plates by Taylor-series shooting, mixed force formulation.
 
-    ``Equilibrium(mech, stiffness, loads=(), params=None)``: ``stiffness`` maps every non-rigid
-    hinge to (E, width, thickness) (numbers or expressions over the file parameters, e.g.
-    ``(210e9, 5e-3, "l/10")``), or is one such tuple for all of them; ``loads`` a list of
-    :class:`Load` (or (link, at, force, moment) tuples); ``params`` overrides file parameters.
+    ``Equilibrium(mech, stiffness, loads=(), params=None, extensible=False)``: ``stiffness``
+    maps every non-rigid hinge to (E, width, thickness) (numbers or expressions over the file
+    parameters, e.g. ``(210e9, 5e-3, "l/10")``), or is one such tuple for all of them; ``loads``
+    a list of :class:`Load` (or (link, at, force, moment) tuples); ``params`` overrides file
+    parameters. ``extensible=True`` lets every plate stretch by N/EA (EA = E·width·thickness;
+    the energy then includes N²/(2EA)): a diagnostic variant, not the contract's elastica.
 
     ``solve(inputs, load_factor=1)`` returns::
 
@@ -632,7 +696,8 @@ class Equilibrium(_Solver):
             rm = _rot(pm, r.cm0)
             rPc = (xp + rp[0], yp + rp[1])
             rMc = (xm + rm[0], ym + rm[1])
-            (u1, x1, y1, mu1), Js, W, _ = shoot(pp + r.alpha, mu0, fx, fy, bits, True, energy)
+            (u1, x1, y1, mu1), Js, W, _ = shoot(pp + r.alpha, mu0, fx, fy, bits, True, energy,
+                                                eps=r.eps)
             shots[r.name] = (u1, mu1, Js)
             l, EI = r.l, r.EI
             if energy:
@@ -886,6 +951,8 @@ class ChainEquilibrium(_Solver):
 
     def __init__(self, *args, n0: int = 16, levels: int = 4, **kwargs) -> None:
         super().__init__(*args, **kwargs)
+        if self.extensible:
+            raise NotImplementedError("the chain method models inextensible plates only")
         self.n0, self.levels = n0, levels
         self.N = n0
 
@@ -903,6 +970,7 @@ class ChainEquilibrium(_Solver):
         self.n = self.n_o + self.N * len(nums.plates)
 
     def _zero(self):
+        self.N = self.n0
         self._layout()
         state = [mpmath.mpf(0)] * self.n
         for i, r in enumerate(self.nums.plates):
@@ -1161,6 +1229,13 @@ class ChainEquilibrium(_Solver):
 
     def _stability(self, info):
         return info["mark"]
+
+    def _check_start(self, info):
+        if info["mark"] != self.n_c:
+            raise InstabilityError(
+                f"{self.mech.name}: the as-fabricated pose is not a stable equilibrium "
+                f"({info['mark']} negative eigenvalues of the KKT matrix, {self.n_c} expected): "
+                "a free mode (e.g. a released input between pins)", 0.0, None)
 
     def _describe(self, info, mark0):
         return (f"{mark0} -> {info['mark']} negative eigenvalues of the KKT matrix, "

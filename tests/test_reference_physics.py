@@ -10,8 +10,9 @@ Hencky chains in a potential-energy formulation extrapolated over the segment co
 no mechanics, only the geometry reader and the rigid pin linkage.
 
 Measured agreement of (a) and (b) on the deviation of the coupler point (relative, this run's
-code, levels N = 16..128): four-bar 1e-25..1e-20 for l = 0.2, 1, 5 mm and A0 = 0.02..0.3; 5e-14
-at the corner l/L = 1e-3, A0 = 0.5 and 6e-17 at l/L = 0.2; six-bar 6e-21; with a load on C 1e-21.
+code, levels N = 16..128): four-bar 2e-27..5e-20 for l = 0.2, 1, 5 mm and A0 = 0.02..0.3; 5e-20
+at the corner l/L = 1e-3, A0 = 0.5 and 6e-17 at l/L = 0.2; six-bar 6e-21; with a load on C 1e-21;
+plates of different thickness 3e-22. (b)'s own Richardson estimate is more cautious (1e-13..1e-21).
 
 Kinematic circular-arc model (level exact, tests/reference_solver.py) against the elastica,
 four-bar without loads, relative gap |ΔR_arc − ΔR_elastica| / |ΔR_elastica| at point C, measured
@@ -286,6 +287,66 @@ def test_no_input_and_no_load_is_the_as_fabricated_pose(four_bar):
     res = Equilibrium(four_bar, STEEL).solve({"A0": 0})
     assert norm(res["points"]["C"]["deviation"]) < 1e-38 and abs(res["energy"]) < 1e-45
     assert all(abs(h["moment"]) < 1e-38 for h in res["hinges"].values())
+
+
+# ---- the plate integrator and the extensible variant -----------------------------------------
+@pytest.mark.parametrize("eps", ["0", "0.01"])
+def test_plate_integrator_matches_an_independent_ode_solver(eps):
+    """shoot() (fixed-point Taylor series, variational equations) against mpmath.odefun on a
+    strongly bent, loaded plate; its Jacobian against central differences."""
+    from reference_physics import shoot
+    with mpmath.workdps(40):
+        u0, mu0, fx, fy = (mpmath.mpf(v) for v in ("0.7", "0.9", "2.5", "-3"))
+        e = mpmath.mpf(eps)
+        out, jac, energy, _ = shoot(u0, mu0, fx, fy, 160, True, True, eps=e)
+        args = (u0, mu0, fx, fy)
+        for j in range(4):
+            h = mpmath.mpf("1e-15")
+            plus = shoot(*[a + h * (i == j) for i, a in enumerate(args)], 160, False, eps=e)[0]
+            minus = shoot(*[a - h * (i == j) for i, a in enumerate(args)], 160, False, eps=e)[0]
+            for i in range(4):
+                assert abs((plus[i] - minus[i]) / (2 * h) - jac[i][j]) < 1e-20
+    with mpmath.workdps(20):
+        def rhs(s, y):
+            u, mu = y[0], y[1]
+            c, sn = mpmath.cos(u), mpmath.sin(u)
+            n_t = fx * c + fy * sn
+            grow = 1 + e * n_t
+            return [mu, grow * (fx * sn - fy * c), grow * c, grow * sn, mu ** 2 + e * n_t ** 2]
+        end = mpmath.odefun(rhs, 0, [u0, mu0, 0, 0, 0])(1)
+        for got, want in zip((out[0], out[3], out[1], out[2], energy), end):
+            assert abs(got - want) < 1e-16
+
+
+@pytest.mark.parametrize("force", ["3", "-1.5"])
+def test_extensible_plate_under_axial_load_stretches_by_n_l_over_ea(cantilever, force):
+    """A straight plate under an axial end force F stays straight and stretches by F·l/EA
+    (below Euler's load in compression); the energy is F²l/(2EA). EI = 1, EA = 12."""
+    res = Equilibrium(cantilever, UNIT, loads=[Load("tip", (1, 0), (force, 0))],
+                      extensible=True).solve({"A": None})
+    f = mpmath.mpf(force)
+    dx, dy = res["points"]["T"]["deviation"]
+    assert abs(dx - f / 12) < 1e-25 and abs(dy) < 1e-25
+    assert abs(res["energy"] - f ** 2 / 24) < 1e-25
+    with pytest.raises(NotImplementedError):
+        ChainEquilibrium(cantilever, UNIT, extensible=True)
+
+
+def test_extensible_actuator_torque_is_the_derivative_of_the_potential(four_bar):
+    q, h = mpmath.mpf("0.2"), mpmath.mpf("1e-6")
+    solver = Equilibrium(four_bar, STEEL, loads=[point_load(four_bar, "C", ("0.5", "-1"))],
+                         extensible=True)
+
+    def potential(res):
+        c = res["points"]["C"]["compliant"]
+        return res["energy"] - (mpmath.mpf("0.5") * (c[0] - mpmath.mpf("0.06"))
+                                - (c[1] - mpmath.mpf("0.09")))
+
+    with mpmath.workdps(50):
+        mid = solver.solve({"A0": q})
+        derivative = (potential(solver.solve({"A0": q + h}))
+                      - potential(solver.solve({"A0": q - h}))) / (2 * h)
+        assert rel_scalar(derivative, mid["actuators"]["A0"]) < 1e-9
 
 
 # ---- loss of stability ----------------------------------------------------------------------
