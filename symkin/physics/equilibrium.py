@@ -79,6 +79,7 @@ class System:
     links: list[str]
     hinges: list[_Hinge]
     loads: list[_Load]
+    points: dict[str, tuple]
     L: object
     F: object
     index: dict = field(default_factory=dict)
@@ -228,13 +229,14 @@ def build(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr], inputs: Mapping[
     loads = [
         _Load(index[ld.link], tuple(num(v) for v in ld.at), tuple(num(v) for v in ld.force),
               num(ld.moment / s)) for ld in mech.loads]
+    points = {p.name: (index[p.link], tuple(num(v) for v in p.at)) for p in mech.points}
     centres = [(float(sp.N(h.at[0].subs(values))), float(sp.N(h.at[1].subs(values))))
                for h in mech.hinges]
     span = max([math.dist(a, b) for a in centres for b in centres]
                + [float(sp.N(sp.sympify(h.length).subs(values))) for h in mech.hinges])
     plates = [h for h in hinges if h.plate]
     force = max([float(h.EI) / (float(h.length) * span) for h in plates], default=1.0)
-    return System(links, hinges, loads, convert(sp.Float(span, 17)),
+    return System(links, hinges, loads, points, convert(sp.Float(span, 17)),
                   convert(sp.Float(force, 17)))
 
 
@@ -413,10 +415,8 @@ def _position(system: System, name: str) -> int:
 
 
 def _where(system: System, u: np.ndarray, point):
-    """Position of a mechanism.Point in the solution u (float or mpf, as u)."""
-    link = system.links.index(point.link) if point.link in system.links else -1
-    at = tuple(mpmath.mpf(sp.N(v, mpmath.mp.dps + 5)) if arith.is_mp(u) else _float(v)
-               for v in point.at)
+    """Position of a mechanism.Point in the solution u."""
+    link, at = system.points[point.name]
     x, y = system.place(u[:, None], link, at)
     return x[0], y[0]
 

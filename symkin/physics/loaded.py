@@ -48,14 +48,7 @@ def evaluate(analysis, inputs: Mapping[str, object], params: Mapping[str, object
         theta = bridge.rigid_angles(analysis, pvals, ivals)
         base = [*la.params, *la.thetas]
         at_rigid = [*pvals, *(theta[a] for a in sorted(theta))]
-        a_t, q = der.statics
-        try:
-            mu = mpmath.lu_solve(mpmath.matrix(fn("AT", a_t.tolist(), base)(*at_rigid)),
-                                 mpmath.matrix(fn("Q", list(q), base)(*at_rigid)))
-        except ZeroDivisionError:
-            raise AssemblyError(f"{analysis.mechanism.path}: the mechanism is at a toggle "
-                                "position (singular loop Jacobian) for these inputs") from None
-        mu = list(mu)
+        mu = _multipliers(der, fn, base, at_rigid, analysis.mechanism.path)
         loads = der.plate_loads
         disp = [e for a in sorted(der.compliance) for e in loads[a].displacement]
         args = [*base, *der.mu]
@@ -90,6 +83,19 @@ def evaluate(analysis, inputs: Mapping[str, object], params: Mapping[str, object
             angles_compliant={names[a]: float(theta[a] + delta.get(a, 0)) for a in sorted(theta)},
             points=points, hinges=hinges, energy=float(energy * mpmath.mpf(sp.N(s, dps))),
             error_estimate=None)
+
+
+def _multipliers(der: LoadedDerivation, fn, args: list, values: list, path: str) -> list:
+    """μ from A^T μ = Q at the rigid pose (none for an open chain)."""
+    a_t, q = der.statics
+    if not der.mu:
+        return []
+    try:
+        return list(mpmath.lu_solve(mpmath.matrix(fn("AT", a_t.tolist(), args)(*values)),
+                                    mpmath.matrix(fn("Q", list(q), args)(*values))))
+    except ZeroDivisionError:
+        raise AssemblyError(f"{path}: the mechanism is at a toggle position (singular loop "
+                            "Jacobian) for these inputs") from None
 
 
 def _newton(la, fn, args: list, known: list, path: str, dps: int) -> dict:
