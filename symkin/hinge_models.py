@@ -58,10 +58,14 @@ MODELS: dict[str, ModelSpec] = {spec.name: spec for spec in (
         ModelParameter("gamma", "fraction", default=PRBM_PRESETS["force"]["gamma"]),
         ModelParameter("c_theta", "number", default=PRBM_PRESETS["force"]["c_theta"]),
         ModelParameter("preset", "choice", choices=tuple(sorted(PRBM_PRESETS))),
-    ), "pseudo-rigid-body model: a pin at distance (1 - gamma) l from P's clamp"),
+    ), "pseudo-rigid-body model: a pin at distance (1 - gamma) l from P's clamp; its "
+       "first-order pivot is gamma l/c_theta from M's clamp, so against the midpoint pin it "
+       "deviates by O(l theta) unless pin = \"prbm\""),
     ModelSpec("small_deflection", (), "linear beam theory: f = l, g = l theta / 2"),
     ModelSpec("elastica_force", (),
-              "cantilever elastica under a transverse end force (Bisshopp-Drucker)"),
+              "cantilever elastica under a transverse end force (Bisshopp-Drucker); its "
+              "first-order pivot is 2 l/3 from M's clamp, so against the midpoint pin it "
+              "deviates by O(l theta) unless pin = \"prbm\""),
     ModelSpec("table", (
         ModelParameter("file", "text", required=True),
         ModelParameter("degree", "int", default=3),

@@ -100,6 +100,34 @@ def test_complex_step_derivative_of_a_straight_plate():
     assert slope == pytest.approx(math.sin(math.sqrt(lam)) / math.sqrt(lam), rel=1e-12)
 
 
+# -- the beam-column series of `loaded` -------------------------------------------------------
+
+def test_beam_column_series_against_closed_forms_and_the_beam_constraint_model():
+    import sympy as sp
+
+    from symkin.physics.beamcolumn import ORDER, series
+
+    bc = series()
+    p = sp.Symbol("p", positive=True)
+    k = sp.sqrt(p)
+
+    def taylor(expr):
+        return sp.series(expr, p, 0, ORDER + 1).removeO()
+
+    # clamped–guided beam-column in tension: f/δ = k³/(k − 2 tanh(k/2))
+    assert sp.expand(taylor((k - 2 * sp.tanh(k / 2)) / k ** 3) - bc.value("shear", p)) == 0
+    # the beam constraint model's transverse stiffness 12 + 6p/5 − p²/700 (Awtar et al. 2007)
+    gap = sp.expand(taylor(1 / bc.value("shear", p)) - (12 + sp.Rational(6, 5) * p - p ** 2 / 700))
+    assert [gap.coeff(p, n) for n in range(3)] == [0, 0, 0]
+    # symmetric bending under tension: M = (EI θ/l)(k/2)/tanh(k/2)
+    assert sp.expand(taylor((k / 2) / sp.tanh(k / 2)) - bc.value("rotation", p)) == 0
+    # p = 0: the arc's chord shortening θ²/24, the clamped–guided bowing (3/5)(f/12)²,
+    # the strain energies θ²/2 and f²/24, the end moment θ − f/2
+    assert (bc.bending[0], bc.bowing[0]) == (sp.Rational(1, 24), sp.Rational(3, 5) / 144)
+    assert (bc.strain_bending[0], bc.strain_shear[0]) == (sp.Rational(1, 2), sp.Rational(1, 24))
+    assert (bc.rotation[0], bc.coupling[0]) == (1, sp.Rational(1, 2))
+
+
 # -- a lone plate held by its actuator --------------------------------------------------------
 
 def lone_plate(units: str = "mm", width: str = "5", nu: str = "0.3", scale: float = 1.0,
@@ -291,27 +319,56 @@ def pin_linkage_forces(mech, poses, angles, stiffness, loads):
     return {h.name: solution[2 * j: 2 * j + 2] for j, h in enumerate(hinges)}
 
 
+def symmetric_bending_factor(p: float) -> float:
+    """M/(EI θ/l) of a plate bent symmetrically under the axial load index p: (k/2)/tanh(k/2),
+    k = √p (linear beam-column theory; its cosine form in compression)."""
+    if p >= 0:
+        k = math.sqrt(p) / 2
+        return k / math.tanh(k) if k else 1.0
+    k = math.sqrt(-p) / 2
+    return k / math.tan(k)
+
+
 @pytest.mark.parametrize("example", ["four_bar", "stephenson_six_bar"])
 def test_loaded_statics_balance_every_link(example):
+    # First order: the pin linkage with springs EI/l. Beam-column: springs EI/l times the
+    # symmetric-bending factor at the first pass's axial loads. Both against a link-by-link
+    # balance written here.
+    from symkin.physics import loaded
+
     text = (EXAMPLES / f"{example}.toml").read_text()
     text = text.replace('length = "l"', 'length = "l"\nE = 210e9\nthickness = "l/10"\n'
                         'width = 4e-3')
     point = "C" if example == "four_bar" else "D"
-    text += f'[[load]]\npoint = "{point}"\nforce = [0.3, -1.5]\nmoment = 0.02\n'
+    text += f'[[load]]\npoint = "{point}"\nforce = [3, -15]\nmoment = 0.02\n'
     mech = symkin.loads(text, f"{example}.toml")
     an = symkin.analyze(mech)
-    angle = 0.15
-    inputs = {mech.inputs[0]: angle}
-    result = an.evaluate(inputs, "loaded")
-    rigid = Reference(mech).solve({mech.inputs[0]: str(angle)}, model_override="rigid")
+    inputs = {mech.inputs[0]: 0.15}
+    rigid = Reference(mech).solve({mech.inputs[0]: "0.15"}, model_override="rigid")
     ei = 210e9 / (1 - 0.09) * 4e-3 * (1e-4 if example == "four_bar" else 0.8e-4) ** 3 / 12
-    stiffness = {h.name: ei / float(h.length.subs(mech.defaults)) for h in mech.hinges}
+    length = {h.name: float(h.length.subs(mech.defaults)) for h in mech.hinges}
     p = mech.point(point)
-    forces = pin_linkage_forces(mech, rigid["poses"], rigid["angles"], stiffness,
-                                [(p.link, p.at, (0.3, -1.5), 0.02)])
-    scale = max(np.linalg.norm(f) for f in forces.values())
-    for name, f in forces.items():
+    loads = [(p.link, p.at, (3.0, -15.0), 0.02)]
+    first = pin_linkage_forces(mech, rigid["poses"], rigid["angles"],
+                               {n: ei / length[n] for n in length}, loads)
+    result = loaded.evaluate(an, inputs, beam_column=False)
+    scale = max(np.linalg.norm(f) for f in first.values())
+    for name, f in first.items():
         assert np.allclose(result.hinges[name].force, f, rtol=0, atol=1e-11 * scale), name
+    # the axial load index of each plate along its mid-direction, from the first pass
+    factor = {}
+    for h in mech.hinges:
+        x, y, phi = (float(v) for v in rigid["poses"][h.links[0]])
+        mid = phi + float(h.plate_angle.subs(mech.defaults)) + float(rigid["angles"][h.name]) / 2
+        axial = first[h.name] @ np.array([math.cos(mid), math.sin(mid)])
+        factor[h.name] = symmetric_bending_factor(axial * length[h.name] ** 2 / ei)
+    second = pin_linkage_forces(mech, rigid["poses"], rigid["angles"],
+                                {n: ei / length[n] * factor[n] for n in length}, loads)
+    result = an.evaluate(inputs, "loaded")
+    for name, f in second.items():
+        # the series through p³ against the exact factor: |p| < 0.3 here, so within 1e-6
+        assert np.allclose(result.hinges[name].force, f, rtol=0, atol=1e-7 * scale), name
+    assert max(abs(factor[n] - 1) for n in factor) > 1e-3      # the second pass matters
 
 
 # -- the command line -------------------------------------------------------------------------

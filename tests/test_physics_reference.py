@@ -122,18 +122,22 @@ def test_stephenson_six_bar(angle):
     compare(mech, reference, "D", {"O_A": angle}, 0.8e-3 / CRANK)
 
 
-def test_loaded_against_the_extensible_reference_is_closer_still():
-    # `loaded` carries the plates' axial compliance N l/EA, which the inextensible elastica
-    # lacks; against the reference's extensible variant it agrees to the first-order residual.
+def test_loaded_with_axial_stretch_against_the_extensible_reference():
+    # Both physical levels model inextensible plates; `loaded` can add the axial stretch N l/EA
+    # (extensible=True), and then agrees with the reference's extensible variant as closely as
+    # the inextensible pair does, while the two models differ by 0.6 % (0.02 rad) to 0.05 % (0.3 rad) here.
+    from symkin.physics import loaded
+
     mech = symkin.loads(with_stiffness("four_bar"), "four_bar.toml")
     stretch = Equilibrium(mech, (PLANE, WIDTH, "l/10"), extensible=True)
-    rigid = Equilibrium(mech, (PLANE, WIDTH, "l/10"))
+    plain = Equilibrium(mech, (PLANE, WIDTH, "l/10"))
     an = symkin.analyze(mech)
     for angle in (0.02, 0.3):
-        loaded = an.evaluate({"A0": angle}, "loaded").points["C"].deviation
-        with mpmath.workdps(30):
-            gap_ext = relative_gap(loaded, stretch.solve({"A0": str(angle)})["points"]["C"]
-                                   ["deviation"])
-            gap_inext = relative_gap(loaded, rigid.solve({"A0": str(angle)})["points"]["C"]
-                                     ["deviation"])
-        assert gap_ext < 5e-4 and gap_ext < gap_inext
+        inputs = {"A0": str(angle)}
+        ext = stretch.solve(inputs)["points"]["C"]["deviation"]
+        inext = plain.solve(inputs)["points"]["C"]["deviation"]
+        ours = loaded.evaluate(an, {"A0": angle}, extensible=True).points["C"].deviation
+        assert relative_gap(ours, ext) < 5e-4
+        assert relative_gap(an.evaluate({"A0": angle}, "loaded").points["C"].deviation,
+                            inext) < 5e-4
+        assert relative_gap([float(v) for v in ext], inext) > 4e-4     # 0.6 % at 0.02 rad

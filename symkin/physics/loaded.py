@@ -16,27 +16,31 @@ from .statics import LoadedDerivation
 DPS = 40
 
 
-def derivation(analysis) -> LoadedDerivation:
-    """The LoadedDerivation of an Analysis, cached on it (the derivation takes a moment)."""
+def derivation(analysis, **options) -> LoadedDerivation:
+    """The LoadedDerivation of an Analysis (options: beam_column, extensible), cached on it."""
     cache = analysis.__dict__.setdefault("_physics", {})
-    if "loaded" not in cache:
-        cache["loaded"] = LoadedDerivation(analysis.structure,
-                                           [p.name for p in analysis.points])
-    return cache["loaded"]
+    key = ("loaded", *sorted(options.items()))
+    if key not in cache:
+        cache[key] = LoadedDerivation(analysis.structure, [p.name for p in analysis.points],
+                                      **options)
+    return cache[key]
 
 
 def evaluate(analysis, inputs: Mapping[str, object], params: Mapping[str, object] | None = None,
-             dps: int = DPS):
-    """One configuration at the `loaded` level (CONTRACT §7)."""
+             dps: int = DPS, **options):
+    """One configuration at the `loaded` level (CONTRACT §7); `options` select a variant of the
+    derivation (statics.LoadedDerivation: beam_column, extensible)."""
     from ..analysis import PointResult
     from .result import HingeLoad, PhysicalEvaluation
     from .stiffness import check_values
 
-    der = derivation(analysis)
+    der = derivation(analysis, **options)
     la = der.analysis
     kin = la.kin
+    prefix = "loaded" + "".join(f":{k}={v}" for k, v in sorted(options.items())) + ":"
+
     def fn(key, exprs, args):
-        return bridge.function(analysis, "loaded:" + key, exprs, args)
+        return bridge.function(analysis, prefix + key, exprs, args)
 
     values = analysis.parameter_values(params)
     check_values(analysis.mechanism, values, "loaded")
@@ -48,7 +52,12 @@ def evaluate(analysis, inputs: Mapping[str, object], params: Mapping[str, object
         theta = bridge.rigid_angles(analysis, pvals, ivals)
         base = [*la.params, *la.thetas]
         at_rigid = [*pvals, *(theta[a] for a in sorted(theta))]
-        mu = _multipliers(der, fn, base, at_rigid, analysis.mechanism.path)
+        path = analysis.mechanism.path
+        mu0 = _multipliers(der.first_statics, der.mu0, fn, "AT0", base, at_rigid, path) \
+            if der.mu0 else []
+        mu = _multipliers(der.statics, der.mu, fn, "AT", [*base, *der.mu0], [*at_rigid, *mu0],
+                          path)
+        base, at_rigid = [*base, *der.mu0], [*at_rigid, *mu0]
         loads = der.plate_loads
         disp = [e for a in sorted(der.compliance) for e in loads[a].displacement]
         args = [*base, *der.mu]
@@ -85,14 +94,14 @@ def evaluate(analysis, inputs: Mapping[str, object], params: Mapping[str, object
             error_estimate=None)
 
 
-def _multipliers(der: LoadedDerivation, fn, args: list, values: list, path: str) -> list:
-    """μ from A^T μ = Q at the rigid pose (none for an open chain)."""
-    a_t, q = der.statics
-    if not der.mu:
+def _multipliers(statics, symbols, fn, key: str, args: list, values: list, path: str) -> list:
+    """The multipliers of A^T μ = Q at the rigid pose (none for an open chain)."""
+    a_t, q = statics
+    if not symbols:
         return []
     try:
-        return list(mpmath.lu_solve(mpmath.matrix(fn("AT", a_t.tolist(), args)(*values)),
-                                    mpmath.matrix(fn("Q", list(q), args)(*values))))
+        return list(mpmath.lu_solve(mpmath.matrix(fn(key, a_t.tolist(), args)(*values)),
+                                    mpmath.matrix(fn(key + ":Q", list(q), args)(*values))))
     except ZeroDivisionError:
         raise AssemblyError(f"{path}: the mechanism is at a toggle position (singular loop "
                             "Jacobian) for these inputs") from None
