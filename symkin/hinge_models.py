@@ -192,7 +192,8 @@ def pivot_distance(hinge) -> _sp.Expr:
     y = 2 l θ/3); the fit's linear coefficient times l for table; g'(0) for expr.  Against a pin
     elsewhere the model carries an O(l θ) deviation (docs/physics.md)."""
     l = hinge.length
-    if hinge.pin == "midpoint" or hinge.model in ("rigid", "circular_arc", "small_deflection"):
+    pin = getattr(hinge, "pin", "midpoint")       # stand-in hinges of the reports have none
+    if pin == "midpoint" or hinge.model in ("rigid", "circular_arc", "small_deflection"):
         return l / 2
     if hinge.model == "prbm":
         gamma, c = _prbm_constants(hinge)
