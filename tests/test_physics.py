@@ -22,6 +22,7 @@ import mpmath
 import numpy as np
 import pytest
 
+import mechanisms as M
 import symkin
 from conftest import EXAMPLES
 from reference_solver import Reference
@@ -252,7 +253,7 @@ def test_below_the_euler_load_the_column_stays_straight(tmp_path):
 
 
 def test_the_error_estimate_is_honest_and_below_1e_10():
-    text = (EXAMPLES / "four_bar.toml").read_text().replace(
+    text = M.without_stiffness(EXAMPLES / "four_bar.toml").replace(
         'length = "l"', 'length = "l"\nE = 210e9\nthickness = "l/10"\nwidth = 5e-3')
     text += '[[load]]\npoint = "C"\nforce = [0.5, -2.0]\nmoment = 0.01\n'
     an = symkin.analyze(symkin.loads(text, "four_bar.toml"))
@@ -336,7 +337,7 @@ def test_loaded_statics_balance_every_link(example):
     # balance written here.
     from symkin.physics import loaded
 
-    text = (EXAMPLES / f"{example}.toml").read_text()
+    text = M.without_stiffness(EXAMPLES / f"{example}.toml")
     text = text.replace('length = "l"', 'length = "l"\nE = 210e9\nthickness = "l/10"\n'
                         'width = 4e-3')
     point = "C" if example == "four_bar" else "D"
@@ -374,7 +375,7 @@ def test_loaded_statics_balance_every_link(example):
 # -- the command line -------------------------------------------------------------------------
 
 def steel_four_bar(tmp_path, extra: str = "") -> str:
-    text = (EXAMPLES / "four_bar.toml").read_text().replace(
+    text = M.without_stiffness(EXAMPLES / "four_bar.toml").replace(
         'length = "l"', 'length = "l"\nE = 210e9\nthickness = "l/10"\nwidth = 5e-3')
     path = tmp_path / "four_bar.toml"
     path.write_text(text + extra)
@@ -409,16 +410,17 @@ def test_eval_text_lists_plate_loads(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("level", ["equilibrium", "loaded"])
-def test_physical_level_without_stiffness_names_key_and_hinge(capsys, level):
-    code = main(["eval", str(EXAMPLES / "four_bar.toml"), "--input", "A0=0.1", "--level",
-                 level])
+def test_physical_level_without_stiffness_names_key_and_hinge(tmp_path, capsys, level):
+    path = tmp_path / "four_bar.toml"
+    path.write_text(M.without_stiffness(EXAMPLES / "four_bar.toml"))
+    code = main(["eval", str(path), "--input", "A0=0.1", "--level", level])
     err = capsys.readouterr().err
     assert code == 2
     assert "four_bar.toml" in err and "'A0'" in err and "'E'" in err and "fix:" in err
 
 
 def test_partial_stiffness_names_the_missing_key(tmp_path, capsys):
-    text = (EXAMPLES / "four_bar.toml").read_text().replace(
+    text = M.without_stiffness(EXAMPLES / "four_bar.toml").replace(
         'length = "l"', 'length = "l"\nE = 210e9\nwidth = 5e-3')
     text = text.replace('plate_angle = "0"\n', 'plate_angle = "0"\nthickness = 1e-4\n', 1)
     path = tmp_path / "partial.toml"
@@ -446,8 +448,6 @@ def test_physical_levels_run_on_the_sympy_backend_only(tmp_path, capsys, backend
 
 
 def test_unreachable_input_exits_3_like_the_kinematic_levels(tmp_path, capsys):
-    import mechanisms as M
-
     path = tmp_path / "non_grashof.toml"
     path.write_text(M.NON_GRASHOF.replace('length = "l"', 'length = "l"\nE = 210e9\n'
                                           'thickness = "l/10"\nwidth = 5e-3'))

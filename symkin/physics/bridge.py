@@ -24,6 +24,12 @@ def rigid_angles(analysis, pvals: list, ivals: Mapping[int, object]) -> dict[int
     return theta
 
 
+def deltas(analysis, pvals: list, theta: Mapping[int, object]) -> dict[int, object]:
+    """δ of the non-input hinges from the `exact` level's Newton on the analysis's closure, with
+    `pvals` the values of analysis.params."""
+    return analysis._deltas("exact", list(pvals), dict(theta))
+
+
 def function(analysis, key: str, exprs, args):
     """An mpmath function of sympy `exprs` in `args`, built once per analysis and key."""
     cache = analysis.__dict__.setdefault("_physics_lambdas", {})

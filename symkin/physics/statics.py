@@ -95,6 +95,10 @@ class LoadedDerivation:
         self.mu = tuple(sp.Symbol(f"mu_{k}", real=True) for k in range(1, loops + 1))
         self.mu0 = tuple(sp.Symbol(f"mu0_{k}", real=True) for k in range(1, loops + 1)) \
             if beam_column else ()
+        # The closure's constants (multipliers, compliance) count as parameters of its analysis,
+        # so the exact level's evaluation runs on it unchanged.
+        self.analysis.params = (*self.analysis.params, *self.mu0, *self.mu,
+                                *(c for a in sorted(self.compliance) for c in self.compliance[a]))
 
     # -- 1. statics --------------------------------------------------------------------------------
     def generalized_forces(self, springs: dict[int, sp.Expr]) -> sp.Matrix:
