@@ -154,3 +154,15 @@ def test_four_bar_under_a_heavy_load(l, force):
                             loads=[point_load(mech, "C", (str(force / 4), str(-force)))])
     for angle in (0.02, 0.3):
         compare(mech, reference, "C", {"A0": angle}, float(l) / CRANK)
+
+
+@pytest.mark.parametrize("name, inputs, point", [
+    ("WATT_II", {"O1": 0.2}, "Q"),                    # a `rigid` hinge (a pin) among the plates
+    ("FIVE_BAR", {"O1": 0.1, "O2": -0.05}, "P_tip"),   # two actuators
+])
+def test_test_mechanisms_with_a_pin_and_two_inputs(name, inputs, point):
+    text = getattr(M, name).replace('length = "l"', 'length = "l"\n' + STEEL.replace(
+        f"nu = {NU}", "nu = 0"), 1)
+    mech = symkin.loads(text, f"{name}.toml")
+    reference = Equilibrium(mech, (E, WIDTH, "l/10"))
+    compare(mech, reference, point, inputs, 1e-3 / 0.05)
