@@ -160,7 +160,7 @@ def test_four_bar_under_a_heavy_load(l, force):
     ("WATT_II", {"O1": 0.2}, "Q"),                    # a `rigid` hinge (a pin) among the plates
     ("FIVE_BAR", {"O1": 0.1, "O2": -0.05}, "P_tip"),   # two actuators
 ])
-def test_test_mechanisms_with_a_pin_and_two_inputs(name, inputs, point):
+def test_mechanisms_with_a_pin_and_with_two_inputs(name, inputs, point):
     text = getattr(M, name).replace('length = "l"', 'length = "l"\n' + STEEL.replace(
         f"nu = {NU}", "nu = 0"), 1)
     mech = symkin.loads(text, f"{name}.toml")
