@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import math
 
-import mpmath
 import pytest
 
 import mechanisms as M
