@@ -19,7 +19,6 @@ def evaluate(analysis: Analysis, inputs: Mapping[str, object], level: str,
              params: Mapping[str, object] | None, backend: str) -> Evaluation:
     """One configuration through the generated `backend` ('numpy' or 'c')."""
     from .codegen.build import plan
-
     from .physics import LEVELS as PHYSICAL
 
     if backend == "sympy":

@@ -8,7 +8,8 @@ as-fabricated pose, and c_ia is the as-fabricated absolute position of hinge a's
 
 The rigid position of a point fixed in link k is Σ_i Rot(φ_i) W_i with constant vectors W_i between
 hinge pins (an ideal revolute at the plate midpoint, or at the model's pseudo-rigid-body pivot
-when the hinge says pin = "prbm"); the compliant one adds Σ Δz_b over the direct path (4.7)–(4.8). Loop closure (5.1)/(5.3) for the chord c reads
+when the hinge says pin = "prbm"); the compliant one adds Σ Δz_b over the direct path (4.7)–(4.8).
+Loop closure (5.1)/(5.3) for the chord c reads
     Σ_b Φ_cb q_b = 0,     Σ_i Rot(φ_i) V^c_i + Σ_b Φ_cb Δz_b = 0,   V^c_i = Σ_b S_ib Φ_cb centre_b.
 """
 
