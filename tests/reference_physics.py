@@ -507,6 +507,7 @@ class _Continuation:
 
     max_dlam: float = 1.0
     min_dlam: float = 1e-7
+    max_attempts: int = 400
 
     def _continue(self, state, span: float, has_loads: bool, tol_mid):
         lam = mpmath.mpf(0)
@@ -523,7 +524,13 @@ class _Continuation:
         dlam = mpmath.mpf(dmax)
         steps = rejected = 0
         last_reason = ""
+        grow = True
         while lam < 1:
+            if steps + rejected >= self.max_attempts:
+                raise ContinuationError(
+                    f"{self.mech.name}: continuation too slow, λ = {float(lam):.9g} after "
+                    f"{steps + rejected} steps (last rejection: {last_reason or 'none'})",
+                    float(lam))
             new = min(mpmath.mpf(1), lam + dlam)
             tan = self._tangent(state, lam, info)
             pred = state if tan is None else [a + (new - lam) * b for a, b in zip(state, tan)]
@@ -539,6 +546,7 @@ class _Continuation:
                 rejected += 1
                 last_reason = reason
                 dlam /= 2
+                grow = False
                 if dlam < self.min_dlam:
                     lf = float(lam)
                     hinge = self._critical(state, lam)
@@ -554,7 +562,9 @@ class _Continuation:
             state, info = res
             lam = new
             steps += 1
-            dlam = min(mpmath.mpf(dmax), dlam * 2)
+            if grow:
+                dlam = min(mpmath.mpf(dmax), dlam * 2)
+            grow = True
         return state, info, {"steps": steps, "rejected": rejected}
 
     def _describe(self, info, mark0) -> str:
@@ -807,11 +817,17 @@ class Equilibrium(_Solver):
         return R, J, dR, shots, energy_total
 
     # -- Newton, continuation hooks ----------------------------------------------------------
-    def _norm(self, d):
+    def _norm(self, d, X):
+        """Scaled size of a correction: positions / mechanism size, angles as they are, plate
+        and pin loads relative to 1 + their size."""
         L = self.nums.scale
+        n3 = 3 * len(self.moving)
         out = mpmath.mpf(0)
         for i, v in enumerate(d):
-            scaled = abs(v) / L if i < 3 * len(self.moving) and i % 3 != 2 else abs(v)
+            if i < n3:
+                scaled = abs(v) / L if i % 3 != 2 else abs(v)
+            else:
+                scaled = abs(v) / (1 + abs(X[i]))
             out = max(out, scaled)
         return out
 
@@ -825,7 +841,7 @@ class Equilibrium(_Solver):
             except ZeroDivisionError:
                 return None
             d = lu.solve([-v for v in R])
-            step = self._norm(d)
+            step = self._norm(d, X)
             if step > 1:
                 return None
             X = [a + b for a, b in zip(X, d)]
