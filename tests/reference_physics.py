@@ -478,7 +478,6 @@ class _LU:
         tiny = big * mpmath.mpf(10) ** (-(mpmath.mp.dps - 3))
         perm = list(range(n))
         sign = 1
-        log_min_pivot = math.inf
         for k in range(n):
             piv = max(range(k, n), key=lambda i: abs(A[i][k]))
             if abs(A[piv][k]) <= tiny:
@@ -1211,19 +1210,23 @@ class ChainEquilibrium(_Solver):
         """Newton step: (δZ, info)."""
         S, rhs, drhs, back, neg_inner = self._reduce(Z, lam)
         lu = _LU(S)
-        do = lu.solve(rhs)
+        dZ = self._expand(lu.solve(rhs), back, True)
+        return dZ, {"S": S, "lu": lu, "drhs": drhs, "back": back, "neg_inner": neg_inner}
+
+    def _expand(self, do, back, with_rhs):
+        """Full correction from the outer one: δψ = H⁻¹(rhs_ψ − B·δo) per plate (without the
+        H⁻¹rhs_ψ part for a tangent), and δλ = −w for the multipliers."""
         dZ = list(do) + [mpmath.mpf(0)] * (self.n - self.n_o)
         for (i, d, lo, y, Y, cols, Bc) in back:
             p0 = self.psi0[i]
-            dpsi = list(y)
+            dpsi = list(y) if with_rhs else [mpmath.mpf(0)] * len(d)
             for t, c in enumerate(cols):
                 if c is not None:
                     dpsi = [a - do[c] * b for a, b in zip(dpsi, Y[t])]
             dZ[p0:p0 + len(dpsi)] = dpsi
-        # the outer unknowns hold w = −δλ for the multipliers
         for j in range(self.n_x, self.n_o):
             dZ[j] = -dZ[j]
-        return dZ, {"S": S, "lu": lu, "drhs": drhs, "back": back, "neg_inner": neg_inner}
+        return dZ
 
     def _norm(self, d):
         L = self.nums.scale
@@ -1283,18 +1286,7 @@ class ChainEquilibrium(_Solver):
                 f"{self.n_c} for a stable equilibrium")
 
     def _tangent(self, Z, lam, info):
-        do = info["lu"].solve(info["drhs"])
-        dZ = list(do) + [mpmath.mpf(0)] * (self.n - self.n_o)
-        for (i, d, lo, y, Y, cols, Bc) in info["back"]:
-            p0 = self.psi0[i]
-            dpsi = [mpmath.mpf(0)] * len(d)
-            for t, c in enumerate(cols):
-                if c is not None:
-                    dpsi = [a - do[c] * b for a, b in zip(dpsi, Y[t])]
-            dZ[p0:p0 + len(dpsi)] = dpsi
-        for j in range(self.n_x, self.n_o):
-            dZ[j] = -dZ[j]
-        return dZ
+        return self._expand(info["lu"].solve(info["drhs"]), info["back"], False)
 
     def _distance(self, a, b):
         L = self.nums.scale
