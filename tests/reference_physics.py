@@ -57,11 +57,29 @@ The deviation is ~1e-6..1e-10 of the positions, so both methods work at d digits
 d = (digits lost between position and deviation) + ``min_digits`` + 10, found after a first solve
 at 30 digits. (a) reports as ``error_estimate`` the relative change of the deviation between d and
 d + 10 digits (the returned values are the d + 10 ones); (b) the difference of the last two
-Richardson extrapolants. Values are mpmath ``mpf``; inputs may be str/int/sympy (a Python float
-is taken as its exact binary value).
+Richardson extrapolants. Values are mpmath ``mpf``; numbers given (angles, stiffness, loads) may
+be str (expressions over the file parameters for stiffness and loads), int, sympy or float (taken
+as the decimal it prints as, 0.1 → 1/10, like the file reader).
 
-Measured (this file's tests): (a) and (b) agree on the four-bar and six-bar examples to < 1e-11
-relative in the deviation; see tests/test_reference_physics.py for the cases and numbers.
+Use
+---
+    mech = symkin.load("examples/four_bar.toml")
+    eq = Equilibrium(mech, stiffness=(210e9, 5e-3, "l/10"),           # E, width, thickness
+                     loads=[point_load(mech, "C", ("0.5", "-1"))], params={"l": "1e-3"})
+    res = eq.solve({"A0": "0.1"})             # or ChainEquilibrium(...) with the same arguments
+    res["points"]["C"]["deviation"], res["hinges"]["A"]["moment"], res["energy"]
+
+An input given as None is released (no actuator; its rigid reference stays at 0): a cantilever.
+
+Validity and measured accuracy
+------------------------------
+(a) and (b) agree on the deviation to 1e-27..5e-20 (relative) on the four-bar and six-bar
+examples with l/L from 1e-3 to 0.05 and inputs 0.01..0.5 rad, with or without loads, and to 6e-17
+at l/L = 0.2 (tests/test_reference_physics.py lists the cases). Both reproduce the
+Bisshopp–Drucker and Mattiasson cantilever tables to their last digit. Cost: 0.2–2 s per solve
+for (a), 1–4 s for (b). Plain shooting gets ill-conditioned (its Jacobian grows like
+exp(√α)) for plate load indices α = |F|·l²/EI beyond ~100 and slows down there; mechanism plates
+carry α ~ θ·l/L ≪ 1, the cantilever tables go to α = 10.
 """
 
 from __future__ import annotations
@@ -124,6 +142,8 @@ def _mpf(expr, dps: int) -> mpmath.mpf:
     """A sympy number (no free symbols) or int/str as an mpf at ``dps`` digits."""
     if isinstance(expr, mpmath.mpf):
         return +expr
+    if isinstance(expr, float):
+        expr = repr(expr)                    # the decimal the user wrote, like the file reader
     if isinstance(expr, (int, str)):
         return mpmath.mpf(expr)
     expr = sp.sympify(expr)
@@ -218,10 +238,15 @@ class _Base:
         unknown = set(stiffness) - set(self._ei)
         if unknown:
             raise KeyError(f"stiffness given for {sorted(unknown)}, which are not plates")
-        self.loads = [ld if isinstance(ld, Load) else Load(*ld) for ld in loads]
-        for ld in self.loads:
+        self.loads = []
+        for ld in loads:
+            ld = ld if isinstance(ld, Load) else Load(*ld)
             if ld.link not in self.link_index and ld.link != self.ground:
                 raise KeyError(f"load on unknown link {ld.link!r}")
+            # every number as an exact sympy value (floats as the decimal they print as)
+            self.loads.append(Load(ld.link, tuple(self._expr(v, names) for v in ld.at),
+                                   tuple(self._expr(v, names) for v in ld.force),
+                                   self._expr(ld.moment, names)))
         self._cache: dict[int, _Mech] = {}
 
     def _expr(self, value, names):
@@ -453,7 +478,6 @@ class _LU:
         tiny = big * mpmath.mpf(10) ** (-(mpmath.mp.dps - 3))
         perm = list(range(n))
         sign = 1
-        log_min_pivot = math.inf
         for k in range(n):
             piv = max(range(k, n), key=lambda i: abs(A[i][k]))
             if abs(A[piv][k]) <= tiny:
@@ -507,6 +531,7 @@ class _Continuation:
 
     max_dlam: float = 1.0
     min_dlam: float = 1e-7
+    max_attempts: int = 400
 
     def _continue(self, state, span: float, has_loads: bool, tol_mid):
         lam = mpmath.mpf(0)
@@ -523,7 +548,13 @@ class _Continuation:
         dlam = mpmath.mpf(dmax)
         steps = rejected = 0
         last_reason = ""
+        grow = True
         while lam < 1:
+            if steps + rejected >= self.max_attempts:
+                raise ContinuationError(
+                    f"{self.mech.name}: continuation too slow, λ = {float(lam):.9g} after "
+                    f"{steps + rejected} steps (last rejection: {last_reason or 'none'})",
+                    float(lam))
             new = min(mpmath.mpf(1), lam + dlam)
             tan = self._tangent(state, lam, info)
             pred = state if tan is None else [a + (new - lam) * b for a, b in zip(state, tan)]
@@ -539,6 +570,7 @@ class _Continuation:
                 rejected += 1
                 last_reason = reason
                 dlam /= 2
+                grow = False
                 if dlam < self.min_dlam:
                     lf = float(lam)
                     hinge = self._critical(state, lam)
@@ -554,7 +586,9 @@ class _Continuation:
             state, info = res
             lam = new
             steps += 1
-            dlam = min(mpmath.mpf(dmax), dlam * 2)
+            if grow:
+                dlam = min(mpmath.mpf(dmax), dlam * 2)
+            grow = True
         return state, info, {"steps": steps, "rejected": rejected}
 
     def _describe(self, info, mark0) -> str:
@@ -807,11 +841,17 @@ class Equilibrium(_Solver):
         return R, J, dR, shots, energy_total
 
     # -- Newton, continuation hooks ----------------------------------------------------------
-    def _norm(self, d):
+    def _norm(self, d, X):
+        """Scaled size of a correction: positions / mechanism size, angles as they are, plate
+        and pin loads relative to 1 + their size."""
         L = self.nums.scale
+        n3 = 3 * len(self.moving)
         out = mpmath.mpf(0)
         for i, v in enumerate(d):
-            scaled = abs(v) / L if i < 3 * len(self.moving) and i % 3 != 2 else abs(v)
+            if i < n3:
+                scaled = abs(v) / L if i % 3 != 2 else abs(v)
+            else:
+                scaled = abs(v) / (1 + abs(X[i]))
             out = max(out, scaled)
         return out
 
@@ -825,7 +865,7 @@ class Equilibrium(_Solver):
             except ZeroDivisionError:
                 return None
             d = lu.solve([-v for v in R])
-            step = self._norm(d)
+            step = self._norm(d, X)
             if step > 1:
                 return None
             X = [a + b for a, b in zip(X, d)]
@@ -1170,19 +1210,23 @@ class ChainEquilibrium(_Solver):
         """Newton step: (δZ, info)."""
         S, rhs, drhs, back, neg_inner = self._reduce(Z, lam)
         lu = _LU(S)
-        do = lu.solve(rhs)
+        dZ = self._expand(lu.solve(rhs), back, True)
+        return dZ, {"S": S, "lu": lu, "drhs": drhs, "back": back, "neg_inner": neg_inner}
+
+    def _expand(self, do, back, with_rhs):
+        """Full correction from the outer one: δψ = H⁻¹(rhs_ψ − B·δo) per plate (without the
+        H⁻¹rhs_ψ part for a tangent), and δλ = −w for the multipliers."""
         dZ = list(do) + [mpmath.mpf(0)] * (self.n - self.n_o)
         for (i, d, lo, y, Y, cols, Bc) in back:
             p0 = self.psi0[i]
-            dpsi = list(y)
+            dpsi = list(y) if with_rhs else [mpmath.mpf(0)] * len(d)
             for t, c in enumerate(cols):
                 if c is not None:
                     dpsi = [a - do[c] * b for a, b in zip(dpsi, Y[t])]
             dZ[p0:p0 + len(dpsi)] = dpsi
-        # the outer unknowns hold w = −δλ for the multipliers
         for j in range(self.n_x, self.n_o):
             dZ[j] = -dZ[j]
-        return dZ, {"S": S, "lu": lu, "drhs": drhs, "back": back, "neg_inner": neg_inner}
+        return dZ
 
     def _norm(self, d):
         L = self.nums.scale
@@ -1242,18 +1286,7 @@ class ChainEquilibrium(_Solver):
                 f"{self.n_c} for a stable equilibrium")
 
     def _tangent(self, Z, lam, info):
-        do = info["lu"].solve(info["drhs"])
-        dZ = list(do) + [mpmath.mpf(0)] * (self.n - self.n_o)
-        for (i, d, lo, y, Y, cols, Bc) in info["back"]:
-            p0 = self.psi0[i]
-            dpsi = [mpmath.mpf(0)] * len(d)
-            for t, c in enumerate(cols):
-                if c is not None:
-                    dpsi = [a - do[c] * b for a, b in zip(dpsi, Y[t])]
-            dZ[p0:p0 + len(dpsi)] = dpsi
-        for j in range(self.n_x, self.n_o):
-            dZ[j] = -dZ[j]
-        return dZ
+        return self._expand(info["lu"].solve(info["drhs"]), info["back"], False)
 
     def _distance(self, a, b):
         L = self.nums.scale

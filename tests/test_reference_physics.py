@@ -114,6 +114,30 @@ def test_pure_moment_bends_the_plate_into_a_circular_arc(cantilever, method, the
         assert norm(res["hinges"]["A"]["force"]) < tol * EI / l ** 2
 
 
+@pytest.mark.parametrize("method", [Equilibrium, ChainEquilibrium])
+def test_dead_moment_on_a_free_link_bends_the_plate_into_a_circular_arc(cantilever, method):
+    """A CCW load moment Mz on the released tip link: θ = Mz·l/EI exactly, the arc again, and the
+    link passes Mz to the plate (moment +Mz at the M end). EI = 1, l = 1."""
+    res = method(cantilever, UNIT, loads=[Load("tip", (1, 0), (0, 0), "0.7")]).solve({"A": None})
+    tol = 1e-25 if method is Equilibrium else 1e-11
+    with mpmath.workdps(50):
+        th = mpmath.mpf("0.7")
+        assert abs(res["angles"]["A"] - th) < tol
+        assert rel(res["points"]["T"]["compliant"],
+                   (mpmath.sin(th) / th, (1 - mpmath.cos(th)) / th)) < tol
+        assert abs(res["hinges"]["A"]["moment"] - th) < tol
+
+
+def test_small_combined_end_loads_follow_linear_beam_theory(cantilever):
+    """Released cantilever, transverse V and moment M at the tip (both ~1e-3 EI/l): end rotation
+    (M l + V l²/2)/EI and sideways deflection (M l²/2 + V l³/3)/EI, up to O(load²)."""
+    V, M = mpmath.mpf("1e-3"), mpmath.mpf("-2e-3")
+    res = Equilibrium(cantilever, UNIT, loads=[Load("tip", (1, 0), (0, V), M)]).solve({"A": None})
+    theta, dy = res["angles"]["A"], res["points"]["T"]["compliant"][1]
+    assert rel_scalar(theta, M + V / 2) < 1e-5
+    assert rel_scalar(dy, M / 2 + V / 3) < 1e-5
+
+
 # ---- cantilever under a transverse end force: published elastica tables ---------------------
 BISSHOPP_DRUCKER = [
     # α = F L²/EI, tip angle (deg), 1 − x/L, y/L  (Bisshopp & Drucker 1945)
