@@ -37,6 +37,10 @@ LEVELS: tuple[Level, ...] = (
     Level("paper", 0, "paper", needs_delta=False, equation="(4.8)"),
     Level("first_order", 1, "first order", needs_delta=True),
     Level("exact", 2, "exact", needs_delta=True),
+    # The physical levels (docs/physics.md): the plates' stiffness and the file's loads.
+    Level("loaded", 3, "loaded", needs_delta=True, needs_stiffness=True, generated=False),
+    Level("equilibrium", 4, "equilibrium", needs_delta=False, needs_stiffness=True,
+          generated=False),
 )
 
 NAMES: tuple[str, ...] = tuple(lv.name for lv in LEVELS)

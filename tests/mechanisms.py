@@ -81,3 +81,13 @@ NON_GRASHOF = text("non_grashof", links("frame", "crank", "coupler", "rocker")
                    + hinge("B0", "frame", "rocker", 0.1, 0.0, "pi/2")
                    + hinge("B", "coupler", "rocker", 0.08, 0.05, "0")
                    + point("C", "coupler", 0.04, 0.08))
+
+
+def without_stiffness(path) -> str:
+    """An example file's text without the plates' E, thickness and width (for tests that set
+    their own stiffness, or need a file without any)."""
+    import re
+    from pathlib import Path
+
+    text = Path(path).read_text()
+    return re.sub(r"^(E|thickness|width) = .*\n", "", text, flags=re.M)
