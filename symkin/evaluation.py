@@ -605,12 +605,19 @@ def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
         rigid = dict(zip(hinges, angles[:m]))
         compliant = dict(zip(hinges, angles[m:]))
     order = {kin.hinges[a].name: a for a in kin.hinges}
+    extra = {}
+    if levels.get(level).needs_stiffness:
+        # The plates' loads and energy are not in the generated evaluators' output: the
+        # derivation gives them, as it gives the dyad states (docs/physics.md).
+        physical = loaded(analysis, inputs, params)
+        extra = {"hinges": physical.hinges, "energy": physical.energy}
     return Evaluation(
         level=level, backend=backend, inputs=dict(zip(names, x)),
         angles_rigid={h: rigid[h] for h in sorted(rigid, key=order.get)},
         angles_compliant={h: compliant[h] for h in sorted(compliant, key=order.get)},
         points=points, dyads=_mpmath_evaluator(analysis).dyad_states(inputs, params),
-        params=parameter_floats(analysis.mechanism, pvals), overrides=tuple(params or ()))
+        params=parameter_floats(analysis.mechanism, pvals), overrides=tuple(params or ()),
+        **extra)
 
 
 def _explain(analysis: Analysis, inputs, level, params) -> None:

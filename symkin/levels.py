@@ -38,7 +38,7 @@ LEVELS: tuple[Level, ...] = (
     Level("first_order", 1, "first order", needs_delta=True),
     Level("exact", 2, "exact", needs_delta=True),
     # The physical levels (docs/physics.md): the plates' stiffness and the file's loads.
-    Level("loaded", 3, "loaded", needs_delta=True, needs_stiffness=True, generated=False),
+    Level("loaded", 3, "loaded", needs_delta=True, needs_stiffness=True),
     Level("equilibrium", 4, "equilibrium", needs_delta=False, needs_stiffness=True,
           generated=False),
 )

@@ -441,11 +441,28 @@ def test_param_override_that_thickens_the_plate_past_its_length_is_bad_input(tmp
 
 
 @pytest.mark.parametrize("backend", ["numpy", "c"])
-def test_physical_levels_run_on_the_sympy_backend_only(tmp_path, capsys, backend):
-    code = main(["eval", steel_four_bar(tmp_path), "--input", "A0=0.1", "--level", "loaded",
-                 "--backend", backend])
+def test_equilibrium_runs_on_the_sympy_backend_only(tmp_path, capsys, backend):
+    code = main(["eval", steel_four_bar(tmp_path), "--input", "A0=0.1", "--level",
+                 "equilibrium", "--backend", backend])
     err = capsys.readouterr().err
     assert code == 2 and "sympy" in err
+
+
+@pytest.mark.parametrize("backend", ["numpy", "c"])
+def test_loaded_prints_the_same_json_on_every_backend(tmp_path, capsys, backend):
+    path = steel_four_bar(tmp_path)
+    outputs = []
+    for chosen in ("sympy", backend):
+        code = main(["eval", path, "--input", "A0=0.1", "--level", "loaded", "--json",
+                     "--backend", chosen])
+        out, err = capsys.readouterr()
+        assert code == 0, err
+        outputs.append(json.loads(out))
+    ours, generated = outputs
+    assert generated["backend"] == backend
+    assert generated["hinges"] == ours["hinges"] and generated["energy"] == ours["energy"]
+    want, got = ours["points"]["C"]["deviation"], generated["points"]["C"]["deviation"]
+    assert math.dist(want, got) <= 1e-12 * math.hypot(*want)
 
 
 def test_unreachable_input_exits_3_like_the_kinematic_levels(tmp_path, capsys):

@@ -51,9 +51,18 @@ class Backend:
             unknown_index=list(plan.unknown_index), k=len(plan.unknown_index),
             n_dyads=plan.n_dyads, closed_form=plan.closed_form, needs_loops=plan.needs_loops,
             dtype=precision, solver=plan.solver, tol=plan.solver.tolerances(precision),
+            default_level=default_level(plan), loaded=plan.loaded,
+            loaded_code=levels.get("loaded").code,
             routines=[routine_data(r, self.printer) for r in plan.routines.values()],
             kernels=[type(self).kernel_source(n) for n in special_functions(plan)],
         )
+
+
+def default_level(plan: Plan) -> str:
+    """The level a generated evaluator uses when none is given: `exact` (docs/cli.md) when it is
+    generated, else the most faithful one generated."""
+    names = [lv.name for lv in plan.levels]
+    return levels.DEFAULT if levels.DEFAULT in names else names[-1]
 
 
 def routine_data(routine: Routine, printer: CodePrinter) -> dict:
