@@ -21,6 +21,7 @@ from functools import cached_property, lru_cache
 
 import sympy as sp
 
+from . import levels
 from . import rigid as rigid_solver
 from . import vectors as V
 from .errors import InputError
@@ -158,6 +159,17 @@ class Analysis:
         exact = [V.rot(kin.phi(i), V.rot_minus_identity(self.delta_phi(i), w))
                  for i, w in weights.items()]
         return V.add(*exact, kin.path_deviation(k, self.compliant_angles()))
+
+    def link_rotation(self, link: int) -> sp.Expr:
+        """Rotation φ of `link` from the as-fabricated pose in the rigid mechanism: Σ q_b over the
+        direct path [s_0, s_link] (the sum behind J* in (4.7))."""
+        return self.kin.phi(link)
+
+    def link_deviation(self, link: int, level: str) -> sp.Expr:
+        """δφ of `link`: how much further the compliant link turns, Σ ± δ_b over its direct path,
+        written from δ itself (never a difference of two rotations); zero where the level keeps
+        the rigid angles (`paper`)."""
+        return self.delta_phi(link) if levels.get(level).needs_delta else sp.Integer(0)
 
     def point_rigid(self, name: str) -> V.Vec:
         point = self.mechanism.point(name)

@@ -62,7 +62,7 @@ def _eval(args: argparse.Namespace) -> str:
 
 
 def _derive(args: argparse.Namespace) -> str:
-    from .derive import EMITTERS, derive, parse_list
+    from .derive import EMITTERS, derive, parse_length, parse_list
     from .levels import GENERATED
 
     emit = parse_list(args.emit, EMITTERS, "--emit") or list(EMITTERS)
@@ -76,8 +76,9 @@ def _derive(args: argparse.Namespace) -> str:
     if args.tolerance is not None and not args.tolerance > 0:
         raise InputError(f"tolerance must be positive, got {args.tolerance}", entry="--tolerance")
     output_dir(args.output, "-o")
+    column = parse_length(args.columnwidth) if args.columnwidth else None
     written = derive(args.file, args.output, emit, points, levels, args.appendix, progress,
-                     args.tolerance, args.range)
+                     args.tolerance, args.range, column)
     return "".join(f"{path}\n" for path in written)
 
 
@@ -149,6 +150,9 @@ def parser() -> argparse.ArgumentParser:
     de.add_argument("--levels", metavar="LIST", help="paper,first_order,exact (all by default)")
     de.add_argument("--appendix", action="store_true",
                     help="LaTeX body only, to \\input into a paper")
+    de.add_argument("--columnwidth", metavar="LENGTH",
+                    help="lay the report out for this column, e.g. 229.9pt for a two-column "
+                         "article (default 345pt)")
     de.add_argument("--quiet", action="store_true", help="no progress messages")
     de.add_argument("--tolerance", type=float, metavar="TOL",
                     help="derive the cheapest variant whose worst relative error meets TOL")

@@ -46,6 +46,16 @@ class PointResult:
 
 
 @dataclass(frozen=True)
+class LinkResult:
+    """A link's rotation from the as-fabricated pose (radians): rigid (wrapped to (−π, π]),
+    compliant = rigid + deviation, and the deviation itself, computed from δ directly."""
+
+    rigid: float
+    compliant: float
+    deviation: float
+
+
+@dataclass(frozen=True)
 class Evaluation:
     """One configuration evaluated at one level (the `eval --json` of docs/cli.md via
     :meth:`as_json`)."""
@@ -59,6 +69,7 @@ class Evaluation:
     dyads: tuple[dict, ...] = field(default=())
     params: dict[str, float] = field(default_factory=dict)   # every parameter's value used
     overrides: tuple[str, ...] = ()                           # the ones given with --param
+    links: dict[str, LinkResult] = field(default_factory=dict)   # every link's rotation
     # The physical levels (docs/physics.md): each plate's end load, the elastic energy (J) and,
     # at `equilibrium`, the solver's estimate of the deviations' largest relative error.
     hinges: dict[str, HingeLoad] = field(default_factory=dict)
@@ -84,6 +95,8 @@ class Evaluation:
             "points": {name: {"rigid": list(p.rigid), "compliant": list(p.compliant),
                               "deviation": list(p.deviation), "norm": p.norm}
                        for name, p in self.points.items()},
+            "links": {name: {"rigid": r.rigid, "compliant": r.compliant,
+                             "deviation": r.deviation} for name, r in self.links.items()},
             "dyads": [dict(d) for d in self.dyads],
         } | physical
 
@@ -288,6 +301,7 @@ class _Mpmath:
                     (float(rig[0]), float(rig[1])),
                     (float(rig[0] + dev[0]), float(rig[1] + dev[1])),
                     (float(dev[0]), float(dev[1])))
+            links = self._links(an, level, "", args, values)
             names = {a: self.kin.hinges[a].name for a in self.kin.hinges}
             return Evaluation(
                 level=level, backend="sympy",
@@ -297,7 +311,7 @@ class _Mpmath:
                                   for a in sorted(theta)},
                 points=points, dyads=tuple(dyads),
                 params=parameter_floats(self.mechanism, exact_params),
-                overrides=tuple(params or ()))
+                overrides=tuple(params or ()), links=links)
 
     def loaded(self, inputs: Mapping[str, object], params: Mapping[str, object] | None,
                dps: int, **options) -> Evaluation:
@@ -338,13 +352,14 @@ class _Mpmath:
             full = [*known, *thetas, *(delta[a] for a in kin.unknowns)]
             points = {}
             for p in la.points:
-                rig = self._fn(f"rigid:{p.name}", list(an.point_rigid(p.name)),
+                rig = self._fn(f"rigid(theta):{p.name}", list(an.point_rigid(p.name)),
                                [*an.params, *an.thetas])(*pvals, *thetas)
                 dev = self._fn(prefix + p.name, list(la.point_deviation(p.name, "exact")),
                                args)(*full)
                 points[p.name] = PointResult((float(rig[0]), float(rig[1])),
                                              (float(rig[0] + dev[0]), float(rig[1] + dev[1])),
                                              (float(dev[0]), float(dev[1])))
+            links = self._links(la, "exact", prefix, args, full)
             scale = mpmath.mpf(sp.N(self.mechanism.unit_scale, dps))
             hinges, energy = {}, mpmath.mpf(0)
             for a in sorted(kin.hinges):
@@ -362,7 +377,20 @@ class _Mpmath:
                                   for a in sorted(theta)},
                 points=points, dyads=tuple(dyads),
                 params=parameter_floats(self.mechanism, exact_params),
-                overrides=tuple(params or ()), hinges=hinges, energy=float(energy * scale))
+                overrides=tuple(params or ()), hinges=hinges, energy=float(energy * scale),
+                links=links)
+
+    def _links(self, an: Analysis, level: str, prefix: str, args: list, values: list) -> dict:
+        """Every link's rigid rotation, compliant rotation and deviation at `level` (the
+        deviation from δ itself), `args` the symbols of `an` and `values` theirs."""
+        s = an.structure
+        rot = self._fn(f"{prefix}links:{level}", [an.link_rotation(i) for i in range(s.n + 1)]
+                       + [an.link_deviation(i, level) for i in range(s.n + 1)], args)(*values)
+        links = {}
+        for i in range(s.n + 1):
+            rigid, dev = _wrap(rot[i]), rot[s.n + 1 + i]
+            links[s.links[i]] = LinkResult(float(rigid), float(rigid + dev), float(dev))
+        return links
 
     def _multipliers(self, a_t: list, q: list) -> list:
         """μ of A^T μ = Q at the rigid pose (the loop's chord forces and moments)."""
@@ -389,13 +417,20 @@ class _Mpmath:
                 theta, _ = self._rigid_angles(pvals, ivals)
                 at = [*pvals, *(theta[a] for a in sorted(theta))]
                 return ({names[a]: v for a, v in theta.items()},
-                        {p.name: self._fn(f"rigid:{p.name}", list(an.point_rigid(p.name)),
+                        {p.name: self._fn(f"rigid(theta):{p.name}", list(an.point_rigid(p.name)),
                                           args)(*at) for p in an.points})
 
         res = physical_equilibrium.solve(self.mechanism, exact_params,
                                          {names[a]: v for a, v in given.items()}, rigid,
                                          extra_digits)
         order = [names[a] for a in sorted(names)]
+        with mpmath.workdps(20):
+            # The links' rotations: the rigid one from the rigid angles, the deviation from the
+            # solution's angle deviations (docs/physics.md).
+            values = [*(mpmath.mpf(sp.N(exact_params[s], 25)) for s in an.params),
+                      *(mpmath.mpf(res.angles_rigid[names[a]]) for a in sorted(names)),
+                      *(mpmath.mpf(res.angle_deviations[names[a]]) for a in self.kin.unknowns)]
+            links = self._links(an, "exact", "equilibrium:", [*args, *an.deltas], values)
         return Evaluation(
             level="equilibrium", backend="sympy",
             inputs={names[a]: float(sp.N(given[a], 20)) for a in sorted(given)},
@@ -405,7 +440,7 @@ class _Mpmath:
             dyads=self.dyad_states(inputs, params),
             params=parameter_floats(self.mechanism, exact_params),
             overrides=tuple(params or ()), hinges={n: res.hinges[n] for n in order},
-            energy=res.energy, error_estimate=res.error_estimate)
+            energy=res.energy, error_estimate=res.error_estimate, links=links)
 
     def dyad_states(self, inputs: Mapping[str, object],
                     params: Mapping[str, object] | None = None) -> tuple[dict, ...]:
@@ -589,12 +624,15 @@ def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
                   for n in p.points}
         rigid = {h: float(res["angles"]["rigid"][h]) for h in hinges}
         compliant = {h: float(res["angles"]["compliant"][h]) for h in hinges}
+        links = {n: LinkResult(*(float(res["links"][n][key])
+                                 for key in ("rigid", "compliant", "deviation")))
+                 for n in p.reported_links}
     else:
         header, code = c_backend.emit(p, source)
         name = analysis.mechanism.name
         lib = runtime.Library(runtime.build(name, header, code), name, len(x), len(pfloat),
-                              len(p.points), len(hinges))
-        status, out, angles = lib.evaluate(x, pfloat, levels.get(level).code)
+                              len(p.points), len(hinges), len(p.reported_links))
+        status, out, angles, rot = lib.pose(x, pfloat, levels.get(level).code)
         if status == 3:
             raise InputError("the C evaluator rejected the arguments", entry="--input")
         if status:
@@ -604,6 +642,7 @@ def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
         m = len(hinges)
         rigid = dict(zip(hinges, angles[:m]))
         compliant = dict(zip(hinges, angles[m:]))
+        links = {n: LinkResult(*rot[3 * i:3 * i + 3]) for i, n in enumerate(p.reported_links)}
     order = {kin.hinges[a].name: a for a in kin.hinges}
     extra = {}
     if levels.get(level).needs_stiffness:
@@ -617,7 +656,7 @@ def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
         angles_compliant={h: compliant[h] for h in sorted(compliant, key=order.get)},
         points=points, dyads=_mpmath_evaluator(analysis).dyad_states(inputs, params),
         params=parameter_floats(analysis.mechanism, pvals), overrides=tuple(params or ()),
-        **extra)
+        links=links, **extra)
 
 
 def _explain(analysis: Analysis, inputs, level, params) -> None:

@@ -44,12 +44,16 @@ def test_failure_leaves_the_previous_output_untouched(tmp_path):
 def test_points_and_levels_limit_what_is_derived():
     mech = symkin.load(EXAMPLES / "nine_bar_platform.toml")
     full = plan(Analysis(symkin.structure(mech)))
-    # F on link 2 is reached only through the input hinges O and A: no loop needs solving.
-    assert not full.needs_loops and "newton" not in full.routines
+    # F on link 2 is reached only through the input hinges O and A: no loop needs solving for
+    # it, only for the links' rotations, and only when they are asked for.
+    assert not full.needs_loops and full.loops_for_links
+    only_f = plan(Analysis(symkin.structure(mech)), points=["F"])
+    assert not only_f.needs_loops and not only_f.loops_for_links
+    assert "newton" not in only_f.routines and "links" not in only_f.routines
     four = symkin.loads(M.WATT_II)
     only_paper = plan(Analysis(symkin.structure(four)), levels=["paper"])
     assert set(only_paper.routines) == {"rigid", "rigid_res", "linear", "rigid_points",
-                                        "dev_paper"}
+                                        "dev_paper", "links"}
     exact = plan(Analysis(symkin.structure(four)), levels=["exact"])
     assert "newton" in exact.routines and "dev_first_order" not in exact.routines
 

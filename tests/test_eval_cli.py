@@ -28,7 +28,8 @@ def test_json_has_the_contract_keys(capsys, level):
                          "--json")
     assert code == 0, err
     data = json.loads(out)
-    assert set(data) == {"level", "backend", "inputs", "params", "angles", "points", "dyads"}
+    assert set(data) == {"level", "backend", "inputs", "params", "angles", "points", "links",
+                         "dyads"}
     assert data["level"] == level and data["backend"] == "sympy"
     assert data["inputs"] == {"A0": 0.2} and data["params"] == {"l": 1e-3}
     assert set(data["angles"]) == {"rigid", "compliant"}

@@ -18,10 +18,11 @@ import pytest
 import symkin
 from conftest import EXAMPLES, ROOT
 from symkin.codegen.backends.latex.text import escape_latex, math_name
+from symkin.cli import main
 from symkin.derive import generate
 
 EXAMPLE_NAMES = sorted(p.stem for p in EXAMPLES.glob("*.toml"))
-MAX_OVERFULL_PT = 20.0
+MAX_OVERFULL_PT = 1.0
 OVERFULL = re.compile(r"Overfull \\hbox \((\d+(?:\.\d+)?)pt too wide\)")
 HOSTILE_NAMES = ("int", "a-b", r"\input{/etc/passwd}", '"; system("true")', "50% & $x$_#~^{}")
 APPENDIX_WRAPPER = r"""\documentclass{article}
@@ -136,6 +137,65 @@ def test_appendix_compiles_in_a_paper(example, reports, tmp_path):
     # the default article's 345 pt text width: narrower than the standalone report's
     worst = max(overfull(log), default=0.0)
     assert worst <= MAX_OVERFULL_PT, f"an overfull \\hbox {worst} pt too wide in the appendix"
+
+
+TWO_COLUMN_WRAPPER = r"""\documentclass[twocolumn]{article}
+\usepackage{amsmath,amssymb,graphicx,booktabs}
+\begin{document}
+\typeout{COLUMNWIDTH=\the\columnwidth}
+\section{Introduction} A conference paper.
+\appendix
+%s
+\end{document}
+"""
+
+
+@pytest.mark.parametrize("key", [*EXAMPLE_NAMES, "SERIAL_ARM", "FIVE_BAR", "WATT_II",
+                                 "TRIAD_SIX_BAR"])
+def test_appendix_fits_a_two_column_paper(key, tmp_path):
+    """derive --appendix --columnwidth 229.5pt, \\input into a two-column article (whose column
+    is 229.5 pt): no overfull box over 1 pt."""
+    pdflatex()
+    import mechanisms
+
+    if key in EXAMPLE_NAMES:
+        mech = symkin.load(EXAMPLES / f"{key}.toml")
+    else:
+        path = tmp_path / "m.toml"
+        path.write_text(getattr(mechanisms, key))
+        mech = symkin.load(path)
+    folder = write(generate(mech, emit=["latex"], appendix=True, column_width=229.5),
+                   tmp_path / "out")
+    (folder / "paper.tex").write_text(TWO_COLUMN_WRAPPER % f"\\input{{{mech.name}}}")
+    log = compile_tex(folder, "paper.tex")
+    assert "COLUMNWIDTH=229.5pt" in log
+    worst = max(overfull(log), default=0.0)
+    assert worst <= 1.0, f"an overfull \\hbox {worst} pt too wide in {key} (two columns)"
+
+
+def test_two_reports_input_into_one_paper(tmp_path):
+    """The report's helper macros are defined once: two appendices in one document compile."""
+    pdflatex()
+    parts = []
+    for name in ("four_bar", "stephenson_six_bar"):
+        write(generate(symkin.load(EXAMPLES / f"{name}.toml"), emit=["latex"], appendix=True,
+                       column_width=229.5), tmp_path)
+        parts.append(f"\\input{{{name}}}")
+    (tmp_path / "paper.tex").write_text(TWO_COLUMN_WRAPPER % "\n".join(parts))
+    log = compile_tex(tmp_path, "paper.tex")
+    assert max(overfull(log), default=0.0) <= 1.0
+
+
+@pytest.mark.parametrize("width, ok", [("229.5pt", True), ("8.1cm", True), ("3.2in", True),
+                                       ("81mm", True), ("240", False), ("12em", False),
+                                       ("20pt", False), ("wide", False)])
+def test_columnwidth_option(tmp_path, capsys, width, ok):
+    code = main(["derive", str(EXAMPLES / "four_bar.toml"), "-o", str(tmp_path / "o"), "--emit",
+                 "latex", "--appendix", "--quiet", "--columnwidth", width])
+    err = capsys.readouterr().err
+    assert (code == 0) == ok, err
+    if not ok:
+        assert code == 2 and "fix:" in err
 
 
 @pytest.mark.parametrize("key", ["SERIAL_ARM", "FIVE_BAR", "WATT_II", "TRIAD_SIX_BAR"])

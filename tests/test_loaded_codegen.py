@@ -109,3 +109,15 @@ def test_a_file_without_stiffness_generates_no_loaded_level():
         ["paper", "first_order", "exact"]
     with pytest.raises(symkin.InputError, match="no 'E'"):
         plan(symkin.analyze(mech), levels=["loaded"])
+
+
+@pytest.mark.parametrize("key", ["four_bar", "six_bar", "loaded_arm"])
+@pytest.mark.parametrize("backend", ["numpy", "c"])
+def test_loaded_link_rotations_match_the_sympy_backend(key, backend):
+    g = loaded_case(key)
+    want = symkin.evaluate(g.analysis, CASES[key], "loaded").links
+    got = symkin.evaluate(g.analysis, CASES[key], "loaded", backend=backend).links
+    assert want.keys() == got.keys()
+    for name, link in want.items():
+        assert got[name].rigid == pytest.approx(link.rigid, rel=1e-14, abs=1e-16)
+        assert got[name].deviation == pytest.approx(link.deviation, rel=1e-12, abs=1e-18), name

@@ -54,6 +54,10 @@ def compare(mech, reference, point: str, inputs: dict, l_over_L: float):
             < 1e-9 * scale
         assert eq.hinges[name].moment == pytest.approx(float(h["moment"]), rel=1e-9, abs=1e-15)
     assert eq.energy == pytest.approx(float(ref["energy"]), rel=1e-9)
+    for name, pose in ref["poses"].items():     # every moving link's rotation, its deviation
+        link = eq.links[name]
+        assert link.compliant == pytest.approx(float(pose[2]), rel=1e-12, abs=1e-15)
+        assert link.deviation == pytest.approx(float(pose[2] - link.rigid), rel=1e-9, abs=1e-16)
     loaded = symkin.evaluate(an, inputs, "loaded")
     gap = relative_gap(loaded.points[point].deviation, expected)
     assert gap < goal(l_over_L), f"loaded is {gap:.2%} off at l/L = {l_over_L}, {inputs}"

@@ -3,7 +3,7 @@
  * Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, dev_paper 38, dev_first_order 52, dev_exact 62, loaded_q0 10, loaded_q 75, loaded_compliance 234, loaded_linear 99, loaded_newton 266, dev_loaded 69.
+ * Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, dev_paper 38, dev_first_order 52, dev_exact 62, loaded_q0 10, loaded_q 75, loaded_compliance 234, loaded_linear 99, loaded_newton 266, dev_loaded 69, links 1.
  */
 #include "four_bar.h"
 
@@ -15,7 +15,8 @@ enum {
     SK_K = 3,          /* non-input hinges: size of the loop unknowns */
     SK_K1 = 4,
     SK_NDYAD = 1,
-    SK_NP = 1
+    SK_NP = 1,
+    SK_NL = 4            /* links whose rotation is reported */
 };
 
 const double four_bar_default_params[FOUR_BAR_N_PARAMS > 0 ? FOUR_BAR_N_PARAMS : 1] = {
@@ -32,6 +33,13 @@ const char *const four_bar_param_names[FOUR_BAR_N_PARAMS > 0 ? FOUR_BAR_N_PARAMS
 
 const char *const four_bar_point_names[FOUR_BAR_N_POINTS > 0 ? FOUR_BAR_N_POINTS : 1] = {
     "C"
+};
+
+const char *const four_bar_link_names[FOUR_BAR_N_LINKS > 0 ? FOUR_BAR_N_LINKS : 1] = {
+    "frame",
+    "crank",
+    "coupler",
+    "rocker"
 };
 
 const char *const four_bar_hinge_names[FOUR_BAR_N_HINGES] = {
@@ -717,6 +725,24 @@ static void sk_dev_loaded(const double *theta, const double *delta, const double
     out[1] = _tmp1*cos(_tmp0) + _tmp10*_tmp19 + _tmp17*_tmp18 + _tmp3*_tmp9 + _tmp7*_tmp8 + compliance_x_1;
 }
 
+/* rotation of every link and how much further the compliant one turns (1 operations) */
+static void sk_links(const double *theta, const double *delta, double *out)
+{
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double delta_2 = delta[0];
+    const double delta_3 = delta[1];
+    out[0] = 0;
+    out[1] = theta_1;
+    out[2] = theta_1 + theta_2;
+    out[3] = theta_3;
+    out[4] = 0;
+    out[5] = 0;
+    out[6] = delta_2;
+    out[7] = delta_3;
+}
+
 /* Gaussian elimination with partial pivoting on the n x n row-major a, in place; x -> b. */
 static int sk_solve(int n, double *a, double *b)
 {
@@ -958,16 +984,22 @@ static int sk_loaded_constants(const double *theta, const double *params, double
 
 int four_bar_evaluate(const double *inputs, const double *params, int level, double *out)
 {
-    return four_bar_evaluate_angles(inputs, params, level, out, NULL);
+    return four_bar_evaluate_pose(inputs, params, level, out, NULL, NULL);
 }
-
-static int sk_evaluate(const double *inputs, const double *params, int level, double *out,
-                       double *angles);
 
 int four_bar_evaluate_angles(const double *inputs, const double *params, int level, double *out,
                     double *angles)
 {
-    int i, status = sk_evaluate(inputs, params, level, out, angles);
+    return four_bar_evaluate_pose(inputs, params, level, out, angles, NULL);
+}
+
+static int sk_evaluate(const double *inputs, const double *params, int level, double *out,
+                       double *angles, double *links);
+
+int four_bar_evaluate_pose(const double *inputs, const double *params, int level, double *out,
+                    double *angles, double *links)
+{
+    int i, status = sk_evaluate(inputs, params, level, out, angles, links);
     if (status != 0) {
         /* no partial result: every output is NaN */
         for (i = 0; out != NULL && i < 6 * SK_NP; ++i) {
@@ -976,13 +1008,16 @@ int four_bar_evaluate_angles(const double *inputs, const double *params, int lev
         for (i = 0; angles != NULL && i < 2 * SK_M; ++i) {
             angles[i] = NAN;
         }
+        for (i = 0; links != NULL && i < 3 * SK_NL; ++i) {
+            links[i] = NAN;
+        }
     }
     return status;
 }
 
-/* The evaluation; four_bar_evaluate_angles turns a failure into NaN outputs. */
+/* The evaluation; four_bar_evaluate_pose turns a failure into NaN outputs. */
 static int sk_evaluate(const double *inputs, const double *params, int level, double *out,
-                       double *angles)
+                       double *angles, double *links)
 {
     double theta[SK_M];
     double delta[SK_K1];
@@ -1116,6 +1151,20 @@ static int sk_evaluate(const double *inputs, const double *params, int level, do
         }
         for (i = 0; i < SK_K; ++i) {
             angles[SK_M + sk_unknown_index[i]] += delta[i];
+        }
+    }
+    if (links != NULL) {
+        double rot[2 * SK_NL];
+        sk_links(theta, delta, rot);
+        for (i = 0; i < 2 * SK_NL; ++i) {
+            if (!isfinite(rot[i])) {
+                return 2;
+            }
+        }
+        for (i = 0; i < SK_NL; ++i) {
+            links[3 * i + 0] = remainder(rot[i], sk_two_pi);
+            links[3 * i + 1] = links[3 * i + 0] + rot[SK_NL + i];
+            links[3 * i + 2] = rot[SK_NL + i];
         }
     }
     (void)delta;

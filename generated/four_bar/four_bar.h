@@ -3,7 +3,7 @@
  * Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, dev_paper 38, dev_first_order 52, dev_exact 62, loaded_q0 10, loaded_q 75, loaded_compliance 234, loaded_linear 99, loaded_newton 266, dev_loaded 69.
+ * Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, dev_paper 38, dev_first_order 52, dev_exact 62, loaded_q0 10, loaded_q 75, loaded_compliance 234, loaded_linear 99, loaded_newton 266, dev_loaded 69, links 1.
  */
 #ifndef SYMKIN_FOUR_BAR_H
 #define SYMKIN_FOUR_BAR_H
@@ -12,6 +12,7 @@
 #define FOUR_BAR_N_PARAMS 1
 #define FOUR_BAR_N_POINTS 1
 #define FOUR_BAR_N_HINGES 4
+#define FOUR_BAR_N_LINKS 4
 
 /* Default parameter values, in the mechanism file's order. */
 extern const double four_bar_default_params[FOUR_BAR_N_PARAMS > 0 ? FOUR_BAR_N_PARAMS : 1];
@@ -20,6 +21,7 @@ extern const char *const four_bar_input_names[FOUR_BAR_N_INPUTS];
 extern const char *const four_bar_param_names[FOUR_BAR_N_PARAMS > 0 ? FOUR_BAR_N_PARAMS : 1];
 extern const char *const four_bar_point_names[FOUR_BAR_N_POINTS > 0 ? FOUR_BAR_N_POINTS : 1];
 extern const char *const four_bar_hinge_names[FOUR_BAR_N_HINGES];
+extern const char *const four_bar_link_names[FOUR_BAR_N_LINKS > 0 ? FOUR_BAR_N_LINKS : 1];
 
 /*
  * Deviation of the points for one configuration.
@@ -42,5 +44,14 @@ int four_bar_evaluate(const double *inputs, const double *params, int level, dou
  */
 int four_bar_evaluate_angles(const double *inputs, const double *params, int level, double *out,
                     double *angles);
+
+/*
+ * The whole pose: as four_bar_evaluate_angles, and (when links is not NULL) the rotation of
+ * every link in four_bar_link_names order from the as-fabricated pose: per link the rigid
+ * rotation (wrapped to (-pi, pi]), the compliant one and their difference, the deviation
+ * (3 doubles; the deviation is computed directly, not as a difference). angles may be NULL.
+ */
+int four_bar_evaluate_pose(const double *inputs, const double *params, int level, double *out,
+                    double *angles, double *links);
 
 #endif /* SYMKIN_FOUR_BAR_H */

@@ -3,7 +3,7 @@
  * Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
  * Points: F; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 158, rigid_res 114, linear 222, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33, loaded_q0 16, loaded_q 129, loaded_compliance 125, dev_loaded 33.
+ * Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33, loaded_q0 16, loaded_q 129, loaded_compliance 565, loaded_linear 239, loaded_newton 539, dev_loaded 33, links 9.
  */
 #include "nine_bar_platform.h"
 
@@ -15,7 +15,8 @@ enum {
     SK_K = 6,          /* non-input hinges: size of the loop unknowns */
     SK_K1 = 7,
     SK_NDYAD = 2,
-    SK_NP = 1
+    SK_NP = 1,
+    SK_NL = 9            /* links whose rotation is reported */
 };
 
 const double nine_bar_platform_default_params[NINE_BAR_PLATFORM_N_PARAMS > 0 ? NINE_BAR_PLATFORM_N_PARAMS : 1] = {
@@ -35,6 +36,18 @@ const char *const nine_bar_platform_param_names[NINE_BAR_PLATFORM_N_PARAMS > 0 ?
 
 const char *const nine_bar_platform_point_names[NINE_BAR_PLATFORM_N_POINTS > 0 ? NINE_BAR_PLATFORM_N_POINTS : 1] = {
     "F"
+};
+
+const char *const nine_bar_platform_link_names[NINE_BAR_PLATFORM_N_LINKS > 0 ? NINE_BAR_PLATFORM_N_LINKS : 1] = {
+    "frame",
+    "b1",
+    "b2",
+    "b3",
+    "b4",
+    "b5",
+    "b6",
+    "b7",
+    "b8"
 };
 
 const char *const nine_bar_platform_hinge_names[NINE_BAR_PLATFORM_N_HINGES] = {
@@ -64,6 +77,46 @@ static double symkin_arck(double x)
     }
     b = sin(x) / x - cos(x);
     b = b / x2;
+    return b;
+}
+
+/* cosr2(x): cosr2(x) = (cos x - sum_(k<2) (-1)^k x^(2k)/(2k)!) / x^4; Taylor series (12 terms) for |x| < 3.0, else the nested elementary formula. */
+static double symkin_cosr2(double x)
+{
+    const double x2 = x * x;
+    double b;
+    if (fabs(x) < 3.0) {
+        return 0.041666666666666664 + x2 * (-0.001388888888888889 + x2 * (2.48015873015873e-05 + x2 * (-2.755731922398589e-07 + x2 * (2.08767569878681e-09 + x2 * (-1.1470745597729725e-11 + x2 * (4.779477332387385e-14 + x2 * (-1.5619206968586225e-16 + x2 * (4.110317623312165e-19 + x2 * (-8.896791392450574e-22 + x2 * (1.6117375710961184e-24 + x2 * (-2.4795962632247976e-27)))))))))));
+    }
+    b = -2.0 * (sin(0.5 * x) / x) * (sin(0.5 * x) / x);
+    b = (b + 0.5) / x2;
+    return b;
+}
+
+/* sinr1(x): sinr1(x) = (sin x - sum_(k<1) (-1)^k x^(2k+1)/(2k+1)!) / x^3; Taylor series (11 terms) for |x| < 2.0, else the nested elementary formula. */
+static double symkin_sinr1(double x)
+{
+    const double x2 = x * x;
+    double b;
+    if (fabs(x) < 2.0) {
+        return -0.16666666666666666 + x2 * (0.008333333333333333 + x2 * (-0.0001984126984126984 + x2 * (2.7557319223985893e-06 + x2 * (-2.505210838544172e-08 + x2 * (1.6059043836821613e-10 + x2 * (-7.647163731819816e-13 + x2 * (2.8114572543455206e-15 + x2 * (-8.22063524662433e-18 + x2 * (1.9572941063391263e-20 + x2 * (-3.868170170630684e-23))))))))));
+    }
+    b = sin(x) / x;
+    b = (b - 1.0) / x2;
+    return b;
+}
+
+/* sinr2(x): sinr2(x) = (sin x - sum_(k<2) (-1)^k x^(2k+1)/(2k+1)!) / x^5; Taylor series (12 terms) for |x| < 3.0, else the nested elementary formula. */
+static double symkin_sinr2(double x)
+{
+    const double x2 = x * x;
+    double b;
+    if (fabs(x) < 3.0) {
+        return 0.008333333333333333 + x2 * (-0.0001984126984126984 + x2 * (2.7557319223985893e-06 + x2 * (-2.505210838544172e-08 + x2 * (1.6059043836821613e-10 + x2 * (-7.647163731819816e-13 + x2 * (2.8114572543455206e-15 + x2 * (-8.22063524662433e-18 + x2 * (1.9572941063391263e-20 + x2 * (-3.868170170630684e-23 + x2 * (6.446950284384474e-26 + x2 * (-9.183689863795546e-29)))))))))));
+    }
+    b = sin(x) / x;
+    b = (b - 1.0) / x2;
+    b = (b + 0.16666666666666666) / x2;
     return b;
 }
 
@@ -315,6 +368,247 @@ static void sk_linear(const double *theta, const double *params, double *out)
     out[41] = -_tmp59 + 0.25*_tmp61*_tmp62*p_0*cos(_tmp60) - _tmp64*_tmp72 - _tmp66*_tmp71 - _tmp68*_tmp74 - _tmp70*_tmp73;
 }
 
+/* exact compliant closure F(delta) and dF/ddelta (531 operations) */
+static void sk_newton(const double *theta, const double *delta, const double *params, double *out)
+{
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double theta_5 = theta[4];
+    const double theta_6 = theta[5];
+    const double theta_7 = theta[6];
+    const double theta_8 = theta[7];
+    const double theta_9 = theta[8];
+    const double theta_10 = theta[9];
+    const double delta_5 = delta[0];
+    const double delta_6 = delta[1];
+    const double delta_7 = delta[2];
+    const double delta_8 = delta[3];
+    const double delta_9 = delta[4];
+    const double delta_10 = delta[5];
+    const double p_0 = params[0];
+    const double _tmp0 = delta_5 + delta_6;
+    const double _tmp1 = theta_1 + theta_2;
+    const double _tmp2 = _tmp1 + theta_3;
+    const double _tmp3 = _tmp2 + theta_4;
+    const double _tmp4 = _tmp3 + theta_5;
+    const double _tmp5 = cos(_tmp4);
+    const double _tmp6 = sin(delta_5);
+    const double _tmp7 = 0.5*delta_5;
+    const double _tmp8 = pow(sin(_tmp7), 2);
+    const double _tmp9 = -0.02*_tmp6 + 0.1*_tmp8;
+    const double _tmp10 = _tmp4 + theta_6;
+    const double _tmp11 = cos(_tmp10);
+    const double _tmp12 = sin(_tmp0);
+    const double _tmp13 = 0.5*delta_6;
+    const double _tmp14 = pow(sin(_tmp13 + _tmp7), 2);
+    const double _tmp15 = -0.05*_tmp12 - 0.08*_tmp14;
+    const double _tmp16 = sin(_tmp10);
+    const double _tmp17 = 0.04*_tmp12 - 0.1*_tmp14;
+    const double _tmp18 = sin(_tmp4);
+    const double _tmp19 = -0.05*_tmp6 - 0.04*_tmp8;
+    const double _tmp20 = 0.5*delta_9 + 0.5*theta_9;
+    const double _tmp21 = sin(_tmp20);
+    const double _tmp22 = 0.25*p_0;
+    const double _tmp23 = delta_9 + theta_9;
+    const double _tmp24 = pow(_tmp23, 2);
+    const double _tmp25 = symkin_arck(_tmp20);
+    const double _tmp26 = _tmp24*_tmp25;
+    const double _tmp27 = 0.5*theta_4;
+    const double _tmp28 = sin(_tmp27);
+    const double _tmp29 = sin(_tmp2);
+    const double _tmp30 = _tmp22*_tmp29;
+    const double _tmp31 = pow(theta_4, 2)*symkin_arck(_tmp27);
+    const double _tmp32 = _tmp30*_tmp31;
+    const double _tmp33 = _tmp7 + 0.5*theta_5;
+    const double _tmp34 = sin(_tmp33);
+    const double _tmp35 = sin(_tmp3);
+    const double _tmp36 = delta_5 + theta_5;
+    const double _tmp37 = symkin_arck(_tmp33);
+    const double _tmp38 = pow(_tmp36, 2)*_tmp37;
+    const double _tmp39 = _tmp22*_tmp38;
+    const double _tmp40 = _tmp35*_tmp39;
+    const double _tmp41 = _tmp13 + 0.5*theta_6;
+    const double _tmp42 = cos(_tmp41);
+    const double _tmp43 = _tmp3 + _tmp36;
+    const double _tmp44 = sin(_tmp43);
+    const double _tmp45 = symkin_arck(_tmp41);
+    const double _tmp46 = delta_6 + theta_6;
+    const double _tmp47 = pow(_tmp46, 2);
+    const double _tmp48 = _tmp22*_tmp45*_tmp47;
+    const double _tmp49 = _tmp44*_tmp48;
+    const double _tmp50 = sin(_tmp41);
+    const double _tmp51 = cos(_tmp43);
+    const double _tmp52 = _tmp48*_tmp51;
+    const double _tmp53 = cos(_tmp27);
+    const double _tmp54 = cos(_tmp2);
+    const double _tmp55 = _tmp22*_tmp54;
+    const double _tmp56 = _tmp31*_tmp55;
+    const double _tmp57 = cos(_tmp33);
+    const double _tmp58 = cos(_tmp3);
+    const double _tmp59 = _tmp39*_tmp58;
+    const double _tmp60 = 0.5*theta_1;
+    const double _tmp61 = _tmp22*pow(theta_1, 2)*symkin_arck(_tmp60);
+    const double _tmp62 = sin(theta_1);
+    const double _tmp63 = 0.5*theta_2;
+    const double _tmp64 = _tmp22*pow(theta_2, 2)*symkin_arck(_tmp63);
+    const double _tmp65 = _tmp64*sin(_tmp63);
+    const double _tmp66 = 0.5*theta_3;
+    const double _tmp67 = sin(_tmp66);
+    const double _tmp68 = _tmp22*pow(theta_3, 2)*symkin_arck(_tmp66);
+    const double _tmp69 = _tmp68*sin(_tmp1);
+    const double _tmp70 = cos(theta_1);
+    const double _tmp71 = _tmp64*cos(_tmp63);
+    const double _tmp72 = cos(_tmp66);
+    const double _tmp73 = _tmp68*cos(_tmp1);
+    const double _tmp74 = _tmp61*sin(_tmp60) + _tmp62*_tmp65 + _tmp67*_tmp69 - _tmp70*_tmp71 - _tmp72*_tmp73;
+    const double _tmp75 = cos(_tmp20);
+    const double _tmp76 = _tmp42*_tmp52;
+    const double _tmp77 = _tmp49*_tmp50;
+    const double _tmp78 = _tmp61*cos(_tmp60) + _tmp62*_tmp71 + _tmp65*_tmp70 + _tmp67*_tmp73 + _tmp69*_tmp72;
+    const double _tmp79 = delta_7 + delta_8;
+    const double _tmp80 = _tmp2 + theta_7;
+    const double _tmp81 = cos(_tmp80);
+    const double _tmp82 = sin(delta_7);
+    const double _tmp83 = 0.5*delta_7;
+    const double _tmp84 = pow(sin(_tmp83), 2);
+    const double _tmp85 = -0.005*_tmp82 + 0.08*_tmp84;
+    const double _tmp86 = _tmp80 + theta_8;
+    const double _tmp87 = cos(_tmp86);
+    const double _tmp88 = sin(_tmp79);
+    const double _tmp89 = 0.5*delta_8;
+    const double _tmp90 = pow(sin(_tmp83 + _tmp89), 2);
+    const double _tmp91 = -0.035*_tmp88 - 0.05*_tmp90;
+    const double _tmp92 = sin(_tmp86);
+    const double _tmp93 = 0.025*_tmp88 - 0.07*_tmp90;
+    const double _tmp94 = sin(_tmp80);
+    const double _tmp95 = -0.04*_tmp82 - 0.01*_tmp84;
+    const double _tmp96 = 0.5*delta_10 + 0.5*theta_10;
+    const double _tmp97 = sin(_tmp96);
+    const double _tmp98 = delta_10 + theta_10;
+    const double _tmp99 = pow(_tmp98, 2);
+    const double _tmp100 = symkin_arck(_tmp96);
+    const double _tmp101 = _tmp100*_tmp99;
+    const double _tmp102 = _tmp83 + 0.5*theta_7;
+    const double _tmp103 = sin(_tmp102);
+    const double _tmp104 = delta_7 + theta_7;
+    const double _tmp105 = symkin_arck(_tmp102);
+    const double _tmp106 = pow(_tmp104, 2)*_tmp105;
+    const double _tmp107 = _tmp106*_tmp30;
+    const double _tmp108 = _tmp89 + 0.5*theta_8;
+    const double _tmp109 = sin(_tmp108);
+    const double _tmp110 = _tmp104 + _tmp2;
+    const double _tmp111 = sin(_tmp110);
+    const double _tmp112 = delta_8 + theta_8;
+    const double _tmp113 = pow(_tmp112, 2);
+    const double _tmp114 = symkin_arck(_tmp108);
+    const double _tmp115 = _tmp113*_tmp114;
+    const double _tmp116 = _tmp115*_tmp22;
+    const double _tmp117 = _tmp111*_tmp116;
+    const double _tmp118 = cos(_tmp102);
+    const double _tmp119 = _tmp106*_tmp55;
+    const double _tmp120 = cos(_tmp108);
+    const double _tmp121 = cos(_tmp110);
+    const double _tmp122 = _tmp116*_tmp121;
+    const double _tmp123 = _tmp120*_tmp122;
+    const double _tmp124 = cos(_tmp96);
+    const double _tmp125 = _tmp109*_tmp122 + _tmp117*_tmp120;
+    const double _tmp126 = _tmp57*p_0;
+    const double _tmp127 = 0.5*_tmp36*_tmp37;
+    const double _tmp128 = _tmp34*p_0;
+    const double _tmp129 = 0.125*_tmp38;
+    const double _tmp130 = 0.0625*pow(_tmp36, 3)*(3*symkin_cosr2(_tmp33) + symkin_sinr1(_tmp33) - 3*symkin_sinr2(_tmp33));
+    const double _tmp131 = _tmp126*_tmp127 + _tmp126*_tmp130 - _tmp128*_tmp129;
+    const double _tmp132 = _tmp126*_tmp129 + _tmp127*_tmp128 + _tmp128*_tmp130;
+    const double _tmp133 = _tmp0 + _tmp10;
+    const double _tmp134 = cos(_tmp133);
+    const double _tmp135 = sin(_tmp133);
+    const double _tmp136 = 0.05*_tmp134 + 0.04*_tmp135;
+    const double _tmp137 = 0.5*_tmp46;
+    const double _tmp138 = _tmp50*p_0;
+    const double _tmp139 = _tmp138*_tmp45;
+    const double _tmp140 = _tmp42*p_0;
+    const double _tmp141 = _tmp140*_tmp45;
+    const double _tmp142 = 0.125*_tmp47;
+    const double _tmp143 = 0.0625*pow(_tmp46, 3)*(3*symkin_cosr2(_tmp41) + symkin_sinr1(_tmp41) - 3*symkin_sinr2(_tmp41));
+    const double _tmp144 = -_tmp137*_tmp139 - _tmp138*_tmp143 - _tmp141*_tmp142;
+    const double _tmp145 = _tmp137*_tmp141 - _tmp139*_tmp142 + _tmp140*_tmp143;
+    const double _tmp146 = _tmp21*p_0;
+    const double _tmp147 = 0.5*_tmp23*_tmp25;
+    const double _tmp148 = _tmp75*p_0;
+    const double _tmp149 = 0.125*_tmp26;
+    const double _tmp150 = 0.0625*pow(_tmp23, 3)*(3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20) - 3*symkin_sinr2(_tmp20));
+    const double _tmp151 = -0.04*_tmp134 + 0.05*_tmp135;
+    const double _tmp152 = _tmp79 + _tmp86;
+    const double _tmp153 = cos(_tmp152);
+    const double _tmp154 = 0.035*_tmp153;
+    const double _tmp155 = sin(_tmp152);
+    const double _tmp156 = 0.025*_tmp155;
+    const double _tmp157 = _tmp103*p_0;
+    const double _tmp158 = 0.5*_tmp104*_tmp105;
+    const double _tmp159 = _tmp118*p_0;
+    const double _tmp160 = 0.125*_tmp106;
+    const double _tmp161 = 0.0625*pow(_tmp104, 3)*(3*symkin_cosr2(_tmp102) + symkin_sinr1(_tmp102) - 3*symkin_sinr2(_tmp102));
+    const double _tmp162 = _tmp157*_tmp158 + _tmp157*_tmp161 + _tmp159*_tmp160;
+    const double _tmp163 = -_tmp157*_tmp160 + _tmp158*_tmp159 + _tmp159*_tmp161;
+    const double _tmp164 = _tmp120*p_0;
+    const double _tmp165 = 0.5*_tmp112*_tmp114;
+    const double _tmp166 = _tmp109*p_0;
+    const double _tmp167 = 0.125*_tmp115;
+    const double _tmp168 = 0.0625*pow(_tmp112, 3)*(3*symkin_cosr2(_tmp108) + symkin_sinr1(_tmp108) - 3*symkin_sinr2(_tmp108));
+    const double _tmp169 = _tmp164*_tmp165 + _tmp164*_tmp168 - _tmp166*_tmp167;
+    const double _tmp170 = _tmp164*_tmp167 + _tmp165*_tmp166 + _tmp166*_tmp168;
+    const double _tmp171 = _tmp97*p_0;
+    const double _tmp172 = 0.5*_tmp100*_tmp98;
+    const double _tmp173 = _tmp124*p_0;
+    const double _tmp174 = 0.125*_tmp101;
+    const double _tmp175 = 0.0625*pow(_tmp98, 3)*(3*symkin_cosr2(_tmp96) + symkin_sinr1(_tmp96) - 3*symkin_sinr2(_tmp96));
+    const double _tmp176 = -0.025*_tmp153 + 0.035*_tmp155;
+    out[0] = -_tmp0 + delta_9;
+    out[1] = _tmp11*_tmp15 - _tmp16*_tmp17 - _tmp18*_tmp19 - _tmp21*_tmp22*_tmp26 + _tmp28*_tmp32 + _tmp34*_tmp40 + _tmp42*_tmp49 + _tmp5*_tmp9 + _tmp50*_tmp52 - _tmp53*_tmp56 - _tmp57*_tmp59 + _tmp74;
+    out[2] = _tmp11*_tmp17 + _tmp15*_tmp16 + _tmp18*_tmp9 + _tmp19*_tmp5 + 0.25*_tmp24*_tmp25*_tmp75*p_0 - _tmp28*_tmp56 - _tmp32*_tmp53 - _tmp34*_tmp59 - _tmp40*_tmp57 - _tmp76 + _tmp77 - _tmp78;
+    out[3] = -_tmp79 + delta_10;
+    out[4] = -_tmp101*_tmp22*_tmp97 + _tmp103*_tmp107 + _tmp109*_tmp117 - _tmp118*_tmp119 - _tmp123 + _tmp74 + _tmp81*_tmp85 + _tmp87*_tmp91 - _tmp92*_tmp93 - _tmp94*_tmp95;
+    out[5] = 0.25*_tmp100*_tmp124*_tmp99*p_0 - _tmp103*_tmp119 - _tmp107*_tmp118 - _tmp125 - _tmp78 + _tmp81*_tmp95 + _tmp85*_tmp94 + _tmp87*_tmp93 + _tmp91*_tmp92;
+    out[6] = -1;
+    out[7] = -1;
+    out[8] = 0;
+    out[9] = 0;
+    out[10] = 1;
+    out[11] = 0;
+    out[12] = -_tmp131*_tmp58 + _tmp132*_tmp35 - _tmp136 + 0.05*_tmp44 - 0.02*_tmp51 + _tmp76 - _tmp77;
+    out[13] = -_tmp136 - _tmp144*_tmp51 + _tmp145*_tmp44;
+    out[14] = 0;
+    out[15] = 0;
+    out[16] = -_tmp146*_tmp147 - _tmp146*_tmp150 - _tmp148*_tmp149;
+    out[17] = 0;
+    out[18] = -_tmp131*_tmp35 - _tmp132*_tmp58 - _tmp151 + 0.25*_tmp42*_tmp44*_tmp45*_tmp47*p_0 - 0.02*_tmp44 + 0.25*_tmp45*_tmp47*_tmp50*_tmp51*p_0 - 0.05*_tmp51;
+    out[19] = -_tmp144*_tmp44 - _tmp145*_tmp51 - _tmp151;
+    out[20] = 0;
+    out[21] = 0;
+    out[22] = -_tmp146*_tmp149 + _tmp147*_tmp148 + _tmp148*_tmp150;
+    out[23] = 0;
+    out[24] = 0;
+    out[25] = 0;
+    out[26] = -1;
+    out[27] = -1;
+    out[28] = 0;
+    out[29] = 1;
+    out[30] = 0;
+    out[31] = 0;
+    out[32] = 0.04*_tmp111 - 0.005*_tmp121 + _tmp125 - _tmp154 - _tmp156 + _tmp162*_tmp29 - _tmp163*_tmp54;
+    out[33] = _tmp111*_tmp170 - _tmp121*_tmp169 - _tmp154 - _tmp156;
+    out[34] = 0;
+    out[35] = -_tmp171*_tmp172 - _tmp171*_tmp175 - _tmp173*_tmp174;
+    out[36] = 0;
+    out[37] = 0;
+    out[38] = 0.25*_tmp109*_tmp111*_tmp113*_tmp114*p_0 - 0.005*_tmp111 - 0.04*_tmp121 - _tmp123 - _tmp162*_tmp54 - _tmp163*_tmp29 - _tmp176;
+    out[39] = -_tmp111*_tmp169 - _tmp121*_tmp170 - _tmp176;
+    out[40] = 0;
+    out[41] = -_tmp171*_tmp174 + _tmp172*_tmp173 + _tmp173*_tmp175;
+}
+
 /* rigid positions of the points (14 operations) */
 static void sk_rigid_points(const double *theta, const double *params, double *out)
 {
@@ -458,11 +752,19 @@ static void sk_loaded_q(const double *theta, const double *mu0, const double *pa
     out[5] = -_tmp9*theta_10*(pow(_tmp19, 3)*_tmp6 - pow(_tmp19, 2)*_tmp8 + _tmp19*_tmp5 + 1);
 }
 
-/* loaded: each plate's end displacement beyond its circular arc under its loads (125 operations) */
+/* loaded: each plate's end displacement beyond its circular arc under its loads (565 operations) */
 static void sk_loaded_compliance(const double *theta, const double *mu, const double *params, double *out)
 {
     const double theta_1 = theta[0];
     const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double theta_5 = theta[4];
+    const double theta_6 = theta[5];
+    const double theta_7 = theta[6];
+    const double theta_8 = theta[7];
+    const double theta_9 = theta[8];
+    const double theta_10 = theta[9];
     const double mu_2 = mu[1];
     const double mu_3 = mu[2];
     const double mu_5 = mu[4];
@@ -504,10 +806,538 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp33 = -33333.333333333336*_tmp29 - 5467372134038801.0*_tmp30 + 13492063492.063492*_tmp32 + 0.08333333333333333;
     const double _tmp34 = cos(_tmp22);
     const double _tmp35 = p_0*(_tmp20*pow(_tmp27, 2)*(-3373.0158730158732*_tmp29 - 1107904441237774.6*_tmp30 + 2050264550.2645502*_tmp32 + 0.004166666666666667) + pow(theta_2, 2)*(793650793.6507937*_tmp14*_tmp15*_tmp31 - 5555.555555555556*_tmp29 - 105820105820105.81*_tmp30));
+    const double _tmp36 = 0.5*theta_3;
+    const double _tmp37 = sin(_tmp36);
+    const double _tmp38 = theta_1 + theta_2;
+    const double _tmp39 = _tmp36 + _tmp38;
+    const double _tmp40 = sin(_tmp39);
+    const double _tmp41 = cos(_tmp39);
+    const double _tmp42 = -_tmp2*_tmp40 + _tmp4*_tmp41;
+    const double _tmp43 = _tmp2*_tmp41 + _tmp4*_tmp40;
+    const double _tmp44 = _tmp43*_tmp9;
+    const double _tmp45 = _tmp11*pow(_tmp43, 3);
+    const double _tmp46 = pow(_tmp43, 2);
+    const double _tmp47 = _tmp16*_tmp46;
+    const double _tmp48 = -33333.333333333336*_tmp44 - 5467372134038801.0*_tmp45 + 13492063492.063492*_tmp47 + 0.08333333333333333;
+    const double _tmp49 = cos(_tmp36);
+    const double _tmp50 = p_0*(_tmp20*pow(_tmp42, 2)*(-3373.0158730158732*_tmp44 - 1107904441237774.6*_tmp45 + 2050264550.2645502*_tmp47 + 0.004166666666666667) + pow(theta_3, 2)*(793650793.6507937*_tmp14*_tmp15*_tmp46 - 5555.555555555556*_tmp44 - 105820105820105.81*_tmp45));
+    const double _tmp51 = 0.5*theta_4;
+    const double _tmp52 = sin(_tmp51);
+    const double _tmp53 = _tmp38 + theta_3;
+    const double _tmp54 = _tmp51 + _tmp53;
+    const double _tmp55 = sin(_tmp54);
+    const double _tmp56 = cos(_tmp54);
+    const double _tmp57 = -_tmp55*mu_2 + _tmp56*mu_3;
+    const double _tmp58 = _tmp55*mu_3 + _tmp56*mu_2;
+    const double _tmp59 = _tmp58*_tmp9;
+    const double _tmp60 = _tmp11*pow(_tmp58, 3);
+    const double _tmp61 = pow(_tmp58, 2);
+    const double _tmp62 = _tmp16*_tmp61;
+    const double _tmp63 = -33333.333333333336*_tmp59 - 5467372134038801.0*_tmp60 + 13492063492.063492*_tmp62 + 0.08333333333333333;
+    const double _tmp64 = cos(_tmp51);
+    const double _tmp65 = p_0*(_tmp20*pow(_tmp57, 2)*(-3373.0158730158732*_tmp59 - 1107904441237774.6*_tmp60 + 2050264550.2645502*_tmp62 + 0.004166666666666667) + pow(theta_4, 2)*(793650793.6507937*_tmp14*_tmp15*_tmp61 - 5555.555555555556*_tmp59 - 105820105820105.81*_tmp60));
+    const double _tmp66 = 0.5*theta_5;
+    const double _tmp67 = sin(_tmp66);
+    const double _tmp68 = _tmp53 + theta_4;
+    const double _tmp69 = _tmp66 + _tmp68;
+    const double _tmp70 = sin(_tmp69);
+    const double _tmp71 = cos(_tmp69);
+    const double _tmp72 = -_tmp70*mu_2 + _tmp71*mu_3;
+    const double _tmp73 = _tmp70*mu_3 + _tmp71*mu_2;
+    const double _tmp74 = _tmp73*_tmp9;
+    const double _tmp75 = _tmp11*pow(_tmp73, 3);
+    const double _tmp76 = pow(_tmp73, 2);
+    const double _tmp77 = _tmp16*_tmp76;
+    const double _tmp78 = -33333.333333333336*_tmp74 - 5467372134038801.0*_tmp75 + 13492063492.063492*_tmp77 + 0.08333333333333333;
+    const double _tmp79 = cos(_tmp66);
+    const double _tmp80 = p_0*(_tmp20*pow(_tmp72, 2)*(-3373.0158730158732*_tmp74 - 1107904441237774.6*_tmp75 + 2050264550.2645502*_tmp77 + 0.004166666666666667) + pow(theta_5, 2)*(793650793.6507937*_tmp14*_tmp15*_tmp76 - 5555.555555555556*_tmp74 - 105820105820105.81*_tmp75));
+    const double _tmp81 = 0.5*theta_6;
+    const double _tmp82 = sin(_tmp81);
+    const double _tmp83 = _tmp68 + _tmp81 + theta_5;
+    const double _tmp84 = cos(_tmp83);
+    const double _tmp85 = sin(_tmp83);
+    const double _tmp86 = -_tmp84*mu_2 - _tmp85*mu_3;
+    const double _tmp87 = _tmp84*mu_3 - _tmp85*mu_2;
+    const double _tmp88 = _tmp87*_tmp9;
+    const double _tmp89 = _tmp11*pow(_tmp87, 3);
+    const double _tmp90 = pow(_tmp87, 2);
+    const double _tmp91 = _tmp16*_tmp90;
+    const double _tmp92 = -33333.333333333336*_tmp88 - 5467372134038801.0*_tmp89 + 13492063492.063492*_tmp91 + 0.08333333333333333;
+    const double _tmp93 = cos(_tmp81);
+    const double _tmp94 = p_0*(_tmp20*pow(_tmp86, 2)*(-3373.0158730158732*_tmp88 - 1107904441237774.6*_tmp89 + 2050264550.2645502*_tmp91 + 0.004166666666666667) + pow(theta_6, 2)*(793650793.6507937*_tmp14*_tmp15*_tmp90 - 5555.555555555556*_tmp88 - 105820105820105.81*_tmp89));
+    const double _tmp95 = 0.5*theta_7;
+    const double _tmp96 = sin(_tmp95);
+    const double _tmp97 = _tmp53 + _tmp95;
+    const double _tmp98 = sin(_tmp97);
+    const double _tmp99 = cos(_tmp97);
+    const double _tmp100 = -_tmp98*mu_5 + _tmp99*mu_6;
+    const double _tmp101 = _tmp98*mu_6 + _tmp99*mu_5;
+    const double _tmp102 = _tmp101*_tmp9;
+    const double _tmp103 = pow(_tmp101, 3)*_tmp11;
+    const double _tmp104 = pow(_tmp101, 2);
+    const double _tmp105 = _tmp104*_tmp16;
+    const double _tmp106 = -33333.333333333336*_tmp102 - 5467372134038801.0*_tmp103 + 13492063492.063492*_tmp105 + 0.08333333333333333;
+    const double _tmp107 = cos(_tmp95);
+    const double _tmp108 = p_0*(pow(_tmp100, 2)*_tmp20*(-3373.0158730158732*_tmp102 - 1107904441237774.6*_tmp103 + 2050264550.2645502*_tmp105 + 0.004166666666666667) + pow(theta_7, 2)*(-5555.555555555556*_tmp102 - 105820105820105.81*_tmp103 + 793650793.6507937*_tmp104*_tmp14*_tmp15));
+    const double _tmp109 = 0.5*theta_8;
+    const double _tmp110 = sin(_tmp109);
+    const double _tmp111 = _tmp109 + _tmp53 + theta_7;
+    const double _tmp112 = sin(_tmp111);
+    const double _tmp113 = cos(_tmp111);
+    const double _tmp114 = -_tmp112*mu_5 + _tmp113*mu_6;
+    const double _tmp115 = _tmp112*mu_6 + _tmp113*mu_5;
+    const double _tmp116 = _tmp115*_tmp9;
+    const double _tmp117 = _tmp11*pow(_tmp115, 3);
+    const double _tmp118 = pow(_tmp115, 2);
+    const double _tmp119 = _tmp118*_tmp16;
+    const double _tmp120 = -33333.333333333336*_tmp116 - 5467372134038801.0*_tmp117 + 13492063492.063492*_tmp119 + 0.08333333333333333;
+    const double _tmp121 = cos(_tmp109);
+    const double _tmp122 = p_0*(pow(_tmp114, 2)*_tmp20*(-3373.0158730158732*_tmp116 - 1107904441237774.6*_tmp117 + 2050264550.2645502*_tmp119 + 0.004166666666666667) + pow(theta_8, 2)*(-5555.555555555556*_tmp116 - 105820105820105.81*_tmp117 + 793650793.6507937*_tmp118*_tmp14*_tmp15));
+    const double _tmp123 = 0.5*theta_9;
+    const double _tmp124 = sin(_tmp123);
+    const double _tmp125 = cos(_tmp123);
+    const double _tmp126 = _tmp124*mu_3 + _tmp125*mu_2;
+    const double _tmp127 = _tmp124*mu_2 - _tmp125*mu_3;
+    const double _tmp128 = _tmp127*_tmp9;
+    const double _tmp129 = _tmp11*pow(_tmp127, 3);
+    const double _tmp130 = pow(_tmp127, 2);
+    const double _tmp131 = _tmp130*_tmp16;
+    const double _tmp132 = -33333.333333333336*_tmp128 - 5467372134038801.0*_tmp129 + 13492063492.063492*_tmp131 + 0.08333333333333333;
+    const double _tmp133 = p_0*(pow(_tmp126, 2)*_tmp20*(-3373.0158730158732*_tmp128 - 1107904441237774.6*_tmp129 + 2050264550.2645502*_tmp131 + 0.004166666666666667) + pow(theta_9, 2)*(-5555.555555555556*_tmp128 - 105820105820105.81*_tmp129 + 793650793.6507937*_tmp130*_tmp14*_tmp15));
+    const double _tmp134 = 0.5*theta_10;
+    const double _tmp135 = sin(_tmp134);
+    const double _tmp136 = cos(_tmp134);
+    const double _tmp137 = _tmp135*mu_6 + _tmp136*mu_5;
+    const double _tmp138 = _tmp135*mu_5 - _tmp136*mu_6;
+    const double _tmp139 = _tmp138*_tmp9;
+    const double _tmp140 = _tmp11*pow(_tmp138, 3);
+    const double _tmp141 = pow(_tmp138, 2);
+    const double _tmp142 = _tmp141*_tmp16;
+    const double _tmp143 = -33333.333333333336*_tmp139 - 5467372134038801.0*_tmp140 + 13492063492.063492*_tmp142 + 0.08333333333333333;
+    const double _tmp144 = p_0*(pow(_tmp137, 2)*_tmp20*(-3373.0158730158732*_tmp139 - 1107904441237774.6*_tmp140 + 2050264550.2645502*_tmp142 + 0.004166666666666667) + pow(theta_10, 2)*(-5555.555555555556*_tmp139 + 793650793.6507937*_tmp14*_tmp141*_tmp15 - 105820105820105.81*_tmp140));
     out[0] = -_tmp1*_tmp18*_tmp19*_tmp5 - _tmp21*_tmp3;
     out[1] = -_tmp1*_tmp21 + 4000000*_tmp18*_tmp3*_tmp5*_tmp8;
     out[2] = -_tmp19*_tmp23*_tmp27*_tmp33 - _tmp34*_tmp35;
     out[3] = -_tmp23*_tmp35 + 4000000*_tmp27*_tmp33*_tmp34*_tmp8;
+    out[4] = -_tmp19*_tmp37*_tmp42*_tmp48 - _tmp49*_tmp50;
+    out[5] = -_tmp37*_tmp50 + 4000000*_tmp42*_tmp48*_tmp49*_tmp8;
+    out[6] = -_tmp19*_tmp52*_tmp57*_tmp63 - _tmp64*_tmp65;
+    out[7] = -_tmp52*_tmp65 + 4000000*_tmp57*_tmp63*_tmp64*_tmp8;
+    out[8] = -_tmp19*_tmp67*_tmp72*_tmp78 - _tmp79*_tmp80;
+    out[9] = -_tmp67*_tmp80 + 4000000*_tmp72*_tmp78*_tmp79*_tmp8;
+    out[10] = -_tmp19*_tmp82*_tmp86*_tmp92 - _tmp93*_tmp94;
+    out[11] = 4000000*_tmp8*_tmp86*_tmp92*_tmp93 - _tmp82*_tmp94;
+    out[12] = -_tmp100*_tmp106*_tmp19*_tmp96 - _tmp107*_tmp108;
+    out[13] = 4000000*_tmp100*_tmp106*_tmp107*_tmp8 - _tmp108*_tmp96;
+    out[14] = -_tmp110*_tmp114*_tmp120*_tmp19 - _tmp121*_tmp122;
+    out[15] = -_tmp110*_tmp122 + 4000000*_tmp114*_tmp120*_tmp121*_tmp8;
+    out[16] = -_tmp124*_tmp126*_tmp132*_tmp19 - _tmp125*_tmp133;
+    out[17] = -_tmp124*_tmp133 + 4000000*_tmp125*_tmp126*_tmp132*_tmp8;
+    out[18] = -_tmp135*_tmp137*_tmp143*_tmp19 - _tmp136*_tmp144;
+    out[19] = -_tmp135*_tmp144 + 4000000*_tmp136*_tmp137*_tmp143*_tmp8;
+}
+
+/* loaded: A and r = Phi dz of the loaded closure (its first-order start) (239 operations) */
+static void sk_loaded_linear(const double *theta, const double *params, double *out)
+{
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double theta_5 = theta[4];
+    const double theta_6 = theta[5];
+    const double theta_7 = theta[6];
+    const double theta_8 = theta[7];
+    const double theta_9 = theta[8];
+    const double theta_10 = theta[9];
+    const double p_0 = params[0];
+    const double compliance_x_1 = params[1];
+    const double compliance_y_1 = params[2];
+    const double compliance_x_2 = params[3];
+    const double compliance_y_2 = params[4];
+    const double compliance_x_3 = params[5];
+    const double compliance_y_3 = params[6];
+    const double compliance_x_4 = params[7];
+    const double compliance_y_4 = params[8];
+    const double compliance_x_5 = params[9];
+    const double compliance_y_5 = params[10];
+    const double compliance_x_6 = params[11];
+    const double compliance_y_6 = params[12];
+    const double compliance_x_7 = params[13];
+    const double compliance_y_7 = params[14];
+    const double compliance_x_8 = params[15];
+    const double compliance_y_8 = params[16];
+    const double compliance_x_9 = params[17];
+    const double compliance_y_9 = params[18];
+    const double compliance_x_10 = params[19];
+    const double compliance_y_10 = params[20];
+    const double _tmp0 = theta_1 + theta_2;
+    const double _tmp1 = _tmp0 + theta_3;
+    const double _tmp2 = _tmp1 + theta_4;
+    const double _tmp3 = _tmp2 + theta_5;
+    const double _tmp4 = cos(_tmp3);
+    const double _tmp5 = sin(_tmp3);
+    const double _tmp6 = _tmp3 + theta_6;
+    const double _tmp7 = sin(_tmp6);
+    const double _tmp8 = cos(_tmp6);
+    const double _tmp9 = 0.04*_tmp7 + 0.05*_tmp8;
+    const double _tmp10 = 0.05*_tmp7 - 0.04*_tmp8;
+    const double _tmp11 = _tmp1 + theta_7;
+    const double _tmp12 = cos(_tmp11);
+    const double _tmp13 = sin(_tmp11);
+    const double _tmp14 = _tmp11 + theta_8;
+    const double _tmp15 = sin(_tmp14);
+    const double _tmp16 = cos(_tmp14);
+    const double _tmp17 = 0.025*_tmp15 + 0.035*_tmp16;
+    const double _tmp18 = 0.035*_tmp15 - 0.025*_tmp16;
+    const double _tmp20 = 0.25*p_0;
+    const double _tmp19 = 0.5*theta_6;
+    const double _tmp21 = _tmp20*pow(theta_6, 2)*symkin_arck(_tmp19);
+    const double _tmp22 = _tmp21*cos(_tmp19) + compliance_x_6;
+    const double _tmp23 = sin(_tmp1);
+    const double _tmp24 = 0.5*theta_4;
+    const double _tmp25 = _tmp20*pow(theta_4, 2)*symkin_arck(_tmp24);
+    const double _tmp26 = _tmp25*sin(_tmp24) + compliance_y_4;
+    const double _tmp27 = sin(_tmp2);
+    const double _tmp28 = 0.5*theta_5;
+    const double _tmp29 = _tmp20*pow(theta_5, 2)*symkin_arck(_tmp28);
+    const double _tmp30 = _tmp29*sin(_tmp28) + compliance_y_5;
+    const double _tmp31 = cos(_tmp1);
+    const double _tmp32 = _tmp25*cos(_tmp24) + compliance_x_4;
+    const double _tmp33 = cos(_tmp2);
+    const double _tmp34 = _tmp29*cos(_tmp28) + compliance_x_5;
+    const double _tmp35 = -_tmp21*sin(_tmp19) - compliance_y_6;
+    const double _tmp36 = 0.5*theta_9;
+    const double _tmp37 = pow(theta_9, 2);
+    const double _tmp38 = symkin_arck(_tmp36);
+    const double _tmp39 = sin(theta_1);
+    const double _tmp40 = 0.5*theta_2;
+    const double _tmp41 = _tmp20*pow(theta_2, 2)*symkin_arck(_tmp40);
+    const double _tmp42 = _tmp41*sin(_tmp40) + compliance_y_2;
+    const double _tmp43 = sin(_tmp0);
+    const double _tmp44 = 0.5*theta_3;
+    const double _tmp45 = _tmp20*pow(theta_3, 2)*symkin_arck(_tmp44);
+    const double _tmp46 = _tmp45*sin(_tmp44) + compliance_y_3;
+    const double _tmp47 = cos(theta_1);
+    const double _tmp48 = _tmp41*cos(_tmp40) + compliance_x_2;
+    const double _tmp49 = cos(_tmp0);
+    const double _tmp50 = _tmp45*cos(_tmp44) + compliance_x_3;
+    const double _tmp51 = 0.5*theta_1;
+    const double _tmp52 = _tmp20*pow(theta_1, 2)*symkin_arck(_tmp51);
+    const double _tmp53 = _tmp39*_tmp42 + _tmp43*_tmp46 - _tmp47*_tmp48 - _tmp49*_tmp50 + _tmp52*sin(_tmp51) + compliance_y_1;
+    const double _tmp54 = _tmp39*_tmp48 + _tmp42*_tmp47 + _tmp43*_tmp50 + _tmp46*_tmp49 + _tmp52*cos(_tmp51) + compliance_x_1;
+    const double _tmp55 = 0.5*theta_7;
+    const double _tmp56 = _tmp20*pow(theta_7, 2)*symkin_arck(_tmp55);
+    const double _tmp57 = _tmp56*sin(_tmp55) + compliance_y_7;
+    const double _tmp58 = 0.5*theta_8;
+    const double _tmp59 = _tmp20*pow(theta_8, 2)*symkin_arck(_tmp58);
+    const double _tmp60 = _tmp59*sin(_tmp58) + compliance_y_8;
+    const double _tmp61 = _tmp56*cos(_tmp55) + compliance_x_7;
+    const double _tmp62 = _tmp59*cos(_tmp58) + compliance_x_8;
+    const double _tmp63 = 0.5*theta_10;
+    const double _tmp64 = pow(theta_10, 2);
+    const double _tmp65 = symkin_arck(_tmp63);
+    out[0] = -1;
+    out[1] = -1;
+    out[2] = 0;
+    out[3] = 0;
+    out[4] = 1;
+    out[5] = 0;
+    out[6] = -0.02*_tmp4 + 0.05*_tmp5 - _tmp9;
+    out[7] = -_tmp9;
+    out[8] = 0;
+    out[9] = 0;
+    out[10] = 0;
+    out[11] = 0;
+    out[12] = -_tmp10 - 0.05*_tmp4 - 0.02*_tmp5;
+    out[13] = -_tmp10;
+    out[14] = 0;
+    out[15] = 0;
+    out[16] = 0;
+    out[17] = 0;
+    out[18] = 0;
+    out[19] = 0;
+    out[20] = -1;
+    out[21] = -1;
+    out[22] = 0;
+    out[23] = 1;
+    out[24] = 0;
+    out[25] = 0;
+    out[26] = -0.005*_tmp12 + 0.04*_tmp13 - _tmp17;
+    out[27] = -_tmp17;
+    out[28] = 0;
+    out[29] = 0;
+    out[30] = 0;
+    out[31] = 0;
+    out[32] = -0.04*_tmp12 - 0.005*_tmp13 - _tmp18;
+    out[33] = -_tmp18;
+    out[34] = 0;
+    out[35] = 0;
+    out[36] = 0;
+    out[37] = -_tmp20*_tmp37*_tmp38*sin(_tmp36) + _tmp22*_tmp5 + _tmp23*_tmp26 + _tmp27*_tmp30 - _tmp31*_tmp32 - _tmp33*_tmp34 - _tmp35*_tmp4 + _tmp53 - compliance_y_9;
+    out[38] = -_tmp22*_tmp4 - _tmp23*_tmp32 - _tmp26*_tmp31 - _tmp27*_tmp34 - _tmp30*_tmp33 - _tmp35*_tmp5 + 0.25*_tmp37*_tmp38*p_0*cos(_tmp36) - _tmp54 + compliance_x_9;
+    out[39] = 0;
+    out[40] = -_tmp12*_tmp62 + _tmp13*_tmp60 - _tmp20*_tmp64*_tmp65*sin(_tmp63) + _tmp23*_tmp57 - _tmp31*_tmp61 + _tmp53 - compliance_y_10;
+    out[41] = -_tmp12*_tmp60 - _tmp13*_tmp62 - _tmp23*_tmp61 - _tmp31*_tmp57 - _tmp54 + 0.25*_tmp64*_tmp65*p_0*cos(_tmp63) + compliance_x_10;
+}
+
+/* loaded: the loaded closure F(delta) and dF/ddelta (539 operations) */
+static void sk_loaded_newton(const double *theta, const double *delta, const double *params, double *out)
+{
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double theta_5 = theta[4];
+    const double theta_6 = theta[5];
+    const double theta_7 = theta[6];
+    const double theta_8 = theta[7];
+    const double theta_9 = theta[8];
+    const double theta_10 = theta[9];
+    const double delta_5 = delta[0];
+    const double delta_6 = delta[1];
+    const double delta_7 = delta[2];
+    const double delta_8 = delta[3];
+    const double delta_9 = delta[4];
+    const double delta_10 = delta[5];
+    const double p_0 = params[0];
+    const double compliance_x_1 = params[1];
+    const double compliance_y_1 = params[2];
+    const double compliance_x_2 = params[3];
+    const double compliance_y_2 = params[4];
+    const double compliance_x_3 = params[5];
+    const double compliance_y_3 = params[6];
+    const double compliance_x_4 = params[7];
+    const double compliance_y_4 = params[8];
+    const double compliance_x_5 = params[9];
+    const double compliance_y_5 = params[10];
+    const double compliance_x_6 = params[11];
+    const double compliance_y_6 = params[12];
+    const double compliance_x_7 = params[13];
+    const double compliance_y_7 = params[14];
+    const double compliance_x_8 = params[15];
+    const double compliance_y_8 = params[16];
+    const double compliance_x_9 = params[17];
+    const double compliance_y_9 = params[18];
+    const double compliance_x_10 = params[19];
+    const double compliance_y_10 = params[20];
+    const double _tmp0 = delta_5 + delta_6;
+    const double _tmp1 = delta_5 + theta_5;
+    const double _tmp2 = theta_1 + theta_2;
+    const double _tmp3 = _tmp2 + theta_3;
+    const double _tmp4 = _tmp3 + theta_4;
+    const double _tmp5 = _tmp1 + _tmp4;
+    const double _tmp6 = sin(_tmp5);
+    const double _tmp14 = 0.25*p_0;
+    const double _tmp7 = 0.5*delta_6;
+    const double _tmp8 = _tmp7 + 0.5*theta_6;
+    const double _tmp9 = symkin_arck(_tmp8);
+    const double _tmp10 = cos(_tmp8);
+    const double _tmp11 = _tmp10*_tmp9;
+    const double _tmp12 = delta_6 + theta_6;
+    const double _tmp13 = pow(_tmp12, 2);
+    const double _tmp15 = _tmp13*_tmp14;
+    const double _tmp16 = _tmp11*_tmp15 + compliance_x_6;
+    const double _tmp17 = sin(_tmp3);
+    const double _tmp18 = 0.5*theta_4;
+    const double _tmp19 = _tmp14*pow(theta_4, 2)*symkin_arck(_tmp18);
+    const double _tmp20 = _tmp19*sin(_tmp18) + compliance_y_4;
+    const double _tmp21 = sin(_tmp4);
+    const double _tmp22 = 0.5*delta_5;
+    const double _tmp23 = _tmp22 + 0.5*theta_5;
+    const double _tmp24 = sin(_tmp23);
+    const double _tmp25 = symkin_arck(_tmp23);
+    const double _tmp26 = pow(_tmp1, 2)*_tmp25;
+    const double _tmp27 = _tmp14*_tmp26;
+    const double _tmp28 = _tmp24*_tmp27 + compliance_y_5;
+    const double _tmp29 = _tmp4 + theta_5;
+    const double _tmp30 = cos(_tmp29);
+    const double _tmp31 = sin(delta_5);
+    const double _tmp32 = pow(sin(_tmp22), 2);
+    const double _tmp33 = -0.02*_tmp31 + 0.1*_tmp32;
+    const double _tmp34 = _tmp29 + theta_6;
+    const double _tmp35 = cos(_tmp34);
+    const double _tmp36 = sin(_tmp0);
+    const double _tmp37 = pow(sin(_tmp22 + _tmp7), 2);
+    const double _tmp38 = -0.05*_tmp36 - 0.08*_tmp37;
+    const double _tmp39 = cos(_tmp3);
+    const double _tmp40 = _tmp19*cos(_tmp18) + compliance_x_4;
+    const double _tmp41 = cos(_tmp4);
+    const double _tmp42 = cos(_tmp23);
+    const double _tmp43 = _tmp27*_tmp42 + compliance_x_5;
+    const double _tmp44 = cos(_tmp5);
+    const double _tmp45 = sin(_tmp8);
+    const double _tmp46 = _tmp45*_tmp9;
+    const double _tmp47 = -_tmp15*_tmp46 - compliance_y_6;
+    const double _tmp48 = _tmp44*_tmp47;
+    const double _tmp49 = sin(_tmp34);
+    const double _tmp50 = 0.04*_tmp36 - 0.1*_tmp37;
+    const double _tmp51 = sin(_tmp29);
+    const double _tmp52 = -0.05*_tmp31 - 0.04*_tmp32;
+    const double _tmp53 = 0.5*delta_9 + 0.5*theta_9;
+    const double _tmp54 = sin(_tmp53);
+    const double _tmp55 = delta_9 + theta_9;
+    const double _tmp56 = pow(_tmp55, 2);
+    const double _tmp57 = symkin_arck(_tmp53);
+    const double _tmp58 = _tmp56*_tmp57;
+    const double _tmp59 = sin(theta_1);
+    const double _tmp60 = 0.5*theta_2;
+    const double _tmp61 = _tmp14*pow(theta_2, 2)*symkin_arck(_tmp60);
+    const double _tmp62 = _tmp61*sin(_tmp60) + compliance_y_2;
+    const double _tmp63 = sin(_tmp2);
+    const double _tmp64 = 0.5*theta_3;
+    const double _tmp65 = _tmp14*pow(theta_3, 2)*symkin_arck(_tmp64);
+    const double _tmp66 = _tmp65*sin(_tmp64) + compliance_y_3;
+    const double _tmp67 = cos(theta_1);
+    const double _tmp68 = _tmp61*cos(_tmp60) + compliance_x_2;
+    const double _tmp69 = cos(_tmp2);
+    const double _tmp70 = _tmp65*cos(_tmp64) + compliance_x_3;
+    const double _tmp71 = 0.5*theta_1;
+    const double _tmp72 = _tmp14*pow(theta_1, 2)*symkin_arck(_tmp71);
+    const double _tmp73 = _tmp59*_tmp62 + _tmp63*_tmp66 - _tmp67*_tmp68 - _tmp69*_tmp70 + _tmp72*sin(_tmp71) + compliance_y_1;
+    const double _tmp74 = cos(_tmp53);
+    const double _tmp75 = _tmp16*_tmp44 + _tmp47*_tmp6;
+    const double _tmp76 = _tmp59*_tmp68 + _tmp62*_tmp67 + _tmp63*_tmp70 + _tmp66*_tmp69 + _tmp72*cos(_tmp71) + compliance_x_1;
+    const double _tmp77 = delta_7 + delta_8;
+    const double _tmp78 = 0.5*delta_7;
+    const double _tmp79 = _tmp78 + 0.5*theta_7;
+    const double _tmp80 = sin(_tmp79);
+    const double _tmp81 = delta_7 + theta_7;
+    const double _tmp82 = symkin_arck(_tmp79);
+    const double _tmp83 = pow(_tmp81, 2)*_tmp82;
+    const double _tmp84 = _tmp14*_tmp83;
+    const double _tmp85 = _tmp80*_tmp84 + compliance_y_7;
+    const double _tmp86 = _tmp3 + _tmp81;
+    const double _tmp87 = sin(_tmp86);
+    const double _tmp88 = 0.5*delta_8;
+    const double _tmp89 = _tmp88 + 0.5*theta_8;
+    const double _tmp90 = sin(_tmp89);
+    const double _tmp91 = delta_8 + theta_8;
+    const double _tmp92 = symkin_arck(_tmp89);
+    const double _tmp93 = pow(_tmp91, 2)*_tmp92;
+    const double _tmp94 = _tmp14*_tmp93;
+    const double _tmp95 = _tmp90*_tmp94 + compliance_y_8;
+    const double _tmp96 = _tmp3 + theta_7;
+    const double _tmp97 = cos(_tmp96);
+    const double _tmp98 = sin(delta_7);
+    const double _tmp99 = pow(sin(_tmp78), 2);
+    const double _tmp100 = -0.005*_tmp98 + 0.08*_tmp99;
+    const double _tmp101 = _tmp96 + theta_8;
+    const double _tmp102 = cos(_tmp101);
+    const double _tmp103 = sin(_tmp77);
+    const double _tmp104 = pow(sin(_tmp78 + _tmp88), 2);
+    const double _tmp105 = -0.035*_tmp103 - 0.05*_tmp104;
+    const double _tmp106 = cos(_tmp79);
+    const double _tmp107 = _tmp106*_tmp84 + compliance_x_7;
+    const double _tmp108 = cos(_tmp86);
+    const double _tmp109 = cos(_tmp89);
+    const double _tmp110 = _tmp109*_tmp94 + compliance_x_8;
+    const double _tmp111 = _tmp108*_tmp110;
+    const double _tmp112 = sin(_tmp101);
+    const double _tmp113 = 0.025*_tmp103 - 0.07*_tmp104;
+    const double _tmp114 = sin(_tmp96);
+    const double _tmp115 = -0.04*_tmp98 - 0.01*_tmp99;
+    const double _tmp116 = 0.5*delta_10 + 0.5*theta_10;
+    const double _tmp117 = sin(_tmp116);
+    const double _tmp118 = delta_10 + theta_10;
+    const double _tmp119 = pow(_tmp118, 2);
+    const double _tmp120 = symkin_arck(_tmp116);
+    const double _tmp121 = _tmp119*_tmp120;
+    const double _tmp122 = cos(_tmp116);
+    const double _tmp123 = _tmp108*_tmp95 + _tmp110*_tmp87;
+    const double _tmp124 = _tmp12 + _tmp5;
+    const double _tmp125 = cos(_tmp124);
+    const double _tmp126 = 0.05*_tmp125;
+    const double _tmp127 = sin(_tmp124);
+    const double _tmp128 = 0.04*_tmp127;
+    const double _tmp129 = _tmp24*p_0;
+    const double _tmp130 = 0.5*_tmp1*_tmp25;
+    const double _tmp131 = _tmp42*p_0;
+    const double _tmp132 = 0.125*_tmp26;
+    const double _tmp133 = 0.0625*pow(_tmp1, 3)*(3*symkin_cosr2(_tmp23) + symkin_sinr1(_tmp23) - 3*symkin_sinr2(_tmp23));
+    const double _tmp134 = _tmp129*_tmp130 + _tmp129*_tmp133 + _tmp131*_tmp132;
+    const double _tmp135 = -_tmp129*_tmp132 + _tmp130*_tmp131 + _tmp131*_tmp133;
+    const double _tmp136 = 0.5*_tmp12;
+    const double _tmp137 = _tmp46*p_0;
+    const double _tmp138 = _tmp11*p_0;
+    const double _tmp139 = 0.125*_tmp13;
+    const double _tmp140 = 0.0625*p_0;
+    const double _tmp141 = pow(_tmp12, 3)*_tmp140*(3*symkin_cosr2(_tmp8) + symkin_sinr1(_tmp8) - 3*symkin_sinr2(_tmp8));
+    const double _tmp142 = -_tmp136*_tmp137 - _tmp138*_tmp139 - _tmp141*_tmp45;
+    const double _tmp143 = _tmp10*_tmp141 + _tmp136*_tmp138 - _tmp137*_tmp139;
+    const double _tmp144 = _tmp54*p_0;
+    const double _tmp145 = 0.5*_tmp55*_tmp57;
+    const double _tmp146 = _tmp74*p_0;
+    const double _tmp147 = 0.125*_tmp58;
+    const double _tmp148 = _tmp140*pow(_tmp55, 3)*(3*symkin_cosr2(_tmp53) + symkin_sinr1(_tmp53) - 3*symkin_sinr2(_tmp53));
+    const double _tmp149 = -0.04*_tmp125 + 0.05*_tmp127;
+    const double _tmp150 = _tmp86 + _tmp91;
+    const double _tmp151 = cos(_tmp150);
+    const double _tmp152 = 0.035*_tmp151;
+    const double _tmp153 = sin(_tmp150);
+    const double _tmp154 = 0.025*_tmp153;
+    const double _tmp155 = _tmp80*p_0;
+    const double _tmp156 = 0.5*_tmp81*_tmp82;
+    const double _tmp157 = _tmp106*p_0;
+    const double _tmp158 = 0.125*_tmp83;
+    const double _tmp159 = _tmp140*pow(_tmp81, 3)*(3*symkin_cosr2(_tmp79) + symkin_sinr1(_tmp79) - 3*symkin_sinr2(_tmp79));
+    const double _tmp160 = _tmp155*_tmp156 + _tmp157*_tmp158 + _tmp159*_tmp80;
+    const double _tmp161 = _tmp106*_tmp159 - _tmp155*_tmp158 + _tmp156*_tmp157;
+    const double _tmp162 = _tmp109*p_0;
+    const double _tmp163 = 0.5*_tmp91*_tmp92;
+    const double _tmp164 = 0.125*_tmp93;
+    const double _tmp165 = _tmp90*p_0;
+    const double _tmp166 = _tmp140*pow(_tmp91, 3)*(3*symkin_cosr2(_tmp89) + symkin_sinr1(_tmp89) - 3*symkin_sinr2(_tmp89));
+    const double _tmp167 = _tmp109*_tmp166 + _tmp162*_tmp163 - _tmp164*_tmp165;
+    const double _tmp168 = _tmp162*_tmp164 + _tmp163*_tmp165 + _tmp166*_tmp90;
+    const double _tmp169 = _tmp117*p_0;
+    const double _tmp170 = 0.5*_tmp118*_tmp120;
+    const double _tmp171 = _tmp122*p_0;
+    const double _tmp172 = 0.125*_tmp121;
+    const double _tmp173 = pow(_tmp118, 3)*_tmp140*(3*symkin_cosr2(_tmp116) + symkin_sinr1(_tmp116) - 3*symkin_sinr2(_tmp116));
+    const double _tmp174 = -0.025*_tmp151 + 0.035*_tmp153;
+    out[0] = -_tmp0 + delta_9;
+    out[1] = -_tmp14*_tmp54*_tmp58 + _tmp16*_tmp6 + _tmp17*_tmp20 + _tmp21*_tmp28 + _tmp30*_tmp33 + _tmp35*_tmp38 - _tmp39*_tmp40 - _tmp41*_tmp43 - _tmp48 - _tmp49*_tmp50 - _tmp51*_tmp52 + _tmp73 - compliance_y_9;
+    out[2] = -_tmp17*_tmp40 - _tmp20*_tmp39 - _tmp21*_tmp43 - _tmp28*_tmp41 + _tmp30*_tmp52 + _tmp33*_tmp51 + _tmp35*_tmp50 + _tmp38*_tmp49 + 0.25*_tmp56*_tmp57*_tmp74*p_0 - _tmp75 - _tmp76 + compliance_x_9;
+    out[3] = -_tmp77 + delta_10;
+    out[4] = _tmp100*_tmp97 + _tmp102*_tmp105 - _tmp107*_tmp39 - _tmp111 - _tmp112*_tmp113 - _tmp114*_tmp115 - _tmp117*_tmp121*_tmp14 + _tmp17*_tmp85 + _tmp73 + _tmp87*_tmp95 - compliance_y_10;
+    out[5] = _tmp100*_tmp114 + _tmp102*_tmp113 + _tmp105*_tmp112 - _tmp107*_tmp17 + _tmp115*_tmp97 + 0.25*_tmp119*_tmp120*_tmp122*p_0 - _tmp123 - _tmp39*_tmp85 - _tmp76 + compliance_x_10;
+    out[6] = -1;
+    out[7] = -1;
+    out[8] = 0;
+    out[9] = 0;
+    out[10] = 1;
+    out[11] = 0;
+    out[12] = -_tmp126 - _tmp128 + _tmp134*_tmp21 - _tmp135*_tmp41 - 0.02*_tmp44 + 0.05*_tmp6 + _tmp75;
+    out[13] = -_tmp126 - _tmp128 - _tmp142*_tmp44 + _tmp143*_tmp6;
+    out[14] = 0;
+    out[15] = 0;
+    out[16] = -_tmp144*_tmp145 - _tmp146*_tmp147 - _tmp148*_tmp54;
+    out[17] = 0;
+    out[18] = -_tmp134*_tmp41 - _tmp135*_tmp21 - _tmp149 + _tmp16*_tmp6 - 0.05*_tmp44 - _tmp48 - 0.02*_tmp6;
+    out[19] = -_tmp142*_tmp6 - _tmp143*_tmp44 - _tmp149;
+    out[20] = 0;
+    out[21] = 0;
+    out[22] = -_tmp144*_tmp147 + _tmp145*_tmp146 + _tmp148*_tmp74;
+    out[23] = 0;
+    out[24] = 0;
+    out[25] = 0;
+    out[26] = -1;
+    out[27] = -1;
+    out[28] = 0;
+    out[29] = 1;
+    out[30] = 0;
+    out[31] = 0;
+    out[32] = -0.005*_tmp108 + _tmp123 - _tmp152 - _tmp154 + _tmp160*_tmp17 - _tmp161*_tmp39 + 0.04*_tmp87;
+    out[33] = -_tmp108*_tmp167 - _tmp152 - _tmp154 + _tmp168*_tmp87;
+    out[34] = 0;
+    out[35] = -_tmp117*_tmp173 - _tmp169*_tmp170 - _tmp171*_tmp172;
+    out[36] = 0;
+    out[37] = 0;
+    out[38] = -0.04*_tmp108 - _tmp111 - _tmp160*_tmp39 - _tmp161*_tmp17 - _tmp174 + _tmp87*_tmp95 - 0.005*_tmp87;
+    out[39] = -_tmp108*_tmp168 - _tmp167*_tmp87 - _tmp174;
+    out[40] = 0;
+    out[41] = _tmp122*_tmp173 - _tmp169*_tmp172 + _tmp170*_tmp171;
 }
 
 /* deviation of the points at level loaded (33 operations) */
@@ -532,6 +1362,46 @@ static void sk_dev_loaded(const double *theta, const double *delta, const double
     const double _tmp8 = _tmp5*cos(_tmp4) + compliance_x_2;
     out[0] = -_tmp2*sin(_tmp0) - _tmp3*_tmp6 + _tmp7*_tmp8 - compliance_y_1;
     out[1] = _tmp2*cos(_tmp0) + _tmp3*_tmp8 + _tmp6*_tmp7 + compliance_x_1;
+}
+
+/* rotation of every link and how much further the compliant one turns (9 operations) */
+static void sk_links(const double *theta, const double *delta, double *out)
+{
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double theta_5 = theta[4];
+    const double theta_6 = theta[5];
+    const double theta_7 = theta[6];
+    const double theta_8 = theta[7];
+    const double delta_5 = delta[0];
+    const double delta_6 = delta[1];
+    const double delta_7 = delta[2];
+    const double delta_8 = delta[3];
+    const double _tmp0 = theta_1 + theta_2;
+    const double _tmp1 = _tmp0 + theta_3;
+    const double _tmp2 = _tmp1 + theta_4;
+    const double _tmp3 = _tmp2 + theta_5;
+    const double _tmp4 = _tmp1 + theta_7;
+    out[0] = 0;
+    out[1] = theta_1;
+    out[2] = _tmp0;
+    out[3] = _tmp1;
+    out[4] = _tmp2;
+    out[5] = _tmp3;
+    out[6] = _tmp3 + theta_6;
+    out[7] = _tmp4;
+    out[8] = _tmp4 + theta_8;
+    out[9] = 0;
+    out[10] = 0;
+    out[11] = 0;
+    out[12] = 0;
+    out[13] = 0;
+    out[14] = delta_5;
+    out[15] = delta_5 + delta_6;
+    out[16] = delta_7;
+    out[17] = delta_7 + delta_8;
 }
 
 /* Gaussian elimination with partial pivoting on the n x n row-major a, in place; x -> b. */
@@ -609,6 +1479,78 @@ static double sk_rigid_newton(double *theta, const double *params, int iteration
         }
     }
     return change;
+}
+
+typedef void (*sk_linear_fn)(const double *theta, const double *params, double *out);
+
+/* A delta = -r of a closure's linear routine (A, then r): its first-order delta.
+   Returns 0, or 1 when A is singular. */
+static int sk_linear_start(sk_linear_fn linear, const double *theta, const double *params,
+                           double *delta)
+{
+    double lin[SK_K * SK_K + SK_K];
+    int i;
+    linear(theta, params, lin);
+    for (i = 0; i < SK_K; ++i) {
+        delta[i] = -lin[SK_K * SK_K + i];
+    }
+    return sk_solve(SK_K, lin, delta);
+}
+
+/* Level first_order, and the start of every other loop-solving level: A delta = -Phi dz. */
+static int sk_first_order(const double *theta, const double *params, double *delta)
+{
+    return sk_linear_start(sk_linear, theta, params, delta);
+}
+
+typedef void (*sk_newton_fn)(const double *theta, const double *delta, const double *params,
+                             double *out);
+
+/* Newton on a compliant closure (`newton`: F and dF/ddelta) from its first-order delta, ending
+   once a step is below sqrt(eps) of delta (quadratic convergence leaves it exact) or stalls at
+   rounding. Returns 0, 1 when a Jacobian is singular, 2 without convergence. */
+static int sk_newton_solve(sk_linear_fn linear, sk_newton_fn newton, const double *theta,
+                           const double *params, double *delta)
+{
+    double nw[SK_K + SK_K * SK_K];
+    double previous = HUGE_VAL;
+    int it, i, converged = 0;
+    if (sk_linear_start(linear, theta, params, delta)) {
+        return 1;
+    }
+    for (it = 0; it < 40 && !converged; ++it) {
+        double size = 0.0, change = 0.0;
+        newton(theta, delta, params, nw);
+        if (sk_solve(SK_K, nw + SK_K, nw)) {
+            return 1;
+        }
+        for (i = 0; i < SK_K; ++i) {
+            delta[i] -= nw[i];
+            if (fabs(delta[i]) > size) {
+                size = fabs(delta[i]);
+            }
+            if (fabs(nw[i]) > change) {
+                change = fabs(nw[i]);
+            }
+        }
+        converged = change <= 1e-08 * size || size == 0.0
+                    || (change >= 0.5 * previous && change <= 1e-12 * size);
+        previous = change;
+    }
+    return converged ? 0 : 2;
+}
+
+/* Level exact: Newton on the compliant closure from the first-order delta. */
+static int sk_exact(const double *theta, const double *params, double *delta)
+{
+    return sk_newton_solve(sk_linear, sk_newton, theta, params, delta);
+}
+
+/* Level loaded: Newton on the loaded closure from its first-order delta; `params` holds the
+   plates' compliance after the parameters (sk_loaded_constants). */
+static int sk_loaded(const double *theta, const double *params, double *delta)
+{
+    return sk_newton_solve(sk_loaded_linear, sk_loaded_newton, theta, params, delta);
 }
 
 /* LU factorisation with partial pivoting of the n x n row-major a, in place (L below the unit
@@ -703,16 +1645,22 @@ static int sk_loaded_constants(const double *theta, const double *params, double
 
 int nine_bar_platform_evaluate(const double *inputs, const double *params, int level, double *out)
 {
-    return nine_bar_platform_evaluate_angles(inputs, params, level, out, NULL);
+    return nine_bar_platform_evaluate_pose(inputs, params, level, out, NULL, NULL);
 }
-
-static int sk_evaluate(const double *inputs, const double *params, int level, double *out,
-                       double *angles);
 
 int nine_bar_platform_evaluate_angles(const double *inputs, const double *params, int level, double *out,
                     double *angles)
 {
-    int i, status = sk_evaluate(inputs, params, level, out, angles);
+    return nine_bar_platform_evaluate_pose(inputs, params, level, out, angles, NULL);
+}
+
+static int sk_evaluate(const double *inputs, const double *params, int level, double *out,
+                       double *angles, double *links);
+
+int nine_bar_platform_evaluate_pose(const double *inputs, const double *params, int level, double *out,
+                    double *angles, double *links)
+{
+    int i, status = sk_evaluate(inputs, params, level, out, angles, links);
     if (status != 0) {
         /* no partial result: every output is NaN */
         for (i = 0; out != NULL && i < 6 * SK_NP; ++i) {
@@ -721,18 +1669,21 @@ int nine_bar_platform_evaluate_angles(const double *inputs, const double *params
         for (i = 0; angles != NULL && i < 2 * SK_M; ++i) {
             angles[i] = NAN;
         }
+        for (i = 0; links != NULL && i < 3 * SK_NL; ++i) {
+            links[i] = NAN;
+        }
     }
     return status;
 }
 
-/* The evaluation; nine_bar_platform_evaluate_angles turns a failure into NaN outputs. */
+/* The evaluation; nine_bar_platform_evaluate_pose turns a failure into NaN outputs. */
 static int sk_evaluate(const double *inputs, const double *params, int level, double *out,
-                       double *angles)
+                       double *angles, double *links)
 {
     double theta[SK_M];
     double delta[SK_K1];
     double rigid[2 * SK_NP + 1], dev[2 * SK_NP + 1];
-    double constants[NINE_BAR_PLATFORM_N_PARAMS + 4 + 1];
+    double constants[NINE_BAR_PLATFORM_N_PARAMS + 20 + 1];
     const double *q;        /* what the level's routines read: the parameters (loaded: and more) */
     int i;
 
@@ -787,6 +1738,21 @@ static int sk_evaluate(const double *inputs, const double *params, int level, do
             return 1;
         }
         q = constants;
+    }
+    if (links != NULL) {            /* only the links' rotations need the loops solved */
+        int status = 0;
+        if (level == 1) {
+            status = sk_first_order(theta, q, delta);
+        }
+        else if (level == 2) {
+            status = sk_exact(theta, q, delta);
+        }
+        else if (level == 3) {
+            status = sk_loaded(theta, q, delta);
+        }
+        if (status) {
+            return status;
+        }
     }
     /* hinge 1: its plate holds for |theta| < 3.141592653589793 only */
     if (!(fabs(theta[0]) <= 3.141592653589793)) {
@@ -879,6 +1845,20 @@ static int sk_evaluate(const double *inputs, const double *params, int level, do
         }
         for (i = 0; i < SK_K; ++i) {
             angles[SK_M + sk_unknown_index[i]] += delta[i];
+        }
+    }
+    if (links != NULL) {
+        double rot[2 * SK_NL];
+        sk_links(theta, delta, rot);
+        for (i = 0; i < 2 * SK_NL; ++i) {
+            if (!isfinite(rot[i])) {
+                return 2;
+            }
+        }
+        for (i = 0; i < SK_NL; ++i) {
+            links[3 * i + 0] = remainder(rot[i], sk_two_pi);
+            links[3 * i + 1] = links[3 * i + 0] + rot[SK_NL + i];
+            links[3 * i + 2] = rot[SK_NL + i];
         }
     }
     (void)delta;

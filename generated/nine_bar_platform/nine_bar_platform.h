@@ -3,7 +3,7 @@
  * Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
  * Points: F; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 158, rigid_res 114, linear 222, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33, loaded_q0 16, loaded_q 129, loaded_compliance 125, dev_loaded 33.
+ * Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33, loaded_q0 16, loaded_q 129, loaded_compliance 565, loaded_linear 239, loaded_newton 539, dev_loaded 33, links 9.
  */
 #ifndef SYMKIN_NINE_BAR_PLATFORM_H
 #define SYMKIN_NINE_BAR_PLATFORM_H
@@ -12,6 +12,7 @@
 #define NINE_BAR_PLATFORM_N_PARAMS 1
 #define NINE_BAR_PLATFORM_N_POINTS 1
 #define NINE_BAR_PLATFORM_N_HINGES 10
+#define NINE_BAR_PLATFORM_N_LINKS 9
 
 /* Default parameter values, in the mechanism file's order. */
 extern const double nine_bar_platform_default_params[NINE_BAR_PLATFORM_N_PARAMS > 0 ? NINE_BAR_PLATFORM_N_PARAMS : 1];
@@ -20,6 +21,7 @@ extern const char *const nine_bar_platform_input_names[NINE_BAR_PLATFORM_N_INPUT
 extern const char *const nine_bar_platform_param_names[NINE_BAR_PLATFORM_N_PARAMS > 0 ? NINE_BAR_PLATFORM_N_PARAMS : 1];
 extern const char *const nine_bar_platform_point_names[NINE_BAR_PLATFORM_N_POINTS > 0 ? NINE_BAR_PLATFORM_N_POINTS : 1];
 extern const char *const nine_bar_platform_hinge_names[NINE_BAR_PLATFORM_N_HINGES];
+extern const char *const nine_bar_platform_link_names[NINE_BAR_PLATFORM_N_LINKS > 0 ? NINE_BAR_PLATFORM_N_LINKS : 1];
 
 /*
  * Deviation of the points for one configuration.
@@ -42,5 +44,14 @@ int nine_bar_platform_evaluate(const double *inputs, const double *params, int l
  */
 int nine_bar_platform_evaluate_angles(const double *inputs, const double *params, int level, double *out,
                     double *angles);
+
+/*
+ * The whole pose: as nine_bar_platform_evaluate_angles, and (when links is not NULL) the rotation of
+ * every link in nine_bar_platform_link_names order from the as-fabricated pose: per link the rigid
+ * rotation (wrapped to (-pi, pi]), the compliant one and their difference, the deviation
+ * (3 doubles; the deviation is computed directly, not as a difference). angles may be NULL.
+ */
+int nine_bar_platform_evaluate_pose(const double *inputs, const double *params, int level, double *out,
+                    double *angles, double *links);
 
 #endif /* SYMKIN_NINE_BAR_PLATFORM_H */

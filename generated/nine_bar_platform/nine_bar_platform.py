@@ -2,13 +2,15 @@
 Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
 Points: F; levels: paper, first_order, exact, loaded.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 158, rigid_res 114, linear 222, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33, loaded_q0 16, loaded_q 129, loaded_compliance 125, dev_loaded 33.
+Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33, loaded_q0 16, loaded_q 129, loaded_compliance 565, loaded_linear 239, loaded_newton 539, dev_loaded 33, links 9.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
 shape (2, *broadcast_shape); entries that cannot be assembled (or do not converge) are NaN and
 False in ok. It also holds "angles": {"rigid": {H: a}, "compliant": {H: a}}, every hinge's
-angle (radians, the rotation of links[1] relative to links[0] from the as-fabricated pose).
+angle (radians, the rotation of links[1] relative to links[0] from the as-fabricated pose), and
+"links": {L: {"rigid": a, "compliant": a, "deviation": a}}, the rotation of every link in LINKS
+from the as-fabricated pose (rigid wrapped to (-pi, pi]; the deviation computed directly).
 """
 
 import math
@@ -19,6 +21,7 @@ import numpy as np
 INPUTS = ('O', 'A', 'B', 'K', )
 PARAMETERS = {'l': 0.0006}
 HINGES = ('O', 'A', 'B', 'K', 'G', 'H', 'C', 'D', 'I', 'E', )
+LINKS = ('frame', 'b1', 'b2', 'b3', 'b4', 'b5', 'b6', 'b7', 'b8', )
 POINTS = ('F', )
 LEVELS = ('paper', 'first_order', 'exact', 'loaded', )
 
@@ -28,6 +31,7 @@ _UNKNOWN_INDEX = (4, 5, 6, 7, 8, 9, )
 _N_DYADS = 2
 _LIMITS = ((0, 3.141592653589793), (1, 3.141592653589793), (2, 3.141592653589793), (3, 3.141592653589793), (4, 3.141592653589793), (5, 3.141592653589793), (6, 3.141592653589793), (7, 3.141592653589793), (8, 3.141592653589793), (9, 3.141592653589793), )  # models valid for |theta| < limit
 _NEEDS_LOOPS = False
+_LOOPS_FOR_LINKS = True  # the links' rotations alone need the loops solved
 _DTYPE = numpy.float64
 _POLISH = 1  # Newton steps after the rigid start: relative accuracy of small angles
 _EXACT_ITERATIONS = 40  # Newton cap of the exact level
@@ -47,6 +51,46 @@ def arck(x):
     xs2 = xs * xs
     b = np.sin(xs) / xs - np.cos(xs)
     b = b / xs2
+    return np.where(small, series, b)
+
+
+def cosr2(x):
+    """cosr2(x) = (cos x - sum_(k<2) (-1)^k x^(2k)/(2k)!) / x^4; Taylor series (12 terms) for |x| < 3.0, else the nested elementary formula (vectorised)."""
+    x = np.asarray(x, dtype=float)
+    x2 = x * x
+    small = np.abs(x) < 3.0
+    series = 0.041666666666666664 + x2 * (-0.001388888888888889 + x2 * (2.48015873015873e-05 + x2 * (-2.755731922398589e-07 + x2 * (2.08767569878681e-09 + x2 * (-1.1470745597729725e-11 + x2 * (4.779477332387385e-14 + x2 * (-1.5619206968586225e-16 + x2 * (4.110317623312165e-19 + x2 * (-8.896791392450574e-22 + x2 * (1.6117375710961184e-24 + x2 * (-2.4795962632247976e-27)))))))))))
+    xs = np.where(small, 1.0, x)
+    xs2 = xs * xs
+    b = -2.0 * (np.sin(0.5 * xs) / xs) ** 2
+    b = (b + 0.5) / xs2
+    return np.where(small, series, b)
+
+
+def sinr1(x):
+    """sinr1(x) = (sin x - sum_(k<1) (-1)^k x^(2k+1)/(2k+1)!) / x^3; Taylor series (11 terms) for |x| < 2.0, else the nested elementary formula (vectorised)."""
+    x = np.asarray(x, dtype=float)
+    x2 = x * x
+    small = np.abs(x) < 2.0
+    series = -0.16666666666666666 + x2 * (0.008333333333333333 + x2 * (-0.0001984126984126984 + x2 * (2.7557319223985893e-06 + x2 * (-2.505210838544172e-08 + x2 * (1.6059043836821613e-10 + x2 * (-7.647163731819816e-13 + x2 * (2.8114572543455206e-15 + x2 * (-8.22063524662433e-18 + x2 * (1.9572941063391263e-20 + x2 * (-3.868170170630684e-23))))))))))
+    xs = np.where(small, 1.0, x)
+    xs2 = xs * xs
+    b = np.sin(xs) / xs
+    b = (b - 1.0) / xs2
+    return np.where(small, series, b)
+
+
+def sinr2(x):
+    """sinr2(x) = (sin x - sum_(k<2) (-1)^k x^(2k+1)/(2k+1)!) / x^5; Taylor series (12 terms) for |x| < 3.0, else the nested elementary formula (vectorised)."""
+    x = np.asarray(x, dtype=float)
+    x2 = x * x
+    small = np.abs(x) < 3.0
+    series = 0.008333333333333333 + x2 * (-0.0001984126984126984 + x2 * (2.7557319223985893e-06 + x2 * (-2.505210838544172e-08 + x2 * (1.6059043836821613e-10 + x2 * (-7.647163731819816e-13 + x2 * (2.8114572543455206e-15 + x2 * (-8.22063524662433e-18 + x2 * (1.9572941063391263e-20 + x2 * (-3.868170170630684e-23 + x2 * (6.446950284384474e-26 + x2 * (-9.183689863795546e-29)))))))))))
+    xs = np.where(small, 1.0, x)
+    xs2 = xs * xs
+    b = np.sin(xs) / xs
+    b = (b - 1.0) / xs2
+    b = (b + 0.16666666666666666) / xs2
     return np.where(small, series, b)
 
 
@@ -288,6 +332,234 @@ def _linear(theta, params):
     ]
 
 
+def _newton(theta, delta, params):
+    """exact compliant closure F(delta) and dF/ddelta (531 operations)."""
+    theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7, theta_8, theta_9, theta_10 = theta
+    delta_5, delta_6, delta_7, delta_8, delta_9, delta_10 = delta
+    p_0, = params
+    _tmp0 = delta_5 + delta_6
+    _tmp1 = theta_1 + theta_2
+    _tmp2 = _tmp1 + theta_3
+    _tmp3 = _tmp2 + theta_4
+    _tmp4 = _tmp3 + theta_5
+    _tmp5 = numpy.cos(_tmp4)
+    _tmp6 = numpy.sin(delta_5)
+    _tmp7 = 0.5*delta_5
+    _tmp8 = numpy.sin(_tmp7)**2
+    _tmp9 = -0.02*_tmp6 + 0.1*_tmp8
+    _tmp10 = _tmp4 + theta_6
+    _tmp11 = numpy.cos(_tmp10)
+    _tmp12 = numpy.sin(_tmp0)
+    _tmp13 = 0.5*delta_6
+    _tmp14 = numpy.sin(_tmp13 + _tmp7)**2
+    _tmp15 = -0.05*_tmp12 - 0.08*_tmp14
+    _tmp16 = numpy.sin(_tmp10)
+    _tmp17 = 0.04*_tmp12 - 0.1*_tmp14
+    _tmp18 = numpy.sin(_tmp4)
+    _tmp19 = -0.05*_tmp6 - 0.04*_tmp8
+    _tmp20 = 0.5*delta_9 + 0.5*theta_9
+    _tmp21 = numpy.sin(_tmp20)
+    _tmp22 = 0.25*p_0
+    _tmp23 = delta_9 + theta_9
+    _tmp24 = _tmp23**2
+    _tmp25 = arck(_tmp20)
+    _tmp26 = _tmp24*_tmp25
+    _tmp27 = 0.5*theta_4
+    _tmp28 = numpy.sin(_tmp27)
+    _tmp29 = numpy.sin(_tmp2)
+    _tmp30 = _tmp22*_tmp29
+    _tmp31 = theta_4**2*arck(_tmp27)
+    _tmp32 = _tmp30*_tmp31
+    _tmp33 = _tmp7 + 0.5*theta_5
+    _tmp34 = numpy.sin(_tmp33)
+    _tmp35 = numpy.sin(_tmp3)
+    _tmp36 = delta_5 + theta_5
+    _tmp37 = arck(_tmp33)
+    _tmp38 = _tmp36**2*_tmp37
+    _tmp39 = _tmp22*_tmp38
+    _tmp40 = _tmp35*_tmp39
+    _tmp41 = _tmp13 + 0.5*theta_6
+    _tmp42 = numpy.cos(_tmp41)
+    _tmp43 = _tmp3 + _tmp36
+    _tmp44 = numpy.sin(_tmp43)
+    _tmp45 = arck(_tmp41)
+    _tmp46 = delta_6 + theta_6
+    _tmp47 = _tmp46**2
+    _tmp48 = _tmp22*_tmp45*_tmp47
+    _tmp49 = _tmp44*_tmp48
+    _tmp50 = numpy.sin(_tmp41)
+    _tmp51 = numpy.cos(_tmp43)
+    _tmp52 = _tmp48*_tmp51
+    _tmp53 = numpy.cos(_tmp27)
+    _tmp54 = numpy.cos(_tmp2)
+    _tmp55 = _tmp22*_tmp54
+    _tmp56 = _tmp31*_tmp55
+    _tmp57 = numpy.cos(_tmp33)
+    _tmp58 = numpy.cos(_tmp3)
+    _tmp59 = _tmp39*_tmp58
+    _tmp60 = 0.5*theta_1
+    _tmp61 = _tmp22*theta_1**2*arck(_tmp60)
+    _tmp62 = numpy.sin(theta_1)
+    _tmp63 = 0.5*theta_2
+    _tmp64 = _tmp22*theta_2**2*arck(_tmp63)
+    _tmp65 = _tmp64*numpy.sin(_tmp63)
+    _tmp66 = 0.5*theta_3
+    _tmp67 = numpy.sin(_tmp66)
+    _tmp68 = _tmp22*theta_3**2*arck(_tmp66)
+    _tmp69 = _tmp68*numpy.sin(_tmp1)
+    _tmp70 = numpy.cos(theta_1)
+    _tmp71 = _tmp64*numpy.cos(_tmp63)
+    _tmp72 = numpy.cos(_tmp66)
+    _tmp73 = _tmp68*numpy.cos(_tmp1)
+    _tmp74 = _tmp61*numpy.sin(_tmp60) + _tmp62*_tmp65 + _tmp67*_tmp69 - _tmp70*_tmp71 - _tmp72*_tmp73
+    _tmp75 = numpy.cos(_tmp20)
+    _tmp76 = _tmp42*_tmp52
+    _tmp77 = _tmp49*_tmp50
+    _tmp78 = _tmp61*numpy.cos(_tmp60) + _tmp62*_tmp71 + _tmp65*_tmp70 + _tmp67*_tmp73 + _tmp69*_tmp72
+    _tmp79 = delta_7 + delta_8
+    _tmp80 = _tmp2 + theta_7
+    _tmp81 = numpy.cos(_tmp80)
+    _tmp82 = numpy.sin(delta_7)
+    _tmp83 = 0.5*delta_7
+    _tmp84 = numpy.sin(_tmp83)**2
+    _tmp85 = -0.005*_tmp82 + 0.08*_tmp84
+    _tmp86 = _tmp80 + theta_8
+    _tmp87 = numpy.cos(_tmp86)
+    _tmp88 = numpy.sin(_tmp79)
+    _tmp89 = 0.5*delta_8
+    _tmp90 = numpy.sin(_tmp83 + _tmp89)**2
+    _tmp91 = -0.035*_tmp88 - 0.05*_tmp90
+    _tmp92 = numpy.sin(_tmp86)
+    _tmp93 = 0.025*_tmp88 - 0.07*_tmp90
+    _tmp94 = numpy.sin(_tmp80)
+    _tmp95 = -0.04*_tmp82 - 0.01*_tmp84
+    _tmp96 = 0.5*delta_10 + 0.5*theta_10
+    _tmp97 = numpy.sin(_tmp96)
+    _tmp98 = delta_10 + theta_10
+    _tmp99 = _tmp98**2
+    _tmp100 = arck(_tmp96)
+    _tmp101 = _tmp100*_tmp99
+    _tmp102 = _tmp83 + 0.5*theta_7
+    _tmp103 = numpy.sin(_tmp102)
+    _tmp104 = delta_7 + theta_7
+    _tmp105 = arck(_tmp102)
+    _tmp106 = _tmp104**2*_tmp105
+    _tmp107 = _tmp106*_tmp30
+    _tmp108 = _tmp89 + 0.5*theta_8
+    _tmp109 = numpy.sin(_tmp108)
+    _tmp110 = _tmp104 + _tmp2
+    _tmp111 = numpy.sin(_tmp110)
+    _tmp112 = delta_8 + theta_8
+    _tmp113 = _tmp112**2
+    _tmp114 = arck(_tmp108)
+    _tmp115 = _tmp113*_tmp114
+    _tmp116 = _tmp115*_tmp22
+    _tmp117 = _tmp111*_tmp116
+    _tmp118 = numpy.cos(_tmp102)
+    _tmp119 = _tmp106*_tmp55
+    _tmp120 = numpy.cos(_tmp108)
+    _tmp121 = numpy.cos(_tmp110)
+    _tmp122 = _tmp116*_tmp121
+    _tmp123 = _tmp120*_tmp122
+    _tmp124 = numpy.cos(_tmp96)
+    _tmp125 = _tmp109*_tmp122 + _tmp117*_tmp120
+    _tmp126 = _tmp57*p_0
+    _tmp127 = 0.5*_tmp36*_tmp37
+    _tmp128 = _tmp34*p_0
+    _tmp129 = 0.125*_tmp38
+    _tmp130 = 0.0625*_tmp36**3*(3*cosr2(_tmp33) + sinr1(_tmp33) - 3*sinr2(_tmp33))
+    _tmp131 = _tmp126*_tmp127 + _tmp126*_tmp130 - _tmp128*_tmp129
+    _tmp132 = _tmp126*_tmp129 + _tmp127*_tmp128 + _tmp128*_tmp130
+    _tmp133 = _tmp0 + _tmp10
+    _tmp134 = numpy.cos(_tmp133)
+    _tmp135 = numpy.sin(_tmp133)
+    _tmp136 = 0.05*_tmp134 + 0.04*_tmp135
+    _tmp137 = 0.5*_tmp46
+    _tmp138 = _tmp50*p_0
+    _tmp139 = _tmp138*_tmp45
+    _tmp140 = _tmp42*p_0
+    _tmp141 = _tmp140*_tmp45
+    _tmp142 = 0.125*_tmp47
+    _tmp143 = 0.0625*_tmp46**3*(3*cosr2(_tmp41) + sinr1(_tmp41) - 3*sinr2(_tmp41))
+    _tmp144 = -_tmp137*_tmp139 - _tmp138*_tmp143 - _tmp141*_tmp142
+    _tmp145 = _tmp137*_tmp141 - _tmp139*_tmp142 + _tmp140*_tmp143
+    _tmp146 = _tmp21*p_0
+    _tmp147 = 0.5*_tmp23*_tmp25
+    _tmp148 = _tmp75*p_0
+    _tmp149 = 0.125*_tmp26
+    _tmp150 = 0.0625*_tmp23**3*(3*cosr2(_tmp20) + sinr1(_tmp20) - 3*sinr2(_tmp20))
+    _tmp151 = -0.04*_tmp134 + 0.05*_tmp135
+    _tmp152 = _tmp79 + _tmp86
+    _tmp153 = numpy.cos(_tmp152)
+    _tmp154 = 0.035*_tmp153
+    _tmp155 = numpy.sin(_tmp152)
+    _tmp156 = 0.025*_tmp155
+    _tmp157 = _tmp103*p_0
+    _tmp158 = 0.5*_tmp104*_tmp105
+    _tmp159 = _tmp118*p_0
+    _tmp160 = 0.125*_tmp106
+    _tmp161 = 0.0625*_tmp104**3*(3*cosr2(_tmp102) + sinr1(_tmp102) - 3*sinr2(_tmp102))
+    _tmp162 = _tmp157*_tmp158 + _tmp157*_tmp161 + _tmp159*_tmp160
+    _tmp163 = -_tmp157*_tmp160 + _tmp158*_tmp159 + _tmp159*_tmp161
+    _tmp164 = _tmp120*p_0
+    _tmp165 = 0.5*_tmp112*_tmp114
+    _tmp166 = _tmp109*p_0
+    _tmp167 = 0.125*_tmp115
+    _tmp168 = 0.0625*_tmp112**3*(3*cosr2(_tmp108) + sinr1(_tmp108) - 3*sinr2(_tmp108))
+    _tmp169 = _tmp164*_tmp165 + _tmp164*_tmp168 - _tmp166*_tmp167
+    _tmp170 = _tmp164*_tmp167 + _tmp165*_tmp166 + _tmp166*_tmp168
+    _tmp171 = _tmp97*p_0
+    _tmp172 = 0.5*_tmp100*_tmp98
+    _tmp173 = _tmp124*p_0
+    _tmp174 = 0.125*_tmp101
+    _tmp175 = 0.0625*_tmp98**3*(3*cosr2(_tmp96) + sinr1(_tmp96) - 3*sinr2(_tmp96))
+    _tmp176 = -0.025*_tmp153 + 0.035*_tmp155
+    return [
+        -_tmp0 + delta_9,
+        _tmp11*_tmp15 - _tmp16*_tmp17 - _tmp18*_tmp19 - _tmp21*_tmp22*_tmp26 + _tmp28*_tmp32 + _tmp34*_tmp40 + _tmp42*_tmp49 + _tmp5*_tmp9 + _tmp50*_tmp52 - _tmp53*_tmp56 - _tmp57*_tmp59 + _tmp74,
+        _tmp11*_tmp17 + _tmp15*_tmp16 + _tmp18*_tmp9 + _tmp19*_tmp5 + 0.25*_tmp24*_tmp25*_tmp75*p_0 - _tmp28*_tmp56 - _tmp32*_tmp53 - _tmp34*_tmp59 - _tmp40*_tmp57 - _tmp76 + _tmp77 - _tmp78,
+        -_tmp79 + delta_10,
+        -_tmp101*_tmp22*_tmp97 + _tmp103*_tmp107 + _tmp109*_tmp117 - _tmp118*_tmp119 - _tmp123 + _tmp74 + _tmp81*_tmp85 + _tmp87*_tmp91 - _tmp92*_tmp93 - _tmp94*_tmp95,
+        0.25*_tmp100*_tmp124*_tmp99*p_0 - _tmp103*_tmp119 - _tmp107*_tmp118 - _tmp125 - _tmp78 + _tmp81*_tmp95 + _tmp85*_tmp94 + _tmp87*_tmp93 + _tmp91*_tmp92,
+        -1,
+        -1,
+        0,
+        0,
+        1,
+        0,
+        -_tmp131*_tmp58 + _tmp132*_tmp35 - _tmp136 + 0.05*_tmp44 - 0.02*_tmp51 + _tmp76 - _tmp77,
+        -_tmp136 - _tmp144*_tmp51 + _tmp145*_tmp44,
+        0,
+        0,
+        -_tmp146*_tmp147 - _tmp146*_tmp150 - _tmp148*_tmp149,
+        0,
+        -_tmp131*_tmp35 - _tmp132*_tmp58 - _tmp151 + 0.25*_tmp42*_tmp44*_tmp45*_tmp47*p_0 - 0.02*_tmp44 + 0.25*_tmp45*_tmp47*_tmp50*_tmp51*p_0 - 0.05*_tmp51,
+        -_tmp144*_tmp44 - _tmp145*_tmp51 - _tmp151,
+        0,
+        0,
+        -_tmp146*_tmp149 + _tmp147*_tmp148 + _tmp148*_tmp150,
+        0,
+        0,
+        0,
+        -1,
+        -1,
+        0,
+        1,
+        0,
+        0,
+        0.04*_tmp111 - 0.005*_tmp121 + _tmp125 - _tmp154 - _tmp156 + _tmp162*_tmp29 - _tmp163*_tmp54,
+        _tmp111*_tmp170 - _tmp121*_tmp169 - _tmp154 - _tmp156,
+        0,
+        -_tmp171*_tmp172 - _tmp171*_tmp175 - _tmp173*_tmp174,
+        0,
+        0,
+        0.25*_tmp109*_tmp111*_tmp113*_tmp114*p_0 - 0.005*_tmp111 - 0.04*_tmp121 - _tmp123 - _tmp162*_tmp54 - _tmp163*_tmp29 - _tmp176,
+        -_tmp111*_tmp169 - _tmp121*_tmp170 - _tmp176,
+        0,
+        -_tmp171*_tmp174 + _tmp172*_tmp173 + _tmp173*_tmp175,
+    ]
+
+
 def _rigid_points(theta, params):
     """rigid positions of the points (14 operations)."""
     theta_1, theta_2, _, _, _, _, _, _, _, _ = theta
@@ -414,8 +686,8 @@ def _loaded_q(theta, mu0, params):
 
 
 def _loaded_compliance(theta, mu, params):
-    """loaded: each plate's end displacement beyond its circular arc under its loads (125 operations)."""
-    theta_1, theta_2, _, _, _, _, _, _, _, _ = theta
+    """loaded: each plate's end displacement beyond its circular arc under its loads (565 operations)."""
+    theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7, theta_8, theta_9, theta_10 = theta
     _, mu_2, mu_3, _, mu_5, mu_6 = mu
     p_0, = params
     _tmp0 = 0.5*theta_1
@@ -454,18 +726,485 @@ def _loaded_compliance(theta, mu, params):
     _tmp33 = -33333.333333333336*_tmp29 - 5467372134038801.0*_tmp30 + 13492063492.063492*_tmp32 + 0.08333333333333333
     _tmp34 = numpy.cos(_tmp22)
     _tmp35 = p_0*(_tmp20*_tmp27**2*(-3373.0158730158732*_tmp29 - 1107904441237774.6*_tmp30 + 2050264550.2645502*_tmp32 + 0.004166666666666667) + theta_2**2*(793650793.6507937*_tmp14*_tmp15*_tmp31 - 5555.555555555556*_tmp29 - 105820105820105.81*_tmp30))
+    _tmp36 = 0.5*theta_3
+    _tmp37 = numpy.sin(_tmp36)
+    _tmp38 = theta_1 + theta_2
+    _tmp39 = _tmp36 + _tmp38
+    _tmp40 = numpy.sin(_tmp39)
+    _tmp41 = numpy.cos(_tmp39)
+    _tmp42 = -_tmp2*_tmp40 + _tmp4*_tmp41
+    _tmp43 = _tmp2*_tmp41 + _tmp4*_tmp40
+    _tmp44 = _tmp43*_tmp9
+    _tmp45 = _tmp11*_tmp43**3
+    _tmp46 = _tmp43**2
+    _tmp47 = _tmp16*_tmp46
+    _tmp48 = -33333.333333333336*_tmp44 - 5467372134038801.0*_tmp45 + 13492063492.063492*_tmp47 + 0.08333333333333333
+    _tmp49 = numpy.cos(_tmp36)
+    _tmp50 = p_0*(_tmp20*_tmp42**2*(-3373.0158730158732*_tmp44 - 1107904441237774.6*_tmp45 + 2050264550.2645502*_tmp47 + 0.004166666666666667) + theta_3**2*(793650793.6507937*_tmp14*_tmp15*_tmp46 - 5555.555555555556*_tmp44 - 105820105820105.81*_tmp45))
+    _tmp51 = 0.5*theta_4
+    _tmp52 = numpy.sin(_tmp51)
+    _tmp53 = _tmp38 + theta_3
+    _tmp54 = _tmp51 + _tmp53
+    _tmp55 = numpy.sin(_tmp54)
+    _tmp56 = numpy.cos(_tmp54)
+    _tmp57 = -_tmp55*mu_2 + _tmp56*mu_3
+    _tmp58 = _tmp55*mu_3 + _tmp56*mu_2
+    _tmp59 = _tmp58*_tmp9
+    _tmp60 = _tmp11*_tmp58**3
+    _tmp61 = _tmp58**2
+    _tmp62 = _tmp16*_tmp61
+    _tmp63 = -33333.333333333336*_tmp59 - 5467372134038801.0*_tmp60 + 13492063492.063492*_tmp62 + 0.08333333333333333
+    _tmp64 = numpy.cos(_tmp51)
+    _tmp65 = p_0*(_tmp20*_tmp57**2*(-3373.0158730158732*_tmp59 - 1107904441237774.6*_tmp60 + 2050264550.2645502*_tmp62 + 0.004166666666666667) + theta_4**2*(793650793.6507937*_tmp14*_tmp15*_tmp61 - 5555.555555555556*_tmp59 - 105820105820105.81*_tmp60))
+    _tmp66 = 0.5*theta_5
+    _tmp67 = numpy.sin(_tmp66)
+    _tmp68 = _tmp53 + theta_4
+    _tmp69 = _tmp66 + _tmp68
+    _tmp70 = numpy.sin(_tmp69)
+    _tmp71 = numpy.cos(_tmp69)
+    _tmp72 = -_tmp70*mu_2 + _tmp71*mu_3
+    _tmp73 = _tmp70*mu_3 + _tmp71*mu_2
+    _tmp74 = _tmp73*_tmp9
+    _tmp75 = _tmp11*_tmp73**3
+    _tmp76 = _tmp73**2
+    _tmp77 = _tmp16*_tmp76
+    _tmp78 = -33333.333333333336*_tmp74 - 5467372134038801.0*_tmp75 + 13492063492.063492*_tmp77 + 0.08333333333333333
+    _tmp79 = numpy.cos(_tmp66)
+    _tmp80 = p_0*(_tmp20*_tmp72**2*(-3373.0158730158732*_tmp74 - 1107904441237774.6*_tmp75 + 2050264550.2645502*_tmp77 + 0.004166666666666667) + theta_5**2*(793650793.6507937*_tmp14*_tmp15*_tmp76 - 5555.555555555556*_tmp74 - 105820105820105.81*_tmp75))
+    _tmp81 = 0.5*theta_6
+    _tmp82 = numpy.sin(_tmp81)
+    _tmp83 = _tmp68 + _tmp81 + theta_5
+    _tmp84 = numpy.cos(_tmp83)
+    _tmp85 = numpy.sin(_tmp83)
+    _tmp86 = -_tmp84*mu_2 - _tmp85*mu_3
+    _tmp87 = _tmp84*mu_3 - _tmp85*mu_2
+    _tmp88 = _tmp87*_tmp9
+    _tmp89 = _tmp11*_tmp87**3
+    _tmp90 = _tmp87**2
+    _tmp91 = _tmp16*_tmp90
+    _tmp92 = -33333.333333333336*_tmp88 - 5467372134038801.0*_tmp89 + 13492063492.063492*_tmp91 + 0.08333333333333333
+    _tmp93 = numpy.cos(_tmp81)
+    _tmp94 = p_0*(_tmp20*_tmp86**2*(-3373.0158730158732*_tmp88 - 1107904441237774.6*_tmp89 + 2050264550.2645502*_tmp91 + 0.004166666666666667) + theta_6**2*(793650793.6507937*_tmp14*_tmp15*_tmp90 - 5555.555555555556*_tmp88 - 105820105820105.81*_tmp89))
+    _tmp95 = 0.5*theta_7
+    _tmp96 = numpy.sin(_tmp95)
+    _tmp97 = _tmp53 + _tmp95
+    _tmp98 = numpy.sin(_tmp97)
+    _tmp99 = numpy.cos(_tmp97)
+    _tmp100 = -_tmp98*mu_5 + _tmp99*mu_6
+    _tmp101 = _tmp98*mu_6 + _tmp99*mu_5
+    _tmp102 = _tmp101*_tmp9
+    _tmp103 = _tmp101**3*_tmp11
+    _tmp104 = _tmp101**2
+    _tmp105 = _tmp104*_tmp16
+    _tmp106 = -33333.333333333336*_tmp102 - 5467372134038801.0*_tmp103 + 13492063492.063492*_tmp105 + 0.08333333333333333
+    _tmp107 = numpy.cos(_tmp95)
+    _tmp108 = p_0*(_tmp100**2*_tmp20*(-3373.0158730158732*_tmp102 - 1107904441237774.6*_tmp103 + 2050264550.2645502*_tmp105 + 0.004166666666666667) + theta_7**2*(-5555.555555555556*_tmp102 - 105820105820105.81*_tmp103 + 793650793.6507937*_tmp104*_tmp14*_tmp15))
+    _tmp109 = 0.5*theta_8
+    _tmp110 = numpy.sin(_tmp109)
+    _tmp111 = _tmp109 + _tmp53 + theta_7
+    _tmp112 = numpy.sin(_tmp111)
+    _tmp113 = numpy.cos(_tmp111)
+    _tmp114 = -_tmp112*mu_5 + _tmp113*mu_6
+    _tmp115 = _tmp112*mu_6 + _tmp113*mu_5
+    _tmp116 = _tmp115*_tmp9
+    _tmp117 = _tmp11*_tmp115**3
+    _tmp118 = _tmp115**2
+    _tmp119 = _tmp118*_tmp16
+    _tmp120 = -33333.333333333336*_tmp116 - 5467372134038801.0*_tmp117 + 13492063492.063492*_tmp119 + 0.08333333333333333
+    _tmp121 = numpy.cos(_tmp109)
+    _tmp122 = p_0*(_tmp114**2*_tmp20*(-3373.0158730158732*_tmp116 - 1107904441237774.6*_tmp117 + 2050264550.2645502*_tmp119 + 0.004166666666666667) + theta_8**2*(-5555.555555555556*_tmp116 - 105820105820105.81*_tmp117 + 793650793.6507937*_tmp118*_tmp14*_tmp15))
+    _tmp123 = 0.5*theta_9
+    _tmp124 = numpy.sin(_tmp123)
+    _tmp125 = numpy.cos(_tmp123)
+    _tmp126 = _tmp124*mu_3 + _tmp125*mu_2
+    _tmp127 = _tmp124*mu_2 - _tmp125*mu_3
+    _tmp128 = _tmp127*_tmp9
+    _tmp129 = _tmp11*_tmp127**3
+    _tmp130 = _tmp127**2
+    _tmp131 = _tmp130*_tmp16
+    _tmp132 = -33333.333333333336*_tmp128 - 5467372134038801.0*_tmp129 + 13492063492.063492*_tmp131 + 0.08333333333333333
+    _tmp133 = p_0*(_tmp126**2*_tmp20*(-3373.0158730158732*_tmp128 - 1107904441237774.6*_tmp129 + 2050264550.2645502*_tmp131 + 0.004166666666666667) + theta_9**2*(-5555.555555555556*_tmp128 - 105820105820105.81*_tmp129 + 793650793.6507937*_tmp130*_tmp14*_tmp15))
+    _tmp134 = 0.5*theta_10
+    _tmp135 = numpy.sin(_tmp134)
+    _tmp136 = numpy.cos(_tmp134)
+    _tmp137 = _tmp135*mu_6 + _tmp136*mu_5
+    _tmp138 = _tmp135*mu_5 - _tmp136*mu_6
+    _tmp139 = _tmp138*_tmp9
+    _tmp140 = _tmp11*_tmp138**3
+    _tmp141 = _tmp138**2
+    _tmp142 = _tmp141*_tmp16
+    _tmp143 = -33333.333333333336*_tmp139 - 5467372134038801.0*_tmp140 + 13492063492.063492*_tmp142 + 0.08333333333333333
+    _tmp144 = p_0*(_tmp137**2*_tmp20*(-3373.0158730158732*_tmp139 - 1107904441237774.6*_tmp140 + 2050264550.2645502*_tmp142 + 0.004166666666666667) + theta_10**2*(-5555.555555555556*_tmp139 + 793650793.6507937*_tmp14*_tmp141*_tmp15 - 105820105820105.81*_tmp140))
     return [
         -_tmp1*_tmp18*_tmp19*_tmp5 - _tmp21*_tmp3,
         -_tmp1*_tmp21 + 4000000*_tmp18*_tmp3*_tmp5*_tmp8,
         -_tmp19*_tmp23*_tmp27*_tmp33 - _tmp34*_tmp35,
         -_tmp23*_tmp35 + 4000000*_tmp27*_tmp33*_tmp34*_tmp8,
+        -_tmp19*_tmp37*_tmp42*_tmp48 - _tmp49*_tmp50,
+        -_tmp37*_tmp50 + 4000000*_tmp42*_tmp48*_tmp49*_tmp8,
+        -_tmp19*_tmp52*_tmp57*_tmp63 - _tmp64*_tmp65,
+        -_tmp52*_tmp65 + 4000000*_tmp57*_tmp63*_tmp64*_tmp8,
+        -_tmp19*_tmp67*_tmp72*_tmp78 - _tmp79*_tmp80,
+        -_tmp67*_tmp80 + 4000000*_tmp72*_tmp78*_tmp79*_tmp8,
+        -_tmp19*_tmp82*_tmp86*_tmp92 - _tmp93*_tmp94,
+        4000000*_tmp8*_tmp86*_tmp92*_tmp93 - _tmp82*_tmp94,
+        -_tmp100*_tmp106*_tmp19*_tmp96 - _tmp107*_tmp108,
+        4000000*_tmp100*_tmp106*_tmp107*_tmp8 - _tmp108*_tmp96,
+        -_tmp110*_tmp114*_tmp120*_tmp19 - _tmp121*_tmp122,
+        -_tmp110*_tmp122 + 4000000*_tmp114*_tmp120*_tmp121*_tmp8,
+        -_tmp124*_tmp126*_tmp132*_tmp19 - _tmp125*_tmp133,
+        -_tmp124*_tmp133 + 4000000*_tmp125*_tmp126*_tmp132*_tmp8,
+        -_tmp135*_tmp137*_tmp143*_tmp19 - _tmp136*_tmp144,
+        -_tmp135*_tmp144 + 4000000*_tmp136*_tmp137*_tmp143*_tmp8,
+    ]
+
+
+def _loaded_linear(theta, params):
+    """loaded: A and r = Phi dz of the loaded closure (its first-order start) (239 operations)."""
+    theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7, theta_8, theta_9, theta_10 = theta
+    p_0, compliance_x_1, compliance_y_1, compliance_x_2, compliance_y_2, compliance_x_3, compliance_y_3, compliance_x_4, compliance_y_4, compliance_x_5, compliance_y_5, compliance_x_6, compliance_y_6, compliance_x_7, compliance_y_7, compliance_x_8, compliance_y_8, compliance_x_9, compliance_y_9, compliance_x_10, compliance_y_10 = params
+    _tmp0 = theta_1 + theta_2
+    _tmp1 = _tmp0 + theta_3
+    _tmp2 = _tmp1 + theta_4
+    _tmp3 = _tmp2 + theta_5
+    _tmp4 = numpy.cos(_tmp3)
+    _tmp5 = numpy.sin(_tmp3)
+    _tmp6 = _tmp3 + theta_6
+    _tmp7 = numpy.sin(_tmp6)
+    _tmp8 = numpy.cos(_tmp6)
+    _tmp9 = 0.04*_tmp7 + 0.05*_tmp8
+    _tmp10 = 0.05*_tmp7 - 0.04*_tmp8
+    _tmp11 = _tmp1 + theta_7
+    _tmp12 = numpy.cos(_tmp11)
+    _tmp13 = numpy.sin(_tmp11)
+    _tmp14 = _tmp11 + theta_8
+    _tmp15 = numpy.sin(_tmp14)
+    _tmp16 = numpy.cos(_tmp14)
+    _tmp17 = 0.025*_tmp15 + 0.035*_tmp16
+    _tmp18 = 0.035*_tmp15 - 0.025*_tmp16
+    _tmp20 = 0.25*p_0
+    _tmp19 = 0.5*theta_6
+    _tmp21 = _tmp20*theta_6**2*arck(_tmp19)
+    _tmp22 = _tmp21*numpy.cos(_tmp19) + compliance_x_6
+    _tmp23 = numpy.sin(_tmp1)
+    _tmp24 = 0.5*theta_4
+    _tmp25 = _tmp20*theta_4**2*arck(_tmp24)
+    _tmp26 = _tmp25*numpy.sin(_tmp24) + compliance_y_4
+    _tmp27 = numpy.sin(_tmp2)
+    _tmp28 = 0.5*theta_5
+    _tmp29 = _tmp20*theta_5**2*arck(_tmp28)
+    _tmp30 = _tmp29*numpy.sin(_tmp28) + compliance_y_5
+    _tmp31 = numpy.cos(_tmp1)
+    _tmp32 = _tmp25*numpy.cos(_tmp24) + compliance_x_4
+    _tmp33 = numpy.cos(_tmp2)
+    _tmp34 = _tmp29*numpy.cos(_tmp28) + compliance_x_5
+    _tmp35 = -_tmp21*numpy.sin(_tmp19) - compliance_y_6
+    _tmp36 = 0.5*theta_9
+    _tmp37 = theta_9**2
+    _tmp38 = arck(_tmp36)
+    _tmp39 = numpy.sin(theta_1)
+    _tmp40 = 0.5*theta_2
+    _tmp41 = _tmp20*theta_2**2*arck(_tmp40)
+    _tmp42 = _tmp41*numpy.sin(_tmp40) + compliance_y_2
+    _tmp43 = numpy.sin(_tmp0)
+    _tmp44 = 0.5*theta_3
+    _tmp45 = _tmp20*theta_3**2*arck(_tmp44)
+    _tmp46 = _tmp45*numpy.sin(_tmp44) + compliance_y_3
+    _tmp47 = numpy.cos(theta_1)
+    _tmp48 = _tmp41*numpy.cos(_tmp40) + compliance_x_2
+    _tmp49 = numpy.cos(_tmp0)
+    _tmp50 = _tmp45*numpy.cos(_tmp44) + compliance_x_3
+    _tmp51 = 0.5*theta_1
+    _tmp52 = _tmp20*theta_1**2*arck(_tmp51)
+    _tmp53 = _tmp39*_tmp42 + _tmp43*_tmp46 - _tmp47*_tmp48 - _tmp49*_tmp50 + _tmp52*numpy.sin(_tmp51) + compliance_y_1
+    _tmp54 = _tmp39*_tmp48 + _tmp42*_tmp47 + _tmp43*_tmp50 + _tmp46*_tmp49 + _tmp52*numpy.cos(_tmp51) + compliance_x_1
+    _tmp55 = 0.5*theta_7
+    _tmp56 = _tmp20*theta_7**2*arck(_tmp55)
+    _tmp57 = _tmp56*numpy.sin(_tmp55) + compliance_y_7
+    _tmp58 = 0.5*theta_8
+    _tmp59 = _tmp20*theta_8**2*arck(_tmp58)
+    _tmp60 = _tmp59*numpy.sin(_tmp58) + compliance_y_8
+    _tmp61 = _tmp56*numpy.cos(_tmp55) + compliance_x_7
+    _tmp62 = _tmp59*numpy.cos(_tmp58) + compliance_x_8
+    _tmp63 = 0.5*theta_10
+    _tmp64 = theta_10**2
+    _tmp65 = arck(_tmp63)
+    return [
+        -1,
+        -1,
+        0,
+        0,
+        1,
+        0,
+        -0.02*_tmp4 + 0.05*_tmp5 - _tmp9,
+        -_tmp9,
+        0,
+        0,
+        0,
+        0,
+        -_tmp10 - 0.05*_tmp4 - 0.02*_tmp5,
+        -_tmp10,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -1,
+        -1,
+        0,
+        1,
+        0,
+        0,
+        -0.005*_tmp12 + 0.04*_tmp13 - _tmp17,
+        -_tmp17,
+        0,
+        0,
+        0,
+        0,
+        -0.04*_tmp12 - 0.005*_tmp13 - _tmp18,
+        -_tmp18,
+        0,
+        0,
+        0,
+        -_tmp20*_tmp37*_tmp38*numpy.sin(_tmp36) + _tmp22*_tmp5 + _tmp23*_tmp26 + _tmp27*_tmp30 - _tmp31*_tmp32 - _tmp33*_tmp34 - _tmp35*_tmp4 + _tmp53 - compliance_y_9,
+        -_tmp22*_tmp4 - _tmp23*_tmp32 - _tmp26*_tmp31 - _tmp27*_tmp34 - _tmp30*_tmp33 - _tmp35*_tmp5 + 0.25*_tmp37*_tmp38*p_0*numpy.cos(_tmp36) - _tmp54 + compliance_x_9,
+        0,
+        -_tmp12*_tmp62 + _tmp13*_tmp60 - _tmp20*_tmp64*_tmp65*numpy.sin(_tmp63) + _tmp23*_tmp57 - _tmp31*_tmp61 + _tmp53 - compliance_y_10,
+        -_tmp12*_tmp60 - _tmp13*_tmp62 - _tmp23*_tmp61 - _tmp31*_tmp57 - _tmp54 + 0.25*_tmp64*_tmp65*p_0*numpy.cos(_tmp63) + compliance_x_10,
+    ]
+
+
+def _loaded_newton(theta, delta, params):
+    """loaded: the loaded closure F(delta) and dF/ddelta (539 operations)."""
+    theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7, theta_8, theta_9, theta_10 = theta
+    delta_5, delta_6, delta_7, delta_8, delta_9, delta_10 = delta
+    p_0, compliance_x_1, compliance_y_1, compliance_x_2, compliance_y_2, compliance_x_3, compliance_y_3, compliance_x_4, compliance_y_4, compliance_x_5, compliance_y_5, compliance_x_6, compliance_y_6, compliance_x_7, compliance_y_7, compliance_x_8, compliance_y_8, compliance_x_9, compliance_y_9, compliance_x_10, compliance_y_10 = params
+    _tmp0 = delta_5 + delta_6
+    _tmp1 = delta_5 + theta_5
+    _tmp2 = theta_1 + theta_2
+    _tmp3 = _tmp2 + theta_3
+    _tmp4 = _tmp3 + theta_4
+    _tmp5 = _tmp1 + _tmp4
+    _tmp6 = numpy.sin(_tmp5)
+    _tmp14 = 0.25*p_0
+    _tmp7 = 0.5*delta_6
+    _tmp8 = _tmp7 + 0.5*theta_6
+    _tmp9 = arck(_tmp8)
+    _tmp10 = numpy.cos(_tmp8)
+    _tmp11 = _tmp10*_tmp9
+    _tmp12 = delta_6 + theta_6
+    _tmp13 = _tmp12**2
+    _tmp15 = _tmp13*_tmp14
+    _tmp16 = _tmp11*_tmp15 + compliance_x_6
+    _tmp17 = numpy.sin(_tmp3)
+    _tmp18 = 0.5*theta_4
+    _tmp19 = _tmp14*theta_4**2*arck(_tmp18)
+    _tmp20 = _tmp19*numpy.sin(_tmp18) + compliance_y_4
+    _tmp21 = numpy.sin(_tmp4)
+    _tmp22 = 0.5*delta_5
+    _tmp23 = _tmp22 + 0.5*theta_5
+    _tmp24 = numpy.sin(_tmp23)
+    _tmp25 = arck(_tmp23)
+    _tmp26 = _tmp1**2*_tmp25
+    _tmp27 = _tmp14*_tmp26
+    _tmp28 = _tmp24*_tmp27 + compliance_y_5
+    _tmp29 = _tmp4 + theta_5
+    _tmp30 = numpy.cos(_tmp29)
+    _tmp31 = numpy.sin(delta_5)
+    _tmp32 = numpy.sin(_tmp22)**2
+    _tmp33 = -0.02*_tmp31 + 0.1*_tmp32
+    _tmp34 = _tmp29 + theta_6
+    _tmp35 = numpy.cos(_tmp34)
+    _tmp36 = numpy.sin(_tmp0)
+    _tmp37 = numpy.sin(_tmp22 + _tmp7)**2
+    _tmp38 = -0.05*_tmp36 - 0.08*_tmp37
+    _tmp39 = numpy.cos(_tmp3)
+    _tmp40 = _tmp19*numpy.cos(_tmp18) + compliance_x_4
+    _tmp41 = numpy.cos(_tmp4)
+    _tmp42 = numpy.cos(_tmp23)
+    _tmp43 = _tmp27*_tmp42 + compliance_x_5
+    _tmp44 = numpy.cos(_tmp5)
+    _tmp45 = numpy.sin(_tmp8)
+    _tmp46 = _tmp45*_tmp9
+    _tmp47 = -_tmp15*_tmp46 - compliance_y_6
+    _tmp48 = _tmp44*_tmp47
+    _tmp49 = numpy.sin(_tmp34)
+    _tmp50 = 0.04*_tmp36 - 0.1*_tmp37
+    _tmp51 = numpy.sin(_tmp29)
+    _tmp52 = -0.05*_tmp31 - 0.04*_tmp32
+    _tmp53 = 0.5*delta_9 + 0.5*theta_9
+    _tmp54 = numpy.sin(_tmp53)
+    _tmp55 = delta_9 + theta_9
+    _tmp56 = _tmp55**2
+    _tmp57 = arck(_tmp53)
+    _tmp58 = _tmp56*_tmp57
+    _tmp59 = numpy.sin(theta_1)
+    _tmp60 = 0.5*theta_2
+    _tmp61 = _tmp14*theta_2**2*arck(_tmp60)
+    _tmp62 = _tmp61*numpy.sin(_tmp60) + compliance_y_2
+    _tmp63 = numpy.sin(_tmp2)
+    _tmp64 = 0.5*theta_3
+    _tmp65 = _tmp14*theta_3**2*arck(_tmp64)
+    _tmp66 = _tmp65*numpy.sin(_tmp64) + compliance_y_3
+    _tmp67 = numpy.cos(theta_1)
+    _tmp68 = _tmp61*numpy.cos(_tmp60) + compliance_x_2
+    _tmp69 = numpy.cos(_tmp2)
+    _tmp70 = _tmp65*numpy.cos(_tmp64) + compliance_x_3
+    _tmp71 = 0.5*theta_1
+    _tmp72 = _tmp14*theta_1**2*arck(_tmp71)
+    _tmp73 = _tmp59*_tmp62 + _tmp63*_tmp66 - _tmp67*_tmp68 - _tmp69*_tmp70 + _tmp72*numpy.sin(_tmp71) + compliance_y_1
+    _tmp74 = numpy.cos(_tmp53)
+    _tmp75 = _tmp16*_tmp44 + _tmp47*_tmp6
+    _tmp76 = _tmp59*_tmp68 + _tmp62*_tmp67 + _tmp63*_tmp70 + _tmp66*_tmp69 + _tmp72*numpy.cos(_tmp71) + compliance_x_1
+    _tmp77 = delta_7 + delta_8
+    _tmp78 = 0.5*delta_7
+    _tmp79 = _tmp78 + 0.5*theta_7
+    _tmp80 = numpy.sin(_tmp79)
+    _tmp81 = delta_7 + theta_7
+    _tmp82 = arck(_tmp79)
+    _tmp83 = _tmp81**2*_tmp82
+    _tmp84 = _tmp14*_tmp83
+    _tmp85 = _tmp80*_tmp84 + compliance_y_7
+    _tmp86 = _tmp3 + _tmp81
+    _tmp87 = numpy.sin(_tmp86)
+    _tmp88 = 0.5*delta_8
+    _tmp89 = _tmp88 + 0.5*theta_8
+    _tmp90 = numpy.sin(_tmp89)
+    _tmp91 = delta_8 + theta_8
+    _tmp92 = arck(_tmp89)
+    _tmp93 = _tmp91**2*_tmp92
+    _tmp94 = _tmp14*_tmp93
+    _tmp95 = _tmp90*_tmp94 + compliance_y_8
+    _tmp96 = _tmp3 + theta_7
+    _tmp97 = numpy.cos(_tmp96)
+    _tmp98 = numpy.sin(delta_7)
+    _tmp99 = numpy.sin(_tmp78)**2
+    _tmp100 = -0.005*_tmp98 + 0.08*_tmp99
+    _tmp101 = _tmp96 + theta_8
+    _tmp102 = numpy.cos(_tmp101)
+    _tmp103 = numpy.sin(_tmp77)
+    _tmp104 = numpy.sin(_tmp78 + _tmp88)**2
+    _tmp105 = -0.035*_tmp103 - 0.05*_tmp104
+    _tmp106 = numpy.cos(_tmp79)
+    _tmp107 = _tmp106*_tmp84 + compliance_x_7
+    _tmp108 = numpy.cos(_tmp86)
+    _tmp109 = numpy.cos(_tmp89)
+    _tmp110 = _tmp109*_tmp94 + compliance_x_8
+    _tmp111 = _tmp108*_tmp110
+    _tmp112 = numpy.sin(_tmp101)
+    _tmp113 = 0.025*_tmp103 - 0.07*_tmp104
+    _tmp114 = numpy.sin(_tmp96)
+    _tmp115 = -0.04*_tmp98 - 0.01*_tmp99
+    _tmp116 = 0.5*delta_10 + 0.5*theta_10
+    _tmp117 = numpy.sin(_tmp116)
+    _tmp118 = delta_10 + theta_10
+    _tmp119 = _tmp118**2
+    _tmp120 = arck(_tmp116)
+    _tmp121 = _tmp119*_tmp120
+    _tmp122 = numpy.cos(_tmp116)
+    _tmp123 = _tmp108*_tmp95 + _tmp110*_tmp87
+    _tmp124 = _tmp12 + _tmp5
+    _tmp125 = numpy.cos(_tmp124)
+    _tmp126 = 0.05*_tmp125
+    _tmp127 = numpy.sin(_tmp124)
+    _tmp128 = 0.04*_tmp127
+    _tmp129 = _tmp24*p_0
+    _tmp130 = 0.5*_tmp1*_tmp25
+    _tmp131 = _tmp42*p_0
+    _tmp132 = 0.125*_tmp26
+    _tmp133 = 0.0625*_tmp1**3*(3*cosr2(_tmp23) + sinr1(_tmp23) - 3*sinr2(_tmp23))
+    _tmp134 = _tmp129*_tmp130 + _tmp129*_tmp133 + _tmp131*_tmp132
+    _tmp135 = -_tmp129*_tmp132 + _tmp130*_tmp131 + _tmp131*_tmp133
+    _tmp136 = 0.5*_tmp12
+    _tmp137 = _tmp46*p_0
+    _tmp138 = _tmp11*p_0
+    _tmp139 = 0.125*_tmp13
+    _tmp140 = 0.0625*p_0
+    _tmp141 = _tmp12**3*_tmp140*(3*cosr2(_tmp8) + sinr1(_tmp8) - 3*sinr2(_tmp8))
+    _tmp142 = -_tmp136*_tmp137 - _tmp138*_tmp139 - _tmp141*_tmp45
+    _tmp143 = _tmp10*_tmp141 + _tmp136*_tmp138 - _tmp137*_tmp139
+    _tmp144 = _tmp54*p_0
+    _tmp145 = 0.5*_tmp55*_tmp57
+    _tmp146 = _tmp74*p_0
+    _tmp147 = 0.125*_tmp58
+    _tmp148 = _tmp140*_tmp55**3*(3*cosr2(_tmp53) + sinr1(_tmp53) - 3*sinr2(_tmp53))
+    _tmp149 = -0.04*_tmp125 + 0.05*_tmp127
+    _tmp150 = _tmp86 + _tmp91
+    _tmp151 = numpy.cos(_tmp150)
+    _tmp152 = 0.035*_tmp151
+    _tmp153 = numpy.sin(_tmp150)
+    _tmp154 = 0.025*_tmp153
+    _tmp155 = _tmp80*p_0
+    _tmp156 = 0.5*_tmp81*_tmp82
+    _tmp157 = _tmp106*p_0
+    _tmp158 = 0.125*_tmp83
+    _tmp159 = _tmp140*_tmp81**3*(3*cosr2(_tmp79) + sinr1(_tmp79) - 3*sinr2(_tmp79))
+    _tmp160 = _tmp155*_tmp156 + _tmp157*_tmp158 + _tmp159*_tmp80
+    _tmp161 = _tmp106*_tmp159 - _tmp155*_tmp158 + _tmp156*_tmp157
+    _tmp162 = _tmp109*p_0
+    _tmp163 = 0.5*_tmp91*_tmp92
+    _tmp164 = 0.125*_tmp93
+    _tmp165 = _tmp90*p_0
+    _tmp166 = _tmp140*_tmp91**3*(3*cosr2(_tmp89) + sinr1(_tmp89) - 3*sinr2(_tmp89))
+    _tmp167 = _tmp109*_tmp166 + _tmp162*_tmp163 - _tmp164*_tmp165
+    _tmp168 = _tmp162*_tmp164 + _tmp163*_tmp165 + _tmp166*_tmp90
+    _tmp169 = _tmp117*p_0
+    _tmp170 = 0.5*_tmp118*_tmp120
+    _tmp171 = _tmp122*p_0
+    _tmp172 = 0.125*_tmp121
+    _tmp173 = _tmp118**3*_tmp140*(3*cosr2(_tmp116) + sinr1(_tmp116) - 3*sinr2(_tmp116))
+    _tmp174 = -0.025*_tmp151 + 0.035*_tmp153
+    return [
+        -_tmp0 + delta_9,
+        -_tmp14*_tmp54*_tmp58 + _tmp16*_tmp6 + _tmp17*_tmp20 + _tmp21*_tmp28 + _tmp30*_tmp33 + _tmp35*_tmp38 - _tmp39*_tmp40 - _tmp41*_tmp43 - _tmp48 - _tmp49*_tmp50 - _tmp51*_tmp52 + _tmp73 - compliance_y_9,
+        -_tmp17*_tmp40 - _tmp20*_tmp39 - _tmp21*_tmp43 - _tmp28*_tmp41 + _tmp30*_tmp52 + _tmp33*_tmp51 + _tmp35*_tmp50 + _tmp38*_tmp49 + 0.25*_tmp56*_tmp57*_tmp74*p_0 - _tmp75 - _tmp76 + compliance_x_9,
+        -_tmp77 + delta_10,
+        _tmp100*_tmp97 + _tmp102*_tmp105 - _tmp107*_tmp39 - _tmp111 - _tmp112*_tmp113 - _tmp114*_tmp115 - _tmp117*_tmp121*_tmp14 + _tmp17*_tmp85 + _tmp73 + _tmp87*_tmp95 - compliance_y_10,
+        _tmp100*_tmp114 + _tmp102*_tmp113 + _tmp105*_tmp112 - _tmp107*_tmp17 + _tmp115*_tmp97 + 0.25*_tmp119*_tmp120*_tmp122*p_0 - _tmp123 - _tmp39*_tmp85 - _tmp76 + compliance_x_10,
+        -1,
+        -1,
+        0,
+        0,
+        1,
+        0,
+        -_tmp126 - _tmp128 + _tmp134*_tmp21 - _tmp135*_tmp41 - 0.02*_tmp44 + 0.05*_tmp6 + _tmp75,
+        -_tmp126 - _tmp128 - _tmp142*_tmp44 + _tmp143*_tmp6,
+        0,
+        0,
+        -_tmp144*_tmp145 - _tmp146*_tmp147 - _tmp148*_tmp54,
+        0,
+        -_tmp134*_tmp41 - _tmp135*_tmp21 - _tmp149 + _tmp16*_tmp6 - 0.05*_tmp44 - _tmp48 - 0.02*_tmp6,
+        -_tmp142*_tmp6 - _tmp143*_tmp44 - _tmp149,
+        0,
+        0,
+        -_tmp144*_tmp147 + _tmp145*_tmp146 + _tmp148*_tmp74,
+        0,
+        0,
+        0,
+        -1,
+        -1,
+        0,
+        1,
+        0,
+        0,
+        -0.005*_tmp108 + _tmp123 - _tmp152 - _tmp154 + _tmp160*_tmp17 - _tmp161*_tmp39 + 0.04*_tmp87,
+        -_tmp108*_tmp167 - _tmp152 - _tmp154 + _tmp168*_tmp87,
+        0,
+        -_tmp117*_tmp173 - _tmp169*_tmp170 - _tmp171*_tmp172,
+        0,
+        0,
+        -0.04*_tmp108 - _tmp111 - _tmp160*_tmp39 - _tmp161*_tmp17 - _tmp174 + _tmp87*_tmp95 - 0.005*_tmp87,
+        -_tmp108*_tmp168 - _tmp167*_tmp87 - _tmp174,
+        0,
+        _tmp122*_tmp173 - _tmp169*_tmp172 + _tmp170*_tmp171,
     ]
 
 
 def _dev_loaded(theta, delta, params):
     """deviation of the points at level loaded (33 operations)."""
     theta_1, theta_2, _, _, _, _, _, _, _, _ = theta
-    p_0, compliance_x_1, compliance_y_1, compliance_x_2, compliance_y_2 = params
+    p_0, compliance_x_1, compliance_y_1, compliance_x_2, compliance_y_2, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _ = params
     _tmp0 = 0.5*theta_1
     _tmp1 = 0.25*p_0
     _tmp2 = _tmp1*theta_1**2*arck(_tmp0)
@@ -478,6 +1217,37 @@ def _dev_loaded(theta, delta, params):
     return [
         -_tmp2*numpy.sin(_tmp0) - _tmp3*_tmp6 + _tmp7*_tmp8 - compliance_y_1,
         _tmp2*numpy.cos(_tmp0) + _tmp3*_tmp8 + _tmp6*_tmp7 + compliance_x_1,
+    ]
+
+
+def _links(theta, delta):
+    """rotation of every link and how much further the compliant one turns (9 operations)."""
+    theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7, theta_8, _, _ = theta
+    delta_5, delta_6, delta_7, delta_8, _, _ = delta
+    _tmp0 = theta_1 + theta_2
+    _tmp1 = _tmp0 + theta_3
+    _tmp2 = _tmp1 + theta_4
+    _tmp3 = _tmp2 + theta_5
+    _tmp4 = _tmp1 + theta_7
+    return [
+        0,
+        theta_1,
+        _tmp0,
+        _tmp1,
+        _tmp2,
+        _tmp3,
+        _tmp3 + theta_6,
+        _tmp4,
+        _tmp4 + theta_8,
+        0,
+        0,
+        0,
+        0,
+        0,
+        delta_5,
+        delta_5 + delta_6,
+        delta_7,
+        delta_7 + delta_8,
     ]
 
 
@@ -622,8 +1392,9 @@ _DELTA = {'first_order': _first_order, 'exact': _exact, 'loaded': _loaded}
 _CHUNK = 8192   # elements per block: the temporaries of a block stay in the CPU cache
 
 
-def evaluate(inputs, level='exact', params=None):
-    """Deviation of the points at `level` for broadcast input arrays (see the module docstring)."""
+def evaluate(inputs, level='exact', params=None, links=True):
+    """Deviation of the points at `level` for broadcast input arrays (see the module docstring);
+    `links=False` leaves out the links' rotations (and any loop solve only they need)."""
     if level not in LEVELS:
         raise ValueError(f"level must be one of {LEVELS}, got {level!r}")
     names = set(inputs)
@@ -634,9 +1405,9 @@ def evaluate(inputs, level='exact', params=None):
     p = [_DTYPE(v) for v in _parameters(params)]
     size = arrays[0].size
     if size <= _CHUNK:
-        return _evaluate(arrays, level, p)
+        return _evaluate(arrays, level, p, links)
     flat = [a.reshape(-1) for a in arrays]
-    parts = [_evaluate([a[k:k + _CHUNK] for a in flat], level, p)
+    parts = [_evaluate([a[k:k + _CHUNK] for a in flat], level, p, links)
              for k in range(0, size, _CHUNK)]
 
     def join(get):
@@ -649,10 +1420,13 @@ def evaluate(inputs, level='exact', params=None):
         "ok": join(lambda part: part["ok"]),
         "angles": {kind: {h: join(lambda part, kind=kind, h=h: part["angles"][kind][h])
                           for h in HINGES} for kind in ("rigid", "compliant")},
+        "links": {n: {key: join(lambda part, n=n, key=key: part["links"][n][key])
+                      for key in ("rigid", "compliant", "deviation")}
+                  for n in (LINKS if links else ())},
     }
 
 
-def _evaluate(arrays, level, p):
+def _evaluate(arrays, level, p, links):
     """evaluate() on one block of broadcast input arrays and parameter values p."""
     shape = arrays[0].shape
     ok = numpy.ones(shape, dtype=bool)
@@ -666,7 +1440,7 @@ def _evaluate(arrays, level, p):
         if level == "loaded":
             q, ok = _loaded_constants(theta, p, ok)
         delta = [numpy.zeros(shape, dtype=_DTYPE) for _ in _UNKNOWN_INDEX]
-        if _NEEDS_LOOPS and level in _DELTA:
+        if (_NEEDS_LOOPS or (links and _LOOPS_FOR_LINKS)) and level in _DELTA:
             delta, ok = _DELTA[level](theta, q, ok)
         for i, limit in _LIMITS:
             ok = ok & (numpy.abs(theta[i]) <= limit)
@@ -681,9 +1455,10 @@ def _evaluate(arrays, level, p):
             dev = _dev_exact(theta, delta, q)
         elif level == 'loaded':
             dev = _dev_loaded(theta, delta, q)
+        rot = [numpy.broadcast_to(v, shape) for v in _links(theta, delta)] if links else []
     rigid = [numpy.broadcast_to(v, shape) for v in rigid]
     dev = [numpy.broadcast_to(v, shape) for v in dev]
-    for v in rigid + dev:
+    for v in rigid + dev + rot:
         ok = ok & numpy.isfinite(v)            # a non-finite result is never ok
     compliant = list(theta)
     for j, i in enumerate(_UNKNOWN_INDEX):
@@ -700,4 +1475,9 @@ def _evaluate(arrays, level, p):
         r = numpy.where(ok, r, numpy.nan).astype(_DTYPE)
         d = numpy.where(ok, d, numpy.nan).astype(_DTYPE)
         result[name] = {"rigid": r, "compliant": r + d, "deviation": d}
-    return {"points": result, "ok": ok, "angles": angles}
+    rotations = {}
+    for i, name in enumerate(LINKS if links else ()):
+        r = numpy.where(ok, _wrap(rot[i]), numpy.nan).astype(_DTYPE)
+        d = numpy.where(ok, rot[len(LINKS) + i], numpy.nan).astype(_DTYPE)
+        rotations[name] = {"rigid": r, "compliant": r + d, "deviation": d}
+    return {"points": result, "ok": ok, "angles": angles, "links": rotations}

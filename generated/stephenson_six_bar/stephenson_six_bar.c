@@ -3,7 +3,7 @@
  * Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
  * Points: D; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60, loaded_q0 16, loaded_q 131, loaded_compliance 404, loaded_linear 185, loaded_newton 522, dev_loaded 63.
+ * Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60, loaded_q0 16, loaded_q 131, loaded_compliance 404, loaded_linear 185, loaded_newton 522, dev_loaded 63, links 5.
  */
 #include "stephenson_six_bar.h"
 
@@ -15,7 +15,8 @@ enum {
     SK_K = 6,          /* non-input hinges: size of the loop unknowns */
     SK_K1 = 7,
     SK_NDYAD = 2,
-    SK_NP = 1
+    SK_NP = 1,
+    SK_NL = 6            /* links whose rotation is reported */
 };
 
 const double stephenson_six_bar_default_params[STEPHENSON_SIX_BAR_N_PARAMS > 0 ? STEPHENSON_SIX_BAR_N_PARAMS : 1] = {
@@ -32,6 +33,15 @@ const char *const stephenson_six_bar_param_names[STEPHENSON_SIX_BAR_N_PARAMS > 0
 
 const char *const stephenson_six_bar_point_names[STEPHENSON_SIX_BAR_N_POINTS > 0 ? STEPHENSON_SIX_BAR_N_POINTS : 1] = {
     "D"
+};
+
+const char *const stephenson_six_bar_link_names[STEPHENSON_SIX_BAR_N_LINKS > 0 ? STEPHENSON_SIX_BAR_N_LINKS : 1] = {
+    "frame",
+    "input",
+    "coupler",
+    "rocker",
+    "link_ED",
+    "link_AB"
 };
 
 const char *const stephenson_six_bar_hinge_names[STEPHENSON_SIX_BAR_N_HINGES] = {
@@ -1236,6 +1246,32 @@ static void sk_dev_loaded(const double *theta, const double *delta, const double
     out[1] = _tmp1*cos(_tmp0) + _tmp10*_tmp18 + _tmp16*_tmp17 + _tmp3*_tmp9 + _tmp7*_tmp8 + compliance_x_1;
 }
 
+/* rotation of every link and how much further the compliant one turns (5 operations) */
+static void sk_links(const double *theta, const double *delta, double *out)
+{
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double theta_5 = theta[4];
+    const double delta_2 = delta[0];
+    const double delta_3 = delta[1];
+    const double delta_4 = delta[2];
+    const double delta_5 = delta[3];
+    out[0] = 0;
+    out[1] = theta_1;
+    out[2] = theta_1 + theta_2;
+    out[3] = theta_3;
+    out[4] = theta_3 + theta_4;
+    out[5] = theta_3 + theta_5;
+    out[6] = 0;
+    out[7] = 0;
+    out[8] = delta_2;
+    out[9] = delta_3;
+    out[10] = delta_3 + delta_4;
+    out[11] = delta_3 + delta_5;
+}
+
 /* Gaussian elimination with partial pivoting on the n x n row-major a, in place; x -> b. */
 static int sk_solve(int n, double *a, double *b)
 {
@@ -1477,16 +1513,22 @@ static int sk_loaded_constants(const double *theta, const double *params, double
 
 int stephenson_six_bar_evaluate(const double *inputs, const double *params, int level, double *out)
 {
-    return stephenson_six_bar_evaluate_angles(inputs, params, level, out, NULL);
+    return stephenson_six_bar_evaluate_pose(inputs, params, level, out, NULL, NULL);
 }
-
-static int sk_evaluate(const double *inputs, const double *params, int level, double *out,
-                       double *angles);
 
 int stephenson_six_bar_evaluate_angles(const double *inputs, const double *params, int level, double *out,
                     double *angles)
 {
-    int i, status = sk_evaluate(inputs, params, level, out, angles);
+    return stephenson_six_bar_evaluate_pose(inputs, params, level, out, angles, NULL);
+}
+
+static int sk_evaluate(const double *inputs, const double *params, int level, double *out,
+                       double *angles, double *links);
+
+int stephenson_six_bar_evaluate_pose(const double *inputs, const double *params, int level, double *out,
+                    double *angles, double *links)
+{
+    int i, status = sk_evaluate(inputs, params, level, out, angles, links);
     if (status != 0) {
         /* no partial result: every output is NaN */
         for (i = 0; out != NULL && i < 6 * SK_NP; ++i) {
@@ -1495,13 +1537,16 @@ int stephenson_six_bar_evaluate_angles(const double *inputs, const double *param
         for (i = 0; angles != NULL && i < 2 * SK_M; ++i) {
             angles[i] = NAN;
         }
+        for (i = 0; links != NULL && i < 3 * SK_NL; ++i) {
+            links[i] = NAN;
+        }
     }
     return status;
 }
 
-/* The evaluation; stephenson_six_bar_evaluate_angles turns a failure into NaN outputs. */
+/* The evaluation; stephenson_six_bar_evaluate_pose turns a failure into NaN outputs. */
 static int sk_evaluate(const double *inputs, const double *params, int level, double *out,
-                       double *angles)
+                       double *angles, double *links)
 {
     double theta[SK_M];
     double delta[SK_K1];
@@ -1656,6 +1701,20 @@ static int sk_evaluate(const double *inputs, const double *params, int level, do
         }
         for (i = 0; i < SK_K; ++i) {
             angles[SK_M + sk_unknown_index[i]] += delta[i];
+        }
+    }
+    if (links != NULL) {
+        double rot[2 * SK_NL];
+        sk_links(theta, delta, rot);
+        for (i = 0; i < 2 * SK_NL; ++i) {
+            if (!isfinite(rot[i])) {
+                return 2;
+            }
+        }
+        for (i = 0; i < SK_NL; ++i) {
+            links[3 * i + 0] = remainder(rot[i], sk_two_pi);
+            links[3 * i + 1] = links[3 * i + 0] + rot[SK_NL + i];
+            links[3 * i + 2] = rot[SK_NL + i];
         }
     }
     (void)delta;

@@ -3,7 +3,7 @@
  * Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
  * Points: D; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60, loaded_q0 16, loaded_q 131, loaded_compliance 404, loaded_linear 185, loaded_newton 522, dev_loaded 63.
+ * Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60, loaded_q0 16, loaded_q 131, loaded_compliance 404, loaded_linear 185, loaded_newton 522, dev_loaded 63, links 5.
  */
 #ifndef SYMKIN_STEPHENSON_SIX_BAR_H
 #define SYMKIN_STEPHENSON_SIX_BAR_H
@@ -12,6 +12,7 @@
 #define STEPHENSON_SIX_BAR_N_PARAMS 1
 #define STEPHENSON_SIX_BAR_N_POINTS 1
 #define STEPHENSON_SIX_BAR_N_HINGES 7
+#define STEPHENSON_SIX_BAR_N_LINKS 6
 
 /* Default parameter values, in the mechanism file's order. */
 extern const double stephenson_six_bar_default_params[STEPHENSON_SIX_BAR_N_PARAMS > 0 ? STEPHENSON_SIX_BAR_N_PARAMS : 1];
@@ -20,6 +21,7 @@ extern const char *const stephenson_six_bar_input_names[STEPHENSON_SIX_BAR_N_INP
 extern const char *const stephenson_six_bar_param_names[STEPHENSON_SIX_BAR_N_PARAMS > 0 ? STEPHENSON_SIX_BAR_N_PARAMS : 1];
 extern const char *const stephenson_six_bar_point_names[STEPHENSON_SIX_BAR_N_POINTS > 0 ? STEPHENSON_SIX_BAR_N_POINTS : 1];
 extern const char *const stephenson_six_bar_hinge_names[STEPHENSON_SIX_BAR_N_HINGES];
+extern const char *const stephenson_six_bar_link_names[STEPHENSON_SIX_BAR_N_LINKS > 0 ? STEPHENSON_SIX_BAR_N_LINKS : 1];
 
 /*
  * Deviation of the points for one configuration.
@@ -42,5 +44,14 @@ int stephenson_six_bar_evaluate(const double *inputs, const double *params, int 
  */
 int stephenson_six_bar_evaluate_angles(const double *inputs, const double *params, int level, double *out,
                     double *angles);
+
+/*
+ * The whole pose: as stephenson_six_bar_evaluate_angles, and (when links is not NULL) the rotation of
+ * every link in stephenson_six_bar_link_names order from the as-fabricated pose: per link the rigid
+ * rotation (wrapped to (-pi, pi]), the compliant one and their difference, the deviation
+ * (3 doubles; the deviation is computed directly, not as a difference). angles may be NULL.
+ */
+int stephenson_six_bar_evaluate_pose(const double *inputs, const double *params, int level, double *out,
+                    double *angles, double *links);
 
 #endif /* SYMKIN_STEPHENSON_SIX_BAR_H */

@@ -2,13 +2,15 @@
 Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
 Points: D; levels: paper, first_order, exact, loaded.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60, loaded_q0 16, loaded_q 131, loaded_compliance 404, loaded_linear 185, loaded_newton 522, dev_loaded 63.
+Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60, loaded_q0 16, loaded_q 131, loaded_compliance 404, loaded_linear 185, loaded_newton 522, dev_loaded 63, links 5.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
 shape (2, *broadcast_shape); entries that cannot be assembled (or do not converge) are NaN and
 False in ok. It also holds "angles": {"rigid": {H: a}, "compliant": {H: a}}, every hinge's
-angle (radians, the rotation of links[1] relative to links[0] from the as-fabricated pose).
+angle (radians, the rotation of links[1] relative to links[0] from the as-fabricated pose), and
+"links": {L: {"rigid": a, "compliant": a, "deviation": a}}, the rotation of every link in LINKS
+from the as-fabricated pose (rigid wrapped to (-pi, pi]; the deviation computed directly).
 """
 
 import math
@@ -19,6 +21,7 @@ import numpy as np
 INPUTS = ('O_A', )
 PARAMETERS = {'l': 0.0008}
 HINGES = ('O_A', 'C', 'O_B', 'E', 'B', 'A', 'D', )
+LINKS = ('frame', 'input', 'coupler', 'rocker', 'link_ED', 'link_AB', )
 POINTS = ('D', )
 LEVELS = ('paper', 'first_order', 'exact', 'loaded', )
 
@@ -28,6 +31,7 @@ _UNKNOWN_INDEX = (1, 2, 3, 4, 5, 6, )
 _N_DYADS = 2
 _LIMITS = ((0, 3.141592653589793), (1, 3.141592653589793), (2, 3.141592653589793), (3, 3.141592653589793), (4, 3.141592653589793), (5, 3.141592653589793), (6, 3.141592653589793), )  # models valid for |theta| < limit
 _NEEDS_LOOPS = True
+_LOOPS_FOR_LINKS = False  # the links' rotations alone need the loops solved
 _DTYPE = numpy.float64
 _POLISH = 1  # Newton steps after the rigid start: relative accuracy of small angles
 _EXACT_ITERATIONS = 40  # Newton cap of the exact level
@@ -1146,6 +1150,26 @@ def _dev_loaded(theta, delta, params):
     ]
 
 
+def _links(theta, delta):
+    """rotation of every link and how much further the compliant one turns (5 operations)."""
+    theta_1, theta_2, theta_3, theta_4, theta_5, _, _ = theta
+    delta_2, delta_3, delta_4, delta_5, _, _ = delta
+    return [
+        0,
+        theta_1,
+        theta_1 + theta_2,
+        theta_3,
+        theta_3 + theta_4,
+        theta_3 + theta_5,
+        0,
+        0,
+        delta_2,
+        delta_3,
+        delta_3 + delta_4,
+        delta_3 + delta_5,
+    ]
+
+
 def _wrap(angle):
     return angle - _TWO_PI * numpy.round(angle / _TWO_PI)
 
@@ -1287,8 +1311,9 @@ _DELTA = {'first_order': _first_order, 'exact': _exact, 'loaded': _loaded}
 _CHUNK = 8192   # elements per block: the temporaries of a block stay in the CPU cache
 
 
-def evaluate(inputs, level='exact', params=None):
-    """Deviation of the points at `level` for broadcast input arrays (see the module docstring)."""
+def evaluate(inputs, level='exact', params=None, links=True):
+    """Deviation of the points at `level` for broadcast input arrays (see the module docstring);
+    `links=False` leaves out the links' rotations (and any loop solve only they need)."""
     if level not in LEVELS:
         raise ValueError(f"level must be one of {LEVELS}, got {level!r}")
     names = set(inputs)
@@ -1299,9 +1324,9 @@ def evaluate(inputs, level='exact', params=None):
     p = [_DTYPE(v) for v in _parameters(params)]
     size = arrays[0].size
     if size <= _CHUNK:
-        return _evaluate(arrays, level, p)
+        return _evaluate(arrays, level, p, links)
     flat = [a.reshape(-1) for a in arrays]
-    parts = [_evaluate([a[k:k + _CHUNK] for a in flat], level, p)
+    parts = [_evaluate([a[k:k + _CHUNK] for a in flat], level, p, links)
              for k in range(0, size, _CHUNK)]
 
     def join(get):
@@ -1314,10 +1339,13 @@ def evaluate(inputs, level='exact', params=None):
         "ok": join(lambda part: part["ok"]),
         "angles": {kind: {h: join(lambda part, kind=kind, h=h: part["angles"][kind][h])
                           for h in HINGES} for kind in ("rigid", "compliant")},
+        "links": {n: {key: join(lambda part, n=n, key=key: part["links"][n][key])
+                      for key in ("rigid", "compliant", "deviation")}
+                  for n in (LINKS if links else ())},
     }
 
 
-def _evaluate(arrays, level, p):
+def _evaluate(arrays, level, p, links):
     """evaluate() on one block of broadcast input arrays and parameter values p."""
     shape = arrays[0].shape
     ok = numpy.ones(shape, dtype=bool)
@@ -1331,7 +1359,7 @@ def _evaluate(arrays, level, p):
         if level == "loaded":
             q, ok = _loaded_constants(theta, p, ok)
         delta = [numpy.zeros(shape, dtype=_DTYPE) for _ in _UNKNOWN_INDEX]
-        if _NEEDS_LOOPS and level in _DELTA:
+        if (_NEEDS_LOOPS or (links and _LOOPS_FOR_LINKS)) and level in _DELTA:
             delta, ok = _DELTA[level](theta, q, ok)
         for i, limit in _LIMITS:
             ok = ok & (numpy.abs(theta[i]) <= limit)
@@ -1346,9 +1374,10 @@ def _evaluate(arrays, level, p):
             dev = _dev_exact(theta, delta, q)
         elif level == 'loaded':
             dev = _dev_loaded(theta, delta, q)
+        rot = [numpy.broadcast_to(v, shape) for v in _links(theta, delta)] if links else []
     rigid = [numpy.broadcast_to(v, shape) for v in rigid]
     dev = [numpy.broadcast_to(v, shape) for v in dev]
-    for v in rigid + dev:
+    for v in rigid + dev + rot:
         ok = ok & numpy.isfinite(v)            # a non-finite result is never ok
     compliant = list(theta)
     for j, i in enumerate(_UNKNOWN_INDEX):
@@ -1365,4 +1394,9 @@ def _evaluate(arrays, level, p):
         r = numpy.where(ok, r, numpy.nan).astype(_DTYPE)
         d = numpy.where(ok, d, numpy.nan).astype(_DTYPE)
         result[name] = {"rigid": r, "compliant": r + d, "deviation": d}
-    return {"points": result, "ok": ok, "angles": angles}
+    rotations = {}
+    for i, name in enumerate(LINKS if links else ()):
+        r = numpy.where(ok, _wrap(rot[i]), numpy.nan).astype(_DTYPE)
+        d = numpy.where(ok, rot[len(LINKS) + i], numpy.nan).astype(_DTYPE)
+        rotations[name] = {"rigid": r, "compliant": r + d, "deviation": d}
+    return {"points": result, "ok": ok, "angles": angles, "links": rotations}

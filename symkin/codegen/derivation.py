@@ -78,6 +78,7 @@ class Derivation:
     hinges: dict[int, HingeGeometry]
     plates: dict[int, dict[str, sp.Expr]]   # c_{i±a}, α±, q*, l of every hinge
     phi: tuple[sp.Expr, ...]         # φ_i of links 0..n: Σ q_b over the direct path
+    delta_phi: tuple[sp.Expr, ...]   # δφ_i of links 0..n: Σ σ_b δ_b over the direct path
     J: sp.Matrix                     # (4.3) over abstract c_{i,a}
     Jstar: sp.Matrix                 # (4.4) over abstract z_a
     R: sp.Matrix                     # (4.7)
@@ -97,7 +98,8 @@ def derivation(analysis: Analysis, points: Sequence[str],
         structure=s, theta=dict(kin.theta), delta=dict(kin.delta), deltas=an.deltas,
         variable=THETA, inputs=kin.inputs, unknowns=kin.unknowns, hinges=dict(kin.hinges),
         plates={a: kin.plate_data(a) for a in range(1, s.m + 1)},
-        phi=tuple(kin.phi(i) for i in range(s.n + 1)), J=J, Jstar=Jstar, R=paper_positions(s),
+        phi=tuple(kin.phi(i) for i in range(s.n + 1)),
+        delta_phi=tuple(an.delta_phi(i) for i in range(s.n + 1)), J=J, Jstar=Jstar, R=paper_positions(s),
         models=_models(an), loops=_loops(an), rigid=an.rigid,
         linear=an.linear_system if an.deltas and moved else None,
         points=tuple(_point(an, name, name in moved) for name in points))

@@ -8,6 +8,7 @@
     newton       theta, delta, params  -> F, ∂F/∂δ of the exact compliant closure
     rigid_points theta, params         -> rigid x, y of every requested point
     dev_<level>  theta, delta, params  -> deviation x, y of every requested point
+    links        theta, delta          -> rotation φ of every reported link and its deviation δφ
 
 and for the `loaded` level (docs/physics.md), whose routines read the file's parameters followed
 by the plates' compliance (its closure's constants, computed once per configuration):
@@ -66,10 +67,12 @@ class Plan:
     unknown_index: tuple[int, ...]     # position in θ of each non-input hinge (the order of δ)
     parameters: tuple[Parameter, ...]
     points: tuple[str, ...]
+    reported_links: tuple[str, ...]    # links whose rotation the evaluators report
     levels: tuple[Level, ...]
     limits: tuple[tuple[int, float], ...]   # (θ index, L): the hinge's model holds for |θ| < L
     n_dyads: int
     needs_loops: bool                  # some requested level/point needs the loop solution
+    loops_for_links: bool              # the links' rotations need it (solved when asked for)
     closed_form: bool                  # rigid solution by dyads (else Newton + continuation)
     routines: dict[str, Routine]
     notes: tuple[str, ...] = ()        # e.g. the variant a tolerance chose, for the headers
@@ -91,11 +94,14 @@ class LoadedPlan:
 
 def plan(analysis: Analysis, points: Sequence[str] | None = None,
          levels: Sequence[str] | None = None, cse: bool = True,
-         notes: Sequence[str] = (), report: bool = False, beam_column: bool = True) -> Plan:
+         notes: Sequence[str] = (), report: bool = False, links: bool | None = None,
+         beam_column: bool = True) -> Plan:
     """Derive the routines for the requested points and levels (by default every generated level
     the file's data allows: `loaded` needs the plates' stiffness); with `report`, also the
-    statement of the derivation a LaTeX report prints. `beam_column=False` derives the `loaded`
-    level with the first-order force correction only (a cheaper variant)."""
+    statement of the derivation a LaTeX report prints. `links`: report the rotation of every
+    link (default: when no points are singled out; their rotations need the loops).
+    `beam_column=False` derives the `loaded` level with the first-order force correction only (a
+    cheaper variant)."""
     an, kin = analysis, analysis.kin
     mech = an.mechanism
     names = tuple(p.name for p in an.points if points is None or p.name in points)
@@ -107,7 +113,10 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
     theta = Argument("theta", an.thetas)
     delta = Argument("delta", an.deltas)
     moved = moved_points(an, names)
-    needs_loops = bool(an.deltas) and any(lv.needs_delta for lv in levels) and bool(moved)
+    links = points is None if links is None else links
+    solves = bool(an.deltas) and any(lv.needs_delta for lv in levels)
+    needs_loops = solves and bool(moved)
+    loops_for_links = solves and links and not needs_loops
     routines: dict[str, Routine] = {}
     sol = an.rigid
     if sol.closed_form and kin.unknowns:
@@ -123,7 +132,7 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
         routines["linear"] = Routine("linear", (theta, params), (),
                                      flatten(a_lin.tolist()) + tuple(r_lin),
                                      "rigid loop Jacobian A and r = Phi dz")
-    if needs_loops and any(lv.name == "exact" for lv in levels):
+    if (needs_loops or loops_for_links) and any(lv.name == "exact" for lv in levels):
         routines["newton"] = Routine("newton", (theta, delta, params), (),
                                      tuple(an.residual) + flatten(an.jacobian.tolist()),
                                      "exact compliant closure F(delta) and dF/ddelta")
@@ -137,12 +146,20 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
             der = loaded_derivation(an, beam_column=beam_column)
             exprs = tuple(e for n in names for e in der.analysis.point_deviation(n, "exact"))
             loaded, constants = _loaded_routines(der, routines, theta, delta, params, exprs,
-                                                 needs_loops)
+                                                 needs_loops or loops_for_links)
             args = (theta, delta, constants)
         else:
             exprs = tuple(e for n in names for e in an.point_deviation(n, lv.name))
         routines[f"dev_{lv.name}"] = Routine(f"dev_{lv.name}", args, (), exprs,
                                              f"deviation of the points at level {lv.name}")
+    s = an.structure
+    reported = tuple(range(s.n + 1)) if links else ()
+    if reported:
+        routines["links"] = Routine(
+            "links", (theta, delta), (),
+            tuple(an.link_rotation(i) for i in reported)
+            + tuple(an.delta_phi(i) for i in reported),
+            "rotation of every link and how much further the compliant one turns")
     # Numbers reach the printers as correctly rounded doubles (exact rationals stay in mpmath).
     routines = {k: Routine(r.name, r.arguments,
                            tuple((s, float_literals(e)) for s, e in r.assignments),
@@ -157,14 +174,13 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
                        for p in mech.parameters)
     limits = tuple((a - 1, float(sp.N(h.limit, 20))) for a, h in sorted(kin.hinges.items())
                    if h.limit is not None)
-    s = an.structure
     result = Plan(
         name=mech.name, links=s.links, hinges=s.hinges, inputs=mech.inputs,
         input_index=tuple(a - 1 for a in kin.inputs),
         unknown_index=tuple(a - 1 for a in kin.unknowns), parameters=parameters, points=names,
-        levels=levels, limits=limits, n_dyads=len(sol.dyads),
-        needs_loops=needs_loops, closed_form=sol.closed_form, routines=routines,
-        notes=tuple(notes), loaded=loaded)
+        reported_links=tuple(s.links[i] for i in reported), levels=levels, limits=limits,
+        n_dyads=len(sol.dyads), needs_loops=needs_loops, loops_for_links=loops_for_links,
+        closed_form=sol.closed_form, routines=routines, notes=tuple(notes), loaded=loaded)
     return with_derivation(result, an) if report else result
 
 

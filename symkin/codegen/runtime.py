@@ -64,27 +64,36 @@ def build(name: str, header: str, source: str, flags: tuple[str, ...] = CFLAGS,
 
 
 class Library:
-    """A loaded generated evaluator: `evaluate(inputs, params, level) -> (status, out)`."""
+    """A loaded generated evaluator: `evaluate(inputs, params, level) -> (status, out, angles)`,
+    `pose(...)` with the links' rotations too."""
 
     def __init__(self, path: Path, name: str, n_inputs: int, n_params: int, n_points: int,
-                 n_hinges: int):
+                 n_hinges: int, n_links: int = 0):
         self.lib = ctypes.CDLL(str(path))
-        self.fn = getattr(self.lib, f"{name}_evaluate_angles")
+        self.fn = getattr(self.lib, f"{name}_evaluate_pose")
         self.fn.restype = ctypes.c_int
         dptr = ctypes.POINTER(ctypes.c_double)
-        self.fn.argtypes = [dptr, dptr, ctypes.c_int, dptr, dptr]
+        self.fn.argtypes = [dptr, dptr, ctypes.c_int, dptr, dptr, dptr]
         self.n_inputs, self.n_params = n_inputs, n_params
-        self.n_points, self.n_hinges = n_points, n_hinges
+        self.n_points, self.n_hinges, self.n_links = n_points, n_hinges, n_links
 
-    def evaluate(self, inputs, params=None, level: int = 2
-                 ) -> tuple[int, list[float], list[float]]:
-        """(status, out: 6 doubles per point, angles: rigid then compliant per hinge)."""
+    def pose(self, inputs, params=None, level: int = 2
+             ) -> tuple[int, list[float], list[float], list[float]]:
+        """(status, out: 6 doubles per point, angles: rigid then compliant per hinge, links:
+        rigid, compliant, deviation per link)."""
         x = (ctypes.c_double * max(1, self.n_inputs))(*inputs)
         p = None if params is None else (ctypes.c_double * max(1, self.n_params))(*params)
         out = (ctypes.c_double * max(1, 6 * self.n_points))()
         angles = (ctypes.c_double * (2 * self.n_hinges))()
-        status = self.fn(x, p, level, out, angles)
-        return status, list(out)[: 6 * self.n_points], list(angles)
+        links = (ctypes.c_double * max(1, 3 * self.n_links))()
+        status = self.fn(x, p, level, out, angles, links if self.n_links else None)
+        return (status, list(out)[: 6 * self.n_points], list(angles),
+                list(links)[: 3 * self.n_links])
+
+    def evaluate(self, inputs, params=None, level: int = 2
+                 ) -> tuple[int, list[float], list[float]]:
+        """(status, out: 6 doubles per point, angles: rigid then compliant per hinge)."""
+        return self.pose(inputs, params, level)[:3]
 
 
 TIMER = r"""

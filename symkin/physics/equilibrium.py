@@ -350,6 +350,9 @@ class Result:
     hinges: dict[str, HingeLoad]
     energy: float
     error_estimate: float
+    # compliant − rigid angle of every hinge, taken at the working precision (not a difference
+    # of the floats above: it keeps its relative accuracy for tiny plates)
+    angle_deviations: dict[str, float] = field(default_factory=dict)
 
 
 def solve(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr], inputs: Mapping[str, sp.Expr],
@@ -395,7 +398,10 @@ def solve(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr], inputs: Mapping[
             hinges={n: HingeLoad((float(report[n][0][0][0]), float(report[n][0][1][0])),
                                  float(report[n][1][0] * s)) for n in report},
             energy=float(sum(report[n][2][0] for n in plates) * s),
-            error_estimate=error)
+            error_estimate=error,
+            angle_deviations={h.name: float(_angle(solution.system, solution.u, h.name)
+                                            - theta[h.name])
+                              for h in solution.system.hinges})
 
 
 def _position(system: System, name: str) -> int:

@@ -43,6 +43,7 @@ class Backend:
         return dict(
             header=header_lines(plan, source), name=plan.name, NAME=plan.name.upper(),
             inputs=list(plan.inputs), hinges=list(plan.hinges), points=list(plan.points),
+            links=list(plan.reported_links),
             levels=plan.levels, all_levels=levels.LEVELS,
             parameters=[{"name": p.name, "symbol": p.symbol.name, "expr": print_(p.default),
                          "value": repr(p.value)} for p in plan.parameters],
@@ -50,6 +51,7 @@ class Backend:
             n_theta=len(plan.hinges), input_index=list(plan.input_index),
             unknown_index=list(plan.unknown_index), k=len(plan.unknown_index),
             n_dyads=plan.n_dyads, closed_form=plan.closed_form, needs_loops=plan.needs_loops,
+            loops_for_links=plan.loops_for_links,
             dtype=precision, solver=plan.solver, tol=plan.solver.tolerances(precision),
             default_level=default_level(plan), loaded=plan.loaded,
             loaded_code=levels.get("loaded").code,

@@ -40,8 +40,11 @@ __all__ = ["emit", "escape_latex", "environment", "SWEEP_RANGE", "SWEEP_SAMPLES"
 #: Default input range of the deviation plot: every input equal to t, |t| <= SWEEP_RANGE (rad).
 SWEEP_RANGE = 0.3
 SWEEP_SAMPLES = 241
-#: Matrices wider than this many columns are printed in column blocks.
+#: Matrices wider than this many columns are printed in column blocks (at the full width).
 MAX_MATRIX_COLS = 14
+#: The column the report is laid out for, in points: an article's one-column text width at
+#: 10 pt; `derive --columnwidth` sets a journal's (e.g. a two-column article's 229.9 pt).
+COLUMN_WIDTH = 345.0
 
 
 # -- Jinja environment with LaTeX-friendly delimiters (SymForce style) ----------------------------
@@ -114,7 +117,7 @@ def _dz_sum(signs) -> sp.Expr:
 class Report:
     """Builds the template context of one plan."""
 
-    def __init__(self, plan: Plan, source: str) -> None:
+    def __init__(self, plan: Plan, source: str, column_width: float = COLUMN_WIDTH) -> None:
         if plan.derivation is None:
             raise ValueError("a report needs a plan made with plan(..., report=True)")
         self.plan = plan
@@ -123,7 +126,11 @@ class Report:
         self.s = self.d.structure
         self.mech = self.s.mechanism
         self.defaults = dict(self.mech.defaults)
-        self.tex = Tex(self._symbol_names())
+        # ems the equations are broken for: LINE_WIDTH_EM (calibrated, with a margin for the
+        # estimated glyph widths) at the one-column width, in proportion elsewhere
+        self.width = LINE_WIDTH_EM * column_width / COLUMN_WIDTH
+        self.max_cols = max(4, int(MAX_MATRIX_COLS * self.width / LINE_WIDTH_EM))
+        self.tex = Tex(self._symbol_names(), self.width)
 
     # -- symbols -------------------------------------------------------------------------------
     def _symbol_names(self) -> dict[sp.Symbol, str]:
@@ -195,6 +202,7 @@ class Report:
         ctx["plates"] = self.plate_rows()
         ctx["alpha_equal"] = all(p["alpha_plus"] == p["alpha_minus"] for p in ctx["plates"])
         ctx["rotations"] = self.rotation_lines()
+        ctx["link_deviations"] = self.link_deviation_lines()
         ctx["dz"] = self.delta_z_lines()
         ctx["jmat"] = self.j_matrices()
         ctx["positions"] = self.position_lines()
@@ -234,7 +242,7 @@ class Report:
         """Display lines of an integer matrix, in column blocks when it is wide."""
         ncol = len(rows[0]) if rows else 0
         out = []
-        blocks = _chunks(list(range(ncol)), MAX_MATRIX_COLS) if ncol else [[]]
+        blocks = _chunks(list(range(ncol)), self.max_cols) if ncol else [[]]
         for block in blocks:
             sub_rows = [[r[c] for c in block] for r in rows]
             body = self.tex.matrix(sub_rows) if block else r"\mathbf{0}"
@@ -274,6 +282,14 @@ class Report:
             lines += self.tex.equation(rf"\varphi_{{{i}}}", self.d.phi[i])
         return lines
 
+    def link_deviation_lines(self) -> list[str]:
+        """δφ_i = Σ σ_b δ_b over the direct path, for the links the loops turn."""
+        lines = []
+        for i in range(1, self.s.n + 1):
+            if self.d.delta_phi[i] != 0:
+                lines += self.tex.equation(rf"\delta\varphi_{{{i}}}", self.d.delta_phi[i])
+        return lines
+
     def delta_z_lines(self) -> list[str]:
         """Δz_a = σ_a G(φ_P) (Δf_a(θ_a) u_a + Δg_a(θ_a) u_a^⊥) for every hinge."""
         tex = self.tex
@@ -282,15 +298,17 @@ class Report:
             h = self.d.hinges[a]
             phi_p = self.d.phi[h.P]
             u = h.u
-            body = (rf"\Delta f_{{{a}}}(\theta_{{{a}}})\,{tex.table_vector(u)} + "
-                    rf"\Delta g_{{{a}}}(\theta_{{{a}}})\,{tex.table_vector(V.perp(u))}")
+            first = rf"\Delta f_{{{a}}}(\theta_{{{a}}})\,{tex.table_vector(u)}"
+            second = rf"\Delta g_{{{a}}}(\theta_{{{a}}})\,{tex.table_vector(V.perp(u))}"
             rot = "" if phi_p == 0 else _rotation_tex(tex, phi_p)
             sign = "-" if h.sign < 0 else ""
-            if rot or sign:
-                rhs = rf"{sign}{rot}\Bigl[{body}\Bigr]"
-            else:
-                rhs = body
-            lines.append(rf"\Delta\mathbf{{z}}_{{{a}}} &= {rhs}")
+            open_, close = (rf"{sign}{rot}\Bigl[", r"\Bigr]") if rot or sign else ("", "")
+            lhs = rf"\Delta\mathbf{{z}}_{{{a}}} &= "
+            one_line = f"{lhs}{open_}{first} + {second}{close}"
+            if width(one_line) <= self.width - 1:
+                lines.append(one_line)
+            else:                       # a narrow column: the second term on a line of its own
+                lines += [f"{lhs}{open_}{first}", rf"&\qquad + {second}{close}"]
         return lines
 
     def _abstract_names(self, exprs) -> Tex:
@@ -312,7 +330,7 @@ class Report:
             rows = [[zero if M[i, j] == 0 else M[i, j] for j in range(M.cols)]
                     for i in range(M.rows)]
             tex = self._abstract_names(list(M))
-            blocks = _chunks(list(range(M.cols)), 10)
+            blocks = _chunks(list(range(M.cols)), max(3, self.max_cols * 10 // 14))
             lines = []
             for block in blocks:
                 body = tex.matrix([[r[c] for c in block] for r in rows])
@@ -351,7 +369,7 @@ class Report:
                     lines = tex.named_equation(lhs, e, prefix)
                     if key in md.elementary:
                         lines += align_lines("", "=", tex.lines(md.elementary[key],
-                                                                LINE_WIDTH_EM - 4))
+                                                                self.width - 4))
                     entry["lines"] += lines
                 for a, gamma, c in md.prbm:
                     entry["param_values"].append(
@@ -548,16 +566,16 @@ class Report:
             base = rf"\Delta\mathbf{{R}}_{{{sub_name}}}^{{\mathrm{{paper}}}}"
             toks = [base] + [f"+ {t}" for t in terms_lin]
             lead = width(lhs1) + 1.5
-            entry["first_order"] = align_lines(lhs1, "=", pack(toks, LINE_WIDTH_EM - lead,
-                                                               LINE_WIDTH_EM - lead - 1))
+            entry["first_order"] = align_lines(lhs1, "=", pack(toks, self.width - lead,
+                                                               self.width - lead - 1))
             lhs2 = rf"\Delta\mathbf{{R}}_{{{sub_name}}}"
-            dzc = " + ".join(rf"\Delta\mathbf{{z}}_{{{b}}}(\theta_{{{b}}}"
-                             + (rf" + \delta_{{{b}}}" if b in self.d.unknowns else "") + ")"
-                             for b in path) or r"\mathbf{0}"
-            toks = terms_exact[:1] + [f"+ {t}" for t in terms_exact[1:]] + [
-                f"+ {dzc}" if terms_exact else dzc]
-            entry["exact"] = align_lines(lhs2, "=", pack(toks, LINE_WIDTH_EM - lead,
-                                                         LINE_WIDTH_EM - lead - 1))
+            dzc = [rf"\Delta\mathbf{{z}}_{{{b}}}(\theta_{{{b}}}"
+                   + (rf" + \delta_{{{b}}}" if b in self.d.unknowns else "") + ")"
+                   for b in path] or [r"\mathbf{0}"]
+            terms = terms_exact + dzc
+            toks = terms[:1] + [f"+ {t}" for t in terms[1:]]
+            entry["exact"] = align_lines(lhs2, "=", pack(toks, self.width - lead,
+                                                         self.width - lead - 1))
             out.append(entry)
         return out
 
@@ -589,9 +607,9 @@ def _rounded(expr: sp.Expr) -> sp.Expr:
 
 def _relation_lines(tex: Tex, lhs: sp.Expr, rhs: sp.Expr) -> list[str]:
     """``lhs = rhs`` with both sides possibly long: lhs lines, then ``&= rhs`` lines."""
-    left = tex.lines(lhs, LINE_WIDTH_EM - 4, LINE_WIDTH_EM - 4)
-    right = tex.lines(rhs, LINE_WIDTH_EM - 4, LINE_WIDTH_EM - 5)
-    if len(left) == 1 and width(left[0]) + width(right[0]) < LINE_WIDTH_EM - 3 and \
+    left = tex.lines(lhs, tex.width - 4, tex.width - 4)
+    right = tex.lines(rhs, tex.width - 4, tex.width - 5)
+    if len(left) == 1 and width(left[0]) + width(right[0]) < tex.width - 3 and \
             len(right) == 1:
         return [f"{left[0]} &= {right[0]}"]
     out = [f"&{left[0]}"] + [r"&\quad {}" + ln for ln in left[1:]]
@@ -674,11 +692,12 @@ def sweep(report: Report, numpy_module) -> tuple[Sweep, tuple[float, float], dic
 # -- emit ----------------------------------------------------------------------------------------
 
 def emit(plan: Plan, source: str, appendix: bool = False,
-         evaluator: ModuleType | None = None) -> dict[str, bytes]:
-    """`<name>.tex` (standalone, or the body alone with `appendix`) and its figure PDFs; the
-    deviation plot is evaluated with `evaluator`, the plan's generated numpy module (needed when
-    the plan has points)."""
-    report = Report(plan, source)
+         evaluator: ModuleType | None = None,
+         column_width: float = COLUMN_WIDTH) -> dict[str, bytes]:
+    """`<name>.tex` (standalone, or the body alone with `appendix`) and its figure PDFs, laid out
+    for a column of `column_width` points; the deviation plot is evaluated with `evaluator`, the
+    plan's generated numpy module (needed when the plan has points)."""
+    report = Report(plan, source, column_width)
     name = report.mech.name
     ctx = report.context(appendix)
     files: dict[str, bytes] = {}
@@ -696,7 +715,7 @@ def emit(plan: Plan, source: str, appendix: bool = False,
     files[f"{name}-graph.pdf"] = graph_figure(layout, arcs)
     depth = max(x for x, _ in layout.values())
     # a shallow tree beside the hinge table, a deep one (a long chain) above it
-    ctx["graph_beside"] = depth <= 3
+    ctx["graph_beside"] = depth <= 3 and report.width >= LINE_WIDTH_EM
     ctx["graph_width"] = f"{0.16 + 0.1 * depth:.2f}" if depth <= 3 else \
         f"{min(0.9, 0.13 * (depth + 1)):.2f}"
     ctx["table_width"] = f"{min(0.58, 0.96 - float(ctx['graph_width'])):.2f}"
