@@ -389,8 +389,8 @@ def test_eval_json_adds_hinges_and_energy(tmp_path, capsys, level):
     out, err = capsys.readouterr()
     assert code == 0, err
     data = json.loads(out)
-    keys = {"level", "backend", "inputs", "params", "angles", "points", "dyads", "hinges",
-            "energy"}
+    keys = {"level", "backend", "inputs", "params", "angles", "points", "links", "dyads",
+            "hinges", "energy"}
     assert set(data) == keys | ({"error_estimate"} if level == "equilibrium" else set())
     assert data["level"] == level
     assert set(data["hinges"]) == {"A0", "A", "B0", "B"}

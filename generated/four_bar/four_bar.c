@@ -3,7 +3,7 @@
  * Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, dev_paper 38, dev_first_order 52, dev_exact 62, loaded_q0 10, loaded_q 75, loaded_compliance 234, loaded_linear 99, loaded_newton 266, dev_loaded 69, links 1.
+ * Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, dev_paper 38, dev_first_order 52, dev_exact 62, loaded_q0 10, loaded_q 72, loaded_compliance 231, loaded_linear 99, loaded_newton 266, dev_loaded 69, links 1.
  */
 #include "four_bar.h"
 
@@ -419,7 +419,7 @@ static void sk_loaded_q0(const double *theta, const double *params, double *out)
     out[2] = -_tmp0*theta_4;
 }
 
-/* loaded: generalized forces Q with the beam-column springs (A^T mu = Q) (75 operations) */
+/* loaded: generalized forces Q with the beam-column springs (A^T mu = Q) (72 operations) */
 static void sk_loaded_q(const double *theta, const double *mu0, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -432,10 +432,10 @@ static void sk_loaded_q(const double *theta, const double *mu0, const double *pa
     const double _tmp0 = theta_1 + 0.5*theta_2 + 1.0471975511965979;
     const double _tmp1 = -mu0_2*cos(_tmp0) - mu0_3*sin(_tmp0);
     const double _tmp2 = p_0 <= 0.01;
-    const double _tmp3 = 200000*((_tmp2) ? (4.333333333333334e-12) : (1.0/210000000000.0))/p_0;
-    const double _tmp4 = 457142857142857.1*((_tmp2) ? (8.137037037037037e-35) : (1.0/9261000000000000000000000000000000.0))/pow(p_0, 3);
+    const double _tmp3 = 200000*((_tmp2) ? (4.333333333333334e-12) : (4.761904761904762e-12))/p_0;
+    const double _tmp4 = 457142857142857.1*((_tmp2) ? (8.137037037037037e-35) : (1.0797969981643451e-34))/pow(p_0, 3);
     const double _tmp5 = pow(p_0, 2);
-    const double _tmp6 = 8000000000*((_tmp2) ? (1.8777777777777777e-23) : (1.0/44100000000000000000000.0))/_tmp5;
+    const double _tmp6 = 8000000000*((_tmp2) ? (1.8777777777777777e-23) : (2.267573696145125e-23))/_tmp5;
     const double _tmp7 = 4.1666666666666667e-07*_tmp5*((_tmp2) ? (230769230769.23077) : (210000000000));
     const double _tmp8 = 0.5*theta_3;
     const double _tmp9 = -mu0_2*sin(_tmp8) + mu0_3*cos(_tmp8);
@@ -446,7 +446,7 @@ static void sk_loaded_q(const double *theta, const double *mu0, const double *pa
     out[2] = -_tmp7*theta_4*(pow(_tmp11, 3)*_tmp4 - pow(_tmp11, 2)*_tmp6 + _tmp11*_tmp3 + 1);
 }
 
-/* loaded: each plate's end displacement beyond its circular arc under its loads (234 operations) */
+/* loaded: each plate's end displacement beyond its circular arc under its loads (231 operations) */
 static void sk_loaded_compliance(const double *theta, const double *mu, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -462,14 +462,14 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp3 = _tmp1*mu_3 + _tmp2*mu_2;
     const double _tmp4 = _tmp1*mu_2 - _tmp2*mu_3;
     const double _tmp5 = p_0 <= 0.01;
-    const double _tmp6 = ((_tmp5) ? (4.333333333333334e-12) : (1.0/210000000000.0));
+    const double _tmp6 = ((_tmp5) ? (4.333333333333334e-12) : (4.761904761904762e-12));
     const double _tmp7 = _tmp6/p_0;
     const double _tmp8 = _tmp4*_tmp7;
-    const double _tmp9 = ((_tmp5) ? (8.137037037037037e-35) : (1.0/9261000000000000000000000000000000.0))/pow(p_0, 3);
+    const double _tmp9 = ((_tmp5) ? (8.137037037037037e-35) : (1.0797969981643451e-34))/pow(p_0, 3);
     const double _tmp10 = pow(_tmp4, 3)*_tmp9;
     const double _tmp11 = pow(_tmp4, 2);
     const double _tmp12 = pow(p_0, -2);
-    const double _tmp13 = ((_tmp5) ? (1.8777777777777777e-23) : (1.0/44100000000000000000000.0));
+    const double _tmp13 = ((_tmp5) ? (1.8777777777777777e-23) : (2.267573696145125e-23));
     const double _tmp14 = _tmp12*_tmp13;
     const double _tmp15 = _tmp11*_tmp14;
     const double _tmp16 = -1180952380952381.0*_tmp10 + 4857142857.142858*_tmp15 - 20000*_tmp8 + 0.08333333333333333;

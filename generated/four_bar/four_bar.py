@@ -2,7 +2,7 @@
 Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
 Points: C; levels: paper, first_order, exact, loaded.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, dev_paper 38, dev_first_order 52, dev_exact 62, loaded_q0 10, loaded_q 75, loaded_compliance 234, loaded_linear 99, loaded_newton 266, dev_loaded 69, links 1.
+Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, dev_paper 38, dev_first_order 52, dev_exact 62, loaded_q0 10, loaded_q 72, loaded_compliance 231, loaded_linear 99, loaded_newton 266, dev_loaded 69, links 1.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -407,17 +407,17 @@ def _loaded_q0(theta, params):
 
 
 def _loaded_q(theta, mu0, params):
-    """loaded: generalized forces Q with the beam-column springs (A^T mu = Q) (75 operations)."""
+    """loaded: generalized forces Q with the beam-column springs (A^T mu = Q) (72 operations)."""
     theta_1, theta_2, theta_3, theta_4 = theta
     _, mu0_2, mu0_3 = mu0
     p_0, = params
     _tmp0 = theta_1 + 0.5*theta_2 + 1.0471975511965979
     _tmp1 = -mu0_2*numpy.cos(_tmp0) - mu0_3*numpy.sin(_tmp0)
     _tmp2 = numpy.less_equal(p_0, 0.01)
-    _tmp3 = 200000*_DTYPE(numpy.where(_tmp2, 4.333333333333334e-12, 1/210000000000))/p_0
-    _tmp4 = 457142857142857.1*_DTYPE(numpy.where(_tmp2, 8.137037037037037e-35, 1/9261000000000000000000000000000000))/p_0**3
+    _tmp3 = 200000*_DTYPE(numpy.where(_tmp2, 4.333333333333334e-12, 4.761904761904762e-12))/p_0
+    _tmp4 = 457142857142857.1*_DTYPE(numpy.where(_tmp2, 8.137037037037037e-35, 1.0797969981643451e-34))/p_0**3
     _tmp5 = p_0**2
-    _tmp6 = 8000000000*_DTYPE(numpy.where(_tmp2, 1.8777777777777777e-23, 1/44100000000000000000000))/_tmp5
+    _tmp6 = 8000000000*_DTYPE(numpy.where(_tmp2, 1.8777777777777777e-23, 2.267573696145125e-23))/_tmp5
     _tmp7 = 4.1666666666666667e-07*_tmp5*_DTYPE(numpy.where(_tmp2, 230769230769.23077, 210000000000))
     _tmp8 = 0.5*theta_3
     _tmp9 = -mu0_2*numpy.sin(_tmp8) + mu0_3*numpy.cos(_tmp8)
@@ -431,7 +431,7 @@ def _loaded_q(theta, mu0, params):
 
 
 def _loaded_compliance(theta, mu, params):
-    """loaded: each plate's end displacement beyond its circular arc under its loads (234 operations)."""
+    """loaded: each plate's end displacement beyond its circular arc under its loads (231 operations)."""
     theta_1, theta_2, theta_3, theta_4 = theta
     _, mu_2, mu_3 = mu
     p_0, = params
@@ -441,14 +441,14 @@ def _loaded_compliance(theta, mu, params):
     _tmp3 = _tmp1*mu_3 + _tmp2*mu_2
     _tmp4 = _tmp1*mu_2 - _tmp2*mu_3
     _tmp5 = numpy.less_equal(p_0, 0.01)
-    _tmp6 = _DTYPE(numpy.where(_tmp5, 4.333333333333334e-12, 1/210000000000))
+    _tmp6 = _DTYPE(numpy.where(_tmp5, 4.333333333333334e-12, 4.761904761904762e-12))
     _tmp7 = _tmp6/p_0
     _tmp8 = _tmp4*_tmp7
-    _tmp9 = _DTYPE(numpy.where(_tmp5, 8.137037037037037e-35, 1/9261000000000000000000000000000000))/p_0**3
+    _tmp9 = _DTYPE(numpy.where(_tmp5, 8.137037037037037e-35, 1.0797969981643451e-34))/p_0**3
     _tmp10 = _tmp4**3*_tmp9
     _tmp11 = _tmp4**2
     _tmp12 = p_0**(-2.0)
-    _tmp13 = _DTYPE(numpy.where(_tmp5, 1.8777777777777777e-23, 1/44100000000000000000000))
+    _tmp13 = _DTYPE(numpy.where(_tmp5, 1.8777777777777777e-23, 2.267573696145125e-23))
     _tmp14 = _tmp12*_tmp13
     _tmp15 = _tmp11*_tmp14
     _tmp16 = -1180952380952381.0*_tmp10 + 4857142857.142858*_tmp15 - 20000*_tmp8 + 0.08333333333333333

@@ -3,7 +3,7 @@
  * Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
  * Points: F; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33, loaded_q0 16, loaded_q 129, loaded_compliance 565, loaded_linear 239, loaded_newton 539, dev_loaded 33, links 9.
+ * Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33, loaded_q0 16, loaded_q 126, loaded_compliance 562, loaded_linear 239, loaded_newton 539, dev_loaded 33, links 9.
  */
 #include "nine_bar_platform.h"
 
@@ -706,7 +706,7 @@ static void sk_loaded_q0(const double *theta, const double *params, double *out)
     out[5] = -_tmp0*theta_10;
 }
 
-/* loaded: generalized forces Q with the beam-column springs (A^T mu = Q) (129 operations) */
+/* loaded: generalized forces Q with the beam-column springs (A^T mu = Q) (126 operations) */
 static void sk_loaded_q(const double *theta, const double *mu0, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -729,10 +729,10 @@ static void sk_loaded_q(const double *theta, const double *mu0, const double *pa
     const double _tmp2 = _tmp1 + 0.5*theta_5;
     const double _tmp3 = mu0_2*cos(_tmp2) + mu0_3*sin(_tmp2);
     const double _tmp4 = p_0 <= 0.006;
-    const double _tmp5 = 333333.3333333333*((_tmp4) ? (4.333333333333334e-12) : (1.0/210000000000.0))/p_0;
-    const double _tmp6 = 2116402116402116.5*((_tmp4) ? (8.137037037037037e-35) : (1.0/9261000000000000000000000000000000.0))/pow(p_0, 3);
+    const double _tmp5 = 333333.3333333333*((_tmp4) ? (4.333333333333334e-12) : (4.761904761904762e-12))/p_0;
+    const double _tmp6 = 2116402116402116.5*((_tmp4) ? (8.137037037037037e-35) : (1.0797969981643451e-34))/pow(p_0, 3);
     const double _tmp7 = pow(p_0, 2);
-    const double _tmp8 = 22222222222.22222*((_tmp4) ? (1.8777777777777777e-23) : (1.0/44100000000000000000000.0))/_tmp7;
+    const double _tmp8 = 22222222222.22222*((_tmp4) ? (1.8777777777777777e-23) : (2.267573696145125e-23))/_tmp7;
     const double _tmp9 = 2.5e-07*_tmp7*((_tmp4) ? (230769230769.23077) : (210000000000));
     const double _tmp10 = _tmp1 + theta_5 + 0.5*theta_6;
     const double _tmp11 = -mu0_2*sin(_tmp10) + mu0_3*cos(_tmp10);
@@ -752,7 +752,7 @@ static void sk_loaded_q(const double *theta, const double *mu0, const double *pa
     out[5] = -_tmp9*theta_10*(pow(_tmp19, 3)*_tmp6 - pow(_tmp19, 2)*_tmp8 + _tmp19*_tmp5 + 1);
 }
 
-/* loaded: each plate's end displacement beyond its circular arc under its loads (565 operations) */
+/* loaded: each plate's end displacement beyond its circular arc under its loads (562 operations) */
 static void sk_loaded_compliance(const double *theta, const double *mu, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -778,14 +778,14 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp5 = -_tmp1*_tmp4 - _tmp2*_tmp3;
     const double _tmp6 = -_tmp1*_tmp2 + _tmp3*_tmp4;
     const double _tmp7 = p_0 <= 0.006;
-    const double _tmp8 = ((_tmp7) ? (4.333333333333334e-12) : (1.0/210000000000.0));
+    const double _tmp8 = ((_tmp7) ? (4.333333333333334e-12) : (4.761904761904762e-12));
     const double _tmp9 = _tmp8/p_0;
     const double _tmp10 = _tmp6*_tmp9;
-    const double _tmp11 = ((_tmp7) ? (8.137037037037037e-35) : (1.0/9261000000000000000000000000000000.0))/pow(p_0, 3);
+    const double _tmp11 = ((_tmp7) ? (8.137037037037037e-35) : (1.0797969981643451e-34))/pow(p_0, 3);
     const double _tmp12 = _tmp11*pow(_tmp6, 3);
     const double _tmp13 = pow(_tmp6, 2);
     const double _tmp14 = pow(p_0, -2);
-    const double _tmp15 = ((_tmp7) ? (1.8777777777777777e-23) : (1.0/44100000000000000000000.0));
+    const double _tmp15 = ((_tmp7) ? (1.8777777777777777e-23) : (2.267573696145125e-23));
     const double _tmp16 = _tmp14*_tmp15;
     const double _tmp17 = _tmp13*_tmp16;
     const double _tmp18 = -33333.333333333336*_tmp10 - 5467372134038801.0*_tmp12 + 13492063492.063492*_tmp17 + 0.08333333333333333;

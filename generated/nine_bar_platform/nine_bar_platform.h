@@ -3,7 +3,7 @@
  * Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
  * Points: F; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33, loaded_q0 16, loaded_q 129, loaded_compliance 565, loaded_linear 239, loaded_newton 539, dev_loaded 33, links 9.
+ * Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33, loaded_q0 16, loaded_q 126, loaded_compliance 562, loaded_linear 239, loaded_newton 539, dev_loaded 33, links 9.
  */
 #ifndef SYMKIN_NINE_BAR_PLATFORM_H
 #define SYMKIN_NINE_BAR_PLATFORM_H

@@ -2,7 +2,7 @@
 Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
 Points: F; levels: paper, first_order, exact, loaded.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33, loaded_q0 16, loaded_q 129, loaded_compliance 565, loaded_linear 239, loaded_newton 539, dev_loaded 33, links 9.
+Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33, loaded_q0 16, loaded_q 126, loaded_compliance 562, loaded_linear 239, loaded_newton 539, dev_loaded 33, links 9.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -651,7 +651,7 @@ def _loaded_q0(theta, params):
 
 
 def _loaded_q(theta, mu0, params):
-    """loaded: generalized forces Q with the beam-column springs (A^T mu = Q) (129 operations)."""
+    """loaded: generalized forces Q with the beam-column springs (A^T mu = Q) (126 operations)."""
     theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7, theta_8, theta_9, theta_10 = theta
     _, mu0_2, mu0_3, _, mu0_5, mu0_6 = mu0
     p_0, = params
@@ -660,10 +660,10 @@ def _loaded_q(theta, mu0, params):
     _tmp2 = _tmp1 + 0.5*theta_5
     _tmp3 = mu0_2*numpy.cos(_tmp2) + mu0_3*numpy.sin(_tmp2)
     _tmp4 = numpy.less_equal(p_0, 0.006)
-    _tmp5 = 333333.3333333333*_DTYPE(numpy.where(_tmp4, 4.333333333333334e-12, 1/210000000000))/p_0
-    _tmp6 = 2116402116402116.5*_DTYPE(numpy.where(_tmp4, 8.137037037037037e-35, 1/9261000000000000000000000000000000))/p_0**3
+    _tmp5 = 333333.3333333333*_DTYPE(numpy.where(_tmp4, 4.333333333333334e-12, 4.761904761904762e-12))/p_0
+    _tmp6 = 2116402116402116.5*_DTYPE(numpy.where(_tmp4, 8.137037037037037e-35, 1.0797969981643451e-34))/p_0**3
     _tmp7 = p_0**2
-    _tmp8 = 22222222222.22222*_DTYPE(numpy.where(_tmp4, 1.8777777777777777e-23, 1/44100000000000000000000))/_tmp7
+    _tmp8 = 22222222222.22222*_DTYPE(numpy.where(_tmp4, 1.8777777777777777e-23, 2.267573696145125e-23))/_tmp7
     _tmp9 = 2.5e-07*_tmp7*_DTYPE(numpy.where(_tmp4, 230769230769.23077, 210000000000))
     _tmp10 = _tmp1 + theta_5 + 0.5*theta_6
     _tmp11 = -mu0_2*numpy.sin(_tmp10) + mu0_3*numpy.cos(_tmp10)
@@ -686,7 +686,7 @@ def _loaded_q(theta, mu0, params):
 
 
 def _loaded_compliance(theta, mu, params):
-    """loaded: each plate's end displacement beyond its circular arc under its loads (565 operations)."""
+    """loaded: each plate's end displacement beyond its circular arc under its loads (562 operations)."""
     theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7, theta_8, theta_9, theta_10 = theta
     _, mu_2, mu_3, _, mu_5, mu_6 = mu
     p_0, = params
@@ -698,14 +698,14 @@ def _loaded_compliance(theta, mu, params):
     _tmp5 = -_tmp1*_tmp4 - _tmp2*_tmp3
     _tmp6 = -_tmp1*_tmp2 + _tmp3*_tmp4
     _tmp7 = numpy.less_equal(p_0, 0.006)
-    _tmp8 = _DTYPE(numpy.where(_tmp7, 4.333333333333334e-12, 1/210000000000))
+    _tmp8 = _DTYPE(numpy.where(_tmp7, 4.333333333333334e-12, 4.761904761904762e-12))
     _tmp9 = _tmp8/p_0
     _tmp10 = _tmp6*_tmp9
-    _tmp11 = _DTYPE(numpy.where(_tmp7, 8.137037037037037e-35, 1/9261000000000000000000000000000000))/p_0**3
+    _tmp11 = _DTYPE(numpy.where(_tmp7, 8.137037037037037e-35, 1.0797969981643451e-34))/p_0**3
     _tmp12 = _tmp11*_tmp6**3
     _tmp13 = _tmp6**2
     _tmp14 = p_0**(-2.0)
-    _tmp15 = _DTYPE(numpy.where(_tmp7, 1.8777777777777777e-23, 1/44100000000000000000000))
+    _tmp15 = _DTYPE(numpy.where(_tmp7, 1.8777777777777777e-23, 2.267573696145125e-23))
     _tmp16 = _tmp14*_tmp15
     _tmp17 = _tmp13*_tmp16
     _tmp18 = -33333.333333333336*_tmp10 - 5467372134038801.0*_tmp12 + 13492063492.063492*_tmp17 + 0.08333333333333333

@@ -3,7 +3,7 @@
  * Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
  * Points: D; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60, loaded_q0 16, loaded_q 131, loaded_compliance 404, loaded_linear 185, loaded_newton 522, dev_loaded 63, links 5.
+ * Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60, loaded_q0 16, loaded_q 128, loaded_compliance 401, loaded_linear 185, loaded_newton 522, dev_loaded 63, links 5.
  */
 #include "stephenson_six_bar.h"
 
@@ -671,7 +671,7 @@ static void sk_loaded_q0(const double *theta, const double *params, double *out)
     out[5] = -_tmp0*theta_7;
 }
 
-/* loaded: generalized forces Q with the beam-column springs (A^T mu = Q) (131 operations) */
+/* loaded: generalized forces Q with the beam-column springs (A^T mu = Q) (128 operations) */
 static void sk_loaded_q(const double *theta, const double *mu0, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -689,10 +689,10 @@ static void sk_loaded_q(const double *theta, const double *mu0, const double *pa
     const double _tmp0 = theta_1 + 0.5*theta_2 + 0.7853981633974483;
     const double _tmp1 = -mu0_5*cos(_tmp0) - mu0_6*sin(_tmp0);
     const double _tmp2 = p_0 <= 0.008;
-    const double _tmp3 = 250000*((_tmp2) ? (4.333333333333334e-12) : (1.0/210000000000.0))/p_0;
-    const double _tmp4 = 892857142857142.9*((_tmp2) ? (8.137037037037037e-35) : (1.0/9261000000000000000000000000000000.0))/pow(p_0, 3);
+    const double _tmp3 = 250000*((_tmp2) ? (4.333333333333334e-12) : (4.761904761904762e-12))/p_0;
+    const double _tmp4 = 892857142857142.9*((_tmp2) ? (8.137037037037037e-35) : (1.0797969981643451e-34))/pow(p_0, 3);
     const double _tmp5 = pow(p_0, 2);
-    const double _tmp6 = 12500000000*((_tmp2) ? (1.8777777777777777e-23) : (1.0/44100000000000000000000.0))/_tmp5;
+    const double _tmp6 = 12500000000*((_tmp2) ? (1.8777777777777777e-23) : (2.267573696145125e-23))/_tmp5;
     const double _tmp7 = 3.3333333333333335e-07*_tmp5*((_tmp2) ? (230769230769.23077) : (210000000000));
     const double _tmp8 = 0.5*theta_3;
     const double _tmp9 = -(mu0_2 + mu0_5)*sin(_tmp8) + (mu0_3 + mu0_6)*cos(_tmp8);
@@ -712,7 +712,7 @@ static void sk_loaded_q(const double *theta, const double *mu0, const double *pa
     out[5] = -_tmp7*theta_7*(pow(_tmp17, 3)*_tmp4 - pow(_tmp17, 2)*_tmp6 + _tmp17*_tmp3 + 1);
 }
 
-/* loaded: each plate's end displacement beyond its circular arc under its loads (404 operations) */
+/* loaded: each plate's end displacement beyond its circular arc under its loads (401 operations) */
 static void sk_loaded_compliance(const double *theta, const double *mu, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -737,14 +737,14 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp7 = -_tmp1*_tmp6 - _tmp2*_tmp4;
     const double _tmp8 = -_tmp1*_tmp4 + _tmp2*_tmp6;
     const double _tmp9 = p_0 <= 0.008;
-    const double _tmp10 = ((_tmp9) ? (4.333333333333334e-12) : (1.0/210000000000.0));
+    const double _tmp10 = ((_tmp9) ? (4.333333333333334e-12) : (4.761904761904762e-12));
     const double _tmp11 = _tmp10/p_0;
     const double _tmp12 = _tmp11*_tmp8;
-    const double _tmp13 = ((_tmp9) ? (8.137037037037037e-35) : (1.0/9261000000000000000000000000000000.0))/pow(p_0, 3);
+    const double _tmp13 = ((_tmp9) ? (8.137037037037037e-35) : (1.0797969981643451e-34))/pow(p_0, 3);
     const double _tmp14 = _tmp13*pow(_tmp8, 3);
     const double _tmp15 = pow(_tmp8, 2);
     const double _tmp16 = pow(p_0, -2);
-    const double _tmp17 = ((_tmp9) ? (1.8777777777777777e-23) : (1.0/44100000000000000000000.0));
+    const double _tmp17 = ((_tmp9) ? (1.8777777777777777e-23) : (2.267573696145125e-23));
     const double _tmp18 = _tmp16*_tmp17;
     const double _tmp19 = _tmp15*_tmp18;
     const double _tmp20 = -25000*_tmp12 - 2306547619047619.0*_tmp14 + 7589285714.285714*_tmp19 + 0.08333333333333333;

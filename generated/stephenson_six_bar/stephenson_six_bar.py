@@ -2,7 +2,7 @@
 Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
 Points: D; levels: paper, first_order, exact, loaded.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60, loaded_q0 16, loaded_q 131, loaded_compliance 404, loaded_linear 185, loaded_newton 522, dev_loaded 63, links 5.
+Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60, loaded_q0 16, loaded_q 128, loaded_compliance 401, loaded_linear 185, loaded_newton 522, dev_loaded 63, links 5.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -639,17 +639,17 @@ def _loaded_q0(theta, params):
 
 
 def _loaded_q(theta, mu0, params):
-    """loaded: generalized forces Q with the beam-column springs (A^T mu = Q) (131 operations)."""
+    """loaded: generalized forces Q with the beam-column springs (A^T mu = Q) (128 operations)."""
     theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7 = theta
     _, mu0_2, mu0_3, _, mu0_5, mu0_6 = mu0
     p_0, = params
     _tmp0 = theta_1 + 0.5*theta_2 + 0.7853981633974483
     _tmp1 = -mu0_5*numpy.cos(_tmp0) - mu0_6*numpy.sin(_tmp0)
     _tmp2 = numpy.less_equal(p_0, 0.008)
-    _tmp3 = 250000*_DTYPE(numpy.where(_tmp2, 4.333333333333334e-12, 1/210000000000))/p_0
-    _tmp4 = 892857142857142.9*_DTYPE(numpy.where(_tmp2, 8.137037037037037e-35, 1/9261000000000000000000000000000000))/p_0**3
+    _tmp3 = 250000*_DTYPE(numpy.where(_tmp2, 4.333333333333334e-12, 4.761904761904762e-12))/p_0
+    _tmp4 = 892857142857142.9*_DTYPE(numpy.where(_tmp2, 8.137037037037037e-35, 1.0797969981643451e-34))/p_0**3
     _tmp5 = p_0**2
-    _tmp6 = 12500000000*_DTYPE(numpy.where(_tmp2, 1.8777777777777777e-23, 1/44100000000000000000000))/_tmp5
+    _tmp6 = 12500000000*_DTYPE(numpy.where(_tmp2, 1.8777777777777777e-23, 2.267573696145125e-23))/_tmp5
     _tmp7 = 3.3333333333333335e-07*_tmp5*_DTYPE(numpy.where(_tmp2, 230769230769.23077, 210000000000))
     _tmp8 = 0.5*theta_3
     _tmp9 = -(mu0_2 + mu0_5)*numpy.sin(_tmp8) + (mu0_3 + mu0_6)*numpy.cos(_tmp8)
@@ -672,7 +672,7 @@ def _loaded_q(theta, mu0, params):
 
 
 def _loaded_compliance(theta, mu, params):
-    """loaded: each plate's end displacement beyond its circular arc under its loads (404 operations)."""
+    """loaded: each plate's end displacement beyond its circular arc under its loads (401 operations)."""
     theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7 = theta
     _, mu_2, mu_3, _, mu_5, mu_6 = mu
     p_0, = params
@@ -686,14 +686,14 @@ def _loaded_compliance(theta, mu, params):
     _tmp7 = -_tmp1*_tmp6 - _tmp2*_tmp4
     _tmp8 = -_tmp1*_tmp4 + _tmp2*_tmp6
     _tmp9 = numpy.less_equal(p_0, 0.008)
-    _tmp10 = _DTYPE(numpy.where(_tmp9, 4.333333333333334e-12, 1/210000000000))
+    _tmp10 = _DTYPE(numpy.where(_tmp9, 4.333333333333334e-12, 4.761904761904762e-12))
     _tmp11 = _tmp10/p_0
     _tmp12 = _tmp11*_tmp8
-    _tmp13 = _DTYPE(numpy.where(_tmp9, 8.137037037037037e-35, 1/9261000000000000000000000000000000))/p_0**3
+    _tmp13 = _DTYPE(numpy.where(_tmp9, 8.137037037037037e-35, 1.0797969981643451e-34))/p_0**3
     _tmp14 = _tmp13*_tmp8**3
     _tmp15 = _tmp8**2
     _tmp16 = p_0**(-2.0)
-    _tmp17 = _DTYPE(numpy.where(_tmp9, 1.8777777777777777e-23, 1/44100000000000000000000))
+    _tmp17 = _DTYPE(numpy.where(_tmp9, 1.8777777777777777e-23, 2.267573696145125e-23))
     _tmp18 = _tmp16*_tmp17
     _tmp19 = _tmp15*_tmp18
     _tmp20 = -25000*_tmp12 - 2306547619047619.0*_tmp14 + 7589285714.285714*_tmp19 + 0.08333333333333333
