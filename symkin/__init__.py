@@ -4,6 +4,11 @@
     s = symkin.structure(mech)                        # labeling and I, I+, Φ, Ψ = [T; 0]
     an = symkin.analyze(mech)                         # symbolic deviation at every level
     symkin.evaluate(an, {"A0": 0.2}, level="exact")   # one configuration, mpmath at 40 digits
+    symkin.evaluate(an, {"A0": 0.2}, level="equilibrium")  # the plates as elastica
+    symkin.evaluate(an, {"A0": 0.2}, level="loaded")  # closed form with the plates' loads
+
+The physical levels need E, thickness and width of the plates (docs/physics.md); their
+derivation is symkin.physics.statics.LoadedDerivation, their solvers are in symkin.physics.
 """
 
 from __future__ import annotations

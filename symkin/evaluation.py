@@ -24,6 +24,9 @@ from . import expressions, levels, special
 from .analysis import Analysis
 from .errors import AssemblyError, InputError
 from .mechanism import Mechanism, check_values
+from .physics import equilibrium as physical_equilibrium
+from .physics import statics
+from .physics.result import HingeLoad
 from .reports import loop_text
 from .solver import SOLVER
 
@@ -106,10 +109,22 @@ class Evaluation:
     overrides: tuple[str, ...] = ()                           # the ones given with --param
     links: dict[str, LinkResult] = field(default_factory=dict)   # every link's rotation
     sensitivity: Sensitivity | None = None                    # with eval --sensitivity
+    # The physical levels (docs/physics.md): each plate's end load, the elastic energy (J) and,
+    # at `equilibrium`, the solver's estimate of the deviations' largest relative error.
+    hinges: dict[str, HingeLoad] = field(default_factory=dict)
+    energy: float | None = None
+    error_estimate: float | None = None
 
     def as_json(self) -> dict:
-        """The `eval --json` document (docs/cli.md)."""
+        """The `eval --json` document (docs/cli.md; the physical levels' keys: docs/physics.md)."""
         extra = self.sensitivity.as_json() if self.sensitivity is not None else {}
+        physical = {}
+        if levels.get(self.level).needs_stiffness:
+            physical = {"hinges": {name: {"moment": h.moment, "force": list(h.force)}
+                                   for name, h in self.hinges.items()},
+                        "energy": self.energy}
+            if self.error_estimate is not None:
+                physical["error_estimate"] = self.error_estimate
         return {
             "level": self.level,
             "backend": self.backend,
@@ -124,7 +139,7 @@ class Evaluation:
                              "deviation": r.deviation} for name, r in self.links.items()},
             "dyads": [dict(d) for d in self.dyads],
             **extra,
-        }
+        } | physical
 
 
 def evaluate(analysis: Analysis, inputs: Mapping[str, object], level: str = levels.DEFAULT,
@@ -133,12 +148,37 @@ def evaluate(analysis: Analysis, inputs: Mapping[str, object], level: str = leve
     """Evaluate one configuration at `level` through `backend` (sympy: mpmath at `dps` digits);
     with `sensitivity`, also the derivatives by every parameter and input
     (docs/sensitivity.md)."""
+    if sensitivity and not levels.get(level).sensitivity:
+        raise InputError(f"the {level} level has no sensitivities", entry="--sensitivity",
+                         hint="ask for them at level exact (docs/sensitivity.md)")
     if backend == "sympy":
+        if level == "loaded":
+            return loaded(analysis, inputs, params, dps)
+        if level == "equilibrium":
+            return equilibrium(analysis, inputs, params)
         return _mpmath_evaluator(analysis).evaluate(inputs, level, params, dps, sensitivity)
     if backend in ("numpy", "c"):
         return _generated(analysis, inputs, level, params, backend, sensitivity)
     raise InputError(f"unknown backend '{backend}'", entry="--backend",
                      hint="backends: " + ", ".join(BACKENDS))
+
+
+def loaded(analysis: Analysis, inputs: Mapping[str, object],
+           params: Mapping[str, object] | None = None, dps: int = 40, beam_column: bool = True,
+           extensible: bool = False) -> Evaluation:
+    """The `loaded` level with mpmath at `dps` digits (docs/physics.md); `beam_column=False`
+    keeps the first-order force correction only, `extensible=True` adds the plates' stretch
+    (symkin.physics.statics.LoadedDerivation)."""
+    return _mpmath_evaluator(analysis).loaded(inputs, params, dps, beam_column=beam_column,
+                                              extensible=extensible)
+
+
+def equilibrium(analysis: Analysis, inputs: Mapping[str, object],
+                params: Mapping[str, object] | None = None,
+                extra_digits: int = 0) -> Evaluation:
+    """The `equilibrium` level (docs/physics.md): the plates as elastica, solved numerically to
+    its own error estimate; `extra_digits` raises the working precision (to check it)."""
+    return _mpmath_evaluator(analysis).equilibrium(inputs, params, extra_digits)
 
 
 # -- values from the user -----------------------------------------------------------------------
@@ -295,14 +335,8 @@ class _Mpmath:
                     (float(rig[0] + dev[0]), float(rig[1] + dev[1])),
                     (float(dev[0]), float(dev[1])))
             theta, delta, ivals = state.theta, state.delta, state.inputs
-            s = an.structure
             args, values = self._arguments(state)
-            rot = self._fn(f"links:{level}", [an.link_rotation(i) for i in range(s.n + 1)]
-                           + [an.link_deviation(i, level) for i in range(s.n + 1)], args)(*values)
-            links = {}
-            for i in range(s.n + 1):
-                rigid, dev = _wrap(rot[i]), rot[s.n + 1 + i]
-                links[s.links[i]] = LinkResult(float(rigid), float(rigid + dev), float(dev))
+            links = self._links(an, level, "", args, values)
             names = {a: self.kin.hinges[a].name for a in self.kin.hinges}
             return Evaluation(
                 level=level, backend="sympy",
@@ -417,6 +451,135 @@ class _Mpmath:
         return Sensitivity.from_columns(
             names, [p.name for p in self.mechanism.parameters],
             [kin.hinges[a].name for a in kin.inputs], per_point(total_d), per_point(total_r))
+
+    def loaded(self, inputs: Mapping[str, object], params: Mapping[str, object] | None,
+               dps: int, **options) -> Evaluation:
+        """The `loaded` level (docs/physics.md), in the order of its derivation
+        (symkin.physics.statics): rigid angles → A^T μ0 = Q0 → A^T μ = Q(μ0) → each plate's
+        compliance → the exact level's Newton on the loaded closure → ΔR, the plates' loads and
+        energy."""
+        an = self.an
+        der = statics.loaded_derivation(an, **options)
+        la, kin = der.analysis, der.kin
+        closure = _mpmath_evaluator(la)      # its params: the file's, μ0, μ and the compliance
+        prefix = "loaded" + "".join(f":{k}={v}" for k, v in sorted(options.items())) + ":"
+        given = input_values(an, inputs)
+        exact_params = parameter_values(self.mechanism, params)
+        loads = der.plate_loads
+        with mpmath.workdps(dps):
+            pvals = [mpmath.mpf(sp.N(exact_params[s], dps + 5)) for s in an.params]
+            ivals = {a: mpmath.mpf(sp.N(v, dps + 5)) for a, v in given.items()}
+            theta, dyads = self._rigid_angles(pvals, ivals)
+            self._check_limits(theta, ivals)
+            known = [*pvals]
+            thetas = [theta[a] for a in sorted(theta)]
+
+            def at_rigid(key: str, exprs):
+                n = len(known)
+                return self._fn(prefix + key, exprs, [*la.params[:n], *la.thetas])(*known, *thetas)
+
+            for symbols, system, key in ((der.mu0, der.first_statics, "mu0"),
+                                         (der.mu, der.statics, "mu")):
+                if symbols:
+                    known += self._multipliers(at_rigid(key + ":AT", system[0].tolist()),
+                                               at_rigid(key + ":Q", list(system[1])))
+            disp = [e for a in sorted(der.compliance) for e in loads[a].displacement]
+            known += list(at_rigid("compliance", disp)) if disp else []
+            delta = closure._deltas("exact", known, theta)
+            self._check_limits({a: theta[a] + delta.get(a, 0) for a in theta}, ivals)
+            args = [*la.params, *la.thetas, *la.deltas]
+            full = [*known, *thetas, *(delta[a] for a in kin.unknowns)]
+            points = {}
+            for p in la.points:
+                rig = self._fn(f"rigid(theta):{p.name}", list(an.point_rigid(p.name)),
+                               [*an.params, *an.thetas])(*pvals, *thetas)
+                dev = self._fn(prefix + p.name, list(la.point_deviation(p.name, "exact")),
+                               args)(*full)
+                points[p.name] = PointResult((float(rig[0]), float(rig[1])),
+                                             (float(rig[0] + dev[0]), float(rig[1] + dev[1])),
+                                             (float(dev[0]), float(dev[1])))
+            links = self._links(la, "exact", prefix, args, full)
+            scale = mpmath.mpf(sp.N(self.mechanism.unit_scale, dps))
+            hinges, energy = {}, mpmath.mpf(0)
+            for a in sorted(kin.hinges):
+                force = self._fn(f"{prefix}force:{a}", list(loads[a].force), args)(*full)
+                moment = self._fn(f"{prefix}moment:{a}", der.end_moment(a), args)(*full)
+                energy += self._fn(f"{prefix}energy:{a}", der.energy(a), args)(*full)
+                hinges[kin.hinges[a].name] = HingeLoad((float(force[0]), float(force[1])),
+                                                       float(moment * scale))
+            names = {a: h.name for a, h in kin.hinges.items()}
+            return Evaluation(
+                level="loaded", backend="sympy",
+                inputs={names[a]: float(ivals[a]) for a in sorted(ivals)},
+                angles_rigid={names[a]: float(theta[a]) for a in sorted(theta)},
+                angles_compliant={names[a]: float(theta[a] + delta.get(a, 0))
+                                  for a in sorted(theta)},
+                points=points, dyads=tuple(dyads),
+                params=parameter_floats(self.mechanism, exact_params),
+                overrides=tuple(params or ()), hinges=hinges, energy=float(energy * scale),
+                links=links)
+
+    def _links(self, an: Analysis, level: str, prefix: str, args: list, values: list) -> dict:
+        """Every link's rigid rotation, compliant rotation and deviation at `level` (the
+        deviation from δ itself), `args` the symbols of `an` and `values` theirs."""
+        s = an.structure
+        rot = self._fn(f"{prefix}links:{level}", [an.link_rotation(i) for i in range(s.n + 1)]
+                       + [an.link_deviation(i, level) for i in range(s.n + 1)], args)(*values)
+        links = {}
+        for i in range(s.n + 1):
+            rigid, dev = _wrap(rot[i]), rot[s.n + 1 + i]
+            links[s.links[i]] = LinkResult(float(rigid), float(rigid + dev), float(dev))
+        return links
+
+    def _multipliers(self, a_t: list, q: list) -> list:
+        """μ of A^T μ = Q at the rigid pose (the loop's chord forces and moments)."""
+        try:
+            return list(mpmath.lu_solve(mpmath.matrix(a_t), mpmath.matrix(q)))
+        except ZeroDivisionError:
+            raise AssemblyError(f"{self.mechanism.path}: the mechanism is at a toggle position "
+                                "(singular loop Jacobian) for these inputs") from None
+
+    def equilibrium(self, inputs: Mapping[str, object], params: Mapping[str, object] | None,
+                    extra_digits: int = 0) -> Evaluation:
+        """The `equilibrium` level (symkin.physics.equilibrium), against this rigid linkage."""
+        an = self.an
+        given = input_values(an, inputs)
+        exact_params = parameter_values(self.mechanism, params)
+        names = {a: h.name for a, h in self.kin.hinges.items()}
+        args = [*an.params, *an.thetas]
+
+        def rigid(dps: int) -> tuple[dict, dict]:
+            """Rigid hinge angles and point positions at `dps` digits (exit 3 out of range)."""
+            with mpmath.workdps(dps):
+                pvals = [mpmath.mpf(sp.N(exact_params[s], dps + 5)) for s in an.params]
+                ivals = {a: mpmath.mpf(sp.N(v, dps + 5)) for a, v in given.items()}
+                theta, _ = self._rigid_angles(pvals, ivals)
+                at = [*pvals, *(theta[a] for a in sorted(theta))]
+                return ({names[a]: v for a, v in theta.items()},
+                        {p.name: self._fn(f"rigid(theta):{p.name}", list(an.point_rigid(p.name)),
+                                          args)(*at) for p in an.points})
+
+        res = physical_equilibrium.solve(self.mechanism, exact_params,
+                                         {names[a]: v for a, v in given.items()}, rigid,
+                                         extra_digits)
+        order = [names[a] for a in sorted(names)]
+        with mpmath.workdps(20):
+            # The links' rotations: the rigid one from the rigid angles, the deviation from the
+            # solution's angle deviations (docs/physics.md).
+            values = [*(mpmath.mpf(sp.N(exact_params[s], 25)) for s in an.params),
+                      *(mpmath.mpf(res.angles_rigid[names[a]]) for a in sorted(names)),
+                      *(mpmath.mpf(res.angle_deviations[names[a]]) for a in self.kin.unknowns)]
+            links = self._links(an, "exact", "equilibrium:", [*args, *an.deltas], values)
+        return Evaluation(
+            level="equilibrium", backend="sympy",
+            inputs={names[a]: float(sp.N(given[a], 20)) for a in sorted(given)},
+            angles_rigid={n: res.angles_rigid[n] for n in order},
+            angles_compliant={n: res.angles_compliant[n] for n in order},
+            points={n: PointResult(*res.points[n]) for n in res.points},
+            dyads=self.dyad_states(inputs, params),
+            params=parameter_floats(self.mechanism, exact_params),
+            overrides=tuple(params or ()), hinges={n: res.hinges[n] for n in order},
+            energy=res.energy, error_estimate=res.error_estimate, links=links)
 
     def dyad_states(self, inputs: Mapping[str, object],
                     params: Mapping[str, object] | None = None) -> tuple[dict, ...]:
@@ -650,13 +813,19 @@ def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
         compliant = dict(zip(hinges, angles[m:]))
         links = {n: LinkResult(*rot[3 * i:3 * i + 3]) for i, n in enumerate(p.reported_links)}
     order = {kin.hinges[a].name: a for a in kin.hinges}
+    extra = {}
+    if levels.get(level).needs_stiffness:
+        # The plates' loads and energy are not in the generated evaluators' output: the
+        # derivation gives them, as it gives the dyad states (docs/physics.md).
+        physical = loaded(analysis, inputs, params)
+        extra = {"hinges": physical.hinges, "energy": physical.energy}
     return Evaluation(
         level=level, backend=backend, inputs=dict(zip(names, x)),
         angles_rigid={h: rigid[h] for h in sorted(rigid, key=order.get)},
         angles_compliant={h: compliant[h] for h in sorted(compliant, key=order.get)},
         points=points, dyads=_mpmath_evaluator(analysis).dyad_states(inputs, params),
         params=parameter_floats(analysis.mechanism, pvals), overrides=tuple(params or ()),
-        links=links, sensitivity=sens)
+        links=links, sensitivity=sens, **extra)
 
 
 def _explain(analysis: Analysis, inputs, level, params, sensitivity: bool = False) -> None:

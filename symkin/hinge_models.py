@@ -12,6 +12,7 @@ expressions in THETA, the deviation written with the cancellation-free kernels o
 
 from __future__ import annotations
 
+import dataclasses as _dc
 import math as _math
 from dataclasses import dataclass
 
@@ -62,10 +63,14 @@ MODELS: dict[str, ModelSpec] = {spec.name: spec for spec in (
         ModelParameter("gamma", "fraction", default=PRBM_PRESETS["force"]["gamma"]),
         ModelParameter("c_theta", "number", default=PRBM_PRESETS["force"]["c_theta"]),
         ModelParameter("preset", "choice", choices=tuple(sorted(PRBM_PRESETS))),
-    ), "pseudo-rigid-body model: a pin at distance (1 - gamma) l from P's clamp"),
+    ), "pseudo-rigid-body model: a pin at distance (1 - gamma) l from P's clamp; its "
+       "first-order pivot is gamma l/c_theta from M's clamp, so against the midpoint pin it "
+       "deviates by O(l theta) unless pin = \"prbm\""),
     ModelSpec("small_deflection", (), "linear beam theory: f = l, g = l theta / 2"),
     ModelSpec("elastica_force", (),
-              "cantilever elastica under a transverse end force (Bisshopp-Drucker)"),
+              "cantilever elastica under a transverse end force (Bisshopp-Drucker); its "
+              "first-order pivot is 2 l/3 from M's clamp, so against the midpoint pin it "
+              "deviates by O(l theta) unless pin = \"prbm\""),
     ModelSpec("table", (
         ModelParameter("file", "text", required=True),
         ModelParameter("degree", "int", default=3),
@@ -76,8 +81,13 @@ MODELS: dict[str, ModelSpec] = {spec.name: spec for spec in (
     ), "user expressions in theta, l and the parameters"),
 )}
 
-#: Hinge keys that are not model parameters.
-HINGE_KEYS = ("name", "links", "at", "plate_angle", "length", "model", "input")
+#: Hinge keys that are not model parameters: geometry, model, input, where the rigid reference
+#: pin sits (`pin`), and the plate's stiffness data (CONTRACT §7, docs/physics.md).
+HINGE_KEYS = ("name", "links", "at", "plate_angle", "length", "model", "input", "pin",
+              "E", "thickness", "width", "nu")
+#: Values of the `pin` key: the rigid reference pin at the plate midpoint (the paper's R_a), or at
+#: the pivot of the model's pseudo-rigid-body equivalent (see :func:`pivot_distance`).
+PINS = ("midpoint", "prbm")
 #: Every key a model may take, over all models (allowed in [defaults]).
 MODEL_KEYS = tuple(sorted({p.name for spec in MODELS.values() for p in spec.parameters}))
 
@@ -112,9 +122,12 @@ class PlateFunctions:
     df, dg:      f - f_rigid, g - g_rigid, in cancellation-free form when `stable` is True: a
                  float64 evaluation (the kernels as every backend writes them) keeps full
                  relative accuracy for every θ down to 1e-300 and up to `limit`.
-    f_rigid, g_rigid: the ideal revolute at the plate midpoint, l/2 (1 + cos θ), l/2 sin θ.
+    f_rigid, g_rigid: the ideal revolute the hinge is compared with: a pin at distance `pivot`
+                 from M's clamp, (l - d) + d cos θ, d sin θ; at the plate midpoint (d = l/2,
+                 the paper's (3.1)) unless the hinge says pin = "prbm".
     limit:       models defined only for |θ| < limit (elastica_force: π/2), else None.
     fit:         the table model's fit and its residuals, else None.
+    pivot:       d, the rigid pin's distance from M's clamp along the straight plate (None: l/2).
     """
 
     model: str
@@ -128,6 +141,7 @@ class PlateFunctions:
     limit: _sp.Expr | None = None
     stable: bool = True
     fit: TableFit | None = None
+    pivot: _sp.Expr | None = None
 
     def derivatives(self) -> tuple[_sp.Expr, _sp.Expr]:
         """(d df/dθ, d dg/dθ), through the kernels' stable derivatives."""
@@ -135,9 +149,70 @@ class PlateFunctions:
         return _sp.diff(self.df, t), _sp.diff(self.dg, t)
 
 
-def plate_functions(hinge) -> PlateFunctions:
+def pivot_distance(hinge) -> _sp.Expr:
+    """d, the distance of the hinge's rigid reference pin from M's clamp along the straight plate.
+
+    `pin = "midpoint"`: l/2, the paper's R_a.  `pin = "prbm"`: the pivot of the model's own
+    pseudo-rigid-body equivalent, the pin whose motion agrees with the model's to first order in θ,
+    d = g'(0): l/2 for rigid, circular_arc and small_deflection; γ l/c_θ for prbm (not γ l: link
+    M turns by θ = c_θ Θ, so the pin that moves M's clamp along the model's first-order path sits
+    γ l/c_θ from it); 2 l/3 for elastica_force (the cantilever's tip under an end force moves
+    y = 2 l θ/3); the fit's linear coefficient times l for table; g'(0) for expr.  Against a pin
+    elsewhere the model carries an O(l θ) deviation (docs/physics.md)."""
+    l = hinge.length
+    pin = getattr(hinge, "pin", "midpoint")       # stand-in hinges of the reports have none
+    if pin == "midpoint" or hinge.model in ("rigid", "circular_arc", "small_deflection"):
+        return l / 2
+    if hinge.model == "prbm":
+        gamma, c = _prbm_constants(hinge)
+        return gamma * l / c
+    if hinge.model == "elastica_force":
+        return 2 * l / 3
+    t = THETA
+    return _sp.limit(_sp.diff(_midpoint_functions(hinge).g, t), t, 0)
+
+
+def _prbm_constants(hinge) -> tuple[_sp.Expr, _sp.Expr]:
+    gamma = _sp.sympify(hinge.param("gamma", _sp.Rational(PRBM_PRESETS["force"]["gamma"])))
+    c = _sp.sympify(hinge.param("c_theta", _sp.Rational(PRBM_PRESETS["force"]["c_theta"])))
+    return gamma, c
+
+
+def plate_functions(hinge, shape: str | None = None) -> PlateFunctions:
     """f, g, df = f - f_rigid, dg = g - g_rigid of `hinge` (a mechanism.Hinge) as sympy
-    expressions in THETA, with the plate length replaced by ``hinge.length``."""
+    expressions in THETA, with the plate length replaced by ``hinge.length``; the rigid reference
+    is the pin of :func:`pivot_distance`. `shape` (a model without parameters, e.g.
+    "circular_arc") replaces the hinge's model for f and g but keeps its pin."""
+    own = hinge if shape is None else _dc.replace(hinge, model=shape, model_params=())
+    base = _midpoint_functions(own)
+    d = pivot_distance(hinge)
+    l = hinge.length
+    if _sp.simplify(d - l / 2) == 0:
+        return base
+    t = THETA
+    # Pin at d instead of l/2: f_rigid moves by (l/2 - d)(1 - cos θ), with 1 - cos θ = -θ² c1(θ)
+    # (no cancellation: both parts of df are O(θ²)); g_rigid by (d - l/2) sin θ, which cancels
+    # the model's own O(θ) term, so dg needs each model's exact form.
+    f_rigid = l - d + d * _sp.cos(t)
+    g_rigid = d * _sp.sin(t)
+    df = base.df - (d - l / 2) * t ** 2 * _special.cosr(1)(t)
+    stable = base.stable
+    if own.model != hinge.model:
+        dg = base.dg - (d - l / 2) * _sp.sin(t)      # the shape's own O(θ) term stays: no cancellation
+    elif hinge.model == "prbm":
+        # γ l sin(θ/c) - (γ l/c) sin θ = γ l θ³ (s1(θ/c)/c³ - s1(θ)/c)
+        gamma, c = _prbm_constants(hinge)
+        sinr1 = _special.sinr(1)
+        dg = gamma * l * t ** 3 * (sinr1(t / c) / c ** 3 - sinr1(t) / c)
+    else:
+        dg = base.dg - (d - l / 2) * _sp.sin(t)      # a plain difference: loses ε/θ² in float64
+        stable = False
+    return PlateFunctions(base.model, l, base.f, base.g, df, dg, f_rigid, g_rigid, base.limit,
+                          stable, base.fit, d)
+
+
+def _midpoint_functions(hinge) -> PlateFunctions:
+    """The model's f, g and its deviation from the pin at the plate midpoint (eq. 3.1, 3.3)."""
     model = hinge.model
     if model not in MODELS:
         raise ValueError(f"unknown hinge model {model!r}")
@@ -162,8 +237,7 @@ def plate_functions(hinge) -> PlateFunctions:
         return PlateFunctions(model, l, l, l * t / 2, -l * t ** 2 / 2 * cosr(1)(t),
                               -l * t ** 3 / 2 * sinr(1)(t), f_rigid, g_rigid)
     if model == "prbm":
-        gamma = _sp.sympify(hinge.param("gamma", _sp.Rational(PRBM_PRESETS["force"]["gamma"])))
-        c = _sp.sympify(hinge.param("c_theta", _sp.Rational(PRBM_PRESETS["force"]["c_theta"])))
+        gamma, c = _prbm_constants(hinge)
         big = t / c
         f = l * (1 + gamma * big ** 2 * cosr(1)(big))
         g = gamma * l * _sp.sin(big)

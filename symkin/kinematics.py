@@ -7,8 +7,9 @@ as-fabricated pose, and c_ia is the as-fabricated absolute position of hinge a's
 [s_0, s_i]. A hinge whose file order is [i-(a), i+(a)] has paper angle q_a = -θ_a.
 
 The rigid position of a point fixed in link k is Σ_i Rot(φ_i) W_i with constant vectors W_i between
-hinge centres (an ideal revolute sits at the plate midpoint); the compliant one adds Σ Δz_b over the
-direct path (4.7)–(4.8). Loop closure (5.1)/(5.3) for the chord c reads
+hinge pins (an ideal revolute at the plate midpoint, or at the model's pseudo-rigid-body pivot
+when the hinge says pin = "prbm"); the compliant one adds Σ Δz_b over the direct path (4.7)–(4.8).
+Loop closure (5.1)/(5.3) for the chord c reads
     Σ_b Φ_cb q_b = 0,     Σ_i Rot(φ_i) V^c_i + Σ_b Φ_cb Δz_b = 0,   V^c_i = Σ_b S_ib Φ_cb centre_b.
 """
 
@@ -36,7 +37,7 @@ class HingeGeometry:
     P: int                  # label of the file's links[0]: the plate frame is fixed in P
     M: int                  # label of links[1]
     sign: int               # +1 when P = i+(a): paper angle q_a = sign * θ_a
-    centre: Vec
+    centre: Vec             # the rigid reference pin (the plate midpoint unless pin = "prbm")
     angle: sp.Expr
     length: sp.Expr
     f: sp.Expr              # model functions of THETA (plate length substituted)
@@ -45,6 +46,7 @@ class HingeGeometry:
     dg: sp.Expr
     limit: sp.Expr | None = None    # |θ| < limit: the model's (elastica_force π/2), else π for
     #                                 any plate (it cannot bend further); None for a rigid pin
+    midpoint: Vec | None = None     # the plate midpoint `at` when the pin sits elsewhere
 
     @property
     def name(self) -> str:
@@ -61,7 +63,8 @@ class HingeGeometry:
     def clamp(self, link: int) -> Vec:
         """As-fabricated position of the plate end fixed in `link` (P's end or M's end)."""
         half = V.scale(self.length / 2, self.u)
-        return V.sub(self.centre, half) if link == self.P else V.add(self.centre, half)
+        mid = self.centre if self.midpoint is None else self.midpoint
+        return V.sub(mid, half) if link == self.P else V.add(mid, half)
 
     def delta_z(self, theta: sp.Expr, phi_p: sp.Expr) -> Vec:
         """Paper-oriented Δz_a (3.3): z_a - z_a^r at hinge angle θ, with P rotated by phi_p."""
@@ -97,9 +100,13 @@ class Kinematics:
             h = mech.hinge(name)
             plate = plate_of(h)
             P, M = label[h.links[0]], label[h.links[1]]
-            hinges[a] = HingeGeometry(a, h, P, M, 1 if P == s.i_plus[a - 1] else -1, h.at,
+            centre, midpoint = h.at, None
+            if plate.pivot is not None:         # the pin sits d from M's clamp, not at `at`
+                midpoint = h.at
+                centre = V.add(h.at, V.scale(h.length / 2 - plate.pivot, V.unit(h.plate_angle)))
+            hinges[a] = HingeGeometry(a, h, P, M, 1 if P == s.i_plus[a - 1] else -1, centre,
                                       h.plate_angle, h.length, plate.f, plate.g, plate.df,
-                                      plate.dg, plate_limit(h.model, plate.limit))
+                                      plate.dg, plate_limit(h.model, plate.limit), midpoint)
         self.hinges = hinges
         self.inputs = tuple(a for a in hinges if hinges[a].is_input)
         self.unknowns = tuple(a for a in hinges if not hinges[a].is_input)

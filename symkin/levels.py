@@ -25,6 +25,7 @@ class Level:
     equation: str = ""              # the paper's equation it restates, e.g. "(4.8)"
     needs_stiffness: bool = False   # needs E, thickness and width of every compliant plate
     generated: bool = True          # the generated C and numpy hold it; else mpmath only
+    sensitivity: bool = True        # closed-form derivatives by the parameters (docs/sensitivity.md)
 
     @property
     def label(self) -> str:
@@ -37,6 +38,10 @@ LEVELS: tuple[Level, ...] = (
     Level("paper", 0, "paper", needs_delta=False, equation="(4.8)"),
     Level("first_order", 1, "first order", needs_delta=True),
     Level("exact", 2, "exact", needs_delta=True),
+    # The physical levels (docs/physics.md): the plates' stiffness and the file's loads.
+    Level("loaded", 3, "loaded", needs_delta=True, needs_stiffness=True, sensitivity=False),
+    Level("equilibrium", 4, "equilibrium", needs_delta=False, needs_stiffness=True,
+          generated=False, sensitivity=False),
 )
 
 NAMES: tuple[str, ...] = tuple(lv.name for lv in LEVELS)

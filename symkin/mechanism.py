@@ -21,14 +21,32 @@ import sympy as sp
 
 from . import expressions
 from .errors import InputError, suggest
-from .hinge_models import (HINGE_KEYS, MODEL_KEYS, MODELS, PLATE_LENGTH, PRBM_PRESETS, THETA,
-                           ModelParameter)
+from .hinge_models import (HINGE_KEYS, MODEL_KEYS, MODELS, PINS, PLATE_LENGTH, PRBM_PRESETS,
+                           THETA, ModelParameter)
 
 FORMAT = 1
-TOP_KEYS = ("format", "name", "ground", "chords", "basic_chain", "parameters", "defaults",
-            "link", "hinge", "point")
+TOP_KEYS = ("format", "name", "ground", "chords", "basic_chain", "units", "parameters",
+            "defaults", "link", "hinge", "point", "load")
 LINK_KEYS = ("name",)
 POINT_KEYS = ("name", "link", "at")
+LOAD_KEYS = ("point", "link", "at", "force", "moment")
+#: The file's length unit (`units`), in metres: geometry, lengths, thickness, width and load points
+#: are in it; E is in Pa, forces in N, moments in N·m (CONTRACT §7, docs/physics.md).
+UNITS: dict[str, sp.Rational] = {"m": sp.Integer(1), "mm": sp.Rational(1, 10**3),
+                                 "um": sp.Rational(1, 10**6)}
+#: Poisson's ratio when a hinge gives none (CONTRACT §7).
+DEFAULT_NU = sp.Rational(3, 10)
+#: The value rules of the stiffness keys: (holds for the value, what is wrong, how to fix it).
+STIFFNESS_RULES = {
+    "E": (lambda v: v > 0, "Young's modulus must be positive (Pa)",
+          "give E in Pa, e.g. E = 210e9 for steel"),
+    "thickness": (lambda v: v > 0, "plate thickness must be positive",
+                  "give the thickness in the file's length unit"),
+    "width": (lambda v: v > 0, "plate width must be positive",
+              "give the out-of-plane width in the file's length unit"),
+    "nu": (lambda v: 0 <= v < sp.Rational(1, 2), "Poisson's ratio must be in [0, 0.5)",
+           "e.g. nu = 0.3 for steel"),
+}
 DEFAULT_KEYS = tuple(k for k in HINGE_KEYS if k not in ("name", "links", "at")) + MODEL_KEYS
 DEFAULT_MODEL = "circular_arc"
 
@@ -65,6 +83,11 @@ class Hinge:
     model_params: tuple[tuple[str, object], ...] = ()
     input: bool = False
     line: int | None = None
+    pin: str = "midpoint"               # where the rigid reference pin sits (hinge_models.PINS)
+    E: sp.Expr | None = None            # Young's modulus, Pa (None: not given)
+    thickness: sp.Expr | None = None    # plate thickness, file unit
+    width: sp.Expr | None = None        # out-of-plane width, file unit
+    nu: sp.Expr = DEFAULT_NU            # Poisson's ratio
 
     def param(self, key: str, default: object = None) -> object:
         return dict(self.model_params).get(key, default)
@@ -80,6 +103,25 @@ class Point:
 
 
 @dataclass(frozen=True)
+class Load:
+    """A dead load on a link (CONTRACT §7): force (N, frame axes) at `at` (the as-fabricated
+    absolute position, file unit) and a moment (N·m, counter-clockwise)."""
+
+    index: int
+    link: str
+    at: tuple[sp.Expr, sp.Expr]
+    force: tuple[sp.Expr, sp.Expr]
+    moment: sp.Expr
+    point: str | None = None            # the named [[point]] it acts on, if it names one
+    line: int | None = None
+
+    @property
+    def label(self) -> str:
+        """How reports name it: `[[load]] #k` (on point P)."""
+        return f"[[load]] #{self.index + 1}" + (f" on '{self.point}'" if self.point else "")
+
+
+@dataclass(frozen=True)
 class Mechanism:
     """A validated mechanism file: names, exact numbers and sympy expressions, in file order."""
 
@@ -92,6 +134,13 @@ class Mechanism:
     points: tuple[Point, ...]
     chords: tuple[str, ...] | None = None
     basic_chain: tuple[str, ...] | None = None
+    units: str = "m"
+    loads: tuple[Load, ...] = ()
+
+    @property
+    def unit_scale(self) -> sp.Rational:
+        """Metres per file length unit."""
+        return UNITS[self.units]
 
     @property
     def inputs(self) -> tuple[str, ...]:
@@ -303,6 +352,10 @@ class _Reader:
             raise self.error(f"ground {ground!r} is not a [[link]]", "ground",
                              self.where.key("ground"),
                              suggest(str(ground), link_names) or "name one of the links")
+        units = data.get("units", "m")
+        if units not in UNITS:
+            raise self.error(f"unknown length unit {units!r}", "units", self.where.key("units"),
+                             "units: " + ", ".join(f'"{u}"' for u in UNITS))
         hinges = self.hinges(self.array_of_tables(data, "hinge"), defaults, link_names)
         points = self.points(self.array_of_tables(data, "point"), link_names)
         mech = Mechanism(
@@ -310,6 +363,7 @@ class _Reader:
             hinges=hinges, points=points,
             chords=self.name_list(data, "chords", [h.name for h in hinges], "hinge"),
             basic_chain=self.name_list(data, "basic_chain", link_names, "link"),
+            units=units, loads=self.loads(self.array_of_tables(data, "load"), link_names, points),
         )
         self.check_connected(mech)
         self.check_mobility(mech)
@@ -412,8 +466,37 @@ class _Reader:
         if not isinstance(is_input, bool):
             raise self.error(f"'input' must be true or false, got {is_input!r}", entry, line)
         params = self.model_params(spec, table, defaults, entry, line, length)
+        pin = merged.get("pin", "midpoint")
+        if pin not in PINS:
+            raise self.error(f"'pin' must be one of {', '.join(PINS)}, got {pin!r}", entry, line,
+                             "pin = \"midpoint\" (the paper's rigid pin) or \"prbm\" (the "
+                             "model's pseudo-rigid-body pivot)")
+        stiffness = self.stiffness(merged, entry, line, length)
         return Hinge(name, i, (links[0], links[1]), at, plate_angle, length, model, params,
-                     is_input, line)
+                     is_input, line, pin, **stiffness)
+
+    def stiffness(self, merged: Mapping, entry: str, line: int | None,
+                  length: sp.Expr) -> dict[str, sp.Expr]:
+        """E, thickness, width, nu of a hinge (CONTRACT §7), each checked where given: E > 0,
+        0 < thickness < length, width > 0, 0 <= nu < 0.5 (with the default parameters)."""
+        out: dict[str, sp.Expr] = {}
+        for key, (ok, message, hint) in STIFFNESS_RULES.items():
+            if key not in merged:
+                continue
+            expr = self.expr(merged[key], entry, key, line)
+            value = self.finite(expr, entry, key, line)
+            if not ok(value):
+                raise self.error(f"{message}, got {key} = {_short(value)}", entry, line, hint)
+            out[key] = expr
+        if "thickness" in out:
+            t = self.finite(out["thickness"], entry, "thickness", line)
+            lval = self.finite(length, entry, "length", line)
+            if not t < lval:
+                raise self.error(f"thickness {_short(t)} is not smaller than the plate length "
+                                 f"{_short(lval)}", entry, line,
+                                 "a flexure plate is thin: make thickness < length (about "
+                                 "length/10 or less)")
+        return out
 
     def model_params(self, spec, table: Mapping, defaults: Mapping, entry: str,
                      line: int | None, length: sp.Expr) -> tuple[tuple[str, object], ...]:
@@ -535,6 +618,49 @@ class _Reader:
         self.unique("point", [p.name for p in out], [p.line for p in out])
         return tuple(out)
 
+    def loads(self, tables: list[Mapping], link_names: list[str],
+              points: tuple[Point, ...]) -> tuple[Load, ...]:
+        """[[load]] entries: on a named point, or on a link at a position; a force, a moment or
+        both (CONTRACT §7)."""
+        out = []
+        point_names = [p.name for p in points]
+        for i, table in enumerate(tables):
+            line = self.where.header("load", i)
+            entry = f"[[load]] #{i + 1}"
+            self.check_keys(table, LOAD_KEYS, entry, line)
+            if "point" in table:
+                if "link" in table or "at" in table:
+                    raise self.error("give either 'point' or 'link' with 'at', not both", entry,
+                                     line, "remove 'link'/'at', or remove 'point'")
+                name = self.text(table, "point", entry, line)
+                if name not in point_names:
+                    raise self.error(f"load on an unknown point '{name}'", entry, line,
+                                     suggest(name, point_names)
+                                     or "name one of the [[point]] entries, or use link and at")
+                point = next(p for p in points if p.name == name)
+                link, at = point.link, point.at
+            elif "link" in table:
+                link = self.text(table, "link", entry, line)
+                if link not in link_names:
+                    raise self.error(f"load on an unknown link '{link}'", entry, line,
+                                     suggest(link, link_names) or "name one of the links")
+                if "at" not in table:
+                    raise self.error("a load on a link needs 'at'", entry, line,
+                                     "add at = [x, y], where the load acts (as fabricated)")
+                name, at = None, self.vector(table["at"], entry, "at", line)
+            else:
+                raise self.error("a load needs 'point', or 'link' and 'at'", entry, line,
+                                 "add point = \"C\" (a [[point]]) or link = ... with at = [x, y]")
+            if "force" not in table and "moment" not in table:
+                raise self.error("a load needs a 'force', a 'moment' or both", entry, line,
+                                 "add force = [Fx, Fy] (N) and/or moment = M (N·m)")
+            force = (self.vector(table["force"], entry, "force", line) if "force" in table
+                     else (sp.Integer(0), sp.Integer(0)))
+            moment = self.expr(table.get("moment", 0), entry, "moment", line)
+            self.finite(moment, entry, "moment", line)
+            out.append(Load(i, link, at, force, moment, name, line))
+        return tuple(out)
+
     def name_list(self, data: Mapping, key: str, known: list[str],
                   kind: str) -> tuple[str, ...] | None:
         if key not in data:
@@ -630,7 +756,20 @@ def check_values(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr],
                     raise fail(f"'{key}' must be {rng}, got "
                                f"{'not finite' if value is None else mpmath.nstr(value, 6)}",
                                entry, h.line, f"keep '{key}' {rng}")
+            for key, (ok, message, hint) in STIFFNESS_RULES.items():
+                raw = getattr(h, key)
+                value = None if raw is None else sp.N(sp.sympify(raw).subs(values), 30)
+                if value is not None and not (value.is_real and value.is_finite and ok(value)):
+                    raise fail(f"{message}, got {key} = {_short(value)}", entry, h.line, hint)
+            if h.thickness is not None and not _mp(h.thickness, values) < length:
+                raise fail(f"thickness {mpmath.nstr(_mp(h.thickness, values), 6)} is not smaller "
+                           f"than the plate length {mpmath.nstr(length, 6)}", entry, h.line,
+                           "a flexure plate is thin: make thickness < length")
             centres[h.name] = (at, length)
+        for load in mech.loads:
+            if None in [_mp(v, values) for v in (*load.force, load.moment)]:
+                raise fail("'force' or 'moment' is not a finite number", load.label, load.line,
+                           "keep loads finite")
         for p in mech.points:
             if None in [_mp(v, values) for v in p.at]:
                 raise fail("'at' is not a finite number", f"[[point]] '{p.name}'", p.line,

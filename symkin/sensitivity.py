@@ -116,6 +116,8 @@ class Sensitivities:
         kin = an.kin
         out: dict[str, Stage | None] = {}
         for lv in levels.LEVELS:
+            if not lv.sensitivity:
+                continue
             if not lv.generated or not lv.needs_delta or not kin.unknowns:
                 out[lv.name] = None
                 continue
@@ -133,7 +135,7 @@ class Sensitivities:
         kin = an.kin
         out: dict[str, Partials] = {}
         for lv in levels.LEVELS:
-            if not lv.generated:
+            if not lv.generated or not lv.sensitivity:
                 continue
             rows_v, rows_t, rows_d = [], [], []
             for name in self.points:

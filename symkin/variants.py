@@ -23,11 +23,13 @@ import sympy as sp
 
 from . import hinge_models, special
 from .analysis import Analysis
-from .levels import NAMES as LEVELS
+from .levels import LEVELS as LEVEL_TABLE
 from .hinge_models import THETA
 from .mechanism import Mechanism
 from .structure import build
 
+#: The levels a variant can take: generated ones (a variant is timed in C and numpy), kinematic.
+LEVELS = tuple(lv.name for lv in LEVEL_TABLE if lv.generated and not lv.needs_stiffness)
 FAITHFUL_MODELS = ("circular_arc", "elastica_force")
 MODEL_CHOICES = ("file", "taylor2", "taylor3", "taylor4", "taylor6", "prbm", "small_deflection")
 PRBM_DEFAULT = (("c_theta", sp.Rational("1.2385")), ("gamma", sp.Rational("0.8517")))

@@ -106,3 +106,12 @@ length = "l"
     hinge("B0", "frame", "rocker", 0.1, 0.0, "pi/2") + \
     '[[hinge]]\nname = "B"\nlinks = ["coupler", "rocker"]\nat = ["bx", "by"]\n' + \
     '[[point]]\nname = "C"\nlink = "coupler"\nat = ["cx", "0.064 + ay"]\n'
+
+def without_stiffness(path) -> str:
+    """An example file's text without the plates' E, thickness and width (for tests that set
+    their own stiffness, or need a file without any)."""
+    import re
+    from pathlib import Path
+
+    text = Path(path).read_text()
+    return re.sub(r"^(E|thickness|width) = .*\n", "", text, flags=re.M)

@@ -25,6 +25,10 @@ FLOORS: tuple[tuple[str, ...], ...] = (
     ("rigid", "loop_equations"),
     ("analysis",),
     ("variants", "sensitivity"),
+    # the physical levels: plate stiffness, the loaded level's derivation, the elastica solver
+    ("physics.stiffness", "physics.beamcolumn", "physics.arith", "physics.result"),
+    ("physics.elastica", "physics.statics"),
+    ("physics.equilibrium",),
     # code generation: the plan, then each backend's printer and kernels, then the backends
     ("codegen.derivation", "codegen.plan"),
     ("codegen.backends.c.printer", "codegen.backends.c.kernels",
@@ -42,8 +46,8 @@ FLOORS: tuple[tuple[str, ...], ...] = (
     ("cli", "__main__"),
 )
 #: Packages whose __init__ only documents them (no imports): no floor needed.
-DOC_ONLY = ("codegen", "codegen.backends", "codegen.backends.c", "codegen.backends.numpy",
-            "codegen.backends.latex")
+DOC_ONLY = ("physics", "codegen", "codegen.backends", "codegen.backends.c",
+            "codegen.backends.numpy", "codegen.backends.latex")
 
 
 def modules() -> dict[str, ast.Module]:

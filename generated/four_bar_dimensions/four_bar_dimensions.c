@@ -16,7 +16,8 @@ enum {
     SK_K1 = 4,
     SK_NDYAD = 1,
     SK_NP = 1,
-    SK_NL = 4            /* links whose rotation is reported */
+    SK_NL = 4,           /* links whose rotation is reported */
+    SK_NQ = FOUR_BAR_DIMENSIONS_N_PARAMS + 0 + 1  /* what the routines read */
 };
 
 const double four_bar_dimensions_default_params[FOUR_BAR_DIMENSIONS_N_PARAMS > 0 ? FOUR_BAR_DIMENSIONS_N_PARAMS : 1] = {
@@ -1478,33 +1479,46 @@ static double sk_rigid_newton(double *theta, const double *params, int iteration
     return change;
 }
 
-/* Level first_order, and the start of every other loop-solving level: A delta = -Phi dz.
+typedef void (*sk_linear_fn)(const double *theta, const double *params, double *out);
+
+/* A delta = -r of a closure's linear routine (A, then r): its first-order delta.
    Returns 0, or 1 when A is singular. */
-static int sk_first_order(const double *theta, const double *params, double *delta)
+static int sk_linear_start(sk_linear_fn linear, const double *theta, const double *params,
+                           double *delta)
 {
     double lin[SK_K * SK_K + SK_K];
     int i;
-    sk_linear(theta, params, lin);
+    linear(theta, params, lin);
     for (i = 0; i < SK_K; ++i) {
         delta[i] = -lin[SK_K * SK_K + i];
     }
     return sk_solve(SK_K, lin, delta);
 }
 
-/* Level exact: Newton on the compliant closure from the first-order delta, ending once a step
-   is below sqrt(eps) of delta (quadratic convergence leaves it exact) or stalls at rounding.
-   Returns 0, 1 when a Jacobian is singular, 2 without convergence. */
-static int sk_exact(const double *theta, const double *params, double *delta)
+/* Level first_order, and the start of every other loop-solving level: A delta = -Phi dz. */
+static int sk_first_order(const double *theta, const double *params, double *delta)
+{
+    return sk_linear_start(sk_linear, theta, params, delta);
+}
+
+typedef void (*sk_newton_fn)(const double *theta, const double *delta, const double *params,
+                             double *out);
+
+/* Newton on a compliant closure (`newton`: F and dF/ddelta) from its first-order delta, ending
+   once a step is below sqrt(eps) of delta (quadratic convergence leaves it exact) or stalls at
+   rounding. Returns 0, 1 when a Jacobian is singular, 2 without convergence. */
+static int sk_newton_solve(sk_linear_fn linear, sk_newton_fn newton, const double *theta,
+                           const double *params, double *delta)
 {
     double nw[SK_K + SK_K * SK_K];
     double previous = HUGE_VAL;
     int it, i, converged = 0;
-    if (sk_first_order(theta, params, delta)) {
+    if (sk_linear_start(linear, theta, params, delta)) {
         return 1;
     }
     for (it = 0; it < 40 && !converged; ++it) {
         double size = 0.0, change = 0.0;
-        sk_newton(theta, delta, params, nw);
+        newton(theta, delta, params, nw);
         if (sk_solve(SK_K, nw + SK_K, nw)) {
             return 1;
         }
@@ -1524,17 +1538,26 @@ static int sk_exact(const double *theta, const double *params, double *delta)
     return converged ? 0 : 2;
 }
 
+/* Level exact: Newton on the compliant closure from the first-order delta. */
+static int sk_exact(const double *theta, const double *params, double *delta)
+{
+    return sk_newton_solve(sk_linear, sk_newton, theta, params, delta);
+}
+
 /* The configuration: the arguments checked, the rigid angles theta (every hinge) and, at the
    levels that solve the loops, delta (the non-input hinges; solved for the links' rotations
-   only when want_links). Returns a status code. */
+   only when want_links). *q is what the level's routines read: params, or at the loaded level
+   the constants (the parameters, then the plates' compliance) computed into `constants`.
+   Returns a status code. */
 static int sk_pose(const double *inputs, const double *params, int level, int want_links,
-                   double *theta, double *delta)
+                   double *theta, double *delta, double *constants, const double **q)
 {
     int i;
 
     if (inputs == NULL) {
         return 3;
     }
+    *q = params;
     if (level != 0 && level != 1 && level != 2) {
         return 3;
     }
@@ -1577,10 +1600,10 @@ static int sk_pose(const double *inputs, const double *params, int level, int wa
     {
         int status = 0;
         if (level == 1) {
-            status = sk_first_order(theta, params, delta);
+            status = sk_first_order(theta, *q, delta);
         }
         else if (level == 2) {
-            status = sk_exact(theta, params, delta);
+            status = sk_exact(theta, *q, delta);
         }
         if (status) {
             return status;
@@ -1612,6 +1635,7 @@ static int sk_pose(const double *inputs, const double *params, int level, int wa
         return 1;
     }
     (void)want_links;
+    (void)constants;
     return 0;
 }
 
@@ -1619,7 +1643,7 @@ static int sk_pose(const double *inputs, const double *params, int level, int wa
    into out; when angles is not NULL the rigid then the compliant hinge angles; when links is
    not NULL every reported link's rigid rotation, compliant rotation and deviation. */
 static int sk_outputs(const double *theta, const double *delta, const double *params,
-                      int level, double *out, double *angles, double *links)
+                      const double *q, int level, double *out, double *angles, double *links)
 {
     double rigid[2 * SK_NP + 1], dev[2 * SK_NP + 1];
     int i;
@@ -1627,13 +1651,13 @@ static int sk_outputs(const double *theta, const double *delta, const double *pa
     sk_rigid_points(theta, params, rigid);
     /* the level is one of these: sk_pose checked it */
     if (level == 0) {
-        sk_dev_paper(theta, params, dev);
+        sk_dev_paper(theta, q, dev);
     }
     else if (level == 1) {
-        sk_dev_first_order(theta, delta, params, dev);
+        sk_dev_first_order(theta, delta, q, dev);
     }
     else {
-        sk_dev_exact(theta, delta, params, dev);
+        sk_dev_exact(theta, delta, q, dev);
     }
     for (i = 0; i < 2 * SK_NP; ++i) {
         if (!isfinite(rigid[i]) || !isfinite(dev[i])) {
@@ -1690,14 +1714,17 @@ int four_bar_dimensions_evaluate_pose(const double *inputs, const double *params
 {
     double theta[SK_M];
     double delta[SK_K1];
+    double constants[SK_NQ];
+    const double *q;
     int status;
 
     if (params == NULL) {
         params = four_bar_dimensions_default_params;
     }
-    status = out == NULL ? 3 : sk_pose(inputs, params, level, links != NULL, theta, delta);
+    status = out == NULL ? 3 : sk_pose(inputs, params, level, links != NULL, theta, delta,
+                                       constants, &q);
     if (status == 0) {
-        status = sk_outputs(theta, delta, params, level, out, angles, links);
+        status = sk_outputs(theta, delta, params, q, level, out, angles, links);
     }
     if (status != 0) {
         sk_nan(out, 6 * SK_NP);
@@ -1780,6 +1807,10 @@ static int sk_sensitivity(const double *theta, const double *delta, const double
     double th[39];
     int i;
 
+    /* the levels without closed-form sensitivities (docs/sensitivity.md) are refused */
+    if (level != 0 && level != 1 && level != 2 && 1) {
+        return 3;
+    }
     sk_sens_rigid(theta, params, sr);
     for (i = 0; i < 39; ++i) {
         th[i] = -sr[9 + i];
@@ -1864,14 +1895,17 @@ int four_bar_dimensions_sensitivity_full(const double *inputs, const double *par
     double theta[SK_M];
     double delta[SK_K1];
     double dev[26 + 1], rig[26 + 1];
+    double constants[SK_NQ];
+    const double *q;
     int i, v, status;
 
     if (params == NULL) {
         params = four_bar_dimensions_default_params;
     }
-    status = deviation == NULL ? 3 : sk_pose(inputs, params, level, 0, theta, delta);
+    status = deviation == NULL ? 3 : sk_pose(inputs, params, level, 0, theta, delta,
+                                             constants, &q);
     if (status == 0 && values != NULL) {
-        status = sk_outputs(theta, delta, params, level, values, NULL, NULL);
+        status = sk_outputs(theta, delta, params, q, level, values, NULL, NULL);
     }
     if (status == 0) {
         status = sk_sensitivity(theta, delta, params, level, dev, rig);

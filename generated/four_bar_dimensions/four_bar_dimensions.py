@@ -29,6 +29,8 @@ HINGES = ('A0', 'A', 'B0', 'B', )
 LINKS = ('frame', 'crank', 'coupler', 'rocker', )
 POINTS = ('C', )
 LEVELS = ('paper', 'first_order', 'exact', )
+#: The levels with closed-form sensitivities (docs/sensitivity.md).
+SENSITIVITY_LEVELS = ('paper', 'first_order', 'exact', )
 
 _N_THETA = 4
 _INPUT_INDEX = (0, )
@@ -1423,22 +1425,27 @@ def _rigid_newton(theta, params, ok, iterations, tolerance=0.0):
     return theta, ok, ~active
 
 
-def _first_order(theta, params, ok):
-    """Level first_order, and the start of every other loop-solving level: A delta = -Phi dz."""
+def _linear_start(theta, params, ok, linear):
+    """A delta = -r of a closure's `linear` routine (A, then r): its first-order delta."""
     k = len(_UNKNOWN_INDEX)
-    lin = _linear(theta, params)
+    lin = linear(theta, params)
     delta, good = _solve(lin[:k * k], [-numpy.asarray(r) for r in lin[k * k:]], ok)
     return delta, ok & good
 
 
-def _exact(theta, params, ok):
-    """Level exact: Newton on the compliant closure from the first-order delta."""
-    delta, ok = _first_order(theta, params, ok)
+def _first_order(theta, params, ok):
+    """Level first_order, and the start of every other loop-solving level: A delta = -Phi dz."""
+    return _linear_start(theta, params, ok, _linear)
+
+
+def _newton_solve(theta, params, ok, linear, newton):
+    """Newton on a compliant closure (`newton`: F and dF/ddelta) from its first-order delta."""
+    delta, ok = _linear_start(theta, params, ok, linear)
     k = len(_UNKNOWN_INDEX)
     active = ok.copy()
     previous = numpy.full(ok.shape, numpy.inf)
     for _ in range(_EXACT_ITERATIONS):
-        out = _newton(theta, delta, params)
+        out = newton(theta, delta, params)
         step, good = _solve(out[k:], out[:k], active)
         ok = ok & (good | ~active)
         active = active & good
@@ -1454,6 +1461,11 @@ def _exact(theta, params, ok):
         if not active.any():
             break
     return delta, ok & ~active
+
+
+def _exact(theta, params, ok):
+    """Level exact: Newton on the compliant closure from the first-order delta."""
+    return _newton_solve(theta, params, ok, _linear, _newton)
 
 
 #: The levels that solve the loops, and how.
@@ -1500,13 +1512,13 @@ def evaluate(inputs, level='exact', params=None, links=True):
 
 def _evaluate(arrays, level, p, links):
     """evaluate() on one block of broadcast input arrays and parameter values p."""
-    theta, delta, ok = _pose(arrays, level, p, links)
-    return _points(theta, delta, ok, level, p, links)
+    theta, delta, ok, q = _pose(arrays, level, p, links)
+    return _points(theta, delta, ok, level, p, q, links)
 
 
 def _pose(arrays, level, p, links):
     """The rigid angles theta (every hinge), delta (the non-input hinges; solved for the links'
-    rotations only when `links`) and the ok mask."""
+    rotations only when `links`), the ok mask and what the level's routines read (q)."""
     shape = arrays[0].shape
     ok = numpy.ones(shape, dtype=bool)
     for a in arrays:
@@ -1515,28 +1527,29 @@ def _pose(arrays, level, p, links):
     x = [numpy.where(ok, a, 0.0) for a in arrays]
     with numpy.errstate(all="ignore"):
         theta, ok = _rigid_angles(x, p, ok)
+        q = p           # what the level's routines read: the parameters (loaded: and more)
         delta = [numpy.zeros(shape, dtype=_DTYPE) for _ in _UNKNOWN_INDEX]
         if (_NEEDS_LOOPS or (links and _LOOPS_FOR_LINKS)) and level in _DELTA:
-            delta, ok = _DELTA[level](theta, p, ok)
+            delta, ok = _DELTA[level](theta, q, ok)
         for i, limit in _LIMITS:
             ok = ok & (numpy.abs(theta[i]) <= limit)
             if i in _UNKNOWN_INDEX:
                 ok = ok & (numpy.abs(theta[i] + delta[_UNKNOWN_INDEX.index(i)]) <= limit)
-    return theta, delta, ok
+    return theta, delta, ok, q
 
 
-def _points(theta, delta, ok, level, p, links):
+def _points(theta, delta, ok, level, p, q, links):
     """The points, angles and (with `links`) the links' rotations of solved configurations, NaN
-    where not ok."""
+    where not ok; the rigid points read the parameters p, the level's deviation q."""
     shape = ok.shape
     with numpy.errstate(all="ignore"):
         rigid = _rigid_points(theta, p)
         if level == 'paper':
-            dev = _dev_paper(theta, p)
+            dev = _dev_paper(theta, q)
         elif level == 'first_order':
-            dev = _dev_first_order(theta, delta, p)
+            dev = _dev_first_order(theta, delta, q)
         elif level == 'exact':
-            dev = _dev_exact(theta, delta, p)
+            dev = _dev_exact(theta, delta, q)
         rot = [numpy.broadcast_to(v, shape) for v in _links(theta, delta)] if links else []
     rigid = [numpy.broadcast_to(v, shape) for v in rigid]
     dev = [numpy.broadcast_to(v, shape) for v in dev]
@@ -1576,6 +1589,9 @@ def sensitivity_full(inputs, level='exact', params=None):
     """evaluate()'s result with "deviation" and "rigid": {P: {"params": {p: a}, "inputs":
     {H: a}}}, the derivatives of every point's deviation and rigid position by every
     parameter and input, each a of shape (2, *broadcast_shape)."""
+    if level not in SENSITIVITY_LEVELS:
+        raise ValueError(f"sensitivities are derived at the levels {SENSITIVITY_LEVELS}, "
+                         f"not {level!r} (docs/sensitivity.md)")
     arrays, p = _prepare(inputs, level, params)
     return _blocks(_sensitivity, arrays, level, p)
 
@@ -1587,8 +1603,8 @@ def _times(a, b):
 
 def _sensitivity(arrays, level, p):
     """sensitivity_full() on one block: the implicit-function theorem on the closures."""
-    theta, delta, ok = _pose(arrays, level, p, True)
-    result = _points(theta, delta, ok, level, p, True)
+    theta, delta, ok, q = _pose(arrays, level, p, True)
+    result = _points(theta, delta, ok, level, p, q, True)
     ok = result["ok"]
     shape = ok.shape
     with numpy.errstate(all="ignore"):

@@ -77,10 +77,8 @@ def fold_numbers(expr: sp.Expr, keep: Callable[[sp.Expr], bool],
         return new
 
     def _fold(e: sp.Expr) -> sp.Expr:
-        if not e.free_symbols:
-            if not e.is_number or keep(e):
-                return e
-            return replace(e)
+        if not e.free_symbols and e.is_number:
+            return e if keep(e) else replace(e)
         if e.is_Atom:
             return e
         if e.is_Pow:

@@ -15,6 +15,15 @@
     sens_chain   params                -> ∂(default of p_j)/∂p_k, when defaults read parameters
     links        theta, delta          -> rotation φ of every reported link and its deviation δφ
 
+and for the `loaded` level (docs/physics.md), whose routines read the file's parameters followed
+by the plates' compliance (its closure's constants, computed once per configuration):
+
+    loaded_q0          theta, params       -> generalized forces Q0 (springs EI/l): A^T mu0 = Q0
+    loaded_q           theta, mu0, params  -> Q with the beam-column springs: A^T mu = Q
+    loaded_compliance  theta, mu, params   -> each plate's end displacement beyond its arc
+    loaded_linear      theta, constants    -> A and r of the loaded closure (its first-order start)
+    loaded_newton      theta, delta, constants -> F, dF/ddelta of the loaded closure
+
 Only what the requested points and levels need is derived: a point whose direct path holds only
 input hinges needs no loop solved at any level. Parameters are renamed p_0, p_1, ... so no name
 from the mechanism file can clash with generated code. A :class:`Plan` is the emitters' only
@@ -33,6 +42,8 @@ import sympy as sp
 from .. import levels as level_table
 from ..analysis import Analysis
 from ..levels import Level
+from ..physics.statics import LoadedDerivation, loaded_derivation
+from ..physics.stiffness import has_stiffness
 from ..solver import SOLVER, SolverSettings
 from .derivation import Derivation, derivation
 from .literals import float_literals, to_double
@@ -72,6 +83,7 @@ class Plan:
     notes: tuple[str, ...] = ()        # e.g. the variant a tolerance chose, for the headers
     solver: SolverSettings = SOLVER    # how the generated evaluators solve the loops
     derivation: Derivation | None = None    # what a report restates (plan(..., report=True))
+    loaded: LoadedPlan | None = None   # the `loaded` level's statics, when it is generated
     sensitivity: bool = False          # the sens_* routines are there
     chain: bool = False                # some parameter's default reads others (sens_chain)
 
@@ -80,20 +92,34 @@ class Plan:
         return self.needs_loops and level.needs_delta
 
 
+@dataclass(frozen=True)
+class LoadedPlan:
+    """How the generated `loaded` level computes its closure's constants: `passes` statics
+    solves A^T mu = Q (2: springs EI/l, then the beam-column springs at the first pass's axial
+    loads; 1: EI/l only), then `compliance` numbers (x, y of every plate) that follow the file's
+    parameters in the constants its closure, Newton and deviation routines read."""
+
+    passes: int
+    compliance: int
+
+
 def plan(analysis: Analysis, points: Sequence[str] | None = None,
          levels: Sequence[str] | None = None, cse: bool = True,
          notes: Sequence[str] = (), report: bool = False, links: bool | None = None,
-         sensitivity: bool = True) -> Plan:
-    """Derive the routines for the requested points and levels (all by default); with `report`,
-    also the statement of the derivation a LaTeX report prints. `links`: report the rotation of
-    every link (default: when no points are singled out; their rotations need the loops). With
-    `sensitivity`, the routines of the derivatives by the parameters and inputs
-    (docs/sensitivity.md)."""
+         sensitivity: bool = True, beam_column: bool = True) -> Plan:
+    """Derive the routines for the requested points and levels (by default every generated level
+    the file's data allows: `loaded` needs the plates' stiffness); with `report`, also the
+    statement of the derivation a LaTeX report prints. `links`: report the rotation of every
+    link (default: when no points are singled out; their rotations need the loops). With
+    `sensitivity`, the routines of the derivatives by the parameters and inputs at the levels
+    that have them (docs/sensitivity.md). `beam_column=False` derives the `loaded` level with the
+    first-order force correction only (a cheaper variant)."""
     an, kin = analysis, analysis.kin
     mech = an.mechanism
     names = tuple(p.name for p in an.points if points is None or p.name in points)
-    levels = tuple(lv for lv in level_table.LEVELS
-                   if lv.generated and (levels is None or lv.name in levels))
+    stiff = has_stiffness(mech)
+    levels = tuple(lv for lv in level_table.LEVELS if lv.generated and (
+        lv.name in levels if levels is not None else stiff or not lv.needs_stiffness))
     inputs = Argument("inputs", tuple(kin.theta[a] for a in kin.inputs))
     params = Argument("params", an.params)
     theta = Argument("theta", an.thetas)
@@ -125,12 +151,19 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
     routines["rigid_points"] = Routine(
         "rigid_points", (theta, params), (),
         tuple(e for n in names for e in an.point_rigid(n)), "rigid positions of the points")
+    loaded = None
     for lv in levels:
         args = (theta, delta, params) if lv.needs_delta else (theta, params)
-        routines[f"dev_{lv.name}"] = Routine(
-            f"dev_{lv.name}", args, (),
-            tuple(e for n in names for e in an.point_deviation(n, lv.name)),
-            f"deviation of the points at level {lv.name}")
+        if lv.name == "loaded":
+            der = loaded_derivation(an, beam_column=beam_column)
+            exprs = tuple(e for n in names for e in der.analysis.point_deviation(n, "exact"))
+            loaded, constants = _loaded_routines(der, routines, theta, delta, params, exprs,
+                                                 needs_loops or loops_for_links)
+            args = (theta, delta, constants)
+        else:
+            exprs = tuple(e for n in names for e in an.point_deviation(n, lv.name))
+        routines[f"dev_{lv.name}"] = Routine(f"dev_{lv.name}", args, (), exprs,
+                                             f"deviation of the points at level {lv.name}")
     s = an.structure
     reported = tuple(range(s.n + 1)) if links else ()
     if reported:
@@ -161,10 +194,10 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
         name=mech.name, links=s.links, hinges=s.hinges, inputs=mech.inputs,
         input_index=tuple(a - 1 for a in kin.inputs),
         unknown_index=tuple(a - 1 for a in kin.unknowns), parameters=parameters, points=names,
-        reported_links=tuple(s.links[i] for i in reported), levels=levels, limits=limits, n_dyads=len(sol.dyads),
-        needs_loops=needs_loops, loops_for_links=loops_for_links, closed_form=sol.closed_form,
-        routines=routines,
-        notes=tuple(notes), sensitivity=sensitivity, chain=chain)
+        reported_links=tuple(s.links[i] for i in reported), levels=levels, limits=limits,
+        n_dyads=len(sol.dyads), needs_loops=needs_loops, loops_for_links=loops_for_links,
+        closed_form=sol.closed_form, routines=routines, notes=tuple(notes), loaded=loaded,
+        sensitivity=sensitivity, chain=chain)
     return with_derivation(result, an) if report else result
 
 
@@ -182,7 +215,7 @@ def _sensitivity_routines(an: Analysis, points: Sequence[str], levels: Sequence[
         blocks = [terms.rigid_stage.jacobian, terms.rigid_stage.variables] + blocks
     routines["sens_rigid"] = Routine("sens_rigid", args, (), _flat(blocks),
                                      "rigid stage: A, dG/dv; rigid points: dR/dtheta, dR/dv")
-    for lv in levels:
+    for lv in (lv for lv in levels if lv.sensitivity):
         part = terms.partials(lv.name)
         stage = terms.stage(lv.name) if needs_loops and lv.needs_delta else None
         blocks = [part.theta] + ([part.delta] if stage is not None else []) + [part.variables]
@@ -202,6 +235,44 @@ def _sensitivity_routines(an: Analysis, points: Sequence[str], levels: Sequence[
 
 def _flat(blocks: Sequence[sp.Matrix]) -> tuple[sp.Expr, ...]:
     return tuple(e for b in blocks for e in flatten(b.tolist()))
+
+
+def _loaded_routines(der: LoadedDerivation, routines: dict[str, Routine], theta: Argument,
+                     delta: Argument, params: Argument, deviation: tuple[sp.Expr, ...],
+                     needs_loops: bool) -> tuple[LoadedPlan, Argument]:
+    """The `loaded` level's statics, compliance and closure routines (added to `routines`, in
+    the order they run) and the constants argument of its closure and `deviation`: the file's
+    parameters, then the compliance they read (the derivation's intermediates mu0, mu and
+    compliance_*, never parameters). A point the loops do not move reads only the plates on its
+    path; the others' compliance is not computed."""
+    la = der.analysis
+    closure = (tuple(la.residual) + flatten(la.jacobian.tolist()) if needs_loops else ())
+    read = set().union(*(sp.sympify(e).free_symbols for e in deviation + closure))
+    plates = [a for a in sorted(der.compliance) if read & set(der.compliance[a])]
+    compliance = tuple(c for a in plates for c in der.compliance[a])
+    constants = Argument("params", (*params.symbols, *compliance))
+    if la.kin.unknowns:
+        if der.mu0:
+            routines["loaded_q0"] = Routine(
+                "loaded_q0", (theta, params), (), tuple(der.first_statics[1]),
+                "loaded: generalized forces Q0 of the pin linkage, springs EI/l (A^T mu0 = Q0)")
+        routines["loaded_q"] = Routine(
+            "loaded_q", (theta, Argument("mu0", der.mu0), params), (), tuple(der.statics[1]),
+            "loaded: generalized forces Q with the beam-column springs (A^T mu = Q)"
+            if der.mu0 else "loaded: generalized forces Q of the pin linkage (A^T mu = Q)")
+    routines["loaded_compliance"] = Routine(
+        "loaded_compliance", (theta, Argument("mu", der.mu), params), (),
+        tuple(e for a in plates for e in der.plate_loads[a].displacement),
+        "loaded: each plate's end displacement beyond its circular arc under its loads")
+    if needs_loops:
+        a_lin, r_lin = la.linear_system
+        routines["loaded_linear"] = Routine(
+            "loaded_linear", (theta, constants), (), flatten(a_lin.tolist()) + tuple(r_lin),
+            "loaded: A and r = Phi dz of the loaded closure (its first-order start)")
+        routines["loaded_newton"] = Routine(
+            "loaded_newton", (theta, delta, constants), (), closure,
+            "loaded: the loaded closure F(delta) and dF/ddelta")
+    return LoadedPlan(2 if der.mu0 else 1, len(compliance)), constants
 
 
 def with_derivation(plan: Plan, analysis: Analysis) -> Plan:

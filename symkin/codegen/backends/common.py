@@ -56,9 +56,18 @@ class Backend:
             sensitivity=plan.sensitivity, chain=plan.chain,
             stages=[lv.name for lv in plan.levels if plan.stage(lv)],
             n_params=len(plan.parameters), n_vars=len(plan.parameters) + len(plan.inputs),
+            default_level=default_level(plan), loaded=plan.loaded,
+            loaded_code=levels.get("loaded").code,
             routines=[routine_data(r, self.printer) for r in plan.routines.values()],
             kernels=[type(self).kernel_source(n) for n in special_functions(plan)],
         )
+
+
+def default_level(plan: Plan) -> str:
+    """The level a generated evaluator uses when none is given: `exact` (docs/cli.md) when it is
+    generated, else the most faithful one generated."""
+    names = [lv.name for lv in plan.levels]
+    return levels.DEFAULT if levels.DEFAULT in names else names[-1]
 
 
 def routine_data(routine: Routine, printer: CodePrinter) -> dict:

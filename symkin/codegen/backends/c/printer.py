@@ -9,8 +9,9 @@ from .... import special
 
 class CPrinter(C99CodePrinter):
     """C99 printer without the non-standard M_PI / M_SQRT2 ... macros (strict -std=c99 has none),
-    writing every Float as its shortest round-trip decimal and symkin's special functions as the
-    static `symkin_<name>` of backends/c/kernels.py."""
+    writing every Float as its shortest round-trip decimal, symkin's special functions as the
+    static `symkin_<name>` of backends/c/kernels.py and a Piecewise (the plates' modulus,
+    docs/physics.md) as one line of nested ternaries."""
 
     def __init__(self, settings=None) -> None:
         super().__init__(settings)
@@ -31,3 +32,11 @@ class CPrinter(C99CodePrinter):
             args = ", ".join(self._print(a) for a in expr.args)
             return f"symkin_{type(expr).__name__}({args})"
         return super()._print_Function(expr)
+
+    def _print_Piecewise(self, expr):  # noqa: N802
+        if expr.args[-1].cond != True:  # noqa: E712 - sympy's BooleanTrue
+            raise ValueError("a Piecewise in generated code needs a default (True) branch")
+        text = self._print(expr.args[-1].expr)
+        for e, c in reversed(expr.args[:-1]):
+            text = f"(({self._print(c)}) ? ({self._print(e)}) : ({text}))"
+        return text

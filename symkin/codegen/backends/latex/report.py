@@ -719,9 +719,10 @@ def sensitivity_table(report: Report, numpy_module,
     without parameters or sensitivities."""
     plan = report.plan
     names = list(getattr(numpy_module, "PARAMETERS", {}))
-    if not names or not hasattr(numpy_module, "sensitivity_full"):
+    with_rates = [lv for lv in plan.levels if lv.sensitivity]
+    if not names or not with_rates or not hasattr(numpy_module, "sensitivity_full"):
         return None
-    level = plan.levels[-1].name
+    level = with_rates[-1].name
     single = len(runs) == 1
     held = {h: 0.5 * (data.t[0] + data.t[-1]) for h, data, _ in runs}
     rows = []
@@ -754,7 +755,7 @@ def sensitivity_table(report: Report, numpy_module,
         rows += [e[1] for e in entries]
     if not rows:
         return None
-    return {"level": plan.levels[-1].title, "rows": rows, "single_input": single,
+    return {"level": with_rates[-1].title, "rows": rows, "single_input": single,
             "inputs": [escape_latex(n) for n in numpy_module.INPUTS]}
 
 

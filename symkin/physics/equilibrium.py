@@ -1,0 +1,421 @@
+"""The `equilibrium` level (CONTRACT §7): the mechanism's plates as elastica, solved for the pose
+that balances them, the actuators and the loads (docs/physics.md).
+
+Unknowns: the pose (x, y, φ) of every moving link (a point fixed in it at p0 as fabricated is at
+(x, y) + Rot(φ) p0), the end loads (k0, λx, λy) of every plate (symkin.physics.elastica), the
+force of every pin (`rigid` hinges) and the torque of every input's actuator. Equations: each
+plate's elastica reaches M's clamp in P's plate frame with M's rotation (3), each pin joins its
+two links (2), each input hinge holds its angle (1), each moving link is in force and moment
+balance (3): a square system, because the inputs number the mechanism's mobility.
+
+It is solved by continuation in the load factor t (inputs and loads times t) from the straight,
+unloaded, as-fabricated pose at t = 0: a tangent predictor and Newton's method in float64 with
+the Jacobian by the complex step, the step halved when Newton fails or det J changes sign (a plate
+buckles or the path passes a limit point: exit 3 naming the hinge whose plate dominates the
+singular mode, and t). At t = 1 Newton polishes the solution in mpmath at a precision chosen from
+the digits the deviation loses against the positions, with the float64 Jacobian. The rigid
+reference is the kinematic levels' rigid linkage (pins at hinge_models.pivot_distance), evaluated
+at the same precision; the deviation is the difference of the two positions.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+
+import mpmath
+import numpy as np
+import sympy as sp
+
+from ..errors import AssemblyError
+from ..hinge_models import pivot_distance
+from ..mechanism import Mechanism
+from . import arith, elastica
+from .result import HingeLoad
+from .stiffness import PlateStiffness, is_plate, plate_stiffness
+
+#: Smallest load-factor step before the continuation gives up.
+MIN_STEP = 1e-7
+#: Largest input-angle change per continuation step, rad.
+MAX_TURN = 0.05
+#: Most continuation steps before giving up.
+MAX_STEPS = 2000
+
+
+@dataclass
+class _Hinge:
+    """Numbers of one hinge: links (index into the poses, -1 the ground), clamps and pin as
+    fabricated, plate direction, length and EI; `theta` the input angle (None if not an input)."""
+
+    name: str
+    P: int
+    M: int
+    clamp_p: tuple
+    clamp_m: tuple
+    pin: tuple
+    cos_a: object
+    sin_a: object
+    length: object
+    EI: object
+    plate: bool
+    theta: object = None
+
+
+@dataclass
+class _Load:
+    link: int
+    at: tuple
+    force: tuple
+    moment: object
+
+
+@dataclass
+class System:
+    """The equilibrium equations of one mechanism at fixed parameters, in float or mpf numbers.
+
+    Unknowns u (scaled to order one): per moving link x/L, y/L, φ; per plate k0, λx, λy; per pin
+    fx/F, fy/F; per input τ/(F L). `residual(u, t)` works on a batch: u (N, B), t (B,)."""
+
+    links: list[str]
+    hinges: list[_Hinge]
+    loads: list[_Load]
+    points: dict[str, tuple]
+    L: object
+    F: object
+    index: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        k = 3 * len(self.links)
+        for h in self.hinges:
+            self.index[h.name] = k
+            k += 3 if h.plate else 2
+        for h in self.hinges:
+            if h.theta is not None:
+                self.index["tau:" + h.name] = k
+                k += 1
+        self.size = k
+
+    def pose(self, u: np.ndarray, i: int):
+        """(x, y, φ) of link i (zeros for the ground, i = -1)."""
+        if i < 0:
+            zero = u[0] * 0
+            return zero, zero, zero
+        return u[3 * i] * self.L, u[3 * i + 1] * self.L, u[3 * i + 2]
+
+    def place(self, u: np.ndarray, i: int, p0: tuple):
+        """Position now of the point fixed in link i that was at p0 as fabricated."""
+        x, y, phi = self.pose(u, i)
+        c, s = arith.cos(phi), arith.sin(phi)
+        return x + c * p0[0] - s * p0[1], y + s * p0[0] + c * p0[1]
+
+    def residual(self, u: np.ndarray, t: np.ndarray, tol: float,
+                 report: dict | None = None) -> np.ndarray:
+        """Equations in the order: hinges (plate 3, pin 2), inputs (1), link balances (3 each)."""
+        rows: list = []
+        n = len(self.links)
+        zero = u[0] * 0
+        fx, fy, mz = [zero] * n, [zero] * n, [zero] * n
+
+        def apply(i: int, f: tuple, at: tuple, m) -> None:
+            if i >= 0:
+                fx[i] = fx[i] + f[0]
+                fy[i] = fy[i] + f[1]
+                mz[i] = mz[i] + at[0] * f[1] - at[1] * f[0] + m
+
+        plates = [h for h in self.hinges if h.plate]
+        if plates:
+            loads = np.array([u[self.index[h.name] + j] for h in plates for j in range(3)])
+            loads = loads.reshape(len(plates), 3, *u.shape[1:])
+            end = elastica.shoot(loads[:, 0], loads[:, 1], loads[:, 2], tol,
+                                 energy=report is not None)
+        ends = {h.name: k for k, h in enumerate(plates)}
+        for h in self.hinges:
+            _, _, phi_p = self.pose(u, h.P)
+            _, _, phi_m = self.pose(u, h.M)
+            base = self.index[h.name]
+            if h.plate:
+                k = ends[h.name]
+                xp, yp = self.place(u, h.P, h.clamp_p)
+                xm, ym = self.place(u, h.M, h.clamp_m)
+                cb = arith.cos(phi_p) * h.cos_a - arith.sin(phi_p) * h.sin_a     # plate frame
+                sb = arith.sin(phi_p) * h.cos_a + arith.cos(phi_p) * h.sin_a
+                dx, dy = xm - xp, ym - yp
+                rows += [(cb * dx + sb * dy) / h.length - end.x[k],
+                         (-sb * dx + cb * dy) / h.length - end.y[k],
+                         phi_m - phi_p - end.psi[k]]
+                scale = h.EI / h.length ** 2
+                lx, ly = u[base + 1] * scale, u[base + 2] * scale
+                force = (cb * lx - sb * ly, sb * lx + cb * ly)         # by M on the plate
+                m_p = u[base] * h.EI / h.length                       # on P at its clamp
+                m_m = end.omega[k] * h.EI / h.length                  # by M on the plate
+                apply(h.P, force, (xp, yp), m_p)
+                apply(h.M, (-force[0], -force[1]), (xm, ym), -m_m)
+                if report is not None:
+                    report[h.name] = (force, m_m, end.energy[k] * h.EI / (2 * h.length))
+            else:
+                xp, yp = self.place(u, h.P, h.pin)
+                xm, ym = self.place(u, h.M, h.pin)
+                rows += [(xp - xm) / self.L, (yp - ym) / self.L]
+                force = (u[base] * self.F, u[base + 1] * self.F)
+                apply(h.P, force, (xp, yp), 0)
+                apply(h.M, (-force[0], -force[1]), (xp, yp), 0)
+                if report is not None:
+                    report[h.name] = (force, zero, zero)
+        for h in self.hinges:
+            if h.theta is not None:
+                _, _, phi_p = self.pose(u, h.P)
+                _, _, phi_m = self.pose(u, h.M)
+                rows.append(phi_m - phi_p - t * h.theta)
+                tau = u[self.index["tau:" + h.name]] * self.F * self.L
+                apply(h.M, (zero, zero), (zero, zero), tau)
+                apply(h.P, (zero, zero), (zero, zero), -tau)
+        for load in self.loads:
+            at = self.place(u, load.link, load.at)
+            apply(load.link, (t * load.force[0], t * load.force[1]), at, t * load.moment)
+        for i in range(n):
+            rows += [fx[i] / self.F, fy[i] / self.F, mz[i] / (self.F * self.L)]
+        return np.array(rows)
+
+    def jacobian(self, u: np.ndarray, t: float, tol: float) -> tuple[np.ndarray, np.ndarray]:
+        """(∂R/∂u, ∂R/∂t) at a float point, by the complex step: one batched residual."""
+        n = self.size
+        batch = np.tile(u.astype(complex)[:, None], (1, n + 1))
+        batch[np.arange(n), np.arange(n)] += 1j * arith.COMPLEX_STEP
+        tt = np.full(n + 1, t, dtype=complex)
+        tt[n] += 1j * arith.COMPLEX_STEP
+        r = self.residual(batch, tt, tol)
+        d = r.imag / arith.COMPLEX_STEP
+        return d[:, :n], d[:, n]
+
+    def singular_hinge(self, jac: np.ndarray) -> str:
+        """The hinge whose unknowns dominate the singular mode of `jac` (the smallest singular
+        value's right vector): the plate that buckles or the pin at the limit point."""
+        vector = np.linalg.svd(jac)[2][-1]
+        best, size = self.hinges[0].name, -1.0
+        for h in self.hinges:
+            k = self.index[h.name]
+            part = float(np.linalg.norm(vector[k:k + (3 if h.plate else 2)]))
+            if part > size:
+                best, size = h.name, part
+        return best
+
+
+def build(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr], inputs: Mapping[str, sp.Expr],
+          stiffness: Mapping[str, PlateStiffness], convert) -> System:
+    """The System of `mech` with parameter `values`, the input angles by hinge name, EI of every
+    plate and `convert` (exact number -> float or mpf)."""
+    links = [lk.name for lk in mech.links if lk.name != mech.ground]
+    index = {name: k for k, name in enumerate(links)}
+    index[mech.ground] = -1
+
+    def num(expr):
+        return convert(sp.sympify(expr).subs(values))
+
+    hinges = []
+    for h in mech.hinges:
+        length = sp.sympify(h.length)
+        u = (sp.cos(h.plate_angle), sp.sin(h.plate_angle))
+        d = pivot_distance(h)
+        plate = is_plate(h)
+        hinges.append(_Hinge(
+            h.name, index[h.links[0]], index[h.links[1]],
+            tuple(num(h.at[k] - length / 2 * u[k]) for k in range(2)),
+            tuple(num(h.at[k] + length / 2 * u[k]) for k in range(2)),
+            tuple(num(h.at[k] + (length / 2 - d) * u[k]) for k in range(2)),
+            num(u[0]), num(u[1]), num(length),
+            num(stiffness[h.name].EI) if plate else None, plate,
+            num(inputs[h.name]) if h.input else None))
+    s = mech.unit_scale
+    loads = [
+        _Load(index[ld.link], tuple(num(v) for v in ld.at), tuple(num(v) for v in ld.force),
+              num(ld.moment / s)) for ld in mech.loads]
+    points = {p.name: (index[p.link], tuple(num(v) for v in p.at)) for p in mech.points}
+    centres = [(float(sp.N(h.at[0].subs(values))), float(sp.N(h.at[1].subs(values))))
+               for h in mech.hinges]
+    span = max([math.dist(a, b) for a in centres for b in centres]
+               + [float(sp.N(sp.sympify(h.length).subs(values))) for h in mech.hinges])
+    plates = [h for h in hinges if h.plate]
+    force = max([float(h.EI) / (float(h.length) * span) for h in plates], default=1.0)
+    return System(links, hinges, loads, points, convert(sp.Float(span, 17)),
+                  convert(sp.Float(force, 17)))
+
+
+@dataclass(frozen=True)
+class Solution:
+    """A converged equilibrium: the unknowns at the working precision `dps` and the size of the
+    last polishing step (scaled units), which bounds the error (Newton contracts it further)."""
+
+    system: System
+    u: np.ndarray
+    dps: int
+    last_step: float
+    tol: float
+
+
+def continuation(system: System, what: str, path: str) -> tuple[np.ndarray, np.ndarray]:
+    """Float64 solution at t = 1 from u = 0 at t = 0, and its Jacobian; AssemblyError (exit 3)
+    when the path buckles, passes a limit point or cannot be followed."""
+    tol = 1e-18
+    u = np.zeros(system.size)
+    jac, _ = system.jacobian(u, 0.0, tol)
+    sign = np.sign(np.linalg.det(jac))
+    turn = max([abs(float(h.theta)) for h in system.hinges if h.theta is not None] + [0.0])
+    largest = min(1.0, MAX_TURN / turn) if turn else 0.25
+    t, dt = 0.0, largest
+    for _ in range(MAX_STEPS):
+        if t >= 1:
+            break
+        t1 = min(1.0, t + dt)
+        jac, rate = system.jacobian(u, t, tol)
+        guess = u - np.linalg.solve(jac, rate) * (t1 - t)
+        new = _newton(system, guess, t1, tol)
+        ok = new is not None
+        if ok:
+            jac_new, _ = system.jacobian(new[0], t1, tol)
+            ok = np.sign(np.linalg.det(jac_new)) == sign
+        if not ok:
+            dt /= 2
+            if dt < MIN_STEP:
+                name = system.singular_hinge(system.jacobian(u, t, tol)[0])
+                raise AssemblyError(
+                    f"{path}: {what} cannot be followed beyond load factor t = {t:.6g} (of the "
+                    f"requested inputs and loads): the hinge '{name}' buckles there or the "
+                    "mechanism passes a limit point (docs/physics.md)")
+            continue
+        u, t = new[0], t1
+        dt = min(largest, dt * 1.5)
+    else:
+        raise AssemblyError(f"{path}: {what} did not reach the requested inputs and loads in "
+                            f"{MAX_STEPS} continuation steps (stopped at load factor t = {t:.6g}, "
+                            "near a toggle position or a limit point)")
+    return u, system.jacobian(u, 1.0, tol)[0]
+
+
+def _newton(system: System, u: np.ndarray, t: float, tol: float):
+    """Newton in float64 from `u`; (u, step) once the step stops shrinking, or None."""
+    previous = math.inf
+    for _ in range(12):
+        jac, _ = system.jacobian(u, t, tol)
+        try:
+            step = np.linalg.solve(jac, system.residual(u[:, None], np.array([t]), tol)[:, 0])
+        except np.linalg.LinAlgError:
+            return None
+        u = u - step
+        size = float(np.max(np.abs(step)))
+        if size <= 1e-14 * (1 + float(np.max(np.abs(u)))) or size >= previous / 2 > 0 \
+                and size < 1e-9:
+            return u, size
+        if not np.all(np.isfinite(u)) or size > 1e3:
+            return None
+        previous = size
+    return None
+
+
+def polish(system_mp: System, u: np.ndarray, jac: np.ndarray, dps: int) -> Solution:
+    """Newton at `dps` digits from the float64 solution, each step solved with the float64
+    Jacobian (its error contracts the correction by about 1e-12 per step)."""
+    tol = float(mpmath.mpf(10) ** (-dps - 3))
+    with mpmath.workdps(dps):
+        x = arith.mp_array(u)
+        one = arith.mp_array([1])
+        last = math.inf
+        for _ in range(8):
+            r = system_mp.residual(x[:, None], one, tol)[:, 0]
+            step = np.linalg.solve(jac, np.array([float(v) for v in r]))
+            x = x - arith.mp_array(step)
+            last = float(np.max(np.abs(step)))
+            if last <= 10.0 ** (6 - dps):
+                break
+        return Solution(system_mp, x, dps, last, tol)
+
+
+def _mp_converter(dps: int):
+    return lambda expr: mpmath.mpf(sp.N(expr, dps + 5))
+
+
+def _float(expr) -> float:
+    return float(sp.N(expr, 20))
+
+
+@dataclass(frozen=True)
+class Result:
+    """One configuration at the `equilibrium` level, in floats: hinge angles and point positions
+    (rigid, compliant, deviation) by name, the plates' end loads, the elastic energy (J) and an
+    estimate of the largest relative error of the points' deviations."""
+
+    angles_rigid: dict[str, float]
+    angles_compliant: dict[str, float]
+    points: dict[str, tuple[tuple[float, float], tuple[float, float], tuple[float, float]]]
+    hinges: dict[str, HingeLoad]
+    energy: float
+    error_estimate: float
+    # compliant − rigid angle of every hinge, taken at the working precision (not a difference
+    # of the floats above: it keeps its relative accuracy for tiny plates)
+    angle_deviations: dict[str, float] = field(default_factory=dict)
+
+
+def solve(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr], inputs: Mapping[str, sp.Expr],
+          rigid: Callable[[int], tuple[dict, dict]], extra_digits: int = 0) -> Result:
+    """The elastica equilibrium of `mech` (CONTRACT §7) at parameter `values` and the input
+    angles by hinge name, against the rigid pin linkage: `rigid(dps)` gives its hinge angles and
+    its point positions by name at `dps` digits (the kinematic levels' rigid solution, exit 3
+    out of range). `extra_digits` raises the working precision (to check the error estimate)."""
+    stiffness = plate_stiffness(mech, "equilibrium")
+    _, rigid_points = rigid(20)
+    system = build(mech, values, inputs, stiffness, _float)
+    u, jac = continuation(system, "the equilibrium", mech.path)
+    # The digits the deviation loses against the positions decide the working precision.
+    span = float(system.L)
+    smallest = min([math.hypot(*(np.array(_where(system, u, p), dtype=float)
+                                 - np.array(rigid_points[p], dtype=float)))
+                    for p in rigid_points] + [span])
+    lost = max(0, math.ceil(math.log10(span / smallest))) if smallest > 0 else 0
+    dps = min(400, 24 + lost) + extra_digits
+    theta, rigid_points = rigid(dps)
+    with mpmath.workdps(dps):
+        solution = polish(build(mech, values, inputs, stiffness, _mp_converter(dps)), u, jac, dps)
+        report: dict = {}
+        solution.system.residual(solution.u[:, None], arith.mp_array([1]), solution.tol, report)
+        # The last Newton step bounds the solution's error (Newton shrinks it further); the
+        # working precision bounds the rounding.
+        bound = (2 * solution.last_step + 10.0 ** (8 - dps)) * span
+        points, error = {}, 0.0
+        for name, (xr, yr) in rigid_points.items():
+            xc, yc = _where(solution.system, solution.u, name)
+            dev = (xc - xr, yc - yr)
+            size = float(mpmath.hypot(*dev))
+            error = max(error, bound / size if size else 0.0)
+            points[name] = ((float(xr), float(yr)), (float(xc), float(yc)),
+                            (float(dev[0]), float(dev[1])))
+        s = mpmath.mpf(sp.N(mech.unit_scale, dps))
+        plates = {h.name for h in solution.system.hinges if h.plate}
+        return Result(
+            angles_rigid={h.name: float(theta[h.name]) for h in solution.system.hinges},
+            angles_compliant={h.name: float(_angle(solution.system, solution.u, h.name))
+                              for h in solution.system.hinges},
+            points=points,
+            hinges={n: HingeLoad((float(report[n][0][0][0]), float(report[n][0][1][0])),
+                                 float(report[n][1][0] * s)) for n in report},
+            energy=float(sum(report[n][2][0] for n in plates) * s),
+            error_estimate=error,
+            angle_deviations={h.name: float(_angle(solution.system, solution.u, h.name)
+                                            - theta[h.name])
+                              for h in solution.system.hinges})
+
+
+def _position(system: System, name: str) -> int:
+    return next(k for k, h in enumerate(system.hinges) if h.name == name)
+
+
+def _where(system: System, u: np.ndarray, point: str):
+    """Position of the named point in the solution u."""
+    link, at = system.points[point]
+    x, y = system.place(u[:, None], link, at)
+    return x[0], y[0]
+
+
+def _angle(system: System, u: np.ndarray, name: str):
+    """Hinge angle θ = φ_M − φ_P in the solution u."""
+    h = system.hinges[_position(system, name)]
+    return system.pose(u[:, None], h.M)[2][0] - system.pose(u[:, None], h.P)[2][0]

@@ -1,0 +1,123 @@
+"""The `loaded` level in the generated numpy and C evaluators (docs/physics.md) against the
+sympy backend's 40-digit evaluation of the same derivation; tests/test_physics_reference.py
+holds that derivation against the independent elastica reference.
+
+Cases: the three examples (steel plates), a load on a point with plates narrower than five
+thicknesses (the modulus's other branch), an open chain (no loops: the loads alone bend the
+plates), the first-order variant (beam_column=False), float32, and --param overrides.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import mechanisms as M
+import symkin
+from conftest import EXAMPLES
+from evaluators import INPUTS, Generated, generated, rel_err
+from symkin import evaluation
+from symkin.codegen.backends.numpy import backend as numpy_backend
+from symkin.codegen.plan import plan
+from symkin.codegen.runtime import import_numpy_module
+
+LOADED_FOUR_BAR = (M.without_stiffness(EXAMPLES / "four_bar.toml")
+                   .replace('length = "l"\n', 'length = "l"\nE = 70e9\nthickness = "l/8"\n'
+                            'width = "l/2"\n')       # narrower than 5 t: E' = E
+                   + '[[load]]\npoint = "C"\nforce = [0.4, -1.5]\nmoment = 0.003\n')
+LOADED_ARM = (M.SERIAL_ARM.replace('length = "l"\n', 'length = "l"\nE = 210e9\n'
+                                   'thickness = "l/10"\nwidth = 4e-3\n')
+              + '[[load]]\npoint = "T"\nforce = [1.0, -2.0]\n')
+
+
+def loaded_case(key: str) -> Generated:
+    text = {"loaded_four_bar": LOADED_FOUR_BAR, "loaded_arm": LOADED_ARM}.get(key)
+    return generated(key) if text is None else _cached(key, text)
+
+
+_CASES: dict[str, Generated] = {}
+
+
+def _cached(key: str, text: str) -> Generated:
+    if key not in _CASES:
+        _CASES[key] = Generated(mech=symkin.loads(text, f"{key}.toml"))
+    return _CASES[key]
+
+
+CASES = {"four_bar": INPUTS["four_bar"], "six_bar": INPUTS["six_bar"],
+         "nine_bar": INPUTS["nine_bar"], "loaded_four_bar": {"A0": "-0.15"},
+         "loaded_arm": {"S": "0.3", "E": "-0.2"}}
+
+
+@pytest.mark.parametrize("key", sorted(CASES))
+@pytest.mark.parametrize("backend", ["numpy", "c"])
+def test_loaded_matches_the_sympy_backend(key, backend):
+    g = loaded_case(key)
+    assert "loaded" in [lv.name for lv in g.plan.levels]
+    want = symkin.evaluate(g.analysis, CASES[key], "loaded")
+    got = (g.run_numpy if backend == "numpy" else g.run_c)(CASES[key], "loaded")
+    for name, dev in got.items():
+        assert rel_err(dev, want.points[name].deviation) <= 1e-12, name
+
+
+def test_the_modulus_branch_and_the_load_reach_the_generated_code():
+    """The narrow plates' E' = E and the load on C matter: without them the answer differs."""
+    g = loaded_case("loaded_four_bar")
+    assert g.plan.loaded.passes == 2
+    got = g.run_c(CASES["loaded_four_bar"], "loaded")["C"]
+    wide = symkin.loads(LOADED_FOUR_BAR.replace('width = "l/2"', "width = 5e-3"), "w.toml")
+    unloaded = symkin.loads(LOADED_FOUR_BAR.split("[[load]]")[0], "u.toml")
+    for other in (wide, unloaded):
+        want = symkin.evaluate(symkin.analyze(other), CASES["loaded_four_bar"], "loaded")
+        assert rel_err(got, want.points["C"].deviation) > 1e-3
+
+
+@pytest.mark.parametrize("backend", ["numpy", "c"])
+def test_loaded_with_parameter_overrides(backend):
+    g = generated("four_bar")
+    overrides = {"l": "4e-3"}          # thickness l/10 follows; 4 mm plates stay wide (5 mm)
+    want = symkin.evaluate(g.analysis, INPUTS["four_bar"], "loaded", params=overrides)
+    got = (g.run_numpy if backend == "numpy" else g.run_c)(INPUTS["four_bar"], "loaded",
+                                                           overrides)
+    assert rel_err(got["C"], want.points["C"].deviation) <= 1e-12
+
+
+def test_first_order_variant_matches_its_derivation():
+    an = symkin.analyze(symkin.loads(LOADED_FOUR_BAR, "lf.toml"))
+    p = plan(an, levels=["loaded"], beam_column=False)
+    assert p.loaded.passes == 1 and "loaded_q0" not in p.routines
+    module = import_numpy_module(numpy_backend.emit(p, "test"), "loaded_first_order")
+    got = module.evaluate({"A0": -0.15}, "loaded")["points"]["C"]["deviation"]
+    want = evaluation.loaded(an, {"A0": "-0.15"}, beam_column=False).points["C"].deviation
+    assert rel_err([float(v) for v in got], want) <= 1e-12
+
+
+def test_float32_loaded_stays_in_float32():
+    g = generated("four_bar")
+    module = import_numpy_module(numpy_backend.emit(g.plan, "test", "float32"), "four_bar_f32")
+    res = module.evaluate({"A0": np.linspace(0.02, 0.3, 15)}, "loaded")
+    dev = res["points"]["C"]["deviation"]
+    assert dev.dtype == np.float32 and res["ok"].all()
+    want = g.numpy.evaluate({"A0": np.linspace(0.02, 0.3, 15)}, "loaded")["points"]["C"]
+    err = np.hypot(*(dev - want["deviation"])) / np.hypot(*want["deviation"])
+    assert err.max() < 1e-3
+
+
+def test_a_file_without_stiffness_generates_no_loaded_level():
+    mech = symkin.loads(M.without_stiffness(EXAMPLES / "four_bar.toml"), "plain.toml")
+    assert [lv.name for lv in plan(symkin.analyze(mech)).levels] == \
+        ["paper", "first_order", "exact"]
+    with pytest.raises(symkin.InputError, match="no 'E'"):
+        plan(symkin.analyze(mech), levels=["loaded"])
+
+
+@pytest.mark.parametrize("key", ["four_bar", "six_bar", "loaded_arm"])
+@pytest.mark.parametrize("backend", ["numpy", "c"])
+def test_loaded_link_rotations_match_the_sympy_backend(key, backend):
+    g = loaded_case(key)
+    want = symkin.evaluate(g.analysis, CASES[key], "loaded").links
+    got = symkin.evaluate(g.analysis, CASES[key], "loaded", backend=backend).links
+    assert want.keys() == got.keys()
+    for name, link in want.items():
+        assert got[name].rigid == pytest.approx(link.rigid, rel=1e-14, abs=1e-16)
+        assert got[name].deviation == pytest.approx(link.deviation, rel=1e-12, abs=1e-18), name
