@@ -125,9 +125,13 @@ class Compiled:
         read it follow (the generated module's `parameters`)."""
         return [float(v) for v in self.module.parameters(given, shifts)]
 
-    def code(self, level: str | None) -> str:
-        """`level` checked against the generated ones (None: the most faithful)."""
-        level = self.levels[-1] if level is None else level
+    def code(self, level: str | None, sensitivity: bool = False) -> str:
+        """`level` checked against the generated ones (None: `exact` when generated, else the
+        most faithful; with `sensitivity`, among the levels that have sensitivities)."""
+        if level is None:
+            names = [n for n in self.levels
+                     if not sensitivity or level_table.get(n).sensitivity] or list(self.levels)
+            level = level_table.DEFAULT if level_table.DEFAULT in names else names[-1]
         if level not in self.levels:
             raise ValueError(f"level must be one of {self.levels}, got {level!r}")
         return level
@@ -155,7 +159,7 @@ class Compiled:
         """x (n, n_inputs) -> (status, values (n, 6 n_points), deviation and rigid
         derivatives (n, n_points, n_variables, 2)); variables: the parameters, then the
         inputs."""
-        level = self.code(level)
+        level = self.code(level, sensitivity=True)
         if self.backend == "c":
             return self.library.sensitivity_rows(x, params, level_table.get(level).code)
         res = self.module.sensitivity_full(self._columns(x), level, self._named(params))
@@ -208,10 +212,10 @@ class Compiled:
         if not self.sources.sensitivity:
             raise ValueError("this evaluator was compiled without sensitivities")
         if self.backend == "numpy":
-            return self.module.sensitivity_full(inputs, self.code(level), params)
+            return self.module.sensitivity_full(inputs, self.code(level, sensitivity=True), params)
         x, shape = self._rows(inputs)
         status, values, dev, rig = self.library.sensitivity_rows(
-            x, self.parameters(params), level_table.get(self.code(level)).code)
+            x, self.parameters(params), level_table.get(self.code(level, sensitivity=True)).code)
         names = self.sources.params
 
         def table(data: np.ndarray, i: int) -> dict:

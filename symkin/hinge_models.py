@@ -82,7 +82,7 @@ MODELS: dict[str, ModelSpec] = {spec.name: spec for spec in (
 )}
 
 #: Hinge keys that are not model parameters: geometry, model, input, where the rigid reference
-#: pin sits (`pin`), and the plate's stiffness data (CONTRACT §7, docs/physics.md).
+#: pin sits (`pin`), and the plate's stiffness data (docs/physics.md).
 HINGE_KEYS = ("name", "links", "at", "plate_angle", "length", "model", "input", "pin",
               "E", "thickness", "width", "nu")
 #: Values of the `pin` key: the rigid reference pin at the plate midpoint (the paper's R_a), or at

@@ -31,10 +31,10 @@ LINK_KEYS = ("name",)
 POINT_KEYS = ("name", "link", "at")
 LOAD_KEYS = ("point", "link", "at", "force", "moment")
 #: The file's length unit (`units`), in metres: geometry, lengths, thickness, width and load points
-#: are in it; E is in Pa, forces in N, moments in N·m (CONTRACT §7, docs/physics.md).
+#: are in it; E is in Pa, forces in N, moments in N·m (docs/physics.md).
 UNITS: dict[str, sp.Rational] = {"m": sp.Integer(1), "mm": sp.Rational(1, 10**3),
                                  "um": sp.Rational(1, 10**6)}
-#: Poisson's ratio when a hinge gives none (CONTRACT §7).
+#: Poisson's ratio when a hinge gives none (docs/physics.md).
 DEFAULT_NU = sp.Rational(3, 10)
 #: The value rules of the stiffness keys: (holds for the value, what is wrong, how to fix it).
 STIFFNESS_RULES = {
@@ -104,7 +104,7 @@ class Point:
 
 @dataclass(frozen=True)
 class Load:
-    """A dead load on a link (CONTRACT §7): force (N, frame axes) at `at` (the as-fabricated
+    """A dead load on a link (docs/physics.md): force (N, frame axes) at `at` (the as-fabricated
     absolute position, file unit) and a moment (N·m, counter-clockwise)."""
 
     index: int
@@ -477,7 +477,7 @@ class _Reader:
 
     def stiffness(self, merged: Mapping, entry: str, line: int | None,
                   length: sp.Expr) -> dict[str, sp.Expr]:
-        """E, thickness, width, nu of a hinge (CONTRACT §7), each checked where given: E > 0,
+        """E, thickness, width, nu of a hinge (docs/physics.md), each checked where given: E > 0,
         0 < thickness < length, width > 0, 0 <= nu < 0.5 (with the default parameters)."""
         out: dict[str, sp.Expr] = {}
         for key, (ok, message, hint) in STIFFNESS_RULES.items():
@@ -621,7 +621,7 @@ class _Reader:
     def loads(self, tables: list[Mapping], link_names: list[str],
               points: tuple[Point, ...]) -> tuple[Load, ...]:
         """[[load]] entries: on a named point, or on a link at a position; a force, a moment or
-        both (CONTRACT §7)."""
+        both (docs/physics.md)."""
         out = []
         point_names = [p.name for p in points]
         for i, table in enumerate(tables):

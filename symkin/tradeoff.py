@@ -1,10 +1,11 @@
 """`symkin tradeoff` (docs/cli.md): every variant's worst error over an input range and its time
 per evaluation.
 
-Errors are measured against an mpmath evaluation (30 digits) of the most faithful derivation:
-the file's own hinge models at the reference level (`levels.reference()`, today `exact`). Times
-are measured in one run: the numpy evaluator vectorized over 10^4 points, the C evaluator in a
-loop timed inside C.
+Errors are measured against the most faithful level the file's data allows
+(`levels.reference()`): `equilibrium`, the plates' elastica equilibrium, when every plate has its
+stiffness (docs/physics.md), else the kinematic `exact` level of the file's own hinge models, in
+mpmath at 30 digits. Times are measured in one run: the numpy evaluator vectorized over 10^4
+points, the C evaluator in a loop timed inside C.
 """
 
 from __future__ import annotations
@@ -26,8 +27,16 @@ from .variants import Variant, analysis_for, default_variants
 
 DEFAULT_RANGE = (-0.2, 0.2)
 TIMING_POINTS = 10_000
-#: What every variant is measured against: the most faithful kinematic level.
+#: What every variant of a file without stiffness data is measured against.
 REFERENCE = levels.reference()
+
+
+def reference_level(mech: Mechanism) -> levels.Level:
+    """What the variants of `mech` are measured against: `equilibrium` when every plate has its
+    stiffness, else the kinematic `exact` level."""
+    from .physics.stiffness import has_stiffness
+
+    return levels.reference(has_stiffness(mech))
 
 
 @dataclass(frozen=True)
@@ -61,10 +70,17 @@ class Tradeoff:
     rows: tuple[Row, ...] = field(default=())
     inputs: tuple[dict, ...] = field(default=())   # the samples measured (assembled ones)
     name: str = ""                                 # the mechanism's name
+    reference: str = REFERENCE.name                # the level the errors are measured against
+
+    @property
+    def reference_text(self) -> str:
+        if self.reference == "equilibrium":
+            return "equilibrium level: the plates' elastica equilibrium under the file's loads"
+        return f"mpmath, 30 digits, {self.reference} level, the file's hinge models"
 
     def as_json(self) -> dict:
         return {
-            "reference": f"mpmath, 30 digits, {REFERENCE.name} level, the file's hinge models",
+            "reference": self.reference_text, "reference_level": self.reference,
             "ranges": {k: list(v) for k, v in self.ranges.items()},
             "samples": self.samples, "skipped": self.skipped, "zero_deviation": self.zero,
             "inputs": list(self.inputs),
@@ -124,12 +140,13 @@ def at_rest(sample: Mapping[str, float]) -> bool:
     return all(v == 0 for v in sample.values())
 
 
-def reference(analysis: Analysis, samples: list[dict[str, float]]):
-    """(kept samples, deviations) of the most faithful derivation at 30 digits."""
+def reference(analysis: Analysis, samples: list[dict[str, float]],
+              level: str = REFERENCE.name):
+    """(kept samples, deviations) of the most faithful derivation at 30 digits (`level`)."""
     kept, devs = [], []
     for s in samples:
         try:
-            ev = evaluate(analysis, {k: repr(v) for k, v in s.items()}, REFERENCE.name, dps=30)
+            ev = evaluate(analysis, {k: repr(v) for k, v in s.items()}, level, dps=30)
         except AssemblyError:
             continue
         kept.append(s)
@@ -211,20 +228,21 @@ def run(mech: Mechanism, ranges: Mapping[str, tuple[float, float]], n: int = 25,
     say = progress or (lambda message: None)
     faithful = Analysis(build(mech))
     samples = sample(ranges, n)
-    say(f"reference: {len(samples)} samples at 30 digits")
-    kept, ref = reference(faithful, samples)
+    level = reference_level(mech)
+    say(f"reference: {len(samples)} samples at level {level.name}")
+    kept, ref = reference(faithful, samples, level.name)
     if not kept:
         raise InputError("no sample of the range can be assembled", file=mech.path,
                          entry="--range", hint="choose a range inside the assembly range")
     rows = []
-    for v in variants or default_variants():
+    for v in variants or default_variants(stiffness=level.needs_stiffness):
         say(f"variant {v.name}")
         rows.append(measure(mech, v, kept, ref, with_c))
     rows = pareto(rows)
     rows.sort(key=lambda r: (r.time, r.worst, r.variant))
     zero = sum(at_rest(s) for s in kept)
     return Tradeoff(dict(ranges), len(samples), len(samples) - len(kept), zero, tuple(rows),
-                    tuple(kept), mech.name)
+                    tuple(kept), mech.name, level.name)
 
 
 def choose(table: Tradeoff, tolerance: float, points: Sequence[str] | None = None) -> Row:

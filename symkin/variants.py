@@ -30,6 +30,8 @@ from .structure import build
 
 #: The levels a variant can take: generated ones (a variant is timed in C and numpy), kinematic.
 LEVELS = tuple(lv.name for lv in LEVEL_TABLE if lv.generated and not lv.needs_stiffness)
+#: The generated physical levels: variants of files with the plates' stiffness (the file's models).
+PHYSICAL = tuple(lv.name for lv in LEVEL_TABLE if lv.generated and lv.needs_stiffness)
 FAITHFUL_MODELS = ("circular_arc", "elastica_force")
 MODEL_CHOICES = ("file", "taylor2", "taylor3", "taylor4", "taylor6", "prbm", "small_deflection")
 PRBM_DEFAULT = (("c_theta", sp.Rational("1.2385")), ("gamma", sp.Rational("0.8517")))
@@ -61,15 +63,20 @@ class Variant:
                 precision = "float32"
             else:
                 model = part
-        if level not in LEVELS or model not in MODEL_CHOICES:
+        if not (level in LEVELS and model in MODEL_CHOICES or level in PHYSICAL and
+                model == "file"):
             raise ValueError(f"unknown variant '{text}'")
         return cls(level, model, precision)
 
 
-def default_variants() -> list[Variant]:
-    """Every level with every model choice in float64, and the file's models in float32."""
+def default_variants(stiffness: bool = False) -> list[Variant]:
+    """Every kinematic level with every model choice in float64, and the file's models in
+    float32; with the plates' `stiffness`, the physical levels too (the file's models)."""
     out = [Variant(lv, m) for m in MODEL_CHOICES for lv in LEVELS]
     out += [Variant(lv, "file", "float32") for lv in LEVELS]
+    if stiffness:
+        out += [Variant(lv, "file", precision) for lv in PHYSICAL
+                for precision in ("float64", "float32")]
     return out
 
 

@@ -1,14 +1,14 @@
 """Independent physical reference solver for compliant mechanisms (a test oracle).
 
 Test support, not a test file. It solves the physics that symkin's ``equilibrium`` level claims to
-solve (CONTRACT §7, DESIGN "Physics of the plates"), from scratch, with mpmath: every non-``rigid``
+solve (docs/physics.md), from scratch, with mpmath: every non-``rigid``
 hinge is a geometrically exact, inextensible Euler–Bernoulli plate (elastica) clamped in its two
 links and straight as fabricated; ``rigid`` hinges are ideal pins at ``at``; loads are dead loads;
 input hinges have their angle prescribed by an actuator whose torque is an unknown. symkin is used
 only to read the mechanism's geometry (``symkin.load``/``loads``); the rigid pin linkage used for
 the deviation comes from the independent kinematic oracle ``tests/reference_solver.py``.
 
-Conventions (CONTRACT §1/§7)
+Conventions (docs/file-format.md, docs/physics.md)
 ----------------------------
 Hinge a joins P = links[0] and M = links[1]; its plate runs from P's clamp ``at − l/2·u`` to M's
 clamp ``at + l/2·u``, u = (cos plate_angle, sin plate_angle). θ_a = φ_M − φ_P. A link's pose

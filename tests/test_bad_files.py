@@ -78,7 +78,7 @@ EXPECTED: dict[str, tuple] = {
     "table_missing_csv": ("'A'", "no_such_table.csv"),
     "table_bad_row": ("'A'", "table_bad_row.csv:4"),
     "expr_f0_not_l": ("'A'", "f(0)"),
-    # plate stiffness, the rigid pin and the length unit (CONTRACT §7)
+    # plate stiffness, the rigid pin and the length unit (docs/physics.md)
     "thickness_not_below_length": ("'A'", "thickness", "length"),
     "youngs_modulus_negative": ("'A'", "E", "-2.1e+11"),
     "poisson_ratio_half": ("'B'", "nu", "0.5"),

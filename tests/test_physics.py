@@ -1,4 +1,4 @@
-"""The physical levels (CONTRACT §7, docs/physics.md) against closed forms and published values.
+"""The physical levels (docs/physics.md) against closed forms and published values.
 
 - the elastica integrator (symkin.physics.elastica): a pure end moment bends a circular arc;
   the Bisshopp–Drucker cantilever (load index α = F L²/EI, α = 1, 2, 5) and Mattiasson's α = 10;

@@ -3,7 +3,7 @@ at its model's pseudo-rigid-body pivot, d = g'(0) from M's clamp, so the model's
 from a pin at the plate midpoint disappears.
 
 Checked on a lone hinge (an arm on one input plate) against the models' closed forms of
-CONTRACT §2 evaluated here with mpmath at 50 digits, and by the scaling of the deviation with θ.
+the pin placement of docs/file-format.md evaluated here with mpmath at 50 digits, and by the scaling of the deviation with θ.
 """
 
 from __future__ import annotations

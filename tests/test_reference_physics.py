@@ -96,7 +96,7 @@ def test_pure_moment_bends_the_plate_into_a_circular_arc(cantilever, method, the
     """An input plate with nothing else acting carries only its end moment: the M clamp sits at
     (l sinθ/θ, l(1 − cosθ)/θ), the moment is EI·θ/l (= the actuator torque), the energy
     EI·θ²/(2l); the deviation from the midpoint pin is |d|(cos θ/2, sin θ/2) with
-    |d|/l = 2 sin(θ/2)/θ − cos(θ/2) (DESIGN.md)."""
+    |d|/l = 2 sin(θ/2)/θ − cos(θ/2)."""
     L, t = "3e-3", "L/10"
     res = method(cantilever, (210e9, 5e-3, t), params={"L": L}).solve({"A": theta})
     tol = 1e-25 if method is Equilibrium else 1e-11

@@ -1787,6 +1787,7 @@ static int sk_sensitivity(const double *theta, const double *delta, const double
         sk_gemm(2, SK_K, 2, s + 24, th, dev);
         sk_gemm(2, SK_K, 2, s + 30, y, dev);
     }
+    (void)dev;
     (void)delta;
     (void)level;
     return 0;

@@ -1884,6 +1884,7 @@ static int sk_sensitivity(const double *theta, const double *delta, const double
             }
         }
     }
+    (void)dev;
     (void)delta;
     (void)level;
     return 0;

@@ -2387,6 +2387,7 @@ static int sk_sensitivity(const double *theta, const double *delta, const double
         }
         sk_gemm(2, SK_K, 5, s + 0, th, dev);
     }
+    (void)dev;
     (void)delta;
     (void)level;
     return 0;

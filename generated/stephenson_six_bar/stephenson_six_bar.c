@@ -2740,6 +2740,7 @@ static int sk_sensitivity(const double *theta, const double *delta, const double
         sk_gemm(2, SK_K, 2, s + 84, th, dev);
         sk_gemm(2, SK_K, 2, s + 96, y, dev);
     }
+    (void)dev;
     (void)delta;
     (void)level;
     return 0;

@@ -1,4 +1,4 @@
-"""The `equilibrium` level (CONTRACT §7): the mechanism's plates as elastica, solved for the pose
+"""The `equilibrium` level (docs/physics.md): the mechanism's plates as elastica, solved for the pose
 that balances them, the actuators and the loads (docs/physics.md).
 
 Unknowns: the pose (x, y, φ) of every moving link (a point fixed in it at p0 as fabricated is at
@@ -357,7 +357,7 @@ class Result:
 
 def solve(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr], inputs: Mapping[str, sp.Expr],
           rigid: Callable[[int], tuple[dict, dict]], extra_digits: int = 0) -> Result:
-    """The elastica equilibrium of `mech` (CONTRACT §7) at parameter `values` and the input
+    """The elastica equilibrium of `mech` (docs/physics.md) at parameter `values` and the input
     angles by hinge name, against the rigid pin linkage: `rigid(dps)` gives its hinge angles and
     its point positions by name at `dps` digits (the kinematic levels' rigid solution, exit 3
     out of range). `extra_digits` raises the working precision (to check the error estimate)."""

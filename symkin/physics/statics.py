@@ -1,4 +1,4 @@
-"""The `loaded` level's derivation (CONTRACT §7, docs/physics.md): plate end loads from the statics
+"""The `loaded` level's derivation (docs/physics.md): plate end loads from the statics
 of the pin linkage, each plate's force compliance added to its circular arc, loops closed exactly.
 
 All sympy, in the symbols the kinematic levels use (theta_a: rigid hinge angles, delta_a: their

@@ -1,4 +1,4 @@
-"""Plate stiffness from a hinge's E, thickness, width and nu (CONTRACT §7, docs/physics.md).
+"""Plate stiffness from a hinge's E, thickness, width and nu (docs/physics.md).
 
 EI = E'·b·t³/12 and EA = E'·b·t with E' = E/(1 − ν²) for a wide plate (b ≥ 5 t: the plate bends
 in plane strain, its anticlastic curvature suppressed) and E' = E for a narrower one. Both are

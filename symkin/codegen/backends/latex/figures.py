@@ -237,8 +237,9 @@ def _place_labels(fig, ax, labels: Sequence[_Label], segments, markers) -> None:
         placed.append(box)
 
 
-def pose_figure(data: PoseData, plain) -> bytes:
-    """PDF of the as-fabricated pose; `plain` makes a name safe for matplotlib text."""
+def pose_figure(data: PoseData, plain, unit: str = "m") -> bytes:
+    """PDF of the as-fabricated pose, axes in the file's length `unit`; `plain` makes a name safe
+    for matplotlib text."""
     from matplotlib.patches import Polygon
 
     every = [p for _, _, att in data.links for p in att] + [p for _, _, p in data.points]
@@ -337,8 +338,8 @@ def pose_figure(data: PoseData, plain) -> bytes:
         ax.set_xlim(min(xs) - 1.4 * pad, max(xs) + 1.4 * pad)
         ax.set_ylim(min(ys) - pad, max(ys) + pad)
         ax.set_aspect("equal", adjustable="box")
-        ax.set_xlabel("x")
-        ax.set_ylabel("y")
+        ax.set_xlabel(f"x ({unit})")
+        ax.set_ylabel(f"y ({unit})")
         ax.tick_params(direction="in")
         ax.apply_aspect()
         _place_labels(fig, ax, labels + link_labels + ground_label, segments, markers)
@@ -477,7 +478,7 @@ def differs(sweep: Sweep, points: Sequence[str], levels: Sequence[Level]) -> boo
 
 
 def deviation_figure(sweep: Sweep, points: Sequence[str], levels: Sequence[Level], plain,
-                     xlim: tuple[float, float], xlabel: str) -> bytes:
+                     xlim: tuple[float, float], xlabel: str, length: str = "m") -> bytes:
     """PDF with one row per point: |ΔR| at every level, and |ΔR_level - ΔR_exact| when some
     level differs from the exact one."""
     from matplotlib.patches import Patch
@@ -512,8 +513,8 @@ def deviation_figure(sweep: Sweep, points: Sequence[str], levels: Sequence[Level
                                      ls=st["ls"], label=st["label"])
                 if r == 0:
                     handles.append(line)
-            axes[0].set_ylabel(r"$|\Delta R|$" + ("" if power == 0 else
-                                                 rf" / $10^{{{power}}}$"))
+            axes[0].set_ylabel(r"$|\Delta R|$" + (f" ({length})" if power == 0 else
+                                                 rf" ($10^{{{power}}}$ {length})"))
             axes[0].set_ylim(bottom=0)
             axes[0].set_title(plain(name), loc="left", parse_math=False, fontsize=8,
                               fontweight="bold")
@@ -526,7 +527,7 @@ def deviation_figure(sweep: Sweep, points: Sequence[str], levels: Sequence[Level
                     diff = np.where(diff > 0, diff, np.nan)
                     st = _style(level)
                     axes[1].semilogy(t, diff, color=st["color"], ls=st["ls"])
-                axes[1].set_ylabel(r"$|\Delta R - \Delta R_{\mathrm{exact}}|$")
+                axes[1].set_ylabel(r"$|\Delta R - \Delta R_{\mathrm{exact}}|$" + f" ({length})")
                 # nine decades below the largest difference: the dip at t = 0 goes to zero
                 finite = [float(np.nanmax(line.get_ydata())) for line in axes[1].get_lines()
                           if np.isfinite(line.get_ydata()).any()]

@@ -46,6 +46,10 @@ MAX_MATRIX_COLS = 14
 #: The column the report is laid out for, in points: an article's one-column text width at
 #: 10 pt; `derive --columnwidth` sets a journal's (e.g. a two-column article's 229.9 pt).
 COLUMN_WIDTH = 345.0
+#: The file's length unit (`units`) in the figures, the tables and the text.
+PLAIN_UNITS = {"m": "m", "mm": "mm", "um": "µm"}
+TEX_UNITS = {"m": r"\mathrm{m}", "mm": r"\mathrm{mm}", "um": r"\mu\mathrm{m}"}
+UNIT_NAMES = {"m": "metres", "mm": "millimetres", "um": "micrometres"}
 
 
 # -- Jinja environment with LaTeX-friendly delimiters (SymForce style) ----------------------------
@@ -195,6 +199,7 @@ class Report:
             "levels": [lv.title for lv in self.plan.levels],
             "notes": [escape_latex(n.strip()) for n in self.plan.notes],
             "four_bar": s.n == 3 and s.m == 4,
+            "unit": TEX_UNITS[mech.units], "unit_name": UNIT_NAMES[mech.units],
             "relabeled": s.relabeled,
             "links": [{"label": i, "name": self.link_name(i),
                        "ground": i == 0} for i in range(s.n + 1)],
@@ -774,7 +779,8 @@ def emit(plan: Plan, source: str, appendix: bool = False,
     ctx = report.context(appendix)
     files: dict[str, bytes] = {}
     pose = pose_data(report)
-    files[f"{name}-pose.pdf"] = pose_figure(pose, plain_name)
+    unit = PLAIN_UNITS[report.mech.units]
+    files[f"{name}-pose.pdf"] = pose_figure(pose, plain_name, unit)
     scale = plate_scale(pose)
     ctx["pose_width"] = f"{min(1.0, pose_size(pose)[0] / FIG_WIDTH):.2f}"
     plates = ("the flexure plates as thick black segments"
@@ -808,7 +814,7 @@ def emit(plan: Plan, source: str, appendix: bool = False,
                 k = len(ctx["deviation_figures"])
                 fname = f"{name}-deviation.pdf" if k == 0 else f"{name}-deviation-{k + 1}.pdf"
                 files[fname] = deviation_figure(data, chunk, plan.levels, plain_name, xlim,
-                                                xlabel)
+                                                xlabel, unit)
                 ctx["deviation_figures"].append({
                     "file": fname, "points": [escape_latex(p) for p in chunk],
                     "input": None if single else escape_latex(h),
