@@ -235,7 +235,8 @@ class _Mpmath:
     def _fn(self, key: str, exprs, args) -> object:
         """Lambdified (mpmath) function, cached per key."""
         if key not in self._lambdas:
-            self._lambdas[key] = sp.lambdify(args, exprs,
+            # dummify: a parameter may share its name with an internal symbol (a class apart)
+            self._lambdas[key] = sp.lambdify(args, exprs, dummify=True,
                                              modules=[special.mpmath_namespace(), "mpmath"])
         return self._lambdas[key]
 

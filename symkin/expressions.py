@@ -37,6 +37,16 @@ SHOWN = 60             # characters of an expression quoted in an error message
 _BINARY = {ast.Add: sp.Add, ast.Sub: None, ast.Mult: sp.Mul, ast.Div: None, ast.Pow: None}
 
 
+class ParameterSymbol(sp.Symbol):
+    """The symbol of a file's parameter: a class of its own, so a parameter named like one of
+    symkin's internal symbols (theta, theta_1, delta_2, dyad1_reach, _tmp0, p_0, ...) is never
+    equal to it. It prints as its name; code printers see it only renamed (p_k) or dummified."""
+
+    def __new__(cls, name: str, **assumptions) -> ParameterSymbol:
+        assumptions.setdefault("real", True)
+        return super().__new__(cls, name, **assumptions)
+
+
 class ExpressionError(ValueError):
     """An expression string that is not allowed; the message says what to change."""
 

@@ -331,7 +331,7 @@ class _Reader:
                                  "rename the parameter")
             expr = self.expr(value, entry, key, line)
             value_ = self.finite(expr, entry, key, line)
-            symbol = sp.Symbol(key, real=True)
+            symbol = expressions.ParameterSymbol(key)
             exact = expr.subs(self.defaults)
             out.append(Parameter(key, symbol, expr, exact if exact.is_number else value_, line))
             self.names[key] = symbol

@@ -359,18 +359,18 @@ static void sk_dev_first_order(const double *theta, const double *delta, const d
     const double _tmp2 = theta_1 + theta_2;
     const double _tmp3 = sin(_tmp2);
     const double _tmp4 = cos(_tmp2);
-    const double _tmp5 = cos(theta_1);
+    const double _tmp5 = sin(theta_1);
     const double _tmp6 = 0.5*theta_2;
     const double _tmp7 = sin(_tmp6);
     const double _tmp8 = pow(theta_2, 2);
     const double _tmp9 = symkin_arck(_tmp6);
     const double _tmp10 = _tmp8*_tmp9*p_0;
-    const double _tmp11 = 0.21650635094610965*_tmp10;
-    const double _tmp12 = cos(_tmp6);
-    const double _tmp13 = -_tmp11*_tmp7 + 0.125*_tmp12*_tmp8*_tmp9*p_0;
-    const double _tmp14 = sin(theta_1);
-    const double _tmp15 = 0.125*_tmp10*_tmp7 + _tmp11*_tmp12;
-    out[0] = -_tmp1*sin(_tmp0) + _tmp13*_tmp5 - _tmp14*_tmp15 + delta_2*(-0.045*_tmp3 - 0.064*_tmp4);
+    const double _tmp11 = cos(_tmp6);
+    const double _tmp12 = 0.21650635094610965*_tmp10;
+    const double _tmp13 = 0.125*_tmp10*_tmp7 + _tmp11*_tmp12;
+    const double _tmp14 = cos(theta_1);
+    const double _tmp15 = 0.125*_tmp11*_tmp8*_tmp9*p_0 - _tmp12*_tmp7;
+    out[0] = -_tmp1*sin(_tmp0) - _tmp13*_tmp5 + _tmp14*_tmp15 + delta_2*(-0.045*_tmp3 - 0.064*_tmp4);
     out[1] = _tmp1*cos(_tmp0) + _tmp13*_tmp14 + _tmp15*_tmp5 + delta_2*(-0.064*_tmp3 + 0.045*_tmp4);
 }
 

@@ -345,19 +345,19 @@ def _dev_first_order(theta, delta, params):
     _tmp2 = theta_1 + theta_2
     _tmp3 = numpy.sin(_tmp2)
     _tmp4 = numpy.cos(_tmp2)
-    _tmp5 = numpy.cos(theta_1)
+    _tmp5 = numpy.sin(theta_1)
     _tmp6 = 0.5*theta_2
     _tmp7 = numpy.sin(_tmp6)
     _tmp8 = theta_2**2
     _tmp9 = arck(_tmp6)
     _tmp10 = _tmp8*_tmp9*p_0
-    _tmp11 = 0.21650635094610965*_tmp10
-    _tmp12 = numpy.cos(_tmp6)
-    _tmp13 = -_tmp11*_tmp7 + 0.125*_tmp12*_tmp8*_tmp9*p_0
-    _tmp14 = numpy.sin(theta_1)
-    _tmp15 = 0.125*_tmp10*_tmp7 + _tmp11*_tmp12
+    _tmp11 = numpy.cos(_tmp6)
+    _tmp12 = 0.21650635094610965*_tmp10
+    _tmp13 = 0.125*_tmp10*_tmp7 + _tmp11*_tmp12
+    _tmp14 = numpy.cos(theta_1)
+    _tmp15 = 0.125*_tmp11*_tmp8*_tmp9*p_0 - _tmp12*_tmp7
     return [
-        -_tmp1*numpy.sin(_tmp0) + _tmp13*_tmp5 - _tmp14*_tmp15 + delta_2*(-0.045*_tmp3 - 0.064*_tmp4),
+        -_tmp1*numpy.sin(_tmp0) - _tmp13*_tmp5 + _tmp14*_tmp15 + delta_2*(-0.045*_tmp3 - 0.064*_tmp4),
         _tmp1*numpy.cos(_tmp0) + _tmp13*_tmp14 + _tmp15*_tmp5 + delta_2*(-0.064*_tmp3 + 0.045*_tmp4),
     ]
 

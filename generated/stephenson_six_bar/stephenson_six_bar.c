@@ -607,17 +607,17 @@ static void sk_dev_first_order(const double *theta, const double *delta, const d
     const double _tmp2 = theta_1 + theta_2;
     const double _tmp3 = sin(_tmp2);
     const double _tmp4 = cos(_tmp2);
-    const double _tmp5 = cos(theta_1);
+    const double _tmp5 = sin(theta_1);
     const double _tmp7 = pow(theta_2, 2);
     const double _tmp6 = 0.5*theta_2;
     const double _tmp8 = symkin_arck(_tmp6);
     const double _tmp9 = 0.1767766952966369*_tmp7*_tmp8*p_0;
     const double _tmp10 = _tmp9*sin(_tmp6);
     const double _tmp11 = cos(_tmp6);
-    const double _tmp12 = -_tmp10 + 0.1767766952966369*_tmp11*_tmp7*_tmp8*p_0;
-    const double _tmp13 = sin(theta_1);
-    const double _tmp14 = _tmp10 + _tmp11*_tmp9;
-    out[0] = -_tmp1*sin(_tmp0) + _tmp12*_tmp5 - _tmp13*_tmp14 + delta_2*(-0.04*_tmp3 - 0.07*_tmp4);
+    const double _tmp12 = _tmp10 + _tmp11*_tmp9;
+    const double _tmp13 = cos(theta_1);
+    const double _tmp14 = -_tmp10 + 0.1767766952966369*_tmp11*_tmp7*_tmp8*p_0;
+    out[0] = -_tmp1*sin(_tmp0) - _tmp12*_tmp5 + _tmp13*_tmp14 + delta_2*(-0.04*_tmp3 - 0.07*_tmp4);
     out[1] = _tmp1*cos(_tmp0) + _tmp12*_tmp13 + _tmp14*_tmp5 + delta_2*(-0.07*_tmp3 + 0.04*_tmp4);
 }
 

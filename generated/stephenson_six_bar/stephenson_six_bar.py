@@ -576,18 +576,18 @@ def _dev_first_order(theta, delta, params):
     _tmp2 = theta_1 + theta_2
     _tmp3 = numpy.sin(_tmp2)
     _tmp4 = numpy.cos(_tmp2)
-    _tmp5 = numpy.cos(theta_1)
+    _tmp5 = numpy.sin(theta_1)
     _tmp7 = theta_2**2
     _tmp6 = 0.5*theta_2
     _tmp8 = arck(_tmp6)
     _tmp9 = 0.1767766952966369*_tmp7*_tmp8*p_0
     _tmp10 = _tmp9*numpy.sin(_tmp6)
     _tmp11 = numpy.cos(_tmp6)
-    _tmp12 = -_tmp10 + 0.1767766952966369*_tmp11*_tmp7*_tmp8*p_0
-    _tmp13 = numpy.sin(theta_1)
-    _tmp14 = _tmp10 + _tmp11*_tmp9
+    _tmp12 = _tmp10 + _tmp11*_tmp9
+    _tmp13 = numpy.cos(theta_1)
+    _tmp14 = -_tmp10 + 0.1767766952966369*_tmp11*_tmp7*_tmp8*p_0
     return [
-        -_tmp1*numpy.sin(_tmp0) + _tmp12*_tmp5 - _tmp13*_tmp14 + delta_2*(-0.04*_tmp3 - 0.07*_tmp4),
+        -_tmp1*numpy.sin(_tmp0) - _tmp12*_tmp5 + _tmp13*_tmp14 + delta_2*(-0.04*_tmp3 - 0.07*_tmp4),
         _tmp1*numpy.cos(_tmp0) + _tmp12*_tmp13 + _tmp14*_tmp5 + delta_2*(-0.07*_tmp3 + 0.04*_tmp4),
     ]
 
