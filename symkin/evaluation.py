@@ -300,7 +300,9 @@ class _Mpmath:
         env.update({kin.theta[a]: v for a, v in ivals.items()})
         dyads = []
         if not sol.closed_form:
-            return self._rigid_newton(pvals, ivals), dyads
+            theta = self._rigid_newton(pvals, ivals)
+            self._check_winding(pvals, theta, ivals)
+            return theta, dyads
         for symbol, expr in sol.assignments:
             fn = self._fn(f"assign:{symbol.name}", expr, sorted(expr.free_symbols, key=str))
             env[symbol] = fn(*(env[s] for s in sorted(expr.free_symbols, key=str)))
@@ -319,7 +321,25 @@ class _Mpmath:
         for a in kin.unknowns:
             h = kin.hinges[a]
             theta[a] = _wrap(phi[h.M] - phi[h.P])
+        self._check_winding(pvals, theta, ivals)
         return theta, dyads
+
+    def _check_winding(self, pvals: list, theta: dict, ivals: dict) -> None:
+        """The winding rule of symkin.solver: every loop's angle sum below SOLVER.winding."""
+        an, kin = self.an, self.kin
+        if not kin.unknowns:
+            return
+        f = self._fn("rigid_residual", list(an.rigid_residual), [*an.params, *an.thetas])
+        rows = f(*pvals, *(theta[a] for a in sorted(theta)))
+        for k, c in enumerate(kin.chords):
+            if not abs(rows[3 * k]) < SOLVER.winding:
+                at = ", ".join(f"{kin.hinges[b].name}={float(v):g}"
+                               for b, v in sorted(ivals.items()))
+                raise AssemblyError(
+                    f"{self.mechanism.path}: at {at} a hinge of the loop of "
+                    f"'{kin.hinges[c].name}' ({loop_text(an.structure, c)}) would have turned "
+                    "through more than half a turn on the way from the as-fabricated pose (its "
+                    "angles sum to 2*pi, not 0): a plate cannot bend that far")
 
     def _check_limits(self, theta: dict, ivals: dict) -> None:
         """No plate is driven past its bound: its model's limit (elastica_force: π/2) or π."""
@@ -363,7 +383,7 @@ class _Mpmath:
                 raise AssemblyError(f"{self.mechanism.path}: the rigid loops cannot close at {at} "
                                     "(no convergence: outside the assembly range or at a toggle "
                                     "position)")
-        return {**ivals, **{a: _wrap(v) for a, v in x.items()}}
+        return {**ivals, **x}           # tracked continuously: the limits see |theta| > pi
 
     def _newton(self, f, jac, pvals: list, theta: dict, unknowns: Sequence[int]) -> dict | None:
         """Newton iteration on the θ of `unknowns`; None when it does not converge."""
