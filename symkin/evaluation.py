@@ -110,6 +110,14 @@ def exact_value(value: object, entry: str, file: str) -> sp.Expr:
                          hint="give a number or an expression such as 10*deg") from None
     if not (expr.is_real and expr.is_finite):
         raise InputError(f"{value!r} is not a finite real number", file=file, entry=entry)
+    try:
+        size = abs(expressions.numeric(expr, {}))
+    except expressions.NotReal:
+        raise InputError(f"{value!r} is not a finite real number", file=file, entry=entry,
+                         hint="give a number or an expression such as 10*deg") from None
+    if size > expressions.FLOAT64_MAX:
+        raise InputError(f"{value!r} is beyond a float64 (|value| < 1.8e308)", file=file,
+                         entry=entry, hint="give a value the generated code can hold")
     return expr
 
 
@@ -135,8 +143,11 @@ def parameter_values(mechanism: Mechanism,
         else:
             # A default re-evaluated with overridden values: numerically (60 digits), so an
             # override can never make sympy build a huge exact number (e.g. l**n, n = 1e9).
-            value = p.expr.evalf(60, subs=values)
-            if not (value.is_real and value.is_finite):
+            try:
+                value = sp.Float(expressions.numeric(p.expr, values), expressions.NUMERIC_DPS)
+            except expressions.NotReal:
+                value = sp.nan
+            if not (value.is_real and value.is_finite) or abs(value) > expressions.FLOAT64_MAX:
                 raise InputError(f"parameter '{p.name}' = {p.expr} evaluates to {value} with "
                                  "the overrides", file=mechanism.path, entry="--param",
                                  hint="choose override values that keep it finite")
