@@ -224,15 +224,15 @@ def targets(results: dict) -> list[dict]:
     return out
 
 
-def write_readme(block: str) -> bool:
-    """Rewrite the block between README's benchmark markers; False when there are none."""
+def write_readme(block: str, start: str = START, end: str = END) -> bool:
+    """Rewrite the block between two README markers; False when there are none."""
     path = ROOT / "README.md"
     text = path.read_text()
-    if START not in text or END not in text:
-        log("README has no benchmark markers: not written")
+    if start not in text or end not in text:
+        log(f"README has no {start} ... {end} markers: not written")
         return False
-    head, rest = text.split(START, 1)
-    _, tail = rest.split(END, 1)
-    path.write_text(head + START + "\n" + block + "\n" + END + tail)
+    head, rest = text.split(start, 1)
+    _, tail = rest.split(end, 1)
+    path.write_text(head + start + "\n" + block + "\n" + end + tail)
     return True
 

@@ -16,6 +16,10 @@ Measures, on this machine:
 3. Derivation (derivation.py: `symkin.derive.generate`, every emitter, all levels) time and peak
    memory on the examples and on generated families (families.py), each in a fresh process,
    with growth exponents fitted by least squares on log-log.
+4. Sweeps and sensitivities (sweeps.py): batch calls against one ctypes call per point, a
+   sensitivity evaluation against a deviation evaluation in C, `symkin sweep` throughput on
+   this machine's cores against the single-core C rate, Dask's overhead per chunk. Its own
+   README block (`<!-- sweeps:start -->`); `--only sweeps` measures and rewrites only that.
 
 Writes benchmarks/results.json (raw numbers) and rewrites only the README block between
 `<!-- benchmarks:start -->` and `<!-- benchmarks:end -->` (report.py; read-modify-write at the
@@ -38,6 +42,7 @@ from derivation import measure
 from evaluators import bench_example
 from report import render, targets, write_readme
 from symforce_alt import symforce_status
+import sweeps
 
 
 def main() -> None:
@@ -49,8 +54,14 @@ def main() -> None:
     ap.add_argument("--no-readme", action="store_true", help="do not rewrite README.md")
     ap.add_argument("--budget", type=float, default=120.0,
                     help="seconds allowed per derivation case (default 120)")
+    ap.add_argument("--only", choices=("sweeps",),
+                    help="measure only this part; rewrites only its README block")
     args = ap.parse_args()
     sizes = SMOKE if args.smoke else QUICK if args.quick else FULL
+    if args.only == "sweeps":
+        run_sweeps(sizes, args.no_readme, {"date": datetime.date.today().isoformat(),
+                                           "machine": machine()})
+        return
     t_start = time.perf_counter()
     results: dict = {"quick": sizes is not FULL, "sizes": sizes.name,
                      "date": datetime.date.today().isoformat(),
@@ -75,12 +86,40 @@ def main() -> None:
     print(block)
     if sizes is SMOKE:
         log(f"smoke run done in {results['total_s'] / 60:.1f} min; nothing written")
+        run_sweeps(sizes, True, {"date": results["date"], "machine": results["machine"]})
         return
     out = BENCH / ("results-quick.json" if sizes is QUICK else "results.json")
     out.write_text(json.dumps(results, indent=1, default=str) + "\n")
     if not args.no_readme:
         write_readme(block)          # read-modify-write of the marked block only, at the end
     log(f"done in {results['total_s'] / 60:.1f} min; raw numbers in {out.relative_to(ROOT)}")
+    run_sweeps(sizes, args.no_readme, {"date": results["date"], "machine": results["machine"]})
+
+
+def run_sweeps(sizes, no_readme: bool, header: dict) -> None:
+    """Part 4 (sweeps.py): measured, printed, written to results-sweeps.json and its README
+    block (not for --smoke)."""
+    t0 = time.perf_counter()
+    results = {**header, "sizes": sizes.name, "sweeps": sweeps.measure(sizes),
+               "symkin_commit": first_line(["git", "-C", str(ROOT), "rev-parse", "--short",
+                                            "HEAD"])}
+    results["total_s"] = time.perf_counter() - t0
+    results["targets"] = sweeps.targets(results)
+    m = results["machine"]
+    block = "\n".join(
+        [f"Measured {results['date']} by `python benchmarks/run.py --only sweeps` in "
+         f"{results['total_s'] / 60:.1f} min (symkin at commit {results['symkin_commit']}) on "
+         f"{m['cpu']}, {m['cores']} cores; raw numbers: `benchmarks/results-sweeps.json`.", ""]
+        + sweeps.render(results) + ["", "Targets:", ""]
+        + [f"- {'met' if t['met'] else 'MISSED'}: {t['text']} — measured {t['measured']}"
+           for t in results["targets"]])
+    print(block)
+    if sizes is SMOKE:
+        return
+    (BENCH / ("results-sweeps-quick.json" if sizes is QUICK else "results-sweeps.json")
+     ).write_text(json.dumps(results, indent=1, default=str) + "\n")
+    if not no_readme:
+        write_readme(block, "<!-- sweeps:start -->", "<!-- sweeps:end -->")
 
 
 if __name__ == "__main__":

@@ -19,6 +19,7 @@ from .structure import Structure, build as structure
 
 if TYPE_CHECKING:                     # the heavy modules load on first use
     from .analysis import Analysis
+    from .compiled import Compiled
     from .evaluation import Evaluation
 
 __version__ = "0.1.0"
@@ -34,13 +35,25 @@ def analyze(mechanism: Mechanism | str | Path, points: list[str] | None = None) 
 
 def evaluate(analysis: Analysis, inputs: Mapping[str, object], level: str = DEFAULT,
              params: Mapping[str, object] | None = None, backend: str = "sympy",
-             dps: int = 40) -> Evaluation:
+             dps: int = 40, sensitivity: bool = False) -> Evaluation:
     """One configuration of an analysis (:func:`symkin.evaluation.evaluate`): the derivation with
-    mpmath at `dps` digits (backend sympy) or the generated numpy / C evaluators."""
+    mpmath at `dps` digits (backend sympy) or the generated numpy / C evaluators; with
+    `sensitivity`, the derivatives by every parameter and input too (docs/sensitivity.md)."""
     from .evaluation import evaluate as run
 
-    return run(analysis, inputs, level, params, backend, dps)
+    return run(analysis, inputs, level, params, backend, dps, sensitivity)
+
+
+def compile(mechanism: Mechanism | Analysis | str | Path, backend: str = "c",  # noqa: A001
+            points: list[str] | None = None, levels: list[str] | None = None,
+            sensitivity: bool = True) -> Compiled:
+    """The generated evaluator of a mechanism, in memory, no files left behind
+    (:func:`symkin.compiled.compile`): `evaluate`, `sensitivity` and `sensitivity_full` on
+    arrays of inputs, one C call each."""
+    from .compiled import compile as build_evaluator
+
+    return build_evaluator(mechanism, backend, points, levels, sensitivity)
 
 
 __all__ = ["AssemblyError", "InputError", "Mechanism", "Structure", "SymkinError", "analyze",
-           "evaluate", "load", "loads", "structure", "__version__"]
+           "compile", "evaluate", "load", "loads", "structure", "__version__"]

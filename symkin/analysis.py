@@ -88,10 +88,9 @@ class Analysis:
 
     @cached_property
     def jacobian(self) -> sp.Matrix:
-        """∂F/∂δ of the exact closure, built from its structure rather than by differentiating:
-        rigid part: column a gets s_a Rot(φ_i + δφ_i) J V_i from each link i whose path holds a;
-        plates: Δz_b gives its model derivative (a = b) and J Δz_b (a on the path of P_b)."""
-        return self._closure_jacobian(exact=True)
+        """∂F/∂δ of the exact closure, built from its structure rather than by differentiating
+        (:meth:`closure_partials`, form exact)."""
+        return self.closure_partials("exact", "delta", self.kin.unknowns)
 
     @cached_property
     def linear_system(self) -> tuple[sp.Matrix, sp.Matrix]:
@@ -101,48 +100,133 @@ class Analysis:
         for c in self.kin.chords:
             rows_r.append(sp.Integer(0))
             rows_r.extend(self.kin.loop_deviation(c))
-        return self._closure_jacobian(exact=False), sp.Matrix(rows_r)
+        return self.closure_partials("first_order", "delta", self.kin.unknowns), sp.Matrix(rows_r)
 
-    def _closure_jacobian(self, exact: bool) -> sp.Matrix:
+    # -- partial derivatives from the structure ----------------------------------------------------
+    #
+    # Every quantity symkin solves for or reports has one shape: a sum over links of a rotated
+    # constant vector U_i plus a sum of plate deviations c_b Δz_b. Loops take U_i = V^c_i and
+    # c_b = Φ_cb, a point fixed in link k takes U_i = W_i and c_b = 1 on the direct path. The
+    # forms differ in what the links contribute:
+    #
+    #   rigid        Σ Rot(φ_i) U_i  (or Σ (Rot(φ_i) - I) U_i: the same derivatives); no plates
+    #   paper        Σ c_b Δz_b(θ_b, φ_P)                                          (4.8)
+    #   first_order  Σ δφ_i Rot(φ_i) J U_i + Σ c_b Δz_b(θ_b, φ_P)
+    #   exact        Σ Rot(φ_i)(Rot(δφ_i) - I) U_i + Σ c_b Δz_b(θ_b + δ_b, φ_P + δφ_P)
+    #
+    # with J = Rot(π/2) and φ_i = Σ s_a θ_a, δφ_i = Σ s_a δ_a over the direct path of link i.
+    # Their partial derivatives by a hinge angle θ_a or a difference δ_a follow term by term
+    # (below), stay free of cancellation (an O(l) quantity has O(l) derivatives written as such)
+    # and cost no symbolic differentiation of large expressions; by a parameter p, only the
+    # constant vectors U_i and the plates' Δz_b are differentiated, each a small expression.
+
+    def chain_partials(self, weights: dict[int, V.Vec], plates: dict[int, int], form: str,
+                       wrt: str, columns: Sequence, relative: bool = False) -> list[V.Vec]:
+        """∂X/∂θ_a (wrt 'theta'), ∂X/∂δ_a (wrt 'delta') for every hinge a of `columns`, or
+        ∂X/∂p (wrt 'param') for every parameter symbol p of `columns`, X the quantity of `form`
+        with link vectors `weights` and plate coefficients `plates` (`relative`: the rigid form
+        is Σ (Rot(φ_i) - I) U_i, the closure relative to the as-fabricated pose)."""
         kin, s = self.kin, self.structure
-        col = {a: k for k, a in enumerate(kin.unknowns)}
-        on_path = {i: set(s.tree_path(i)) & set(col) for i in range(s.n + 1)}
+        exact = form == "exact"
+        col = {a: k for k, a in enumerate(columns)}
+        out: list[list[sp.Expr]] = [[sp.Integer(0), sp.Integer(0)] for _ in columns]
+
+        def add(a, vec: V.Vec) -> None:
+            out[col[a]][0] += vec[0]
+            out[col[a]][1] += vec[1]
+
+        if wrt == "param":
+            self._parameter_partials(weights, plates, form, columns, relative, add)
+        elif form != "paper":
+            for i, w in weights.items():
+                hits = [a for a in s.tree_path(i) if a in col]
+                if not hits:
+                    continue
+                if form == "rigid" or (form == "first_order" and wrt == "delta"):
+                    d = V.rot(kin.phi(i), V.perp(w))
+                elif form == "first_order":
+                    d = V.scale(-self.delta_phi(i), V.rot(kin.phi(i), w))
+                elif wrt == "delta":
+                    d = V.rot(kin.phi(i) + self.delta_phi(i), V.perp(w))
+                else:
+                    d = V.rot(kin.phi(i), V.perp(V.rot_minus_identity(self.delta_phi(i), w)))
+                for a in hits:
+                    add(a, V.scale(kin.hinges[a].sign, d))
+        if form != "rigid" and (wrt == "theta" or (exact and wrt == "delta")):
+            angles = self.compliant_angles() if exact else kin.theta
+            for b, coeff in plates.items():
+                h = kin.hinges[b]
+                phi_p = kin.phi(h.P) + (self.delta_phi(h.P) if exact else 0)
+                dz = h.delta_z(angles[b], phi_p)
+                for a in s.tree_path(h.P):
+                    if a in col:
+                        add(a, V.scale(coeff * kin.hinges[a].sign, V.perp(dz)))
+                if b in col:
+                    rate = V.add(V.scale(_theta_derivative(h.df).subs(THETA, angles[b]), h.u),
+                                 V.scale(_theta_derivative(h.dg).subs(THETA, angles[b]),
+                                         V.perp(h.u)))
+                    add(b, V.scale(coeff * h.sign, V.rot(phi_p, rate)))
+        return [(x, y) for x, y in out]
+
+    def _parameter_partials(self, weights: dict[int, V.Vec], plates: dict[int, int], form: str,
+                            params: Sequence[sp.Symbol], relative: bool, add) -> None:
+        """chain_partials by the parameters: the link terms are linear in U_i, so they take
+        ∂U_i/∂p in place of U_i; each plate contributes ∂Δz_b/∂p."""
+        kin, exact = self.kin, form == "exact"
+        for i, w in weights.items():
+            free = sp.sympify(w[0]).free_symbols | sp.sympify(w[1]).free_symbols
+            for p in params:
+                if p not in free:
+                    continue
+                dw = (sp.diff(w[0], p), sp.diff(w[1], p))
+                if form == "rigid":
+                    d = V.rot_minus_identity(kin.phi(i), dw) if relative else V.rot(kin.phi(i), dw)
+                elif form == "first_order":
+                    d = V.scale(self.delta_phi(i), V.rot(kin.phi(i), V.perp(dw)))
+                elif exact:
+                    d = V.rot(kin.phi(i), V.rot_minus_identity(self.delta_phi(i), dw))
+                else:
+                    continue
+                add(p, d)
+        if form == "rigid":
+            return
         angles = self.compliant_angles() if exact else kin.theta
+        for b, coeff in plates.items():
+            h = kin.hinges[b]
+            phi_p = kin.phi(h.P) + (self.delta_phi(h.P) if exact else 0)
+            dz = h.delta_z(angles[b], phi_p)
+            free = dz[0].free_symbols | dz[1].free_symbols
+            for p in params:
+                if p in free:
+                    add(p, V.scale(coeff, (sp.diff(dz[0], p), sp.diff(dz[1], p))))
+
+    def closure_partials(self, form: str, wrt: str, columns: Sequence) -> sp.Matrix:
+        """Partial derivatives of the loop closure of `form` (rigid: the rigid closure relative
+        to the as-fabricated pose; first_order: A δ + r; exact: the residual F) by θ_a or δ_a,
+        a in `columns`: an angular row (5.1), then x, y rows (5.3) per loop."""
+        kin, s = self.kin, self.structure
         rows: list[list[sp.Expr]] = []
         for c in kin.chords:
             loop = s.loops[c - s.n - 1]
-            angular = [sp.Integer(0)] * len(col)
-            px, py = [sp.Integer(0)] * len(col), [sp.Integer(0)] * len(col)
+            # (5.1) is linear: Σ Φ_cb s_b θ_b (rigid) or Σ Φ_cb s_b δ_b (the others)
+            angular = [sp.Integer(int(loop[a - 1]) * kin.hinges[a].sign)
+                       if wrt != "param" and (wrt == "delta") != (form == "rigid")
+                       else sp.Integer(0) for a in columns]
+            plates = {b: int(loop[b - 1]) for b in range(1, s.m + 1) if loop[b - 1]}
+            vecs = self.chain_partials(kin.loop_weights(c), plates, form, wrt, columns,
+                                       relative=True)
+            rows.extend([angular, [v[0] for v in vecs], [v[1] for v in vecs]])
+        return sp.Matrix(rows) if rows else sp.zeros(0, len(columns))
 
-            def add(a: int, vec: V.Vec) -> None:
-                px[col[a]] += vec[0]
-                py[col[a]] += vec[1]
-
-            for b in range(1, s.m + 1):
-                if loop[b - 1] and b in col:
-                    angular[col[b]] += int(loop[b - 1]) * kin.hinges[b].sign
-            for i, w in kin.loop_weights(c).items():
-                turn = kin.phi(i) + (self.delta_phi(i) if exact else 0)
-                d = V.rot(turn, V.perp(w))
-                for a in on_path[i]:
-                    add(a, V.scale(kin.hinges[a].sign, d))
-            if exact:
-                for b in range(1, s.m + 1):
-                    coeff = int(loop[b - 1])
-                    if not coeff:
-                        continue
-                    h = kin.hinges[b]
-                    phi_p = kin.phi(h.P) + self.delta_phi(h.P)
-                    dz = h.delta_z(angles[b], phi_p)
-                    for a in on_path[h.P]:
-                        add(a, V.scale(coeff * kin.hinges[a].sign, V.perp(dz)))
-                    if b in col:
-                        rate = V.add(V.scale(_theta_derivative(h.df).subs(THETA, angles[b]), h.u),
-                                     V.scale(_theta_derivative(h.dg).subs(THETA, angles[b]),
-                                             V.perp(h.u)))
-                        add(b, V.scale(coeff * h.sign, V.rot(phi_p, rate)))
-            rows.extend([angular, px, py])
-        return sp.Matrix(rows) if rows else sp.zeros(0, len(col))
+    def point_partials(self, name: str, form: str, wrt: str, columns: Sequence) -> sp.Matrix:
+        """2 × len(columns): partial derivatives of the named point's rigid position (form
+        rigid) or of its deviation at the level `form` by θ_a or δ_a, a in `columns`."""
+        point = self.mechanism.point(name)
+        k = self.link[point.link]
+        plates = {b: 1 for b in self.structure.tree_path(k)}
+        vecs = self.chain_partials(self.kin.weights(k, point.at), plates, form, wrt, columns)
+        return sp.Matrix([[v[0] for v in vecs], [v[1] for v in vecs]]) if vecs else \
+            sp.zeros(2, 0)
 
     def point_deviation(self, name: str, level: str) -> V.Vec:
         """ΔX of the named point at `level`, in θ (rigid angles), δ and the parameters."""

@@ -58,12 +58,13 @@ def _eval(args: argparse.Namespace) -> str:
 
     analysis = Analysis(build(load(args.file)))
     result = evaluate(analysis, _pairs(args.input, "--input"), args.level,
-                      _pairs(args.param, "--param"), args.backend)
+                      _pairs(args.param, "--param"), args.backend,
+                      sensitivity=args.sensitivity)
     return evaluation_json(result) if args.json else evaluation_text(result)
 
 
 def _derive(args: argparse.Namespace) -> str:
-    from .derive import EMITTERS, derive, parse_list
+    from .derive import EMITTERS, derive, parse_length, parse_list
     from .levels import GENERATED
 
     emit = parse_list(args.emit, EMITTERS, "--emit") or list(EMITTERS)
@@ -77,8 +78,9 @@ def _derive(args: argparse.Namespace) -> str:
     if args.tolerance is not None and not args.tolerance > 0:
         raise InputError(f"tolerance must be positive, got {args.tolerance}", entry="--tolerance")
     output_dir(args.output, "-o")
+    column = parse_length(args.columnwidth) if args.columnwidth else None
     written = derive(args.file, args.output, emit, points, levels, args.appendix, progress,
-                     args.tolerance, args.range)
+                     args.tolerance, args.range, column)
     return "".join(f"{path}\n" for path in written)
 
 
@@ -106,6 +108,74 @@ def _tradeoff(args: argparse.Namespace) -> str:
             raise InputError(f"cannot write '{args.plot}' ({exc.strerror or exc})",
                              entry="--plot", hint="choose a path you can write to") from None
     return json.dumps(table.as_json(), indent=2) + "\n" if args.json else tradeoff.text(table)
+
+
+def _evaluator(args: argparse.Namespace, mech):
+    """The compiled evaluator of `mech` at args.level (C unless --backend numpy)."""
+    from .compiled import compile as build_evaluator
+
+    level = levels.get(args.level)
+    if not level.generated:
+        raise InputError(f"level '{level.name}' has no generated evaluator", entry="--level",
+                         hint="choose one of " + ", ".join(levels.GENERATED))
+    if args.backend == "c":
+        from .codegen.runtime import compiler
+
+        compiler()
+    return build_evaluator(mech, args.backend, levels=[level.name])
+
+
+def _tolerance(args: argparse.Namespace) -> str:
+    import json
+
+    from . import tolerance, variation
+
+    mech = load(args.file)
+    nominal = {p.name: float(p.value) for p in mech.parameters}
+    vary = variation.parse_vary(args.vary, mech, nominal, kinds=("pm",))
+    grid = variation.parse_grid(args.input, mech)
+    result = tolerance.run(_evaluator(args, mech), vary, grid, args.level)
+    return json.dumps(result.as_json(), indent=2) + "\n" if args.json else tolerance.text(result)
+
+
+def _sweep(args: argparse.Namespace) -> str:
+    import json
+
+    from . import sweep, variation
+
+    mech = load(args.file)
+    nominal = {p.name: float(p.value) for p in mech.parameters}
+    vary = variation.parse_vary(args.vary, mech, nominal)
+    grid = variation.parse_grid(args.input, mech, points=variation.DEFAULT_POINTS)
+    if args.samples < 2:
+        raise InputError(f"--samples must be at least 2, got {args.samples}", entry="--samples",
+                         hint="e.g. --samples 10000")
+    if args.seed < 0:
+        raise InputError(f"--seed must be a non-negative integer, got {args.seed}",
+                         entry="--seed")
+    if args.chunks is not None and args.chunks < 1:
+        raise InputError(f"--chunks must be positive, got {args.chunks}", entry="--chunks")
+    if args.plot:
+        output_file(args.plot, "--plot", PLOT_SUFFIXES)
+    scheduler = sweep.parse_scheduler(args.scheduler)
+    client = sweep.connect(scheduler) if scheduler.kind == "distributed" else None
+    try:
+        evaluator = _evaluator(args, mech)
+        sweep.check_grid(evaluator, grid, args.level)
+    except BaseException:
+        if client is not None:
+            client.close()
+        raise
+    progress = sys.stderr.isatty() and not args.json
+    result = sweep.run(evaluator, mech, vary, grid, args.samples, args.seed, scheduler,
+                       args.level, args.chunks, progress, client)
+    if args.plot:
+        try:
+            sweep.plot(result, args.plot)
+        except OSError as exc:
+            raise InputError(f"cannot write '{args.plot}' ({exc.strerror or exc})",
+                             entry="--plot", hint="choose a path you can write to") from None
+    return json.dumps(result.as_json(), indent=2) + "\n" if args.json else sweep.text(result)
 
 
 def parser() -> argparse.ArgumentParser:
@@ -138,6 +208,8 @@ def parser() -> argparse.ArgumentParser:
     ev.add_argument("--param", action="append", metavar="K=V", help="override a parameter")
     ev.add_argument("--level", choices=levels.NAMES, default=levels.DEFAULT)
     ev.add_argument("--backend", choices=("sympy", "numpy", "c"), default="sympy")
+    ev.add_argument("--sensitivity", action="store_true",
+                    help="also the derivatives by every parameter and input")
     ev.add_argument("--json", action="store_true", help="machine-readable output")
     ev.set_defaults(run=_eval)
     de = command("derive", "write the LaTeX report and the C99 and numpy evaluators")
@@ -148,11 +220,15 @@ def parser() -> argparse.ArgumentParser:
     de.add_argument("--levels", metavar="LIST", help="paper,first_order,exact (all by default)")
     de.add_argument("--appendix", action="store_true",
                     help="LaTeX body only, to \\input into a paper")
+    de.add_argument("--columnwidth", metavar="LENGTH",
+                    help="lay the report out for this column, e.g. 229.9pt for a two-column "
+                         "article (default 345pt)")
     de.add_argument("--quiet", action="store_true", help="no progress messages")
     de.add_argument("--tolerance", type=float, metavar="TOL",
                     help="derive the cheapest variant whose worst relative error meets TOL")
     de.add_argument("--range", action="append", metavar="H=LO:HI",
-                    help="input range for --tolerance (default -0.2:0.2 rad)")
+                    help="input range of --tolerance (default -0.2:0.2 rad) and of the report's "
+                         "deviation plots (default -0.3:0.3 rad)")
     de.set_defaults(run=_derive)
     tr = command("tradeoff", "speed and accuracy of every variant over a range")
     tr.add_argument("file", metavar="FILE")
@@ -164,6 +240,34 @@ def parser() -> argparse.ArgumentParser:
                     help="error against time, log-log (.png, .pdf or .svg)")
     tr.add_argument("--quiet", action="store_true", help="no progress messages")
     tr.set_defaults(run=_tradeoff)
+    to = command("tolerance", "worst-case and RSS stack-up of parameter tolerances")
+    to.add_argument("file", metavar="FILE")
+    to.add_argument("--vary", action="append", metavar="P=±A",
+                    help="a parameter's tolerance (±A, or ±A%% of its value)")
+    to.add_argument("--input", action="append", metavar="H=LO:HI[:N]",
+                    help="input range (default -0.2:0.2, 25 values)")
+    to.add_argument("--level", choices=levels.GENERATED, default=levels.DEFAULT)
+    to.add_argument("--backend", choices=("c", "numpy"), default="c")
+    to.add_argument("--json", action="store_true", help="machine-readable output")
+    to.set_defaults(run=_tolerance)
+    sw = command("sweep", "Monte Carlo over parameter spreads, on Dask")
+    sw.add_argument("file", metavar="FILE")
+    sw.add_argument("--vary", action="append", metavar="P=DIST",
+                    help="normal(MU,SIGMA), uniform(LO,HI) or ±A around the value")
+    sw.add_argument("--input", action="append", metavar="H=LO:HI:N",
+                    help="input grid (default -0.2:0.2:25)")
+    sw.add_argument("--samples", type=int, default=1000, metavar="S", help="samples (1000)")
+    sw.add_argument("--seed", type=int, default=0, metavar="K", help="random seed (0)")
+    sw.add_argument("--level", choices=levels.GENERATED, default=levels.DEFAULT)
+    sw.add_argument("--backend", choices=("c", "numpy"), default="c")
+    sw.add_argument("--scheduler", metavar="SPEC",
+                    help="threads[:N] (default, this machine's cores), processes[:N], sync, "
+                         "or tcp://HOST:PORT of a running distributed scheduler")
+    sw.add_argument("--chunks", type=int, metavar="K",
+                    help="Dask tasks (default about 4 per worker)")
+    sw.add_argument("--json", action="store_true", help="machine-readable output")
+    sw.add_argument("--plot", metavar="FILE.png", help="histograms (.png, .pdf or .svg)")
+    sw.set_defaults(run=_sweep)
     return top
 
 

@@ -7,7 +7,7 @@ order, no timestamps, headers name the source file by its base name only).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 from .analysis import Analysis
@@ -34,12 +34,35 @@ def parse_list(text: str | None, allowed: Sequence[str] | None, option: str) -> 
     return items
 
 
+#: TeX's length units in points (pt), for --columnwidth.
+TEX_UNITS = {"pt": 1.0, "bp": 72.27 / 72, "in": 72.27, "cm": 72.27 / 2.54, "mm": 72.27 / 25.4}
+
+
+def parse_length(text: str, option: str = "--columnwidth") -> float:
+    """A TeX length such as '240pt', '8.4cm' or '3.3in', in points; bad input exits 2."""
+    value, unit = text.strip()[:-2], text.strip()[-2:]
+    try:
+        points = float(value) * TEX_UNITS[unit]
+    except (KeyError, ValueError):
+        raise InputError(f"'{text}' is not a length", entry=option,
+                         hint="give a number with a unit pt, bp, mm, cm or in, e.g. 240pt "
+                              "(your document's \\the\\columnwidth)") from None
+    if not 100 <= points <= 1000:
+        raise InputError(f"{text} is not a plausible column width", entry=option,
+                         hint="give the column width of your document, between 100pt and "
+                              "1000pt (e.g. 229.9pt for a two-column article)")
+    return points
+
+
 def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[str] | None = None,
              levels: Sequence[str] | None = None, appendix: bool = False,
              progress: Callable[[str], None] | None = None, variant=None,
-             notes: Sequence[str] = ()) -> dict[str, bytes]:
+             notes: Sequence[str] = (), column_width: float | None = None,
+             spans: Mapping[str, tuple[float, float]] | None = None) -> dict[str, bytes]:
     """File name -> content of every requested artifact (nothing is written). A `variant`
-    (symkin.variants.Variant) derives that cheaper variant instead of the file's models."""
+    (symkin.variants.Variant) derives that cheaper variant instead of the file's models;
+    `column_width` (points) lays the LaTeX report out for that column and `spans` (input ->
+    (lo, hi) rad) sets its deviation plots' ranges."""
     from .codegen import runtime
     from .codegen.backends.c import backend as c_backend
     from .codegen.backends.numpy import backend as numpy_backend
@@ -79,18 +102,20 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
         if p.points:
             numpy_text = numpy_text or numpy_backend.emit(p, source)
             evaluator = runtime.import_numpy_module(numpy_text, mech.name)
-        files.update(report.emit(with_derivation(p, analysis), source, appendix, evaluator))
+        files.update(report.emit(with_derivation(p, analysis), source, appendix, evaluator,
+                                 column_width or report.COLUMN_WIDTH, spans))
     return files
 
 
 def derive(path: str | Path, out_dir: str | Path = ".", emit: Sequence[str] = EMITTERS,
            points: Sequence[str] | None = None, levels: Sequence[str] | None = None,
            appendix: bool = False, progress: Callable[[str], None] | None = None,
-           tolerance: float | None = None, ranges: Sequence[str] | None = None) -> list[Path]:
+           tolerance: float | None = None, ranges: Sequence[str] | None = None,
+           column_width: float | None = None) -> list[Path]:
     """Load, generate and write; returns the written paths. With a `tolerance`, the cheapest
     variant whose measured worst error over `ranges` meets it is derived instead."""
     mech = load(path)
-    variant, notes = None, []
+    variant, notes, spans = None, [], None
     if tolerance is not None:
         from . import tradeoff
 
@@ -107,9 +132,15 @@ def derive(path: str | Path, out_dir: str | Path = ".", emit: Sequence[str] = EM
                   for p, e in row.errors.items() if points is None or p in points]
         say(notes[0])
     elif ranges:
-        raise InputError("--range needs --tolerance", entry="--range",
-                         hint="add --tolerance, e.g. --tolerance 1e-6")
-    files = generate(mech, emit, points, levels, appendix, progress, variant, notes)
+        from . import tradeoff
+
+        if "latex" not in emit:
+            raise InputError("--range sets the ranges of --tolerance and of the report's "
+                             "deviation plots; neither is asked for", entry="--range",
+                             hint="add --tolerance TOL or --emit latex, or drop --range")
+        spans = tradeoff.parse_ranges(ranges, mech.inputs, mech.path, default=None)
+    files = generate(mech, emit, points, levels, appendix, progress, variant, notes,
+                     column_width, spans)
     try:
         return write_atomically(files, Path(out_dir))
     except OSError as exc:

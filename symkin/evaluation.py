@@ -42,6 +42,44 @@ class PointResult:
         return math.hypot(*self.deviation)
 
 
+Pair = tuple[float, float]
+
+
+@dataclass(frozen=True)
+class Sensitivity:
+    """Total derivatives at one configuration (docs/sensitivity.md): per point, per parameter
+    (file order) or input hinge, the derivative of (x, y) of the deviation and of the rigid
+    position. A parameter whose default reads others carries them along."""
+
+    deviation: dict[str, dict[str, Pair]]           # P -> parameter -> d(dx, dy)/dp
+    deviation_inputs: dict[str, dict[str, Pair]]    # P -> input hinge -> d(dx, dy)/dθ
+    rigid: dict[str, dict[str, Pair]]               # P -> parameter -> d(x, y)/dp, rigid
+    rigid_inputs: dict[str, dict[str, Pair]]
+
+    def as_json(self) -> dict:
+        """The keys `eval --sensitivity --json` adds (docs/cli.md)."""
+        def lists(table: dict) -> dict:
+            return {p: {k: list(v) for k, v in row.items()} for p, row in table.items()}
+
+        return {"sensitivity": lists(self.deviation),
+                "sensitivity_inputs": lists(self.deviation_inputs),
+                "rigid_sensitivity": lists(self.rigid),
+                "rigid_sensitivity_inputs": lists(self.rigid_inputs)}
+
+    @classmethod
+    def from_columns(cls, points: Sequence[str], params: Sequence[str], inputs: Sequence[str],
+                     deviation, rigid) -> Sensitivity:
+        """From arrays indexed [point][variable][component], variables = params then inputs."""
+        n = len(params)
+
+        def table(data, names, offset) -> dict:
+            return {p: {v: (float(data[i][offset + k][0]), float(data[i][offset + k][1]))
+                        for k, v in enumerate(names)} for i, p in enumerate(points)}
+
+        return cls(table(deviation, params, 0), table(deviation, inputs, n),
+                   table(rigid, params, 0), table(rigid, inputs, n))
+
+
 @dataclass(frozen=True)
 class LinkResult:
     """A link's rotation from the as-fabricated pose (radians): rigid (wrapped to (−π, π]),
@@ -67,9 +105,11 @@ class Evaluation:
     params: dict[str, float] = field(default_factory=dict)   # every parameter's value used
     overrides: tuple[str, ...] = ()                           # the ones given with --param
     links: dict[str, LinkResult] = field(default_factory=dict)   # every link's rotation
+    sensitivity: Sensitivity | None = None                    # with eval --sensitivity
 
     def as_json(self) -> dict:
         """The `eval --json` document (docs/cli.md)."""
+        extra = self.sensitivity.as_json() if self.sensitivity is not None else {}
         return {
             "level": self.level,
             "backend": self.backend,
@@ -83,17 +123,20 @@ class Evaluation:
             "links": {name: {"rigid": r.rigid, "compliant": r.compliant,
                              "deviation": r.deviation} for name, r in self.links.items()},
             "dyads": [dict(d) for d in self.dyads],
+            **extra,
         }
 
 
 def evaluate(analysis: Analysis, inputs: Mapping[str, object], level: str = levels.DEFAULT,
              params: Mapping[str, object] | None = None, backend: str = "sympy",
-             dps: int = 40) -> Evaluation:
-    """Evaluate one configuration at `level` through `backend` (sympy: mpmath at `dps` digits)."""
+             dps: int = 40, sensitivity: bool = False) -> Evaluation:
+    """Evaluate one configuration at `level` through `backend` (sympy: mpmath at `dps` digits);
+    with `sensitivity`, also the derivatives by every parameter and input
+    (docs/sensitivity.md)."""
     if backend == "sympy":
-        return _mpmath_evaluator(analysis).evaluate(inputs, level, params, dps)
+        return _mpmath_evaluator(analysis).evaluate(inputs, level, params, dps, sensitivity)
     if backend in ("numpy", "c"):
-        return _generated(analysis, inputs, level, params, backend)
+        return _generated(analysis, inputs, level, params, backend, sensitivity)
     raise InputError(f"unknown backend '{backend}'", entry="--backend",
                      hint="backends: " + ", ".join(BACKENDS))
 
@@ -252,31 +295,20 @@ class _Mpmath:
         return self._lambdas[key]
 
     def evaluate(self, inputs: Mapping[str, object], level: str,
-                 params: Mapping[str, object] | None, dps: int) -> Evaluation:
+                 params: Mapping[str, object] | None, dps: int,
+                 sensitivity: bool = False) -> Evaluation:
         an = self.an
-        levels.get(level)
-        given = input_values(an, inputs)
-        exact_params = parameter_values(self.mechanism, params)
         with mpmath.workdps(dps):
-            pvals = [mpmath.mpf(sp.N(exact_params[s], dps + 5)) for s in an.params]
-            ivals = {a: mpmath.mpf(sp.N(v, dps + 5)) for a, v in given.items()}
-            theta, dyads = self._rigid_angles(pvals, ivals)
-            self._check_limits(theta, ivals)
-            delta = self._deltas(level, pvals, theta)
-            self._check_limits({a: theta[a] + delta.get(a, 0) for a in theta}, ivals)
-            args = [*an.params, *an.thetas, *an.deltas]
-            values = [*pvals, *(theta[a] for a in sorted(theta)),
-                      *(delta.get(a, mpmath.mpf(0)) for a in self.kin.unknowns)]
+            state = self.state(inputs, level, params, dps)
             points = {}
-            for p in an.points:
-                rig = self._fn(f"rigid:{p.name}", list(an.point_rigid(p.name)), args)(*values)
-                dev = self._fn(f"{level}:{p.name}", list(an.point_deviation(p.name, level)),
-                               args)(*values)
-                points[p.name] = PointResult(
+            for name, (rig, dev) in self._point_values(state).items():
+                points[name] = PointResult(
                     (float(rig[0]), float(rig[1])),
                     (float(rig[0] + dev[0]), float(rig[1] + dev[1])),
                     (float(dev[0]), float(dev[1])))
+            theta, delta, ivals = state.theta, state.delta, state.inputs
             s = an.structure
+            args, values = self._arguments(state)
             rot = self._fn(f"links:{level}", [an.link_rotation(i) for i in range(s.n + 1)]
                            + [an.link_deviation(i, level) for i in range(s.n + 1)], args)(*values)
             links = {}
@@ -290,9 +322,113 @@ class _Mpmath:
                 angles_rigid={names[a]: float(theta[a]) for a in sorted(theta)},
                 angles_compliant={names[a]: float(theta[a] + delta.get(a, 0))
                                   for a in sorted(theta)},
-                points=points, dyads=tuple(dyads),
-                params=parameter_floats(self.mechanism, exact_params),
-                overrides=tuple(params or ()), links=links)
+                points=points, dyads=tuple(state.dyads),
+                params=parameter_floats(self.mechanism, state.exact_params),
+                overrides=tuple(params or ()), links=links,
+                sensitivity=self._sensitivity(state) if sensitivity else None)
+
+    def values(self, inputs: Mapping[str, object], level: str,
+               params: Mapping[str, object] | None, dps: int) -> dict[str, tuple]:
+        """Point name -> (rigid (x, y), deviation (dx, dy)) as mpmath numbers at `dps` digits
+        (for references that need more than doubles, e.g. central differences)."""
+        with mpmath.workdps(dps):
+            return self._point_values(self.state(inputs, level, params, dps))
+
+    def state(self, inputs: Mapping[str, object], level: str,
+              params: Mapping[str, object] | None, dps: int) -> _State:
+        """The solved configuration (call inside mpmath.workdps(dps))."""
+        an = self.an
+        levels.get(level)
+        given = input_values(an, inputs)
+        exact_params = parameter_values(self.mechanism, params)
+        pvals = [mpmath.mpf(sp.N(exact_params[s], dps + 5)) for s in an.params]
+        ivals = {a: mpmath.mpf(sp.N(v, dps + 5)) for a, v in given.items()}
+        theta, dyads = self._rigid_angles(pvals, ivals)
+        self._check_limits(theta, ivals)
+        delta = self._deltas(level, pvals, theta)
+        self._check_limits({a: theta[a] + delta.get(a, 0) for a in theta}, ivals)
+        return _State(level, exact_params, pvals, ivals, theta, delta, dyads)
+
+    def _arguments(self, state: _State) -> tuple[list, list]:
+        """The symbols of the derivation (parameters, θ, δ) and their values in `state`."""
+        an = self.an
+        args = [*an.params, *an.thetas, *an.deltas]
+        values = [*state.pvals, *(state.theta[a] for a in sorted(state.theta)),
+                  *(state.delta.get(a, mpmath.mpf(0)) for a in self.kin.unknowns)]
+        return args, values
+
+    def _point_values(self, state: _State) -> dict[str, tuple]:
+        an = self.an
+        args, values = self._arguments(state)
+        out = {}
+        for p in an.points:
+            rig = self._fn(f"rigid:{p.name}", list(an.point_rigid(p.name)), args)(*values)
+            dev = self._fn(f"{state.level}:{p.name}",
+                           list(an.point_deviation(p.name, state.level)), args)(*values)
+            out[p.name] = ((rig[0], rig[1]), (dev[0], dev[1]))
+        return out
+
+    def _sensitivity(self, state: _State) -> Sensitivity:
+        """Total derivatives by the implicit-function theorem on the closures
+        (symkin.sensitivity), in mpmath."""
+        from . import sensitivity
+
+        an, kin = self.an, self.kin
+        if not an.points:
+            return Sensitivity({}, {}, {}, {})
+        terms = sensitivity.of(an)
+        args, values = self._arguments(state)
+        level = state.level
+
+        def matrix(key: str, expr: sp.Matrix):
+            if not expr.rows or not expr.cols:
+                return mpmath.zeros(expr.rows, expr.cols)
+            return mpmath.matrix(self._fn(f"sens:{key}", expr.tolist(), args)(*values))
+
+        def solve(m, rhs):
+            try:
+                cols = [mpmath.lu_solve(m, rhs.column(j)) for j in range(rhs.cols)]
+            except ZeroDivisionError:
+                raise AssemblyError(f"{self.mechanism.path}: the mechanism is at a toggle "
+                                    "position (singular loop Jacobian) for these inputs") from None
+            out = mpmath.zeros(rhs.rows, rhs.cols)
+            for j, col in enumerate(cols):
+                for i in range(rhs.rows):
+                    out[i, j] = col[i]
+            return out
+
+        k, nv = len(kin.unknowns), len(terms.variables)
+        theta_v = mpmath.zeros(k, nv)
+        rigid_stage = terms.rigid_stage
+        if rigid_stage is not None:
+            theta_v = -solve(matrix("A", rigid_stage.jacobian),
+                             matrix("Gv", rigid_stage.variables))
+        rig = terms.rigid
+        total_r = matrix("Rv", rig.variables) + (matrix("Rt", rig.theta) * theta_v if k else 0)
+        part = terms.partials(level)
+        total_d = matrix(f"{level}:Dv", part.variables)
+        if k:
+            total_d += matrix(f"{level}:Dt", part.theta) * theta_v
+            stage = terms.stage(level)
+            if stage is not None:
+                rhs = matrix(f"{level}:Ev", stage.variables) + \
+                    matrix(f"{level}:Et", stage.theta) * theta_v
+                delta_v = -solve(matrix(f"{level}:M", stage.jacobian), rhs)
+                total_d += matrix(f"{level}:Dd", part.delta) * delta_v
+        chain = self._fn("sens:chain", sensitivity.parameter_chain(
+            [p.expr for p in self.mechanism.parameters], an.params).tolist(), args)(*values)
+        n_p = len(an.params)
+
+        def per_point(m) -> list:
+            cols = [[(m[2 * i, j], m[2 * i + 1, j]) for i in range(len(an.points))]
+                    for j in range(nv)]
+            cols[:n_p] = sensitivity.total(cols[:n_p], chain)
+            return [[cols[j][i] for j in range(nv)] for i in range(len(an.points))]
+
+        names = [p.name for p in an.points]
+        return Sensitivity.from_columns(
+            names, [p.name for p in self.mechanism.parameters],
+            [kin.hinges[a].name for a in kin.inputs], per_point(total_d), per_point(total_r))
 
     def dyad_states(self, inputs: Mapping[str, object],
                     params: Mapping[str, object] | None = None) -> tuple[dict, ...]:
@@ -456,6 +592,19 @@ class _Mpmath:
                             f"(no convergence in {SOLVER.exact_iterations} Newton steps)")
 
 
+@dataclass(frozen=True)
+class _State:
+    """One configuration solved in mpmath: parameter and input values, θ and δ."""
+
+    level: str
+    exact_params: dict
+    pvals: list
+    inputs: dict
+    theta: dict
+    delta: dict
+    dyads: list
+
+
 def _wrap(angle):
     """Angle wrapped into (-π, π]: hinge angles are rotations from the as-fabricated pose."""
     two_pi = 2 * mpmath.pi
@@ -465,8 +614,10 @@ def _wrap(angle):
 # -- the numpy and c backends: the generated evaluators --------------------------------------------
 
 def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
-               params: Mapping[str, object] | None, backend: str) -> Evaluation:
-    """One configuration through the generated `backend` ('numpy' or 'c')."""
+               params: Mapping[str, object] | None, backend: str,
+               sensitivity: bool = False) -> Evaluation:
+    """One configuration through the generated `backend` ('numpy' or 'c'); with `sensitivity`,
+    its generated sensitivity function too."""
     if not levels.get(level).generated:
         raise InputError(f"level '{level}' has no generated evaluator", entry="--backend",
                          hint="evaluate it with --backend sympy")
@@ -481,16 +632,27 @@ def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
     x = [float(sp.N(given[a], 20)) for a in kin.inputs]
     pvals = parameter_values(analysis.mechanism, params)
     pfloat = [float(sp.N(pvals[s], 20)) for s in analysis.params]
-    p = plan(analysis)
+    p = plan(analysis, sensitivity=sensitivity)
     source = analysis.mechanism.path
     hinges = [kin.hinges[a].name for a in sorted(kin.hinges)]
+    pnames = [q.name for q in analysis.mechanism.parameters]
+    sens = None
     if backend == "numpy":
         module = runtime.import_numpy_module(numpy_backend.emit(p, source),
                                              analysis.mechanism.name)
-        res = module.evaluate(dict(zip(names, x)), level,
-                              {q.name: v for q, v in zip(analysis.mechanism.parameters, pfloat)})
+        call = module.sensitivity_full if sensitivity else module.evaluate
+        res = call(dict(zip(names, x)), level, dict(zip(pnames, pfloat)))
         if not bool(res["ok"]):
-            _explain(analysis, inputs, level, params)
+            _explain(analysis, inputs, level, params, sensitivity)
+        if sensitivity:
+            def cols(kind: str, point: str) -> list:
+                table = res[kind][point]
+                return [table["params"][q] for q in pnames] + \
+                    [table["inputs"][h] for h in names]
+
+            sens = Sensitivity.from_columns(
+                p.points, pnames, names, [cols("deviation", n) for n in p.points],
+                [cols("rigid", n) for n in p.points])
         points = {n: PointResult(*(tuple(float(v) for v in res["points"][n][key])
                                    for key in ("rigid", "compliant", "deviation")))
                   for n in p.points}
@@ -507,8 +669,12 @@ def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
         status, out, angles, rot = lib.pose(x, pfloat, levels.get(level).code)
         if status == 3:
             raise InputError("the C evaluator rejected the arguments", entry="--input")
+        if status == 0 and sensitivity:
+            rows = lib.sensitivity_rows([x], pfloat, levels.get(level).code)
+            status = int(rows[0][0])
+            sens = Sensitivity.from_columns(p.points, pnames, names, rows[2][0], rows[3][0])
         if status:
-            _explain(analysis, inputs, level, params)
+            _explain(analysis, inputs, level, params, sensitivity)
         points = {n: PointResult((out[6 * i], out[6 * i + 1]), (out[6 * i + 2], out[6 * i + 3]),
                                  (out[6 * i + 4], out[6 * i + 5])) for i, n in enumerate(p.points)}
         m = len(hinges)
@@ -522,12 +688,12 @@ def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
         angles_compliant={h: compliant[h] for h in sorted(compliant, key=order.get)},
         points=points, dyads=_mpmath_evaluator(analysis).dyad_states(inputs, params),
         params=parameter_floats(analysis.mechanism, pvals), overrides=tuple(params or ()),
-        links=links)
+        links=links, sensitivity=sens)
 
 
-def _explain(analysis: Analysis, inputs, level, params) -> None:
+def _explain(analysis: Analysis, inputs, level, params, sensitivity: bool = False) -> None:
     """Raise the sympy backend's error for a configuration a generated evaluator refused."""
-    evaluate(analysis, inputs, level, params)
+    evaluate(analysis, inputs, level, params, sensitivity=sensitivity)
     raise AssemblyError(f"{analysis.mechanism.path}: the generated evaluator could not solve this "
                         "configuration (no convergence in float64), although the 40-digit "
                         "derivation can")

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -81,5 +82,39 @@ def evaluation_json(result) -> str:
 
 
 def evaluation_text(result) -> str:
-    """Human summary of `symkin eval`: angles, points, deviations and dyad toggle margins."""
-    return render("text/eval.txt.j2", r=result)
+    """Human summary of `symkin eval`: angles, points, deviations and dyad toggle margins, and
+    with --sensitivity each point's derivatives, ranked."""
+    tables = sensitivity_tables(result) if result.sensitivity is not None else {}
+    return render("text/eval.txt.j2", r=result, sensitivity=tables)
+
+
+def norm_rate(deviation: Sequence[float], rate: Sequence[float]) -> float:
+    """d|ΔR|/dv from ΔR and dΔR/dv; at ΔR = 0 (the as-fabricated pose) |dΔR/dv|, the rate at
+    which |ΔR| grows from zero."""
+    norm = math.hypot(*deviation)
+    if norm == 0:
+        return math.hypot(*rate)
+    return (deviation[0] * rate[0] + deviation[1] * rate[1]) / norm
+
+
+def sensitivity_tables(result) -> dict[str, list[dict]]:
+    """Per point, one row per parameter and input: value, d(dx, dy)/dv, d|ΔR|/dv, the rigid
+    position's d(x, y)/dv and the relative sensitivity (v/|ΔR|) d|ΔR|/dv; ranked by the size
+    of the relative sensitivity (parameters of value 0 last)."""
+    sens = result.sensitivity
+    out = {}
+    for name, point in result.points.items():
+        rows = []
+        for kind, table, rigid, values in (
+                ("param", sens.deviation, sens.rigid, result.params),
+                ("input", sens.deviation_inputs, sens.rigid_inputs, result.inputs)):
+            for var, rate in table[name].items():
+                d_norm = norm_rate(point.deviation, rate)
+                value = values[var]
+                relative = value * d_norm / point.norm if point.norm else None
+                rows.append({"name": var, "kind": kind, "value": value, "rate": rate,
+                             "norm": d_norm, "rigid": rigid[name][var], "relative": relative})
+        rows.sort(key=lambda r: (r["relative"] is None or r["value"] == 0,
+                                 -abs(r["relative"] or 0.0), -abs(r["norm"])))
+        out[name] = rows
+    return out

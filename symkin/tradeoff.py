@@ -77,10 +77,12 @@ class Tradeoff:
         }
 
 
-def parse_ranges(items: Sequence[str] | None, inputs: Sequence[str],
-                 file: str) -> dict[str, tuple[float, float]]:
-    """H=LO:HI options (expressions allowed), every input defaulting to DEFAULT_RANGE."""
-    ranges = {name: DEFAULT_RANGE for name in inputs}
+def parse_ranges(items: Sequence[str] | None, inputs: Sequence[str], file: str,
+                 default: tuple[float, float] | None = DEFAULT_RANGE
+                 ) -> dict[str, tuple[float, float]]:
+    """H=LO:HI options (expressions allowed), every other input at `default` (left out when
+    `default` is None)."""
+    ranges = {name: default for name in inputs}
     for item in items or ():
         name, sep, span = item.partition("=")
         lo, colon, hi = span.partition(":")
@@ -92,7 +94,7 @@ def parse_ranges(items: Sequence[str] | None, inputs: Sequence[str],
             raise InputError(f"empty range {a}:{b}", file=file, entry="--range",
                              hint="give LO < HI")
         ranges[name.strip()] = (a, b)
-    return ranges
+    return {name: span for name, span in ranges.items() if span is not None}
 
 
 def sample(ranges: Mapping[str, tuple[float, float]], n: int) -> list[dict[str, float]]:
@@ -144,7 +146,7 @@ def measure(mech: Mechanism, variant: Variant, samples: list[dict[str, float]],
     from .codegen.plan import plan
     
     analysis = analysis_for(mech, variant)
-    p = plan(analysis, levels=[variant.level])
+    p = plan(analysis, levels=[variant.level], sensitivity=False)
     tag = f"{mech.name}_{variant.name.replace('/', '_')}"
     module = runtime.import_numpy_module(numpy_backend.emit(p, "tradeoff", variant.precision),
                                          tag)
@@ -322,9 +324,13 @@ def _number_markers(fig, ax, markers: list[tuple[float, float, int]]) -> None:
 
 def plot(table: Tradeoff, path: str) -> None:
     """Save the tradeoff figure (the format follows the file's suffix)."""
+    save_figure(figure(table), path)
+
+
+def save_figure(fig, path: str) -> None:
+    """Save and close a matplotlib figure without dates or versions (format from the suffix)."""
     import matplotlib.pyplot as plt
 
-    fig = figure(table)
     fig.savefig(path, dpi=120, metadata=_PLOT_METADATA.get(path.rsplit(".", 1)[-1].lower()))
     plt.close(fig)
 

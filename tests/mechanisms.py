@@ -81,3 +81,28 @@ NON_GRASHOF = text("non_grashof", links("frame", "crank", "coupler", "rocker")
                    + hinge("B0", "frame", "rocker", 0.1, 0.0, "pi/2")
                    + hinge("B", "coupler", "rocker", 0.08, 0.05, "0")
                    + point("C", "coupler", 0.04, 0.08))
+
+# The four-bar with its geometry in parameters: a dependent default (L2 = 2*l), a PRBM plate
+# whose gamma and direction are parameters, a point placed by parameters (sensitivity tests).
+PARAM_FOUR_BAR = """format = 1
+name = "param_four_bar"
+[parameters]
+l = 1e-3
+L2 = "2*l"
+ax = 0.015
+ay = 0.026
+bx = 0.085
+by = 0.068
+g = 0.8517
+tilt = "pi/3"
+cx = 0.06
+[defaults]
+model = "circular_arc"
+length = "l"
+""" + links("frame", "crank", "coupler", "rocker") + \
+    hinge("A0", "frame", "crank", 0.0, 0.0, "pi/2", input=True) + \
+    '[[hinge]]\nname = "A"\nlinks = ["crank", "coupler"]\nat = ["ax", "ay"]\n' \
+    'plate_angle = "tilt"\nmodel = "prbm"\ngamma = "g"\nlength = "L2"\n' + \
+    hinge("B0", "frame", "rocker", 0.1, 0.0, "pi/2") + \
+    '[[hinge]]\nname = "B"\nlinks = ["coupler", "rocker"]\nat = ["bx", "by"]\n' + \
+    '[[point]]\nname = "C"\nlink = "coupler"\nat = ["cx", "0.064 + ay"]\n'

@@ -51,9 +51,11 @@ def test_points_and_levels_limit_what_is_derived():
     assert not only_f.needs_loops and not only_f.loops_for_links
     assert "newton" not in only_f.routines and "links" not in only_f.routines
     four = symkin.loads(M.WATT_II)
-    only_paper = plan(Analysis(symkin.structure(four)), levels=["paper"])
+    only_paper = plan(Analysis(symkin.structure(four)), levels=["paper"], sensitivity=False)
     assert set(only_paper.routines) == {"rigid", "rigid_res", "linear", "rigid_points",
                                         "dev_paper", "links"}
+    with_sens = plan(Analysis(symkin.structure(four)), levels=["paper"])
+    assert set(with_sens.routines) - set(only_paper.routines) == {"sens_rigid", "sens_paper"}
     exact = plan(Analysis(symkin.structure(four)), levels=["exact"])
     assert "newton" in exact.routines and "dev_first_order" not in exact.routines
 

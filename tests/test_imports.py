@@ -24,7 +24,7 @@ FLOORS: tuple[tuple[str, ...], ...] = (
     ("kinematics", "reports"),
     ("rigid", "loop_equations"),
     ("analysis",),
-    ("variants",),
+    ("variants", "sensitivity"),
     # code generation: the plan, then each backend's printer and kernels, then the backends
     ("codegen.derivation", "codegen.plan"),
     ("codegen.backends.c.printer", "codegen.backends.c.kernels",
@@ -35,7 +35,8 @@ FLOORS: tuple[tuple[str, ...], ...] = (
      "codegen.backends.latex.report"),
     # numbers and commands
     ("evaluation",),
-    ("tradeoff",),
+    ("compiled",),
+    ("variation", "tolerance", "tradeoff", "sweep"),
     ("derive",),
     ("",),                                  # the package itself: symkin.load, analyze, ...
     ("cli", "__main__"),

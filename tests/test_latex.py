@@ -18,10 +18,11 @@ import pytest
 import symkin
 from conftest import EXAMPLES, ROOT
 from symkin.codegen.backends.latex.text import escape_latex, math_name
+from symkin.cli import main
 from symkin.derive import generate
 
 EXAMPLE_NAMES = sorted(p.stem for p in EXAMPLES.glob("*.toml"))
-MAX_OVERFULL_PT = 20.0
+MAX_OVERFULL_PT = 1.0
 OVERFULL = re.compile(r"Overfull \\hbox \((\d+(?:\.\d+)?)pt too wide\)")
 HOSTILE_NAMES = ("int", "a-b", r"\input{/etc/passwd}", '"; system("true")', "50% & $x$_#~^{}")
 APPENDIX_WRAPPER = r"""\documentclass{article}
@@ -136,6 +137,65 @@ def test_appendix_compiles_in_a_paper(example, reports, tmp_path):
     # the default article's 345 pt text width: narrower than the standalone report's
     worst = max(overfull(log), default=0.0)
     assert worst <= MAX_OVERFULL_PT, f"an overfull \\hbox {worst} pt too wide in the appendix"
+
+
+TWO_COLUMN_WRAPPER = r"""\documentclass[twocolumn]{article}
+\usepackage{amsmath,amssymb,graphicx,booktabs}
+\begin{document}
+\typeout{COLUMNWIDTH=\the\columnwidth}
+\section{Introduction} A conference paper.
+\appendix
+%s
+\end{document}
+"""
+
+
+@pytest.mark.parametrize("key", [*EXAMPLE_NAMES, "SERIAL_ARM", "FIVE_BAR", "WATT_II",
+                                 "TRIAD_SIX_BAR"])
+def test_appendix_fits_a_two_column_paper(key, tmp_path):
+    """derive --appendix --columnwidth 229.5pt, \\input into a two-column article (whose column
+    is 229.5 pt): no overfull box over 1 pt."""
+    pdflatex()
+    import mechanisms
+
+    if key in EXAMPLE_NAMES:
+        mech = symkin.load(EXAMPLES / f"{key}.toml")
+    else:
+        path = tmp_path / "m.toml"
+        path.write_text(getattr(mechanisms, key))
+        mech = symkin.load(path)
+    folder = write(generate(mech, emit=["latex"], appendix=True, column_width=229.5),
+                   tmp_path / "out")
+    (folder / "paper.tex").write_text(TWO_COLUMN_WRAPPER % f"\\input{{{mech.name}}}")
+    log = compile_tex(folder, "paper.tex")
+    assert "COLUMNWIDTH=229.5pt" in log
+    worst = max(overfull(log), default=0.0)
+    assert worst <= 1.0, f"an overfull \\hbox {worst} pt too wide in {key} (two columns)"
+
+
+def test_two_reports_input_into_one_paper(tmp_path):
+    """The report's helper macros are defined once: two appendices in one document compile."""
+    pdflatex()
+    parts = []
+    for name in ("four_bar", "stephenson_six_bar"):
+        write(generate(symkin.load(EXAMPLES / f"{name}.toml"), emit=["latex"], appendix=True,
+                       column_width=229.5), tmp_path)
+        parts.append(f"\\input{{{name}}}")
+    (tmp_path / "paper.tex").write_text(TWO_COLUMN_WRAPPER % "\n".join(parts))
+    log = compile_tex(tmp_path, "paper.tex")
+    assert max(overfull(log), default=0.0) <= 1.0
+
+
+@pytest.mark.parametrize("width, ok", [("229.5pt", True), ("8.1cm", True), ("3.2in", True),
+                                       ("81mm", True), ("240", False), ("12em", False),
+                                       ("20pt", False), ("wide", False)])
+def test_columnwidth_option(tmp_path, capsys, width, ok):
+    code = main(["derive", str(EXAMPLES / "four_bar.toml"), "-o", str(tmp_path / "o"), "--emit",
+                 "latex", "--appendix", "--quiet", "--columnwidth", width])
+    err = capsys.readouterr().err
+    assert (code == 0) == ok, err
+    if not ok:
+        assert code == 2 and "fix:" in err
 
 
 @pytest.mark.parametrize("key", ["SERIAL_ARM", "FIVE_BAR", "WATT_II", "TRIAD_SIX_BAR"])
@@ -274,3 +334,86 @@ def test_escape_latex_of_every_character_compiles(tmp_path):
         for fragment in ('!"#$%&', "()*+,-./0123456789:;<=>?@ABC", "[\\]^", "{|}~",
                          "[U+0007]", "[U+2192]"):
             assert fragment in text, fragment
+
+
+# -- what the report states --------------------------------------------------------------------
+
+def _derive_tex(tmp_path: Path, file: Path, *options: str) -> str:
+    out = tmp_path / "out"
+    code = main(["derive", str(file), "-o", str(out), "--emit", "latex", "--quiet", *options])
+    assert code == 0
+    return next(out.glob("*.tex")).read_text()
+
+
+def _peak_rows(tex: str) -> list[list[str]]:
+    table = tex[tex.index(":peaks}"):tex.index(r"\bottomrule", tex.index(":peaks}"))]
+    return [[c.strip() for c in line.rstrip("\\ ").split("&")]
+            for line in table.splitlines() if line.count("&") == 4 and "level" not in line]
+
+
+def _sci(cell: str) -> float:
+    m = re.fullmatch(r"\$(-?[\d.]+)(?:\\times 10\^\{(-?\d+)\})?\$", cell)
+    return float(m[1]) * 10 ** int(m[2] or 0)
+
+
+def test_range_without_tolerance_sets_the_plotted_range(tmp_path):
+    """derive --range A0=-0.1:0.25 (no --tolerance): the report sweeps that range, and its table's
+    largest exact deviation is the 40-digit evaluation's at the stated angle, no smaller than at
+    the range's ends."""
+    tex = _derive_tex(tmp_path, EXAMPLES / "four_bar.toml", "--range", "A0=-0.1:0.25")
+    assert "of the input $\\theta$ of A0 from $-0.1$ to $0.25$~rad" in tex
+    from symkin.analysis import Analysis
+    from symkin.structure import build
+
+    analysis = Analysis(build(symkin.load(EXAMPLES / "four_bar.toml")))
+    rows = [r for r in _peak_rows(tex) if r[1] == "exact"]
+    assert [r[0] for r in rows] == ["C"]
+    peak, at = _sci(rows[0][2]), float(rows[0][3].strip("$"))
+    assert -0.1 <= at <= 0.25
+    norm = lambda a: symkin.evaluate(analysis, {"A0": a}, "exact").points["C"].norm  # noqa: E731
+    assert abs(norm(at) - peak) <= 5e-3 * peak          # the table prints 3 digits
+    assert max(norm(-0.1), norm(0.25)) <= norm(at) * (1 + 1e-9)
+
+
+def test_range_needs_something_to_act_on(tmp_path, capsys):
+    code = main(["derive", str(EXAMPLES / "four_bar.toml"), "-o", str(tmp_path / "o"), "--emit",
+                 "c", "--quiet", "--range", "A0=-0.1:0.2"])
+    assert code == 2 and "fix:" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
+def test_several_inputs_are_swept_one_at_a_time(tmp_path):
+    """A two-input five-bar: one figure per input, each input over its own range with the other
+    held at the middle of its range, and the table says which input its largest value is at."""
+    import mechanisms
+
+    path = tmp_path / "five_bar.toml"
+    path.write_text(mechanisms.FIVE_BAR)
+    tex = _derive_tex(tmp_path, path, "--range", "O1=-0.1:0.2")
+    assert "O1: $-0.1$ to $0.2$~rad, held at $0.05$; O2: $-0.3$ to $0.3$~rad, held at $0$" in tex
+    figures = re.findall(r"\\symkinfigpath (five_bar-deviation\S*\.pdf)", tex)
+    assert figures == ["five_bar-deviation.pdf", "five_bar-deviation-2.pdf"]
+    assert "the input O1 (the other inputs held)" in tex
+    assert "the input O2 (the other inputs held)" in tex
+    assert "every input angle" not in tex
+    for row in _peak_rows(tex):
+        assert re.fullmatch(r"O[12] \$[+-]\d\.\d{3}\$", row[3]), row
+    log = compile_tex(tmp_path / "out", "five_bar.tex")
+    assert max(overfull(log), default=0.0) <= MAX_OVERFULL_PT
+
+
+def test_tolerance_choice_is_in_the_rendered_report(tmp_path):
+    tex = _derive_tex(tmp_path, EXAMPLES / "four_bar.toml", "--tolerance", "0.05")
+    body = "\n".join(line for line in tex.splitlines() if not line.startswith("%"))
+    assert r"\paragraph{Variant chosen for a tolerance.}" in body
+    body = body.replace(r"\penalty0{}", "").replace("{}", "").replace(r"\_", "_")
+    m = re.search(r"Tolerance 0.05 over A0 in \[-0.2, 0.2\]: variant (\S+) chosen", body)
+    assert m and "worst relative error" in body
+    assert f"variant {m[1]} chosen" in tex.split(r"\documentclass")[0]     # and in the header
+
+
+def test_mechanism_specific_sentences(reports):
+    for example, (standalone, _) in reports.items():
+        tex = standalone[f"{example}.tex"].decode()
+        assert "graph traversal" not in tex
+        assert ("for the four-bar's" in tex) == (example == "four_bar"), example

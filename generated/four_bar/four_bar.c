@@ -3,7 +3,7 @@
  * Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, dev_paper 38, dev_first_order 52, dev_exact 62, links 1.
+ * Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, dev_paper 38, dev_first_order 52, dev_exact 62, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339.
  */
 #include "four_bar.h"
 
@@ -424,10 +424,419 @@ static void sk_links(const double *theta, const double *delta, double *out)
     out[7] = delta_3;
 }
 
+/* rigid stage: A, dG/dv; rigid points: dR/dtheta, dR/dv (44 operations) */
+static void sk_sens_rigid(const double *theta, const double *params, double *out)
+{
+    (void)params;
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double _tmp0 = theta_1 + theta_2;
+    const double _tmp1 = sin(_tmp0);
+    const double _tmp2 = cos(_tmp0);
+    const double _tmp3 = 0.07*_tmp1 + 0.042*_tmp2;
+    const double _tmp4 = sin(theta_3);
+    const double _tmp5 = cos(theta_3);
+    const double _tmp6 = 0.042*_tmp1 - 0.07*_tmp2;
+    const double _tmp7 = sin(theta_1);
+    const double _tmp8 = cos(theta_1);
+    const double _tmp9 = 0.015*_tmp7 + 0.026*_tmp8;
+    const double _tmp10 = 0.026*_tmp7 - 0.015*_tmp8;
+    const double _tmp11 = 0.045*_tmp1 + 0.064*_tmp2;
+    const double _tmp12 = 0.064*_tmp1 - 0.045*_tmp2;
+    out[0] = 1;
+    out[1] = -1;
+    out[2] = 1;
+    out[3] = -_tmp3;
+    out[4] = -0.015*_tmp4 + 0.068*_tmp5;
+    out[5] = 0;
+    out[6] = -_tmp6;
+    out[7] = 0.068*_tmp4 + 0.015*_tmp5;
+    out[8] = 0;
+    out[9] = 0;
+    out[10] = 1;
+    out[11] = 0;
+    out[12] = -_tmp3 - _tmp9;
+    out[13] = 0;
+    out[14] = -_tmp10 - _tmp6;
+    out[15] = -_tmp11;
+    out[16] = 0;
+    out[17] = 0;
+    out[18] = -_tmp12;
+    out[19] = 0;
+    out[20] = 0;
+    out[21] = 0;
+    out[22] = -_tmp11 - _tmp9;
+    out[23] = 0;
+    out[24] = -_tmp10 - _tmp12;
+}
+
+/* sensitivity at level paper: dD/dtheta, dD/dv (129 operations) */
+static void sk_sens_paper(const double *theta, const double *params, double *out)
+{
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double p_0 = params[0];
+    const double _tmp0 = cos(theta_1);
+    const double _tmp1 = 0.5*theta_2;
+    const double _tmp2 = sin(_tmp1);
+    const double _tmp3 = _tmp2*p_0;
+    const double _tmp4 = symkin_arck(_tmp1);
+    const double _tmp5 = _tmp4*theta_2;
+    const double _tmp6 = 0.4330127018922193*_tmp5;
+    const double _tmp7 = cos(_tmp1);
+    const double _tmp8 = pow(theta_2, 2);
+    const double _tmp9 = _tmp4*_tmp8;
+    const double _tmp10 = 0.0625*_tmp9;
+    const double _tmp11 = _tmp7*p_0;
+    const double _tmp12 = 0.10825317547305482*_tmp9;
+    const double _tmp13 = pow(theta_2, 3);
+    const double _tmp14 = 3*symkin_cosr2(_tmp1) + symkin_sinr1(_tmp1) - 3*symkin_sinr2(_tmp1);
+    const double _tmp15 = _tmp13*_tmp14;
+    const double _tmp16 = 0.05412658773652741*_tmp15;
+    const double _tmp17 = -_tmp10*_tmp3 - _tmp11*_tmp12 + 0.03125*_tmp13*_tmp14*_tmp7*p_0 - _tmp16*_tmp3 - _tmp3*_tmp6 + 0.25*_tmp4*_tmp7*p_0*theta_2;
+    const double _tmp18 = sin(theta_1);
+    const double _tmp19 = _tmp10*_tmp11 + _tmp11*_tmp16 + _tmp11*_tmp6 - _tmp12*_tmp3 + 0.03125*_tmp15*_tmp3 + 0.25*_tmp3*_tmp5;
+    const double _tmp20 = 0.5*theta_1;
+    const double _tmp21 = sin(_tmp20);
+    const double _tmp22 = symkin_arck(_tmp20);
+    const double _tmp23 = _tmp22*pow(theta_1, 2);
+    const double _tmp24 = 0.25*_tmp23;
+    const double _tmp25 = 0.125*_tmp2*_tmp9;
+    const double _tmp26 = 0.21650635094610965*_tmp9;
+    const double _tmp27 = _tmp26*_tmp7;
+    const double _tmp28 = _tmp25 + _tmp27;
+    const double _tmp29 = _tmp2*_tmp26;
+    const double _tmp30 = -_tmp29 + 0.125*_tmp4*_tmp7*_tmp8;
+    const double _tmp31 = _tmp21*p_0;
+    const double _tmp32 = _tmp20*_tmp22;
+    const double _tmp33 = cos(_tmp20);
+    const double _tmp34 = _tmp33*p_0;
+    const double _tmp35 = 0.125*_tmp23;
+    const double _tmp36 = 0.0625*pow(theta_1, 3)*(3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20) - 3*symkin_sinr2(_tmp20));
+    const double _tmp37 = -_tmp29*p_0 + 0.125*_tmp4*_tmp7*_tmp8*p_0;
+    const double _tmp38 = _tmp25*p_0 + _tmp27*p_0;
+    out[0] = _tmp0*_tmp17 - _tmp18*_tmp19;
+    out[1] = 0;
+    out[2] = 0;
+    out[3] = _tmp0*_tmp19 + _tmp17*_tmp18;
+    out[4] = 0;
+    out[5] = 0;
+    out[6] = _tmp0*_tmp30 - _tmp18*_tmp28 - _tmp21*_tmp24;
+    out[7] = -_tmp0*_tmp38 - _tmp18*_tmp37 - _tmp31*_tmp32 - _tmp31*_tmp36 - _tmp34*_tmp35;
+    out[8] = _tmp0*_tmp28 + _tmp18*_tmp30 + _tmp24*_tmp33;
+    out[9] = _tmp0*_tmp37 - _tmp18*_tmp38 - _tmp31*_tmp35 + _tmp32*_tmp34 + _tmp34*_tmp36;
+}
+
+/* sensitivity at level first_order: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (278 operations) */
+static void sk_sens_first_order(const double *theta, const double *delta, const double *params, double *out)
+{
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double delta_2 = delta[0];
+    const double delta_3 = delta[1];
+    const double p_0 = params[0];
+    const double _tmp0 = theta_1 + theta_2;
+    const double _tmp1 = sin(_tmp0);
+    const double _tmp2 = cos(_tmp0);
+    const double _tmp3 = 0.07*_tmp1 + 0.042*_tmp2;
+    const double _tmp4 = sin(theta_3);
+    const double _tmp5 = cos(theta_3);
+    const double _tmp6 = 0.015*_tmp4 - 0.068*_tmp5;
+    const double _tmp7 = -0.042*_tmp1 + 0.07*_tmp2;
+    const double _tmp8 = 0.068*_tmp4 + 0.015*_tmp5;
+    const double _tmp9 = sin(theta_1);
+    const double _tmp10 = 0.5*theta_2;
+    const double _tmp11 = symkin_arck(_tmp10);
+    const double _tmp12 = _tmp11*theta_2;
+    const double _tmp13 = sin(_tmp10);
+    const double _tmp14 = _tmp13*p_0;
+    const double _tmp15 = cos(_tmp10);
+    const double _tmp16 = _tmp15*p_0;
+    const double _tmp17 = 0.4330127018922193*_tmp12;
+    const double _tmp18 = pow(theta_2, 2);
+    const double _tmp19 = _tmp11*_tmp18;
+    const double _tmp20 = 0.10825317547305482*_tmp19;
+    const double _tmp21 = 0.0625*_tmp19;
+    const double _tmp22 = pow(theta_2, 3);
+    const double _tmp23 = 3*symkin_cosr2(_tmp10) + symkin_sinr1(_tmp10) - 3*symkin_sinr2(_tmp10);
+    const double _tmp24 = _tmp22*_tmp23;
+    const double _tmp25 = 0.05412658773652741*_tmp24;
+    const double _tmp26 = 0.25*_tmp12*_tmp14 - _tmp14*_tmp20 + 0.03125*_tmp14*_tmp24 + _tmp16*_tmp17 + _tmp16*_tmp21 + _tmp16*_tmp25;
+    const double _tmp27 = cos(theta_1);
+    const double _tmp28 = 0.25*_tmp11*_tmp15*p_0*theta_2 - _tmp14*_tmp17 - _tmp14*_tmp21 - _tmp14*_tmp25 + 0.03125*_tmp15*_tmp22*_tmp23*p_0 - _tmp16*_tmp20;
+    const double _tmp29 = _tmp26*_tmp9 - _tmp27*_tmp28;
+    const double _tmp30 = 0.5*theta_4;
+    const double _tmp31 = cos(_tmp30);
+    const double _tmp32 = _tmp31*p_0;
+    const double _tmp33 = symkin_arck(_tmp30);
+    const double _tmp34 = pow(theta_4, 2);
+    const double _tmp35 = _tmp33*_tmp34;
+    const double _tmp36 = 0.25*_tmp35;
+    const double _tmp37 = _tmp32*_tmp36;
+    const double _tmp38 = sin(_tmp30);
+    const double _tmp39 = _tmp38*p_0;
+    const double _tmp40 = _tmp36*_tmp39;
+    const double _tmp41 = _tmp1*_tmp37 + _tmp2*_tmp40 + _tmp7*delta_2;
+    const double _tmp42 = 0.5*theta_3;
+    const double _tmp43 = sin(_tmp42);
+    const double _tmp44 = _tmp43*p_0;
+    const double _tmp45 = symkin_arck(_tmp42);
+    const double _tmp46 = _tmp42*_tmp45;
+    const double _tmp47 = cos(_tmp42);
+    const double _tmp48 = pow(theta_3, 2);
+    const double _tmp49 = _tmp45*_tmp48;
+    const double _tmp50 = 0.125*p_0;
+    const double _tmp51 = 0.0625*pow(theta_3, 3)*(3*symkin_cosr2(_tmp42) + symkin_sinr1(_tmp42) - 3*symkin_sinr2(_tmp42));
+    const double _tmp52 = _tmp30*_tmp33;
+    const double _tmp53 = _tmp35*_tmp50;
+    const double _tmp54 = 0.0625*pow(theta_4, 3)*(3*symkin_cosr2(_tmp30) + symkin_sinr1(_tmp30) - 3*symkin_sinr2(_tmp30));
+    const double _tmp55 = _tmp31*_tmp53 + _tmp39*_tmp52 + _tmp39*_tmp54;
+    const double _tmp56 = _tmp32*_tmp52 + _tmp32*_tmp54 - _tmp38*_tmp53;
+    const double _tmp57 = _tmp26*_tmp27 + _tmp28*_tmp9;
+    const double _tmp58 = -_tmp1*_tmp40 + _tmp2*_tmp37 - _tmp3*delta_2;
+    const double _tmp59 = _tmp47*p_0;
+    const double _tmp60 = _tmp36*_tmp38;
+    const double _tmp61 = 0.5*theta_1;
+    const double _tmp62 = sin(_tmp61);
+    const double _tmp63 = symkin_arck(_tmp61);
+    const double _tmp64 = _tmp63*pow(theta_1, 2);
+    const double _tmp65 = 0.25*_tmp64;
+    const double _tmp66 = 0.125*_tmp13*_tmp19;
+    const double _tmp67 = 0.21650635094610965*_tmp19;
+    const double _tmp68 = _tmp15*_tmp67;
+    const double _tmp69 = _tmp66 + _tmp68;
+    const double _tmp70 = _tmp13*_tmp67;
+    const double _tmp71 = 0.125*_tmp11*_tmp15*_tmp18 - _tmp70;
+    const double _tmp72 = -_tmp27*_tmp71 + _tmp62*_tmp65 + _tmp69*_tmp9;
+    const double _tmp73 = 0.125*_tmp11*_tmp15*_tmp18*p_0 - _tmp70*p_0;
+    const double _tmp74 = _tmp66*p_0 + _tmp68*p_0;
+    const double _tmp75 = _tmp62*p_0;
+    const double _tmp76 = 0.0625*pow(theta_1, 3)*(3*symkin_cosr2(_tmp61) + symkin_sinr1(_tmp61) - 3*symkin_sinr2(_tmp61));
+    const double _tmp77 = cos(_tmp61);
+    const double _tmp78 = _tmp50*_tmp64;
+    const double _tmp79 = _tmp61*_tmp63;
+    const double _tmp80 = _tmp27*_tmp74 + _tmp73*_tmp9 + _tmp75*_tmp76 + _tmp75*_tmp79 + _tmp77*_tmp78;
+    const double _tmp81 = _tmp27*_tmp69 + _tmp65*_tmp77 + _tmp71*_tmp9;
+    const double _tmp82 = _tmp77*p_0;
+    const double _tmp83 = _tmp27*_tmp73 - _tmp62*_tmp78 - _tmp74*_tmp9 + _tmp76*_tmp82 + _tmp79*_tmp82;
+    const double _tmp84 = -0.064*_tmp1 + 0.045*_tmp2;
+    const double _tmp85 = _tmp84*delta_2;
+    const double _tmp86 = 0.045*_tmp1 + 0.064*_tmp2;
+    const double _tmp87 = -_tmp86*delta_2;
+    out[0] = 1;
+    out[1] = -1;
+    out[2] = 1;
+    out[3] = -_tmp3;
+    out[4] = -_tmp6;
+    out[5] = 0;
+    out[6] = _tmp7;
+    out[7] = _tmp8;
+    out[8] = 0;
+    out[9] = 0;
+    out[10] = 0;
+    out[11] = 0;
+    out[12] = -_tmp29 - _tmp41;
+    out[13] = _tmp44*_tmp46 + _tmp44*_tmp51 + _tmp47*_tmp49*_tmp50 - _tmp8*delta_3;
+    out[14] = -_tmp1*_tmp55 + _tmp2*_tmp56;
+    out[15] = _tmp57 + _tmp58;
+    out[16] = 0.125*_tmp43*_tmp45*_tmp48*p_0 - _tmp46*_tmp59 - _tmp51*_tmp59 - _tmp6*delta_3;
+    out[17] = _tmp1*_tmp56 + _tmp2*_tmp55;
+    out[18] = 0;
+    out[19] = 0;
+    out[20] = -_tmp1*_tmp60 + 0.25*_tmp2*_tmp31*_tmp33*_tmp34 + 0.25*_tmp43*_tmp45*_tmp48 - _tmp72;
+    out[21] = -_tmp41 - _tmp80;
+    out[22] = _tmp1*_tmp31*_tmp36 + _tmp2*_tmp60 - 0.25*_tmp47*_tmp49 + _tmp81;
+    out[23] = _tmp58 + _tmp83;
+    out[24] = -_tmp29 - _tmp85;
+    out[25] = 0;
+    out[26] = 0;
+    out[27] = _tmp57 + _tmp87;
+    out[28] = 0;
+    out[29] = 0;
+    out[30] = -_tmp86;
+    out[31] = 0;
+    out[32] = 0;
+    out[33] = _tmp84;
+    out[34] = 0;
+    out[35] = 0;
+    out[36] = -_tmp72;
+    out[37] = -_tmp80 - _tmp85;
+    out[38] = _tmp81;
+    out[39] = _tmp83 + _tmp87;
+}
+
+/* sensitivity at level exact: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (339 operations) */
+static void sk_sens_exact(const double *theta, const double *delta, const double *params, double *out)
+{
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double delta_2 = delta[0];
+    const double delta_3 = delta[1];
+    const double delta_4 = delta[2];
+    const double p_0 = params[0];
+    const double _tmp0 = delta_2 + theta_2;
+    const double _tmp1 = _tmp0 + theta_1;
+    const double _tmp2 = sin(_tmp1);
+    const double _tmp3 = cos(_tmp1);
+    const double _tmp4 = sin(theta_1);
+    const double _tmp5 = 0.5*delta_2;
+    const double _tmp6 = _tmp5 + 0.5*theta_2;
+    const double _tmp7 = symkin_arck(_tmp6);
+    const double _tmp8 = _tmp0*_tmp7;
+    const double _tmp9 = sin(_tmp6);
+    const double _tmp10 = _tmp9*p_0;
+    const double _tmp11 = cos(_tmp6);
+    const double _tmp12 = _tmp11*p_0;
+    const double _tmp13 = 0.4330127018922193*_tmp8;
+    const double _tmp14 = pow(_tmp0, 2);
+    const double _tmp15 = _tmp14*_tmp7;
+    const double _tmp16 = 0.10825317547305482*_tmp15;
+    const double _tmp17 = 0.0625*_tmp15;
+    const double _tmp18 = pow(_tmp0, 3);
+    const double _tmp19 = 3*symkin_cosr2(_tmp6) + symkin_sinr1(_tmp6) - 3*symkin_sinr2(_tmp6);
+    const double _tmp20 = _tmp18*_tmp19;
+    const double _tmp21 = 0.05412658773652741*_tmp20;
+    const double _tmp22 = -_tmp10*_tmp16 + 0.03125*_tmp10*_tmp20 + 0.25*_tmp10*_tmp8 + _tmp12*_tmp13 + _tmp12*_tmp17 + _tmp12*_tmp21;
+    const double _tmp23 = cos(theta_1);
+    const double _tmp24 = 0.25*_tmp0*_tmp11*_tmp7*p_0 - _tmp10*_tmp13 - _tmp10*_tmp17 - _tmp10*_tmp21 + 0.03125*_tmp11*_tmp18*_tmp19*p_0 - _tmp12*_tmp16;
+    const double _tmp25 = _tmp22*_tmp4 - _tmp23*_tmp24;
+    const double _tmp26 = 0.5*delta_4 + 0.5*theta_4;
+    const double _tmp27 = symkin_arck(_tmp26);
+    const double _tmp28 = cos(_tmp26);
+    const double _tmp29 = _tmp28*p_0;
+    const double _tmp30 = _tmp27*_tmp29;
+    const double _tmp31 = delta_4 + theta_4;
+    const double _tmp32 = pow(_tmp31, 2);
+    const double _tmp33 = 0.25*_tmp32;
+    const double _tmp34 = _tmp30*_tmp33;
+    const double _tmp35 = sin(_tmp26);
+    const double _tmp36 = _tmp27*_tmp35;
+    const double _tmp37 = _tmp36*p_0;
+    const double _tmp38 = _tmp33*_tmp37;
+    const double _tmp39 = _tmp2*_tmp34 + _tmp3*_tmp38;
+    const double _tmp40 = _tmp25 + _tmp39;
+    const double _tmp41 = delta_3 + theta_3;
+    const double _tmp42 = cos(_tmp41);
+    const double _tmp43 = sin(_tmp41);
+    const double _tmp44 = 0.5*delta_3;
+    const double _tmp45 = _tmp44 + 0.5*theta_3;
+    const double _tmp46 = sin(_tmp45);
+    const double _tmp47 = _tmp46*p_0;
+    const double _tmp48 = 0.0625*pow(_tmp41, 3)*(3*symkin_cosr2(_tmp45) + symkin_sinr1(_tmp45) - 3*symkin_sinr2(_tmp45));
+    const double _tmp49 = cos(_tmp45);
+    const double _tmp50 = pow(_tmp41, 2);
+    const double _tmp51 = symkin_arck(_tmp45);
+    const double _tmp52 = _tmp50*_tmp51;
+    const double _tmp53 = 0.125*p_0;
+    const double _tmp54 = 0.5*_tmp41*_tmp51;
+    const double _tmp55 = _tmp47*_tmp48 + _tmp47*_tmp54 + _tmp49*_tmp52*_tmp53;
+    const double _tmp56 = 0.5*_tmp31;
+    const double _tmp57 = _tmp32*_tmp53;
+    const double _tmp58 = _tmp27*_tmp28;
+    const double _tmp59 = 0.0625*pow(_tmp31, 3)*(3*symkin_cosr2(_tmp26) + symkin_sinr1(_tmp26) - 3*symkin_sinr2(_tmp26));
+    const double _tmp60 = _tmp35*_tmp59*p_0 + _tmp37*_tmp56 + _tmp57*_tmp58;
+    const double _tmp61 = _tmp29*_tmp59 + _tmp30*_tmp56 - _tmp36*_tmp57;
+    const double _tmp62 = -_tmp2*_tmp60 + _tmp3*_tmp61;
+    const double _tmp63 = _tmp22*_tmp23 + _tmp24*_tmp4;
+    const double _tmp64 = -_tmp2*_tmp38 + _tmp3*_tmp34;
+    const double _tmp65 = _tmp63 + _tmp64;
+    const double _tmp66 = _tmp49*p_0;
+    const double _tmp67 = 0.125*_tmp47*_tmp52 - _tmp48*_tmp66 - _tmp54*_tmp66;
+    const double _tmp68 = _tmp2*_tmp61 + _tmp3*_tmp60;
+    const double _tmp69 = theta_1 + theta_2;
+    const double _tmp70 = sin(_tmp69);
+    const double _tmp71 = sin(delta_2);
+    const double _tmp72 = pow(sin(_tmp5), 2);
+    const double _tmp73 = -0.042*_tmp71 - 0.14*_tmp72;
+    const double _tmp74 = cos(_tmp69);
+    const double _tmp75 = -0.07*_tmp71 + 0.084*_tmp72;
+    const double _tmp76 = _tmp70*_tmp73 - _tmp74*_tmp75;
+    const double _tmp77 = cos(theta_3);
+    const double _tmp78 = sin(delta_3);
+    const double _tmp79 = pow(sin(_tmp44), 2);
+    const double _tmp80 = -0.015*_tmp78 - 0.136*_tmp79;
+    const double _tmp81 = sin(theta_3);
+    const double _tmp82 = 0.068*_tmp78 - 0.03*_tmp79;
+    const double _tmp83 = _tmp70*_tmp75 + _tmp73*_tmp74;
+    const double _tmp84 = _tmp33*_tmp36;
+    const double _tmp85 = 0.5*theta_1;
+    const double _tmp86 = sin(_tmp85);
+    const double _tmp87 = symkin_arck(_tmp85);
+    const double _tmp88 = _tmp87*pow(theta_1, 2);
+    const double _tmp89 = 0.25*_tmp88;
+    const double _tmp90 = 0.125*_tmp15*_tmp9;
+    const double _tmp91 = 0.21650635094610965*_tmp15;
+    const double _tmp92 = _tmp11*_tmp91;
+    const double _tmp93 = _tmp90 + _tmp92;
+    const double _tmp94 = _tmp9*_tmp91;
+    const double _tmp95 = 0.125*_tmp11*_tmp14*_tmp7 - _tmp94;
+    const double _tmp96 = -_tmp23*_tmp95 + _tmp4*_tmp93 + _tmp86*_tmp89;
+    const double _tmp97 = 0.125*_tmp11*_tmp14*_tmp7*p_0 - _tmp94*p_0;
+    const double _tmp98 = _tmp90*p_0 + _tmp92*p_0;
+    const double _tmp99 = _tmp86*p_0;
+    const double _tmp100 = 0.0625*pow(theta_1, 3)*(3*symkin_cosr2(_tmp85) + symkin_sinr1(_tmp85) - 3*symkin_sinr2(_tmp85));
+    const double _tmp101 = cos(_tmp85);
+    const double _tmp102 = _tmp53*_tmp88;
+    const double _tmp103 = _tmp85*_tmp87;
+    const double _tmp104 = _tmp100*_tmp99 + _tmp101*_tmp102 + _tmp103*_tmp99 + _tmp23*_tmp98 + _tmp4*_tmp97;
+    const double _tmp105 = _tmp101*_tmp89 + _tmp23*_tmp93 + _tmp4*_tmp95;
+    const double _tmp106 = _tmp101*p_0;
+    const double _tmp107 = _tmp100*_tmp106 - _tmp102*_tmp86 + _tmp103*_tmp106 + _tmp23*_tmp97 - _tmp4*_tmp98;
+    const double _tmp108 = -0.064*_tmp71 - 0.09*_tmp72;
+    const double _tmp109 = -0.045*_tmp71 + 0.128*_tmp72;
+    const double _tmp110 = _tmp108*_tmp70 - _tmp109*_tmp74;
+    const double _tmp111 = _tmp108*_tmp74 + _tmp109*_tmp70;
+    out[0] = 1;
+    out[1] = -1;
+    out[2] = 1;
+    out[3] = -0.07*_tmp2 - 0.042*_tmp3 - _tmp40;
+    out[4] = 0.068*_tmp42 - 0.015*_tmp43 + _tmp55;
+    out[5] = _tmp62;
+    out[6] = -0.042*_tmp2 + 0.07*_tmp3 + _tmp65;
+    out[7] = 0.015*_tmp42 + 0.068*_tmp43 + _tmp67;
+    out[8] = _tmp68;
+    out[9] = 0;
+    out[10] = 0;
+    out[11] = 0;
+    out[12] = -_tmp40 - _tmp76;
+    out[13] = _tmp55 + _tmp77*_tmp80 - _tmp81*_tmp82;
+    out[14] = _tmp62;
+    out[15] = _tmp65 + _tmp83;
+    out[16] = _tmp67 + _tmp77*_tmp82 + _tmp80*_tmp81;
+    out[17] = _tmp68;
+    out[18] = 0;
+    out[19] = 0;
+    out[20] = -_tmp2*_tmp84 + 0.25*_tmp27*_tmp28*_tmp3*_tmp32 + 0.25*_tmp46*_tmp50*_tmp51 - _tmp96;
+    out[21] = -_tmp104 - _tmp39 - _tmp76;
+    out[22] = _tmp105 + _tmp2*_tmp33*_tmp58 + _tmp3*_tmp84 - 0.25*_tmp49*_tmp52;
+    out[23] = _tmp107 + _tmp64 + _tmp83;
+    out[24] = -_tmp110 - _tmp25;
+    out[25] = 0;
+    out[26] = 0;
+    out[27] = _tmp111 + _tmp63;
+    out[28] = 0;
+    out[29] = 0;
+    out[30] = -0.045*_tmp2 - _tmp25 - 0.064*_tmp3;
+    out[31] = 0;
+    out[32] = 0;
+    out[33] = -0.064*_tmp2 + 0.045*_tmp3 + _tmp63;
+    out[34] = 0;
+    out[35] = 0;
+    out[36] = -_tmp96;
+    out[37] = -_tmp104 - _tmp110;
+    out[38] = _tmp105;
+    out[39] = _tmp107 + _tmp111;
+}
+
 /* Gaussian elimination with partial pivoting on the n x n row-major a, in place; x -> b. */
 static int sk_solve(int n, double *a, double *b)
 {
-    int i, j, c, p;
+    int i, j, c, p, r;
     for (c = 0; c < n; ++c) {
         double best = fabs(a[c * n + c]);
         p = c;
@@ -447,24 +856,81 @@ static int sk_solve(int n, double *a, double *b)
                 a[c * n + j] = a[p * n + j];
                 a[p * n + j] = t;
             }
-            t = b[c];
-            b[c] = b[p];
-            b[p] = t;
+            for (r = 0; r < 1; ++r) {
+                t = b[c * 1 + r];
+                b[c * 1 + r] = b[p * 1 + r];
+                b[p * 1 + r] = t;
+            }
         }
         for (i = c + 1; i < n; ++i) {
             const double f = a[i * n + c] / a[c * n + c];
             for (j = c; j < n; ++j) {
                 a[i * n + j] -= f * a[c * n + j];
             }
-            b[i] -= f * b[c];
+            for (r = 0; r < 1; ++r) {
+                b[i * 1 + r] -= f * b[c * 1 + r];
+            }
         }
     }
-    for (i = n - 1; i >= 0; --i) {
-        double s = b[i];
-        for (j = i + 1; j < n; ++j) {
-            s -= a[i * n + j] * b[j];
+    for (r = 0; r < 1; ++r) {
+        for (i = n - 1; i >= 0; --i) {
+            double s = b[i * 1 + r];
+            for (j = i + 1; j < n; ++j) {
+                s -= a[i * n + j] * b[j * 1 + r];
+            }
+            b[i * 1 + r] = s / a[i * n + i];
         }
-        b[i] = s / a[i * n + i];
+    }
+    return 0;
+}
+
+/* The same for m right-hand sides: the n x m row-major b becomes the solution. */
+static int sk_solve_many(int n, double *a, int m, double *b)
+{
+    int i, j, c, p, r;
+    for (c = 0; c < n; ++c) {
+        double best = fabs(a[c * n + c]);
+        p = c;
+        for (i = c + 1; i < n; ++i) {
+            if (fabs(a[i * n + c]) > best) {
+                best = fabs(a[i * n + c]);
+                p = i;
+            }
+        }
+        if (!(best > 0.0) || !isfinite(best)) {
+            return 1;
+        }
+        if (p != c) {
+            double t;
+            for (j = 0; j < n; ++j) {
+                t = a[c * n + j];
+                a[c * n + j] = a[p * n + j];
+                a[p * n + j] = t;
+            }
+            for (r = 0; r < m; ++r) {
+                t = b[c * m + r];
+                b[c * m + r] = b[p * m + r];
+                b[p * m + r] = t;
+            }
+        }
+        for (i = c + 1; i < n; ++i) {
+            const double f = a[i * n + c] / a[c * n + c];
+            for (j = c; j < n; ++j) {
+                a[i * n + j] -= f * a[c * n + j];
+            }
+            for (r = 0; r < m; ++r) {
+                b[i * m + r] -= f * b[c * m + r];
+            }
+        }
+    }
+    for (r = 0; r < m; ++r) {
+        for (i = n - 1; i >= 0; --i) {
+            double s = b[i * m + r];
+            for (j = i + 1; j < n; ++j) {
+                s -= a[i * n + j] * b[j * m + r];
+            }
+            b[i * m + r] = s / a[i * n + i];
+        }
     }
     return 0;
 }
@@ -544,53 +1010,16 @@ static int sk_exact(const double *theta, const double *params, double *delta)
     return converged ? 0 : 2;
 }
 
-int four_bar_evaluate(const double *inputs, const double *params, int level, double *out)
+/* The configuration: the arguments checked, the rigid angles theta (every hinge) and, at the
+   levels that solve the loops, delta (the non-input hinges; solved for the links' rotations
+   only when want_links). Returns a status code. */
+static int sk_pose(const double *inputs, const double *params, int level, int want_links,
+                   double *theta, double *delta)
 {
-    return four_bar_evaluate_pose(inputs, params, level, out, NULL, NULL);
-}
-
-int four_bar_evaluate_angles(const double *inputs, const double *params, int level, double *out,
-                    double *angles)
-{
-    return four_bar_evaluate_pose(inputs, params, level, out, angles, NULL);
-}
-
-static int sk_evaluate(const double *inputs, const double *params, int level, double *out,
-                       double *angles, double *links);
-
-int four_bar_evaluate_pose(const double *inputs, const double *params, int level, double *out,
-                    double *angles, double *links)
-{
-    int i, status = sk_evaluate(inputs, params, level, out, angles, links);
-    if (status != 0) {
-        /* no partial result: every output is NaN */
-        for (i = 0; out != NULL && i < 6 * SK_NP; ++i) {
-            out[i] = NAN;
-        }
-        for (i = 0; angles != NULL && i < 2 * SK_M; ++i) {
-            angles[i] = NAN;
-        }
-        for (i = 0; links != NULL && i < 3 * SK_NL; ++i) {
-            links[i] = NAN;
-        }
-    }
-    return status;
-}
-
-/* The evaluation; four_bar_evaluate_pose turns a failure into NaN outputs. */
-static int sk_evaluate(const double *inputs, const double *params, int level, double *out,
-                       double *angles, double *links)
-{
-    double theta[SK_M];
-    double delta[SK_K1];
-    double rigid[2 * SK_NP + 1], dev[2 * SK_NP + 1];
     int i;
 
-    if (inputs == NULL || out == NULL) {
+    if (inputs == NULL) {
         return 3;
-    }
-    if (params == NULL) {
-        params = four_bar_default_params;
     }
     if (level != 0 && level != 1 && level != 2) {
         return 3;
@@ -678,14 +1107,28 @@ static int sk_evaluate(const double *inputs, const double *params, int level, do
     if (!(fabs(theta[3] + delta[2]) <= 3.141592653589793)) {
         return 1;
     }
+    (void)want_links;
+    return 0;
+}
+
+/* The points of a solved configuration: per point rigid x, y, compliant x, y, deviation x, y
+   into out; when angles is not NULL the rigid then the compliant hinge angles; when links is
+   not NULL every reported link's rigid rotation, compliant rotation and deviation. */
+static int sk_outputs(const double *theta, const double *delta, const double *params,
+                      int level, double *out, double *angles, double *links)
+{
+    double rigid[2 * SK_NP + 1], dev[2 * SK_NP + 1];
+    int i;
+
     sk_rigid_points(theta, params, rigid);
+    /* the level is one of these: sk_pose checked it */
     if (level == 0) {
         sk_dev_paper(theta, params, dev);
     }
     else if (level == 1) {
         sk_dev_first_order(theta, delta, params, dev);
     }
-    else if (level == 2) {
+    else {
         sk_dev_exact(theta, delta, params, dev);
     }
     for (i = 0; i < 2 * SK_NP; ++i) {
@@ -725,5 +1168,250 @@ static int sk_evaluate(const double *inputs, const double *params, int level, do
         }
     }
     (void)delta;
+    (void)level;
     return 0;
+}
+
+/* n entries of x set to NaN (no partial result after a failure); x may be NULL. */
+static void sk_nan(double *x, int n)
+{
+    int i;
+    for (i = 0; x != NULL && i < n; ++i) {
+        x[i] = NAN;
+    }
+}
+
+int four_bar_evaluate_pose(const double *inputs, const double *params, int level, double *out,
+                    double *angles, double *links)
+{
+    double theta[SK_M];
+    double delta[SK_K1];
+    int status;
+
+    if (params == NULL) {
+        params = four_bar_default_params;
+    }
+    status = out == NULL ? 3 : sk_pose(inputs, params, level, links != NULL, theta, delta);
+    if (status == 0) {
+        status = sk_outputs(theta, delta, params, level, out, angles, links);
+    }
+    if (status != 0) {
+        sk_nan(out, 6 * SK_NP);
+        sk_nan(angles, 2 * SK_M);
+        sk_nan(links, 3 * SK_NL);
+    }
+    return status;
+}
+
+int four_bar_evaluate_angles(const double *inputs, const double *params, int level, double *out,
+                    double *angles)
+{
+    return four_bar_evaluate_pose(inputs, params, level, out, angles, NULL);
+}
+
+int four_bar_evaluate(const double *inputs, const double *params, int level, double *out)
+{
+    return four_bar_evaluate_pose(inputs, params, level, out, NULL, NULL);
+}
+
+int four_bar_evaluate_angles_batch(int n, const double *inputs, const double *params, int level,
+                          double *out, double *angles, int *status)
+{
+    int j, s, failed = 0;
+    for (j = 0; j < n; ++j) {
+        s = inputs == NULL ? 3 : four_bar_evaluate_angles(
+            inputs + (size_t)j * FOUR_BAR_N_INPUTS, params, level,
+            out == NULL ? NULL : out + (size_t)j * 6 * SK_NP,
+            angles == NULL ? NULL : angles + (size_t)j * 2 * SK_M);
+        failed += s != 0;
+        if (status != NULL) {
+            status[j] = s;
+        }
+    }
+    return failed;
+}
+
+int four_bar_evaluate_batch(int n, const double *inputs, const double *params, int level,
+                    double *out, int *status)
+{
+    return four_bar_evaluate_angles_batch(n, inputs, params, level, out, NULL, status);
+}
+
+int four_bar_evaluate_grid(int n_sets, const double *params, int n, const double *inputs,
+                   int level, double *out, int *status)
+{
+    int s, failed = 0;
+    for (s = 0; s < n_sets; ++s) {
+        failed += four_bar_evaluate_angles_batch(
+            n, inputs, params == NULL ? NULL : params + (size_t)s * FOUR_BAR_N_PARAMS, level,
+            out == NULL ? NULL : out + (size_t)s * n * 6 * SK_NP, NULL,
+            status == NULL ? NULL : status + (size_t)s * n);
+    }
+    return failed;
+}
+
+/* c (m x n) += a (m x p) b (p x n), row-major. */
+static void sk_gemm(int m, int p, int n, const double *a, const double *b, double *c)
+{
+    int i, j, q;
+    for (i = 0; i < m; ++i) {
+        for (q = 0; q < p; ++q) {
+            const double f = a[i * p + q];
+            for (j = 0; j < n; ++j) {
+                c[i * n + j] += f * b[q * n + j];
+            }
+        }
+    }
+}
+
+/* The total derivatives of the points' deviations (dev) and rigid positions (rig) by every
+   variable, 2 N_POINTS x N_VARIABLES row-major (row 2 p + c: component c of point p; columns:
+   the parameters, then the inputs), by the implicit-function theorem on the closures: with
+   Theta = d theta_u / dv = -A^-1 dG/dv and, where the level solves a closure E for delta,
+   Y = -M^-1 (dE/dv + dE/dtheta_u Theta): dD/dv + dD/dtheta_u Theta + dD/ddelta Y. */
+static int sk_sensitivity(const double *theta, const double *delta, const double *params,
+                          int level, double *dev, double *rig)
+{
+    double sr[25 + 1];
+    double th[6];
+    int i;
+
+    sk_sens_rigid(theta, params, sr);
+    for (i = 0; i < 6; ++i) {
+        th[i] = -sr[9 + i];
+    }
+    if (sk_solve_many(SK_K, sr, 2, th)) {
+        return 1;
+    }
+    for (i = 0; i < 4; ++i) {
+        rig[i] = sr[21 + i];
+    }
+    sk_gemm(2, SK_K, 2, sr + 15, th, rig);
+    if (level == 0) {
+        double s[10 + 1];
+        sk_sens_paper(theta, params, s);
+        for (i = 0; i < 4; ++i) {
+            dev[i] = s[6 + i];
+        }
+        sk_gemm(2, SK_K, 2, s + 0, th, dev);
+    }
+    else if (level == 1) {
+        double s[40 + 1];
+        double y[6];
+        sk_sens_first_order(theta, delta, params, s);
+        for (i = 0; i < 6; ++i) {
+            y[i] = s[18 + i];
+        }
+        sk_gemm(SK_K, SK_K, 2, s + 9, th, y);
+        for (i = 0; i < 6; ++i) {
+            y[i] = -y[i];
+        }
+        if (sk_solve_many(SK_K, s, 2, y)) {
+            return 1;
+        }
+        for (i = 0; i < 4; ++i) {
+            dev[i] = s[36 + i];
+        }
+        sk_gemm(2, SK_K, 2, s + 24, th, dev);
+        sk_gemm(2, SK_K, 2, s + 30, y, dev);
+    }
+    else {
+        double s[40 + 1];
+        double y[6];
+        sk_sens_exact(theta, delta, params, s);
+        for (i = 0; i < 6; ++i) {
+            y[i] = s[18 + i];
+        }
+        sk_gemm(SK_K, SK_K, 2, s + 9, th, y);
+        for (i = 0; i < 6; ++i) {
+            y[i] = -y[i];
+        }
+        if (sk_solve_many(SK_K, s, 2, y)) {
+            return 1;
+        }
+        for (i = 0; i < 4; ++i) {
+            dev[i] = s[36 + i];
+        }
+        sk_gemm(2, SK_K, 2, s + 24, th, dev);
+        sk_gemm(2, SK_K, 2, s + 30, y, dev);
+    }
+    (void)delta;
+    (void)level;
+    return 0;
+}
+
+int four_bar_sensitivity_full(const double *inputs, const double *params, int level,
+                         double *values, double *deviation, double *rigid)
+{
+    double theta[SK_M];
+    double delta[SK_K1];
+    double dev[4 + 1], rig[4 + 1];
+    int i, v, status;
+
+    if (params == NULL) {
+        params = four_bar_default_params;
+    }
+    status = deviation == NULL ? 3 : sk_pose(inputs, params, level, 0, theta, delta);
+    if (status == 0 && values != NULL) {
+        status = sk_outputs(theta, delta, params, level, values, NULL, NULL);
+    }
+    if (status == 0) {
+        status = sk_sensitivity(theta, delta, params, level, dev, rig);
+    }
+    for (i = 0; status == 0 && i < 4; ++i) {
+        if (!isfinite(dev[i]) || !isfinite(rig[i])) {
+            status = 2;             /* a non-finite result is never a success */
+        }
+    }
+    if (status != 0) {
+        sk_nan(values, 6 * SK_NP);
+        sk_nan(deviation, 4);
+        sk_nan(rigid, 4);
+        return status;
+    }
+    for (i = 0; i < 2; ++i) {
+        for (v = 0; v < 2; ++v) {
+            deviation[((i / 2) * 2 + v) * 2 + i % 2] = dev[i * 2 + v];
+            if (rigid != NULL) {
+                rigid[((i / 2) * 2 + v) * 2 + i % 2] = rig[i * 2 + v];
+            }
+        }
+    }
+    return 0;
+}
+
+int four_bar_sensitivity(const double *inputs, const double *params, int level, double *out)
+{
+    double full[4 + 1];
+    int p, v, status;
+
+    if (out == NULL) {
+        return 3;
+    }
+    status = four_bar_sensitivity_full(inputs, params, level, NULL, full, NULL);
+    for (p = 0; p < SK_NP; ++p) {
+        for (v = 0; v < FOUR_BAR_N_PARAMS; ++v) {
+            out[(p * FOUR_BAR_N_PARAMS + v) * 2] = full[(p * 2 + v) * 2];
+            out[(p * FOUR_BAR_N_PARAMS + v) * 2 + 1] = full[(p * 2 + v) * 2 + 1];
+        }
+    }
+    return status;
+}
+
+int four_bar_sensitivity_batch(int n, const double *inputs, const double *params, int level,
+                          double *values, double *deviation, double *rigid, int *status)
+{
+    int j, s, failed = 0;
+    for (j = 0; j < n; ++j) {
+        s = inputs == NULL || deviation == NULL ? 3 : four_bar_sensitivity_full(
+            inputs + (size_t)j * FOUR_BAR_N_INPUTS, params, level,
+            values == NULL ? NULL : values + (size_t)j * 6 * SK_NP,
+            deviation + (size_t)j * 4,
+            rigid == NULL ? NULL : rigid + (size_t)j * 4);
+        failed += s != 0;
+        if (status != NULL) {
+            status[j] = s;
+        }
+    }
+    return failed;
 }

@@ -3,7 +3,7 @@
  * Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, dev_paper 38, dev_first_order 52, dev_exact 62, links 1.
+ * Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, dev_paper 38, dev_first_order 52, dev_exact 62, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339.
  */
 #ifndef SYMKIN_FOUR_BAR_H
 #define SYMKIN_FOUR_BAR_H
@@ -53,5 +53,52 @@ int four_bar_evaluate_angles(const double *inputs, const double *params, int lev
  */
 int four_bar_evaluate_pose(const double *inputs, const double *params, int level, double *out,
                     double *angles, double *links);
+
+/*
+ * n configurations at once (one call instead of n): inputs holds n rows of
+ * FOUR_BAR_N_INPUTS angles; every row uses the same params (NULL: the defaults). out receives
+ * 6 * FOUR_BAR_N_POINTS doubles per row, angles (may be NULL) 2 * FOUR_BAR_N_HINGES per row,
+ * status (may be NULL) each row's return code. Returns the number of rows that failed (their
+ * outputs are NaN).
+ */
+int four_bar_evaluate_batch(int n, const double *inputs, const double *params, int level,
+                    double *out, int *status);
+int four_bar_evaluate_angles_batch(int n, const double *inputs, const double *params, int level,
+                          double *out, double *angles, int *status);
+
+/*
+ * Every parameter set at every input row (a Monte Carlo sweep): params holds n_sets rows of
+ * FOUR_BAR_N_PARAMS values (NULL: the defaults, n_sets 1), inputs n rows; out and status
+ * are ordered set by set, row (s * n + i) for set s and input row i, as in
+ * four_bar_evaluate_batch. Returns the number of failed configurations.
+ */
+int four_bar_evaluate_grid(int n_sets, const double *params, int n, const double *inputs,
+                   int level, double *out, int *status);
+
+/* Variables of the sensitivities: the parameters in file order, then the inputs. */
+#define FOUR_BAR_N_VARIABLES (FOUR_BAR_N_PARAMS + FOUR_BAR_N_INPUTS)
+
+/*
+ * Derivatives of the points' deviations with respect to every parameter, at level (0 paper,
+ * 1 first_order, 2 exact: the levels generated). out receives, per point in
+ * four_bar_point_names order and per parameter in file order, d(dx)/dp, d(dy)/dp
+ * (2 * N_POINTS * N_PARAMS doubles). A parameter whose default reads other parameters
+ * moves them along (the total derivative). Same return codes as four_bar_evaluate; on any
+ * non-zero return out is NaN.
+ */
+int four_bar_sensitivity(const double *inputs, const double *params, int level, double *out);
+
+/*
+ * The same with the inputs and the rigid positions: deviation receives, per point and per
+ * variable (the parameters, then the inputs), d(dx)/dv, d(dy)/dv (2 * N_POINTS *
+ * N_VARIABLES doubles); rigid (may be NULL) the same for the rigid position; values (may be
+ * NULL) what four_bar_evaluate writes to out.
+ */
+int four_bar_sensitivity_full(const double *inputs, const double *params, int level,
+                         double *values, double *deviation, double *rigid);
+
+/* four_bar_sensitivity_full for n rows of inputs (as four_bar_evaluate_batch). */
+int four_bar_sensitivity_batch(int n, const double *inputs, const double *params, int level,
+                          double *values, double *deviation, double *rigid, int *status);
 
 #endif /* SYMKIN_FOUR_BAR_H */

@@ -2,7 +2,7 @@
 Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
 Points: C; levels: paper, first_order, exact.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, dev_paper 38, dev_first_order 52, dev_exact 62, links 1.
+Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, dev_paper 38, dev_first_order 52, dev_exact 62, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -11,6 +11,11 @@ False in ok. It also holds "angles": {"rigid": {H: a}, "compliant": {H: a}}, eve
 angle (radians, the rotation of links[1] relative to links[0] from the as-fabricated pose), and
 "links": {L: {"rigid": a, "compliant": a, "deviation": a}}, the rotation of every link in LINKS
 from the as-fabricated pose (rigid wrapped to (-pi, pi]; the deviation computed directly).
+
+sensitivity(inputs, level, params) gives {P: {p: a}}: d(dx, dy)/dp of every point's deviation
+by every parameter p, each a of shape (2, *broadcast_shape); sensitivity_full(...) adds the
+inputs and the rigid positions. A parameter whose default reads other parameters moves them
+along (the total derivative). NaN where evaluate is not ok.
 """
 
 import math
@@ -48,6 +53,8 @@ def arck(x):
     x2 = x * x
     small = np.abs(x) < 1.5
     series = 0.3333333333333333 + x2 * (-0.03333333333333333 + x2 * (0.0011904761904761906 + x2 * (-2.2045855379188714e-05 + x2 * (2.505210838544172e-07 + x2 * (-1.9270852604185937e-09 + x2 * (1.0706029224547743e-11 + x2 * (-4.498331606952833e-14 + x2 * (1.4797143443923793e-16 + x2 * (-3.9145882126782523e-19)))))))))
+    if small.all():
+        return series
     xs = np.where(small, 1.0, x)
     xs2 = xs * xs
     b = np.sin(xs) / xs - np.cos(xs)
@@ -61,6 +68,8 @@ def cosr2(x):
     x2 = x * x
     small = np.abs(x) < 3.0
     series = 0.041666666666666664 + x2 * (-0.001388888888888889 + x2 * (2.48015873015873e-05 + x2 * (-2.755731922398589e-07 + x2 * (2.08767569878681e-09 + x2 * (-1.1470745597729725e-11 + x2 * (4.779477332387385e-14 + x2 * (-1.5619206968586225e-16 + x2 * (4.110317623312165e-19 + x2 * (-8.896791392450574e-22 + x2 * (1.6117375710961184e-24 + x2 * (-2.4795962632247976e-27)))))))))))
+    if small.all():
+        return series
     xs = np.where(small, 1.0, x)
     xs2 = xs * xs
     b = -2.0 * (np.sin(0.5 * xs) / xs) ** 2
@@ -74,6 +83,8 @@ def sinr1(x):
     x2 = x * x
     small = np.abs(x) < 2.0
     series = -0.16666666666666666 + x2 * (0.008333333333333333 + x2 * (-0.0001984126984126984 + x2 * (2.7557319223985893e-06 + x2 * (-2.505210838544172e-08 + x2 * (1.6059043836821613e-10 + x2 * (-7.647163731819816e-13 + x2 * (2.8114572543455206e-15 + x2 * (-8.22063524662433e-18 + x2 * (1.9572941063391263e-20 + x2 * (-3.868170170630684e-23))))))))))
+    if small.all():
+        return series
     xs = np.where(small, 1.0, x)
     xs2 = xs * xs
     b = np.sin(xs) / xs
@@ -87,6 +98,8 @@ def sinr2(x):
     x2 = x * x
     small = np.abs(x) < 3.0
     series = 0.008333333333333333 + x2 * (-0.0001984126984126984 + x2 * (2.7557319223985893e-06 + x2 * (-2.505210838544172e-08 + x2 * (1.6059043836821613e-10 + x2 * (-7.647163731819816e-13 + x2 * (2.8114572543455206e-15 + x2 * (-8.22063524662433e-18 + x2 * (1.9572941063391263e-20 + x2 * (-3.868170170630684e-23 + x2 * (6.446950284384474e-26 + x2 * (-9.183689863795546e-29)))))))))))
+    if small.all():
+        return series
     xs = np.where(small, 1.0, x)
     xs2 = xs * xs
     b = np.sin(xs) / xs
@@ -95,13 +108,23 @@ def sinr2(x):
     return np.where(small, series, b)
 
 
-def _parameters(given):
-    """Parameter values in file order: given ones, defaults re-evaluated for the others."""
+def _value(v):
+    """A parameter value: a float, or an array for many parameter sets at once."""
+    return float(v) if numpy.ndim(v) == 0 else numpy.asarray(v, dtype=_DTYPE)
+
+
+def parameters(given=None, shifts=None):
+    """Parameter values in file order: given ones, defaults re-evaluated for the others; a shift
+    (name -> amount) is added to a parameter after its value is set, so the parameters whose
+    defaults read it follow. Values and shifts may be arrays (many parameter sets at once)."""
     given = dict(given or {})
-    unknown = sorted(set(given) - set(PARAMETERS))
+    shifts = dict(shifts or {})
+    unknown = sorted((set(given) | set(shifts)) - set(PARAMETERS))
     if unknown:
         raise ValueError(f"unknown parameter(s) {unknown}; parameters: {sorted(PARAMETERS)}")
-    p_0 = float(given['l']) if 'l' in given else 0.001
+    p_0 = _value(given['l']) if 'l' in given else 0.001
+    if 'l' in shifts:
+        p_0 = p_0 + _value(shifts['l'])
     return [p_0]
 
 
@@ -411,35 +434,492 @@ def _links(theta, delta):
     ]
 
 
+def _sens_rigid(theta, params):
+    """rigid stage: A, dG/dv; rigid points: dR/dtheta, dR/dv (44 operations)."""
+    theta_1, theta_2, theta_3, _ = theta
+    _tmp0 = theta_1 + theta_2
+    _tmp1 = numpy.sin(_tmp0)
+    _tmp2 = numpy.cos(_tmp0)
+    _tmp3 = 0.07*_tmp1 + 0.042*_tmp2
+    _tmp4 = numpy.sin(theta_3)
+    _tmp5 = numpy.cos(theta_3)
+    _tmp6 = 0.042*_tmp1 - 0.07*_tmp2
+    _tmp7 = numpy.sin(theta_1)
+    _tmp8 = numpy.cos(theta_1)
+    _tmp9 = 0.015*_tmp7 + 0.026*_tmp8
+    _tmp10 = 0.026*_tmp7 - 0.015*_tmp8
+    _tmp11 = 0.045*_tmp1 + 0.064*_tmp2
+    _tmp12 = 0.064*_tmp1 - 0.045*_tmp2
+    return [
+        1,
+        -1,
+        1,
+        -_tmp3,
+        -0.015*_tmp4 + 0.068*_tmp5,
+        0,
+        -_tmp6,
+        0.068*_tmp4 + 0.015*_tmp5,
+        0,
+        0,
+        1,
+        0,
+        -_tmp3 - _tmp9,
+        0,
+        -_tmp10 - _tmp6,
+        -_tmp11,
+        0,
+        0,
+        -_tmp12,
+        0,
+        0,
+        0,
+        -_tmp11 - _tmp9,
+        0,
+        -_tmp10 - _tmp12,
+    ]
+
+
+def _sens_paper(theta, params):
+    """sensitivity at level paper: dD/dtheta, dD/dv (129 operations)."""
+    theta_1, theta_2, _, _ = theta
+    p_0, = params
+    _tmp0 = numpy.cos(theta_1)
+    _tmp1 = 0.5*theta_2
+    _tmp2 = numpy.sin(_tmp1)
+    _tmp3 = _tmp2*p_0
+    _tmp4 = arck(_tmp1)
+    _tmp5 = _tmp4*theta_2
+    _tmp6 = 0.4330127018922193*_tmp5
+    _tmp7 = numpy.cos(_tmp1)
+    _tmp8 = theta_2**2
+    _tmp9 = _tmp4*_tmp8
+    _tmp10 = 0.0625*_tmp9
+    _tmp11 = _tmp7*p_0
+    _tmp12 = 0.10825317547305482*_tmp9
+    _tmp13 = theta_2**3
+    _tmp14 = 3*cosr2(_tmp1) + sinr1(_tmp1) - 3*sinr2(_tmp1)
+    _tmp15 = _tmp13*_tmp14
+    _tmp16 = 0.05412658773652741*_tmp15
+    _tmp17 = -_tmp10*_tmp3 - _tmp11*_tmp12 + 0.03125*_tmp13*_tmp14*_tmp7*p_0 - _tmp16*_tmp3 - _tmp3*_tmp6 + 0.25*_tmp4*_tmp7*p_0*theta_2
+    _tmp18 = numpy.sin(theta_1)
+    _tmp19 = _tmp10*_tmp11 + _tmp11*_tmp16 + _tmp11*_tmp6 - _tmp12*_tmp3 + 0.03125*_tmp15*_tmp3 + 0.25*_tmp3*_tmp5
+    _tmp20 = 0.5*theta_1
+    _tmp21 = numpy.sin(_tmp20)
+    _tmp22 = arck(_tmp20)
+    _tmp23 = _tmp22*theta_1**2
+    _tmp24 = 0.25*_tmp23
+    _tmp25 = 0.125*_tmp2*_tmp9
+    _tmp26 = 0.21650635094610965*_tmp9
+    _tmp27 = _tmp26*_tmp7
+    _tmp28 = _tmp25 + _tmp27
+    _tmp29 = _tmp2*_tmp26
+    _tmp30 = -_tmp29 + 0.125*_tmp4*_tmp7*_tmp8
+    _tmp31 = _tmp21*p_0
+    _tmp32 = _tmp20*_tmp22
+    _tmp33 = numpy.cos(_tmp20)
+    _tmp34 = _tmp33*p_0
+    _tmp35 = 0.125*_tmp23
+    _tmp36 = 0.0625*theta_1**3*(3*cosr2(_tmp20) + sinr1(_tmp20) - 3*sinr2(_tmp20))
+    _tmp37 = -_tmp29*p_0 + 0.125*_tmp4*_tmp7*_tmp8*p_0
+    _tmp38 = _tmp25*p_0 + _tmp27*p_0
+    return [
+        _tmp0*_tmp17 - _tmp18*_tmp19,
+        0,
+        0,
+        _tmp0*_tmp19 + _tmp17*_tmp18,
+        0,
+        0,
+        _tmp0*_tmp30 - _tmp18*_tmp28 - _tmp21*_tmp24,
+        -_tmp0*_tmp38 - _tmp18*_tmp37 - _tmp31*_tmp32 - _tmp31*_tmp36 - _tmp34*_tmp35,
+        _tmp0*_tmp28 + _tmp18*_tmp30 + _tmp24*_tmp33,
+        _tmp0*_tmp37 - _tmp18*_tmp38 - _tmp31*_tmp35 + _tmp32*_tmp34 + _tmp34*_tmp36,
+    ]
+
+
+def _sens_first_order(theta, delta, params):
+    """sensitivity at level first_order: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (278 operations)."""
+    theta_1, theta_2, theta_3, theta_4 = theta
+    delta_2, delta_3, _ = delta
+    p_0, = params
+    _tmp0 = theta_1 + theta_2
+    _tmp1 = numpy.sin(_tmp0)
+    _tmp2 = numpy.cos(_tmp0)
+    _tmp3 = 0.07*_tmp1 + 0.042*_tmp2
+    _tmp4 = numpy.sin(theta_3)
+    _tmp5 = numpy.cos(theta_3)
+    _tmp6 = 0.015*_tmp4 - 0.068*_tmp5
+    _tmp7 = -0.042*_tmp1 + 0.07*_tmp2
+    _tmp8 = 0.068*_tmp4 + 0.015*_tmp5
+    _tmp9 = numpy.sin(theta_1)
+    _tmp10 = 0.5*theta_2
+    _tmp11 = arck(_tmp10)
+    _tmp12 = _tmp11*theta_2
+    _tmp13 = numpy.sin(_tmp10)
+    _tmp14 = _tmp13*p_0
+    _tmp15 = numpy.cos(_tmp10)
+    _tmp16 = _tmp15*p_0
+    _tmp17 = 0.4330127018922193*_tmp12
+    _tmp18 = theta_2**2
+    _tmp19 = _tmp11*_tmp18
+    _tmp20 = 0.10825317547305482*_tmp19
+    _tmp21 = 0.0625*_tmp19
+    _tmp22 = theta_2**3
+    _tmp23 = 3*cosr2(_tmp10) + sinr1(_tmp10) - 3*sinr2(_tmp10)
+    _tmp24 = _tmp22*_tmp23
+    _tmp25 = 0.05412658773652741*_tmp24
+    _tmp26 = 0.25*_tmp12*_tmp14 - _tmp14*_tmp20 + 0.03125*_tmp14*_tmp24 + _tmp16*_tmp17 + _tmp16*_tmp21 + _tmp16*_tmp25
+    _tmp27 = numpy.cos(theta_1)
+    _tmp28 = 0.25*_tmp11*_tmp15*p_0*theta_2 - _tmp14*_tmp17 - _tmp14*_tmp21 - _tmp14*_tmp25 + 0.03125*_tmp15*_tmp22*_tmp23*p_0 - _tmp16*_tmp20
+    _tmp29 = _tmp26*_tmp9 - _tmp27*_tmp28
+    _tmp30 = 0.5*theta_4
+    _tmp31 = numpy.cos(_tmp30)
+    _tmp32 = _tmp31*p_0
+    _tmp33 = arck(_tmp30)
+    _tmp34 = theta_4**2
+    _tmp35 = _tmp33*_tmp34
+    _tmp36 = 0.25*_tmp35
+    _tmp37 = _tmp32*_tmp36
+    _tmp38 = numpy.sin(_tmp30)
+    _tmp39 = _tmp38*p_0
+    _tmp40 = _tmp36*_tmp39
+    _tmp41 = _tmp1*_tmp37 + _tmp2*_tmp40 + _tmp7*delta_2
+    _tmp42 = 0.5*theta_3
+    _tmp43 = numpy.sin(_tmp42)
+    _tmp44 = _tmp43*p_0
+    _tmp45 = arck(_tmp42)
+    _tmp46 = _tmp42*_tmp45
+    _tmp47 = numpy.cos(_tmp42)
+    _tmp48 = theta_3**2
+    _tmp49 = _tmp45*_tmp48
+    _tmp50 = 0.125*p_0
+    _tmp51 = 0.0625*theta_3**3*(3*cosr2(_tmp42) + sinr1(_tmp42) - 3*sinr2(_tmp42))
+    _tmp52 = _tmp30*_tmp33
+    _tmp53 = _tmp35*_tmp50
+    _tmp54 = 0.0625*theta_4**3*(3*cosr2(_tmp30) + sinr1(_tmp30) - 3*sinr2(_tmp30))
+    _tmp55 = _tmp31*_tmp53 + _tmp39*_tmp52 + _tmp39*_tmp54
+    _tmp56 = _tmp32*_tmp52 + _tmp32*_tmp54 - _tmp38*_tmp53
+    _tmp57 = _tmp26*_tmp27 + _tmp28*_tmp9
+    _tmp58 = -_tmp1*_tmp40 + _tmp2*_tmp37 - _tmp3*delta_2
+    _tmp59 = _tmp47*p_0
+    _tmp60 = _tmp36*_tmp38
+    _tmp61 = 0.5*theta_1
+    _tmp62 = numpy.sin(_tmp61)
+    _tmp63 = arck(_tmp61)
+    _tmp64 = _tmp63*theta_1**2
+    _tmp65 = 0.25*_tmp64
+    _tmp66 = 0.125*_tmp13*_tmp19
+    _tmp67 = 0.21650635094610965*_tmp19
+    _tmp68 = _tmp15*_tmp67
+    _tmp69 = _tmp66 + _tmp68
+    _tmp70 = _tmp13*_tmp67
+    _tmp71 = 0.125*_tmp11*_tmp15*_tmp18 - _tmp70
+    _tmp72 = -_tmp27*_tmp71 + _tmp62*_tmp65 + _tmp69*_tmp9
+    _tmp73 = 0.125*_tmp11*_tmp15*_tmp18*p_0 - _tmp70*p_0
+    _tmp74 = _tmp66*p_0 + _tmp68*p_0
+    _tmp75 = _tmp62*p_0
+    _tmp76 = 0.0625*theta_1**3*(3*cosr2(_tmp61) + sinr1(_tmp61) - 3*sinr2(_tmp61))
+    _tmp77 = numpy.cos(_tmp61)
+    _tmp78 = _tmp50*_tmp64
+    _tmp79 = _tmp61*_tmp63
+    _tmp80 = _tmp27*_tmp74 + _tmp73*_tmp9 + _tmp75*_tmp76 + _tmp75*_tmp79 + _tmp77*_tmp78
+    _tmp81 = _tmp27*_tmp69 + _tmp65*_tmp77 + _tmp71*_tmp9
+    _tmp82 = _tmp77*p_0
+    _tmp83 = _tmp27*_tmp73 - _tmp62*_tmp78 - _tmp74*_tmp9 + _tmp76*_tmp82 + _tmp79*_tmp82
+    _tmp84 = -0.064*_tmp1 + 0.045*_tmp2
+    _tmp85 = _tmp84*delta_2
+    _tmp86 = 0.045*_tmp1 + 0.064*_tmp2
+    _tmp87 = -_tmp86*delta_2
+    return [
+        1,
+        -1,
+        1,
+        -_tmp3,
+        -_tmp6,
+        0,
+        _tmp7,
+        _tmp8,
+        0,
+        0,
+        0,
+        0,
+        -_tmp29 - _tmp41,
+        _tmp44*_tmp46 + _tmp44*_tmp51 + _tmp47*_tmp49*_tmp50 - _tmp8*delta_3,
+        -_tmp1*_tmp55 + _tmp2*_tmp56,
+        _tmp57 + _tmp58,
+        0.125*_tmp43*_tmp45*_tmp48*p_0 - _tmp46*_tmp59 - _tmp51*_tmp59 - _tmp6*delta_3,
+        _tmp1*_tmp56 + _tmp2*_tmp55,
+        0,
+        0,
+        -_tmp1*_tmp60 + 0.25*_tmp2*_tmp31*_tmp33*_tmp34 + 0.25*_tmp43*_tmp45*_tmp48 - _tmp72,
+        -_tmp41 - _tmp80,
+        _tmp1*_tmp31*_tmp36 + _tmp2*_tmp60 - 0.25*_tmp47*_tmp49 + _tmp81,
+        _tmp58 + _tmp83,
+        -_tmp29 - _tmp85,
+        0,
+        0,
+        _tmp57 + _tmp87,
+        0,
+        0,
+        -_tmp86,
+        0,
+        0,
+        _tmp84,
+        0,
+        0,
+        -_tmp72,
+        -_tmp80 - _tmp85,
+        _tmp81,
+        _tmp83 + _tmp87,
+    ]
+
+
+def _sens_exact(theta, delta, params):
+    """sensitivity at level exact: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (339 operations)."""
+    theta_1, theta_2, theta_3, theta_4 = theta
+    delta_2, delta_3, delta_4 = delta
+    p_0, = params
+    _tmp0 = delta_2 + theta_2
+    _tmp1 = _tmp0 + theta_1
+    _tmp2 = numpy.sin(_tmp1)
+    _tmp3 = numpy.cos(_tmp1)
+    _tmp4 = numpy.sin(theta_1)
+    _tmp5 = 0.5*delta_2
+    _tmp6 = _tmp5 + 0.5*theta_2
+    _tmp7 = arck(_tmp6)
+    _tmp8 = _tmp0*_tmp7
+    _tmp9 = numpy.sin(_tmp6)
+    _tmp10 = _tmp9*p_0
+    _tmp11 = numpy.cos(_tmp6)
+    _tmp12 = _tmp11*p_0
+    _tmp13 = 0.4330127018922193*_tmp8
+    _tmp14 = _tmp0**2
+    _tmp15 = _tmp14*_tmp7
+    _tmp16 = 0.10825317547305482*_tmp15
+    _tmp17 = 0.0625*_tmp15
+    _tmp18 = _tmp0**3
+    _tmp19 = 3*cosr2(_tmp6) + sinr1(_tmp6) - 3*sinr2(_tmp6)
+    _tmp20 = _tmp18*_tmp19
+    _tmp21 = 0.05412658773652741*_tmp20
+    _tmp22 = -_tmp10*_tmp16 + 0.03125*_tmp10*_tmp20 + 0.25*_tmp10*_tmp8 + _tmp12*_tmp13 + _tmp12*_tmp17 + _tmp12*_tmp21
+    _tmp23 = numpy.cos(theta_1)
+    _tmp24 = 0.25*_tmp0*_tmp11*_tmp7*p_0 - _tmp10*_tmp13 - _tmp10*_tmp17 - _tmp10*_tmp21 + 0.03125*_tmp11*_tmp18*_tmp19*p_0 - _tmp12*_tmp16
+    _tmp25 = _tmp22*_tmp4 - _tmp23*_tmp24
+    _tmp26 = 0.5*delta_4 + 0.5*theta_4
+    _tmp27 = arck(_tmp26)
+    _tmp28 = numpy.cos(_tmp26)
+    _tmp29 = _tmp28*p_0
+    _tmp30 = _tmp27*_tmp29
+    _tmp31 = delta_4 + theta_4
+    _tmp32 = _tmp31**2
+    _tmp33 = 0.25*_tmp32
+    _tmp34 = _tmp30*_tmp33
+    _tmp35 = numpy.sin(_tmp26)
+    _tmp36 = _tmp27*_tmp35
+    _tmp37 = _tmp36*p_0
+    _tmp38 = _tmp33*_tmp37
+    _tmp39 = _tmp2*_tmp34 + _tmp3*_tmp38
+    _tmp40 = _tmp25 + _tmp39
+    _tmp41 = delta_3 + theta_3
+    _tmp42 = numpy.cos(_tmp41)
+    _tmp43 = numpy.sin(_tmp41)
+    _tmp44 = 0.5*delta_3
+    _tmp45 = _tmp44 + 0.5*theta_3
+    _tmp46 = numpy.sin(_tmp45)
+    _tmp47 = _tmp46*p_0
+    _tmp48 = 0.0625*_tmp41**3*(3*cosr2(_tmp45) + sinr1(_tmp45) - 3*sinr2(_tmp45))
+    _tmp49 = numpy.cos(_tmp45)
+    _tmp50 = _tmp41**2
+    _tmp51 = arck(_tmp45)
+    _tmp52 = _tmp50*_tmp51
+    _tmp53 = 0.125*p_0
+    _tmp54 = 0.5*_tmp41*_tmp51
+    _tmp55 = _tmp47*_tmp48 + _tmp47*_tmp54 + _tmp49*_tmp52*_tmp53
+    _tmp56 = 0.5*_tmp31
+    _tmp57 = _tmp32*_tmp53
+    _tmp58 = _tmp27*_tmp28
+    _tmp59 = 0.0625*_tmp31**3*(3*cosr2(_tmp26) + sinr1(_tmp26) - 3*sinr2(_tmp26))
+    _tmp60 = _tmp35*_tmp59*p_0 + _tmp37*_tmp56 + _tmp57*_tmp58
+    _tmp61 = _tmp29*_tmp59 + _tmp30*_tmp56 - _tmp36*_tmp57
+    _tmp62 = -_tmp2*_tmp60 + _tmp3*_tmp61
+    _tmp63 = _tmp22*_tmp23 + _tmp24*_tmp4
+    _tmp64 = -_tmp2*_tmp38 + _tmp3*_tmp34
+    _tmp65 = _tmp63 + _tmp64
+    _tmp66 = _tmp49*p_0
+    _tmp67 = 0.125*_tmp47*_tmp52 - _tmp48*_tmp66 - _tmp54*_tmp66
+    _tmp68 = _tmp2*_tmp61 + _tmp3*_tmp60
+    _tmp69 = theta_1 + theta_2
+    _tmp70 = numpy.sin(_tmp69)
+    _tmp71 = numpy.sin(delta_2)
+    _tmp72 = numpy.sin(_tmp5)**2
+    _tmp73 = -0.042*_tmp71 - 0.14*_tmp72
+    _tmp74 = numpy.cos(_tmp69)
+    _tmp75 = -0.07*_tmp71 + 0.084*_tmp72
+    _tmp76 = _tmp70*_tmp73 - _tmp74*_tmp75
+    _tmp77 = numpy.cos(theta_3)
+    _tmp78 = numpy.sin(delta_3)
+    _tmp79 = numpy.sin(_tmp44)**2
+    _tmp80 = -0.015*_tmp78 - 0.136*_tmp79
+    _tmp81 = numpy.sin(theta_3)
+    _tmp82 = 0.068*_tmp78 - 0.03*_tmp79
+    _tmp83 = _tmp70*_tmp75 + _tmp73*_tmp74
+    _tmp84 = _tmp33*_tmp36
+    _tmp85 = 0.5*theta_1
+    _tmp86 = numpy.sin(_tmp85)
+    _tmp87 = arck(_tmp85)
+    _tmp88 = _tmp87*theta_1**2
+    _tmp89 = 0.25*_tmp88
+    _tmp90 = 0.125*_tmp15*_tmp9
+    _tmp91 = 0.21650635094610965*_tmp15
+    _tmp92 = _tmp11*_tmp91
+    _tmp93 = _tmp90 + _tmp92
+    _tmp94 = _tmp9*_tmp91
+    _tmp95 = 0.125*_tmp11*_tmp14*_tmp7 - _tmp94
+    _tmp96 = -_tmp23*_tmp95 + _tmp4*_tmp93 + _tmp86*_tmp89
+    _tmp97 = 0.125*_tmp11*_tmp14*_tmp7*p_0 - _tmp94*p_0
+    _tmp98 = _tmp90*p_0 + _tmp92*p_0
+    _tmp99 = _tmp86*p_0
+    _tmp100 = 0.0625*theta_1**3*(3*cosr2(_tmp85) + sinr1(_tmp85) - 3*sinr2(_tmp85))
+    _tmp101 = numpy.cos(_tmp85)
+    _tmp102 = _tmp53*_tmp88
+    _tmp103 = _tmp85*_tmp87
+    _tmp104 = _tmp100*_tmp99 + _tmp101*_tmp102 + _tmp103*_tmp99 + _tmp23*_tmp98 + _tmp4*_tmp97
+    _tmp105 = _tmp101*_tmp89 + _tmp23*_tmp93 + _tmp4*_tmp95
+    _tmp106 = _tmp101*p_0
+    _tmp107 = _tmp100*_tmp106 - _tmp102*_tmp86 + _tmp103*_tmp106 + _tmp23*_tmp97 - _tmp4*_tmp98
+    _tmp108 = -0.064*_tmp71 - 0.09*_tmp72
+    _tmp109 = -0.045*_tmp71 + 0.128*_tmp72
+    _tmp110 = _tmp108*_tmp70 - _tmp109*_tmp74
+    _tmp111 = _tmp108*_tmp74 + _tmp109*_tmp70
+    return [
+        1,
+        -1,
+        1,
+        -0.07*_tmp2 - 0.042*_tmp3 - _tmp40,
+        0.068*_tmp42 - 0.015*_tmp43 + _tmp55,
+        _tmp62,
+        -0.042*_tmp2 + 0.07*_tmp3 + _tmp65,
+        0.015*_tmp42 + 0.068*_tmp43 + _tmp67,
+        _tmp68,
+        0,
+        0,
+        0,
+        -_tmp40 - _tmp76,
+        _tmp55 + _tmp77*_tmp80 - _tmp81*_tmp82,
+        _tmp62,
+        _tmp65 + _tmp83,
+        _tmp67 + _tmp77*_tmp82 + _tmp80*_tmp81,
+        _tmp68,
+        0,
+        0,
+        -_tmp2*_tmp84 + 0.25*_tmp27*_tmp28*_tmp3*_tmp32 + 0.25*_tmp46*_tmp50*_tmp51 - _tmp96,
+        -_tmp104 - _tmp39 - _tmp76,
+        _tmp105 + _tmp2*_tmp33*_tmp58 + _tmp3*_tmp84 - 0.25*_tmp49*_tmp52,
+        _tmp107 + _tmp64 + _tmp83,
+        -_tmp110 - _tmp25,
+        0,
+        0,
+        _tmp111 + _tmp63,
+        0,
+        0,
+        -0.045*_tmp2 - _tmp25 - 0.064*_tmp3,
+        0,
+        0,
+        -0.064*_tmp2 + 0.045*_tmp3 + _tmp63,
+        0,
+        0,
+        -_tmp96,
+        -_tmp104 - _tmp110,
+        _tmp105,
+        _tmp107 + _tmp111,
+    ]
+
+
 def _wrap(angle):
     return angle - _TWO_PI * numpy.round(angle / _TWO_PI)
 
 
-def _solve(a, b, ok):
-    """Batched dense solve a x = b (a row-major k*k list, b a k list); bad elements -> ok False."""
-    k = len(b)
+def _matrix(entries, rows, cols, shape):
+    """A (*shape, rows, cols) array from a row-major list of arrays (or numbers)."""
+    out = numpy.empty(shape + (rows, cols), dtype=_DTYPE)
+    for i in range(rows):
+        for j in range(cols):
+            out[..., i, j] = entries[i * cols + j]
+    return out
+
+
+_GAUSS_MAX = 12   # systems up to this size: elementwise elimination, as the C evaluator does
+
+
+def _solve(a, b, ok, m=1):
+    """Batched dense solve a x = b (a row-major k*k list, b a row-major k*m list: m right-hand
+    sides); bad elements -> ok False. The solution as a row-major k*m list."""
+    k = len(b) // m
+    if k <= _GAUSS_MAX:
+        return _gauss(a, b, ok, k, m)
     shape = ok.shape
-    am = numpy.empty(shape + (k, k), dtype=_DTYPE)
-    bm = numpy.empty(shape + (k,), dtype=_DTYPE)
-    for i in range(k):
-        bm[..., i] = b[i]
-        for j in range(k):
-            am[..., i, j] = a[i * k + j]
+    am = _matrix(a, k, k, shape)
+    bm = _matrix(b, k, m, shape)
     # numpy.array: a writable array even for 0-d input, where & gives a numpy.bool scalar
-    good = numpy.array(ok & numpy.isfinite(am).all(axis=(-1, -2)) & numpy.isfinite(bm).all(axis=-1))
+    good = numpy.array(ok & numpy.isfinite(am).all(axis=(-1, -2))
+                       & numpy.isfinite(bm).all(axis=(-1, -2)))
     am[~good] = numpy.eye(k)
     bm[~good] = 0.0
     try:
-        x = numpy.linalg.solve(am, bm[..., None])[..., 0]
+        x = numpy.linalg.solve(am, bm)
     except numpy.linalg.LinAlgError:
-        x = numpy.zeros(shape + (k,), dtype=_DTYPE)
+        x = numpy.zeros(shape + (k, m), dtype=_DTYPE)
         for index in numpy.ndindex(*shape):
             try:
                 x[index] = numpy.linalg.solve(am[index], bm[index])
             except numpy.linalg.LinAlgError:
                 good[index] = False
-    good &= numpy.isfinite(x).all(axis=-1)
-    return [x[..., i] for i in range(k)], good
+    good &= numpy.isfinite(x).all(axis=(-1, -2))
+    return [x[..., i, j] for i in range(k) for j in range(m)], good
+
+
+def _gauss(a, b, ok, k, m):
+    """_solve by Gaussian elimination with partial pivoting written out over the element
+    arrays, step for step the C evaluator's sk_solve (one small LAPACK call per element costs
+    more than the whole elimination)."""
+    shape = ok.shape
+    A = [[numpy.array(numpy.broadcast_to(a[i * k + j], shape), dtype=_DTYPE) for j in range(k)]
+         for i in range(k)]
+    B = [[numpy.array(numpy.broadcast_to(b[i * m + r], shape), dtype=_DTYPE) for r in range(m)]
+         for i in range(k)]
+    good = numpy.array(ok)
+    for c in range(k):
+        # the pivot: the first row i >= c with the largest |a[i][c]|
+        best = numpy.abs(A[c][c])
+        pivot = numpy.full(shape, c)
+        for i in range(c + 1, k):
+            size = numpy.abs(A[i][c])
+            larger = size > best
+            best = numpy.where(larger, size, best)
+            pivot = numpy.where(larger, i, pivot)
+        good &= (best > 0.0) & numpy.isfinite(best)
+        for i in range(c + 1, k):
+            swap = pivot == i
+            if swap.any():
+                for row in (A, B):
+                    for j in range(len(row[c])):
+                        row[c][j], row[i][j] = (numpy.where(swap, row[i][j], row[c][j]),
+                                                numpy.where(swap, row[c][j], row[i][j]))
+        for i in range(c + 1, k):
+            f = A[i][c] / A[c][c]
+            for j in range(c, k):
+                A[i][j] = A[i][j] - f * A[c][j]
+            for r in range(m):
+                B[i][r] = B[i][r] - f * B[c][r]
+    for r in range(m):
+        for i in range(k - 1, -1, -1):
+            s = B[i][r]
+            for j in range(i + 1, k):
+                s = s - A[i][j] * B[j][r]
+            B[i][r] = s / A[i][i]
+    x = [B[i][r] for i in range(k) for r in range(m)]
+    for v in x:
+        good &= numpy.isfinite(v)
+    return x, good
 
 
 def _rigid_angles(x, params, ok):
@@ -525,42 +1005,51 @@ _DELTA = {'first_order': _first_order, 'exact': _exact}
 _CHUNK = 8192   # elements per block: the temporaries of a block stay in the CPU cache
 
 
-def evaluate(inputs, level='exact', params=None, links=True):
-    """Deviation of the points at `level` for broadcast input arrays (see the module docstring);
-    `links=False` leaves out the links' rotations (and any loop solve only they need)."""
+def _prepare(inputs, level, params):
+    """Checked arguments: the broadcast input arrays, their shape and the parameter values."""
     if level not in LEVELS:
         raise ValueError(f"level must be one of {LEVELS}, got {level!r}")
     names = set(inputs)
     if names != set(INPUTS):
         raise ValueError(f"inputs must be exactly {INPUTS}, got {tuple(sorted(names))}")
     arrays = numpy.broadcast_arrays(*(numpy.asarray(inputs[n], dtype=_DTYPE) for n in INPUTS))
+    return arrays, [_DTYPE(v) for v in parameters(params)]
+
+
+def _blocks(run, arrays, *args):
+    """run(arrays, *args) over cache-sized blocks of the flattened inputs, its nested dict of
+    arrays (elements on the last axis) joined and shaped like the inputs."""
     shape = arrays[0].shape
-    p = [_DTYPE(v) for v in _parameters(params)]
     size = arrays[0].size
     if size <= _CHUNK:
-        return _evaluate(arrays, level, p, links)
+        return run(arrays, *args)
     flat = [a.reshape(-1) for a in arrays]
-    parts = [_evaluate([a[k:k + _CHUNK] for a in flat], level, p, links)
-             for k in range(0, size, _CHUNK)]
+    parts = [run([a[k:k + _CHUNK] for a in flat], *args) for k in range(0, size, _CHUNK)]
 
-    def join(get):
-        return numpy.concatenate([get(part) for part in parts], axis=-1).reshape(
-            get(parts[0]).shape[:-1] + shape)
+    def join(items):
+        if isinstance(items[0], dict):
+            return {key: join([item[key] for item in items]) for key in items[0]}
+        return numpy.concatenate(items, axis=-1).reshape(items[0].shape[:-1] + shape)
 
-    return {
-        "points": {n: {key: join(lambda part, n=n, key=key: part["points"][n][key])
-                       for key in ("rigid", "compliant", "deviation")} for n in POINTS},
-        "ok": join(lambda part: part["ok"]),
-        "angles": {kind: {h: join(lambda part, kind=kind, h=h: part["angles"][kind][h])
-                          for h in HINGES} for kind in ("rigid", "compliant")},
-        "links": {n: {key: join(lambda part, n=n, key=key: part["links"][n][key])
-                      for key in ("rigid", "compliant", "deviation")}
-                  for n in (LINKS if links else ())},
-    }
+    return join(parts)
+
+
+def evaluate(inputs, level='exact', params=None, links=True):
+    """Deviation of the points at `level` for broadcast input arrays (see the module docstring);
+    `links=False` leaves out the links' rotations (and any loop solve only they need)."""
+    arrays, p = _prepare(inputs, level, params)
+    return _blocks(_evaluate, arrays, level, p, links)
 
 
 def _evaluate(arrays, level, p, links):
     """evaluate() on one block of broadcast input arrays and parameter values p."""
+    theta, delta, ok = _pose(arrays, level, p, links)
+    return _points(theta, delta, ok, level, p, links)
+
+
+def _pose(arrays, level, p, links):
+    """The rigid angles theta (every hinge), delta (the non-input hinges; solved for the links'
+    rotations only when `links`) and the ok mask."""
     shape = arrays[0].shape
     ok = numpy.ones(shape, dtype=bool)
     for a in arrays:
@@ -576,6 +1065,14 @@ def _evaluate(arrays, level, p, links):
             ok = ok & (numpy.abs(theta[i]) <= limit)
             if i in _UNKNOWN_INDEX:
                 ok = ok & (numpy.abs(theta[i] + delta[_UNKNOWN_INDEX.index(i)]) <= limit)
+    return theta, delta, ok
+
+
+def _points(theta, delta, ok, level, p, links):
+    """The points, angles and (with `links`) the links' rotations of solved configurations, NaN
+    where not ok."""
+    shape = ok.shape
+    with numpy.errstate(all="ignore"):
         rigid = _rigid_points(theta, p)
         if level == 'paper':
             dev = _dev_paper(theta, p)
@@ -609,3 +1106,90 @@ def _evaluate(arrays, level, p, links):
         d = numpy.where(ok, rot[len(LINKS) + i], numpy.nan).astype(_DTYPE)
         rotations[name] = {"rigid": r, "compliant": r + d, "deviation": d}
     return {"points": result, "ok": ok, "angles": angles, "links": rotations}
+
+
+def sensitivity(inputs, level='exact', params=None):
+    """{P: {p: a}}: d(dx, dy)/dp of every point's deviation by every parameter, a of shape
+    (2, *broadcast_shape); NaN where the configuration cannot be evaluated."""
+    full = sensitivity_full(inputs, level, params)
+    return {n: full["deviation"][n]["params"] for n in POINTS}
+
+
+def sensitivity_full(inputs, level='exact', params=None):
+    """evaluate()'s result with "deviation" and "rigid": {P: {"params": {p: a}, "inputs":
+    {H: a}}}, the derivatives of every point's deviation and rigid position by every
+    parameter and input, each a of shape (2, *broadcast_shape)."""
+    arrays, p = _prepare(inputs, level, params)
+    return _blocks(_sensitivity, arrays, level, p)
+
+
+def _times(a, b):
+    """Batched matrix product of (..., m, q) and (..., q, n) arrays."""
+    return numpy.matmul(a, b)
+
+
+def _sensitivity(arrays, level, p):
+    """sensitivity_full() on one block: the implicit-function theorem on the closures."""
+    theta, delta, ok = _pose(arrays, level, p, True)
+    result = _points(theta, delta, ok, level, p, True)
+    ok = result["ok"]
+    shape = ok.shape
+    with numpy.errstate(all="ignore"):
+        sr = _sens_rigid(theta, p)
+        # Theta = d theta_u / dv = -A^-1 dG/dv; rigid: dR/dv + dR/dtheta_u Theta
+        th, good = _solve(sr[:9], [-numpy.asarray(v) for v in sr[9:15]], ok, 2)
+        ok = ok & good
+        th = _matrix(th, 3, 2, shape)
+        rig = _matrix(sr[21:], 2, 2, shape) + _times(
+            _matrix(sr[15:21], 2, 3, shape), th)
+        if level == 'paper':
+            s = _sens_paper(theta, p)
+            dev = _matrix(s[6:], 2, 2, shape)
+            dev = dev + _times(_matrix(s[0:6], 2, 3, shape), th)
+        elif level == 'first_order':
+            s = _sens_first_order(theta, delta, p)
+            dev = _matrix(s[36:], 2, 2, shape)
+            # Y = -M^-1 (dE/dv + dE/dtheta_u Theta)
+            rhs = -(_matrix(s[18:24], 3, 2, shape)
+                    + _times(_matrix(s[9:18], 3, 3, shape), th))
+            y, good = _solve(s[:9], [rhs[..., i, j] for i in range(3) for j in range(2)], ok, 2)
+            ok = ok & good
+            dev = dev + _times(_matrix(s[30:36], 2, 3, shape),
+                               _matrix(y, 3, 2, shape))
+            dev = dev + _times(_matrix(s[24:30], 2, 3, shape), th)
+        elif level == 'exact':
+            s = _sens_exact(theta, delta, p)
+            dev = _matrix(s[36:], 2, 2, shape)
+            # Y = -M^-1 (dE/dv + dE/dtheta_u Theta)
+            rhs = -(_matrix(s[18:24], 3, 2, shape)
+                    + _times(_matrix(s[9:18], 3, 3, shape), th))
+            y, good = _solve(s[:9], [rhs[..., i, j] for i in range(3) for j in range(2)], ok, 2)
+            ok = ok & good
+            dev = dev + _times(_matrix(s[30:36], 2, 3, shape),
+                               _matrix(y, 3, 2, shape))
+            dev = dev + _times(_matrix(s[24:30], 2, 3, shape), th)
+    ok = ok & numpy.isfinite(dev).all(axis=(-1, -2)) & numpy.isfinite(rig).all(axis=(-1, -2))
+    if not ok.all():
+        for key in result["points"]:
+            for part in result["points"][key].values():
+                part[..., ~ok] = numpy.nan
+        for kind in result["angles"].values():
+            for h in kind:
+                kind[h] = numpy.where(ok, kind[h], numpy.nan)
+        for link in result["links"].values():
+            for key in link:
+                link[key] = numpy.where(ok, link[key], numpy.nan)
+    dev = numpy.where(ok[..., None, None], dev, numpy.nan)
+    rig = numpy.where(ok[..., None, None], rig, numpy.nan)
+    names = list(PARAMETERS)
+
+    def table(m, n):
+        rows = numpy.moveaxis(m[..., 2 * n:2 * n + 2, :], -1, 0)
+        rows = numpy.moveaxis(rows, -1, 1)                 # (variable, 2, *shape)
+        return {"params": {q: rows[v] for v, q in enumerate(names)},
+                "inputs": {h: rows[len(names) + v] for v, h in enumerate(INPUTS)}}
+
+    result["ok"] = ok
+    result["deviation"] = {n: table(dev, i) for i, n in enumerate(POINTS)}
+    result["rigid"] = {n: table(rig, i) for i, n in enumerate(POINTS)}
+    return result

@@ -3,7 +3,7 @@
  * Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
  * Points: F; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33, links 9.
+ * Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
  */
 #include "nine_bar_platform.h"
 
@@ -727,10 +727,349 @@ static void sk_links(const double *theta, const double *delta, double *out)
     out[17] = delta_7 + delta_8;
 }
 
+/* rigid stage: A, dG/dv; rigid points: dR/dtheta, dR/dv (142 operations) */
+static void sk_sens_rigid(const double *theta, const double *params, double *out)
+{
+    (void)params;
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double theta_5 = theta[4];
+    const double theta_6 = theta[5];
+    const double theta_7 = theta[6];
+    const double theta_8 = theta[7];
+    const double _tmp0 = theta_1 + theta_2;
+    const double _tmp1 = _tmp0 + theta_3;
+    const double _tmp2 = _tmp1 + theta_4;
+    const double _tmp3 = _tmp2 + theta_5;
+    const double _tmp4 = cos(_tmp3);
+    const double _tmp5 = 0.02*_tmp4;
+    const double _tmp6 = sin(_tmp3);
+    const double _tmp7 = _tmp3 + theta_6;
+    const double _tmp8 = sin(_tmp7);
+    const double _tmp9 = 0.04*_tmp8;
+    const double _tmp10 = cos(_tmp7);
+    const double _tmp11 = 0.05*_tmp10;
+    const double _tmp12 = _tmp11 + _tmp9;
+    const double _tmp13 = _tmp12 + _tmp5 - 0.05*_tmp6;
+    const double _tmp14 = -0.04*_tmp10 + 0.05*_tmp8;
+    const double _tmp15 = _tmp14 + 0.05*_tmp4 + 0.02*_tmp6;
+    const double _tmp16 = _tmp1 + theta_7;
+    const double _tmp17 = cos(_tmp16);
+    const double _tmp18 = 0.005*_tmp17;
+    const double _tmp19 = sin(_tmp16);
+    const double _tmp20 = _tmp16 + theta_8;
+    const double _tmp21 = sin(_tmp20);
+    const double _tmp22 = 0.025*_tmp21;
+    const double _tmp23 = cos(_tmp20);
+    const double _tmp24 = 0.035*_tmp23;
+    const double _tmp25 = _tmp22 + _tmp24;
+    const double _tmp26 = _tmp18 - 0.04*_tmp19 + _tmp25;
+    const double _tmp27 = 0.035*_tmp21 - 0.025*_tmp23;
+    const double _tmp28 = 0.04*_tmp17 + 0.005*_tmp19 + _tmp27;
+    const double _tmp29 = 0.06*cos(theta_1);
+    const double _tmp30 = sin(_tmp1);
+    const double _tmp31 = cos(_tmp1);
+    const double _tmp32 = sin(_tmp2);
+    const double _tmp33 = cos(_tmp2);
+    const double _tmp34 = 0.02*_tmp33;
+    const double _tmp35 = -_tmp11 + 0.05*_tmp30 + 0.01*_tmp31 + 0.05*_tmp32 - _tmp34 - _tmp5 + 0.05*_tmp6 - _tmp9;
+    const double _tmp36 = sin(_tmp0);
+    const double _tmp37 = cos(_tmp0);
+    const double _tmp38 = 0.05*_tmp36 + 0.02*_tmp37;
+    const double _tmp39 = _tmp35 + _tmp38;
+    const double _tmp40 = 0.06*sin(theta_1);
+    const double _tmp41 = -_tmp40;
+    const double _tmp42 = _tmp15 + 0.02*_tmp32 + 0.05*_tmp33;
+    const double _tmp43 = -0.01*_tmp30 + 0.05*_tmp31 + _tmp42;
+    const double _tmp44 = -0.02*_tmp36 + 0.05*_tmp37;
+    const double _tmp45 = _tmp43 + _tmp44;
+    const double _tmp46 = 0.04*_tmp31;
+    const double _tmp47 = -_tmp18 + 0.04*_tmp19 - _tmp22 - _tmp24 + 0.02*_tmp30 + _tmp38 - _tmp46;
+    const double _tmp48 = _tmp28 + 0.04*_tmp30 + 0.02*_tmp31;
+    const double _tmp49 = _tmp44 + _tmp48;
+    const double _tmp50 = 0.03*_tmp36;
+    const double _tmp51 = 0.03*_tmp37;
+    const double _tmp52 = _tmp50 + _tmp51;
+    const double _tmp53 = _tmp50 - _tmp51;
+    out[0] = -1;
+    out[1] = -1;
+    out[2] = 0;
+    out[3] = 0;
+    out[4] = 1;
+    out[5] = 0;
+    out[6] = -_tmp13;
+    out[7] = -_tmp12;
+    out[8] = 0;
+    out[9] = 0;
+    out[10] = 0;
+    out[11] = 0;
+    out[12] = -_tmp15;
+    out[13] = -_tmp14;
+    out[14] = 0;
+    out[15] = 0;
+    out[16] = 0;
+    out[17] = 0;
+    out[18] = 0;
+    out[19] = 0;
+    out[20] = -1;
+    out[21] = -1;
+    out[22] = 0;
+    out[23] = 1;
+    out[24] = 0;
+    out[25] = 0;
+    out[26] = -_tmp26;
+    out[27] = -_tmp25;
+    out[28] = 0;
+    out[29] = 0;
+    out[30] = 0;
+    out[31] = 0;
+    out[32] = -_tmp28;
+    out[33] = -_tmp27;
+    out[34] = 0;
+    out[35] = 0;
+    out[36] = 0;
+    out[37] = -1;
+    out[38] = -1;
+    out[39] = -1;
+    out[40] = -1;
+    out[41] = 0;
+    out[42] = _tmp29 + _tmp39;
+    out[43] = _tmp39;
+    out[44] = _tmp35;
+    out[45] = -_tmp13 + 0.05*_tmp32 - _tmp34;
+    out[46] = 0;
+    out[47] = -_tmp41 - _tmp45;
+    out[48] = -_tmp45;
+    out[49] = -_tmp43;
+    out[50] = -_tmp42;
+    out[51] = 0;
+    out[52] = -1;
+    out[53] = -1;
+    out[54] = -1;
+    out[55] = 0;
+    out[56] = 0;
+    out[57] = _tmp29 + _tmp47;
+    out[58] = _tmp47;
+    out[59] = -_tmp26 + 0.02*_tmp30 - _tmp46;
+    out[60] = 0;
+    out[61] = 0;
+    out[62] = -_tmp41 - _tmp49;
+    out[63] = -_tmp49;
+    out[64] = -_tmp48;
+    out[65] = 0;
+    out[66] = 0;
+    out[67] = 0;
+    out[68] = 0;
+    out[69] = 0;
+    out[70] = 0;
+    out[71] = 0;
+    out[72] = 0;
+    out[73] = 0;
+    out[74] = 0;
+    out[75] = 0;
+    out[76] = 0;
+    out[77] = 0;
+    out[78] = 0;
+    out[79] = -_tmp29 - _tmp52;
+    out[80] = -_tmp52;
+    out[81] = 0;
+    out[82] = 0;
+    out[83] = 0;
+    out[84] = -_tmp40 - _tmp53;
+    out[85] = -_tmp53;
+    out[86] = 0;
+    out[87] = 0;
+}
+
+/* sensitivity at level paper: dD/dtheta, dD/dv (97 operations) */
+static void sk_sens_paper(const double *theta, const double *params, double *out)
+{
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double p_0 = params[0];
+    const double _tmp0 = 0.5*theta_1;
+    const double _tmp1 = sin(_tmp0);
+    const double _tmp2 = symkin_arck(_tmp0);
+    const double _tmp3 = _tmp2*pow(theta_1, 2);
+    const double _tmp4 = 0.25*_tmp3;
+    const double _tmp5 = 0.5*theta_2;
+    const double _tmp6 = symkin_arck(_tmp5);
+    const double _tmp10 = pow(theta_2, 2);
+    const double _tmp7 = sin(_tmp5);
+    const double _tmp8 = _tmp6*_tmp7;
+    const double _tmp9 = sin(theta_1);
+    const double _tmp11 = 0.25*_tmp10;
+    const double _tmp12 = _tmp11*_tmp9;
+    const double _tmp13 = _tmp12*_tmp8;
+    const double _tmp14 = cos(theta_1);
+    const double _tmp15 = cos(_tmp5);
+    const double _tmp16 = _tmp1*p_0;
+    const double _tmp17 = _tmp0*_tmp2;
+    const double _tmp18 = cos(_tmp0);
+    const double _tmp19 = 0.125*p_0;
+    const double _tmp20 = _tmp15*_tmp6;
+    const double _tmp21 = _tmp12*_tmp20;
+    const double _tmp22 = _tmp11*_tmp14;
+    const double _tmp23 = _tmp22*_tmp8;
+    const double _tmp24 = 0.0625*pow(theta_1, 3)*(3*symkin_cosr2(_tmp0) + symkin_sinr1(_tmp0) - 3*symkin_sinr2(_tmp0));
+    const double _tmp25 = _tmp5*p_0;
+    const double _tmp26 = _tmp10*_tmp19;
+    const double _tmp27 = 0.0625*p_0*pow(theta_2, 3)*(3*symkin_cosr2(_tmp5) + symkin_sinr1(_tmp5) - 3*symkin_sinr2(_tmp5));
+    const double _tmp28 = _tmp20*_tmp26 + _tmp25*_tmp8 + _tmp27*_tmp7;
+    const double _tmp29 = _tmp15*_tmp27 + _tmp20*_tmp25 - _tmp26*_tmp8;
+    const double _tmp30 = _tmp18*p_0;
+    out[0] = 0;
+    out[1] = 0;
+    out[2] = 0;
+    out[3] = 0;
+    out[4] = 0;
+    out[5] = 0;
+    out[6] = 0;
+    out[7] = 0;
+    out[8] = 0;
+    out[9] = 0;
+    out[10] = 0;
+    out[11] = 0;
+    out[12] = -_tmp1*_tmp4 + 0.25*_tmp10*_tmp14*_tmp15*_tmp6 - _tmp13;
+    out[13] = -_tmp16*_tmp17 - _tmp16*_tmp24 - _tmp18*_tmp19*_tmp3 - _tmp21*p_0 - _tmp23*p_0;
+    out[14] = _tmp14*_tmp29 - _tmp28*_tmp9;
+    out[15] = 0;
+    out[16] = 0;
+    out[17] = _tmp18*_tmp4 + _tmp21 + _tmp23;
+    out[18] = -_tmp13*p_0 - 0.125*_tmp16*_tmp3 + _tmp17*_tmp30 + _tmp20*_tmp22*p_0 + _tmp24*_tmp30;
+    out[19] = _tmp14*_tmp28 + _tmp29*_tmp9;
+    out[20] = 0;
+    out[21] = 0;
+}
+
+/* sensitivity at level first_order: dD/dtheta, dD/dv (97 operations) */
+static void sk_sens_first_order(const double *theta, const double *params, double *out)
+{
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double p_0 = params[0];
+    const double _tmp0 = 0.5*theta_1;
+    const double _tmp1 = sin(_tmp0);
+    const double _tmp2 = symkin_arck(_tmp0);
+    const double _tmp3 = _tmp2*pow(theta_1, 2);
+    const double _tmp4 = 0.25*_tmp3;
+    const double _tmp5 = 0.5*theta_2;
+    const double _tmp6 = symkin_arck(_tmp5);
+    const double _tmp10 = pow(theta_2, 2);
+    const double _tmp7 = sin(_tmp5);
+    const double _tmp8 = _tmp6*_tmp7;
+    const double _tmp9 = sin(theta_1);
+    const double _tmp11 = 0.25*_tmp10;
+    const double _tmp12 = _tmp11*_tmp9;
+    const double _tmp13 = _tmp12*_tmp8;
+    const double _tmp14 = cos(theta_1);
+    const double _tmp15 = cos(_tmp5);
+    const double _tmp16 = _tmp1*p_0;
+    const double _tmp17 = _tmp0*_tmp2;
+    const double _tmp18 = cos(_tmp0);
+    const double _tmp19 = 0.125*p_0;
+    const double _tmp20 = _tmp15*_tmp6;
+    const double _tmp21 = _tmp12*_tmp20;
+    const double _tmp22 = _tmp11*_tmp14;
+    const double _tmp23 = _tmp22*_tmp8;
+    const double _tmp24 = 0.0625*pow(theta_1, 3)*(3*symkin_cosr2(_tmp0) + symkin_sinr1(_tmp0) - 3*symkin_sinr2(_tmp0));
+    const double _tmp25 = _tmp5*p_0;
+    const double _tmp26 = _tmp10*_tmp19;
+    const double _tmp27 = 0.0625*p_0*pow(theta_2, 3)*(3*symkin_cosr2(_tmp5) + symkin_sinr1(_tmp5) - 3*symkin_sinr2(_tmp5));
+    const double _tmp28 = _tmp20*_tmp26 + _tmp25*_tmp8 + _tmp27*_tmp7;
+    const double _tmp29 = _tmp15*_tmp27 + _tmp20*_tmp25 - _tmp26*_tmp8;
+    const double _tmp30 = _tmp18*p_0;
+    out[0] = 0;
+    out[1] = 0;
+    out[2] = 0;
+    out[3] = 0;
+    out[4] = 0;
+    out[5] = 0;
+    out[6] = 0;
+    out[7] = 0;
+    out[8] = 0;
+    out[9] = 0;
+    out[10] = 0;
+    out[11] = 0;
+    out[12] = -_tmp1*_tmp4 + 0.25*_tmp10*_tmp14*_tmp15*_tmp6 - _tmp13;
+    out[13] = -_tmp16*_tmp17 - _tmp16*_tmp24 - _tmp18*_tmp19*_tmp3 - _tmp21*p_0 - _tmp23*p_0;
+    out[14] = _tmp14*_tmp29 - _tmp28*_tmp9;
+    out[15] = 0;
+    out[16] = 0;
+    out[17] = _tmp18*_tmp4 + _tmp21 + _tmp23;
+    out[18] = -_tmp13*p_0 - 0.125*_tmp16*_tmp3 + _tmp17*_tmp30 + _tmp20*_tmp22*p_0 + _tmp24*_tmp30;
+    out[19] = _tmp14*_tmp28 + _tmp29*_tmp9;
+    out[20] = 0;
+    out[21] = 0;
+}
+
+/* sensitivity at level exact: dD/dtheta, dD/dv (97 operations) */
+static void sk_sens_exact(const double *theta, const double *params, double *out)
+{
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double p_0 = params[0];
+    const double _tmp0 = 0.5*theta_1;
+    const double _tmp1 = sin(_tmp0);
+    const double _tmp2 = symkin_arck(_tmp0);
+    const double _tmp3 = _tmp2*pow(theta_1, 2);
+    const double _tmp4 = 0.25*_tmp3;
+    const double _tmp5 = 0.5*theta_2;
+    const double _tmp6 = symkin_arck(_tmp5);
+    const double _tmp10 = pow(theta_2, 2);
+    const double _tmp7 = sin(_tmp5);
+    const double _tmp8 = _tmp6*_tmp7;
+    const double _tmp9 = sin(theta_1);
+    const double _tmp11 = 0.25*_tmp10;
+    const double _tmp12 = _tmp11*_tmp9;
+    const double _tmp13 = _tmp12*_tmp8;
+    const double _tmp14 = cos(theta_1);
+    const double _tmp15 = cos(_tmp5);
+    const double _tmp16 = _tmp1*p_0;
+    const double _tmp17 = _tmp0*_tmp2;
+    const double _tmp18 = cos(_tmp0);
+    const double _tmp19 = 0.125*p_0;
+    const double _tmp20 = _tmp15*_tmp6;
+    const double _tmp21 = _tmp12*_tmp20;
+    const double _tmp22 = _tmp11*_tmp14;
+    const double _tmp23 = _tmp22*_tmp8;
+    const double _tmp24 = 0.0625*pow(theta_1, 3)*(3*symkin_cosr2(_tmp0) + symkin_sinr1(_tmp0) - 3*symkin_sinr2(_tmp0));
+    const double _tmp25 = _tmp5*p_0;
+    const double _tmp26 = _tmp10*_tmp19;
+    const double _tmp27 = 0.0625*p_0*pow(theta_2, 3)*(3*symkin_cosr2(_tmp5) + symkin_sinr1(_tmp5) - 3*symkin_sinr2(_tmp5));
+    const double _tmp28 = _tmp20*_tmp26 + _tmp25*_tmp8 + _tmp27*_tmp7;
+    const double _tmp29 = _tmp15*_tmp27 + _tmp20*_tmp25 - _tmp26*_tmp8;
+    const double _tmp30 = _tmp18*p_0;
+    out[0] = 0;
+    out[1] = 0;
+    out[2] = 0;
+    out[3] = 0;
+    out[4] = 0;
+    out[5] = 0;
+    out[6] = 0;
+    out[7] = 0;
+    out[8] = 0;
+    out[9] = 0;
+    out[10] = 0;
+    out[11] = 0;
+    out[12] = -_tmp1*_tmp4 + 0.25*_tmp10*_tmp14*_tmp15*_tmp6 - _tmp13;
+    out[13] = -_tmp16*_tmp17 - _tmp16*_tmp24 - _tmp18*_tmp19*_tmp3 - _tmp21*p_0 - _tmp23*p_0;
+    out[14] = _tmp14*_tmp29 - _tmp28*_tmp9;
+    out[15] = 0;
+    out[16] = 0;
+    out[17] = _tmp18*_tmp4 + _tmp21 + _tmp23;
+    out[18] = -_tmp13*p_0 - 0.125*_tmp16*_tmp3 + _tmp17*_tmp30 + _tmp20*_tmp22*p_0 + _tmp24*_tmp30;
+    out[19] = _tmp14*_tmp28 + _tmp29*_tmp9;
+    out[20] = 0;
+    out[21] = 0;
+}
+
 /* Gaussian elimination with partial pivoting on the n x n row-major a, in place; x -> b. */
 static int sk_solve(int n, double *a, double *b)
 {
-    int i, j, c, p;
+    int i, j, c, p, r;
     for (c = 0; c < n; ++c) {
         double best = fabs(a[c * n + c]);
         p = c;
@@ -750,24 +1089,81 @@ static int sk_solve(int n, double *a, double *b)
                 a[c * n + j] = a[p * n + j];
                 a[p * n + j] = t;
             }
-            t = b[c];
-            b[c] = b[p];
-            b[p] = t;
+            for (r = 0; r < 1; ++r) {
+                t = b[c * 1 + r];
+                b[c * 1 + r] = b[p * 1 + r];
+                b[p * 1 + r] = t;
+            }
         }
         for (i = c + 1; i < n; ++i) {
             const double f = a[i * n + c] / a[c * n + c];
             for (j = c; j < n; ++j) {
                 a[i * n + j] -= f * a[c * n + j];
             }
-            b[i] -= f * b[c];
+            for (r = 0; r < 1; ++r) {
+                b[i * 1 + r] -= f * b[c * 1 + r];
+            }
         }
     }
-    for (i = n - 1; i >= 0; --i) {
-        double s = b[i];
-        for (j = i + 1; j < n; ++j) {
-            s -= a[i * n + j] * b[j];
+    for (r = 0; r < 1; ++r) {
+        for (i = n - 1; i >= 0; --i) {
+            double s = b[i * 1 + r];
+            for (j = i + 1; j < n; ++j) {
+                s -= a[i * n + j] * b[j * 1 + r];
+            }
+            b[i * 1 + r] = s / a[i * n + i];
         }
-        b[i] = s / a[i * n + i];
+    }
+    return 0;
+}
+
+/* The same for m right-hand sides: the n x m row-major b becomes the solution. */
+static int sk_solve_many(int n, double *a, int m, double *b)
+{
+    int i, j, c, p, r;
+    for (c = 0; c < n; ++c) {
+        double best = fabs(a[c * n + c]);
+        p = c;
+        for (i = c + 1; i < n; ++i) {
+            if (fabs(a[i * n + c]) > best) {
+                best = fabs(a[i * n + c]);
+                p = i;
+            }
+        }
+        if (!(best > 0.0) || !isfinite(best)) {
+            return 1;
+        }
+        if (p != c) {
+            double t;
+            for (j = 0; j < n; ++j) {
+                t = a[c * n + j];
+                a[c * n + j] = a[p * n + j];
+                a[p * n + j] = t;
+            }
+            for (r = 0; r < m; ++r) {
+                t = b[c * m + r];
+                b[c * m + r] = b[p * m + r];
+                b[p * m + r] = t;
+            }
+        }
+        for (i = c + 1; i < n; ++i) {
+            const double f = a[i * n + c] / a[c * n + c];
+            for (j = c; j < n; ++j) {
+                a[i * n + j] -= f * a[c * n + j];
+            }
+            for (r = 0; r < m; ++r) {
+                b[i * m + r] -= f * b[c * m + r];
+            }
+        }
+    }
+    for (r = 0; r < m; ++r) {
+        for (i = n - 1; i >= 0; --i) {
+            double s = b[i * m + r];
+            for (j = i + 1; j < n; ++j) {
+                s -= a[i * n + j] * b[j * m + r];
+            }
+            b[i * m + r] = s / a[i * n + i];
+        }
     }
     return 0;
 }
@@ -847,53 +1243,16 @@ static int sk_exact(const double *theta, const double *params, double *delta)
     return converged ? 0 : 2;
 }
 
-int nine_bar_platform_evaluate(const double *inputs, const double *params, int level, double *out)
+/* The configuration: the arguments checked, the rigid angles theta (every hinge) and, at the
+   levels that solve the loops, delta (the non-input hinges; solved for the links' rotations
+   only when want_links). Returns a status code. */
+static int sk_pose(const double *inputs, const double *params, int level, int want_links,
+                   double *theta, double *delta)
 {
-    return nine_bar_platform_evaluate_pose(inputs, params, level, out, NULL, NULL);
-}
-
-int nine_bar_platform_evaluate_angles(const double *inputs, const double *params, int level, double *out,
-                    double *angles)
-{
-    return nine_bar_platform_evaluate_pose(inputs, params, level, out, angles, NULL);
-}
-
-static int sk_evaluate(const double *inputs, const double *params, int level, double *out,
-                       double *angles, double *links);
-
-int nine_bar_platform_evaluate_pose(const double *inputs, const double *params, int level, double *out,
-                    double *angles, double *links)
-{
-    int i, status = sk_evaluate(inputs, params, level, out, angles, links);
-    if (status != 0) {
-        /* no partial result: every output is NaN */
-        for (i = 0; out != NULL && i < 6 * SK_NP; ++i) {
-            out[i] = NAN;
-        }
-        for (i = 0; angles != NULL && i < 2 * SK_M; ++i) {
-            angles[i] = NAN;
-        }
-        for (i = 0; links != NULL && i < 3 * SK_NL; ++i) {
-            links[i] = NAN;
-        }
-    }
-    return status;
-}
-
-/* The evaluation; nine_bar_platform_evaluate_pose turns a failure into NaN outputs. */
-static int sk_evaluate(const double *inputs, const double *params, int level, double *out,
-                       double *angles, double *links)
-{
-    double theta[SK_M];
-    double delta[SK_K1];
-    double rigid[2 * SK_NP + 1], dev[2 * SK_NP + 1];
     int i;
 
-    if (inputs == NULL || out == NULL) {
+    if (inputs == NULL) {
         return 3;
-    }
-    if (params == NULL) {
-        params = nine_bar_platform_default_params;
     }
     if (level != 0 && level != 1 && level != 2) {
         return 3;
@@ -944,7 +1303,7 @@ static int sk_evaluate(const double *inputs, const double *params, int level, do
     if (sk_rigid_newton(theta, params, 1, 0.0) < 0.0) {
         return 1;
     }
-    if (links != NULL) {            /* only the links' rotations need the loops solved */
+    if (want_links) {               /* only the links' rotations need the loops solved */
         int status = 0;
         if (level == 1) {
             status = sk_first_order(theta, params, delta);
@@ -1014,14 +1373,28 @@ static int sk_evaluate(const double *inputs, const double *params, int level, do
     if (!(fabs(theta[9] + delta[5]) <= 3.141592653589793)) {
         return 1;
     }
+    (void)want_links;
+    return 0;
+}
+
+/* The points of a solved configuration: per point rigid x, y, compliant x, y, deviation x, y
+   into out; when angles is not NULL the rigid then the compliant hinge angles; when links is
+   not NULL every reported link's rigid rotation, compliant rotation and deviation. */
+static int sk_outputs(const double *theta, const double *delta, const double *params,
+                      int level, double *out, double *angles, double *links)
+{
+    double rigid[2 * SK_NP + 1], dev[2 * SK_NP + 1];
+    int i;
+
     sk_rigid_points(theta, params, rigid);
+    /* the level is one of these: sk_pose checked it */
     if (level == 0) {
         sk_dev_paper(theta, params, dev);
     }
     else if (level == 1) {
         sk_dev_first_order(theta, delta, params, dev);
     }
-    else if (level == 2) {
+    else {
         sk_dev_exact(theta, delta, params, dev);
     }
     for (i = 0; i < 2 * SK_NP; ++i) {
@@ -1061,5 +1434,226 @@ static int sk_evaluate(const double *inputs, const double *params, int level, do
         }
     }
     (void)delta;
+    (void)level;
     return 0;
+}
+
+/* n entries of x set to NaN (no partial result after a failure); x may be NULL. */
+static void sk_nan(double *x, int n)
+{
+    int i;
+    for (i = 0; x != NULL && i < n; ++i) {
+        x[i] = NAN;
+    }
+}
+
+int nine_bar_platform_evaluate_pose(const double *inputs, const double *params, int level, double *out,
+                    double *angles, double *links)
+{
+    double theta[SK_M];
+    double delta[SK_K1];
+    int status;
+
+    if (params == NULL) {
+        params = nine_bar_platform_default_params;
+    }
+    status = out == NULL ? 3 : sk_pose(inputs, params, level, links != NULL, theta, delta);
+    if (status == 0) {
+        status = sk_outputs(theta, delta, params, level, out, angles, links);
+    }
+    if (status != 0) {
+        sk_nan(out, 6 * SK_NP);
+        sk_nan(angles, 2 * SK_M);
+        sk_nan(links, 3 * SK_NL);
+    }
+    return status;
+}
+
+int nine_bar_platform_evaluate_angles(const double *inputs, const double *params, int level, double *out,
+                    double *angles)
+{
+    return nine_bar_platform_evaluate_pose(inputs, params, level, out, angles, NULL);
+}
+
+int nine_bar_platform_evaluate(const double *inputs, const double *params, int level, double *out)
+{
+    return nine_bar_platform_evaluate_pose(inputs, params, level, out, NULL, NULL);
+}
+
+int nine_bar_platform_evaluate_angles_batch(int n, const double *inputs, const double *params, int level,
+                          double *out, double *angles, int *status)
+{
+    int j, s, failed = 0;
+    for (j = 0; j < n; ++j) {
+        s = inputs == NULL ? 3 : nine_bar_platform_evaluate_angles(
+            inputs + (size_t)j * NINE_BAR_PLATFORM_N_INPUTS, params, level,
+            out == NULL ? NULL : out + (size_t)j * 6 * SK_NP,
+            angles == NULL ? NULL : angles + (size_t)j * 2 * SK_M);
+        failed += s != 0;
+        if (status != NULL) {
+            status[j] = s;
+        }
+    }
+    return failed;
+}
+
+int nine_bar_platform_evaluate_batch(int n, const double *inputs, const double *params, int level,
+                    double *out, int *status)
+{
+    return nine_bar_platform_evaluate_angles_batch(n, inputs, params, level, out, NULL, status);
+}
+
+int nine_bar_platform_evaluate_grid(int n_sets, const double *params, int n, const double *inputs,
+                   int level, double *out, int *status)
+{
+    int s, failed = 0;
+    for (s = 0; s < n_sets; ++s) {
+        failed += nine_bar_platform_evaluate_angles_batch(
+            n, inputs, params == NULL ? NULL : params + (size_t)s * NINE_BAR_PLATFORM_N_PARAMS, level,
+            out == NULL ? NULL : out + (size_t)s * n * 6 * SK_NP, NULL,
+            status == NULL ? NULL : status + (size_t)s * n);
+    }
+    return failed;
+}
+
+/* c (m x n) += a (m x p) b (p x n), row-major. */
+static void sk_gemm(int m, int p, int n, const double *a, const double *b, double *c)
+{
+    int i, j, q;
+    for (i = 0; i < m; ++i) {
+        for (q = 0; q < p; ++q) {
+            const double f = a[i * p + q];
+            for (j = 0; j < n; ++j) {
+                c[i * n + j] += f * b[q * n + j];
+            }
+        }
+    }
+}
+
+/* The total derivatives of the points' deviations (dev) and rigid positions (rig) by every
+   variable, 2 N_POINTS x N_VARIABLES row-major (row 2 p + c: component c of point p; columns:
+   the parameters, then the inputs), by the implicit-function theorem on the closures: with
+   Theta = d theta_u / dv = -A^-1 dG/dv and, where the level solves a closure E for delta,
+   Y = -M^-1 (dE/dv + dE/dtheta_u Theta): dD/dv + dD/dtheta_u Theta + dD/ddelta Y. */
+static int sk_sensitivity(const double *theta, const double *delta, const double *params,
+                          int level, double *dev, double *rig)
+{
+    double sr[88 + 1];
+    double th[30];
+    int i;
+
+    sk_sens_rigid(theta, params, sr);
+    for (i = 0; i < 30; ++i) {
+        th[i] = -sr[36 + i];
+    }
+    if (sk_solve_many(SK_K, sr, 5, th)) {
+        return 1;
+    }
+    for (i = 0; i < 10; ++i) {
+        rig[i] = sr[78 + i];
+    }
+    sk_gemm(2, SK_K, 5, sr + 66, th, rig);
+    if (level == 0) {
+        double s[22 + 1];
+        sk_sens_paper(theta, params, s);
+        for (i = 0; i < 10; ++i) {
+            dev[i] = s[12 + i];
+        }
+        sk_gemm(2, SK_K, 5, s + 0, th, dev);
+    }
+    else if (level == 1) {
+        double s[22 + 1];
+        sk_sens_first_order(theta, params, s);
+        for (i = 0; i < 10; ++i) {
+            dev[i] = s[12 + i];
+        }
+        sk_gemm(2, SK_K, 5, s + 0, th, dev);
+    }
+    else {
+        double s[22 + 1];
+        sk_sens_exact(theta, params, s);
+        for (i = 0; i < 10; ++i) {
+            dev[i] = s[12 + i];
+        }
+        sk_gemm(2, SK_K, 5, s + 0, th, dev);
+    }
+    (void)delta;
+    (void)level;
+    return 0;
+}
+
+int nine_bar_platform_sensitivity_full(const double *inputs, const double *params, int level,
+                         double *values, double *deviation, double *rigid)
+{
+    double theta[SK_M];
+    double delta[SK_K1];
+    double dev[10 + 1], rig[10 + 1];
+    int i, v, status;
+
+    if (params == NULL) {
+        params = nine_bar_platform_default_params;
+    }
+    status = deviation == NULL ? 3 : sk_pose(inputs, params, level, 0, theta, delta);
+    if (status == 0 && values != NULL) {
+        status = sk_outputs(theta, delta, params, level, values, NULL, NULL);
+    }
+    if (status == 0) {
+        status = sk_sensitivity(theta, delta, params, level, dev, rig);
+    }
+    for (i = 0; status == 0 && i < 10; ++i) {
+        if (!isfinite(dev[i]) || !isfinite(rig[i])) {
+            status = 2;             /* a non-finite result is never a success */
+        }
+    }
+    if (status != 0) {
+        sk_nan(values, 6 * SK_NP);
+        sk_nan(deviation, 10);
+        sk_nan(rigid, 10);
+        return status;
+    }
+    for (i = 0; i < 2; ++i) {
+        for (v = 0; v < 5; ++v) {
+            deviation[((i / 2) * 5 + v) * 2 + i % 2] = dev[i * 5 + v];
+            if (rigid != NULL) {
+                rigid[((i / 2) * 5 + v) * 2 + i % 2] = rig[i * 5 + v];
+            }
+        }
+    }
+    return 0;
+}
+
+int nine_bar_platform_sensitivity(const double *inputs, const double *params, int level, double *out)
+{
+    double full[10 + 1];
+    int p, v, status;
+
+    if (out == NULL) {
+        return 3;
+    }
+    status = nine_bar_platform_sensitivity_full(inputs, params, level, NULL, full, NULL);
+    for (p = 0; p < SK_NP; ++p) {
+        for (v = 0; v < NINE_BAR_PLATFORM_N_PARAMS; ++v) {
+            out[(p * NINE_BAR_PLATFORM_N_PARAMS + v) * 2] = full[(p * 5 + v) * 2];
+            out[(p * NINE_BAR_PLATFORM_N_PARAMS + v) * 2 + 1] = full[(p * 5 + v) * 2 + 1];
+        }
+    }
+    return status;
+}
+
+int nine_bar_platform_sensitivity_batch(int n, const double *inputs, const double *params, int level,
+                          double *values, double *deviation, double *rigid, int *status)
+{
+    int j, s, failed = 0;
+    for (j = 0; j < n; ++j) {
+        s = inputs == NULL || deviation == NULL ? 3 : nine_bar_platform_sensitivity_full(
+            inputs + (size_t)j * NINE_BAR_PLATFORM_N_INPUTS, params, level,
+            values == NULL ? NULL : values + (size_t)j * 6 * SK_NP,
+            deviation + (size_t)j * 10,
+            rigid == NULL ? NULL : rigid + (size_t)j * 10);
+        failed += s != 0;
+        if (status != NULL) {
+            status[j] = s;
+        }
+    }
+    return failed;
 }

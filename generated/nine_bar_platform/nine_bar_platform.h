@@ -3,7 +3,7 @@
  * Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
  * Points: F; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33, links 9.
+ * Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
  */
 #ifndef SYMKIN_NINE_BAR_PLATFORM_H
 #define SYMKIN_NINE_BAR_PLATFORM_H
@@ -53,5 +53,52 @@ int nine_bar_platform_evaluate_angles(const double *inputs, const double *params
  */
 int nine_bar_platform_evaluate_pose(const double *inputs, const double *params, int level, double *out,
                     double *angles, double *links);
+
+/*
+ * n configurations at once (one call instead of n): inputs holds n rows of
+ * NINE_BAR_PLATFORM_N_INPUTS angles; every row uses the same params (NULL: the defaults). out receives
+ * 6 * NINE_BAR_PLATFORM_N_POINTS doubles per row, angles (may be NULL) 2 * NINE_BAR_PLATFORM_N_HINGES per row,
+ * status (may be NULL) each row's return code. Returns the number of rows that failed (their
+ * outputs are NaN).
+ */
+int nine_bar_platform_evaluate_batch(int n, const double *inputs, const double *params, int level,
+                    double *out, int *status);
+int nine_bar_platform_evaluate_angles_batch(int n, const double *inputs, const double *params, int level,
+                          double *out, double *angles, int *status);
+
+/*
+ * Every parameter set at every input row (a Monte Carlo sweep): params holds n_sets rows of
+ * NINE_BAR_PLATFORM_N_PARAMS values (NULL: the defaults, n_sets 1), inputs n rows; out and status
+ * are ordered set by set, row (s * n + i) for set s and input row i, as in
+ * nine_bar_platform_evaluate_batch. Returns the number of failed configurations.
+ */
+int nine_bar_platform_evaluate_grid(int n_sets, const double *params, int n, const double *inputs,
+                   int level, double *out, int *status);
+
+/* Variables of the sensitivities: the parameters in file order, then the inputs. */
+#define NINE_BAR_PLATFORM_N_VARIABLES (NINE_BAR_PLATFORM_N_PARAMS + NINE_BAR_PLATFORM_N_INPUTS)
+
+/*
+ * Derivatives of the points' deviations with respect to every parameter, at level (0 paper,
+ * 1 first_order, 2 exact: the levels generated). out receives, per point in
+ * nine_bar_platform_point_names order and per parameter in file order, d(dx)/dp, d(dy)/dp
+ * (2 * N_POINTS * N_PARAMS doubles). A parameter whose default reads other parameters
+ * moves them along (the total derivative). Same return codes as nine_bar_platform_evaluate; on any
+ * non-zero return out is NaN.
+ */
+int nine_bar_platform_sensitivity(const double *inputs, const double *params, int level, double *out);
+
+/*
+ * The same with the inputs and the rigid positions: deviation receives, per point and per
+ * variable (the parameters, then the inputs), d(dx)/dv, d(dy)/dv (2 * N_POINTS *
+ * N_VARIABLES doubles); rigid (may be NULL) the same for the rigid position; values (may be
+ * NULL) what nine_bar_platform_evaluate writes to out.
+ */
+int nine_bar_platform_sensitivity_full(const double *inputs, const double *params, int level,
+                         double *values, double *deviation, double *rigid);
+
+/* nine_bar_platform_sensitivity_full for n rows of inputs (as nine_bar_platform_evaluate_batch). */
+int nine_bar_platform_sensitivity_batch(int n, const double *inputs, const double *params, int level,
+                          double *values, double *deviation, double *rigid, int *status);
 
 #endif /* SYMKIN_NINE_BAR_PLATFORM_H */

@@ -2,7 +2,7 @@
 Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
 Points: F; levels: paper, first_order, exact.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33, links 9.
+Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, dev_paper 33, dev_first_order 33, dev_exact 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -11,6 +11,11 @@ False in ok. It also holds "angles": {"rigid": {H: a}, "compliant": {H: a}}, eve
 angle (radians, the rotation of links[1] relative to links[0] from the as-fabricated pose), and
 "links": {L: {"rigid": a, "compliant": a, "deviation": a}}, the rotation of every link in LINKS
 from the as-fabricated pose (rigid wrapped to (-pi, pi]; the deviation computed directly).
+
+sensitivity(inputs, level, params) gives {P: {p: a}}: d(dx, dy)/dp of every point's deviation
+by every parameter p, each a of shape (2, *broadcast_shape); sensitivity_full(...) adds the
+inputs and the rigid positions. A parameter whose default reads other parameters moves them
+along (the total derivative). NaN where evaluate is not ok.
 """
 
 import math
@@ -48,6 +53,8 @@ def arck(x):
     x2 = x * x
     small = np.abs(x) < 1.5
     series = 0.3333333333333333 + x2 * (-0.03333333333333333 + x2 * (0.0011904761904761906 + x2 * (-2.2045855379188714e-05 + x2 * (2.505210838544172e-07 + x2 * (-1.9270852604185937e-09 + x2 * (1.0706029224547743e-11 + x2 * (-4.498331606952833e-14 + x2 * (1.4797143443923793e-16 + x2 * (-3.9145882126782523e-19)))))))))
+    if small.all():
+        return series
     xs = np.where(small, 1.0, x)
     xs2 = xs * xs
     b = np.sin(xs) / xs - np.cos(xs)
@@ -61,6 +68,8 @@ def cosr2(x):
     x2 = x * x
     small = np.abs(x) < 3.0
     series = 0.041666666666666664 + x2 * (-0.001388888888888889 + x2 * (2.48015873015873e-05 + x2 * (-2.755731922398589e-07 + x2 * (2.08767569878681e-09 + x2 * (-1.1470745597729725e-11 + x2 * (4.779477332387385e-14 + x2 * (-1.5619206968586225e-16 + x2 * (4.110317623312165e-19 + x2 * (-8.896791392450574e-22 + x2 * (1.6117375710961184e-24 + x2 * (-2.4795962632247976e-27)))))))))))
+    if small.all():
+        return series
     xs = np.where(small, 1.0, x)
     xs2 = xs * xs
     b = -2.0 * (np.sin(0.5 * xs) / xs) ** 2
@@ -74,6 +83,8 @@ def sinr1(x):
     x2 = x * x
     small = np.abs(x) < 2.0
     series = -0.16666666666666666 + x2 * (0.008333333333333333 + x2 * (-0.0001984126984126984 + x2 * (2.7557319223985893e-06 + x2 * (-2.505210838544172e-08 + x2 * (1.6059043836821613e-10 + x2 * (-7.647163731819816e-13 + x2 * (2.8114572543455206e-15 + x2 * (-8.22063524662433e-18 + x2 * (1.9572941063391263e-20 + x2 * (-3.868170170630684e-23))))))))))
+    if small.all():
+        return series
     xs = np.where(small, 1.0, x)
     xs2 = xs * xs
     b = np.sin(xs) / xs
@@ -87,6 +98,8 @@ def sinr2(x):
     x2 = x * x
     small = np.abs(x) < 3.0
     series = 0.008333333333333333 + x2 * (-0.0001984126984126984 + x2 * (2.7557319223985893e-06 + x2 * (-2.505210838544172e-08 + x2 * (1.6059043836821613e-10 + x2 * (-7.647163731819816e-13 + x2 * (2.8114572543455206e-15 + x2 * (-8.22063524662433e-18 + x2 * (1.9572941063391263e-20 + x2 * (-3.868170170630684e-23 + x2 * (6.446950284384474e-26 + x2 * (-9.183689863795546e-29)))))))))))
+    if small.all():
+        return series
     xs = np.where(small, 1.0, x)
     xs2 = xs * xs
     b = np.sin(xs) / xs
@@ -95,13 +108,23 @@ def sinr2(x):
     return np.where(small, series, b)
 
 
-def _parameters(given):
-    """Parameter values in file order: given ones, defaults re-evaluated for the others."""
+def _value(v):
+    """A parameter value: a float, or an array for many parameter sets at once."""
+    return float(v) if numpy.ndim(v) == 0 else numpy.asarray(v, dtype=_DTYPE)
+
+
+def parameters(given=None, shifts=None):
+    """Parameter values in file order: given ones, defaults re-evaluated for the others; a shift
+    (name -> amount) is added to a parameter after its value is set, so the parameters whose
+    defaults read it follow. Values and shifts may be arrays (many parameter sets at once)."""
     given = dict(given or {})
-    unknown = sorted(set(given) - set(PARAMETERS))
+    shifts = dict(shifts or {})
+    unknown = sorted((set(given) | set(shifts)) - set(PARAMETERS))
     if unknown:
         raise ValueError(f"unknown parameter(s) {unknown}; parameters: {sorted(PARAMETERS)}")
-    p_0 = float(given['l']) if 'l' in given else 0.0006
+    p_0 = _value(given['l']) if 'l' in given else 0.0006
+    if 'l' in shifts:
+        p_0 = p_0 + _value(shifts['l'])
     return [p_0]
 
 
@@ -667,35 +690,424 @@ def _links(theta, delta):
     ]
 
 
+def _sens_rigid(theta, params):
+    """rigid stage: A, dG/dv; rigid points: dR/dtheta, dR/dv (142 operations)."""
+    theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7, theta_8, _, _ = theta
+    _tmp0 = theta_1 + theta_2
+    _tmp1 = _tmp0 + theta_3
+    _tmp2 = _tmp1 + theta_4
+    _tmp3 = _tmp2 + theta_5
+    _tmp4 = numpy.cos(_tmp3)
+    _tmp5 = 0.02*_tmp4
+    _tmp6 = numpy.sin(_tmp3)
+    _tmp7 = _tmp3 + theta_6
+    _tmp8 = numpy.sin(_tmp7)
+    _tmp9 = 0.04*_tmp8
+    _tmp10 = numpy.cos(_tmp7)
+    _tmp11 = 0.05*_tmp10
+    _tmp12 = _tmp11 + _tmp9
+    _tmp13 = _tmp12 + _tmp5 - 0.05*_tmp6
+    _tmp14 = -0.04*_tmp10 + 0.05*_tmp8
+    _tmp15 = _tmp14 + 0.05*_tmp4 + 0.02*_tmp6
+    _tmp16 = _tmp1 + theta_7
+    _tmp17 = numpy.cos(_tmp16)
+    _tmp18 = 0.005*_tmp17
+    _tmp19 = numpy.sin(_tmp16)
+    _tmp20 = _tmp16 + theta_8
+    _tmp21 = numpy.sin(_tmp20)
+    _tmp22 = 0.025*_tmp21
+    _tmp23 = numpy.cos(_tmp20)
+    _tmp24 = 0.035*_tmp23
+    _tmp25 = _tmp22 + _tmp24
+    _tmp26 = _tmp18 - 0.04*_tmp19 + _tmp25
+    _tmp27 = 0.035*_tmp21 - 0.025*_tmp23
+    _tmp28 = 0.04*_tmp17 + 0.005*_tmp19 + _tmp27
+    _tmp29 = 0.06*numpy.cos(theta_1)
+    _tmp30 = numpy.sin(_tmp1)
+    _tmp31 = numpy.cos(_tmp1)
+    _tmp32 = numpy.sin(_tmp2)
+    _tmp33 = numpy.cos(_tmp2)
+    _tmp34 = 0.02*_tmp33
+    _tmp35 = -_tmp11 + 0.05*_tmp30 + 0.01*_tmp31 + 0.05*_tmp32 - _tmp34 - _tmp5 + 0.05*_tmp6 - _tmp9
+    _tmp36 = numpy.sin(_tmp0)
+    _tmp37 = numpy.cos(_tmp0)
+    _tmp38 = 0.05*_tmp36 + 0.02*_tmp37
+    _tmp39 = _tmp35 + _tmp38
+    _tmp40 = 0.06*numpy.sin(theta_1)
+    _tmp41 = -_tmp40
+    _tmp42 = _tmp15 + 0.02*_tmp32 + 0.05*_tmp33
+    _tmp43 = -0.01*_tmp30 + 0.05*_tmp31 + _tmp42
+    _tmp44 = -0.02*_tmp36 + 0.05*_tmp37
+    _tmp45 = _tmp43 + _tmp44
+    _tmp46 = 0.04*_tmp31
+    _tmp47 = -_tmp18 + 0.04*_tmp19 - _tmp22 - _tmp24 + 0.02*_tmp30 + _tmp38 - _tmp46
+    _tmp48 = _tmp28 + 0.04*_tmp30 + 0.02*_tmp31
+    _tmp49 = _tmp44 + _tmp48
+    _tmp50 = 0.03*_tmp36
+    _tmp51 = 0.03*_tmp37
+    _tmp52 = _tmp50 + _tmp51
+    _tmp53 = _tmp50 - _tmp51
+    return [
+        -1,
+        -1,
+        0,
+        0,
+        1,
+        0,
+        -_tmp13,
+        -_tmp12,
+        0,
+        0,
+        0,
+        0,
+        -_tmp15,
+        -_tmp14,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -1,
+        -1,
+        0,
+        1,
+        0,
+        0,
+        -_tmp26,
+        -_tmp25,
+        0,
+        0,
+        0,
+        0,
+        -_tmp28,
+        -_tmp27,
+        0,
+        0,
+        0,
+        -1,
+        -1,
+        -1,
+        -1,
+        0,
+        _tmp29 + _tmp39,
+        _tmp39,
+        _tmp35,
+        -_tmp13 + 0.05*_tmp32 - _tmp34,
+        0,
+        -_tmp41 - _tmp45,
+        -_tmp45,
+        -_tmp43,
+        -_tmp42,
+        0,
+        -1,
+        -1,
+        -1,
+        0,
+        0,
+        _tmp29 + _tmp47,
+        _tmp47,
+        -_tmp26 + 0.02*_tmp30 - _tmp46,
+        0,
+        0,
+        -_tmp41 - _tmp49,
+        -_tmp49,
+        -_tmp48,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp29 - _tmp52,
+        -_tmp52,
+        0,
+        0,
+        0,
+        -_tmp40 - _tmp53,
+        -_tmp53,
+        0,
+        0,
+    ]
+
+
+def _sens_paper(theta, params):
+    """sensitivity at level paper: dD/dtheta, dD/dv (97 operations)."""
+    theta_1, theta_2, _, _, _, _, _, _, _, _ = theta
+    p_0, = params
+    _tmp0 = 0.5*theta_1
+    _tmp1 = numpy.sin(_tmp0)
+    _tmp2 = arck(_tmp0)
+    _tmp3 = _tmp2*theta_1**2
+    _tmp4 = 0.25*_tmp3
+    _tmp5 = 0.5*theta_2
+    _tmp6 = arck(_tmp5)
+    _tmp10 = theta_2**2
+    _tmp7 = numpy.sin(_tmp5)
+    _tmp8 = _tmp6*_tmp7
+    _tmp9 = numpy.sin(theta_1)
+    _tmp11 = 0.25*_tmp10
+    _tmp12 = _tmp11*_tmp9
+    _tmp13 = _tmp12*_tmp8
+    _tmp14 = numpy.cos(theta_1)
+    _tmp15 = numpy.cos(_tmp5)
+    _tmp16 = _tmp1*p_0
+    _tmp17 = _tmp0*_tmp2
+    _tmp18 = numpy.cos(_tmp0)
+    _tmp19 = 0.125*p_0
+    _tmp20 = _tmp15*_tmp6
+    _tmp21 = _tmp12*_tmp20
+    _tmp22 = _tmp11*_tmp14
+    _tmp23 = _tmp22*_tmp8
+    _tmp24 = 0.0625*theta_1**3*(3*cosr2(_tmp0) + sinr1(_tmp0) - 3*sinr2(_tmp0))
+    _tmp25 = _tmp5*p_0
+    _tmp26 = _tmp10*_tmp19
+    _tmp27 = 0.0625*p_0*theta_2**3*(3*cosr2(_tmp5) + sinr1(_tmp5) - 3*sinr2(_tmp5))
+    _tmp28 = _tmp20*_tmp26 + _tmp25*_tmp8 + _tmp27*_tmp7
+    _tmp29 = _tmp15*_tmp27 + _tmp20*_tmp25 - _tmp26*_tmp8
+    _tmp30 = _tmp18*p_0
+    return [
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp1*_tmp4 + 0.25*_tmp10*_tmp14*_tmp15*_tmp6 - _tmp13,
+        -_tmp16*_tmp17 - _tmp16*_tmp24 - _tmp18*_tmp19*_tmp3 - _tmp21*p_0 - _tmp23*p_0,
+        _tmp14*_tmp29 - _tmp28*_tmp9,
+        0,
+        0,
+        _tmp18*_tmp4 + _tmp21 + _tmp23,
+        -_tmp13*p_0 - 0.125*_tmp16*_tmp3 + _tmp17*_tmp30 + _tmp20*_tmp22*p_0 + _tmp24*_tmp30,
+        _tmp14*_tmp28 + _tmp29*_tmp9,
+        0,
+        0,
+    ]
+
+
+def _sens_first_order(theta, params):
+    """sensitivity at level first_order: dD/dtheta, dD/dv (97 operations)."""
+    theta_1, theta_2, _, _, _, _, _, _, _, _ = theta
+    p_0, = params
+    _tmp0 = 0.5*theta_1
+    _tmp1 = numpy.sin(_tmp0)
+    _tmp2 = arck(_tmp0)
+    _tmp3 = _tmp2*theta_1**2
+    _tmp4 = 0.25*_tmp3
+    _tmp5 = 0.5*theta_2
+    _tmp6 = arck(_tmp5)
+    _tmp10 = theta_2**2
+    _tmp7 = numpy.sin(_tmp5)
+    _tmp8 = _tmp6*_tmp7
+    _tmp9 = numpy.sin(theta_1)
+    _tmp11 = 0.25*_tmp10
+    _tmp12 = _tmp11*_tmp9
+    _tmp13 = _tmp12*_tmp8
+    _tmp14 = numpy.cos(theta_1)
+    _tmp15 = numpy.cos(_tmp5)
+    _tmp16 = _tmp1*p_0
+    _tmp17 = _tmp0*_tmp2
+    _tmp18 = numpy.cos(_tmp0)
+    _tmp19 = 0.125*p_0
+    _tmp20 = _tmp15*_tmp6
+    _tmp21 = _tmp12*_tmp20
+    _tmp22 = _tmp11*_tmp14
+    _tmp23 = _tmp22*_tmp8
+    _tmp24 = 0.0625*theta_1**3*(3*cosr2(_tmp0) + sinr1(_tmp0) - 3*sinr2(_tmp0))
+    _tmp25 = _tmp5*p_0
+    _tmp26 = _tmp10*_tmp19
+    _tmp27 = 0.0625*p_0*theta_2**3*(3*cosr2(_tmp5) + sinr1(_tmp5) - 3*sinr2(_tmp5))
+    _tmp28 = _tmp20*_tmp26 + _tmp25*_tmp8 + _tmp27*_tmp7
+    _tmp29 = _tmp15*_tmp27 + _tmp20*_tmp25 - _tmp26*_tmp8
+    _tmp30 = _tmp18*p_0
+    return [
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp1*_tmp4 + 0.25*_tmp10*_tmp14*_tmp15*_tmp6 - _tmp13,
+        -_tmp16*_tmp17 - _tmp16*_tmp24 - _tmp18*_tmp19*_tmp3 - _tmp21*p_0 - _tmp23*p_0,
+        _tmp14*_tmp29 - _tmp28*_tmp9,
+        0,
+        0,
+        _tmp18*_tmp4 + _tmp21 + _tmp23,
+        -_tmp13*p_0 - 0.125*_tmp16*_tmp3 + _tmp17*_tmp30 + _tmp20*_tmp22*p_0 + _tmp24*_tmp30,
+        _tmp14*_tmp28 + _tmp29*_tmp9,
+        0,
+        0,
+    ]
+
+
+def _sens_exact(theta, params):
+    """sensitivity at level exact: dD/dtheta, dD/dv (97 operations)."""
+    theta_1, theta_2, _, _, _, _, _, _, _, _ = theta
+    p_0, = params
+    _tmp0 = 0.5*theta_1
+    _tmp1 = numpy.sin(_tmp0)
+    _tmp2 = arck(_tmp0)
+    _tmp3 = _tmp2*theta_1**2
+    _tmp4 = 0.25*_tmp3
+    _tmp5 = 0.5*theta_2
+    _tmp6 = arck(_tmp5)
+    _tmp10 = theta_2**2
+    _tmp7 = numpy.sin(_tmp5)
+    _tmp8 = _tmp6*_tmp7
+    _tmp9 = numpy.sin(theta_1)
+    _tmp11 = 0.25*_tmp10
+    _tmp12 = _tmp11*_tmp9
+    _tmp13 = _tmp12*_tmp8
+    _tmp14 = numpy.cos(theta_1)
+    _tmp15 = numpy.cos(_tmp5)
+    _tmp16 = _tmp1*p_0
+    _tmp17 = _tmp0*_tmp2
+    _tmp18 = numpy.cos(_tmp0)
+    _tmp19 = 0.125*p_0
+    _tmp20 = _tmp15*_tmp6
+    _tmp21 = _tmp12*_tmp20
+    _tmp22 = _tmp11*_tmp14
+    _tmp23 = _tmp22*_tmp8
+    _tmp24 = 0.0625*theta_1**3*(3*cosr2(_tmp0) + sinr1(_tmp0) - 3*sinr2(_tmp0))
+    _tmp25 = _tmp5*p_0
+    _tmp26 = _tmp10*_tmp19
+    _tmp27 = 0.0625*p_0*theta_2**3*(3*cosr2(_tmp5) + sinr1(_tmp5) - 3*sinr2(_tmp5))
+    _tmp28 = _tmp20*_tmp26 + _tmp25*_tmp8 + _tmp27*_tmp7
+    _tmp29 = _tmp15*_tmp27 + _tmp20*_tmp25 - _tmp26*_tmp8
+    _tmp30 = _tmp18*p_0
+    return [
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp1*_tmp4 + 0.25*_tmp10*_tmp14*_tmp15*_tmp6 - _tmp13,
+        -_tmp16*_tmp17 - _tmp16*_tmp24 - _tmp18*_tmp19*_tmp3 - _tmp21*p_0 - _tmp23*p_0,
+        _tmp14*_tmp29 - _tmp28*_tmp9,
+        0,
+        0,
+        _tmp18*_tmp4 + _tmp21 + _tmp23,
+        -_tmp13*p_0 - 0.125*_tmp16*_tmp3 + _tmp17*_tmp30 + _tmp20*_tmp22*p_0 + _tmp24*_tmp30,
+        _tmp14*_tmp28 + _tmp29*_tmp9,
+        0,
+        0,
+    ]
+
+
 def _wrap(angle):
     return angle - _TWO_PI * numpy.round(angle / _TWO_PI)
 
 
-def _solve(a, b, ok):
-    """Batched dense solve a x = b (a row-major k*k list, b a k list); bad elements -> ok False."""
-    k = len(b)
+def _matrix(entries, rows, cols, shape):
+    """A (*shape, rows, cols) array from a row-major list of arrays (or numbers)."""
+    out = numpy.empty(shape + (rows, cols), dtype=_DTYPE)
+    for i in range(rows):
+        for j in range(cols):
+            out[..., i, j] = entries[i * cols + j]
+    return out
+
+
+_GAUSS_MAX = 12   # systems up to this size: elementwise elimination, as the C evaluator does
+
+
+def _solve(a, b, ok, m=1):
+    """Batched dense solve a x = b (a row-major k*k list, b a row-major k*m list: m right-hand
+    sides); bad elements -> ok False. The solution as a row-major k*m list."""
+    k = len(b) // m
+    if k <= _GAUSS_MAX:
+        return _gauss(a, b, ok, k, m)
     shape = ok.shape
-    am = numpy.empty(shape + (k, k), dtype=_DTYPE)
-    bm = numpy.empty(shape + (k,), dtype=_DTYPE)
-    for i in range(k):
-        bm[..., i] = b[i]
-        for j in range(k):
-            am[..., i, j] = a[i * k + j]
+    am = _matrix(a, k, k, shape)
+    bm = _matrix(b, k, m, shape)
     # numpy.array: a writable array even for 0-d input, where & gives a numpy.bool scalar
-    good = numpy.array(ok & numpy.isfinite(am).all(axis=(-1, -2)) & numpy.isfinite(bm).all(axis=-1))
+    good = numpy.array(ok & numpy.isfinite(am).all(axis=(-1, -2))
+                       & numpy.isfinite(bm).all(axis=(-1, -2)))
     am[~good] = numpy.eye(k)
     bm[~good] = 0.0
     try:
-        x = numpy.linalg.solve(am, bm[..., None])[..., 0]
+        x = numpy.linalg.solve(am, bm)
     except numpy.linalg.LinAlgError:
-        x = numpy.zeros(shape + (k,), dtype=_DTYPE)
+        x = numpy.zeros(shape + (k, m), dtype=_DTYPE)
         for index in numpy.ndindex(*shape):
             try:
                 x[index] = numpy.linalg.solve(am[index], bm[index])
             except numpy.linalg.LinAlgError:
                 good[index] = False
-    good &= numpy.isfinite(x).all(axis=-1)
-    return [x[..., i] for i in range(k)], good
+    good &= numpy.isfinite(x).all(axis=(-1, -2))
+    return [x[..., i, j] for i in range(k) for j in range(m)], good
+
+
+def _gauss(a, b, ok, k, m):
+    """_solve by Gaussian elimination with partial pivoting written out over the element
+    arrays, step for step the C evaluator's sk_solve (one small LAPACK call per element costs
+    more than the whole elimination)."""
+    shape = ok.shape
+    A = [[numpy.array(numpy.broadcast_to(a[i * k + j], shape), dtype=_DTYPE) for j in range(k)]
+         for i in range(k)]
+    B = [[numpy.array(numpy.broadcast_to(b[i * m + r], shape), dtype=_DTYPE) for r in range(m)]
+         for i in range(k)]
+    good = numpy.array(ok)
+    for c in range(k):
+        # the pivot: the first row i >= c with the largest |a[i][c]|
+        best = numpy.abs(A[c][c])
+        pivot = numpy.full(shape, c)
+        for i in range(c + 1, k):
+            size = numpy.abs(A[i][c])
+            larger = size > best
+            best = numpy.where(larger, size, best)
+            pivot = numpy.where(larger, i, pivot)
+        good &= (best > 0.0) & numpy.isfinite(best)
+        for i in range(c + 1, k):
+            swap = pivot == i
+            if swap.any():
+                for row in (A, B):
+                    for j in range(len(row[c])):
+                        row[c][j], row[i][j] = (numpy.where(swap, row[i][j], row[c][j]),
+                                                numpy.where(swap, row[c][j], row[i][j]))
+        for i in range(c + 1, k):
+            f = A[i][c] / A[c][c]
+            for j in range(c, k):
+                A[i][j] = A[i][j] - f * A[c][j]
+            for r in range(m):
+                B[i][r] = B[i][r] - f * B[c][r]
+    for r in range(m):
+        for i in range(k - 1, -1, -1):
+            s = B[i][r]
+            for j in range(i + 1, k):
+                s = s - A[i][j] * B[j][r]
+            B[i][r] = s / A[i][i]
+    x = [B[i][r] for i in range(k) for r in range(m)]
+    for v in x:
+        good &= numpy.isfinite(v)
+    return x, good
 
 
 def _rigid_angles(x, params, ok):
@@ -781,42 +1193,51 @@ _DELTA = {'first_order': _first_order, 'exact': _exact}
 _CHUNK = 8192   # elements per block: the temporaries of a block stay in the CPU cache
 
 
-def evaluate(inputs, level='exact', params=None, links=True):
-    """Deviation of the points at `level` for broadcast input arrays (see the module docstring);
-    `links=False` leaves out the links' rotations (and any loop solve only they need)."""
+def _prepare(inputs, level, params):
+    """Checked arguments: the broadcast input arrays, their shape and the parameter values."""
     if level not in LEVELS:
         raise ValueError(f"level must be one of {LEVELS}, got {level!r}")
     names = set(inputs)
     if names != set(INPUTS):
         raise ValueError(f"inputs must be exactly {INPUTS}, got {tuple(sorted(names))}")
     arrays = numpy.broadcast_arrays(*(numpy.asarray(inputs[n], dtype=_DTYPE) for n in INPUTS))
+    return arrays, [_DTYPE(v) for v in parameters(params)]
+
+
+def _blocks(run, arrays, *args):
+    """run(arrays, *args) over cache-sized blocks of the flattened inputs, its nested dict of
+    arrays (elements on the last axis) joined and shaped like the inputs."""
     shape = arrays[0].shape
-    p = [_DTYPE(v) for v in _parameters(params)]
     size = arrays[0].size
     if size <= _CHUNK:
-        return _evaluate(arrays, level, p, links)
+        return run(arrays, *args)
     flat = [a.reshape(-1) for a in arrays]
-    parts = [_evaluate([a[k:k + _CHUNK] for a in flat], level, p, links)
-             for k in range(0, size, _CHUNK)]
+    parts = [run([a[k:k + _CHUNK] for a in flat], *args) for k in range(0, size, _CHUNK)]
 
-    def join(get):
-        return numpy.concatenate([get(part) for part in parts], axis=-1).reshape(
-            get(parts[0]).shape[:-1] + shape)
+    def join(items):
+        if isinstance(items[0], dict):
+            return {key: join([item[key] for item in items]) for key in items[0]}
+        return numpy.concatenate(items, axis=-1).reshape(items[0].shape[:-1] + shape)
 
-    return {
-        "points": {n: {key: join(lambda part, n=n, key=key: part["points"][n][key])
-                       for key in ("rigid", "compliant", "deviation")} for n in POINTS},
-        "ok": join(lambda part: part["ok"]),
-        "angles": {kind: {h: join(lambda part, kind=kind, h=h: part["angles"][kind][h])
-                          for h in HINGES} for kind in ("rigid", "compliant")},
-        "links": {n: {key: join(lambda part, n=n, key=key: part["links"][n][key])
-                      for key in ("rigid", "compliant", "deviation")}
-                  for n in (LINKS if links else ())},
-    }
+    return join(parts)
+
+
+def evaluate(inputs, level='exact', params=None, links=True):
+    """Deviation of the points at `level` for broadcast input arrays (see the module docstring);
+    `links=False` leaves out the links' rotations (and any loop solve only they need)."""
+    arrays, p = _prepare(inputs, level, params)
+    return _blocks(_evaluate, arrays, level, p, links)
 
 
 def _evaluate(arrays, level, p, links):
     """evaluate() on one block of broadcast input arrays and parameter values p."""
+    theta, delta, ok = _pose(arrays, level, p, links)
+    return _points(theta, delta, ok, level, p, links)
+
+
+def _pose(arrays, level, p, links):
+    """The rigid angles theta (every hinge), delta (the non-input hinges; solved for the links'
+    rotations only when `links`) and the ok mask."""
     shape = arrays[0].shape
     ok = numpy.ones(shape, dtype=bool)
     for a in arrays:
@@ -832,6 +1253,14 @@ def _evaluate(arrays, level, p, links):
             ok = ok & (numpy.abs(theta[i]) <= limit)
             if i in _UNKNOWN_INDEX:
                 ok = ok & (numpy.abs(theta[i] + delta[_UNKNOWN_INDEX.index(i)]) <= limit)
+    return theta, delta, ok
+
+
+def _points(theta, delta, ok, level, p, links):
+    """The points, angles and (with `links`) the links' rotations of solved configurations, NaN
+    where not ok."""
+    shape = ok.shape
+    with numpy.errstate(all="ignore"):
         rigid = _rigid_points(theta, p)
         if level == 'paper':
             dev = _dev_paper(theta, p)
@@ -865,3 +1294,76 @@ def _evaluate(arrays, level, p, links):
         d = numpy.where(ok, rot[len(LINKS) + i], numpy.nan).astype(_DTYPE)
         rotations[name] = {"rigid": r, "compliant": r + d, "deviation": d}
     return {"points": result, "ok": ok, "angles": angles, "links": rotations}
+
+
+def sensitivity(inputs, level='exact', params=None):
+    """{P: {p: a}}: d(dx, dy)/dp of every point's deviation by every parameter, a of shape
+    (2, *broadcast_shape); NaN where the configuration cannot be evaluated."""
+    full = sensitivity_full(inputs, level, params)
+    return {n: full["deviation"][n]["params"] for n in POINTS}
+
+
+def sensitivity_full(inputs, level='exact', params=None):
+    """evaluate()'s result with "deviation" and "rigid": {P: {"params": {p: a}, "inputs":
+    {H: a}}}, the derivatives of every point's deviation and rigid position by every
+    parameter and input, each a of shape (2, *broadcast_shape)."""
+    arrays, p = _prepare(inputs, level, params)
+    return _blocks(_sensitivity, arrays, level, p)
+
+
+def _times(a, b):
+    """Batched matrix product of (..., m, q) and (..., q, n) arrays."""
+    return numpy.matmul(a, b)
+
+
+def _sensitivity(arrays, level, p):
+    """sensitivity_full() on one block: the implicit-function theorem on the closures."""
+    theta, delta, ok = _pose(arrays, level, p, True)
+    result = _points(theta, delta, ok, level, p, True)
+    ok = result["ok"]
+    shape = ok.shape
+    with numpy.errstate(all="ignore"):
+        sr = _sens_rigid(theta, p)
+        # Theta = d theta_u / dv = -A^-1 dG/dv; rigid: dR/dv + dR/dtheta_u Theta
+        th, good = _solve(sr[:36], [-numpy.asarray(v) for v in sr[36:66]], ok, 5)
+        ok = ok & good
+        th = _matrix(th, 6, 5, shape)
+        rig = _matrix(sr[78:], 2, 5, shape) + _times(
+            _matrix(sr[66:78], 2, 6, shape), th)
+        if level == 'paper':
+            s = _sens_paper(theta, p)
+            dev = _matrix(s[12:], 2, 5, shape)
+            dev = dev + _times(_matrix(s[0:12], 2, 6, shape), th)
+        elif level == 'first_order':
+            s = _sens_first_order(theta, p)
+            dev = _matrix(s[12:], 2, 5, shape)
+            dev = dev + _times(_matrix(s[0:12], 2, 6, shape), th)
+        elif level == 'exact':
+            s = _sens_exact(theta, p)
+            dev = _matrix(s[12:], 2, 5, shape)
+            dev = dev + _times(_matrix(s[0:12], 2, 6, shape), th)
+    ok = ok & numpy.isfinite(dev).all(axis=(-1, -2)) & numpy.isfinite(rig).all(axis=(-1, -2))
+    if not ok.all():
+        for key in result["points"]:
+            for part in result["points"][key].values():
+                part[..., ~ok] = numpy.nan
+        for kind in result["angles"].values():
+            for h in kind:
+                kind[h] = numpy.where(ok, kind[h], numpy.nan)
+        for link in result["links"].values():
+            for key in link:
+                link[key] = numpy.where(ok, link[key], numpy.nan)
+    dev = numpy.where(ok[..., None, None], dev, numpy.nan)
+    rig = numpy.where(ok[..., None, None], rig, numpy.nan)
+    names = list(PARAMETERS)
+
+    def table(m, n):
+        rows = numpy.moveaxis(m[..., 2 * n:2 * n + 2, :], -1, 0)
+        rows = numpy.moveaxis(rows, -1, 1)                 # (variable, 2, *shape)
+        return {"params": {q: rows[v] for v, q in enumerate(names)},
+                "inputs": {h: rows[len(names) + v] for v, h in enumerate(INPUTS)}}
+
+    result["ok"] = ok
+    result["deviation"] = {n: table(dev, i) for i, n in enumerate(POINTS)}
+    result["rigid"] = {n: table(rig, i) for i, n in enumerate(POINTS)}
+    return result

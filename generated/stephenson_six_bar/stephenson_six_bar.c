@@ -3,7 +3,7 @@
  * Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
  * Points: D; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60, links 5.
+ * Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661.
  */
 #include "stephenson_six_bar.h"
 
@@ -678,10 +678,825 @@ static void sk_links(const double *theta, const double *delta, double *out)
     out[11] = delta_3 + delta_5;
 }
 
+/* rigid stage: A, dG/dv; rigid points: dR/dtheta, dR/dv (70 operations) */
+static void sk_sens_rigid(const double *theta, const double *params, double *out)
+{
+    (void)params;
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double theta_5 = theta[4];
+    const double _tmp0 = sin(theta_3);
+    const double _tmp1 = 0.02*_tmp0;
+    const double _tmp2 = cos(theta_3);
+    const double _tmp3 = theta_3 + theta_5;
+    const double _tmp4 = sin(_tmp3);
+    const double _tmp5 = cos(_tmp3);
+    const double _tmp6 = 0.072*_tmp4 + 0.03*_tmp5;
+    const double _tmp7 = 0.02*_tmp2;
+    const double _tmp8 = 0.03*_tmp4;
+    const double _tmp9 = theta_1 + theta_2;
+    const double _tmp10 = sin(_tmp9);
+    const double _tmp11 = cos(_tmp9);
+    const double _tmp12 = 0.04*_tmp10 + 0.07*_tmp11;
+    const double _tmp13 = -_tmp12;
+    const double _tmp14 = theta_3 + theta_4;
+    const double _tmp15 = sin(_tmp14);
+    const double _tmp16 = 0.05*_tmp15;
+    const double _tmp17 = cos(_tmp14);
+    const double _tmp18 = 0.07*_tmp10 - 0.04*_tmp11;
+    const double _tmp19 = -_tmp18;
+    const double _tmp20 = 0.04*_tmp15 + 0.05*_tmp17;
+    const double _tmp21 = sin(theta_1);
+    const double _tmp22 = cos(theta_1);
+    const double _tmp23 = 0.03*_tmp22;
+    const double _tmp24 = 0.03*_tmp21;
+    const double _tmp25 = -_tmp12 - 0.02*_tmp22 - _tmp24;
+    const double _tmp26 = -_tmp18 - 0.02*_tmp21 + _tmp23;
+    out[0] = 0;
+    out[1] = -1;
+    out[2] = 0;
+    out[3] = -1;
+    out[4] = 1;
+    out[5] = 0;
+    out[6] = 0;
+    out[7] = -_tmp1 + 0.06*_tmp2 - _tmp6;
+    out[8] = 0;
+    out[9] = -_tmp6;
+    out[10] = 0;
+    out[11] = 0;
+    out[12] = 0;
+    out[13] = 0.06*_tmp0 + 0.072*_tmp5 + _tmp7 - _tmp8;
+    out[14] = 0;
+    out[15] = 0.072*_tmp5 - _tmp8;
+    out[16] = 0;
+    out[17] = 0;
+    out[18] = 1;
+    out[19] = -1;
+    out[20] = -1;
+    out[21] = 0;
+    out[22] = 0;
+    out[23] = 1;
+    out[24] = _tmp13;
+    out[25] = _tmp1 - _tmp16 + 0.04*_tmp17 + 0.05*_tmp2;
+    out[26] = -_tmp16 + 0.04*_tmp17;
+    out[27] = 0;
+    out[28] = 0;
+    out[29] = 0;
+    out[30] = _tmp19;
+    out[31] = 0.05*_tmp0 + _tmp20 - _tmp7;
+    out[32] = _tmp20;
+    out[33] = 0;
+    out[34] = 0;
+    out[35] = 0;
+    out[36] = 0;
+    out[37] = 1;
+    out[38] = 0;
+    out[39] = -0.008*_tmp21 - _tmp23;
+    out[40] = 0;
+    out[41] = 0.008*_tmp22 - _tmp24;
+    out[42] = 0;
+    out[43] = 1;
+    out[44] = 0;
+    out[45] = _tmp25;
+    out[46] = 0;
+    out[47] = _tmp26;
+    out[48] = _tmp13;
+    out[49] = 0;
+    out[50] = 0;
+    out[51] = 0;
+    out[52] = 0;
+    out[53] = 0;
+    out[54] = _tmp19;
+    out[55] = 0;
+    out[56] = 0;
+    out[57] = 0;
+    out[58] = 0;
+    out[59] = 0;
+    out[60] = 0;
+    out[61] = _tmp25;
+    out[62] = 0;
+    out[63] = _tmp26;
+}
+
+/* sensitivity at level paper: dD/dtheta, dD/dv (118 operations) */
+static void sk_sens_paper(const double *theta, const double *params, double *out)
+{
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double p_0 = params[0];
+    const double _tmp0 = cos(theta_1);
+    const double _tmp3 = 0.5*theta_2;
+    const double _tmp4 = symkin_arck(_tmp3);
+    const double _tmp1 = pow(theta_2, 2);
+    const double _tmp2 = 0.08838834764831845*_tmp1;
+    const double _tmp5 = sin(_tmp3);
+    const double _tmp6 = _tmp4*_tmp5;
+    const double _tmp7 = _tmp6*p_0;
+    const double _tmp8 = _tmp2*_tmp7;
+    const double _tmp9 = pow(theta_2, 3);
+    const double _tmp10 = cos(_tmp3);
+    const double _tmp11 = 3*symkin_cosr2(_tmp3) + symkin_sinr1(_tmp3) - 3*symkin_sinr2(_tmp3);
+    const double _tmp12 = 0.04419417382415922*_tmp11*_tmp9*p_0;
+    const double _tmp13 = _tmp10*_tmp4;
+    const double _tmp14 = _tmp13*p_0;
+    const double _tmp15 = 0.3535533905932738*theta_2;
+    const double _tmp16 = _tmp12*_tmp5 + _tmp14*_tmp2 + _tmp15*_tmp7;
+    const double _tmp17 = 0.04419417382415922*_tmp10*_tmp11*_tmp9*p_0 + 0.3535533905932738*_tmp10*_tmp4*p_0*theta_2 - _tmp16 - _tmp8;
+    const double _tmp18 = sin(theta_1);
+    const double _tmp19 = _tmp10*_tmp12 + _tmp14*_tmp15 + _tmp16 - _tmp8;
+    const double _tmp20 = 0.5*theta_1;
+    const double _tmp21 = sin(_tmp20);
+    const double _tmp22 = symkin_arck(_tmp20);
+    const double _tmp23 = _tmp22*pow(theta_1, 2);
+    const double _tmp24 = 0.25*_tmp23;
+    const double _tmp25 = 0.1767766952966369*_tmp1;
+    const double _tmp26 = _tmp25*_tmp6;
+    const double _tmp27 = _tmp13*_tmp25;
+    const double _tmp28 = _tmp26 + _tmp27;
+    const double _tmp29 = 0.1767766952966369*_tmp1*_tmp10*_tmp4 - _tmp26;
+    const double _tmp30 = _tmp21*p_0;
+    const double _tmp31 = _tmp20*_tmp22;
+    const double _tmp32 = cos(_tmp20);
+    const double _tmp33 = _tmp32*p_0;
+    const double _tmp34 = 0.125*_tmp23;
+    const double _tmp35 = 0.0625*pow(theta_1, 3)*(3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20) - 3*symkin_sinr2(_tmp20));
+    const double _tmp36 = _tmp26*p_0;
+    const double _tmp37 = 0.1767766952966369*_tmp1*_tmp10*_tmp4*p_0 - _tmp36;
+    const double _tmp38 = _tmp27*p_0 + _tmp36;
+    out[0] = _tmp0*_tmp17 - _tmp18*_tmp19;
+    out[1] = 0;
+    out[2] = 0;
+    out[3] = 0;
+    out[4] = 0;
+    out[5] = 0;
+    out[6] = _tmp0*_tmp19 + _tmp17*_tmp18;
+    out[7] = 0;
+    out[8] = 0;
+    out[9] = 0;
+    out[10] = 0;
+    out[11] = 0;
+    out[12] = _tmp0*_tmp29 - _tmp18*_tmp28 - _tmp21*_tmp24;
+    out[13] = -_tmp0*_tmp38 - _tmp18*_tmp37 - _tmp30*_tmp31 - _tmp30*_tmp35 - _tmp33*_tmp34;
+    out[14] = _tmp0*_tmp28 + _tmp18*_tmp29 + _tmp24*_tmp32;
+    out[15] = _tmp0*_tmp37 - _tmp18*_tmp38 - _tmp30*_tmp34 + _tmp31*_tmp33 + _tmp33*_tmp35;
+}
+
+/* sensitivity at level first_order: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (564 operations) */
+static void sk_sens_first_order(const double *theta, const double *delta, const double *params, double *out)
+{
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double theta_5 = theta[4];
+    const double theta_6 = theta[5];
+    const double theta_7 = theta[6];
+    const double delta_2 = delta[0];
+    const double delta_3 = delta[1];
+    const double delta_4 = delta[2];
+    const double delta_5 = delta[3];
+    const double p_0 = params[0];
+    const double _tmp0 = theta_3 + theta_5;
+    const double _tmp1 = sin(_tmp0);
+    const double _tmp2 = cos(_tmp0);
+    const double _tmp3 = 0.072*_tmp1 + 0.03*_tmp2;
+    const double _tmp4 = sin(theta_3);
+    const double _tmp5 = 0.02*_tmp4;
+    const double _tmp6 = cos(theta_3);
+    const double _tmp7 = _tmp5 - 0.06*_tmp6;
+    const double _tmp8 = 0.03*_tmp1;
+    const double _tmp9 = 0.02*_tmp6;
+    const double _tmp10 = 0.06*_tmp4 + _tmp9;
+    const double _tmp11 = 0.072*_tmp2 - _tmp8;
+    const double _tmp12 = theta_1 + theta_2;
+    const double _tmp13 = sin(_tmp12);
+    const double _tmp14 = cos(_tmp12);
+    const double _tmp15 = 0.04*_tmp13 + 0.07*_tmp14;
+    const double _tmp16 = -_tmp15;
+    const double _tmp17 = theta_3 + theta_4;
+    const double _tmp18 = cos(_tmp17);
+    const double _tmp19 = sin(_tmp17);
+    const double _tmp20 = 0.05*_tmp19;
+    const double _tmp21 = _tmp5 + 0.05*_tmp6;
+    const double _tmp22 = -0.04*_tmp18 + _tmp20;
+    const double _tmp23 = -0.07*_tmp13 + 0.04*_tmp14;
+    const double _tmp24 = 0.05*_tmp18 + 0.04*_tmp19;
+    const double _tmp25 = 0.05*_tmp4 - _tmp9;
+    const double _tmp26 = -delta_3 - delta_5;
+    const double _tmp27 = _tmp11*_tmp26;
+    const double _tmp28 = pow(theta_5, 2);
+    const double _tmp29 = 0.6594566077552098*theta_5;
+    const double _tmp30 = 0.21067334783983213*symkin_sinr1(_tmp29) - 0.5*symkin_sinr1(theta_5);
+    const double _tmp31 = _tmp28*_tmp30 - 0.01556317594302295;
+    const double _tmp32 = _tmp31*p_0;
+    const double _tmp33 = 0.5*theta_5;
+    const double _tmp34 = 0.3297283038776049*theta_5;
+    const double _tmp35 = sin(_tmp33) + 1.2121056059601407*sin(_tmp34);
+    const double _tmp36 = symkin_sinr1(_tmp33) - 0.347615499514091*symkin_sinr1(_tmp34);
+    const double _tmp37 = 0.25*_tmp28;
+    const double _tmp38 = _tmp36*_tmp37 + 0.20066894885245268;
+    const double _tmp39 = _tmp38*p_0;
+    const double _tmp40 = _tmp35*_tmp39;
+    const double _tmp41 = _tmp33*_tmp40;
+    const double _tmp42 = 0.5*theta_3;
+    const double _tmp43 = sin(_tmp42);
+    const double _tmp44 = _tmp43*p_0;
+    const double _tmp45 = 0.0625*pow(theta_3, 3)*(3*symkin_cosr2(_tmp42) + symkin_sinr1(_tmp42) - 3*symkin_sinr2(_tmp42));
+    const double _tmp46 = cos(_tmp42);
+    const double _tmp47 = pow(theta_3, 2);
+    const double _tmp48 = symkin_arck(_tmp42);
+    const double _tmp49 = _tmp47*_tmp48;
+    const double _tmp50 = 0.125*p_0;
+    const double _tmp51 = _tmp42*_tmp48;
+    const double _tmp52 = _tmp44*_tmp45 + _tmp44*_tmp51 + _tmp46*_tmp49*_tmp50;
+    const double _tmp53 = _tmp32 + p_0*theta_5*(_tmp28*(-_tmp33*(symkin_cosr2(theta_5) - 3*symkin_sinr2(theta_5)) + 0.09161826121794318*theta_5*(symkin_cosr2(_tmp29) - 3*symkin_sinr2(_tmp29))) + 2*_tmp30*theta_5);
+    const double _tmp54 = _tmp33*_tmp35;
+    const double _tmp55 = _tmp33*_tmp39*(0.5*cos(_tmp33) + 0.39966552557377366*cos(_tmp34)) + 0.5*_tmp40 + _tmp54*p_0*(_tmp33*_tmp36 + _tmp37*(0.25*theta_5*(symkin_cosr2(_tmp33) - 3*symkin_sinr2(_tmp33)) - 0.037793019340658006*theta_5*(symkin_cosr2(_tmp34) - 3*symkin_sinr2(_tmp34))));
+    const double _tmp56 = cos(theta_1);
+    const double _tmp57 = 0.5*theta_6;
+    const double _tmp59 = sin(_tmp57);
+    const double _tmp60 = _tmp59*p_0;
+    const double _tmp58 = symkin_arck(_tmp57);
+    const double _tmp61 = _tmp58*_tmp60;
+    const double _tmp62 = cos(_tmp57);
+    const double _tmp63 = _tmp58*_tmp62;
+    const double _tmp64 = pow(theta_6, 2);
+    const double _tmp65 = _tmp50*_tmp64;
+    const double _tmp66 = 0.0625*pow(theta_6, 3)*(3*symkin_cosr2(_tmp57) + symkin_sinr1(_tmp57) - 3*symkin_sinr2(_tmp57));
+    const double _tmp67 = -_tmp57*_tmp61 - _tmp60*_tmp66 - _tmp63*_tmp65;
+    const double _tmp68 = sin(theta_1);
+    const double _tmp69 = _tmp63*p_0;
+    const double _tmp70 = _tmp58*_tmp59;
+    const double _tmp71 = _tmp57*_tmp69 + _tmp62*_tmp66*p_0 - _tmp65*_tmp70;
+    const double _tmp72 = -_tmp26*_tmp3;
+    const double _tmp73 = _tmp46*p_0;
+    const double _tmp74 = -0.125*_tmp43*_tmp47*_tmp48*p_0 + _tmp45*_tmp73 + _tmp51*_tmp73;
+    const double _tmp75 = _tmp23*delta_2;
+    const double _tmp76 = 0.5*theta_2;
+    const double _tmp77 = cos(_tmp76);
+    const double _tmp78 = pow(theta_2, 3);
+    const double _tmp79 = 3*symkin_cosr2(_tmp76) + symkin_sinr1(_tmp76) - 3*symkin_sinr2(_tmp76);
+    const double _tmp80 = 0.04419417382415922*_tmp78*_tmp79*p_0;
+    const double _tmp81 = symkin_arck(_tmp76);
+    const double _tmp82 = _tmp77*_tmp81;
+    const double _tmp83 = _tmp82*p_0;
+    const double _tmp84 = 0.3535533905932738*theta_2;
+    const double _tmp85 = pow(theta_2, 2);
+    const double _tmp86 = 0.08838834764831845*_tmp85;
+    const double _tmp87 = sin(_tmp76);
+    const double _tmp88 = _tmp81*_tmp87;
+    const double _tmp89 = _tmp88*p_0;
+    const double _tmp90 = _tmp86*_tmp89;
+    const double _tmp91 = _tmp80*_tmp87 + _tmp83*_tmp86 + _tmp84*_tmp89;
+    const double _tmp92 = _tmp77*_tmp80 + _tmp83*_tmp84 - _tmp90 + _tmp91;
+    const double _tmp93 = 0.04419417382415922*_tmp77*_tmp78*_tmp79*p_0 + 0.3535533905932738*_tmp77*_tmp81*p_0*theta_2 - _tmp90 - _tmp91;
+    const double _tmp94 = -_tmp56*_tmp93 + _tmp68*_tmp92 + _tmp75;
+    const double _tmp95 = 0.5*theta_7;
+    const double _tmp96 = cos(_tmp95);
+    const double _tmp97 = _tmp96*p_0;
+    const double _tmp98 = symkin_arck(_tmp95);
+    const double _tmp99 = pow(theta_7, 2);
+    const double _tmp100 = _tmp98*_tmp99;
+    const double _tmp101 = 0.25*_tmp100;
+    const double _tmp102 = _tmp101*_tmp97;
+    const double _tmp103 = sin(_tmp95);
+    const double _tmp104 = _tmp103*p_0;
+    const double _tmp105 = _tmp101*_tmp104;
+    const double _tmp106 = _tmp102*_tmp13 + _tmp105*_tmp14;
+    const double _tmp107 = -delta_3 - delta_4;
+    const double _tmp108 = _tmp107*_tmp24;
+    const double _tmp109 = 0.5*theta_4;
+    const double _tmp110 = symkin_arck(_tmp109);
+    const double _tmp111 = sin(_tmp109);
+    const double _tmp112 = _tmp111*p_0;
+    const double _tmp113 = _tmp110*_tmp112;
+    const double _tmp114 = pow(theta_4, 2);
+    const double _tmp115 = 0.25*_tmp114;
+    const double _tmp116 = cos(_tmp109);
+    const double _tmp117 = _tmp110*_tmp116;
+    const double _tmp118 = _tmp117*p_0;
+    const double _tmp119 = _tmp115*_tmp118;
+    const double _tmp120 = _tmp114*_tmp50;
+    const double _tmp121 = 0.0625*pow(theta_4, 3)*(3*symkin_cosr2(_tmp109) + symkin_sinr1(_tmp109) - 3*symkin_sinr2(_tmp109));
+    const double _tmp122 = _tmp109*_tmp113 + _tmp112*_tmp121 + _tmp117*_tmp120;
+    const double _tmp123 = _tmp110*_tmp111;
+    const double _tmp124 = _tmp109*_tmp118 + _tmp116*_tmp121*p_0 - _tmp120*_tmp123;
+    const double _tmp125 = _tmp95*_tmp98;
+    const double _tmp126 = _tmp100*_tmp50;
+    const double _tmp127 = 0.0625*pow(theta_7, 3)*(3*symkin_cosr2(_tmp95) + symkin_sinr1(_tmp95) - 3*symkin_sinr2(_tmp95));
+    const double _tmp128 = _tmp104*_tmp125 + _tmp104*_tmp127 + _tmp126*_tmp96;
+    const double _tmp129 = -_tmp103*_tmp126 + _tmp125*_tmp97 + _tmp127*_tmp97;
+    const double _tmp130 = -_tmp15*delta_2;
+    const double _tmp131 = _tmp130 + _tmp56*_tmp92 + _tmp68*_tmp93;
+    const double _tmp132 = _tmp102*_tmp14 - _tmp105*_tmp13;
+    const double _tmp133 = -_tmp107*_tmp22;
+    const double _tmp134 = 0.5*theta_1;
+    const double _tmp135 = sin(_tmp134);
+    const double _tmp136 = pow(theta_1, 2);
+    const double _tmp137 = symkin_arck(_tmp134);
+    const double _tmp138 = _tmp136*_tmp137;
+    const double _tmp139 = 0.25*_tmp138;
+    const double _tmp140 = _tmp135*_tmp139;
+    const double _tmp141 = -0.25*_tmp43*_tmp47*_tmp48;
+    const double _tmp142 = 0.25*_tmp64;
+    const double _tmp143 = _tmp142*_tmp68;
+    const double _tmp144 = _tmp142*_tmp56;
+    const double _tmp145 = _tmp38*_tmp54;
+    const double _tmp146 = _tmp135*p_0;
+    const double _tmp147 = pow(theta_1, 3);
+    const double _tmp148 = 3*symkin_cosr2(_tmp134) + symkin_sinr1(_tmp134) - 3*symkin_sinr2(_tmp134);
+    const double _tmp149 = 0.0625*_tmp147*_tmp148;
+    const double _tmp150 = cos(_tmp134);
+    const double _tmp151 = _tmp138*_tmp50;
+    const double _tmp152 = _tmp134*_tmp137;
+    const double _tmp153 = _tmp146*_tmp149 + _tmp146*_tmp152 + _tmp150*_tmp151;
+    const double _tmp154 = 0.25*_tmp46*_tmp49;
+    const double _tmp155 = _tmp135*_tmp151;
+    const double _tmp156 = _tmp115*_tmp117;
+    const double _tmp157 = _tmp101*_tmp103;
+    const double _tmp158 = 0.1767766952966369*_tmp85;
+    const double _tmp159 = _tmp158*_tmp88;
+    const double _tmp160 = _tmp158*_tmp82;
+    const double _tmp161 = _tmp159 + _tmp160;
+    const double _tmp162 = -_tmp159 + 0.1767766952966369*_tmp77*_tmp81*_tmp85;
+    const double _tmp163 = _tmp140 + _tmp161*_tmp68 - _tmp162*_tmp56;
+    const double _tmp164 = _tmp159*p_0;
+    const double _tmp165 = _tmp160*p_0 + _tmp164;
+    const double _tmp166 = -_tmp164 + 0.1767766952966369*_tmp77*_tmp81*_tmp85*p_0;
+    const double _tmp167 = _tmp153 + _tmp165*_tmp56 + _tmp166*_tmp68 + _tmp75;
+    const double _tmp168 = _tmp139*_tmp150 + _tmp161*_tmp56 + _tmp162*_tmp68;
+    const double _tmp169 = _tmp150*p_0;
+    const double _tmp170 = _tmp130 + _tmp149*_tmp169 + _tmp152*_tmp169 - _tmp155 - _tmp165*_tmp68 + _tmp166*_tmp56;
+    out[0] = 0;
+    out[1] = -1;
+    out[2] = 0;
+    out[3] = -1;
+    out[4] = 1;
+    out[5] = 0;
+    out[6] = 0;
+    out[7] = -_tmp3 - _tmp7;
+    out[8] = 0;
+    out[9] = -_tmp3;
+    out[10] = 0;
+    out[11] = 0;
+    out[12] = 0;
+    out[13] = _tmp10 + 0.072*_tmp2 - _tmp8;
+    out[14] = 0;
+    out[15] = _tmp11;
+    out[16] = 0;
+    out[17] = 0;
+    out[18] = 1;
+    out[19] = -1;
+    out[20] = -1;
+    out[21] = 0;
+    out[22] = 0;
+    out[23] = 1;
+    out[24] = _tmp16;
+    out[25] = 0.04*_tmp18 - _tmp20 + _tmp21;
+    out[26] = -_tmp22;
+    out[27] = 0;
+    out[28] = 0;
+    out[29] = 0;
+    out[30] = _tmp23;
+    out[31] = _tmp24 + _tmp25;
+    out[32] = _tmp24;
+    out[33] = 0;
+    out[34] = 0;
+    out[35] = 0;
+    out[36] = 0;
+    out[37] = 0;
+    out[38] = 0;
+    out[39] = 0;
+    out[40] = 0;
+    out[41] = 0;
+    out[42] = 0;
+    out[43] = -_tmp10*delta_3 + _tmp27 + _tmp32*_tmp6*theta_5 + _tmp4*_tmp41 + _tmp52;
+    out[44] = 0;
+    out[45] = _tmp27 + _tmp4*_tmp53 - _tmp55*_tmp6;
+    out[46] = _tmp56*_tmp67 - _tmp68*_tmp71;
+    out[47] = 0;
+    out[48] = 0;
+    out[49] = _tmp31*_tmp4*p_0*theta_5 - _tmp41*_tmp6 - _tmp7*delta_3 - _tmp72 - _tmp74;
+    out[50] = 0;
+    out[51] = -_tmp4*_tmp55 - _tmp53*_tmp6 - _tmp72;
+    out[52] = _tmp56*_tmp71 + _tmp67*_tmp68;
+    out[53] = 0;
+    out[54] = 0;
+    out[55] = 0;
+    out[56] = 0;
+    out[57] = 0;
+    out[58] = 0;
+    out[59] = 0;
+    out[60] = -_tmp106 - _tmp94;
+    out[61] = _tmp108 + _tmp113*_tmp115*_tmp6 + _tmp119*_tmp4 - _tmp25*delta_3 + _tmp52;
+    out[62] = _tmp108 + _tmp122*_tmp4 - _tmp124*_tmp6;
+    out[63] = 0;
+    out[64] = 0;
+    out[65] = -_tmp128*_tmp13 + _tmp129*_tmp14;
+    out[66] = _tmp131 + _tmp132;
+    out[67] = 0.25*_tmp110*_tmp111*_tmp114*_tmp4*p_0 - _tmp119*_tmp6 - _tmp133 + _tmp21*delta_3 - _tmp74;
+    out[68] = -_tmp122*_tmp6 - _tmp124*_tmp4 - _tmp133;
+    out[69] = 0;
+    out[70] = 0;
+    out[71] = _tmp128*_tmp14 + _tmp129*_tmp13;
+    out[72] = 0;
+    out[73] = 0;
+    out[74] = -_tmp140 - _tmp141 - _tmp143*_tmp63 - _tmp144*_tmp70 - _tmp145*_tmp6 + _tmp31*_tmp4*theta_5;
+    out[75] = -_tmp144*_tmp69 - _tmp153 + 0.25*_tmp58*_tmp59*_tmp64*_tmp68*p_0;
+    out[76] = 0.25*_tmp136*_tmp137*_tmp150 - _tmp143*_tmp70 - _tmp145*_tmp4 - _tmp154 - _tmp31*_tmp6*theta_5 + 0.25*_tmp56*_tmp58*_tmp62*_tmp64;
+    out[77] = 0.5*_tmp137*_tmp150*p_0*theta_1 - _tmp143*_tmp69 - _tmp144*_tmp61 + 0.0625*_tmp147*_tmp148*_tmp150*p_0 - _tmp155;
+    out[78] = 0;
+    out[79] = 0;
+    out[80] = 0.25*_tmp110*_tmp111*_tmp114*_tmp4 - _tmp13*_tmp157 + 0.25*_tmp14*_tmp96*_tmp98*_tmp99 - _tmp141 - _tmp156*_tmp6 - _tmp163;
+    out[81] = -_tmp106 - _tmp167;
+    out[82] = _tmp101*_tmp13*_tmp96 - _tmp115*_tmp123*_tmp6 + _tmp14*_tmp157 - _tmp154 - _tmp156*_tmp4 + _tmp168;
+    out[83] = _tmp132 + _tmp170;
+    out[84] = -_tmp94;
+    out[85] = 0;
+    out[86] = 0;
+    out[87] = 0;
+    out[88] = 0;
+    out[89] = 0;
+    out[90] = _tmp131;
+    out[91] = 0;
+    out[92] = 0;
+    out[93] = 0;
+    out[94] = 0;
+    out[95] = 0;
+    out[96] = _tmp16;
+    out[97] = 0;
+    out[98] = 0;
+    out[99] = 0;
+    out[100] = 0;
+    out[101] = 0;
+    out[102] = _tmp23;
+    out[103] = 0;
+    out[104] = 0;
+    out[105] = 0;
+    out[106] = 0;
+    out[107] = 0;
+    out[108] = -_tmp163;
+    out[109] = -_tmp167;
+    out[110] = _tmp168;
+    out[111] = _tmp170;
+}
+
+/* sensitivity at level exact: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (661 operations) */
+static void sk_sens_exact(const double *theta, const double *delta, const double *params, double *out)
+{
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double theta_5 = theta[4];
+    const double theta_6 = theta[5];
+    const double theta_7 = theta[6];
+    const double delta_2 = delta[0];
+    const double delta_3 = delta[1];
+    const double delta_4 = delta[2];
+    const double delta_5 = delta[3];
+    const double delta_6 = delta[4];
+    const double delta_7 = delta[5];
+    const double p_0 = params[0];
+    const double _tmp0 = delta_3 + theta_3;
+    const double _tmp1 = cos(_tmp0);
+    const double _tmp2 = delta_5 + theta_5;
+    const double _tmp3 = _tmp0 + _tmp2;
+    const double _tmp4 = cos(_tmp3);
+    const double _tmp5 = 0.03*_tmp4;
+    const double _tmp6 = sin(_tmp3);
+    const double _tmp7 = 0.072*_tmp6;
+    const double _tmp8 = sin(_tmp0);
+    const double _tmp9 = 0.02*_tmp8;
+    const double _tmp10 = pow(_tmp2, 2);
+    const double _tmp11 = 0.6594566077552098*delta_5 + 0.6594566077552098*theta_5;
+    const double _tmp12 = 0.21067334783983213*symkin_sinr1(_tmp11) - 0.5*symkin_sinr1(_tmp2);
+    const double _tmp13 = _tmp10*_tmp12 - 0.01556317594302295;
+    const double _tmp14 = _tmp13*p_0;
+    const double _tmp15 = _tmp14*_tmp2;
+    const double _tmp16 = 0.3297283038776049*delta_5 + 0.3297283038776049*theta_5;
+    const double _tmp17 = 0.5*delta_5;
+    const double _tmp18 = _tmp17 + 0.5*theta_5;
+    const double _tmp19 = -0.347615499514091*symkin_sinr1(_tmp16) + symkin_sinr1(_tmp18);
+    const double _tmp20 = 0.25*_tmp10;
+    const double _tmp21 = _tmp19*_tmp20 + 0.20066894885245268;
+    const double _tmp22 = 1.2121056059601407*sin(_tmp16) + sin(_tmp18);
+    const double _tmp23 = _tmp21*_tmp22;
+    const double _tmp24 = 0.5*_tmp2;
+    const double _tmp25 = _tmp24*p_0;
+    const double _tmp26 = _tmp23*_tmp25;
+    const double _tmp27 = 0.5*delta_3;
+    const double _tmp28 = _tmp27 + 0.5*theta_3;
+    const double _tmp29 = sin(_tmp28);
+    const double _tmp30 = 0.0625*p_0;
+    const double _tmp31 = pow(_tmp0, 3)*_tmp30*(3*symkin_cosr2(_tmp28) + symkin_sinr1(_tmp28) - 3*symkin_sinr2(_tmp28));
+    const double _tmp32 = cos(_tmp28);
+    const double _tmp33 = pow(_tmp0, 2);
+    const double _tmp34 = symkin_arck(_tmp28);
+    const double _tmp35 = _tmp33*_tmp34;
+    const double _tmp36 = 0.125*p_0;
+    const double _tmp37 = _tmp35*_tmp36;
+    const double _tmp38 = 0.5*p_0;
+    const double _tmp39 = _tmp0*_tmp34*_tmp38;
+    const double _tmp40 = _tmp29*_tmp31 + _tmp29*_tmp39 + _tmp32*_tmp37;
+    const double _tmp41 = _tmp1*_tmp15 + _tmp26*_tmp8 + _tmp40;
+    const double _tmp42 = _tmp14 + _tmp2*p_0*(_tmp10*(0.09161826121794318*_tmp2*(symkin_cosr2(_tmp11) - 3*symkin_sinr2(_tmp11)) - _tmp24*(symkin_cosr2(_tmp2) - 3*symkin_sinr2(_tmp2))) + 2*_tmp12*_tmp2);
+    const double _tmp43 = _tmp21*_tmp25*(0.39966552557377366*cos(_tmp16) + 0.5*cos(_tmp18)) + _tmp22*_tmp25*(_tmp19*_tmp24 + _tmp20*(-0.037793019340658006*_tmp2*(symkin_cosr2(_tmp16) - 3*symkin_sinr2(_tmp16)) + 0.25*_tmp2*(symkin_cosr2(_tmp18) - 3*symkin_sinr2(_tmp18)))) + _tmp23*_tmp38;
+    const double _tmp44 = _tmp1*_tmp43;
+    const double _tmp45 = cos(theta_1);
+    const double _tmp46 = delta_6 + theta_6;
+    const double _tmp47 = _tmp38*_tmp46;
+    const double _tmp48 = 0.5*delta_6 + 0.5*theta_6;
+    const double _tmp49 = sin(_tmp48);
+    const double _tmp50 = symkin_arck(_tmp48);
+    const double _tmp51 = _tmp49*_tmp50;
+    const double _tmp52 = cos(_tmp48);
+    const double _tmp53 = _tmp50*_tmp52;
+    const double _tmp54 = pow(_tmp46, 2);
+    const double _tmp55 = _tmp36*_tmp54;
+    const double _tmp56 = _tmp30*pow(_tmp46, 3)*(3*symkin_cosr2(_tmp48) + symkin_sinr1(_tmp48) - 3*symkin_sinr2(_tmp48));
+    const double _tmp57 = -_tmp47*_tmp51 - _tmp49*_tmp56 - _tmp53*_tmp55;
+    const double _tmp58 = sin(theta_1);
+    const double _tmp59 = _tmp47*_tmp53 - _tmp51*_tmp55 + _tmp52*_tmp56;
+    const double _tmp60 = _tmp45*_tmp57 - _tmp58*_tmp59;
+    const double _tmp61 = 0.02*_tmp1;
+    const double _tmp62 = 0.03*_tmp6;
+    const double _tmp63 = _tmp29*_tmp37 - _tmp31*_tmp32 - _tmp32*_tmp39;
+    const double _tmp64 = -_tmp1*_tmp26 + _tmp15*_tmp8 + _tmp63;
+    const double _tmp65 = _tmp1*_tmp42 + _tmp43*_tmp8;
+    const double _tmp66 = _tmp45*_tmp59 + _tmp57*_tmp58;
+    const double _tmp67 = delta_2 + theta_2;
+    const double _tmp68 = _tmp67 + theta_1;
+    const double _tmp69 = cos(_tmp68);
+    const double _tmp70 = sin(_tmp68);
+    const double _tmp71 = 0.5*delta_2;
+    const double _tmp72 = _tmp71 + 0.5*theta_2;
+    const double _tmp73 = cos(_tmp72);
+    const double _tmp74 = pow(_tmp67, 3);
+    const double _tmp75 = 3*symkin_cosr2(_tmp72) + symkin_sinr1(_tmp72) - 3*symkin_sinr2(_tmp72);
+    const double _tmp76 = 0.04419417382415922*_tmp74*_tmp75*p_0;
+    const double _tmp77 = symkin_arck(_tmp72);
+    const double _tmp78 = _tmp73*_tmp77;
+    const double _tmp79 = _tmp78*p_0;
+    const double _tmp80 = 0.3535533905932738*_tmp67;
+    const double _tmp81 = pow(_tmp67, 2);
+    const double _tmp82 = 0.08838834764831845*_tmp81;
+    const double _tmp83 = sin(_tmp72);
+    const double _tmp84 = _tmp77*_tmp83;
+    const double _tmp85 = _tmp84*p_0;
+    const double _tmp86 = _tmp82*_tmp85;
+    const double _tmp87 = _tmp76*_tmp83 + _tmp79*_tmp82 + _tmp80*_tmp85;
+    const double _tmp88 = _tmp73*_tmp76 + _tmp79*_tmp80 - _tmp86 + _tmp87;
+    const double _tmp89 = 0.3535533905932738*_tmp67*_tmp73*_tmp77*p_0 + 0.04419417382415922*_tmp73*_tmp74*_tmp75*p_0 - _tmp86 - _tmp87;
+    const double _tmp90 = -_tmp45*_tmp89 + _tmp58*_tmp88;
+    const double _tmp91 = 0.07*_tmp69 + 0.04*_tmp70 + _tmp90;
+    const double _tmp92 = 0.5*delta_7 + 0.5*theta_7;
+    const double _tmp93 = cos(_tmp92);
+    const double _tmp94 = symkin_arck(_tmp92);
+    const double _tmp95 = _tmp93*_tmp94;
+    const double _tmp96 = delta_7 + theta_7;
+    const double _tmp97 = pow(_tmp96, 2);
+    const double _tmp98 = 0.25*_tmp97;
+    const double _tmp99 = _tmp95*_tmp98;
+    const double _tmp100 = _tmp70*_tmp99;
+    const double _tmp101 = sin(_tmp92);
+    const double _tmp102 = _tmp101*_tmp94;
+    const double _tmp103 = _tmp102*_tmp98;
+    const double _tmp104 = _tmp103*_tmp69;
+    const double _tmp105 = _tmp100*p_0 + _tmp104*p_0;
+    const double _tmp106 = delta_4 + theta_4;
+    const double _tmp107 = _tmp0 + _tmp106;
+    const double _tmp108 = cos(_tmp107);
+    const double _tmp109 = sin(_tmp107);
+    const double _tmp110 = 0.04*_tmp108 - 0.05*_tmp109;
+    const double _tmp111 = 0.5*delta_4;
+    const double _tmp112 = _tmp111 + 0.5*theta_4;
+    const double _tmp113 = sin(_tmp112);
+    const double _tmp114 = symkin_arck(_tmp112);
+    const double _tmp115 = _tmp113*_tmp114;
+    const double _tmp116 = pow(_tmp106, 2);
+    const double _tmp117 = 0.25*_tmp116;
+    const double _tmp118 = _tmp115*_tmp117;
+    const double _tmp119 = _tmp1*_tmp118;
+    const double _tmp120 = cos(_tmp112);
+    const double _tmp121 = _tmp114*_tmp120;
+    const double _tmp122 = _tmp117*_tmp121;
+    const double _tmp123 = _tmp122*_tmp8;
+    const double _tmp124 = _tmp119*p_0 + _tmp123*p_0 + _tmp40;
+    const double _tmp125 = _tmp106*_tmp38;
+    const double _tmp126 = _tmp116*_tmp36;
+    const double _tmp127 = pow(_tmp106, 3)*_tmp30*(3*symkin_cosr2(_tmp112) + symkin_sinr1(_tmp112) - 3*symkin_sinr2(_tmp112));
+    const double _tmp128 = _tmp113*_tmp127 + _tmp115*_tmp125 + _tmp121*_tmp126;
+    const double _tmp129 = -_tmp115*_tmp126 + _tmp120*_tmp127 + _tmp121*_tmp125;
+    const double _tmp130 = _tmp1*_tmp129;
+    const double _tmp131 = _tmp38*_tmp96;
+    const double _tmp132 = _tmp36*_tmp97;
+    const double _tmp133 = _tmp30*pow(_tmp96, 3)*(3*symkin_cosr2(_tmp92) + symkin_sinr1(_tmp92) - 3*symkin_sinr2(_tmp92));
+    const double _tmp134 = _tmp101*_tmp133 + _tmp102*_tmp131 + _tmp132*_tmp95;
+    const double _tmp135 = -_tmp102*_tmp132 + _tmp131*_tmp95 + _tmp133*_tmp93;
+    const double _tmp136 = -_tmp134*_tmp70 + _tmp135*_tmp69;
+    const double _tmp137 = _tmp45*_tmp88 + _tmp58*_tmp89;
+    const double _tmp138 = _tmp137 + 0.04*_tmp69 - 0.07*_tmp70;
+    const double _tmp139 = _tmp103*_tmp70;
+    const double _tmp140 = -_tmp139*p_0 + _tmp69*_tmp99*p_0;
+    const double _tmp141 = _tmp1*_tmp122;
+    const double _tmp142 = _tmp118*_tmp8*p_0 - _tmp141*p_0 + _tmp63;
+    const double _tmp143 = _tmp1*_tmp128;
+    const double _tmp144 = _tmp129*_tmp8;
+    const double _tmp145 = _tmp134*_tmp69 + _tmp135*_tmp70;
+    const double _tmp146 = cos(theta_3);
+    const double _tmp147 = sin(delta_3);
+    const double _tmp148 = 0.02*_tmp147;
+    const double _tmp149 = pow(sin(_tmp27), 2);
+    const double _tmp150 = -_tmp148 - 0.12*_tmp149;
+    const double _tmp151 = sin(theta_3);
+    const double _tmp152 = 0.04*_tmp149;
+    const double _tmp153 = 0.06*_tmp147 - _tmp152;
+    const double _tmp154 = theta_3 + theta_5;
+    const double _tmp155 = cos(_tmp154);
+    const double _tmp156 = sin(delta_3 + delta_5);
+    const double _tmp157 = pow(sin(_tmp17 + _tmp27), 2);
+    const double _tmp158 = -0.072*_tmp156 + 0.06*_tmp157;
+    const double _tmp159 = sin(_tmp154);
+    const double _tmp160 = -0.03*_tmp156 - 0.144*_tmp157;
+    const double _tmp161 = _tmp155*_tmp158 - _tmp159*_tmp160;
+    const double _tmp162 = theta_1 + theta_2;
+    const double _tmp163 = sin(_tmp162);
+    const double _tmp164 = sin(delta_2);
+    const double _tmp165 = pow(sin(_tmp71), 2);
+    const double _tmp166 = -0.07*_tmp164 - 0.08*_tmp165;
+    const double _tmp167 = cos(_tmp162);
+    const double _tmp168 = -0.04*_tmp164 + 0.14*_tmp165;
+    const double _tmp169 = _tmp163*_tmp166 - _tmp167*_tmp168;
+    const double _tmp170 = _tmp169 + _tmp90;
+    const double _tmp171 = _tmp148 - 0.1*_tmp149;
+    const double _tmp172 = theta_3 + theta_4;
+    const double _tmp173 = cos(_tmp172);
+    const double _tmp174 = sin(delta_3 + delta_4);
+    const double _tmp175 = pow(sin(_tmp111 + _tmp27), 2);
+    const double _tmp176 = -0.05*_tmp174 - 0.08*_tmp175;
+    const double _tmp177 = 0.05*_tmp147 + _tmp152;
+    const double _tmp178 = sin(_tmp172);
+    const double _tmp179 = 0.04*_tmp174 - 0.1*_tmp175;
+    const double _tmp180 = _tmp178*_tmp179;
+    const double _tmp181 = _tmp163*_tmp168 + _tmp166*_tmp167;
+    const double _tmp182 = _tmp137 + _tmp181;
+    const double _tmp183 = _tmp173*_tmp179 + _tmp176*_tmp178;
+    const double _tmp184 = 0.5*theta_1;
+    const double _tmp185 = sin(_tmp184);
+    const double _tmp186 = pow(theta_1, 2);
+    const double _tmp187 = symkin_arck(_tmp184);
+    const double _tmp188 = _tmp186*_tmp187;
+    const double _tmp189 = 0.25*_tmp188;
+    const double _tmp190 = _tmp185*_tmp189;
+    const double _tmp191 = -0.25*_tmp29*_tmp33*_tmp34;
+    const double _tmp192 = 0.25*_tmp54;
+    const double _tmp193 = _tmp192*_tmp58;
+    const double _tmp194 = _tmp193*_tmp53;
+    const double _tmp195 = _tmp192*_tmp45;
+    const double _tmp196 = _tmp195*_tmp51;
+    const double _tmp197 = _tmp23*_tmp24;
+    const double _tmp198 = pow(theta_1, 3);
+    const double _tmp199 = 3*symkin_cosr2(_tmp184) + symkin_sinr1(_tmp184) - 3*symkin_sinr2(_tmp184);
+    const double _tmp200 = _tmp198*_tmp199*_tmp30;
+    const double _tmp201 = cos(_tmp184);
+    const double _tmp202 = _tmp188*_tmp36;
+    const double _tmp203 = _tmp184*_tmp187*p_0;
+    const double _tmp204 = _tmp185*_tmp200 + _tmp185*_tmp203 + _tmp201*_tmp202;
+    const double _tmp205 = 0.25*_tmp32*_tmp35;
+    const double _tmp206 = _tmp185*_tmp202;
+    const double _tmp207 = 0.1767766952966369*_tmp81;
+    const double _tmp208 = _tmp207*_tmp84;
+    const double _tmp209 = _tmp207*_tmp78;
+    const double _tmp210 = _tmp208 + _tmp209;
+    const double _tmp211 = -_tmp208 + 0.1767766952966369*_tmp73*_tmp77*_tmp81;
+    const double _tmp212 = _tmp190 + _tmp210*_tmp58 - _tmp211*_tmp45;
+    const double _tmp213 = _tmp208*p_0;
+    const double _tmp214 = _tmp209*p_0 + _tmp213;
+    const double _tmp215 = -_tmp213 + 0.1767766952966369*_tmp73*_tmp77*_tmp81*p_0;
+    const double _tmp216 = _tmp169 + _tmp204 + _tmp214*_tmp45 + _tmp215*_tmp58;
+    const double _tmp217 = _tmp189*_tmp201 + _tmp210*_tmp45 + _tmp211*_tmp58;
+    const double _tmp218 = _tmp181 + _tmp200*_tmp201 + _tmp201*_tmp203 - _tmp206 - _tmp214*_tmp58 + _tmp215*_tmp45;
+    out[0] = 0;
+    out[1] = -1;
+    out[2] = 0;
+    out[3] = -1;
+    out[4] = 1;
+    out[5] = 0;
+    out[6] = 0;
+    out[7] = 0.06*_tmp1 + _tmp41 - _tmp5 - _tmp7 - _tmp9;
+    out[8] = 0;
+    out[9] = _tmp42*_tmp8 - _tmp44 - _tmp5 - _tmp7;
+    out[10] = _tmp60;
+    out[11] = 0;
+    out[12] = 0;
+    out[13] = 0.072*_tmp4 + _tmp61 - _tmp62 + _tmp64 + 0.06*_tmp8;
+    out[14] = 0;
+    out[15] = 0.072*_tmp4 - _tmp62 - _tmp65;
+    out[16] = _tmp66;
+    out[17] = 0;
+    out[18] = 1;
+    out[19] = -1;
+    out[20] = -1;
+    out[21] = 0;
+    out[22] = 0;
+    out[23] = 1;
+    out[24] = -_tmp105 - _tmp91;
+    out[25] = 0.05*_tmp1 + _tmp110 + _tmp124 + _tmp9;
+    out[26] = _tmp110 + _tmp128*_tmp8 - _tmp130;
+    out[27] = 0;
+    out[28] = 0;
+    out[29] = _tmp136;
+    out[30] = _tmp138 + _tmp140;
+    out[31] = 0.05*_tmp108 + 0.04*_tmp109 + _tmp142 - _tmp61 + 0.05*_tmp8;
+    out[32] = 0.05*_tmp108 + 0.04*_tmp109 - _tmp143 - _tmp144;
+    out[33] = 0;
+    out[34] = 0;
+    out[35] = _tmp145;
+    out[36] = 0;
+    out[37] = 0;
+    out[38] = 0;
+    out[39] = 0;
+    out[40] = 0;
+    out[41] = 0;
+    out[42] = 0;
+    out[43] = _tmp146*_tmp150 - _tmp151*_tmp153 + _tmp161 + _tmp41;
+    out[44] = 0;
+    out[45] = _tmp161 + _tmp42*_tmp8 - _tmp44;
+    out[46] = _tmp60;
+    out[47] = 0;
+    out[48] = 0;
+    out[49] = _tmp146*_tmp153 + _tmp150*_tmp151 + _tmp155*_tmp160 + _tmp158*_tmp159 + _tmp64;
+    out[50] = 0;
+    out[51] = _tmp155*_tmp160 + _tmp158*_tmp159 - _tmp65;
+    out[52] = _tmp66;
+    out[53] = 0;
+    out[54] = 0;
+    out[55] = 0;
+    out[56] = 0;
+    out[57] = 0;
+    out[58] = 0;
+    out[59] = 0;
+    out[60] = -_tmp105 - _tmp170;
+    out[61] = _tmp124 + _tmp146*_tmp171 - _tmp151*_tmp177 + _tmp173*_tmp176 - _tmp180;
+    out[62] = _tmp128*_tmp8 - _tmp130 + _tmp173*_tmp176 - _tmp180;
+    out[63] = 0;
+    out[64] = 0;
+    out[65] = _tmp136;
+    out[66] = _tmp140 + _tmp182;
+    out[67] = _tmp142 + _tmp146*_tmp177 + _tmp151*_tmp171 + _tmp183;
+    out[68] = -_tmp143 - _tmp144 + _tmp183;
+    out[69] = 0;
+    out[70] = 0;
+    out[71] = _tmp145;
+    out[72] = 0;
+    out[73] = 0;
+    out[74] = -_tmp1*_tmp197 + _tmp13*_tmp2*_tmp8 - _tmp190 - _tmp191 - _tmp194 - _tmp196;
+    out[75] = -_tmp195*_tmp53*p_0 - _tmp204 + 0.25*_tmp49*_tmp50*_tmp54*_tmp58*p_0;
+    out[76] = -_tmp1*_tmp13*_tmp2 + 0.25*_tmp186*_tmp187*_tmp201 - _tmp193*_tmp51 - _tmp197*_tmp8 - _tmp205 + 0.25*_tmp45*_tmp50*_tmp52*_tmp54;
+    out[77] = 0.5*_tmp187*_tmp201*p_0*theta_1 - _tmp194*p_0 - _tmp196*p_0 + 0.0625*_tmp198*_tmp199*_tmp201*p_0 - _tmp206;
+    out[78] = 0;
+    out[79] = 0;
+    out[80] = 0.25*_tmp113*_tmp114*_tmp116*_tmp8 - _tmp139 - _tmp141 - _tmp191 - _tmp212 + 0.25*_tmp69*_tmp93*_tmp94*_tmp97;
+    out[81] = -_tmp105 - _tmp216;
+    out[82] = _tmp100 + _tmp104 - _tmp119 - _tmp123 - _tmp205 + _tmp217;
+    out[83] = _tmp140 + _tmp218;
+    out[84] = -_tmp170;
+    out[85] = 0;
+    out[86] = 0;
+    out[87] = 0;
+    out[88] = 0;
+    out[89] = 0;
+    out[90] = _tmp182;
+    out[91] = 0;
+    out[92] = 0;
+    out[93] = 0;
+    out[94] = 0;
+    out[95] = 0;
+    out[96] = -_tmp91;
+    out[97] = 0;
+    out[98] = 0;
+    out[99] = 0;
+    out[100] = 0;
+    out[101] = 0;
+    out[102] = _tmp138;
+    out[103] = 0;
+    out[104] = 0;
+    out[105] = 0;
+    out[106] = 0;
+    out[107] = 0;
+    out[108] = -_tmp212;
+    out[109] = -_tmp216;
+    out[110] = _tmp217;
+    out[111] = _tmp218;
+}
+
 /* Gaussian elimination with partial pivoting on the n x n row-major a, in place; x -> b. */
 static int sk_solve(int n, double *a, double *b)
 {
-    int i, j, c, p;
+    int i, j, c, p, r;
     for (c = 0; c < n; ++c) {
         double best = fabs(a[c * n + c]);
         p = c;
@@ -701,24 +1516,81 @@ static int sk_solve(int n, double *a, double *b)
                 a[c * n + j] = a[p * n + j];
                 a[p * n + j] = t;
             }
-            t = b[c];
-            b[c] = b[p];
-            b[p] = t;
+            for (r = 0; r < 1; ++r) {
+                t = b[c * 1 + r];
+                b[c * 1 + r] = b[p * 1 + r];
+                b[p * 1 + r] = t;
+            }
         }
         for (i = c + 1; i < n; ++i) {
             const double f = a[i * n + c] / a[c * n + c];
             for (j = c; j < n; ++j) {
                 a[i * n + j] -= f * a[c * n + j];
             }
-            b[i] -= f * b[c];
+            for (r = 0; r < 1; ++r) {
+                b[i * 1 + r] -= f * b[c * 1 + r];
+            }
         }
     }
-    for (i = n - 1; i >= 0; --i) {
-        double s = b[i];
-        for (j = i + 1; j < n; ++j) {
-            s -= a[i * n + j] * b[j];
+    for (r = 0; r < 1; ++r) {
+        for (i = n - 1; i >= 0; --i) {
+            double s = b[i * 1 + r];
+            for (j = i + 1; j < n; ++j) {
+                s -= a[i * n + j] * b[j * 1 + r];
+            }
+            b[i * 1 + r] = s / a[i * n + i];
         }
-        b[i] = s / a[i * n + i];
+    }
+    return 0;
+}
+
+/* The same for m right-hand sides: the n x m row-major b becomes the solution. */
+static int sk_solve_many(int n, double *a, int m, double *b)
+{
+    int i, j, c, p, r;
+    for (c = 0; c < n; ++c) {
+        double best = fabs(a[c * n + c]);
+        p = c;
+        for (i = c + 1; i < n; ++i) {
+            if (fabs(a[i * n + c]) > best) {
+                best = fabs(a[i * n + c]);
+                p = i;
+            }
+        }
+        if (!(best > 0.0) || !isfinite(best)) {
+            return 1;
+        }
+        if (p != c) {
+            double t;
+            for (j = 0; j < n; ++j) {
+                t = a[c * n + j];
+                a[c * n + j] = a[p * n + j];
+                a[p * n + j] = t;
+            }
+            for (r = 0; r < m; ++r) {
+                t = b[c * m + r];
+                b[c * m + r] = b[p * m + r];
+                b[p * m + r] = t;
+            }
+        }
+        for (i = c + 1; i < n; ++i) {
+            const double f = a[i * n + c] / a[c * n + c];
+            for (j = c; j < n; ++j) {
+                a[i * n + j] -= f * a[c * n + j];
+            }
+            for (r = 0; r < m; ++r) {
+                b[i * m + r] -= f * b[c * m + r];
+            }
+        }
+    }
+    for (r = 0; r < m; ++r) {
+        for (i = n - 1; i >= 0; --i) {
+            double s = b[i * m + r];
+            for (j = i + 1; j < n; ++j) {
+                s -= a[i * n + j] * b[j * m + r];
+            }
+            b[i * m + r] = s / a[i * n + i];
+        }
     }
     return 0;
 }
@@ -798,53 +1670,16 @@ static int sk_exact(const double *theta, const double *params, double *delta)
     return converged ? 0 : 2;
 }
 
-int stephenson_six_bar_evaluate(const double *inputs, const double *params, int level, double *out)
+/* The configuration: the arguments checked, the rigid angles theta (every hinge) and, at the
+   levels that solve the loops, delta (the non-input hinges; solved for the links' rotations
+   only when want_links). Returns a status code. */
+static int sk_pose(const double *inputs, const double *params, int level, int want_links,
+                   double *theta, double *delta)
 {
-    return stephenson_six_bar_evaluate_pose(inputs, params, level, out, NULL, NULL);
-}
-
-int stephenson_six_bar_evaluate_angles(const double *inputs, const double *params, int level, double *out,
-                    double *angles)
-{
-    return stephenson_six_bar_evaluate_pose(inputs, params, level, out, angles, NULL);
-}
-
-static int sk_evaluate(const double *inputs, const double *params, int level, double *out,
-                       double *angles, double *links);
-
-int stephenson_six_bar_evaluate_pose(const double *inputs, const double *params, int level, double *out,
-                    double *angles, double *links)
-{
-    int i, status = sk_evaluate(inputs, params, level, out, angles, links);
-    if (status != 0) {
-        /* no partial result: every output is NaN */
-        for (i = 0; out != NULL && i < 6 * SK_NP; ++i) {
-            out[i] = NAN;
-        }
-        for (i = 0; angles != NULL && i < 2 * SK_M; ++i) {
-            angles[i] = NAN;
-        }
-        for (i = 0; links != NULL && i < 3 * SK_NL; ++i) {
-            links[i] = NAN;
-        }
-    }
-    return status;
-}
-
-/* The evaluation; stephenson_six_bar_evaluate_pose turns a failure into NaN outputs. */
-static int sk_evaluate(const double *inputs, const double *params, int level, double *out,
-                       double *angles, double *links)
-{
-    double theta[SK_M];
-    double delta[SK_K1];
-    double rigid[2 * SK_NP + 1], dev[2 * SK_NP + 1];
     int i;
 
-    if (inputs == NULL || out == NULL) {
+    if (inputs == NULL) {
         return 3;
-    }
-    if (params == NULL) {
-        params = stephenson_six_bar_default_params;
     }
     if (level != 0 && level != 1 && level != 2) {
         return 3;
@@ -953,14 +1788,28 @@ static int sk_evaluate(const double *inputs, const double *params, int level, do
     if (!(fabs(theta[6] + delta[5]) <= 3.141592653589793)) {
         return 1;
     }
+    (void)want_links;
+    return 0;
+}
+
+/* The points of a solved configuration: per point rigid x, y, compliant x, y, deviation x, y
+   into out; when angles is not NULL the rigid then the compliant hinge angles; when links is
+   not NULL every reported link's rigid rotation, compliant rotation and deviation. */
+static int sk_outputs(const double *theta, const double *delta, const double *params,
+                      int level, double *out, double *angles, double *links)
+{
+    double rigid[2 * SK_NP + 1], dev[2 * SK_NP + 1];
+    int i;
+
     sk_rigid_points(theta, params, rigid);
+    /* the level is one of these: sk_pose checked it */
     if (level == 0) {
         sk_dev_paper(theta, params, dev);
     }
     else if (level == 1) {
         sk_dev_first_order(theta, delta, params, dev);
     }
-    else if (level == 2) {
+    else {
         sk_dev_exact(theta, delta, params, dev);
     }
     for (i = 0; i < 2 * SK_NP; ++i) {
@@ -1000,5 +1849,250 @@ static int sk_evaluate(const double *inputs, const double *params, int level, do
         }
     }
     (void)delta;
+    (void)level;
     return 0;
+}
+
+/* n entries of x set to NaN (no partial result after a failure); x may be NULL. */
+static void sk_nan(double *x, int n)
+{
+    int i;
+    for (i = 0; x != NULL && i < n; ++i) {
+        x[i] = NAN;
+    }
+}
+
+int stephenson_six_bar_evaluate_pose(const double *inputs, const double *params, int level, double *out,
+                    double *angles, double *links)
+{
+    double theta[SK_M];
+    double delta[SK_K1];
+    int status;
+
+    if (params == NULL) {
+        params = stephenson_six_bar_default_params;
+    }
+    status = out == NULL ? 3 : sk_pose(inputs, params, level, links != NULL, theta, delta);
+    if (status == 0) {
+        status = sk_outputs(theta, delta, params, level, out, angles, links);
+    }
+    if (status != 0) {
+        sk_nan(out, 6 * SK_NP);
+        sk_nan(angles, 2 * SK_M);
+        sk_nan(links, 3 * SK_NL);
+    }
+    return status;
+}
+
+int stephenson_six_bar_evaluate_angles(const double *inputs, const double *params, int level, double *out,
+                    double *angles)
+{
+    return stephenson_six_bar_evaluate_pose(inputs, params, level, out, angles, NULL);
+}
+
+int stephenson_six_bar_evaluate(const double *inputs, const double *params, int level, double *out)
+{
+    return stephenson_six_bar_evaluate_pose(inputs, params, level, out, NULL, NULL);
+}
+
+int stephenson_six_bar_evaluate_angles_batch(int n, const double *inputs, const double *params, int level,
+                          double *out, double *angles, int *status)
+{
+    int j, s, failed = 0;
+    for (j = 0; j < n; ++j) {
+        s = inputs == NULL ? 3 : stephenson_six_bar_evaluate_angles(
+            inputs + (size_t)j * STEPHENSON_SIX_BAR_N_INPUTS, params, level,
+            out == NULL ? NULL : out + (size_t)j * 6 * SK_NP,
+            angles == NULL ? NULL : angles + (size_t)j * 2 * SK_M);
+        failed += s != 0;
+        if (status != NULL) {
+            status[j] = s;
+        }
+    }
+    return failed;
+}
+
+int stephenson_six_bar_evaluate_batch(int n, const double *inputs, const double *params, int level,
+                    double *out, int *status)
+{
+    return stephenson_six_bar_evaluate_angles_batch(n, inputs, params, level, out, NULL, status);
+}
+
+int stephenson_six_bar_evaluate_grid(int n_sets, const double *params, int n, const double *inputs,
+                   int level, double *out, int *status)
+{
+    int s, failed = 0;
+    for (s = 0; s < n_sets; ++s) {
+        failed += stephenson_six_bar_evaluate_angles_batch(
+            n, inputs, params == NULL ? NULL : params + (size_t)s * STEPHENSON_SIX_BAR_N_PARAMS, level,
+            out == NULL ? NULL : out + (size_t)s * n * 6 * SK_NP, NULL,
+            status == NULL ? NULL : status + (size_t)s * n);
+    }
+    return failed;
+}
+
+/* c (m x n) += a (m x p) b (p x n), row-major. */
+static void sk_gemm(int m, int p, int n, const double *a, const double *b, double *c)
+{
+    int i, j, q;
+    for (i = 0; i < m; ++i) {
+        for (q = 0; q < p; ++q) {
+            const double f = a[i * p + q];
+            for (j = 0; j < n; ++j) {
+                c[i * n + j] += f * b[q * n + j];
+            }
+        }
+    }
+}
+
+/* The total derivatives of the points' deviations (dev) and rigid positions (rig) by every
+   variable, 2 N_POINTS x N_VARIABLES row-major (row 2 p + c: component c of point p; columns:
+   the parameters, then the inputs), by the implicit-function theorem on the closures: with
+   Theta = d theta_u / dv = -A^-1 dG/dv and, where the level solves a closure E for delta,
+   Y = -M^-1 (dE/dv + dE/dtheta_u Theta): dD/dv + dD/dtheta_u Theta + dD/ddelta Y. */
+static int sk_sensitivity(const double *theta, const double *delta, const double *params,
+                          int level, double *dev, double *rig)
+{
+    double sr[64 + 1];
+    double th[12];
+    int i;
+
+    sk_sens_rigid(theta, params, sr);
+    for (i = 0; i < 12; ++i) {
+        th[i] = -sr[36 + i];
+    }
+    if (sk_solve_many(SK_K, sr, 2, th)) {
+        return 1;
+    }
+    for (i = 0; i < 4; ++i) {
+        rig[i] = sr[60 + i];
+    }
+    sk_gemm(2, SK_K, 2, sr + 48, th, rig);
+    if (level == 0) {
+        double s[16 + 1];
+        sk_sens_paper(theta, params, s);
+        for (i = 0; i < 4; ++i) {
+            dev[i] = s[12 + i];
+        }
+        sk_gemm(2, SK_K, 2, s + 0, th, dev);
+    }
+    else if (level == 1) {
+        double s[112 + 1];
+        double y[12];
+        sk_sens_first_order(theta, delta, params, s);
+        for (i = 0; i < 12; ++i) {
+            y[i] = s[72 + i];
+        }
+        sk_gemm(SK_K, SK_K, 2, s + 36, th, y);
+        for (i = 0; i < 12; ++i) {
+            y[i] = -y[i];
+        }
+        if (sk_solve_many(SK_K, s, 2, y)) {
+            return 1;
+        }
+        for (i = 0; i < 4; ++i) {
+            dev[i] = s[108 + i];
+        }
+        sk_gemm(2, SK_K, 2, s + 84, th, dev);
+        sk_gemm(2, SK_K, 2, s + 96, y, dev);
+    }
+    else {
+        double s[112 + 1];
+        double y[12];
+        sk_sens_exact(theta, delta, params, s);
+        for (i = 0; i < 12; ++i) {
+            y[i] = s[72 + i];
+        }
+        sk_gemm(SK_K, SK_K, 2, s + 36, th, y);
+        for (i = 0; i < 12; ++i) {
+            y[i] = -y[i];
+        }
+        if (sk_solve_many(SK_K, s, 2, y)) {
+            return 1;
+        }
+        for (i = 0; i < 4; ++i) {
+            dev[i] = s[108 + i];
+        }
+        sk_gemm(2, SK_K, 2, s + 84, th, dev);
+        sk_gemm(2, SK_K, 2, s + 96, y, dev);
+    }
+    (void)delta;
+    (void)level;
+    return 0;
+}
+
+int stephenson_six_bar_sensitivity_full(const double *inputs, const double *params, int level,
+                         double *values, double *deviation, double *rigid)
+{
+    double theta[SK_M];
+    double delta[SK_K1];
+    double dev[4 + 1], rig[4 + 1];
+    int i, v, status;
+
+    if (params == NULL) {
+        params = stephenson_six_bar_default_params;
+    }
+    status = deviation == NULL ? 3 : sk_pose(inputs, params, level, 0, theta, delta);
+    if (status == 0 && values != NULL) {
+        status = sk_outputs(theta, delta, params, level, values, NULL, NULL);
+    }
+    if (status == 0) {
+        status = sk_sensitivity(theta, delta, params, level, dev, rig);
+    }
+    for (i = 0; status == 0 && i < 4; ++i) {
+        if (!isfinite(dev[i]) || !isfinite(rig[i])) {
+            status = 2;             /* a non-finite result is never a success */
+        }
+    }
+    if (status != 0) {
+        sk_nan(values, 6 * SK_NP);
+        sk_nan(deviation, 4);
+        sk_nan(rigid, 4);
+        return status;
+    }
+    for (i = 0; i < 2; ++i) {
+        for (v = 0; v < 2; ++v) {
+            deviation[((i / 2) * 2 + v) * 2 + i % 2] = dev[i * 2 + v];
+            if (rigid != NULL) {
+                rigid[((i / 2) * 2 + v) * 2 + i % 2] = rig[i * 2 + v];
+            }
+        }
+    }
+    return 0;
+}
+
+int stephenson_six_bar_sensitivity(const double *inputs, const double *params, int level, double *out)
+{
+    double full[4 + 1];
+    int p, v, status;
+
+    if (out == NULL) {
+        return 3;
+    }
+    status = stephenson_six_bar_sensitivity_full(inputs, params, level, NULL, full, NULL);
+    for (p = 0; p < SK_NP; ++p) {
+        for (v = 0; v < STEPHENSON_SIX_BAR_N_PARAMS; ++v) {
+            out[(p * STEPHENSON_SIX_BAR_N_PARAMS + v) * 2] = full[(p * 2 + v) * 2];
+            out[(p * STEPHENSON_SIX_BAR_N_PARAMS + v) * 2 + 1] = full[(p * 2 + v) * 2 + 1];
+        }
+    }
+    return status;
+}
+
+int stephenson_six_bar_sensitivity_batch(int n, const double *inputs, const double *params, int level,
+                          double *values, double *deviation, double *rigid, int *status)
+{
+    int j, s, failed = 0;
+    for (j = 0; j < n; ++j) {
+        s = inputs == NULL || deviation == NULL ? 3 : stephenson_six_bar_sensitivity_full(
+            inputs + (size_t)j * STEPHENSON_SIX_BAR_N_INPUTS, params, level,
+            values == NULL ? NULL : values + (size_t)j * 6 * SK_NP,
+            deviation + (size_t)j * 4,
+            rigid == NULL ? NULL : rigid + (size_t)j * 4);
+        failed += s != 0;
+        if (status != NULL) {
+            status[j] = s;
+        }
+    }
+    return failed;
 }

@@ -3,7 +3,7 @@
  * Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
  * Points: D; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60, links 5.
+ * Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661.
  */
 #ifndef SYMKIN_STEPHENSON_SIX_BAR_H
 #define SYMKIN_STEPHENSON_SIX_BAR_H
@@ -53,5 +53,52 @@ int stephenson_six_bar_evaluate_angles(const double *inputs, const double *param
  */
 int stephenson_six_bar_evaluate_pose(const double *inputs, const double *params, int level, double *out,
                     double *angles, double *links);
+
+/*
+ * n configurations at once (one call instead of n): inputs holds n rows of
+ * STEPHENSON_SIX_BAR_N_INPUTS angles; every row uses the same params (NULL: the defaults). out receives
+ * 6 * STEPHENSON_SIX_BAR_N_POINTS doubles per row, angles (may be NULL) 2 * STEPHENSON_SIX_BAR_N_HINGES per row,
+ * status (may be NULL) each row's return code. Returns the number of rows that failed (their
+ * outputs are NaN).
+ */
+int stephenson_six_bar_evaluate_batch(int n, const double *inputs, const double *params, int level,
+                    double *out, int *status);
+int stephenson_six_bar_evaluate_angles_batch(int n, const double *inputs, const double *params, int level,
+                          double *out, double *angles, int *status);
+
+/*
+ * Every parameter set at every input row (a Monte Carlo sweep): params holds n_sets rows of
+ * STEPHENSON_SIX_BAR_N_PARAMS values (NULL: the defaults, n_sets 1), inputs n rows; out and status
+ * are ordered set by set, row (s * n + i) for set s and input row i, as in
+ * stephenson_six_bar_evaluate_batch. Returns the number of failed configurations.
+ */
+int stephenson_six_bar_evaluate_grid(int n_sets, const double *params, int n, const double *inputs,
+                   int level, double *out, int *status);
+
+/* Variables of the sensitivities: the parameters in file order, then the inputs. */
+#define STEPHENSON_SIX_BAR_N_VARIABLES (STEPHENSON_SIX_BAR_N_PARAMS + STEPHENSON_SIX_BAR_N_INPUTS)
+
+/*
+ * Derivatives of the points' deviations with respect to every parameter, at level (0 paper,
+ * 1 first_order, 2 exact: the levels generated). out receives, per point in
+ * stephenson_six_bar_point_names order and per parameter in file order, d(dx)/dp, d(dy)/dp
+ * (2 * N_POINTS * N_PARAMS doubles). A parameter whose default reads other parameters
+ * moves them along (the total derivative). Same return codes as stephenson_six_bar_evaluate; on any
+ * non-zero return out is NaN.
+ */
+int stephenson_six_bar_sensitivity(const double *inputs, const double *params, int level, double *out);
+
+/*
+ * The same with the inputs and the rigid positions: deviation receives, per point and per
+ * variable (the parameters, then the inputs), d(dx)/dv, d(dy)/dv (2 * N_POINTS *
+ * N_VARIABLES doubles); rigid (may be NULL) the same for the rigid position; values (may be
+ * NULL) what stephenson_six_bar_evaluate writes to out.
+ */
+int stephenson_six_bar_sensitivity_full(const double *inputs, const double *params, int level,
+                         double *values, double *deviation, double *rigid);
+
+/* stephenson_six_bar_sensitivity_full for n rows of inputs (as stephenson_six_bar_evaluate_batch). */
+int stephenson_six_bar_sensitivity_batch(int n, const double *inputs, const double *params, int level,
+                          double *values, double *deviation, double *rigid, int *status);
 
 #endif /* SYMKIN_STEPHENSON_SIX_BAR_H */

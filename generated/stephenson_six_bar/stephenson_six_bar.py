@@ -2,7 +2,7 @@
 Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
 Points: D; levels: paper, first_order, exact.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60, links 5.
+Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -11,6 +11,11 @@ False in ok. It also holds "angles": {"rigid": {H: a}, "compliant": {H: a}}, eve
 angle (radians, the rotation of links[1] relative to links[0] from the as-fabricated pose), and
 "links": {L: {"rigid": a, "compliant": a, "deviation": a}}, the rotation of every link in LINKS
 from the as-fabricated pose (rigid wrapped to (-pi, pi]; the deviation computed directly).
+
+sensitivity(inputs, level, params) gives {P: {p: a}}: d(dx, dy)/dp of every point's deviation
+by every parameter p, each a of shape (2, *broadcast_shape); sensitivity_full(...) adds the
+inputs and the rigid positions. A parameter whose default reads other parameters moves them
+along (the total derivative). NaN where evaluate is not ok.
 """
 
 import math
@@ -48,6 +53,8 @@ def arck(x):
     x2 = x * x
     small = np.abs(x) < 1.5
     series = 0.3333333333333333 + x2 * (-0.03333333333333333 + x2 * (0.0011904761904761906 + x2 * (-2.2045855379188714e-05 + x2 * (2.505210838544172e-07 + x2 * (-1.9270852604185937e-09 + x2 * (1.0706029224547743e-11 + x2 * (-4.498331606952833e-14 + x2 * (1.4797143443923793e-16 + x2 * (-3.9145882126782523e-19)))))))))
+    if small.all():
+        return series
     xs = np.where(small, 1.0, x)
     xs2 = xs * xs
     b = np.sin(xs) / xs - np.cos(xs)
@@ -61,6 +68,8 @@ def cosr2(x):
     x2 = x * x
     small = np.abs(x) < 3.0
     series = 0.041666666666666664 + x2 * (-0.001388888888888889 + x2 * (2.48015873015873e-05 + x2 * (-2.755731922398589e-07 + x2 * (2.08767569878681e-09 + x2 * (-1.1470745597729725e-11 + x2 * (4.779477332387385e-14 + x2 * (-1.5619206968586225e-16 + x2 * (4.110317623312165e-19 + x2 * (-8.896791392450574e-22 + x2 * (1.6117375710961184e-24 + x2 * (-2.4795962632247976e-27)))))))))))
+    if small.all():
+        return series
     xs = np.where(small, 1.0, x)
     xs2 = xs * xs
     b = -2.0 * (np.sin(0.5 * xs) / xs) ** 2
@@ -74,6 +83,8 @@ def sinr1(x):
     x2 = x * x
     small = np.abs(x) < 2.0
     series = -0.16666666666666666 + x2 * (0.008333333333333333 + x2 * (-0.0001984126984126984 + x2 * (2.7557319223985893e-06 + x2 * (-2.505210838544172e-08 + x2 * (1.6059043836821613e-10 + x2 * (-7.647163731819816e-13 + x2 * (2.8114572543455206e-15 + x2 * (-8.22063524662433e-18 + x2 * (1.9572941063391263e-20 + x2 * (-3.868170170630684e-23))))))))))
+    if small.all():
+        return series
     xs = np.where(small, 1.0, x)
     xs2 = xs * xs
     b = np.sin(xs) / xs
@@ -87,6 +98,8 @@ def sinr2(x):
     x2 = x * x
     small = np.abs(x) < 3.0
     series = 0.008333333333333333 + x2 * (-0.0001984126984126984 + x2 * (2.7557319223985893e-06 + x2 * (-2.505210838544172e-08 + x2 * (1.6059043836821613e-10 + x2 * (-7.647163731819816e-13 + x2 * (2.8114572543455206e-15 + x2 * (-8.22063524662433e-18 + x2 * (1.9572941063391263e-20 + x2 * (-3.868170170630684e-23 + x2 * (6.446950284384474e-26 + x2 * (-9.183689863795546e-29)))))))))))
+    if small.all():
+        return series
     xs = np.where(small, 1.0, x)
     xs2 = xs * xs
     b = np.sin(xs) / xs
@@ -95,13 +108,23 @@ def sinr2(x):
     return np.where(small, series, b)
 
 
-def _parameters(given):
-    """Parameter values in file order: given ones, defaults re-evaluated for the others."""
+def _value(v):
+    """A parameter value: a float, or an array for many parameter sets at once."""
+    return float(v) if numpy.ndim(v) == 0 else numpy.asarray(v, dtype=_DTYPE)
+
+
+def parameters(given=None, shifts=None):
+    """Parameter values in file order: given ones, defaults re-evaluated for the others; a shift
+    (name -> amount) is added to a parameter after its value is set, so the parameters whose
+    defaults read it follow. Values and shifts may be arrays (many parameter sets at once)."""
     given = dict(given or {})
-    unknown = sorted(set(given) - set(PARAMETERS))
+    shifts = dict(shifts or {})
+    unknown = sorted((set(given) | set(shifts)) - set(PARAMETERS))
     if unknown:
         raise ValueError(f"unknown parameter(s) {unknown}; parameters: {sorted(PARAMETERS)}")
-    p_0 = float(given['l']) if 'l' in given else 0.0008
+    p_0 = _value(given['l']) if 'l' in given else 0.0008
+    if 'l' in shifts:
+        p_0 = p_0 + _value(shifts['l'])
     return [p_0]
 
 
@@ -644,35 +667,885 @@ def _links(theta, delta):
     ]
 
 
+def _sens_rigid(theta, params):
+    """rigid stage: A, dG/dv; rigid points: dR/dtheta, dR/dv (70 operations)."""
+    theta_1, theta_2, theta_3, theta_4, theta_5, _, _ = theta
+    _tmp0 = numpy.sin(theta_3)
+    _tmp1 = 0.02*_tmp0
+    _tmp2 = numpy.cos(theta_3)
+    _tmp3 = theta_3 + theta_5
+    _tmp4 = numpy.sin(_tmp3)
+    _tmp5 = numpy.cos(_tmp3)
+    _tmp6 = 0.072*_tmp4 + 0.03*_tmp5
+    _tmp7 = 0.02*_tmp2
+    _tmp8 = 0.03*_tmp4
+    _tmp9 = theta_1 + theta_2
+    _tmp10 = numpy.sin(_tmp9)
+    _tmp11 = numpy.cos(_tmp9)
+    _tmp12 = 0.04*_tmp10 + 0.07*_tmp11
+    _tmp13 = -_tmp12
+    _tmp14 = theta_3 + theta_4
+    _tmp15 = numpy.sin(_tmp14)
+    _tmp16 = 0.05*_tmp15
+    _tmp17 = numpy.cos(_tmp14)
+    _tmp18 = 0.07*_tmp10 - 0.04*_tmp11
+    _tmp19 = -_tmp18
+    _tmp20 = 0.04*_tmp15 + 0.05*_tmp17
+    _tmp21 = numpy.sin(theta_1)
+    _tmp22 = numpy.cos(theta_1)
+    _tmp23 = 0.03*_tmp22
+    _tmp24 = 0.03*_tmp21
+    _tmp25 = -_tmp12 - 0.02*_tmp22 - _tmp24
+    _tmp26 = -_tmp18 - 0.02*_tmp21 + _tmp23
+    return [
+        0,
+        -1,
+        0,
+        -1,
+        1,
+        0,
+        0,
+        -_tmp1 + 0.06*_tmp2 - _tmp6,
+        0,
+        -_tmp6,
+        0,
+        0,
+        0,
+        0.06*_tmp0 + 0.072*_tmp5 + _tmp7 - _tmp8,
+        0,
+        0.072*_tmp5 - _tmp8,
+        0,
+        0,
+        1,
+        -1,
+        -1,
+        0,
+        0,
+        1,
+        _tmp13,
+        _tmp1 - _tmp16 + 0.04*_tmp17 + 0.05*_tmp2,
+        -_tmp16 + 0.04*_tmp17,
+        0,
+        0,
+        0,
+        _tmp19,
+        0.05*_tmp0 + _tmp20 - _tmp7,
+        _tmp20,
+        0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        -0.008*_tmp21 - _tmp23,
+        0,
+        0.008*_tmp22 - _tmp24,
+        0,
+        1,
+        0,
+        _tmp25,
+        0,
+        _tmp26,
+        _tmp13,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp19,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp25,
+        0,
+        _tmp26,
+    ]
+
+
+def _sens_paper(theta, params):
+    """sensitivity at level paper: dD/dtheta, dD/dv (118 operations)."""
+    theta_1, theta_2, _, _, _, _, _ = theta
+    p_0, = params
+    _tmp0 = numpy.cos(theta_1)
+    _tmp3 = 0.5*theta_2
+    _tmp4 = arck(_tmp3)
+    _tmp1 = theta_2**2
+    _tmp2 = 0.08838834764831845*_tmp1
+    _tmp5 = numpy.sin(_tmp3)
+    _tmp6 = _tmp4*_tmp5
+    _tmp7 = _tmp6*p_0
+    _tmp8 = _tmp2*_tmp7
+    _tmp9 = theta_2**3
+    _tmp10 = numpy.cos(_tmp3)
+    _tmp11 = 3*cosr2(_tmp3) + sinr1(_tmp3) - 3*sinr2(_tmp3)
+    _tmp12 = 0.04419417382415922*_tmp11*_tmp9*p_0
+    _tmp13 = _tmp10*_tmp4
+    _tmp14 = _tmp13*p_0
+    _tmp15 = 0.3535533905932738*theta_2
+    _tmp16 = _tmp12*_tmp5 + _tmp14*_tmp2 + _tmp15*_tmp7
+    _tmp17 = 0.04419417382415922*_tmp10*_tmp11*_tmp9*p_0 + 0.3535533905932738*_tmp10*_tmp4*p_0*theta_2 - _tmp16 - _tmp8
+    _tmp18 = numpy.sin(theta_1)
+    _tmp19 = _tmp10*_tmp12 + _tmp14*_tmp15 + _tmp16 - _tmp8
+    _tmp20 = 0.5*theta_1
+    _tmp21 = numpy.sin(_tmp20)
+    _tmp22 = arck(_tmp20)
+    _tmp23 = _tmp22*theta_1**2
+    _tmp24 = 0.25*_tmp23
+    _tmp25 = 0.1767766952966369*_tmp1
+    _tmp26 = _tmp25*_tmp6
+    _tmp27 = _tmp13*_tmp25
+    _tmp28 = _tmp26 + _tmp27
+    _tmp29 = 0.1767766952966369*_tmp1*_tmp10*_tmp4 - _tmp26
+    _tmp30 = _tmp21*p_0
+    _tmp31 = _tmp20*_tmp22
+    _tmp32 = numpy.cos(_tmp20)
+    _tmp33 = _tmp32*p_0
+    _tmp34 = 0.125*_tmp23
+    _tmp35 = 0.0625*theta_1**3*(3*cosr2(_tmp20) + sinr1(_tmp20) - 3*sinr2(_tmp20))
+    _tmp36 = _tmp26*p_0
+    _tmp37 = 0.1767766952966369*_tmp1*_tmp10*_tmp4*p_0 - _tmp36
+    _tmp38 = _tmp27*p_0 + _tmp36
+    return [
+        _tmp0*_tmp17 - _tmp18*_tmp19,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp0*_tmp19 + _tmp17*_tmp18,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp0*_tmp29 - _tmp18*_tmp28 - _tmp21*_tmp24,
+        -_tmp0*_tmp38 - _tmp18*_tmp37 - _tmp30*_tmp31 - _tmp30*_tmp35 - _tmp33*_tmp34,
+        _tmp0*_tmp28 + _tmp18*_tmp29 + _tmp24*_tmp32,
+        _tmp0*_tmp37 - _tmp18*_tmp38 - _tmp30*_tmp34 + _tmp31*_tmp33 + _tmp33*_tmp35,
+    ]
+
+
+def _sens_first_order(theta, delta, params):
+    """sensitivity at level first_order: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (564 operations)."""
+    theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7 = theta
+    delta_2, delta_3, delta_4, delta_5, _, _ = delta
+    p_0, = params
+    _tmp0 = theta_3 + theta_5
+    _tmp1 = numpy.sin(_tmp0)
+    _tmp2 = numpy.cos(_tmp0)
+    _tmp3 = 0.072*_tmp1 + 0.03*_tmp2
+    _tmp4 = numpy.sin(theta_3)
+    _tmp5 = 0.02*_tmp4
+    _tmp6 = numpy.cos(theta_3)
+    _tmp7 = _tmp5 - 0.06*_tmp6
+    _tmp8 = 0.03*_tmp1
+    _tmp9 = 0.02*_tmp6
+    _tmp10 = 0.06*_tmp4 + _tmp9
+    _tmp11 = 0.072*_tmp2 - _tmp8
+    _tmp12 = theta_1 + theta_2
+    _tmp13 = numpy.sin(_tmp12)
+    _tmp14 = numpy.cos(_tmp12)
+    _tmp15 = 0.04*_tmp13 + 0.07*_tmp14
+    _tmp16 = -_tmp15
+    _tmp17 = theta_3 + theta_4
+    _tmp18 = numpy.cos(_tmp17)
+    _tmp19 = numpy.sin(_tmp17)
+    _tmp20 = 0.05*_tmp19
+    _tmp21 = _tmp5 + 0.05*_tmp6
+    _tmp22 = -0.04*_tmp18 + _tmp20
+    _tmp23 = -0.07*_tmp13 + 0.04*_tmp14
+    _tmp24 = 0.05*_tmp18 + 0.04*_tmp19
+    _tmp25 = 0.05*_tmp4 - _tmp9
+    _tmp26 = -delta_3 - delta_5
+    _tmp27 = _tmp11*_tmp26
+    _tmp28 = theta_5**2
+    _tmp29 = 0.6594566077552098*theta_5
+    _tmp30 = 0.21067334783983213*sinr1(_tmp29) - 0.5*sinr1(theta_5)
+    _tmp31 = _tmp28*_tmp30 - 0.01556317594302295
+    _tmp32 = _tmp31*p_0
+    _tmp33 = 0.5*theta_5
+    _tmp34 = 0.3297283038776049*theta_5
+    _tmp35 = numpy.sin(_tmp33) + 1.2121056059601407*numpy.sin(_tmp34)
+    _tmp36 = sinr1(_tmp33) - 0.347615499514091*sinr1(_tmp34)
+    _tmp37 = 0.25*_tmp28
+    _tmp38 = _tmp36*_tmp37 + 0.20066894885245268
+    _tmp39 = _tmp38*p_0
+    _tmp40 = _tmp35*_tmp39
+    _tmp41 = _tmp33*_tmp40
+    _tmp42 = 0.5*theta_3
+    _tmp43 = numpy.sin(_tmp42)
+    _tmp44 = _tmp43*p_0
+    _tmp45 = 0.0625*theta_3**3*(3*cosr2(_tmp42) + sinr1(_tmp42) - 3*sinr2(_tmp42))
+    _tmp46 = numpy.cos(_tmp42)
+    _tmp47 = theta_3**2
+    _tmp48 = arck(_tmp42)
+    _tmp49 = _tmp47*_tmp48
+    _tmp50 = 0.125*p_0
+    _tmp51 = _tmp42*_tmp48
+    _tmp52 = _tmp44*_tmp45 + _tmp44*_tmp51 + _tmp46*_tmp49*_tmp50
+    _tmp53 = _tmp32 + p_0*theta_5*(_tmp28*(-_tmp33*(cosr2(theta_5) - 3*sinr2(theta_5)) + 0.09161826121794318*theta_5*(cosr2(_tmp29) - 3*sinr2(_tmp29))) + 2*_tmp30*theta_5)
+    _tmp54 = _tmp33*_tmp35
+    _tmp55 = _tmp33*_tmp39*(0.5*numpy.cos(_tmp33) + 0.39966552557377366*numpy.cos(_tmp34)) + 0.5*_tmp40 + _tmp54*p_0*(_tmp33*_tmp36 + _tmp37*(0.25*theta_5*(cosr2(_tmp33) - 3*sinr2(_tmp33)) - 0.037793019340658006*theta_5*(cosr2(_tmp34) - 3*sinr2(_tmp34))))
+    _tmp56 = numpy.cos(theta_1)
+    _tmp57 = 0.5*theta_6
+    _tmp59 = numpy.sin(_tmp57)
+    _tmp60 = _tmp59*p_0
+    _tmp58 = arck(_tmp57)
+    _tmp61 = _tmp58*_tmp60
+    _tmp62 = numpy.cos(_tmp57)
+    _tmp63 = _tmp58*_tmp62
+    _tmp64 = theta_6**2
+    _tmp65 = _tmp50*_tmp64
+    _tmp66 = 0.0625*theta_6**3*(3*cosr2(_tmp57) + sinr1(_tmp57) - 3*sinr2(_tmp57))
+    _tmp67 = -_tmp57*_tmp61 - _tmp60*_tmp66 - _tmp63*_tmp65
+    _tmp68 = numpy.sin(theta_1)
+    _tmp69 = _tmp63*p_0
+    _tmp70 = _tmp58*_tmp59
+    _tmp71 = _tmp57*_tmp69 + _tmp62*_tmp66*p_0 - _tmp65*_tmp70
+    _tmp72 = -_tmp26*_tmp3
+    _tmp73 = _tmp46*p_0
+    _tmp74 = -0.125*_tmp43*_tmp47*_tmp48*p_0 + _tmp45*_tmp73 + _tmp51*_tmp73
+    _tmp75 = _tmp23*delta_2
+    _tmp76 = 0.5*theta_2
+    _tmp77 = numpy.cos(_tmp76)
+    _tmp78 = theta_2**3
+    _tmp79 = 3*cosr2(_tmp76) + sinr1(_tmp76) - 3*sinr2(_tmp76)
+    _tmp80 = 0.04419417382415922*_tmp78*_tmp79*p_0
+    _tmp81 = arck(_tmp76)
+    _tmp82 = _tmp77*_tmp81
+    _tmp83 = _tmp82*p_0
+    _tmp84 = 0.3535533905932738*theta_2
+    _tmp85 = theta_2**2
+    _tmp86 = 0.08838834764831845*_tmp85
+    _tmp87 = numpy.sin(_tmp76)
+    _tmp88 = _tmp81*_tmp87
+    _tmp89 = _tmp88*p_0
+    _tmp90 = _tmp86*_tmp89
+    _tmp91 = _tmp80*_tmp87 + _tmp83*_tmp86 + _tmp84*_tmp89
+    _tmp92 = _tmp77*_tmp80 + _tmp83*_tmp84 - _tmp90 + _tmp91
+    _tmp93 = 0.04419417382415922*_tmp77*_tmp78*_tmp79*p_0 + 0.3535533905932738*_tmp77*_tmp81*p_0*theta_2 - _tmp90 - _tmp91
+    _tmp94 = -_tmp56*_tmp93 + _tmp68*_tmp92 + _tmp75
+    _tmp95 = 0.5*theta_7
+    _tmp96 = numpy.cos(_tmp95)
+    _tmp97 = _tmp96*p_0
+    _tmp98 = arck(_tmp95)
+    _tmp99 = theta_7**2
+    _tmp100 = _tmp98*_tmp99
+    _tmp101 = 0.25*_tmp100
+    _tmp102 = _tmp101*_tmp97
+    _tmp103 = numpy.sin(_tmp95)
+    _tmp104 = _tmp103*p_0
+    _tmp105 = _tmp101*_tmp104
+    _tmp106 = _tmp102*_tmp13 + _tmp105*_tmp14
+    _tmp107 = -delta_3 - delta_4
+    _tmp108 = _tmp107*_tmp24
+    _tmp109 = 0.5*theta_4
+    _tmp110 = arck(_tmp109)
+    _tmp111 = numpy.sin(_tmp109)
+    _tmp112 = _tmp111*p_0
+    _tmp113 = _tmp110*_tmp112
+    _tmp114 = theta_4**2
+    _tmp115 = 0.25*_tmp114
+    _tmp116 = numpy.cos(_tmp109)
+    _tmp117 = _tmp110*_tmp116
+    _tmp118 = _tmp117*p_0
+    _tmp119 = _tmp115*_tmp118
+    _tmp120 = _tmp114*_tmp50
+    _tmp121 = 0.0625*theta_4**3*(3*cosr2(_tmp109) + sinr1(_tmp109) - 3*sinr2(_tmp109))
+    _tmp122 = _tmp109*_tmp113 + _tmp112*_tmp121 + _tmp117*_tmp120
+    _tmp123 = _tmp110*_tmp111
+    _tmp124 = _tmp109*_tmp118 + _tmp116*_tmp121*p_0 - _tmp120*_tmp123
+    _tmp125 = _tmp95*_tmp98
+    _tmp126 = _tmp100*_tmp50
+    _tmp127 = 0.0625*theta_7**3*(3*cosr2(_tmp95) + sinr1(_tmp95) - 3*sinr2(_tmp95))
+    _tmp128 = _tmp104*_tmp125 + _tmp104*_tmp127 + _tmp126*_tmp96
+    _tmp129 = -_tmp103*_tmp126 + _tmp125*_tmp97 + _tmp127*_tmp97
+    _tmp130 = -_tmp15*delta_2
+    _tmp131 = _tmp130 + _tmp56*_tmp92 + _tmp68*_tmp93
+    _tmp132 = _tmp102*_tmp14 - _tmp105*_tmp13
+    _tmp133 = -_tmp107*_tmp22
+    _tmp134 = 0.5*theta_1
+    _tmp135 = numpy.sin(_tmp134)
+    _tmp136 = theta_1**2
+    _tmp137 = arck(_tmp134)
+    _tmp138 = _tmp136*_tmp137
+    _tmp139 = 0.25*_tmp138
+    _tmp140 = _tmp135*_tmp139
+    _tmp141 = -0.25*_tmp43*_tmp47*_tmp48
+    _tmp142 = 0.25*_tmp64
+    _tmp143 = _tmp142*_tmp68
+    _tmp144 = _tmp142*_tmp56
+    _tmp145 = _tmp38*_tmp54
+    _tmp146 = _tmp135*p_0
+    _tmp147 = theta_1**3
+    _tmp148 = 3*cosr2(_tmp134) + sinr1(_tmp134) - 3*sinr2(_tmp134)
+    _tmp149 = 0.0625*_tmp147*_tmp148
+    _tmp150 = numpy.cos(_tmp134)
+    _tmp151 = _tmp138*_tmp50
+    _tmp152 = _tmp134*_tmp137
+    _tmp153 = _tmp146*_tmp149 + _tmp146*_tmp152 + _tmp150*_tmp151
+    _tmp154 = 0.25*_tmp46*_tmp49
+    _tmp155 = _tmp135*_tmp151
+    _tmp156 = _tmp115*_tmp117
+    _tmp157 = _tmp101*_tmp103
+    _tmp158 = 0.1767766952966369*_tmp85
+    _tmp159 = _tmp158*_tmp88
+    _tmp160 = _tmp158*_tmp82
+    _tmp161 = _tmp159 + _tmp160
+    _tmp162 = -_tmp159 + 0.1767766952966369*_tmp77*_tmp81*_tmp85
+    _tmp163 = _tmp140 + _tmp161*_tmp68 - _tmp162*_tmp56
+    _tmp164 = _tmp159*p_0
+    _tmp165 = _tmp160*p_0 + _tmp164
+    _tmp166 = -_tmp164 + 0.1767766952966369*_tmp77*_tmp81*_tmp85*p_0
+    _tmp167 = _tmp153 + _tmp165*_tmp56 + _tmp166*_tmp68 + _tmp75
+    _tmp168 = _tmp139*_tmp150 + _tmp161*_tmp56 + _tmp162*_tmp68
+    _tmp169 = _tmp150*p_0
+    _tmp170 = _tmp130 + _tmp149*_tmp169 + _tmp152*_tmp169 - _tmp155 - _tmp165*_tmp68 + _tmp166*_tmp56
+    return [
+        0,
+        -1,
+        0,
+        -1,
+        1,
+        0,
+        0,
+        -_tmp3 - _tmp7,
+        0,
+        -_tmp3,
+        0,
+        0,
+        0,
+        _tmp10 + 0.072*_tmp2 - _tmp8,
+        0,
+        _tmp11,
+        0,
+        0,
+        1,
+        -1,
+        -1,
+        0,
+        0,
+        1,
+        _tmp16,
+        0.04*_tmp18 - _tmp20 + _tmp21,
+        -_tmp22,
+        0,
+        0,
+        0,
+        _tmp23,
+        _tmp24 + _tmp25,
+        _tmp24,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp10*delta_3 + _tmp27 + _tmp32*_tmp6*theta_5 + _tmp4*_tmp41 + _tmp52,
+        0,
+        _tmp27 + _tmp4*_tmp53 - _tmp55*_tmp6,
+        _tmp56*_tmp67 - _tmp68*_tmp71,
+        0,
+        0,
+        _tmp31*_tmp4*p_0*theta_5 - _tmp41*_tmp6 - _tmp7*delta_3 - _tmp72 - _tmp74,
+        0,
+        -_tmp4*_tmp55 - _tmp53*_tmp6 - _tmp72,
+        _tmp56*_tmp71 + _tmp67*_tmp68,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp106 - _tmp94,
+        _tmp108 + _tmp113*_tmp115*_tmp6 + _tmp119*_tmp4 - _tmp25*delta_3 + _tmp52,
+        _tmp108 + _tmp122*_tmp4 - _tmp124*_tmp6,
+        0,
+        0,
+        -_tmp128*_tmp13 + _tmp129*_tmp14,
+        _tmp131 + _tmp132,
+        0.25*_tmp110*_tmp111*_tmp114*_tmp4*p_0 - _tmp119*_tmp6 - _tmp133 + _tmp21*delta_3 - _tmp74,
+        -_tmp122*_tmp6 - _tmp124*_tmp4 - _tmp133,
+        0,
+        0,
+        _tmp128*_tmp14 + _tmp129*_tmp13,
+        0,
+        0,
+        -_tmp140 - _tmp141 - _tmp143*_tmp63 - _tmp144*_tmp70 - _tmp145*_tmp6 + _tmp31*_tmp4*theta_5,
+        -_tmp144*_tmp69 - _tmp153 + 0.25*_tmp58*_tmp59*_tmp64*_tmp68*p_0,
+        0.25*_tmp136*_tmp137*_tmp150 - _tmp143*_tmp70 - _tmp145*_tmp4 - _tmp154 - _tmp31*_tmp6*theta_5 + 0.25*_tmp56*_tmp58*_tmp62*_tmp64,
+        0.5*_tmp137*_tmp150*p_0*theta_1 - _tmp143*_tmp69 - _tmp144*_tmp61 + 0.0625*_tmp147*_tmp148*_tmp150*p_0 - _tmp155,
+        0,
+        0,
+        0.25*_tmp110*_tmp111*_tmp114*_tmp4 - _tmp13*_tmp157 + 0.25*_tmp14*_tmp96*_tmp98*_tmp99 - _tmp141 - _tmp156*_tmp6 - _tmp163,
+        -_tmp106 - _tmp167,
+        _tmp101*_tmp13*_tmp96 - _tmp115*_tmp123*_tmp6 + _tmp14*_tmp157 - _tmp154 - _tmp156*_tmp4 + _tmp168,
+        _tmp132 + _tmp170,
+        -_tmp94,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp131,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp16,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp23,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp163,
+        -_tmp167,
+        _tmp168,
+        _tmp170,
+    ]
+
+
+def _sens_exact(theta, delta, params):
+    """sensitivity at level exact: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (661 operations)."""
+    theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7 = theta
+    delta_2, delta_3, delta_4, delta_5, delta_6, delta_7 = delta
+    p_0, = params
+    _tmp0 = delta_3 + theta_3
+    _tmp1 = numpy.cos(_tmp0)
+    _tmp2 = delta_5 + theta_5
+    _tmp3 = _tmp0 + _tmp2
+    _tmp4 = numpy.cos(_tmp3)
+    _tmp5 = 0.03*_tmp4
+    _tmp6 = numpy.sin(_tmp3)
+    _tmp7 = 0.072*_tmp6
+    _tmp8 = numpy.sin(_tmp0)
+    _tmp9 = 0.02*_tmp8
+    _tmp10 = _tmp2**2
+    _tmp11 = 0.6594566077552098*delta_5 + 0.6594566077552098*theta_5
+    _tmp12 = 0.21067334783983213*sinr1(_tmp11) - 0.5*sinr1(_tmp2)
+    _tmp13 = _tmp10*_tmp12 - 0.01556317594302295
+    _tmp14 = _tmp13*p_0
+    _tmp15 = _tmp14*_tmp2
+    _tmp16 = 0.3297283038776049*delta_5 + 0.3297283038776049*theta_5
+    _tmp17 = 0.5*delta_5
+    _tmp18 = _tmp17 + 0.5*theta_5
+    _tmp19 = -0.347615499514091*sinr1(_tmp16) + sinr1(_tmp18)
+    _tmp20 = 0.25*_tmp10
+    _tmp21 = _tmp19*_tmp20 + 0.20066894885245268
+    _tmp22 = 1.2121056059601407*numpy.sin(_tmp16) + numpy.sin(_tmp18)
+    _tmp23 = _tmp21*_tmp22
+    _tmp24 = 0.5*_tmp2
+    _tmp25 = _tmp24*p_0
+    _tmp26 = _tmp23*_tmp25
+    _tmp27 = 0.5*delta_3
+    _tmp28 = _tmp27 + 0.5*theta_3
+    _tmp29 = numpy.sin(_tmp28)
+    _tmp30 = 0.0625*p_0
+    _tmp31 = _tmp0**3*_tmp30*(3*cosr2(_tmp28) + sinr1(_tmp28) - 3*sinr2(_tmp28))
+    _tmp32 = numpy.cos(_tmp28)
+    _tmp33 = _tmp0**2
+    _tmp34 = arck(_tmp28)
+    _tmp35 = _tmp33*_tmp34
+    _tmp36 = 0.125*p_0
+    _tmp37 = _tmp35*_tmp36
+    _tmp38 = 0.5*p_0
+    _tmp39 = _tmp0*_tmp34*_tmp38
+    _tmp40 = _tmp29*_tmp31 + _tmp29*_tmp39 + _tmp32*_tmp37
+    _tmp41 = _tmp1*_tmp15 + _tmp26*_tmp8 + _tmp40
+    _tmp42 = _tmp14 + _tmp2*p_0*(_tmp10*(0.09161826121794318*_tmp2*(cosr2(_tmp11) - 3*sinr2(_tmp11)) - _tmp24*(cosr2(_tmp2) - 3*sinr2(_tmp2))) + 2*_tmp12*_tmp2)
+    _tmp43 = _tmp21*_tmp25*(0.39966552557377366*numpy.cos(_tmp16) + 0.5*numpy.cos(_tmp18)) + _tmp22*_tmp25*(_tmp19*_tmp24 + _tmp20*(-0.037793019340658006*_tmp2*(cosr2(_tmp16) - 3*sinr2(_tmp16)) + 0.25*_tmp2*(cosr2(_tmp18) - 3*sinr2(_tmp18)))) + _tmp23*_tmp38
+    _tmp44 = _tmp1*_tmp43
+    _tmp45 = numpy.cos(theta_1)
+    _tmp46 = delta_6 + theta_6
+    _tmp47 = _tmp38*_tmp46
+    _tmp48 = 0.5*delta_6 + 0.5*theta_6
+    _tmp49 = numpy.sin(_tmp48)
+    _tmp50 = arck(_tmp48)
+    _tmp51 = _tmp49*_tmp50
+    _tmp52 = numpy.cos(_tmp48)
+    _tmp53 = _tmp50*_tmp52
+    _tmp54 = _tmp46**2
+    _tmp55 = _tmp36*_tmp54
+    _tmp56 = _tmp30*_tmp46**3*(3*cosr2(_tmp48) + sinr1(_tmp48) - 3*sinr2(_tmp48))
+    _tmp57 = -_tmp47*_tmp51 - _tmp49*_tmp56 - _tmp53*_tmp55
+    _tmp58 = numpy.sin(theta_1)
+    _tmp59 = _tmp47*_tmp53 - _tmp51*_tmp55 + _tmp52*_tmp56
+    _tmp60 = _tmp45*_tmp57 - _tmp58*_tmp59
+    _tmp61 = 0.02*_tmp1
+    _tmp62 = 0.03*_tmp6
+    _tmp63 = _tmp29*_tmp37 - _tmp31*_tmp32 - _tmp32*_tmp39
+    _tmp64 = -_tmp1*_tmp26 + _tmp15*_tmp8 + _tmp63
+    _tmp65 = _tmp1*_tmp42 + _tmp43*_tmp8
+    _tmp66 = _tmp45*_tmp59 + _tmp57*_tmp58
+    _tmp67 = delta_2 + theta_2
+    _tmp68 = _tmp67 + theta_1
+    _tmp69 = numpy.cos(_tmp68)
+    _tmp70 = numpy.sin(_tmp68)
+    _tmp71 = 0.5*delta_2
+    _tmp72 = _tmp71 + 0.5*theta_2
+    _tmp73 = numpy.cos(_tmp72)
+    _tmp74 = _tmp67**3
+    _tmp75 = 3*cosr2(_tmp72) + sinr1(_tmp72) - 3*sinr2(_tmp72)
+    _tmp76 = 0.04419417382415922*_tmp74*_tmp75*p_0
+    _tmp77 = arck(_tmp72)
+    _tmp78 = _tmp73*_tmp77
+    _tmp79 = _tmp78*p_0
+    _tmp80 = 0.3535533905932738*_tmp67
+    _tmp81 = _tmp67**2
+    _tmp82 = 0.08838834764831845*_tmp81
+    _tmp83 = numpy.sin(_tmp72)
+    _tmp84 = _tmp77*_tmp83
+    _tmp85 = _tmp84*p_0
+    _tmp86 = _tmp82*_tmp85
+    _tmp87 = _tmp76*_tmp83 + _tmp79*_tmp82 + _tmp80*_tmp85
+    _tmp88 = _tmp73*_tmp76 + _tmp79*_tmp80 - _tmp86 + _tmp87
+    _tmp89 = 0.3535533905932738*_tmp67*_tmp73*_tmp77*p_0 + 0.04419417382415922*_tmp73*_tmp74*_tmp75*p_0 - _tmp86 - _tmp87
+    _tmp90 = -_tmp45*_tmp89 + _tmp58*_tmp88
+    _tmp91 = 0.07*_tmp69 + 0.04*_tmp70 + _tmp90
+    _tmp92 = 0.5*delta_7 + 0.5*theta_7
+    _tmp93 = numpy.cos(_tmp92)
+    _tmp94 = arck(_tmp92)
+    _tmp95 = _tmp93*_tmp94
+    _tmp96 = delta_7 + theta_7
+    _tmp97 = _tmp96**2
+    _tmp98 = 0.25*_tmp97
+    _tmp99 = _tmp95*_tmp98
+    _tmp100 = _tmp70*_tmp99
+    _tmp101 = numpy.sin(_tmp92)
+    _tmp102 = _tmp101*_tmp94
+    _tmp103 = _tmp102*_tmp98
+    _tmp104 = _tmp103*_tmp69
+    _tmp105 = _tmp100*p_0 + _tmp104*p_0
+    _tmp106 = delta_4 + theta_4
+    _tmp107 = _tmp0 + _tmp106
+    _tmp108 = numpy.cos(_tmp107)
+    _tmp109 = numpy.sin(_tmp107)
+    _tmp110 = 0.04*_tmp108 - 0.05*_tmp109
+    _tmp111 = 0.5*delta_4
+    _tmp112 = _tmp111 + 0.5*theta_4
+    _tmp113 = numpy.sin(_tmp112)
+    _tmp114 = arck(_tmp112)
+    _tmp115 = _tmp113*_tmp114
+    _tmp116 = _tmp106**2
+    _tmp117 = 0.25*_tmp116
+    _tmp118 = _tmp115*_tmp117
+    _tmp119 = _tmp1*_tmp118
+    _tmp120 = numpy.cos(_tmp112)
+    _tmp121 = _tmp114*_tmp120
+    _tmp122 = _tmp117*_tmp121
+    _tmp123 = _tmp122*_tmp8
+    _tmp124 = _tmp119*p_0 + _tmp123*p_0 + _tmp40
+    _tmp125 = _tmp106*_tmp38
+    _tmp126 = _tmp116*_tmp36
+    _tmp127 = _tmp106**3*_tmp30*(3*cosr2(_tmp112) + sinr1(_tmp112) - 3*sinr2(_tmp112))
+    _tmp128 = _tmp113*_tmp127 + _tmp115*_tmp125 + _tmp121*_tmp126
+    _tmp129 = -_tmp115*_tmp126 + _tmp120*_tmp127 + _tmp121*_tmp125
+    _tmp130 = _tmp1*_tmp129
+    _tmp131 = _tmp38*_tmp96
+    _tmp132 = _tmp36*_tmp97
+    _tmp133 = _tmp30*_tmp96**3*(3*cosr2(_tmp92) + sinr1(_tmp92) - 3*sinr2(_tmp92))
+    _tmp134 = _tmp101*_tmp133 + _tmp102*_tmp131 + _tmp132*_tmp95
+    _tmp135 = -_tmp102*_tmp132 + _tmp131*_tmp95 + _tmp133*_tmp93
+    _tmp136 = -_tmp134*_tmp70 + _tmp135*_tmp69
+    _tmp137 = _tmp45*_tmp88 + _tmp58*_tmp89
+    _tmp138 = _tmp137 + 0.04*_tmp69 - 0.07*_tmp70
+    _tmp139 = _tmp103*_tmp70
+    _tmp140 = -_tmp139*p_0 + _tmp69*_tmp99*p_0
+    _tmp141 = _tmp1*_tmp122
+    _tmp142 = _tmp118*_tmp8*p_0 - _tmp141*p_0 + _tmp63
+    _tmp143 = _tmp1*_tmp128
+    _tmp144 = _tmp129*_tmp8
+    _tmp145 = _tmp134*_tmp69 + _tmp135*_tmp70
+    _tmp146 = numpy.cos(theta_3)
+    _tmp147 = numpy.sin(delta_3)
+    _tmp148 = 0.02*_tmp147
+    _tmp149 = numpy.sin(_tmp27)**2
+    _tmp150 = -_tmp148 - 0.12*_tmp149
+    _tmp151 = numpy.sin(theta_3)
+    _tmp152 = 0.04*_tmp149
+    _tmp153 = 0.06*_tmp147 - _tmp152
+    _tmp154 = theta_3 + theta_5
+    _tmp155 = numpy.cos(_tmp154)
+    _tmp156 = numpy.sin(delta_3 + delta_5)
+    _tmp157 = numpy.sin(_tmp17 + _tmp27)**2
+    _tmp158 = -0.072*_tmp156 + 0.06*_tmp157
+    _tmp159 = numpy.sin(_tmp154)
+    _tmp160 = -0.03*_tmp156 - 0.144*_tmp157
+    _tmp161 = _tmp155*_tmp158 - _tmp159*_tmp160
+    _tmp162 = theta_1 + theta_2
+    _tmp163 = numpy.sin(_tmp162)
+    _tmp164 = numpy.sin(delta_2)
+    _tmp165 = numpy.sin(_tmp71)**2
+    _tmp166 = -0.07*_tmp164 - 0.08*_tmp165
+    _tmp167 = numpy.cos(_tmp162)
+    _tmp168 = -0.04*_tmp164 + 0.14*_tmp165
+    _tmp169 = _tmp163*_tmp166 - _tmp167*_tmp168
+    _tmp170 = _tmp169 + _tmp90
+    _tmp171 = _tmp148 - 0.1*_tmp149
+    _tmp172 = theta_3 + theta_4
+    _tmp173 = numpy.cos(_tmp172)
+    _tmp174 = numpy.sin(delta_3 + delta_4)
+    _tmp175 = numpy.sin(_tmp111 + _tmp27)**2
+    _tmp176 = -0.05*_tmp174 - 0.08*_tmp175
+    _tmp177 = 0.05*_tmp147 + _tmp152
+    _tmp178 = numpy.sin(_tmp172)
+    _tmp179 = 0.04*_tmp174 - 0.1*_tmp175
+    _tmp180 = _tmp178*_tmp179
+    _tmp181 = _tmp163*_tmp168 + _tmp166*_tmp167
+    _tmp182 = _tmp137 + _tmp181
+    _tmp183 = _tmp173*_tmp179 + _tmp176*_tmp178
+    _tmp184 = 0.5*theta_1
+    _tmp185 = numpy.sin(_tmp184)
+    _tmp186 = theta_1**2
+    _tmp187 = arck(_tmp184)
+    _tmp188 = _tmp186*_tmp187
+    _tmp189 = 0.25*_tmp188
+    _tmp190 = _tmp185*_tmp189
+    _tmp191 = -0.25*_tmp29*_tmp33*_tmp34
+    _tmp192 = 0.25*_tmp54
+    _tmp193 = _tmp192*_tmp58
+    _tmp194 = _tmp193*_tmp53
+    _tmp195 = _tmp192*_tmp45
+    _tmp196 = _tmp195*_tmp51
+    _tmp197 = _tmp23*_tmp24
+    _tmp198 = theta_1**3
+    _tmp199 = 3*cosr2(_tmp184) + sinr1(_tmp184) - 3*sinr2(_tmp184)
+    _tmp200 = _tmp198*_tmp199*_tmp30
+    _tmp201 = numpy.cos(_tmp184)
+    _tmp202 = _tmp188*_tmp36
+    _tmp203 = _tmp184*_tmp187*p_0
+    _tmp204 = _tmp185*_tmp200 + _tmp185*_tmp203 + _tmp201*_tmp202
+    _tmp205 = 0.25*_tmp32*_tmp35
+    _tmp206 = _tmp185*_tmp202
+    _tmp207 = 0.1767766952966369*_tmp81
+    _tmp208 = _tmp207*_tmp84
+    _tmp209 = _tmp207*_tmp78
+    _tmp210 = _tmp208 + _tmp209
+    _tmp211 = -_tmp208 + 0.1767766952966369*_tmp73*_tmp77*_tmp81
+    _tmp212 = _tmp190 + _tmp210*_tmp58 - _tmp211*_tmp45
+    _tmp213 = _tmp208*p_0
+    _tmp214 = _tmp209*p_0 + _tmp213
+    _tmp215 = -_tmp213 + 0.1767766952966369*_tmp73*_tmp77*_tmp81*p_0
+    _tmp216 = _tmp169 + _tmp204 + _tmp214*_tmp45 + _tmp215*_tmp58
+    _tmp217 = _tmp189*_tmp201 + _tmp210*_tmp45 + _tmp211*_tmp58
+    _tmp218 = _tmp181 + _tmp200*_tmp201 + _tmp201*_tmp203 - _tmp206 - _tmp214*_tmp58 + _tmp215*_tmp45
+    return [
+        0,
+        -1,
+        0,
+        -1,
+        1,
+        0,
+        0,
+        0.06*_tmp1 + _tmp41 - _tmp5 - _tmp7 - _tmp9,
+        0,
+        _tmp42*_tmp8 - _tmp44 - _tmp5 - _tmp7,
+        _tmp60,
+        0,
+        0,
+        0.072*_tmp4 + _tmp61 - _tmp62 + _tmp64 + 0.06*_tmp8,
+        0,
+        0.072*_tmp4 - _tmp62 - _tmp65,
+        _tmp66,
+        0,
+        1,
+        -1,
+        -1,
+        0,
+        0,
+        1,
+        -_tmp105 - _tmp91,
+        0.05*_tmp1 + _tmp110 + _tmp124 + _tmp9,
+        _tmp110 + _tmp128*_tmp8 - _tmp130,
+        0,
+        0,
+        _tmp136,
+        _tmp138 + _tmp140,
+        0.05*_tmp108 + 0.04*_tmp109 + _tmp142 - _tmp61 + 0.05*_tmp8,
+        0.05*_tmp108 + 0.04*_tmp109 - _tmp143 - _tmp144,
+        0,
+        0,
+        _tmp145,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp146*_tmp150 - _tmp151*_tmp153 + _tmp161 + _tmp41,
+        0,
+        _tmp161 + _tmp42*_tmp8 - _tmp44,
+        _tmp60,
+        0,
+        0,
+        _tmp146*_tmp153 + _tmp150*_tmp151 + _tmp155*_tmp160 + _tmp158*_tmp159 + _tmp64,
+        0,
+        _tmp155*_tmp160 + _tmp158*_tmp159 - _tmp65,
+        _tmp66,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp105 - _tmp170,
+        _tmp124 + _tmp146*_tmp171 - _tmp151*_tmp177 + _tmp173*_tmp176 - _tmp180,
+        _tmp128*_tmp8 - _tmp130 + _tmp173*_tmp176 - _tmp180,
+        0,
+        0,
+        _tmp136,
+        _tmp140 + _tmp182,
+        _tmp142 + _tmp146*_tmp177 + _tmp151*_tmp171 + _tmp183,
+        -_tmp143 - _tmp144 + _tmp183,
+        0,
+        0,
+        _tmp145,
+        0,
+        0,
+        -_tmp1*_tmp197 + _tmp13*_tmp2*_tmp8 - _tmp190 - _tmp191 - _tmp194 - _tmp196,
+        -_tmp195*_tmp53*p_0 - _tmp204 + 0.25*_tmp49*_tmp50*_tmp54*_tmp58*p_0,
+        -_tmp1*_tmp13*_tmp2 + 0.25*_tmp186*_tmp187*_tmp201 - _tmp193*_tmp51 - _tmp197*_tmp8 - _tmp205 + 0.25*_tmp45*_tmp50*_tmp52*_tmp54,
+        0.5*_tmp187*_tmp201*p_0*theta_1 - _tmp194*p_0 - _tmp196*p_0 + 0.0625*_tmp198*_tmp199*_tmp201*p_0 - _tmp206,
+        0,
+        0,
+        0.25*_tmp113*_tmp114*_tmp116*_tmp8 - _tmp139 - _tmp141 - _tmp191 - _tmp212 + 0.25*_tmp69*_tmp93*_tmp94*_tmp97,
+        -_tmp105 - _tmp216,
+        _tmp100 + _tmp104 - _tmp119 - _tmp123 - _tmp205 + _tmp217,
+        _tmp140 + _tmp218,
+        -_tmp170,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp182,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp91,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp138,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp212,
+        -_tmp216,
+        _tmp217,
+        _tmp218,
+    ]
+
+
 def _wrap(angle):
     return angle - _TWO_PI * numpy.round(angle / _TWO_PI)
 
 
-def _solve(a, b, ok):
-    """Batched dense solve a x = b (a row-major k*k list, b a k list); bad elements -> ok False."""
-    k = len(b)
+def _matrix(entries, rows, cols, shape):
+    """A (*shape, rows, cols) array from a row-major list of arrays (or numbers)."""
+    out = numpy.empty(shape + (rows, cols), dtype=_DTYPE)
+    for i in range(rows):
+        for j in range(cols):
+            out[..., i, j] = entries[i * cols + j]
+    return out
+
+
+_GAUSS_MAX = 12   # systems up to this size: elementwise elimination, as the C evaluator does
+
+
+def _solve(a, b, ok, m=1):
+    """Batched dense solve a x = b (a row-major k*k list, b a row-major k*m list: m right-hand
+    sides); bad elements -> ok False. The solution as a row-major k*m list."""
+    k = len(b) // m
+    if k <= _GAUSS_MAX:
+        return _gauss(a, b, ok, k, m)
     shape = ok.shape
-    am = numpy.empty(shape + (k, k), dtype=_DTYPE)
-    bm = numpy.empty(shape + (k,), dtype=_DTYPE)
-    for i in range(k):
-        bm[..., i] = b[i]
-        for j in range(k):
-            am[..., i, j] = a[i * k + j]
+    am = _matrix(a, k, k, shape)
+    bm = _matrix(b, k, m, shape)
     # numpy.array: a writable array even for 0-d input, where & gives a numpy.bool scalar
-    good = numpy.array(ok & numpy.isfinite(am).all(axis=(-1, -2)) & numpy.isfinite(bm).all(axis=-1))
+    good = numpy.array(ok & numpy.isfinite(am).all(axis=(-1, -2))
+                       & numpy.isfinite(bm).all(axis=(-1, -2)))
     am[~good] = numpy.eye(k)
     bm[~good] = 0.0
     try:
-        x = numpy.linalg.solve(am, bm[..., None])[..., 0]
+        x = numpy.linalg.solve(am, bm)
     except numpy.linalg.LinAlgError:
-        x = numpy.zeros(shape + (k,), dtype=_DTYPE)
+        x = numpy.zeros(shape + (k, m), dtype=_DTYPE)
         for index in numpy.ndindex(*shape):
             try:
                 x[index] = numpy.linalg.solve(am[index], bm[index])
             except numpy.linalg.LinAlgError:
                 good[index] = False
-    good &= numpy.isfinite(x).all(axis=-1)
-    return [x[..., i] for i in range(k)], good
+    good &= numpy.isfinite(x).all(axis=(-1, -2))
+    return [x[..., i, j] for i in range(k) for j in range(m)], good
+
+
+def _gauss(a, b, ok, k, m):
+    """_solve by Gaussian elimination with partial pivoting written out over the element
+    arrays, step for step the C evaluator's sk_solve (one small LAPACK call per element costs
+    more than the whole elimination)."""
+    shape = ok.shape
+    A = [[numpy.array(numpy.broadcast_to(a[i * k + j], shape), dtype=_DTYPE) for j in range(k)]
+         for i in range(k)]
+    B = [[numpy.array(numpy.broadcast_to(b[i * m + r], shape), dtype=_DTYPE) for r in range(m)]
+         for i in range(k)]
+    good = numpy.array(ok)
+    for c in range(k):
+        # the pivot: the first row i >= c with the largest |a[i][c]|
+        best = numpy.abs(A[c][c])
+        pivot = numpy.full(shape, c)
+        for i in range(c + 1, k):
+            size = numpy.abs(A[i][c])
+            larger = size > best
+            best = numpy.where(larger, size, best)
+            pivot = numpy.where(larger, i, pivot)
+        good &= (best > 0.0) & numpy.isfinite(best)
+        for i in range(c + 1, k):
+            swap = pivot == i
+            if swap.any():
+                for row in (A, B):
+                    for j in range(len(row[c])):
+                        row[c][j], row[i][j] = (numpy.where(swap, row[i][j], row[c][j]),
+                                                numpy.where(swap, row[c][j], row[i][j]))
+        for i in range(c + 1, k):
+            f = A[i][c] / A[c][c]
+            for j in range(c, k):
+                A[i][j] = A[i][j] - f * A[c][j]
+            for r in range(m):
+                B[i][r] = B[i][r] - f * B[c][r]
+    for r in range(m):
+        for i in range(k - 1, -1, -1):
+            s = B[i][r]
+            for j in range(i + 1, k):
+                s = s - A[i][j] * B[j][r]
+            B[i][r] = s / A[i][i]
+    x = [B[i][r] for i in range(k) for r in range(m)]
+    for v in x:
+        good &= numpy.isfinite(v)
+    return x, good
 
 
 def _rigid_angles(x, params, ok):
@@ -758,42 +1631,51 @@ _DELTA = {'first_order': _first_order, 'exact': _exact}
 _CHUNK = 8192   # elements per block: the temporaries of a block stay in the CPU cache
 
 
-def evaluate(inputs, level='exact', params=None, links=True):
-    """Deviation of the points at `level` for broadcast input arrays (see the module docstring);
-    `links=False` leaves out the links' rotations (and any loop solve only they need)."""
+def _prepare(inputs, level, params):
+    """Checked arguments: the broadcast input arrays, their shape and the parameter values."""
     if level not in LEVELS:
         raise ValueError(f"level must be one of {LEVELS}, got {level!r}")
     names = set(inputs)
     if names != set(INPUTS):
         raise ValueError(f"inputs must be exactly {INPUTS}, got {tuple(sorted(names))}")
     arrays = numpy.broadcast_arrays(*(numpy.asarray(inputs[n], dtype=_DTYPE) for n in INPUTS))
+    return arrays, [_DTYPE(v) for v in parameters(params)]
+
+
+def _blocks(run, arrays, *args):
+    """run(arrays, *args) over cache-sized blocks of the flattened inputs, its nested dict of
+    arrays (elements on the last axis) joined and shaped like the inputs."""
     shape = arrays[0].shape
-    p = [_DTYPE(v) for v in _parameters(params)]
     size = arrays[0].size
     if size <= _CHUNK:
-        return _evaluate(arrays, level, p, links)
+        return run(arrays, *args)
     flat = [a.reshape(-1) for a in arrays]
-    parts = [_evaluate([a[k:k + _CHUNK] for a in flat], level, p, links)
-             for k in range(0, size, _CHUNK)]
+    parts = [run([a[k:k + _CHUNK] for a in flat], *args) for k in range(0, size, _CHUNK)]
 
-    def join(get):
-        return numpy.concatenate([get(part) for part in parts], axis=-1).reshape(
-            get(parts[0]).shape[:-1] + shape)
+    def join(items):
+        if isinstance(items[0], dict):
+            return {key: join([item[key] for item in items]) for key in items[0]}
+        return numpy.concatenate(items, axis=-1).reshape(items[0].shape[:-1] + shape)
 
-    return {
-        "points": {n: {key: join(lambda part, n=n, key=key: part["points"][n][key])
-                       for key in ("rigid", "compliant", "deviation")} for n in POINTS},
-        "ok": join(lambda part: part["ok"]),
-        "angles": {kind: {h: join(lambda part, kind=kind, h=h: part["angles"][kind][h])
-                          for h in HINGES} for kind in ("rigid", "compliant")},
-        "links": {n: {key: join(lambda part, n=n, key=key: part["links"][n][key])
-                      for key in ("rigid", "compliant", "deviation")}
-                  for n in (LINKS if links else ())},
-    }
+    return join(parts)
+
+
+def evaluate(inputs, level='exact', params=None, links=True):
+    """Deviation of the points at `level` for broadcast input arrays (see the module docstring);
+    `links=False` leaves out the links' rotations (and any loop solve only they need)."""
+    arrays, p = _prepare(inputs, level, params)
+    return _blocks(_evaluate, arrays, level, p, links)
 
 
 def _evaluate(arrays, level, p, links):
     """evaluate() on one block of broadcast input arrays and parameter values p."""
+    theta, delta, ok = _pose(arrays, level, p, links)
+    return _points(theta, delta, ok, level, p, links)
+
+
+def _pose(arrays, level, p, links):
+    """The rigid angles theta (every hinge), delta (the non-input hinges; solved for the links'
+    rotations only when `links`) and the ok mask."""
     shape = arrays[0].shape
     ok = numpy.ones(shape, dtype=bool)
     for a in arrays:
@@ -809,6 +1691,14 @@ def _evaluate(arrays, level, p, links):
             ok = ok & (numpy.abs(theta[i]) <= limit)
             if i in _UNKNOWN_INDEX:
                 ok = ok & (numpy.abs(theta[i] + delta[_UNKNOWN_INDEX.index(i)]) <= limit)
+    return theta, delta, ok
+
+
+def _points(theta, delta, ok, level, p, links):
+    """The points, angles and (with `links`) the links' rotations of solved configurations, NaN
+    where not ok."""
+    shape = ok.shape
+    with numpy.errstate(all="ignore"):
         rigid = _rigid_points(theta, p)
         if level == 'paper':
             dev = _dev_paper(theta, p)
@@ -842,3 +1732,90 @@ def _evaluate(arrays, level, p, links):
         d = numpy.where(ok, rot[len(LINKS) + i], numpy.nan).astype(_DTYPE)
         rotations[name] = {"rigid": r, "compliant": r + d, "deviation": d}
     return {"points": result, "ok": ok, "angles": angles, "links": rotations}
+
+
+def sensitivity(inputs, level='exact', params=None):
+    """{P: {p: a}}: d(dx, dy)/dp of every point's deviation by every parameter, a of shape
+    (2, *broadcast_shape); NaN where the configuration cannot be evaluated."""
+    full = sensitivity_full(inputs, level, params)
+    return {n: full["deviation"][n]["params"] for n in POINTS}
+
+
+def sensitivity_full(inputs, level='exact', params=None):
+    """evaluate()'s result with "deviation" and "rigid": {P: {"params": {p: a}, "inputs":
+    {H: a}}}, the derivatives of every point's deviation and rigid position by every
+    parameter and input, each a of shape (2, *broadcast_shape)."""
+    arrays, p = _prepare(inputs, level, params)
+    return _blocks(_sensitivity, arrays, level, p)
+
+
+def _times(a, b):
+    """Batched matrix product of (..., m, q) and (..., q, n) arrays."""
+    return numpy.matmul(a, b)
+
+
+def _sensitivity(arrays, level, p):
+    """sensitivity_full() on one block: the implicit-function theorem on the closures."""
+    theta, delta, ok = _pose(arrays, level, p, True)
+    result = _points(theta, delta, ok, level, p, True)
+    ok = result["ok"]
+    shape = ok.shape
+    with numpy.errstate(all="ignore"):
+        sr = _sens_rigid(theta, p)
+        # Theta = d theta_u / dv = -A^-1 dG/dv; rigid: dR/dv + dR/dtheta_u Theta
+        th, good = _solve(sr[:36], [-numpy.asarray(v) for v in sr[36:48]], ok, 2)
+        ok = ok & good
+        th = _matrix(th, 6, 2, shape)
+        rig = _matrix(sr[60:], 2, 2, shape) + _times(
+            _matrix(sr[48:60], 2, 6, shape), th)
+        if level == 'paper':
+            s = _sens_paper(theta, p)
+            dev = _matrix(s[12:], 2, 2, shape)
+            dev = dev + _times(_matrix(s[0:12], 2, 6, shape), th)
+        elif level == 'first_order':
+            s = _sens_first_order(theta, delta, p)
+            dev = _matrix(s[108:], 2, 2, shape)
+            # Y = -M^-1 (dE/dv + dE/dtheta_u Theta)
+            rhs = -(_matrix(s[72:84], 6, 2, shape)
+                    + _times(_matrix(s[36:72], 6, 6, shape), th))
+            y, good = _solve(s[:36], [rhs[..., i, j] for i in range(6) for j in range(2)], ok, 2)
+            ok = ok & good
+            dev = dev + _times(_matrix(s[96:108], 2, 6, shape),
+                               _matrix(y, 6, 2, shape))
+            dev = dev + _times(_matrix(s[84:96], 2, 6, shape), th)
+        elif level == 'exact':
+            s = _sens_exact(theta, delta, p)
+            dev = _matrix(s[108:], 2, 2, shape)
+            # Y = -M^-1 (dE/dv + dE/dtheta_u Theta)
+            rhs = -(_matrix(s[72:84], 6, 2, shape)
+                    + _times(_matrix(s[36:72], 6, 6, shape), th))
+            y, good = _solve(s[:36], [rhs[..., i, j] for i in range(6) for j in range(2)], ok, 2)
+            ok = ok & good
+            dev = dev + _times(_matrix(s[96:108], 2, 6, shape),
+                               _matrix(y, 6, 2, shape))
+            dev = dev + _times(_matrix(s[84:96], 2, 6, shape), th)
+    ok = ok & numpy.isfinite(dev).all(axis=(-1, -2)) & numpy.isfinite(rig).all(axis=(-1, -2))
+    if not ok.all():
+        for key in result["points"]:
+            for part in result["points"][key].values():
+                part[..., ~ok] = numpy.nan
+        for kind in result["angles"].values():
+            for h in kind:
+                kind[h] = numpy.where(ok, kind[h], numpy.nan)
+        for link in result["links"].values():
+            for key in link:
+                link[key] = numpy.where(ok, link[key], numpy.nan)
+    dev = numpy.where(ok[..., None, None], dev, numpy.nan)
+    rig = numpy.where(ok[..., None, None], rig, numpy.nan)
+    names = list(PARAMETERS)
+
+    def table(m, n):
+        rows = numpy.moveaxis(m[..., 2 * n:2 * n + 2, :], -1, 0)
+        rows = numpy.moveaxis(rows, -1, 1)                 # (variable, 2, *shape)
+        return {"params": {q: rows[v] for v, q in enumerate(names)},
+                "inputs": {h: rows[len(names) + v] for v, h in enumerate(INPUTS)}}
+
+    result["ok"] = ok
+    result["deviation"] = {n: table(dev, i) for i, n in enumerate(POINTS)}
+    result["rigid"] = {n: table(rig, i) for i, n in enumerate(POINTS)}
+    return result

@@ -15,6 +15,7 @@ Small integers stay integers (exponents, signs, `2*x`), and rational exponents s
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import sympy as sp
 
@@ -55,6 +56,14 @@ def float_literals(expr: sp.Expr) -> sp.Expr:
 
     The numeric factors of a product (and terms of a sum) are folded together, so the product of
     two constants is rounded once, not twice."""
+    return fold_numbers(expr, _simple, _double)
+
+
+def fold_numbers(expr: sp.Expr, keep: Callable[[sp.Expr], bool],
+                 replace: Callable[[sp.Expr], sp.Expr]) -> sp.Expr:
+    """`expr` with every maximal numeric subexpression that `keep` rejects replaced by
+    `replace(it)`; the numeric factors of a product and terms of a sum are taken together, and
+    small rational exponents stay exact (so x**(1/2) still prints as a square root)."""
     expr = sp.sympify(expr)
     if not isinstance(expr, sp.Basic) or expr.is_Atom and not expr.is_number:
         return expr
@@ -69,9 +78,9 @@ def float_literals(expr: sp.Expr) -> sp.Expr:
 
     def _fold(e: sp.Expr) -> sp.Expr:
         if not e.free_symbols:
-            if not e.is_number or _simple(e):
+            if not e.is_number or keep(e):
                 return e
-            return _double(e)
+            return replace(e)
         if e.is_Atom:
             return e
         if e.is_Pow:
@@ -83,8 +92,8 @@ def float_literals(expr: sp.Expr) -> sp.Expr:
             rest = [fold(a) for a in e.args if a.free_symbols]
             if numeric:
                 constant = e.func(*numeric)
-                if not _simple(constant):
-                    constant = _double(constant)
+                if not keep(constant):
+                    constant = replace(constant)
                 rest.append(constant)
             return e.func(*rest)
         args = [fold(a) for a in e.args]

@@ -8,6 +8,11 @@
     newton       theta, delta, params  -> F, ∂F/∂δ of the exact compliant closure
     rigid_points theta, params         -> rigid x, y of every requested point
     dev_<level>  theta, delta, params  -> deviation x, y of every requested point
+    sens_rigid   theta, params         -> A, ∂G/∂v (G the rigid closure), ∂R/∂θ_u, ∂R/∂v
+    sens_<level> theta, delta, params  -> M, ∂E/∂θ_u, ∂E/∂v of the closure E the level solves
+                                          for δ (where it does), ∂D/∂θ_u, ∂D/∂δ, ∂D/∂v of the
+                                          points' deviations D (symkin.sensitivity)
+    sens_chain   params                -> ∂(default of p_j)/∂p_k, when defaults read parameters
     links        theta, delta          -> rotation φ of every reported link and its deviation δφ
 
 Only what the requested points and levels need is derived: a point whose direct path holds only
@@ -67,14 +72,23 @@ class Plan:
     notes: tuple[str, ...] = ()        # e.g. the variant a tolerance chose, for the headers
     solver: SolverSettings = SOLVER    # how the generated evaluators solve the loops
     derivation: Derivation | None = None    # what a report restates (plan(..., report=True))
+    sensitivity: bool = False          # the sens_* routines are there
+    chain: bool = False                # some parameter's default reads others (sens_chain)
+
+    def stage(self, level: Level) -> bool:
+        """Whether the sensitivity at `level` goes through a closure solved for δ."""
+        return self.needs_loops and level.needs_delta
 
 
 def plan(analysis: Analysis, points: Sequence[str] | None = None,
          levels: Sequence[str] | None = None, cse: bool = True,
-         notes: Sequence[str] = (), report: bool = False, links: bool | None = None) -> Plan:
+         notes: Sequence[str] = (), report: bool = False, links: bool | None = None,
+         sensitivity: bool = True) -> Plan:
     """Derive the routines for the requested points and levels (all by default); with `report`,
     also the statement of the derivation a LaTeX report prints. `links`: report the rotation of
-    every link (default: when no points are singled out; their rotations need the loops)."""
+    every link (default: when no points are singled out; their rotations need the loops). With
+    `sensitivity`, the routines of the derivatives by the parameters and inputs
+    (docs/sensitivity.md)."""
     an, kin = analysis, analysis.kin
     mech = an.mechanism
     names = tuple(p.name for p in an.points if points is None or p.name in points)
@@ -125,6 +139,10 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
             tuple(an.link_rotation(i) for i in reported)
             + tuple(an.delta_phi(i) for i in reported),
             "rotation of every link and how much further the compliant one turns")
+    chain = False
+    if sensitivity:
+        chain = _sensitivity_routines(an, names, levels, needs_loops, routines,
+                                      (theta, params), (theta, delta, params))
     # Numbers reach the printers as correctly rounded doubles (exact rationals stay in mpmath).
     routines = {k: Routine(r.name, r.arguments,
                            tuple((s, float_literals(e)) for s, e in r.assignments),
@@ -146,8 +164,44 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
         reported_links=tuple(s.links[i] for i in reported), levels=levels, limits=limits, n_dyads=len(sol.dyads),
         needs_loops=needs_loops, loops_for_links=loops_for_links, closed_form=sol.closed_form,
         routines=routines,
-        notes=tuple(notes))
+        notes=tuple(notes), sensitivity=sensitivity, chain=chain)
     return with_derivation(result, an) if report else result
+
+
+def _sensitivity_routines(an: Analysis, points: Sequence[str], levels: Sequence[Level],
+                          needs_loops: bool, routines: dict[str, Routine],
+                          args: tuple[Argument, ...], args_delta: tuple[Argument, ...]) -> bool:
+    """Add the sens_* routines (row-major matrices, in the order of the module docstring);
+    True when the parameter chain routine is needed."""
+    from ..sensitivity import Sensitivities, parameter_chain
+
+    terms = Sensitivities(an, points)
+    rigid = terms.rigid
+    blocks = [rigid.theta, rigid.variables]
+    if terms.rigid_stage is not None:
+        blocks = [terms.rigid_stage.jacobian, terms.rigid_stage.variables] + blocks
+    routines["sens_rigid"] = Routine("sens_rigid", args, (), _flat(blocks),
+                                     "rigid stage: A, dG/dv; rigid points: dR/dtheta, dR/dv")
+    for lv in levels:
+        part = terms.partials(lv.name)
+        stage = terms.stage(lv.name) if needs_loops and lv.needs_delta else None
+        blocks = [part.theta] + ([part.delta] if stage is not None else []) + [part.variables]
+        if stage is not None:
+            blocks = [stage.jacobian, stage.theta, stage.variables] + blocks
+        routines[f"sens_{lv.name}"] = Routine(
+            f"sens_{lv.name}", args_delta if stage is not None else args, (), _flat(blocks),
+            f"sensitivity at level {lv.name}: " + ("M, dE/dtheta, dE/dv; " if stage else "")
+            + "dD/dtheta, " + ("dD/ddelta, " if stage else "") + "dD/dv")
+    chain = parameter_chain([p.expr for p in an.mechanism.parameters], an.params)
+    if not chain.is_zero_matrix:
+        routines["sens_chain"] = Routine("sens_chain", args[1:], (), _flat([chain]),
+                                         "d(default of p_j)/dp_k of the parameters")
+        return True
+    return False
+
+
+def _flat(blocks: Sequence[sp.Matrix]) -> tuple[sp.Expr, ...]:
+    return tuple(e for b in blocks for e in flatten(b.tolist()))
 
 
 def with_derivation(plan: Plan, analysis: Analysis) -> Plan:

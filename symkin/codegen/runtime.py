@@ -18,6 +18,8 @@ import threading
 from pathlib import Path
 from types import ModuleType
 
+import numpy as np
+
 from ..errors import InputError
 
 CFLAGS = ("-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O2", "-fPIC", "-shared")
@@ -122,17 +124,7 @@ def build(name: str, header: str, source: str, flags: tuple[str, ...] = CFLAGS,
     if _verified(target, record, full):
         return target
     with tempfile.TemporaryDirectory() as tmp:
-        (Path(tmp) / f"{name}.h").write_text(header)
-        (Path(tmp) / f"{name}.c").write_text(source)
-        files = [f"{name}.c"]
-        if extra:
-            (Path(tmp) / "extra.c").write_text(extra)
-            files.append("extra.c")
-        built = Path(tmp) / "lib.so"
-        proc = subprocess.run([cc, *flags, *files, "-o", str(built), "-lm"], cwd=tmp,
-                              capture_output=True, text=True)
-        if proc.returncode != 0:
-            raise RuntimeError(f"the generated C did not compile:\n{proc.stderr}")
+        built = _compile(cc, flags, name, header, source, extra, Path(tmp))
         digest = _sha256(built)
         # atomic, unique temporary names: a concurrent build never sees half a file; the
         # record last, so a reader that sees it finds the library it describes
@@ -141,37 +133,143 @@ def build(name: str, header: str, source: str, flags: tuple[str, ...] = CFLAGS,
     return target
 
 
-class Library:
-    """A loaded generated evaluator: `evaluate(inputs, params, level) -> (status, out, angles)`,
-    `pose(...)` with the links' rotations too."""
+def load_transient(name: str, header: str, source: str,
+                   flags: tuple[str, ...] = CFLAGS) -> ctypes.CDLL:
+    """The generated pair compiled in a temporary folder and loaded; the folder is removed
+    before returning (the loaded library stays mapped), so no file is left behind."""
+    with tempfile.TemporaryDirectory(prefix="symkin-") as tmp:
+        return ctypes.CDLL(str(_compile(compiler(), flags, name, header, source, "", Path(tmp))))
 
-    def __init__(self, path: Path, name: str, n_inputs: int, n_params: int, n_points: int,
-                 n_hinges: int, n_links: int = 0):
-        self.lib = ctypes.CDLL(str(path))
+
+def _compile(cc: str, flags: tuple[str, ...], name: str, header: str, source: str, extra: str,
+             folder: Path) -> Path:
+    """The shared library of the texts, built in `folder`."""
+    (folder / f"{name}.h").write_text(header)
+    (folder / f"{name}.c").write_text(source)
+    files = [f"{name}.c"]
+    if extra:
+        (folder / "extra.c").write_text(extra)
+        files.append("extra.c")
+    built = folder / "lib.so"
+    proc = subprocess.run([cc, *flags, *files, "-o", str(built), "-lm"], cwd=folder,
+                          capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise RuntimeError(f"the generated C did not compile:\n{proc.stderr}")
+    return built
+
+
+class Library:
+    """A loaded generated evaluator, called through its batch entry points (one ctypes call for
+    any number of configurations: docs/generated-code.md)."""
+
+    def __init__(self, path: Path | ctypes.CDLL, name: str, n_inputs: int, n_params: int,
+                 n_points: int, n_hinges: int, n_links: int = 0):
+        self.lib = path if isinstance(path, ctypes.CDLL) else ctypes.CDLL(str(path))
+        dptr, iptr = ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_int)
         self.fn = getattr(self.lib, f"{name}_evaluate_pose")
         self.fn.restype = ctypes.c_int
-        dptr = ctypes.POINTER(ctypes.c_double)
         self.fn.argtypes = [dptr, dptr, ctypes.c_int, dptr, dptr, dptr]
+        self.batch = getattr(self.lib, f"{name}_evaluate_angles_batch")
+        self.batch.restype = ctypes.c_int
+        self.batch.argtypes = [ctypes.c_int, dptr, dptr, ctypes.c_int, dptr, dptr, iptr]
+        self.grid = getattr(self.lib, f"{name}_evaluate_grid")
+        self.grid.restype = ctypes.c_int
+        self.grid.argtypes = [ctypes.c_int, dptr, ctypes.c_int, dptr, ctypes.c_int, dptr, iptr]
+        self.sensitivity = getattr(self.lib, f"{name}_sensitivity_batch", None)
+        if self.sensitivity is not None:
+            self.sensitivity.restype = ctypes.c_int
+            self.sensitivity.argtypes = [ctypes.c_int, dptr, dptr, ctypes.c_int, dptr, dptr, dptr,
+                                         iptr]
         self.n_inputs, self.n_params = n_inputs, n_params
         self.n_points, self.n_hinges, self.n_links = n_points, n_hinges, n_links
+        self.n_variables = n_params + n_inputs
 
     def pose(self, inputs, params=None, level: int = 2
              ) -> tuple[int, list[float], list[float], list[float]]:
-        """(status, out: 6 doubles per point, angles: rigid then compliant per hinge, links:
-        rigid, compliant, deviation per link)."""
+        """One configuration in one call: (status, out: 6 doubles per point, angles: rigid then
+        compliant per hinge, links: rigid, compliant, deviation per link)."""
         x = (ctypes.c_double * max(1, self.n_inputs))(*inputs)
-        p = None if params is None else (ctypes.c_double * max(1, self.n_params))(*params)
         out = (ctypes.c_double * max(1, 6 * self.n_points))()
         angles = (ctypes.c_double * (2 * self.n_hinges))()
         links = (ctypes.c_double * max(1, 3 * self.n_links))()
-        status = self.fn(x, p, level, out, angles, links if self.n_links else None)
+        status = self.fn(x, self.params(params), level, out, angles,
+                         links if self.n_links else None)
         return (status, list(out)[: 6 * self.n_points], list(angles),
                 list(links)[: 3 * self.n_links])
 
     def evaluate(self, inputs, params=None, level: int = 2
                  ) -> tuple[int, list[float], list[float]]:
-        """(status, out: 6 doubles per point, angles: rigid then compliant per hinge)."""
+        """One configuration: (status, out: 6 doubles per point, angles: rigid then compliant
+        per hinge)."""
         return self.pose(inputs, params, level)[:3]
+
+    def evaluate_rows(self, inputs: np.ndarray, params=None, level: int = 2,
+                      angles: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """n configurations in one call: inputs (n, n_inputs); (status (n,), out (n, 6 n_points),
+        angles (n, 2 n_hinges) or None)."""
+        x = _rows(inputs, self.n_inputs)
+        n = x.shape[0]
+        out = np.empty((n, 6 * self.n_points))
+        ang = np.empty((n, 2 * self.n_hinges)) if angles else None
+        status = np.empty(n, dtype=np.intc)
+        self.batch(n, _ptr(x), self.params(params), level, _ptr(out), _ptr(ang), _iptr(status))
+        return status, out, ang
+
+    def evaluate_grid(self, params: np.ndarray, inputs: np.ndarray, level: int = 2,
+                      out: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Every row of params (n_sets, n_params) at every row of inputs (n, n_inputs), one
+        call: (status (n_sets, n), out (n_sets, n, 6 n_points)); `out` may be given, to reuse."""
+        p = np.ascontiguousarray(params, dtype=np.float64)
+        if p.ndim != 2 or p.shape[1] != self.n_params:
+            raise ValueError(f"params must have shape (n_sets, {self.n_params}), got {p.shape}")
+        x = _rows(inputs, self.n_inputs)
+        shape = (p.shape[0], x.shape[0])
+        if out is None or out.shape != shape + (6 * self.n_points,) or not out.flags.c_contiguous:
+            out = np.empty(shape + (6 * self.n_points,))
+        status = np.empty(shape, dtype=np.intc)
+        self.grid(shape[0], _ptr(p) if self.n_params else None, shape[1], _ptr(x), level,
+                  _ptr(out), _iptr(status))
+        return status, out
+
+    def sensitivity_rows(self, inputs: np.ndarray, params=None, level: int = 2
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Sensitivities of n configurations in one call: (status (n,), values (n, 6 n_points),
+        deviation and rigid (n, n_points, n_variables, 2))."""
+        if self.sensitivity is None:
+            raise RuntimeError("this evaluator was generated without sensitivities")
+        x = _rows(inputs, self.n_inputs)
+        n = x.shape[0]
+        values = np.empty((n, 6 * self.n_points))
+        dev = np.empty((n, self.n_points, self.n_variables, 2))
+        rig = np.empty((n, self.n_points, self.n_variables, 2))
+        status = np.empty(n, dtype=np.intc)
+        self.sensitivity(n, _ptr(x), self.params(params), level, _ptr(values), _ptr(dev),
+                         _ptr(rig), _iptr(status))
+        return status, values, dev, rig
+
+    def params(self, params) -> ctypes.Array | None:
+        """A parameter array for the C calls (None: the defaults)."""
+        if params is None:
+            return None
+        values = [float(v) for v in params]
+        if len(values) != self.n_params:
+            raise ValueError(f"expected {self.n_params} parameter values, got {len(values)}")
+        return (ctypes.c_double * max(1, self.n_params))(*values)
+
+
+def _rows(inputs, width: int) -> np.ndarray:
+    x = np.ascontiguousarray(inputs, dtype=np.float64)
+    if x.ndim != 2 or x.shape[1] != width:
+        raise ValueError(f"inputs must have shape (n, {width}), got {x.shape}")
+    return x
+
+
+def _ptr(array: np.ndarray | None):
+    return None if array is None else array.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
+
+
+def _iptr(array: np.ndarray):
+    return array.ctypes.data_as(ctypes.POINTER(ctypes.c_int))
 
 
 TIMER = r"""
@@ -225,6 +323,14 @@ def time_per_evaluation(name: str, header: str, source: str, inputs: list[float]
 def _evaluate_prefix(header: str) -> str:
     """The mechanism name a generated header declares (<name>_evaluate)."""
     return re.search(r"int (\w+)_evaluate\(", header).group(1)
+
+
+def numpy_module_in_memory(source: str, name: str) -> ModuleType:
+    """A generated numpy module executed from its text, with no file (our own generated code,
+    names escaped); it is not entered in sys.modules."""
+    module = ModuleType(f"symkin_compiled_{name}")
+    exec(compile(source, f"<symkin generated {name}>", "exec"), module.__dict__)  # noqa: S102
+    return module
 
 
 _MODULES: dict[str, ModuleType] = {}

@@ -53,6 +53,9 @@ class Backend:
             n_dyads=plan.n_dyads, closed_form=plan.closed_form, needs_loops=plan.needs_loops,
             loops_for_links=plan.loops_for_links,
             dtype=precision, solver=plan.solver, tol=plan.solver.tolerances(precision),
+            sensitivity=plan.sensitivity, chain=plan.chain,
+            stages=[lv.name for lv in plan.levels if plan.stage(lv)],
+            n_params=len(plan.parameters), n_vars=len(plan.parameters) + len(plan.inputs),
             routines=[routine_data(r, self.printer) for r in plan.routines.values()],
             kernels=[type(self).kernel_source(n) for n in special_functions(plan)],
         )

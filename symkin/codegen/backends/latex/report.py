@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping, Sequence
 from functools import cache
 from types import ModuleType
 
@@ -40,8 +41,11 @@ __all__ = ["emit", "escape_latex", "environment", "SWEEP_RANGE", "SWEEP_SAMPLES"
 #: Default input range of the deviation plot: every input equal to t, |t| <= SWEEP_RANGE (rad).
 SWEEP_RANGE = 0.3
 SWEEP_SAMPLES = 241
-#: Matrices wider than this many columns are printed in column blocks.
+#: Matrices wider than this many columns are printed in column blocks (at the full width).
 MAX_MATRIX_COLS = 14
+#: The column the report is laid out for, in points: an article's one-column text width at
+#: 10 pt; `derive --columnwidth` sets a journal's (e.g. a two-column article's 229.9 pt).
+COLUMN_WIDTH = 345.0
 
 
 # -- Jinja environment with LaTeX-friendly delimiters (SymForce style) ----------------------------
@@ -114,7 +118,7 @@ def _dz_sum(signs) -> sp.Expr:
 class Report:
     """Builds the template context of one plan."""
 
-    def __init__(self, plan: Plan, source: str) -> None:
+    def __init__(self, plan: Plan, source: str, column_width: float = COLUMN_WIDTH) -> None:
         if plan.derivation is None:
             raise ValueError("a report needs a plan made with plan(..., report=True)")
         self.plan = plan
@@ -123,7 +127,11 @@ class Report:
         self.s = self.d.structure
         self.mech = self.s.mechanism
         self.defaults = dict(self.mech.defaults)
-        self.tex = Tex(self._symbol_names())
+        # ems the equations are broken for: LINE_WIDTH_EM (calibrated, with a margin for the
+        # estimated glyph widths) at the one-column width, in proportion elsewhere
+        self.width = LINE_WIDTH_EM * column_width / COLUMN_WIDTH
+        self.max_cols = max(4, int(MAX_MATRIX_COLS * self.width / LINE_WIDTH_EM))
+        self.tex = Tex(self._symbol_names(), self.width)
 
     # -- symbols -------------------------------------------------------------------------------
     def _symbol_names(self) -> dict[sp.Symbol, str]:
@@ -185,6 +193,8 @@ class Report:
             "input_labels": list(self.d.inputs),
             "point_names": [escape_latex(p) for p in self.plan.points],
             "levels": [lv.title for lv in self.plan.levels],
+            "notes": [escape_latex(n.strip()) for n in self.plan.notes],
+            "four_bar": s.n == 3 and s.m == 4,
             "relabeled": s.relabeled,
             "links": [{"label": i, "name": self.link_name(i),
                        "ground": i == 0} for i in range(s.n + 1)],
@@ -235,7 +245,7 @@ class Report:
         """Display lines of an integer matrix, in column blocks when it is wide."""
         ncol = len(rows[0]) if rows else 0
         out = []
-        blocks = _chunks(list(range(ncol)), MAX_MATRIX_COLS) if ncol else [[]]
+        blocks = _chunks(list(range(ncol)), self.max_cols) if ncol else [[]]
         for block in blocks:
             sub_rows = [[r[c] for c in block] for r in rows]
             body = self.tex.matrix(sub_rows) if block else r"\mathbf{0}"
@@ -291,15 +301,17 @@ class Report:
             h = self.d.hinges[a]
             phi_p = self.d.phi[h.P]
             u = h.u
-            body = (rf"\Delta f_{{{a}}}(\theta_{{{a}}})\,{tex.table_vector(u)} + "
-                    rf"\Delta g_{{{a}}}(\theta_{{{a}}})\,{tex.table_vector(V.perp(u))}")
+            first = rf"\Delta f_{{{a}}}(\theta_{{{a}}})\,{tex.table_vector(u)}"
+            second = rf"\Delta g_{{{a}}}(\theta_{{{a}}})\,{tex.table_vector(V.perp(u))}"
             rot = "" if phi_p == 0 else _rotation_tex(tex, phi_p)
             sign = "-" if h.sign < 0 else ""
-            if rot or sign:
-                rhs = rf"{sign}{rot}\Bigl[{body}\Bigr]"
-            else:
-                rhs = body
-            lines.append(rf"\Delta\mathbf{{z}}_{{{a}}} &= {rhs}")
+            open_, close = (rf"{sign}{rot}\Bigl[", r"\Bigr]") if rot or sign else ("", "")
+            lhs = rf"\Delta\mathbf{{z}}_{{{a}}} &= "
+            one_line = f"{lhs}{open_}{first} + {second}{close}"
+            if width(one_line) <= self.width - 1:
+                lines.append(one_line)
+            else:                       # a narrow column: the second term on a line of its own
+                lines += [f"{lhs}{open_}{first}", rf"&\qquad + {second}{close}"]
         return lines
 
     def _abstract_names(self, exprs) -> Tex:
@@ -321,7 +333,7 @@ class Report:
             rows = [[zero if M[i, j] == 0 else M[i, j] for j in range(M.cols)]
                     for i in range(M.rows)]
             tex = self._abstract_names(list(M))
-            blocks = _chunks(list(range(M.cols)), 10)
+            blocks = _chunks(list(range(M.cols)), max(3, self.max_cols * 10 // 14))
             lines = []
             for block in blocks:
                 body = tex.matrix([[r[c] for c in block] for r in rows])
@@ -360,7 +372,7 @@ class Report:
                     lines = tex.named_equation(lhs, e, prefix)
                     if key in md.elementary:
                         lines += align_lines("", "=", tex.lines(md.elementary[key],
-                                                                LINE_WIDTH_EM - 4))
+                                                                self.width - 4))
                     entry["lines"] += lines
                 for a, gamma, c in md.prbm:
                     entry["param_values"].append(
@@ -557,16 +569,16 @@ class Report:
             base = rf"\Delta\mathbf{{R}}_{{{sub_name}}}^{{\mathrm{{paper}}}}"
             toks = [base] + [f"+ {t}" for t in terms_lin]
             lead = width(lhs1) + 1.5
-            entry["first_order"] = align_lines(lhs1, "=", pack(toks, LINE_WIDTH_EM - lead,
-                                                               LINE_WIDTH_EM - lead - 1))
+            entry["first_order"] = align_lines(lhs1, "=", pack(toks, self.width - lead,
+                                                               self.width - lead - 1))
             lhs2 = rf"\Delta\mathbf{{R}}_{{{sub_name}}}"
-            dzc = " + ".join(rf"\Delta\mathbf{{z}}_{{{b}}}(\theta_{{{b}}}"
-                             + (rf" + \delta_{{{b}}}" if b in self.d.unknowns else "") + ")"
-                             for b in path) or r"\mathbf{0}"
-            toks = terms_exact[:1] + [f"+ {t}" for t in terms_exact[1:]] + [
-                f"+ {dzc}" if terms_exact else dzc]
-            entry["exact"] = align_lines(lhs2, "=", pack(toks, LINE_WIDTH_EM - lead,
-                                                         LINE_WIDTH_EM - lead - 1))
+            dzc = [rf"\Delta\mathbf{{z}}_{{{b}}}(\theta_{{{b}}}"
+                   + (rf" + \delta_{{{b}}}" if b in self.d.unknowns else "") + ")"
+                   for b in path] or [r"\mathbf{0}"]
+            terms = terms_exact + dzc
+            toks = terms[:1] + [f"+ {t}" for t in terms[1:]]
+            entry["exact"] = align_lines(lhs2, "=", pack(toks, self.width - lead,
+                                                         self.width - lead - 1))
             out.append(entry)
         return out
 
@@ -598,9 +610,9 @@ def _rounded(expr: sp.Expr) -> sp.Expr:
 
 def _relation_lines(tex: Tex, lhs: sp.Expr, rhs: sp.Expr) -> list[str]:
     """``lhs = rhs`` with both sides possibly long: lhs lines, then ``&= rhs`` lines."""
-    left = tex.lines(lhs, LINE_WIDTH_EM - 4, LINE_WIDTH_EM - 4)
-    right = tex.lines(rhs, LINE_WIDTH_EM - 4, LINE_WIDTH_EM - 5)
-    if len(left) == 1 and width(left[0]) + width(right[0]) < LINE_WIDTH_EM - 3 and \
+    left = tex.lines(lhs, tex.width - 4, tex.width - 4)
+    right = tex.lines(rhs, tex.width - 4, tex.width - 5)
+    if len(left) == 1 and width(left[0]) + width(right[0]) < tex.width - 3 and \
             len(right) == 1:
         return [f"{left[0]} &= {right[0]}"]
     out = [f"&{left[0]}"] + [r"&\quad {}" + ln for ln in left[1:]]
@@ -627,67 +639,136 @@ def pose_data(report: Report) -> PoseData:
     return PoseData(links, 0, tuple(plates), points)
 
 
-def sweep(report: Report, numpy_module) -> tuple[Sweep, tuple[float, float], dict]:
-    """|ΔR| of the points over every input = t, |t| <= SWEEP_RANGE, evaluated with numpy."""
-    t = np.linspace(-SWEEP_RANGE, SWEEP_RANGE, SWEEP_SAMPLES)
-    inputs = {name: t for name in numpy_module.INPUTS}
-    magnitude: dict[str, dict[str, np.ndarray]] = {p: {} for p in report.plan.points}
-    deviation: dict[str, dict[str, np.ndarray]] = {p: {} for p in report.plan.points}
-    ok = np.ones(t.shape, dtype=bool)
+def sweep_spans(inputs: Sequence[str], given: Mapping[str, tuple[float, float]] | None = None
+                ) -> dict[str, tuple[float, float]]:
+    """Each input's plotted range: the `given` ones (derive --range), else ±SWEEP_RANGE."""
+    spans = {h: (-SWEEP_RANGE, SWEEP_RANGE) for h in inputs}
+    spans.update({h: (float(lo), float(hi)) for h, (lo, hi) in (given or {}).items()})
+    return spans
+
+
+def sweep(report: Report, numpy_module, spans: Mapping[str, tuple[float, float]]
+          ) -> tuple[list[tuple[str, Sweep, tuple[float, float]]], dict]:
+    """|ΔR| of the points at every level with each input in turn over its span (the others held
+    at the middle of theirs), evaluated with the generated numpy module.
+
+    Returns per input its sweep and the plot's clipped x range, and the report's summary (the
+    largest deviation per point and level over all sweeps, where it occurs, and the largest
+    distance of each level from the exact one relative to the largest exact deviation)."""
     names = [lv.name for lv in report.plan.levels]
-    for lv in names:
-        result = numpy_module.evaluate(inputs, level=lv)
-        ok &= np.asarray(result["ok"], dtype=bool)
-        for p in report.plan.points:
-            d = np.asarray(result["points"][p]["deviation"], dtype=float)
-            deviation[p][lv] = d
-    for p in report.plan.points:
+    held = {h: 0.5 * (lo + hi) for h, (lo, hi) in spans.items()}
+    single = len(spans) == 1
+    runs: list[tuple[str, Sweep, tuple[float, float]]] = []
+    summary: dict = {"samples": 0, "failed": 0, "spans": [], "rows": []}
+    for h, (lo, hi) in spans.items():
+        t = np.linspace(lo, hi, SWEEP_SAMPLES)
+        inputs = {n: (t if n == h else np.full_like(t, held[n])) for n in numpy_module.INPUTS}
+        magnitude: dict[str, dict[str, np.ndarray]] = {p: {} for p in report.plan.points}
+        deviation: dict[str, dict[str, np.ndarray]] = {p: {} for p in report.plan.points}
+        ok = np.ones(t.shape, dtype=bool)
         for lv in names:
-            d = np.where(ok, deviation[p][lv], np.nan)
-            deviation[p][lv] = d
-            magnitude[p][lv] = np.hypot(d[0], d[1])
-    # clipped to the assembling samples, with a margin (10 % of the range) showing where
-    # assembly stops
-    margin = 0.1 * SWEEP_RANGE
-    if ok.any():
-        idx = np.flatnonzero(ok)
-        lo = -SWEEP_RANGE if idx[0] == 0 else max(-SWEEP_RANGE, t[idx[0]] - margin)
-        hi = SWEEP_RANGE if idx[-1] == len(t) - 1 else min(SWEEP_RANGE, t[idx[-1]] + margin)
-    else:
-        lo, hi = -SWEEP_RANGE, SWEEP_RANGE
-    summary = {"samples": int(len(t)), "failed": int((~ok).sum()),
-               "range": f"{SWEEP_RANGE:g}", "lo": f"{lo:.3f}", "hi": f"{hi:.3f}",
-               "rows": []}
+            result = numpy_module.evaluate(inputs, level=lv)
+            ok &= np.asarray(result["ok"], dtype=bool)
+            for p in report.plan.points:
+                deviation[p][lv] = np.asarray(result["points"][p]["deviation"], dtype=float)
+        for p in report.plan.points:
+            for lv in names:
+                deviation[p][lv] = np.where(ok, deviation[p][lv], np.nan)
+                magnitude[p][lv] = np.hypot(*deviation[p][lv])
+        # clipped to the assembling samples, with a margin (10 % of the span) showing where
+        # assembly stops
+        margin = 0.1 * (hi - lo)
+        a, b = lo, hi
+        if ok.any():
+            idx = np.flatnonzero(ok)
+            a = lo if idx[0] == 0 else max(lo, t[idx[0]] - margin)
+            b = hi if idx[-1] == len(t) - 1 else min(hi, t[idx[-1]] + margin)
+        runs.append((h, Sweep(t, ok, magnitude, deviation), (a, b)))
+        summary["samples"] += len(t)
+        summary["failed"] += int((~ok).sum())
+        summary["spans"].append({"input": escape_latex(h), "lo": f"{lo:g}", "hi": f"{hi:g}",
+                                 "held": f"{held[h]:g}", "clip": f"[{a:.3f}, {b:.3f}]",
+                                 "clipped": bool(a > lo or b < hi)})
     for p in report.plan.points:
-        exact = deviation[p].get("exact")
         for level in report.plan.levels:
             lv = level.name
-            mag = magnitude[p][lv]
-            if np.isfinite(mag).any():
-                k = int(np.nanargmax(mag))
-                peak, at = float(mag[k]), float(t[k])
-            else:
-                peak, at = float("nan"), float("nan")
-            rel = None
-            if exact is not None and lv != "exact":
-                diff = np.hypot(*(deviation[p][lv] - exact))
-                ref = np.nanmax(np.hypot(*exact)) if np.isfinite(exact).any() else float("nan")
-                if np.isfinite(diff).any() and ref > 0:
-                    rel = float(np.nanmax(diff) / ref)
+            peak, at, diff, ref = float("nan"), "", float("nan"), float("nan")
+            for h, data, _ in runs:
+                mag = data.magnitude[p][lv]
+                if np.isfinite(mag).any() and not np.nanmax(mag) <= peak:
+                    k = int(np.nanargmax(mag))
+                    peak = float(mag[k])
+                    at = f"${data.t[k]:+.3f}$" if single else \
+                        f"{escape_latex(h)} ${data.t[k]:+.3f}$"
+                exact = data.deviation[p].get("exact")
+                if exact is not None and lv != "exact" and np.isfinite(exact).any():
+                    d = np.hypot(*(data.deviation[p][lv] - exact))
+                    diff = np.nanmax([diff, np.nanmax(d)])
+                    ref = np.nanmax([ref, np.nanmax(np.hypot(*exact))])
+            rel = float(diff / ref) if np.isfinite(diff) and ref > 0 else None
             summary["rows"].append({"point": escape_latex(p), "level": level.title,
-                                    "peak": sci(peak), "at": f"{at:+.3f}",
+                                    "peak": sci(peak), "at": at or r"\text{--}",
                                     "rel": sci(rel, 2) if rel is not None else r"\text{--}"})
-    return Sweep(t, ok, magnitude, deviation), (lo, hi), summary
+    return runs, summary
+
+
+def sensitivity_table(report: Report, numpy_module,
+                      runs: Sequence[tuple[str, Sweep, tuple[float, float]]]) -> dict | None:
+    """The parameters ranked by their effect on each point's deviation (docs/sensitivity.md),
+    at the swept input where the point's |ΔR| at the most faithful level is largest; None
+    without parameters or sensitivities."""
+    plan = report.plan
+    names = list(getattr(numpy_module, "PARAMETERS", {}))
+    if not names or not hasattr(numpy_module, "sensitivity_full"):
+        return None
+    level = plan.levels[-1].name
+    single = len(runs) == 1
+    held = {h: 0.5 * (data.t[0] + data.t[-1]) for h, data, _ in runs}
+    rows = []
+    for point in plan.points:
+        best = None                 # (|ΔR|, swept input, its value)
+        for h, data, _ in runs:
+            mag = data.magnitude[point][level]
+            if np.isfinite(mag).any() and np.nanmax(mag) > 0 and \
+                    (best is None or np.nanmax(mag) > best[0]):
+                best = (float(np.nanmax(mag)), h, float(data.t[int(np.nanargmax(mag))]))
+        if best is None:
+            continue
+        _, swept, t = best
+        inputs = {n: (t if n == swept else float(held[n])) for n in numpy_module.INPUTS}
+        at = f"${t:+.3f}$" if single else f"{escape_latex(swept)} ${t:+.3f}$"
+        res = numpy_module.sensitivity_full(inputs, level)
+        d = np.asarray(res["points"][point]["deviation"], dtype=float)
+        norm = float(np.hypot(d[0], d[1]))
+        entries = []
+        for name in names:
+            rate = np.asarray(res["deviation"][point]["params"][name], dtype=float)
+            d_norm = float((d[0] * rate[0] + d[1] * rate[1]) / norm)
+            value = float(numpy_module.PARAMETERS[name])
+            relative = value * d_norm / norm
+            entries.append((abs(relative), {
+                "point": escape_latex(point), "name": escape_latex(name), "value": gnum(value),
+                "dx": sci(float(rate[0])), "dy": sci(float(rate[1])), "norm": sci(d_norm),
+                "relative": f"{relative:+.3f}" if value else r"\text{--}", "at": at}))
+        entries.sort(key=lambda e: -e[0])
+        rows += [e[1] for e in entries]
+    if not rows:
+        return None
+    return {"level": plan.levels[-1].title, "rows": rows, "single_input": single,
+            "inputs": [escape_latex(n) for n in numpy_module.INPUTS]}
 
 
 # -- emit ----------------------------------------------------------------------------------------
 
 def emit(plan: Plan, source: str, appendix: bool = False,
-         evaluator: ModuleType | None = None) -> dict[str, bytes]:
-    """`<name>.tex` (standalone, or the body alone with `appendix`) and its figure PDFs; the
-    deviation plot is evaluated with `evaluator`, the plan's generated numpy module (needed when
-    the plan has points)."""
-    report = Report(plan, source)
+         evaluator: ModuleType | None = None,
+         column_width: float = COLUMN_WIDTH,
+         spans: Mapping[str, tuple[float, float]] | None = None) -> dict[str, bytes]:
+    """`<name>.tex` (standalone, or the body alone with `appendix`) and its figure PDFs, laid out
+    for a column of `column_width` points; the deviation plots are evaluated with `evaluator`,
+    the plan's generated numpy module (needed when the plan has points), over `spans` (input ->
+    (lo, hi) in rad; ±SWEEP_RANGE for inputs not given)."""
+    report = Report(plan, source, column_width)
     name = report.mech.name
     ctx = report.context(appendix)
     files: dict[str, bytes] = {}
@@ -705,31 +786,35 @@ def emit(plan: Plan, source: str, appendix: bool = False,
     files[f"{name}-graph.pdf"] = graph_figure(layout, arcs)
     depth = max(x for x, _ in layout.values())
     # a shallow tree beside the hinge table, a deep one (a long chain) above it
-    ctx["graph_beside"] = depth <= 3
+    ctx["graph_beside"] = depth <= 3 and report.width >= LINE_WIDTH_EM
     ctx["graph_width"] = f"{0.16 + 0.1 * depth:.2f}" if depth <= 3 else \
         f"{min(0.9, 0.13 * (depth + 1)):.2f}"
     ctx["table_width"] = f"{min(0.58, 0.96 - float(ctx['graph_width'])):.2f}"
     ctx["deviation_figures"] = []
     ctx["sweep"] = None
-    if plan.points:
+    ctx["sensitivity"] = None
+    if plan.points and report.mech.inputs:
         if evaluator is None:
             raise ValueError("the deviation plot needs the plan's generated numpy module")
-        data, xlim, summary = sweep(report, evaluator)
-        inputs = report.mech.inputs
-        if len(inputs) == 1:
-            xlabel = f"input θ of {plain_name(inputs[0])} (rad)"
-        else:
-            xlabel = "t (rad): every input angle = t"
+        runs, summary = sweep(report, evaluator, sweep_spans(report.mech.inputs, spans))
+        single = len(runs) == 1
         points = list(plan.points)
-        for k, chunk in enumerate(_chunks(points, 3)):
-            fname = f"{name}-deviation.pdf" if k == 0 else f"{name}-deviation-{k + 1}.pdf"
-            files[fname] = deviation_figure(data, chunk, plan.levels, plain_name, xlim, xlabel)
-            ctx["deviation_figures"].append({"file": fname,
-                                             "points": [escape_latex(p) for p in chunk],
-                                             "compare": differs(data, chunk, plan.levels)})
-        summary["single_input"] = len(inputs) == 1
-        summary["inputs"] = [escape_latex(n) for n in inputs]
+        for h, data, xlim in runs:
+            xlabel = f"input θ of {plain_name(h)} (rad)"
+            if not single:
+                xlabel += ", the other inputs held"
+            for chunk in _chunks(points, 3):
+                k = len(ctx["deviation_figures"])
+                fname = f"{name}-deviation.pdf" if k == 0 else f"{name}-deviation-{k + 1}.pdf"
+                files[fname] = deviation_figure(data, chunk, plan.levels, plain_name, xlim,
+                                                xlabel)
+                ctx["deviation_figures"].append({
+                    "file": fname, "points": [escape_latex(p) for p in chunk],
+                    "input": None if single else escape_latex(h),
+                    "compare": differs(data, chunk, plan.levels)})
+        summary["single_input"] = single
         ctx["sweep"] = summary
+        ctx["sensitivity"] = sensitivity_table(report, evaluator, runs)
     body = environment().get_template("latex/body.tex.j2").render(**ctx)
     if appendix:
         text = body

@@ -8,6 +8,7 @@ page of :data:`LINE_WIDTH_EM` ems (a one-column article's 345 pt text width at 1
 
 from __future__ import annotations
 
+import decimal
 import re
 from functools import lru_cache
 import unicodedata
@@ -17,6 +18,7 @@ import sympy as sp
 from sympy.printing.latex import LatexPrinter
 
 from .... import special
+from ...literals import fold_numbers
 
 #: Width the equations are broken for, in ems of the 10 pt body font (345 pt = article's
 #: one-column \textwidth; the standalone report is wider, an appendix may be this narrow).
@@ -158,8 +160,61 @@ class ReportPrinter(LatexPrinter):
         return rf"{symbol}^{{{exp}}}{call}"
 
 
+#: Significant digits of a constant the report shows rounded.
+DISPLAY_DIGITS = 6
+
+
+def display_numbers(expr: object) -> sp.Expr:
+    """`expr` as the report prints it: halves, quarters, eighths, small fractions (1/840),
+    surds and multiples of π exact; the file's decimal numbers as written (a CAD coordinate
+    0.0851234567 stays whole, 363/200000 reads 0.001815); any other constant (250000
+    sqrt(164866)/577031) rounded to DISPLAY_DIGITS significant digits."""
+    return fold_numbers(sp.sympify(expr), _readable, _displayed)
+
+
+def _terminating(q: sp.Rational) -> bool:
+    """Its decimal expansion ends: the denominator holds no prime but 2 and 5."""
+    d = q.q
+    for prime in (2, 5):
+        while d % prime == 0:
+            d //= prime
+    return d == 1
+
+
+def _fraction(q: sp.Expr) -> bool:
+    """A rational the report prints as a fraction."""
+    if not q.is_Rational:
+        return False
+    if q.q in (1, 2, 4, 8):
+        return True
+    return not _terminating(q) and abs(q.p) <= 100 and q.q <= 10 ** 4
+
+
+def _readable(c: sp.Expr) -> bool:
+    """A constant the report prints as it is."""
+    if c.is_Integer or c.is_Float:
+        return True
+    if c.is_Rational:
+        return _fraction(c)
+    coeff, rest = c.as_coeff_Mul()
+    surd = rest.is_Pow and rest.exp == sp.S.Half and rest.base.is_Integer \
+        and 0 < rest.base <= 100
+    return (rest is sp.pi or surd) and _fraction(coeff)
+
+
+def _displayed(c: sp.Expr) -> sp.Expr:
+    """A terminating decimal exactly (at most 12 digits), anything else rounded."""
+    if c.is_Rational and _terminating(c):
+        text = f"{decimal.Decimal(c.p) / decimal.Decimal(c.q):f}"
+        digits = len(text.replace("-", "").replace(".", "").lstrip("0"))
+        if digits <= 12:
+            return sp.Float(text, max(digits, 1))
+    return sp.Float(sp.N(c, DISPLAY_DIGITS + 5), DISPLAY_DIGITS)
+
+
 class Tex:
-    """Prints sympy expressions to LaTeX with fixed symbol names, and breaks long ones."""
+    """Prints sympy expressions to LaTeX with fixed symbol names, and breaks long ones. Numbers
+    print as :func:`display_numbers` shows them."""
 
     def __init__(self, symbol_names: Mapping[sp.Symbol, str] | None = None,
                  width: float = LINE_WIDTH_EM) -> None:
@@ -181,12 +236,12 @@ class Tex:
         expr = sp.sympify(expr)
         tex = self._printed.get(expr)
         if tex is None:
-            tex = self._printed[expr] = self.printer.doprint(expr)
+            tex = self._printed[expr] = self.printer.doprint(display_numbers(expr))
         return tex
 
     def matrix(self, rows: Iterable[Iterable[object]], style: str = "bmatrix") -> str:
         """A matrix environment of the given rows (each entry printed by sympy)."""
-        m = sp.Matrix([list(r) for r in rows])
+        m = sp.Matrix([[display_numbers(e) for e in r] for r in rows])
         return self._printer(mat_str=style).doprint(m)
 
     def vector(self, v: Iterable[object]) -> str:
@@ -195,7 +250,7 @@ class Tex:
 
     def inline(self, expr: object) -> str:
         """`expr` with short fractions folded (a/b), for tables and running text."""
-        return self._printer(fold_short_frac=True).doprint(sp.sympify(expr))
+        return self._printer(fold_short_frac=True).doprint(display_numbers(expr))
 
     def table_vector(self, v: Iterable[object]) -> str:
         """A column vector for tables: a pmatrix with folded fractions."""
@@ -245,8 +300,9 @@ class Tex:
             return self._mul_tokens(expr, budget, tex)
         if isinstance(expr, sp.Function) and expr.args:
             return self._function_tokens(expr, budget, tex)
-        if expr.is_Pow and expr.base.is_Add and expr.exp.is_Integer and expr.exp > 0:
-            inner = self.tokens(expr.base, budget - 2)
+        if expr.is_Pow and expr.base.is_Add and expr.exp.is_Rational and expr.exp != 1:
+            # (a sum)^e, a root or a reciprocal too: the sum breaks inside big parentheses
+            inner = self.tokens(expr.base, budget - 3)
             return self._wrap(inner, r"\Bigl(", r"\Bigr)^{%s}" % self(expr.exp))
         return [tex]
 
@@ -258,27 +314,47 @@ class Tex:
         return inner
 
     def _mul_tokens(self, expr: sp.Expr, budget: float, tex: str) -> list[str]:
-        coeff, factors = expr.as_coeff_mul()
+        coeff, rest_ = expr.as_coeff_Mul()      # any number, a decimal one too
+        factors = sp.Mul.make_args(rest_)
         sign = ""
         if coeff < 0:
             sign, coeff = "- ", -coeff
+        if coeff.is_Float:              # a decimal coefficient leads, as the printer puts it
+            sign, coeff = sign + self(coeff) + " ", sp.Integer(1)
         num, den = sp.fraction(sp.Mul(coeff, *factors, evaluate=False))
         if den != 1:
             head = sign + self(1 / den)
+            if width(head) > budget / 2:
+                # a wide denominator: its factors as powers, each breaking where it must
+                out = [sign.strip()] if sign else []
+                for f in sp.Mul.make_args(sp.expand_power_base(den, force=True)):
+                    base, exp = f.as_base_exp()
+                    out += self.tokens(sp.Pow(base, -exp, evaluate=False), budget)
+                return out + self._wrap(self.tokens(num, budget - 2), r"\Bigl(", r"\Bigr)")
             inner = self.tokens(num, budget - width(head) - 2)
             return self._wrap(inner, head + r" \Bigl(", r"\Bigr)")
-        factors = [f for f in sp.Mul.make_args(num)]
+        factors = [f for f in sp.Mul.make_args(num) if f != 1]
+        if not factors:
+            return [tex]
         widest = max(factors, key=lambda f: width(self(f)))
         rest = [f for f in factors if f is not widest]
         if not rest and sign == "":
             return [tex]
-        head = sign + (self(sp.Mul(*rest)) if rest else "")
+        # a lone sum left over keeps its parentheses (printed alone it would lose them)
+        head = sign + (self._term(rest[0]) if len(rest) == 1 else
+                       self(sp.Mul(*rest)) if rest else "")
         if head.strip() == "1":
             head = ""
         if widest.is_Add:
             inner = self.tokens(widest, budget - width(head) - 2)
             return self._wrap(inner, head + r" \Bigl(", r"\Bigr)")
         inner = self.tokens(widest, budget - width(head))
+        if rest and width(head) + width(inner[0]) > budget:
+            # the product itself breaks between its factors, in the printer's order
+            ordered = sp.Mul(*rest).as_ordered_factors()
+            pieces = [self._term(f) for f in ordered]
+            pieces[0] = (sign + pieces[0]).strip()
+            return pieces + inner
         inner[0] = (head + " " + inner[0]).strip()
         return inner
 
@@ -286,6 +362,8 @@ class Tex:
         names = {sp.sin: r"\sin", sp.cos: r"\cos", sp.tan: r"\tan", sp.atan2: r"\operatorname{atan2}",
                  sp.exp: r"\exp", sp.atan: r"\arctan", sp.asin: r"\arcsin", sp.acos: r"\arccos"}
         name = names.get(expr.func)
+        if name is None and isinstance(expr, sp.core.function.AppliedUndef):
+            name = self.printer._deal_with_super_sub(expr.func.__name__)     # R_F, R_D
         if name is None:
             return [tex]
         out: list[str] = []
@@ -302,12 +380,12 @@ class Tex:
         `rest` (defaults: the full width and the width less the continuation indent)."""
         first = self.width if first is None else first
         rest = self.width - 1.5 if rest is None else rest
-        return pack(self.tokens(expr, min(first, rest)), first, rest)
+        return pack(self.tokens(display_numbers(expr), min(first, rest)), first, rest)
 
     def named_equation(self, lhs: str, rhs: sp.Expr, prefix: str) -> list[str]:
         """Like :meth:`equation`, but a product too wide for one line has its sums named
         ``prefix_1, prefix_2, ...`` and defined on the following lines (OpenSYMORO style)."""
-        rhs = sp.sympify(rhs)
+        rhs = display_numbers(rhs)
         lead = max(width(lhs), LHS_EM) + 1.5
         if width(self(rhs)) <= self.width - lead or not rhs.is_Mul:
             return self.equation(lhs, rhs)

@@ -87,6 +87,8 @@ def _kernel(cls: type[StableKernel], scalar: bool) -> str:
         f"    x2 = x * x\n"
         f"    small = np.abs(x) < {threshold}\n"
         f"    series = {series}\n"
+        f"    if small.all():\n"
+        f"        return series\n"
         f"    xs = np.where(small, 1.0, x)\n"
         f"    xs2 = xs * xs\n"
         f"    b = {base}\n"

@@ -1,0 +1,409 @@
+"""`symkin sweep` (docs/cli.md): Monte Carlo over fabrication tolerances, on Dask.
+
+Each sample draws every varied parameter (symkin.variation: its spread, the parameters whose
+defaults read it following), checks the sampled geometry by the file's rules (positive plate
+lengths, model parameters in range, plates shorter than the links between them), evaluates the
+mechanism at every configuration of the input grid with the generated evaluator, and keeps per
+point the largest |ΔR| over the grid. A sample that breaks a rule, or cannot be assembled (or
+does not converge) somewhere on the grid, is counted as failed (`failed`, of which `invalid`
+broke a rule) and left out of the statistics, never dropped silently.
+
+Reproducible bit for bit: samples are drawn in fixed blocks of BLOCK, block b from a generator
+seeded with (seed, b), and every block is evaluated alone (same arrays, same C calls), so the
+per-sample values, and the statistics computed from all of them in sample order, do not depend
+on how the blocks are grouped into Dask tasks, how many workers run them or where.
+
+Schedulers (`--scheduler`): `threads[:N]` (default: the local threaded scheduler on this
+machine's cores; the C evaluator releases the GIL), `processes[:N]`, `sync` (one thread, for
+debugging), or `tcp://HOST:PORT`, a running `distributed` scheduler (its workers need symkin,
+and for the C backend a C compiler: the evaluator travels as its generated text and each worker
+process compiles it once).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+import threading
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import sympy as sp
+
+from . import levels
+from .compiled import Compiled
+from .errors import AssemblyError, InputError
+from .hinge_models import MODELS
+from .mechanism import Mechanism
+from .variation import Grid, Spread
+
+#: Samples per seeded block: the unit of reproducibility (a Dask task runs whole blocks).
+BLOCK = 256
+#: The statistics reported per point, as (JSON key, percentile or None).
+STATISTICS = (("mean", None), ("std", None), ("p50", 50.0), ("p99", 99.0), ("p999", 99.9),
+              ("max", 100.0))
+
+
+@dataclass(frozen=True)
+class Scheduler:
+    """Where the chunks run."""
+
+    kind: str               # "threads", "processes", "sync" or "distributed"
+    workers: int            # local workers (distributed: those of the cluster, when known)
+    address: str = ""
+
+    @property
+    def text(self) -> str:
+        return self.address if self.kind == "distributed" else (
+            "sync" if self.kind == "sync" else f"{self.kind}:{self.workers}")
+
+
+def parse_scheduler(spec: str | None) -> Scheduler:
+    """threads[:N] (default: this machine's cores), processes[:N], sync or tcp://HOST:PORT."""
+    cores = os.cpu_count() or 1
+    if spec is None or not spec.strip():
+        return Scheduler("threads", cores)
+    spec = spec.strip()
+    if spec.startswith(("tcp://", "tls://")):
+        host, sep, port = spec.split("://", 1)[1].rpartition(":")
+        if not sep or not host or not port.isdigit():
+            raise InputError(f"'{spec}' is not tcp://HOST:PORT", entry="--scheduler",
+                             hint="give the address the distributed scheduler prints, e.g. "
+                                  "tcp://10.0.0.5:8786")
+        return Scheduler("distributed", 0, spec)
+    kind, _, count = spec.partition(":")
+    if kind == "sync" and not count:
+        return Scheduler("sync", 1)
+    if kind in ("threads", "processes"):
+        if not count:
+            return Scheduler(kind, cores)
+        if count.isdigit() and int(count) > 0:
+            return Scheduler(kind, int(count))
+    raise InputError(f"unknown scheduler '{spec}'", entry="--scheduler",
+                     hint="threads[:N], processes[:N], sync or tcp://HOST:PORT")
+
+
+@dataclass(frozen=True)
+class Task:
+    """What a chunk needs; pickled to worker processes (the evaluator as its texts)."""
+
+    evaluator: Compiled
+    level: str
+    inputs: np.ndarray                              # (n, n_inputs): the grid
+    vary: tuple[tuple[str, Spread, float], ...]     # (name, spread, nominal value), file order
+    seed: int
+    samples: int
+    checks: tuple[tuple[str, sp.Expr, bool], ...]   # (rule, expression > 0, also <= 1)
+    symbols: tuple[sp.Symbol, ...]                  # the parameters the checks read
+
+
+def geometry_checks(mech: Mechanism) -> tuple[tuple[str, sp.Expr, bool], ...]:
+    """The file's numeric rules that the parameters can break, as expressions that must be
+    positive (and at most 1 for fractions): plate lengths, model parameters, and on every link
+    the squared distance of two hinge centres against the square of half their plate lengths'
+    sum (the rules of symkin.mechanism.check_values)."""
+    out = []
+    for h in mech.hinges:
+        out.append((f"the plate length of hinge '{h.name}'", sp.sympify(h.length), False))
+        for key, raw in h.model_params:
+            spec = MODELS[h.model].parameter(key)
+            if spec is not None and spec.kind in ("number", "fraction"):
+                out.append((f"'{key}' of hinge '{h.name}'", sp.sympify(raw),
+                            spec.kind == "fraction"))
+    for link in mech.links:
+        on_link = [h for h in mech.hinges if link.name in h.links]
+        for i, a in enumerate(on_link):
+            for b in on_link[i + 1:]:
+                gap2 = (a.at[0] - b.at[0]) ** 2 + (a.at[1] - b.at[1]) ** 2
+                out.append((f"the plates of '{a.name}' and '{b.name}' on link '{link.name}'",
+                            gap2 - ((a.length + b.length) / 2) ** 2, False))
+    symbols = {p.symbol for p in mech.parameters}
+    return tuple((rule, e, frac) for rule, e, frac in out if e.free_symbols & symbols)
+
+
+_CHECKS: dict[tuple, Callable] = {}
+_CHECKS_LOCK = threading.Lock()
+
+
+def _checker(task: Task) -> Callable:
+    """The checks lambdified (numpy), once per process."""
+    key = (task.checks, task.symbols)
+    found = _CHECKS.get(key)
+    if found is None:
+        with _CHECKS_LOCK:
+            found = _CHECKS.get(key)
+            if found is None:
+                exprs = [e for _, e, _ in task.checks]
+                found = _CHECKS[key] = sp.lambdify(task.symbols, exprs, "numpy", dummify=True) \
+                    if exprs else (lambda *args: [])
+    return found
+
+
+def sample_block(task: Task, block: int) -> tuple[np.ndarray, np.ndarray]:
+    """(params (n, n_params), valid (n,)) of the samples of `block`."""
+    first = block * BLOCK
+    n = min(BLOCK, task.samples - first)
+    rng = np.random.default_rng([task.seed, block])
+    shifts = {name: spread.offsets(rng, n, nominal) for name, spread, nominal in task.vary}
+    values = task.evaluator.module.parameters(None, shifts)
+    params = np.stack([np.broadcast_to(np.asarray(v, dtype=float), (n,)) for v in values],
+                      axis=1) if values else np.zeros((n, 0))
+    valid = np.isfinite(params).all(axis=1)
+    if task.checks:
+        names = list(task.evaluator.sources.params)
+        columns = [params[:, names.index(s.name)] for s in task.symbols]
+        with np.errstate(all="ignore"):
+            for (_, _, fraction), value in zip(task.checks, _checker(task)(*columns)):
+                value = np.broadcast_to(np.asarray(value, dtype=float), (n,))
+                valid &= value > 0
+                if fraction:
+                    valid &= value <= 1
+    return params, valid
+
+
+def run_blocks(task: Task, first: int, last: int) -> tuple[np.ndarray, np.ndarray]:
+    """Blocks first..last-1: (worst |ΔR| per sample and point (n, n_points), NaN where failed;
+    flag per sample: 0 evaluated, 1 cannot be assembled (or no convergence) somewhere on the
+    grid, 2 parameters that break the file's rules)."""
+    ev = task.evaluator
+    n_points = len(ev.points)
+    worst_all, flags_all = [], []
+    buffer = None
+    for block in range(first, last):
+        params, valid = sample_block(task, block)
+        n = len(params)
+        worst = np.full((n, n_points), np.nan)
+        flags = np.where(valid, 0, 2).astype(np.int8)
+        good = np.flatnonzero(valid)
+        if len(good):
+            if ev.backend == "c":
+                status, buffer = ev.library.evaluate_grid(
+                    params[good], task.inputs, level_code(task.level), buffer)
+            else:
+                status, buffer = _numpy_grid(ev, params[good], task.inputs, task.level)
+            dx = buffer[:, :, 4::6]
+            dy = buffer[:, :, 5::6]
+            norm = np.sqrt(dx * dx + dy * dy)                 # exact IEEE operations only
+            failed = (status != 0).any(axis=1)
+            values = norm.max(axis=1)
+            values[failed] = np.nan
+            worst[good] = values
+            flags[good[failed]] = 1
+        worst_all.append(worst)
+        flags_all.append(flags)
+    return np.concatenate(worst_all), np.concatenate(flags_all)
+
+
+def level_code(level: str) -> int:
+    return levels.get(level).code
+
+
+def _numpy_grid(ev: Compiled, params: np.ndarray, inputs: np.ndarray,
+                level: str) -> tuple[np.ndarray, np.ndarray]:
+    """The numpy backend's evaluate_grid: one vectorized call per parameter set."""
+    out = np.empty((len(params), len(inputs), 6 * len(ev.points)))
+    status = np.empty((len(params), len(inputs)), dtype=np.intc)
+    for s, row in enumerate(params):
+        status[s], out[s] = ev.evaluate_rows(inputs, level, row)
+    return status, out
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """The result of `symkin sweep`."""
+
+    name: str
+    level: str
+    backend: str
+    grid: Grid
+    vary: dict[str, str]                    # p -> spread as given
+    samples: int
+    seed: int
+    scheduler: str
+    seconds: float                          # wall time of the Monte Carlo (compile excluded)
+    chunks: int
+    values: np.ndarray = field(repr=False)  # (samples, n_points): worst |ΔR|, NaN where failed
+    flags: np.ndarray = field(repr=False)   # (samples,): 0 ok, 1 cannot assemble, 2 invalid
+    nominal: dict[str, float] = field(default_factory=dict)  # worst |ΔR| at nominal values
+    points: tuple[str, ...] = ()
+
+    @property
+    def failed(self) -> int:
+        return int((self.flags != 0).sum())
+
+    @property
+    def invalid(self) -> int:
+        return int((self.flags == 2).sum())
+
+    def statistics(self, point: str) -> dict[str, float | None]:
+        """mean, std (n - 1), p50, p99, p99.9 and max of the evaluated samples' worst |ΔR|."""
+        v = self.values[self.flags == 0, self.points.index(point)]
+        out: dict[str, float | None] = {}
+        for key, q in STATISTICS:
+            if len(v) == 0 or (key == "std" and len(v) < 2):
+                out[key] = None
+            elif key == "mean":
+                out[key] = float(np.mean(v))
+            elif key == "std":
+                out[key] = float(np.std(v, ddof=1))
+            else:
+                out[key] = float(np.percentile(v, q))
+        out["nominal"] = self.nominal.get(point)
+        return out
+
+    def as_json(self) -> dict:
+        return {"samples": self.samples, "failed": self.failed, "invalid": self.invalid,
+                "seed": self.seed, "scheduler": self.scheduler, "seconds": self.seconds,
+                "chunks": self.chunks, "block": BLOCK, "level": self.level,
+                "backend": self.backend, "inputs": self.grid.as_json(),
+                "configurations": int(len(self.grid.rows)), "vary": dict(self.vary),
+                "points": {p: self.statistics(p) for p in self.points}}
+
+
+def run(evaluator: Compiled, mech: Mechanism, vary: Mapping[str, Spread], grid: Grid,
+        samples: int, seed: int = 0, scheduler: Scheduler | None = None,
+        level: str = levels.DEFAULT, chunks: int | None = None,
+        progress: bool = False, client=None) -> Sweep:
+    """The Monte Carlo sweep (see the module docstring); `chunks` Dask tasks (default: about
+    four per worker, whole blocks each). A distributed `client` (see `connect`) may be given;
+    it is closed at the end."""
+    scheduler = scheduler or parse_scheduler(None)
+    nominal = evaluator.defaults
+    task = Task(evaluator, level, grid.rows, tuple((p, s, nominal[p]) for p, s in vary.items()),
+                int(seed), int(samples), geometry_checks(mech),
+                tuple(p.symbol for p in mech.parameters))
+    blocks = math.ceil(samples / BLOCK)
+    if client is None and scheduler.kind == "distributed":
+        client = connect(scheduler)
+    try:
+        workers = scheduler.workers or (len(client.scheduler_info()["workers"]) if client else 1)
+        count = max(1, min(blocks, chunks or 4 * max(1, workers)))
+        edges = [round(k * blocks / count) for k in range(count + 1)]
+        spans = [(a, b) for a, b in zip(edges, edges[1:]) if b > a]
+        start = time.perf_counter()
+        if client is not None:
+            parts = _distributed(client, task, spans, progress)
+        else:
+            parts = _local(scheduler, task, spans, progress)
+        seconds = time.perf_counter() - start
+    finally:
+        if client is not None:
+            client.close()
+    values = np.concatenate([p[0] for p in parts])
+    flags = np.concatenate([p[1] for p in parts])
+    status, out = evaluator.evaluate_rows(grid.rows, level)
+    nominal_worst = {}
+    if (status == 0).all():
+        for i, p in enumerate(evaluator.points):
+            nominal_worst[p] = float(np.max(np.hypot(out[:, 6 * i + 4], out[:, 6 * i + 5])))
+    return Sweep(evaluator.name, level, evaluator.backend, grid,
+                 {p: s.text for p, s in vary.items()}, int(samples), int(seed), scheduler.text,
+                 seconds, len(spans), values, flags, nominal_worst, tuple(evaluator.points))
+
+
+def _local(scheduler: Scheduler, task: Task, spans: Sequence[tuple[int, int]],
+           progress: bool) -> list:
+    import dask
+
+    jobs = [dask.delayed(run_blocks, pure=False)(task, a, b) for a, b in spans]
+    kind = "sync" if scheduler.kind == "sync" else scheduler.kind
+    kwargs = {} if kind == "sync" else {"num_workers": scheduler.workers}
+    if progress:
+        from dask.diagnostics import ProgressBar
+
+        with ProgressBar(out=sys.stderr, minimum=0.5):
+            return list(dask.compute(*jobs, scheduler=kind, **kwargs))
+    return list(dask.compute(*jobs, scheduler=kind, **kwargs))
+
+
+def connect(scheduler: Scheduler):
+    """A client of the running distributed scheduler; bad input (exit 2) when unreachable."""
+    from distributed import Client
+
+    try:
+        return Client(scheduler.address, timeout="5s", set_as_default=False)
+    except (OSError, TimeoutError) as exc:
+        raise InputError(f"cannot reach the scheduler at {scheduler.address} ({exc})",
+                         entry="--scheduler", hint="start one (dask scheduler, then dask "
+                         "worker ADDRESS on each machine) or check the address") from None
+
+
+def _distributed(client, task: Task, spans: Sequence[tuple[int, int]], progress: bool) -> list:
+    shared = client.scatter(task, broadcast=True)
+    futures = [client.submit(run_blocks, shared, a, b, pure=False) for a, b in spans]
+    if progress:
+        done = -1
+        while done < len(futures):
+            now = sum(f.done() for f in futures)
+            if now != done:
+                done = now
+                print(f"\rsymkin: sweep {done}/{len(futures)} chunks", end="", file=sys.stderr,
+                      flush=True)
+            time.sleep(0.2)
+        print(file=sys.stderr)
+    return client.gather(futures)
+
+
+def check_grid(evaluator: Compiled, grid: Grid, level: str) -> None:
+    """Refuse (exit 3) a grid the nominal mechanism cannot reach everywhere, before the work."""
+    status, _ = evaluator.evaluate_rows(grid.rows, level)
+    if (status != 0).any():
+        k = int(np.flatnonzero(status != 0)[0])
+        at = ", ".join(f"{h}={v:g}" for h, v in zip(evaluator.inputs, grid.rows[k]))
+        raise AssemblyError(f"{evaluator.name}: with the nominal parameters the mechanism "
+                            f"cannot be evaluated at {at} ({int((status != 0).sum())} of "
+                            f"{len(status)} configurations of the input grid); narrow --input")
+
+
+def text(result: Sweep) -> str:
+    """The summary of `symkin sweep`."""
+    ranges = ", ".join(f"{k} in [{v[0]:g}, {v[1]:g}] ({v[2]})"
+                       for k, v in result.grid.as_json().items())
+    lines = [f"{result.name}: {result.samples} samples of "
+             + ", ".join(f"{p} = {s}" for p, s in result.vary.items())
+             + f"; worst |dR| over {ranges}; level {result.level} ({result.backend})",
+             f"seed {result.seed}, scheduler {result.scheduler}, {result.chunks} chunks, "
+             f"{result.seconds:.2f} s",
+             f"failed: {result.failed}" + (f" ({result.invalid} with parameters that break the "
+                                           "file's rules)" if result.invalid else "")]
+    header = f"  {'point':<10}" + "".join(f"{k:>12}" for k in
+                                           ("nominal", "mean", "std", "p50", "p99", "p99.9",
+                                            "max"))
+    lines += ["", header]
+    for p in result.points:
+        s = result.statistics(p)
+        cells = [s["nominal"], s["mean"], s["std"], s["p50"], s["p99"], s["p999"], s["max"]]
+        lines.append(f"  {p:<10}" + "".join(f"{c:>12.4e}" if c is not None else f"{'-':>12}"
+                                            for c in cells))
+    return "\n".join(lines) + "\n"
+
+
+def plot(result: Sweep, path: str) -> None:
+    """Histograms of every point's worst |ΔR| over the samples (format from the suffix)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .tradeoff import save_figure
+
+    n = len(result.points)
+    fig, axes = plt.subplots(n, 1, figsize=(6.4, 2.6 * n + 0.6), squeeze=False)
+    for ax, p in zip(axes[:, 0], result.points):
+        v = result.values[result.flags == 0, result.points.index(p)]
+        s = result.statistics(p)
+        if len(v):
+            ax.hist(v, bins=min(60, max(10, len(v) // 20)), color="0.6")
+        for key, style in (("nominal", "k-"), ("mean", "b--"), ("p99", "r:")):
+            if s[key] is not None:
+                ax.axvline(s[key], color=style[0], linestyle=style[1:], label=key)
+        ax.set_xlabel(f"largest |ΔR| of {p} over the input grid")
+        ax.set_ylabel("samples")
+        ax.legend(loc="upper right", fontsize="small")
+    fig.suptitle(f"{result.name}: {result.samples} samples, level {result.level}"
+                 + (f", {result.failed} failed" if result.failed else ""))
+    fig.tight_layout()
+    save_figure(fig, path)
