@@ -447,8 +447,8 @@ class _Reader:
         links = table.get("links")
         if (not isinstance(links, list) or len(links) != 2
                 or not all(isinstance(x, str) for x in links)):
-            raise self.error("'links' must name the two links it joins, e.g. "
-                             "links = [\"frame\", \"crank\"]", entry, line)
+            raise self.error("'links' must name the two links it joins", entry, line,
+                             "write e.g. links = [\"frame\", \"crank\"]: two [[link]] names")
         for link in links:
             if link not in link_names:
                 raise self.error(f"links names an unknown link '{link}'", entry, line,
