@@ -6,6 +6,7 @@ Exit codes: 0 success, 1 internal error (a bug), 2 bad input, 3 cannot reach the
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 import traceback
 from collections.abc import Sequence
@@ -272,8 +273,42 @@ def parser() -> argparse.ArgumentParser:
     return top
 
 
+#: Characters a terminal could act on (C0 and C1 controls but newline and tab, DEL, the
+#: bidirectional overrides and isolates): never printed raw, whatever a file or option names.
+CONTROL = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\u202a-\u202e\u2066-\u2069]")
+
+
+def escape(text: str) -> str:
+    """`text` with every control character shown as an escape (\\x1b, \\u202e)."""
+    return CONTROL.sub(lambda m: (f"\\x{ord(m.group()):02x}" if ord(m.group()) < 0x100
+                                  else f"\\u{ord(m.group()):04x}"), text)
+
+
+class _Escaping:
+    """A text stream that escapes control characters in everything written to it."""
+
+    def __init__(self, stream) -> None:
+        self._stream = stream
+
+    def write(self, text: str) -> int:
+        return self._stream.write(escape(text))
+
+    def __getattr__(self, name: str):
+        return getattr(self._stream, name)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; returns the exit code."""
+    """Run the command line; returns the exit code. Nothing it prints holds a raw control
+    character (names in a file or an option are escaped; JSON escapes them itself)."""
+    out, err = sys.stdout, sys.stderr
+    sys.stdout, sys.stderr = _Escaping(out), _Escaping(err)
+    try:
+        return _main(argv)
+    finally:
+        sys.stdout, sys.stderr = out, err
+
+
+def _main(argv: Sequence[str] | None = None) -> int:
     args = parser().parse_args(argv)
     try:
         output = args.run(args)

@@ -7,15 +7,13 @@ order, no timestamps, headers name the source file by its base name only).
 
 from __future__ import annotations
 
-import os
-import shutil
-import tempfile
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 from .analysis import Analysis
 from .errors import InputError
 from .mechanism import Mechanism, load
+from .paths import write_atomically
 from .structure import build
 
 EMITTERS = ("latex", "c", "numpy")
@@ -107,33 +105,6 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
         files.update(report.emit(with_derivation(p, analysis), source, appendix, evaluator,
                                  column_width or report.COLUMN_WIDTH, spans))
     return files
-
-
-def write_atomically(files: dict[str, bytes], out_dir: Path) -> list[Path]:
-    """Write all files or none: into a temporary folder beside `out_dir`, then moved into place.
-
-    A new `out_dir` is the temporary folder renamed; into an existing one each file is moved with
-    an atomic rename, after every file has been written in full.
-    """
-    out_dir = Path(out_dir)
-    parent = out_dir.resolve().parent
-    parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.symkin-", dir=parent))
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o777 & ~umask)          # mkdtemp's 0700 would stick to a renamed folder
-    try:
-        for name, content in sorted(files.items()):
-            (tmp / name).write_bytes(content)
-        if not out_dir.exists():
-            os.replace(tmp, out_dir)
-        else:
-            for name in sorted(files):
-                os.replace(tmp / name, out_dir / name)
-    finally:
-        if tmp.exists():
-            shutil.rmtree(tmp, ignore_errors=True)
-    return [out_dir / name for name in sorted(files)]
 
 
 def derive(path: str | Path, out_dir: str | Path = ".", emit: Sequence[str] = EMITTERS,

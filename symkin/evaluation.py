@@ -193,6 +193,14 @@ def exact_value(value: object, entry: str, file: str) -> sp.Expr:
                          hint="give a number or an expression such as 10*deg") from None
     if not (expr.is_real and expr.is_finite):
         raise InputError(f"{value!r} is not a finite real number", file=file, entry=entry)
+    try:
+        size = abs(expressions.numeric(expr, {}))
+    except expressions.NotReal:
+        raise InputError(f"{value!r} is not a finite real number", file=file, entry=entry,
+                         hint="give a number or an expression such as 10*deg") from None
+    if size > expressions.FLOAT64_MAX:
+        raise InputError(f"{value!r} is beyond a float64 (|value| < 1.8e308)", file=file,
+                         entry=entry, hint="give a value the generated code can hold")
     return expr
 
 
@@ -218,8 +226,11 @@ def parameter_values(mechanism: Mechanism,
         else:
             # A default re-evaluated with overridden values: numerically (60 digits), so an
             # override can never make sympy build a huge exact number (e.g. l**n, n = 1e9).
-            value = p.expr.evalf(60, subs=values)
-            if not (value.is_real and value.is_finite):
+            try:
+                value = sp.Float(expressions.numeric(p.expr, values), expressions.NUMERIC_DPS)
+            except expressions.NotReal:
+                value = sp.nan
+            if not (value.is_real and value.is_finite) or abs(value) > expressions.FLOAT64_MAX:
                 raise InputError(f"parameter '{p.name}' = {p.expr} evaluates to {value} with "
                                  "the overrides", file=mechanism.path, entry="--param",
                                  hint="choose override values that keep it finite")
@@ -318,7 +329,8 @@ class _Mpmath:
     def _fn(self, key: str, exprs, args) -> object:
         """Lambdified (mpmath) function, cached per key."""
         if key not in self._lambdas:
-            self._lambdas[key] = sp.lambdify(args, exprs,
+            # dummify: a parameter may share its name with an internal symbol (a class apart)
+            self._lambdas[key] = sp.lambdify(args, exprs, dummify=True,
                                              modules=[special.mpmath_namespace(), "mpmath"])
         return self._lambdas[key]
 
@@ -598,7 +610,9 @@ class _Mpmath:
         env.update({kin.theta[a]: v for a, v in ivals.items()})
         dyads = []
         if not sol.closed_form:
-            return self._rigid_newton(pvals, ivals), dyads
+            theta = self._rigid_newton(pvals, ivals)
+            self._check_winding(pvals, theta, ivals)
+            return theta, dyads
         for symbol, expr in sol.assignments:
             fn = self._fn(f"assign:{symbol.name}", expr, sorted(expr.free_symbols, key=str))
             env[symbol] = fn(*(env[s] for s in sorted(expr.free_symbols, key=str)))
@@ -617,7 +631,25 @@ class _Mpmath:
         for a in kin.unknowns:
             h = kin.hinges[a]
             theta[a] = _wrap(phi[h.M] - phi[h.P])
+        self._check_winding(pvals, theta, ivals)
         return theta, dyads
+
+    def _check_winding(self, pvals: list, theta: dict, ivals: dict) -> None:
+        """The winding rule of symkin.solver: every loop's angle sum below SOLVER.winding."""
+        an, kin = self.an, self.kin
+        if not kin.unknowns:
+            return
+        f = self._fn("rigid_residual", list(an.rigid_residual), [*an.params, *an.thetas])
+        rows = f(*pvals, *(theta[a] for a in sorted(theta)))
+        for k, c in enumerate(kin.chords):
+            if not abs(rows[3 * k]) < SOLVER.winding:
+                at = ", ".join(f"{kin.hinges[b].name}={float(v):g}"
+                               for b, v in sorted(ivals.items()))
+                raise AssemblyError(
+                    f"{self.mechanism.path}: at {at} a hinge of the loop of "
+                    f"'{kin.hinges[c].name}' ({loop_text(an.structure, c)}) would have turned "
+                    "through more than half a turn on the way from the as-fabricated pose (its "
+                    "angles sum to 2*pi, not 0): a plate cannot bend that far")
 
     def _check_limits(self, theta: dict, ivals: dict) -> None:
         """No plate is driven past its bound: its model's limit (elastica_force: π/2) or π."""
@@ -661,7 +693,7 @@ class _Mpmath:
                 raise AssemblyError(f"{self.mechanism.path}: the rigid loops cannot close at {at} "
                                     "(no convergence: outside the assembly range or at a toggle "
                                     "position)")
-        return {**ivals, **{a: _wrap(v) for a, v in x.items()}}
+        return {**ivals, **x}           # tracked continuously: the limits see |theta| > pi
 
     def _newton(self, f, jac, pvals: list, theta: dict, unknowns: Sequence[int]) -> dict | None:
         """Newton iteration on the θ of `unknowns`; None when it does not converge."""

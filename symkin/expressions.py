@@ -37,6 +37,16 @@ SHOWN = 60             # characters of an expression quoted in an error message
 _BINARY = {ast.Add: sp.Add, ast.Sub: None, ast.Mult: sp.Mul, ast.Div: None, ast.Pow: None}
 
 
+class ParameterSymbol(sp.Symbol):
+    """The symbol of a file's parameter: a class of its own, so a parameter named like one of
+    symkin's internal symbols (theta, theta_1, delta_2, dyad1_reach, _tmp0, p_0, ...) is never
+    equal to it. It prints as its name; code printers see it only renamed (p_k) or dummified."""
+
+    def __new__(cls, name: str, **assumptions) -> ParameterSymbol:
+        assumptions.setdefault("real", True)
+        return super().__new__(cls, name, **assumptions)
+
+
 class ExpressionError(ValueError):
     """An expression string that is not allowed; the message says what to change."""
 
@@ -200,6 +210,20 @@ class _Converter:
             raise self.reject(f"calling '{name}' with {len(node.args)} argument(s)",
                               f"'{name}' takes {arity}")
         args = [self.visit(a) for a in node.args]
+        if name in ("log", "sqrt", "asin", "acos"):
+            # checked numerically before sympy sees it: sympy's complex logarithms of nested
+            # negative arguments take unbounded time
+            try:
+                x = numeric(args[0], self.values, 30)
+            except NoValue:
+                x = None
+            except NotReal:
+                raise self.reject("an argument that leaves the real numbers",
+                                  "every value must stay real") from None
+            if x is not None and (name == "log" and x <= 0 or name == "sqrt" and x < 0
+                                  or name in ("asin", "acos") and abs(x) > 1):
+                raise self.reject(f"{name}() of {float(x):.6g}, which leaves the real numbers",
+                                  "every value must stay real")
         if name == "exp":
             # sympy turns exp(k*log(b)) into b**k at once: bound the argument like a power.
             value = self.approx(args[0])
@@ -207,3 +231,81 @@ class _Converter:
                 raise self.reject(f"exp() of an argument beyond {MAX_BITS}*log(2)",
                                   "the value would not fit any number format")
         return func(*args)
+
+
+# -- numeric values, bounded work ------------------------------------------------------------------
+
+#: Largest magnitude a value may have: it must fit a float64 (the generated code's numbers).
+FLOAT64_MAX = 1.7976931348623157e308
+NUMERIC_DPS = 60       # digits of the numeric evaluation of file values
+
+
+class NotReal(ValueError):
+    """An expression whose value leaves the real numbers (or is undefined) at some step."""
+
+
+class NoValue(NotReal):
+    """A symbol without a value (the expression cannot be evaluated yet)."""
+
+
+_MPMATH = {sp.sin: "sin", sp.cos: "cos", sp.tan: "tan", sp.asin: "asin", sp.acos: "acos",
+           sp.atan: "atan", sp.exp: "exp", sp.log: "log"}
+
+
+def numeric(expr: sp.Expr, values: Mapping[sp.Symbol, object], dps: int = NUMERIC_DPS):
+    """The value of `expr` (symbols from `values`) as a real mpmath number at `dps` digits,
+    computed node by node in bounded time (never sympy's exact or complex arithmetic); NotReal
+    when any step leaves the reals (log of a negative, sqrt of a negative, asin(2), 0/0)."""
+    import mpmath
+
+    def real(x):
+        if isinstance(x, mpmath.mpc) or not mpmath.isfinite(x):
+            raise NotReal(f"{x}")
+        return x
+
+    def walk(e):
+        if e.is_Symbol:
+            if e not in values:
+                raise NoValue(f"no value for {e}")
+            v = values[e]
+            return real(v) if isinstance(v, mpmath.mpf) else walk(sp.sympify(v))
+        if e.is_Rational:
+            return mpmath.mpf(e.p) / e.q
+        if e.is_Float:
+            return mpmath.mpf(e)
+        if e is sp.pi:
+            return +mpmath.pi
+        if e is sp.E:
+            return +mpmath.e
+        if e.is_Add:
+            return real(mpmath.fsum(walk(a) for a in e.args))
+        if e.is_Mul:
+            out = mpmath.mpf(1)
+            for a in e.args:
+                out = real(out * walk(a))
+            return out
+        if e.is_Pow:
+            base, exponent = walk(e.base), walk(e.exp)
+            if base == 0 and exponent < 0:
+                raise NotReal("division by zero")
+            if base < 0 and exponent != int(exponent):
+                raise NotReal("a fractional power of a negative number")
+            return real(mpmath.power(base, exponent))
+        if isinstance(e, sp.atan2):
+            y, x = walk(e.args[0]), walk(e.args[1])
+            return real(mpmath.atan2(y, x))
+        name = _MPMATH.get(e.func)
+        if name is not None:
+            x = walk(e.args[0])
+            if name == "log" and x <= 0 or name in ("asin", "acos") and abs(x) > 1:
+                raise NotReal(f"{name} of {mpmath.nstr(x, 6)}")
+            return real(getattr(mpmath, name)(x))
+        raise NotReal(f"cannot evaluate {type(e).__name__}")
+
+    with mpmath.workdps(dps):
+        try:
+            return walk(sp.sympify(expr))
+        except (ZeroDivisionError, OverflowError, ValueError) as exc:
+            if isinstance(exc, NotReal):
+                raise
+            raise NotReal(str(exc)) from None

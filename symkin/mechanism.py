@@ -9,8 +9,12 @@ from __future__ import annotations
 
 import csv
 import io
+import keyword
 import math
+import os
 import re
+import stat
+import sys
 import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -197,10 +201,51 @@ def loads(text: str, file: str = "<string>", base_dir: Path | None = None) -> Me
         line = _line_from_toml_error(str(exc))
         raise InputError(f"TOML syntax error: {exc}", file=file, line=line,
                          hint="fix the TOML syntax at that line") from None
+    except ValueError as exc:            # an integer of more than 4300 digits
+        raise InputError(f"a TOML number with too many digits ({str(exc)[:80]})", file=file,
+                         hint="write long numbers with an exponent, e.g. 1.5e30") from None
     except RecursionError:
         raise InputError("TOML nesting too deep (arrays or tables inside each other)", file=file,
                          hint="a mechanism file needs at most a few levels of nesting") from None
     return _Reader(text, file, base_dir or Path(".")).read(data)
+
+
+#: Exact parameter values up to this size; beyond, the 60-digit numeric value (a chain such as
+#: c_k = c_(k-1)**2 doubles the digits of the exact value every line).
+EXACT_BITS = 256
+EXACT_OPS = 64
+
+
+def _bounded_exact(expr: sp.Expr, defaults: Mapping[sp.Symbol, sp.Expr]) -> sp.Expr | None:
+    """The exact value of a parameter's expression, or None when it is large (then the
+    60-digit numeric value serves)."""
+    exact = expr.xreplace({s: defaults[s] for s in expr.free_symbols if s in defaults})
+    if not exact.is_number:
+        return None
+    if exact.is_Rational:
+        return exact if max(abs(exact.p).bit_length(), exact.q.bit_length()) <= EXACT_BITS \
+            else None
+    return exact if sp.count_ops(exact) <= EXACT_OPS else None
+
+
+MAX_NAME = 64
+MAX_TABLE_BYTES = 1 << 20
+
+
+def _is_float(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+C_KEYWORDS = frozenset("""auto break case char const continue default do double else enum extern
+float for goto if inline int long register restrict return short signed sizeof static struct
+switch typedef union unsigned void volatile while""".split())
+#: modules whose names a mechanism may not take: the generated module imports them, and a file
+#: <name>.py beside a script would shadow them
+SHADOWED = frozenset(sys.stdlib_module_names) | {"numpy", "symkin", "mpmath", "sympy"}
 
 
 def _entry(kind: str, i: int, table: Mapping) -> str:
@@ -285,11 +330,17 @@ class _Reader:
 
     def finite(self, expr: sp.Expr, entry: str, key: str, line: int | None) -> sp.Expr:
         """Check that `expr` evaluates to a finite real number with the default parameters."""
-        value = sp.N(expr.subs(self.defaults), 30)
-        if not (value.is_real and value.is_finite):
-            raise self.error(f"'{key}' evaluates to {value}, not a finite real number", entry,
+        try:
+            value = expressions.numeric(expr, self.defaults)
+        except expressions.NotReal as exc:
+            raise self.error(f"'{key}' does not evaluate to a finite real number ({exc})",
+                             entry, line, "change the expression or the parameters it uses"
+                             ) from None
+        if abs(value) > expressions.FLOAT64_MAX:
+            raise self.error(f"'{key}' evaluates to {mpmath.nstr(value, 6)}, beyond a float64 "
+                             "(|value| < 1.8e308), the generated code's number format", entry,
                              line, "change the expression or the parameters it uses")
-        return value
+        return sp.Float(value, expressions.NUMERIC_DPS)
 
     def text(self, table: Mapping, key: str, entry: str, line: int | None,
              required: bool = True) -> str | None:
@@ -339,10 +390,18 @@ class _Reader:
             raise self.error(f"unsupported format {fmt!r}", "format", self.where.key("format"),
                              f"this symkin reads format = {FORMAT}")
         name = self.text(data, "name", "top level", None)
-        if not expressions.IDENTIFIER.match(name):
+        if len(name) > MAX_NAME:
+            raise self.error(f"name is {len(name)} characters long, more than {MAX_NAME}", "name",
+                             self.where.key("name"), f"use at most {MAX_NAME} characters: it "
+                             "names the generated files and the C functions")
+        if not expressions.IDENTIFIER.match(name) or name.startswith("_"):
             raise self.error(f"name '{name}' is not identifier-safe", "name",
-                             self.where.key("name"),
-                             "use letters, digits and '_' only, not starting with a digit")
+                             self.where.key("name"), "use letters, digits and '_' only, starting "
+                             "with a letter")
+        if keyword.iskeyword(name) or name in C_KEYWORDS or name in SHADOWED:
+            raise self.error(f"name '{name}' is a Python or C keyword or the name of a module the "
+                             "generated code imports", "name", self.where.key("name"),
+                             f"rename the mechanism, e.g. name = \"{name}_mechanism\"")
         parameters = self.parameters(data.get("parameters", {}))
         defaults = self.hinge_defaults(data.get("defaults", {}))
         links = self.links(self.array_of_tables(data, "link"))
@@ -385,9 +444,9 @@ class _Reader:
                                  "rename the parameter")
             expr = self.expr(value, entry, key, line)
             value_ = self.finite(expr, entry, key, line)
-            symbol = sp.Symbol(key, real=True)
-            exact = expr.subs(self.defaults)
-            out.append(Parameter(key, symbol, expr, exact if exact.is_number else value_, line))
+            symbol = expressions.ParameterSymbol(key)
+            exact = _bounded_exact(expr, self.defaults)
+            out.append(Parameter(key, symbol, expr, exact if exact is not None else value_, line))
             self.names[key] = symbol
             self.defaults[symbol] = out[-1].value
         return tuple(out)
@@ -425,6 +484,9 @@ class _Reader:
         name = self.text(table, "name", entry, line)
         entry = f"[[hinge]] #{i + 1} '{name}'"
         model = table.get("model", defaults.get("model", DEFAULT_MODEL))
+        if not isinstance(model, str):
+            raise self.error(f"'model' must be a model name string, got {model!r}"[:200], entry,
+                             line, "models: " + ", ".join(MODELS))
         if model not in MODELS:
             raise self.error(f"unknown hinge model {model!r}", entry, line,
                              suggest(str(model), MODELS) or "models: " + ", ".join(MODELS))
@@ -439,8 +501,8 @@ class _Reader:
         links = table.get("links")
         if (not isinstance(links, list) or len(links) != 2
                 or not all(isinstance(x, str) for x in links)):
-            raise self.error("'links' must name the two links it joins, e.g. "
-                             "links = [\"frame\", \"crank\"]", entry, line)
+            raise self.error("'links' must name the two links it joins", entry, line,
+                             "write e.g. links = [\"frame\", \"crank\"]: two [[link]] names")
         for link in links:
             if link not in link_names:
                 raise self.error(f"links names an unknown link '{link}'", entry, line,
@@ -505,7 +567,7 @@ class _Reader:
         given.update({k: v for k, v in table.items() if spec.parameter(k)})
         if spec.name == "prbm" and "preset" in given:
             preset = given["preset"]
-            if preset not in PRBM_PRESETS:
+            if not isinstance(preset, str) or preset not in PRBM_PRESETS:
                 raise self.error(f"unknown prbm preset {preset!r}", entry, line,
                                  "presets: " + ", ".join(sorted(PRBM_PRESETS)))
             given = {**PRBM_PRESETS[preset], **{k: v for k, v in given.items()
@@ -537,7 +599,7 @@ class _Reader:
                 raise self.error(f"'{p.name}' must be {rng}, got {_short(num)}", entry, line)
             return value
         if p.kind == "choice":
-            if raw not in p.choices:
+            if not isinstance(raw, str) or raw not in p.choices:
                 raise self.error(f"'{p.name}' must be one of {', '.join(p.choices)}, got {raw!r}",
                                  entry, line)
             return raw
@@ -572,13 +634,7 @@ class _Reader:
                                  "at theta = 0 the plate is straight: f(0) = l and g(0) = 0")
 
     def table_rows(self, name: str, degree: int, entry: str, line: int | None) -> tuple:
-        path = (self.base_dir / name)
-        try:
-            content = path.read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as exc:
-            reason = getattr(exc, "strerror", None) or exc
-            raise self.error(f"cannot read table file '{name}' ({reason})", entry, line,
-                             "give a CSV path relative to the mechanism file") from None
+        content = self.table_text(name, entry, line)
         rows = []
         for k, row in enumerate(csv.reader(io.StringIO(content)), start=1):
             if not row or not "".join(row).strip() or row[0].lstrip().startswith("#"):
@@ -588,7 +644,9 @@ class _Reader:
             except ValueError:
                 if not rows and k == 1:
                     continue                  # a header row
-                raise self.error(f"{name}:{k}: not three numbers: {row!r}", entry, line,
+                bad = next((x for x in row if not _is_float(x)), "")
+                shown = bad if len(bad) <= 40 else bad[:37] + "..."
+                raise self.error(f"{name}:{k}: not a number: {shown!r}", entry, line,
                                  "each row is theta, f/l, g/l") from None
             if len(values) != 3 or not all(math.isfinite(v) for v in values):
                 raise self.error(f"{name}:{k}: need three finite numbers theta, f/l, g/l",
@@ -599,6 +657,41 @@ class _Reader:
                              f"{degree} fit needs at least {degree + 1}", entry, line,
                              "add rows or lower 'degree'")
         return tuple(rows)
+
+    def table_text(self, name: str, entry: str, line: int | None) -> str:
+        """The text of a table file: a regular file inside the mechanism's folder (relative
+        path, no '..', symbolic links resolved inside it too), at most MAX_TABLE_BYTES."""
+        hint = "give a CSV path relative to the mechanism file, inside its folder"
+        rel = Path(name)
+        if rel.is_absolute() or ".." in rel.parts:
+            raise self.error(f"table file '{name}' must be inside the mechanism's folder "
+                             "(a relative path without '..')", entry, line, hint)
+        base = self.base_dir.resolve()
+        path = (base / rel).resolve()
+        if path != base and base not in path.parents:
+            raise self.error(f"table file '{name}' leads outside the mechanism's folder "
+                             "(a symbolic link)", entry, line, hint)
+        try:
+            info = os.stat(path)
+        except OSError as exc:
+            raise self.error(f"cannot read table file '{name}' ({exc.strerror or exc})", entry,
+                             line, hint) from None
+        if not stat.S_ISREG(info.st_mode):
+            raise self.error(f"table file '{name}' is not a regular file", entry, line, hint)
+        if info.st_size > MAX_TABLE_BYTES:
+            raise self.error(f"table file '{name}' is larger than {MAX_TABLE_BYTES} bytes",
+                             entry, line, "a table needs a few hundred rows at most")
+        try:
+            with open(path, "rb") as f:
+                raw = f.read(MAX_TABLE_BYTES + 1)
+            if len(raw) > MAX_TABLE_BYTES:
+                raise self.error(f"table file '{name}' is larger than {MAX_TABLE_BYTES} bytes",
+                                 entry, line, "a table needs a few hundred rows at most")
+            return raw.decode("utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            reason = getattr(exc, "strerror", None) or type(exc).__name__
+            raise self.error(f"cannot read table file '{name}' ({reason})", entry, line,
+                             hint) from None
 
     def points(self, tables: list[Mapping], link_names: list[str]) -> tuple[Point, ...]:
         out = []

@@ -1,4 +1,5 @@
-"""Checks of the paths a user gives (`-o DIR`, `--plot FILE`), made before any long work starts.
+"""Checks of the paths a user gives (`-o DIR`, `--plot FILE`), made before any long work starts,
+and writing a set of files all or none (`derive`).
 
 A mistake in a path is bad input (exit code 2) with a `fix:` line, never an internal error after
 minutes of derivation.
@@ -6,7 +7,11 @@ minutes of derivation.
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import os
+import shutil
+import tempfile
 from pathlib import Path
 
 from .errors import InputError
@@ -58,3 +63,80 @@ def output_file(path: str | Path, option: str, suffixes: tuple[str, ...]) -> Pat
         raise InputError(f"'{shown}' is not writable", entry=option,
                          hint="choose a path you can write to")
     return target
+
+
+# -- writing a set of files all or none (`derive`) ---------------------------------------------
+
+#: Temporary folders a writer stages its files in, inside the output folder (hidden).
+TEMP_PREFIX = ".symkin-tmp-"
+#: The commit record: present while staged files are being moved into place.
+COMMIT = ".symkin-commit"
+
+
+@contextlib.contextmanager
+def _locked(folder: Path):
+    """An exclusive lock on `folder` itself (flock on the folder): writers of one folder take
+    turns, and a killed writer's lock goes with it. No lock file is left behind."""
+    fd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)                         # releases the lock
+
+
+def _roll_forward(folder: Path) -> None:
+    """Finish a commit a killed writer left (the lock held): move its staged files into place;
+    then remove every stale temporary folder."""
+    record = folder / COMMIT
+    if record.exists():
+        staged, *names = record.read_text().split("\n")
+        for name in names:
+            if name and (folder / staged / name).exists():
+                os.replace(folder / staged / name, folder / name)
+        record.unlink()
+    for stale in folder.glob(TEMP_PREFIX + "*"):
+        shutil.rmtree(stale, ignore_errors=True)
+
+
+def complete_interrupted(folder: str | Path) -> None:
+    """Leave `folder` as the last writer meant it: a commit interrupted by a kill is completed,
+    temporary folders of killed writers are removed. Every write starts with this."""
+    folder = Path(folder)
+    if folder.is_dir():
+        with _locked(folder):
+            _roll_forward(folder)
+
+
+def write_atomically(files: dict[str, bytes], out_dir: str | Path) -> list[Path]:
+    """Write all `files` into `out_dir` or none, even when killed or raced by other writers.
+
+    Under a lock on the folder: staged in full in a hidden temporary folder inside it, then a
+    commit record names the staged files (one atomic rename makes it appear), the files are
+    moved into place with one rename each and the record is removed. A writer killed before the
+    record appears leaves the old files (its temporary folder is removed by the next write or
+    :func:`complete_interrupted`); one killed after it is completed by them. Concurrent writers
+    take turns: the folder holds one writer's complete set.
+    """
+    out_dir = Path(out_dir)
+    os.makedirs(out_dir, exist_ok=True)
+    with _locked(out_dir):
+        _roll_forward(out_dir)
+        staged = Path(tempfile.mkdtemp(prefix=TEMP_PREFIX, dir=out_dir))
+        try:
+            for name, content in sorted(files.items()):
+                with open(staged / name, "wb") as f:
+                    f.write(content)
+                    f.flush()
+                    os.fsync(f.fileno())
+            fd, tmp = tempfile.mkstemp(prefix=TEMP_PREFIX, dir=out_dir)
+            with os.fdopen(fd, "w") as f:
+                f.write("\n".join([staged.name, *sorted(files)]))
+                f.flush()
+                os.fsync(f.fileno())
+            os.replace(tmp, out_dir / COMMIT)          # the commit point
+            _roll_forward(out_dir)
+        finally:
+            if staged.exists():
+                shutil.rmtree(staged, ignore_errors=True)
+    return [out_dir / name for name in sorted(files)]

@@ -8,6 +8,18 @@ The algorithm, in every arithmetic:
    to their values in ``continuation_steps`` equal steps, each solved from the previous pose
    until a Newton step is at most ``rigid`` (radians) in size, at most ``rigid_iterations``
    steps; a step that does not converge means the input cannot be reached;
+   The rigid Newton tracks every angle continuously: its angular residuals are never wrapped.
+   **Winding rule** (every backend, the same test): the closed-form dyads give each angle only
+   modulo 2π (wrapped into (−π, π]), which hides a plate turned through more than half a turn
+   on the way from the as-fabricated pose (the four-bar at A0 = −3: hinge A at +3.35, wrapped
+   to −2.93). Along that path every loop's rotations sum to zero, so the rigid angles are
+   accepted only when every loop's angular closure Σ_a Φ_ka θ_a (the rows 0, 3, 6, ... of the
+   rigid residual) is below ``winding`` in magnitude; a sum of ±2π means a hinge left
+   (−π, π]: the input cannot be reached (exit 3). Then every hinge, rigid and compliant, must
+   stay below its model's limit (π at most). Inputs themselves are bounded by π (larger values,
+   1e8 or 1e16 included, are refused before any arithmetic), so no reduction modulo 2π of a
+   huge number is ever needed. Known gap: two hinges of one loop wrapping in opposite
+   directions at once cancel in the sum and pass, in every backend alike;
 2. ``polish`` Newton steps on that closure: the dyad formulas lose the relative accuracy of
    small angles to cancellation in floating point (none in mpmath);
 3. δ: the first-order linear system A δ = −Φ Δz (`first_order`), then for `exact` Newton on the
@@ -41,6 +53,7 @@ class SolverSettings:
     rigid_iterations: int = 30           # Newton cap per continuation step
     exact_iterations: int = 40           # Newton cap of the exact level
     stall_ratio: float = 0.5             # a step this fraction of the previous one has stalled
+    winding: float = math.pi             # a loop's angle sum this large: a hinge wrapped (no assembly)
     float64: Tolerances = Tolerances(rigid=1e-10, converged=1e-8, stalled=1e-12, polish=1)
     float32: Tolerances = Tolerances(rigid=1e-4, converged=3e-4, stalled=1e-5, polish=1)
 

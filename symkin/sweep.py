@@ -137,7 +137,7 @@ def _checker(task: Task) -> Callable:
             found = _CHECKS.get(key)
             if found is None:
                 exprs = [e for _, e, _ in task.checks]
-                found = _CHECKS[key] = sp.lambdify(task.symbols, exprs, "numpy") \
+                found = _CHECKS[key] = sp.lambdify(task.symbols, exprs, "numpy", dummify=True) \
                     if exprs else (lambda *args: [])
     return found
 

@@ -3,7 +3,7 @@
  * Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, dev_paper 38, dev_first_order 52, dev_exact 62, loaded_q0 10, loaded_q 72, loaded_compliance 231, loaded_linear 99, loaded_newton 266, dev_loaded 69, links 1, sens_rigid 44, sens_paper 129, sens_first_order 290, sens_exact 339.
+ * Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, dev_paper 38, dev_first_order 52, dev_exact 62, loaded_q0 10, loaded_q 72, loaded_compliance 231, loaded_linear 102, loaded_newton 269, dev_loaded 72, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339.
  */
 #include "four_bar.h"
 
@@ -360,18 +360,18 @@ static void sk_dev_first_order(const double *theta, const double *delta, const d
     const double _tmp2 = theta_1 + theta_2;
     const double _tmp3 = sin(_tmp2);
     const double _tmp4 = cos(_tmp2);
-    const double _tmp5 = cos(theta_1);
+    const double _tmp5 = sin(theta_1);
     const double _tmp6 = 0.5*theta_2;
     const double _tmp7 = sin(_tmp6);
     const double _tmp8 = pow(theta_2, 2);
     const double _tmp9 = symkin_arck(_tmp6);
     const double _tmp10 = _tmp8*_tmp9*p_0;
-    const double _tmp11 = 0.21650635094610965*_tmp10;
-    const double _tmp12 = cos(_tmp6);
-    const double _tmp13 = -_tmp11*_tmp7 + 0.125*_tmp12*_tmp8*_tmp9*p_0;
-    const double _tmp14 = sin(theta_1);
-    const double _tmp15 = 0.125*_tmp10*_tmp7 + _tmp11*_tmp12;
-    out[0] = -_tmp1*sin(_tmp0) + _tmp13*_tmp5 - _tmp14*_tmp15 + delta_2*(-0.045*_tmp3 - 0.064*_tmp4);
+    const double _tmp11 = cos(_tmp6);
+    const double _tmp12 = 0.21650635094610965*_tmp10;
+    const double _tmp13 = 0.125*_tmp10*_tmp7 + _tmp11*_tmp12;
+    const double _tmp14 = cos(theta_1);
+    const double _tmp15 = 0.125*_tmp11*_tmp8*_tmp9*p_0 - _tmp12*_tmp7;
+    out[0] = -_tmp1*sin(_tmp0) - _tmp13*_tmp5 + _tmp14*_tmp15 + delta_2*(-0.045*_tmp3 - 0.064*_tmp4);
     out[1] = _tmp1*cos(_tmp0) + _tmp13*_tmp14 + _tmp15*_tmp5 + delta_2*(-0.064*_tmp3 + 0.045*_tmp4);
 }
 
@@ -526,7 +526,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     out[7] = -_tmp46*_tmp58 + 2400000*_tmp50*_tmp56*_tmp57*_tmp6;
 }
 
-/* loaded: A and r = Phi dz of the loaded closure (its first-order start) (99 operations) */
+/* loaded: A and r = Phi dz of the loaded closure (its first-order start) (102 operations) */
 static void sk_loaded_linear(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -560,13 +560,14 @@ static void sk_loaded_linear(const double *theta, const double *params, double *
     const double _tmp15 = sin(theta_1);
     const double _tmp16 = 0.5*theta_2;
     const double _tmp17 = sin(_tmp16);
-    const double _tmp18 = p_0*pow(theta_2, 2)*symkin_arck(_tmp16);
-    const double _tmp19 = 0.125*_tmp18;
-    const double _tmp20 = cos(_tmp16);
-    const double _tmp21 = 0.21650635094610965*_tmp18;
-    const double _tmp22 = _tmp17*_tmp19 + _tmp20*_tmp21 + 0.8660254037844386*compliance_x_2 + 0.5*compliance_y_2;
-    const double _tmp23 = cos(theta_1);
-    const double _tmp24 = -_tmp17*_tmp21 + _tmp19*_tmp20 + 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2;
+    const double _tmp18 = pow(theta_2, 2);
+    const double _tmp19 = symkin_arck(_tmp16);
+    const double _tmp20 = _tmp18*_tmp19*p_0;
+    const double _tmp21 = cos(_tmp16);
+    const double _tmp22 = 0.21650635094610965*_tmp20;
+    const double _tmp23 = 0.125*_tmp17*_tmp20 + _tmp21*_tmp22 + 0.8660254037844386*compliance_x_2 + 0.5*compliance_y_2;
+    const double _tmp24 = cos(theta_1);
+    const double _tmp25 = -_tmp17*_tmp22 + 0.125*_tmp18*_tmp19*_tmp21*p_0 + 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2;
     out[0] = 1;
     out[1] = -1;
     out[2] = 1;
@@ -577,11 +578,11 @@ static void sk_loaded_linear(const double *theta, const double *params, double *
     out[7] = 0.068*_tmp3 + 0.015*_tmp4;
     out[8] = 0;
     out[9] = 0;
-    out[10] = -_tmp1*_tmp13 + 0.25*_tmp10*_tmp8*p_0*sin(_tmp9) + _tmp14*_tmp2 - _tmp15*_tmp22 + _tmp23*_tmp24 - _tmp7*sin(_tmp5) - compliance_y_1 + compliance_y_3;
-    out[11] = _tmp1*_tmp14 - _tmp10*_tmp6*_tmp8*cos(_tmp9) + _tmp13*_tmp2 + _tmp15*_tmp24 + _tmp22*_tmp23 + _tmp7*cos(_tmp5) + compliance_x_1 - compliance_x_3;
+    out[10] = -_tmp1*_tmp13 + 0.25*_tmp10*_tmp8*p_0*sin(_tmp9) + _tmp14*_tmp2 - _tmp15*_tmp23 + _tmp24*_tmp25 - _tmp7*sin(_tmp5) - compliance_y_1 + compliance_y_3;
+    out[11] = _tmp1*_tmp14 - _tmp10*_tmp6*_tmp8*cos(_tmp9) + _tmp13*_tmp2 + _tmp15*_tmp25 + _tmp23*_tmp24 + _tmp7*cos(_tmp5) + compliance_x_1 - compliance_x_3;
 }
 
-/* loaded: the loaded closure F(delta) and dF/ddelta (266 operations) */
+/* loaded: the loaded closure F(delta) and dF/ddelta (269 operations) */
 static void sk_loaded_newton(const double *theta, const double *delta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -640,31 +641,31 @@ static void sk_loaded_newton(const double *theta, const double *delta, const dou
     const double _tmp37 = _tmp27*_tmp36 + compliance_x_4;
     const double _tmp38 = sin(theta_1);
     const double _tmp39 = delta_2 + theta_2;
-    const double _tmp40 = _tmp13 + 0.5*theta_2;
-    const double _tmp41 = symkin_arck(_tmp40);
-    const double _tmp42 = pow(_tmp39, 2)*_tmp41;
-    const double _tmp43 = 0.125*_tmp42;
-    const double _tmp44 = sin(_tmp40);
+    const double _tmp40 = pow(_tmp39, 2);
+    const double _tmp41 = _tmp13 + 0.5*theta_2;
+    const double _tmp42 = symkin_arck(_tmp41);
+    const double _tmp43 = _tmp40*_tmp42;
+    const double _tmp44 = sin(_tmp41);
     const double _tmp45 = _tmp44*p_0;
-    const double _tmp46 = cos(_tmp40);
+    const double _tmp46 = cos(_tmp41);
     const double _tmp47 = _tmp46*p_0;
-    const double _tmp48 = 0.21650635094610965*_tmp42;
-    const double _tmp49 = _tmp43*_tmp45 + _tmp47*_tmp48 + 0.8660254037844386*compliance_x_2 + 0.5*compliance_y_2;
+    const double _tmp48 = 0.21650635094610965*_tmp43;
+    const double _tmp49 = 0.125*_tmp43*_tmp45 + _tmp47*_tmp48 + 0.8660254037844386*compliance_x_2 + 0.5*compliance_y_2;
     const double _tmp50 = cos(theta_1);
-    const double _tmp51 = _tmp43*_tmp47 - _tmp45*_tmp48 + 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2;
+    const double _tmp51 = 0.125*_tmp40*_tmp42*_tmp46*p_0 - _tmp45*_tmp48 + 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2;
     const double _tmp52 = cos(_tmp20);
     const double _tmp53 = _tmp19*_tmp22;
     const double _tmp54 = _tmp24*_tmp37 + _tmp32*_tmp34;
-    const double _tmp55 = _tmp39*_tmp41;
+    const double _tmp55 = _tmp39*_tmp42;
     const double _tmp56 = 0.4330127018922193*_tmp55;
-    const double _tmp57 = 0.10825317547305482*_tmp42;
-    const double _tmp58 = 0.0625*_tmp42;
+    const double _tmp57 = 0.10825317547305482*_tmp43;
+    const double _tmp58 = 0.0625*_tmp43;
     const double _tmp59 = pow(_tmp39, 3);
-    const double _tmp60 = 3*symkin_cosr2(_tmp40) + symkin_sinr1(_tmp40) - 3*symkin_sinr2(_tmp40);
+    const double _tmp60 = 3*symkin_cosr2(_tmp41) + symkin_sinr1(_tmp41) - 3*symkin_sinr2(_tmp41);
     const double _tmp61 = _tmp59*_tmp60;
     const double _tmp62 = 0.05412658773652741*_tmp61;
     const double _tmp63 = _tmp1*_tmp44*_tmp55 - _tmp45*_tmp57 + 0.03125*_tmp45*_tmp61 + _tmp47*_tmp56 + _tmp47*_tmp58 + _tmp47*_tmp62;
-    const double _tmp64 = 0.25*_tmp39*_tmp41*_tmp46*p_0 - _tmp45*_tmp56 - _tmp45*_tmp58 - _tmp45*_tmp62 + 0.03125*_tmp46*_tmp59*_tmp60*p_0 - _tmp47*_tmp57;
+    const double _tmp64 = 0.25*_tmp39*_tmp42*_tmp46*p_0 - _tmp45*_tmp56 - _tmp45*_tmp58 - _tmp45*_tmp62 + 0.03125*_tmp46*_tmp59*_tmp60*p_0 - _tmp47*_tmp57;
     const double _tmp65 = sin(_tmp18);
     const double _tmp66 = cos(_tmp18);
     const double _tmp67 = _tmp21*p_0;
@@ -691,7 +692,7 @@ static void sk_loaded_newton(const double *theta, const double *delta, const dou
     out[11] = _tmp24*_tmp75 + _tmp34*_tmp74;
 }
 
-/* deviation of the points at level loaded (69 operations) */
+/* deviation of the points at level loaded (72 operations) */
 static void sk_dev_loaded(const double *theta, const double *delta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -715,15 +716,16 @@ static void sk_dev_loaded(const double *theta, const double *delta, const double
     const double _tmp10 = sin(theta_1);
     const double _tmp11 = _tmp5 + 0.5*theta_2;
     const double _tmp12 = sin(_tmp11);
-    const double _tmp13 = p_0*pow(delta_2 + theta_2, 2)*symkin_arck(_tmp11);
-    const double _tmp14 = 0.125*_tmp13;
-    const double _tmp15 = cos(_tmp11);
-    const double _tmp16 = 0.21650635094610965*_tmp13;
-    const double _tmp17 = _tmp12*_tmp14 + _tmp15*_tmp16 + 0.8660254037844386*compliance_x_2 + 0.5*compliance_y_2;
-    const double _tmp18 = cos(theta_1);
-    const double _tmp19 = -_tmp12*_tmp16 + _tmp14*_tmp15 + 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2;
-    out[0] = -_tmp1*sin(_tmp0) - _tmp10*_tmp17 + _tmp18*_tmp19 - _tmp3*_tmp7 + _tmp8*_tmp9 - compliance_y_1;
-    out[1] = _tmp1*cos(_tmp0) + _tmp10*_tmp19 + _tmp17*_tmp18 + _tmp3*_tmp9 + _tmp7*_tmp8 + compliance_x_1;
+    const double _tmp13 = pow(delta_2 + theta_2, 2);
+    const double _tmp14 = symkin_arck(_tmp11);
+    const double _tmp15 = _tmp13*_tmp14*p_0;
+    const double _tmp16 = cos(_tmp11);
+    const double _tmp17 = 0.21650635094610965*_tmp15;
+    const double _tmp18 = 0.125*_tmp12*_tmp15 + _tmp16*_tmp17 + 0.8660254037844386*compliance_x_2 + 0.5*compliance_y_2;
+    const double _tmp19 = cos(theta_1);
+    const double _tmp20 = -_tmp12*_tmp17 + 0.125*_tmp13*_tmp14*_tmp16*p_0 + 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2;
+    out[0] = -_tmp1*sin(_tmp0) - _tmp10*_tmp18 + _tmp19*_tmp20 - _tmp3*_tmp7 + _tmp8*_tmp9 - compliance_y_1;
+    out[1] = _tmp1*cos(_tmp0) + _tmp10*_tmp20 + _tmp18*_tmp19 + _tmp3*_tmp9 + _tmp7*_tmp8 + compliance_x_1;
 }
 
 /* rotation of every link and how much further the compliant one turns (1 operations) */
@@ -848,7 +850,7 @@ static void sk_sens_paper(const double *theta, const double *params, double *out
     out[9] = _tmp0*_tmp37 - _tmp18*_tmp38 - _tmp31*_tmp35 + _tmp32*_tmp34 + _tmp34*_tmp36;
 }
 
-/* sensitivity at level first_order: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (290 operations) */
+/* sensitivity at level first_order: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (278 operations) */
 static void sk_sens_first_order(const double *theta, const double *delta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -915,37 +917,37 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp54 = 0.0625*pow(theta_4, 3)*(3*symkin_cosr2(_tmp30) + symkin_sinr1(_tmp30) - 3*symkin_sinr2(_tmp30));
     const double _tmp55 = _tmp31*_tmp53 + _tmp39*_tmp52 + _tmp39*_tmp54;
     const double _tmp56 = _tmp32*_tmp52 + _tmp32*_tmp54 - _tmp38*_tmp53;
-    const double _tmp57 = _tmp3*delta_2;
-    const double _tmp58 = _tmp1*_tmp40;
-    const double _tmp59 = _tmp26*_tmp27 + _tmp28*_tmp9;
-    const double _tmp60 = _tmp47*p_0;
-    const double _tmp61 = _tmp36*_tmp38;
-    const double _tmp62 = 0.5*theta_1;
-    const double _tmp63 = sin(_tmp62);
-    const double _tmp64 = symkin_arck(_tmp62);
-    const double _tmp65 = _tmp64*pow(theta_1, 2);
-    const double _tmp66 = 0.25*_tmp65;
-    const double _tmp67 = 0.125*_tmp13*_tmp19;
-    const double _tmp68 = 0.21650635094610965*_tmp19;
-    const double _tmp69 = _tmp15*_tmp68;
-    const double _tmp70 = _tmp67 + _tmp69;
-    const double _tmp71 = _tmp13*_tmp68;
-    const double _tmp72 = 0.125*_tmp11*_tmp15*_tmp18 - _tmp71;
-    const double _tmp73 = -_tmp27*_tmp72 + _tmp63*_tmp66 + _tmp70*_tmp9;
-    const double _tmp74 = 0.125*_tmp11*_tmp15*_tmp18*p_0 - _tmp71*p_0;
-    const double _tmp75 = _tmp67*p_0 + _tmp69*p_0;
-    const double _tmp76 = _tmp63*p_0;
-    const double _tmp77 = pow(theta_1, 3);
-    const double _tmp78 = 3*symkin_cosr2(_tmp62) + symkin_sinr1(_tmp62) - 3*symkin_sinr2(_tmp62);
-    const double _tmp79 = cos(_tmp62);
-    const double _tmp80 = _tmp50*_tmp65;
-    const double _tmp81 = _tmp27*_tmp75 + _tmp62*_tmp64*_tmp76 + _tmp74*_tmp9 + 0.0625*_tmp76*_tmp77*_tmp78 + _tmp79*_tmp80;
-    const double _tmp82 = _tmp27*_tmp70 + _tmp66*_tmp79 + _tmp72*_tmp9;
-    const double _tmp83 = -_tmp27*_tmp74 + _tmp63*_tmp80 - 0.5*_tmp64*_tmp79*p_0*theta_1 + _tmp75*_tmp9 - 0.0625*_tmp77*_tmp78*_tmp79*p_0;
+    const double _tmp57 = _tmp26*_tmp27 + _tmp28*_tmp9;
+    const double _tmp58 = -_tmp1*_tmp40 + _tmp2*_tmp37 - _tmp3*delta_2;
+    const double _tmp59 = _tmp47*p_0;
+    const double _tmp60 = _tmp36*_tmp38;
+    const double _tmp61 = 0.5*theta_1;
+    const double _tmp62 = sin(_tmp61);
+    const double _tmp63 = symkin_arck(_tmp61);
+    const double _tmp64 = _tmp63*pow(theta_1, 2);
+    const double _tmp65 = 0.25*_tmp64;
+    const double _tmp66 = 0.125*_tmp13*_tmp19;
+    const double _tmp67 = 0.21650635094610965*_tmp19;
+    const double _tmp68 = _tmp15*_tmp67;
+    const double _tmp69 = _tmp66 + _tmp68;
+    const double _tmp70 = _tmp13*_tmp67;
+    const double _tmp71 = 0.125*_tmp11*_tmp15*_tmp18 - _tmp70;
+    const double _tmp72 = -_tmp27*_tmp71 + _tmp62*_tmp65 + _tmp69*_tmp9;
+    const double _tmp73 = 0.125*_tmp11*_tmp15*_tmp18*p_0 - _tmp70*p_0;
+    const double _tmp74 = _tmp66*p_0 + _tmp68*p_0;
+    const double _tmp75 = _tmp62*p_0;
+    const double _tmp76 = 0.0625*pow(theta_1, 3)*(3*symkin_cosr2(_tmp61) + symkin_sinr1(_tmp61) - 3*symkin_sinr2(_tmp61));
+    const double _tmp77 = cos(_tmp61);
+    const double _tmp78 = _tmp50*_tmp64;
+    const double _tmp79 = _tmp61*_tmp63;
+    const double _tmp80 = _tmp27*_tmp74 + _tmp73*_tmp9 + _tmp75*_tmp76 + _tmp75*_tmp79 + _tmp77*_tmp78;
+    const double _tmp81 = _tmp27*_tmp69 + _tmp65*_tmp77 + _tmp71*_tmp9;
+    const double _tmp82 = _tmp77*p_0;
+    const double _tmp83 = _tmp27*_tmp73 - _tmp62*_tmp78 - _tmp74*_tmp9 + _tmp76*_tmp82 + _tmp79*_tmp82;
     const double _tmp84 = -0.064*_tmp1 + 0.045*_tmp2;
     const double _tmp85 = _tmp84*delta_2;
     const double _tmp86 = 0.045*_tmp1 + 0.064*_tmp2;
-    const double _tmp87 = _tmp86*delta_2;
+    const double _tmp87 = -_tmp86*delta_2;
     out[0] = 1;
     out[1] = -1;
     out[2] = 1;
@@ -961,19 +963,19 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     out[12] = -_tmp29 - _tmp41;
     out[13] = _tmp44*_tmp46 + _tmp44*_tmp51 + _tmp47*_tmp49*_tmp50 - _tmp8*delta_3;
     out[14] = -_tmp1*_tmp55 + _tmp2*_tmp56;
-    out[15] = _tmp2*_tmp37 - _tmp57 - _tmp58 + _tmp59;
-    out[16] = 0.125*_tmp43*_tmp45*_tmp48*p_0 - _tmp46*_tmp60 - _tmp51*_tmp60 - _tmp6*delta_3;
+    out[15] = _tmp57 + _tmp58;
+    out[16] = 0.125*_tmp43*_tmp45*_tmp48*p_0 - _tmp46*_tmp59 - _tmp51*_tmp59 - _tmp6*delta_3;
     out[17] = _tmp1*_tmp56 + _tmp2*_tmp55;
     out[18] = 0;
     out[19] = 0;
-    out[20] = -_tmp1*_tmp61 + 0.25*_tmp2*_tmp31*_tmp33*_tmp34 + 0.25*_tmp43*_tmp45*_tmp48 - _tmp73;
-    out[21] = -_tmp41 - _tmp81;
-    out[22] = _tmp1*_tmp31*_tmp36 + _tmp2*_tmp61 - 0.25*_tmp47*_tmp49 + _tmp82;
-    out[23] = 0.25*_tmp2*_tmp31*_tmp33*_tmp34*p_0 - _tmp57 - _tmp58 - _tmp83;
+    out[20] = -_tmp1*_tmp60 + 0.25*_tmp2*_tmp31*_tmp33*_tmp34 + 0.25*_tmp43*_tmp45*_tmp48 - _tmp72;
+    out[21] = -_tmp41 - _tmp80;
+    out[22] = _tmp1*_tmp31*_tmp36 + _tmp2*_tmp60 - 0.25*_tmp47*_tmp49 + _tmp81;
+    out[23] = _tmp58 + _tmp83;
     out[24] = -_tmp29 - _tmp85;
     out[25] = 0;
     out[26] = 0;
-    out[27] = _tmp59 - _tmp87;
+    out[27] = _tmp57 + _tmp87;
     out[28] = 0;
     out[29] = 0;
     out[30] = -_tmp86;
@@ -982,10 +984,10 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     out[33] = _tmp84;
     out[34] = 0;
     out[35] = 0;
-    out[36] = -_tmp73;
-    out[37] = -_tmp81 - _tmp85;
-    out[38] = _tmp82;
-    out[39] = -_tmp83 - _tmp87;
+    out[36] = -_tmp72;
+    out[37] = -_tmp80 - _tmp85;
+    out[38] = _tmp81;
+    out[39] = _tmp83 + _tmp87;
 }
 
 /* sensitivity at level exact: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (339 operations) */
@@ -1267,9 +1269,6 @@ static double sk_rigid_newton(double *theta, const double *params, int iteration
     for (it = 0; it < iterations; ++it) {
         sk_rigid_res(theta, params, res);
         sk_linear(theta, params, lin);
-        for (i = 0; i < SK_K; i += 3) {
-            res[i] = remainder(res[i], sk_two_pi);
-        }
         if (sk_solve(SK_K, lin, res)) {
             return -1.0;
         }
@@ -1496,6 +1495,16 @@ static int sk_pose(const double *inputs, const double *params, int level, int wa
         }
         for (i = 0; i < SK_K; ++i) {
             theta[sk_unknown_index[i]] = remainder(sol[i], sk_two_pi);
+        }
+    }
+    {
+        /* the winding rule (symkin.solver): every loop's angles sum to 0, not +-2*pi */
+        double res[SK_K];
+        sk_rigid_res(theta, params, res);
+        for (i = 0; i < SK_K; i += 3) {
+            if (!(fabs(res[i]) < 3.141592653589793)) {
+                return 1;
+            }
         }
     }
     /* polish: the relative accuracy of small angles */

@@ -2,7 +2,7 @@
 Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
 Points: C; levels: paper, first_order, exact, loaded.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, dev_paper 38, dev_first_order 52, dev_exact 62, loaded_q0 10, loaded_q 72, loaded_compliance 231, loaded_linear 99, loaded_newton 266, dev_loaded 69, links 1, sens_rigid 44, sens_paper 129, sens_first_order 290, sens_exact 339.
+Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, dev_paper 38, dev_first_order 52, dev_exact 62, loaded_q0 10, loaded_q 72, loaded_compliance 231, loaded_linear 102, loaded_newton 269, dev_loaded 72, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -40,6 +40,7 @@ _LIMITS = ((0, 3.141592653589793), (1, 3.141592653589793), (2, 3.141592653589793
 _NEEDS_LOOPS = True
 _LOOPS_FOR_LINKS = False  # the links' rotations alone need the loops solved
 _DTYPE = numpy.float64
+_WINDING = 3.141592653589793  # a loop's angle sum this large: a hinge wrapped (no assembly)
 _POLISH = 1  # Newton steps after the rigid start: relative accuracy of small angles
 _EXACT_ITERATIONS = 40  # Newton cap of the exact level
 _CONVERGED = 1e-08  # ~sqrt(eps): a step this small (relative) ends Newton
@@ -370,19 +371,19 @@ def _dev_first_order(theta, delta, params):
     _tmp2 = theta_1 + theta_2
     _tmp3 = numpy.sin(_tmp2)
     _tmp4 = numpy.cos(_tmp2)
-    _tmp5 = numpy.cos(theta_1)
+    _tmp5 = numpy.sin(theta_1)
     _tmp6 = 0.5*theta_2
     _tmp7 = numpy.sin(_tmp6)
     _tmp8 = theta_2**2
     _tmp9 = arck(_tmp6)
     _tmp10 = _tmp8*_tmp9*p_0
-    _tmp11 = 0.21650635094610965*_tmp10
-    _tmp12 = numpy.cos(_tmp6)
-    _tmp13 = -_tmp11*_tmp7 + 0.125*_tmp12*_tmp8*_tmp9*p_0
-    _tmp14 = numpy.sin(theta_1)
-    _tmp15 = 0.125*_tmp10*_tmp7 + _tmp11*_tmp12
+    _tmp11 = numpy.cos(_tmp6)
+    _tmp12 = 0.21650635094610965*_tmp10
+    _tmp13 = 0.125*_tmp10*_tmp7 + _tmp11*_tmp12
+    _tmp14 = numpy.cos(theta_1)
+    _tmp15 = 0.125*_tmp11*_tmp8*_tmp9*p_0 - _tmp12*_tmp7
     return [
-        -_tmp1*numpy.sin(_tmp0) + _tmp13*_tmp5 - _tmp14*_tmp15 + delta_2*(-0.045*_tmp3 - 0.064*_tmp4),
+        -_tmp1*numpy.sin(_tmp0) - _tmp13*_tmp5 + _tmp14*_tmp15 + delta_2*(-0.045*_tmp3 - 0.064*_tmp4),
         _tmp1*numpy.cos(_tmp0) + _tmp13*_tmp14 + _tmp15*_tmp5 + delta_2*(-0.064*_tmp3 + 0.045*_tmp4),
     ]
 
@@ -532,7 +533,7 @@ def _loaded_compliance(theta, mu, params):
 
 
 def _loaded_linear(theta, params):
-    """loaded: A and r = Phi dz of the loaded closure (its first-order start) (99 operations)."""
+    """loaded: A and r = Phi dz of the loaded closure (its first-order start) (102 operations)."""
     theta_1, theta_2, theta_3, theta_4 = theta
     p_0, compliance_x_1, compliance_y_1, compliance_x_2, compliance_y_2, compliance_x_3, compliance_y_3, compliance_x_4, compliance_y_4 = params
     _tmp0 = theta_1 + theta_2
@@ -553,13 +554,14 @@ def _loaded_linear(theta, params):
     _tmp15 = numpy.sin(theta_1)
     _tmp16 = 0.5*theta_2
     _tmp17 = numpy.sin(_tmp16)
-    _tmp18 = p_0*theta_2**2*arck(_tmp16)
-    _tmp19 = 0.125*_tmp18
-    _tmp20 = numpy.cos(_tmp16)
-    _tmp21 = 0.21650635094610965*_tmp18
-    _tmp22 = _tmp17*_tmp19 + _tmp20*_tmp21 + 0.8660254037844386*compliance_x_2 + 0.5*compliance_y_2
-    _tmp23 = numpy.cos(theta_1)
-    _tmp24 = -_tmp17*_tmp21 + _tmp19*_tmp20 + 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2
+    _tmp18 = theta_2**2
+    _tmp19 = arck(_tmp16)
+    _tmp20 = _tmp18*_tmp19*p_0
+    _tmp21 = numpy.cos(_tmp16)
+    _tmp22 = 0.21650635094610965*_tmp20
+    _tmp23 = 0.125*_tmp17*_tmp20 + _tmp21*_tmp22 + 0.8660254037844386*compliance_x_2 + 0.5*compliance_y_2
+    _tmp24 = numpy.cos(theta_1)
+    _tmp25 = -_tmp17*_tmp22 + 0.125*_tmp18*_tmp19*_tmp21*p_0 + 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2
     return [
         1,
         -1,
@@ -571,13 +573,13 @@ def _loaded_linear(theta, params):
         0.068*_tmp3 + 0.015*_tmp4,
         0,
         0,
-        -_tmp1*_tmp13 + 0.25*_tmp10*_tmp8*p_0*numpy.sin(_tmp9) + _tmp14*_tmp2 - _tmp15*_tmp22 + _tmp23*_tmp24 - _tmp7*numpy.sin(_tmp5) - compliance_y_1 + compliance_y_3,
-        _tmp1*_tmp14 - _tmp10*_tmp6*_tmp8*numpy.cos(_tmp9) + _tmp13*_tmp2 + _tmp15*_tmp24 + _tmp22*_tmp23 + _tmp7*numpy.cos(_tmp5) + compliance_x_1 - compliance_x_3,
+        -_tmp1*_tmp13 + 0.25*_tmp10*_tmp8*p_0*numpy.sin(_tmp9) + _tmp14*_tmp2 - _tmp15*_tmp23 + _tmp24*_tmp25 - _tmp7*numpy.sin(_tmp5) - compliance_y_1 + compliance_y_3,
+        _tmp1*_tmp14 - _tmp10*_tmp6*_tmp8*numpy.cos(_tmp9) + _tmp13*_tmp2 + _tmp15*_tmp25 + _tmp23*_tmp24 + _tmp7*numpy.cos(_tmp5) + compliance_x_1 - compliance_x_3,
     ]
 
 
 def _loaded_newton(theta, delta, params):
-    """loaded: the loaded closure F(delta) and dF/ddelta (266 operations)."""
+    """loaded: the loaded closure F(delta) and dF/ddelta (269 operations)."""
     theta_1, theta_2, theta_3, theta_4 = theta
     delta_2, delta_3, delta_4 = delta
     p_0, compliance_x_1, compliance_y_1, compliance_x_2, compliance_y_2, compliance_x_3, compliance_y_3, compliance_x_4, compliance_y_4 = params
@@ -621,31 +623,31 @@ def _loaded_newton(theta, delta, params):
     _tmp37 = _tmp27*_tmp36 + compliance_x_4
     _tmp38 = numpy.sin(theta_1)
     _tmp39 = delta_2 + theta_2
-    _tmp40 = _tmp13 + 0.5*theta_2
-    _tmp41 = arck(_tmp40)
-    _tmp42 = _tmp39**2*_tmp41
-    _tmp43 = 0.125*_tmp42
-    _tmp44 = numpy.sin(_tmp40)
+    _tmp40 = _tmp39**2
+    _tmp41 = _tmp13 + 0.5*theta_2
+    _tmp42 = arck(_tmp41)
+    _tmp43 = _tmp40*_tmp42
+    _tmp44 = numpy.sin(_tmp41)
     _tmp45 = _tmp44*p_0
-    _tmp46 = numpy.cos(_tmp40)
+    _tmp46 = numpy.cos(_tmp41)
     _tmp47 = _tmp46*p_0
-    _tmp48 = 0.21650635094610965*_tmp42
-    _tmp49 = _tmp43*_tmp45 + _tmp47*_tmp48 + 0.8660254037844386*compliance_x_2 + 0.5*compliance_y_2
+    _tmp48 = 0.21650635094610965*_tmp43
+    _tmp49 = 0.125*_tmp43*_tmp45 + _tmp47*_tmp48 + 0.8660254037844386*compliance_x_2 + 0.5*compliance_y_2
     _tmp50 = numpy.cos(theta_1)
-    _tmp51 = _tmp43*_tmp47 - _tmp45*_tmp48 + 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2
+    _tmp51 = 0.125*_tmp40*_tmp42*_tmp46*p_0 - _tmp45*_tmp48 + 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2
     _tmp52 = numpy.cos(_tmp20)
     _tmp53 = _tmp19*_tmp22
     _tmp54 = _tmp24*_tmp37 + _tmp32*_tmp34
-    _tmp55 = _tmp39*_tmp41
+    _tmp55 = _tmp39*_tmp42
     _tmp56 = 0.4330127018922193*_tmp55
-    _tmp57 = 0.10825317547305482*_tmp42
-    _tmp58 = 0.0625*_tmp42
+    _tmp57 = 0.10825317547305482*_tmp43
+    _tmp58 = 0.0625*_tmp43
     _tmp59 = _tmp39**3
-    _tmp60 = 3*cosr2(_tmp40) + sinr1(_tmp40) - 3*sinr2(_tmp40)
+    _tmp60 = 3*cosr2(_tmp41) + sinr1(_tmp41) - 3*sinr2(_tmp41)
     _tmp61 = _tmp59*_tmp60
     _tmp62 = 0.05412658773652741*_tmp61
     _tmp63 = _tmp1*_tmp44*_tmp55 - _tmp45*_tmp57 + 0.03125*_tmp45*_tmp61 + _tmp47*_tmp56 + _tmp47*_tmp58 + _tmp47*_tmp62
-    _tmp64 = 0.25*_tmp39*_tmp41*_tmp46*p_0 - _tmp45*_tmp56 - _tmp45*_tmp58 - _tmp45*_tmp62 + 0.03125*_tmp46*_tmp59*_tmp60*p_0 - _tmp47*_tmp57
+    _tmp64 = 0.25*_tmp39*_tmp42*_tmp46*p_0 - _tmp45*_tmp56 - _tmp45*_tmp58 - _tmp45*_tmp62 + 0.03125*_tmp46*_tmp59*_tmp60*p_0 - _tmp47*_tmp57
     _tmp65 = numpy.sin(_tmp18)
     _tmp66 = numpy.cos(_tmp18)
     _tmp67 = _tmp21*p_0
@@ -675,7 +677,7 @@ def _loaded_newton(theta, delta, params):
 
 
 def _dev_loaded(theta, delta, params):
-    """deviation of the points at level loaded (69 operations)."""
+    """deviation of the points at level loaded (72 operations)."""
     theta_1, theta_2, _, _ = theta
     delta_2, _, _ = delta
     p_0, compliance_x_1, compliance_y_1, compliance_x_2, compliance_y_2, _, _, _, _ = params
@@ -692,16 +694,17 @@ def _dev_loaded(theta, delta, params):
     _tmp10 = numpy.sin(theta_1)
     _tmp11 = _tmp5 + 0.5*theta_2
     _tmp12 = numpy.sin(_tmp11)
-    _tmp13 = p_0*(delta_2 + theta_2)**2*arck(_tmp11)
-    _tmp14 = 0.125*_tmp13
-    _tmp15 = numpy.cos(_tmp11)
-    _tmp16 = 0.21650635094610965*_tmp13
-    _tmp17 = _tmp12*_tmp14 + _tmp15*_tmp16 + 0.8660254037844386*compliance_x_2 + 0.5*compliance_y_2
-    _tmp18 = numpy.cos(theta_1)
-    _tmp19 = -_tmp12*_tmp16 + _tmp14*_tmp15 + 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2
+    _tmp13 = (delta_2 + theta_2)**2
+    _tmp14 = arck(_tmp11)
+    _tmp15 = _tmp13*_tmp14*p_0
+    _tmp16 = numpy.cos(_tmp11)
+    _tmp17 = 0.21650635094610965*_tmp15
+    _tmp18 = 0.125*_tmp12*_tmp15 + _tmp16*_tmp17 + 0.8660254037844386*compliance_x_2 + 0.5*compliance_y_2
+    _tmp19 = numpy.cos(theta_1)
+    _tmp20 = -_tmp12*_tmp17 + 0.125*_tmp13*_tmp14*_tmp16*p_0 + 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2
     return [
-        -_tmp1*numpy.sin(_tmp0) - _tmp10*_tmp17 + _tmp18*_tmp19 - _tmp3*_tmp7 + _tmp8*_tmp9 - compliance_y_1,
-        _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp19 + _tmp17*_tmp18 + _tmp3*_tmp9 + _tmp7*_tmp8 + compliance_x_1,
+        -_tmp1*numpy.sin(_tmp0) - _tmp10*_tmp18 + _tmp19*_tmp20 - _tmp3*_tmp7 + _tmp8*_tmp9 - compliance_y_1,
+        _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp20 + _tmp18*_tmp19 + _tmp3*_tmp9 + _tmp7*_tmp8 + compliance_x_1,
     ]
 
 
@@ -824,7 +827,7 @@ def _sens_paper(theta, params):
 
 
 def _sens_first_order(theta, delta, params):
-    """sensitivity at level first_order: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (290 operations)."""
+    """sensitivity at level first_order: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (278 operations)."""
     theta_1, theta_2, theta_3, theta_4 = theta
     delta_2, delta_3, _ = delta
     p_0, = params
@@ -885,37 +888,37 @@ def _sens_first_order(theta, delta, params):
     _tmp54 = 0.0625*theta_4**3*(3*cosr2(_tmp30) + sinr1(_tmp30) - 3*sinr2(_tmp30))
     _tmp55 = _tmp31*_tmp53 + _tmp39*_tmp52 + _tmp39*_tmp54
     _tmp56 = _tmp32*_tmp52 + _tmp32*_tmp54 - _tmp38*_tmp53
-    _tmp57 = _tmp3*delta_2
-    _tmp58 = _tmp1*_tmp40
-    _tmp59 = _tmp26*_tmp27 + _tmp28*_tmp9
-    _tmp60 = _tmp47*p_0
-    _tmp61 = _tmp36*_tmp38
-    _tmp62 = 0.5*theta_1
-    _tmp63 = numpy.sin(_tmp62)
-    _tmp64 = arck(_tmp62)
-    _tmp65 = _tmp64*theta_1**2
-    _tmp66 = 0.25*_tmp65
-    _tmp67 = 0.125*_tmp13*_tmp19
-    _tmp68 = 0.21650635094610965*_tmp19
-    _tmp69 = _tmp15*_tmp68
-    _tmp70 = _tmp67 + _tmp69
-    _tmp71 = _tmp13*_tmp68
-    _tmp72 = 0.125*_tmp11*_tmp15*_tmp18 - _tmp71
-    _tmp73 = -_tmp27*_tmp72 + _tmp63*_tmp66 + _tmp70*_tmp9
-    _tmp74 = 0.125*_tmp11*_tmp15*_tmp18*p_0 - _tmp71*p_0
-    _tmp75 = _tmp67*p_0 + _tmp69*p_0
-    _tmp76 = _tmp63*p_0
-    _tmp77 = theta_1**3
-    _tmp78 = 3*cosr2(_tmp62) + sinr1(_tmp62) - 3*sinr2(_tmp62)
-    _tmp79 = numpy.cos(_tmp62)
-    _tmp80 = _tmp50*_tmp65
-    _tmp81 = _tmp27*_tmp75 + _tmp62*_tmp64*_tmp76 + _tmp74*_tmp9 + 0.0625*_tmp76*_tmp77*_tmp78 + _tmp79*_tmp80
-    _tmp82 = _tmp27*_tmp70 + _tmp66*_tmp79 + _tmp72*_tmp9
-    _tmp83 = -_tmp27*_tmp74 + _tmp63*_tmp80 - 0.5*_tmp64*_tmp79*p_0*theta_1 + _tmp75*_tmp9 - 0.0625*_tmp77*_tmp78*_tmp79*p_0
+    _tmp57 = _tmp26*_tmp27 + _tmp28*_tmp9
+    _tmp58 = -_tmp1*_tmp40 + _tmp2*_tmp37 - _tmp3*delta_2
+    _tmp59 = _tmp47*p_0
+    _tmp60 = _tmp36*_tmp38
+    _tmp61 = 0.5*theta_1
+    _tmp62 = numpy.sin(_tmp61)
+    _tmp63 = arck(_tmp61)
+    _tmp64 = _tmp63*theta_1**2
+    _tmp65 = 0.25*_tmp64
+    _tmp66 = 0.125*_tmp13*_tmp19
+    _tmp67 = 0.21650635094610965*_tmp19
+    _tmp68 = _tmp15*_tmp67
+    _tmp69 = _tmp66 + _tmp68
+    _tmp70 = _tmp13*_tmp67
+    _tmp71 = 0.125*_tmp11*_tmp15*_tmp18 - _tmp70
+    _tmp72 = -_tmp27*_tmp71 + _tmp62*_tmp65 + _tmp69*_tmp9
+    _tmp73 = 0.125*_tmp11*_tmp15*_tmp18*p_0 - _tmp70*p_0
+    _tmp74 = _tmp66*p_0 + _tmp68*p_0
+    _tmp75 = _tmp62*p_0
+    _tmp76 = 0.0625*theta_1**3*(3*cosr2(_tmp61) + sinr1(_tmp61) - 3*sinr2(_tmp61))
+    _tmp77 = numpy.cos(_tmp61)
+    _tmp78 = _tmp50*_tmp64
+    _tmp79 = _tmp61*_tmp63
+    _tmp80 = _tmp27*_tmp74 + _tmp73*_tmp9 + _tmp75*_tmp76 + _tmp75*_tmp79 + _tmp77*_tmp78
+    _tmp81 = _tmp27*_tmp69 + _tmp65*_tmp77 + _tmp71*_tmp9
+    _tmp82 = _tmp77*p_0
+    _tmp83 = _tmp27*_tmp73 - _tmp62*_tmp78 - _tmp74*_tmp9 + _tmp76*_tmp82 + _tmp79*_tmp82
     _tmp84 = -0.064*_tmp1 + 0.045*_tmp2
     _tmp85 = _tmp84*delta_2
     _tmp86 = 0.045*_tmp1 + 0.064*_tmp2
-    _tmp87 = _tmp86*delta_2
+    _tmp87 = -_tmp86*delta_2
     return [
         1,
         -1,
@@ -932,19 +935,19 @@ def _sens_first_order(theta, delta, params):
         -_tmp29 - _tmp41,
         _tmp44*_tmp46 + _tmp44*_tmp51 + _tmp47*_tmp49*_tmp50 - _tmp8*delta_3,
         -_tmp1*_tmp55 + _tmp2*_tmp56,
-        _tmp2*_tmp37 - _tmp57 - _tmp58 + _tmp59,
-        0.125*_tmp43*_tmp45*_tmp48*p_0 - _tmp46*_tmp60 - _tmp51*_tmp60 - _tmp6*delta_3,
+        _tmp57 + _tmp58,
+        0.125*_tmp43*_tmp45*_tmp48*p_0 - _tmp46*_tmp59 - _tmp51*_tmp59 - _tmp6*delta_3,
         _tmp1*_tmp56 + _tmp2*_tmp55,
         0,
         0,
-        -_tmp1*_tmp61 + 0.25*_tmp2*_tmp31*_tmp33*_tmp34 + 0.25*_tmp43*_tmp45*_tmp48 - _tmp73,
-        -_tmp41 - _tmp81,
-        _tmp1*_tmp31*_tmp36 + _tmp2*_tmp61 - 0.25*_tmp47*_tmp49 + _tmp82,
-        0.25*_tmp2*_tmp31*_tmp33*_tmp34*p_0 - _tmp57 - _tmp58 - _tmp83,
+        -_tmp1*_tmp60 + 0.25*_tmp2*_tmp31*_tmp33*_tmp34 + 0.25*_tmp43*_tmp45*_tmp48 - _tmp72,
+        -_tmp41 - _tmp80,
+        _tmp1*_tmp31*_tmp36 + _tmp2*_tmp60 - 0.25*_tmp47*_tmp49 + _tmp81,
+        _tmp58 + _tmp83,
         -_tmp29 - _tmp85,
         0,
         0,
-        _tmp59 - _tmp87,
+        _tmp57 + _tmp87,
         0,
         0,
         -_tmp86,
@@ -953,10 +956,10 @@ def _sens_first_order(theta, delta, params):
         _tmp84,
         0,
         0,
-        -_tmp73,
-        -_tmp81 - _tmp85,
-        _tmp82,
-        -_tmp83 - _tmp87,
+        -_tmp72,
+        -_tmp80 - _tmp85,
+        _tmp81,
+        _tmp83 + _tmp87,
     ]
 
 
@@ -1223,6 +1226,10 @@ def _rigid_angles(x, params, ok):
         ok = ok & (numpy.broadcast_to(reach, shape) >= 0.0)
     for j, i in enumerate(_UNKNOWN_INDEX):
         theta[i] = numpy.where(ok, _wrap(numpy.broadcast_to(out[j], shape)), 0.0)
+    # the winding rule (symkin.solver): every loop's angles sum to 0, not +-2*pi (a wrapped hinge)
+    res = _rigid_res(theta, params)
+    for n in range(0, k, 3):
+        ok = ok & (numpy.abs(numpy.broadcast_to(res[n], shape)) < _WINDING)
     theta, ok, _ = _rigid_newton(theta, params, ok, _POLISH)
     return theta, ok
 
@@ -1235,8 +1242,7 @@ def _rigid_newton(theta, params, ok, iterations, tolerance=0.0):
     active = ok.copy()
     for _ in range(iterations):
         res = _rigid_res(theta, params)
-        res = [numpy.broadcast_to(_wrap(r) if n % 3 == 0 else r, ok.shape)
-               for n, r in enumerate(res)]
+        res = [numpy.broadcast_to(r, ok.shape) for r in res]   # angles tracked continuously
         lin = _linear(theta, params)
         step, good = _solve(lin[:k * k], res, active)
         ok = ok & (good | ~active)

@@ -3,7 +3,7 @@
  * Mechanism 'four_bar_dimensions': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 85, rigid_res 46, linear 98, newton 265, rigid_points 21, dev_paper 38, dev_first_order 53, dev_exact 65, links 1, sens_rigid 71, sens_paper 128, sens_first_order 310, sens_exact 360, sens_chain 0.
+ * Operation counts after CSE: rigid 85, rigid_res 46, linear 98, newton 265, rigid_points 21, dev_paper 38, dev_first_order 53, dev_exact 65, links 1, sens_rigid 71, sens_paper 128, sens_first_order 297, sens_exact 360, sens_chain 0.
  */
 #include "four_bar_dimensions.h"
 
@@ -445,18 +445,18 @@ static void sk_dev_first_order(const double *theta, const double *delta, const d
     const double _tmp4 = p_10 - p_5;
     const double _tmp5 = cos(_tmp2);
     const double _tmp6 = -p_11 + p_6;
-    const double _tmp7 = cos(theta_1);
+    const double _tmp7 = sin(theta_1);
     const double _tmp8 = 0.5*theta_2;
     const double _tmp9 = sin(_tmp8);
     const double _tmp10 = pow(theta_2, 2);
     const double _tmp11 = symkin_arck(_tmp8);
     const double _tmp12 = _tmp10*_tmp11*p_2;
-    const double _tmp13 = 0.21650635094610965*_tmp12;
-    const double _tmp14 = cos(_tmp8);
-    const double _tmp15 = 0.125*_tmp10*_tmp11*_tmp14*p_2 - _tmp13*_tmp9;
-    const double _tmp16 = sin(theta_1);
-    const double _tmp17 = 0.125*_tmp12*_tmp9 + _tmp13*_tmp14;
-    out[0] = -_tmp1*sin(_tmp0) + _tmp15*_tmp7 - _tmp16*_tmp17 + delta_2*(-_tmp3*_tmp4 + _tmp5*_tmp6);
+    const double _tmp13 = cos(_tmp8);
+    const double _tmp14 = 0.21650635094610965*_tmp12;
+    const double _tmp15 = 0.125*_tmp12*_tmp9 + _tmp13*_tmp14;
+    const double _tmp16 = cos(theta_1);
+    const double _tmp17 = 0.125*_tmp10*_tmp11*_tmp13*p_2 - _tmp14*_tmp9;
+    out[0] = -_tmp1*sin(_tmp0) - _tmp15*_tmp7 + _tmp16*_tmp17 + delta_2*(-_tmp3*_tmp4 + _tmp5*_tmp6);
     out[1] = _tmp1*cos(_tmp0) + _tmp15*_tmp16 + _tmp17*_tmp7 + delta_2*(_tmp3*_tmp6 + _tmp4*_tmp5);
 }
 
@@ -721,7 +721,7 @@ static void sk_sens_paper(const double *theta, const double *params, double *out
     out[31] = _tmp0*_tmp37 - _tmp18*_tmp38 - _tmp31*_tmp35 + _tmp32*_tmp34 + _tmp34*_tmp36;
 }
 
-/* sensitivity at level first_order: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (310 operations) */
+/* sensitivity at level first_order: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (297 operations) */
 static void sk_sens_first_order(const double *theta, const double *delta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -803,50 +803,50 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp59 = 0.0625*pow(theta_4, 3)*(3*symkin_cosr2(_tmp35) + symkin_sinr1(_tmp35) - 3*symkin_sinr2(_tmp35));
     const double _tmp60 = _tmp35*_tmp45 + _tmp39*_tmp58 + _tmp44*_tmp59;
     const double _tmp61 = _tmp35*_tmp39 + _tmp38*_tmp59 - _tmp45*_tmp58;
-    const double _tmp62 = delta_2*(_tmp34*_tmp5 + _tmp4);
-    const double _tmp63 = _tmp1*_tmp46;
-    const double _tmp64 = _tmp13*_tmp32 + _tmp30*_tmp31;
-    const double _tmp65 = 0.5*theta_1;
-    const double _tmp66 = sin(_tmp65);
-    const double _tmp67 = symkin_arck(_tmp65);
-    const double _tmp68 = _tmp67*pow(theta_1, 2);
-    const double _tmp69 = 0.25*_tmp68;
-    const double _tmp70 = -_tmp66*_tmp69;
-    const double _tmp71 = 0.21650635094610965*_tmp23;
-    const double _tmp72 = _tmp17*_tmp71;
-    const double _tmp73 = 0.125*_tmp15*_tmp19*_tmp22 - _tmp72;
-    const double _tmp74 = 0.125*_tmp17*_tmp23;
-    const double _tmp75 = _tmp19*_tmp71;
-    const double _tmp76 = _tmp74 + _tmp75;
-    const double _tmp77 = -_tmp13*_tmp76 + _tmp31*_tmp73;
-    const double _tmp78 = 0.25*_tmp54;
-    const double _tmp79 = _tmp36*_tmp41;
-    const double _tmp80 = _tmp43*_tmp79;
-    const double _tmp81 = _tmp1*delta_2;
-    const double _tmp82 = _tmp5*delta_2;
-    const double _tmp83 = -_tmp8*delta_3;
-    const double _tmp84 = -_tmp81 - _tmp83;
-    const double _tmp85 = -_tmp7*delta_3 + _tmp82;
-    const double _tmp86 = 0.125*_tmp15*_tmp19*_tmp22*p_2 - _tmp72*p_2;
-    const double _tmp87 = _tmp74*p_2 + _tmp75*p_2;
-    const double _tmp88 = _tmp66*p_1;
-    const double _tmp89 = pow(theta_1, 3);
-    const double _tmp90 = 3*symkin_cosr2(_tmp65) + symkin_sinr1(_tmp65) - 3*symkin_sinr2(_tmp65);
-    const double _tmp91 = cos(_tmp65);
-    const double _tmp92 = 0.125*_tmp68;
-    const double _tmp93 = _tmp13*_tmp86 + _tmp31*_tmp87 + _tmp65*_tmp67*_tmp88 + 0.0625*_tmp88*_tmp89*_tmp90 + _tmp91*_tmp92*p_1;
-    const double _tmp94 = _tmp69*_tmp91;
-    const double _tmp95 = _tmp13*_tmp73 + _tmp31*_tmp76;
-    const double _tmp96 = -_tmp82;
-    const double _tmp97 = _tmp13*_tmp87 - _tmp31*_tmp86 - 0.5*_tmp67*_tmp91*p_1*theta_1 + _tmp88*_tmp92 - 0.0625*_tmp89*_tmp90*_tmp91*p_1;
+    const double _tmp62 = _tmp13*_tmp32 + _tmp30*_tmp31;
+    const double _tmp63 = -_tmp1*_tmp46 + _tmp42*_tmp5 - delta_2*(_tmp34*_tmp5 + _tmp4);
+    const double _tmp64 = 0.5*theta_1;
+    const double _tmp65 = sin(_tmp64);
+    const double _tmp66 = symkin_arck(_tmp64);
+    const double _tmp67 = _tmp66*pow(theta_1, 2);
+    const double _tmp68 = 0.25*_tmp67;
+    const double _tmp69 = -_tmp65*_tmp68;
+    const double _tmp70 = 0.21650635094610965*_tmp23;
+    const double _tmp71 = _tmp17*_tmp70;
+    const double _tmp72 = 0.125*_tmp15*_tmp19*_tmp22 - _tmp71;
+    const double _tmp73 = 0.125*_tmp17*_tmp23;
+    const double _tmp74 = _tmp19*_tmp70;
+    const double _tmp75 = _tmp73 + _tmp74;
+    const double _tmp76 = -_tmp13*_tmp75 + _tmp31*_tmp72;
+    const double _tmp77 = 0.25*_tmp54;
+    const double _tmp78 = _tmp36*_tmp41;
+    const double _tmp79 = _tmp43*_tmp78;
+    const double _tmp80 = _tmp1*delta_2;
+    const double _tmp81 = _tmp5*delta_2;
+    const double _tmp82 = -_tmp8*delta_3;
+    const double _tmp83 = -_tmp80 - _tmp82;
+    const double _tmp84 = -_tmp7*delta_3 + _tmp81;
+    const double _tmp85 = 0.125*_tmp15*_tmp19*_tmp22*p_2 - _tmp71*p_2;
+    const double _tmp86 = _tmp73*p_2 + _tmp74*p_2;
+    const double _tmp87 = _tmp65*p_1;
+    const double _tmp88 = 0.0625*pow(theta_1, 3)*(3*symkin_cosr2(_tmp64) + symkin_sinr1(_tmp64) - 3*symkin_sinr2(_tmp64));
+    const double _tmp89 = cos(_tmp64);
+    const double _tmp90 = _tmp89*p_1;
+    const double _tmp91 = 0.125*_tmp67;
+    const double _tmp92 = _tmp64*_tmp66;
+    const double _tmp93 = _tmp13*_tmp85 + _tmp31*_tmp86 + _tmp87*_tmp88 + _tmp87*_tmp92 + _tmp90*_tmp91;
+    const double _tmp94 = _tmp68*_tmp89;
+    const double _tmp95 = _tmp13*_tmp72 + _tmp31*_tmp75;
+    const double _tmp96 = -_tmp81;
+    const double _tmp97 = -_tmp13*_tmp86 + _tmp31*_tmp85 - _tmp87*_tmp91 + _tmp88*_tmp90 + _tmp90*_tmp92;
     const double _tmp98 = p_10 - p_5;
     const double _tmp99 = _tmp5*_tmp98;
     const double _tmp100 = -p_11 + p_6;
     const double _tmp101 = -_tmp100;
     const double _tmp102 = delta_2*(-_tmp1*_tmp101 + _tmp99);
     const double _tmp103 = _tmp1*_tmp98;
-    const double _tmp104 = delta_2*(_tmp101*_tmp5 + _tmp103);
-    const double _tmp105 = -_tmp81;
+    const double _tmp104 = -delta_2*(_tmp101*_tmp5 + _tmp103);
+    const double _tmp105 = -_tmp80;
     out[0] = 1;
     out[1] = -1;
     out[2] = 1;
@@ -862,7 +862,7 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     out[12] = -_tmp33 - _tmp47;
     out[13] = -_tmp12*delta_3 + _tmp50*_tmp52 + _tmp50*_tmp57 + 0.125*_tmp54*_tmp56;
     out[14] = -_tmp1*_tmp60 + _tmp5*_tmp61;
-    out[15] = _tmp42*_tmp5 - _tmp62 - _tmp63 + _tmp64;
+    out[15] = _tmp62 + _tmp63;
     out[16] = _tmp10*delta_3 + 0.125*_tmp49*_tmp51*_tmp53*p_3 - _tmp52*_tmp56 - _tmp56*_tmp57;
     out[17] = _tmp1*_tmp61 + _tmp5*_tmp60;
     out[18] = 0;
@@ -879,35 +879,35 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     out[29] = 0;
     out[30] = 0;
     out[31] = 0;
-    out[32] = _tmp70;
-    out[33] = _tmp77;
-    out[34] = _tmp49*_tmp78;
-    out[35] = -_tmp1*_tmp80 + 0.25*_tmp36*_tmp37*_tmp40*_tmp5;
-    out[36] = _tmp81;
-    out[37] = _tmp82;
-    out[38] = _tmp83;
-    out[39] = _tmp84;
-    out[40] = -_tmp85;
+    out[32] = _tmp69;
+    out[33] = _tmp76;
+    out[34] = _tmp49*_tmp77;
+    out[35] = -_tmp1*_tmp79 + 0.25*_tmp36*_tmp37*_tmp40*_tmp5;
+    out[36] = _tmp80;
+    out[37] = _tmp81;
+    out[38] = _tmp82;
+    out[39] = _tmp83;
+    out[40] = -_tmp84;
     out[41] = 0;
     out[42] = 0;
     out[43] = -_tmp47 - _tmp93;
     out[44] = 0;
     out[45] = _tmp94;
     out[46] = _tmp95;
-    out[47] = -_tmp55*_tmp78;
-    out[48] = _tmp1*_tmp37*_tmp79 + _tmp5*_tmp80;
+    out[47] = -_tmp55*_tmp77;
+    out[48] = _tmp1*_tmp37*_tmp78 + _tmp5*_tmp79;
     out[49] = _tmp96;
-    out[50] = _tmp81;
+    out[50] = _tmp80;
     out[51] = _tmp7*delta_3;
-    out[52] = _tmp85;
-    out[53] = _tmp84;
+    out[52] = _tmp84;
+    out[53] = _tmp83;
     out[54] = 0;
     out[55] = 0;
-    out[56] = 0.25*_tmp36*_tmp37*_tmp40*_tmp5*p_4 - _tmp62 - _tmp63 - _tmp97;
+    out[56] = _tmp63 + _tmp97;
     out[57] = -_tmp102 - _tmp33;
     out[58] = 0;
     out[59] = 0;
-    out[60] = -_tmp104 + _tmp64;
+    out[60] = _tmp104 + _tmp62;
     out[61] = 0;
     out[62] = 0;
     out[63] = _tmp100*_tmp5 - _tmp103;
@@ -917,12 +917,12 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     out[67] = 0;
     out[68] = 0;
     out[69] = 0;
-    out[70] = _tmp70;
-    out[71] = _tmp77;
+    out[70] = _tmp69;
+    out[71] = _tmp76;
     out[72] = 0;
     out[73] = 0;
-    out[74] = _tmp81;
-    out[75] = _tmp82;
+    out[74] = _tmp80;
+    out[75] = _tmp81;
     out[76] = 0;
     out[77] = 0;
     out[78] = 0;
@@ -935,13 +935,13 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     out[85] = 0;
     out[86] = 0;
     out[87] = _tmp96;
-    out[88] = _tmp81;
+    out[88] = _tmp80;
     out[89] = 0;
     out[90] = 0;
     out[91] = 0;
-    out[92] = _tmp82;
+    out[92] = _tmp81;
     out[93] = _tmp105;
-    out[94] = -_tmp104 - _tmp97;
+    out[94] = _tmp104 + _tmp97;
 }
 
 /* sensitivity at level exact: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (360 operations) */
@@ -1459,9 +1459,6 @@ static double sk_rigid_newton(double *theta, const double *params, int iteration
     for (it = 0; it < iterations; ++it) {
         sk_rigid_res(theta, params, res);
         sk_linear(theta, params, lin);
-        for (i = 0; i < SK_K; i += 3) {
-            res[i] = remainder(res[i], sk_two_pi);
-        }
         if (sk_solve(SK_K, lin, res)) {
             return -1.0;
         }
@@ -1591,6 +1588,16 @@ static int sk_pose(const double *inputs, const double *params, int level, int wa
         }
         for (i = 0; i < SK_K; ++i) {
             theta[sk_unknown_index[i]] = remainder(sol[i], sk_two_pi);
+        }
+    }
+    {
+        /* the winding rule (symkin.solver): every loop's angles sum to 0, not +-2*pi */
+        double res[SK_K];
+        sk_rigid_res(theta, params, res);
+        for (i = 0; i < SK_K; i += 3) {
+            if (!(fabs(res[i]) < 3.141592653589793)) {
+                return 1;
+            }
         }
     }
     /* polish: the relative accuracy of small angles */

@@ -2,7 +2,7 @@
 Mechanism 'four_bar_dimensions': 4 links, 4 hinges, 1 loop(s); inputs A0.
 Points: C; levels: paper, first_order, exact.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 85, rigid_res 46, linear 98, newton 265, rigid_points 21, dev_paper 38, dev_first_order 53, dev_exact 65, links 1, sens_rigid 71, sens_paper 128, sens_first_order 310, sens_exact 360, sens_chain 0.
+Operation counts after CSE: rigid 85, rigid_res 46, linear 98, newton 265, rigid_points 21, dev_paper 38, dev_first_order 53, dev_exact 65, links 1, sens_rigid 71, sens_paper 128, sens_first_order 297, sens_exact 360, sens_chain 0.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -40,6 +40,7 @@ _LIMITS = ((0, 3.141592653589793), (1, 3.141592653589793), (2, 3.141592653589793
 _NEEDS_LOOPS = True
 _LOOPS_FOR_LINKS = False  # the links' rotations alone need the loops solved
 _DTYPE = numpy.float64
+_WINDING = 3.141592653589793  # a loop's angle sum this large: a hinge wrapped (no assembly)
 _POLISH = 1  # Newton steps after the rigid start: relative accuracy of small angles
 _EXACT_ITERATIONS = 40  # Newton cap of the exact level
 _CONVERGED = 1e-08  # ~sqrt(eps): a step this small (relative) ends Newton
@@ -436,19 +437,19 @@ def _dev_first_order(theta, delta, params):
     _tmp4 = p_10 - p_5
     _tmp5 = numpy.cos(_tmp2)
     _tmp6 = -p_11 + p_6
-    _tmp7 = numpy.cos(theta_1)
+    _tmp7 = numpy.sin(theta_1)
     _tmp8 = 0.5*theta_2
     _tmp9 = numpy.sin(_tmp8)
     _tmp10 = theta_2**2
     _tmp11 = arck(_tmp8)
     _tmp12 = _tmp10*_tmp11*p_2
-    _tmp13 = 0.21650635094610965*_tmp12
-    _tmp14 = numpy.cos(_tmp8)
-    _tmp15 = 0.125*_tmp10*_tmp11*_tmp14*p_2 - _tmp13*_tmp9
-    _tmp16 = numpy.sin(theta_1)
-    _tmp17 = 0.125*_tmp12*_tmp9 + _tmp13*_tmp14
+    _tmp13 = numpy.cos(_tmp8)
+    _tmp14 = 0.21650635094610965*_tmp12
+    _tmp15 = 0.125*_tmp12*_tmp9 + _tmp13*_tmp14
+    _tmp16 = numpy.cos(theta_1)
+    _tmp17 = 0.125*_tmp10*_tmp11*_tmp13*p_2 - _tmp14*_tmp9
     return [
-        -_tmp1*numpy.sin(_tmp0) + _tmp15*_tmp7 - _tmp16*_tmp17 + delta_2*(-_tmp3*_tmp4 + _tmp5*_tmp6),
+        -_tmp1*numpy.sin(_tmp0) - _tmp15*_tmp7 + _tmp16*_tmp17 + delta_2*(-_tmp3*_tmp4 + _tmp5*_tmp6),
         _tmp1*numpy.cos(_tmp0) + _tmp15*_tmp16 + _tmp17*_tmp7 + delta_2*(_tmp3*_tmp6 + _tmp4*_tmp5),
     ]
 
@@ -700,7 +701,7 @@ def _sens_paper(theta, params):
 
 
 def _sens_first_order(theta, delta, params):
-    """sensitivity at level first_order: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (310 operations)."""
+    """sensitivity at level first_order: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (297 operations)."""
     theta_1, theta_2, theta_3, theta_4 = theta
     delta_2, delta_3, _ = delta
     _, p_1, p_2, p_3, p_4, p_5, p_6, p_7, p_8, p_9, p_10, p_11 = params
@@ -766,50 +767,50 @@ def _sens_first_order(theta, delta, params):
     _tmp59 = 0.0625*theta_4**3*(3*cosr2(_tmp35) + sinr1(_tmp35) - 3*sinr2(_tmp35))
     _tmp60 = _tmp35*_tmp45 + _tmp39*_tmp58 + _tmp44*_tmp59
     _tmp61 = _tmp35*_tmp39 + _tmp38*_tmp59 - _tmp45*_tmp58
-    _tmp62 = delta_2*(_tmp34*_tmp5 + _tmp4)
-    _tmp63 = _tmp1*_tmp46
-    _tmp64 = _tmp13*_tmp32 + _tmp30*_tmp31
-    _tmp65 = 0.5*theta_1
-    _tmp66 = numpy.sin(_tmp65)
-    _tmp67 = arck(_tmp65)
-    _tmp68 = _tmp67*theta_1**2
-    _tmp69 = 0.25*_tmp68
-    _tmp70 = -_tmp66*_tmp69
-    _tmp71 = 0.21650635094610965*_tmp23
-    _tmp72 = _tmp17*_tmp71
-    _tmp73 = 0.125*_tmp15*_tmp19*_tmp22 - _tmp72
-    _tmp74 = 0.125*_tmp17*_tmp23
-    _tmp75 = _tmp19*_tmp71
-    _tmp76 = _tmp74 + _tmp75
-    _tmp77 = -_tmp13*_tmp76 + _tmp31*_tmp73
-    _tmp78 = 0.25*_tmp54
-    _tmp79 = _tmp36*_tmp41
-    _tmp80 = _tmp43*_tmp79
-    _tmp81 = _tmp1*delta_2
-    _tmp82 = _tmp5*delta_2
-    _tmp83 = -_tmp8*delta_3
-    _tmp84 = -_tmp81 - _tmp83
-    _tmp85 = -_tmp7*delta_3 + _tmp82
-    _tmp86 = 0.125*_tmp15*_tmp19*_tmp22*p_2 - _tmp72*p_2
-    _tmp87 = _tmp74*p_2 + _tmp75*p_2
-    _tmp88 = _tmp66*p_1
-    _tmp89 = theta_1**3
-    _tmp90 = 3*cosr2(_tmp65) + sinr1(_tmp65) - 3*sinr2(_tmp65)
-    _tmp91 = numpy.cos(_tmp65)
-    _tmp92 = 0.125*_tmp68
-    _tmp93 = _tmp13*_tmp86 + _tmp31*_tmp87 + _tmp65*_tmp67*_tmp88 + 0.0625*_tmp88*_tmp89*_tmp90 + _tmp91*_tmp92*p_1
-    _tmp94 = _tmp69*_tmp91
-    _tmp95 = _tmp13*_tmp73 + _tmp31*_tmp76
-    _tmp96 = -_tmp82
-    _tmp97 = _tmp13*_tmp87 - _tmp31*_tmp86 - 0.5*_tmp67*_tmp91*p_1*theta_1 + _tmp88*_tmp92 - 0.0625*_tmp89*_tmp90*_tmp91*p_1
+    _tmp62 = _tmp13*_tmp32 + _tmp30*_tmp31
+    _tmp63 = -_tmp1*_tmp46 + _tmp42*_tmp5 - delta_2*(_tmp34*_tmp5 + _tmp4)
+    _tmp64 = 0.5*theta_1
+    _tmp65 = numpy.sin(_tmp64)
+    _tmp66 = arck(_tmp64)
+    _tmp67 = _tmp66*theta_1**2
+    _tmp68 = 0.25*_tmp67
+    _tmp69 = -_tmp65*_tmp68
+    _tmp70 = 0.21650635094610965*_tmp23
+    _tmp71 = _tmp17*_tmp70
+    _tmp72 = 0.125*_tmp15*_tmp19*_tmp22 - _tmp71
+    _tmp73 = 0.125*_tmp17*_tmp23
+    _tmp74 = _tmp19*_tmp70
+    _tmp75 = _tmp73 + _tmp74
+    _tmp76 = -_tmp13*_tmp75 + _tmp31*_tmp72
+    _tmp77 = 0.25*_tmp54
+    _tmp78 = _tmp36*_tmp41
+    _tmp79 = _tmp43*_tmp78
+    _tmp80 = _tmp1*delta_2
+    _tmp81 = _tmp5*delta_2
+    _tmp82 = -_tmp8*delta_3
+    _tmp83 = -_tmp80 - _tmp82
+    _tmp84 = -_tmp7*delta_3 + _tmp81
+    _tmp85 = 0.125*_tmp15*_tmp19*_tmp22*p_2 - _tmp71*p_2
+    _tmp86 = _tmp73*p_2 + _tmp74*p_2
+    _tmp87 = _tmp65*p_1
+    _tmp88 = 0.0625*theta_1**3*(3*cosr2(_tmp64) + sinr1(_tmp64) - 3*sinr2(_tmp64))
+    _tmp89 = numpy.cos(_tmp64)
+    _tmp90 = _tmp89*p_1
+    _tmp91 = 0.125*_tmp67
+    _tmp92 = _tmp64*_tmp66
+    _tmp93 = _tmp13*_tmp85 + _tmp31*_tmp86 + _tmp87*_tmp88 + _tmp87*_tmp92 + _tmp90*_tmp91
+    _tmp94 = _tmp68*_tmp89
+    _tmp95 = _tmp13*_tmp72 + _tmp31*_tmp75
+    _tmp96 = -_tmp81
+    _tmp97 = -_tmp13*_tmp86 + _tmp31*_tmp85 - _tmp87*_tmp91 + _tmp88*_tmp90 + _tmp90*_tmp92
     _tmp98 = p_10 - p_5
     _tmp99 = _tmp5*_tmp98
     _tmp100 = -p_11 + p_6
     _tmp101 = -_tmp100
     _tmp102 = delta_2*(-_tmp1*_tmp101 + _tmp99)
     _tmp103 = _tmp1*_tmp98
-    _tmp104 = delta_2*(_tmp101*_tmp5 + _tmp103)
-    _tmp105 = -_tmp81
+    _tmp104 = -delta_2*(_tmp101*_tmp5 + _tmp103)
+    _tmp105 = -_tmp80
     return [
         1,
         -1,
@@ -826,7 +827,7 @@ def _sens_first_order(theta, delta, params):
         -_tmp33 - _tmp47,
         -_tmp12*delta_3 + _tmp50*_tmp52 + _tmp50*_tmp57 + 0.125*_tmp54*_tmp56,
         -_tmp1*_tmp60 + _tmp5*_tmp61,
-        _tmp42*_tmp5 - _tmp62 - _tmp63 + _tmp64,
+        _tmp62 + _tmp63,
         _tmp10*delta_3 + 0.125*_tmp49*_tmp51*_tmp53*p_3 - _tmp52*_tmp56 - _tmp56*_tmp57,
         _tmp1*_tmp61 + _tmp5*_tmp60,
         0,
@@ -843,35 +844,35 @@ def _sens_first_order(theta, delta, params):
         0,
         0,
         0,
-        _tmp70,
-        _tmp77,
-        _tmp49*_tmp78,
-        -_tmp1*_tmp80 + 0.25*_tmp36*_tmp37*_tmp40*_tmp5,
+        _tmp69,
+        _tmp76,
+        _tmp49*_tmp77,
+        -_tmp1*_tmp79 + 0.25*_tmp36*_tmp37*_tmp40*_tmp5,
+        _tmp80,
         _tmp81,
         _tmp82,
         _tmp83,
-        _tmp84,
-        -_tmp85,
+        -_tmp84,
         0,
         0,
         -_tmp47 - _tmp93,
         0,
         _tmp94,
         _tmp95,
-        -_tmp55*_tmp78,
-        _tmp1*_tmp37*_tmp79 + _tmp5*_tmp80,
+        -_tmp55*_tmp77,
+        _tmp1*_tmp37*_tmp78 + _tmp5*_tmp79,
         _tmp96,
-        _tmp81,
+        _tmp80,
         _tmp7*delta_3,
-        _tmp85,
         _tmp84,
+        _tmp83,
         0,
         0,
-        0.25*_tmp36*_tmp37*_tmp40*_tmp5*p_4 - _tmp62 - _tmp63 - _tmp97,
+        _tmp63 + _tmp97,
         -_tmp102 - _tmp33,
         0,
         0,
-        -_tmp104 + _tmp64,
+        _tmp104 + _tmp62,
         0,
         0,
         _tmp100*_tmp5 - _tmp103,
@@ -881,12 +882,12 @@ def _sens_first_order(theta, delta, params):
         0,
         0,
         0,
-        _tmp70,
-        _tmp77,
+        _tmp69,
+        _tmp76,
         0,
         0,
+        _tmp80,
         _tmp81,
-        _tmp82,
         0,
         0,
         0,
@@ -899,13 +900,13 @@ def _sens_first_order(theta, delta, params):
         0,
         0,
         _tmp96,
+        _tmp80,
+        0,
+        0,
+        0,
         _tmp81,
-        0,
-        0,
-        0,
-        _tmp82,
         _tmp105,
-        -_tmp104 - _tmp97,
+        _tmp104 + _tmp97,
     ]
 
 
@@ -1398,6 +1399,10 @@ def _rigid_angles(x, params, ok):
         ok = ok & (numpy.broadcast_to(reach, shape) >= 0.0)
     for j, i in enumerate(_UNKNOWN_INDEX):
         theta[i] = numpy.where(ok, _wrap(numpy.broadcast_to(out[j], shape)), 0.0)
+    # the winding rule (symkin.solver): every loop's angles sum to 0, not +-2*pi (a wrapped hinge)
+    res = _rigid_res(theta, params)
+    for n in range(0, k, 3):
+        ok = ok & (numpy.abs(numpy.broadcast_to(res[n], shape)) < _WINDING)
     theta, ok, _ = _rigid_newton(theta, params, ok, _POLISH)
     return theta, ok
 
@@ -1410,8 +1415,7 @@ def _rigid_newton(theta, params, ok, iterations, tolerance=0.0):
     active = ok.copy()
     for _ in range(iterations):
         res = _rigid_res(theta, params)
-        res = [numpy.broadcast_to(_wrap(r) if n % 3 == 0 else r, ok.shape)
-               for n, r in enumerate(res)]
+        res = [numpy.broadcast_to(r, ok.shape) for r in res]   # angles tracked continuously
         lin = _linear(theta, params)
         step, good = _solve(lin[:k * k], res, active)
         ok = ok & (good | ~active)

@@ -1858,9 +1858,6 @@ static double sk_rigid_newton(double *theta, const double *params, int iteration
     for (it = 0; it < iterations; ++it) {
         sk_rigid_res(theta, params, res);
         sk_linear(theta, params, lin);
-        for (i = 0; i < SK_K; i += 3) {
-            res[i] = remainder(res[i], sk_two_pi);
-        }
         if (sk_solve(SK_K, lin, res)) {
             return -1.0;
         }
@@ -2087,6 +2084,16 @@ static int sk_pose(const double *inputs, const double *params, int level, int wa
         }
         for (i = 0; i < SK_K; ++i) {
             theta[sk_unknown_index[i]] = remainder(sol[i], sk_two_pi);
+        }
+    }
+    {
+        /* the winding rule (symkin.solver): every loop's angles sum to 0, not +-2*pi */
+        double res[SK_K];
+        sk_rigid_res(theta, params, res);
+        for (i = 0; i < SK_K; i += 3) {
+            if (!(fabs(res[i]) < 3.141592653589793)) {
+                return 1;
+            }
         }
     }
     /* polish: the relative accuracy of small angles */

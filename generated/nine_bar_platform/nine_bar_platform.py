@@ -40,6 +40,7 @@ _LIMITS = ((0, 3.141592653589793), (1, 3.141592653589793), (2, 3.141592653589793
 _NEEDS_LOOPS = False
 _LOOPS_FOR_LINKS = True  # the links' rotations alone need the loops solved
 _DTYPE = numpy.float64
+_WINDING = 3.141592653589793  # a loop's angle sum this large: a hinge wrapped (no assembly)
 _POLISH = 1  # Newton steps after the rigid start: relative accuracy of small angles
 _EXACT_ITERATIONS = 40  # Newton cap of the exact level
 _CONVERGED = 1e-08  # ~sqrt(eps): a step this small (relative) ends Newton
@@ -1710,6 +1711,10 @@ def _rigid_angles(x, params, ok):
         ok = ok & (numpy.broadcast_to(reach, shape) >= 0.0)
     for j, i in enumerate(_UNKNOWN_INDEX):
         theta[i] = numpy.where(ok, _wrap(numpy.broadcast_to(out[j], shape)), 0.0)
+    # the winding rule (symkin.solver): every loop's angles sum to 0, not +-2*pi (a wrapped hinge)
+    res = _rigid_res(theta, params)
+    for n in range(0, k, 3):
+        ok = ok & (numpy.abs(numpy.broadcast_to(res[n], shape)) < _WINDING)
     theta, ok, _ = _rigid_newton(theta, params, ok, _POLISH)
     return theta, ok
 
@@ -1722,8 +1727,7 @@ def _rigid_newton(theta, params, ok, iterations, tolerance=0.0):
     active = ok.copy()
     for _ in range(iterations):
         res = _rigid_res(theta, params)
-        res = [numpy.broadcast_to(_wrap(r) if n % 3 == 0 else r, ok.shape)
-               for n, r in enumerate(res)]
+        res = [numpy.broadcast_to(r, ok.shape) for r in res]   # angles tracked continuously
         lin = _linear(theta, params)
         step, good = _solve(lin[:k * k], res, active)
         ok = ok & (good | ~active)

@@ -3,7 +3,7 @@
  * Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
  * Points: D; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60, loaded_q0 16, loaded_q 128, loaded_compliance 401, loaded_linear 185, loaded_newton 522, dev_loaded 63, links 5, sens_rigid 70, sens_paper 118, sens_first_order 566, sens_exact 661.
+ * Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60, loaded_q0 16, loaded_q 128, loaded_compliance 401, loaded_linear 190, loaded_newton 527, dev_loaded 68, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661.
  */
 #include "stephenson_six_bar.h"
 
@@ -608,17 +608,17 @@ static void sk_dev_first_order(const double *theta, const double *delta, const d
     const double _tmp2 = theta_1 + theta_2;
     const double _tmp3 = sin(_tmp2);
     const double _tmp4 = cos(_tmp2);
-    const double _tmp5 = cos(theta_1);
+    const double _tmp5 = sin(theta_1);
     const double _tmp7 = pow(theta_2, 2);
     const double _tmp6 = 0.5*theta_2;
     const double _tmp8 = symkin_arck(_tmp6);
     const double _tmp9 = 0.1767766952966369*_tmp7*_tmp8*p_0;
     const double _tmp10 = _tmp9*sin(_tmp6);
     const double _tmp11 = cos(_tmp6);
-    const double _tmp12 = -_tmp10 + 0.1767766952966369*_tmp11*_tmp7*_tmp8*p_0;
-    const double _tmp13 = sin(theta_1);
-    const double _tmp14 = _tmp10 + _tmp11*_tmp9;
-    out[0] = -_tmp1*sin(_tmp0) + _tmp12*_tmp5 - _tmp13*_tmp14 + delta_2*(-0.04*_tmp3 - 0.07*_tmp4);
+    const double _tmp12 = _tmp10 + _tmp11*_tmp9;
+    const double _tmp13 = cos(theta_1);
+    const double _tmp14 = -_tmp10 + 0.1767766952966369*_tmp11*_tmp7*_tmp8*p_0;
+    out[0] = -_tmp1*sin(_tmp0) - _tmp12*_tmp5 + _tmp13*_tmp14 + delta_2*(-0.04*_tmp3 - 0.07*_tmp4);
     out[1] = _tmp1*cos(_tmp0) + _tmp12*_tmp13 + _tmp14*_tmp5 + delta_2*(-0.07*_tmp3 + 0.04*_tmp4);
 }
 
@@ -849,7 +849,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     out[13] = 3000000*_tmp10*_tmp102*_tmp103*_tmp96 - _tmp104*_tmp92;
 }
 
-/* loaded: A and r = Phi dz of the loaded closure (its first-order start) (185 operations) */
+/* loaded: A and r = Phi dz of the loaded closure (its first-order start) (190 operations) */
 static void sk_loaded_linear(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -915,15 +915,16 @@ static void sk_loaded_linear(const double *theta, const double *params, double *
     const double _tmp38 = 0.5*theta_7;
     const double _tmp39 = _tmp18*pow(theta_7, 2)*symkin_arck(_tmp38);
     const double _tmp40 = _tmp39*sin(_tmp38) + compliance_y_7;
-    const double _tmp41 = 0.7071067811865476*compliance_y_2;
-    const double _tmp42 = 0.5*theta_2;
-    const double _tmp43 = 0.1767766952966369*p_0*pow(theta_2, 2)*symkin_arck(_tmp42);
-    const double _tmp44 = _tmp43*sin(_tmp42);
-    const double _tmp45 = _tmp43*cos(_tmp42) + 0.7071067811865476*compliance_x_2;
-    const double _tmp46 = _tmp41 + _tmp44 + _tmp45;
-    const double _tmp47 = _tmp39*cos(_tmp38) + compliance_x_7;
-    const double _tmp48 = _tmp36*sin(_tmp35) + compliance_y_4;
-    const double _tmp49 = -_tmp41 - _tmp44 + _tmp45;
+    const double _tmp41 = 0.5*theta_2;
+    const double _tmp42 = cos(_tmp41);
+    const double _tmp43 = pow(theta_2, 2);
+    const double _tmp44 = symkin_arck(_tmp41);
+    const double _tmp45 = 0.1767766952966369*_tmp43*_tmp44*p_0;
+    const double _tmp46 = _tmp45*sin(_tmp41) + 0.7071067811865476*compliance_y_2;
+    const double _tmp47 = _tmp42*_tmp45 + _tmp46 + 0.7071067811865476*compliance_x_2;
+    const double _tmp48 = _tmp39*cos(_tmp38) + compliance_x_7;
+    const double _tmp49 = _tmp36*sin(_tmp35) + compliance_y_4;
+    const double _tmp50 = 0.1767766952966369*_tmp42*_tmp43*_tmp44*p_0 - _tmp46 + 0.7071067811865476*compliance_x_2;
     out[0] = 0;
     out[1] = -1;
     out[2] = 0;
@@ -964,11 +965,11 @@ static void sk_loaded_linear(const double *theta, const double *params, double *
     out[37] = _tmp0*_tmp25 - _tmp2*_tmp20 - _tmp21*_tmp24 + _tmp26*_tmp27 - _tmp33;
     out[38] = -_tmp0*_tmp20 - _tmp2*_tmp25 + _tmp21*_tmp27 + _tmp24*_tmp26 + _tmp34;
     out[39] = 0;
-    out[40] = _tmp0*_tmp48 - _tmp10*_tmp40 + _tmp11*_tmp47 - _tmp2*_tmp37 - _tmp21*_tmp46 + _tmp26*_tmp49 - _tmp33;
-    out[41] = -_tmp0*_tmp37 + _tmp10*_tmp47 + _tmp11*_tmp40 - _tmp2*_tmp48 + _tmp21*_tmp49 + _tmp26*_tmp46 + _tmp34;
+    out[40] = _tmp0*_tmp49 - _tmp10*_tmp40 + _tmp11*_tmp48 - _tmp2*_tmp37 - _tmp21*_tmp47 + _tmp26*_tmp50 - _tmp33;
+    out[41] = -_tmp0*_tmp37 + _tmp10*_tmp48 + _tmp11*_tmp40 - _tmp2*_tmp49 + _tmp21*_tmp50 + _tmp26*_tmp47 + _tmp34;
 }
 
-/* loaded: the loaded closure F(delta) and dF/ddelta (522 operations) */
+/* loaded: the loaded closure F(delta) and dF/ddelta (527 operations) */
 static void sk_loaded_newton(const double *theta, const double *delta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -1086,95 +1087,93 @@ static void sk_loaded_newton(const double *theta, const double *delta, const dou
     const double _tmp84 = 0.5*delta_2;
     const double _tmp85 = pow(sin(_tmp84), 2);
     const double _tmp86 = 0.04*_tmp83 - 0.14*_tmp85;
-    const double _tmp87 = 0.7071067811865476*compliance_y_2;
-    const double _tmp88 = delta_2 + theta_2;
-    const double _tmp89 = pow(_tmp88, 2);
-    const double _tmp90 = 0.1767766952966369*_tmp89;
-    const double _tmp91 = _tmp84 + 0.5*theta_2;
-    const double _tmp92 = symkin_arck(_tmp91);
-    const double _tmp93 = p_0*sin(_tmp91);
-    const double _tmp94 = _tmp92*_tmp93;
-    const double _tmp95 = _tmp90*_tmp94;
-    const double _tmp96 = cos(_tmp91);
-    const double _tmp97 = _tmp96*p_0;
-    const double _tmp98 = _tmp92*_tmp97;
-    const double _tmp99 = _tmp90*_tmp98 + 0.7071067811865476*compliance_x_2;
-    const double _tmp100 = _tmp87 + _tmp95 + _tmp99;
-    const double _tmp101 = cos(_tmp65);
-    const double _tmp102 = cos(_tmp70);
-    const double _tmp103 = _tmp102*_tmp71;
-    const double _tmp104 = _tmp103*_tmp69 + compliance_x_7;
-    const double _tmp105 = sin(_tmp56);
-    const double _tmp106 = _tmp105*_tmp61 + compliance_y_4;
-    const double _tmp107 = 0.05*_tmp22 + _tmp39;
-    const double _tmp108 = cos(_tmp76);
-    const double _tmp109 = 0.04*_tmp78 - 0.1*_tmp79;
-    const double _tmp110 = cos(_tmp64);
-    const double _tmp111 = -0.07*_tmp83 - 0.08*_tmp85;
-    const double _tmp112 = -_tmp87 - _tmp95 + _tmp99;
-    const double _tmp113 = _tmp32*_tmp62;
-    const double _tmp114 = _tmp106*_tmp2;
-    const double _tmp115 = _tmp101*_tmp74 + _tmp104*_tmp66;
-    const double _tmp116 = _tmp1 + _tmp7;
-    const double _tmp117 = cos(_tmp116);
-    const double _tmp118 = 0.03*_tmp117;
-    const double _tmp119 = sin(_tmp116);
-    const double _tmp120 = 0.072*_tmp119;
-    const double _tmp121 = 0.02*_tmp32;
-    const double _tmp122 = _tmp47*p_0;
-    const double _tmp123 = 0.0625*pow(_tmp1, 3)*(3*symkin_cosr2(_tmp46) + symkin_sinr1(_tmp46) - 3*symkin_sinr2(_tmp46));
-    const double _tmp124 = 0.125*p_0;
-    const double _tmp125 = 0.5*_tmp1*_tmp48;
-    const double _tmp126 = _tmp122*_tmp123 + _tmp122*_tmp125 + _tmp124*_tmp52*_tmp53;
-    const double _tmp127 = 0.5*_tmp7*_tmp8;
-    const double _tmp128 = _tmp5*p_0;
-    const double _tmp129 = _tmp124*_tmp9;
-    const double _tmp130 = 0.0625*pow(_tmp7, 3)*(3*symkin_cosr2(_tmp4) + symkin_sinr1(_tmp4) - 3*symkin_sinr2(_tmp4));
-    const double _tmp131 = _tmp127*_tmp128 + _tmp128*_tmp130 - _tmp129*_tmp33;
-    const double _tmp132 = _tmp33*p_0;
-    const double _tmp133 = _tmp127*_tmp132 + _tmp129*_tmp5 + _tmp130*_tmp132;
-    const double _tmp134 = _tmp36*p_0;
-    const double _tmp135 = 0.5*_tmp16*_tmp17;
-    const double _tmp136 = _tmp124*_tmp18;
-    const double _tmp137 = 0.0625*pow(_tmp16, 3)*(3*symkin_cosr2(_tmp14) + symkin_sinr1(_tmp14) - 3*symkin_sinr2(_tmp14));
-    const double _tmp138 = -_tmp134*_tmp135 - _tmp134*_tmp137 - _tmp136*_tmp15;
-    const double _tmp139 = _tmp15*p_0;
-    const double _tmp140 = _tmp135*_tmp139 - _tmp136*_tmp36 + _tmp137*_tmp139;
-    const double _tmp141 = 0.02*_tmp2;
-    const double _tmp142 = 0.03*_tmp119;
-    const double _tmp143 = _tmp52*p_0;
-    const double _tmp144 = 0.125*_tmp122*_tmp53 - _tmp123*_tmp143 - _tmp125*_tmp143;
-    const double _tmp145 = pow(_tmp88, 3);
-    const double _tmp146 = 3*symkin_cosr2(_tmp91) + symkin_sinr1(_tmp91) - 3*symkin_sinr2(_tmp91);
-    const double _tmp147 = 0.04419417382415922*_tmp145*_tmp146;
-    const double _tmp148 = 0.3535533905932738*_tmp88;
-    const double _tmp149 = 0.08838834764831845*_tmp89;
-    const double _tmp150 = _tmp149*_tmp94;
-    const double _tmp151 = _tmp147*_tmp93 + _tmp148*_tmp94 + _tmp149*_tmp98;
-    const double _tmp152 = _tmp147*_tmp97 + _tmp148*_tmp98 - _tmp150 + _tmp151;
-    const double _tmp153 = 0.04419417382415922*_tmp145*_tmp146*_tmp96*p_0 - _tmp150 - _tmp151 + 0.3535533905932738*_tmp88*_tmp92*_tmp96*p_0;
-    const double _tmp154 = _tmp1 + _tmp58;
-    const double _tmp155 = cos(_tmp154);
-    const double _tmp156 = sin(_tmp154);
-    const double _tmp157 = 0.04*_tmp155 - 0.05*_tmp156;
-    const double _tmp158 = _tmp105*p_0;
-    const double _tmp159 = 0.5*_tmp58*_tmp59;
-    const double _tmp160 = _tmp124*_tmp60;
-    const double _tmp161 = 0.0625*pow(_tmp58, 3)*(3*symkin_cosr2(_tmp56) + symkin_sinr1(_tmp56) - 3*symkin_sinr2(_tmp56));
-    const double _tmp162 = _tmp158*_tmp159 + _tmp158*_tmp161 + _tmp160*_tmp57;
-    const double _tmp163 = _tmp57*p_0;
-    const double _tmp164 = -_tmp105*_tmp160 + _tmp159*_tmp163 + _tmp161*_tmp163;
-    const double _tmp165 = 0.5*_tmp67*p_0;
-    const double _tmp166 = _tmp124*_tmp68;
-    const double _tmp167 = 0.0625*pow(_tmp67, 3)*p_0*(3*symkin_cosr2(_tmp70) + symkin_sinr1(_tmp70) - 3*symkin_sinr2(_tmp70));
-    const double _tmp168 = _tmp103*_tmp166 + _tmp165*_tmp73 + _tmp167*_tmp72;
-    const double _tmp169 = _tmp102*_tmp167 + _tmp103*_tmp165 - _tmp166*_tmp73;
+    const double _tmp87 = _tmp84 + 0.5*theta_2;
+    const double _tmp88 = symkin_arck(_tmp87);
+    const double _tmp89 = cos(_tmp87);
+    const double _tmp90 = _tmp89*p_0;
+    const double _tmp91 = _tmp88*_tmp90;
+    const double _tmp92 = delta_2 + theta_2;
+    const double _tmp93 = pow(_tmp92, 2);
+    const double _tmp94 = 0.1767766952966369*_tmp93;
+    const double _tmp95 = p_0*sin(_tmp87);
+    const double _tmp96 = _tmp88*_tmp95;
+    const double _tmp97 = _tmp94*_tmp96 + 0.7071067811865476*compliance_y_2;
+    const double _tmp98 = _tmp91*_tmp94 + _tmp97 + 0.7071067811865476*compliance_x_2;
+    const double _tmp99 = cos(_tmp65);
+    const double _tmp100 = cos(_tmp70);
+    const double _tmp101 = _tmp100*_tmp71;
+    const double _tmp102 = _tmp101*_tmp69 + compliance_x_7;
+    const double _tmp103 = sin(_tmp56);
+    const double _tmp104 = _tmp103*_tmp61 + compliance_y_4;
+    const double _tmp105 = 0.05*_tmp22 + _tmp39;
+    const double _tmp106 = cos(_tmp76);
+    const double _tmp107 = 0.04*_tmp78 - 0.1*_tmp79;
+    const double _tmp108 = cos(_tmp64);
+    const double _tmp109 = -0.07*_tmp83 - 0.08*_tmp85;
+    const double _tmp110 = 0.1767766952966369*_tmp88*_tmp89*_tmp93*p_0 - _tmp97 + 0.7071067811865476*compliance_x_2;
+    const double _tmp111 = _tmp32*_tmp62;
+    const double _tmp112 = _tmp104*_tmp2;
+    const double _tmp113 = _tmp102*_tmp66 + _tmp74*_tmp99;
+    const double _tmp114 = _tmp1 + _tmp7;
+    const double _tmp115 = cos(_tmp114);
+    const double _tmp116 = 0.03*_tmp115;
+    const double _tmp117 = sin(_tmp114);
+    const double _tmp118 = 0.072*_tmp117;
+    const double _tmp119 = 0.02*_tmp32;
+    const double _tmp120 = _tmp47*p_0;
+    const double _tmp121 = 0.0625*pow(_tmp1, 3)*(3*symkin_cosr2(_tmp46) + symkin_sinr1(_tmp46) - 3*symkin_sinr2(_tmp46));
+    const double _tmp122 = 0.125*p_0;
+    const double _tmp123 = 0.5*_tmp1*_tmp48;
+    const double _tmp124 = _tmp120*_tmp121 + _tmp120*_tmp123 + _tmp122*_tmp52*_tmp53;
+    const double _tmp125 = 0.5*_tmp7*_tmp8;
+    const double _tmp126 = _tmp5*p_0;
+    const double _tmp127 = _tmp122*_tmp9;
+    const double _tmp128 = 0.0625*pow(_tmp7, 3)*(3*symkin_cosr2(_tmp4) + symkin_sinr1(_tmp4) - 3*symkin_sinr2(_tmp4));
+    const double _tmp129 = _tmp125*_tmp126 + _tmp126*_tmp128 - _tmp127*_tmp33;
+    const double _tmp130 = _tmp33*p_0;
+    const double _tmp131 = _tmp125*_tmp130 + _tmp127*_tmp5 + _tmp128*_tmp130;
+    const double _tmp132 = _tmp36*p_0;
+    const double _tmp133 = 0.5*_tmp16*_tmp17;
+    const double _tmp134 = _tmp122*_tmp18;
+    const double _tmp135 = 0.0625*pow(_tmp16, 3)*(3*symkin_cosr2(_tmp14) + symkin_sinr1(_tmp14) - 3*symkin_sinr2(_tmp14));
+    const double _tmp136 = -_tmp132*_tmp133 - _tmp132*_tmp135 - _tmp134*_tmp15;
+    const double _tmp137 = _tmp15*p_0;
+    const double _tmp138 = _tmp133*_tmp137 - _tmp134*_tmp36 + _tmp135*_tmp137;
+    const double _tmp139 = 0.02*_tmp2;
+    const double _tmp140 = 0.03*_tmp117;
+    const double _tmp141 = _tmp52*p_0;
+    const double _tmp142 = 0.125*_tmp120*_tmp53 - _tmp121*_tmp141 - _tmp123*_tmp141;
+    const double _tmp143 = pow(_tmp92, 3);
+    const double _tmp144 = 3*symkin_cosr2(_tmp87) + symkin_sinr1(_tmp87) - 3*symkin_sinr2(_tmp87);
+    const double _tmp145 = 0.04419417382415922*_tmp143*_tmp144;
+    const double _tmp146 = 0.3535533905932738*_tmp92;
+    const double _tmp147 = 0.08838834764831845*_tmp93;
+    const double _tmp148 = _tmp147*_tmp96;
+    const double _tmp149 = _tmp145*_tmp95 + _tmp146*_tmp96 + _tmp147*_tmp91;
+    const double _tmp150 = _tmp145*_tmp90 + _tmp146*_tmp91 - _tmp148 + _tmp149;
+    const double _tmp151 = 0.04419417382415922*_tmp143*_tmp144*_tmp89*p_0 - _tmp148 - _tmp149 + 0.3535533905932738*_tmp88*_tmp89*_tmp92*p_0;
+    const double _tmp152 = _tmp1 + _tmp58;
+    const double _tmp153 = cos(_tmp152);
+    const double _tmp154 = sin(_tmp152);
+    const double _tmp155 = 0.04*_tmp153 - 0.05*_tmp154;
+    const double _tmp156 = _tmp103*p_0;
+    const double _tmp157 = 0.5*_tmp58*_tmp59;
+    const double _tmp158 = _tmp122*_tmp60;
+    const double _tmp159 = 0.0625*pow(_tmp58, 3)*(3*symkin_cosr2(_tmp56) + symkin_sinr1(_tmp56) - 3*symkin_sinr2(_tmp56));
+    const double _tmp160 = _tmp156*_tmp157 + _tmp156*_tmp159 + _tmp158*_tmp57;
+    const double _tmp161 = _tmp57*p_0;
+    const double _tmp162 = -_tmp103*_tmp158 + _tmp157*_tmp161 + _tmp159*_tmp161;
+    const double _tmp163 = 0.5*_tmp67*p_0;
+    const double _tmp164 = _tmp122*_tmp68;
+    const double _tmp165 = 0.0625*pow(_tmp67, 3)*p_0*(3*symkin_cosr2(_tmp70) + symkin_sinr1(_tmp70) - 3*symkin_sinr2(_tmp70));
+    const double _tmp166 = _tmp101*_tmp164 + _tmp163*_tmp73 + _tmp165*_tmp72;
+    const double _tmp167 = _tmp100*_tmp165 + _tmp101*_tmp163 - _tmp164*_tmp73;
     out[0] = -_tmp0 + delta_6;
     out[1] = -_tmp12 - _tmp13*_tmp20 - _tmp21*_tmp26 - _tmp28*_tmp31 + _tmp32*_tmp34 + _tmp35*_tmp37 + _tmp38*_tmp40 + _tmp41*_tmp42 - _tmp49;
     out[2] = _tmp13*_tmp37 + _tmp20*_tmp35 + _tmp21*_tmp40 + _tmp26*_tmp38 + _tmp28*_tmp42 + _tmp31*_tmp41 - _tmp50 - _tmp51 + _tmp54;
     out[3] = delta_2 - delta_3 - delta_4 + delta_7;
-    out[4] = -_tmp100*_tmp13 + _tmp101*_tmp104 + _tmp106*_tmp32 + _tmp107*_tmp38 + _tmp108*_tmp109 + _tmp110*_tmp111 + _tmp112*_tmp35 - _tmp21*_tmp81 - _tmp49 - _tmp63 - _tmp75 - _tmp77*_tmp80 - _tmp82*_tmp86;
-    out[5] = _tmp100*_tmp35 + _tmp107*_tmp21 + _tmp108*_tmp80 + _tmp109*_tmp77 + _tmp110*_tmp86 + _tmp111*_tmp82 + _tmp112*_tmp13 - _tmp113 - _tmp114 + _tmp115 + _tmp38*_tmp81 + _tmp54;
+    out[4] = _tmp102*_tmp99 + _tmp104*_tmp32 + _tmp105*_tmp38 + _tmp106*_tmp107 + _tmp108*_tmp109 + _tmp110*_tmp35 - _tmp13*_tmp98 - _tmp21*_tmp81 - _tmp49 - _tmp63 - _tmp75 - _tmp77*_tmp80 - _tmp82*_tmp86;
+    out[5] = _tmp105*_tmp21 + _tmp106*_tmp80 + _tmp107*_tmp77 + _tmp108*_tmp86 + _tmp109*_tmp82 + _tmp110*_tmp13 - _tmp111 - _tmp112 + _tmp113 + _tmp35*_tmp98 + _tmp38*_tmp81 + _tmp54;
     out[6] = 0;
     out[7] = -1;
     out[8] = 0;
@@ -1182,16 +1181,16 @@ static void sk_loaded_newton(const double *theta, const double *delta, const dou
     out[10] = 1;
     out[11] = 0;
     out[12] = 0;
-    out[13] = -_tmp118 - _tmp120 - _tmp121 + _tmp126 + 0.06*_tmp2 + _tmp50 + _tmp51;
+    out[13] = -_tmp116 - _tmp118 - _tmp119 + _tmp124 + 0.06*_tmp2 + _tmp50 + _tmp51;
     out[14] = 0;
-    out[15] = -_tmp118 - _tmp120 - _tmp131*_tmp2 + _tmp133*_tmp32;
-    out[16] = -_tmp13*_tmp140 + _tmp138*_tmp35;
+    out[15] = -_tmp116 - _tmp118 - _tmp129*_tmp2 + _tmp131*_tmp32;
+    out[16] = -_tmp13*_tmp138 + _tmp136*_tmp35;
     out[17] = 0;
     out[18] = 0;
-    out[19] = 0.072*_tmp117 - _tmp12 + _tmp141 - _tmp142 + _tmp144 + _tmp32*_tmp34 + 0.06*_tmp32;
+    out[19] = 0.072*_tmp115 - _tmp12 + _tmp139 - _tmp140 + _tmp142 + _tmp32*_tmp34 + 0.06*_tmp32;
     out[20] = 0;
-    out[21] = 0.072*_tmp117 - _tmp131*_tmp32 - _tmp133*_tmp2 - _tmp142;
-    out[22] = _tmp13*_tmp138 + _tmp140*_tmp35;
+    out[21] = 0.072*_tmp115 - _tmp129*_tmp32 - _tmp131*_tmp2 - _tmp140;
+    out[22] = _tmp13*_tmp136 + _tmp138*_tmp35;
     out[23] = 0;
     out[24] = 1;
     out[25] = -1;
@@ -1199,21 +1198,21 @@ static void sk_loaded_newton(const double *theta, const double *delta, const dou
     out[27] = 0;
     out[28] = 0;
     out[29] = 1;
-    out[30] = -0.07*_tmp101 - _tmp115 - _tmp13*_tmp152 + _tmp153*_tmp35 - 0.04*_tmp66;
-    out[31] = _tmp113 + _tmp114 + _tmp121 + _tmp126 + _tmp157 + 0.05*_tmp2;
-    out[32] = _tmp157 + _tmp162*_tmp32 - _tmp164*_tmp2;
+    out[30] = -_tmp113 - _tmp13*_tmp150 + _tmp151*_tmp35 - 0.04*_tmp66 - 0.07*_tmp99;
+    out[31] = _tmp111 + _tmp112 + _tmp119 + _tmp124 + _tmp155 + 0.05*_tmp2;
+    out[32] = _tmp155 + _tmp160*_tmp32 - _tmp162*_tmp2;
     out[33] = 0;
     out[34] = 0;
-    out[35] = _tmp101*_tmp169 - _tmp168*_tmp66;
-    out[36] = _tmp101*_tmp104 + 0.04*_tmp101 + _tmp13*_tmp153 + _tmp152*_tmp35 - 0.07*_tmp66 - _tmp75;
-    out[37] = _tmp106*_tmp32 - _tmp141 + _tmp144 + 0.05*_tmp155 + 0.04*_tmp156 + 0.05*_tmp32 - _tmp63;
-    out[38] = 0.05*_tmp155 + 0.04*_tmp156 - _tmp162*_tmp2 - _tmp164*_tmp32;
+    out[35] = -_tmp166*_tmp66 + _tmp167*_tmp99;
+    out[36] = _tmp102*_tmp99 + _tmp13*_tmp151 + _tmp150*_tmp35 - 0.07*_tmp66 - _tmp75 + 0.04*_tmp99;
+    out[37] = _tmp104*_tmp32 - _tmp139 + _tmp142 + 0.05*_tmp153 + 0.04*_tmp154 + 0.05*_tmp32 - _tmp63;
+    out[38] = 0.05*_tmp153 + 0.04*_tmp154 - _tmp160*_tmp2 - _tmp162*_tmp32;
     out[39] = 0;
     out[40] = 0;
-    out[41] = _tmp101*_tmp168 + _tmp169*_tmp66;
+    out[41] = _tmp166*_tmp99 + _tmp167*_tmp66;
 }
 
-/* deviation of the points at level loaded (63 operations) */
+/* deviation of the points at level loaded (68 operations) */
 static void sk_dev_loaded(const double *theta, const double *delta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -1235,16 +1234,17 @@ static void sk_dev_loaded(const double *theta, const double *delta, const double
     const double _tmp8 = cos(_tmp2);
     const double _tmp9 = -0.07*_tmp4 - 0.08*_tmp6;
     const double _tmp10 = sin(theta_1);
-    const double _tmp11 = 0.7071067811865476*compliance_y_2;
-    const double _tmp12 = _tmp5 + 0.5*theta_2;
-    const double _tmp13 = 0.1767766952966369*p_0*pow(delta_2 + theta_2, 2)*symkin_arck(_tmp12);
-    const double _tmp14 = _tmp13*sin(_tmp12);
-    const double _tmp15 = _tmp13*cos(_tmp12) + 0.7071067811865476*compliance_x_2;
-    const double _tmp16 = _tmp11 + _tmp14 + _tmp15;
-    const double _tmp17 = cos(theta_1);
-    const double _tmp18 = -_tmp11 - _tmp14 + _tmp15;
-    out[0] = -_tmp1*sin(_tmp0) - _tmp10*_tmp16 + _tmp17*_tmp18 - _tmp3*_tmp7 + _tmp8*_tmp9 - compliance_y_1;
-    out[1] = _tmp1*cos(_tmp0) + _tmp10*_tmp18 + _tmp16*_tmp17 + _tmp3*_tmp9 + _tmp7*_tmp8 + compliance_x_1;
+    const double _tmp11 = _tmp5 + 0.5*theta_2;
+    const double _tmp12 = cos(_tmp11);
+    const double _tmp13 = pow(delta_2 + theta_2, 2);
+    const double _tmp14 = symkin_arck(_tmp11);
+    const double _tmp15 = 0.1767766952966369*_tmp13*_tmp14*p_0;
+    const double _tmp16 = _tmp15*sin(_tmp11) + 0.7071067811865476*compliance_y_2;
+    const double _tmp17 = _tmp12*_tmp15 + _tmp16 + 0.7071067811865476*compliance_x_2;
+    const double _tmp18 = cos(theta_1);
+    const double _tmp19 = 0.1767766952966369*_tmp12*_tmp13*_tmp14*p_0 - _tmp16 + 0.7071067811865476*compliance_x_2;
+    out[0] = -_tmp1*sin(_tmp0) - _tmp10*_tmp17 + _tmp18*_tmp19 - _tmp3*_tmp7 + _tmp8*_tmp9 - compliance_y_1;
+    out[1] = _tmp1*cos(_tmp0) + _tmp10*_tmp19 + _tmp17*_tmp18 + _tmp3*_tmp9 + _tmp7*_tmp8 + compliance_x_1;
 }
 
 /* rotation of every link and how much further the compliant one turns (5 operations) */
@@ -1438,7 +1438,7 @@ static void sk_sens_paper(const double *theta, const double *params, double *out
     out[15] = _tmp0*_tmp37 - _tmp18*_tmp38 - _tmp30*_tmp34 + _tmp31*_tmp33 + _tmp33*_tmp35;
 }
 
-/* sensitivity at level first_order: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (566 operations) */
+/* sensitivity at level first_order: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (564 operations) */
 static void sk_sens_first_order(const double *theta, const double *delta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -1583,9 +1583,9 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp127 = 0.0625*pow(theta_7, 3)*(3*symkin_cosr2(_tmp95) + symkin_sinr1(_tmp95) - 3*symkin_sinr2(_tmp95));
     const double _tmp128 = _tmp104*_tmp125 + _tmp104*_tmp127 + _tmp126*_tmp96;
     const double _tmp129 = -_tmp103*_tmp126 + _tmp125*_tmp97 + _tmp127*_tmp97;
-    const double _tmp130 = _tmp105*_tmp13;
-    const double _tmp131 = _tmp15*delta_2;
-    const double _tmp132 = -_tmp131 + _tmp56*_tmp92 + _tmp68*_tmp93;
+    const double _tmp130 = -_tmp15*delta_2;
+    const double _tmp131 = _tmp130 + _tmp56*_tmp92 + _tmp68*_tmp93;
+    const double _tmp132 = _tmp102*_tmp14 - _tmp105*_tmp13;
     const double _tmp133 = -_tmp107*_tmp22;
     const double _tmp134 = 0.5*theta_1;
     const double _tmp135 = sin(_tmp134);
@@ -1602,25 +1602,28 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp146 = _tmp135*p_0;
     const double _tmp147 = pow(theta_1, 3);
     const double _tmp148 = 3*symkin_cosr2(_tmp134) + symkin_sinr1(_tmp134) - 3*symkin_sinr2(_tmp134);
-    const double _tmp149 = cos(_tmp134);
-    const double _tmp150 = _tmp138*_tmp50;
-    const double _tmp151 = _tmp134*_tmp137*_tmp146 + 0.0625*_tmp146*_tmp147*_tmp148 + _tmp149*_tmp150;
-    const double _tmp152 = 0.25*_tmp46*_tmp49;
-    const double _tmp153 = _tmp135*_tmp150 - 0.5*_tmp137*_tmp149*p_0*theta_1 - 0.0625*_tmp147*_tmp148*_tmp149*p_0;
-    const double _tmp154 = _tmp115*_tmp117;
-    const double _tmp155 = _tmp101*_tmp103;
-    const double _tmp156 = 0.1767766952966369*_tmp85;
-    const double _tmp157 = _tmp156*_tmp88;
-    const double _tmp158 = _tmp156*_tmp82;
-    const double _tmp159 = _tmp157 + _tmp158;
-    const double _tmp160 = -_tmp157 + 0.1767766952966369*_tmp77*_tmp81*_tmp85;
-    const double _tmp161 = _tmp140 + _tmp159*_tmp68 - _tmp160*_tmp56;
-    const double _tmp162 = _tmp157*p_0;
-    const double _tmp163 = _tmp158*p_0 + _tmp162;
-    const double _tmp164 = -_tmp162 + 0.1767766952966369*_tmp77*_tmp81*_tmp85*p_0;
-    const double _tmp165 = _tmp151 + _tmp163*_tmp56 + _tmp164*_tmp68 + _tmp75;
-    const double _tmp166 = _tmp139*_tmp149 + _tmp159*_tmp56 + _tmp160*_tmp68;
-    const double _tmp167 = _tmp131 + _tmp153 + _tmp163*_tmp68 - _tmp164*_tmp56;
+    const double _tmp149 = 0.0625*_tmp147*_tmp148;
+    const double _tmp150 = cos(_tmp134);
+    const double _tmp151 = _tmp138*_tmp50;
+    const double _tmp152 = _tmp134*_tmp137;
+    const double _tmp153 = _tmp146*_tmp149 + _tmp146*_tmp152 + _tmp150*_tmp151;
+    const double _tmp154 = 0.25*_tmp46*_tmp49;
+    const double _tmp155 = _tmp135*_tmp151;
+    const double _tmp156 = _tmp115*_tmp117;
+    const double _tmp157 = _tmp101*_tmp103;
+    const double _tmp158 = 0.1767766952966369*_tmp85;
+    const double _tmp159 = _tmp158*_tmp88;
+    const double _tmp160 = _tmp158*_tmp82;
+    const double _tmp161 = _tmp159 + _tmp160;
+    const double _tmp162 = -_tmp159 + 0.1767766952966369*_tmp77*_tmp81*_tmp85;
+    const double _tmp163 = _tmp140 + _tmp161*_tmp68 - _tmp162*_tmp56;
+    const double _tmp164 = _tmp159*p_0;
+    const double _tmp165 = _tmp160*p_0 + _tmp164;
+    const double _tmp166 = -_tmp164 + 0.1767766952966369*_tmp77*_tmp81*_tmp85*p_0;
+    const double _tmp167 = _tmp153 + _tmp165*_tmp56 + _tmp166*_tmp68 + _tmp75;
+    const double _tmp168 = _tmp139*_tmp150 + _tmp161*_tmp56 + _tmp162*_tmp68;
+    const double _tmp169 = _tmp150*p_0;
+    const double _tmp170 = _tmp130 + _tmp149*_tmp169 + _tmp152*_tmp169 - _tmp155 - _tmp165*_tmp68 + _tmp166*_tmp56;
     out[0] = 0;
     out[1] = -1;
     out[2] = 0;
@@ -1687,7 +1690,7 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     out[63] = 0;
     out[64] = 0;
     out[65] = -_tmp128*_tmp13 + _tmp129*_tmp14;
-    out[66] = _tmp102*_tmp14 - _tmp130 + _tmp132;
+    out[66] = _tmp131 + _tmp132;
     out[67] = 0.25*_tmp110*_tmp111*_tmp114*_tmp4*p_0 - _tmp119*_tmp6 - _tmp133 + _tmp21*delta_3 - _tmp74;
     out[68] = -_tmp122*_tmp6 - _tmp124*_tmp4 - _tmp133;
     out[69] = 0;
@@ -1696,22 +1699,22 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     out[72] = 0;
     out[73] = 0;
     out[74] = -_tmp140 - _tmp141 - _tmp143*_tmp63 - _tmp144*_tmp70 - _tmp145*_tmp6 + _tmp31*_tmp4*theta_5;
-    out[75] = -_tmp144*_tmp69 - _tmp151 + 0.25*_tmp58*_tmp59*_tmp64*_tmp68*p_0;
-    out[76] = 0.25*_tmp136*_tmp137*_tmp149 - _tmp143*_tmp70 - _tmp145*_tmp4 - _tmp152 - _tmp31*_tmp6*theta_5 + 0.25*_tmp56*_tmp58*_tmp62*_tmp64;
-    out[77] = -_tmp143*_tmp69 - _tmp144*_tmp61 - _tmp153;
+    out[75] = -_tmp144*_tmp69 - _tmp153 + 0.25*_tmp58*_tmp59*_tmp64*_tmp68*p_0;
+    out[76] = 0.25*_tmp136*_tmp137*_tmp150 - _tmp143*_tmp70 - _tmp145*_tmp4 - _tmp154 - _tmp31*_tmp6*theta_5 + 0.25*_tmp56*_tmp58*_tmp62*_tmp64;
+    out[77] = 0.5*_tmp137*_tmp150*p_0*theta_1 - _tmp143*_tmp69 - _tmp144*_tmp61 + 0.0625*_tmp147*_tmp148*_tmp150*p_0 - _tmp155;
     out[78] = 0;
     out[79] = 0;
-    out[80] = 0.25*_tmp110*_tmp111*_tmp114*_tmp4 - _tmp13*_tmp155 + 0.25*_tmp14*_tmp96*_tmp98*_tmp99 - _tmp141 - _tmp154*_tmp6 - _tmp161;
-    out[81] = -_tmp106 - _tmp165;
-    out[82] = _tmp101*_tmp13*_tmp96 - _tmp115*_tmp123*_tmp6 + _tmp14*_tmp155 - _tmp152 - _tmp154*_tmp4 + _tmp166;
-    out[83] = -_tmp130 + 0.25*_tmp14*_tmp96*_tmp98*_tmp99*p_0 - _tmp167;
+    out[80] = 0.25*_tmp110*_tmp111*_tmp114*_tmp4 - _tmp13*_tmp157 + 0.25*_tmp14*_tmp96*_tmp98*_tmp99 - _tmp141 - _tmp156*_tmp6 - _tmp163;
+    out[81] = -_tmp106 - _tmp167;
+    out[82] = _tmp101*_tmp13*_tmp96 - _tmp115*_tmp123*_tmp6 + _tmp14*_tmp157 - _tmp154 - _tmp156*_tmp4 + _tmp168;
+    out[83] = _tmp132 + _tmp170;
     out[84] = -_tmp94;
     out[85] = 0;
     out[86] = 0;
     out[87] = 0;
     out[88] = 0;
     out[89] = 0;
-    out[90] = _tmp132;
+    out[90] = _tmp131;
     out[91] = 0;
     out[92] = 0;
     out[93] = 0;
@@ -1729,10 +1732,10 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     out[105] = 0;
     out[106] = 0;
     out[107] = 0;
-    out[108] = -_tmp161;
-    out[109] = -_tmp165;
-    out[110] = _tmp166;
-    out[111] = -_tmp167;
+    out[108] = -_tmp163;
+    out[109] = -_tmp167;
+    out[110] = _tmp168;
+    out[111] = _tmp170;
 }
 
 /* sensitivity at level exact: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (661 operations) */
@@ -2199,9 +2202,6 @@ static double sk_rigid_newton(double *theta, const double *params, int iteration
     for (it = 0; it < iterations; ++it) {
         sk_rigid_res(theta, params, res);
         sk_linear(theta, params, lin);
-        for (i = 0; i < SK_K; i += 3) {
-            res[i] = remainder(res[i], sk_two_pi);
-        }
         if (sk_solve(SK_K, lin, res)) {
             return -1.0;
         }
@@ -2428,6 +2428,16 @@ static int sk_pose(const double *inputs, const double *params, int level, int wa
         }
         for (i = 0; i < SK_K; ++i) {
             theta[sk_unknown_index[i]] = remainder(sol[i], sk_two_pi);
+        }
+    }
+    {
+        /* the winding rule (symkin.solver): every loop's angles sum to 0, not +-2*pi */
+        double res[SK_K];
+        sk_rigid_res(theta, params, res);
+        for (i = 0; i < SK_K; i += 3) {
+            if (!(fabs(res[i]) < 3.141592653589793)) {
+                return 1;
+            }
         }
     }
     /* polish: the relative accuracy of small angles */

@@ -2,7 +2,7 @@
 Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
 Points: D; levels: paper, first_order, exact, loaded.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60, loaded_q0 16, loaded_q 128, loaded_compliance 401, loaded_linear 185, loaded_newton 522, dev_loaded 63, links 5, sens_rigid 70, sens_paper 118, sens_first_order 566, sens_exact 661.
+Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, dev_paper 36, dev_first_order 50, dev_exact 60, loaded_q0 16, loaded_q 128, loaded_compliance 401, loaded_linear 190, loaded_newton 527, dev_loaded 68, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -40,6 +40,7 @@ _LIMITS = ((0, 3.141592653589793), (1, 3.141592653589793), (2, 3.141592653589793
 _NEEDS_LOOPS = True
 _LOOPS_FOR_LINKS = False  # the links' rotations alone need the loops solved
 _DTYPE = numpy.float64
+_WINDING = 3.141592653589793  # a loop's angle sum this large: a hinge wrapped (no assembly)
 _POLISH = 1  # Newton steps after the rigid start: relative accuracy of small angles
 _EXACT_ITERATIONS = 40  # Newton cap of the exact level
 _CONVERGED = 1e-08  # ~sqrt(eps): a step this small (relative) ends Newton
@@ -601,18 +602,18 @@ def _dev_first_order(theta, delta, params):
     _tmp2 = theta_1 + theta_2
     _tmp3 = numpy.sin(_tmp2)
     _tmp4 = numpy.cos(_tmp2)
-    _tmp5 = numpy.cos(theta_1)
+    _tmp5 = numpy.sin(theta_1)
     _tmp7 = theta_2**2
     _tmp6 = 0.5*theta_2
     _tmp8 = arck(_tmp6)
     _tmp9 = 0.1767766952966369*_tmp7*_tmp8*p_0
     _tmp10 = _tmp9*numpy.sin(_tmp6)
     _tmp11 = numpy.cos(_tmp6)
-    _tmp12 = -_tmp10 + 0.1767766952966369*_tmp11*_tmp7*_tmp8*p_0
-    _tmp13 = numpy.sin(theta_1)
-    _tmp14 = _tmp10 + _tmp11*_tmp9
+    _tmp12 = _tmp10 + _tmp11*_tmp9
+    _tmp13 = numpy.cos(theta_1)
+    _tmp14 = -_tmp10 + 0.1767766952966369*_tmp11*_tmp7*_tmp8*p_0
     return [
-        -_tmp1*numpy.sin(_tmp0) + _tmp12*_tmp5 - _tmp13*_tmp14 + delta_2*(-0.04*_tmp3 - 0.07*_tmp4),
+        -_tmp1*numpy.sin(_tmp0) - _tmp12*_tmp5 + _tmp13*_tmp14 + delta_2*(-0.04*_tmp3 - 0.07*_tmp4),
         _tmp1*numpy.cos(_tmp0) + _tmp12*_tmp13 + _tmp14*_tmp5 + delta_2*(-0.07*_tmp3 + 0.04*_tmp4),
     ]
 
@@ -825,7 +826,7 @@ def _loaded_compliance(theta, mu, params):
 
 
 def _loaded_linear(theta, params):
-    """loaded: A and r = Phi dz of the loaded closure (its first-order start) (185 operations)."""
+    """loaded: A and r = Phi dz of the loaded closure (its first-order start) (190 operations)."""
     theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7 = theta
     p_0, compliance_x_1, compliance_y_1, compliance_x_2, compliance_y_2, compliance_x_3, compliance_y_3, compliance_x_4, compliance_y_4, compliance_x_5, compliance_y_5, compliance_x_6, compliance_y_6, compliance_x_7, compliance_y_7 = params
     _tmp0 = numpy.sin(theta_3)
@@ -869,15 +870,16 @@ def _loaded_linear(theta, params):
     _tmp38 = 0.5*theta_7
     _tmp39 = _tmp18*theta_7**2*arck(_tmp38)
     _tmp40 = _tmp39*numpy.sin(_tmp38) + compliance_y_7
-    _tmp41 = 0.7071067811865476*compliance_y_2
-    _tmp42 = 0.5*theta_2
-    _tmp43 = 0.1767766952966369*p_0*theta_2**2*arck(_tmp42)
-    _tmp44 = _tmp43*numpy.sin(_tmp42)
-    _tmp45 = _tmp43*numpy.cos(_tmp42) + 0.7071067811865476*compliance_x_2
-    _tmp46 = _tmp41 + _tmp44 + _tmp45
-    _tmp47 = _tmp39*numpy.cos(_tmp38) + compliance_x_7
-    _tmp48 = _tmp36*numpy.sin(_tmp35) + compliance_y_4
-    _tmp49 = -_tmp41 - _tmp44 + _tmp45
+    _tmp41 = 0.5*theta_2
+    _tmp42 = numpy.cos(_tmp41)
+    _tmp43 = theta_2**2
+    _tmp44 = arck(_tmp41)
+    _tmp45 = 0.1767766952966369*_tmp43*_tmp44*p_0
+    _tmp46 = _tmp45*numpy.sin(_tmp41) + 0.7071067811865476*compliance_y_2
+    _tmp47 = _tmp42*_tmp45 + _tmp46 + 0.7071067811865476*compliance_x_2
+    _tmp48 = _tmp39*numpy.cos(_tmp38) + compliance_x_7
+    _tmp49 = _tmp36*numpy.sin(_tmp35) + compliance_y_4
+    _tmp50 = 0.1767766952966369*_tmp42*_tmp43*_tmp44*p_0 - _tmp46 + 0.7071067811865476*compliance_x_2
     return [
         0,
         -1,
@@ -919,13 +921,13 @@ def _loaded_linear(theta, params):
         _tmp0*_tmp25 - _tmp2*_tmp20 - _tmp21*_tmp24 + _tmp26*_tmp27 - _tmp33,
         -_tmp0*_tmp20 - _tmp2*_tmp25 + _tmp21*_tmp27 + _tmp24*_tmp26 + _tmp34,
         0,
-        _tmp0*_tmp48 - _tmp10*_tmp40 + _tmp11*_tmp47 - _tmp2*_tmp37 - _tmp21*_tmp46 + _tmp26*_tmp49 - _tmp33,
-        -_tmp0*_tmp37 + _tmp10*_tmp47 + _tmp11*_tmp40 - _tmp2*_tmp48 + _tmp21*_tmp49 + _tmp26*_tmp46 + _tmp34,
+        _tmp0*_tmp49 - _tmp10*_tmp40 + _tmp11*_tmp48 - _tmp2*_tmp37 - _tmp21*_tmp47 + _tmp26*_tmp50 - _tmp33,
+        -_tmp0*_tmp37 + _tmp10*_tmp48 + _tmp11*_tmp40 - _tmp2*_tmp49 + _tmp21*_tmp50 + _tmp26*_tmp47 + _tmp34,
     ]
 
 
 def _loaded_newton(theta, delta, params):
-    """loaded: the loaded closure F(delta) and dF/ddelta (522 operations)."""
+    """loaded: the loaded closure F(delta) and dF/ddelta (527 operations)."""
     theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7 = theta
     delta_2, delta_3, delta_4, delta_5, delta_6, delta_7 = delta
     p_0, compliance_x_1, compliance_y_1, compliance_x_2, compliance_y_2, compliance_x_3, compliance_y_3, compliance_x_4, compliance_y_4, compliance_x_5, compliance_y_5, compliance_x_6, compliance_y_6, compliance_x_7, compliance_y_7 = params
@@ -1016,96 +1018,94 @@ def _loaded_newton(theta, delta, params):
     _tmp84 = 0.5*delta_2
     _tmp85 = numpy.sin(_tmp84)**2
     _tmp86 = 0.04*_tmp83 - 0.14*_tmp85
-    _tmp87 = 0.7071067811865476*compliance_y_2
-    _tmp88 = delta_2 + theta_2
-    _tmp89 = _tmp88**2
-    _tmp90 = 0.1767766952966369*_tmp89
-    _tmp91 = _tmp84 + 0.5*theta_2
-    _tmp92 = arck(_tmp91)
-    _tmp93 = p_0*numpy.sin(_tmp91)
-    _tmp94 = _tmp92*_tmp93
-    _tmp95 = _tmp90*_tmp94
-    _tmp96 = numpy.cos(_tmp91)
-    _tmp97 = _tmp96*p_0
-    _tmp98 = _tmp92*_tmp97
-    _tmp99 = _tmp90*_tmp98 + 0.7071067811865476*compliance_x_2
-    _tmp100 = _tmp87 + _tmp95 + _tmp99
-    _tmp101 = numpy.cos(_tmp65)
-    _tmp102 = numpy.cos(_tmp70)
-    _tmp103 = _tmp102*_tmp71
-    _tmp104 = _tmp103*_tmp69 + compliance_x_7
-    _tmp105 = numpy.sin(_tmp56)
-    _tmp106 = _tmp105*_tmp61 + compliance_y_4
-    _tmp107 = 0.05*_tmp22 + _tmp39
-    _tmp108 = numpy.cos(_tmp76)
-    _tmp109 = 0.04*_tmp78 - 0.1*_tmp79
-    _tmp110 = numpy.cos(_tmp64)
-    _tmp111 = -0.07*_tmp83 - 0.08*_tmp85
-    _tmp112 = -_tmp87 - _tmp95 + _tmp99
-    _tmp113 = _tmp32*_tmp62
-    _tmp114 = _tmp106*_tmp2
-    _tmp115 = _tmp101*_tmp74 + _tmp104*_tmp66
-    _tmp116 = _tmp1 + _tmp7
-    _tmp117 = numpy.cos(_tmp116)
-    _tmp118 = 0.03*_tmp117
-    _tmp119 = numpy.sin(_tmp116)
-    _tmp120 = 0.072*_tmp119
-    _tmp121 = 0.02*_tmp32
-    _tmp122 = _tmp47*p_0
-    _tmp123 = 0.0625*_tmp1**3*(3*cosr2(_tmp46) + sinr1(_tmp46) - 3*sinr2(_tmp46))
-    _tmp124 = 0.125*p_0
-    _tmp125 = 0.5*_tmp1*_tmp48
-    _tmp126 = _tmp122*_tmp123 + _tmp122*_tmp125 + _tmp124*_tmp52*_tmp53
-    _tmp127 = 0.5*_tmp7*_tmp8
-    _tmp128 = _tmp5*p_0
-    _tmp129 = _tmp124*_tmp9
-    _tmp130 = 0.0625*_tmp7**3*(3*cosr2(_tmp4) + sinr1(_tmp4) - 3*sinr2(_tmp4))
-    _tmp131 = _tmp127*_tmp128 + _tmp128*_tmp130 - _tmp129*_tmp33
-    _tmp132 = _tmp33*p_0
-    _tmp133 = _tmp127*_tmp132 + _tmp129*_tmp5 + _tmp130*_tmp132
-    _tmp134 = _tmp36*p_0
-    _tmp135 = 0.5*_tmp16*_tmp17
-    _tmp136 = _tmp124*_tmp18
-    _tmp137 = 0.0625*_tmp16**3*(3*cosr2(_tmp14) + sinr1(_tmp14) - 3*sinr2(_tmp14))
-    _tmp138 = -_tmp134*_tmp135 - _tmp134*_tmp137 - _tmp136*_tmp15
-    _tmp139 = _tmp15*p_0
-    _tmp140 = _tmp135*_tmp139 - _tmp136*_tmp36 + _tmp137*_tmp139
-    _tmp141 = 0.02*_tmp2
-    _tmp142 = 0.03*_tmp119
-    _tmp143 = _tmp52*p_0
-    _tmp144 = 0.125*_tmp122*_tmp53 - _tmp123*_tmp143 - _tmp125*_tmp143
-    _tmp145 = _tmp88**3
-    _tmp146 = 3*cosr2(_tmp91) + sinr1(_tmp91) - 3*sinr2(_tmp91)
-    _tmp147 = 0.04419417382415922*_tmp145*_tmp146
-    _tmp148 = 0.3535533905932738*_tmp88
-    _tmp149 = 0.08838834764831845*_tmp89
-    _tmp150 = _tmp149*_tmp94
-    _tmp151 = _tmp147*_tmp93 + _tmp148*_tmp94 + _tmp149*_tmp98
-    _tmp152 = _tmp147*_tmp97 + _tmp148*_tmp98 - _tmp150 + _tmp151
-    _tmp153 = 0.04419417382415922*_tmp145*_tmp146*_tmp96*p_0 - _tmp150 - _tmp151 + 0.3535533905932738*_tmp88*_tmp92*_tmp96*p_0
-    _tmp154 = _tmp1 + _tmp58
-    _tmp155 = numpy.cos(_tmp154)
-    _tmp156 = numpy.sin(_tmp154)
-    _tmp157 = 0.04*_tmp155 - 0.05*_tmp156
-    _tmp158 = _tmp105*p_0
-    _tmp159 = 0.5*_tmp58*_tmp59
-    _tmp160 = _tmp124*_tmp60
-    _tmp161 = 0.0625*_tmp58**3*(3*cosr2(_tmp56) + sinr1(_tmp56) - 3*sinr2(_tmp56))
-    _tmp162 = _tmp158*_tmp159 + _tmp158*_tmp161 + _tmp160*_tmp57
-    _tmp163 = _tmp57*p_0
-    _tmp164 = -_tmp105*_tmp160 + _tmp159*_tmp163 + _tmp161*_tmp163
-    _tmp165 = 0.5*_tmp67*p_0
-    _tmp166 = _tmp124*_tmp68
-    _tmp167 = 0.0625*_tmp67**3*p_0*(3*cosr2(_tmp70) + sinr1(_tmp70) - 3*sinr2(_tmp70))
-    _tmp168 = _tmp103*_tmp166 + _tmp165*_tmp73 + _tmp167*_tmp72
-    _tmp169 = _tmp102*_tmp167 + _tmp103*_tmp165 - _tmp166*_tmp73
+    _tmp87 = _tmp84 + 0.5*theta_2
+    _tmp88 = arck(_tmp87)
+    _tmp89 = numpy.cos(_tmp87)
+    _tmp90 = _tmp89*p_0
+    _tmp91 = _tmp88*_tmp90
+    _tmp92 = delta_2 + theta_2
+    _tmp93 = _tmp92**2
+    _tmp94 = 0.1767766952966369*_tmp93
+    _tmp95 = p_0*numpy.sin(_tmp87)
+    _tmp96 = _tmp88*_tmp95
+    _tmp97 = _tmp94*_tmp96 + 0.7071067811865476*compliance_y_2
+    _tmp98 = _tmp91*_tmp94 + _tmp97 + 0.7071067811865476*compliance_x_2
+    _tmp99 = numpy.cos(_tmp65)
+    _tmp100 = numpy.cos(_tmp70)
+    _tmp101 = _tmp100*_tmp71
+    _tmp102 = _tmp101*_tmp69 + compliance_x_7
+    _tmp103 = numpy.sin(_tmp56)
+    _tmp104 = _tmp103*_tmp61 + compliance_y_4
+    _tmp105 = 0.05*_tmp22 + _tmp39
+    _tmp106 = numpy.cos(_tmp76)
+    _tmp107 = 0.04*_tmp78 - 0.1*_tmp79
+    _tmp108 = numpy.cos(_tmp64)
+    _tmp109 = -0.07*_tmp83 - 0.08*_tmp85
+    _tmp110 = 0.1767766952966369*_tmp88*_tmp89*_tmp93*p_0 - _tmp97 + 0.7071067811865476*compliance_x_2
+    _tmp111 = _tmp32*_tmp62
+    _tmp112 = _tmp104*_tmp2
+    _tmp113 = _tmp102*_tmp66 + _tmp74*_tmp99
+    _tmp114 = _tmp1 + _tmp7
+    _tmp115 = numpy.cos(_tmp114)
+    _tmp116 = 0.03*_tmp115
+    _tmp117 = numpy.sin(_tmp114)
+    _tmp118 = 0.072*_tmp117
+    _tmp119 = 0.02*_tmp32
+    _tmp120 = _tmp47*p_0
+    _tmp121 = 0.0625*_tmp1**3*(3*cosr2(_tmp46) + sinr1(_tmp46) - 3*sinr2(_tmp46))
+    _tmp122 = 0.125*p_0
+    _tmp123 = 0.5*_tmp1*_tmp48
+    _tmp124 = _tmp120*_tmp121 + _tmp120*_tmp123 + _tmp122*_tmp52*_tmp53
+    _tmp125 = 0.5*_tmp7*_tmp8
+    _tmp126 = _tmp5*p_0
+    _tmp127 = _tmp122*_tmp9
+    _tmp128 = 0.0625*_tmp7**3*(3*cosr2(_tmp4) + sinr1(_tmp4) - 3*sinr2(_tmp4))
+    _tmp129 = _tmp125*_tmp126 + _tmp126*_tmp128 - _tmp127*_tmp33
+    _tmp130 = _tmp33*p_0
+    _tmp131 = _tmp125*_tmp130 + _tmp127*_tmp5 + _tmp128*_tmp130
+    _tmp132 = _tmp36*p_0
+    _tmp133 = 0.5*_tmp16*_tmp17
+    _tmp134 = _tmp122*_tmp18
+    _tmp135 = 0.0625*_tmp16**3*(3*cosr2(_tmp14) + sinr1(_tmp14) - 3*sinr2(_tmp14))
+    _tmp136 = -_tmp132*_tmp133 - _tmp132*_tmp135 - _tmp134*_tmp15
+    _tmp137 = _tmp15*p_0
+    _tmp138 = _tmp133*_tmp137 - _tmp134*_tmp36 + _tmp135*_tmp137
+    _tmp139 = 0.02*_tmp2
+    _tmp140 = 0.03*_tmp117
+    _tmp141 = _tmp52*p_0
+    _tmp142 = 0.125*_tmp120*_tmp53 - _tmp121*_tmp141 - _tmp123*_tmp141
+    _tmp143 = _tmp92**3
+    _tmp144 = 3*cosr2(_tmp87) + sinr1(_tmp87) - 3*sinr2(_tmp87)
+    _tmp145 = 0.04419417382415922*_tmp143*_tmp144
+    _tmp146 = 0.3535533905932738*_tmp92
+    _tmp147 = 0.08838834764831845*_tmp93
+    _tmp148 = _tmp147*_tmp96
+    _tmp149 = _tmp145*_tmp95 + _tmp146*_tmp96 + _tmp147*_tmp91
+    _tmp150 = _tmp145*_tmp90 + _tmp146*_tmp91 - _tmp148 + _tmp149
+    _tmp151 = 0.04419417382415922*_tmp143*_tmp144*_tmp89*p_0 - _tmp148 - _tmp149 + 0.3535533905932738*_tmp88*_tmp89*_tmp92*p_0
+    _tmp152 = _tmp1 + _tmp58
+    _tmp153 = numpy.cos(_tmp152)
+    _tmp154 = numpy.sin(_tmp152)
+    _tmp155 = 0.04*_tmp153 - 0.05*_tmp154
+    _tmp156 = _tmp103*p_0
+    _tmp157 = 0.5*_tmp58*_tmp59
+    _tmp158 = _tmp122*_tmp60
+    _tmp159 = 0.0625*_tmp58**3*(3*cosr2(_tmp56) + sinr1(_tmp56) - 3*sinr2(_tmp56))
+    _tmp160 = _tmp156*_tmp157 + _tmp156*_tmp159 + _tmp158*_tmp57
+    _tmp161 = _tmp57*p_0
+    _tmp162 = -_tmp103*_tmp158 + _tmp157*_tmp161 + _tmp159*_tmp161
+    _tmp163 = 0.5*_tmp67*p_0
+    _tmp164 = _tmp122*_tmp68
+    _tmp165 = 0.0625*_tmp67**3*p_0*(3*cosr2(_tmp70) + sinr1(_tmp70) - 3*sinr2(_tmp70))
+    _tmp166 = _tmp101*_tmp164 + _tmp163*_tmp73 + _tmp165*_tmp72
+    _tmp167 = _tmp100*_tmp165 + _tmp101*_tmp163 - _tmp164*_tmp73
     return [
         -_tmp0 + delta_6,
         -_tmp12 - _tmp13*_tmp20 - _tmp21*_tmp26 - _tmp28*_tmp31 + _tmp32*_tmp34 + _tmp35*_tmp37 + _tmp38*_tmp40 + _tmp41*_tmp42 - _tmp49,
         _tmp13*_tmp37 + _tmp20*_tmp35 + _tmp21*_tmp40 + _tmp26*_tmp38 + _tmp28*_tmp42 + _tmp31*_tmp41 - _tmp50 - _tmp51 + _tmp54,
         delta_2 - delta_3 - delta_4 + delta_7,
-        -_tmp100*_tmp13 + _tmp101*_tmp104 + _tmp106*_tmp32 + _tmp107*_tmp38 + _tmp108*_tmp109 + _tmp110*_tmp111 + _tmp112*_tmp35 - _tmp21*_tmp81 - _tmp49 - _tmp63 - _tmp75 - _tmp77*_tmp80 - _tmp82*_tmp86,
-        _tmp100*_tmp35 + _tmp107*_tmp21 + _tmp108*_tmp80 + _tmp109*_tmp77 + _tmp110*_tmp86 + _tmp111*_tmp82 + _tmp112*_tmp13 - _tmp113 - _tmp114 + _tmp115 + _tmp38*_tmp81 + _tmp54,
+        _tmp102*_tmp99 + _tmp104*_tmp32 + _tmp105*_tmp38 + _tmp106*_tmp107 + _tmp108*_tmp109 + _tmp110*_tmp35 - _tmp13*_tmp98 - _tmp21*_tmp81 - _tmp49 - _tmp63 - _tmp75 - _tmp77*_tmp80 - _tmp82*_tmp86,
+        _tmp105*_tmp21 + _tmp106*_tmp80 + _tmp107*_tmp77 + _tmp108*_tmp86 + _tmp109*_tmp82 + _tmp110*_tmp13 - _tmp111 - _tmp112 + _tmp113 + _tmp35*_tmp98 + _tmp38*_tmp81 + _tmp54,
         0,
         -1,
         0,
@@ -1113,16 +1113,16 @@ def _loaded_newton(theta, delta, params):
         1,
         0,
         0,
-        -_tmp118 - _tmp120 - _tmp121 + _tmp126 + 0.06*_tmp2 + _tmp50 + _tmp51,
+        -_tmp116 - _tmp118 - _tmp119 + _tmp124 + 0.06*_tmp2 + _tmp50 + _tmp51,
         0,
-        -_tmp118 - _tmp120 - _tmp131*_tmp2 + _tmp133*_tmp32,
-        -_tmp13*_tmp140 + _tmp138*_tmp35,
+        -_tmp116 - _tmp118 - _tmp129*_tmp2 + _tmp131*_tmp32,
+        -_tmp13*_tmp138 + _tmp136*_tmp35,
         0,
         0,
-        0.072*_tmp117 - _tmp12 + _tmp141 - _tmp142 + _tmp144 + _tmp32*_tmp34 + 0.06*_tmp32,
+        0.072*_tmp115 - _tmp12 + _tmp139 - _tmp140 + _tmp142 + _tmp32*_tmp34 + 0.06*_tmp32,
         0,
-        0.072*_tmp117 - _tmp131*_tmp32 - _tmp133*_tmp2 - _tmp142,
-        _tmp13*_tmp138 + _tmp140*_tmp35,
+        0.072*_tmp115 - _tmp129*_tmp32 - _tmp131*_tmp2 - _tmp140,
+        _tmp13*_tmp136 + _tmp138*_tmp35,
         0,
         1,
         -1,
@@ -1130,23 +1130,23 @@ def _loaded_newton(theta, delta, params):
         0,
         0,
         1,
-        -0.07*_tmp101 - _tmp115 - _tmp13*_tmp152 + _tmp153*_tmp35 - 0.04*_tmp66,
-        _tmp113 + _tmp114 + _tmp121 + _tmp126 + _tmp157 + 0.05*_tmp2,
-        _tmp157 + _tmp162*_tmp32 - _tmp164*_tmp2,
+        -_tmp113 - _tmp13*_tmp150 + _tmp151*_tmp35 - 0.04*_tmp66 - 0.07*_tmp99,
+        _tmp111 + _tmp112 + _tmp119 + _tmp124 + _tmp155 + 0.05*_tmp2,
+        _tmp155 + _tmp160*_tmp32 - _tmp162*_tmp2,
         0,
         0,
-        _tmp101*_tmp169 - _tmp168*_tmp66,
-        _tmp101*_tmp104 + 0.04*_tmp101 + _tmp13*_tmp153 + _tmp152*_tmp35 - 0.07*_tmp66 - _tmp75,
-        _tmp106*_tmp32 - _tmp141 + _tmp144 + 0.05*_tmp155 + 0.04*_tmp156 + 0.05*_tmp32 - _tmp63,
-        0.05*_tmp155 + 0.04*_tmp156 - _tmp162*_tmp2 - _tmp164*_tmp32,
+        -_tmp166*_tmp66 + _tmp167*_tmp99,
+        _tmp102*_tmp99 + _tmp13*_tmp151 + _tmp150*_tmp35 - 0.07*_tmp66 - _tmp75 + 0.04*_tmp99,
+        _tmp104*_tmp32 - _tmp139 + _tmp142 + 0.05*_tmp153 + 0.04*_tmp154 + 0.05*_tmp32 - _tmp63,
+        0.05*_tmp153 + 0.04*_tmp154 - _tmp160*_tmp2 - _tmp162*_tmp32,
         0,
         0,
-        _tmp101*_tmp168 + _tmp169*_tmp66,
+        _tmp166*_tmp99 + _tmp167*_tmp66,
     ]
 
 
 def _dev_loaded(theta, delta, params):
-    """deviation of the points at level loaded (63 operations)."""
+    """deviation of the points at level loaded (68 operations)."""
     theta_1, theta_2, _, _, _, _, _ = theta
     delta_2, _, _, _, _, _ = delta
     p_0, compliance_x_1, compliance_y_1, compliance_x_2, compliance_y_2, _, _, _, _, _, _, _, _, _, _ = params
@@ -1161,17 +1161,18 @@ def _dev_loaded(theta, delta, params):
     _tmp8 = numpy.cos(_tmp2)
     _tmp9 = -0.07*_tmp4 - 0.08*_tmp6
     _tmp10 = numpy.sin(theta_1)
-    _tmp11 = 0.7071067811865476*compliance_y_2
-    _tmp12 = _tmp5 + 0.5*theta_2
-    _tmp13 = 0.1767766952966369*p_0*(delta_2 + theta_2)**2*arck(_tmp12)
-    _tmp14 = _tmp13*numpy.sin(_tmp12)
-    _tmp15 = _tmp13*numpy.cos(_tmp12) + 0.7071067811865476*compliance_x_2
-    _tmp16 = _tmp11 + _tmp14 + _tmp15
-    _tmp17 = numpy.cos(theta_1)
-    _tmp18 = -_tmp11 - _tmp14 + _tmp15
+    _tmp11 = _tmp5 + 0.5*theta_2
+    _tmp12 = numpy.cos(_tmp11)
+    _tmp13 = (delta_2 + theta_2)**2
+    _tmp14 = arck(_tmp11)
+    _tmp15 = 0.1767766952966369*_tmp13*_tmp14*p_0
+    _tmp16 = _tmp15*numpy.sin(_tmp11) + 0.7071067811865476*compliance_y_2
+    _tmp17 = _tmp12*_tmp15 + _tmp16 + 0.7071067811865476*compliance_x_2
+    _tmp18 = numpy.cos(theta_1)
+    _tmp19 = 0.1767766952966369*_tmp12*_tmp13*_tmp14*p_0 - _tmp16 + 0.7071067811865476*compliance_x_2
     return [
-        -_tmp1*numpy.sin(_tmp0) - _tmp10*_tmp16 + _tmp17*_tmp18 - _tmp3*_tmp7 + _tmp8*_tmp9 - compliance_y_1,
-        _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp18 + _tmp16*_tmp17 + _tmp3*_tmp9 + _tmp7*_tmp8 + compliance_x_1,
+        -_tmp1*numpy.sin(_tmp0) - _tmp10*_tmp17 + _tmp18*_tmp19 - _tmp3*_tmp7 + _tmp8*_tmp9 - compliance_y_1,
+        _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp19 + _tmp17*_tmp18 + _tmp3*_tmp9 + _tmp7*_tmp8 + compliance_x_1,
     ]
 
 
@@ -1357,7 +1358,7 @@ def _sens_paper(theta, params):
 
 
 def _sens_first_order(theta, delta, params):
-    """sensitivity at level first_order: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (566 operations)."""
+    """sensitivity at level first_order: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (564 operations)."""
     theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7 = theta
     delta_2, delta_3, delta_4, delta_5, _, _ = delta
     p_0, = params
@@ -1491,9 +1492,9 @@ def _sens_first_order(theta, delta, params):
     _tmp127 = 0.0625*theta_7**3*(3*cosr2(_tmp95) + sinr1(_tmp95) - 3*sinr2(_tmp95))
     _tmp128 = _tmp104*_tmp125 + _tmp104*_tmp127 + _tmp126*_tmp96
     _tmp129 = -_tmp103*_tmp126 + _tmp125*_tmp97 + _tmp127*_tmp97
-    _tmp130 = _tmp105*_tmp13
-    _tmp131 = _tmp15*delta_2
-    _tmp132 = -_tmp131 + _tmp56*_tmp92 + _tmp68*_tmp93
+    _tmp130 = -_tmp15*delta_2
+    _tmp131 = _tmp130 + _tmp56*_tmp92 + _tmp68*_tmp93
+    _tmp132 = _tmp102*_tmp14 - _tmp105*_tmp13
     _tmp133 = -_tmp107*_tmp22
     _tmp134 = 0.5*theta_1
     _tmp135 = numpy.sin(_tmp134)
@@ -1510,25 +1511,28 @@ def _sens_first_order(theta, delta, params):
     _tmp146 = _tmp135*p_0
     _tmp147 = theta_1**3
     _tmp148 = 3*cosr2(_tmp134) + sinr1(_tmp134) - 3*sinr2(_tmp134)
-    _tmp149 = numpy.cos(_tmp134)
-    _tmp150 = _tmp138*_tmp50
-    _tmp151 = _tmp134*_tmp137*_tmp146 + 0.0625*_tmp146*_tmp147*_tmp148 + _tmp149*_tmp150
-    _tmp152 = 0.25*_tmp46*_tmp49
-    _tmp153 = _tmp135*_tmp150 - 0.5*_tmp137*_tmp149*p_0*theta_1 - 0.0625*_tmp147*_tmp148*_tmp149*p_0
-    _tmp154 = _tmp115*_tmp117
-    _tmp155 = _tmp101*_tmp103
-    _tmp156 = 0.1767766952966369*_tmp85
-    _tmp157 = _tmp156*_tmp88
-    _tmp158 = _tmp156*_tmp82
-    _tmp159 = _tmp157 + _tmp158
-    _tmp160 = -_tmp157 + 0.1767766952966369*_tmp77*_tmp81*_tmp85
-    _tmp161 = _tmp140 + _tmp159*_tmp68 - _tmp160*_tmp56
-    _tmp162 = _tmp157*p_0
-    _tmp163 = _tmp158*p_0 + _tmp162
-    _tmp164 = -_tmp162 + 0.1767766952966369*_tmp77*_tmp81*_tmp85*p_0
-    _tmp165 = _tmp151 + _tmp163*_tmp56 + _tmp164*_tmp68 + _tmp75
-    _tmp166 = _tmp139*_tmp149 + _tmp159*_tmp56 + _tmp160*_tmp68
-    _tmp167 = _tmp131 + _tmp153 + _tmp163*_tmp68 - _tmp164*_tmp56
+    _tmp149 = 0.0625*_tmp147*_tmp148
+    _tmp150 = numpy.cos(_tmp134)
+    _tmp151 = _tmp138*_tmp50
+    _tmp152 = _tmp134*_tmp137
+    _tmp153 = _tmp146*_tmp149 + _tmp146*_tmp152 + _tmp150*_tmp151
+    _tmp154 = 0.25*_tmp46*_tmp49
+    _tmp155 = _tmp135*_tmp151
+    _tmp156 = _tmp115*_tmp117
+    _tmp157 = _tmp101*_tmp103
+    _tmp158 = 0.1767766952966369*_tmp85
+    _tmp159 = _tmp158*_tmp88
+    _tmp160 = _tmp158*_tmp82
+    _tmp161 = _tmp159 + _tmp160
+    _tmp162 = -_tmp159 + 0.1767766952966369*_tmp77*_tmp81*_tmp85
+    _tmp163 = _tmp140 + _tmp161*_tmp68 - _tmp162*_tmp56
+    _tmp164 = _tmp159*p_0
+    _tmp165 = _tmp160*p_0 + _tmp164
+    _tmp166 = -_tmp164 + 0.1767766952966369*_tmp77*_tmp81*_tmp85*p_0
+    _tmp167 = _tmp153 + _tmp165*_tmp56 + _tmp166*_tmp68 + _tmp75
+    _tmp168 = _tmp139*_tmp150 + _tmp161*_tmp56 + _tmp162*_tmp68
+    _tmp169 = _tmp150*p_0
+    _tmp170 = _tmp130 + _tmp149*_tmp169 + _tmp152*_tmp169 - _tmp155 - _tmp165*_tmp68 + _tmp166*_tmp56
     return [
         0,
         -1,
@@ -1596,7 +1600,7 @@ def _sens_first_order(theta, delta, params):
         0,
         0,
         -_tmp128*_tmp13 + _tmp129*_tmp14,
-        _tmp102*_tmp14 - _tmp130 + _tmp132,
+        _tmp131 + _tmp132,
         0.25*_tmp110*_tmp111*_tmp114*_tmp4*p_0 - _tmp119*_tmp6 - _tmp133 + _tmp21*delta_3 - _tmp74,
         -_tmp122*_tmp6 - _tmp124*_tmp4 - _tmp133,
         0,
@@ -1605,22 +1609,22 @@ def _sens_first_order(theta, delta, params):
         0,
         0,
         -_tmp140 - _tmp141 - _tmp143*_tmp63 - _tmp144*_tmp70 - _tmp145*_tmp6 + _tmp31*_tmp4*theta_5,
-        -_tmp144*_tmp69 - _tmp151 + 0.25*_tmp58*_tmp59*_tmp64*_tmp68*p_0,
-        0.25*_tmp136*_tmp137*_tmp149 - _tmp143*_tmp70 - _tmp145*_tmp4 - _tmp152 - _tmp31*_tmp6*theta_5 + 0.25*_tmp56*_tmp58*_tmp62*_tmp64,
-        -_tmp143*_tmp69 - _tmp144*_tmp61 - _tmp153,
+        -_tmp144*_tmp69 - _tmp153 + 0.25*_tmp58*_tmp59*_tmp64*_tmp68*p_0,
+        0.25*_tmp136*_tmp137*_tmp150 - _tmp143*_tmp70 - _tmp145*_tmp4 - _tmp154 - _tmp31*_tmp6*theta_5 + 0.25*_tmp56*_tmp58*_tmp62*_tmp64,
+        0.5*_tmp137*_tmp150*p_0*theta_1 - _tmp143*_tmp69 - _tmp144*_tmp61 + 0.0625*_tmp147*_tmp148*_tmp150*p_0 - _tmp155,
         0,
         0,
-        0.25*_tmp110*_tmp111*_tmp114*_tmp4 - _tmp13*_tmp155 + 0.25*_tmp14*_tmp96*_tmp98*_tmp99 - _tmp141 - _tmp154*_tmp6 - _tmp161,
-        -_tmp106 - _tmp165,
-        _tmp101*_tmp13*_tmp96 - _tmp115*_tmp123*_tmp6 + _tmp14*_tmp155 - _tmp152 - _tmp154*_tmp4 + _tmp166,
-        -_tmp130 + 0.25*_tmp14*_tmp96*_tmp98*_tmp99*p_0 - _tmp167,
+        0.25*_tmp110*_tmp111*_tmp114*_tmp4 - _tmp13*_tmp157 + 0.25*_tmp14*_tmp96*_tmp98*_tmp99 - _tmp141 - _tmp156*_tmp6 - _tmp163,
+        -_tmp106 - _tmp167,
+        _tmp101*_tmp13*_tmp96 - _tmp115*_tmp123*_tmp6 + _tmp14*_tmp157 - _tmp154 - _tmp156*_tmp4 + _tmp168,
+        _tmp132 + _tmp170,
         -_tmp94,
         0,
         0,
         0,
         0,
         0,
-        _tmp132,
+        _tmp131,
         0,
         0,
         0,
@@ -1638,10 +1642,10 @@ def _sens_first_order(theta, delta, params):
         0,
         0,
         0,
-        -_tmp161,
-        -_tmp165,
-        _tmp166,
+        -_tmp163,
         -_tmp167,
+        _tmp168,
+        _tmp170,
     ]
 
 
@@ -2087,6 +2091,10 @@ def _rigid_angles(x, params, ok):
         ok = ok & (numpy.broadcast_to(reach, shape) >= 0.0)
     for j, i in enumerate(_UNKNOWN_INDEX):
         theta[i] = numpy.where(ok, _wrap(numpy.broadcast_to(out[j], shape)), 0.0)
+    # the winding rule (symkin.solver): every loop's angles sum to 0, not +-2*pi (a wrapped hinge)
+    res = _rigid_res(theta, params)
+    for n in range(0, k, 3):
+        ok = ok & (numpy.abs(numpy.broadcast_to(res[n], shape)) < _WINDING)
     theta, ok, _ = _rigid_newton(theta, params, ok, _POLISH)
     return theta, ok
 
@@ -2099,8 +2107,7 @@ def _rigid_newton(theta, params, ok, iterations, tolerance=0.0):
     active = ok.copy()
     for _ in range(iterations):
         res = _rigid_res(theta, params)
-        res = [numpy.broadcast_to(_wrap(r) if n % 3 == 0 else r, ok.shape)
-               for n, r in enumerate(res)]
+        res = [numpy.broadcast_to(r, ok.shape) for r in res]   # angles tracked continuously
         lin = _linear(theta, params)
         step, good = _solve(lin[:k * k], res, active)
         ok = ok & (good | ~active)

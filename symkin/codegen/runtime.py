@@ -1,17 +1,20 @@
-"""Running generated code: C compiled with the system compiler and called via ctypes, numpy
-modules imported from their text; both cached by content hash under :func:`cache_dir`."""
+"""Running generated code: C compiled with the system compiler and called via ctypes, cached by
+content hash under :func:`cache_dir` (private, verified before loading: docs/cli.md, SYMKIN_CACHE);
+numpy modules executed from their text in memory, never read back from disk."""
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import hashlib
-import importlib.util
 import os
 import re
 import shutil
+import stat
 import subprocess
 import sys
 import tempfile
+import threading
 from pathlib import Path
 from types import ModuleType
 
@@ -32,26 +35,101 @@ def compiler() -> str:
 
 
 def cache_dir() -> Path:
-    """$SYMKIN_CACHE, else $XDG_CACHE_HOME/symkin, else ~/.cache/symkin."""
+    """$SYMKIN_CACHE, else $XDG_CACHE_HOME/symkin, else ~/.cache/symkin (docs/cli.md)."""
     base = os.environ.get("SYMKIN_CACHE") or os.path.join(
         os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "symkin")
     return Path(base)
 
 
+def _cache_error(folder: Path, why: str) -> InputError:
+    return InputError(f"the compiled-code cache '{folder}' {why}", entry="SYMKIN_CACHE",
+                      hint="set SYMKIN_CACHE to a folder of your own that only you can write "
+                           "(it is created with mode 0700 if missing)")
+
+
+def _private(stat_result: os.stat_result) -> bool:
+    """Owned by this user and writable by no one else."""
+    return (stat_result.st_uid == os.getuid()
+            and not stat_result.st_mode & (stat.S_IWGRP | stat.S_IWOTH))
+
+
+def safe_cache_dir() -> Path:
+    """The cache folder, created 0700 if missing; InputError (exit 2) when it cannot be made or
+    is not safe to load code from: not a folder, not owned by this user, or writable by others."""
+    folder = cache_dir()
+    try:
+        os.makedirs(folder, mode=0o700, exist_ok=True)
+        info = os.stat(folder)
+    except OSError as exc:
+        raise _cache_error(folder, f"cannot be created ({exc.strerror or exc})") from None
+    if not stat.S_ISDIR(info.st_mode):
+        raise _cache_error(folder, "is not a folder")
+    if not _private(info):
+        who = ("belongs to another user" if info.st_uid != os.getuid()
+               else f"is writable by others (mode {stat.S_IMODE(info.st_mode):o})")
+        raise _cache_error(folder, f"{who}: code loaded from it could be anyone's")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise _cache_error(folder, "is not writable")
+    return folder
+
+
+def _sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def _verified(target: Path, record: Path, source_digest: str) -> bool:
+    """The cached library is ours and intact: both files private regular files, the record
+    names the source digest and the library's own sha256 (a planted, truncated or corrupt
+    library fails this and is rebuilt, never loaded)."""
+    try:
+        for p in (target, record):
+            info = os.lstat(p)
+            if not stat.S_ISREG(info.st_mode) or not _private(info):
+                return False
+        lines = record.read_text().split()
+        return lines == [source_digest, _sha256(target)]
+    except (OSError, UnicodeDecodeError):
+        return False
+
+
+def _replace_atomically(folder: Path, final: Path, data: bytes | None = None,
+                        src: Path | None = None) -> None:
+    """Put `data` (or the file `src`) at `final` with a unique temporary name and one rename."""
+    fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{final.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data if data is not None else src.read_bytes())
+        os.chmod(tmp, 0o600 if data is not None else 0o700)
+        os.replace(tmp, final)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
 def build(name: str, header: str, source: str, flags: tuple[str, ...] = CFLAGS,
           extra: str = "") -> Path:
-    """Shared library of the generated pair (and an `extra` C file, e.g. a timer); rebuilt
-    only when the texts or flags change."""
+    """Shared library of the generated pair (and an `extra` C file, e.g. a timer), cached by the
+    hash of its texts and flags; a cached library is loaded only when verified (see _verified)
+    and rebuilt otherwise."""
     cc = compiler()
-    digest = hashlib.sha256("\0".join((cc, *flags, header, source, extra)).encode()
-                            ).hexdigest()[:20]
-    target = cache_dir() / f"{name}-{digest}.so"
-    if target.exists():
+    full = hashlib.sha256("\0".join((cc, *flags, header, source, extra)).encode()).hexdigest()
+    folder = safe_cache_dir()
+    target = folder / f"{name}-{full[:20]}.so"
+    record = folder / f"{name}-{full[:20]}.sha256"
+    if _verified(target, record, full):
         return target
-    target.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
         built = _compile(cc, flags, name, header, source, extra, Path(tmp))
-        os.replace(built, target)          # atomic: a concurrent build never sees half a file
+        digest = _sha256(built)
+        # atomic, unique temporary names: a concurrent build never sees half a file; the
+        # record last, so a reader that sees it finds the library it describes
+        _replace_atomically(folder, target, src=built)
+        _replace_atomically(folder, record, data=f"{full}\n{digest}\n".encode())
     return target
 
 
@@ -255,21 +333,26 @@ def numpy_module_in_memory(source: str, name: str) -> ModuleType:
     return module
 
 
+_MODULES: dict[str, ModuleType] = {}
+_MODULES_LOCK = threading.Lock()
+
+
 def import_numpy_module(source: str, name: str) -> ModuleType:
-    """Import a generated numpy module from its text (our own generated code, names escaped)."""
+    """A generated numpy module, executed from its text in memory (our own generated code, names
+    escaped): nothing is written to or read back from disk, so no planted or truncated file can
+    be executed, and threads importing the same text at once get one module."""
     digest = hashlib.sha256(source.encode()).hexdigest()[:20]
-    folder = cache_dir() / "numpy"
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / f"{name}_{digest}.py"
-    if not path.exists():
-        tmp = path.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text(source)
-        os.replace(tmp, path)
     module_name = f"symkin_generated_{name}_{digest}"
-    if module_name in sys.modules:
-        return sys.modules[module_name]
-    spec = importlib.util.spec_from_file_location(module_name, path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    sys.modules[module_name] = module
-    return module
+    with _MODULES_LOCK:
+        module = _MODULES.get(module_name)
+        if module is None:
+            module = ModuleType(module_name)
+            module.__file__ = f"<symkin generated {name}>"
+            sys.modules[module_name] = module       # functions pickle by module name
+            try:
+                exec(compile(source, module.__file__, "exec"), module.__dict__)  # noqa: S102
+            except BaseException:
+                del sys.modules[module_name]
+                raise
+            _MODULES[module_name] = module
+        return module
