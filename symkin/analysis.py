@@ -129,11 +129,13 @@ class Analysis:
         kin, s = self.kin, self.structure
         exact = form == "exact"
         col = {a: k for k, a in enumerate(columns)}
-        out: list[list[sp.Expr]] = [[sp.Integer(0), sp.Integer(0)] for _ in columns]
+        # Terms are collected and summed once: adding them one by one re-flattens the growing
+        # sum each time (quadratic in the number of links on a long loop).
+        out: list[tuple[list[sp.Expr], list[sp.Expr]]] = [([], []) for _ in columns]
 
         def add(a, vec: V.Vec) -> None:
-            out[col[a]][0] += vec[0]
-            out[col[a]][1] += vec[1]
+            out[col[a]][0].append(vec[0])
+            out[col[a]][1].append(vec[1])
 
         if wrt == "param":
             self._parameter_partials(weights, plates, form, columns, relative, add)
@@ -166,7 +168,7 @@ class Analysis:
                                  V.scale(_theta_derivative(h.dg).subs(THETA, angles[b]),
                                          V.perp(h.u)))
                     add(b, V.scale(coeff * h.sign, V.rot(phi_p, rate)))
-        return [(x, y) for x, y in out]
+        return [(sp.Add(*x), sp.Add(*y)) for x, y in out]
 
     def _parameter_partials(self, weights: dict[int, V.Vec], plates: dict[int, int], form: str,
                             params: Sequence[sp.Symbol], relative: bool, add) -> None:

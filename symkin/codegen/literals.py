@@ -51,33 +51,46 @@ def _simple(e: sp.Expr) -> bool:
     return e.is_Integer and abs(int(e)) < EXACT_INT
 
 
-def float_literals(expr: sp.Expr) -> sp.Expr:
+def float_literals(expr: sp.Expr, memo: dict | None = None) -> sp.Expr:
     """`expr` with every numeric subexpression replaced by its correctly rounded double.
 
     The numeric factors of a product (and terms of a sum) are folded together, so the product of
-    two constants is rounded once, not twice."""
-    return fold_numbers(expr, _simple, _double)
+    two constants is rounded once, not twice. Pass one `memo` dict to many calls over
+    expressions that share subtrees (a plan's routines) so each subtree is folded once."""
+    return fold_numbers(expr, _simple, _double, memo)
 
 
 def fold_numbers(expr: sp.Expr, keep: Callable[[sp.Expr], bool],
-                 replace: Callable[[sp.Expr], sp.Expr]) -> sp.Expr:
+                 replace: Callable[[sp.Expr], sp.Expr], memo: dict | None = None) -> sp.Expr:
     """`expr` with every maximal numeric subexpression that `keep` rejects replaced by
     `replace(it)`; the numeric factors of a product and terms of a sum are taken together, and
-    small rational exponents stay exact (so x**(1/2) still prints as a square root)."""
+    small rational exponents stay exact (so x**(1/2) still prints as a square root).
+
+    `memo` (optional, shared between calls with the same keep/replace) caches folded subtrees and
+    which subtrees are constant, so the work is linear in the size of the expression DAG."""
     expr = sp.sympify(expr)
     if not isinstance(expr, sp.Basic) or expr.is_Atom and not expr.is_number:
         return expr
-    mapping: dict[sp.Expr, sp.Expr] = {}
+    memo = {} if memo is None else memo
+    mapping = memo.setdefault("folded", {})
+    constant = memo.setdefault("constant", {})
+
+    def const(e: sp.Basic) -> bool:
+        """No free symbols (computed once per subtree; sympy does not cache free_symbols)."""
+        known = constant.get(e)
+        if known is None:
+            known = not e.free_symbols if e.is_Atom else all(const(a) for a in e.args)
+            constant[e] = known
+        return known
 
     def fold(e: sp.Expr) -> sp.Expr:
-        if e in mapping:
-            return mapping[e]
-        new = _fold(e)
-        mapping[e] = new
+        new = mapping.get(e)
+        if new is None:
+            new = mapping[e] = _fold(e)
         return new
 
     def _fold(e: sp.Expr) -> sp.Expr:
-        if not e.free_symbols and e.is_number:
+        if const(e) and e.is_number:
             return e if keep(e) else replace(e)
         if e.is_Atom:
             return e
@@ -86,13 +99,13 @@ def fold_numbers(expr: sp.Expr, keep: Callable[[sp.Expr], bool],
             new_exp = exp if exp.is_Rational and _simple_rational(exp) else fold(exp)
             return sp.Pow(fold(base), new_exp)
         if e.is_Mul or e.is_Add:
-            numeric = [a for a in e.args if not a.free_symbols]
-            rest = [fold(a) for a in e.args if a.free_symbols]
+            numeric = [a for a in e.args if const(a)]
+            rest = [fold(a) for a in e.args if not const(a)]
             if numeric:
-                constant = e.func(*numeric)
-                if not keep(constant):
-                    constant = replace(constant)
-                rest.append(constant)
+                number = e.func(*numeric)
+                if not keep(number):
+                    number = replace(number)
+                rest.append(number)
             return e.func(*rest)
         args = [fold(a) for a in e.args]
         return e.func(*args) if args != list(e.args) else e

@@ -177,9 +177,10 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
         chain = _sensitivity_routines(an, names, levels, needs_loops, routines,
                                       (theta, params), (theta, delta, params))
     # Numbers reach the printers as correctly rounded doubles (exact rationals stay in mpmath).
+    memo: dict = {}
     routines = {k: Routine(r.name, r.arguments,
-                           tuple((s, float_literals(e)) for s, e in r.assignments),
-                           tuple(float_literals(e) for e in r.outputs), r.doc)
+                           tuple((s, float_literals(e, memo)) for s, e in r.assignments),
+                           tuple(float_literals(e, memo) for e in r.outputs), r.doc)
                 for k, r in routines.items()}
     if cse:
         routines = {k: optimize(r) for k, r in routines.items()}

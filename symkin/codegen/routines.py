@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cached_property
 
 import sympy as sp
 
@@ -32,7 +33,7 @@ class Routine:
     outputs: tuple[sp.Expr, ...]
     doc: str = ""
 
-    @property
+    @cached_property
     def ops(self) -> int:
         """Operation count (sympy count_ops) of the assignments and outputs."""
         return int(sum(sp.count_ops(e) for _, e in self.assignments)
