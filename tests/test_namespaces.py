@@ -85,6 +85,8 @@ def renamed(text: str, names: list[str], seed: int) -> str:
     assert re.search(r"^l = 1e-3\b", text, re.M) and 'length = "l"' in text
     text = re.sub(r"^l = 1e-3\b.*$", lambda m: "\n".join(lines), text, count=1, flags=re.M)
     text = text.replace('length = "l"', f'length = "{mean}"')
+    # the plates' thickness (the stiffness data, when the file has it) follows their length
+    text = text.replace('thickness = "l/10"', f'thickness = "({mean})/10"')
     # every plate angle and the first hinge's x coordinate scaled by a ratio that is 1
     text = re.sub(r'plate_angle = "([^"]*)"', lambda m: f'plate_angle = "({m.group(1)})*{ratio}"',
                   text)
