@@ -8,6 +8,8 @@
   link of the cell below — so each cell adds one loop, two links, three hinges and one dyad, and
   the mobility stays 1. The single input is the first ground hinge; one point sits on the top
   rung.
+- ``fan(k)``: k copies of the paper's four-bar (examples/four_bar.toml) side by side on one
+  frame, k inputs, k independent loops, a point C1 ... Ck on each coupler.
 
 All plates are ``circular_arc`` of length l = 1e-3; links are about 0.05 m long. Coordinates are
 written with at most 4 decimals, so the exact rationals symkin reads stay small.
@@ -110,12 +112,36 @@ def ladder(k: int) -> str:
     return text
 
 
+def fan(k: int) -> str:
+    """k four-bars on one frame (k loops, 3k+1 links, 4k hinges, k inputs), 0.12 m apart.
+
+    Cell j is the paper's crank-rocker (examples/four_bar.toml) shifted by 0.12 (j - 1) in x:
+    crank a{j} (input at its ground hinge A0_{j}), coupler c{j} with the point C{j}, rocker
+    r{j}.
+    """
+    if k < 1:
+        raise ValueError("k >= 1")
+    names = ["ground"]
+    for j in range(1, k + 1):
+        names += [f"a{j}", f"c{j}", f"r{j}"]
+    text = _header(f"fan_{k}") + _links(names)
+    for j in range(1, k + 1):
+        x = 0.12 * (j - 1)
+        text += _hinge(f"A0_{j}", "ground", f"a{j}", x, 0.0, "pi/2", input=True)
+        text += _hinge(f"A_{j}", f"a{j}", f"c{j}", x + 0.015, 0.026, "pi/3")
+        text += _hinge(f"B0_{j}", "ground", f"r{j}", x + 0.1, 0.0, "pi/2")
+        text += _hinge(f"B_{j}", f"c{j}", f"r{j}", x + 0.085, 0.068, "0")
+    for j in range(1, k + 1):
+        text += _point(f"C{j}", f"c{j}", 0.12 * (j - 1) + 0.06, 0.09)
+    return text
+
+
 SERIAL_SIZES = (2, 4, 8, 16, 32, 64)
 LADDER_SIZES = (1, 2, 4, 8, 16, 32)
 
 
 def family(kind: str, size: int) -> str:
-    return {"serial": serial_chain, "ladder": ladder}[kind](size)
+    return {"serial": serial_chain, "ladder": ladder, "fan": fan}[kind](size)
 
 
 def check(sizes_serial=SERIAL_SIZES, sizes_ladder=LADDER_SIZES, angle: float = 0.05) -> None:

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import mpmath
 import numpy as np
 import sympy as sp
+from sympy.printing.pycode import MpmathPrinter
 
 from . import expressions, levels, special
 from .analysis import Analysis
@@ -336,9 +337,24 @@ class _Mpmath:
     def _fn(self, key: str, exprs, args) -> object:
         """Lambdified (mpmath) function, cached per key."""
         if key not in self._lambdas:
-            # dummify: a parameter may share its name with an internal symbol (a class apart)
-            self._lambdas[key] = sp.lambdify(args, exprs, dummify=True,
-                                             modules=[special.mpmath_namespace(), "mpmath"])
+            # A parameter may share its name with an internal symbol (a class apart), so the
+            # arguments are renamed _a0, _a1, ... in one pass first. (lambdify's own dummify
+            # re-walks the whole expression per subexpression: minutes on a ladder of 20 loops.)
+            names = {s: sp.Symbol(f"_a{k}") for k, s in enumerate(args)}
+
+            def renamed(e):
+                if isinstance(e, (list, tuple)):
+                    return [renamed(x) for x in e]
+                return sp.sympify(e).xreplace(names)
+
+            namespace = special.mpmath_namespace()
+            # lambdify's own MpmathPrinter settings, plus order="none": sorting the terms of
+            # every sum for printing is most of the cost on large mechanisms.
+            printer = MpmathPrinter({"fully_qualified_modules": False, "inline": True,
+                                     "allow_unknown_functions": True, "order": "none",
+                                     "user_functions": {k: k for k in namespace}})
+            self._lambdas[key] = sp.lambdify(list(names.values()), renamed(exprs),
+                                             modules=[namespace, "mpmath"], printer=printer)
         return self._lambdas[key]
 
     def evaluate(self, inputs: Mapping[str, object], level: str,
