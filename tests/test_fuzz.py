@@ -6,15 +6,21 @@
 from __future__ import annotations
 
 import collections
+import json
 import os
 import random
 import re
 
 import pytest
 
-from conftest import EXAMPLES
+import sys
+
+from conftest import EXAMPLES, ROOT
 from symkin import load
 from symkin.cli import main
+
+sys.path.insert(0, str(ROOT / "benchmarks"))
+import families  # noqa: E402
 
 MUTANTS = int(os.environ.get("SYMKIN_FUZZ", "200"))
 EVALUATED = 12                       # valid mutants also evaluated, every backend
@@ -60,6 +66,27 @@ def mutate(text: str, rng: random.Random) -> str:
     return "\n".join(lines) + "\n"
 
 
+COORDINATE = re.compile(r"-?\d+\.\d+(e-?\d+)?|-?\d+(?=[,\]])")
+
+
+def cad_digits(text: str, rng: random.Random) -> str:
+    """Every coordinate of `at = [x, y]` as CAD exports it: moved by up to 1e-7 of its size and
+    written with 15-17 significant digits (the geometry that once broke generated code)."""
+    def one(m: re.Match) -> str:
+        x = float(m.group(0))
+        x += (abs(x) or 1e-3) * rng.uniform(-1e-7, 1e-7)
+        return f"{x:.{rng.randint(15, 17)}g}"
+
+    return re.sub(r"^at = \[([^\]]*)\]",
+                  lambda m: "at = [" + COORDINATE.sub(one, m.group(1)) + "]", text, flags=re.M)
+
+
+def sources() -> list[str]:
+    """The examples and small members of the scale families (benchmarks/families.py)."""
+    return ([p.read_text() for p in sorted(EXAMPLES.glob("*.toml"))]
+            + [families.ladder(3), families.fan(2)])
+
+
 def run(capsys, args) -> tuple[int, str]:
     try:
         code = main(args)
@@ -71,13 +98,13 @@ def run(capsys, args) -> tuple[int, str]:
 
 def test_fuzzed_mechanisms_never_crash(tmp_path, capsys):
     rng = random.Random(11)
-    sources = [p.read_text() for p in sorted(EXAMPLES.glob("*.toml"))]
+    texts = sources()
     counts: collections.Counter = collections.Counter()
     bugs = []
     valid = []
     for k in range(MUTANTS):
         path = tmp_path / f"m{k}.toml"
-        path.write_text(mutate(rng.choice(sources), rng))
+        path.write_text(mutate(rng.choice(texts), rng))
         code, err = run(capsys, ["check", str(path)])
         counts[f"check exit {code}"] += 1
         if code == 2 and "fix:" not in err:
@@ -101,6 +128,34 @@ def test_fuzzed_mechanisms_never_crash(tmp_path, capsys):
     assert sum(v for k, v in counts.items() if k.startswith("check")) == MUTANTS
     assert counts["check exit 0"] and counts["check exit 2"], counts
     assert not bugs, f"{len(bugs)} mutants exit 1 or lack a fix line, e.g.\n{bugs[0][1]}\n---\n{bugs[0][0]}"
+
+
+def test_cad_digit_geometry_evaluates_in_every_backend(tmp_path, capsys):
+    """Valid mutants with many-digit coordinates (one per source family) evaluate with exit 0
+    in every backend, and the backends agree."""
+    rng = random.Random(7)
+    texts = sources()
+    for k, text in enumerate([texts[0], texts[-2], texts[-1]]):
+        path = tmp_path / f"cad{k}.toml"
+        path.write_text(cad_digits(text, rng))
+        assert re.search(r"\d\.\d{14}", path.read_text())
+        assert run(capsys, ["check", str(path)])[0] == 0
+        norms = []
+        for backend in ("sympy", "numpy", "c"):
+            args = ["eval", str(path), "--backend", backend, "--json"]
+            for name in load(path).inputs:
+                args += ["--input", f"{name}=0.1"]
+            try:
+                code = main(args)
+            except SystemExit as exc:
+                code = exc.code
+            out, err = capsys.readouterr()
+            assert code == 0, (backend, err)
+            norms.append(json.loads(out)["points"])
+        for got in norms[1:]:
+            for name, point in got.items():
+                want = norms[0][name]["norm"]
+                assert abs(point["norm"] - want) <= 1e-9 * abs(want), name
 
 
 @pytest.fixture(autouse=True)
