@@ -402,6 +402,24 @@ def test_several_inputs_are_swept_one_at_a_time(tmp_path):
     assert max(overfull(log), default=0.0) <= MAX_OVERFULL_PT
 
 
+def test_each_input_figure_shows_the_points_it_moves(tmp_path):
+    """A fan of three four-bars (benchmarks/families.py): crank A0_j drives only coupler j, so
+    the figure of input A0_j holds point Cj alone, and the text says points were left out."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    import families
+
+    path = tmp_path / "fan_3.toml"
+    path.write_text(families.fan(3))
+    tex = _derive_tex(tmp_path, path)
+    captions = re.findall(r"\\caption\{Deviation \$\|\\Delta\\mathbf\{R\}\|\$ of (.*?) over "
+                          r"the range of the input (\S+) \(",
+                          tex.replace(r"\penalty0{}", "").replace(r"\_", "_"))
+    assert captions == [("point C1", "A0_1"), ("point C2", "A0_2"), ("point C3", "A0_3")]
+    assert "A figure shows only the points its input moves" in tex
+    log = compile_tex(tmp_path / "out", "fan_3.tex")
+    assert max(overfull(log), default=0.0) <= MAX_OVERFULL_PT
+
+
 def test_tolerance_choice_is_in_the_rendered_report(tmp_path):
     tex = _derive_tex(tmp_path, EXAMPLES / "four_bar.toml", "--tolerance", "0.05")
     body = "\n".join(line for line in tex.splitlines() if not line.startswith("%"))

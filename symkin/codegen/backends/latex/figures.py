@@ -469,6 +469,19 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return out
 
 
+def moves(sweep: Sweep, point: str, rel: float = 1e-9) -> bool:
+    """Whether the point's deviation changes over the sweep at some level (beyond `rel` of its
+    size: a point on a loop the swept input does not drive stays put up to rounding)."""
+    for dev in sweep.deviation[point].values():
+        dev = np.asarray(dev, dtype=float)
+        if not np.isfinite(dev).any():
+            continue
+        size = np.nanmax(np.abs(dev))
+        if np.nanmax(np.nanmax(dev, axis=-1) - np.nanmin(dev, axis=-1)) > rel * size:
+            return True
+    return False
+
+
 def differs(sweep: Sweep, points: Sequence[str], levels: Sequence[Level]) -> bool:
     """Whether some level differs from the exact one for some point (then it is plotted)."""
     names = [lv.name for lv in levels]

@@ -31,7 +31,7 @@ from .... import templating
 from .... import vectors as V
 from ...plan import Plan
 from ..common import header_lines
-from .figures import (FIG_WIDTH, PoseData, Sweep, deviation_figure, differs,
+from .figures import (FIG_WIDTH, PoseData, Sweep, deviation_figure, differs, moves,
                              graph_figure, plate_scale, pose_figure, pose_size, tree_layout)
 from .text import (LINE_WIDTH_EM, Tex, align_lines, escape_latex, math_name, pack,
                          plain_name, width)
@@ -806,11 +806,16 @@ def emit(plan: Plan, source: str, appendix: bool = False,
         runs, summary = sweep(report, evaluator, sweep_spans(report.mech.inputs, spans))
         single = len(runs) == 1
         points = list(plan.points)
+        pruned = False
         for h, data, xlim in runs:
             xlabel = f"input θ of {plain_name(h)} (rad)"
+            shown = points
             if not single:
                 xlabel += ", the other inputs held"
-            for chunk in _chunks(points, 3):
+                # only the points this input moves (a fan of four-bars: one point per input)
+                shown = [p for p in points if moves(data, p)] or points
+                pruned = pruned or len(shown) < len(points)
+            for chunk in _chunks(shown, 3):
                 k = len(ctx["deviation_figures"])
                 fname = f"{name}-deviation.pdf" if k == 0 else f"{name}-deviation-{k + 1}.pdf"
                 files[fname] = deviation_figure(data, chunk, plan.levels, plain_name, xlim,
@@ -820,6 +825,7 @@ def emit(plan: Plan, source: str, appendix: bool = False,
                     "input": None if single else escape_latex(h),
                     "compare": differs(data, chunk, plan.levels)})
         summary["single_input"] = single
+        summary["pruned"] = pruned
         ctx["sweep"] = summary
         ctx["sensitivity"] = sensitivity_table(report, evaluator, runs)
     body = environment().get_template("latex/body.tex.j2").render(**ctx)
