@@ -103,8 +103,22 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
             numpy_text = numpy_text or numpy_backend.emit(p, source)
             evaluator = runtime.import_numpy_module(numpy_text, mech.name)
         files.update(report.emit(with_derivation(p, analysis), source, appendix, evaluator,
-                                 column_width or report.COLUMN_WIDTH, spans))
+                                 column_width or report.COLUMN_WIDTH, spans,
+                                 physics_reference(analysis) if p.loaded is not None else None))
     return files
+
+
+def physics_reference(analysis: Analysis) -> Callable[[Mapping[str, float]], dict]:
+    """The report's physical reference: the `equilibrium` level's point deviations at given
+    inputs (the file's own plates and loads, whatever variant the report derives)."""
+    from .evaluation import equilibrium
+
+    reference = Analysis(analysis.structure, [p.name for p in analysis.points])
+
+    def deviations(inputs: Mapping[str, float]) -> dict:
+        result = equilibrium(reference, {k: repr(v) for k, v in inputs.items()})
+        return {name: pt.deviation for name, pt in result.points.items()}
+    return deviations
 
 
 def derive(path: str | Path, out_dir: str | Path = ".", emit: Sequence[str] = EMITTERS,

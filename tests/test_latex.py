@@ -75,16 +75,19 @@ def reports() -> dict[str, tuple[dict[str, bytes], dict[str, bytes]]]:
     from symkin.codegen.backends.numpy import backend as numpy_backend
     from symkin.codegen.plan import plan
     from symkin.codegen.runtime import import_numpy_module
+    from symkin.derive import physics_reference
     from symkin.structure import build
 
     out = {}
     for name in EXAMPLE_NAMES:
         mech = symkin.load(EXAMPLES / f"{name}.toml")
-        p = plan(Analysis(build(mech)), report=True)
+        an = Analysis(build(mech))
+        p = plan(an, report=True)
         source = Path(mech.path).name
         module = import_numpy_module(numpy_backend.emit(p, source), mech.name)
-        out[name] = (report.emit(p, source, evaluator=module),
-                     report.emit(p, source, appendix=True, evaluator=module))
+        physics = physics_reference(an) if p.loaded is not None else None
+        out[name] = (report.emit(p, source, evaluator=module, physics=physics),
+                     report.emit(p, source, appendix=True, evaluator=module, physics=physics))
     return out
 
 

@@ -5,7 +5,8 @@ The LaTeX report prints these pieces and derives nothing itself: the structure m
 plate data and Δz of every hinge, J, J* and the positions (4.7), the hinge models' formulas, the
 loop equations (5.1)/(5.3) with the signed hinges of each loop, the dyads, the first-order system
 A δ = −Φ Δz, and for every point its path, whether the loops move it, its rigid position, its
-paper-level deviation (4.8) and the link turns the other levels add.
+paper-level deviation (4.8) and the link turns the other levels add; with the `loaded` level,
+the plates' stiffness, the statics of the pin linkage and the hinge forces (docs/physics.md).
 """
 
 from __future__ import annotations
@@ -20,6 +21,10 @@ from ..analysis import Analysis
 from ..hinge_models import PLATE_LENGTH, PRBM_PRESETS, THETA
 from ..kinematics import HingeGeometry, paper_matrices, paper_positions
 from ..loop_equations import LoopEquations, loop_equations
+from ..mechanism import Load
+from ..physics.beamcolumn import BeamColumn
+from ..physics.statics import LoadedDerivation
+from ..physics.stiffness import PlateStiffness
 from ..rigid import RigidSolution
 from ..structure import Structure
 from ..vectors import Vec
@@ -65,6 +70,21 @@ class ModelStatement:
 
 
 @dataclass(frozen=True, eq=False)
+class LoadedStatement:
+    """The `loaded` level (docs/physics.md): plate stiffness, the pin linkage's statics
+    A^T mu = Q and the hinge forces in the multipliers mu, as the report states them."""
+
+    beam_column: bool                # two statics passes (beam-column springs) or one
+    plates: tuple[tuple[int, PlateStiffness], ...]   # (hinge label, its plate's EI, EA, l)
+    loads: tuple[Load, ...]
+    springs: dict[int, sp.Symbol]    # k_a = EI_a/l_a of every plate, as symbols
+    forces: tuple[tuple[int, sp.Expr], ...]   # (a, Q_a) over the non-input hinges, springs k_a
+    multipliers: tuple[sp.Symbol, ...]        # mu, three per loop (angular, x, y)
+    hinge_forces: tuple[tuple[int, Vec, sp.Expr], ...]  # (a, n_a in mu, mid-direction angle)
+    series: BeamColumn
+
+
+@dataclass(frozen=True, eq=False)
 class Derivation:
     """The symbolic derivation of one mechanism, for the points and levels of a plan."""
 
@@ -87,11 +107,13 @@ class Derivation:
     rigid: RigidSolution
     linear: tuple[sp.Matrix, sp.Matrix] | None   # (A, r) when some point is moved by the loops
     points: tuple[PointStatement, ...]
+    loaded: LoadedStatement | None = None
 
 
-def derivation(analysis: Analysis, points: Sequence[str],
-               moved: frozenset[str]) -> Derivation:
-    """The statement of `analysis` for the named points (`moved`: those the loops move)."""
+def derivation(analysis: Analysis, points: Sequence[str], moved: frozenset[str],
+               loaded: LoadedDerivation | None = None) -> Derivation:
+    """The statement of `analysis` for the named points (`moved`: those the loops move), with
+    the `loaded` level's statics when `loaded` is given."""
     an, kin, s = analysis, analysis.kin, analysis.structure
     J, Jstar = paper_matrices(s)
     return Derivation(
@@ -102,7 +124,24 @@ def derivation(analysis: Analysis, points: Sequence[str],
         delta_phi=tuple(an.delta_phi(i) for i in range(s.n + 1)), J=J, Jstar=Jstar, R=paper_positions(s),
         models=_models(an), loops=_loops(an), rigid=an.rigid,
         linear=an.linear_system if an.deltas and moved else None,
-        points=tuple(_point(an, name, name in moved) for name in points))
+        points=tuple(_point(an, name, name in moved) for name in points),
+        loaded=None if loaded is None else _loaded(loaded))
+
+
+def _loaded(der: LoadedDerivation) -> LoadedStatement:
+    kin = der.kin
+    springs = {a: sp.Symbol(f"k_{a}", positive=True) for a, h in kin.hinges.items()
+               if h.name in der.stiffness}
+    forces = der.generalized_forces(springs)
+    loads = der.plate_loads
+    return LoadedStatement(
+        beam_column=der.beam_column,
+        plates=tuple((a, der.stiffness[kin.hinges[a].name]) for a in sorted(springs)),
+        loads=tuple(der.mechanism.loads), springs=springs,
+        forces=tuple(zip(kin.unknowns, forces)), multipliers=der.mu,
+        hinge_forces=tuple((a, loads[a].force, kin.phi(h.P) + h.angle + kin.theta[a] / 2)
+                           for a, h in sorted(kin.hinges.items())),
+        series=der.series)
 
 
 def _point(an: Analysis, name: str, moved: bool) -> PointStatement:

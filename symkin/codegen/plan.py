@@ -101,6 +101,7 @@ class LoadedPlan:
 
     passes: int
     compliance: int
+    beam_column: bool = True           # the beam-column series (False: first order only)
 
 
 def plan(analysis: Analysis, points: Sequence[str] | None = None,
@@ -273,13 +274,16 @@ def _loaded_routines(der: LoadedDerivation, routines: dict[str, Routine], theta:
         routines["loaded_newton"] = Routine(
             "loaded_newton", (theta, delta, constants), (), closure,
             "loaded: the loaded closure F(delta) and dF/ddelta")
-    return LoadedPlan(2 if der.mu0 else 1, len(compliance)), constants
+    return LoadedPlan(2 if der.mu0 else 1, len(compliance), der.beam_column), constants
 
 
 def with_derivation(plan: Plan, analysis: Analysis) -> Plan:
-    """`plan` with the statement of its derivation, for a report (the plan's points)."""
-    return dataclasses.replace(
-        plan, derivation=derivation(analysis, plan.points, moved_points(analysis, plan.points)))
+    """`plan` with the statement of its derivation, for a report (the plan's points; the
+    `loaded` level's statics when the plan holds it)."""
+    loaded = None if plan.loaded is None else \
+        loaded_derivation(analysis, beam_column=plan.loaded.beam_column)
+    return dataclasses.replace(plan, derivation=derivation(
+        analysis, plan.points, moved_points(analysis, plan.points), loaded))
 
 
 def moved_points(analysis: Analysis, points: Sequence[str]) -> frozenset[str]:

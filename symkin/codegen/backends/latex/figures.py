@@ -443,11 +443,19 @@ class Sweep:
     ok: np.ndarray
     magnitude: dict[str, dict[str, np.ndarray]]      # point -> level -> |ΔR|
     deviation: dict[str, dict[str, np.ndarray]]      # point -> level -> (2, N)
+    #: the physical reference at a few samples: (their indices in t, point -> (2, K) deviation),
+    #: NaN where it could not be solved; None without stiffness data
+    reference: tuple[np.ndarray, dict[str, np.ndarray]] | None = None
 
 
 #: Colour and dash of each level's curve, by level code (fixed, so figures are deterministic).
 LEVEL_STYLES = (("#c62828", "--"), ("#1f5fa8", "-."), ("black", "-"), ("#2e7d32", ":"),
                 ("#8e24aa", (0, (5, 1, 1, 1))))
+
+
+#: The physical reference's points: open circles in the colour of the level `equilibrium`.
+REFERENCE_MARKER = {"marker": "o", "markersize": 3.5, "markerfacecolor": "none",
+                    "markeredgecolor": LEVEL_STYLES[4][0], "markeredgewidth": 0.8}
 
 
 def _style(level) -> dict:
@@ -493,18 +501,25 @@ def differs(sweep: Sweep, points: Sequence[str], levels: Sequence[Level]) -> boo
 def deviation_figure(sweep: Sweep, points: Sequence[str], levels: Sequence[Level], plain,
                      xlim: tuple[float, float], xlabel: str, length: str = "m") -> bytes:
     """PDF with one row per point: |ΔR| at every level, and |ΔR_level - ΔR_exact| when some
-    level differs from the exact one."""
+    level differs from the exact one; the physical reference's points (`equilibrium`) as
+    markers on both, where the sweep has them."""
+    from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
     compare = differs(sweep, points, levels)
     rows = len(points)
     ncols = 2 if compare else 1
-    height = 0.55 + 1.75 * rows
+    # the legend: a row of up to four entries, else two rows
+    entries = len(levels) + (sweep.reference is not None) + (not sweep.ok.all())
+    legend_cols = entries if entries <= 4 else math.ceil(entries / 2)
+    legend = 0.0 if entries <= 4 else 0.16
+    height = 0.55 + legend + 1.75 * rows
     t = sweep.t
     step = float(t[1] - t[0]) if len(t) > 1 else 0.0
     with rc_context():
         fig = _figure(FIG_WIDTH, height)
-        grid = fig.add_gridspec(rows, ncols, left=0.1, right=0.98, bottom=0.5 / height + 0.06,
+        grid = fig.add_gridspec(rows, ncols, left=0.1, right=0.98,
+                                bottom=(0.5 + legend) / height + 0.06,
                                 top=1 - 0.28 / height, wspace=0.3, hspace=0.55)
         handles = []
         for r, name in enumerate(points):
@@ -526,6 +541,10 @@ def deviation_figure(sweep: Sweep, points: Sequence[str], levels: Sequence[Level
                                      ls=st["ls"], label=st["label"])
                 if r == 0:
                     handles.append(line)
+            if sweep.reference is not None:
+                at, ref = sweep.reference[0], sweep.reference[1][name]
+                ref_t = t[at]
+                axes[0].plot(ref_t, np.hypot(*ref) / unit, ls="none", **REFERENCE_MARKER)
             axes[0].set_ylabel(r"$|\Delta R|$" + (f" ({length})" if power == 0 else
                                                  rf" ($10^{{{power}}}$ {length})"))
             axes[0].set_ylim(bottom=0)
@@ -540,6 +559,11 @@ def deviation_figure(sweep: Sweep, points: Sequence[str], levels: Sequence[Level
                     diff = np.where(diff > 0, diff, np.nan)
                     st = _style(level)
                     axes[1].semilogy(t, diff, color=st["color"], ls=st["ls"])
+                if sweep.reference is not None:
+                    # the physics' own distance from the kinematic exact level, at its points
+                    gap = np.hypot(*(ref - exact[:, at]))
+                    axes[1].semilogy(ref_t, np.where(gap > 0, gap, np.nan), ls="none",
+                                     **REFERENCE_MARKER)
                 axes[1].set_ylabel(r"$|\Delta R - \Delta R_{\mathrm{exact}}|$" + f" ({length})")
                 # nine decades below the largest difference: the dip at t = 0 goes to zero
                 finite = [float(np.nanmax(line.get_ydata())) for line in axes[1].get_lines()
@@ -550,9 +574,12 @@ def deviation_figure(sweep: Sweep, points: Sequence[str], levels: Sequence[Level
             if r == rows - 1:
                 for ax in axes:
                     ax.set_xlabel(xlabel)
+        if sweep.reference is not None:
+            handles.append(Line2D([], [], ls="none", label="equilibrium (elastica)",
+                                  **REFERENCE_MARKER))
         if not sweep.ok.all():
             handles.append(Patch(facecolor="0.85", edgecolor="0.6", hatch="xx",
                                  label="cannot be assembled"))
-        fig.legend(handles=handles, loc="lower center", ncol=len(handles), frameon=False,
+        fig.legend(handles=handles, loc="lower center", ncol=legend_cols, frameon=False,
                    bbox_to_anchor=(0.5, 0.0))
         return _render(fig)

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from functools import cache
 from types import ModuleType
 
@@ -29,6 +29,8 @@ import sympy as sp
 
 from .... import templating
 from .... import vectors as V
+from ....errors import SymkinError
+from ....physics.stiffness import modulus
 from ...plan import Plan
 from ..common import header_lines
 from .figures import (FIG_WIDTH, PoseData, Sweep, deviation_figure, differs, moves,
@@ -41,6 +43,10 @@ __all__ = ["emit", "escape_latex", "environment", "SWEEP_RANGE", "SWEEP_SAMPLES"
 #: Default input range of the deviation plot: every input equal to t, |t| <= SWEEP_RANGE (rad).
 SWEEP_RANGE = 0.3
 SWEEP_SAMPLES = 241
+#: Inputs of each swept range at which the physical reference (`equilibrium`) is solved.
+REFERENCE_SAMPLES = 9
+#: The physical reference of a report: input name -> value  to  point name -> (Δx, Δy).
+Physics = Callable[[Mapping[str, float]], Mapping[str, tuple[float, float]]]
 #: Matrices wider than this many columns are printed in column blocks (at the full width).
 MAX_MATRIX_COLS = 14
 #: The column the report is laid out for, in points: an article's one-column text width at
@@ -170,7 +176,7 @@ class Report:
                       and not p.name.endswith("_") and p.name.replace("_", "").isalnum())
             if not simple or default in reserved or default.split("_")[0] in (
                     r"\theta", r"\delta", "r", r"\beta", "a", "X", "Y", "D", r"\varphi",
-                    r"\lambda", r"\rho", r"\eta", r"\mu"):
+                    r"\lambda", r"\rho", r"\eta", r"\mu", "k", r"\Lambda", r"\chi", "Q"):
                 names[p.symbol] = r"\text{\itshape " + escape_latex(p.name) + "}"
         return names
 
@@ -222,6 +228,7 @@ class Report:
         ctx["first_order_lines"] = [ln for p in ctx["points"] for ln in p["first_order"]]
         ctx["exact_lines"] = [ln for p in ctx["points"] for ln in p["exact"]]
         ctx["matrix_cols"] = max(10, s.m, s.n + 1)
+        ctx["loaded"] = self.loaded_statics()
         return ctx
 
     def parameters(self) -> list[dict]:
@@ -587,6 +594,63 @@ class Report:
             out.append(entry)
         return out
 
+    # -- the loaded level ------------------------------------------------------------------------
+    def loaded_statics(self) -> dict | None:
+        """The `loaded` level's statement (docs/physics.md): the plates' stiffness, the loads, the
+        generalized forces of A^T Λ = Q, the hinge forces in Λ, the beam-column series."""
+        ld = self.d.loaded
+        if ld is None:
+            return None
+        mech, tex = self.mech, self.tex
+        unit = TEX_UNITS[mech.units]
+        hinges = {h.name: h for h in mech.hinges}
+        names = {m: rf"\Lambda_{{{k}}}" for k, m in enumerate(ld.multipliers, start=1)}
+        ltex = tex.with_names(names)
+        plates = []
+        for a, stiff in ld.plates:
+            h = hinges[stiff.hinge]
+            plates.append({
+                "a": a, "name": self.hinge_name(a), "length": sci(_num(stiff.length, self.defaults)),
+                "thickness": sci(_num(h.thickness, self.defaults)),
+                "width": sci(_num(h.width, self.defaults)),
+                "modulus": sci(_num(modulus(h), self.defaults)),
+                "EI": sci(_num(stiff.EI, self.defaults)),
+                "k": sci(_num(stiff.EI / stiff.length, self.defaults))})
+        loads = [{"index": load.index + 1,
+                  "point": escape_latex(load.point) if load.point else "--", "link": self.link_name(self.s.links.index(
+                      load.link)), "at": tex.row_vector(load.at),
+                  "force": tex.row_vector(load.force), "moment": tex.inline(load.moment)}
+                 for load in ld.loads]
+        forces = []
+        for a, q in ld.forces:
+            forces += tex.equation(rf"Q^{{0}}_{{{a}}}" if ld.beam_column else rf"Q_{{{a}}}", q)
+        hinge_forces = []
+        for a, n, chi in ld.hinge_forces:
+            hinge_forces.append(rf"\mathbf{{n}}_{{{a}}} &= {ltex.table_vector(n)}, & "
+                                rf"\chi_{{{a}}} &= {tex(chi)}")
+        series = []
+        for lhs, key in (("s(p)", "shear"), ("r(p)", "rotation"), ("b(p)", "bending"),
+                         ("w(p)", "bowing")):
+            series.append(f"{lhs} &= {_power_series(getattr(ld.series, key), 'p')}")
+        return {"beam_column": ld.beam_column, "plates": plates, "loads": loads,
+                "forces": forces, "hinge_forces": hinge_forces, "series": series,
+                "loops": len(ld.multipliers) // 3, "unit": unit}
+
+
+def _power_series(coefficients: Sequence[sp.Rational], x: str) -> str:
+    r"""Σ c_k x^k in ascending powers with exact fractions, ``+ O(x^n)``: the beam-column's
+    coefficients are rationals, shown as derived."""
+    out = ""
+    for k, c in enumerate(coefficients):
+        if c == 0:
+            continue
+        sign = "-" if c < 0 else ("+" if out else "")
+        mag = abs(c)
+        power = "" if k == 0 else (x if k == 1 else f"{x}^{{{k}}}")
+        body = sp.latex(mag) if k == 0 or mag != 1 else ""
+        out += f" {sign} {body}{power}" if out else f"{sign}{body}{power}"
+    return f"{out} + O({x}^{{{len(coefficients)}}})"
+
 
 def _elastica_lines(tex: Tex, t: sp.Symbol) -> list[str]:
     """The tip-force elastica's functions of the tip angle `t` in Carlson form (as
@@ -652,14 +716,36 @@ def sweep_spans(inputs: Sequence[str], given: Mapping[str, tuple[float, float]] 
     return spans
 
 
-def sweep(report: Report, numpy_module, spans: Mapping[str, tuple[float, float]]
+def reference_points(report: Report, t: np.ndarray, ok: np.ndarray,
+                     inputs: Mapping[str, np.ndarray], physics: Physics
+                     ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """The physical reference (`physics`: inputs -> point deviations, the `equilibrium` level) at
+    REFERENCE_SAMPLES evenly spaced samples of a sweep; NaN where it cannot be solved."""
+    at = np.unique(np.round(np.linspace(0, len(t) - 1, REFERENCE_SAMPLES)).astype(int))
+    out = {p: np.full((2, len(at)), np.nan) for p in report.plan.points}
+    for k, i in enumerate(at):
+        if not ok[i]:
+            continue
+        try:
+            values = physics({n: float(v[i]) for n, v in inputs.items()})
+        except SymkinError:             # beyond the assembly range, a plate buckling
+            continue
+        for p in report.plan.points:
+            out[p][:, k] = values[p]
+    return at, out
+
+
+def sweep(report: Report, numpy_module, spans: Mapping[str, tuple[float, float]],
+          physics: Physics | None = None
           ) -> tuple[list[tuple[str, Sweep, tuple[float, float]]], dict]:
     """|ΔR| of the points at every level with each input in turn over its span (the others held
-    at the middle of theirs), evaluated with the generated numpy module.
+    at the middle of theirs), evaluated with the generated numpy module, and with `physics` the
+    physical reference at a few of the inputs.
 
     Returns per input its sweep and the plot's clipped x range, and the report's summary (the
-    largest deviation per point and level over all sweeps, where it occurs, and the largest
-    distance of each level from the exact one relative to the largest exact deviation)."""
+    largest deviation per point and level over all sweeps, where it occurs, the largest
+    distance of each level from the exact one relative to the largest exact deviation and, with
+    `physics`, from the reference relative to the reference's largest deviation)."""
     names = [lv.name for lv in report.plan.levels]
     held = {h: 0.5 * (lo + hi) for h, (lo, hi) in spans.items()}
     single = len(spans) == 1
@@ -688,7 +774,9 @@ def sweep(report: Report, numpy_module, spans: Mapping[str, tuple[float, float]]
             idx = np.flatnonzero(ok)
             a = lo if idx[0] == 0 else max(lo, t[idx[0]] - margin)
             b = hi if idx[-1] == len(t) - 1 else min(hi, t[idx[-1]] + margin)
-        runs.append((h, Sweep(t, ok, magnitude, deviation), (a, b)))
+        reference = None if physics is None else \
+            reference_points(report, t, ok, inputs, physics)
+        runs.append((h, Sweep(t, ok, magnitude, deviation, reference), (a, b)))
         summary["samples"] += len(t)
         summary["failed"] += int((~ok).sum())
         summary["spans"].append({"input": escape_latex(h), "lo": f"{lo:g}", "hi": f"{hi:g}",
@@ -711,10 +799,32 @@ def sweep(report: Report, numpy_module, spans: Mapping[str, tuple[float, float]]
                     diff = np.nanmax([diff, np.nanmax(d)])
                     ref = np.nanmax([ref, np.nanmax(np.hypot(*exact))])
             rel = float(diff / ref) if np.isfinite(diff) and ref > 0 else None
-            summary["rows"].append({"point": escape_latex(p), "level": level.title,
-                                    "peak": sci(peak), "at": at or r"\text{--}",
-                                    "rel": sci(rel, 2) if rel is not None else r"\text{--}"})
+            row = {"point": escape_latex(p), "level": level.title, "peak": sci(peak),
+                   "at": at or r"\text{--}",
+                   "rel": sci(rel, 2) if rel is not None else r"\text{--}"}
+            if physics is not None:
+                row["physics"] = _physics_distance(runs, p, lv)
+            summary["rows"].append(row)
+    summary["physics"] = physics is not None
+    if physics is not None:
+        summary["reference_samples"] = sum(int(np.isfinite(data.reference[1][p][0]).sum())
+                                           for _, data, _ in runs for p in report.plan.points[:1])
     return runs, summary
+
+
+def _physics_distance(runs: Sequence[tuple[str, Sweep, tuple[float, float]]], point: str,
+                      level: str) -> str:
+    """max |ΔR_level − ΔR_equilibrium| over the reference's samples of every sweep, relative to
+    the largest |ΔR_equilibrium|, as LaTeX math text."""
+    gap, size = [], []
+    for _, data, _ in runs:
+        at, ref = data.reference[0], data.reference[1][point]
+        gap.append(np.hypot(*(data.deviation[point][level][:, at] - ref)))
+        size.append(np.hypot(*ref))
+    gap_all, size_all = np.concatenate(gap), np.concatenate(size)
+    if not np.isfinite(gap_all).any() or not np.nanmax(size_all) > 0:
+        return r"\text{--}"
+    return sci(float(np.nanmax(gap_all) / np.nanmax(size_all)), 2)
 
 
 def sensitivity_table(report: Report, numpy_module,
@@ -769,11 +879,13 @@ def sensitivity_table(report: Report, numpy_module,
 def emit(plan: Plan, source: str, appendix: bool = False,
          evaluator: ModuleType | None = None,
          column_width: float = COLUMN_WIDTH,
-         spans: Mapping[str, tuple[float, float]] | None = None) -> dict[str, bytes]:
+         spans: Mapping[str, tuple[float, float]] | None = None,
+         physics: Physics | None = None) -> dict[str, bytes]:
     """`<name>.tex` (standalone, or the body alone with `appendix`) and its figure PDFs, laid out
     for a column of `column_width` points; the deviation plots are evaluated with `evaluator`,
     the plan's generated numpy module (needed when the plan has points), over `spans` (input ->
-    (lo, hi) in rad; ±SWEEP_RANGE for inputs not given)."""
+    (lo, hi) in rad; ±SWEEP_RANGE for inputs not given), with the physical reference's points
+    from `physics` (the `equilibrium` level, when the file has stiffness data)."""
     report = Report(plan, source, column_width)
     name = report.mech.name
     ctx = report.context(appendix)
@@ -803,15 +915,15 @@ def emit(plan: Plan, source: str, appendix: bool = False,
     if plan.points and report.mech.inputs:
         if evaluator is None:
             raise ValueError("the deviation plot needs the plan's generated numpy module")
-        runs, summary = sweep(report, evaluator, sweep_spans(report.mech.inputs, spans))
+        runs, summary = sweep(report, evaluator, sweep_spans(report.mech.inputs, spans),
+                              physics)
         single = len(runs) == 1
         points = list(plan.points)
         pruned = False
         for h, data, xlim in runs:
             xlabel = f"input θ of {plain_name(h)} (rad)"
             shown = points
-            if not single:
-                xlabel += ", the other inputs held"
+            if not single:       # (the caption says that the other inputs are held)
                 # only the points this input moves (a fan of four-bars: one point per input)
                 shown = [p for p in points if moves(data, p)] or points
                 pruned = pruned or len(shown) < len(points)
