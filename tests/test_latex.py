@@ -351,7 +351,7 @@ def _derive_tex(tmp_path: Path, file: Path, *options: str) -> str:
 def _peak_rows(tex: str) -> list[list[str]]:
     table = tex[tex.index(":peaks}"):tex.index(r"\bottomrule", tex.index(":peaks}"))]
     return [[c.strip() for c in line.rstrip("\\ ").split("&")]
-            for line in table.splitlines() if line.count("&") == 4 and "level" not in line]
+            for line in table.splitlines() if line.count("&") in (4, 5) and "level" not in line]
 
 
 def _sci(cell: str) -> float:

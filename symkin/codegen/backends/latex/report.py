@@ -624,23 +624,31 @@ class Report:
         forces = []
         for a, q in ld.forces:
             forces += tex.equation(rf"Q^{{0}}_{{{a}}}" if ld.beam_column else rf"Q_{{{a}}}", q)
-        hinge_forces = []
-        for a, n, chi in ld.hinge_forces:
-            hinge_forces.append(rf"\mathbf{{n}}_{{{a}}} &= {ltex.table_vector(n)}, & "
-                                rf"\chi_{{{a}}} &= {tex(chi)}")
+        pairs = [(rf"\mathbf{{n}}_{{{a}}} &= {ltex.table_vector(n)}", a, chi)
+                 for a, n, chi in ld.hinge_forces]
+        # side by side when every pair fits (align* shares its columns between the rows), else
+        # each direction on lines of its own
+        if all(width(f) + width(tex(chi)) + 5 <= self.width for f, _, chi in pairs):
+            hinge_forces = [rf"{f}, & \chi_{{{a}}} &= {tex(chi)}" for f, a, chi in pairs]
+        else:
+            hinge_forces = []
+            for f, a, chi in pairs:
+                hinge_forces += [f + ","] + tex.equation(rf"\chi_{{{a}}}", chi)
         series = []
         for lhs, key in (("s(p)", "shear"), ("r(p)", "rotation"), ("b(p)", "bending"),
                          ("w(p)", "bowing")):
-            series.append(f"{lhs} &= {_power_series(getattr(ld.series, key), 'p')}")
+            budget = self.width - width(lhs) - 2
+            series += align_lines(lhs, "=", pack(_power_series(getattr(ld.series, key), "p"),
+                                                 budget, budget - 1))
         return {"beam_column": ld.beam_column, "plates": plates, "loads": loads,
                 "forces": forces, "hinge_forces": hinge_forces, "series": series,
                 "loops": len(ld.multipliers) // 3, "unit": unit}
 
 
-def _power_series(coefficients: Sequence[sp.Rational], x: str) -> str:
-    r"""Σ c_k x^k in ascending powers with exact fractions, ``+ O(x^n)``: the beam-column's
-    coefficients are rationals, shown as derived."""
-    out = ""
+def _power_series(coefficients: Sequence[sp.Rational], x: str) -> list[str]:
+    r"""The terms of Σ c_k x^k in ascending powers with exact fractions, then ``+ O(x^n)``, for
+    :func:`pack`: the beam-column's coefficients are rationals, shown as derived."""
+    out: list[str] = []
     for k, c in enumerate(coefficients):
         if c == 0:
             continue
@@ -648,8 +656,8 @@ def _power_series(coefficients: Sequence[sp.Rational], x: str) -> str:
         mag = abs(c)
         power = "" if k == 0 else (x if k == 1 else f"{x}^{{{k}}}")
         body = sp.latex(mag) if k == 0 or mag != 1 else ""
-        out += f" {sign} {body}{power}" if out else f"{sign}{body}{power}"
-    return f"{out} + O({x}^{{{len(coefficients)}}})"
+        out.append(f"{sign} {body}{power}".strip())
+    return out + [f"+ O({x}^{{{len(coefficients)}}})"]
 
 
 def _elastica_lines(tex: Tex, t: sp.Symbol) -> list[str]:
