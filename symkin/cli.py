@@ -207,8 +207,8 @@ def parser() -> argparse.ArgumentParser:
                     help="input hinge angle in radians (an expression such as 10*deg is fine)")
     ev.add_argument("--param", action="append", metavar="K=V", help="override a parameter")
     ev.add_argument("--level", choices=levels.NAMES, default=levels.DEFAULT,
-                    help="deviation level (loaded and equilibrium need the plates' E, thickness "
-                    "and width: docs/physics.md)")
+                    help="deviation level (loaded, loaded_refined and equilibrium need the "
+                    "plates' E, thickness and width: docs/physics.md)")
     ev.add_argument("--backend", choices=("sympy", "numpy", "c"), default="sympy")
     ev.add_argument("--sensitivity", action="store_true",
                     help="also the derivatives by every parameter and input")

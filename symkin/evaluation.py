@@ -154,8 +154,8 @@ def evaluate(analysis: Analysis, inputs: Mapping[str, object], level: str = leve
         raise InputError(f"the {level} level has no sensitivities", entry="--sensitivity",
                          hint="ask for them at level exact (docs/sensitivity.md)")
     if backend == "sympy":
-        if level == "loaded":
-            return loaded(analysis, inputs, params, dps)
+        if level in levels.LOADED:
+            return loaded(analysis, inputs, params, dps, refine=level == "loaded_refined")
         if level == "equilibrium":
             return equilibrium(analysis, inputs, params)
         return _mpmath_evaluator(analysis).evaluate(inputs, level, params, dps, sensitivity)
@@ -167,12 +167,12 @@ def evaluate(analysis: Analysis, inputs: Mapping[str, object], level: str = leve
 
 def loaded(analysis: Analysis, inputs: Mapping[str, object],
            params: Mapping[str, object] | None = None, dps: int = 40, beam_column: bool = True,
-           extensible: bool = False) -> Evaluation:
+           extensible: bool = False, refine: bool = False) -> Evaluation:
     """The `loaded` level with mpmath at `dps` digits (docs/physics.md); `beam_column=False`
     keeps the first-order force correction only, `extensible=True` adds the plates' stretch
-    (symkin.physics.statics.LoadedDerivation)."""
-    return _mpmath_evaluator(analysis).loaded(inputs, params, dps, beam_column=beam_column,
-                                              extensible=extensible)
+    (symkin.physics.statics.LoadedDerivation); `refine=True` is the `loaded_refined` level."""
+    return _mpmath_evaluator(analysis).loaded(inputs, params, dps, refine,
+                                              beam_column=beam_column, extensible=extensible)
 
 
 def equilibrium(analysis: Analysis, inputs: Mapping[str, object],
@@ -488,11 +488,12 @@ class _Mpmath:
             [kin.hinges[a].name for a in kin.inputs], per_point(total_d), per_point(total_r))
 
     def loaded(self, inputs: Mapping[str, object], params: Mapping[str, object] | None,
-               dps: int, **options) -> Evaluation:
+               dps: int, refine: bool = False, **options) -> Evaluation:
         """The `loaded` level (docs/physics.md), in the order of its derivation
         (symkin.physics.statics): rigid angles → A^T μ0 = Q0 → A^T μ = Q(μ0) → each plate's
         compliance → the exact level's Newton on the loaded closure → ΔR, the plates' loads and
-        energy."""
+        energy. With `refine` (level `loaded_refined`) the statics is solved again with A the
+        loaded closure's Jacobian at the δ reached, then the compliance and the closure."""
         an = self.an
         der = statics.loaded_derivation(an, **options)
         la, kin = der.analysis, der.kin
@@ -513,16 +514,30 @@ class _Mpmath:
                 n = len(known)
                 return self._fn(prefix + key, exprs, [*la.params[:n], *la.thetas])(*known, *thetas)
 
-            for symbols, system, key in ((der.mu0, der.first_statics, "mu0"),
-                                         (der.mu, der.statics, "mu")):
-                if symbols:
-                    known += self._multipliers(at_rigid(key + ":AT", system[0].tolist()),
-                                               at_rigid(key + ":Q", list(system[1])))
             disp = [e for a in sorted(der.compliance) for e in loads[a].displacement]
-            known += list(at_rigid("compliance", disp)) if disp else []
-            delta = closure._deltas("exact", known, theta)
-            self._check_limits({a: theta[a] + delta.get(a, 0) for a in theta}, ivals)
             args = [*la.params, *la.thetas, *la.deltas]
+
+            def constants(transposed=None) -> list:
+                """The parameters, μ0, μ and the compliance; A^T from the rigid loop Jacobian
+                or, `transposed`, the values given."""
+                del known[len(pvals):]
+                for symbols, system, key in ((der.mu0, der.first_statics, "mu0"),
+                                             (der.mu, der.statics, "mu")):
+                    if symbols:
+                        at = (at_rigid(key + ":AT", system[0].tolist()) if transposed is None
+                              else transposed)
+                        known.extend(self._multipliers(at, at_rigid(key + ":Q",
+                                                                    list(system[1]))))
+                known.extend(list(at_rigid("compliance", disp)) if disp else [])
+                return known
+
+            delta = closure._deltas("exact", constants(), theta)
+            if refine and kin.unknowns:
+                # the loaded closure's Jacobian at the pose reached, transposed
+                jac = self._fn(prefix + "refine", la.jacobian.T.tolist(), args)(
+                    *known, *thetas, *(delta[a] for a in kin.unknowns))
+                delta = closure._deltas("exact", constants(jac), theta)
+            self._check_limits({a: theta[a] + delta.get(a, 0) for a in theta}, ivals)
             full = [*known, *thetas, *(delta[a] for a in kin.unknowns)]
             points = {}
             for p in la.points:
@@ -544,7 +559,7 @@ class _Mpmath:
                                                        float(moment * scale))
             names = {a: h.name for a, h in kin.hinges.items()}
             return Evaluation(
-                level="loaded", backend="sympy",
+                level="loaded_refined" if refine else "loaded", backend="sympy",
                 inputs={names[a]: float(ivals[a]) for a in sorted(ivals)},
                 angles_rigid={names[a]: float(theta[a]) for a in sorted(theta)},
                 angles_compliant={names[a]: float(theta[a] + delta.get(a, 0))
@@ -872,7 +887,7 @@ def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
     if levels.get(level).needs_stiffness:
         # The plates' loads and energy are not in the generated evaluators' output: the
         # derivation gives them, as it gives the dyad states (docs/physics.md).
-        physical = loaded(analysis, inputs, params)
+        physical = loaded(analysis, inputs, params, refine=level == "loaded_refined")
         extra = {"hinges": physical.hinges, "energy": physical.energy}
     return Evaluation(
         level=level, backend=backend, inputs=dict(zip(names, x)),

@@ -33,16 +33,22 @@ class Level:
         return f"{self.title} {self.equation}" if self.equation else self.title
 
 
-#: Every level, in order of fidelity (and of code).
+#: Every level, in order of fidelity. Codes are unique and never change once given: a new level
+#: takes the next free code wherever it sits in fidelity.
 LEVELS: tuple[Level, ...] = (
     Level("paper", 0, "paper", needs_delta=False, equation="(4.8)"),
     Level("first_order", 1, "first order", needs_delta=True),
     Level("exact", 2, "exact", needs_delta=True),
     # The physical levels (docs/physics.md): the plates' stiffness and the file's loads.
     Level("loaded", 3, "loaded", needs_delta=True, needs_stiffness=True, sensitivity=False),
+    Level("loaded_refined", 5, "loaded, refined", needs_delta=True, needs_stiffness=True,
+          sensitivity=False),
     Level("equilibrium", 4, "equilibrium", needs_delta=False, needs_stiffness=True,
           generated=False, sensitivity=False),
 )
+#: The closed-form physical levels: the pin linkage's statics, the plates' compliance and the
+#: loaded closure (symkin.physics.statics); `loaded_refined` solves the statics a second time.
+LOADED: tuple[str, ...] = ("loaded", "loaded_refined")
 
 NAMES: tuple[str, ...] = tuple(lv.name for lv in LEVELS)
 #: The levels the generated C and numpy evaluators can hold (`derive --levels`).

@@ -19,7 +19,10 @@ from symkin.codegen.plan import plan
 
 def test_the_table():
     codes = [lv.code for lv in levels.LEVELS]
-    assert codes == sorted(set(codes))                     # unique, in order of fidelity
+    assert sorted(codes) == list(range(len(codes)))       # unique, none skipped
+    # the contract's codes never change: new levels take the next free one
+    assert [levels.get(n).code for n in ("paper", "first_order", "exact", "loaded",
+                                         "equilibrium")] == [0, 1, 2, 3, 4]
     assert len(set(levels.NAMES)) == len(levels.NAMES)
     assert levels.DEFAULT in levels.NAMES
     assert levels.reference().name == "exact"

@@ -1,4 +1,4 @@
-"""The `loaded` level in the generated numpy and C evaluators (docs/physics.md) against the
+"""The `loaded` and `loaded_refined` levels in the generated numpy and C evaluators (docs/physics.md) against the
 sympy backend's 40-digit evaluation of the same derivation; tests/test_physics_reference.py
 holds that derivation against the independent elastica reference.
 
@@ -49,15 +49,31 @@ CASES = {"four_bar": INPUTS["four_bar"], "six_bar": INPUTS["six_bar"],
          "loaded_arm": {"S": "0.3", "E": "-0.2"}}
 
 
+@pytest.mark.parametrize("level", ["loaded", "loaded_refined"])
 @pytest.mark.parametrize("key", sorted(CASES))
 @pytest.mark.parametrize("backend", ["numpy", "c"])
-def test_loaded_matches_the_sympy_backend(key, backend):
+def test_loaded_matches_the_sympy_backend(key, backend, level):
     g = loaded_case(key)
-    assert "loaded" in [lv.name for lv in g.plan.levels]
-    want = symkin.evaluate(g.analysis, CASES[key], "loaded")
-    got = (g.run_numpy if backend == "numpy" else g.run_c)(CASES[key], "loaded")
+    assert level in [lv.name for lv in g.plan.levels]
+    want = symkin.evaluate(g.analysis, CASES[key], level)
+    got = (g.run_numpy if backend == "numpy" else g.run_c)(CASES[key], level)
     for name, dev in got.items():
         assert rel_err(dev, want.points[name].deviation) <= 1e-12, name
+
+
+@pytest.mark.parametrize("backend", ["numpy", "c"])
+def test_refined_alone_solves_the_loops_it_needs(backend):
+    """The nine-bar's point F is moved by no loop at the kinematic levels, yet loaded_refined
+    needs the loaded closure solved for its statics: a plan with that level alone compiles and
+    agrees with the sympy backend near the toggle position (O = 0.3)."""
+    g = generated("nine_bar")
+    p = plan(g.analysis, levels=["loaded_refined"])
+    assert not p.needs_loops and "loaded_newton" in p.routines
+    inputs = {"O": "0.3", "A": "0", "B": "0", "K": "0"}
+    want = symkin.evaluate(g.analysis, inputs, "loaded_refined").points["F"].deviation
+    got = symkin.compile(g.mech, backend, levels=["loaded_refined"], sensitivity=False).evaluate(
+        {k: np.array([float(v)]) for k, v in inputs.items()})["points"]["F"]["deviation"][:, 0]
+    assert rel_err([float(v) for v in got], want) <= 1e-12
 
 
 def test_the_modulus_branch_and_the_load_reach_the_generated_code():

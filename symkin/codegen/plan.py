@@ -21,6 +21,7 @@ by the plates' compliance (its closure's constants, computed once per configurat
     loaded_q0          theta, params       -> generalized forces Q0 (springs EI/l): A^T mu0 = Q0
     loaded_q           theta, mu0, params  -> Q with the beam-column springs: A^T mu = Q
     loaded_compliance  theta, mu, params   -> each plate's end displacement beyond its arc
+    loaded_compliance_more  theta, mu, params -> the plates only loaded_refined's closure reads
     loaded_linear      theta, constants    -> A and r of the loaded closure (its first-order start)
     loaded_newton      theta, delta, constants -> F, dF/ddelta of the loaded closure
 
@@ -102,6 +103,7 @@ class LoadedPlan:
     passes: int
     compliance: int
     beam_column: bool = True           # the beam-column series (False: first order only)
+    more: int = 0                      # the last `more` of them only loaded_refined computes
 
 
 def plan(analysis: Analysis, points: Sequence[str] | None = None,
@@ -153,14 +155,19 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
         "rigid_points", (theta, params), (),
         tuple(e for n in names for e in an.point_rigid(n)), "rigid positions of the points")
     loaded = None
+    physical = [lv.name for lv in levels if lv.name in level_table.LOADED]
+    if physical:
+        der = loaded_derivation(an, beam_column=beam_column)
+        loaded_exprs = tuple(e for n in names for e in der.analysis.point_deviation(n, "exact"))
+        # loaded_refined solves the loaded closure whatever the points need: its Jacobian at
+        # the pose reached is the matrix of the second statics
+        loaded, constants = _loaded_routines(
+            der, routines, theta, delta, params, loaded_exprs, needs_loops or loops_for_links,
+            "loaded_refined" in physical and bool(kin.unknowns))
     for lv in levels:
         args = (theta, delta, params) if lv.needs_delta else (theta, params)
-        if lv.name == "loaded":
-            der = loaded_derivation(an, beam_column=beam_column)
-            exprs = tuple(e for n in names for e in der.analysis.point_deviation(n, "exact"))
-            loaded, constants = _loaded_routines(der, routines, theta, delta, params, exprs,
-                                                 needs_loops or loops_for_links)
-            args = (theta, delta, constants)
+        if lv.name in level_table.LOADED:
+            exprs, args = loaded_exprs, (theta, delta, constants)
         else:
             exprs = tuple(e for n in names for e in an.point_deviation(n, lv.name))
         routines[f"dev_{lv.name}"] = Routine(f"dev_{lv.name}", args, (), exprs,
@@ -241,17 +248,25 @@ def _flat(blocks: Sequence[sp.Matrix]) -> tuple[sp.Expr, ...]:
 
 def _loaded_routines(der: LoadedDerivation, routines: dict[str, Routine], theta: Argument,
                      delta: Argument, params: Argument, deviation: tuple[sp.Expr, ...],
-                     needs_loops: bool) -> tuple[LoadedPlan, Argument]:
-    """The `loaded` level's statics, compliance and closure routines (added to `routines`, in
-    the order they run) and the constants argument of its closure and `deviation`: the file's
-    parameters, then the compliance they read (the derivation's intermediates mu0, mu and
+                     needs_loops: bool, refine: bool) -> tuple[LoadedPlan, Argument]:
+    """The physical levels' statics, compliance and closure routines (added to `routines`, in
+    the order they run) and the constants argument of the loaded closure and `deviation`: the
+    file's parameters, then the compliance they read (the derivation's intermediates mu0, mu and
     compliance_*, never parameters). A point the loops do not move reads only the plates on its
-    path; the others' compliance is not computed."""
+    path: `loaded` then computes only their compliance (`loaded_compliance`); `refine`
+    (`loaded_refined`) solves the closure whatever the points need, so the other plates' come
+    after them (`loaded_compliance_more`)."""
     la = der.analysis
-    closure = (tuple(la.residual) + flatten(la.jacobian.tolist()) if needs_loops else ())
-    read = set().union(*(sp.sympify(e).free_symbols for e in deviation + closure))
-    plates = [a for a in sorted(der.compliance) if read & set(der.compliance[a])]
-    compliance = tuple(c for a in plates for c in der.compliance[a])
+    closure = (tuple(la.residual) + flatten(la.jacobian.tolist())
+               if needs_loops or refine else ())
+
+    def reading(exprs) -> list[int]:
+        read = set().union(*(sp.sympify(e).free_symbols for e in exprs))
+        return [a for a in sorted(der.compliance) if read & set(der.compliance[a])]
+
+    plates = reading(deviation + (closure if needs_loops else ()))
+    more = [a for a in reading(deviation + closure) if a not in plates]
+    compliance = tuple(c for a in plates + more for c in der.compliance[a])
     constants = Argument("params", (*params.symbols, *compliance))
     if la.kin.unknowns:
         if der.mu0:
@@ -262,11 +277,16 @@ def _loaded_routines(der: LoadedDerivation, routines: dict[str, Routine], theta:
             "loaded_q", (theta, Argument("mu0", der.mu0), params), (), tuple(der.statics[1]),
             "loaded: generalized forces Q with the beam-column springs (A^T mu = Q)"
             if der.mu0 else "loaded: generalized forces Q of the pin linkage (A^T mu = Q)")
-    routines["loaded_compliance"] = Routine(
-        "loaded_compliance", (theta, Argument("mu", der.mu), params), (),
-        tuple(e for a in plates for e in der.plate_loads[a].displacement),
-        "loaded: each plate's end displacement beyond its circular arc under its loads")
-    if needs_loops:
+    for name, which, doc in (
+            ("loaded_compliance", plates,
+             "loaded: each plate's end displacement beyond its circular arc under its loads"),
+            ("loaded_compliance_more", more,
+             "loaded: the same for the plates only the loaded closure reads (loaded_refined)")):
+        if which or name == "loaded_compliance":
+            routines[name] = Routine(
+                name, (theta, Argument("mu", der.mu), params), (),
+                tuple(e for a in which for e in der.plate_loads[a].displacement), doc)
+    if closure:
         a_lin, r_lin = la.linear_system
         routines["loaded_linear"] = Routine(
             "loaded_linear", (theta, constants), (), flatten(a_lin.tolist()) + tuple(r_lin),
@@ -274,7 +294,8 @@ def _loaded_routines(der: LoadedDerivation, routines: dict[str, Routine], theta:
         routines["loaded_newton"] = Routine(
             "loaded_newton", (theta, delta, constants), (), closure,
             "loaded: the loaded closure F(delta) and dF/ddelta")
-    return LoadedPlan(2 if der.mu0 else 1, len(compliance), der.beam_column), constants
+    return LoadedPlan(2 if der.mu0 else 1, len(compliance), der.beam_column,
+                      2 * len(more)), constants
 
 
 def with_derivation(plan: Plan, analysis: Analysis) -> Plan:

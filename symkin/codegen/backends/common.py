@@ -52,12 +52,19 @@ class Backend:
             unknown_index=list(plan.unknown_index), k=len(plan.unknown_index),
             n_dyads=plan.n_dyads, closed_form=plan.closed_form, needs_loops=plan.needs_loops,
             loops_for_links=plan.loops_for_links,
+            # the loop solvers are emitted: some point or the links need them, or the refined
+            # statics (the loaded closure's Jacobian at its solution)
+            solves=plan.needs_loops or plan.loops_for_links or (
+                bool(plan.unknown_index) and any(lv.name == "loaded_refined"
+                                                 for lv in plan.levels)),
             dtype=precision, solver=plan.solver, tol=plan.solver.tolerances(precision),
             sensitivity=plan.sensitivity, chain=plan.chain,
             stages=[lv.name for lv in plan.levels if plan.stage(lv)],
             n_params=len(plan.parameters), n_vars=len(plan.parameters) + len(plan.inputs),
             default_level=default_level(plan), loaded=plan.loaded,
-            loaded_code=levels.get("loaded").code,
+            loaded_levels=[lv for lv in plan.levels if lv.name in levels.LOADED],
+            refined=any(lv.name == "loaded_refined" for lv in plan.levels),
+            refined_code=levels.get("loaded_refined").code,
             routines=[routine_data(r, self.printer) for r in plan.routines.values()],
             kernels=[type(self).kernel_source(n) for n in special_functions(plan)],
         )

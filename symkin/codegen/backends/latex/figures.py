@@ -450,7 +450,7 @@ class Sweep:
 
 #: Colour and dash of each level's curve, by level code (fixed, so figures are deterministic).
 LEVEL_STYLES = (("#c62828", "--"), ("#1f5fa8", "-."), ("black", "-"), ("#2e7d32", ":"),
-                ("#8e24aa", (0, (5, 1, 1, 1))))
+                ("#8e24aa", (0, (5, 1, 1, 1))), ("#ef6c00", (0, (3, 1))))
 
 
 #: The physical reference's points: open circles in the colour of the level `equilibrium`.

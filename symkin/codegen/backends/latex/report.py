@@ -642,7 +642,9 @@ class Report:
                                                  budget, budget - 1))
         return {"beam_column": ld.beam_column, "plates": plates, "loads": loads,
                 "forces": forces, "hinge_forces": hinge_forces, "series": series,
-                "loops": len(ld.multipliers) // 3, "unit": unit}
+                "loops": len(ld.multipliers) // 3, "unit": unit,
+                "refined": any(lv.name == "loaded_refined" for lv in self.plan.levels)
+                and bool(self.d.unknowns)}
 
 
 def _power_series(coefficients: Sequence[sp.Rational], x: str) -> list[str]:
