@@ -114,25 +114,25 @@ static void sk_rigid(const double *inputs, const double *params, double *out)
     const double theta_1 = inputs[0];
     const double _tmp0 = sin(theta_1);
     const double _tmp1 = cos(theta_1);
-    const double dyad1_ax = -0.026*_tmp0 + 0.015*_tmp1;
+    const double dyad1_ax = 0.015*_tmp1 - 0.026*_tmp0;
     const double dyad1_ay = 0.015*_tmp0 + 0.026*_tmp1;
     const double dyad1_cx = 0.1;
     const double dyad1_cy = 0;
-    const double _tmp2 = -dyad1_ax + dyad1_cx;
-    const double _tmp3 = -dyad1_ay + dyad1_cy;
+    const double _tmp2 = dyad1_cx - dyad1_ax;
+    const double _tmp3 = dyad1_cy - dyad1_ay;
     const double dyad1_dsq = pow(_tmp2, 2) + pow(_tmp3, 2);
     const double _tmp4 = 1.0/dyad1_dsq;
-    const double dyad1_along = 0.5*_tmp4*(dyad1_dsq + 0.001815);
-    const double dyad1_reach = 0.006664*_tmp4 - pow(dyad1_along, 2);
+    const double dyad1_along = 0.5*_tmp4*(0.001815 + dyad1_dsq);
+    const double dyad1_reach = -pow(dyad1_along, 2) + 0.006664*_tmp4;
     const double dyad1_across = sqrt(dyad1_reach);
-    const double dyad1_bx = _tmp2*dyad1_along - _tmp3*dyad1_across + dyad1_ax;
-    const double dyad1_by = _tmp2*dyad1_across + _tmp3*dyad1_along + dyad1_ay;
+    const double dyad1_bx = dyad1_ax + _tmp2*dyad1_along - _tmp3*dyad1_across;
+    const double dyad1_by = dyad1_ay + _tmp2*dyad1_across + _tmp3*dyad1_along;
     const double dyad1_margin = 175.91643435618488*dyad1_dsq*fabs(dyad1_across);
-    const double dyad1_phi1 = atan2(0.042*dyad1_ax - 0.07*dyad1_ay - 0.042*dyad1_bx + 0.07*dyad1_by, -0.07*dyad1_ax - 0.042*dyad1_ay + 0.07*dyad1_bx + 0.042*dyad1_by);
-    const double dyad1_phi2 = atan2(-0.068*dyad1_bx - 0.015*dyad1_by + 0.068*dyad1_cx + 0.015*dyad1_cy, -0.015*dyad1_bx + 0.068*dyad1_by + 0.015*dyad1_cx - 0.068*dyad1_cy);
+    const double dyad1_phi1 = atan2(0.07*dyad1_by + 0.042*dyad1_ax - 0.07*dyad1_ay - 0.042*dyad1_bx, 0.07*dyad1_bx + 0.042*dyad1_by - 0.07*dyad1_ax - 0.042*dyad1_ay);
+    const double dyad1_phi2 = atan2(0.015*dyad1_cy + 0.068*dyad1_cx - 0.015*dyad1_by - 0.068*dyad1_bx, 0.015*dyad1_cx + 0.068*dyad1_by - 0.015*dyad1_bx - 0.068*dyad1_cy);
     out[0] = dyad1_phi1 - theta_1;
     out[1] = dyad1_phi2;
-    out[2] = -dyad1_phi1 + dyad1_phi2;
+    out[2] = dyad1_phi2 - dyad1_phi1;
     out[3] = dyad1_reach;
     out[4] = dyad1_margin;
 }
@@ -153,9 +153,9 @@ static void sk_rigid_res(const double *theta, const double *params, double *out)
     const double _tmp5 = pow(sin(_tmp4), 2);
     const double _tmp6 = pow(sin(0.5*theta_3), 2);
     const double _tmp7 = pow(sin(_tmp4 + 0.5*theta_2), 2);
-    out[0] = _tmp0 - theta_3 + theta_4;
-    out[1] = -0.026*_tmp1 + 0.068*_tmp2 - 0.042*_tmp3 - 0.03*_tmp5 - 0.03*_tmp6 - 0.14*_tmp7;
-    out[2] = 0.015*_tmp1 + 0.015*_tmp2 + 0.07*_tmp3 - 0.052*_tmp5 + 0.136*_tmp6 - 0.084*_tmp7;
+    out[0] = _tmp0 + theta_4 - theta_3;
+    out[1] = 0.068*_tmp2 - 0.03*_tmp5 - 0.03*_tmp6 - 0.14*_tmp7 - 0.042*_tmp3 - 0.026*_tmp1;
+    out[2] = 0.015*_tmp1 + 0.015*_tmp2 + 0.136*_tmp6 + 0.07*_tmp3 - 0.084*_tmp7 - 0.052*_tmp5;
 }
 
 /* rigid loop Jacobian A and r = Phi dz (92 operations) */
@@ -191,21 +191,21 @@ static void sk_linear(const double *theta, const double *params, double *out)
     const double _tmp22 = _tmp20*_tmp21*p_0;
     const double _tmp23 = cos(_tmp18);
     const double _tmp24 = 0.21650635094610965*_tmp22;
-    const double _tmp25 = 0.125*_tmp19*_tmp22 + _tmp23*_tmp24;
+    const double _tmp25 = _tmp23*_tmp24 + 0.125*_tmp19*_tmp22;
     const double _tmp26 = cos(theta_1);
     const double _tmp27 = -_tmp19*_tmp24 + 0.125*_tmp20*_tmp21*_tmp23*p_0;
     out[0] = 1;
     out[1] = -1;
     out[2] = 1;
     out[3] = -0.07*_tmp1 - 0.042*_tmp2;
-    out[4] = -0.015*_tmp3 + 0.068*_tmp4;
+    out[4] = 0.068*_tmp4 - 0.015*_tmp3;
     out[5] = 0;
-    out[6] = -0.042*_tmp1 + 0.07*_tmp2;
-    out[7] = 0.068*_tmp3 + 0.015*_tmp4;
+    out[6] = 0.07*_tmp2 - 0.042*_tmp1;
+    out[7] = 0.015*_tmp4 + 0.068*_tmp3;
     out[8] = 0;
     out[9] = 0;
-    out[10] = -_tmp1*_tmp15 + 0.25*_tmp10*_tmp8*p_0*sin(_tmp9) + 0.25*_tmp12*_tmp13*_tmp16*_tmp2*p_0 - _tmp17*_tmp25 + _tmp26*_tmp27 - _tmp7*sin(_tmp5);
-    out[11] = _tmp1*_tmp14*_tmp16 - _tmp10*_tmp6*_tmp8*cos(_tmp9) + _tmp15*_tmp2 + _tmp17*_tmp27 + _tmp25*_tmp26 + _tmp7*cos(_tmp5);
+    out[10] = _tmp26*_tmp27 - _tmp1*_tmp15 - _tmp17*_tmp25 - _tmp7*sin(_tmp5) + 0.25*_tmp10*_tmp8*p_0*sin(_tmp9) + 0.25*_tmp12*_tmp13*_tmp16*_tmp2*p_0;
+    out[11] = _tmp15*_tmp2 + _tmp17*_tmp27 + _tmp25*_tmp26 + _tmp7*cos(_tmp5) + _tmp1*_tmp14*_tmp16 - _tmp10*_tmp6*_tmp8*cos(_tmp9);
 }
 
 /* exact compliant closure F(delta) and dF/ddelta (259 operations) */
@@ -236,7 +236,7 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp14 = pow(sin(_tmp13), 2);
     const double _tmp15 = 0.07*_tmp12 - 0.084*_tmp14;
     const double _tmp16 = cos(_tmp10);
-    const double _tmp17 = -0.042*_tmp12 - 0.14*_tmp14;
+    const double _tmp17 = -0.14*_tmp14 - 0.042*_tmp12;
     const double _tmp18 = delta_3 + theta_3;
     const double _tmp19 = pow(_tmp18, 2);
     const double _tmp20 = _tmp5 + 0.5*theta_3;
@@ -265,9 +265,9 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp43 = cos(_tmp39);
     const double _tmp44 = _tmp43*p_0;
     const double _tmp45 = 0.21650635094610965*_tmp41;
-    const double _tmp46 = 0.125*_tmp41*_tmp42 + _tmp44*_tmp45;
+    const double _tmp46 = _tmp44*_tmp45 + 0.125*_tmp41*_tmp42;
     const double _tmp47 = cos(theta_1);
-    const double _tmp48 = 0.125*_tmp38*_tmp40*_tmp43*p_0 - _tmp42*_tmp45;
+    const double _tmp48 = -_tmp42*_tmp45 + 0.125*_tmp38*_tmp40*_tmp43*p_0;
     const double _tmp49 = cos(_tmp20);
     const double _tmp50 = _tmp19*_tmp22;
     const double _tmp51 = _tmp31*_tmp35;
@@ -277,36 +277,36 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp55 = 0.10825317547305482*_tmp41;
     const double _tmp56 = 0.0625*_tmp41;
     const double _tmp57 = pow(_tmp37, 3);
-    const double _tmp58 = 3*symkin_cosr2(_tmp39) + symkin_sinr1(_tmp39) - 3*symkin_sinr2(_tmp39);
+    const double _tmp58 = -3*symkin_sinr2(_tmp39) + 3*symkin_cosr2(_tmp39) + symkin_sinr1(_tmp39);
     const double _tmp59 = _tmp57*_tmp58;
     const double _tmp60 = 0.05412658773652741*_tmp59;
-    const double _tmp61 = 0.25*_tmp42*_tmp53 - _tmp42*_tmp55 + 0.03125*_tmp42*_tmp59 + _tmp44*_tmp54 + _tmp44*_tmp56 + _tmp44*_tmp60;
-    const double _tmp62 = 0.25*_tmp37*_tmp40*_tmp43*p_0 - _tmp42*_tmp54 - _tmp42*_tmp56 - _tmp42*_tmp60 + 0.03125*_tmp43*_tmp57*_tmp58*p_0 - _tmp44*_tmp55;
+    const double _tmp61 = _tmp44*_tmp54 + _tmp44*_tmp56 + _tmp44*_tmp60 - _tmp42*_tmp55 + 0.03125*_tmp42*_tmp59 + 0.25*_tmp42*_tmp53;
+    const double _tmp62 = -_tmp42*_tmp54 - _tmp42*_tmp56 - _tmp42*_tmp60 - _tmp44*_tmp55 + 0.03125*_tmp43*_tmp57*_tmp58*p_0 + 0.25*_tmp37*_tmp40*_tmp43*p_0;
     const double _tmp63 = sin(_tmp18);
     const double _tmp64 = cos(_tmp18);
     const double _tmp65 = _tmp21*p_0;
     const double _tmp66 = 0.5*_tmp18*_tmp22;
     const double _tmp67 = 0.125*p_0;
-    const double _tmp68 = 0.0625*pow(_tmp18, 3)*(3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20) - 3*symkin_sinr2(_tmp20));
+    const double _tmp68 = 0.0625*pow(_tmp18, 3)*(-3*symkin_sinr2(_tmp20) + 3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20));
     const double _tmp69 = 0.5*_tmp27*_tmp28;
     const double _tmp70 = _tmp26*p_0;
     const double _tmp71 = _tmp30*_tmp67;
-    const double _tmp72 = 0.0625*pow(_tmp28, 3)*(3*symkin_cosr2(_tmp25) + symkin_sinr1(_tmp25) - 3*symkin_sinr2(_tmp25));
+    const double _tmp72 = 0.0625*pow(_tmp28, 3)*(-3*symkin_sinr2(_tmp25) + 3*symkin_cosr2(_tmp25) + symkin_sinr1(_tmp25));
     const double _tmp73 = _tmp35*_tmp71 + _tmp69*_tmp70 + _tmp70*_tmp72;
     const double _tmp74 = _tmp35*p_0;
-    const double _tmp75 = -_tmp26*_tmp71 + _tmp69*_tmp74 + _tmp72*_tmp74;
+    const double _tmp75 = _tmp69*_tmp74 + _tmp72*_tmp74 - _tmp26*_tmp71;
     const double _tmp76 = _tmp49*p_0;
-    out[0] = delta_2 - delta_3 + delta_4;
-    out[1] = -_tmp11*_tmp15 + _tmp16*_tmp17 + 0.25*_tmp19*_tmp21*_tmp22*p_0 - _tmp2*sin(_tmp0) + 0.25*_tmp27*_tmp29*_tmp34*_tmp35*p_0 - _tmp3*_tmp7 - _tmp33 - _tmp36*_tmp46 + _tmp47*_tmp48 + _tmp8*_tmp9;
-    out[2] = -_tmp1*_tmp49*_tmp50 + _tmp11*_tmp17 + _tmp15*_tmp16 + _tmp2*cos(_tmp0) + _tmp3*_tmp9 + _tmp36*_tmp48 + _tmp46*_tmp47 + _tmp52 + _tmp7*_tmp8;
+    out[0] = delta_2 + delta_4 - delta_3;
+    out[1] = -_tmp33 + _tmp16*_tmp17 + _tmp47*_tmp48 + _tmp8*_tmp9 - _tmp11*_tmp15 - _tmp2*sin(_tmp0) - _tmp3*_tmp7 - _tmp36*_tmp46 + 0.25*_tmp19*_tmp21*_tmp22*p_0 + 0.25*_tmp27*_tmp29*_tmp34*_tmp35*p_0;
+    out[2] = _tmp52 + _tmp11*_tmp17 + _tmp15*_tmp16 + _tmp2*cos(_tmp0) + _tmp3*_tmp9 + _tmp36*_tmp48 + _tmp46*_tmp47 + _tmp7*_tmp8 - _tmp1*_tmp49*_tmp50;
     out[3] = 1;
     out[4] = -1;
     out[5] = 1;
-    out[6] = -0.07*_tmp24 - 0.042*_tmp34 - _tmp36*_tmp61 + _tmp47*_tmp62 - _tmp52;
-    out[7] = _tmp49*_tmp50*_tmp67 - 0.015*_tmp63 + 0.068*_tmp64 + _tmp65*_tmp66 + _tmp65*_tmp68;
-    out[8] = -_tmp24*_tmp73 + _tmp34*_tmp75;
-    out[9] = -0.042*_tmp24 - _tmp33 + _tmp34*_tmp51 + 0.07*_tmp34 + _tmp36*_tmp62 + _tmp47*_tmp61;
-    out[10] = 0.125*_tmp50*_tmp65 + 0.068*_tmp63 + 0.015*_tmp64 - _tmp66*_tmp76 - _tmp68*_tmp76;
+    out[6] = -_tmp52 - 0.07*_tmp24 - 0.042*_tmp34 + _tmp47*_tmp62 - _tmp36*_tmp61;
+    out[7] = 0.068*_tmp64 - 0.015*_tmp63 + _tmp65*_tmp66 + _tmp65*_tmp68 + _tmp49*_tmp50*_tmp67;
+    out[8] = _tmp34*_tmp75 - _tmp24*_tmp73;
+    out[9] = -_tmp33 + 0.07*_tmp34 - 0.042*_tmp24 + _tmp34*_tmp51 + _tmp36*_tmp62 + _tmp47*_tmp61;
+    out[10] = 0.015*_tmp64 + 0.068*_tmp63 - _tmp66*_tmp76 - _tmp68*_tmp76 + 0.125*_tmp50*_tmp65;
     out[11] = _tmp24*_tmp75 + _tmp34*_tmp73;
 }
 
@@ -321,8 +321,8 @@ static void sk_rigid_points(const double *theta, const double *params, double *o
     const double _tmp2 = theta_1 + theta_2;
     const double _tmp3 = sin(_tmp2);
     const double _tmp4 = cos(_tmp2);
-    out[0] = -0.026*_tmp0 + 0.015*_tmp1 - 0.064*_tmp3 + 0.045*_tmp4;
-    out[1] = 0.015*_tmp0 + 0.026*_tmp1 + 0.045*_tmp3 + 0.064*_tmp4;
+    out[0] = 0.015*_tmp1 + 0.045*_tmp4 - 0.064*_tmp3 - 0.026*_tmp0;
+    out[1] = 0.015*_tmp0 + 0.064*_tmp4 + 0.045*_tmp3 + 0.026*_tmp1;
 }
 
 /* loaded: generalized forces Q0 of the pin linkage, springs EI/l (A^T mu0 = Q0) (10 operations) */
@@ -348,7 +348,7 @@ static void sk_loaded_q(const double *theta, const double *mu0, const double *pa
     const double mu0_2 = mu0[1];
     const double mu0_3 = mu0[2];
     const double p_0 = params[0];
-    const double _tmp0 = theta_1 + 0.5*theta_2 + 1.0471975511965979;
+    const double _tmp0 = 1.0471975511965979 + theta_1 + 0.5*theta_2;
     const double _tmp1 = -mu0_2*cos(_tmp0) - mu0_3*sin(_tmp0);
     const double _tmp2 = p_0 <= 0.01;
     const double _tmp3 = 200000*((_tmp2) ? (4.333333333333334e-12) : (4.761904761904762e-12))/p_0;
@@ -357,12 +357,12 @@ static void sk_loaded_q(const double *theta, const double *mu0, const double *pa
     const double _tmp6 = 8000000000*((_tmp2) ? (1.8777777777777777e-23) : (2.267573696145125e-23))/_tmp5;
     const double _tmp7 = 4.1666666666666667e-07*_tmp5*((_tmp2) ? (230769230769.23077) : (210000000000));
     const double _tmp8 = 0.5*theta_3;
-    const double _tmp9 = -mu0_2*sin(_tmp8) + mu0_3*cos(_tmp8);
+    const double _tmp9 = mu0_3*cos(_tmp8) - mu0_2*sin(_tmp8);
     const double _tmp10 = theta_1 + theta_2 + 0.5*theta_4;
     const double _tmp11 = -mu0_2*cos(_tmp10) - mu0_3*sin(_tmp10);
-    out[0] = -_tmp7*theta_2*(pow(_tmp1, 3)*_tmp4 - pow(_tmp1, 2)*_tmp6 + _tmp1*_tmp3 + 1);
-    out[1] = -_tmp7*theta_3*(_tmp3*_tmp9 + _tmp4*pow(_tmp9, 3) - _tmp6*pow(_tmp9, 2) + 1);
-    out[2] = -_tmp7*theta_4*(pow(_tmp11, 3)*_tmp4 - pow(_tmp11, 2)*_tmp6 + _tmp11*_tmp3 + 1);
+    out[0] = -_tmp7*theta_2*(1 + _tmp1*_tmp3 + _tmp4*pow(_tmp1, 3) - _tmp6*pow(_tmp1, 2));
+    out[1] = -_tmp7*theta_3*(1 + _tmp3*_tmp9 + _tmp4*pow(_tmp9, 3) - _tmp6*pow(_tmp9, 2));
+    out[2] = -_tmp7*theta_4*(1 + _tmp11*_tmp3 + _tmp4*pow(_tmp11, 3) - _tmp6*pow(_tmp11, 2));
 }
 
 /* loaded: each plate's end displacement beyond its circular arc under its loads (231 operations) */
@@ -385,41 +385,41 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp7 = _tmp6/p_0;
     const double _tmp8 = _tmp4*_tmp7;
     const double _tmp9 = ((_tmp5) ? (8.137037037037037e-35) : (1.0797969981643451e-34))/pow(p_0, 3);
-    const double _tmp10 = pow(_tmp4, 3)*_tmp9;
+    const double _tmp10 = _tmp9*pow(_tmp4, 3);
     const double _tmp11 = pow(_tmp4, 2);
     const double _tmp12 = pow(p_0, -2);
     const double _tmp13 = ((_tmp5) ? (1.8777777777777777e-23) : (2.267573696145125e-23));
     const double _tmp14 = _tmp12*_tmp13;
     const double _tmp15 = _tmp11*_tmp14;
-    const double _tmp16 = -1180952380952381.0*_tmp10 + 4857142857.142858*_tmp15 - 20000*_tmp8 + 0.08333333333333333;
+    const double _tmp16 = 0.08333333333333333 - 20000*_tmp8 + 4857142857.142858*_tmp15 - 1180952380952381.0*_tmp10;
     const double _tmp17 = 2400000*_tmp6;
     const double _tmp18 = 5760000000000*_tmp14;
-    const double _tmp19 = p_0*(_tmp18*pow(_tmp3, 2)*(-239307359307359.3*_tmp10 + 738095238.0952381*_tmp15 - 2023.8095238095239*_tmp8 + 0.004166666666666667) + pow(theta_1, 2)*(-22857142857142.855*_tmp10 + 285714285.71428573*_tmp11*_tmp12*_tmp13 - 3333.3333333333335*_tmp8));
+    const double _tmp19 = p_0*(pow(theta_1, 2)*(-22857142857142.855*_tmp10 - 3333.3333333333335*_tmp8 + 285714285.71428573*_tmp11*_tmp12*_tmp13) + _tmp18*pow(_tmp3, 2)*(0.004166666666666667 + 738095238.0952381*_tmp15 - 2023.8095238095239*_tmp8 - 239307359307359.3*_tmp10));
     const double _tmp20 = 0.5*theta_2;
     const double _tmp21 = sin(_tmp20);
-    const double _tmp22 = _tmp20 + theta_1 + 1.0471975511965979;
+    const double _tmp22 = 1.0471975511965979 + _tmp20 + theta_1;
     const double _tmp23 = sin(_tmp22);
     const double _tmp24 = cos(_tmp22);
     const double _tmp25 = _tmp23*mu_2 - _tmp24*mu_3;
     const double _tmp26 = -_tmp23*mu_3 - _tmp24*mu_2;
     const double _tmp27 = _tmp26*_tmp7;
-    const double _tmp28 = pow(_tmp26, 3)*_tmp9;
+    const double _tmp28 = _tmp9*pow(_tmp26, 3);
     const double _tmp29 = pow(_tmp26, 2);
     const double _tmp30 = _tmp14*_tmp29;
-    const double _tmp31 = -20000*_tmp27 - 1180952380952381.0*_tmp28 + 4857142857.142858*_tmp30 + 0.08333333333333333;
+    const double _tmp31 = 0.08333333333333333 - 20000*_tmp27 + 4857142857.142858*_tmp30 - 1180952380952381.0*_tmp28;
     const double _tmp32 = cos(_tmp20);
-    const double _tmp33 = p_0*(_tmp18*pow(_tmp25, 2)*(-2023.8095238095239*_tmp27 - 239307359307359.3*_tmp28 + 738095238.0952381*_tmp30 + 0.004166666666666667) + pow(theta_2, 2)*(285714285.71428573*_tmp12*_tmp13*_tmp29 - 3333.3333333333335*_tmp27 - 22857142857142.855*_tmp28));
+    const double _tmp33 = p_0*(pow(theta_2, 2)*(-22857142857142.855*_tmp28 - 3333.3333333333335*_tmp27 + 285714285.71428573*_tmp12*_tmp13*_tmp29) + _tmp18*pow(_tmp25, 2)*(0.004166666666666667 + 738095238.0952381*_tmp30 - 2023.8095238095239*_tmp27 - 239307359307359.3*_tmp28));
     const double _tmp34 = 0.5*theta_3;
     const double _tmp35 = sin(_tmp34);
     const double _tmp36 = cos(_tmp34);
     const double _tmp37 = -_tmp35*mu_3 - _tmp36*mu_2;
-    const double _tmp38 = -_tmp35*mu_2 + _tmp36*mu_3;
+    const double _tmp38 = _tmp36*mu_3 - _tmp35*mu_2;
     const double _tmp39 = _tmp38*_tmp7;
-    const double _tmp40 = pow(_tmp38, 3)*_tmp9;
+    const double _tmp40 = _tmp9*pow(_tmp38, 3);
     const double _tmp41 = pow(_tmp38, 2);
     const double _tmp42 = _tmp14*_tmp41;
-    const double _tmp43 = -20000*_tmp39 - 1180952380952381.0*_tmp40 + 4857142857.142858*_tmp42 + 0.08333333333333333;
-    const double _tmp44 = p_0*(_tmp18*pow(_tmp37, 2)*(-2023.8095238095239*_tmp39 - 239307359307359.3*_tmp40 + 738095238.0952381*_tmp42 + 0.004166666666666667) + pow(theta_3, 2)*(285714285.71428573*_tmp12*_tmp13*_tmp41 - 3333.3333333333335*_tmp39 - 22857142857142.855*_tmp40));
+    const double _tmp43 = 0.08333333333333333 - 20000*_tmp39 + 4857142857.142858*_tmp42 - 1180952380952381.0*_tmp40;
+    const double _tmp44 = p_0*(pow(theta_3, 2)*(-22857142857142.855*_tmp40 - 3333.3333333333335*_tmp39 + 285714285.71428573*_tmp12*_tmp13*_tmp41) + _tmp18*pow(_tmp37, 2)*(0.004166666666666667 + 738095238.0952381*_tmp42 - 2023.8095238095239*_tmp39 - 239307359307359.3*_tmp40));
     const double _tmp45 = 0.5*theta_4;
     const double _tmp46 = sin(_tmp45);
     const double _tmp47 = _tmp45 + theta_1 + theta_2;
@@ -428,19 +428,19 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp50 = _tmp48*mu_2 - _tmp49*mu_3;
     const double _tmp51 = -_tmp48*mu_3 - _tmp49*mu_2;
     const double _tmp52 = _tmp51*_tmp7;
-    const double _tmp53 = pow(_tmp51, 3)*_tmp9;
+    const double _tmp53 = _tmp9*pow(_tmp51, 3);
     const double _tmp54 = pow(_tmp51, 2);
     const double _tmp55 = _tmp14*_tmp54;
-    const double _tmp56 = -20000*_tmp52 - 1180952380952381.0*_tmp53 + 4857142857.142858*_tmp55 + 0.08333333333333333;
+    const double _tmp56 = 0.08333333333333333 - 20000*_tmp52 + 4857142857.142858*_tmp55 - 1180952380952381.0*_tmp53;
     const double _tmp57 = cos(_tmp45);
-    const double _tmp58 = p_0*(_tmp18*pow(_tmp50, 2)*(-2023.8095238095239*_tmp52 - 239307359307359.3*_tmp53 + 738095238.0952381*_tmp55 + 0.004166666666666667) + pow(theta_4, 2)*(285714285.71428573*_tmp12*_tmp13*_tmp54 - 3333.3333333333335*_tmp52 - 22857142857142.855*_tmp53));
-    out[0] = -_tmp1*_tmp16*_tmp17*_tmp3 - _tmp19*_tmp2;
+    const double _tmp58 = p_0*(pow(theta_4, 2)*(-22857142857142.855*_tmp53 - 3333.3333333333335*_tmp52 + 285714285.71428573*_tmp12*_tmp13*_tmp54) + _tmp18*pow(_tmp50, 2)*(0.004166666666666667 + 738095238.0952381*_tmp55 - 2023.8095238095239*_tmp52 - 239307359307359.3*_tmp53));
+    out[0] = -_tmp19*_tmp2 - _tmp1*_tmp16*_tmp17*_tmp3;
     out[1] = -_tmp1*_tmp19 + 2400000*_tmp16*_tmp2*_tmp3*_tmp6;
-    out[2] = -_tmp17*_tmp21*_tmp25*_tmp31 - _tmp32*_tmp33;
+    out[2] = -_tmp32*_tmp33 - _tmp17*_tmp21*_tmp25*_tmp31;
     out[3] = -_tmp21*_tmp33 + 2400000*_tmp25*_tmp31*_tmp32*_tmp6;
-    out[4] = -_tmp17*_tmp35*_tmp37*_tmp43 - _tmp36*_tmp44;
+    out[4] = -_tmp36*_tmp44 - _tmp17*_tmp35*_tmp37*_tmp43;
     out[5] = -_tmp35*_tmp44 + 2400000*_tmp36*_tmp37*_tmp43*_tmp6;
-    out[6] = -_tmp17*_tmp46*_tmp50*_tmp56 - _tmp57*_tmp58;
+    out[6] = -_tmp57*_tmp58 - _tmp17*_tmp46*_tmp50*_tmp56;
     out[7] = -_tmp46*_tmp58 + 2400000*_tmp50*_tmp56*_tmp57*_tmp6;
 }
 
@@ -473,8 +473,8 @@ static void sk_loaded_linear(const double *theta, const double *params, double *
     const double _tmp10 = symkin_arck(_tmp9);
     const double _tmp11 = 0.5*theta_4;
     const double _tmp12 = _tmp6*pow(theta_4, 2)*symkin_arck(_tmp11);
-    const double _tmp13 = _tmp12*sin(_tmp11) + compliance_y_4;
-    const double _tmp14 = _tmp12*cos(_tmp11) + compliance_x_4;
+    const double _tmp13 = compliance_y_4 + _tmp12*sin(_tmp11);
+    const double _tmp14 = compliance_x_4 + _tmp12*cos(_tmp11);
     const double _tmp15 = sin(theta_1);
     const double _tmp16 = 0.5*theta_2;
     const double _tmp17 = sin(_tmp16);
@@ -483,21 +483,21 @@ static void sk_loaded_linear(const double *theta, const double *params, double *
     const double _tmp20 = _tmp18*_tmp19*p_0;
     const double _tmp21 = cos(_tmp16);
     const double _tmp22 = 0.21650635094610965*_tmp20;
-    const double _tmp23 = 0.125*_tmp17*_tmp20 + _tmp21*_tmp22 + 0.8660254037844386*compliance_x_2 + 0.5*compliance_y_2;
+    const double _tmp23 = 0.5*compliance_y_2 + 0.8660254037844386*compliance_x_2 + _tmp21*_tmp22 + 0.125*_tmp17*_tmp20;
     const double _tmp24 = cos(theta_1);
-    const double _tmp25 = -_tmp17*_tmp22 + 0.125*_tmp18*_tmp19*_tmp21*p_0 + 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2;
+    const double _tmp25 = 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2 - _tmp17*_tmp22 + 0.125*_tmp18*_tmp19*_tmp21*p_0;
     out[0] = 1;
     out[1] = -1;
     out[2] = 1;
     out[3] = -0.07*_tmp1 - 0.042*_tmp2;
-    out[4] = -0.015*_tmp3 + 0.068*_tmp4;
+    out[4] = 0.068*_tmp4 - 0.015*_tmp3;
     out[5] = 0;
-    out[6] = -0.042*_tmp1 + 0.07*_tmp2;
-    out[7] = 0.068*_tmp3 + 0.015*_tmp4;
+    out[6] = 0.07*_tmp2 - 0.042*_tmp1;
+    out[7] = 0.015*_tmp4 + 0.068*_tmp3;
     out[8] = 0;
     out[9] = 0;
-    out[10] = -_tmp1*_tmp13 + 0.25*_tmp10*_tmp8*p_0*sin(_tmp9) + _tmp14*_tmp2 - _tmp15*_tmp23 + _tmp24*_tmp25 - _tmp7*sin(_tmp5) - compliance_y_1 + compliance_y_3;
-    out[11] = _tmp1*_tmp14 - _tmp10*_tmp6*_tmp8*cos(_tmp9) + _tmp13*_tmp2 + _tmp15*_tmp25 + _tmp23*_tmp24 + _tmp7*cos(_tmp5) + compliance_x_1 - compliance_x_3;
+    out[10] = compliance_y_3 - compliance_y_1 + _tmp14*_tmp2 + _tmp24*_tmp25 - _tmp1*_tmp13 - _tmp15*_tmp23 - _tmp7*sin(_tmp5) + 0.25*_tmp10*_tmp8*p_0*sin(_tmp9);
+    out[11] = compliance_x_1 - compliance_x_3 + _tmp1*_tmp14 + _tmp13*_tmp2 + _tmp15*_tmp25 + _tmp23*_tmp24 + _tmp7*cos(_tmp5) - _tmp10*_tmp6*_tmp8*cos(_tmp9);
 }
 
 /* loaded: the loaded closure F(delta) and dF/ddelta (269 operations) */
@@ -536,7 +536,7 @@ static void sk_loaded_newton(const double *theta, const double *delta, const dou
     const double _tmp14 = pow(sin(_tmp13), 2);
     const double _tmp15 = 0.07*_tmp12 - 0.084*_tmp14;
     const double _tmp16 = cos(_tmp10);
-    const double _tmp17 = -0.042*_tmp12 - 0.14*_tmp14;
+    const double _tmp17 = -0.14*_tmp14 - 0.042*_tmp12;
     const double _tmp18 = delta_3 + theta_3;
     const double _tmp19 = pow(_tmp18, 2);
     const double _tmp20 = _tmp5 + 0.5*theta_3;
@@ -551,12 +551,12 @@ static void sk_loaded_newton(const double *theta, const double *delta, const dou
     const double _tmp29 = symkin_arck(_tmp28);
     const double _tmp30 = sin(_tmp28);
     const double _tmp31 = _tmp29*_tmp30;
-    const double _tmp32 = _tmp27*_tmp31 + compliance_y_4;
+    const double _tmp32 = compliance_y_4 + _tmp27*_tmp31;
     const double _tmp33 = _tmp24*_tmp32;
     const double _tmp34 = cos(_tmp23);
     const double _tmp35 = cos(_tmp28);
     const double _tmp36 = _tmp29*_tmp35;
-    const double _tmp37 = _tmp27*_tmp36 + compliance_x_4;
+    const double _tmp37 = compliance_x_4 + _tmp27*_tmp36;
     const double _tmp38 = sin(theta_1);
     const double _tmp39 = delta_2 + theta_2;
     const double _tmp40 = pow(_tmp39, 2);
@@ -568,9 +568,9 @@ static void sk_loaded_newton(const double *theta, const double *delta, const dou
     const double _tmp46 = cos(_tmp41);
     const double _tmp47 = _tmp46*p_0;
     const double _tmp48 = 0.21650635094610965*_tmp43;
-    const double _tmp49 = 0.125*_tmp43*_tmp45 + _tmp47*_tmp48 + 0.8660254037844386*compliance_x_2 + 0.5*compliance_y_2;
+    const double _tmp49 = 0.5*compliance_y_2 + 0.8660254037844386*compliance_x_2 + _tmp47*_tmp48 + 0.125*_tmp43*_tmp45;
     const double _tmp50 = cos(theta_1);
-    const double _tmp51 = 0.125*_tmp40*_tmp42*_tmp46*p_0 - _tmp45*_tmp48 + 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2;
+    const double _tmp51 = 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2 - _tmp45*_tmp48 + 0.125*_tmp40*_tmp42*_tmp46*p_0;
     const double _tmp52 = cos(_tmp20);
     const double _tmp53 = _tmp19*_tmp22;
     const double _tmp54 = _tmp24*_tmp37 + _tmp32*_tmp34;
@@ -579,34 +579,34 @@ static void sk_loaded_newton(const double *theta, const double *delta, const dou
     const double _tmp57 = 0.10825317547305482*_tmp43;
     const double _tmp58 = 0.0625*_tmp43;
     const double _tmp59 = pow(_tmp39, 3);
-    const double _tmp60 = 3*symkin_cosr2(_tmp41) + symkin_sinr1(_tmp41) - 3*symkin_sinr2(_tmp41);
+    const double _tmp60 = -3*symkin_sinr2(_tmp41) + 3*symkin_cosr2(_tmp41) + symkin_sinr1(_tmp41);
     const double _tmp61 = _tmp59*_tmp60;
     const double _tmp62 = 0.05412658773652741*_tmp61;
-    const double _tmp63 = _tmp1*_tmp44*_tmp55 - _tmp45*_tmp57 + 0.03125*_tmp45*_tmp61 + _tmp47*_tmp56 + _tmp47*_tmp58 + _tmp47*_tmp62;
-    const double _tmp64 = 0.25*_tmp39*_tmp42*_tmp46*p_0 - _tmp45*_tmp56 - _tmp45*_tmp58 - _tmp45*_tmp62 + 0.03125*_tmp46*_tmp59*_tmp60*p_0 - _tmp47*_tmp57;
+    const double _tmp63 = _tmp47*_tmp56 + _tmp47*_tmp58 + _tmp47*_tmp62 - _tmp45*_tmp57 + 0.03125*_tmp45*_tmp61 + _tmp1*_tmp44*_tmp55;
+    const double _tmp64 = -_tmp45*_tmp56 - _tmp45*_tmp58 - _tmp45*_tmp62 - _tmp47*_tmp57 + 0.03125*_tmp46*_tmp59*_tmp60*p_0 + 0.25*_tmp39*_tmp42*_tmp46*p_0;
     const double _tmp65 = sin(_tmp18);
     const double _tmp66 = cos(_tmp18);
     const double _tmp67 = _tmp21*p_0;
     const double _tmp68 = 0.5*_tmp18*_tmp22;
     const double _tmp69 = 0.125*p_0;
-    const double _tmp70 = 0.0625*pow(_tmp18, 3)*(3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20) - 3*symkin_sinr2(_tmp20));
+    const double _tmp70 = 0.0625*pow(_tmp18, 3)*(-3*symkin_sinr2(_tmp20) + 3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20));
     const double _tmp71 = 0.5*_tmp25*p_0;
     const double _tmp72 = _tmp26*_tmp69;
-    const double _tmp73 = 0.0625*pow(_tmp25, 3)*p_0*(3*symkin_cosr2(_tmp28) + symkin_sinr1(_tmp28) - 3*symkin_sinr2(_tmp28));
+    const double _tmp73 = 0.0625*p_0*pow(_tmp25, 3)*(-3*symkin_sinr2(_tmp28) + 3*symkin_cosr2(_tmp28) + symkin_sinr1(_tmp28));
     const double _tmp74 = _tmp30*_tmp73 + _tmp31*_tmp71 + _tmp36*_tmp72;
-    const double _tmp75 = -_tmp31*_tmp72 + _tmp35*_tmp73 + _tmp36*_tmp71;
+    const double _tmp75 = _tmp35*_tmp73 + _tmp36*_tmp71 - _tmp31*_tmp72;
     const double _tmp76 = _tmp52*p_0;
-    out[0] = delta_2 - delta_3 + delta_4;
-    out[1] = -_tmp11*_tmp15 + _tmp16*_tmp17 + 0.25*_tmp19*_tmp21*_tmp22*p_0 - _tmp2*sin(_tmp0) - _tmp3*_tmp7 - _tmp33 + _tmp34*_tmp37 - _tmp38*_tmp49 + _tmp50*_tmp51 + _tmp8*_tmp9 - compliance_y_1 + compliance_y_3;
-    out[2] = -_tmp1*_tmp52*_tmp53 + _tmp11*_tmp17 + _tmp15*_tmp16 + _tmp2*cos(_tmp0) + _tmp3*_tmp9 + _tmp38*_tmp51 + _tmp49*_tmp50 + _tmp54 + _tmp7*_tmp8 + compliance_x_1 - compliance_x_3;
+    out[0] = delta_2 + delta_4 - delta_3;
+    out[1] = compliance_y_3 - _tmp33 - compliance_y_1 + _tmp16*_tmp17 + _tmp34*_tmp37 + _tmp50*_tmp51 + _tmp8*_tmp9 - _tmp11*_tmp15 - _tmp2*sin(_tmp0) - _tmp3*_tmp7 - _tmp38*_tmp49 + 0.25*_tmp19*_tmp21*_tmp22*p_0;
+    out[2] = _tmp54 + compliance_x_1 - compliance_x_3 + _tmp11*_tmp17 + _tmp15*_tmp16 + _tmp2*cos(_tmp0) + _tmp3*_tmp9 + _tmp38*_tmp51 + _tmp49*_tmp50 + _tmp7*_tmp8 - _tmp1*_tmp52*_tmp53;
     out[3] = 1;
     out[4] = -1;
     out[5] = 1;
-    out[6] = -0.07*_tmp24 - 0.042*_tmp34 - _tmp38*_tmp63 + _tmp50*_tmp64 - _tmp54;
-    out[7] = _tmp52*_tmp53*_tmp69 - 0.015*_tmp65 + 0.068*_tmp66 + _tmp67*_tmp68 + _tmp67*_tmp70;
-    out[8] = -_tmp24*_tmp74 + _tmp34*_tmp75;
-    out[9] = -0.042*_tmp24 - _tmp33 + _tmp34*_tmp37 + 0.07*_tmp34 + _tmp38*_tmp64 + _tmp50*_tmp63;
-    out[10] = 0.125*_tmp53*_tmp67 + 0.068*_tmp65 + 0.015*_tmp66 - _tmp68*_tmp76 - _tmp70*_tmp76;
+    out[6] = -_tmp54 - 0.07*_tmp24 - 0.042*_tmp34 + _tmp50*_tmp64 - _tmp38*_tmp63;
+    out[7] = 0.068*_tmp66 - 0.015*_tmp65 + _tmp67*_tmp68 + _tmp67*_tmp70 + _tmp52*_tmp53*_tmp69;
+    out[8] = _tmp34*_tmp75 - _tmp24*_tmp74;
+    out[9] = -_tmp33 + 0.07*_tmp34 - 0.042*_tmp24 + _tmp34*_tmp37 + _tmp38*_tmp64 + _tmp50*_tmp63;
+    out[10] = 0.015*_tmp66 + 0.068*_tmp65 - _tmp68*_tmp76 - _tmp70*_tmp76 + 0.125*_tmp53*_tmp67;
     out[11] = _tmp24*_tmp75 + _tmp34*_tmp74;
 }
 
@@ -626,10 +626,10 @@ static void sk_dev_paper(const double *theta, const double *params, double *out)
     const double _tmp7 = _tmp5*_tmp6*p_0;
     const double _tmp8 = cos(_tmp3);
     const double _tmp9 = 0.21650635094610965*_tmp7;
-    const double _tmp10 = 0.125*_tmp4*_tmp7 + _tmp8*_tmp9;
+    const double _tmp10 = _tmp8*_tmp9 + 0.125*_tmp4*_tmp7;
     const double _tmp11 = cos(theta_1);
     const double _tmp12 = -_tmp4*_tmp9 + 0.125*_tmp5*_tmp6*_tmp8*p_0;
-    out[0] = -_tmp1*sin(_tmp0) - _tmp10*_tmp2 + _tmp11*_tmp12;
+    out[0] = _tmp11*_tmp12 - _tmp1*sin(_tmp0) - _tmp10*_tmp2;
     out[1] = _tmp1*cos(_tmp0) + _tmp10*_tmp11 + _tmp12*_tmp2;
 }
 
@@ -653,11 +653,11 @@ static void sk_dev_first_order(const double *theta, const double *delta, const d
     const double _tmp10 = _tmp8*_tmp9*p_0;
     const double _tmp11 = cos(_tmp6);
     const double _tmp12 = 0.21650635094610965*_tmp10;
-    const double _tmp13 = 0.125*_tmp10*_tmp7 + _tmp11*_tmp12;
+    const double _tmp13 = _tmp11*_tmp12 + 0.125*_tmp10*_tmp7;
     const double _tmp14 = cos(theta_1);
-    const double _tmp15 = 0.125*_tmp11*_tmp8*_tmp9*p_0 - _tmp12*_tmp7;
-    out[0] = -_tmp1*sin(_tmp0) - _tmp13*_tmp5 + _tmp14*_tmp15 + delta_2*(-0.045*_tmp3 - 0.064*_tmp4);
-    out[1] = _tmp1*cos(_tmp0) + _tmp13*_tmp14 + _tmp15*_tmp5 + delta_2*(-0.064*_tmp3 + 0.045*_tmp4);
+    const double _tmp15 = -_tmp12*_tmp7 + 0.125*_tmp11*_tmp8*_tmp9*p_0;
+    out[0] = _tmp14*_tmp15 + delta_2*(-0.064*_tmp4 - 0.045*_tmp3) - _tmp1*sin(_tmp0) - _tmp13*_tmp5;
+    out[1] = _tmp1*cos(_tmp0) + _tmp13*_tmp14 + _tmp15*_tmp5 + delta_2*(0.045*_tmp4 - 0.064*_tmp3);
 }
 
 /* deviation of the points at level exact (62 operations) */
@@ -685,10 +685,10 @@ static void sk_dev_exact(const double *theta, const double *delta, const double 
     const double _tmp15 = _tmp13*_tmp14*p_0;
     const double _tmp16 = cos(_tmp11);
     const double _tmp17 = 0.21650635094610965*_tmp15;
-    const double _tmp18 = 0.125*_tmp12*_tmp15 + _tmp16*_tmp17;
+    const double _tmp18 = _tmp16*_tmp17 + 0.125*_tmp12*_tmp15;
     const double _tmp19 = cos(theta_1);
     const double _tmp20 = -_tmp12*_tmp17 + 0.125*_tmp13*_tmp14*_tmp16*p_0;
-    out[0] = -_tmp1*sin(_tmp0) - _tmp10*_tmp18 + _tmp19*_tmp20 - _tmp3*_tmp7 + _tmp8*_tmp9;
+    out[0] = _tmp19*_tmp20 + _tmp8*_tmp9 - _tmp1*sin(_tmp0) - _tmp10*_tmp18 - _tmp3*_tmp7;
     out[1] = _tmp1*cos(_tmp0) + _tmp10*_tmp20 + _tmp18*_tmp19 + _tmp3*_tmp9 + _tmp7*_tmp8;
 }
 
@@ -721,11 +721,11 @@ static void sk_dev_loaded(const double *theta, const double *delta, const double
     const double _tmp15 = _tmp13*_tmp14*p_0;
     const double _tmp16 = cos(_tmp11);
     const double _tmp17 = 0.21650635094610965*_tmp15;
-    const double _tmp18 = 0.125*_tmp12*_tmp15 + _tmp16*_tmp17 + 0.8660254037844386*compliance_x_2 + 0.5*compliance_y_2;
+    const double _tmp18 = 0.5*compliance_y_2 + 0.8660254037844386*compliance_x_2 + _tmp16*_tmp17 + 0.125*_tmp12*_tmp15;
     const double _tmp19 = cos(theta_1);
-    const double _tmp20 = -_tmp12*_tmp17 + 0.125*_tmp13*_tmp14*_tmp16*p_0 + 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2;
-    out[0] = -_tmp1*sin(_tmp0) - _tmp10*_tmp18 + _tmp19*_tmp20 - _tmp3*_tmp7 + _tmp8*_tmp9 - compliance_y_1;
-    out[1] = _tmp1*cos(_tmp0) + _tmp10*_tmp20 + _tmp18*_tmp19 + _tmp3*_tmp9 + _tmp7*_tmp8 + compliance_x_1;
+    const double _tmp20 = 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2 - _tmp12*_tmp17 + 0.125*_tmp13*_tmp14*_tmp16*p_0;
+    out[0] = -compliance_y_1 + _tmp19*_tmp20 + _tmp8*_tmp9 - _tmp1*sin(_tmp0) - _tmp10*_tmp18 - _tmp3*_tmp7;
+    out[1] = compliance_x_1 + _tmp1*cos(_tmp0) + _tmp10*_tmp20 + _tmp18*_tmp19 + _tmp3*_tmp9 + _tmp7*_tmp8;
 }
 
 /* deviation of the points at level loaded_refined (72 operations) */
@@ -757,11 +757,11 @@ static void sk_dev_loaded_refined(const double *theta, const double *delta, cons
     const double _tmp15 = _tmp13*_tmp14*p_0;
     const double _tmp16 = cos(_tmp11);
     const double _tmp17 = 0.21650635094610965*_tmp15;
-    const double _tmp18 = 0.125*_tmp12*_tmp15 + _tmp16*_tmp17 + 0.8660254037844386*compliance_x_2 + 0.5*compliance_y_2;
+    const double _tmp18 = 0.5*compliance_y_2 + 0.8660254037844386*compliance_x_2 + _tmp16*_tmp17 + 0.125*_tmp12*_tmp15;
     const double _tmp19 = cos(theta_1);
-    const double _tmp20 = -_tmp12*_tmp17 + 0.125*_tmp13*_tmp14*_tmp16*p_0 + 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2;
-    out[0] = -_tmp1*sin(_tmp0) - _tmp10*_tmp18 + _tmp19*_tmp20 - _tmp3*_tmp7 + _tmp8*_tmp9 - compliance_y_1;
-    out[1] = _tmp1*cos(_tmp0) + _tmp10*_tmp20 + _tmp18*_tmp19 + _tmp3*_tmp9 + _tmp7*_tmp8 + compliance_x_1;
+    const double _tmp20 = 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2 - _tmp12*_tmp17 + 0.125*_tmp13*_tmp14*_tmp16*p_0;
+    out[0] = -compliance_y_1 + _tmp19*_tmp20 + _tmp8*_tmp9 - _tmp1*sin(_tmp0) - _tmp10*_tmp18 - _tmp3*_tmp7;
+    out[1] = compliance_x_1 + _tmp1*cos(_tmp0) + _tmp10*_tmp20 + _tmp18*_tmp19 + _tmp3*_tmp9 + _tmp7*_tmp8;
 }
 
 /* rotation of every link and how much further the compliant one turns (1 operations) */
@@ -800,16 +800,16 @@ static void sk_sens_rigid(const double *theta, const double *params, double *out
     const double _tmp8 = cos(theta_1);
     const double _tmp9 = 0.015*_tmp7 + 0.026*_tmp8;
     const double _tmp10 = 0.026*_tmp7 - 0.015*_tmp8;
-    const double _tmp11 = 0.045*_tmp1 + 0.064*_tmp2;
+    const double _tmp11 = 0.064*_tmp2 + 0.045*_tmp1;
     const double _tmp12 = 0.064*_tmp1 - 0.045*_tmp2;
     out[0] = 1;
     out[1] = -1;
     out[2] = 1;
     out[3] = -_tmp3;
-    out[4] = -0.015*_tmp4 + 0.068*_tmp5;
+    out[4] = 0.068*_tmp5 - 0.015*_tmp4;
     out[5] = 0;
     out[6] = -_tmp6;
-    out[7] = 0.068*_tmp4 + 0.015*_tmp5;
+    out[7] = 0.015*_tmp5 + 0.068*_tmp4;
     out[8] = 0;
     out[9] = 0;
     out[10] = 1;
@@ -849,10 +849,10 @@ static void sk_sens_paper(const double *theta, const double *params, double *out
     const double _tmp11 = _tmp7*p_0;
     const double _tmp12 = 0.10825317547305482*_tmp9;
     const double _tmp13 = pow(theta_2, 3);
-    const double _tmp14 = 3*symkin_cosr2(_tmp1) + symkin_sinr1(_tmp1) - 3*symkin_sinr2(_tmp1);
+    const double _tmp14 = -3*symkin_sinr2(_tmp1) + 3*symkin_cosr2(_tmp1) + symkin_sinr1(_tmp1);
     const double _tmp15 = _tmp13*_tmp14;
     const double _tmp16 = 0.05412658773652741*_tmp15;
-    const double _tmp17 = -_tmp10*_tmp3 - _tmp11*_tmp12 + 0.03125*_tmp13*_tmp14*_tmp7*p_0 - _tmp16*_tmp3 - _tmp3*_tmp6 + 0.25*_tmp4*_tmp7*p_0*theta_2;
+    const double _tmp17 = -_tmp10*_tmp3 - _tmp11*_tmp12 - _tmp16*_tmp3 - _tmp3*_tmp6 + 0.03125*_tmp13*_tmp14*_tmp7*p_0 + 0.25*_tmp4*_tmp7*p_0*theta_2;
     const double _tmp18 = sin(theta_1);
     const double _tmp19 = _tmp10*_tmp11 + _tmp11*_tmp16 + _tmp11*_tmp6 - _tmp12*_tmp3 + 0.03125*_tmp15*_tmp3 + 0.25*_tmp3*_tmp5;
     const double _tmp20 = 0.5*theta_1;
@@ -871,7 +871,7 @@ static void sk_sens_paper(const double *theta, const double *params, double *out
     const double _tmp33 = cos(_tmp20);
     const double _tmp34 = _tmp33*p_0;
     const double _tmp35 = 0.125*_tmp23;
-    const double _tmp36 = 0.0625*pow(theta_1, 3)*(3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20) - 3*symkin_sinr2(_tmp20));
+    const double _tmp36 = 0.0625*pow(theta_1, 3)*(-3*symkin_sinr2(_tmp20) + 3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20));
     const double _tmp37 = -_tmp29*p_0 + 0.125*_tmp4*_tmp7*_tmp8*p_0;
     const double _tmp38 = _tmp25*p_0 + _tmp27*p_0;
     out[0] = _tmp0*_tmp17 - _tmp18*_tmp19;
@@ -883,7 +883,7 @@ static void sk_sens_paper(const double *theta, const double *params, double *out
     out[6] = _tmp0*_tmp30 - _tmp18*_tmp28 - _tmp21*_tmp24;
     out[7] = -_tmp0*_tmp38 - _tmp18*_tmp37 - _tmp31*_tmp32 - _tmp31*_tmp36 - _tmp34*_tmp35;
     out[8] = _tmp0*_tmp28 + _tmp18*_tmp30 + _tmp24*_tmp33;
-    out[9] = _tmp0*_tmp37 - _tmp18*_tmp38 - _tmp31*_tmp35 + _tmp32*_tmp34 + _tmp34*_tmp36;
+    out[9] = _tmp0*_tmp37 + _tmp32*_tmp34 + _tmp34*_tmp36 - _tmp18*_tmp38 - _tmp31*_tmp35;
 }
 
 /* sensitivity at level first_order: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (278 operations) */
@@ -903,8 +903,8 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp4 = sin(theta_3);
     const double _tmp5 = cos(theta_3);
     const double _tmp6 = 0.015*_tmp4 - 0.068*_tmp5;
-    const double _tmp7 = -0.042*_tmp1 + 0.07*_tmp2;
-    const double _tmp8 = 0.068*_tmp4 + 0.015*_tmp5;
+    const double _tmp7 = 0.07*_tmp2 - 0.042*_tmp1;
+    const double _tmp8 = 0.015*_tmp5 + 0.068*_tmp4;
     const double _tmp9 = sin(theta_1);
     const double _tmp10 = 0.5*theta_2;
     const double _tmp11 = symkin_arck(_tmp10);
@@ -919,12 +919,12 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp20 = 0.10825317547305482*_tmp19;
     const double _tmp21 = 0.0625*_tmp19;
     const double _tmp22 = pow(theta_2, 3);
-    const double _tmp23 = 3*symkin_cosr2(_tmp10) + symkin_sinr1(_tmp10) - 3*symkin_sinr2(_tmp10);
+    const double _tmp23 = -3*symkin_sinr2(_tmp10) + 3*symkin_cosr2(_tmp10) + symkin_sinr1(_tmp10);
     const double _tmp24 = _tmp22*_tmp23;
     const double _tmp25 = 0.05412658773652741*_tmp24;
-    const double _tmp26 = 0.25*_tmp12*_tmp14 - _tmp14*_tmp20 + 0.03125*_tmp14*_tmp24 + _tmp16*_tmp17 + _tmp16*_tmp21 + _tmp16*_tmp25;
+    const double _tmp26 = _tmp16*_tmp17 + _tmp16*_tmp21 + _tmp16*_tmp25 - _tmp14*_tmp20 + 0.03125*_tmp14*_tmp24 + 0.25*_tmp12*_tmp14;
     const double _tmp27 = cos(theta_1);
-    const double _tmp28 = 0.25*_tmp11*_tmp15*p_0*theta_2 - _tmp14*_tmp17 - _tmp14*_tmp21 - _tmp14*_tmp25 + 0.03125*_tmp15*_tmp22*_tmp23*p_0 - _tmp16*_tmp20;
+    const double _tmp28 = -_tmp14*_tmp17 - _tmp14*_tmp21 - _tmp14*_tmp25 - _tmp16*_tmp20 + 0.03125*_tmp15*_tmp22*_tmp23*p_0 + 0.25*_tmp11*_tmp15*p_0*theta_2;
     const double _tmp29 = _tmp26*_tmp9 - _tmp27*_tmp28;
     const double _tmp30 = 0.5*theta_4;
     const double _tmp31 = cos(_tmp30);
@@ -947,14 +947,14 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp48 = pow(theta_3, 2);
     const double _tmp49 = _tmp45*_tmp48;
     const double _tmp50 = 0.125*p_0;
-    const double _tmp51 = 0.0625*pow(theta_3, 3)*(3*symkin_cosr2(_tmp42) + symkin_sinr1(_tmp42) - 3*symkin_sinr2(_tmp42));
+    const double _tmp51 = 0.0625*pow(theta_3, 3)*(-3*symkin_sinr2(_tmp42) + 3*symkin_cosr2(_tmp42) + symkin_sinr1(_tmp42));
     const double _tmp52 = _tmp30*_tmp33;
     const double _tmp53 = _tmp35*_tmp50;
-    const double _tmp54 = 0.0625*pow(theta_4, 3)*(3*symkin_cosr2(_tmp30) + symkin_sinr1(_tmp30) - 3*symkin_sinr2(_tmp30));
+    const double _tmp54 = 0.0625*pow(theta_4, 3)*(-3*symkin_sinr2(_tmp30) + 3*symkin_cosr2(_tmp30) + symkin_sinr1(_tmp30));
     const double _tmp55 = _tmp31*_tmp53 + _tmp39*_tmp52 + _tmp39*_tmp54;
     const double _tmp56 = _tmp32*_tmp52 + _tmp32*_tmp54 - _tmp38*_tmp53;
     const double _tmp57 = _tmp26*_tmp27 + _tmp28*_tmp9;
-    const double _tmp58 = -_tmp1*_tmp40 + _tmp2*_tmp37 - _tmp3*delta_2;
+    const double _tmp58 = _tmp2*_tmp37 - _tmp1*_tmp40 - _tmp3*delta_2;
     const double _tmp59 = _tmp47*p_0;
     const double _tmp60 = _tmp36*_tmp38;
     const double _tmp61 = 0.5*theta_1;
@@ -967,22 +967,22 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp68 = _tmp15*_tmp67;
     const double _tmp69 = _tmp66 + _tmp68;
     const double _tmp70 = _tmp13*_tmp67;
-    const double _tmp71 = 0.125*_tmp11*_tmp15*_tmp18 - _tmp70;
-    const double _tmp72 = -_tmp27*_tmp71 + _tmp62*_tmp65 + _tmp69*_tmp9;
-    const double _tmp73 = 0.125*_tmp11*_tmp15*_tmp18*p_0 - _tmp70*p_0;
+    const double _tmp71 = -_tmp70 + 0.125*_tmp11*_tmp15*_tmp18;
+    const double _tmp72 = _tmp62*_tmp65 + _tmp69*_tmp9 - _tmp27*_tmp71;
+    const double _tmp73 = -_tmp70*p_0 + 0.125*_tmp11*_tmp15*_tmp18*p_0;
     const double _tmp74 = _tmp66*p_0 + _tmp68*p_0;
     const double _tmp75 = _tmp62*p_0;
-    const double _tmp76 = 0.0625*pow(theta_1, 3)*(3*symkin_cosr2(_tmp61) + symkin_sinr1(_tmp61) - 3*symkin_sinr2(_tmp61));
+    const double _tmp76 = 0.0625*pow(theta_1, 3)*(-3*symkin_sinr2(_tmp61) + 3*symkin_cosr2(_tmp61) + symkin_sinr1(_tmp61));
     const double _tmp77 = cos(_tmp61);
     const double _tmp78 = _tmp50*_tmp64;
     const double _tmp79 = _tmp61*_tmp63;
     const double _tmp80 = _tmp27*_tmp74 + _tmp73*_tmp9 + _tmp75*_tmp76 + _tmp75*_tmp79 + _tmp77*_tmp78;
     const double _tmp81 = _tmp27*_tmp69 + _tmp65*_tmp77 + _tmp71*_tmp9;
     const double _tmp82 = _tmp77*p_0;
-    const double _tmp83 = _tmp27*_tmp73 - _tmp62*_tmp78 - _tmp74*_tmp9 + _tmp76*_tmp82 + _tmp79*_tmp82;
-    const double _tmp84 = -0.064*_tmp1 + 0.045*_tmp2;
+    const double _tmp83 = _tmp27*_tmp73 + _tmp76*_tmp82 + _tmp79*_tmp82 - _tmp62*_tmp78 - _tmp74*_tmp9;
+    const double _tmp84 = 0.045*_tmp2 - 0.064*_tmp1;
     const double _tmp85 = _tmp84*delta_2;
-    const double _tmp86 = 0.045*_tmp1 + 0.064*_tmp2;
+    const double _tmp86 = 0.064*_tmp2 + 0.045*_tmp1;
     const double _tmp87 = -_tmp86*delta_2;
     out[0] = 1;
     out[1] = -1;
@@ -997,16 +997,16 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     out[10] = 0;
     out[11] = 0;
     out[12] = -_tmp29 - _tmp41;
-    out[13] = _tmp44*_tmp46 + _tmp44*_tmp51 + _tmp47*_tmp49*_tmp50 - _tmp8*delta_3;
-    out[14] = -_tmp1*_tmp55 + _tmp2*_tmp56;
+    out[13] = _tmp44*_tmp46 + _tmp44*_tmp51 - _tmp8*delta_3 + _tmp47*_tmp49*_tmp50;
+    out[14] = _tmp2*_tmp56 - _tmp1*_tmp55;
     out[15] = _tmp57 + _tmp58;
-    out[16] = 0.125*_tmp43*_tmp45*_tmp48*p_0 - _tmp46*_tmp59 - _tmp51*_tmp59 - _tmp6*delta_3;
+    out[16] = -_tmp46*_tmp59 - _tmp51*_tmp59 - _tmp6*delta_3 + 0.125*_tmp43*_tmp45*_tmp48*p_0;
     out[17] = _tmp1*_tmp56 + _tmp2*_tmp55;
     out[18] = 0;
     out[19] = 0;
-    out[20] = -_tmp1*_tmp60 + 0.25*_tmp2*_tmp31*_tmp33*_tmp34 + 0.25*_tmp43*_tmp45*_tmp48 - _tmp72;
+    out[20] = -_tmp72 - _tmp1*_tmp60 + 0.25*_tmp43*_tmp45*_tmp48 + 0.25*_tmp2*_tmp31*_tmp33*_tmp34;
     out[21] = -_tmp41 - _tmp80;
-    out[22] = _tmp1*_tmp31*_tmp36 + _tmp2*_tmp60 - 0.25*_tmp47*_tmp49 + _tmp81;
+    out[22] = _tmp81 + _tmp2*_tmp60 - 0.25*_tmp47*_tmp49 + _tmp1*_tmp31*_tmp36;
     out[23] = _tmp58 + _tmp83;
     out[24] = -_tmp29 - _tmp85;
     out[25] = 0;
@@ -1056,12 +1056,12 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp16 = 0.10825317547305482*_tmp15;
     const double _tmp17 = 0.0625*_tmp15;
     const double _tmp18 = pow(_tmp0, 3);
-    const double _tmp19 = 3*symkin_cosr2(_tmp6) + symkin_sinr1(_tmp6) - 3*symkin_sinr2(_tmp6);
+    const double _tmp19 = -3*symkin_sinr2(_tmp6) + 3*symkin_cosr2(_tmp6) + symkin_sinr1(_tmp6);
     const double _tmp20 = _tmp18*_tmp19;
     const double _tmp21 = 0.05412658773652741*_tmp20;
-    const double _tmp22 = -_tmp10*_tmp16 + 0.03125*_tmp10*_tmp20 + 0.25*_tmp10*_tmp8 + _tmp12*_tmp13 + _tmp12*_tmp17 + _tmp12*_tmp21;
+    const double _tmp22 = _tmp12*_tmp13 + _tmp12*_tmp17 + _tmp12*_tmp21 - _tmp10*_tmp16 + 0.03125*_tmp10*_tmp20 + 0.25*_tmp10*_tmp8;
     const double _tmp23 = cos(theta_1);
-    const double _tmp24 = 0.25*_tmp0*_tmp11*_tmp7*p_0 - _tmp10*_tmp13 - _tmp10*_tmp17 - _tmp10*_tmp21 + 0.03125*_tmp11*_tmp18*_tmp19*p_0 - _tmp12*_tmp16;
+    const double _tmp24 = -_tmp10*_tmp13 - _tmp10*_tmp17 - _tmp10*_tmp21 - _tmp12*_tmp16 + 0.03125*_tmp11*_tmp18*_tmp19*p_0 + 0.25*_tmp0*_tmp11*_tmp7*p_0;
     const double _tmp25 = _tmp22*_tmp4 - _tmp23*_tmp24;
     const double _tmp26 = 0.5*delta_4 + 0.5*theta_4;
     const double _tmp27 = symkin_arck(_tmp26);
@@ -1085,7 +1085,7 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp45 = _tmp44 + 0.5*theta_3;
     const double _tmp46 = sin(_tmp45);
     const double _tmp47 = _tmp46*p_0;
-    const double _tmp48 = 0.0625*pow(_tmp41, 3)*(3*symkin_cosr2(_tmp45) + symkin_sinr1(_tmp45) - 3*symkin_sinr2(_tmp45));
+    const double _tmp48 = 0.0625*pow(_tmp41, 3)*(-3*symkin_sinr2(_tmp45) + 3*symkin_cosr2(_tmp45) + symkin_sinr1(_tmp45));
     const double _tmp49 = cos(_tmp45);
     const double _tmp50 = pow(_tmp41, 2);
     const double _tmp51 = symkin_arck(_tmp45);
@@ -1096,23 +1096,23 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp56 = 0.5*_tmp31;
     const double _tmp57 = _tmp32*_tmp53;
     const double _tmp58 = _tmp27*_tmp28;
-    const double _tmp59 = 0.0625*pow(_tmp31, 3)*(3*symkin_cosr2(_tmp26) + symkin_sinr1(_tmp26) - 3*symkin_sinr2(_tmp26));
-    const double _tmp60 = _tmp35*_tmp59*p_0 + _tmp37*_tmp56 + _tmp57*_tmp58;
+    const double _tmp59 = 0.0625*pow(_tmp31, 3)*(-3*symkin_sinr2(_tmp26) + 3*symkin_cosr2(_tmp26) + symkin_sinr1(_tmp26));
+    const double _tmp60 = _tmp37*_tmp56 + _tmp57*_tmp58 + _tmp35*_tmp59*p_0;
     const double _tmp61 = _tmp29*_tmp59 + _tmp30*_tmp56 - _tmp36*_tmp57;
-    const double _tmp62 = -_tmp2*_tmp60 + _tmp3*_tmp61;
+    const double _tmp62 = _tmp3*_tmp61 - _tmp2*_tmp60;
     const double _tmp63 = _tmp22*_tmp23 + _tmp24*_tmp4;
-    const double _tmp64 = -_tmp2*_tmp38 + _tmp3*_tmp34;
+    const double _tmp64 = _tmp3*_tmp34 - _tmp2*_tmp38;
     const double _tmp65 = _tmp63 + _tmp64;
     const double _tmp66 = _tmp49*p_0;
-    const double _tmp67 = 0.125*_tmp47*_tmp52 - _tmp48*_tmp66 - _tmp54*_tmp66;
+    const double _tmp67 = -_tmp48*_tmp66 - _tmp54*_tmp66 + 0.125*_tmp47*_tmp52;
     const double _tmp68 = _tmp2*_tmp61 + _tmp3*_tmp60;
     const double _tmp69 = theta_1 + theta_2;
     const double _tmp70 = sin(_tmp69);
     const double _tmp71 = sin(delta_2);
     const double _tmp72 = pow(sin(_tmp5), 2);
-    const double _tmp73 = -0.042*_tmp71 - 0.14*_tmp72;
+    const double _tmp73 = -0.14*_tmp72 - 0.042*_tmp71;
     const double _tmp74 = cos(_tmp69);
-    const double _tmp75 = -0.07*_tmp71 + 0.084*_tmp72;
+    const double _tmp75 = 0.084*_tmp72 - 0.07*_tmp71;
     const double _tmp76 = _tmp70*_tmp73 - _tmp74*_tmp75;
     const double _tmp77 = cos(theta_3);
     const double _tmp78 = sin(delta_3);
@@ -1132,31 +1132,31 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp92 = _tmp11*_tmp91;
     const double _tmp93 = _tmp90 + _tmp92;
     const double _tmp94 = _tmp9*_tmp91;
-    const double _tmp95 = 0.125*_tmp11*_tmp14*_tmp7 - _tmp94;
-    const double _tmp96 = -_tmp23*_tmp95 + _tmp4*_tmp93 + _tmp86*_tmp89;
-    const double _tmp97 = 0.125*_tmp11*_tmp14*_tmp7*p_0 - _tmp94*p_0;
+    const double _tmp95 = -_tmp94 + 0.125*_tmp11*_tmp14*_tmp7;
+    const double _tmp96 = _tmp4*_tmp93 + _tmp86*_tmp89 - _tmp23*_tmp95;
+    const double _tmp97 = -_tmp94*p_0 + 0.125*_tmp11*_tmp14*_tmp7*p_0;
     const double _tmp98 = _tmp90*p_0 + _tmp92*p_0;
     const double _tmp99 = _tmp86*p_0;
-    const double _tmp100 = 0.0625*pow(theta_1, 3)*(3*symkin_cosr2(_tmp85) + symkin_sinr1(_tmp85) - 3*symkin_sinr2(_tmp85));
+    const double _tmp100 = 0.0625*pow(theta_1, 3)*(-3*symkin_sinr2(_tmp85) + 3*symkin_cosr2(_tmp85) + symkin_sinr1(_tmp85));
     const double _tmp101 = cos(_tmp85);
     const double _tmp102 = _tmp53*_tmp88;
     const double _tmp103 = _tmp85*_tmp87;
     const double _tmp104 = _tmp100*_tmp99 + _tmp101*_tmp102 + _tmp103*_tmp99 + _tmp23*_tmp98 + _tmp4*_tmp97;
     const double _tmp105 = _tmp101*_tmp89 + _tmp23*_tmp93 + _tmp4*_tmp95;
     const double _tmp106 = _tmp101*p_0;
-    const double _tmp107 = _tmp100*_tmp106 - _tmp102*_tmp86 + _tmp103*_tmp106 + _tmp23*_tmp97 - _tmp4*_tmp98;
+    const double _tmp107 = _tmp100*_tmp106 + _tmp103*_tmp106 + _tmp23*_tmp97 - _tmp102*_tmp86 - _tmp4*_tmp98;
     const double _tmp108 = -0.064*_tmp71 - 0.09*_tmp72;
-    const double _tmp109 = -0.045*_tmp71 + 0.128*_tmp72;
+    const double _tmp109 = 0.128*_tmp72 - 0.045*_tmp71;
     const double _tmp110 = _tmp108*_tmp70 - _tmp109*_tmp74;
     const double _tmp111 = _tmp108*_tmp74 + _tmp109*_tmp70;
     out[0] = 1;
     out[1] = -1;
     out[2] = 1;
-    out[3] = -0.07*_tmp2 - 0.042*_tmp3 - _tmp40;
-    out[4] = 0.068*_tmp42 - 0.015*_tmp43 + _tmp55;
+    out[3] = -_tmp40 - 0.07*_tmp2 - 0.042*_tmp3;
+    out[4] = _tmp55 + 0.068*_tmp42 - 0.015*_tmp43;
     out[5] = _tmp62;
-    out[6] = -0.042*_tmp2 + 0.07*_tmp3 + _tmp65;
-    out[7] = 0.015*_tmp42 + 0.068*_tmp43 + _tmp67;
+    out[6] = _tmp65 + 0.07*_tmp3 - 0.042*_tmp2;
+    out[7] = _tmp67 + 0.015*_tmp42 + 0.068*_tmp43;
     out[8] = _tmp68;
     out[9] = 0;
     out[10] = 0;
@@ -1169,9 +1169,9 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     out[17] = _tmp68;
     out[18] = 0;
     out[19] = 0;
-    out[20] = -_tmp2*_tmp84 + 0.25*_tmp27*_tmp28*_tmp3*_tmp32 + 0.25*_tmp46*_tmp50*_tmp51 - _tmp96;
+    out[20] = -_tmp96 - _tmp2*_tmp84 + 0.25*_tmp46*_tmp50*_tmp51 + 0.25*_tmp27*_tmp28*_tmp3*_tmp32;
     out[21] = -_tmp104 - _tmp39 - _tmp76;
-    out[22] = _tmp105 + _tmp2*_tmp33*_tmp58 + _tmp3*_tmp84 - 0.25*_tmp49*_tmp52;
+    out[22] = _tmp105 + _tmp3*_tmp84 - 0.25*_tmp49*_tmp52 + _tmp2*_tmp33*_tmp58;
     out[23] = _tmp107 + _tmp64 + _tmp83;
     out[24] = -_tmp110 - _tmp25;
     out[25] = 0;
@@ -1179,10 +1179,10 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     out[27] = _tmp111 + _tmp63;
     out[28] = 0;
     out[29] = 0;
-    out[30] = -0.045*_tmp2 - _tmp25 - 0.064*_tmp3;
+    out[30] = -_tmp25 - 0.064*_tmp3 - 0.045*_tmp2;
     out[31] = 0;
     out[32] = 0;
-    out[33] = -0.064*_tmp2 + 0.045*_tmp3 + _tmp63;
+    out[33] = _tmp63 + 0.045*_tmp3 - 0.064*_tmp2;
     out[34] = 0;
     out[35] = 0;
     out[36] = -_tmp96;

@@ -135,26 +135,26 @@ def _rigid(inputs, params):
     theta_1, = inputs
     _tmp0 = numpy.sin(theta_1)
     _tmp1 = numpy.cos(theta_1)
-    dyad1_ax = -0.026*_tmp0 + 0.015*_tmp1
+    dyad1_ax = 0.015*_tmp1 - 0.026*_tmp0
     dyad1_ay = 0.015*_tmp0 + 0.026*_tmp1
     dyad1_cx = 0.1
     dyad1_cy = 0
-    _tmp2 = -dyad1_ax + dyad1_cx
-    _tmp3 = -dyad1_ay + dyad1_cy
+    _tmp2 = dyad1_cx - dyad1_ax
+    _tmp3 = dyad1_cy - dyad1_ay
     dyad1_dsq = _tmp2**2 + _tmp3**2
     _tmp4 = dyad1_dsq**(-1.0)
-    dyad1_along = 0.5*_tmp4*(dyad1_dsq + 0.001815)
-    dyad1_reach = 0.006664*_tmp4 - dyad1_along**2
+    dyad1_along = 0.5*_tmp4*(0.001815 + dyad1_dsq)
+    dyad1_reach = -dyad1_along**2 + 0.006664*_tmp4
     dyad1_across = numpy.sqrt(dyad1_reach)
-    dyad1_bx = _tmp2*dyad1_along - _tmp3*dyad1_across + dyad1_ax
-    dyad1_by = _tmp2*dyad1_across + _tmp3*dyad1_along + dyad1_ay
+    dyad1_bx = dyad1_ax + _tmp2*dyad1_along - _tmp3*dyad1_across
+    dyad1_by = dyad1_ay + _tmp2*dyad1_across + _tmp3*dyad1_along
     dyad1_margin = 175.91643435618488*dyad1_dsq*abs(dyad1_across)
-    dyad1_phi1 = numpy.arctan2(0.042*dyad1_ax - 0.07*dyad1_ay - 0.042*dyad1_bx + 0.07*dyad1_by, -0.07*dyad1_ax - 0.042*dyad1_ay + 0.07*dyad1_bx + 0.042*dyad1_by)
-    dyad1_phi2 = numpy.arctan2(-0.068*dyad1_bx - 0.015*dyad1_by + 0.068*dyad1_cx + 0.015*dyad1_cy, -0.015*dyad1_bx + 0.068*dyad1_by + 0.015*dyad1_cx - 0.068*dyad1_cy)
+    dyad1_phi1 = numpy.arctan2(0.07*dyad1_by + 0.042*dyad1_ax - 0.07*dyad1_ay - 0.042*dyad1_bx, 0.07*dyad1_bx + 0.042*dyad1_by - 0.07*dyad1_ax - 0.042*dyad1_ay)
+    dyad1_phi2 = numpy.arctan2(0.015*dyad1_cy + 0.068*dyad1_cx - 0.015*dyad1_by - 0.068*dyad1_bx, 0.015*dyad1_cx + 0.068*dyad1_by - 0.015*dyad1_bx - 0.068*dyad1_cy)
     return [
         dyad1_phi1 - theta_1,
         dyad1_phi2,
-        -dyad1_phi1 + dyad1_phi2,
+        dyad1_phi2 - dyad1_phi1,
         dyad1_reach,
         dyad1_margin,
     ]
@@ -172,9 +172,9 @@ def _rigid_res(theta, params):
     _tmp6 = numpy.sin(0.5*theta_3)**2
     _tmp7 = numpy.sin(_tmp4 + 0.5*theta_2)**2
     return [
-        _tmp0 - theta_3 + theta_4,
-        -0.026*_tmp1 + 0.068*_tmp2 - 0.042*_tmp3 - 0.03*_tmp5 - 0.03*_tmp6 - 0.14*_tmp7,
-        0.015*_tmp1 + 0.015*_tmp2 + 0.07*_tmp3 - 0.052*_tmp5 + 0.136*_tmp6 - 0.084*_tmp7,
+        _tmp0 + theta_4 - theta_3,
+        0.068*_tmp2 - 0.03*_tmp5 - 0.03*_tmp6 - 0.14*_tmp7 - 0.042*_tmp3 - 0.026*_tmp1,
+        0.015*_tmp1 + 0.015*_tmp2 + 0.136*_tmp6 + 0.07*_tmp3 - 0.084*_tmp7 - 0.052*_tmp5,
     ]
 
 
@@ -207,7 +207,7 @@ def _linear(theta, params):
     _tmp22 = _tmp20*_tmp21*p_0
     _tmp23 = numpy.cos(_tmp18)
     _tmp24 = 0.21650635094610965*_tmp22
-    _tmp25 = 0.125*_tmp19*_tmp22 + _tmp23*_tmp24
+    _tmp25 = _tmp23*_tmp24 + 0.125*_tmp19*_tmp22
     _tmp26 = numpy.cos(theta_1)
     _tmp27 = -_tmp19*_tmp24 + 0.125*_tmp20*_tmp21*_tmp23*p_0
     return [
@@ -215,14 +215,14 @@ def _linear(theta, params):
         -1,
         1,
         -0.07*_tmp1 - 0.042*_tmp2,
-        -0.015*_tmp3 + 0.068*_tmp4,
+        0.068*_tmp4 - 0.015*_tmp3,
         0,
-        -0.042*_tmp1 + 0.07*_tmp2,
-        0.068*_tmp3 + 0.015*_tmp4,
+        0.07*_tmp2 - 0.042*_tmp1,
+        0.015*_tmp4 + 0.068*_tmp3,
         0,
         0,
-        -_tmp1*_tmp15 + 0.25*_tmp10*_tmp8*p_0*numpy.sin(_tmp9) + 0.25*_tmp12*_tmp13*_tmp16*_tmp2*p_0 - _tmp17*_tmp25 + _tmp26*_tmp27 - _tmp7*numpy.sin(_tmp5),
-        _tmp1*_tmp14*_tmp16 - _tmp10*_tmp6*_tmp8*numpy.cos(_tmp9) + _tmp15*_tmp2 + _tmp17*_tmp27 + _tmp25*_tmp26 + _tmp7*numpy.cos(_tmp5),
+        _tmp26*_tmp27 - _tmp1*_tmp15 - _tmp17*_tmp25 - _tmp7*numpy.sin(_tmp5) + 0.25*_tmp10*_tmp8*p_0*numpy.sin(_tmp9) + 0.25*_tmp12*_tmp13*_tmp16*_tmp2*p_0,
+        _tmp15*_tmp2 + _tmp17*_tmp27 + _tmp25*_tmp26 + _tmp7*numpy.cos(_tmp5) + _tmp1*_tmp14*_tmp16 - _tmp10*_tmp6*_tmp8*numpy.cos(_tmp9),
     ]
 
 
@@ -248,7 +248,7 @@ def _newton(theta, delta, params):
     _tmp14 = numpy.sin(_tmp13)**2
     _tmp15 = 0.07*_tmp12 - 0.084*_tmp14
     _tmp16 = numpy.cos(_tmp10)
-    _tmp17 = -0.042*_tmp12 - 0.14*_tmp14
+    _tmp17 = -0.14*_tmp14 - 0.042*_tmp12
     _tmp18 = delta_3 + theta_3
     _tmp19 = _tmp18**2
     _tmp20 = _tmp5 + 0.5*theta_3
@@ -277,9 +277,9 @@ def _newton(theta, delta, params):
     _tmp43 = numpy.cos(_tmp39)
     _tmp44 = _tmp43*p_0
     _tmp45 = 0.21650635094610965*_tmp41
-    _tmp46 = 0.125*_tmp41*_tmp42 + _tmp44*_tmp45
+    _tmp46 = _tmp44*_tmp45 + 0.125*_tmp41*_tmp42
     _tmp47 = numpy.cos(theta_1)
-    _tmp48 = 0.125*_tmp38*_tmp40*_tmp43*p_0 - _tmp42*_tmp45
+    _tmp48 = -_tmp42*_tmp45 + 0.125*_tmp38*_tmp40*_tmp43*p_0
     _tmp49 = numpy.cos(_tmp20)
     _tmp50 = _tmp19*_tmp22
     _tmp51 = _tmp31*_tmp35
@@ -289,37 +289,37 @@ def _newton(theta, delta, params):
     _tmp55 = 0.10825317547305482*_tmp41
     _tmp56 = 0.0625*_tmp41
     _tmp57 = _tmp37**3
-    _tmp58 = 3*cosr2(_tmp39) + sinr1(_tmp39) - 3*sinr2(_tmp39)
+    _tmp58 = -3*sinr2(_tmp39) + 3*cosr2(_tmp39) + sinr1(_tmp39)
     _tmp59 = _tmp57*_tmp58
     _tmp60 = 0.05412658773652741*_tmp59
-    _tmp61 = 0.25*_tmp42*_tmp53 - _tmp42*_tmp55 + 0.03125*_tmp42*_tmp59 + _tmp44*_tmp54 + _tmp44*_tmp56 + _tmp44*_tmp60
-    _tmp62 = 0.25*_tmp37*_tmp40*_tmp43*p_0 - _tmp42*_tmp54 - _tmp42*_tmp56 - _tmp42*_tmp60 + 0.03125*_tmp43*_tmp57*_tmp58*p_0 - _tmp44*_tmp55
+    _tmp61 = _tmp44*_tmp54 + _tmp44*_tmp56 + _tmp44*_tmp60 - _tmp42*_tmp55 + 0.03125*_tmp42*_tmp59 + 0.25*_tmp42*_tmp53
+    _tmp62 = -_tmp42*_tmp54 - _tmp42*_tmp56 - _tmp42*_tmp60 - _tmp44*_tmp55 + 0.03125*_tmp43*_tmp57*_tmp58*p_0 + 0.25*_tmp37*_tmp40*_tmp43*p_0
     _tmp63 = numpy.sin(_tmp18)
     _tmp64 = numpy.cos(_tmp18)
     _tmp65 = _tmp21*p_0
     _tmp66 = 0.5*_tmp18*_tmp22
     _tmp67 = 0.125*p_0
-    _tmp68 = 0.0625*_tmp18**3*(3*cosr2(_tmp20) + sinr1(_tmp20) - 3*sinr2(_tmp20))
+    _tmp68 = 0.0625*_tmp18**3*(-3*sinr2(_tmp20) + 3*cosr2(_tmp20) + sinr1(_tmp20))
     _tmp69 = 0.5*_tmp27*_tmp28
     _tmp70 = _tmp26*p_0
     _tmp71 = _tmp30*_tmp67
-    _tmp72 = 0.0625*_tmp28**3*(3*cosr2(_tmp25) + sinr1(_tmp25) - 3*sinr2(_tmp25))
+    _tmp72 = 0.0625*_tmp28**3*(-3*sinr2(_tmp25) + 3*cosr2(_tmp25) + sinr1(_tmp25))
     _tmp73 = _tmp35*_tmp71 + _tmp69*_tmp70 + _tmp70*_tmp72
     _tmp74 = _tmp35*p_0
-    _tmp75 = -_tmp26*_tmp71 + _tmp69*_tmp74 + _tmp72*_tmp74
+    _tmp75 = _tmp69*_tmp74 + _tmp72*_tmp74 - _tmp26*_tmp71
     _tmp76 = _tmp49*p_0
     return [
-        delta_2 - delta_3 + delta_4,
-        -_tmp11*_tmp15 + _tmp16*_tmp17 + 0.25*_tmp19*_tmp21*_tmp22*p_0 - _tmp2*numpy.sin(_tmp0) + 0.25*_tmp27*_tmp29*_tmp34*_tmp35*p_0 - _tmp3*_tmp7 - _tmp33 - _tmp36*_tmp46 + _tmp47*_tmp48 + _tmp8*_tmp9,
-        -_tmp1*_tmp49*_tmp50 + _tmp11*_tmp17 + _tmp15*_tmp16 + _tmp2*numpy.cos(_tmp0) + _tmp3*_tmp9 + _tmp36*_tmp48 + _tmp46*_tmp47 + _tmp52 + _tmp7*_tmp8,
+        delta_2 + delta_4 - delta_3,
+        -_tmp33 + _tmp16*_tmp17 + _tmp47*_tmp48 + _tmp8*_tmp9 - _tmp11*_tmp15 - _tmp2*numpy.sin(_tmp0) - _tmp3*_tmp7 - _tmp36*_tmp46 + 0.25*_tmp19*_tmp21*_tmp22*p_0 + 0.25*_tmp27*_tmp29*_tmp34*_tmp35*p_0,
+        _tmp52 + _tmp11*_tmp17 + _tmp15*_tmp16 + _tmp2*numpy.cos(_tmp0) + _tmp3*_tmp9 + _tmp36*_tmp48 + _tmp46*_tmp47 + _tmp7*_tmp8 - _tmp1*_tmp49*_tmp50,
         1,
         -1,
         1,
-        -0.07*_tmp24 - 0.042*_tmp34 - _tmp36*_tmp61 + _tmp47*_tmp62 - _tmp52,
-        _tmp49*_tmp50*_tmp67 - 0.015*_tmp63 + 0.068*_tmp64 + _tmp65*_tmp66 + _tmp65*_tmp68,
-        -_tmp24*_tmp73 + _tmp34*_tmp75,
-        -0.042*_tmp24 - _tmp33 + _tmp34*_tmp51 + 0.07*_tmp34 + _tmp36*_tmp62 + _tmp47*_tmp61,
-        0.125*_tmp50*_tmp65 + 0.068*_tmp63 + 0.015*_tmp64 - _tmp66*_tmp76 - _tmp68*_tmp76,
+        -_tmp52 - 0.07*_tmp24 - 0.042*_tmp34 + _tmp47*_tmp62 - _tmp36*_tmp61,
+        0.068*_tmp64 - 0.015*_tmp63 + _tmp65*_tmp66 + _tmp65*_tmp68 + _tmp49*_tmp50*_tmp67,
+        _tmp34*_tmp75 - _tmp24*_tmp73,
+        -_tmp33 + 0.07*_tmp34 - 0.042*_tmp24 + _tmp34*_tmp51 + _tmp36*_tmp62 + _tmp47*_tmp61,
+        0.015*_tmp64 + 0.068*_tmp63 - _tmp66*_tmp76 - _tmp68*_tmp76 + 0.125*_tmp50*_tmp65,
         _tmp24*_tmp75 + _tmp34*_tmp73,
     ]
 
@@ -333,8 +333,8 @@ def _rigid_points(theta, params):
     _tmp3 = numpy.sin(_tmp2)
     _tmp4 = numpy.cos(_tmp2)
     return [
-        -0.026*_tmp0 + 0.015*_tmp1 - 0.064*_tmp3 + 0.045*_tmp4,
-        0.015*_tmp0 + 0.026*_tmp1 + 0.045*_tmp3 + 0.064*_tmp4,
+        0.015*_tmp1 + 0.045*_tmp4 - 0.064*_tmp3 - 0.026*_tmp0,
+        0.015*_tmp0 + 0.064*_tmp4 + 0.045*_tmp3 + 0.026*_tmp1,
     ]
 
 
@@ -355,7 +355,7 @@ def _loaded_q(theta, mu0, params):
     theta_1, theta_2, theta_3, theta_4 = theta
     _, mu0_2, mu0_3 = mu0
     p_0, = params
-    _tmp0 = theta_1 + 0.5*theta_2 + 1.0471975511965979
+    _tmp0 = 1.0471975511965979 + theta_1 + 0.5*theta_2
     _tmp1 = -mu0_2*numpy.cos(_tmp0) - mu0_3*numpy.sin(_tmp0)
     _tmp2 = numpy.less_equal(p_0, 0.01)
     _tmp3 = 200000*_DTYPE(numpy.where(_tmp2, 4.333333333333334e-12, 4.761904761904762e-12))/p_0
@@ -364,13 +364,13 @@ def _loaded_q(theta, mu0, params):
     _tmp6 = 8000000000*_DTYPE(numpy.where(_tmp2, 1.8777777777777777e-23, 2.267573696145125e-23))/_tmp5
     _tmp7 = 4.1666666666666667e-07*_tmp5*_DTYPE(numpy.where(_tmp2, 230769230769.23077, 210000000000))
     _tmp8 = 0.5*theta_3
-    _tmp9 = -mu0_2*numpy.sin(_tmp8) + mu0_3*numpy.cos(_tmp8)
+    _tmp9 = mu0_3*numpy.cos(_tmp8) - mu0_2*numpy.sin(_tmp8)
     _tmp10 = theta_1 + theta_2 + 0.5*theta_4
     _tmp11 = -mu0_2*numpy.cos(_tmp10) - mu0_3*numpy.sin(_tmp10)
     return [
-        -_tmp7*theta_2*(_tmp1**3*_tmp4 - _tmp1**2*_tmp6 + _tmp1*_tmp3 + 1),
-        -_tmp7*theta_3*(_tmp3*_tmp9 + _tmp4*_tmp9**3 - _tmp6*_tmp9**2 + 1),
-        -_tmp7*theta_4*(_tmp11**3*_tmp4 - _tmp11**2*_tmp6 + _tmp11*_tmp3 + 1),
+        -_tmp7*theta_2*(1 + _tmp1*_tmp3 + _tmp4*_tmp1**3 - _tmp6*_tmp1**2),
+        -_tmp7*theta_3*(1 + _tmp3*_tmp9 + _tmp4*_tmp9**3 - _tmp6*_tmp9**2),
+        -_tmp7*theta_4*(1 + _tmp11*_tmp3 + _tmp4*_tmp11**3 - _tmp6*_tmp11**2),
     ]
 
 
@@ -389,41 +389,41 @@ def _loaded_compliance(theta, mu, params):
     _tmp7 = _tmp6/p_0
     _tmp8 = _tmp4*_tmp7
     _tmp9 = _DTYPE(numpy.where(_tmp5, 8.137037037037037e-35, 1.0797969981643451e-34))/p_0**3
-    _tmp10 = _tmp4**3*_tmp9
+    _tmp10 = _tmp9*_tmp4**3
     _tmp11 = _tmp4**2
     _tmp12 = p_0**(-2.0)
     _tmp13 = _DTYPE(numpy.where(_tmp5, 1.8777777777777777e-23, 2.267573696145125e-23))
     _tmp14 = _tmp12*_tmp13
     _tmp15 = _tmp11*_tmp14
-    _tmp16 = -1180952380952381.0*_tmp10 + 4857142857.142858*_tmp15 - 20000*_tmp8 + 0.08333333333333333
+    _tmp16 = 0.08333333333333333 - 20000*_tmp8 + 4857142857.142858*_tmp15 - 1180952380952381.0*_tmp10
     _tmp17 = 2400000*_tmp6
     _tmp18 = 5760000000000*_tmp14
-    _tmp19 = p_0*(_tmp18*_tmp3**2*(-239307359307359.3*_tmp10 + 738095238.0952381*_tmp15 - 2023.8095238095239*_tmp8 + 0.004166666666666667) + theta_1**2*(-22857142857142.855*_tmp10 + 285714285.71428573*_tmp11*_tmp12*_tmp13 - 3333.3333333333335*_tmp8))
+    _tmp19 = p_0*(theta_1**2*(-22857142857142.855*_tmp10 - 3333.3333333333335*_tmp8 + 285714285.71428573*_tmp11*_tmp12*_tmp13) + _tmp18*_tmp3**2*(0.004166666666666667 + 738095238.0952381*_tmp15 - 2023.8095238095239*_tmp8 - 239307359307359.3*_tmp10))
     _tmp20 = 0.5*theta_2
     _tmp21 = numpy.sin(_tmp20)
-    _tmp22 = _tmp20 + theta_1 + 1.0471975511965979
+    _tmp22 = 1.0471975511965979 + _tmp20 + theta_1
     _tmp23 = numpy.sin(_tmp22)
     _tmp24 = numpy.cos(_tmp22)
     _tmp25 = _tmp23*mu_2 - _tmp24*mu_3
     _tmp26 = -_tmp23*mu_3 - _tmp24*mu_2
     _tmp27 = _tmp26*_tmp7
-    _tmp28 = _tmp26**3*_tmp9
+    _tmp28 = _tmp9*_tmp26**3
     _tmp29 = _tmp26**2
     _tmp30 = _tmp14*_tmp29
-    _tmp31 = -20000*_tmp27 - 1180952380952381.0*_tmp28 + 4857142857.142858*_tmp30 + 0.08333333333333333
+    _tmp31 = 0.08333333333333333 - 20000*_tmp27 + 4857142857.142858*_tmp30 - 1180952380952381.0*_tmp28
     _tmp32 = numpy.cos(_tmp20)
-    _tmp33 = p_0*(_tmp18*_tmp25**2*(-2023.8095238095239*_tmp27 - 239307359307359.3*_tmp28 + 738095238.0952381*_tmp30 + 0.004166666666666667) + theta_2**2*(285714285.71428573*_tmp12*_tmp13*_tmp29 - 3333.3333333333335*_tmp27 - 22857142857142.855*_tmp28))
+    _tmp33 = p_0*(theta_2**2*(-22857142857142.855*_tmp28 - 3333.3333333333335*_tmp27 + 285714285.71428573*_tmp12*_tmp13*_tmp29) + _tmp18*_tmp25**2*(0.004166666666666667 + 738095238.0952381*_tmp30 - 2023.8095238095239*_tmp27 - 239307359307359.3*_tmp28))
     _tmp34 = 0.5*theta_3
     _tmp35 = numpy.sin(_tmp34)
     _tmp36 = numpy.cos(_tmp34)
     _tmp37 = -_tmp35*mu_3 - _tmp36*mu_2
-    _tmp38 = -_tmp35*mu_2 + _tmp36*mu_3
+    _tmp38 = _tmp36*mu_3 - _tmp35*mu_2
     _tmp39 = _tmp38*_tmp7
-    _tmp40 = _tmp38**3*_tmp9
+    _tmp40 = _tmp9*_tmp38**3
     _tmp41 = _tmp38**2
     _tmp42 = _tmp14*_tmp41
-    _tmp43 = -20000*_tmp39 - 1180952380952381.0*_tmp40 + 4857142857.142858*_tmp42 + 0.08333333333333333
-    _tmp44 = p_0*(_tmp18*_tmp37**2*(-2023.8095238095239*_tmp39 - 239307359307359.3*_tmp40 + 738095238.0952381*_tmp42 + 0.004166666666666667) + theta_3**2*(285714285.71428573*_tmp12*_tmp13*_tmp41 - 3333.3333333333335*_tmp39 - 22857142857142.855*_tmp40))
+    _tmp43 = 0.08333333333333333 - 20000*_tmp39 + 4857142857.142858*_tmp42 - 1180952380952381.0*_tmp40
+    _tmp44 = p_0*(theta_3**2*(-22857142857142.855*_tmp40 - 3333.3333333333335*_tmp39 + 285714285.71428573*_tmp12*_tmp13*_tmp41) + _tmp18*_tmp37**2*(0.004166666666666667 + 738095238.0952381*_tmp42 - 2023.8095238095239*_tmp39 - 239307359307359.3*_tmp40))
     _tmp45 = 0.5*theta_4
     _tmp46 = numpy.sin(_tmp45)
     _tmp47 = _tmp45 + theta_1 + theta_2
@@ -432,20 +432,20 @@ def _loaded_compliance(theta, mu, params):
     _tmp50 = _tmp48*mu_2 - _tmp49*mu_3
     _tmp51 = -_tmp48*mu_3 - _tmp49*mu_2
     _tmp52 = _tmp51*_tmp7
-    _tmp53 = _tmp51**3*_tmp9
+    _tmp53 = _tmp9*_tmp51**3
     _tmp54 = _tmp51**2
     _tmp55 = _tmp14*_tmp54
-    _tmp56 = -20000*_tmp52 - 1180952380952381.0*_tmp53 + 4857142857.142858*_tmp55 + 0.08333333333333333
+    _tmp56 = 0.08333333333333333 - 20000*_tmp52 + 4857142857.142858*_tmp55 - 1180952380952381.0*_tmp53
     _tmp57 = numpy.cos(_tmp45)
-    _tmp58 = p_0*(_tmp18*_tmp50**2*(-2023.8095238095239*_tmp52 - 239307359307359.3*_tmp53 + 738095238.0952381*_tmp55 + 0.004166666666666667) + theta_4**2*(285714285.71428573*_tmp12*_tmp13*_tmp54 - 3333.3333333333335*_tmp52 - 22857142857142.855*_tmp53))
+    _tmp58 = p_0*(theta_4**2*(-22857142857142.855*_tmp53 - 3333.3333333333335*_tmp52 + 285714285.71428573*_tmp12*_tmp13*_tmp54) + _tmp18*_tmp50**2*(0.004166666666666667 + 738095238.0952381*_tmp55 - 2023.8095238095239*_tmp52 - 239307359307359.3*_tmp53))
     return [
-        -_tmp1*_tmp16*_tmp17*_tmp3 - _tmp19*_tmp2,
+        -_tmp19*_tmp2 - _tmp1*_tmp16*_tmp17*_tmp3,
         -_tmp1*_tmp19 + 2400000*_tmp16*_tmp2*_tmp3*_tmp6,
-        -_tmp17*_tmp21*_tmp25*_tmp31 - _tmp32*_tmp33,
+        -_tmp32*_tmp33 - _tmp17*_tmp21*_tmp25*_tmp31,
         -_tmp21*_tmp33 + 2400000*_tmp25*_tmp31*_tmp32*_tmp6,
-        -_tmp17*_tmp35*_tmp37*_tmp43 - _tmp36*_tmp44,
+        -_tmp36*_tmp44 - _tmp17*_tmp35*_tmp37*_tmp43,
         -_tmp35*_tmp44 + 2400000*_tmp36*_tmp37*_tmp43*_tmp6,
-        -_tmp17*_tmp46*_tmp50*_tmp56 - _tmp57*_tmp58,
+        -_tmp57*_tmp58 - _tmp17*_tmp46*_tmp50*_tmp56,
         -_tmp46*_tmp58 + 2400000*_tmp50*_tmp56*_tmp57*_tmp6,
     ]
 
@@ -467,8 +467,8 @@ def _loaded_linear(theta, params):
     _tmp10 = arck(_tmp9)
     _tmp11 = 0.5*theta_4
     _tmp12 = _tmp6*theta_4**2*arck(_tmp11)
-    _tmp13 = _tmp12*numpy.sin(_tmp11) + compliance_y_4
-    _tmp14 = _tmp12*numpy.cos(_tmp11) + compliance_x_4
+    _tmp13 = compliance_y_4 + _tmp12*numpy.sin(_tmp11)
+    _tmp14 = compliance_x_4 + _tmp12*numpy.cos(_tmp11)
     _tmp15 = numpy.sin(theta_1)
     _tmp16 = 0.5*theta_2
     _tmp17 = numpy.sin(_tmp16)
@@ -477,22 +477,22 @@ def _loaded_linear(theta, params):
     _tmp20 = _tmp18*_tmp19*p_0
     _tmp21 = numpy.cos(_tmp16)
     _tmp22 = 0.21650635094610965*_tmp20
-    _tmp23 = 0.125*_tmp17*_tmp20 + _tmp21*_tmp22 + 0.8660254037844386*compliance_x_2 + 0.5*compliance_y_2
+    _tmp23 = 0.5*compliance_y_2 + 0.8660254037844386*compliance_x_2 + _tmp21*_tmp22 + 0.125*_tmp17*_tmp20
     _tmp24 = numpy.cos(theta_1)
-    _tmp25 = -_tmp17*_tmp22 + 0.125*_tmp18*_tmp19*_tmp21*p_0 + 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2
+    _tmp25 = 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2 - _tmp17*_tmp22 + 0.125*_tmp18*_tmp19*_tmp21*p_0
     return [
         1,
         -1,
         1,
         -0.07*_tmp1 - 0.042*_tmp2,
-        -0.015*_tmp3 + 0.068*_tmp4,
+        0.068*_tmp4 - 0.015*_tmp3,
         0,
-        -0.042*_tmp1 + 0.07*_tmp2,
-        0.068*_tmp3 + 0.015*_tmp4,
+        0.07*_tmp2 - 0.042*_tmp1,
+        0.015*_tmp4 + 0.068*_tmp3,
         0,
         0,
-        -_tmp1*_tmp13 + 0.25*_tmp10*_tmp8*p_0*numpy.sin(_tmp9) + _tmp14*_tmp2 - _tmp15*_tmp23 + _tmp24*_tmp25 - _tmp7*numpy.sin(_tmp5) - compliance_y_1 + compliance_y_3,
-        _tmp1*_tmp14 - _tmp10*_tmp6*_tmp8*numpy.cos(_tmp9) + _tmp13*_tmp2 + _tmp15*_tmp25 + _tmp23*_tmp24 + _tmp7*numpy.cos(_tmp5) + compliance_x_1 - compliance_x_3,
+        compliance_y_3 - compliance_y_1 + _tmp14*_tmp2 + _tmp24*_tmp25 - _tmp1*_tmp13 - _tmp15*_tmp23 - _tmp7*numpy.sin(_tmp5) + 0.25*_tmp10*_tmp8*p_0*numpy.sin(_tmp9),
+        compliance_x_1 - compliance_x_3 + _tmp1*_tmp14 + _tmp13*_tmp2 + _tmp15*_tmp25 + _tmp23*_tmp24 + _tmp7*numpy.cos(_tmp5) - _tmp10*_tmp6*_tmp8*numpy.cos(_tmp9),
     ]
 
 
@@ -518,7 +518,7 @@ def _loaded_newton(theta, delta, params):
     _tmp14 = numpy.sin(_tmp13)**2
     _tmp15 = 0.07*_tmp12 - 0.084*_tmp14
     _tmp16 = numpy.cos(_tmp10)
-    _tmp17 = -0.042*_tmp12 - 0.14*_tmp14
+    _tmp17 = -0.14*_tmp14 - 0.042*_tmp12
     _tmp18 = delta_3 + theta_3
     _tmp19 = _tmp18**2
     _tmp20 = _tmp5 + 0.5*theta_3
@@ -533,12 +533,12 @@ def _loaded_newton(theta, delta, params):
     _tmp29 = arck(_tmp28)
     _tmp30 = numpy.sin(_tmp28)
     _tmp31 = _tmp29*_tmp30
-    _tmp32 = _tmp27*_tmp31 + compliance_y_4
+    _tmp32 = compliance_y_4 + _tmp27*_tmp31
     _tmp33 = _tmp24*_tmp32
     _tmp34 = numpy.cos(_tmp23)
     _tmp35 = numpy.cos(_tmp28)
     _tmp36 = _tmp29*_tmp35
-    _tmp37 = _tmp27*_tmp36 + compliance_x_4
+    _tmp37 = compliance_x_4 + _tmp27*_tmp36
     _tmp38 = numpy.sin(theta_1)
     _tmp39 = delta_2 + theta_2
     _tmp40 = _tmp39**2
@@ -550,9 +550,9 @@ def _loaded_newton(theta, delta, params):
     _tmp46 = numpy.cos(_tmp41)
     _tmp47 = _tmp46*p_0
     _tmp48 = 0.21650635094610965*_tmp43
-    _tmp49 = 0.125*_tmp43*_tmp45 + _tmp47*_tmp48 + 0.8660254037844386*compliance_x_2 + 0.5*compliance_y_2
+    _tmp49 = 0.5*compliance_y_2 + 0.8660254037844386*compliance_x_2 + _tmp47*_tmp48 + 0.125*_tmp43*_tmp45
     _tmp50 = numpy.cos(theta_1)
-    _tmp51 = 0.125*_tmp40*_tmp42*_tmp46*p_0 - _tmp45*_tmp48 + 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2
+    _tmp51 = 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2 - _tmp45*_tmp48 + 0.125*_tmp40*_tmp42*_tmp46*p_0
     _tmp52 = numpy.cos(_tmp20)
     _tmp53 = _tmp19*_tmp22
     _tmp54 = _tmp24*_tmp37 + _tmp32*_tmp34
@@ -561,35 +561,35 @@ def _loaded_newton(theta, delta, params):
     _tmp57 = 0.10825317547305482*_tmp43
     _tmp58 = 0.0625*_tmp43
     _tmp59 = _tmp39**3
-    _tmp60 = 3*cosr2(_tmp41) + sinr1(_tmp41) - 3*sinr2(_tmp41)
+    _tmp60 = -3*sinr2(_tmp41) + 3*cosr2(_tmp41) + sinr1(_tmp41)
     _tmp61 = _tmp59*_tmp60
     _tmp62 = 0.05412658773652741*_tmp61
-    _tmp63 = _tmp1*_tmp44*_tmp55 - _tmp45*_tmp57 + 0.03125*_tmp45*_tmp61 + _tmp47*_tmp56 + _tmp47*_tmp58 + _tmp47*_tmp62
-    _tmp64 = 0.25*_tmp39*_tmp42*_tmp46*p_0 - _tmp45*_tmp56 - _tmp45*_tmp58 - _tmp45*_tmp62 + 0.03125*_tmp46*_tmp59*_tmp60*p_0 - _tmp47*_tmp57
+    _tmp63 = _tmp47*_tmp56 + _tmp47*_tmp58 + _tmp47*_tmp62 - _tmp45*_tmp57 + 0.03125*_tmp45*_tmp61 + _tmp1*_tmp44*_tmp55
+    _tmp64 = -_tmp45*_tmp56 - _tmp45*_tmp58 - _tmp45*_tmp62 - _tmp47*_tmp57 + 0.03125*_tmp46*_tmp59*_tmp60*p_0 + 0.25*_tmp39*_tmp42*_tmp46*p_0
     _tmp65 = numpy.sin(_tmp18)
     _tmp66 = numpy.cos(_tmp18)
     _tmp67 = _tmp21*p_0
     _tmp68 = 0.5*_tmp18*_tmp22
     _tmp69 = 0.125*p_0
-    _tmp70 = 0.0625*_tmp18**3*(3*cosr2(_tmp20) + sinr1(_tmp20) - 3*sinr2(_tmp20))
+    _tmp70 = 0.0625*_tmp18**3*(-3*sinr2(_tmp20) + 3*cosr2(_tmp20) + sinr1(_tmp20))
     _tmp71 = 0.5*_tmp25*p_0
     _tmp72 = _tmp26*_tmp69
-    _tmp73 = 0.0625*_tmp25**3*p_0*(3*cosr2(_tmp28) + sinr1(_tmp28) - 3*sinr2(_tmp28))
+    _tmp73 = 0.0625*p_0*_tmp25**3*(-3*sinr2(_tmp28) + 3*cosr2(_tmp28) + sinr1(_tmp28))
     _tmp74 = _tmp30*_tmp73 + _tmp31*_tmp71 + _tmp36*_tmp72
-    _tmp75 = -_tmp31*_tmp72 + _tmp35*_tmp73 + _tmp36*_tmp71
+    _tmp75 = _tmp35*_tmp73 + _tmp36*_tmp71 - _tmp31*_tmp72
     _tmp76 = _tmp52*p_0
     return [
-        delta_2 - delta_3 + delta_4,
-        -_tmp11*_tmp15 + _tmp16*_tmp17 + 0.25*_tmp19*_tmp21*_tmp22*p_0 - _tmp2*numpy.sin(_tmp0) - _tmp3*_tmp7 - _tmp33 + _tmp34*_tmp37 - _tmp38*_tmp49 + _tmp50*_tmp51 + _tmp8*_tmp9 - compliance_y_1 + compliance_y_3,
-        -_tmp1*_tmp52*_tmp53 + _tmp11*_tmp17 + _tmp15*_tmp16 + _tmp2*numpy.cos(_tmp0) + _tmp3*_tmp9 + _tmp38*_tmp51 + _tmp49*_tmp50 + _tmp54 + _tmp7*_tmp8 + compliance_x_1 - compliance_x_3,
+        delta_2 + delta_4 - delta_3,
+        compliance_y_3 - _tmp33 - compliance_y_1 + _tmp16*_tmp17 + _tmp34*_tmp37 + _tmp50*_tmp51 + _tmp8*_tmp9 - _tmp11*_tmp15 - _tmp2*numpy.sin(_tmp0) - _tmp3*_tmp7 - _tmp38*_tmp49 + 0.25*_tmp19*_tmp21*_tmp22*p_0,
+        _tmp54 + compliance_x_1 - compliance_x_3 + _tmp11*_tmp17 + _tmp15*_tmp16 + _tmp2*numpy.cos(_tmp0) + _tmp3*_tmp9 + _tmp38*_tmp51 + _tmp49*_tmp50 + _tmp7*_tmp8 - _tmp1*_tmp52*_tmp53,
         1,
         -1,
         1,
-        -0.07*_tmp24 - 0.042*_tmp34 - _tmp38*_tmp63 + _tmp50*_tmp64 - _tmp54,
-        _tmp52*_tmp53*_tmp69 - 0.015*_tmp65 + 0.068*_tmp66 + _tmp67*_tmp68 + _tmp67*_tmp70,
-        -_tmp24*_tmp74 + _tmp34*_tmp75,
-        -0.042*_tmp24 - _tmp33 + _tmp34*_tmp37 + 0.07*_tmp34 + _tmp38*_tmp64 + _tmp50*_tmp63,
-        0.125*_tmp53*_tmp67 + 0.068*_tmp65 + 0.015*_tmp66 - _tmp68*_tmp76 - _tmp70*_tmp76,
+        -_tmp54 - 0.07*_tmp24 - 0.042*_tmp34 + _tmp50*_tmp64 - _tmp38*_tmp63,
+        0.068*_tmp66 - 0.015*_tmp65 + _tmp67*_tmp68 + _tmp67*_tmp70 + _tmp52*_tmp53*_tmp69,
+        _tmp34*_tmp75 - _tmp24*_tmp74,
+        -_tmp33 + 0.07*_tmp34 - 0.042*_tmp24 + _tmp34*_tmp37 + _tmp38*_tmp64 + _tmp50*_tmp63,
+        0.015*_tmp66 + 0.068*_tmp65 - _tmp68*_tmp76 - _tmp70*_tmp76 + 0.125*_tmp53*_tmp67,
         _tmp24*_tmp75 + _tmp34*_tmp74,
     ]
 
@@ -608,11 +608,11 @@ def _dev_paper(theta, params):
     _tmp7 = _tmp5*_tmp6*p_0
     _tmp8 = numpy.cos(_tmp3)
     _tmp9 = 0.21650635094610965*_tmp7
-    _tmp10 = 0.125*_tmp4*_tmp7 + _tmp8*_tmp9
+    _tmp10 = _tmp8*_tmp9 + 0.125*_tmp4*_tmp7
     _tmp11 = numpy.cos(theta_1)
     _tmp12 = -_tmp4*_tmp9 + 0.125*_tmp5*_tmp6*_tmp8*p_0
     return [
-        -_tmp1*numpy.sin(_tmp0) - _tmp10*_tmp2 + _tmp11*_tmp12,
+        _tmp11*_tmp12 - _tmp1*numpy.sin(_tmp0) - _tmp10*_tmp2,
         _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp11 + _tmp12*_tmp2,
     ]
 
@@ -635,12 +635,12 @@ def _dev_first_order(theta, delta, params):
     _tmp10 = _tmp8*_tmp9*p_0
     _tmp11 = numpy.cos(_tmp6)
     _tmp12 = 0.21650635094610965*_tmp10
-    _tmp13 = 0.125*_tmp10*_tmp7 + _tmp11*_tmp12
+    _tmp13 = _tmp11*_tmp12 + 0.125*_tmp10*_tmp7
     _tmp14 = numpy.cos(theta_1)
-    _tmp15 = 0.125*_tmp11*_tmp8*_tmp9*p_0 - _tmp12*_tmp7
+    _tmp15 = -_tmp12*_tmp7 + 0.125*_tmp11*_tmp8*_tmp9*p_0
     return [
-        -_tmp1*numpy.sin(_tmp0) - _tmp13*_tmp5 + _tmp14*_tmp15 + delta_2*(-0.045*_tmp3 - 0.064*_tmp4),
-        _tmp1*numpy.cos(_tmp0) + _tmp13*_tmp14 + _tmp15*_tmp5 + delta_2*(-0.064*_tmp3 + 0.045*_tmp4),
+        _tmp14*_tmp15 + delta_2*(-0.064*_tmp4 - 0.045*_tmp3) - _tmp1*numpy.sin(_tmp0) - _tmp13*_tmp5,
+        _tmp1*numpy.cos(_tmp0) + _tmp13*_tmp14 + _tmp15*_tmp5 + delta_2*(0.045*_tmp4 - 0.064*_tmp3),
     ]
 
 
@@ -667,11 +667,11 @@ def _dev_exact(theta, delta, params):
     _tmp15 = _tmp13*_tmp14*p_0
     _tmp16 = numpy.cos(_tmp11)
     _tmp17 = 0.21650635094610965*_tmp15
-    _tmp18 = 0.125*_tmp12*_tmp15 + _tmp16*_tmp17
+    _tmp18 = _tmp16*_tmp17 + 0.125*_tmp12*_tmp15
     _tmp19 = numpy.cos(theta_1)
     _tmp20 = -_tmp12*_tmp17 + 0.125*_tmp13*_tmp14*_tmp16*p_0
     return [
-        -_tmp1*numpy.sin(_tmp0) - _tmp10*_tmp18 + _tmp19*_tmp20 - _tmp3*_tmp7 + _tmp8*_tmp9,
+        _tmp19*_tmp20 + _tmp8*_tmp9 - _tmp1*numpy.sin(_tmp0) - _tmp10*_tmp18 - _tmp3*_tmp7,
         _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp20 + _tmp18*_tmp19 + _tmp3*_tmp9 + _tmp7*_tmp8,
     ]
 
@@ -699,12 +699,12 @@ def _dev_loaded(theta, delta, params):
     _tmp15 = _tmp13*_tmp14*p_0
     _tmp16 = numpy.cos(_tmp11)
     _tmp17 = 0.21650635094610965*_tmp15
-    _tmp18 = 0.125*_tmp12*_tmp15 + _tmp16*_tmp17 + 0.8660254037844386*compliance_x_2 + 0.5*compliance_y_2
+    _tmp18 = 0.5*compliance_y_2 + 0.8660254037844386*compliance_x_2 + _tmp16*_tmp17 + 0.125*_tmp12*_tmp15
     _tmp19 = numpy.cos(theta_1)
-    _tmp20 = -_tmp12*_tmp17 + 0.125*_tmp13*_tmp14*_tmp16*p_0 + 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2
+    _tmp20 = 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2 - _tmp12*_tmp17 + 0.125*_tmp13*_tmp14*_tmp16*p_0
     return [
-        -_tmp1*numpy.sin(_tmp0) - _tmp10*_tmp18 + _tmp19*_tmp20 - _tmp3*_tmp7 + _tmp8*_tmp9 - compliance_y_1,
-        _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp20 + _tmp18*_tmp19 + _tmp3*_tmp9 + _tmp7*_tmp8 + compliance_x_1,
+        -compliance_y_1 + _tmp19*_tmp20 + _tmp8*_tmp9 - _tmp1*numpy.sin(_tmp0) - _tmp10*_tmp18 - _tmp3*_tmp7,
+        compliance_x_1 + _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp20 + _tmp18*_tmp19 + _tmp3*_tmp9 + _tmp7*_tmp8,
     ]
 
 
@@ -731,12 +731,12 @@ def _dev_loaded_refined(theta, delta, params):
     _tmp15 = _tmp13*_tmp14*p_0
     _tmp16 = numpy.cos(_tmp11)
     _tmp17 = 0.21650635094610965*_tmp15
-    _tmp18 = 0.125*_tmp12*_tmp15 + _tmp16*_tmp17 + 0.8660254037844386*compliance_x_2 + 0.5*compliance_y_2
+    _tmp18 = 0.5*compliance_y_2 + 0.8660254037844386*compliance_x_2 + _tmp16*_tmp17 + 0.125*_tmp12*_tmp15
     _tmp19 = numpy.cos(theta_1)
-    _tmp20 = -_tmp12*_tmp17 + 0.125*_tmp13*_tmp14*_tmp16*p_0 + 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2
+    _tmp20 = 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2 - _tmp12*_tmp17 + 0.125*_tmp13*_tmp14*_tmp16*p_0
     return [
-        -_tmp1*numpy.sin(_tmp0) - _tmp10*_tmp18 + _tmp19*_tmp20 - _tmp3*_tmp7 + _tmp8*_tmp9 - compliance_y_1,
-        _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp20 + _tmp18*_tmp19 + _tmp3*_tmp9 + _tmp7*_tmp8 + compliance_x_1,
+        -compliance_y_1 + _tmp19*_tmp20 + _tmp8*_tmp9 - _tmp1*numpy.sin(_tmp0) - _tmp10*_tmp18 - _tmp3*_tmp7,
+        compliance_x_1 + _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp20 + _tmp18*_tmp19 + _tmp3*_tmp9 + _tmp7*_tmp8,
     ]
 
 
@@ -770,17 +770,17 @@ def _sens_rigid(theta, params):
     _tmp8 = numpy.cos(theta_1)
     _tmp9 = 0.015*_tmp7 + 0.026*_tmp8
     _tmp10 = 0.026*_tmp7 - 0.015*_tmp8
-    _tmp11 = 0.045*_tmp1 + 0.064*_tmp2
+    _tmp11 = 0.064*_tmp2 + 0.045*_tmp1
     _tmp12 = 0.064*_tmp1 - 0.045*_tmp2
     return [
         1,
         -1,
         1,
         -_tmp3,
-        -0.015*_tmp4 + 0.068*_tmp5,
+        0.068*_tmp5 - 0.015*_tmp4,
         0,
         -_tmp6,
-        0.068*_tmp4 + 0.015*_tmp5,
+        0.015*_tmp5 + 0.068*_tmp4,
         0,
         0,
         1,
@@ -819,10 +819,10 @@ def _sens_paper(theta, params):
     _tmp11 = _tmp7*p_0
     _tmp12 = 0.10825317547305482*_tmp9
     _tmp13 = theta_2**3
-    _tmp14 = 3*cosr2(_tmp1) + sinr1(_tmp1) - 3*sinr2(_tmp1)
+    _tmp14 = -3*sinr2(_tmp1) + 3*cosr2(_tmp1) + sinr1(_tmp1)
     _tmp15 = _tmp13*_tmp14
     _tmp16 = 0.05412658773652741*_tmp15
-    _tmp17 = -_tmp10*_tmp3 - _tmp11*_tmp12 + 0.03125*_tmp13*_tmp14*_tmp7*p_0 - _tmp16*_tmp3 - _tmp3*_tmp6 + 0.25*_tmp4*_tmp7*p_0*theta_2
+    _tmp17 = -_tmp10*_tmp3 - _tmp11*_tmp12 - _tmp16*_tmp3 - _tmp3*_tmp6 + 0.03125*_tmp13*_tmp14*_tmp7*p_0 + 0.25*_tmp4*_tmp7*p_0*theta_2
     _tmp18 = numpy.sin(theta_1)
     _tmp19 = _tmp10*_tmp11 + _tmp11*_tmp16 + _tmp11*_tmp6 - _tmp12*_tmp3 + 0.03125*_tmp15*_tmp3 + 0.25*_tmp3*_tmp5
     _tmp20 = 0.5*theta_1
@@ -841,7 +841,7 @@ def _sens_paper(theta, params):
     _tmp33 = numpy.cos(_tmp20)
     _tmp34 = _tmp33*p_0
     _tmp35 = 0.125*_tmp23
-    _tmp36 = 0.0625*theta_1**3*(3*cosr2(_tmp20) + sinr1(_tmp20) - 3*sinr2(_tmp20))
+    _tmp36 = 0.0625*theta_1**3*(-3*sinr2(_tmp20) + 3*cosr2(_tmp20) + sinr1(_tmp20))
     _tmp37 = -_tmp29*p_0 + 0.125*_tmp4*_tmp7*_tmp8*p_0
     _tmp38 = _tmp25*p_0 + _tmp27*p_0
     return [
@@ -854,7 +854,7 @@ def _sens_paper(theta, params):
         _tmp0*_tmp30 - _tmp18*_tmp28 - _tmp21*_tmp24,
         -_tmp0*_tmp38 - _tmp18*_tmp37 - _tmp31*_tmp32 - _tmp31*_tmp36 - _tmp34*_tmp35,
         _tmp0*_tmp28 + _tmp18*_tmp30 + _tmp24*_tmp33,
-        _tmp0*_tmp37 - _tmp18*_tmp38 - _tmp31*_tmp35 + _tmp32*_tmp34 + _tmp34*_tmp36,
+        _tmp0*_tmp37 + _tmp32*_tmp34 + _tmp34*_tmp36 - _tmp18*_tmp38 - _tmp31*_tmp35,
     ]
 
 
@@ -870,8 +870,8 @@ def _sens_first_order(theta, delta, params):
     _tmp4 = numpy.sin(theta_3)
     _tmp5 = numpy.cos(theta_3)
     _tmp6 = 0.015*_tmp4 - 0.068*_tmp5
-    _tmp7 = -0.042*_tmp1 + 0.07*_tmp2
-    _tmp8 = 0.068*_tmp4 + 0.015*_tmp5
+    _tmp7 = 0.07*_tmp2 - 0.042*_tmp1
+    _tmp8 = 0.015*_tmp5 + 0.068*_tmp4
     _tmp9 = numpy.sin(theta_1)
     _tmp10 = 0.5*theta_2
     _tmp11 = arck(_tmp10)
@@ -886,12 +886,12 @@ def _sens_first_order(theta, delta, params):
     _tmp20 = 0.10825317547305482*_tmp19
     _tmp21 = 0.0625*_tmp19
     _tmp22 = theta_2**3
-    _tmp23 = 3*cosr2(_tmp10) + sinr1(_tmp10) - 3*sinr2(_tmp10)
+    _tmp23 = -3*sinr2(_tmp10) + 3*cosr2(_tmp10) + sinr1(_tmp10)
     _tmp24 = _tmp22*_tmp23
     _tmp25 = 0.05412658773652741*_tmp24
-    _tmp26 = 0.25*_tmp12*_tmp14 - _tmp14*_tmp20 + 0.03125*_tmp14*_tmp24 + _tmp16*_tmp17 + _tmp16*_tmp21 + _tmp16*_tmp25
+    _tmp26 = _tmp16*_tmp17 + _tmp16*_tmp21 + _tmp16*_tmp25 - _tmp14*_tmp20 + 0.03125*_tmp14*_tmp24 + 0.25*_tmp12*_tmp14
     _tmp27 = numpy.cos(theta_1)
-    _tmp28 = 0.25*_tmp11*_tmp15*p_0*theta_2 - _tmp14*_tmp17 - _tmp14*_tmp21 - _tmp14*_tmp25 + 0.03125*_tmp15*_tmp22*_tmp23*p_0 - _tmp16*_tmp20
+    _tmp28 = -_tmp14*_tmp17 - _tmp14*_tmp21 - _tmp14*_tmp25 - _tmp16*_tmp20 + 0.03125*_tmp15*_tmp22*_tmp23*p_0 + 0.25*_tmp11*_tmp15*p_0*theta_2
     _tmp29 = _tmp26*_tmp9 - _tmp27*_tmp28
     _tmp30 = 0.5*theta_4
     _tmp31 = numpy.cos(_tmp30)
@@ -914,14 +914,14 @@ def _sens_first_order(theta, delta, params):
     _tmp48 = theta_3**2
     _tmp49 = _tmp45*_tmp48
     _tmp50 = 0.125*p_0
-    _tmp51 = 0.0625*theta_3**3*(3*cosr2(_tmp42) + sinr1(_tmp42) - 3*sinr2(_tmp42))
+    _tmp51 = 0.0625*theta_3**3*(-3*sinr2(_tmp42) + 3*cosr2(_tmp42) + sinr1(_tmp42))
     _tmp52 = _tmp30*_tmp33
     _tmp53 = _tmp35*_tmp50
-    _tmp54 = 0.0625*theta_4**3*(3*cosr2(_tmp30) + sinr1(_tmp30) - 3*sinr2(_tmp30))
+    _tmp54 = 0.0625*theta_4**3*(-3*sinr2(_tmp30) + 3*cosr2(_tmp30) + sinr1(_tmp30))
     _tmp55 = _tmp31*_tmp53 + _tmp39*_tmp52 + _tmp39*_tmp54
     _tmp56 = _tmp32*_tmp52 + _tmp32*_tmp54 - _tmp38*_tmp53
     _tmp57 = _tmp26*_tmp27 + _tmp28*_tmp9
-    _tmp58 = -_tmp1*_tmp40 + _tmp2*_tmp37 - _tmp3*delta_2
+    _tmp58 = _tmp2*_tmp37 - _tmp1*_tmp40 - _tmp3*delta_2
     _tmp59 = _tmp47*p_0
     _tmp60 = _tmp36*_tmp38
     _tmp61 = 0.5*theta_1
@@ -934,22 +934,22 @@ def _sens_first_order(theta, delta, params):
     _tmp68 = _tmp15*_tmp67
     _tmp69 = _tmp66 + _tmp68
     _tmp70 = _tmp13*_tmp67
-    _tmp71 = 0.125*_tmp11*_tmp15*_tmp18 - _tmp70
-    _tmp72 = -_tmp27*_tmp71 + _tmp62*_tmp65 + _tmp69*_tmp9
-    _tmp73 = 0.125*_tmp11*_tmp15*_tmp18*p_0 - _tmp70*p_0
+    _tmp71 = -_tmp70 + 0.125*_tmp11*_tmp15*_tmp18
+    _tmp72 = _tmp62*_tmp65 + _tmp69*_tmp9 - _tmp27*_tmp71
+    _tmp73 = -_tmp70*p_0 + 0.125*_tmp11*_tmp15*_tmp18*p_0
     _tmp74 = _tmp66*p_0 + _tmp68*p_0
     _tmp75 = _tmp62*p_0
-    _tmp76 = 0.0625*theta_1**3*(3*cosr2(_tmp61) + sinr1(_tmp61) - 3*sinr2(_tmp61))
+    _tmp76 = 0.0625*theta_1**3*(-3*sinr2(_tmp61) + 3*cosr2(_tmp61) + sinr1(_tmp61))
     _tmp77 = numpy.cos(_tmp61)
     _tmp78 = _tmp50*_tmp64
     _tmp79 = _tmp61*_tmp63
     _tmp80 = _tmp27*_tmp74 + _tmp73*_tmp9 + _tmp75*_tmp76 + _tmp75*_tmp79 + _tmp77*_tmp78
     _tmp81 = _tmp27*_tmp69 + _tmp65*_tmp77 + _tmp71*_tmp9
     _tmp82 = _tmp77*p_0
-    _tmp83 = _tmp27*_tmp73 - _tmp62*_tmp78 - _tmp74*_tmp9 + _tmp76*_tmp82 + _tmp79*_tmp82
-    _tmp84 = -0.064*_tmp1 + 0.045*_tmp2
+    _tmp83 = _tmp27*_tmp73 + _tmp76*_tmp82 + _tmp79*_tmp82 - _tmp62*_tmp78 - _tmp74*_tmp9
+    _tmp84 = 0.045*_tmp2 - 0.064*_tmp1
     _tmp85 = _tmp84*delta_2
-    _tmp86 = 0.045*_tmp1 + 0.064*_tmp2
+    _tmp86 = 0.064*_tmp2 + 0.045*_tmp1
     _tmp87 = -_tmp86*delta_2
     return [
         1,
@@ -965,16 +965,16 @@ def _sens_first_order(theta, delta, params):
         0,
         0,
         -_tmp29 - _tmp41,
-        _tmp44*_tmp46 + _tmp44*_tmp51 + _tmp47*_tmp49*_tmp50 - _tmp8*delta_3,
-        -_tmp1*_tmp55 + _tmp2*_tmp56,
+        _tmp44*_tmp46 + _tmp44*_tmp51 - _tmp8*delta_3 + _tmp47*_tmp49*_tmp50,
+        _tmp2*_tmp56 - _tmp1*_tmp55,
         _tmp57 + _tmp58,
-        0.125*_tmp43*_tmp45*_tmp48*p_0 - _tmp46*_tmp59 - _tmp51*_tmp59 - _tmp6*delta_3,
+        -_tmp46*_tmp59 - _tmp51*_tmp59 - _tmp6*delta_3 + 0.125*_tmp43*_tmp45*_tmp48*p_0,
         _tmp1*_tmp56 + _tmp2*_tmp55,
         0,
         0,
-        -_tmp1*_tmp60 + 0.25*_tmp2*_tmp31*_tmp33*_tmp34 + 0.25*_tmp43*_tmp45*_tmp48 - _tmp72,
+        -_tmp72 - _tmp1*_tmp60 + 0.25*_tmp43*_tmp45*_tmp48 + 0.25*_tmp2*_tmp31*_tmp33*_tmp34,
         -_tmp41 - _tmp80,
-        _tmp1*_tmp31*_tmp36 + _tmp2*_tmp60 - 0.25*_tmp47*_tmp49 + _tmp81,
+        _tmp81 + _tmp2*_tmp60 - 0.25*_tmp47*_tmp49 + _tmp1*_tmp31*_tmp36,
         _tmp58 + _tmp83,
         -_tmp29 - _tmp85,
         0,
@@ -1019,12 +1019,12 @@ def _sens_exact(theta, delta, params):
     _tmp16 = 0.10825317547305482*_tmp15
     _tmp17 = 0.0625*_tmp15
     _tmp18 = _tmp0**3
-    _tmp19 = 3*cosr2(_tmp6) + sinr1(_tmp6) - 3*sinr2(_tmp6)
+    _tmp19 = -3*sinr2(_tmp6) + 3*cosr2(_tmp6) + sinr1(_tmp6)
     _tmp20 = _tmp18*_tmp19
     _tmp21 = 0.05412658773652741*_tmp20
-    _tmp22 = -_tmp10*_tmp16 + 0.03125*_tmp10*_tmp20 + 0.25*_tmp10*_tmp8 + _tmp12*_tmp13 + _tmp12*_tmp17 + _tmp12*_tmp21
+    _tmp22 = _tmp12*_tmp13 + _tmp12*_tmp17 + _tmp12*_tmp21 - _tmp10*_tmp16 + 0.03125*_tmp10*_tmp20 + 0.25*_tmp10*_tmp8
     _tmp23 = numpy.cos(theta_1)
-    _tmp24 = 0.25*_tmp0*_tmp11*_tmp7*p_0 - _tmp10*_tmp13 - _tmp10*_tmp17 - _tmp10*_tmp21 + 0.03125*_tmp11*_tmp18*_tmp19*p_0 - _tmp12*_tmp16
+    _tmp24 = -_tmp10*_tmp13 - _tmp10*_tmp17 - _tmp10*_tmp21 - _tmp12*_tmp16 + 0.03125*_tmp11*_tmp18*_tmp19*p_0 + 0.25*_tmp0*_tmp11*_tmp7*p_0
     _tmp25 = _tmp22*_tmp4 - _tmp23*_tmp24
     _tmp26 = 0.5*delta_4 + 0.5*theta_4
     _tmp27 = arck(_tmp26)
@@ -1048,7 +1048,7 @@ def _sens_exact(theta, delta, params):
     _tmp45 = _tmp44 + 0.5*theta_3
     _tmp46 = numpy.sin(_tmp45)
     _tmp47 = _tmp46*p_0
-    _tmp48 = 0.0625*_tmp41**3*(3*cosr2(_tmp45) + sinr1(_tmp45) - 3*sinr2(_tmp45))
+    _tmp48 = 0.0625*_tmp41**3*(-3*sinr2(_tmp45) + 3*cosr2(_tmp45) + sinr1(_tmp45))
     _tmp49 = numpy.cos(_tmp45)
     _tmp50 = _tmp41**2
     _tmp51 = arck(_tmp45)
@@ -1059,23 +1059,23 @@ def _sens_exact(theta, delta, params):
     _tmp56 = 0.5*_tmp31
     _tmp57 = _tmp32*_tmp53
     _tmp58 = _tmp27*_tmp28
-    _tmp59 = 0.0625*_tmp31**3*(3*cosr2(_tmp26) + sinr1(_tmp26) - 3*sinr2(_tmp26))
-    _tmp60 = _tmp35*_tmp59*p_0 + _tmp37*_tmp56 + _tmp57*_tmp58
+    _tmp59 = 0.0625*_tmp31**3*(-3*sinr2(_tmp26) + 3*cosr2(_tmp26) + sinr1(_tmp26))
+    _tmp60 = _tmp37*_tmp56 + _tmp57*_tmp58 + _tmp35*_tmp59*p_0
     _tmp61 = _tmp29*_tmp59 + _tmp30*_tmp56 - _tmp36*_tmp57
-    _tmp62 = -_tmp2*_tmp60 + _tmp3*_tmp61
+    _tmp62 = _tmp3*_tmp61 - _tmp2*_tmp60
     _tmp63 = _tmp22*_tmp23 + _tmp24*_tmp4
-    _tmp64 = -_tmp2*_tmp38 + _tmp3*_tmp34
+    _tmp64 = _tmp3*_tmp34 - _tmp2*_tmp38
     _tmp65 = _tmp63 + _tmp64
     _tmp66 = _tmp49*p_0
-    _tmp67 = 0.125*_tmp47*_tmp52 - _tmp48*_tmp66 - _tmp54*_tmp66
+    _tmp67 = -_tmp48*_tmp66 - _tmp54*_tmp66 + 0.125*_tmp47*_tmp52
     _tmp68 = _tmp2*_tmp61 + _tmp3*_tmp60
     _tmp69 = theta_1 + theta_2
     _tmp70 = numpy.sin(_tmp69)
     _tmp71 = numpy.sin(delta_2)
     _tmp72 = numpy.sin(_tmp5)**2
-    _tmp73 = -0.042*_tmp71 - 0.14*_tmp72
+    _tmp73 = -0.14*_tmp72 - 0.042*_tmp71
     _tmp74 = numpy.cos(_tmp69)
-    _tmp75 = -0.07*_tmp71 + 0.084*_tmp72
+    _tmp75 = 0.084*_tmp72 - 0.07*_tmp71
     _tmp76 = _tmp70*_tmp73 - _tmp74*_tmp75
     _tmp77 = numpy.cos(theta_3)
     _tmp78 = numpy.sin(delta_3)
@@ -1095,32 +1095,32 @@ def _sens_exact(theta, delta, params):
     _tmp92 = _tmp11*_tmp91
     _tmp93 = _tmp90 + _tmp92
     _tmp94 = _tmp9*_tmp91
-    _tmp95 = 0.125*_tmp11*_tmp14*_tmp7 - _tmp94
-    _tmp96 = -_tmp23*_tmp95 + _tmp4*_tmp93 + _tmp86*_tmp89
-    _tmp97 = 0.125*_tmp11*_tmp14*_tmp7*p_0 - _tmp94*p_0
+    _tmp95 = -_tmp94 + 0.125*_tmp11*_tmp14*_tmp7
+    _tmp96 = _tmp4*_tmp93 + _tmp86*_tmp89 - _tmp23*_tmp95
+    _tmp97 = -_tmp94*p_0 + 0.125*_tmp11*_tmp14*_tmp7*p_0
     _tmp98 = _tmp90*p_0 + _tmp92*p_0
     _tmp99 = _tmp86*p_0
-    _tmp100 = 0.0625*theta_1**3*(3*cosr2(_tmp85) + sinr1(_tmp85) - 3*sinr2(_tmp85))
+    _tmp100 = 0.0625*theta_1**3*(-3*sinr2(_tmp85) + 3*cosr2(_tmp85) + sinr1(_tmp85))
     _tmp101 = numpy.cos(_tmp85)
     _tmp102 = _tmp53*_tmp88
     _tmp103 = _tmp85*_tmp87
     _tmp104 = _tmp100*_tmp99 + _tmp101*_tmp102 + _tmp103*_tmp99 + _tmp23*_tmp98 + _tmp4*_tmp97
     _tmp105 = _tmp101*_tmp89 + _tmp23*_tmp93 + _tmp4*_tmp95
     _tmp106 = _tmp101*p_0
-    _tmp107 = _tmp100*_tmp106 - _tmp102*_tmp86 + _tmp103*_tmp106 + _tmp23*_tmp97 - _tmp4*_tmp98
+    _tmp107 = _tmp100*_tmp106 + _tmp103*_tmp106 + _tmp23*_tmp97 - _tmp102*_tmp86 - _tmp4*_tmp98
     _tmp108 = -0.064*_tmp71 - 0.09*_tmp72
-    _tmp109 = -0.045*_tmp71 + 0.128*_tmp72
+    _tmp109 = 0.128*_tmp72 - 0.045*_tmp71
     _tmp110 = _tmp108*_tmp70 - _tmp109*_tmp74
     _tmp111 = _tmp108*_tmp74 + _tmp109*_tmp70
     return [
         1,
         -1,
         1,
-        -0.07*_tmp2 - 0.042*_tmp3 - _tmp40,
-        0.068*_tmp42 - 0.015*_tmp43 + _tmp55,
+        -_tmp40 - 0.07*_tmp2 - 0.042*_tmp3,
+        _tmp55 + 0.068*_tmp42 - 0.015*_tmp43,
         _tmp62,
-        -0.042*_tmp2 + 0.07*_tmp3 + _tmp65,
-        0.015*_tmp42 + 0.068*_tmp43 + _tmp67,
+        _tmp65 + 0.07*_tmp3 - 0.042*_tmp2,
+        _tmp67 + 0.015*_tmp42 + 0.068*_tmp43,
         _tmp68,
         0,
         0,
@@ -1133,9 +1133,9 @@ def _sens_exact(theta, delta, params):
         _tmp68,
         0,
         0,
-        -_tmp2*_tmp84 + 0.25*_tmp27*_tmp28*_tmp3*_tmp32 + 0.25*_tmp46*_tmp50*_tmp51 - _tmp96,
+        -_tmp96 - _tmp2*_tmp84 + 0.25*_tmp46*_tmp50*_tmp51 + 0.25*_tmp27*_tmp28*_tmp3*_tmp32,
         -_tmp104 - _tmp39 - _tmp76,
-        _tmp105 + _tmp2*_tmp33*_tmp58 + _tmp3*_tmp84 - 0.25*_tmp49*_tmp52,
+        _tmp105 + _tmp3*_tmp84 - 0.25*_tmp49*_tmp52 + _tmp2*_tmp33*_tmp58,
         _tmp107 + _tmp64 + _tmp83,
         -_tmp110 - _tmp25,
         0,
@@ -1143,10 +1143,10 @@ def _sens_exact(theta, delta, params):
         _tmp111 + _tmp63,
         0,
         0,
-        -0.045*_tmp2 - _tmp25 - 0.064*_tmp3,
+        -_tmp25 - 0.064*_tmp3 - 0.045*_tmp2,
         0,
         0,
-        -0.064*_tmp2 + 0.045*_tmp3 + _tmp63,
+        _tmp63 + 0.045*_tmp3 - 0.064*_tmp2,
         0,
         0,
         -_tmp96,

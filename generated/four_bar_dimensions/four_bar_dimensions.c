@@ -153,28 +153,28 @@ static void sk_rigid(const double *inputs, const double *params, double *out)
     const double _tmp7 = pow(p_7, 2);
     const double _tmp8 = 2*p_8;
     const double _tmp9 = _tmp8*p_7;
-    const double _tmp10 = -_tmp8*p_5 + pow(p_5, 2) + pow(p_6, 2) - 2*p_6*p_9;
-    const double dyad1_along = 0.5*_tmp6*(_tmp10 - _tmp7 + _tmp9 + dyad1_dsq);
+    const double _tmp10 = pow(p_5, 2) + pow(p_6, 2) - _tmp8*p_5 - 2*p_6*p_9;
+    const double dyad1_along = 0.5*_tmp6*(_tmp10 + _tmp9 + dyad1_dsq - _tmp7);
     const double _tmp11 = pow(p_8, 2) + pow(p_9, 2);
     const double _tmp12 = _tmp10 + _tmp11;
-    const double dyad1_reach = _tmp12*_tmp6 - pow(dyad1_along, 2);
+    const double dyad1_reach = -pow(dyad1_along, 2) + _tmp12*_tmp6;
     const double dyad1_across = sqrt(dyad1_reach);
-    const double dyad1_bx = _tmp3*dyad1_along - _tmp5*dyad1_across + dyad1_ax;
-    const double dyad1_by = _tmp3*dyad1_across + _tmp5*dyad1_along + dyad1_ay;
+    const double dyad1_bx = dyad1_ax + _tmp3*dyad1_along - _tmp5*dyad1_across;
+    const double dyad1_by = dyad1_ay + _tmp3*dyad1_across + _tmp5*dyad1_along;
     const double dyad1_margin = dyad1_dsq*fabs(dyad1_across)/sqrt(_tmp12*(_tmp11 + _tmp7 - _tmp9));
     const double _tmp13 = -p_8;
     const double _tmp14 = -_tmp13 - p_5;
-    const double _tmp15 = -dyad1_ay + dyad1_by;
-    const double _tmp16 = -p_6 + p_9;
-    const double _tmp17 = -dyad1_ax + dyad1_bx;
+    const double _tmp15 = dyad1_by - dyad1_ay;
+    const double _tmp16 = p_9 - p_6;
+    const double _tmp17 = dyad1_bx - dyad1_ax;
     const double dyad1_phi1 = atan2(_tmp14*_tmp15 - _tmp16*_tmp17, _tmp14*_tmp17 + _tmp15*_tmp16);
     const double _tmp18 = _tmp2 + dyad1_bx;
     const double _tmp19 = -_tmp13 - p_7;
     const double _tmp20 = _tmp4 + dyad1_by;
-    const double dyad1_phi2 = atan2(-_tmp18*p_9 + _tmp19*_tmp20, _tmp18*_tmp19 + _tmp20*p_9);
+    const double dyad1_phi2 = atan2(_tmp19*_tmp20 - _tmp18*p_9, _tmp18*_tmp19 + _tmp20*p_9);
     out[0] = dyad1_phi1 - theta_1;
     out[1] = dyad1_phi2;
-    out[2] = -dyad1_phi1 + dyad1_phi2;
+    out[2] = dyad1_phi2 - dyad1_phi1;
     out[3] = dyad1_reach;
     out[4] = dyad1_margin;
 }
@@ -197,15 +197,15 @@ static void sk_rigid_res(const double *theta, const double *params, double *out)
     const double _tmp3 = 0.5*theta_1;
     const double _tmp4 = 2*pow(sin(_tmp3), 2);
     const double _tmp5 = sin(_tmp0);
-    const double _tmp6 = -p_6 + p_9;
+    const double _tmp6 = p_9 - p_6;
     const double _tmp7 = -p_8;
     const double _tmp8 = _tmp7 + p_7;
     const double _tmp9 = 2*pow(sin(0.5*theta_3), 2);
     const double _tmp10 = -_tmp7 - p_5;
     const double _tmp11 = 2*pow(sin(_tmp3 + 0.5*theta_2), 2);
-    out[0] = _tmp0 - theta_3 + theta_4;
-    out[1] = -_tmp1*p_6 - _tmp10*_tmp11 + _tmp2*p_9 - _tmp4*p_5 - _tmp5*_tmp6 - _tmp8*_tmp9;
-    out[2] = _tmp1*p_5 + _tmp10*_tmp5 - _tmp11*_tmp6 + _tmp2*_tmp8 - _tmp4*p_6 + _tmp9*p_9;
+    out[0] = _tmp0 + theta_4 - theta_3;
+    out[1] = _tmp2*p_9 - _tmp1*p_6 - _tmp10*_tmp11 - _tmp4*p_5 - _tmp5*_tmp6 - _tmp8*_tmp9;
+    out[2] = _tmp1*p_5 + _tmp10*_tmp5 + _tmp2*_tmp8 + _tmp9*p_9 - _tmp11*_tmp6 - _tmp4*p_6;
 }
 
 /* rigid loop Jacobian A and r = Phi dz (98 operations) */
@@ -252,21 +252,21 @@ static void sk_linear(const double *theta, const double *params, double *out)
     const double _tmp25 = _tmp23*_tmp24*p_2;
     const double _tmp26 = cos(_tmp21);
     const double _tmp27 = 0.21650635094610965*_tmp25;
-    const double _tmp28 = 0.125*_tmp22*_tmp25 + _tmp26*_tmp27;
+    const double _tmp28 = _tmp26*_tmp27 + 0.125*_tmp22*_tmp25;
     const double _tmp29 = cos(theta_1);
     const double _tmp30 = -_tmp22*_tmp27 + 0.125*_tmp23*_tmp24*_tmp26*p_2;
     out[0] = 1;
     out[1] = -1;
     out[2] = 1;
-    out[3] = -_tmp1*_tmp3 + _tmp4*_tmp5;
+    out[3] = _tmp4*_tmp5 - _tmp1*_tmp3;
     out[4] = _tmp6*p_9 - _tmp7*_tmp8;
     out[5] = 0;
     out[6] = _tmp1*_tmp5 + _tmp3*_tmp4;
     out[7] = _tmp6*_tmp8 + _tmp7*p_9;
     out[8] = 0;
     out[9] = 0;
-    out[10] = -_tmp1*_tmp18 - _tmp10*sin(_tmp9) + 0.25*_tmp11*_tmp13*p_3*sin(_tmp12) + 0.25*_tmp15*_tmp16*_tmp19*_tmp4*p_4 - _tmp20*_tmp28 + _tmp29*_tmp30;
-    out[11] = _tmp1*_tmp17*_tmp19 + _tmp10*cos(_tmp9) - 0.25*_tmp11*_tmp13*p_3*cos(_tmp12) + _tmp18*_tmp4 + _tmp20*_tmp30 + _tmp28*_tmp29;
+    out[10] = _tmp29*_tmp30 - _tmp1*_tmp18 - _tmp10*sin(_tmp9) - _tmp20*_tmp28 + 0.25*_tmp11*_tmp13*p_3*sin(_tmp12) + 0.25*_tmp15*_tmp16*_tmp19*_tmp4*p_4;
+    out[11] = _tmp10*cos(_tmp9) + _tmp18*_tmp4 + _tmp20*_tmp30 + _tmp28*_tmp29 + _tmp1*_tmp17*_tmp19 - 0.25*_tmp11*_tmp13*p_3*cos(_tmp12);
 }
 
 /* exact compliant closure F(delta) and dF/ddelta (265 operations) */
@@ -338,9 +338,9 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp47 = cos(_tmp43);
     const double _tmp48 = _tmp47*p_2;
     const double _tmp49 = 0.21650635094610965*_tmp45;
-    const double _tmp50 = 0.125*_tmp45*_tmp46 + _tmp48*_tmp49;
+    const double _tmp50 = _tmp48*_tmp49 + 0.125*_tmp45*_tmp46;
     const double _tmp51 = cos(theta_1);
-    const double _tmp52 = 0.125*_tmp42*_tmp44*_tmp47*p_2 - _tmp46*_tmp49;
+    const double _tmp52 = -_tmp46*_tmp49 + 0.125*_tmp42*_tmp44*_tmp47*p_2;
     const double _tmp53 = _tmp12*_tmp15;
     const double _tmp54 = p_3*cos(_tmp13);
     const double _tmp55 = _tmp37*p_4;
@@ -352,33 +352,33 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp61 = 0.10825317547305482*_tmp45;
     const double _tmp62 = 0.0625*_tmp45;
     const double _tmp63 = pow(_tmp41, 3);
-    const double _tmp64 = 3*symkin_cosr2(_tmp43) + symkin_sinr1(_tmp43) - 3*symkin_sinr2(_tmp43);
+    const double _tmp64 = -3*symkin_sinr2(_tmp43) + 3*symkin_cosr2(_tmp43) + symkin_sinr1(_tmp43);
     const double _tmp65 = _tmp63*_tmp64;
     const double _tmp66 = 0.05412658773652741*_tmp65;
-    const double _tmp67 = 0.25*_tmp46*_tmp59 - _tmp46*_tmp61 + 0.03125*_tmp46*_tmp65 + _tmp48*_tmp60 + _tmp48*_tmp62 + _tmp48*_tmp66;
-    const double _tmp68 = 0.25*_tmp41*_tmp44*_tmp47*p_2 - _tmp46*_tmp60 - _tmp46*_tmp62 - _tmp46*_tmp66 + 0.03125*_tmp47*_tmp63*_tmp64*p_2 - _tmp48*_tmp61;
+    const double _tmp67 = _tmp48*_tmp60 + _tmp48*_tmp62 + _tmp48*_tmp66 - _tmp46*_tmp61 + 0.03125*_tmp46*_tmp65 + 0.25*_tmp46*_tmp59;
+    const double _tmp68 = -_tmp46*_tmp60 - _tmp46*_tmp62 - _tmp46*_tmp66 - _tmp48*_tmp61 + 0.03125*_tmp47*_tmp63*_tmp64*p_2 + 0.25*_tmp41*_tmp44*_tmp47*p_2;
     const double _tmp69 = cos(_tmp11);
     const double _tmp70 = sin(_tmp11);
     const double _tmp71 = _tmp14*p_3;
     const double _tmp72 = 0.5*_tmp11*_tmp15;
     const double _tmp73 = 0.125*_tmp53;
-    const double _tmp74 = 0.0625*pow(_tmp11, 3)*(3*symkin_cosr2(_tmp13) + symkin_sinr1(_tmp13) - 3*symkin_sinr2(_tmp13));
+    const double _tmp74 = 0.0625*pow(_tmp11, 3)*(-3*symkin_sinr2(_tmp13) + 3*symkin_cosr2(_tmp13) + symkin_sinr1(_tmp13));
     const double _tmp75 = 0.5*_tmp31;
     const double _tmp76 = 0.125*_tmp32;
-    const double _tmp77 = 0.0625*pow(_tmp31, 3)*(3*symkin_cosr2(_tmp27) + symkin_sinr1(_tmp27) - 3*symkin_sinr2(_tmp27));
+    const double _tmp77 = 0.0625*pow(_tmp31, 3)*(-3*symkin_sinr2(_tmp27) + 3*symkin_cosr2(_tmp27) + symkin_sinr1(_tmp27));
     const double _tmp78 = _tmp29*_tmp77 + _tmp30*_tmp75 + _tmp56*_tmp76;
-    const double _tmp79 = -_tmp30*_tmp76 + _tmp55*_tmp77 + _tmp56*_tmp75;
-    out[0] = delta_2 - delta_3 + delta_4;
-    out[1] = -_tmp1*sin(_tmp0) + _tmp10*_tmp9 + 0.25*_tmp12*_tmp14*_tmp15*p_3 - _tmp17*_tmp24 - _tmp2*_tmp8 + 0.25*_tmp28*_tmp32*_tmp36*_tmp37*p_4 - _tmp35 + _tmp38*_tmp39 - _tmp40*_tmp50 + _tmp51*_tmp52;
-    out[2] = _tmp1*cos(_tmp0) + _tmp10*_tmp2 + _tmp17*_tmp39 + _tmp24*_tmp38 + _tmp40*_tmp52 + _tmp50*_tmp51 - 0.25*_tmp53*_tmp54 + _tmp58 + _tmp8*_tmp9;
+    const double _tmp79 = _tmp55*_tmp77 + _tmp56*_tmp75 - _tmp30*_tmp76;
+    out[0] = delta_2 + delta_4 - delta_3;
+    out[1] = -_tmp35 + _tmp10*_tmp9 + _tmp38*_tmp39 + _tmp51*_tmp52 - _tmp1*sin(_tmp0) - _tmp17*_tmp24 - _tmp2*_tmp8 - _tmp40*_tmp50 + 0.25*_tmp12*_tmp14*_tmp15*p_3 + 0.25*_tmp28*_tmp32*_tmp36*_tmp37*p_4;
+    out[2] = _tmp58 + _tmp1*cos(_tmp0) + _tmp10*_tmp2 + _tmp17*_tmp39 + _tmp24*_tmp38 + _tmp40*_tmp52 + _tmp50*_tmp51 + _tmp8*_tmp9 - 0.25*_tmp53*_tmp54;
     out[3] = 1;
     out[4] = -1;
     out[5] = 1;
-    out[6] = -_tmp19*_tmp26 + _tmp20*_tmp36 - _tmp40*_tmp67 + _tmp51*_tmp68 - _tmp58;
-    out[7] = -_tmp5*_tmp70 + _tmp54*_tmp73 + _tmp69*p_9 + _tmp71*_tmp72 + _tmp71*_tmp74;
-    out[8] = -_tmp26*_tmp78 + _tmp36*_tmp79;
-    out[9] = _tmp19*_tmp36 + _tmp20*_tmp26 - _tmp35 + _tmp36*_tmp57 + _tmp40*_tmp68 + _tmp51*_tmp67;
-    out[10] = _tmp5*_tmp69 - _tmp54*_tmp72 - _tmp54*_tmp74 + _tmp70*p_9 + _tmp71*_tmp73;
+    out[6] = -_tmp58 + _tmp20*_tmp36 + _tmp51*_tmp68 - _tmp19*_tmp26 - _tmp40*_tmp67;
+    out[7] = _tmp54*_tmp73 + _tmp69*p_9 + _tmp71*_tmp72 + _tmp71*_tmp74 - _tmp5*_tmp70;
+    out[8] = _tmp36*_tmp79 - _tmp26*_tmp78;
+    out[9] = -_tmp35 + _tmp19*_tmp36 + _tmp20*_tmp26 + _tmp36*_tmp57 + _tmp40*_tmp68 + _tmp51*_tmp67;
+    out[10] = _tmp5*_tmp69 + _tmp70*p_9 + _tmp71*_tmp73 - _tmp54*_tmp72 - _tmp54*_tmp74;
     out[11] = _tmp26*_tmp79 + _tmp36*_tmp78;
 }
 
@@ -398,7 +398,7 @@ static void sk_rigid_points(const double *theta, const double *params, double *o
     const double _tmp4 = p_10 - p_5;
     const double _tmp5 = sin(_tmp2);
     const double _tmp6 = p_11 - p_6;
-    out[0] = _tmp0*p_5 - _tmp1*p_6 + _tmp3*_tmp4 - _tmp5*_tmp6;
+    out[0] = _tmp0*p_5 + _tmp3*_tmp4 - _tmp1*p_6 - _tmp5*_tmp6;
     out[1] = _tmp0*p_6 + _tmp1*p_5 + _tmp3*_tmp6 + _tmp4*_tmp5;
 }
 
@@ -419,10 +419,10 @@ static void sk_dev_paper(const double *theta, const double *params, double *out)
     const double _tmp7 = _tmp5*_tmp6*p_2;
     const double _tmp8 = cos(_tmp3);
     const double _tmp9 = 0.21650635094610965*_tmp7;
-    const double _tmp10 = 0.125*_tmp4*_tmp7 + _tmp8*_tmp9;
+    const double _tmp10 = _tmp8*_tmp9 + 0.125*_tmp4*_tmp7;
     const double _tmp11 = cos(theta_1);
     const double _tmp12 = -_tmp4*_tmp9 + 0.125*_tmp5*_tmp6*_tmp8*p_2;
-    out[0] = -_tmp1*sin(_tmp0) - _tmp10*_tmp2 + _tmp11*_tmp12;
+    out[0] = _tmp11*_tmp12 - _tmp1*sin(_tmp0) - _tmp10*_tmp2;
     out[1] = _tmp1*cos(_tmp0) + _tmp10*_tmp11 + _tmp12*_tmp2;
 }
 
@@ -444,7 +444,7 @@ static void sk_dev_first_order(const double *theta, const double *delta, const d
     const double _tmp3 = sin(_tmp2);
     const double _tmp4 = p_10 - p_5;
     const double _tmp5 = cos(_tmp2);
-    const double _tmp6 = -p_11 + p_6;
+    const double _tmp6 = p_6 - p_11;
     const double _tmp7 = sin(theta_1);
     const double _tmp8 = 0.5*theta_2;
     const double _tmp9 = sin(_tmp8);
@@ -453,10 +453,10 @@ static void sk_dev_first_order(const double *theta, const double *delta, const d
     const double _tmp12 = _tmp10*_tmp11*p_2;
     const double _tmp13 = cos(_tmp8);
     const double _tmp14 = 0.21650635094610965*_tmp12;
-    const double _tmp15 = 0.125*_tmp12*_tmp9 + _tmp13*_tmp14;
+    const double _tmp15 = _tmp13*_tmp14 + 0.125*_tmp12*_tmp9;
     const double _tmp16 = cos(theta_1);
-    const double _tmp17 = 0.125*_tmp10*_tmp11*_tmp13*p_2 - _tmp14*_tmp9;
-    out[0] = -_tmp1*sin(_tmp0) - _tmp15*_tmp7 + _tmp16*_tmp17 + delta_2*(-_tmp3*_tmp4 + _tmp5*_tmp6);
+    const double _tmp17 = -_tmp14*_tmp9 + 0.125*_tmp10*_tmp11*_tmp13*p_2;
+    out[0] = _tmp16*_tmp17 + delta_2*(_tmp5*_tmp6 - _tmp3*_tmp4) - _tmp1*sin(_tmp0) - _tmp15*_tmp7;
     out[1] = _tmp1*cos(_tmp0) + _tmp15*_tmp16 + _tmp17*_tmp7 + delta_2*(_tmp3*_tmp6 + _tmp4*_tmp5);
 }
 
@@ -492,10 +492,10 @@ static void sk_dev_exact(const double *theta, const double *delta, const double 
     const double _tmp17 = _tmp15*_tmp16*p_2;
     const double _tmp18 = cos(_tmp13);
     const double _tmp19 = 0.21650635094610965*_tmp17;
-    const double _tmp20 = 0.125*_tmp14*_tmp17 + _tmp18*_tmp19;
+    const double _tmp20 = _tmp18*_tmp19 + 0.125*_tmp14*_tmp17;
     const double _tmp21 = cos(theta_1);
     const double _tmp22 = -_tmp14*_tmp19 + 0.125*_tmp15*_tmp16*_tmp18*p_2;
-    out[0] = -_tmp1*sin(_tmp0) + _tmp10*_tmp11 - _tmp12*_tmp20 + _tmp21*_tmp22 - _tmp3*_tmp9;
+    out[0] = _tmp10*_tmp11 + _tmp21*_tmp22 - _tmp1*sin(_tmp0) - _tmp12*_tmp20 - _tmp3*_tmp9;
     out[1] = _tmp1*cos(_tmp0) + _tmp10*_tmp9 + _tmp11*_tmp3 + _tmp12*_tmp22 + _tmp20*_tmp21;
 }
 
@@ -553,9 +553,9 @@ static void sk_sens_rigid(const double *theta, const double *params, double *out
     const double _tmp20 = _tmp15 + _tmp8;
     const double _tmp21 = cos(theta_1);
     const double _tmp22 = _tmp14*p_5 + _tmp21*p_6;
-    const double _tmp23 = -_tmp14*p_6 + _tmp21*p_5;
+    const double _tmp23 = _tmp21*p_5 - _tmp14*p_6;
     const double _tmp24 = p_10 - p_5;
-    const double _tmp25 = -p_11 + p_6;
+    const double _tmp25 = p_6 - p_11;
     const double _tmp26 = _tmp1*_tmp24 - _tmp25*_tmp4;
     const double _tmp27 = _tmp1*_tmp25 + _tmp24*_tmp4;
     const double _tmp28 = _tmp21 - _tmp4;
@@ -662,10 +662,10 @@ static void sk_sens_paper(const double *theta, const double *params, double *out
     const double _tmp11 = _tmp7*p_2;
     const double _tmp12 = 0.10825317547305482*_tmp9;
     const double _tmp13 = pow(theta_2, 3);
-    const double _tmp14 = 3*symkin_cosr2(_tmp1) + symkin_sinr1(_tmp1) - 3*symkin_sinr2(_tmp1);
+    const double _tmp14 = -3*symkin_sinr2(_tmp1) + 3*symkin_cosr2(_tmp1) + symkin_sinr1(_tmp1);
     const double _tmp15 = _tmp13*_tmp14;
     const double _tmp16 = 0.05412658773652741*_tmp15;
-    const double _tmp17 = -_tmp10*_tmp3 - _tmp11*_tmp12 + 0.03125*_tmp13*_tmp14*_tmp7*p_2 - _tmp16*_tmp3 - _tmp3*_tmp6 + 0.25*_tmp4*_tmp7*p_2*theta_2;
+    const double _tmp17 = -_tmp10*_tmp3 - _tmp11*_tmp12 - _tmp16*_tmp3 - _tmp3*_tmp6 + 0.03125*_tmp13*_tmp14*_tmp7*p_2 + 0.25*_tmp4*_tmp7*p_2*theta_2;
     const double _tmp18 = sin(theta_1);
     const double _tmp19 = _tmp10*_tmp11 + _tmp11*_tmp16 + _tmp11*_tmp6 - _tmp12*_tmp3 + 0.03125*_tmp15*_tmp3 + 0.25*_tmp3*_tmp5;
     const double _tmp20 = 0.5*theta_1;
@@ -684,7 +684,7 @@ static void sk_sens_paper(const double *theta, const double *params, double *out
     const double _tmp33 = cos(_tmp20);
     const double _tmp34 = _tmp33*p_1;
     const double _tmp35 = 0.125*_tmp23;
-    const double _tmp36 = 0.0625*pow(theta_1, 3)*(3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20) - 3*symkin_sinr2(_tmp20));
+    const double _tmp36 = 0.0625*pow(theta_1, 3)*(-3*symkin_sinr2(_tmp20) + 3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20));
     const double _tmp37 = -_tmp26*p_2 + 0.125*_tmp4*_tmp7*_tmp8*p_2;
     const double _tmp38 = _tmp28*p_2 + _tmp29*p_2;
     out[0] = _tmp0*_tmp17 - _tmp18*_tmp19;
@@ -718,7 +718,7 @@ static void sk_sens_paper(const double *theta, const double *params, double *out
     out[28] = 0;
     out[29] = 0;
     out[30] = 0;
-    out[31] = _tmp0*_tmp37 - _tmp18*_tmp38 - _tmp31*_tmp35 + _tmp32*_tmp34 + _tmp34*_tmp36;
+    out[31] = _tmp0*_tmp37 + _tmp32*_tmp34 + _tmp34*_tmp36 - _tmp18*_tmp38 - _tmp31*_tmp35;
 }
 
 /* sensitivity at level first_order: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (297 operations) */
@@ -768,12 +768,12 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp24 = 0.10825317547305482*_tmp23;
     const double _tmp25 = 0.0625*_tmp23;
     const double _tmp26 = pow(theta_2, 3);
-    const double _tmp27 = 3*symkin_cosr2(_tmp14) + symkin_sinr1(_tmp14) - 3*symkin_sinr2(_tmp14);
+    const double _tmp27 = -3*symkin_sinr2(_tmp14) + 3*symkin_cosr2(_tmp14) + symkin_sinr1(_tmp14);
     const double _tmp28 = _tmp26*_tmp27;
     const double _tmp29 = 0.05412658773652741*_tmp28;
-    const double _tmp30 = 0.25*_tmp16*_tmp18 - _tmp18*_tmp24 + 0.03125*_tmp18*_tmp28 + _tmp20*_tmp21 + _tmp20*_tmp25 + _tmp20*_tmp29;
+    const double _tmp30 = _tmp20*_tmp21 + _tmp20*_tmp25 + _tmp20*_tmp29 - _tmp18*_tmp24 + 0.03125*_tmp18*_tmp28 + 0.25*_tmp16*_tmp18;
     const double _tmp31 = cos(theta_1);
-    const double _tmp32 = 0.25*_tmp15*_tmp19*p_2*theta_2 - _tmp18*_tmp21 - _tmp18*_tmp25 - _tmp18*_tmp29 + 0.03125*_tmp19*_tmp26*_tmp27*p_2 - _tmp20*_tmp24;
+    const double _tmp32 = -_tmp18*_tmp21 - _tmp18*_tmp25 - _tmp18*_tmp29 - _tmp20*_tmp24 + 0.03125*_tmp19*_tmp26*_tmp27*p_2 + 0.25*_tmp15*_tmp19*p_2*theta_2;
     const double _tmp33 = _tmp13*_tmp30 - _tmp31*_tmp32;
     const double _tmp34 = -_tmp6;
     const double _tmp35 = 0.5*theta_4;
@@ -788,7 +788,7 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp44 = _tmp43*p_4;
     const double _tmp45 = _tmp36*_tmp44;
     const double _tmp46 = _tmp41*_tmp45;
-    const double _tmp47 = _tmp1*_tmp42 + _tmp46*_tmp5 + delta_2*(-_tmp1*_tmp34 + _tmp11);
+    const double _tmp47 = _tmp1*_tmp42 + _tmp46*_tmp5 + delta_2*(_tmp11 - _tmp1*_tmp34);
     const double _tmp48 = 0.5*theta_3;
     const double _tmp49 = sin(_tmp48);
     const double _tmp50 = _tmp49*p_3;
@@ -798,13 +798,13 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp54 = _tmp51*_tmp53;
     const double _tmp55 = cos(_tmp48);
     const double _tmp56 = _tmp55*p_3;
-    const double _tmp57 = 0.0625*pow(theta_3, 3)*(3*symkin_cosr2(_tmp48) + symkin_sinr1(_tmp48) - 3*symkin_sinr2(_tmp48));
+    const double _tmp57 = 0.0625*pow(theta_3, 3)*(-3*symkin_sinr2(_tmp48) + 3*symkin_cosr2(_tmp48) + symkin_sinr1(_tmp48));
     const double _tmp58 = 0.125*_tmp40;
-    const double _tmp59 = 0.0625*pow(theta_4, 3)*(3*symkin_cosr2(_tmp35) + symkin_sinr1(_tmp35) - 3*symkin_sinr2(_tmp35));
+    const double _tmp59 = 0.0625*pow(theta_4, 3)*(-3*symkin_sinr2(_tmp35) + 3*symkin_cosr2(_tmp35) + symkin_sinr1(_tmp35));
     const double _tmp60 = _tmp35*_tmp45 + _tmp39*_tmp58 + _tmp44*_tmp59;
     const double _tmp61 = _tmp35*_tmp39 + _tmp38*_tmp59 - _tmp45*_tmp58;
     const double _tmp62 = _tmp13*_tmp32 + _tmp30*_tmp31;
-    const double _tmp63 = -_tmp1*_tmp46 + _tmp42*_tmp5 - delta_2*(_tmp34*_tmp5 + _tmp4);
+    const double _tmp63 = _tmp42*_tmp5 - _tmp1*_tmp46 - delta_2*(_tmp4 + _tmp34*_tmp5);
     const double _tmp64 = 0.5*theta_1;
     const double _tmp65 = sin(_tmp64);
     const double _tmp66 = symkin_arck(_tmp64);
@@ -813,11 +813,11 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp69 = -_tmp65*_tmp68;
     const double _tmp70 = 0.21650635094610965*_tmp23;
     const double _tmp71 = _tmp17*_tmp70;
-    const double _tmp72 = 0.125*_tmp15*_tmp19*_tmp22 - _tmp71;
+    const double _tmp72 = -_tmp71 + 0.125*_tmp15*_tmp19*_tmp22;
     const double _tmp73 = 0.125*_tmp17*_tmp23;
     const double _tmp74 = _tmp19*_tmp70;
     const double _tmp75 = _tmp73 + _tmp74;
-    const double _tmp76 = -_tmp13*_tmp75 + _tmp31*_tmp72;
+    const double _tmp76 = _tmp31*_tmp72 - _tmp13*_tmp75;
     const double _tmp77 = 0.25*_tmp54;
     const double _tmp78 = _tmp36*_tmp41;
     const double _tmp79 = _tmp43*_tmp78;
@@ -825,11 +825,11 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp81 = _tmp5*delta_2;
     const double _tmp82 = -_tmp8*delta_3;
     const double _tmp83 = -_tmp80 - _tmp82;
-    const double _tmp84 = -_tmp7*delta_3 + _tmp81;
-    const double _tmp85 = 0.125*_tmp15*_tmp19*_tmp22*p_2 - _tmp71*p_2;
+    const double _tmp84 = _tmp81 - _tmp7*delta_3;
+    const double _tmp85 = -_tmp71*p_2 + 0.125*_tmp15*_tmp19*_tmp22*p_2;
     const double _tmp86 = _tmp73*p_2 + _tmp74*p_2;
     const double _tmp87 = _tmp65*p_1;
-    const double _tmp88 = 0.0625*pow(theta_1, 3)*(3*symkin_cosr2(_tmp64) + symkin_sinr1(_tmp64) - 3*symkin_sinr2(_tmp64));
+    const double _tmp88 = 0.0625*pow(theta_1, 3)*(-3*symkin_sinr2(_tmp64) + 3*symkin_cosr2(_tmp64) + symkin_sinr1(_tmp64));
     const double _tmp89 = cos(_tmp64);
     const double _tmp90 = _tmp89*p_1;
     const double _tmp91 = 0.125*_tmp67;
@@ -838,14 +838,14 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp94 = _tmp68*_tmp89;
     const double _tmp95 = _tmp13*_tmp72 + _tmp31*_tmp75;
     const double _tmp96 = -_tmp81;
-    const double _tmp97 = -_tmp13*_tmp86 + _tmp31*_tmp85 - _tmp87*_tmp91 + _tmp88*_tmp90 + _tmp90*_tmp92;
+    const double _tmp97 = _tmp31*_tmp85 + _tmp88*_tmp90 + _tmp90*_tmp92 - _tmp13*_tmp86 - _tmp87*_tmp91;
     const double _tmp98 = p_10 - p_5;
     const double _tmp99 = _tmp5*_tmp98;
-    const double _tmp100 = -p_11 + p_6;
+    const double _tmp100 = p_6 - p_11;
     const double _tmp101 = -_tmp100;
-    const double _tmp102 = delta_2*(-_tmp1*_tmp101 + _tmp99);
+    const double _tmp102 = delta_2*(_tmp99 - _tmp1*_tmp101);
     const double _tmp103 = _tmp1*_tmp98;
-    const double _tmp104 = -delta_2*(_tmp101*_tmp5 + _tmp103);
+    const double _tmp104 = -delta_2*(_tmp103 + _tmp101*_tmp5);
     const double _tmp105 = -_tmp80;
     out[0] = 1;
     out[1] = -1;
@@ -853,17 +853,17 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     out[3] = -_tmp4 + _tmp5*_tmp6;
     out[4] = _tmp10;
     out[5] = 0;
-    out[6] = _tmp1*_tmp6 + _tmp11;
+    out[6] = _tmp11 + _tmp1*_tmp6;
     out[7] = _tmp12;
     out[8] = 0;
     out[9] = 0;
     out[10] = 0;
     out[11] = 0;
     out[12] = -_tmp33 - _tmp47;
-    out[13] = -_tmp12*delta_3 + _tmp50*_tmp52 + _tmp50*_tmp57 + 0.125*_tmp54*_tmp56;
-    out[14] = -_tmp1*_tmp60 + _tmp5*_tmp61;
+    out[13] = _tmp50*_tmp52 + _tmp50*_tmp57 - _tmp12*delta_3 + 0.125*_tmp54*_tmp56;
+    out[14] = _tmp5*_tmp61 - _tmp1*_tmp60;
     out[15] = _tmp62 + _tmp63;
-    out[16] = _tmp10*delta_3 + 0.125*_tmp49*_tmp51*_tmp53*p_3 - _tmp52*_tmp56 - _tmp56*_tmp57;
+    out[16] = _tmp10*delta_3 - _tmp52*_tmp56 - _tmp56*_tmp57 + 0.125*_tmp49*_tmp51*_tmp53*p_3;
     out[17] = _tmp1*_tmp61 + _tmp5*_tmp60;
     out[18] = 0;
     out[19] = 0;
@@ -895,7 +895,7 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     out[45] = _tmp94;
     out[46] = _tmp95;
     out[47] = -_tmp55*_tmp77;
-    out[48] = _tmp1*_tmp37*_tmp78 + _tmp5*_tmp79;
+    out[48] = _tmp5*_tmp79 + _tmp1*_tmp37*_tmp78;
     out[49] = _tmp96;
     out[50] = _tmp80;
     out[51] = _tmp7*delta_3;
@@ -910,10 +910,10 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     out[60] = _tmp104 + _tmp62;
     out[61] = 0;
     out[62] = 0;
-    out[63] = _tmp100*_tmp5 - _tmp103;
+    out[63] = -_tmp103 + _tmp100*_tmp5;
     out[64] = 0;
     out[65] = 0;
-    out[66] = _tmp1*_tmp100 + _tmp99;
+    out[66] = _tmp99 + _tmp1*_tmp100;
     out[67] = 0;
     out[68] = 0;
     out[69] = 0;
@@ -987,12 +987,12 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp19 = 0.10825317547305482*_tmp18;
     const double _tmp20 = 0.0625*_tmp18;
     const double _tmp21 = pow(_tmp2, 3);
-    const double _tmp22 = 3*symkin_cosr2(_tmp9) + symkin_sinr1(_tmp9) - 3*symkin_sinr2(_tmp9);
+    const double _tmp22 = -3*symkin_sinr2(_tmp9) + 3*symkin_cosr2(_tmp9) + symkin_sinr1(_tmp9);
     const double _tmp23 = _tmp21*_tmp22;
     const double _tmp24 = 0.05412658773652741*_tmp23;
-    const double _tmp25 = 0.25*_tmp11*_tmp13 - _tmp13*_tmp19 + 0.03125*_tmp13*_tmp23 + _tmp15*_tmp16 + _tmp15*_tmp20 + _tmp15*_tmp24;
+    const double _tmp25 = _tmp15*_tmp16 + _tmp15*_tmp20 + _tmp15*_tmp24 - _tmp13*_tmp19 + 0.03125*_tmp13*_tmp23 + 0.25*_tmp11*_tmp13;
     const double _tmp26 = cos(theta_1);
-    const double _tmp27 = 0.25*_tmp10*_tmp14*_tmp2*p_2 - _tmp13*_tmp16 - _tmp13*_tmp20 - _tmp13*_tmp24 + 0.03125*_tmp14*_tmp21*_tmp22*p_2 - _tmp15*_tmp19;
+    const double _tmp27 = -_tmp13*_tmp16 - _tmp13*_tmp20 - _tmp13*_tmp24 - _tmp15*_tmp19 + 0.03125*_tmp14*_tmp21*_tmp22*p_2 + 0.25*_tmp10*_tmp14*_tmp2*p_2;
     const double _tmp28 = _tmp25*_tmp7 - _tmp26*_tmp27;
     const double _tmp29 = 0.5*delta_4 + 0.5*theta_4;
     const double _tmp30 = symkin_arck(_tmp29);
@@ -1017,9 +1017,9 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp49 = _tmp48 + 0.5*theta_3;
     const double _tmp50 = sin(_tmp49);
     const double _tmp51 = _tmp50*p_3;
-    const double _tmp52 = 0.0625*pow(_tmp44, 3)*(3*symkin_cosr2(_tmp49) + symkin_sinr1(_tmp49) - 3*symkin_sinr2(_tmp49));
+    const double _tmp52 = 0.0625*pow(_tmp44, 3)*(-3*symkin_sinr2(_tmp49) + 3*symkin_cosr2(_tmp49) + symkin_sinr1(_tmp49));
     const double _tmp53 = symkin_arck(_tmp49);
-    const double _tmp54 = pow(_tmp44, 2)*_tmp53;
+    const double _tmp54 = _tmp53*pow(_tmp44, 2);
     const double _tmp55 = 0.125*_tmp54;
     const double _tmp56 = cos(_tmp49);
     const double _tmp57 = _tmp56*p_3;
@@ -1027,10 +1027,10 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp59 = _tmp51*_tmp52 + _tmp51*_tmp58 + _tmp55*_tmp57;
     const double _tmp60 = 0.5*_tmp34;
     const double _tmp61 = 0.125*_tmp35;
-    const double _tmp62 = 0.0625*pow(_tmp34, 3)*(3*symkin_cosr2(_tmp29) + symkin_sinr1(_tmp29) - 3*symkin_sinr2(_tmp29));
+    const double _tmp62 = 0.0625*pow(_tmp34, 3)*(-3*symkin_sinr2(_tmp29) + 3*symkin_cosr2(_tmp29) + symkin_sinr1(_tmp29));
     const double _tmp63 = _tmp33*_tmp61 + _tmp39*_tmp62 + _tmp40*_tmp60;
     const double _tmp64 = _tmp32*_tmp62 + _tmp33*_tmp60 - _tmp40*_tmp61;
-    const double _tmp65 = -_tmp4*_tmp63 + _tmp6*_tmp64;
+    const double _tmp65 = _tmp6*_tmp64 - _tmp4*_tmp63;
     const double _tmp66 = _tmp25*_tmp26 + _tmp27*_tmp7;
     const double _tmp67 = _tmp37*_tmp6 - _tmp4*_tmp41;
     const double _tmp68 = _tmp66 + _tmp67;
@@ -1051,7 +1051,7 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp83 = 2*pow(sin(_tmp48), 2);
     const double _tmp84 = -_tmp47*_tmp82 - _tmp83*p_9;
     const double _tmp85 = sin(theta_3);
-    const double _tmp86 = -_tmp47*_tmp83 + _tmp82*p_9;
+    const double _tmp86 = _tmp82*p_9 - _tmp47*_tmp83;
     const double _tmp87 = _tmp72*_tmp79 + _tmp77*_tmp78;
     const double _tmp88 = 0.5*theta_1;
     const double _tmp89 = sin(_tmp88);
@@ -1061,7 +1061,7 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp93 = -_tmp89*_tmp92;
     const double _tmp94 = 0.21650635094610965*_tmp18;
     const double _tmp95 = _tmp12*_tmp94;
-    const double _tmp96 = 0.125*_tmp10*_tmp14*_tmp17 - _tmp95;
+    const double _tmp96 = -_tmp95 + 0.125*_tmp10*_tmp14*_tmp17;
     const double _tmp97 = 0.125*_tmp12*_tmp18;
     const double _tmp98 = _tmp14*_tmp94;
     const double _tmp99 = _tmp97 + _tmp98;
@@ -1074,14 +1074,14 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp106 = -_tmp105;
     const double _tmp107 = _tmp82*_tmp85;
     const double _tmp108 = _tmp81*_tmp83;
-    const double _tmp109 = -_tmp104 + _tmp107 + _tmp108;
+    const double _tmp109 = _tmp107 + _tmp108 - _tmp104;
     const double _tmp110 = _tmp81*_tmp82;
     const double _tmp111 = _tmp83*_tmp85;
     const double _tmp112 = _tmp105 + _tmp110 - _tmp111;
-    const double _tmp113 = 0.125*_tmp10*_tmp14*_tmp17*p_2 - _tmp95*p_2;
+    const double _tmp113 = -_tmp95*p_2 + 0.125*_tmp10*_tmp14*_tmp17*p_2;
     const double _tmp114 = _tmp97*p_2 + _tmp98*p_2;
     const double _tmp115 = _tmp89*p_1;
-    const double _tmp116 = 0.0625*pow(theta_1, 3)*(3*symkin_cosr2(_tmp88) + symkin_sinr1(_tmp88) - 3*symkin_sinr2(_tmp88));
+    const double _tmp116 = 0.0625*pow(theta_1, 3)*(-3*symkin_sinr2(_tmp88) + 3*symkin_cosr2(_tmp88) + symkin_sinr1(_tmp88));
     const double _tmp117 = cos(_tmp88);
     const double _tmp118 = _tmp117*p_1;
     const double _tmp119 = 0.125*_tmp91;
@@ -1089,23 +1089,23 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp121 = _tmp113*_tmp7 + _tmp114*_tmp26 + _tmp115*_tmp116 + _tmp115*_tmp120 + _tmp118*_tmp119;
     const double _tmp122 = _tmp117*_tmp92;
     const double _tmp123 = _tmp26*_tmp99 + _tmp7*_tmp96;
-    const double _tmp124 = _tmp113*_tmp26 - _tmp114*_tmp7 - _tmp115*_tmp119 + _tmp116*_tmp118 + _tmp118*_tmp120;
-    const double _tmp125 = -p_11 + p_6;
+    const double _tmp124 = _tmp113*_tmp26 + _tmp116*_tmp118 + _tmp118*_tmp120 - _tmp114*_tmp7 - _tmp115*_tmp119;
+    const double _tmp125 = p_6 - p_11;
     const double _tmp126 = -_tmp125;
     const double _tmp127 = p_10 - p_5;
     const double _tmp128 = -_tmp126*_tmp73 - _tmp127*_tmp76;
-    const double _tmp129 = 2*_tmp126*_tmp75 - _tmp127*_tmp73;
+    const double _tmp129 = -_tmp127*_tmp73 + 2*_tmp126*_tmp75;
     const double _tmp130 = _tmp128*_tmp72 - _tmp129*_tmp78;
     const double _tmp131 = _tmp128*_tmp78 + _tmp129*_tmp72;
     const double _tmp132 = -_tmp104;
     out[0] = 1;
     out[1] = -1;
     out[2] = 1;
-    out[3] = -_tmp1*_tmp4 - _tmp43 + _tmp5*_tmp6;
-    out[4] = _tmp45*p_9 - _tmp46*_tmp47 + _tmp59;
+    out[3] = -_tmp43 + _tmp5*_tmp6 - _tmp1*_tmp4;
+    out[4] = _tmp59 + _tmp45*p_9 - _tmp46*_tmp47;
     out[5] = _tmp65;
-    out[6] = _tmp1*_tmp6 + _tmp4*_tmp5 + _tmp68;
-    out[7] = _tmp45*_tmp47 + _tmp46*p_9 + _tmp69;
+    out[6] = _tmp68 + _tmp1*_tmp6 + _tmp4*_tmp5;
+    out[7] = _tmp69 + _tmp45*_tmp47 + _tmp46*p_9;
     out[8] = _tmp70;
     out[9] = 0;
     out[10] = 0;
@@ -1146,7 +1146,7 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     out[45] = _tmp122;
     out[46] = _tmp123;
     out[47] = -_tmp101*_tmp56;
-    out[48] = _tmp102*_tmp31*_tmp4 + _tmp103*_tmp6;
+    out[48] = _tmp103*_tmp6 + _tmp102*_tmp31*_tmp4;
     out[49] = _tmp105;
     out[50] = _tmp104;
     out[51] = _tmp110 - _tmp111;
@@ -1161,10 +1161,10 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     out[60] = _tmp131 + _tmp66;
     out[61] = 0;
     out[62] = 0;
-    out[63] = _tmp125*_tmp6 - _tmp127*_tmp4 - _tmp28;
+    out[63] = -_tmp28 + _tmp125*_tmp6 - _tmp127*_tmp4;
     out[64] = 0;
     out[65] = 0;
-    out[66] = _tmp125*_tmp4 + _tmp127*_tmp6 + _tmp66;
+    out[66] = _tmp66 + _tmp125*_tmp4 + _tmp127*_tmp6;
     out[67] = 0;
     out[68] = 0;
     out[69] = 0;

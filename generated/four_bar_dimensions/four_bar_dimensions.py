@@ -182,29 +182,29 @@ def _rigid(inputs, params):
     _tmp7 = p_7**2
     _tmp8 = 2*p_8
     _tmp9 = _tmp8*p_7
-    _tmp10 = -_tmp8*p_5 + p_5**2 + p_6**2 - 2*p_6*p_9
-    dyad1_along = 0.5*_tmp6*(_tmp10 - _tmp7 + _tmp9 + dyad1_dsq)
+    _tmp10 = p_5**2 + p_6**2 - _tmp8*p_5 - 2*p_6*p_9
+    dyad1_along = 0.5*_tmp6*(_tmp10 + _tmp9 + dyad1_dsq - _tmp7)
     _tmp11 = p_8**2 + p_9**2
     _tmp12 = _tmp10 + _tmp11
-    dyad1_reach = _tmp12*_tmp6 - dyad1_along**2
+    dyad1_reach = -dyad1_along**2 + _tmp12*_tmp6
     dyad1_across = numpy.sqrt(dyad1_reach)
-    dyad1_bx = _tmp3*dyad1_along - _tmp5*dyad1_across + dyad1_ax
-    dyad1_by = _tmp3*dyad1_across + _tmp5*dyad1_along + dyad1_ay
+    dyad1_bx = dyad1_ax + _tmp3*dyad1_along - _tmp5*dyad1_across
+    dyad1_by = dyad1_ay + _tmp3*dyad1_across + _tmp5*dyad1_along
     dyad1_margin = dyad1_dsq*abs(dyad1_across)/numpy.sqrt(_tmp12*(_tmp11 + _tmp7 - _tmp9))
     _tmp13 = -p_8
     _tmp14 = -_tmp13 - p_5
-    _tmp15 = -dyad1_ay + dyad1_by
-    _tmp16 = -p_6 + p_9
-    _tmp17 = -dyad1_ax + dyad1_bx
+    _tmp15 = dyad1_by - dyad1_ay
+    _tmp16 = p_9 - p_6
+    _tmp17 = dyad1_bx - dyad1_ax
     dyad1_phi1 = numpy.arctan2(_tmp14*_tmp15 - _tmp16*_tmp17, _tmp14*_tmp17 + _tmp15*_tmp16)
     _tmp18 = _tmp2 + dyad1_bx
     _tmp19 = -_tmp13 - p_7
     _tmp20 = _tmp4 + dyad1_by
-    dyad1_phi2 = numpy.arctan2(-_tmp18*p_9 + _tmp19*_tmp20, _tmp18*_tmp19 + _tmp20*p_9)
+    dyad1_phi2 = numpy.arctan2(_tmp19*_tmp20 - _tmp18*p_9, _tmp18*_tmp19 + _tmp20*p_9)
     return [
         dyad1_phi1 - theta_1,
         dyad1_phi2,
-        -dyad1_phi1 + dyad1_phi2,
+        dyad1_phi2 - dyad1_phi1,
         dyad1_reach,
         dyad1_margin,
     ]
@@ -220,16 +220,16 @@ def _rigid_res(theta, params):
     _tmp3 = 0.5*theta_1
     _tmp4 = 2*numpy.sin(_tmp3)**2
     _tmp5 = numpy.sin(_tmp0)
-    _tmp6 = -p_6 + p_9
+    _tmp6 = p_9 - p_6
     _tmp7 = -p_8
     _tmp8 = _tmp7 + p_7
     _tmp9 = 2*numpy.sin(0.5*theta_3)**2
     _tmp10 = -_tmp7 - p_5
     _tmp11 = 2*numpy.sin(_tmp3 + 0.5*theta_2)**2
     return [
-        _tmp0 - theta_3 + theta_4,
-        -_tmp1*p_6 - _tmp10*_tmp11 + _tmp2*p_9 - _tmp4*p_5 - _tmp5*_tmp6 - _tmp8*_tmp9,
-        _tmp1*p_5 + _tmp10*_tmp5 - _tmp11*_tmp6 + _tmp2*_tmp8 - _tmp4*p_6 + _tmp9*p_9,
+        _tmp0 + theta_4 - theta_3,
+        _tmp2*p_9 - _tmp1*p_6 - _tmp10*_tmp11 - _tmp4*p_5 - _tmp5*_tmp6 - _tmp8*_tmp9,
+        _tmp1*p_5 + _tmp10*_tmp5 + _tmp2*_tmp8 + _tmp9*p_9 - _tmp11*_tmp6 - _tmp4*p_6,
     ]
 
 
@@ -265,22 +265,22 @@ def _linear(theta, params):
     _tmp25 = _tmp23*_tmp24*p_2
     _tmp26 = numpy.cos(_tmp21)
     _tmp27 = 0.21650635094610965*_tmp25
-    _tmp28 = 0.125*_tmp22*_tmp25 + _tmp26*_tmp27
+    _tmp28 = _tmp26*_tmp27 + 0.125*_tmp22*_tmp25
     _tmp29 = numpy.cos(theta_1)
     _tmp30 = -_tmp22*_tmp27 + 0.125*_tmp23*_tmp24*_tmp26*p_2
     return [
         1,
         -1,
         1,
-        -_tmp1*_tmp3 + _tmp4*_tmp5,
+        _tmp4*_tmp5 - _tmp1*_tmp3,
         _tmp6*p_9 - _tmp7*_tmp8,
         0,
         _tmp1*_tmp5 + _tmp3*_tmp4,
         _tmp6*_tmp8 + _tmp7*p_9,
         0,
         0,
-        -_tmp1*_tmp18 - _tmp10*numpy.sin(_tmp9) + 0.25*_tmp11*_tmp13*p_3*numpy.sin(_tmp12) + 0.25*_tmp15*_tmp16*_tmp19*_tmp4*p_4 - _tmp20*_tmp28 + _tmp29*_tmp30,
-        _tmp1*_tmp17*_tmp19 + _tmp10*numpy.cos(_tmp9) - 0.25*_tmp11*_tmp13*p_3*numpy.cos(_tmp12) + _tmp18*_tmp4 + _tmp20*_tmp30 + _tmp28*_tmp29,
+        _tmp29*_tmp30 - _tmp1*_tmp18 - _tmp10*numpy.sin(_tmp9) - _tmp20*_tmp28 + 0.25*_tmp11*_tmp13*p_3*numpy.sin(_tmp12) + 0.25*_tmp15*_tmp16*_tmp19*_tmp4*p_4,
+        _tmp10*numpy.cos(_tmp9) + _tmp18*_tmp4 + _tmp20*_tmp30 + _tmp28*_tmp29 + _tmp1*_tmp17*_tmp19 - 0.25*_tmp11*_tmp13*p_3*numpy.cos(_tmp12),
     ]
 
 
@@ -339,9 +339,9 @@ def _newton(theta, delta, params):
     _tmp47 = numpy.cos(_tmp43)
     _tmp48 = _tmp47*p_2
     _tmp49 = 0.21650635094610965*_tmp45
-    _tmp50 = 0.125*_tmp45*_tmp46 + _tmp48*_tmp49
+    _tmp50 = _tmp48*_tmp49 + 0.125*_tmp45*_tmp46
     _tmp51 = numpy.cos(theta_1)
-    _tmp52 = 0.125*_tmp42*_tmp44*_tmp47*p_2 - _tmp46*_tmp49
+    _tmp52 = -_tmp46*_tmp49 + 0.125*_tmp42*_tmp44*_tmp47*p_2
     _tmp53 = _tmp12*_tmp15
     _tmp54 = p_3*numpy.cos(_tmp13)
     _tmp55 = _tmp37*p_4
@@ -353,34 +353,34 @@ def _newton(theta, delta, params):
     _tmp61 = 0.10825317547305482*_tmp45
     _tmp62 = 0.0625*_tmp45
     _tmp63 = _tmp41**3
-    _tmp64 = 3*cosr2(_tmp43) + sinr1(_tmp43) - 3*sinr2(_tmp43)
+    _tmp64 = -3*sinr2(_tmp43) + 3*cosr2(_tmp43) + sinr1(_tmp43)
     _tmp65 = _tmp63*_tmp64
     _tmp66 = 0.05412658773652741*_tmp65
-    _tmp67 = 0.25*_tmp46*_tmp59 - _tmp46*_tmp61 + 0.03125*_tmp46*_tmp65 + _tmp48*_tmp60 + _tmp48*_tmp62 + _tmp48*_tmp66
-    _tmp68 = 0.25*_tmp41*_tmp44*_tmp47*p_2 - _tmp46*_tmp60 - _tmp46*_tmp62 - _tmp46*_tmp66 + 0.03125*_tmp47*_tmp63*_tmp64*p_2 - _tmp48*_tmp61
+    _tmp67 = _tmp48*_tmp60 + _tmp48*_tmp62 + _tmp48*_tmp66 - _tmp46*_tmp61 + 0.03125*_tmp46*_tmp65 + 0.25*_tmp46*_tmp59
+    _tmp68 = -_tmp46*_tmp60 - _tmp46*_tmp62 - _tmp46*_tmp66 - _tmp48*_tmp61 + 0.03125*_tmp47*_tmp63*_tmp64*p_2 + 0.25*_tmp41*_tmp44*_tmp47*p_2
     _tmp69 = numpy.cos(_tmp11)
     _tmp70 = numpy.sin(_tmp11)
     _tmp71 = _tmp14*p_3
     _tmp72 = 0.5*_tmp11*_tmp15
     _tmp73 = 0.125*_tmp53
-    _tmp74 = 0.0625*_tmp11**3*(3*cosr2(_tmp13) + sinr1(_tmp13) - 3*sinr2(_tmp13))
+    _tmp74 = 0.0625*_tmp11**3*(-3*sinr2(_tmp13) + 3*cosr2(_tmp13) + sinr1(_tmp13))
     _tmp75 = 0.5*_tmp31
     _tmp76 = 0.125*_tmp32
-    _tmp77 = 0.0625*_tmp31**3*(3*cosr2(_tmp27) + sinr1(_tmp27) - 3*sinr2(_tmp27))
+    _tmp77 = 0.0625*_tmp31**3*(-3*sinr2(_tmp27) + 3*cosr2(_tmp27) + sinr1(_tmp27))
     _tmp78 = _tmp29*_tmp77 + _tmp30*_tmp75 + _tmp56*_tmp76
-    _tmp79 = -_tmp30*_tmp76 + _tmp55*_tmp77 + _tmp56*_tmp75
+    _tmp79 = _tmp55*_tmp77 + _tmp56*_tmp75 - _tmp30*_tmp76
     return [
-        delta_2 - delta_3 + delta_4,
-        -_tmp1*numpy.sin(_tmp0) + _tmp10*_tmp9 + 0.25*_tmp12*_tmp14*_tmp15*p_3 - _tmp17*_tmp24 - _tmp2*_tmp8 + 0.25*_tmp28*_tmp32*_tmp36*_tmp37*p_4 - _tmp35 + _tmp38*_tmp39 - _tmp40*_tmp50 + _tmp51*_tmp52,
-        _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp2 + _tmp17*_tmp39 + _tmp24*_tmp38 + _tmp40*_tmp52 + _tmp50*_tmp51 - 0.25*_tmp53*_tmp54 + _tmp58 + _tmp8*_tmp9,
+        delta_2 + delta_4 - delta_3,
+        -_tmp35 + _tmp10*_tmp9 + _tmp38*_tmp39 + _tmp51*_tmp52 - _tmp1*numpy.sin(_tmp0) - _tmp17*_tmp24 - _tmp2*_tmp8 - _tmp40*_tmp50 + 0.25*_tmp12*_tmp14*_tmp15*p_3 + 0.25*_tmp28*_tmp32*_tmp36*_tmp37*p_4,
+        _tmp58 + _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp2 + _tmp17*_tmp39 + _tmp24*_tmp38 + _tmp40*_tmp52 + _tmp50*_tmp51 + _tmp8*_tmp9 - 0.25*_tmp53*_tmp54,
         1,
         -1,
         1,
-        -_tmp19*_tmp26 + _tmp20*_tmp36 - _tmp40*_tmp67 + _tmp51*_tmp68 - _tmp58,
-        -_tmp5*_tmp70 + _tmp54*_tmp73 + _tmp69*p_9 + _tmp71*_tmp72 + _tmp71*_tmp74,
-        -_tmp26*_tmp78 + _tmp36*_tmp79,
-        _tmp19*_tmp36 + _tmp20*_tmp26 - _tmp35 + _tmp36*_tmp57 + _tmp40*_tmp68 + _tmp51*_tmp67,
-        _tmp5*_tmp69 - _tmp54*_tmp72 - _tmp54*_tmp74 + _tmp70*p_9 + _tmp71*_tmp73,
+        -_tmp58 + _tmp20*_tmp36 + _tmp51*_tmp68 - _tmp19*_tmp26 - _tmp40*_tmp67,
+        _tmp54*_tmp73 + _tmp69*p_9 + _tmp71*_tmp72 + _tmp71*_tmp74 - _tmp5*_tmp70,
+        _tmp36*_tmp79 - _tmp26*_tmp78,
+        -_tmp35 + _tmp19*_tmp36 + _tmp20*_tmp26 + _tmp36*_tmp57 + _tmp40*_tmp68 + _tmp51*_tmp67,
+        _tmp5*_tmp69 + _tmp70*p_9 + _tmp71*_tmp73 - _tmp54*_tmp72 - _tmp54*_tmp74,
         _tmp26*_tmp79 + _tmp36*_tmp78,
     ]
 
@@ -397,7 +397,7 @@ def _rigid_points(theta, params):
     _tmp5 = numpy.sin(_tmp2)
     _tmp6 = p_11 - p_6
     return [
-        _tmp0*p_5 - _tmp1*p_6 + _tmp3*_tmp4 - _tmp5*_tmp6,
+        _tmp0*p_5 + _tmp3*_tmp4 - _tmp1*p_6 - _tmp5*_tmp6,
         _tmp0*p_6 + _tmp1*p_5 + _tmp3*_tmp6 + _tmp4*_tmp5,
     ]
 
@@ -416,11 +416,11 @@ def _dev_paper(theta, params):
     _tmp7 = _tmp5*_tmp6*p_2
     _tmp8 = numpy.cos(_tmp3)
     _tmp9 = 0.21650635094610965*_tmp7
-    _tmp10 = 0.125*_tmp4*_tmp7 + _tmp8*_tmp9
+    _tmp10 = _tmp8*_tmp9 + 0.125*_tmp4*_tmp7
     _tmp11 = numpy.cos(theta_1)
     _tmp12 = -_tmp4*_tmp9 + 0.125*_tmp5*_tmp6*_tmp8*p_2
     return [
-        -_tmp1*numpy.sin(_tmp0) - _tmp10*_tmp2 + _tmp11*_tmp12,
+        _tmp11*_tmp12 - _tmp1*numpy.sin(_tmp0) - _tmp10*_tmp2,
         _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp11 + _tmp12*_tmp2,
     ]
 
@@ -436,7 +436,7 @@ def _dev_first_order(theta, delta, params):
     _tmp3 = numpy.sin(_tmp2)
     _tmp4 = p_10 - p_5
     _tmp5 = numpy.cos(_tmp2)
-    _tmp6 = -p_11 + p_6
+    _tmp6 = p_6 - p_11
     _tmp7 = numpy.sin(theta_1)
     _tmp8 = 0.5*theta_2
     _tmp9 = numpy.sin(_tmp8)
@@ -445,11 +445,11 @@ def _dev_first_order(theta, delta, params):
     _tmp12 = _tmp10*_tmp11*p_2
     _tmp13 = numpy.cos(_tmp8)
     _tmp14 = 0.21650635094610965*_tmp12
-    _tmp15 = 0.125*_tmp12*_tmp9 + _tmp13*_tmp14
+    _tmp15 = _tmp13*_tmp14 + 0.125*_tmp12*_tmp9
     _tmp16 = numpy.cos(theta_1)
-    _tmp17 = 0.125*_tmp10*_tmp11*_tmp13*p_2 - _tmp14*_tmp9
+    _tmp17 = -_tmp14*_tmp9 + 0.125*_tmp10*_tmp11*_tmp13*p_2
     return [
-        -_tmp1*numpy.sin(_tmp0) - _tmp15*_tmp7 + _tmp16*_tmp17 + delta_2*(-_tmp3*_tmp4 + _tmp5*_tmp6),
+        _tmp16*_tmp17 + delta_2*(_tmp5*_tmp6 - _tmp3*_tmp4) - _tmp1*numpy.sin(_tmp0) - _tmp15*_tmp7,
         _tmp1*numpy.cos(_tmp0) + _tmp15*_tmp16 + _tmp17*_tmp7 + delta_2*(_tmp3*_tmp6 + _tmp4*_tmp5),
     ]
 
@@ -479,11 +479,11 @@ def _dev_exact(theta, delta, params):
     _tmp17 = _tmp15*_tmp16*p_2
     _tmp18 = numpy.cos(_tmp13)
     _tmp19 = 0.21650635094610965*_tmp17
-    _tmp20 = 0.125*_tmp14*_tmp17 + _tmp18*_tmp19
+    _tmp20 = _tmp18*_tmp19 + 0.125*_tmp14*_tmp17
     _tmp21 = numpy.cos(theta_1)
     _tmp22 = -_tmp14*_tmp19 + 0.125*_tmp15*_tmp16*_tmp18*p_2
     return [
-        -_tmp1*numpy.sin(_tmp0) + _tmp10*_tmp11 - _tmp12*_tmp20 + _tmp21*_tmp22 - _tmp3*_tmp9,
+        _tmp10*_tmp11 + _tmp21*_tmp22 - _tmp1*numpy.sin(_tmp0) - _tmp12*_tmp20 - _tmp3*_tmp9,
         _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp9 + _tmp11*_tmp3 + _tmp12*_tmp22 + _tmp20*_tmp21,
     ]
 
@@ -531,9 +531,9 @@ def _sens_rigid(theta, params):
     _tmp20 = _tmp15 + _tmp8
     _tmp21 = numpy.cos(theta_1)
     _tmp22 = _tmp14*p_5 + _tmp21*p_6
-    _tmp23 = -_tmp14*p_6 + _tmp21*p_5
+    _tmp23 = _tmp21*p_5 - _tmp14*p_6
     _tmp24 = p_10 - p_5
-    _tmp25 = -p_11 + p_6
+    _tmp25 = p_6 - p_11
     _tmp26 = _tmp1*_tmp24 - _tmp25*_tmp4
     _tmp27 = _tmp1*_tmp25 + _tmp24*_tmp4
     _tmp28 = _tmp21 - _tmp4
@@ -639,10 +639,10 @@ def _sens_paper(theta, params):
     _tmp11 = _tmp7*p_2
     _tmp12 = 0.10825317547305482*_tmp9
     _tmp13 = theta_2**3
-    _tmp14 = 3*cosr2(_tmp1) + sinr1(_tmp1) - 3*sinr2(_tmp1)
+    _tmp14 = -3*sinr2(_tmp1) + 3*cosr2(_tmp1) + sinr1(_tmp1)
     _tmp15 = _tmp13*_tmp14
     _tmp16 = 0.05412658773652741*_tmp15
-    _tmp17 = -_tmp10*_tmp3 - _tmp11*_tmp12 + 0.03125*_tmp13*_tmp14*_tmp7*p_2 - _tmp16*_tmp3 - _tmp3*_tmp6 + 0.25*_tmp4*_tmp7*p_2*theta_2
+    _tmp17 = -_tmp10*_tmp3 - _tmp11*_tmp12 - _tmp16*_tmp3 - _tmp3*_tmp6 + 0.03125*_tmp13*_tmp14*_tmp7*p_2 + 0.25*_tmp4*_tmp7*p_2*theta_2
     _tmp18 = numpy.sin(theta_1)
     _tmp19 = _tmp10*_tmp11 + _tmp11*_tmp16 + _tmp11*_tmp6 - _tmp12*_tmp3 + 0.03125*_tmp15*_tmp3 + 0.25*_tmp3*_tmp5
     _tmp20 = 0.5*theta_1
@@ -661,7 +661,7 @@ def _sens_paper(theta, params):
     _tmp33 = numpy.cos(_tmp20)
     _tmp34 = _tmp33*p_1
     _tmp35 = 0.125*_tmp23
-    _tmp36 = 0.0625*theta_1**3*(3*cosr2(_tmp20) + sinr1(_tmp20) - 3*sinr2(_tmp20))
+    _tmp36 = 0.0625*theta_1**3*(-3*sinr2(_tmp20) + 3*cosr2(_tmp20) + sinr1(_tmp20))
     _tmp37 = -_tmp26*p_2 + 0.125*_tmp4*_tmp7*_tmp8*p_2
     _tmp38 = _tmp28*p_2 + _tmp29*p_2
     return [
@@ -696,7 +696,7 @@ def _sens_paper(theta, params):
         0,
         0,
         0,
-        _tmp0*_tmp37 - _tmp18*_tmp38 - _tmp31*_tmp35 + _tmp32*_tmp34 + _tmp34*_tmp36,
+        _tmp0*_tmp37 + _tmp32*_tmp34 + _tmp34*_tmp36 - _tmp18*_tmp38 - _tmp31*_tmp35,
     ]
 
 
@@ -732,12 +732,12 @@ def _sens_first_order(theta, delta, params):
     _tmp24 = 0.10825317547305482*_tmp23
     _tmp25 = 0.0625*_tmp23
     _tmp26 = theta_2**3
-    _tmp27 = 3*cosr2(_tmp14) + sinr1(_tmp14) - 3*sinr2(_tmp14)
+    _tmp27 = -3*sinr2(_tmp14) + 3*cosr2(_tmp14) + sinr1(_tmp14)
     _tmp28 = _tmp26*_tmp27
     _tmp29 = 0.05412658773652741*_tmp28
-    _tmp30 = 0.25*_tmp16*_tmp18 - _tmp18*_tmp24 + 0.03125*_tmp18*_tmp28 + _tmp20*_tmp21 + _tmp20*_tmp25 + _tmp20*_tmp29
+    _tmp30 = _tmp20*_tmp21 + _tmp20*_tmp25 + _tmp20*_tmp29 - _tmp18*_tmp24 + 0.03125*_tmp18*_tmp28 + 0.25*_tmp16*_tmp18
     _tmp31 = numpy.cos(theta_1)
-    _tmp32 = 0.25*_tmp15*_tmp19*p_2*theta_2 - _tmp18*_tmp21 - _tmp18*_tmp25 - _tmp18*_tmp29 + 0.03125*_tmp19*_tmp26*_tmp27*p_2 - _tmp20*_tmp24
+    _tmp32 = -_tmp18*_tmp21 - _tmp18*_tmp25 - _tmp18*_tmp29 - _tmp20*_tmp24 + 0.03125*_tmp19*_tmp26*_tmp27*p_2 + 0.25*_tmp15*_tmp19*p_2*theta_2
     _tmp33 = _tmp13*_tmp30 - _tmp31*_tmp32
     _tmp34 = -_tmp6
     _tmp35 = 0.5*theta_4
@@ -752,7 +752,7 @@ def _sens_first_order(theta, delta, params):
     _tmp44 = _tmp43*p_4
     _tmp45 = _tmp36*_tmp44
     _tmp46 = _tmp41*_tmp45
-    _tmp47 = _tmp1*_tmp42 + _tmp46*_tmp5 + delta_2*(-_tmp1*_tmp34 + _tmp11)
+    _tmp47 = _tmp1*_tmp42 + _tmp46*_tmp5 + delta_2*(_tmp11 - _tmp1*_tmp34)
     _tmp48 = 0.5*theta_3
     _tmp49 = numpy.sin(_tmp48)
     _tmp50 = _tmp49*p_3
@@ -762,13 +762,13 @@ def _sens_first_order(theta, delta, params):
     _tmp54 = _tmp51*_tmp53
     _tmp55 = numpy.cos(_tmp48)
     _tmp56 = _tmp55*p_3
-    _tmp57 = 0.0625*theta_3**3*(3*cosr2(_tmp48) + sinr1(_tmp48) - 3*sinr2(_tmp48))
+    _tmp57 = 0.0625*theta_3**3*(-3*sinr2(_tmp48) + 3*cosr2(_tmp48) + sinr1(_tmp48))
     _tmp58 = 0.125*_tmp40
-    _tmp59 = 0.0625*theta_4**3*(3*cosr2(_tmp35) + sinr1(_tmp35) - 3*sinr2(_tmp35))
+    _tmp59 = 0.0625*theta_4**3*(-3*sinr2(_tmp35) + 3*cosr2(_tmp35) + sinr1(_tmp35))
     _tmp60 = _tmp35*_tmp45 + _tmp39*_tmp58 + _tmp44*_tmp59
     _tmp61 = _tmp35*_tmp39 + _tmp38*_tmp59 - _tmp45*_tmp58
     _tmp62 = _tmp13*_tmp32 + _tmp30*_tmp31
-    _tmp63 = -_tmp1*_tmp46 + _tmp42*_tmp5 - delta_2*(_tmp34*_tmp5 + _tmp4)
+    _tmp63 = _tmp42*_tmp5 - _tmp1*_tmp46 - delta_2*(_tmp4 + _tmp34*_tmp5)
     _tmp64 = 0.5*theta_1
     _tmp65 = numpy.sin(_tmp64)
     _tmp66 = arck(_tmp64)
@@ -777,11 +777,11 @@ def _sens_first_order(theta, delta, params):
     _tmp69 = -_tmp65*_tmp68
     _tmp70 = 0.21650635094610965*_tmp23
     _tmp71 = _tmp17*_tmp70
-    _tmp72 = 0.125*_tmp15*_tmp19*_tmp22 - _tmp71
+    _tmp72 = -_tmp71 + 0.125*_tmp15*_tmp19*_tmp22
     _tmp73 = 0.125*_tmp17*_tmp23
     _tmp74 = _tmp19*_tmp70
     _tmp75 = _tmp73 + _tmp74
-    _tmp76 = -_tmp13*_tmp75 + _tmp31*_tmp72
+    _tmp76 = _tmp31*_tmp72 - _tmp13*_tmp75
     _tmp77 = 0.25*_tmp54
     _tmp78 = _tmp36*_tmp41
     _tmp79 = _tmp43*_tmp78
@@ -789,11 +789,11 @@ def _sens_first_order(theta, delta, params):
     _tmp81 = _tmp5*delta_2
     _tmp82 = -_tmp8*delta_3
     _tmp83 = -_tmp80 - _tmp82
-    _tmp84 = -_tmp7*delta_3 + _tmp81
-    _tmp85 = 0.125*_tmp15*_tmp19*_tmp22*p_2 - _tmp71*p_2
+    _tmp84 = _tmp81 - _tmp7*delta_3
+    _tmp85 = -_tmp71*p_2 + 0.125*_tmp15*_tmp19*_tmp22*p_2
     _tmp86 = _tmp73*p_2 + _tmp74*p_2
     _tmp87 = _tmp65*p_1
-    _tmp88 = 0.0625*theta_1**3*(3*cosr2(_tmp64) + sinr1(_tmp64) - 3*sinr2(_tmp64))
+    _tmp88 = 0.0625*theta_1**3*(-3*sinr2(_tmp64) + 3*cosr2(_tmp64) + sinr1(_tmp64))
     _tmp89 = numpy.cos(_tmp64)
     _tmp90 = _tmp89*p_1
     _tmp91 = 0.125*_tmp67
@@ -802,14 +802,14 @@ def _sens_first_order(theta, delta, params):
     _tmp94 = _tmp68*_tmp89
     _tmp95 = _tmp13*_tmp72 + _tmp31*_tmp75
     _tmp96 = -_tmp81
-    _tmp97 = -_tmp13*_tmp86 + _tmp31*_tmp85 - _tmp87*_tmp91 + _tmp88*_tmp90 + _tmp90*_tmp92
+    _tmp97 = _tmp31*_tmp85 + _tmp88*_tmp90 + _tmp90*_tmp92 - _tmp13*_tmp86 - _tmp87*_tmp91
     _tmp98 = p_10 - p_5
     _tmp99 = _tmp5*_tmp98
-    _tmp100 = -p_11 + p_6
+    _tmp100 = p_6 - p_11
     _tmp101 = -_tmp100
-    _tmp102 = delta_2*(-_tmp1*_tmp101 + _tmp99)
+    _tmp102 = delta_2*(_tmp99 - _tmp1*_tmp101)
     _tmp103 = _tmp1*_tmp98
-    _tmp104 = -delta_2*(_tmp101*_tmp5 + _tmp103)
+    _tmp104 = -delta_2*(_tmp103 + _tmp101*_tmp5)
     _tmp105 = -_tmp80
     return [
         1,
@@ -818,17 +818,17 @@ def _sens_first_order(theta, delta, params):
         -_tmp4 + _tmp5*_tmp6,
         _tmp10,
         0,
-        _tmp1*_tmp6 + _tmp11,
+        _tmp11 + _tmp1*_tmp6,
         _tmp12,
         0,
         0,
         0,
         0,
         -_tmp33 - _tmp47,
-        -_tmp12*delta_3 + _tmp50*_tmp52 + _tmp50*_tmp57 + 0.125*_tmp54*_tmp56,
-        -_tmp1*_tmp60 + _tmp5*_tmp61,
+        _tmp50*_tmp52 + _tmp50*_tmp57 - _tmp12*delta_3 + 0.125*_tmp54*_tmp56,
+        _tmp5*_tmp61 - _tmp1*_tmp60,
         _tmp62 + _tmp63,
-        _tmp10*delta_3 + 0.125*_tmp49*_tmp51*_tmp53*p_3 - _tmp52*_tmp56 - _tmp56*_tmp57,
+        _tmp10*delta_3 - _tmp52*_tmp56 - _tmp56*_tmp57 + 0.125*_tmp49*_tmp51*_tmp53*p_3,
         _tmp1*_tmp61 + _tmp5*_tmp60,
         0,
         0,
@@ -860,7 +860,7 @@ def _sens_first_order(theta, delta, params):
         _tmp94,
         _tmp95,
         -_tmp55*_tmp77,
-        _tmp1*_tmp37*_tmp78 + _tmp5*_tmp79,
+        _tmp5*_tmp79 + _tmp1*_tmp37*_tmp78,
         _tmp96,
         _tmp80,
         _tmp7*delta_3,
@@ -875,10 +875,10 @@ def _sens_first_order(theta, delta, params):
         _tmp104 + _tmp62,
         0,
         0,
-        _tmp100*_tmp5 - _tmp103,
+        -_tmp103 + _tmp100*_tmp5,
         0,
         0,
-        _tmp1*_tmp100 + _tmp99,
+        _tmp99 + _tmp1*_tmp100,
         0,
         0,
         0,
@@ -937,12 +937,12 @@ def _sens_exact(theta, delta, params):
     _tmp19 = 0.10825317547305482*_tmp18
     _tmp20 = 0.0625*_tmp18
     _tmp21 = _tmp2**3
-    _tmp22 = 3*cosr2(_tmp9) + sinr1(_tmp9) - 3*sinr2(_tmp9)
+    _tmp22 = -3*sinr2(_tmp9) + 3*cosr2(_tmp9) + sinr1(_tmp9)
     _tmp23 = _tmp21*_tmp22
     _tmp24 = 0.05412658773652741*_tmp23
-    _tmp25 = 0.25*_tmp11*_tmp13 - _tmp13*_tmp19 + 0.03125*_tmp13*_tmp23 + _tmp15*_tmp16 + _tmp15*_tmp20 + _tmp15*_tmp24
+    _tmp25 = _tmp15*_tmp16 + _tmp15*_tmp20 + _tmp15*_tmp24 - _tmp13*_tmp19 + 0.03125*_tmp13*_tmp23 + 0.25*_tmp11*_tmp13
     _tmp26 = numpy.cos(theta_1)
-    _tmp27 = 0.25*_tmp10*_tmp14*_tmp2*p_2 - _tmp13*_tmp16 - _tmp13*_tmp20 - _tmp13*_tmp24 + 0.03125*_tmp14*_tmp21*_tmp22*p_2 - _tmp15*_tmp19
+    _tmp27 = -_tmp13*_tmp16 - _tmp13*_tmp20 - _tmp13*_tmp24 - _tmp15*_tmp19 + 0.03125*_tmp14*_tmp21*_tmp22*p_2 + 0.25*_tmp10*_tmp14*_tmp2*p_2
     _tmp28 = _tmp25*_tmp7 - _tmp26*_tmp27
     _tmp29 = 0.5*delta_4 + 0.5*theta_4
     _tmp30 = arck(_tmp29)
@@ -967,9 +967,9 @@ def _sens_exact(theta, delta, params):
     _tmp49 = _tmp48 + 0.5*theta_3
     _tmp50 = numpy.sin(_tmp49)
     _tmp51 = _tmp50*p_3
-    _tmp52 = 0.0625*_tmp44**3*(3*cosr2(_tmp49) + sinr1(_tmp49) - 3*sinr2(_tmp49))
+    _tmp52 = 0.0625*_tmp44**3*(-3*sinr2(_tmp49) + 3*cosr2(_tmp49) + sinr1(_tmp49))
     _tmp53 = arck(_tmp49)
-    _tmp54 = _tmp44**2*_tmp53
+    _tmp54 = _tmp53*_tmp44**2
     _tmp55 = 0.125*_tmp54
     _tmp56 = numpy.cos(_tmp49)
     _tmp57 = _tmp56*p_3
@@ -977,10 +977,10 @@ def _sens_exact(theta, delta, params):
     _tmp59 = _tmp51*_tmp52 + _tmp51*_tmp58 + _tmp55*_tmp57
     _tmp60 = 0.5*_tmp34
     _tmp61 = 0.125*_tmp35
-    _tmp62 = 0.0625*_tmp34**3*(3*cosr2(_tmp29) + sinr1(_tmp29) - 3*sinr2(_tmp29))
+    _tmp62 = 0.0625*_tmp34**3*(-3*sinr2(_tmp29) + 3*cosr2(_tmp29) + sinr1(_tmp29))
     _tmp63 = _tmp33*_tmp61 + _tmp39*_tmp62 + _tmp40*_tmp60
     _tmp64 = _tmp32*_tmp62 + _tmp33*_tmp60 - _tmp40*_tmp61
-    _tmp65 = -_tmp4*_tmp63 + _tmp6*_tmp64
+    _tmp65 = _tmp6*_tmp64 - _tmp4*_tmp63
     _tmp66 = _tmp25*_tmp26 + _tmp27*_tmp7
     _tmp67 = _tmp37*_tmp6 - _tmp4*_tmp41
     _tmp68 = _tmp66 + _tmp67
@@ -1001,7 +1001,7 @@ def _sens_exact(theta, delta, params):
     _tmp83 = 2*numpy.sin(_tmp48)**2
     _tmp84 = -_tmp47*_tmp82 - _tmp83*p_9
     _tmp85 = numpy.sin(theta_3)
-    _tmp86 = -_tmp47*_tmp83 + _tmp82*p_9
+    _tmp86 = _tmp82*p_9 - _tmp47*_tmp83
     _tmp87 = _tmp72*_tmp79 + _tmp77*_tmp78
     _tmp88 = 0.5*theta_1
     _tmp89 = numpy.sin(_tmp88)
@@ -1011,7 +1011,7 @@ def _sens_exact(theta, delta, params):
     _tmp93 = -_tmp89*_tmp92
     _tmp94 = 0.21650635094610965*_tmp18
     _tmp95 = _tmp12*_tmp94
-    _tmp96 = 0.125*_tmp10*_tmp14*_tmp17 - _tmp95
+    _tmp96 = -_tmp95 + 0.125*_tmp10*_tmp14*_tmp17
     _tmp97 = 0.125*_tmp12*_tmp18
     _tmp98 = _tmp14*_tmp94
     _tmp99 = _tmp97 + _tmp98
@@ -1024,14 +1024,14 @@ def _sens_exact(theta, delta, params):
     _tmp106 = -_tmp105
     _tmp107 = _tmp82*_tmp85
     _tmp108 = _tmp81*_tmp83
-    _tmp109 = -_tmp104 + _tmp107 + _tmp108
+    _tmp109 = _tmp107 + _tmp108 - _tmp104
     _tmp110 = _tmp81*_tmp82
     _tmp111 = _tmp83*_tmp85
     _tmp112 = _tmp105 + _tmp110 - _tmp111
-    _tmp113 = 0.125*_tmp10*_tmp14*_tmp17*p_2 - _tmp95*p_2
+    _tmp113 = -_tmp95*p_2 + 0.125*_tmp10*_tmp14*_tmp17*p_2
     _tmp114 = _tmp97*p_2 + _tmp98*p_2
     _tmp115 = _tmp89*p_1
-    _tmp116 = 0.0625*theta_1**3*(3*cosr2(_tmp88) + sinr1(_tmp88) - 3*sinr2(_tmp88))
+    _tmp116 = 0.0625*theta_1**3*(-3*sinr2(_tmp88) + 3*cosr2(_tmp88) + sinr1(_tmp88))
     _tmp117 = numpy.cos(_tmp88)
     _tmp118 = _tmp117*p_1
     _tmp119 = 0.125*_tmp91
@@ -1039,12 +1039,12 @@ def _sens_exact(theta, delta, params):
     _tmp121 = _tmp113*_tmp7 + _tmp114*_tmp26 + _tmp115*_tmp116 + _tmp115*_tmp120 + _tmp118*_tmp119
     _tmp122 = _tmp117*_tmp92
     _tmp123 = _tmp26*_tmp99 + _tmp7*_tmp96
-    _tmp124 = _tmp113*_tmp26 - _tmp114*_tmp7 - _tmp115*_tmp119 + _tmp116*_tmp118 + _tmp118*_tmp120
-    _tmp125 = -p_11 + p_6
+    _tmp124 = _tmp113*_tmp26 + _tmp116*_tmp118 + _tmp118*_tmp120 - _tmp114*_tmp7 - _tmp115*_tmp119
+    _tmp125 = p_6 - p_11
     _tmp126 = -_tmp125
     _tmp127 = p_10 - p_5
     _tmp128 = -_tmp126*_tmp73 - _tmp127*_tmp76
-    _tmp129 = 2*_tmp126*_tmp75 - _tmp127*_tmp73
+    _tmp129 = -_tmp127*_tmp73 + 2*_tmp126*_tmp75
     _tmp130 = _tmp128*_tmp72 - _tmp129*_tmp78
     _tmp131 = _tmp128*_tmp78 + _tmp129*_tmp72
     _tmp132 = -_tmp104
@@ -1052,11 +1052,11 @@ def _sens_exact(theta, delta, params):
         1,
         -1,
         1,
-        -_tmp1*_tmp4 - _tmp43 + _tmp5*_tmp6,
-        _tmp45*p_9 - _tmp46*_tmp47 + _tmp59,
+        -_tmp43 + _tmp5*_tmp6 - _tmp1*_tmp4,
+        _tmp59 + _tmp45*p_9 - _tmp46*_tmp47,
         _tmp65,
-        _tmp1*_tmp6 + _tmp4*_tmp5 + _tmp68,
-        _tmp45*_tmp47 + _tmp46*p_9 + _tmp69,
+        _tmp68 + _tmp1*_tmp6 + _tmp4*_tmp5,
+        _tmp69 + _tmp45*_tmp47 + _tmp46*p_9,
         _tmp70,
         0,
         0,
@@ -1097,7 +1097,7 @@ def _sens_exact(theta, delta, params):
         _tmp122,
         _tmp123,
         -_tmp101*_tmp56,
-        _tmp102*_tmp31*_tmp4 + _tmp103*_tmp6,
+        _tmp103*_tmp6 + _tmp102*_tmp31*_tmp4,
         _tmp105,
         _tmp104,
         _tmp110 - _tmp111,
@@ -1112,10 +1112,10 @@ def _sens_exact(theta, delta, params):
         _tmp131 + _tmp66,
         0,
         0,
-        _tmp125*_tmp6 - _tmp127*_tmp4 - _tmp28,
+        -_tmp28 + _tmp125*_tmp6 - _tmp127*_tmp4,
         0,
         0,
-        _tmp125*_tmp4 + _tmp127*_tmp6 + _tmp66,
+        _tmp66 + _tmp125*_tmp4 + _tmp127*_tmp6,
         0,
         0,
         0,

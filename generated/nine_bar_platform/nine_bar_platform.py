@@ -142,46 +142,46 @@ def _rigid(inputs, params):
     _tmp6 = numpy.sin(_tmp1)
     _tmp7 = numpy.cos(_tmp0)
     _tmp8 = numpy.sin(_tmp0)
-    _tmp9 = 0.05*_tmp7 - 0.02*_tmp8 - 0.06*numpy.sin(theta_1)
-    dyad1_ax = 0.05*_tmp2 + 0.05*_tmp4 + 0.02*_tmp5 - 0.01*_tmp6 + _tmp9
-    _tmp10 = 0.02*_tmp7 + 0.05*_tmp8 + 0.06*numpy.cos(theta_1)
-    dyad1_ay = _tmp10 + 0.01*_tmp2 - 0.02*_tmp4 + 0.05*_tmp5 + 0.05*_tmp6
+    _tmp9 = 0.05*_tmp7 - 0.06*numpy.sin(theta_1) - 0.02*_tmp8
+    dyad1_ax = _tmp9 + 0.05*_tmp2 + 0.05*_tmp4 + 0.02*_tmp5 - 0.01*_tmp6
+    _tmp10 = 0.06*numpy.cos(theta_1) + 0.05*_tmp8 + 0.02*_tmp7
+    dyad1_ay = _tmp10 + 0.05*_tmp5 + 0.05*_tmp6 + 0.01*_tmp2 - 0.02*_tmp4
     dyad1_cx = 0.16
     dyad1_cy = 0
-    _tmp11 = -dyad1_ax + dyad1_cx
-    _tmp12 = -dyad1_ay + dyad1_cy
+    _tmp11 = dyad1_cx - dyad1_ax
+    _tmp12 = dyad1_cy - dyad1_ay
     dyad1_dsq = _tmp11**2 + _tmp12**2
     _tmp13 = dyad1_dsq**(-1.0)
-    dyad1_along = 0.5*_tmp13*(dyad1_dsq - 0.0012)
-    dyad1_reach = 0.0029*_tmp13 - dyad1_along**2
+    dyad1_along = 0.5*_tmp13*(-0.0012 + dyad1_dsq)
+    dyad1_reach = -dyad1_along**2 + 0.0029*_tmp13
     dyad1_across = numpy.sqrt(dyad1_reach)
-    dyad1_bx = _tmp11*dyad1_along - _tmp12*dyad1_across + dyad1_ax
-    dyad1_by = _tmp11*dyad1_across + _tmp12*dyad1_along + dyad1_ay
+    dyad1_bx = dyad1_ax + _tmp11*dyad1_along - _tmp12*dyad1_across
+    dyad1_by = dyad1_ay + _tmp11*dyad1_across + _tmp12*dyad1_along
     dyad1_margin = 290.0073952828708*dyad1_dsq*abs(dyad1_across)
     _tmp14 = 0.05*dyad1_bx
-    dyad1_phi1 = numpy.arctan2(-0.02*dyad1_ax - 0.05*dyad1_ay + 0.02*dyad1_bx + 0.05*dyad1_by, _tmp14 - 0.05*dyad1_ax + 0.02*dyad1_ay - 0.02*dyad1_by)
-    dyad1_phi2 = numpy.arctan2(-_tmp14 + 0.04*dyad1_by + 0.05*dyad1_cx - 0.04*dyad1_cy, 0.04*dyad1_bx + 0.05*dyad1_by - 0.04*dyad1_cx - 0.05*dyad1_cy)
-    dyad2_ax = 0.02*_tmp2 + 0.04*_tmp6 + _tmp9
-    dyad2_ay = _tmp10 - 0.04*_tmp2 + 0.02*_tmp6
+    dyad1_phi1 = numpy.arctan2(0.05*dyad1_by + 0.02*dyad1_bx - 0.05*dyad1_ay - 0.02*dyad1_ax, _tmp14 + 0.02*dyad1_ay - 0.05*dyad1_ax - 0.02*dyad1_by)
+    dyad1_phi2 = numpy.arctan2(-_tmp14 + 0.05*dyad1_cx + 0.04*dyad1_by - 0.04*dyad1_cy, 0.05*dyad1_by + 0.04*dyad1_bx - 0.05*dyad1_cy - 0.04*dyad1_cx)
+    dyad2_ax = _tmp9 + 0.02*_tmp2 + 0.04*_tmp6
+    dyad2_ay = _tmp10 + 0.02*_tmp6 - 0.04*_tmp2
     dyad2_cx = 0.085
     dyad2_cy = 0
-    _tmp15 = -dyad2_ax + dyad2_cx
-    _tmp16 = -dyad2_ay + dyad2_cy
+    _tmp15 = dyad2_cx - dyad2_ax
+    _tmp16 = dyad2_cy - dyad2_ay
     dyad2_dsq = _tmp15**2 + _tmp16**2
     _tmp17 = dyad2_dsq**(-1.0)
-    dyad2_along = 0.5*_tmp17*(dyad2_dsq - 0.000225)
-    dyad2_reach = 0.001625*_tmp17 - dyad2_along**2
+    dyad2_along = 0.5*_tmp17*(-0.000225 + dyad2_dsq)
+    dyad2_reach = -dyad2_along**2 + 0.001625*_tmp17
     dyad2_across = numpy.sqrt(dyad2_reach)
-    dyad2_bx = _tmp15*dyad2_along - _tmp16*dyad2_across + dyad2_ax
-    dyad2_by = _tmp15*dyad2_across + _tmp16*dyad2_along + dyad2_ay
+    dyad2_bx = dyad2_ax + _tmp15*dyad2_along - _tmp16*dyad2_across
+    dyad2_by = dyad2_ay + _tmp15*dyad2_across + _tmp16*dyad2_along
     dyad2_margin = 576.7498007284725*dyad2_dsq*abs(dyad2_across)
-    dyad2_phi1 = numpy.arctan2(-0.005*dyad2_ax - 0.04*dyad2_ay + 0.005*dyad2_bx + 0.04*dyad2_by, -0.04*dyad2_ax + 0.005*dyad2_ay + 0.04*dyad2_bx - 0.005*dyad2_by)
-    dyad2_phi2 = numpy.arctan2(-0.035*dyad2_bx + 0.025*dyad2_by + 0.035*dyad2_cx - 0.025*dyad2_cy, 0.025*dyad2_bx + 0.035*dyad2_by - 0.025*dyad2_cx - 0.035*dyad2_cy)
+    dyad2_phi1 = numpy.arctan2(0.005*dyad2_bx + 0.04*dyad2_by - 0.005*dyad2_ax - 0.04*dyad2_ay, 0.005*dyad2_ay + 0.04*dyad2_bx - 0.005*dyad2_by - 0.04*dyad2_ax)
+    dyad2_phi2 = numpy.arctan2(0.035*dyad2_cx + 0.025*dyad2_by - 0.035*dyad2_bx - 0.025*dyad2_cy, 0.035*dyad2_by + 0.025*dyad2_bx - 0.035*dyad2_cy - 0.025*dyad2_cx)
     return [
-        -_tmp3 + dyad1_phi1,
-        -dyad1_phi1 + dyad1_phi2,
-        -_tmp1 + dyad2_phi1,
-        -dyad2_phi1 + dyad2_phi2,
+        dyad1_phi1 - _tmp3,
+        dyad1_phi2 - dyad1_phi1,
+        dyad2_phi1 - _tmp1,
+        dyad2_phi2 - dyad2_phi1,
         dyad1_phi2,
         dyad2_phi2,
         dyad1_reach,
@@ -214,8 +214,8 @@ def _rigid_res(theta, params):
     _tmp17 = numpy.sin(_tmp11 + 0.5*theta_6)**2
     _tmp18 = numpy.sin(_tmp6)**2
     _tmp19 = numpy.sin(_tmp0)
-    _tmp20 = 0.1*_tmp18 + 0.02*_tmp19 + 0.06*numpy.sin(theta_1)
-    _tmp21 = -0.04*_tmp18 + 0.05*_tmp19 - 0.12*numpy.sin(_tmp5)**2
+    _tmp20 = 0.06*numpy.sin(theta_1) + 0.1*_tmp18 + 0.02*_tmp19
+    _tmp21 = 0.05*_tmp19 - 0.12*numpy.sin(_tmp5)**2 - 0.04*_tmp18
     _tmp22 = _tmp1 + theta_7
     _tmp23 = _tmp22 + theta_8
     _tmp24 = _tmp7 + 0.5*theta_7
@@ -224,12 +224,12 @@ def _rigid_res(theta, params):
     _tmp27 = numpy.sin(_tmp24 + 0.5*theta_8)**2
     _tmp28 = numpy.sin(_tmp22)
     return [
-        -_tmp4 + theta_9,
-        0.1*_tmp10 + 0.1*_tmp12 + 0.01*_tmp13 - 0.05*_tmp14 - 0.02*_tmp15 - 0.02*_tmp16 - 0.08*_tmp17 + _tmp20 + 0.1*_tmp8,
-        -0.04*_tmp10 - 0.04*_tmp12 - 0.05*_tmp13 + 0.04*_tmp14 - 0.05*_tmp15 - 0.05*_tmp16 - 0.1*_tmp17 - _tmp21 + 0.02*_tmp8,
-        -_tmp23 + theta_10,
-        -0.04*_tmp13 + _tmp20 + 0.08*_tmp25 - 0.035*_tmp26 - 0.05*_tmp27 - 0.005*_tmp28 + 0.04*_tmp8,
-        -0.02*_tmp13 - _tmp21 - 0.01*_tmp25 + 0.025*_tmp26 - 0.07*_tmp27 - 0.04*_tmp28 - 0.08*_tmp8,
+        theta_9 - _tmp4,
+        _tmp20 + 0.1*_tmp10 + 0.1*_tmp12 + 0.1*_tmp8 + 0.01*_tmp13 - 0.05*_tmp14 - 0.02*_tmp15 - 0.02*_tmp16 - 0.08*_tmp17,
+        -_tmp21 + 0.02*_tmp8 + 0.04*_tmp14 - 0.05*_tmp13 - 0.05*_tmp15 - 0.05*_tmp16 - 0.1*_tmp17 - 0.04*_tmp10 - 0.04*_tmp12,
+        theta_10 - _tmp23,
+        _tmp20 + 0.04*_tmp8 + 0.08*_tmp25 - 0.035*_tmp26 - 0.05*_tmp27 - 0.005*_tmp28 - 0.04*_tmp13,
+        -_tmp21 + 0.025*_tmp26 - 0.07*_tmp27 - 0.01*_tmp25 - 0.02*_tmp13 - 0.04*_tmp28 - 0.08*_tmp8,
     ]
 
 
@@ -246,7 +246,7 @@ def _linear(theta, params):
     _tmp6 = _tmp3 + theta_6
     _tmp7 = numpy.sin(_tmp6)
     _tmp8 = numpy.cos(_tmp6)
-    _tmp9 = 0.04*_tmp7 + 0.05*_tmp8
+    _tmp9 = 0.05*_tmp8 + 0.04*_tmp7
     _tmp10 = 0.05*_tmp7 - 0.04*_tmp8
     _tmp11 = _tmp1 + theta_7
     _tmp12 = numpy.cos(_tmp11)
@@ -254,7 +254,7 @@ def _linear(theta, params):
     _tmp14 = _tmp11 + theta_8
     _tmp15 = numpy.sin(_tmp14)
     _tmp16 = numpy.cos(_tmp14)
-    _tmp17 = 0.025*_tmp15 + 0.035*_tmp16
+    _tmp17 = 0.035*_tmp16 + 0.025*_tmp15
     _tmp18 = 0.035*_tmp15 - 0.025*_tmp16
     _tmp19 = 0.5*theta_9
     _tmp20 = theta_9**2
@@ -319,7 +319,7 @@ def _linear(theta, params):
         0,
         1,
         0,
-        -0.02*_tmp4 + 0.05*_tmp5 - _tmp9,
+        -_tmp9 + 0.05*_tmp5 - 0.02*_tmp4,
         -_tmp9,
         0,
         0,
@@ -339,22 +339,22 @@ def _linear(theta, params):
         1,
         0,
         0,
-        -0.005*_tmp12 + 0.04*_tmp13 - _tmp17,
+        -_tmp17 + 0.04*_tmp13 - 0.005*_tmp12,
         -_tmp17,
         0,
         0,
         0,
         0,
-        -0.04*_tmp12 - 0.005*_tmp13 - _tmp18,
+        -_tmp18 - 0.005*_tmp13 - 0.04*_tmp12,
         -_tmp18,
         0,
         0,
         0,
-        -_tmp20*_tmp21*_tmp22*numpy.sin(_tmp19) + _tmp24*_tmp27 + _tmp29*_tmp31 + _tmp33*_tmp36*_tmp5 + _tmp37*_tmp38 - _tmp39*_tmp41 - _tmp42*_tmp43 + _tmp58,
-        0.25*_tmp20*_tmp21*p_0*numpy.cos(_tmp19) - _tmp24*_tmp41 - _tmp27*_tmp39 - _tmp29*_tmp43 - _tmp31*_tmp42 - _tmp33*_tmp38 + 0.25*_tmp34*_tmp35*_tmp37*_tmp5*p_0 - _tmp59,
+        _tmp58 + _tmp24*_tmp27 + _tmp29*_tmp31 + _tmp37*_tmp38 - _tmp39*_tmp41 - _tmp42*_tmp43 + _tmp33*_tmp36*_tmp5 - _tmp20*_tmp21*_tmp22*numpy.sin(_tmp19),
+        -_tmp59 - _tmp24*_tmp41 - _tmp27*_tmp39 - _tmp29*_tmp43 - _tmp31*_tmp42 - _tmp33*_tmp38 + 0.25*_tmp20*_tmp21*p_0*numpy.cos(_tmp19) + 0.25*_tmp34*_tmp35*_tmp37*_tmp5*p_0,
         0,
-        -_tmp22*_tmp61*_tmp62*numpy.sin(_tmp60) + _tmp58 + _tmp64*_tmp66 + _tmp68*_tmp70 - _tmp71*_tmp72 - _tmp73*_tmp74,
-        -_tmp59 + 0.25*_tmp61*_tmp62*p_0*numpy.cos(_tmp60) - _tmp64*_tmp72 - _tmp66*_tmp71 - _tmp68*_tmp74 - _tmp70*_tmp73,
+        _tmp58 + _tmp64*_tmp66 + _tmp68*_tmp70 - _tmp71*_tmp72 - _tmp73*_tmp74 - _tmp22*_tmp61*_tmp62*numpy.sin(_tmp60),
+        -_tmp59 - _tmp64*_tmp72 - _tmp66*_tmp71 - _tmp68*_tmp74 - _tmp70*_tmp73 + 0.25*_tmp61*_tmp62*p_0*numpy.cos(_tmp60),
     ]
 
 
@@ -372,7 +372,7 @@ def _newton(theta, delta, params):
     _tmp6 = numpy.sin(delta_5)
     _tmp7 = 0.5*delta_5
     _tmp8 = numpy.sin(_tmp7)**2
-    _tmp9 = -0.02*_tmp6 + 0.1*_tmp8
+    _tmp9 = 0.1*_tmp8 - 0.02*_tmp6
     _tmp10 = _tmp4 + theta_6
     _tmp11 = numpy.cos(_tmp10)
     _tmp12 = numpy.sin(_tmp0)
@@ -401,7 +401,7 @@ def _newton(theta, delta, params):
     _tmp35 = numpy.sin(_tmp3)
     _tmp36 = delta_5 + theta_5
     _tmp37 = arck(_tmp33)
-    _tmp38 = _tmp36**2*_tmp37
+    _tmp38 = _tmp37*_tmp36**2
     _tmp39 = _tmp22*_tmp38
     _tmp40 = _tmp35*_tmp39
     _tmp41 = _tmp13 + 0.5*theta_6
@@ -448,7 +448,7 @@ def _newton(theta, delta, params):
     _tmp82 = numpy.sin(delta_7)
     _tmp83 = 0.5*delta_7
     _tmp84 = numpy.sin(_tmp83)**2
-    _tmp85 = -0.005*_tmp82 + 0.08*_tmp84
+    _tmp85 = 0.08*_tmp84 - 0.005*_tmp82
     _tmp86 = _tmp80 + theta_8
     _tmp87 = numpy.cos(_tmp86)
     _tmp88 = numpy.sin(_tmp79)
@@ -458,7 +458,7 @@ def _newton(theta, delta, params):
     _tmp92 = numpy.sin(_tmp86)
     _tmp93 = 0.025*_tmp88 - 0.07*_tmp90
     _tmp94 = numpy.sin(_tmp80)
-    _tmp95 = -0.04*_tmp82 - 0.01*_tmp84
+    _tmp95 = -0.01*_tmp84 - 0.04*_tmp82
     _tmp96 = 0.5*delta_10 + 0.5*theta_10
     _tmp97 = numpy.sin(_tmp96)
     _tmp98 = delta_10 + theta_10
@@ -469,7 +469,7 @@ def _newton(theta, delta, params):
     _tmp103 = numpy.sin(_tmp102)
     _tmp104 = delta_7 + theta_7
     _tmp105 = arck(_tmp102)
-    _tmp106 = _tmp104**2*_tmp105
+    _tmp106 = _tmp105*_tmp104**2
     _tmp107 = _tmp106*_tmp30
     _tmp108 = _tmp89 + 0.5*theta_8
     _tmp109 = numpy.sin(_tmp108)
@@ -493,7 +493,7 @@ def _newton(theta, delta, params):
     _tmp127 = 0.5*_tmp36*_tmp37
     _tmp128 = _tmp34*p_0
     _tmp129 = 0.125*_tmp38
-    _tmp130 = 0.0625*_tmp36**3*(3*cosr2(_tmp33) + sinr1(_tmp33) - 3*sinr2(_tmp33))
+    _tmp130 = 0.0625*_tmp36**3*(-3*sinr2(_tmp33) + 3*cosr2(_tmp33) + sinr1(_tmp33))
     _tmp131 = _tmp126*_tmp127 + _tmp126*_tmp130 - _tmp128*_tmp129
     _tmp132 = _tmp126*_tmp129 + _tmp127*_tmp128 + _tmp128*_tmp130
     _tmp133 = _tmp0 + _tmp10
@@ -506,15 +506,15 @@ def _newton(theta, delta, params):
     _tmp140 = _tmp42*p_0
     _tmp141 = _tmp140*_tmp45
     _tmp142 = 0.125*_tmp47
-    _tmp143 = 0.0625*_tmp46**3*(3*cosr2(_tmp41) + sinr1(_tmp41) - 3*sinr2(_tmp41))
+    _tmp143 = 0.0625*_tmp46**3*(-3*sinr2(_tmp41) + 3*cosr2(_tmp41) + sinr1(_tmp41))
     _tmp144 = -_tmp137*_tmp139 - _tmp138*_tmp143 - _tmp141*_tmp142
-    _tmp145 = _tmp137*_tmp141 - _tmp139*_tmp142 + _tmp140*_tmp143
+    _tmp145 = _tmp137*_tmp141 + _tmp140*_tmp143 - _tmp139*_tmp142
     _tmp146 = _tmp21*p_0
     _tmp147 = 0.5*_tmp23*_tmp25
     _tmp148 = _tmp75*p_0
     _tmp149 = 0.125*_tmp26
-    _tmp150 = 0.0625*_tmp23**3*(3*cosr2(_tmp20) + sinr1(_tmp20) - 3*sinr2(_tmp20))
-    _tmp151 = -0.04*_tmp134 + 0.05*_tmp135
+    _tmp150 = 0.0625*_tmp23**3*(-3*sinr2(_tmp20) + 3*cosr2(_tmp20) + sinr1(_tmp20))
+    _tmp151 = 0.05*_tmp135 - 0.04*_tmp134
     _tmp152 = _tmp79 + _tmp86
     _tmp153 = numpy.cos(_tmp152)
     _tmp154 = 0.035*_tmp153
@@ -524,46 +524,46 @@ def _newton(theta, delta, params):
     _tmp158 = 0.5*_tmp104*_tmp105
     _tmp159 = _tmp118*p_0
     _tmp160 = 0.125*_tmp106
-    _tmp161 = 0.0625*_tmp104**3*(3*cosr2(_tmp102) + sinr1(_tmp102) - 3*sinr2(_tmp102))
+    _tmp161 = 0.0625*_tmp104**3*(-3*sinr2(_tmp102) + 3*cosr2(_tmp102) + sinr1(_tmp102))
     _tmp162 = _tmp157*_tmp158 + _tmp157*_tmp161 + _tmp159*_tmp160
-    _tmp163 = -_tmp157*_tmp160 + _tmp158*_tmp159 + _tmp159*_tmp161
+    _tmp163 = _tmp158*_tmp159 + _tmp159*_tmp161 - _tmp157*_tmp160
     _tmp164 = _tmp120*p_0
     _tmp165 = 0.5*_tmp112*_tmp114
     _tmp166 = _tmp109*p_0
     _tmp167 = 0.125*_tmp115
-    _tmp168 = 0.0625*_tmp112**3*(3*cosr2(_tmp108) + sinr1(_tmp108) - 3*sinr2(_tmp108))
+    _tmp168 = 0.0625*_tmp112**3*(-3*sinr2(_tmp108) + 3*cosr2(_tmp108) + sinr1(_tmp108))
     _tmp169 = _tmp164*_tmp165 + _tmp164*_tmp168 - _tmp166*_tmp167
     _tmp170 = _tmp164*_tmp167 + _tmp165*_tmp166 + _tmp166*_tmp168
     _tmp171 = _tmp97*p_0
     _tmp172 = 0.5*_tmp100*_tmp98
     _tmp173 = _tmp124*p_0
     _tmp174 = 0.125*_tmp101
-    _tmp175 = 0.0625*_tmp98**3*(3*cosr2(_tmp96) + sinr1(_tmp96) - 3*sinr2(_tmp96))
-    _tmp176 = -0.025*_tmp153 + 0.035*_tmp155
+    _tmp175 = 0.0625*_tmp98**3*(-3*sinr2(_tmp96) + 3*cosr2(_tmp96) + sinr1(_tmp96))
+    _tmp176 = 0.035*_tmp155 - 0.025*_tmp153
     return [
-        -_tmp0 + delta_9,
-        _tmp11*_tmp15 - _tmp16*_tmp17 - _tmp18*_tmp19 - _tmp21*_tmp22*_tmp26 + _tmp28*_tmp32 + _tmp34*_tmp40 + _tmp42*_tmp49 + _tmp5*_tmp9 + _tmp50*_tmp52 - _tmp53*_tmp56 - _tmp57*_tmp59 + _tmp74,
-        _tmp11*_tmp17 + _tmp15*_tmp16 + _tmp18*_tmp9 + _tmp19*_tmp5 + 0.25*_tmp24*_tmp25*_tmp75*p_0 - _tmp28*_tmp56 - _tmp32*_tmp53 - _tmp34*_tmp59 - _tmp40*_tmp57 - _tmp76 + _tmp77 - _tmp78,
-        -_tmp79 + delta_10,
-        -_tmp101*_tmp22*_tmp97 + _tmp103*_tmp107 + _tmp109*_tmp117 - _tmp118*_tmp119 - _tmp123 + _tmp74 + _tmp81*_tmp85 + _tmp87*_tmp91 - _tmp92*_tmp93 - _tmp94*_tmp95,
-        0.25*_tmp100*_tmp124*_tmp99*p_0 - _tmp103*_tmp119 - _tmp107*_tmp118 - _tmp125 - _tmp78 + _tmp81*_tmp95 + _tmp85*_tmp94 + _tmp87*_tmp93 + _tmp91*_tmp92,
+        delta_9 - _tmp0,
+        _tmp74 + _tmp11*_tmp15 + _tmp28*_tmp32 + _tmp34*_tmp40 + _tmp42*_tmp49 + _tmp5*_tmp9 + _tmp50*_tmp52 - _tmp16*_tmp17 - _tmp18*_tmp19 - _tmp53*_tmp56 - _tmp57*_tmp59 - _tmp21*_tmp22*_tmp26,
+        _tmp77 - _tmp76 - _tmp78 + _tmp11*_tmp17 + _tmp15*_tmp16 + _tmp18*_tmp9 + _tmp19*_tmp5 - _tmp28*_tmp56 - _tmp32*_tmp53 - _tmp34*_tmp59 - _tmp40*_tmp57 + 0.25*_tmp24*_tmp25*_tmp75*p_0,
+        delta_10 - _tmp79,
+        _tmp74 - _tmp123 + _tmp103*_tmp107 + _tmp109*_tmp117 + _tmp81*_tmp85 + _tmp87*_tmp91 - _tmp118*_tmp119 - _tmp92*_tmp93 - _tmp94*_tmp95 - _tmp101*_tmp22*_tmp97,
+        -_tmp125 - _tmp78 + _tmp81*_tmp95 + _tmp85*_tmp94 + _tmp87*_tmp93 + _tmp91*_tmp92 - _tmp103*_tmp119 - _tmp107*_tmp118 + 0.25*_tmp100*_tmp124*_tmp99*p_0,
         -1,
         -1,
         0,
         0,
         1,
         0,
-        -_tmp131*_tmp58 + _tmp132*_tmp35 - _tmp136 + 0.05*_tmp44 - 0.02*_tmp51 + _tmp76 - _tmp77,
-        -_tmp136 - _tmp144*_tmp51 + _tmp145*_tmp44,
+        _tmp76 - _tmp136 - _tmp77 + 0.05*_tmp44 - 0.02*_tmp51 + _tmp132*_tmp35 - _tmp131*_tmp58,
+        -_tmp136 + _tmp145*_tmp44 - _tmp144*_tmp51,
         0,
         0,
         -_tmp146*_tmp147 - _tmp146*_tmp150 - _tmp148*_tmp149,
         0,
-        -_tmp131*_tmp35 - _tmp132*_tmp58 - _tmp151 + 0.25*_tmp42*_tmp44*_tmp45*_tmp47*p_0 - 0.02*_tmp44 + 0.25*_tmp45*_tmp47*_tmp50*_tmp51*p_0 - 0.05*_tmp51,
-        -_tmp144*_tmp44 - _tmp145*_tmp51 - _tmp151,
+        -_tmp151 - 0.05*_tmp51 - 0.02*_tmp44 - _tmp131*_tmp35 - _tmp132*_tmp58 + 0.25*_tmp42*_tmp44*_tmp45*_tmp47*p_0 + 0.25*_tmp45*_tmp47*_tmp50*_tmp51*p_0,
+        -_tmp151 - _tmp144*_tmp44 - _tmp145*_tmp51,
         0,
         0,
-        -_tmp146*_tmp149 + _tmp147*_tmp148 + _tmp148*_tmp150,
+        _tmp147*_tmp148 + _tmp148*_tmp150 - _tmp146*_tmp149,
         0,
         0,
         0,
@@ -573,16 +573,16 @@ def _newton(theta, delta, params):
         1,
         0,
         0,
-        0.04*_tmp111 - 0.005*_tmp121 + _tmp125 - _tmp154 - _tmp156 + _tmp162*_tmp29 - _tmp163*_tmp54,
-        _tmp111*_tmp170 - _tmp121*_tmp169 - _tmp154 - _tmp156,
+        _tmp125 - _tmp154 - _tmp156 + 0.04*_tmp111 - 0.005*_tmp121 + _tmp162*_tmp29 - _tmp163*_tmp54,
+        -_tmp154 - _tmp156 + _tmp111*_tmp170 - _tmp121*_tmp169,
         0,
         -_tmp171*_tmp172 - _tmp171*_tmp175 - _tmp173*_tmp174,
         0,
         0,
-        0.25*_tmp109*_tmp111*_tmp113*_tmp114*p_0 - 0.005*_tmp111 - 0.04*_tmp121 - _tmp123 - _tmp162*_tmp54 - _tmp163*_tmp29 - _tmp176,
-        -_tmp111*_tmp169 - _tmp121*_tmp170 - _tmp176,
+        -_tmp123 - _tmp176 - 0.005*_tmp111 - 0.04*_tmp121 - _tmp162*_tmp54 - _tmp163*_tmp29 + 0.25*_tmp109*_tmp111*_tmp113*_tmp114*p_0,
+        -_tmp176 - _tmp111*_tmp169 - _tmp121*_tmp170,
         0,
-        -_tmp171*_tmp174 + _tmp172*_tmp173 + _tmp173*_tmp175,
+        _tmp172*_tmp173 + _tmp173*_tmp175 - _tmp171*_tmp174,
     ]
 
 
@@ -629,7 +629,7 @@ def _loaded_q(theta, mu0, params):
     _tmp8 = 22222222222.22222*_DTYPE(numpy.where(_tmp4, 1.8777777777777777e-23, 2.267573696145125e-23))/_tmp7
     _tmp9 = 2.5e-07*_tmp7*_DTYPE(numpy.where(_tmp4, 230769230769.23077, 210000000000))
     _tmp10 = _tmp1 + theta_5 + 0.5*theta_6
-    _tmp11 = -mu0_2*numpy.sin(_tmp10) + mu0_3*numpy.cos(_tmp10)
+    _tmp11 = mu0_3*numpy.cos(_tmp10) - mu0_2*numpy.sin(_tmp10)
     _tmp12 = _tmp0 + 0.5*theta_7
     _tmp13 = mu0_5*numpy.cos(_tmp12) + mu0_6*numpy.sin(_tmp12)
     _tmp14 = _tmp0 + theta_7 + 0.5*theta_8
@@ -639,12 +639,12 @@ def _loaded_q(theta, mu0, params):
     _tmp18 = 0.5*theta_10
     _tmp19 = mu0_5*numpy.sin(_tmp18) - mu0_6*numpy.cos(_tmp18)
     return [
-        -_tmp9*theta_5*(_tmp3**3*_tmp6 - _tmp3**2*_tmp8 + _tmp3*_tmp5 + 1),
-        -_tmp9*theta_6*(_tmp11**3*_tmp6 - _tmp11**2*_tmp8 + _tmp11*_tmp5 + 1),
-        -_tmp9*theta_7*(_tmp13**3*_tmp6 - _tmp13**2*_tmp8 + _tmp13*_tmp5 + 1),
-        -_tmp9*theta_8*(_tmp15**3*_tmp6 - _tmp15**2*_tmp8 + _tmp15*_tmp5 + 1),
-        -_tmp9*theta_9*(_tmp17**3*_tmp6 - _tmp17**2*_tmp8 + _tmp17*_tmp5 + 1),
-        -_tmp9*theta_10*(_tmp19**3*_tmp6 - _tmp19**2*_tmp8 + _tmp19*_tmp5 + 1),
+        -_tmp9*theta_5*(1 + _tmp3*_tmp5 + _tmp6*_tmp3**3 - _tmp8*_tmp3**2),
+        -_tmp9*theta_6*(1 + _tmp11*_tmp5 + _tmp6*_tmp11**3 - _tmp8*_tmp11**2),
+        -_tmp9*theta_7*(1 + _tmp13*_tmp5 + _tmp6*_tmp13**3 - _tmp8*_tmp13**2),
+        -_tmp9*theta_8*(1 + _tmp15*_tmp5 + _tmp6*_tmp15**3 - _tmp8*_tmp15**2),
+        -_tmp9*theta_9*(1 + _tmp17*_tmp5 + _tmp6*_tmp17**3 - _tmp8*_tmp17**2),
+        -_tmp9*theta_10*(1 + _tmp19*_tmp5 + _tmp6*_tmp19**3 - _tmp8*_tmp19**2),
     ]
 
 
@@ -659,7 +659,7 @@ def _loaded_compliance(theta, mu, params):
     _tmp2 = mu_2 + mu_5
     _tmp4 = mu_3 + mu_6
     _tmp5 = -_tmp1*_tmp4 - _tmp2*_tmp3
-    _tmp6 = -_tmp1*_tmp2 + _tmp3*_tmp4
+    _tmp6 = _tmp3*_tmp4 - _tmp1*_tmp2
     _tmp7 = numpy.less_equal(p_0, 0.006)
     _tmp8 = _DTYPE(numpy.where(_tmp7, 4.333333333333334e-12, 4.761904761904762e-12))
     _tmp9 = _tmp8/p_0
@@ -671,69 +671,69 @@ def _loaded_compliance(theta, mu, params):
     _tmp15 = _DTYPE(numpy.where(_tmp7, 1.8777777777777777e-23, 2.267573696145125e-23))
     _tmp16 = _tmp14*_tmp15
     _tmp17 = _tmp13*_tmp16
-    _tmp18 = -33333.333333333336*_tmp10 - 5467372134038801.0*_tmp12 + 13492063492.063492*_tmp17 + 0.08333333333333333
+    _tmp18 = 0.08333333333333333 + 13492063492.063492*_tmp17 - 33333.333333333336*_tmp10 - 5467372134038801.0*_tmp12
     _tmp19 = 4000000*_tmp8
     _tmp20 = 16000000000000*_tmp16
-    _tmp21 = p_0*(_tmp20*_tmp5**2*(-3373.0158730158732*_tmp10 - 1107904441237774.6*_tmp12 + 2050264550.2645502*_tmp17 + 0.004166666666666667) + theta_1**2*(-5555.555555555556*_tmp10 - 105820105820105.81*_tmp12 + 793650793.6507937*_tmp13*_tmp14*_tmp15))
+    _tmp21 = p_0*(theta_1**2*(-105820105820105.81*_tmp12 - 5555.555555555556*_tmp10 + 793650793.6507937*_tmp13*_tmp14*_tmp15) + _tmp20*_tmp5**2*(0.004166666666666667 + 2050264550.2645502*_tmp17 - 3373.0158730158732*_tmp10 - 1107904441237774.6*_tmp12))
     _tmp22 = 0.5*theta_2
     _tmp23 = numpy.sin(_tmp22)
     _tmp24 = _tmp22 + theta_1
     _tmp25 = numpy.sin(_tmp24)
     _tmp26 = numpy.cos(_tmp24)
-    _tmp27 = -_tmp2*_tmp25 + _tmp26*_tmp4
+    _tmp27 = _tmp26*_tmp4 - _tmp2*_tmp25
     _tmp28 = _tmp2*_tmp26 + _tmp25*_tmp4
     _tmp29 = _tmp28*_tmp9
     _tmp30 = _tmp11*_tmp28**3
     _tmp31 = _tmp28**2
     _tmp32 = _tmp16*_tmp31
-    _tmp33 = -33333.333333333336*_tmp29 - 5467372134038801.0*_tmp30 + 13492063492.063492*_tmp32 + 0.08333333333333333
+    _tmp33 = 0.08333333333333333 + 13492063492.063492*_tmp32 - 33333.333333333336*_tmp29 - 5467372134038801.0*_tmp30
     _tmp34 = numpy.cos(_tmp22)
-    _tmp35 = p_0*(_tmp20*_tmp27**2*(-3373.0158730158732*_tmp29 - 1107904441237774.6*_tmp30 + 2050264550.2645502*_tmp32 + 0.004166666666666667) + theta_2**2*(793650793.6507937*_tmp14*_tmp15*_tmp31 - 5555.555555555556*_tmp29 - 105820105820105.81*_tmp30))
+    _tmp35 = p_0*(theta_2**2*(-105820105820105.81*_tmp30 - 5555.555555555556*_tmp29 + 793650793.6507937*_tmp14*_tmp15*_tmp31) + _tmp20*_tmp27**2*(0.004166666666666667 + 2050264550.2645502*_tmp32 - 3373.0158730158732*_tmp29 - 1107904441237774.6*_tmp30))
     _tmp36 = 0.5*theta_3
     _tmp37 = numpy.sin(_tmp36)
     _tmp38 = theta_1 + theta_2
     _tmp39 = _tmp36 + _tmp38
     _tmp40 = numpy.sin(_tmp39)
     _tmp41 = numpy.cos(_tmp39)
-    _tmp42 = -_tmp2*_tmp40 + _tmp4*_tmp41
+    _tmp42 = _tmp4*_tmp41 - _tmp2*_tmp40
     _tmp43 = _tmp2*_tmp41 + _tmp4*_tmp40
     _tmp44 = _tmp43*_tmp9
     _tmp45 = _tmp11*_tmp43**3
     _tmp46 = _tmp43**2
     _tmp47 = _tmp16*_tmp46
-    _tmp48 = -33333.333333333336*_tmp44 - 5467372134038801.0*_tmp45 + 13492063492.063492*_tmp47 + 0.08333333333333333
+    _tmp48 = 0.08333333333333333 + 13492063492.063492*_tmp47 - 33333.333333333336*_tmp44 - 5467372134038801.0*_tmp45
     _tmp49 = numpy.cos(_tmp36)
-    _tmp50 = p_0*(_tmp20*_tmp42**2*(-3373.0158730158732*_tmp44 - 1107904441237774.6*_tmp45 + 2050264550.2645502*_tmp47 + 0.004166666666666667) + theta_3**2*(793650793.6507937*_tmp14*_tmp15*_tmp46 - 5555.555555555556*_tmp44 - 105820105820105.81*_tmp45))
+    _tmp50 = p_0*(theta_3**2*(-105820105820105.81*_tmp45 - 5555.555555555556*_tmp44 + 793650793.6507937*_tmp14*_tmp15*_tmp46) + _tmp20*_tmp42**2*(0.004166666666666667 + 2050264550.2645502*_tmp47 - 3373.0158730158732*_tmp44 - 1107904441237774.6*_tmp45))
     _tmp51 = 0.5*theta_4
     _tmp52 = numpy.sin(_tmp51)
     _tmp53 = _tmp38 + theta_3
     _tmp54 = _tmp51 + _tmp53
     _tmp55 = numpy.sin(_tmp54)
     _tmp56 = numpy.cos(_tmp54)
-    _tmp57 = -_tmp55*mu_2 + _tmp56*mu_3
+    _tmp57 = _tmp56*mu_3 - _tmp55*mu_2
     _tmp58 = _tmp55*mu_3 + _tmp56*mu_2
     _tmp59 = _tmp58*_tmp9
     _tmp60 = _tmp11*_tmp58**3
     _tmp61 = _tmp58**2
     _tmp62 = _tmp16*_tmp61
-    _tmp63 = -33333.333333333336*_tmp59 - 5467372134038801.0*_tmp60 + 13492063492.063492*_tmp62 + 0.08333333333333333
+    _tmp63 = 0.08333333333333333 + 13492063492.063492*_tmp62 - 33333.333333333336*_tmp59 - 5467372134038801.0*_tmp60
     _tmp64 = numpy.cos(_tmp51)
-    _tmp65 = p_0*(_tmp20*_tmp57**2*(-3373.0158730158732*_tmp59 - 1107904441237774.6*_tmp60 + 2050264550.2645502*_tmp62 + 0.004166666666666667) + theta_4**2*(793650793.6507937*_tmp14*_tmp15*_tmp61 - 5555.555555555556*_tmp59 - 105820105820105.81*_tmp60))
+    _tmp65 = p_0*(theta_4**2*(-105820105820105.81*_tmp60 - 5555.555555555556*_tmp59 + 793650793.6507937*_tmp14*_tmp15*_tmp61) + _tmp20*_tmp57**2*(0.004166666666666667 + 2050264550.2645502*_tmp62 - 3373.0158730158732*_tmp59 - 1107904441237774.6*_tmp60))
     _tmp66 = 0.5*theta_5
     _tmp67 = numpy.sin(_tmp66)
     _tmp68 = _tmp53 + theta_4
     _tmp69 = _tmp66 + _tmp68
     _tmp70 = numpy.sin(_tmp69)
     _tmp71 = numpy.cos(_tmp69)
-    _tmp72 = -_tmp70*mu_2 + _tmp71*mu_3
+    _tmp72 = _tmp71*mu_3 - _tmp70*mu_2
     _tmp73 = _tmp70*mu_3 + _tmp71*mu_2
     _tmp74 = _tmp73*_tmp9
     _tmp75 = _tmp11*_tmp73**3
     _tmp76 = _tmp73**2
     _tmp77 = _tmp16*_tmp76
-    _tmp78 = -33333.333333333336*_tmp74 - 5467372134038801.0*_tmp75 + 13492063492.063492*_tmp77 + 0.08333333333333333
+    _tmp78 = 0.08333333333333333 + 13492063492.063492*_tmp77 - 33333.333333333336*_tmp74 - 5467372134038801.0*_tmp75
     _tmp79 = numpy.cos(_tmp66)
-    _tmp80 = p_0*(_tmp20*_tmp72**2*(-3373.0158730158732*_tmp74 - 1107904441237774.6*_tmp75 + 2050264550.2645502*_tmp77 + 0.004166666666666667) + theta_5**2*(793650793.6507937*_tmp14*_tmp15*_tmp76 - 5555.555555555556*_tmp74 - 105820105820105.81*_tmp75))
+    _tmp80 = p_0*(theta_5**2*(-105820105820105.81*_tmp75 - 5555.555555555556*_tmp74 + 793650793.6507937*_tmp14*_tmp15*_tmp76) + _tmp20*_tmp72**2*(0.004166666666666667 + 2050264550.2645502*_tmp77 - 3373.0158730158732*_tmp74 - 1107904441237774.6*_tmp75))
     _tmp81 = 0.5*theta_6
     _tmp82 = numpy.sin(_tmp81)
     _tmp83 = _tmp68 + _tmp81 + theta_5
@@ -745,37 +745,37 @@ def _loaded_compliance(theta, mu, params):
     _tmp89 = _tmp11*_tmp87**3
     _tmp90 = _tmp87**2
     _tmp91 = _tmp16*_tmp90
-    _tmp92 = -33333.333333333336*_tmp88 - 5467372134038801.0*_tmp89 + 13492063492.063492*_tmp91 + 0.08333333333333333
+    _tmp92 = 0.08333333333333333 + 13492063492.063492*_tmp91 - 33333.333333333336*_tmp88 - 5467372134038801.0*_tmp89
     _tmp93 = numpy.cos(_tmp81)
-    _tmp94 = p_0*(_tmp20*_tmp86**2*(-3373.0158730158732*_tmp88 - 1107904441237774.6*_tmp89 + 2050264550.2645502*_tmp91 + 0.004166666666666667) + theta_6**2*(793650793.6507937*_tmp14*_tmp15*_tmp90 - 5555.555555555556*_tmp88 - 105820105820105.81*_tmp89))
+    _tmp94 = p_0*(theta_6**2*(-105820105820105.81*_tmp89 - 5555.555555555556*_tmp88 + 793650793.6507937*_tmp14*_tmp15*_tmp90) + _tmp20*_tmp86**2*(0.004166666666666667 + 2050264550.2645502*_tmp91 - 3373.0158730158732*_tmp88 - 1107904441237774.6*_tmp89))
     _tmp95 = 0.5*theta_7
     _tmp96 = numpy.sin(_tmp95)
     _tmp97 = _tmp53 + _tmp95
     _tmp98 = numpy.sin(_tmp97)
     _tmp99 = numpy.cos(_tmp97)
-    _tmp100 = -_tmp98*mu_5 + _tmp99*mu_6
+    _tmp100 = _tmp99*mu_6 - _tmp98*mu_5
     _tmp101 = _tmp98*mu_6 + _tmp99*mu_5
     _tmp102 = _tmp101*_tmp9
-    _tmp103 = _tmp101**3*_tmp11
+    _tmp103 = _tmp11*_tmp101**3
     _tmp104 = _tmp101**2
     _tmp105 = _tmp104*_tmp16
-    _tmp106 = -33333.333333333336*_tmp102 - 5467372134038801.0*_tmp103 + 13492063492.063492*_tmp105 + 0.08333333333333333
+    _tmp106 = 0.08333333333333333 + 13492063492.063492*_tmp105 - 33333.333333333336*_tmp102 - 5467372134038801.0*_tmp103
     _tmp107 = numpy.cos(_tmp95)
-    _tmp108 = p_0*(_tmp100**2*_tmp20*(-3373.0158730158732*_tmp102 - 1107904441237774.6*_tmp103 + 2050264550.2645502*_tmp105 + 0.004166666666666667) + theta_7**2*(-5555.555555555556*_tmp102 - 105820105820105.81*_tmp103 + 793650793.6507937*_tmp104*_tmp14*_tmp15))
+    _tmp108 = p_0*(theta_7**2*(-105820105820105.81*_tmp103 - 5555.555555555556*_tmp102 + 793650793.6507937*_tmp104*_tmp14*_tmp15) + _tmp20*_tmp100**2*(0.004166666666666667 + 2050264550.2645502*_tmp105 - 3373.0158730158732*_tmp102 - 1107904441237774.6*_tmp103))
     _tmp109 = 0.5*theta_8
     _tmp110 = numpy.sin(_tmp109)
     _tmp111 = _tmp109 + _tmp53 + theta_7
     _tmp112 = numpy.sin(_tmp111)
     _tmp113 = numpy.cos(_tmp111)
-    _tmp114 = -_tmp112*mu_5 + _tmp113*mu_6
+    _tmp114 = _tmp113*mu_6 - _tmp112*mu_5
     _tmp115 = _tmp112*mu_6 + _tmp113*mu_5
     _tmp116 = _tmp115*_tmp9
     _tmp117 = _tmp11*_tmp115**3
     _tmp118 = _tmp115**2
     _tmp119 = _tmp118*_tmp16
-    _tmp120 = -33333.333333333336*_tmp116 - 5467372134038801.0*_tmp117 + 13492063492.063492*_tmp119 + 0.08333333333333333
+    _tmp120 = 0.08333333333333333 + 13492063492.063492*_tmp119 - 33333.333333333336*_tmp116 - 5467372134038801.0*_tmp117
     _tmp121 = numpy.cos(_tmp109)
-    _tmp122 = p_0*(_tmp114**2*_tmp20*(-3373.0158730158732*_tmp116 - 1107904441237774.6*_tmp117 + 2050264550.2645502*_tmp119 + 0.004166666666666667) + theta_8**2*(-5555.555555555556*_tmp116 - 105820105820105.81*_tmp117 + 793650793.6507937*_tmp118*_tmp14*_tmp15))
+    _tmp122 = p_0*(theta_8**2*(-105820105820105.81*_tmp117 - 5555.555555555556*_tmp116 + 793650793.6507937*_tmp118*_tmp14*_tmp15) + _tmp20*_tmp114**2*(0.004166666666666667 + 2050264550.2645502*_tmp119 - 3373.0158730158732*_tmp116 - 1107904441237774.6*_tmp117))
     _tmp123 = 0.5*theta_9
     _tmp124 = numpy.sin(_tmp123)
     _tmp125 = numpy.cos(_tmp123)
@@ -785,8 +785,8 @@ def _loaded_compliance(theta, mu, params):
     _tmp129 = _tmp11*_tmp127**3
     _tmp130 = _tmp127**2
     _tmp131 = _tmp130*_tmp16
-    _tmp132 = -33333.333333333336*_tmp128 - 5467372134038801.0*_tmp129 + 13492063492.063492*_tmp131 + 0.08333333333333333
-    _tmp133 = p_0*(_tmp126**2*_tmp20*(-3373.0158730158732*_tmp128 - 1107904441237774.6*_tmp129 + 2050264550.2645502*_tmp131 + 0.004166666666666667) + theta_9**2*(-5555.555555555556*_tmp128 - 105820105820105.81*_tmp129 + 793650793.6507937*_tmp130*_tmp14*_tmp15))
+    _tmp132 = 0.08333333333333333 + 13492063492.063492*_tmp131 - 33333.333333333336*_tmp128 - 5467372134038801.0*_tmp129
+    _tmp133 = p_0*(theta_9**2*(-105820105820105.81*_tmp129 - 5555.555555555556*_tmp128 + 793650793.6507937*_tmp130*_tmp14*_tmp15) + _tmp20*_tmp126**2*(0.004166666666666667 + 2050264550.2645502*_tmp131 - 3373.0158730158732*_tmp128 - 1107904441237774.6*_tmp129))
     _tmp134 = 0.5*theta_10
     _tmp135 = numpy.sin(_tmp134)
     _tmp136 = numpy.cos(_tmp134)
@@ -796,28 +796,28 @@ def _loaded_compliance(theta, mu, params):
     _tmp140 = _tmp11*_tmp138**3
     _tmp141 = _tmp138**2
     _tmp142 = _tmp141*_tmp16
-    _tmp143 = -33333.333333333336*_tmp139 - 5467372134038801.0*_tmp140 + 13492063492.063492*_tmp142 + 0.08333333333333333
-    _tmp144 = p_0*(_tmp137**2*_tmp20*(-3373.0158730158732*_tmp139 - 1107904441237774.6*_tmp140 + 2050264550.2645502*_tmp142 + 0.004166666666666667) + theta_10**2*(-5555.555555555556*_tmp139 + 793650793.6507937*_tmp14*_tmp141*_tmp15 - 105820105820105.81*_tmp140))
+    _tmp143 = 0.08333333333333333 + 13492063492.063492*_tmp142 - 33333.333333333336*_tmp139 - 5467372134038801.0*_tmp140
+    _tmp144 = p_0*(theta_10**2*(-105820105820105.81*_tmp140 - 5555.555555555556*_tmp139 + 793650793.6507937*_tmp14*_tmp141*_tmp15) + _tmp20*_tmp137**2*(0.004166666666666667 + 2050264550.2645502*_tmp142 - 3373.0158730158732*_tmp139 - 1107904441237774.6*_tmp140))
     return [
-        -_tmp1*_tmp18*_tmp19*_tmp5 - _tmp21*_tmp3,
+        -_tmp21*_tmp3 - _tmp1*_tmp18*_tmp19*_tmp5,
         -_tmp1*_tmp21 + 4000000*_tmp18*_tmp3*_tmp5*_tmp8,
-        -_tmp19*_tmp23*_tmp27*_tmp33 - _tmp34*_tmp35,
+        -_tmp34*_tmp35 - _tmp19*_tmp23*_tmp27*_tmp33,
         -_tmp23*_tmp35 + 4000000*_tmp27*_tmp33*_tmp34*_tmp8,
-        -_tmp19*_tmp37*_tmp42*_tmp48 - _tmp49*_tmp50,
+        -_tmp49*_tmp50 - _tmp19*_tmp37*_tmp42*_tmp48,
         -_tmp37*_tmp50 + 4000000*_tmp42*_tmp48*_tmp49*_tmp8,
-        -_tmp19*_tmp52*_tmp57*_tmp63 - _tmp64*_tmp65,
+        -_tmp64*_tmp65 - _tmp19*_tmp52*_tmp57*_tmp63,
         -_tmp52*_tmp65 + 4000000*_tmp57*_tmp63*_tmp64*_tmp8,
-        -_tmp19*_tmp67*_tmp72*_tmp78 - _tmp79*_tmp80,
+        -_tmp79*_tmp80 - _tmp19*_tmp67*_tmp72*_tmp78,
         -_tmp67*_tmp80 + 4000000*_tmp72*_tmp78*_tmp79*_tmp8,
-        -_tmp19*_tmp82*_tmp86*_tmp92 - _tmp93*_tmp94,
-        4000000*_tmp8*_tmp86*_tmp92*_tmp93 - _tmp82*_tmp94,
-        -_tmp100*_tmp106*_tmp19*_tmp96 - _tmp107*_tmp108,
-        4000000*_tmp100*_tmp106*_tmp107*_tmp8 - _tmp108*_tmp96,
-        -_tmp110*_tmp114*_tmp120*_tmp19 - _tmp121*_tmp122,
+        -_tmp93*_tmp94 - _tmp19*_tmp82*_tmp86*_tmp92,
+        -_tmp82*_tmp94 + 4000000*_tmp8*_tmp86*_tmp92*_tmp93,
+        -_tmp107*_tmp108 - _tmp100*_tmp106*_tmp19*_tmp96,
+        -_tmp108*_tmp96 + 4000000*_tmp100*_tmp106*_tmp107*_tmp8,
+        -_tmp121*_tmp122 - _tmp110*_tmp114*_tmp120*_tmp19,
         -_tmp110*_tmp122 + 4000000*_tmp114*_tmp120*_tmp121*_tmp8,
-        -_tmp124*_tmp126*_tmp132*_tmp19 - _tmp125*_tmp133,
+        -_tmp125*_tmp133 - _tmp124*_tmp126*_tmp132*_tmp19,
         -_tmp124*_tmp133 + 4000000*_tmp125*_tmp126*_tmp132*_tmp8,
-        -_tmp135*_tmp137*_tmp143*_tmp19 - _tmp136*_tmp144,
+        -_tmp136*_tmp144 - _tmp135*_tmp137*_tmp143*_tmp19,
         -_tmp135*_tmp144 + 4000000*_tmp136*_tmp137*_tmp143*_tmp8,
     ]
 
@@ -835,7 +835,7 @@ def _loaded_linear(theta, params):
     _tmp6 = _tmp3 + theta_6
     _tmp7 = numpy.sin(_tmp6)
     _tmp8 = numpy.cos(_tmp6)
-    _tmp9 = 0.04*_tmp7 + 0.05*_tmp8
+    _tmp9 = 0.05*_tmp8 + 0.04*_tmp7
     _tmp10 = 0.05*_tmp7 - 0.04*_tmp8
     _tmp11 = _tmp1 + theta_7
     _tmp12 = numpy.cos(_tmp11)
@@ -843,52 +843,52 @@ def _loaded_linear(theta, params):
     _tmp14 = _tmp11 + theta_8
     _tmp15 = numpy.sin(_tmp14)
     _tmp16 = numpy.cos(_tmp14)
-    _tmp17 = 0.025*_tmp15 + 0.035*_tmp16
+    _tmp17 = 0.035*_tmp16 + 0.025*_tmp15
     _tmp18 = 0.035*_tmp15 - 0.025*_tmp16
     _tmp20 = 0.25*p_0
     _tmp19 = 0.5*theta_6
     _tmp21 = _tmp20*theta_6**2*arck(_tmp19)
-    _tmp22 = _tmp21*numpy.cos(_tmp19) + compliance_x_6
+    _tmp22 = compliance_x_6 + _tmp21*numpy.cos(_tmp19)
     _tmp23 = numpy.sin(_tmp1)
     _tmp24 = 0.5*theta_4
     _tmp25 = _tmp20*theta_4**2*arck(_tmp24)
-    _tmp26 = _tmp25*numpy.sin(_tmp24) + compliance_y_4
+    _tmp26 = compliance_y_4 + _tmp25*numpy.sin(_tmp24)
     _tmp27 = numpy.sin(_tmp2)
     _tmp28 = 0.5*theta_5
     _tmp29 = _tmp20*theta_5**2*arck(_tmp28)
-    _tmp30 = _tmp29*numpy.sin(_tmp28) + compliance_y_5
+    _tmp30 = compliance_y_5 + _tmp29*numpy.sin(_tmp28)
     _tmp31 = numpy.cos(_tmp1)
-    _tmp32 = _tmp25*numpy.cos(_tmp24) + compliance_x_4
+    _tmp32 = compliance_x_4 + _tmp25*numpy.cos(_tmp24)
     _tmp33 = numpy.cos(_tmp2)
-    _tmp34 = _tmp29*numpy.cos(_tmp28) + compliance_x_5
-    _tmp35 = -_tmp21*numpy.sin(_tmp19) - compliance_y_6
+    _tmp34 = compliance_x_5 + _tmp29*numpy.cos(_tmp28)
+    _tmp35 = -compliance_y_6 - _tmp21*numpy.sin(_tmp19)
     _tmp36 = 0.5*theta_9
     _tmp37 = theta_9**2
     _tmp38 = arck(_tmp36)
     _tmp39 = numpy.sin(theta_1)
     _tmp40 = 0.5*theta_2
     _tmp41 = _tmp20*theta_2**2*arck(_tmp40)
-    _tmp42 = _tmp41*numpy.sin(_tmp40) + compliance_y_2
+    _tmp42 = compliance_y_2 + _tmp41*numpy.sin(_tmp40)
     _tmp43 = numpy.sin(_tmp0)
     _tmp44 = 0.5*theta_3
     _tmp45 = _tmp20*theta_3**2*arck(_tmp44)
-    _tmp46 = _tmp45*numpy.sin(_tmp44) + compliance_y_3
+    _tmp46 = compliance_y_3 + _tmp45*numpy.sin(_tmp44)
     _tmp47 = numpy.cos(theta_1)
-    _tmp48 = _tmp41*numpy.cos(_tmp40) + compliance_x_2
+    _tmp48 = compliance_x_2 + _tmp41*numpy.cos(_tmp40)
     _tmp49 = numpy.cos(_tmp0)
-    _tmp50 = _tmp45*numpy.cos(_tmp44) + compliance_x_3
+    _tmp50 = compliance_x_3 + _tmp45*numpy.cos(_tmp44)
     _tmp51 = 0.5*theta_1
     _tmp52 = _tmp20*theta_1**2*arck(_tmp51)
-    _tmp53 = _tmp39*_tmp42 + _tmp43*_tmp46 - _tmp47*_tmp48 - _tmp49*_tmp50 + _tmp52*numpy.sin(_tmp51) + compliance_y_1
-    _tmp54 = _tmp39*_tmp48 + _tmp42*_tmp47 + _tmp43*_tmp50 + _tmp46*_tmp49 + _tmp52*numpy.cos(_tmp51) + compliance_x_1
+    _tmp53 = compliance_y_1 + _tmp39*_tmp42 + _tmp43*_tmp46 + _tmp52*numpy.sin(_tmp51) - _tmp47*_tmp48 - _tmp49*_tmp50
+    _tmp54 = compliance_x_1 + _tmp39*_tmp48 + _tmp42*_tmp47 + _tmp43*_tmp50 + _tmp46*_tmp49 + _tmp52*numpy.cos(_tmp51)
     _tmp55 = 0.5*theta_7
     _tmp56 = _tmp20*theta_7**2*arck(_tmp55)
-    _tmp57 = _tmp56*numpy.sin(_tmp55) + compliance_y_7
+    _tmp57 = compliance_y_7 + _tmp56*numpy.sin(_tmp55)
     _tmp58 = 0.5*theta_8
     _tmp59 = _tmp20*theta_8**2*arck(_tmp58)
-    _tmp60 = _tmp59*numpy.sin(_tmp58) + compliance_y_8
-    _tmp61 = _tmp56*numpy.cos(_tmp55) + compliance_x_7
-    _tmp62 = _tmp59*numpy.cos(_tmp58) + compliance_x_8
+    _tmp60 = compliance_y_8 + _tmp59*numpy.sin(_tmp58)
+    _tmp61 = compliance_x_7 + _tmp56*numpy.cos(_tmp55)
+    _tmp62 = compliance_x_8 + _tmp59*numpy.cos(_tmp58)
     _tmp63 = 0.5*theta_10
     _tmp64 = theta_10**2
     _tmp65 = arck(_tmp63)
@@ -899,7 +899,7 @@ def _loaded_linear(theta, params):
         0,
         1,
         0,
-        -0.02*_tmp4 + 0.05*_tmp5 - _tmp9,
+        -_tmp9 + 0.05*_tmp5 - 0.02*_tmp4,
         -_tmp9,
         0,
         0,
@@ -919,22 +919,22 @@ def _loaded_linear(theta, params):
         1,
         0,
         0,
-        -0.005*_tmp12 + 0.04*_tmp13 - _tmp17,
+        -_tmp17 + 0.04*_tmp13 - 0.005*_tmp12,
         -_tmp17,
         0,
         0,
         0,
         0,
-        -0.04*_tmp12 - 0.005*_tmp13 - _tmp18,
+        -_tmp18 - 0.005*_tmp13 - 0.04*_tmp12,
         -_tmp18,
         0,
         0,
         0,
-        -_tmp20*_tmp37*_tmp38*numpy.sin(_tmp36) + _tmp22*_tmp5 + _tmp23*_tmp26 + _tmp27*_tmp30 - _tmp31*_tmp32 - _tmp33*_tmp34 - _tmp35*_tmp4 + _tmp53 - compliance_y_9,
-        -_tmp22*_tmp4 - _tmp23*_tmp32 - _tmp26*_tmp31 - _tmp27*_tmp34 - _tmp30*_tmp33 - _tmp35*_tmp5 + 0.25*_tmp37*_tmp38*p_0*numpy.cos(_tmp36) - _tmp54 + compliance_x_9,
+        _tmp53 - compliance_y_9 + _tmp22*_tmp5 + _tmp23*_tmp26 + _tmp27*_tmp30 - _tmp31*_tmp32 - _tmp33*_tmp34 - _tmp35*_tmp4 - _tmp20*_tmp37*_tmp38*numpy.sin(_tmp36),
+        compliance_x_9 - _tmp54 - _tmp22*_tmp4 - _tmp23*_tmp32 - _tmp26*_tmp31 - _tmp27*_tmp34 - _tmp30*_tmp33 - _tmp35*_tmp5 + 0.25*_tmp37*_tmp38*p_0*numpy.cos(_tmp36),
         0,
-        -_tmp12*_tmp62 + _tmp13*_tmp60 - _tmp20*_tmp64*_tmp65*numpy.sin(_tmp63) + _tmp23*_tmp57 - _tmp31*_tmp61 + _tmp53 - compliance_y_10,
-        -_tmp12*_tmp60 - _tmp13*_tmp62 - _tmp23*_tmp61 - _tmp31*_tmp57 - _tmp54 + 0.25*_tmp64*_tmp65*p_0*numpy.cos(_tmp63) + compliance_x_10,
+        _tmp53 - compliance_y_10 + _tmp13*_tmp60 + _tmp23*_tmp57 - _tmp12*_tmp62 - _tmp31*_tmp61 - _tmp20*_tmp64*_tmp65*numpy.sin(_tmp63),
+        compliance_x_10 - _tmp54 - _tmp12*_tmp60 - _tmp13*_tmp62 - _tmp23*_tmp61 - _tmp31*_tmp57 + 0.25*_tmp64*_tmp65*p_0*numpy.cos(_tmp63),
     ]
 
 
@@ -959,38 +959,38 @@ def _loaded_newton(theta, delta, params):
     _tmp12 = delta_6 + theta_6
     _tmp13 = _tmp12**2
     _tmp15 = _tmp13*_tmp14
-    _tmp16 = _tmp11*_tmp15 + compliance_x_6
+    _tmp16 = compliance_x_6 + _tmp11*_tmp15
     _tmp17 = numpy.sin(_tmp3)
     _tmp18 = 0.5*theta_4
     _tmp19 = _tmp14*theta_4**2*arck(_tmp18)
-    _tmp20 = _tmp19*numpy.sin(_tmp18) + compliance_y_4
+    _tmp20 = compliance_y_4 + _tmp19*numpy.sin(_tmp18)
     _tmp21 = numpy.sin(_tmp4)
     _tmp22 = 0.5*delta_5
     _tmp23 = _tmp22 + 0.5*theta_5
     _tmp24 = numpy.sin(_tmp23)
     _tmp25 = arck(_tmp23)
-    _tmp26 = _tmp1**2*_tmp25
+    _tmp26 = _tmp25*_tmp1**2
     _tmp27 = _tmp14*_tmp26
-    _tmp28 = _tmp24*_tmp27 + compliance_y_5
+    _tmp28 = compliance_y_5 + _tmp24*_tmp27
     _tmp29 = _tmp4 + theta_5
     _tmp30 = numpy.cos(_tmp29)
     _tmp31 = numpy.sin(delta_5)
     _tmp32 = numpy.sin(_tmp22)**2
-    _tmp33 = -0.02*_tmp31 + 0.1*_tmp32
+    _tmp33 = 0.1*_tmp32 - 0.02*_tmp31
     _tmp34 = _tmp29 + theta_6
     _tmp35 = numpy.cos(_tmp34)
     _tmp36 = numpy.sin(_tmp0)
     _tmp37 = numpy.sin(_tmp22 + _tmp7)**2
     _tmp38 = -0.05*_tmp36 - 0.08*_tmp37
     _tmp39 = numpy.cos(_tmp3)
-    _tmp40 = _tmp19*numpy.cos(_tmp18) + compliance_x_4
+    _tmp40 = compliance_x_4 + _tmp19*numpy.cos(_tmp18)
     _tmp41 = numpy.cos(_tmp4)
     _tmp42 = numpy.cos(_tmp23)
-    _tmp43 = _tmp27*_tmp42 + compliance_x_5
+    _tmp43 = compliance_x_5 + _tmp27*_tmp42
     _tmp44 = numpy.cos(_tmp5)
     _tmp45 = numpy.sin(_tmp8)
     _tmp46 = _tmp45*_tmp9
-    _tmp47 = -_tmp15*_tmp46 - compliance_y_6
+    _tmp47 = -compliance_y_6 - _tmp15*_tmp46
     _tmp48 = _tmp44*_tmp47
     _tmp49 = numpy.sin(_tmp34)
     _tmp50 = 0.04*_tmp36 - 0.1*_tmp37
@@ -1005,30 +1005,30 @@ def _loaded_newton(theta, delta, params):
     _tmp59 = numpy.sin(theta_1)
     _tmp60 = 0.5*theta_2
     _tmp61 = _tmp14*theta_2**2*arck(_tmp60)
-    _tmp62 = _tmp61*numpy.sin(_tmp60) + compliance_y_2
+    _tmp62 = compliance_y_2 + _tmp61*numpy.sin(_tmp60)
     _tmp63 = numpy.sin(_tmp2)
     _tmp64 = 0.5*theta_3
     _tmp65 = _tmp14*theta_3**2*arck(_tmp64)
-    _tmp66 = _tmp65*numpy.sin(_tmp64) + compliance_y_3
+    _tmp66 = compliance_y_3 + _tmp65*numpy.sin(_tmp64)
     _tmp67 = numpy.cos(theta_1)
-    _tmp68 = _tmp61*numpy.cos(_tmp60) + compliance_x_2
+    _tmp68 = compliance_x_2 + _tmp61*numpy.cos(_tmp60)
     _tmp69 = numpy.cos(_tmp2)
-    _tmp70 = _tmp65*numpy.cos(_tmp64) + compliance_x_3
+    _tmp70 = compliance_x_3 + _tmp65*numpy.cos(_tmp64)
     _tmp71 = 0.5*theta_1
     _tmp72 = _tmp14*theta_1**2*arck(_tmp71)
-    _tmp73 = _tmp59*_tmp62 + _tmp63*_tmp66 - _tmp67*_tmp68 - _tmp69*_tmp70 + _tmp72*numpy.sin(_tmp71) + compliance_y_1
+    _tmp73 = compliance_y_1 + _tmp59*_tmp62 + _tmp63*_tmp66 + _tmp72*numpy.sin(_tmp71) - _tmp67*_tmp68 - _tmp69*_tmp70
     _tmp74 = numpy.cos(_tmp53)
     _tmp75 = _tmp16*_tmp44 + _tmp47*_tmp6
-    _tmp76 = _tmp59*_tmp68 + _tmp62*_tmp67 + _tmp63*_tmp70 + _tmp66*_tmp69 + _tmp72*numpy.cos(_tmp71) + compliance_x_1
+    _tmp76 = compliance_x_1 + _tmp59*_tmp68 + _tmp62*_tmp67 + _tmp63*_tmp70 + _tmp66*_tmp69 + _tmp72*numpy.cos(_tmp71)
     _tmp77 = delta_7 + delta_8
     _tmp78 = 0.5*delta_7
     _tmp79 = _tmp78 + 0.5*theta_7
     _tmp80 = numpy.sin(_tmp79)
     _tmp81 = delta_7 + theta_7
     _tmp82 = arck(_tmp79)
-    _tmp83 = _tmp81**2*_tmp82
+    _tmp83 = _tmp82*_tmp81**2
     _tmp84 = _tmp14*_tmp83
-    _tmp85 = _tmp80*_tmp84 + compliance_y_7
+    _tmp85 = compliance_y_7 + _tmp80*_tmp84
     _tmp86 = _tmp3 + _tmp81
     _tmp87 = numpy.sin(_tmp86)
     _tmp88 = 0.5*delta_8
@@ -1036,29 +1036,29 @@ def _loaded_newton(theta, delta, params):
     _tmp90 = numpy.sin(_tmp89)
     _tmp91 = delta_8 + theta_8
     _tmp92 = arck(_tmp89)
-    _tmp93 = _tmp91**2*_tmp92
+    _tmp93 = _tmp92*_tmp91**2
     _tmp94 = _tmp14*_tmp93
-    _tmp95 = _tmp90*_tmp94 + compliance_y_8
+    _tmp95 = compliance_y_8 + _tmp90*_tmp94
     _tmp96 = _tmp3 + theta_7
     _tmp97 = numpy.cos(_tmp96)
     _tmp98 = numpy.sin(delta_7)
     _tmp99 = numpy.sin(_tmp78)**2
-    _tmp100 = -0.005*_tmp98 + 0.08*_tmp99
+    _tmp100 = 0.08*_tmp99 - 0.005*_tmp98
     _tmp101 = _tmp96 + theta_8
     _tmp102 = numpy.cos(_tmp101)
     _tmp103 = numpy.sin(_tmp77)
     _tmp104 = numpy.sin(_tmp78 + _tmp88)**2
     _tmp105 = -0.035*_tmp103 - 0.05*_tmp104
     _tmp106 = numpy.cos(_tmp79)
-    _tmp107 = _tmp106*_tmp84 + compliance_x_7
+    _tmp107 = compliance_x_7 + _tmp106*_tmp84
     _tmp108 = numpy.cos(_tmp86)
     _tmp109 = numpy.cos(_tmp89)
-    _tmp110 = _tmp109*_tmp94 + compliance_x_8
+    _tmp110 = compliance_x_8 + _tmp109*_tmp94
     _tmp111 = _tmp108*_tmp110
     _tmp112 = numpy.sin(_tmp101)
     _tmp113 = 0.025*_tmp103 - 0.07*_tmp104
     _tmp114 = numpy.sin(_tmp96)
-    _tmp115 = -0.04*_tmp98 - 0.01*_tmp99
+    _tmp115 = -0.01*_tmp99 - 0.04*_tmp98
     _tmp116 = 0.5*delta_10 + 0.5*theta_10
     _tmp117 = numpy.sin(_tmp116)
     _tmp118 = delta_10 + theta_10
@@ -1076,23 +1076,23 @@ def _loaded_newton(theta, delta, params):
     _tmp130 = 0.5*_tmp1*_tmp25
     _tmp131 = _tmp42*p_0
     _tmp132 = 0.125*_tmp26
-    _tmp133 = 0.0625*_tmp1**3*(3*cosr2(_tmp23) + sinr1(_tmp23) - 3*sinr2(_tmp23))
+    _tmp133 = 0.0625*_tmp1**3*(-3*sinr2(_tmp23) + 3*cosr2(_tmp23) + sinr1(_tmp23))
     _tmp134 = _tmp129*_tmp130 + _tmp129*_tmp133 + _tmp131*_tmp132
-    _tmp135 = -_tmp129*_tmp132 + _tmp130*_tmp131 + _tmp131*_tmp133
+    _tmp135 = _tmp130*_tmp131 + _tmp131*_tmp133 - _tmp129*_tmp132
     _tmp136 = 0.5*_tmp12
     _tmp137 = _tmp46*p_0
     _tmp138 = _tmp11*p_0
     _tmp139 = 0.125*_tmp13
     _tmp140 = 0.0625*p_0
-    _tmp141 = _tmp12**3*_tmp140*(3*cosr2(_tmp8) + sinr1(_tmp8) - 3*sinr2(_tmp8))
+    _tmp141 = _tmp140*_tmp12**3*(-3*sinr2(_tmp8) + 3*cosr2(_tmp8) + sinr1(_tmp8))
     _tmp142 = -_tmp136*_tmp137 - _tmp138*_tmp139 - _tmp141*_tmp45
     _tmp143 = _tmp10*_tmp141 + _tmp136*_tmp138 - _tmp137*_tmp139
     _tmp144 = _tmp54*p_0
     _tmp145 = 0.5*_tmp55*_tmp57
     _tmp146 = _tmp74*p_0
     _tmp147 = 0.125*_tmp58
-    _tmp148 = _tmp140*_tmp55**3*(3*cosr2(_tmp53) + sinr1(_tmp53) - 3*sinr2(_tmp53))
-    _tmp149 = -0.04*_tmp125 + 0.05*_tmp127
+    _tmp148 = _tmp140*_tmp55**3*(-3*sinr2(_tmp53) + 3*cosr2(_tmp53) + sinr1(_tmp53))
+    _tmp149 = 0.05*_tmp127 - 0.04*_tmp125
     _tmp150 = _tmp86 + _tmp91
     _tmp151 = numpy.cos(_tmp150)
     _tmp152 = 0.035*_tmp151
@@ -1102,46 +1102,46 @@ def _loaded_newton(theta, delta, params):
     _tmp156 = 0.5*_tmp81*_tmp82
     _tmp157 = _tmp106*p_0
     _tmp158 = 0.125*_tmp83
-    _tmp159 = _tmp140*_tmp81**3*(3*cosr2(_tmp79) + sinr1(_tmp79) - 3*sinr2(_tmp79))
+    _tmp159 = _tmp140*_tmp81**3*(-3*sinr2(_tmp79) + 3*cosr2(_tmp79) + sinr1(_tmp79))
     _tmp160 = _tmp155*_tmp156 + _tmp157*_tmp158 + _tmp159*_tmp80
-    _tmp161 = _tmp106*_tmp159 - _tmp155*_tmp158 + _tmp156*_tmp157
+    _tmp161 = _tmp106*_tmp159 + _tmp156*_tmp157 - _tmp155*_tmp158
     _tmp162 = _tmp109*p_0
     _tmp163 = 0.5*_tmp91*_tmp92
     _tmp164 = 0.125*_tmp93
     _tmp165 = _tmp90*p_0
-    _tmp166 = _tmp140*_tmp91**3*(3*cosr2(_tmp89) + sinr1(_tmp89) - 3*sinr2(_tmp89))
+    _tmp166 = _tmp140*_tmp91**3*(-3*sinr2(_tmp89) + 3*cosr2(_tmp89) + sinr1(_tmp89))
     _tmp167 = _tmp109*_tmp166 + _tmp162*_tmp163 - _tmp164*_tmp165
     _tmp168 = _tmp162*_tmp164 + _tmp163*_tmp165 + _tmp166*_tmp90
     _tmp169 = _tmp117*p_0
     _tmp170 = 0.5*_tmp118*_tmp120
     _tmp171 = _tmp122*p_0
     _tmp172 = 0.125*_tmp121
-    _tmp173 = _tmp118**3*_tmp140*(3*cosr2(_tmp116) + sinr1(_tmp116) - 3*sinr2(_tmp116))
-    _tmp174 = -0.025*_tmp151 + 0.035*_tmp153
+    _tmp173 = _tmp140*_tmp118**3*(-3*sinr2(_tmp116) + 3*cosr2(_tmp116) + sinr1(_tmp116))
+    _tmp174 = 0.035*_tmp153 - 0.025*_tmp151
     return [
-        -_tmp0 + delta_9,
-        -_tmp14*_tmp54*_tmp58 + _tmp16*_tmp6 + _tmp17*_tmp20 + _tmp21*_tmp28 + _tmp30*_tmp33 + _tmp35*_tmp38 - _tmp39*_tmp40 - _tmp41*_tmp43 - _tmp48 - _tmp49*_tmp50 - _tmp51*_tmp52 + _tmp73 - compliance_y_9,
-        -_tmp17*_tmp40 - _tmp20*_tmp39 - _tmp21*_tmp43 - _tmp28*_tmp41 + _tmp30*_tmp52 + _tmp33*_tmp51 + _tmp35*_tmp50 + _tmp38*_tmp49 + 0.25*_tmp56*_tmp57*_tmp74*p_0 - _tmp75 - _tmp76 + compliance_x_9,
-        -_tmp77 + delta_10,
-        _tmp100*_tmp97 + _tmp102*_tmp105 - _tmp107*_tmp39 - _tmp111 - _tmp112*_tmp113 - _tmp114*_tmp115 - _tmp117*_tmp121*_tmp14 + _tmp17*_tmp85 + _tmp73 + _tmp87*_tmp95 - compliance_y_10,
-        _tmp100*_tmp114 + _tmp102*_tmp113 + _tmp105*_tmp112 - _tmp107*_tmp17 + _tmp115*_tmp97 + 0.25*_tmp119*_tmp120*_tmp122*p_0 - _tmp123 - _tmp39*_tmp85 - _tmp76 + compliance_x_10,
+        delta_9 - _tmp0,
+        _tmp73 - _tmp48 - compliance_y_9 + _tmp16*_tmp6 + _tmp17*_tmp20 + _tmp21*_tmp28 + _tmp30*_tmp33 + _tmp35*_tmp38 - _tmp39*_tmp40 - _tmp41*_tmp43 - _tmp49*_tmp50 - _tmp51*_tmp52 - _tmp14*_tmp54*_tmp58,
+        compliance_x_9 - _tmp75 - _tmp76 + _tmp30*_tmp52 + _tmp33*_tmp51 + _tmp35*_tmp50 + _tmp38*_tmp49 - _tmp17*_tmp40 - _tmp20*_tmp39 - _tmp21*_tmp43 - _tmp28*_tmp41 + 0.25*_tmp56*_tmp57*_tmp74*p_0,
+        delta_10 - _tmp77,
+        _tmp73 - _tmp111 - compliance_y_10 + _tmp100*_tmp97 + _tmp102*_tmp105 + _tmp17*_tmp85 + _tmp87*_tmp95 - _tmp107*_tmp39 - _tmp112*_tmp113 - _tmp114*_tmp115 - _tmp117*_tmp121*_tmp14,
+        compliance_x_10 - _tmp123 - _tmp76 + _tmp100*_tmp114 + _tmp102*_tmp113 + _tmp105*_tmp112 + _tmp115*_tmp97 - _tmp107*_tmp17 - _tmp39*_tmp85 + 0.25*_tmp119*_tmp120*_tmp122*p_0,
         -1,
         -1,
         0,
         0,
         1,
         0,
-        -_tmp126 - _tmp128 + _tmp134*_tmp21 - _tmp135*_tmp41 - 0.02*_tmp44 + 0.05*_tmp6 + _tmp75,
-        -_tmp126 - _tmp128 - _tmp142*_tmp44 + _tmp143*_tmp6,
+        _tmp75 - _tmp126 - _tmp128 + 0.05*_tmp6 - 0.02*_tmp44 + _tmp134*_tmp21 - _tmp135*_tmp41,
+        -_tmp126 - _tmp128 + _tmp143*_tmp6 - _tmp142*_tmp44,
         0,
         0,
         -_tmp144*_tmp145 - _tmp146*_tmp147 - _tmp148*_tmp54,
         0,
-        -_tmp134*_tmp41 - _tmp135*_tmp21 - _tmp149 + _tmp16*_tmp6 - 0.05*_tmp44 - _tmp48 - 0.02*_tmp6,
-        -_tmp142*_tmp6 - _tmp143*_tmp44 - _tmp149,
+        -_tmp149 - _tmp48 - 0.05*_tmp44 - 0.02*_tmp6 + _tmp16*_tmp6 - _tmp134*_tmp41 - _tmp135*_tmp21,
+        -_tmp149 - _tmp142*_tmp6 - _tmp143*_tmp44,
         0,
         0,
-        -_tmp144*_tmp147 + _tmp145*_tmp146 + _tmp148*_tmp74,
+        _tmp145*_tmp146 + _tmp148*_tmp74 - _tmp144*_tmp147,
         0,
         0,
         0,
@@ -1151,16 +1151,16 @@ def _loaded_newton(theta, delta, params):
         1,
         0,
         0,
-        -0.005*_tmp108 + _tmp123 - _tmp152 - _tmp154 + _tmp160*_tmp17 - _tmp161*_tmp39 + 0.04*_tmp87,
-        -_tmp108*_tmp167 - _tmp152 - _tmp154 + _tmp168*_tmp87,
+        _tmp123 - _tmp152 - _tmp154 + 0.04*_tmp87 - 0.005*_tmp108 + _tmp160*_tmp17 - _tmp161*_tmp39,
+        -_tmp152 - _tmp154 + _tmp168*_tmp87 - _tmp108*_tmp167,
         0,
         -_tmp117*_tmp173 - _tmp169*_tmp170 - _tmp171*_tmp172,
         0,
         0,
-        -0.04*_tmp108 - _tmp111 - _tmp160*_tmp39 - _tmp161*_tmp17 - _tmp174 + _tmp87*_tmp95 - 0.005*_tmp87,
-        -_tmp108*_tmp168 - _tmp167*_tmp87 - _tmp174,
+        -_tmp111 - _tmp174 - 0.005*_tmp87 - 0.04*_tmp108 + _tmp87*_tmp95 - _tmp160*_tmp39 - _tmp161*_tmp17,
+        -_tmp174 - _tmp108*_tmp168 - _tmp167*_tmp87,
         0,
-        _tmp122*_tmp173 - _tmp169*_tmp172 + _tmp170*_tmp171,
+        _tmp122*_tmp173 + _tmp170*_tmp171 - _tmp169*_tmp172,
     ]
 
 
@@ -1180,7 +1180,7 @@ def _dev_paper(theta, params):
     _tmp9 = numpy.cos(theta_1)
     _tmp10 = numpy.cos(_tmp3)
     return [
-        0.25*_tmp10*_tmp5*_tmp6*_tmp9*p_0 - _tmp2*numpy.sin(_tmp0) - _tmp4*_tmp8,
+        -_tmp2*numpy.sin(_tmp0) - _tmp4*_tmp8 + 0.25*_tmp10*_tmp5*_tmp6*_tmp9*p_0,
         _tmp10*_tmp8 + _tmp2*numpy.cos(_tmp0) + _tmp4*_tmp7*_tmp9,
     ]
 
@@ -1201,7 +1201,7 @@ def _dev_first_order(theta, delta, params):
     _tmp9 = numpy.cos(theta_1)
     _tmp10 = numpy.cos(_tmp3)
     return [
-        0.25*_tmp10*_tmp5*_tmp6*_tmp9*p_0 - _tmp2*numpy.sin(_tmp0) - _tmp4*_tmp8,
+        -_tmp2*numpy.sin(_tmp0) - _tmp4*_tmp8 + 0.25*_tmp10*_tmp5*_tmp6*_tmp9*p_0,
         _tmp10*_tmp8 + _tmp2*numpy.cos(_tmp0) + _tmp4*_tmp7*_tmp9,
     ]
 
@@ -1222,7 +1222,7 @@ def _dev_exact(theta, delta, params):
     _tmp9 = numpy.cos(theta_1)
     _tmp10 = numpy.cos(_tmp3)
     return [
-        0.25*_tmp10*_tmp5*_tmp6*_tmp9*p_0 - _tmp2*numpy.sin(_tmp0) - _tmp4*_tmp8,
+        -_tmp2*numpy.sin(_tmp0) - _tmp4*_tmp8 + 0.25*_tmp10*_tmp5*_tmp6*_tmp9*p_0,
         _tmp10*_tmp8 + _tmp2*numpy.cos(_tmp0) + _tmp4*_tmp7*_tmp9,
     ]
 
@@ -1237,12 +1237,12 @@ def _dev_loaded(theta, delta, params):
     _tmp3 = numpy.sin(theta_1)
     _tmp4 = 0.5*theta_2
     _tmp5 = _tmp1*theta_2**2*arck(_tmp4)
-    _tmp6 = _tmp5*numpy.sin(_tmp4) + compliance_y_2
+    _tmp6 = compliance_y_2 + _tmp5*numpy.sin(_tmp4)
     _tmp7 = numpy.cos(theta_1)
-    _tmp8 = _tmp5*numpy.cos(_tmp4) + compliance_x_2
+    _tmp8 = compliance_x_2 + _tmp5*numpy.cos(_tmp4)
     return [
-        -_tmp2*numpy.sin(_tmp0) - _tmp3*_tmp6 + _tmp7*_tmp8 - compliance_y_1,
-        _tmp2*numpy.cos(_tmp0) + _tmp3*_tmp8 + _tmp6*_tmp7 + compliance_x_1,
+        -compliance_y_1 + _tmp7*_tmp8 - _tmp2*numpy.sin(_tmp0) - _tmp3*_tmp6,
+        compliance_x_1 + _tmp2*numpy.cos(_tmp0) + _tmp3*_tmp8 + _tmp6*_tmp7,
     ]
 
 
@@ -1256,12 +1256,12 @@ def _dev_loaded_refined(theta, delta, params):
     _tmp3 = numpy.sin(theta_1)
     _tmp4 = 0.5*theta_2
     _tmp5 = _tmp1*theta_2**2*arck(_tmp4)
-    _tmp6 = _tmp5*numpy.sin(_tmp4) + compliance_y_2
+    _tmp6 = compliance_y_2 + _tmp5*numpy.sin(_tmp4)
     _tmp7 = numpy.cos(theta_1)
-    _tmp8 = _tmp5*numpy.cos(_tmp4) + compliance_x_2
+    _tmp8 = compliance_x_2 + _tmp5*numpy.cos(_tmp4)
     return [
-        -_tmp2*numpy.sin(_tmp0) - _tmp3*_tmp6 + _tmp7*_tmp8 - compliance_y_1,
-        _tmp2*numpy.cos(_tmp0) + _tmp3*_tmp8 + _tmp6*_tmp7 + compliance_x_1,
+        -compliance_y_1 + _tmp7*_tmp8 - _tmp2*numpy.sin(_tmp0) - _tmp3*_tmp6,
+        compliance_x_1 + _tmp2*numpy.cos(_tmp0) + _tmp3*_tmp8 + _tmp6*_tmp7,
     ]
 
 
@@ -1313,7 +1313,7 @@ def _sens_rigid(theta, params):
     _tmp11 = 0.05*_tmp10
     _tmp12 = _tmp11 + _tmp9
     _tmp13 = _tmp12 + _tmp5 - 0.05*_tmp6
-    _tmp14 = -0.04*_tmp10 + 0.05*_tmp8
+    _tmp14 = 0.05*_tmp8 - 0.04*_tmp10
     _tmp15 = _tmp14 + 0.05*_tmp4 + 0.02*_tmp6
     _tmp16 = _tmp1 + theta_7
     _tmp17 = numpy.cos(_tmp16)
@@ -1325,29 +1325,29 @@ def _sens_rigid(theta, params):
     _tmp23 = numpy.cos(_tmp20)
     _tmp24 = 0.035*_tmp23
     _tmp25 = _tmp22 + _tmp24
-    _tmp26 = _tmp18 - 0.04*_tmp19 + _tmp25
+    _tmp26 = _tmp18 + _tmp25 - 0.04*_tmp19
     _tmp27 = 0.035*_tmp21 - 0.025*_tmp23
-    _tmp28 = 0.04*_tmp17 + 0.005*_tmp19 + _tmp27
+    _tmp28 = _tmp27 + 0.005*_tmp19 + 0.04*_tmp17
     _tmp29 = 0.06*numpy.cos(theta_1)
     _tmp30 = numpy.sin(_tmp1)
     _tmp31 = numpy.cos(_tmp1)
     _tmp32 = numpy.sin(_tmp2)
     _tmp33 = numpy.cos(_tmp2)
     _tmp34 = 0.02*_tmp33
-    _tmp35 = -_tmp11 + 0.05*_tmp30 + 0.01*_tmp31 + 0.05*_tmp32 - _tmp34 - _tmp5 + 0.05*_tmp6 - _tmp9
+    _tmp35 = -_tmp11 - _tmp34 - _tmp5 - _tmp9 + 0.05*_tmp30 + 0.05*_tmp32 + 0.05*_tmp6 + 0.01*_tmp31
     _tmp36 = numpy.sin(_tmp0)
     _tmp37 = numpy.cos(_tmp0)
     _tmp38 = 0.05*_tmp36 + 0.02*_tmp37
     _tmp39 = _tmp35 + _tmp38
     _tmp40 = 0.06*numpy.sin(theta_1)
     _tmp41 = -_tmp40
-    _tmp42 = _tmp15 + 0.02*_tmp32 + 0.05*_tmp33
-    _tmp43 = -0.01*_tmp30 + 0.05*_tmp31 + _tmp42
-    _tmp44 = -0.02*_tmp36 + 0.05*_tmp37
+    _tmp42 = _tmp15 + 0.05*_tmp33 + 0.02*_tmp32
+    _tmp43 = _tmp42 + 0.05*_tmp31 - 0.01*_tmp30
+    _tmp44 = 0.05*_tmp37 - 0.02*_tmp36
     _tmp45 = _tmp43 + _tmp44
     _tmp46 = 0.04*_tmp31
-    _tmp47 = -_tmp18 + 0.04*_tmp19 - _tmp22 - _tmp24 + 0.02*_tmp30 + _tmp38 - _tmp46
-    _tmp48 = _tmp28 + 0.04*_tmp30 + 0.02*_tmp31
+    _tmp47 = _tmp38 - _tmp18 - _tmp22 - _tmp24 - _tmp46 + 0.02*_tmp30 + 0.04*_tmp19
+    _tmp48 = _tmp28 + 0.02*_tmp31 + 0.04*_tmp30
     _tmp49 = _tmp44 + _tmp48
     _tmp50 = 0.03*_tmp36
     _tmp51 = 0.03*_tmp37
@@ -1399,7 +1399,7 @@ def _sens_rigid(theta, params):
         _tmp29 + _tmp39,
         _tmp39,
         _tmp35,
-        -_tmp13 + 0.05*_tmp32 - _tmp34,
+        -_tmp13 - _tmp34 + 0.05*_tmp32,
         0,
         -_tmp41 - _tmp45,
         -_tmp45,
@@ -1413,7 +1413,7 @@ def _sens_rigid(theta, params):
         0,
         _tmp29 + _tmp47,
         _tmp47,
-        -_tmp26 + 0.02*_tmp30 - _tmp46,
+        -_tmp26 - _tmp46 + 0.02*_tmp30,
         0,
         0,
         -_tmp41 - _tmp49,
@@ -1473,10 +1473,10 @@ def _sens_paper(theta, params):
     _tmp21 = _tmp12*_tmp20
     _tmp22 = _tmp11*_tmp14
     _tmp23 = _tmp22*_tmp8
-    _tmp24 = 0.0625*theta_1**3*(3*cosr2(_tmp0) + sinr1(_tmp0) - 3*sinr2(_tmp0))
+    _tmp24 = 0.0625*theta_1**3*(-3*sinr2(_tmp0) + 3*cosr2(_tmp0) + sinr1(_tmp0))
     _tmp25 = _tmp5*p_0
     _tmp26 = _tmp10*_tmp19
-    _tmp27 = 0.0625*p_0*theta_2**3*(3*cosr2(_tmp5) + sinr1(_tmp5) - 3*sinr2(_tmp5))
+    _tmp27 = 0.0625*p_0*theta_2**3*(-3*sinr2(_tmp5) + 3*cosr2(_tmp5) + sinr1(_tmp5))
     _tmp28 = _tmp20*_tmp26 + _tmp25*_tmp8 + _tmp27*_tmp7
     _tmp29 = _tmp15*_tmp27 + _tmp20*_tmp25 - _tmp26*_tmp8
     _tmp30 = _tmp18*p_0
@@ -1493,13 +1493,13 @@ def _sens_paper(theta, params):
         0,
         0,
         0,
-        -_tmp1*_tmp4 + 0.25*_tmp10*_tmp14*_tmp15*_tmp6 - _tmp13,
-        -_tmp16*_tmp17 - _tmp16*_tmp24 - _tmp18*_tmp19*_tmp3 - _tmp21*p_0 - _tmp23*p_0,
+        -_tmp13 - _tmp1*_tmp4 + 0.25*_tmp10*_tmp14*_tmp15*_tmp6,
+        -_tmp16*_tmp17 - _tmp16*_tmp24 - _tmp21*p_0 - _tmp23*p_0 - _tmp18*_tmp19*_tmp3,
         _tmp14*_tmp29 - _tmp28*_tmp9,
         0,
         0,
-        _tmp18*_tmp4 + _tmp21 + _tmp23,
-        -_tmp13*p_0 - 0.125*_tmp16*_tmp3 + _tmp17*_tmp30 + _tmp20*_tmp22*p_0 + _tmp24*_tmp30,
+        _tmp21 + _tmp23 + _tmp18*_tmp4,
+        _tmp17*_tmp30 + _tmp24*_tmp30 - _tmp13*p_0 - 0.125*_tmp16*_tmp3 + _tmp20*_tmp22*p_0,
         _tmp14*_tmp28 + _tmp29*_tmp9,
         0,
         0,
@@ -1534,10 +1534,10 @@ def _sens_first_order(theta, params):
     _tmp21 = _tmp12*_tmp20
     _tmp22 = _tmp11*_tmp14
     _tmp23 = _tmp22*_tmp8
-    _tmp24 = 0.0625*theta_1**3*(3*cosr2(_tmp0) + sinr1(_tmp0) - 3*sinr2(_tmp0))
+    _tmp24 = 0.0625*theta_1**3*(-3*sinr2(_tmp0) + 3*cosr2(_tmp0) + sinr1(_tmp0))
     _tmp25 = _tmp5*p_0
     _tmp26 = _tmp10*_tmp19
-    _tmp27 = 0.0625*p_0*theta_2**3*(3*cosr2(_tmp5) + sinr1(_tmp5) - 3*sinr2(_tmp5))
+    _tmp27 = 0.0625*p_0*theta_2**3*(-3*sinr2(_tmp5) + 3*cosr2(_tmp5) + sinr1(_tmp5))
     _tmp28 = _tmp20*_tmp26 + _tmp25*_tmp8 + _tmp27*_tmp7
     _tmp29 = _tmp15*_tmp27 + _tmp20*_tmp25 - _tmp26*_tmp8
     _tmp30 = _tmp18*p_0
@@ -1554,13 +1554,13 @@ def _sens_first_order(theta, params):
         0,
         0,
         0,
-        -_tmp1*_tmp4 + 0.25*_tmp10*_tmp14*_tmp15*_tmp6 - _tmp13,
-        -_tmp16*_tmp17 - _tmp16*_tmp24 - _tmp18*_tmp19*_tmp3 - _tmp21*p_0 - _tmp23*p_0,
+        -_tmp13 - _tmp1*_tmp4 + 0.25*_tmp10*_tmp14*_tmp15*_tmp6,
+        -_tmp16*_tmp17 - _tmp16*_tmp24 - _tmp21*p_0 - _tmp23*p_0 - _tmp18*_tmp19*_tmp3,
         _tmp14*_tmp29 - _tmp28*_tmp9,
         0,
         0,
-        _tmp18*_tmp4 + _tmp21 + _tmp23,
-        -_tmp13*p_0 - 0.125*_tmp16*_tmp3 + _tmp17*_tmp30 + _tmp20*_tmp22*p_0 + _tmp24*_tmp30,
+        _tmp21 + _tmp23 + _tmp18*_tmp4,
+        _tmp17*_tmp30 + _tmp24*_tmp30 - _tmp13*p_0 - 0.125*_tmp16*_tmp3 + _tmp20*_tmp22*p_0,
         _tmp14*_tmp28 + _tmp29*_tmp9,
         0,
         0,
@@ -1595,10 +1595,10 @@ def _sens_exact(theta, params):
     _tmp21 = _tmp12*_tmp20
     _tmp22 = _tmp11*_tmp14
     _tmp23 = _tmp22*_tmp8
-    _tmp24 = 0.0625*theta_1**3*(3*cosr2(_tmp0) + sinr1(_tmp0) - 3*sinr2(_tmp0))
+    _tmp24 = 0.0625*theta_1**3*(-3*sinr2(_tmp0) + 3*cosr2(_tmp0) + sinr1(_tmp0))
     _tmp25 = _tmp5*p_0
     _tmp26 = _tmp10*_tmp19
-    _tmp27 = 0.0625*p_0*theta_2**3*(3*cosr2(_tmp5) + sinr1(_tmp5) - 3*sinr2(_tmp5))
+    _tmp27 = 0.0625*p_0*theta_2**3*(-3*sinr2(_tmp5) + 3*cosr2(_tmp5) + sinr1(_tmp5))
     _tmp28 = _tmp20*_tmp26 + _tmp25*_tmp8 + _tmp27*_tmp7
     _tmp29 = _tmp15*_tmp27 + _tmp20*_tmp25 - _tmp26*_tmp8
     _tmp30 = _tmp18*p_0
@@ -1615,13 +1615,13 @@ def _sens_exact(theta, params):
         0,
         0,
         0,
-        -_tmp1*_tmp4 + 0.25*_tmp10*_tmp14*_tmp15*_tmp6 - _tmp13,
-        -_tmp16*_tmp17 - _tmp16*_tmp24 - _tmp18*_tmp19*_tmp3 - _tmp21*p_0 - _tmp23*p_0,
+        -_tmp13 - _tmp1*_tmp4 + 0.25*_tmp10*_tmp14*_tmp15*_tmp6,
+        -_tmp16*_tmp17 - _tmp16*_tmp24 - _tmp21*p_0 - _tmp23*p_0 - _tmp18*_tmp19*_tmp3,
         _tmp14*_tmp29 - _tmp28*_tmp9,
         0,
         0,
-        _tmp18*_tmp4 + _tmp21 + _tmp23,
-        -_tmp13*p_0 - 0.125*_tmp16*_tmp3 + _tmp17*_tmp30 + _tmp20*_tmp22*p_0 + _tmp24*_tmp30,
+        _tmp21 + _tmp23 + _tmp18*_tmp4,
+        _tmp17*_tmp30 + _tmp24*_tmp30 - _tmp13*p_0 - 0.125*_tmp16*_tmp3 + _tmp20*_tmp22*p_0,
         _tmp14*_tmp28 + _tmp29*_tmp9,
         0,
         0,

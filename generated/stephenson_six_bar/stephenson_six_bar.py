@@ -139,45 +139,45 @@ def _rigid(inputs, params):
     _tmp1 = 0.03*_tmp0
     _tmp2 = numpy.cos(theta_1)
     dyad1_cx = -_tmp1 + 0.008*_tmp2
-    dyad1_cy = 0.008*_tmp0 + 0.03*_tmp2
-    _tmp3 = -dyad1_ax + dyad1_cx
-    _tmp4 = -dyad1_ay + dyad1_cy
+    dyad1_cy = 0.03*_tmp2 + 0.008*_tmp0
+    _tmp3 = dyad1_cx - dyad1_ax
+    _tmp4 = dyad1_cy - dyad1_ay
     dyad1_dsq = _tmp3**2 + _tmp4**2
     _tmp5 = dyad1_dsq**(-1.0)
-    dyad1_along = 0.5*_tmp5*(dyad1_dsq - 0.002084)
-    dyad1_reach = 0.004*_tmp5 - dyad1_along**2
+    dyad1_along = 0.5*_tmp5*(-0.002084 + dyad1_dsq)
+    dyad1_reach = -dyad1_along**2 + 0.004*_tmp5
     dyad1_across = -numpy.sqrt(dyad1_reach)
-    dyad1_bx = _tmp3*dyad1_along - _tmp4*dyad1_across + dyad1_ax
-    dyad1_by = _tmp3*dyad1_across + _tmp4*dyad1_along + dyad1_ay
+    dyad1_bx = dyad1_ax + _tmp3*dyad1_along - _tmp4*dyad1_across
+    dyad1_by = dyad1_ay + _tmp3*dyad1_across + _tmp4*dyad1_along
     dyad1_margin = 202.71010642104994*dyad1_dsq*abs(dyad1_across)
-    dyad1_phi1 = numpy.arctan2(0.06*dyad1_ax + 0.02*dyad1_ay - 0.06*dyad1_bx - 0.02*dyad1_by, 0.02*dyad1_ax - 0.06*dyad1_ay - 0.02*dyad1_bx + 0.06*dyad1_by)
-    dyad1_phi2 = numpy.arctan2(-0.03*dyad1_bx + 0.072*dyad1_by + 0.03*dyad1_cx - 0.072*dyad1_cy, 0.072*dyad1_bx + 0.03*dyad1_by - 0.072*dyad1_cx - 0.03*dyad1_cy)
-    dyad2_ax = -0.02*_tmp0 + 0.03*_tmp2
+    dyad1_phi1 = numpy.arctan2(0.06*dyad1_ax + 0.02*dyad1_ay - 0.06*dyad1_bx - 0.02*dyad1_by, 0.06*dyad1_by + 0.02*dyad1_ax - 0.06*dyad1_ay - 0.02*dyad1_bx)
+    dyad1_phi2 = numpy.arctan2(0.03*dyad1_cx + 0.072*dyad1_by - 0.03*dyad1_bx - 0.072*dyad1_cy, 0.03*dyad1_by + 0.072*dyad1_bx - 0.03*dyad1_cy - 0.072*dyad1_cx)
+    dyad2_ax = 0.03*_tmp2 - 0.02*_tmp0
     dyad2_ay = _tmp1 + 0.02*_tmp2
     _tmp6 = numpy.sin(dyad1_phi1)
     _tmp7 = numpy.cos(dyad1_phi1)
-    dyad2_cx = -0.05*_tmp6 + 0.02*_tmp7 + dyad1_ax
-    dyad2_cy = 0.02*_tmp6 + 0.05*_tmp7 + dyad1_ay
-    _tmp8 = -dyad2_ax + dyad2_cx
-    _tmp9 = -dyad2_ay + dyad2_cy
+    dyad2_cx = dyad1_ax + 0.02*_tmp7 - 0.05*_tmp6
+    dyad2_cy = dyad1_ay + 0.05*_tmp7 + 0.02*_tmp6
+    _tmp8 = dyad2_cx - dyad2_ax
+    _tmp9 = dyad2_cy - dyad2_ay
     dyad2_dsq = _tmp8**2 + _tmp9**2
     _tmp10 = dyad2_dsq**(-1.0)
-    dyad2_along = 0.5*_tmp10*(dyad2_dsq + 0.0024)
-    dyad2_reach = 0.0065*_tmp10 - dyad2_along**2
+    dyad2_along = 0.5*_tmp10*(0.0024 + dyad2_dsq)
+    dyad2_reach = -dyad2_along**2 + 0.0065*_tmp10
     dyad2_across = numpy.sqrt(dyad2_reach)
-    dyad2_bx = _tmp8*dyad2_along - _tmp9*dyad2_across + dyad2_ax
-    dyad2_by = _tmp8*dyad2_across + _tmp9*dyad2_along + dyad2_ay
+    dyad2_bx = dyad2_ax + _tmp8*dyad2_along - _tmp9*dyad2_across
+    dyad2_by = dyad2_ay + _tmp8*dyad2_across + _tmp9*dyad2_along
     dyad2_margin = 193.70971105651492*dyad2_dsq*abs(dyad2_across)
     _tmp11 = 0.04*dyad2_bx
-    dyad2_phi1 = numpy.arctan2(0.07*dyad2_ax - 0.04*dyad2_ay - 0.07*dyad2_bx + 0.04*dyad2_by, _tmp11 - 0.04*dyad2_ax - 0.07*dyad2_ay + 0.07*dyad2_by)
-    dyad2_phi2 = numpy.arctan2(-_tmp11 - 0.05*dyad2_by + 0.04*dyad2_cx + 0.05*dyad2_cy, -0.05*dyad2_bx + 0.04*dyad2_by + 0.05*dyad2_cx - 0.04*dyad2_cy)
+    dyad2_phi1 = numpy.arctan2(0.07*dyad2_ax + 0.04*dyad2_by - 0.07*dyad2_bx - 0.04*dyad2_ay, _tmp11 + 0.07*dyad2_by - 0.07*dyad2_ay - 0.04*dyad2_ax)
+    dyad2_phi2 = numpy.arctan2(-_tmp11 + 0.05*dyad2_cy + 0.04*dyad2_cx - 0.05*dyad2_by, 0.05*dyad2_cx + 0.04*dyad2_by - 0.05*dyad2_bx - 0.04*dyad2_cy)
     _tmp12 = -theta_1
     _tmp13 = -dyad2_phi2
     return [
         _tmp12 + dyad2_phi1,
         dyad1_phi1,
         -_tmp13 - dyad1_phi1,
-        -dyad1_phi1 + dyad1_phi2,
+        dyad1_phi2 - dyad1_phi1,
         _tmp12 + dyad1_phi2,
         -_tmp13 - dyad2_phi1,
         dyad1_reach,
@@ -209,12 +209,12 @@ def _rigid_res(theta, params):
     _tmp16 = numpy.sin(_tmp5 + 0.5*theta_2)**2
     _tmp17 = numpy.sin(_tmp7 + 0.5*theta_4)**2
     return [
-        _tmp0 + theta_1 - theta_5 + theta_6,
-        -0.144*_tmp10 - _tmp2 + 0.06*_tmp3 - 0.03*_tmp4 - 0.016*_tmp6 - _tmp9,
-        0.008*_tmp1 - 0.06*_tmp10 + _tmp11 - _tmp12 + 0.072*_tmp4 + 0.12*_tmp8,
-        _tmp0 + _tmp13 - theta_4 + theta_7,
-        -0.02*_tmp1 - _tmp12 - 0.07*_tmp14 + 0.04*_tmp15 - 0.08*_tmp16 - 0.1*_tmp17 + 0.05*_tmp3 + _tmp9,
-        -_tmp11 + 0.04*_tmp14 + 0.05*_tmp15 - 0.14*_tmp16 + 0.08*_tmp17 + _tmp2 - 0.04*_tmp6 + 0.1*_tmp8,
+        _tmp0 + theta_1 + theta_6 - theta_5,
+        -_tmp2 - _tmp9 + 0.06*_tmp3 - 0.03*_tmp4 - 0.016*_tmp6 - 0.144*_tmp10,
+        _tmp11 - _tmp12 + 0.12*_tmp8 + 0.008*_tmp1 + 0.072*_tmp4 - 0.06*_tmp10,
+        _tmp0 + _tmp13 + theta_7 - theta_4,
+        _tmp9 - _tmp12 + 0.05*_tmp3 + 0.04*_tmp15 - 0.07*_tmp14 - 0.1*_tmp17 - 0.02*_tmp1 - 0.08*_tmp16,
+        _tmp2 - _tmp11 + 0.05*_tmp15 + 0.1*_tmp8 + 0.04*_tmp14 + 0.08*_tmp17 - 0.14*_tmp16 - 0.04*_tmp6,
     ]
 
 
@@ -228,7 +228,7 @@ def _linear(theta, params):
     _tmp3 = theta_3 + theta_5
     _tmp4 = numpy.sin(_tmp3)
     _tmp5 = numpy.cos(_tmp3)
-    _tmp6 = 0.072*_tmp4 + 0.03*_tmp5
+    _tmp6 = 0.03*_tmp5 + 0.072*_tmp4
     _tmp7 = 0.02*_tmp2
     _tmp8 = 0.03*_tmp4
     _tmp9 = theta_1 + theta_2
@@ -238,9 +238,9 @@ def _linear(theta, params):
     _tmp13 = numpy.sin(_tmp12)
     _tmp14 = 0.05*_tmp13
     _tmp15 = numpy.cos(_tmp12)
-    _tmp16 = 0.04*_tmp13 + 0.05*_tmp15
+    _tmp16 = 0.05*_tmp15 + 0.04*_tmp13
     _tmp17 = theta_5**2
-    _tmp18 = _tmp17*(0.21067334783983213*sinr1(0.6594566077552098*theta_5) - 0.5*sinr1(theta_5)) - 0.01556317594302295
+    _tmp18 = -0.01556317594302295 + _tmp17*(0.21067334783983213*sinr1(0.6594566077552098*theta_5) - 0.5*sinr1(theta_5))
     _tmp19 = 0.5*theta_6
     _tmp20 = numpy.sin(_tmp19)
     _tmp21 = numpy.cos(theta_1)
@@ -254,7 +254,7 @@ def _linear(theta, params):
     _tmp29 = _tmp2*p_0
     _tmp30 = 0.3297283038776049*theta_5
     _tmp31 = 0.5*theta_5
-    _tmp32 = _tmp31*(0.25*_tmp17*(-0.347615499514091*sinr1(_tmp30) + sinr1(_tmp31)) + 0.20066894885245268)*(1.2121056059601407*numpy.sin(_tmp30) + numpy.sin(_tmp31))
+    _tmp32 = _tmp31*(0.20066894885245268 + 0.25*_tmp17*(-0.347615499514091*sinr1(_tmp30) + sinr1(_tmp31)))*(1.2121056059601407*numpy.sin(_tmp30) + numpy.sin(_tmp31))
     _tmp33 = 0.5*theta_1
     _tmp34 = theta_1**2
     _tmp35 = arck(_tmp33)
@@ -272,8 +272,8 @@ def _linear(theta, params):
     _tmp47 = 0.1767766952966369*_tmp45*_tmp46*p_0
     _tmp48 = _tmp47*numpy.sin(_tmp44)
     _tmp49 = numpy.cos(_tmp44)
-    _tmp50 = _tmp47*_tmp49 + _tmp48
-    _tmp51 = 0.1767766952966369*_tmp45*_tmp46*_tmp49*p_0 - _tmp48
+    _tmp50 = _tmp48 + _tmp47*_tmp49
+    _tmp51 = -_tmp48 + 0.1767766952966369*_tmp45*_tmp46*_tmp49*p_0
     _tmp53 = theta_4**2
     _tmp52 = 0.5*theta_4
     _tmp54 = arck(_tmp52)
@@ -294,15 +294,15 @@ def _linear(theta, params):
         1,
         0,
         0,
-        -_tmp1 + 0.06*_tmp2 - _tmp6,
+        -_tmp1 - _tmp6 + 0.06*_tmp2,
         0,
         -_tmp6,
         0,
         0,
         0,
-        0.06*_tmp0 + 0.072*_tmp5 + _tmp7 - _tmp8,
+        _tmp7 - _tmp8 + 0.06*_tmp0 + 0.072*_tmp5,
         0,
-        0.072*_tmp5 - _tmp8,
+        -_tmp8 + 0.072*_tmp5,
         0,
         0,
         1,
@@ -311,24 +311,24 @@ def _linear(theta, params):
         0,
         0,
         1,
-        -0.04*_tmp10 - 0.07*_tmp11,
-        _tmp1 - _tmp14 + 0.04*_tmp15 + 0.05*_tmp2,
+        -0.07*_tmp11 - 0.04*_tmp10,
+        _tmp1 - _tmp14 + 0.05*_tmp2 + 0.04*_tmp15,
         -_tmp14 + 0.04*_tmp15,
         0,
         0,
         0,
-        -0.07*_tmp10 + 0.04*_tmp11,
-        0.05*_tmp0 + _tmp16 - _tmp7,
+        0.04*_tmp11 - 0.07*_tmp10,
+        _tmp16 - _tmp7 + 0.05*_tmp0,
         _tmp16,
         0,
         0,
         0,
         0,
-        _tmp0*_tmp18*p_0*theta_5 - _tmp20*_tmp21*_tmp25 - _tmp26*_tmp28 - _tmp29*_tmp32 - _tmp40,
-        -_tmp18*_tmp29*theta_5 - _tmp20*_tmp28 + 0.25*_tmp21*_tmp22*_tmp23*_tmp26*p_0 - _tmp32*_tmp43 + 0.25*_tmp34*_tmp35*_tmp41*p_0 - _tmp42,
+        -_tmp40 - _tmp26*_tmp28 - _tmp29*_tmp32 - _tmp20*_tmp21*_tmp25 + _tmp0*_tmp18*p_0*theta_5,
+        -_tmp42 - _tmp20*_tmp28 - _tmp32*_tmp43 - _tmp18*_tmp29*theta_5 + 0.25*_tmp34*_tmp35*_tmp41*p_0 + 0.25*_tmp21*_tmp22*_tmp23*_tmp26*p_0,
         0,
-        0.25*_tmp0*_tmp53*_tmp54*_tmp62*p_0 - _tmp10*_tmp61 + 0.25*_tmp11*_tmp58*_tmp59*_tmp63*p_0 + _tmp21*_tmp51 - _tmp27*_tmp50 - _tmp29*_tmp56 - _tmp40,
-        _tmp10*_tmp60*_tmp63 + _tmp11*_tmp61 + _tmp21*_tmp50 + _tmp27*_tmp51 - _tmp29*_tmp55*_tmp62 + _tmp36*_tmp41 - _tmp42 - _tmp43*_tmp56,
+        -_tmp40 + _tmp21*_tmp51 - _tmp10*_tmp61 - _tmp27*_tmp50 - _tmp29*_tmp56 + 0.25*_tmp0*_tmp53*_tmp54*_tmp62*p_0 + 0.25*_tmp11*_tmp58*_tmp59*_tmp63*p_0,
+        -_tmp42 + _tmp11*_tmp61 + _tmp21*_tmp50 + _tmp27*_tmp51 + _tmp36*_tmp41 - _tmp43*_tmp56 + _tmp10*_tmp60*_tmp63 - _tmp29*_tmp55*_tmp62,
     ]
 
 
@@ -349,19 +349,19 @@ def _newton(theta, delta, params):
     _tmp9 = numpy.sin(_tmp0)
     _tmp10 = 0.5*delta_5
     _tmp11 = numpy.sin(_tmp10 + _tmp4)**2
-    _tmp12 = -0.06*_tmp11 + 0.072*_tmp9
+    _tmp12 = 0.072*_tmp9 - 0.06*_tmp11
     _tmp13 = numpy.cos(theta_3)
     _tmp14 = 0.04*_tmp5
     _tmp15 = -_tmp14 + 0.06*_tmp2
     _tmp16 = numpy.cos(_tmp7)
-    _tmp17 = -0.144*_tmp11 - 0.03*_tmp9
+    _tmp17 = -0.03*_tmp9 - 0.144*_tmp11
     _tmp18 = delta_5 + theta_5
     _tmp19 = delta_3 + theta_3
     _tmp20 = numpy.sin(_tmp19)
     _tmp21 = _tmp18**2
     _tmp22 = 0.6594566077552098*delta_5 + 0.6594566077552098*theta_5
-    _tmp23 = -0.5*sinr1(_tmp18) + 0.21067334783983213*sinr1(_tmp22)
-    _tmp24 = _tmp21*_tmp23 - 0.01556317594302295
+    _tmp23 = 0.21067334783983213*sinr1(_tmp22) - 0.5*sinr1(_tmp18)
+    _tmp24 = -0.01556317594302295 + _tmp21*_tmp23
     _tmp25 = 0.5*delta_6 + 0.5*theta_6
     _tmp26 = numpy.sin(_tmp25)
     _tmp27 = arck(_tmp25)
@@ -381,7 +381,7 @@ def _newton(theta, delta, params):
     _tmp41 = _tmp10 + 0.5*theta_5
     _tmp42 = -0.347615499514091*sinr1(_tmp40) + sinr1(_tmp41)
     _tmp43 = 0.25*_tmp21
-    _tmp44 = _tmp42*_tmp43 + 0.20066894885245268
+    _tmp44 = 0.20066894885245268 + _tmp42*_tmp43
     _tmp45 = 1.2121056059601407*numpy.sin(_tmp40) + numpy.sin(_tmp41)
     _tmp46 = _tmp44*_tmp45
     _tmp47 = 0.5*_tmp18
@@ -401,7 +401,7 @@ def _newton(theta, delta, params):
     _tmp61 = _tmp20*_tmp49
     _tmp62 = numpy.cos(_tmp54)
     _tmp63 = _tmp56*_tmp62
-    _tmp64 = -_tmp32*_tmp53*_tmp63 + _tmp52*numpy.cos(_tmp51)
+    _tmp64 = _tmp52*numpy.cos(_tmp51) - _tmp32*_tmp53*_tmp63
     _tmp65 = theta_3 + theta_4
     _tmp66 = numpy.sin(_tmp65)
     _tmp67 = numpy.sin(delta_3 + delta_4)
@@ -426,13 +426,13 @@ def _newton(theta, delta, params):
     _tmp86 = numpy.cos(_tmp81)
     _tmp87 = _tmp86*p_0
     _tmp88 = _tmp82*_tmp87
-    _tmp89 = _tmp80*_tmp88 + _tmp85
+    _tmp89 = _tmp85 + _tmp80*_tmp88
     _tmp90 = _tmp14 + 0.05*_tmp2
     _tmp91 = numpy.cos(_tmp65)
     _tmp92 = 0.04*_tmp67 - 0.1*_tmp69
     _tmp93 = numpy.cos(_tmp72)
     _tmp94 = -0.07*_tmp74 - 0.08*_tmp76
-    _tmp95 = 0.1767766952966369*_tmp79*_tmp82*_tmp86*p_0 - _tmp85
+    _tmp95 = -_tmp85 + 0.1767766952966369*_tmp79*_tmp82*_tmp86*p_0
     _tmp96 = _tmp68 + 0.5*theta_4
     _tmp97 = arck(_tmp96)
     _tmp100 = delta_4 + theta_4
@@ -470,53 +470,53 @@ def _newton(theta, delta, params):
     _tmp130 = 0.072*_tmp129
     _tmp131 = 0.02*_tmp20
     _tmp132 = 0.0625*p_0
-    _tmp133 = _tmp132*_tmp19**3*(3*cosr2(_tmp54) + sinr1(_tmp54) - 3*sinr2(_tmp54))
+    _tmp133 = _tmp132*_tmp19**3*(-3*sinr2(_tmp54) + 3*cosr2(_tmp54) + sinr1(_tmp54))
     _tmp134 = 0.125*p_0
     _tmp135 = _tmp134*_tmp53
     _tmp136 = _tmp55*_tmp56
     _tmp137 = 0.5*p_0
     _tmp138 = _tmp137*_tmp19
     _tmp139 = _tmp133*_tmp55 + _tmp135*_tmp63 + _tmp136*_tmp138
-    _tmp140 = _tmp18*p_0*(2*_tmp18*_tmp23 + _tmp21*(0.09161826121794318*_tmp18*(cosr2(_tmp22) - 3*sinr2(_tmp22)) - _tmp47*(cosr2(_tmp18) - 3*sinr2(_tmp18)))) + _tmp58
-    _tmp141 = _tmp137*_tmp46 + _tmp44*_tmp48*(0.39966552557377366*numpy.cos(_tmp40) + 0.5*numpy.cos(_tmp41)) + _tmp45*_tmp48*(_tmp42*_tmp47 + _tmp43*(-0.037793019340658006*_tmp18*(cosr2(_tmp40) - 3*sinr2(_tmp40)) + 0.25*_tmp18*(cosr2(_tmp41) - 3*sinr2(_tmp41))))
+    _tmp140 = _tmp58 + _tmp18*p_0*(_tmp21*(-_tmp47*(-3*sinr2(_tmp18) + cosr2(_tmp18)) + 0.09161826121794318*_tmp18*(-3*sinr2(_tmp22) + cosr2(_tmp22))) + 2*_tmp18*_tmp23)
+    _tmp141 = _tmp137*_tmp46 + _tmp44*_tmp48*(0.5*numpy.cos(_tmp41) + 0.39966552557377366*numpy.cos(_tmp40)) + _tmp45*_tmp48*(_tmp42*_tmp47 + _tmp43*(0.25*_tmp18*(-3*sinr2(_tmp41) + cosr2(_tmp41)) - 0.037793019340658006*_tmp18*(-3*sinr2(_tmp40) + cosr2(_tmp40))))
     _tmp142 = _tmp137*_tmp30
     _tmp143 = _tmp134*_tmp31
-    _tmp144 = _tmp132*_tmp30**3*(3*cosr2(_tmp25) + sinr1(_tmp25) - 3*sinr2(_tmp25))
+    _tmp144 = _tmp132*_tmp30**3*(-3*sinr2(_tmp25) + 3*cosr2(_tmp25) + sinr1(_tmp25))
     _tmp145 = -_tmp142*_tmp28 - _tmp143*_tmp36 - _tmp144*_tmp26
-    _tmp146 = _tmp142*_tmp36 - _tmp143*_tmp28 + _tmp144*_tmp35
+    _tmp146 = _tmp142*_tmp36 + _tmp144*_tmp35 - _tmp143*_tmp28
     _tmp147 = 0.02*_tmp39
     _tmp148 = 0.03*_tmp129
-    _tmp149 = -_tmp133*_tmp62 + _tmp135*_tmp136 - _tmp138*_tmp63
+    _tmp149 = _tmp135*_tmp136 - _tmp133*_tmp62 - _tmp138*_tmp63
     _tmp150 = _tmp78**3
-    _tmp151 = 3*cosr2(_tmp81) + sinr1(_tmp81) - 3*sinr2(_tmp81)
+    _tmp151 = -3*sinr2(_tmp81) + 3*cosr2(_tmp81) + sinr1(_tmp81)
     _tmp152 = 0.04419417382415922*_tmp150*_tmp151
     _tmp153 = 0.3535533905932738*_tmp78
     _tmp154 = 0.08838834764831845*_tmp79
     _tmp155 = _tmp154*_tmp84
     _tmp156 = _tmp152*_tmp83 + _tmp153*_tmp84 + _tmp154*_tmp88
-    _tmp157 = _tmp152*_tmp87 + _tmp153*_tmp88 - _tmp155 + _tmp156
-    _tmp158 = 0.04419417382415922*_tmp150*_tmp151*_tmp86*p_0 - _tmp155 - _tmp156 + 0.3535533905932738*_tmp78*_tmp82*_tmp86*p_0
+    _tmp157 = _tmp156 - _tmp155 + _tmp152*_tmp87 + _tmp153*_tmp88
+    _tmp158 = -_tmp155 - _tmp156 + 0.04419417382415922*_tmp150*_tmp151*_tmp86*p_0 + 0.3535533905932738*_tmp78*_tmp82*_tmp86*p_0
     _tmp159 = _tmp100 + _tmp19
     _tmp160 = numpy.cos(_tmp159)
     _tmp161 = numpy.sin(_tmp159)
     _tmp162 = 0.04*_tmp160 - 0.05*_tmp161
     _tmp163 = _tmp100*_tmp137
     _tmp164 = _tmp101*_tmp134
-    _tmp165 = _tmp100**3*_tmp132*(3*cosr2(_tmp96) + sinr1(_tmp96) - 3*sinr2(_tmp96))
+    _tmp165 = _tmp132*_tmp100**3*(-3*sinr2(_tmp96) + 3*cosr2(_tmp96) + sinr1(_tmp96))
     _tmp166 = _tmp116*_tmp165 + _tmp119*_tmp163 + _tmp164*_tmp99
-    _tmp167 = -_tmp119*_tmp164 + _tmp163*_tmp99 + _tmp165*_tmp98
+    _tmp167 = _tmp163*_tmp99 + _tmp165*_tmp98 - _tmp119*_tmp164
     _tmp168 = _tmp111*_tmp137
     _tmp169 = _tmp112*_tmp134
-    _tmp170 = _tmp111**3*_tmp132*(3*cosr2(_tmp107) + sinr1(_tmp107) - 3*sinr2(_tmp107))
+    _tmp170 = _tmp132*_tmp111**3*(-3*sinr2(_tmp107) + 3*cosr2(_tmp107) + sinr1(_tmp107))
     _tmp171 = _tmp109*_tmp170 + _tmp110*_tmp168 + _tmp123*_tmp169
-    _tmp172 = -_tmp110*_tmp169 + _tmp118*_tmp170 + _tmp123*_tmp168
+    _tmp172 = _tmp118*_tmp170 + _tmp123*_tmp168 - _tmp110*_tmp169
     return [
-        -_tmp0 + delta_6,
-        -_tmp1*_tmp6 - _tmp12*_tmp8 + _tmp13*_tmp15 + _tmp16*_tmp17 + _tmp18*_tmp20*_tmp24*p_0 - _tmp28*_tmp34 - _tmp36*_tmp38 - _tmp50 - _tmp57,
-        _tmp1*_tmp15 + _tmp12*_tmp16 + _tmp13*_tmp6 + _tmp17*_tmp8 - _tmp28*_tmp38 + _tmp34*_tmp36 - _tmp60 - _tmp61 + _tmp64,
-        delta_2 - delta_3 - delta_4 + delta_7,
-        -_tmp1*_tmp71 + 0.25*_tmp101*_tmp116*_tmp20*_tmp97*p_0 - _tmp104 + 0.25*_tmp108*_tmp112*_tmp117*_tmp118*p_0 - _tmp115 + _tmp13*_tmp90 + _tmp29*_tmp95 - _tmp37*_tmp89 - _tmp57 - _tmp66*_tmp70 - _tmp73*_tmp77 + _tmp91*_tmp92 + _tmp93*_tmp94,
-        _tmp1*_tmp90 - _tmp121 - _tmp122 + _tmp125 + _tmp13*_tmp71 + _tmp29*_tmp89 + _tmp37*_tmp95 + _tmp64 + _tmp66*_tmp92 + _tmp70*_tmp91 + _tmp73*_tmp94 + _tmp77*_tmp93,
+        delta_6 - _tmp0,
+        -_tmp50 - _tmp57 + _tmp13*_tmp15 + _tmp16*_tmp17 - _tmp1*_tmp6 - _tmp12*_tmp8 - _tmp28*_tmp34 - _tmp36*_tmp38 + _tmp18*_tmp20*_tmp24*p_0,
+        _tmp64 - _tmp60 - _tmp61 + _tmp1*_tmp15 + _tmp12*_tmp16 + _tmp13*_tmp6 + _tmp17*_tmp8 + _tmp34*_tmp36 - _tmp28*_tmp38,
+        delta_2 + delta_7 - delta_3 - delta_4,
+        -_tmp104 - _tmp115 - _tmp57 + _tmp13*_tmp90 + _tmp29*_tmp95 + _tmp91*_tmp92 + _tmp93*_tmp94 - _tmp1*_tmp71 - _tmp37*_tmp89 - _tmp66*_tmp70 - _tmp73*_tmp77 + 0.25*_tmp101*_tmp116*_tmp20*_tmp97*p_0 + 0.25*_tmp108*_tmp112*_tmp117*_tmp118*p_0,
+        _tmp125 + _tmp64 - _tmp121 - _tmp122 + _tmp1*_tmp90 + _tmp13*_tmp71 + _tmp29*_tmp89 + _tmp37*_tmp95 + _tmp66*_tmp92 + _tmp70*_tmp91 + _tmp73*_tmp94 + _tmp77*_tmp93,
         0,
         -1,
         0,
@@ -524,15 +524,15 @@ def _newton(theta, delta, params):
         1,
         0,
         0,
-        -_tmp128 - _tmp130 - _tmp131 + _tmp139 + 0.06*_tmp39 + _tmp60 + _tmp61,
+        _tmp139 + _tmp60 + _tmp61 - _tmp128 - _tmp130 - _tmp131 + 0.06*_tmp39,
         0,
         -_tmp128 - _tmp130 + _tmp140*_tmp20 - _tmp141*_tmp39,
         _tmp145*_tmp29 - _tmp146*_tmp37,
         0,
         0,
-        0.072*_tmp127 + _tmp147 - _tmp148 + _tmp149 + _tmp20*_tmp59 + 0.06*_tmp20 - _tmp50,
+        _tmp147 + _tmp149 - _tmp148 - _tmp50 + 0.06*_tmp20 + 0.072*_tmp127 + _tmp20*_tmp59,
         0,
-        0.072*_tmp127 - _tmp140*_tmp39 - _tmp141*_tmp20 - _tmp148,
+        -_tmp148 + 0.072*_tmp127 - _tmp140*_tmp39 - _tmp141*_tmp20,
         _tmp145*_tmp37 + _tmp146*_tmp29,
         0,
         1,
@@ -541,14 +541,14 @@ def _newton(theta, delta, params):
         0,
         0,
         1,
-        -0.04*_tmp106 - 0.07*_tmp117 - _tmp125 - _tmp157*_tmp37 + _tmp158*_tmp29,
+        -_tmp125 - 0.07*_tmp117 - 0.04*_tmp106 + _tmp158*_tmp29 - _tmp157*_tmp37,
         _tmp121 + _tmp122 + _tmp131 + _tmp139 + _tmp162 + 0.05*_tmp39,
         _tmp162 + _tmp166*_tmp20 - _tmp167*_tmp39,
         0,
         0,
-        -_tmp106*_tmp171 + _tmp117*_tmp172,
-        -0.07*_tmp106 - _tmp115 + _tmp117*_tmp124 + 0.04*_tmp117 + _tmp157*_tmp29 + _tmp158*_tmp37,
-        -_tmp104 + _tmp120*_tmp20 - _tmp147 + _tmp149 + 0.05*_tmp160 + 0.04*_tmp161 + 0.05*_tmp20,
+        _tmp117*_tmp172 - _tmp106*_tmp171,
+        -_tmp115 + 0.04*_tmp117 - 0.07*_tmp106 + _tmp117*_tmp124 + _tmp157*_tmp29 + _tmp158*_tmp37,
+        _tmp149 - _tmp104 - _tmp147 + 0.05*_tmp160 + 0.05*_tmp20 + 0.04*_tmp161 + _tmp120*_tmp20,
         0.05*_tmp160 + 0.04*_tmp161 - _tmp166*_tmp39 - _tmp167*_tmp20,
         0,
         0,
@@ -565,8 +565,8 @@ def _rigid_points(theta, params):
     _tmp3 = numpy.sin(_tmp2)
     _tmp4 = numpy.cos(_tmp2)
     return [
-        -0.02*_tmp0 + 0.03*_tmp1 - 0.07*_tmp3 + 0.04*_tmp4,
-        0.03*_tmp0 + 0.02*_tmp1 + 0.04*_tmp3 + 0.07*_tmp4,
+        0.03*_tmp1 + 0.04*_tmp4 - 0.07*_tmp3 - 0.02*_tmp0,
+        0.03*_tmp0 + 0.07*_tmp4 + 0.02*_tmp1 + 0.04*_tmp3,
     ]
 
 
@@ -590,7 +590,7 @@ def _loaded_q(theta, mu0, params):
     theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7 = theta
     _, mu0_2, mu0_3, _, mu0_5, mu0_6 = mu0
     p_0, = params
-    _tmp0 = theta_1 + 0.5*theta_2 + 0.7853981633974483
+    _tmp0 = 0.7853981633974483 + theta_1 + 0.5*theta_2
     _tmp1 = -mu0_5*numpy.cos(_tmp0) - mu0_6*numpy.sin(_tmp0)
     _tmp2 = numpy.less_equal(p_0, 0.008)
     _tmp3 = 250000*_DTYPE(numpy.where(_tmp2, 4.333333333333334e-12, 4.761904761904762e-12))/p_0
@@ -599,7 +599,7 @@ def _loaded_q(theta, mu0, params):
     _tmp6 = 12500000000*_DTYPE(numpy.where(_tmp2, 1.8777777777777777e-23, 2.267573696145125e-23))/_tmp5
     _tmp7 = 3.3333333333333335e-07*_tmp5*_DTYPE(numpy.where(_tmp2, 230769230769.23077, 210000000000))
     _tmp8 = 0.5*theta_3
-    _tmp9 = -(mu0_2 + mu0_5)*numpy.sin(_tmp8) + (mu0_3 + mu0_6)*numpy.cos(_tmp8)
+    _tmp9 = (mu0_3 + mu0_6)*numpy.cos(_tmp8) - (mu0_2 + mu0_5)*numpy.sin(_tmp8)
     _tmp10 = theta_3 + 0.5*theta_4
     _tmp11 = mu0_5*numpy.cos(_tmp10) + mu0_6*numpy.sin(_tmp10)
     _tmp12 = theta_3 + 0.5*theta_5
@@ -609,12 +609,12 @@ def _loaded_q(theta, mu0, params):
     _tmp16 = theta_1 + theta_2 + 0.5*theta_7
     _tmp17 = -mu0_5*numpy.cos(_tmp16) - mu0_6*numpy.sin(_tmp16)
     return [
-        -_tmp7*theta_2*(_tmp1**3*_tmp4 - _tmp1**2*_tmp6 + _tmp1*_tmp3 + 1),
-        -_tmp7*theta_3*(_tmp3*_tmp9 + _tmp4*_tmp9**3 - _tmp6*_tmp9**2 + 1),
-        -_tmp7*theta_4*(_tmp11**3*_tmp4 - _tmp11**2*_tmp6 + _tmp11*_tmp3 + 1),
-        -_tmp7*theta_5*(_tmp13**3*_tmp4 - _tmp13**2*_tmp6 + _tmp13*_tmp3 + 1),
-        -_tmp7*theta_6*(_tmp15**3*_tmp4 - _tmp15**2*_tmp6 + _tmp15*_tmp3 + 1),
-        -_tmp7*theta_7*(_tmp17**3*_tmp4 - _tmp17**2*_tmp6 + _tmp17*_tmp3 + 1),
+        -_tmp7*theta_2*(1 + _tmp1*_tmp3 + _tmp4*_tmp1**3 - _tmp6*_tmp1**2),
+        -_tmp7*theta_3*(1 + _tmp3*_tmp9 + _tmp4*_tmp9**3 - _tmp6*_tmp9**2),
+        -_tmp7*theta_4*(1 + _tmp11*_tmp3 + _tmp4*_tmp11**3 - _tmp6*_tmp11**2),
+        -_tmp7*theta_5*(1 + _tmp13*_tmp3 + _tmp4*_tmp13**3 - _tmp6*_tmp13**2),
+        -_tmp7*theta_6*(1 + _tmp15*_tmp3 + _tmp4*_tmp15**3 - _tmp6*_tmp15**2),
+        -_tmp7*theta_7*(1 + _tmp17*_tmp3 + _tmp4*_tmp17**3 - _tmp6*_tmp17**2),
     ]
 
 
@@ -631,7 +631,7 @@ def _loaded_compliance(theta, mu, params):
     _tmp5 = mu_3 + mu_6
     _tmp6 = -_tmp5
     _tmp7 = -_tmp1*_tmp6 - _tmp2*_tmp4
-    _tmp8 = -_tmp1*_tmp4 + _tmp2*_tmp6
+    _tmp8 = _tmp2*_tmp6 - _tmp1*_tmp4
     _tmp9 = numpy.less_equal(p_0, 0.008)
     _tmp10 = _DTYPE(numpy.where(_tmp9, 4.333333333333334e-12, 4.761904761904762e-12))
     _tmp11 = _tmp10/p_0
@@ -643,13 +643,13 @@ def _loaded_compliance(theta, mu, params):
     _tmp17 = _DTYPE(numpy.where(_tmp9, 1.8777777777777777e-23, 2.267573696145125e-23))
     _tmp18 = _tmp16*_tmp17
     _tmp19 = _tmp15*_tmp18
-    _tmp20 = -25000*_tmp12 - 2306547619047619.0*_tmp14 + 7589285714.285714*_tmp19 + 0.08333333333333333
+    _tmp20 = 0.08333333333333333 - 25000*_tmp12 + 7589285714.285714*_tmp19 - 2306547619047619.0*_tmp14
     _tmp21 = 3000000*_tmp10
     _tmp22 = 9000000000000*_tmp18
-    _tmp23 = p_0*(_tmp22*_tmp7**2*(-2529.7619047619046*_tmp12 - 467397186147186.1*_tmp14 + 1153273809.5238094*_tmp19 + 0.004166666666666667) + theta_1**2*(-4166.666666666667*_tmp12 - 44642857142857.14*_tmp14 + 446428571.4285714*_tmp15*_tmp16*_tmp17))
+    _tmp23 = p_0*(theta_1**2*(-44642857142857.14*_tmp14 - 4166.666666666667*_tmp12 + 446428571.4285714*_tmp15*_tmp16*_tmp17) + _tmp22*_tmp7**2*(0.004166666666666667 + 1153273809.5238094*_tmp19 - 2529.7619047619046*_tmp12 - 467397186147186.1*_tmp14))
     _tmp24 = 0.5*theta_2
     _tmp25 = numpy.sin(_tmp24)
-    _tmp26 = _tmp24 + theta_1 + 0.7853981633974483
+    _tmp26 = 0.7853981633974483 + _tmp24 + theta_1
     _tmp27 = numpy.sin(_tmp26)
     _tmp28 = numpy.cos(_tmp26)
     _tmp29 = _tmp27*mu_5 - _tmp28*mu_6
@@ -658,62 +658,62 @@ def _loaded_compliance(theta, mu, params):
     _tmp32 = _tmp13*_tmp30**3
     _tmp33 = _tmp30**2
     _tmp34 = _tmp18*_tmp33
-    _tmp35 = -25000*_tmp31 - 2306547619047619.0*_tmp32 + 7589285714.285714*_tmp34 + 0.08333333333333333
+    _tmp35 = 0.08333333333333333 - 25000*_tmp31 + 7589285714.285714*_tmp34 - 2306547619047619.0*_tmp32
     _tmp36 = numpy.cos(_tmp24)
-    _tmp37 = p_0*(_tmp22*_tmp29**2*(-2529.7619047619046*_tmp31 - 467397186147186.1*_tmp32 + 1153273809.5238094*_tmp34 + 0.004166666666666667) + theta_2**2*(446428571.4285714*_tmp16*_tmp17*_tmp33 - 4166.666666666667*_tmp31 - 44642857142857.14*_tmp32))
+    _tmp37 = p_0*(theta_2**2*(-44642857142857.14*_tmp32 - 4166.666666666667*_tmp31 + 446428571.4285714*_tmp16*_tmp17*_tmp33) + _tmp22*_tmp29**2*(0.004166666666666667 + 1153273809.5238094*_tmp34 - 2529.7619047619046*_tmp31 - 467397186147186.1*_tmp32))
     _tmp38 = 0.5*theta_3
     _tmp39 = numpy.sin(_tmp38)
     _tmp40 = numpy.cos(_tmp38)
     _tmp41 = -_tmp3*_tmp40 - _tmp39*_tmp5
-    _tmp42 = -_tmp3*_tmp39 + _tmp40*_tmp5
+    _tmp42 = _tmp40*_tmp5 - _tmp3*_tmp39
     _tmp43 = _tmp11*_tmp42
     _tmp44 = _tmp13*_tmp42**3
     _tmp45 = _tmp42**2
     _tmp46 = _tmp18*_tmp45
-    _tmp47 = -25000*_tmp43 - 2306547619047619.0*_tmp44 + 7589285714.285714*_tmp46 + 0.08333333333333333
-    _tmp48 = p_0*(_tmp22*_tmp41**2*(-2529.7619047619046*_tmp43 - 467397186147186.1*_tmp44 + 1153273809.5238094*_tmp46 + 0.004166666666666667) + theta_3**2*(446428571.4285714*_tmp16*_tmp17*_tmp45 - 4166.666666666667*_tmp43 - 44642857142857.14*_tmp44))
+    _tmp47 = 0.08333333333333333 - 25000*_tmp43 + 7589285714.285714*_tmp46 - 2306547619047619.0*_tmp44
+    _tmp48 = p_0*(theta_3**2*(-44642857142857.14*_tmp44 - 4166.666666666667*_tmp43 + 446428571.4285714*_tmp16*_tmp17*_tmp45) + _tmp22*_tmp41**2*(0.004166666666666667 + 1153273809.5238094*_tmp46 - 2529.7619047619046*_tmp43 - 467397186147186.1*_tmp44))
     _tmp49 = 0.5*theta_4
     _tmp50 = numpy.sin(_tmp49)
     _tmp51 = _tmp49 + theta_3
     _tmp52 = numpy.sin(_tmp51)
     _tmp53 = numpy.cos(_tmp51)
-    _tmp54 = -_tmp52*mu_5 + _tmp53*mu_6
+    _tmp54 = _tmp53*mu_6 - _tmp52*mu_5
     _tmp55 = _tmp52*mu_6 + _tmp53*mu_5
     _tmp56 = _tmp11*_tmp55
     _tmp57 = _tmp13*_tmp55**3
     _tmp58 = _tmp55**2
     _tmp59 = _tmp18*_tmp58
-    _tmp60 = -25000*_tmp56 - 2306547619047619.0*_tmp57 + 7589285714.285714*_tmp59 + 0.08333333333333333
+    _tmp60 = 0.08333333333333333 - 25000*_tmp56 + 7589285714.285714*_tmp59 - 2306547619047619.0*_tmp57
     _tmp61 = numpy.cos(_tmp49)
-    _tmp62 = p_0*(_tmp22*_tmp54**2*(-2529.7619047619046*_tmp56 - 467397186147186.1*_tmp57 + 1153273809.5238094*_tmp59 + 0.004166666666666667) + theta_4**2*(446428571.4285714*_tmp16*_tmp17*_tmp58 - 4166.666666666667*_tmp56 - 44642857142857.14*_tmp57))
+    _tmp62 = p_0*(theta_4**2*(-44642857142857.14*_tmp57 - 4166.666666666667*_tmp56 + 446428571.4285714*_tmp16*_tmp17*_tmp58) + _tmp22*_tmp54**2*(0.004166666666666667 + 1153273809.5238094*_tmp59 - 2529.7619047619046*_tmp56 - 467397186147186.1*_tmp57))
     _tmp63 = 0.5*theta_5
     _tmp64 = numpy.sin(_tmp63)
     _tmp65 = _tmp63 + theta_3
     _tmp66 = numpy.sin(_tmp65)
     _tmp67 = numpy.cos(_tmp65)
-    _tmp68 = -_tmp66*mu_2 + _tmp67*mu_3
+    _tmp68 = _tmp67*mu_3 - _tmp66*mu_2
     _tmp69 = _tmp66*mu_3 + _tmp67*mu_2
     _tmp70 = _tmp11*_tmp69
     _tmp71 = _tmp13*_tmp69**3
     _tmp72 = _tmp69**2
     _tmp73 = _tmp18*_tmp72
-    _tmp74 = -25000*_tmp70 - 2306547619047619.0*_tmp71 + 7589285714.285714*_tmp73 + 0.08333333333333333
+    _tmp74 = 0.08333333333333333 - 25000*_tmp70 + 7589285714.285714*_tmp73 - 2306547619047619.0*_tmp71
     _tmp75 = numpy.cos(_tmp63)
-    _tmp76 = p_0*(_tmp22*_tmp68**2*(-2529.7619047619046*_tmp70 - 467397186147186.1*_tmp71 + 1153273809.5238094*_tmp73 + 0.004166666666666667) + theta_5**2*(446428571.4285714*_tmp16*_tmp17*_tmp72 - 4166.666666666667*_tmp70 - 44642857142857.14*_tmp71))
+    _tmp76 = p_0*(theta_5**2*(-44642857142857.14*_tmp71 - 4166.666666666667*_tmp70 + 446428571.4285714*_tmp16*_tmp17*_tmp72) + _tmp22*_tmp68**2*(0.004166666666666667 + 1153273809.5238094*_tmp73 - 2529.7619047619046*_tmp70 - 467397186147186.1*_tmp71))
     _tmp77 = 0.5*theta_6
     _tmp78 = numpy.sin(_tmp77)
     _tmp79 = _tmp77 + theta_1
     _tmp80 = numpy.cos(_tmp79)
     _tmp81 = numpy.sin(_tmp79)
     _tmp82 = _tmp80*mu_2 + _tmp81*mu_3
-    _tmp83 = -_tmp80*mu_3 + _tmp81*mu_2
+    _tmp83 = _tmp81*mu_2 - _tmp80*mu_3
     _tmp84 = _tmp11*_tmp83
     _tmp85 = _tmp13*_tmp83**3
     _tmp86 = _tmp83**2
     _tmp87 = _tmp18*_tmp86
-    _tmp88 = -25000*_tmp84 - 2306547619047619.0*_tmp85 + 7589285714.285714*_tmp87 + 0.08333333333333333
+    _tmp88 = 0.08333333333333333 - 25000*_tmp84 + 7589285714.285714*_tmp87 - 2306547619047619.0*_tmp85
     _tmp89 = numpy.cos(_tmp77)
-    _tmp90 = p_0*(_tmp22*_tmp82**2*(-2529.7619047619046*_tmp84 - 467397186147186.1*_tmp85 + 1153273809.5238094*_tmp87 + 0.004166666666666667) + theta_6**2*(446428571.4285714*_tmp16*_tmp17*_tmp86 - 4166.666666666667*_tmp84 - 44642857142857.14*_tmp85))
+    _tmp90 = p_0*(theta_6**2*(-44642857142857.14*_tmp85 - 4166.666666666667*_tmp84 + 446428571.4285714*_tmp16*_tmp17*_tmp86) + _tmp22*_tmp82**2*(0.004166666666666667 + 1153273809.5238094*_tmp87 - 2529.7619047619046*_tmp84 - 467397186147186.1*_tmp85))
     _tmp91 = 0.5*theta_7
     _tmp92 = numpy.sin(_tmp91)
     _tmp93 = _tmp91 + theta_1 + theta_2
@@ -725,24 +725,24 @@ def _loaded_compliance(theta, mu, params):
     _tmp99 = _tmp13*_tmp97**3
     _tmp100 = _tmp97**2
     _tmp101 = _tmp100*_tmp18
-    _tmp102 = 7589285714.285714*_tmp101 - 25000*_tmp98 - 2306547619047619.0*_tmp99 + 0.08333333333333333
+    _tmp102 = 0.08333333333333333 - 25000*_tmp98 + 7589285714.285714*_tmp101 - 2306547619047619.0*_tmp99
     _tmp103 = numpy.cos(_tmp91)
-    _tmp104 = p_0*(_tmp22*_tmp96**2*(1153273809.5238094*_tmp101 - 2529.7619047619046*_tmp98 - 467397186147186.1*_tmp99 + 0.004166666666666667) + theta_7**2*(446428571.4285714*_tmp100*_tmp16*_tmp17 - 4166.666666666667*_tmp98 - 44642857142857.14*_tmp99))
+    _tmp104 = p_0*(theta_7**2*(-44642857142857.14*_tmp99 - 4166.666666666667*_tmp98 + 446428571.4285714*_tmp100*_tmp16*_tmp17) + _tmp22*_tmp96**2*(0.004166666666666667 + 1153273809.5238094*_tmp101 - 2529.7619047619046*_tmp98 - 467397186147186.1*_tmp99))
     return [
-        -_tmp1*_tmp20*_tmp21*_tmp7 - _tmp2*_tmp23,
+        -_tmp2*_tmp23 - _tmp1*_tmp20*_tmp21*_tmp7,
         -_tmp1*_tmp23 + 3000000*_tmp10*_tmp2*_tmp20*_tmp7,
-        -_tmp21*_tmp25*_tmp29*_tmp35 - _tmp36*_tmp37,
-        3000000*_tmp10*_tmp29*_tmp35*_tmp36 - _tmp25*_tmp37,
-        -_tmp21*_tmp39*_tmp41*_tmp47 - _tmp40*_tmp48,
-        3000000*_tmp10*_tmp40*_tmp41*_tmp47 - _tmp39*_tmp48,
-        -_tmp21*_tmp50*_tmp54*_tmp60 - _tmp61*_tmp62,
-        3000000*_tmp10*_tmp54*_tmp60*_tmp61 - _tmp50*_tmp62,
-        -_tmp21*_tmp64*_tmp68*_tmp74 - _tmp75*_tmp76,
-        3000000*_tmp10*_tmp68*_tmp74*_tmp75 - _tmp64*_tmp76,
-        -_tmp21*_tmp78*_tmp82*_tmp88 - _tmp89*_tmp90,
-        3000000*_tmp10*_tmp82*_tmp88*_tmp89 - _tmp78*_tmp90,
-        -_tmp102*_tmp21*_tmp92*_tmp96 - _tmp103*_tmp104,
-        3000000*_tmp10*_tmp102*_tmp103*_tmp96 - _tmp104*_tmp92,
+        -_tmp36*_tmp37 - _tmp21*_tmp25*_tmp29*_tmp35,
+        -_tmp25*_tmp37 + 3000000*_tmp10*_tmp29*_tmp35*_tmp36,
+        -_tmp40*_tmp48 - _tmp21*_tmp39*_tmp41*_tmp47,
+        -_tmp39*_tmp48 + 3000000*_tmp10*_tmp40*_tmp41*_tmp47,
+        -_tmp61*_tmp62 - _tmp21*_tmp50*_tmp54*_tmp60,
+        -_tmp50*_tmp62 + 3000000*_tmp10*_tmp54*_tmp60*_tmp61,
+        -_tmp75*_tmp76 - _tmp21*_tmp64*_tmp68*_tmp74,
+        -_tmp64*_tmp76 + 3000000*_tmp10*_tmp68*_tmp74*_tmp75,
+        -_tmp89*_tmp90 - _tmp21*_tmp78*_tmp82*_tmp88,
+        -_tmp78*_tmp90 + 3000000*_tmp10*_tmp82*_tmp88*_tmp89,
+        -_tmp103*_tmp104 - _tmp102*_tmp21*_tmp92*_tmp96,
+        -_tmp104*_tmp92 + 3000000*_tmp10*_tmp102*_tmp103*_tmp96,
     ]
 
 
@@ -756,7 +756,7 @@ def _loaded_linear(theta, params):
     _tmp3 = theta_3 + theta_5
     _tmp4 = numpy.sin(_tmp3)
     _tmp5 = numpy.cos(_tmp3)
-    _tmp6 = 0.072*_tmp4 + 0.03*_tmp5
+    _tmp6 = 0.03*_tmp5 + 0.072*_tmp4
     _tmp7 = 0.02*_tmp2
     _tmp8 = 0.03*_tmp4
     _tmp9 = theta_1 + theta_2
@@ -766,41 +766,41 @@ def _loaded_linear(theta, params):
     _tmp13 = numpy.sin(_tmp12)
     _tmp14 = 0.05*_tmp13
     _tmp15 = numpy.cos(_tmp12)
-    _tmp16 = 0.04*_tmp13 + 0.05*_tmp15
+    _tmp16 = 0.05*_tmp15 + 0.04*_tmp13
     _tmp17 = 0.5*theta_5
     _tmp18 = 0.25*p_0
     _tmp19 = _tmp18*theta_5**2*arck(_tmp17)
-    _tmp20 = _tmp19*numpy.cos(_tmp17) + compliance_x_5
+    _tmp20 = compliance_x_5 + _tmp19*numpy.cos(_tmp17)
     _tmp21 = numpy.sin(theta_1)
     _tmp22 = 0.5*theta_6
     _tmp23 = _tmp18*theta_6**2*arck(_tmp22)
-    _tmp24 = _tmp23*numpy.cos(_tmp22) + compliance_x_6
-    _tmp25 = _tmp19*numpy.sin(_tmp17) + compliance_y_5
+    _tmp24 = compliance_x_6 + _tmp23*numpy.cos(_tmp22)
+    _tmp25 = compliance_y_5 + _tmp19*numpy.sin(_tmp17)
     _tmp26 = numpy.cos(theta_1)
-    _tmp27 = -_tmp23*numpy.sin(_tmp22) - compliance_y_6
+    _tmp27 = -compliance_y_6 - _tmp23*numpy.sin(_tmp22)
     _tmp28 = 0.5*theta_1
     _tmp29 = _tmp18*theta_1**2*arck(_tmp28)
     _tmp30 = theta_3**2
     _tmp31 = 0.5*theta_3
     _tmp32 = arck(_tmp31)
-    _tmp33 = _tmp29*numpy.sin(_tmp28) - 0.25*_tmp30*_tmp32*p_0*numpy.sin(_tmp31) + compliance_y_1 - compliance_y_3
-    _tmp34 = -_tmp18*_tmp30*_tmp32*numpy.cos(_tmp31) + _tmp29*numpy.cos(_tmp28) + compliance_x_1 - compliance_x_3
+    _tmp33 = compliance_y_1 - compliance_y_3 + _tmp29*numpy.sin(_tmp28) - 0.25*_tmp30*_tmp32*p_0*numpy.sin(_tmp31)
+    _tmp34 = compliance_x_1 - compliance_x_3 + _tmp29*numpy.cos(_tmp28) - _tmp18*_tmp30*_tmp32*numpy.cos(_tmp31)
     _tmp35 = 0.5*theta_4
     _tmp36 = _tmp18*theta_4**2*arck(_tmp35)
-    _tmp37 = _tmp36*numpy.cos(_tmp35) + compliance_x_4
+    _tmp37 = compliance_x_4 + _tmp36*numpy.cos(_tmp35)
     _tmp38 = 0.5*theta_7
     _tmp39 = _tmp18*theta_7**2*arck(_tmp38)
-    _tmp40 = _tmp39*numpy.sin(_tmp38) + compliance_y_7
+    _tmp40 = compliance_y_7 + _tmp39*numpy.sin(_tmp38)
     _tmp41 = 0.5*theta_2
     _tmp42 = numpy.cos(_tmp41)
     _tmp43 = theta_2**2
     _tmp44 = arck(_tmp41)
     _tmp45 = 0.1767766952966369*_tmp43*_tmp44*p_0
-    _tmp46 = _tmp45*numpy.sin(_tmp41) + 0.7071067811865476*compliance_y_2
-    _tmp47 = _tmp42*_tmp45 + _tmp46 + 0.7071067811865476*compliance_x_2
-    _tmp48 = _tmp39*numpy.cos(_tmp38) + compliance_x_7
-    _tmp49 = _tmp36*numpy.sin(_tmp35) + compliance_y_4
-    _tmp50 = 0.1767766952966369*_tmp42*_tmp43*_tmp44*p_0 - _tmp46 + 0.7071067811865476*compliance_x_2
+    _tmp46 = 0.7071067811865476*compliance_y_2 + _tmp45*numpy.sin(_tmp41)
+    _tmp47 = _tmp46 + 0.7071067811865476*compliance_x_2 + _tmp42*_tmp45
+    _tmp48 = compliance_x_7 + _tmp39*numpy.cos(_tmp38)
+    _tmp49 = compliance_y_4 + _tmp36*numpy.sin(_tmp35)
+    _tmp50 = -_tmp46 + 0.7071067811865476*compliance_x_2 + 0.1767766952966369*_tmp42*_tmp43*_tmp44*p_0
     return [
         0,
         -1,
@@ -809,15 +809,15 @@ def _loaded_linear(theta, params):
         1,
         0,
         0,
-        -_tmp1 + 0.06*_tmp2 - _tmp6,
+        -_tmp1 - _tmp6 + 0.06*_tmp2,
         0,
         -_tmp6,
         0,
         0,
         0,
-        0.06*_tmp0 + 0.072*_tmp5 + _tmp7 - _tmp8,
+        _tmp7 - _tmp8 + 0.06*_tmp0 + 0.072*_tmp5,
         0,
-        0.072*_tmp5 - _tmp8,
+        -_tmp8 + 0.072*_tmp5,
         0,
         0,
         1,
@@ -826,24 +826,24 @@ def _loaded_linear(theta, params):
         0,
         0,
         1,
-        -0.04*_tmp10 - 0.07*_tmp11,
-        _tmp1 - _tmp14 + 0.04*_tmp15 + 0.05*_tmp2,
+        -0.07*_tmp11 - 0.04*_tmp10,
+        _tmp1 - _tmp14 + 0.05*_tmp2 + 0.04*_tmp15,
         -_tmp14 + 0.04*_tmp15,
         0,
         0,
         0,
-        -0.07*_tmp10 + 0.04*_tmp11,
-        0.05*_tmp0 + _tmp16 - _tmp7,
+        0.04*_tmp11 - 0.07*_tmp10,
+        _tmp16 - _tmp7 + 0.05*_tmp0,
         _tmp16,
         0,
         0,
         0,
         0,
-        _tmp0*_tmp25 - _tmp2*_tmp20 - _tmp21*_tmp24 + _tmp26*_tmp27 - _tmp33,
-        -_tmp0*_tmp20 - _tmp2*_tmp25 + _tmp21*_tmp27 + _tmp24*_tmp26 + _tmp34,
+        -_tmp33 + _tmp0*_tmp25 + _tmp26*_tmp27 - _tmp2*_tmp20 - _tmp21*_tmp24,
+        _tmp34 + _tmp21*_tmp27 + _tmp24*_tmp26 - _tmp0*_tmp20 - _tmp2*_tmp25,
         0,
-        _tmp0*_tmp49 - _tmp10*_tmp40 + _tmp11*_tmp48 - _tmp2*_tmp37 - _tmp21*_tmp47 + _tmp26*_tmp50 - _tmp33,
-        -_tmp0*_tmp37 + _tmp10*_tmp48 + _tmp11*_tmp40 - _tmp2*_tmp49 + _tmp21*_tmp50 + _tmp26*_tmp47 + _tmp34,
+        -_tmp33 + _tmp0*_tmp49 + _tmp11*_tmp48 + _tmp26*_tmp50 - _tmp10*_tmp40 - _tmp2*_tmp37 - _tmp21*_tmp47,
+        _tmp34 + _tmp10*_tmp48 + _tmp11*_tmp40 + _tmp21*_tmp50 + _tmp26*_tmp47 - _tmp0*_tmp37 - _tmp2*_tmp49,
     ]
 
 
@@ -861,18 +861,18 @@ def _loaded_newton(theta, delta, params):
     _tmp6 = 0.25*p_0
     _tmp7 = delta_5 + theta_5
     _tmp8 = arck(_tmp4)
-    _tmp9 = _tmp7**2*_tmp8
+    _tmp9 = _tmp8*_tmp7**2
     _tmp10 = _tmp6*_tmp9
-    _tmp11 = _tmp10*_tmp5 + compliance_x_5
+    _tmp11 = compliance_x_5 + _tmp10*_tmp5
     _tmp12 = _tmp11*_tmp2
     _tmp13 = numpy.sin(theta_1)
     _tmp14 = 0.5*delta_6 + 0.5*theta_6
     _tmp15 = numpy.cos(_tmp14)
     _tmp16 = delta_6 + theta_6
     _tmp17 = arck(_tmp14)
-    _tmp18 = _tmp16**2*_tmp17
+    _tmp18 = _tmp17*_tmp16**2
     _tmp19 = _tmp18*_tmp6
-    _tmp20 = _tmp15*_tmp19 + compliance_x_6
+    _tmp20 = compliance_x_6 + _tmp15*_tmp19
     _tmp21 = numpy.sin(theta_3)
     _tmp22 = numpy.sin(delta_3)
     _tmp23 = 0.02*_tmp22
@@ -886,13 +886,13 @@ def _loaded_newton(theta, delta, params):
     _tmp31 = 0.072*_tmp29 - 0.06*_tmp30
     _tmp32 = numpy.sin(_tmp1)
     _tmp33 = numpy.sin(_tmp4)
-    _tmp34 = _tmp10*_tmp33 + compliance_y_5
+    _tmp34 = compliance_y_5 + _tmp10*_tmp33
     _tmp35 = numpy.cos(theta_1)
     _tmp36 = numpy.sin(_tmp14)
-    _tmp37 = -_tmp19*_tmp36 - compliance_y_6
+    _tmp37 = -compliance_y_6 - _tmp19*_tmp36
     _tmp38 = numpy.cos(theta_3)
     _tmp39 = 0.04*_tmp25
-    _tmp40 = 0.06*_tmp22 - _tmp39
+    _tmp40 = -_tmp39 + 0.06*_tmp22
     _tmp41 = numpy.cos(_tmp27)
     _tmp42 = -0.03*_tmp29 - 0.144*_tmp30
     _tmp43 = 0.5*theta_1
@@ -901,20 +901,20 @@ def _loaded_newton(theta, delta, params):
     _tmp46 = _tmp24 + 0.5*theta_3
     _tmp47 = numpy.sin(_tmp46)
     _tmp48 = arck(_tmp46)
-    _tmp49 = _tmp44*numpy.sin(_tmp43) - 0.25*_tmp45*_tmp47*_tmp48*p_0 + compliance_y_1 - compliance_y_3
+    _tmp49 = compliance_y_1 - compliance_y_3 + _tmp44*numpy.sin(_tmp43) - 0.25*_tmp45*_tmp47*_tmp48*p_0
     _tmp50 = _tmp11*_tmp32
     _tmp51 = _tmp2*_tmp34
     _tmp52 = numpy.cos(_tmp46)
     _tmp53 = _tmp45*_tmp48
-    _tmp54 = _tmp44*numpy.cos(_tmp43) - _tmp52*_tmp53*_tmp6 + compliance_x_1 - compliance_x_3
+    _tmp54 = compliance_x_1 - compliance_x_3 + _tmp44*numpy.cos(_tmp43) - _tmp52*_tmp53*_tmp6
     _tmp55 = 0.5*delta_4
     _tmp56 = _tmp55 + 0.5*theta_4
     _tmp57 = numpy.cos(_tmp56)
     _tmp58 = delta_4 + theta_4
     _tmp59 = arck(_tmp56)
-    _tmp60 = _tmp58**2*_tmp59
+    _tmp60 = _tmp59*_tmp58**2
     _tmp61 = _tmp6*_tmp60
-    _tmp62 = _tmp57*_tmp61 + compliance_x_4
+    _tmp62 = compliance_x_4 + _tmp57*_tmp61
     _tmp63 = _tmp2*_tmp62
     _tmp64 = theta_1 + theta_2
     _tmp65 = _tmp64 + delta_2
@@ -926,7 +926,7 @@ def _loaded_newton(theta, delta, params):
     _tmp71 = arck(_tmp70)
     _tmp72 = numpy.sin(_tmp70)
     _tmp73 = _tmp71*_tmp72
-    _tmp74 = _tmp69*_tmp73 + compliance_y_7
+    _tmp74 = compliance_y_7 + _tmp69*_tmp73
     _tmp75 = _tmp66*_tmp74
     _tmp76 = theta_3 + theta_4
     _tmp77 = numpy.sin(_tmp76)
@@ -949,20 +949,20 @@ def _loaded_newton(theta, delta, params):
     _tmp94 = 0.1767766952966369*_tmp93
     _tmp95 = p_0*numpy.sin(_tmp87)
     _tmp96 = _tmp88*_tmp95
-    _tmp97 = _tmp94*_tmp96 + 0.7071067811865476*compliance_y_2
-    _tmp98 = _tmp91*_tmp94 + _tmp97 + 0.7071067811865476*compliance_x_2
+    _tmp97 = 0.7071067811865476*compliance_y_2 + _tmp94*_tmp96
+    _tmp98 = _tmp97 + 0.7071067811865476*compliance_x_2 + _tmp91*_tmp94
     _tmp99 = numpy.cos(_tmp65)
     _tmp100 = numpy.cos(_tmp70)
     _tmp101 = _tmp100*_tmp71
-    _tmp102 = _tmp101*_tmp69 + compliance_x_7
+    _tmp102 = compliance_x_7 + _tmp101*_tmp69
     _tmp103 = numpy.sin(_tmp56)
-    _tmp104 = _tmp103*_tmp61 + compliance_y_4
-    _tmp105 = 0.05*_tmp22 + _tmp39
+    _tmp104 = compliance_y_4 + _tmp103*_tmp61
+    _tmp105 = _tmp39 + 0.05*_tmp22
     _tmp106 = numpy.cos(_tmp76)
     _tmp107 = 0.04*_tmp78 - 0.1*_tmp79
     _tmp108 = numpy.cos(_tmp64)
     _tmp109 = -0.07*_tmp83 - 0.08*_tmp85
-    _tmp110 = 0.1767766952966369*_tmp88*_tmp89*_tmp93*p_0 - _tmp97 + 0.7071067811865476*compliance_x_2
+    _tmp110 = -_tmp97 + 0.7071067811865476*compliance_x_2 + 0.1767766952966369*_tmp88*_tmp89*_tmp93*p_0
     _tmp111 = _tmp32*_tmp62
     _tmp112 = _tmp104*_tmp2
     _tmp113 = _tmp102*_tmp66 + _tmp74*_tmp99
@@ -973,37 +973,37 @@ def _loaded_newton(theta, delta, params):
     _tmp118 = 0.072*_tmp117
     _tmp119 = 0.02*_tmp32
     _tmp120 = _tmp47*p_0
-    _tmp121 = 0.0625*_tmp1**3*(3*cosr2(_tmp46) + sinr1(_tmp46) - 3*sinr2(_tmp46))
+    _tmp121 = 0.0625*_tmp1**3*(-3*sinr2(_tmp46) + 3*cosr2(_tmp46) + sinr1(_tmp46))
     _tmp122 = 0.125*p_0
     _tmp123 = 0.5*_tmp1*_tmp48
     _tmp124 = _tmp120*_tmp121 + _tmp120*_tmp123 + _tmp122*_tmp52*_tmp53
     _tmp125 = 0.5*_tmp7*_tmp8
     _tmp126 = _tmp5*p_0
     _tmp127 = _tmp122*_tmp9
-    _tmp128 = 0.0625*_tmp7**3*(3*cosr2(_tmp4) + sinr1(_tmp4) - 3*sinr2(_tmp4))
+    _tmp128 = 0.0625*_tmp7**3*(-3*sinr2(_tmp4) + 3*cosr2(_tmp4) + sinr1(_tmp4))
     _tmp129 = _tmp125*_tmp126 + _tmp126*_tmp128 - _tmp127*_tmp33
     _tmp130 = _tmp33*p_0
     _tmp131 = _tmp125*_tmp130 + _tmp127*_tmp5 + _tmp128*_tmp130
     _tmp132 = _tmp36*p_0
     _tmp133 = 0.5*_tmp16*_tmp17
     _tmp134 = _tmp122*_tmp18
-    _tmp135 = 0.0625*_tmp16**3*(3*cosr2(_tmp14) + sinr1(_tmp14) - 3*sinr2(_tmp14))
+    _tmp135 = 0.0625*_tmp16**3*(-3*sinr2(_tmp14) + 3*cosr2(_tmp14) + sinr1(_tmp14))
     _tmp136 = -_tmp132*_tmp133 - _tmp132*_tmp135 - _tmp134*_tmp15
     _tmp137 = _tmp15*p_0
-    _tmp138 = _tmp133*_tmp137 - _tmp134*_tmp36 + _tmp135*_tmp137
+    _tmp138 = _tmp133*_tmp137 + _tmp135*_tmp137 - _tmp134*_tmp36
     _tmp139 = 0.02*_tmp2
     _tmp140 = 0.03*_tmp117
     _tmp141 = _tmp52*p_0
-    _tmp142 = 0.125*_tmp120*_tmp53 - _tmp121*_tmp141 - _tmp123*_tmp141
+    _tmp142 = -_tmp121*_tmp141 - _tmp123*_tmp141 + 0.125*_tmp120*_tmp53
     _tmp143 = _tmp92**3
-    _tmp144 = 3*cosr2(_tmp87) + sinr1(_tmp87) - 3*sinr2(_tmp87)
+    _tmp144 = -3*sinr2(_tmp87) + 3*cosr2(_tmp87) + sinr1(_tmp87)
     _tmp145 = 0.04419417382415922*_tmp143*_tmp144
     _tmp146 = 0.3535533905932738*_tmp92
     _tmp147 = 0.08838834764831845*_tmp93
     _tmp148 = _tmp147*_tmp96
     _tmp149 = _tmp145*_tmp95 + _tmp146*_tmp96 + _tmp147*_tmp91
-    _tmp150 = _tmp145*_tmp90 + _tmp146*_tmp91 - _tmp148 + _tmp149
-    _tmp151 = 0.04419417382415922*_tmp143*_tmp144*_tmp89*p_0 - _tmp148 - _tmp149 + 0.3535533905932738*_tmp88*_tmp89*_tmp92*p_0
+    _tmp150 = _tmp149 - _tmp148 + _tmp145*_tmp90 + _tmp146*_tmp91
+    _tmp151 = -_tmp148 - _tmp149 + 0.04419417382415922*_tmp143*_tmp144*_tmp89*p_0 + 0.3535533905932738*_tmp88*_tmp89*_tmp92*p_0
     _tmp152 = _tmp1 + _tmp58
     _tmp153 = numpy.cos(_tmp152)
     _tmp154 = numpy.sin(_tmp152)
@@ -1011,22 +1011,22 @@ def _loaded_newton(theta, delta, params):
     _tmp156 = _tmp103*p_0
     _tmp157 = 0.5*_tmp58*_tmp59
     _tmp158 = _tmp122*_tmp60
-    _tmp159 = 0.0625*_tmp58**3*(3*cosr2(_tmp56) + sinr1(_tmp56) - 3*sinr2(_tmp56))
+    _tmp159 = 0.0625*_tmp58**3*(-3*sinr2(_tmp56) + 3*cosr2(_tmp56) + sinr1(_tmp56))
     _tmp160 = _tmp156*_tmp157 + _tmp156*_tmp159 + _tmp158*_tmp57
     _tmp161 = _tmp57*p_0
-    _tmp162 = -_tmp103*_tmp158 + _tmp157*_tmp161 + _tmp159*_tmp161
+    _tmp162 = _tmp157*_tmp161 + _tmp159*_tmp161 - _tmp103*_tmp158
     _tmp163 = 0.5*_tmp67*p_0
     _tmp164 = _tmp122*_tmp68
-    _tmp165 = 0.0625*_tmp67**3*p_0*(3*cosr2(_tmp70) + sinr1(_tmp70) - 3*sinr2(_tmp70))
+    _tmp165 = 0.0625*p_0*_tmp67**3*(-3*sinr2(_tmp70) + 3*cosr2(_tmp70) + sinr1(_tmp70))
     _tmp166 = _tmp101*_tmp164 + _tmp163*_tmp73 + _tmp165*_tmp72
     _tmp167 = _tmp100*_tmp165 + _tmp101*_tmp163 - _tmp164*_tmp73
     return [
-        -_tmp0 + delta_6,
-        -_tmp12 - _tmp13*_tmp20 - _tmp21*_tmp26 - _tmp28*_tmp31 + _tmp32*_tmp34 + _tmp35*_tmp37 + _tmp38*_tmp40 + _tmp41*_tmp42 - _tmp49,
-        _tmp13*_tmp37 + _tmp20*_tmp35 + _tmp21*_tmp40 + _tmp26*_tmp38 + _tmp28*_tmp42 + _tmp31*_tmp41 - _tmp50 - _tmp51 + _tmp54,
-        delta_2 - delta_3 - delta_4 + delta_7,
-        _tmp102*_tmp99 + _tmp104*_tmp32 + _tmp105*_tmp38 + _tmp106*_tmp107 + _tmp108*_tmp109 + _tmp110*_tmp35 - _tmp13*_tmp98 - _tmp21*_tmp81 - _tmp49 - _tmp63 - _tmp75 - _tmp77*_tmp80 - _tmp82*_tmp86,
-        _tmp105*_tmp21 + _tmp106*_tmp80 + _tmp107*_tmp77 + _tmp108*_tmp86 + _tmp109*_tmp82 + _tmp110*_tmp13 - _tmp111 - _tmp112 + _tmp113 + _tmp35*_tmp98 + _tmp38*_tmp81 + _tmp54,
+        delta_6 - _tmp0,
+        -_tmp12 - _tmp49 + _tmp32*_tmp34 + _tmp35*_tmp37 + _tmp38*_tmp40 + _tmp41*_tmp42 - _tmp13*_tmp20 - _tmp21*_tmp26 - _tmp28*_tmp31,
+        _tmp54 - _tmp50 - _tmp51 + _tmp13*_tmp37 + _tmp20*_tmp35 + _tmp21*_tmp40 + _tmp26*_tmp38 + _tmp28*_tmp42 + _tmp31*_tmp41,
+        delta_2 + delta_7 - delta_3 - delta_4,
+        -_tmp49 - _tmp63 - _tmp75 + _tmp102*_tmp99 + _tmp104*_tmp32 + _tmp105*_tmp38 + _tmp106*_tmp107 + _tmp108*_tmp109 + _tmp110*_tmp35 - _tmp13*_tmp98 - _tmp21*_tmp81 - _tmp77*_tmp80 - _tmp82*_tmp86,
+        _tmp113 + _tmp54 - _tmp111 - _tmp112 + _tmp105*_tmp21 + _tmp106*_tmp80 + _tmp107*_tmp77 + _tmp108*_tmp86 + _tmp109*_tmp82 + _tmp110*_tmp13 + _tmp35*_tmp98 + _tmp38*_tmp81,
         0,
         -1,
         0,
@@ -1034,15 +1034,15 @@ def _loaded_newton(theta, delta, params):
         1,
         0,
         0,
-        -_tmp116 - _tmp118 - _tmp119 + _tmp124 + 0.06*_tmp2 + _tmp50 + _tmp51,
+        _tmp124 + _tmp50 + _tmp51 - _tmp116 - _tmp118 - _tmp119 + 0.06*_tmp2,
         0,
-        -_tmp116 - _tmp118 - _tmp129*_tmp2 + _tmp131*_tmp32,
-        -_tmp13*_tmp138 + _tmp136*_tmp35,
+        -_tmp116 - _tmp118 + _tmp131*_tmp32 - _tmp129*_tmp2,
+        _tmp136*_tmp35 - _tmp13*_tmp138,
         0,
         0,
-        0.072*_tmp115 - _tmp12 + _tmp139 - _tmp140 + _tmp142 + _tmp32*_tmp34 + 0.06*_tmp32,
+        _tmp139 + _tmp142 - _tmp12 - _tmp140 + 0.06*_tmp32 + 0.072*_tmp115 + _tmp32*_tmp34,
         0,
-        0.072*_tmp115 - _tmp129*_tmp32 - _tmp131*_tmp2 - _tmp140,
+        -_tmp140 + 0.072*_tmp115 - _tmp129*_tmp32 - _tmp131*_tmp2,
         _tmp13*_tmp136 + _tmp138*_tmp35,
         0,
         1,
@@ -1051,14 +1051,14 @@ def _loaded_newton(theta, delta, params):
         0,
         0,
         1,
-        -_tmp113 - _tmp13*_tmp150 + _tmp151*_tmp35 - 0.04*_tmp66 - 0.07*_tmp99,
+        -_tmp113 - 0.07*_tmp99 - 0.04*_tmp66 + _tmp151*_tmp35 - _tmp13*_tmp150,
         _tmp111 + _tmp112 + _tmp119 + _tmp124 + _tmp155 + 0.05*_tmp2,
         _tmp155 + _tmp160*_tmp32 - _tmp162*_tmp2,
         0,
         0,
-        -_tmp166*_tmp66 + _tmp167*_tmp99,
-        _tmp102*_tmp99 + _tmp13*_tmp151 + _tmp150*_tmp35 - 0.07*_tmp66 - _tmp75 + 0.04*_tmp99,
-        _tmp104*_tmp32 - _tmp139 + _tmp142 + 0.05*_tmp153 + 0.04*_tmp154 + 0.05*_tmp32 - _tmp63,
+        _tmp167*_tmp99 - _tmp166*_tmp66,
+        -_tmp75 + 0.04*_tmp99 - 0.07*_tmp66 + _tmp102*_tmp99 + _tmp13*_tmp151 + _tmp150*_tmp35,
+        _tmp142 - _tmp139 - _tmp63 + 0.05*_tmp153 + 0.05*_tmp32 + 0.04*_tmp154 + _tmp104*_tmp32,
         0.05*_tmp153 + 0.04*_tmp154 - _tmp160*_tmp2 - _tmp162*_tmp32,
         0,
         0,
@@ -1079,11 +1079,11 @@ def _dev_paper(theta, params):
     _tmp6 = 0.1767766952966369*_tmp4*_tmp5*p_0
     _tmp7 = _tmp6*numpy.sin(_tmp3)
     _tmp8 = numpy.cos(_tmp3)
-    _tmp9 = _tmp6*_tmp8 + _tmp7
+    _tmp9 = _tmp7 + _tmp6*_tmp8
     _tmp10 = numpy.cos(theta_1)
-    _tmp11 = 0.1767766952966369*_tmp4*_tmp5*_tmp8*p_0 - _tmp7
+    _tmp11 = -_tmp7 + 0.1767766952966369*_tmp4*_tmp5*_tmp8*p_0
     return [
-        -_tmp1*numpy.sin(_tmp0) + _tmp10*_tmp11 - _tmp2*_tmp9,
+        _tmp10*_tmp11 - _tmp1*numpy.sin(_tmp0) - _tmp2*_tmp9,
         _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp9 + _tmp11*_tmp2,
     ]
 
@@ -1109,8 +1109,8 @@ def _dev_first_order(theta, delta, params):
     _tmp13 = numpy.cos(theta_1)
     _tmp14 = -_tmp10 + 0.1767766952966369*_tmp11*_tmp7*_tmp8*p_0
     return [
-        -_tmp1*numpy.sin(_tmp0) - _tmp12*_tmp5 + _tmp13*_tmp14 + delta_2*(-0.04*_tmp3 - 0.07*_tmp4),
-        _tmp1*numpy.cos(_tmp0) + _tmp12*_tmp13 + _tmp14*_tmp5 + delta_2*(-0.07*_tmp3 + 0.04*_tmp4),
+        _tmp13*_tmp14 + delta_2*(-0.07*_tmp4 - 0.04*_tmp3) - _tmp1*numpy.sin(_tmp0) - _tmp12*_tmp5,
+        _tmp1*numpy.cos(_tmp0) + _tmp12*_tmp13 + _tmp14*_tmp5 + delta_2*(0.04*_tmp4 - 0.07*_tmp3),
     ]
 
 
@@ -1136,11 +1136,11 @@ def _dev_exact(theta, delta, params):
     _tmp14 = 0.1767766952966369*_tmp12*_tmp13*p_0
     _tmp15 = _tmp14*numpy.sin(_tmp11)
     _tmp16 = numpy.cos(_tmp11)
-    _tmp17 = _tmp14*_tmp16 + _tmp15
+    _tmp17 = _tmp15 + _tmp14*_tmp16
     _tmp18 = numpy.cos(theta_1)
-    _tmp19 = 0.1767766952966369*_tmp12*_tmp13*_tmp16*p_0 - _tmp15
+    _tmp19 = -_tmp15 + 0.1767766952966369*_tmp12*_tmp13*_tmp16*p_0
     return [
-        -_tmp1*numpy.sin(_tmp0) - _tmp10*_tmp17 + _tmp18*_tmp19 - _tmp3*_tmp7 + _tmp8*_tmp9,
+        _tmp18*_tmp19 + _tmp8*_tmp9 - _tmp1*numpy.sin(_tmp0) - _tmp10*_tmp17 - _tmp3*_tmp7,
         _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp19 + _tmp17*_tmp18 + _tmp3*_tmp9 + _tmp7*_tmp8,
     ]
 
@@ -1166,13 +1166,13 @@ def _dev_loaded(theta, delta, params):
     _tmp13 = (delta_2 + theta_2)**2
     _tmp14 = arck(_tmp11)
     _tmp15 = 0.1767766952966369*_tmp13*_tmp14*p_0
-    _tmp16 = _tmp15*numpy.sin(_tmp11) + 0.7071067811865476*compliance_y_2
-    _tmp17 = _tmp12*_tmp15 + _tmp16 + 0.7071067811865476*compliance_x_2
+    _tmp16 = 0.7071067811865476*compliance_y_2 + _tmp15*numpy.sin(_tmp11)
+    _tmp17 = _tmp16 + 0.7071067811865476*compliance_x_2 + _tmp12*_tmp15
     _tmp18 = numpy.cos(theta_1)
-    _tmp19 = 0.1767766952966369*_tmp12*_tmp13*_tmp14*p_0 - _tmp16 + 0.7071067811865476*compliance_x_2
+    _tmp19 = -_tmp16 + 0.7071067811865476*compliance_x_2 + 0.1767766952966369*_tmp12*_tmp13*_tmp14*p_0
     return [
-        -_tmp1*numpy.sin(_tmp0) - _tmp10*_tmp17 + _tmp18*_tmp19 - _tmp3*_tmp7 + _tmp8*_tmp9 - compliance_y_1,
-        _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp19 + _tmp17*_tmp18 + _tmp3*_tmp9 + _tmp7*_tmp8 + compliance_x_1,
+        -compliance_y_1 + _tmp18*_tmp19 + _tmp8*_tmp9 - _tmp1*numpy.sin(_tmp0) - _tmp10*_tmp17 - _tmp3*_tmp7,
+        compliance_x_1 + _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp19 + _tmp17*_tmp18 + _tmp3*_tmp9 + _tmp7*_tmp8,
     ]
 
 
@@ -1197,13 +1197,13 @@ def _dev_loaded_refined(theta, delta, params):
     _tmp13 = (delta_2 + theta_2)**2
     _tmp14 = arck(_tmp11)
     _tmp15 = 0.1767766952966369*_tmp13*_tmp14*p_0
-    _tmp16 = _tmp15*numpy.sin(_tmp11) + 0.7071067811865476*compliance_y_2
-    _tmp17 = _tmp12*_tmp15 + _tmp16 + 0.7071067811865476*compliance_x_2
+    _tmp16 = 0.7071067811865476*compliance_y_2 + _tmp15*numpy.sin(_tmp11)
+    _tmp17 = _tmp16 + 0.7071067811865476*compliance_x_2 + _tmp12*_tmp15
     _tmp18 = numpy.cos(theta_1)
-    _tmp19 = 0.1767766952966369*_tmp12*_tmp13*_tmp14*p_0 - _tmp16 + 0.7071067811865476*compliance_x_2
+    _tmp19 = -_tmp16 + 0.7071067811865476*compliance_x_2 + 0.1767766952966369*_tmp12*_tmp13*_tmp14*p_0
     return [
-        -_tmp1*numpy.sin(_tmp0) - _tmp10*_tmp17 + _tmp18*_tmp19 - _tmp3*_tmp7 + _tmp8*_tmp9 - compliance_y_1,
-        _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp19 + _tmp17*_tmp18 + _tmp3*_tmp9 + _tmp7*_tmp8 + compliance_x_1,
+        -compliance_y_1 + _tmp18*_tmp19 + _tmp8*_tmp9 - _tmp1*numpy.sin(_tmp0) - _tmp10*_tmp17 - _tmp3*_tmp7,
+        compliance_x_1 + _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp19 + _tmp17*_tmp18 + _tmp3*_tmp9 + _tmp7*_tmp8,
     ]
 
 
@@ -1236,13 +1236,13 @@ def _sens_rigid(theta, params):
     _tmp3 = theta_3 + theta_5
     _tmp4 = numpy.sin(_tmp3)
     _tmp5 = numpy.cos(_tmp3)
-    _tmp6 = 0.072*_tmp4 + 0.03*_tmp5
+    _tmp6 = 0.03*_tmp5 + 0.072*_tmp4
     _tmp7 = 0.02*_tmp2
     _tmp8 = 0.03*_tmp4
     _tmp9 = theta_1 + theta_2
     _tmp10 = numpy.sin(_tmp9)
     _tmp11 = numpy.cos(_tmp9)
-    _tmp12 = 0.04*_tmp10 + 0.07*_tmp11
+    _tmp12 = 0.07*_tmp11 + 0.04*_tmp10
     _tmp13 = -_tmp12
     _tmp14 = theta_3 + theta_4
     _tmp15 = numpy.sin(_tmp14)
@@ -1250,13 +1250,13 @@ def _sens_rigid(theta, params):
     _tmp17 = numpy.cos(_tmp14)
     _tmp18 = 0.07*_tmp10 - 0.04*_tmp11
     _tmp19 = -_tmp18
-    _tmp20 = 0.04*_tmp15 + 0.05*_tmp17
+    _tmp20 = 0.05*_tmp17 + 0.04*_tmp15
     _tmp21 = numpy.sin(theta_1)
     _tmp22 = numpy.cos(theta_1)
     _tmp23 = 0.03*_tmp22
     _tmp24 = 0.03*_tmp21
-    _tmp25 = -_tmp12 - 0.02*_tmp22 - _tmp24
-    _tmp26 = -_tmp18 - 0.02*_tmp21 + _tmp23
+    _tmp25 = -_tmp12 - _tmp24 - 0.02*_tmp22
+    _tmp26 = _tmp23 - _tmp18 - 0.02*_tmp21
     return [
         0,
         -1,
@@ -1265,15 +1265,15 @@ def _sens_rigid(theta, params):
         1,
         0,
         0,
-        -_tmp1 + 0.06*_tmp2 - _tmp6,
+        -_tmp1 - _tmp6 + 0.06*_tmp2,
         0,
         -_tmp6,
         0,
         0,
         0,
-        0.06*_tmp0 + 0.072*_tmp5 + _tmp7 - _tmp8,
+        _tmp7 - _tmp8 + 0.06*_tmp0 + 0.072*_tmp5,
         0,
-        0.072*_tmp5 - _tmp8,
+        -_tmp8 + 0.072*_tmp5,
         0,
         0,
         1,
@@ -1283,13 +1283,13 @@ def _sens_rigid(theta, params):
         0,
         1,
         _tmp13,
-        _tmp1 - _tmp16 + 0.04*_tmp17 + 0.05*_tmp2,
+        _tmp1 - _tmp16 + 0.05*_tmp2 + 0.04*_tmp17,
         -_tmp16 + 0.04*_tmp17,
         0,
         0,
         0,
         _tmp19,
-        0.05*_tmp0 + _tmp20 - _tmp7,
+        _tmp20 - _tmp7 + 0.05*_tmp0,
         _tmp20,
         0,
         0,
@@ -1297,9 +1297,9 @@ def _sens_rigid(theta, params):
         0,
         1,
         0,
-        -0.008*_tmp21 - _tmp23,
+        -_tmp23 - 0.008*_tmp21,
         0,
-        0.008*_tmp22 - _tmp24,
+        -_tmp24 + 0.008*_tmp22,
         0,
         1,
         0,
@@ -1340,15 +1340,15 @@ def _sens_paper(theta, params):
     _tmp8 = _tmp2*_tmp7
     _tmp9 = theta_2**3
     _tmp10 = numpy.cos(_tmp3)
-    _tmp11 = 3*cosr2(_tmp3) + sinr1(_tmp3) - 3*sinr2(_tmp3)
+    _tmp11 = -3*sinr2(_tmp3) + 3*cosr2(_tmp3) + sinr1(_tmp3)
     _tmp12 = 0.04419417382415922*_tmp11*_tmp9*p_0
     _tmp13 = _tmp10*_tmp4
     _tmp14 = _tmp13*p_0
     _tmp15 = 0.3535533905932738*theta_2
     _tmp16 = _tmp12*_tmp5 + _tmp14*_tmp2 + _tmp15*_tmp7
-    _tmp17 = 0.04419417382415922*_tmp10*_tmp11*_tmp9*p_0 + 0.3535533905932738*_tmp10*_tmp4*p_0*theta_2 - _tmp16 - _tmp8
+    _tmp17 = -_tmp16 - _tmp8 + 0.04419417382415922*_tmp10*_tmp11*_tmp9*p_0 + 0.3535533905932738*_tmp10*_tmp4*p_0*theta_2
     _tmp18 = numpy.sin(theta_1)
-    _tmp19 = _tmp10*_tmp12 + _tmp14*_tmp15 + _tmp16 - _tmp8
+    _tmp19 = _tmp16 - _tmp8 + _tmp10*_tmp12 + _tmp14*_tmp15
     _tmp20 = 0.5*theta_1
     _tmp21 = numpy.sin(_tmp20)
     _tmp22 = arck(_tmp20)
@@ -1358,16 +1358,16 @@ def _sens_paper(theta, params):
     _tmp26 = _tmp25*_tmp6
     _tmp27 = _tmp13*_tmp25
     _tmp28 = _tmp26 + _tmp27
-    _tmp29 = 0.1767766952966369*_tmp1*_tmp10*_tmp4 - _tmp26
+    _tmp29 = -_tmp26 + 0.1767766952966369*_tmp1*_tmp10*_tmp4
     _tmp30 = _tmp21*p_0
     _tmp31 = _tmp20*_tmp22
     _tmp32 = numpy.cos(_tmp20)
     _tmp33 = _tmp32*p_0
     _tmp34 = 0.125*_tmp23
-    _tmp35 = 0.0625*theta_1**3*(3*cosr2(_tmp20) + sinr1(_tmp20) - 3*sinr2(_tmp20))
+    _tmp35 = 0.0625*theta_1**3*(-3*sinr2(_tmp20) + 3*cosr2(_tmp20) + sinr1(_tmp20))
     _tmp36 = _tmp26*p_0
-    _tmp37 = 0.1767766952966369*_tmp1*_tmp10*_tmp4*p_0 - _tmp36
-    _tmp38 = _tmp27*p_0 + _tmp36
+    _tmp37 = -_tmp36 + 0.1767766952966369*_tmp1*_tmp10*_tmp4*p_0
+    _tmp38 = _tmp36 + _tmp27*p_0
     return [
         _tmp0*_tmp17 - _tmp18*_tmp19,
         0,
@@ -1384,7 +1384,7 @@ def _sens_paper(theta, params):
         _tmp0*_tmp29 - _tmp18*_tmp28 - _tmp21*_tmp24,
         -_tmp0*_tmp38 - _tmp18*_tmp37 - _tmp30*_tmp31 - _tmp30*_tmp35 - _tmp33*_tmp34,
         _tmp0*_tmp28 + _tmp18*_tmp29 + _tmp24*_tmp32,
-        _tmp0*_tmp37 - _tmp18*_tmp38 - _tmp30*_tmp34 + _tmp31*_tmp33 + _tmp33*_tmp35,
+        _tmp0*_tmp37 + _tmp31*_tmp33 + _tmp33*_tmp35 - _tmp18*_tmp38 - _tmp30*_tmp34,
     ]
 
 
@@ -1396,49 +1396,49 @@ def _sens_first_order(theta, delta, params):
     _tmp0 = theta_3 + theta_5
     _tmp1 = numpy.sin(_tmp0)
     _tmp2 = numpy.cos(_tmp0)
-    _tmp3 = 0.072*_tmp1 + 0.03*_tmp2
+    _tmp3 = 0.03*_tmp2 + 0.072*_tmp1
     _tmp4 = numpy.sin(theta_3)
     _tmp5 = 0.02*_tmp4
     _tmp6 = numpy.cos(theta_3)
     _tmp7 = _tmp5 - 0.06*_tmp6
     _tmp8 = 0.03*_tmp1
     _tmp9 = 0.02*_tmp6
-    _tmp10 = 0.06*_tmp4 + _tmp9
-    _tmp11 = 0.072*_tmp2 - _tmp8
+    _tmp10 = _tmp9 + 0.06*_tmp4
+    _tmp11 = -_tmp8 + 0.072*_tmp2
     _tmp12 = theta_1 + theta_2
     _tmp13 = numpy.sin(_tmp12)
     _tmp14 = numpy.cos(_tmp12)
-    _tmp15 = 0.04*_tmp13 + 0.07*_tmp14
+    _tmp15 = 0.07*_tmp14 + 0.04*_tmp13
     _tmp16 = -_tmp15
     _tmp17 = theta_3 + theta_4
     _tmp18 = numpy.cos(_tmp17)
     _tmp19 = numpy.sin(_tmp17)
     _tmp20 = 0.05*_tmp19
     _tmp21 = _tmp5 + 0.05*_tmp6
-    _tmp22 = -0.04*_tmp18 + _tmp20
-    _tmp23 = -0.07*_tmp13 + 0.04*_tmp14
+    _tmp22 = _tmp20 - 0.04*_tmp18
+    _tmp23 = 0.04*_tmp14 - 0.07*_tmp13
     _tmp24 = 0.05*_tmp18 + 0.04*_tmp19
-    _tmp25 = 0.05*_tmp4 - _tmp9
+    _tmp25 = -_tmp9 + 0.05*_tmp4
     _tmp26 = -delta_3 - delta_5
     _tmp27 = _tmp11*_tmp26
     _tmp28 = theta_5**2
     _tmp29 = 0.6594566077552098*theta_5
     _tmp30 = 0.21067334783983213*sinr1(_tmp29) - 0.5*sinr1(theta_5)
-    _tmp31 = _tmp28*_tmp30 - 0.01556317594302295
+    _tmp31 = -0.01556317594302295 + _tmp28*_tmp30
     _tmp32 = _tmp31*p_0
     _tmp33 = 0.5*theta_5
     _tmp34 = 0.3297283038776049*theta_5
-    _tmp35 = numpy.sin(_tmp33) + 1.2121056059601407*numpy.sin(_tmp34)
-    _tmp36 = sinr1(_tmp33) - 0.347615499514091*sinr1(_tmp34)
+    _tmp35 = 1.2121056059601407*numpy.sin(_tmp34) + numpy.sin(_tmp33)
+    _tmp36 = -0.347615499514091*sinr1(_tmp34) + sinr1(_tmp33)
     _tmp37 = 0.25*_tmp28
-    _tmp38 = _tmp36*_tmp37 + 0.20066894885245268
+    _tmp38 = 0.20066894885245268 + _tmp36*_tmp37
     _tmp39 = _tmp38*p_0
     _tmp40 = _tmp35*_tmp39
     _tmp41 = _tmp33*_tmp40
     _tmp42 = 0.5*theta_3
     _tmp43 = numpy.sin(_tmp42)
     _tmp44 = _tmp43*p_0
-    _tmp45 = 0.0625*theta_3**3*(3*cosr2(_tmp42) + sinr1(_tmp42) - 3*sinr2(_tmp42))
+    _tmp45 = 0.0625*theta_3**3*(-3*sinr2(_tmp42) + 3*cosr2(_tmp42) + sinr1(_tmp42))
     _tmp46 = numpy.cos(_tmp42)
     _tmp47 = theta_3**2
     _tmp48 = arck(_tmp42)
@@ -1446,9 +1446,9 @@ def _sens_first_order(theta, delta, params):
     _tmp50 = 0.125*p_0
     _tmp51 = _tmp42*_tmp48
     _tmp52 = _tmp44*_tmp45 + _tmp44*_tmp51 + _tmp46*_tmp49*_tmp50
-    _tmp53 = _tmp32 + p_0*theta_5*(_tmp28*(-_tmp33*(cosr2(theta_5) - 3*sinr2(theta_5)) + 0.09161826121794318*theta_5*(cosr2(_tmp29) - 3*sinr2(_tmp29))) + 2*_tmp30*theta_5)
+    _tmp53 = _tmp32 + p_0*theta_5*(_tmp28*(-_tmp33*(-3*sinr2(theta_5) + cosr2(theta_5)) + 0.09161826121794318*theta_5*(-3*sinr2(_tmp29) + cosr2(_tmp29))) + 2*_tmp30*theta_5)
     _tmp54 = _tmp33*_tmp35
-    _tmp55 = _tmp33*_tmp39*(0.5*numpy.cos(_tmp33) + 0.39966552557377366*numpy.cos(_tmp34)) + 0.5*_tmp40 + _tmp54*p_0*(_tmp33*_tmp36 + _tmp37*(0.25*theta_5*(cosr2(_tmp33) - 3*sinr2(_tmp33)) - 0.037793019340658006*theta_5*(cosr2(_tmp34) - 3*sinr2(_tmp34))))
+    _tmp55 = 0.5*_tmp40 + _tmp33*_tmp39*(0.5*numpy.cos(_tmp33) + 0.39966552557377366*numpy.cos(_tmp34)) + _tmp54*p_0*(_tmp33*_tmp36 + _tmp37*(0.25*theta_5*(-3*sinr2(_tmp33) + cosr2(_tmp33)) - 0.037793019340658006*theta_5*(-3*sinr2(_tmp34) + cosr2(_tmp34))))
     _tmp56 = numpy.cos(theta_1)
     _tmp57 = 0.5*theta_6
     _tmp59 = numpy.sin(_tmp57)
@@ -1459,20 +1459,20 @@ def _sens_first_order(theta, delta, params):
     _tmp63 = _tmp58*_tmp62
     _tmp64 = theta_6**2
     _tmp65 = _tmp50*_tmp64
-    _tmp66 = 0.0625*theta_6**3*(3*cosr2(_tmp57) + sinr1(_tmp57) - 3*sinr2(_tmp57))
+    _tmp66 = 0.0625*theta_6**3*(-3*sinr2(_tmp57) + 3*cosr2(_tmp57) + sinr1(_tmp57))
     _tmp67 = -_tmp57*_tmp61 - _tmp60*_tmp66 - _tmp63*_tmp65
     _tmp68 = numpy.sin(theta_1)
     _tmp69 = _tmp63*p_0
     _tmp70 = _tmp58*_tmp59
-    _tmp71 = _tmp57*_tmp69 + _tmp62*_tmp66*p_0 - _tmp65*_tmp70
+    _tmp71 = _tmp57*_tmp69 - _tmp65*_tmp70 + _tmp62*_tmp66*p_0
     _tmp72 = -_tmp26*_tmp3
     _tmp73 = _tmp46*p_0
-    _tmp74 = -0.125*_tmp43*_tmp47*_tmp48*p_0 + _tmp45*_tmp73 + _tmp51*_tmp73
+    _tmp74 = _tmp45*_tmp73 + _tmp51*_tmp73 - 0.125*_tmp43*_tmp47*_tmp48*p_0
     _tmp75 = _tmp23*delta_2
     _tmp76 = 0.5*theta_2
     _tmp77 = numpy.cos(_tmp76)
     _tmp78 = theta_2**3
-    _tmp79 = 3*cosr2(_tmp76) + sinr1(_tmp76) - 3*sinr2(_tmp76)
+    _tmp79 = -3*sinr2(_tmp76) + 3*cosr2(_tmp76) + sinr1(_tmp76)
     _tmp80 = 0.04419417382415922*_tmp78*_tmp79*p_0
     _tmp81 = arck(_tmp76)
     _tmp82 = _tmp77*_tmp81
@@ -1485,9 +1485,9 @@ def _sens_first_order(theta, delta, params):
     _tmp89 = _tmp88*p_0
     _tmp90 = _tmp86*_tmp89
     _tmp91 = _tmp80*_tmp87 + _tmp83*_tmp86 + _tmp84*_tmp89
-    _tmp92 = _tmp77*_tmp80 + _tmp83*_tmp84 - _tmp90 + _tmp91
-    _tmp93 = 0.04419417382415922*_tmp77*_tmp78*_tmp79*p_0 + 0.3535533905932738*_tmp77*_tmp81*p_0*theta_2 - _tmp90 - _tmp91
-    _tmp94 = -_tmp56*_tmp93 + _tmp68*_tmp92 + _tmp75
+    _tmp92 = _tmp91 - _tmp90 + _tmp77*_tmp80 + _tmp83*_tmp84
+    _tmp93 = -_tmp90 - _tmp91 + 0.04419417382415922*_tmp77*_tmp78*_tmp79*p_0 + 0.3535533905932738*_tmp77*_tmp81*p_0*theta_2
+    _tmp94 = _tmp75 + _tmp68*_tmp92 - _tmp56*_tmp93
     _tmp95 = 0.5*theta_7
     _tmp96 = numpy.cos(_tmp95)
     _tmp97 = _tmp96*p_0
@@ -1514,15 +1514,15 @@ def _sens_first_order(theta, delta, params):
     _tmp118 = _tmp117*p_0
     _tmp119 = _tmp115*_tmp118
     _tmp120 = _tmp114*_tmp50
-    _tmp121 = 0.0625*theta_4**3*(3*cosr2(_tmp109) + sinr1(_tmp109) - 3*sinr2(_tmp109))
+    _tmp121 = 0.0625*theta_4**3*(-3*sinr2(_tmp109) + 3*cosr2(_tmp109) + sinr1(_tmp109))
     _tmp122 = _tmp109*_tmp113 + _tmp112*_tmp121 + _tmp117*_tmp120
     _tmp123 = _tmp110*_tmp111
-    _tmp124 = _tmp109*_tmp118 + _tmp116*_tmp121*p_0 - _tmp120*_tmp123
+    _tmp124 = _tmp109*_tmp118 - _tmp120*_tmp123 + _tmp116*_tmp121*p_0
     _tmp125 = _tmp95*_tmp98
     _tmp126 = _tmp100*_tmp50
-    _tmp127 = 0.0625*theta_7**3*(3*cosr2(_tmp95) + sinr1(_tmp95) - 3*sinr2(_tmp95))
+    _tmp127 = 0.0625*theta_7**3*(-3*sinr2(_tmp95) + 3*cosr2(_tmp95) + sinr1(_tmp95))
     _tmp128 = _tmp104*_tmp125 + _tmp104*_tmp127 + _tmp126*_tmp96
-    _tmp129 = -_tmp103*_tmp126 + _tmp125*_tmp97 + _tmp127*_tmp97
+    _tmp129 = _tmp125*_tmp97 + _tmp127*_tmp97 - _tmp103*_tmp126
     _tmp130 = -_tmp15*delta_2
     _tmp131 = _tmp130 + _tmp56*_tmp92 + _tmp68*_tmp93
     _tmp132 = _tmp102*_tmp14 - _tmp105*_tmp13
@@ -1541,7 +1541,7 @@ def _sens_first_order(theta, delta, params):
     _tmp145 = _tmp38*_tmp54
     _tmp146 = _tmp135*p_0
     _tmp147 = theta_1**3
-    _tmp148 = 3*cosr2(_tmp134) + sinr1(_tmp134) - 3*sinr2(_tmp134)
+    _tmp148 = -3*sinr2(_tmp134) + 3*cosr2(_tmp134) + sinr1(_tmp134)
     _tmp149 = 0.0625*_tmp147*_tmp148
     _tmp150 = numpy.cos(_tmp134)
     _tmp151 = _tmp138*_tmp50
@@ -1558,12 +1558,12 @@ def _sens_first_order(theta, delta, params):
     _tmp162 = -_tmp159 + 0.1767766952966369*_tmp77*_tmp81*_tmp85
     _tmp163 = _tmp140 + _tmp161*_tmp68 - _tmp162*_tmp56
     _tmp164 = _tmp159*p_0
-    _tmp165 = _tmp160*p_0 + _tmp164
+    _tmp165 = _tmp164 + _tmp160*p_0
     _tmp166 = -_tmp164 + 0.1767766952966369*_tmp77*_tmp81*_tmp85*p_0
-    _tmp167 = _tmp153 + _tmp165*_tmp56 + _tmp166*_tmp68 + _tmp75
+    _tmp167 = _tmp153 + _tmp75 + _tmp165*_tmp56 + _tmp166*_tmp68
     _tmp168 = _tmp139*_tmp150 + _tmp161*_tmp56 + _tmp162*_tmp68
     _tmp169 = _tmp150*p_0
-    _tmp170 = _tmp130 + _tmp149*_tmp169 + _tmp152*_tmp169 - _tmp155 - _tmp165*_tmp68 + _tmp166*_tmp56
+    _tmp170 = _tmp130 - _tmp155 + _tmp149*_tmp169 + _tmp152*_tmp169 + _tmp166*_tmp56 - _tmp165*_tmp68
     return [
         0,
         -1,
@@ -1578,7 +1578,7 @@ def _sens_first_order(theta, delta, params):
         0,
         0,
         0,
-        _tmp10 + 0.072*_tmp2 - _tmp8,
+        _tmp10 - _tmp8 + 0.072*_tmp2,
         0,
         _tmp11,
         0,
@@ -1590,7 +1590,7 @@ def _sens_first_order(theta, delta, params):
         0,
         1,
         _tmp16,
-        0.04*_tmp18 - _tmp20 + _tmp21,
+        _tmp21 - _tmp20 + 0.04*_tmp18,
         -_tmp22,
         0,
         0,
@@ -1608,15 +1608,15 @@ def _sens_first_order(theta, delta, params):
         0,
         0,
         0,
-        -_tmp10*delta_3 + _tmp27 + _tmp32*_tmp6*theta_5 + _tmp4*_tmp41 + _tmp52,
+        _tmp27 + _tmp52 + _tmp4*_tmp41 - _tmp10*delta_3 + _tmp32*_tmp6*theta_5,
         0,
         _tmp27 + _tmp4*_tmp53 - _tmp55*_tmp6,
         _tmp56*_tmp67 - _tmp68*_tmp71,
         0,
         0,
-        _tmp31*_tmp4*p_0*theta_5 - _tmp41*_tmp6 - _tmp7*delta_3 - _tmp72 - _tmp74,
+        -_tmp72 - _tmp74 - _tmp41*_tmp6 - _tmp7*delta_3 + _tmp31*_tmp4*p_0*theta_5,
         0,
-        -_tmp4*_tmp55 - _tmp53*_tmp6 - _tmp72,
+        -_tmp72 - _tmp4*_tmp55 - _tmp53*_tmp6,
         _tmp56*_tmp71 + _tmp67*_tmp68,
         0,
         0,
@@ -1626,28 +1626,28 @@ def _sens_first_order(theta, delta, params):
         0,
         0,
         -_tmp106 - _tmp94,
-        _tmp108 + _tmp113*_tmp115*_tmp6 + _tmp119*_tmp4 - _tmp25*delta_3 + _tmp52,
+        _tmp108 + _tmp52 + _tmp119*_tmp4 - _tmp25*delta_3 + _tmp113*_tmp115*_tmp6,
         _tmp108 + _tmp122*_tmp4 - _tmp124*_tmp6,
         0,
         0,
-        -_tmp128*_tmp13 + _tmp129*_tmp14,
+        _tmp129*_tmp14 - _tmp128*_tmp13,
         _tmp131 + _tmp132,
-        0.25*_tmp110*_tmp111*_tmp114*_tmp4*p_0 - _tmp119*_tmp6 - _tmp133 + _tmp21*delta_3 - _tmp74,
-        -_tmp122*_tmp6 - _tmp124*_tmp4 - _tmp133,
+        -_tmp133 - _tmp74 + _tmp21*delta_3 - _tmp119*_tmp6 + 0.25*_tmp110*_tmp111*_tmp114*_tmp4*p_0,
+        -_tmp133 - _tmp122*_tmp6 - _tmp124*_tmp4,
         0,
         0,
         _tmp128*_tmp14 + _tmp129*_tmp13,
         0,
         0,
         -_tmp140 - _tmp141 - _tmp143*_tmp63 - _tmp144*_tmp70 - _tmp145*_tmp6 + _tmp31*_tmp4*theta_5,
-        -_tmp144*_tmp69 - _tmp153 + 0.25*_tmp58*_tmp59*_tmp64*_tmp68*p_0,
-        0.25*_tmp136*_tmp137*_tmp150 - _tmp143*_tmp70 - _tmp145*_tmp4 - _tmp154 - _tmp31*_tmp6*theta_5 + 0.25*_tmp56*_tmp58*_tmp62*_tmp64,
-        0.5*_tmp137*_tmp150*p_0*theta_1 - _tmp143*_tmp69 - _tmp144*_tmp61 + 0.0625*_tmp147*_tmp148*_tmp150*p_0 - _tmp155,
+        -_tmp153 - _tmp144*_tmp69 + 0.25*_tmp58*_tmp59*_tmp64*_tmp68*p_0,
+        -_tmp154 - _tmp143*_tmp70 - _tmp145*_tmp4 - _tmp31*_tmp6*theta_5 + 0.25*_tmp136*_tmp137*_tmp150 + 0.25*_tmp56*_tmp58*_tmp62*_tmp64,
+        -_tmp155 - _tmp143*_tmp69 - _tmp144*_tmp61 + 0.0625*_tmp147*_tmp148*_tmp150*p_0 + 0.5*_tmp137*_tmp150*p_0*theta_1,
         0,
         0,
-        0.25*_tmp110*_tmp111*_tmp114*_tmp4 - _tmp13*_tmp157 + 0.25*_tmp14*_tmp96*_tmp98*_tmp99 - _tmp141 - _tmp156*_tmp6 - _tmp163,
+        -_tmp141 - _tmp163 - _tmp13*_tmp157 - _tmp156*_tmp6 + 0.25*_tmp110*_tmp111*_tmp114*_tmp4 + 0.25*_tmp14*_tmp96*_tmp98*_tmp99,
         -_tmp106 - _tmp167,
-        _tmp101*_tmp13*_tmp96 - _tmp115*_tmp123*_tmp6 + _tmp14*_tmp157 - _tmp154 - _tmp156*_tmp4 + _tmp168,
+        _tmp168 - _tmp154 + _tmp14*_tmp157 - _tmp156*_tmp4 + _tmp101*_tmp13*_tmp96 - _tmp115*_tmp123*_tmp6,
         _tmp132 + _tmp170,
         -_tmp94,
         0,
@@ -1698,7 +1698,7 @@ def _sens_exact(theta, delta, params):
     _tmp10 = _tmp2**2
     _tmp11 = 0.6594566077552098*delta_5 + 0.6594566077552098*theta_5
     _tmp12 = 0.21067334783983213*sinr1(_tmp11) - 0.5*sinr1(_tmp2)
-    _tmp13 = _tmp10*_tmp12 - 0.01556317594302295
+    _tmp13 = -0.01556317594302295 + _tmp10*_tmp12
     _tmp14 = _tmp13*p_0
     _tmp15 = _tmp14*_tmp2
     _tmp16 = 0.3297283038776049*delta_5 + 0.3297283038776049*theta_5
@@ -1706,7 +1706,7 @@ def _sens_exact(theta, delta, params):
     _tmp18 = _tmp17 + 0.5*theta_5
     _tmp19 = -0.347615499514091*sinr1(_tmp16) + sinr1(_tmp18)
     _tmp20 = 0.25*_tmp10
-    _tmp21 = _tmp19*_tmp20 + 0.20066894885245268
+    _tmp21 = 0.20066894885245268 + _tmp19*_tmp20
     _tmp22 = 1.2121056059601407*numpy.sin(_tmp16) + numpy.sin(_tmp18)
     _tmp23 = _tmp21*_tmp22
     _tmp24 = 0.5*_tmp2
@@ -1716,7 +1716,7 @@ def _sens_exact(theta, delta, params):
     _tmp28 = _tmp27 + 0.5*theta_3
     _tmp29 = numpy.sin(_tmp28)
     _tmp30 = 0.0625*p_0
-    _tmp31 = _tmp0**3*_tmp30*(3*cosr2(_tmp28) + sinr1(_tmp28) - 3*sinr2(_tmp28))
+    _tmp31 = _tmp30*_tmp0**3*(-3*sinr2(_tmp28) + 3*cosr2(_tmp28) + sinr1(_tmp28))
     _tmp32 = numpy.cos(_tmp28)
     _tmp33 = _tmp0**2
     _tmp34 = arck(_tmp28)
@@ -1726,9 +1726,9 @@ def _sens_exact(theta, delta, params):
     _tmp38 = 0.5*p_0
     _tmp39 = _tmp0*_tmp34*_tmp38
     _tmp40 = _tmp29*_tmp31 + _tmp29*_tmp39 + _tmp32*_tmp37
-    _tmp41 = _tmp1*_tmp15 + _tmp26*_tmp8 + _tmp40
-    _tmp42 = _tmp14 + _tmp2*p_0*(_tmp10*(0.09161826121794318*_tmp2*(cosr2(_tmp11) - 3*sinr2(_tmp11)) - _tmp24*(cosr2(_tmp2) - 3*sinr2(_tmp2))) + 2*_tmp12*_tmp2)
-    _tmp43 = _tmp21*_tmp25*(0.39966552557377366*numpy.cos(_tmp16) + 0.5*numpy.cos(_tmp18)) + _tmp22*_tmp25*(_tmp19*_tmp24 + _tmp20*(-0.037793019340658006*_tmp2*(cosr2(_tmp16) - 3*sinr2(_tmp16)) + 0.25*_tmp2*(cosr2(_tmp18) - 3*sinr2(_tmp18)))) + _tmp23*_tmp38
+    _tmp41 = _tmp40 + _tmp1*_tmp15 + _tmp26*_tmp8
+    _tmp42 = _tmp14 + _tmp2*p_0*(_tmp10*(-_tmp24*(-3*sinr2(_tmp2) + cosr2(_tmp2)) + 0.09161826121794318*_tmp2*(-3*sinr2(_tmp11) + cosr2(_tmp11))) + 2*_tmp12*_tmp2)
+    _tmp43 = _tmp23*_tmp38 + _tmp21*_tmp25*(0.5*numpy.cos(_tmp18) + 0.39966552557377366*numpy.cos(_tmp16)) + _tmp22*_tmp25*(_tmp19*_tmp24 + _tmp20*(0.25*_tmp2*(-3*sinr2(_tmp18) + cosr2(_tmp18)) - 0.037793019340658006*_tmp2*(-3*sinr2(_tmp16) + cosr2(_tmp16))))
     _tmp44 = _tmp1*_tmp43
     _tmp45 = numpy.cos(theta_1)
     _tmp46 = delta_6 + theta_6
@@ -1741,15 +1741,15 @@ def _sens_exact(theta, delta, params):
     _tmp53 = _tmp50*_tmp52
     _tmp54 = _tmp46**2
     _tmp55 = _tmp36*_tmp54
-    _tmp56 = _tmp30*_tmp46**3*(3*cosr2(_tmp48) + sinr1(_tmp48) - 3*sinr2(_tmp48))
+    _tmp56 = _tmp30*_tmp46**3*(-3*sinr2(_tmp48) + 3*cosr2(_tmp48) + sinr1(_tmp48))
     _tmp57 = -_tmp47*_tmp51 - _tmp49*_tmp56 - _tmp53*_tmp55
     _tmp58 = numpy.sin(theta_1)
-    _tmp59 = _tmp47*_tmp53 - _tmp51*_tmp55 + _tmp52*_tmp56
+    _tmp59 = _tmp47*_tmp53 + _tmp52*_tmp56 - _tmp51*_tmp55
     _tmp60 = _tmp45*_tmp57 - _tmp58*_tmp59
     _tmp61 = 0.02*_tmp1
     _tmp62 = 0.03*_tmp6
     _tmp63 = _tmp29*_tmp37 - _tmp31*_tmp32 - _tmp32*_tmp39
-    _tmp64 = -_tmp1*_tmp26 + _tmp15*_tmp8 + _tmp63
+    _tmp64 = _tmp63 + _tmp15*_tmp8 - _tmp1*_tmp26
     _tmp65 = _tmp1*_tmp42 + _tmp43*_tmp8
     _tmp66 = _tmp45*_tmp59 + _tmp57*_tmp58
     _tmp67 = delta_2 + theta_2
@@ -1760,7 +1760,7 @@ def _sens_exact(theta, delta, params):
     _tmp72 = _tmp71 + 0.5*theta_2
     _tmp73 = numpy.cos(_tmp72)
     _tmp74 = _tmp67**3
-    _tmp75 = 3*cosr2(_tmp72) + sinr1(_tmp72) - 3*sinr2(_tmp72)
+    _tmp75 = -3*sinr2(_tmp72) + 3*cosr2(_tmp72) + sinr1(_tmp72)
     _tmp76 = 0.04419417382415922*_tmp74*_tmp75*p_0
     _tmp77 = arck(_tmp72)
     _tmp78 = _tmp73*_tmp77
@@ -1773,10 +1773,10 @@ def _sens_exact(theta, delta, params):
     _tmp85 = _tmp84*p_0
     _tmp86 = _tmp82*_tmp85
     _tmp87 = _tmp76*_tmp83 + _tmp79*_tmp82 + _tmp80*_tmp85
-    _tmp88 = _tmp73*_tmp76 + _tmp79*_tmp80 - _tmp86 + _tmp87
-    _tmp89 = 0.3535533905932738*_tmp67*_tmp73*_tmp77*p_0 + 0.04419417382415922*_tmp73*_tmp74*_tmp75*p_0 - _tmp86 - _tmp87
-    _tmp90 = -_tmp45*_tmp89 + _tmp58*_tmp88
-    _tmp91 = 0.07*_tmp69 + 0.04*_tmp70 + _tmp90
+    _tmp88 = _tmp87 - _tmp86 + _tmp73*_tmp76 + _tmp79*_tmp80
+    _tmp89 = -_tmp86 - _tmp87 + 0.04419417382415922*_tmp73*_tmp74*_tmp75*p_0 + 0.3535533905932738*_tmp67*_tmp73*_tmp77*p_0
+    _tmp90 = _tmp58*_tmp88 - _tmp45*_tmp89
+    _tmp91 = _tmp90 + 0.07*_tmp69 + 0.04*_tmp70
     _tmp92 = 0.5*delta_7 + 0.5*theta_7
     _tmp93 = numpy.cos(_tmp92)
     _tmp94 = arck(_tmp92)
@@ -1809,25 +1809,25 @@ def _sens_exact(theta, delta, params):
     _tmp121 = _tmp114*_tmp120
     _tmp122 = _tmp117*_tmp121
     _tmp123 = _tmp122*_tmp8
-    _tmp124 = _tmp119*p_0 + _tmp123*p_0 + _tmp40
+    _tmp124 = _tmp40 + _tmp119*p_0 + _tmp123*p_0
     _tmp125 = _tmp106*_tmp38
     _tmp126 = _tmp116*_tmp36
-    _tmp127 = _tmp106**3*_tmp30*(3*cosr2(_tmp112) + sinr1(_tmp112) - 3*sinr2(_tmp112))
+    _tmp127 = _tmp30*_tmp106**3*(-3*sinr2(_tmp112) + 3*cosr2(_tmp112) + sinr1(_tmp112))
     _tmp128 = _tmp113*_tmp127 + _tmp115*_tmp125 + _tmp121*_tmp126
-    _tmp129 = -_tmp115*_tmp126 + _tmp120*_tmp127 + _tmp121*_tmp125
+    _tmp129 = _tmp120*_tmp127 + _tmp121*_tmp125 - _tmp115*_tmp126
     _tmp130 = _tmp1*_tmp129
     _tmp131 = _tmp38*_tmp96
     _tmp132 = _tmp36*_tmp97
-    _tmp133 = _tmp30*_tmp96**3*(3*cosr2(_tmp92) + sinr1(_tmp92) - 3*sinr2(_tmp92))
+    _tmp133 = _tmp30*_tmp96**3*(-3*sinr2(_tmp92) + 3*cosr2(_tmp92) + sinr1(_tmp92))
     _tmp134 = _tmp101*_tmp133 + _tmp102*_tmp131 + _tmp132*_tmp95
-    _tmp135 = -_tmp102*_tmp132 + _tmp131*_tmp95 + _tmp133*_tmp93
-    _tmp136 = -_tmp134*_tmp70 + _tmp135*_tmp69
+    _tmp135 = _tmp131*_tmp95 + _tmp133*_tmp93 - _tmp102*_tmp132
+    _tmp136 = _tmp135*_tmp69 - _tmp134*_tmp70
     _tmp137 = _tmp45*_tmp88 + _tmp58*_tmp89
     _tmp138 = _tmp137 + 0.04*_tmp69 - 0.07*_tmp70
     _tmp139 = _tmp103*_tmp70
     _tmp140 = -_tmp139*p_0 + _tmp69*_tmp99*p_0
     _tmp141 = _tmp1*_tmp122
-    _tmp142 = _tmp118*_tmp8*p_0 - _tmp141*p_0 + _tmp63
+    _tmp142 = _tmp63 - _tmp141*p_0 + _tmp118*_tmp8*p_0
     _tmp143 = _tmp1*_tmp128
     _tmp144 = _tmp129*_tmp8
     _tmp145 = _tmp134*_tmp69 + _tmp135*_tmp70
@@ -1838,12 +1838,12 @@ def _sens_exact(theta, delta, params):
     _tmp150 = -_tmp148 - 0.12*_tmp149
     _tmp151 = numpy.sin(theta_3)
     _tmp152 = 0.04*_tmp149
-    _tmp153 = 0.06*_tmp147 - _tmp152
+    _tmp153 = -_tmp152 + 0.06*_tmp147
     _tmp154 = theta_3 + theta_5
     _tmp155 = numpy.cos(_tmp154)
     _tmp156 = numpy.sin(delta_3 + delta_5)
     _tmp157 = numpy.sin(_tmp17 + _tmp27)**2
-    _tmp158 = -0.072*_tmp156 + 0.06*_tmp157
+    _tmp158 = 0.06*_tmp157 - 0.072*_tmp156
     _tmp159 = numpy.sin(_tmp154)
     _tmp160 = -0.03*_tmp156 - 0.144*_tmp157
     _tmp161 = _tmp155*_tmp158 - _tmp159*_tmp160
@@ -1853,7 +1853,7 @@ def _sens_exact(theta, delta, params):
     _tmp165 = numpy.sin(_tmp71)**2
     _tmp166 = -0.07*_tmp164 - 0.08*_tmp165
     _tmp167 = numpy.cos(_tmp162)
-    _tmp168 = -0.04*_tmp164 + 0.14*_tmp165
+    _tmp168 = 0.14*_tmp165 - 0.04*_tmp164
     _tmp169 = _tmp163*_tmp166 - _tmp167*_tmp168
     _tmp170 = _tmp169 + _tmp90
     _tmp171 = _tmp148 - 0.1*_tmp149
@@ -1862,7 +1862,7 @@ def _sens_exact(theta, delta, params):
     _tmp174 = numpy.sin(delta_3 + delta_4)
     _tmp175 = numpy.sin(_tmp111 + _tmp27)**2
     _tmp176 = -0.05*_tmp174 - 0.08*_tmp175
-    _tmp177 = 0.05*_tmp147 + _tmp152
+    _tmp177 = _tmp152 + 0.05*_tmp147
     _tmp178 = numpy.sin(_tmp172)
     _tmp179 = 0.04*_tmp174 - 0.1*_tmp175
     _tmp180 = _tmp178*_tmp179
@@ -1884,7 +1884,7 @@ def _sens_exact(theta, delta, params):
     _tmp196 = _tmp195*_tmp51
     _tmp197 = _tmp23*_tmp24
     _tmp198 = theta_1**3
-    _tmp199 = 3*cosr2(_tmp184) + sinr1(_tmp184) - 3*sinr2(_tmp184)
+    _tmp199 = -3*sinr2(_tmp184) + 3*cosr2(_tmp184) + sinr1(_tmp184)
     _tmp200 = _tmp198*_tmp199*_tmp30
     _tmp201 = numpy.cos(_tmp184)
     _tmp202 = _tmp188*_tmp36
@@ -1899,11 +1899,11 @@ def _sens_exact(theta, delta, params):
     _tmp211 = -_tmp208 + 0.1767766952966369*_tmp73*_tmp77*_tmp81
     _tmp212 = _tmp190 + _tmp210*_tmp58 - _tmp211*_tmp45
     _tmp213 = _tmp208*p_0
-    _tmp214 = _tmp209*p_0 + _tmp213
+    _tmp214 = _tmp213 + _tmp209*p_0
     _tmp215 = -_tmp213 + 0.1767766952966369*_tmp73*_tmp77*_tmp81*p_0
     _tmp216 = _tmp169 + _tmp204 + _tmp214*_tmp45 + _tmp215*_tmp58
     _tmp217 = _tmp189*_tmp201 + _tmp210*_tmp45 + _tmp211*_tmp58
-    _tmp218 = _tmp181 + _tmp200*_tmp201 + _tmp201*_tmp203 - _tmp206 - _tmp214*_tmp58 + _tmp215*_tmp45
+    _tmp218 = _tmp181 - _tmp206 + _tmp200*_tmp201 + _tmp201*_tmp203 + _tmp215*_tmp45 - _tmp214*_tmp58
     return [
         0,
         -1,
@@ -1912,15 +1912,15 @@ def _sens_exact(theta, delta, params):
         1,
         0,
         0,
-        0.06*_tmp1 + _tmp41 - _tmp5 - _tmp7 - _tmp9,
+        _tmp41 - _tmp5 - _tmp7 - _tmp9 + 0.06*_tmp1,
         0,
-        _tmp42*_tmp8 - _tmp44 - _tmp5 - _tmp7,
+        -_tmp44 - _tmp5 - _tmp7 + _tmp42*_tmp8,
         _tmp60,
         0,
         0,
-        0.072*_tmp4 + _tmp61 - _tmp62 + _tmp64 + 0.06*_tmp8,
+        _tmp61 + _tmp64 - _tmp62 + 0.06*_tmp8 + 0.072*_tmp4,
         0,
-        0.072*_tmp4 - _tmp62 - _tmp65,
+        -_tmp62 - _tmp65 + 0.072*_tmp4,
         _tmp66,
         0,
         1,
@@ -1930,14 +1930,14 @@ def _sens_exact(theta, delta, params):
         0,
         1,
         -_tmp105 - _tmp91,
-        0.05*_tmp1 + _tmp110 + _tmp124 + _tmp9,
-        _tmp110 + _tmp128*_tmp8 - _tmp130,
+        _tmp110 + _tmp124 + _tmp9 + 0.05*_tmp1,
+        _tmp110 - _tmp130 + _tmp128*_tmp8,
         0,
         0,
         _tmp136,
         _tmp138 + _tmp140,
-        0.05*_tmp108 + 0.04*_tmp109 + _tmp142 - _tmp61 + 0.05*_tmp8,
-        0.05*_tmp108 + 0.04*_tmp109 - _tmp143 - _tmp144,
+        _tmp142 - _tmp61 + 0.05*_tmp108 + 0.05*_tmp8 + 0.04*_tmp109,
+        -_tmp143 - _tmp144 + 0.05*_tmp108 + 0.04*_tmp109,
         0,
         0,
         _tmp145,
@@ -1948,15 +1948,15 @@ def _sens_exact(theta, delta, params):
         0,
         0,
         0,
-        _tmp146*_tmp150 - _tmp151*_tmp153 + _tmp161 + _tmp41,
+        _tmp161 + _tmp41 + _tmp146*_tmp150 - _tmp151*_tmp153,
         0,
-        _tmp161 + _tmp42*_tmp8 - _tmp44,
+        _tmp161 - _tmp44 + _tmp42*_tmp8,
         _tmp60,
         0,
         0,
-        _tmp146*_tmp153 + _tmp150*_tmp151 + _tmp155*_tmp160 + _tmp158*_tmp159 + _tmp64,
+        _tmp64 + _tmp146*_tmp153 + _tmp150*_tmp151 + _tmp155*_tmp160 + _tmp158*_tmp159,
         0,
-        _tmp155*_tmp160 + _tmp158*_tmp159 - _tmp65,
+        -_tmp65 + _tmp155*_tmp160 + _tmp158*_tmp159,
         _tmp66,
         0,
         0,
@@ -1966,28 +1966,28 @@ def _sens_exact(theta, delta, params):
         0,
         0,
         -_tmp105 - _tmp170,
-        _tmp124 + _tmp146*_tmp171 - _tmp151*_tmp177 + _tmp173*_tmp176 - _tmp180,
-        _tmp128*_tmp8 - _tmp130 + _tmp173*_tmp176 - _tmp180,
+        _tmp124 - _tmp180 + _tmp146*_tmp171 + _tmp173*_tmp176 - _tmp151*_tmp177,
+        -_tmp130 - _tmp180 + _tmp128*_tmp8 + _tmp173*_tmp176,
         0,
         0,
         _tmp136,
         _tmp140 + _tmp182,
-        _tmp142 + _tmp146*_tmp177 + _tmp151*_tmp171 + _tmp183,
-        -_tmp143 - _tmp144 + _tmp183,
+        _tmp142 + _tmp183 + _tmp146*_tmp177 + _tmp151*_tmp171,
+        _tmp183 - _tmp143 - _tmp144,
         0,
         0,
         _tmp145,
         0,
         0,
-        -_tmp1*_tmp197 + _tmp13*_tmp2*_tmp8 - _tmp190 - _tmp191 - _tmp194 - _tmp196,
-        -_tmp195*_tmp53*p_0 - _tmp204 + 0.25*_tmp49*_tmp50*_tmp54*_tmp58*p_0,
-        -_tmp1*_tmp13*_tmp2 + 0.25*_tmp186*_tmp187*_tmp201 - _tmp193*_tmp51 - _tmp197*_tmp8 - _tmp205 + 0.25*_tmp45*_tmp50*_tmp52*_tmp54,
-        0.5*_tmp187*_tmp201*p_0*theta_1 - _tmp194*p_0 - _tmp196*p_0 + 0.0625*_tmp198*_tmp199*_tmp201*p_0 - _tmp206,
+        -_tmp190 - _tmp191 - _tmp194 - _tmp196 - _tmp1*_tmp197 + _tmp13*_tmp2*_tmp8,
+        -_tmp204 - _tmp195*_tmp53*p_0 + 0.25*_tmp49*_tmp50*_tmp54*_tmp58*p_0,
+        -_tmp205 - _tmp193*_tmp51 - _tmp197*_tmp8 - _tmp1*_tmp13*_tmp2 + 0.25*_tmp186*_tmp187*_tmp201 + 0.25*_tmp45*_tmp50*_tmp52*_tmp54,
+        -_tmp206 - _tmp194*p_0 - _tmp196*p_0 + 0.0625*_tmp198*_tmp199*_tmp201*p_0 + 0.5*_tmp187*_tmp201*p_0*theta_1,
         0,
         0,
-        0.25*_tmp113*_tmp114*_tmp116*_tmp8 - _tmp139 - _tmp141 - _tmp191 - _tmp212 + 0.25*_tmp69*_tmp93*_tmp94*_tmp97,
+        -_tmp139 - _tmp141 - _tmp191 - _tmp212 + 0.25*_tmp113*_tmp114*_tmp116*_tmp8 + 0.25*_tmp69*_tmp93*_tmp94*_tmp97,
         -_tmp105 - _tmp216,
-        _tmp100 + _tmp104 - _tmp119 - _tmp123 - _tmp205 + _tmp217,
+        _tmp100 + _tmp104 + _tmp217 - _tmp119 - _tmp123 - _tmp205,
         _tmp140 + _tmp218,
         -_tmp170,
         0,

@@ -24,7 +24,10 @@ class Backend:
     """Renders a plan with one language's printer and templates."""
 
     printer_class: ClassVar[type[CodePrinter]]
-    printer_settings: ClassVar[dict] = {}
+    #: sums printed in sympy's own (canonical, hash-independent) argument order: sorting the terms
+    #: of every sum for print (order="lex") costs a numeric evaluation of each term, a tenth of
+    #: a large mechanism's derivation, and a compiler reads them in any order
+    printer_settings: ClassVar[dict] = {"order": "none"}
     templates: ClassVar[tuple[str, ...]]                 # paths under templates/
     kernel_source: ClassVar[Callable[[str], str]]        # a special function's definition
 

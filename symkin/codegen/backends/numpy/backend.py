@@ -11,7 +11,7 @@ from .printer import NumpyPrinter
 
 class NumpyBackend(Backend):
     printer_class = NumpyPrinter
-    printer_settings = {"fully_qualified_modules": True}
+    printer_settings = {**Backend.printer_settings, "fully_qualified_modules": True}
     templates = ("numpy/module.py.j2",)
     kernel_source = staticmethod(kernels.source)
 
