@@ -351,14 +351,16 @@ class _Reader:
             return None
         value = table[key]
         if not isinstance(value, str) or not value.strip():
-            raise self.error(f"'{key}' must be a non-empty string, got {value!r}", entry, line)
+            raise self.error(f"'{key}' must be a non-empty string, got {value!r}", entry, line,
+                             f'write {key} = "..." (quoted text, not empty)')
         return value
 
     def array_of_tables(self, data: Mapping, key: str) -> list[Mapping]:
         value = data.get(key, [])
         if not isinstance(value, list) or not all(isinstance(t, dict) for t in value):
             raise self.error(f"'{key}' must be an array of tables written as [[{key}]]",
-                             f"[[{key}]]", self.where.key(key))
+                             f"[[{key}]]", self.where.key(key),
+                             f"write each entry as a [[{key}]] table (docs/file-format.md)")
         return value
 
     def unique(self, kind: str, names: list[str], lines: list[int | None]) -> None:
@@ -373,7 +375,7 @@ class _Reader:
     def vector(self, value: object, entry: str, key: str, line: int | None) -> tuple:
         if not isinstance(value, list) or len(value) != 2:
             raise self.error(f"'{key}' must be a list of two coordinates [x, y], got {value!r}",
-                             entry, line)
+                             entry, line, f"write {key} = [x, y] with two numbers or expressions")
         vec = tuple(self.expr(v, entry, key, line) for v in value)
         for v in vec:
             self.finite(v, entry, key, line)
@@ -431,7 +433,8 @@ class _Reader:
 
     def parameters(self, table: object) -> tuple[Parameter, ...]:
         if not isinstance(table, dict):
-            raise self.error("[parameters] must be a table", "[parameters]", None)
+            raise self.error("[parameters] must be a table", "[parameters]", None,
+                             "write [parameters] on a line of its own, then name = value lines")
         out = []
         for key, value in table.items():
             line = self.where.key(key, table="parameters")
@@ -453,7 +456,8 @@ class _Reader:
 
     def hinge_defaults(self, table: object) -> dict:
         if not isinstance(table, dict):
-            raise self.error("[defaults] must be a table", "[defaults]", None)
+            raise self.error("[defaults] must be a table", "[defaults]", None,
+                             "write [defaults] on a line of its own, then key = value lines")
         self.check_keys(table, DEFAULT_KEYS, "[defaults]", self.where.key("defaults"))
         return dict(table)
 
@@ -473,7 +477,8 @@ class _Reader:
     def hinges(self, tables: list[Mapping], defaults: Mapping,
                link_names: list[str]) -> tuple[Hinge, ...]:
         if not tables:
-            raise self.error("a mechanism needs at least one [[hinge]]", "[[hinge]]", None)
+            raise self.error("a mechanism needs at least one [[hinge]]", "[[hinge]]", None,
+                             "add [[hinge]] tables with name, links and at (docs/file-format.md)")
         out = [self.hinge(i, table, defaults, link_names) for i, table in enumerate(tables)]
         self.unique("hinge", [h.name for h in out], [h.line for h in out])
         return tuple(out)
@@ -526,7 +531,8 @@ class _Reader:
                              "give the plate a positive length")
         is_input = merged.get("input", False)
         if not isinstance(is_input, bool):
-            raise self.error(f"'input' must be true or false, got {is_input!r}", entry, line)
+            raise self.error(f"'input' must be true or false, got {is_input!r}", entry, line,
+                             "write input = true or input = false")
         params = self.model_params(spec, table, defaults, entry, line, length)
         pin = merged.get("pin", "midpoint")
         if pin not in PINS:
@@ -596,28 +602,30 @@ class _Reader:
             ok = num > 0 and (p.kind == "number" or num <= 1)
             if not ok:
                 rng = "in (0, 1]" if p.kind == "fraction" else "positive"
-                raise self.error(f"'{p.name}' must be {rng}, got {_short(num)}", entry, line)
+                raise self.error(f"'{p.name}' must be {rng}, got {_short(num)}", entry, line,
+                                 f"give {p.name} a value {rng}")
             return value
         if p.kind == "choice":
             if not isinstance(raw, str) or raw not in p.choices:
                 raise self.error(f"'{p.name}' must be one of {', '.join(p.choices)}, got {raw!r}",
-                                 entry, line)
+                                 entry, line,
+                                 f'write {p.name} = "{p.choices[0]}" or another of these')
             return raw
         if p.kind == "int":
             if isinstance(raw, bool) or not isinstance(raw, int) or not 1 <= raw <= 12:
                 raise self.error(f"'{p.name}' must be an integer from 1 to 12, got {raw!r}",
-                                 entry, line)
+                                 entry, line, f"write {p.name} = an integer from 1 to 12")
             return raw
         if p.kind == "text":
             if not isinstance(raw, str) or not raw:
                 raise self.error(f"'{p.name}' must be a file name string, got {raw!r}", entry,
-                                 line)
+                                 line, f'write {p.name} = "name.csv", a file beside the mechanism')
             return raw
         # "expr": an expression in theta, l and the parameters
         names = {**self.names, "theta": THETA, "l": PLATE_LENGTH}
         if not isinstance(raw, str):
             raise self.error(f"'{p.name}' must be an expression string in theta and l", entry,
-                             line)
+                             line, f'write {p.name} = "..." with an expression in theta and l')
         return self.expr(raw, entry, p.name, line, names)
 
     def check_expr_model(self, f: sp.Expr, g: sp.Expr, entry: str, line: int | None,
@@ -650,7 +658,7 @@ class _Reader:
                                  "each row is theta, f/l, g/l") from None
             if len(values) != 3 or not all(math.isfinite(v) for v in values):
                 raise self.error(f"{name}:{k}: need three finite numbers theta, f/l, g/l",
-                                 entry, line)
+                                 entry, line, f"correct row {k} of {name}")
             rows.append(tuple(values))
         if len({r[0] for r in rows}) < degree + 1:
             raise self.error(f"table '{name}' has {len(rows)} rows with distinct theta; a degree "
@@ -761,13 +769,15 @@ class _Reader:
         value = data[key]
         line = self.where.key(key)
         if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
-            raise self.error(f"'{key}' must be a list of {kind} names", key, line)
+            raise self.error(f"'{key}' must be a list of {kind} names", key, line,
+                             f'write {key} = ["name", ...] with the names of [[{kind}]] entries')
         for v in value:
             if v not in known:
                 raise self.error(f"unknown {kind} '{v}'", key, line,
                                  suggest(v, known) or f"name one of the [[{kind}]] entries")
         if len(set(value)) != len(value):
-            raise self.error(f"'{key}' names a {kind} twice", key, line)
+            raise self.error(f"'{key}' names a {kind} twice", key, line,
+                             "name each one once")
         return tuple(value)
 
     def check_connected(self, mech: Mechanism) -> None:

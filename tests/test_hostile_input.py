@@ -68,6 +68,10 @@ def check(tmp_path: Path, text: str, *fragments: str, limit: float = 20.0) -> No
     ('name = "four_bar"', 'name = "_four_bar"', ("name",)),
     ("l = 1e-3", 'l = 1e-3\nhuge = "exp(800)"', ("huge", "float64")),
     ("l = 1e-3", "l = 1e-3\nhuge = 1e309", ("huge",)),
+    # found by the fuzz harness at 1000 mutants: exit 2 without a fix line
+    ('name = "frame"', 'name = ""', ("[[link]] #1", "name")),
+    ('name = "crank"', "name = {}", ("[[link]] #2", "name")),
+    ("at = [0.1, 0.0]", 'at = "/dev/zero"', ("'B0'", "at")),
 ])
 def test_unexpected_values_are_bad_input(tmp_path, old, new, fragments):
     assert old in FOUR_BAR
