@@ -41,7 +41,7 @@ LEVELS: tuple[Level, ...] = (
     Level("exact", 2, "exact", needs_delta=True),
     # The physical levels (docs/physics.md): the plates' stiffness and the file's loads.
     Level("loaded", 3, "loaded", needs_delta=True, needs_stiffness=True, sensitivity=False),
-    Level("loaded_refined", 5, "loaded, refined", needs_delta=True, needs_stiffness=True,
+    Level("loaded_refined", 5, "loaded (refined)", needs_delta=True, needs_stiffness=True,
           sensitivity=False),
     Level("equilibrium", 4, "equilibrium", needs_delta=False, needs_stiffness=True,
           generated=False, sensitivity=False),

@@ -157,3 +157,21 @@ def test_physical_levels_on_other_topologies(key, backend):
         for name, point in want.points.items():
             assert rel_err([float(v) for v in got["points"][name]["deviation"][:, 0]],
                            point.deviation) <= 1e-12, (level, name)
+
+
+def test_refined_reports_the_angles_of_the_other_generated_levels():
+    """The nine-bar's point F needs no loop: the refined statics solves the loaded closure for
+    itself, but an evaluator without the links reports delta = 0 there as at every level that
+    solves no loop, C and numpy alike (C left the statics' delta behind once), and both agree
+    on the deviation with the sympy backend."""
+    g = generated("nine_bar")
+    inputs = {"O": 0.2, "A": 0.05, "B": -0.1, "K": 0.1}
+    arrays = {k: np.array([v]) for k, v in inputs.items()}
+    want = symkin.evaluate(g.analysis, inputs, "loaded_refined").points["F"].deviation
+    for backend in ("numpy", "c"):
+        res = symkin.compile(g.mech, backend, sensitivity=False).evaluate(arrays,
+                                                                         "loaded_refined")
+        assert res["ok"].all()
+        for hinge, rigid in res["angles"]["rigid"].items():
+            assert np.array_equal(res["angles"]["compliant"][hinge], rigid), (backend, hinge)
+        assert rel_err([float(v) for v in res["points"]["F"]["deviation"][:, 0]], want) <= 1e-12

@@ -2172,13 +2172,19 @@ static int sk_pose(const double *inputs, const double *params, int level, int wa
         *q = constants;
     }
     if (level == 5) {
-        /* the loaded level's delta, then the statics again at the pose it reached */
+        /* the loaded level's delta, then the statics again with the loaded closure's Jacobian
+           there */
         int status = sk_loaded(theta, constants, delta);
         if (status) {
             return status;
         }
         if (sk_loaded_refine(theta, params, delta, constants)) {
             return 1;
+        }
+        /* that delta was the statics' only: the points need no loop solved (as at the other
+           levels, delta stays zero unless the links ask for it below) */
+        for (i = 0; i < SK_K; ++i) {
+            delta[i] = 0.0;
         }
     }
     if (want_links) {               /* only the links' rotations need the loops solved */

@@ -2527,7 +2527,8 @@ static int sk_pose(const double *inputs, const double *params, int level, int wa
         *q = constants;
     }
     if (level == 5) {
-        /* the loaded level's delta, then the statics again at the pose it reached */
+        /* the loaded level's delta, then the statics again with the loaded closure's Jacobian
+           there */
         int status = sk_loaded(theta, constants, delta);
         if (status) {
             return status;
