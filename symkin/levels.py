@@ -26,6 +26,13 @@ class Level:
     needs_stiffness: bool = False   # needs E, thickness and width of every compliant plate
     generated: bool = True          # the generated C and numpy hold it; else mpmath only
     sensitivity: bool = True        # closed-form derivatives by the parameters (docs/sensitivity.md)
+    shares: str = ""                # the level whose loop solver and deviation routine it runs,
+                                    # with constants of its own
+
+    @property
+    def routine(self) -> str:
+        """The name of its loop solver and deviation routine in generated code."""
+        return self.shares or self.name
 
     @property
     def label(self) -> str:
@@ -42,7 +49,7 @@ LEVELS: tuple[Level, ...] = (
     # The physical levels (docs/physics.md): the plates' stiffness and the file's loads.
     Level("loaded", 3, "loaded", needs_delta=True, needs_stiffness=True, sensitivity=False),
     Level("loaded_refined", 5, "loaded (refined)", needs_delta=True, needs_stiffness=True,
-          sensitivity=False),
+          sensitivity=False, shares="loaded"),
     Level("equilibrium", 4, "equilibrium", needs_delta=False, needs_stiffness=True,
           generated=False, sensitivity=False),
 )

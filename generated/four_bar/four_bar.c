@@ -3,7 +3,7 @@
  * Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact, loaded, loaded_refined.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, loaded_q0 10, loaded_q 72, loaded_compliance 231, loaded_linear 102, loaded_newton 269, dev_paper 38, dev_first_order 52, dev_exact 62, dev_loaded 72, dev_loaded_refined 72, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339.
+ * Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, loaded_q0 10, loaded_q 72, loaded_compliance 231, loaded_linear 102, loaded_newton 269, dev_paper 38, dev_first_order 52, dev_exact 62, dev_loaded 72, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339.
  */
 #include "four_bar.h"
 
@@ -692,44 +692,8 @@ static void sk_dev_exact(const double *theta, const double *delta, const double 
     out[1] = _tmp1*cos(_tmp0) + _tmp10*_tmp20 + _tmp18*_tmp19 + _tmp3*_tmp9 + _tmp7*_tmp8;
 }
 
-/* deviation of the points at level loaded (72 operations) */
+/* deviation of the points at level loaded, loaded_refined (72 operations) */
 static void sk_dev_loaded(const double *theta, const double *delta, const double *params, double *out)
-{
-    const double theta_1 = theta[0];
-    const double theta_2 = theta[1];
-    const double delta_2 = delta[0];
-    const double p_0 = params[0];
-    const double compliance_x_1 = params[1];
-    const double compliance_y_1 = params[2];
-    const double compliance_x_2 = params[3];
-    const double compliance_y_2 = params[4];
-    const double _tmp0 = 0.5*theta_1;
-    const double _tmp1 = 0.25*p_0*pow(theta_1, 2)*symkin_arck(_tmp0);
-    const double _tmp2 = theta_1 + theta_2;
-    const double _tmp3 = sin(_tmp2);
-    const double _tmp4 = sin(delta_2);
-    const double _tmp5 = 0.5*delta_2;
-    const double _tmp6 = pow(sin(_tmp5), 2);
-    const double _tmp7 = 0.045*_tmp4 - 0.128*_tmp6;
-    const double _tmp8 = cos(_tmp2);
-    const double _tmp9 = -0.064*_tmp4 - 0.09*_tmp6;
-    const double _tmp10 = sin(theta_1);
-    const double _tmp11 = _tmp5 + 0.5*theta_2;
-    const double _tmp12 = sin(_tmp11);
-    const double _tmp13 = pow(delta_2 + theta_2, 2);
-    const double _tmp14 = symkin_arck(_tmp11);
-    const double _tmp15 = _tmp13*_tmp14*p_0;
-    const double _tmp16 = cos(_tmp11);
-    const double _tmp17 = 0.21650635094610965*_tmp15;
-    const double _tmp18 = 0.5*compliance_y_2 + 0.8660254037844386*compliance_x_2 + _tmp16*_tmp17 + 0.125*_tmp12*_tmp15;
-    const double _tmp19 = cos(theta_1);
-    const double _tmp20 = 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2 - _tmp12*_tmp17 + 0.125*_tmp13*_tmp14*_tmp16*p_0;
-    out[0] = -compliance_y_1 + _tmp19*_tmp20 + _tmp8*_tmp9 - _tmp1*sin(_tmp0) - _tmp10*_tmp18 - _tmp3*_tmp7;
-    out[1] = compliance_x_1 + _tmp1*cos(_tmp0) + _tmp10*_tmp20 + _tmp18*_tmp19 + _tmp3*_tmp9 + _tmp7*_tmp8;
-}
-
-/* deviation of the points at level loaded_refined (72 operations) */
-static void sk_dev_loaded_refined(const double *theta, const double *delta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
     const double theta_2 = theta[1];
@@ -1387,18 +1351,12 @@ static int sk_exact(const double *theta, const double *params, double *delta)
     return sk_newton_solve(sk_linear, sk_newton, theta, params, delta);
 }
 
-/* Level loaded: Newton on the loaded closure from its first-order delta; `params` holds the
-   plates' compliance after the parameters (sk_loaded_constants). */
+/* Level loaded (and loaded_refined, with its own constants): Newton on the loaded closure from
+   its first-order delta; `params` holds the plates' compliance after the parameters
+   (sk_loaded_constants, sk_loaded_refine). */
 static int sk_loaded(const double *theta, const double *params, double *delta)
 {
     return sk_newton_solve(sk_loaded_linear, sk_loaded_newton, theta, params, delta);
-}
-
-/* Level loaded_refined: the loaded closure again, with the compliance of the refined statics
-   (sk_loaded_refine). */
-static int sk_loaded_refined(const double *theta, const double *params, double *delta)
-{
-    return sk_loaded(theta, params, delta);
 }
 
 /* LU factorisation with partial pivoting of the n x n row-major a, in place (L below the unit
@@ -1617,7 +1575,7 @@ static int sk_pose(const double *inputs, const double *params, int level, int wa
             status = sk_loaded(theta, *q, delta);
         }
         else if (level == 5) {
-            status = sk_loaded_refined(theta, *q, delta);
+            status = sk_loaded(theta, *q, delta);
         }
         if (status) {
             return status;
@@ -1677,7 +1635,7 @@ static int sk_outputs(const double *theta, const double *delta, const double *pa
         sk_dev_loaded(theta, delta, q, dev);
     }
     else {
-        sk_dev_loaded_refined(theta, delta, q, dev);
+        sk_dev_loaded(theta, delta, q, dev);
     }
     for (i = 0; i < 2 * SK_NP; ++i) {
         if (!isfinite(rigid[i]) || !isfinite(dev[i])) {

@@ -2,7 +2,7 @@
 Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
 Points: C; levels: paper, first_order, exact, loaded, loaded_refined.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, loaded_q0 10, loaded_q 72, loaded_compliance 231, loaded_linear 102, loaded_newton 269, dev_paper 38, dev_first_order 52, dev_exact 62, dev_loaded 72, dev_loaded_refined 72, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339.
+Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, loaded_q0 10, loaded_q 72, loaded_compliance 231, loaded_linear 102, loaded_newton 269, dev_paper 38, dev_first_order 52, dev_exact 62, dev_loaded 72, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -677,39 +677,7 @@ def _dev_exact(theta, delta, params):
 
 
 def _dev_loaded(theta, delta, params):
-    """deviation of the points at level loaded (72 operations)."""
-    theta_1, theta_2, _, _ = theta
-    delta_2, _, _ = delta
-    p_0, compliance_x_1, compliance_y_1, compliance_x_2, compliance_y_2, _, _, _, _ = params
-    _tmp0 = 0.5*theta_1
-    _tmp1 = 0.25*p_0*theta_1**2*arck(_tmp0)
-    _tmp2 = theta_1 + theta_2
-    _tmp3 = numpy.sin(_tmp2)
-    _tmp4 = numpy.sin(delta_2)
-    _tmp5 = 0.5*delta_2
-    _tmp6 = numpy.sin(_tmp5)**2
-    _tmp7 = 0.045*_tmp4 - 0.128*_tmp6
-    _tmp8 = numpy.cos(_tmp2)
-    _tmp9 = -0.064*_tmp4 - 0.09*_tmp6
-    _tmp10 = numpy.sin(theta_1)
-    _tmp11 = _tmp5 + 0.5*theta_2
-    _tmp12 = numpy.sin(_tmp11)
-    _tmp13 = (delta_2 + theta_2)**2
-    _tmp14 = arck(_tmp11)
-    _tmp15 = _tmp13*_tmp14*p_0
-    _tmp16 = numpy.cos(_tmp11)
-    _tmp17 = 0.21650635094610965*_tmp15
-    _tmp18 = 0.5*compliance_y_2 + 0.8660254037844386*compliance_x_2 + _tmp16*_tmp17 + 0.125*_tmp12*_tmp15
-    _tmp19 = numpy.cos(theta_1)
-    _tmp20 = 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2 - _tmp12*_tmp17 + 0.125*_tmp13*_tmp14*_tmp16*p_0
-    return [
-        -compliance_y_1 + _tmp19*_tmp20 + _tmp8*_tmp9 - _tmp1*numpy.sin(_tmp0) - _tmp10*_tmp18 - _tmp3*_tmp7,
-        compliance_x_1 + _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp20 + _tmp18*_tmp19 + _tmp3*_tmp9 + _tmp7*_tmp8,
-    ]
-
-
-def _dev_loaded_refined(theta, delta, params):
-    """deviation of the points at level loaded_refined (72 operations)."""
+    """deviation of the points at level loaded, loaded_refined (72 operations)."""
     theta_1, theta_2, _, _ = theta
     delta_2, _, _ = delta
     p_0, compliance_x_1, compliance_y_1, compliance_x_2, compliance_y_2, _, _, _, _ = params
@@ -1349,8 +1317,9 @@ def _loaded_constants(theta, params, ok, at=None, more=False):
 
 
 def _loaded(theta, params, ok):
-    """Level loaded: Newton on the loaded closure from its first-order delta; `params` holds the
-    plates' compliance after the parameters (_loaded_constants)."""
+    """Level loaded (and loaded_refined, with its own constants): Newton on the loaded closure
+    from its first-order delta; `params` holds the plates' compliance after the parameters
+    (_loaded_constants, _loaded_refine)."""
     return _newton_solve(theta, params, ok, _loaded_linear, _loaded_newton)
 
 
@@ -1367,14 +1336,8 @@ def _loaded_refine(theta, params, constants, ok):
                                                  for j in range(k)], more=True)
 
 
-def _loaded_refined(theta, params, ok):
-    """Level loaded_refined: the loaded closure again, with the compliance of the refined
-    statics (_loaded_refine)."""
-    return _loaded(theta, params, ok)
-
-
 #: The levels that solve the loops, and how.
-_DELTA = {'first_order': _first_order, 'exact': _exact, 'loaded': _loaded, 'loaded_refined': _loaded_refined}
+_DELTA = {'first_order': _first_order, 'exact': _exact, 'loaded': _loaded, 'loaded_refined': _loaded}
 
 _CHUNK = 8192   # elements per block: the temporaries of a block stay in the CPU cache
 
@@ -1462,7 +1425,7 @@ def _points(theta, delta, ok, level, p, q, links):
         elif level == 'loaded':
             dev = _dev_loaded(theta, delta, q)
         elif level == 'loaded_refined':
-            dev = _dev_loaded_refined(theta, delta, q)
+            dev = _dev_loaded(theta, delta, q)
         rot = [numpy.broadcast_to(v, shape) for v in _links(theta, delta)] if links else []
     rigid = [numpy.broadcast_to(v, shape) for v in rigid]
     dev = [numpy.broadcast_to(v, shape) for v in dev]

@@ -3,7 +3,7 @@
  * Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
  * Points: F; levels: paper, first_order, exact, loaded, loaded_refined.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, loaded_q0 16, loaded_q 126, loaded_compliance 562, loaded_linear 239, loaded_newton 539, dev_paper 33, dev_first_order 33, dev_exact 33, dev_loaded 33, dev_loaded_refined 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
+ * Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, loaded_q0 16, loaded_q 126, loaded_compliance 562, loaded_linear 239, loaded_newton 539, dev_paper 33, dev_first_order 33, dev_exact 33, dev_loaded 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
  */
 #include "nine_bar_platform.h"
 
@@ -1341,32 +1341,8 @@ static void sk_dev_exact(const double *theta, const double *delta, const double 
     out[1] = _tmp10*_tmp8 + _tmp2*cos(_tmp0) + _tmp4*_tmp7*_tmp9;
 }
 
-/* deviation of the points at level loaded (33 operations) */
+/* deviation of the points at level loaded, loaded_refined (33 operations) */
 static void sk_dev_loaded(const double *theta, const double *delta, const double *params, double *out)
-{
-    (void)delta;
-    const double theta_1 = theta[0];
-    const double theta_2 = theta[1];
-    const double p_0 = params[0];
-    const double compliance_x_1 = params[1];
-    const double compliance_y_1 = params[2];
-    const double compliance_x_2 = params[3];
-    const double compliance_y_2 = params[4];
-    const double _tmp0 = 0.5*theta_1;
-    const double _tmp1 = 0.25*p_0;
-    const double _tmp2 = _tmp1*pow(theta_1, 2)*symkin_arck(_tmp0);
-    const double _tmp3 = sin(theta_1);
-    const double _tmp4 = 0.5*theta_2;
-    const double _tmp5 = _tmp1*pow(theta_2, 2)*symkin_arck(_tmp4);
-    const double _tmp6 = compliance_y_2 + _tmp5*sin(_tmp4);
-    const double _tmp7 = cos(theta_1);
-    const double _tmp8 = compliance_x_2 + _tmp5*cos(_tmp4);
-    out[0] = -compliance_y_1 + _tmp7*_tmp8 - _tmp2*sin(_tmp0) - _tmp3*_tmp6;
-    out[1] = compliance_x_1 + _tmp2*cos(_tmp0) + _tmp3*_tmp8 + _tmp6*_tmp7;
-}
-
-/* deviation of the points at level loaded_refined (33 operations) */
-static void sk_dev_loaded_refined(const double *theta, const double *delta, const double *params, double *out)
 {
     (void)delta;
     const double theta_1 = theta[0];
@@ -1964,18 +1940,12 @@ static int sk_exact(const double *theta, const double *params, double *delta)
     return sk_newton_solve(sk_linear, sk_newton, theta, params, delta);
 }
 
-/* Level loaded: Newton on the loaded closure from its first-order delta; `params` holds the
-   plates' compliance after the parameters (sk_loaded_constants). */
+/* Level loaded (and loaded_refined, with its own constants): Newton on the loaded closure from
+   its first-order delta; `params` holds the plates' compliance after the parameters
+   (sk_loaded_constants, sk_loaded_refine). */
 static int sk_loaded(const double *theta, const double *params, double *delta)
 {
     return sk_newton_solve(sk_loaded_linear, sk_loaded_newton, theta, params, delta);
-}
-
-/* Level loaded_refined: the loaded closure again, with the compliance of the refined statics
-   (sk_loaded_refine). */
-static int sk_loaded_refined(const double *theta, const double *params, double *delta)
-{
-    return sk_loaded(theta, params, delta);
 }
 
 /* LU factorisation with partial pivoting of the n x n row-major a, in place (L below the unit
@@ -2199,7 +2169,7 @@ static int sk_pose(const double *inputs, const double *params, int level, int wa
             status = sk_loaded(theta, *q, delta);
         }
         else if (level == 5) {
-            status = sk_loaded_refined(theta, *q, delta);
+            status = sk_loaded(theta, *q, delta);
         }
         if (status) {
             return status;
@@ -2292,7 +2262,7 @@ static int sk_outputs(const double *theta, const double *delta, const double *pa
         sk_dev_loaded(theta, delta, q, dev);
     }
     else {
-        sk_dev_loaded_refined(theta, delta, q, dev);
+        sk_dev_loaded(theta, delta, q, dev);
     }
     for (i = 0; i < 2 * SK_NP; ++i) {
         if (!isfinite(rigid[i]) || !isfinite(dev[i])) {

@@ -2,7 +2,7 @@
 Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
 Points: F; levels: paper, first_order, exact, loaded, loaded_refined.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, loaded_q0 16, loaded_q 126, loaded_compliance 562, loaded_linear 239, loaded_newton 539, dev_paper 33, dev_first_order 33, dev_exact 33, dev_loaded 33, dev_loaded_refined 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
+Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, loaded_q0 16, loaded_q 126, loaded_compliance 562, loaded_linear 239, loaded_newton 539, dev_paper 33, dev_first_order 33, dev_exact 33, dev_loaded 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -1228,26 +1228,7 @@ def _dev_exact(theta, delta, params):
 
 
 def _dev_loaded(theta, delta, params):
-    """deviation of the points at level loaded (33 operations)."""
-    theta_1, theta_2, _, _, _, _, _, _, _, _ = theta
-    p_0, compliance_x_1, compliance_y_1, compliance_x_2, compliance_y_2, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _ = params
-    _tmp0 = 0.5*theta_1
-    _tmp1 = 0.25*p_0
-    _tmp2 = _tmp1*theta_1**2*arck(_tmp0)
-    _tmp3 = numpy.sin(theta_1)
-    _tmp4 = 0.5*theta_2
-    _tmp5 = _tmp1*theta_2**2*arck(_tmp4)
-    _tmp6 = compliance_y_2 + _tmp5*numpy.sin(_tmp4)
-    _tmp7 = numpy.cos(theta_1)
-    _tmp8 = compliance_x_2 + _tmp5*numpy.cos(_tmp4)
-    return [
-        -compliance_y_1 + _tmp7*_tmp8 - _tmp2*numpy.sin(_tmp0) - _tmp3*_tmp6,
-        compliance_x_1 + _tmp2*numpy.cos(_tmp0) + _tmp3*_tmp8 + _tmp6*_tmp7,
-    ]
-
-
-def _dev_loaded_refined(theta, delta, params):
-    """deviation of the points at level loaded_refined (33 operations)."""
+    """deviation of the points at level loaded, loaded_refined (33 operations)."""
     theta_1, theta_2, _, _, _, _, _, _, _, _ = theta
     p_0, compliance_x_1, compliance_y_1, compliance_x_2, compliance_y_2, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _ = params
     _tmp0 = 0.5*theta_1
@@ -1821,8 +1802,9 @@ def _loaded_constants(theta, params, ok, at=None, more=False):
 
 
 def _loaded(theta, params, ok):
-    """Level loaded: Newton on the loaded closure from its first-order delta; `params` holds the
-    plates' compliance after the parameters (_loaded_constants)."""
+    """Level loaded (and loaded_refined, with its own constants): Newton on the loaded closure
+    from its first-order delta; `params` holds the plates' compliance after the parameters
+    (_loaded_constants, _loaded_refine)."""
     return _newton_solve(theta, params, ok, _loaded_linear, _loaded_newton)
 
 
@@ -1839,14 +1821,8 @@ def _loaded_refine(theta, params, constants, ok):
                                                  for j in range(k)], more=True)
 
 
-def _loaded_refined(theta, params, ok):
-    """Level loaded_refined: the loaded closure again, with the compliance of the refined
-    statics (_loaded_refine)."""
-    return _loaded(theta, params, ok)
-
-
 #: The levels that solve the loops, and how.
-_DELTA = {'first_order': _first_order, 'exact': _exact, 'loaded': _loaded, 'loaded_refined': _loaded_refined}
+_DELTA = {'first_order': _first_order, 'exact': _exact, 'loaded': _loaded, 'loaded_refined': _loaded}
 
 _CHUNK = 8192   # elements per block: the temporaries of a block stay in the CPU cache
 
@@ -1934,7 +1910,7 @@ def _points(theta, delta, ok, level, p, q, links):
         elif level == 'loaded':
             dev = _dev_loaded(theta, delta, q)
         elif level == 'loaded_refined':
-            dev = _dev_loaded_refined(theta, delta, q)
+            dev = _dev_loaded(theta, delta, q)
         rot = [numpy.broadcast_to(v, shape) for v in _links(theta, delta)] if links else []
     rigid = [numpy.broadcast_to(v, shape) for v in rigid]
     dev = [numpy.broadcast_to(v, shape) for v in dev]

@@ -3,7 +3,7 @@
  * Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
  * Points: D; levels: paper, first_order, exact, loaded, loaded_refined.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, loaded_q0 16, loaded_q 128, loaded_compliance 401, loaded_linear 190, loaded_newton 527, dev_paper 36, dev_first_order 50, dev_exact 60, dev_loaded 68, dev_loaded_refined 68, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661.
+ * Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, loaded_q0 16, loaded_q 128, loaded_compliance 401, loaded_linear 190, loaded_newton 527, dev_paper 36, dev_first_order 50, dev_exact 60, dev_loaded 68, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661.
  */
 #include "stephenson_six_bar.h"
 
@@ -1212,43 +1212,8 @@ static void sk_dev_exact(const double *theta, const double *delta, const double 
     out[1] = _tmp1*cos(_tmp0) + _tmp10*_tmp19 + _tmp17*_tmp18 + _tmp3*_tmp9 + _tmp7*_tmp8;
 }
 
-/* deviation of the points at level loaded (68 operations) */
+/* deviation of the points at level loaded, loaded_refined (68 operations) */
 static void sk_dev_loaded(const double *theta, const double *delta, const double *params, double *out)
-{
-    const double theta_1 = theta[0];
-    const double theta_2 = theta[1];
-    const double delta_2 = delta[0];
-    const double p_0 = params[0];
-    const double compliance_x_1 = params[1];
-    const double compliance_y_1 = params[2];
-    const double compliance_x_2 = params[3];
-    const double compliance_y_2 = params[4];
-    const double _tmp0 = 0.5*theta_1;
-    const double _tmp1 = 0.25*p_0*pow(theta_1, 2)*symkin_arck(_tmp0);
-    const double _tmp2 = theta_1 + theta_2;
-    const double _tmp3 = sin(_tmp2);
-    const double _tmp4 = sin(delta_2);
-    const double _tmp5 = 0.5*delta_2;
-    const double _tmp6 = pow(sin(_tmp5), 2);
-    const double _tmp7 = 0.04*_tmp4 - 0.14*_tmp6;
-    const double _tmp8 = cos(_tmp2);
-    const double _tmp9 = -0.07*_tmp4 - 0.08*_tmp6;
-    const double _tmp10 = sin(theta_1);
-    const double _tmp11 = _tmp5 + 0.5*theta_2;
-    const double _tmp12 = cos(_tmp11);
-    const double _tmp13 = pow(delta_2 + theta_2, 2);
-    const double _tmp14 = symkin_arck(_tmp11);
-    const double _tmp15 = 0.1767766952966369*_tmp13*_tmp14*p_0;
-    const double _tmp16 = 0.7071067811865476*compliance_y_2 + _tmp15*sin(_tmp11);
-    const double _tmp17 = _tmp16 + 0.7071067811865476*compliance_x_2 + _tmp12*_tmp15;
-    const double _tmp18 = cos(theta_1);
-    const double _tmp19 = -_tmp16 + 0.7071067811865476*compliance_x_2 + 0.1767766952966369*_tmp12*_tmp13*_tmp14*p_0;
-    out[0] = -compliance_y_1 + _tmp18*_tmp19 + _tmp8*_tmp9 - _tmp1*sin(_tmp0) - _tmp10*_tmp17 - _tmp3*_tmp7;
-    out[1] = compliance_x_1 + _tmp1*cos(_tmp0) + _tmp10*_tmp19 + _tmp17*_tmp18 + _tmp3*_tmp9 + _tmp7*_tmp8;
-}
-
-/* deviation of the points at level loaded_refined (68 operations) */
-static void sk_dev_loaded_refined(const double *theta, const double *delta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
     const double theta_2 = theta[1];
@@ -2319,18 +2284,12 @@ static int sk_exact(const double *theta, const double *params, double *delta)
     return sk_newton_solve(sk_linear, sk_newton, theta, params, delta);
 }
 
-/* Level loaded: Newton on the loaded closure from its first-order delta; `params` holds the
-   plates' compliance after the parameters (sk_loaded_constants). */
+/* Level loaded (and loaded_refined, with its own constants): Newton on the loaded closure from
+   its first-order delta; `params` holds the plates' compliance after the parameters
+   (sk_loaded_constants, sk_loaded_refine). */
 static int sk_loaded(const double *theta, const double *params, double *delta)
 {
     return sk_newton_solve(sk_loaded_linear, sk_loaded_newton, theta, params, delta);
-}
-
-/* Level loaded_refined: the loaded closure again, with the compliance of the refined statics
-   (sk_loaded_refine). */
-static int sk_loaded_refined(const double *theta, const double *params, double *delta)
-{
-    return sk_loaded(theta, params, delta);
 }
 
 /* LU factorisation with partial pivoting of the n x n row-major a, in place (L below the unit
@@ -2549,7 +2508,7 @@ static int sk_pose(const double *inputs, const double *params, int level, int wa
             status = sk_loaded(theta, *q, delta);
         }
         else if (level == 5) {
-            status = sk_loaded_refined(theta, *q, delta);
+            status = sk_loaded(theta, *q, delta);
         }
         if (status) {
             return status;
@@ -2630,7 +2589,7 @@ static int sk_outputs(const double *theta, const double *delta, const double *pa
         sk_dev_loaded(theta, delta, q, dev);
     }
     else {
-        sk_dev_loaded_refined(theta, delta, q, dev);
+        sk_dev_loaded(theta, delta, q, dev);
     }
     for (i = 0; i < 2 * SK_NP; ++i) {
         if (!isfinite(rigid[i]) || !isfinite(dev[i])) {

@@ -2,7 +2,7 @@
 Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
 Points: D; levels: paper, first_order, exact, loaded, loaded_refined.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, loaded_q0 16, loaded_q 128, loaded_compliance 401, loaded_linear 190, loaded_newton 527, dev_paper 36, dev_first_order 50, dev_exact 60, dev_loaded 68, dev_loaded_refined 68, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661.
+Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, loaded_q0 16, loaded_q 128, loaded_compliance 401, loaded_linear 190, loaded_newton 527, dev_paper 36, dev_first_order 50, dev_exact 60, dev_loaded 68, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -1146,38 +1146,7 @@ def _dev_exact(theta, delta, params):
 
 
 def _dev_loaded(theta, delta, params):
-    """deviation of the points at level loaded (68 operations)."""
-    theta_1, theta_2, _, _, _, _, _ = theta
-    delta_2, _, _, _, _, _ = delta
-    p_0, compliance_x_1, compliance_y_1, compliance_x_2, compliance_y_2, _, _, _, _, _, _, _, _, _, _ = params
-    _tmp0 = 0.5*theta_1
-    _tmp1 = 0.25*p_0*theta_1**2*arck(_tmp0)
-    _tmp2 = theta_1 + theta_2
-    _tmp3 = numpy.sin(_tmp2)
-    _tmp4 = numpy.sin(delta_2)
-    _tmp5 = 0.5*delta_2
-    _tmp6 = numpy.sin(_tmp5)**2
-    _tmp7 = 0.04*_tmp4 - 0.14*_tmp6
-    _tmp8 = numpy.cos(_tmp2)
-    _tmp9 = -0.07*_tmp4 - 0.08*_tmp6
-    _tmp10 = numpy.sin(theta_1)
-    _tmp11 = _tmp5 + 0.5*theta_2
-    _tmp12 = numpy.cos(_tmp11)
-    _tmp13 = (delta_2 + theta_2)**2
-    _tmp14 = arck(_tmp11)
-    _tmp15 = 0.1767766952966369*_tmp13*_tmp14*p_0
-    _tmp16 = 0.7071067811865476*compliance_y_2 + _tmp15*numpy.sin(_tmp11)
-    _tmp17 = _tmp16 + 0.7071067811865476*compliance_x_2 + _tmp12*_tmp15
-    _tmp18 = numpy.cos(theta_1)
-    _tmp19 = -_tmp16 + 0.7071067811865476*compliance_x_2 + 0.1767766952966369*_tmp12*_tmp13*_tmp14*p_0
-    return [
-        -compliance_y_1 + _tmp18*_tmp19 + _tmp8*_tmp9 - _tmp1*numpy.sin(_tmp0) - _tmp10*_tmp17 - _tmp3*_tmp7,
-        compliance_x_1 + _tmp1*numpy.cos(_tmp0) + _tmp10*_tmp19 + _tmp17*_tmp18 + _tmp3*_tmp9 + _tmp7*_tmp8,
-    ]
-
-
-def _dev_loaded_refined(theta, delta, params):
-    """deviation of the points at level loaded_refined (68 operations)."""
+    """deviation of the points at level loaded, loaded_refined (68 operations)."""
     theta_1, theta_2, _, _, _, _, _ = theta
     delta_2, _, _, _, _, _ = delta
     p_0, compliance_x_1, compliance_y_1, compliance_x_2, compliance_y_2, _, _, _, _, _, _, _, _, _, _ = params
@@ -2213,8 +2182,9 @@ def _loaded_constants(theta, params, ok, at=None, more=False):
 
 
 def _loaded(theta, params, ok):
-    """Level loaded: Newton on the loaded closure from its first-order delta; `params` holds the
-    plates' compliance after the parameters (_loaded_constants)."""
+    """Level loaded (and loaded_refined, with its own constants): Newton on the loaded closure
+    from its first-order delta; `params` holds the plates' compliance after the parameters
+    (_loaded_constants, _loaded_refine)."""
     return _newton_solve(theta, params, ok, _loaded_linear, _loaded_newton)
 
 
@@ -2231,14 +2201,8 @@ def _loaded_refine(theta, params, constants, ok):
                                                  for j in range(k)], more=True)
 
 
-def _loaded_refined(theta, params, ok):
-    """Level loaded_refined: the loaded closure again, with the compliance of the refined
-    statics (_loaded_refine)."""
-    return _loaded(theta, params, ok)
-
-
 #: The levels that solve the loops, and how.
-_DELTA = {'first_order': _first_order, 'exact': _exact, 'loaded': _loaded, 'loaded_refined': _loaded_refined}
+_DELTA = {'first_order': _first_order, 'exact': _exact, 'loaded': _loaded, 'loaded_refined': _loaded}
 
 _CHUNK = 8192   # elements per block: the temporaries of a block stay in the CPU cache
 
@@ -2326,7 +2290,7 @@ def _points(theta, delta, ok, level, p, q, links):
         elif level == 'loaded':
             dev = _dev_loaded(theta, delta, q)
         elif level == 'loaded_refined':
-            dev = _dev_loaded_refined(theta, delta, q)
+            dev = _dev_loaded(theta, delta, q)
         rot = [numpy.broadcast_to(v, shape) for v in _links(theta, delta)] if links else []
     rigid = [numpy.broadcast_to(v, shape) for v in rigid]
     dev = [numpy.broadcast_to(v, shape) for v in dev]

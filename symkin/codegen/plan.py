@@ -7,7 +7,8 @@
     linear       theta, params         -> A (rigid loop Jacobian), r = Φ Δz at the rigid pose
     newton       theta, delta, params  -> F, ∂F/∂δ of the exact compliant closure
     rigid_points theta, params         -> rigid x, y of every requested point
-    dev_<level>  theta, delta, params  -> deviation x, y of every requested point
+    dev_<level>  theta, delta, params  -> deviation x, y of every requested point (a level that
+                                          shares another's, loaded_refined, runs its routine)
     sens_rigid   theta, params         -> A, ∂G/∂v (G the rigid closure), ∂R/∂θ_u, ∂R/∂v
     sens_<level> theta, delta, params  -> M, ∂E/∂θ_u, ∂E/∂v of the closure E the level solves
                                           for δ (where it does), ∂D/∂θ_u, ∂D/∂δ, ∂D/∂v of the
@@ -165,13 +166,16 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
             der, routines, theta, delta, params, loaded_exprs, needs_loops or loops_for_links,
             "loaded_refined" in physical and bool(kin.unknowns))
     for lv in levels:
+        if f"dev_{lv.routine}" in routines:         # a level that shares another's deviation
+            continue
         args = (theta, delta, params) if lv.needs_delta else (theta, params)
         if lv.name in level_table.LOADED:
             exprs, args = loaded_exprs, (theta, delta, constants)
         else:
             exprs = tuple(e for n in names for e in an.point_deviation(n, lv.name))
-        routines[f"dev_{lv.name}"] = Routine(f"dev_{lv.name}", args, (), exprs,
-                                             f"deviation of the points at level {lv.name}")
+        users = ", ".join(o.name for o in levels if o.routine == lv.routine)
+        routines[f"dev_{lv.routine}"] = Routine(f"dev_{lv.routine}", args, (), exprs,
+                                                f"deviation of the points at level {users}")
     s = an.structure
     reported = tuple(range(s.n + 1)) if links else ()
     if reported:

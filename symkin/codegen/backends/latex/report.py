@@ -816,9 +816,10 @@ def sweep(report: Report, numpy_module, spans: Mapping[str, tuple[float, float]]
                 row["physics"] = _physics_distance(runs, p, lv)
             summary["rows"].append(row)
     summary["physics"] = physics is not None
-    if physics is not None:
-        summary["reference_samples"] = sum(int(np.isfinite(data.reference[1][p][0]).sum())
-                                           for _, data, _ in runs for p in report.plan.points[:1])
+    if physics is not None:             # the configurations where the reference was solved
+        first = report.plan.points[0]
+        summary["reference_samples"] = sum(int(np.isfinite(data.reference[1][first][0]).sum())
+                                           for _, data, _ in runs)
     return runs, summary
 
 
