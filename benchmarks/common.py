@@ -4,6 +4,7 @@ iteration policy of symkin's generated evaluators (read from symkin.solver)."""
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import platform
@@ -129,3 +130,13 @@ def machine() -> dict:
         pass
     return info
 
+
+def save(name: str, rows: list[dict], table: list[str], load_before: tuple) -> None:
+    """Print `table` and the load average, and write benchmarks/results-<name>.json with the
+    machine and the load before and after (wall times on a shared machine move)."""
+    after = os.getloadavg()
+    print("\n".join(table))
+    print(f"load average before {load_before[0]:.1f}, after {after[0]:.1f}")
+    results = {"machine": machine(), "load_average_before": load_before,
+               "load_average_after": after, "rows": rows}
+    (BENCH / f"results-{name}.json").write_text(json.dumps(results, indent=1) + "\n")

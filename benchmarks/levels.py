@@ -14,14 +14,13 @@ benchmarks/results-levels.json with the load average (wall times on a shared mac
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import time
 
 import numpy as np
 
 import symkin
-from common import BENCH, EXAMPLES, ROOT, log, machine
+from common import EXAMPLES, ROOT, log, save
 
 LEVELS = ("paper", "first_order", "exact", "loaded", "loaded_refined")
 
@@ -74,11 +73,7 @@ def main() -> None:
     args = ap.parse_args()
     load_before = os.getloadavg()
     rows = measure(args.points, args.repeats)
-    results = {"machine": machine(), "load_average_before": load_before,
-               "load_average_after": os.getloadavg(), "rows": rows}
-    print("\n".join(render(rows)))
-    print(f"load average before {load_before[0]:.1f}, after {results['load_average_after'][0]:.1f}")
-    (BENCH / "results-levels.json").write_text(json.dumps(results, indent=1) + "\n")
+    save("levels", rows, render(rows), load_before)
 
 
 if __name__ == "__main__":

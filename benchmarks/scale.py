@@ -12,7 +12,6 @@ benchmarks/results-scale.json with the machine's load average (the figures are w
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import subprocess
 import sys
@@ -21,7 +20,7 @@ import time
 from pathlib import Path
 
 import families
-from common import BENCH, log, machine
+from common import log, save
 
 SYMKIN = [sys.executable, "-m", "symkin"]
 
@@ -76,11 +75,7 @@ def main() -> None:
     sizes = tuple(int(k) for k in args.sizes.split(","))
     load_before = os.getloadavg()
     rows = measure(sizes)
-    results = {"machine": machine(), "load_average_before": load_before,
-               "load_average_after": os.getloadavg(), "rows": rows}
-    print("\n".join(render(rows)))
-    print(f"load average before {load_before[0]:.1f}, after {results['load_average_after'][0]:.1f}")
-    (BENCH / "results-scale.json").write_text(json.dumps(results, indent=1) + "\n")
+    save("scale", rows, render(rows), load_before)
 
 
 if __name__ == "__main__":

@@ -17,6 +17,7 @@ generated module's `evaluate` and `<name>_evaluate_pose` have them).
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import threading
 from collections.abc import Mapping, Sequence
@@ -31,6 +32,7 @@ from .analysis import Analysis
 from .codegen import runtime
 from .errors import InputError
 from .mechanism import Mechanism, load
+from .pruning import for_levels
 from .structure import build
 
 BACKENDS = ("c", "numpy")
@@ -234,7 +236,8 @@ class Compiled:
 
     # -- helpers ---------------------------------------------------------------------------------
     def _rows(self, inputs: Mapping[str, object]) -> tuple[np.ndarray, tuple[int, ...]]:
-        if set(inputs) != set(self.inputs):
+        # the file's inputs pruning dropped (they move none of the points) are ignored
+        if set(inputs) - set(self.module.PRUNED_INPUTS) != set(self.inputs):
             raise ValueError(f"inputs must be exactly {self.inputs}, got "
                              f"{tuple(sorted(inputs))}")
         arrays = np.broadcast_arrays(*(np.asarray(inputs[n], dtype=float) for n in self.inputs))
@@ -269,14 +272,19 @@ def compile(mechanism: Mechanism | Analysis | str | Path, backend: str = "c",
     if backend not in BACKENDS:
         raise InputError(f"unknown backend '{backend}'", entry="--backend",
                          hint="backends: " + ", ".join(BACKENDS))
+    pruned: tuple[str, ...] = ()
     if isinstance(mechanism, Analysis):
         analysis = mechanism
     else:
         mech = mechanism if isinstance(mechanism, Mechanism) else load(mechanism)
+        if points is not None:          # only the loops that move the points (docs/pruning.md)
+            mech, pruning = for_levels(mech, points, levels)
+            pruned = pruning.dropped_inputs
         analysis = Analysis(build(mech), points)
     check_fabricated_pose(analysis)
     mech = analysis.mechanism
     p = plan(analysis, points, levels, sensitivity=sensitivity, links=False)
+    p = dataclasses.replace(p, pruned_inputs=pruned)
     source = Path(mech.path).name
     header, code = c_backend.emit(p, source) if backend == "c" else ("", "")
     return Compiled(Sources(

@@ -7,6 +7,7 @@ order, no timestamps, headers name the source file by its base name only).
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
@@ -14,6 +15,7 @@ from .analysis import Analysis
 from .errors import InputError
 from .mechanism import Mechanism, load
 from .paths import write_atomically
+from .pruning import for_levels
 from .structure import build
 
 EMITTERS = ("latex", "c", "numpy")
@@ -71,6 +73,19 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
 
     say = progress or (lambda message: None)
     source = Path(mech.path).name
+    pruning = None
+    if points is not None:
+        mech, pruning = for_levels(mech, points,
+                                   [variant.level] if variant is not None else levels)
+        notes = [*notes, *pruning.notes()]
+        if spans:
+            unused = [k for k in spans if k not in mech.inputs]
+            if unused and variant is None:      # a --range the pruned report cannot plot
+                raise InputError(f"the input {unused[0]} moves none of the points "
+                                 f"{', '.join(pruning.points)}", file=mech.path,
+                                 entry="--range", hint=f"drop --range {unused[0]}=..., or ask "
+                                 "for a point it moves (docs/pruning.md)")
+            spans = {k: v for k, v in spans.items() if k in mech.inputs}
     say(f"deriving {mech.name}: structure and kinematics")
     if variant is not None:
         from .variants import analysis_for
@@ -82,6 +97,8 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
     check_fabricated_pose(analysis)
     say("deriving the routines (CSE)")
     p = plan(analysis, points, levels, notes=notes)
+    if pruning is not None:
+        p = dataclasses.replace(p, pruned_inputs=pruning.dropped_inputs)
     files: dict[str, bytes] = {}
     numpy_text = None
     if "numpy" in emit:

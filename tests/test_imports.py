@@ -27,7 +27,7 @@ FLOORS: tuple[tuple[str, ...], ...] = (
     ("variants", "sensitivity"),
     # the physical levels: plate stiffness, the loaded level's derivation, the elastica solver
     ("physics.stiffness", "physics.beamcolumn", "physics.arith", "physics.result"),
-    ("physics.elastica", "physics.statics"),
+    ("physics.elastica", "physics.statics", "pruning"),
     ("physics.equilibrium",),
     # code generation: the plan, then each backend's printer and kernels, then the backends
     ("codegen.derivation", "codegen.plan"),

@@ -24,6 +24,7 @@ import numpy
 import numpy as np
 
 INPUTS = ('A0', )
+PRUNED_INPUTS = ()
 PARAMETERS = {'l': 0.001, 'l_A0': 0.001, 'l_A': 0.001, 'l_B0': 0.001, 'l_B': 0.001, 'ax': 0.015, 'ay': 0.026, 'b0x': 0.1, 'bx': 0.085, 'by': 0.068, 'cx': 0.06, 'cy': 0.09}
 HINGES = ('A0', 'A', 'B0', 'B', )
 LINKS = ('frame', 'crank', 'coupler', 'rocker', )
@@ -1482,7 +1483,7 @@ def _prepare(inputs, level, params):
     """Checked arguments: the broadcast input arrays, their shape and the parameter values."""
     if level not in LEVELS:
         raise ValueError(f"level must be one of {LEVELS}, got {level!r}")
-    names = set(inputs)
+    names = set(inputs) - set(PRUNED_INPUTS)
     if names != set(INPUTS):
         raise ValueError(f"inputs must be exactly {INPUTS}, got {tuple(sorted(names))}")
     arrays = numpy.broadcast_arrays(*(numpy.asarray(inputs[n], dtype=_DTYPE) for n in INPUTS))

@@ -24,6 +24,7 @@ import numpy
 import numpy as np
 
 INPUTS = ('O', 'A', 'B', 'K', )
+PRUNED_INPUTS = ()
 PARAMETERS = {'l': 0.0006}
 HINGES = ('O', 'A', 'B', 'K', 'G', 'H', 'C', 'D', 'I', 'E', )
 LINKS = ('frame', 'b1', 'b2', 'b3', 'b4', 'b5', 'b6', 'b7', 'b8', )
@@ -1831,7 +1832,7 @@ def _prepare(inputs, level, params):
     """Checked arguments: the broadcast input arrays, their shape and the parameter values."""
     if level not in LEVELS:
         raise ValueError(f"level must be one of {LEVELS}, got {level!r}")
-    names = set(inputs)
+    names = set(inputs) - set(PRUNED_INPUTS)
     if names != set(INPUTS):
         raise ValueError(f"inputs must be exactly {INPUTS}, got {tuple(sorted(names))}")
     arrays = numpy.broadcast_arrays(*(numpy.asarray(inputs[n], dtype=_DTYPE) for n in INPUTS))

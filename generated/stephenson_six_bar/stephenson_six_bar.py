@@ -24,6 +24,7 @@ import numpy
 import numpy as np
 
 INPUTS = ('O_A', )
+PRUNED_INPUTS = ()
 PARAMETERS = {'l': 0.0008}
 HINGES = ('O_A', 'C', 'O_B', 'E', 'B', 'A', 'D', )
 LINKS = ('frame', 'input', 'coupler', 'rocker', 'link_ED', 'link_AB', )
@@ -2211,7 +2212,7 @@ def _prepare(inputs, level, params):
     """Checked arguments: the broadcast input arrays, their shape and the parameter values."""
     if level not in LEVELS:
         raise ValueError(f"level must be one of {LEVELS}, got {level!r}")
-    names = set(inputs)
+    names = set(inputs) - set(PRUNED_INPUTS)
     if names != set(INPUTS):
         raise ValueError(f"inputs must be exactly {INPUTS}, got {tuple(sorted(names))}")
     arrays = numpy.broadcast_arrays(*(numpy.asarray(inputs[n], dtype=_DTYPE) for n in INPUTS))

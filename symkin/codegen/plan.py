@@ -88,6 +88,8 @@ class Plan:
     loaded: LoadedPlan | None = None   # the `loaded` level's statics, when it is generated
     sensitivity: bool = False          # the sens_* routines are there
     chain: bool = False                # some parameter's default reads others (sens_chain)
+    pruned_inputs: tuple[str, ...] = ()   # the file's inputs that move none of the points
+                                          # (docs/pruning.md): accepted and ignored by numpy
 
     def stage(self, level: Level) -> bool:
         """Whether the sensitivity at `level` goes through a closure solved for δ."""
