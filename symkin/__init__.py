@@ -51,13 +51,14 @@ def evaluate(analysis: Analysis, inputs: Mapping[str, object], level: str = DEFA
 
 def compile(mechanism: Mechanism | Analysis | str | Path, backend: str = "c",  # noqa: A001
             points: list[str] | None = None, levels: list[str] | None = None,
-            sensitivity: bool = True) -> Compiled:
+            sensitivity: bool = True, fixed: Mapping[str, object] | None = None) -> Compiled:
     """The generated evaluator of a mechanism, in memory, no files left behind
     (:func:`symkin.compiled.compile`): `evaluate`, `sensitivity` and `sensitivity_full` on
-    arrays of inputs, one C call each."""
+    arrays of inputs, one C call each; with `points`, only what moves them (docs/pruning.md);
+    `fixed` inputs (name -> angle) are held constant and folded in."""
     from .compiled import compile as build_evaluator
 
-    return build_evaluator(mechanism, backend, points, levels, sensitivity)
+    return build_evaluator(mechanism, backend, points, levels, sensitivity, fixed)
 
 
 __all__ = ["AssemblyError", "InputError", "Mechanism", "Structure", "SymkinError", "analyze",

@@ -80,7 +80,7 @@ def _derive(args: argparse.Namespace) -> str:
     output_dir(args.output, "-o")
     column = parse_length(args.columnwidth) if args.columnwidth else None
     written = derive(args.file, args.output, emit, points, levels, args.appendix, progress,
-                     args.tolerance, args.range, column)
+                     args.tolerance, args.range, column, _pairs(args.fix, "--fix"))
     return "".join(f"{path}\n" for path in written)
 
 
@@ -220,6 +220,9 @@ def parser() -> argparse.ArgumentParser:
     de.add_argument("--emit", metavar="LIST", help="latex,c,numpy (all by default)")
     de.add_argument("--points", metavar="LIST", help="only these points (all by default)")
     de.add_argument("--levels", metavar="LIST", help="paper,first_order,exact (all by default)")
+    de.add_argument("--fix", action="append", metavar="H=V",
+                    help="hold input H at angle V (rad): not an argument of the evaluators, its "
+                         "value folded into them")
     de.add_argument("--appendix", action="store_true",
                     help="LaTeX body only, to \\input into a paper")
     de.add_argument("--columnwidth", metavar="LENGTH",

@@ -261,13 +261,14 @@ def _shaped(columns: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
 
 def compile(mechanism: Mechanism | Analysis | str | Path, backend: str = "c",
             points: Sequence[str] | None = None, levels: Sequence[str] | None = None,
-            sensitivity: bool = True) -> Compiled:
+            sensitivity: bool = True, fixed: Mapping[str, object] | None = None) -> Compiled:
     """The generated evaluator of a mechanism (file, Mechanism or Analysis), in memory: the
-    requested points and levels (all by default), with its sensitivities unless told not to."""
+    requested points and levels (all by default), with its sensitivities unless told not to or
+    inputs are `fixed` (input -> angle: held constant, folded into the evaluator)."""
     from .codegen.backends.c import backend as c_backend
     from .codegen.backends.numpy import backend as numpy_backend
     from .codegen.plan import plan
-    from .evaluation import check_fabricated_pose
+    from .evaluation import check_fabricated_pose, fixed_angles
 
     if backend not in BACKENDS:
         raise InputError(f"unknown backend '{backend}'", entry="--backend",
@@ -275,15 +276,18 @@ def compile(mechanism: Mechanism | Analysis | str | Path, backend: str = "c",
     pruned: tuple[str, ...] = ()
     if isinstance(mechanism, Analysis):
         analysis = mechanism
+        held = fixed_angles(analysis.mechanism, fixed)
     else:
         mech = mechanism if isinstance(mechanism, Mechanism) else load(mechanism)
+        held = fixed_angles(mech, fixed)
         if points is not None:          # only the loops that move the points (docs/pruning.md)
             mech, pruning = for_levels(mech, points, levels)
             pruned = pruning.dropped_inputs
         analysis = Analysis(build(mech), points)
     check_fabricated_pose(analysis)
     mech = analysis.mechanism
-    p = plan(analysis, points, levels, sensitivity=sensitivity, links=False)
+    held = {k: v for k, v in held.items() if k in analysis.mechanism.inputs}
+    p = plan(analysis, points, levels, sensitivity=sensitivity, links=False, fixed=held)
     p = dataclasses.replace(p, pruned_inputs=pruned)
     source = Path(mech.path).name
     header, code = c_backend.emit(p, source) if backend == "c" else ("", "")
@@ -291,4 +295,4 @@ def compile(mechanism: Mechanism | Analysis | str | Path, backend: str = "c",
         name=mech.name, backend=backend, header=header, source=code,
         numpy=numpy_backend.emit(p, source), inputs=p.inputs,
         params=tuple(q.name for q in p.parameters), points=p.points, hinges=p.hinges,
-        levels=tuple(lv.name for lv in p.levels), sensitivity=sensitivity))
+        levels=tuple(lv.name for lv in p.levels), sensitivity=p.sensitivity))

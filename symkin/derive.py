@@ -11,6 +11,8 @@ import dataclasses
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
+import sympy as sp
+
 from .analysis import Analysis
 from .errors import InputError
 from .mechanism import Mechanism, load
@@ -60,19 +62,22 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
              levels: Sequence[str] | None = None, appendix: bool = False,
              progress: Callable[[str], None] | None = None, variant=None,
              notes: Sequence[str] = (), column_width: float | None = None,
-             spans: Mapping[str, tuple[float, float]] | None = None) -> dict[str, bytes]:
+             spans: Mapping[str, tuple[float, float]] | None = None,
+             fixed: Mapping[str, object] | None = None) -> dict[str, bytes]:
     """File name -> content of every requested artifact (nothing is written). A `variant`
     (symkin.variants.Variant) derives that cheaper variant instead of the file's models;
     `column_width` (points) lays the LaTeX report out for that column and `spans` (input ->
-    (lo, hi) rad) sets its deviation plots' ranges."""
+    (lo, hi) rad) sets its deviation plots' ranges; `fixed` (input -> angle, numbers or
+    expressions) holds inputs constant, folded into the evaluators."""
     from .codegen import runtime
     from .codegen.backends.c import backend as c_backend
     from .codegen.backends.numpy import backend as numpy_backend
     from .codegen.plan import plan, with_derivation
-    from .evaluation import check_fabricated_pose
+    from .evaluation import check_fabricated_pose, fixed_angles
 
     say = progress or (lambda message: None)
     source = Path(mech.path).name
+    held = fixed_angles(mech, fixed)
     pruning = None
     if points is not None:
         mech, pruning = for_levels(mech, points,
@@ -86,6 +91,9 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
                                  entry="--range", hint=f"drop --range {unused[0]}=..., or ask "
                                  "for a point it moves (docs/pruning.md)")
             spans = {k: v for k, v in spans.items() if k in mech.inputs}
+        held = {k: v for k, v in held.items() if k in mech.inputs}   # a pruned one moves nothing
+    if spans and held:
+        spans = {k: v for k, v in spans.items() if k not in held}
     say(f"deriving {mech.name}: structure and kinematics")
     if variant is not None:
         from .variants import analysis_for
@@ -96,7 +104,7 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
         analysis = Analysis(build(mech), points)
     check_fabricated_pose(analysis)
     say("deriving the routines (CSE)")
-    p = plan(analysis, points, levels, notes=notes)
+    p = plan(analysis, points, levels, notes=notes, fixed=held)
     if pruning is not None:
         p = dataclasses.replace(p, pruned_inputs=pruning.dropped_inputs)
     files: dict[str, bytes] = {}
@@ -121,19 +129,24 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
             evaluator = runtime.import_numpy_module(numpy_text, mech.name)
         files.update(report.emit(with_derivation(p, analysis), source, appendix, evaluator,
                                  column_width or report.COLUMN_WIDTH, spans,
-                                 physics_reference(analysis) if p.loaded is not None else None))
+                                 physics_reference(analysis, held)
+                                 if p.loaded is not None else None))
     return files
 
 
-def physics_reference(analysis: Analysis) -> Callable[[Mapping[str, float]], dict]:
+def physics_reference(analysis: Analysis, fixed: Mapping[str, object] | None = None
+                      ) -> Callable[[Mapping[str, float]], dict]:
     """The report's physical reference: the `equilibrium` level's point deviations at given
-    inputs (the file's own plates and loads, whatever variant the report derives)."""
+    inputs and the `fixed` ones (the file's own plates and loads, whatever variant the report
+    derives)."""
     from .evaluation import equilibrium
 
     reference = Analysis(analysis.structure, [p.name for p in analysis.points])
 
     def deviations(inputs: Mapping[str, float]) -> dict:
-        result = equilibrium(reference, {k: repr(v) for k, v in inputs.items()})
+        given = {k: repr(v) for k, v in inputs.items()}
+        given.update({k: sp.sstr(v) for k, v in (fixed or {}).items()})
+        result = equilibrium(reference, given)
         return {name: pt.deviation for name, pt in result.points.items()}
     return deviations
 
@@ -142,10 +155,15 @@ def derive(path: str | Path, out_dir: str | Path = ".", emit: Sequence[str] = EM
            points: Sequence[str] | None = None, levels: Sequence[str] | None = None,
            appendix: bool = False, progress: Callable[[str], None] | None = None,
            tolerance: float | None = None, ranges: Sequence[str] | None = None,
-           column_width: float | None = None) -> list[Path]:
+           column_width: float | None = None, fixed: Mapping[str, object] | None = None
+           ) -> list[Path]:
     """Load, generate and write; returns the written paths. With a `tolerance`, the cheapest
-    variant whose measured worst error over `ranges` meets it is derived instead."""
+    variant whose measured worst error over `ranges` meets it is derived instead; `fixed`
+    inputs are held at their angles."""
     mech = load(path)
+    if fixed and tolerance is not None:
+        raise InputError("--fix and --tolerance together are not supported yet", entry="--fix",
+                         hint="derive with --tolerance alone, or --fix alone")
     variant, notes, spans = None, [], None
     if tolerance is not None:
         from . import tradeoff
@@ -171,7 +189,7 @@ def derive(path: str | Path, out_dir: str | Path = ".", emit: Sequence[str] = EM
                              hint="add --tolerance TOL or --emit latex, or drop --range")
         spans = tradeoff.parse_ranges(ranges, mech.inputs, mech.path, default=None)
     files = generate(mech, emit, points, levels, appendix, progress, variant, notes,
-                     column_width, spans)
+                     column_width, spans, fixed)
     try:
         return write_atomically(files, Path(out_dir))
     except OSError as exc:

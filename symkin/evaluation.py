@@ -904,3 +904,15 @@ def _explain(analysis: Analysis, inputs, level, params, sensitivity: bool = Fals
     raise AssemblyError(f"{analysis.mechanism.path}: the generated evaluator could not solve this "
                         "configuration (no convergence in float64), although the 40-digit "
                         "derivation can")
+
+
+def fixed_angles(mech: Mechanism, fixed: Mapping[str, object] | None) -> dict[str, sp.Expr]:
+    """Input name -> exact angle of the inputs `fixed` holds (numbers or expressions such as
+    'pi/8'); names that are not inputs are bad input (exit 2)."""
+    held = {}
+    for name, value in (fixed or {}).items():
+        if name not in mech.inputs:
+            raise InputError(f"'{name}' is not an input hinge", file=mech.path, entry="--fix",
+                             hint="inputs: " + ", ".join(mech.inputs))
+        held[name] = exact_value(value, "--fix", mech.path)
+    return held

@@ -426,7 +426,7 @@ def test_each_input_figure_shows_the_points_it_moves(tmp_path):
 def test_tolerance_choice_is_in_the_rendered_report(tmp_path):
     tex = _derive_tex(tmp_path, EXAMPLES / "four_bar.toml", "--tolerance", "0.05")
     body = "\n".join(line for line in tex.splitlines() if not line.startswith("%"))
-    assert r"\paragraph{Variant chosen for a tolerance.}" in body
+    assert r"\paragraph{What this derivation covers.}" in body
     body = body.replace(r"\penalty0{}", "").replace("{}", "").replace(r"\_", "_")
     m = re.search(r"Tolerance 0.05 over A0 in \[-0.2, 0.2\]: variant (\S+) chosen", body)
     assert m and "worst relative error" in body

@@ -36,13 +36,14 @@ input: the C and numpy backends read its fields and routines, the LaTeX report i
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import sympy as sp
 
 from .. import levels as level_table
 from ..analysis import Analysis
+from ..errors import InputError
 from ..levels import Level
 from ..physics.statics import LoadedDerivation, loaded_derivation
 from ..physics.stiffness import has_stiffness
@@ -89,6 +90,8 @@ class Plan:
     sensitivity: bool = False          # the sens_* routines are there
     chain: bool = False                # some parameter's default reads others (sens_chain)
     pruned_inputs: tuple[str, ...] = ()   # the file's inputs that move none of the points
+    fixed: tuple[tuple[int, float], ...] = ()   # (θ index, angle): inputs held constant,
+                                                # folded into the routines (docs/cli.md, --fix)
                                           # (docs/pruning.md): accepted and ignored by numpy
 
     def stage(self, level: Level) -> bool:
@@ -112,21 +115,27 @@ class LoadedPlan:
 def plan(analysis: Analysis, points: Sequence[str] | None = None,
          levels: Sequence[str] | None = None, cse: bool = True,
          notes: Sequence[str] = (), report: bool = False, links: bool | None = None,
-         sensitivity: bool = True, beam_column: bool = True) -> Plan:
+         sensitivity: bool = True, beam_column: bool = True,
+         fixed: Mapping[str, sp.Expr] | None = None) -> Plan:
     """Derive the routines for the requested points and levels (by default every generated level
     the file's data allows: `loaded` needs the plates' stiffness); with `report`, also the
     statement of the derivation a LaTeX report prints. `links`: report the rotation of every
     link (default: when no points are singled out; their rotations need the loops). With
     `sensitivity`, the routines of the derivatives by the parameters and inputs at the levels
     that have them (docs/sensitivity.md). `beam_column=False` derives the `loaded` level with the
-    first-order force correction only (a cheaper variant)."""
+    first-order force correction only (a cheaper variant). `fixed` (input name -> exact angle)
+    holds those inputs constant: they leave the evaluators' arguments and their values are
+    folded into the routines (an evaluator with fixed inputs has no sensitivities)."""
     an, kin = analysis, analysis.kin
     mech = an.mechanism
     names = tuple(p.name for p in an.points if points is None or p.name in points)
     stiff = has_stiffness(mech)
     levels = tuple(lv for lv in level_table.LEVELS if lv.generated and (
         lv.name in levels if levels is not None else stiff or not lv.needs_stiffness))
-    inputs = Argument("inputs", tuple(kin.theta[a] for a in kin.inputs))
+    held = _fixed_angles(an, fixed or {})
+    sensitivity = sensitivity and not held
+    free = tuple(a for a in kin.inputs if a not in held)
+    inputs = Argument("inputs", tuple(kin.theta[a] for a in free))
     params = Argument("params", an.params)
     theta = Argument("theta", an.thetas)
     delta = Argument("delta", an.deltas)
@@ -190,6 +199,12 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
     if sensitivity:
         chain = _sensitivity_routines(an, names, levels, needs_loops, routines,
                                       (theta, params), (theta, delta, params))
+    if held:
+        # rigid_res and linear read θ as the rigid solve sets it (continuation scales the fixed
+        # inputs from the as-fabricated pose like the others); every other routine folds them
+        values = {kin.theta[a]: v for a, v in held.items()}
+        routines = {k: r if k in ("rigid_res", "linear") else _substituted(r, values)
+                    for k, r in routines.items()}
     # Numbers reach the printers as correctly rounded doubles (exact rationals stay in mpmath).
     memo: dict = {}
     routines = {k: Routine(r.name, r.arguments,
@@ -206,13 +221,18 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
     limits = tuple((a - 1, float(sp.N(h.limit, 20))) for a, h in sorted(kin.hinges.items())
                    if h.limit is not None)
     result = Plan(
-        name=mech.name, links=s.links, hinges=s.hinges, inputs=mech.inputs,
-        input_index=tuple(a - 1 for a in kin.inputs),
+        name=mech.name, links=s.links, hinges=s.hinges,
+        inputs=tuple(kin.hinges[a].name for a in free), input_index=tuple(a - 1 for a in free),
         unknown_index=tuple(a - 1 for a in kin.unknowns), parameters=parameters, points=names,
         reported_links=tuple(s.links[i] for i in reported), levels=levels, limits=limits,
         n_dyads=len(sol.dyads), needs_loops=needs_loops, loops_for_links=loops_for_links,
-        closed_form=sol.closed_form, routines=routines, notes=tuple(notes), loaded=loaded,
-        sensitivity=sensitivity, chain=chain)
+        closed_form=sol.closed_form, routines=routines, loaded=loaded,
+        notes=tuple(notes) + (("Fixed inputs, folded into the evaluator (not its arguments): "
+                               + ", ".join(f"{kin.hinges[a].name} = {sp.sstr(v)} rad"
+                                           for a, v in sorted(held.items())) + ".",)
+                              if held else ()),
+        sensitivity=sensitivity, chain=chain,
+        fixed=tuple((a - 1, to_double(v)) for a, v in sorted(held.items())))
     return with_derivation(result, an) if report else result
 
 
@@ -321,6 +341,35 @@ def moved_points(analysis: Analysis, points: Sequence[str]) -> frozenset[str]:
         n for n in points
         if any(b in an.kin.unknowns
                for b in an.structure.tree_path(an.link[an.mechanism.point(n).link])))
+
+
+def _fixed_angles(an: Analysis, fixed: Mapping[str, sp.Expr]) -> dict[int, sp.Expr]:
+    """Hinge label -> angle of the inputs `fixed` names; names that are not inputs, angles
+    beyond a half turn and fixing every input are bad input (exit 2)."""
+    kin = an.kin
+    by_name = {kin.hinges[a].name: a for a in kin.inputs}
+    held = {}
+    for name, value in fixed.items():
+        if name not in by_name:
+            raise InputError(f"'{name}' is not an input hinge", file=an.mechanism.path,
+                             entry="--fix", hint="inputs: " + ", ".join(by_name))
+        number = sp.N(value, 30)
+        if not (number.is_real and abs(number) <= sp.pi):
+            raise InputError(f"the fixed angle {name} = {sp.sstr(value)[:40]} is not within "
+                             "[-pi, pi]", file=an.mechanism.path, entry="--fix",
+                             hint="give the input's rotation from the as-fabricated pose, rad")
+        held[by_name[name]] = sp.sympify(value)
+    if held and len(held) == len(by_name):
+        raise InputError("every input is fixed", file=an.mechanism.path, entry="--fix",
+                         hint="leave at least one input free (a pose needs no evaluator)")
+    return held
+
+
+def _substituted(routine: Routine, values: dict[sp.Symbol, sp.Expr]) -> Routine:
+    """The routine with the symbols of `values` replaced by them (arguments unchanged)."""
+    lines = tuple((s, e.xreplace(values)) for s, e in routine.assignments)
+    outs = tuple(sp.sympify(e).xreplace(values) for e in routine.outputs)
+    return Routine(routine.name, routine.arguments, lines, outs, routine.doc)
 
 
 def _renamed(routine: Routine, names: dict[sp.Symbol, sp.Symbol]) -> Routine:

@@ -45,7 +45,8 @@ class Backend:
         print_ = self.printer.doprint
         return dict(
             header=header_lines(plan, source), name=plan.name, NAME=plan.name.upper(),
-            inputs=list(plan.inputs), pruned_inputs=list(plan.pruned_inputs), hinges=list(plan.hinges), points=list(plan.points),
+            inputs=list(plan.inputs), fixed=[(i, repr(v)) for i, v in plan.fixed],
+            pruned_inputs=list(plan.pruned_inputs), hinges=list(plan.hinges), points=list(plan.points),
             links=list(plan.reported_links),
             levels=plan.levels, all_levels=levels.LEVELS,
             parameters=[{"name": p.name, "symbol": p.symbol.name, "expr": print_(p.default),

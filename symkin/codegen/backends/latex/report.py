@@ -923,10 +923,10 @@ def emit(plan: Plan, source: str, appendix: bool = False,
     ctx["deviation_figures"] = []
     ctx["sweep"] = None
     ctx["sensitivity"] = None
-    if plan.points and report.mech.inputs:
+    if plan.points and plan.inputs:
         if evaluator is None:
             raise ValueError("the deviation plot needs the plan's generated numpy module")
-        runs, summary = sweep(report, evaluator, sweep_spans(report.mech.inputs, spans),
+        runs, summary = sweep(report, evaluator, sweep_spans(plan.inputs, spans),
                               physics)
         single = len(runs) == 1
         points = list(plan.points)
