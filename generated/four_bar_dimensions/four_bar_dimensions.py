@@ -1485,7 +1485,9 @@ def _prepare(inputs, level, params):
         raise ValueError(f"level must be one of {LEVELS}, got {level!r}")
     names = set(inputs) - set(PRUNED_INPUTS)
     if names != set(INPUTS):
-        raise ValueError(f"inputs must be exactly {INPUTS}, got {tuple(sorted(names))}")
+        ignored = f" (accepted and ignored: {PRUNED_INPUTS})" if PRUNED_INPUTS else ""
+        raise ValueError(f"inputs must be exactly {INPUTS}{ignored}, got "
+                         f"{tuple(sorted(inputs))}")
     arrays = numpy.broadcast_arrays(*(numpy.asarray(inputs[n], dtype=_DTYPE) for n in INPUTS))
     return arrays, [_DTYPE(v) for v in parameters(params)]
 
