@@ -93,6 +93,11 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
             spans = {k: v for k, v in spans.items() if k in mech.inputs}
         held = {k: v for k, v in held.items() if k in mech.inputs}   # a pruned one moves nothing
     if spans and held:
+        clash = [k for k in spans if k in held]
+        if clash and variant is None:           # a --range over an input --fix holds
+            raise InputError(f"the input {clash[0]} is fixed (--fix) and cannot be swept",
+                             file=mech.path, entry="--range",
+                             hint=f"drop --range {clash[0]}=... or --fix {clash[0]}=...")
         spans = {k: v for k, v in spans.items() if k not in held}
     say(f"deriving {mech.name}: structure and kinematics")
     if variant is not None:

@@ -131,3 +131,12 @@ def test_the_report_states_the_fixed_input_and_sweeps_the_free_one():
     assert "O2 = -1/10 rad" in body.replace(r"\penalty0{}", "").replace("{}", "")
     # one deviation figure: O1 is the only input swept
     assert "five_bar-deviation.pdf" in files and "five_bar-deviation-2.pdf" not in files
+
+
+def test_a_range_over_a_fixed_input_is_refused():
+    from symkin.derive import generate
+
+    with pytest.raises(symkin.InputError, match="O2 is fixed") as err:
+        generate(_mech(M.FIVE_BAR), ["latex"], fixed={"O2": "-0.1"},
+                 spans={"O2": (-0.1, 0.1)})
+    assert err.value.entry == "--range"

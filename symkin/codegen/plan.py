@@ -90,9 +90,9 @@ class Plan:
     sensitivity: bool = False          # the sens_* routines are there
     chain: bool = False                # some parameter's default reads others (sens_chain)
     pruned_inputs: tuple[str, ...] = ()   # the file's inputs that move none of the points
+                                          # (docs/pruning.md): accepted and ignored by numpy
     fixed: tuple[tuple[int, float], ...] = ()   # (θ index, angle): inputs held constant,
                                                 # folded into the routines (docs/cli.md, --fix)
-                                          # (docs/pruning.md): accepted and ignored by numpy
 
     def stage(self, level: Level) -> bool:
         """Whether the sensitivity at `level` goes through a closure solved for δ."""
