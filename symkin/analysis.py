@@ -24,7 +24,6 @@ import sympy as sp
 from . import levels
 from . import rigid as rigid_solver
 from . import vectors as V
-from .errors import InputError
 from .hinge_models import THETA
 from .kinematics import Kinematics
 from .structure import Structure
@@ -39,11 +38,7 @@ class Analysis:
         self.mechanism = mech = structure.mechanism
         self.kin = kin = Kinematics(structure, plate)
         self.rigid = rigid_solver.solve(kin)
-        names = [p.name for p in mech.points]
-        for p in points or ():
-            if p not in names:
-                raise InputError(f"unknown point '{p}'", file=mech.path, entry="--points",
-                                 hint="points: " + ", ".join(names))
+        mech.check_points(points or ())
         self.points = tuple(p for p in mech.points if points is None or p.name in points)
         self.link = {name: i for i, name in enumerate(structure.links)}
         self.params = tuple(p.symbol for p in mech.parameters)

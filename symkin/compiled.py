@@ -17,7 +17,6 @@ generated module's `evaluate` and `<name>_evaluate_pose` have them).
 
 from __future__ import annotations
 
-import dataclasses
 import hashlib
 import threading
 from collections.abc import Mapping, Sequence
@@ -287,8 +286,8 @@ def compile(mechanism: Mechanism | Analysis | str | Path, backend: str = "c",
     check_fabricated_pose(analysis)
     mech = analysis.mechanism
     held = {k: v for k, v in held.items() if k in analysis.mechanism.inputs}
-    p = plan(analysis, points, levels, sensitivity=sensitivity, links=False, fixed=held)
-    p = dataclasses.replace(p, pruned_inputs=pruned)
+    p = plan(analysis, points, levels, sensitivity=sensitivity, links=False, fixed=held,
+             pruned_inputs=pruned)
     source = Path(mech.path).name
     header, code = c_backend.emit(p, source) if backend == "c" else ("", "")
     return Compiled(Sources(

@@ -7,7 +7,6 @@ order, no timestamps, headers name the source file by its base name only).
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
@@ -83,22 +82,24 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
         mech, pruning = for_levels(mech, points,
                                    [variant.level] if variant is not None else levels)
         notes = [*notes, *pruning.notes()]
-        if spans:
-            unused = [k for k in spans if k not in mech.inputs]
-            if unused and variant is None:      # a --range the pruned report cannot plot
-                raise InputError(f"the input {unused[0]} moves none of the points "
-                                 f"{', '.join(pruning.points)}", file=mech.path,
-                                 entry="--range", hint=f"drop --range {unused[0]}=..., or ask "
-                                 "for a point it moves (docs/pruning.md)")
-            spans = {k: v for k, v in spans.items() if k in mech.inputs}
         held = {k: v for k, v in held.items() if k in mech.inputs}   # a pruned one moves nothing
-    if spans and held:
-        clash = [k for k in spans if k in held]
-        if clash and variant is None:           # a --range over an input --fix holds
-            raise InputError(f"the input {clash[0]} is fixed (--fix) and cannot be swept",
+    if spans:
+        # the report sweeps the evaluator's own inputs; a --range over another cannot be
+        # plotted (with --tolerance, the ranges were the measurement's and are dropped)
+        swept = [k for k in mech.inputs if k not in held]
+        other = [k for k in spans if k not in swept]
+        if other and variant is None:
+            k = other[0]
+            if k in held:
+                raise InputError(f"the input {k} is fixed (--fix) and cannot be swept",
+                                 file=mech.path, entry="--range",
+                                 hint=f"drop --range {k}=... or --fix {k}=...")
+            asked = ", ".join(pruning.points) if pruning is not None else "asked for"
+            raise InputError(f"the input {k} moves none of the points {asked}",
                              file=mech.path, entry="--range",
-                             hint=f"drop --range {clash[0]}=... or --fix {clash[0]}=...")
-        spans = {k: v for k, v in spans.items() if k not in held}
+                             hint=f"drop --range {k}=..., or ask for a point it moves "
+                             "(docs/pruning.md)")
+        spans = {k: v for k, v in spans.items() if k in swept}
     say(f"deriving {mech.name}: structure and kinematics")
     if variant is not None:
         from .variants import analysis_for
@@ -109,9 +110,8 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
         analysis = Analysis(build(mech), points)
     check_fabricated_pose(analysis)
     say("deriving the routines (CSE)")
-    p = plan(analysis, points, levels, notes=notes, fixed=held)
-    if pruning is not None:
-        p = dataclasses.replace(p, pruned_inputs=pruning.dropped_inputs)
+    p = plan(analysis, points, levels, notes=notes, fixed=held,
+             pruned_inputs=pruning.dropped_inputs if pruning is not None else ())
     files: dict[str, bytes] = {}
     numpy_text = None
     if "numpy" in emit:

@@ -175,6 +175,14 @@ class Mechanism:
     def point(self, name: str) -> Point:
         return next(p for p in self.points if p.name == name)
 
+    def check_points(self, names: Sequence[str]) -> None:
+        """Every name of `names` (a --points list) is a point of the file, else bad input."""
+        known = [p.name for p in self.points]
+        for name in names:
+            if name not in known:
+                raise InputError(f"unknown point '{name}'", file=self.path, entry="--points",
+                                 hint="points: " + ", ".join(known))
+
 
 def load(path: str | Path) -> Mechanism:
     """Read and validate a mechanism file; raise InputError (exit 2) on anything wrong with it."""

@@ -21,11 +21,10 @@ import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from .errors import InputError
 from .levels import LOADED
 from .mechanism import Mechanism
 from .physics.stiffness import has_stiffness
-from .structure import build
+from .structure import Structure, build
 
 
 @dataclass(frozen=True)
@@ -75,23 +74,20 @@ def for_levels(mech: Mechanism, points: Sequence[str], levels: Sequence[str] | N
 
 
 def needed_links(mech: Mechanism, points: Sequence[str], physical: bool = False,
-                 paths: bool = True) -> set[str]:
+                 paths: bool = True, structure: Structure | None = None) -> set[str]:
     """The links the requested points' positions depend on (the ground included); with
     `physical`, also every link their forces reach other than through the ground; with `paths`
     (the `paper` level is derived), also the links on the points' direct paths of the file's
-    skeleton tree, over which (4.8) sums, and what places them."""
-    names = [p.name for p in mech.points]
-    for p in points:
-        if p not in names:
-            raise InputError(f"unknown point '{p}'", file=mech.path, entry="--points",
-                             hint="points: " + ", ".join(names))
+    skeleton tree, over which (4.8) sums, and what places them (`structure`: the file's, when
+    already built)."""
+    mech.check_points(points)
     body = _bodies(mech)
     depends = _dependencies(mech, body)
     if depends is None:                 # structurally singular: keep everything
         return {lk.name for lk in mech.links}
     carriers = {mech.point(p).link for p in points}
     if paths:
-        s = build(mech)
+        s = structure or build(mech)
         carriers |= {s.links[s.i_minus[a - 1]] for p in points
                      for a in s.tree_path(s.links.index(mech.point(p).link))}
     todo = [body[link] for link in carriers]
@@ -114,25 +110,19 @@ def prune(mech: Mechanism, points: Sequence[str], physical: bool = False, paths:
     skeleton tree keeps every edge of the file's tree among the kept links (so the points'
     direct paths, and the `paper` level, are the file's); a kept link whose tree edge was
     dropped hangs on the first kept hinge, in file order, that reaches it."""
-    kept = needed_links(mech, points, physical, paths)
+    full = build(mech)
+    kept = needed_links(mech, points, physical, paths, full)
     links = tuple(lk for lk in mech.links if lk.name in kept)
     hinges = tuple(h for h in mech.hinges if set(h.links) <= kept)
     hinge_names = {h.name for h in hinges}
     if len(hinges) == len(mech.hinges) and len(links) == len(mech.links):
         sub = dataclasses.replace(mech, points=tuple(p for p in mech.points if p.name in points))
     else:
-        full = build(mech)
         tree = [name for name in full.hinges[:full.n] if name in hinge_names]
         root = {lk.name: lk.name for lk in links}
-
-        def find(x: str) -> str:
-            while root[x] != x:
-                x = root[x]
-            return x
-
         chosen = []
         for name in tree + [h.name for h in hinges]:
-            a, b = (find(x) for x in mech.hinge(name).links)
+            a, b = (_find(root, x) for x in mech.hinge(name).links)
             if a != b:
                 root[a] = b
                 chosen.append(name)
@@ -160,19 +150,20 @@ def prune(mech: Mechanism, points: Sequence[str], physical: bool = False, paths:
 def _bodies(mech: Mechanism) -> dict[str, str]:
     """Link -> its body (the first of its links in file order): links welded by input hinges."""
     root = {lk.name: lk.name for lk in mech.links}
-
-    def find(x: str) -> str:
-        while root[x] != x:
-            root[x] = root[root[x]]
-            x = root[x]
-        return x
-
     order = {lk.name: k for k, lk in enumerate(mech.links)}
     for h in mech.hinges:
         if h.input:
-            a, b = sorted((find(h.links[0]), find(h.links[1])), key=order.get)
+            a, b = sorted((_find(root, h.links[0]), _find(root, h.links[1])), key=order.get)
             root[b] = a
-    return {lk.name: find(lk.name) for lk in mech.links}
+    return {lk.name: _find(root, lk.name) for lk in mech.links}
+
+
+def _find(root: dict[str, str], x: str) -> str:
+    """The representative of `x` in the union-find forest `root` (paths halved on the way)."""
+    while root[x] != x:
+        root[x] = root[root[x]]
+        x = root[x]
+    return x
 
 
 def _dependencies(mech: Mechanism, body: dict[str, str]) -> dict[str, set[str]] | None:

@@ -116,7 +116,8 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
          levels: Sequence[str] | None = None, cse: bool = True,
          notes: Sequence[str] = (), report: bool = False, links: bool | None = None,
          sensitivity: bool = True, beam_column: bool = True,
-         fixed: Mapping[str, sp.Expr] | None = None) -> Plan:
+         fixed: Mapping[str, sp.Expr] | None = None,
+         pruned_inputs: Sequence[str] = ()) -> Plan:
     """Derive the routines for the requested points and levels (by default every generated level
     the file's data allows: `loaded` needs the plates' stiffness); with `report`, also the
     statement of the derivation a LaTeX report prints. `links`: report the rotation of every
@@ -125,7 +126,9 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
     that have them (docs/sensitivity.md). `beam_column=False` derives the `loaded` level with the
     first-order force correction only (a cheaper variant). `fixed` (input name -> exact angle)
     holds those inputs constant: they leave the evaluators' arguments and their values are
-    folded into the routines (an evaluator with fixed inputs has no sensitivities)."""
+    folded into the routines (an evaluator with fixed inputs has no sensitivities).
+    `pruned_inputs`: the file's inputs that pruning dropped (docs/pruning.md), which the numpy
+    module accepts and ignores."""
     an, kin = analysis, analysis.kin
     mech = an.mechanism
     names = tuple(p.name for p in an.points if points is None or p.name in points)
@@ -231,7 +234,7 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
                                + ", ".join(f"{kin.hinges[a].name} = {sp.sstr(v)} rad"
                                            for a, v in sorted(held.items())) + ".",)
                               if held else ()),
-        sensitivity=sensitivity, chain=chain,
+        sensitivity=sensitivity, chain=chain, pruned_inputs=tuple(pruned_inputs),
         fixed=tuple((a - 1, to_double(v)) for a, v in sorted(held.items())))
     return with_derivation(result, an) if report else result
 
