@@ -80,7 +80,7 @@ def _derive(args: argparse.Namespace) -> str:
     output_dir(args.output, "-o")
     column = parse_length(args.columnwidth) if args.columnwidth else None
     written = derive(args.file, args.output, emit, points, levels, args.appendix, progress,
-                     args.tolerance, args.range, column, _pairs(args.fix, "--fix"))
+                     args.tolerance, args.range, column, _pairs(args.fix, "--fix"), args.scene)
     return "".join(f"{path}\n" for path in written)
 
 
@@ -234,6 +234,9 @@ def parser() -> argparse.ArgumentParser:
     de.add_argument("--range", action="append", metavar="H=LO:HI",
                     help="input range of --tolerance (default -0.2:0.2 rad) and of the report's "
                          "deviation plots (default -0.3:0.3 rad)")
+    de.add_argument("--scene", metavar="SCENE.toml",
+                    help="derive what a scene file asks for: per point a tolerance, ranges and a "
+                         "reference, each point by its cheapest variant (docs/scene.md)")
     de.set_defaults(run=_derive)
     tr = command("tradeoff", "speed and accuracy of every variant over a range")
     tr.add_argument("file", metavar="FILE")

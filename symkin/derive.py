@@ -64,10 +64,22 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
              spans: Mapping[str, tuple[float, float]] | None = None,
              fixed: Mapping[str, object] | None = None) -> dict[str, bytes]:
     """File name -> content of every requested artifact (nothing is written). A `variant`
-    (symkin.variants.Variant) derives that cheaper variant instead of the file's models;
-    `column_width` (points) lays the LaTeX report out for that column and `spans` (input ->
-    (lo, hi) rad) sets its deviation plots' ranges; `fixed` (input -> angle, numbers or
-    expressions) holds inputs constant, folded into the evaluators."""
+    (symkin.variants.Variant) derives that cheaper variant instead of the file's models (a
+    float32 one: its numpy module in float32, no C); `column_width` (points) lays the LaTeX
+    report out for that column and `spans` (input -> (lo, hi) rad) sets its deviation plots'
+    ranges; `fixed` (input -> angle, numbers or expressions) holds inputs constant, folded into
+    the evaluators."""
+    return generate_plan(mech, emit, points, levels, appendix, progress, variant, notes,
+                         column_width, spans, fixed)[0]
+
+
+def generate_plan(mech: Mechanism, emit: Sequence[str] = EMITTERS,
+                  points: Sequence[str] | None = None, levels: Sequence[str] | None = None,
+                  appendix: bool = False, progress: Callable[[str], None] | None = None,
+                  variant=None, notes: Sequence[str] = (), column_width: float | None = None,
+                  spans: Mapping[str, tuple[float, float]] | None = None,
+                  fixed: Mapping[str, object] | None = None) -> tuple[dict[str, bytes], object]:
+    """:func:`generate`, and the Plan the evaluators were emitted from."""
     from .codegen import runtime
     from .codegen.backends.c import backend as c_backend
     from .codegen.backends.numpy import backend as numpy_backend
@@ -76,6 +88,7 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
 
     say = progress or (lambda message: None)
     source = Path(mech.path).name
+    precision = variant.precision if variant is not None else "float64"
     held = fixed_angles(mech, fixed)
     pruning = None
     if points is not None:
@@ -116,8 +129,11 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
     numpy_text = None
     if "numpy" in emit:
         say("emitting numpy")
-        numpy_text = numpy_backend.emit(p, source)
+        numpy_text = numpy_backend.emit(p, source, precision)
         files[f"{mech.name}.py"] = numpy_text.encode()
+    if "c" in emit and precision != "float64":
+        raise InputError(f"the variant {variant.name} is numpy-only (C evaluates in float64)",
+                         file=mech.path, entry="--emit", hint="leave c out of --emit")
     if "c" in emit:
         say("emitting C99")
         header, code = c_backend.emit(p, source)
@@ -130,13 +146,13 @@ def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[s
         # the report's deviation plot runs the generated numpy module
         evaluator = None
         if p.points:
-            numpy_text = numpy_text or numpy_backend.emit(p, source)
+            numpy_text = numpy_text or numpy_backend.emit(p, source, precision)
             evaluator = runtime.import_numpy_module(numpy_text, mech.name)
         files.update(report.emit(with_derivation(p, analysis), source, appendix, evaluator,
                                  column_width or report.COLUMN_WIDTH, spans,
                                  physics_reference(analysis, held)
                                  if p.loaded is not None else None))
-    return files
+    return files, p
 
 
 def physics_reference(analysis: Analysis, fixed: Mapping[str, object] | None = None
@@ -160,12 +176,27 @@ def derive(path: str | Path, out_dir: str | Path = ".", emit: Sequence[str] = EM
            points: Sequence[str] | None = None, levels: Sequence[str] | None = None,
            appendix: bool = False, progress: Callable[[str], None] | None = None,
            tolerance: float | None = None, ranges: Sequence[str] | None = None,
-           column_width: float | None = None, fixed: Mapping[str, object] | None = None
-           ) -> list[Path]:
+           column_width: float | None = None, fixed: Mapping[str, object] | None = None,
+           scene: str | Path | None = None) -> list[Path]:
     """Load, generate and write; returns the written paths. With a `tolerance`, the cheapest
     variant whose measured worst error over `ranges` meets it is derived instead; `fixed`
-    inputs are held at their angles."""
+    inputs are held at their angles; a `scene` file (docs/scene.md) states the points, their
+    tolerances, ranges, references and the fixed inputs instead."""
     mech = load(path)
+    if scene is not None:
+        from . import scene as scenes
+
+        given = [option for option, value in (("--points", points), ("--levels", levels),
+                                              ("--tolerance", tolerance), ("--range", ranges),
+                                              ("--fix", fixed)) if value]
+        if given:
+            raise InputError(f"{given[0]} and --scene together: the scene file states the points, "
+                             "their tolerances and ranges, and the fixed inputs",
+                             entry=given[0], hint=f"drop {given[0]}, or put it in the scene "
+                             "file (docs/scene.md)")
+        files, _ = scenes.generate(scenes.load(scene, mech), emit, progress, column_width,
+                                   appendix)
+        return _write(files, out_dir)
     if fixed and tolerance is not None:
         raise InputError("--fix and --tolerance together are not supported yet", entry="--fix",
                          hint="derive with --tolerance alone, or --fix alone")
@@ -195,6 +226,11 @@ def derive(path: str | Path, out_dir: str | Path = ".", emit: Sequence[str] = EM
         spans = tradeoff.parse_ranges(ranges, mech.inputs, mech.path, default=None)
     files = generate(mech, emit, points, levels, appendix, progress, variant, notes,
                      column_width, spans, fixed)
+    return _write(files, out_dir)
+
+
+def _write(files: dict[str, bytes], out_dir: str | Path) -> list[Path]:
+    """Write every file at once (none when one cannot be written); the paths written."""
     try:
         return write_atomically(files, Path(out_dir))
     except OSError as exc:

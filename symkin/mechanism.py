@@ -17,6 +17,7 @@ import stat
 import sys
 import tomllib
 from collections.abc import Mapping, Sequence
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -256,6 +257,42 @@ switch typedef union unsigned void volatile while""".split())
 SHADOWED = frozenset(sys.stdlib_module_names) | {"numpy", "symkin", "mpmath", "sympy"}
 
 
+def name_problem(name: str, longest: int = MAX_NAME) -> tuple[str, str] | None:
+    """(what is wrong, how to fix it) when `name` cannot name generated files and C functions,
+    else None."""
+    if len(name) > longest:
+        return (f"name is {len(name)} characters long, more than {longest}",
+                f"use at most {longest} characters: it names the generated files and the C "
+                "functions")
+    if not expressions.IDENTIFIER.match(name) or name.startswith("_"):
+        return (f"name '{name}' is not identifier-safe",
+                "use letters, digits and '_' only, starting with a letter")
+    if keyword.iskeyword(name) or name in C_KEYWORDS or name in SHADOWED:
+        return (f"name '{name}' is a Python or C keyword or the name of a module the generated "
+                f"code imports", f"rename it, e.g. name = \"{name}_mechanism\"")
+    return None
+
+
+def with_points(mech: Mechanism, tables: Sequence[Mapping], file: str, text: str,
+                header: str = "point") -> Mechanism:
+    """`mech` with further points, given as [[point]] tables (name, link, at: expressions over
+    the file's parameters) of another file (a scene, docs/scene.md), validated as the file's own
+    are; a name the mechanism already uses is bad input."""
+    reader = _Reader(text, file, Path("."))
+    reader.names = {p.name: p.symbol for p in mech.parameters}
+    reader.defaults = dict(mech.defaults)
+    added = reader.points(list(tables), [lk.name for lk in mech.links])
+    taken = {p.name for p in mech.points}
+    for p in added:
+        if p.name in taken:
+            raise reader.error(f"the mechanism already has a point '{p.name}'",
+                               f"[[{header}]] '{p.name}'", p.line,
+                               "give only its name to use the file's point, or rename it")
+    n = len(mech.points)
+    return dataclasses.replace(mech, points=mech.points + tuple(
+        dataclasses.replace(p, index=n + i) for i, p in enumerate(added)))
+
+
 def _entry(kind: str, i: int, table: Mapping) -> str:
     """How an error names the i-th [[kind]] entry: by number, and by name once it has one."""
     name = table.get("name")
@@ -400,18 +437,9 @@ class _Reader:
             raise self.error(f"unsupported format {fmt!r}", "format", self.where.key("format"),
                              f"this symkin reads format = {FORMAT}")
         name = self.text(data, "name", "top level", None)
-        if len(name) > MAX_NAME:
-            raise self.error(f"name is {len(name)} characters long, more than {MAX_NAME}", "name",
-                             self.where.key("name"), f"use at most {MAX_NAME} characters: it "
-                             "names the generated files and the C functions")
-        if not expressions.IDENTIFIER.match(name) or name.startswith("_"):
-            raise self.error(f"name '{name}' is not identifier-safe", "name",
-                             self.where.key("name"), "use letters, digits and '_' only, starting "
-                             "with a letter")
-        if keyword.iskeyword(name) or name in C_KEYWORDS or name in SHADOWED:
-            raise self.error(f"name '{name}' is a Python or C keyword or the name of a module the "
-                             "generated code imports", "name", self.where.key("name"),
-                             f"rename the mechanism, e.g. name = \"{name}_mechanism\"")
+        problem = name_problem(name)
+        if problem is not None:
+            raise self.error(problem[0], "name", self.where.key("name"), problem[1])
         parameters = self.parameters(data.get("parameters", {}))
         defaults = self.hinge_defaults(data.get("defaults", {}))
         links = self.links(self.array_of_tables(data, "link"))

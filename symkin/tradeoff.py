@@ -154,6 +154,28 @@ def reference(analysis: Analysis, samples: list[dict[str, float]],
     return kept, devs
 
 
+def worst_errors(got, want: Sequence[tuple[float, float]], samples: Sequence[Mapping]
+                 ) -> tuple[float, float]:
+    """(absolute, relative) worst error of the deviations `got` (2, n) against the reference's
+    `want` at `samples`: |got - want| and that over |want|. In the as-fabricated pose the
+    deviation is exactly zero: there the relative error is measured against the largest
+    deviation over the range, so no sample goes unchecked. A non-finite result is an infinite
+    error."""
+    got = np.asarray(got, dtype=float)
+    scale = max(math.hypot(*w) for w in want)
+    absolute = relative = 0.0
+    for j, w in enumerate(want):
+        rest = at_rest(samples[j])
+        target = (0.0, 0.0) if rest else w
+        err = math.hypot(got[0, j] - target[0], got[1, j] - target[1])
+        err = err if math.isfinite(err) else math.inf
+        absolute = max(absolute, err)
+        size = scale if rest else math.hypot(*target)
+        if size > 0.0:
+            relative = max(relative, err / size)
+    return absolute, relative
+
+
 def measure(mech: Mechanism, variant: Variant, samples: list[dict[str, float]],
             ref: list[dict], with_c: bool = True) -> Row:
     """Derive, emit and run one variant; its errors against `ref` and its times."""
@@ -170,21 +192,8 @@ def measure(mech: Mechanism, variant: Variant, samples: list[dict[str, float]],
     names = list(module.INPUTS)
     arrays = {n: np.array([s[n] for s in samples]) for n in names}
     res = module.evaluate(arrays, variant.level)
-    errors = {}
-    for point in p.points:
-        worst = 0.0
-        got = res["points"][point]["deviation"].astype(float)
-        # In the as-fabricated pose the deviation is exactly zero: there the error is measured
-        # against the largest deviation over the range, so no sample goes unchecked.
-        scale = max(math.hypot(*r[point]) for r in ref)
-        for j, r in enumerate(ref):
-            want = (0.0, 0.0) if at_rest(samples[j]) else r[point]
-            size = scale if at_rest(samples[j]) else math.hypot(*want)
-            if size == 0.0:
-                continue
-            err = math.hypot(got[0, j] - want[0], got[1, j] - want[1]) / size
-            worst = max(worst, err if math.isfinite(err) else math.inf)
-        errors[point] = worst
+    errors = {point: worst_errors(res["points"][point]["deviation"], [r[point] for r in ref],
+                                  samples)[1] for point in p.points}
     reps = max(1, TIMING_POINTS // max(1, len(samples)))
     big = {n: np.tile(arrays[n], reps) for n in names}
     module.evaluate(big, variant.level)                     # warm up

@@ -112,6 +112,37 @@ class LoadedPlan:
     more: int = 0                      # the last `more` of them only loaded_refined computes
 
 
+@dataclass(frozen=True)
+class SceneGroup:
+    """One evaluator of a scene (docs/scene.md): the points one variant computes."""
+
+    name: str                          # its generated evaluator's name
+    variant: str
+    level: Level
+    inputs: tuple[str, ...]            # the inputs it takes, its order
+    points: tuple[str, ...]            # its points, its order
+    parameters: tuple[str, ...]        # its parameters, its order
+    precision: str
+    cost: int                          # weighted operations of one evaluation
+
+
+@dataclass(frozen=True)
+class ScenePlan:
+    """The scene evaluator over its groups' evaluators: which inputs, points and parameters go
+    where."""
+
+    name: str
+    source: str                        # the mechanism file's base name
+    scene: str                         # the scene file's base name
+    inputs: tuple[str, ...]            # the scene evaluator's inputs (label order)
+    points: tuple[str, ...]            # scene order
+    parameters: tuple[tuple[str, float], ...]   # the file's parameters and defaults
+    fixed: tuple[tuple[str, float], ...]        # inputs the scene holds
+    ignored: tuple[str, ...]           # the file's free inputs that move no scene point
+    groups: tuple[SceneGroup, ...]
+    notes: tuple[str, ...]
+
+
 def plan(analysis: Analysis, points: Sequence[str] | None = None,
          levels: Sequence[str] | None = None, cse: bool = True,
          notes: Sequence[str] = (), report: bool = False, links: bool | None = None,

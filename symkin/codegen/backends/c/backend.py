@@ -3,8 +3,9 @@
 
 from __future__ import annotations
 
-from ...plan import Plan
-from ..common import Backend
+from ....templating import render
+from ...plan import Plan, ScenePlan
+from ..common import Backend, scene_context
 from . import kernels
 from .printer import CPrinter
 
@@ -19,3 +20,9 @@ def emit(plan: Plan, source: str) -> tuple[str, str]:
     """The header and source texts."""
     header, code = CBackend().render(plan, source)
     return header, code
+
+
+def emit_scene(plan: ScenePlan) -> tuple[str, str]:
+    """The scene evaluator's header and source (docs/scene.md)."""
+    context = scene_context(plan)
+    return render("c/scene.h.j2", **context), render("c/scene.c.j2", **context)

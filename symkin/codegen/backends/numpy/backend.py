@@ -3,8 +3,9 @@
 
 from __future__ import annotations
 
-from ...plan import Plan
-from ..common import Backend
+from ....templating import render
+from ...plan import Plan, ScenePlan
+from ..common import Backend, scene_context
 from . import kernels
 from .printer import NumpyPrinter
 
@@ -20,3 +21,8 @@ def emit(plan: Plan, source: str, dtype: str = "float64") -> str:
     """The numpy module's text; `dtype` float32 gives the single-precision variant."""
     (module,) = NumpyBackend().render(plan, source, dtype)
     return module
+
+
+def emit_scene(plan: ScenePlan) -> str:
+    """The scene evaluator's module (docs/scene.md)."""
+    return render("numpy/scene.py.j2", **scene_context(plan))
