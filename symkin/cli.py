@@ -79,8 +79,23 @@ def _derive(args: argparse.Namespace) -> str:
         raise InputError(f"tolerance must be positive, got {args.tolerance}", entry="--tolerance")
     output_dir(args.output, "-o")
     column = parse_length(args.columnwidth) if args.columnwidth else None
-    written = derive(args.file, args.output, emit, points, levels, args.appendix, progress,
-                     args.tolerance, args.range, column, _pairs(args.fix, "--fix"), args.scene)
+    if args.scene is not None:
+        from .scene import derive as derive_scene
+
+        given = [option for option, value in (("--points", points), ("--levels", levels),
+                                              ("--tolerance", args.tolerance),
+                                              ("--range", args.range), ("--fix", args.fix))
+                 if value]
+        if given:
+            raise InputError(f"{given[0]} and --scene together: the scene file states the points, "
+                             "their tolerances and ranges, and the fixed inputs",
+                             entry=given[0], hint=f"drop {given[0]}, or put it in the scene "
+                             "file (docs/scene.md)")
+        written = derive_scene(args.file, args.scene, args.output, emit, progress, column,
+                               args.appendix)
+    else:
+        written = derive(args.file, args.output, emit, points, levels, args.appendix, progress,
+                         args.tolerance, args.range, column, _pairs(args.fix, "--fix"))
     return "".join(f"{path}\n" for path in written)
 
 

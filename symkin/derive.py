@@ -176,27 +176,12 @@ def derive(path: str | Path, out_dir: str | Path = ".", emit: Sequence[str] = EM
            points: Sequence[str] | None = None, levels: Sequence[str] | None = None,
            appendix: bool = False, progress: Callable[[str], None] | None = None,
            tolerance: float | None = None, ranges: Sequence[str] | None = None,
-           column_width: float | None = None, fixed: Mapping[str, object] | None = None,
-           scene: str | Path | None = None) -> list[Path]:
+           column_width: float | None = None, fixed: Mapping[str, object] | None = None
+           ) -> list[Path]:
     """Load, generate and write; returns the written paths. With a `tolerance`, the cheapest
     variant whose measured worst error over `ranges` meets it is derived instead; `fixed`
-    inputs are held at their angles; a `scene` file (docs/scene.md) states the points, their
-    tolerances, ranges, references and the fixed inputs instead."""
+    inputs are held at their angles (a scene file: symkin.scene.derive)."""
     mech = load(path)
-    if scene is not None:
-        from . import scene as scenes
-
-        given = [option for option, value in (("--points", points), ("--levels", levels),
-                                              ("--tolerance", tolerance), ("--range", ranges),
-                                              ("--fix", fixed)) if value]
-        if given:
-            raise InputError(f"{given[0]} and --scene together: the scene file states the points, "
-                             "their tolerances and ranges, and the fixed inputs",
-                             entry=given[0], hint=f"drop {given[0]}, or put it in the scene "
-                             "file (docs/scene.md)")
-        files, _ = scenes.generate(scenes.load(scene, mech), emit, progress, column_width,
-                                   appendix)
-        return _write(files, out_dir)
     if fixed and tolerance is not None:
         raise InputError("--fix and --tolerance together are not supported yet", entry="--fix",
                          hint="derive with --tolerance alone, or --fix alone")
@@ -226,10 +211,10 @@ def derive(path: str | Path, out_dir: str | Path = ".", emit: Sequence[str] = EM
         spans = tradeoff.parse_ranges(ranges, mech.inputs, mech.path, default=None)
     files = generate(mech, emit, points, levels, appendix, progress, variant, notes,
                      column_width, spans, fixed)
-    return _write(files, out_dir)
+    return write_files(files, out_dir)
 
 
-def _write(files: dict[str, bytes], out_dir: str | Path) -> list[Path]:
+def write_files(files: dict[str, bytes], out_dir: str | Path) -> list[Path]:
     """Write every file at once (none when one cannot be written); the paths written."""
     try:
         return write_atomically(files, Path(out_dir))

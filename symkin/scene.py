@@ -569,3 +569,17 @@ def generate(scene: Scene, emit: Sequence[str], progress: Callable[[str], None] 
         files[f"{scene.name}.h"] = header.encode()
         files[f"{scene.name}.c"] = code.encode()
     return files, choice
+
+
+def derive(path: str | Path, scene: str | Path, out_dir: str | Path = ".",
+           emit: Sequence[str] = ("latex", "c", "numpy"),
+           progress: Callable[[str], None] | None = None, column_width: float | None = None,
+           appendix: bool = False) -> list[Path]:
+    """`symkin derive FILE --scene SCENE`: load both, generate, write every file at once; the
+    paths written."""
+    from .derive import write_files
+    from .mechanism import load as load_mechanism
+
+    files, _ = generate(load(scene, load_mechanism(path)), emit, progress, column_width,
+                        appendix)
+    return write_files(files, out_dir)

@@ -42,6 +42,7 @@ FLOORS: tuple[tuple[str, ...], ...] = (
     ("compiled",),
     ("variation", "tolerance", "tradeoff", "sweep"),
     ("derive",),
+    ("scene",),
     ("",),                                  # the package itself: symkin.load, analyze, ...
     ("cli", "__main__"),
 )

@@ -24,7 +24,7 @@ import symkin
 from conftest import EXAMPLES
 from evaluators import require_compiler
 from reference_solver import Reference
-from symkin.derive import derive
+from symkin.scene import derive as derive_scene
 from symkin.errors import InputError
 
 NINE_BAR = EXAMPLES / "nine_bar_platform.toml"
@@ -84,7 +84,7 @@ def derived(tmp_path_factory):
     scene = folder / "stage.toml"
     scene.write_text(SCENE)
     out = folder / "out"
-    written = derive(NINE_BAR, out, emit=["c", "numpy"], scene=scene)
+    written = derive_scene(NINE_BAR, scene, out, emit=["c", "numpy"])
     return out, written
 
 
@@ -262,8 +262,8 @@ def test_scene_output_is_deterministic_and_reports_compile(tmp_path):
 
     scene = tmp_path / "s.toml"
     scene.write_text(FOUR_BAR_SCENE)
-    first = derive(FOUR_BAR, tmp_path / "a", scene=scene, emit=["numpy", "latex", "c"])
-    second = derive(FOUR_BAR, tmp_path / "b", scene=scene, emit=["numpy", "latex", "c"])
+    first = derive_scene(FOUR_BAR, scene, tmp_path / "a", emit=["numpy", "latex", "c"])
+    second = derive_scene(FOUR_BAR, scene, tmp_path / "b", emit=["numpy", "latex", "c"])
     assert [p.name for p in first] == [p.name for p in second]
     for a, b in zip(first, second):
         assert a.read_bytes() == b.read_bytes(), a.name
