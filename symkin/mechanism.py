@@ -273,8 +273,7 @@ def name_problem(name: str, longest: int = MAX_NAME) -> tuple[str, str] | None:
     return None
 
 
-def with_points(mech: Mechanism, tables: Sequence[Mapping], file: str, text: str,
-                header: str = "point") -> Mechanism:
+def with_points(mech: Mechanism, tables: Sequence[Mapping], file: str, text: str) -> Mechanism:
     """`mech` with further points, given as [[point]] tables (name, link, at: expressions over
     the file's parameters) of another file (a scene, docs/scene.md), validated as the file's own
     are; a name the mechanism already uses is bad input."""
@@ -286,7 +285,7 @@ def with_points(mech: Mechanism, tables: Sequence[Mapping], file: str, text: str
     for p in added:
         if p.name in taken:
             raise reader.error(f"the mechanism already has a point '{p.name}'",
-                               f"[[{header}]] '{p.name}'", p.line,
+                               f"[[point]] '{p.name}'", p.line,
                                "give only its name to use the file's point, or rename it")
     n = len(mech.points)
     return dataclasses.replace(mech, points=mech.points + tuple(

@@ -251,6 +251,7 @@ class _Reader:
         added = []
         points = []
         seen: set[str] = set()
+        known = [p.name for p in mech.points]
         for i, table in enumerate(tables):
             entry = f"[[point]] #{i + 1}"
             self.keys(table, POINT_KEYS, entry)
@@ -264,9 +265,7 @@ class _Reader:
                 raise self.error(f"the point '{pname}' is named twice", entry,
                                  "give every point once")
             seen.add(pname)
-            new = "link" in table or "at" in table
-            known = [p.name for p in mech.points]
-            if new:
+            if "link" in table or "at" in table:
                 added.append({k: table[k] for k in ("name", "link", "at") if k in table})
             elif pname not in known:
                 raise self.error(f"the mechanism has no point '{pname}'", entry,
@@ -335,11 +334,11 @@ def measure(scene: Scene, progress: Callable[[str], None] | None = None
                 continue
             kept.append(s | fixed_value)
             devs.append({n: ev.points[n].deviation for n in names})
+        if not kept:
+            raise InputError("no sample of the point's range can be assembled", file=scene.path,
+                             entry=f"[[point]] '{names[0]}'",
+                             hint="choose ranges inside the assembly range")
         for name in names:
-            if not kept:
-                raise InputError(f"no sample of the point's range can be assembled", file=scene.path,
-                                 entry=f"[[point]] '{name}'",
-                                 hint="choose ranges inside the assembly range")
             samples[name] = kept
             wanted[name] = [(float(d[name][0]), float(d[name][1])) for d in devs]
     allowed = [v for v in default_variants(stiffness=any(
@@ -399,7 +398,8 @@ def choose(scene: Scene, measured: Sequence[Measured], counts: Mapping[str, int]
     memo: dict[tuple, int] = {}
 
     def price(v: Variant, points: tuple[str, ...]) -> int:
-        key = (v, frozenset(points))
+        # a float32 variant runs the float64 one's routines
+        key = (dataclasses.replace(v, precision="float64"), frozenset(points))
         if key not in memo:
             pruned, _ = for_levels(mech, points, [v.level])
             held = {h: a for h, a in fixed.items() if h in pruned.inputs}
@@ -503,8 +503,8 @@ def notes(scene: Scene, choice: Choice, group: Group | None = None) -> list[str]
                          f"(relative {relative:.3g}) against the {pt.reference} level at 30 "
                          f"digits over {span} ({choice.references[name]} samples); tolerance "
                          f"{pt.tolerance_text};")
-    total = sum(g.cost for g in choice.groups)
     if group is None:
+        total = sum(g.cost for g in choice.groups)
         if choice.single is not None:
             lines.append(f"  cost {total} against {choice.single.cost} for the cheapest single "
                          f"variant meeting every point ({choice.single.variant.name}).")
@@ -543,8 +543,8 @@ def generate(scene: Scene, emit: Sequence[str], progress: Callable[[str], None] 
             for h, (lo, hi) in by_name[p].ranges:
                 a, b = spans.get(h, (lo, hi))
                 spans[h] = (min(a, lo), max(b, hi))
-        gemit = [e for e in emit if e != "c" or g.variant.precision == "float64"]
-        out, p = generate_plan(dataclasses.replace(mech, name=name), gemit, g.points,
+        # (a float32 variant is chosen only with backend numpy, which emits no C)
+        out, p = generate_plan(dataclasses.replace(mech, name=name), emit, g.points,
                                variant=g.variant, notes=notes(scene, choice, g),
                                column_width=column_width, spans=spans, fixed=fixed,
                                progress=say, appendix=appendix)
