@@ -1,6 +1,6 @@
 """What every part of the benchmarks shares: paths, the examples and their input ranges, the
 compile flags, the sizes of a full, --quick or --smoke run, timing helpers, the machine, and the
-iteration policy of symkin's generated evaluators (read from symkin.solver)."""
+iteration policy of symkin's generated evaluators (read from symkin.core.settings)."""
 
 from __future__ import annotations
 
@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 
 import families
-from symkin.levels import get as level
-from symkin.solver import SOLVER
+from symkin.core.levels import get as level
+from symkin.core.settings import SOLVER
 
 ROOT = Path(__file__).resolve().parent.parent
 BENCH = ROOT / "benchmarks"

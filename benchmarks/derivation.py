@@ -1,4 +1,4 @@
-"""Derivation time and memory (`symkin.derive.generate`, every emitter, all levels), each case in
+"""Derivation time and memory (`symkin.studies.derive.generate`, every emitter, all levels), each case in
 a fresh process, on the examples and on the families of benchmarks/families.py, with growth
 exponents fitted on log-log.
 
@@ -25,7 +25,7 @@ from common import ROOT, log
 
 def emitters() -> list[str]:
     """Every emitter symkin has: the derivation is timed with all of them."""
-    from symkin.derive import EMITTERS
+    from symkin.studies.derive import EMITTERS
 
     return list(EMITTERS)
 
@@ -45,7 +45,7 @@ def peak_rss_mb() -> float:
 def derive_child(kind: str, arg: str) -> None:
     """Runs in a fresh process: prints one JSON line with the derivation's time and memory."""
     t_start = time.perf_counter()
-    from symkin.derive import generate
+    from symkin.studies.derive import generate
 
     import symkin.codegen.plan  # noqa: F401 - the emitters' imports are start-up, not derivation
     for module in ("numpy.backend", "c.backend", "latex.report"):

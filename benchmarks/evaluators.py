@@ -13,7 +13,7 @@ from common import EXACT, EXAMPLES, POLICY, ROOT, TOL, Sizes, best_time, log, re
 from lambdify_alt import lambdify_alternative, substituted
 from scipy_alt import scipy_alternative
 from symforce_alt import SFBench, symforce_build
-from symkin.levels import LEVELS
+from symkin.core.levels import LEVELS
 from symkin_c import CBench, compile_c
 
 
@@ -23,7 +23,7 @@ def bench_example(example: str, sizes: Sizes, sf: dict, workroot: Path) -> dict:
     from symkin.codegen.backends.c import backend as c_backend
     from symkin.codegen.backends.numpy import backend as numpy_backend
     from symkin.codegen.plan import plan as make_plan
-    from symkin.codegen.runtime import import_numpy_module
+    from symkin.codegen.toolchain import import_numpy_module
 
     log(f"evaluators: {example}")
     mech = symkin.load(ROOT / "examples" / f"{example}.toml")

@@ -30,8 +30,8 @@ import numpy as np
 import families
 import symkin
 from common import ROOT, log, save
-from symkin.analysis import Analysis
-from symkin.structure import build
+from symkin.kinematics.analysis import Analysis
+from symkin.graph.structure import build
 
 POINT = {"fan": "C1", "ladder": "P1", "nine_bar": "F"}
 
@@ -48,7 +48,7 @@ def _ops(header: str) -> dict[str, int]:
     return {m.group(1): int(m.group(2)) for m in re.finditer(r"(\w+) (\d+)", line.split(":")[1])}
 
 
-def _evaluators(kind: str, k: int) -> dict[str, symkin.compiled.Compiled]:
+def _evaluators(kind: str, k: int) -> dict[str, symkin.studies.compiled.Compiled]:
     point = POINT[kind]
     opts = {"backend": "c", "levels": ["exact"], "sensitivity": False}
     if kind == "nine_bar":

@@ -10,10 +10,10 @@ Measures, on this machine:
    `scipy.optimize.root` on the compliant loop equations (scipy_alt.py), and SymForce-generated
    C++ for the same routines driven by the same algorithm (symforce_alt.py with
    symforce_driver.cc, where SymForce installs). Every alternative is first checked to give the
-   same deviation as the C evaluator; the drivers follow symkin.solver's settings.
+   same deviation as the C evaluator; the drivers follow symkin.core.settings's settings.
 2. Throughput: the numpy module on 10^6 points against the C evaluator called 10^6 times in a
    C loop.
-3. Derivation (derivation.py: `symkin.derive.generate`, every emitter, all levels) time and peak
+3. Derivation (derivation.py: `symkin.studies.derive.generate`, every emitter, all levels) time and peak
    memory on the examples and on generated families (families.py), each in a fresh process,
    with growth exponents fitted by least squares on log-log.
 4. Sweeps and sensitivities (sweeps.py): batch calls against one ctypes call per point, a

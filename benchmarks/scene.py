@@ -33,8 +33,8 @@ import numpy as np
 
 import symkin
 from common import C_FLAGS, ROOT, log, save
-from symkin import scene as scenes
-from symkin.derive import generate
+from symkin.studies import scene as scenes
+from symkin.studies.derive import generate
 
 NINE_BAR = ROOT / "examples" / "nine_bar_platform.toml"
 POINTS = """
@@ -127,7 +127,7 @@ def run(n_points: int, repeats: int) -> list[dict]:
         with tempfile.TemporaryDirectory() as a, tempfile.TemporaryDirectory() as b:
             lib = _library(files, name, f"{name}_evaluate(inputs + (size_t)i * "
                                         f"{name.upper()}_N_INPUTS, NULL, out)", Path(a))
-            code = symkin.levels.get(single.variant.level).code
+            code = symkin.core.levels.get(single.variant.level).code
             lib1 = _library(single_files, single_name,
                             f"{single_name}_evaluate(inputs + (size_t)i * "
                             f"{single_name.upper()}_N_INPUTS, NULL, {code}, out)", Path(b))

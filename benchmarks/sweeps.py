@@ -64,7 +64,7 @@ class Timed:
 
     def __init__(self, mech, plan_levels=("exact",)):
         import symkin
-        from symkin.codegen import runtime
+        from symkin.codegen import toolchain
         from symkin.codegen.backends.c import backend as c_backend
         from symkin.codegen.plan import plan
 
@@ -74,13 +74,13 @@ class Timed:
         header, code = c_backend.emit(self.plan, f"{mech.name}.toml")
         name = mech.name
         extra = TIMER_C.replace("UPPER", name.upper()).replace("NAME", name)
-        path = runtime.build(name, header, code, runtime.CFLAGS, extra)
+        path = toolchain.build(name, header, code, toolchain.CFLAGS, extra)
         self.raw = ctypes.CDLL(str(path))
         self.fn = self.raw.bench_time
         self.fn.restype = ctypes.c_double
         d = ctypes.POINTER(ctypes.c_double)
         self.fn.argtypes = [d, ctypes.c_int, ctypes.c_int, ctypes.c_int, ctypes.c_int, d]
-        self.lib = runtime.Library(path, name, len(self.plan.inputs), len(self.plan.parameters),
+        self.lib = toolchain.Library(path, name, len(self.plan.inputs), len(self.plan.parameters),
                                    len(self.plan.points), len(self.plan.hinges))
         self.name = name
 
@@ -199,7 +199,8 @@ def sweep_throughput(samples: int, grid: int) -> dict:
     """`symkin sweep` of the four-bar (l = normal(1e-3, 2e-5)) on this machine's cores against
     twice the single-core C rate on the same configurations, measured before and after."""
     import symkin
-    from symkin import sweep, variation
+    from symkin.studies import sweep
+    from symkin.studies import variation
 
     mech = symkin.load(ROOT / "examples" / "four_bar.toml")
     ev = symkin.compile(mech, levels=["exact"])

@@ -61,7 +61,7 @@ def symforce_build(plan, workdir: Path) -> tuple[Path, float]:
     import symforce.symbolic as sf
     from symforce.codegen import Codegen, CppConfig
     from symforce.values import Values
-    from symkin import special
+    from symkin.model import special
     from symkin.codegen.backends.c import kernels as c_kernels
 
     t0 = time.perf_counter()

@@ -1,7 +1,7 @@
 // The SymForce alternative of benchmarks/run.py: SymForce-generated C++ routines (sk::Rigid,
 // sk::RigidRes, sk::Linear, sk::Newton, sk::RigidPoints, sk::DevExact) driven by the algorithm of
 // symkin's generated C evaluator, step for step: closed-form rigid angles, SK_POLISH Newton
-// polish steps, first-order delta, Newton on delta with symkin's stopping rule (symkin.solver).
+// polish steps, first-order delta, Newton on delta with symkin's stopping rule (symkin.core.settings).
 // benchmarks/symforce_alt.py writes sk_config.h (sizes, indices, solver settings, the routine
 // headers) beside it and compiles both with Eigen; sf_bench_loop is timed inside C++.
 #include <time.h>

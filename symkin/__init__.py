@@ -17,22 +17,22 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .errors import AssemblyError, InputError, SymkinError
-from .levels import DEFAULT
-from .mechanism import Mechanism, load, loads
-from .structure import Structure, build as structure
+from .core.errors import AssemblyError, InputError, SymkinError
+from .core.levels import DEFAULT
+from .model.mechanism import Mechanism, load, loads
+from .graph.structure import Structure, build as structure
 
 if TYPE_CHECKING:                     # the heavy modules load on first use
-    from .analysis import Analysis
-    from .compiled import Compiled
-    from .evaluation import Evaluation
+    from .kinematics.analysis import Analysis
+    from .studies.compiled import Compiled
+    from .studies.evaluation import Evaluation
 
 __version__ = "0.1.0"
 
 
 def analyze(mechanism: Mechanism | str | Path, points: list[str] | None = None) -> Analysis:
     """The :class:`symkin.analysis.Analysis` of a mechanism (or of the file at that path)."""
-    from .analysis import Analysis
+    from .kinematics.analysis import Analysis
 
     mech = mechanism if isinstance(mechanism, Mechanism) else load(mechanism)
     return Analysis(structure(mech), points)
@@ -44,7 +44,7 @@ def evaluate(analysis: Analysis, inputs: Mapping[str, object], level: str = DEFA
     """One configuration of an analysis (:func:`symkin.evaluation.evaluate`): the derivation with
     mpmath at `dps` digits (backend sympy) or the generated numpy / C evaluators; with
     `sensitivity`, the derivatives by every parameter and input too (docs/sensitivity.md)."""
-    from .evaluation import evaluate as run
+    from .studies.evaluation import evaluate as run
 
     return run(analysis, inputs, level, params, backend, dps, sensitivity)
 
@@ -56,7 +56,7 @@ def compile(mechanism: Mechanism | Analysis | str | Path, backend: str = "c",  #
     (:func:`symkin.compiled.compile`): `evaluate`, `sensitivity` and `sensitivity_full` on
     arrays of inputs, one C call each; with `points`, only what moves them (docs/pruning.md);
     `fixed` inputs (name -> angle) are held constant and folded in."""
-    from .compiled import compile as build_evaluator
+    from .studies.compiled import compile as build_evaluator
 
     return build_evaluator(mechanism, backend, points, levels, sensitivity, fixed)
 

@@ -11,13 +11,13 @@ import pytest
 import mechanisms as M
 import symkin
 from conftest import EXAMPLES
-from symkin import levels
-from symkin.evaluation import parameter_values
-from symkin.codegen import runtime
+from symkin.core import levels
+from symkin.studies.evaluation import parameter_values
+from symkin.codegen import toolchain
 from symkin.codegen.backends.c import backend as c_backend
 from symkin.codegen.backends.numpy import backend as numpy_backend
 from symkin.codegen.plan import plan
-from symkin.codegen.runtime import import_numpy_module
+from symkin.codegen.toolchain import import_numpy_module
 
 SOURCES = {
     "four_bar": EXAMPLES / "four_bar.toml",
@@ -67,8 +67,8 @@ class Generated:
             require_compiler()
             header, code = c_backend.emit(self.plan, "test")
             kin = self.analysis.kin
-            self._lib = runtime.Library(
-                runtime.build(self.mech.name, header, code), self.mech.name,
+            self._lib = toolchain.Library(
+                toolchain.build(self.mech.name, header, code), self.mech.name,
                 len(kin.inputs), len(self.analysis.params), len(self.plan.points), len(kin.hinges))
         return self._lib
 

@@ -64,7 +64,7 @@ from fractions import Fraction
 import mpmath
 import sympy as sp
 
-from symkin.mechanism import PLATE_LENGTH, THETA, Mechanism
+from symkin.model.mechanism import PLATE_LENGTH, THETA, Mechanism
 
 __all__ = ["Reference", "ReferenceAssemblyError", "ReferenceModelError", "OVERRIDE_MODELS"]
 

@@ -1,5 +1,5 @@
 """Hinge angles are tracked continuously from the as-fabricated pose, by one rule in every backend
-(symkin.solver, the winding rule): the closed-form dyads wrap angles into (-pi, pi], so a hinge
+(symkin.core.settings, the winding rule): the closed-form dyads wrap angles into (-pi, pi], so a hinge
 that turned beyond half a turn must be refused (exit 3), never reported wrapped. Over the whole
 input range every backend agrees with the independent solver, and none answers where another
 (or the oracle) finds no assembly.
@@ -17,9 +17,9 @@ import symkin
 from conftest import EXAMPLES
 from evaluators import Generated, rel_err
 from reference_solver import Reference, ReferenceAssemblyError
-from symkin.errors import AssemblyError
-from symkin.evaluation import evaluate
-from symkin.solver import SOLVER
+from symkin.core.errors import AssemblyError
+from symkin.studies.evaluation import evaluate
+from symkin.core.settings import SOLVER
 
 
 def moved_input(text: str, old: str, new: str) -> str:

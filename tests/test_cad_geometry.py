@@ -68,7 +68,7 @@ def test_millimetres_scale_the_deviation_by_a_thousand():
 
 
 def test_generated_code_holds_no_huge_integer(tmp_path):
-    from symkin.derive import generate
+    from symkin.studies.derive import generate
 
     files = generate(symkin.loads(cad_text(), "cad.toml"), emit=("c", "numpy"))
     for name in ("four_bar.c", "four_bar.py"):

@@ -7,7 +7,7 @@ import pytest
 import symkin
 from conftest import EXAMPLES
 from evaluators import Generated
-from symkin.cli import main
+from symkin.cli.commands import main
 
 FOUR_BAR = (EXAMPLES / "four_bar.toml").read_text()
 

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import pytest
 
-import symkin.cli as cli
+import symkin.cli.commands as cli
 from conftest import EXAMPLES
-from symkin.cli import main
+from symkin.cli.commands import main
 
 FOUR_BAR = str(EXAMPLES / "four_bar.toml")
 

@@ -19,11 +19,11 @@ import symkin
 from conftest import EXAMPLES, ROOT
 from evaluators import INPUTS, SOURCES, generated, rel_err, require_compiler
 from reference_solver import Reference
-from symkin.codegen import runtime
+from symkin.codegen import toolchain
 from symkin.codegen.backends.c import backend as c_backend
 from symkin.codegen.backends.numpy import backend as numpy_backend
 from symkin.codegen.plan import plan
-from symkin.codegen.runtime import import_numpy_module
+from symkin.codegen.toolchain import import_numpy_module
 
 @pytest.mark.parametrize("key", sorted(SOURCES))
 @pytest.mark.parametrize("backend", ["numpy", "c"])
@@ -127,7 +127,7 @@ def test_out_of_range_is_nan_in_numpy_and_status_1_in_c():
 def test_c_rejects_bad_arguments():
     g = generated("four_bar")
     assert g.lib.evaluate([float("nan")], None, 2)[0] == 3
-    unknown = max(lv.code for lv in symkin.levels.LEVELS) + 1     # no level has this code
+    unknown = max(lv.code for lv in symkin.core.levels.LEVELS) + 1     # no level has this code
     assert g.lib.evaluate([0.1], None, unknown)[0] == 3
     assert g.lib.evaluate([0.1], [float("inf")], 2)[0] == 3
 
@@ -228,6 +228,6 @@ def test_hostile_names_give_safe_compiling_code(tmp_path):
     assert rel_err(res["points"]["'; exit(1); '"]["deviation"], want) <= 1e-12
     assert not (ROOT / "PWNED").exists() and not (tmp_path / "PWNED").exists()
     header, code = c_backend.emit(p, 'x*/y.toml')
-    lib = runtime.Library(runtime.build(mech.name, header, code), mech.name, 1, 1, 1, 4)
+    lib = toolchain.Library(toolchain.build(mech.name, header, code), mech.name, 1, 1, 1, 4)
     status, out, _ = lib.evaluate([0.2], None, 2)
     assert status == 0 and rel_err(out[4:6], want) <= 1e-12

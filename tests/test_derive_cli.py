@@ -8,9 +8,9 @@ import sys
 import mechanisms as M
 import symkin
 from conftest import EXAMPLES
-from symkin.analysis import Analysis
+from symkin.kinematics.analysis import Analysis
 from symkin.codegen.plan import plan
-from symkin.cli import main
+from symkin.cli.commands import main
 
 
 def test_writes_c_and_numpy(tmp_path, capsys):

@@ -19,7 +19,7 @@ import symkin
 from conftest import EXAMPLES
 from evaluators import rel_err
 from reference_solver import Reference
-from symkin.analysis import Analysis
+from symkin.kinematics.analysis import Analysis
 
 CASES = {
     "four_bar": (EXAMPLES / "four_bar.toml", {"A0": "0.2"}),

@@ -12,8 +12,8 @@ import pytest
 import symkin
 from conftest import ROOT
 from reference_solver import Reference
-from symkin.hinge_models import HINGE_KEYS, MODELS
-from symkin.mechanism import LINK_KEYS, POINT_KEYS, TOP_KEYS
+from symkin.model.hinges import HINGE_KEYS, MODELS
+from symkin.model.mechanism import LINK_KEYS, POINT_KEYS, TOP_KEYS
 
 DOCS = sorted((ROOT / "docs").glob("*.md"))
 FILE_FORMAT = (ROOT / "docs" / "file-format.md").read_text()

@@ -11,7 +11,7 @@ import pytest
 
 import mechanisms as M
 from conftest import EXAMPLES
-from symkin.cli import main
+from symkin.cli.commands import main
 
 FOUR_BAR = str(EXAMPLES / "four_bar.toml")
 

@@ -13,10 +13,10 @@ import symkin
 from conftest import EXAMPLES
 from evaluators import generated, rel_err
 from reference_solver import Reference
-from symkin.cli import main
+from symkin.cli.commands import main
 from symkin.codegen.backends.numpy import backend as numpy_backend
 from symkin.codegen.plan import plan
-from symkin.codegen.runtime import import_numpy_module
+from symkin.codegen.toolchain import import_numpy_module
 
 FOUR_BAR = str(EXAMPLES / "four_bar.toml")
 BACKENDS = ["sympy", "numpy", "c"]

@@ -7,7 +7,7 @@ import time
 import pytest
 import sympy as sp
 
-from symkin.expressions import ExpressionError, number, parse
+from symkin.model.expressions import ExpressionError, number, parse
 
 L = sp.Symbol("l", real=True)
 NAMES = {"l": L}

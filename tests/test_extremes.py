@@ -14,7 +14,7 @@ import pytest
 from evaluators import generated, rel_err
 from reference_solver import Reference
 from symkin.codegen.backends.numpy import backend as numpy_backend
-from symkin.codegen.runtime import import_numpy_module
+from symkin.codegen.toolchain import import_numpy_module
 
 ANGLES = ["1e-12", "1e-10", "1e-8", "1e-6", "1e-4", "1e-2", "0.1", "0.3", "0.6", "1.0"]
 RATIOS = ["1e-9", "1e-7", "1e-5", "1e-3", "1e-2", "0.1"]

@@ -24,8 +24,8 @@ from evaluators import rel_err, require_compiler
 from reference_solver import Reference
 from symkin.codegen.backends.numpy import backend as numpy_backend
 from symkin.codegen.plan import plan
-from symkin.codegen.runtime import import_numpy_module
-from symkin.paths import COMMIT, TEMP_PREFIX, complete_interrupted, write_atomically
+from symkin.codegen.toolchain import import_numpy_module
+from symkin.core.files import COMMIT, TEMP_PREFIX, complete_interrupted, write_atomically
 
 FOUR_BAR = EXAMPLES / "four_bar.toml"
 ROOT = Path(__file__).resolve().parent.parent

@@ -21,7 +21,7 @@ import mechanisms as M
 import symkin
 from conftest import EXAMPLES
 from evaluators import require_compiler
-from symkin.evaluation import evaluate
+from symkin.studies.evaluation import evaluate
 
 # The triad six-bar and, 0.3 m to its right, the example four-bar with its own input A0.
 TRIAD_AND_FOUR_BAR = M.text(
@@ -123,7 +123,7 @@ def test_derive_fix_on_the_command_line(tmp_path):
 
 
 def test_the_report_states_the_fixed_input_and_sweeps_the_free_one():
-    from symkin.derive import generate
+    from symkin.studies.derive import generate
 
     files = generate(_mech(M.FIVE_BAR), ["latex"], fixed={"O2": "-0.1"}, appendix=True)
     body = files["five_bar.tex"].decode()
@@ -134,7 +134,7 @@ def test_the_report_states_the_fixed_input_and_sweeps_the_free_one():
 
 
 def test_a_range_over_a_fixed_input_is_refused():
-    from symkin.derive import generate
+    from symkin.studies.derive import generate
 
     with pytest.raises(symkin.InputError, match="O2 is fixed") as err:
         generate(_mech(M.FIVE_BAR), ["latex"], fixed={"O2": "-0.1"},

@@ -17,7 +17,7 @@ import sys
 
 from conftest import EXAMPLES, ROOT
 from symkin import load
-from symkin.cli import main
+from symkin.cli.commands import main
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
 import families  # noqa: E402

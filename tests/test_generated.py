@@ -11,7 +11,7 @@ import pytest
 
 import symkin
 from conftest import EXAMPLES, ROOT
-from symkin.derive import generate, write_atomically
+from symkin.studies.derive import generate, write_atomically
 
 GENERATED = ROOT / "generated"
 

@@ -18,12 +18,12 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from symkin import hinge_models as hm
-from symkin import special
+from symkin.model import hinges as hm
+from symkin.model import special
 from symkin.codegen.backends.c import kernels as c_kernels
 from symkin.codegen.backends.numpy import kernels as np_kernels
 from symkin.codegen.backends.c.printer import CPrinter
-from symkin.mechanism import PLATE_LENGTH, THETA, Hinge
+from symkin.model.mechanism import PLATE_LENGTH, THETA, Hinge
 
 DPS = 90                       # reference precision (digits)
 F64_TOL = 1e-12                # required float64 relative accuracy of df, dg and derivatives

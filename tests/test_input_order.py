@@ -16,7 +16,7 @@ import pytest
 import mechanisms as M
 import symkin
 from evaluators import require_compiler
-from symkin.evaluation import evaluate
+from symkin.studies.evaluation import evaluate
 
 # basic_chain from the right: O2 gets label 1, O1 a later one; the file lists O1 first
 REORDERED = M.FIVE_BAR.replace('name = "five_bar"\n',

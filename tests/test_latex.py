@@ -18,8 +18,8 @@ import pytest
 import symkin
 from conftest import EXAMPLES, ROOT
 from symkin.codegen.backends.latex.text import escape_latex, math_name
-from symkin.cli import main
-from symkin.derive import generate
+from symkin.cli.commands import main
+from symkin.studies.derive import generate
 
 EXAMPLE_NAMES = sorted(p.stem for p in EXAMPLES.glob("*.toml"))
 MAX_OVERFULL_PT = 1.0
@@ -70,13 +70,13 @@ def write(files: dict[str, bytes], folder: Path) -> Path:
 @pytest.fixture(scope="module")
 def reports() -> dict[str, tuple[dict[str, bytes], dict[str, bytes]]]:
     """example -> (standalone files, appendix files), generated once in this process."""
-    from symkin.analysis import Analysis
+    from symkin.kinematics.analysis import Analysis
     from symkin.codegen.backends.latex import report
     from symkin.codegen.backends.numpy import backend as numpy_backend
     from symkin.codegen.plan import plan
-    from symkin.codegen.runtime import import_numpy_module
-    from symkin.derive import physics_reference
-    from symkin.structure import build
+    from symkin.codegen.toolchain import import_numpy_module
+    from symkin.studies.derive import physics_reference
+    from symkin.graph.structure import build
 
     out = {}
     for name in EXAMPLE_NAMES:
@@ -223,7 +223,7 @@ def test_byte_identical_across_processes_and_hash_seeds(reports, tmp_path):
     seed = "271828" if os.environ.get("PYTHONHASHSEED") != "271828" else "314159"
     script = (
         "import sys, pathlib, symkin\n"
-        "from symkin.derive import generate\n"
+        "from symkin.studies.derive import generate\n"
         "out = pathlib.Path(sys.argv[1])\n"
         "for name in sys.argv[2:]:\n"
         f"    files = generate(symkin.load(pathlib.Path({str(EXAMPLES)!r}) / (name + '.toml')),\n"
@@ -365,8 +365,8 @@ def test_range_without_tolerance_sets_the_plotted_range(tmp_path):
     the range's ends."""
     tex = _derive_tex(tmp_path, EXAMPLES / "four_bar.toml", "--range", "A0=-0.1:0.25")
     assert "of the input $\\theta$ of A0 from $-0.1$ to $0.25$~rad" in tex
-    from symkin.analysis import Analysis
-    from symkin.structure import build
+    from symkin.kinematics.analysis import Analysis
+    from symkin.graph.structure import build
 
     analysis = Analysis(build(symkin.load(EXAMPLES / "four_bar.toml")))
     rows = [r for r in _peak_rows(tex) if r[1] == "exact"]

@@ -1,4 +1,4 @@
-"""The level table (symkin/levels.py) is the one place levels are defined: every layer reads
+"""The level table (symkin/core/levels.py) is the one place levels are defined: every layer reads
 names and codes from it (docs/levels.md)."""
 
 from __future__ import annotations
@@ -9,9 +9,9 @@ import pytest
 import symkin
 from conftest import EXAMPLES
 from evaluators import require_compiler
-from symkin import levels
-from symkin.cli import parser
-from symkin.codegen import runtime
+from symkin.core import levels
+from symkin.cli.commands import parser
+from symkin.codegen import toolchain
 from symkin.codegen.backends.c import backend as c_backend
 from symkin.codegen.backends.numpy import backend as numpy_backend
 from symkin.codegen.plan import plan
@@ -43,7 +43,7 @@ def test_generated_code_takes_the_plans_levels_and_their_codes(wanted):
     an = symkin.analyze(symkin.load(EXAMPLES / "four_bar.toml"))
     p = plan(an, levels=wanted)
     names = tuple(lv.name for lv in p.levels)
-    module = runtime.import_numpy_module(numpy_backend.emit(p, "levels"),
+    module = toolchain.import_numpy_module(numpy_backend.emit(p, "levels"),
                                          "four_bar_" + "_".join(names))
     assert module.LEVELS == names
     # exact when it is generated, else the most faithful level generated
@@ -52,7 +52,7 @@ def test_generated_code_takes_the_plans_levels_and_their_codes(wanted):
                             levels.DEFAULT if levels.DEFAULT in names else names[-1])
     assert np.array_equal(default["points"]["C"]["deviation"], given["points"]["C"]["deviation"])
     header, code = c_backend.emit(p, "levels")
-    lib = runtime.Library(runtime.build("four_bar", header, code), "four_bar", 1, 1, 1, 4)
+    lib = toolchain.Library(toolchain.build("four_bar", header, code), "four_bar", 1, 1, 1, 4)
     for lv in levels.LEVELS:
         status = lib.evaluate([0.2], None, lv.code)[0]
         assert status == (0 if lv.name in names else 3), lv.name

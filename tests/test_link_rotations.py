@@ -13,8 +13,8 @@ import symkin
 from conftest import EXAMPLES
 from evaluators import INPUTS, generated
 from reference_solver import Reference
-from symkin.cli import main
-from symkin.codegen import runtime
+from symkin.cli.commands import main
+from symkin.codegen import toolchain
 from symkin.codegen.backends.c import backend as c_backend
 from symkin.codegen.plan import plan
 
@@ -89,7 +89,7 @@ def test_c_pose_fills_nan_on_failure_and_accepts_null():
     p = plan(g.analysis)
     header, code = c_backend.emit(p, "test")
     assert "#define FOUR_BAR_N_LINKS 4" in header and "four_bar_evaluate_pose" in header
-    lib = runtime.Library(runtime.build("four_bar", header, code), "four_bar", 1, 1, 1, 4, 4)
+    lib = toolchain.Library(toolchain.build("four_bar", header, code), "four_bar", 1, 1, 1, 4, 4)
     status, _, _, links = lib.pose([0.2], None, 2)
     assert status == 0 and links[3 * 1] == 0.2          # the crank turns by its input
     status, out, angles, links = lib.pose([4.0], None, 2)

@@ -16,10 +16,10 @@ import mechanisms as M
 import symkin
 from conftest import EXAMPLES
 from evaluators import INPUTS, Generated, generated, rel_err
-from symkin import evaluation
+from symkin.studies import evaluation
 from symkin.codegen.backends.numpy import backend as numpy_backend
 from symkin.codegen.plan import plan
-from symkin.codegen.runtime import import_numpy_module
+from symkin.codegen.toolchain import import_numpy_module
 
 LOADED_FOUR_BAR = (M.without_stiffness(EXAMPLES / "four_bar.toml")
                    .replace('length = "l"\n', 'length = "l"\nE = 70e9\nthickness = "l/8"\n'

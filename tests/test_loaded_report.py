@@ -26,8 +26,8 @@ from reference_solver import Reference
 from symkin.codegen.backends.latex import report as latex_report
 from symkin.codegen.backends.numpy import backend as numpy_backend
 from symkin.codegen.plan import plan
-from symkin.codegen.runtime import import_numpy_module
-from symkin.derive import generate
+from symkin.codegen.toolchain import import_numpy_module
+from symkin.studies.derive import generate
 
 E, NU, WIDTH = 210e9, 0.3, 5e-3
 LOADED = (EXAMPLES / "four_bar.toml").read_text() + (
@@ -94,7 +94,7 @@ def test_figure_reference_points_are_the_elastica(example):
     """The report's sweep holds the `equilibrium` level at REFERENCE_SAMPLES inputs; two of them
     agree with the independent reference to 1e-8 relative, and `loaded` is within 1 % of it
     there (l/L <= 0.05)."""
-    from symkin.derive import physics_reference
+    from symkin.studies.derive import physics_reference
 
     mech = symkin.load(EXAMPLES / f"{example}.toml")
     an = symkin.analyze(mech)

@@ -1,4 +1,4 @@
-"""Loop-closure equations (symkin.loop_equations) against the paper's section 5, symbolically.
+"""Loop-closure equations (symkin.kinematics.loop_equations) against the paper's section 5, symbolically.
 
 The paper's equations are typed in below in the paper's own symbols (lengths r1, a, b1, ...,
 relative angles q1, q2, ...). They are mapped onto symkin's:
@@ -30,8 +30,8 @@ import symkin
 from conftest import EXAMPLES
 from mechanisms import FIVE_BAR, SERIAL_ARM, TRIAD_SIX_BAR, WATT_II
 
-from symkin.kinematics import Kinematics
-from symkin.loop_equations import LoopEquations, latex, loop_equations
+from symkin.kinematics.positions import Kinematics
+from symkin.kinematics.loop_equations import LoopEquations, latex, loop_equations
 
 Q = {a: sp.Symbol(f"q{a}", real=True) for a in range(1, 11)}
 q1, q2, q3, q4, q5, q6, q7, q8, q9, q10 = (Q[a] for a in range(1, 11))
@@ -425,8 +425,8 @@ def test_squared_form_is_implied_by_the_positional_pair():
 
 @pytest.mark.parametrize("name", sorted(GENERIC))
 def test_equations_vanish_at_the_rigid_solution(name):
-    from symkin.analysis import Analysis
-    from symkin.evaluation import parameter_values
+    from symkin.kinematics.analysis import Analysis
+    from symkin.studies.evaluation import parameter_values
 
     text, cases = GENERIC[name]
     structure = symkin.structure(symkin.loads(text))

@@ -22,11 +22,12 @@ import symkin
 from conftest import EXAMPLES
 from evaluators import Generated, generated, rel_err
 from reference_solver import Reference
-from symkin import derive, expressions
+from symkin.studies import derive
+from symkin.model import expressions
 from symkin.codegen.backends.c import backend as c_backend
 from symkin.codegen.backends.numpy import backend as numpy_backend
-from symkin.evaluation import evaluate
-from symkin.hinge_models import PLATE_LENGTH, THETA
+from symkin.studies.evaluation import evaluate
+from symkin.model.hinges import PLATE_LENGTH, THETA
 
 IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 

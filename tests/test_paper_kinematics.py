@@ -8,7 +8,7 @@ import sympy as sp
 
 import symkin
 from conftest import EXAMPLES
-from symkin.kinematics import c_symbol as c, paper_positions, z_symbol as z
+from symkin.kinematics.positions import c_symbol as c, paper_positions, z_symbol as z
 
 
 def structure(name):
@@ -60,7 +60,7 @@ def test_link_positions_4_7_match_the_paper(name):
                                          ("nine_bar_platform", "F")])
 def test_paper_level_deviation_is_dz1_plus_dz2(name, point):
     """ΔR of the characteristic point on link 2 = Δz_1 + Δz_2 rotated into the absolute frame."""
-    from symkin.analysis import Analysis
+    from symkin.kinematics.analysis import Analysis
 
     an = Analysis(structure(name))
     kin = an.kin
@@ -72,8 +72,8 @@ def test_paper_level_deviation_is_dz1_plus_dz2(name, point):
         assert sp.simplify(g - w) == 0
     # Δz_a (3.3) itself: the plate deviation, rotated by the reference link's angle.
     dz2 = h2.delta_z(kin.theta[2], kin.theta[1])
-    local = (h2.df.subs(symkin.mechanism.THETA, kin.theta[2]),
-             h2.dg.subs(symkin.mechanism.THETA, kin.theta[2]))
+    local = (h2.df.subs(symkin.model.mechanism.THETA, kin.theta[2]),
+             h2.dg.subs(symkin.model.mechanism.THETA, kin.theta[2]))
     rotated_u = (sp.cos(h2.angle + kin.theta[1]), sp.sin(h2.angle + kin.theta[1]))
     normal = (-rotated_u[1], rotated_u[0])
     for k in range(2):
@@ -84,7 +84,7 @@ def test_paper_level_deviation_is_dz1_plus_dz2(name, point):
 @pytest.mark.parametrize("name", sorted(PAPER_R))
 def test_plate_data_and_hinge_vectors_in_the_as_fabricated_pose(name):
     """With every θ = 0, z_a (3.2) of each model equals c_{i-(a)a} - c_{i+(a)a}, the plate."""
-    from symkin.analysis import Analysis
+    from symkin.kinematics.analysis import Analysis
 
     an = Analysis(structure(name))
     kin = an.kin

@@ -26,8 +26,8 @@ import mechanisms as M
 import symkin
 from conftest import EXAMPLES
 from reference_solver import Reference
-from symkin.cli import main
-from symkin import evaluation
+from symkin.cli.commands import main
+from symkin.studies import evaluation
 from symkin.physics import arith, elastica, equilibrium
 
 DPS = 30

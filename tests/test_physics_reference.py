@@ -133,7 +133,7 @@ def test_loaded_with_axial_stretch_against_the_extensible_reference():
     # Both physical levels model inextensible plates; `loaded` can add the axial stretch N l/EA
     # (extensible=True), and then agrees with the reference's extensible variant as closely as
     # the inextensible pair does, while the two models differ by 0.6 % (0.02 rad) to 0.05 % (0.3 rad) here.
-    from symkin import evaluation
+    from symkin.studies import evaluation
 
     mech = symkin.loads(with_stiffness("four_bar"), "four_bar.toml")
     stretch = Equilibrium(mech, (PLANE, WIDTH, "l/10"), extensible=True)

@@ -21,11 +21,11 @@ import mechanisms as M
 import symkin
 from conftest import EXAMPLES, ROOT
 from evaluators import require_compiler
-from symkin import levels as level_table
-from symkin.codegen import runtime
-from symkin.derive import generate
-from symkin.evaluation import evaluate
-from symkin.pruning import prune
+from symkin.core import levels as level_table
+from symkin.codegen import toolchain
+from symkin.studies.derive import generate
+from symkin.studies.evaluation import evaluate
+from symkin.graph.pruning import prune
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
 import families  # noqa: E402
@@ -118,13 +118,13 @@ def _modules(text: str, points, levels=None, c: bool = True):
     pruned = generate(mech, emit, points=points, levels=levels)
     out = []
     for tag, files in (("full", full), ("pruned", pruned)):
-        mod = runtime.numpy_module_in_memory(files[f"{mech.name}.py"].decode(),
+        mod = toolchain.numpy_module_in_memory(files[f"{mech.name}.py"].decode(),
                                              f"{mech.name}_{tag}")
         lib = None
         if c:
             require_compiler()
             h, src = files[f"{mech.name}.h"].decode(), files[f"{mech.name}.c"].decode()
-            lib = runtime.Library(runtime.build(mech.name, h, src), mech.name,
+            lib = toolchain.Library(toolchain.build(mech.name, h, src), mech.name,
                                   len(mod.INPUTS), len(mod.PARAMETERS), len(mod.POINTS),
                                   _count(h, "N_HINGES"))
         out.append((mod, lib, files))

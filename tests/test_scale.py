@@ -17,7 +17,7 @@ import symkin
 from conftest import ROOT
 from evaluators import Generated, rel_err
 from reference_solver import Reference
-from symkin.evaluation import evaluate
+from symkin.studies.evaluation import evaluate
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
 import families  # noqa: E402
@@ -61,5 +61,5 @@ def test_out_of_range_input_is_refused_not_a_crash(family):
     kind, g = family
     inputs = {"g0": 1.5} if kind == "ladder" else {**_cases(kind)[0], "A0_3": -3.0}
     for backend in ("numpy", "c", "sympy"):
-        with pytest.raises(symkin.errors.AssemblyError):
+        with pytest.raises(symkin.core.errors.AssemblyError):
             evaluate(g.analysis, inputs, "exact", backend=backend)

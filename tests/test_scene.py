@@ -24,8 +24,8 @@ import symkin
 from conftest import EXAMPLES
 from evaluators import require_compiler
 from reference_solver import Reference
-from symkin.scene import derive as derive_scene
-from symkin.errors import InputError
+from symkin.studies.scene import derive as derive_scene
+from symkin.core.errors import InputError
 
 NINE_BAR = EXAMPLES / "nine_bar_platform.toml"
 FOUR_BAR = EXAMPLES / "four_bar.toml"
@@ -170,7 +170,7 @@ def test_numpy_scene_checks_its_inputs(derived):
 
 
 def _scene_error(text: str, mech: symkin.Mechanism | None = None) -> InputError:
-    from symkin import scene
+    from symkin.studies import scene
 
     with pytest.raises(InputError) as exc:
         scene.loads(text, mech or symkin.load(FOUR_BAR), "bad.toml")

@@ -24,8 +24,8 @@ import mechanisms as M
 import symkin
 from conftest import EXAMPLES, ROOT
 from evaluators import require_compiler
-from symkin.cli import main
-from symkin.evaluation import _mpmath_evaluator, evaluate
+from symkin.cli.commands import main
+from symkin.studies.evaluation import _mpmath_evaluator, evaluate
 
 FOUR_BAR = (EXAMPLES / "four_bar.toml").read_text()
 TINY = FOUR_BAR.replace("l = 1e-3 ", "l = 1e-10 ")     # plates 1e-9 of the link lengths
@@ -50,7 +50,7 @@ def exact(x) -> str:
     return sign + (f"{man}/{2 ** -exp}" if exp < 0 else str(man * 2 ** exp))
 
 
-_ANALYSES: dict[str, symkin.analysis.Analysis] = {}
+_ANALYSES: dict[str, symkin.kinematics.analysis.Analysis] = {}
 
 
 def analysis(key: str):
@@ -90,7 +90,7 @@ def rel(got, want) -> float:
         return float(diff / size) if size else float(diff)
 
 
-_COMPILED: dict[str, symkin.compiled.Compiled] = {}
+_COMPILED: dict[str, symkin.studies.compiled.Compiled] = {}
 
 
 def compiled(key: str):
@@ -254,7 +254,7 @@ def test_report_ranks_the_parameters():
     of the relative sensitivity, at the input where |ΔR| is largest."""
     import re
 
-    from symkin.derive import generate
+    from symkin.studies.derive import generate
 
     mech = symkin.loads(M.PARAM_FOUR_BAR, "param_four_bar.toml")
     tex = generate(mech, emit=["latex"])["param_four_bar.tex"].decode()

@@ -1,5 +1,5 @@
 """One solver: the mpmath evaluation and the generated C and numpy evaluators all take their
-continuation, iteration caps and tolerances from symkin.solver (docs/numerics.md)."""
+continuation, iteration caps and tolerances from symkin.core.settings (docs/numerics.md)."""
 
 from __future__ import annotations
 
@@ -11,12 +11,12 @@ import pytest
 import mechanisms as M
 import symkin
 from evaluators import require_compiler
-from symkin import evaluation
-from symkin.codegen import runtime
+from symkin.studies import evaluation
+from symkin.codegen import toolchain
 from symkin.codegen.backends.c import backend as c_backend
 from symkin.codegen.backends.numpy import backend as numpy_backend
 from symkin.codegen.plan import plan
-from symkin.solver import SOLVER
+from symkin.core.settings import SOLVER
 
 
 def test_continuation_steps():
@@ -43,10 +43,10 @@ def triad():
 
 def evaluators(an, settings):
     p = dataclasses.replace(plan(an), solver=settings)
-    module = runtime.import_numpy_module(numpy_backend.emit(p, "solver"),
+    module = toolchain.import_numpy_module(numpy_backend.emit(p, "solver"),
                                          f"triad_{settings.rigid_iterations}")
     header, code = c_backend.emit(p, "solver")
-    lib = runtime.Library(runtime.build("triad_six_bar", header, code), "triad_six_bar", 1, 1,
+    lib = toolchain.Library(toolchain.build("triad_six_bar", header, code), "triad_six_bar", 1, 1,
                           1, len(p.hinges))
     return module, lib
 

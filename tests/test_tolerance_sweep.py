@@ -15,9 +15,11 @@ import pytest
 import mechanisms as M
 import symkin
 from evaluators import require_compiler
-from symkin import sweep, tolerance, variation
-from symkin.cli import main
-from symkin.evaluation import evaluate
+from symkin.studies import sweep
+from symkin.studies import tolerance
+from symkin.studies import variation
+from symkin.cli.commands import main
+from symkin.studies.evaluation import evaluate
 
 _STATE: dict = {}
 

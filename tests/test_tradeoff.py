@@ -19,10 +19,10 @@ import mechanisms as M
 import symkin
 from conftest import EXAMPLES
 from reference_solver import Reference
-from symkin.cli import main
-from symkin.codegen.runtime import import_numpy_module
-from symkin.tradeoff import Row, Tradeoff, Variant, choose, figure, pareto, plot, run, sample
-from symkin.variants import analysis_for
+from symkin.cli.commands import main
+from symkin.codegen.toolchain import import_numpy_module
+from symkin.studies.tradeoff import Row, Tradeoff, Variant, choose, figure, pareto, plot, run, sample
+from symkin.kinematics.variants import analysis_for
 
 # The kinematic trade: the example without its plates' stiffness, measured against `exact`.
 FOUR_BAR = Path(tempfile.mkdtemp(prefix="symkin-tradeoff-")) / "four_bar.toml"
@@ -114,7 +114,7 @@ def test_pareto_front_of_each_backend_is_non_dominated(table, backend):
 
 def crowded_table() -> Tradeoff:
     """Every default variant with made-up, tightly clustered errors and times."""
-    from symkin.variants import default_variants
+    from symkin.kinematics.variants import default_variants
 
     rows = []
     for k, v in enumerate(default_variants()):
@@ -183,7 +183,7 @@ def test_with_stiffness_the_trade_is_measured_against_the_physics():
     elastica reference (tests/reference_physics.py) within 10 %; the kinematic `exact` level
     is far from the physics where `loaded` is close."""
     from reference_physics import Equilibrium
-    from symkin.variants import default_variants
+    from symkin.kinematics.variants import default_variants
 
     assert {"loaded", "loaded/f32"} <= {v.name for v in default_variants(stiffness=True)}
     mech = symkin.load(EXAMPLES / "four_bar.toml")

@@ -6,5 +6,6 @@ the plan is the backends' only input.
 - :mod:`.derivation`: the statement of the derivation a report prints;
 - :mod:`.backends`: one folder per language (printer, kernels' source, backend; the templates
   live in the top-level ``templates/<lang>/``): ``c``, ``numpy``, ``latex``;
-- :mod:`.runtime`: compiling and calling generated C, importing generated numpy modules.
+- :mod:`.toolchain`: compiling and calling generated C, importing generated numpy modules;
+- :mod:`.templating`: the Jinja2 environment every emitter shares.
 """

@@ -16,18 +16,18 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from .. import hinge_models, special
-from ..analysis import Analysis
-from ..hinge_models import PLATE_LENGTH, PRBM_PRESETS, THETA
-from ..kinematics import HingeGeometry, paper_matrices, paper_positions
-from ..loop_equations import LoopEquations, loop_equations
-from ..mechanism import Load
+from ..model import hinges as hinge_models, special
+from ..kinematics.analysis import Analysis
+from ..model.hinges import PLATE_LENGTH, PRBM_PRESETS, THETA
+from ..kinematics.positions import HingeGeometry, paper_matrices, paper_positions
+from ..kinematics.loop_equations import LoopEquations, loop_equations
+from ..model.mechanism import Load
 from ..physics.beamcolumn import BeamColumn
 from ..physics.statics import LoadedDerivation
 from ..physics.stiffness import PlateStiffness
-from ..rigid import RigidSolution
-from ..structure import Structure
-from ..vectors import Vec
+from ..kinematics.dyads import RigidSolution
+from ..graph.structure import Structure
+from ..core.vectors import Vec
 
 
 @dataclass(frozen=True, eq=False)

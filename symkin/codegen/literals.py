@@ -19,7 +19,7 @@ from collections.abc import Callable
 
 import sympy as sp
 
-from ..errors import InputError
+from ..core.errors import InputError
 
 #: Integers up to this magnitude are exact in a double and stay integers.
 EXACT_INT = 2 ** 53

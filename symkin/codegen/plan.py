@@ -41,13 +41,12 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from .. import levels as level_table
-from ..analysis import Analysis
-from ..errors import InputError
-from ..levels import Level
+from ..core import levels as level_table
+from ..kinematics.analysis import Analysis
+from ..core.errors import InputError
+from ..core.levels import Level
 from ..physics.statics import LoadedDerivation, loaded_derivation
-from ..physics.stiffness import has_stiffness
-from ..solver import SOLVER, SolverSettings
+from ..core.settings import SOLVER, SolverSettings
 from .derivation import Derivation, derivation
 from .literals import float_literals, to_double
 from .routines import Argument, Routine, flatten, optimize
@@ -163,7 +162,7 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
     an, kin = analysis, analysis.kin
     mech = an.mechanism
     names = tuple(p.name for p in an.points if points is None or p.name in points)
-    stiff = has_stiffness(mech)
+    stiff = mech.has_stiffness
     levels = tuple(lv for lv in level_table.LEVELS if lv.generated and (
         lv.name in levels if levels is not None else stiff or not lv.needs_stiffness))
     held = _fixed_angles(an, fixed or {})
@@ -275,7 +274,7 @@ def _sensitivity_routines(an: Analysis, points: Sequence[str], levels: Sequence[
                           args: tuple[Argument, ...], args_delta: tuple[Argument, ...]) -> bool:
     """Add the sens_* routines (row-major matrices, in the order of the module docstring);
     True when the parameter chain routine is needed."""
-    from ..sensitivity import Sensitivities, parameter_chain
+    from ..kinematics.sensitivity import Sensitivities, parameter_chain
 
     terms = Sensitivities(an, points)
     rigid = terms.rigid

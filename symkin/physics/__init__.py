@@ -7,5 +7,5 @@
   numerically (float64 continuation, mpmath polish);
 - `result`: the plate end loads both levels report.
 
-Their evaluation for one configuration is symkin.evaluation's (the `sympy` backend).
+Their evaluation for one configuration is symkin.studies.evaluation's (the `sympy` backend).
 """

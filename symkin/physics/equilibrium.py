@@ -28,12 +28,12 @@ import mpmath
 import numpy as np
 import sympy as sp
 
-from ..errors import AssemblyError
-from ..hinge_models import pivot_distance
-from ..mechanism import Mechanism
+from ..core.errors import AssemblyError
+from ..model.hinges import pivot_distance
+from ..model.mechanism import Mechanism
 from . import arith, elastica
 from .result import HingeLoad
-from .stiffness import PlateStiffness, is_plate, plate_stiffness
+from .stiffness import PlateStiffness, plate_stiffness
 
 #: Smallest load-factor step before the continuation gives up.
 MIN_STEP = 1e-7
@@ -217,7 +217,7 @@ def build(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr], inputs: Mapping[
         length = sp.sympify(h.length)
         u = (sp.cos(h.plate_angle), sp.sin(h.plate_angle))
         d = pivot_distance(h)
-        plate = is_plate(h)
+        plate = h.is_plate
         hinges.append(_Hinge(
             h.name, index[h.links[0]], index[h.links[1]],
             tuple(num(h.at[k] - length / 2 * u[k]) for k in range(2)),

@@ -37,12 +37,12 @@ from functools import cached_property
 
 import sympy as sp
 
-from .. import vectors as V
-from ..analysis import Analysis
-from ..hinge_models import plate_functions
-from ..structure import Structure
+from ..core import vectors as V
+from ..kinematics.analysis import Analysis
+from ..model.hinges import plate_functions
+from ..graph.structure import Structure
 from .beamcolumn import series
-from .stiffness import PlateStiffness, is_plate, plate_stiffness
+from .stiffness import PlateStiffness, plate_stiffness
 
 
 @dataclass(frozen=True)
@@ -78,11 +78,11 @@ class LoadedDerivation:
         label = {name: a for a, name in enumerate(structure.hinges, start=1)}
         self.compliance = {label[h.name]: (sp.Symbol(f"compliance_x_{label[h.name]}", real=True),
                                            sp.Symbol(f"compliance_y_{label[h.name]}", real=True))
-                           for h in mech.hinges if is_plate(h)}
+                           for h in mech.hinges if h.is_plate}
 
         def plate(hinge):
             """The physical plate: circular arc (pure moment) plus its force compliance."""
-            if not is_plate(hinge):
+            if not hinge.is_plate:
                 return plate_functions(hinge)
             pf = plate_functions(hinge, shape="circular_arc")
             ex, ey = self.compliance[label[hinge.name]]

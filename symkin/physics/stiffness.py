@@ -14,13 +14,11 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from ..errors import InputError
-from ..mechanism import Hinge, Mechanism
+from ..core.errors import InputError
+from ..model.mechanism import STIFFNESS_REQUIRED as REQUIRED, Hinge, Mechanism
 
 #: A plate at least this many thicknesses wide bends in plane strain: E' = E/(1 - nu^2).
 WIDE = 5
-#: The keys a physical level needs on every hinge that is not a `rigid` pin.
-REQUIRED = ("E", "thickness", "width")
 
 
 @dataclass(frozen=True)
@@ -31,17 +29,6 @@ class PlateStiffness:
     length: sp.Expr
     EI: sp.Expr
     EA: sp.Expr
-
-
-def is_plate(hinge: Hinge) -> bool:
-    """A `rigid` hinge stays an ideal pin at the physical levels; every other one is a plate."""
-    return hinge.model != "rigid"
-
-
-def has_stiffness(mech: Mechanism) -> bool:
-    """Every plate has E, thickness and width: the data the physical levels need (a mechanism
-    with `rigid` pins only needs none)."""
-    return all(getattr(h, key) is not None for h in mech.hinges if is_plate(h) for key in REQUIRED)
 
 
 def modulus(hinge: Hinge) -> sp.Expr:
@@ -56,7 +43,7 @@ def plate_stiffness(mech: Mechanism, level: str) -> dict[str, PlateStiffness]:
     out = {}
     s2 = mech.unit_scale ** 2
     for h in mech.hinges:
-        if not is_plate(h):
+        if not h.is_plate:
             continue
         for key in REQUIRED:
             if getattr(h, key) is None:

@@ -14,8 +14,9 @@ from typing import ClassVar
 import sympy as sp
 from sympy.printing.codeprinter import CodePrinter
 
-from ... import levels, special
-from ...templating import render
+from ...core import levels
+from ...model import special
+from ..templating import render
 from ..plan import Plan, ScenePlan
 from ..routines import Routine
 

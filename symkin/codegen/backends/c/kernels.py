@@ -11,10 +11,10 @@ from __future__ import annotations
 from collections.abc import Iterable
 from functools import cache
 
-from ....special import registry
-from ....special.elastica import (A1_SERIES, HALF_PI_FLOAT, OUTPUTS, Q_SERIES, RD_DOC, RD_STOP,
+from ....model.special import registry
+from ....model.special.elastica_force import (A1_SERIES, HALF_PI_FLOAT, OUTPUTS, Q_SERIES, RD_DOC, RD_STOP,
                                   RF_DOC, RF_STOP)
-from ....special.kernels import StableKernel
+from ....model.special.kernels import StableKernel
 from ...literals import horner, literal, recurrence
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from sympy.printing.c import C99CodePrinter
 
-from .... import special
+from ....model import special
 
 
 class CPrinter(C99CodePrinter):

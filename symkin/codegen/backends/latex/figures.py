@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ....levels import Level
+from ....core.levels import Level
 
 _SUB = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
 

@@ -27,9 +27,9 @@ import jinja2
 import numpy as np
 import sympy as sp
 
-from .... import templating
-from .... import vectors as V
-from ....errors import SymkinError
+from ... import templating
+from ....core import vectors as V
+from ....core.errors import SymkinError
 from ....physics.stiffness import modulus
 from ...plan import Plan
 from ..common import header_lines

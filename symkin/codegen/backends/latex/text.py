@@ -17,7 +17,7 @@ from collections.abc import Iterable, Mapping
 import sympy as sp
 from sympy.printing.latex import LatexPrinter
 
-from .... import special
+from ....model import special
 from ...literals import fold_numbers
 
 #: Width the equations are broken for, in ems of the 10 pt body font (345 pt = article's

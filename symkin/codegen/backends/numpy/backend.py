@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from ....templating import render
+from ...templating import render
 from ...plan import Plan, ScenePlan
 from ..common import Backend, scene_context
 from . import kernels

@@ -14,10 +14,10 @@ from functools import cache
 
 import numpy as np
 
-from ....special import registry
-from ....special.elastica import (A1_SERIES, HALF_PI_FLOAT, OUTPUTS, Q_SERIES, RD_DOC, RD_STOP,
+from ....model.special import registry
+from ....model.special.elastica_force import (A1_SERIES, HALF_PI_FLOAT, OUTPUTS, Q_SERIES, RD_DOC, RD_STOP,
                                   RF_DOC, RF_STOP)
-from ....special.kernels import StableKernel
+from ....model.special.kernels import StableKernel
 from ...literals import horner, literal, recurrence
 
 

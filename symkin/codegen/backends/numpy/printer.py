@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from sympy.printing.numpy import NumPyPrinter
 
-from .... import special
+from ....model import special
 
 
 class NumpyPrinter(NumPyPrinter):

@@ -9,8 +9,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .structure import Structure
-from .templating import render
+from ..graph.structure import Structure
+from ..codegen.templating import render
 
 
 def grid(row_labels: Sequence[str], col_labels: Sequence[str], matrix: np.ndarray) -> list[str]:
@@ -24,19 +24,11 @@ def grid(row_labels: Sequence[str], col_labels: Sequence[str], matrix: np.ndarra
     return [head.rstrip()] + body
 
 
-def loop_text(s: Structure, chord: int) -> str:
-    """The fundamental loop of `chord` as a signed sum of hinge names, e.g. 'A0 + A - B0 + B'."""
-    row = s.loops[chord - s.n - 1]
-    terms = [("+ " if v > 0 else "- ") + s.hinges[b] for b, v in enumerate(row) if v]
-    text = " ".join(terms)
-    return text[2:] if text.startswith("+ ") else "-" + text[2:]
-
-
 def check_text(s: Structure) -> str:
     """Human summary printed by `symkin check`."""
     mech = s.mechanism
     models = [mech.hinge(name).model for name in s.hinges]
-    loops = {c: loop_text(s, c) for c in range(s.n + 1, s.m + 1)}
+    loops = {c: s.loop_text(c) for c in range(s.n + 1, s.m + 1)}
     return render("text/check.txt.j2", mech=mech, s=s, models=models, loop_text=loops)
 
 

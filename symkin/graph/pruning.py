@@ -21,9 +21,8 @@ import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from .levels import LOADED
-from .mechanism import Mechanism
-from .physics.stiffness import has_stiffness
+from ..core.levels import LOADED
+from ..model.mechanism import Mechanism
 from .structure import Structure, build
 
 
@@ -69,7 +68,7 @@ def for_levels(mech: Mechanism, points: Sequence[str], levels: Sequence[str] | N
     """:func:`prune` for a derivation of `levels` (None: every generated level the file's data
     allows): force paths are followed when it holds a physical level, the file's direct paths
     kept when it holds `paper`."""
-    physical = has_stiffness(mech) if levels is None else any(lv in LOADED for lv in levels)
+    physical = mech.has_stiffness if levels is None else any(lv in LOADED for lv in levels)
     return prune(mech, points, physical, paths=levels is None or "paper" in levels)
 
 

@@ -21,12 +21,12 @@ from functools import cached_property, lru_cache
 
 import sympy as sp
 
-from . import levels
-from . import rigid as rigid_solver
-from . import vectors as V
-from .hinge_models import THETA
-from .kinematics import Kinematics
-from .structure import Structure
+from ..core import levels
+from . import dyads as rigid_solver
+from ..core import vectors as V
+from ..model.hinges import THETA
+from .positions import Kinematics
+from ..graph.structure import Structure
 
 
 class Analysis:

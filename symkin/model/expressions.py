@@ -15,7 +15,7 @@ from collections.abc import Mapping
 
 import sympy as sp
 
-from .errors import suggest
+from ..core.errors import suggest
 
 #: Functions an expression may call, by name, with their number of arguments.
 FUNCTIONS: dict[str, tuple[object, int]] = {

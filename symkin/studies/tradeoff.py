@@ -18,12 +18,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import levels
-from .analysis import Analysis
-from .errors import AssemblyError, InputError
+from ..core import levels
+from ..kinematics.analysis import Analysis
+from ..core.errors import AssemblyError, InputError
 from .evaluation import evaluate, exact_value
-from .mechanism import Mechanism
-from .variants import Variant, analysis_for, default_variants
+from ..model.mechanism import Mechanism
+from ..kinematics.variants import Variant, analysis_for, default_variants
 
 DEFAULT_RANGE = (-0.2, 0.2)
 TIMING_POINTS = 10_000
@@ -34,9 +34,7 @@ REFERENCE = levels.reference()
 def reference_level(mech: Mechanism) -> levels.Level:
     """What the variants of `mech` are measured against: `equilibrium` when every plate has its
     stiffness, else the kinematic `exact` level."""
-    from .physics.stiffness import has_stiffness
-
-    return levels.reference(has_stiffness(mech))
+    return levels.reference(mech.has_stiffness)
 
 
 @dataclass(frozen=True)
@@ -179,15 +177,15 @@ def worst_errors(got, want: Sequence[tuple[float, float]], samples: Sequence[Map
 def measure(mech: Mechanism, variant: Variant, samples: list[dict[str, float]],
             ref: list[dict], with_c: bool = True) -> Row:
     """Derive, emit and run one variant; its errors against `ref` and its times."""
-    from .codegen import runtime
-    from .codegen.backends.c import backend as c_backend
-    from .codegen.backends.numpy import backend as numpy_backend
-    from .codegen.plan import plan
+    from ..codegen import toolchain
+    from ..codegen.backends.c import backend as c_backend
+    from ..codegen.backends.numpy import backend as numpy_backend
+    from ..codegen.plan import plan
     
     analysis = analysis_for(mech, variant)
     p = plan(analysis, levels=[variant.level], sensitivity=False)
     tag = f"{mech.name}_{variant.name.replace('/', '_')}"
-    module = runtime.import_numpy_module(numpy_backend.emit(p, "tradeoff", variant.precision),
+    module = toolchain.import_numpy_module(numpy_backend.emit(p, "tradeoff", variant.precision),
                                          tag)
     names = list(module.INPUTS)
     arrays = {n: np.array([s[n] for s in samples]) for n in names}
@@ -204,7 +202,7 @@ def measure(mech: Mechanism, variant: Variant, samples: list[dict[str, float]],
     if with_c and variant.precision == "float64":
         header, code = c_backend.emit(p, "tradeoff")
         flat = [s[n] for s in samples for n in names]
-        time_c = runtime.time_per_evaluation(tag, header, code, flat, len(samples),
+        time_c = toolchain.time_per_evaluation(tag, header, code, flat, len(samples),
                                                levels.get(variant.level).code)
     ops = sum(r.ops for r in p.routines.values())
     return Row(variant, errors, time_numpy, time_c, ops)
@@ -232,7 +230,7 @@ def run(mech: Mechanism, ranges: Mapping[str, tuple[float, float]], n: int = 25,
         variants: Sequence[Variant] | None = None, with_c: bool = True,
         progress=None) -> Tradeoff:
     """The full table for `mech` over `ranges`."""
-    from .structure import build
+    from ..graph.structure import build
 
     say = progress or (lambda message: None)
     faithful = Analysis(build(mech))
@@ -268,7 +266,7 @@ def choose(table: Tradeoff, tolerance: float, points: Sequence[str] | None = Non
 
 def text(table: Tradeoff) -> str:
     """The human table, fastest first, Pareto front marked with '*'."""
-    from .templating import render
+    from ..codegen.templating import render
 
     return render("text/tradeoff.txt.j2", t=table)
 

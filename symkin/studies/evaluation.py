@@ -22,15 +22,15 @@ import numpy as np
 import sympy as sp
 from sympy.printing.pycode import MpmathPrinter
 
-from . import expressions, levels, special
-from .analysis import Analysis
-from .errors import AssemblyError, InputError
-from .mechanism import Mechanism, check_values
-from .physics import equilibrium as physical_equilibrium
-from .physics import statics
-from .physics.result import HingeLoad
-from .reports import loop_text
-from .solver import SOLVER
+from ..core import levels
+from ..model import expressions, special
+from ..kinematics.analysis import Analysis
+from ..core.errors import AssemblyError, InputError
+from ..model.mechanism import Mechanism, check_values
+from ..physics import equilibrium as physical_equilibrium
+from ..physics import statics
+from ..physics.result import HingeLoad
+from ..core.settings import SOLVER
 
 BACKENDS = ("sympy", "numpy", "c")
 
@@ -428,7 +428,7 @@ class _Mpmath:
     def _sensitivity(self, state: _State) -> Sensitivity:
         """Total derivatives by the implicit-function theorem on the closures
         (symkin.sensitivity), in mpmath."""
-        from . import sensitivity
+        from ..kinematics import sensitivity
 
         an, kin = self.an, self.kin
         if not an.points:
@@ -685,7 +685,7 @@ class _Mpmath:
                                for b, v in sorted(ivals.items()))
                 raise AssemblyError(
                     f"{self.mechanism.path}: at {at} a hinge of the loop of "
-                    f"'{kin.hinges[c].name}' ({loop_text(an.structure, c)}) would have turned "
+                    f"'{kin.hinges[c].name}' ({an.structure.loop_text(c)}) would have turned "
                     "through more than half a turn on the way from the as-fabricated pose (its "
                     "angles sum to 2*pi, not 0): a plate cannot bend that far")
 
@@ -707,7 +707,7 @@ class _Mpmath:
         at = ", ".join(f"{kin.hinges[a].name}={float(v):g}" for a, v in sorted(ivals.items()))
         return AssemblyError(
             f"{self.mechanism.path}: the loop of hinge '{kin.hinges[dyad.chord].name}' "
-            f"({loop_text(self.an.structure, dyad.chord)}) cannot close at {at}: the dyad "
+            f"({self.an.structure.loop_text(dyad.chord)}) cannot close at {at}: the dyad "
             f"{'-'.join(kin.hinges[a].name for a in dyad.hinges)} is beyond its toggle position "
             "(outside the assembly range)")
 
@@ -822,10 +822,10 @@ def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
     if not levels.get(level).generated:
         raise InputError(f"level '{level}' has no generated evaluator", entry="--backend",
                          hint="evaluate it with --backend sympy")
-    from .codegen import runtime
-    from .codegen.backends.c import backend as c_backend
-    from .codegen.backends.numpy import backend as numpy_backend
-    from .codegen.plan import plan
+    from ..codegen import toolchain
+    from ..codegen.backends.c import backend as c_backend
+    from ..codegen.backends.numpy import backend as numpy_backend
+    from ..codegen.plan import plan
 
     given = input_values(analysis, inputs)
     kin = analysis.kin
@@ -839,7 +839,7 @@ def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
     pnames = [q.name for q in analysis.mechanism.parameters]
     sens = None
     if backend == "numpy":
-        module = runtime.import_numpy_module(numpy_backend.emit(p, source),
+        module = toolchain.import_numpy_module(numpy_backend.emit(p, source),
                                              analysis.mechanism.name)
         call = module.sensitivity_full if sensitivity else module.evaluate
         res = call(dict(zip(names, x)), level, dict(zip(pnames, pfloat)))
@@ -865,7 +865,7 @@ def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
     else:
         header, code = c_backend.emit(p, source)
         name = analysis.mechanism.name
-        lib = runtime.Library(runtime.build(name, header, code), name, len(x), len(pfloat),
+        lib = toolchain.Library(toolchain.build(name, header, code), name, len(x), len(pfloat),
                               len(p.points), len(hinges), len(p.reported_links))
         status, out, angles, rot = lib.pose(x, pfloat, levels.get(level).code)
         if status == 3:

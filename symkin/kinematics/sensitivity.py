@@ -37,7 +37,7 @@ from functools import cached_property
 
 import sympy as sp
 
-from . import levels
+from ..core import levels
 from .analysis import Analysis
 
 

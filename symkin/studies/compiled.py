@@ -26,13 +26,13 @@ from types import ModuleType
 
 import numpy as np
 
-from . import levels as level_table
-from .analysis import Analysis
-from .codegen import runtime
-from .errors import InputError
-from .mechanism import Mechanism, load
-from .pruning import for_levels
-from .structure import build
+from ..core import levels as level_table
+from ..kinematics.analysis import Analysis
+from ..codegen import toolchain
+from ..core.errors import InputError
+from ..model.mechanism import Mechanism, load
+from ..graph.pruning import for_levels
+from ..graph.structure import build
 
 BACKENDS = ("c", "numpy")
 
@@ -60,7 +60,7 @@ class Sources:
 
 
 #: The loaded evaluators of this process, by digest: compiled once per process.
-_LOADED: dict[str, tuple[ModuleType, runtime.Library | None]] = {}
+_LOADED: dict[str, tuple[ModuleType, toolchain.Library | None]] = {}
 _LOCK = threading.Lock()
 
 
@@ -83,7 +83,7 @@ class Compiled:
         return f"<symkin.compile {self.name!r} ({self.backend}), levels {', '.join(self.levels)}>"
 
     # -- what is loaded --------------------------------------------------------------------------
-    def _loaded(self) -> tuple[ModuleType, runtime.Library | None]:
+    def _loaded(self) -> tuple[ModuleType, toolchain.Library | None]:
         key = self.sources.digest
         found = _LOADED.get(key)
         if found is None:
@@ -91,10 +91,10 @@ class Compiled:
                 found = _LOADED.get(key)
                 if found is None:
                     s = self.sources
-                    module = runtime.numpy_module_in_memory(s.numpy, s.name)
+                    module = toolchain.numpy_module_in_memory(s.numpy, s.name)
                     lib = None
                     if s.backend == "c":
-                        lib = runtime.Library(runtime.load_transient(s.name, s.header, s.source),
+                        lib = toolchain.Library(toolchain.load_transient(s.name, s.header, s.source),
                                               s.name, len(s.inputs), len(s.params),
                                               len(s.points), len(s.hinges))
                     found = _LOADED[key] = (module, lib)
@@ -106,7 +106,7 @@ class Compiled:
         return self._loaded()[0]
 
     @property
-    def library(self) -> runtime.Library:
+    def library(self) -> toolchain.Library:
         """The loaded C library (backend c)."""
         lib = self._loaded()[1]
         if lib is None:
@@ -264,9 +264,9 @@ def compile(mechanism: Mechanism | Analysis | str | Path, backend: str = "c",
     """The generated evaluator of a mechanism (file, Mechanism or Analysis), in memory: the
     requested points and levels (all by default), with its sensitivities unless told not to or
     inputs are `fixed` (input -> angle: held constant, folded into the evaluator)."""
-    from .codegen.backends.c import backend as c_backend
-    from .codegen.backends.numpy import backend as numpy_backend
-    from .codegen.plan import plan
+    from ..codegen.backends.c import backend as c_backend
+    from ..codegen.backends.numpy import backend as numpy_backend
+    from ..codegen.plan import plan
     from .evaluation import check_fabricated_pose, fixed_angles
 
     if backend not in BACKENDS:

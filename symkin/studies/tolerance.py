@@ -26,9 +26,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import levels
+from ..core import levels
 from .compiled import Compiled
-from .errors import AssemblyError
+from ..core.errors import AssemblyError
 from .variation import Grid, Spread
 
 

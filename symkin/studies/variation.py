@@ -24,9 +24,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InputError
+from ..core.errors import InputError
 from .evaluation import exact_value
-from .mechanism import Mechanism
+from ..model.mechanism import Mechanism
 
 KINDS = ("pm", "uniform", "normal")
 #: Grid points of an input given as LO:HI (without :N).

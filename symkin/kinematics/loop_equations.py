@@ -38,7 +38,7 @@ from typing import NamedTuple
 
 import sympy as sp
 
-from .kinematics import Kinematics
+from .positions import Kinematics
 
 
 class Term(NamedTuple):

@@ -9,8 +9,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InputError
-from .mechanism import Mechanism
+from ..core.errors import InputError
+from ..model.mechanism import Mechanism
 
 
 def _frozen(rows: list[list[int]], shape: tuple[int, int]) -> np.ndarray:
@@ -73,6 +73,13 @@ class Structure:
         """Hinge labels of the fundamental loop of `chord` (a label > n), in label order."""
         row = self.loops[chord - self.n - 1]
         return tuple(int(b) + 1 for b in np.flatnonzero(row))
+
+    def loop_text(self, chord: int) -> str:
+        """The fundamental loop of `chord` as a signed sum of hinge names, e.g. 'A0 + A - B0 + B'."""
+        row = self.loops[chord - self.n - 1]
+        terms = [("+ " if v > 0 else "- ") + self.hinges[b] for b, v in enumerate(row) if v]
+        text = " ".join(terms)
+        return text[2:] if text.startswith("+ ") else "-" + text[2:]
 
     def mapping(self) -> list[tuple[str, str, int]]:
         """(kind, name, label) for every link and hinge: the labeling, for reports."""

@@ -12,12 +12,12 @@ from pathlib import Path
 
 import sympy as sp
 
-from .analysis import Analysis
-from .errors import InputError
-from .mechanism import Mechanism, load
-from .paths import write_atomically
-from .pruning import for_levels
-from .structure import build
+from ..kinematics.analysis import Analysis
+from ..core.errors import InputError
+from ..model.mechanism import Mechanism, load
+from ..core.files import write_atomically
+from ..graph.pruning import for_levels
+from ..graph.structure import build
 
 EMITTERS = ("latex", "c", "numpy")
 
@@ -80,10 +80,10 @@ def generate_plan(mech: Mechanism, emit: Sequence[str] = EMITTERS,
                   spans: Mapping[str, tuple[float, float]] | None = None,
                   fixed: Mapping[str, object] | None = None) -> tuple[dict[str, bytes], object]:
     """:func:`generate`, and the Plan the evaluators were emitted from."""
-    from .codegen import runtime
-    from .codegen.backends.c import backend as c_backend
-    from .codegen.backends.numpy import backend as numpy_backend
-    from .codegen.plan import plan, with_derivation
+    from ..codegen import toolchain
+    from ..codegen.backends.c import backend as c_backend
+    from ..codegen.backends.numpy import backend as numpy_backend
+    from ..codegen.plan import plan, with_derivation
     from .evaluation import check_fabricated_pose, fixed_angles
 
     say = progress or (lambda message: None)
@@ -115,7 +115,7 @@ def generate_plan(mech: Mechanism, emit: Sequence[str] = EMITTERS,
         spans = {k: v for k, v in spans.items() if k in swept}
     say(f"deriving {mech.name}: structure and kinematics")
     if variant is not None:
-        from .variants import analysis_for
+        from ..kinematics.variants import analysis_for
 
         analysis = analysis_for(mech, variant, points)
         levels = [variant.level]
@@ -141,13 +141,13 @@ def generate_plan(mech: Mechanism, emit: Sequence[str] = EMITTERS,
         files[f"{mech.name}.c"] = code.encode()
     if "latex" in emit:
         say("emitting the LaTeX report")
-        from .codegen.backends.latex import report
+        from ..codegen.backends.latex import report
 
         # the report's deviation plot runs the generated numpy module
         evaluator = None
         if p.points:
             numpy_text = numpy_text or numpy_backend.emit(p, source, precision)
-            evaluator = runtime.import_numpy_module(numpy_text, mech.name)
+            evaluator = toolchain.import_numpy_module(numpy_text, mech.name)
         files.update(report.emit(with_derivation(p, analysis), source, appendix, evaluator,
                                  column_width or report.COLUMN_WIDTH, spans,
                                  physics_reference(analysis, held)

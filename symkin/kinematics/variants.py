@@ -21,12 +21,12 @@ from dataclasses import dataclass
 import mpmath
 import sympy as sp
 
-from . import hinge_models, special
+from ..model import hinges as hinge_models, special
 from .analysis import Analysis
-from .levels import LEVELS as LEVEL_TABLE
-from .hinge_models import THETA
-from .mechanism import Mechanism
-from .structure import build
+from ..core.levels import LEVELS as LEVEL_TABLE
+from ..model.hinges import THETA
+from ..model.mechanism import Mechanism
+from ..graph.structure import build
 
 #: The levels a variant can take: generated ones (a variant is timed in C and numpy), kinematic.
 LEVELS = tuple(lv.name for lv in LEVEL_TABLE if lv.generated and not lv.needs_stiffness)

@@ -23,10 +23,10 @@ from pathlib import Path
 import numpy as np
 import sympy as sp
 
-from . import levels as level_table
-from .errors import AssemblyError, InputError, suggest
-from .mechanism import MAX_NAME, Mechanism, name_problem, with_points
-from .variants import Variant, analysis_for, default_variants
+from ..core import levels as level_table
+from ..core.errors import AssemblyError, InputError, suggest
+from ..model.mechanism import MAX_NAME, Mechanism, name_problem, with_points
+from ..kinematics.variants import Variant, analysis_for, default_variants
 
 FORMAT = 1
 TOP_KEYS = ("format", "name", "reference", "samples", "backend", "ranges", "fix", "point")
@@ -200,7 +200,6 @@ class _Reader:
         return float(value)
 
     def read(self, data: Mapping) -> Scene:
-        from .physics.stiffness import has_stiffness
         from .tradeoff import DEFAULT_RANGE
 
         mech = self.mech
@@ -215,7 +214,7 @@ class _Reader:
         problem = name_problem(name, MAX_NAME - SUFFIX)
         if problem is not None:
             raise self.error(problem[0], "name", problem[1])
-        stiff = has_stiffness(mech)
+        stiff = mech.has_stiffness
         default_reference = "equilibrium" if stiff else "exact"
         reference = self.choice(data, "reference", REFERENCES, default_reference, "reference")
         backend = self.choice(data, "backend", BACKENDS, "c", "backend")
@@ -303,13 +302,13 @@ def measure(scene: Scene, progress: Callable[[str], None] | None = None
     """Every allowed variant's worst errors per point, each over the point's own samples against
     its own reference at 30 digits (the variant's numpy evaluator, pruned to the scene's points);
     and per point the samples its reference assembled."""
-    from .analysis import Analysis
-    from .codegen import runtime
-    from .codegen.backends.numpy import backend as numpy_backend
-    from .codegen.plan import plan
+    from ..kinematics.analysis import Analysis
+    from ..codegen import toolchain
+    from ..codegen.backends.numpy import backend as numpy_backend
+    from ..codegen.plan import plan
     from .evaluation import evaluate
-    from .pruning import for_levels
-    from .structure import build
+    from ..graph.pruning import for_levels
+    from ..graph.structure import build
     from .tradeoff import sample, worst_errors
 
     say = progress or (lambda message: None)
@@ -350,7 +349,7 @@ def measure(scene: Scene, progress: Callable[[str], None] | None = None
         say(f"measuring variant {v.name}")
         pruned, _ = for_levels(mech, names, [v.level])
         p = plan(analysis_for(pruned, v, names), names, [v.level], sensitivity=False)
-        module = runtime.import_numpy_module(
+        module = toolchain.import_numpy_module(
             numpy_backend.emit(p, "scene", v.precision), f"scene_{v.name.replace('/', '_')}")
         accepted = set(module.INPUTS) | set(module.PRUNED_INPUTS)
         absolute, relative = {}, {}
@@ -387,9 +386,9 @@ def choose(scene: Scene, measured: Sequence[Measured], counts: Mapping[str, int]
            progress: Callable[[str], None] | None = None) -> Choice:
     """Each point's cheapest variant meeting its tolerance, then merges of groups whose joint
     evaluator costs less than theirs apart; a point no variant meets is bad input (exit 2)."""
-    from .codegen.plan import plan
-    from .pruning import for_levels
-    from .solver import SOLVER
+    from ..codegen.plan import plan
+    from ..graph.pruning import for_levels
+    from ..core.settings import SOLVER
 
     say = progress or (lambda message: None)
     mech = scene.mechanism
@@ -518,12 +517,12 @@ def generate(scene: Scene, emit: Sequence[str], progress: Callable[[str], None] 
              ) -> tuple[dict[str, bytes], Choice]:
     """File name -> content of the scene's evaluators (one per chosen variant and the scene
     evaluator over them) and reports, and the choice made; nothing is written."""
-    from .codegen.backends.c import backend as c_backend
-    from .codegen.backends.numpy import backend as numpy_backend
-    from .codegen.literals import to_double
-    from .codegen.plan import SceneGroup, ScenePlan
+    from ..codegen.backends.c import backend as c_backend
+    from ..codegen.backends.numpy import backend as numpy_backend
+    from ..codegen.literals import to_double
+    from ..codegen.plan import SceneGroup, ScenePlan
     from .derive import generate_plan
-    from .structure import build
+    from ..graph.structure import build
 
     say = progress or (lambda message: None)
     if scene.backend == "numpy" and "c" in emit:
@@ -579,7 +578,7 @@ def derive(path: str | Path, scene: str | Path, out_dir: str | Path = ".",
     """`symkin derive FILE --scene SCENE`: load both, generate, write every file at once; the
     paths written."""
     from .derive import write_files
-    from .mechanism import load as load_mechanism
+    from ..model.mechanism import load as load_mechanism
 
     files, _ = generate(load(scene, load_mechanism(path)), emit, progress, column_width,
                         appendix)

@@ -11,19 +11,20 @@ import sys
 import traceback
 from collections.abc import Sequence
 
-from . import __version__, levels, load
-from .errors import InputError, SymkinError
-from .paths import output_dir, output_file
-from .reports import check_text, matrices_json, matrices_text
-from .structure import build
+from .. import __version__, load
+from ..core import levels
+from ..core.errors import InputError, SymkinError
+from ..core.files import output_dir, output_file
+from .output import check_text, matrices_json, matrices_text
+from ..graph.structure import build
 
 #: File types `tradeoff --plot` can write (matplotlib picks the format from the suffix).
 PLOT_SUFFIXES = (".png", ".pdf", ".svg")
 
 
 def _check(args: argparse.Namespace) -> str:
-    from .analysis import Analysis
-    from .evaluation import check_fabricated_pose
+    from ..kinematics.analysis import Analysis
+    from ..studies.evaluation import check_fabricated_pose
 
     structure = build(load(args.file))
     # What evaluation would refuse: a dyad at a toggle position as fabricated (raised while
@@ -52,9 +53,9 @@ def _pairs(items: Sequence[str] | None, option: str) -> dict[str, str]:
 
 
 def _eval(args: argparse.Namespace) -> str:
-    from .analysis import Analysis
-    from .evaluation import evaluate
-    from .reports import evaluation_json, evaluation_text
+    from ..kinematics.analysis import Analysis
+    from ..studies.evaluation import evaluate
+    from .output import evaluation_json, evaluation_text
 
     analysis = Analysis(build(load(args.file)))
     result = evaluate(analysis, _pairs(args.input, "--input"), args.level,
@@ -64,8 +65,8 @@ def _eval(args: argparse.Namespace) -> str:
 
 
 def _derive(args: argparse.Namespace) -> str:
-    from .derive import EMITTERS, derive, parse_length, parse_list
-    from .levels import GENERATED
+    from ..studies.derive import EMITTERS, derive, parse_length, parse_list
+    from ..core.levels import GENERATED
 
     emit = parse_list(args.emit, EMITTERS, "--emit") or list(EMITTERS)
     levels = parse_list(args.levels, GENERATED, "--levels")
@@ -80,7 +81,7 @@ def _derive(args: argparse.Namespace) -> str:
     output_dir(args.output, "-o")
     column = parse_length(args.columnwidth) if args.columnwidth else None
     if args.scene is not None:
-        from .scene import derive as derive_scene
+        from ..studies.scene import derive as derive_scene
 
         given = [option for option, value in (("--points", points), ("--levels", levels),
                                               ("--tolerance", args.tolerance),
@@ -102,7 +103,7 @@ def _derive(args: argparse.Namespace) -> str:
 def _tradeoff(args: argparse.Namespace) -> str:
     import json
 
-    from . import tradeoff
+    from ..studies import tradeoff
 
     mech = load(args.file)
     if args.samples < 3:
@@ -127,14 +128,14 @@ def _tradeoff(args: argparse.Namespace) -> str:
 
 def _evaluator(args: argparse.Namespace, mech):
     """The compiled evaluator of `mech` at args.level (C unless --backend numpy)."""
-    from .compiled import compile as build_evaluator
+    from ..studies.compiled import compile as build_evaluator
 
     level = levels.get(args.level)
     if not level.generated:
         raise InputError(f"level '{level.name}' has no generated evaluator", entry="--level",
                          hint="choose one of " + ", ".join(levels.GENERATED))
     if args.backend == "c":
-        from .codegen.runtime import compiler
+        from ..codegen.toolchain import compiler
 
         compiler()
     return build_evaluator(mech, args.backend, levels=[level.name])
@@ -143,7 +144,7 @@ def _evaluator(args: argparse.Namespace, mech):
 def _tolerance(args: argparse.Namespace) -> str:
     import json
 
-    from . import tolerance, variation
+    from ..studies import tolerance, variation
 
     mech = load(args.file)
     nominal = {p.name: float(p.value) for p in mech.parameters}
@@ -156,7 +157,7 @@ def _tolerance(args: argparse.Namespace) -> str:
 def _sweep(args: argparse.Namespace) -> str:
     import json
 
-    from . import sweep, variation
+    from ..studies import sweep, variation
 
     mech = load(args.file)
     nominal = {p.name: float(p.value) for p in mech.parameters}

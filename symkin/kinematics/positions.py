@@ -20,12 +20,11 @@ from functools import cached_property
 
 import sympy as sp
 
-from . import vectors as V
-from . import hinge_models
-from .hinge_models import THETA
-from .mechanism import Hinge
-from .structure import Structure
-from .vectors import Vec
+from ..core import vectors as V
+from ..model.hinges import THETA, plate_functions
+from ..model.mechanism import Hinge
+from ..graph.structure import Structure
+from ..core.vectors import Vec
 
 
 @dataclass(frozen=True)
@@ -89,7 +88,7 @@ class Kinematics:
     def __init__(self, structure: Structure, plate=None) -> None:
         """`plate(hinge) -> PlateFunctions` overrides the hinge models (variants use it)."""
         self.structure = s = structure
-        plate_of = plate or hinge_models.plate_functions
+        plate_of = plate or plate_functions
         mech = s.mechanism
         self.mechanism = mech
         label = {name: i for i, name in enumerate(s.links)}

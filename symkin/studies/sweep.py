@@ -33,11 +33,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import sympy as sp
 
-from . import levels
+from ..core import levels
 from .compiled import Compiled
-from .errors import AssemblyError, InputError
-from .hinge_models import MODELS
-from .mechanism import Mechanism
+from ..core.errors import AssemblyError, InputError
+from ..model.hinges import MODELS
+from ..model.mechanism import Mechanism
 from .variation import Grid, Spread
 
 #: Samples per seeded block: the unit of reproducibility (a Dask task runs whole blocks).

@@ -20,7 +20,7 @@ from types import ModuleType
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
 
 CFLAGS = ("-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O2", "-fPIC", "-shared")
 

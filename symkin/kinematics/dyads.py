@@ -14,10 +14,10 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from . import vectors as V
-from .errors import InputError
-from .kinematics import Kinematics
-from .vectors import Vec
+from ..core import vectors as V
+from ..core.errors import InputError
+from .positions import Kinematics
+from ..core.vectors import Vec
 
 
 @dataclass(frozen=True)

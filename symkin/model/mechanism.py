@@ -25,8 +25,8 @@ import mpmath
 import sympy as sp
 
 from . import expressions
-from .errors import InputError, suggest
-from .hinge_models import (HINGE_KEYS, MODEL_KEYS, MODELS, PINS, PLATE_LENGTH, PRBM_PRESETS,
+from ..core.errors import InputError, suggest
+from .hinges import (HINGE_KEYS, MODEL_KEYS, MODELS, PINS, PLATE_LENGTH, PRBM_PRESETS,
                            THETA, ModelParameter)
 
 FORMAT = 1
@@ -39,6 +39,8 @@ LOAD_KEYS = ("point", "link", "at", "force", "moment")
 #: are in it; E is in Pa, forces in N, moments in N·m (docs/physics.md).
 UNITS: dict[str, sp.Rational] = {"m": sp.Integer(1), "mm": sp.Rational(1, 10**3),
                                  "um": sp.Rational(1, 10**6)}
+#: The keys a physical level needs on every hinge that is not a `rigid` pin.
+STIFFNESS_REQUIRED = ("E", "thickness", "width")
 #: Poisson's ratio when a hinge gives none (docs/physics.md).
 DEFAULT_NU = sp.Rational(3, 10)
 #: The value rules of the stiffness keys: (holds for the value, what is wrong, how to fix it).
@@ -96,6 +98,11 @@ class Hinge:
 
     def param(self, key: str, default: object = None) -> object:
         return dict(self.model_params).get(key, default)
+
+    @property
+    def is_plate(self) -> bool:
+        """A `rigid` hinge stays an ideal pin at the physical levels; every other one is a plate."""
+        return self.model != "rigid"
 
 
 @dataclass(frozen=True)
@@ -166,6 +173,13 @@ class Mechanism:
     def defaults(self) -> dict[sp.Symbol, sp.Expr]:
         """Exact default value of every parameter symbol."""
         return {p.symbol: p.value for p in self.parameters}
+
+    @property
+    def has_stiffness(self) -> bool:
+        """Every plate has E, thickness and width: the data the physical levels need (a mechanism
+        with `rigid` pins only needs none)."""
+        return all(getattr(h, key) is not None for h in self.hinges if h.is_plate
+                   for key in STIFFNESS_REQUIRED)
 
     def hinge(self, name: str) -> Hinge:
         return next(h for h in self.hinges if h.name == name)

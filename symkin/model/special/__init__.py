@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from .elastica import (ELASTICA_FUNCTIONS, ELASTICA_LIMIT, ElasticaFunction, elastica_dx,
+from .elastica_force import (ELASTICA_FUNCTIONS, ELASTICA_LIMIT, ElasticaFunction, elastica_dx,
                        elastica_dx_d1, elastica_dy, elastica_dy_d1, elastica_load, elastica_x,
                        elastica_y)
 from .kernels import StableKernel, arck, cosr, sinr

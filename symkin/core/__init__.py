@@ -1,0 +1,3 @@
+"""Foundations that know nothing of mechanisms: errors and exit codes (`errors`), plane vectors
+(`vectors`), the table of deviation levels (`levels`), the solvers' settings (`settings`) and the
+checks and atomic writes of the files a user names (`files`)."""
