@@ -1,4 +1,5 @@
-"""Derivation time and memory (`symkin.studies.derive.generate`, every emitter, all levels), each case in
+"""Derivation time and memory (`symkin.studies.derive.generate`, every emitter, all levels), each
+case in
 a fresh process, on the examples and on the families of benchmarks/families.py, with growth
 exponents fitted on log-log.
 
@@ -17,9 +18,8 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
-
 import families
+import numpy as np
 from common import ROOT, log
 
 
@@ -45,9 +45,9 @@ def peak_rss_mb() -> float:
 def derive_child(kind: str, arg: str) -> None:
     """Runs in a fresh process: prints one JSON line with the derivation's time and memory."""
     t_start = time.perf_counter()
+    import symkin.codegen.plan  # noqa: F401 - the emitters' imports are start-up, not derivation
     from symkin.studies.derive import generate
 
-    import symkin.codegen.plan  # noqa: F401 - the emitters' imports are start-up, not derivation
     for module in ("numpy.backend", "c.backend", "latex.report"):
         importlib.import_module(f"symkin.codegen.backends.{module}")
     rss0 = peak_rss_mb()
@@ -57,8 +57,9 @@ def derive_child(kind: str, arg: str) -> None:
     emit = emitters()
     marks = []
     t0 = time.perf_counter()
-    files = generate(mech, emit=emit,
-                     progress=lambda msg: marks.append((time.perf_counter() - t0, msg)))
+    files = generate(
+        mech, emit=emit, progress=lambda msg: marks.append((time.perf_counter() - t0, msg))
+    )
     total = time.perf_counter() - t0
     rss1 = peak_rss_mb()
     phases, prev = {}, (0.0, "start")
@@ -66,11 +67,21 @@ def derive_child(kind: str, arg: str) -> None:
         if prev[1] != "start":
             phases[prev[1]] = t - prev[0]
         prev = (t, msg)
-    print(json.dumps({
-        **stats, "emit": emit, "derive_s": total, "import_s": t_import, "phases_s": phases,
-        "without_latex_s": total - sum(v for k, v in phases.items() if "LaTeX" in k),
-        "maxrss_mb": rss1, "baseline_rss_mb": rss0,
-        "output_kb": sum(len(v) for v in files.values()) / 1024}))
+    print(
+        json.dumps(
+            {
+                **stats,
+                "emit": emit,
+                "derive_s": total,
+                "import_s": t_import,
+                "phases_s": phases,
+                "without_latex_s": total - sum(v for k, v in phases.items() if "LaTeX" in k),
+                "maxrss_mb": rss1,
+                "baseline_rss_mb": rss0,
+                "output_kb": sum(len(v) for v in files.values()) / 1024,
+            }
+        )
+    )
 
 
 def mechanism(kind: str, arg):
@@ -93,8 +104,14 @@ def sizes_of(mech) -> dict:
 
     s = symkin.structure(mech)
     paths = [len(s.tree_path(i)) for i in range(1, s.n + 1)]
-    return {"links": s.n + 1, "hinges": s.m, "loops": s.m - s.n, "inputs": len(mech.inputs),
-            "mean_path": sum(paths) / len(paths), "size": s.m * sum(paths) / len(paths)}
+    return {
+        "links": s.n + 1,
+        "hinges": s.m,
+        "loops": s.m - s.n,
+        "inputs": len(mech.inputs),
+        "mean_path": sum(paths) / len(paths),
+        "size": s.m * sum(paths) / len(paths),
+    }
 
 
 def derive_case(kind: str, arg, budget: float) -> dict:
@@ -105,8 +122,13 @@ def derive_case(kind: str, arg, budget: float) -> dict:
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=budget, cwd=ROOT)
     except subprocess.TimeoutExpired:
         log(f"derive {kind} {arg}: over budget ({budget:.0f} s)")
-        return {"kind": kind, "case": str(arg), "over_budget": True, "budget_s": budget,
-                **structure_stats(kind, arg)}
+        return {
+            "kind": kind,
+            "case": str(arg),
+            "over_budget": True,
+            "budget_s": budget,
+            **structure_stats(kind, arg),
+        }
     wall = time.perf_counter() - t0
     if proc.returncode != 0:
         return {"kind": kind, "case": str(arg), "error": proc.stderr.strip()[-500:]}
@@ -119,12 +141,25 @@ def derive_case(kind: str, arg, budget: float) -> dict:
 def cli_derive(example: str) -> dict:
     """Wall time of the whole `symkin derive` command (start-up and writing included)."""
     with tempfile.TemporaryDirectory() as tmp:
-        cmd = [sys.executable, "-m", "symkin", "derive", str(ROOT / "examples" / f"{example}.toml"),
-               "-o", tmp, "--quiet", "--emit", ",".join(emitters())]
+        cmd = [
+            sys.executable,
+            "-m",
+            "symkin",
+            "derive",
+            str(ROOT / "examples" / f"{example}.toml"),
+            "-o",
+            tmp,
+            "--quiet",
+            "--emit",
+            ",".join(emitters()),
+        ]
         t0 = time.perf_counter()
         proc = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
-        return {"wall_s": time.perf_counter() - t0, "exit": proc.returncode,
-                "stderr": proc.stderr.strip()[-300:]}
+        return {
+            "wall_s": time.perf_counter() - t0,
+            "exit": proc.returncode,
+            "stderr": proc.stderr.strip()[-300:],
+        }
 
 
 def fit(xs, ys) -> float | None:
@@ -153,7 +188,6 @@ def exponents(cases: list[dict]) -> dict:
     return out
 
 
-
 def measure(examples, serial, ladder, budget: float) -> dict:
     """Every derivation case: the examples (with the whole command's wall time) and the families
     up to their first member over `budget` seconds (the larger ones are reported as skipped)."""
@@ -166,9 +200,17 @@ def measure(examples, serial, ladder, budget: float) -> dict:
         dv[kind] = []
         over = False
         for n in sizes:
-            if over:       # a larger member of a family already over budget: skip, say so
-                dv[kind].append({"kind": kind, "case": str(n), "over_budget": True,
-                                 "budget_s": budget, "skipped": True, **structure_stats(kind, n)})
+            if over:  # a larger member of a family already over budget: skip, say so
+                dv[kind].append(
+                    {
+                        "kind": kind,
+                        "case": str(n),
+                        "over_budget": True,
+                        "budget_s": budget,
+                        "skipped": True,
+                        **structure_stats(kind, n),
+                    }
+                )
                 continue
             case = derive_case(kind, n, budget)
             over = bool(case.get("over_budget"))

@@ -8,13 +8,13 @@ import time
 from pathlib import Path
 
 import numpy as np
-
 from common import EXACT, EXAMPLES, POLICY, ROOT, TOL, Sizes, best_time, log, relerr
 from lambdify_alt import lambdify_alternative, substituted
 from scipy_alt import scipy_alternative
 from symforce_alt import SFBench, symforce_build
-from symkin.core.levels import LEVELS
 from symkin_c import CBench, compile_c
+
+from symkin.core.levels import LEVELS
 
 
 def bench_example(example: str, sizes: Sizes, sf: dict, workroot: Path) -> dict:
@@ -42,9 +42,16 @@ def bench_example(example: str, sizes: Sizes, sf: dict, workroot: Path) -> dict:
     work.mkdir(parents=True, exist_ok=True)
     cb = CBench(compile_c(work, mech.name, header, code), mech.name, len(names), len(p.points))
     npmod = import_numpy_module(numpy_backend.emit(p, source), mech.name)
-    res: dict = {"inputs": {k: list(v) for k, v in ranges.items()}, "point": p.points[0],
-                 "k_unknowns": len(an.deltas), "needs_loops": p.needs_loops,
-                 "closed_form": p.closed_form, "checks": {}, "per_point_s": {}, "notes": {}}
+    res: dict = {
+        "inputs": {k: list(v) for k, v in ranges.items()},
+        "point": p.points[0],
+        "k_unknowns": len(an.deltas),
+        "needs_loops": p.needs_loops,
+        "closed_form": p.closed_form,
+        "checks": {},
+        "per_point_s": {},
+        "notes": {},
+    }
 
     # the C evaluator, checked against the mpmath reference (40 digits)
     check_x = sample(5)
@@ -68,24 +75,32 @@ def bench_example(example: str, sizes: Sizes, sf: dict, workroot: Path) -> dict:
 
     # numpy module, vectorized over the sampled points
     np_in = {k: xs[:, j] for j, k in enumerate(names)}
-    out = npmod.evaluate({k: v[:5] for k, v in
-                          {k: check_x[:, j] for j, k in enumerate(names)}.items()}, "exact")
-    res["checks"]["numpy"] = max(relerr(out["points"][p.points[0]]["deviation"][:, i], c_dev[i])
-                                 for i in range(5))
+    out = npmod.evaluate(
+        {k: v[:5] for k, v in {k: check_x[:, j] for j, k in enumerate(names)}.items()}, "exact"
+    )
+    res["checks"]["numpy"] = max(
+        relerr(out["points"][p.points[0]]["deviation"][:, i], c_dev[i]) for i in range(5)
+    )
     t_np, _ = best_time(lambda: npmod.evaluate(np_in, "exact"), 3, 0.0)
     res["per_point_s"]["numpy_vectorized_1e4"] = t_np / n_c
 
     # lambdify of the same closed form: plain (substituted, no CSE) and with cse=True
     if p.closed_form:
         raw = make_plan(an, cse=False)
-        res["closed_form_ops"] = {"symkin_rigid_after_cse": p.routines["rigid"].ops
-                                  if "rigid" in p.routines else 0}
+        res["closed_form_ops"] = {
+            "symkin_rigid_after_cse": p.routines["rigid"].ops if "rigid" in p.routines else 0
+        }
         if "rigid" in raw.routines:
             import sympy as sp
-            res["closed_form_ops"]["rigid_substituted"] = int(sum(
-                sp.count_ops(e) for e in substituted(raw.routines["rigid"])))
-        variants = (("lambdify", False, POLICY["polish"]), ("lambdify_cse", True, POLICY["polish"]),
-                    ("lambdify_cse_no_polish", True, 0))
+
+            res["closed_form_ops"]["rigid_substituted"] = int(
+                sum(sp.count_ops(e) for e in substituted(raw.routines["rigid"]))
+            )
+        variants = (
+            ("lambdify", False, POLICY["polish"]),
+            ("lambdify_cse", True, POLICY["polish"]),
+            ("lambdify_cse_no_polish", True, 0),
+        )
         for key, cse, polish in variants:
             t0 = time.perf_counter()
             lam = lambdify_alternative(raw, cse, polish)
@@ -95,8 +110,9 @@ def bench_example(example: str, sizes: Sizes, sf: dict, workroot: Path) -> dict:
             t, _ = best_time(lambda: [lam(x) for x in xs[:n_l]], 3, sizes.lambdify_time)
             res["per_point_s"][key] = t / n_l
     else:
-        res["notes"]["lambdify"] = res["notes"]["lambdify_cse"] = \
+        res["notes"]["lambdify"] = res["notes"]["lambdify_cse"] = (
             "no closed form (not all groups are dyads)"
+        )
 
     # scipy.optimize.root on the loop equations
     sci = scipy_alternative(an)
@@ -123,8 +139,9 @@ def bench_example(example: str, sizes: Sizes, sf: dict, workroot: Path) -> dict:
 
     res["verified"] = {k: v <= TOL.get(k, 1e-12) for k, v in res["checks"].items()}
     res["verified"]["c_vs_mpmath"] = res["checks"]["c_vs_mpmath"] <= 1e-12
-    res["ratios"] = {k: v / t_c for k, v in res["per_point_s"].items()
-                     if k != "c" and not k.startswith("c_")}
+    res["ratios"] = {
+        k: v / t_c for k, v in res["per_point_s"].items() if k != "c" and not k.startswith("c_")
+    }
 
     # throughput: numpy on many points in one call vs the C loop over the same points
     n_big = sizes.throughput
@@ -134,9 +151,12 @@ def bench_example(example: str, sizes: Sizes, sf: dict, workroot: Path) -> dict:
     t0 = time.perf_counter()
     out = npmod.evaluate(big_in, "exact")
     np_secs = time.perf_counter() - t0
-    res["throughput"] = {"points": n_big, "c_loop_s": c_secs, "numpy_s": np_secs,
-                         "ratio_numpy_over_c": np_secs / c_secs,
-                         "numpy_ok_fraction": float(np.mean(out["ok"]))}
+    res["throughput"] = {
+        "points": n_big,
+        "c_loop_s": c_secs,
+        "numpy_s": np_secs,
+        "ratio_numpy_over_c": np_secs / c_secs,
+        "numpy_ok_fraction": float(np.mean(out["ok"])),
+    }
     del out
     return res
-

@@ -22,8 +22,8 @@ from __future__ import annotations
 import json
 import math
 
-LINK = 0.05          # typical link length, m
-PLATE = "1e-3"       # plate length l, m
+LINK = 0.05  # typical link length, m
+PLATE = "1e-3"  # plate length l, m
 
 
 def _q(name: str) -> str:
@@ -35,19 +35,24 @@ def _num(x: float) -> str:
 
 
 def _header(name: str) -> str:
-    return (f'format = 1\nname = "{name}"\nground = "ground"\n\n[parameters]\nl = {PLATE}\n\n'
-            '[defaults]\nmodel = "circular_arc"\nlength = "l"\n\n')
+    return (
+        f'format = 1\nname = "{name}"\nground = "ground"\n\n[parameters]\nl = {PLATE}\n\n'
+        '[defaults]\nmodel = "circular_arc"\nlength = "l"\n\n'
+    )
 
 
 def _links(names) -> str:
     return "".join(f"[[link]]\nname = {_q(n)}\n" for n in names)
 
 
-def _hinge(name: str, p: str, m: str, x: float, y: float, angle: str = "0",
-           input: bool = False) -> str:
-    return (f"\n[[hinge]]\nname = {_q(name)}\nlinks = [{_q(p)}, {_q(m)}]\n"
-            f"at = [{_num(x)}, {_num(y)}]\nplate_angle = {_q(angle)}\n"
-            + ("input = true\n" if input else ""))
+def _hinge(
+    name: str, p: str, m: str, x: float, y: float, angle: str = "0", input: bool = False
+) -> str:
+    return (
+        f"\n[[hinge]]\nname = {_q(name)}\nlinks = [{_q(p)}, {_q(m)}]\n"
+        f"at = [{_num(x)}, {_num(y)}]\nplate_angle = {_q(angle)}\n"
+        + ("input = true\n" if input else "")
+    )
 
 
 def _point(name: str, link: str, x: float, y: float) -> str:
@@ -92,7 +97,7 @@ def ladder(k: int) -> str:
     # cell 1: left upright t0 (input), right upright t1, rung r1.
     text += _hinge("g0", "ground", "t0", 0.0, 0.0, "pi/2", input=True)
     text += _hinge("g1", "ground", "t1", w, 0.0, "pi/2")
-    top = {"t0": (0.004, h), "t1": (w, h)}          # upper hinge of each side link on its rung
+    top = {"t0": (0.004, h), "t1": (w, h)}  # upper hinge of each side link on its rung
     text += _hinge("a1", "t0", "r1", *top["t0"], "0")
     text += _hinge("b1", "r1", "t1", *top["t1"], "0")
     # side links: the newest one ("prev") and which side it is on (x coordinate of the rail).
@@ -103,7 +108,7 @@ def ladder(k: int) -> str:
         tilt = 0.003 if j % 2 else -0.002
         y0, y1 = (j - 1) * h, j * h
         # the new side link t{j} hinged to the rung below, a little inward from its end
-        text += _hinge(f"c{j}", f"r{j-1}", f"t{j}", new_x + inward, y0, "pi/2")
+        text += _hinge(f"c{j}", f"r{j - 1}", f"t{j}", new_x + inward, y0, "pi/2")
         # the new rung r{j}: on t{j} at the top and on the previous side link, extended
         text += _hinge(f"d{j}", f"t{j}", f"r{j}", new_x + inward + tilt, y1, "0")
         text += _hinge(f"e{j}", f"r{j}", prev, prev_x, y1, "0")
@@ -153,12 +158,15 @@ def check(sizes_serial=SERIAL_SIZES, sizes_ladder=LADDER_SIZES, angle: float = 0
             mech = symkin.loads(family(kind, n), f"{kind}_{n}.toml")
             s = symkin.structure(mech)
             an = symkin.analyze(mech)
-            inputs = {name: angle for name in mech.inputs}
+            inputs = dict.fromkeys(mech.inputs, angle)
             ev = symkin.evaluate(an, inputs, "paper", dps=20)
             dev = next(iter(ev.points.values())).deviation
-            print(f"{kind:6} {n:3}: links {s.n + 1:3}, hinges {s.m:3}, loops {s.m - s.n:2}, "
-                  f"inputs {len(mech.inputs):2}, dyads {len(an.rigid.dyads):2}, "
-                  f"closed form {an.rigid.closed_form}, paper deviation {dev}", flush=True)
+            print(
+                f"{kind:6} {n:3}: links {s.n + 1:3}, hinges {s.m:3}, loops {s.m - s.n:2}, "
+                f"inputs {len(mech.inputs):2}, dyads {len(an.rigid.dyads):2}, "
+                f"closed form {an.rigid.closed_form}, paper deviation {dev}",
+                flush=True,
+            )
 
 
 if __name__ == "__main__":

@@ -7,7 +7,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-
 from common import POLICY
 
 
@@ -44,35 +43,43 @@ class Pipeline:
             theta[i] = float(x[j])
         if k:
             sol = self.fns["rigid"](*x, *p)
-            if any(r < 0 for r in sol[k:k + self.nd]):
+            if any(r < 0 for r in sol[k : k + self.nd]):
                 raise ArithmeticError("cannot assemble")
             for j, i in enumerate(self.unknown_index):
                 theta[i] = math.remainder(sol[j], 2 * math.pi)
-            for _ in range(self.polish):         # the C template's Newton polish steps
+            for _ in range(self.polish):  # the C template's Newton polish steps
                 res = self.fns["rigid_res"](*theta, *p)
-                res = [math.remainder(r, 2 * math.pi) if n % 3 == 0 else r
-                       for n, r in enumerate(res)]
+                res = [
+                    math.remainder(r, 2 * math.pi) if n % 3 == 0 else r for n, r in enumerate(res)
+                ]
                 lin = self.fns["linear"](*theta, *p)
-                step = np.linalg.solve(np.array(lin[:k * k], dtype=float).reshape(k, k),
-                                       np.array(res, dtype=float))
+                step = np.linalg.solve(
+                    np.array(lin[: k * k], dtype=float).reshape(k, k), np.array(res, dtype=float)
+                )
                 for j, i in enumerate(self.unknown_index):
                     theta[i] -= float(step[j])
         delta = [0.0] * k
         if self.needs_loops:
             lin = self.fns["linear"](*theta, *p)
-            a = np.array(lin[:k * k], dtype=float).reshape(k, k)
-            delta = list(np.linalg.solve(a, -np.array(lin[k * k:], dtype=float)))
+            a = np.array(lin[: k * k], dtype=float).reshape(k, k)
+            delta = list(np.linalg.solve(a, -np.array(lin[k * k :], dtype=float)))
             previous = math.inf
             for _ in range(POLICY["iterations"]):
                 nw = self.fns["newton"](*theta, *delta, *p)
-                step = np.linalg.solve(np.array(nw[k:], dtype=float).reshape(k, k),
-                                       np.array(nw[:k], dtype=float))
+                step = np.linalg.solve(
+                    np.array(nw[k:], dtype=float).reshape(k, k), np.array(nw[:k], dtype=float)
+                )
                 delta = [d - s for d, s in zip(delta, step)]
                 size = max(abs(d) for d in delta)
                 change = float(np.max(np.abs(step)))
-                if (change <= POLICY["stop"] * size or size == 0.0
-                        or (change >= POLICY["stall_ratio"] * previous
-                            and change <= POLICY["stall"] * size)):
+                if (
+                    change <= POLICY["stop"] * size
+                    or size == 0.0
+                    or (
+                        change >= POLICY["stall_ratio"] * previous
+                        and change <= POLICY["stall"] * size
+                    )
+                ):
                     break
                 previous = change
             else:
@@ -88,6 +95,7 @@ def lambdify_alternative(plan, cse: bool, polish: int = POLICY["polish"]):
     dF/dδ, the deviation; driven by the same Newton loop in Python (numpy.linalg.solve for the
     small systems)."""
     import sympy as sp
+
     from symkin.codegen.backends.numpy import kernels as np_kernels
 
     # conjugate: substituting the dyad assignments turns Abs(x)**2 into x*conjugate(x), which
@@ -102,4 +110,3 @@ def lambdify_alternative(plan, cse: bool, polish: int = POLICY["polish"]):
         outs = substituted(r)
         fns[key] = sp.lambdify(args, outs, modules=modules, cse=cse)
     return Pipeline(plan, fns, polish=polish)
-

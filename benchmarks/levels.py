@@ -3,7 +3,8 @@
 `loaded_refined` solves the statics, the compliance and the closure a second time.
 
 Every level runs through `symkin.compile`'s `evaluate_rows` (one C call evaluates the whole
-batch into preallocated arrays, so the figure is the evaluator's own time per configuration) over the same
+batch into preallocated arrays, so the figure is the evaluator's own time per configuration) over
+the same
 uniformly sampled inputs (benchmarks/common.py's ranges), best of several repeats, the levels
 interleaved so that a change of the machine's load hits them alike.
 
@@ -18,9 +19,9 @@ import os
 import time
 
 import numpy as np
+from common import EXAMPLES, ROOT, log, save
 
 import symkin
-from common import EXAMPLES, ROOT, log, save
 
 LEVELS = ("paper", "first_order", "exact", "loaded", "loaded_refined")
 
@@ -35,13 +36,12 @@ def measure(points: int, repeats: int) -> list[dict]:
     rows = []
     for example in EXAMPLES:
         log(f"levels: {example}")
-        ev = symkin.compile(ROOT / "examples" / f"{example}.toml", backend="c",
-                            sensitivity=False)
+        ev = symkin.compile(ROOT / "examples" / f"{example}.toml", backend="c", sensitivity=False)
         assert list(ev.inputs) == list(EXAMPLES[example])
         x = inputs_for(example, points)
         row = {"example": example, "points": points}
         best = {level: float("inf") for level in LEVELS}
-        for level in LEVELS:                          # warm: the library is built and loaded
+        for level in LEVELS:  # warm: the library is built and loaded
             status, _ = ev.evaluate_rows(x, level)
             row[f"{level}_failed"] = int((status != 0).sum())
         for _ in range(repeats):
@@ -57,12 +57,18 @@ def measure(points: int, repeats: int) -> list[dict]:
 
 
 def render(rows: list[dict]) -> list[str]:
-    out = ["| example | " + " | ".join(f"{lv} (ns)" for lv in LEVELS)
-           + " | loaded / exact | loaded_refined / exact |",
-           "| --- |" + " ---: |" * (len(LEVELS) + 2)]
+    out = [
+        "| example | "
+        + " | ".join(f"{lv} (ns)" for lv in LEVELS)
+        + " | loaded / exact | loaded_refined / exact |",
+        "| --- |" + " ---: |" * (len(LEVELS) + 2),
+    ]
     for r in rows:
-        out.append(f"| {r['example']} | " + " | ".join(f"{r[lv]:.0f}" for lv in LEVELS)
-                   + f" | {r['loaded_over_exact']:.2f} | {r['refined_over_exact']:.2f} |")
+        out.append(
+            f"| {r['example']} | "
+            + " | ".join(f"{r[lv]:.0f}" for lv in LEVELS)
+            + f" | {r['loaded_over_exact']:.2f} | {r['refined_over_exact']:.2f} |"
+        )
     return out
 
 

@@ -25,13 +25,13 @@ import os
 import re
 import time
 
-import numpy as np
-
 import families
-import symkin
+import numpy as np
 from common import ROOT, log, save
-from symkin.kinematics.analysis import Analysis
+
+import symkin
 from symkin.graph.structure import build
+from symkin.kinematics.analysis import Analysis
 
 POINT = {"fan": "C1", "ladder": "P1", "nine_bar": "F"}
 
@@ -54,8 +54,11 @@ def _evaluators(kind: str, k: int) -> dict[str, symkin.studies.compiled.Compiled
     if kind == "nine_bar":
         mech = symkin.load(ROOT / "examples" / "nine_bar_platform.toml")
         pruned = symkin.compile(mech, points=[point], **opts)
-        return {"full": symkin.compile(Analysis(build(mech), [point]), points=[point], **opts),
-                "pruned": pruned, "alone": pruned}
+        return {
+            "full": symkin.compile(Analysis(build(mech), [point]), points=[point], **opts),
+            "pruned": pruned,
+            "alone": pruned,
+        }
     mech = symkin.loads(_text(kind, k), f"{kind}_{k}.toml")
     alone = symkin.loads(_text(kind, 1), f"{kind}_1.toml")
     return {
@@ -86,15 +89,16 @@ def measure(sizes: tuple[int, ...], points: int, repeats: int) -> list[dict]:
                     x[tag][:, list(evs[tag].inputs).index(name)] = x["alone"][:, j]
             row = {"family": kind, "k": k, "point": POINT[kind]}
             for tag, ev in evs.items():
-                status, res = ev.evaluate_rows(x[tag], "exact")
+                status, _res = ev.evaluate_rows(x[tag], "exact")
                 row[f"{tag}_failed"] = int((status != 0).sum())
                 ops = _ops(ev.sources.header)
                 row[f"{tag}_ops"] = ops
                 row[f"{tag}_ops_rigid_newton"] = ops.get("rigid", 0) + ops.get("newton", 0)
             want = evs["full"].evaluate_rows(x["full"], "exact")[1]
             got = evs["pruned"].evaluate_rows(x["pruned"], "exact")[1]
-            row["pruned_vs_full_max_rel"] = float(np.nanmax(np.abs(got - want))
-                                                  / np.nanmax(np.abs(want)))
+            row["pruned_vs_full_max_rel"] = float(
+                np.nanmax(np.abs(got - want)) / np.nanmax(np.abs(want))
+            )
             best = {tag: float("inf") for tag in evs}
             for _ in range(repeats):
                 for tag, ev in evs.items():
@@ -110,16 +114,20 @@ def measure(sizes: tuple[int, ...], points: int, repeats: int) -> list[dict]:
 
 
 def render(rows: list[dict]) -> list[str]:
-    out = ["| mechanism | point | ops rigid+newton full / pruned / alone | C ns full | C ns pruned "
-           "| C ns alone | pruned / alone | full / pruned |",
-           "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    out = [
+        "| mechanism | point | ops rigid+newton full / pruned / alone | C ns full | C ns pruned "
+        "| C ns alone | pruned / alone | full / pruned |",
+        "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |",
+    ]
     for r in rows:
         name = "nine-bar platform" if r["family"] == "nine_bar" else f"{r['family']} of {r['k']}"
-        out.append(f"| {name} | {r['point']} | "
-                   f"{r['full_ops_rigid_newton']} / {r['pruned_ops_rigid_newton']} / "
-                   f"{r['alone_ops_rigid_newton']} | {r['full_ns']:.0f} | {r['pruned_ns']:.0f} | "
-                   f"{r['alone_ns']:.0f} | {r['pruned_over_alone']:.2f} | "
-                   f"{r['full_over_pruned']:.2f} |")
+        out.append(
+            f"| {name} | {r['point']} | "
+            f"{r['full_ops_rigid_newton']} / {r['pruned_ops_rigid_newton']} / "
+            f"{r['alone_ops_rigid_newton']} | {r['full_ns']:.0f} | {r['pruned_ns']:.0f} | "
+            f"{r['alone_ns']:.0f} | {r['pruned_over_alone']:.2f} | "
+            f"{r['full_over_pruned']:.2f} |"
+        )
     return out
 
 

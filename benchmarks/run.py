@@ -13,7 +13,8 @@ Measures, on this machine:
    same deviation as the C evaluator; the drivers follow symkin.core.settings's settings.
 2. Throughput: the numpy module on 10^6 points against the C evaluator called 10^6 times in a
    C loop.
-3. Derivation (derivation.py: `symkin.studies.derive.generate`, every emitter, all levels) time and peak
+3. Derivation (derivation.py: `symkin.studies.derive.generate`, every emitter, all levels) time and
+peak
    memory on the examples and on generated families (families.py), each in a fresh process,
    with growth exponents fitted by least squares on log-log.
 4. Sweeps and sensitivities (sweeps.py): batch calls against one ctypes call per point, a
@@ -37,47 +38,64 @@ import tempfile
 import time
 from pathlib import Path
 
+import sweeps
 from common import BENCH, FULL, POLICY, QUICK, ROOT, SMOKE, first_line, log, machine
 from derivation import measure
 from evaluators import bench_example
 from report import render, targets, write_readme
 from symforce_alt import symforce_status
-import sweeps
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     size = ap.add_mutually_exclusive_group()
     size.add_argument("--quick", action="store_true", help="smaller sizes, shorter timings")
-    size.add_argument("--smoke", action="store_true",
-                      help="every part once at the smallest sizes; prints, writes nothing")
+    size.add_argument(
+        "--smoke",
+        action="store_true",
+        help="every part once at the smallest sizes; prints, writes nothing",
+    )
     ap.add_argument("--no-readme", action="store_true", help="do not rewrite README.md")
-    ap.add_argument("--budget", type=float, default=120.0,
-                    help="seconds allowed per derivation case (default 120)")
-    ap.add_argument("--only", choices=("sweeps",),
-                    help="measure only this part; rewrites only its README block")
+    ap.add_argument(
+        "--budget",
+        type=float,
+        default=120.0,
+        help="seconds allowed per derivation case (default 120)",
+    )
+    ap.add_argument(
+        "--only", choices=("sweeps",), help="measure only this part; rewrites only its README block"
+    )
     args = ap.parse_args()
     sizes = SMOKE if args.smoke else QUICK if args.quick else FULL
     if args.only == "sweeps":
-        run_sweeps(sizes, args.no_readme, {"date": datetime.date.today().isoformat(),
-                                           "machine": machine()})
+        run_sweeps(
+            sizes, args.no_readme, {"date": datetime.date.today().isoformat(), "machine": machine()}
+        )
         return
     t_start = time.perf_counter()
-    results: dict = {"quick": sizes is not FULL, "sizes": sizes.name,
-                     "date": datetime.date.today().isoformat(),
-                     "machine": machine(), "solver": POLICY,
-                     "symkin_commit": first_line(["git", "-C", str(ROOT), "rev-parse",
-                                                  "--short", "HEAD"]),
-                     "symkin_dirty": bool(subprocess.run(
-                         ["git", "-C", str(ROOT), "status", "--porcelain", "symkin", "templates"],
-                         capture_output=True, text=True).stdout.strip())}
+    results: dict = {
+        "quick": sizes is not FULL,
+        "sizes": sizes.name,
+        "date": datetime.date.today().isoformat(),
+        "machine": machine(),
+        "solver": POLICY,
+        "symkin_commit": first_line(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"]),
+        "symkin_dirty": bool(
+            subprocess.run(
+                ["git", "-C", str(ROOT), "status", "--porcelain", "symkin", "templates"],
+                capture_output=True,
+                text=True,
+            ).stdout.strip()
+        ),
+    }
     log("machine: " + json.dumps(results["machine"]))
     results["symforce"] = symforce_status(install=sizes.install_symforce)
     log(f"SymForce: {results['symforce']}")
 
     with tempfile.TemporaryDirectory(prefix="symkin-bench-") as tmp:
-        results["evaluators"] = {e: bench_example(e, sizes, results["symforce"], Path(tmp))
-                                 for e in sizes.examples}
+        results["evaluators"] = {
+            e: bench_example(e, sizes, results["symforce"], Path(tmp)) for e in sizes.examples
+        }
     examples = sizes.examples if sizes is not SMOKE else sizes.examples[:1]
     results["derivation"] = measure(examples, sizes.serial, sizes.ladder, args.budget)
     results["total_s"] = time.perf_counter() - t_start
@@ -91,7 +109,7 @@ def main() -> None:
     out = BENCH / ("results-quick.json" if sizes is QUICK else "results.json")
     out.write_text(json.dumps(results, indent=1, default=str) + "\n")
     if not args.no_readme:
-        write_readme(block)          # read-modify-write of the marked block only, at the end
+        write_readme(block)  # read-modify-write of the marked block only, at the end
     log(f"done in {results['total_s'] / 60:.1f} min; raw numbers in {out.relative_to(ROOT)}")
     run_sweeps(sizes, args.no_readme, {"date": results["date"], "machine": results["machine"]})
 
@@ -100,24 +118,35 @@ def run_sweeps(sizes, no_readme: bool, header: dict) -> None:
     """Part 4 (sweeps.py): measured, printed, written to results-sweeps.json and its README
     block (not for --smoke)."""
     t0 = time.perf_counter()
-    results = {**header, "sizes": sizes.name, "sweeps": sweeps.measure(sizes),
-               "symkin_commit": first_line(["git", "-C", str(ROOT), "rev-parse", "--short",
-                                            "HEAD"])}
+    results = {
+        **header,
+        "sizes": sizes.name,
+        "sweeps": sweeps.measure(sizes),
+        "symkin_commit": first_line(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"]),
+    }
     results["total_s"] = time.perf_counter() - t0
     results["targets"] = sweeps.targets(results)
     m = results["machine"]
     block = "\n".join(
-        [f"Measured {results['date']} by `python benchmarks/run.py --only sweeps` in "
-         f"{results['total_s'] / 60:.1f} min (symkin at commit {results['symkin_commit']}) on "
-         f"{m['cpu']}, {m['cores']} cores; raw numbers: `benchmarks/results-sweeps.json`.", ""]
-        + sweeps.render(results) + ["", "Targets:", ""]
-        + [f"- {'met' if t['met'] else 'MISSED'}: {t['text']} — measured {t['measured']}"
-           for t in results["targets"]])
+        [
+            f"Measured {results['date']} by `python benchmarks/run.py --only sweeps` in "
+            f"{results['total_s'] / 60:.1f} min (symkin at commit {results['symkin_commit']}) on "
+            f"{m['cpu']}, {m['cores']} cores; raw numbers: `benchmarks/results-sweeps.json`.",
+            "",
+        ]
+        + sweeps.render(results)
+        + ["", "Targets:", ""]
+        + [
+            f"- {'met' if t['met'] else 'MISSED'}: {t['text']} — measured {t['measured']}"
+            for t in results["targets"]
+        ]
+    )
     print(block)
     if sizes is SMOKE:
         return
-    (BENCH / ("results-sweeps-quick.json" if sizes is QUICK else "results-sweeps.json")
-     ).write_text(json.dumps(results, indent=1, default=str) + "\n")
+    (BENCH / ("results-sweeps-quick.json" if sizes is QUICK else "results-sweeps.json")).write_text(
+        json.dumps(results, indent=1, default=str) + "\n"
+    )
     if not no_readme:
         write_readme(block, "<!-- sweeps:start -->", "<!-- sweeps:end -->")
 

@@ -50,9 +50,11 @@ def measure(sizes: tuple[int, ...]) -> list[dict]:
                 row = {"family": kind, "k": k}
                 for backend in ("derive", "sympy", "numpy", "c"):
                     env = {**os.environ, "SYMKIN_CACHE": str(work / f"cache-{kind}{k}{backend}")}
-                    cmd = (SYMKIN + ["derive", str(path), "-o", str(work / f"out-{kind}{k}")]
-                           if backend == "derive" else
-                           SYMKIN + ["eval", str(path), *_inputs(kind, k), "--backend", backend])
+                    cmd = (
+                        SYMKIN + ["derive", str(path), "-o", str(work / f"out-{kind}{k}")]
+                        if backend == "derive"
+                        else SYMKIN + ["eval", str(path), *_inputs(kind, k), "--backend", backend]
+                    )
                     log(f"scale: {kind} {k} {backend}")
                     row[backend] = _timed(cmd, env)
                 rows.append(row)
@@ -60,11 +62,16 @@ def measure(sizes: tuple[int, ...]) -> list[dict]:
 
 
 def render(rows: list[dict]) -> list[str]:
-    out = ["| mechanism | loops | derive, all emitters (s) | eval sympy (s) | eval numpy (s) | "
-           "eval c (s) |", "| --- | ---: | ---: | ---: | ---: | ---: |"]
+    out = [
+        "| mechanism | loops | derive, all emitters (s) | eval sympy (s) | eval numpy (s) | "
+        "eval c (s) |",
+        "| --- | ---: | ---: | ---: | ---: | ---: |",
+    ]
     for r in rows:
-        out.append(f"| {r['family']} of {r['k']} | {r['k']} | {r['derive']:.1f} | "
-                   f"{r['sympy']:.1f} | {r['numpy']:.1f} | {r['c']:.1f} |")
+        out.append(
+            f"| {r['family']} of {r['k']} | {r['k']} | {r['derive']:.1f} | "
+            f"{r['sympy']:.1f} | {r['numpy']:.1f} | {r['c']:.1f} |"
+        )
     return out
 
 

@@ -30,9 +30,9 @@ import time
 from pathlib import Path
 
 import numpy as np
+from common import C_FLAGS, ROOT, log, save
 
 import symkin
-from common import C_FLAGS, ROOT, log, save
 from symkin.studies import scene as scenes
 from symkin.studies.derive import generate
 
@@ -52,8 +52,11 @@ at = [0.18, 0.075]
 """
 SCENES = {
     "kinematic": ('reference = "exact"', "tolerance = 1e-12", "relative_tolerance = 0.05"),
-    "physical": ('reference = "equilibrium"', "relative_tolerance = 0.01",
-                 "relative_tolerance = 3.0"),
+    "physical": (
+        'reference = "equilibrium"',
+        "relative_tolerance = 0.01",
+        "relative_tolerance = 3.0",
+    ),
 }
 RANGE = 0.1
 TIMER = r"""
@@ -94,8 +97,12 @@ def _library(files: dict[str, bytes], name: str, call: str, folder: Path) -> cty
     subprocess.run(["cc", *C_FLAGS, "-shared", *sources, "-o", str(lib), "-lm"], check=True)
     dll = ctypes.CDLL(str(lib))
     dll.bench_time.restype = ctypes.c_double
-    dll.bench_time.argtypes = [ctypes.POINTER(ctypes.c_double), ctypes.c_int, ctypes.c_int,
-                               ctypes.POINTER(ctypes.c_double)]
+    dll.bench_time.argtypes = [
+        ctypes.POINTER(ctypes.c_double),
+        ctypes.c_int,
+        ctypes.c_int,
+        ctypes.POINTER(ctypes.c_double),
+    ]
     return dll
 
 
@@ -110,9 +117,11 @@ def run(n_points: int, repeats: int) -> list[dict]:
     mech = symkin.load(NINE_BAR)
     rows_out = []
     for key, (reference, p8, p5) in SCENES.items():
-        text = (f'format = 1\nname = "stage_{key}"\n{reference}\n[ranges]\n'
-                + "".join(f"{h} = [{-RANGE}, {RANGE}]\n" for h in mech.inputs)
-                + POINTS.format(p8=p8, p5=p5))
+        text = (
+            f'format = 1\nname = "stage_{key}"\n{reference}\n[ranges]\n'
+            + "".join(f"{h} = [{-RANGE}, {RANGE}]\n" for h in mech.inputs)
+            + POINTS.format(p8=p8, p5=p5)
+        )
         scene = scenes.loads(text, mech, f"{key}.toml")
         start = time.perf_counter()
         files, choice = scenes.generate(scene, ["c"])
@@ -120,35 +129,53 @@ def run(n_points: int, repeats: int) -> list[dict]:
         single = choice.single
         name = scene.name
         single_name = f"{name}_single"
-        single_files = generate(dataclasses.replace(scene.mechanism, name=single_name), ["c"],
-                                list(scene.point_names), variant=single.variant)
+        single_files = generate(
+            dataclasses.replace(scene.mechanism, name=single_name),
+            ["c"],
+            list(scene.point_names),
+            variant=single.variant,
+        )
         rng = np.random.default_rng(1)
         x = rng.uniform(-RANGE, RANGE, size=(n_points, len(mech.inputs)))
         with tempfile.TemporaryDirectory() as a, tempfile.TemporaryDirectory() as b:
-            lib = _library(files, name, f"{name}_evaluate(inputs + (size_t)i * "
-                                        f"{name.upper()}_N_INPUTS, NULL, out)", Path(a))
+            lib = _library(
+                files,
+                name,
+                f"{name}_evaluate(inputs + (size_t)i * {name.upper()}_N_INPUTS, NULL, out)",
+                Path(a),
+            )
             code = symkin.core.levels.get(single.variant.level).code
-            lib1 = _library(single_files, single_name,
-                            f"{single_name}_evaluate(inputs + (size_t)i * "
-                            f"{single_name.upper()}_N_INPUTS, NULL, {code}, out)", Path(b))
+            lib1 = _library(
+                single_files,
+                single_name,
+                f"{single_name}_evaluate(inputs + (size_t)i * "
+                f"{single_name.upper()}_N_INPUTS, NULL, {code}, out)",
+                Path(b),
+            )
             # the scene takes the free inputs in label order, the single evaluator its own
             best, best1 = float("inf"), float("inf")
             for _ in range(repeats):
                 best = min(best, _time(lib, x, 1))
                 best1 = min(best1, _time(lib1, x, 1))
-        row = {"scene": key, "choice": {p: g.variant.name for g in choice.groups
-                                        for p in g.points},
-               "errors": {p: {"absolute": e[0], "relative": e[1]}
-                          for p, e in choice.errors.items()},
-               "single": single.variant.name, "cost_scene": sum(g.cost for g in choice.groups),
-               "cost_single": single.cost, "ns_scene": best * 1e9, "ns_single": best1 * 1e9,
-               "derive_seconds": seconds}
+        row = {
+            "scene": key,
+            "choice": {p: g.variant.name for g in choice.groups for p in g.points},
+            "errors": {p: {"absolute": e[0], "relative": e[1]} for p, e in choice.errors.items()},
+            "single": single.variant.name,
+            "cost_scene": sum(g.cost for g in choice.groups),
+            "cost_single": single.cost,
+            "ns_scene": best * 1e9,
+            "ns_single": best1 * 1e9,
+            "derive_seconds": seconds,
+        }
         row["time_ratio"] = row["ns_single"] / row["ns_scene"]
         row["cost_ratio"] = row["cost_single"] / row["cost_scene"]
         rows_out.append(row)
-        log(f"{key}: scene {row['choice']} cost {row['cost_scene']} ({row['ns_scene']:.0f} ns) "
+        log(
+            f"{key}: scene {row['choice']} cost {row['cost_scene']} ({row['ns_scene']:.0f} ns) "
             f"vs single {single.variant.name} cost {single.cost} ({row['ns_single']:.0f} ns): "
-            f"{row['time_ratio']:.2f}x faster, ops {row['cost_ratio']:.2f}x")
+            f"{row['time_ratio']:.2f}x faster, ops {row['cost_ratio']:.2f}x"
+        )
     return rows_out
 
 
@@ -159,14 +186,18 @@ def main() -> None:
     args = parser.parse_args()
     before = os.getloadavg()
     rows = run(args.points, args.repeats)
-    table = [f"{'scene':<10} {'per point':<40} {'single':<16} {'ops':>11} {'C ns':>13} "
-             f"{'ops x':>6} {'time x':>6}"]
+    table = [
+        f"{'scene':<10} {'per point':<40} {'single':<16} {'ops':>11} {'C ns':>13} "
+        f"{'ops x':>6} {'time x':>6}"
+    ]
     for r in rows:
         choice = ", ".join(f"{p} {v}" for p, v in r["choice"].items())
-        table.append(f"{r['scene']:<10} {choice:<40} {r['single']:<16} "
-                     f"{r['cost_scene']:>5}/{r['cost_single']:<5} "
-                     f"{r['ns_scene']:>6.0f}/{r['ns_single']:<6.0f} {r['cost_ratio']:>6.2f} "
-                     f"{r['time_ratio']:>6.2f}")
+        table.append(
+            f"{r['scene']:<10} {choice:<40} {r['single']:<16} "
+            f"{r['cost_scene']:>5}/{r['cost_single']:<5} "
+            f"{r['ns_scene']:>6.0f}/{r['ns_single']:<6.0f} {r['cost_ratio']:>6.2f} "
+            f"{r['time_ratio']:>6.2f}"
+        )
     save("scene", rows, table, before)
 
 

@@ -15,6 +15,7 @@ def scipy_alternative(an):
     compliant angles) minus the rigid position."""
     import sympy as sp
     from scipy.optimize import root
+
     from symkin.codegen.backends.numpy import kernels as np_kernels
 
     kin = an.kin
@@ -50,10 +51,18 @@ def scipy_alternative(an):
         x = np.asarray(x, float)
         th0 = np.zeros(len(unknown))
         if unknown:
-            sr = root(lambda u: np.asarray(f_rigid(*full(x, u), *pvals), float), th0,
-                      method="hybr", options={"xtol": 1e-12})
-            sc = root(lambda u: np.asarray(f_comp(*full(x, u), *pvals), float), sr.x,
-                      method="hybr", options={"xtol": 1e-12})
+            sr = root(
+                lambda u: np.asarray(f_rigid(*full(x, u), *pvals), float),
+                th0,
+                method="hybr",
+                options={"xtol": 1e-12},
+            )
+            sc = root(
+                lambda u: np.asarray(f_comp(*full(x, u), *pvals), float),
+                sr.x,
+                method="hybr",
+                options={"xtol": 1e-12},
+            )
             if not (sr.success and sc.success):
                 raise ArithmeticError(f"root: {sr.message} / {sc.message}")
             ur, uc = sr.x, sc.x
@@ -64,4 +73,3 @@ def scipy_alternative(an):
         return list(pc - pr)
 
     return solve
-

@@ -21,7 +21,6 @@ import os
 import time
 
 import numpy as np
-
 from common import ROOT, log
 
 TIMER_C = r"""
@@ -80,8 +79,14 @@ class Timed:
         self.fn.restype = ctypes.c_double
         d = ctypes.POINTER(ctypes.c_double)
         self.fn.argtypes = [d, ctypes.c_int, ctypes.c_int, ctypes.c_int, ctypes.c_int, d]
-        self.lib = toolchain.Library(path, name, len(self.plan.inputs), len(self.plan.parameters),
-                                   len(self.plan.points), len(self.plan.hinges))
+        self.lib = toolchain.Library(
+            path,
+            name,
+            len(self.plan.inputs),
+            len(self.plan.parameters),
+            len(self.plan.points),
+            len(self.plan.hinges),
+        )
         self.name = name
 
     def per_call(self, x: np.ndarray, what: int, budget: float, level: int = 2) -> float:
@@ -95,8 +100,10 @@ class Timed:
             if t >= budget / 3 or reps > 1 << 20:
                 break
             reps *= 2
-        best = min(self.fn(x.ctypes.data_as(d), len(x), reps, level, what, ctypes.byref(sink))
-                   for _ in range(3))
+        best = min(
+            self.fn(x.ctypes.data_as(d), len(x), reps, level, what, ctypes.byref(sink))
+            for _ in range(3)
+        )
         return best / (reps * len(x))
 
 
@@ -149,10 +156,16 @@ def batch_calls(timed: Timed, n: int, budget: float) -> dict:
     t_raw = best(raw) / n
     t_lib = best(library) / (n // 10)
     t_batch = best(batch) / n
-    return {"points": n, "c_loop_s": c_loop, "ctypes_per_point_s": t_raw,
-            "library_per_point_s": t_lib, "batch_s": t_batch,
-            "ratio_ctypes_per_point": t_raw / c_loop, "ratio_library_per_point": t_lib / c_loop,
-            "ratio_batch": t_batch / c_loop}
+    return {
+        "points": n,
+        "c_loop_s": c_loop,
+        "ctypes_per_point_s": t_raw,
+        "library_per_point_s": t_lib,
+        "batch_s": t_batch,
+        "ratio_ctypes_per_point": t_raw / c_loop,
+        "ratio_library_per_point": t_lib / c_loop,
+        "ratio_batch": t_batch / c_loop,
+    }
 
 
 def best(fn, repeat: int = 3) -> float:
@@ -169,8 +182,12 @@ def sensitivity_cost(timed: Timed, n: int, budget: float) -> dict:
     x = np.random.default_rng(4).uniform(-1.0, 1.0, (n, 1))
     t_dev = timed.per_call(x, 0, budget)
     t_sens = timed.per_call(x, 1, budget)
-    return {"variables": len(timed.plan.parameters) + len(timed.plan.inputs),
-            "deviation_s": t_dev, "sensitivity_s": t_sens, "ratio": t_sens / t_dev}
+    return {
+        "variables": len(timed.plan.parameters) + len(timed.plan.inputs),
+        "deviation_s": t_dev,
+        "sensitivity_s": t_sens,
+        "ratio": t_sens / t_dev,
+    }
 
 
 def dask_overhead(tasks: int) -> dict:
@@ -186,9 +203,13 @@ def dask_overhead(tasks: int) -> dict:
     t0 = time.perf_counter()
     dask.compute(*jobs, scheduler="threads", num_workers=2)
     local = (time.perf_counter() - t0) / tasks
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                      dashboard_address=None) as cluster, Client(cluster) as client:
-        client.gather(client.map(noop, range(10), pure=False))          # warm up
+    with (
+        LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        ) as cluster,
+        Client(cluster) as client,
+    ):
+        client.gather(client.map(noop, range(10), pure=False))  # warm up
         t0 = time.perf_counter()
         client.gather(client.map(noop, range(tasks), pure=False))
         dist = (time.perf_counter() - t0) / tasks
@@ -199,16 +220,22 @@ def sweep_throughput(samples: int, grid: int) -> dict:
     """`symkin sweep` of the four-bar (l = normal(1e-3, 2e-5)) on this machine's cores against
     twice the single-core C rate on the same configurations, measured before and after."""
     import symkin
-    from symkin.studies import sweep
-    from symkin.studies import variation
+    from symkin.studies import sweep, variation
 
     mech = symkin.load(ROOT / "examples" / "four_bar.toml")
     ev = symkin.compile(mech, levels=["exact"])
     vary = variation.parse_vary(["l=normal(1e-3,2e-5)"], mech, {"l": 1e-3})
     g = variation.parse_grid([f"A0=-1:1:{grid}"], mech)
-    task = sweep.Task(ev, "exact", g.rows, tuple((p, s, 1e-3) for p, s in vary.items()), 1,
-                      sweep.BLOCK, sweep.geometry_checks(mech),
-                      tuple(p.symbol for p in mech.parameters))
+    task = sweep.Task(
+        ev,
+        "exact",
+        g.rows,
+        tuple((p, s, 1e-3) for p, s in vary.items()),
+        1,
+        sweep.BLOCK,
+        sweep.geometry_checks(mech),
+        tuple(p.symbol for p in mech.parameters),
+    )
     params, _ = sweep.sample_block(task, 0)
 
     def single_core() -> tuple[float, float]:
@@ -219,13 +246,21 @@ def sweep_throughput(samples: int, grid: int) -> dict:
         n = params.shape[0] * len(g.rows)
         return n / (time.perf_counter() - t0), n / (time.process_time() - c0)
 
-    single_core()                                                       # warm up
+    single_core()  # warm up
     before = single_core()
     workers = os.cpu_count() or 1
     load = os.getloadavg()[0]
     c0 = time.process_time()
-    result = sweep.run(ev, mech, vary, g, samples, seed=1,
-                       scheduler=sweep.parse_scheduler(f"threads:{workers}"), level="exact")
+    result = sweep.run(
+        ev,
+        mech,
+        vary,
+        g,
+        samples,
+        seed=1,
+        scheduler=sweep.parse_scheduler(f"threads:{workers}"),
+        level="exact",
+    )
     cpu = time.process_time() - c0
     after = single_core()
     points = samples * len(g.rows)
@@ -233,15 +268,25 @@ def sweep_throughput(samples: int, grid: int) -> dict:
     one = (before[0] + after[0]) / 2
     one_cpu = (before[1] + after[1]) / 2
     assert result.failed == 0
-    return {"samples": samples, "grid": len(g.rows), "points": points, "workers": workers,
-            "chunks": result.chunks, "sweep_s": result.seconds, "sweep_cpu_s": cpu,
-            "sweep_points_per_s": rate, "single_core_points_per_s": one,
-            "single_core_points_per_cpu_s": one_cpu, "single_core_before": before[0],
-            "single_core_after": after[0], "load_average_before": load,
-            "load_average_after": os.getloadavg()[0],
-            "cores_obtained": cpu / result.seconds,
-            "cpu_efficiency": (points / cpu) / one_cpu,
-            "ratio_to_ideal": rate / (workers * one)}
+    return {
+        "samples": samples,
+        "grid": len(g.rows),
+        "points": points,
+        "workers": workers,
+        "chunks": result.chunks,
+        "sweep_s": result.seconds,
+        "sweep_cpu_s": cpu,
+        "sweep_points_per_s": rate,
+        "single_core_points_per_s": one,
+        "single_core_points_per_cpu_s": one_cpu,
+        "single_core_before": before[0],
+        "single_core_after": after[0],
+        "load_average_before": load,
+        "load_average_after": os.getloadavg()[0],
+        "cores_obtained": cpu / result.seconds,
+        "cpu_efficiency": (points / cpu) / one_cpu,
+        "ratio_to_ideal": rate / (workers * one),
+    }
 
 
 def measure(sizes) -> dict:
@@ -255,14 +300,15 @@ def measure(sizes) -> dict:
     param = Timed(symkin.load(ROOT / "examples" / "four_bar_dimensions.toml"))
     x = np.array([[0.3], [-0.7]])
     out = {"checks": {"four_bar": check(four, x), "four_bar_dimensions": check(param, x)}}
-    out["batch"] = batch_calls(four, 200 if smoke else 10 ** 4, budget)
-    out["sensitivity"] = {"four_bar": sensitivity_cost(four, 100 if smoke else 1000, budget),
-                          "four_bar_dimensions": sensitivity_cost(param, 100 if smoke else 1000,
-                                                                  budget)}
+    out["batch"] = batch_calls(four, 200 if smoke else 10**4, budget)
+    out["sensitivity"] = {
+        "four_bar": sensitivity_cost(four, 100 if smoke else 1000, budget),
+        "four_bar_dimensions": sensitivity_cost(param, 100 if smoke else 1000, budget),
+    }
     log("sweeps: Dask overhead per chunk")
     out["dask"] = dask_overhead(20 if smoke else 500)
     log("sweeps: throughput on this machine's cores")
-    out["sweep"] = sweep_throughput(*((512, 20) if smoke else (10 ** 4, 10 ** 3)))
+    out["sweep"] = sweep_throughput(*((512, 20) if smoke else (10**4, 10**3)))
     return out
 
 
@@ -270,36 +316,55 @@ def render(results: dict) -> list[str]:
     """The README lines of this part."""
     s = results["sweeps"]
     b, sw, dk = s["batch"], s["sweep"], s["dask"]
-    lines = ["Sweeps and sensitivities (four-bar, exact level; `benchmarks/sweeps.py`), "
-             "measured side by side in this run:", "",
-             "| measurement | value | target |", "| --- | ---: | --- |"]
-    lines.append(f"| one ctypes call per point ÷ the C loop (timed inside C) | "
-                 f"{b['ratio_ctypes_per_point']:.1f}× | |")
-    lines.append(f"| symkin's Library.evaluate per point ÷ the C loop | "
-                 f"{b['ratio_library_per_point']:.1f}× | |")
-    lines.append(f"| one batch call (`<name>_evaluate_batch`, 10^4 rows) ÷ the C loop | "
-                 f"{b['ratio_batch']:.2f}× | |")
+    lines = [
+        "Sweeps and sensitivities (four-bar, exact level; `benchmarks/sweeps.py`), "
+        "measured side by side in this run:",
+        "",
+        "| measurement | value | target |",
+        "| --- | ---: | --- |",
+    ]
+    lines.append(
+        f"| one ctypes call per point ÷ the C loop (timed inside C) | "
+        f"{b['ratio_ctypes_per_point']:.1f}× | |"
+    )
+    lines.append(
+        f"| symkin's Library.evaluate per point ÷ the C loop | "
+        f"{b['ratio_library_per_point']:.1f}× | |"
+    )
+    lines.append(
+        f"| one batch call (`<name>_evaluate_batch`, 10^4 rows) ÷ the C loop | "
+        f"{b['ratio_batch']:.2f}× | |"
+    )
     for key, label in (("four_bar", "four_bar"), ("four_bar_dimensions", "four_bar_dimensions")):
         r = s["sensitivity"][key]
-        lines.append(f"| sensitivity ÷ deviation evaluation in C ({label}, "
-                     f"{r['variables']} variables) | {r['ratio']:.2f}× | ≤ 3× |")
-    lines.append(f"| sweep throughput ({sw['workers']} threads, {sw['chunks']} chunks) ÷ "
-                 f"{sw['workers']} × single-core C | {100 * sw['ratio_to_ideal']:.0f} % | ≥ 70 % |")
-    lines.append(f"| sweep of {sw['points']:.0e} evaluations ({sw['samples']} samples × "
-                 f"{sw['grid']} inputs) | {sw['sweep_s']:.1f} s | < 20 s |".replace("1e+07",
-                                                                                      "10^7"))
-    lines.append(f"| Dask overhead per chunk, local threads / distributed (2 processes) | "
-                 f"{dk['threads_s'] * 1e3:.2f} ms / {dk['distributed_s'] * 1e3:.2f} ms | |")
+        lines.append(
+            f"| sensitivity ÷ deviation evaluation in C ({label}, "
+            f"{r['variables']} variables) | {r['ratio']:.2f}× | ≤ 3× |"
+        )
+    lines.append(
+        f"| sweep throughput ({sw['workers']} threads, {sw['chunks']} chunks) ÷ "
+        f"{sw['workers']} × single-core C | {100 * sw['ratio_to_ideal']:.0f} % | ≥ 70 % |"
+    )
+    lines.append(
+        f"| sweep of {sw['points']:.0e} evaluations ({sw['samples']} samples × "
+        f"{sw['grid']} inputs) | {sw['sweep_s']:.1f} s | < 20 s |".replace("1e+07", "10^7")
+    )
+    lines.append(
+        f"| Dask overhead per chunk, local threads / distributed (2 processes) | "
+        f"{dk['threads_s'] * 1e3:.2f} ms / {dk['distributed_s'] * 1e3:.2f} ms | |"
+    )
     lines.append("")
-    lines.append(f"Single-core C: {sw['single_core_points_per_s']:.3g} points/s "
-                 f"({sw['single_core_before']:.3g} before, {sw['single_core_after']:.3g} after "
-                 f"the sweep); the sweep: {sw['sweep_points_per_s']:.3g} points/s, using "
-                 f"{sw['cores_obtained']:.2f} cores' worth of CPU time (load average "
-                 f"{sw['load_average_before']:.1f} before, {sw['load_average_after']:.1f} after: "
-                 f"other work shares the machine), at {100 * sw['cpu_efficiency']:.0f} % of the "
-                 f"single-core rate per CPU second. Dask's overhead, {sw['chunks']} chunks × "
-                 f"{dk['threads_s'] * 1e3:.2f} ms, is "
-                 f"{100 * sw['chunks'] * dk['threads_s'] / sw['sweep_s']:.2g} % of the sweep.")
+    lines.append(
+        f"Single-core C: {sw['single_core_points_per_s']:.3g} points/s "
+        f"({sw['single_core_before']:.3g} before, {sw['single_core_after']:.3g} after "
+        f"the sweep); the sweep: {sw['sweep_points_per_s']:.3g} points/s, using "
+        f"{sw['cores_obtained']:.2f} cores' worth of CPU time (load average "
+        f"{sw['load_average_before']:.1f} before, {sw['load_average_after']:.1f} after: "
+        f"other work shares the machine), at {100 * sw['cpu_efficiency']:.0f} % of the "
+        f"single-core rate per CPU second. Dask's overhead, {sw['chunks']} chunks × "
+        f"{dk['threads_s'] * 1e3:.2f} ms, is "
+        f"{100 * sw['chunks'] * dk['threads_s'] / sw['sweep_s']:.2g} % of the sweep."
+    )
     return lines
 
 
@@ -308,19 +373,25 @@ def targets(results: dict) -> list[dict]:
     sw = s["sweep"]
     sens = s["sensitivity"]
     return [
-        {"text": "a sensitivity evaluation ≤ 3× one deviation evaluation in C",
-         "met": all(r["ratio"] <= 3 for r in sens.values()),
-         "measured": ", ".join(f"{k} {r['ratio']:.2f}×" for k, r in sens.items())},
-        {"text": f"sweep throughput ≥ 70 % of {sw['workers']} × single-core C",
-         "met": sw["ratio_to_ideal"] >= 0.7,
-         "measured": f"{100 * sw['ratio_to_ideal']:.0f} %"},
-        {"text": "10^7 evaluations of the four-bar at exact in a sweep < 20 s",
-         "met": sw["points"] >= 10 ** 7 and sw["sweep_s"] < 20,
-         "measured": f"{sw['points']:.0e} in {sw['sweep_s']:.1f} s".replace("1e+07", "10^7")},
+        {
+            "text": "a sensitivity evaluation ≤ 3× one deviation evaluation in C",
+            "met": all(r["ratio"] <= 3 for r in sens.values()),
+            "measured": ", ".join(f"{k} {r['ratio']:.2f}×" for k, r in sens.items()),
+        },
+        {
+            "text": f"sweep throughput ≥ 70 % of {sw['workers']} × single-core C",
+            "met": sw["ratio_to_ideal"] >= 0.7,
+            "measured": f"{100 * sw['ratio_to_ideal']:.0f} %",
+        },
+        {
+            "text": "10^7 evaluations of the four-bar at exact in a sweep < 20 s",
+            "met": sw["points"] >= 10**7 and sw["sweep_s"] < 20,
+            "measured": f"{sw['points']:.0e} in {sw['sweep_s']:.1f} s".replace("1e+07", "10^7"),
+        },
     ]
 
 
-if __name__ == "__main__":                      # python benchmarks/sweeps.py [--smoke]
+if __name__ == "__main__":  # python benchmarks/sweeps.py [--smoke]
     import json
     import sys
 

@@ -9,7 +9,6 @@ import subprocess
 from pathlib import Path
 
 import numpy as np
-
 from common import C_FLAGS, EXACT
 
 HARNESS_C = r"""
@@ -48,11 +47,21 @@ def compile_c(workdir: Path, name: str, header: str, code: str) -> Path:
     (workdir / f"{name}.c").write_text(code)
     (workdir / "harness.c").write_text(HARNESS_C.format(name=name, NAME=name.upper()))
     for src in (f"{name}.c", "harness.c"):
-        subprocess.run([cc, *C_FLAGS, "-c", src, "-o", src + ".o"], cwd=workdir, check=True,
-                       capture_output=True, text=True)
+        subprocess.run(
+            [cc, *C_FLAGS, "-c", src, "-o", src + ".o"],
+            cwd=workdir,
+            check=True,
+            capture_output=True,
+            text=True,
+        )
     lib = workdir / f"lib{name}_bench.so"
-    subprocess.run([cc, "-shared", f"{name}.c.o", "harness.c.o", "-o", str(lib), "-lm"],
-                   cwd=workdir, check=True, capture_output=True, text=True)
+    subprocess.run(
+        [cc, "-shared", f"{name}.c.o", "harness.c.o", "-o", str(lib), "-lm"],
+        cwd=workdir,
+        check=True,
+        capture_output=True,
+        text=True,
+    )
     return lib
 
 
@@ -64,24 +73,39 @@ class CBench:
         d = ctypes.POINTER(ctypes.c_double)
         self.loop = self.lib.bench_loop
         self.loop.restype = ctypes.c_double
-        self.loop.argtypes = [d, ctypes.c_int, d, ctypes.c_int, ctypes.c_int, d,
-                              ctypes.POINTER(ctypes.c_int)]
+        self.loop.argtypes = [
+            d,
+            ctypes.c_int,
+            d,
+            ctypes.c_int,
+            ctypes.c_int,
+            d,
+            ctypes.POINTER(ctypes.c_int),
+        ]
         self.n_inputs, self.n_points = n_inputs, n_points
 
-    def run(self, x: np.ndarray, level: int = EXACT,
-            reps: int = 1) -> tuple[float, np.ndarray, int]:
+    def run(
+        self, x: np.ndarray, level: int = EXACT, reps: int = 1
+    ) -> tuple[float, np.ndarray, int]:
         """(seconds for reps x len(x) calls, measured in C; out (N, n_points, 6); failures)."""
         x = np.ascontiguousarray(x, dtype=float).reshape(-1, self.n_inputs)
         out = np.zeros((len(x), self.n_points, 6))
         fails = ctypes.c_int(0)
         d = ctypes.POINTER(ctypes.c_double)
-        secs = self.loop(x.ctypes.data_as(d), len(x), None, level, reps, out.ctypes.data_as(d),
-                         ctypes.byref(fails))
+        secs = self.loop(
+            x.ctypes.data_as(d),
+            len(x),
+            None,
+            level,
+            reps,
+            out.ctypes.data_as(d),
+            ctypes.byref(fails),
+        )
         return secs, out, fails.value
 
-    def per_point(self, x: np.ndarray, level: int = EXACT, min_time: float = 0.3,
-                  repeat: int = 3) -> float:
+    def per_point(
+        self, x: np.ndarray, level: int = EXACT, min_time: float = 0.3, repeat: int = 3
+    ) -> float:
         secs, _, _ = self.run(x, level, 1)
         reps = max(1, int(min_time / max(secs, 1e-9)))
         return min(self.run(x, level, reps)[0] for _ in range(repeat)) / (reps * len(x))
-

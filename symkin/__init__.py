@@ -19,10 +19,11 @@ from typing import TYPE_CHECKING
 
 from .core.errors import AssemblyError, InputError, SymkinError
 from .core.levels import DEFAULT
+from .graph.structure import Structure
+from .graph.structure import build as structure
 from .model.mechanism import Mechanism, load, loads
-from .graph.structure import Structure, build as structure
 
-if TYPE_CHECKING:                     # the heavy modules load on first use
+if TYPE_CHECKING:  # the heavy modules load on first use
     from .kinematics.analysis import Analysis
     from .studies.compiled import Compiled
     from .studies.evaluation import Evaluation
@@ -38,9 +39,15 @@ def analyze(mechanism: Mechanism | str | Path, points: list[str] | None = None) 
     return Analysis(structure(mech), points)
 
 
-def evaluate(analysis: Analysis, inputs: Mapping[str, object], level: str = DEFAULT,
-             params: Mapping[str, object] | None = None, backend: str = "sympy",
-             dps: int = 40, sensitivity: bool = False) -> Evaluation:
+def evaluate(
+    analysis: Analysis,
+    inputs: Mapping[str, object],
+    level: str = DEFAULT,
+    params: Mapping[str, object] | None = None,
+    backend: str = "sympy",
+    dps: int = 40,
+    sensitivity: bool = False,
+) -> Evaluation:
     """One configuration of an analysis (:func:`symkin.evaluation.evaluate`): the derivation with
     mpmath at `dps` digits (backend sympy) or the generated numpy / C evaluators; with
     `sensitivity`, the derivatives by every parameter and input too (docs/sensitivity.md)."""
@@ -49,9 +56,14 @@ def evaluate(analysis: Analysis, inputs: Mapping[str, object], level: str = DEFA
     return run(analysis, inputs, level, params, backend, dps, sensitivity)
 
 
-def compile(mechanism: Mechanism | Analysis | str | Path, backend: str = "c",  # noqa: A001
-            points: list[str] | None = None, levels: list[str] | None = None,
-            sensitivity: bool = True, fixed: Mapping[str, object] | None = None) -> Compiled:
+def compile(
+    mechanism: Mechanism | Analysis | str | Path,
+    backend: str = "c",
+    points: list[str] | None = None,
+    levels: list[str] | None = None,
+    sensitivity: bool = True,
+    fixed: Mapping[str, object] | None = None,
+) -> Compiled:
     """The generated evaluator of a mechanism, in memory, no files left behind
     (:func:`symkin.compiled.compile`): `evaluate`, `sensitivity` and `sensitivity_full` on
     arrays of inputs, one C call each; with `points`, only what moves them (docs/pruning.md);
@@ -61,5 +73,17 @@ def compile(mechanism: Mechanism | Analysis | str | Path, backend: str = "c",  #
     return build_evaluator(mechanism, backend, points, levels, sensitivity, fixed)
 
 
-__all__ = ["AssemblyError", "InputError", "Mechanism", "Structure", "SymkinError", "analyze",
-           "compile", "evaluate", "load", "loads", "structure", "__version__"]
+__all__ = [
+    "AssemblyError",
+    "InputError",
+    "Mechanism",
+    "Structure",
+    "SymkinError",
+    "__version__",
+    "analyze",
+    "compile",
+    "evaluate",
+    "load",
+    "loads",
+    "structure",
+]

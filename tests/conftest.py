@@ -9,5 +9,9 @@ EXAMPLES = ROOT / "examples"
 
 
 def pytest_addoption(parser):
-    parser.addoption("--update", action="store_true", default=False,
-                     help="rewrite generated/ from examples/ instead of comparing")
+    parser.addoption(
+        "--update",
+        action="store_true",
+        default=False,
+        help="rewrite generated/ from examples/ instead of comparing",
+    )

@@ -5,19 +5,19 @@ from __future__ import annotations
 import os
 import shutil
 
+import mechanisms as M
 import mpmath
 import pytest
-
-import mechanisms as M
-import symkin
 from conftest import EXAMPLES
-from symkin.core import levels
-from symkin.studies.evaluation import parameter_values
+
+import symkin
 from symkin.codegen import toolchain
 from symkin.codegen.backends.c import backend as c_backend
 from symkin.codegen.backends.numpy import backend as numpy_backend
 from symkin.codegen.plan import plan
 from symkin.codegen.toolchain import import_numpy_module
+from symkin.core import levels
+from symkin.studies.evaluation import parameter_values
 
 SOURCES = {
     "four_bar": EXAMPLES / "four_bar.toml",
@@ -68,8 +68,13 @@ class Generated:
             header, code = c_backend.emit(self.plan, "test")
             kin = self.analysis.kin
             self._lib = toolchain.Library(
-                toolchain.build(self.mech.name, header, code), self.mech.name,
-                len(kin.inputs), len(self.analysis.params), len(self.plan.points), len(kin.hinges))
+                toolchain.build(self.mech.name, header, code),
+                self.mech.name,
+                len(kin.inputs),
+                len(self.analysis.params),
+                len(self.plan.points),
+                len(kin.hinges),
+            )
         return self._lib
 
     def params(self, overrides=None):

@@ -9,6 +9,7 @@ def q(name: str) -> str:
     """A TOML basic string for any name (JSON's escapes are TOML's)."""
     return json.dumps(name)
 
+
 HEADER = """format = 1
 name = "{name}"
 [parameters]
@@ -24,67 +25,98 @@ def text(name: str, body: str, l: str = "1e-3", model: str = "circular_arc") -> 
 
 
 def links(*names: str) -> str:
-    return "".join(f'[[link]]\nname = {q(n)}\n' for n in names)
+    return "".join(f"[[link]]\nname = {q(n)}\n" for n in names)
 
 
-def hinge(name: str, p: str, m: str, x: float, y: float, angle: str = "0", extra: str = "",
-          input: bool = False) -> str:
-    return (f'[[hinge]]\nname = {q(name)}\nlinks = [{q(p)}, {q(m)}]\nat = [{x}, {y}]\n'
-            f'plate_angle = "{angle}"\n' + ("input = true\n" if input else "") + extra)
+def hinge(
+    name: str,
+    p: str,
+    m: str,
+    x: float,
+    y: float,
+    angle: str = "0",
+    extra: str = "",
+    input: bool = False,
+) -> str:
+    return (
+        f"[[hinge]]\nname = {q(name)}\nlinks = [{q(p)}, {q(m)}]\nat = [{x}, {y}]\n"
+        f'plate_angle = "{angle}"\n' + ("input = true\n" if input else "") + extra
+    )
 
 
 def point(name: str, link: str, x: float, y: float) -> str:
-    return f'[[point]]\nname = {q(name)}\nlink = {q(link)}\nat = [{x}, {y}]\n'
+    return f"[[point]]\nname = {q(name)}\nlink = {q(link)}\nat = [{x}, {y}]\n"
 
 
-SERIAL_ARM = text("serial_arm", links("base", "upper", "fore")
-                  + hinge("S", "base", "upper", 0.0, 0.0, "pi/2", input=True)
-                  + hinge("E", "upper", "fore", 0.0, 0.08, "pi/3", 'model = "prbm"\n',
-                          input=True)
-                  + point("T", "fore", 0.05, 0.12))
+SERIAL_ARM = text(
+    "serial_arm",
+    links("base", "upper", "fore")
+    + hinge("S", "base", "upper", 0.0, 0.0, "pi/2", input=True)
+    + hinge("E", "upper", "fore", 0.0, 0.08, "pi/3", 'model = "prbm"\n', input=True)
+    + point("T", "fore", 0.05, 0.12),
+)
 
-FIVE_BAR = text("five_bar", links("ground", "left", "left_top", "right_top", "right")
-                + hinge("O1", "ground", "left", 0.0, 0.0, "pi/2", input=True)
-                + hinge("O2", "right", "ground", 0.08, 0.0, "pi/2", input=True)
-                + hinge("A", "left", "left_top", -0.01, 0.05, "0", 'model = "small_deflection"\n')
-                + hinge("B", "right_top", "right", 0.095, 0.05, "pi/4")
-                + hinge("P", "left_top", "right_top", 0.04, 0.09, "-pi/6",
-                        'model = "prbm"\npreset = "moment"\n')
-                + point("P_tip", "left_top", 0.04, 0.09))
+FIVE_BAR = text(
+    "five_bar",
+    links("ground", "left", "left_top", "right_top", "right")
+    + hinge("O1", "ground", "left", 0.0, 0.0, "pi/2", input=True)
+    + hinge("O2", "right", "ground", 0.08, 0.0, "pi/2", input=True)
+    + hinge("A", "left", "left_top", -0.01, 0.05, "0", 'model = "small_deflection"\n')
+    + hinge("B", "right_top", "right", 0.095, 0.05, "pi/4")
+    + hinge(
+        "P", "left_top", "right_top", 0.04, 0.09, "-pi/6", 'model = "prbm"\npreset = "moment"\n'
+    )
+    + point("P_tip", "left_top", 0.04, 0.09),
+)
 
-WATT_II = text("watt_ii", links("ground", "crank", "coupler", "rocker", "coupler2", "output")
-               + hinge("O1", "ground", "crank", 0.0, 0.0, "pi/2", input=True)
-               + hinge("A", "crank", "coupler", 0.015, 0.025, "0")
-               + hinge("O3", "ground", "rocker", 0.1, 0.0, "pi/2")
-               + hinge("B", "coupler", "rocker", 0.09, 0.065, "pi/3", 'model = "prbm"\n')
-               + hinge("C", "rocker", "coupler2", 0.13, 0.05, "0", 'model = "rigid"\n')
-               + hinge("O5", "ground", "output", 0.2, 0.0, "pi/2",
-                       'model = "expr"\nf = "l*sin(theta)/theta"\n'
-                       'g = "l*(1 - cos(theta))/theta"\n')
-               + hinge("D", "coupler2", "output", 0.19, 0.07, "pi/2")
-               + point("Q", "coupler2", 0.16, 0.09))
+WATT_II = text(
+    "watt_ii",
+    links("ground", "crank", "coupler", "rocker", "coupler2", "output")
+    + hinge("O1", "ground", "crank", 0.0, 0.0, "pi/2", input=True)
+    + hinge("A", "crank", "coupler", 0.015, 0.025, "0")
+    + hinge("O3", "ground", "rocker", 0.1, 0.0, "pi/2")
+    + hinge("B", "coupler", "rocker", 0.09, 0.065, "pi/3", 'model = "prbm"\n')
+    + hinge("C", "rocker", "coupler2", 0.13, 0.05, "0", 'model = "rigid"\n')
+    + hinge(
+        "O5",
+        "ground",
+        "output",
+        0.2,
+        0.0,
+        "pi/2",
+        'model = "expr"\nf = "l*sin(theta)/theta"\ng = "l*(1 - cos(theta))/theta"\n',
+    )
+    + hinge("D", "coupler2", "output", 0.19, 0.07, "pi/2")
+    + point("Q", "coupler2", 0.16, 0.09),
+)
 
-TRIAD_SIX_BAR = text("triad_six_bar", links("ground", "crank", "link1", "tri", "link2", "link3")
-                     + hinge("O1", "ground", "crank", 0.0, 0.0, "pi/2", input=True)
-                     + hinge("A", "crank", "link1", 0.02, 0.02, "0")
-                     + hinge("B", "link1", "tri", 0.06, 0.05, "pi/4",
-                             'model = "elastica_force"\n')
-                     + hinge("C", "tri", "link2", 0.1, 0.07, "0")
-                     + hinge("O4", "ground", "link2", 0.14, 0.01, "pi/2")
-                     + hinge("D", "tri", "link3", 0.08, 0.1, "pi/2")
-                     + hinge("O5", "ground", "link3", 0.03, 0.12, "0")
-                     + point("T", "tri", 0.09, 0.08))
+TRIAD_SIX_BAR = text(
+    "triad_six_bar",
+    links("ground", "crank", "link1", "tri", "link2", "link3")
+    + hinge("O1", "ground", "crank", 0.0, 0.0, "pi/2", input=True)
+    + hinge("A", "crank", "link1", 0.02, 0.02, "0")
+    + hinge("B", "link1", "tri", 0.06, 0.05, "pi/4", 'model = "elastica_force"\n')
+    + hinge("C", "tri", "link2", 0.1, 0.07, "0")
+    + hinge("O4", "ground", "link2", 0.14, 0.01, "pi/2")
+    + hinge("D", "tri", "link3", 0.08, 0.1, "pi/2")
+    + hinge("O5", "ground", "link3", 0.03, 0.12, "0")
+    + point("T", "tri", 0.09, 0.08),
+)
 
-NON_GRASHOF = text("non_grashof", links("frame", "crank", "coupler", "rocker")
-                   + hinge("A0", "frame", "crank", 0.0, 0.0, "pi/2", input=True)
-                   + hinge("A", "crank", "coupler", 0.0, 0.06, "0")
-                   + hinge("B0", "frame", "rocker", 0.1, 0.0, "pi/2")
-                   + hinge("B", "coupler", "rocker", 0.08, 0.05, "0")
-                   + point("C", "coupler", 0.04, 0.08))
+NON_GRASHOF = text(
+    "non_grashof",
+    links("frame", "crank", "coupler", "rocker")
+    + hinge("A0", "frame", "crank", 0.0, 0.0, "pi/2", input=True)
+    + hinge("A", "crank", "coupler", 0.0, 0.06, "0")
+    + hinge("B0", "frame", "rocker", 0.1, 0.0, "pi/2")
+    + hinge("B", "coupler", "rocker", 0.08, 0.05, "0")
+    + point("C", "coupler", 0.04, 0.08),
+)
 
 # The four-bar with its geometry in parameters: a dependent default (L2 = 2*l), a PRBM plate
 # whose gamma and direction are parameters, a point placed by parameters (sensitivity tests).
-PARAM_FOUR_BAR = """format = 1
+PARAM_FOUR_BAR = (
+    """format = 1
 name = "param_four_bar"
 [parameters]
 l = 1e-3
@@ -99,13 +131,16 @@ cx = 0.06
 [defaults]
 model = "circular_arc"
 length = "l"
-""" + links("frame", "crank", "coupler", "rocker") + \
-    hinge("A0", "frame", "crank", 0.0, 0.0, "pi/2", input=True) + \
-    '[[hinge]]\nname = "A"\nlinks = ["crank", "coupler"]\nat = ["ax", "ay"]\n' \
-    'plate_angle = "tilt"\nmodel = "prbm"\ngamma = "g"\nlength = "L2"\n' + \
-    hinge("B0", "frame", "rocker", 0.1, 0.0, "pi/2") + \
-    '[[hinge]]\nname = "B"\nlinks = ["coupler", "rocker"]\nat = ["bx", "by"]\n' + \
-    '[[point]]\nname = "C"\nlink = "coupler"\nat = ["cx", "0.064 + ay"]\n'
+"""
+    + links("frame", "crank", "coupler", "rocker")
+    + hinge("A0", "frame", "crank", 0.0, 0.0, "pi/2", input=True)
+    + '[[hinge]]\nname = "A"\nlinks = ["crank", "coupler"]\nat = ["ax", "ay"]\n'
+    'plate_angle = "tilt"\nmodel = "prbm"\ngamma = "g"\nlength = "L2"\n'
+    + hinge("B0", "frame", "rocker", 0.1, 0.0, "pi/2")
+    + '[[hinge]]\nname = "B"\nlinks = ["coupler", "rocker"]\nat = ["bx", "by"]\n'
+    + '[[point]]\nname = "C"\nlink = "coupler"\nat = ["cx", "0.064 + ay"]\n'
+)
+
 
 def without_stiffness(path) -> str:
     """An example file's text without the plates' E, thickness and width (for tests that set

@@ -85,17 +85,24 @@ carry α ~ θ·l/L ≪ 1, the cantilever tables go to α = 10.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from operator import mul
-from typing import Any, Mapping, Sequence
+from typing import Any
 
 import mpmath
 import sympy as sp
-
 from reference_solver import Reference
 
-__all__ = ["Load", "Equilibrium", "ChainEquilibrium", "PhysicsError", "ContinuationError",
-           "InstabilityError", "point_load"]
+__all__ = [
+    "ChainEquilibrium",
+    "ContinuationError",
+    "Equilibrium",
+    "InstabilityError",
+    "Load",
+    "PhysicsError",
+    "point_load",
+]
 
 
 class PhysicsError(RuntimeError):
@@ -143,7 +150,7 @@ def _mpf(expr, dps: int) -> mpmath.mpf:
     if isinstance(expr, mpmath.mpf):
         return +expr
     if isinstance(expr, float):
-        expr = repr(expr)                    # the decimal the user wrote, like the file reader
+        expr = repr(expr)  # the decimal the user wrote, like the file reader
     if isinstance(expr, (int, str)):
         return mpmath.mpf(expr)
     expr = sp.sympify(expr)
@@ -164,14 +171,27 @@ def _cross(a, b):
 
 
 class _Plate:
-    __slots__ = ("name", "p", "m", "alpha", "u", "l", "at", "cp0", "cm0", "EI", "eps", "pin",
-                 "input")
+    __slots__ = (
+        "EI",
+        "alpha",
+        "at",
+        "cm0",
+        "cp0",
+        "eps",
+        "input",
+        "l",
+        "m",
+        "name",
+        "p",
+        "pin",
+        "u",
+    )
 
 
 class _Mech:
     """The mechanism's numbers at one precision (geometry, stiffness, loads)."""
 
-    def __init__(self, owner: "_Base", dps: int):
+    def __init__(self, owner: _Base, dps: int):
         with mpmath.workdps(dps):
             self.dps = dps
             num = owner._num
@@ -188,16 +208,26 @@ class _Mech:
                 r.pin = h.model == "rigid"
                 r.EI = None if r.pin else num(owner._ei[h.name], dps)
                 # EI/(EA·l²) = t²/(12 l²) of an extensible plate, 0 when inextensible
-                r.eps = (num(owner._ea_ratio[h.name], dps) / r.l ** 2
-                         if owner.extensible and not r.pin else 0)
+                r.eps = (
+                    num(owner._ea_ratio[h.name], dps) / r.l**2
+                    if owner.extensible and not r.pin
+                    else 0
+                )
                 self.hinges.append(r)
             self.plates = [r for r in self.hinges if not r.pin]
             self.pins = [r for r in self.hinges if r.pin]
-            self.points = {p.name: (p.link, (num(p.at[0], dps), num(p.at[1], dps)))
-                           for p in owner.mech.points}
-            self.loads = [(ld.link, (num(ld.at[0], dps), num(ld.at[1], dps)),
-                           (num(ld.force[0], dps), num(ld.force[1], dps)), num(ld.moment, dps))
-                          for ld in owner.loads]
+            self.points = {
+                p.name: (p.link, (num(p.at[0], dps), num(p.at[1], dps))) for p in owner.mech.points
+            }
+            self.loads = [
+                (
+                    ld.link,
+                    (num(ld.at[0], dps), num(ld.at[1], dps)),
+                    (num(ld.force[0], dps), num(ld.force[1], dps)),
+                    num(ld.moment, dps),
+                )
+                for ld in owner.loads
+            ]
             coords = [abs(c) for r in self.hinges for c in (*r.cp0, *r.cm0)]
             coords += [abs(c) for _, xy in self.points.values() for c in xy]
             self.scale = max(coords + [r.l for r in self.hinges])
@@ -214,11 +244,17 @@ class _Base:
 
     method = "?"
 
-    def __init__(self, mech, stiffness: Mapping | tuple, loads: Sequence = (),
-                 params: Mapping | None = None, extensible: bool = False) -> None:
+    def __init__(
+        self,
+        mech,
+        stiffness: Mapping | tuple,
+        loads: Sequence = (),
+        params: Mapping | None = None,
+        extensible: bool = False,
+    ) -> None:
         self.mech = mech
         self.extensible = extensible
-        self.kinematic = Reference(mech, params)      # parameter values + the rigid pin linkage
+        self.kinematic = Reference(mech, params)  # parameter values + the rigid pin linkage
         self.values = self.kinematic.values
         self.ground = mech.ground
         self.moving = [lk.name for lk in mech.links if lk.name != mech.ground]
@@ -233,8 +269,8 @@ class _Base:
             if h.name not in stiffness:
                 raise KeyError(f"hinge {h.name!r} is a plate: give its (E, width, thickness)")
             E, b, t = (self._expr(v, names) for v in stiffness[h.name])
-            self._ei[h.name] = E * b * t ** 3 / 12
-            self._ea_ratio[h.name] = t ** 2 / 12            # EI/EA
+            self._ei[h.name] = E * b * t**3 / 12
+            self._ea_ratio[h.name] = t**2 / 12  # EI/EA
         unknown = set(stiffness) - set(self._ei)
         if unknown:
             raise KeyError(f"stiffness given for {sorted(unknown)}, which are not plates")
@@ -244,16 +280,24 @@ class _Base:
             if ld.link not in self.link_index and ld.link != self.ground:
                 raise KeyError(f"load on unknown link {ld.link!r}")
             # every number as an exact sympy value (floats as the decimal they print as)
-            self.loads.append(Load(ld.link, tuple(self._expr(v, names) for v in ld.at),
-                                   tuple(self._expr(v, names) for v in ld.force),
-                                   self._expr(ld.moment, names)))
+            self.loads.append(
+                Load(
+                    ld.link,
+                    tuple(self._expr(v, names) for v in ld.at),
+                    tuple(self._expr(v, names) for v in ld.force),
+                    self._expr(ld.moment, names),
+                )
+            )
         self._cache: dict[int, _Mech] = {}
 
     def _expr(self, value, names):
         if isinstance(value, float):
             value = repr(value)
-        expr = sp.sympify(value, locals=names, rational=True) if isinstance(value, str) \
+        expr = (
+            sp.sympify(value, locals=names, rational=True)
+            if isinstance(value, str)
             else sp.sympify(value)
+        )
         return expr.subs(self.values)
 
     def _num(self, expr, dps):
@@ -272,8 +316,10 @@ class _Base:
         if unknown:
             raise KeyError(f"{unknown} are not input hinges; inputs: {names}")
         with mpmath.workdps(dps):
-            return {k: (None if inputs.get(k, 0) is None else _mpf(inputs.get(k, 0), dps))
-                    for k in names}
+            return {
+                k: (None if inputs.get(k, 0) is None else _mpf(inputs.get(k, 0), dps))
+                for k in names
+            }
 
     # -- the rigid reference and the deviation --------------------------------------------
     def _rigid(self, targets: dict, dps: int) -> dict:
@@ -298,7 +344,7 @@ class _Base:
             pts[name] = {"rigid": r, "compliant": c, "deviation": d}
             mag = mpmath.sqrt(d[0] ** 2 + d[1] ** 2)
             if mag > 0:
-                lost = max(lost, int(math.ceil(float(mpmath.log10(nums.scale / mag)))))
+                lost = max(lost, math.ceil(float(mpmath.log10(nums.scale / mag))))
         return pts, lost
 
 
@@ -320,8 +366,9 @@ def _horner(cs: list, h: int, bits: int) -> int:
     return acc
 
 
-def shoot(u0, mu0, fx, fy, bits: int, jac: bool = True, energy: bool = False,
-          eps=0, kmax: int = 60) -> tuple:
+def shoot(
+    u0, mu0, fx, fy, bits: int, jac: bool = True, energy: bool = False, eps=0, kmax: int = 60
+) -> tuple:
     """Integrate one plate over σ ∈ [0, 1] from ψ(0) = u0, ψ'(0) = mu0, x = y = 0:
 
         ψ'' = (1 + e)(f_x sin ψ − f_y cos ψ),   (x, y)' = (1 + e)(cos ψ, sin ψ),
@@ -342,22 +389,22 @@ def shoot(u0, mu0, fx, fy, bits: int, jac: bool = True, energy: bool = False,
     A2 = (FX * FX - FY * FY) >> bits
     B2 = (FX * FY) >> bits
     nd = 4 if jac else 0
-    V = [one if p == 0 else 0 for p in range(nd)]      # ∂ψ/∂p
-    VP = [one if p == 1 else 0 for p in range(nd)]     # ∂ψ'/∂p
+    V = [one if p == 0 else 0 for p in range(nd)]  # ∂ψ/∂p
+    VP = [one if p == 1 else 0 for p in range(nd)]  # ∂ψ'/∂p
     DX, DY = [0] * nd, [0] * nd
-    W = 0                                              # ∫ψ'² + ε n_t² dσ
+    W = 0  # ∫ψ'² + ε n_t² dσ
     sig, steps = 0, 0
 
     def conv(a, b, k):
-        return sum(map(mul, a[:k + 1], b[k::-1])) >> bits
+        return sum(map(mul, a[: k + 1], b[k::-1])) >> bits
 
     while sig < one:
         H = one - sig
         lh = math.log2(H) - bits
         cu, su = mpmath.cos(_unfix(U, bits)), mpmath.sin(_unfix(U, bits))
         u, C, S = [U, MU], [_fix(cu, bits)], [_fix(su, bits)]
-        cc, sc = [], []                                # series of cos²ψ and sin ψ cos ψ
-        ju = [0, MU]                                   # j·u_j
+        cc, sc = [], []  # series of cos²ψ and sin ψ cos ψ
+        ju = [0, MU]  # j·u_j
         xs, ys = [X], [Y]
         v = [[V[p], VP[p]] for p in range(nd)]
         dxs = [[DX[p]] for p in range(nd)]
@@ -372,7 +419,7 @@ def shoot(u0, mu0, fx, fy, bits: int, jac: bool = True, energy: bool = False,
             if EPS:
                 cc.append(conv(C, C, k))
                 sc.append(conv(S, C, k))
-                num += (EPS * ((A2 * sc[k] + B2 * (delta - 2 * cc[k])) >> bits))
+                num += EPS * ((A2 * sc[k] + B2 * (delta - 2 * cc[k])) >> bits)
                 dx_k += EPS * ((FX * cc[k] + FY * sc[k]) >> bits)
                 dy_k += EPS * ((FX * sc[k] + FY * (delta - cc[k])) >> bits)
             u.append(num // d)
@@ -381,8 +428,8 @@ def shoot(u0, mu0, fx, fy, bits: int, jac: bool = True, energy: bool = False,
             ys.append(dy_k // ((k + 1) << bits))
             for p in range(nd):
                 vp = v[p]
-                P = conv(C, vp, k)                     # (cos ψ · v)_k
-                Q = conv(S, vp, k)                     # (sin ψ · v)_k
+                P = conv(C, vp, k)  # (cos ψ · v)_k
+                Q = conv(S, vp, k)  # (sin ψ · v)_k
                 num = FX * P + FY * Q
                 ddx, ddy = -Q << bits, P << bits
                 if p == 2:
@@ -390,14 +437,14 @@ def shoot(u0, mu0, fx, fy, bits: int, jac: bool = True, energy: bool = False,
                 elif p == 3:
                     num -= C[k] << bits
                 if EPS:
-                    Pc = conv(cc, vp, k)               # (cos²ψ · v)_k
-                    Ps = conv(sc, vp, k)               # (sin ψ cos ψ · v)_k
-                    dsc = 2 * Pc - vp[k]               # ∂(sin ψ cos ψ) = (2cos²ψ − 1) v
-                    dcc = -2 * Ps                      # ∂(cos²ψ) = −2 sin ψ cos ψ v
+                    Pc = conv(cc, vp, k)  # (cos²ψ · v)_k
+                    Ps = conv(sc, vp, k)  # (sin ψ cos ψ · v)_k
+                    dsc = 2 * Pc - vp[k]  # ∂(sin ψ cos ψ) = (2cos²ψ − 1) v
+                    dcc = -2 * Ps  # ∂(cos²ψ) = −2 sin ψ cos ψ v
                     e = A2 * dsc - 2 * B2 * dcc
                     ex = FX * dcc + FY * dsc
                     ey = FX * dsc - FY * dcc
-                    if p == 2:                         # ∂/∂fx of A2 = 2fx, B2 = fy
+                    if p == 2:  # ∂/∂fx of A2 = 2fx, B2 = fy
                         e += 2 * FX * sc[k] + FY * (delta - 2 * cc[k])
                         ex += cc[k] << bits
                         ey += sc[k] << bits
@@ -413,8 +460,8 @@ def shoot(u0, mu0, fx, fy, bits: int, jac: bool = True, energy: bool = False,
                 dys[p].append(ddy // ((k + 1) << bits))
             k += 1
             # (sin ψ)' = cos ψ · ψ',  (cos ψ)' = −sin ψ · ψ'
-            C.append(-(sum(map(mul, ju[1:k + 1], reversed(S))) // (k << bits)))
-            S.append(sum(map(mul, ju[1:k + 1], reversed(C[:k]))) // (k << bits))
+            C.append(-(sum(map(mul, ju[1 : k + 1], reversed(S))) // (k << bits)))
+            S.append(sum(map(mul, ju[1 : k + 1], reversed(C[:k]))) // (k << bits))
             if k >= 4:
                 worst = -math.inf
                 for seq in (u, C, S, *v):
@@ -453,8 +500,11 @@ def shoot(u0, mu0, fx, fy, bits: int, jac: bool = True, energy: bool = False,
                     sc.append(conv(S, C, len(sc)))
                 for i in range(min(n, len(C))):
                     delta = one if i == 0 else 0
-                    nt2 = ((FX * FX >> bits) * cc[i] + 2 * B2 * sc[i]
-                           + (FY * FY >> bits) * (delta - cc[i])) >> bits
+                    nt2 = (
+                        (FX * FX >> bits) * cc[i]
+                        + 2 * B2 * sc[i]
+                        + (FY * FY >> bits) * (delta - cc[i])
+                    ) >> bits
                     sq[i] += (EPS * nt2) >> bits
             W += _horner([0] + [sq[i] // (i + 1) for i in range(n)], h, bits)
         U, MU = Un, MUn
@@ -537,8 +587,11 @@ class _Continuation:
         lam = mpmath.mpf(0)
         res = self._newton(state, lam, tol_mid)
         if res is None:
-            raise ContinuationError(f"{self.mech.name}: the as-fabricated pose is not a regular "
-                                    "solution (singular at λ = 0)", 0.0)
+            raise ContinuationError(
+                f"{self.mech.name}: the as-fabricated pose is not a regular "
+                "solution (singular at λ = 0)",
+                0.0,
+            )
         state, info = res
         mark0 = self._stability(info)
         self._check_start(info)
@@ -554,7 +607,8 @@ class _Continuation:
                 raise ContinuationError(
                     f"{self.mech.name}: continuation too slow, λ = {float(lam):.9g} after "
                     f"{steps + rejected} steps (last rejection: {last_reason or 'none'})",
-                    float(lam))
+                    float(lam),
+                )
             new = min(mpmath.mpf(1), lam + dlam)
             tan = self._tangent(state, lam, info)
             pred = state if tan is None else [a + (new - lam) * b for a, b in zip(state, tan)]
@@ -578,10 +632,13 @@ class _Continuation:
                     if "stability" in last_reason or hinge:
                         raise InstabilityError(
                             f"{self.mech.name}: equilibrium path lost stability{where} at load "
-                            f"factor λ = {lf:.9g} ({last_reason})", lf, hinge)
+                            f"factor λ = {lf:.9g} ({last_reason})",
+                            lf,
+                            hinge,
+                        )
                     raise ContinuationError(
-                        f"{self.mech.name}: continuation stuck at λ = {lf:.9g} ({last_reason})",
-                        lf)
+                        f"{self.mech.name}: continuation stuck at λ = {lf:.9g} ({last_reason})", lf
+                    )
                 continue
             state, info = res
             lam = new
@@ -617,8 +674,9 @@ class _Solver(_Base, _Continuation):
         with mpmath.workdps(dps):
             self._set(dps, targets, _mpf(load_factor, dps))
             span = max([float(abs(v)) for v in targets.values() if v is not None] + [0.0])
-            state, _, cont = self._continue(self._zero(), span, bool(self.loads),
-                                            mpmath.mpf(10) ** -12)
+            state, _, cont = self._continue(
+                self._zero(), span, bool(self.loads), mpmath.mpf(10) ** -12
+            )
             _, lost = self._deviation(self._points(state), self._rigid(targets, dps))
         target_dps = max(dps, lost + min_digits + 10)
         return self._final(state, inputs, load_factor, target_dps, cont)
@@ -671,8 +729,9 @@ class Equilibrium(_Solver):
         return X[c], X[c + 1], X[c + 2]
 
     def _points(self, X):
-        return self._point_positions({lk.name: self._pose(X, lk.name) for lk in self.mech.links},
-                                     self.nums)
+        return self._point_positions(
+            {lk.name: self._pose(X, lk.name) for lk in self.mech.links}, self.nums
+        )
 
     @staticmethod
     def _bits():
@@ -687,7 +746,7 @@ class Equilibrium(_Solver):
         J = [[zero] * n for _ in range(n)]
         dR = [zero] * n
         Fr, L, Tr = nums.force_ref, nums.scale, nums.torque_ref
-        bal = {name: 3 * i for i, name in enumerate(self.moving)}   # rows of link balances
+        bal = {name: 3 * i for i, name in enumerate(self.moving)}  # rows of link balances
         # rows: 3 balances per moving link, then 3 closures per plate, 2 per pin, 1 per actuator
 
         def col(link):
@@ -730,23 +789,24 @@ class Equilibrium(_Solver):
             rm = _rot(pm, r.cm0)
             rPc = (xp + rp[0], yp + rp[1])
             rMc = (xm + rm[0], ym + rm[1])
-            (u1, x1, y1, mu1), Js, W, _ = shoot(pp + r.alpha, mu0, fx, fy, bits, True, energy,
-                                                eps=r.eps)
+            (u1, x1, y1, mu1), Js, W, _ = shoot(
+                pp + r.alpha, mu0, fx, fy, bits, True, energy, eps=r.eps
+            )
             shots[r.name] = (u1, mu1, Js)
             l, EI = r.l, r.EI
             if energy:
                 energy_total += EI / (2 * l) * W
-            rw = 3 * i + 3 * len(self.moving)                       # closure rows
+            rw = 3 * i + 3 * len(self.moving)  # closure rows
             # closure: (rPc + l·(x1, y1) − rMc)/l = 0 and ψ(1) − φ_M − α = 0
             R[rw] = (rPc[0] + l * x1 - rMc[0]) / l
             R[rw + 1] = (rPc[1] + l * y1 - rMc[1]) / l
             R[rw + 2] = u1 - pm - r.alpha
-            for k in range(3):                                     # rows x, y, ψ
-                src = (1, 2, 0)[k]                                 # shoot outputs (ψ, x, y, μ)
+            for k in range(3):  # rows x, y, ψ
+                src = (1, 2, 0)[k]  # shoot outputs (ψ, x, y, μ)
                 J[rw + k][cu] += Js[src][1]
                 J[rw + k][cu + 1] += Js[src][2]
                 J[rw + k][cu + 2] += Js[src][3]
-                if cP is not None:                                 # ψ(0) = φ_P + α
+                if cP is not None:  # ψ(0) = φ_P + α
                     J[rw + k][cP + 2] += Js[src][0]
             if cP is not None:
                 J[rw][cP] += 1 / l
@@ -761,7 +821,7 @@ class Equilibrium(_Solver):
                 J[rw + 2][cM + 2] -= 1
             # loads on the links: P gets +F at its clamp and the moment m(0) = EI·μ0/l,
             # M gets −F at its clamp and −m(1) = −EI·μ(1)/l
-            fs = EI / l ** 2
+            fs = EI / l**2
             F = (fx * fs, fy * fs)
             dF = [(cu + 1, fs, zero), (cu + 2, zero, fs)]
             if cP is not None:
@@ -770,10 +830,14 @@ class Equilibrium(_Solver):
             if cM is not None:
                 negF = (-F[0], -F[1])
                 ndF = [(cu + 1, -fs, zero), (cu + 2, zero, -fs)]
-                add_force(r.m, negF, rMc, ndF,
-                          [(cM, 1, 0), (cM + 1, 0, 1), (cM + 2, -rm[1], rm[0])])
-                dmu1 = [(cu, -EI / l * Js[3][1]), (cu + 1, -EI / l * Js[3][2]),
-                        (cu + 2, -EI / l * Js[3][3])]
+                add_force(
+                    r.m, negF, rMc, ndF, [(cM, 1, 0), (cM + 1, 0, 1), (cM + 2, -rm[1], rm[0])]
+                )
+                dmu1 = [
+                    (cu, -EI / l * Js[3][1]),
+                    (cu + 1, -EI / l * Js[3][2]),
+                    (cu + 2, -EI / l * Js[3][3]),
+                ]
                 if cP is not None:
                     dmu1.append((cP + 2, -EI / l * Js[3][0]))
                 add_moment(r.m, -EI * mu1 / l, dmu1)
@@ -793,16 +857,25 @@ class Equilibrium(_Solver):
                 J[rw + 1][cP + 1] += 1 / L
                 J[rw][cP + 2] += -ap[1] / L
                 J[rw + 1][cP + 2] += ap[0] / L
-                add_force(r.p, G, (xp + ap[0], yp + ap[1]), [(cg, Fr, zero), (cg + 1, zero, Fr)],
-                          [(cP, 1, 0), (cP + 1, 0, 1), (cP + 2, -ap[1], ap[0])])
+                add_force(
+                    r.p,
+                    G,
+                    (xp + ap[0], yp + ap[1]),
+                    [(cg, Fr, zero), (cg + 1, zero, Fr)],
+                    [(cP, 1, 0), (cP + 1, 0, 1), (cP + 2, -ap[1], ap[0])],
+                )
             if cM is not None:
                 J[rw][cM] -= 1 / L
                 J[rw + 1][cM + 1] -= 1 / L
                 J[rw][cM + 2] -= -am[1] / L
                 J[rw + 1][cM + 2] -= am[0] / L
-                add_force(r.m, (-G[0], -G[1]), (xm + am[0], ym + am[1]),
-                          [(cg, -Fr, zero), (cg + 1, zero, -Fr)],
-                          [(cM, 1, 0), (cM + 1, 0, 1), (cM + 2, -am[1], am[0])])
+                add_force(
+                    r.m,
+                    (-G[0], -G[1]),
+                    (xm + am[0], ym + am[1]),
+                    [(cg, -Fr, zero), (cg + 1, zero, -Fr)],
+                    [(cM, 1, 0), (cM + 1, 0, 1), (cM + 2, -am[1], am[0])],
+                )
         base += 2 * len(nums.pins)
         for i, r in enumerate(self.actuated):
             ct = self.c_act + i
@@ -848,10 +921,7 @@ class Equilibrium(_Solver):
         n3 = 3 * len(self.moving)
         out = mpmath.mpf(0)
         for i, v in enumerate(d):
-            if i < n3:
-                scaled = abs(v) / L if i % 3 != 2 else abs(v)
-            else:
-                scaled = abs(v) / (1 + abs(X[i]))
+            scaled = (abs(v) / L if i % 3 != 2 else abs(v)) if i < n3 else abs(v) / (1 + abs(X[i]))
             out = max(out, scaled)
         return out
 
@@ -859,7 +929,7 @@ class Equilibrium(_Solver):
         X = list(X)
         last = None
         for it in range(max_iter):
-            R, J, dR, shots, _ = self._system(X, lam)
+            R, J, dR, _shots, _ = self._system(X, lam)
             try:
                 lu = _LU(J)
             except ZeroDivisionError:
@@ -872,7 +942,7 @@ class Equilibrium(_Solver):
             if step <= tol:
                 return X, {"sign": lu.sign, "lu": lu, "dR": dR}
             if last is not None and step > last / 2 and it >= 2:
-                if step <= tol * 10 ** 6:            # rounding floor of an ill-conditioned J
+                if step <= tol * 10**6:  # rounding floor of an ill-conditioned J
                     return X, {"sign": lu.sign, "lu": lu, "dR": dR}
                 if step > last:
                     return None
@@ -898,7 +968,7 @@ class Equilibrium(_Solver):
 
     def _critical(self, X, lam):
         """The plate carrying most of the critical mode (inverse iteration on J), if one does."""
-        R, J, dR, shots, _ = self._system(X, lam)
+        _R, J, _dR, shots, _ = self._system(X, lam)
         try:
             lu = _LU(J)
         except ZeroDivisionError:
@@ -913,8 +983,7 @@ class Equilibrium(_Solver):
             cu = self.c_plate + 3 * i
             Js = shots[r.name][2]
             du0 = v[3 * self.link_index[r.p] + 2] if r.p != self.ground else 0
-            dmu1 = (Js[3][0] * du0 + Js[3][1] * v[cu] + Js[3][2] * v[cu + 1]
-                    + Js[3][3] * v[cu + 2])
+            dmu1 = Js[3][0] * du0 + Js[3][1] * v[cu] + Js[3][2] * v[cu + 1] + Js[3][3] * v[cu + 2]
             share[r.name] = abs(v[cu]) + abs(dmu1)
         total = sum(share.values())
         if not total:
@@ -932,33 +1001,47 @@ class Equilibrium(_Solver):
                 self._layout()
                 res = self._newton([+x for x in state], mpmath.mpf(1), mpmath.mpf(10) ** (8 - d))
                 if res is None:
-                    raise ContinuationError(f"{self.mech.name}: Newton failed polishing at {d} "
-                                            "digits", 1.0)
+                    raise ContinuationError(
+                        f"{self.mech.name}: Newton failed polishing at {d} digits", 1.0
+                    )
                 state = res[0]
                 out.append(self._result(state, targets, d, cont, res[1]))
         return _with_error_estimate(out[0], out[1])
 
     def _result(self, X, targets, dps, cont, info):
         nums = self.nums
-        R, J, dR, shots, energy = self._system(X, mpmath.mpf(1), energy=True)
+        _R, _J, _dR, shots, energy = self._system(X, mpmath.mpf(1), energy=True)
         poses = {lk.name: self._pose(X, lk.name) for lk in self.mech.links}
         pts, _ = self._deviation(self._points(X), self._rigid(targets, dps))
         hinges = {}
         for i, r in enumerate(nums.plates):
             cu = self.c_plate + 3 * i
-            fs = r.EI / r.l ** 2
-            hinges[r.name] = {"moment": r.EI / r.l * shots[r.name][1],
-                              "force": (X[cu + 1] * fs, X[cu + 2] * fs)}
+            fs = r.EI / r.l**2
+            hinges[r.name] = {
+                "moment": r.EI / r.l * shots[r.name][1],
+                "force": (X[cu + 1] * fs, X[cu + 2] * fs),
+            }
         for i, r in enumerate(nums.pins):
             cg = self.c_pin + 2 * i
-            hinges[r.name] = {"moment": mpmath.mpf(0),
-                              "force": (X[cg] * nums.force_ref, X[cg + 1] * nums.force_ref)}
+            hinges[r.name] = {
+                "moment": mpmath.mpf(0),
+                "force": (X[cg] * nums.force_ref, X[cg + 1] * nums.force_ref),
+            }
         acts = {r.name: X[self.c_act + i] * nums.torque_ref for i, r in enumerate(self.actuated)}
         angles = {r.name: poses[r.m][2] - poses[r.p][2] for r in nums.hinges}
-        return {"method": self.method, "dps": dps, "inputs": dict(targets),
-                "load_factor": self.load_factor, "points": pts, "poses": poses,
-                "angles": angles, "hinges": hinges, "actuators": acts, "energy": energy,
-                "continuation": {**cont, "stable": True, "det_sign": info["sign"]}}
+        return {
+            "method": self.method,
+            "dps": dps,
+            "inputs": dict(targets),
+            "load_factor": self.load_factor,
+            "points": pts,
+            "poses": poses,
+            "angles": angles,
+            "hinges": hinges,
+            "actuators": acts,
+            "energy": energy,
+            "continuation": {**cont, "stable": True, "det_sign": info["sign"]},
+        }
 
 
 def _with_error_estimate(low: dict, high: dict) -> dict:
@@ -1028,8 +1111,9 @@ class ChainEquilibrium(_Solver):
         return None if link == self.ground else 3 * self.link_index[link]
 
     def _points(self, X):
-        return self._point_positions({lk.name: self._pose(X, lk.name) for lk in self.mech.links},
-                                     self.nums)
+        return self._point_positions(
+            {lk.name: self._pose(X, lk.name) for lk in self.mech.links}, self.nums
+        )
 
     # -- one Newton step on the KKT system -----------------------------------------------------
     def _kkt(self, Z, lam):
@@ -1037,9 +1121,9 @@ class ChainEquilibrium(_Solver):
         nums, N = self.nums, self.N
         zero = mpmath.mpf(0)
         n_o = self.n_o
-        S = [[zero] * n_o for _ in range(n_o)]         # outer block of K = [[H, Aᵀ], [A, 0]]
-        g = [zero] * n_o                               # [g_X | c] (the outer residual)
-        dg = [zero] * n_o                              # d/dλ of the outer residual
+        S = [[zero] * n_o for _ in range(n_o)]  # outer block of K = [[H, Aᵀ], [A, 0]]
+        g = [zero] * n_o  # [g_X | c] (the outer residual)
+        dg = [zero] * n_o  # d/dλ of the outer residual
         plates = []
         s_load = lam * self.load_factor
 
@@ -1071,12 +1155,12 @@ class ChainEquilibrium(_Solver):
             wc = (self.w_plate + 2 * i, self.w_plate + 2 * i + 1)
             lv = (Z[wc[0]], Z[wc[1]])
             p0 = self.psi0[i]
-            psi = Z[p0:p0 + N]
+            psi = Z[p0 : p0 + N]
             phiP = self._pose(Z, r.p)[2]
             phiM = self._pose(Z, r.m)[2]
             ext = [phiP + r.alpha] + psi + [phiM + r.alpha]
             kj = [2 * k] + [k] * (N - 1) + [2 * k]
-            mom = [kj[j] * (ext[j + 1] - ext[j]) for j in range(N + 1)]   # joint moments
+            mom = [kj[j] * (ext[j + 1] - ext[j]) for j in range(N + 1)]  # joint moments
             cs = [(mpmath.cos(a), mpmath.sin(a)) for a in psi]
             # chain closure c = start + h Σ t(ψ) − end
             a = link_terms(r.p, r.cp0, lv, wc, 1)
@@ -1094,10 +1178,10 @@ class ChainEquilibrium(_Solver):
                 g[cM + 2] += mom[N]
                 S[cM + 2][cM + 2] += 2 * k
             # inner block: tridiagonal H_ψψ, gradient, couplings B (N × 4)
-            diag = [kj[j] + kj[j + 1] + h * (lv[0] * cs[j][0] + lv[1] * cs[j][1])
-                    for j in range(N)]
-            gpsi = [mom[j] - mom[j + 1] - h * (-lv[0] * cs[j][1] + lv[1] * cs[j][0])
-                    for j in range(N)]
+            diag = [kj[j] + kj[j + 1] + h * (lv[0] * cs[j][0] + lv[1] * cs[j][1]) for j in range(N)]
+            gpsi = [
+                mom[j] - mom[j + 1] - h * (-lv[0] * cs[j][1] + lv[1] * cs[j][0]) for j in range(N)
+            ]
             cols = [None if cP is None else cP + 2, None if cM is None else cM + 2, wc[0], wc[1]]
             plates.append((i, k, h, diag, gpsi, cs, cols, mom))
         for i, r in enumerate(nums.pins):
@@ -1124,7 +1208,7 @@ class ChainEquilibrium(_Solver):
             c = self._col(link)
             if c is None:
                 continue
-            x, y, phi = self._pose(Z, link)
+            _x, _y, phi = self._pose(Z, link)
             rp = _rot(phi, p0)
             # V = −s (F·r + Mz φ)
             g[c] += -s_load * F[0]
@@ -1170,7 +1254,7 @@ class ChainEquilibrium(_Solver):
         drhs = [-v for v in dg]
         neg_inner = {}
         back = []
-        for (i, k, h, diag, gpsi, cs, cols, mom) in plates:
+        for i, k, h, diag, gpsi, cs, cols, _mom in plates:
             N = len(diag)
             d, lo, neg = self._tridiag(diag, -k)
             neg_inner[self.nums.plates[i].name] = neg
@@ -1217,13 +1301,13 @@ class ChainEquilibrium(_Solver):
         """Full correction from the outer one: δψ = H⁻¹(rhs_ψ − B·δo) per plate (without the
         H⁻¹rhs_ψ part for a tangent), and δλ = −w for the multipliers."""
         dZ = list(do) + [mpmath.mpf(0)] * (self.n - self.n_o)
-        for (i, d, lo, y, Y, cols, Bc) in back:
+        for i, d, _lo, y, Y, cols, _Bc in back:
             p0 = self.psi0[i]
             dpsi = list(y) if with_rhs else [mpmath.mpf(0)] * len(d)
             for t, c in enumerate(cols):
                 if c is not None:
                     dpsi = [a - do[c] * b for a, b in zip(dpsi, Y[t])]
-            dZ[p0:p0 + len(dpsi)] = dpsi
+            dZ[p0 : p0 + len(dpsi)] = dpsi
         for j in range(self.n_x, self.n_o):
             dZ[j] = -dZ[j]
         return dZ
@@ -1249,8 +1333,9 @@ class ChainEquilibrium(_Solver):
             if step > 1:
                 return None
             Z = [a + b for a, b in zip(Z, dZ)]
-            if step <= tol or (last is not None and step > last / 2 and it >= 2
-                               and step <= tol * 10 ** 6):
+            if step <= tol or (
+                last is not None and step > last / 2 and it >= 2 and step <= tol * 10**6
+            ):
                 info["mark"] = self._inertia(info)
                 return Z, info
             if last is not None and step > last and it >= 2:
@@ -1262,9 +1347,10 @@ class ChainEquilibrium(_Solver):
         """Negative eigenvalues of the KKT matrix: every plate's H_ψψ (LDLᵀ pivots) plus the
         reduced outer matrix (float64 eigenvalues after symmetric equilibration)."""
         import numpy as np
+
         S = np.array([[float(v) for v in row] for row in info["S"]])
         D = np.ones(len(S))
-        for _ in range(8):                    # Ruiz: D S D with rows and columns of size ~1
+        for _ in range(8):  # Ruiz: D S D with rows and columns of size ~1
             M = np.abs(D[:, None] * S * D[None, :]).max(axis=1)
             M[M == 0] = 1
             D /= np.sqrt(M)
@@ -1279,11 +1365,16 @@ class ChainEquilibrium(_Solver):
             raise InstabilityError(
                 f"{self.mech.name}: the as-fabricated pose is not a stable equilibrium "
                 f"({info['mark']} negative eigenvalues of the KKT matrix, {self.n_c} expected): "
-                "a free mode (e.g. a released input between pins)", 0.0, None)
+                "a free mode (e.g. a released input between pins)",
+                0.0,
+                None,
+            )
 
     def _describe(self, info, mark0):
-        return (f"{mark0} -> {info['mark']} negative eigenvalues of the KKT matrix, "
-                f"{self.n_c} for a stable equilibrium")
+        return (
+            f"{mark0} -> {info['mark']} negative eigenvalues of the KKT matrix, "
+            f"{self.n_c} for a stable equilibrium"
+        )
 
     def _tangent(self, Z, lam, info):
         return self._expand(info["lu"].solve(info["drhs"]), info["back"], False)
@@ -1300,6 +1391,7 @@ class ChainEquilibrium(_Solver):
         """A plate whose own block lost definiteness, else the plate holding most of the bending
         energy of the (float64) eigenvector of the smallest eigenvalue of the reduced matrix."""
         import numpy as np
+
         try:
             _, info = self._step(Z, lam)
         except ZeroDivisionError:
@@ -1311,15 +1403,17 @@ class ChainEquilibrium(_Solver):
         ev, vec = np.linalg.eigh(S)
         v = vec[:, int(np.argmin(np.abs(ev)))]
         share = {}
-        for (i, d, lo, y, Y, cols, Bc) in info["back"]:
+        for i, d, _lo, _y, Y, cols, _Bc in info["back"]:
             r = self.nums.plates[i]
             N = len(d)
             dpsi = np.zeros(N)
             for t, c in enumerate(cols):
                 if c is not None:
                     dpsi -= v[c] * np.array([float(e) for e in Y[t]])
-            ends = [v[cols[0]] if cols[0] is not None else 0.0,
-                    v[cols[1]] if cols[1] is not None else 0.0]
+            ends = [
+                v[cols[0]] if cols[0] is not None else 0.0,
+                v[cols[1]] if cols[1] is not None else 0.0,
+            ]
             ext = np.concatenate([[ends[0]], dpsi, [ends[1]]])
             kj = np.array([2.0] + [1.0] * (N - 1) + [2.0]) * float(r.EI * N / r.l)
             share[r.name] = float((kj * np.diff(ext) ** 2).sum())
@@ -1335,9 +1429,9 @@ class ChainEquilibrium(_Solver):
         length, the clamp angles as end values) from the N_old solution."""
         nums = self.nums
         old_psi0 = [self.n_o + i * N_old for i in range(len(nums.plates))]
-        out = list(Z[:self.n_o])
+        out = list(Z[: self.n_o])
         for i, r in enumerate(nums.plates):
-            psi = Z[old_psi0[i]:old_psi0[i] + N_old]
+            psi = Z[old_psi0[i] : old_psi0[i] + N_old]
             phiP = self._pose(Z, r.p)[2]
             phiM = self._pose(Z, r.m)[2]
             s = [mpmath.mpf(0)] + [(j + mpmath.mpf(1) / 2) / N_old for j in range(N_old)] + [1]
@@ -1355,7 +1449,7 @@ class ChainEquilibrium(_Solver):
     def _values(self, Z, targets, dps):
         """Every reported quantity of one chain solution, flattened to {key: mpf}."""
         nums = self.nums
-        S, g, dg, plates = self._kkt(Z, mpmath.mpf(1))
+        _S, _g, _dg, plates = self._kkt(Z, mpmath.mpf(1))
         poses = {lk.name: self._pose(Z, lk.name) for lk in self.mech.links}
         out = {}
         for name, p in self._deviation(self._points(Z), self._rigid_cache)[0].items():
@@ -1364,7 +1458,7 @@ class ChainEquilibrium(_Solver):
             out[("points", name, "deviation", 0)] = p["deviation"][0]
             out[("points", name, "deviation", 1)] = p["deviation"][1]
         energy = mpmath.mpf(0)
-        for (i, k, h, diag, gpsi, cs, cols, mom) in plates:
+        for i, k, _h, _diag, _gpsi, _cs, _cols, mom in plates:
             r = nums.plates[i]
             wc = self.w_plate + 2 * i
             out[("hinges", r.name, "moment")] = mom[-1]
@@ -1401,21 +1495,28 @@ class ChainEquilibrium(_Solver):
                 self._layout()
                 res = self._newton(Z, mpmath.mpf(1), mpmath.mpf(10) ** (8 - dps))
                 if res is None:
-                    raise ContinuationError(f"{self.mech.name}: Newton failed for N = {self.N}",
-                                            1.0)
+                    raise ContinuationError(
+                        f"{self.mech.name}: Newton failed for N = {self.N}", 1.0
+                    )
                 Z, info = res
                 if info["mark"] != self.n_c:
-                    raise InstabilityError(f"{self.mech.name}: chain with N = {self.N} is not a "
-                                           "stable equilibrium", 1.0, None)
+                    raise InstabilityError(
+                        f"{self.mech.name}: chain with N = {self.N} is not a stable equilibrium",
+                        1.0,
+                        None,
+                    )
                 levels.append(self._values(Z, targets, dps))
-            Ns = [self.n0 * 2 ** j for j in range(self.levels)]
+            Ns = [self.n0 * 2**j for j in range(self.levels)]
             self.N = self.n0
             best, second = _richardson(levels)
             res = _unflatten(best)
             pts = {}
             for name, rp in self._rigid_cache["points"].items():
-                pts[name] = {"rigid": rp, "compliant": res["points"][name]["compliant"],
-                             "deviation": res["points"][name]["deviation"]}
+                pts[name] = {
+                    "rigid": rp,
+                    "compliant": res["points"][name]["compliant"],
+                    "deviation": res["points"][name]["deviation"],
+                }
             err = 0.0
             for name in pts:
                 d1 = [best[("points", name, "deviation", k)] for k in range(2)]
@@ -1423,12 +1524,21 @@ class ChainEquilibrium(_Solver):
                 size = mpmath.sqrt(d1[0] ** 2 + d1[1] ** 2)
                 diff = mpmath.sqrt((d1[0] - d2[0]) ** 2 + (d1[1] - d2[1]) ** 2)
                 err = max(err, float(diff / size) if size else float(diff))
-            return {"method": self.method, "dps": dps, "inputs": dict(targets),
-                    "load_factor": self.load_factor, "points": pts, "poses": res["poses"],
-                    "angles": res["angles"], "hinges": res["hinges"],
-                    "actuators": res.get("actuators", {}), "energy": res["energy"],
-                    "error_estimate": err, "levels": Ns,
-                    "continuation": {**cont, "stable": True, "kkt_negative": self.n_c}}
+            return {
+                "method": self.method,
+                "dps": dps,
+                "inputs": dict(targets),
+                "load_factor": self.load_factor,
+                "points": pts,
+                "poses": res["poses"],
+                "angles": res["angles"],
+                "hinges": res["hinges"],
+                "actuators": res.get("actuators", {}),
+                "energy": res["energy"],
+                "error_estimate": err,
+                "levels": Ns,
+                "continuation": {**cont, "stable": True, "kkt_negative": self.n_c},
+            }
 
 
 def _richardson(levels: list[dict]) -> tuple[dict, dict]:
@@ -1466,8 +1576,9 @@ def _unflatten(flat: dict) -> dict:
             else:
                 entry["force"][rest[1]] = v
         elif head == "points":
-            out.setdefault("points", {}).setdefault(name, {}).setdefault(
-                rest[0], [None, None])[rest[1]] = v
+            out.setdefault("points", {}).setdefault(name, {}).setdefault(rest[0], [None, None])[
+                rest[1]
+            ] = v
     for entry in out.get("hinges", {}).values():
         entry["force"] = tuple(entry["force"])
     for name, pose in out.get("poses", {}).items():

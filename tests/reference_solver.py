@@ -17,7 +17,8 @@ Hinge a joins P = links[0] and M = links[1]; u = (cos α, sin α), u⊥ = (−si
 plate angle, l the plate length. P's clamp is cP0 = at − l/2·u (fixed in P), M's clamp is
 cM0 = at + l/2·u (fixed in M). With θ = φ_M − φ_P and the hinge model (f(θ), g(θ)):
 
-    [x_M, y_M] + Rot(φ_M)·cM0 − [x_P, y_P] − Rot(φ_P)·cP0 − Rot(φ_P)·(f(θ)·u + g(θ)·u⊥) = 0   (2 eq.)
+    [x_M, y_M] + Rot(φ_M)·cM0 − [x_P, y_P] − Rot(φ_P)·cP0 − Rot(φ_P)·(f(θ)·u + g(θ)·u⊥) = 0   (2
+    eq.)
 
 and every input hinge adds φ_M − φ_P − q_a = 0 (1 eq.). For a mechanism whose number of inputs is
 its mobility, 2m + #inputs = 3n: a square system, solved by Newton's method with an analytic
@@ -66,7 +67,7 @@ import sympy as sp
 
 from symkin.model.mechanism import PLATE_LENGTH, THETA, Mechanism
 
-__all__ = ["Reference", "ReferenceAssemblyError", "ReferenceModelError", "OVERRIDE_MODELS"]
+__all__ = ["OVERRIDE_MODELS", "Reference", "ReferenceAssemblyError", "ReferenceModelError"]
 
 #: models accepted by ``model_override`` (prbm with its default "force" parameters)
 OVERRIDE_MODELS = ("rigid", "circular_arc", "small_deflection", "prbm", "elastica_force")
@@ -155,7 +156,7 @@ class _CircularArc(_Model):
             return l * (1 - t2 / 6), l * (t / 2 - t * t2 / 24), -l * t / 3, l * (0.5 - t2 / 8)
         with mpmath.extradps(_extra_digits(t)):
             s, c = mpmath.sin(t), mpmath.cos(t)
-            h2 = 2 * mpmath.sin(t / 2) ** 2          # 1 − cos θ without cancellation
+            h2 = 2 * mpmath.sin(t / 2) ** 2  # 1 − cos θ without cancellation
             f = l * s / t
             g = l * h2 / t
             df = l * (t * c - s) / (t * t)
@@ -173,7 +174,7 @@ class _Prbm(_Model):
         l, gm, c = self.l, self.gamma, self.c
         big = t / c
         s, co = mpmath.sin(big), mpmath.cos(big)
-        f = l * (1 - gm * 2 * mpmath.sin(big / 2) ** 2)   # l(1 − γ(1 − cos Θ))
+        f = l * (1 - gm * 2 * mpmath.sin(big / 2) ** 2)  # l(1 − γ(1 − cos Θ))
         g = gm * l * s
         return f, g, -gm * l * s / c, gm * l * co / c
 
@@ -210,8 +211,9 @@ class _ElasticaForce(_Model):
 
     def __call__(self, t):
         if abs(t) >= 1.5:
-            raise ReferenceModelError(f"elastica_force reference covers |theta| < 1.5 rad, got "
-                                      f"{mpmath.nstr(t, 8)}")
+            raise ReferenceModelError(
+                f"elastica_force reference covers |theta| < 1.5 rad, got {mpmath.nstr(t, 8)}"
+            )
         with mpmath.extradps(10):
             S = mpmath.sin(t)
             S2 = S * S
@@ -229,8 +231,8 @@ class _ElasticaForce(_Model):
             c = mpmath.cos(t)
             f = self.l / j0
             g = self.l * S * j1 / j0
-            df = -self.l * dj0 / j0 ** 2 * c
-            dg = self.l * (j1 / j0 + S * (dj1 * j0 - j1 * dj0) / j0 ** 2) * c
+            df = -self.l * dj0 / j0**2 * c
+            dg = self.l * (j1 / j0 + S * (dj1 * j0 - j1 * dj0) / j0**2) * c
         return +f, +g, +df, +dg
 
 
@@ -256,12 +258,14 @@ class _Expr(_Model):
                 v = mpmath.mpmathify(func(mpmath.mpf(t)))
                 if isinstance(v, mpmath.mpc):
                     if abs(v.imag) > abs(v) * mpmath.mpf(10) ** (-dps):
-                        raise ReferenceModelError("expr model gives a complex value at theta = "
-                                                  f"{mpmath.nstr(t, 8)}")
+                        raise ReferenceModelError(
+                            f"expr model gives a complex value at theta = {mpmath.nstr(t, 8)}"
+                        )
                     v = v.real
                 if not mpmath.isfinite(v):
-                    raise ReferenceModelError("expr model is not finite at theta = "
-                                              f"{mpmath.nstr(t, 8)}")
+                    raise ReferenceModelError(
+                        f"expr model is not finite at theta = {mpmath.nstr(t, 8)}"
+                    )
                 out.append(v)
         return tuple(+v for v in out)
 
@@ -272,7 +276,7 @@ class _Expr(_Model):
 class _Hinge:
     """A hinge's numbers at one precision."""
 
-    __slots__ = ("name", "p", "m", "u", "v", "cp0", "cm0", "model", "input", "length")
+    __slots__ = ("cm0", "cp0", "input", "length", "m", "model", "name", "p", "u", "v")
 
 
 class Reference:
@@ -295,7 +299,8 @@ class Reference:
         if n_eq != self.n_unknowns:
             raise ReferenceAssemblyError(
                 f"{n_eq} equations (2 per hinge + 1 per input) for {self.n_unknowns} unknowns "
-                "(3 per moving link): the number of inputs is not the mobility")
+                "(3 per moving link): the number of inputs is not the mobility"
+            )
         self._cache: dict = {}
 
     # -- numbers ------------------------------------------------------------------------------
@@ -310,7 +315,7 @@ class Reference:
             if p.name in params:
                 raw = params[p.name]
                 if isinstance(raw, float):
-                    raw = repr(raw)           # the decimal the user wrote, like the file reader
+                    raw = repr(raw)  # the decimal the user wrote, like the file reader
                 if isinstance(raw, str):
                     expr = sp.sympify(raw, locals=names, rational=True)
                 else:
@@ -342,8 +347,9 @@ class Reference:
             lval = sp.sympify(h.length).subs(self.values)
             subs = {**self.values, PLATE_LENGTH: lval}
             return _Expr(sp.sympify(h.param("f")).subs(subs), sp.sympify(h.param("g")).subs(subs))
-        raise ReferenceModelError(f"hinge {h.name!r}: the reference solver does not support "
-                                  f"model {model!r}")
+        raise ReferenceModelError(
+            f"hinge {h.name!r}: the reference solver does not support model {model!r}"
+        )
 
     def _setup(self, model_override, dps):
         if model_override is not None and model_override not in OVERRIDE_MODELS:
@@ -365,8 +371,10 @@ class Reference:
             r.cm0 = (ax + length / 2 * r.u[0], ay + length / 2 * r.u[1])
             r.model = self._model(h, model_override or h.model, length, dps)
             hinges.append(r)
-        points = {p.name: (p.link, (self._num(p.at[0], dps), self._num(p.at[1], dps)))
-                  for p in self.mech.points}
+        points = {
+            p.name: (p.link, (self._num(p.at[0], dps), self._num(p.at[1], dps)))
+            for p in self.mech.points
+        }
         coords = [abs(c) for r in hinges for c in (*r.cp0, *r.cm0)]
         coords += [abs(c) for _, xy in points.values() for c in xy]
         scale = max(coords + [r.length for r in hinges]) or mpmath.mpf(1)
@@ -487,16 +495,16 @@ class Reference:
             except (ZeroDivisionError, ReferenceModelError):
                 return None
             step = self._norm(dX, scale)
-            if step > 1:                      # a jump of a full mechanism size or a radian
+            if step > 1:  # a jump of a full mechanism size or a radian
                 return None
             X = [a + b for a, b in zip(X, dX)]
             if step <= tol:
                 return X, sign
             if last is not None and step > last / 4:
-                if step <= tol * 10 ** 6:
-                    return X, sign            # at the rounding-noise floor (ill-conditioned J)
+                if step <= tol * 10**6:
+                    return X, sign  # at the rounding-noise floor (ill-conditioned J)
                 if step > last:
-                    return None               # diverging
+                    return None  # diverging
             last = step
         return None
 
@@ -507,8 +515,14 @@ class Reference:
             raise KeyError(f"{unknown} are not input hinges; inputs: {list(self.inputs)}")
         return {name: _to_mpf(inputs.get(name, 0), mpmath.mp.dps) for name in self.inputs}
 
-    def solve(self, inputs: dict, model_override: str | None = None, dps: int = 40,
-              max_step: float = 0.05, min_step: float = 1e-6) -> dict:
+    def solve(
+        self,
+        inputs: dict,
+        model_override: str | None = None,
+        dps: int = 40,
+        max_step: float = 0.05,
+        min_step: float = 1e-6,
+    ) -> dict:
         """Solve the mechanism at the given input angles (hinge name → θ, missing inputs = 0).
 
         Returns a dict::
@@ -537,10 +551,11 @@ class Reference:
             if res is None:
                 raise ReferenceAssemblyError(
                     f"{self.mech.name}: the as-fabricated pose is singular or not a solution "
-                    "(Jacobian singular at all θ = 0)")
+                    "(Jacobian singular at all θ = 0)"
+                )
             X, sign0 = res
             h = mpmath.mpf(max_step)
-            t = mpmath.mpf(0)                     # path parameter: q = t * target
+            t = mpmath.mpf(0)  # path parameter: q = t * target
             span = max([abs(v) for v in target.values()] + [mpmath.mpf(0)])
             steps = 0
             while t < 1:
@@ -559,8 +574,11 @@ class Reference:
                 res = self._newton(pred, q_new, hinges, scale, tol_end if final else tol_mid)
                 # reject: no convergence, det(J) changed sign (crossed a singular/toggle
                 # configuration: the branch would switch), or a large correction (a jump)
-                ok = (res is not None and res[1] == sign0
-                      and self._norm([a - b for a, b in zip(res[0], pred)], scale) <= MAX_JUMP)
+                ok = (
+                    res is not None
+                    and res[1] == sign0
+                    and self._norm([a - b for a, b in zip(res[0], pred)], scale) <= MAX_JUMP
+                )
                 if not ok:
                     h /= 2
                     if h < min_step:
@@ -570,7 +588,8 @@ class Reference:
                             f"continue from the as-fabricated pose to the inputs "
                             f"{ {k: mpmath.nstr(v, 10) for k, v in target.items()} }; stuck at "
                             f"{where} (out of the assembly range, a toggle/singular "
-                            "configuration, or Newton not converging)")
+                            "configuration, or Newton not converging)"
+                        )
                     continue
                 X, t = res[0], t_new
                 steps += 1
@@ -578,8 +597,10 @@ class Reference:
             F, _ = self._system(X, target, hinges)
             resid = max([abs(v) for v in F] + [mpmath.mpf(0)])
             if resid > scale * mpmath.mpf(10) ** (-(dps - 8)):
-                raise ReferenceAssemblyError(f"{self.mech.name}: residual {mpmath.nstr(resid, 5)} "
-                                             "after Newton, not converged")
+                raise ReferenceAssemblyError(
+                    f"{self.mech.name}: residual {mpmath.nstr(resid, 5)} "
+                    "after Newton, not converged"
+                )
             poses = {lk.name: self._pose(X, lk.name) for lk in self.mech.links}
             angles = {r.name: poses[r.m][2] - poses[r.p][2] for r in hinges}
             pts = {}
@@ -587,11 +608,19 @@ class Reference:
                 x, y, phi = poses[link]
                 c, s = mpmath.cos(phi), mpmath.sin(phi)
                 pts[name] = (x + c * px - s * py, y + s * px + c * py)
-            return {"model": model_override or "file", "dps": dps, "inputs": dict(target),
-                    "poses": poses, "angles": angles, "points": pts, "steps": steps}
+            return {
+                "model": model_override or "file",
+                "dps": dps,
+                "inputs": dict(target),
+                "poses": poses,
+                "angles": angles,
+                "points": pts,
+                "steps": steps,
+            }
 
-    def deviation(self, inputs: dict, dps: int = 40, min_digits: int = 20,
-                  max_dps: int = 1000) -> dict:
+    def deviation(
+        self, inputs: dict, dps: int = 40, min_digits: int = 20, max_dps: int = 1000
+    ) -> dict:
         """Rigid (every hinge an ideal revolute) and compliant (file models) solutions at the same
         inputs, and the deviation compliant − rigid of every point.
 
@@ -620,12 +649,18 @@ class Reference:
                     mag = max(abs(d[0]), abs(d[1]))
                     size = max(abs(r[0]), abs(r[1]), scale)
                     if mag > 0:
-                        lost = max(lost, int(math.ceil(float(mpmath.log10(size / mag)))))
+                        lost = max(lost, math.ceil(float(mpmath.log10(size / mag))))
                 digits = dps - 6 - lost
                 if digits >= min_digits or dps >= max_dps:
-                    return {"dps": dps, "digits": digits, "inputs": rigid["inputs"],
-                            "angles": {"rigid": rigid["angles"], "compliant": comp["angles"]},
-                            "points": pts, "rigid": rigid, "compliant": comp}
+                    return {
+                        "dps": dps,
+                        "digits": digits,
+                        "inputs": rigid["inputs"],
+                        "angles": {"rigid": rigid["angles"], "compliant": comp["angles"]},
+                        "points": pts,
+                        "rigid": rigid,
+                        "compliant": comp,
+                    }
                 dps = min(max_dps, lost + min_digits + 10)
 
     def fg(self, hinge: str, theta, model_override: str | None = None, dps: int = 40):

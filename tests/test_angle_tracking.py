@@ -1,5 +1,6 @@
 """Hinge angles are tracked continuously from the as-fabricated pose, by one rule in every backend
-(symkin.core.settings, the winding rule): the closed-form dyads wrap angles into (-pi, pi], so a hinge
+(symkin.core.settings, the winding rule): the closed-form dyads wrap angles into (-pi, pi], so a
+hinge
 that turned beyond half a turn must be refused (exit 3), never reported wrapped. Over the whole
 input range every backend agrees with the independent solver, and none answers where another
 (or the oracle) finds no assembly.
@@ -12,14 +13,14 @@ import math
 import mpmath
 import numpy
 import pytest
-
-import symkin
 from conftest import EXAMPLES
 from evaluators import Generated, rel_err
 from reference_solver import Reference, ReferenceAssemblyError
+
+import symkin
 from symkin.core.errors import AssemblyError
-from symkin.studies.evaluation import evaluate
 from symkin.core.settings import SOLVER
+from symkin.studies.evaluation import evaluate
 
 
 def moved_input(text: str, old: str, new: str) -> str:
@@ -77,16 +78,22 @@ def test_every_backend_follows_the_oracle_over_the_input_range(key):
         for backend in ("sympy", "numpy", "c"):
             got = evaluate(g.analysis, {name: repr(value)}, "exact", backend=backend)
             for hinge, angle in got.angles_rigid.items():
-                assert abs(angle - float(want["angles"]["rigid"][hinge])) <= 1e-9, \
-                    (backend, value, hinge)
+                assert abs(angle - float(want["angles"]["rigid"][hinge])) <= 1e-9, (
+                    backend,
+                    value,
+                    hinge,
+                )
             for hinge, angle in got.angles_compliant.items():
-                assert abs(angle - float(want["angles"]["compliant"][hinge])) <= 1e-9, \
-                    (backend, value, hinge)
+                assert abs(angle - float(want["angles"]["compliant"][hinge])) <= 1e-9, (
+                    backend,
+                    value,
+                    hinge,
+                )
             for point, res in got.points.items():
                 ref_dev = [float(v) for v in want["points"][point]["deviation"]]
                 if max(map(abs, ref_dev)) > 1e-15:
                     assert rel_err(res.deviation, ref_dev) <= 1e-7, (backend, value, point)
-                else:                                     # a point the plates do not move
+                else:  # a point the plates do not move
                     assert max(map(abs, res.deviation)) <= 1e-15, (backend, value, point)
     # the grid reaches both outcomes in both cases
     assert outcomes["refused"] and outcomes["agreed"], outcomes
@@ -121,5 +128,6 @@ def test_the_rule_lives_in_the_solver_settings():
     g = Generated(mech=symkin.load(EXAMPLES / "four_bar.toml"))
     from symkin.codegen.backends.c import backend as c_backend
     from symkin.codegen.backends.numpy import backend as numpy_backend
+
     assert f"_WINDING = {SOLVER.winding}" in numpy_backend.emit(g.plan, "t")
     assert f"< {SOLVER.winding})" in c_backend.emit(g.plan, "t")[1]

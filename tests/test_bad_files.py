@@ -1,4 +1,5 @@
-"""Every file in tests/bad/ is rejected cleanly: exit code 2, a short message naming the file and the
+"""Every file in tests/bad/ is rejected cleanly: exit code 2, a short message naming the file and
+the
 offending entry, no traceback, nothing executed. The good examples pass `check` and `matrices`.
 
 Each bad file is the four-bar of examples/four_bar.toml with one fault; its first comment line
@@ -113,9 +114,16 @@ BOMBS = ("power_bomb", "power_bomb_nested", "power_bomb_parameter", "power_bomb_
 BAD_FILES = sorted(BAD.glob("*.toml"))
 
 
-def run_cli(*args: str, cwd: Path | None = None, timeout: float = 60) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "symkin", *args], capture_output=True, text=True,
-                          cwd=cwd, timeout=timeout)
+def run_cli(
+    *args: str, cwd: Path | None = None, timeout: float = 60
+) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "symkin", *args],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        timeout=timeout,
+    )
 
 
 def test_corpus_is_complete():
@@ -172,9 +180,19 @@ def test_near_miss_key_gets_a_suggestion():
     assert "did you mean 'length'" in result.stderr
 
 
-@pytest.mark.parametrize("stem", ["unknown_key_hinge", "inject_import", "power_bomb",
-                                  "power_bomb_parameter", "duplicate_hinge_name", "too_few_inputs",
-                                  "table_missing_csv", "hinge_self_loop"])
+@pytest.mark.parametrize(
+    "stem",
+    [
+        "unknown_key_hinge",
+        "inject_import",
+        "power_bomb",
+        "power_bomb_parameter",
+        "duplicate_hinge_name",
+        "too_few_inputs",
+        "table_missing_csv",
+        "hinge_self_loop",
+    ],
+)
 def test_load_raises_input_error(stem: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch):
     monkeypatch.chdir(tmp_path)
     path = BAD / f"{stem}.toml"
@@ -234,15 +252,18 @@ def four_bar_with(parameters: str) -> str:
     return FOUR_BAR.replace("l = 1e-3", "l = 1e-3\n" + parameters, 1)
 
 
-@pytest.mark.parametrize("parameters, culprit", [
-    ('q = "((((9**64)**64)**64)**64)**64"', "'q'"),         # nesting around the exponent limit
-    ('q = "exp(1000000000*log(9))"', "'q'"),                 # sympy makes this 9**1000000000
-    ('a = 9\nb = 1e9\nq = "(a**b + 1)/a**b"', "'q'"),         # an exponent from a parameter
-    ('b = 1e9\nq = "exp(b*log(9))"', "'q'"),
-    ('p1 = "9**64"\np2 = "p1**64"\np3 = "p2**64"\np4 = "p3**64"\np5 = "p4**64"', "'p"),
-    ('q = "' + "*".join(["9**60"] * 250) + '"', "'q'"),     # a long product of big numbers
-    ('q = "exp(exp(exp(10)))"', "'q'"),
-])
+@pytest.mark.parametrize(
+    "parameters, culprit",
+    [
+        ('q = "((((9**64)**64)**64)**64)**64"', "'q'"),  # nesting around the exponent limit
+        ('q = "exp(1000000000*log(9))"', "'q'"),  # sympy makes this 9**1000000000
+        ('a = 9\nb = 1e9\nq = "(a**b + 1)/a**b"', "'q'"),  # an exponent from a parameter
+        ('b = 1e9\nq = "exp(b*log(9))"', "'q'"),
+        ('p1 = "9**64"\np2 = "p1**64"\np3 = "p2**64"\np4 = "p3**64"\np5 = "p4**64"', "'p"),
+        ('q = "' + "*".join(["9**60"] * 250) + '"', "'q'"),  # a long product of big numbers
+        ('q = "exp(exp(exp(10)))"', "'q'"),
+    ],
+)
 def test_no_expression_can_build_a_huge_number(parameters: str, culprit: str):
     start = time.perf_counter()
     with pytest.raises(symkin.InputError) as info:

@@ -11,20 +11,22 @@ import re
 from decimal import Decimal
 
 import pytest
+from conftest import EXAMPLES
+from evaluators import Generated, rel_err
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from reference_solver import Reference
 
 import symkin
-from conftest import EXAMPLES, ROOT
-from evaluators import Generated, rel_err
-from reference_solver import Reference
 
 FOUR_BAR = (EXAMPLES / "four_bar.toml").read_text()
 #: The four-bar's coordinates as CAD writes them: 10 significant digits.
-CAD = {"[0.015, 0.026]": "[0.01512345678, 0.02598765432]",
-       "[0.1, 0.0]": "[0.1000012345, 0.0]",
-       "[0.085, 0.068]": "[0.08512345671, 0.06800000012]",
-       "[0.06, 0.09]": "[0.06012345678, 0.09000123457]"}
+CAD = {
+    "[0.015, 0.026]": "[0.01512345678, 0.02598765432]",
+    "[0.1, 0.0]": "[0.1000012345, 0.0]",
+    "[0.085, 0.068]": "[0.08512345671, 0.06800000012]",
+    "[0.06, 0.09]": "[0.06012345678, 0.09000123457]",
+}
 
 
 def cad_text(scale_mm: bool = False) -> str:
@@ -33,9 +35,11 @@ def cad_text(scale_mm: bool = False) -> str:
         text = text.replace(f"at = {old}", f"at = {new}")
     if scale_mm:
         # The same mechanism in millimetres: every length times 1000.
-        text = re.sub(r"at = \[([^,\]]+), ([^\]]+)\]",
-                      lambda m: "at = [{}, {}]".format(*(Decimal(v) * 1000 for v in m.groups())),
-                      text)
+        text = re.sub(
+            r"at = \[([^,\]]+), ([^\]]+)\]",
+            lambda m: "at = [{}, {}]".format(*(Decimal(v) * 1000 for v in m.groups())),
+            text,
+        )
         text = text.replace("l = 1e-3", "l = 1.000000001")
     return text
 
@@ -44,8 +48,11 @@ def run_all(mech, inputs: dict[str, str], level: str = "exact") -> dict[str, dic
     """Deviation of every point by every backend: sympy (mpmath), numpy and C."""
     g = Generated(mech=mech)
     sympy = symkin.evaluate(g.analysis, inputs, level).points
-    return {"sympy": {n: p.deviation for n, p in sympy.items()},
-            "numpy": g.run_numpy(inputs, level), "c": g.run_c(inputs, level)}
+    return {
+        "sympy": {n: p.deviation for n, p in sympy.items()},
+        "numpy": g.run_numpy(inputs, level),
+        "c": g.run_c(inputs, level),
+    }
 
 
 @pytest.mark.parametrize("mm", [False, True], ids=["metres", "millimetres"])
@@ -78,13 +85,18 @@ def test_generated_code_holds_no_huge_integer(tmp_path):
 
 decimal_offset = st.builds(
     lambda mantissa, digits: Decimal(mantissa).scaleb(-digits),
-    st.integers(-2_000_000_000, 2_000_000_000), st.integers(12, 14))
+    st.integers(-2_000_000_000, 2_000_000_000),
+    st.integers(12, 14),
+)
 
 
-@settings(max_examples=6, deadline=None, derandomize=True,
-          suppress_health_check=[HealthCheck.too_slow])
-@given(offsets=st.lists(decimal_offset, min_size=6, max_size=6),
-       angle=st.sampled_from(["-0.25", "0.05", "0.3"]))
+@settings(
+    max_examples=6, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
+)
+@given(
+    offsets=st.lists(decimal_offset, min_size=6, max_size=6),
+    angle=st.sampled_from(["-0.25", "0.05", "0.3"]),
+)
 def test_random_decimal_geometry_every_backend_agrees_with_mpmath(offsets, angle):
     """Hinge and point coordinates moved by up to 2 mm, written with 6 to 14 decimals."""
     text = FOUR_BAR

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import pytest
-
-import symkin
 from conftest import EXAMPLES
 from evaluators import Generated
+
+import symkin
 from symkin.cli.commands import main
 
 FOUR_BAR = (EXAMPLES / "four_bar.toml").read_text()
@@ -29,10 +29,13 @@ def run(args, capsys):
     return (code, *capsys.readouterr())
 
 
-@pytest.mark.parametrize("at, message", [
-    ("[0.015, 0.026]", "reach past each other"),     # B on top of A: plates overlap
-    ("[0.0575, 0.013]", "collinear"),                # B midway between A and B0: a toggle
-])
+@pytest.mark.parametrize(
+    "at, message",
+    [
+        ("[0.015, 0.026]", "reach past each other"),  # B on top of A: plates overlap
+        ("[0.0575, 0.013]", "collinear"),  # B midway between A and B0: a toggle
+    ],
+)
 def test_check_refuses_as_eval_does(tmp_path, capsys, at, message):
     path = tmp_path / "four_bar.toml"
     path.write_text(FOUR_BAR.replace("at = [0.085, 0.068]", f"at = {at}"))
@@ -73,4 +76,4 @@ def test_numpy_module_on_0d_input_with_a_singular_system():
     g = Generated(mech=symkin.loads(nine_bar_input_moved_to_d(), "nine_d.toml"))
     res = g.numpy.evaluate({"O": 0.0, "A": 0.0, "B": 0.0, "D": 0.0}, "exact")
     assert res["ok"].shape == () and not res["ok"]
-    assert all(v != v for v in res["points"]["F"]["deviation"])      # NaN
+    assert all(v != v for v in res["points"]["F"]["deviation"])  # NaN

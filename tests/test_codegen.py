@@ -11,19 +11,20 @@ import os
 import subprocess
 import sys
 
+import mechanisms as M
 import numpy as np
 import pytest
-
-import mechanisms as M
-import symkin
 from conftest import EXAMPLES, ROOT
 from evaluators import INPUTS, SOURCES, generated, rel_err, require_compiler
 from reference_solver import Reference
+
+import symkin
 from symkin.codegen import toolchain
 from symkin.codegen.backends.c import backend as c_backend
 from symkin.codegen.backends.numpy import backend as numpy_backend
 from symkin.codegen.plan import plan
 from symkin.codegen.toolchain import import_numpy_module
+
 
 @pytest.mark.parametrize("key", sorted(SOURCES))
 @pytest.mark.parametrize("backend", ["numpy", "c"])
@@ -50,19 +51,22 @@ def test_every_level_matches_the_sympy_backend(key, backend, level):
 @pytest.mark.parametrize("backend", ["numpy", "c"])
 def test_tiny_plates(key, backend):
     g = generated(key)
-    overrides = {"l": "5e-11"}                 # l/L about 1e-9
+    overrides = {"l": "5e-11"}  # l/L about 1e-9
     ref = Reference(g.mech, overrides).deviation(INPUTS[key])
     got = (g.run_numpy if backend == "numpy" else g.run_c)(INPUTS[key], "exact", overrides)
     for name, dev in got.items():
         assert rel_err(dev, ref["points"][name]["deviation"]) <= 1e-9
 
 
-@pytest.mark.parametrize("key, inputs", [
-    ("four_bar", {"A0": "1e-8"}),
-    ("six_bar", {"O_A": "-1e-8"}),
-    ("five_bar", {"O1": "1e-8", "O2": "2e-8"}),
-    ("serial_arm", {"S": "1e-8", "E": "-1e-8"}),
-])
+@pytest.mark.parametrize(
+    "key, inputs",
+    [
+        ("four_bar", {"A0": "1e-8"}),
+        ("six_bar", {"O_A": "-1e-8"}),
+        ("five_bar", {"O1": "1e-8", "O2": "2e-8"}),
+        ("serial_arm", {"S": "1e-8", "E": "-1e-8"}),
+    ],
+)
 @pytest.mark.parametrize("backend", ["numpy", "c"])
 def test_tiny_angles(key, inputs, backend):
     g = generated(key)
@@ -103,13 +107,17 @@ def test_numpy_broadcasts_and_masks_what_cannot_assemble():
     res = g.numpy.evaluate({"O1": o1, "O2": o2}, "exact")
     assert res["ok"].shape == (3, 4)
     assert res["points"]["P_tip"]["deviation"].shape == (2, 3, 4)
-    assert not res["ok"][2].any()                      # NaN input
+    assert not res["ok"][2].any()  # NaN input
     for i in range(2):
         for j in range(3):
             assert res["ok"][i, j]
-            want = symkin.evaluate(g.analysis, {"O1": repr(float(o1[i, 0])),
-                                                "O2": repr(float(o2[0, j]))},
-                                       "exact").points["P_tip"].deviation
+            want = (
+                symkin.evaluate(
+                    g.analysis, {"O1": repr(float(o1[i, 0])), "O2": repr(float(o2[0, j]))}, "exact"
+                )
+                .points["P_tip"]
+                .deviation
+            )
             assert rel_err(res["points"]["P_tip"]["deviation"][:, i, j], want) <= 1e-12
     bad = ~res["ok"]
     assert np.isnan(res["points"]["P_tip"]["deviation"][:, bad]).all()
@@ -127,7 +135,7 @@ def test_out_of_range_is_nan_in_numpy_and_status_1_in_c():
 def test_c_rejects_bad_arguments():
     g = generated("four_bar")
     assert g.lib.evaluate([float("nan")], None, 2)[0] == 3
-    unknown = max(lv.code for lv in symkin.core.levels.LEVELS) + 1     # no level has this code
+    unknown = max(lv.code for lv in symkin.core.levels.LEVELS) + 1  # no level has this code
     assert g.lib.evaluate([0.1], None, unknown)[0] == 3
     assert g.lib.evaluate([0.1], [float("inf")], 2)[0] == 3
 
@@ -135,10 +143,15 @@ def test_c_rejects_bad_arguments():
 def test_numpy_module_imports_only_numpy_and_the_standard_library():
     g = generated("four_bar")
     tree = ast.parse(numpy_backend.emit(g.plan, "test"))
-    modules = {alias.name.split(".")[0] for node in ast.walk(tree)
-               if isinstance(node, ast.Import) for alias in node.names}
-    modules |= {node.module.split(".")[0] for node in ast.walk(tree)
-                if isinstance(node, ast.ImportFrom)}
+    modules = {
+        alias.name.split(".")[0]
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Import)
+        for alias in node.names
+    }
+    modules |= {
+        node.module.split(".")[0] for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)
+    }
     assert modules <= {"numpy", "math"} | set(sys.stdlib_module_names)
 
 
@@ -177,17 +190,33 @@ def test_c_harness_under_address_and_undefined_sanitizers(tmp_path, key):
     header, code = c_backend.emit(g.plan, "test")
     (tmp_path / f"{name}.h").write_text(header)
     (tmp_path / f"{name}.c").write_text(code)
-    (tmp_path / "main.c").write_text(HARNESS.replace("NAME_UPPER", name.upper())
-                                     .replace("NAME_LEVELS", ", ".join(
-                                         str(lv.code) for lv in g.plan.levels))
-                                     .replace("NAME", name))
+    (tmp_path / "main.c").write_text(
+        HARNESS.replace("NAME_UPPER", name.upper())
+        .replace("NAME_LEVELS", ", ".join(str(lv.code) for lv in g.plan.levels))
+        .replace("NAME", name)
+    )
     cc = os.environ.get("CC", "cc")
-    flags = ["-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O1", "-g",
-             "-fsanitize=address,undefined", "-fno-sanitize-recover=all"]
-    subprocess.run([cc, *flags, "main.c", f"{name}.c", "-o", "harness", "-lm"], cwd=tmp_path,
-                   check=True)
-    proc = subprocess.run(["./harness"], cwd=tmp_path, capture_output=True, text=True,
-                          env={**os.environ, "ASAN_OPTIONS": "detect_leaks=1"})
+    flags = [
+        "-std=c99",
+        "-pedantic",
+        "-Wall",
+        "-Wextra",
+        "-Werror",
+        "-O1",
+        "-g",
+        "-fsanitize=address,undefined",
+        "-fno-sanitize-recover=all",
+    ]
+    subprocess.run(
+        [cc, *flags, "main.c", f"{name}.c", "-o", "harness", "-lm"], cwd=tmp_path, check=True
+    )
+    proc = subprocess.run(
+        ["./harness"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        env={**os.environ, "ASAN_OPTIONS": "detect_leaks=1"},
+    )
     assert proc.returncode == 0 and proc.stdout.strip() == "OK", proc.stdout + proc.stderr
     assert "runtime error" not in proc.stderr
 
@@ -197,21 +226,43 @@ def test_derive_is_deterministic_across_hash_seeds(tmp_path):
     for seed in ("1", "12345"):
         out = tmp_path / f"out{seed}"
         env = {**os.environ, "PYTHONHASHSEED": seed}
-        subprocess.run([sys.executable, "-m", "symkin", "derive", "--quiet", "--emit", "c,numpy",
-                        str(EXAMPLES / "stephenson_six_bar.toml"), "-o", str(out)], env=env,
-                       check=True, cwd=ROOT)
+        subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "symkin",
+                "derive",
+                "--quiet",
+                "--emit",
+                "c,numpy",
+                str(EXAMPLES / "stephenson_six_bar.toml"),
+                "-o",
+                str(out),
+            ],
+            env=env,
+            check=True,
+            cwd=ROOT,
+        )
         outputs.append({p.name: p.read_bytes() for p in sorted(out.iterdir())})
     assert outputs[0] == outputs[1]
 
 
-HOSTILE = M.text("hostile", M.links("int", "a-b", r"\input{/etc/passwd}", '"; system("true")')
-                 + M.hinge("int", "int", "a-b", 0.0, 0.0, "pi/2", input=True)
-                 + M.hinge("*/ x; /*", "a-b", r"\input{/etc/passwd}", 0.015, 0.026)
-                 + M.hinge('""" + __import__("os").system("touch PWNED") + """', "int",
-                           '"; system("true")', 0.1, 0.0, "pi/2")
-                 + M.hinge("\\\\\n#include <x>", r"\input{/etc/passwd}", '"; system("true")',
-                           0.085, 0.068)
-                 + M.point("'; exit(1); '", r"\input{/etc/passwd}", 0.06, 0.09))
+HOSTILE = M.text(
+    "hostile",
+    M.links("int", "a-b", r"\input{/etc/passwd}", '"; system("true")')
+    + M.hinge("int", "int", "a-b", 0.0, 0.0, "pi/2", input=True)
+    + M.hinge("*/ x; /*", "a-b", r"\input{/etc/passwd}", 0.015, 0.026)
+    + M.hinge(
+        '""" + __import__("os").system("touch PWNED") + """',
+        "int",
+        '"; system("true")',
+        0.1,
+        0.0,
+        "pi/2",
+    )
+    + M.hinge("\\\\\n#include <x>", r"\input{/etc/passwd}", '"; system("true")', 0.085, 0.068)
+    + M.point("'; exit(1); '", r"\input{/etc/passwd}", 0.06, 0.09),
+)
 
 
 def test_hostile_names_give_safe_compiling_code(tmp_path):
@@ -227,7 +278,7 @@ def test_hostile_names_give_safe_compiling_code(tmp_path):
     want = symkin.evaluate(an, {"int": "0.2"}, "exact").points["'; exit(1); '"].deviation
     assert rel_err(res["points"]["'; exit(1); '"]["deviation"], want) <= 1e-12
     assert not (ROOT / "PWNED").exists() and not (tmp_path / "PWNED").exists()
-    header, code = c_backend.emit(p, 'x*/y.toml')
+    header, code = c_backend.emit(p, "x*/y.toml")
     lib = toolchain.Library(toolchain.build(mech.name, header, code), mech.name, 1, 1, 1, 4)
     status, out, _ = lib.evaluate([0.2], None, 2)
     assert status == 0 and rel_err(out[4:6], want) <= 1e-12

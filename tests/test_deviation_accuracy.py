@@ -11,22 +11,24 @@ from __future__ import annotations
 
 import math
 
+import mechanisms as M
 import mpmath
 import pytest
-
-import mechanisms as M
-import symkin
 from conftest import EXAMPLES
 from evaluators import rel_err
 from reference_solver import Reference
+
+import symkin
 from symkin.kinematics.analysis import Analysis
 
 CASES = {
     "four_bar": (EXAMPLES / "four_bar.toml", {"A0": "0.2"}),
     "four_bar_negative": (EXAMPLES / "four_bar.toml", {"A0": "-0.35"}),
     "six_bar": (EXAMPLES / "stephenson_six_bar.toml", {"O_A": "0.2"}),
-    "nine_bar": (EXAMPLES / "nine_bar_platform.toml",
-                 {"O": "0.05", "A": "0.03", "B": "-0.02", "K": "0.04"}),
+    "nine_bar": (
+        EXAMPLES / "nine_bar_platform.toml",
+        {"O": "0.05", "A": "0.03", "B": "-0.02", "K": "0.04"},
+    ),
     "serial_arm": (M.SERIAL_ARM, {"S": "0.3", "E": "-0.2"}),
     "five_bar": (M.FIVE_BAR, {"O1": "0.15", "O2": "-0.1"}),
     "watt_ii": (M.WATT_II, {"O1": "0.25"}),
@@ -85,11 +87,14 @@ def test_exact_with_tiny_plates(case, l_ratio, analyses):
     assert length > 0
 
 
-@pytest.mark.parametrize("case, inputs", [
-    ("four_bar", {"A0": "1e-7"}),
-    ("serial_arm", {"S": "1e-7", "E": "-3e-7"}),
-    ("five_bar", {"O1": "1e-7", "O2": "2e-7"}),
-])
+@pytest.mark.parametrize(
+    "case, inputs",
+    [
+        ("four_bar", {"A0": "1e-7"}),
+        ("serial_arm", {"S": "1e-7", "E": "-3e-7"}),
+        ("five_bar", {"O1": "1e-7", "O2": "2e-7"}),
+    ],
+)
 def test_exact_with_tiny_angles(case, inputs, analyses):
     source, _ = CASES[case]
     mech, an = analysis(analyses, case, source)
@@ -107,7 +112,7 @@ def test_first_order_is_within_plate_ratio_of_exact(case, analyses):
     first = symkin.evaluate(an, inputs, "first_order")
     # l/L with L the smallest distance between two hinges of the mechanism.
     centres = [tuple(float(c.subs(mech.defaults)) for c in h.at) for h in mech.hinges]
-    shortest = min(math.dist(a, b) for i, a in enumerate(centres) for b in centres[i + 1:])
+    shortest = min(math.dist(a, b) for i, a in enumerate(centres) for b in centres[i + 1 :])
     ratio = float(mech.parameters[0].value) / shortest
     for name, p in exact.points.items():
         err = rel_err(first.points[name].deviation, [mpmath.mpf(x) for x in p.deviation])
@@ -115,16 +120,18 @@ def test_first_order_is_within_plate_ratio_of_exact(case, analyses):
 
 
 def test_paper_equals_exact_for_an_open_chain(analyses):
-    mech, an = analysis(analyses, "serial_arm", M.SERIAL_ARM)
+    _mech, an = analysis(analyses, "serial_arm", M.SERIAL_ARM)
     inputs = {"S": "0.3", "E": "-0.2"}
-    levels = [symkin.evaluate(an, inputs, lv).points["T"].deviation for lv in
-              ("paper", "first_order", "exact")]
+    levels = [
+        symkin.evaluate(an, inputs, lv).points["T"].deviation
+        for lv in ("paper", "first_order", "exact")
+    ]
     assert levels[0] == levels[1] == levels[2]
 
 
 def test_paper_differs_from_exact_in_a_closed_loop(analyses):
     """Erratum-aware: (4.8) ignores loop closure, so for the four-bar's C it is not exact."""
-    mech, an = analysis(analyses, "four_bar", EXAMPLES / "four_bar.toml")
+    _mech, an = analysis(analyses, "four_bar", EXAMPLES / "four_bar.toml")
     paper = symkin.evaluate(an, {"A0": "0.2"}, "paper").points["C"].deviation
     exact = symkin.evaluate(an, {"A0": "0.2"}, "exact").points["C"].deviation
     assert rel_err(paper, [mpmath.mpf(x) for x in exact]) > 0.1
@@ -146,12 +153,15 @@ def test_structured_jacobian_equals_the_derivative_of_the_closure(case, analyses
     values.update(mech.defaults)
     numeric = an.residual.jacobian(an.deltas).subs(values).evalf(30)
     assert (an.jacobian.subs(values).evalf(30) - numeric).norm() <= 1e-25 * (1 + numeric.norm())
-    zero = {**values, **{s: 0 for s in an.deltas}}
+    zero = {**values, **dict.fromkeys(an.deltas, 0)}
     a_lin, _ = an.linear_system
     lin = []
     for c in an.kin.chords:
-        lin.append(an.kin.angular_closure(c, {a: an.compliant_angles()[a] - an.kin.theta[a]
-                                              for a in an.kin.theta}))
+        lin.append(
+            an.kin.angular_closure(
+                c, {a: an.compliant_angles()[a] - an.kin.theta[a] for a in an.kin.theta}
+            )
+        )
         lin.extend(an.kin.positional_closure(c, an.compliant_angles(), rigid=True))
     expected = sp.Matrix(lin).jacobian(an.deltas).subs(zero).evalf(30)
     assert (a_lin.subs(zero).evalf(30) - expected).norm() <= 1e-25 * (1 + expected.norm())

@@ -8,10 +8,10 @@ import re
 
 import mpmath
 import pytest
-
-import symkin
 from conftest import ROOT
 from reference_solver import Reference
+
+import symkin
 from symkin.model.hinges import HINGE_KEYS, MODELS
 from symkin.model.mechanism import LINK_KEYS, POINT_KEYS, TOP_KEYS
 
@@ -35,21 +35,25 @@ def test_the_complete_example_loads_and_matches_the_independent_solver():
     mech = symkin.loads(text, "from_the_docs.toml")
     assert list(mech.inputs) == ["A0"]
     got = symkin.evaluate(symkin.analyze(mech), {"A0": 0.2}, "exact").points["C"].deviation
-    ref = [float(x) for x in Reference(mech).deviation({"A0": mpmath.mpf("0.2")})["points"]["C"]
-           ["deviation"]]
+    ref = [
+        float(x)
+        for x in Reference(mech).deviation({"A0": mpmath.mpf("0.2")})["points"]["C"]["deviation"]
+    ]
     assert max(abs(g - r) for g, r in zip(got, ref)) <= 1e-9 * max(map(abs, ref))
 
 
-@pytest.mark.parametrize("key", sorted(set(TOP_KEYS) | set(HINGE_KEYS) | set(LINK_KEYS)
-                                       | set(POINT_KEYS)))
+@pytest.mark.parametrize(
+    "key", sorted(set(TOP_KEYS) | set(HINGE_KEYS) | set(LINK_KEYS) | set(POINT_KEYS))
+)
 def test_every_key_is_documented(key):
     assert any(f"`{form}`" in FILE_FORMAT for form in (key, f"[{key}]", f"[[{key}]]")), key
 
 
 @pytest.mark.parametrize("model", sorted(MODELS))
 def test_every_model_and_its_parameters_are_documented(model):
-    row = next((line for line in FILE_FORMAT.splitlines() if line.startswith(f"| `{model}` |")),
-               None)
+    row = next(
+        (line for line in FILE_FORMAT.splitlines() if line.startswith(f"| `{model}` |")), None
+    )
     assert row, f"no row for model {model}"
     for parameter in MODELS[model].parameters:
         assert f"`{parameter.name}`" in row, (model, parameter.name)

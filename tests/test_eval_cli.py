@@ -7,10 +7,10 @@ import math
 import subprocess
 import sys
 
-import pytest
-
 import mechanisms as M
+import pytest
 from conftest import EXAMPLES
+
 from symkin.cli.commands import main
 
 FOUR_BAR = str(EXAMPLES / "four_bar.toml")
@@ -24,12 +24,19 @@ def run(capsys, *argv):
 
 @pytest.mark.parametrize("level", ["paper", "first_order", "exact"])
 def test_json_has_the_contract_keys(capsys, level):
-    code, out, err = run(capsys, "eval", FOUR_BAR, "--input", "A0=0.2", "--level", level,
-                         "--json")
+    code, out, err = run(capsys, "eval", FOUR_BAR, "--input", "A0=0.2", "--level", level, "--json")
     assert code == 0, err
     data = json.loads(out)
-    assert set(data) == {"level", "backend", "inputs", "params", "angles", "points", "links",
-                         "dyads"}
+    assert set(data) == {
+        "level",
+        "backend",
+        "inputs",
+        "params",
+        "angles",
+        "points",
+        "links",
+        "dyads",
+    }
     assert data["level"] == level and data["backend"] == "sympy"
     assert data["inputs"] == {"A0": 0.2} and data["params"] == {"l": 1e-3}
     assert set(data["angles"]) == {"rigid", "compliant"}
@@ -41,8 +48,9 @@ def test_json_has_the_contract_keys(capsys, level):
     assert dyad["hinges"] == ["A", "B", "B0"] and dyad["loop"] == "B" and dyad["branch"] == 1
     assert 0 < dyad["toggle_margin"] <= 1
     for k in range(2):
-        assert c["compliant"][k] == pytest.approx(c["rigid"][k] + c["deviation"][k],
-                                                  rel=1e-15, abs=1e-18)
+        assert c["compliant"][k] == pytest.approx(
+            c["rigid"][k] + c["deviation"][k], rel=1e-15, abs=1e-18
+        )
     assert 1e-7 < abs(c["deviation"][0]) < 1e-4
 
 
@@ -54,33 +62,38 @@ def test_text_output_names_points_and_dyads(capsys):
 
 def test_param_override_changes_the_deviation(capsys):
     _, base, _ = run(capsys, "eval", FOUR_BAR, "--input", "A0=0.2", "--json")
-    _, bigger, _ = run(capsys, "eval", FOUR_BAR, "--input", "A0=0.2", "--param", "l=2e-3",
-                       "--json")
+    _, bigger, _ = run(capsys, "eval", FOUR_BAR, "--input", "A0=0.2", "--param", "l=2e-3", "--json")
     d0 = json.loads(base)["points"]["C"]["deviation"]
     d1 = json.loads(bigger)["points"]["C"]["deviation"]
-    assert d1[0] / d0[0] == pytest.approx(2.0, rel=0.05)   # Δz scales with the plate length
+    assert d1[0] / d0[0] == pytest.approx(2.0, rel=0.05)  # Δz scales with the plate length
 
 
 @pytest.mark.parametrize("level", ["paper", "first_order", "exact"])
 def test_out_of_assembly_range_exits_3_naming_the_loop(tmp_path, level):
     path = tmp_path / "non_grashof.toml"
     path.write_text(M.NON_GRASHOF)
-    proc = subprocess.run([sys.executable, "-m", "symkin", "eval", str(path), "--input",
-                           "A0=2.5", "--level", level], capture_output=True, text=True,
-                          timeout=120)
+    proc = subprocess.run(
+        [sys.executable, "-m", "symkin", "eval", str(path), "--input", "A0=2.5", "--level", level],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert proc.returncode == 3, proc.stderr
     assert "Traceback" not in proc.stderr
     assert "loop of hinge 'B'" in proc.stderr and "non_grashof.toml" in proc.stderr
 
 
-@pytest.mark.parametrize("argv, fragment", [
-    (["--input", "A0"], "not NAME=VALUE"),
-    (["--input", "B=0.2"], "'B' is not an input hinge"),
-    ([], "no value for the input(s) A0"),
-    (["--input", "A0=0.2", "--param", "L=1"], "unknown parameter 'L'"),
-    (["--input", "A0=__import__('os')"], "not allowed"),
-    (["--input", "A0=0.2", "--input", "A0=0.3"], "given twice"),
-])
+@pytest.mark.parametrize(
+    "argv, fragment",
+    [
+        (["--input", "A0"], "not NAME=VALUE"),
+        (["--input", "B=0.2"], "'B' is not an input hinge"),
+        ([], "no value for the input(s) A0"),
+        (["--input", "A0=0.2", "--param", "L=1"], "unknown parameter 'L'"),
+        (["--input", "A0=__import__('os')"], "not allowed"),
+        (["--input", "A0=0.2", "--input", "A0=0.3"], "given twice"),
+    ],
+)
 def test_bad_options_exit_2(capsys, argv, fragment):
     code, out, err = run(capsys, "eval", FOUR_BAR, *argv)
     assert code == 2
@@ -92,13 +105,17 @@ def test_param_override_cannot_build_a_huge_number(tmp_path, capsys):
     """A default that depends on an overridden parameter is re-evaluated numerically."""
     import time
 
-    text = (EXAMPLES / "four_bar.toml").read_text().replace(
-        "[defaults]\n", 'n = 2\nq = "l**n"\n\n[defaults]\n')
+    text = (
+        (EXAMPLES / "four_bar.toml")
+        .read_text()
+        .replace("[defaults]\n", 'n = 2\nq = "l**n"\n\n[defaults]\n')
+    )
     path = tmp_path / "bomb.toml"
     path.write_text(text)
     start = time.perf_counter()
-    code, out, err = run(capsys, "eval", str(path), "--input", "A0=0.2", "--param", "n=1e9",
-                         "--level", "paper")
+    code, _out, err = run(
+        capsys, "eval", str(path), "--input", "A0=0.2", "--param", "n=1e9", "--level", "paper"
+    )
     assert code == 0, err
     assert time.perf_counter() - start < 20
 
@@ -106,11 +123,27 @@ def test_param_override_cannot_build_a_huge_number(tmp_path, capsys):
 @pytest.mark.parametrize("backend", ["sympy", "numpy", "c"])
 def test_model_limit_exits_3_in_every_backend(tmp_path, backend):
     path = tmp_path / "elastica.toml"
-    path.write_text((EXAMPLES / "four_bar.toml").read_text().replace(
-        'model = "circular_arc"', 'model = "elastica_force"'))
-    proc = subprocess.run([sys.executable, "-m", "symkin", "eval", str(path), "--input",
-                           "A0=1.7", "--backend", backend], capture_output=True, text=True,
-                          timeout=300)
+    path.write_text(
+        (EXAMPLES / "four_bar.toml")
+        .read_text()
+        .replace('model = "circular_arc"', 'model = "elastica_force"')
+    )
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "symkin",
+            "eval",
+            str(path),
+            "--input",
+            "A0=1.7",
+            "--backend",
+            backend,
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert proc.returncode == 3, proc.stderr
     assert "hinge 'A0'" in proc.stderr and "elastica_force" in proc.stderr
 
@@ -119,9 +152,20 @@ def test_model_limit_exits_3_in_every_backend(tmp_path, backend):
 def test_all_backends_print_the_same_json(capsys, level):
     outputs = {}
     for backend in ("sympy", "numpy", "c"):
-        code, out, err = run(capsys, "eval", str(EXAMPLES / "stephenson_six_bar.toml"),
-                             "--input", "O_A=0.15", "--param", "l=1.2e-3", "--level", level,
-                             "--backend", backend, "--json")
+        code, out, err = run(
+            capsys,
+            "eval",
+            str(EXAMPLES / "stephenson_six_bar.toml"),
+            "--input",
+            "O_A=0.15",
+            "--param",
+            "l=1.2e-3",
+            "--level",
+            level,
+            "--backend",
+            backend,
+            "--json",
+        )
         assert code == 0, err
         outputs[backend] = json.loads(out)
     ref = outputs.pop("sympy")
@@ -146,16 +190,18 @@ def test_toggle_margin_against_an_independent_construction(capsys):
     margin = json.loads(out)["dyads"][0]["toggle_margin"]
     with mpmath.workdps(30):
         t = mpmath.mpf("0.2")
-        a = (mpmath.mpf("0.015") * mpmath.cos(t) - mpmath.mpf("0.026") * mpmath.sin(t),
-             mpmath.mpf("0.015") * mpmath.sin(t) + mpmath.mpf("0.026") * mpmath.cos(t))
+        a = (
+            mpmath.mpf("0.015") * mpmath.cos(t) - mpmath.mpf("0.026") * mpmath.sin(t),
+            mpmath.mpf("0.015") * mpmath.sin(t) + mpmath.mpf("0.026") * mpmath.cos(t),
+        )
         b0 = (mpmath.mpf("0.1"), mpmath.mpf(0))
-        r1 = mpmath.hypot(mpmath.mpf("0.07"), mpmath.mpf("0.042"))     # |B - A| as fabricated
-        r2 = mpmath.hypot(mpmath.mpf("-0.015"), mpmath.mpf("0.068"))   # |B - B0|
+        r1 = mpmath.hypot(mpmath.mpf("0.07"), mpmath.mpf("0.042"))  # |B - A| as fabricated
+        r2 = mpmath.hypot(mpmath.mpf("-0.015"), mpmath.mpf("0.068"))  # |B - B0|
         d = mpmath.hypot(b0[0] - a[0], b0[1] - a[1])
-        along = (r1 ** 2 - r2 ** 2 + d ** 2) / (2 * d)
-        h = mpmath.sqrt(r1 ** 2 - along ** 2)
+        along = (r1**2 - r2**2 + d**2) / (2 * d)
+        h = mpmath.sqrt(r1**2 - along**2)
         ex, ey = (b0[0] - a[0]) / d, (b0[1] - a[1]) / d
-        b = (a[0] + along * ex - h * ey, a[1] + along * ey + h * ex)    # B lies left of A -> B0
+        b = (a[0] + along * ex - h * ey, a[1] + along * ey + h * ex)  # B lies left of A -> B0
         u, v = (a[0] - b[0], a[1] - b[1]), (b0[0] - b[0], b0[1] - b[1])
         sine = abs(u[0] * v[1] - u[1] * v[0]) / (r1 * r2)
     assert margin == pytest.approx(float(sine), rel=1e-12)

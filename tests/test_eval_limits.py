@@ -8,11 +8,11 @@ import math
 
 import numpy as np
 import pytest
-
-import symkin
 from conftest import EXAMPLES
 from evaluators import generated, rel_err
 from reference_solver import Reference
+
+import symkin
 from symkin.cli.commands import main
 from symkin.codegen.backends.numpy import backend as numpy_backend
 from symkin.codegen.plan import plan
@@ -28,14 +28,18 @@ def run(args, capsys):
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
-@pytest.mark.parametrize("param, message", [
-    ("l=-1e-3", "plate length must be positive"),
-    ("l=0", "plate length must be positive"),
-    ("l=0.04", "reach past each other"),            # longer than the 30 mm crank
-])
+@pytest.mark.parametrize(
+    "param, message",
+    [
+        ("l=-1e-3", "plate length must be positive"),
+        ("l=0", "plate length must be positive"),
+        ("l=0.04", "reach past each other"),  # longer than the 30 mm crank
+    ],
+)
 def test_overrides_are_validated_like_the_file(capsys, backend, param, message):
-    code, out, err = run(["eval", FOUR_BAR, "--input", "A0=0.2", "--param", param,
-                          "--backend", backend], capsys)
+    code, out, err = run(
+        ["eval", FOUR_BAR, "--input", "A0=0.2", "--param", param, "--backend", backend], capsys
+    )
     assert code == 2 and message in err and "fix:" in err and out == ""
 
 
@@ -49,8 +53,7 @@ def test_a_negative_length_in_the_file_is_refused_too(tmp_path, capsys):
 @pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("angle", ["2*pi-0.3", "-3.2", "1e300", "1e8"])
 def test_inputs_beyond_a_half_turn_exit_3_in_every_backend(capsys, backend, angle):
-    code, out, err = run(["eval", FOUR_BAR, "--input", f"A0={angle}", "--backend", backend],
-                         capsys)
+    code, out, err = run(["eval", FOUR_BAR, "--input", f"A0={angle}", "--backend", backend], capsys)
     assert code == 3 and "|angle| <= pi" in err and out == ""
 
 
@@ -63,8 +66,10 @@ def test_the_refusal_names_the_same_pose(capsys):
 def test_a_half_turn_itself_is_accepted(capsys, backend):
     """The double nearest pi lies below pi: the crank-rocker's crank reaches a half turn in every
     backend, with the independent solver's deviation (every hinge stays within a half turn)."""
-    code, out, err = run(["eval", FOUR_BAR, "--input", "A0=3.141592653589793", "--json",
-                          "--backend", backend], capsys)
+    code, out, err = run(
+        ["eval", FOUR_BAR, "--input", "A0=3.141592653589793", "--json", "--backend", backend],
+        capsys,
+    )
     assert code == 0, err
     dev = json.loads(out)["points"]["C"]["deviation"]
     ref = Reference(symkin.load(FOUR_BAR)).deviation({"A0": "3.141592653589793"})
@@ -81,7 +86,7 @@ def test_c_api_refuses_and_fills_nan():
     h = generated("non_grashof")
     status, out, _ = h.lib.evaluate([2.5], None, 2)
     assert status == 1 and all(math.isnan(v) for v in out)
-    status, out, _ = g.lib.evaluate([0.2], None, 7)            # a level not generated
+    status, out, _ = g.lib.evaluate([0.2], None, 7)  # a level not generated
     assert status == 3 and all(math.isnan(v) for v in out)
 
 
@@ -115,5 +120,4 @@ def test_numpy_default_level_is_the_most_faithful_generated():
     assert module.LEVELS == ("paper", "first_order")
     default = module.evaluate({"A0": 0.2})
     explicit = module.evaluate({"A0": 0.2}, "first_order")
-    assert np.array_equal(default["points"]["C"]["deviation"],
-                          explicit["points"]["C"]["deviation"])
+    assert np.array_equal(default["points"]["C"]["deviation"], explicit["points"]["C"]["deviation"])

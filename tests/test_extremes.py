@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from evaluators import generated, rel_err
 from reference_solver import Reference
+
 from symkin.codegen.backends.numpy import backend as numpy_backend
 from symkin.codegen.toolchain import import_numpy_module
 
@@ -37,7 +37,7 @@ def test_angle_grid_float64(key, hinge):
 def test_plate_ratio_grid_float64(key):
     g = generated(key)
     inputs = {"four_bar": {"A0": "0.25"}, "five_bar": {"O1": "0.15", "O2": "-0.1"}}[key]
-    length_scale = 0.05                          # the links are about 5 cm
+    length_scale = 0.05  # the links are about 5 cm
     for ratio in RATIOS:
         overrides = {"l": f"{float(ratio) * length_scale:.6e}"}
         want = Reference(g.mech, overrides).deviation(inputs)["points"]
@@ -68,19 +68,30 @@ def test_approaching_a_toggle_position():
 def test_float32_error_is_bounded(key):
     g = generated(key)
     module = import_numpy_module(numpy_backend.emit(g.plan, "f32", "float32"), f"{key}_f32")
-    inputs = {"four_bar": {"A0": ["1e-6", "0.05", "0.2", "0.5"]},
-              "six_bar": {"O_A": ["1e-6", "0.05", "0.2", "0.5"]},
-              "nine_bar": {"O": ["0.05", "0.01"], "A": ["0.03", "-0.02"], "B": ["-0.02", "0.01"],
-                           "K": ["0.04", "0.02"]}}[key]
+    inputs = {
+        "four_bar": {"A0": ["1e-6", "0.05", "0.2", "0.5"]},
+        "six_bar": {"O_A": ["1e-6", "0.05", "0.2", "0.5"]},
+        "nine_bar": {
+            "O": ["0.05", "0.01"],
+            "A": ["0.03", "-0.02"],
+            "B": ["-0.02", "0.01"],
+            "K": ["0.04", "0.02"],
+        },
+    }[key]
     n = len(next(iter(inputs.values())))
-    res = module.evaluate({k: np.array([float(v) for v in vs]) for k, vs in inputs.items()},
-                          "exact")
+    res = module.evaluate(
+        {k: np.array([float(v) for v in vs]) for k, vs in inputs.items()}, "exact"
+    )
     assert res["ok"].all()
     ref = Reference(g.mech)
     worst = 0.0
     for j in range(n):
         want = ref.deviation({k: vs[j] for k, vs in inputs.items()})["points"]
         for name in module.POINTS:
-            worst = max(worst, rel_err(res["points"][name]["deviation"][:, j].astype(float),
-                                       want[name]["deviation"]))
+            worst = max(
+                worst,
+                rel_err(
+                    res["points"][name]["deviation"][:, j].astype(float), want[name]["deviation"]
+                ),
+            )
     assert worst <= FLOAT32_BOUND, worst

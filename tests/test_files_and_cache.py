@@ -17,11 +17,11 @@ import time
 from pathlib import Path
 
 import pytest
-
-import symkin
 from conftest import EXAMPLES
 from evaluators import rel_err, require_compiler
 from reference_solver import Reference
+
+import symkin
 from symkin.codegen.backends.numpy import backend as numpy_backend
 from symkin.codegen.plan import plan
 from symkin.codegen.toolchain import import_numpy_module
@@ -33,8 +33,14 @@ ROOT = Path(__file__).resolve().parent.parent
 
 def cli(*args: str, cache: Path, timeout: float = 300) -> subprocess.CompletedProcess:
     env = {**os.environ, "SYMKIN_CACHE": str(cache)}
-    return subprocess.run([sys.executable, "-m", "symkin", *args], capture_output=True,
-                          text=True, env=env, timeout=timeout, cwd=ROOT)
+    return subprocess.run(
+        [sys.executable, "-m", "symkin", *args],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=timeout,
+        cwd=ROOT,
+    )
 
 
 def deviation(stdout: str) -> list[float]:
@@ -65,16 +71,18 @@ def planted_library(tmp_path: Path, marker: Path) -> bytes:
     source = tmp_path / "planted.c"
     source.write_text(PLANTED.replace("MARKER", str(marker)))
     out = tmp_path / "planted.so"
-    subprocess.run([os.environ.get("CC", "cc"), "-shared", "-fPIC", str(source), "-o", str(out)],
-                   check=True)
+    subprocess.run(
+        [os.environ.get("CC", "cc"), "-shared", "-fPIC", str(source), "-o", str(out)], check=True
+    )
     return out.read_bytes()
 
 
 def test_cache_is_created_private(tmp_path):
     require_compiler()
     cache = tmp_path / "new" / "cache"
-    result = cli("eval", str(FOUR_BAR), "--input", "A0=0.2", "--backend", "c", "--json",
-                 cache=cache)
+    result = cli(
+        "eval", str(FOUR_BAR), "--input", "A0=0.2", "--backend", "c", "--json", cache=cache
+    )
     assert result.returncode == 0, result.stderr
     assert stat.S_IMODE(cache.stat().st_mode) == 0o700
     assert rel_err(deviation(result.stdout), oracle()) <= 1e-9
@@ -83,15 +91,15 @@ def test_cache_is_created_private(tmp_path):
 def test_a_planted_or_corrupt_library_is_rebuilt_not_loaded(tmp_path):
     require_compiler()
     cache = tmp_path / "cache"
-    first = cli("eval", str(FOUR_BAR), "--input", "A0=0.2", "--backend", "c", "--json",
-                cache=cache)
+    first = cli("eval", str(FOUR_BAR), "--input", "A0=0.2", "--backend", "c", "--json", cache=cache)
     assert first.returncode == 0, first.stderr
     [library] = cache.glob("four_bar-*.so")
     marker = tmp_path / "marker"
     for content in (planted_library(tmp_path, marker), library.read_bytes()[:1000], b""):
-        library.write_bytes(content)          # same name, planted or truncated
-        again = cli("eval", str(FOUR_BAR), "--input", "A0=0.2", "--backend", "c", "--json",
-                    cache=cache)
+        library.write_bytes(content)  # same name, planted or truncated
+        again = cli(
+            "eval", str(FOUR_BAR), "--input", "A0=0.2", "--backend", "c", "--json", cache=cache
+        )
         assert again.returncode == 0, again.stderr
         assert not marker.exists(), "the planted library's constructor ran"
         assert rel_err(deviation(again.stdout), oracle()) <= 1e-9
@@ -135,16 +143,19 @@ def test_no_numpy_module_is_read_from_the_cache(tmp_path):
     marker = tmp_path / "marker"
     planted = cache / "numpy" / f"four_bar_{digest}.py"
     planted.write_text(f"open({str(marker)!r}, 'w').write('ran')\n")
-    result = cli("eval", str(FOUR_BAR), "--input", "A0=0.2", "--backend", "numpy", "--json",
-                 cache=cache)
+    result = cli(
+        "eval", str(FOUR_BAR), "--input", "A0=0.2", "--backend", "numpy", "--json", cache=cache
+    )
     assert result.returncode == 0, result.stderr
     assert not marker.exists()
     assert rel_err(deviation(result.stdout), oracle()) <= 1e-9
 
 
 def test_threads_import_one_module_at_once():
-    source = numpy_backend.emit(plan(symkin.analyze(symkin.load(FOUR_BAR))), "threads") + \
-        f"\n# {random.random()}\n"                         # a text no earlier test imported
+    source = (
+        numpy_backend.emit(plan(symkin.analyze(symkin.load(FOUR_BAR))), "threads")
+        + f"\n# {random.random()}\n"
+    )  # a text no earlier test imported
     start = threading.Barrier(9)
     modules, errors = [], []
 
@@ -152,7 +163,7 @@ def test_threads_import_one_module_at_once():
         start.wait()
         try:
             modules.append(import_numpy_module(source, "four_bar_threads"))
-        except Exception as exc:                          # noqa: BLE001 - collected, asserted
+        except Exception as exc:
             errors.append(exc)
 
     threads = [threading.Thread(target=worker) for _ in range(9)]
@@ -164,6 +175,7 @@ def test_threads_import_one_module_at_once():
 
 
 # -- derive: all or none -----------------------------------------------------------------------
+
 
 def version(tag: str, size: int) -> dict[str, bytes]:
     """A set of files whose every byte says which write it belongs to."""
@@ -186,7 +198,7 @@ def test_killed_writes_leave_the_old_set_or_the_new(tmp_path):
     for k in range(20):
         new = f"new{k % 10}"
         pid = os.fork()
-        if pid == 0:                                   # the writer
+        if pid == 0:  # the writer
             try:
                 write_atomically(version(new, 4 << 20), folder)
             finally:
@@ -207,13 +219,13 @@ def test_killed_writes_leave_the_old_set_or_the_new(tmp_path):
         write_atomically(version("old0", 1 << 20), folder)
         assert tags(folder) == {"old0"}
         assert not list(folder.glob(TEMP_PREFIX + "*")) and not (folder / COMMIT).exists()
-    assert kills["before"] > 0                          # the test did kill writes midway
+    assert kills["before"] > 0  # the test did kill writes midway
 
 
 def test_concurrent_writers_never_mix(tmp_path):
     rounds = 10
     for r in range(rounds):
-        folder = tmp_path / f"new{r}"                   # a new folder, four writers at once
+        folder = tmp_path / f"new{r}"  # a new folder, four writers at once
         start = threading.Barrier(4)
         errors = []
 
@@ -221,7 +233,7 @@ def test_concurrent_writers_never_mix(tmp_path):
             start.wait()
             try:
                 write_atomically(version(tag, 1 << 16), folder)
-            except Exception as exc:                      # noqa: BLE001 - collected, asserted
+            except Exception as exc:
                 errors.append(exc)
 
         threads = [threading.Thread(target=writer, args=(f"w{n}{r}",)) for n in range(4)]
@@ -242,18 +254,48 @@ def test_killed_derive_leaves_old_or_new_files(tmp_path):
     cache = tmp_path / "cache"
     other = tmp_path / "four_bar.toml"
     other.write_text(FOUR_BAR.read_text().replace("l = 1e-3", "l = 2e-3", 1))
-    assert cli("derive", str(other), "-o", str(folder), "--emit", "numpy,c", "--quiet",
-               cache=cache).returncode == 0
+    assert (
+        cli(
+            "derive", str(other), "-o", str(folder), "--emit", "numpy,c", "--quiet", cache=cache
+        ).returncode
+        == 0
+    )
     old = {p.name: p.read_bytes() for p in folder.iterdir()}
-    assert cli("derive", str(FOUR_BAR), "-o", str(tmp_path / "ref"), "--emit", "numpy,c",
-               "--quiet", cache=cache).returncode == 0
+    assert (
+        cli(
+            "derive",
+            str(FOUR_BAR),
+            "-o",
+            str(tmp_path / "ref"),
+            "--emit",
+            "numpy,c",
+            "--quiet",
+            cache=cache,
+        ).returncode
+        == 0
+    )
     new = {p.name: p.read_bytes() for p in (tmp_path / "ref").iterdir()}
     assert old.keys() == new.keys() and old != new
     env = {**os.environ, "SYMKIN_CACHE": str(cache)}
     for _ in range(4):
-        proc = subprocess.Popen([sys.executable, "-m", "symkin", "derive", str(FOUR_BAR), "-o",
-                                 str(folder), "--emit", "numpy,c", "--quiet"], env=env,
-                                cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        proc = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "symkin",
+                "derive",
+                str(FOUR_BAR),
+                "-o",
+                str(folder),
+                "--emit",
+                "numpy,c",
+                "--quiet",
+            ],
+            env=env,
+            cwd=ROOT,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
         time.sleep(rng.uniform(0.5, 6.0))
         proc.kill()
         proc.wait()

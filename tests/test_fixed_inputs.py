@@ -14,13 +14,13 @@ import re
 import subprocess
 import sys
 
+import mechanisms as M
 import numpy as np
 import pytest
-
-import mechanisms as M
-import symkin
 from conftest import EXAMPLES
 from evaluators import require_compiler
+
+import symkin
 from symkin.studies.evaluation import evaluate
 
 # The triad six-bar and, 0.3 m to its right, the example four-bar with its own input A0.
@@ -38,7 +38,9 @@ TRIAD_AND_FOUR_BAR = M.text(
     + M.hinge("F1", "a", "c", 0.315, 0.026, "pi/3")
     + M.hinge("F2", "ground", "r", 0.4, 0.0, "pi/2")
     + M.hinge("F3", "c", "r", 0.385, 0.068)
-    + M.point("T", "tri", 0.09, 0.08) + M.point("Q", "c", 0.36, 0.09))
+    + M.point("T", "tri", 0.09, 0.08)
+    + M.point("Q", "c", 0.36, 0.09),
+)
 
 
 def _mech(text: str, name: str = "fixed.toml"):
@@ -70,15 +72,19 @@ def _check(mech, fixed: dict, free: list[dict], levels, backends=("numpy", "c"),
 
 def test_five_bar_with_one_input_locked():
     mech = _mech(M.FIVE_BAR)
-    ev = _check(mech, {"O2": "-0.1"}, [{"O1": 0.15}, {"O1": -0.2}],
-                ("paper", "first_order", "exact"))
+    ev = _check(
+        mech, {"O2": "-0.1"}, [{"O1": 0.15}, {"O1": -0.2}], ("paper", "first_order", "exact")
+    )
     full = symkin.compile(mech, backend="c", sensitivity=False)
 
     def ops(e, routine):
         return int(re.search(rf"\b{routine} (\d+)", e.sources.header).group(1))
+
     assert ops(ev, "rigid") < ops(full, "rigid") and ops(ev, "newton") < ops(full, "newton")
-    assert "Fixed inputs, folded into the evaluator (not its arguments): O2 = -1/10 rad." \
+    assert (
+        "Fixed inputs, folded into the evaluator (not its arguments): O2 = -1/10 rad."
         in ev.sources.header
+    )
 
 
 def test_continuation_carries_the_fixed_input():
@@ -92,15 +98,24 @@ def test_continuation_carries_the_fixed_input():
 
 def test_fixed_inputs_at_the_physical_level():
     mech = symkin.load(EXAMPLES / "nine_bar_platform.toml")
-    _check(mech, {"B": "0.02", "K": "-0.03"}, [{"O": 0.1, "A": -0.05}], ("loaded",),
-           backends=("numpy",), tol=1e-12)
+    _check(
+        mech,
+        {"B": "0.02", "K": "-0.03"},
+        [{"O": 0.1, "A": -0.05}],
+        ("loaded",),
+        backends=("numpy",),
+        tol=1e-12,
+    )
 
 
-@pytest.mark.parametrize("fixed, message", [
-    ({"Q": "0.1"}, "'Q' is not an input hinge"),
-    ({"O1": "0.1", "O2": "0.2"}, "every input is fixed"),
-    ({"O2": "4"}, "not within"),
-])
+@pytest.mark.parametrize(
+    "fixed, message",
+    [
+        ({"Q": "0.1"}, "'Q' is not an input hinge"),
+        ({"O1": "0.1", "O2": "0.2"}, "every input is fixed"),
+        ({"O2": "4"}, "not within"),
+    ],
+)
 def test_bad_fixed_inputs_are_refused(fixed, message):
     with pytest.raises(symkin.InputError, match=message):
         symkin.compile(_mech(M.FIVE_BAR), backend="numpy", fixed=fixed)
@@ -110,15 +125,45 @@ def test_derive_fix_on_the_command_line(tmp_path):
     path = tmp_path / "five_bar.toml"
     path.write_text(M.FIVE_BAR)
     out = tmp_path / "out"
-    done = subprocess.run([sys.executable, "-m", "symkin", "derive", str(path), "-o", str(out),
-                           "--emit", "numpy,c", "--fix", "O2=-pi/30", "--quiet"],
-                          capture_output=True, text=True)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "symkin",
+            "derive",
+            str(path),
+            "-o",
+            str(out),
+            "--emit",
+            "numpy,c",
+            "--fix",
+            "O2=-pi/30",
+            "--quiet",
+        ],
+        capture_output=True,
+        text=True,
+    )
     assert done.returncode == 0, done.stderr
     header = (out / "five_bar.h").read_text()
     assert "#define FIVE_BAR_N_INPUTS 1" in header and "O2 = -pi/30 rad" in header
-    bad = subprocess.run([sys.executable, "-m", "symkin", "derive", str(path), "-o", str(out),
-                          "--fix", "O2=0.1", "--tolerance", "1e-3", "--quiet"],
-                         capture_output=True, text=True)
+    bad = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "symkin",
+            "derive",
+            str(path),
+            "-o",
+            str(out),
+            "--fix",
+            "O2=0.1",
+            "--tolerance",
+            "1e-3",
+            "--quiet",
+        ],
+        capture_output=True,
+        text=True,
+    )
     assert bad.returncode == 2 and "fix:" in bad.stderr
 
 
@@ -137,6 +182,5 @@ def test_a_range_over_a_fixed_input_is_refused():
     from symkin.studies.derive import generate
 
     with pytest.raises(symkin.InputError, match="O2 is fixed") as err:
-        generate(_mech(M.FIVE_BAR), ["latex"], fixed={"O2": "-0.1"},
-                 spans={"O2": (-0.1, 0.1)})
+        generate(_mech(M.FIVE_BAR), ["latex"], fixed={"O2": "-0.1"}, spans={"O2": (-0.1, 0.1)})
     assert err.value.entry == "--range"

@@ -1,6 +1,7 @@
 """A seeded, bounded fuzz harness (issue 11): mutants of the example mechanisms through `check`
 (and, for a sample of the valid ones, `eval` in every backend) must never exit 1 (a bug), only 0,
-2 (bad input, with a fix line) or 3 (no assembly). Run with SYMKIN_FUZZ=N for N mutants (default 200, about two minutes).
+2 (bad input, with a fix line) or 3 (no assembly). Run with SYMKIN_FUZZ=N for N mutants (default
+200, about two minutes).
 """
 
 from __future__ import annotations
@@ -10,33 +11,89 @@ import json
 import os
 import random
 import re
-
-import pytest
-
 import sys
 
+import pytest
 from conftest import EXAMPLES, ROOT
+
 from symkin import load
 from symkin.cli.commands import main
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
-import families  # noqa: E402
+import families
 
 MUTANTS = int(os.environ.get("SYMKIN_FUZZ", "200"))
-EVALUATED = 12                       # valid mutants also evaluated, every backend
+EVALUATED = 12  # valid mutants also evaluated, every backend
 
-NUMBERS = ["0", "-1", "0.0", "1e-320", "1e308", "1e309", "-1e309", "1" * 4400, "2.5e-3",
-           '"nan"', '"inf"', '"1/0"', '"log(-1)"', '"exp(800)"', '"sqrt(-2)"', '"asin(2)"',
-           '"l**64"', '"l**l**l"', '"theta"', '"theta_1"', '"delta_2"', '"__import__(1)"',
-           '"x.y"', '"pi*1e300*1e10"', "[]", "{}", "true", '""', '"0.001*(1+1e-15)"',
-           '"log(log(log(2)))"', "123456789012345678901234567890"]
-STRINGS = ['"numpy"', '"class"', '"_x"', '"' + "a" * 300 + '"', '"cou\\u001b[2Jpler"',
-           '"C\\u202e"', '""', "[1]", "{}", "3", '"frame"', '"prbm"', '"table"', '"expr"',
-           '"elastica_force"', '"rigid"', '"small_deflection"', '"../x.csv"', '"/dev/zero"']
-LINES = ["input = true", "input = false", 'model = "prbm"\npreset = []', "mass = 1",
-         'ground = "nowhere"', "[[link]]\nname = \"extra\"", "[parameters]\nl = 2",
-         'theta = 1e-3', 'plate_angle = "pi"', 'length = "-l"', "chords = []",
-         'model = "expr"\nf = "l"\ng = "theta"', 'model = "table"\nfile = "/dev/zero"']
+NUMBERS = [
+    "0",
+    "-1",
+    "0.0",
+    "1e-320",
+    "1e308",
+    "1e309",
+    "-1e309",
+    "1" * 4400,
+    "2.5e-3",
+    '"nan"',
+    '"inf"',
+    '"1/0"',
+    '"log(-1)"',
+    '"exp(800)"',
+    '"sqrt(-2)"',
+    '"asin(2)"',
+    '"l**64"',
+    '"l**l**l"',
+    '"theta"',
+    '"theta_1"',
+    '"delta_2"',
+    '"__import__(1)"',
+    '"x.y"',
+    '"pi*1e300*1e10"',
+    "[]",
+    "{}",
+    "true",
+    '""',
+    '"0.001*(1+1e-15)"',
+    '"log(log(log(2)))"',
+    "123456789012345678901234567890",
+]
+STRINGS = [
+    '"numpy"',
+    '"class"',
+    '"_x"',
+    '"' + "a" * 300 + '"',
+    '"cou\\u001b[2Jpler"',
+    '"C\\u202e"',
+    '""',
+    "[1]",
+    "{}",
+    "3",
+    '"frame"',
+    '"prbm"',
+    '"table"',
+    '"expr"',
+    '"elastica_force"',
+    '"rigid"',
+    '"small_deflection"',
+    '"../x.csv"',
+    '"/dev/zero"',
+]
+LINES = [
+    "input = true",
+    "input = false",
+    'model = "prbm"\npreset = []',
+    "mass = 1",
+    'ground = "nowhere"',
+    '[[link]]\nname = "extra"',
+    "[parameters]\nl = 2",
+    "theta = 1e-3",
+    'plate_angle = "pi"',
+    'length = "-l"',
+    "chords = []",
+    'model = "expr"\nf = "l"\ng = "theta"',
+    'model = "table"\nfile = "/dev/zero"',
+]
 
 
 def mutate(text: str, rng: random.Random) -> str:
@@ -48,7 +105,7 @@ def mutate(text: str, rng: random.Random) -> str:
         if kind == 0 and re.search(r"-?\d+(\.\d+)?(e-?\d+)?", line):
             hits = list(re.finditer(r"-?\d+(\.\d+)?(e-?\d+)?", line))
             m = rng.choice(hits)
-            lines[i] = line[:m.start()] + rng.choice(NUMBERS) + line[m.end():]
+            lines[i] = line[: m.start()] + rng.choice(NUMBERS) + line[m.end() :]
         elif kind == 1 and '"' in line and "=" in line:
             key = line.split("=", 1)[0]
             lines[i] = key + "= " + rng.choice(STRINGS)
@@ -72,27 +129,34 @@ COORDINATE = re.compile(r"-?\d+\.\d+(e-?\d+)?|-?\d+(?=[,\]])")
 def cad_digits(text: str, rng: random.Random) -> str:
     """Every coordinate of `at = [x, y]` as CAD exports it: moved by up to 1e-7 of its size and
     written with 15-17 significant digits (the geometry that once broke generated code)."""
+
     def one(m: re.Match) -> str:
         x = float(m.group(0))
         x += (abs(x) or 1e-3) * rng.uniform(-1e-7, 1e-7)
         return f"{x:.{rng.randint(15, 17)}g}"
 
-    return re.sub(r"^at = \[([^\]]*)\]",
-                  lambda m: "at = [" + COORDINATE.sub(one, m.group(1)) + "]", text, flags=re.M)
+    return re.sub(
+        r"^at = \[([^\]]*)\]",
+        lambda m: "at = [" + COORDINATE.sub(one, m.group(1)) + "]",
+        text,
+        flags=re.M,
+    )
 
 
 def sources() -> list[str]:
     """The examples and small members of the scale families (benchmarks/families.py)."""
-    return ([p.read_text() for p in sorted(EXAMPLES.glob("*.toml"))]
-            + [families.ladder(3), families.fan(2)])
+    return [p.read_text() for p in sorted(EXAMPLES.glob("*.toml"))] + [
+        families.ladder(3),
+        families.fan(2),
+    ]
 
 
 def run(capsys, args) -> tuple[int, str]:
     try:
         code = main(args)
-    except SystemExit as exc:                  # argparse
+    except SystemExit as exc:  # argparse
         code = exc.code
-    out, err = capsys.readouterr()
+    _out, err = capsys.readouterr()
     return code, err
 
 
@@ -127,7 +191,9 @@ def test_fuzzed_mechanisms_never_crash(tmp_path, capsys):
     assert counts["check exit 1"] == 0
     assert sum(v for k, v in counts.items() if k.startswith("check")) == MUTANTS
     assert counts["check exit 0"] and counts["check exit 2"], counts
-    assert not bugs, f"{len(bugs)} mutants exit 1 or lack a fix line, e.g.\n{bugs[0][1]}\n---\n{bugs[0][0]}"
+    assert not bugs, (
+        f"{len(bugs)} mutants exit 1 or lack a fix line, e.g.\n{bugs[0][1]}\n---\n{bugs[0][0]}"
+    )
 
 
 def test_cad_digit_geometry_evaluates_in_every_backend(tmp_path, capsys):

@@ -8,9 +8,9 @@ from __future__ import annotations
 import difflib
 
 import pytest
+from conftest import EXAMPLES, ROOT
 
 import symkin
-from conftest import EXAMPLES, ROOT
 from symkin.studies.derive import generate, write_atomically
 
 GENERATED = ROOT / "generated"
@@ -37,11 +37,17 @@ def test_generated_matches_derive(example, request):
                 problems.append(f"{path} is not a PDF")
             continue
         if old != content:
-            diff = difflib.unified_diff(old.decode().splitlines(), content.decode().splitlines(),
-                                        f"{path} (committed)", f"{name} (derived now)",
-                                        lineterm="", n=2)
+            diff = difflib.unified_diff(
+                old.decode().splitlines(),
+                content.decode().splitlines(),
+                f"{path} (committed)",
+                f"{name} (derived now)",
+                lineterm="",
+                n=2,
+            )
             problems.append("\n".join(list(diff)[:80]))
-    stale = sorted(set(p.name for p in folder.iterdir()) - set(files)) if folder.exists() else []
+    stale = sorted({p.name for p in folder.iterdir()} - set(files)) if folder.exists() else []
     problems += [f"{folder / s} is not produced any more" for s in stale]
-    assert not problems, "generated/ is out of date (pytest --update rewrites it):\n" + \
-        "\n".join(problems)
+    assert not problems, "generated/ is out of date (pytest --update rewrites it):\n" + "\n".join(
+        problems
+    )

@@ -18,24 +18,32 @@ import numpy as np
 import pytest
 import sympy as sp
 
+from symkin.codegen.backends.c import kernels as c_kernels
+from symkin.codegen.backends.c.printer import CPrinter
+from symkin.codegen.backends.numpy import kernels as np_kernels
 from symkin.model import hinges as hm
 from symkin.model import special
-from symkin.codegen.backends.c import kernels as c_kernels
-from symkin.codegen.backends.numpy import kernels as np_kernels
-from symkin.codegen.backends.c.printer import CPrinter
 from symkin.model.mechanism import PLATE_LENGTH, THETA, Hinge
 
-DPS = 90                       # reference precision (digits)
-F64_TOL = 1e-12                # required float64 relative accuracy of df, dg and derivatives
-ULP = 2.0 ** -52
+DPS = 90  # reference precision (digits)
+F64_TOL = 1e-12  # required float64 relative accuracy of df, dg and derivatives
+ULP = 2.0**-52
 
 GAMMA, CTHETA = sp.Rational("0.8517"), sp.Rational("1.2385")
 MOMENT = (sp.Rational("0.7346"), sp.Rational("1.5164"))
 
 
-def hinge(model: str, params: tuple = (), length: sp.Expr = sp.Integer(1)) -> Hinge:
-    return Hinge("H", 0, ("P", "M"), (sp.Integer(0), sp.Integer(0)), sp.Integer(0), length,
-                 model, tuple(sorted(params)))
+def hinge(model: str, params: tuple = (), length: sp.Expr = sp.S.One) -> Hinge:
+    return Hinge(
+        "H",
+        0,
+        ("P", "M"),
+        (sp.Integer(0), sp.Integer(0)),
+        sp.Integer(0),
+        length,
+        model,
+        tuple(sorted(params)),
+    )
 
 
 PRBM = (("c_theta", CTHETA), ("gamma", GAMMA))
@@ -44,13 +52,13 @@ PRBM_MOMENT = (("c_theta", MOMENT[1]), ("gamma", MOMENT[0]))
 # θ grids: from 1e-12 to each model's limit
 SMALL = [1e-12, 3e-11, 1e-10, 1e-8, 1e-6, 1e-4, 1e-3, 1e-2]
 GRID = {
-    "circular_arc": SMALL + [0.1, 0.3, 0.5, 0.9, 1.2, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, -0.7,
-                             -1e-9],
+    "circular_arc": SMALL
+    + [0.1, 0.3, 0.5, 0.9, 1.2, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, -0.7, -1e-9],
     "small_deflection": SMALL + [0.1, 0.5, 1.0, 2.0, 3.0, 5.0, -0.4, -1e-7],
     "prbm": SMALL + [0.1, 0.3, 0.6, 1.0, 1.5, 2.0, 2.5, 3.0, -0.5, -1e-9],
     "prbm_moment": SMALL + [0.1, 0.5, 1.0, 2.0, 3.0],
-    "elastica_force": SMALL + [0.05, 0.1, 0.3, 0.5, 0.52, 0.7, 0.9, 1.2, 1.4, 1.5, 1.55, 1.569,
-                               -0.6, -1e-9],
+    "elastica_force": SMALL
+    + [0.05, 0.1, 0.3, 0.5, 0.52, 0.7, 0.9, 1.2, 1.4, 1.5, 1.55, 1.569, -0.6, -1e-9],
 }
 MODELS = {
     "circular_arc": ("circular_arc", ()),
@@ -64,6 +72,7 @@ MODELS = {
 # =============================================================================================
 # Independent references (l = 1)
 # =============================================================================================
+
 
 def _rigid(t):
     return (1 + mp.cos(t)) / 2, mp.sin(t) / 2, -mp.sin(t) / 2, mp.cos(t) / 2
@@ -90,20 +99,20 @@ def _elastica_integrals(t):
     Bq = integral(lambda v: (1 - v * v) ** 3 / (1 - q * (1 - v * v) ** 2) ** 1.5) / 2
     dq = 2 * s * c
     x, y = 1 / A, s * B / A
-    dx = -Aq * dq / A ** 2
-    dy = c * B / A + s * dq * (Bq * A - B * Aq) / A ** 2
+    dx = -Aq * dq / A**2
+    dy = c * B / A + s * dq * (Bq * A - B * Aq) / A**2
     return x, y, dx, dy, 2 * s * A * A
 
 
 def reference(key: str, theta: float):
     """(f, g, df, dg, f', g', df', dg') at θ for l = 1, mpmath at DPS digits."""
     with mp.workdps(DPS + 2 * max(0, int(-math.log10(abs(theta))))):
-        t = mp.mpf(theta)                       # the double θ exactly
+        t = mp.mpf(theta)  # the double θ exactly
         fr, gr, dfr, dgr = _rigid(t)
         if key == "circular_arc":
             f, g = mp.sin(t) / t, (1 - mp.cos(t)) / t
-            df_ = (t * mp.cos(t) - mp.sin(t)) / t ** 2
-            dg_ = (t * mp.sin(t) - (1 - mp.cos(t))) / t ** 2
+            df_ = (t * mp.cos(t) - mp.sin(t)) / t**2
+            dg_ = (t * mp.sin(t) - (1 - mp.cos(t))) / t**2
         elif key == "small_deflection":
             f, g, df_, dg_ = mp.mpf(1), t / 2, mp.mpf(0), mp.mpf(1) / 2
         elif key in ("prbm", "prbm_moment"):
@@ -141,7 +150,7 @@ def rel(a, b) -> float:
     return float(abs((_mp(a) - b) / b))
 
 
-def plate(key, length=sp.Integer(1)):
+def plate(key, length=sp.S.One):
     model, params = MODELS[key]
     return hm.plate_functions(hinge(model, params, length))
 
@@ -162,19 +171,20 @@ X = sp.Symbol("x", real=True)
 #: definitions typed independently of special.py
 KERNEL_DEFS = {
     "sinr0": sp.sin(X) / X,
-    "sinr1": (sp.sin(X) - X) / X ** 3,
-    "sinr2": (sp.sin(X) - X + X ** 3 / 6) / X ** 5,
-    "sinr3": (sp.sin(X) - X + X ** 3 / 6 - X ** 5 / 120) / X ** 7,
-    "cosr1": (sp.cos(X) - 1) / X ** 2,
-    "cosr2": (sp.cos(X) - 1 + X ** 2 / 2) / X ** 4,
-    "cosr3": (sp.cos(X) - 1 + X ** 2 / 2 - X ** 4 / 24) / X ** 6,
-    "arck": (sp.sin(X) - X * sp.cos(X)) / X ** 3,
+    "sinr1": (sp.sin(X) - X) / X**3,
+    "sinr2": (sp.sin(X) - X + X**3 / 6) / X**5,
+    "sinr3": (sp.sin(X) - X + X**3 / 6 - X**5 / 120) / X**7,
+    "cosr1": (sp.cos(X) - 1) / X**2,
+    "cosr2": (sp.cos(X) - 1 + X**2 / 2) / X**4,
+    "cosr3": (sp.cos(X) - 1 + X**2 / 2 - X**4 / 24) / X**6,
+    "arck": (sp.sin(X) - X * sp.cos(X)) / X**3,
 }
 
 
 def kernel_class(name):
     return {"arck": special.arck}.get(name) or (
-        special.sinr(int(name[4:])) if name.startswith("sinr") else special.cosr(int(name[4:])))
+        special.sinr(int(name[4:])) if name.startswith("sinr") else special.cosr(int(name[4:]))
+    )
 
 
 @pytest.mark.parametrize("name", sorted(KERNEL_DEFS))
@@ -201,7 +211,7 @@ def test_kernel_evalf_high_precision(name):
     for x in ["1e-40", "1e-12", "3e-5", "0.3", "1.7", "2.9", "4.4", "7.5"]:
         xv = sp.Rational(x)
         got = cls(xv).evalf(40)
-        with mp.workdps(80 + 7 * max(0, -int(math.log10(float(xv))))):   # cancellation
+        with mp.workdps(80 + 7 * max(0, -int(math.log10(float(xv))))):  # cancellation
             want = sp.lambdify(X, KERNEL_DEFS[name], "mpmath")(mp.mpf(xv.p) / xv.q)
         assert rel(got, want) < 1e-38, (name, x)
     # Float arguments evaluate at their own precision
@@ -218,10 +228,13 @@ def test_kernel_float64_numpy_mpmath(name):
     worst = 0.0
     for x, v in zip(xs, vec):
         with mp.workdps(90 + 7 * max(0, math.ceil(-math.log10(x)))):  # the definition cancels
-            want = sp.lambdify(X, KERNEL_DEFS[name], "mpmath")(mp.mpf(x)) if x > 1e-30 else \
-                mp.mpf(cls.coeff(0).p) / cls.coeff(0).q
+            want = (
+                sp.lambdify(X, KERNEL_DEFS[name], "mpmath")(mp.mpf(x))
+                if x > 1e-30
+                else mp.mpf(cls.coeff(0).p) / cls.coeff(0).q
+            )
             if abs(want) < 1e-3 * abs(float(cls.coeff(0))):
-                continue                               # next to a zero of the kernel
+                continue  # next to a zero of the kernel
             err = max(rel(f64(float(x)), want), rel(float(v), want), rel(f64(-float(x)), want))
             worst = max(worst, err)
             assert rel(fmp(mp.mpf(x)), want) < 1e-55
@@ -233,9 +246,9 @@ def test_kernel_series_threshold_rule():
     """The first dropped Taylor term at the threshold is below the unit roundoff."""
     for name in KERNEL_DEFS:
         cls = kernel_class(name)
-        coeffs, n = cls.float_series()
+        _coeffs, n = cls.float_series()
         dropped = abs(float(cls.coeff(n))) * cls.threshold ** (2 * n)
-        assert dropped < 2.0 ** -53 * abs(float(cls.coeff(0)))
+        assert dropped < 2.0**-53 * abs(float(cls.coeff(0)))
 
 
 def test_higher_order_kernels_are_created_lazily():
@@ -243,16 +256,18 @@ def test_higher_order_kernels_are_created_lazily():
     assert "sinr7" in np_kernels.float64_namespace()
     assert "symkin_sinr7(" in c_kernels.source("sinr7")
     assert cls(0) == sp.Rational(-1, math.factorial(15))
-    d = sp.diff(cls(X), X)                      # creates cosr8, sinr8
+    d = sp.diff(cls(X), X)  # creates cosr8, sinr8
     assert {"cosr8", "sinr8"} <= set(np_kernels.float64_namespace())
-    assert abs(np_kernels.float64_namespace()["sinr7"](0.5)
-               - float(cls(sp.Rational(1, 2)).evalf(20))) < 1e-15 * abs(float(cls.coeff(0)))
+    assert abs(
+        np_kernels.float64_namespace()["sinr7"](0.5) - float(cls(sp.Rational(1, 2)).evalf(20))
+    ) < 1e-15 * abs(float(cls.coeff(0)))
     assert d.subs(X, 0) == 0
 
 
 # =============================================================================================
 # Models: symbolic identities
 # =============================================================================================
+
 
 @pytest.mark.parametrize("key", ["circular_arc", "small_deflection", "prbm", "prbm_moment"])
 def test_deviation_rewrites_to_difference(key):
@@ -284,18 +299,22 @@ def test_limits_at_zero():
     dx/l = θ²/12 - θ⁴/80, dy/l = θ³/24 - θ⁵/360)."""
     t = THETA
     circ = plate("circular_arc")
-    assert sp.expand(sp.series(circ.df, t, 0, 6).removeO()) == t ** 2 / 12 - t ** 4 / 80
-    assert sp.expand(sp.series(circ.dg, t, 0, 6).removeO()) == t ** 3 / 24 - t ** 5 / 360
+    assert sp.expand(sp.series(circ.df, t, 0, 6).removeO()) == t**2 / 12 - t**4 / 80
+    assert sp.expand(sp.series(circ.dg, t, 0, 6).removeO()) == t**3 / 24 - t**5 / 360
     small = plate("small_deflection")
-    assert sp.expand(sp.series(small.df, t, 0, 5).removeO()) == t ** 2 / 4 - t ** 4 / 48
-    assert sp.expand(sp.series(small.dg, t, 0, 6).removeO()) == t ** 3 / 12 - t ** 5 / 240
+    assert sp.expand(sp.series(small.df, t, 0, 5).removeO()) == t**2 / 4 - t**4 / 48
+    assert sp.expand(sp.series(small.dg, t, 0, 6).removeO()) == t**3 / 12 - t**5 / 240
     pr = plate("prbm")
-    k_f = sp.Rational(1, 4) - GAMMA / (2 * CTHETA ** 2)
+    k_f = sp.Rational(1, 4) - GAMMA / (2 * CTHETA**2)
     k_g = GAMMA / CTHETA - sp.Rational(1, 2)
-    assert sp.simplify(sp.series(pr.df, t, 0, 3).removeO() - k_f * t ** 2) == 0
+    assert sp.simplify(sp.series(pr.df, t, 0, 3).removeO() - k_f * t**2) == 0
     assert sp.series(pr.dg, t, 0, 2).removeO() == k_g * t
-    expected_d1 = {"circular_arc": 0, "small_deflection": 0, "prbm": k_g,
-                   "elastica_force": sp.Rational(1, 6)}
+    expected_d1 = {
+        "circular_arc": 0,
+        "small_deflection": 0,
+        "prbm": k_g,
+        "elastica_force": sp.Rational(1, 6),
+    }
     for key, slope in expected_d1.items():
         pf = plate(key)
         ddf, ddg = pf.derivatives()
@@ -306,11 +325,11 @@ def test_limits_at_zero():
     # elastica: linear beam theory at small tip angle: y/l = 2θ/3, x/l = 1 - 4θ²/15,
     # so df/l = -θ²/60 and dg/l = θ/6 (+ O(θ³))
     el = plate("elastica_force")
-    tiny = sp.Rational(1, 10 ** 8)
-    assert abs(el.df.subs(t, tiny).evalf(30) / tiny ** 2 + sp.Rational(1, 60)) < 1e-15
+    tiny = sp.Rational(1, 10**8)
+    assert abs(el.df.subs(t, tiny).evalf(30) / tiny**2 + sp.Rational(1, 60)) < 1e-15
     assert abs(el.dg.subs(t, tiny).evalf(30) / tiny - sp.Rational(1, 6)) < 1e-15
     assert abs(el.g.subs(t, tiny).evalf(30) / tiny - sp.Rational(2, 3)) < 1e-15
-    assert abs((1 - el.f.subs(t, tiny).evalf(30)) / tiny ** 2 - sp.Rational(4, 15)) < 1e-15
+    assert abs((1 - el.f.subs(t, tiny).evalf(30)) / tiny**2 - sp.Rational(4, 15)) < 1e-15
 
 
 def test_elastica_carlson_equals_legendre_rewrite():
@@ -327,8 +346,10 @@ def test_elastica_carlson_equals_legendre_rewrite():
     # d/dθ of the Legendre x, y equals the cancellation-free first derivatives
     for tv in ["0.3", "1.1"]:
         t = sp.Rational(tv)
-        for dev, d1 in ((special.elastica_dx, special.elastica_dx_d1),
-                        (special.elastica_dy, special.elastica_dy_d1)):
+        for dev, d1 in (
+            (special.elastica_dx, special.elastica_dx_d1),
+            (special.elastica_dy, special.elastica_dy_d1),
+        ):
             want = sp.diff(dev(THETA).rewrite("elliptic"), THETA).subs(THETA, t).evalf(30)
             assert abs(d1(t).evalf(30) - want) < 1e-27
     # second derivatives (exact closed form) against numerical differentiation
@@ -367,7 +388,7 @@ def test_elastica_parity_and_domain():
 
 
 def test_length_substitution_and_special_names():
-    ell = sp.Symbol("l_A", positive=True)         # a mechanism parameter
+    ell = sp.Symbol("l_A", positive=True)  # a mechanism parameter
     pf = hm.plate_functions(hinge("circular_arc", (), 2 * ell))
     assert not pf.df.has(PLATE_LENGTH) and pf.df.has(ell)
     unit = plate("circular_arc")
@@ -394,13 +415,14 @@ def test_prbm_symbolic_parameters_and_presets():
 # Models: numerical accuracy against the independent references
 # =============================================================================================
 
+
 @pytest.mark.parametrize("key", sorted(MODELS))
 def test_evalf_30_digits(key):
     """sympy evalf at 30 digits of f, g, df, dg and their θ-derivatives (relative 1e-27)."""
     exprs = expressions(plate(key))
     for theta in GRID[key]:
         want = ref(key, theta)
-        t = sp.Rational(theta)                     # the double θ exactly
+        t = sp.Rational(theta)  # the double θ exactly
         for name, e, w in zip(NAMES, exprs, want):
             got = e.subs(THETA, t).evalf(30)
             if w == 0:
@@ -444,8 +466,9 @@ def test_float64_lambdify(key):
 def test_mpmath_lambdify(key):
     """lambdify with special.mpmath_namespace() at 30 digits."""
     pf = plate(key)
-    fn = sp.lambdify(THETA, [pf.df, pf.dg, *pf.derivatives()],
-                     modules=[special.mpmath_namespace(), "mpmath"])
+    fn = sp.lambdify(
+        THETA, [pf.df, pf.dg, *pf.derivatives()], modules=[special.mpmath_namespace(), "mpmath"]
+    )
     with mp.workdps(30):
         for theta in GRID[key][::3]:
             want = ref(key, theta)
@@ -457,7 +480,7 @@ def test_mpmath_lambdify(key):
 def test_scaled_length():
     """A tiny plate (l = 1e-6 in exact rational form) scales the deviation exactly."""
     key = "circular_arc"
-    pf = plate(key, sp.Rational(1, 10 ** 6))
+    pf = plate(key, sp.Rational(1, 10**6))
     fn = sp.lambdify(THETA, [pf.df, pf.dg], modules=[np_kernels.float64_namespace(), "math"])
     for theta in (1e-10, 0.3):
         want = ref(key, theta)
@@ -472,8 +495,12 @@ def test_scaled_length():
 
 #: Circular arc (plate under a pure end moment), tip position per unit length, as printed to five
 #: decimals: x/l = sin θ/θ, y/l = (1 - cos θ)/θ.
-ARC_TABLE = {10: (0.99493, 0.08705), 30: (0.95493, 0.25587), 90: (0.63662, 0.63662),
-             120: (0.41350, 0.71620)}
+ARC_TABLE = {
+    10: (0.99493, 0.08705),
+    30: (0.95493, 0.25587),
+    90: (0.63662, 0.63662),
+    120: (0.41350, 0.71620),
+}
 
 
 def test_circular_arc_published_tip_positions():
@@ -492,13 +519,18 @@ def test_circular_arc_published_tip_positions():
 #: Literature (Bisshopp & Drucker 1945, Q. Appl. Math. 3, 272; tabulated to five digits e.g. by
 #: Mattiasson 1981): α = 1: δ/L 0.30172, Δ/L 0.05643, θ0 0.46135 (26.43°); α = 2: 0.49346,
 #: 0.16064, 0.78175; α = 5: 0.71379, 0.38763, 1.21537.
-BD_PUBLISHED = {1: (0.46135, 0.05643, 0.30172), 2: (0.78175, 0.16064, 0.49346),
-                5: (1.21537, 0.38763, 0.71379)}
+BD_PUBLISHED = {
+    1: (0.46135, 0.05643, 0.30172),
+    2: (0.78175, 0.16064, 0.49346),
+    5: (1.21537, 0.38763, 0.71379),
+}
 #: Our own independent solution: mpmath.odefun (Taylor method, 30 digits) on the shooting problem
 #: φ'' = -α cos φ, φ(0) = 0, φ'(1) = 0 (these are its first 15 digits).
-BD_ODE = {1: ("0.461351949711879", "0.0564332362833769", "0.301720773799814"),
-          2: ("0.781749831556543", "0.160641720825167", "0.493457480396712"),
-          5: ("1.21536811761168", "0.387628360724430", "0.713791523611913")}
+BD_ODE = {
+    1: ("0.461351949711879", "0.0564332362833769", "0.301720773799814"),
+    2: ("0.781749831556543", "0.160641720825167", "0.493457480396712"),
+    5: ("1.21536811761168", "0.387628360724430", "0.713791523611913"),
+}
 
 
 def _shoot(alpha: float):
@@ -510,8 +542,9 @@ def _shoot(alpha: float):
         return [u[1], -alpha * math.cos(u[0]), math.cos(u[0]), math.sin(u[0])]
 
     def end(k0):
-        sol = integrate.solve_ivp(rhs, (0.0, 1.0), [0.0, k0, 0.0, 0.0], method="DOP853",
-                                  rtol=1e-13, atol=1e-15)
+        sol = integrate.solve_ivp(
+            rhs, (0.0, 1.0), [0.0, k0, 0.0, 0.0], method="DOP853", rtol=1e-13, atol=1e-15
+        )
         return sol.y[:, -1]
 
     k0 = optimize.brentq(lambda k: end(k)[1], 0.0, alpha, xtol=1e-15, rtol=1e-15)
@@ -551,6 +584,7 @@ def test_elastica_reference_matches_ode():
 # Table and expression models
 # =============================================================================================
 
+
 def _arc_rows(n=25, span=1.2):
     rows = []
     for k in range(n):
@@ -569,44 +603,56 @@ def test_table_fit_residuals_and_accuracy():
     assert fit.degree == 6 and fit.rows == len(rows) and fit.theta_range == (-1.2, 1.2)
     th = np.array([r[0] for r in rows])
     res_f = np.array([r[1] for r in rows]) - np.polynomial.polynomial.polyval(th, fit.coeffs_f)
-    assert math.isclose(fit.rms_f, float(np.sqrt(np.mean(res_f ** 2))), rel_tol=1e-9)
+    assert math.isclose(fit.rms_f, float(np.sqrt(np.mean(res_f**2))), rel_tol=1e-9)
     assert math.isclose(fit.max_f, float(np.max(np.abs(res_f))), rel_tol=1e-9)
     assert 0 < max(fit.rms_f, fit.rms_g) <= max(fit.max_f, fit.max_g) < 1e-4
     # f, g are the fitted polynomials; df, dg their exact differences from the rigid hinge
     t = sp.Rational(7, 10)
-    assert abs(pf.f.subs(THETA, t) - sum(sp.Rational(c) * t ** k
-                                         for k, c in enumerate(fit.coeffs_f))) == 0
+    assert (
+        abs(pf.f.subs(THETA, t) - sum(sp.Rational(c) * t**k for k, c in enumerate(fit.coeffs_f)))
+        == 0
+    )
     for dev, whole, rigid in ((pf.df, pf.f, pf.f_rigid), (pf.dg, pf.g, pf.g_rigid)):
         assert sp.simplify(special.expand_special(dev) - (whole - rigid)) == 0
     # float64 df, dg to full relative accuracy down to tiny θ (reference: the exact polynomial
     # minus the rigid functions at 90 digits)
-    fn = sp.lambdify(THETA, [pf.df, pf.dg, *pf.derivatives()],
-                     modules=[np_kernels.float64_namespace(), "math"])
+    fn = sp.lambdify(
+        THETA, [pf.df, pf.dg, *pf.derivatives()], modules=[np_kernels.float64_namespace(), "math"]
+    )
     with mp.workdps(DPS):
         cf = [mp.mpf(c) for c in fit.coeffs_f]
         cg = [mp.mpf(c) for c in fit.coeffs_g]
         for theta in [1e-12, 1e-9, 1e-6, 1e-3, 0.1, 0.5, 1.0, 1.2, -0.3]:
             tt = mp.mpf(theta)
-            want = [mp.polyval(cf[::-1], tt) - (1 + mp.cos(tt)) / 2,
-                    mp.polyval(cg[::-1], tt) - mp.sin(tt) / 2,
-                    mp.polyval([k * c for k, c in enumerate(cf)][:0:-1], tt) + mp.sin(tt) / 2,
-                    mp.polyval([k * c for k, c in enumerate(cg)][:0:-1], tt) - mp.cos(tt) / 2]
+            want = [
+                mp.polyval(cf[::-1], tt) - (1 + mp.cos(tt)) / 2,
+                mp.polyval(cg[::-1], tt) - mp.sin(tt) / 2,
+                mp.polyval([k * c for k, c in enumerate(cf)][:0:-1], tt) + mp.sin(tt) / 2,
+                mp.polyval([k * c for k, c in enumerate(cg)][:0:-1], tt) - mp.cos(tt) / 2,
+            ]
             for got, w in zip(fn(theta), want):
                 assert rel(got, w) < F64_TOL, theta
 
 
 def test_expr_model():
     ell = sp.Symbol("L", positive=True)
-    h = hinge("expr", (("f", PLATE_LENGTH * sp.cos(THETA / 2) ** 2 + PLATE_LENGTH * THETA ** 2),
-                       ("g", PLATE_LENGTH * sp.sin(THETA) / 2)), 3 * ell)
+    h = hinge(
+        "expr",
+        (
+            ("f", PLATE_LENGTH * sp.cos(THETA / 2) ** 2 + PLATE_LENGTH * THETA**2),
+            ("g", PLATE_LENGTH * sp.sin(THETA) / 2),
+        ),
+        3 * ell,
+    )
     pf = hm.plate_functions(h)
     assert not pf.stable
-    assert sp.simplify(pf.df - 3 * ell * THETA ** 2) == 0 and sp.simplify(pf.dg) == 0
+    assert sp.simplify(pf.df - 3 * ell * THETA**2) == 0 and sp.simplify(pf.dg) == 0
 
 
 # =============================================================================================
 # Generated-code snippets: C99 and numpy run the same algorithm as FLOAT64
 # =============================================================================================
+
 
 def test_c_snippets_compile_and_agree(tmp_path):
     cc = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
@@ -617,17 +663,39 @@ def test_c_snippets_compile_and_agree(tmp_path):
     xs = [1e-300, 1e-12, 3e-7, 0.01, 0.24, 0.5, 0.9, 1.3, 1.55, -0.8, 2.2, 4.7, 7.5]
     calls = "\n".join(
         f'    for (i = 0; i < n; ++i) printf("%s %.17g\\n", "{n}", symkin_{n}(xs[i]));'
-        for n in names)
+        for n in names
+    )
     driver = (
-        "#include <math.h>\n#include <stdio.h>\n" + c_kernels.support(names) +
-        "\nint main(void)\n{\n    static const double xs[] = {"
-        + ", ".join(repr(x) for x in xs) + "};\n    const int n = "
-        + str(len(xs)) + ";\n    int i;\n" + calls + "\n    return 0;\n}\n")
+        "#include <math.h>\n#include <stdio.h>\n"
+        + c_kernels.support(names)
+        + "\nint main(void)\n{\n    static const double xs[] = {"
+        + ", ".join(repr(x) for x in xs)
+        + "};\n    const int n = "
+        + str(len(xs))
+        + ";\n    int i;\n"
+        + calls
+        + "\n    return 0;\n}\n"
+    )
     src = tmp_path / "kernels.c"
     src.write_text(driver)
     exe = tmp_path / "kernels"
-    subprocess.run([cc, "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O2",
-                    str(src), "-o", str(exe), "-lm"], check=True, capture_output=True)
+    subprocess.run(
+        [
+            cc,
+            "-std=c99",
+            "-pedantic",
+            "-Wall",
+            "-Wextra",
+            "-Werror",
+            "-O2",
+            str(src),
+            "-o",
+            str(exe),
+            "-lm",
+        ],
+        check=True,
+        capture_output=True,
+    )
     out = subprocess.run([str(exe)], check=True, capture_output=True, text=True).stdout.split("\n")
     lines = iter(out)
     for name in names:
@@ -654,24 +722,55 @@ def test_model_expressions_in_generated_c(tmp_path):
     for key in keys:
         pf = plate(key)
         exprs = [pf.df, pf.dg, *pf.derivatives()]
-        names.update(special.used_names(*exprs))    # only what is called: -Werror=unused
+        names.update(special.used_names(*exprs))  # only what is called: -Werror=unused
         for j, e in enumerate(exprs):
-            funcs.append(f"static double {key}_{j}(double theta)\n{{\n"
-                         f"    return {CPrinter().doprint(e)};\n}}\n")
+            funcs.append(
+                f"static double {key}_{j}(double theta)\n{{\n"
+                f"    return {CPrinter().doprint(e)};\n}}\n"
+            )
     thetas = [1e-12, 1e-7, 0.01, 0.3, 1.0, 1.5, -0.4]
     body = "\n".join(
         f'    for (i = 0; i < n; ++i) printf("%.17g\\n", {key}_{j}(ts[i]));'
-        for key in keys for j in range(4))
+        for key in keys
+        for j in range(4)
+    )
     src = tmp_path / "models.c"
-    src.write_text("#include <math.h>\n#include <stdio.h>\n" + c_kernels.support(names)
-                   + "\n".join(funcs) + "\nint main(void)\n{\n    static const double ts[] = {"
-                   + ", ".join(repr(t) for t in thetas) + "};\n    const int n = "
-                   + str(len(thetas)) + ";\n    int i;\n" + body + "\n    return 0;\n}\n")
+    src.write_text(
+        "#include <math.h>\n#include <stdio.h>\n"
+        + c_kernels.support(names)
+        + "\n".join(funcs)
+        + "\nint main(void)\n{\n    static const double ts[] = {"
+        + ", ".join(repr(t) for t in thetas)
+        + "};\n    const int n = "
+        + str(len(thetas))
+        + ";\n    int i;\n"
+        + body
+        + "\n    return 0;\n}\n"
+    )
     exe = tmp_path / "models"
-    subprocess.run([cc, "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O2",
-                    str(src), "-o", str(exe), "-lm"], check=True, capture_output=True)
-    values = iter(float(v) for v in subprocess.run([str(exe)], check=True, capture_output=True,
-                                                   text=True).stdout.split())
+    subprocess.run(
+        [
+            cc,
+            "-std=c99",
+            "-pedantic",
+            "-Wall",
+            "-Wextra",
+            "-Werror",
+            "-O2",
+            str(src),
+            "-o",
+            str(exe),
+            "-lm",
+        ],
+        check=True,
+        capture_output=True,
+    )
+    values = iter(
+        float(v)
+        for v in subprocess.run(
+            [str(exe)], check=True, capture_output=True, text=True
+        ).stdout.split()
+    )
     for key in keys:
         for j, k in enumerate([2, 3, 6, 7]):
             for theta in thetas:

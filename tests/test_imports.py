@@ -14,19 +14,30 @@ from conftest import ROOT
 #: floors below it (docs/architecture.md draws them). Within a package, imports are free as long
 #: as they form no circle. "" is the package itself (symkin.load, analyze, ...).
 FLOORS: tuple[tuple[str, ...], ...] = (
-    ("core",),          # errors, vectors, the level table, solver settings, file checks
-    ("model",),         # expressions, hinge models and special functions, the file reader
-    ("graph",),         # labeling, I, Φ, Ψ; pruning
-    ("kinematics",),    # the paper's sections 3-5: positions, dyads, loop equations, deviation
-    ("physics",),       # stiffness, loads, the physical levels
-    ("codegen",),       # the plan, the backends (C, numpy, LaTeX), building and loading
-    ("studies",),       # evaluation, compiled evaluators, derive, tradeoff, tolerance, sweep, scene
+    ("core",),  # errors, vectors, the level table, solver settings, file checks
+    ("model",),  # expressions, hinge models and special functions, the file reader
+    ("graph",),  # labeling, I, Φ, Ψ; pruning
+    ("kinematics",),  # the paper's sections 3-5: positions, dyads, loop equations, deviation
+    ("physics",),  # stiffness, loads, the physical levels
+    ("codegen",),  # the plan, the backends (C, numpy, LaTeX), building and loading
+    ("studies",),  # evaluation, compiled evaluators, derive, tradeoff, tolerance, sweep, scene
     ("",),
     ("cli", "__main__"),
 )
 #: Packages whose __init__ only documents them (no imports): no floor of their own needed.
-DOC_ONLY = ("core", "model", "graph", "kinematics", "physics", "codegen", "codegen.backends",
-            "codegen.backends.c", "codegen.backends.numpy", "codegen.backends.latex", "studies")
+DOC_ONLY = (
+    "core",
+    "model",
+    "graph",
+    "kinematics",
+    "physics",
+    "codegen",
+    "codegen.backends",
+    "codegen.backends.c",
+    "codegen.backends.numpy",
+    "codegen.backends.latex",
+    "studies",
+)
 
 
 def package(module: str) -> str:
@@ -53,10 +64,10 @@ def imports(name: str, tree: ast.Module, known: set[str]) -> set[str]:
     for node in ast.walk(tree):
         if isinstance(node, ast.ImportFrom):
             if node.level:
-                base = package[:len(package) - node.level + 1]
+                base = package[: len(package) - node.level + 1]
                 target = ".".join([*base, *([node.module] if node.module else [])])
             elif (node.module or "").split(".")[0] == "symkin":
-                target = node.module[len("symkin."):] if "." in node.module else ""
+                target = node.module[len("symkin.") :] if "." in node.module else ""
             else:
                 continue
             for alias in node.names:
@@ -65,7 +76,7 @@ def imports(name: str, tree: ast.Module, known: set[str]) -> set[str]:
         elif isinstance(node, ast.Import):
             for alias in node.names:
                 if alias.name.split(".")[0] == "symkin":
-                    found.add(alias.name[len("symkin."):] if "." in alias.name else "")
+                    found.add(alias.name[len("symkin.") :] if "." in alias.name else "")
     return found - {name}
 
 
@@ -88,15 +99,18 @@ def test_every_module_has_a_floor():
 
 def test_no_upward_import():
     level = {m: k for k, floor in enumerate(FLOORS) for m in floor}
-    upward = [f"{name or 'symkin'} imports {target or 'symkin'}"
-              for name, targets in graph().items() for target in targets
-              if level.get(package(target), -1) > level[package(name)]]
+    upward = [
+        f"{name or 'symkin'} imports {target or 'symkin'}"
+        for name, targets in graph().items()
+        for target in targets
+        if level.get(package(target), -1) > level[package(name)]
+    ]
     assert not upward, "upward imports:\n" + "\n".join(sorted(upward))
 
 
 def test_no_import_circle():
     edges = graph()
-    state: dict[str, int] = {}          # 1: on the current path, 2: done
+    state: dict[str, int] = {}  # 1: on the current path, 2: done
     path: list[str] = []
 
     def visit(node: str) -> list[str] | None:
@@ -104,7 +118,7 @@ def test_no_import_circle():
         path.append(node)
         for nxt in sorted(edges.get(node, ())):
             if state.get(nxt) == 1:
-                return path[path.index(nxt):] + [nxt]
+                return path[path.index(nxt) :] + [nxt]
             if nxt not in state:
                 cycle = visit(nxt)
                 if cycle:
@@ -122,16 +136,20 @@ def test_no_import_circle():
 def test_the_check_sees_lazy_and_relative_imports():
     """The parser finds what the package really imports, inside functions too."""
     edges = graph()
-    assert "codegen.plan" in edges["studies.evaluation"]                  # inside a function
-    assert "model.special.registry" in edges["model.special.kernels"]     # from .registry import
-    assert "kinematics.analysis" in edges["codegen.plan"]                 # from ..kinematics...
+    assert "codegen.plan" in edges["studies.evaluation"]  # inside a function
+    assert "model.special.registry" in edges["model.special.kernels"]  # from .registry import
+    assert "kinematics.analysis" in edges["codegen.plan"]  # from ..kinematics...
     assert "model.hinges" in edges["model.mechanism"]
 
 
 def test_the_backends_read_the_plan_only():
     """The emitters take everything from a Plan: no backend reaches back into the derivation."""
     derivation = ("model.mechanism", "model.hinges", "graph", "kinematics", "studies")
-    reach = [f"{name} imports {target}" for name, targets in graph().items()
-             if name.startswith("codegen.backends") for target in targets
-             if target.startswith(derivation)]
+    reach = [
+        f"{name} imports {target}"
+        for name, targets in graph().items()
+        if name.startswith("codegen.backends")
+        for target in targets
+        if target.startswith(derivation)
+    ]
     assert not reach, "\n".join(sorted(reach))

@@ -10,17 +10,18 @@ the deviation). Checked against the 40-digit mpmath evaluation, which takes inpu
 
 from __future__ import annotations
 
+import mechanisms as M
 import numpy as np
 import pytest
-
-import mechanisms as M
-import symkin
 from evaluators import require_compiler
+
+import symkin
 from symkin.studies.evaluation import evaluate
 
 # basic_chain from the right: O2 gets label 1, O1 a later one; the file lists O1 first
-REORDERED = M.FIVE_BAR.replace('name = "five_bar"\n',
-                               'name = "five_bar"\nbasic_chain = ["right", "right_top"]\n')
+REORDERED = M.FIVE_BAR.replace(
+    'name = "five_bar"\n', 'name = "five_bar"\nbasic_chain = ["right", "right_top"]\n'
+)
 INPUTS = {"O1": 0.15, "O2": -0.1}
 
 
@@ -30,8 +31,10 @@ def test_inputs_reach_their_own_hinges(backend):
         require_compiler()
     mech = symkin.loads(REORDERED, "five_bar.toml")
     an = symkin.analyze(mech)
-    assert mech.inputs == ("O1", "O2") and [an.kin.hinges[a].name for a in an.kin.inputs] == \
-        ["O2", "O1"]
+    assert mech.inputs == ("O1", "O2") and [an.kin.hinges[a].name for a in an.kin.inputs] == [
+        "O2",
+        "O1",
+    ]
     want = evaluate(an, {k: str(v) for k, v in INPUTS.items()}, "exact", sensitivity=True)
     ev = symkin.compile(mech, backend=backend)
     assert ev.inputs == ("O2", "O1")
@@ -41,8 +44,9 @@ def test_inputs_reach_their_own_hinges(backend):
     full = ev.sensitivity_full(INPUTS, "exact")["deviation"]["P_tip"]["inputs"]
     for name in INPUTS:
         ref = np.array(want.sensitivity.deviation_inputs["P_tip"][name], dtype=float)
-        assert np.abs(np.asarray(full[name], dtype=float) - ref).max() <= \
-            1e-10 * np.abs(ref).max(), name
-    if backend == "c":      # the C source names them in the same order
+        assert (
+            np.abs(np.asarray(full[name], dtype=float) - ref).max() <= 1e-10 * np.abs(ref).max()
+        ), name
+    if backend == "c":  # the C source names them in the same order
         names = ev.sources.source.split("five_bar_input_names[FIVE_BAR_N_INPUTS] = {")[1]
         assert [n.strip() for n in names.split("}")[0].split(",")] == ['"O2"', '"O1"']

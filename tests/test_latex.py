@@ -14,11 +14,11 @@ import sys
 from pathlib import Path
 
 import pytest
+from conftest import EXAMPLES, ROOT
 
 import symkin
-from conftest import EXAMPLES, ROOT
-from symkin.codegen.backends.latex.text import escape_latex, math_name
 from symkin.cli.commands import main
+from symkin.codegen.backends.latex.text import escape_latex, math_name
 from symkin.studies.derive import generate
 
 EXAMPLE_NAMES = sorted(p.stem for p in EXAMPLES.glob("*.toml"))
@@ -47,12 +47,17 @@ def compile_tex(folder: Path, main: str) -> str:
     """Run pdflatex twice (references), halting on the first error; returns the log."""
     exe = pdflatex()
     for flags in (["-draftmode"], []):
-        run = subprocess.run([exe, "-interaction=nonstopmode", "-halt-on-error", "-no-shell-escape",
-                              *flags, main], cwd=folder, capture_output=True, text=True,
-                             timeout=180)
+        run = subprocess.run(
+            [exe, "-interaction=nonstopmode", "-halt-on-error", "-no-shell-escape", *flags, main],
+            cwd=folder,
+            capture_output=True,
+            text=True,
+            timeout=180,
+        )
         log = (folder / (Path(main).stem + ".log")).read_text(encoding="latin-1")
         assert run.returncode == 0, f"pdflatex failed on {main}:\n" + "\n".join(
-            log.splitlines()[-40:])
+            log.splitlines()[-40:]
+        )
     return log
 
 
@@ -70,13 +75,13 @@ def write(files: dict[str, bytes], folder: Path) -> Path:
 @pytest.fixture(scope="module")
 def reports() -> dict[str, tuple[dict[str, bytes], dict[str, bytes]]]:
     """example -> (standalone files, appendix files), generated once in this process."""
-    from symkin.kinematics.analysis import Analysis
     from symkin.codegen.backends.latex import report
     from symkin.codegen.backends.numpy import backend as numpy_backend
     from symkin.codegen.plan import plan
     from symkin.codegen.toolchain import import_numpy_module
-    from symkin.studies.derive import physics_reference
     from symkin.graph.structure import build
+    from symkin.kinematics.analysis import Analysis
+    from symkin.studies.derive import physics_reference
 
     out = {}
     for name in EXAMPLE_NAMES:
@@ -86,12 +91,15 @@ def reports() -> dict[str, tuple[dict[str, bytes], dict[str, bytes]]]:
         source = Path(mech.path).name
         module = import_numpy_module(numpy_backend.emit(p, source), mech.name)
         physics = physics_reference(an) if p.loaded is not None else None
-        out[name] = (report.emit(p, source, evaluator=module, physics=physics),
-                     report.emit(p, source, appendix=True, evaluator=module, physics=physics))
+        out[name] = (
+            report.emit(p, source, evaluator=module, physics=physics),
+            report.emit(p, source, appendix=True, evaluator=module, physics=physics),
+        )
     return out
 
 
 # -- structure of the output ---------------------------------------------------------------------
+
 
 @pytest.mark.parametrize("example", EXAMPLE_NAMES)
 def test_files_header_and_figures(example, reports):
@@ -106,12 +114,21 @@ def test_files_header_and_figures(example, reports):
         for figure in re.findall(r"\\includegraphics\[[^]]*\]\{\\symkinfigpath (\S+)\}", text):
             assert figure in files and files[figure].startswith(b"%PDF-")
     assert set(standalone) == set(appendix)
-    assert {f"{example}-pose.pdf", f"{example}-graph.pdf", f"{example}-deviation.pdf"} <= \
-        set(standalone)
-    for needed in (r"\underline{I} = \begin{bmatrix}", r"\underline{\Phi} = \begin{bmatrix}",
-                   r"\underline{\Psi} = \begin{bmatrix}", r"\underline{\mathbf{J}} = ",
-                   r"\underline{\mathbf{J}}^{*} = ", r"\tag*{(5.1)}", r"\tag*{(5.3)}",
-                   r"\operatorname{atan2}", r"^{\mathrm{paper}}", r"^{(1)}"):
+    assert {f"{example}-pose.pdf", f"{example}-graph.pdf", f"{example}-deviation.pdf"} <= set(
+        standalone
+    )
+    for needed in (
+        r"\underline{I} = \begin{bmatrix}",
+        r"\underline{\Phi} = \begin{bmatrix}",
+        r"\underline{\Psi} = \begin{bmatrix}",
+        r"\underline{\mathbf{J}} = ",
+        r"\underline{\mathbf{J}}^{*} = ",
+        r"\tag*{(5.1)}",
+        r"\tag*{(5.3)}",
+        r"\operatorname{atan2}",
+        r"^{\mathrm{paper}}",
+        r"^{(1)}",
+    ):
         assert needed in tex, needed
 
 
@@ -121,6 +138,7 @@ def test_report_is_generated_by_derive(reports):
 
 
 # -- pdflatex ------------------------------------------------------------------------------------
+
 
 @pytest.mark.parametrize("example", EXAMPLE_NAMES)
 def test_standalone_compiles_without_overfull_boxes(example, reports, tmp_path):
@@ -153,8 +171,9 @@ TWO_COLUMN_WRAPPER = r"""\documentclass[twocolumn]{article}
 """
 
 
-@pytest.mark.parametrize("key", [*EXAMPLE_NAMES, "SERIAL_ARM", "FIVE_BAR", "WATT_II",
-                                 "TRIAD_SIX_BAR"])
+@pytest.mark.parametrize(
+    "key", [*EXAMPLE_NAMES, "SERIAL_ARM", "FIVE_BAR", "WATT_II", "TRIAD_SIX_BAR"]
+)
 def test_appendix_fits_a_two_column_paper(key, tmp_path):
     """derive --appendix --columnwidth 229.5pt, \\input into a two-column article (whose column
     is 229.5 pt): no overfull box over 1 pt."""
@@ -167,8 +186,9 @@ def test_appendix_fits_a_two_column_paper(key, tmp_path):
         path = tmp_path / "m.toml"
         path.write_text(getattr(mechanisms, key))
         mech = symkin.load(path)
-    folder = write(generate(mech, emit=["latex"], appendix=True, column_width=229.5),
-                   tmp_path / "out")
+    folder = write(
+        generate(mech, emit=["latex"], appendix=True, column_width=229.5), tmp_path / "out"
+    )
     (folder / "paper.tex").write_text(TWO_COLUMN_WRAPPER % f"\\input{{{mech.name}}}")
     log = compile_tex(folder, "paper.tex")
     assert "COLUMNWIDTH=229.5pt" in log
@@ -181,20 +201,49 @@ def test_two_reports_input_into_one_paper(tmp_path):
     pdflatex()
     parts = []
     for name in ("four_bar", "stephenson_six_bar"):
-        write(generate(symkin.load(EXAMPLES / f"{name}.toml"), emit=["latex"], appendix=True,
-                       column_width=229.5), tmp_path)
+        write(
+            generate(
+                symkin.load(EXAMPLES / f"{name}.toml"),
+                emit=["latex"],
+                appendix=True,
+                column_width=229.5,
+            ),
+            tmp_path,
+        )
         parts.append(f"\\input{{{name}}}")
     (tmp_path / "paper.tex").write_text(TWO_COLUMN_WRAPPER % "\n".join(parts))
     log = compile_tex(tmp_path, "paper.tex")
     assert max(overfull(log), default=0.0) <= 1.0
 
 
-@pytest.mark.parametrize("width, ok", [("229.5pt", True), ("8.1cm", True), ("3.2in", True),
-                                       ("81mm", True), ("240", False), ("12em", False),
-                                       ("20pt", False), ("wide", False)])
+@pytest.mark.parametrize(
+    "width, ok",
+    [
+        ("229.5pt", True),
+        ("8.1cm", True),
+        ("3.2in", True),
+        ("81mm", True),
+        ("240", False),
+        ("12em", False),
+        ("20pt", False),
+        ("wide", False),
+    ],
+)
 def test_columnwidth_option(tmp_path, capsys, width, ok):
-    code = main(["derive", str(EXAMPLES / "four_bar.toml"), "-o", str(tmp_path / "o"), "--emit",
-                 "latex", "--appendix", "--quiet", "--columnwidth", width])
+    code = main(
+        [
+            "derive",
+            str(EXAMPLES / "four_bar.toml"),
+            "-o",
+            str(tmp_path / "o"),
+            "--emit",
+            "latex",
+            "--appendix",
+            "--quiet",
+            "--columnwidth",
+            width,
+        ]
+    )
     err = capsys.readouterr().err
     assert (code == 0) == ok, err
     if not ok:
@@ -219,6 +268,7 @@ def test_other_models_and_topologies_compile(key, tmp_path):
 
 # -- determinism ---------------------------------------------------------------------------------
 
+
 def test_byte_identical_across_processes_and_hash_seeds(reports, tmp_path):
     seed = "271828" if os.environ.get("PYTHONHASHSEED") != "271828" else "314159"
     script = (
@@ -232,8 +282,13 @@ def test_byte_identical_across_processes_and_hash_seeds(reports, tmp_path):
         "        (out / key).write_bytes(content)\n"
     )
     env = dict(os.environ, PYTHONHASHSEED=seed)
-    subprocess.run([sys.executable, "-c", script, str(tmp_path), *EXAMPLE_NAMES], check=True,
-                   env=env, cwd=ROOT, timeout=300)
+    subprocess.run(
+        [sys.executable, "-c", script, str(tmp_path), *EXAMPLE_NAMES],
+        check=True,
+        env=env,
+        cwd=ROOT,
+        timeout=300,
+    )
     for example in EXAMPLE_NAMES:
         for name, content in reports[example][0].items():
             assert (tmp_path / name).read_bytes() == content, f"{name} differs between runs"
@@ -306,12 +361,16 @@ def test_hostile_names_compile_to_literal_text(tmp_path):
     assert {lk.name for lk in mech.links} | {h.name for h in mech.hinges} >= set(HOSTILE_NAMES)
     folder = write(generate(mech, emit=["latex"]), tmp_path / "out")
     log = compile_tex(folder, "hostile.tex")
-    assert "(/etc/passwd" not in log                    # never \input
+    assert "(/etc/passwd" not in log  # never \input
     tex = (folder / "hostile.tex").read_text()
     assert r"\input{/etc/passwd}" not in tex
     if shutil.which("pdftotext"):
-        text = subprocess.run(["pdftotext", str(folder / "hostile.pdf"), "-"],
-                              capture_output=True, text=True, check=True).stdout
+        text = subprocess.run(
+            ["pdftotext", str(folder / "hostile.pdf"), "-"],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout
         assert r"\input{/etc/passwd}" in text and 'system("true")' in text
         passwd = Path("/etc/passwd")
         if passwd.exists():
@@ -321,25 +380,38 @@ def test_hostile_names_compile_to_literal_text(tmp_path):
 
 def test_escape_latex_of_every_character_compiles(tmp_path):
     pdflatex()
-    every = "".join(chr(c) for c in range(32, 127)) + "\t\x07 éÅßΩ→ ﬁ\U0001F600"
+    every = "".join(chr(c) for c in range(32, 127)) + "\t\x07 éÅßΩ→ ﬁ\U0001f600"
     assert escape_latex("plain Name_1") == r"plain Name\_\penalty0{}1"
-    for ch in "\\{}$&#^_%~<>|\"":
+    for ch in '\\{}$&#^_%~<>|"':
         out = escape_latex(ch)
         assert out != ch and out.startswith(("\\", "{\\ttfamily\\char")), (ch, out)
-    doc = ("\\documentclass{article}\\usepackage{amsmath}\\begin{document}\n"
-           f"{escape_latex(every)}\n\n$x_{{{math_name(every)}}}$\n\\end{{document}}\n")
+    doc = (
+        "\\documentclass{article}\\usepackage{amsmath}\\begin{document}\n"
+        f"{escape_latex(every)}\n\n$x_{{{math_name(every)}}}$\n\\end{{document}}\n"
+    )
     (tmp_path / "chars.tex").write_text(doc)
     compile_tex(tmp_path, "chars.tex")
     if shutil.which("pdftotext"):
-        text = subprocess.run(["pdftotext", str(tmp_path / "chars.pdf"), "-"],
-                              capture_output=True, text=True, check=True).stdout
+        text = subprocess.run(
+            ["pdftotext", str(tmp_path / "chars.pdf"), "-"],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout
         # (OT1 sets ' and ` as typographic quotes and _ as a rule; the rest is literal)
-        for fragment in ('!"#$%&', "()*+,-./0123456789:;<=>?@ABC", "[\\]^", "{|}~",
-                         "[U+0007]", "[U+2192]"):
+        for fragment in (
+            '!"#$%&',
+            "()*+,-./0123456789:;<=>?@ABC",
+            "[\\]^",
+            "{|}~",
+            "[U+0007]",
+            "[U+2192]",
+        ):
             assert fragment in text, fragment
 
 
 # -- what the report states --------------------------------------------------------------------
+
 
 def _derive_tex(tmp_path: Path, file: Path, *options: str) -> str:
     out = tmp_path / "out"
@@ -349,9 +421,12 @@ def _derive_tex(tmp_path: Path, file: Path, *options: str) -> str:
 
 
 def _peak_rows(tex: str) -> list[list[str]]:
-    table = tex[tex.index(":peaks}"):tex.index(r"\bottomrule", tex.index(":peaks}"))]
-    return [[c.strip() for c in line.rstrip("\\ ").split("&")]
-            for line in table.splitlines() if line.count("&") in (4, 5) and "level" not in line]
+    table = tex[tex.index(":peaks}") : tex.index(r"\bottomrule", tex.index(":peaks}"))]
+    return [
+        [c.strip() for c in line.rstrip("\\ ").split("&")]
+        for line in table.splitlines()
+        if line.count("&") in (4, 5) and "level" not in line
+    ]
 
 
 def _sci(cell: str) -> float:
@@ -365,8 +440,8 @@ def test_range_without_tolerance_sets_the_plotted_range(tmp_path):
     the range's ends."""
     tex = _derive_tex(tmp_path, EXAMPLES / "four_bar.toml", "--range", "A0=-0.1:0.25")
     assert "of the input $\\theta$ of A0 from $-0.1$ to $0.25$~rad" in tex
-    from symkin.kinematics.analysis import Analysis
     from symkin.graph.structure import build
+    from symkin.kinematics.analysis import Analysis
 
     analysis = Analysis(build(symkin.load(EXAMPLES / "four_bar.toml")))
     rows = [r for r in _peak_rows(tex) if r[1] == "exact"]
@@ -374,13 +449,24 @@ def test_range_without_tolerance_sets_the_plotted_range(tmp_path):
     peak, at = _sci(rows[0][2]), float(rows[0][3].strip("$"))
     assert -0.1 <= at <= 0.25
     norm = lambda a: symkin.evaluate(analysis, {"A0": a}, "exact").points["C"].norm  # noqa: E731
-    assert abs(norm(at) - peak) <= 5e-3 * peak          # the table prints 3 digits
+    assert abs(norm(at) - peak) <= 5e-3 * peak  # the table prints 3 digits
     assert max(norm(-0.1), norm(0.25)) <= norm(at) * (1 + 1e-9)
 
 
 def test_range_needs_something_to_act_on(tmp_path, capsys):
-    code = main(["derive", str(EXAMPLES / "four_bar.toml"), "-o", str(tmp_path / "o"), "--emit",
-                 "c", "--quiet", "--range", "A0=-0.1:0.2"])
+    code = main(
+        [
+            "derive",
+            str(EXAMPLES / "four_bar.toml"),
+            "-o",
+            str(tmp_path / "o"),
+            "--emit",
+            "c",
+            "--quiet",
+            "--range",
+            "A0=-0.1:0.2",
+        ]
+    )
     assert code == 2 and "fix:" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
 
@@ -414,9 +500,11 @@ def test_each_input_figure_shows_the_points_it_moves(tmp_path):
     path = tmp_path / "fan_3.toml"
     path.write_text(families.fan(3))
     tex = _derive_tex(tmp_path, path)
-    captions = re.findall(r"\\caption\{Deviation \$\|\\Delta\\mathbf\{R\}\|\$ of (.*?) over "
-                          r"the range of the input (\S+) \(",
-                          tex.replace(r"\penalty0{}", "").replace(r"\_", "_"))
+    captions = re.findall(
+        r"\\caption\{Deviation \$\|\\Delta\\mathbf\{R\}\|\$ of (.*?) over "
+        r"the range of the input (\S+) \(",
+        tex.replace(r"\penalty0{}", "").replace(r"\_", "_"),
+    )
     assert captions == [("point C1", "A0_1"), ("point C2", "A0_2"), ("point C3", "A0_3")]
     assert "A figure shows only the points its input moves" in tex
     log = compile_tex(tmp_path / "out", "fan_3.tex")
@@ -430,7 +518,7 @@ def test_tolerance_choice_is_in_the_rendered_report(tmp_path):
     body = body.replace(r"\penalty0{}", "").replace("{}", "").replace(r"\_", "_")
     m = re.search(r"Tolerance 0.05 over A0 in \[-0.2, 0.2\]: variant (\S+) chosen", body)
     assert m and "worst relative error" in body
-    assert f"variant {m[1]} chosen" in tex.split(r"\documentclass")[0]     # and in the header
+    assert f"variant {m[1]} chosen" in tex.split(r"\documentclass")[0]  # and in the header
 
 
 def test_mechanism_specific_sentences(reports):
@@ -448,7 +536,8 @@ def test_units_on_the_text_tables_and_axes(tmp_path, reports):
     tex = reports["four_bar"][0]["four_bar.tex"].decode()
     assert "are in metres" in tex and r"($\mathrm{m}$)" in tex
     text = M.without_stiffness(EXAMPLES / "four_bar.toml").replace(
-        'name = "four_bar"', 'name = "four_bar"\nunits = "mm"', 1)
+        'name = "four_bar"', 'name = "four_bar"\nunits = "mm"', 1
+    )
     assert 'units = "mm"' in text
     path = tmp_path / "four_bar_mm.toml"
     path.write_text(text)

@@ -5,24 +5,25 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-import symkin
 from conftest import EXAMPLES
 from evaluators import require_compiler
-from symkin.core import levels
+
+import symkin
 from symkin.cli.commands import parser
 from symkin.codegen import toolchain
 from symkin.codegen.backends.c import backend as c_backend
 from symkin.codegen.backends.numpy import backend as numpy_backend
 from symkin.codegen.plan import plan
+from symkin.core import levels
 
 
 def test_the_table():
     codes = [lv.code for lv in levels.LEVELS]
-    assert sorted(codes) == list(range(len(codes)))       # unique, none skipped
+    assert sorted(codes) == list(range(len(codes)))  # unique, none skipped
     # the contract's codes never change: new levels take the next free one
-    assert [levels.get(n).code for n in ("paper", "first_order", "exact", "loaded",
-                                         "equilibrium")] == [0, 1, 2, 3, 4]
+    assert [
+        levels.get(n).code for n in ("paper", "first_order", "exact", "loaded", "equilibrium")
+    ] == [0, 1, 2, 3, 4]
     assert len(set(levels.NAMES)) == len(levels.NAMES)
     assert levels.DEFAULT in levels.NAMES
     assert levels.reference().name == "exact"
@@ -43,13 +44,15 @@ def test_generated_code_takes_the_plans_levels_and_their_codes(wanted):
     an = symkin.analyze(symkin.load(EXAMPLES / "four_bar.toml"))
     p = plan(an, levels=wanted)
     names = tuple(lv.name for lv in p.levels)
-    module = toolchain.import_numpy_module(numpy_backend.emit(p, "levels"),
-                                         "four_bar_" + "_".join(names))
-    assert module.LEVELS == names
+    module = toolchain.import_numpy_module(
+        numpy_backend.emit(p, "levels"), "four_bar_" + "_".join(names)
+    )
+    assert names == module.LEVELS
     # exact when it is generated, else the most faithful level generated
     default = module.evaluate({"A0": np.array([0.2])})
-    given = module.evaluate({"A0": np.array([0.2])},
-                            levels.DEFAULT if levels.DEFAULT in names else names[-1])
+    given = module.evaluate(
+        {"A0": np.array([0.2])}, levels.DEFAULT if levels.DEFAULT in names else names[-1]
+    )
     assert np.array_equal(default["points"]["C"]["deviation"], given["points"]["C"]["deviation"])
     header, code = c_backend.emit(p, "levels")
     lib = toolchain.Library(toolchain.build("four_bar", header, code), "four_bar", 1, 1, 1, 4)

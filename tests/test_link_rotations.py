@@ -8,11 +8,11 @@ import math
 
 import mpmath
 import pytest
-
-import symkin
 from conftest import EXAMPLES
 from evaluators import INPUTS, generated
 from reference_solver import Reference
+
+import symkin
 from symkin.cli.commands import main
 from symkin.codegen import toolchain
 from symkin.codegen.backends.c import backend as c_backend
@@ -26,8 +26,10 @@ def reference_rotations(mech, inputs, overrides=None) -> dict[str, tuple[float, 
     ref = Reference(mech, overrides).deviation(inputs)
     with mpmath.workdps(ref["dps"]):
         rigid, compliant = ref["rigid"]["poses"], ref["compliant"]["poses"]
-        return {name: (float(rigid[name][2]), float(compliant[name][2] - rigid[name][2]))
-                for name in rigid}
+        return {
+            name: (float(rigid[name][2]), float(compliant[name][2] - rigid[name][2]))
+            for name in rigid
+        }
 
 
 def run_backend(g, inputs, level, backend, overrides=None):
@@ -43,8 +45,9 @@ def test_exact_link_rotations_against_the_independent_solver(key, backend):
     assert set(got) == set(want)
     for name, (rigid, dev) in want.items():
         assert got[name].rigid == pytest.approx(rigid, rel=1e-12, abs=1e-15), name
-        assert got[name].compliant == pytest.approx(got[name].rigid + got[name].deviation,
-                                                    rel=1e-15, abs=1e-18)
+        assert got[name].compliant == pytest.approx(
+            got[name].rigid + got[name].deviation, rel=1e-15, abs=1e-18
+        )
         if dev == 0.0:
             assert got[name].deviation == 0.0, name
         else:
@@ -71,12 +74,24 @@ def test_every_level_matches_the_sympy_backend(key, backend):
         for name, r in want.items():
             assert got[name].deviation == pytest.approx(r.deviation, rel=1e-12, abs=1e-300)
             if level == "paper":
-                assert r.deviation == 0.0       # (4.8) keeps the rigid angles
+                assert r.deviation == 0.0  # (4.8) keeps the rigid angles
 
 
 def test_json_and_text_carry_the_links(capsys):
-    assert main(["eval", str(EXAMPLES / "four_bar.toml"), "--input", "A0=0.2", "--json",
-                 "--backend", "c"]) == 0
+    assert (
+        main(
+            [
+                "eval",
+                str(EXAMPLES / "four_bar.toml"),
+                "--input",
+                "A0=0.2",
+                "--json",
+                "--backend",
+                "c",
+            ]
+        )
+        == 0
+    )
     data = json.loads(capsys.readouterr().out)
     assert set(data["links"]) == {"frame", "crank", "coupler", "rocker"}
     assert data["links"]["crank"] == {"rigid": 0.2, "compliant": 0.2, "deviation": 0.0}
@@ -91,10 +106,10 @@ def test_c_pose_fills_nan_on_failure_and_accepts_null():
     assert "#define FOUR_BAR_N_LINKS 4" in header and "four_bar_evaluate_pose" in header
     lib = toolchain.Library(toolchain.build("four_bar", header, code), "four_bar", 1, 1, 1, 4, 4)
     status, _, _, links = lib.pose([0.2], None, 2)
-    assert status == 0 and links[3 * 1] == 0.2          # the crank turns by its input
+    assert status == 0 and links[3 * 1] == 0.2  # the crank turns by its input
     status, out, angles, links = lib.pose([4.0], None, 2)
     assert status == 3 and all(math.isnan(v) for v in links + out + angles)
-    status, out, _ = lib.evaluate([0.2], None, 2)         # evaluate_pose with links NULL
+    status, out, _ = lib.evaluate([0.2], None, 2)  # evaluate_pose with links NULL
     assert status == 0
 
 

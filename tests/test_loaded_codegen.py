@@ -1,4 +1,5 @@
-"""The `loaded` and `loaded_refined` levels in the generated numpy and C evaluators (docs/physics.md) against the
+"""The `loaded` and `loaded_refined` levels in the generated numpy and C evaluators
+(docs/physics.md) against the
 sympy backend's 40-digit evaluation of the same derivation; tests/test_physics_reference.py
 holds that derivation against the independent elastica reference.
 
@@ -9,25 +10,30 @@ plates), the first-order variant (beam_column=False), float32, and --param overr
 
 from __future__ import annotations
 
+import mechanisms as M
 import numpy as np
 import pytest
-
-import mechanisms as M
-import symkin
 from conftest import EXAMPLES
 from evaluators import INPUTS, Generated, generated, rel_err
-from symkin.studies import evaluation
+
+import symkin
 from symkin.codegen.backends.numpy import backend as numpy_backend
 from symkin.codegen.plan import plan
 from symkin.codegen.toolchain import import_numpy_module
+from symkin.studies import evaluation
 
-LOADED_FOUR_BAR = (M.without_stiffness(EXAMPLES / "four_bar.toml")
-                   .replace('length = "l"\n', 'length = "l"\nE = 70e9\nthickness = "l/8"\n'
-                            'width = "l/2"\n')       # narrower than 5 t: E' = E
-                   + '[[load]]\npoint = "C"\nforce = [0.4, -1.5]\nmoment = 0.003\n')
-LOADED_ARM = (M.SERIAL_ARM.replace('length = "l"\n', 'length = "l"\nE = 210e9\n'
-                                   'thickness = "l/10"\nwidth = 4e-3\n')
-              + '[[load]]\npoint = "T"\nforce = [1.0, -2.0]\n')
+LOADED_FOUR_BAR = (
+    M.without_stiffness(EXAMPLES / "four_bar.toml").replace(
+        'length = "l"\n', 'length = "l"\nE = 70e9\nthickness = "l/8"\nwidth = "l/2"\n'
+    )  # narrower than 5 t: E' = E
+    + '[[load]]\npoint = "C"\nforce = [0.4, -1.5]\nmoment = 0.003\n'
+)
+LOADED_ARM = (
+    M.SERIAL_ARM.replace(
+        'length = "l"\n', 'length = "l"\nE = 210e9\nthickness = "l/10"\nwidth = 4e-3\n'
+    )
+    + '[[load]]\npoint = "T"\nforce = [1.0, -2.0]\n'
+)
 
 
 def loaded_case(key: str) -> Generated:
@@ -44,9 +50,13 @@ def _cached(key: str, text: str) -> Generated:
     return _CASES[key]
 
 
-CASES = {"four_bar": INPUTS["four_bar"], "six_bar": INPUTS["six_bar"],
-         "nine_bar": INPUTS["nine_bar"], "loaded_four_bar": {"A0": "-0.15"},
-         "loaded_arm": {"S": "0.3", "E": "-0.2"}}
+CASES = {
+    "four_bar": INPUTS["four_bar"],
+    "six_bar": INPUTS["six_bar"],
+    "nine_bar": INPUTS["nine_bar"],
+    "loaded_four_bar": {"A0": "-0.15"},
+    "loaded_arm": {"S": "0.3", "E": "-0.2"},
+}
 
 
 @pytest.mark.parametrize("level", ["loaded", "loaded_refined"])
@@ -72,7 +82,8 @@ def test_refined_alone_solves_the_loops_it_needs(backend):
     inputs = {"O": "0.3", "A": "0", "B": "0", "K": "0"}
     want = symkin.evaluate(g.analysis, inputs, "loaded_refined").points["F"].deviation
     got = symkin.compile(g.mech, backend, levels=["loaded_refined"], sensitivity=False).evaluate(
-        {k: np.array([float(v)]) for k, v in inputs.items()})["points"]["F"]["deviation"][:, 0]
+        {k: np.array([float(v)]) for k, v in inputs.items()}
+    )["points"]["F"]["deviation"][:, 0]
     assert rel_err([float(v) for v in got], want) <= 1e-12
 
 
@@ -91,10 +102,9 @@ def test_the_modulus_branch_and_the_load_reach_the_generated_code():
 @pytest.mark.parametrize("backend", ["numpy", "c"])
 def test_loaded_with_parameter_overrides(backend):
     g = generated("four_bar")
-    overrides = {"l": "4e-3"}          # thickness l/10 follows; 4 mm plates stay wide (5 mm)
+    overrides = {"l": "4e-3"}  # thickness l/10 follows; 4 mm plates stay wide (5 mm)
     want = symkin.evaluate(g.analysis, INPUTS["four_bar"], "loaded", params=overrides)
-    got = (g.run_numpy if backend == "numpy" else g.run_c)(INPUTS["four_bar"], "loaded",
-                                                           overrides)
+    got = (g.run_numpy if backend == "numpy" else g.run_c)(INPUTS["four_bar"], "loaded", overrides)
     assert rel_err(got["C"], want.points["C"].deviation) <= 1e-12
 
 
@@ -121,8 +131,11 @@ def test_float32_loaded_stays_in_float32():
 
 def test_a_file_without_stiffness_generates_no_loaded_level():
     mech = symkin.loads(M.without_stiffness(EXAMPLES / "four_bar.toml"), "plain.toml")
-    assert [lv.name for lv in plan(symkin.analyze(mech)).levels] == \
-        ["paper", "first_order", "exact"]
+    assert [lv.name for lv in plan(symkin.analyze(mech)).levels] == [
+        "paper",
+        "first_order",
+        "exact",
+    ]
     with pytest.raises(symkin.InputError, match="no 'E'"):
         plan(symkin.analyze(mech), levels=["loaded"])
 
@@ -144,8 +157,9 @@ def test_loaded_link_rotations_match_the_sympy_backend(key, backend):
 def test_physical_levels_on_other_topologies(key, backend):
     """A `rigid` pin among the plates, two inputs, a triad solved by continuation (no dyads):
     both closed-form physical levels agree with the sympy backend's 40-digit evaluation."""
-    text = getattr(M, key).replace('length = "l"', 'length = "l"\nE = 210e9\nthickness = "l/10"\n'
-                                   'width = 5e-3\nnu = 0.3\n', 1)
+    text = getattr(M, key).replace(
+        'length = "l"', 'length = "l"\nE = 210e9\nthickness = "l/10"\nwidth = 5e-3\nnu = 0.3\n', 1
+    )
     mech = symkin.loads(text, f"{key}.toml")
     an = symkin.analyze(mech)
     inputs = {n: 0.1 * (i + 1) for i, n in enumerate(mech.inputs)}
@@ -155,8 +169,10 @@ def test_physical_levels_on_other_topologies(key, backend):
         got = ev.evaluate({k: np.array([v]) for k, v in inputs.items()}, level)
         assert got["ok"].all()
         for name, point in want.points.items():
-            assert rel_err([float(v) for v in got["points"][name]["deviation"][:, 0]],
-                           point.deviation) <= 1e-12, (level, name)
+            assert (
+                rel_err([float(v) for v in got["points"][name]["deviation"][:, 0]], point.deviation)
+                <= 1e-12
+            ), (level, name)
 
 
 def test_refined_reports_the_angles_of_the_other_generated_levels():
@@ -169,8 +185,7 @@ def test_refined_reports_the_angles_of_the_other_generated_levels():
     arrays = {k: np.array([v]) for k, v in inputs.items()}
     want = symkin.evaluate(g.analysis, inputs, "loaded_refined").points["F"].deviation
     for backend in ("numpy", "c"):
-        res = symkin.compile(g.mech, backend, sensitivity=False).evaluate(arrays,
-                                                                         "loaded_refined")
+        res = symkin.compile(g.mech, backend, sensitivity=False).evaluate(arrays, "loaded_refined")
         assert res["ok"].all()
         for hinge, rigid in res["angles"]["rigid"].items():
             assert np.array_equal(res["angles"]["compliant"][hinge], rigid), (backend, hinge)

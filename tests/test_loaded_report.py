@@ -14,15 +14,15 @@ from __future__ import annotations
 
 import math
 
+import mechanisms as M
 import numpy as np
 import pytest
 import sympy as sp
-
-import mechanisms as M
-import symkin
 from conftest import EXAMPLES
 from reference_physics import Equilibrium
 from reference_solver import Reference
+
+import symkin
 from symkin.codegen.backends.latex import report as latex_report
 from symkin.codegen.backends.numpy import backend as numpy_backend
 from symkin.codegen.plan import plan
@@ -32,12 +32,20 @@ from symkin.studies.derive import generate
 E, NU, WIDTH = 210e9, 0.3, 5e-3
 LOADED = (EXAMPLES / "four_bar.toml").read_text() + (
     '\n[[load]]\npoint = "C"\nforce = [0.4, -1.5]\nmoment = 0.003\n'
-    '\n[[load]]\nlink = "rocker"\nat = [0.09, 0.03]\nforce = [0.0, -0.5]\n')
+    '\n[[load]]\nlink = "rocker"\nat = [0.09, 0.03]\nforce = [0.0, -0.5]\n'
+)
 
 
 def loads_of(mech):
-    return [(ld.link, tuple(float(v) for v in ld.at), tuple(float(v) for v in ld.force),
-             float(ld.moment)) for ld in mech.loads]
+    return [
+        (
+            ld.link,
+            tuple(float(v) for v in ld.at),
+            tuple(float(v) for v in ld.force),
+            float(ld.moment),
+        )
+        for ld in mech.loads
+    ]
 
 
 def test_printed_statics_give_the_plate_forces_of_the_elastica():
@@ -46,34 +54,40 @@ def test_printed_statics_give_the_plate_forces_of_the_elastica():
     ld = statement.loaded
     assert ld is not None and ld.beam_column
     l = 1e-3
-    EI = E / (1 - NU ** 2) * WIDTH * (l / 10) ** 3 / 12
+    EI = E / (1 - NU**2) * WIDTH * (l / 10) ** 3 / 12
     inputs = {"A0": "0.2"}
     angles = Reference(mech).solve(inputs, model_override="rigid")["angles"]
-    values = {theta: sp.Float(str(angles[statement.structure.hinges[a - 1]]), 30)
-              for a, theta in statement.theta.items()}
-    values.update({k: EI / l for k in ld.springs.values()})
+    values = {
+        theta: sp.Float(str(angles[statement.structure.hinges[a - 1]]), 30)
+        for a, theta in statement.theta.items()
+    }
+    values.update(dict.fromkeys(ld.springs.values(), EI / l))
     values.update({p.symbol: p.value for p in mech.parameters})
     A = np.array(statement.linear[0].xreplace(values).evalf(30).tolist(), dtype=float)
     Q = np.array([float(q.xreplace(values).evalf(30)) for _, q in ld.forces])
     multipliers = np.linalg.solve(A.T, Q)
     values.update(dict(zip(ld.multipliers, multipliers)))
-    reference = Equilibrium(mech, (E / (1 - NU ** 2), WIDTH, "l/10"),
-                            loads=loads_of(mech)).solve(inputs)
+    reference = Equilibrium(mech, (E / (1 - NU**2), WIDTH, "l/10"), loads=loads_of(mech)).solve(
+        inputs
+    )
     for a, force, _ in ld.hinge_forces:
         name = statement.structure.hinges[a - 1]
         want = [float(v) for v in reference["hinges"][name]["force"]]
         got = [float(sp.sympify(c).xreplace(values)) for c in force]
-        assert math.hypot(got[0] - want[0], got[1] - want[1]) < 5e-3 * math.hypot(*want), \
-            (name, got, want)
+        assert math.hypot(got[0] - want[0], got[1] - want[1]) < 5e-3 * math.hypot(*want), (
+            name,
+            got,
+            want,
+        )
 
 
 def test_report_states_stiffness_loads_and_statics():
     mech = symkin.loads(LOADED, "four_bar.toml")
     tex = generate(mech, emit=("latex",))["four_bar.tex"].decode()
-    EI = E / (1 - NU ** 2) * WIDTH * 1e-4 ** 3 / 12          # 9.615e-5 N m^2
+    EI = E / (1 - NU**2) * WIDTH * 1e-4**3 / 12  # 9.615e-5 N m^2
     assert f"{EI / 1e-5:.2f}\\times 10^{{-5}}" in tex
     assert r"\subsection{Plate stiffness, loads and the level \emph{loaded}}" in tex
-    for a in (2, 3, 4):                                       # the non-input hinges
+    for a in (2, 3, 4):  # the non-input hinges
         assert rf"Q^{{0}}_{{{a}}} &=" in tex
     for a in (1, 2, 3, 4):
         assert rf"\mathbf{{n}}_{{{a}}} &=" in tex
@@ -107,7 +121,7 @@ def test_figure_reference_points_are_the_elastica(example):
     h, data, _ = runs[0]
     at, ref = data.reference
     assert len(at) == latex_report.REFERENCE_SAMPLES
-    reference = Equilibrium(mech, (E / (1 - NU ** 2), WIDTH, "l/10"))
+    reference = Equilibrium(mech, (E / (1 - NU**2), WIDTH, "l/10"))
     point = p.points[0]
     for k in (0, len(at) - 2):
         t = float(data.t[at[k]])

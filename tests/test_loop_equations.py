@@ -1,4 +1,5 @@
-"""Loop-closure equations (symkin.kinematics.loop_equations) against the paper's section 5, symbolically.
+"""Loop-closure equations (symkin.kinematics.loop_equations) against the paper's section 5,
+symbolically.
 
 The paper's equations are typed in below in the paper's own symbols (lengths r1, a, b1, ...,
 relative angles q1, q2, ...). They are mapped onto symkin's:
@@ -25,13 +26,12 @@ from __future__ import annotations
 import mpmath
 import pytest
 import sympy as sp
-
-import symkin
 from conftest import EXAMPLES
 from mechanisms import FIVE_BAR, SERIAL_ARM, TRIAD_SIX_BAR, WATT_II
 
-from symkin.kinematics.positions import Kinematics
+import symkin
 from symkin.kinematics.loop_equations import LoopEquations, latex, loop_equations
+from symkin.kinematics.positions import Kinematics
 
 Q = {a: sp.Symbol(f"q{a}", real=True) for a in range(1, 11)}
 q1, q2, q3, q4, q5, q6, q7, q8, q9, q10 = (Q[a] for a in range(1, 11))
@@ -49,11 +49,12 @@ def equations(kin: Kinematics) -> dict[int, LoopEquations]:
 class Paper:
     """The map from the paper's symbols onto symkin's, for one loop of one example."""
 
-    def __init__(self, kin: Kinematics, ground: tuple[str, str],
-                 frames: dict[int, tuple[str, str]]) -> None:
+    def __init__(
+        self, kin: Kinematics, ground: tuple[str, str], frames: dict[int, tuple[str, str]]
+    ) -> None:
         self.kin = kin
         s = kin.structure
-        self.rho = self.direction(*ground)              # paper's x axis in symkin's frame
+        self.rho = self.direction(*ground)  # paper's x axis in symkin's frame
         # γ_i: as-fabricated direction of link i's paper x axis, from the paper's x axis.
         self.gamma = {0: sp.Integer(0)}
         self.gamma.update({i: self.direction(*pq) - self.rho for i, pq in frames.items()})
@@ -99,8 +100,9 @@ def vanishes(expr: sp.Expr) -> bool:
     expr = sp.expand(sp.expand_trig(sp.expand(expr)))
     thetas = sorted((s for s in expr.free_symbols if s.name.startswith("theta_")), key=str)
     cs = {t: (sp.Dummy(f"c{t.name}"), sp.Dummy(f"s{t.name}")) for t in thetas}
-    expr = expr.xreplace({sp.cos(t): c for t, (c, _) in cs.items()}
-                         | {sp.sin(t): s for t, (_, s) in cs.items()})
+    expr = expr.xreplace(
+        {sp.cos(t): c for t, (c, _) in cs.items()} | {sp.sin(t): s for t, (_, s) in cs.items()}
+    )
     gens = [g for pair in cs.values() for g in pair]
     if not gens:
         return sp.simplify(sp.radsimp(expr)) == 0
@@ -115,7 +117,7 @@ def vanishes(expr: sp.Expr) -> bool:
             if monom[k] >= 2:
                 monom[k] -= 2
                 lower = list(monom)
-                lower[k - 1] += 2                   # s² = 1 - c²
+                lower[k - 1] += 2  # s² = 1 - c²
                 terms.extend([(tuple(monom), coeff), (tuple(lower), -coeff)])
                 break
         else:
@@ -158,30 +160,41 @@ def check_squared(paper: Paper, eq: LoopEquations, lhs, rhs) -> None:
 def four_bar():
     kin = kinematics("four_bar")
     paper = Paper(kin, ("A0", "B0"), {1: ("A0", "A"), 2: ("A", "B"), 3: ("B0", "B")})
-    r1, r2, r4, r6 = (paper.length("A0", "B0"), paper.length("A0", "A"),
-                      paper.length("B0", "B"), paper.length("A", "B"))
+    r1, r2, r4, r6 = (
+        paper.length("A0", "B0"),
+        paper.length("A0", "A"),
+        paper.length("B0", "B"),
+        paper.length("A", "B"),
+    )
     return kin, equations(kin)[4], paper, (r1, r2, r4, r6)
 
 
 def test_four_bar_5_4_and_5_5(four_bar):
-    kin, eq, paper, (r1, r2, r4, r6) = four_bar
-    check_loop(paper, eq, +1,
-               # "(5.4) takes the form" means (5.1) (erratum 3); the relation is (5.5):
-               q1 + q2 - q3 + q4,
-               r2 * sp.cos(q1) + r6 * sp.cos(q1 + q2) - r4 * sp.cos(q3) - r1,
-               r2 * sp.sin(q1) + r6 * sp.sin(q1 + q2) - r4 * sp.sin(q3))
+    _kin, eq, paper, (r1, r2, r4, r6) = four_bar
+    check_loop(
+        paper,
+        eq,
+        +1,
+        # "(5.4) takes the form" means (5.1) (erratum 3); the relation is (5.5):
+        q1 + q2 - q3 + q4,
+        r2 * sp.cos(q1) + r6 * sp.cos(q1 + q2) - r4 * sp.cos(q3) - r1,
+        r2 * sp.sin(q1) + r6 * sp.sin(q1 + q2) - r4 * sp.sin(q3),
+    )
 
 
 def test_four_bar_squared_form(four_bar):
-    kin, eq, paper, (r1, r2, r4, r6) = four_bar
-    assert eq.eliminated == 3                      # the rocker: the paper eliminates q3 too
-    check_squared(paper, eq, r4 ** 2 - (r1 ** 2 + r2 ** 2 + r6 ** 2),
-                  2 * r2 * r6 * sp.cos(q2) - 2 * r1 * r2 * sp.cos(q1)
-                  - 2 * r1 * r6 * sp.cos(q1 + q2))
+    _kin, eq, paper, (r1, r2, r4, r6) = four_bar
+    assert eq.eliminated == 3  # the rocker: the paper eliminates q3 too
+    check_squared(
+        paper,
+        eq,
+        r4**2 - (r1**2 + r2**2 + r6**2),
+        2 * r2 * r6 * sp.cos(q2) - 2 * r1 * r2 * sp.cos(q1) - 2 * r1 * r6 * sp.cos(q1 + q2),
+    )
 
 
 def test_four_bar_5_6_solved_angle(four_bar):
-    kin, eq, paper, (r1, r2, r4, r6) = four_bar
+    _kin, eq, paper, (r1, r2, _r4, r6) = four_bar
     # (5.6) with r1 for the printed "r" (erratum 3) and atan2 for arctan (erratum 6).
     num = r2 * sp.sin(q1) + r6 * sp.sin(q1 + q2)
     den = r2 * sp.cos(q1) + r6 * sp.cos(q1 + q2) - r1
@@ -198,22 +211,38 @@ def six_bar():
     # Paper frames: link 1 along O_A C (a appears as a cos(q1 - α)), link 2 along C D, link 3 along
     # O_B E (c cos(q3 + β)), link 4 along E D (-g cos(q3 + q4)) and link 5 along B A (the AB term
     # is written -b cos(q1 + q6), with the loop walked O_A A B O_B).
-    paper = Paper(kin, ("O_A", "O_B"), {1: ("O_A", "C"), 2: ("C", "D"), 3: ("O_B", "E"),
-                                        4: ("E", "D"), 5: ("B", "A")})
+    paper = Paper(
+        kin,
+        ("O_A", "O_B"),
+        {1: ("O_A", "C"), 2: ("C", "D"), 3: ("O_B", "E"), 4: ("E", "D"), 5: ("B", "A")},
+    )
     L = paper.length
-    dims = dict(a=L("O_A", "A"), b=L("A", "B"), c=L("O_B", "B"), d=L("O_A", "O_B"),
-                e=L("O_A", "C"), f=L("O_B", "E"), g=L("E", "D"), h=L("C", "D"),
-                alpha=paper.angle("O_A", "A", "O_A", "C"), beta=paper.angle("O_B", "E", "O_B", "B"))
+    dims = {
+        "a": L("O_A", "A"),
+        "b": L("A", "B"),
+        "c": L("O_B", "B"),
+        "d": L("O_A", "O_B"),
+        "e": L("O_A", "C"),
+        "f": L("O_B", "E"),
+        "g": L("E", "D"),
+        "h": L("C", "D"),
+        "alpha": paper.angle("O_A", "A", "O_A", "C"),
+        "beta": paper.angle("O_B", "E", "O_B", "B"),
+    }
     return kin, eqs, paper, dims
 
 
 def test_six_bar_loop_1_5_7_and_5_8(six_bar):
-    kin, eqs, paper, k = six_bar
+    _kin, eqs, paper, k = six_bar
     a, b, c, d, alpha, beta = (k[n] for n in ("a", "b", "c", "d", "alpha", "beta"))
-    check_loop(paper, eqs[6], +1,
-               q1 - q3 - q5 + q6,
-               a * sp.cos(q1 - alpha) - b * sp.cos(q1 + q6) - c * sp.cos(q3 + beta) - d,
-               a * sp.sin(q1 - alpha) - b * sp.sin(q1 + q6) - c * sp.sin(q3 + beta))
+    check_loop(
+        paper,
+        eqs[6],
+        +1,
+        q1 - q3 - q5 + q6,
+        a * sp.cos(q1 - alpha) - b * sp.cos(q1 + q6) - c * sp.cos(q3 + beta) - d,
+        a * sp.sin(q1 - alpha) - b * sp.sin(q1 + q6) - c * sp.sin(q3 + beta),
+    )
 
 
 def test_six_bar_loop_1_squared_5_10_and_solved_5_9(six_bar):
@@ -222,9 +251,14 @@ def test_six_bar_loop_1_squared_5_10_and_solved_5_9(six_bar):
     # The default rule eliminates the last free link (5, AB); the paper eliminates q3 (link 3).
     assert eqs[6].eliminated == 5
     eq = eqs[6].eliminating(3)
-    check_squared(paper, eq, c ** 2 - (a ** 2 + b ** 2 + d ** 2),
-                  -2 * a * b * sp.cos(q6 + alpha) - 2 * a * d * sp.cos(q1 - alpha)
-                  + 2 * b * d * sp.cos(q1 + q6))
+    check_squared(
+        paper,
+        eq,
+        c**2 - (a**2 + b**2 + d**2),
+        -2 * a * b * sp.cos(q6 + alpha)
+        - 2 * a * d * sp.cos(q1 - alpha)
+        + 2 * b * d * sp.cos(q1 + q6),
+    )
     # (5.9) with atan2 (erratum 6): q3 + β = atan2(num, den).
     num = a * sp.sin(q1 - alpha) - b * sp.sin(q1 + q6)
     den = a * sp.cos(q1 - alpha) - b * sp.cos(q1 + q6) - d
@@ -235,25 +269,34 @@ def test_six_bar_loop_1_squared_5_10_and_solved_5_9(six_bar):
 
 
 def test_six_bar_loop_2_5_11_and_5_12(six_bar):
-    kin, eqs, paper, k = six_bar
+    _kin, eqs, paper, k = six_bar
     d, e, f, g, h = (k[n] for n in "defgh")
-    check_loop(paper, eqs[7], +1,
-               q1 + q2 - q3 - q4 + q7,
-               e * sp.cos(q1) + h * sp.cos(q1 + q2) - g * sp.cos(q3 + q4) - f * sp.cos(q3) - d,
-               e * sp.sin(q1) + h * sp.sin(q1 + q2) - g * sp.sin(q3 + q4) - f * sp.sin(q3))
+    check_loop(
+        paper,
+        eqs[7],
+        +1,
+        q1 + q2 - q3 - q4 + q7,
+        e * sp.cos(q1) + h * sp.cos(q1 + q2) - g * sp.cos(q3 + q4) - f * sp.cos(q3) - d,
+        e * sp.sin(q1) + h * sp.sin(q1 + q2) - g * sp.sin(q3 + q4) - f * sp.sin(q3),
+    )
 
 
 def test_six_bar_loop_2_squared_5_13_and_solved_5_14(six_bar):
-    kin, eqs, paper, k = six_bar
+    _kin, eqs, paper, k = six_bar
     d, e, f, g, h = (k[n] for n in "defgh")
-    assert eqs[7].eliminated == 4                  # default rule; the paper eliminates link 2
+    assert eqs[7].eliminated == 4  # default rule; the paper eliminates link 2
     eq = eqs[7].eliminating(2)
-    lhs = h ** 2 - (d ** 2 + e ** 2 + f ** 2 + g ** 2)
+    lhs = h**2 - (d**2 + e**2 + f**2 + g**2)
 
     def rhs(ef_angle):
-        return (-2 * e * g * sp.cos(q1 - (q3 + q4)) - 2 * e * f * sp.cos(ef_angle)
-                + 2 * f * g * sp.cos(q4) - 2 * d * e * sp.cos(q1) + 2 * d * g * sp.cos(q3 + q4)
-                + 2 * d * f * sp.cos(q3))
+        return (
+            -2 * e * g * sp.cos(q1 - (q3 + q4))
+            - 2 * e * f * sp.cos(ef_angle)
+            + 2 * f * g * sp.cos(q4)
+            - 2 * d * e * sp.cos(q1)
+            + 2 * d * g * sp.cos(q3 + q4)
+            + 2 * d * f * sp.cos(q3)
+        )
 
     # docs/errata.md, item 7: (5.13) prints cos(q1 + q3) in the e f term; squaring (5.11) gives
     # cos(q1 - q3). The corrected form holds, the printed one does not.
@@ -268,8 +311,14 @@ def test_six_bar_loop_2_squared_5_13_and_solved_5_14(six_bar):
 
 
 # -- nine-bar platform (Fig. 6): (5.15)–(5.20) -----------------------------------------------------
-NINE_BAR_LOOP_1 = {1: ("O", "A"), 2: ("A", "B"), 3: ("B", "K"), 4: ("K", "G"), 5: ("G", "H"),
-                   6: ("H", "I")}
+NINE_BAR_LOOP_1 = {
+    1: ("O", "A"),
+    2: ("A", "B"),
+    3: ("B", "K"),
+    4: ("K", "G"),
+    5: ("G", "H"),
+    6: ("H", "I"),
+}
 # The paper writes both h1 = |BK| (loop 1) and b3 = |BC| (loop 2) at the angle q1 + q2 + q3 of the
 # ternary link 3, i.e. it drops the constant angle KBC (the six-bar keeps its α and β). In the
 # example B, K and C are not collinear, so link 3's paper frame is taken along B K in loop 1 and
@@ -291,36 +340,65 @@ def test_nine_bar_loop_1_5_15_and_5_16(nine_bar):
     kin, eqs = nine_bar
     paper = Paper(kin, ("O", "I"), NINE_BAR_LOOP_1)
     L = paper.length
-    b1, b2, h1, b4, b5, b6, a = (L("O", "A"), L("A", "B"), L("B", "K"), L("K", "G"), L("G", "H"),
-                                 L("H", "I"), L("O", "I"))
+    b1, b2, h1, b4, b5, b6, a = (
+        L("O", "A"),
+        L("A", "B"),
+        L("B", "K"),
+        L("K", "G"),
+        L("G", "H"),
+        L("H", "I"),
+        L("O", "I"),
+    )
     angles = [q1, q1 + q2, sums(1, 3), sums(1, 4), sums(1, 5)]
     lengths = [b1, b2, h1, b4, b5]
     # The paper walks O A B K G H I against the chord u9 (directed from the ground): sign -1.
-    check_loop(paper, eqs[9], -1,
-               q1 + q2 + q3 + q4 + q5 + q6 - q9,
-               sum(r * sp.cos(t) for r, t in zip(lengths, angles)) + b6 * sp.cos(q9) - a,
-               sum(r * sp.sin(t) for r, t in zip(lengths, angles)) + b6 * sp.sin(q9))
+    check_loop(
+        paper,
+        eqs[9],
+        -1,
+        q1 + q2 + q3 + q4 + q5 + q6 - q9,
+        sum(r * sp.cos(t) for r, t in zip(lengths, angles)) + b6 * sp.cos(q9) - a,
+        sum(r * sp.sin(t) for r, t in zip(lengths, angles)) + b6 * sp.sin(q9),
+    )
 
 
 def test_nine_bar_loop_1_squared_and_solved_5_17(nine_bar):
     kin, eqs = nine_bar
     paper = Paper(kin, ("O", "I"), NINE_BAR_LOOP_1)
     L = paper.length
-    b1, b2, h1, b4, b5, b6, a = (L("O", "A"), L("A", "B"), L("B", "K"), L("K", "G"), L("G", "H"),
-                                 L("H", "I"), L("O", "I"))
+    b1, b2, h1, b4, b5, b6, a = (
+        L("O", "A"),
+        L("A", "B"),
+        L("B", "K"),
+        L("K", "G"),
+        L("G", "H"),
+        L("H", "I"),
+        L("O", "I"),
+    )
     eq = eqs[9]
     assert eq.eliminated == 6
     c = sp.cos
-    rhs = (2 * b1 * b2 * c(q2) + 2 * b1 * h1 * c(q2 + q3) + 2 * b1 * b4 * c(sums(2, 4))
-           + 2 * b1 * b5 * c(sums(2, 5)) + 2 * b2 * h1 * c(q3) + 2 * b2 * b4 * c(q3 + q4)
-           + 2 * b2 * b5 * c(sums(3, 5)) + 2 * h1 * b4 * c(q4) + 2 * h1 * b5 * c(q4 + q5)
-           + 2 * b4 * b5 * c(q5) - 2 * a * b1 * c(q1) - 2 * a * b2 * c(q1 + q2)
-           - 2 * a * h1 * c(sums(1, 3)) - 2 * a * b4 * c(sums(1, 4)) - 2 * a * b5 * c(sums(1, 5)))
-    others = b1 ** 2 + b2 ** 2 + h1 ** 2 + b4 ** 2 + b5 ** 2 + a ** 2
+    rhs = (
+        2 * b1 * b2 * c(q2)
+        + 2 * b1 * h1 * c(q2 + q3)
+        + 2 * b1 * b4 * c(sums(2, 4))
+        + 2 * b1 * b5 * c(sums(2, 5))
+        + 2 * b2 * h1 * c(q3)
+        + 2 * b2 * b4 * c(q3 + q4)
+        + 2 * b2 * b5 * c(sums(3, 5))
+        + 2 * h1 * b4 * c(q4)
+        + 2 * h1 * b5 * c(q4 + q5)
+        + 2 * b4 * b5 * c(q5)
+        - 2 * a * b1 * c(q1)
+        - 2 * a * b2 * c(q1 + q2)
+        - 2 * a * h1 * c(sums(1, 3))
+        - 2 * a * b4 * c(sums(1, 4))
+        - 2 * a * b5 * c(sums(1, 5))
+    )
+    others = b1**2 + b2**2 + h1**2 + b4**2 + b5**2 + a**2
     # Erratum 4: the left side is b6² - (...), not the printed b7² - (...).
-    check_squared(paper, eq, b6 ** 2 - others, rhs)
-    assert not vanishes(paper(L("C", "D") ** 2 - others - rhs)
-                        - (eq.squared.lhs - eq.squared.rhs))
+    check_squared(paper, eq, b6**2 - others, rhs)
+    assert not vanishes(paper(L("C", "D") ** 2 - others - rhs) - (eq.squared.lhs - eq.squared.rhs))
     # (5.17): the printed fraction is cos-sum over sin-sum (erratum 4: swapped); from (5.16),
     # b6 (cos q9, sin q9) = -(C, S), so q9 = atan2(-S, -C) (erratum 6, with the signs).
     angles = [q1, q1 + q2, sums(1, 3), sums(1, 4), sums(1, 5)]
@@ -328,42 +406,68 @@ def test_nine_bar_loop_1_squared_and_solved_5_17(nine_bar):
     S = sum(r * sp.sin(t) for r, t in zip(lengths, angles))
     C = sum(r * sp.cos(t) for r, t in zip(lengths, angles)) - a
     assert same_angle(paper, eq.solved_angle, q9, -S, -C)
-    assert not same_angle(paper, eq.solved_angle, q9, -C, -S)      # the printed (swapped) one
+    assert not same_angle(paper, eq.solved_angle, q9, -C, -S)  # the printed (swapped) one
 
 
 def test_nine_bar_loop_2_5_18_and_5_19(nine_bar):
     kin, eqs = nine_bar
     paper = Paper(kin, ("O", "E"), NINE_BAR_LOOP_2)
     L = paper.length
-    b1, b2, b3, b7, b8, c = (L("O", "A"), L("A", "B"), L("B", "C"), L("C", "D"), L("D", "E"),
-                             L("O", "E"))
+    b1, b2, b3, b7, b8, c = (
+        L("O", "A"),
+        L("A", "B"),
+        L("B", "C"),
+        L("C", "D"),
+        L("D", "E"),
+        L("O", "E"),
+    )
     angles = [q1, q1 + q2, sums(1, 3), q7 + sums(1, 3)]
     lengths = [b1, b2, b3, b7]
-    check_loop(paper, eqs[10], -1,
-               q1 + q2 + q3 + q7 + q8 - q10,
-               sum(r * sp.cos(t) for r, t in zip(lengths, angles)) + b8 * sp.cos(q10) - c,
-               sum(r * sp.sin(t) for r, t in zip(lengths, angles)) + b8 * sp.sin(q10))
+    check_loop(
+        paper,
+        eqs[10],
+        -1,
+        q1 + q2 + q3 + q7 + q8 - q10,
+        sum(r * sp.cos(t) for r, t in zip(lengths, angles)) + b8 * sp.cos(q10) - c,
+        sum(r * sp.sin(t) for r, t in zip(lengths, angles)) + b8 * sp.sin(q10),
+    )
 
 
 def test_nine_bar_loop_2_squared_and_solved_5_20(nine_bar):
     kin, eqs = nine_bar
     paper = Paper(kin, ("O", "E"), NINE_BAR_LOOP_2)
     L = paper.length
-    b1, b2, b3, b7, b8, c = (L("O", "A"), L("A", "B"), L("B", "C"), L("C", "D"), L("D", "E"),
-                             L("O", "E"))
+    b1, b2, b3, b7, b8, c = (
+        L("O", "A"),
+        L("A", "B"),
+        L("B", "C"),
+        L("C", "D"),
+        L("D", "E"),
+        L("O", "E"),
+    )
     eq = eqs[10]
     assert eq.eliminated == 8
     cos = sp.cos
-    rhs = (2 * b1 * b2 * cos(q2) + 2 * b1 * b3 * cos(q2 + q3) + 2 * b1 * b7 * cos(q2 + q3 + q7)
-           + 2 * b2 * b3 * cos(q3) + 2 * b2 * b7 * cos(q3 + q7) + 2 * b3 * b7 * cos(q7)
-           - 2 * b1 * c * cos(q1) - 2 * b2 * c * cos(q1 + q2) - 2 * b3 * c * cos(sums(1, 3))
-           - 2 * b7 * c * cos(q7 + sums(1, 3)))
+    rhs = (
+        2 * b1 * b2 * cos(q2)
+        + 2 * b1 * b3 * cos(q2 + q3)
+        + 2 * b1 * b7 * cos(q2 + q3 + q7)
+        + 2 * b2 * b3 * cos(q3)
+        + 2 * b2 * b7 * cos(q3 + q7)
+        + 2 * b3 * b7 * cos(q7)
+        - 2 * b1 * c * cos(q1)
+        - 2 * b2 * c * cos(q1 + q2)
+        - 2 * b3 * c * cos(sums(1, 3))
+        - 2 * b7 * c * cos(q7 + sums(1, 3))
+    )
     # Erratum 5: left side b8² - (b1² + b2² + b3² + b7² + c²), and no b3 b4 or b3 b5 terms.
-    check_squared(paper, eq, b8 ** 2 - (b1 ** 2 + b2 ** 2 + b3 ** 2 + b7 ** 2 + c ** 2), rhs)
+    check_squared(paper, eq, b8**2 - (b1**2 + b2**2 + b3**2 + b7**2 + c**2), rhs)
     b4, b5 = L("K", "G"), L("G", "H")
     printed = rhs + 2 * b3 * b4 * cos(q4) + 2 * b3 * b5 * cos(q4 + q5)
-    assert not vanishes(paper(b8 ** 2 - (b1 ** 2 + b2 ** 2 + b3 ** 2 + b7 ** 2 + c ** 2) - printed)
-                        - (eq.squared.lhs - eq.squared.rhs))
+    assert not vanishes(
+        paper(b8**2 - (b1**2 + b2**2 + b3**2 + b7**2 + c**2) - printed)
+        - (eq.squared.lhs - eq.squared.rhs)
+    )
     # (5.20) with atan2: b8 (cos q10, sin q10) = -(C, S), so q10 = atan2(-S, -C).
     angles = [q1, q1 + q2, sums(1, 3), q7 + sums(1, 3)]
     lengths = [b1, b2, b3, b7]
@@ -392,17 +496,22 @@ def test_no_loops_no_equations():
     assert loop_equations(kin) == ()
 
 
-GENERIC = {"five_bar": (FIVE_BAR, [{"O1": "0.2", "O2": "-0.15"}, {"O1": "-0.1", "O2": "0.05"}]),
-           "watt_ii": (WATT_II, [{"O1": "0.3"}, {"O1": "-0.25"}]),
-           "triad_six_bar": (TRIAD_SIX_BAR, [{"O1": "0.1"}])}
+GENERIC = {
+    "five_bar": (FIVE_BAR, [{"O1": "0.2", "O2": "-0.15"}, {"O1": "-0.1", "O2": "0.05"}]),
+    "watt_ii": (WATT_II, [{"O1": "0.3"}, {"O1": "-0.25"}]),
+    "triad_six_bar": (TRIAD_SIX_BAR, [{"O1": "0.1"}]),
+}
 
 
 @pytest.mark.parametrize("name", sorted(GENERIC))
 def test_equations_are_the_positional_closure(name):
     """x, y are the components of Σ Rot(φ_i) V_i; `angular` is (5.1); the rule's link is free."""
     kin = Kinematics(symkin.structure(symkin.loads(GENERIC[name][0])))
-    fixed = {i for i in range(kin.structure.n + 1)
-             if all(kin.hinges[b].is_input for b in kin.structure.tree_path(i))}
+    fixed = {
+        i
+        for i in range(kin.structure.n + 1)
+        if all(kin.hinges[b].is_input for b in kin.structure.tree_path(i))
+    }
     for eq in loop_equations(kin):
         px, py = kin.positional_closure(eq.chord, rigid=True)
         assert vanishes(eq.x - px) and vanishes(eq.y - py)
@@ -418,8 +527,11 @@ def test_squared_form_is_implied_by_the_positional_pair():
             e = eq.eliminating(j)
             u = e.angle(j)
             r_j = e.term(j).r
-            identity = (e.squared.rhs - e.squared.lhs
-                        - (e.x ** 2 + e.y ** 2 - 2 * r_j * (e.x * sp.cos(u) + e.y * sp.sin(u))))
+            identity = (
+                e.squared.rhs
+                - e.squared.lhs
+                - (e.x**2 + e.y**2 - 2 * r_j * (e.x * sp.cos(u) + e.y * sp.sin(u)))
+            )
             assert vanishes(identity)
 
 
@@ -446,7 +558,7 @@ def test_equations_vanish_at_the_rigid_solution(name):
                 args = sorted(expr.free_symbols, key=str)
                 return sp.lambdify(args, expr, "mpmath")(*(values[a] for a in args))
 
-            tol = mpmath.mpf("1e-14")              # the rigid angles come back as float64
+            tol = mpmath.mpf("1e-14")  # the rigid angles come back as float64
             for eq in eqs:
                 assert abs(at(eq.angular)) < tol
                 assert abs(at(eq.x)) < tol and abs(at(eq.y)) < tol

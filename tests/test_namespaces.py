@@ -15,19 +15,19 @@ import keyword
 import random
 import re
 
-import pytest
-
 import mechanisms as M
-import symkin
+import pytest
 from conftest import EXAMPLES
 from evaluators import Generated, generated, rel_err
 from reference_solver import Reference
-from symkin.studies import derive
-from symkin.model import expressions
+
+import symkin
 from symkin.codegen.backends.c import backend as c_backend
 from symkin.codegen.backends.numpy import backend as numpy_backend
-from symkin.studies.evaluation import evaluate
+from symkin.model import expressions
 from symkin.model.hinges import PLATE_LENGTH, THETA
+from symkin.studies import derive
+from symkin.studies.evaluation import evaluate
 
 IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
@@ -36,8 +36,13 @@ def internal_names(key: str) -> set[str]:
     """Every name symkin gives a symbol or an identifier while deriving mechanism `key`."""
     g = generated(key)
     an = g.analysis
-    exprs = [*an.residual, *an.jacobian, *an.linear_system[0], *an.linear_system[1],
-             *an.rigid_residual]
+    exprs = [
+        *an.residual,
+        *an.jacobian,
+        *an.linear_system[0],
+        *an.linear_system[1],
+        *an.rigid_residual,
+    ]
     names = {THETA.name, PLATE_LENGTH.name}
     for symbol, expr in an.rigid.assignments:
         names.add(symbol.name)
@@ -89,10 +94,12 @@ def renamed(text: str, names: list[str], seed: int) -> str:
     # the plates' thickness (the stiffness data, when the file has it) follows their length
     text = text.replace('thickness = "l/10"', f'thickness = "({mean})/10"')
     # every plate angle and the first hinge's x coordinate scaled by a ratio that is 1
-    text = re.sub(r'plate_angle = "([^"]*)"', lambda m: f'plate_angle = "({m.group(1)})*{ratio}"',
-                  text)
-    text = re.sub(r"at = \[([-0-9.e]+), ", lambda m: f'at = ["{m.group(1)}*{ratio}", ', text,
-                  count=1)
+    text = re.sub(
+        r'plate_angle = "([^"]*)"', lambda m: f'plate_angle = "({m.group(1)})*{ratio}"', text
+    )
+    text = re.sub(
+        r"at = \[([-0-9.e]+), ", lambda m: f'at = ["{m.group(1)}*{ratio}", ', text, count=1
+    )
     return text
 
 
@@ -108,8 +115,7 @@ def test_parameters_named_like_internal_symbols(key):
     names = drawn(internal_names(key), seed=11)
     # the harvest reaches every kind of internal name
     for expected in ("theta", "theta_1", "delta_2", "_tmp0", "p_0"):
-        assert any(n.rstrip("0123456789") == expected.rstrip("0123456789") for n in names), \
-            expected
+        assert any(n.rstrip("0123456789") == expected.rstrip("0123456789") for n in names), expected
     hostile = symkin.loads(renamed(text, names, seed=5), "hostile.toml")
     assert len(hostile.parameters) == len(names)
     want = Reference(symkin.loads(text)).deviation(inputs)
@@ -117,7 +123,7 @@ def test_parameters_named_like_internal_symbols(key):
     an = g.analysis
     for backend in ("sympy", "numpy", "c"):
         if backend == "c":
-            g.lib                                   # noqa: B018 - compiles, or skips without cc
+            g.lib  # noqa: B018 - compiles, or skips without cc
         got = evaluate(an, inputs, "exact", backend=backend)
         for name, point in got.points.items():
             ref = want["points"][name]
@@ -137,5 +143,7 @@ def test_parameters_named_like_internal_symbols(key):
 def test_a_parameter_is_never_an_internal_symbol():
     p = expressions.ParameterSymbol("theta")
     assert p != THETA and p.name == THETA.name and str(p) == "theta"
-    assert expressions.ParameterSymbol("theta_1") != symkin.analyze(
-        symkin.load(EXAMPLES / "four_bar.toml")).kin.theta[1]
+    assert (
+        expressions.ParameterSymbol("theta_1")
+        != symkin.analyze(symkin.load(EXAMPLES / "four_bar.toml")).kin.theta[1]
+    )

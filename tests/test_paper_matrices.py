@@ -40,24 +40,20 @@ FOUR_BAR = {
     "hinges": ["A0", "A", "B0", "B"],
     "i_plus": [0, 1, 0, 2],
     "i_minus": [1, 2, 3, 3],
-    "incidence": [[1, 0, 1, 0],
-                  [-1, 1, 0, 0],
-                  [0, -1, 0, 1],
-                  [0, 0, -1, -1]],
+    "incidence": [[1, 0, 1, 0], [-1, 1, 0, 0], [0, -1, 0, 1], [0, 0, -1, -1]],
     "loops": [[1, 1, -1, 1]],
-    "paths": [[-1, -1, 0],
-              [0, -1, 0],
-              [0, 0, -1],
-              [0, 0, 0]],
+    "paths": [[-1, -1, 0], [0, -1, 0], [0, 0, -1], [0, 0, 0]],
 }
 
 # Six-bar Stephenson-I (Fig. 4, Fig. 5, the table of i+/i- and the printed I and Φ).
-SIX_BAR_INCIDENCE = [[1, 0, 1, 0, 0, 0, 0],
-                     [-1, 1, 0, 0, 0, 1, 0],
-                     [0, -1, 0, 0, 0, 0, 1],
-                     [0, 0, -1, 1, 1, 0, 0],
-                     [0, 0, 0, -1, 0, 0, -1],
-                     [0, 0, 0, 0, -1, -1, 0]]
+SIX_BAR_INCIDENCE = [
+    [1, 0, 1, 0, 0, 0, 0],
+    [-1, 1, 0, 0, 0, 1, 0],
+    [0, -1, 0, 0, 0, 0, 1],
+    [0, 0, -1, 1, 1, 0, 0],
+    [0, 0, 0, -1, 0, 0, -1],
+    [0, 0, 0, 0, -1, -1, 0],
+]
 SIX_BAR = {
     "file": "stephenson_six_bar.toml",
     "links": ["frame", "input", "coupler", "rocker", "link_ED", "link_AB"],
@@ -65,8 +61,7 @@ SIX_BAR = {
     "i_plus": [0, 1, 0, 3, 3, 1, 2],
     "i_minus": [1, 2, 3, 4, 5, 5, 4],
     "incidence": SIX_BAR_INCIDENCE,
-    "loops": [[1, 0, -1, 0, -1, 1, 0],
-              [1, 1, -1, -1, 0, 0, 1]],
+    "loops": [[1, 0, -1, 0, -1, 1, 0], [1, 1, -1, -1, 0, 0, 1]],
     "paths": paths_from_incidence(SIX_BAR_INCIDENCE, 5, 7),
 }
 
@@ -81,8 +76,7 @@ NINE_BAR = {
     "i_plus": NINE_BAR_I_PLUS,
     "i_minus": NINE_BAR_I_MINUS,
     "incidence": NINE_BAR_INCIDENCE,
-    "loops": [[-1, -1, -1, -1, -1, -1, 0, 0, 1, 0],
-              [-1, -1, -1, 0, 0, 0, -1, -1, 0, 1]],
+    "loops": [[-1, -1, -1, -1, -1, -1, 0, 0, 1, 0], [-1, -1, -1, 0, 0, 0, -1, -1, 0, 1]],
     "paths": paths_from_incidence(NINE_BAR_INCIDENCE, 8, 10),
 }
 
@@ -121,8 +115,10 @@ def test_matrices_json_prints_the_paper(key: str):
     expected = PAPER[key]
     result = subprocess.run(
         [sys.executable, "-m", "symkin", "matrices", "--json", str(EXAMPLES / expected["file"])],
-        capture_output=True, text=True, timeout=60)
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert result.returncode == 0, result.stderr
     data = json.loads(result.stdout)
     assert data == {k: v for k, v in expected.items() if k != "file"}
-

@@ -18,35 +18,41 @@ import json
 import math
 from pathlib import Path
 
+import mechanisms as M
 import mpmath
 import numpy as np
 import pytest
-
-import mechanisms as M
-import symkin
 from conftest import EXAMPLES
 from reference_solver import Reference
+
+import symkin
 from symkin.cli.commands import main
+from symkin.physics import arith, elastica
 from symkin.studies import evaluation
-from symkin.physics import arith, elastica, equilibrium
 
 DPS = 30
 
 
 def shoot_mp(k0, lx, ly, energy: bool = False) -> elastica.PlateEnd:
     """One plate at DPS digits."""
-    return elastica.shoot(arith.mp_array([k0]), arith.mp_array([lx]), arith.mp_array([ly]),
-                          tol=10.0 ** (-DPS - 3), energy=energy)
+    return elastica.shoot(
+        arith.mp_array([k0]),
+        arith.mp_array([lx]),
+        arith.mp_array([ly]),
+        tol=10.0 ** (-DPS - 3),
+        energy=energy,
+    )
 
 
 # -- the elastica -----------------------------------------------------------------------------
+
 
 @pytest.mark.parametrize("theta", ["1e-8", "0.3", "2", "6"])
 def test_pure_end_moment_bends_a_circular_arc(theta):
     with mpmath.workdps(DPS):
         t = mpmath.mpf(theta)
         end = shoot_mp(t, 0, 0, energy=True)
-        expected = (mpmath.sin(t) / t, 2 * mpmath.sin(t / 2) ** 2 / t, t, t, t ** 2)
+        expected = (mpmath.sin(t) / t, 2 * mpmath.sin(t / 2) ** 2 / t, t, t, t**2)
         got = (end.x[0], end.y[0], end.psi[0], end.omega[0], end.energy[0])
         for g, e in zip(got, expected):
             assert abs(g - e) <= mpmath.mpf(10) ** (3 - DPS) * (1 + abs(e))
@@ -59,19 +65,26 @@ def cantilever(alpha) -> elastica.PlateEnd:
 
 
 # Bisshopp & Drucker (1945): α, tip angle (deg), 1 - x/L, y/L
-@pytest.mark.parametrize("alpha, angle, short, rise", [
-    (1, "26.4335196", "0.0564332363", "0.301720774"),
-    (2, "44.790966", "0.160641721", "0.49345748"),
-    (5, "69.6354637", "0.387628361", "0.713791524"),
-])
+@pytest.mark.parametrize(
+    "alpha, angle, short, rise",
+    [
+        (1, "26.4335196", "0.0564332363", "0.301720774"),
+        (2, "44.790966", "0.160641721", "0.49345748"),
+        (5, "69.6354637", "0.387628361", "0.713791524"),
+    ],
+)
 def test_bisshopp_drucker_cantilever(alpha, angle, short, rise):
     with mpmath.workdps(DPS):
         end = cantilever(alpha)
-        for got, want in ((end.psi[0] * 180 / mpmath.pi, angle), (1 - end.x[0], short),
-                          (end.y[0], rise)):
+        for got, want in (
+            (end.psi[0] * 180 / mpmath.pi, angle),
+            (1 - end.x[0], short),
+            (end.y[0], rise),
+        ):
             digits = len(want.replace(".", "").lstrip("0"))
             assert abs(got - mpmath.mpf(want)) <= 0.6 * 10.0 ** (-digits) * 10 ** math.floor(
-                math.log10(float(want)) + 1)
+                math.log10(float(want)) + 1
+            )
 
 
 def test_mattiasson_cantilever_alpha_10():
@@ -90,19 +103,21 @@ def test_clamped_guided_linear_limit(shear):
         lam = mpmath.mpf(shear)
         k0 = mpmath.findroot(lambda k: shoot_mp(k, 0, lam).psi[0], lam / 2)
         end = shoot_mp(k0, 0, lam)
-        assert abs(end.y[0] / (lam / 12) - 1) < 10 * lam ** 2
+        assert abs(end.y[0] / (lam / 12) - 1) < 10 * lam**2
 
 
 def test_complex_step_derivative_of_a_straight_plate():
     # A straight plate under the axial load λ: ψ(1) = k0 sin(√λ)/√λ exactly to first order in k0.
     lam = 9.8722
-    end = elastica.shoot(np.array([1j * arith.COMPLEX_STEP]), np.array([-lam + 0j]),
-                         np.array([0j]), tol=1e-18)
+    end = elastica.shoot(
+        np.array([1j * arith.COMPLEX_STEP]), np.array([-lam + 0j]), np.array([0j]), tol=1e-18
+    )
     slope = end.psi.imag[0] / arith.COMPLEX_STEP
     assert slope == pytest.approx(math.sin(math.sqrt(lam)) / math.sqrt(lam), rel=1e-12)
 
 
 # -- the beam-column series of `loaded` -------------------------------------------------------
+
 
 def test_beam_column_series_against_closed_forms_and_the_beam_constraint_model():
     import sympy as sp
@@ -117,9 +132,9 @@ def test_beam_column_series_against_closed_forms_and_the_beam_constraint_model()
         return sp.series(expr, p, 0, ORDER + 1).removeO()
 
     # clamped–guided beam-column in tension: f/δ = k³/(k − 2 tanh(k/2))
-    assert sp.expand(taylor((k - 2 * sp.tanh(k / 2)) / k ** 3) - bc.value("shear", p)) == 0
+    assert sp.expand(taylor((k - 2 * sp.tanh(k / 2)) / k**3) - bc.value("shear", p)) == 0
     # the beam constraint model's transverse stiffness 12 + 6p/5 − p²/700 (Awtar et al. 2007)
-    gap = sp.expand(taylor(1 / bc.value("shear", p)) - (12 + sp.Rational(6, 5) * p - p ** 2 / 700))
+    gap = sp.expand(taylor(1 / bc.value("shear", p)) - (12 + sp.Rational(6, 5) * p - p**2 / 700))
     assert [gap.coeff(p, n) for n in range(3)] == [0, 0, 0]
     # symmetric bending under tension: M = (EI θ/l)(k/2)/tanh(k/2)
     assert sp.expand(taylor((k / 2) / sp.tanh(k / 2)) - bc.value("rotation", p)) == 0
@@ -132,11 +147,14 @@ def test_beam_column_series_against_closed_forms_and_the_beam_constraint_model()
 
 # -- a lone plate held by its actuator --------------------------------------------------------
 
-def lone_plate(units: str = "mm", width: str = "5", nu: str = "0.3", scale: float = 1.0,
-               load: str = "") -> str:
+
+def lone_plate(
+    units: str = "mm", width: str = "5", nu: str = "0.3", scale: float = 1.0, load: str = ""
+) -> str:
     """A plate of length l = 10 along +y from the ground's clamp at the origin to link `arm`,
     point T on the arm at (0, 3 l); lengths in `units`, all of them times `scale`."""
-    return f"""format = 1
+    return (
+        f"""format = 1
 name = "lone_plate"
 units = "{units}"
 [parameters]
@@ -162,15 +180,17 @@ input = true
 name = "T"
 link = "arm"
 at = [0, "3*l"]
-""" + load
+"""
+        + load
+    )
 
 
 def bending_stiffness(width: float, nu: float, unit: float, scale: float = 1.0) -> float:
     """EI (N m²) of the lone plate, written here from the documented rule: E/(1 - ν²) when the
     plate is at least 5 thicknesses wide."""
     b, t = width * scale * unit, 0.2 * scale * unit
-    modulus = 200e9 / (1 - nu ** 2) if b >= 5 * t else 200e9
-    return modulus * b * t ** 3 / 12
+    modulus = 200e9 / (1 - nu**2) if b >= 5 * t else 200e9
+    return modulus * b * t**3 / 12
 
 
 @pytest.mark.parametrize("level", ["equilibrium", "loaded"])
@@ -192,8 +212,8 @@ def test_actuator_torque_alone_bends_a_circular_arc(level, theta):
     ei = bending_stiffness(5, 0.3, 1e-3)
     hinge = result.hinges["A"]
     assert hinge.moment == pytest.approx(ei * theta / 0.01, rel=1e-12)
-    assert max(abs(f) for f in hinge.force) < 1e-12 * ei / 0.01 ** 2
-    assert result.energy == pytest.approx(ei * theta ** 2 / (2 * 0.01), rel=1e-12)
+    assert max(abs(f) for f in hinge.force) < 1e-12 * ei / 0.01**2
+    assert result.energy == pytest.approx(ei * theta**2 / (2 * 0.01), rel=1e-12)
 
 
 @pytest.mark.parametrize("level", ["equilibrium", "loaded"])
@@ -201,16 +221,15 @@ def test_actuator_torque_alone_bends_a_circular_arc(level, theta):
 def test_small_transverse_load_moves_the_arm_by_the_clamped_guided_compliance(level, width, nu):
     # Input held at 0, a force F across the plate at T: the arm translates by F l³/(12 EI).
     force = 1e-3
-    text = lone_plate(width=width, nu=nu,
-                      load='[[load]]\npoint = "T"\nforce = ["F", 0]\n')
+    text = lone_plate(width=width, nu=nu, load='[[load]]\npoint = "T"\nforce = ["F", 0]\n')
     an = symkin.analyze(symkin.loads(text, "lone.toml"))
     result = symkin.evaluate(an, {"A": 0}, level, params={"F": force})
     ei = bending_stiffness(float(width), float(nu), 1e-3)
-    expected = force * 0.01 ** 3 / (12 * ei) * 1e3           # metres -> the file's mm
+    expected = force * 0.01**3 / (12 * ei) * 1e3  # metres -> the file's mm
     dev = result.points["T"].deviation
     assert dev[0] == pytest.approx(expected, rel=1e-6)
-    alpha = force * 0.01 ** 2 / ei
-    assert abs(dev[1]) < expected * alpha                      # inextensible: second order only
+    alpha = force * 0.01**2 / ei
+    assert abs(dev[1]) < expected * alpha  # inextensible: second order only
 
 
 def test_lengths_in_m_mm_um_give_the_same_physics():
@@ -220,10 +239,11 @@ def test_lengths_in_m_mm_um_give_the_same_physics():
         an = symkin.analyze(symkin.loads(lone_plate(units, scale=scale, load=load), "u.toml"))
         results[units] = (symkin.evaluate(an, {"A": 0.2}, "equilibrium", params={"F": 0.5}), scale)
     base, base_scale = results["m"]
-    for units, (r, scale) in results.items():
+    for r, scale in results.values():
         for k in range(2):
             assert r.points["T"].deviation[k] / scale == pytest.approx(
-                base.points["T"].deviation[k] / base_scale, rel=1e-12)
+                base.points["T"].deviation[k] / base_scale, rel=1e-12
+            )
         assert r.hinges["A"].moment == pytest.approx(base.hinges["A"].moment, rel=1e-12)
         assert r.energy == pytest.approx(base.energy, rel=1e-12)
 
@@ -233,9 +253,19 @@ def test_buckling_exits_3_naming_the_hinge_and_the_load_factor(tmp_path, capsys)
     # column buckles at P = π² EI/l² (Euler), so F = 2 P stops at load factor 1/2.
     path = tmp_path / "column.toml"
     path.write_text(lone_plate(load='[[load]]\npoint = "T"\nforce = [0, "-F"]\n'))
-    critical = math.pi ** 2 * bending_stiffness(5, 0.3, 1e-3) / 0.01 ** 2
-    code = main(["eval", str(path), "--input", "A=0", "--level", "equilibrium",
-                 "--param", f"F={2 * critical!r}"])
+    critical = math.pi**2 * bending_stiffness(5, 0.3, 1e-3) / 0.01**2
+    code = main(
+        [
+            "eval",
+            str(path),
+            "--input",
+            "A=0",
+            "--level",
+            "equilibrium",
+            "--param",
+            f"F={2 * critical!r}",
+        ]
+    )
     err = capsys.readouterr().err
     assert code == 3, err
     assert "'A'" in err and "buckles" in err
@@ -247,7 +277,7 @@ def test_buckling_exits_3_naming_the_hinge_and_the_load_factor(tmp_path, capsys)
 def test_below_the_euler_load_the_column_stays_straight(tmp_path):
     text = lone_plate(load='[[load]]\npoint = "T"\nforce = [0, "-F"]\n')
     an = symkin.analyze(symkin.loads(text, "column.toml"))
-    critical = math.pi ** 2 * bending_stiffness(5, 0.3, 1e-3) / 0.01 ** 2
+    critical = math.pi**2 * bending_stiffness(5, 0.3, 1e-3) / 0.01**2
     result = symkin.evaluate(an, {"A": 0}, "equilibrium", params={"F": 0.9 * critical})
     assert result.points["T"].deviation == (0.0, 0.0)
     assert result.hinges["A"].force[1] == pytest.approx(-0.9 * critical, rel=1e-12)
@@ -255,7 +285,8 @@ def test_below_the_euler_load_the_column_stays_straight(tmp_path):
 
 def test_the_error_estimate_is_honest_and_below_1e_10():
     text = M.without_stiffness(EXAMPLES / "four_bar.toml").replace(
-        'length = "l"', 'length = "l"\nE = 210e9\nthickness = "l/10"\nwidth = 5e-3')
+        'length = "l"', 'length = "l"\nE = 210e9\nthickness = "l/10"\nwidth = 5e-3'
+    )
     text += '[[load]]\npoint = "C"\nforce = [0.5, -2.0]\nmoment = 0.01\n'
     an = symkin.analyze(symkin.loads(text, "four_bar.toml"))
     for angle in (1e-3, 0.2):
@@ -264,10 +295,11 @@ def test_the_error_estimate_is_honest_and_below_1e_10():
         d0, d1 = plain.points["C"].deviation, finer.points["C"].deviation
         gap = math.hypot(d0[0] - d1[0], d0[1] - d1[1]) / math.hypot(*d1)
         assert plain.error_estimate < 1e-10
-        assert gap <= max(plain.error_estimate, 2.3e-16)   # float64 rounding of the output
+        assert gap <= max(plain.error_estimate, 2.3e-16)  # float64 rounding of the output
 
 
 # -- the statics of `loaded` ------------------------------------------------------------------
+
 
 def pin_linkage_forces(mech, poses, angles, stiffness, loads):
     """Pin forces of the rigid linkage at `poses`: every moving link's force and moment balance
@@ -283,10 +315,12 @@ def pin_linkage_forces(mech, poses, angles, stiffness, loads):
     def place(link, p):
         x, y, phi = (float(v) for v in poses[link])
         p = (float(p[0]), float(p[1]))
-        return (x + math.cos(phi) * p[0] - math.sin(phi) * p[1],
-                y + math.sin(phi) * p[0] + math.cos(phi) * p[1])
+        return (
+            x + math.cos(phi) * p[0] - math.sin(phi) * p[1],
+            y + math.sin(phi) * p[0] + math.cos(phi) * p[1],
+        )
 
-    def add(link, column, force, at):            # a force column acting at `at` on `link`
+    def add(link, column, force, at):  # a force column acting at `at` on `link`
         if link == mech.ground:
             return
         k = 3 * moving.index(link)
@@ -318,7 +352,7 @@ def pin_linkage_forces(mech, poses, angles, stiffness, loads):
     for link, at, force, moment in loads:
         known(link, force, moment, place(link, at))
     solution = np.linalg.lstsq(rows, rhs, rcond=None)[0]
-    return {h.name: solution[2 * j: 2 * j + 2] for j, h in enumerate(hinges)}
+    return {h.name: solution[2 * j : 2 * j + 2] for j, h in enumerate(hinges)}
 
 
 def symmetric_bending_factor(p: float) -> float:
@@ -338,8 +372,7 @@ def test_loaded_statics_balance_every_link(example):
     # balance written here.
 
     text = M.without_stiffness(EXAMPLES / f"{example}.toml")
-    text = text.replace('length = "l"', 'length = "l"\nE = 210e9\nthickness = "l/10"\n'
-                        'width = 4e-3')
+    text = text.replace('length = "l"', 'length = "l"\nE = 210e9\nthickness = "l/10"\nwidth = 4e-3')
     point = "C" if example == "four_bar" else "D"
     text += f'[[load]]\npoint = "{point}"\nforce = [3, -15]\nmoment = 0.02\n'
     mech = symkin.loads(text, f"{example}.toml")
@@ -350,8 +383,9 @@ def test_loaded_statics_balance_every_link(example):
     length = {h.name: float(h.length.subs(mech.defaults)) for h in mech.hinges}
     p = mech.point(point)
     loads = [(p.link, p.at, (3.0, -15.0), 0.02)]
-    first = pin_linkage_forces(mech, rigid["poses"], rigid["angles"],
-                               {n: ei / length[n] for n in length}, loads)
+    first = pin_linkage_forces(
+        mech, rigid["poses"], rigid["angles"], {n: ei / length[n] for n in length}, loads
+    )
     result = evaluation.loaded(an, inputs, beam_column=False)
     scale = max(np.linalg.norm(f) for f in first.values())
     for name, f in first.items():
@@ -359,24 +393,31 @@ def test_loaded_statics_balance_every_link(example):
     # the axial load index of each plate along its mid-direction, from the first pass
     factor = {}
     for h in mech.hinges:
-        x, y, phi = (float(v) for v in rigid["poses"][h.links[0]])
+        _x, _y, phi = (float(v) for v in rigid["poses"][h.links[0]])
         mid = phi + float(h.plate_angle.subs(mech.defaults)) + float(rigid["angles"][h.name]) / 2
         axial = first[h.name] @ np.array([math.cos(mid), math.sin(mid)])
         factor[h.name] = symmetric_bending_factor(axial * length[h.name] ** 2 / ei)
-    second = pin_linkage_forces(mech, rigid["poses"], rigid["angles"],
-                                {n: ei / length[n] * factor[n] for n in length}, loads)
+    second = pin_linkage_forces(
+        mech,
+        rigid["poses"],
+        rigid["angles"],
+        {n: ei / length[n] * factor[n] for n in length},
+        loads,
+    )
     result = symkin.evaluate(an, inputs, "loaded")
     for name, f in second.items():
         # the series through p³ against the exact factor: |p| < 0.3 here, so within 1e-6
         assert np.allclose(result.hinges[name].force, f, rtol=0, atol=1e-7 * scale), name
-    assert max(abs(factor[n] - 1) for n in factor) > 1e-3      # the second pass matters
+    assert max(abs(factor[n] - 1) for n in factor) > 1e-3  # the second pass matters
 
 
 # -- the command line -------------------------------------------------------------------------
 
+
 def steel_four_bar(tmp_path, extra: str = "") -> str:
     text = M.without_stiffness(EXAMPLES / "four_bar.toml").replace(
-        'length = "l"', 'length = "l"\nE = 210e9\nthickness = "l/10"\nwidth = 5e-3')
+        'length = "l"', 'length = "l"\nE = 210e9\nthickness = "l/10"\nwidth = 5e-3'
+    )
     path = tmp_path / "four_bar.toml"
     path.write_text(text + extra)
     return str(path)
@@ -389,8 +430,18 @@ def test_eval_json_adds_hinges_and_energy(tmp_path, capsys, level):
     out, err = capsys.readouterr()
     assert code == 0, err
     data = json.loads(out)
-    keys = {"level", "backend", "inputs", "params", "angles", "points", "links", "dyads",
-            "hinges", "energy"}
+    keys = {
+        "level",
+        "backend",
+        "inputs",
+        "params",
+        "angles",
+        "points",
+        "links",
+        "dyads",
+        "hinges",
+        "energy",
+    }
     assert set(data) == keys | ({"error_estimate"} if level == "equilibrium" else set())
     assert data["level"] == level
     assert set(data["hinges"]) == {"A0", "A", "B0", "B"}
@@ -402,8 +453,7 @@ def test_eval_json_adds_hinges_and_energy(tmp_path, capsys, level):
 
 
 def test_eval_text_lists_plate_loads(tmp_path, capsys):
-    code = main(["eval", steel_four_bar(tmp_path), "--input", "A0=0.1", "--level",
-                 "equilibrium"])
+    code = main(["eval", steel_four_bar(tmp_path), "--input", "A0=0.1", "--level", "equilibrium"])
     out, _ = capsys.readouterr()
     assert code == 0
     assert "point C" in out and "plate loads" in out and "elastic energy" in out
@@ -422,7 +472,8 @@ def test_physical_level_without_stiffness_names_key_and_hinge(tmp_path, capsys, 
 
 def test_partial_stiffness_names_the_missing_key(tmp_path, capsys):
     text = M.without_stiffness(EXAMPLES / "four_bar.toml").replace(
-        'length = "l"', 'length = "l"\nE = 210e9\nwidth = 5e-3')
+        'length = "l"', 'length = "l"\nE = 210e9\nwidth = 5e-3'
+    )
     text = text.replace('plate_angle = "0"\n', 'plate_angle = "0"\nthickness = 1e-4\n', 1)
     path = tmp_path / "partial.toml"
     path.write_text(text)
@@ -433,8 +484,11 @@ def test_partial_stiffness_names_the_missing_key(tmp_path, capsys):
 
 def test_param_override_that_thickens_the_plate_past_its_length_is_bad_input(tmp_path, capsys):
     path = steel_four_bar(tmp_path).replace("four_bar.toml", "thick.toml")
-    Path(path).write_text(Path(tmp_path / "four_bar.toml").read_text().replace(
-        'thickness = "l/10"', "thickness = 1e-4"))
+    Path(path).write_text(
+        Path(tmp_path / "four_bar.toml")
+        .read_text()
+        .replace('thickness = "l/10"', "thickness = 1e-4")
+    )
     code = main(["eval", path, "--input", "A0=0.1", "--level", "loaded", "--param", "l=5e-5"])
     err = capsys.readouterr().err
     assert code == 2 and "thickness" in err and "--param" in err
@@ -442,8 +496,18 @@ def test_param_override_that_thickens_the_plate_past_its_length_is_bad_input(tmp
 
 @pytest.mark.parametrize("backend", ["numpy", "c"])
 def test_equilibrium_runs_on_the_sympy_backend_only(tmp_path, capsys, backend):
-    code = main(["eval", steel_four_bar(tmp_path), "--input", "A0=0.1", "--level",
-                 "equilibrium", "--backend", backend])
+    code = main(
+        [
+            "eval",
+            steel_four_bar(tmp_path),
+            "--input",
+            "A0=0.1",
+            "--level",
+            "equilibrium",
+            "--backend",
+            backend,
+        ]
+    )
     err = capsys.readouterr().err
     assert code == 2 and "sympy" in err
 
@@ -453,8 +517,9 @@ def test_loaded_prints_the_same_json_on_every_backend(tmp_path, capsys, backend)
     path = steel_four_bar(tmp_path)
     outputs = []
     for chosen in ("sympy", backend):
-        code = main(["eval", path, "--input", "A0=0.1", "--level", "loaded", "--json",
-                     "--backend", chosen])
+        code = main(
+            ["eval", path, "--input", "A0=0.1", "--level", "loaded", "--json", "--backend", chosen]
+        )
         out, err = capsys.readouterr()
         assert code == 0, err
         outputs.append(json.loads(out))
@@ -467,8 +532,11 @@ def test_loaded_prints_the_same_json_on_every_backend(tmp_path, capsys, backend)
 
 def test_unreachable_input_exits_3_like_the_kinematic_levels(tmp_path, capsys):
     path = tmp_path / "non_grashof.toml"
-    path.write_text(M.NON_GRASHOF.replace('length = "l"', 'length = "l"\nE = 210e9\n'
-                                          'thickness = "l/10"\nwidth = 5e-3'))
+    path.write_text(
+        M.NON_GRASHOF.replace(
+            'length = "l"', 'length = "l"\nE = 210e9\nthickness = "l/10"\nwidth = 5e-3'
+        )
+    )
     messages = []
     for level in ("exact", "equilibrium", "loaded"):
         assert main(["eval", str(path), "--input", "A0=1.5", "--level", level]) == 3

@@ -1,4 +1,5 @@
-"""`equilibrium`, `loaded` and `loaded_refined` against the independent physical reference (tests/reference_physics.py,
+"""`equilibrium`, `loaded` and `loaded_refined` against the independent physical reference
+(tests/reference_physics.py,
 Taylor-series shooting in fixed-point arithmetic, written apart from symkin).
 
 `equilibrium` must agree to 1e-9 relative in the deviation (it claims 1e-10); `loaded` must meet
@@ -12,15 +13,15 @@ from __future__ import annotations
 
 import math
 
-import pytest
-
 import mechanisms as M
-import symkin
+import pytest
 from conftest import EXAMPLES
 from reference_physics import Equilibrium, Load, point_load
 
+import symkin
+
 E, NU, WIDTH = 210e9, 0.3, 5e-3
-PLANE = E / (1 - NU ** 2)
+PLANE = E / (1 - NU**2)
 STEEL = f'E = {E}\nthickness = "l/10"\nwidth = {WIDTH}\nnu = {NU}\n'
 CRANK = 0.03
 
@@ -50,11 +51,12 @@ def compare(mech, reference, point: str, inputs: dict, l_over_L: float):
     assert relative_gap(eq.points[point].deviation, expected) < 1e-9
     for name, h in ref["hinges"].items():
         scale = max(abs(float(v)) for v in h["force"]) + 1e-300
-        assert max(abs(a - float(b)) for a, b in zip(eq.hinges[name].force, h["force"])) \
-            < 1e-9 * scale
+        assert (
+            max(abs(a - float(b)) for a, b in zip(eq.hinges[name].force, h["force"])) < 1e-9 * scale
+        )
         assert eq.hinges[name].moment == pytest.approx(float(h["moment"]), rel=1e-9, abs=1e-15)
     assert eq.energy == pytest.approx(float(ref["energy"]), rel=1e-9)
-    for name, pose in ref["poses"].items():     # every moving link's rotation, its deviation
+    for name, pose in ref["poses"].items():  # every moving link's rotation, its deviation
         link = eq.links[name]
         assert link.compliant == pytest.approx(float(pose[2]), rel=1e-12, abs=1e-15)
         assert link.deviation == pytest.approx(float(pose[2] - link.rigid), rel=1e-9, abs=1e-16)
@@ -97,8 +99,9 @@ def test_four_bar_plates_of_different_thickness():
 def test_four_bar_with_a_load_on_a_point(angle):
     load = '[[load]]\npoint = "C"\nforce = [0.5, -2.0]\nmoment = 0.01\n'
     mech = symkin.loads(with_stiffness("four_bar", load), "four_bar.toml")
-    reference = Equilibrium(mech, (PLANE, WIDTH, "l/10"),
-                            loads=[point_load(mech, "C", ("0.5", "-2.0"), "0.01")])
+    reference = Equilibrium(
+        mech, (PLANE, WIDTH, "l/10"), loads=[point_load(mech, "C", ("0.5", "-2.0"), "0.01")]
+    )
     compare(mech, reference, "C", {"A0": angle}, 1e-3 / CRANK)
 
 
@@ -106,18 +109,28 @@ def test_four_bar_with_a_load_on_a_link_position_in_millimetres():
     # The same four-bar written in mm: the reference reads metres, so it gets the metre file.
     load = '[[load]]\nlink = "rocker"\nat = [0.09, 0.03]\nforce = [-1.0, 0.5]\nmoment = -0.02\n'
     metres = symkin.loads(with_stiffness("four_bar", load), "four_bar.toml")
-    reference = Equilibrium(metres, (PLANE, WIDTH, "l/10"),
-                            loads=[Load("rocker", ("0.09", "0.03"), ("-1.0", "0.5"), "-0.02")])
+    reference = Equilibrium(
+        metres,
+        (PLANE, WIDTH, "l/10"),
+        loads=[Load("rocker", ("0.09", "0.03"), ("-1.0", "0.5"), "-0.02")],
+    )
     ref = reference.solve({"A0": "0.15"})
     mm = with_stiffness("four_bar", load.replace("[0.09, 0.03]", "[90, 30]"))
-    for old, new in (("[0.0, 0.0]", "[0, 0]"), ("[0.015, 0.026]", "[15, 26]"),
-                     ("[0.1, 0.0]", "[100, 0]"), ("[0.085, 0.068]", "[85, 68]"),
-                     ("[0.06, 0.09]", "[60, 90]"), ("l = 1e-3 ", "l = 1 "),
-                     ("width = 0.005", "width = 5"), ('format = 1\n', 'format = 1\nunits = "mm"\n')):
+    for old, new in (
+        ("[0.0, 0.0]", "[0, 0]"),
+        ("[0.015, 0.026]", "[15, 26]"),
+        ("[0.1, 0.0]", "[100, 0]"),
+        ("[0.085, 0.068]", "[85, 68]"),
+        ("[0.06, 0.09]", "[60, 90]"),
+        ("l = 1e-3 ", "l = 1 "),
+        ("width = 0.005", "width = 5"),
+        ("format = 1\n", 'format = 1\nunits = "mm"\n'),
+    ):
         assert old in mm, old
         mm = mm.replace(old, new, 1)
-    result = symkin.evaluate(symkin.analyze(symkin.loads(mm, "four_bar_mm.toml")), {"A0": 0.15},
-                             "equilibrium")
+    result = symkin.evaluate(
+        symkin.analyze(symkin.loads(mm, "four_bar_mm.toml")), {"A0": 0.15}, "equilibrium"
+    )
     dev = [v / 1000 for v in result.points["C"].deviation]
     assert relative_gap(dev, ref["points"]["C"]["deviation"]) < 1e-9
 
@@ -132,7 +145,8 @@ def test_stephenson_six_bar(angle):
 def test_loaded_with_axial_stretch_against_the_extensible_reference():
     # Both physical levels model inextensible plates; `loaded` can add the axial stretch N l/EA
     # (extensible=True), and then agrees with the reference's extensible variant as closely as
-    # the inextensible pair does, while the two models differ by 0.6 % (0.02 rad) to 0.05 % (0.3 rad) here.
+    # the inextensible pair does, while the two models differ by 0.6 % (0.02 rad) to 0.05 % (0.3
+    # rad) here.
     from symkin.studies import evaluation
 
     mech = symkin.loads(with_stiffness("four_bar"), "four_bar.toml")
@@ -145,9 +159,11 @@ def test_loaded_with_axial_stretch_against_the_extensible_reference():
         inext = plain.solve(inputs)["points"]["C"]["deviation"]
         ours = evaluation.loaded(an, {"A0": angle}, extensible=True).points["C"].deviation
         assert relative_gap(ours, ext) < 5e-4
-        assert relative_gap(symkin.evaluate(an, {"A0": angle}, "loaded").points["C"].deviation,
-                            inext) < 5e-4
-        assert relative_gap([float(v) for v in ext], inext) > 4e-4     # 0.6 % at 0.02 rad
+        assert (
+            relative_gap(symkin.evaluate(an, {"A0": angle}, "loaded").points["C"].deviation, inext)
+            < 5e-4
+        )
+        assert relative_gap([float(v) for v in ext], inext) > 4e-4  # 0.6 % at 0.02 rad
 
 
 @pytest.mark.parametrize("l, force", [("0.2e-3", 10.0), ("1e-3", 30.0)])
@@ -156,29 +172,37 @@ def test_four_bar_under_a_heavy_load(l, force):
     # 10 N); the beam-column level keeps `loaded` within the goal.
     load = f'[[load]]\npoint = "C"\nforce = [{force / 4}, {-force}]\n'
     mech = symkin.loads(with_stiffness("four_bar", load, l=l), "four_bar.toml")
-    reference = Equilibrium(mech, (PLANE, WIDTH, "l/10"),
-                            loads=[point_load(mech, "C", (str(force / 4), str(-force)))])
+    reference = Equilibrium(
+        mech, (PLANE, WIDTH, "l/10"), loads=[point_load(mech, "C", (str(force / 4), str(-force)))]
+    )
     for angle in (0.02, 0.3):
         compare(mech, reference, "C", {"A0": angle}, float(l) / CRANK)
 
 
-@pytest.mark.parametrize("name, inputs, point", [
-    ("WATT_II", {"O1": 0.2}, "Q"),                    # a `rigid` hinge (a pin) among the plates
-    ("FIVE_BAR", {"O1": 0.1, "O2": -0.05}, "P_tip"),   # two actuators
-])
+@pytest.mark.parametrize(
+    "name, inputs, point",
+    [
+        ("WATT_II", {"O1": 0.2}, "Q"),  # a `rigid` hinge (a pin) among the plates
+        ("FIVE_BAR", {"O1": 0.1, "O2": -0.05}, "P_tip"),  # two actuators
+    ],
+)
 def test_mechanisms_with_a_pin_and_with_two_inputs(name, inputs, point):
-    text = getattr(M, name).replace('length = "l"', 'length = "l"\n' + STEEL.replace(
-        f"nu = {NU}", "nu = 0"), 1)
+    text = getattr(M, name).replace(
+        'length = "l"', 'length = "l"\n' + STEEL.replace(f"nu = {NU}", "nu = 0"), 1
+    )
     mech = symkin.loads(text, f"{name}.toml")
     reference = Equilibrium(mech, (E, WIDTH, "l/10"))
     compare(mech, reference, point, inputs, 1e-3 / 0.05)
 
 
-@pytest.mark.parametrize("inputs, loaded_within", [
-    ({"O": "0.3", "A": "0", "B": "0", "K": "0"}, 0.03),   # the dyad G-H-I near its toggle
-    ({"O": "0", "A": "0.3", "B": "0", "K": "0"}, 0.01),
-    ({"O": "-0.3", "A": "0", "B": "0", "K": "0"}, 0.01),
-])
+@pytest.mark.parametrize(
+    "inputs, loaded_within",
+    [
+        ({"O": "0.3", "A": "0", "B": "0", "K": "0"}, 0.03),  # the dyad G-H-I near its toggle
+        ({"O": "0", "A": "0.3", "B": "0", "K": "0"}, 0.01),
+        ({"O": "-0.3", "A": "0", "B": "0", "K": "0"}, 0.01),
+    ],
+)
 def test_nine_bar_near_a_toggle_position(inputs, loaded_within):
     """The nine-bar platform's dyad G-H-I has a toggle margin of 0.195 at O = 0.3: the pin
     linkage's statics is 2 % off there and `loaded` misses the goal (2.5 %); `loaded_refined`,
@@ -187,9 +211,12 @@ def test_nine_bar_near_a_toggle_position(inputs, loaded_within):
     reference = Equilibrium(mech, (PLANE, WIDTH, "l/10"))
     expected = reference.solve(inputs)["points"]["F"]["deviation"]
     an = symkin.analyze(mech)
-    assert relative_gap(symkin.evaluate(an, inputs, "equilibrium").points["F"].deviation,
-                        expected) < 1e-9
+    assert (
+        relative_gap(symkin.evaluate(an, inputs, "equilibrium").points["F"].deviation, expected)
+        < 1e-9
+    )
     loaded = relative_gap(symkin.evaluate(an, inputs, "loaded").points["F"].deviation, expected)
-    refined = relative_gap(symkin.evaluate(an, inputs, "loaded_refined").points["F"].deviation,
-                           expected)
+    refined = relative_gap(
+        symkin.evaluate(an, inputs, "loaded_refined").points["F"].deviation, expected
+    )
     assert loaded < loaded_within and refined < 0.01 and refined < loaded

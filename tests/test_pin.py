@@ -3,7 +3,8 @@ at its model's pseudo-rigid-body pivot, d = g'(0) from M's clamp, so the model's
 from a pin at the plate midpoint disappears.
 
 Checked on a lone hinge (an arm on one input plate) against the models' closed forms of
-the pin placement of docs/file-format.md evaluated here with mpmath at 50 digits, and by the scaling of the deviation with θ.
+the pin placement of docs/file-format.md evaluated here with mpmath at 50 digits, and by the
+scaling of the deviation with θ.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ import symkin
 from symkin.physics import arith, elastica
 
 L = mpmath.mpf("0.002")
-ANGLE = mpmath.pi / 3                     # the plate's direction as fabricated
+ANGLE = mpmath.pi / 3  # the plate's direction as fabricated
 POINT = (mpmath.mpf("0.05"), mpmath.mpf("0.08"))
 
 
@@ -47,7 +48,10 @@ at = [0.05, 0.08]
 
 
 def rot(t, v):
-    return (mpmath.cos(t) * v[0] - mpmath.sin(t) * v[1], mpmath.sin(t) * v[0] + mpmath.cos(t) * v[1])
+    return (
+        mpmath.cos(t) * v[0] - mpmath.sin(t) * v[1],
+        mpmath.sin(t) * v[0] + mpmath.cos(t) * v[1],
+    )
 
 
 def expected_deviation(theta, f, g, d):
@@ -73,8 +77,9 @@ def test_prbm_pin_sits_gamma_l_over_c_theta_from_m_clamp(gamma, c, theta):
     with mpmath.workdps(50):
         t, gm, ct = mpmath.mpf(theta), mpmath.mpf(gamma), mpmath.mpf(c)
         big = t / ct
-        want = expected_deviation(t, L * (1 - gm * (1 - mpmath.cos(big))), gm * L * mpmath.sin(big),
-                                  gm * L / ct)
+        want = expected_deviation(
+            t, L * (1 - gm * (1 - mpmath.cos(big))), gm * L * mpmath.sin(big), gm * L / ct
+        )
         dev = result.points["T"].deviation
         assert math.hypot(dev[0] - want[0], dev[1] - want[1]) < 1e-13 * float(mpmath.hypot(*want))
 
@@ -89,11 +94,14 @@ def test_elastica_force_pin_sits_two_thirds_of_the_plate_from_m_clamp():
             t = mpmath.mpf(theta)
 
             def tip(k0, alpha):
-                return elastica.shoot(arith.mp_array([k0]), arith.mp_array([0]),
-                                      arith.mp_array([alpha]), tol=1e-33)
+                return elastica.shoot(
+                    arith.mp_array([k0]), arith.mp_array([0]), arith.mp_array([alpha]), tol=1e-33
+                )
+
             # no moment at the tip, tip angle θ: k0 and the load index α
-            k0, alpha = mpmath.findroot(lambda k, a: (tip(k, a).omega[0], tip(k, a).psi[0] - t),
-                                        (2 * t, 2 * t))
+            k0, alpha = mpmath.findroot(
+                lambda k, a: (tip(k, a).omega[0], tip(k, a).psi[0] - t), (2 * t, 2 * t)
+            )
             end = tip(k0, alpha)
             want = expected_deviation(t, L * end.x[0], L * end.y[0], 2 * L / 3)
         dev = result.points["T"].deviation
@@ -106,8 +114,10 @@ def test_the_order_l_theta_term_vanishes_with_the_models_pin(model):
     midpoint, own = arm(model, "midpoint"), arm(model, "prbm")
     size = {}
     for name, an in (("midpoint", midpoint), ("prbm", own)):
-        size[name] = [math.hypot(*symkin.evaluate(an, {"S": t}, "exact").points["T"].deviation)
-                      for t in (1e-3, 1e-4)]
+        size[name] = [
+            math.hypot(*symkin.evaluate(an, {"S": t}, "exact").points["T"].deviation)
+            for t in (1e-3, 1e-4)
+        ]
     assert size["midpoint"][0] / size["midpoint"][1] == pytest.approx(10, rel=1e-3)
     assert size["prbm"][0] / size["prbm"][1] == pytest.approx(100, rel=1e-2)
     assert size["prbm"][0] < 1e-2 * size["midpoint"][0]
@@ -117,5 +127,7 @@ def test_the_order_l_theta_term_vanishes_with_the_models_pin(model):
 def test_models_pivoting_at_the_midpoint_are_unchanged(model):
     a, b = arm(model, "midpoint"), arm(model, "prbm")
     for theta in (0.01, 0.3):
-        assert symkin.evaluate(a, {"S": theta}, "exact").points["T"].deviation == \
-            symkin.evaluate(b, {"S": theta}, "exact").points["T"].deviation
+        assert (
+            symkin.evaluate(a, {"S": theta}, "exact").points["T"].deviation
+            == symkin.evaluate(b, {"S": theta}, "exact").points["T"].deviation
+        )

@@ -13,22 +13,22 @@ from __future__ import annotations
 import dataclasses
 import sys
 
+import mechanisms as M
 import numpy as np
 import pytest
 import sympy as sp
-
-import mechanisms as M
-import symkin
 from conftest import EXAMPLES, ROOT
 from evaluators import require_compiler
-from symkin.core import levels as level_table
+
+import symkin
 from symkin.codegen import toolchain
+from symkin.core import levels as level_table
+from symkin.graph.pruning import prune
 from symkin.studies.derive import generate
 from symkin.studies.evaluation import evaluate
-from symkin.graph.pruning import prune
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
-import families  # noqa: E402
+import families
 
 STIFF = 'E = 210e9\nthickness = "l/10"\nwidth = 5e-3\n'
 
@@ -39,32 +39,42 @@ def _stiff(text: str) -> str:
 
 def _ladder(k: int) -> str:
     """A ladder with a point on its first two rungs as well as the top one."""
-    return (families.ladder(k) + families._point("P1", "r1", 0.02, 0.06)
-            + families._point("P2", "r2", 0.03, 0.11))
+    return (
+        families.ladder(k)
+        + families._point("P1", "r1", 0.02, 0.06)
+        + families._point("P2", "r2", 0.03, 0.11)
+    )
 
 
 WATT = M.WATT_II + M.point("P", "coupler", 0.06, 0.07)
 # The Watt II with its hinges in another order: the file's skeleton tree reaches the rocker
 # through the second loop (O5, D, C), so the paper level of a point on the rocker sums those
 # plates (4.8) and pruning must keep them (it once rebuilt the tree and dropped them).
-WATT_ORDER = M.text("watt_order", M.links("ground", "crank", "coupler", "output", "coupler2",
-                                          "rocker")
-                    + M.hinge("C", "rocker", "coupler2", 0.13, 0.05)
-                    + M.hinge("O1", "ground", "crank", 0.0, 0.0, "pi/2", input=True)
-                    + M.hinge("A", "crank", "coupler", 0.015, 0.025)
-                    + M.hinge("O5", "ground", "output", 0.2, 0.0, "pi/2")
-                    + M.hinge("D", "coupler2", "output", 0.19, 0.07, "pi/2")
-                    + M.hinge("O3", "ground", "rocker", 0.1, 0.0, "pi/2")
-                    + M.hinge("B", "coupler", "rocker", 0.09, 0.065, "pi/3")
-                    + M.point("P", "coupler", 0.06, 0.07) + M.point("R", "rocker", 0.11, 0.03))
+WATT_ORDER = M.text(
+    "watt_order",
+    M.links("ground", "crank", "coupler", "output", "coupler2", "rocker")
+    + M.hinge("C", "rocker", "coupler2", 0.13, 0.05)
+    + M.hinge("O1", "ground", "crank", 0.0, 0.0, "pi/2", input=True)
+    + M.hinge("A", "crank", "coupler", 0.015, 0.025)
+    + M.hinge("O5", "ground", "output", 0.2, 0.0, "pi/2")
+    + M.hinge("D", "coupler2", "output", 0.19, 0.07, "pi/2")
+    + M.hinge("O3", "ground", "rocker", 0.1, 0.0, "pi/2")
+    + M.hinge("B", "coupler", "rocker", 0.09, 0.065, "pi/3")
+    + M.point("P", "coupler", 0.06, 0.07)
+    + M.point("R", "rocker", 0.11, 0.03),
+)
 # The file's chords O3 and B: dropping the second loop leaves the rocker without its tree edge C
 WATT_CHORDS = WATT.replace('name = "watt_ii"\n', 'name = "watt_ii"\nchords = ["O3", "B"]\n')
 
 CASES = {
     # text, points, inputs (full mechanism), loops kept
     "fan_C2": (families.fan(4), ["C2"], {f"A0_{j}": 0.1 * j - 0.15 for j in range(1, 5)}, 1),
-    "fan_C1_C4": (families.fan(4), ["C1", "C4"], {f"A0_{j}": 0.2 - 0.1 * j for j in range(1, 5)},
-                  2),
+    "fan_C1_C4": (
+        families.fan(4),
+        ["C1", "C4"],
+        {f"A0_{j}": 0.2 - 0.1 * j for j in range(1, 5)},
+        2,
+    ),
     "ladder_P1": (_ladder(4), ["P1"], {"g0": 0.2}, 1),
     "ladder_P2": (_ladder(4), ["P2"], {"g0": -0.15}, 2),
     "ladder_top": (_ladder(3), ["top"], {"g0": 0.1}, 3),
@@ -72,8 +82,12 @@ CASES = {
     "watt_order_R": (WATT_ORDER, ["R"], {"O1": 0.2}, 2),
     "watt_order_P": (WATT_ORDER, ["P"], {"O1": -0.2}, 1),
     "watt_chords_P": (WATT_CHORDS, ["P"], {"O1": 0.2}, 1),
-    "serial_upper": (M.SERIAL_ARM + M.point("U", "upper", 0.01, 0.05), ["U"],
-                     {"S": 0.3, "E": -0.2}, 0),
+    "serial_upper": (
+        M.SERIAL_ARM + M.point("U", "upper", 0.01, 0.05),
+        ["U"],
+        {"S": 0.3, "E": -0.2},
+        0,
+    ),
 }
 
 
@@ -83,9 +97,15 @@ def _mech(text: str) -> symkin.Mechanism:
 
 def _lengthened(mech, hinge: str):
     """The mechanism with one plate 1 % longer."""
-    return dataclasses.replace(mech, hinges=tuple(
-        dataclasses.replace(h, length=h.length * sp.Rational(101, 100)) if h.name == hinge else h
-        for h in mech.hinges))
+    return dataclasses.replace(
+        mech,
+        hinges=tuple(
+            dataclasses.replace(h, length=h.length * sp.Rational(101, 100))
+            if h.name == hinge
+            else h
+            for h in mech.hinges
+        ),
+    )
 
 
 @pytest.mark.parametrize("case", sorted(CASES))
@@ -102,12 +122,16 @@ def test_kept_hinges_are_exactly_those_that_move_the_points(case):
         change = {}
         for level in ("paper", "exact"):
             moved = evaluate(longer, inputs, level, dps=30)
-            change[level] = max(np.abs(np.subtract(moved.points[p].deviation,
-                                                   base[level].points[p].deviation)).max()
-                                / np.abs(base[level].points[p].deviation).max() for p in points)
-        if h.name in kept:      # moves some point at some level (paper: over the direct path)
+            change[level] = max(
+                np.abs(
+                    np.subtract(moved.points[p].deviation, base[level].points[p].deviation)
+                ).max()
+                / np.abs(base[level].points[p].deviation).max()
+                for p in points
+            )
+        if h.name in kept:  # moves some point at some level (paper: over the direct path)
             assert max(change.values()) > 1e-6, (h.name, change)
-        else:                   # moves none at any level
+        else:  # moves none at any level
             assert max(change.values()) < 1e-14, (h.name, change)
 
 
@@ -118,15 +142,21 @@ def _modules(text: str, points, levels=None, c: bool = True):
     pruned = generate(mech, emit, points=points, levels=levels)
     out = []
     for tag, files in (("full", full), ("pruned", pruned)):
-        mod = toolchain.numpy_module_in_memory(files[f"{mech.name}.py"].decode(),
-                                             f"{mech.name}_{tag}")
+        mod = toolchain.numpy_module_in_memory(
+            files[f"{mech.name}.py"].decode(), f"{mech.name}_{tag}"
+        )
         lib = None
         if c:
             require_compiler()
             h, src = files[f"{mech.name}.h"].decode(), files[f"{mech.name}.c"].decode()
-            lib = toolchain.Library(toolchain.build(mech.name, h, src), mech.name,
-                                  len(mod.INPUTS), len(mod.PARAMETERS), len(mod.POINTS),
-                                  _count(h, "N_HINGES"))
+            lib = toolchain.Library(
+                toolchain.build(mech.name, h, src),
+                mech.name,
+                len(mod.INPUTS),
+                len(mod.PARAMETERS),
+                len(mod.POINTS),
+                _count(h, "N_HINGES"),
+            )
         out.append((mod, lib, files))
     return mech, out
 
@@ -138,8 +168,8 @@ def _count(header: str, key: str) -> int:
 
 def _agree(mech, modules, points, inputs, levels):
     (full, full_lib, _), (pruned, pruned_lib, _) = modules
-    assert pruned.POINTS == tuple(p.name for p in mech.points if p.name in points)
-    assert pruned.INPUTS == tuple(n for n in full.INPUTS if n in pruned.INPUTS)
+    assert tuple(p.name for p in mech.points if p.name in points) == pruned.POINTS
+    assert tuple(n for n in full.INPUTS if n in pruned.INPUTS) == pruned.INPUTS
     sub_inputs = {k: inputs[k] for k in pruned.INPUTS}
     for level in levels:
         want = full.evaluate(inputs, level)["points"]
@@ -156,7 +186,7 @@ def _agree(mech, modules, points, inputs, levels):
         assert s1 == s2 == 0
         for i, p in enumerate(pruned.POINTS):
             j = full.POINTS.index(p)
-            w, g = np.array(o1[6 * j:6 * j + 6]), np.array(o2[6 * i:6 * i + 6])
+            w, g = np.array(o1[6 * j : 6 * j + 6]), np.array(o2[6 * i : 6 * i + 6])
             assert np.abs(g[4:] - w[4:]).max() <= 1e-14 * np.abs(w[4:]).max(), (level, p)
             assert np.abs(g[:2] - w[:2]).max() <= 1e-14 * np.abs(w[:2]).max(), (level, p)
 
@@ -177,8 +207,9 @@ def test_the_dropped_inputs_are_accepted_and_ignored():
         pruned.evaluate({"A0_1": 0.1})
 
 
-@pytest.mark.parametrize("case", ["fan_C2", "ladder_P2", "watt_P", "watt_order_R",
-                                  "watt_chords_P", "serial_upper"])
+@pytest.mark.parametrize(
+    "case", ["fan_C2", "ladder_P2", "watt_P", "watt_order_R", "watt_chords_P", "serial_upper"]
+)
 def test_pruned_evaluators_agree_with_the_full_ones(case):
     text, points, inputs, _ = CASES[case]
     mech, modules = _modules(text, points)
@@ -221,8 +252,12 @@ def test_physical_pruning_is_checked_against_the_full_statics():
     inputs = {"A0_1": 0.2, "A0_2": -0.1}
     base = evaluate(symkin.analyze(mech), inputs, "loaded", dps=30).points["C1"].deviation
     for h in mech.hinges:
-        stiffer = dataclasses.replace(mech, hinges=tuple(
-            dataclasses.replace(x, E=x.E * 2) if x.name == h.name else x for x in mech.hinges))
+        stiffer = dataclasses.replace(
+            mech,
+            hinges=tuple(
+                dataclasses.replace(x, E=x.E * 2) if x.name == h.name else x for x in mech.hinges
+            ),
+        )
         dev = evaluate(symkin.analyze(stiffer), inputs, "loaded", dps=30).points["C1"].deviation
         change = np.abs(np.subtract(dev, base)).max() / np.abs(base).max()
         assert (change > 1e-9) if h.name in kept else (change < 1e-14), (h.name, change)
@@ -230,14 +265,22 @@ def test_physical_pruning_is_checked_against_the_full_statics():
 
 def test_nine_bar_point_on_input_links_solves_no_loop():
     """F rides on links the inputs alone place: the pruned evaluator holds no loop solve."""
-    mech, modules = _modules((EXAMPLES / "nine_bar_platform.toml").read_text(), ["F"],
-                             levels=["paper", "first_order", "exact"])
-    (full, _, _), (pruned, _, files) = modules
+    mech, modules = _modules(
+        (EXAMPLES / "nine_bar_platform.toml").read_text(),
+        ["F"],
+        levels=["paper", "first_order", "exact"],
+    )
+    (_full, _, _), (pruned, _, files) = modules
     assert pruned.INPUTS == ("O", "A")
     source = files[f"{mech.name}.c"].decode()
     assert "newton" not in source and "_linear(" not in source
-    _agree(mech, modules, ["F"], {"O": 0.1, "A": -0.05, "B": 0.02, "K": 0.03},
-           ["paper", "first_order", "exact"])
+    _agree(
+        mech,
+        modules,
+        ["F"],
+        {"O": 0.1, "A": -0.05, "B": 0.02, "K": 0.03},
+        ["paper", "first_order", "exact"],
+    )
 
 
 def test_the_report_says_what_was_kept_and_why(tmp_path):

@@ -43,6 +43,10 @@ def test_under_ci_the_tests_run_in_a_venv_without_system_site_packages():
         return
     cfg = Path(sys.prefix) / "pyvenv.cfg"
     assert sys.prefix != sys.base_prefix and cfg.is_file(), "CI must run the tests in a venv"
-    settings = {key.strip(): value.strip() for key, value in
-                (line.split("=", 1) for line in cfg.read_text().splitlines() if "=" in line)}
+    settings = {
+        key.strip(): value.strip()
+        for key, value in (
+            line.split("=", 1) for line in cfg.read_text().splitlines() if "=" in line
+        )
+    }
     assert settings.get("include-system-site-packages") == "false"

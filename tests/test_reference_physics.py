@@ -31,14 +31,20 @@ from __future__ import annotations
 
 import mpmath
 import pytest
-import symkin
-
 from conftest import EXAMPLES
-from reference_physics import (ChainEquilibrium, ContinuationError, Equilibrium,
-                               InstabilityError, Load, point_load)
+from reference_physics import (
+    ChainEquilibrium,
+    ContinuationError,
+    Equilibrium,
+    InstabilityError,
+    Load,
+    point_load,
+)
 from reference_solver import Reference
 
-STEEL = (210e9, 5e-3, "l/10")           # E (Pa), width (m), thickness = l/10
+import symkin
+
+STEEL = (210e9, 5e-3, "l/10")  # E (Pa), width (m), thickness = l/10
 
 # one plate of length L from the ground (clamp at the origin) to a free link "tip"; the input
 # hinge A is either held (an angle) or released (None)
@@ -62,7 +68,7 @@ name = "T"
 link = "tip"
 at = ["L", 0]
 """
-UNIT = (12, 1, 1)                        # EI = 12·1·1³/12 = 1
+UNIT = (12, 1, 1)  # EI = 12·1·1³/12 = 1
 
 
 @pytest.fixture(scope="module")
@@ -110,8 +116,8 @@ def test_pure_moment_bends_the_plate_into_a_circular_arc(cantilever, method, the
         assert rel(res["points"]["T"]["deviation"], dev) < tol
         assert rel_scalar(res["hinges"]["A"]["moment"], EI * th / l) < tol
         assert rel_scalar(res["actuators"]["A"], EI * th / l) < tol
-        assert rel_scalar(res["energy"], EI * th ** 2 / (2 * l)) < tol
-        assert norm(res["hinges"]["A"]["force"]) < tol * EI / l ** 2
+        assert rel_scalar(res["energy"], EI * th**2 / (2 * l)) < tol
+        assert norm(res["hinges"]["A"]["force"]) < tol * EI / l**2
 
 
 @pytest.mark.parametrize("method", [Equilibrium, ChainEquilibrium])
@@ -123,8 +129,10 @@ def test_dead_moment_on_a_free_link_bends_the_plate_into_a_circular_arc(cantilev
     with mpmath.workdps(50):
         th = mpmath.mpf("0.7")
         assert abs(res["angles"]["A"] - th) < tol
-        assert rel(res["points"]["T"]["compliant"],
-                   (mpmath.sin(th) / th, (1 - mpmath.cos(th)) / th)) < tol
+        assert (
+            rel(res["points"]["T"]["compliant"], (mpmath.sin(th) / th, (1 - mpmath.cos(th)) / th))
+            < tol
+        )
         assert abs(res["hinges"]["A"]["moment"] - th) < tol
 
 
@@ -150,7 +158,7 @@ BISSHOPP_DRUCKER = [
 def half_unit(text: str) -> float:
     """Half a unit in the last digit given."""
     decimals = len(text.split(".")[1]) if "." in text else 0
-    return 0.5 * 10.0 ** -decimals
+    return 0.5 * 10.0**-decimals
 
 
 @pytest.mark.parametrize("method", [Equilibrium, ChainEquilibrium])
@@ -192,7 +200,7 @@ def test_clamped_guided_plate_small_load_limit(cantilever, method):
         delta = a / 12
         errs.append(rel_scalar(dy, delta))
         assert rel_scalar(dy, delta) < 1e-5
-        assert rel_scalar(dx, -3 * delta ** 2 / 5) < 1e-4
+        assert rel_scalar(dx, -3 * delta**2 / 5) < 1e-4
         assert rel_scalar(res["hinges"]["A"]["moment"], -a / 2) < 1e-5
         assert rel_scalar(res["actuators"]["A"], -a / 2) < 1e-5
     # the residual is the quadratic nonlinear correction, not a numerical floor
@@ -200,8 +208,9 @@ def test_clamped_guided_plate_small_load_limit(cantilever, method):
 
 
 # ---- energy consistency ----------------------------------------------------------------------
-@pytest.mark.parametrize("method, loaded", [(Equilibrium, False), (Equilibrium, True),
-                                            (ChainEquilibrium, False)])
+@pytest.mark.parametrize(
+    "method, loaded", [(Equilibrium, False), (Equilibrium, True), (ChainEquilibrium, False)]
+)
 def test_actuator_torque_is_the_derivative_of_the_potential(four_bar, method, loaded):
     """τ = d(E − W)/dθ_input, W the work of the dead loads (central differences, step 1e-6)."""
     q, h = mpmath.mpf("0.2"), mpmath.mpf("1e-6")
@@ -235,10 +244,11 @@ def assert_methods_agree(mech, stiffness, inputs, loads=(), params=None, tol=1e-
     assert b["error_estimate"] < 100 * tol
     assert a["error_estimate"] < 1e-20
     for h, v in a["hinges"].items():
-        scale = norm(v["force"]) * mpmath.mpf(1e-3) + abs(v["moment"])   # N·m, lever 1 mm
+        scale = norm(v["force"]) * mpmath.mpf(1e-3) + abs(v["moment"])  # N·m, lever 1 mm
         assert abs(b["hinges"][h]["moment"] - v["moment"]) < tol * scale
-        assert norm([b["hinges"][h]["force"][k] - v["force"][k] for k in range(2)]) \
-            < tol * (norm(v["force"]) + abs(v["moment"]) / mpmath.mpf(1e-3))
+        assert norm([b["hinges"][h]["force"][k] - v["force"][k] for k in range(2)]) < tol * (
+            norm(v["force"]) + abs(v["moment"]) / mpmath.mpf(1e-3)
+        )
     assert rel_scalar(b["energy"], a["energy"]) < tol
     for h, v in a["actuators"].items():
         assert rel_scalar(b["actuators"][h], v) < tol
@@ -251,16 +261,21 @@ def test_methods_agree_on_the_four_bar(four_bar, l, q):
     assert_methods_agree(four_bar, STEEL, {"A0": q}, params={"l": l})
 
 
-@pytest.mark.parametrize("l, q", [("1e-4", "0.01"), ("1e-4", "0.5"), ("2e-2", "0.01"),
-                                  ("2e-2", "0.5")])
+@pytest.mark.parametrize(
+    "l, q", [("1e-4", "0.01"), ("1e-4", "0.5"), ("2e-2", "0.01"), ("2e-2", "0.5")]
+)
 def test_methods_agree_at_the_corners_of_the_accuracy_range(four_bar, l, q):
     """l/L from 1e-3 to 0.2 (L = 0.1 m, the frame), input angle 0.01 to 0.5 rad."""
     assert_methods_agree(four_bar, STEEL, {"A0": q}, params={"l": l})
 
 
 def test_methods_agree_with_plates_of_different_thickness(four_bar):
-    stiffness = {"A0": (210e9, 5e-3, "l/10"), "A": (210e9, 5e-3, "l/20"),
-                 "B0": (70e9, 8e-3, "l/8"), "B": (210e9, 5e-3, "l/15")}
+    stiffness = {
+        "A0": (210e9, 5e-3, "l/10"),
+        "A": (210e9, 5e-3, "l/20"),
+        "B0": (70e9, 8e-3, "l/8"),
+        "B": (210e9, 5e-3, "l/15"),
+    }
     assert_methods_agree(four_bar, stiffness, {"A0": "0.1"})
 
 
@@ -277,14 +292,20 @@ def test_methods_agree_with_a_load_on_the_coupler_point(four_bar):
 def test_methods_agree_with_a_pin(four_bar):
     """A `rigid` hinge stays an ideal pin: zero moment, and its force is a Lagrange multiplier
     in (b) and an unknown of the balance in (a)."""
-    text = (EXAMPLES / "four_bar.toml").read_text().replace(
-        'at = [0.085, 0.068]\nplate_angle = "0"', 'at = [0.085, 0.068]\nplate_angle = "0"\n'
-        'model = "rigid"')
+    text = (
+        (EXAMPLES / "four_bar.toml")
+        .read_text()
+        .replace(
+            'at = [0.085, 0.068]\nplate_angle = "0"',
+            'at = [0.085, 0.068]\nplate_angle = "0"\nmodel = "rigid"',
+        )
+    )
     mech = symkin.loads(text)
     assert mech.hinge("B").model == "rigid"
-    stiffness = {h: STEEL for h in ("A0", "A", "B0")}
-    a, _ = assert_methods_agree(mech, stiffness, {"A0": "0.2"},
-                                loads=[point_load(mech, "C", (0, "-1"))])
+    stiffness = dict.fromkeys(("A0", "A", "B0"), STEEL)
+    a, _ = assert_methods_agree(
+        mech, stiffness, {"A0": "0.2"}, loads=[point_load(mech, "C", (0, "-1"))]
+    )
     assert a["hinges"]["B"]["moment"] == 0 and norm(a["hinges"]["B"]["force"]) > 0.1
 
 
@@ -294,10 +315,19 @@ def test_methods_agree_on_the_stephenson_six_bar():
 
 
 # ---- plausibility against the published side measurements ----------------------------------
-@pytest.mark.parametrize("l, q, published", [
-    ("1e-3", "0.02", 0.18), ("1e-3", "0.05", 0.08), ("1e-3", "0.1", 0.047),
-    ("1e-3", "0.3", 0.024), ("5e-3", "0.02", 0.56), ("5e-3", "0.3", 0.11),
-    ("0.2e-3", "0.02", 0.04), ("0.2e-3", "0.3", 0.005)])
+@pytest.mark.parametrize(
+    "l, q, published",
+    [
+        ("1e-3", "0.02", 0.18),
+        ("1e-3", "0.05", 0.08),
+        ("1e-3", "0.1", 0.047),
+        ("1e-3", "0.3", 0.024),
+        ("5e-3", "0.02", 0.56),
+        ("5e-3", "0.3", 0.11),
+        ("0.2e-3", "0.02", 0.04),
+        ("0.2e-3", "0.3", 0.005),
+    ],
+)
 def test_kinematic_gap_matches_the_published_measurements(four_bar, l, q, published):
     """Relative gap between the circular-arc exact deviation and the elastica's (no loads)."""
     elastica = Equilibrium(four_bar, STEEL, params={"l": l}).solve({"A0": q})
@@ -319,6 +349,7 @@ def test_plate_integrator_matches_an_independent_ode_solver(eps):
     """shoot() (fixed-point Taylor series, variational equations) against mpmath.odefun on a
     strongly bent, loaded plate; its Jacobian against central differences."""
     from reference_physics import shoot
+
     with mpmath.workdps(40):
         u0, mu0, fx, fy = (mpmath.mpf(v) for v in ("0.7", "0.9", "2.5", "-3"))
         e = mpmath.mpf(eps)
@@ -331,12 +362,14 @@ def test_plate_integrator_matches_an_independent_ode_solver(eps):
             for i in range(4):
                 assert abs((plus[i] - minus[i]) / (2 * h) - jac[i][j]) < 1e-20
     with mpmath.workdps(20):
+
         def rhs(s, y):
             u, mu = y[0], y[1]
             c, sn = mpmath.cos(u), mpmath.sin(u)
             n_t = fx * c + fy * sn
             grow = 1 + e * n_t
-            return [mu, grow * (fx * sn - fy * c), grow * c, grow * sn, mu ** 2 + e * n_t ** 2]
+            return [mu, grow * (fx * sn - fy * c), grow * c, grow * sn, mu**2 + e * n_t**2]
+
         end = mpmath.odefun(rhs, 0, [u0, mu0, 0, 0, 0])(1)
         for got, want in zip((out[0], out[3], out[1], out[2], energy), end):
             assert abs(got - want) < 1e-16
@@ -346,30 +379,34 @@ def test_plate_integrator_matches_an_independent_ode_solver(eps):
 def test_extensible_plate_under_axial_load_stretches_by_n_l_over_ea(cantilever, force):
     """A straight plate under an axial end force F stays straight and stretches by F·l/EA
     (below Euler's load in compression); the energy is F²l/(2EA). EI = 1, EA = 12."""
-    res = Equilibrium(cantilever, UNIT, loads=[Load("tip", (1, 0), (force, 0))],
-                      extensible=True).solve({"A": None})
+    res = Equilibrium(
+        cantilever, UNIT, loads=[Load("tip", (1, 0), (force, 0))], extensible=True
+    ).solve({"A": None})
     f = mpmath.mpf(force)
     dx, dy = res["points"]["T"]["deviation"]
     assert abs(dx - f / 12) < 1e-25 and abs(dy) < 1e-25
-    assert abs(res["energy"] - f ** 2 / 24) < 1e-25
+    assert abs(res["energy"] - f**2 / 24) < 1e-25
     with pytest.raises(NotImplementedError):
         ChainEquilibrium(cantilever, UNIT, extensible=True)
 
 
 def test_extensible_actuator_torque_is_the_derivative_of_the_potential(four_bar):
     q, h = mpmath.mpf("0.2"), mpmath.mpf("1e-6")
-    solver = Equilibrium(four_bar, STEEL, loads=[point_load(four_bar, "C", ("0.5", "-1"))],
-                         extensible=True)
+    solver = Equilibrium(
+        four_bar, STEEL, loads=[point_load(four_bar, "C", ("0.5", "-1"))], extensible=True
+    )
 
     def potential(res):
         c = res["points"]["C"]["compliant"]
-        return res["energy"] - (mpmath.mpf("0.5") * (c[0] - mpmath.mpf("0.06"))
-                                - (c[1] - mpmath.mpf("0.09")))
+        return res["energy"] - (
+            mpmath.mpf("0.5") * (c[0] - mpmath.mpf("0.06")) - (c[1] - mpmath.mpf("0.09"))
+        )
 
     with mpmath.workdps(50):
         mid = solver.solve({"A0": q})
-        derivative = (potential(solver.solve({"A0": q + h}))
-                      - potential(solver.solve({"A0": q - h}))) / (2 * h)
+        derivative = (
+            potential(solver.solve({"A0": q + h})) - potential(solver.solve({"A0": q - h}))
+        ) / (2 * h)
         assert rel_scalar(derivative, mid["actuators"]["A0"]) < 1e-9
 
 
@@ -380,7 +417,7 @@ def test_axial_compression_beyond_euler_raises(cantilever, method, tol, held, eu
     """Axial dead load P = 12 EI/L² at the tip: the free cantilever buckles at π²EI/(4L²), the
     clamped–guided one (input held) at π²EI/L². The error names the plate and the load factor
     reached ≈ P_cr / P; (b)'s 16-segment chain buckles O(h²) early. Below P_cr nothing raises."""
-    p_cr = euler * float(mpmath.pi ** 2)
+    p_cr = euler * float(mpmath.pi**2)
     solver = method(cantilever, UNIT, loads=[Load("tip", (1, 0), (-12, 0))])
     with pytest.raises(InstabilityError) as info:
         solver.solve({"A": held})

@@ -19,8 +19,11 @@ import sympy as sp
 import symkin
 
 sys.path.insert(0, os.path.dirname(__file__))
-from reference_solver import (  # noqa: E402
-    Reference, ReferenceAssemblyError, ReferenceModelError)
+from reference_solver import (
+    Reference,
+    ReferenceAssemblyError,
+    ReferenceModelError,
+)
 
 EXAMPLES = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "examples")
 DPS = 40
@@ -77,11 +80,11 @@ def across(mech, h, known_link, pose, theta, model):
     cp0, cm0, alpha, length = hinge_numbers(mech, h)
     z, phi = pose
     c = chord(model, length, alpha, theta)
-    if known_link == h.links[0]:                 # P known: M = P rotated by θ
+    if known_link == h.links[0]:  # P known: M = P rotated by θ
         clamp_m = z + mpmath.expj(phi) * cp0 + mpmath.expj(phi) * c
         phi_m = phi + theta
         return clamp_m - mpmath.expj(phi_m) * cm0, phi_m
-    assert known_link == h.links[1]              # M known: P = M rotated by −θ
+    assert known_link == h.links[1]  # M known: P = M rotated by −θ
     phi_p = phi - theta
     clamp_p = z + mpmath.expj(phi) * cm0 - mpmath.expj(phi_p) * c
     return clamp_p - mpmath.expj(phi_p) * cp0, phi_p
@@ -211,7 +214,7 @@ def test_rigid_four_bar_matches_circle_intersection(q):
 def test_four_bar_branch_is_kept(q):
     mech = example("four_bar")
     ref = Reference(mech)
-    A0, A, B0, B = (cnum(mech, mech.hinge(n).at) for n in ("A0", "A", "B0", "B"))
+    _A0, A, B0, B = (cnum(mech, mech.hinge(n).at) for n in ("A0", "A", "B0", "B"))
     with mpmath.workdps(DPS):
         sign0 = mpmath.sign(cross(B - A, B0 - A))
         _, _, _, _, C_here, sigma = four_bar_closed_form(mech, mpmath.mpf(q))
@@ -220,15 +223,17 @@ def test_four_bar_branch_is_kept(q):
     for model in ("rigid", None):
         sol = ref.solve({"A0": q}, model_override=model)
         with mpmath.workdps(DPS):
+
             def at(link, p0):
                 x, y, phi = sol["poses"][link]
                 return mpmath.mpc(x, y) + mpmath.expj(phi) * p0
+
             Aq, Bq = at("crank", A), at("coupler", B)
             assert mpmath.sign(cross(Bq - Aq, B0 - Aq)) == sign0
             C = mpmath.mpc(*sol["points"]["C"])
             if model == "rigid":
                 assert abs(C - C_here) < TOL
-            else:                                   # within plate-size effects of the rigid C
+            else:  # within plate-size effects of the rigid C
                 assert abs(C - C_here) < mpmath.mpf("1e-4") < abs(C - C_mirror)
 
 
@@ -285,7 +290,7 @@ def test_non_grashof_four_bar_input_range(tmp_path):
     with mpmath.workdps(DPS):
         A0, A, B0, B = (cnum(mech, mech.hinge(n).at) for n in ("A0", "A", "B0", "B"))
         a, g, c, r = abs(A - A0), abs(B0 - A0), abs(B - A), abs(B - B0)
-        assert a + g > c + r                                  # non-Grashof
+        assert a + g > c + r  # non-Grashof
         psi = mpmath.acos((a * a + g * g - (c + r) ** 2) / (2 * a * g))
         q_max, q_min = psi - mpmath.pi / 3, -psi - mpmath.pi / 3
         rocker = {}
@@ -294,8 +299,10 @@ def test_non_grashof_four_bar_input_range(tmp_path):
         # hinge angles reach 1.5..3.2 rad at the toggles, where the arc and the pin differ by a
         # good fraction of l), so it gets wider margins
         for model, margin in (("rigid", mpmath.mpf("1e-3")), (None, mpmath.mpf("0.1"))):
-            cases[model] = ((q_max - margin / 2, q_min + margin / 2),
-                            (q_max + margin, q_min - margin, mpmath.mpf(2)))
+            cases[model] = (
+                (q_max - margin / 2, q_min + margin / 2),
+                (q_max + margin, q_min - margin, mpmath.mpf(2)),
+            )
             rocker[model] = [four_bar_closed_form(mech, q)[0] for q in cases[model][0]]
     for model, (inside, outside) in cases.items():
         for q, want in zip(inside, rocker[model]):
@@ -347,7 +354,7 @@ def test_nine_bar_stops_at_its_dyad_limit():
                 poses[link] = pose
             return poses
 
-        def gaps(t):                          # all must be ≤ 0 for the mechanism to assemble
+        def gaps(t):  # all must be ≤ 0 for the mechanism to assemble
             poses = chain(t)
             out = []
             for x, y, z, link in (("G", "H", "I", "b4"), ("C", "D", "E", "b3")):
@@ -418,7 +425,7 @@ def test_single_hinge_deviation_closed_form(tmp_path, theta):
             dev = d["points"][name]["deviation"]
             err = max(abs(dev[0] - want[0]), abs(dev[1] - want[1]))
             assert err < abs(mag) * mpmath.mpf("1e-20"), (name, err, mag)
-    if theta == "1e-7":                    # |ΔR| ≈ lθ²/12 ≈ 2e-18: 17 digits lost, dps raised
+    if theta == "1e-7":  # |ΔR| ≈ lθ²/12 ≈ 2e-18: 17 digits lost, dps raised
         assert d["dps"] > DPS and d["digits"] >= 20
 
 
@@ -496,15 +503,18 @@ def test_nine_bar_point_on_input_chain_is_open_chain_exact():
 # ---- model plumbing ---------------------------------------------------------------------------
 def test_zero_inputs_give_the_as_fabricated_pose():
     for name, inputs in EXAMPLE_INPUTS:
-        sol = Reference(example(name)).solve({k: 0 for k in inputs})
+        sol = Reference(example(name)).solve(dict.fromkeys(inputs, 0))
         for x, y, phi in sol["poses"].values():
             assert max(abs(x), abs(y), abs(phi)) < TOL
 
 
 def test_expr_model_equals_circular_arc(tmp_path):
-    text = open(os.path.join(EXAMPLES, "four_bar.toml"), encoding="utf-8").read()
-    text = text.replace('model = "circular_arc"',
-                        'model = "expr"\nf = "l*sin(theta)/theta"\ng = "l*(1 - cos(theta))/theta"')
+    with open(os.path.join(EXAMPLES, "four_bar.toml"), encoding="utf-8") as fh:
+        text = fh.read()
+    text = text.replace(
+        'model = "circular_arc"',
+        'model = "expr"\nf = "l*sin(theta)/theta"\ng = "l*(1 - cos(theta))/theta"',
+    )
     mech = from_text(tmp_path, text)
     assert all(h.model == "expr" for h in mech.hinges)
     a = Reference(mech).deviation({"A0": "0.2"})["points"]["C"]["deviation"]
@@ -513,19 +523,21 @@ def test_expr_model_equals_circular_arc(tmp_path):
         assert abs(a[0] - b[0]) + abs(a[1] - b[1]) < mpmath.mpf("1e-32")
 
 
-@pytest.mark.parametrize("model", ["rigid", "circular_arc", "small_deflection", "prbm",
-                                   "elastica_force"])
+@pytest.mark.parametrize(
+    "model", ["rigid", "circular_arc", "small_deflection", "prbm", "elastica_force"]
+)
 def test_model_derivatives(model):
     ref = Reference(example("four_bar"))
     dps = 30
     with mpmath.workdps(dps):
         for theta in ("0", "1e-12", "0.4", "-0.9"):
             t = mpmath.mpf(theta)
-            f, g, df, dg = ref.fg("A", t, model_override=model, dps=dps)
+            _f, _g, df, dg = ref.fg("A", t, model_override=model, dps=dps)
             # mpmath.diff raises the working precision: evaluate the model at that precision
-            num_df, num_dg = (mpmath.diff(lambda s: ref.fg("A", s, model_override=model,
-                                                           dps=mpmath.mp.dps)[k], t)
-                              for k in (0, 1))
+            num_df, num_dg = (
+                mpmath.diff(lambda s: ref.fg("A", s, model_override=model, dps=mpmath.mp.dps)[k], t)
+                for k in (0, 1)
+            )
             assert abs(df - num_df) < mpmath.mpf("1e-25") and abs(dg - num_dg) < mpmath.mpf("1e-25")
         f0, g0, _, _ = ref.fg("A", 0, model_override=model, dps=dps)
         assert abs(f0 - mpmath.mpf("1e-3")) < mpmath.mpf("1e-28") and abs(g0) < mpmath.mpf("1e-28")
@@ -536,14 +548,18 @@ def test_jacobian_matches_finite_differences():
     ref = Reference(mech)
     with mpmath.workdps(DPS):
         hinges, _, _ = ref._setup(None, DPS)
-        X = [mpmath.mpf(k % 7 - 3) / 97 * (mpmath.mpf("0.01") if k % 3 != 2 else 1)
-             for k in range(ref.n_unknowns)]
+        X = [
+            mpmath.mpf(k % 7 - 3) / 97 * (mpmath.mpf("0.01") if k % 3 != 2 else 1)
+            for k in range(ref.n_unknowns)
+        ]
         q = {"O_A": mpmath.mpf("0.1")}
         _, J = ref._system(X, q, hinges)
         h = mpmath.mpf("1e-15")
         for j in range(ref.n_unknowns):
-            up = list(X); up[j] += h
-            dn = list(X); dn[j] -= h
+            up = list(X)
+            up[j] += h
+            dn = list(X)
+            dn[j] -= h
             Fu, _ = ref._system(up, q, hinges)
             Fd, _ = ref._system(dn, q, hinges)
             for i in range(len(Fu)):
@@ -558,16 +574,22 @@ def test_elastica_force_against_ode_shooting():
 
     def tip(params):
         alpha, k0 = params
-        sol = solve_ivp(lambda s, y: [y[1], -alpha * math.cos(y[0]), math.cos(y[0]),
-                                      math.sin(y[0])],
-                        (0, 1), [0.0, k0, 0.0, 0.0], rtol=1e-12, atol=1e-13)
+        sol = solve_ivp(
+            lambda s, y: [y[1], -alpha * math.cos(y[0]), math.cos(y[0]), math.sin(y[0])],
+            (0, 1),
+            [0.0, k0, 0.0, 0.0],
+            rtol=1e-12,
+            atol=1e-13,
+        )
         return sol.y[:, -1]
 
     ref = Reference(example("four_bar"))
     for theta in (0.05, 0.5, -1.0):
+
         def eqs(p):
             phi1, k1, _, _ = tip(p)
             return [k1, phi1 - theta]
+
         alpha, k0 = fsolve(eqs, [2 * theta, 2 * theta], xtol=1e-13)
         _, _, x1, y1 = tip((alpha, k0))
         f, g, _, _ = ref.fg("A", theta, model_override="elastica_force", dps=25)

@@ -12,15 +12,15 @@ from __future__ import annotations
 import sys
 
 import pytest
-
-import symkin
 from conftest import ROOT
 from evaluators import Generated, rel_err
 from reference_solver import Reference
+
+import symkin
 from symkin.studies.evaluation import evaluate
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
-import families  # noqa: E402
+import families
 
 K = 20
 
@@ -44,9 +44,9 @@ def test_every_backend_agrees_with_the_independent_solver(family):
     # the sympy backend once (its 30-digit Newton is the slow one), numpy and C at every case
     for i, inputs in enumerate(_cases(kind)):
         want = ref.deviation(inputs)
-        for backend in (("sympy", "numpy", "c") if i == 0 else ("numpy", "c")):
+        for backend in ("sympy", "numpy", "c") if i == 0 else ("numpy", "c"):
             if backend == "c":
-                g.lib                                   # noqa: B018 - compiles, or fails in CI
+                g.lib  # noqa: B018 - compiles, or fails in CI
             got = evaluate(g.analysis, inputs, "exact", backend=backend)
             assert set(got.points) == set(want["points"])
             for name, point in got.points.items():

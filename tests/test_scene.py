@@ -19,13 +19,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 import sympy as sp
-
-import symkin
 from conftest import EXAMPLES
 from evaluators import require_compiler
 from reference_solver import Reference
-from symkin.studies.scene import derive as derive_scene
+
+import symkin
 from symkin.core.errors import InputError
+from symkin.studies.scene import derive as derive_scene
 
 NINE_BAR = EXAMPLES / "nine_bar_platform.toml"
 FOUR_BAR = EXAMPLES / "four_bar.toml"
@@ -61,13 +61,15 @@ ranges = { O = [-0.05, 0.05] }
 TOLERANCE = {"P8": (1e-12, False), "P5": (0.05, True)}
 AT = {"P8": ("b8", (0.1, 0.01)), "P5": ("b5", (0.18, 0.075))}
 K_EXACT = sp.pi / 60
-K = float(sp.N(K_EXACT, 30))     # correctly rounded, as the generated code holds it
+K = float(sp.N(K_EXACT, 30))  # correctly rounded, as the generated code holds it
 
 
 def _with_points(path: Path) -> symkin.Mechanism:
     """The nine-bar with the scene's points written into the file (for the reference solver)."""
-    extra = "".join(f'\n[[point]]\nname = "{p}"\nlink = "{link}"\nat = [{x}, {y}]\n'
-                    for p, (link, (x, y)) in AT.items())
+    extra = "".join(
+        f'\n[[point]]\nname = "{p}"\nlink = "{link}"\nat = [{x}, {y}]\n'
+        for p, (link, (x, y)) in AT.items()
+    )
     return symkin.loads(path.read_text() + extra, "nine_bar_points.toml")
 
 
@@ -90,8 +92,14 @@ def derived(tmp_path_factory):
 
 def _samples(n: int, seed: int = 7) -> list[dict[str, float]]:
     rng = np.random.default_rng(seed)
-    return [{"O": rng.uniform(-0.05, 0.05), "A": rng.uniform(-0.1, 0.1),
-             "B": rng.uniform(-math.pi / 30, math.pi / 30)} for _ in range(n)]
+    return [
+        {
+            "O": rng.uniform(-0.05, 0.05),
+            "A": rng.uniform(-0.1, 0.1),
+            "B": rng.uniform(-math.pi / 30, math.pi / 30),
+        }
+        for _ in range(n)
+    ]
 
 
 def test_every_point_meets_its_tolerance_against_the_independent_solver(derived):
@@ -119,34 +127,56 @@ def test_scene_evaluator_in_c_agrees_with_numpy(derived):
     lib_path = out / "libstage.so"
     sources = sorted(str(p) for p in out.glob("*.c"))
     cc = os.environ.get("CC", "cc")
-    subprocess.run([cc, "-std=c99", "-O2", "-shared", "-fPIC", "-Wall", "-Werror", *sources,
-                    "-o", str(lib_path), "-lm"], check=True, capture_output=True)
+    subprocess.run(
+        [
+            cc,
+            "-std=c99",
+            "-O2",
+            "-shared",
+            "-fPIC",
+            "-Wall",
+            "-Werror",
+            *sources,
+            "-o",
+            str(lib_path),
+            "-lm",
+        ],
+        check=True,
+        capture_output=True,
+    )
     lib = ctypes.CDLL(str(lib_path))
     dbl = ctypes.POINTER(ctypes.c_double)
     lib.stage_evaluate.argtypes = [dbl, dbl, dbl]
-    lib.stage_evaluate_batch.argtypes = [ctypes.c_int, dbl, dbl, dbl,
-                                         ctypes.POINTER(ctypes.c_int)]
-    names = [ctypes.c_char_p.in_dll(lib, "stage_input_names").value]   # first entry
+    lib.stage_evaluate_batch.argtypes = [ctypes.c_int, dbl, dbl, dbl, ctypes.POINTER(ctypes.c_int)]
+    names = [ctypes.c_char_p.in_dll(lib, "stage_input_names").value]  # first entry
     assert names == [b"O"]
     samples = _samples(5, seed=3)
     x = np.array([[s[h] for h in scene.INPUTS] for s in samples])
     out_c = np.zeros((len(samples), 6 * len(scene.POINTS)))
     status = np.zeros(len(samples), dtype=np.int32)
-    failed = lib.stage_evaluate_batch(len(samples), x.ctypes.data_as(dbl), None,
-                                      out_c.ctypes.data_as(dbl),
-                                      status.ctypes.data_as(ctypes.POINTER(ctypes.c_int)))
+    failed = lib.stage_evaluate_batch(
+        len(samples),
+        x.ctypes.data_as(dbl),
+        None,
+        out_c.ctypes.data_as(dbl),
+        status.ctypes.data_as(ctypes.POINTER(ctypes.c_int)),
+    )
     assert failed == 0 and not status.any()
     got = scene.evaluate({h: x[:, i] for i, h in enumerate(scene.INPUTS)})
     for i, p in enumerate(scene.POINTS):
         for k, key in enumerate(("rigid", "compliant", "deviation")):
-            c = out_c[:, 6 * i + 2 * k: 6 * i + 2 * k + 2].T
+            c = out_c[:, 6 * i + 2 * k : 6 * i + 2 * k + 2].T
             n = got["points"][p][key]
             assert np.abs(c - n).max() <= 1e-13 * np.abs(n).max(), (p, key)
     # a parameter given explicitly reaches every evaluator
     params = np.array([1.2e-3])
     one = np.zeros(6 * len(scene.POINTS))
-    assert lib.stage_evaluate(x[0].ctypes.data_as(dbl), params.ctypes.data_as(dbl),
-                              one.ctypes.data_as(dbl)) == 0
+    assert (
+        lib.stage_evaluate(
+            x[0].ctypes.data_as(dbl), params.ctypes.data_as(dbl), one.ctypes.data_as(dbl)
+        )
+        == 0
+    )
     want = scene.evaluate({h: x[0, i] for i, h in enumerate(scene.INPUTS)}, {"l": 1.2e-3})
     assert np.allclose(one[4:6], want["points"]["P8"]["deviation"], rtol=1e-13, atol=0)
     # bad argument: NaN everywhere, code 3
@@ -180,41 +210,81 @@ def _scene_error(text: str, mech: symkin.Mechanism | None = None) -> InputError:
 def test_the_equilibrium_reference_needs_stiffness():
     import mechanisms as M
 
-    err = _scene_error('format = 1\n[[point]]\nname = "C"\ntolerance = 1e-6\n'
-                       'reference = "equilibrium"\n',
-                       symkin.loads(M.without_stiffness(FOUR_BAR), "plain.toml"))
+    err = _scene_error(
+        'format = 1\n[[point]]\nname = "C"\ntolerance = 1e-6\nreference = "equilibrium"\n',
+        symkin.loads(M.without_stiffness(FOUR_BAR), "plain.toml"),
+    )
     assert "stiffness" in err.message and err.entry == "[[point]] #1 'C'"
 
 
-@pytest.mark.parametrize("text, message, entry", [
-    ('format = 1\n[[point]]\nname = "C"\ntolerance = 1e-6\nspeed = 1\n', "unknown key 'speed'",
-     "[[point]] #1"),
-    ('format = 1\n[[point]]\nname = "Q"\ntolerance = 1e-6\n', "no point 'Q'", "[[point]] #1 'Q'"),
-    ('format = 1\n[[point]]\nname = "C"\ntolerance = 1e-6\nrelative_tolerance = 0.1\n',
-     "exactly one", "[[point]] #1 'C'"),
-    ('format = 1\n[[point]]\nname = "C"\ntolerance = -1\n', "positive", "[[point]] #1 'C'"),
-    ('format = 1\n[[point]]\nname = "C"\ntolerance = 1e-6\nprecision = "float32"\n',
-     "numpy only", "[[point]] #1 'C'"),
-    ('format = 1\n[fix]\nA0 = 0.1\n[[point]]\nname = "C"\ntolerance = 1e-6\n',
-     "every input is fixed", "[fix]"),
-    ('format = 1\n[fix]\nB = 0.1\n[[point]]\nname = "C"\ntolerance = 1e-6\n',
-     "not an input", "[fix] 'B'"),
-    ('format = 1\n[ranges]\nA0 = [0.2, 0.1]\n[[point]]\nname = "C"\ntolerance = 1e-6\n',
-     "empty range", "[ranges] 'A0'"),
-    ('format = 1\n[ranges]\nA0 = [0, 4]\n[[point]]\nname = "C"\ntolerance = 1e-6\n',
-     "[-pi, pi]", "[ranges] 'A0'"),
-    ('format = 1\n[ranges]\nA0 = ["__import__(\'os\')", 1]\n[[point]]\nname = "C"\n'
-     'tolerance = 1e-6\n', "", "[ranges] 'A0'"),
-    ('format = 1\nname = "sys"\n[[point]]\nname = "C"\ntolerance = 1e-6\n', "keyword",
-     "name"),
-    ('format = 1\n', "no point", "[[point]]"),
-    ('format = 2\n[[point]]\nname = "C"\ntolerance = 1e-6\n', "format", "format"),
-    ('format = 1\n[[point]]\nname = "C"\nlink = "coupler"\nat = [0.1, 0.2]\ntolerance = 1e-6\n',
-     "already has a point", "[[point]] 'C'"),
-    ('format = 1\n[[point]]\nname = "N"\nlink = "nowhere"\nat = [0.1, 0.2]\ntolerance = 1e-6\n',
-     "unknown link", "[[point]] #1 'N'"),
-    ('format = 1\n[[point\n', "TOML", None),
-])
+@pytest.mark.parametrize(
+    "text, message, entry",
+    [
+        (
+            'format = 1\n[[point]]\nname = "C"\ntolerance = 1e-6\nspeed = 1\n',
+            "unknown key 'speed'",
+            "[[point]] #1",
+        ),
+        (
+            'format = 1\n[[point]]\nname = "Q"\ntolerance = 1e-6\n',
+            "no point 'Q'",
+            "[[point]] #1 'Q'",
+        ),
+        (
+            'format = 1\n[[point]]\nname = "C"\ntolerance = 1e-6\nrelative_tolerance = 0.1\n',
+            "exactly one",
+            "[[point]] #1 'C'",
+        ),
+        ('format = 1\n[[point]]\nname = "C"\ntolerance = -1\n', "positive", "[[point]] #1 'C'"),
+        (
+            'format = 1\n[[point]]\nname = "C"\ntolerance = 1e-6\nprecision = "float32"\n',
+            "numpy only",
+            "[[point]] #1 'C'",
+        ),
+        (
+            'format = 1\n[fix]\nA0 = 0.1\n[[point]]\nname = "C"\ntolerance = 1e-6\n',
+            "every input is fixed",
+            "[fix]",
+        ),
+        (
+            'format = 1\n[fix]\nB = 0.1\n[[point]]\nname = "C"\ntolerance = 1e-6\n',
+            "not an input",
+            "[fix] 'B'",
+        ),
+        (
+            'format = 1\n[ranges]\nA0 = [0.2, 0.1]\n[[point]]\nname = "C"\ntolerance = 1e-6\n',
+            "empty range",
+            "[ranges] 'A0'",
+        ),
+        (
+            'format = 1\n[ranges]\nA0 = [0, 4]\n[[point]]\nname = "C"\ntolerance = 1e-6\n',
+            "[-pi, pi]",
+            "[ranges] 'A0'",
+        ),
+        (
+            'format = 1\n[ranges]\nA0 = ["__import__(\'os\')", 1]\n[[point]]\nname = "C"\n'
+            "tolerance = 1e-6\n",
+            "",
+            "[ranges] 'A0'",
+        ),
+        ('format = 1\nname = "sys"\n[[point]]\nname = "C"\ntolerance = 1e-6\n', "keyword", "name"),
+        ("format = 1\n", "no point", "[[point]]"),
+        ('format = 2\n[[point]]\nname = "C"\ntolerance = 1e-6\n', "format", "format"),
+        (
+            'format = 1\n[[point]]\nname = "C"\nlink = "coupler"\nat = [0.1, 0.2]\n'
+            "tolerance = 1e-6\n",
+            "already has a point",
+            "[[point]] 'C'",
+        ),
+        (
+            'format = 1\n[[point]]\nname = "N"\nlink = "nowhere"\nat = [0.1, 0.2]\n'
+            "tolerance = 1e-6\n",
+            "unknown link",
+            "[[point]] #1 'N'",
+        ),
+        ("format = 1\n[[point\n", "TOML", None),
+    ],
+)
 def test_bad_scenes_name_the_entry_and_the_fix(text, message, entry):
     err = _scene_error(text)
     assert err.file == "bad.toml" and message in err.message and err.hint
@@ -226,8 +296,22 @@ def test_a_tolerance_no_variant_meets_exits_2_naming_the_point(tmp_path):
     scene = tmp_path / "tight.toml"
     scene.write_text('format = 1\n[[point]]\nname = "C"\ntolerance = 1e-40\n')
     out = tmp_path / "out"
-    run = subprocess.run([sys.executable, "-m", "symkin", "derive", str(FOUR_BAR), "--scene",
-                          str(scene), "-o", str(out), "--quiet"], capture_output=True, text=True)
+    run = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "symkin",
+            "derive",
+            str(FOUR_BAR),
+            "--scene",
+            str(scene),
+            "-o",
+            str(out),
+            "--quiet",
+        ],
+        capture_output=True,
+        text=True,
+    )
     assert run.returncode == 2, run.stderr
     assert "'C'" in run.stderr and "no variant meets" in run.stderr and "fix:" in run.stderr
     assert not out.exists() or not any(out.iterdir())
@@ -236,9 +320,23 @@ def test_a_tolerance_no_variant_meets_exits_2_naming_the_point(tmp_path):
 def test_scene_and_points_together_are_refused(tmp_path):
     scene = tmp_path / "s.toml"
     scene.write_text('format = 1\n[[point]]\nname = "C"\nrelative_tolerance = 0.1\n')
-    run = subprocess.run([sys.executable, "-m", "symkin", "derive", str(FOUR_BAR), "--scene",
-                          str(scene), "--points", "C", "-o", str(tmp_path / "o")],
-                         capture_output=True, text=True)
+    run = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "symkin",
+            "derive",
+            str(FOUR_BAR),
+            "--scene",
+            str(scene),
+            "--points",
+            "C",
+            "-o",
+            str(tmp_path / "o"),
+        ],
+        capture_output=True,
+        text=True,
+    )
     assert run.returncode == 2 and "--points" in run.stderr
 
 
@@ -277,9 +375,12 @@ def test_scene_output_is_deterministic_and_reports_compile(tmp_path):
         compile_tex(tmp_path / "a", tex)
     # the scene module reads its evaluators from its own folder
     module = _import(tmp_path / "a" / "four_bar_scene.py")
-    ref = Reference(symkin.loads(FOUR_BAR.read_text()
-                                 + '\n[[point]]\nname = "R"\nlink = "rocker"\n'
-                                   'at = [0.045, 0.1]\n', "fb.toml"))
+    ref = Reference(
+        symkin.loads(
+            FOUR_BAR.read_text() + '\n[[point]]\nname = "R"\nlink = "rocker"\nat = [0.045, 0.1]\n',
+            "fb.toml",
+        )
+    )
     for q in (-0.15, 0.05, 0.2):
         got = module.evaluate({"A0": q})
         want = ref.deviation({"A0": q})["points"]

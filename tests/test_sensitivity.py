@@ -15,27 +15,30 @@ import pickle
 import subprocess
 import sys
 
+import mechanisms as M
 import mpmath
 import numpy as np
 import pytest
 import sympy as sp
-
-import mechanisms as M
-import symkin
 from conftest import EXAMPLES, ROOT
 from evaluators import require_compiler
+
+import symkin
 from symkin.cli.commands import main
 from symkin.studies.evaluation import _mpmath_evaluator, evaluate
 
 FOUR_BAR = (EXAMPLES / "four_bar.toml").read_text()
-TINY = FOUR_BAR.replace("l = 1e-3 ", "l = 1e-10 ")     # plates 1e-9 of the link lengths
+TINY = FOUR_BAR.replace("l = 1e-3 ", "l = 1e-10 ")  # plates 1e-9 of the link lengths
 
 CASES = {
     "four_bar": (FOUR_BAR, {"A0": "0.2"}, ("paper", "first_order", "exact")),
     "param_four_bar": (M.PARAM_FOUR_BAR, {"A0": "-0.25"}, ("paper", "first_order", "exact")),
     "six_bar": ((EXAMPLES / "stephenson_six_bar.toml").read_text(), {"O_A": "0.2"}, ("exact",)),
-    "nine_bar": ((EXAMPLES / "nine_bar_platform.toml").read_text(),
-                 {"O": "0.05", "A": "0.03", "B": "-0.02", "K": "0.04"}, ("exact",)),
+    "nine_bar": (
+        (EXAMPLES / "nine_bar_platform.toml").read_text(),
+        {"O": "0.05", "A": "0.03", "B": "-0.02", "K": "0.04"},
+        ("exact",),
+    ),
     "triad": (M.TRIAD_SIX_BAR, {"O1": "0.1"}, ("exact",)),
     "serial_arm": (M.SERIAL_ARM, {"S": "0.3", "E": "-0.2"}, ("paper",)),
     "tiny_plates": (TINY, {"A0": "1e-3"}, ("first_order", "exact")),
@@ -47,7 +50,7 @@ def exact(x) -> str:
     x = mpmath.mpf(x)
     sign = "-" if x < 0 else ""
     man, exp = x.man_exp
-    return sign + (f"{man}/{2 ** -exp}" if exp < 0 else str(man * 2 ** exp))
+    return sign + (f"{man}/{2**-exp}" if exp < 0 else str(man * 2**exp))
 
 
 _ANALYSES: dict[str, symkin.kinematics.analysis.Analysis] = {}
@@ -64,8 +67,9 @@ def central(an, inputs: dict, level: str) -> dict:
     ev = _mpmath_evaluator(an)
     out = {}
     with mpmath.workdps(40):
-        variables = [("params", p.name, mpmath.mpf(sp.N(p.value, 45)))
-                     for p in an.mechanism.parameters]
+        variables = [
+            ("params", p.name, mpmath.mpf(sp.N(p.value, 45))) for p in an.mechanism.parameters
+        ]
         variables += [("inputs", k, mpmath.mpf(v)) for k, v in inputs.items()]
         for kind, name, v0 in variables:
             h = abs(v0) * mpmath.mpf("1e-12") if v0 else mpmath.mpf("1e-15")
@@ -77,8 +81,12 @@ def central(an, inputs: dict, level: str) -> dict:
                     values.append(ev.values({**inputs, name: exact(v0 + step)}, level, None, 40))
             plus, minus = values
             out[kind, name] = {
-                p: tuple(tuple((plus[p][k][c] - minus[p][k][c]) / (2 * h) for c in range(2))
-                         for k in (1, 0)) for p in plus}
+                p: tuple(
+                    tuple((plus[p][k][c] - minus[p][k][c]) / (2 * h) for c in range(2))
+                    for k in (1, 0)
+                )
+                for p in plus
+            }
     return out
 
 
@@ -86,7 +94,7 @@ def rel(got, want) -> float:
     """|got - want| / |want| for 2-vectors (absolute when want is 0)."""
     with mpmath.workdps(40):
         diff = mpmath.sqrt(sum((mpmath.mpf(g) - w) ** 2 for g, w in zip(got, want)))
-        size = mpmath.sqrt(sum(w ** 2 for w in want))
+        size = mpmath.sqrt(sum(w**2 for w in want))
         return float(diff / size) if size else float(diff)
 
 
@@ -99,8 +107,7 @@ def compiled(key: str):
     return _COMPILED[key]
 
 
-@pytest.mark.parametrize("key,level", [(k, lv) for k, (_, _, lvs) in CASES.items()
-                                       for lv in lvs])
+@pytest.mark.parametrize("key,level", [(k, lv) for k, (_, _, lvs) in CASES.items() for lv in lvs])
 def test_every_backend_against_central_differences(key, level):
     an = analysis(key)
     inputs = CASES[key][1]
@@ -123,8 +130,10 @@ def test_every_backend_against_central_differences(key, level):
             checks = {
                 "mpmath": ((table[point][name], dev_ref), (rtable[point][name], rig_ref)),
                 "c": ((c_dev[0, i, v], dev_ref), (c_rig[0, i, v], rig_ref)),
-                "numpy": ((py["deviation"][point][kind][name], dev_ref),
-                          (py["rigid"][point][kind][name], rig_ref)),
+                "numpy": (
+                    (py["deviation"][point][kind][name], dev_ref),
+                    (py["rigid"][point][kind][name], rig_ref),
+                ),
             }
             for backend, pairs in checks.items():
                 for got, ref in pairs:
@@ -149,15 +158,25 @@ def test_a_parameter_carries_the_defaults_that_read_it():
         partial = [(plus[c] - minus[c]) / (2 * h) for c in range(2)]
         combined = [partial[c] + 2 * mpmath.mpf(sens["L2"][c]) for c in range(2)]
     assert rel(sens["l"], combined) < 1e-12
-    assert rel(sens["l"], partial) > 1e-3          # the dependence matters here
+    assert rel(sens["l"], partial) > 1e-3  # the dependence matters here
 
 
 def test_eval_sensitivity_json_is_the_same_in_every_backend(capsys):
     require_compiler()
     docs = {}
     for backend in ("sympy", "numpy", "c"):
-        code = main(["eval", str(EXAMPLES / "four_bar.toml"), "--input", "A0=0.2",
-                                "--sensitivity", "--json", "--backend", backend])
+        code = main(
+            [
+                "eval",
+                str(EXAMPLES / "four_bar.toml"),
+                "--input",
+                "A0=0.2",
+                "--sensitivity",
+                "--json",
+                "--backend",
+                backend,
+            ]
+        )
         out = capsys.readouterr().out
         assert code == 0
         import json
@@ -170,13 +189,13 @@ def test_eval_sensitivity_json_is_the_same_in_every_backend(capsys):
         for key in keys:
             for point, row in doc[key].items():
                 for name, pair in row.items():
-                    assert rel(pair, [mpmath.mpf(v) for v in docs["sympy"][key][point][name]]) \
-                        < 1e-12, (backend, key, name)
+                    assert (
+                        rel(pair, [mpmath.mpf(v) for v in docs["sympy"][key][point][name]]) < 1e-12
+                    ), (backend, key, name)
 
 
 def test_text_output_ranks_the_parameters(capsys):
-    code = main(["eval", str(EXAMPLES / "four_bar.toml"), "--input", "A0=0.2",
-                            "--sensitivity"])
+    code = main(["eval", str(EXAMPLES / "four_bar.toml"), "--input", "A0=0.2", "--sensitivity"])
     out = capsys.readouterr().out
     assert code == 0
     assert "sensitivity of point C" in out and "d|dR|/dv" in out
@@ -188,7 +207,7 @@ def test_c_batch_entry_points():
     require_compiler()
     ev = compiled("param_four_bar")
     lib = ev.library
-    x = np.array([[0.2], [-0.1], [4.0], [0.0]])                # 4.0 > pi: status 3
+    x = np.array([[0.2], [-0.1], [4.0], [0.0]])  # 4.0 > pi: status 3
     status, out, angles = lib.evaluate_rows(x, None, 2, angles=True)
     for i, row in enumerate(x):
         s, o, a = lib.evaluate(row, None, 2)
@@ -197,10 +216,11 @@ def test_c_batch_entry_points():
         assert np.array_equal(np.array(a), angles[i], equal_nan=True)
     assert list(status) == [0, 0, 3, 0]
     assert np.isnan(out[2]).all() and np.isfinite(out[[0, 1, 3]]).all()
-    failed = lib.batch(len(x), x.ctypes.data_as(lib_ptr()), None, 2,
-                       out.ctypes.data_as(lib_ptr()), None, None)
+    failed = lib.batch(
+        len(x), x.ctypes.data_as(lib_ptr()), None, 2, out.ctypes.data_as(lib_ptr()), None, None
+    )
     assert failed == 1
-    long_crank = ev.parameters({"ay": 0.08})         # a crank too long to turn beyond ~0.5
+    long_crank = ev.parameters({"ay": 0.08})  # a crank too long to turn beyond ~0.5
     status_far, out_far, _ = lib.evaluate_rows(np.array([[0.2], [1.5]]), long_crank, 2)
     assert list(status_far) == [0, 1] and np.isnan(out_far[1]).all()
     s_status, values, dev, _ = lib.sensitivity_rows(x, None, 2)
@@ -208,7 +228,7 @@ def test_c_batch_entry_points():
     assert np.array_equal(values, out, equal_nan=True)
     import ctypes
 
-    fn = getattr(lib.lib, "param_four_bar_sensitivity")
+    fn = lib.lib.param_four_bar_sensitivity
     fn.argtypes = [lib_ptr(), lib_ptr(), ctypes.c_int, lib_ptr()]
     n_p = len(ev.sources.params)
     small = np.empty(2 * n_p)
@@ -233,14 +253,15 @@ def test_compile_leaves_no_files_and_pickles_as_its_texts(tmp_path):
     tmp.mkdir()
     script = f"""
 import pickle, sys, numpy as np, symkin
-ev = symkin.compile({str(EXAMPLES / 'four_bar.toml')!r})
+ev = symkin.compile({str(EXAMPLES / "four_bar.toml")!r})
 res = ev.evaluate({{"A0": np.linspace(-0.2, 0.2, 7)}})
 sens = ev.sensitivity({{"A0": 0.2}})
 sys.stdout.buffer.write(pickle.dumps((ev, res["points"]["C"]["deviation"], sens["C"]["l"])))
 """
     env = {**os.environ, "SYMKIN_CACHE": str(cache), "TMPDIR": str(tmp)}
-    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, env=env,
-                          cwd=ROOT, check=True)
+    proc = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, env=env, cwd=ROOT, check=True
+    )
     assert list(cache.iterdir()) == [] and list(tmp.iterdir()) == []
     ev, deviation, dl = pickle.loads(proc.stdout)
     again = ev.evaluate({"A0": np.linspace(-0.2, 0.2, 7)})["points"]["C"]["deviation"]
@@ -258,10 +279,11 @@ def test_report_ranks_the_parameters():
 
     mech = symkin.loads(M.PARAM_FOUR_BAR, "param_four_bar.toml")
     tex = generate(mech, emit=["latex"])["param_four_bar.tex"].decode()
-    table = tex[tex.index(r"\label{symkin:param-four-bar:sensitivity}"):]
-    table = table[:table.index(r"\bottomrule")]
-    rows = re.findall(r"^C & (\S+) & .* & \$([+-]\d\.\d{3})\$ & \$([+-]\d\.\d{3})\$ \\\\$",
-                      table, re.MULTILINE)
+    table = tex[tex.index(r"\label{symkin:param-four-bar:sensitivity}") :]
+    table = table[: table.index(r"\bottomrule")]
+    rows = re.findall(
+        r"^C & (\S+) & .* & \$([+-]\d\.\d{3})\$ & \$([+-]\d\.\d{3})\$ \\\\$", table, re.MULTILINE
+    )
     assert sorted(r[0] for r in rows) == sorted(p.name for p in mech.parameters)
     relative = [abs(float(r[1])) for r in rows]
     assert relative == sorted(relative, reverse=True)

@@ -5,18 +5,18 @@ from __future__ import annotations
 
 import dataclasses
 
+import mechanisms as M
 import numpy as np
 import pytest
-
-import mechanisms as M
-import symkin
 from evaluators import require_compiler
-from symkin.studies import evaluation
+
+import symkin
 from symkin.codegen import toolchain
 from symkin.codegen.backends.c import backend as c_backend
 from symkin.codegen.backends.numpy import backend as numpy_backend
 from symkin.codegen.plan import plan
 from symkin.core.settings import SOLVER
+from symkin.studies import evaluation
 
 
 def test_continuation_steps():
@@ -30,7 +30,7 @@ def test_tolerances_by_arithmetic():
     assert SOLVER.tolerances("float64") == SOLVER.float64
     assert SOLVER.tolerances("float32").converged > SOLVER.float64.converged
     assert SOLVER.mpmath(40).converged < SOLVER.float64.stalled
-    assert SOLVER.mpmath(40).polish == 0          # the closed form needs no polish at 40 digits
+    assert SOLVER.mpmath(40).polish == 0  # the closed form needs no polish at 40 digits
 
 
 @pytest.fixture(scope="module")
@@ -43,11 +43,13 @@ def triad():
 
 def evaluators(an, settings):
     p = dataclasses.replace(plan(an), solver=settings)
-    module = toolchain.import_numpy_module(numpy_backend.emit(p, "solver"),
-                                         f"triad_{settings.rigid_iterations}")
+    module = toolchain.import_numpy_module(
+        numpy_backend.emit(p, "solver"), f"triad_{settings.rigid_iterations}"
+    )
     header, code = c_backend.emit(p, "solver")
-    lib = toolchain.Library(toolchain.build("triad_six_bar", header, code), "triad_six_bar", 1, 1,
-                          1, len(p.hinges))
+    lib = toolchain.Library(
+        toolchain.build("triad_six_bar", header, code), "triad_six_bar", 1, 1, 1, len(p.hinges)
+    )
     return module, lib
 
 

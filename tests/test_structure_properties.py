@@ -29,8 +29,8 @@ class Spec:
 
     text: str
     ground: str
-    links: tuple[str, ...]                          # file order
-    hinges: tuple[tuple[str, str, str], ...]        # (name, P, M) in file order
+    links: tuple[str, ...]  # file order
+    hinges: tuple[tuple[str, str, str], ...]  # (name, P, M) in file order
     n: int
     m: int
 
@@ -65,11 +65,13 @@ class _RandomDraws:
 
 def make_spec(d) -> Spec:
     """A random connected, multigraph-free mechanism with mobility 3n - 2m >= 1, scrambled."""
-    n = d.integer(1, 8)                                     # n + 1 = 2..9 links
+    n = d.integer(1, 8)  # n + 1 = 2..9 links
     vertices = list(range(n + 1))
-    edges = [(d.integer(0, k - 1), k) for k in range(1, n + 1)]    # a random spanning tree
+    edges = [(d.integer(0, k - 1), k) for k in range(1, n + 1)]  # a random spanning tree
     present = {frozenset(e) for e in edges}
-    free = [(i, j) for i in vertices for j in vertices if i < j and frozenset((i, j)) not in present]
+    free = [
+        (i, j) for i in vertices for j in vertices if i < j and frozenset((i, j)) not in present
+    ]
     # m = n + k hinges; mobility 3n - 2m = n - 2k >= 1; at most 4 chords
     k = d.integer(0, min(4, (n - 1) // 2, len(free)))
     edges += d.permutation(free)[:k]
@@ -83,7 +85,7 @@ def make_spec(d) -> Spec:
     ground = link_names[d.integer(0, n)]
     dof = 3 * n - 2 * m
     inputs = set(d.permutation(list(range(m)))[:dof])
-    xs = d.permutation(list(range(m)))                      # distinct hinge positions
+    xs = d.permutation(list(range(m)))  # distinct hinge positions
     ys = d.permutation(list(range(m)))
 
     hinges = []
@@ -93,18 +95,36 @@ def make_spec(d) -> Spec:
             p, q = q, p
         hinges.append((hinge_names[e], link_names[p], link_names[q], e))
 
-    lines = ["format = 1", 'name = "random_mechanism"', f'ground = "{ground}"', "",
-             "[defaults]", 'model = "circular_arc"', 'length = "1e-3"', ""]
+    lines = [
+        "format = 1",
+        'name = "random_mechanism"',
+        f'ground = "{ground}"',
+        "",
+        "[defaults]",
+        'model = "circular_arc"',
+        'length = "1e-3"',
+        "",
+    ]
     for v in link_order:
         lines += ["[[link]]", f'name = "{link_names[v]}"']
     for name, p, q, e in hinges:
-        lines += ["", "[[hinge]]", f'name = "{name}"', f'links = ["{p}", "{q}"]',
-                  f"at = [{0.01 * xs[e] + 0.001:.4f}, {0.007 * ys[e] - 0.02:.4f}]"]
+        lines += [
+            "",
+            "[[hinge]]",
+            f'name = "{name}"',
+            f'links = ["{p}", "{q}"]',
+            f"at = [{0.01 * xs[e] + 0.001:.4f}, {0.007 * ys[e] - 0.02:.4f}]",
+        ]
         if e in inputs:
             lines.append("input = true")
-    return Spec(text="\n".join(lines) + "\n", ground=ground,
-                links=tuple(link_names[v] for v in link_order),
-                hinges=tuple((name, p, q) for name, p, q, _ in hinges), n=n, m=m)
+    return Spec(
+        text="\n".join(lines) + "\n",
+        ground=ground,
+        links=tuple(link_names[v] for v in link_order),
+        hinges=tuple((name, p, q) for name, p, q, _ in hinges),
+        n=n,
+        m=m,
+    )
 
 
 @st.composite
@@ -113,8 +133,19 @@ def specs(draw) -> Spec:
 
 
 def snapshot(s: symkin.Structure) -> tuple:
-    return (s.links, s.hinges, s.i_plus, s.i_minus, s.parent, s.basic_chain, s.relabeled,
-            s.incidence.tolist(), s.incidence_plus.tolist(), s.loops.tolist(), s.paths.tolist())
+    return (
+        s.links,
+        s.hinges,
+        s.i_plus,
+        s.i_minus,
+        s.parent,
+        s.basic_chain,
+        s.relabeled,
+        s.incidence.tolist(),
+        s.incidence_plus.tolist(),
+        s.loops.tolist(),
+        s.paths.tolist(),
+    )
 
 
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -174,15 +205,22 @@ def test_labeling_does_not_depend_on_the_hash_seed(tmp_path: Path):
     # A scrambled example with many links, hinges and chords, so that any iteration over a set or
     # a dict keyed by names would have many chances to show.
     rng = random.Random(20080101)
-    spec = next(sp for sp in (make_spec(_RandomDraws(rng)) for _ in range(1000))
-                if sp.n >= 7 and sp.m - sp.n >= 3)
+    spec = next(
+        sp
+        for sp in (make_spec(_RandomDraws(rng)) for _ in range(1000))
+        if sp.n >= 7 and sp.m - sp.n >= 3
+    )
     path = tmp_path / "scrambled.toml"
     path.write_text(spec.text)
     outputs = []
     for seed in ("0", "1", "4242", "987654321"):
         env = {**os.environ, "PYTHONHASHSEED": seed}
-        result = subprocess.run([sys.executable, "-m", "symkin", "matrices", "--json", str(path)],
-                                capture_output=True, env=env, timeout=120)
+        result = subprocess.run(
+            [sys.executable, "-m", "symkin", "matrices", "--json", str(path)],
+            capture_output=True,
+            env=env,
+            timeout=120,
+        )
         assert result.returncode == 0, result.stderr.decode()
         outputs.append(result.stdout)
     assert all(out == outputs[0] for out in outputs[1:])

@@ -12,17 +12,27 @@ import math
 import tempfile
 from pathlib import Path
 
+import mechanisms as M
 import numpy as np
 import pytest
-
-import mechanisms as M
-import symkin
 from conftest import EXAMPLES
 from reference_solver import Reference
+
+import symkin
 from symkin.cli.commands import main
 from symkin.codegen.toolchain import import_numpy_module
-from symkin.studies.tradeoff import Row, Tradeoff, Variant, choose, figure, pareto, plot, run, sample
 from symkin.kinematics.variants import analysis_for
+from symkin.studies.tradeoff import (
+    Row,
+    Tradeoff,
+    Variant,
+    choose,
+    figure,
+    pareto,
+    plot,
+    run,
+    sample,
+)
 
 # The kinematic trade: the example without its plates' stiffness, measured against `exact`.
 FOUR_BAR = Path(tempfile.mkdtemp(prefix="symkin-tradeoff-")) / "four_bar.toml"
@@ -35,9 +45,26 @@ def table(tmp_path_factory):
     import subprocess
     import sys
 
-    proc = subprocess.run([sys.executable, "-m", "symkin", "tradeoff", str(FOUR_BAR), "--range",
-                           "A0=-0.15:0.25", "--samples", "9", "--json", "--plot", str(plot),
-                           "--quiet"], capture_output=True, text=True, timeout=600)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "symkin",
+            "tradeoff",
+            str(FOUR_BAR),
+            "--range",
+            "A0=-0.15:0.25",
+            "--samples",
+            "9",
+            "--json",
+            "--plot",
+            str(plot),
+            "--quiet",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert proc.returncode == 0, proc.stderr
     assert plot.stat().st_size > 1000
     return json.loads(proc.stdout)
@@ -45,8 +72,15 @@ def table(tmp_path_factory):
 
 def test_json_lists_every_variant_with_errors_and_times(table):
     names = {v["name"] for v in table["variants"]}
-    assert {"exact", "first_order", "paper", "exact/taylor4", "exact/prbm",
-            "paper/small_deflection", "exact/f32"} <= names
+    assert {
+        "exact",
+        "first_order",
+        "paper",
+        "exact/taylor4",
+        "exact/prbm",
+        "paper/small_deflection",
+        "exact/f32",
+    } <= names
     for v in table["variants"]:
         assert v["time_numpy"] > 0
         assert (v["time_c"] is None) == (v["precision"] == "float32")
@@ -58,19 +92,23 @@ def test_claimed_errors_match_an_independent_check(table):
     ref_solver = Reference(mech)
     samples = table["inputs"]
     assert samples == sample({"A0": tuple(table["ranges"]["A0"])}, 9)
-    faithful = [ref_solver.deviation({"A0": repr(s["A0"])})["points"]["C"]["deviation"]
-                for s in samples]
+    faithful = [
+        ref_solver.deviation({"A0": repr(s["A0"])})["points"]["C"]["deviation"] for s in samples
+    ]
     for v in table["variants"]:
         variant = Variant(v["level"], v["model"], v["precision"])
         if variant.precision == "float32":
-            continue                          # rounding noise, checked in the next test
+            continue  # rounding noise, checked in the next test
         an = analysis_for(mech, variant)
         worst = 0.0
         # at A0 = 0 (the as-fabricated pose) the deviation is zero: measured against the largest
         scale = max(math.hypot(float(w[0]), float(w[1])) for w in faithful)
         for s, want in zip(samples, faithful):
-            got = symkin.evaluate(an, {"A0": repr(s["A0"])}, variant.level,
-                                  dps=30).points["C"].deviation
+            got = (
+                symkin.evaluate(an, {"A0": repr(s["A0"])}, variant.level, dps=30)
+                .points["C"]
+                .deviation
+            )
             size = math.hypot(float(want[0]), float(want[1])) if s["A0"] else scale
             worst = max(worst, math.hypot(got[0] - float(want[0]), got[1] - float(want[1])) / size)
         claimed = v["worst_error"]
@@ -84,8 +122,7 @@ def test_every_sample_is_measured(table):
 def test_a_sample_at_zero_deviation_is_measured_not_dropped():
     """-0.2:0.2 with 5 samples holds A0 = 0 exactly, where every deviation vanishes."""
     mech = symkin.load(FOUR_BAR)
-    table = run(mech, {"A0": (-0.2, 0.2)}, n=5, variants=[Variant("first_order")],
-                with_c=False)
+    table = run(mech, {"A0": (-0.2, 0.2)}, n=5, variants=[Variant("first_order")], with_c=False)
     assert table.samples == 5 and len(table.inputs) == 5 and table.zero == 1
     assert {s["A0"] for s in table.inputs} >= {0.0}
     assert 0 < table.rows[0].worst < 1e-2
@@ -94,7 +131,7 @@ def test_a_sample_at_zero_deviation_is_measured_not_dropped():
 def test_float32_error_is_reported_and_bounded(table):
     f32 = {v["name"]: v["worst_error"] for v in table["variants"] if v["precision"] == "float32"}
     f64 = {v["name"]: v["worst_error"] for v in table["variants"]}
-    assert 1e-9 < f32["exact/f32"] < 1e-4             # single precision, documented in README
+    assert 1e-9 < f32["exact/f32"] < 1e-4  # single precision, documented in README
     assert f32["first_order/f32"] == pytest.approx(f64["first_order"], rel=1e-2)
 
 
@@ -103,12 +140,16 @@ def test_pareto_front_of_each_backend_is_non_dominated(table, backend):
     rows = [v for v in table["variants"] if v[f"time_{backend}"] is not None]
     time = f"time_{backend}"
     for v in rows:
-        dominated = any(o is not v and o[time] <= v[time] and o["worst_error"] <= v["worst_error"]
-                        and (o[time] < v[time] or o["worst_error"] < v["worst_error"])
-                        for o in rows)
+        dominated = any(
+            o is not v
+            and o[time] <= v[time]
+            and o["worst_error"] <= v["worst_error"]
+            and (o[time] < v[time] or o["worst_error"] < v["worst_error"])
+            for o in rows
+        )
         assert v[f"pareto_{backend}"] == (not dominated), v["name"]
     assert any(v[f"pareto_{backend}"] for v in rows)
-    if backend == "c":          # float32 variants are timed in numpy only
+    if backend == "c":  # float32 variants are timed in numpy only
         assert not any(v["pareto_c"] for v in table["variants"] if v["precision"] == "float32")
 
 
@@ -118,10 +159,15 @@ def crowded_table() -> Tradeoff:
 
     rows = []
     for k, v in enumerate(default_variants()):
-        rows.append(Row(v, {"C": 10.0 ** (-2 - (k % 7)) * (1 + 0.01 * k)},
-                        time_numpy=(2000 + 13 * k) * 1e-9,
-                        time_c=None if v.precision == "float32" else (400 + 7 * k) * 1e-9,
-                        ops=100 + k))
+        rows.append(
+            Row(
+                v,
+                {"C": 10.0 ** (-2 - (k % 7)) * (1 + 0.01 * k)},
+                time_numpy=(2000 + 13 * k) * 1e-9,
+                time_c=None if v.precision == "float32" else (400 + 7 * k) * 1e-9,
+                ops=100 + k,
+            )
+        )
     return Tradeoff({"A0": (-0.2, 0.2)}, 25, 0, 1, tuple(pareto(rows)), (), "crowded_bar")
 
 
@@ -140,9 +186,9 @@ def test_plot_lists_every_variant_and_no_labels_overlap(tmp_path):
     (legend,) = fig.legends
     assert len(legend.get_texts()) == 4
     boxes = [a.get_window_extent(renderer) for a in ax.texts]
-    assert len(boxes) >= len(table.rows) // 2             # most markers carry their number
+    assert len(boxes) >= len(table.rows) // 2  # most markers carry their number
     for i, a in enumerate(boxes):
-        assert not any(a.overlaps(b) for b in boxes[i + 1:])
+        assert not any(a.overlaps(b) for b in boxes[i + 1 :])
     plt.close(fig)
     path = tmp_path / "t.png"
     plot(table, str(path))
@@ -151,8 +197,21 @@ def test_plot_lists_every_variant_and_no_labels_overlap(tmp_path):
 
 def test_tolerance_choice_meets_the_tolerance_on_fresh_inputs(tmp_path, capsys):
     tolerance = 1e-4
-    code = main(["derive", str(FOUR_BAR), "-o", str(tmp_path), "--emit", "numpy", "--quiet",
-                 "--tolerance", str(tolerance), "--range", "A0=-0.15:0.25"])
+    code = main(
+        [
+            "derive",
+            str(FOUR_BAR),
+            "-o",
+            str(tmp_path),
+            "--emit",
+            "numpy",
+            "--quiet",
+            "--tolerance",
+            str(tolerance),
+            "--range",
+            "A0=-0.15:0.25",
+        ]
+    )
     assert code == 0, capsys.readouterr().err
     text = (tmp_path / "four_bar.py").read_text()
     assert "Tolerance 0.0001 over A0 in [-0.15, 0.25]: variant" in text
@@ -166,7 +225,8 @@ def test_tolerance_choice_meets_the_tolerance_on_fresh_inputs(tmp_path, capsys):
         want = ref_solver.deviation({"A0": repr(float(a))})["points"]["C"]["deviation"]
         got = res["points"]["C"]["deviation"][:, j]
         err = math.hypot(got[0] - float(want[0]), got[1] - float(want[1])) / math.hypot(
-            float(want[0]), float(want[1]))
+            float(want[0]), float(want[1])
+        )
         assert err <= tolerance
 
 
@@ -183,22 +243,35 @@ def test_with_stiffness_the_trade_is_measured_against_the_physics():
     elastica reference (tests/reference_physics.py) within 10 %; the kinematic `exact` level
     is far from the physics where `loaded` is close."""
     from reference_physics import Equilibrium
+
     from symkin.kinematics.variants import default_variants
 
     assert {"loaded", "loaded/f32"} <= {v.name for v in default_variants(stiffness=True)}
     mech = symkin.load(EXAMPLES / "four_bar.toml")
-    table = run(mech, {"A0": (0.05, 0.25)}, n=3,
-                variants=[Variant("exact"), Variant("loaded")], with_c=False)
+    table = run(
+        mech,
+        {"A0": (0.05, 0.25)},
+        n=3,
+        variants=[Variant("exact"), Variant("loaded")],
+        with_c=False,
+    )
     assert table.reference == "equilibrium" and table.as_json()["reference_level"] == "equilibrium"
-    ref = Equilibrium(mech, (210e9 / (1 - 0.3 ** 2), 5e-3, "l/10"))
-    want = [[float(v) for v in ref.solve({"A0": repr(s["A0"])})["points"]["C"]["deviation"]]
-            for s in table.inputs]
+    ref = Equilibrium(mech, (210e9 / (1 - 0.3**2), 5e-3, "l/10"))
+    want = [
+        [float(v) for v in ref.solve({"A0": repr(s["A0"])})["points"]["C"]["deviation"]]
+        for s in table.inputs
+    ]
     claimed = {r.variant.name: r.worst for r in table.rows}
     for name, variant in (("exact", Variant("exact")), ("loaded", Variant("loaded"))):
         an = analysis_for(mech, variant)
-        worst = max(math.hypot(g[0] - w[0], g[1] - w[1]) / math.hypot(*w)
-                    for s, w in zip(table.inputs, want)
-                    for g in [symkin.evaluate(an, {"A0": repr(s["A0"])}, variant.level,
-                                              dps=30).points["C"].deviation])
+        worst = max(
+            math.hypot(g[0] - w[0], g[1] - w[1]) / math.hypot(*w)
+            for s, w in zip(table.inputs, want)
+            for g in [
+                symkin.evaluate(an, {"A0": repr(s["A0"])}, variant.level, dps=30)
+                .points["C"]
+                .deviation
+            ]
+        )
         assert abs(claimed[name] - worst) <= 0.1 * worst, (name, claimed[name], worst)
     assert claimed["loaded"] < 1e-2 < claimed["exact"]

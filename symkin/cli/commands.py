@@ -15,8 +15,8 @@ from .. import __version__, load
 from ..core import levels
 from ..core.errors import InputError, SymkinError
 from ..core.files import output_dir, output_file
-from .output import check_text, matrices_json, matrices_text
 from ..graph.structure import build
+from .output import check_text, matrices_json, matrices_text
 
 #: File types `tradeoff --plot` can write (matplotlib picks the format from the suffix).
 PLOT_SUFFIXES = (".png", ".pdf", ".svg")
@@ -44,8 +44,9 @@ def _pairs(items: Sequence[str] | None, option: str) -> dict[str, str]:
     for item in items or ():
         name, sep, value = item.partition("=")
         if not sep or not name.strip() or not value.strip():
-            raise InputError(f"'{item}' is not NAME=VALUE", entry=option,
-                             hint=f"write e.g. {option} A0=0.2")
+            raise InputError(
+                f"'{item}' is not NAME=VALUE", entry=option, hint=f"write e.g. {option} A0=0.2"
+            )
         if name.strip() in out:
             raise InputError(f"'{name.strip()}' given twice", entry=option)
         out[name.strip()] = value.strip()
@@ -58,15 +59,20 @@ def _eval(args: argparse.Namespace) -> str:
     from .output import evaluation_json, evaluation_text
 
     analysis = Analysis(build(load(args.file)))
-    result = evaluate(analysis, _pairs(args.input, "--input"), args.level,
-                      _pairs(args.param, "--param"), args.backend,
-                      sensitivity=args.sensitivity)
+    result = evaluate(
+        analysis,
+        _pairs(args.input, "--input"),
+        args.level,
+        _pairs(args.param, "--param"),
+        args.backend,
+        sensitivity=args.sensitivity,
+    )
     return evaluation_json(result) if args.json else evaluation_text(result)
 
 
 def _derive(args: argparse.Namespace) -> str:
-    from ..studies.derive import EMITTERS, derive, parse_length, parse_list
     from ..core.levels import GENERATED
+    from ..studies.derive import EMITTERS, derive, parse_length, parse_list
 
     emit = parse_list(args.emit, EMITTERS, "--emit") or list(EMITTERS)
     levels = parse_list(args.levels, GENERATED, "--levels")
@@ -83,20 +89,41 @@ def _derive(args: argparse.Namespace) -> str:
     if args.scene is not None:
         from ..studies.scene import derive as derive_scene
 
-        given = [option for option, value in (("--points", points), ("--levels", levels),
-                                              ("--tolerance", args.tolerance),
-                                              ("--range", args.range), ("--fix", args.fix))
-                 if value]
+        given = [
+            option
+            for option, value in (
+                ("--points", points),
+                ("--levels", levels),
+                ("--tolerance", args.tolerance),
+                ("--range", args.range),
+                ("--fix", args.fix),
+            )
+            if value
+        ]
         if given:
-            raise InputError(f"{given[0]} and --scene together: the scene file states the points, "
-                             "their tolerances and ranges, and the fixed inputs",
-                             entry=given[0], hint=f"drop {given[0]}, or put it in the scene "
-                             "file (docs/scene.md)")
-        written = derive_scene(args.file, args.scene, args.output, emit, progress, column,
-                               args.appendix)
+            raise InputError(
+                f"{given[0]} and --scene together: the scene file states the points, "
+                "their tolerances and ranges, and the fixed inputs",
+                entry=given[0],
+                hint=f"drop {given[0]}, or put it in the scene file (docs/scene.md)",
+            )
+        written = derive_scene(
+            args.file, args.scene, args.output, emit, progress, column, args.appendix
+        )
     else:
-        written = derive(args.file, args.output, emit, points, levels, args.appendix, progress,
-                         args.tolerance, args.range, column, _pairs(args.fix, "--fix"))
+        written = derive(
+            args.file,
+            args.output,
+            emit,
+            points,
+            levels,
+            args.appendix,
+            progress,
+            args.tolerance,
+            args.range,
+            column,
+            _pairs(args.fix, "--fix"),
+        )
     return "".join(f"{path}\n" for path in written)
 
 
@@ -121,8 +148,11 @@ def _tradeoff(args: argparse.Namespace) -> str:
         try:
             tradeoff.plot(table, args.plot)
         except OSError as exc:
-            raise InputError(f"cannot write '{args.plot}' ({exc.strerror or exc})",
-                             entry="--plot", hint="choose a path you can write to") from None
+            raise InputError(
+                f"cannot write '{args.plot}' ({exc.strerror or exc})",
+                entry="--plot",
+                hint="choose a path you can write to",
+            ) from None
     return json.dumps(table.as_json(), indent=2) + "\n" if args.json else tradeoff.text(table)
 
 
@@ -132,8 +162,11 @@ def _evaluator(args: argparse.Namespace, mech):
 
     level = levels.get(args.level)
     if not level.generated:
-        raise InputError(f"level '{level.name}' has no generated evaluator", entry="--level",
-                         hint="choose one of " + ", ".join(levels.GENERATED))
+        raise InputError(
+            f"level '{level.name}' has no generated evaluator",
+            entry="--level",
+            hint="choose one of " + ", ".join(levels.GENERATED),
+        )
     if args.backend == "c":
         from ..codegen.toolchain import compiler
 
@@ -164,11 +197,13 @@ def _sweep(args: argparse.Namespace) -> str:
     vary = variation.parse_vary(args.vary, mech, nominal)
     grid = variation.parse_grid(args.input, mech, points=variation.DEFAULT_POINTS)
     if args.samples < 2:
-        raise InputError(f"--samples must be at least 2, got {args.samples}", entry="--samples",
-                         hint="e.g. --samples 10000")
+        raise InputError(
+            f"--samples must be at least 2, got {args.samples}",
+            entry="--samples",
+            hint="e.g. --samples 10000",
+        )
     if args.seed < 0:
-        raise InputError(f"--seed must be a non-negative integer, got {args.seed}",
-                         entry="--seed")
+        raise InputError(f"--seed must be a non-negative integer, got {args.seed}", entry="--seed")
     if args.chunks is not None and args.chunks < 1:
         raise InputError(f"--chunks must be positive, got {args.chunks}", entry="--chunks")
     if args.plot:
@@ -183,14 +218,28 @@ def _sweep(args: argparse.Namespace) -> str:
             client.close()
         raise
     progress = sys.stderr.isatty() and not args.json
-    result = sweep.run(evaluator, mech, vary, grid, args.samples, args.seed, scheduler,
-                       args.level, args.chunks, progress, client)
+    result = sweep.run(
+        evaluator,
+        mech,
+        vary,
+        grid,
+        args.samples,
+        args.seed,
+        scheduler,
+        args.level,
+        args.chunks,
+        progress,
+        client,
+    )
     if args.plot:
         try:
             sweep.plot(result, args.plot)
         except OSError as exc:
-            raise InputError(f"cannot write '{args.plot}' ({exc.strerror or exc})",
-                             entry="--plot", hint="choose a path you can write to") from None
+            raise InputError(
+                f"cannot write '{args.plot}' ({exc.strerror or exc})",
+                entry="--plot",
+                hint="choose a path you can write to",
+            ) from None
     return json.dumps(result.as_json(), indent=2) + "\n" if args.json else sweep.text(result)
 
 
@@ -198,13 +247,15 @@ def parser() -> argparse.ArgumentParser:
     """The argument parser; argparse itself exits with code 2 on a bad option."""
     top = argparse.ArgumentParser(
         prog="symkin",
-        description="Closed-form accuracy of planar compliant mechanisms (Hasan & Lilov, 2008).")
+        description="Closed-form accuracy of planar compliant mechanisms (Hasan & Lilov, 2008).",
+    )
     top.add_argument("--version", action="version", version=f"symkin {__version__}")
     top.add_argument("--debug", action="store_true", help="show a traceback on errors")
     # --debug after the command too; SUPPRESS keeps a top-level --debug from being reset.
     debug = argparse.ArgumentParser(add_help=False)
-    debug.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
-                       help="show a traceback on errors")
+    debug.add_argument(
+        "--debug", action="store_true", default=argparse.SUPPRESS, help="show a traceback on errors"
+    )
     sub = top.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     def command(name: str, help: str) -> argparse.ArgumentParser:
@@ -219,15 +270,26 @@ def parser() -> argparse.ArgumentParser:
     matrices.set_defaults(run=_matrices)
     ev = command("eval", "deviation of the points in one configuration")
     ev.add_argument("file", metavar="FILE")
-    ev.add_argument("--input", action="append", metavar="H=V",
-                    help="input hinge angle in radians (an expression such as 10*deg is fine)")
+    ev.add_argument(
+        "--input",
+        action="append",
+        metavar="H=V",
+        help="input hinge angle in radians (an expression such as 10*deg is fine)",
+    )
     ev.add_argument("--param", action="append", metavar="K=V", help="override a parameter")
-    ev.add_argument("--level", choices=levels.NAMES, default=levels.DEFAULT,
-                    help="deviation level (loaded, loaded_refined and equilibrium need the "
-                    "plates' E, thickness and width: docs/physics.md)")
+    ev.add_argument(
+        "--level",
+        choices=levels.NAMES,
+        default=levels.DEFAULT,
+        help="deviation level (loaded, loaded_refined and equilibrium need the "
+        "plates' E, thickness and width: docs/physics.md)",
+    )
     ev.add_argument("--backend", choices=("sympy", "numpy", "c"), default="sympy")
-    ev.add_argument("--sensitivity", action="store_true",
-                    help="also the derivatives by every parameter and input")
+    ev.add_argument(
+        "--sensitivity",
+        action="store_true",
+        help="also the derivatives by every parameter and input",
+    )
     ev.add_argument("--json", action="store_true", help="machine-readable output")
     ev.set_defaults(run=_eval)
     de = command("derive", "write the LaTeX report and the C99 and numpy evaluators")
@@ -236,59 +298,100 @@ def parser() -> argparse.ArgumentParser:
     de.add_argument("--emit", metavar="LIST", help="latex,c,numpy (all by default)")
     de.add_argument("--points", metavar="LIST", help="only these points (all by default)")
     de.add_argument("--levels", metavar="LIST", help="paper,first_order,exact (all by default)")
-    de.add_argument("--fix", action="append", metavar="H=V",
-                    help="hold input H at angle V (rad): not an argument of the evaluators, its "
-                         "value folded into them")
-    de.add_argument("--appendix", action="store_true",
-                    help="LaTeX body only, to \\input into a paper")
-    de.add_argument("--columnwidth", metavar="LENGTH",
-                    help="lay the report out for this column, e.g. 229.9pt for a two-column "
-                         "article (default 345pt)")
+    de.add_argument(
+        "--fix",
+        action="append",
+        metavar="H=V",
+        help="hold input H at angle V (rad): not an argument of the evaluators, its "
+        "value folded into them",
+    )
+    de.add_argument(
+        "--appendix", action="store_true", help="LaTeX body only, to \\input into a paper"
+    )
+    de.add_argument(
+        "--columnwidth",
+        metavar="LENGTH",
+        help="lay the report out for this column, e.g. 229.9pt for a two-column "
+        "article (default 345pt)",
+    )
     de.add_argument("--quiet", action="store_true", help="no progress messages")
-    de.add_argument("--tolerance", type=float, metavar="TOL",
-                    help="derive the cheapest variant whose worst relative error meets TOL")
-    de.add_argument("--range", action="append", metavar="H=LO:HI",
-                    help="input range of --tolerance (default -0.2:0.2 rad) and of the report's "
-                         "deviation plots (default -0.3:0.3 rad)")
-    de.add_argument("--scene", metavar="SCENE.toml",
-                    help="derive what a scene file asks for: per point a tolerance, ranges and a "
-                         "reference, each point by its cheapest variant (docs/scene.md)")
+    de.add_argument(
+        "--tolerance",
+        type=float,
+        metavar="TOL",
+        help="derive the cheapest variant whose worst relative error meets TOL",
+    )
+    de.add_argument(
+        "--range",
+        action="append",
+        metavar="H=LO:HI",
+        help="input range of --tolerance (default -0.2:0.2 rad) and of the report's "
+        "deviation plots (default -0.3:0.3 rad)",
+    )
+    de.add_argument(
+        "--scene",
+        metavar="SCENE.toml",
+        help="derive what a scene file asks for: per point a tolerance, ranges and a "
+        "reference, each point by its cheapest variant (docs/scene.md)",
+    )
     de.set_defaults(run=_derive)
     tr = command("tradeoff", "speed and accuracy of every variant over a range")
     tr.add_argument("file", metavar="FILE")
-    tr.add_argument("--range", action="append", metavar="H=LO:HI",
-                    help="input range (default -0.2:0.2 rad for every input)")
+    tr.add_argument(
+        "--range",
+        action="append",
+        metavar="H=LO:HI",
+        help="input range (default -0.2:0.2 rad for every input)",
+    )
     tr.add_argument("--samples", type=int, default=25, metavar="N", help="samples (25)")
     tr.add_argument("--json", action="store_true", help="machine-readable output")
-    tr.add_argument("--plot", metavar="FILE.png",
-                    help="error against time, log-log (.png, .pdf or .svg)")
+    tr.add_argument(
+        "--plot", metavar="FILE.png", help="error against time, log-log (.png, .pdf or .svg)"
+    )
     tr.add_argument("--quiet", action="store_true", help="no progress messages")
     tr.set_defaults(run=_tradeoff)
     to = command("tolerance", "worst-case and RSS stack-up of parameter tolerances")
     to.add_argument("file", metavar="FILE")
-    to.add_argument("--vary", action="append", metavar="P=±A",
-                    help="a parameter's tolerance (±A, or ±A%% of its value)")
-    to.add_argument("--input", action="append", metavar="H=LO:HI[:N]",
-                    help="input range (default -0.2:0.2, 25 values)")
+    to.add_argument(
+        "--vary",
+        action="append",
+        metavar="P=±A",
+        help="a parameter's tolerance (±A, or ±A%% of its value)",
+    )
+    to.add_argument(
+        "--input",
+        action="append",
+        metavar="H=LO:HI[:N]",
+        help="input range (default -0.2:0.2, 25 values)",
+    )
     to.add_argument("--level", choices=levels.GENERATED, default=levels.DEFAULT)
     to.add_argument("--backend", choices=("c", "numpy"), default="c")
     to.add_argument("--json", action="store_true", help="machine-readable output")
     to.set_defaults(run=_tolerance)
     sw = command("sweep", "Monte Carlo over parameter spreads, on Dask")
     sw.add_argument("file", metavar="FILE")
-    sw.add_argument("--vary", action="append", metavar="P=DIST",
-                    help="normal(MU,SIGMA), uniform(LO,HI) or ±A around the value")
-    sw.add_argument("--input", action="append", metavar="H=LO:HI:N",
-                    help="input grid (default -0.2:0.2:25)")
+    sw.add_argument(
+        "--vary",
+        action="append",
+        metavar="P=DIST",
+        help="normal(MU,SIGMA), uniform(LO,HI) or ±A around the value",
+    )
+    sw.add_argument(
+        "--input", action="append", metavar="H=LO:HI:N", help="input grid (default -0.2:0.2:25)"
+    )
     sw.add_argument("--samples", type=int, default=1000, metavar="S", help="samples (1000)")
     sw.add_argument("--seed", type=int, default=0, metavar="K", help="random seed (0)")
     sw.add_argument("--level", choices=levels.GENERATED, default=levels.DEFAULT)
     sw.add_argument("--backend", choices=("c", "numpy"), default="c")
-    sw.add_argument("--scheduler", metavar="SPEC",
-                    help="threads[:N] (default, this machine's cores), processes[:N], sync, "
-                         "or tcp://HOST:PORT of a running distributed scheduler")
-    sw.add_argument("--chunks", type=int, metavar="K",
-                    help="Dask tasks (default about 4 per worker)")
+    sw.add_argument(
+        "--scheduler",
+        metavar="SPEC",
+        help="threads[:N] (default, this machine's cores), processes[:N], sync, "
+        "or tcp://HOST:PORT of a running distributed scheduler",
+    )
+    sw.add_argument(
+        "--chunks", type=int, metavar="K", help="Dask tasks (default about 4 per worker)"
+    )
     sw.add_argument("--json", action="store_true", help="machine-readable output")
     sw.add_argument("--plot", metavar="FILE.png", help="histograms (.png, .pdf or .svg)")
     sw.set_defaults(run=_sweep)
@@ -302,8 +405,12 @@ CONTROL = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\u202a-\u202e\u2066-\u2069]")
 
 def escape(text: str) -> str:
     """`text` with every control character shown as an escape (\\x1b, \\u202e)."""
-    return CONTROL.sub(lambda m: (f"\\x{ord(m.group()):02x}" if ord(m.group()) < 0x100
-                                  else f"\\u{ord(m.group()):04x}"), text)
+    return CONTROL.sub(
+        lambda m: (
+            f"\\x{ord(m.group()):02x}" if ord(m.group()) < 0x100 else f"\\u{ord(m.group()):04x}"
+        ),
+        text,
+    )
 
 
 class _Escaping:
@@ -342,11 +449,14 @@ def _main(argv: Sequence[str] | None = None) -> int:
             traceback.print_exc()
         print(f"symkin: {exc}", file=sys.stderr)
         return exc.exit_code
-    except Exception as exc:  # noqa: BLE001 - anything else is a bug: say so, exit 1
+    except Exception as exc:
         if args.debug:
             traceback.print_exc()
-        print(f"symkin: internal error ({type(exc).__name__}: {exc}); this is a bug in symkin, "
-              "rerun with --debug for a traceback and report it", file=sys.stderr)
+        print(
+            f"symkin: internal error ({type(exc).__name__}: {exc}); this is a bug in symkin, "
+            "rerun with --debug for a traceback and report it",
+            file=sys.stderr,
+        )
         return 1
     sys.stdout.write(output)
     return 0

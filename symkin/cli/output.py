@@ -9,8 +9,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..graph.structure import Structure
 from ..codegen.templating import render
+from ..graph.structure import Structure
 
 
 def grid(row_labels: Sequence[str], col_labels: Sequence[str], matrix: np.ndarray) -> list[str]:
@@ -19,8 +19,9 @@ def grid(row_labels: Sequence[str], col_labels: Sequence[str], matrix: np.ndarra
     width = max([len(c) for c in col_labels] + [len(c) for row in cells for c in row] + [1])
     lead = max([len(r) for r in row_labels] + [0])
     head = " " * lead + "".join(f" {c:>{width}}" for c in col_labels)
-    body = [f"{r:<{lead}}" + "".join(f" {c:>{width}}" for c in row)
-            for r, row in zip(row_labels, cells)]
+    body = [
+        f"{r:<{lead}}" + "".join(f" {c:>{width}}" for c in row) for r, row in zip(row_labels, cells)
+    ]
     return [head.rstrip()] + body
 
 
@@ -39,19 +40,24 @@ def matrices_text(s: Structure) -> str:
     hinge_rows = [f"u{a + 1} {name}" for a, name in enumerate(s.hinges)]
     chord_rows = [f"u{c + 1} {s.hinges[c]}" for c in range(s.n, s.m)]
     link_cols = [f"s{i}" for i in range(1, s.n + 1)]
-    labeling = [f"u{a + 1} {name}: i+ = s{s.i_plus[a]} {s.links[s.i_plus[a]]}, "
-                f"i- = s{s.i_minus[a]} {s.links[s.i_minus[a]]}"
-                + ("  (chord)" if a >= s.n else "") for a, name in enumerate(s.hinges)]
+    labeling = [
+        f"u{a + 1} {name}: i+ = s{s.i_plus[a]} {s.links[s.i_plus[a]]}, "
+        f"i- = s{s.i_minus[a]} {s.links[s.i_minus[a]]}" + ("  (chord)" if a >= s.n else "")
+        for a, name in enumerate(s.hinges)
+    ]
     tables = [
         ("incidence I (rows: links, columns: hinges)", grid(links, hinge_cols, s.incidence)),
         ("I+ (reference links)", grid(links, hinge_cols, s.incidence_plus)),
-        ("cyclomatic Phi (rows: chords' loops, columns: hinges)",
-         grid(chord_rows, hinge_cols, s.loops) if s.m > s.n else ["(no loops: an open chain)"]),
-        ("direct paths Psi = [T; 0] (rows: hinges, columns: links)",
-         grid(hinge_rows, link_cols, s.paths)),
+        (
+            "cyclomatic Phi (rows: chords' loops, columns: hinges)",
+            grid(chord_rows, hinge_cols, s.loops) if s.m > s.n else ["(no loops: an open chain)"],
+        ),
+        (
+            "direct paths Psi = [T; 0] (rows: hinges, columns: links)",
+            grid(hinge_rows, link_cols, s.paths),
+        ),
     ]
-    return render("text/matrices.txt.j2", mech=s.mechanism, s=s, labeling=labeling,
-                  tables=tables)
+    return render("text/matrices.txt.j2", mech=s.mechanism, s=s, labeling=labeling, tables=tables)
 
 
 def matrices_json(s: Structure) -> str:
@@ -98,15 +104,30 @@ def sensitivity_tables(result) -> dict[str, list[dict]]:
     for name, point in result.points.items():
         rows = []
         for kind, table, rigid, values in (
-                ("param", sens.deviation, sens.rigid, result.params),
-                ("input", sens.deviation_inputs, sens.rigid_inputs, result.inputs)):
+            ("param", sens.deviation, sens.rigid, result.params),
+            ("input", sens.deviation_inputs, sens.rigid_inputs, result.inputs),
+        ):
             for var, rate in table[name].items():
                 d_norm = norm_rate(point.deviation, rate)
                 value = values[var]
                 relative = value * d_norm / point.norm if point.norm else None
-                rows.append({"name": var, "kind": kind, "value": value, "rate": rate,
-                             "norm": d_norm, "rigid": rigid[name][var], "relative": relative})
-        rows.sort(key=lambda r: (r["relative"] is None or r["value"] == 0,
-                                 -abs(r["relative"] or 0.0), -abs(r["norm"])))
+                rows.append(
+                    {
+                        "name": var,
+                        "kind": kind,
+                        "value": value,
+                        "rate": rate,
+                        "norm": d_norm,
+                        "rigid": rigid[name][var],
+                        "relative": relative,
+                    }
+                )
+        rows.sort(
+            key=lambda r: (
+                r["relative"] is None or r["value"] == 0,
+                -abs(r["relative"] or 0.0),
+                -abs(r["norm"]),
+            )
+        )
         out[name] = rows
     return out

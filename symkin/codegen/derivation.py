@@ -16,18 +16,19 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from ..model import hinges as hinge_models, special
+from ..core.vectors import Vec
+from ..graph.structure import Structure
 from ..kinematics.analysis import Analysis
-from ..model.hinges import PLATE_LENGTH, PRBM_PRESETS, THETA
-from ..kinematics.positions import HingeGeometry, paper_matrices, paper_positions
+from ..kinematics.dyads import RigidSolution
 from ..kinematics.loop_equations import LoopEquations, loop_equations
+from ..kinematics.positions import HingeGeometry, paper_matrices, paper_positions
+from ..model import hinges as hinge_models
+from ..model import special
+from ..model.hinges import PLATE_LENGTH, PRBM_PRESETS, THETA
 from ..model.mechanism import Load
 from ..physics.beamcolumn import BeamColumn
 from ..physics.statics import LoadedDerivation
 from ..physics.stiffness import PlateStiffness
-from ..kinematics.dyads import RigidSolution
-from ..graph.structure import Structure
-from ..core.vectors import Vec
 
 
 @dataclass(frozen=True, eq=False)
@@ -35,13 +36,13 @@ class PointStatement:
     """One characteristic point: where it sits and how each level moves it."""
 
     name: str
-    link: int                        # label of its link
-    at: Vec                          # as-fabricated position
-    path: tuple[int, ...]            # hinge labels of the direct path [s_0, s_link]
-    moved: bool                      # a hinge on the path is not an input: the loops move it
-    rigid: Vec                       # rigid position Σ Rot(φ_i) W_i
-    paper: Vec                       # ΔR at level paper (4.8)
-    turns: tuple[tuple[int, Vec, sp.Expr, sp.Expr], ...]   # (link i, W_i, δφ_i, φ_i), δφ_i ≠ 0
+    link: int  # label of its link
+    at: Vec  # as-fabricated position
+    path: tuple[int, ...]  # hinge labels of the direct path [s_0, s_link]
+    moved: bool  # a hinge on the path is not an input: the loops move it
+    rigid: Vec  # rigid position Σ Rot(φ_i) W_i
+    paper: Vec  # ΔR at level paper (4.8)
+    turns: tuple[tuple[int, Vec, sp.Expr, sp.Expr], ...]  # (link i, W_i, δφ_i, φ_i), δφ_i ≠ 0
 
 
 @dataclass(frozen=True, eq=False)
@@ -49,11 +50,11 @@ class LoopStatement:
     """The fundamental loop of one chord."""
 
     chord: int
-    hinges: tuple[int, ...]          # labels of the loop's hinges
-    links: tuple[int, ...]           # labels of the links it passes
-    signs: tuple[tuple[int, int], ...]   # (b, Φ_cb) for the loop's hinges: Φ_c Δz = Σ Φ_cb Δz_b
-    weights: dict[int, Vec]          # V^c_i: the rigid part of (5.3) is Σ Rot(φ_i) V^c_i
-    equations: LoopEquations         # (5.1), the scalar pair, squared and solved forms
+    hinges: tuple[int, ...]  # labels of the loop's hinges
+    links: tuple[int, ...]  # labels of the links it passes
+    signs: tuple[tuple[int, int], ...]  # (b, Φ_cb) for the loop's hinges: Φ_c Δz = Σ Φ_cb Δz_b
+    weights: dict[int, Vec]  # V^c_i: the rigid part of (5.3) is Σ Rot(φ_i) V^c_i
+    equations: LoopEquations  # (5.1), the scalar pair, squared and solved forms
 
 
 @dataclass(frozen=True, eq=False)
@@ -63,10 +64,10 @@ class ModelStatement:
     model: str
     description: str
     hinges: tuple[int, ...]
-    generic: tuple[sp.Expr, sp.Expr, sp.Expr, sp.Expr] | None   # f, g, Δf, Δg over l (γ, c_θ)
-    elementary: dict[str, sp.Expr]   # "f", "g": the same without kernels, where that exists
-    prbm: tuple[tuple[int, sp.Expr, sp.Expr], ...]   # (hinge, γ, c_θ) of prbm hinges
-    kernels: tuple[type, ...]        # the stable kernels its formulas use
+    generic: tuple[sp.Expr, sp.Expr, sp.Expr, sp.Expr] | None  # f, g, Δf, Δg over l (γ, c_θ)
+    elementary: dict[str, sp.Expr]  # "f", "g": the same without kernels, where that exists
+    prbm: tuple[tuple[int, sp.Expr, sp.Expr], ...]  # (hinge, γ, c_θ) of prbm hinges
+    kernels: tuple[type, ...]  # the stable kernels its formulas use
 
 
 @dataclass(frozen=True, eq=False)
@@ -74,12 +75,12 @@ class LoadedStatement:
     """The `loaded` level (docs/physics.md): plate stiffness, the pin linkage's statics
     A^T mu = Q and the hinge forces in the multipliers mu, as the report states them."""
 
-    beam_column: bool                # two statics passes (beam-column springs) or one
-    plates: tuple[tuple[int, PlateStiffness], ...]   # (hinge label, its plate's EI, EA, l)
+    beam_column: bool  # two statics passes (beam-column springs) or one
+    plates: tuple[tuple[int, PlateStiffness], ...]  # (hinge label, its plate's EI, EA, l)
     loads: tuple[Load, ...]
-    springs: dict[int, sp.Symbol]    # k_a = EI_a/l_a of every plate, as symbols
-    forces: tuple[tuple[int, sp.Expr], ...]   # (a, Q_a) over the non-input hinges, springs k_a
-    multipliers: tuple[sp.Symbol, ...]        # mu, three per loop (angular, x, y)
+    springs: dict[int, sp.Symbol]  # k_a = EI_a/l_a of every plate, as symbols
+    forces: tuple[tuple[int, sp.Expr], ...]  # (a, Q_a) over the non-input hinges, springs k_a
+    multipliers: tuple[sp.Symbol, ...]  # mu, three per loop (angular, x, y)
     hinge_forces: tuple[tuple[int, Vec, sp.Expr], ...]  # (a, n_a in mu, mid-direction angle)
     series: BeamColumn
 
@@ -89,69 +90,104 @@ class Derivation:
     """The symbolic derivation of one mechanism, for the points and levels of a plan."""
 
     structure: Structure
-    theta: dict[int, sp.Symbol]      # θ_a by hinge label
-    delta: dict[int, sp.Symbol]      # δ_a by hinge label
-    deltas: tuple[sp.Symbol, ...]    # the unknown δ, in the order of the linear system
-    variable: sp.Symbol              # θ of the hinge models' f(θ), g(θ)
-    inputs: tuple[int, ...]          # input hinge labels
-    unknowns: tuple[int, ...]        # non-input hinge labels
+    theta: dict[int, sp.Symbol]  # θ_a by hinge label
+    delta: dict[int, sp.Symbol]  # δ_a by hinge label
+    deltas: tuple[sp.Symbol, ...]  # the unknown δ, in the order of the linear system
+    variable: sp.Symbol  # θ of the hinge models' f(θ), g(θ)
+    inputs: tuple[int, ...]  # input hinge labels
+    unknowns: tuple[int, ...]  # non-input hinge labels
     hinges: dict[int, HingeGeometry]
-    plates: dict[int, dict[str, sp.Expr]]   # c_{i±a}, α±, q*, l of every hinge
-    phi: tuple[sp.Expr, ...]         # φ_i of links 0..n: Σ q_b over the direct path
-    delta_phi: tuple[sp.Expr, ...]   # δφ_i of links 0..n: Σ σ_b δ_b over the direct path
-    J: sp.Matrix                     # (4.3) over abstract c_{i,a}
-    Jstar: sp.Matrix                 # (4.4) over abstract z_a
-    R: sp.Matrix                     # (4.7)
+    plates: dict[int, dict[str, sp.Expr]]  # c_{i±a}, α±, q*, l of every hinge
+    phi: tuple[sp.Expr, ...]  # φ_i of links 0..n: Σ q_b over the direct path
+    delta_phi: tuple[sp.Expr, ...]  # δφ_i of links 0..n: Σ σ_b δ_b over the direct path
+    J: sp.Matrix  # (4.3) over abstract c_{i,a}
+    Jstar: sp.Matrix  # (4.4) over abstract z_a
+    R: sp.Matrix  # (4.7)
     models: tuple[ModelStatement, ...]
     loops: tuple[LoopStatement, ...]
     rigid: RigidSolution
-    linear: tuple[sp.Matrix, sp.Matrix] | None   # (A, r) when some point is moved by the loops
+    linear: tuple[sp.Matrix, sp.Matrix] | None  # (A, r) when some point is moved by the loops
     points: tuple[PointStatement, ...]
     loaded: LoadedStatement | None = None
 
 
-def derivation(analysis: Analysis, points: Sequence[str], moved: frozenset[str],
-               loaded: LoadedDerivation | None = None) -> Derivation:
+def derivation(
+    analysis: Analysis,
+    points: Sequence[str],
+    moved: frozenset[str],
+    loaded: LoadedDerivation | None = None,
+) -> Derivation:
     """The statement of `analysis` for the named points (`moved`: those the loops move), with
     the `loaded` level's statics when `loaded` is given."""
     an, kin, s = analysis, analysis.kin, analysis.structure
     J, Jstar = paper_matrices(s)
     return Derivation(
-        structure=s, theta=dict(kin.theta), delta=dict(kin.delta), deltas=an.deltas,
-        variable=THETA, inputs=kin.inputs, unknowns=kin.unknowns, hinges=dict(kin.hinges),
+        structure=s,
+        theta=dict(kin.theta),
+        delta=dict(kin.delta),
+        deltas=an.deltas,
+        variable=THETA,
+        inputs=kin.inputs,
+        unknowns=kin.unknowns,
+        hinges=dict(kin.hinges),
         plates={a: kin.plate_data(a) for a in range(1, s.m + 1)},
         phi=tuple(kin.phi(i) for i in range(s.n + 1)),
-        delta_phi=tuple(an.delta_phi(i) for i in range(s.n + 1)), J=J, Jstar=Jstar, R=paper_positions(s),
-        models=_models(an), loops=_loops(an), rigid=an.rigid,
+        delta_phi=tuple(an.delta_phi(i) for i in range(s.n + 1)),
+        J=J,
+        Jstar=Jstar,
+        R=paper_positions(s),
+        models=_models(an),
+        loops=_loops(an),
+        rigid=an.rigid,
         linear=an.linear_system if an.deltas and moved else None,
         points=tuple(_point(an, name, name in moved) for name in points),
-        loaded=None if loaded is None else _loaded(loaded))
+        loaded=None if loaded is None else _loaded(loaded),
+    )
 
 
 def _loaded(der: LoadedDerivation) -> LoadedStatement:
     kin = der.kin
-    springs = {a: sp.Symbol(f"k_{a}", positive=True) for a, h in kin.hinges.items()
-               if h.name in der.stiffness}
+    springs = {
+        a: sp.Symbol(f"k_{a}", positive=True)
+        for a, h in kin.hinges.items()
+        if h.name in der.stiffness
+    }
     forces = der.generalized_forces(springs)
     loads = der.plate_loads
     return LoadedStatement(
         beam_column=der.beam_column,
         plates=tuple((a, der.stiffness[kin.hinges[a].name]) for a in sorted(springs)),
-        loads=tuple(der.mechanism.loads), springs=springs,
-        forces=tuple(zip(kin.unknowns, forces)), multipliers=der.mu,
-        hinge_forces=tuple((a, loads[a].force, kin.phi(h.P) + h.angle + kin.theta[a] / 2)
-                           for a, h in sorted(kin.hinges.items())),
-        series=der.series)
+        loads=tuple(der.mechanism.loads),
+        springs=springs,
+        forces=tuple(zip(kin.unknowns, forces)),
+        multipliers=der.mu,
+        hinge_forces=tuple(
+            (a, loads[a].force, kin.phi(h.P) + h.angle + kin.theta[a] / 2)
+            for a, h in sorted(kin.hinges.items())
+        ),
+        series=der.series,
+    )
 
 
 def _point(an: Analysis, name: str, moved: bool) -> PointStatement:
     kin = an.kin
     point = an.mechanism.point(name)
     k = an.link[point.link]
-    turns = tuple((i, w, an.delta_phi(i), kin.phi(i))
-                  for i, w in kin.weights(k, point.at).items() if an.delta_phi(i) != 0)
-    return PointStatement(name, k, point.at, an.structure.tree_path(k), moved,
-                          an.point_rigid(name), an.point_deviation(name, "paper"), turns)
+    turns = tuple(
+        (i, w, an.delta_phi(i), kin.phi(i))
+        for i, w in kin.weights(k, point.at).items()
+        if an.delta_phi(i) != 0
+    )
+    return PointStatement(
+        name,
+        k,
+        point.at,
+        an.structure.tree_path(k),
+        moved,
+        an.point_rigid(name),
+        an.point_deviation(name, "paper"),
+        turns,
+    )
 
 
 def _loops(an: Analysis) -> tuple[LoopStatement, ...]:
@@ -162,10 +198,16 @@ def _loops(an: Analysis) -> tuple[LoopStatement, ...]:
         hinges = s.loop_hinges(c)
         row = s.loops[c - s.n - 1]
         links = sorted({s.i_plus[b - 1] for b in hinges} | {s.i_minus[b - 1] for b in hinges})
-        out.append(LoopStatement(c, hinges, tuple(links),
-                                 tuple((b, int(row[b - 1])) for b in range(1, s.m + 1)
-                                       if row[b - 1]),
-                                 an.kin.loop_weights(c), eq))
+        out.append(
+            LoopStatement(
+                c,
+                hinges,
+                tuple(links),
+                tuple((b, int(row[b - 1])) for b in range(1, s.m + 1) if row[b - 1]),
+                an.kin.loop_weights(c),
+                eq,
+            )
+        )
     return tuple(out)
 
 
@@ -191,13 +233,34 @@ def _models(an: Analysis) -> tuple[ModelStatement, ...]:
         prbm = ()
         if model == "prbm":
             force = PRBM_PRESETS["force"]
-            prbm = tuple((a, sp.sympify(kin.hinges[a].hinge.param("gamma", force["gamma"])),
-                          sp.sympify(kin.hinges[a].hinge.param("c_theta", force["c_theta"])))
-                         for a in hinges)
-        kernels = sorted({type(f) for e in exprs for f in sp.sympify(e).atoms(sp.Function)
-                          if isinstance(f, special.StableKernel)}, key=lambda c: c.__name__)
-        out.append(ModelStatement(model, hinge_models.MODELS[model].description, hinges,
-                                  generic, elementary, prbm, tuple(kernels)))
+            prbm = tuple(
+                (
+                    a,
+                    sp.sympify(kin.hinges[a].hinge.param("gamma", force["gamma"])),
+                    sp.sympify(kin.hinges[a].hinge.param("c_theta", force["c_theta"])),
+                )
+                for a in hinges
+            )
+        kernels = sorted(
+            {
+                type(f)
+                for e in exprs
+                for f in sp.sympify(e).atoms(sp.Function)
+                if isinstance(f, special.StableKernel)
+            },
+            key=lambda c: c.__name__,
+        )
+        out.append(
+            ModelStatement(
+                model,
+                hinge_models.MODELS[model].description,
+                hinges,
+                generic,
+                elementary,
+                prbm,
+                tuple(kernels),
+            )
+        )
     return tuple(out)
 
 
@@ -221,8 +284,10 @@ def _generic_functions(model: str) -> tuple | None:
         return None
     params = {}
     if model == "prbm":
-        params = {"gamma": sp.Symbol("gamma", positive=True),
-                  "c_theta": sp.Symbol("c_theta", positive=True)}
+        params = {
+            "gamma": sp.Symbol("gamma", positive=True),
+            "c_theta": sp.Symbol("c_theta", positive=True),
+        }
     plate = hinge_models.plate_functions(_Generic(model, params))
     return plate.f, plate.g, plate.df, plate.dg
 

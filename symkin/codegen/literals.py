@@ -22,7 +22,7 @@ import sympy as sp
 from ..core.errors import InputError
 
 #: Integers up to this magnitude are exact in a double and stay integers.
-EXACT_INT = 2 ** 53
+EXACT_INT = 2**53
 #: Digits of the evaluation that is rounded to a double (far beyond double's 17).
 DIGITS = 40
 
@@ -31,14 +31,16 @@ def to_double(value: sp.Expr | float | int) -> float:
     """The double nearest to a real numeric expression (evaluated with DIGITS digits first)."""
     number = sp.N(sp.sympify(value), DIGITS)
     if not (number.is_real and number.is_finite):
-        raise InputError(f"the constant {sp.sstr(value)[:60]} evaluates to {number}, which no "
-                         "float64 can hold", hint="keep parameters and geometry within float64 "
-                         "range (|x| < 1.8e308)")
+        raise InputError(
+            f"the constant {sp.sstr(value)[:60]} evaluates to {number}, which no float64 can hold",
+            hint="keep parameters and geometry within float64 range (|x| < 1.8e308)",
+        )
     result = float(number)
     if not math.isfinite(result):
-        raise InputError(f"the constant {sp.sstr(value)[:60]} = {sp.N(number, 6)} overflows "
-                         "float64", hint="keep parameters and geometry within float64 range "
-                         "(|x| < 1.8e308)")
+        raise InputError(
+            f"the constant {sp.sstr(value)[:60]} = {sp.N(number, 6)} overflows float64",
+            hint="keep parameters and geometry within float64 range (|x| < 1.8e308)",
+        )
     return result
 
 
@@ -60,8 +62,12 @@ def float_literals(expr: sp.Expr, memo: dict | None = None) -> sp.Expr:
     return fold_numbers(expr, _simple, _double, memo)
 
 
-def fold_numbers(expr: sp.Expr, keep: Callable[[sp.Expr], bool],
-                 replace: Callable[[sp.Expr], sp.Expr], memo: dict | None = None) -> sp.Expr:
+def fold_numbers(
+    expr: sp.Expr,
+    keep: Callable[[sp.Expr], bool],
+    replace: Callable[[sp.Expr], sp.Expr],
+    memo: dict | None = None,
+) -> sp.Expr:
     """`expr` with every maximal numeric subexpression that `keep` rejects replaced by
     `replace(it)`; the numeric factors of a product and terms of a sum are taken together, and
     small rational exponents stay exact (so x**(1/2) still prints as a square root).
@@ -69,7 +75,7 @@ def fold_numbers(expr: sp.Expr, keep: Callable[[sp.Expr], bool],
     `memo` (optional, shared between calls with the same keep/replace) caches folded subtrees and
     which subtrees are constant, so the work is linear in the size of the expression DAG."""
     expr = sp.sympify(expr)
-    if not isinstance(expr, sp.Basic) or expr.is_Atom and not expr.is_number:
+    if not isinstance(expr, sp.Basic) or (expr.is_Atom and not expr.is_number):
         return expr
     memo = {} if memo is None else memo
     mapping = memo.setdefault("folded", {})

@@ -42,11 +42,11 @@ from dataclasses import dataclass
 import sympy as sp
 
 from ..core import levels as level_table
-from ..kinematics.analysis import Analysis
 from ..core.errors import InputError
 from ..core.levels import Level
-from ..physics.statics import LoadedDerivation, loaded_derivation
 from ..core.settings import SOLVER, SolverSettings
+from ..kinematics.analysis import Analysis
+from ..physics.statics import LoadedDerivation, loaded_derivation
 from .derivation import Derivation, derivation
 from .literals import float_literals, to_double
 from .routines import Argument, Routine, flatten, optimize
@@ -56,42 +56,42 @@ from .routines import Argument, Routine, flatten, optimize
 class Parameter:
     """A file parameter as generated code sees it."""
 
-    name: str               # the file's name (for tables and keyword arguments)
-    symbol: sp.Symbol       # p_k in the routines
-    default: sp.Expr        # its default over the earlier p_k, numbers as doubles
-    value: float            # the default's value, correctly rounded
+    name: str  # the file's name (for tables and keyword arguments)
+    symbol: sp.Symbol  # p_k in the routines
+    default: sp.Expr  # its default over the earlier p_k, numbers as doubles
+    value: float  # the default's value, correctly rounded
 
 
 @dataclass(frozen=True, eq=False)
 class Plan:
     """Everything a backend template needs, backend-neutral."""
 
-    name: str                          # the mechanism's identifier-safe name
-    links: tuple[str, ...]             # link names by label 0..n
-    hinges: tuple[str, ...]            # hinge names by label 1..m
-    inputs: tuple[str, ...]            # input hinge names, the order of the `inputs` array
-    input_index: tuple[int, ...]       # position of each input in θ (label - 1)
-    unknown_index: tuple[int, ...]     # position in θ of each non-input hinge (the order of δ)
+    name: str  # the mechanism's identifier-safe name
+    links: tuple[str, ...]  # link names by label 0..n
+    hinges: tuple[str, ...]  # hinge names by label 1..m
+    inputs: tuple[str, ...]  # input hinge names, the order of the `inputs` array
+    input_index: tuple[int, ...]  # position of each input in θ (label - 1)
+    unknown_index: tuple[int, ...]  # position in θ of each non-input hinge (the order of δ)
     parameters: tuple[Parameter, ...]
     points: tuple[str, ...]
-    reported_links: tuple[str, ...]    # links whose rotation the evaluators report
+    reported_links: tuple[str, ...]  # links whose rotation the evaluators report
     levels: tuple[Level, ...]
-    limits: tuple[tuple[int, float], ...]   # (θ index, L): the hinge's model holds for |θ| < L
+    limits: tuple[tuple[int, float], ...]  # (θ index, L): the hinge's model holds for |θ| < L
     n_dyads: int
-    needs_loops: bool                  # some requested level/point needs the loop solution
-    loops_for_links: bool              # the links' rotations need it (solved when asked for)
-    closed_form: bool                  # rigid solution by dyads (else Newton + continuation)
+    needs_loops: bool  # some requested level/point needs the loop solution
+    loops_for_links: bool  # the links' rotations need it (solved when asked for)
+    closed_form: bool  # rigid solution by dyads (else Newton + continuation)
     routines: dict[str, Routine]
-    notes: tuple[str, ...] = ()        # e.g. the variant a tolerance chose, for the headers
-    solver: SolverSettings = SOLVER    # how the generated evaluators solve the loops
-    derivation: Derivation | None = None    # what a report restates (plan(..., report=True))
-    loaded: LoadedPlan | None = None   # the `loaded` level's statics, when it is generated
-    sensitivity: bool = False          # the sens_* routines are there
-    chain: bool = False                # some parameter's default reads others (sens_chain)
-    pruned_inputs: tuple[str, ...] = ()   # the file's inputs that move none of the points
-                                          # (docs/pruning.md): accepted and ignored by numpy
-    fixed: tuple[tuple[int, float], ...] = ()   # (θ index, angle): inputs held constant,
-                                                # folded into the routines (docs/cli.md, --fix)
+    notes: tuple[str, ...] = ()  # e.g. the variant a tolerance chose, for the headers
+    solver: SolverSettings = SOLVER  # how the generated evaluators solve the loops
+    derivation: Derivation | None = None  # what a report restates (plan(..., report=True))
+    loaded: LoadedPlan | None = None  # the `loaded` level's statics, when it is generated
+    sensitivity: bool = False  # the sens_* routines are there
+    chain: bool = False  # some parameter's default reads others (sens_chain)
+    pruned_inputs: tuple[str, ...] = ()  # the file's inputs that move none of the points
+    # (docs/pruning.md): accepted and ignored by numpy
+    fixed: tuple[tuple[int, float], ...] = ()  # (θ index, angle): inputs held constant,
+    # folded into the routines (docs/cli.md, --fix)
 
     def stage(self, level: Level) -> bool:
         """Whether the sensitivity at `level` goes through a closure solved for δ."""
@@ -107,22 +107,22 @@ class LoadedPlan:
 
     passes: int
     compliance: int
-    beam_column: bool = True           # the beam-column series (False: first order only)
-    more: int = 0                      # the last `more` of them only loaded_refined computes
+    beam_column: bool = True  # the beam-column series (False: first order only)
+    more: int = 0  # the last `more` of them only loaded_refined computes
 
 
 @dataclass(frozen=True)
 class SceneGroup:
     """One evaluator of a scene (docs/scene.md): the points one variant computes."""
 
-    name: str                          # its generated evaluator's name
+    name: str  # its generated evaluator's name
     variant: str
     level: Level
-    inputs: tuple[str, ...]            # the inputs it takes, its order
-    points: tuple[str, ...]            # its points, its order
-    parameters: tuple[str, ...]        # its parameters, its order
+    inputs: tuple[str, ...]  # the inputs it takes, its order
+    points: tuple[str, ...]  # its points, its order
+    parameters: tuple[str, ...]  # its parameters, its order
     precision: str
-    cost: int                          # weighted operations of one evaluation
+    cost: int  # weighted operations of one evaluation
 
 
 @dataclass(frozen=True)
@@ -131,23 +131,30 @@ class ScenePlan:
     where."""
 
     name: str
-    source: str                        # the mechanism file's base name
-    scene: str                         # the scene file's base name
-    inputs: tuple[str, ...]            # the scene evaluator's inputs (label order)
-    points: tuple[str, ...]            # scene order
-    parameters: tuple[tuple[str, float], ...]   # the file's parameters and defaults
-    fixed: tuple[tuple[str, float], ...]        # inputs the scene holds
-    ignored: tuple[str, ...]           # the file's free inputs that move no scene point
+    source: str  # the mechanism file's base name
+    scene: str  # the scene file's base name
+    inputs: tuple[str, ...]  # the scene evaluator's inputs (label order)
+    points: tuple[str, ...]  # scene order
+    parameters: tuple[tuple[str, float], ...]  # the file's parameters and defaults
+    fixed: tuple[tuple[str, float], ...]  # inputs the scene holds
+    ignored: tuple[str, ...]  # the file's free inputs that move no scene point
     groups: tuple[SceneGroup, ...]
     notes: tuple[str, ...]
 
 
-def plan(analysis: Analysis, points: Sequence[str] | None = None,
-         levels: Sequence[str] | None = None, cse: bool = True,
-         notes: Sequence[str] = (), report: bool = False, links: bool | None = None,
-         sensitivity: bool = True, beam_column: bool = True,
-         fixed: Mapping[str, sp.Expr] | None = None,
-         pruned_inputs: Sequence[str] = ()) -> Plan:
+def plan(
+    analysis: Analysis,
+    points: Sequence[str] | None = None,
+    levels: Sequence[str] | None = None,
+    cse: bool = True,
+    notes: Sequence[str] = (),
+    report: bool = False,
+    links: bool | None = None,
+    sensitivity: bool = True,
+    beam_column: bool = True,
+    fixed: Mapping[str, sp.Expr] | None = None,
+    pruned_inputs: Sequence[str] = (),
+) -> Plan:
     """Derive the routines for the requested points and levels (by default every generated level
     the file's data allows: `loaded` needs the plates' stiffness); with `report`, also the
     statement of the derivation a LaTeX report prints. `links`: report the rotation of every
@@ -163,8 +170,12 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
     mech = an.mechanism
     names = tuple(p.name for p in an.points if points is None or p.name in points)
     stiff = mech.has_stiffness
-    levels = tuple(lv for lv in level_table.LEVELS if lv.generated and (
-        lv.name in levels if levels is not None else stiff or not lv.needs_stiffness))
+    levels = tuple(
+        lv
+        for lv in level_table.LEVELS
+        if lv.generated
+        and (lv.name in levels if levels is not None else stiff or not lv.needs_stiffness)
+    )
     held = _fixed_angles(an, fixed or {})
     sensitivity = sensitivity and not held
     free = tuple(a for a in kin.inputs if a not in held)
@@ -182,23 +193,44 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
     if sol.closed_form and kin.unknowns:
         outs = [sol.phi[kin.hinges[a].M] - sol.phi[kin.hinges[a].P] for a in kin.unknowns]
         outs += [d.reach for d in sol.dyads] + [d.margin for d in sol.dyads]
-        routines["rigid"] = Routine("rigid", (inputs, params), sol.assignments, tuple(outs),
-                                    "closed-form rigid solution (dyads)")
+        routines["rigid"] = Routine(
+            "rigid",
+            (inputs, params),
+            sol.assignments,
+            tuple(outs),
+            "closed-form rigid solution (dyads)",
+        )
     if kin.unknowns:
-        routines["rigid_res"] = Routine("rigid_res", (theta, params), (),
-                                        tuple(an.rigid_residual),
-                                        "rigid loop closure relative to the as-fabricated pose")
+        routines["rigid_res"] = Routine(
+            "rigid_res",
+            (theta, params),
+            (),
+            tuple(an.rigid_residual),
+            "rigid loop closure relative to the as-fabricated pose",
+        )
         a_lin, r_lin = an.linear_system
-        routines["linear"] = Routine("linear", (theta, params), (),
-                                     flatten(a_lin.tolist()) + tuple(r_lin),
-                                     "rigid loop Jacobian A and r = Phi dz")
+        routines["linear"] = Routine(
+            "linear",
+            (theta, params),
+            (),
+            flatten(a_lin.tolist()) + tuple(r_lin),
+            "rigid loop Jacobian A and r = Phi dz",
+        )
     if (needs_loops or loops_for_links) and any(lv.name == "exact" for lv in levels):
-        routines["newton"] = Routine("newton", (theta, delta, params), (),
-                                     tuple(an.residual) + flatten(an.jacobian.tolist()),
-                                     "exact compliant closure F(delta) and dF/ddelta")
+        routines["newton"] = Routine(
+            "newton",
+            (theta, delta, params),
+            (),
+            tuple(an.residual) + flatten(an.jacobian.tolist()),
+            "exact compliant closure F(delta) and dF/ddelta",
+        )
     routines["rigid_points"] = Routine(
-        "rigid_points", (theta, params), (),
-        tuple(e for n in names for e in an.point_rigid(n)), "rigid positions of the points")
+        "rigid_points",
+        (theta, params),
+        (),
+        tuple(e for n in names for e in an.point_rigid(n)),
+        "rigid positions of the points",
+    )
     loaded = None
     physical = [lv.name for lv in levels if lv.name in level_table.LOADED]
     if physical:
@@ -207,10 +239,17 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
         # loaded_refined solves the loaded closure whatever the points need: its Jacobian at
         # the pose reached is the matrix of the second statics
         loaded, constants = _loaded_routines(
-            der, routines, theta, delta, params, loaded_exprs, needs_loops or loops_for_links,
-            "loaded_refined" in physical and bool(kin.unknowns))
+            der,
+            routines,
+            theta,
+            delta,
+            params,
+            loaded_exprs,
+            needs_loops or loops_for_links,
+            "loaded_refined" in physical and bool(kin.unknowns),
+        )
     for lv in levels:
-        if f"dev_{lv.routine}" in routines:         # a level that shares another's deviation
+        if f"dev_{lv.routine}" in routines:  # a level that shares another's deviation
             continue
         args = (theta, delta, params) if lv.needs_delta else (theta, params)
         if lv.name in level_table.LOADED:
@@ -218,60 +257,106 @@ def plan(analysis: Analysis, points: Sequence[str] | None = None,
         else:
             exprs = tuple(e for n in names for e in an.point_deviation(n, lv.name))
         users = ", ".join(o.name for o in levels if o.routine == lv.routine)
-        routines[f"dev_{lv.routine}"] = Routine(f"dev_{lv.routine}", args, (), exprs,
-                                                f"deviation of the points at level {users}")
+        routines[f"dev_{lv.routine}"] = Routine(
+            f"dev_{lv.routine}", args, (), exprs, f"deviation of the points at level {users}"
+        )
     s = an.structure
     reported = tuple(range(s.n + 1)) if links else ()
     if reported:
         routines["links"] = Routine(
-            "links", (theta, delta), (),
-            tuple(an.link_rotation(i) for i in reported)
-            + tuple(an.delta_phi(i) for i in reported),
-            "rotation of every link and how much further the compliant one turns")
+            "links",
+            (theta, delta),
+            (),
+            tuple(an.link_rotation(i) for i in reported) + tuple(an.delta_phi(i) for i in reported),
+            "rotation of every link and how much further the compliant one turns",
+        )
     chain = False
     if sensitivity:
-        chain = _sensitivity_routines(an, names, levels, needs_loops, routines,
-                                      (theta, params), (theta, delta, params))
+        chain = _sensitivity_routines(
+            an, names, levels, needs_loops, routines, (theta, params), (theta, delta, params)
+        )
     if held:
         # rigid_res and linear read θ as the rigid solve sets it (continuation scales the fixed
         # inputs from the as-fabricated pose like the others); every other routine folds them
         values = {kin.theta[a]: v for a, v in held.items()}
-        routines = {k: r if k in ("rigid_res", "linear") else _substituted(r, values)
-                    for k, r in routines.items()}
+        routines = {
+            k: r if k in ("rigid_res", "linear") else _substituted(r, values)
+            for k, r in routines.items()
+        }
     # Numbers reach the printers as correctly rounded doubles (exact rationals stay in mpmath).
     memo: dict = {}
-    routines = {k: Routine(r.name, r.arguments,
-                           tuple((s, float_literals(e, memo)) for s, e in r.assignments),
-                           tuple(float_literals(e, memo) for e in r.outputs), r.doc)
-                for k, r in routines.items()}
+    routines = {
+        k: Routine(
+            r.name,
+            r.arguments,
+            tuple((s, float_literals(e, memo)) for s, e in r.assignments),
+            tuple(float_literals(e, memo) for e in r.outputs),
+            r.doc,
+        )
+        for k, r in routines.items()
+    }
     if cse:
         routines = {k: optimize(r) for k, r in routines.items()}
     rename = {s: sp.Symbol(f"p_{k}", real=True) for k, s in enumerate(an.params)}
     routines = {k: _renamed(r, rename) for k, r in routines.items()}
-    parameters = tuple(Parameter(p.name, rename[p.symbol],
-                                 float_literals(p.expr.xreplace(rename)), to_double(p.value))
-                       for p in mech.parameters)
-    limits = tuple((a - 1, float(sp.N(h.limit, 20))) for a, h in sorted(kin.hinges.items())
-                   if h.limit is not None)
+    parameters = tuple(
+        Parameter(
+            p.name, rename[p.symbol], float_literals(p.expr.xreplace(rename)), to_double(p.value)
+        )
+        for p in mech.parameters
+    )
+    limits = tuple(
+        (a - 1, float(sp.N(h.limit, 20)))
+        for a, h in sorted(kin.hinges.items())
+        if h.limit is not None
+    )
     result = Plan(
-        name=mech.name, links=s.links, hinges=s.hinges,
-        inputs=tuple(kin.hinges[a].name for a in free), input_index=tuple(a - 1 for a in free),
-        unknown_index=tuple(a - 1 for a in kin.unknowns), parameters=parameters, points=names,
-        reported_links=tuple(s.links[i] for i in reported), levels=levels, limits=limits,
-        n_dyads=len(sol.dyads), needs_loops=needs_loops, loops_for_links=loops_for_links,
-        closed_form=sol.closed_form, routines=routines, loaded=loaded,
-        notes=tuple(notes) + (("Fixed inputs, folded into the evaluator (not its arguments): "
-                               + ", ".join(f"{kin.hinges[a].name} = {sp.sstr(v)} rad"
-                                           for a, v in sorted(held.items())) + ".",)
-                              if held else ()),
-        sensitivity=sensitivity, chain=chain, pruned_inputs=tuple(pruned_inputs),
-        fixed=tuple((a - 1, to_double(v)) for a, v in sorted(held.items())))
+        name=mech.name,
+        links=s.links,
+        hinges=s.hinges,
+        inputs=tuple(kin.hinges[a].name for a in free),
+        input_index=tuple(a - 1 for a in free),
+        unknown_index=tuple(a - 1 for a in kin.unknowns),
+        parameters=parameters,
+        points=names,
+        reported_links=tuple(s.links[i] for i in reported),
+        levels=levels,
+        limits=limits,
+        n_dyads=len(sol.dyads),
+        needs_loops=needs_loops,
+        loops_for_links=loops_for_links,
+        closed_form=sol.closed_form,
+        routines=routines,
+        loaded=loaded,
+        notes=tuple(notes)
+        + (
+            (
+                "Fixed inputs, folded into the evaluator (not its arguments): "
+                + ", ".join(
+                    f"{kin.hinges[a].name} = {sp.sstr(v)} rad" for a, v in sorted(held.items())
+                )
+                + ".",
+            )
+            if held
+            else ()
+        ),
+        sensitivity=sensitivity,
+        chain=chain,
+        pruned_inputs=tuple(pruned_inputs),
+        fixed=tuple((a - 1, to_double(v)) for a, v in sorted(held.items())),
+    )
     return with_derivation(result, an) if report else result
 
 
-def _sensitivity_routines(an: Analysis, points: Sequence[str], levels: Sequence[Level],
-                          needs_loops: bool, routines: dict[str, Routine],
-                          args: tuple[Argument, ...], args_delta: tuple[Argument, ...]) -> bool:
+def _sensitivity_routines(
+    an: Analysis,
+    points: Sequence[str],
+    levels: Sequence[Level],
+    needs_loops: bool,
+    routines: dict[str, Routine],
+    args: tuple[Argument, ...],
+    args_delta: tuple[Argument, ...],
+) -> bool:
     """Add the sens_* routines (row-major matrices, in the order of the module docstring);
     True when the parameter chain routine is needed."""
     from ..kinematics.sensitivity import Sensitivities, parameter_chain
@@ -281,8 +366,13 @@ def _sensitivity_routines(an: Analysis, points: Sequence[str], levels: Sequence[
     blocks = [rigid.theta, rigid.variables]
     if terms.rigid_stage is not None:
         blocks = [terms.rigid_stage.jacobian, terms.rigid_stage.variables] + blocks
-    routines["sens_rigid"] = Routine("sens_rigid", args, (), _flat(blocks),
-                                     "rigid stage: A, dG/dv; rigid points: dR/dtheta, dR/dv")
+    routines["sens_rigid"] = Routine(
+        "sens_rigid",
+        args,
+        (),
+        _flat(blocks),
+        "rigid stage: A, dG/dv; rigid points: dR/dtheta, dR/dv",
+    )
     for lv in (lv for lv in levels if lv.sensitivity):
         part = terms.partials(lv.name)
         stage = terms.stage(lv.name) if needs_loops and lv.needs_delta else None
@@ -290,13 +380,21 @@ def _sensitivity_routines(an: Analysis, points: Sequence[str], levels: Sequence[
         if stage is not None:
             blocks = [stage.jacobian, stage.theta, stage.variables] + blocks
         routines[f"sens_{lv.name}"] = Routine(
-            f"sens_{lv.name}", args_delta if stage is not None else args, (), _flat(blocks),
-            f"sensitivity at level {lv.name}: " + ("M, dE/dtheta, dE/dv; " if stage else "")
-            + "dD/dtheta, " + ("dD/ddelta, " if stage else "") + "dD/dv")
+            f"sens_{lv.name}",
+            args_delta if stage is not None else args,
+            (),
+            _flat(blocks),
+            f"sensitivity at level {lv.name}: "
+            + ("M, dE/dtheta, dE/dv; " if stage else "")
+            + "dD/dtheta, "
+            + ("dD/ddelta, " if stage else "")
+            + "dD/dv",
+        )
     chain = parameter_chain([p.expr for p in an.mechanism.parameters], an.params)
     if not chain.is_zero_matrix:
-        routines["sens_chain"] = Routine("sens_chain", args[1:], (), _flat([chain]),
-                                         "d(default of p_j)/dp_k of the parameters")
+        routines["sens_chain"] = Routine(
+            "sens_chain", args[1:], (), _flat([chain]), "d(default of p_j)/dp_k of the parameters"
+        )
         return True
     return False
 
@@ -305,9 +403,16 @@ def _flat(blocks: Sequence[sp.Matrix]) -> tuple[sp.Expr, ...]:
     return tuple(e for b in blocks for e in flatten(b.tolist()))
 
 
-def _loaded_routines(der: LoadedDerivation, routines: dict[str, Routine], theta: Argument,
-                     delta: Argument, params: Argument, deviation: tuple[sp.Expr, ...],
-                     needs_loops: bool, refine: bool) -> tuple[LoadedPlan, Argument]:
+def _loaded_routines(
+    der: LoadedDerivation,
+    routines: dict[str, Routine],
+    theta: Argument,
+    delta: Argument,
+    params: Argument,
+    deviation: tuple[sp.Expr, ...],
+    needs_loops: bool,
+    refine: bool,
+) -> tuple[LoadedPlan, Argument]:
     """The physical levels' statics, compliance and closure routines (added to `routines`, in
     the order they run) and the constants argument of the loaded closure and `deviation`: the
     file's parameters, then the compliance they read (the derivation's intermediates mu0, mu and
@@ -316,8 +421,7 @@ def _loaded_routines(der: LoadedDerivation, routines: dict[str, Routine], theta:
     (`loaded_refined`) solves the closure whatever the points need, so the other plates' come
     after them (`loaded_compliance_more`)."""
     la = der.analysis
-    closure = (tuple(la.residual) + flatten(la.jacobian.tolist())
-               if needs_loops or refine else ())
+    closure = tuple(la.residual) + flatten(la.jacobian.tolist()) if needs_loops or refine else ()
 
     def reading(exprs) -> list[int]:
         read = set().union(*(sp.sympify(e).free_symbols for e in exprs))
@@ -330,40 +434,74 @@ def _loaded_routines(der: LoadedDerivation, routines: dict[str, Routine], theta:
     if la.kin.unknowns:
         if der.mu0:
             routines["loaded_q0"] = Routine(
-                "loaded_q0", (theta, params), (), tuple(der.first_statics[1]),
-                "loaded: generalized forces Q0 of the pin linkage, springs EI/l (A^T mu0 = Q0)")
+                "loaded_q0",
+                (theta, params),
+                (),
+                tuple(der.first_statics[1]),
+                "loaded: generalized forces Q0 of the pin linkage, springs EI/l (A^T mu0 = Q0)",
+            )
         routines["loaded_q"] = Routine(
-            "loaded_q", (theta, Argument("mu0", der.mu0), params), (), tuple(der.statics[1]),
+            "loaded_q",
+            (theta, Argument("mu0", der.mu0), params),
+            (),
+            tuple(der.statics[1]),
             "loaded: generalized forces Q with the beam-column springs (A^T mu = Q)"
-            if der.mu0 else "loaded: generalized forces Q of the pin linkage (A^T mu = Q)")
+            if der.mu0
+            else "loaded: generalized forces Q of the pin linkage (A^T mu = Q)",
+        )
     for name, which, doc in (
-            ("loaded_compliance", plates,
-             "loaded: each plate's end displacement beyond its circular arc under its loads"),
-            ("loaded_compliance_more", more,
-             "loaded: the same for the plates only the loaded closure reads (loaded_refined)")):
+        (
+            "loaded_compliance",
+            plates,
+            "loaded: each plate's end displacement beyond its circular arc under its loads",
+        ),
+        (
+            "loaded_compliance_more",
+            more,
+            "loaded: the same for the plates only the loaded closure reads (loaded_refined)",
+        ),
+    ):
         if which or name == "loaded_compliance":
             routines[name] = Routine(
-                name, (theta, Argument("mu", der.mu), params), (),
-                tuple(e for a in which for e in der.plate_loads[a].displacement), doc)
+                name,
+                (theta, Argument("mu", der.mu), params),
+                (),
+                tuple(e for a in which for e in der.plate_loads[a].displacement),
+                doc,
+            )
     if closure:
         a_lin, r_lin = la.linear_system
         routines["loaded_linear"] = Routine(
-            "loaded_linear", (theta, constants), (), flatten(a_lin.tolist()) + tuple(r_lin),
-            "loaded: A and r = Phi dz of the loaded closure (its first-order start)")
+            "loaded_linear",
+            (theta, constants),
+            (),
+            flatten(a_lin.tolist()) + tuple(r_lin),
+            "loaded: A and r = Phi dz of the loaded closure (its first-order start)",
+        )
         routines["loaded_newton"] = Routine(
-            "loaded_newton", (theta, delta, constants), (), closure,
-            "loaded: the loaded closure F(delta) and dF/ddelta")
-    return LoadedPlan(2 if der.mu0 else 1, len(compliance), der.beam_column,
-                      2 * len(more)), constants
+            "loaded_newton",
+            (theta, delta, constants),
+            (),
+            closure,
+            "loaded: the loaded closure F(delta) and dF/ddelta",
+        )
+    return LoadedPlan(
+        2 if der.mu0 else 1, len(compliance), der.beam_column, 2 * len(more)
+    ), constants
 
 
 def with_derivation(plan: Plan, analysis: Analysis) -> Plan:
     """`plan` with the statement of its derivation, for a report (the plan's points; the
     `loaded` level's statics when the plan holds it)."""
-    loaded = None if plan.loaded is None else \
-        loaded_derivation(analysis, beam_column=plan.loaded.beam_column)
-    return dataclasses.replace(plan, derivation=derivation(
-        analysis, plan.points, moved_points(analysis, plan.points), loaded))
+    loaded = (
+        None
+        if plan.loaded is None
+        else loaded_derivation(analysis, beam_column=plan.loaded.beam_column)
+    )
+    return dataclasses.replace(
+        plan,
+        derivation=derivation(analysis, plan.points, moved_points(analysis, plan.points), loaded),
+    )
 
 
 def moved_points(analysis: Analysis, points: Sequence[str]) -> frozenset[str]:
@@ -371,9 +509,13 @@ def moved_points(analysis: Analysis, points: Sequence[str]) -> frozenset[str]:
     (the others need no loop solved at any level)."""
     an = analysis
     return frozenset(
-        n for n in points
-        if any(b in an.kin.unknowns
-               for b in an.structure.tree_path(an.link[an.mechanism.point(n).link])))
+        n
+        for n in points
+        if any(
+            b in an.kin.unknowns
+            for b in an.structure.tree_path(an.link[an.mechanism.point(n).link])
+        )
+    )
 
 
 def _fixed_angles(an: Analysis, fixed: Mapping[str, sp.Expr]) -> dict[int, sp.Expr]:
@@ -384,17 +526,28 @@ def _fixed_angles(an: Analysis, fixed: Mapping[str, sp.Expr]) -> dict[int, sp.Ex
     held = {}
     for name, value in fixed.items():
         if name not in by_name:
-            raise InputError(f"'{name}' is not an input hinge", file=an.mechanism.path,
-                             entry="--fix", hint="inputs: " + ", ".join(by_name))
+            raise InputError(
+                f"'{name}' is not an input hinge",
+                file=an.mechanism.path,
+                entry="--fix",
+                hint="inputs: " + ", ".join(by_name),
+            )
         number = sp.N(value, 30)
         if not (number.is_real and abs(number) <= sp.pi):
-            raise InputError(f"the fixed angle {name} = {sp.sstr(value)[:40]} is not within "
-                             "[-pi, pi]", file=an.mechanism.path, entry="--fix",
-                             hint="give the input's rotation from the as-fabricated pose, rad")
+            raise InputError(
+                f"the fixed angle {name} = {sp.sstr(value)[:40]} is not within [-pi, pi]",
+                file=an.mechanism.path,
+                entry="--fix",
+                hint="give the input's rotation from the as-fabricated pose, rad",
+            )
         held[by_name[name]] = sp.sympify(value)
     if held and len(held) == len(by_name):
-        raise InputError("every input is fixed", file=an.mechanism.path, entry="--fix",
-                         hint="leave at least one input free (a pose needs no evaluator)")
+        raise InputError(
+            "every input is fixed",
+            file=an.mechanism.path,
+            entry="--fix",
+            hint="leave at least one input free (a pose needs no evaluator)",
+        )
     return held
 
 
@@ -407,8 +560,9 @@ def _substituted(routine: Routine, values: dict[sp.Symbol, sp.Expr]) -> Routine:
 
 def _renamed(routine: Routine, names: dict[sp.Symbol, sp.Symbol]) -> Routine:
     """The routine with parameter symbols renamed (arguments, assignments and outputs)."""
-    args = tuple(Argument(a.name, tuple(names.get(s, s) for s in a.symbols))
-                 for a in routine.arguments)
+    args = tuple(
+        Argument(a.name, tuple(names.get(s, s) for s in a.symbols)) for a in routine.arguments
+    )
     lines = tuple((s, e.xreplace(names)) for s, e in routine.assignments)
     outs = tuple(sp.sympify(e).xreplace(names) for e in routine.outputs)
     return Routine(routine.name, args, lines, outs, routine.doc)

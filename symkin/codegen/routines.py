@@ -1,4 +1,5 @@
-"""Routines: the functions every backend emits, as CSE'd straight-line programs of sympy assignments.
+"""Routines: the functions every backend emits, as CSE'd straight-line programs of sympy
+assignments.
 
 A routine has named array arguments (inputs, params, theta, delta, ...), an ordered list of named
 intermediates (already named as they were built, OpenSYMORO style) and outputs. `optimize` runs one
@@ -36,8 +37,10 @@ class Routine:
     @cached_property
     def ops(self) -> int:
         """Operation count (sympy count_ops) of the assignments and outputs."""
-        return int(sum(sp.count_ops(e) for _, e in self.assignments)
-                   + sum(sp.count_ops(e) for e in self.outputs))
+        return int(
+            sum(sp.count_ops(e) for _, e in self.assignments)
+            + sum(sp.count_ops(e) for e in self.outputs)
+        )
 
 
 def optimize(routine: Routine, prefix: str = "_tmp") -> Routine:
@@ -60,7 +63,7 @@ def optimize(routine: Routine, prefix: str = "_tmp") -> Routine:
     for symbol, expr in zip(named, reduced[: len(named)]):
         need(expr)
         lines.append((symbol, expr))
-    outputs = tuple(reduced[len(named):])
+    outputs = tuple(reduced[len(named) :])
     for expr in outputs:
         need(expr)
     return Routine(routine.name, routine.arguments, tuple(lines), outputs, routine.doc)

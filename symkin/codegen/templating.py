@@ -7,12 +7,14 @@ from importlib import resources
 
 import jinja2
 
-
 #: Jinja delimiters for LaTeX templates (SymForce style), so TeX's braces never clash with Jinja's.
 LATEX_DELIMITERS = {
-    "block_start_string": r"\BLOCK{", "block_end_string": "}",
-    "variable_start_string": r"\VAR{", "variable_end_string": "}",
-    "comment_start_string": r"\#{", "comment_end_string": "}",
+    "block_start_string": r"\BLOCK{",
+    "block_end_string": "}",
+    "variable_start_string": r"\VAR{",
+    "variable_end_string": "}",
+    "comment_start_string": r"\#{",
+    "comment_end_string": "}",
 }
 
 

@@ -29,28 +29,36 @@ def compiler() -> str:
     """The C compiler: $CC, else cc; a clear error when there is none."""
     cc = os.environ.get("CC", "cc")
     if shutil.which(cc) is None:
-        raise InputError(f"no C compiler found ('{cc}')", entry="--backend c",
-                         hint="install gcc (apt-get install gcc) or set CC")
+        raise InputError(
+            f"no C compiler found ('{cc}')",
+            entry="--backend c",
+            hint="install gcc (apt-get install gcc) or set CC",
+        )
     return cc
 
 
 def cache_dir() -> Path:
     """$SYMKIN_CACHE, else $XDG_CACHE_HOME/symkin, else ~/.cache/symkin (docs/cli.md)."""
     base = os.environ.get("SYMKIN_CACHE") or os.path.join(
-        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "symkin")
+        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "symkin"
+    )
     return Path(base)
 
 
 def _cache_error(folder: Path, why: str) -> InputError:
-    return InputError(f"the compiled-code cache '{folder}' {why}", entry="SYMKIN_CACHE",
-                      hint="set SYMKIN_CACHE to a folder of your own that only you can write "
-                           "(it is created with mode 0700 if missing)")
+    return InputError(
+        f"the compiled-code cache '{folder}' {why}",
+        entry="SYMKIN_CACHE",
+        hint="set SYMKIN_CACHE to a folder of your own that only you can write "
+        "(it is created with mode 0700 if missing)",
+    )
 
 
 def _private(stat_result: os.stat_result) -> bool:
     """Owned by this user and writable by no one else."""
-    return (stat_result.st_uid == os.getuid()
-            and not stat_result.st_mode & (stat.S_IWGRP | stat.S_IWOTH))
+    return stat_result.st_uid == os.getuid() and not stat_result.st_mode & (
+        stat.S_IWGRP | stat.S_IWOTH
+    )
 
 
 def safe_cache_dir() -> Path:
@@ -65,8 +73,11 @@ def safe_cache_dir() -> Path:
     if not stat.S_ISDIR(info.st_mode):
         raise _cache_error(folder, "is not a folder")
     if not _private(info):
-        who = ("belongs to another user" if info.st_uid != os.getuid()
-               else f"is writable by others (mode {stat.S_IMODE(info.st_mode):o})")
+        who = (
+            "belongs to another user"
+            if info.st_uid != os.getuid()
+            else f"is writable by others (mode {stat.S_IMODE(info.st_mode):o})"
+        )
         raise _cache_error(folder, f"{who}: code loaded from it could be anyone's")
     if not os.access(folder, os.W_OK | os.X_OK):
         raise _cache_error(folder, "is not writable")
@@ -96,8 +107,9 @@ def _verified(target: Path, record: Path, source_digest: str) -> bool:
         return False
 
 
-def _replace_atomically(folder: Path, final: Path, data: bytes | None = None,
-                        src: Path | None = None) -> None:
+def _replace_atomically(
+    folder: Path, final: Path, data: bytes | None = None, src: Path | None = None
+) -> None:
     """Put `data` (or the file `src`) at `final` with a unique temporary name and one rename."""
     fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{final.name}.", suffix=".tmp")
     try:
@@ -111,8 +123,9 @@ def _replace_atomically(folder: Path, final: Path, data: bytes | None = None,
         raise
 
 
-def build(name: str, header: str, source: str, flags: tuple[str, ...] = CFLAGS,
-          extra: str = "") -> Path:
+def build(
+    name: str, header: str, source: str, flags: tuple[str, ...] = CFLAGS, extra: str = ""
+) -> Path:
     """Shared library of the generated pair (and an `extra` C file, e.g. a timer), cached by the
     hash of its texts and flags; a cached library is loaded only when verified (see _verified)
     and rebuilt otherwise."""
@@ -133,16 +146,18 @@ def build(name: str, header: str, source: str, flags: tuple[str, ...] = CFLAGS,
     return target
 
 
-def load_transient(name: str, header: str, source: str,
-                   flags: tuple[str, ...] = CFLAGS) -> ctypes.CDLL:
+def load_transient(
+    name: str, header: str, source: str, flags: tuple[str, ...] = CFLAGS
+) -> ctypes.CDLL:
     """The generated pair compiled in a temporary folder and loaded; the folder is removed
     before returning (the loaded library stays mapped), so no file is left behind."""
     with tempfile.TemporaryDirectory(prefix="symkin-") as tmp:
         return ctypes.CDLL(str(_compile(compiler(), flags, name, header, source, "", Path(tmp))))
 
 
-def _compile(cc: str, flags: tuple[str, ...], name: str, header: str, source: str, extra: str,
-             folder: Path) -> Path:
+def _compile(
+    cc: str, flags: tuple[str, ...], name: str, header: str, source: str, extra: str, folder: Path
+) -> Path:
     """The shared library of the texts, built in `folder`."""
     (folder / f"{name}.h").write_text(header)
     (folder / f"{name}.c").write_text(source)
@@ -151,8 +166,9 @@ def _compile(cc: str, flags: tuple[str, ...], name: str, header: str, source: st
         (folder / "extra.c").write_text(extra)
         files.append("extra.c")
     built = folder / "lib.so"
-    proc = subprocess.run([cc, *flags, *files, "-o", str(built), "-lm"], cwd=folder,
-                          capture_output=True, text=True)
+    proc = subprocess.run(
+        [cc, *flags, *files, "-o", str(built), "-lm"], cwd=folder, capture_output=True, text=True
+    )
     if proc.returncode != 0:
         raise RuntimeError(f"the generated C did not compile:\n{proc.stderr}")
     return built
@@ -162,8 +178,16 @@ class Library:
     """A loaded generated evaluator, called through its batch entry points (one ctypes call for
     any number of configurations: docs/generated-code.md)."""
 
-    def __init__(self, path: Path | ctypes.CDLL, name: str, n_inputs: int, n_params: int,
-                 n_points: int, n_hinges: int, n_links: int = 0):
+    def __init__(
+        self,
+        path: Path | ctypes.CDLL,
+        name: str,
+        n_inputs: int,
+        n_params: int,
+        n_points: int,
+        n_hinges: int,
+        n_links: int = 0,
+    ):
         self.lib = path if isinstance(path, ctypes.CDLL) else ctypes.CDLL(str(path))
         dptr, iptr = ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_int)
         self.fn = getattr(self.lib, f"{name}_evaluate_pose")
@@ -178,33 +202,47 @@ class Library:
         self.sensitivity = getattr(self.lib, f"{name}_sensitivity_batch", None)
         if self.sensitivity is not None:
             self.sensitivity.restype = ctypes.c_int
-            self.sensitivity.argtypes = [ctypes.c_int, dptr, dptr, ctypes.c_int, dptr, dptr, dptr,
-                                         iptr]
+            self.sensitivity.argtypes = [
+                ctypes.c_int,
+                dptr,
+                dptr,
+                ctypes.c_int,
+                dptr,
+                dptr,
+                dptr,
+                iptr,
+            ]
         self.n_inputs, self.n_params = n_inputs, n_params
         self.n_points, self.n_hinges, self.n_links = n_points, n_hinges, n_links
         self.n_variables = n_params + n_inputs
 
-    def pose(self, inputs, params=None, level: int = 2
-             ) -> tuple[int, list[float], list[float], list[float]]:
+    def pose(
+        self, inputs, params=None, level: int = 2
+    ) -> tuple[int, list[float], list[float], list[float]]:
         """One configuration in one call: (status, out: 6 doubles per point, angles: rigid then
         compliant per hinge, links: rigid, compliant, deviation per link)."""
         x = (ctypes.c_double * max(1, self.n_inputs))(*inputs)
         out = (ctypes.c_double * max(1, 6 * self.n_points))()
         angles = (ctypes.c_double * (2 * self.n_hinges))()
         links = (ctypes.c_double * max(1, 3 * self.n_links))()
-        status = self.fn(x, self.params(params), level, out, angles,
-                         links if self.n_links else None)
-        return (status, list(out)[: 6 * self.n_points], list(angles),
-                list(links)[: 3 * self.n_links])
+        status = self.fn(
+            x, self.params(params), level, out, angles, links if self.n_links else None
+        )
+        return (
+            status,
+            list(out)[: 6 * self.n_points],
+            list(angles),
+            list(links)[: 3 * self.n_links],
+        )
 
-    def evaluate(self, inputs, params=None, level: int = 2
-                 ) -> tuple[int, list[float], list[float]]:
+    def evaluate(self, inputs, params=None, level: int = 2) -> tuple[int, list[float], list[float]]:
         """One configuration: (status, out: 6 doubles per point, angles: rigid then compliant
         per hinge)."""
         return self.pose(inputs, params, level)[:3]
 
-    def evaluate_rows(self, inputs: np.ndarray, params=None, level: int = 2,
-                      angles: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    def evaluate_rows(
+        self, inputs: np.ndarray, params=None, level: int = 2, angles: bool = False
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """n configurations in one call: inputs (n, n_inputs); (status (n,), out (n, 6 n_points),
         angles (n, 2 n_hinges) or None)."""
         x = _rows(inputs, self.n_inputs)
@@ -215,8 +253,9 @@ class Library:
         self.batch(n, _ptr(x), self.params(params), level, _ptr(out), _ptr(ang), _iptr(status))
         return status, out, ang
 
-    def evaluate_grid(self, params: np.ndarray, inputs: np.ndarray, level: int = 2,
-                      out: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    def evaluate_grid(
+        self, params: np.ndarray, inputs: np.ndarray, level: int = 2, out: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Every row of params (n_sets, n_params) at every row of inputs (n, n_inputs), one
         call: (status (n_sets, n), out (n_sets, n, 6 n_points)); `out` may be given, to reuse."""
         p = np.ascontiguousarray(params, dtype=np.float64)
@@ -227,12 +266,20 @@ class Library:
         if out is None or out.shape != shape + (6 * self.n_points,) or not out.flags.c_contiguous:
             out = np.empty(shape + (6 * self.n_points,))
         status = np.empty(shape, dtype=np.intc)
-        self.grid(shape[0], _ptr(p) if self.n_params else None, shape[1], _ptr(x), level,
-                  _ptr(out), _iptr(status))
+        self.grid(
+            shape[0],
+            _ptr(p) if self.n_params else None,
+            shape[1],
+            _ptr(x),
+            level,
+            _ptr(out),
+            _iptr(status),
+        )
         return status, out
 
-    def sensitivity_rows(self, inputs: np.ndarray, params=None, level: int = 2
-                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def sensitivity_rows(
+        self, inputs: np.ndarray, params=None, level: int = 2
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Sensitivities of n configurations in one call: (status (n,), values (n, 6 n_points),
         deviation and rigid (n, n_points, n_variables, 2))."""
         if self.sensitivity is None:
@@ -243,8 +290,16 @@ class Library:
         dev = np.empty((n, self.n_points, self.n_variables, 2))
         rig = np.empty((n, self.n_points, self.n_variables, 2))
         status = np.empty(n, dtype=np.intc)
-        self.sensitivity(n, _ptr(x), self.params(params), level, _ptr(values), _ptr(dev),
-                         _ptr(rig), _iptr(status))
+        self.sensitivity(
+            n,
+            _ptr(x),
+            self.params(params),
+            level,
+            _ptr(values),
+            _ptr(dev),
+            _ptr(rig),
+            _iptr(status),
+        )
         return status, values, dev, rig
 
     def params(self, params) -> ctypes.Array | None:
@@ -300,16 +355,28 @@ double symkin_time(const double *inputs, int n, int repeats, int level, double *
 """
 
 
-def time_per_evaluation(name: str, header: str, source: str, inputs: list[float], n: int,
-                        level: int, budget: float = 0.2) -> float:
+def time_per_evaluation(
+    name: str,
+    header: str,
+    source: str,
+    inputs: list[float],
+    n: int,
+    level: int,
+    budget: float = 0.2,
+) -> float:
     """Seconds per call of the generated evaluator over `n` input rows, timed inside C."""
     mech_name = _evaluate_prefix(header)
     extra = TIMER.replace("UPPER", mech_name.upper()).replace("NAME", mech_name)
     lib = ctypes.CDLL(str(build(mech_name, header, source, CFLAGS, extra)))
     fn = lib.symkin_time
     fn.restype = ctypes.c_double
-    fn.argtypes = [ctypes.POINTER(ctypes.c_double), ctypes.c_int, ctypes.c_int, ctypes.c_int,
-                   ctypes.POINTER(ctypes.c_double)]
+    fn.argtypes = [
+        ctypes.POINTER(ctypes.c_double),
+        ctypes.c_int,
+        ctypes.c_int,
+        ctypes.c_int,
+        ctypes.POINTER(ctypes.c_double),
+    ]
     data = (ctypes.c_double * max(1, len(inputs)))(*inputs)
     sink = ctypes.c_double()
     repeats = 1
@@ -329,7 +396,7 @@ def numpy_module_in_memory(source: str, name: str) -> ModuleType:
     """A generated numpy module executed from its text, with no file (our own generated code,
     names escaped); it is not entered in sys.modules."""
     module = ModuleType(f"symkin_compiled_{name}")
-    exec(compile(source, f"<symkin generated {name}>", "exec"), module.__dict__)  # noqa: S102
+    exec(compile(source, f"<symkin generated {name}>", "exec"), module.__dict__)
     return module
 
 
@@ -348,9 +415,9 @@ def import_numpy_module(source: str, name: str) -> ModuleType:
         if module is None:
             module = ModuleType(module_name)
             module.__file__ = f"<symkin generated {name}>"
-            sys.modules[module_name] = module       # functions pickle by module name
+            sys.modules[module_name] = module  # functions pickle by module name
             try:
-                exec(compile(source, module.__file__, "exec"), module.__dict__)  # noqa: S102
+                exec(compile(source, module.__file__, "exec"), module.__dict__)
             except BaseException:
                 del sys.modules[module_name]
                 raise

@@ -21,8 +21,15 @@ class InputError(SymkinError):
 
     exit_code = 2
 
-    def __init__(self, message: str, *, file: str | None = None, line: int | None = None,
-                 entry: str | None = None, hint: str | None = None) -> None:
+    def __init__(
+        self,
+        message: str,
+        *,
+        file: str | None = None,
+        line: int | None = None,
+        entry: str | None = None,
+        hint: str | None = None,
+    ) -> None:
         self.message = message
         self.file = file
         self.line = line

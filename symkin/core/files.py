@@ -30,15 +30,24 @@ def output_dir(path: str | Path, option: str) -> Path:
     target = Path(path)
     shown = str(path)
     if target.exists() and not target.is_dir():
-        raise InputError(f"'{shown}' is a file, not a folder", entry=option,
-                         hint="give a folder (it is created if missing), e.g. -o out/")
+        raise InputError(
+            f"'{shown}' is a file, not a folder",
+            entry=option,
+            hint="give a folder (it is created if missing), e.g. -o out/",
+        )
     base = _existing_ancestor(target.absolute())
     if not base.is_dir():
-        raise InputError(f"'{shown}' cannot be created: '{base}' is a file, not a folder",
-                         entry=option, hint="choose a folder outside it")
+        raise InputError(
+            f"'{shown}' cannot be created: '{base}' is a file, not a folder",
+            entry=option,
+            hint="choose a folder outside it",
+        )
     if not os.access(base, os.W_OK | os.X_OK):
-        raise InputError(f"'{shown}' is not writable (no permission to write in '{base}')",
-                         entry=option, hint="choose a folder you can write to")
+        raise InputError(
+            f"'{shown}' is not writable (no permission to write in '{base}')",
+            entry=option,
+            hint="choose a folder you can write to",
+        )
     return target
 
 
@@ -48,20 +57,31 @@ def output_file(path: str | Path, option: str, suffixes: tuple[str, ...]) -> Pat
     target = Path(path)
     shown = str(path)
     if target.is_dir():
-        raise InputError(f"'{shown}' is a folder", entry=option,
-                         hint=f"name a file inside it, e.g. {target / ('plot' + suffixes[0])}")
+        raise InputError(
+            f"'{shown}' is a folder",
+            entry=option,
+            hint=f"name a file inside it, e.g. {target / ('plot' + suffixes[0])}",
+        )
     if target.suffix.lower() not in suffixes:
-        raise InputError(f"'{shown}' does not end in {' or '.join(suffixes)}", entry=option,
-                         hint=f"name the file e.g. plot{suffixes[0]}")
+        raise InputError(
+            f"'{shown}' does not end in {' or '.join(suffixes)}",
+            entry=option,
+            hint=f"name the file e.g. plot{suffixes[0]}",
+        )
     folder = target.absolute().parent
     if not folder.is_dir():
         what = "is a file, not a folder" if folder.exists() else "does not exist"
-        raise InputError(f"the folder '{folder}' of '{shown}' {what}", entry=option,
-                         hint="create the folder first, or write the file elsewhere")
-    if not os.access(folder, os.W_OK | os.X_OK) or (target.exists()
-                                                     and not os.access(target, os.W_OK)):
-        raise InputError(f"'{shown}' is not writable", entry=option,
-                         hint="choose a path you can write to")
+        raise InputError(
+            f"the folder '{folder}' of '{shown}' {what}",
+            entry=option,
+            hint="create the folder first, or write the file elsewhere",
+        )
+    if not os.access(folder, os.W_OK | os.X_OK) or (
+        target.exists() and not os.access(target, os.W_OK)
+    ):
+        raise InputError(
+            f"'{shown}' is not writable", entry=option, hint="choose a path you can write to"
+        )
     return target
 
 
@@ -82,7 +102,7 @@ def _locked(folder: Path):
         fcntl.flock(fd, fcntl.LOCK_EX)
         yield
     finally:
-        os.close(fd)                         # releases the lock
+        os.close(fd)  # releases the lock
 
 
 def _roll_forward(folder: Path) -> None:
@@ -134,7 +154,7 @@ def write_atomically(files: dict[str, bytes], out_dir: str | Path) -> list[Path]
                 f.write("\n".join([staged.name, *sorted(files)]))
                 f.flush()
                 os.fsync(f.fileno())
-            os.replace(tmp, out_dir / COMMIT)          # the commit point
+            os.replace(tmp, out_dir / COMMIT)  # the commit point
             _roll_forward(out_dir)
         finally:
             if staged.exists():

@@ -18,16 +18,16 @@ from .errors import InputError
 class Level:
     """One row of the level table."""
 
-    name: str                       # --level, numpy LEVELS, JSON "level"
-    code: int                       # the generated C's `level` argument
-    title: str                      # how reports and plots name it
-    needs_delta: bool               # compliant angles differ from rigid ones: the loops are solved
-    equation: str = ""              # the paper's equation it restates, e.g. "(4.8)"
-    needs_stiffness: bool = False   # needs E, thickness and width of every compliant plate
-    generated: bool = True          # the generated C and numpy hold it; else mpmath only
-    sensitivity: bool = True        # closed-form derivatives by the parameters (docs/sensitivity.md)
-    shares: str = ""                # the level whose loop solver and deviation routine it runs,
-                                    # with constants of its own
+    name: str  # --level, numpy LEVELS, JSON "level"
+    code: int  # the generated C's `level` argument
+    title: str  # how reports and plots name it
+    needs_delta: bool  # compliant angles differ from rigid ones: the loops are solved
+    equation: str = ""  # the paper's equation it restates, e.g. "(4.8)"
+    needs_stiffness: bool = False  # needs E, thickness and width of every compliant plate
+    generated: bool = True  # the generated C and numpy hold it; else mpmath only
+    sensitivity: bool = True  # closed-form derivatives by the parameters (docs/sensitivity.md)
+    shares: str = ""  # the level whose loop solver and deviation routine it runs,
+    # with constants of its own
 
     @property
     def routine(self) -> str:
@@ -48,10 +48,24 @@ LEVELS: tuple[Level, ...] = (
     Level("exact", 2, "exact", needs_delta=True),
     # The physical levels (docs/physics.md): the plates' stiffness and the file's loads.
     Level("loaded", 3, "loaded", needs_delta=True, needs_stiffness=True, sensitivity=False),
-    Level("loaded_refined", 5, "loaded (refined)", needs_delta=True, needs_stiffness=True,
-          sensitivity=False, shares="loaded"),
-    Level("equilibrium", 4, "equilibrium", needs_delta=False, needs_stiffness=True,
-          generated=False, sensitivity=False),
+    Level(
+        "loaded_refined",
+        5,
+        "loaded (refined)",
+        needs_delta=True,
+        needs_stiffness=True,
+        sensitivity=False,
+        shares="loaded",
+    ),
+    Level(
+        "equilibrium",
+        4,
+        "equilibrium",
+        needs_delta=False,
+        needs_stiffness=True,
+        generated=False,
+        sensitivity=False,
+    ),
 )
 #: The closed-form physical levels: the pin linkage's statics, the plates' compliance and the
 #: loaded closure (symkin.physics.statics); `loaded_refined` solves the statics a second time.
@@ -71,8 +85,9 @@ def get(name: str, entry: str = "--level") -> Level:
     try:
         return _BY_NAME[name]
     except KeyError:
-        raise InputError(f"unknown level '{name}'", entry=entry,
-                         hint="levels: " + ", ".join(NAMES)) from None
+        raise InputError(
+            f"unknown level '{name}'", entry=entry, hint="levels: " + ", ".join(NAMES)
+        ) from None
 
 
 def reference(stiffness: bool = False) -> Level:

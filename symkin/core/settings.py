@@ -39,21 +39,21 @@ from dataclasses import dataclass
 class Tolerances:
     """The stopping rules of one arithmetic (float64, float32 or mpmath at some precision)."""
 
-    rigid: float        # a rigid Newton step at most this (radians) ends a continuation step
-    converged: float    # an exact-level step at most this times |δ| ends the iteration
-    stalled: float      # a stalled exact-level step at most this times |δ| ends it too
-    polish: int         # Newton steps on the rigid closure after the rigid start
+    rigid: float  # a rigid Newton step at most this (radians) ends a continuation step
+    converged: float  # an exact-level step at most this times |δ| ends the iteration
+    stalled: float  # a stalled exact-level step at most this times |δ| ends it too
+    polish: int  # Newton steps on the rigid closure after the rigid start
 
 
 @dataclass(frozen=True)
 class SolverSettings:
     """Continuation, iteration caps and tolerances of every solver symkin runs."""
 
-    continuation_step: float = 0.05      # largest input change per continuation step (rad)
-    rigid_iterations: int = 30           # Newton cap per continuation step
-    exact_iterations: int = 40           # Newton cap of the exact level
-    stall_ratio: float = 0.5             # a step this fraction of the previous one has stalled
-    winding: float = math.pi             # a loop's angle sum this large: a hinge wrapped (no assembly)
+    continuation_step: float = 0.05  # largest input change per continuation step (rad)
+    rigid_iterations: int = 30  # Newton cap per continuation step
+    exact_iterations: int = 40  # Newton cap of the exact level
+    stall_ratio: float = 0.5  # a step this fraction of the previous one has stalled
+    winding: float = math.pi  # a loop's angle sum this large: a hinge wrapped (no assembly)
     float64: Tolerances = Tolerances(rigid=1e-10, converged=1e-8, stalled=1e-12, polish=1)
     float32: Tolerances = Tolerances(rigid=1e-4, converged=3e-4, stalled=1e-5, polish=1)
 
@@ -67,8 +67,12 @@ class SolverSettings:
 
     def mpmath(self, dps: int) -> Tolerances:
         """The rules at `dps` decimal digits: steps near the precision's own rounding floor."""
-        return Tolerances(rigid=10.0 ** (6 - dps), converged=10.0 ** (4 - dps),
-                          stalled=10.0 ** (-(dps // 2)), polish=0)
+        return Tolerances(
+            rigid=10.0 ** (6 - dps),
+            converged=10.0 ** (4 - dps),
+            stalled=10.0 ** (-(dps // 2)),
+            polish=0,
+        )
 
 
 #: The settings every solver reads.

@@ -30,13 +30,13 @@ from .structure import Structure, build
 class Pruning:
     """What a pruned derivation keeps of the file's mechanism, and why."""
 
-    points: tuple[str, ...]            # the requested points
-    physical: bool                     # force paths were followed too (physical levels)
-    kept_links: tuple[str, ...]        # in file order, the ground first
+    points: tuple[str, ...]  # the requested points
+    physical: bool  # force paths were followed too (physical levels)
+    kept_links: tuple[str, ...]  # in file order, the ground first
     dropped_links: tuple[str, ...]
     dropped_hinges: tuple[str, ...]
     dropped_inputs: tuple[str, ...]
-    kept_loops: int                    # independent loops (m - n) kept and dropped
+    kept_loops: int  # independent loops (m - n) kept and dropped
     dropped_loops: int
 
     @property
@@ -47,24 +47,32 @@ class Pruning:
         """Lines for the generated headers and the report (empty when nothing was dropped)."""
         if not self.pruned:
             return []
-        why = ("their loops neither move the points nor, through their plates and loads, "
-               "change the forces on the links that do" if self.physical else
-               "their loops do not move the points")
-        lines = [f"Pruned for the points {', '.join(self.points)}: kept {self.kept_loops} of "
-                 f"{self.kept_loops + self.dropped_loops} loop(s) and the links "
-                 f"{', '.join(self.kept_links)}; dropped the links "
-                 f"{', '.join(self.dropped_links) or '(none)'} and the hinges "
-                 f"{', '.join(self.dropped_hinges)} ({why})."]
+        why = (
+            "their loops neither move the points nor, through their plates and loads, "
+            "change the forces on the links that do"
+            if self.physical
+            else "their loops do not move the points"
+        )
+        lines = [
+            f"Pruned for the points {', '.join(self.points)}: kept {self.kept_loops} of "
+            f"{self.kept_loops + self.dropped_loops} loop(s) and the links "
+            f"{', '.join(self.kept_links)}; dropped the links "
+            f"{', '.join(self.dropped_links) or '(none)'} and the hinges "
+            f"{', '.join(self.dropped_hinges)} ({why})."
+        ]
         if self.dropped_inputs:
             one = len(self.dropped_inputs) == 1
-            lines.append(f"  The input{'' if one else 's'} {', '.join(self.dropped_inputs)} "
-                         f"move{'s' if one else ''} none of the points and "
-                         f"{'is' if one else 'are'} not an argument of this evaluator.")
+            lines.append(
+                f"  The input{'' if one else 's'} {', '.join(self.dropped_inputs)} "
+                f"move{'s' if one else ''} none of the points and "
+                f"{'is' if one else 'are'} not an argument of this evaluator."
+            )
         return lines
 
 
-def for_levels(mech: Mechanism, points: Sequence[str], levels: Sequence[str] | None
-               ) -> tuple[Mechanism, Pruning]:
+def for_levels(
+    mech: Mechanism, points: Sequence[str], levels: Sequence[str] | None
+) -> tuple[Mechanism, Pruning]:
     """:func:`prune` for a derivation of `levels` (None: every generated level the file's data
     allows): force paths are followed when it holds a physical level, the file's direct paths
     kept when it holds `paper`."""
@@ -72,8 +80,13 @@ def for_levels(mech: Mechanism, points: Sequence[str], levels: Sequence[str] | N
     return prune(mech, points, physical, paths=levels is None or "paper" in levels)
 
 
-def needed_links(mech: Mechanism, points: Sequence[str], physical: bool = False,
-                 paths: bool = True, structure: Structure | None = None) -> set[str]:
+def needed_links(
+    mech: Mechanism,
+    points: Sequence[str],
+    physical: bool = False,
+    paths: bool = True,
+    structure: Structure | None = None,
+) -> set[str]:
     """The links the requested points' positions depend on (the ground included); with
     `physical`, also every link their forces reach other than through the ground; with `paths`
     (the `paper` level is derived), also the links on the points' direct paths of the file's
@@ -82,13 +95,16 @@ def needed_links(mech: Mechanism, points: Sequence[str], physical: bool = False,
     mech.check_points(points)
     body = _bodies(mech)
     depends = _dependencies(mech, body)
-    if depends is None:                 # structurally singular: keep everything
+    if depends is None:  # structurally singular: keep everything
         return {lk.name for lk in mech.links}
     carriers = {mech.point(p).link for p in points}
     if paths:
         s = structure or build(mech)
-        carriers |= {s.links[s.i_minus[a - 1]] for p in points
-                     for a in s.tree_path(s.links.index(mech.point(p).link))}
+        carriers |= {
+            s.links[s.i_minus[a - 1]]
+            for p in points
+            for a in s.tree_path(s.links.index(mech.point(p).link))
+        }
     todo = [body[link] for link in carriers]
     bodies: set[str] = {body[mech.ground]}
     while todo:
@@ -102,8 +118,9 @@ def needed_links(mech: Mechanism, points: Sequence[str], physical: bool = False,
     return kept
 
 
-def prune(mech: Mechanism, points: Sequence[str], physical: bool = False, paths: bool = True
-          ) -> tuple[Mechanism, Pruning]:
+def prune(
+    mech: Mechanism, points: Sequence[str], physical: bool = False, paths: bool = True
+) -> tuple[Mechanism, Pruning]:
     """The mechanism of the links `points` depend on (see :func:`needed_links`): its hinges are
     those between kept links, its points the requested ones, its loads those on kept links. Its
     skeleton tree keeps every edge of the file's tree among the kept links (so the points'
@@ -117,7 +134,7 @@ def prune(mech: Mechanism, points: Sequence[str], physical: bool = False, paths:
     if len(hinges) == len(mech.hinges) and len(links) == len(mech.links):
         sub = dataclasses.replace(mech, points=tuple(p for p in mech.points if p.name in points))
     else:
-        tree = [name for name in full.hinges[:full.n] if name in hinge_names]
+        tree = [name for name in full.hinges[: full.n] if name in hinge_names]
         root = {lk.name: lk.name for lk in links}
         chosen = []
         for name in tree + [h.name for h in hinges]:
@@ -131,19 +148,26 @@ def prune(mech: Mechanism, points: Sequence[str], physical: bool = False, paths:
                 break
             chain.append(name)
         sub = dataclasses.replace(
-            mech, links=links, hinges=hinges,
+            mech,
+            links=links,
+            hinges=hinges,
             points=tuple(p for p in mech.points if p.name in points),
             loads=tuple(ld for ld in mech.loads if ld.link in kept),
             chords=tuple(h.name for h in hinges if h.name not in chosen),
-            basic_chain=None if mech.basic_chain is None else tuple(chain))
+            basic_chain=None if mech.basic_chain is None else tuple(chain),
+        )
     order = [p.name for p in mech.points if p.name in points]
     ground_first = (mech.ground,) + tuple(lk.name for lk in links if lk.name != mech.ground)
     return sub, Pruning(
-        points=tuple(order), physical=physical, kept_links=ground_first,
+        points=tuple(order),
+        physical=physical,
+        kept_links=ground_first,
         dropped_links=tuple(lk.name for lk in mech.links if lk.name not in kept),
         dropped_hinges=tuple(h.name for h in mech.hinges if h.name not in hinge_names),
         dropped_inputs=tuple(n for n in mech.inputs if n not in hinge_names),
-        kept_loops=sub.loop_count, dropped_loops=mech.loop_count - sub.loop_count)
+        kept_loops=sub.loop_count,
+        dropped_loops=mech.loop_count - sub.loop_count,
+    )
 
 
 def _bodies(mech: Mechanism) -> dict[str, str]:
@@ -169,9 +193,13 @@ def _dependencies(mech: Mechanism, body: dict[str, str]) -> dict[str, set[str]] 
     """Body -> the bodies its pose is solved from (through the equations matched to its three
     pose variables), or None when no matching covers every variable."""
     ground = body[mech.ground]
-    variables = [(b, k) for b in dict.fromkeys(body[lk.name] for lk in mech.links)
-                 if b != ground for k in range(3)]
-    equations = []                      # the two closure equations of every hinge
+    variables = [
+        (b, k)
+        for b in dict.fromkeys(body[lk.name] for lk in mech.links)
+        if b != ground
+        for k in range(3)
+    ]
+    equations = []  # the two closure equations of every hinge
     for h in mech.hinges:
         if h.input:
             continue
@@ -180,7 +208,7 @@ def _dependencies(mech: Mechanism, body: dict[str, str]) -> dict[str, set[str]] 
         equations += [cols, cols]
     if len(equations) != len(variables):
         return None
-    matched: dict[tuple[str, int], int] = {}      # variable -> equation
+    matched: dict[tuple[str, int], int] = {}  # variable -> equation
 
     def augment(e: int, seen: set) -> bool:
         for v in equations[e]:
@@ -201,8 +229,9 @@ def _dependencies(mech: Mechanism, body: dict[str, str]) -> dict[str, set[str]] 
     return depends
 
 
-def _welded_links(mech: Mechanism, body: dict[str, str], bodies: set[str],
-                  carriers: set[str]) -> set[str]:
+def _welded_links(
+    mech: Mechanism, body: dict[str, str], bodies: set[str], carriers: set[str]
+) -> set[str]:
     """The links of `bodies` that are needed: those carrying a point, hinged (not by an input) to
     a link of another kept body, or the ground, and the input hinges' chains joining them within
     their body (a crank welded to the ground that nothing kept is hinged to is left out)."""

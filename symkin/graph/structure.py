@@ -28,17 +28,17 @@ class Structure:
     """
 
     mechanism: Mechanism
-    links: tuple[str, ...]          # link names by label 0..n
-    hinges: tuple[str, ...]         # hinge names by label 1..m (position a-1)
-    i_plus: tuple[int, ...]         # i+(a): the smaller label, reference link of hinge a
-    i_minus: tuple[int, ...]        # i-(a): the larger label
-    parent: tuple[int, ...]         # parent[i-1] = label of link i's parent in the skeleton tree
-    basic_chain: tuple[int, ...]    # labels 1..i* of the basic chain
-    relabeled: bool                 # False when the file's order already was a regular labeling
-    incidence: np.ndarray           # I, (n+1) x m
-    incidence_plus: np.ndarray      # I+, (n+1) x m
-    loops: np.ndarray               # Φ, (m-n) x m
-    paths: np.ndarray               # Ψ = [T; 0], m x n
+    links: tuple[str, ...]  # link names by label 0..n
+    hinges: tuple[str, ...]  # hinge names by label 1..m (position a-1)
+    i_plus: tuple[int, ...]  # i+(a): the smaller label, reference link of hinge a
+    i_minus: tuple[int, ...]  # i-(a): the larger label
+    parent: tuple[int, ...]  # parent[i-1] = label of link i's parent in the skeleton tree
+    basic_chain: tuple[int, ...]  # labels 1..i* of the basic chain
+    relabeled: bool  # False when the file's order already was a regular labeling
+    incidence: np.ndarray  # I, (n+1) x m
+    incidence_plus: np.ndarray  # I+, (n+1) x m
+    loops: np.ndarray  # Φ, (m-n) x m
+    paths: np.ndarray  # Ψ = [T; 0], m x n
 
     @property
     def n(self) -> int:
@@ -49,13 +49,13 @@ class Structure:
         return len(self.hinges)
 
     @property
-    def T(self) -> np.ndarray:  # noqa: N802 - the paper's name
+    def T(self) -> np.ndarray:
         """T = S̆⁻¹, the upper n rows of Ψ."""
         return self.paths[: self.n]
 
     @property
     def chords(self) -> tuple[str, ...]:
-        return self.hinges[self.n:]
+        return self.hinges[self.n :]
 
     def hinge_label(self, name: str) -> int:
         """Label a (1-based) of the named hinge."""
@@ -75,7 +75,8 @@ class Structure:
         return tuple(int(b) + 1 for b in np.flatnonzero(row))
 
     def loop_text(self, chord: int) -> str:
-        """The fundamental loop of `chord` as a signed sum of hinge names, e.g. 'A0 + A - B0 + B'."""
+        """The fundamental loop of `chord` as a signed sum of hinge names, e.g. 'A0 + A - B0 +
+        B'."""
         row = self.loops[chord - self.n - 1]
         terms = [("+ " if v > 0 else "- ") + self.hinges[b] for b, v in enumerate(row) if v]
         text = " ".join(terms)
@@ -83,8 +84,9 @@ class Structure:
 
     def mapping(self) -> list[tuple[str, str, int]]:
         """(kind, name, label) for every link and hinge: the labeling, for reports."""
-        return ([("link", name, i) for i, name in enumerate(self.links)]
-                + [("hinge", name, a + 1) for a, name in enumerate(self.hinges)])
+        return [("link", name, i) for i, name in enumerate(self.links)] + [
+            ("hinge", name, a + 1) for a, name in enumerate(self.hinges)
+        ]
 
 
 def build(mech: Mechanism) -> Structure:
@@ -93,7 +95,7 @@ def build(mech: Mechanism) -> Structure:
     chords = set(mech.chords or ())
     candidates = [h for h in mech.hinges if h.name not in chords]
     label: dict[str, int] = {mech.ground: 0}
-    tree_edge: list[str] = []       # tree_edge[i-1] = hinge joining link i to its parent
+    tree_edge: list[str] = []  # tree_edge[i-1] = hinge joining link i to its parent
     parent: list[int] = []
 
     def joining(link: str, labeled_only: str | None = None) -> str | None:
@@ -117,35 +119,49 @@ def build(mech: Mechanism) -> Structure:
         if link == mech.ground and previous == mech.ground and not tree_edge:
             continue
         if link in label:
-            raise InputError(f"link '{link}' appears twice on the basic chain or is the ground",
-                             file=mech.path, entry="basic_chain",
-                             hint="list the chain's links from the ground outward, once each")
+            raise InputError(
+                f"link '{link}' appears twice on the basic chain or is the ground",
+                file=mech.path,
+                entry="basic_chain",
+                hint="list the chain's links from the ground outward, once each",
+            )
         hinge = joining(link, previous)
         if hinge is None:
-            on_chord = [h.name for h in mech.hinges if h.name in chords
-                        and set(h.links) == {link, previous}]
+            on_chord = [
+                h.name for h in mech.hinges if h.name in chords and set(h.links) == {link, previous}
+            ]
             if on_chord:
-                raise InputError(f"the chord '{on_chord[0]}' lies on the basic chain between "
-                                 f"'{previous}' and '{link}'", file=mech.path, entry="chords",
-                                 hint="a chord may never lie on the basic chain; choose another")
-            raise InputError(f"no hinge joins '{previous}' and '{link}'", file=mech.path,
-                             entry="basic_chain",
-                             hint="consecutive links of the basic chain must share a hinge")
+                raise InputError(
+                    f"the chord '{on_chord[0]}' lies on the basic chain between "
+                    f"'{previous}' and '{link}'",
+                    file=mech.path,
+                    entry="chords",
+                    hint="a chord may never lie on the basic chain; choose another",
+                )
+            raise InputError(
+                f"no hinge joins '{previous}' and '{link}'",
+                file=mech.path,
+                entry="basic_chain",
+                hint="consecutive links of the basic chain must share a hinge",
+            )
         attach(link, hinge)
         previous = link
 
     while len(label) < len(file_links):
-        for link in file_links:                 # the unlabeled link first in file order...
+        for link in file_links:  # the unlabeled link first in file order...
             if link not in label:
-                hinge = joining(link)           # ...that a non-chord hinge reaches
+                hinge = joining(link)  # ...that a non-chord hinge reaches
                 if hinge is not None:
                     attach(link, hinge)
                     break
         else:
             lost = [lk for lk in file_links if lk not in label]
-            raise InputError(f"the chords leave link(s) {', '.join(lost)} outside the skeleton tree",
-                             file=mech.path, entry="chords",
-                             hint="name fewer chords: the other hinges must form a spanning tree")
+            raise InputError(
+                f"the chords leave link(s) {', '.join(lost)} outside the skeleton tree",
+                file=mech.path,
+                entry="chords",
+                hint="name fewer chords: the other hinges must form a spanning tree",
+            )
 
     links = tuple(sorted(label, key=label.get))
     tree = set(tree_edge)
@@ -189,9 +205,16 @@ def build(mech: Mechanism) -> Structure:
 
     relabeled = list(links) != file_links or list(hinges) != [h.name for h in mech.hinges]
     return Structure(
-        mechanism=mech, links=links, hinges=hinges, i_plus=tuple(i_plus), i_minus=tuple(i_minus),
-        parent=tuple(parent), basic_chain=tuple(chain), relabeled=relabeled,
+        mechanism=mech,
+        links=links,
+        hinges=hinges,
+        i_plus=tuple(i_plus),
+        i_minus=tuple(i_minus),
+        parent=tuple(parent),
+        basic_chain=tuple(chain),
+        relabeled=relabeled,
         incidence=_frozen(incidence, (n + 1, m)),
         incidence_plus=_frozen(incidence_plus, (n + 1, m)),
-        loops=_frozen(loops, (m - n, m)), paths=_frozen(paths, (m, n)),
+        loops=_frozen(loops, (m - n, m)),
+        paths=_frozen(paths, (m, n)),
     )

@@ -17,23 +17,24 @@ Numbers come from :mod:`symkin.evaluation` (mpmath) and the generated code (:mod
 from __future__ import annotations
 
 from collections.abc import Sequence
-from functools import cached_property, lru_cache
+from functools import cache, cached_property
 
 import sympy as sp
 
 from ..core import levels
-from . import dyads as rigid_solver
 from ..core import vectors as V
-from ..model.hinges import THETA
-from .positions import Kinematics
 from ..graph.structure import Structure
+from ..model.hinges import THETA
+from . import dyads as rigid_solver
+from .positions import Kinematics
 
 
 class Analysis:
     """The symbolic deviation of a mechanism's points at every level."""
 
-    def __init__(self, structure: Structure, points: Sequence[str] | None = None,
-                 plate=None) -> None:
+    def __init__(
+        self, structure: Structure, points: Sequence[str] | None = None, plate=None
+    ) -> None:
         self.structure = structure
         self.mechanism = mech = structure.mechanism
         self.kin = kin = Kinematics(structure, plate)
@@ -53,8 +54,13 @@ class Analysis:
     def delta_phi(self, link: int) -> sp.Expr:
         """δφ_link = Σ of the paper-oriented δ over the direct path (inputs have δ = 0)."""
         kin = self.kin
-        return sp.Add(*(kin.hinges[b].sign * kin.delta[b] for b in
-                        self.structure.tree_path(link) if b in kin.unknowns))
+        return sp.Add(
+            *(
+                kin.hinges[b].sign * kin.delta[b]
+                for b in self.structure.tree_path(link)
+                if b in kin.unknowns
+            )
+        )
 
     @cached_property
     def residual(self) -> sp.Matrix:
@@ -64,8 +70,10 @@ class Analysis:
         rows: list[sp.Expr] = []
         for c in kin.chords:
             rows.append(kin.angular_closure(c, {a: angles[a] - kin.theta[a] for a in angles}))
-            rigid_part = [V.rot(kin.phi(i), V.rot_minus_identity(self.delta_phi(i), w))
-                          for i, w in kin.loop_weights(c).items()]
+            rigid_part = [
+                V.rot(kin.phi(i), V.rot_minus_identity(self.delta_phi(i), w))
+                for i, w in kin.loop_weights(c).items()
+            ]
             rows.extend(V.add(*rigid_part, kin.loop_deviation(c, angles)))
         return sp.Matrix(rows)
 
@@ -77,8 +85,11 @@ class Analysis:
         rows: list[sp.Expr] = []
         for c in kin.chords:
             rows.append(kin.angular_closure(c))
-            rows.extend(V.add(*(V.rot_minus_identity(kin.phi(i), w)
-                                for i, w in kin.loop_weights(c).items())))
+            rows.extend(
+                V.add(
+                    *(V.rot_minus_identity(kin.phi(i), w) for i, w in kin.loop_weights(c).items())
+                )
+            )
         return sp.Matrix(rows)
 
     @cached_property
@@ -115,8 +126,15 @@ class Analysis:
     # and cost no symbolic differentiation of large expressions; by a parameter p, only the
     # constant vectors U_i and the plates' Δz_b are differentiated, each a small expression.
 
-    def chain_partials(self, weights: dict[int, V.Vec], plates: dict[int, int], form: str,
-                       wrt: str, columns: Sequence, relative: bool = False) -> list[V.Vec]:
+    def chain_partials(
+        self,
+        weights: dict[int, V.Vec],
+        plates: dict[int, int],
+        form: str,
+        wrt: str,
+        columns: Sequence,
+        relative: bool = False,
+    ) -> list[V.Vec]:
         """∂X/∂θ_a (wrt 'theta'), ∂X/∂δ_a (wrt 'delta') for every hinge a of `columns`, or
         ∂X/∂p (wrt 'param') for every parameter symbol p of `columns`, X the quantity of `form`
         with link vectors `weights` and plate coefficients `plates` (`relative`: the rigid form
@@ -159,14 +177,22 @@ class Analysis:
                     if a in col:
                         add(a, V.scale(coeff * kin.hinges[a].sign, V.perp(dz)))
                 if b in col:
-                    rate = V.add(V.scale(_theta_derivative(h.df).subs(THETA, angles[b]), h.u),
-                                 V.scale(_theta_derivative(h.dg).subs(THETA, angles[b]),
-                                         V.perp(h.u)))
+                    rate = V.add(
+                        V.scale(_theta_derivative(h.df).subs(THETA, angles[b]), h.u),
+                        V.scale(_theta_derivative(h.dg).subs(THETA, angles[b]), V.perp(h.u)),
+                    )
                     add(b, V.scale(coeff * h.sign, V.rot(phi_p, rate)))
         return [(sp.Add(*x), sp.Add(*y)) for x, y in out]
 
-    def _parameter_partials(self, weights: dict[int, V.Vec], plates: dict[int, int], form: str,
-                            params: Sequence[sp.Symbol], relative: bool, add) -> None:
+    def _parameter_partials(
+        self,
+        weights: dict[int, V.Vec],
+        plates: dict[int, int],
+        form: str,
+        params: Sequence[sp.Symbol],
+        relative: bool,
+        add,
+    ) -> None:
         """chain_partials by the parameters: the link terms are linear in U_i, so they take
         ∂U_i/∂p in place of U_i; each plate contributes ∂Δz_b/∂p."""
         kin, exact = self.kin, form == "exact"
@@ -206,12 +232,16 @@ class Analysis:
         for c in kin.chords:
             loop = s.loops[c - s.n - 1]
             # (5.1) is linear: Σ Φ_cb s_b θ_b (rigid) or Σ Φ_cb s_b δ_b (the others)
-            angular = [sp.Integer(int(loop[a - 1]) * kin.hinges[a].sign)
-                       if wrt != "param" and (wrt == "delta") != (form == "rigid")
-                       else sp.Integer(0) for a in columns]
+            angular = [
+                sp.Integer(int(loop[a - 1]) * kin.hinges[a].sign)
+                if wrt != "param" and (wrt == "delta") != (form == "rigid")
+                else sp.Integer(0)
+                for a in columns
+            ]
             plates = {b: int(loop[b - 1]) for b in range(1, s.m + 1) if loop[b - 1]}
-            vecs = self.chain_partials(kin.loop_weights(c), plates, form, wrt, columns,
-                                       relative=True)
+            vecs = self.chain_partials(
+                kin.loop_weights(c), plates, form, wrt, columns, relative=True
+            )
             rows.extend([angular, [v[0] for v in vecs], [v[1] for v in vecs]])
         return sp.Matrix(rows) if rows else sp.zeros(0, len(columns))
 
@@ -220,10 +250,9 @@ class Analysis:
         rigid) or of its deviation at the level `form` by θ_a or δ_a, a in `columns`."""
         point = self.mechanism.point(name)
         k = self.link[point.link]
-        plates = {b: 1 for b in self.structure.tree_path(k)}
+        plates = dict.fromkeys(self.structure.tree_path(k), 1)
         vecs = self.chain_partials(self.kin.weights(k, point.at), plates, form, wrt, columns)
-        return sp.Matrix([[v[0] for v in vecs], [v[1] for v in vecs]]) if vecs else \
-            sp.zeros(2, 0)
+        return sp.Matrix([[v[0] for v in vecs], [v[1] for v in vecs]]) if vecs else sp.zeros(2, 0)
 
     def point_deviation(self, name: str, level: str) -> V.Vec:
         """ΔX of the named point at `level`, in θ (rigid angles), δ and the parameters."""
@@ -234,11 +263,14 @@ class Analysis:
             return kin.path_deviation(k)
         weights = kin.weights(k, point.at)
         if level == "first_order":
-            lin = [V.scale(self.delta_phi(i), V.rot(kin.phi(i), V.perp(w)))
-                   for i, w in weights.items()]
+            lin = [
+                V.scale(self.delta_phi(i), V.rot(kin.phi(i), V.perp(w))) for i, w in weights.items()
+            ]
             return V.add(*lin, kin.path_deviation(k))
-        exact = [V.rot(kin.phi(i), V.rot_minus_identity(self.delta_phi(i), w))
-                 for i, w in weights.items()]
+        exact = [
+            V.rot(kin.phi(i), V.rot_minus_identity(self.delta_phi(i), w))
+            for i, w in weights.items()
+        ]
         return V.add(*exact, kin.path_deviation(k, self.compliant_angles()))
 
     def link_rotation(self, link: int) -> sp.Expr:
@@ -257,8 +289,7 @@ class Analysis:
         return self.kin.rigid_position(self.link[point.link], point.at)
 
 
-@lru_cache(maxsize=None)
+@cache
 def _theta_derivative(expr: sp.Expr) -> sp.Expr:
     """d/dθ of a hinge model's Δf or Δg (its kernels differentiate into stable kernels)."""
     return sp.diff(expr, THETA)
-

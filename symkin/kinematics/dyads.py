@@ -16,8 +16,8 @@ import sympy as sp
 
 from ..core import vectors as V
 from ..core.errors import InputError
-from .positions import Kinematics
 from ..core.vectors import Vec
+from .positions import Kinematics
 
 
 @dataclass(frozen=True)
@@ -27,10 +27,10 @@ class Dyad:
     index: int
     bodies: tuple[tuple[int, ...], tuple[int, ...]]
     hinges: tuple[int, int, int]
-    chord: int              # the fundamental loop this dyad closes
-    branch: int             # +1: the middle joint lies left of h1 -> h3 (as fabricated)
-    reach: sp.Symbol        # (h/d)^2; negative: the loop cannot close (out of the assembly range)
-    margin: sp.Symbol       # |sin| of the angle at the middle joint: 0 at a toggle position
+    chord: int  # the fundamental loop this dyad closes
+    branch: int  # +1: the middle joint lies left of h1 -> h3 (as fabricated)
+    reach: sp.Symbol  # (h/d)^2; negative: the loop cannot close (out of the assembly range)
+    margin: sp.Symbol  # |sin| of the angle at the middle joint: 0 at a toggle position
 
 
 @dataclass(frozen=True)
@@ -38,7 +38,7 @@ class RigidSolution:
     """Named assignments giving every link rotation φ_i in closed form, when dyads cover all."""
 
     assignments: tuple[tuple[sp.Symbol, sp.Expr], ...]
-    phi: dict[int, sp.Expr] | None       # None: no closed form, solve numerically
+    phi: dict[int, sp.Expr] | None  # None: no closed form, solve numerically
     dyads: tuple[Dyad, ...]
 
     @property
@@ -54,7 +54,7 @@ class _Bodies:
         self.kin = kin
         self.body_of: dict[int, int] = {}
         self.rho: dict[int, sp.Expr] = {}
-        self.pivot: dict[int, tuple[Vec, Vec]] = {}   # link -> (as-fabricated pivot, local pivot)
+        self.pivot: dict[int, tuple[Vec, Vec]] = {}  # link -> (as-fabricated pivot, local pivot)
         for root in range(s.n + 1):
             if root in self.body_of:
                 continue
@@ -110,7 +110,8 @@ def solve(kin: Kinematics) -> RigidSolution:
         for a in kin.unknowns:
             pb, mb = bodies.body_of[kin.hinges[a].P], bodies.body_of[kin.hinges[a].M]
             if (pb == body and mb in others and mb != body) or (
-                    mb == body and pb in others and pb != body):
+                mb == body and pb in others and pb != body
+            ):
                 out.append(a)
         return out
 
@@ -128,8 +129,9 @@ def solve(kin: Kinematics) -> RigidSolution:
                 continue
             h1, h3 = to_known1[0], to_known2[0]
             k = len(dyads) + 1
-            dyads.append(_dyad(kin, bodies, k, (b1, b2), (h1, h2, h3), absolute, assign,
-                               known, defaults))
+            dyads.append(
+                _dyad(kin, bodies, k, (b1, b2), (h1, h2, h3), absolute, assign, known, defaults)
+            )
             progress = True
             break
 
@@ -142,26 +144,39 @@ def solve(kin: Kinematics) -> RigidSolution:
     return RigidSolution(tuple(assignments), phi, tuple(dyads))
 
 
-def _dyad(kin: Kinematics, bodies: _Bodies, k: int, pair: tuple[int, int],
-          hinges: tuple[int, int, int], absolute, assign, known: dict, defaults: dict) -> Dyad:
+def _dyad(
+    kin: Kinematics,
+    bodies: _Bodies,
+    k: int,
+    pair: tuple[int, int],
+    hinges: tuple[int, int, int],
+    absolute,
+    assign,
+    known: dict,
+    defaults: dict,
+) -> Dyad:
     """Closed-form RRR dyad; adds its named assignments and marks both bodies known."""
     b1, b2 = pair
     h1, h2, h3 = (kin.hinges[a] for a in hinges)
-    on1 = lambda h: h.P if bodies.body_of[h.P] == b1 else h.M      # noqa: E731
-    on2 = lambda h: h.P if bodies.body_of[h.P] == b2 else h.M      # noqa: E731
-    known1 = lambda h: h.M if bodies.body_of[h.P] == b1 else h.P   # noqa: E731
-    known2 = lambda h: h.M if bodies.body_of[h.P] == b2 else h.P   # noqa: E731
+    on1 = lambda h: h.P if bodies.body_of[h.P] == b1 else h.M  # noqa: E731
+    on2 = lambda h: h.P if bodies.body_of[h.P] == b2 else h.M  # noqa: E731
+    known1 = lambda h: h.M if bodies.body_of[h.P] == b1 else h.P  # noqa: E731
+    known2 = lambda h: h.M if bodies.body_of[h.P] == b2 else h.P  # noqa: E731
     # As-fabricated branch: which side of the line h1 -> h3 the middle joint h2 lies on.
     side = V.cross(V.sub(h3.centre, h1.centre), V.sub(h2.centre, h1.centre)).subs(defaults)
     side = sp.N(side, 30)
     names = f"{h1.name}, {h2.name}, {h3.name}"
-    if abs(side) < 1e-12 * max(1e-300, float(sp.N(V.dot(V.sub(h3.centre, h1.centre),
-                                                       V.sub(h3.centre, h1.centre))
-                                                 .subs(defaults)))):
-        raise InputError(f"the hinges {names} are collinear in the as-fabricated pose: a toggle "
-                         "position, where the assembly mode is undefined",
-                         file=kin.mechanism.path, entry=f"[[hinge]] '{h2.name}'",
-                         hint="move the middle hinge off the line through the other two")
+    if abs(side) < 1e-12 * max(
+        1e-300,
+        float(sp.N(V.dot(V.sub(h3.centre, h1.centre), V.sub(h3.centre, h1.centre)).subs(defaults))),
+    ):
+        raise InputError(
+            f"the hinges {names} are collinear in the as-fabricated pose: a toggle "
+            "position, where the assembly mode is undefined",
+            file=kin.mechanism.path,
+            entry=f"[[hinge]] '{h2.name}'",
+            hint="move the middle hinge off the line through the other two",
+        )
     branch = 1 if side > 0 else -1
     # Body-local geometry: lengths of the two dyad members (may depend on welded inputs).
     l1a, l1b = bodies.local(on1(h1), h1.centre), bodies.local(on1(h2), h2.centre)
@@ -174,11 +189,13 @@ def _dyad(kin: Kinematics, bodies: _Bodies, k: int, pair: tuple[int, int],
     C = (assign(f"dyad{k}_cx", cx), assign(f"dyad{k}_cy", cy))
     d = V.sub(C, A)
     dsq = assign(f"dyad{k}_dsq", V.dot(d, d))
-    along = assign(f"dyad{k}_along", (r1sq - r2sq + dsq) / (2 * dsq))       # a/d
-    reach = assign(f"dyad{k}_reach", r1sq / dsq - along ** 2)               # (h/d)^2
-    across = assign(f"dyad{k}_across", branch * sp.sqrt(reach))              # ±h/d
-    B = (assign(f"dyad{k}_bx", A[0] + along * d[0] - across * d[1]),
-         assign(f"dyad{k}_by", A[1] + along * d[1] + across * d[0]))
+    along = assign(f"dyad{k}_along", (r1sq - r2sq + dsq) / (2 * dsq))  # a/d
+    reach = assign(f"dyad{k}_reach", r1sq / dsq - along**2)  # (h/d)^2
+    across = assign(f"dyad{k}_across", branch * sp.sqrt(reach))  # ±h/d
+    B = (
+        assign(f"dyad{k}_bx", A[0] + along * d[0] - across * d[1]),
+        assign(f"dyad{k}_by", A[1] + along * d[1] + across * d[0]),
+    )
     margin = assign(f"dyad{k}_margin", dsq * sp.Abs(across) / sp.sqrt(r1sq * r2sq))
     v1, w1 = V.sub(l1b, l1a), V.sub(B, A)
     v2, w2 = V.sub(l2b, l2c), V.sub(B, C)
@@ -186,9 +203,16 @@ def _dyad(kin: Kinematics, bodies: _Bodies, k: int, pair: tuple[int, int],
     phi2 = assign(f"dyad{k}_phi2", sp.atan2(V.cross(v2, w2), V.dot(v2, w2)))
     known[b1] = (phi1, l1a, A)
     known[b2] = (phi2, l2c, C)
-    chord = _closing_chord(kin, set(a.label for a in (h1, h2, h3)))
-    return Dyad(k, (bodies.members(b1), bodies.members(b2)), (h1.label, h2.label, h3.label),
-                chord, branch, reach, margin)
+    chord = _closing_chord(kin, {a.label for a in (h1, h2, h3)})
+    return Dyad(
+        k,
+        (bodies.members(b1), bodies.members(b2)),
+        (h1.label, h2.label, h3.label),
+        chord,
+        branch,
+        reach,
+        margin,
+    )
 
 
 def _closing_chord(kin: Kinematics, hinges: set[int]) -> int:

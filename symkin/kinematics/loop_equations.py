@@ -57,15 +57,15 @@ class LoopEquations:
     ``squared`` and ``solved_angle`` are :class:`sympy.Eq` objects.
     """
 
-    chord: int                          # label of the chord hinge that closes the loop
-    angular: sp.Expr                    # (5.1): Σ_b Φ_cb q_b
-    terms: tuple[Term, ...]             # (i, r_i, β_i) by link label, zero vectors left out
-    phi: tuple[sp.Expr, ...]            # φ_i of each term's link (0 for the ground), same order
-    x: sp.Expr                          # Σ r_i cos(φ_i + β_i)
-    y: sp.Expr                          # Σ r_i sin(φ_i + β_i)
-    eliminated: int | None              # link j whose angle `squared` eliminates
-    squared: sp.Eq | None               # r_j² − Σ_{i≠j} r_i² = 2 Σ_{i<k} r_i r_k cos(...)
-    solved_angle: sp.Eq | None          # φ_j + β_j = atan2(−Σ_{i≠j} r_i sin, −Σ_{i≠j} r_i cos)
+    chord: int  # label of the chord hinge that closes the loop
+    angular: sp.Expr  # (5.1): Σ_b Φ_cb q_b
+    terms: tuple[Term, ...]  # (i, r_i, β_i) by link label, zero vectors left out
+    phi: tuple[sp.Expr, ...]  # φ_i of each term's link (0 for the ground), same order
+    x: sp.Expr  # Σ r_i cos(φ_i + β_i)
+    y: sp.Expr  # Σ r_i sin(φ_i + β_i)
+    eliminated: int | None  # link j whose angle `squared` eliminates
+    squared: sp.Eq | None  # r_j² − Σ_{i≠j} r_i² = 2 Σ_{i<k} r_i r_k cos(...)
+    solved_angle: sp.Eq | None  # φ_j + β_j = atan2(−Σ_{i≠j} r_i sin, −Σ_{i≠j} r_i cos)
 
     @property
     def links(self) -> tuple[int, ...]:
@@ -101,7 +101,7 @@ def polar(vector: tuple[sp.Expr, sp.Expr]) -> tuple[sp.Expr, sp.Expr] | None:
     vx, vy = (sp.simplify(sp.sympify(v)) for v in vector)
     if vx == 0 and vy == 0:
         return None
-    r = sp.sqrt(sp.simplify(vx ** 2 + vy ** 2))
+    r = sp.sqrt(sp.simplify(vx**2 + vy**2))
     return r, sp.atan2(vy, vx)
 
 
@@ -110,8 +110,11 @@ def fixed_links(kin: Kinematics) -> frozenset[int]:
 
     The ground (empty path) is among them.
     """
-    return frozenset(i for i in range(kin.structure.n + 1)
-                     if all(kin.hinges[b].is_input for b in kin.structure.tree_path(i)))
+    return frozenset(
+        i
+        for i in range(kin.structure.n + 1)
+        if all(kin.hinges[b].is_input for b in kin.structure.tree_path(i))
+    )
 
 
 def eliminated_link(kin: Kinematics, links: tuple[int, ...]) -> int | None:
@@ -129,8 +132,7 @@ def eliminated_link(kin: Kinematics, links: tuple[int, ...]) -> int | None:
     return max(moving) if moving else None
 
 
-def _eliminate(terms: tuple[Term, ...], phi: tuple[sp.Expr, ...],
-               j: int) -> tuple[sp.Eq, sp.Eq]:
+def _eliminate(terms: tuple[Term, ...], phi: tuple[sp.Expr, ...], j: int) -> tuple[sp.Eq, sp.Eq]:
     links = [t.link for t in terms]
     if j not in links:
         raise ValueError(f"link {j} has no term in this loop (links {links})")
@@ -139,7 +141,7 @@ def _eliminate(terms: tuple[Term, ...], phi: tuple[sp.Expr, ...],
     k_j = links.index(j)
     others = [(t, p) for k, (t, p) in enumerate(zip(terms, phi)) if k != k_j]
     r_j = terms[k_j].r
-    lhs = r_j ** 2 - sp.Add(*(t.r ** 2 for t, _ in others))
+    lhs = r_j**2 - sp.Add(*(t.r**2 for t, _ in others))
     pairs = []
     for a in range(len(others)):
         for b in range(a + 1, len(others)):
@@ -168,13 +170,22 @@ def loop_equation(kin: Kinematics, chord: int, eliminate: int | None = None) -> 
     y = sp.Add(*(t.r * sp.sin(p + t.beta) for t, p in zip(terms, phi)))
     j = eliminate if eliminate is not None else eliminated_link(kin, tuple(t.link for t in terms))
     squared, solved = _eliminate(tuple(terms), tuple(phi), j) if j is not None else (None, None)
-    return LoopEquations(chord=chord, angular=kin.angular_closure(chord), terms=tuple(terms),
-                         phi=tuple(phi), x=x, y=y, eliminated=j, squared=squared,
-                         solved_angle=solved)
+    return LoopEquations(
+        chord=chord,
+        angular=kin.angular_closure(chord),
+        terms=tuple(terms),
+        phi=tuple(phi),
+        x=x,
+        y=y,
+        eliminated=j,
+        squared=squared,
+        solved_angle=solved,
+    )
 
 
-def loop_equations(kin: Kinematics,
-                   eliminate: Mapping[int, int] | None = None) -> tuple[LoopEquations, ...]:
+def loop_equations(
+    kin: Kinematics, eliminate: Mapping[int, int] | None = None
+) -> tuple[LoopEquations, ...]:
     """Loop equations for every chord, in chord-label order.
 
     `eliminate` maps a chord label to the link whose angle its squared form should eliminate
@@ -189,6 +200,7 @@ def loop_equations(kin: Kinematics,
 
 def latex(eq: LoopEquations, kin: Kinematics | None = None) -> str:
     """The loop's equations as a LaTeX ``aligned`` block (one line each), for reports."""
+
     def tex(e: sp.Basic) -> str:
         return sp.latex(e)
 

@@ -21,10 +21,10 @@ from functools import cached_property
 import sympy as sp
 
 from ..core import vectors as V
+from ..core.vectors import Vec
+from ..graph.structure import Structure
 from ..model.hinges import THETA, plate_functions
 from ..model.mechanism import Hinge
-from ..graph.structure import Structure
-from ..core.vectors import Vec
 
 
 @dataclass(frozen=True)
@@ -33,19 +33,19 @@ class HingeGeometry:
 
     label: int
     hinge: Hinge
-    P: int                  # label of the file's links[0]: the plate frame is fixed in P
-    M: int                  # label of links[1]
-    sign: int               # +1 when P = i+(a): paper angle q_a = sign * θ_a
-    centre: Vec             # the rigid reference pin (the plate midpoint unless pin = "prbm")
+    P: int  # label of the file's links[0]: the plate frame is fixed in P
+    M: int  # label of links[1]
+    sign: int  # +1 when P = i+(a): paper angle q_a = sign * θ_a
+    centre: Vec  # the rigid reference pin (the plate midpoint unless pin = "prbm")
     angle: sp.Expr
     length: sp.Expr
-    f: sp.Expr              # model functions of THETA (plate length substituted)
+    f: sp.Expr  # model functions of THETA (plate length substituted)
     g: sp.Expr
-    df: sp.Expr             # f - f_rigid, g - g_rigid in cancellation-free form
+    df: sp.Expr  # f - f_rigid, g - g_rigid in cancellation-free form
     dg: sp.Expr
-    limit: sp.Expr | None = None    # |θ| < limit: the model's (elastica_force π/2), else π for
+    limit: sp.Expr | None = None  # |θ| < limit: the model's (elastica_force π/2), else π for
     #                                 any plate (it cannot bend further); None for a rigid pin
-    midpoint: Vec | None = None     # the plate midpoint `at` when the pin sits elsewhere
+    midpoint: Vec | None = None  # the plate midpoint `at` when the pin sits elsewhere
 
     @property
     def name(self) -> str:
@@ -67,8 +67,10 @@ class HingeGeometry:
 
     def delta_z(self, theta: sp.Expr, phi_p: sp.Expr) -> Vec:
         """Paper-oriented Δz_a (3.3): z_a - z_a^r at hinge angle θ, with P rotated by phi_p."""
-        local = V.add(V.scale(self.df.subs(THETA, theta), self.u),
-                      V.scale(self.dg.subs(THETA, theta), V.perp(self.u)))
+        local = V.add(
+            V.scale(self.df.subs(THETA, theta), self.u),
+            V.scale(self.dg.subs(THETA, theta), V.perp(self.u)),
+        )
         return V.scale(self.sign, V.rot(phi_p, local))
 
     def z(self, theta: sp.Expr, phi_p: sp.Expr, rigid: bool = False) -> Vec:
@@ -100,19 +102,33 @@ class Kinematics:
             plate = plate_of(h)
             P, M = label[h.links[0]], label[h.links[1]]
             centre, midpoint = h.at, None
-            if plate.pivot is not None:         # the pin sits d from M's clamp, not at `at`
+            if plate.pivot is not None:  # the pin sits d from M's clamp, not at `at`
                 midpoint = h.at
                 centre = V.add(h.at, V.scale(h.length / 2 - plate.pivot, V.unit(h.plate_angle)))
-            hinges[a] = HingeGeometry(a, h, P, M, 1 if P == s.i_plus[a - 1] else -1, centre,
-                                      h.plate_angle, h.length, plate.f, plate.g, plate.df,
-                                      plate.dg, plate_limit(h.model, plate.limit), midpoint)
+            hinges[a] = HingeGeometry(
+                a,
+                h,
+                P,
+                M,
+                1 if s.i_plus[a - 1] == P else -1,
+                centre,
+                h.plate_angle,
+                h.length,
+                plate.f,
+                plate.g,
+                plate.df,
+                plate.dg,
+                plate_limit(h.model, plate.limit),
+                midpoint,
+            )
         self.hinges = hinges
         self.inputs = tuple(a for a in hinges if hinges[a].is_input)
         self.unknowns = tuple(a for a in hinges if not hinges[a].is_input)
 
     # -- geometry in the paper's terms ---------------------------------------------------------
     def c_vector(self, link: int, a: int) -> Vec:
-        """c_ia: hinge point C_ia (the plate end fixed in `link`) from C_i (the origin), as fabricated."""
+        """c_ia: hinge point C_ia (the plate end fixed in `link`) from C_i (the origin), as
+        fabricated."""
         h = self.hinges[a]
         if link not in (h.P, h.M):
             raise ValueError(f"hinge {a} does not touch link {link}")
@@ -124,9 +140,14 @@ class Kinematics:
         the plate length and the clamp vectors c_{i+(a)a}, c_{i-(a)a}."""
         s, h = self.structure, self.hinges[a]
         alpha = h.angle if h.sign > 0 else h.angle + sp.pi
-        return {"alpha_plus": alpha, "alpha_minus": alpha, "q_star": sp.Integer(0),
-                "length": h.length, "c_plus": self.c_vector(s.i_plus[a - 1], a),
-                "c_minus": self.c_vector(s.i_minus[a - 1], a)}
+        return {
+            "alpha_plus": alpha,
+            "alpha_minus": alpha,
+            "q_star": sp.Integer(0),
+            "length": h.length,
+            "c_plus": self.c_vector(s.i_plus[a - 1], a),
+            "c_minus": self.c_vector(s.i_minus[a - 1], a),
+        }
 
     # -- angles ----------------------------------------------------------------------------------
     def q(self, a: int, angles: dict[int, sp.Expr] | None = None) -> sp.Expr:
@@ -151,7 +172,8 @@ class Kinematics:
         return out
 
     def loop_weights(self, chord: int) -> dict[int, Vec]:
-        """V^c_i = Σ_b S_ib Φ_cb centre_b: the rigid part of the loop of `chord` is Σ Rot(φ_i) V_i."""
+        """V^c_i = Σ_b S_ib Φ_cb centre_b: the rigid part of the loop of `chord` is Σ Rot(φ_i)
+        V_i."""
         s = self.structure
         row = s.loops[chord - s.n - 1]
         out: dict[int, Vec] = {}
@@ -163,16 +185,19 @@ class Kinematics:
                     out[i] = V.add(out.get(i, V.ZERO), V.scale(sign, centre))
         return out
 
-    def rigid_position(self, link: int, point: Vec,
-                       angles: dict[int, sp.Expr] | None = None) -> Vec:
+    def rigid_position(
+        self, link: int, point: Vec, angles: dict[int, sp.Expr] | None = None
+    ) -> Vec:
         """Rigid position Σ Rot(φ_i) W_i of a point fixed in `link`."""
         return V.add(*(V.rot(self.phi(i, angles), w) for i, w in self.weights(link, point).items()))
 
     def path_deviation(self, link: int, angles: dict[int, sp.Expr] | None = None) -> Vec:
         """Σ Δz_b over the direct path to `link` (4.8) at the given hinge angles."""
         angles = angles or self.theta
-        terms = [self.hinges[b].delta_z(angles[b], self.phi(self.hinges[b].P, angles))
-                 for b in self.structure.tree_path(link)]
+        terms = [
+            self.hinges[b].delta_z(angles[b], self.phi(self.hinges[b].P, angles))
+            for b in self.structure.tree_path(link)
+        ]
         return V.add(*terms) if terms else V.ZERO
 
     # -- loop closure ----------------------------------------------------------------------------
@@ -183,11 +208,17 @@ class Kinematics:
     def angular_closure(self, chord: int, angles: dict[int, sp.Expr] | None = None) -> sp.Expr:
         """(5.1): Σ_b Φ_cb q_b for the loop of `chord` (zero when the loop closes)."""
         row = self.structure.loops[chord - self.structure.n - 1]
-        return sp.Add(*(int(row[b - 1]) * self.q(b, angles) for b in range(1, self.structure.m + 1)
-                        if row[b - 1]))
+        return sp.Add(
+            *(
+                int(row[b - 1]) * self.q(b, angles)
+                for b in range(1, self.structure.m + 1)
+                if row[b - 1]
+            )
+        )
 
-    def positional_closure(self, chord: int, angles: dict[int, sp.Expr] | None = None,
-                           rigid: bool = False) -> Vec:
+    def positional_closure(
+        self, chord: int, angles: dict[int, sp.Expr] | None = None, rigid: bool = False
+    ) -> Vec:
         """(5.3) in full: Σ_i Rot(φ_i) V^c_i + Σ_b Φ_cb Δz_b (the Δz part dropped when rigid)."""
         angles = angles or self.theta
         rigid_part = [V.rot(self.phi(i, angles), w) for i, w in self.loop_weights(chord).items()]
@@ -199,9 +230,14 @@ class Kinematics:
         """Φ_c Δz: the plate deviations summed around the loop of `chord` (left side of 5.3)."""
         angles = angles or self.theta
         row = self.structure.loops[chord - self.structure.n - 1]
-        terms = [V.scale(int(row[b - 1]), self.hinges[b].delta_z(
-            angles[b], self.phi(self.hinges[b].P, angles)))
-            for b in range(1, self.structure.m + 1) if row[b - 1]]
+        terms = [
+            V.scale(
+                int(row[b - 1]),
+                self.hinges[b].delta_z(angles[b], self.phi(self.hinges[b].P, angles)),
+            )
+            for b in range(1, self.structure.m + 1)
+            if row[b - 1]
+        ]
         return V.add(*terms)
 
 

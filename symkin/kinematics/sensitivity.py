@@ -45,18 +45,18 @@ from .analysis import Analysis
 class Stage:
     """A closure E(y; θ_u, v) = 0 that a level solves for its unknowns y."""
 
-    jacobian: sp.Matrix     # M = ∂E/∂y, K × K
-    theta: sp.Matrix        # ∂E/∂θ_u, K × K (the rigid stage has none: zero columns)
-    variables: sp.Matrix    # ∂E/∂v, K × n_v
+    jacobian: sp.Matrix  # M = ∂E/∂y, K × K
+    theta: sp.Matrix  # ∂E/∂θ_u, K × K (the rigid stage has none: zero columns)
+    variables: sp.Matrix  # ∂E/∂v, K × n_v
 
 
 @dataclass(frozen=True)
 class Partials:
     """Partial derivatives of the requested points' outputs, two rows (x, y) per point."""
 
-    theta: sp.Matrix        # by the non-input hinge angles θ_u: 2 n_P × K
-    delta: sp.Matrix        # by δ (zero columns at levels without δ): 2 n_P × K
-    variables: sp.Matrix    # by the parameters, then the inputs: 2 n_P × n_v
+    theta: sp.Matrix  # by the non-input hinge angles θ_u: 2 n_P × K
+    delta: sp.Matrix  # by δ (zero columns at levels without δ): 2 n_P × K
+    variables: sp.Matrix  # by the parameters, then the inputs: 2 n_P × n_v
 
 
 class Sensitivities:
@@ -74,12 +74,14 @@ class Sensitivities:
     def _closure(self, an: Analysis, form: str) -> sp.Matrix:
         """∂E/∂v of the closure of `form`: by the parameters, then by the inputs."""
         return an.closure_partials(form, "param", self.params).row_join(
-            an.closure_partials(form, "theta", an.kin.inputs))
+            an.closure_partials(form, "theta", an.kin.inputs)
+        )
 
     def _point(self, an: Analysis, name: str, form: str) -> sp.Matrix:
         """∂/∂v of a point's rigid position (form rigid) or deviation at the level `form`."""
         return an.point_partials(name, form, "param", self.params).row_join(
-            an.point_partials(name, form, "theta", an.kin.inputs))
+            an.point_partials(name, form, "theta", an.kin.inputs)
+        )
 
     @cached_property
     def rigid_stage(self) -> Stage | None:
@@ -122,11 +124,14 @@ class Sensitivities:
                 out[lv.name] = None
                 continue
             # first_order: E = A δ + r, M = A; exact: E = F, M = its Jacobian (∂E/∂δ)
-            if lv.name not in ("first_order", "exact"):               # pragma: no cover
+            if lv.name not in ("first_order", "exact"):  # pragma: no cover
                 raise NotImplementedError(f"no sensitivity for level '{lv.name}'")
             jacobian = an.closure_partials(lv.name, "delta", kin.unknowns)
-            out[lv.name] = Stage(jacobian, an.closure_partials(lv.name, "theta", kin.unknowns),
-                                 self._closure(an, lv.name))
+            out[lv.name] = Stage(
+                jacobian,
+                an.closure_partials(lv.name, "theta", kin.unknowns),
+                self._closure(an, lv.name),
+            )
         return out
 
     @cached_property
@@ -141,8 +146,11 @@ class Sensitivities:
             for name in self.points:
                 rows_v.append(self._point(an, name, lv.name))
                 rows_t.append(an.point_partials(name, lv.name, "theta", kin.unknowns))
-                rows_d.append(an.point_partials(name, lv.name, "delta", kin.unknowns)
-                              if lv.needs_delta else sp.zeros(2, len(kin.unknowns)))
+                rows_d.append(
+                    an.point_partials(name, lv.name, "delta", kin.unknowns)
+                    if lv.needs_delta
+                    else sp.zeros(2, len(kin.unknowns))
+                )
             out[lv.name] = self._stacked(rows_t, rows_d, rows_v)
         return out
 
@@ -152,8 +160,11 @@ class Sensitivities:
         def stack(blocks: list, cols: int) -> sp.Matrix:
             return sp.Matrix.vstack(*blocks) if blocks else sp.zeros(0, cols)
 
-        return Partials(stack(theta, k), stack(delta, k) if delta is not None else
-                        sp.zeros(2 * len(self.points), k), stack(variables, len(self.variables)))
+        return Partials(
+            stack(theta, k),
+            stack(delta, k) if delta is not None else sp.zeros(2 * len(self.points), k),
+            stack(variables, len(self.variables)),
+        )
 
 
 def parameter_chain(defaults: Sequence[sp.Expr], symbols: Sequence[sp.Symbol]) -> sp.Matrix:

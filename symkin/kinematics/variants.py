@@ -21,12 +21,13 @@ from dataclasses import dataclass
 import mpmath
 import sympy as sp
 
-from ..model import hinges as hinge_models, special
-from .analysis import Analysis
 from ..core.levels import LEVELS as LEVEL_TABLE
+from ..graph.structure import build
+from ..model import hinges as hinge_models
+from ..model import special
 from ..model.hinges import THETA
 from ..model.mechanism import Mechanism
-from ..graph.structure import build
+from .analysis import Analysis
 
 #: The levels a variant can take: generated ones (a variant is timed in C and numpy), kinematic.
 LEVELS = tuple(lv.name for lv in LEVEL_TABLE if lv.generated and not lv.needs_stiffness)
@@ -63,8 +64,9 @@ class Variant:
                 precision = "float32"
             else:
                 model = part
-        if not (level in LEVELS and model in MODEL_CHOICES or level in PHYSICAL and
-                model == "file"):
+        if not (
+            (level in LEVELS and model in MODEL_CHOICES) or (level in PHYSICAL and model == "file")
+        ):
             raise ValueError(f"unknown variant '{text}'")
         return cls(level, model, precision)
 
@@ -75,8 +77,11 @@ def default_variants(stiffness: bool = False) -> list[Variant]:
     out = [Variant(lv, m) for m in MODEL_CHOICES for lv in LEVELS]
     out += [Variant(lv, "file", "float32") for lv in LEVELS]
     if stiffness:
-        out += [Variant(lv, "file", precision) for lv in PHYSICAL
-                for precision in ("float64", "float32")]
+        out += [
+            Variant(lv, "file", precision)
+            for lv in PHYSICAL
+            for precision in ("float64", "float32")
+        ]
     return out
 
 
@@ -85,8 +90,12 @@ def substituted(mech: Mechanism, model: str) -> Mechanism:
     if model not in ("prbm", "small_deflection"):
         return mech
     params = PRBM_DEFAULT if model == "prbm" else ()
-    hinges = tuple(dataclasses.replace(h, model=model, model_params=params)
-                   if h.model in FAITHFUL_MODELS else h for h in mech.hinges)
+    hinges = tuple(
+        dataclasses.replace(h, model=model, model_params=params)
+        if h.model in FAITHFUL_MODELS
+        else h
+        for h in mech.hinges
+    )
     return dataclasses.replace(mech, hinges=hinges)
 
 
@@ -104,8 +113,9 @@ def truncated(degree: int):
 def _taylor(expr: sp.Expr, degree: int) -> sp.Expr:
     """Taylor polynomial of `expr` in θ: symbolic where sympy can, else numeric (mpmath, 40
     digits) coefficients of the expression with its parameters at their values."""
-    numeric_only = any(type(f).__name__.startswith(("elastica", "carlson"))
-                       for f in expr.atoms(sp.Function))
+    numeric_only = any(
+        type(f).__name__.startswith(("elastica", "carlson")) for f in expr.atoms(sp.Function)
+    )
     if not numeric_only:
         series = sp.series(expr, THETA, 0, degree + 1).removeO()
         if not series.has(sp.nan) and series.is_polynomial(THETA):
@@ -117,7 +127,7 @@ def _taylor(expr: sp.Expr, degree: int) -> sp.Expr:
     fn = sp.lambdify(THETA, unit, modules=[special.mpmath_namespace(), "mpmath"])
     with mpmath.workdps(40):
         coeffs = mpmath.taylor(fn, 0, degree)
-    poly = sum(sp.Float(str(c), 30) * THETA ** k for k, c in enumerate(coeffs) if abs(c) > 1e-30)
+    poly = sum(sp.Float(str(c), 30) * THETA**k for k, c in enumerate(coeffs) if abs(c) > 1e-30)
     return sp.expand(poly * (length if length is not None else 1))
 
 

@@ -19,9 +19,16 @@ from ..core.errors import suggest
 
 #: Functions an expression may call, by name, with their number of arguments.
 FUNCTIONS: dict[str, tuple[object, int]] = {
-    "sin": (sp.sin, 1), "cos": (sp.cos, 1), "tan": (sp.tan, 1),
-    "asin": (sp.asin, 1), "acos": (sp.acos, 1), "atan": (sp.atan, 1),
-    "atan2": (sp.atan2, 2), "sqrt": (sp.sqrt, 1), "exp": (sp.exp, 1), "log": (sp.log, 1),
+    "sin": (sp.sin, 1),
+    "cos": (sp.cos, 1),
+    "tan": (sp.tan, 1),
+    "asin": (sp.asin, 1),
+    "acos": (sp.acos, 1),
+    "atan": (sp.atan, 1),
+    "atan2": (sp.atan2, 2),
+    "sqrt": (sp.sqrt, 1),
+    "exp": (sp.exp, 1),
+    "log": (sp.log, 1),
 }
 #: Constants every expression may use.
 CONSTANTS: dict[str, sp.Expr] = {"pi": sp.pi, "deg": sp.pi / 180}
@@ -29,10 +36,10 @@ CONSTANTS: dict[str, sp.Expr] = {"pi": sp.pi, "deg": sp.pi / 180}
 RESERVED = frozenset(FUNCTIONS) | frozenset(CONSTANTS)
 
 IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
-MAX_LENGTH = 2000      # characters in one expression
-MAX_EXPONENT = 64      # |exponent| allowed in a**b, so no expression can blow up memory
-MAX_BITS = 4096        # |log2| of any exact number an expression may build (10**+-1233)
-SHOWN = 60             # characters of an expression quoted in an error message
+MAX_LENGTH = 2000  # characters in one expression
+MAX_EXPONENT = 64  # |exponent| allowed in a**b, so no expression can blow up memory
+MAX_BITS = 4096  # |log2| of any exact number an expression may build (10**+-1233)
+SHOWN = 60  # characters of an expression quoted in an error message
 
 _BINARY = {ast.Add: sp.Add, ast.Sub: None, ast.Mult: sp.Mul, ast.Div: None, ast.Pow: None}
 
@@ -68,8 +75,9 @@ def _shown(text: str) -> str:
     return text if len(text) <= SHOWN else text[: SHOWN - 3] + "..."
 
 
-def parse(text: str, names: Mapping[str, sp.Expr],
-          values: Mapping[sp.Symbol, sp.Expr] | None = None) -> sp.Expr:
+def parse(
+    text: str, names: Mapping[str, sp.Expr], values: Mapping[sp.Symbol, sp.Expr] | None = None
+) -> sp.Expr:
     """Parse `text` into a sympy expression; `names` maps the allowed variable names to symbols.
 
     `values` (symbol -> default value) lets the size limits on powers and exp() see the values of
@@ -96,8 +104,9 @@ def parse(text: str, names: Mapping[str, sp.Expr],
 class _Converter:
     """Turns an allowed syntax tree into sympy; raises ExpressionError on anything else."""
 
-    def __init__(self, text: str, names: Mapping[str, sp.Expr],
-                 values: Mapping[sp.Symbol, sp.Expr]) -> None:
+    def __init__(
+        self, text: str, names: Mapping[str, sp.Expr], values: Mapping[sp.Symbol, sp.Expr]
+    ) -> None:
         self.text = _shown(text)
         self.names = names
         self.values = values
@@ -113,15 +122,19 @@ class _Converter:
         """Reject an exact number with more than MAX_BITS bits (a product of huge literals)."""
         for atom in expr.atoms(sp.Rational):
             if max(abs(atom.p).bit_length(), atom.q.bit_length()) > MAX_BITS:
-                raise self.reject(f"a number beyond 2**(+-{MAX_BITS})",
-                                  "use smaller numbers, or exp() and log()")
+                raise self.reject(
+                    f"a number beyond 2**(+-{MAX_BITS})", "use smaller numbers, or exp() and log()"
+                )
         return expr
 
     def reject(self, what: str, hint: str = "") -> ExpressionError:
-        allowed = ("numbers, parameter names, pi, deg, + - * / **, and calls of "
-                   + ", ".join(FUNCTIONS))
-        return ExpressionError(f"'{self.text}': {what} is not allowed" + (f"; {hint}" if hint
-                               else f" (allowed: {allowed})"))
+        allowed = "numbers, parameter names, pi, deg, + - * / **, and calls of " + ", ".join(
+            FUNCTIONS
+        )
+        return ExpressionError(
+            f"'{self.text}': {what} is not allowed"
+            + (f"; {hint}" if hint else f" (allowed: {allowed})")
+        )
 
     def visit(self, node: ast.AST) -> sp.Expr:
         if isinstance(node, ast.Constant):
@@ -139,9 +152,10 @@ class _Converter:
             if node.id in FUNCTIONS:
                 raise self.reject(f"the function name '{node.id}' without a call")
             hint = suggest(node.id, [*self.names, *CONSTANTS])
-            raise ExpressionError(f"'{self.text}': unknown name '{node.id}'"
-                                  + (f"; {hint}" if hint else
-                                     "; define it in [parameters] before it is used"))
+            raise ExpressionError(
+                f"'{self.text}': unknown name '{node.id}'"
+                + (f"; {hint}" if hint else "; define it in [parameters] before it is used")
+            )
         if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
             operand = self.visit(node.operand)
             return -operand if isinstance(node.op, ast.USub) else operand
@@ -163,8 +177,9 @@ class _Converter:
         if isinstance(node.op, ast.Pow):
             # A power whose exponent holds another power, or a literal exponent beyond
             # MAX_EXPONENT, could make sympy build an astronomically large number.
-            if any(isinstance(n, ast.BinOp) and isinstance(n.op, ast.Pow)
-                   for n in ast.walk(node.right)):
+            if any(
+                isinstance(n, ast.BinOp) and isinstance(n.op, ast.Pow) for n in ast.walk(node.right)
+            ):
                 raise self.reject("a power in an exponent", "write the exponent out")
             right = self.visit(node.right)
             # The exponent's value (parameters at their defaults) is bounded, and so is the size
@@ -172,14 +187,17 @@ class _Converter:
             # sympy evaluates powers of exact numbers at once, e.g. (9**64)**64.
             exponent = self.approx(right)
             if exponent is not None and abs(exponent) > MAX_EXPONENT:
-                raise self.reject(f"an exponent of magnitude above {MAX_EXPONENT}",
-                                  "use exp() and log() instead")
+                raise self.reject(
+                    f"an exponent of magnitude above {MAX_EXPONENT}", "use exp() and log() instead"
+                )
             base = self.approx(left)
             if exponent is not None and base is not None and not base.is_zero:
                 bits = abs(sp.re(exponent)) * abs(sp.log(abs(base), 2))
                 if bits > MAX_BITS:
-                    raise self.reject(f"a power beyond 2**(+-{MAX_BITS})",
-                                      "use exp() and log(), or smaller numbers")
+                    raise self.reject(
+                        f"a power beyond 2**(+-{MAX_BITS})",
+                        "use exp() and log(), or smaller numbers",
+                    )
             return sp.Pow(left, right)
         right = self.visit(node.right)
         if isinstance(node.op, ast.Add):
@@ -200,15 +218,17 @@ class _Converter:
         name = node.func.id
         if name not in FUNCTIONS:
             hint = suggest(name, FUNCTIONS)
-            raise self.reject(f"calling '{name}'",
-                              (hint + "; " if hint else "") + "allowed functions: "
-                              + ", ".join(FUNCTIONS))
+            raise self.reject(
+                f"calling '{name}'",
+                (hint + "; " if hint else "") + "allowed functions: " + ", ".join(FUNCTIONS),
+            )
         if node.keywords or any(isinstance(a, ast.Starred) for a in node.args):
             raise self.reject(f"keyword or starred arguments to '{name}'")
         func, arity = FUNCTIONS[name]
         if len(node.args) != arity:
-            raise self.reject(f"calling '{name}' with {len(node.args)} argument(s)",
-                              f"'{name}' takes {arity}")
+            raise self.reject(
+                f"calling '{name}' with {len(node.args)} argument(s)", f"'{name}' takes {arity}"
+            )
         args = [self.visit(a) for a in node.args]
         if name in ("log", "sqrt", "asin", "acos"):
             # checked numerically before sympy sees it: sympy's complex logarithms of nested
@@ -218,18 +238,26 @@ class _Converter:
             except NoValue:
                 x = None
             except NotReal:
-                raise self.reject("an argument that leaves the real numbers",
-                                  "every value must stay real") from None
-            if x is not None and (name == "log" and x <= 0 or name == "sqrt" and x < 0
-                                  or name in ("asin", "acos") and abs(x) > 1):
-                raise self.reject(f"{name}() of {float(x):.6g}, which leaves the real numbers",
-                                  "every value must stay real")
+                raise self.reject(
+                    "an argument that leaves the real numbers", "every value must stay real"
+                ) from None
+            if x is not None and (
+                (name == "log" and x <= 0)
+                or (name == "sqrt" and x < 0)
+                or (name in ("asin", "acos") and abs(x) > 1)
+            ):
+                raise self.reject(
+                    f"{name}() of {float(x):.6g}, which leaves the real numbers",
+                    "every value must stay real",
+                )
         if name == "exp":
             # sympy turns exp(k*log(b)) into b**k at once: bound the argument like a power.
             value = self.approx(args[0])
             if value is not None and abs(sp.re(value)) > MAX_BITS * math.log(2):
-                raise self.reject(f"exp() of an argument beyond {MAX_BITS}*log(2)",
-                                  "the value would not fit any number format")
+                raise self.reject(
+                    f"exp() of an argument beyond {MAX_BITS}*log(2)",
+                    "the value would not fit any number format",
+                )
         return func(*args)
 
 
@@ -237,7 +265,7 @@ class _Converter:
 
 #: Largest magnitude a value may have: it must fit a float64 (the generated code's numbers).
 FLOAT64_MAX = 1.7976931348623157e308
-NUMERIC_DPS = 60       # digits of the numeric evaluation of file values
+NUMERIC_DPS = 60  # digits of the numeric evaluation of file values
 
 
 class NotReal(ValueError):
@@ -248,8 +276,16 @@ class NoValue(NotReal):
     """A symbol without a value (the expression cannot be evaluated yet)."""
 
 
-_MPMATH = {sp.sin: "sin", sp.cos: "cos", sp.tan: "tan", sp.asin: "asin", sp.acos: "acos",
-           sp.atan: "atan", sp.exp: "exp", sp.log: "log"}
+_MPMATH = {
+    sp.sin: "sin",
+    sp.cos: "cos",
+    sp.tan: "tan",
+    sp.asin: "asin",
+    sp.acos: "acos",
+    sp.atan: "atan",
+    sp.exp: "exp",
+    sp.log: "log",
+}
 
 
 def numeric(expr: sp.Expr, values: Mapping[sp.Symbol, object], dps: int = NUMERIC_DPS):
@@ -297,7 +333,7 @@ def numeric(expr: sp.Expr, values: Mapping[sp.Symbol, object], dps: int = NUMERI
         name = _MPMATH.get(e.func)
         if name is not None:
             x = walk(e.args[0])
-            if name == "log" and x <= 0 or name in ("asin", "acos") and abs(x) > 1:
+            if (name == "log" and x <= 0) or (name in ("asin", "acos") and abs(x) > 1):
                 raise NotReal(f"{name} of {mpmath.nstr(x, 6)}")
             return real(getattr(mpmath, name)(x))
         raise NotReal(f"cannot evaluate {type(e).__name__}")

@@ -38,7 +38,7 @@ class ModelParameter:
     """One model parameter: its kind decides how the reader checks and stores it."""
 
     name: str
-    kind: str            # "number" (expression > 0), "fraction" (0 < x <= 1), "choice", "text", "int", "expr"
+    kind: str  # "number" (expression > 0), "fraction" (0 < x <= 1), "choice", "text", "int", "expr"
     required: bool = False
     choices: tuple[str, ...] = ()
     default: object = None
@@ -56,35 +56,65 @@ class ModelSpec:
         return next((p for p in self.parameters if p.name == key), None)
 
 
-MODELS: dict[str, ModelSpec] = {spec.name: spec for spec in (
-    ModelSpec("rigid", (), "ideal revolute joint at the plate's midpoint (eq. 3.1)"),
-    ModelSpec("circular_arc", (), "plate bent into a circular arc by a pure end moment"),
-    ModelSpec("prbm", (
-        ModelParameter("gamma", "fraction", default=PRBM_PRESETS["force"]["gamma"]),
-        ModelParameter("c_theta", "number", default=PRBM_PRESETS["force"]["c_theta"]),
-        ModelParameter("preset", "choice", choices=tuple(sorted(PRBM_PRESETS))),
-    ), "pseudo-rigid-body model: a pin at distance (1 - gamma) l from P's clamp; its "
-       "first-order pivot is gamma l/c_theta from M's clamp, so against the midpoint pin it "
-       "deviates by O(l theta) unless pin = \"prbm\""),
-    ModelSpec("small_deflection", (), "linear beam theory: f = l, g = l theta / 2"),
-    ModelSpec("elastica_force", (),
-              "cantilever elastica under a transverse end force (Bisshopp-Drucker); its "
-              "first-order pivot is 2 l/3 from M's clamp, so against the midpoint pin it "
-              "deviates by O(l theta) unless pin = \"prbm\""),
-    ModelSpec("table", (
-        ModelParameter("file", "text", required=True),
-        ModelParameter("degree", "int", default=3),
-    ), "polynomial fit of measured (theta, f/l, g/l) rows"),
-    ModelSpec("expr", (
-        ModelParameter("f", "expr", required=True),
-        ModelParameter("g", "expr", required=True),
-    ), "user expressions in theta, l and the parameters"),
-)}
+MODELS: dict[str, ModelSpec] = {
+    spec.name: spec
+    for spec in (
+        ModelSpec("rigid", (), "ideal revolute joint at the plate's midpoint (eq. 3.1)"),
+        ModelSpec("circular_arc", (), "plate bent into a circular arc by a pure end moment"),
+        ModelSpec(
+            "prbm",
+            (
+                ModelParameter("gamma", "fraction", default=PRBM_PRESETS["force"]["gamma"]),
+                ModelParameter("c_theta", "number", default=PRBM_PRESETS["force"]["c_theta"]),
+                ModelParameter("preset", "choice", choices=tuple(sorted(PRBM_PRESETS))),
+            ),
+            "pseudo-rigid-body model: a pin at distance (1 - gamma) l from P's clamp; its "
+            "first-order pivot is gamma l/c_theta from M's clamp, so against the midpoint pin it "
+            'deviates by O(l theta) unless pin = "prbm"',
+        ),
+        ModelSpec("small_deflection", (), "linear beam theory: f = l, g = l theta / 2"),
+        ModelSpec(
+            "elastica_force",
+            (),
+            "cantilever elastica under a transverse end force (Bisshopp-Drucker); its "
+            "first-order pivot is 2 l/3 from M's clamp, so against the midpoint pin it "
+            'deviates by O(l theta) unless pin = "prbm"',
+        ),
+        ModelSpec(
+            "table",
+            (
+                ModelParameter("file", "text", required=True),
+                ModelParameter("degree", "int", default=3),
+            ),
+            "polynomial fit of measured (theta, f/l, g/l) rows",
+        ),
+        ModelSpec(
+            "expr",
+            (
+                ModelParameter("f", "expr", required=True),
+                ModelParameter("g", "expr", required=True),
+            ),
+            "user expressions in theta, l and the parameters",
+        ),
+    )
+}
 
 #: Hinge keys that are not model parameters: geometry, model, input, where the rigid reference
 #: pin sits (`pin`), and the plate's stiffness data (docs/physics.md).
-HINGE_KEYS = ("name", "links", "at", "plate_angle", "length", "model", "input", "pin",
-              "E", "thickness", "width", "nu")
+HINGE_KEYS = (
+    "name",
+    "links",
+    "at",
+    "plate_angle",
+    "length",
+    "model",
+    "input",
+    "pin",
+    "E",
+    "thickness",
+    "width",
+    "nu",
+)
 #: Values of the `pin` key: the rigid reference pin at the plate midpoint (the paper's R_a), or at
 #: the pivot of the model's pseudo-rigid-body equivalent (see :func:`pivot_distance`).
 PINS = ("midpoint", "prbm")
@@ -104,13 +134,13 @@ class TableFit:
     Residuals are of f/l and g/l at the rows (dimensionless): RMS and max |residual|."""
 
     degree: int
-    coeffs_f: tuple[float, ...]          # f/l = sum coeffs_f[k] θ^k
-    coeffs_g: tuple[float, ...]          # g/l = sum coeffs_g[k] θ^k
+    coeffs_f: tuple[float, ...]  # f/l = sum coeffs_f[k] θ^k
+    coeffs_g: tuple[float, ...]  # g/l = sum coeffs_g[k] θ^k
     rms_f: float
     max_f: float
     rms_g: float
     max_g: float
-    theta_range: tuple[float, float]     # the rows' θ span: the fit is data only inside it
+    theta_range: tuple[float, float]  # the rows' θ span: the fit is data only inside it
     rows: int
 
 
@@ -160,7 +190,7 @@ def pivot_distance(hinge) -> _sp.Expr:
     y = 2 l θ/3); the fit's linear coefficient times l for table; g'(0) for expr.  Against a pin
     elsewhere the model carries an O(l θ) deviation (docs/physics.md)."""
     l = hinge.length
-    pin = getattr(hinge, "pin", "midpoint")       # stand-in hinges of the reports have none
+    pin = getattr(hinge, "pin", "midpoint")  # stand-in hinges of the reports have none
     if pin == "midpoint" or hinge.model in ("rigid", "circular_arc", "small_deflection"):
         return l / 2
     if hinge.model == "prbm":
@@ -195,20 +225,21 @@ def plate_functions(hinge, shape: str | None = None) -> PlateFunctions:
     # the model's own O(θ) term, so dg needs each model's exact form.
     f_rigid = l - d + d * _sp.cos(t)
     g_rigid = d * _sp.sin(t)
-    df = base.df - (d - l / 2) * t ** 2 * _special.cosr(1)(t)
+    df = base.df - (d - l / 2) * t**2 * _special.cosr(1)(t)
     stable = base.stable
     if own.model != hinge.model:
-        dg = base.dg - (d - l / 2) * _sp.sin(t)      # the shape's own O(θ) term stays: no cancellation
+        dg = base.dg - (d - l / 2) * _sp.sin(t)  # the shape's own O(θ) term stays: no cancellation
     elif hinge.model == "prbm":
         # γ l sin(θ/c) - (γ l/c) sin θ = γ l θ³ (s1(θ/c)/c³ - s1(θ)/c)
         gamma, c = _prbm_constants(hinge)
         sinr1 = _special.sinr(1)
-        dg = gamma * l * t ** 3 * (sinr1(t / c) / c ** 3 - sinr1(t) / c)
+        dg = gamma * l * t**3 * (sinr1(t / c) / c**3 - sinr1(t) / c)
     else:
-        dg = base.dg - (d - l / 2) * _sp.sin(t)      # a plain difference: loses ε/θ² in float64
+        dg = base.dg - (d - l / 2) * _sp.sin(t)  # a plain difference: loses ε/θ² in float64
         stable = False
-    return PlateFunctions(base.model, l, base.f, base.g, df, dg, f_rigid, g_rigid, base.limit,
-                          stable, base.fit, d)
+    return PlateFunctions(
+        base.model, l, base.f, base.g, df, dg, f_rigid, g_rigid, base.limit, stable, base.fit, d
+    )
 
 
 def _midpoint_functions(hinge) -> PlateFunctions:
@@ -222,24 +253,31 @@ def _midpoint_functions(hinge) -> PlateFunctions:
     g_rigid = l * _sp.sin(t) / 2
     sinr, cosr = _special.sinr, _special.cosr
     if model == "rigid":
-        return PlateFunctions(model, l, f_rigid, g_rigid, _sp.S.Zero, _sp.S.Zero, f_rigid,
-                              g_rigid)
+        return PlateFunctions(model, l, f_rigid, g_rigid, _sp.S.Zero, _sp.S.Zero, f_rigid, g_rigid)
     if model == "circular_arc":
         # f = l sin θ/θ, g = l (1 - cos θ)/θ; deviation l u^2 K(u) (cos u, sin u), u = θ/2
         u = t / 2
         f = l * sinr(0)(t)
         g = -l * t * cosr(1)(t)
-        df = l * _sp.cos(u) * u ** 2 * _special.arck(u)
-        dg = l * _sp.sin(u) * u ** 2 * _special.arck(u)
+        df = l * _sp.cos(u) * u**2 * _special.arck(u)
+        dg = l * _sp.sin(u) * u**2 * _special.arck(u)
         return PlateFunctions(model, l, f, g, df, dg, f_rigid, g_rigid)
     if model == "small_deflection":
         # f = l, g = l θ/2; df = l sin^2(θ/2) = -l θ^2/2 c1(θ), dg = l (θ - sin θ)/2
-        return PlateFunctions(model, l, l, l * t / 2, -l * t ** 2 / 2 * cosr(1)(t),
-                              -l * t ** 3 / 2 * sinr(1)(t), f_rigid, g_rigid)
+        return PlateFunctions(
+            model,
+            l,
+            l,
+            l * t / 2,
+            -l * t**2 / 2 * cosr(1)(t),
+            -l * t**3 / 2 * sinr(1)(t),
+            f_rigid,
+            g_rigid,
+        )
     if model == "prbm":
         gamma, c = _prbm_constants(hinge)
         big = t / c
-        f = l * (1 + gamma * big ** 2 * cosr(1)(big))
+        f = l * (1 + gamma * big**2 * cosr(1)(big))
         g = gamma * l * _sp.sin(big)
         # df/l = sin^2(θ/2) - 2γ sin^2(Θ/2) = (a - b)(a + b), a = sin u, b = sqrt(2γ) sin(u/c),
         # u = θ/2, k = sqrt(2γ)/c:  a - b = u [(1 - k) + u^2 (s1(u) - k/c^2 s1(u/c))],
@@ -247,26 +285,33 @@ def _midpoint_functions(hinge) -> PlateFunctions:
         # dg/l = γ sin Θ - sin(θ)/2 = θ [(2γ - c)/(2c) + θ^2 (γ/c^3 s1(Θ) - s1(θ)/2)].
         u = t / 2
         root = _sp.sqrt(2 * gamma)
-        one_minus_k = (c ** 2 - 2 * gamma) / (c * (c + root))
-        a_minus_b = u * (one_minus_k + u ** 2 * (sinr(1)(u) - root / c ** 3 * sinr(1)(u / c)))
+        one_minus_k = (c**2 - 2 * gamma) / (c * (c + root))
+        a_minus_b = u * (one_minus_k + u**2 * (sinr(1)(u) - root / c**3 * sinr(1)(u / c)))
         a_plus_b = _sp.sin(u) + root * _sp.sin(u / c)
         df = l * a_minus_b * a_plus_b
         k_g = (2 * gamma - c) / (2 * c)
-        dg = l * t * (k_g + t ** 2 * (gamma / c ** 3 * sinr(1)(big) - sinr(1)(t) / 2))
+        dg = l * t * (k_g + t**2 * (gamma / c**3 * sinr(1)(big) - sinr(1)(t) / 2))
         return PlateFunctions(model, l, f, g, df, dg, f_rigid, g_rigid)
     if model == "elastica_force":
         e = _special
-        return PlateFunctions(model, l, l * e.elastica_x(t), l * e.elastica_y(t),
-                              l * e.elastica_dx(t), l * e.elastica_dy(t), f_rigid, g_rigid,
-                              limit=e.ELASTICA_LIMIT)
+        return PlateFunctions(
+            model,
+            l,
+            l * e.elastica_x(t),
+            l * e.elastica_y(t),
+            l * e.elastica_dx(t),
+            l * e.elastica_dy(t),
+            f_rigid,
+            g_rigid,
+            limit=e.ELASTICA_LIMIT,
+        )
     if model == "table":
         return _table_functions(hinge, t, l, f_rigid, g_rigid)
     # "expr": the user's own functions; the deviation is a plain difference
     ell = PLATE_LENGTH
     f = _sp.sympify(hinge.param("f")).subs(ell, l)
     g = _sp.sympify(hinge.param("g")).subs(ell, l)
-    return PlateFunctions(model, l, f, g, f - f_rigid, g - g_rigid, f_rigid, g_rigid,
-                          stable=False)
+    return PlateFunctions(model, l, f, g, f - f_rigid, g - g_rigid, f_rigid, g_rigid, stable=False)
 
 
 def _table_functions(hinge, t, l, f_rigid, g_rigid) -> PlateFunctions:
@@ -288,7 +333,7 @@ def _table_functions(hinge, t, l, f_rigid, g_rigid) -> PlateFunctions:
         coef = _np.zeros(degree + 1)
         coef[: len(poly.coef)] = poly.coef
         resid = values - _np.polynomial.polynomial.polyval(th, coef)
-        return coef, float(_np.sqrt(_np.mean(resid ** 2))), float(_np.max(_np.abs(resid)))
+        return coef, float(_np.sqrt(_np.mean(resid**2))), float(_np.max(_np.abs(resid)))
 
     cf, rms_f, max_f = fit(fl)
     cg, rms_g, max_g = fit(gl)
@@ -304,12 +349,20 @@ def _table_functions(hinge, t, l, f_rigid, g_rigid) -> PlateFunctions:
     top_g = max(degree, 2 * m - 1)
     coef_df = [(p[k] if k <= degree else 0) - rho.get(k, 0) for k in range(top_f + 1)]
     coef_dg = [(r[k] if k <= degree else 0) - sigma.get(k, 0) for k in range(top_g + 1)]
-    poly = lambda cs: _sp.Add(*(c * t ** k for k, c in enumerate(cs)))  # noqa: E731
+    poly = lambda cs: _sp.Add(*(c * t**k for k, c in enumerate(cs)))  # noqa: E731
     f = l * poly(p)
     g = l * poly(r)
     df = l * (poly(coef_df) - t ** (2 * n) / 2 * _special.cosr(n)(t))
     dg = l * (poly(coef_dg) - t ** (2 * m + 1) / 2 * _special.sinr(m)(t))
-    table_fit = TableFit(degree, tuple(float(c) for c in cf), tuple(float(c) for c in cg),
-                         rms_f, max_f, rms_g, max_g, (float(th.min()), float(th.max())),
-                         len(rows))
+    table_fit = TableFit(
+        degree,
+        tuple(float(c) for c in cf),
+        tuple(float(c) for c in cg),
+        rms_f,
+        max_f,
+        rms_g,
+        max_g,
+        (float(th.min()), float(th.max())),
+        len(rows),
+    )
     return PlateFunctions("table", l, f, g, df, dg, f_rigid, g_rigid, fit=table_fit)

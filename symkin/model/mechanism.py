@@ -8,6 +8,7 @@ expression strings by the whitelist parser of :mod:`symkin.expressions`.
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 import keyword
 import math
@@ -17,42 +18,76 @@ import stat
 import sys
 import tomllib
 from collections.abc import Mapping, Sequence
-import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
 import mpmath
 import sympy as sp
 
-from . import expressions
 from ..core.errors import InputError, suggest
-from .hinges import (HINGE_KEYS, MODEL_KEYS, MODELS, PINS, PLATE_LENGTH, PRBM_PRESETS,
-                           THETA, ModelParameter)
+from . import expressions
+from .hinges import (
+    HINGE_KEYS,
+    MODEL_KEYS,
+    MODELS,
+    PINS,
+    PLATE_LENGTH,
+    PRBM_PRESETS,
+    THETA,
+    ModelParameter,
+)
 
 FORMAT = 1
-TOP_KEYS = ("format", "name", "ground", "chords", "basic_chain", "units", "parameters",
-            "defaults", "link", "hinge", "point", "load")
+TOP_KEYS = (
+    "format",
+    "name",
+    "ground",
+    "chords",
+    "basic_chain",
+    "units",
+    "parameters",
+    "defaults",
+    "link",
+    "hinge",
+    "point",
+    "load",
+)
 LINK_KEYS = ("name",)
 POINT_KEYS = ("name", "link", "at")
 LOAD_KEYS = ("point", "link", "at", "force", "moment")
 #: The file's length unit (`units`), in metres: geometry, lengths, thickness, width and load points
 #: are in it; E is in Pa, forces in N, moments in N·m (docs/physics.md).
-UNITS: dict[str, sp.Rational] = {"m": sp.Integer(1), "mm": sp.Rational(1, 10**3),
-                                 "um": sp.Rational(1, 10**6)}
+UNITS: dict[str, sp.Rational] = {
+    "m": sp.Integer(1),
+    "mm": sp.Rational(1, 10**3),
+    "um": sp.Rational(1, 10**6),
+}
 #: The keys a physical level needs on every hinge that is not a `rigid` pin.
 STIFFNESS_REQUIRED = ("E", "thickness", "width")
 #: Poisson's ratio when a hinge gives none (docs/physics.md).
 DEFAULT_NU = sp.Rational(3, 10)
 #: The value rules of the stiffness keys: (holds for the value, what is wrong, how to fix it).
 STIFFNESS_RULES = {
-    "E": (lambda v: v > 0, "Young's modulus must be positive (Pa)",
-          "give E in Pa, e.g. E = 210e9 for steel"),
-    "thickness": (lambda v: v > 0, "plate thickness must be positive",
-                  "give the thickness in the file's length unit"),
-    "width": (lambda v: v > 0, "plate width must be positive",
-              "give the out-of-plane width in the file's length unit"),
-    "nu": (lambda v: 0 <= v < sp.Rational(1, 2), "Poisson's ratio must be in [0, 0.5)",
-           "e.g. nu = 0.3 for steel"),
+    "E": (
+        lambda v: v > 0,
+        "Young's modulus must be positive (Pa)",
+        "give E in Pa, e.g. E = 210e9 for steel",
+    ),
+    "thickness": (
+        lambda v: v > 0,
+        "plate thickness must be positive",
+        "give the thickness in the file's length unit",
+    ),
+    "width": (
+        lambda v: v > 0,
+        "plate width must be positive",
+        "give the out-of-plane width in the file's length unit",
+    ),
+    "nu": (
+        lambda v: 0 <= v < sp.Rational(1, 2),
+        "Poisson's ratio must be in [0, 0.5)",
+        "e.g. nu = 0.3 for steel",
+    ),
 }
 DEFAULT_KEYS = tuple(k for k in HINGE_KEYS if k not in ("name", "links", "at")) + MODEL_KEYS
 DEFAULT_MODEL = "circular_arc"
@@ -72,7 +107,7 @@ class Parameter:
 @dataclass(frozen=True)
 class Link:
     name: str
-    index: int                      # position among the file's [[link]] entries
+    index: int  # position among the file's [[link]] entries
     line: int | None = None
 
 
@@ -90,11 +125,11 @@ class Hinge:
     model_params: tuple[tuple[str, object], ...] = ()
     input: bool = False
     line: int | None = None
-    pin: str = "midpoint"               # where the rigid reference pin sits (hinge_models.PINS)
-    E: sp.Expr | None = None            # Young's modulus, Pa (None: not given)
-    thickness: sp.Expr | None = None    # plate thickness, file unit
-    width: sp.Expr | None = None        # out-of-plane width, file unit
-    nu: sp.Expr = DEFAULT_NU            # Poisson's ratio
+    pin: str = "midpoint"  # where the rigid reference pin sits (hinge_models.PINS)
+    E: sp.Expr | None = None  # Young's modulus, Pa (None: not given)
+    thickness: sp.Expr | None = None  # plate thickness, file unit
+    width: sp.Expr | None = None  # out-of-plane width, file unit
+    nu: sp.Expr = DEFAULT_NU  # Poisson's ratio
 
     def param(self, key: str, default: object = None) -> object:
         return dict(self.model_params).get(key, default)
@@ -124,7 +159,7 @@ class Load:
     at: tuple[sp.Expr, sp.Expr]
     force: tuple[sp.Expr, sp.Expr]
     moment: sp.Expr
-    point: str | None = None            # the named [[point]] it acts on, if it names one
+    point: str | None = None  # the named [[point]] it acts on, if it names one
     line: int | None = None
 
     @property
@@ -178,8 +213,12 @@ class Mechanism:
     def has_stiffness(self) -> bool:
         """Every plate has E, thickness and width: the data the physical levels need (a mechanism
         with `rigid` pins only needs none)."""
-        return all(getattr(h, key) is not None for h in self.hinges if h.is_plate
-                   for key in STIFFNESS_REQUIRED)
+        return all(
+            getattr(h, key) is not None
+            for h in self.hinges
+            if h.is_plate
+            for key in STIFFNESS_REQUIRED
+        )
 
     def hinge(self, name: str) -> Hinge:
         return next(h for h in self.hinges if h.name == name)
@@ -195,8 +234,12 @@ class Mechanism:
         known = [p.name for p in self.points]
         for name in names:
             if name not in known:
-                raise InputError(f"unknown point '{name}'", file=self.path, entry="--points",
-                                 hint="points: " + ", ".join(known))
+                raise InputError(
+                    f"unknown point '{name}'",
+                    file=self.path,
+                    entry="--points",
+                    hint="points: " + ", ".join(known),
+                )
 
 
 def load(path: str | Path) -> Mechanism:
@@ -206,13 +249,15 @@ def load(path: str | Path) -> Mechanism:
     try:
         raw = path.read_bytes()
     except OSError as exc:
-        raise InputError(f"cannot read the file ({exc.strerror or exc})", file=shown,
-                         hint="check the path") from None
+        raise InputError(
+            f"cannot read the file ({exc.strerror or exc})", file=shown, hint="check the path"
+        ) from None
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
-        raise InputError(f"not UTF-8 text (byte {exc.start})", file=shown,
-                         hint="save the file as UTF-8") from None
+        raise InputError(
+            f"not UTF-8 text (byte {exc.start})", file=shown, hint="save the file as UTF-8"
+        ) from None
     return loads(text, shown, base_dir=path.parent)
 
 
@@ -222,14 +267,24 @@ def loads(text: str, file: str = "<string>", base_dir: Path | None = None) -> Me
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         line = _line_from_toml_error(str(exc))
-        raise InputError(f"TOML syntax error: {exc}", file=file, line=line,
-                         hint="fix the TOML syntax at that line") from None
-    except ValueError as exc:            # an integer of more than 4300 digits
-        raise InputError(f"a TOML number with too many digits ({str(exc)[:80]})", file=file,
-                         hint="write long numbers with an exponent, e.g. 1.5e30") from None
+        raise InputError(
+            f"TOML syntax error: {exc}",
+            file=file,
+            line=line,
+            hint="fix the TOML syntax at that line",
+        ) from None
+    except ValueError as exc:  # an integer of more than 4300 digits
+        raise InputError(
+            f"a TOML number with too many digits ({str(exc)[:80]})",
+            file=file,
+            hint="write long numbers with an exponent, e.g. 1.5e30",
+        ) from None
     except RecursionError:
-        raise InputError("TOML nesting too deep (arrays or tables inside each other)", file=file,
-                         hint="a mechanism file needs at most a few levels of nesting") from None
+        raise InputError(
+            "TOML nesting too deep (arrays or tables inside each other)",
+            file=file,
+            hint="a mechanism file needs at most a few levels of nesting",
+        ) from None
     return _Reader(text, file, base_dir or Path(".")).read(data)
 
 
@@ -246,8 +301,7 @@ def _bounded_exact(expr: sp.Expr, defaults: Mapping[sp.Symbol, sp.Expr]) -> sp.E
     if not exact.is_number:
         return None
     if exact.is_Rational:
-        return exact if max(abs(exact.p).bit_length(), exact.q.bit_length()) <= EXACT_BITS \
-            else None
+        return exact if max(abs(exact.p).bit_length(), exact.q.bit_length()) <= EXACT_BITS else None
     return exact if sp.count_ops(exact) <= EXACT_OPS else None
 
 
@@ -263,9 +317,44 @@ def _is_float(text: str) -> bool:
     return True
 
 
-C_KEYWORDS = frozenset("""auto break case char const continue default do double else enum extern
-float for goto if inline int long register restrict return short signed sizeof static struct
-switch typedef union unsigned void volatile while""".split())
+C_KEYWORDS = frozenset(
+    [
+        "auto",
+        "break",
+        "case",
+        "char",
+        "const",
+        "continue",
+        "default",
+        "do",
+        "double",
+        "else",
+        "enum",
+        "extern",
+        "float",
+        "for",
+        "goto",
+        "if",
+        "inline",
+        "int",
+        "long",
+        "register",
+        "restrict",
+        "return",
+        "short",
+        "signed",
+        "sizeof",
+        "static",
+        "struct",
+        "switch",
+        "typedef",
+        "union",
+        "unsigned",
+        "void",
+        "volatile",
+        "while",
+    ]
+)
 #: modules whose names a mechanism may not take: the generated module imports them, and a file
 #: <name>.py beside a script would shadow them
 SHADOWED = frozenset(sys.stdlib_module_names) | {"numpy", "symkin", "mpmath", "sympy"}
@@ -275,15 +364,21 @@ def name_problem(name: str, longest: int = MAX_NAME) -> tuple[str, str] | None:
     """(what is wrong, how to fix it) when `name` cannot name generated files and C functions,
     else None."""
     if len(name) > longest:
-        return (f"name is {len(name)} characters long, more than {longest}",
-                f"use at most {longest} characters: it names the generated files and the C "
-                "functions")
+        return (
+            f"name is {len(name)} characters long, more than {longest}",
+            f"use at most {longest} characters: it names the generated files and the C functions",
+        )
     if not expressions.IDENTIFIER.match(name) or name.startswith("_"):
-        return (f"name '{name}' is not identifier-safe",
-                "use letters, digits and '_' only, starting with a letter")
+        return (
+            f"name '{name}' is not identifier-safe",
+            "use letters, digits and '_' only, starting with a letter",
+        )
     if keyword.iskeyword(name) or name in C_KEYWORDS or name in SHADOWED:
-        return (f"name '{name}' is a Python or C keyword or the name of a module the generated "
-                f"code imports", f"rename it, e.g. name = \"{name}_mechanism\"")
+        return (
+            f"name '{name}' is a Python or C keyword or the name of a module the generated "
+            f"code imports",
+            f'rename it, e.g. name = "{name}_mechanism"',
+        )
     return None
 
 
@@ -298,12 +393,18 @@ def with_points(mech: Mechanism, tables: Sequence[Mapping], file: str, text: str
     taken = {p.name for p in mech.points}
     for p in added:
         if p.name in taken:
-            raise reader.error(f"the mechanism already has a point '{p.name}'",
-                               f"[[point]] '{p.name}'", p.line,
-                               "give only its name to use the file's point, or rename it")
+            raise reader.error(
+                f"the mechanism already has a point '{p.name}'",
+                f"[[point]] '{p.name}'",
+                p.line,
+                "give only its name to use the file's point, or rename it",
+            )
     n = len(mech.points)
-    return dataclasses.replace(mech, points=mech.points + tuple(
-        dataclasses.replace(p, index=n + i) for i, p in enumerate(added)))
+    return dataclasses.replace(
+        mech,
+        points=mech.points
+        + tuple(dataclasses.replace(p, index=n + i) for i, p in enumerate(added)),
+    )
 
 
 def _entry(kind: str, i: int, table: Mapping) -> str:
@@ -361,79 +462,117 @@ class _Reader:
         self.defaults: dict[sp.Symbol, sp.Expr] = {}
 
     # -- helpers -------------------------------------------------------------------------------
-    def error(self, message: str, entry: str | None = None, line: int | None = None,
-              hint: str | None = None) -> InputError:
+    def error(
+        self,
+        message: str,
+        entry: str | None = None,
+        line: int | None = None,
+        hint: str | None = None,
+    ) -> InputError:
         return InputError(message, file=self.file, line=line, entry=entry, hint=hint)
 
-    def check_keys(self, table: Mapping, allowed: Sequence[str], entry: str,
-                   line: int | None) -> None:
+    def check_keys(
+        self, table: Mapping, allowed: Sequence[str], entry: str, line: int | None
+    ) -> None:
         for key in table:
             if key not in allowed:
                 near = suggest(key, allowed)
-                raise self.error(f"unknown key '{key}'", entry,
-                                 line if line is not None else self.where.key(key),
-                                 near or "allowed keys: " + ", ".join(allowed))
+                raise self.error(
+                    f"unknown key '{key}'",
+                    entry,
+                    line if line is not None else self.where.key(key),
+                    near or "allowed keys: " + ", ".join(allowed),
+                )
 
-    def expr(self, value: object, entry: str, key: str, line: int | None,
-             names: Mapping[str, sp.Expr] | None = None) -> sp.Expr:
+    def expr(
+        self,
+        value: object,
+        entry: str,
+        key: str,
+        line: int | None,
+        names: Mapping[str, sp.Expr] | None = None,
+    ) -> sp.Expr:
         """A number or an expression string, as an exact sympy expression."""
         try:
             if isinstance(value, str):
-                return expressions.parse(value, self.names if names is None else names,
-                                         self.defaults)
+                return expressions.parse(
+                    value, self.names if names is None else names, self.defaults
+                )
             return expressions.number(value)  # type: ignore[arg-type]
         except expressions.ExpressionError as exc:
-            raise self.error(f"'{key}': {exc}", entry, line,
-                             "use a number or an expression over the parameters") from None
+            raise self.error(
+                f"'{key}': {exc}", entry, line, "use a number or an expression over the parameters"
+            ) from None
 
     def finite(self, expr: sp.Expr, entry: str, key: str, line: int | None) -> sp.Expr:
         """Check that `expr` evaluates to a finite real number with the default parameters."""
         try:
             value = expressions.numeric(expr, self.defaults)
         except expressions.NotReal as exc:
-            raise self.error(f"'{key}' does not evaluate to a finite real number ({exc})",
-                             entry, line, "change the expression or the parameters it uses"
-                             ) from None
+            raise self.error(
+                f"'{key}' does not evaluate to a finite real number ({exc})",
+                entry,
+                line,
+                "change the expression or the parameters it uses",
+            ) from None
         if abs(value) > expressions.FLOAT64_MAX:
-            raise self.error(f"'{key}' evaluates to {mpmath.nstr(value, 6)}, beyond a float64 "
-                             "(|value| < 1.8e308), the generated code's number format", entry,
-                             line, "change the expression or the parameters it uses")
+            raise self.error(
+                f"'{key}' evaluates to {mpmath.nstr(value, 6)}, beyond a float64 "
+                "(|value| < 1.8e308), the generated code's number format",
+                entry,
+                line,
+                "change the expression or the parameters it uses",
+            )
         return sp.Float(value, expressions.NUMERIC_DPS)
 
-    def text(self, table: Mapping, key: str, entry: str, line: int | None,
-             required: bool = True) -> str | None:
+    def text(
+        self, table: Mapping, key: str, entry: str, line: int | None, required: bool = True
+    ) -> str | None:
         if key not in table:
             if required:
-                raise self.error(f"missing required key '{key}'", entry, line,
-                                 f"add {key} = \"...\"")
+                raise self.error(f"missing required key '{key}'", entry, line, f'add {key} = "..."')
             return None
         value = table[key]
         if not isinstance(value, str) or not value.strip():
-            raise self.error(f"'{key}' must be a non-empty string, got {value!r}", entry, line,
-                             f'write {key} = "..." (quoted text, not empty)')
+            raise self.error(
+                f"'{key}' must be a non-empty string, got {value!r}",
+                entry,
+                line,
+                f'write {key} = "..." (quoted text, not empty)',
+            )
         return value
 
     def array_of_tables(self, data: Mapping, key: str) -> list[Mapping]:
         value = data.get(key, [])
         if not isinstance(value, list) or not all(isinstance(t, dict) for t in value):
-            raise self.error(f"'{key}' must be an array of tables written as [[{key}]]",
-                             f"[[{key}]]", self.where.key(key),
-                             f"write each entry as a [[{key}]] table (docs/file-format.md)")
+            raise self.error(
+                f"'{key}' must be an array of tables written as [[{key}]]",
+                f"[[{key}]]",
+                self.where.key(key),
+                f"write each entry as a [[{key}]] table (docs/file-format.md)",
+            )
         return value
 
     def unique(self, kind: str, names: list[str], lines: list[int | None]) -> None:
         seen: dict[str, int] = {}
         for i, name in enumerate(names):
             if name in seen:
-                raise self.error(f"duplicate {kind} name '{name}' (also {kind} #{seen[name] + 1})",
-                                 f"[[{kind}]] #{i + 1} '{name}'", lines[i],
-                                 f"give every {kind} its own name")
+                raise self.error(
+                    f"duplicate {kind} name '{name}' (also {kind} #{seen[name] + 1})",
+                    f"[[{kind}]] #{i + 1} '{name}'",
+                    lines[i],
+                    f"give every {kind} its own name",
+                )
             seen[name] = i
 
     def vector(self, value: object, entry: str, key: str, line: int | None) -> tuple:
         if not isinstance(value, list) or len(value) != 2:
-            raise self.error(f"'{key}' must be a list of two coordinates [x, y], got {value!r}",
-                             entry, line, f"write {key} = [x, y] with two numbers or expressions")
+            raise self.error(
+                f"'{key}' must be a list of two coordinates [x, y], got {value!r}",
+                entry,
+                line,
+                f"write {key} = [x, y] with two numbers or expressions",
+            )
         vec = tuple(self.expr(v, entry, key, line) for v in value)
         for v in vec:
             self.finite(v, entry, key, line)
@@ -444,11 +583,19 @@ class _Reader:
         self.check_keys(data, TOP_KEYS, "top level", None)
         fmt = data.get("format")
         if fmt is None:
-            raise self.error("missing required key 'format'", "top level", None,
-                             f"add 'format = {FORMAT}' as the first line")
+            raise self.error(
+                "missing required key 'format'",
+                "top level",
+                None,
+                f"add 'format = {FORMAT}' as the first line",
+            )
         if not isinstance(fmt, int) or isinstance(fmt, bool) or fmt != FORMAT:
-            raise self.error(f"unsupported format {fmt!r}", "format", self.where.key("format"),
-                             f"this symkin reads format = {FORMAT}")
+            raise self.error(
+                f"unsupported format {fmt!r}",
+                "format",
+                self.where.key("format"),
+                f"this symkin reads format = {FORMAT}",
+            )
         name = self.text(data, "name", "top level", None)
         problem = name_problem(name)
         if problem is not None:
@@ -459,21 +606,34 @@ class _Reader:
         link_names = [lk.name for lk in links]
         ground = data.get("ground", link_names[0])
         if not isinstance(ground, str) or ground not in link_names:
-            raise self.error(f"ground {ground!r} is not a [[link]]", "ground",
-                             self.where.key("ground"),
-                             suggest(str(ground), link_names) or "name one of the links")
+            raise self.error(
+                f"ground {ground!r} is not a [[link]]",
+                "ground",
+                self.where.key("ground"),
+                suggest(str(ground), link_names) or "name one of the links",
+            )
         units = data.get("units", "m")
         if units not in UNITS:
-            raise self.error(f"unknown length unit {units!r}", "units", self.where.key("units"),
-                             "units: " + ", ".join(f'"{u}"' for u in UNITS))
+            raise self.error(
+                f"unknown length unit {units!r}",
+                "units",
+                self.where.key("units"),
+                "units: " + ", ".join(f'"{u}"' for u in UNITS),
+            )
         hinges = self.hinges(self.array_of_tables(data, "hinge"), defaults, link_names)
         points = self.points(self.array_of_tables(data, "point"), link_names)
         mech = Mechanism(
-            path=self.file, name=name, ground=ground, parameters=parameters, links=links,
-            hinges=hinges, points=points,
+            path=self.file,
+            name=name,
+            ground=ground,
+            parameters=parameters,
+            links=links,
+            hinges=hinges,
+            points=points,
             chords=self.name_list(data, "chords", [h.name for h in hinges], "hinge"),
             basic_chain=self.name_list(data, "basic_chain", link_names, "link"),
-            units=units, loads=self.loads(self.array_of_tables(data, "load"), link_names, points),
+            units=units,
+            loads=self.loads(self.array_of_tables(data, "load"), link_names, points),
         )
         self.check_connected(mech)
         self.check_mobility(mech)
@@ -482,18 +642,25 @@ class _Reader:
 
     def parameters(self, table: object) -> tuple[Parameter, ...]:
         if not isinstance(table, dict):
-            raise self.error("[parameters] must be a table", "[parameters]", None,
-                             "write [parameters] on a line of its own, then name = value lines")
+            raise self.error(
+                "[parameters] must be a table",
+                "[parameters]",
+                None,
+                "write [parameters] on a line of its own, then name = value lines",
+            )
         out = []
         for key, value in table.items():
             line = self.where.key(key, table="parameters")
             entry = f"[parameters] '{key}'"
             if not expressions.IDENTIFIER.match(key):
-                raise self.error("parameter names must be identifiers", entry, line,
-                                 "use letters, digits and '_' only, not starting with a digit")
+                raise self.error(
+                    "parameter names must be identifiers",
+                    entry,
+                    line,
+                    "use letters, digits and '_' only, not starting with a digit",
+                )
             if key in expressions.RESERVED:
-                raise self.error(f"'{key}' is a built-in name", entry, line,
-                                 "rename the parameter")
+                raise self.error(f"'{key}' is a built-in name", entry, line, "rename the parameter")
             expr = self.expr(value, entry, key, line)
             value_ = self.finite(expr, entry, key, line)
             symbol = expressions.ParameterSymbol(key)
@@ -505,15 +672,23 @@ class _Reader:
 
     def hinge_defaults(self, table: object) -> dict:
         if not isinstance(table, dict):
-            raise self.error("[defaults] must be a table", "[defaults]", None,
-                             "write [defaults] on a line of its own, then key = value lines")
+            raise self.error(
+                "[defaults] must be a table",
+                "[defaults]",
+                None,
+                "write [defaults] on a line of its own, then key = value lines",
+            )
         self.check_keys(table, DEFAULT_KEYS, "[defaults]", self.where.key("defaults"))
         return dict(table)
 
     def links(self, tables: list[Mapping]) -> tuple[Link, ...]:
         if len(tables) < 2:
-            raise self.error(f"a mechanism needs at least two [[link]] entries, found {len(tables)}",
-                             "[[link]]", None, "add the ground link and the moving links")
+            raise self.error(
+                f"a mechanism needs at least two [[link]] entries, found {len(tables)}",
+                "[[link]]",
+                None,
+                "add the ground link and the moving links",
+            )
         out = []
         for i, table in enumerate(tables):
             line = self.where.header("link", i)
@@ -523,11 +698,16 @@ class _Reader:
         self.unique("link", [lk.name for lk in out], [lk.line for lk in out])
         return tuple(out)
 
-    def hinges(self, tables: list[Mapping], defaults: Mapping,
-               link_names: list[str]) -> tuple[Hinge, ...]:
+    def hinges(
+        self, tables: list[Mapping], defaults: Mapping, link_names: list[str]
+    ) -> tuple[Hinge, ...]:
         if not tables:
-            raise self.error("a mechanism needs at least one [[hinge]]", "[[hinge]]", None,
-                             "add [[hinge]] tables with name, links and at (docs/file-format.md)")
+            raise self.error(
+                "a mechanism needs at least one [[hinge]]",
+                "[[hinge]]",
+                None,
+                "add [[hinge]] tables with name, links and at (docs/file-format.md)",
+            )
         out = [self.hinge(i, table, defaults, link_names) for i, table in enumerate(tables)]
         self.unique("hinge", [h.name for h in out], [h.line for h in out])
         return tuple(out)
@@ -539,61 +719,117 @@ class _Reader:
         entry = f"[[hinge]] #{i + 1} '{name}'"
         model = table.get("model", defaults.get("model", DEFAULT_MODEL))
         if not isinstance(model, str):
-            raise self.error(f"'model' must be a model name string, got {model!r}"[:200], entry,
-                             line, "models: " + ", ".join(MODELS))
+            raise self.error(
+                f"'model' must be a model name string, got {model!r}"[:200],
+                entry,
+                line,
+                "models: " + ", ".join(MODELS),
+            )
         if model not in MODELS:
-            raise self.error(f"unknown hinge model {model!r}", entry, line,
-                             suggest(str(model), MODELS) or "models: " + ", ".join(MODELS))
+            raise self.error(
+                f"unknown hinge model {model!r}",
+                entry,
+                line,
+                suggest(str(model), MODELS) or "models: " + ", ".join(MODELS),
+            )
         spec = MODELS[model]
         allowed = HINGE_KEYS + tuple(p.name for p in spec.parameters)
         for key in table:
-            if key not in allowed:
-                if key in MODEL_KEYS:
-                    raise self.error(f"'{key}' is not a parameter of model '{model}'", entry,
-                                     line, f"remove it, or choose a model that takes '{key}'")
+            if key not in allowed and key in MODEL_KEYS:
+                raise self.error(
+                    f"'{key}' is not a parameter of model '{model}'",
+                    entry,
+                    line,
+                    f"remove it, or choose a model that takes '{key}'",
+                )
         self.check_keys(table, allowed, entry, line)
         links = table.get("links")
-        if (not isinstance(links, list) or len(links) != 2
-                or not all(isinstance(x, str) for x in links)):
-            raise self.error("'links' must name the two links it joins", entry, line,
-                             "write e.g. links = [\"frame\", \"crank\"]: two [[link]] names")
+        if (
+            not isinstance(links, list)
+            or len(links) != 2
+            or not all(isinstance(x, str) for x in links)
+        ):
+            raise self.error(
+                "'links' must name the two links it joins",
+                entry,
+                line,
+                'write e.g. links = ["frame", "crank"]: two [[link]] names',
+            )
         for link in links:
             if link not in link_names:
-                raise self.error(f"links names an unknown link '{link}'", entry, line,
-                                 suggest(link, link_names) or "declare it as a [[link]]")
+                raise self.error(
+                    f"links names an unknown link '{link}'",
+                    entry,
+                    line,
+                    suggest(link, link_names) or "declare it as a [[link]]",
+                )
         if links[0] == links[1]:
-            raise self.error(f"joins the link '{links[0]}' to itself", entry, line,
-                             "a hinge joins two different links")
+            raise self.error(
+                f"joins the link '{links[0]}' to itself",
+                entry,
+                line,
+                "a hinge joins two different links",
+            )
         if "at" not in table:
-            raise self.error("missing required key 'at'", entry, line,
-                             "add at = [x, y], the plate's midpoint in the as-fabricated pose")
+            raise self.error(
+                "missing required key 'at'",
+                entry,
+                line,
+                "add at = [x, y], the plate's midpoint in the as-fabricated pose",
+            )
         at = self.vector(table["at"], entry, "at", line)
         merged = {**defaults, **table}
         plate_angle = self.expr(merged.get("plate_angle", 0), entry, "plate_angle", line)
         self.finite(plate_angle, entry, "plate_angle", line)
         if "length" not in merged:
-            raise self.error("no plate length", entry, line,
-                             "set length in the hinge or in [defaults]")
+            raise self.error(
+                "no plate length", entry, line, "set length in the hinge or in [defaults]"
+            )
         length = self.expr(merged["length"], entry, "length", line)
         if not self.finite(length, entry, "length", line) > 0:
-            raise self.error(f"plate length must be positive, got {length}", entry, line,
-                             "give the plate a positive length")
+            raise self.error(
+                f"plate length must be positive, got {length}",
+                entry,
+                line,
+                "give the plate a positive length",
+            )
         is_input = merged.get("input", False)
         if not isinstance(is_input, bool):
-            raise self.error(f"'input' must be true or false, got {is_input!r}", entry, line,
-                             "write input = true or input = false")
+            raise self.error(
+                f"'input' must be true or false, got {is_input!r}",
+                entry,
+                line,
+                "write input = true or input = false",
+            )
         params = self.model_params(spec, table, defaults, entry, line, length)
         pin = merged.get("pin", "midpoint")
         if pin not in PINS:
-            raise self.error(f"'pin' must be one of {', '.join(PINS)}, got {pin!r}", entry, line,
-                             "pin = \"midpoint\" (the paper's rigid pin) or \"prbm\" (the "
-                             "model's pseudo-rigid-body pivot)")
+            raise self.error(
+                f"'pin' must be one of {', '.join(PINS)}, got {pin!r}",
+                entry,
+                line,
+                'pin = "midpoint" (the paper\'s rigid pin) or "prbm" (the '
+                "model's pseudo-rigid-body pivot)",
+            )
         stiffness = self.stiffness(merged, entry, line, length)
-        return Hinge(name, i, (links[0], links[1]), at, plate_angle, length, model, params,
-                     is_input, line, pin, **stiffness)
+        return Hinge(
+            name,
+            i,
+            (links[0], links[1]),
+            at,
+            plate_angle,
+            length,
+            model,
+            params,
+            is_input,
+            line,
+            pin,
+            **stiffness,
+        )
 
-    def stiffness(self, merged: Mapping, entry: str, line: int | None,
-                  length: sp.Expr) -> dict[str, sp.Expr]:
+    def stiffness(
+        self, merged: Mapping, entry: str, line: int | None, length: sp.Expr
+    ) -> dict[str, sp.Expr]:
         """E, thickness, width, nu of a hinge (docs/physics.md), each checked where given: E > 0,
         0 < thickness < length, width > 0, 0 <= nu < 0.5 (with the default parameters)."""
         out: dict[str, sp.Expr] = {}
@@ -609,29 +845,42 @@ class _Reader:
             t = self.finite(out["thickness"], entry, "thickness", line)
             lval = self.finite(length, entry, "length", line)
             if not t < lval:
-                raise self.error(f"thickness {_short(t)} is not smaller than the plate length "
-                                 f"{_short(lval)}", entry, line,
-                                 "a flexure plate is thin: make thickness < length (about "
-                                 "length/10 or less)")
+                raise self.error(
+                    f"thickness {_short(t)} is not smaller than the plate length {_short(lval)}",
+                    entry,
+                    line,
+                    "a flexure plate is thin: make thickness < length (about length/10 or less)",
+                )
         return out
 
-    def model_params(self, spec, table: Mapping, defaults: Mapping, entry: str,
-                     line: int | None, length: sp.Expr) -> tuple[tuple[str, object], ...]:
+    def model_params(
+        self, spec, table: Mapping, defaults: Mapping, entry: str, line: int | None, length: sp.Expr
+    ) -> tuple[tuple[str, object], ...]:
         values: dict[str, object] = {}
         given = {k: v for k, v in defaults.items() if spec.parameter(k)}
         given.update({k: v for k, v in table.items() if spec.parameter(k)})
         if spec.name == "prbm" and "preset" in given:
             preset = given["preset"]
             if not isinstance(preset, str) or preset not in PRBM_PRESETS:
-                raise self.error(f"unknown prbm preset {preset!r}", entry, line,
-                                 "presets: " + ", ".join(sorted(PRBM_PRESETS)))
-            given = {**PRBM_PRESETS[preset], **{k: v for k, v in given.items()
-                                                if k in table or k not in PRBM_PRESETS[preset]}}
+                raise self.error(
+                    f"unknown prbm preset {preset!r}",
+                    entry,
+                    line,
+                    "presets: " + ", ".join(sorted(PRBM_PRESETS)),
+                )
+            given = {
+                **PRBM_PRESETS[preset],
+                **{k: v for k, v in given.items() if k in table or k not in PRBM_PRESETS[preset]},
+            }
         for p in spec.parameters:
             if p.name not in given:
                 if p.required:
-                    raise self.error(f"model '{spec.name}' needs '{p.name}'", entry, line,
-                                     f"add {p.name} = ... to the hinge")
+                    raise self.error(
+                        f"model '{spec.name}' needs '{p.name}'",
+                        entry,
+                        line,
+                        f"add {p.name} = ... to the hinge",
+                    )
                 if p.default is None:
                     continue
                 raw = p.default
@@ -651,44 +900,66 @@ class _Reader:
             ok = num > 0 and (p.kind == "number" or num <= 1)
             if not ok:
                 rng = "in (0, 1]" if p.kind == "fraction" else "positive"
-                raise self.error(f"'{p.name}' must be {rng}, got {_short(num)}", entry, line,
-                                 f"give {p.name} a value {rng}")
+                raise self.error(
+                    f"'{p.name}' must be {rng}, got {_short(num)}",
+                    entry,
+                    line,
+                    f"give {p.name} a value {rng}",
+                )
             return value
         if p.kind == "choice":
             if not isinstance(raw, str) or raw not in p.choices:
-                raise self.error(f"'{p.name}' must be one of {', '.join(p.choices)}, got {raw!r}",
-                                 entry, line,
-                                 f'write {p.name} = "{p.choices[0]}" or another of these')
+                raise self.error(
+                    f"'{p.name}' must be one of {', '.join(p.choices)}, got {raw!r}",
+                    entry,
+                    line,
+                    f'write {p.name} = "{p.choices[0]}" or another of these',
+                )
             return raw
         if p.kind == "int":
             if isinstance(raw, bool) or not isinstance(raw, int) or not 1 <= raw <= 12:
-                raise self.error(f"'{p.name}' must be an integer from 1 to 12, got {raw!r}",
-                                 entry, line, f"write {p.name} = an integer from 1 to 12")
+                raise self.error(
+                    f"'{p.name}' must be an integer from 1 to 12, got {raw!r}",
+                    entry,
+                    line,
+                    f"write {p.name} = an integer from 1 to 12",
+                )
             return raw
         if p.kind == "text":
             if not isinstance(raw, str) or not raw:
-                raise self.error(f"'{p.name}' must be a file name string, got {raw!r}", entry,
-                                 line, f'write {p.name} = "name.csv", a file beside the mechanism')
+                raise self.error(
+                    f"'{p.name}' must be a file name string, got {raw!r}",
+                    entry,
+                    line,
+                    f'write {p.name} = "name.csv", a file beside the mechanism',
+                )
             return raw
         # "expr": an expression in theta, l and the parameters
         names = {**self.names, "theta": THETA, "l": PLATE_LENGTH}
         if not isinstance(raw, str):
-            raise self.error(f"'{p.name}' must be an expression string in theta and l", entry,
-                             line, f'write {p.name} = "..." with an expression in theta and l')
+            raise self.error(
+                f"'{p.name}' must be an expression string in theta and l",
+                entry,
+                line,
+                f'write {p.name} = "..." with an expression in theta and l',
+            )
         return self.expr(raw, entry, p.name, line, names)
 
-    def check_expr_model(self, f: sp.Expr, g: sp.Expr, entry: str, line: int | None,
-                         length: sp.Expr) -> None:
+    def check_expr_model(
+        self, f: sp.Expr, g: sp.Expr, entry: str, line: int | None, length: sp.Expr
+    ) -> None:
         """The plate must be straight at θ = 0: f(0) = l, g(0) = 0 (the as-fabricated pose)."""
         subs = {**self.defaults, PLATE_LENGTH: length.subs(self.defaults)}
         lval = sp.N(subs[PLATE_LENGTH], 30)
         for key, expr, want in (("f", f, lval), ("g", g, 0)):
             at0 = sp.N(expr.subs(subs).subs(THETA, sp.Rational(1, 10**12)), 30)
             if not (at0.is_real and at0.is_finite) or abs(at0 - want) > 1e-6 * lval:
-                raise self.error(f"expression model gives {key}(0) = {_short(at0)}, expected "
-                                 f"{_short(want)}",
-                                 entry, line,
-                                 "at theta = 0 the plate is straight: f(0) = l and g(0) = 0")
+                raise self.error(
+                    f"expression model gives {key}(0) = {_short(at0)}, expected {_short(want)}",
+                    entry,
+                    line,
+                    "at theta = 0 the plate is straight: f(0) = l and g(0) = 0",
+                )
 
     def table_rows(self, name: str, degree: int, entry: str, line: int | None) -> tuple:
         content = self.table_text(name, entry, line)
@@ -700,19 +971,31 @@ class _Reader:
                 values = [float(x) for x in row]
             except ValueError:
                 if not rows and k == 1:
-                    continue                  # a header row
+                    continue  # a header row
                 bad = next((x for x in row if not _is_float(x)), "")
                 shown = bad if len(bad) <= 40 else bad[:37] + "..."
-                raise self.error(f"{name}:{k}: not a number: {shown!r}", entry, line,
-                                 "each row is theta, f/l, g/l") from None
+                raise self.error(
+                    f"{name}:{k}: not a number: {shown!r}",
+                    entry,
+                    line,
+                    "each row is theta, f/l, g/l",
+                ) from None
             if len(values) != 3 or not all(math.isfinite(v) for v in values):
-                raise self.error(f"{name}:{k}: need three finite numbers theta, f/l, g/l",
-                                 entry, line, f"correct row {k} of {name}")
+                raise self.error(
+                    f"{name}:{k}: need three finite numbers theta, f/l, g/l",
+                    entry,
+                    line,
+                    f"correct row {k} of {name}",
+                )
             rows.append(tuple(values))
         if len({r[0] for r in rows}) < degree + 1:
-            raise self.error(f"table '{name}' has {len(rows)} rows with distinct theta; a degree "
-                             f"{degree} fit needs at least {degree + 1}", entry, line,
-                             "add rows or lower 'degree'")
+            raise self.error(
+                f"table '{name}' has {len(rows)} rows with distinct theta; a degree "
+                f"{degree} fit needs at least {degree + 1}",
+                entry,
+                line,
+                "add rows or lower 'degree'",
+            )
         return tuple(rows)
 
     def table_text(self, name: str, entry: str, line: int | None) -> str:
@@ -721,34 +1004,53 @@ class _Reader:
         hint = "give a CSV path relative to the mechanism file, inside its folder"
         rel = Path(name)
         if rel.is_absolute() or ".." in rel.parts:
-            raise self.error(f"table file '{name}' must be inside the mechanism's folder "
-                             "(a relative path without '..')", entry, line, hint)
+            raise self.error(
+                f"table file '{name}' must be inside the mechanism's folder "
+                "(a relative path without '..')",
+                entry,
+                line,
+                hint,
+            )
         base = self.base_dir.resolve()
         path = (base / rel).resolve()
         if path != base and base not in path.parents:
-            raise self.error(f"table file '{name}' leads outside the mechanism's folder "
-                             "(a symbolic link)", entry, line, hint)
+            raise self.error(
+                f"table file '{name}' leads outside the mechanism's folder (a symbolic link)",
+                entry,
+                line,
+                hint,
+            )
         try:
             info = os.stat(path)
         except OSError as exc:
-            raise self.error(f"cannot read table file '{name}' ({exc.strerror or exc})", entry,
-                             line, hint) from None
+            raise self.error(
+                f"cannot read table file '{name}' ({exc.strerror or exc})", entry, line, hint
+            ) from None
         if not stat.S_ISREG(info.st_mode):
             raise self.error(f"table file '{name}' is not a regular file", entry, line, hint)
         if info.st_size > MAX_TABLE_BYTES:
-            raise self.error(f"table file '{name}' is larger than {MAX_TABLE_BYTES} bytes",
-                             entry, line, "a table needs a few hundred rows at most")
+            raise self.error(
+                f"table file '{name}' is larger than {MAX_TABLE_BYTES} bytes",
+                entry,
+                line,
+                "a table needs a few hundred rows at most",
+            )
         try:
             with open(path, "rb") as f:
                 raw = f.read(MAX_TABLE_BYTES + 1)
             if len(raw) > MAX_TABLE_BYTES:
-                raise self.error(f"table file '{name}' is larger than {MAX_TABLE_BYTES} bytes",
-                                 entry, line, "a table needs a few hundred rows at most")
+                raise self.error(
+                    f"table file '{name}' is larger than {MAX_TABLE_BYTES} bytes",
+                    entry,
+                    line,
+                    "a table needs a few hundred rows at most",
+                )
             return raw.decode("utf-8")
         except (OSError, UnicodeDecodeError) as exc:
             reason = getattr(exc, "strerror", None) or type(exc).__name__
-            raise self.error(f"cannot read table file '{name}' ({reason})", entry, line,
-                             hint) from None
+            raise self.error(
+                f"cannot read table file '{name}' ({reason})", entry, line, hint
+            ) from None
 
     def points(self, tables: list[Mapping], link_names: list[str]) -> tuple[Point, ...]:
         out = []
@@ -760,16 +1062,21 @@ class _Reader:
             entry = f"[[point]] #{i + 1} '{name}'"
             link = self.text(table, "link", entry, line)
             if link not in link_names:
-                raise self.error(f"point on an unknown link '{link}'", entry, line,
-                                 suggest(link, link_names) or "name one of the [[link]] entries")
+                raise self.error(
+                    f"point on an unknown link '{link}'",
+                    entry,
+                    line,
+                    suggest(link, link_names) or "name one of the [[link]] entries",
+                )
             if "at" not in table:
                 raise self.error("missing required key 'at'", entry, line, "add at = [x, y]")
             out.append(Point(name, i, link, self.vector(table["at"], entry, "at", line), line))
         self.unique("point", [p.name for p in out], [p.line for p in out])
         return tuple(out)
 
-    def loads(self, tables: list[Mapping], link_names: list[str],
-              points: tuple[Point, ...]) -> tuple[Load, ...]:
+    def loads(
+        self, tables: list[Mapping], link_names: list[str], points: tuple[Point, ...]
+    ) -> tuple[Load, ...]:
         """[[load]] entries: on a named point, or on a link at a position; a force, a moment or
         both (docs/physics.md)."""
         out = []
@@ -780,53 +1087,88 @@ class _Reader:
             self.check_keys(table, LOAD_KEYS, entry, line)
             if "point" in table:
                 if "link" in table or "at" in table:
-                    raise self.error("give either 'point' or 'link' with 'at', not both", entry,
-                                     line, "remove 'link'/'at', or remove 'point'")
+                    raise self.error(
+                        "give either 'point' or 'link' with 'at', not both",
+                        entry,
+                        line,
+                        "remove 'link'/'at', or remove 'point'",
+                    )
                 name = self.text(table, "point", entry, line)
                 if name not in point_names:
-                    raise self.error(f"load on an unknown point '{name}'", entry, line,
-                                     suggest(name, point_names)
-                                     or "name one of the [[point]] entries, or use link and at")
+                    raise self.error(
+                        f"load on an unknown point '{name}'",
+                        entry,
+                        line,
+                        suggest(name, point_names)
+                        or "name one of the [[point]] entries, or use link and at",
+                    )
                 point = next(p for p in points if p.name == name)
                 link, at = point.link, point.at
             elif "link" in table:
                 link = self.text(table, "link", entry, line)
                 if link not in link_names:
-                    raise self.error(f"load on an unknown link '{link}'", entry, line,
-                                     suggest(link, link_names) or "name one of the links")
+                    raise self.error(
+                        f"load on an unknown link '{link}'",
+                        entry,
+                        line,
+                        suggest(link, link_names) or "name one of the links",
+                    )
                 if "at" not in table:
-                    raise self.error("a load on a link needs 'at'", entry, line,
-                                     "add at = [x, y], where the load acts (as fabricated)")
+                    raise self.error(
+                        "a load on a link needs 'at'",
+                        entry,
+                        line,
+                        "add at = [x, y], where the load acts (as fabricated)",
+                    )
                 name, at = None, self.vector(table["at"], entry, "at", line)
             else:
-                raise self.error("a load needs 'point', or 'link' and 'at'", entry, line,
-                                 "add point = \"C\" (a [[point]]) or link = ... with at = [x, y]")
+                raise self.error(
+                    "a load needs 'point', or 'link' and 'at'",
+                    entry,
+                    line,
+                    'add point = "C" (a [[point]]) or link = ... with at = [x, y]',
+                )
             if "force" not in table and "moment" not in table:
-                raise self.error("a load needs a 'force', a 'moment' or both", entry, line,
-                                 "add force = [Fx, Fy] (N) and/or moment = M (N·m)")
-            force = (self.vector(table["force"], entry, "force", line) if "force" in table
-                     else (sp.Integer(0), sp.Integer(0)))
+                raise self.error(
+                    "a load needs a 'force', a 'moment' or both",
+                    entry,
+                    line,
+                    "add force = [Fx, Fy] (N) and/or moment = M (N·m)",
+                )
+            force = (
+                self.vector(table["force"], entry, "force", line)
+                if "force" in table
+                else (sp.Integer(0), sp.Integer(0))
+            )
             moment = self.expr(table.get("moment", 0), entry, "moment", line)
             self.finite(moment, entry, "moment", line)
             out.append(Load(i, link, at, force, moment, name, line))
         return tuple(out)
 
-    def name_list(self, data: Mapping, key: str, known: list[str],
-                  kind: str) -> tuple[str, ...] | None:
+    def name_list(
+        self, data: Mapping, key: str, known: list[str], kind: str
+    ) -> tuple[str, ...] | None:
         if key not in data:
             return None
         value = data[key]
         line = self.where.key(key)
         if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
-            raise self.error(f"'{key}' must be a list of {kind} names", key, line,
-                             f'write {key} = ["name", ...] with the names of [[{kind}]] entries')
+            raise self.error(
+                f"'{key}' must be a list of {kind} names",
+                key,
+                line,
+                f'write {key} = ["name", ...] with the names of [[{kind}]] entries',
+            )
         for v in value:
             if v not in known:
-                raise self.error(f"unknown {kind} '{v}'", key, line,
-                                 suggest(v, known) or f"name one of the [[{kind}]] entries")
+                raise self.error(
+                    f"unknown {kind} '{v}'",
+                    key,
+                    line,
+                    suggest(v, known) or f"name one of the [[{kind}]] entries",
+                )
         if len(set(value)) != len(value):
-            raise self.error(f"'{key}' names a {kind} twice", key, line,
-                             "name each one once")
+            raise self.error(f"'{key}' names a {kind} twice", key, line, "name each one once")
         return tuple(value)
 
     def check_connected(self, mech: Mechanism) -> None:
@@ -843,23 +1185,34 @@ class _Reader:
         lost = [lk for lk in mech.links if lk.name not in reached]
         if lost:
             names = ", ".join(f"'{lk.name}'" for lk in lost)
-            raise self.error(f"the mechanism is disconnected: {names} cannot be reached from the "
-                             f"ground '{mech.ground}' through hinges", f"[[link]] '{lost[0].name}'",
-                             lost[0].line, "add the missing hinge or remove the link")
+            raise self.error(
+                f"the mechanism is disconnected: {names} cannot be reached from the "
+                f"ground '{mech.ground}' through hinges",
+                f"[[link]] '{lost[0].name}'",
+                lost[0].line,
+                "add the missing hinge or remove the link",
+            )
 
     def check_mobility(self, mech: Mechanism) -> None:
         n, m = len(mech.links) - 1, len(mech.hinges)
         dof = mech.mobility
         formula = f"3n - 2m = 3*{n} - 2*{m} = {dof}, with {mech.loop_count} loop(s)"
         if dof < 1:
-            raise self.error(f"the mechanism cannot move: Grübler mobility {formula}", "[[hinge]]",
-                             None, "remove hinges or add links")
+            raise self.error(
+                f"the mechanism cannot move: Grübler mobility {formula}",
+                "[[hinge]]",
+                None,
+                "remove hinges or add links",
+            )
         if len(mech.inputs) != dof:
             given = ", ".join(mech.inputs) or "none"
             raise self.error(
                 f"{len(mech.inputs)} input hinge(s) ({given}) but the Grübler mobility is "
-                f"{formula}", "input", None,
-                f"mark exactly {dof} hinge(s) with input = true")
+                f"{formula}",
+                "input",
+                None,
+                f"mark exactly {dof} hinge(s) with input = true",
+            )
 
 
 def _mp(expr: sp.Expr, values: Mapping[sp.Symbol, sp.Expr]) -> mpmath.mpf | None:
@@ -870,20 +1223,25 @@ def _mp(expr: sp.Expr, values: Mapping[sp.Symbol, sp.Expr]) -> mpmath.mpf | None
     return mpmath.mpf(str(value))
 
 
-def check_values(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr],
-                 option: str | None = None) -> None:
+def check_values(
+    mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr], option: str | None = None
+) -> None:
     """Every numeric rule of the file at these parameter values: finite coordinates and angles,
     positive plate lengths, model parameters in range, and plates shorter than the links between
     them (on every link, two hinge centres lie farther apart than half the sum of the plate
     lengths; plates that cross always break this). `option` names the command-line option that
     set the values (e.g. "--param"); None means the file's own defaults."""
     with mpmath.workdps(30):
+
         def fail(message: str, entry: str, line: int | None, hint: str) -> InputError:
             if option is None:
                 return InputError(message, file=mech.path, line=line, entry=entry, hint=hint)
-            return InputError(f"with these values, {entry}: {message}", file=mech.path,
-                              entry=option, hint="choose values that keep the mechanism valid: "
-                              + hint)
+            return InputError(
+                f"with these values, {entry}: {message}",
+                file=mech.path,
+                entry=option,
+                hint="choose values that keep the mechanism valid: " + hint,
+            )
 
         centres = {}
         for h in mech.hinges:
@@ -892,12 +1250,20 @@ def check_values(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr],
             angle = _mp(h.plate_angle, values)
             length = _mp(h.length, values)
             if None in at or angle is None:
-                raise fail("'at' or 'plate_angle' is not a finite number", entry, h.line,
-                           "keep coordinates and angles finite")
+                raise fail(
+                    "'at' or 'plate_angle' is not a finite number",
+                    entry,
+                    h.line,
+                    "keep coordinates and angles finite",
+                )
             if length is None or not length > 0:
                 shown = "not finite" if length is None else mpmath.nstr(length, 6)
-                raise fail(f"plate length must be positive, got {shown}", entry, h.line,
-                           "give the plate a positive length")
+                raise fail(
+                    f"plate length must be positive, got {shown}",
+                    entry,
+                    h.line,
+                    "give the plate a positive length",
+                )
             for key, raw in h.model_params:
                 spec = MODELS[h.model].parameter(key)
                 if spec is None or spec.kind not in ("number", "fraction"):
@@ -905,38 +1271,57 @@ def check_values(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr],
                 value = _mp(raw, values)
                 if value is None or not value > 0 or (spec.kind == "fraction" and value > 1):
                     rng = "in (0, 1]" if spec.kind == "fraction" else "positive"
-                    raise fail(f"'{key}' must be {rng}, got "
-                               f"{'not finite' if value is None else mpmath.nstr(value, 6)}",
-                               entry, h.line, f"keep '{key}' {rng}")
+                    raise fail(
+                        f"'{key}' must be {rng}, got "
+                        f"{'not finite' if value is None else mpmath.nstr(value, 6)}",
+                        entry,
+                        h.line,
+                        f"keep '{key}' {rng}",
+                    )
             for key, (ok, message, hint) in STIFFNESS_RULES.items():
                 raw = getattr(h, key)
                 value = None if raw is None else sp.N(sp.sympify(raw).subs(values), 30)
                 if value is not None and not (value.is_real and value.is_finite and ok(value)):
                     raise fail(f"{message}, got {key} = {_short(value)}", entry, h.line, hint)
             if h.thickness is not None and not _mp(h.thickness, values) < length:
-                raise fail(f"thickness {mpmath.nstr(_mp(h.thickness, values), 6)} is not smaller "
-                           f"than the plate length {mpmath.nstr(length, 6)}", entry, h.line,
-                           "a flexure plate is thin: make thickness < length")
+                raise fail(
+                    f"thickness {mpmath.nstr(_mp(h.thickness, values), 6)} is not smaller "
+                    f"than the plate length {mpmath.nstr(length, 6)}",
+                    entry,
+                    h.line,
+                    "a flexure plate is thin: make thickness < length",
+                )
             centres[h.name] = (at, length)
         for load in mech.loads:
             if None in [_mp(v, values) for v in (*load.force, load.moment)]:
-                raise fail("'force' or 'moment' is not a finite number", load.label, load.line,
-                           "keep loads finite")
+                raise fail(
+                    "'force' or 'moment' is not a finite number",
+                    load.label,
+                    load.line,
+                    "keep loads finite",
+                )
         for p in mech.points:
             if None in [_mp(v, values) for v in p.at]:
-                raise fail("'at' is not a finite number", f"[[point]] '{p.name}'", p.line,
-                           "keep coordinates finite")
+                raise fail(
+                    "'at' is not a finite number",
+                    f"[[point]] '{p.name}'",
+                    p.line,
+                    "keep coordinates finite",
+                )
         for link in mech.links:
             on_link = [h for h in mech.hinges if link.name in h.links]
             for i, a in enumerate(on_link):
-                for b in on_link[i + 1:]:
+                for b in on_link[i + 1 :]:
                     (pa, la), (pb, lb) = centres[a.name], centres[b.name]
                     gap = mpmath.hypot(pa[0] - pb[0], pa[1] - pb[1])
                     if not gap > (la + lb) / 2:
-                        raise fail(f"its plate and the plate of hinge '{b.name}' reach past each "
-                                   f"other on link '{link.name}': their centres are "
-                                   f"{mpmath.nstr(gap, 6)} apart, less than half the sum of the "
-                                   f"plate lengths, {mpmath.nstr((la + lb) / 2, 6)}",
-                                   f"[[hinge]] '{a.name}'", a.line,
-                                   "shorten the plates or move the hinges apart: on every link "
-                                   "the plates must be shorter than the link between them")
+                        raise fail(
+                            f"its plate and the plate of hinge '{b.name}' reach past each "
+                            f"other on link '{link.name}': their centres are "
+                            f"{mpmath.nstr(gap, 6)} apart, less than half the sum of the "
+                            f"plate lengths, {mpmath.nstr((la + lb) / 2, 6)}",
+                            f"[[hinge]] '{a.name}'",
+                            a.line,
+                            "shorten the plates or move the hinges apart: on every link "
+                            "the plates must be shorter than the link between them",
+                        )

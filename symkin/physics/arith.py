@@ -58,6 +58,7 @@ def mp_array(values, dps: int | None = None) -> np.ndarray:
         if isinstance(v, sp.Basic):
             return mpmath.mpf(sp.N(v, (dps or mpmath.mp.dps) + 5))
         return mpmath.mpf(v)
+
     flat = [conv(v) for v in np.ravel(np.asarray(values, dtype=object))]
     out = np.empty(len(flat), dtype=object)
     out[:] = flat

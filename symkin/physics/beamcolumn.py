@@ -23,7 +23,7 @@ uniform bending, 1):
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 
 import sympy as sp
 
@@ -45,30 +45,34 @@ class BeamColumn:
 
     def value(self, name: str, p: sp.Expr, first: int = 0) -> sp.Expr:
         """Σ_{k ≥ first} c_k p^k of the series `name`."""
-        return sp.Add(*(c * p ** k for k, c in enumerate(getattr(self, name)) if k >= first))
+        return sp.Add(*(c * p**k for k, c in enumerate(getattr(self, name)) if k >= first))
 
 
-@lru_cache(maxsize=None)
+@cache
 def series(order: int = ORDER) -> BeamColumn:
     """The beam-column series through p^order (cached: derived once per process)."""
     x, p, f, t = sp.symbols("x p f theta")
     c = sp.symbols("c0:4")
     parts: list[sp.Poly] = []
     for k in range(order + 1):
-        w_k = sp.Poly(c[0] + c[1] * x + c[2] * x ** 2 + c[3] * x ** 3, x)
+        w_k = sp.Poly(c[0] + c[1] * x + c[2] * x**2 + c[3] * x**3, x)
         if k:
             # the order-k part of w'''' = p w'': w_k'''' = w_(k-1)'', integrated from 0
             w_k += parts[-1].diff(x).diff(x).integrate().integrate().integrate().integrate()
         slope = w_k.diff(x)
         previous = parts[-1].diff(x).eval(1) if k else 0
         first = 1 if k == 0 else 0
-        conditions = [w_k.eval(0), slope.eval(0) + first * t / 2, slope.eval(1) - first * t / 2,
-                      previous - slope.diff(x).diff(x).eval(1) - first * f]
+        conditions = [
+            w_k.eval(0),
+            slope.eval(0) + first * t / 2,
+            slope.eval(1) - first * t / 2,
+            previous - slope.diff(x).diff(x).eval(1) - first * f,
+        ]
         solution = sp.solve(conditions, c, dict=True)[0]
         parts.append(sp.Poly(w_k.as_expr().subs(solution), x))
-    offset = sum(p ** k * w.eval(1) for k, w in enumerate(parts))
-    moment = sum(p ** k * w.diff(x).diff(x).eval(1) for k, w in enumerate(parts))
-    slope = sum((w.diff(x) * p ** k for k, w in enumerate(parts)), sp.Poly(0, x))
+    offset = sum(p**k * w.eval(1) for k, w in enumerate(parts))
+    moment = sum(p**k * w.diff(x).diff(x).eval(1) for k, w in enumerate(parts))
+    slope = sum((w.diff(x) * p**k for k, w in enumerate(parts)), sp.Poly(0, x))
     shortening = (slope * slope).integrate().eval(1) / 2
     curvature = slope.diff(x)
     strain = (curvature * curvature).integrate().eval(1) / 2
@@ -77,9 +81,12 @@ def series(order: int = ORDER) -> BeamColumn:
         expr = sp.expand(expr)
         return tuple(sp.expand(expr.coeff(p, k)).coeff(of) for k in range(order + 1))
 
-    return BeamColumn(shear=coefficients(offset, f), rotation=coefficients(moment, t),
-                      coupling=tuple(-c for c in coefficients(moment, f)),
-                      bending=coefficients(shortening, t ** 2),
-                      bowing=coefficients(shortening, f ** 2),
-                      strain_bending=coefficients(strain, t ** 2),
-                      strain_shear=coefficients(strain, f ** 2))
+    return BeamColumn(
+        shear=coefficients(offset, f),
+        rotation=coefficients(moment, t),
+        coupling=tuple(-c for c in coefficients(moment, f)),
+        bending=coefficients(shortening, t**2),
+        bowing=coefficients(shortening, f**2),
+        strain_bending=coefficients(strain, t**2),
+        strain_shear=coefficients(strain, f**2),
+    )

@@ -50,7 +50,8 @@ class PlateEnd:
 
 
 def shoot(k0, lx, ly, tol: float, energy: bool = False) -> PlateEnd:
-    """Integrate the elastica of every element of the (broadcast) arrays k0, λx, λy over s = 0..1."""
+    """Integrate the elastica of every element of the (broadcast) arrays k0, λx, λy over s =
+    0..1."""
     k0, lx, ly = np.broadcast_arrays(*(np.asarray(v) for v in (k0, lx, ly)))
     rate = arith.magnitude(abs(k0.real) + arith.sqrt(abs(lx.real) + abs(ly.real)))
     steps = arith.steps_for(rate)
@@ -73,15 +74,18 @@ def _steps(k0, lx, ly, steps: int, tol: float, energy: bool) -> PlateEnd | None:
             return None
         p, S, C, last = series
         tail = max(tail, last)
-        hk = [h ** k for k in range(2 * len(p) + 1)]
+        hk = [h**k for k in range(2 * len(p) + 1)]
         x = x + sum(C[k] * hk[k + 1] / (k + 1) for k in range(len(C)))
         y = y + sum(S[k] * hk[k + 1] / (k + 1) for k in range(len(S)))
         psi_end = sum(p[k] * hk[k] for k in range(len(p)))
         om_end = sum(k * p[k] * hk[k - 1] for k in range(1, len(p)))
         if energy:
-            w = [(k + 1) * p[k + 1] for k in range(len(p) - 1)]      # ψ'(σ) = Σ w_k σ^k
-            work = work + sum(w[i] * w[j] * hk[i + j + 1] / (i + j + 1)
-                              for i in range(len(w)) for j in range(len(w)))
+            w = [(k + 1) * p[k + 1] for k in range(len(p) - 1)]  # ψ'(σ) = Σ w_k σ^k
+            work = work + sum(
+                w[i] * w[j] * hk[i + j + 1] / (i + j + 1)
+                for i in range(len(w))
+                for j in range(len(w))
+            )
         psi, om = psi_end, om_end
     return PlateEnd(x, y, psi, om, work, tail)
 
@@ -97,9 +101,11 @@ def _series(psi0, om0, lx, ly, h, tol: float):
             S.append(sum(jp[j - 1] * C[k - j] for j in range(1, k + 1)) / k)
             C.append(-sum(jp[j - 1] * S[k - j] for j in range(1, k + 1)) / k)
         p.append((lx * S[k] - ly * C[k]) / ((k + 1) * (k + 2)))
-        size = max(arith.magnitude(p[k + 2]) * float(h) ** (k + 1) * (k + 2),
-                   arith.magnitude(S[k]) * float(h) ** (k + 1),
-                   arith.magnitude(C[k]) * float(h) ** (k + 1))
+        size = max(
+            arith.magnitude(p[k + 2]) * float(h) ** (k + 1) * (k + 2),
+            arith.magnitude(S[k]) * float(h) ** (k + 1),
+            arith.magnitude(C[k]) * float(h) ** (k + 1),
+        )
         small = small + 1 if size < tol else 0
         if small == 3:
             return p, S, C, size

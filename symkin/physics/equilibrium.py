@@ -1,4 +1,5 @@
-"""The `equilibrium` level (docs/physics.md): the mechanism's plates as elastica, solved for the pose
+"""The `equilibrium` level (docs/physics.md): the mechanism's plates as elastica, solved for the
+pose
 that balances them, the actuators and the loads (docs/physics.md).
 
 Unknowns: the pose (x, y, φ) of every moving link (a point fixed in it at p0 as fabricated is at
@@ -109,8 +110,9 @@ class System:
         c, s = arith.cos(phi), arith.sin(phi)
         return x + c * p0[0] - s * p0[1], y + s * p0[0] + c * p0[1]
 
-    def residual(self, u: np.ndarray, t: np.ndarray, tol: float,
-                 report: dict | None = None) -> np.ndarray:
+    def residual(
+        self, u: np.ndarray, t: np.ndarray, tol: float, report: dict | None = None
+    ) -> np.ndarray:
         """Equations in the order: hinges (plate 3, pin 2), inputs (1), link balances (3 each)."""
         rows: list = []
         n = len(self.links)
@@ -127,8 +129,9 @@ class System:
         if plates:
             loads = np.array([u[self.index[h.name] + j] for h in plates for j in range(3)])
             loads = loads.reshape(len(plates), 3, *u.shape[1:])
-            end = elastica.shoot(loads[:, 0], loads[:, 1], loads[:, 2], tol,
-                                 energy=report is not None)
+            end = elastica.shoot(
+                loads[:, 0], loads[:, 1], loads[:, 2], tol, energy=report is not None
+            )
         ends = {h.name: k for k, h in enumerate(plates)}
         for h in self.hinges:
             _, _, phi_p = self.pose(u, h.P)
@@ -138,17 +141,19 @@ class System:
                 k = ends[h.name]
                 xp, yp = self.place(u, h.P, h.clamp_p)
                 xm, ym = self.place(u, h.M, h.clamp_m)
-                cb = arith.cos(phi_p) * h.cos_a - arith.sin(phi_p) * h.sin_a     # plate frame
+                cb = arith.cos(phi_p) * h.cos_a - arith.sin(phi_p) * h.sin_a  # plate frame
                 sb = arith.sin(phi_p) * h.cos_a + arith.cos(phi_p) * h.sin_a
                 dx, dy = xm - xp, ym - yp
-                rows += [(cb * dx + sb * dy) / h.length - end.x[k],
-                         (-sb * dx + cb * dy) / h.length - end.y[k],
-                         phi_m - phi_p - end.psi[k]]
-                scale = h.EI / h.length ** 2
+                rows += [
+                    (cb * dx + sb * dy) / h.length - end.x[k],
+                    (-sb * dx + cb * dy) / h.length - end.y[k],
+                    phi_m - phi_p - end.psi[k],
+                ]
+                scale = h.EI / h.length**2
                 lx, ly = u[base + 1] * scale, u[base + 2] * scale
-                force = (cb * lx - sb * ly, sb * lx + cb * ly)         # by M on the plate
-                m_p = u[base] * h.EI / h.length                       # on P at its clamp
-                m_m = end.omega[k] * h.EI / h.length                  # by M on the plate
+                force = (cb * lx - sb * ly, sb * lx + cb * ly)  # by M on the plate
+                m_p = u[base] * h.EI / h.length  # on P at its clamp
+                m_m = end.omega[k] * h.EI / h.length  # by M on the plate
                 apply(h.P, force, (xp, yp), m_p)
                 apply(h.M, (-force[0], -force[1]), (xm, ym), -m_m)
                 if report is not None:
@@ -195,14 +200,19 @@ class System:
         best, size = self.hinges[0].name, -1.0
         for h in self.hinges:
             k = self.index[h.name]
-            part = float(np.linalg.norm(vector[k:k + (3 if h.plate else 2)]))
+            part = float(np.linalg.norm(vector[k : k + (3 if h.plate else 2)]))
             if part > size:
                 best, size = h.name, part
         return best
 
 
-def build(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr], inputs: Mapping[str, sp.Expr],
-          stiffness: Mapping[str, PlateStiffness], convert) -> System:
+def build(
+    mech: Mechanism,
+    values: Mapping[sp.Symbol, sp.Expr],
+    inputs: Mapping[str, sp.Expr],
+    stiffness: Mapping[str, PlateStiffness],
+    convert,
+) -> System:
     """The System of `mech` with parameter `values`, the input angles by hinge name, EI of every
     plate and `convert` (exact number -> float or mpf)."""
     links = [lk.name for lk in mech.links if lk.name != mech.ground]
@@ -218,27 +228,45 @@ def build(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr], inputs: Mapping[
         u = (sp.cos(h.plate_angle), sp.sin(h.plate_angle))
         d = pivot_distance(h)
         plate = h.is_plate
-        hinges.append(_Hinge(
-            h.name, index[h.links[0]], index[h.links[1]],
-            tuple(num(h.at[k] - length / 2 * u[k]) for k in range(2)),
-            tuple(num(h.at[k] + length / 2 * u[k]) for k in range(2)),
-            tuple(num(h.at[k] + (length / 2 - d) * u[k]) for k in range(2)),
-            num(u[0]), num(u[1]), num(length),
-            num(stiffness[h.name].EI) if plate else None, plate,
-            num(inputs[h.name]) if h.input else None))
+        hinges.append(
+            _Hinge(
+                h.name,
+                index[h.links[0]],
+                index[h.links[1]],
+                tuple(num(h.at[k] - length / 2 * u[k]) for k in range(2)),
+                tuple(num(h.at[k] + length / 2 * u[k]) for k in range(2)),
+                tuple(num(h.at[k] + (length / 2 - d) * u[k]) for k in range(2)),
+                num(u[0]),
+                num(u[1]),
+                num(length),
+                num(stiffness[h.name].EI) if plate else None,
+                plate,
+                num(inputs[h.name]) if h.input else None,
+            )
+        )
     s = mech.unit_scale
     loads = [
-        _Load(index[ld.link], tuple(num(v) for v in ld.at), tuple(num(v) for v in ld.force),
-              num(ld.moment / s)) for ld in mech.loads]
+        _Load(
+            index[ld.link],
+            tuple(num(v) for v in ld.at),
+            tuple(num(v) for v in ld.force),
+            num(ld.moment / s),
+        )
+        for ld in mech.loads
+    ]
     points = {p.name: (index[p.link], tuple(num(v) for v in p.at)) for p in mech.points}
-    centres = [(float(sp.N(h.at[0].subs(values))), float(sp.N(h.at[1].subs(values))))
-               for h in mech.hinges]
-    span = max([math.dist(a, b) for a in centres for b in centres]
-               + [float(sp.N(sp.sympify(h.length).subs(values))) for h in mech.hinges])
+    centres = [
+        (float(sp.N(h.at[0].subs(values))), float(sp.N(h.at[1].subs(values)))) for h in mech.hinges
+    ]
+    span = max(
+        [math.dist(a, b) for a in centres for b in centres]
+        + [float(sp.N(sp.sympify(h.length).subs(values))) for h in mech.hinges]
+    )
     plates = [h for h in hinges if h.plate]
     force = max([float(h.EI) / (float(h.length) * span) for h in plates], default=1.0)
-    return System(links, hinges, loads, points, convert(sp.Float(span, 17)),
-                  convert(sp.Float(force, 17)))
+    return System(
+        links, hinges, loads, points, convert(sp.Float(span, 17)), convert(sp.Float(force, 17))
+    )
 
 
 @dataclass(frozen=True)
@@ -281,14 +309,17 @@ def continuation(system: System, what: str, path: str) -> tuple[np.ndarray, np.n
                 raise AssemblyError(
                     f"{path}: {what} cannot be followed beyond load factor t = {t:.6g} (of the "
                     f"requested inputs and loads): the hinge '{name}' buckles there or the "
-                    "mechanism passes a limit point (docs/physics.md)")
+                    "mechanism passes a limit point (docs/physics.md)"
+                )
             continue
         u, t = new[0], t1
         dt = min(largest, dt * 1.5)
     else:
-        raise AssemblyError(f"{path}: {what} did not reach the requested inputs and loads in "
-                            f"{MAX_STEPS} continuation steps (stopped at load factor t = {t:.6g}, "
-                            "near a toggle position or a limit point)")
+        raise AssemblyError(
+            f"{path}: {what} did not reach the requested inputs and loads in "
+            f"{MAX_STEPS} continuation steps (stopped at load factor t = {t:.6g}, "
+            "near a toggle position or a limit point)"
+        )
     return u, system.jacobian(u, 1.0, tol)[0]
 
 
@@ -303,8 +334,9 @@ def _newton(system: System, u: np.ndarray, t: float, tol: float):
             return None
         u = u - step
         size = float(np.max(np.abs(step)))
-        if size <= 1e-14 * (1 + float(np.max(np.abs(u)))) or size >= previous / 2 > 0 \
-                and size < 1e-9:
+        if size <= 1e-14 * (1 + float(np.max(np.abs(u)))) or (
+            size >= previous / 2 > 0 and size < 1e-9
+        ):
             return u, size
         if not np.all(np.isfinite(u)) or size > 1e3:
             return None
@@ -355,8 +387,13 @@ class Result:
     angle_deviations: dict[str, float] = field(default_factory=dict)
 
 
-def solve(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr], inputs: Mapping[str, sp.Expr],
-          rigid: Callable[[int], tuple[dict, dict]], extra_digits: int = 0) -> Result:
+def solve(
+    mech: Mechanism,
+    values: Mapping[sp.Symbol, sp.Expr],
+    inputs: Mapping[str, sp.Expr],
+    rigid: Callable[[int], tuple[dict, dict]],
+    extra_digits: int = 0,
+) -> Result:
     """The elastica equilibrium of `mech` (docs/physics.md) at parameter `values` and the input
     angles by hinge name, against the rigid pin linkage: `rigid(dps)` gives its hinge angles and
     its point positions by name at `dps` digits (the kinematic levels' rigid solution, exit 3
@@ -367,9 +404,18 @@ def solve(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr], inputs: Mapping[
     u, jac = continuation(system, "the equilibrium", mech.path)
     # The digits the deviation loses against the positions decide the working precision.
     span = float(system.L)
-    smallest = min([math.hypot(*(np.array(_where(system, u, p), dtype=float)
-                                 - np.array(rigid_points[p], dtype=float)))
-                    for p in rigid_points] + [span])
+    smallest = min(
+        [
+            math.hypot(
+                *(
+                    np.array(_where(system, u, p), dtype=float)
+                    - np.array(rigid_points[p], dtype=float)
+                )
+            )
+            for p in rigid_points
+        ]
+        + [span]
+    )
     lost = max(0, math.ceil(math.log10(span / smallest))) if smallest > 0 else 0
     dps = min(400, 24 + lost) + extra_digits
     theta, rigid_points = rigid(dps)
@@ -386,22 +432,34 @@ def solve(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr], inputs: Mapping[
             dev = (xc - xr, yc - yr)
             size = float(mpmath.hypot(*dev))
             error = max(error, bound / size if size else 0.0)
-            points[name] = ((float(xr), float(yr)), (float(xc), float(yc)),
-                            (float(dev[0]), float(dev[1])))
+            points[name] = (
+                (float(xr), float(yr)),
+                (float(xc), float(yc)),
+                (float(dev[0]), float(dev[1])),
+            )
         s = mpmath.mpf(sp.N(mech.unit_scale, dps))
         plates = {h.name for h in solution.system.hinges if h.plate}
         return Result(
             angles_rigid={h.name: float(theta[h.name]) for h in solution.system.hinges},
-            angles_compliant={h.name: float(_angle(solution.system, solution.u, h.name))
-                              for h in solution.system.hinges},
+            angles_compliant={
+                h.name: float(_angle(solution.system, solution.u, h.name))
+                for h in solution.system.hinges
+            },
             points=points,
-            hinges={n: HingeLoad((float(report[n][0][0][0]), float(report[n][0][1][0])),
-                                 float(report[n][1][0] * s)) for n in report},
+            hinges={
+                n: HingeLoad(
+                    (float(report[n][0][0][0]), float(report[n][0][1][0])),
+                    float(report[n][1][0] * s),
+                )
+                for n in report
+            },
             energy=float(sum(report[n][2][0] for n in plates) * s),
             error_estimate=error,
-            angle_deviations={h.name: float(_angle(solution.system, solution.u, h.name)
-                                            - theta[h.name])
-                              for h in solution.system.hinges})
+            angle_deviations={
+                h.name: float(_angle(solution.system, solution.u, h.name) - theta[h.name])
+                for h in solution.system.hinges
+            },
+        )
 
 
 def _position(system: System, name: str) -> int:

@@ -38,9 +38,9 @@ from functools import cached_property
 import sympy as sp
 
 from ..core import vectors as V
+from ..graph.structure import Structure
 from ..kinematics.analysis import Analysis
 from ..model.hinges import plate_functions
-from ..graph.structure import Structure
 from .beamcolumn import series
 from .stiffness import PlateStiffness, plate_stiffness
 
@@ -67,8 +67,9 @@ class LoadedDerivation:
     `beam_column=False` gives the first-order level (springs EI/l, compliance V l³/(12 EI));
     `extensible=True` adds the axial stretch N l/EA."""
 
-    def __init__(self, structure: Structure, points=None, beam_column: bool = True,
-                 extensible: bool = False) -> None:
+    def __init__(
+        self, structure: Structure, points=None, beam_column: bool = True, extensible: bool = False
+    ) -> None:
         self.structure = structure
         self.mechanism = mech = structure.mechanism
         self.beam_column = beam_column
@@ -76,9 +77,14 @@ class LoadedDerivation:
         self.series = series()
         self.stiffness: dict[str, PlateStiffness] = plate_stiffness(mech, "loaded")
         label = {name: a for a, name in enumerate(structure.hinges, start=1)}
-        self.compliance = {label[h.name]: (sp.Symbol(f"compliance_x_{label[h.name]}", real=True),
-                                           sp.Symbol(f"compliance_y_{label[h.name]}", real=True))
-                           for h in mech.hinges if h.is_plate}
+        self.compliance = {
+            label[h.name]: (
+                sp.Symbol(f"compliance_x_{label[h.name]}", real=True),
+                sp.Symbol(f"compliance_y_{label[h.name]}", real=True),
+            )
+            for h in mech.hinges
+            if h.is_plate
+        }
 
         def plate(hinge):
             """The physical plate: circular arc (pure moment) plus its force compliance."""
@@ -86,20 +92,26 @@ class LoadedDerivation:
                 return plate_functions(hinge)
             pf = plate_functions(hinge, shape="circular_arc")
             ex, ey = self.compliance[label[hinge.name]]
-            return dataclasses.replace(pf, f=pf.f + ex, g=pf.g + ey, df=pf.df + ex,
-                                       dg=pf.dg + ey)
+            return dataclasses.replace(pf, f=pf.f + ex, g=pf.g + ey, df=pf.df + ex, dg=pf.dg + ey)
 
         #: The loaded closure: the exact level's equations with the plates of `plate`.
         self.analysis = Analysis(structure, points, plate)
         self.kin = self.analysis.kin
         loops = 3 * len(self.kin.chords)
         self.mu = tuple(sp.Symbol(f"mu_{k}", real=True) for k in range(1, loops + 1))
-        self.mu0 = tuple(sp.Symbol(f"mu0_{k}", real=True) for k in range(1, loops + 1)) \
-            if beam_column else ()
+        self.mu0 = (
+            tuple(sp.Symbol(f"mu0_{k}", real=True) for k in range(1, loops + 1))
+            if beam_column
+            else ()
+        )
         # The closure's constants (multipliers, compliance) count as parameters of its analysis,
         # so the exact level's evaluation runs on it unchanged.
-        self.analysis.params = (*self.analysis.params, *self.mu0, *self.mu,
-                                *(c for a in sorted(self.compliance) for c in self.compliance[a]))
+        self.analysis.params = (
+            *self.analysis.params,
+            *self.mu0,
+            *self.mu,
+            *(c for a in sorted(self.compliance) for c in self.compliance[a]),
+        )
 
     # -- 1. statics --------------------------------------------------------------------------------
     def generalized_forces(self, springs: dict[int, sp.Expr]) -> sp.Matrix:
@@ -174,7 +186,7 @@ class LoadedDerivation:
             if stiff is None:
                 out[a] = PlateLoad(a, force, axial, shear)
             else:
-                index = stiff.length ** 2 / stiff.EI
+                index = stiff.length**2 / stiff.EI
                 out[a] = PlateLoad(a, force, axial, shear, axial * index, shear * index)
         return out
 
@@ -191,15 +203,18 @@ class LoadedDerivation:
             stiff = self.stiffness[self.kin.hinges[a].name]
             l, theta = stiff.length, self.kin.theta[a]
             if self.beam_column:
-                along = -l * (theta ** 2 * bc.value("bending", load.p, first=1)
-                              + load.f ** 2 * bc.value("bowing", load.p))
+                along = -l * (
+                    theta**2 * bc.value("bending", load.p, first=1)
+                    + load.f**2 * bc.value("bowing", load.p)
+                )
                 across = l * load.f * bc.value("shear", load.p)
             else:
                 along, across = sp.Integer(0), l * load.f / 12
             if self.extensible:
                 along += load.axial * l / stiff.EA
-            out[a] = dataclasses.replace(load, compliance=comp,
-                                         displacement=V.rot(theta / 2, (along, across)))
+            out[a] = dataclasses.replace(
+                load, compliance=comp, displacement=V.rot(theta / 2, (along, across))
+            )
         return out
 
     # -- results -----------------------------------------------------------------------------------
@@ -217,8 +232,11 @@ class LoadedDerivation:
         if not self.beam_column:
             return stiff.EI * theta / stiff.length - load.shear * stiff.length / 2
         bc = self.series
-        return stiff.EI / stiff.length * (theta * bc.value("rotation", load.p)
-                                          - load.f * bc.value("coupling", load.p))
+        return (
+            stiff.EI
+            / stiff.length
+            * (theta * bc.value("rotation", load.p) - load.f * bc.value("coupling", load.p))
+        )
 
     def energy(self, a: int) -> sp.Expr:
         """Elastic energy of plate a (N·u): EI/l (θ² strain_bending(p) + f² strain_shear(p)),
@@ -229,23 +247,28 @@ class LoadedDerivation:
         load, theta = self.plate_loads[a], self._compliant_angle(a)
         p = load.p if self.beam_column else sp.Integer(0)
         bc = self.series
-        out = stiff.EI / stiff.length * (theta ** 2 * bc.value("strain_bending", p)
-                                         + load.f ** 2 * bc.value("strain_shear", p))
+        out = (
+            stiff.EI
+            / stiff.length
+            * (theta**2 * bc.value("strain_bending", p) + load.f**2 * bc.value("strain_shear", p))
+        )
         if self.extensible:
-            out += load.axial ** 2 * stiff.length / (2 * stiff.EA)
+            out += load.axial**2 * stiff.length / (2 * stiff.EA)
         return out
 
 
 _DERIVATIONS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-def loaded_derivation(analysis: Analysis, beam_column: bool = True,
-                      extensible: bool = False) -> LoadedDerivation:
+def loaded_derivation(
+    analysis: Analysis, beam_column: bool = True, extensible: bool = False
+) -> LoadedDerivation:
     """The LoadedDerivation of an analysis's structure and points, derived once per analysis
     and options (the mpmath evaluation and the plan of the generated code share it)."""
     cache = _DERIVATIONS.setdefault(analysis, {})
     key = (beam_column, extensible)
     if key not in cache:
-        cache[key] = LoadedDerivation(analysis.structure, [p.name for p in analysis.points],
-                                      beam_column, extensible)
+        cache[key] = LoadedDerivation(
+            analysis.structure, [p.name for p in analysis.points], beam_column, extensible
+        )
     return cache[key]

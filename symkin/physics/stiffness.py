@@ -15,7 +15,8 @@ from dataclasses import dataclass
 import sympy as sp
 
 from ..core.errors import InputError
-from ..model.mechanism import STIFFNESS_REQUIRED as REQUIRED, Hinge, Mechanism
+from ..model.mechanism import STIFFNESS_REQUIRED as REQUIRED
+from ..model.mechanism import Hinge, Mechanism
 
 #: A plate at least this many thicknesses wide bends in plane strain: E' = E/(1 - nu^2).
 WIDE = 5
@@ -33,15 +34,16 @@ class PlateStiffness:
 
 def modulus(hinge: Hinge) -> sp.Expr:
     """E' = E/(1 − ν²) when width ≥ WIDE·thickness (plane strain), else E."""
-    return sp.Piecewise((hinge.E / (1 - hinge.nu ** 2), hinge.width >= WIDE * hinge.thickness),
-                        (hinge.E, True))
+    return sp.Piecewise(
+        (hinge.E / (1 - hinge.nu**2), hinge.width >= WIDE * hinge.thickness), (hinge.E, True)
+    )
 
 
 def plate_stiffness(mech: Mechanism, level: str) -> dict[str, PlateStiffness]:
     """EI and EA of every plate (hinges that are not `rigid`), by hinge name; a plate without E,
     thickness or width is bad input for `level` (exit 2, naming the key and the hinge)."""
     out = {}
-    s2 = mech.unit_scale ** 2
+    s2 = mech.unit_scale**2
     for h in mech.hinges:
         if not h.is_plate:
             continue
@@ -49,10 +51,14 @@ def plate_stiffness(mech: Mechanism, level: str) -> dict[str, PlateStiffness]:
             if getattr(h, key) is None:
                 raise InputError(
                     f"no '{key}': --level {level} needs E, thickness and width of every plate",
-                    file=mech.path, line=h.line, entry=f"[[hinge]] '{h.name}'",
+                    file=mech.path,
+                    line=h.line,
+                    entry=f"[[hinge]] '{h.name}'",
                     hint=f"add {key} = ... to the hinge or to [defaults] (docs/physics.md), or "
-                         "make the hinge model = \"rigid\" (a pin)")
+                    'make the hinge model = "rigid" (a pin)',
+                )
         e = modulus(h)
-        out[h.name] = PlateStiffness(h.name, h.length, e * h.width * h.thickness ** 3 * s2 / 12,
-                                     e * h.width * h.thickness * s2)
+        out[h.name] = PlateStiffness(
+            h.name, h.length, e * h.width * h.thickness**3 * s2 / 12, e * h.width * h.thickness * s2
+        )
     return out

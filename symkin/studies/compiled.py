@@ -26,13 +26,13 @@ from types import ModuleType
 
 import numpy as np
 
-from ..core import levels as level_table
-from ..kinematics.analysis import Analysis
 from ..codegen import toolchain
+from ..core import levels as level_table
 from ..core.errors import InputError
-from ..model.mechanism import Mechanism, load
 from ..graph.pruning import for_levels
 from ..graph.structure import build
+from ..kinematics.analysis import Analysis
+from ..model.mechanism import Mechanism, load
 
 BACKENDS = ("c", "numpy")
 
@@ -42,10 +42,10 @@ class Sources:
     """What an evaluator is made of: the generated texts and the names they use."""
 
     name: str
-    backend: str                        # "c" or "numpy"
-    header: str                         # C header and source ("" for numpy)
+    backend: str  # "c" or "numpy"
+    header: str  # C header and source ("" for numpy)
     source: str
-    numpy: str                          # the numpy module (parameter defaults, numpy backend)
+    numpy: str  # the numpy module (parameter defaults, numpy backend)
     inputs: tuple[str, ...]
     params: tuple[str, ...]
     points: tuple[str, ...]
@@ -94,9 +94,14 @@ class Compiled:
                     module = toolchain.numpy_module_in_memory(s.numpy, s.name)
                     lib = None
                     if s.backend == "c":
-                        lib = toolchain.Library(toolchain.load_transient(s.name, s.header, s.source),
-                                              s.name, len(s.inputs), len(s.params),
-                                              len(s.points), len(s.hinges))
+                        lib = toolchain.Library(
+                            toolchain.load_transient(s.name, s.header, s.source),
+                            s.name,
+                            len(s.inputs),
+                            len(s.params),
+                            len(s.points),
+                            len(s.hinges),
+                        )
                     found = _LOADED[key] = (module, lib)
         return found
 
@@ -119,8 +124,9 @@ class Compiled:
         """Every parameter's default, in file order."""
         return dict(self.module.PARAMETERS)
 
-    def parameters(self, given: Mapping[str, float] | None = None,
-                   shifts: Mapping[str, float] | None = None) -> list[float]:
+    def parameters(
+        self, given: Mapping[str, float] | None = None, shifts: Mapping[str, float] | None = None
+    ) -> list[float]:
         """Parameter values in file order: `given` ones, the others from their defaults; a
         shift is added to a parameter once its value is set, so the parameters whose defaults
         read it follow (the generated module's `parameters`)."""
@@ -130,16 +136,18 @@ class Compiled:
         """`level` checked against the generated ones (None: `exact` when generated, else the
         most faithful; with `sensitivity`, among the levels that have sensitivities)."""
         if level is None:
-            names = [n for n in self.levels
-                     if not sensitivity or level_table.get(n).sensitivity] or list(self.levels)
+            names = [
+                n for n in self.levels if not sensitivity or level_table.get(n).sensitivity
+            ] or list(self.levels)
             level = level_table.DEFAULT if level_table.DEFAULT in names else names[-1]
         if level not in self.levels:
             raise ValueError(f"level must be one of {self.levels}, got {level!r}")
         return level
 
     # -- many configurations at one parameter vector ----------------------------------------------
-    def evaluate_rows(self, x: np.ndarray, level: str | None = None,
-                      params: Sequence[float] | None = None) -> tuple[np.ndarray, np.ndarray]:
+    def evaluate_rows(
+        self, x: np.ndarray, level: str | None = None, params: Sequence[float] | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """x (n, n_inputs) -> (status (n,), out (n, 6 n_points)): per row and point rigid x, y,
         compliant x, y, deviation x, y, as the C evaluator writes them; status 0 where it
         succeeded (NaN rows elsewhere). `params`: every parameter's value (None: defaults)."""
@@ -151,12 +159,12 @@ class Compiled:
         out = np.empty((x.shape[0], 6 * len(self.points)))
         for i, p in enumerate(self.points):
             for j, key in enumerate(("rigid", "compliant", "deviation")):
-                out[:, 6 * i + 2 * j:6 * i + 2 * j + 2] = res["points"][p][key].T
+                out[:, 6 * i + 2 * j : 6 * i + 2 * j + 2] = res["points"][p][key].T
         return np.where(res["ok"], 0, 1).astype(np.intc), out
 
-    def sensitivity_rows(self, x: np.ndarray, level: str | None = None,
-                         params: Sequence[float] | None = None
-                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def sensitivity_rows(
+        self, x: np.ndarray, level: str | None = None, params: Sequence[float] | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """x (n, n_inputs) -> (status, values (n, 6 n_points), deviation and rigid
         derivatives (n, n_points, n_variables, 2)); variables: the parameters, then the
         inputs."""
@@ -170,7 +178,7 @@ class Compiled:
         rig = np.empty_like(dev)
         for i, p in enumerate(self.points):
             for j, key in enumerate(("rigid", "compliant", "deviation")):
-                values[:, 6 * i + 2 * j:6 * i + 2 * j + 2] = res["points"][p][key].T
+                values[:, 6 * i + 2 * j : 6 * i + 2 * j + 2] = res["points"][p][key].T
             for out, kind in ((dev, "deviation"), (rig, "rigid")):
                 table = res[kind][p]
                 for v, name in enumerate(self.sources.params):
@@ -180,34 +188,52 @@ class Compiled:
         return np.where(res["ok"], 0, 1).astype(np.intc), values, dev, rig
 
     # -- the generated module's interface ---------------------------------------------------------
-    def evaluate(self, inputs: Mapping[str, object], level: str | None = None,
-                 params: Mapping[str, float] | None = None) -> dict:
+    def evaluate(
+        self,
+        inputs: Mapping[str, object],
+        level: str | None = None,
+        params: Mapping[str, float] | None = None,
+    ) -> dict:
         """As the generated module's `evaluate` (docs/generated-code.md), in one C call."""
         if self.backend == "numpy":
             return self.module.evaluate(inputs, self.code(level), params)
         x, shape = self._rows(inputs)
         status, out, angles = self.library.evaluate_rows(
-            x, self.parameters(params), level_table.get(self.code(level)).code, angles=True)
+            x, self.parameters(params), level_table.get(self.code(level)).code, angles=True
+        )
         m = len(self.hinges)
         return {
-            "points": {p: {key: _shaped(out[:, 6 * i + 2 * j:6 * i + 2 * j + 2], shape)
-                           for j, key in enumerate(("rigid", "compliant", "deviation"))}
-                       for i, p in enumerate(self.points)},
+            "points": {
+                p: {
+                    key: _shaped(out[:, 6 * i + 2 * j : 6 * i + 2 * j + 2], shape)
+                    for j, key in enumerate(("rigid", "compliant", "deviation"))
+                }
+                for i, p in enumerate(self.points)
+            },
             "ok": (status == 0).reshape(shape),
-            "angles": {kind: {h: angles[:, off + a].reshape(shape)
-                              for a, h in enumerate(self.hinges)}
-                       for kind, off in (("rigid", 0), ("compliant", m))},
+            "angles": {
+                kind: {h: angles[:, off + a].reshape(shape) for a, h in enumerate(self.hinges)}
+                for kind, off in (("rigid", 0), ("compliant", m))
+            },
             "links": {},
         }
 
-    def sensitivity(self, inputs: Mapping[str, object], level: str | None = None,
-                    params: Mapping[str, float] | None = None) -> dict:
+    def sensitivity(
+        self,
+        inputs: Mapping[str, object],
+        level: str | None = None,
+        params: Mapping[str, float] | None = None,
+    ) -> dict:
         """{P: {p: a}}: d(dx, dy)/dp, a of shape (2, *broadcast shape) (docs/sensitivity.md)."""
         full = self.sensitivity_full(inputs, level, params)
         return {p: full["deviation"][p]["params"] for p in self.points}
 
-    def sensitivity_full(self, inputs: Mapping[str, object], level: str | None = None,
-                         params: Mapping[str, float] | None = None) -> dict:
+    def sensitivity_full(
+        self,
+        inputs: Mapping[str, object],
+        level: str | None = None,
+        params: Mapping[str, float] | None = None,
+    ) -> dict:
         """As the generated module's `sensitivity_full`: the points, ok, and "deviation" and
         "rigid": {P: {"params": {p: a}, "inputs": {H: a}}}."""
         if not self.sources.sensitivity:
@@ -216,18 +242,25 @@ class Compiled:
             return self.module.sensitivity_full(inputs, self.code(level, sensitivity=True), params)
         x, shape = self._rows(inputs)
         status, values, dev, rig = self.library.sensitivity_rows(
-            x, self.parameters(params), level_table.get(self.code(level, sensitivity=True)).code)
+            x, self.parameters(params), level_table.get(self.code(level, sensitivity=True)).code
+        )
         names = self.sources.params
 
         def table(data: np.ndarray, i: int) -> dict:
             col = {v: _shaped(data[:, i, v], shape) for v in range(data.shape[2])}
-            return {"params": {q: col[v] for v, q in enumerate(names)},
-                    "inputs": {h: col[len(names) + v] for v, h in enumerate(self.inputs)}}
+            return {
+                "params": {q: col[v] for v, q in enumerate(names)},
+                "inputs": {h: col[len(names) + v] for v, h in enumerate(self.inputs)},
+            }
 
         return {
-            "points": {p: {key: _shaped(values[:, 6 * i + 2 * j:6 * i + 2 * j + 2], shape)
-                           for j, key in enumerate(("rigid", "compliant", "deviation"))}
-                       for i, p in enumerate(self.points)},
+            "points": {
+                p: {
+                    key: _shaped(values[:, 6 * i + 2 * j : 6 * i + 2 * j + 2], shape)
+                    for j, key in enumerate(("rigid", "compliant", "deviation"))
+                }
+                for i, p in enumerate(self.points)
+            },
             "ok": (status == 0).reshape(shape),
             "deviation": {p: table(dev, i) for i, p in enumerate(self.points)},
             "rigid": {p: table(rig, i) for i, p in enumerate(self.points)},
@@ -237,8 +270,7 @@ class Compiled:
     def _rows(self, inputs: Mapping[str, object]) -> tuple[np.ndarray, tuple[int, ...]]:
         # the file's inputs pruning dropped (they move none of the points) are ignored
         if set(inputs) - set(self.module.PRUNED_INPUTS) != set(self.inputs):
-            raise ValueError(f"inputs must be exactly {self.inputs}, got "
-                             f"{tuple(sorted(inputs))}")
+            raise ValueError(f"inputs must be exactly {self.inputs}, got {tuple(sorted(inputs))}")
         arrays = np.broadcast_arrays(*(np.asarray(inputs[n], dtype=float) for n in self.inputs))
         shape = arrays[0].shape
         return np.stack([a.reshape(-1) for a in arrays], axis=1), shape
@@ -258,9 +290,14 @@ def _shaped(columns: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
     return columns.T.reshape((columns.shape[1],) + shape)
 
 
-def compile(mechanism: Mechanism | Analysis | str | Path, backend: str = "c",
-            points: Sequence[str] | None = None, levels: Sequence[str] | None = None,
-            sensitivity: bool = True, fixed: Mapping[str, object] | None = None) -> Compiled:
+def compile(
+    mechanism: Mechanism | Analysis | str | Path,
+    backend: str = "c",
+    points: Sequence[str] | None = None,
+    levels: Sequence[str] | None = None,
+    sensitivity: bool = True,
+    fixed: Mapping[str, object] | None = None,
+) -> Compiled:
     """The generated evaluator of a mechanism (file, Mechanism or Analysis), in memory: the
     requested points and levels (all by default), with its sensitivities unless told not to or
     inputs are `fixed` (input -> angle: held constant, folded into the evaluator)."""
@@ -270,8 +307,11 @@ def compile(mechanism: Mechanism | Analysis | str | Path, backend: str = "c",
     from .evaluation import check_fabricated_pose, fixed_angles
 
     if backend not in BACKENDS:
-        raise InputError(f"unknown backend '{backend}'", entry="--backend",
-                         hint="backends: " + ", ".join(BACKENDS))
+        raise InputError(
+            f"unknown backend '{backend}'",
+            entry="--backend",
+            hint="backends: " + ", ".join(BACKENDS),
+        )
     pruned: tuple[str, ...] = ()
     if isinstance(mechanism, Analysis):
         analysis = mechanism
@@ -279,19 +319,36 @@ def compile(mechanism: Mechanism | Analysis | str | Path, backend: str = "c",
     else:
         mech = mechanism if isinstance(mechanism, Mechanism) else load(mechanism)
         held = fixed_angles(mech, fixed)
-        if points is not None:          # only the loops that move the points (docs/pruning.md)
+        if points is not None:  # only the loops that move the points (docs/pruning.md)
             mech, pruning = for_levels(mech, points, levels)
             pruned = pruning.dropped_inputs
         analysis = Analysis(build(mech), points)
     check_fabricated_pose(analysis)
     mech = analysis.mechanism
     held = {k: v for k, v in held.items() if k in analysis.mechanism.inputs}
-    p = plan(analysis, points, levels, sensitivity=sensitivity, links=False, fixed=held,
-             pruned_inputs=pruned)
+    p = plan(
+        analysis,
+        points,
+        levels,
+        sensitivity=sensitivity,
+        links=False,
+        fixed=held,
+        pruned_inputs=pruned,
+    )
     source = Path(mech.path).name
     header, code = c_backend.emit(p, source) if backend == "c" else ("", "")
-    return Compiled(Sources(
-        name=mech.name, backend=backend, header=header, source=code,
-        numpy=numpy_backend.emit(p, source), inputs=p.inputs,
-        params=tuple(q.name for q in p.parameters), points=p.points, hinges=p.hinges,
-        levels=tuple(lv.name for lv in p.levels), sensitivity=p.sensitivity))
+    return Compiled(
+        Sources(
+            name=mech.name,
+            backend=backend,
+            header=header,
+            source=code,
+            numpy=numpy_backend.emit(p, source),
+            inputs=p.inputs,
+            params=tuple(q.name for q in p.parameters),
+            points=p.points,
+            hinges=p.hinges,
+            levels=tuple(lv.name for lv in p.levels),
+            sensitivity=p.sensitivity,
+        )
+    )

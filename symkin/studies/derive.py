@@ -12,12 +12,12 @@ from pathlib import Path
 
 import sympy as sp
 
-from ..kinematics.analysis import Analysis
 from ..core.errors import InputError
-from ..model.mechanism import Mechanism, load
 from ..core.files import write_atomically
 from ..graph.pruning import for_levels
 from ..graph.structure import build
+from ..kinematics.analysis import Analysis
+from ..model.mechanism import Mechanism, load
 
 EMITTERS = ("latex", "c", "numpy")
 
@@ -28,12 +28,14 @@ def parse_list(text: str | None, allowed: Sequence[str] | None, option: str) -> 
         return None
     items = [t.strip() for t in text.split(",") if t.strip()]
     if not items:
-        raise InputError("empty list", entry=option, hint=f"e.g. {option} " + ",".join(
-            allowed or ["A"]))
+        raise InputError(
+            "empty list", entry=option, hint=f"e.g. {option} " + ",".join(allowed or ["A"])
+        )
     for item in items:
         if allowed is not None and item not in allowed:
-            raise InputError(f"unknown value '{item}'", entry=option,
-                             hint="choose from " + ", ".join(allowed))
+            raise InputError(
+                f"unknown value '{item}'", entry=option, hint="choose from " + ", ".join(allowed)
+            )
     return items
 
 
@@ -47,38 +49,59 @@ def parse_length(text: str, option: str = "--columnwidth") -> float:
     try:
         points = float(value) * TEX_UNITS[unit]
     except (KeyError, ValueError):
-        raise InputError(f"'{text}' is not a length", entry=option,
-                         hint="give a number with a unit pt, bp, mm, cm or in, e.g. 240pt "
-                              "(your document's \\the\\columnwidth)") from None
+        raise InputError(
+            f"'{text}' is not a length",
+            entry=option,
+            hint="give a number with a unit pt, bp, mm, cm or in, e.g. 240pt "
+            "(your document's \\the\\columnwidth)",
+        ) from None
     if not 100 <= points <= 1000:
-        raise InputError(f"{text} is not a plausible column width", entry=option,
-                         hint="give the column width of your document, between 100pt and "
-                              "1000pt (e.g. 229.9pt for a two-column article)")
+        raise InputError(
+            f"{text} is not a plausible column width",
+            entry=option,
+            hint="give the column width of your document, between 100pt and "
+            "1000pt (e.g. 229.9pt for a two-column article)",
+        )
     return points
 
 
-def generate(mech: Mechanism, emit: Sequence[str] = EMITTERS, points: Sequence[str] | None = None,
-             levels: Sequence[str] | None = None, appendix: bool = False,
-             progress: Callable[[str], None] | None = None, variant=None,
-             notes: Sequence[str] = (), column_width: float | None = None,
-             spans: Mapping[str, tuple[float, float]] | None = None,
-             fixed: Mapping[str, object] | None = None) -> dict[str, bytes]:
+def generate(
+    mech: Mechanism,
+    emit: Sequence[str] = EMITTERS,
+    points: Sequence[str] | None = None,
+    levels: Sequence[str] | None = None,
+    appendix: bool = False,
+    progress: Callable[[str], None] | None = None,
+    variant=None,
+    notes: Sequence[str] = (),
+    column_width: float | None = None,
+    spans: Mapping[str, tuple[float, float]] | None = None,
+    fixed: Mapping[str, object] | None = None,
+) -> dict[str, bytes]:
     """File name -> content of every requested artifact (nothing is written). A `variant`
     (symkin.variants.Variant) derives that cheaper variant instead of the file's models (a
     float32 one: its numpy module in float32, no C); `column_width` (points) lays the LaTeX
     report out for that column and `spans` (input -> (lo, hi) rad) sets its deviation plots'
     ranges; `fixed` (input -> angle, numbers or expressions) holds inputs constant, folded into
     the evaluators."""
-    return generate_plan(mech, emit, points, levels, appendix, progress, variant, notes,
-                         column_width, spans, fixed)[0]
+    return generate_plan(
+        mech, emit, points, levels, appendix, progress, variant, notes, column_width, spans, fixed
+    )[0]
 
 
-def generate_plan(mech: Mechanism, emit: Sequence[str] = EMITTERS,
-                  points: Sequence[str] | None = None, levels: Sequence[str] | None = None,
-                  appendix: bool = False, progress: Callable[[str], None] | None = None,
-                  variant=None, notes: Sequence[str] = (), column_width: float | None = None,
-                  spans: Mapping[str, tuple[float, float]] | None = None,
-                  fixed: Mapping[str, object] | None = None) -> tuple[dict[str, bytes], object]:
+def generate_plan(
+    mech: Mechanism,
+    emit: Sequence[str] = EMITTERS,
+    points: Sequence[str] | None = None,
+    levels: Sequence[str] | None = None,
+    appendix: bool = False,
+    progress: Callable[[str], None] | None = None,
+    variant=None,
+    notes: Sequence[str] = (),
+    column_width: float | None = None,
+    spans: Mapping[str, tuple[float, float]] | None = None,
+    fixed: Mapping[str, object] | None = None,
+) -> tuple[dict[str, bytes], object]:
     """:func:`generate`, and the Plan the evaluators were emitted from."""
     from ..codegen import toolchain
     from ..codegen.backends.c import backend as c_backend
@@ -92,10 +115,9 @@ def generate_plan(mech: Mechanism, emit: Sequence[str] = EMITTERS,
     held = fixed_angles(mech, fixed)
     pruning = None
     if points is not None:
-        mech, pruning = for_levels(mech, points,
-                                   [variant.level] if variant is not None else levels)
+        mech, pruning = for_levels(mech, points, [variant.level] if variant is not None else levels)
         notes = [*notes, *pruning.notes()]
-        held = {k: v for k, v in held.items() if k in mech.inputs}   # a pruned one moves nothing
+        held = {k: v for k, v in held.items() if k in mech.inputs}  # a pruned one moves nothing
     if spans:
         # the report sweeps the evaluator's own inputs; a --range over another cannot be
         # plotted (with --tolerance, the ranges were the measurement's and are dropped)
@@ -104,14 +126,19 @@ def generate_plan(mech: Mechanism, emit: Sequence[str] = EMITTERS,
         if other and variant is None:
             k = other[0]
             if k in held:
-                raise InputError(f"the input {k} is fixed (--fix) and cannot be swept",
-                                 file=mech.path, entry="--range",
-                                 hint=f"drop --range {k}=... or --fix {k}=...")
+                raise InputError(
+                    f"the input {k} is fixed (--fix) and cannot be swept",
+                    file=mech.path,
+                    entry="--range",
+                    hint=f"drop --range {k}=... or --fix {k}=...",
+                )
             asked = ", ".join(pruning.points) if pruning is not None else "asked for"
-            raise InputError(f"the input {k} moves none of the points {asked}",
-                             file=mech.path, entry="--range",
-                             hint=f"drop --range {k}=..., or ask for a point it moves "
-                             "(docs/pruning.md)")
+            raise InputError(
+                f"the input {k} moves none of the points {asked}",
+                file=mech.path,
+                entry="--range",
+                hint=f"drop --range {k}=..., or ask for a point it moves (docs/pruning.md)",
+            )
         spans = {k: v for k, v in spans.items() if k in swept}
     say(f"deriving {mech.name}: structure and kinematics")
     if variant is not None:
@@ -123,8 +150,14 @@ def generate_plan(mech: Mechanism, emit: Sequence[str] = EMITTERS,
         analysis = Analysis(build(mech), points)
     check_fabricated_pose(analysis)
     say("deriving the routines (CSE)")
-    p = plan(analysis, points, levels, notes=notes, fixed=held,
-             pruned_inputs=pruning.dropped_inputs if pruning is not None else ())
+    p = plan(
+        analysis,
+        points,
+        levels,
+        notes=notes,
+        fixed=held,
+        pruned_inputs=pruning.dropped_inputs if pruning is not None else (),
+    )
     files: dict[str, bytes] = {}
     numpy_text = None
     if "numpy" in emit:
@@ -132,8 +165,12 @@ def generate_plan(mech: Mechanism, emit: Sequence[str] = EMITTERS,
         numpy_text = numpy_backend.emit(p, source, precision)
         files[f"{mech.name}.py"] = numpy_text.encode()
     if "c" in emit and precision != "float64":
-        raise InputError(f"the variant {variant.name} is numpy-only (C evaluates in float64)",
-                         file=mech.path, entry="--emit", hint="leave c out of --emit")
+        raise InputError(
+            f"the variant {variant.name} is numpy-only (C evaluates in float64)",
+            file=mech.path,
+            entry="--emit",
+            hint="leave c out of --emit",
+        )
     if "c" in emit:
         say("emitting C99")
         header, code = c_backend.emit(p, source)
@@ -148,15 +185,23 @@ def generate_plan(mech: Mechanism, emit: Sequence[str] = EMITTERS,
         if p.points:
             numpy_text = numpy_text or numpy_backend.emit(p, source, precision)
             evaluator = toolchain.import_numpy_module(numpy_text, mech.name)
-        files.update(report.emit(with_derivation(p, analysis), source, appendix, evaluator,
-                                 column_width or report.COLUMN_WIDTH, spans,
-                                 physics_reference(analysis, held)
-                                 if p.loaded is not None else None))
+        files.update(
+            report.emit(
+                with_derivation(p, analysis),
+                source,
+                appendix,
+                evaluator,
+                column_width or report.COLUMN_WIDTH,
+                spans,
+                physics_reference(analysis, held) if p.loaded is not None else None,
+            )
+        )
     return files, p
 
 
-def physics_reference(analysis: Analysis, fixed: Mapping[str, object] | None = None
-                      ) -> Callable[[Mapping[str, float]], dict]:
+def physics_reference(
+    analysis: Analysis, fixed: Mapping[str, object] | None = None
+) -> Callable[[Mapping[str, float]], dict]:
     """The report's physical reference: the `equilibrium` level's point deviations at given
     inputs and the `fixed` ones (the file's own plates and loads, whatever variant the report
     derives)."""
@@ -169,22 +214,33 @@ def physics_reference(analysis: Analysis, fixed: Mapping[str, object] | None = N
         given.update({k: sp.sstr(v) for k, v in (fixed or {}).items()})
         result = equilibrium(reference, given)
         return {name: pt.deviation for name, pt in result.points.items()}
+
     return deviations
 
 
-def derive(path: str | Path, out_dir: str | Path = ".", emit: Sequence[str] = EMITTERS,
-           points: Sequence[str] | None = None, levels: Sequence[str] | None = None,
-           appendix: bool = False, progress: Callable[[str], None] | None = None,
-           tolerance: float | None = None, ranges: Sequence[str] | None = None,
-           column_width: float | None = None, fixed: Mapping[str, object] | None = None
-           ) -> list[Path]:
+def derive(
+    path: str | Path,
+    out_dir: str | Path = ".",
+    emit: Sequence[str] = EMITTERS,
+    points: Sequence[str] | None = None,
+    levels: Sequence[str] | None = None,
+    appendix: bool = False,
+    progress: Callable[[str], None] | None = None,
+    tolerance: float | None = None,
+    ranges: Sequence[str] | None = None,
+    column_width: float | None = None,
+    fixed: Mapping[str, object] | None = None,
+) -> list[Path]:
     """Load, generate and write; returns the written paths. With a `tolerance`, the cheapest
     variant whose measured worst error over `ranges` meets it is derived instead; `fixed`
     inputs are held at their angles (a scene file: symkin.scene.derive)."""
     mech = load(path)
     if fixed and tolerance is not None:
-        raise InputError("--fix and --tolerance together are not supported yet", entry="--fix",
-                         hint="derive with --tolerance alone, or --fix alone")
+        raise InputError(
+            "--fix and --tolerance together are not supported yet",
+            entry="--fix",
+            hint="derive with --tolerance alone, or --fix alone",
+        )
     variant, notes, spans = None, [], None
     if tolerance is not None:
         from . import tradeoff
@@ -196,21 +252,30 @@ def derive(path: str | Path, out_dir: str | Path = ".", emit: Sequence[str] = EM
         row = tradeoff.choose(table, tolerance, points)
         variant = row.variant
         span = ", ".join(f"{k} in [{a:g}, {b:g}]" for k, (a, b) in spans.items())
-        notes = [f"Tolerance {tolerance:g} over {span}: variant {variant.name} chosen, the "
-                 "cheapest whose measured worst relative error meets it;"]
-        notes += [f"  point {p}: worst relative error {e:.3g} (against mpmath, 30 digits)"
-                  for p, e in row.errors.items() if points is None or p in points]
+        notes = [
+            f"Tolerance {tolerance:g} over {span}: variant {variant.name} chosen, the "
+            "cheapest whose measured worst relative error meets it;"
+        ]
+        notes += [
+            f"  point {p}: worst relative error {e:.3g} (against mpmath, 30 digits)"
+            for p, e in row.errors.items()
+            if points is None or p in points
+        ]
         say(notes[0])
     elif ranges:
         from . import tradeoff
 
         if "latex" not in emit:
-            raise InputError("--range sets the ranges of --tolerance and of the report's "
-                             "deviation plots; neither is asked for", entry="--range",
-                             hint="add --tolerance TOL or --emit latex, or drop --range")
+            raise InputError(
+                "--range sets the ranges of --tolerance and of the report's "
+                "deviation plots; neither is asked for",
+                entry="--range",
+                hint="add --tolerance TOL or --emit latex, or drop --range",
+            )
         spans = tradeoff.parse_ranges(ranges, mech.inputs, mech.path, default=None)
-    files = generate(mech, emit, points, levels, appendix, progress, variant, notes,
-                     column_width, spans, fixed)
+    files = generate(
+        mech, emit, points, levels, appendix, progress, variant, notes, column_width, spans, fixed
+    )
     return write_files(files, out_dir)
 
 
@@ -219,6 +284,8 @@ def write_files(files: dict[str, bytes], out_dir: str | Path) -> list[Path]:
     try:
         return write_atomically(files, Path(out_dir))
     except OSError as exc:
-        raise InputError(f"cannot write into '{out_dir}' ({exc.strerror or exc})", entry="-o",
-                         hint="choose a folder you can write to") from None
-
+        raise InputError(
+            f"cannot write into '{out_dir}' ({exc.strerror or exc})",
+            entry="-o",
+            hint="choose a folder you can write to",
+        ) from None

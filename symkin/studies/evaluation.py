@@ -23,14 +23,14 @@ import sympy as sp
 from sympy.printing.pycode import MpmathPrinter
 
 from ..core import levels
-from ..model import expressions, special
-from ..kinematics.analysis import Analysis
 from ..core.errors import AssemblyError, InputError
+from ..core.settings import SOLVER
+from ..kinematics.analysis import Analysis
+from ..model import expressions, special
 from ..model.mechanism import Mechanism, check_values
 from ..physics import equilibrium as physical_equilibrium
 from ..physics import statics
 from ..physics.result import HingeLoad
-from ..core.settings import SOLVER
 
 BACKENDS = ("sympy", "numpy", "c")
 
@@ -56,33 +56,46 @@ class Sensitivity:
     (file order) or input hinge, the derivative of (x, y) of the deviation and of the rigid
     position. A parameter whose default reads others carries them along."""
 
-    deviation: dict[str, dict[str, Pair]]           # P -> parameter -> d(dx, dy)/dp
-    deviation_inputs: dict[str, dict[str, Pair]]    # P -> input hinge -> d(dx, dy)/dθ
-    rigid: dict[str, dict[str, Pair]]               # P -> parameter -> d(x, y)/dp, rigid
+    deviation: dict[str, dict[str, Pair]]  # P -> parameter -> d(dx, dy)/dp
+    deviation_inputs: dict[str, dict[str, Pair]]  # P -> input hinge -> d(dx, dy)/dθ
+    rigid: dict[str, dict[str, Pair]]  # P -> parameter -> d(x, y)/dp, rigid
     rigid_inputs: dict[str, dict[str, Pair]]
 
     def as_json(self) -> dict:
         """The keys `eval --sensitivity --json` adds (docs/cli.md)."""
+
         def lists(table: dict) -> dict:
             return {p: {k: list(v) for k, v in row.items()} for p, row in table.items()}
 
-        return {"sensitivity": lists(self.deviation),
-                "sensitivity_inputs": lists(self.deviation_inputs),
-                "rigid_sensitivity": lists(self.rigid),
-                "rigid_sensitivity_inputs": lists(self.rigid_inputs)}
+        return {
+            "sensitivity": lists(self.deviation),
+            "sensitivity_inputs": lists(self.deviation_inputs),
+            "rigid_sensitivity": lists(self.rigid),
+            "rigid_sensitivity_inputs": lists(self.rigid_inputs),
+        }
 
     @classmethod
-    def from_columns(cls, points: Sequence[str], params: Sequence[str], inputs: Sequence[str],
-                     deviation, rigid) -> Sensitivity:
+    def from_columns(
+        cls, points: Sequence[str], params: Sequence[str], inputs: Sequence[str], deviation, rigid
+    ) -> Sensitivity:
         """From arrays indexed [point][variable][component], variables = params then inputs."""
         n = len(params)
 
         def table(data, names, offset) -> dict:
-            return {p: {v: (float(data[i][offset + k][0]), float(data[i][offset + k][1]))
-                        for k, v in enumerate(names)} for i, p in enumerate(points)}
+            return {
+                p: {
+                    v: (float(data[i][offset + k][0]), float(data[i][offset + k][1]))
+                    for k, v in enumerate(names)
+                }
+                for i, p in enumerate(points)
+            }
 
-        return cls(table(deviation, params, 0), table(deviation, inputs, n),
-                   table(rigid, params, 0), table(rigid, inputs, n))
+        return cls(
+            table(deviation, params, 0),
+            table(deviation, inputs, n),
+            table(rigid, params, 0),
+            table(rigid, inputs, n),
+        )
 
 
 @dataclass(frozen=True)
@@ -107,10 +120,10 @@ class Evaluation:
     angles_compliant: dict[str, float]
     points: dict[str, PointResult]
     dyads: tuple[dict, ...] = field(default=())
-    params: dict[str, float] = field(default_factory=dict)   # every parameter's value used
-    overrides: tuple[str, ...] = ()                           # the ones given with --param
-    links: dict[str, LinkResult] = field(default_factory=dict)   # every link's rotation
-    sensitivity: Sensitivity | None = None                    # with eval --sensitivity
+    params: dict[str, float] = field(default_factory=dict)  # every parameter's value used
+    overrides: tuple[str, ...] = ()  # the ones given with --param
+    links: dict[str, LinkResult] = field(default_factory=dict)  # every link's rotation
+    sensitivity: Sensitivity | None = None  # with eval --sensitivity
     # The physical levels (docs/physics.md): each plate's end load, the elastic energy (J) and,
     # at `equilibrium`, the solver's estimate of the deviations' largest relative error.
     hinges: dict[str, HingeLoad] = field(default_factory=dict)
@@ -122,9 +135,13 @@ class Evaluation:
         extra = self.sensitivity.as_json() if self.sensitivity is not None else {}
         physical = {}
         if levels.get(self.level).needs_stiffness:
-            physical = {"hinges": {name: {"moment": h.moment, "force": list(h.force)}
-                                   for name, h in self.hinges.items()},
-                        "energy": self.energy}
+            physical = {
+                "hinges": {
+                    name: {"moment": h.moment, "force": list(h.force)}
+                    for name, h in self.hinges.items()
+                },
+                "energy": self.energy,
+            }
             if self.error_estimate is not None:
                 physical["error_estimate"] = self.error_estimate
         return {
@@ -132,27 +149,43 @@ class Evaluation:
             "backend": self.backend,
             "inputs": dict(self.inputs),
             "params": dict(self.params),
-            "angles": {"rigid": dict(self.angles_rigid),
-                       "compliant": dict(self.angles_compliant)},
-            "points": {name: {"rigid": list(p.rigid), "compliant": list(p.compliant),
-                              "deviation": list(p.deviation), "norm": p.norm}
-                       for name, p in self.points.items()},
-            "links": {name: {"rigid": r.rigid, "compliant": r.compliant,
-                             "deviation": r.deviation} for name, r in self.links.items()},
+            "angles": {"rigid": dict(self.angles_rigid), "compliant": dict(self.angles_compliant)},
+            "points": {
+                name: {
+                    "rigid": list(p.rigid),
+                    "compliant": list(p.compliant),
+                    "deviation": list(p.deviation),
+                    "norm": p.norm,
+                }
+                for name, p in self.points.items()
+            },
+            "links": {
+                name: {"rigid": r.rigid, "compliant": r.compliant, "deviation": r.deviation}
+                for name, r in self.links.items()
+            },
             "dyads": [dict(d) for d in self.dyads],
             **extra,
         } | physical
 
 
-def evaluate(analysis: Analysis, inputs: Mapping[str, object], level: str = levels.DEFAULT,
-             params: Mapping[str, object] | None = None, backend: str = "sympy",
-             dps: int = 40, sensitivity: bool = False) -> Evaluation:
+def evaluate(
+    analysis: Analysis,
+    inputs: Mapping[str, object],
+    level: str = levels.DEFAULT,
+    params: Mapping[str, object] | None = None,
+    backend: str = "sympy",
+    dps: int = 40,
+    sensitivity: bool = False,
+) -> Evaluation:
     """Evaluate one configuration at `level` through `backend` (sympy: mpmath at `dps` digits);
     with `sensitivity`, also the derivatives by every parameter and input
     (docs/sensitivity.md)."""
     if sensitivity and not levels.get(level).sensitivity:
-        raise InputError(f"the {level} level has no sensitivities", entry="--sensitivity",
-                         hint="ask for them at level exact (docs/sensitivity.md)")
+        raise InputError(
+            f"the {level} level has no sensitivities",
+            entry="--sensitivity",
+            hint="ask for them at level exact (docs/sensitivity.md)",
+        )
     if backend == "sympy":
         if level in levels.LOADED:
             return loaded(analysis, inputs, params, dps, refine=level == "loaded_refined")
@@ -161,23 +194,34 @@ def evaluate(analysis: Analysis, inputs: Mapping[str, object], level: str = leve
         return _mpmath_evaluator(analysis).evaluate(inputs, level, params, dps, sensitivity)
     if backend in ("numpy", "c"):
         return _generated(analysis, inputs, level, params, backend, sensitivity)
-    raise InputError(f"unknown backend '{backend}'", entry="--backend",
-                     hint="backends: " + ", ".join(BACKENDS))
+    raise InputError(
+        f"unknown backend '{backend}'", entry="--backend", hint="backends: " + ", ".join(BACKENDS)
+    )
 
 
-def loaded(analysis: Analysis, inputs: Mapping[str, object],
-           params: Mapping[str, object] | None = None, dps: int = 40, beam_column: bool = True,
-           extensible: bool = False, refine: bool = False) -> Evaluation:
+def loaded(
+    analysis: Analysis,
+    inputs: Mapping[str, object],
+    params: Mapping[str, object] | None = None,
+    dps: int = 40,
+    beam_column: bool = True,
+    extensible: bool = False,
+    refine: bool = False,
+) -> Evaluation:
     """The `loaded` level with mpmath at `dps` digits (docs/physics.md); `beam_column=False`
     keeps the first-order force correction only, `extensible=True` adds the plates' stretch
     (symkin.physics.statics.LoadedDerivation); `refine=True` is the `loaded_refined` level."""
-    return _mpmath_evaluator(analysis).loaded(inputs, params, dps, refine,
-                                              beam_column=beam_column, extensible=extensible)
+    return _mpmath_evaluator(analysis).loaded(
+        inputs, params, dps, refine, beam_column=beam_column, extensible=extensible
+    )
 
 
-def equilibrium(analysis: Analysis, inputs: Mapping[str, object],
-                params: Mapping[str, object] | None = None,
-                extra_digits: int = 0) -> Evaluation:
+def equilibrium(
+    analysis: Analysis,
+    inputs: Mapping[str, object],
+    params: Mapping[str, object] | None = None,
+    extra_digits: int = 0,
+) -> Evaluation:
     """The `equilibrium` level (docs/physics.md): the plates as elastica, solved numerically to
     its own error estimate; `extra_digits` raises the working precision (to check it)."""
     return _mpmath_evaluator(analysis).equilibrium(inputs, params, extra_digits)
@@ -185,37 +229,50 @@ def equilibrium(analysis: Analysis, inputs: Mapping[str, object],
 
 # -- values from the user -----------------------------------------------------------------------
 
+
 def exact_value(value: object, entry: str, file: str) -> sp.Expr:
     """An input or parameter value (number or whitelisted expression string) as an exact number."""
     try:
-        expr = (expressions.parse(value, {}) if isinstance(value, str)
-                else expressions.number(value))  # type: ignore[arg-type]
+        expr = expressions.parse(value, {}) if isinstance(value, str) else expressions.number(value)  # type: ignore[arg-type]
     except expressions.ExpressionError as exc:
-        raise InputError(str(exc), file=file, entry=entry,
-                         hint="give a number or an expression such as 10*deg") from None
+        raise InputError(
+            str(exc), file=file, entry=entry, hint="give a number or an expression such as 10*deg"
+        ) from None
     if not (expr.is_real and expr.is_finite):
         raise InputError(f"{value!r} is not a finite real number", file=file, entry=entry)
     try:
         size = abs(expressions.numeric(expr, {}))
     except expressions.NotReal:
-        raise InputError(f"{value!r} is not a finite real number", file=file, entry=entry,
-                         hint="give a number or an expression such as 10*deg") from None
+        raise InputError(
+            f"{value!r} is not a finite real number",
+            file=file,
+            entry=entry,
+            hint="give a number or an expression such as 10*deg",
+        ) from None
     if size > expressions.FLOAT64_MAX:
-        raise InputError(f"{value!r} is beyond a float64 (|value| < 1.8e308)", file=file,
-                         entry=entry, hint="give a value the generated code can hold")
+        raise InputError(
+            f"{value!r} is beyond a float64 (|value| < 1.8e308)",
+            file=file,
+            entry=entry,
+            hint="give a value the generated code can hold",
+        )
     return expr
 
 
-def parameter_values(mechanism: Mechanism,
-                     overrides: Mapping[str, object] | None = None) -> dict[sp.Symbol, sp.Expr]:
+def parameter_values(
+    mechanism: Mechanism, overrides: Mapping[str, object] | None = None
+) -> dict[sp.Symbol, sp.Expr]:
     """Exact values of every parameter: overrides, then defaults re-evaluated in file order."""
     overrides = dict(overrides or {})
     known = {p.name for p in mechanism.parameters}
     for key in overrides:
         if key not in known:
-            raise InputError(f"unknown parameter '{key}'", file=mechanism.path,
-                             entry="--param", hint="parameters: " + (", ".join(sorted(known))
-                                                                      or "none"))
+            raise InputError(
+                f"unknown parameter '{key}'",
+                file=mechanism.path,
+                entry="--param",
+                hint="parameters: " + (", ".join(sorted(known)) or "none"),
+            )
     values: dict[sp.Symbol, sp.Expr] = {}
     changed = False
     for p in mechanism.parameters:
@@ -233,17 +290,19 @@ def parameter_values(mechanism: Mechanism,
             except expressions.NotReal:
                 value = sp.nan
             if not (value.is_real and value.is_finite) or abs(value) > expressions.FLOAT64_MAX:
-                raise InputError(f"parameter '{p.name}' = {p.expr} evaluates to {value} with "
-                                 "the overrides", file=mechanism.path, entry="--param",
-                                 hint="choose override values that keep it finite")
+                raise InputError(
+                    f"parameter '{p.name}' = {p.expr} evaluates to {value} with the overrides",
+                    file=mechanism.path,
+                    entry="--param",
+                    hint="choose override values that keep it finite",
+                )
             values[p.symbol] = value
     if changed:
         check_values(mechanism, values, "--param")
     return values
 
 
-def parameter_floats(mechanism: Mechanism,
-                     values: Mapping[sp.Symbol, sp.Expr]) -> dict[str, float]:
+def parameter_floats(mechanism: Mechanism, values: Mapping[sp.Symbol, sp.Expr]) -> dict[str, float]:
     """Parameter values by name, as the doubles the generated evaluators receive."""
     return {p.name: float(sp.N(values[p.symbol], 20)) for p in mechanism.parameters}
 
@@ -254,13 +313,20 @@ def input_values(analysis: Analysis, inputs: Mapping[str, object]) -> dict[int, 
     names = {kin.hinges[a].name: a for a in kin.inputs}
     for key in inputs:
         if key not in names:
-            raise InputError(f"'{key}' is not an input hinge", file=mech.path,
-                             entry="--input", hint="inputs: " + ", ".join(names))
+            raise InputError(
+                f"'{key}' is not an input hinge",
+                file=mech.path,
+                entry="--input",
+                hint="inputs: " + ", ".join(names),
+            )
     missing = [n for n in names if n not in inputs]
     if missing:
-        raise InputError(f"no value for the input(s) {', '.join(missing)}", file=mech.path,
-                         entry="--input", hint="give every input, e.g. --input "
-                         + " --input ".join(f"{n}=0.1" for n in missing))
+        raise InputError(
+            f"no value for the input(s) {', '.join(missing)}",
+            file=mech.path,
+            entry="--input",
+            hint="give every input, e.g. --input " + " --input ".join(f"{n}=0.1" for n in missing),
+        )
     values = {names[k]: exact_value(v, f"--input {k}", mech.path) for k, v in inputs.items()}
     for a, value in values.items():
         if (sp.Abs(value) - sp.pi).is_positive:
@@ -272,7 +338,8 @@ def input_values(analysis: Analysis, inputs: Mapping[str, object]) -> dict[int, 
             raise AssemblyError(
                 f"{mech.path}: --input {name}={float(sp.N(value, 20)):.9g} rad: an input is "
                 f"the rotation of its plate from the as-fabricated pose, |angle| <= pi"
-                f"{same}")
+                f"{same}"
+            )
     return values
 
 
@@ -283,11 +350,11 @@ def check_fabricated_pose(analysis: Analysis) -> None:
     kin = analysis.kin
     if not kin.unknowns:
         return
-    at_rest = {t: 0 for t in analysis.thetas}
+    at_rest = dict.fromkeys(analysis.thetas, 0)
     rows = analysis.linear_system[0].xreplace(at_rest).subs(analysis.mechanism.defaults).tolist()
     with mpmath.workdps(30):
         a = mpmath.matrix([[mpmath.mpf(sp.N(e, 35)) for e in row] for row in rows])
-        for i in range(a.rows):         # angular rows are pure numbers, positional lengths
+        for i in range(a.rows):  # angular rows are pure numbers, positional lengths
             scale = max(abs(a[i, j]) for j in range(a.cols))
             for j in range(a.cols):
                 a[i, j] = a[i, j] / scale if scale else a[i, j]
@@ -301,15 +368,20 @@ def check_fabricated_pose(analysis: Analysis) -> None:
         k = min(range(len(sigma)), key=lambda i: sigma[i])
         if sigma[k] > mpmath.mpf(10) ** -20 * max(sigma):
             return
-        free = [kin.hinges[a_].name for j, a_ in enumerate(kin.unknowns)
-                if abs(vt[k, j]) > mpmath.mpf(10) ** -10]
+        free = [
+            kin.hinges[a_].name
+            for j, a_ in enumerate(kin.unknowns)
+            if abs(vt[k, j]) > mpmath.mpf(10) ** -10
+        ]
     inputs = ", ".join(analysis.mechanism.inputs)
     raise InputError(
         f"the input hinges {inputs} do not determine the pose: in the as-fabricated pose the "
         f"loops leave {', '.join(free)} free to move (singular loop Jacobian)",
-        file=analysis.mechanism.path, entry="input",
+        file=analysis.mechanism.path,
+        entry="input",
         hint=f"mark other hinges as inputs, e.g. one of {', '.join(free)} instead of one of "
-             f"{inputs}")
+        f"{inputs}",
+    )
 
 
 # -- the sympy backend: mpmath ---------------------------------------------------------------------
@@ -350,16 +422,28 @@ class _Mpmath:
             namespace = special.mpmath_namespace()
             # lambdify's own MpmathPrinter settings, plus order="none": sorting the terms of
             # every sum for printing is most of the cost on large mechanisms.
-            printer = MpmathPrinter({"fully_qualified_modules": False, "inline": True,
-                                     "allow_unknown_functions": True, "order": "none",
-                                     "user_functions": {k: k for k in namespace}})
-            self._lambdas[key] = sp.lambdify(list(names.values()), renamed(exprs),
-                                             modules=[namespace, "mpmath"], printer=printer)
+            printer = MpmathPrinter(
+                {
+                    "fully_qualified_modules": False,
+                    "inline": True,
+                    "allow_unknown_functions": True,
+                    "order": "none",
+                    "user_functions": {k: k for k in namespace},
+                }
+            )
+            self._lambdas[key] = sp.lambdify(
+                list(names.values()), renamed(exprs), modules=[namespace, "mpmath"], printer=printer
+            )
         return self._lambdas[key]
 
-    def evaluate(self, inputs: Mapping[str, object], level: str,
-                 params: Mapping[str, object] | None, dps: int,
-                 sensitivity: bool = False) -> Evaluation:
+    def evaluate(
+        self,
+        inputs: Mapping[str, object],
+        level: str,
+        params: Mapping[str, object] | None,
+        dps: int,
+        sensitivity: bool = False,
+    ) -> Evaluation:
         an = self.an
         with mpmath.workdps(dps):
             state = self.state(inputs, level, params, dps)
@@ -368,31 +452,47 @@ class _Mpmath:
                 points[name] = PointResult(
                     (float(rig[0]), float(rig[1])),
                     (float(rig[0] + dev[0]), float(rig[1] + dev[1])),
-                    (float(dev[0]), float(dev[1])))
+                    (float(dev[0]), float(dev[1])),
+                )
             theta, delta, ivals = state.theta, state.delta, state.inputs
             args, values = self._arguments(state)
             links = self._links(an, level, "", args, values)
             names = {a: self.kin.hinges[a].name for a in self.kin.hinges}
             return Evaluation(
-                level=level, backend="sympy",
+                level=level,
+                backend="sympy",
                 inputs={names[a]: float(ivals[a]) for a in sorted(ivals)},
                 angles_rigid={names[a]: float(theta[a]) for a in sorted(theta)},
-                angles_compliant={names[a]: float(theta[a] + delta.get(a, 0))
-                                  for a in sorted(theta)},
-                points=points, dyads=tuple(state.dyads),
+                angles_compliant={
+                    names[a]: float(theta[a] + delta.get(a, 0)) for a in sorted(theta)
+                },
+                points=points,
+                dyads=tuple(state.dyads),
                 params=parameter_floats(self.mechanism, state.exact_params),
-                overrides=tuple(params or ()), links=links,
-                sensitivity=self._sensitivity(state) if sensitivity else None)
+                overrides=tuple(params or ()),
+                links=links,
+                sensitivity=self._sensitivity(state) if sensitivity else None,
+            )
 
-    def values(self, inputs: Mapping[str, object], level: str,
-               params: Mapping[str, object] | None, dps: int) -> dict[str, tuple]:
+    def values(
+        self,
+        inputs: Mapping[str, object],
+        level: str,
+        params: Mapping[str, object] | None,
+        dps: int,
+    ) -> dict[str, tuple]:
         """Point name -> (rigid (x, y), deviation (dx, dy)) as mpmath numbers at `dps` digits
         (for references that need more than doubles, e.g. central differences)."""
         with mpmath.workdps(dps):
             return self._point_values(self.state(inputs, level, params, dps))
 
-    def state(self, inputs: Mapping[str, object], level: str,
-              params: Mapping[str, object] | None, dps: int) -> _State:
+    def state(
+        self,
+        inputs: Mapping[str, object],
+        level: str,
+        params: Mapping[str, object] | None,
+        dps: int,
+    ) -> _State:
         """The solved configuration (call inside mpmath.workdps(dps))."""
         an = self.an
         levels.get(level)
@@ -410,8 +510,11 @@ class _Mpmath:
         """The symbols of the derivation (parameters, θ, δ) and their values in `state`."""
         an = self.an
         args = [*an.params, *an.thetas, *an.deltas]
-        values = [*state.pvals, *(state.theta[a] for a in sorted(state.theta)),
-                  *(state.delta.get(a, mpmath.mpf(0)) for a in self.kin.unknowns)]
+        values = [
+            *state.pvals,
+            *(state.theta[a] for a in sorted(state.theta)),
+            *(state.delta.get(a, mpmath.mpf(0)) for a in self.kin.unknowns),
+        ]
         return args, values
 
     def _point_values(self, state: _State) -> dict[str, tuple]:
@@ -420,8 +523,9 @@ class _Mpmath:
         out = {}
         for p in an.points:
             rig = self._fn(f"rigid:{p.name}", list(an.point_rigid(p.name)), args)(*values)
-            dev = self._fn(f"{state.level}:{p.name}",
-                           list(an.point_deviation(p.name, state.level)), args)(*values)
+            dev = self._fn(
+                f"{state.level}:{p.name}", list(an.point_deviation(p.name, state.level)), args
+            )(*values)
             out[p.name] = ((rig[0], rig[1]), (dev[0], dev[1]))
         return out
 
@@ -446,8 +550,10 @@ class _Mpmath:
             try:
                 cols = [mpmath.lu_solve(m, rhs.column(j)) for j in range(rhs.cols)]
             except ZeroDivisionError:
-                raise AssemblyError(f"{self.mechanism.path}: the mechanism is at a toggle "
-                                    "position (singular loop Jacobian) for these inputs") from None
+                raise AssemblyError(
+                    f"{self.mechanism.path}: the mechanism is at a toggle "
+                    "position (singular loop Jacobian) for these inputs"
+                ) from None
             out = mpmath.zeros(rhs.rows, rhs.cols)
             for j, col in enumerate(cols):
                 for i in range(rhs.rows):
@@ -458,8 +564,7 @@ class _Mpmath:
         theta_v = mpmath.zeros(k, nv)
         rigid_stage = terms.rigid_stage
         if rigid_stage is not None:
-            theta_v = -solve(matrix("A", rigid_stage.jacobian),
-                             matrix("Gv", rigid_stage.variables))
+            theta_v = -solve(matrix("A", rigid_stage.jacobian), matrix("Gv", rigid_stage.variables))
         rig = terms.rigid
         total_r = matrix("Rv", rig.variables) + (matrix("Rt", rig.theta) * theta_v if k else 0)
         part = terms.partials(level)
@@ -468,27 +573,45 @@ class _Mpmath:
             total_d += matrix(f"{level}:Dt", part.theta) * theta_v
             stage = terms.stage(level)
             if stage is not None:
-                rhs = matrix(f"{level}:Ev", stage.variables) + \
-                    matrix(f"{level}:Et", stage.theta) * theta_v
+                rhs = (
+                    matrix(f"{level}:Ev", stage.variables)
+                    + matrix(f"{level}:Et", stage.theta) * theta_v
+                )
                 delta_v = -solve(matrix(f"{level}:M", stage.jacobian), rhs)
                 total_d += matrix(f"{level}:Dd", part.delta) * delta_v
-        chain = self._fn("sens:chain", sensitivity.parameter_chain(
-            [p.expr for p in self.mechanism.parameters], an.params).tolist(), args)(*values)
+        chain = self._fn(
+            "sens:chain",
+            sensitivity.parameter_chain(
+                [p.expr for p in self.mechanism.parameters], an.params
+            ).tolist(),
+            args,
+        )(*values)
         n_p = len(an.params)
 
         def per_point(m) -> list:
-            cols = [[(m[2 * i, j], m[2 * i + 1, j]) for i in range(len(an.points))]
-                    for j in range(nv)]
+            cols = [
+                [(m[2 * i, j], m[2 * i + 1, j]) for i in range(len(an.points))] for j in range(nv)
+            ]
             cols[:n_p] = sensitivity.total(cols[:n_p], chain)
             return [[cols[j][i] for j in range(nv)] for i in range(len(an.points))]
 
         names = [p.name for p in an.points]
         return Sensitivity.from_columns(
-            names, [p.name for p in self.mechanism.parameters],
-            [kin.hinges[a].name for a in kin.inputs], per_point(total_d), per_point(total_r))
+            names,
+            [p.name for p in self.mechanism.parameters],
+            [kin.hinges[a].name for a in kin.inputs],
+            per_point(total_d),
+            per_point(total_r),
+        )
 
-    def loaded(self, inputs: Mapping[str, object], params: Mapping[str, object] | None,
-               dps: int, refine: bool = False, **options) -> Evaluation:
+    def loaded(
+        self,
+        inputs: Mapping[str, object],
+        params: Mapping[str, object] | None,
+        dps: int,
+        refine: bool = False,
+        **options,
+    ) -> Evaluation:
         """The `loaded` level (docs/physics.md), in the order of its derivation
         (symkin.physics.statics): rigid angles → A^T μ0 = Q0 → A^T μ = Q(μ0) → each plate's
         compliance → the exact level's Newton on the loaded closure → ΔR, the plates' loads and
@@ -497,7 +620,7 @@ class _Mpmath:
         an = self.an
         der = statics.loaded_derivation(an, **options)
         la, kin = der.analysis, der.kin
-        closure = _mpmath_evaluator(la)      # its params: the file's, μ0, μ and the compliance
+        closure = _mpmath_evaluator(la)  # its params: the file's, μ0, μ and the compliance
         prefix = "loaded" + "".join(f":{k}={v}" for k, v in sorted(options.items())) + ":"
         given = input_values(an, inputs)
         exact_params = parameter_values(self.mechanism, params)
@@ -520,14 +643,18 @@ class _Mpmath:
             def constants(transposed=None) -> list:
                 """The parameters, μ0, μ and the compliance; A^T from the rigid loop Jacobian
                 or, `transposed`, the values given."""
-                del known[len(pvals):]
-                for symbols, system, key in ((der.mu0, der.first_statics, "mu0"),
-                                             (der.mu, der.statics, "mu")):
+                del known[len(pvals) :]
+                for symbols, system, key in (
+                    (der.mu0, der.first_statics, "mu0"),
+                    (der.mu, der.statics, "mu"),
+                ):
                     if symbols:
-                        at = (at_rigid(key + ":AT", system[0].tolist()) if transposed is None
-                              else transposed)
-                        known.extend(self._multipliers(at, at_rigid(key + ":Q",
-                                                                    list(system[1]))))
+                        at = (
+                            at_rigid(key + ":AT", system[0].tolist())
+                            if transposed is None
+                            else transposed
+                        )
+                        known.extend(self._multipliers(at, at_rigid(key + ":Q", list(system[1]))))
                 known.extend(list(at_rigid("compliance", disp)) if disp else [])
                 return known
 
@@ -535,19 +662,24 @@ class _Mpmath:
             if refine and kin.unknowns:
                 # the loaded closure's Jacobian at the pose reached, transposed
                 jac = self._fn(prefix + "refine", la.jacobian.T.tolist(), args)(
-                    *known, *thetas, *(delta[a] for a in kin.unknowns))
+                    *known, *thetas, *(delta[a] for a in kin.unknowns)
+                )
                 delta = closure._deltas("exact", constants(jac), theta)
             self._check_limits({a: theta[a] + delta.get(a, 0) for a in theta}, ivals)
             full = [*known, *thetas, *(delta[a] for a in kin.unknowns)]
             points = {}
             for p in la.points:
-                rig = self._fn(f"rigid(theta):{p.name}", list(an.point_rigid(p.name)),
-                               [*an.params, *an.thetas])(*pvals, *thetas)
-                dev = self._fn(prefix + p.name, list(la.point_deviation(p.name, "exact")),
-                               args)(*full)
-                points[p.name] = PointResult((float(rig[0]), float(rig[1])),
-                                             (float(rig[0] + dev[0]), float(rig[1] + dev[1])),
-                                             (float(dev[0]), float(dev[1])))
+                rig = self._fn(
+                    f"rigid(theta):{p.name}", list(an.point_rigid(p.name)), [*an.params, *an.thetas]
+                )(*pvals, *thetas)
+                dev = self._fn(prefix + p.name, list(la.point_deviation(p.name, "exact")), args)(
+                    *full
+                )
+                points[p.name] = PointResult(
+                    (float(rig[0]), float(rig[1])),
+                    (float(rig[0] + dev[0]), float(rig[1] + dev[1])),
+                    (float(dev[0]), float(dev[1])),
+                )
             links = self._links(la, "exact", prefix, args, full)
             scale = mpmath.mpf(sp.N(self.mechanism.unit_scale, dps))
             hinges, energy = {}, mpmath.mpf(0)
@@ -555,26 +687,37 @@ class _Mpmath:
                 force = self._fn(f"{prefix}force:{a}", list(loads[a].force), args)(*full)
                 moment = self._fn(f"{prefix}moment:{a}", der.end_moment(a), args)(*full)
                 energy += self._fn(f"{prefix}energy:{a}", der.energy(a), args)(*full)
-                hinges[kin.hinges[a].name] = HingeLoad((float(force[0]), float(force[1])),
-                                                       float(moment * scale))
+                hinges[kin.hinges[a].name] = HingeLoad(
+                    (float(force[0]), float(force[1])), float(moment * scale)
+                )
             names = {a: h.name for a, h in kin.hinges.items()}
             return Evaluation(
-                level="loaded_refined" if refine else "loaded", backend="sympy",
+                level="loaded_refined" if refine else "loaded",
+                backend="sympy",
                 inputs={names[a]: float(ivals[a]) for a in sorted(ivals)},
                 angles_rigid={names[a]: float(theta[a]) for a in sorted(theta)},
-                angles_compliant={names[a]: float(theta[a] + delta.get(a, 0))
-                                  for a in sorted(theta)},
-                points=points, dyads=tuple(dyads),
+                angles_compliant={
+                    names[a]: float(theta[a] + delta.get(a, 0)) for a in sorted(theta)
+                },
+                points=points,
+                dyads=tuple(dyads),
                 params=parameter_floats(self.mechanism, exact_params),
-                overrides=tuple(params or ()), hinges=hinges, energy=float(energy * scale),
-                links=links)
+                overrides=tuple(params or ()),
+                hinges=hinges,
+                energy=float(energy * scale),
+                links=links,
+            )
 
     def _links(self, an: Analysis, level: str, prefix: str, args: list, values: list) -> dict:
         """Every link's rigid rotation, compliant rotation and deviation at `level` (the
         deviation from δ itself), `args` the symbols of `an` and `values` theirs."""
         s = an.structure
-        rot = self._fn(f"{prefix}links:{level}", [an.link_rotation(i) for i in range(s.n + 1)]
-                       + [an.link_deviation(i, level) for i in range(s.n + 1)], args)(*values)
+        rot = self._fn(
+            f"{prefix}links:{level}",
+            [an.link_rotation(i) for i in range(s.n + 1)]
+            + [an.link_deviation(i, level) for i in range(s.n + 1)],
+            args,
+        )(*values)
         links = {}
         for i in range(s.n + 1):
             rigid, dev = _wrap(rot[i]), rot[s.n + 1 + i]
@@ -586,11 +729,17 @@ class _Mpmath:
         try:
             return list(mpmath.lu_solve(mpmath.matrix(a_t), mpmath.matrix(q)))
         except ZeroDivisionError:
-            raise AssemblyError(f"{self.mechanism.path}: the mechanism is at a toggle position "
-                                "(singular loop Jacobian) for these inputs") from None
+            raise AssemblyError(
+                f"{self.mechanism.path}: the mechanism is at a toggle position "
+                "(singular loop Jacobian) for these inputs"
+            ) from None
 
-    def equilibrium(self, inputs: Mapping[str, object], params: Mapping[str, object] | None,
-                    extra_digits: int = 0) -> Evaluation:
+    def equilibrium(
+        self,
+        inputs: Mapping[str, object],
+        params: Mapping[str, object] | None,
+        extra_digits: int = 0,
+    ) -> Evaluation:
         """The `equilibrium` level (symkin.physics.equilibrium), against this rigid linkage."""
         an = self.an
         given = input_values(an, inputs)
@@ -605,34 +754,52 @@ class _Mpmath:
                 ivals = {a: mpmath.mpf(sp.N(v, dps + 5)) for a, v in given.items()}
                 theta, _ = self._rigid_angles(pvals, ivals)
                 at = [*pvals, *(theta[a] for a in sorted(theta))]
-                return ({names[a]: v for a, v in theta.items()},
-                        {p.name: self._fn(f"rigid(theta):{p.name}", list(an.point_rigid(p.name)),
-                                          args)(*at) for p in an.points})
+                return (
+                    {names[a]: v for a, v in theta.items()},
+                    {
+                        p.name: self._fn(
+                            f"rigid(theta):{p.name}", list(an.point_rigid(p.name)), args
+                        )(*at)
+                        for p in an.points
+                    },
+                )
 
-        res = physical_equilibrium.solve(self.mechanism, exact_params,
-                                         {names[a]: v for a, v in given.items()}, rigid,
-                                         extra_digits)
+        res = physical_equilibrium.solve(
+            self.mechanism,
+            exact_params,
+            {names[a]: v for a, v in given.items()},
+            rigid,
+            extra_digits,
+        )
         order = [names[a] for a in sorted(names)]
         with mpmath.workdps(20):
             # The links' rotations: the rigid one from the rigid angles, the deviation from the
             # solution's angle deviations (docs/physics.md).
-            values = [*(mpmath.mpf(sp.N(exact_params[s], 25)) for s in an.params),
-                      *(mpmath.mpf(res.angles_rigid[names[a]]) for a in sorted(names)),
-                      *(mpmath.mpf(res.angle_deviations[names[a]]) for a in self.kin.unknowns)]
+            values = [
+                *(mpmath.mpf(sp.N(exact_params[s], 25)) for s in an.params),
+                *(mpmath.mpf(res.angles_rigid[names[a]]) for a in sorted(names)),
+                *(mpmath.mpf(res.angle_deviations[names[a]]) for a in self.kin.unknowns),
+            ]
             links = self._links(an, "exact", "equilibrium:", [*args, *an.deltas], values)
         return Evaluation(
-            level="equilibrium", backend="sympy",
+            level="equilibrium",
+            backend="sympy",
             inputs={names[a]: float(sp.N(given[a], 20)) for a in sorted(given)},
             angles_rigid={n: res.angles_rigid[n] for n in order},
             angles_compliant={n: res.angles_compliant[n] for n in order},
             points={n: PointResult(*res.points[n]) for n in res.points},
             dyads=self.dyad_states(inputs, params),
             params=parameter_floats(self.mechanism, exact_params),
-            overrides=tuple(params or ()), hinges={n: res.hinges[n] for n in order},
-            energy=res.energy, error_estimate=res.error_estimate, links=links)
+            overrides=tuple(params or ()),
+            hinges={n: res.hinges[n] for n in order},
+            energy=res.energy,
+            error_estimate=res.error_estimate,
+            links=links,
+        )
 
-    def dyad_states(self, inputs: Mapping[str, object],
-                    params: Mapping[str, object] | None = None) -> tuple[dict, ...]:
+    def dyad_states(
+        self, inputs: Mapping[str, object], params: Mapping[str, object] | None = None
+    ) -> tuple[dict, ...]:
         """Branch and toggle margin of every dyad of the rigid solution at these inputs."""
         given = input_values(self.an, inputs)
         exact_params = parameter_values(self.mechanism, params)
@@ -658,9 +825,14 @@ class _Mpmath:
             if dyad is not None and env[symbol] < 0:
                 raise self._cannot_close(dyad, ivals)
         for d in sol.dyads:
-            dyads.append({"hinges": [kin.hinges[a].name for a in d.hinges],
-                          "loop": kin.hinges[d.chord].name, "branch": d.branch,
-                          "toggle_margin": float(env[d.margin])})
+            dyads.append(
+                {
+                    "hinges": [kin.hinges[a].name for a in d.hinges],
+                    "loop": kin.hinges[d.chord].name,
+                    "branch": d.branch,
+                    "toggle_margin": float(env[d.margin]),
+                }
+            )
         phi = {}
         for link, expr in sol.phi.items():
             fn = self._fn(f"phi:{link}", expr, sorted(expr.free_symbols, key=str))
@@ -681,26 +853,33 @@ class _Mpmath:
         rows = f(*pvals, *(theta[a] for a in sorted(theta)))
         for k, c in enumerate(kin.chords):
             if not abs(rows[3 * k]) < SOLVER.winding:
-                at = ", ".join(f"{kin.hinges[b].name}={float(v):g}"
-                               for b, v in sorted(ivals.items()))
+                at = ", ".join(
+                    f"{kin.hinges[b].name}={float(v):g}" for b, v in sorted(ivals.items())
+                )
                 raise AssemblyError(
                     f"{self.mechanism.path}: at {at} a hinge of the loop of "
                     f"'{kin.hinges[c].name}' ({an.structure.loop_text(c)}) would have turned "
                     "through more than half a turn on the way from the as-fabricated pose (its "
-                    "angles sum to 2*pi, not 0): a plate cannot bend that far")
+                    "angles sum to 2*pi, not 0): a plate cannot bend that far"
+                )
 
     def _check_limits(self, theta: dict, ivals: dict) -> None:
         """No plate is driven past its bound: its model's limit (elastica_force: π/2) or π."""
         for a, h in self.kin.hinges.items():
             if h.limit is not None and not abs(theta[a]) < mpmath.mpf(sp.N(h.limit, 30)):
-                at = ", ".join(f"{self.kin.hinges[b].name}={float(v):g}"
-                               for b, v in sorted(ivals.items()))
-                why = ("a plate cannot bend through more than half a turn" if h.limit == sp.pi
-                       else f"beyond its model '{h.hinge.model}', which holds for |theta| < "
-                            f"{float(sp.N(h.limit)):.6g} rad")
+                at = ", ".join(
+                    f"{self.kin.hinges[b].name}={float(v):g}" for b, v in sorted(ivals.items())
+                )
+                why = (
+                    "a plate cannot bend through more than half a turn"
+                    if h.limit == sp.pi
+                    else f"beyond its model '{h.hinge.model}', which holds for |theta| < "
+                    f"{float(sp.N(h.limit)):.6g} rad"
+                )
                 raise AssemblyError(
                     f"{self.mechanism.path}: at {at} the hinge '{h.name}' would bend to "
-                    f"{float(theta[a]):.6g} rad: {why}")
+                    f"{float(theta[a]):.6g} rad: {why}"
+                )
 
     def _cannot_close(self, dyad, ivals) -> AssemblyError:
         kin = self.kin
@@ -709,7 +888,8 @@ class _Mpmath:
             f"{self.mechanism.path}: the loop of hinge '{kin.hinges[dyad.chord].name}' "
             f"({self.an.structure.loop_text(dyad.chord)}) cannot close at {at}: the dyad "
             f"{'-'.join(kin.hinges[a].name for a in dyad.hinges)} is beyond its toggle position "
-            "(outside the assembly range)")
+            "(outside the assembly range)"
+        )
 
     def _rigid_newton(self, pvals: list, ivals: dict) -> dict:
         """Rigid angles by Newton with continuation from the as-fabricated pose (no closed
@@ -726,12 +906,15 @@ class _Mpmath:
             theta = {**{a: v * t for a, v in ivals.items()}, **x}
             x = self._newton(f, jac, pvals, theta, kin.unknowns)
             if x is None:
-                at = ", ".join(f"{kin.hinges[a].name}={float(v * t):g}" for a, v in
-                               sorted(ivals.items()))
-                raise AssemblyError(f"{self.mechanism.path}: the rigid loops cannot close at {at} "
-                                    "(no convergence: outside the assembly range or at a toggle "
-                                    "position)")
-        return {**ivals, **x}           # tracked continuously: the limits see |theta| > pi
+                at = ", ".join(
+                    f"{kin.hinges[a].name}={float(v * t):g}" for a, v in sorted(ivals.items())
+                )
+                raise AssemblyError(
+                    f"{self.mechanism.path}: the rigid loops cannot close at {at} "
+                    "(no convergence: outside the assembly range or at a toggle "
+                    "position)"
+                )
+        return {**ivals, **x}  # tracked continuously: the limits see |theta| > pi
 
     def _newton(self, f, jac, pvals: list, theta: dict, unknowns: Sequence[int]) -> dict | None:
         """Newton iteration on the θ of `unknowns`; None when it does not converge."""
@@ -763,8 +946,10 @@ class _Mpmath:
         try:
             d = -mpmath.lu_solve(A, r)
         except ZeroDivisionError:
-            raise AssemblyError(f"{self.mechanism.path}: the mechanism is at a toggle position "
-                                "(singular loop Jacobian) for these inputs") from None
+            raise AssemblyError(
+                f"{self.mechanism.path}: the mechanism is at a toggle position "
+                "(singular loop Jacobian) for these inputs"
+            ) from None
         delta = {a: d[k] for k, a in enumerate(self.kin.unknowns)}
         if level == "first_order":
             return delta
@@ -779,18 +964,28 @@ class _Mpmath:
             try:
                 step = mpmath.lu_solve(mpmath.matrix(jac(*vals)), mpmath.matrix(f(*vals)))
             except ZeroDivisionError:
-                raise AssemblyError(f"{self.mechanism.path}: singular compliant loop Jacobian "
-                                    "(toggle position) for these inputs") from None
+                raise AssemblyError(
+                    f"{self.mechanism.path}: singular compliant loop Jacobian "
+                    "(toggle position) for these inputs"
+                ) from None
             x = x - step
             size, change = mpmath.norm(x, mpmath.inf), mpmath.norm(step, mpmath.inf)
             # Converged, or stalled at the working precision's noise floor far below float64.
-            if change <= tol.converged * size or size == 0 or (
-                    previous is not None and change >= SOLVER.stall_ratio * previous
-                    and change <= tol.stalled * size):
+            if (
+                change <= tol.converged * size
+                or size == 0
+                or (
+                    previous is not None
+                    and change >= SOLVER.stall_ratio * previous
+                    and change <= tol.stalled * size
+                )
+            ):
                 return {a: x[k] for k, a in enumerate(self.kin.unknowns)}
             previous = change
-        raise AssemblyError(f"{self.mechanism.path}: the compliant loops did not converge "
-                            f"(no convergence in {SOLVER.exact_iterations} Newton steps)")
+        raise AssemblyError(
+            f"{self.mechanism.path}: the compliant loops did not converge "
+            f"(no convergence in {SOLVER.exact_iterations} Newton steps)"
+        )
 
 
 @dataclass(frozen=True)
@@ -814,14 +1009,23 @@ def _wrap(angle):
 
 # -- the numpy and c backends: the generated evaluators --------------------------------------------
 
-def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
-               params: Mapping[str, object] | None, backend: str,
-               sensitivity: bool = False) -> Evaluation:
+
+def _generated(
+    analysis: Analysis,
+    inputs: Mapping[str, object],
+    level: str,
+    params: Mapping[str, object] | None,
+    backend: str,
+    sensitivity: bool = False,
+) -> Evaluation:
     """One configuration through the generated `backend` ('numpy' or 'c'); with `sensitivity`,
     its generated sensitivity function too."""
     if not levels.get(level).generated:
-        raise InputError(f"level '{level}' has no generated evaluator", entry="--backend",
-                         hint="evaluate it with --backend sympy")
+        raise InputError(
+            f"level '{level}' has no generated evaluator",
+            entry="--backend",
+            hint="evaluate it with --backend sympy",
+        )
     from ..codegen import toolchain
     from ..codegen.backends.c import backend as c_backend
     from ..codegen.backends.numpy import backend as numpy_backend
@@ -839,34 +1043,55 @@ def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
     pnames = [q.name for q in analysis.mechanism.parameters]
     sens = None
     if backend == "numpy":
-        module = toolchain.import_numpy_module(numpy_backend.emit(p, source),
-                                             analysis.mechanism.name)
+        module = toolchain.import_numpy_module(
+            numpy_backend.emit(p, source), analysis.mechanism.name
+        )
         call = module.sensitivity_full if sensitivity else module.evaluate
         res = call(dict(zip(names, x)), level, dict(zip(pnames, pfloat)))
         if not bool(res["ok"]):
             _explain(analysis, inputs, level, params, sensitivity)
         if sensitivity:
+
             def cols(kind: str, point: str) -> list:
                 table = res[kind][point]
-                return [table["params"][q] for q in pnames] + \
-                    [table["inputs"][h] for h in names]
+                return [table["params"][q] for q in pnames] + [table["inputs"][h] for h in names]
 
             sens = Sensitivity.from_columns(
-                p.points, pnames, names, [cols("deviation", n) for n in p.points],
-                [cols("rigid", n) for n in p.points])
-        points = {n: PointResult(*(tuple(float(v) for v in res["points"][n][key])
-                                   for key in ("rigid", "compliant", "deviation")))
-                  for n in p.points}
+                p.points,
+                pnames,
+                names,
+                [cols("deviation", n) for n in p.points],
+                [cols("rigid", n) for n in p.points],
+            )
+        points = {
+            n: PointResult(
+                *(
+                    tuple(float(v) for v in res["points"][n][key])
+                    for key in ("rigid", "compliant", "deviation")
+                )
+            )
+            for n in p.points
+        }
         rigid = {h: float(res["angles"]["rigid"][h]) for h in hinges}
         compliant = {h: float(res["angles"]["compliant"][h]) for h in hinges}
-        links = {n: LinkResult(*(float(res["links"][n][key])
-                                 for key in ("rigid", "compliant", "deviation")))
-                 for n in p.reported_links}
+        links = {
+            n: LinkResult(
+                *(float(res["links"][n][key]) for key in ("rigid", "compliant", "deviation"))
+            )
+            for n in p.reported_links
+        }
     else:
         header, code = c_backend.emit(p, source)
         name = analysis.mechanism.name
-        lib = toolchain.Library(toolchain.build(name, header, code), name, len(x), len(pfloat),
-                              len(p.points), len(hinges), len(p.reported_links))
+        lib = toolchain.Library(
+            toolchain.build(name, header, code),
+            name,
+            len(x),
+            len(pfloat),
+            len(p.points),
+            len(hinges),
+            len(p.reported_links),
+        )
         status, out, angles, rot = lib.pose(x, pfloat, levels.get(level).code)
         if status == 3:
             raise InputError("the C evaluator rejected the arguments", entry="--input")
@@ -876,12 +1101,18 @@ def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
             sens = Sensitivity.from_columns(p.points, pnames, names, rows[2][0], rows[3][0])
         if status:
             _explain(analysis, inputs, level, params, sensitivity)
-        points = {n: PointResult((out[6 * i], out[6 * i + 1]), (out[6 * i + 2], out[6 * i + 3]),
-                                 (out[6 * i + 4], out[6 * i + 5])) for i, n in enumerate(p.points)}
+        points = {
+            n: PointResult(
+                (out[6 * i], out[6 * i + 1]),
+                (out[6 * i + 2], out[6 * i + 3]),
+                (out[6 * i + 4], out[6 * i + 5]),
+            )
+            for i, n in enumerate(p.points)
+        }
         m = len(hinges)
         rigid = dict(zip(hinges, angles[:m]))
         compliant = dict(zip(hinges, angles[m:]))
-        links = {n: LinkResult(*rot[3 * i:3 * i + 3]) for i, n in enumerate(p.reported_links)}
+        links = {n: LinkResult(*rot[3 * i : 3 * i + 3]) for i, n in enumerate(p.reported_links)}
     order = {kin.hinges[a].name: a for a in kin.hinges}
     extra = {}
     if levels.get(level).needs_stiffness:
@@ -890,20 +1121,29 @@ def _generated(analysis: Analysis, inputs: Mapping[str, object], level: str,
         physical = loaded(analysis, inputs, params, refine=level == "loaded_refined")
         extra = {"hinges": physical.hinges, "energy": physical.energy}
     return Evaluation(
-        level=level, backend=backend, inputs=dict(zip(names, x)),
+        level=level,
+        backend=backend,
+        inputs=dict(zip(names, x)),
         angles_rigid={h: rigid[h] for h in sorted(rigid, key=order.get)},
         angles_compliant={h: compliant[h] for h in sorted(compliant, key=order.get)},
-        points=points, dyads=_mpmath_evaluator(analysis).dyad_states(inputs, params),
-        params=parameter_floats(analysis.mechanism, pvals), overrides=tuple(params or ()),
-        links=links, sensitivity=sens, **extra)
+        points=points,
+        dyads=_mpmath_evaluator(analysis).dyad_states(inputs, params),
+        params=parameter_floats(analysis.mechanism, pvals),
+        overrides=tuple(params or ()),
+        links=links,
+        sensitivity=sens,
+        **extra,
+    )
 
 
 def _explain(analysis: Analysis, inputs, level, params, sensitivity: bool = False) -> None:
     """Raise the sympy backend's error for a configuration a generated evaluator refused."""
     evaluate(analysis, inputs, level, params, sensitivity=sensitivity)
-    raise AssemblyError(f"{analysis.mechanism.path}: the generated evaluator could not solve this "
-                        "configuration (no convergence in float64), although the 40-digit "
-                        "derivation can")
+    raise AssemblyError(
+        f"{analysis.mechanism.path}: the generated evaluator could not solve this "
+        "configuration (no convergence in float64), although the 40-digit "
+        "derivation can"
+    )
 
 
 def fixed_angles(mech: Mechanism, fixed: Mapping[str, object] | None) -> dict[str, sp.Expr]:
@@ -912,7 +1152,11 @@ def fixed_angles(mech: Mechanism, fixed: Mapping[str, object] | None) -> dict[st
     held = {}
     for name, value in (fixed or {}).items():
         if name not in mech.inputs:
-            raise InputError(f"'{name}' is not an input hinge", file=mech.path, entry="--fix",
-                             hint="inputs: " + ", ".join(mech.inputs))
+            raise InputError(
+                f"'{name}' is not an input hinge",
+                file=mech.path,
+                entry="--fix",
+                hint="inputs: " + ", ".join(mech.inputs),
+            )
         held[name] = exact_value(value, "--fix", mech.path)
     return held

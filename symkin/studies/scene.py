@@ -25,13 +25,21 @@ import sympy as sp
 
 from ..core import levels as level_table
 from ..core.errors import AssemblyError, InputError, suggest
-from ..model.mechanism import MAX_NAME, Mechanism, name_problem, with_points
 from ..kinematics.variants import Variant, analysis_for, default_variants
+from ..model.mechanism import MAX_NAME, Mechanism, name_problem, with_points
 
 FORMAT = 1
 TOP_KEYS = ("format", "name", "reference", "samples", "backend", "ranges", "fix", "point")
-POINT_KEYS = ("name", "link", "at", "tolerance", "relative_tolerance", "reference", "ranges",
-              "precision")
+POINT_KEYS = (
+    "name",
+    "link",
+    "at",
+    "tolerance",
+    "relative_tolerance",
+    "reference",
+    "ranges",
+    "precision",
+)
 REFERENCES = ("exact", "equilibrium")
 BACKENDS = ("c", "numpy")
 PRECISIONS = ("float64", "float32")
@@ -49,18 +57,21 @@ class ScenePoint:
 
     name: str
     tolerance: float
-    relative: bool                                 # relative (else absolute, file length unit)
-    reference: str                                 # exact or equilibrium
-    ranges: tuple[tuple[str, tuple[float, float]], ...]   # every free input, file order
-    precision: str                                 # the lowest precision allowed
+    relative: bool  # relative (else absolute, file length unit)
+    reference: str  # exact or equilibrium
+    ranges: tuple[tuple[str, tuple[float, float]], ...]  # every free input, file order
+    precision: str  # the lowest precision allowed
 
     def meets(self, absolute: float, relative: float) -> bool:
         return (relative if self.relative else absolute) <= self.tolerance
 
     @property
     def tolerance_text(self) -> str:
-        return (f"{self.tolerance:g} relative" if self.relative
-                else f"{self.tolerance:g} (file length unit)")
+        return (
+            f"{self.tolerance:g} relative"
+            if self.relative
+            else f"{self.tolerance:g} (file length unit)"
+        )
 
 
 @dataclass(frozen=True)
@@ -72,7 +83,7 @@ class Scene:
     mechanism: Mechanism
     backend: str
     samples: int
-    fixed: tuple[tuple[str, sp.Expr], ...]         # input -> exact angle, file order
+    fixed: tuple[tuple[str, sp.Expr], ...]  # input -> exact angle, file order
     points: tuple[ScenePoint, ...]
 
     @property
@@ -94,8 +105,8 @@ class Group:
     """Points computed by one variant in one evaluator."""
 
     variant: Variant
-    points: tuple[str, ...]                        # scene order
-    cost: int                                      # weighted operations of one evaluation
+    points: tuple[str, ...]  # scene order
+    cost: int  # weighted operations of one evaluation
 
 
 @dataclass(frozen=True)
@@ -104,9 +115,9 @@ class Choice:
     of the cheapest single variant meeting every point (None: no single variant does)."""
 
     groups: tuple[Group, ...]
-    errors: dict[str, tuple[float, float]]         # point -> (absolute, relative), its variant's
+    errors: dict[str, tuple[float, float]]  # point -> (absolute, relative), its variant's
     single: Group | None
-    references: dict[str, int]                     # point -> samples the reference assembled
+    references: dict[str, int]  # point -> samples the reference assembled
 
 
 def load(path: str | Path, mech: Mechanism) -> Scene:
@@ -116,11 +127,16 @@ def load(path: str | Path, mech: Mechanism) -> Scene:
     try:
         text = path.read_bytes().decode("utf-8")
     except OSError as exc:
-        raise InputError(f"cannot read the scene file ({exc.strerror or exc})", file=shown,
-                         entry="--scene", hint="check the path") from None
+        raise InputError(
+            f"cannot read the scene file ({exc.strerror or exc})",
+            file=shown,
+            entry="--scene",
+            hint="check the path",
+        ) from None
     except UnicodeDecodeError as exc:
-        raise InputError(f"not UTF-8 text (byte {exc.start})", file=shown,
-                         hint="save the file as UTF-8") from None
+        raise InputError(
+            f"not UTF-8 text (byte {exc.start})", file=shown, hint="save the file as UTF-8"
+        ) from None
     return loads(text, mech, shown)
 
 
@@ -129,8 +145,11 @@ def loads(text: str, mech: Mechanism, file: str = "<scene>") -> Scene:
     try:
         data = tomllib.loads(text)
     except (tomllib.TOMLDecodeError, ValueError, RecursionError) as exc:
-        raise InputError(f"TOML syntax error: {str(exc)[:200]}", file=file,
-                         hint="fix the TOML syntax (docs/scene.md)") from None
+        raise InputError(
+            f"TOML syntax error: {str(exc)[:200]}",
+            file=file,
+            hint="fix the TOML syntax (docs/scene.md)",
+        ) from None
     return _Reader(file, text, mech).read(data)
 
 
@@ -146,46 +165,70 @@ class _Reader:
     def keys(self, table: Mapping, allowed: Sequence[str], entry: str) -> None:
         for key in table:
             if key not in allowed:
-                raise self.error(f"unknown key '{key}'", entry,
-                                 suggest(key, allowed) or "allowed keys: " + ", ".join(allowed))
+                raise self.error(
+                    f"unknown key '{key}'",
+                    entry,
+                    suggest(key, allowed) or "allowed keys: " + ", ".join(allowed),
+                )
 
-    def choice(self, table: Mapping, key: str, allowed: Sequence[str], default: str,
-               entry: str) -> str:
+    def choice(
+        self, table: Mapping, key: str, allowed: Sequence[str], default: str, entry: str
+    ) -> str:
         value = table.get(key, default)
         if value not in allowed:
-            raise self.error(f"'{key}' must be one of {', '.join(allowed)}, got {value!r}",
-                             entry, f'write {key} = "{allowed[0]}"')
+            raise self.error(
+                f"'{key}' must be one of {', '.join(allowed)}, got {value!r}",
+                entry,
+                f'write {key} = "{allowed[0]}"',
+            )
         return value
 
     def angle(self, value: object, entry: str) -> float | sp.Expr:
         from .evaluation import exact_value
 
         if isinstance(value, bool) or not isinstance(value, (int, float, str)):
-            raise self.error(f"an angle must be a number or an expression, got {value!r}",
-                             entry, "write e.g. 0.1 or \"pi/30\" (radians)")
+            raise self.error(
+                f"an angle must be a number or an expression, got {value!r}",
+                entry,
+                'write e.g. 0.1 or "pi/30" (radians)',
+            )
         number = exact_value(value, entry, self.file)
         if not (number.is_real and abs(sp.N(number, 30)) <= sp.pi):
-            raise self.error(f"the angle {value!r} is not within [-pi, pi]", entry,
-                             "give the input's rotation from the as-fabricated pose, rad")
+            raise self.error(
+                f"the angle {value!r} is not within [-pi, pi]",
+                entry,
+                "give the input's rotation from the as-fabricated pose, rad",
+            )
         return number
 
     def ranges(self, table: object, entry: str, free: Sequence[str]) -> dict:
         if not isinstance(table, dict):
-            raise self.error("ranges must be a table of input = [lo, hi]", entry,
-                             "write e.g. ranges = { O = [-0.2, 0.2] } (radians)")
+            raise self.error(
+                "ranges must be a table of input = [lo, hi]",
+                entry,
+                "write e.g. ranges = { O = [-0.2, 0.2] } (radians)",
+            )
         out = {}
         for name, span in table.items():
             where = f"{entry} '{name}'"
             if name not in self.mech.inputs:
-                raise self.error(f"'{name}' is not an input hinge", where,
-                                 suggest(name, self.mech.inputs)
-                                 or "inputs: " + ", ".join(self.mech.inputs))
+                raise self.error(
+                    f"'{name}' is not an input hinge",
+                    where,
+                    suggest(name, self.mech.inputs) or "inputs: " + ", ".join(self.mech.inputs),
+                )
             if name not in free:
-                raise self.error(f"the input {name} is fixed ([fix]) and cannot range", where,
-                                 f"drop the range of {name} or its [fix] entry")
+                raise self.error(
+                    f"the input {name} is fixed ([fix]) and cannot range",
+                    where,
+                    f"drop the range of {name} or its [fix] entry",
+                )
             if not isinstance(span, list) or len(span) != 2:
-                raise self.error(f"a range must be [lo, hi], got {span!r}", where,
-                                 f"write {name} = [-0.2, 0.2] (radians)")
+                raise self.error(
+                    f"a range must be [lo, hi], got {span!r}",
+                    where,
+                    f"write {name} = [-0.2, 0.2] (radians)",
+                )
             lo, hi = (float(sp.N(self.angle(v, where), 17)) for v in span)
             if not lo < hi:
                 raise self.error(f"empty range [{lo:g}, {hi:g}]", where, "give lo < hi")
@@ -193,10 +236,16 @@ class _Reader:
         return out
 
     def positive(self, value: object, entry: str, key: str) -> float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not (
-                math.isfinite(value) and value > 0):
-            raise self.error(f"'{key}' must be a positive number, got {value!r}", entry,
-                             f"write e.g. {key} = 1e-6")
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, (int, float))
+            or not (math.isfinite(value) and value > 0)
+        ):
+            raise self.error(
+                f"'{key}' must be a positive number, got {value!r}",
+                entry,
+                f"write e.g. {key} = 1e-6",
+            )
         return float(value)
 
     def read(self, data: Mapping) -> Scene:
@@ -205,12 +254,16 @@ class _Reader:
         mech = self.mech
         self.keys(data, TOP_KEYS, "top level")
         if data.get("format") != FORMAT or isinstance(data.get("format"), bool):
-            raise self.error(f"unsupported or missing format {data.get('format')!r}", "format",
-                             f"write format = {FORMAT} as the first line")
+            raise self.error(
+                f"unsupported or missing format {data.get('format')!r}",
+                "format",
+                f"write format = {FORMAT} as the first line",
+            )
         name = data.get("name", f"{mech.name}_scene")
         if not isinstance(name, str):
-            raise self.error(f"'name' must be text, got {name!r}", "name",
-                             'write name = "my_scene"')
+            raise self.error(
+                f"'name' must be text, got {name!r}", "name", 'write name = "my_scene"'
+            )
         problem = name_problem(name, MAX_NAME - SUFFIX)
         if problem is not None:
             raise self.error(problem[0], "name", problem[1])
@@ -220,33 +273,50 @@ class _Reader:
         backend = self.choice(data, "backend", BACKENDS, "c", "backend")
         samples = data.get("samples", DEFAULT_SAMPLES)
         if isinstance(samples, bool) or not isinstance(samples, int) or not 2 <= samples <= 1000:
-            raise self.error(f"'samples' must be a whole number from 2 to 1000, got {samples!r}",
-                             "samples", f"write samples = {DEFAULT_SAMPLES}")
+            raise self.error(
+                f"'samples' must be a whole number from 2 to 1000, got {samples!r}",
+                "samples",
+                f"write samples = {DEFAULT_SAMPLES}",
+            )
         fix = data.get("fix", {})
         if not isinstance(fix, dict):
-            raise self.error("[fix] must be a table of input = angle", "[fix]",
-                             "write [fix] on a line of its own, then K = 0.0 lines (radians)")
+            raise self.error(
+                "[fix] must be a table of input = angle",
+                "[fix]",
+                "write [fix] on a line of its own, then K = 0.0 lines (radians)",
+            )
         fixed = {}
         for input_name, value in fix.items():
             where = f"[fix] '{input_name}'"
             if input_name not in mech.inputs:
-                raise self.error(f"'{input_name}' is not an input hinge", where,
-                                 suggest(input_name, mech.inputs)
-                                 or "inputs: " + ", ".join(mech.inputs))
+                raise self.error(
+                    f"'{input_name}' is not an input hinge",
+                    where,
+                    suggest(input_name, mech.inputs) or "inputs: " + ", ".join(mech.inputs),
+                )
             fixed[input_name] = self.angle(value, where)
         free = [h for h in mech.inputs if h not in fixed]
         if not free:
-            raise self.error("every input is fixed", "[fix]",
-                             "leave at least one input free (a pose needs no evaluator)")
-        scene_ranges = {h: DEFAULT_RANGE for h in free}
+            raise self.error(
+                "every input is fixed",
+                "[fix]",
+                "leave at least one input free (a pose needs no evaluator)",
+            )
+        scene_ranges = dict.fromkeys(free, DEFAULT_RANGE)
         scene_ranges.update(self.ranges(data.get("ranges", {}), "[ranges]", free))
         tables = data.get("point", [])
         if not isinstance(tables, list) or not all(isinstance(t, dict) for t in tables):
-            raise self.error("'point' must be an array of tables written as [[point]]",
-                             "[[point]]", "write each point as a [[point]] table")
+            raise self.error(
+                "'point' must be an array of tables written as [[point]]",
+                "[[point]]",
+                "write each point as a [[point]] table",
+            )
         if not tables:
-            raise self.error("the scene names no point", "[[point]]",
-                             'add a [[point]] with name = "..." and a tolerance')
+            raise self.error(
+                "the scene names no point",
+                "[[point]]",
+                'add a [[point]] with name = "..." and a tolerance',
+            )
         added = []
         points = []
         seen: set[str] = set()
@@ -256,59 +326,91 @@ class _Reader:
             self.keys(table, POINT_KEYS, entry)
             pname = table.get("name")
             if not isinstance(pname, str) or not pname.strip():
-                raise self.error("missing or empty 'name'", entry,
-                                 'write name = "..." (a point of the file, or a new one with '
-                                 'link and at)')
+                raise self.error(
+                    "missing or empty 'name'",
+                    entry,
+                    'write name = "..." (a point of the file, or a new one with link and at)',
+                )
             entry = f"[[point]] #{i + 1} '{pname}'"
             if pname in seen:
-                raise self.error(f"the point '{pname}' is named twice", entry,
-                                 "give every point once")
+                raise self.error(
+                    f"the point '{pname}' is named twice", entry, "give every point once"
+                )
             seen.add(pname)
             if "link" in table or "at" in table:
                 added.append({k: table[k] for k in ("name", "link", "at") if k in table})
             elif pname not in known:
-                raise self.error(f"the mechanism has no point '{pname}'", entry,
-                                 (suggest(pname, known) or "points: " + ", ".join(known)
-                                  if known else "the file has no [[point]]")
-                                 + "; or define it here with link = \"...\" and at = [x, y]")
+                raise self.error(
+                    f"the mechanism has no point '{pname}'",
+                    entry,
+                    (
+                        suggest(pname, known) or "points: " + ", ".join(known)
+                        if known
+                        else "the file has no [[point]]"
+                    )
+                    + '; or define it here with link = "..." and at = [x, y]',
+                )
             given = [k for k in ("tolerance", "relative_tolerance") if k in table]
             if len(given) != 1:
-                raise self.error("give exactly one of 'tolerance' (absolute, the file's length "
-                                 "unit) and 'relative_tolerance'", entry,
-                                 "write e.g. tolerance = 1e-9 or relative_tolerance = 0.01")
+                raise self.error(
+                    "give exactly one of 'tolerance' (absolute, the file's length "
+                    "unit) and 'relative_tolerance'",
+                    entry,
+                    "write e.g. tolerance = 1e-9 or relative_tolerance = 0.01",
+                )
             tol = self.positive(table[given[0]], entry, given[0])
             ref = self.choice(table, "reference", REFERENCES, reference, entry)
             if ref == "equilibrium" and not stiff:
-                raise self.error("the equilibrium reference needs every plate's stiffness (E, "
-                                 "thickness, width)", entry,
-                                 'use reference = "exact", or give the plates\' stiffness '
-                                 "(docs/physics.md)")
+                raise self.error(
+                    "the equilibrium reference needs every plate's stiffness (E, thickness, width)",
+                    entry,
+                    'use reference = "exact", or give the plates\' stiffness (docs/physics.md)',
+                )
             precision = self.choice(table, "precision", PRECISIONS, "float64", entry)
             if precision == "float32" and backend != "numpy":
-                raise self.error("float32 variants exist in numpy only", entry,
-                                 'set backend = "numpy" at the top level, or drop precision')
+                raise self.error(
+                    "float32 variants exist in numpy only",
+                    entry,
+                    'set backend = "numpy" at the top level, or drop precision',
+                )
             spans = dict(scene_ranges)
             spans.update(self.ranges(table.get("ranges", {}), f"{entry} ranges", free))
-            points.append(ScenePoint(pname, tol, given[0] == "relative_tolerance", ref,
-                                     tuple((h, spans[h]) for h in free), precision))
+            points.append(
+                ScenePoint(
+                    pname,
+                    tol,
+                    given[0] == "relative_tolerance",
+                    ref,
+                    tuple((h, spans[h]) for h in free),
+                    precision,
+                )
+            )
         if added:
             mech = with_points(mech, added, self.file, self.text)
-        return Scene(self.file, name, mech, backend, samples,
-                     tuple((h, fixed[h]) for h in mech.inputs if h in fixed), tuple(points))
+        return Scene(
+            self.file,
+            name,
+            mech,
+            backend,
+            samples,
+            tuple((h, fixed[h]) for h in mech.inputs if h in fixed),
+            tuple(points),
+        )
 
 
-def measure(scene: Scene, progress: Callable[[str], None] | None = None
-            ) -> tuple[list[Measured], dict[str, int]]:
+def measure(
+    scene: Scene, progress: Callable[[str], None] | None = None
+) -> tuple[list[Measured], dict[str, int]]:
     """Every allowed variant's worst errors per point, each over the point's own samples against
     its own reference at 30 digits (the variant's numpy evaluator, pruned to the scene's points);
     and per point the samples its reference assembled."""
-    from ..kinematics.analysis import Analysis
     from ..codegen import toolchain
     from ..codegen.backends.numpy import backend as numpy_backend
     from ..codegen.plan import plan
-    from .evaluation import evaluate
     from ..graph.pruning import for_levels
     from ..graph.structure import build
+    from ..kinematics.analysis import Analysis
+    from .evaluation import evaluate
     from .tradeoff import sample, worst_errors
 
     say = progress or (lambda message: None)
@@ -334,15 +436,22 @@ def measure(scene: Scene, progress: Callable[[str], None] | None = None
             kept.append(s | fixed_value)
             devs.append({n: ev.points[n].deviation for n in names})
         if not kept:
-            raise InputError("no sample of the point's range can be assembled", file=scene.path,
-                             entry=f"[[point]] '{names[0]}'",
-                             hint="choose ranges inside the assembly range")
+            raise InputError(
+                "no sample of the point's range can be assembled",
+                file=scene.path,
+                entry=f"[[point]] '{names[0]}'",
+                hint="choose ranges inside the assembly range",
+            )
         for name in names:
             samples[name] = kept
             wanted[name] = [(float(d[name][0]), float(d[name][1])) for d in devs]
-    allowed = [v for v in default_variants(stiffness=any(
-        pt.reference == "equilibrium" for pt in scene.points))
-        if v.precision == "float64" or any(pt.precision == "float32" for pt in scene.points)]
+    allowed = [
+        v
+        for v in default_variants(
+            stiffness=any(pt.reference == "equilibrium" for pt in scene.points)
+        )
+        if v.precision == "float64" or any(pt.precision == "float32" for pt in scene.points)
+    ]
     out = []
     names = list(scene.point_names)
     for v in allowed:
@@ -350,7 +459,8 @@ def measure(scene: Scene, progress: Callable[[str], None] | None = None
         pruned, _ = for_levels(mech, names, [v.level])
         p = plan(analysis_for(pruned, v, names), names, [v.level], sensitivity=False)
         module = toolchain.import_numpy_module(
-            numpy_backend.emit(p, "scene", v.precision), f"scene_{v.name.replace('/', '_')}")
+            numpy_backend.emit(p, "scene", v.precision), f"scene_{v.name.replace('/', '_')}"
+        )
         accepted = set(module.INPUTS) | set(module.PRUNED_INPUTS)
         absolute, relative = {}, {}
         for name in names:
@@ -382,13 +492,17 @@ def cost(routines: Mapping, level: str, closed_form: bool, steps: int) -> int:
     return total
 
 
-def choose(scene: Scene, measured: Sequence[Measured], counts: Mapping[str, int],
-           progress: Callable[[str], None] | None = None) -> Choice:
+def choose(
+    scene: Scene,
+    measured: Sequence[Measured],
+    counts: Mapping[str, int],
+    progress: Callable[[str], None] | None = None,
+) -> Choice:
     """Each point's cheapest variant meeting its tolerance, then merges of groups whose joint
     evaluator costs less than theirs apart; a point no variant meets is bad input (exit 2)."""
     from ..codegen.plan import plan
-    from ..graph.pruning import for_levels
     from ..core.settings import SOLVER
+    from ..graph.pruning import for_levels
 
     say = progress or (lambda message: None)
     mech = scene.mechanism
@@ -402,47 +516,55 @@ def choose(scene: Scene, measured: Sequence[Measured], counts: Mapping[str, int]
         if key not in memo:
             pruned, _ = for_levels(mech, points, [v.level])
             held = {h: a for h, a in fixed.items() if h in pruned.inputs}
-            p = plan(analysis_for(pruned, v, points), points, [v.level], sensitivity=False,
-                     fixed=held)
-            largest = max(max(abs(lo), abs(hi)) for pt in points
-                          for _, (lo, hi) in by_name[pt].ranges)
+            p = plan(
+                analysis_for(pruned, v, points), points, [v.level], sensitivity=False, fixed=held
+            )
+            largest = max(
+                max(abs(lo), abs(hi)) for pt in points for _, (lo, hi) in by_name[pt].ranges
+            )
             largest = max([largest] + [abs(float(a)) for a in held.values()])
-            memo[key] = cost(p.routines, v.level, p.closed_form,
-                             SOLVER.continuation_steps(largest))
+            memo[key] = cost(p.routines, v.level, p.closed_form, SOLVER.continuation_steps(largest))
         return memo[key]
 
     def allowed(v: Variant, points) -> bool:
-        return all(v.precision == "float64" or by_name[p].precision == "float32"
-                   for p in points)
+        return all(v.precision == "float64" or by_name[p].precision == "float32" for p in points)
 
     def meets(m: Measured, points) -> bool:
         return allowed(m.variant, points) and all(
-            by_name[p].meets(m.absolute[p], m.relative[p]) for p in points)
+            by_name[p].meets(m.absolute[p], m.relative[p]) for p in points
+        )
 
     def rank(m: Measured, points: tuple[str, ...]) -> tuple:
         # cheapest; at equal operations float32 first (numpy runs it faster; only where every
         # point allows it), then the most accurate, then by name
-        worst = max(m.relative[p] if by_name[p].relative else m.absolute[p] / by_name[p].tolerance
-                    for p in points)
-        return (price(m.variant, points), m.variant.precision != "float32", worst,
-                m.variant.name)
+        worst = max(
+            m.relative[p] if by_name[p].relative else m.absolute[p] / by_name[p].tolerance
+            for p in points
+        )
+        return (price(m.variant, points), m.variant.precision != "float32", worst, m.variant.name)
 
     table = {m.variant: m for m in measured}
     chosen: dict[str, Variant] = {}
     for pt in scene.points:
         good = [m for m in measured if meets(m, (pt.name,))]
         if not good:
-            err = (lambda m: m.relative[pt.name]) if pt.relative else \
-                (lambda m: m.absolute[pt.name])
+            err = (
+                (lambda m: m.relative[pt.name]) if pt.relative else (lambda m: m.absolute[pt.name])
+            )
             best = min((m for m in measured if allowed(m.variant, (pt.name,))), key=err)
             raise InputError(
                 f"no variant meets the tolerance {pt.tolerance_text} of the point over its "
                 f"range (the most accurate, {best.variant.name}, reaches {err(best):.3g} against "
-                f"the {pt.reference} reference)", file=scene.path,
+                f"the {pt.reference} reference)",
+                file=scene.path,
                 entry=f"[[point]] '{pt.name}'",
                 hint="loosen the tolerance, narrow the ranges"
-                     + (", or measure against the equilibrium reference with stiffness data"
-                        if pt.reference == "exact" else ""))
+                + (
+                    ", or measure against the equilibrium reference with stiffness data"
+                    if pt.reference == "exact"
+                    else ""
+                ),
+            )
         say(f"point {pt.name}: {len(good)} variant(s) meet {pt.tolerance_text}")
         chosen[pt.name] = min(good, key=lambda m: rank(m, (pt.name,))).variant
     groups: dict[Variant, tuple[str, ...]] = {}
@@ -452,7 +574,7 @@ def choose(scene: Scene, measured: Sequence[Measured], counts: Mapping[str, int]
         best = None
         keys = sorted(groups)
         for i, a in enumerate(keys):
-            for b in keys[i + 1:]:
+            for b in keys[i + 1 :]:
                 joint = tuple(n for n in scene.point_names if n in groups[a] + groups[b])
                 apart = price(a, groups[a]) + price(b, groups[b])
                 for v in (a, b):
@@ -468,8 +590,11 @@ def choose(scene: Scene, measured: Sequence[Measured], counts: Mapping[str, int]
         groups[v] = joint
     ordered = sorted(groups.items(), key=lambda item: scene.point_names.index(item[1][0]))
     result = tuple(Group(v, pts, price(v, pts)) for v, pts in ordered)
-    errors = {p: (table[g.variant].absolute[p], table[g.variant].relative[p])
-              for g in result for p in g.points}
+    errors = {
+        p: (table[g.variant].absolute[p], table[g.variant].relative[p])
+        for g in result
+        for p in g.points
+    }
     singles = [m for m in measured if meets(m, scene.point_names)]
     single = None
     if singles:
@@ -487,9 +612,11 @@ def notes(scene: Scene, choice: Choice, group: Group | None = None) -> list[str]
     """Lines for the headers and reports: every point's choice and measured error (a group's
     only, when given), and what one variant for every point would cost."""
     source = Path(scene.path).name
-    lines = [f"Scene {source}: each point computed by the cheapest variant meeting its "
-             "tolerance over its range (cost: weighted operations of one evaluation, "
-             "docs/scene.md);"]
+    lines = [
+        f"Scene {source}: each point computed by the cheapest variant meeting its "
+        "tolerance over its range (cost: weighted operations of one evaluation, "
+        "docs/scene.md);"
+    ]
     by_name = {pt.name: pt for pt in scene.points}
     for g in choice.groups:
         if group is not None and g != group:
@@ -498,31 +625,39 @@ def notes(scene: Scene, choice: Choice, group: Group | None = None) -> list[str]
             pt = by_name[name]
             absolute, relative = choice.errors[name]
             span = ", ".join(f"{h} in [{lo:g}, {hi:g}]" for h, (lo, hi) in pt.ranges)
-            lines.append(f"  point {name}: variant {g.variant.name}, worst error {absolute:.3g} "
-                         f"(relative {relative:.3g}) against the {pt.reference} level at 30 "
-                         f"digits over {span} ({choice.references[name]} samples); tolerance "
-                         f"{pt.tolerance_text};")
+            lines.append(
+                f"  point {name}: variant {g.variant.name}, worst error {absolute:.3g} "
+                f"(relative {relative:.3g}) against the {pt.reference} level at 30 "
+                f"digits over {span} ({choice.references[name]} samples); tolerance "
+                f"{pt.tolerance_text};"
+            )
     if group is None:
         total = sum(g.cost for g in choice.groups)
         if choice.single is not None:
-            lines.append(f"  cost {total} against {choice.single.cost} for the cheapest single "
-                         f"variant meeting every point ({choice.single.variant.name}).")
+            lines.append(
+                f"  cost {total} against {choice.single.cost} for the cheapest single "
+                f"variant meeting every point ({choice.single.variant.name})."
+            )
         else:
             lines.append(f"  cost {total}; no single variant meets every point.")
     return lines
 
 
-def generate(scene: Scene, emit: Sequence[str], progress: Callable[[str], None] | None = None,
-             column_width: float | None = None, appendix: bool = False
-             ) -> tuple[dict[str, bytes], Choice]:
+def generate(
+    scene: Scene,
+    emit: Sequence[str],
+    progress: Callable[[str], None] | None = None,
+    column_width: float | None = None,
+    appendix: bool = False,
+) -> tuple[dict[str, bytes], Choice]:
     """File name -> content of the scene's evaluators (one per chosen variant and the scene
     evaluator over them) and reports, and the choice made; nothing is written."""
     from ..codegen.backends.c import backend as c_backend
     from ..codegen.backends.numpy import backend as numpy_backend
     from ..codegen.literals import to_double
     from ..codegen.plan import SceneGroup, ScenePlan
-    from .derive import generate_plan
     from ..graph.structure import build
+    from .derive import generate_plan
 
     say = progress or (lambda message: None)
     if scene.backend == "numpy" and "c" in emit:
@@ -543,25 +678,46 @@ def generate(scene: Scene, emit: Sequence[str], progress: Callable[[str], None] 
                 a, b = spans.get(h, (lo, hi))
                 spans[h] = (min(a, lo), max(b, hi))
         # (a float32 variant is chosen only with backend numpy, which emits no C)
-        out, p = generate_plan(dataclasses.replace(mech, name=name), emit, g.points,
-                               variant=g.variant, notes=notes(scene, choice, g),
-                               column_width=column_width, spans=spans, fixed=fixed,
-                               progress=say, appendix=appendix)
+        out, p = generate_plan(
+            dataclasses.replace(mech, name=name),
+            emit,
+            g.points,
+            variant=g.variant,
+            notes=notes(scene, choice, g),
+            column_width=column_width,
+            spans=spans,
+            fixed=fixed,
+            progress=say,
+            appendix=appendix,
+        )
         files.update(out)
-        groups.append(SceneGroup(name=name, variant=g.variant.name,
-                                 level=level_table.get(g.variant.level), inputs=p.inputs,
-                                 points=p.points, parameters=tuple(q.name for q in p.parameters),
-                                 precision=g.variant.precision, cost=g.cost))
+        groups.append(
+            SceneGroup(
+                name=name,
+                variant=g.variant.name,
+                level=level_table.get(g.variant.level),
+                inputs=p.inputs,
+                points=p.points,
+                parameters=tuple(q.name for q in p.parameters),
+                precision=g.variant.precision,
+                cost=g.cost,
+            )
+        )
     structure = build(mech)
     used = {h for g in groups for h in g.inputs}
     inputs = tuple(h for h in structure.hinges if h in used)
     scene_plan = ScenePlan(
-        name=scene.name, source=Path(mech.path).name, scene=Path(scene.path).name,
-        inputs=inputs, points=scene.point_names,
+        name=scene.name,
+        source=Path(mech.path).name,
+        scene=Path(scene.path).name,
+        inputs=inputs,
+        points=scene.point_names,
         parameters=tuple((p.name, to_double(p.value)) for p in mech.parameters),
         fixed=tuple((h, to_double(v)) for h, v in scene.fixed),
         ignored=tuple(h for h in mech.inputs if h not in used and h not in fixed),
-        groups=tuple(groups), notes=tuple(notes(scene, choice)))
+        groups=tuple(groups),
+        notes=tuple(notes(scene, choice)),
+    )
     if "numpy" in emit:
         files[f"{scene.name}.py"] = numpy_backend.emit_scene(scene_plan).encode()
     if "c" in emit:
@@ -571,15 +727,19 @@ def generate(scene: Scene, emit: Sequence[str], progress: Callable[[str], None] 
     return files, choice
 
 
-def derive(path: str | Path, scene: str | Path, out_dir: str | Path = ".",
-           emit: Sequence[str] = ("latex", "c", "numpy"),
-           progress: Callable[[str], None] | None = None, column_width: float | None = None,
-           appendix: bool = False) -> list[Path]:
+def derive(
+    path: str | Path,
+    scene: str | Path,
+    out_dir: str | Path = ".",
+    emit: Sequence[str] = ("latex", "c", "numpy"),
+    progress: Callable[[str], None] | None = None,
+    column_width: float | None = None,
+    appendix: bool = False,
+) -> list[Path]:
     """`symkin derive FILE --scene SCENE`: load both, generate, write every file at once; the
     paths written."""
-    from .derive import write_files
     from ..model.mechanism import load as load_mechanism
+    from .derive import write_files
 
-    files, _ = generate(load(scene, load_mechanism(path)), emit, progress, column_width,
-                        appendix)
+    files, _ = generate(load(scene, load_mechanism(path)), emit, progress, column_width, appendix)
     return write_files(files, out_dir)

@@ -22,6 +22,7 @@ process compiles it once).
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 import sys
@@ -34,31 +35,40 @@ import numpy as np
 import sympy as sp
 
 from ..core import levels
-from .compiled import Compiled
 from ..core.errors import AssemblyError, InputError
 from ..model.hinges import MODELS
 from ..model.mechanism import Mechanism
+from .compiled import Compiled
 from .variation import Grid, Spread
 
 #: Samples per seeded block: the unit of reproducibility (a Dask task runs whole blocks).
 BLOCK = 256
 #: The statistics reported per point, as (JSON key, percentile or None).
-STATISTICS = (("mean", None), ("std", None), ("p50", 50.0), ("p99", 99.0), ("p999", 99.9),
-              ("max", 100.0))
+STATISTICS = (
+    ("mean", None),
+    ("std", None),
+    ("p50", 50.0),
+    ("p99", 99.0),
+    ("p999", 99.9),
+    ("max", 100.0),
+)
 
 
 @dataclass(frozen=True)
 class Scheduler:
     """Where the chunks run."""
 
-    kind: str               # "threads", "processes", "sync" or "distributed"
-    workers: int            # local workers (distributed: those of the cluster, when known)
+    kind: str  # "threads", "processes", "sync" or "distributed"
+    workers: int  # local workers (distributed: those of the cluster, when known)
     address: str = ""
 
     @property
     def text(self) -> str:
-        return self.address if self.kind == "distributed" else (
-            "sync" if self.kind == "sync" else f"{self.kind}:{self.workers}")
+        return (
+            self.address
+            if self.kind == "distributed"
+            else ("sync" if self.kind == "sync" else f"{self.kind}:{self.workers}")
+        )
 
 
 def parse_scheduler(spec: str | None) -> Scheduler:
@@ -70,9 +80,11 @@ def parse_scheduler(spec: str | None) -> Scheduler:
     if spec.startswith(("tcp://", "tls://")):
         host, sep, port = spec.split("://", 1)[1].rpartition(":")
         if not sep or not host or not port.isdigit():
-            raise InputError(f"'{spec}' is not tcp://HOST:PORT", entry="--scheduler",
-                             hint="give the address the distributed scheduler prints, e.g. "
-                                  "tcp://10.0.0.5:8786")
+            raise InputError(
+                f"'{spec}' is not tcp://HOST:PORT",
+                entry="--scheduler",
+                hint="give the address the distributed scheduler prints, e.g. tcp://10.0.0.5:8786",
+            )
         return Scheduler("distributed", 0, spec)
     kind, _, count = spec.partition(":")
     if kind == "sync" and not count:
@@ -82,8 +94,11 @@ def parse_scheduler(spec: str | None) -> Scheduler:
             return Scheduler(kind, cores)
         if count.isdigit() and int(count) > 0:
             return Scheduler(kind, int(count))
-    raise InputError(f"unknown scheduler '{spec}'", entry="--scheduler",
-                     hint="threads[:N], processes[:N], sync or tcp://HOST:PORT")
+    raise InputError(
+        f"unknown scheduler '{spec}'",
+        entry="--scheduler",
+        hint="threads[:N], processes[:N], sync or tcp://HOST:PORT",
+    )
 
 
 @dataclass(frozen=True)
@@ -92,12 +107,12 @@ class Task:
 
     evaluator: Compiled
     level: str
-    inputs: np.ndarray                              # (n, n_inputs): the grid
-    vary: tuple[tuple[str, Spread, float], ...]     # (name, spread, nominal value), file order
+    inputs: np.ndarray  # (n, n_inputs): the grid
+    vary: tuple[tuple[str, Spread, float], ...]  # (name, spread, nominal value), file order
     seed: int
     samples: int
-    checks: tuple[tuple[str, sp.Expr, bool], ...]   # (rule, expression > 0, also <= 1)
-    symbols: tuple[sp.Symbol, ...]                  # the parameters the checks read
+    checks: tuple[tuple[str, sp.Expr, bool], ...]  # (rule, expression > 0, also <= 1)
+    symbols: tuple[sp.Symbol, ...]  # the parameters the checks read
 
 
 def geometry_checks(mech: Mechanism) -> tuple[tuple[str, sp.Expr, bool], ...]:
@@ -111,15 +126,21 @@ def geometry_checks(mech: Mechanism) -> tuple[tuple[str, sp.Expr, bool], ...]:
         for key, raw in h.model_params:
             spec = MODELS[h.model].parameter(key)
             if spec is not None and spec.kind in ("number", "fraction"):
-                out.append((f"'{key}' of hinge '{h.name}'", sp.sympify(raw),
-                            spec.kind == "fraction"))
+                out.append(
+                    (f"'{key}' of hinge '{h.name}'", sp.sympify(raw), spec.kind == "fraction")
+                )
     for link in mech.links:
         on_link = [h for h in mech.hinges if link.name in h.links]
         for i, a in enumerate(on_link):
-            for b in on_link[i + 1:]:
+            for b in on_link[i + 1 :]:
                 gap2 = (a.at[0] - b.at[0]) ** 2 + (a.at[1] - b.at[1]) ** 2
-                out.append((f"the plates of '{a.name}' and '{b.name}' on link '{link.name}'",
-                            gap2 - ((a.length + b.length) / 2) ** 2, False))
+                out.append(
+                    (
+                        f"the plates of '{a.name}' and '{b.name}' on link '{link.name}'",
+                        gap2 - ((a.length + b.length) / 2) ** 2,
+                        False,
+                    )
+                )
     symbols = {p.symbol for p in mech.parameters}
     return tuple((rule, e, frac) for rule, e, frac in out if e.free_symbols & symbols)
 
@@ -137,8 +158,11 @@ def _checker(task: Task) -> Callable:
             found = _CHECKS.get(key)
             if found is None:
                 exprs = [e for _, e, _ in task.checks]
-                found = _CHECKS[key] = sp.lambdify(task.symbols, exprs, "numpy", dummify=True) \
-                    if exprs else (lambda *args: [])
+                found = _CHECKS[key] = (
+                    sp.lambdify(task.symbols, exprs, "numpy", dummify=True)
+                    if exprs
+                    else (lambda *args: [])
+                )
     return found
 
 
@@ -149,8 +173,11 @@ def sample_block(task: Task, block: int) -> tuple[np.ndarray, np.ndarray]:
     rng = np.random.default_rng([task.seed, block])
     shifts = {name: spread.offsets(rng, n, nominal) for name, spread, nominal in task.vary}
     values = task.evaluator.module.parameters(None, shifts)
-    params = np.stack([np.broadcast_to(np.asarray(v, dtype=float), (n,)) for v in values],
-                      axis=1) if values else np.zeros((n, 0))
+    params = (
+        np.stack([np.broadcast_to(np.asarray(v, dtype=float), (n,)) for v in values], axis=1)
+        if values
+        else np.zeros((n, 0))
+    )
     valid = np.isfinite(params).all(axis=1)
     if task.checks:
         names = list(task.evaluator.sources.params)
@@ -181,12 +208,13 @@ def run_blocks(task: Task, first: int, last: int) -> tuple[np.ndarray, np.ndarra
         if len(good):
             if ev.backend == "c":
                 status, buffer = ev.library.evaluate_grid(
-                    params[good], task.inputs, level_code(task.level), buffer)
+                    params[good], task.inputs, level_code(task.level), buffer
+                )
             else:
                 status, buffer = _numpy_grid(ev, params[good], task.inputs, task.level)
             dx = buffer[:, :, 4::6]
             dy = buffer[:, :, 5::6]
-            norm = np.sqrt(dx * dx + dy * dy)                 # exact IEEE operations only
+            norm = np.sqrt(dx * dx + dy * dy)  # exact IEEE operations only
             failed = (status != 0).any(axis=1)
             values = norm.max(axis=1)
             values[failed] = np.nan
@@ -201,8 +229,9 @@ def level_code(level: str) -> int:
     return levels.get(level).code
 
 
-def _numpy_grid(ev: Compiled, params: np.ndarray, inputs: np.ndarray,
-                level: str) -> tuple[np.ndarray, np.ndarray]:
+def _numpy_grid(
+    ev: Compiled, params: np.ndarray, inputs: np.ndarray, level: str
+) -> tuple[np.ndarray, np.ndarray]:
     """The numpy backend's evaluate_grid: one vectorized call per parameter set."""
     out = np.empty((len(params), len(inputs), 6 * len(ev.points)))
     status = np.empty((len(params), len(inputs)), dtype=np.intc)
@@ -219,14 +248,14 @@ class Sweep:
     level: str
     backend: str
     grid: Grid
-    vary: dict[str, str]                    # p -> spread as given
+    vary: dict[str, str]  # p -> spread as given
     samples: int
     seed: int
     scheduler: str
-    seconds: float                          # wall time of the Monte Carlo (compile excluded)
+    seconds: float  # wall time of the Monte Carlo (compile excluded)
     chunks: int
     values: np.ndarray = field(repr=False)  # (samples, n_points): worst |ΔR|, NaN where failed
-    flags: np.ndarray = field(repr=False)   # (samples,): 0 ok, 1 cannot assemble, 2 invalid
+    flags: np.ndarray = field(repr=False)  # (samples,): 0 ok, 1 cannot assemble, 2 invalid
     nominal: dict[str, float] = field(default_factory=dict)  # worst |ΔR| at nominal values
     points: tuple[str, ...] = ()
 
@@ -255,26 +284,52 @@ class Sweep:
         return out
 
     def as_json(self) -> dict:
-        return {"samples": self.samples, "failed": self.failed, "invalid": self.invalid,
-                "seed": self.seed, "scheduler": self.scheduler, "seconds": self.seconds,
-                "chunks": self.chunks, "block": BLOCK, "level": self.level,
-                "backend": self.backend, "inputs": self.grid.as_json(),
-                "configurations": int(len(self.grid.rows)), "vary": dict(self.vary),
-                "points": {p: self.statistics(p) for p in self.points}}
+        return {
+            "samples": self.samples,
+            "failed": self.failed,
+            "invalid": self.invalid,
+            "seed": self.seed,
+            "scheduler": self.scheduler,
+            "seconds": self.seconds,
+            "chunks": self.chunks,
+            "block": BLOCK,
+            "level": self.level,
+            "backend": self.backend,
+            "inputs": self.grid.as_json(),
+            "configurations": len(self.grid.rows),
+            "vary": dict(self.vary),
+            "points": {p: self.statistics(p) for p in self.points},
+        }
 
 
-def run(evaluator: Compiled, mech: Mechanism, vary: Mapping[str, Spread], grid: Grid,
-        samples: int, seed: int = 0, scheduler: Scheduler | None = None,
-        level: str = levels.DEFAULT, chunks: int | None = None,
-        progress: bool = False, client=None) -> Sweep:
+def run(
+    evaluator: Compiled,
+    mech: Mechanism,
+    vary: Mapping[str, Spread],
+    grid: Grid,
+    samples: int,
+    seed: int = 0,
+    scheduler: Scheduler | None = None,
+    level: str = levels.DEFAULT,
+    chunks: int | None = None,
+    progress: bool = False,
+    client=None,
+) -> Sweep:
     """The Monte Carlo sweep (see the module docstring); `chunks` Dask tasks (default: about
     four per worker, whole blocks each). A distributed `client` (see `connect`) may be given;
     it is closed at the end."""
     scheduler = scheduler or parse_scheduler(None)
     nominal = evaluator.defaults
-    task = Task(evaluator, level, grid.rows, tuple((p, s, nominal[p]) for p, s in vary.items()),
-                int(seed), int(samples), geometry_checks(mech),
-                tuple(p.symbol for p in mech.parameters))
+    task = Task(
+        evaluator,
+        level,
+        grid.rows,
+        tuple((p, s, nominal[p]) for p, s in vary.items()),
+        int(seed),
+        int(samples),
+        geometry_checks(mech),
+        tuple(p.symbol for p in mech.parameters),
+    )
     blocks = math.ceil(samples / BLOCK)
     if client is None and scheduler.kind == "distributed":
         client = connect(scheduler)
@@ -282,7 +337,7 @@ def run(evaluator: Compiled, mech: Mechanism, vary: Mapping[str, Spread], grid: 
         workers = scheduler.workers or (len(client.scheduler_info()["workers"]) if client else 1)
         count = max(1, min(blocks, chunks or 4 * max(1, workers)))
         edges = [round(k * blocks / count) for k in range(count + 1)]
-        spans = [(a, b) for a, b in zip(edges, edges[1:]) if b > a]
+        spans = [(a, b) for a, b in itertools.pairwise(edges) if b > a]
         start = time.perf_counter()
         if client is not None:
             parts = _distributed(client, task, spans, progress)
@@ -299,13 +354,27 @@ def run(evaluator: Compiled, mech: Mechanism, vary: Mapping[str, Spread], grid: 
     if (status == 0).all():
         for i, p in enumerate(evaluator.points):
             nominal_worst[p] = float(np.max(np.hypot(out[:, 6 * i + 4], out[:, 6 * i + 5])))
-    return Sweep(evaluator.name, level, evaluator.backend, grid,
-                 {p: s.text for p, s in vary.items()}, int(samples), int(seed), scheduler.text,
-                 seconds, len(spans), values, flags, nominal_worst, tuple(evaluator.points))
+    return Sweep(
+        evaluator.name,
+        level,
+        evaluator.backend,
+        grid,
+        {p: s.text for p, s in vary.items()},
+        int(samples),
+        int(seed),
+        scheduler.text,
+        seconds,
+        len(spans),
+        values,
+        flags,
+        nominal_worst,
+        tuple(evaluator.points),
+    )
 
 
-def _local(scheduler: Scheduler, task: Task, spans: Sequence[tuple[int, int]],
-           progress: bool) -> list:
+def _local(
+    scheduler: Scheduler, task: Task, spans: Sequence[tuple[int, int]], progress: bool
+) -> list:
     import dask
 
     jobs = [dask.delayed(run_blocks, pure=False)(task, a, b) for a, b in spans]
@@ -326,9 +395,12 @@ def connect(scheduler: Scheduler):
     try:
         return Client(scheduler.address, timeout="5s", set_as_default=False)
     except (OSError, TimeoutError) as exc:
-        raise InputError(f"cannot reach the scheduler at {scheduler.address} ({exc})",
-                         entry="--scheduler", hint="start one (dask scheduler, then dask "
-                         "worker ADDRESS on each machine) or check the address") from None
+        raise InputError(
+            f"cannot reach the scheduler at {scheduler.address} ({exc})",
+            entry="--scheduler",
+            hint="start one (dask scheduler, then dask "
+            "worker ADDRESS on each machine) or check the address",
+        ) from None
 
 
 def _distributed(client, task: Task, spans: Sequence[tuple[int, int]], progress: bool) -> list:
@@ -340,8 +412,12 @@ def _distributed(client, task: Task, spans: Sequence[tuple[int, int]], progress:
             now = sum(f.done() for f in futures)
             if now != done:
                 done = now
-                print(f"\rsymkin: sweep {done}/{len(futures)} chunks", end="", file=sys.stderr,
-                      flush=True)
+                print(
+                    f"\rsymkin: sweep {done}/{len(futures)} chunks",
+                    end="",
+                    file=sys.stderr,
+                    flush=True,
+                )
             time.sleep(0.2)
         print(file=sys.stderr)
     return client.gather(futures)
@@ -353,31 +429,41 @@ def check_grid(evaluator: Compiled, grid: Grid, level: str) -> None:
     if (status != 0).any():
         k = int(np.flatnonzero(status != 0)[0])
         at = ", ".join(f"{h}={v:g}" for h, v in zip(evaluator.inputs, grid.rows[k]))
-        raise AssemblyError(f"{evaluator.name}: with the nominal parameters the mechanism "
-                            f"cannot be evaluated at {at} ({int((status != 0).sum())} of "
-                            f"{len(status)} configurations of the input grid); narrow --input")
+        raise AssemblyError(
+            f"{evaluator.name}: with the nominal parameters the mechanism "
+            f"cannot be evaluated at {at} ({int((status != 0).sum())} of "
+            f"{len(status)} configurations of the input grid); narrow --input"
+        )
 
 
 def text(result: Sweep) -> str:
     """The summary of `symkin sweep`."""
-    ranges = ", ".join(f"{k} in [{v[0]:g}, {v[1]:g}] ({v[2]})"
-                       for k, v in result.grid.as_json().items())
-    lines = [f"{result.name}: {result.samples} samples of "
-             + ", ".join(f"{p} = {s}" for p, s in result.vary.items())
-             + f"; worst |dR| over {ranges}; level {result.level} ({result.backend})",
-             f"seed {result.seed}, scheduler {result.scheduler}, {result.chunks} chunks, "
-             f"{result.seconds:.2f} s",
-             f"failed: {result.failed}" + (f" ({result.invalid} with parameters that break the "
-                                           "file's rules)" if result.invalid else "")]
-    header = f"  {'point':<10}" + "".join(f"{k:>12}" for k in
-                                           ("nominal", "mean", "std", "p50", "p99", "p99.9",
-                                            "max"))
+    ranges = ", ".join(
+        f"{k} in [{v[0]:g}, {v[1]:g}] ({v[2]})" for k, v in result.grid.as_json().items()
+    )
+    lines = [
+        f"{result.name}: {result.samples} samples of "
+        + ", ".join(f"{p} = {s}" for p, s in result.vary.items())
+        + f"; worst |dR| over {ranges}; level {result.level} ({result.backend})",
+        f"seed {result.seed}, scheduler {result.scheduler}, {result.chunks} chunks, "
+        f"{result.seconds:.2f} s",
+        f"failed: {result.failed}"
+        + (
+            f" ({result.invalid} with parameters that break the file's rules)"
+            if result.invalid
+            else ""
+        ),
+    ]
+    header = f"  {'point':<10}" + "".join(
+        f"{k:>12}" for k in ("nominal", "mean", "std", "p50", "p99", "p99.9", "max")
+    )
     lines += ["", header]
     for p in result.points:
         s = result.statistics(p)
         cells = [s["nominal"], s["mean"], s["std"], s["p50"], s["p99"], s["p999"], s["max"]]
-        lines.append(f"  {p:<10}" + "".join(f"{c:>12.4e}" if c is not None else f"{'-':>12}"
-                                            for c in cells))
+        lines.append(
+            f"  {p:<10}" + "".join(f"{c:>12.4e}" if c is not None else f"{'-':>12}" for c in cells)
+        )
     return "\n".join(lines) + "\n"
 
 
@@ -403,7 +489,9 @@ def plot(result: Sweep, path: str) -> None:
         ax.set_xlabel(f"largest |ΔR| of {p} over the input grid")
         ax.set_ylabel("samples")
         ax.legend(loc="upper right", fontsize="small")
-    fig.suptitle(f"{result.name}: {result.samples} samples, level {result.level}"
-                 + (f", {result.failed} failed" if result.failed else ""))
+    fig.suptitle(
+        f"{result.name}: {result.samples} samples, level {result.level}"
+        + (f", {result.failed} failed" if result.failed else "")
+    )
     fig.tight_layout()
     save_figure(fig, path)

@@ -27,8 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core import levels
-from .compiled import Compiled
 from ..core.errors import AssemblyError
+from .compiled import Compiled
 from .variation import Grid, Spread
 
 
@@ -36,17 +36,22 @@ from .variation import Grid, Spread
 class Stack:
     """A linear stack-up at one configuration."""
 
-    at: dict[str, float]              # the inputs
-    nominal: float                    # the quantity at nominal parameters
+    at: dict[str, float]  # the inputs
+    nominal: float  # the quantity at nominal parameters
     worst_case: float
     rss: float
-    contributions: dict[str, float]   # p -> a_p |g_p| / worst case, largest first
-    rates: dict[str, float]           # p -> g_p
+    contributions: dict[str, float]  # p -> a_p |g_p| / worst case, largest first
+    rates: dict[str, float]  # p -> g_p
 
     def as_json(self) -> dict:
-        return {"at": dict(self.at), "nominal": self.nominal, "worst_case": self.worst_case,
-                "rss": self.rss, "contributions": dict(self.contributions),
-                "rates": dict(self.rates)}
+        return {
+            "at": dict(self.at),
+            "nominal": self.nominal,
+            "worst_case": self.worst_case,
+            "rss": self.rss,
+            "contributions": dict(self.contributions),
+            "rates": dict(self.rates),
+        }
 
 
 @dataclass(frozen=True)
@@ -54,18 +59,22 @@ class PointTolerance:
     """One point: the stack-up of |ΔR| (largest worst case and RSS over the range), of each
     component, and of the largest |ΔR| over the range."""
 
-    worst: Stack                      # at the configuration with the largest worst case
-    rss: Stack                        # at the configuration with the largest RSS
-    components: dict[str, Stack]      # "dx", "dy": largest worst case of each component
-    peak: Stack                       # at the configuration with the largest |ΔR₀|
+    worst: Stack  # at the configuration with the largest worst case
+    rss: Stack  # at the configuration with the largest RSS
+    components: dict[str, Stack]  # "dx", "dy": largest worst case of each component
+    peak: Stack  # at the configuration with the largest |ΔR₀|
 
     def as_json(self) -> dict:
-        return {"worst_case": self.worst.worst_case, "rss": self.rss.rss,
-                "contributions": dict(self.worst.contributions),
-                "at": dict(self.worst.at), "nominal": self.worst.nominal,
-                "rss_at": dict(self.rss.at),
-                "components": {k: s.as_json() for k, s in self.components.items()},
-                "peak": self.peak.as_json()}
+        return {
+            "worst_case": self.worst.worst_case,
+            "rss": self.rss.rss,
+            "contributions": dict(self.worst.contributions),
+            "at": dict(self.worst.at),
+            "nominal": self.worst.nominal,
+            "rss_at": dict(self.rss.at),
+            "components": {k: s.as_json() for k, s in self.components.items()},
+            "peak": self.peak.as_json(),
+        }
 
 
 @dataclass(frozen=True)
@@ -76,42 +85,55 @@ class Tolerance:
     level: str
     backend: str
     grid: Grid
-    vary: dict[str, float]             # p -> a_p
+    vary: dict[str, float]  # p -> a_p
     configurations: int
-    failed: int                        # configurations that could not be evaluated
+    failed: int  # configurations that could not be evaluated
     points: dict[str, PointTolerance]
 
     def as_json(self) -> dict:
-        return {"level": self.level, "backend": self.backend, "inputs": self.grid.as_json(),
-                "vary": dict(self.vary), "configurations": self.configurations,
-                "failed": self.failed,
-                "points": {p: t.as_json() for p, t in self.points.items()}}
+        return {
+            "level": self.level,
+            "backend": self.backend,
+            "inputs": self.grid.as_json(),
+            "vary": dict(self.vary),
+            "configurations": self.configurations,
+            "failed": self.failed,
+            "points": {p: t.as_json() for p, t in self.points.items()},
+        }
 
 
-def run(evaluator: Compiled, vary: Mapping[str, Spread], grid: Grid,
-        level: str = levels.DEFAULT) -> Tolerance:
+def run(
+    evaluator: Compiled, vary: Mapping[str, Spread], grid: Grid, level: str = levels.DEFAULT
+) -> Tolerance:
     """The stack-up of the ±a spreads `vary` over the configurations of `grid`."""
     x = grid.rows
     status, values, dev, _ = evaluator.sensitivity_rows(x, level)
     ok = status == 0
     if not ok.any():
-        raise AssemblyError(f"{evaluator.name}: the mechanism cannot be evaluated anywhere in "
-                            f"the input range {grid.as_json()}")
+        raise AssemblyError(
+            f"{evaluator.name}: the mechanism cannot be evaluated anywhere in "
+            f"the input range {grid.as_json()}"
+        )
     names = list(evaluator.sources.params)
     index = [names.index(p) for p in vary]
     a = np.array([s.half_width for s in vary.values()])
     inputs = list(evaluator.inputs)
     points = {}
     for i, point in enumerate(evaluator.points):
-        d0 = values[:, 6 * i + 4:6 * i + 6]                    # (n, 2)
-        rates = dev[:, i, index, :]                            # (n, n_vary, 2)
+        d0 = values[:, 6 * i + 4 : 6 * i + 6]  # (n, 2)
+        rates = dev[:, i, index, :]  # (n, n_vary, 2)
         norm = np.hypot(d0[:, 0], d0[:, 1])
         with np.errstate(invalid="ignore", divide="ignore"):
-            g = np.where(norm[:, None] > 0,
-                         (d0[:, None, 0] * rates[..., 0] + d0[:, None, 1] * rates[..., 1])
-                         / norm[:, None], np.hypot(rates[..., 0], rates[..., 1]))
-        quantities = {"norm": (norm, g), "dx": (d0[:, 0], rates[..., 0]),
-                      "dy": (d0[:, 1], rates[..., 1])}
+            g = np.where(
+                norm[:, None] > 0,
+                (d0[:, None, 0] * rates[..., 0] + d0[:, None, 1] * rates[..., 1]) / norm[:, None],
+                np.hypot(rates[..., 0], rates[..., 1]),
+            )
+        quantities = {
+            "norm": (norm, g),
+            "dx": (d0[:, 0], rates[..., 0]),
+            "dy": (d0[:, 1], rates[..., 1]),
+        }
         stacks = {}
         for key, (nominal, rate) in quantities.items():
             worst = np.where(ok, (a * np.abs(rate)).sum(axis=1), -np.inf)
@@ -122,46 +144,73 @@ def run(evaluator: Compiled, vary: Mapping[str, Spread], grid: Grid,
 
         def stack(k: int, key: str = "norm") -> Stack:
             nom, r, w, s = stacks[key]
-            share = {p: float(a[j] * abs(r[k, j]) / w[k]) if w[k] > 0 else 0.0
-                     for j, p in enumerate(vary)}
+            share = {
+                p: float(a[j] * abs(r[k, j]) / w[k]) if w[k] > 0 else 0.0
+                for j, p in enumerate(vary)
+            }
             share = dict(sorted(share.items(), key=lambda item: -item[1]))
-            return Stack({h: float(x[k, j]) for j, h in enumerate(inputs)}, float(nom[k]),
-                         float(w[k]), float(s[k]), share,
-                         {p: float(r[k, j]) for j, p in enumerate(vary)})
+            return Stack(
+                {h: float(x[k, j]) for j, h in enumerate(inputs)},
+                float(nom[k]),
+                float(w[k]),
+                float(s[k]),
+                share,
+                {p: float(r[k, j]) for j, p in enumerate(vary)},
+            )
 
         points[point] = PointTolerance(
-            worst=stack(int(np.argmax(worst))), rss=stack(int(np.argmax(rss))),
+            worst=stack(int(np.argmax(worst))),
+            rss=stack(int(np.argmax(rss))),
             components={key: stack(int(np.argmax(stacks[key][2])), key) for key in ("dx", "dy")},
-            peak=stack(peak))
-    return Tolerance(evaluator.name, level, evaluator.backend, grid,
-                     {p: s.half_width for p, s in vary.items()}, int(len(x)),
-                     int((~ok).sum()), points)
+            peak=stack(peak),
+        )
+    return Tolerance(
+        evaluator.name,
+        level,
+        evaluator.backend,
+        grid,
+        {p: s.half_width for p, s in vary.items()},
+        len(x),
+        int((~ok).sum()),
+        points,
+    )
 
 
 def text(result: Tolerance) -> str:
     """The ranked tables of `symkin tolerance`."""
-    lines = [f"{result.name}: linear stack-up of the tolerances at level {result.level} "
-             f"({result.backend}), over {result.configurations} configurations of "
-             + ", ".join(f"{k} in [{v[0]:g}, {v[1]:g}]" for k, v in result.grid.as_json().items())
-             + (f"; {result.failed} could not be evaluated" if result.failed else "")]
+    lines = [
+        f"{result.name}: linear stack-up of the tolerances at level {result.level} "
+        f"({result.backend}), over {result.configurations} configurations of "
+        + ", ".join(f"{k} in [{v[0]:g}, {v[1]:g}]" for k, v in result.grid.as_json().items())
+        + (f"; {result.failed} could not be evaluated" if result.failed else "")
+    ]
     for point, t in result.points.items():
         w = t.worst
         at = ", ".join(f"{k}={v:.4g}" for k, v in w.at.items())
-        lines += ["", f"point {point}: |dR| changes by at most {w.worst_case:.4g} (worst case) "
-                  f"or {t.rss.rss:.4g} (RSS) over the range",
-                  f"  worst case at {at}, where |dR| = {w.nominal:.4g}:",
-                  f"    {'parameter':<14} {'tolerance':>11} {'d|dR|/dp':>12} "
-                  f"{'contribution':>13} {'share':>7}"]
+        lines += [
+            "",
+            f"point {point}: |dR| changes by at most {w.worst_case:.4g} (worst case) "
+            f"or {t.rss.rss:.4g} (RSS) over the range",
+            f"  worst case at {at}, where |dR| = {w.nominal:.4g}:",
+            f"    {'parameter':<14} {'tolerance':>11} {'d|dR|/dp':>12} "
+            f"{'contribution':>13} {'share':>7}",
+        ]
         for p, share in w.contributions.items():
-            lines.append(f"    {p:<14} {'±%.4g' % result.vary[p]:>11} {w.rates[p]:>12.4e} "
-                         f"{result.vary[p] * abs(w.rates[p]):>13.4e} {100 * share:>6.1f}%")
+            lines.append(
+                f"    {p:<14} {f'±{result.vary[p]:.4g}':>11} {w.rates[p]:>12.4e} "
+                f"{result.vary[p] * abs(w.rates[p]):>13.4e} {100 * share:>6.1f}%"
+            )
         pk = t.peak
         pat = ", ".join(f"{k}={v:.4g}" for k, v in pk.at.items())
-        lines.append(f"  largest |dR| over the range: {pk.nominal:.4g} at {pat}, "
-                     f"± {pk.worst_case:.4g} (worst case), ± {pk.rss:.4g} (RSS)")
+        lines.append(
+            f"  largest |dR| over the range: {pk.nominal:.4g} at {pat}, "
+            f"± {pk.worst_case:.4g} (worst case), ± {pk.rss:.4g} (RSS)"
+        )
         for key, s in t.components.items():
-            lines.append(f"  {key}: changes by at most {s.worst_case:.4g} (worst case; RSS "
-                         f"{s.rss:.4g}) at " + ", ".join(f"{k}={v:.4g}" for k, v in s.at.items()))
+            lines.append(
+                f"  {key}: changes by at most {s.worst_case:.4g} (worst case; RSS "
+                f"{s.rss:.4g}) at " + ", ".join(f"{k}={v:.4g}" for k, v in s.at.items())
+            )
     return "\n".join(lines) + "\n"
 
 

@@ -19,11 +19,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core import levels
-from ..kinematics.analysis import Analysis
 from ..core.errors import AssemblyError, InputError
-from .evaluation import evaluate, exact_value
-from ..model.mechanism import Mechanism
+from ..kinematics.analysis import Analysis
 from ..kinematics.variants import Variant, analysis_for, default_variants
+from ..model.mechanism import Mechanism
+from .evaluation import evaluate, exact_value
 
 DEFAULT_RANGE = (-0.2, 0.2)
 TIMING_POINTS = 10_000
@@ -42,12 +42,12 @@ class Row:
     """One variant's measurements."""
 
     variant: Variant
-    errors: dict[str, float]            # point -> worst relative error of the deviation
-    time_numpy: float                   # seconds per point, vectorized
-    time_c: float | None                # seconds per point, in a C loop (float64 variants)
-    ops: int                            # operations of the generated routines (after CSE)
-    pareto_c: bool = False              # on the front of the variants timed in C
-    pareto_numpy: bool = False          # on the front of the variants timed in numpy
+    errors: dict[str, float]  # point -> worst relative error of the deviation
+    time_numpy: float  # seconds per point, vectorized
+    time_c: float | None  # seconds per point, in a C loop (float64 variants)
+    ops: int  # operations of the generated routines (after CSE)
+    pareto_c: bool = False  # on the front of the variants timed in C
+    pareto_numpy: bool = False  # on the front of the variants timed in numpy
 
     @property
     def worst(self) -> float:
@@ -63,12 +63,12 @@ class Row:
 class Tradeoff:
     ranges: dict[str, tuple[float, float]]
     samples: int
-    skipped: int                          # samples the mechanism cannot assemble
-    zero: int = 0                         # samples in the as-fabricated pose (see measure)
+    skipped: int  # samples the mechanism cannot assemble
+    zero: int = 0  # samples in the as-fabricated pose (see measure)
     rows: tuple[Row, ...] = field(default=())
-    inputs: tuple[dict, ...] = field(default=())   # the samples measured (assembled ones)
-    name: str = ""                                 # the mechanism's name
-    reference: str = REFERENCE.name                # the level the errors are measured against
+    inputs: tuple[dict, ...] = field(default=())  # the samples measured (assembled ones)
+    name: str = ""  # the mechanism's name
+    reference: str = REFERENCE.name  # the level the errors are measured against
 
     @property
     def reference_text(self) -> str:
@@ -78,35 +78,56 @@ class Tradeoff:
 
     def as_json(self) -> dict:
         return {
-            "reference": self.reference_text, "reference_level": self.reference,
+            "reference": self.reference_text,
+            "reference_level": self.reference,
             "ranges": {k: list(v) for k, v in self.ranges.items()},
-            "samples": self.samples, "skipped": self.skipped, "zero_deviation": self.zero,
+            "samples": self.samples,
+            "skipped": self.skipped,
+            "zero_deviation": self.zero,
             "inputs": list(self.inputs),
-            "variants": [{"name": r.variant.name, "level": r.variant.level,
-                          "model": r.variant.model, "precision": r.variant.precision,
-                          "worst_error": r.worst, "errors": r.errors,
-                          "time_numpy": r.time_numpy, "time_c": r.time_c, "ops": r.ops,
-                          "pareto_c": r.pareto_c, "pareto_numpy": r.pareto_numpy}
-                         for r in self.rows],
+            "variants": [
+                {
+                    "name": r.variant.name,
+                    "level": r.variant.level,
+                    "model": r.variant.model,
+                    "precision": r.variant.precision,
+                    "worst_error": r.worst,
+                    "errors": r.errors,
+                    "time_numpy": r.time_numpy,
+                    "time_c": r.time_c,
+                    "ops": r.ops,
+                    "pareto_c": r.pareto_c,
+                    "pareto_numpy": r.pareto_numpy,
+                }
+                for r in self.rows
+            ],
         }
 
 
-def parse_ranges(items: Sequence[str] | None, inputs: Sequence[str], file: str,
-                 default: tuple[float, float] | None = DEFAULT_RANGE
-                 ) -> dict[str, tuple[float, float]]:
+def parse_ranges(
+    items: Sequence[str] | None,
+    inputs: Sequence[str],
+    file: str,
+    default: tuple[float, float] | None = DEFAULT_RANGE,
+) -> dict[str, tuple[float, float]]:
     """H=LO:HI options (expressions allowed), every other input at `default` (left out when
     `default` is None)."""
-    ranges = {name: default for name in inputs}
+    ranges = dict.fromkeys(inputs, default)
     for item in items or ():
         name, sep, span = item.partition("=")
         lo, colon, hi = span.partition(":")
         if not sep or not colon or name.strip() not in ranges:
-            raise InputError(f"'{item}' is not INPUT=LO:HI for an input hinge", file=file,
-                             entry="--range", hint="inputs: " + ", ".join(inputs))
+            raise InputError(
+                f"'{item}' is not INPUT=LO:HI for an input hinge",
+                file=file,
+                entry="--range",
+                hint="inputs: " + ", ".join(inputs),
+            )
         a, b = (float(exact_value(v.strip(), "--range", file)) for v in (lo, hi))
         if not a < b:
-            raise InputError(f"empty range {a}:{b}", file=file, entry="--range",
-                             hint="give LO < HI")
+            raise InputError(
+                f"empty range {a}:{b}", file=file, entry="--range", hint="give LO < HI"
+            )
         ranges[name.strip()] = (a, b)
     return {name: span for name, span in ranges.items() if span is not None}
 
@@ -138,8 +159,7 @@ def at_rest(sample: Mapping[str, float]) -> bool:
     return all(v == 0 for v in sample.values())
 
 
-def reference(analysis: Analysis, samples: list[dict[str, float]],
-              level: str = REFERENCE.name):
+def reference(analysis: Analysis, samples: list[dict[str, float]], level: str = REFERENCE.name):
     """(kept samples, deviations) of the most faithful derivation at 30 digits (`level`)."""
     kept, devs = [], []
     for s in samples:
@@ -152,8 +172,9 @@ def reference(analysis: Analysis, samples: list[dict[str, float]],
     return kept, devs
 
 
-def worst_errors(got, want: Sequence[tuple[float, float]], samples: Sequence[Mapping]
-                 ) -> tuple[float, float]:
+def worst_errors(
+    got, want: Sequence[tuple[float, float]], samples: Sequence[Mapping]
+) -> tuple[float, float]:
     """(absolute, relative) worst error of the deviations `got` (2, n) against the reference's
     `want` at `samples`: |got - want| and that over |want|. In the as-fabricated pose the
     deviation is exactly zero: there the relative error is measured against the largest
@@ -174,27 +195,35 @@ def worst_errors(got, want: Sequence[tuple[float, float]], samples: Sequence[Map
     return absolute, relative
 
 
-def measure(mech: Mechanism, variant: Variant, samples: list[dict[str, float]],
-            ref: list[dict], with_c: bool = True) -> Row:
+def measure(
+    mech: Mechanism,
+    variant: Variant,
+    samples: list[dict[str, float]],
+    ref: list[dict],
+    with_c: bool = True,
+) -> Row:
     """Derive, emit and run one variant; its errors against `ref` and its times."""
     from ..codegen import toolchain
     from ..codegen.backends.c import backend as c_backend
     from ..codegen.backends.numpy import backend as numpy_backend
     from ..codegen.plan import plan
-    
+
     analysis = analysis_for(mech, variant)
     p = plan(analysis, levels=[variant.level], sensitivity=False)
     tag = f"{mech.name}_{variant.name.replace('/', '_')}"
-    module = toolchain.import_numpy_module(numpy_backend.emit(p, "tradeoff", variant.precision),
-                                         tag)
+    module = toolchain.import_numpy_module(
+        numpy_backend.emit(p, "tradeoff", variant.precision), tag
+    )
     names = list(module.INPUTS)
     arrays = {n: np.array([s[n] for s in samples]) for n in names}
     res = module.evaluate(arrays, variant.level)
-    errors = {point: worst_errors(res["points"][point]["deviation"], [r[point] for r in ref],
-                                  samples)[1] for point in p.points}
+    errors = {
+        point: worst_errors(res["points"][point]["deviation"], [r[point] for r in ref], samples)[1]
+        for point in p.points
+    }
     reps = max(1, TIMING_POINTS // max(1, len(samples)))
     big = {n: np.tile(arrays[n], reps) for n in names}
-    module.evaluate(big, variant.level)                     # warm up
+    module.evaluate(big, variant.level)  # warm up
     start = time.perf_counter()
     module.evaluate(big, variant.level)
     time_numpy = (time.perf_counter() - start) / len(next(iter(big.values())))
@@ -202,8 +231,9 @@ def measure(mech: Mechanism, variant: Variant, samples: list[dict[str, float]],
     if with_c and variant.precision == "float64":
         header, code = c_backend.emit(p, "tradeoff")
         flat = [s[n] for s in samples for n in names]
-        time_c = toolchain.time_per_evaluation(tag, header, code, flat, len(samples),
-                                               levels.get(variant.level).code)
+        time_c = toolchain.time_per_evaluation(
+            tag, header, code, flat, len(samples), levels.get(variant.level).code
+        )
     ops = sum(r.ops for r in p.routines.values())
     return Row(variant, errors, time_numpy, time_c, ops)
 
@@ -211,9 +241,13 @@ def measure(mech: Mechanism, variant: Variant, samples: list[dict[str, float]],
 def front(points: Sequence[tuple[float, float]]) -> list[bool]:
     """For (time, error) points: True where no other point is both faster and at least as
     accurate (the Pareto front)."""
-    return [not any(j != i and t2 <= t1 and e2 <= e1 and (t2 < t1 or e2 < e1)
-                    for j, (t2, e2) in enumerate(points))
-            for i, (t1, e1) in enumerate(points)]
+    return [
+        not any(
+            j != i and t2 <= t1 and e2 <= e1 and (t2 < t1 or e2 < e1)
+            for j, (t2, e2) in enumerate(points)
+        )
+        for i, (t1, e1) in enumerate(points)
+    ]
 
 
 def pareto(rows: list[Row]) -> list[Row]:
@@ -222,13 +256,20 @@ def pareto(rows: list[Row]) -> list[Row]:
     timed_c = [r for r in rows if r.time_c is not None]
     on_c = dict(zip(map(id, timed_c), front([(r.time_c, r.worst) for r in timed_c])))
     on_numpy = front([(r.time_numpy, r.worst) for r in rows])
-    return [dataclasses.replace(r, pareto_c=on_c.get(id(r), False), pareto_numpy=flag)
-            for r, flag in zip(rows, on_numpy)]
+    return [
+        dataclasses.replace(r, pareto_c=on_c.get(id(r), False), pareto_numpy=flag)
+        for r, flag in zip(rows, on_numpy)
+    ]
 
 
-def run(mech: Mechanism, ranges: Mapping[str, tuple[float, float]], n: int = 25,
-        variants: Sequence[Variant] | None = None, with_c: bool = True,
-        progress=None) -> Tradeoff:
+def run(
+    mech: Mechanism,
+    ranges: Mapping[str, tuple[float, float]],
+    n: int = 25,
+    variants: Sequence[Variant] | None = None,
+    with_c: bool = True,
+    progress=None,
+) -> Tradeoff:
     """The full table for `mech` over `ranges`."""
     from ..graph.structure import build
 
@@ -239,8 +280,12 @@ def run(mech: Mechanism, ranges: Mapping[str, tuple[float, float]], n: int = 25,
     say(f"reference: {len(samples)} samples at level {level.name}")
     kept, ref = reference(faithful, samples, level.name)
     if not kept:
-        raise InputError("no sample of the range can be assembled", file=mech.path,
-                         entry="--range", hint="choose a range inside the assembly range")
+        raise InputError(
+            "no sample of the range can be assembled",
+            file=mech.path,
+            entry="--range",
+            hint="choose a range inside the assembly range",
+        )
     rows = []
     for v in variants or default_variants(stiffness=level.needs_stiffness):
         say(f"variant {v.name}")
@@ -248,19 +293,34 @@ def run(mech: Mechanism, ranges: Mapping[str, tuple[float, float]], n: int = 25,
     rows = pareto(rows)
     rows.sort(key=lambda r: (r.time, r.worst, r.variant))
     zero = sum(at_rest(s) for s in kept)
-    return Tradeoff(dict(ranges), len(samples), len(samples) - len(kept), zero, tuple(rows),
-                    tuple(kept), mech.name, level.name)
+    return Tradeoff(
+        dict(ranges),
+        len(samples),
+        len(samples) - len(kept),
+        zero,
+        tuple(rows),
+        tuple(kept),
+        mech.name,
+        level.name,
+    )
 
 
 def choose(table: Tradeoff, tolerance: float, points: Sequence[str] | None = None) -> Row:
     """The cheapest float64 variant whose worst error meets `tolerance` for the points."""
-    good = [r for r in table.rows if r.variant.precision == "float64" and all(
-        e <= tolerance for p, e in r.errors.items() if points is None or p in points)]
+    good = [
+        r
+        for r in table.rows
+        if r.variant.precision == "float64"
+        and all(e <= tolerance for p, e in r.errors.items() if points is None or p in points)
+    ]
     if not good:
         best = min(table.rows, key=lambda r: r.worst)
-        raise InputError(f"no variant meets the tolerance {tolerance:g} over the range (the "
-                         f"most accurate, {best.variant.name}, reaches {best.worst:.3g})",
-                         entry="--tolerance", hint="loosen the tolerance or narrow the range")
+        raise InputError(
+            f"no variant meets the tolerance {tolerance:g} over the range (the "
+            f"most accurate, {best.variant.name}, reaches {best.worst:.3g})",
+            entry="--tolerance",
+            hint="loosen the tolerance or narrow the range",
+        )
     return min(good, key=lambda r: (r.time, r.worst))
 
 
@@ -280,47 +340,75 @@ def figure(table: Tradeoff):
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
 
-    floor = 1e-17                       # an error of exactly 0 is drawn at the floor
+    floor = 1e-17  # an error of exactly 0 is drawn at the floor
     fig = plt.figure(figsize=(11, 6))
     ax = fig.add_axes((0.07, 0.1, 0.5, 0.76))
     styles = {"C": ("o", "C0"), "numpy": ("s", "C1")}
-    markers: list[tuple[float, float, int]] = []      # (time ns, error, variant number)
+    markers: list[tuple[float, float, int]] = []  # (time ns, error, variant number)
     for number, r in enumerate(table.rows, start=1):
-        for backend, seconds, on_front in (("C", r.time_c, r.pareto_c),
-                                           ("numpy", r.time_numpy, r.pareto_numpy)):
+        for backend, seconds, on_front in (
+            ("C", r.time_c, r.pareto_c),
+            ("numpy", r.time_numpy, r.pareto_numpy),
+        ):
             if seconds is None:
                 continue
             marker, color = styles[backend]
             x, y = seconds * 1e9, max(r.worst, floor)
-            ax.loglog(x, y, marker, color=color, ms=6 if on_front else 4,
-                      alpha=1.0 if on_front else 0.35, markeredgewidth=0)
+            ax.loglog(
+                x,
+                y,
+                marker,
+                color=color,
+                ms=6 if on_front else 4,
+                alpha=1.0 if on_front else 0.35,
+                markeredgewidth=0,
+            )
             markers.append((x, y, number))
-    for backend, attr, seconds, line in (("C", "pareto_c", "time_c", "-"),
-                                         ("numpy", "pareto_numpy", "time_numpy", "--")):
-        rows = sorted((r for r in table.rows if getattr(r, attr)),
-                      key=lambda r: getattr(r, seconds))
-        ax.loglog([getattr(r, seconds) * 1e9 for r in rows], [max(r.worst, floor) for r in rows],
-                  line, color=styles[backend][1], lw=1)
+    for backend, attr, seconds, line in (
+        ("C", "pareto_c", "time_c", "-"),
+        ("numpy", "pareto_numpy", "time_numpy", "--"),
+    ):
+        rows = sorted(
+            (r for r in table.rows if getattr(r, attr)), key=lambda r: getattr(r, seconds)
+        )
+        ax.loglog(
+            [getattr(r, seconds) * 1e9 for r in rows],
+            [max(r.worst, floor) for r in rows],
+            line,
+            color=styles[backend][1],
+            lw=1,
+        )
     ax.set_xlabel("time per evaluation (ns)")
     ax.set_ylabel("worst relative error of the deviation")
     ax.grid(True, which="both", lw=0.3)
-    fig.legend(handles=[
-        Line2D([], [], marker="o", color="C0", ls="", label="C (float64)"),
-        Line2D([], [], marker="s", color="C1", ls="", label="numpy (float64, float32)"),
-        Line2D([], [], color="C0", ls="-", label="Pareto front in C"),
-        Line2D([], [], color="C1", ls="--", label="Pareto front in numpy"),
-    ], fontsize=7, loc="lower left", bbox_to_anchor=(0.6, 0.1), frameon=False)
+    fig.legend(
+        handles=[
+            Line2D([], [], marker="o", color="C0", ls="", label="C (float64)"),
+            Line2D([], [], marker="s", color="C1", ls="", label="numpy (float64, float32)"),
+            Line2D([], [], color="C0", ls="-", label="Pareto front in C"),
+            Line2D([], [], color="C1", ls="--", label="Pareto front in numpy"),
+        ],
+        fontsize=7,
+        loc="lower left",
+        bbox_to_anchor=(0.6, 0.1),
+        frameon=False,
+    )
     _number_markers(fig, ax, markers)
     span = ", ".join(f"{k} in [{a:g}, {b:g}]" for k, (a, b) in table.ranges.items())
-    fig.suptitle(f"{table.name}: speed and accuracy of every variant\n{span} rad, "
-                 f"{table.samples} samples; error against mpmath (30 digits)", fontsize=10)
+    fig.suptitle(
+        f"{table.name}: speed and accuracy of every variant\n{span} rad, "
+        f"{table.samples} samples; error against mpmath (30 digits)",
+        fontsize=10,
+    )
     width = max([len(r.variant.name) for r in table.rows] + [7])
     lines = [f"  #  {'variant':<{width}}    error     C ns  numpy ns"]
     for number, r in enumerate(table.rows, start=1):
         c = f"{r.time_c * 1e9:8.0f}" if r.time_c is not None else "       -"
         mark = ("c" if r.pareto_c else " ") + ("n" if r.pareto_numpy else " ")
-        lines.append(f"{number:3d}  {r.variant.name:<{width}} {r.worst:8.1e} {c} "
-                     f"{r.time_numpy * 1e9:8.0f} {mark}")
+        lines.append(
+            f"{number:3d}  {r.variant.name:<{width}} {r.worst:8.1e} {c} "
+            f"{r.time_numpy * 1e9:8.0f} {mark}"
+        )
     lines.append("c, n: on the Pareto front in C, in numpy")
     fig.text(0.6, 0.86, "\n".join(lines), family="monospace", fontsize=6.5, va="top")
     return fig
@@ -331,15 +419,15 @@ def _number_markers(fig, ax, markers: list[tuple[float, float, int]]) -> None:
     (greedy over eight positions); a crowded marker stays unlabelled, its variant listed."""
     from matplotlib.transforms import Bbox
 
-    fig.canvas.draw()                   # final axis limits: display positions are now known
+    fig.canvas.draw()  # final axis limits: display positions are now known
     renderer = fig.canvas.get_renderer()
-    taken = [Bbox.from_bounds(*(ax.transData.transform((x, y)) - 3), 6, 6)
-             for x, y, _ in markers]
+    taken = [Bbox.from_bounds(*(ax.transData.transform((x, y)) - 3), 6, 6) for x, y, _ in markers]
     offsets = [(5, 3), (5, -9), (-11, 3), (-11, -9), (-3, 6), (-3, -13), (9, -3), (-15, -3)]
     for x, y, number in sorted(markers, key=lambda m: (m[1], m[0])):
         for dx, dy in offsets:
-            label = ax.annotate(str(number), (x, y), xytext=(dx, dy), textcoords="offset points",
-                                fontsize=6)
+            label = ax.annotate(
+                str(number), (x, y), xytext=(dx, dy), textcoords="offset points", fontsize=6
+            )
             box = label.get_window_extent(renderer)
             if not any(box.overlaps(other) for other in taken):
                 taken.append(box)
@@ -361,5 +449,8 @@ def save_figure(fig, path: str) -> None:
 
 
 #: No dates or versions in saved figures, so the same table gives the same file.
-_PLOT_METADATA = {"png": {"Software": None}, "pdf": {"CreationDate": None, "Producer": None},
-                  "svg": {"Date": None}}
+_PLOT_METADATA = {
+    "png": {"Software": None},
+    "pdf": {"CreationDate": None, "Producer": None},
+    "svg": {"Date": None},
+}

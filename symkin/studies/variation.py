@@ -25,8 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.errors import InputError
-from .evaluation import exact_value
 from ..model.mechanism import Mechanism
+from .evaluation import exact_value
 
 KINDS = ("pm", "uniform", "normal")
 #: Grid points of an input given as LO:HI (without :N).
@@ -41,10 +41,10 @@ class Spread:
     """How one parameter varies around its nominal value."""
 
     name: str
-    kind: str             # "pm", "uniform" or "normal"
-    a: float              # pm: half-width; uniform: low; normal: mean
-    b: float              # uniform: high; normal: sigma (pm: unused)
-    text: str             # as given
+    kind: str  # "pm", "uniform" or "normal"
+    a: float  # pm: half-width; uniform: low; normal: mean
+    b: float  # uniform: high; normal: sigma (pm: unused)
+    text: str  # as given
 
     def offsets(self, rng: np.random.Generator, n: int, nominal: float) -> np.ndarray:
         """n draws of the value minus `nominal`."""
@@ -60,35 +60,63 @@ class Spread:
         return self.a
 
 
-def parse_vary(items: Sequence[str] | None, mech: Mechanism, nominal: Mapping[str, float],
-               kinds: Sequence[str] = KINDS, option: str = "--vary") -> dict[str, Spread]:
+def parse_vary(
+    items: Sequence[str] | None,
+    mech: Mechanism,
+    nominal: Mapping[str, float],
+    kinds: Sequence[str] = KINDS,
+    option: str = "--vary",
+) -> dict[str, Spread]:
     """NAME=SPREAD options, one per parameter, in file order; `nominal` gives each parameter's
     value (for A%). Bad input (exit 2) names the option and what to write instead."""
     names = [p.name for p in mech.parameters]
     example = f"{option} {names[0] if names else 'l'}=±1e-5"
     if not items:
-        raise InputError("no parameter to vary", file=mech.path, entry=option,
-                         hint=f"give at least one, e.g. {example}" if names else
-                         "the file has no [parameters]: make the dimensions to vary parameters")
+        raise InputError(
+            "no parameter to vary",
+            file=mech.path,
+            entry=option,
+            hint=f"give at least one, e.g. {example}"
+            if names
+            else "the file has no [parameters]: make the dimensions to vary parameters",
+        )
     found: dict[str, Spread] = {}
     for item in items:
         name, sep, text = item.partition("=")
         name = name.strip()
         if not sep or not text.strip():
-            raise InputError(f"'{item}' is not NAME=SPREAD", file=mech.path, entry=option,
-                             hint=f"write e.g. {example}")
+            raise InputError(
+                f"'{item}' is not NAME=SPREAD",
+                file=mech.path,
+                entry=option,
+                hint=f"write e.g. {example}",
+            )
         if name not in names:
-            raise InputError(f"'{name}' is not a parameter of the file", file=mech.path,
-                             entry=option, hint="parameters: " + (", ".join(names) or "none"))
+            raise InputError(
+                f"'{name}' is not a parameter of the file",
+                file=mech.path,
+                entry=option,
+                hint="parameters: " + (", ".join(names) or "none"),
+            )
         if name in found:
-            raise InputError(f"'{name}' is varied twice", file=mech.path, entry=option,
-                             hint="give one spread per parameter")
+            raise InputError(
+                f"'{name}' is varied twice",
+                file=mech.path,
+                entry=option,
+                hint="give one spread per parameter",
+            )
         found[name] = _spread(name, text.strip(), mech, nominal[name], option)
         if found[name].kind not in kinds:
-            allowed = " or ".join({"pm": "±A", "uniform": "uniform(LO,HI)",
-                                   "normal": "normal(MU,SIGMA)"}[k] for k in kinds)
-            raise InputError(f"'{item}': this command takes {allowed}", file=mech.path,
-                             entry=option, hint=f"write e.g. {example}")
+            allowed = " or ".join(
+                {"pm": "±A", "uniform": "uniform(LO,HI)", "normal": "normal(MU,SIGMA)"}[k]
+                for k in kinds
+            )
+            raise InputError(
+                f"'{item}': this command takes {allowed}",
+                file=mech.path,
+                entry=option,
+                hint=f"write e.g. {example}",
+            )
     return {n: found[n] for n in names if n in found}
 
 
@@ -103,32 +131,51 @@ def _spread(name: str, text: str, mech: Mechanism, nominal: float, option: str) 
 
     for prefix in ("±", "+-", "+/-"):
         if text.startswith(prefix):
-            body = text[len(prefix):].strip()
+            body = text[len(prefix) :].strip()
             percent = body.endswith("%")
             a = number(body[:-1] if percent else body)
             a = abs(nominal) * a / 100 if percent else a
             if not a > 0:
-                raise InputError(f"'{text}': the half-width must be positive", file=mech.path,
-                                 entry=entry, hint="write e.g. ±1e-5 or ±2%"
-                                 + (" (a percentage of a parameter of value 0 is 0)"
-                                    if percent and nominal == 0 else ""))
+                raise InputError(
+                    f"'{text}': the half-width must be positive",
+                    file=mech.path,
+                    entry=entry,
+                    hint="write e.g. ±1e-5 or ±2%"
+                    + (
+                        " (a percentage of a parameter of value 0 is 0)"
+                        if percent and nominal == 0
+                        else ""
+                    ),
+                )
             return Spread(name, "pm", a, 0.0, text)
     match = _CALL.match(text)
     if match is None:
-        raise InputError(f"'{text}' is not a spread", file=mech.path, entry=entry,
-                         hint="write ±A, A%, uniform(LO,HI) or normal(MU,SIGMA)")
+        raise InputError(
+            f"'{text}' is not a spread",
+            file=mech.path,
+            entry=entry,
+            hint="write ±A, A%, uniform(LO,HI) or normal(MU,SIGMA)",
+        )
     kind, args = match.group(1), _split(match.group(2))
     if len(args) != 2:
-        raise InputError(f"{kind}() takes two numbers, got {len(args)}", file=mech.path,
-                         entry=entry, hint=f"write {kind}(" + ("LO,HI)" if kind == "uniform"
-                                                               else "MU,SIGMA)"))
+        raise InputError(
+            f"{kind}() takes two numbers, got {len(args)}",
+            file=mech.path,
+            entry=entry,
+            hint=f"write {kind}(" + ("LO,HI)" if kind == "uniform" else "MU,SIGMA)"),
+        )
     a, b = (number(v) for v in args)
     if kind == "uniform" and not a < b:
-        raise InputError(f"'{text}': empty interval", file=mech.path, entry=entry,
-                         hint="give LO < HI")
+        raise InputError(
+            f"'{text}': empty interval", file=mech.path, entry=entry, hint="give LO < HI"
+        )
     if kind == "normal" and not b > 0:
-        raise InputError(f"'{text}': sigma must be positive", file=mech.path, entry=entry,
-                         hint="give a positive standard deviation")
+        raise InputError(
+            f"'{text}': sigma must be positive",
+            file=mech.path,
+            entry=entry,
+            hint="give a positive standard deviation",
+        )
     return Spread(name, kind, a, b, text)
 
 
@@ -161,11 +208,15 @@ class Grid:
         return np.stack([m.reshape(-1) for m in mesh], axis=1)
 
     def as_json(self) -> dict:
-        return {k: [float(v[0]), float(v[-1]), int(len(v))] for k, v in self.values.items()}
+        return {k: [float(v[0]), float(v[-1]), len(v)] for k, v in self.values.items()}
 
 
-def parse_grid(items: Sequence[str] | None, mech: Mechanism, option: str = "--input",
-               points: int = DEFAULT_POINTS) -> Grid:
+def parse_grid(
+    items: Sequence[str] | None,
+    mech: Mechanism,
+    option: str = "--input",
+    points: int = DEFAULT_POINTS,
+) -> Grid:
     """H=V, H=LO:HI or H=LO:HI:N options (radians, expressions allowed); an input not given
     spans DEFAULT_RANGE with `points` values."""
     inputs = mech.inputs
@@ -174,14 +225,22 @@ def parse_grid(items: Sequence[str] | None, mech: Mechanism, option: str = "--in
         name, sep, span = item.partition("=")
         name = name.strip()
         if not sep or name not in inputs:
-            raise InputError(f"'{item}' is not INPUT=LO:HI:N for an input hinge", file=mech.path,
-                             entry=option, hint="inputs: " + ", ".join(inputs))
+            raise InputError(
+                f"'{item}' is not INPUT=LO:HI:N for an input hinge",
+                file=mech.path,
+                entry=option,
+                hint="inputs: " + ", ".join(inputs),
+            )
         if name in given:
             raise InputError(f"'{name}' given twice", file=mech.path, entry=option)
         parts = span.split(":")
         if len(parts) not in (1, 2, 3) or not all(p.strip() for p in parts):
-            raise InputError(f"'{item}' is not {name}=V, {name}=LO:HI or {name}=LO:HI:N",
-                             file=mech.path, entry=option, hint=f"write e.g. {name}=-0.2:0.2:41")
+            raise InputError(
+                f"'{item}' is not {name}=V, {name}=LO:HI or {name}=LO:HI:N",
+                file=mech.path,
+                entry=option,
+                hint=f"write e.g. {name}=-0.2:0.2:41",
+            )
         ends = [float(exact_value(p.strip(), f"{option} {name}", mech.path)) for p in parts[:2]]
         count = 1 if len(parts) == 1 else points
         if len(parts) == 3:
@@ -190,17 +249,26 @@ def parse_grid(items: Sequence[str] | None, mech: Mechanism, option: str = "--in
             except ValueError:
                 count = 0
             if count < 1:
-                raise InputError(f"'{parts[2]}' is not a positive number of points",
-                                 file=mech.path, entry=f"{option} {name}",
-                                 hint=f"write e.g. {name}=-0.2:0.2:41")
+                raise InputError(
+                    f"'{parts[2]}' is not a positive number of points",
+                    file=mech.path,
+                    entry=f"{option} {name}",
+                    hint=f"write e.g. {name}=-0.2:0.2:41",
+                )
         if len(ends) == 2 and not ends[0] < ends[1]:
-            raise InputError(f"empty range {ends[0]:g}:{ends[1]:g}", file=mech.path,
-                             entry=f"{option} {name}", hint="give LO < HI")
+            raise InputError(
+                f"empty range {ends[0]:g}:{ends[1]:g}",
+                file=mech.path,
+                entry=f"{option} {name}",
+                hint="give LO < HI",
+            )
         if any(not abs(v) <= math.pi for v in ends):
-            raise InputError(f"'{item}' goes beyond a half turn", file=mech.path,
-                             entry=f"{option} {name}",
-                             hint="an input is its plate's rotation from the as-fabricated "
-                                  "pose: keep it within -pi..pi")
-        given[name] = (np.array(ends[:1]) if len(ends) == 1 else
-                       np.linspace(ends[0], ends[1], count))
+            raise InputError(
+                f"'{item}' goes beyond a half turn",
+                file=mech.path,
+                entry=f"{option} {name}",
+                hint="an input is its plate's rotation from the as-fabricated "
+                "pose: keep it within -pi..pi",
+            )
+        given[name] = np.array(ends[:1]) if len(ends) == 1 else np.linspace(ends[0], ends[1], count)
     return Grid({n: given.get(n, np.linspace(*DEFAULT_RANGE, points)) for n in inputs})

@@ -16,9 +16,9 @@ from sympy.printing.codeprinter import CodePrinter
 
 from ...core import levels
 from ...model import special
-from ..templating import render
 from ..plan import Plan, ScenePlan
 from ..routines import Routine
+from ..templating import render
 
 
 class Backend:
@@ -29,8 +29,8 @@ class Backend:
     #: of every sum for print (order="lex") costs a numeric evaluation of each term, a tenth of
     #: a large mechanism's derivation, and a compiler reads them in any order
     printer_settings: ClassVar[dict] = {"order": "none"}
-    templates: ClassVar[tuple[str, ...]]                 # paths under templates/
-    kernel_source: ClassVar[Callable[[str], str]]        # a special function's definition
+    templates: ClassVar[tuple[str, ...]]  # paths under templates/
+    kernel_source: ClassVar[Callable[[str], str]]  # a special function's definition
 
     def __init__(self) -> None:
         self.printer = self.printer_class(dict(self.printer_settings))
@@ -44,35 +44,59 @@ class Backend:
     def context(self, plan: Plan, source: str, precision: str = "float64") -> dict:
         """The template variables: the plan's fields, printed, and the solver's settings."""
         print_ = self.printer.doprint
-        return dict(
-            header=header_lines(plan, source), name=plan.name, NAME=plan.name.upper(),
-            inputs=list(plan.inputs), fixed=[(i, repr(v)) for i, v in plan.fixed],
-            pruned_inputs=list(plan.pruned_inputs), hinges=list(plan.hinges), points=list(plan.points),
-            links=list(plan.reported_links),
-            levels=plan.levels, all_levels=levels.LEVELS,
-            parameters=[{"name": p.name, "symbol": p.symbol.name, "expr": print_(p.default),
-                         "value": repr(p.value)} for p in plan.parameters],
-            limits=[(i, repr(limit)) for i, limit in plan.limits],
-            n_theta=len(plan.hinges), input_index=list(plan.input_index),
-            unknown_index=list(plan.unknown_index), k=len(plan.unknown_index),
-            n_dyads=plan.n_dyads, closed_form=plan.closed_form, needs_loops=plan.needs_loops,
-            loops_for_links=plan.loops_for_links,
+        return {
+            "header": header_lines(plan, source),
+            "name": plan.name,
+            "NAME": plan.name.upper(),
+            "inputs": list(plan.inputs),
+            "fixed": [(i, repr(v)) for i, v in plan.fixed],
+            "pruned_inputs": list(plan.pruned_inputs),
+            "hinges": list(plan.hinges),
+            "points": list(plan.points),
+            "links": list(plan.reported_links),
+            "levels": plan.levels,
+            "all_levels": levels.LEVELS,
+            "parameters": [
+                {
+                    "name": p.name,
+                    "symbol": p.symbol.name,
+                    "expr": print_(p.default),
+                    "value": repr(p.value),
+                }
+                for p in plan.parameters
+            ],
+            "limits": [(i, repr(limit)) for i, limit in plan.limits],
+            "n_theta": len(plan.hinges),
+            "input_index": list(plan.input_index),
+            "unknown_index": list(plan.unknown_index),
+            "k": len(plan.unknown_index),
+            "n_dyads": plan.n_dyads,
+            "closed_form": plan.closed_form,
+            "needs_loops": plan.needs_loops,
+            "loops_for_links": plan.loops_for_links,
             # the loop solvers are emitted: some point or the links need them, or the refined
             # statics (the loaded closure's Jacobian at its solution)
-            solves=plan.needs_loops or plan.loops_for_links or (
-                bool(plan.unknown_index) and any(lv.name == "loaded_refined"
-                                                 for lv in plan.levels)),
-            dtype=precision, solver=plan.solver, tol=plan.solver.tolerances(precision),
-            sensitivity=plan.sensitivity, chain=plan.chain,
-            stages=[lv.name for lv in plan.levels if plan.stage(lv)],
-            n_params=len(plan.parameters), n_vars=len(plan.parameters) + len(plan.inputs),
-            default_level=default_level(plan), loaded=plan.loaded,
-            loaded_levels=[lv for lv in plan.levels if lv.name in levels.LOADED],
-            refined=any(lv.name == "loaded_refined" for lv in plan.levels),
-            refined_code=levels.get("loaded_refined").code,
-            routines=[routine_data(r, self.printer) for r in plan.routines.values()],
-            kernels=[type(self).kernel_source(n) for n in special_functions(plan)],
-        )
+            "solves": plan.needs_loops
+            or plan.loops_for_links
+            or (
+                bool(plan.unknown_index) and any(lv.name == "loaded_refined" for lv in plan.levels)
+            ),
+            "dtype": precision,
+            "solver": plan.solver,
+            "tol": plan.solver.tolerances(precision),
+            "sensitivity": plan.sensitivity,
+            "chain": plan.chain,
+            "stages": [lv.name for lv in plan.levels if plan.stage(lv)],
+            "n_params": len(plan.parameters),
+            "n_vars": len(plan.parameters) + len(plan.inputs),
+            "default_level": default_level(plan),
+            "loaded": plan.loaded,
+            "loaded_levels": [lv for lv in plan.levels if lv.name in levels.LOADED],
+            "refined": any(lv.name == "loaded_refined" for lv in plan.levels),
+            "refined_code": levels.get("loaded_refined").code,
+            "routines": [routine_data(r, self.printer) for r in plan.routines.values()],
+            "kernels": [type(self).kernel_source(n) for n in special_functions(plan)],
+        }
 
 
 def default_level(plan: Plan) -> str:
@@ -90,10 +114,15 @@ def routine_data(routine: Routine, printer: CodePrinter) -> dict:
         free |= sp.sympify(e).free_symbols
     used = [bool(set(a.symbols) & free) for a in routine.arguments]
     return {
-        "name": routine.name, "doc": routine.doc, "ops": routine.ops,
+        "name": routine.name,
+        "doc": routine.doc,
+        "ops": routine.ops,
         "args": [(a.name, u) for a, u in zip(routine.arguments, used)],
-        "unpack": [(a.name, [s.name if s in free else "_" for s in a.symbols])
-                   for a, u in zip(routine.arguments, used) if u],
+        "unpack": [
+            (a.name, [s.name if s in free else "_" for s in a.symbols])
+            for a, u in zip(routine.arguments, used)
+            if u
+        ],
         "lines": [(s.name, printer.doprint(e)) for s, e in routine.assignments],
         "outputs": [printer.doprint(sp.sympify(e)) for e in routine.outputs],
     }
@@ -102,8 +131,9 @@ def routine_data(routine: Routine, printer: CodePrinter) -> dict:
 def special_functions(plan: Plan) -> list[str]:
     """Names of the special functions the routines call and the helpers those call, every
     helper before its callers (deterministic)."""
-    exprs = [e for r in plan.routines.values() for e in [*(e for _, e in r.assignments),
-                                                         *r.outputs]]
+    exprs = [
+        e for r in plan.routines.values() for e in [*(e for _, e in r.assignments), *r.outputs]
+    ]
     return special.with_dependencies(special.used_names(*exprs))
 
 
@@ -122,10 +152,16 @@ def header_lines(plan: Plan, source: str) -> list[str]:
         f"inputs {', '.join(plan.inputs)}.",
         f"Points: {', '.join(plan.points) or 'none'}; "
         f"levels: {', '.join(lv.name for lv in plan.levels)}.",
-        "Rigid solution: " + ("closed form (dyads)" if plan.closed_form
-                              else "Newton with continuation (not all groups are dyads)") + ".",
-        "Operation counts after CSE: " + ", ".join(f"{k} {r.ops}"
-                                                   for k, r in plan.routines.items()) + ".",
+        "Rigid solution: "
+        + (
+            "closed form (dyads)"
+            if plan.closed_form
+            else "Newton with continuation (not all groups are dyads)"
+        )
+        + ".",
+        "Operation counts after CSE: "
+        + ", ".join(f"{k} {r.ops}" for k, r in plan.routines.items())
+        + ".",
     ]
     lines += list(plan.notes)
     return [comment_safe(line) for line in lines]
@@ -136,25 +172,47 @@ def scene_context(plan: ScenePlan) -> dict:
     parameters and points sit in the scene's arrays."""
     inputs, points = list(plan.inputs), list(plan.points)
     params = [name for name, _ in plan.parameters]
-    header = [f"Generated by symkin from {plan.source} and the scene {plan.scene} - do not edit.",
-              f"Scene evaluator '{plan.name}': inputs {', '.join(inputs)}; points "
-              f"{', '.join(points)}; over {len(plan.groups)} evaluator(s):"]
-    header += [f"  {g.name}: variant {g.variant} ({g.precision}), points {', '.join(g.points)}, "
-               f"cost {g.cost}" for g in plan.groups]
+    header = [
+        f"Generated by symkin from {plan.source} and the scene {plan.scene} - do not edit.",
+        f"Scene evaluator '{plan.name}': inputs {', '.join(inputs)}; points "
+        f"{', '.join(points)}; over {len(plan.groups)} evaluator(s):",
+    ]
+    header += [
+        f"  {g.name}: variant {g.variant} ({g.precision}), points {', '.join(g.points)}, "
+        f"cost {g.cost}"
+        for g in plan.groups
+    ]
     if plan.fixed:
-        header.append("Fixed inputs, folded into the evaluators: "
-                      + ", ".join(f"{h} = {v!r} rad" for h, v in plan.fixed) + ".")
+        header.append(
+            "Fixed inputs, folded into the evaluators: "
+            + ", ".join(f"{h} = {v!r} rad" for h, v in plan.fixed)
+            + "."
+        )
     header += list(plan.notes)
-    return dict(
-        header=[comment_safe(line) for line in header], name=plan.name, NAME=plan.name.upper(),
-        inputs=inputs, points=points, ignored=list(plan.ignored),
-        parameters=[{"name": n, "value": repr(v)} for n, v in plan.parameters],
-        fixed=[(h, repr(v)) for h, v in plan.fixed],
-        groups=[{"name": g.name, "NAME": g.name.upper(), "variant": g.variant,
-                 "level": g.level.name, "code": g.level.code, "precision": g.precision,
-                 "inputs": list(g.inputs), "points": list(g.points),
-                 "input_at": [inputs.index(h) for h in g.inputs],
-                 "param_at": [params.index(p) for p in g.parameters],
-                 "point_at": [points.index(p) for p in g.points]} for g in plan.groups],
-        variants={p: g.variant for g in plan.groups for p in g.points},
-    )
+    return {
+        "header": [comment_safe(line) for line in header],
+        "name": plan.name,
+        "NAME": plan.name.upper(),
+        "inputs": inputs,
+        "points": points,
+        "ignored": list(plan.ignored),
+        "parameters": [{"name": n, "value": repr(v)} for n, v in plan.parameters],
+        "fixed": [(h, repr(v)) for h, v in plan.fixed],
+        "groups": [
+            {
+                "name": g.name,
+                "NAME": g.name.upper(),
+                "variant": g.variant,
+                "level": g.level.name,
+                "code": g.level.code,
+                "precision": g.precision,
+                "inputs": list(g.inputs),
+                "points": list(g.points),
+                "input_at": [inputs.index(h) for h in g.inputs],
+                "param_at": [params.index(p) for p in g.parameters],
+                "point_at": [points.index(p) for p in g.points],
+            }
+            for g in plan.groups
+        ],
+        "variants": {p: g.variant for g in plan.groups for p in g.points},
+    }

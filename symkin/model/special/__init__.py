@@ -15,17 +15,42 @@ from __future__ import annotations
 
 import sympy as sp
 
-from .elastica_force import (ELASTICA_FUNCTIONS, ELASTICA_LIMIT, ElasticaFunction, elastica_dx,
-                       elastica_dx_d1, elastica_dy, elastica_dy_d1, elastica_load, elastica_x,
-                       elastica_y)
+from .elastica_force import (
+    ELASTICA_FUNCTIONS,
+    ELASTICA_LIMIT,
+    ElasticaFunction,
+    elastica_dx,
+    elastica_dx_d1,
+    elastica_dy,
+    elastica_dy_d1,
+    elastica_load,
+    elastica_x,
+    elastica_y,
+)
 from .kernels import StableKernel, arck, cosr, sinr
 from .registry import DomainError, is_special, mpmath_namespace, used_names, with_dependencies
 
 __all__ = [
-    "DomainError", "ELASTICA_FUNCTIONS", "ELASTICA_LIMIT", "ElasticaFunction", "StableKernel",
-    "arck", "cosr", "elastica_dx", "elastica_dx_d1", "elastica_dy", "elastica_dy_d1",
-    "elastica_load", "elastica_x", "elastica_y", "expand_special", "is_special",
-    "mpmath_namespace", "sinr", "used_names", "with_dependencies",
+    "ELASTICA_FUNCTIONS",
+    "ELASTICA_LIMIT",
+    "DomainError",
+    "ElasticaFunction",
+    "StableKernel",
+    "arck",
+    "cosr",
+    "elastica_dx",
+    "elastica_dx_d1",
+    "elastica_dy",
+    "elastica_dy_d1",
+    "elastica_load",
+    "elastica_x",
+    "elastica_y",
+    "expand_special",
+    "is_special",
+    "mpmath_namespace",
+    "sinr",
+    "used_names",
+    "with_dependencies",
 ]
 
 

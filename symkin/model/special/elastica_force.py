@@ -61,9 +61,9 @@ def _elastica_a_coeffs(n: int) -> list[Fraction]:
     with ∫_0^1 (1 - v^2)^m dv = 4^m m!^2/(2m+1)!."""
     out = []
     for k in range(n):
-        a = Fraction(math.comb(2 * k, k), 4 ** k)
+        a = Fraction(math.comb(2 * k, k), 4**k)
         m = 2 * k
-        beta = Fraction(4 ** m * math.factorial(m) ** 2, math.factorial(2 * m + 1))
+        beta = Fraction(4**m * math.factorial(m) ** 2, math.factorial(2 * m + 1))
         out.append(a * beta)
     return out
 
@@ -71,15 +71,13 @@ def _elastica_a_coeffs(n: int) -> list[Fraction]:
 def _elastica_a1_series() -> list[float]:
     """Float Taylor coefficients of A1(q), as many as make the first dropped term at
     q = Q_SERIES smaller than 2^-53 times A1's lower bound 4/15."""
-    coeffs = _elastica_a_coeffs(200)[1:]        # A1(q) = sum_k A_(k+1) q^k, A1 >= 4/15
+    coeffs = _elastica_a_coeffs(200)[1:]  # A1(q) = sum_k A_(k+1) q^k, A1 >= 4/15
     bound = Fraction(4, 15) * Fraction(UNIT_ROUNDOFF)
     qt = Fraction(Q_SERIES)
     n = 1
-    while coeffs[n] * qt ** n >= bound:
+    while coeffs[n] * qt**n >= bound:
         n += 1
     return [float(c) for c in coeffs[:n]]
-
-
 
 
 #: Float Taylor coefficients of A1(q) = (A - 1)/q in q, used below Q_SERIES.
@@ -88,14 +86,18 @@ A1_SERIES = _elastica_a1_series()
 
 # -- high precision (mpmath) -----------------------------------------------------------------------
 
+
 def _elastica_mp(name: str, t, prec: int):
     """Value of elastica function `name` at mpmath real t, correct to about `prec` bits."""
     if not abs(t) < mpmath.pi / 2:
-        raise DomainError(f"elastica_force: tip angle |theta| = {mpmath.nstr(abs(t), 8)} is not "
-                          "below pi/2, the largest tip angle a transverse end force can produce")
+        raise DomainError(
+            f"elastica_force: tip angle |theta| = {mpmath.nstr(abs(t), 8)} is not "
+            "below pi/2, the largest tip angle a transverse end force can produce"
+        )
     if t == 0:
         return {"elastica_x": mpmath.mpf(1), "elastica_dy_d1": mpmath.mpf(1) / 6}.get(
-            name, mpmath.mpf(0))
+            name, mpmath.mpf(0)
+        )
     # A - 1 ~ 4q/15 and the rigid terms cancel to O(q): guard bits for that loss and for 1/c
     lost = max(0, 2 * int(-mpmath.log(abs(t), 2)) + 2) if abs(t) < 1 else 0
     near = mpmath.pi / 2 - abs(t)
@@ -126,9 +128,9 @@ def _elastica_mpmath_function(name: str):
     def impl(t):
         t = mpmath.mpmathify(t)
         return _elastica_mp(name, t, mpmath.mp.prec)
+
     impl.__name__ = name
     return impl
-
 
 
 register("carlson_rf", None, mpmath.elliprf)
@@ -138,6 +140,7 @@ register("elastica_core", None, None, ("carlson_rf", "carlson_rd"))
 
 # -- sympy classes ---------------------------------------------------------------------------------
 
+
 def _check_elastica_domain(t: sp.Expr) -> None:
     """Raise DomainError for a number t with |t| >= π/2 (or not real)."""
     if not t.is_number:
@@ -146,9 +149,11 @@ def _check_elastica_domain(t: sp.Expr) -> None:
         raise DomainError(f"elastica_force: tip angle {t} is not real")
     beyond = (sp.Abs(t) - ELASTICA_LIMIT).is_nonnegative
     if beyond:
-        raise DomainError(f"elastica_force: tip angle |theta| = {sp.N(sp.Abs(t), 8)} reaches "
-                          "pi/2, the largest tip angle a purely transverse end force can "
-                          "produce (the load would be infinite)")
+        raise DomainError(
+            f"elastica_force: tip angle |theta| = {sp.N(sp.Abs(t), 8)} reaches "
+            "pi/2, the largest tip angle a purely transverse end force can "
+            "produce (the load would be infinite)"
+        )
 
 
 def _legendre_xy(t: sp.Expr) -> tuple[sp.Expr, sp.Expr]:
@@ -168,20 +173,20 @@ def _closed_d1(name: str, t: sp.Expr, X: sp.Expr, Y: sp.Expr) -> sp.Expr:
     """The first derivatives as algebraic functions of θ, X = x/l and Y = y/l (exact, but with
     cancellation at small θ: used only for second derivatives and the Legendre rewrite)."""
     s, c = sp.sin(t), sp.cos(t)
-    q = s ** 2
+    q = s**2
     A = 1 / X
     C = A * (1 - Y / s)
     A1 = (A - 1) / q
     if name == "elastica_dx_d1":
-        return s * (sp.Rational(1, 2) - (A + C - A1) / (2 * c * A ** 2))
-    return c / 2 * (1 + q * (A + C - A1) / (c ** 2 * A)) * C / A
+        return s * (sp.Rational(1, 2) - (A + C - A1) / (2 * c * A**2))
+    return c / 2 * (1 + q * (A + C - A1) / (c**2 * A)) * C / A
 
 
 class ElasticaFunction(sp.Function):
     """Base of the tip-force elastica functions of the tip angle θ (|θ| < π/2; see module doc)."""
 
     nargs = 1
-    _parity = 1                  # +1 even, -1 odd in θ
+    _parity = 1  # +1 even, -1 odd in θ
     _at_zero = sp.S.Zero
 
     @classmethod
@@ -303,8 +308,14 @@ class elastica_dy_d1(_ElasticaD1):
     _at_zero = sp.Rational(1, 6)
 
 
-ELASTICA_FUNCTIONS = (elastica_x, elastica_y, elastica_dx, elastica_dy, elastica_dx_d1,
-                      elastica_dy_d1)
+ELASTICA_FUNCTIONS = (
+    elastica_x,
+    elastica_y,
+    elastica_dx,
+    elastica_dy,
+    elastica_dx_d1,
+    elastica_dy_d1,
+)
 for _cls in ELASTICA_FUNCTIONS:
     register(_cls.__name__, _cls, _elastica_mpmath_function(_cls.__name__), ("elastica_core",))
 
@@ -312,4 +323,3 @@ for _cls in ELASTICA_FUNCTIONS:
 def elastica_load(theta: sp.Expr) -> sp.Expr:
     """The load α = P l^2/(EI) that bends the plate to tip angle θ: 2 sin θ / X_e(θ)^2."""
     return 2 * sp.sin(theta) / elastica_x(theta) ** 2
-

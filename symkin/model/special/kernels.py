@@ -24,7 +24,7 @@ elementary formula, evaluated by the nested recurrence b <- (b - a_j)/x^2, whose
 from __future__ import annotations
 
 import math
-from functools import lru_cache
+from functools import cache
 
 import mpmath
 import sympy as sp
@@ -50,14 +50,14 @@ class StableKernel(sp.Function):
     The algorithm is language-neutral data; each backend writes it in its own language."""
 
     nargs = 1
-    threshold: float = 1.0              # |x| below: the Taylor series of float_series()
-    float_base = "sinc"                 # "sinc", "cosr1" or "sinc_minus_cos": b before the steps
-    float_subtract: tuple = ()          # exact constants a_j of the recurrence b <- (b - a_j)/x^2
-    definition = ""                     # one line of plain text, for comments in generated code
+    threshold: float = 1.0  # |x| below: the Taylor series of float_series()
+    float_base = "sinc"  # "sinc", "cosr1" or "sinc_minus_cos": b before the steps
+    float_subtract: tuple = ()  # exact constants a_j of the recurrence b <- (b - a_j)/x^2
+    definition = ""  # one line of plain text, for comments in generated code
 
     # -- exact data ------------------------------------------------------------------------------
     @classmethod
-    def coeff(cls, k: int) -> sp.Rational:      # pragma: no cover - abstract
+    def coeff(cls, k: int) -> sp.Rational:  # pragma: no cover - abstract
         raise NotImplementedError
 
     @classmethod
@@ -158,7 +158,7 @@ class StableKernel(sp.Function):
                 with mpmath.workprec(prec):
                     return +v2
             guard *= 2
-            if guard > 20000:               # pragma: no cover - cannot happen for finite x
+            if guard > 20000:  # pragma: no cover - cannot happen for finite x
                 raise ValueError(f"{cls.__name__}({x}): no convergence")
 
     @classmethod
@@ -183,6 +183,7 @@ class StableKernel(sp.Function):
                 c = _cls.coeff(0)
                 return mpmath.mpf(c.p) / c.q
             return _cls._mp_value(x, mpmath.mp.prec)
+
         impl.__name__ = cls.__name__
         return impl
 
@@ -194,7 +195,7 @@ def _kernel_min_on(cls, T: float) -> float:
     return max(c0 - rest, 0.0) or c0 * 1e-3
 
 
-@lru_cache(maxsize=None)
+@cache
 def _float_series(cls) -> tuple[list[float], int]:
     T = cls.threshold
     bound = UNIT_ROUNDOFF * _kernel_min_on(cls, T)
@@ -215,7 +216,7 @@ def _default_threshold(n: int) -> float:
     return 5.0 + 0.5 * (n - 4)
 
 
-@lru_cache(maxsize=None)
+@cache
 def sinr(n: int) -> type:
     """The kernel class sinr_n: (sin x - its Taylor polynomial through x^(2n-1)) / x^(2n+1)."""
     n = int(n)
@@ -228,8 +229,9 @@ def sinr(n: int) -> type:
 
     @classmethod
     def elementary(cls, x):
-        poly = sum(sp.Rational((-1) ** k, math.factorial(2 * k + 1)) * x ** (2 * k + 1)
-                   for k in range(n))
+        poly = sum(
+            sp.Rational((-1) ** k, math.factorial(2 * k + 1)) * x ** (2 * k + 1) for k in range(n)
+        )
         return (sp.sin(x) - poly) / x ** (2 * n + 1)
 
     @classmethod
@@ -237,24 +239,34 @@ def sinr(n: int) -> type:
         return x * (cosr(n + 1)(x) - (2 * n + 1) * sinr(n + 1)(x))
 
     name = f"sinr{n}"
-    definition = (f"sinr{n}(x) = (sin x - sum_(k<{n}) (-1)^k x^(2k+1)/(2k+1)!) / x^{2 * n + 1}"
-                  if n else "sinr0(x) = sin(x)/x")
-    cls = type(name, (StableKernel,), {
-        "coeff": coeff, "elementary": elementary, "_fdiff_expr": fdiff_expr,
-        "threshold": _SINR_THRESHOLD.get(n, _default_threshold(n)),
-        "float_base": "sinc",
-        "float_subtract": tuple(sp.Rational((-1) ** k, math.factorial(2 * k + 1))
-                                for k in range(n)),
-        "definition": definition,
-        "__doc__": definition + " (an even entire kernel; see symkin.special.kernels).",
-        "__module__": __name__,
-    })
+    definition = (
+        f"sinr{n}(x) = (sin x - sum_(k<{n}) (-1)^k x^(2k+1)/(2k+1)!) / x^{2 * n + 1}"
+        if n
+        else "sinr0(x) = sin(x)/x"
+    )
+    cls = type(
+        name,
+        (StableKernel,),
+        {
+            "coeff": coeff,
+            "elementary": elementary,
+            "_fdiff_expr": fdiff_expr,
+            "threshold": _SINR_THRESHOLD.get(n, _default_threshold(n)),
+            "float_base": "sinc",
+            "float_subtract": tuple(
+                sp.Rational((-1) ** k, math.factorial(2 * k + 1)) for k in range(n)
+            ),
+            "definition": definition,
+            "__doc__": definition + " (an even entire kernel; see symkin.special.kernels).",
+            "__module__": __name__,
+        },
+    )
     register(name, cls, cls._mpmath_function())
-    globals()[name] = cls           # importable by name (pickling, lambdify printers)
+    globals()[name] = cls  # importable by name (pickling, lambdify printers)
     return cls
 
 
-@lru_cache(maxsize=None)
+@cache
 def cosr(n: int) -> type:
     """The kernel class cosr_n: (cos x - its Taylor polynomial through x^(2n-2)) / x^(2n)."""
     n = int(n)
@@ -267,8 +279,7 @@ def cosr(n: int) -> type:
 
     @classmethod
     def elementary(cls, x):
-        poly = sum(sp.Rational((-1) ** k, math.factorial(2 * k)) * x ** (2 * k)
-                   for k in range(n))
+        poly = sum(sp.Rational((-1) ** k, math.factorial(2 * k)) * x ** (2 * k) for k in range(n))
         return (sp.cos(x) - poly) / x ** (2 * n)
 
     @classmethod
@@ -277,16 +288,23 @@ def cosr(n: int) -> type:
 
     name = f"cosr{n}"
     definition = f"cosr{n}(x) = (cos x - sum_(k<{n}) (-1)^k x^(2k)/(2k)!) / x^{2 * n}"
-    cls = type(name, (StableKernel,), {
-        "coeff": coeff, "elementary": elementary, "_fdiff_expr": fdiff_expr,
-        "threshold": _COSR_THRESHOLD.get(n, _default_threshold(n)),
-        "float_base": "cosr1",  # cosr1(x) = -2 (sin(x/2)/x)^2: no cancellation anywhere
-        "float_subtract": tuple(sp.Rational((-1) ** k, math.factorial(2 * k))
-                                for k in range(1, n)),
-        "definition": definition,
-        "__doc__": definition + " (an even entire kernel; see symkin.special.kernels).",
-        "__module__": __name__,
-    })
+    cls = type(
+        name,
+        (StableKernel,),
+        {
+            "coeff": coeff,
+            "elementary": elementary,
+            "_fdiff_expr": fdiff_expr,
+            "threshold": _COSR_THRESHOLD.get(n, _default_threshold(n)),
+            "float_base": "cosr1",  # cosr1(x) = -2 (sin(x/2)/x)^2: no cancellation anywhere
+            "float_subtract": tuple(
+                sp.Rational((-1) ** k, math.factorial(2 * k)) for k in range(1, n)
+            ),
+            "definition": definition,
+            "__doc__": definition + " (an even entire kernel; see symkin.special.kernels).",
+            "__module__": __name__,
+        },
+    )
     register(name, cls, cls._mpmath_function())
     globals()[name] = cls
     return cls
@@ -308,7 +326,7 @@ class arck(StableKernel):
 
     @classmethod
     def elementary(cls, x):
-        return (sp.sin(x) - x * sp.cos(x)) / x ** 3
+        return (sp.sin(x) - x * sp.cos(x)) / x**3
 
     @classmethod
     def _fdiff_expr(cls, x):

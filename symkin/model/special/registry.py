@@ -15,7 +15,7 @@ from collections.abc import Callable, Iterable
 import sympy as sp
 
 #: Unit roundoff of IEEE double: float series are cut where the first dropped term is below it.
-UNIT_ROUNDOFF = 2.0 ** -53
+UNIT_ROUNDOFF = 2.0**-53
 
 #: sympy classes by name (kernels are created on demand, e.g. sinr(7), and registered then).
 FUNCTIONS: dict[str, type] = {}
@@ -31,8 +31,9 @@ class DomainError(ValueError):
     A ValueError, so callers that validate user input can turn it into an InputError."""
 
 
-def register(name: str, cls: type | None, mpmath_impl: Callable | None,
-             depends: tuple[str, ...] = ()) -> None:
+def register(
+    name: str, cls: type | None, mpmath_impl: Callable | None, depends: tuple[str, ...] = ()
+) -> None:
     """Record a function (or, with `cls` None, a helper) under `name`."""
     if cls is not None:
         FUNCTIONS[name] = cls

@@ -3,8 +3,8 @@
 
 from __future__ import annotations
 
-from ...templating import render
 from ...plan import Plan, ScenePlan
+from ...templating import render
 from ..common import Backend, scene_context
 from . import kernels
 from .printer import CPrinter

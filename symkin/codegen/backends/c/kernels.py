@@ -12,8 +12,16 @@ from collections.abc import Iterable
 from functools import cache
 
 from ....model.special import registry
-from ....model.special.elastica_force import (A1_SERIES, HALF_PI_FLOAT, OUTPUTS, Q_SERIES, RD_DOC, RD_STOP,
-                                  RF_DOC, RF_STOP)
+from ....model.special.elastica_force import (
+    A1_SERIES,
+    HALF_PI_FLOAT,
+    OUTPUTS,
+    Q_SERIES,
+    RD_DOC,
+    RD_STOP,
+    RF_DOC,
+    RF_STOP,
+)
 from ....model.special.kernels import StableKernel
 from ...literals import horner, literal, recurrence
 
@@ -41,10 +49,15 @@ def _kernel(cls: type[StableKernel]) -> str:
     name = cls.__name__
     coeffs, n = cls.float_series()
     threshold = literal(cls.threshold)
-    doc = (f"{cls.definition}; Taylor series ({n} terms) for |x| < {threshold}, "
-           f"else the nested elementary formula")
-    base = {"sinc": "sin(x) / x", "cosr1": "-2.0 * (sin(0.5 * x) / x) * (sin(0.5 * x) / x)",
-            "sinc_minus_cos": "sin(x) / x - cos(x)"}[cls.float_base]
+    doc = (
+        f"{cls.definition}; Taylor series ({n} terms) for |x| < {threshold}, "
+        f"else the nested elementary formula"
+    )
+    base = {
+        "sinc": "sin(x) / x",
+        "cosr1": "-2.0 * (sin(0.5 * x) / x) * (sin(0.5 * x) / x)",
+        "sinc_minus_cos": "sin(x) / x - cos(x)",
+    }[cls.float_base]
     steps = "".join(f"    {step};\n" for step in recurrence(cls.float_subtract, "x2"))
     return (
         f"/* {name}(x): {doc}. */\n"
@@ -55,10 +68,9 @@ def _kernel(cls: type[StableKernel]) -> str:
         f"    if (fabs(x) < {threshold}) {{\n"
         f"        return {horner(coeffs, 'x2')};\n"
         "    }\n"
-        f"    b = {base};\n"
-        + steps
-        + "    return b;\n"
-        "}\n")
+        f"    b = {base};\n" + steps + "    return b;\n"
+        "}\n"
+    )
 
 
 # The float constants of the algorithms, as literals.
@@ -67,7 +79,7 @@ _QS = literal(Q_SERIES)
 _RF_Q = literal(RF_STOP)
 _RD_Q = literal(RD_STOP)
 
-_CARLSON_RF = f'''/* {RF_DOC}. */
+_CARLSON_RF = f"""/* {RF_DOC}. */
 static double symkin_carlson_rf(double x, double y, double z)
 {{
     const double x0 = x, y0 = y;
@@ -92,9 +104,9 @@ static double symkin_carlson_rf(double x, double y, double z)
     e3 = X * Y * Z;
     return (1.0 - e2 / 10.0 + e3 / 14.0 + e2 * e2 / 24.0 - 3.0 * e2 * e3 / 44.0) / sqrt(an);
 }}
-'''
+"""
 
-_CARLSON_RD = f'''/* {RD_DOC}. */
+_CARLSON_RD = f"""/* {RD_DOC}. */
 static double symkin_carlson_rd(double x, double y, double z)
 {{
     const double x0 = x, y0 = y;
@@ -124,9 +136,9 @@ static double symkin_carlson_rd(double x, double y, double z)
            - 9.0 * e2 * e3 / 52.0 + 3.0 * e5 / 26.0;
     return fac / (an * sqrt(an)) * poly + 3.0 * total;
 }}
-'''
+"""
 
-_ELASTICA_CORE = f'''/* Tip-force elastica at tip angle t (|t| < pi/2): v = (s, c, q, A, C, A1),
+_ELASTICA_CORE = f"""/* Tip-force elastica at tip angle t (|t| < pi/2): v = (s, c, q, A, C, A1),
    A = R_F(1-|s|, 1+|s|, c^2), C = c^2 R_D(1-|s|, 1+|s|, c^2)/3,
    A1 = (A - 1)/q (Taylor series for q < {_QS}). */
 static void symkin_elastica_core(double t, double *v)
@@ -142,7 +154,7 @@ static void symkin_elastica_core(double t, double *v)
     v[4] = C;
     v[5] = q < {_QS} ? {_A1} : (A - 1.0) / q;
 }}
-'''
+"""
 
 #: Each output of the elastica in terms of v = (s, c, q, A, C, A1) from symkin_elastica_core.
 _OUTPUTS = {
@@ -151,16 +163,19 @@ _OUTPUTS = {
     "elastica_dx": "v[2] * (0.5 / (1.0 + v[1]) - v[5] / v[3])",
     "elastica_dy": "v[0] * (0.5 - v[4] / v[3])",
     "elastica_dx_d1": "v[0] * (0.5 - (v[3] + v[4] - v[5]) / (2.0 * v[1] * v[3] * v[3]))",
-    "elastica_dy_d1": ("0.5 * v[1] * (1.0 + v[2] * (v[3] + v[4] - v[5]) / (v[1] * v[1] * v[3]))"
-                       " * v[4] / v[3]"),
+    "elastica_dy_d1": (
+        "0.5 * v[1] * (1.0 + v[2] * (v[3] + v[4] - v[5]) / (v[1] * v[1] * v[3])) * v[4] / v[3]"
+    ),
 }
 
 
 def _elastica_output(name: str) -> str:
-    return (f"/* Tip-force elastica: {OUTPUTS[name]}; NaN for |t| >= pi/2. */\n"
-            f"static double symkin_{name}(double t)\n{{\n    double v[6];\n"
-            f"    if (!(fabs(t) <= {literal(HALF_PI_FLOAT)})) return NAN;\n"
-            f"    symkin_elastica_core(t, v);\n    return {_OUTPUTS[name]};\n}}\n")
+    return (
+        f"/* Tip-force elastica: {OUTPUTS[name]}; NaN for |t| >= pi/2. */\n"
+        f"static double symkin_{name}(double t)\n{{\n    double v[6];\n"
+        f"    if (!(fabs(t) <= {literal(HALF_PI_FLOAT)})) return NAN;\n"
+        f"    symkin_elastica_core(t, v);\n    return {_OUTPUTS[name]};\n}}\n"
+    )
 
 
 _FIXED = {"carlson_rf": _CARLSON_RF, "carlson_rd": _CARLSON_RD, "elastica_core": _ELASTICA_CORE}

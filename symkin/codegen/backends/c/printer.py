@@ -17,23 +17,23 @@ class CPrinter(C99CodePrinter):
         super().__init__(settings)
         self.math_macros = {}
 
-    def _print_Pi(self, expr):  # noqa: N802 - sympy's printer protocol
+    def _print_Pi(self, expr):
         return "3.141592653589793238462643383279503"
 
-    def _print_Exp1(self, expr):  # noqa: N802
+    def _print_Exp1(self, expr):
         return "2.718281828459045235360287471352662"
 
-    def _print_Float(self, expr):  # noqa: N802
+    def _print_Float(self, expr):
         # literals.float_literals made every Float a double: print the shortest exact decimal.
         return repr(float(expr))
 
-    def _print_Function(self, expr):  # noqa: N802
+    def _print_Function(self, expr):
         if special.is_special(expr):
             args = ", ".join(self._print(a) for a in expr.args)
             return f"symkin_{type(expr).__name__}({args})"
         return super()._print_Function(expr)
 
-    def _print_Piecewise(self, expr):  # noqa: N802
+    def _print_Piecewise(self, expr):
         if expr.args[-1].cond != True:  # noqa: E712 - sympy's BooleanTrue
             raise ValueError("a Piecewise in generated code needs a default (True) branch")
         text = self._print(expr.args[-1].expr)

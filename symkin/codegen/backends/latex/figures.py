@@ -17,6 +17,7 @@ producer in the PDF metadata, no dependence on dict/set order.
 from __future__ import annotations
 
 import io
+import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -51,10 +52,20 @@ RC = {
 
 METADATA = {"CreationDate": None, "ModDate": None, "Producer": None, "Creator": None}
 
-FIG_WIDTH = 4.8          # inches: one-column text width (345 pt), scaled to \linewidth
+FIG_WIDTH = 4.8  # inches: one-column text width (345 pt), scaled to \linewidth
 
-LINK_COLOURS = ("#1f5fa8", "#b5651d", "#2e7d32", "#8e24aa", "#c62828", "#00838f", "#6d4c41",
-                "#ad1457", "#455a64", "#9e9d24")
+LINK_COLOURS = (
+    "#1f5fa8",
+    "#b5651d",
+    "#2e7d32",
+    "#8e24aa",
+    "#c62828",
+    "#00838f",
+    "#6d4c41",
+    "#ad1457",
+    "#455a64",
+    "#9e9d24",
+)
 
 
 def sub(k: int) -> str:
@@ -85,14 +96,15 @@ def rc_context():
 
 # -- pose ------------------------------------------------------------------------------------------
 
+
 @dataclass(frozen=True)
 class PoseData:
     """Numbers of the as-fabricated pose (floats, absolute frame)."""
 
-    links: tuple[tuple[int, str, tuple[tuple[float, float], ...]], ...]   # label, name, attachments
+    links: tuple[tuple[int, str, tuple[tuple[float, float], ...]], ...]  # label, name, attachments
     ground: int
     plates: tuple[tuple[int, str, tuple[float, float], tuple[float, float], bool], ...]
-    points: tuple[tuple[str, int, tuple[float, float]], ...]                # name, link, position
+    points: tuple[tuple[str, int, tuple[float, float]], ...]  # name, link, position
 
 
 def _hull(pts: Sequence[tuple[float, float]]) -> list[tuple[float, float]]:
@@ -162,7 +174,7 @@ class _Label:
     style: dict
     prefer: tuple[float, float]
     distance: float = 7.0
-    centred: bool = False          # the anchor itself is a candidate (text over a filled area)
+    centred: bool = False  # the anchor itself is a candidate (text over a filled area)
 
 
 def _segment_hits_box(p, q, box) -> bool:
@@ -216,24 +228,46 @@ def _place_labels(fig, ax, labels: Sequence[_Label], segments, markers) -> None:
             for rank, (dx, dy) in enumerate(_candidates(label)):
                 ha = "left" if dx > 0.5 else ("right" if dx < -0.5 else "center")
                 va = "bottom" if dy > 0.5 else ("top" if dy < -0.5 else "center")
-                text = ax.annotate(label.text, anchor, xytext=(dx, dy),
-                                   textcoords="offset points", ha=ha, va=va, parse_math=False,
-                                   **label.style)
+                text = ax.annotate(
+                    label.text,
+                    anchor,
+                    xytext=(dx, dy),
+                    textcoords="offset points",
+                    ha=ha,
+                    va=va,
+                    parse_math=False,
+                    **label.style,
+                )
                 box = text.get_window_extent(renderer).expanded(1.04, 1.12)
                 text.remove()
                 cost = rank + 0.5 * ai
                 cost += 1000 * sum(box.overlaps(b) for b in placed)
-                cost += 300 * sum(box.x0 - 3 < mx < box.x1 + 3 and box.y0 - 3 < my < box.y1 + 3
-                                  for mx, my in marks if (mx, my) != own)
+                cost += 300 * sum(
+                    box.x0 - 3 < mx < box.x1 + 3 and box.y0 - 3 < my < box.y1 + 3
+                    for mx, my in marks
+                    if (mx, my) != own
+                )
                 cost += 40 * sum(_segment_hits_box(p, q, box) for p, q in segs)
-                if not (frame.x0 <= box.x0 and box.x1 <= frame.x1 and frame.y0 <= box.y0
-                        and box.y1 <= frame.y1):
+                if not (
+                    frame.x0 <= box.x0
+                    and box.x1 <= frame.x1
+                    and frame.y0 <= box.y0
+                    and box.y1 <= frame.y1
+                ):
                     cost += 500
                 if best is None or cost < best[0]:
                     best = (cost, anchor, dx, dy, ha, va, box)
         _, anchor, dx, dy, ha, va, box = best
-        ax.annotate(label.text, anchor, xytext=(dx, dy), textcoords="offset points", ha=ha,
-                    va=va, parse_math=False, **label.style)
+        ax.annotate(
+            label.text,
+            anchor,
+            xytext=(dx, dy),
+            textcoords="offset points",
+            ha=ha,
+            va=va,
+            parse_math=False,
+            **label.style,
+        )
         placed.append(box)
 
 
@@ -272,68 +306,124 @@ def pose_figure(data: PoseData, plain, unit: str = "m") -> bytes:
             text = f"{plain(name)} (s{sub(label)})"
             if label == data.ground:
                 for x, y in att:
-                    ax.add_patch(Polygon([(x, y), (x - anchor / 2, y - anchor),
-                                          (x + anchor / 2, y - anchor)], closed=True,
-                                         facecolor="white", edgecolor="0.25", lw=0.7, zorder=2))
-                    ax.add_patch(Polygon([(x - anchor, y - anchor), (x + anchor, y - anchor),
-                                          (x + anchor, y - 1.5 * anchor),
-                                          (x - anchor, y - 1.5 * anchor)], closed=True,
-                                         facecolor="none", edgecolor="0.35", hatch="//////",
-                                         lw=0.0, zorder=2))
-                    ax.plot([x - anchor, x + anchor], [y - anchor, y - anchor], color="0.25",
-                            lw=0.8, zorder=2)
+                    ax.add_patch(
+                        Polygon(
+                            [(x, y), (x - anchor / 2, y - anchor), (x + anchor / 2, y - anchor)],
+                            closed=True,
+                            facecolor="white",
+                            edgecolor="0.25",
+                            lw=0.7,
+                            zorder=2,
+                        )
+                    )
+                    ax.add_patch(
+                        Polygon(
+                            [
+                                (x - anchor, y - anchor),
+                                (x + anchor, y - anchor),
+                                (x + anchor, y - 1.5 * anchor),
+                                (x - anchor, y - 1.5 * anchor),
+                            ],
+                            closed=True,
+                            facecolor="none",
+                            edgecolor="0.35",
+                            hatch="//////",
+                            lw=0.0,
+                            zorder=2,
+                        )
+                    )
+                    ax.plot(
+                        [x - anchor, x + anchor],
+                        [y - anchor, y - anchor],
+                        color="0.25",
+                        lw=0.8,
+                        zorder=2,
+                    )
                     segments.append(((x - anchor, y - 1.5 * anchor), (x + anchor, y - anchor)))
                     segments.append(((x - anchor, y - anchor), (x + anchor, y - 1.5 * anchor)))
                 if att:
-                    ground_label.append(_Label(
-                        [(x, y - 1.5 * anchor) for x, y in sorted(att, key=lambda p: (p[1], p[0]))],
-                        text, {"fontsize": 7, "color": "0.25", "zorder": 6}, (0.0, -1.0),
-                        distance=3.0))
+                    ground_label.append(
+                        _Label(
+                            [
+                                (x, y - 1.5 * anchor)
+                                for x, y in sorted(att, key=lambda p: (p[1], p[0]))
+                            ],
+                            text,
+                            {"fontsize": 7, "color": "0.25", "zorder": 6},
+                            (0.0, -1.0),
+                            distance=3.0,
+                        )
+                    )
                 continue
             pts = list(att) + [p for _, lk, p in data.points if lk == label]
             hull = _hull(pts)
-            style = {"fontsize": 7, "color": colour, "zorder": 6,
-                     "bbox": {"boxstyle": "round,pad=0.12", "fc": "white", "ec": "none",
-                              "alpha": 0.8}}
+            style = {
+                "fontsize": 7,
+                "color": colour,
+                "zorder": 6,
+                "bbox": {"boxstyle": "round,pad=0.12", "fc": "white", "ec": "none", "alpha": 0.8},
+            }
             if len(hull) >= 3:
-                ax.add_patch(Polygon(hull, closed=True, facecolor=colour, alpha=0.15,
-                                     edgecolor="none", zorder=2))
+                ax.add_patch(
+                    Polygon(
+                        hull, closed=True, facecolor=colour, alpha=0.15, edgecolor="none", zorder=2
+                    )
+                )
                 ring = hull + [hull[0]]
-                ax.plot([p[0] for p in ring], [p[1] for p in ring], color=colour, lw=1.4,
-                        solid_joinstyle="round", zorder=3)
-                segments += list(zip(ring[:-1], ring[1:]))
+                ax.plot(
+                    [p[0] for p in ring],
+                    [p[1] for p in ring],
+                    color=colour,
+                    lw=1.4,
+                    solid_joinstyle="round",
+                    zorder=3,
+                )
+                segments += list(itertools.pairwise(ring))
                 lx = sum(p[0] for p in hull) / len(hull)
                 ly = sum(p[1] for p in hull) / len(hull)
                 link_labels.append(_Label([(lx, ly)], text, style, away(lx, ly), centred=True))
             elif len(hull) == 2:
                 (x0, y0), (x1, y1) = hull
-                ax.plot([x0, x1], [y0, y1], color=colour, lw=1.8, solid_capstyle="round",
-                        zorder=3)
+                ax.plot([x0, x1], [y0, y1], color=colour, lw=1.8, solid_capstyle="round", zorder=3)
                 segments.append(((x0, y0), (x1, y1)))
                 nx, ny = -(y1 - y0), x1 - x0
                 norm = math.hypot(nx, ny) or 1.0
                 mx, my = (x0 + x1) / 2, (y0 + y1) / 2
                 side = 1.0 if (mx - cx) * nx + (my - cy) * ny >= 0 else -1.0
                 anchors = [(x0 + f * (x1 - x0), y0 + f * (y1 - y0)) for f in (0.5, 0.35, 0.65)]
-                link_labels.append(_Label(anchors, text, style,
-                                          (side * nx / norm, side * ny / norm)))
+                link_labels.append(
+                    _Label(anchors, text, style, (side * nx / norm, side * ny / norm))
+                )
             elif hull:
                 link_labels.append(_Label([hull[0]], text, style, away(*hull[0])))
         for a, name, p, m, is_input in data.plates:
             hx, hy = (p[0] + m[0]) / 2, (p[1] + m[1]) / 2
             ux, uy = (m[0] - p[0]) / 2 * scale, (m[1] - p[1]) / 2 * scale
-            ax.plot([hx - ux, hx + ux], [hy - uy, hy + uy], color="black", lw=3.0,
-                    solid_capstyle="butt", zorder=5)
+            ax.plot(
+                [hx - ux, hx + ux],
+                [hy - uy, hy + uy],
+                color="black",
+                lw=3.0,
+                solid_capstyle="butt",
+                zorder=5,
+            )
             markers.append((hx, hy))
             text = f"{plain(name)} (u{sub(a)}" + (", input)" if is_input else ")")
-            labels.append(_Label([(hx, hy)], text, {"fontsize": 7, "zorder": 6}, away(hx, hy),
-                                 distance=6.0))
-        for name, link, (x, y) in data.points:
+            labels.append(
+                _Label([(hx, hy)], text, {"fontsize": 7, "zorder": 6}, away(hx, hy), distance=6.0)
+            )
+        for name, _link, (x, y) in data.points:
             ax.plot([x], [y], marker="o", ms=4.0, color="#c62828", zorder=7)
             markers.append((x, y))
-            labels.append(_Label([(x, y)], plain(name),
-                                 {"fontsize": 8, "color": "#c62828", "fontweight": "bold",
-                                  "zorder": 7}, away(x, y), distance=4.0))
+            labels.append(
+                _Label(
+                    [(x, y)],
+                    plain(name),
+                    {"fontsize": 8, "color": "#c62828", "fontweight": "bold", "zorder": 7},
+                    away(x, y),
+                    distance=4.0,
+                )
+            )
         pad = 0.18 * span
         ax.set_xlim(min(xs) - 1.4 * pad, max(xs) + 1.4 * pad)
         ax.set_ylim(min(ys) - pad, max(ys) + pad)
@@ -347,6 +437,7 @@ def pose_figure(data: PoseData, plain, unit: str = "m") -> bytes:
 
 
 # -- oriented graph ----------------------------------------------------------------------------
+
 
 def tree_layout(parent: Sequence[int], n: int) -> dict[int, tuple[float, float]]:
     """Layered drawing of the skeleton tree: x = depth from s_0, leaves spread along y
@@ -371,8 +462,9 @@ def tree_layout(parent: Sequence[int], n: int) -> dict[int, tuple[float, float]]
     return pos
 
 
-def graph_figure(positions: dict[int, tuple[float, float]],
-                 arcs: Sequence[tuple[int, int, int, bool]]) -> bytes:
+def graph_figure(
+    positions: dict[int, tuple[float, float]], arcs: Sequence[tuple[int, int, int, bool]]
+) -> bytes:
     """PDF of the oriented graph: `arcs` are (a, i+, i-, is_chord)."""
     from matplotlib.patches import Circle, FancyArrowPatch
 
@@ -389,8 +481,9 @@ def graph_figure(positions: dict[int, tuple[float, float]],
         ax.set_axis_off()
         for i in labels:
             x, y = positions[i]
-            ax.add_patch(Circle((x, y), radius, facecolor="white", edgecolor="black", lw=0.7,
-                                zorder=3))
+            ax.add_patch(
+                Circle((x, y), radius, facecolor="white", edgecolor="black", lw=0.7, zorder=3)
+            )
             ax.text(x, y, f"$s_{{{i}}}$", ha="center", va="center", fontsize=8, zorder=4)
         centre = (sum(xs) / len(xs), sum(ys) / len(ys))
         seen: dict[tuple[int, int], int] = {}
@@ -405,13 +498,19 @@ def graph_figure(positions: dict[int, tuple[float, float]],
             rad = 0.0 if (k == 0 and not chord) else 0.3 * (1 if k % 2 == 0 else -1) * (1 + k // 2)
             mid = ((p[0] + q[0]) / 2, (p[1] + q[1]) / 2)
             if rad and uy * (mid[0] - centre[0]) - ux * (mid[1] - centre[1]) < 0:
-                rad = -rad          # curve away from the middle of the drawing
-            arrow = FancyArrowPatch((p[0] + radius * ux, p[1] + radius * uy),
-                                    (q[0] - radius * ux, q[1] - radius * uy),
-                                    arrowstyle="-|>,head_length=3.5,head_width=1.8",
-                                    connectionstyle=f"arc3,rad={rad}", shrinkA=0, shrinkB=0,
-                                    lw=0.8, linestyle="--" if chord else "-", color="black",
-                                    zorder=2)
+                rad = -rad  # curve away from the middle of the drawing
+            arrow = FancyArrowPatch(
+                (p[0] + radius * ux, p[1] + radius * uy),
+                (q[0] - radius * ux, q[1] - radius * uy),
+                arrowstyle="-|>,head_length=3.5,head_width=1.8",
+                connectionstyle=f"arc3,rad={rad}",
+                shrinkA=0,
+                shrinkB=0,
+                lw=0.8,
+                linestyle="--" if chord else "-",
+                color="black",
+                zorder=2,
+            )
             ax.add_patch(arrow)
             # label beside the arc's midpoint (arc3 bulges by rad * d / 2 to the right):
             # chords on the inner side of their curve, tree arcs away from the graph's centre
@@ -424,9 +523,16 @@ def graph_figure(positions: dict[int, tuple[float, float]],
             else:
                 side = 1.0 if nx * (mx - centre[0]) + ny * (my - centre[1]) >= 0 else -1.0
             off = 0.17 * side
-            ax.text(mx + off * nx, my + off * ny, f"$u_{{{a}}}$", ha="center", va="center",
-                    fontsize=7, zorder=4,
-                    bbox={"boxstyle": "round,pad=0.05", "fc": "white", "ec": "none"})
+            ax.text(
+                mx + off * nx,
+                my + off * ny,
+                f"$u_{{{a}}}$",
+                ha="center",
+                va="center",
+                fontsize=7,
+                zorder=4,
+                bbox={"boxstyle": "round,pad=0.05", "fc": "white", "ec": "none"},
+            )
         ax.set_xlim(min(xs) - 0.5, max(xs) + 0.5)
         ax.set_ylim(min(ys) - 0.5, max(ys) + 0.5)
         ax.set_aspect("equal", adjustable="box")
@@ -435,27 +541,39 @@ def graph_figure(positions: dict[int, tuple[float, float]],
 
 # -- deviation over an input range ---------------------------------------------------------
 
+
 @dataclass(frozen=True)
 class Sweep:
     """|ΔR| of the points over t (every input = t), per level; NaN where not assembled."""
 
     t: np.ndarray
     ok: np.ndarray
-    magnitude: dict[str, dict[str, np.ndarray]]      # point -> level -> |ΔR|
-    deviation: dict[str, dict[str, np.ndarray]]      # point -> level -> (2, N)
+    magnitude: dict[str, dict[str, np.ndarray]]  # point -> level -> |ΔR|
+    deviation: dict[str, dict[str, np.ndarray]]  # point -> level -> (2, N)
     #: the physical reference at a few samples: (their indices in t, point -> (2, K) deviation),
     #: NaN where it could not be solved; None without stiffness data
     reference: tuple[np.ndarray, dict[str, np.ndarray]] | None = None
 
 
 #: Colour and dash of each level's curve, by level code (fixed, so figures are deterministic).
-LEVEL_STYLES = (("#c62828", "--"), ("#1f5fa8", "-."), ("black", "-"), ("#2e7d32", ":"),
-                ("#8e24aa", (0, (5, 1, 1, 1))), ("#ef6c00", (0, (3, 1))))
+LEVEL_STYLES = (
+    ("#c62828", "--"),
+    ("#1f5fa8", "-."),
+    ("black", "-"),
+    ("#2e7d32", ":"),
+    ("#8e24aa", (0, (5, 1, 1, 1))),
+    ("#ef6c00", (0, (3, 1))),
+)
 
 
 #: The physical reference's points: open circles in the colour of the level `equilibrium`.
-REFERENCE_MARKER = {"marker": "o", "markersize": 3.5, "markerfacecolor": "none",
-                    "markeredgecolor": LEVEL_STYLES[4][0], "markeredgewidth": 0.8}
+REFERENCE_MARKER = {
+    "marker": "o",
+    "markersize": 3.5,
+    "markerfacecolor": "none",
+    "markeredgecolor": LEVEL_STYLES[4][0],
+    "markeredgewidth": 0.8,
+}
 
 
 def _style(level) -> dict:
@@ -493,13 +611,26 @@ def moves(sweep: Sweep, point: str, rel: float = 1e-9) -> bool:
 def differs(sweep: Sweep, points: Sequence[str], levels: Sequence[Level]) -> bool:
     """Whether some level differs from the exact one for some point (then it is plotted)."""
     names = [lv.name for lv in levels]
-    return "exact" in names and len(names) > 1 and any(
-        np.nanmax(np.abs(sweep.deviation[p][lv] - sweep.deviation[p]["exact"]),
-                  initial=0.0) > 0 for p in points for lv in names)
+    return (
+        "exact" in names
+        and len(names) > 1
+        and any(
+            np.nanmax(np.abs(sweep.deviation[p][lv] - sweep.deviation[p]["exact"]), initial=0.0) > 0
+            for p in points
+            for lv in names
+        )
+    )
 
 
-def deviation_figure(sweep: Sweep, points: Sequence[str], levels: Sequence[Level], plain,
-                     xlim: tuple[float, float], xlabel: str, length: str = "m") -> bytes:
+def deviation_figure(
+    sweep: Sweep,
+    points: Sequence[str],
+    levels: Sequence[Level],
+    plain,
+    xlim: tuple[float, float],
+    xlabel: str,
+    length: str = "m",
+) -> bytes:
     """PDF with one row per point: |ΔR| at every level, and |ΔR_level - ΔR_exact| when some
     level differs from the exact one; the physical reference's points (`equilibrium`) as
     markers on both, where the sweep has them."""
@@ -518,38 +649,66 @@ def deviation_figure(sweep: Sweep, points: Sequence[str], levels: Sequence[Level
     step = float(t[1] - t[0]) if len(t) > 1 else 0.0
     with rc_context():
         fig = _figure(FIG_WIDTH, height)
-        grid = fig.add_gridspec(rows, ncols, left=0.1, right=0.98,
-                                bottom=(0.5 + legend) / height + 0.06,
-                                top=1 - 0.28 / height, wspace=0.3, hspace=0.55)
+        grid = fig.add_gridspec(
+            rows,
+            ncols,
+            left=0.1,
+            right=0.98,
+            bottom=(0.5 + legend) / height + 0.06,
+            top=1 - 0.28 / height,
+            wspace=0.3,
+            hspace=0.55,
+        )
         handles = []
         for r, name in enumerate(points):
             axes = [fig.add_subplot(grid[r, c]) for c in range(ncols)]
             for ax in axes:
                 for i, j in _runs(~sweep.ok):
-                    ax.axvspan(t[i] - step / 2, t[j] + step / 2, facecolor="0.85",
-                               edgecolor="0.6", hatch="xx", lw=0.0, zorder=0)
+                    ax.axvspan(
+                        t[i] - step / 2,
+                        t[j] + step / 2,
+                        facecolor="0.85",
+                        edgecolor="0.6",
+                        hatch="xx",
+                        lw=0.0,
+                        zorder=0,
+                    )
                 ax.set_xlim(*xlim)
                 ax.grid(True, lw=0.3, color="0.9")
                 ax.tick_params(direction="in", which="both")
-            peak = max([float(np.nanmax(sweep.magnitude[name][lv.name])) for lv in levels
-                        if np.isfinite(sweep.magnitude[name][lv.name]).any()] + [0.0])
-            power = int(math.floor(math.log10(peak))) if peak > 0 else 0
-            unit = 10.0 ** power
+            peak = max(
+                [
+                    float(np.nanmax(sweep.magnitude[name][lv.name]))
+                    for lv in levels
+                    if np.isfinite(sweep.magnitude[name][lv.name]).any()
+                ]
+                + [0.0]
+            )
+            power = math.floor(math.log10(peak)) if peak > 0 else 0
+            unit = 10.0**power
             for level in levels:
                 st = _style(level)
-                line, = axes[0].plot(t, sweep.magnitude[name][level.name] / unit, color=st["color"],
-                                     ls=st["ls"], label=st["label"])
+                (line,) = axes[0].plot(
+                    t,
+                    sweep.magnitude[name][level.name] / unit,
+                    color=st["color"],
+                    ls=st["ls"],
+                    label=st["label"],
+                )
                 if r == 0:
                     handles.append(line)
             if sweep.reference is not None:
                 at, ref = sweep.reference[0], sweep.reference[1][name]
                 ref_t = t[at]
                 axes[0].plot(ref_t, np.hypot(*ref) / unit, ls="none", **REFERENCE_MARKER)
-            axes[0].set_ylabel(r"$|\Delta R|$" + (f" ({length})" if power == 0 else
-                                                 rf" ($10^{{{power}}}$ {length})"))
+            axes[0].set_ylabel(
+                r"$|\Delta R|$"
+                + (f" ({length})" if power == 0 else rf" ($10^{{{power}}}$ {length})")
+            )
             axes[0].set_ylim(bottom=0)
-            axes[0].set_title(plain(name), loc="left", parse_math=False, fontsize=8,
-                              fontweight="bold")
+            axes[0].set_title(
+                plain(name), loc="left", parse_math=False, fontsize=8, fontweight="bold"
+            )
             if compare:
                 exact = sweep.deviation[name]["exact"]
                 for level in levels:
@@ -562,12 +721,16 @@ def deviation_figure(sweep: Sweep, points: Sequence[str], levels: Sequence[Level
                 if sweep.reference is not None:
                     # the physics' own distance from the kinematic exact level, at its points
                     gap = np.hypot(*(ref - exact[:, at]))
-                    axes[1].semilogy(ref_t, np.where(gap > 0, gap, np.nan), ls="none",
-                                     **REFERENCE_MARKER)
+                    axes[1].semilogy(
+                        ref_t, np.where(gap > 0, gap, np.nan), ls="none", **REFERENCE_MARKER
+                    )
                 axes[1].set_ylabel(r"$|\Delta R - \Delta R_{\mathrm{exact}}|$" + f" ({length})")
                 # nine decades below the largest difference: the dip at t = 0 goes to zero
-                finite = [float(np.nanmax(line.get_ydata())) for line in axes[1].get_lines()
-                          if np.isfinite(line.get_ydata()).any()]
+                finite = [
+                    float(np.nanmax(line.get_ydata()))
+                    for line in axes[1].get_lines()
+                    if np.isfinite(line.get_ydata()).any()
+                ]
                 if finite and max(finite) > 0:
                     top = 10.0 ** math.ceil(math.log10(max(finite)) + 0.3)
                     axes[1].set_ylim(top * 1e-9, top)
@@ -575,11 +738,18 @@ def deviation_figure(sweep: Sweep, points: Sequence[str], levels: Sequence[Level
                 for ax in axes:
                     ax.set_xlabel(xlabel)
         if sweep.reference is not None:
-            handles.append(Line2D([], [], ls="none", label="equilibrium (elastica)",
-                                  **REFERENCE_MARKER))
+            handles.append(
+                Line2D([], [], ls="none", label="equilibrium (elastica)", **REFERENCE_MARKER)
+            )
         if not sweep.ok.all():
-            handles.append(Patch(facecolor="0.85", edgecolor="0.6", hatch="xx",
-                                 label="cannot be assembled"))
-        fig.legend(handles=handles, loc="lower center", ncol=legend_cols, frameon=False,
-                   bbox_to_anchor=(0.5, 0.0))
+            handles.append(
+                Patch(facecolor="0.85", edgecolor="0.6", hatch="xx", label="cannot be assembled")
+            )
+        fig.legend(
+            handles=handles,
+            loc="lower center",
+            ncol=legend_cols,
+            frameon=False,
+            bbox_to_anchor=(0.5, 0.0),
+        )
         return _render(fig)

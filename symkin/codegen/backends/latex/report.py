@@ -27,18 +27,28 @@ import jinja2
 import numpy as np
 import sympy as sp
 
-from ... import templating
 from ....core import vectors as V
 from ....core.errors import SymkinError
 from ....physics.stiffness import modulus
+from ... import templating
 from ...plan import Plan
 from ..common import header_lines
-from .figures import (FIG_WIDTH, PoseData, Sweep, deviation_figure, differs, moves,
-                             graph_figure, plate_scale, pose_figure, pose_size, tree_layout)
-from .text import (LINE_WIDTH_EM, Tex, align_lines, escape_latex, math_name, pack,
-                         plain_name, width)
+from .figures import (
+    FIG_WIDTH,
+    PoseData,
+    Sweep,
+    deviation_figure,
+    differs,
+    graph_figure,
+    moves,
+    plate_scale,
+    pose_figure,
+    pose_size,
+    tree_layout,
+)
+from .text import LINE_WIDTH_EM, Tex, align_lines, escape_latex, math_name, pack, plain_name, width
 
-__all__ = ["emit", "escape_latex", "environment", "SWEEP_RANGE", "SWEEP_SAMPLES"]
+__all__ = ["SWEEP_RANGE", "SWEEP_SAMPLES", "emit", "environment", "escape_latex"]
 
 #: Default input range of the deviation plot: every input equal to t, |t| <= SWEEP_RANGE (rad).
 SWEEP_RANGE = 0.3
@@ -60,6 +70,7 @@ UNIT_NAMES = {"m": "metres", "mm": "millimetres", "um": "micrometres"}
 
 # -- Jinja environment with LaTeX-friendly delimiters (SymForce style) ----------------------------
 
+
 @cache
 def environment() -> jinja2.Environment:
     r"""The shared strict environment with the ``\VAR{...}``/``\BLOCK{...}`` delimiters, plus
@@ -70,7 +81,9 @@ def environment() -> jinja2.Environment:
     return env
 
 
-# -- small formatting helpers -----------------------------------------------------------------------
+# -- small formatting helpers
+# -----------------------------------------------------------------------
+
 
 def sci(x: float, digits: int = 3) -> str:
     r"""A float as LaTeX math text: ``1.23\times 10^{-6}`` (or plain for moderate magnitudes)."""
@@ -78,10 +91,10 @@ def sci(x: float, digits: int = 3) -> str:
         return r"\text{--}"
     if x == 0:
         return "0"
-    exponent = int(math.floor(math.log10(abs(x))))
+    exponent = math.floor(math.log10(abs(x)))
     if -2 <= exponent <= 3:
         return f"{x:.{max(digits - 1 - exponent, 0)}f}"
-    mantissa = x / 10 ** exponent
+    mantissa = x / 10**exponent
     text = f"{mantissa:.{digits - 1}f}"
     if text.startswith(("10.", "-10.")):
         mantissa /= 10
@@ -105,7 +118,7 @@ def _num(expr: sp.Expr, defaults: dict) -> float:
 
 
 def _chunks(items: list, size: int) -> list[list]:
-    return [items[k:k + size] for k in range(0, len(items), size)] or [[]]
+    return [items[k : k + size] for k in range(0, len(items), size)] or [[]]
 
 
 def _rotation_tex(tex: Tex, angle: sp.Expr) -> str:
@@ -124,6 +137,7 @@ def _dz_sum(signs) -> sp.Expr:
 
 
 # -- the report ----------------------------------------------------------------------------------
+
 
 class Report:
     """Builds the template context of one plan."""
@@ -155,28 +169,72 @@ class Report:
         for d in sol.dyads:
             h1, h2, h3 = d.hinges
             roots = (min(d.bodies[0]), min(d.bodies[1]))
-            suffix = {"ax": rf"X_{{{h1}}}", "ay": rf"Y_{{{h1}}}", "cx": rf"X_{{{h3}}}",
-                      "cy": rf"Y_{{{h3}}}", "bx": rf"X_{{{h2}}}", "by": rf"Y_{{{h2}}}",
-                      "dsq": rf"D_{{{d.index}}}", "along": rf"\lambda_{{{d.index}}}",
-                      "reach": rf"\rho_{{{d.index}}}", "across": rf"\eta_{{{d.index}}}",
-                      "margin": rf"\mu_{{{d.index}}}", "phi1": rf"\varphi_{{{roots[0]}}}",
-                      "phi2": rf"\varphi_{{{roots[1]}}}"}
+            suffix = {
+                "ax": rf"X_{{{h1}}}",
+                "ay": rf"Y_{{{h1}}}",
+                "cx": rf"X_{{{h3}}}",
+                "cy": rf"Y_{{{h3}}}",
+                "bx": rf"X_{{{h2}}}",
+                "by": rf"Y_{{{h2}}}",
+                "dsq": rf"D_{{{d.index}}}",
+                "along": rf"\lambda_{{{d.index}}}",
+                "reach": rf"\rho_{{{d.index}}}",
+                "across": rf"\eta_{{{d.index}}}",
+                "margin": rf"\mu_{{{d.index}}}",
+                "phi1": rf"\varphi_{{{roots[0]}}}",
+                "phi2": rf"\varphi_{{{roots[1]}}}",
+            }
             for symbol, _ in sol.assignments:
                 prefix = f"dyad{d.index}_"
-                if symbol.name.startswith(prefix) and symbol.name[len(prefix):] in suffix:
-                    names[symbol] = suffix[symbol.name[len(prefix):]]
+                if symbol.name.startswith(prefix) and symbol.name[len(prefix) :] in suffix:
+                    names[symbol] = suffix[symbol.name[len(prefix) :]]
         # Parameters print as sympy prints their names (l, gamma_B -> \gamma_{B}) unless the
         # name is unusual or would look like one of the report's own symbols.
-        reserved = set(names.values()) | {r"\theta", r"\delta", "r", r"\beta", "a", "X", "Y",
-                                           "S", "C", "D"}
+        reserved = set(names.values()) | {
+            r"\theta",
+            r"\delta",
+            "r",
+            r"\beta",
+            "a",
+            "X",
+            "Y",
+            "S",
+            "C",
+            "D",
+        }
         printer = Tex()
         for p in self.mech.parameters:
             default = printer(p.symbol)
-            simple = (p.name[0].isalpha() and p.name.count("_") <= 1
-                      and not p.name.endswith("_") and p.name.replace("_", "").isalnum())
-            if not simple or default in reserved or default.split("_")[0] in (
-                    r"\theta", r"\delta", "r", r"\beta", "a", "X", "Y", "D", r"\varphi",
-                    r"\lambda", r"\rho", r"\eta", r"\mu", "k", r"\Lambda", r"\chi", "Q"):
+            simple = (
+                p.name[0].isalpha()
+                and p.name.count("_") <= 1
+                and not p.name.endswith("_")
+                and p.name.replace("_", "").isalnum()
+            )
+            if (
+                not simple
+                or default in reserved
+                or default.split("_")[0]
+                in (
+                    r"\theta",
+                    r"\delta",
+                    "r",
+                    r"\beta",
+                    "a",
+                    "X",
+                    "Y",
+                    "D",
+                    r"\varphi",
+                    r"\lambda",
+                    r"\rho",
+                    r"\eta",
+                    r"\mu",
+                    "k",
+                    r"\Lambda",
+                    r"\chi",
+                    "Q",
+                )
+            ):
                 names[p.symbol] = r"\text{\itshape " + escape_latex(p.name) + "}"
         return names
 
@@ -198,17 +256,22 @@ class Report:
             "source": escape_latex(self.source),
             "figure_pose": f"{name}-pose.pdf",
             "figure_graph": f"{name}-graph.pdf",
-            "n": s.n, "m": s.m, "loops": s.m - s.n, "mobility": mech.mobility,
+            "n": s.n,
+            "m": s.m,
+            "loops": s.m - s.n,
+            "mobility": mech.mobility,
             "inputs": [escape_latex(n) for n in mech.inputs],
             "input_labels": list(self.d.inputs),
             "point_names": [escape_latex(p) for p in self.plan.points],
             "levels": [lv.title for lv in self.plan.levels],
             "notes": [escape_latex(n.strip()) for n in self.plan.notes],
             "four_bar": s.n == 3 and s.m == 4,
-            "unit": TEX_UNITS[mech.units], "unit_name": UNIT_NAMES[mech.units],
+            "unit": TEX_UNITS[mech.units],
+            "unit_name": UNIT_NAMES[mech.units],
             "relabeled": s.relabeled,
-            "links": [{"label": i, "name": self.link_name(i),
-                       "ground": i == 0} for i in range(s.n + 1)],
+            "links": [
+                {"label": i, "name": self.link_name(i), "ground": i == 0} for i in range(s.n + 1)
+            ],
             "parameters": self.parameters(),
         }
         ctx["hinges"] = self.hinge_rows()
@@ -237,8 +300,14 @@ class Report:
             value = gnum(_num(p.value, {}))
             expr = value if sp.sympify(p.expr).is_number else self.tex(p.expr)
             symbol = self.tex(p.symbol)
-            rows.append({"name": escape_latex(p.name) if symbol != p.name else "",
-                         "symbol": symbol, "expr": expr, "value": value})
+            rows.append(
+                {
+                    "name": escape_latex(p.name) if symbol != p.name else "",
+                    "symbol": symbol,
+                    "expr": expr,
+                    "value": value,
+                }
+            )
         return rows
 
     def hinge_rows(self) -> list[dict]:
@@ -246,11 +315,17 @@ class Report:
         rows = []
         for a in range(1, s.m + 1):
             h = self.d.hinges[a]
-            rows.append({
-                "a": a, "name": self.hinge_name(a),
-                "plus": s.i_plus[a - 1], "minus": s.i_minus[a - 1],
-                "chord": a > s.n, "input": h.is_input, "sign": h.sign,
-            })
+            rows.append(
+                {
+                    "a": a,
+                    "name": self.hinge_name(a),
+                    "plus": s.i_plus[a - 1],
+                    "minus": s.i_minus[a - 1],
+                    "chord": a > s.n,
+                    "input": h.is_input,
+                    "sign": h.sign,
+                }
+            )
         return rows
 
     def _int_matrix(self, lhs: str, rows: list[list[int]], col0: int = 1) -> list[str]:
@@ -279,15 +354,19 @@ class Report:
         rows = []
         for a in range(1, s.m + 1):
             data = self.d.plates[a]
-            rows.append({
-                "a": a, "plus": s.i_plus[a - 1], "minus": s.i_minus[a - 1],
-                "c_plus": self.tex.table_vector(data["c_plus"]),
-                "c_minus": self.tex.table_vector(data["c_minus"]),
-                "alpha_plus": self.tex.inline(data["alpha_plus"]),
-                "alpha_minus": self.tex.inline(data["alpha_minus"]),
-                "length": self.tex.inline(data["length"]),
-                "model": escape_latex(self.d.hinges[a].hinge.model),
-            })
+            rows.append(
+                {
+                    "a": a,
+                    "plus": s.i_plus[a - 1],
+                    "minus": s.i_minus[a - 1],
+                    "c_plus": self.tex.table_vector(data["c_plus"]),
+                    "c_minus": self.tex.table_vector(data["c_minus"]),
+                    "alpha_plus": self.tex.inline(data["alpha_plus"]),
+                    "alpha_minus": self.tex.inline(data["alpha_minus"]),
+                    "length": self.tex.inline(data["length"]),
+                    "model": escape_latex(self.d.hinges[a].hinge.model),
+                }
+            )
         return rows
 
     def rotation_lines(self) -> list[str]:
@@ -322,7 +401,7 @@ class Report:
             one_line = f"{lhs}{open_}{first} + {second}{close}"
             if width(one_line) <= self.width - 1:
                 lines.append(one_line)
-            else:                       # a narrow column: the second term on a line of its own
+            else:  # a narrow column: the second term on a line of its own
                 lines += [f"{lhs}{open_}{first}", rf"&\qquad + {second}{close}"]
         return lines
 
@@ -340,10 +419,13 @@ class Report:
         J, Jstar = self.d.J, self.d.Jstar
         zero = sp.Symbol("O_bold")
         out = {}
-        for key, lhs, M in (("J", r"\underline{\mathbf{J}}", J),
-                            ("Jstar", r"\underline{\mathbf{J}}^{*}", Jstar)):
-            rows = [[zero if M[i, j] == 0 else M[i, j] for j in range(M.cols)]
-                    for i in range(M.rows)]
+        for key, lhs, M in (
+            ("J", r"\underline{\mathbf{J}}", J),
+            ("Jstar", r"\underline{\mathbf{J}}^{*}", Jstar),
+        ):
+            rows = [
+                [zero if M[i, j] == 0 else M[i, j] for j in range(M.cols)] for i in range(M.rows)
+            ]
             tex = self._abstract_names(list(M))
             blocks = _chunks(list(range(M.cols)), max(3, self.max_cols * 10 // 14))
             lines = []
@@ -369,57 +451,73 @@ class Report:
         kernels: set = set()
         for md in self.d.models:
             model = md.model
-            entry = {"model": escape_latex(model), "description": escape_latex(md.description),
-                     "hinges": ", ".join(rf"$u_{{{a}}}$ ({self.hinge_name(a)})"
-                                         for a in md.hinges),
-                     "lines": [], "param_values": [], "note": ""}
+            entry = {
+                "model": escape_latex(model),
+                "description": escape_latex(md.description),
+                "hinges": ", ".join(rf"$u_{{{a}}}$ ({self.hinge_name(a)})" for a in md.hinges),
+                "lines": [],
+                "param_values": [],
+                "note": "",
+            }
             if md.generic is not None:
                 f, g, df, dg = md.generic
-                tex = self.tex.with_names({sp.Symbol("gamma", positive=True): r"\gamma",
-                                           sp.Symbol("c_theta", positive=True): r"c_{\theta}"})
+                tex = self.tex.with_names(
+                    {
+                        sp.Symbol("gamma", positive=True): r"\gamma",
+                        sp.Symbol("c_theta", positive=True): r"c_{\theta}",
+                    }
+                )
                 for key, lhs, e, prefix in (
-                        ("f", r"f(\theta)", f, "F"), ("g", r"g(\theta)", g, "G"),
-                        ("", r"\Delta f(\theta)", df, "P"),
-                        ("", r"\Delta g(\theta)", dg, "Q")):
+                    ("f", r"f(\theta)", f, "F"),
+                    ("g", r"g(\theta)", g, "G"),
+                    ("", r"\Delta f(\theta)", df, "P"),
+                    ("", r"\Delta g(\theta)", dg, "Q"),
+                ):
                     lines = tex.named_equation(lhs, e, prefix)
                     if key in md.elementary:
-                        lines += align_lines("", "=", tex.lines(md.elementary[key],
-                                                                self.width - 4))
+                        lines += align_lines("", "=", tex.lines(md.elementary[key], self.width - 4))
                     entry["lines"] += lines
                 for a, gamma, c in md.prbm:
                     entry["param_values"].append(
                         rf"$u_{{{a}}}$: $\gamma = {self.tex(sp.N(gamma, 6))}$, "
-                        rf"$c_{{\theta}} = {self.tex(sp.N(c, 6))}$")
+                        rf"$c_{{\theta}} = {self.tex(sp.N(c, 6))}$"
+                    )
                 if model == "elastica_force":
                     entry["lines"] += _elastica_lines(self.tex, self.d.variable)
-                    entry["note"] = ("$X_e$, $Y_e$ are the coordinates over $l$ of the tip of a "
-                                     "cantilever bent by a transverse end force (Bisshopp--Drucker), "
-                                     "in Carlson's symmetric elliptic integrals $R_F$, $R_D$; they "
-                                     "exist for $|\\theta| < \\pi/2$. The differences "
-                                     "$\\Delta X_e = X_e - \\cos^2\\frac{\\theta}{2}$ and "
-                                     "$\\Delta Y_e = Y_e - \\frac{1}{2}\\sin\\theta$ are "
-                                     "evaluated as written, without cancellation.")
+                    entry["note"] = (
+                        "$X_e$, $Y_e$ are the coordinates over $l$ of the tip of a "
+                        "cantilever bent by a transverse end force (Bisshopp--Drucker), "
+                        "in Carlson's symmetric elliptic integrals $R_F$, $R_D$; they "
+                        "exist for $|\\theta| < \\pi/2$. The differences "
+                        "$\\Delta X_e = X_e - \\cos^2\\frac{\\theta}{2}$ and "
+                        "$\\Delta Y_e = Y_e - \\frac{1}{2}\\sin\\theta$ are "
+                        "evaluated as written, without cancellation."
+                    )
             else:
                 # table / expr: the hinge's own functions (numbers rounded for print)
                 for a in md.hinges:
                     h = self.d.hinges[a]
-                    for lhs, e in ((rf"f_{{{a}}}(\theta)", h.f), (rf"g_{{{a}}}(\theta)", h.g),
-                                   (rf"\Delta f_{{{a}}}(\theta)", h.df),
-                                   (rf"\Delta g_{{{a}}}(\theta)", h.dg)):
+                    for lhs, e in (
+                        (rf"f_{{{a}}}(\theta)", h.f),
+                        (rf"g_{{{a}}}(\theta)", h.g),
+                        (rf"\Delta f_{{{a}}}(\theta)", h.df),
+                        (rf"\Delta g_{{{a}}}(\theta)", h.dg),
+                    ):
                         e = _rounded(e) if model == "table" else e
                         entry["lines"] += self.tex.equation(lhs, e)
                 if model == "expr":
-                    entry["note"] = ("The deviation of an \\texttt{expr} model is the plain "
-                                     "difference from the ideal revolute (not cancellation-free).")
+                    entry["note"] = (
+                        "The deviation of an \\texttt{expr} model is the plain "
+                        "difference from the ideal revolute (not cancellation-free)."
+                    )
             kernels.update(md.kernels)
             out.append(entry)
         kernel_lines = []
         x = sp.Symbol("x")
         for cls in sorted(kernels, key=lambda c: c.__name__):
-            series = sp.Add(*(cls.coeff(k) * x ** (2 * k) for k in range(3))) + sp.O(x ** 6)
+            series = sp.Add(*(cls.coeff(k) * x ** (2 * k) for k in range(3))) + sp.O(x**6)
             lhs = self.tex(cls(x))
-            kernel_lines.append(f"{lhs} &= {self.tex(cls.elementary(x))} "
-                                f"= {self.tex(series)}")
+            kernel_lines.append(f"{lhs} &= {self.tex(cls.elementary(x))} = {self.tex(series)}")
         return out, kernel_lines
 
     # -- loops -----------------------------------------------------------------------------------
@@ -434,8 +532,9 @@ class Report:
             names = {r[i]: rf"r_{{{i}}}" for i in r}
             names.update({beta[i]: rf"\beta_{{{i}}}" for i in beta})
             ltex = tex.with_names(names)
-            sym = dataclasses.replace(eq, terms=tuple(
-                t._replace(r=r[t.link], beta=beta[t.link]) for t in eq.terms))
+            sym = dataclasses.replace(
+                eq, terms=tuple(t._replace(r=r[t.link], beta=beta[t.link]) for t in eq.terms)
+            )
             x = sp.Add(*(t.r * sp.cos(p + t.beta) for t, p in zip(sym.terms, sym.phi)))
             y = sp.Add(*(t.r * sp.sin(p + t.beta) for t, p in zip(sym.terms, sym.phi)))
             psi = {t.link: sp.Symbol(f"psi_{t.link}", real=True) for t in eq.terms}
@@ -445,30 +544,40 @@ class Report:
             compliant = dz_tex.equation(r"\mathbf{0}", _dz_sum(lp.signs))
             compliant[-1] += r" \tag*{(5.3)}"
             entry = {
-                "chord": c, "name": self.hinge_name(c),
+                "chord": c,
+                "name": self.hinge_name(c),
                 "hinges": ", ".join(rf"$u_{{{b}}}$" for b in hinges),
                 "links": ", ".join(rf"$s_{{{i}}}$" for i in lp.links),
                 "constraints": angular + compliant,
                 "terms": [],
-                "x": ltex.equation("0", x), "y": ltex.equation("0", y),
-                "squared": [], "solved": [], "eliminated": eq.eliminated,
+                "x": ltex.equation("0", x),
+                "y": ltex.equation("0", y),
+                "squared": [],
+                "solved": [],
+                "eliminated": eq.eliminated,
             }
             weights = lp.weights
             phis = dict(zip(eq.links, eq.phi))
             for t in eq.terms:
-                entry["terms"].append({
-                    "link": t.link, "vec": tex.table_vector(weights[t.link]),
-                    "r": tex.inline(t.r), "beta": tex.inline(t.beta),
-                    "r_num": sci(_num(t.r, self.defaults), 6),
-                    "beta_num": f"{_num(t.beta, self.defaults):.6f}",
-                    "phi": tex(phis[t.link]),
-                })
+                entry["terms"].append(
+                    {
+                        "link": t.link,
+                        "vec": tex.table_vector(weights[t.link]),
+                        "r": tex.inline(t.r),
+                        "beta": tex.inline(t.beta),
+                        "r_num": sci(_num(t.r, self.defaults), 6),
+                        "beta_num": f"{_num(t.beta, self.defaults):.6f}",
+                        "phi": tex(phis[t.link]),
+                    }
+                )
             if eq.eliminated is not None:
                 j = eq.eliminated
                 # the same loop over ψ_i = φ_i + β_i: r_j² - Σ r_i² = 2 Σ r_i r_k cos(ψ_i - ψ_k)
                 polar = dataclasses.replace(
-                    eq, terms=tuple(t._replace(r=r[t.link], beta=psi[t.link]) for t in eq.terms),
-                    phi=tuple(sp.Integer(0) for _ in eq.terms))
+                    eq,
+                    terms=tuple(t._replace(r=r[t.link], beta=psi[t.link]) for t in eq.terms),
+                    phi=tuple(sp.Integer(0) for _ in eq.terms),
+                )
                 elim = polar.eliminating(j)
                 entry["squared"] = _relation_lines(ptex, elim.squared.lhs, elim.squared.rhs)
                 others = [t for t in polar.terms if t.link != j]
@@ -477,9 +586,13 @@ class Report:
                 S_sym, C_sym = sp.Symbol("S_elim"), sp.Symbol("C_elim")
                 stex = ptex.with_names({S_sym: rf"S_{{{j}}}", C_sym: rf"C_{{{j}}}"})
                 entry["solved"] = (
-                    stex.equation(rf"S_{{{j}}}", S) + stex.equation(rf"C_{{{j}}}", C)
-                    + [rf"\psi_{{{j}}} &= {stex(sp.atan2(-S_sym, -C_sym))}",
-                       rf"\varphi_{{{j}}} &= \psi_{{{j}}} - \beta_{{{j}}}"])
+                    stex.equation(rf"S_{{{j}}}", S)
+                    + stex.equation(rf"C_{{{j}}}", C)
+                    + [
+                        rf"\psi_{{{j}}} &= {stex(sp.atan2(-S_sym, -C_sym))}",
+                        rf"\varphi_{{{j}}} &= \psi_{{{j}}} - \beta_{{{j}}}",
+                    ]
+                )
             out.append(entry)
         return out
 
@@ -489,15 +602,20 @@ class Report:
         dyads = []
         for d in sol.dyads:
             h1, h2, h3 = d.hinges
-            dyads.append({
-                "k": d.index,
-                "hinges": [(a, self.hinge_name(a)) for a in d.hinges],
-                "bodies": [", ".join(f"$s_{{{i}}}$" for i in body) for body in d.bodies],
-                "chord": d.chord, "chord_name": self.hinge_name(d.chord),
-                "branch": "+1" if d.branch > 0 else "-1",
-                "h1": h1, "h2": h2, "h3": h3,
-                "roots": (min(d.bodies[0]), min(d.bodies[1])),
-            })
+            dyads.append(
+                {
+                    "k": d.index,
+                    "hinges": [(a, self.hinge_name(a)) for a in d.hinges],
+                    "bodies": [", ".join(f"$s_{{{i}}}$" for i in body) for body in d.bodies],
+                    "chord": d.chord,
+                    "chord_name": self.hinge_name(d.chord),
+                    "branch": "+1" if d.branch > 0 else "-1",
+                    "h1": h1,
+                    "h2": h2,
+                    "h3": h3,
+                    "roots": (min(d.bodies[0]), min(d.bodies[1])),
+                }
+            )
         steps = []
         for symbol, expr in sol.assignments:
             steps += tex.equation(tex(symbol), expr)
@@ -508,14 +626,20 @@ class Report:
                 e = sol.phi[i]
                 if tex(e) != rf"\varphi_{{{i}}}":
                     phi += tex.equation(rf"\varphi_{{{i}}}", e)
-            varphi = {i: sp.Symbol(f"varphi_{i}") if i else sp.Integer(0)
-                      for i in range(self.s.n + 1)}
+            varphi = {
+                i: sp.Symbol(f"varphi_{i}") if i else sp.Integer(0) for i in range(self.s.n + 1)
+            }
             vtex = tex.with_names({v: rf"\varphi_{{{i}}}" for i, v in varphi.items() if i})
             for a in self.d.unknowns:
                 h = self.d.hinges[a]
                 thetas.append(rf"\theta_{{{a}}} &= {vtex(varphi[h.M] - varphi[h.P])}")
-        return {"closed_form": sol.closed_form, "dyads": dyads, "steps": steps, "phi": phi,
-                "thetas": thetas}
+        return {
+            "closed_form": sol.closed_form,
+            "dyads": dyads,
+            "steps": steps,
+            "phi": phi,
+            "thetas": thetas,
+        }
 
     # -- first order ---------------------------------------------------------------------------
     def linear_system(self) -> dict | None:
@@ -539,13 +663,19 @@ class Report:
         atex = self.tex.with_names(names)
         matrix = atex.matrix(entries)
         defs = []
-        for i, k, sym, e in named:
+        for i, k, _sym, e in named:
             defs += self.tex.equation(rf"a_{{{i},{k}}}", e)
         dz_tex = self.tex.with_names(_dz_names(self.s.m))
         rows_r = [{"chord": lp.chord, "sum": dz_tex(_dz_sum(lp.signs))} for lp in self.d.loops]
         delta = r"\left(" + ", ".join(self.tex(d) for d in self.d.deltas) + r"\right)^{T}"
-        return {"matrix": matrix, "defs": defs, "rows": rows_r, "delta": delta,
-                "size": len(self.d.deltas), "nrows": A.rows}
+        return {
+            "matrix": matrix,
+            "defs": defs,
+            "rows": rows_r,
+            "delta": delta,
+            "size": len(self.d.deltas),
+            "nrows": A.rows,
+        }
 
     # -- points ----------------------------------------------------------------------------------
     def points(self) -> list[dict]:
@@ -554,43 +684,59 @@ class Report:
         for pt in self.d.points:
             name, k, path = pt.name, pt.link, pt.path
             sub_name = math_name(name)
-            entry = {"name": escape_latex(name), "link": k, "link_name": self.link_name(k),
-                     "at": tex.row_vector(pt.at), "path": path, "moved": pt.moved,
-                     "levels": {}}
+            entry = {
+                "name": escape_latex(name),
+                "link": k,
+                "link_name": self.link_name(k),
+                "at": tex.row_vector(pt.at),
+                "path": path,
+                "moved": pt.moved,
+                "levels": {},
+            }
             rigid = pt.rigid
-            entry["rigid"] = (tex.equation(rf"X_{{{sub_name}}}", rigid[0])
-                              + tex.equation(rf"Y_{{{sub_name}}}", rigid[1]))
+            entry["rigid"] = tex.equation(rf"X_{{{sub_name}}}", rigid[0]) + tex.equation(
+                rf"Y_{{{sub_name}}}", rigid[1]
+            )
             dz_sum = " + ".join(rf"\Delta\mathbf{{z}}_{{{b}}}" for b in path) or r"\mathbf{0}"
-            entry["paper_sum"] = (rf"\Delta\mathbf{{R}}_{{{sub_name}}}^{{\mathrm{{paper}}}} = "
-                                  rf"{dz_sum}")
+            entry["paper_sum"] = (
+                rf"\Delta\mathbf{{R}}_{{{sub_name}}}^{{\mathrm{{paper}}}} = "
+                rf"{dz_sum}"
+            )
             # multiplied out (trigonometric functions kept): one term per hinge and kernel
             dev = [sp.expand(e) for e in pt.paper]
-            entry["paper"] = (
-                tex.equation(rf"\Delta X_{{{sub_name}}}^{{\mathrm{{paper}}}}", dev[0])
-                + tex.equation(rf"\Delta Y_{{{sub_name}}}^{{\mathrm{{paper}}}}", dev[1]))
+            entry["paper"] = tex.equation(
+                rf"\Delta X_{{{sub_name}}}^{{\mathrm{{paper}}}}", dev[0]
+            ) + tex.equation(rf"\Delta Y_{{{sub_name}}}^{{\mathrm{{paper}}}}", dev[1])
             terms_lin, terms_exact = [], []
-            for i, w, dphi, phi in pt.turns:
+            for _i, w, dphi, phi in pt.turns:
                 rot = "" if phi == 0 else _rotation_tex(tex, phi)
                 factor = tex(dphi)
                 if dphi.is_Add:
                     factor = r"\left(" + factor + r"\right)"
                 terms_lin.append(rf"{factor}\,{rot}{tex.table_vector(V.perp(w))}")
-                terms_exact.append(rf"{rot}\Bigl(\mathbf{{G}}\!\left({tex(dphi)}\right) - "
-                                   rf"\mathbf{{E}}\Bigr){tex.table_vector(w)}")
+                terms_exact.append(
+                    rf"{rot}\Bigl(\mathbf{{G}}\!\left({tex(dphi)}\right) - "
+                    rf"\mathbf{{E}}\Bigr){tex.table_vector(w)}"
+                )
             lhs1 = rf"\Delta\mathbf{{R}}_{{{sub_name}}}^{{(1)}}"
             base = rf"\Delta\mathbf{{R}}_{{{sub_name}}}^{{\mathrm{{paper}}}}"
             toks = [base] + [f"+ {t}" for t in terms_lin]
             lead = width(lhs1) + 1.5
-            entry["first_order"] = align_lines(lhs1, "=", pack(toks, self.width - lead,
-                                                               self.width - lead - 1))
+            entry["first_order"] = align_lines(
+                lhs1, "=", pack(toks, self.width - lead, self.width - lead - 1)
+            )
             lhs2 = rf"\Delta\mathbf{{R}}_{{{sub_name}}}"
-            dzc = [rf"\Delta\mathbf{{z}}_{{{b}}}(\theta_{{{b}}}"
-                   + (rf" + \delta_{{{b}}}" if b in self.d.unknowns else "") + ")"
-                   for b in path] or [r"\mathbf{0}"]
+            dzc = [
+                rf"\Delta\mathbf{{z}}_{{{b}}}(\theta_{{{b}}}"
+                + (rf" + \delta_{{{b}}}" if b in self.d.unknowns else "")
+                + ")"
+                for b in path
+            ] or [r"\mathbf{0}"]
             terms = terms_exact + dzc
             toks = terms[:1] + [f"+ {t}" for t in terms[1:]]
-            entry["exact"] = align_lines(lhs2, "=", pack(toks, self.width - lead,
-                                                         self.width - lead - 1))
+            entry["exact"] = align_lines(
+                lhs2, "=", pack(toks, self.width - lead, self.width - lead - 1)
+            )
             out.append(entry)
         return out
 
@@ -609,23 +755,36 @@ class Report:
         plates = []
         for a, stiff in ld.plates:
             h = hinges[stiff.hinge]
-            plates.append({
-                "a": a, "name": self.hinge_name(a), "length": sci(_num(stiff.length, self.defaults)),
-                "thickness": sci(_num(h.thickness, self.defaults)),
-                "width": sci(_num(h.width, self.defaults)),
-                "modulus": sci(_num(modulus(h), self.defaults)),
-                "EI": sci(_num(stiff.EI, self.defaults)),
-                "k": sci(_num(stiff.EI / stiff.length, self.defaults))})
-        loads = [{"index": load.index + 1,
-                  "point": escape_latex(load.point) if load.point else "--", "link": self.link_name(self.s.links.index(
-                      load.link)), "at": tex.row_vector(load.at),
-                  "force": tex.row_vector(load.force), "moment": tex.inline(load.moment)}
-                 for load in ld.loads]
+            plates.append(
+                {
+                    "a": a,
+                    "name": self.hinge_name(a),
+                    "length": sci(_num(stiff.length, self.defaults)),
+                    "thickness": sci(_num(h.thickness, self.defaults)),
+                    "width": sci(_num(h.width, self.defaults)),
+                    "modulus": sci(_num(modulus(h), self.defaults)),
+                    "EI": sci(_num(stiff.EI, self.defaults)),
+                    "k": sci(_num(stiff.EI / stiff.length, self.defaults)),
+                }
+            )
+        loads = [
+            {
+                "index": load.index + 1,
+                "point": escape_latex(load.point) if load.point else "--",
+                "link": self.link_name(self.s.links.index(load.link)),
+                "at": tex.row_vector(load.at),
+                "force": tex.row_vector(load.force),
+                "moment": tex.inline(load.moment),
+            }
+            for load in ld.loads
+        ]
         forces = []
         for a, q in ld.forces:
             forces += tex.equation(rf"Q^{{0}}_{{{a}}}" if ld.beam_column else rf"Q_{{{a}}}", q)
-        pairs = [(rf"\mathbf{{n}}_{{{a}}} &= {ltex.table_vector(n)}", a, chi)
-                 for a, n, chi in ld.hinge_forces]
+        pairs = [
+            (rf"\mathbf{{n}}_{{{a}}} &= {ltex.table_vector(n)}", a, chi)
+            for a, n, chi in ld.hinge_forces
+        ]
         # side by side when every pair fits (align* shares its columns between the rows), else
         # each direction on lines of its own
         if all(width(f) + width(tex(chi)) + 5 <= self.width for f, _, chi in pairs):
@@ -635,16 +794,28 @@ class Report:
             for f, a, chi in pairs:
                 hinge_forces += [f + ","] + tex.equation(rf"\chi_{{{a}}}", chi)
         series = []
-        for lhs, key in (("s(p)", "shear"), ("r(p)", "rotation"), ("b(p)", "bending"),
-                         ("w(p)", "bowing")):
+        for lhs, key in (
+            ("s(p)", "shear"),
+            ("r(p)", "rotation"),
+            ("b(p)", "bending"),
+            ("w(p)", "bowing"),
+        ):
             budget = self.width - width(lhs) - 2
-            series += align_lines(lhs, "=", pack(_power_series(getattr(ld.series, key), "p"),
-                                                 budget, budget - 1))
-        return {"beam_column": ld.beam_column, "plates": plates, "loads": loads,
-                "forces": forces, "hinge_forces": hinge_forces, "series": series,
-                "loops": len(ld.multipliers) // 3, "unit": unit,
-                "refined": any(lv.name == "loaded_refined" for lv in self.plan.levels)
-                and bool(self.d.unknowns)}
+            series += align_lines(
+                lhs, "=", pack(_power_series(getattr(ld.series, key), "p"), budget, budget - 1)
+            )
+        return {
+            "beam_column": ld.beam_column,
+            "plates": plates,
+            "loads": loads,
+            "forces": forces,
+            "hinge_forces": hinge_forces,
+            "series": series,
+            "loops": len(ld.multipliers) // 3,
+            "unit": unit,
+            "refined": any(lv.name == "loaded_refined" for lv in self.plan.levels)
+            and bool(self.d.unknowns),
+        }
 
 
 def _power_series(coefficients: Sequence[sp.Rational], x: str) -> list[str]:
@@ -670,29 +841,37 @@ def _elastica_lines(tex: Tex, t: sp.Symbol) -> list[str]:
     s = sp.Abs(sp.sin(t))
     args = (1 - s, 1 + s, sp.cos(t) ** 2)
     lines = []
-    for lhs, rhs in ((r"X_e(\theta)", 1 / A),
-                     (r"Y_e(\theta)", sp.sin(t) * (1 - C / A)),
-                     (r"\Delta X_e(\theta)", sp.Mul(sp.sin(t) ** 2, sp.Add(
-                         1 / (2 * (1 + sp.cos(t))), -(A - 1) / (sp.sin(t) ** 2 * A),
-                         evaluate=False), evaluate=False)),
-                     (r"\Delta Y_e(\theta)", sp.sin(t) * (sp.Rational(1, 2) - C / A)),
-                     ("A", RF(*args)), ("C", sp.cos(t) ** 2 / 3 * RD(*args))):
+    for lhs, rhs in (
+        (r"X_e(\theta)", 1 / A),
+        (r"Y_e(\theta)", sp.sin(t) * (1 - C / A)),
+        (
+            r"\Delta X_e(\theta)",
+            sp.Mul(
+                sp.sin(t) ** 2,
+                sp.Add(1 / (2 * (1 + sp.cos(t))), -(A - 1) / (sp.sin(t) ** 2 * A), evaluate=False),
+                evaluate=False,
+            ),
+        ),
+        (r"\Delta Y_e(\theta)", sp.sin(t) * (sp.Rational(1, 2) - C / A)),
+        ("A", RF(*args)),
+        ("C", sp.cos(t) ** 2 / 3 * RD(*args)),
+    ):
         lines += tex.equation(lhs, rhs)
     return lines
 
 
 def _rounded(expr: sp.Expr) -> sp.Expr:
     """Rationals of a fitted table model shown as 6-digit floats."""
-    return sp.sympify(expr).xreplace({q: sp.Float(q, 6) for q in sp.sympify(expr).atoms(
-        sp.Rational) if q.q > 1000})
+    return sp.sympify(expr).xreplace(
+        {q: sp.Float(q, 6) for q in sp.sympify(expr).atoms(sp.Rational) if q.q > 1000}
+    )
 
 
 def _relation_lines(tex: Tex, lhs: sp.Expr, rhs: sp.Expr) -> list[str]:
     """``lhs = rhs`` with both sides possibly long: lhs lines, then ``&= rhs`` lines."""
     left = tex.lines(lhs, tex.width - 4, tex.width - 4)
     right = tex.lines(rhs, tex.width - 4, tex.width - 5)
-    if len(left) == 1 and width(left[0]) + width(right[0]) < tex.width - 3 and \
-            len(right) == 1:
+    if len(left) == 1 and width(left[0]) + width(right[0]) < tex.width - 3 and len(right) == 1:
         return [f"{left[0]} &= {right[0]}"]
     out = [f"&{left[0]}"] + [r"&\quad {}" + ln for ln in left[1:]]
     out.append(f"&= {right[0]}")
@@ -701,6 +880,7 @@ def _relation_lines(tex: Tex, lhs: sp.Expr, rhs: sp.Expr) -> list[str]:
 
 
 # -- numbers for the figures ---------------------------------------------------------------------
+
 
 def pose_data(report: Report) -> PoseData:
     d, s, defaults = report.d, report.s, report.defaults
@@ -718,17 +898,22 @@ def pose_data(report: Report) -> PoseData:
     return PoseData(links, 0, tuple(plates), points)
 
 
-def sweep_spans(inputs: Sequence[str], given: Mapping[str, tuple[float, float]] | None = None
-                ) -> dict[str, tuple[float, float]]:
+def sweep_spans(
+    inputs: Sequence[str], given: Mapping[str, tuple[float, float]] | None = None
+) -> dict[str, tuple[float, float]]:
     """Each input's plotted range: the `given` ones (derive --range), else ±SWEEP_RANGE."""
-    spans = {h: (-SWEEP_RANGE, SWEEP_RANGE) for h in inputs}
+    spans = dict.fromkeys(inputs, (-SWEEP_RANGE, SWEEP_RANGE))
     spans.update({h: (float(lo), float(hi)) for h, (lo, hi) in (given or {}).items()})
     return spans
 
 
-def reference_points(report: Report, t: np.ndarray, ok: np.ndarray,
-                     inputs: Mapping[str, np.ndarray], physics: Physics
-                     ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+def reference_points(
+    report: Report,
+    t: np.ndarray,
+    ok: np.ndarray,
+    inputs: Mapping[str, np.ndarray],
+    physics: Physics,
+) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """The physical reference (`physics`: inputs -> point deviations, the `equilibrium` level) at
     REFERENCE_SAMPLES evenly spaced samples of a sweep; NaN where it cannot be solved."""
     at = np.unique(np.round(np.linspace(0, len(t) - 1, REFERENCE_SAMPLES)).astype(int))
@@ -738,16 +923,19 @@ def reference_points(report: Report, t: np.ndarray, ok: np.ndarray,
             continue
         try:
             values = physics({n: float(v[i]) for n, v in inputs.items()})
-        except SymkinError:             # beyond the assembly range, a plate buckling
+        except SymkinError:  # beyond the assembly range, a plate buckling
             continue
         for p in report.plan.points:
             out[p][:, k] = values[p]
     return at, out
 
 
-def sweep(report: Report, numpy_module, spans: Mapping[str, tuple[float, float]],
-          physics: Physics | None = None
-          ) -> tuple[list[tuple[str, Sweep, tuple[float, float]]], dict]:
+def sweep(
+    report: Report,
+    numpy_module,
+    spans: Mapping[str, tuple[float, float]],
+    physics: Physics | None = None,
+) -> tuple[list[tuple[str, Sweep, tuple[float, float]]], dict]:
     """|ΔR| of the points at every level with each input in turn over its span (the others held
     at the middle of theirs), evaluated with the generated numpy module, and with `physics` the
     physical reference at a few of the inputs.
@@ -784,14 +972,20 @@ def sweep(report: Report, numpy_module, spans: Mapping[str, tuple[float, float]]
             idx = np.flatnonzero(ok)
             a = lo if idx[0] == 0 else max(lo, t[idx[0]] - margin)
             b = hi if idx[-1] == len(t) - 1 else min(hi, t[idx[-1]] + margin)
-        reference = None if physics is None else \
-            reference_points(report, t, ok, inputs, physics)
+        reference = None if physics is None else reference_points(report, t, ok, inputs, physics)
         runs.append((h, Sweep(t, ok, magnitude, deviation, reference), (a, b)))
         summary["samples"] += len(t)
         summary["failed"] += int((~ok).sum())
-        summary["spans"].append({"input": escape_latex(h), "lo": f"{lo:g}", "hi": f"{hi:g}",
-                                 "held": f"{held[h]:g}", "clip": f"[{a:.3f}, {b:.3f}]",
-                                 "clipped": bool(a > lo or b < hi)})
+        summary["spans"].append(
+            {
+                "input": escape_latex(h),
+                "lo": f"{lo:g}",
+                "hi": f"{hi:g}",
+                "held": f"{held[h]:g}",
+                "clip": f"[{a:.3f}, {b:.3f}]",
+                "clipped": bool(a > lo or b < hi),
+            }
+        )
     for p in report.plan.points:
         for level in report.plan.levels:
             lv = level.name
@@ -801,30 +995,37 @@ def sweep(report: Report, numpy_module, spans: Mapping[str, tuple[float, float]]
                 if np.isfinite(mag).any() and not np.nanmax(mag) <= peak:
                     k = int(np.nanargmax(mag))
                     peak = float(mag[k])
-                    at = f"${data.t[k]:+.3f}$" if single else \
-                        f"{escape_latex(h)} ${data.t[k]:+.3f}$"
+                    at = (
+                        f"${data.t[k]:+.3f}$" if single else f"{escape_latex(h)} ${data.t[k]:+.3f}$"
+                    )
                 exact = data.deviation[p].get("exact")
                 if exact is not None and lv != "exact" and np.isfinite(exact).any():
                     d = np.hypot(*(data.deviation[p][lv] - exact))
                     diff = np.nanmax([diff, np.nanmax(d)])
                     ref = np.nanmax([ref, np.nanmax(np.hypot(*exact))])
             rel = float(diff / ref) if np.isfinite(diff) and ref > 0 else None
-            row = {"point": escape_latex(p), "level": level.title, "peak": sci(peak),
-                   "at": at or r"\text{--}",
-                   "rel": sci(rel, 2) if rel is not None else r"\text{--}"}
+            row = {
+                "point": escape_latex(p),
+                "level": level.title,
+                "peak": sci(peak),
+                "at": at or r"\text{--}",
+                "rel": sci(rel, 2) if rel is not None else r"\text{--}",
+            }
             if physics is not None:
                 row["physics"] = _physics_distance(runs, p, lv)
             summary["rows"].append(row)
     summary["physics"] = physics is not None
-    if physics is not None:             # the configurations where the reference was solved
+    if physics is not None:  # the configurations where the reference was solved
         first = report.plan.points[0]
-        summary["reference_samples"] = sum(int(np.isfinite(data.reference[1][first][0]).sum())
-                                           for _, data, _ in runs)
+        summary["reference_samples"] = sum(
+            int(np.isfinite(data.reference[1][first][0]).sum()) for _, data, _ in runs
+        )
     return runs, summary
 
 
-def _physics_distance(runs: Sequence[tuple[str, Sweep, tuple[float, float]]], point: str,
-                      level: str) -> str:
+def _physics_distance(
+    runs: Sequence[tuple[str, Sweep, tuple[float, float]]], point: str, level: str
+) -> str:
     """max |ΔR_level − ΔR_equilibrium| over the reference's samples of every sweep, relative to
     the largest |ΔR_equilibrium|, as LaTeX math text."""
     gap, size = [], []
@@ -838,8 +1039,9 @@ def _physics_distance(runs: Sequence[tuple[str, Sweep, tuple[float, float]]], po
     return sci(float(np.nanmax(gap_all) / np.nanmax(size_all)), 2)
 
 
-def sensitivity_table(report: Report, numpy_module,
-                      runs: Sequence[tuple[str, Sweep, tuple[float, float]]]) -> dict | None:
+def sensitivity_table(
+    report: Report, numpy_module, runs: Sequence[tuple[str, Sweep, tuple[float, float]]]
+) -> dict | None:
     """The parameters ranked by their effect on each point's deviation (docs/sensitivity.md),
     at the swept input where the point's |ΔR| at the most faithful level is largest; None
     without parameters or sensitivities."""
@@ -853,11 +1055,14 @@ def sensitivity_table(report: Report, numpy_module,
     held = {h: 0.5 * (data.t[0] + data.t[-1]) for h, data, _ in runs}
     rows = []
     for point in plan.points:
-        best = None                 # (|ΔR|, swept input, its value)
+        best = None  # (|ΔR|, swept input, its value)
         for h, data, _ in runs:
             mag = data.magnitude[point][level]
-            if np.isfinite(mag).any() and np.nanmax(mag) > 0 and \
-                    (best is None or np.nanmax(mag) > best[0]):
+            if (
+                np.isfinite(mag).any()
+                and np.nanmax(mag) > 0
+                and (best is None or np.nanmax(mag) > best[0])
+            ):
                 best = (float(np.nanmax(mag)), h, float(data.t[int(np.nanargmax(mag))]))
         if best is None:
             continue
@@ -873,25 +1078,45 @@ def sensitivity_table(report: Report, numpy_module,
             d_norm = float((d[0] * rate[0] + d[1] * rate[1]) / norm)
             value = float(numpy_module.PARAMETERS[name])
             relative = value * d_norm / norm
-            entries.append((abs(relative), {
-                "point": escape_latex(point), "name": escape_latex(name), "value": gnum(value),
-                "dx": sci(float(rate[0])), "dy": sci(float(rate[1])), "norm": sci(d_norm),
-                "relative": f"{relative:+.3f}" if value else r"\text{--}", "at": at}))
+            entries.append(
+                (
+                    abs(relative),
+                    {
+                        "point": escape_latex(point),
+                        "name": escape_latex(name),
+                        "value": gnum(value),
+                        "dx": sci(float(rate[0])),
+                        "dy": sci(float(rate[1])),
+                        "norm": sci(d_norm),
+                        "relative": f"{relative:+.3f}" if value else r"\text{--}",
+                        "at": at,
+                    },
+                )
+            )
         entries.sort(key=lambda e: -e[0])
         rows += [e[1] for e in entries]
     if not rows:
         return None
-    return {"level": with_rates[-1].title, "rows": rows, "single_input": single,
-            "inputs": [escape_latex(n) for n in numpy_module.INPUTS]}
+    return {
+        "level": with_rates[-1].title,
+        "rows": rows,
+        "single_input": single,
+        "inputs": [escape_latex(n) for n in numpy_module.INPUTS],
+    }
 
 
 # -- emit ----------------------------------------------------------------------------------------
 
-def emit(plan: Plan, source: str, appendix: bool = False,
-         evaluator: ModuleType | None = None,
-         column_width: float = COLUMN_WIDTH,
-         spans: Mapping[str, tuple[float, float]] | None = None,
-         physics: Physics | None = None) -> dict[str, bytes]:
+
+def emit(
+    plan: Plan,
+    source: str,
+    appendix: bool = False,
+    evaluator: ModuleType | None = None,
+    column_width: float = COLUMN_WIDTH,
+    spans: Mapping[str, tuple[float, float]] | None = None,
+    physics: Physics | None = None,
+) -> dict[str, bytes]:
     """`<name>.tex` (standalone, or the body alone with `appendix`) and its figure PDFs, laid out
     for a column of `column_width` points; the deviation plots are evaluated with `evaluator`,
     the plan's generated numpy module (needed when the plan has points), over `spans` (input ->
@@ -906,19 +1131,24 @@ def emit(plan: Plan, source: str, appendix: bool = False,
     files[f"{name}-pose.pdf"] = pose_figure(pose, plain_name, unit)
     scale = plate_scale(pose)
     ctx["pose_width"] = f"{min(1.0, pose_size(pose)[0] / FIG_WIDTH):.2f}"
-    plates = ("the flexure plates as thick black segments"
-              + (" to scale" if scale == 1 else f", drawn {scale:g} times their length"))
-    ctx["pose_caption"] = (plates + ", the fixed link $s_0$ as ground anchors; characteristic "
-                           "points in red.")
-    arcs = [(a, report.s.i_plus[a - 1], report.s.i_minus[a - 1], a > report.s.n)
-            for a in range(1, report.s.m + 1)]
+    plates = "the flexure plates as thick black segments" + (
+        " to scale" if scale == 1 else f", drawn {scale:g} times their length"
+    )
+    ctx["pose_caption"] = (
+        plates + ", the fixed link $s_0$ as ground anchors; characteristic points in red."
+    )
+    arcs = [
+        (a, report.s.i_plus[a - 1], report.s.i_minus[a - 1], a > report.s.n)
+        for a in range(1, report.s.m + 1)
+    ]
     layout = tree_layout(report.s.parent, report.s.n)
     files[f"{name}-graph.pdf"] = graph_figure(layout, arcs)
     depth = max(x for x, _ in layout.values())
     # a shallow tree beside the hinge table, a deep one (a long chain) above it
     ctx["graph_beside"] = depth <= 3 and report.width >= LINE_WIDTH_EM
-    ctx["graph_width"] = f"{0.16 + 0.1 * depth:.2f}" if depth <= 3 else \
-        f"{min(0.9, 0.13 * (depth + 1)):.2f}"
+    ctx["graph_width"] = (
+        f"{0.16 + 0.1 * depth:.2f}" if depth <= 3 else f"{min(0.9, 0.13 * (depth + 1)):.2f}"
+    )
     ctx["table_width"] = f"{min(0.58, 0.96 - float(ctx['graph_width'])):.2f}"
     ctx["deviation_figures"] = []
     ctx["sweep"] = None
@@ -926,27 +1156,31 @@ def emit(plan: Plan, source: str, appendix: bool = False,
     if plan.points and plan.inputs:
         if evaluator is None:
             raise ValueError("the deviation plot needs the plan's generated numpy module")
-        runs, summary = sweep(report, evaluator, sweep_spans(plan.inputs, spans),
-                              physics)
+        runs, summary = sweep(report, evaluator, sweep_spans(plan.inputs, spans), physics)
         single = len(runs) == 1
         points = list(plan.points)
         pruned = False
         for h, data, xlim in runs:
             xlabel = f"input θ of {plain_name(h)} (rad)"
             shown = points
-            if not single:       # (the caption says that the other inputs are held)
+            if not single:  # (the caption says that the other inputs are held)
                 # only the points this input moves (a fan of four-bars: one point per input)
                 shown = [p for p in points if moves(data, p)] or points
                 pruned = pruned or len(shown) < len(points)
             for chunk in _chunks(shown, 3):
                 k = len(ctx["deviation_figures"])
                 fname = f"{name}-deviation.pdf" if k == 0 else f"{name}-deviation-{k + 1}.pdf"
-                files[fname] = deviation_figure(data, chunk, plan.levels, plain_name, xlim,
-                                                xlabel, unit)
-                ctx["deviation_figures"].append({
-                    "file": fname, "points": [escape_latex(p) for p in chunk],
-                    "input": None if single else escape_latex(h),
-                    "compare": differs(data, chunk, plan.levels)})
+                files[fname] = deviation_figure(
+                    data, chunk, plan.levels, plain_name, xlim, xlabel, unit
+                )
+                ctx["deviation_figures"].append(
+                    {
+                        "file": fname,
+                        "points": [escape_latex(p) for p in chunk],
+                        "input": None if single else escape_latex(h),
+                        "compare": differs(data, chunk, plan.levels),
+                    }
+                )
         summary["single_input"] = single
         summary["pruned"] = pruned
         ctx["sweep"] = summary

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import decimal
 import re
-from functools import lru_cache
 import unicodedata
 from collections.abc import Iterable, Mapping
+from functools import lru_cache
 
 import sympy as sp
 from sympy.printing.latex import LatexPrinter
@@ -54,14 +54,35 @@ _TEXT_SPECIALS = {
 }
 
 _ACCENTS = {
-    "\u0300": "`", "\u0301": "'", "\u0302": "^", "\u0303": "~", "\u0304": "=", "\u0306": "u",
-    "\u0307": ".", "\u0308": '"', "\u030a": "r", "\u030b": "H", "\u030c": "v", "\u0327": "c",
+    "\u0300": "`",
+    "\u0301": "'",
+    "\u0302": "^",
+    "\u0303": "~",
+    "\u0304": "=",
+    "\u0306": "u",
+    "\u0307": ".",
+    "\u0308": '"',
+    "\u030a": "r",
+    "\u030b": "H",
+    "\u030c": "v",
+    "\u0327": "c",
 }
 
 _LETTERS = {
-    "ß": r"\ss{}", "æ": r"\ae{}", "Æ": r"\AE{}", "ø": r"\o{}", "Ø": r"\O{}", "œ": r"\oe{}",
-    "Œ": r"\OE{}", "ł": r"\l{}", "Ł": r"\L{}", "ı": r"\i{}", "µ": r"\ensuremath{\mu}",
-    "°": r"\ensuremath{^\circ}", "×": r"\ensuremath{\times}", "±": r"\ensuremath{\pm}",
+    "ß": r"\ss{}",
+    "æ": r"\ae{}",
+    "Æ": r"\AE{}",
+    "ø": r"\o{}",
+    "Ø": r"\O{}",
+    "œ": r"\oe{}",
+    "Œ": r"\OE{}",
+    "ł": r"\l{}",
+    "Ł": r"\L{}",
+    "ı": r"\i{}",
+    "µ": r"\ensuremath{\mu}",
+    "°": r"\ensuremath{^\circ}",
+    "×": r"\ensuremath{\times}",
+    "±": r"\ensuremath{\pm}",
 }
 
 
@@ -74,10 +95,42 @@ def _non_ascii(ch: str) -> str:
         word = greek.group(2).lower()
         if greek.group(1) == "CAPITAL":
             word = word.capitalize()
-        known = {"alpha", "beta", "gamma", "delta", "epsilon", "zeta", "eta", "theta", "iota",
-                 "kappa", "lambda", "mu", "nu", "xi", "pi", "rho", "sigma", "tau", "upsilon",
-                 "phi", "chi", "psi", "omega", "Gamma", "Delta", "Theta", "Lambda", "Xi", "Pi",
-                 "Sigma", "Upsilon", "Phi", "Psi", "Omega"}
+        known = {
+            "alpha",
+            "beta",
+            "gamma",
+            "delta",
+            "epsilon",
+            "zeta",
+            "eta",
+            "theta",
+            "iota",
+            "kappa",
+            "lambda",
+            "mu",
+            "nu",
+            "xi",
+            "pi",
+            "rho",
+            "sigma",
+            "tau",
+            "upsilon",
+            "phi",
+            "chi",
+            "psi",
+            "omega",
+            "Gamma",
+            "Delta",
+            "Theta",
+            "Lambda",
+            "Xi",
+            "Pi",
+            "Sigma",
+            "Upsilon",
+            "Phi",
+            "Psi",
+            "Omega",
+        }
         if word in known:
             return rf"\ensuremath{{\{word}}}"
     decomposed = unicodedata.normalize("NFD", ch)
@@ -123,8 +176,11 @@ def plain_name(text: str) -> str:
 
 #: How the report writes the elastica functions (kernels: see :func:`special_symbol`).
 _ELASTICA_SYMBOLS = {
-    "elastica_x": r"X_{e}", "elastica_y": r"Y_{e}", "elastica_dx": r"\Delta X_{e}",
-    "elastica_dy": r"\Delta Y_{e}", "elastica_dx_d1": r"\Delta X_{e}'",
+    "elastica_x": r"X_{e}",
+    "elastica_y": r"Y_{e}",
+    "elastica_dx": r"\Delta X_{e}",
+    "elastica_dy": r"\Delta Y_{e}",
+    "elastica_dx_d1": r"\Delta X_{e}'",
     "elastica_dy_d1": r"\Delta Y_{e}'",
 }
 
@@ -143,12 +199,12 @@ class ReportPrinter(LatexPrinter):
     """sympy's LatexPrinter with atan2 written as one operator and symkin's special functions
     written with the report's symbols."""
 
-    def _print_atan2(self, expr, exp=None):  # noqa: N802 - sympy's printer protocol
+    def _print_atan2(self, expr, exp=None):
         y, x = expr.args
-        tex = r"\operatorname{atan2}\left(%s, %s\right)" % (self._print(y), self._print(x))
-        return tex if exp is None else r"\left(%s\right)^{%s}" % (tex, exp)
+        tex = rf"\operatorname{{atan2}}\left({self._print(y)}, {self._print(x)}\right)"
+        return tex if exp is None else rf"\left({tex}\right)^{{{exp}}}"
 
-    def _print_Function(self, expr, exp=None):  # noqa: N802
+    def _print_Function(self, expr, exp=None):
         if not special.is_special(expr):
             return super()._print_Function(expr, exp)
         symbol = special_symbol(type(expr).__name__)
@@ -187,7 +243,7 @@ def _fraction(q: sp.Expr) -> bool:
         return False
     if q.q in (1, 2, 4, 8):
         return True
-    return not _terminating(q) and abs(q.p) <= 100 and q.q <= 10 ** 4
+    return not _terminating(q) and abs(q.p) <= 100 and q.q <= 10**4
 
 
 def _readable(c: sp.Expr) -> bool:
@@ -197,8 +253,7 @@ def _readable(c: sp.Expr) -> bool:
     if c.is_Rational:
         return _fraction(c)
     coeff, rest = c.as_coeff_Mul()
-    surd = rest.is_Pow and rest.exp == sp.S.Half and rest.base.is_Integer \
-        and 0 < rest.base <= 100
+    surd = rest.is_Pow and rest.exp == sp.S.Half and rest.base.is_Integer and 0 < rest.base <= 100
     return (rest is sp.pi or surd) and _fraction(coeff)
 
 
@@ -216,16 +271,22 @@ class Tex:
     """Prints sympy expressions to LaTeX with fixed symbol names, and breaks long ones. Numbers
     print as :func:`display_numbers` shows them."""
 
-    def __init__(self, symbol_names: Mapping[sp.Symbol, str] | None = None,
-                 width: float = LINE_WIDTH_EM) -> None:
+    def __init__(
+        self, symbol_names: Mapping[sp.Symbol, str] | None = None, width: float = LINE_WIDTH_EM
+    ) -> None:
         self.symbol_names = dict(symbol_names or {})
         self.width = width
         self.printer = self._printer()
-        self._printed: dict[sp.Basic, str] = {}   # line breaking prints the same pieces often
+        self._printed: dict[sp.Basic, str] = {}  # line breaking prints the same pieces often
 
     def _printer(self, **extra) -> ReportPrinter:
-        settings = {"symbol_names": self.symbol_names, "inv_trig_style": "full",
-                    "fold_func_brackets": True, "mat_delim": "", "mat_str": "bmatrix"}
+        settings = {
+            "symbol_names": self.symbol_names,
+            "inv_trig_style": "full",
+            "fold_func_brackets": True,
+            "mat_delim": "",
+            "mat_str": "bmatrix",
+        }
         settings.update(extra)
         return ReportPrinter(settings)
 
@@ -278,7 +339,7 @@ class Tex:
     def _term(self, term: sp.Expr) -> str:
         tex = self(term)
         if self.printer._needs_add_brackets(term):
-            tex = r"\left(%s\right)" % tex
+            tex = rf"\left({tex}\right)"
         return tex
 
     def tokens(self, expr: sp.Expr, budget: float) -> list[str]:
@@ -303,7 +364,7 @@ class Tex:
         if expr.is_Pow and expr.base.is_Add and expr.exp.is_Rational and expr.exp != 1:
             # (a sum)^e, a root or a reciprocal too: the sum breaks inside big parentheses
             inner = self.tokens(expr.base, budget - 3)
-            return self._wrap(inner, r"\Bigl(", r"\Bigr)^{%s}" % self(expr.exp))
+            return self._wrap(inner, r"\Bigl(", rf"\Bigr)^{{{self(expr.exp)}}}")
         return [tex]
 
     @staticmethod
@@ -314,12 +375,12 @@ class Tex:
         return inner
 
     def _mul_tokens(self, expr: sp.Expr, budget: float, tex: str) -> list[str]:
-        coeff, rest_ = expr.as_coeff_Mul()      # any number, a decimal one too
+        coeff, rest_ = expr.as_coeff_Mul()  # any number, a decimal one too
         factors = sp.Mul.make_args(rest_)
         sign = ""
         if coeff < 0:
             sign, coeff = "- ", -coeff
-        if coeff.is_Float:              # a decimal coefficient leads, as the printer puts it
+        if coeff.is_Float:  # a decimal coefficient leads, as the printer puts it
             sign, coeff = sign + self(coeff) + " ", sp.Integer(1)
         num, den = sp.fraction(sp.Mul(coeff, *factors, evaluate=False))
         if den != 1:
@@ -341,8 +402,9 @@ class Tex:
         if not rest and sign == "":
             return [tex]
         # a lone sum left over keeps its parentheses (printed alone it would lose them)
-        head = sign + (self._term(rest[0]) if len(rest) == 1 else
-                       self(sp.Mul(*rest)) if rest else "")
+        head = sign + (
+            self._term(rest[0]) if len(rest) == 1 else self(sp.Mul(*rest)) if rest else ""
+        )
         if head.strip() == "1":
             head = ""
         if widest.is_Add:
@@ -359,11 +421,19 @@ class Tex:
         return inner
 
     def _function_tokens(self, expr: sp.Function, budget: float, tex: str) -> list[str]:
-        names = {sp.sin: r"\sin", sp.cos: r"\cos", sp.tan: r"\tan", sp.atan2: r"\operatorname{atan2}",
-                 sp.exp: r"\exp", sp.atan: r"\arctan", sp.asin: r"\arcsin", sp.acos: r"\arccos"}
+        names = {
+            sp.sin: r"\sin",
+            sp.cos: r"\cos",
+            sp.tan: r"\tan",
+            sp.atan2: r"\operatorname{atan2}",
+            sp.exp: r"\exp",
+            sp.atan: r"\arctan",
+            sp.asin: r"\arcsin",
+            sp.acos: r"\arccos",
+        }
         name = names.get(expr.func)
         if name is None and isinstance(expr, sp.core.function.AppliedUndef):
-            name = self.printer._deal_with_super_sub(expr.func.__name__)     # R_F, R_D
+            name = self.printer._deal_with_super_sub(expr.func.__name__)  # R_F, R_D
         if name is None:
             return [tex]
         out: list[str] = []
@@ -374,8 +444,9 @@ class Tex:
             out.extend(sub)
         return self._wrap(out, name + r"\Bigl(", r"\Bigr)")
 
-    def lines(self, expr: sp.Expr, first: float | None = None,
-              rest: float | None = None) -> list[str]:
+    def lines(
+        self, expr: sp.Expr, first: float | None = None, rest: float | None = None
+    ) -> list[str]:
         """`expr` packed greedily into lines: the first at most `first` ems wide, the others
         `rest` (defaults: the full width and the width less the continuation indent)."""
         first = self.width if first is None else first
@@ -422,7 +493,7 @@ def pack(tokens: list[str], first: float, rest: float) -> list[str]:
     current, current_width = "", 0.0
     for tok in tokens:
         budget = first if not lines else rest
-        tok_width = width(tok)        # widths add over a space-joined line
+        tok_width = width(tok)  # widths add over a space-joined line
         if current and current_width + tok_width > budget:
             lines.append(current)
             current, current_width = tok, tok_width
@@ -436,20 +507,84 @@ def pack(tokens: list[str], first: float, rest: float) -> list[str]:
 # -- width estimate ------------------------------------------------------------------------------
 
 _CMD_WIDTH = {
-    "sin": 1.45, "cos": 1.55, "tan": 1.5, "exp": 1.6, "log": 1.4, "arctan": 2.9, "arcsin": 2.8,
-    "arccos": 2.9, "cdot": 0.75, "times": 1.2, "quad": 1.0, "qquad": 2.0, ",": 0.17, "!": -0.17,
-    ";": 0.28, ":": 0.22, " ": 0.33, "pm": 1.2, "mp": 1.2, "to": 1.5, "rightarrow": 1.5,
-    "ldots": 1.2, "cdots": 1.2, "infty": 1.0, "pi": 0.6, "Delta": 0.85, "sum": 1.1,
-    "leq": 1.3, "geq": 1.3, "neq": 1.3, "approx": 1.3, "equiv": 1.3, "circ": 0.5,
-    "partial": 0.6, "perp": 0.8, "top": 0.8, "{": 0.5, "}": 0.5, "%": 0.8, "$": 0.5, "&": 0.8,
-    "#": 0.8, "_": 0.5,
+    "sin": 1.45,
+    "cos": 1.55,
+    "tan": 1.5,
+    "exp": 1.6,
+    "log": 1.4,
+    "arctan": 2.9,
+    "arcsin": 2.8,
+    "arccos": 2.9,
+    "cdot": 0.75,
+    "times": 1.2,
+    "quad": 1.0,
+    "qquad": 2.0,
+    ",": 0.17,
+    "!": -0.17,
+    ";": 0.28,
+    ":": 0.22,
+    " ": 0.33,
+    "pm": 1.2,
+    "mp": 1.2,
+    "to": 1.5,
+    "rightarrow": 1.5,
+    "ldots": 1.2,
+    "cdots": 1.2,
+    "infty": 1.0,
+    "pi": 0.6,
+    "Delta": 0.85,
+    "sum": 1.1,
+    "leq": 1.3,
+    "geq": 1.3,
+    "neq": 1.3,
+    "approx": 1.3,
+    "equiv": 1.3,
+    "circ": 0.5,
+    "partial": 0.6,
+    "perp": 0.8,
+    "top": 0.8,
+    "{": 0.5,
+    "}": 0.5,
+    "%": 0.8,
+    "$": 0.5,
+    "&": 0.8,
+    "#": 0.8,
+    "_": 0.5,
 }
-_ZERO_CMDS = {"left", "right", "displaystyle", "limits", "nolimits", "relax", "scriptstyle",
-              "textstyle", "mathstrut", "strut", "protect"}
+_ZERO_CMDS = {
+    "left",
+    "right",
+    "displaystyle",
+    "limits",
+    "nolimits",
+    "relax",
+    "scriptstyle",
+    "textstyle",
+    "mathstrut",
+    "strut",
+    "protect",
+}
 _BIG = {"bigl", "bigr", "Bigl", "Bigr", "biggl", "biggr", "big", "Big", "bigg", "Biggl", "Biggr"}
-_CHAR_WIDTH = {"+": 1.25, "-": 1.25, "=": 1.35, "<": 1.35, ">": 1.35, "(": 0.4, ")": 0.4,
-               "[": 0.3, "]": 0.3, ",": 0.45, ";": 0.45, ".": 0.3, "/": 0.5, "|": 0.3, "'": 0.3,
-               " ": 0.0, "&": 0.0, "~": 0.33}
+_CHAR_WIDTH = {
+    "+": 1.25,
+    "-": 1.25,
+    "=": 1.35,
+    "<": 1.35,
+    ">": 1.35,
+    "(": 0.4,
+    ")": 0.4,
+    "[": 0.3,
+    "]": 0.3,
+    ",": 0.45,
+    ";": 0.45,
+    ".": 0.3,
+    "/": 0.5,
+    "|": 0.3,
+    "'": 0.3,
+    " ": 0.0,
+    "&": 0.0,
+    "~": 0.33,
+}
 
 
 @lru_cache(maxsize=65536)
@@ -475,7 +610,7 @@ class _Scanner:
             self.i = k
             return self.s[j:k]
         self.i = j + 1
-        return self.s[j:j + 1]
+        return self.s[j : j + 1]
 
     def argument(self) -> str:
         """Raw text of the next argument (a braced group or one token)."""
@@ -494,13 +629,13 @@ class _Scanner:
                     if depth == 0:
                         break
                 j += 1
-            text = self.s[self.i + 1:j]
+            text = self.s[self.i + 1 : j]
             self.i = j + 1
             return text
         if self.peek() == "\\":
             start = self.i
             self.command()
-            return self.s[start:self.i]
+            return self.s[start : self.i]
         ch = self.peek()
         self.i += 1
         return ch
@@ -508,7 +643,7 @@ class _Scanner:
     def environment(self, name: str) -> float:
         end = "\\end{" + name + "}"
         j = self.s.find(end, self.i)
-        body = self.s[self.i:j if j >= 0 else len(self.s)]
+        body = self.s[self.i : j if j >= 0 else len(self.s)]
         self.i = (j + len(end)) if j >= 0 else len(self.s)
         if "matrix" in name or name in ("array", "aligned", "cases"):
             scale = 0.7 if name == "smallmatrix" else 1.0
@@ -581,8 +716,22 @@ class _Scanner:
         if name == "operatorname":
             arg = self.argument()
             return 0.5 * len(re.sub(r"\\.|[{}]", "", arg)) + 0.3
-        if name in ("hat", "bar", "tilde", "vec", "dot", "ddot", "check", "breve", "acute",
-                    "grave", "underline", "overline", "widehat", "widetilde"):
+        if name in (
+            "hat",
+            "bar",
+            "tilde",
+            "vec",
+            "dot",
+            "ddot",
+            "check",
+            "breve",
+            "acute",
+            "grave",
+            "underline",
+            "overline",
+            "widehat",
+            "widetilde",
+        ):
             return width(self.argument())
         if name in ("hspace", "vspace", "label", "tag", "phantom", "hphantom"):
             arg = self.argument()

@@ -3,8 +3,10 @@
 
 from __future__ import annotations
 
-from ...templating import render
+from typing import ClassVar
+
 from ...plan import Plan, ScenePlan
+from ...templating import render
 from ..common import Backend, scene_context
 from . import kernels
 from .printer import NumpyPrinter
@@ -12,7 +14,7 @@ from .printer import NumpyPrinter
 
 class NumpyBackend(Backend):
     printer_class = NumpyPrinter
-    printer_settings = {**Backend.printer_settings, "fully_qualified_modules": True}
+    printer_settings: ClassVar[dict] = {**Backend.printer_settings, "fully_qualified_modules": True}
     templates = ("numpy/module.py.j2",)
     kernel_source = staticmethod(kernels.source)
 

@@ -15,8 +15,16 @@ from functools import cache
 import numpy as np
 
 from ....model.special import registry
-from ....model.special.elastica_force import (A1_SERIES, HALF_PI_FLOAT, OUTPUTS, Q_SERIES, RD_DOC, RD_STOP,
-                                  RF_DOC, RF_STOP)
+from ....model.special.elastica_force import (
+    A1_SERIES,
+    HALF_PI_FLOAT,
+    OUTPUTS,
+    Q_SERIES,
+    RD_DOC,
+    RD_STOP,
+    RF_DOC,
+    RF_STOP,
+)
 from ....model.special.kernels import StableKernel
 from ...literals import horner, literal, recurrence
 
@@ -64,25 +72,34 @@ def _kernel(cls: type[StableKernel], scalar: bool) -> str:
     coeffs, n = cls.float_series()
     threshold = literal(cls.threshold)
     series = horner(coeffs, "x2")
-    doc = (f"{cls.definition}; Taylor series ({n} terms) for |x| < {threshold}, "
-           f"else the nested elementary formula")
+    doc = (
+        f"{cls.definition}; Taylor series ({n} terms) for |x| < {threshold}, "
+        f"else the nested elementary formula"
+    )
     if scalar:
-        base = {"sinc": "math.sin(x) / x", "cosr1": "-2.0 * (math.sin(0.5 * x) / x) ** 2",
-                "sinc_minus_cos": "math.sin(x) / x - math.cos(x)"}[cls.float_base]
+        base = {
+            "sinc": "math.sin(x) / x",
+            "cosr1": "-2.0 * (math.sin(0.5 * x) / x) ** 2",
+            "sinc_minus_cos": "math.sin(x) / x - math.cos(x)",
+        }[cls.float_base]
         return (
             f"def {name}(x):\n"
-            f"    \"\"\"{doc}.\"\"\"\n"
+            f'    """{doc}."""\n'
             f"    x2 = x * x\n"
             f"    if abs(x) < {threshold}:\n"
             f"        return {series}\n"
             f"    b = {base}\n"
             + "".join(f"    {step}\n" for step in recurrence(cls.float_subtract, "x2"))
-            + "    return b\n")
-    base = {"sinc": "np.sin(xs) / xs", "cosr1": "-2.0 * (np.sin(0.5 * xs) / xs) ** 2",
-            "sinc_minus_cos": "np.sin(xs) / xs - np.cos(xs)"}[cls.float_base]
+            + "    return b\n"
+        )
+    base = {
+        "sinc": "np.sin(xs) / xs",
+        "cosr1": "-2.0 * (np.sin(0.5 * xs) / xs) ** 2",
+        "sinc_minus_cos": "np.sin(xs) / xs - np.cos(xs)",
+    }[cls.float_base]
     return (
         f"def {name}(x):\n"
-        f"    \"\"\"{doc} (vectorised).\"\"\"\n"
+        f'    """{doc} (vectorised)."""\n'
         f"    x = np.asarray(x, dtype=float)\n"
         f"    x2 = x * x\n"
         f"    small = np.abs(x) < {threshold}\n"
@@ -93,7 +110,8 @@ def _kernel(cls: type[StableKernel], scalar: bool) -> str:
         f"    xs2 = xs * xs\n"
         f"    b = {base}\n"
         + "".join(f"    {step}\n" for step in recurrence(cls.float_subtract, "xs2"))
-        + "    return np.where(small, series, b)\n")
+        + "    return np.where(small, series, b)\n"
+    )
 
 
 # The float constants of the algorithms, as literals.
@@ -285,10 +303,15 @@ _OUTPUTS = {
 
 def _elastica_output(name: str, scalar: bool) -> str:
     note = "" if scalar else " (vectorised, NaN out of domain)"
-    return (f'def {name}(t):\n    """Tip-force elastica: {OUTPUTS[name]}{note}."""\n'
-            f"    s, c, q, A, C, A1 = elastica_core(t)\n    return {_OUTPUTS[name]}\n")
+    return (
+        f'def {name}(t):\n    """Tip-force elastica: {OUTPUTS[name]}{note}."""\n'
+        f"    s, c, q, A, C, A1 = elastica_core(t)\n    return {_OUTPUTS[name]}\n"
+    )
 
 
 #: name -> (numpy source, scalar source)
-_FIXED = {"carlson_rf": (_NUMPY_RF, _SCALAR_RF), "carlson_rd": (_NUMPY_RD, _SCALAR_RD),
-          "elastica_core": (_NUMPY_CORE, _SCALAR_CORE)}
+_FIXED = {
+    "carlson_rf": (_NUMPY_RF, _SCALAR_RF),
+    "carlson_rd": (_NUMPY_RD, _SCALAR_RD),
+    "elastica_core": (_NUMPY_CORE, _SCALAR_CORE),
+}
