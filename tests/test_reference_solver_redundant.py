@@ -130,7 +130,7 @@ def test_inconsistent_redundancy_refused(tmp_path):
         Reference(mech).solve({"F1": "0.05"}, model_override="rigid")
 
 
-# ---- closed forms ---------------------------------------------------------------------------------
+# ---- closed forms -----------------------------------------------------------------------------
 def stage_translation(q, L, l, f, g):
     """Translation of a parallelogram stage (legs along +y, length L between plate midpoints,
     plates of length l along the legs) when the legs turn by q, the stage-side hinges by −q and
