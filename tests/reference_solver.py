@@ -17,12 +17,29 @@ Hinge a joins P = links[0] and M = links[1]; u = (cos α, sin α), u⊥ = (−si
 plate angle, l the plate length. P's clamp is cP0 = at − l/2·u (fixed in P), M's clamp is
 cM0 = at + l/2·u (fixed in M). With θ = φ_M − φ_P and the hinge model (f(θ), g(θ)):
 
-    [x_M, y_M] + Rot(φ_M)·cM0 − [x_P, y_P] − Rot(φ_P)·cP0 − Rot(φ_P)·(f(θ)·u + g(θ)·u⊥) = 0   (2
-    eq.)
+    [x_M, y_M] + Rot(φ_M)·cM0 − [x_P, y_P] − Rot(φ_P)·cP0 − Rot(φ_P)·(f(θ)·u + g(θ)·u⊥) = 0
+                                                                                  (2 eq.)
 
 and every input hinge adds φ_M − φ_P − q_a = 0 (1 eq.). For a mechanism whose number of inputs is
 its mobility, 2m + #inputs = 3n: a square system, solved by Newton's method with an analytic
 Jacobian and a dense LU with partial pivoting written here in plain mpmath.
+
+Redundant loops
+---------------
+A parallelogram with a third parallel leg has 2m + #inputs > 3n (Grübler counts a structure)
+but moves: some closure equations are dependent. Its mobility is 3n − rank(J_c), J_c the
+Jacobian of the 2m closure equations (inputs left out) at the as-fabricated pose
+(:func:`mobility`). When 2m + #inputs > 3n, the solver ranks the equations at the as-fabricated
+pose (of the model being solved): it keeps every input row and picks 3n − #inputs independent
+closure rows by a pivoted Gram–Schmidt (a rank-revealing QR of J_cᵀ, columns scaled to the
+mechanism's size, rank threshold 10^-(dps/2)); it refuses the request when the inputs do not
+fix the pose there (rank(J_c) ≠ 3n − #inputs, or an input dependent on the others). Newton then
+runs on the square system of the kept rows, and after every continuation step the dropped
+closure equations are evaluated: a step whose dropped residuals do not vanish (to about half
+the digits in the middle of the path, dps − 8 at the end) is rejected, so an inconsistent
+redundancy (a third leg of another length, which locks the rigid linkage) ends in
+:class:`ReferenceAssemblyError` rather than an answer. ``solve`` reports the dropped residuals.
+A square system takes exactly the former path (all rows, in order).
 
 Branch (assembly mode)
 ----------------------
@@ -67,7 +84,14 @@ import sympy as sp
 
 from symkin.model.mechanism import PLATE_LENGTH, THETA, Mechanism
 
-__all__ = ["OVERRIDE_MODELS", "Reference", "ReferenceAssemblyError", "ReferenceModelError"]
+__all__ = [
+    "OVERRIDE_MODELS",
+    "Reference",
+    "ReferenceAssemblyError",
+    "ReferenceModelError",
+    "load_unchecked",
+    "mobility",
+]
 
 #: models accepted by ``model_override`` (prbm with its default "force" parameters)
 OVERRIDE_MODELS = ("rigid", "circular_arc", "small_deflection", "prbm", "elastica_force")
@@ -287,7 +311,9 @@ class Reference:
     overridden one follow it.
     """
 
-    def __init__(self, mech: Mechanism, params: dict | None = None) -> None:
+    def __init__(
+        self, mech: Mechanism, params: dict | None = None, *, check_count: bool = True
+    ) -> None:
         self.mech = mech
         self.values = self._parameter_values(params or {})
         self.ground = mech.ground
@@ -295,13 +321,17 @@ class Reference:
         self.col = {name: 3 * i for i, name in enumerate(self.moving)}
         self.inputs = tuple(h.name for h in mech.hinges if h.input)
         self.n_unknowns = 3 * len(self.moving)
-        n_eq = 2 * len(mech.hinges) + len(self.inputs)
-        if n_eq != self.n_unknowns:
+        self.n_equations = 2 * len(mech.hinges) + len(self.inputs)
+        # fewer equations than unknowns: never enough inputs; more: a redundant closure is
+        # accepted, the rank is checked per model at the as-fabricated pose (_rows)
+        if check_count and self.n_equations < self.n_unknowns:
             raise ReferenceAssemblyError(
-                f"{n_eq} equations (2 per hinge + 1 per input) for {self.n_unknowns} unknowns "
-                "(3 per moving link): the number of inputs is not the mobility"
+                f"{self.n_equations} equations (2 per hinge + 1 per input) for "
+                f"{self.n_unknowns} unknowns (3 per moving link): the number of inputs is not "
+                "the mobility"
             )
         self._cache: dict = {}
+        self._row_cache: dict = {}
 
     # -- numbers ------------------------------------------------------------------------------
     def _parameter_values(self, params: dict) -> dict:
@@ -380,6 +410,116 @@ class Reference:
         scale = max(coords + [r.length for r in hinges]) or mpmath.mpf(1)
         self._cache[key] = (hinges, points, scale)
         return self._cache[key]
+
+    def _row_labels(self) -> list[str]:
+        """Names of the rows of _system: 'H.x', 'H.y' per hinge, then 'H.input' per input."""
+        out = [f"{h.name}.{c}" for h in self.mech.hinges for c in ("x", "y")]
+        return out + [f"{h.name}.input" for h in self.mech.hinges if h.input]
+
+    def _scaled_rows(self, J, scale):
+        """J with rows divided by the size and position columns multiplied by it: positions in
+        units of the mechanism's size, so the rank test compares like with like."""
+        return [[a if j % 3 != 2 else a / scale for j, a in enumerate(row)] for row in J]
+
+    @staticmethod
+    def _pivoted_rows(rows, forced, candidates, tol):
+        """Rank-revealing selection (pivoted modified Gram–Schmidt on the rows): the `forced`
+        row indices first, then repeatedly the candidate with the largest component outside the
+        span chosen so far, while that component exceeds `tol` times the row's norm. Returns
+        (chosen indices in order, indices of forced rows found dependent)."""
+        basis: list = []
+
+        def residual(row):
+            r = list(row)
+            for _ in range(2):  # twice: re-orthogonalise (Kahan's rule)
+                for b in basis:
+                    d = mpmath.fsum(x * y for x, y in zip(r, b))
+                    r = [x - d * y for x, y in zip(r, b)]
+            return r
+
+        def add(r):
+            nrm = mpmath.sqrt(mpmath.fsum(x * x for x in r))
+            basis.append([x / nrm for x in r])
+
+        chosen, bad = [], []
+        for i in forced:
+            r = residual(rows[i])
+            norm_i = mpmath.sqrt(mpmath.fsum(x * x for x in rows[i]))
+            if mpmath.sqrt(mpmath.fsum(x * x for x in r)) <= tol * norm_i:
+                bad.append(i)
+                continue
+            add(r)
+            chosen.append(i)
+        left = [i for i in candidates if mpmath.fsum(x * x for x in rows[i]) > 0]
+        while left:
+            best, best_val, best_r = None, mpmath.mpf(0), None
+            for i in left:
+                r = residual(rows[i])
+                norm_i = mpmath.sqrt(mpmath.fsum(x * x for x in rows[i]))
+                val = mpmath.sqrt(mpmath.fsum(x * x for x in r)) / norm_i
+                if val > best_val:
+                    best, best_val, best_r = i, val, r
+            if best is None or best_val <= tol:
+                break
+            add(best_r)
+            chosen.append(best)
+            left.remove(best)
+        return chosen, bad
+
+    def _constraint_rank(self, model_override, dps) -> int:
+        """Rank of the 2m closure rows (inputs left out) at the as-fabricated pose."""
+        with mpmath.workdps(dps):
+            hinges, _, scale = self._setup(model_override, dps)
+            X = [mpmath.mpf(0)] * self.n_unknowns
+            q = {k: mpmath.mpf(0) for k in self.inputs}
+            _, J = self._system(X, q, hinges)
+            rows = self._scaled_rows(J, scale)
+            n_c = 2 * len(hinges)
+            tol = mpmath.mpf(10) ** (-(dps // 2))
+            chosen, _ = self._pivoted_rows(rows, [], range(n_c), tol)
+            return len(chosen)
+
+    def _rows(self, model_override, dps):
+        """(kept row indices in _system order, dropped row indices) for this model. A square
+        system keeps every row; an over-determined one is reduced at the as-fabricated pose
+        (module docstring, "Redundant loops")."""
+        key = (model_override, dps)
+        if key not in self._row_cache:
+            with mpmath.workdps(dps):
+                self._row_cache[key] = self._select_rows(model_override, dps)
+        return self._row_cache[key]
+
+    def _select_rows(self, model_override, dps):
+        n_rows = self.n_equations
+        if n_rows == self.n_unknowns:
+            out = (list(range(n_rows)), [])
+        else:
+            hinges, _, scale = self._setup(model_override, dps)
+            X = [mpmath.mpf(0)] * self.n_unknowns
+            q = {k: mpmath.mpf(0) for k in self.inputs}
+            _, J = self._system(X, q, hinges)
+            rows = self._scaled_rows(J, scale)
+            n_c = 2 * len(hinges)
+            tol = mpmath.mpf(10) ** (-(dps // 2))
+            chosen, bad = self._pivoted_rows(rows, range(n_c, n_rows), range(n_c), tol)
+            rank_c = self._constraint_rank(model_override, dps)
+            mob = self.n_unknowns - rank_c
+            labels = self._row_labels()
+            which = f"{self.mech.name} ({model_override or 'file models'})"
+            if bad:
+                raise ReferenceAssemblyError(
+                    f"{which}: the input(s) {[labels[i] for i in bad]} are fixed by the other "
+                    "inputs at the as-fabricated pose: not independent generalized coordinates"
+                )
+            if len(chosen) != self.n_unknowns or mob != len(self.inputs):
+                raise ReferenceAssemblyError(
+                    f"{which}: mobility 3n - rank(J) = {self.n_unknowns} - {rank_c} = {mob} at "
+                    f"the as-fabricated pose but {len(self.inputs)} input(s): the number of "
+                    "inputs is not the mobility"
+                )
+            kept = sorted(chosen)
+            out = (kept, [i for i in range(n_rows) if i not in set(kept)])
+        return out
 
     # -- equations ----------------------------------------------------------------------------
     def _pose(self, X, link):
@@ -484,13 +624,21 @@ class Reference:
             out = max(out, abs(d) / scale if i % 3 != 2 else abs(d))
         return out
 
-    def _newton(self, X, q, hinges, scale, tol, max_iter=30):
-        """Newton from X; return (X, sign det J at the solution) or None if it fails."""
+    def _reduced(self, X, q, hinges, rows):
+        """_system restricted to the kept rows (all of them for a square system)."""
+        F, J = self._system(X, q, hinges)
+        if rows is None or len(rows) == len(F):
+            return F, J
+        return [F[i] for i in rows], [J[i] for i in rows]
+
+    def _newton(self, X, q, hinges, scale, tol, max_iter=30, rows=None):
+        """Newton from X; return (X, sign det J at the solution) or None if it fails.
+        `rows`: the kept rows of a redundant system (None: all)."""
         X = list(X)
         last = None
         for _ in range(max_iter):
             try:
-                F, J = self._system(X, q, hinges)
+                F, J = self._reduced(X, q, hinges, rows)
                 dX, sign = self._lu_solve(J, [-v for v in F])
             except (ZeroDivisionError, ReferenceModelError):
                 return None
@@ -533,7 +681,9 @@ class Reference:
              "poses": {link: (x, y, phi)},              # every link, ground (0, 0, 0) included
              "angles": {hinge: theta},                  # θ_a = φ_M − φ_P for every hinge
              "points": {point: (x, y)},                 # absolute position of every [[point]]
-             "steps": number of accepted continuation steps}
+             "steps": number of accepted continuation steps,
+             "dropped": {row: residual}}                # redundant closure rows not solved for
+                                                        # ('H.x' / 'H.y'), empty when square
 
         Raises ReferenceAssemblyError when the continuation from the as-fabricated pose cannot
         reach the inputs, ReferenceModelError for an unsupported hinge model.
@@ -541,13 +691,25 @@ class Reference:
         with mpmath.workdps(dps):
             target = self._targets(inputs)
             hinges, points, scale = self._setup(model_override, dps)
+            rows, dropped = self._rows(model_override, dps)
             n = self.n_unknowns
             X = [mpmath.mpf(0)] * n
             names = list(self.inputs)
             q = {k: mpmath.mpf(0) for k in names}
             tol_mid = mpmath.mpf(10) ** (-(dps // 2))
             tol_end = mpmath.mpf(10) ** (-(dps - 6))
-            res = self._newton(X, q, hinges, scale, tol_end)
+            # dropped rows of a redundant closure must vanish with the kept ones (lengths, so
+            # relative to the mechanism's size): loosely mid-path, to dps − 8 digits at the end
+            drop_mid = scale * mpmath.mpf(10) ** (-(dps // 2 - 4))
+            drop_end = scale * mpmath.mpf(10) ** (-(dps - 8))
+
+            def dropped_residual(X, q):
+                if not dropped:
+                    return mpmath.mpf(0)
+                F, _ = self._system(X, q, hinges)
+                return max(abs(F[i]) for i in dropped)
+
+            res = self._newton(X, q, hinges, scale, tol_end, rows=rows)
             if res is None:
                 raise ReferenceAssemblyError(
                     f"{self.mech.name}: the as-fabricated pose is singular or not a solution "
@@ -566,29 +728,45 @@ class Reference:
                 # tangent predictor: J dX = (dq on the input rows)
                 pred = X
                 try:
-                    F, J = self._system(X, q_new, hinges)
+                    F, J = self._reduced(X, q_new, hinges, rows)
                     dX, _ = self._lu_solve(J, [-v for v in F])
                     pred = [a + b for a, b in zip(X, dX)]
                 except (ZeroDivisionError, ReferenceModelError):
                     pred = X
-                res = self._newton(pred, q_new, hinges, scale, tol_end if final else tol_mid)
+                res = self._newton(
+                    pred, q_new, hinges, scale, tol_end if final else tol_mid, rows=rows
+                )
                 # reject: no convergence, det(J) changed sign (crossed a singular/toggle
-                # configuration: the branch would switch), or a large correction (a jump)
+                # configuration: the branch would switch), or a large correction (a jump);
+                # for a redundant closure also dropped equations that do not hold
                 ok = (
                     res is not None
                     and res[1] == sign0
                     and self._norm([a - b for a, b in zip(res[0], pred)], scale) <= MAX_JUMP
                 )
+                bad_drop = None
+                if ok and dropped:
+                    bad_drop = dropped_residual(res[0], q_new)
+                    ok = bad_drop <= (drop_end if final else drop_mid)
                 if not ok:
                     h /= 2
                     if h < min_step:
                         where = ", ".join(f"{k}={mpmath.nstr(target[k] * t, 10)}" for k in names)
+                        why = (
+                            "out of the assembly range, a toggle/singular configuration, or "
+                            "Newton not converging"
+                        )
+                        if bad_drop is not None:
+                            why = (
+                                f"the redundant closure equations dropped at the as-fabricated "
+                                f"pose do not hold (residual {mpmath.nstr(bad_drop, 5)}): the "
+                                "redundant loops are inconsistent"
+                            )
                         raise ReferenceAssemblyError(
                             f"{self.mech.name} ({model_override or 'file models'}): cannot "
                             f"continue from the as-fabricated pose to the inputs "
                             f"{ {k: mpmath.nstr(v, 10) for k, v in target.items()} }; stuck at "
-                            f"{where} (out of the assembly range, a toggle/singular "
-                            "configuration, or Newton not converging)"
+                            f"{where} ({why})"
                         )
                     continue
                 X, t = res[0], t_new
@@ -601,6 +779,8 @@ class Reference:
                     f"{self.mech.name}: residual {mpmath.nstr(resid, 5)} "
                     "after Newton, not converged"
                 )
+            labels = self._row_labels()
+            drop_res = {labels[i]: F[i] for i in dropped}
             poses = {lk.name: self._pose(X, lk.name) for lk in self.mech.links}
             angles = {r.name: poses[r.m][2] - poses[r.p][2] for r in hinges}
             pts = {}
@@ -616,6 +796,7 @@ class Reference:
                 "angles": angles,
                 "points": pts,
                 "steps": steps,
+                "dropped": drop_res,
             }
 
     def deviation(
@@ -669,3 +850,39 @@ class Reference:
             hinges, _, _ = self._setup(model_override, dps)
             r = next(r for r in hinges if r.name == hinge)
             return r.model(_to_mpf(theta, dps))
+
+
+# --------------------------------------------------------------------------------------------
+# mobility and files that Grübler's count refuses
+# --------------------------------------------------------------------------------------------
+def mobility(
+    mech: Mechanism, params: dict | None = None, model_override: str | None = "rigid", dps: int = 40
+) -> tuple[int, int]:
+    """(Grübler's 3n − 2m, 3n − rank J_c): J_c the Jacobian of the 2m closure equations (inputs
+    left out) at the as-fabricated pose, by default of the rigid linkage (pins at the plate
+    midpoints; ``model_override=None`` takes the file's models). The second number is the real
+    (first-order) mobility: a parallelogram with a third parallel leg has (0, 1)."""
+    ref = Reference(mech, params, check_count=False)
+    grubler = 3 * len(ref.moving) - 2 * len(mech.hinges)
+    return grubler, ref.n_unknowns - ref._constraint_rank(model_override, dps)
+
+
+def load_unchecked(path) -> Mechanism:
+    """Parse a mechanism file with symkin, also when its inputs do not number Grübler's mobility
+    (a redundant closure such as a three-leg stage, which symkin of this time refuses): only the
+    mobility rule is lifted, every other rule of the file format still applies."""
+    import symkin
+    import symkin.model.mechanism as parser
+
+    try:
+        return symkin.load(path)
+    except symkin.InputError as exc:
+        reader = getattr(parser, "_Reader", None)
+        if "mobility" not in str(exc) or not hasattr(reader, "check_mobility"):
+            raise
+    original = reader.check_mobility
+    reader.check_mobility = lambda self, mech: None
+    try:
+        return symkin.load(path)
+    finally:
+        reader.check_mobility = original
