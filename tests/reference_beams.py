@@ -59,9 +59,9 @@ Methods
 For one plate, independently of both: :func:`cantilever_quadrature`, the first integral of the
 equations above, EI ψ'²/2 + N + N²·(1/EA − 1/κGA)/2 = const (the Reissner analogue of the
 elastica's elliptic-integral solution, cf. Batista, arXiv:1508.04424, 2015), integrated by
-tanh-sinh quadrature after a substitution that removes the tip's square-root singularity; and
-:func:`cantilever` / :func:`cantilever_posed`, the shooting integrator with Newton on the root
-moment (end loads given) or on all three root loads (end pose given). :class:`Section` gives a
+Gauss–Legendre quadrature after a substitution that removes the tip's square-root singularity;
+and :func:`cantilever` / :func:`cantilever_posed`, the shooting integrator with Newton on the
+root moment (end loads given) or on all three root loads (end pose given). :class:`Section` gives a
 plate's EI, EA, κGA from its material and size.
 
 Validation (tests/test_reference_beams.py)
@@ -75,8 +75,8 @@ Validation (tests/test_reference_beams.py)
   F l/EA, the clamped–guided stiffness 1/(l³/(12EI) + l/(κGA)), and a perturbation series
   through α⁴ derived with sympy in the test (remainder O(α⁵));
 - large loads with exaggerated stretch and shear (EI/(EA l²) = 0.01, EI/(κGA l²) = 0.03; load
-  indices up to 5, end moments, axial components): shooting and quadrature agree to 1e-40 at
-  40 digits, and the posed solver returns the loads;
+  indices up to 5, end moments, axial components): shooting and quadrature agree to 1e-31 at
+  30 digits (1e-41 at 40), and the posed solver returns the loads;
 - mechanisms: (a) and (b) agree on every point's deviation, every hinge's force and moment, the
   actuator torques, the links' rotations and the energy, on the four-bar (A0 = 0.05 and 0.3, with
   and without (0.5, −1) N on C), the parallelogram stage (with and without a load on the stage)
@@ -92,14 +92,14 @@ stage; hinge forces and moments 1e-28..5e-23; energy 2e-28..6e-24. (a)'s own err
 (the change from d to d + 10 digits) is below 1e-31; (b)'s Richardson estimate 1e-19..5e-16 is
 pessimistic. The chain's error expands in even powers of h with stretch and shear too: its
 Richardson table converges like the elastica's. Cost, one core: a mechanism solve takes 0.1–0.3 s
-by (a), 0.6–1 s by (b) (N = 16..128); one cantilever 0.01–0.7 s by shooting and 0.3–4 s by the
-quadrature at 40 digits.
+by (a), 0.6–1 s by (b) (N = 16..128); one cantilever 0.01–0.7 s by shooting, 0.2–1.5 s by the
+quadrature and the posed solver at 30 digits. tests/test_reference_beams.py: 25 s of CPU.
 
 Use
 ---
     mech = symkin.load("examples/four_bar.toml")
-    eq = BeamEquilibrium(mech)                 # E, thickness, width, nu, loads from the file
-    res = eq.solve({"A0": "0.1"})                   # Reissner plates by default
+    eq = BeamEquilibrium(mech)            # E, thickness, width, nu and loads from the file
+    res = eq.solve({"A0": "0.1"})         # Reissner plates by default
     BeamEquilibrium(mech, beam="elastica").solve({"A0": "0.1"})
     BeamChainEquilibrium(mech, (210e9, 5e-3, "l/10", "0.3"), loads=[...]).solve(...)
 
@@ -437,16 +437,16 @@ def cantilever_quadrature(fx, fy, m1=0, *, eps=0, gam=0, dps: int = 40,
                           steps: int = 4) -> dict:
     """The problem of :func:`cantilever` by the first integral, for a section angle ψ that runs
     monotonically from 0 to its tip value ψ1 (no inflection point, as in the cantilever tables;
-    other cases are not detected and give wrong answers):
+    an end moment against the end rotation raises ValueError):
 
         ψ'²/2 + V(ψ) = m1²/2 + V(ψ1),   V = f_N + (eps − gam)·f_N²/2,   f_N = f·(cos ψ, sin ψ),
 
     so that 1 = ∫ dψ/ψ' and (x, y) = ∫ r'(ψ) dψ/ψ'. With ψ = ψ1·(1 − τ²) the integrands are
     analytic on τ ∈ [0, 1] (the square-root singularity at a moment-free tip is removed); the
-    difference V(ψ1) − V(ψ) is formed without cancellation. mpmath.quad (tanh-sinh) evaluates
-    them, mpmath.findroot (secant) solves for ψ1, continued in the loads from zero at 20 digits,
-    then at ``dps`` + 10. Shares no code with the shooting: an independent check of it. Returns
-    {"x", "y", "psi", "length" (= 1, the check of the root), "dps"}."""
+    difference V(ψ1) − V(ψ) is formed without cancellation. mpmath.quad (Gauss–Legendre)
+    evaluates them, mpmath.findroot (secant) solves for ψ1, continued in the loads from zero at
+    20 digits, then at ``dps`` + 10. Shares no code with the shooting: an independent check of
+    it. Returns {"x", "y", "psi", "length" (= 1, the check of the root), "dps"}."""
 
     def integral(psi1, f, which):
         gx, gy, mm, e, g = f

@@ -70,6 +70,9 @@ Use
     res["points"]["C"]["deviation"], res["hinges"]["A"]["moment"], res["energy"]
 
 An input given as None is released (no actuator; its rigid reference stays at 0): a cantilever.
+Plates that stretch and shear (Reissner's beam) are in tests/reference_beams.py, which reuses this
+module: ``shoot`` takes their gam = EI/(κGA·l²) beside eps, and each plate's gam is read from the
+owner's ``_shear_ratio`` (absent here: 0).
 
 Validity and measured accuracy
 ------------------------------
