@@ -44,6 +44,11 @@ FLOORS: tuple[tuple[str, ...], ...] = (
     ("derive",),
     ("scene",),
     ("",),                                  # the package itself: symkin.load, analyze, ...
+    # the finite-element check: a client of the package's public API (docs/fea.md)
+    ("fea._symkin",),
+    ("fea.deck", "fea.ccx"),
+    ("fea",),
+    ("fea.command",),
     ("cli", "__main__"),
 )
 #: Packages whose __init__ only documents them (no imports): no floor needed.
