@@ -1,7 +1,9 @@
 """Package discovery for setuptools: every package under symkin/ is found, not listed.
 
-The Jinja templates live in the top-level templates/ folder and ship inside the wheel as the
-package symkin.templates (package_dir maps it), so a plain, non-editable install finds them.
+The Jinja templates and the runtimes the generated files hold (templates/c/runtime.c,
+templates/numpy/runtime.py: docs/runtime.md) live in the top-level templates/ folder and ship
+inside the wheel as the package symkin.templates (package_dir maps it), so a plain, non-editable
+install finds them.
 Everything else (metadata, dependencies, scripts) is in pyproject.toml.
 """
 
@@ -10,5 +12,5 @@ from setuptools import find_packages, setup
 setup(
     packages=find_packages(include=["symkin", "symkin.*"]) + ["symkin.templates"],
     package_dir={"symkin.templates": "templates"},
-    package_data={"symkin.templates": ["**/*.j2"]},
+    package_data={"symkin.templates": ["**/*.j2", "*/runtime.c", "*/runtime.py"]},
 )

@@ -69,8 +69,14 @@ def test_readme_first_command_in_a_fresh_venv(tmp_path):
     assert where.stdout.startswith(str(env_dir)), where.stdout
     # Every module and template of the source tree is in the installed package.
     installed = pathlib.Path(where.stdout.strip()).parent
-    for pattern, root in (("*.py", ROOT / "symkin"), ("*.j2", ROOT / "templates")):
-        for f in root.rglob(pattern):
+    for pattern, root in (
+        ("*.py", ROOT / "symkin"),
+        ("*.j2", ROOT / "templates"),
+        ("runtime.*", ROOT / "templates"),  # the runtimes the generated files hold
+    ):
+        found = list(root.rglob(pattern))
+        assert found, (pattern, root)
+        for f in found:
             target = (
                 installed / ("templates" if root.name == "templates" else "") / f.relative_to(root)
             )
@@ -96,3 +102,8 @@ def test_readme_first_command_in_a_fresh_venv(tmp_path):
     # The templates (package data of symkin.templates) ship inside the wheel.
     matrices = symkin("matrices", example)
     assert "incidence I" in matrices
+    # The installed package reads its runtimes: the generated files hold them verbatim.
+    for name, runtime in (("four_bar.c", "c/runtime.c"), ("four_bar.py", "numpy/runtime.py")):
+        text = (installed / "templates" / runtime).read_text()
+        body = text.split("symkin runtime: every generated", 1)[1].split("\n", 1)[1].lstrip("\n")
+        assert body and body in (tmp_path / "out" / name).read_text(), name

@@ -11,13 +11,15 @@
 #include <stddef.h>
 
 enum {
-    SK_M = 7,          /* hinges */
-    SK_K = 6,          /* non-input hinges: size of the loop unknowns */
-    SK_K1 = 7,
-    SK_NDYAD = 2,
-    SK_NP = 1,
-    SK_NL = 6,           /* links whose rotation is reported */
-    SK_NQ = STEPHENSON_SIX_BAR_N_PARAMS + 14 + 1  /* what the routines read */
+    SK_M = 7,           /* hinges */
+    SK_K = 6,           /* non-input hinges: the loops' unknowns, delta */
+    SK_NI = STEPHENSON_SIX_BAR_N_INPUTS,
+    SK_NPAR = STEPHENSON_SIX_BAR_N_PARAMS,
+    SK_NP = 1,          /* points */
+    SK_NL = 6,          /* links whose rotation is reported */
+    SK_NV = 2,          /* variables of the sensitivities: parameters, inputs */
+    SK_NQ = SK_NPAR + 14 + 1,  /* what the routines read */
+    SK_OUT = 113        /* the largest routine output, and one */
 };
 
 const double stephenson_six_bar_default_params[STEPHENSON_SIX_BAR_N_PARAMS > 0 ? STEPHENSON_SIX_BAR_N_PARAMS : 1] = {
@@ -54,10 +56,6 @@ const char *const stephenson_six_bar_hinge_names[STEPHENSON_SIX_BAR_N_HINGES] = 
     "A",
     "D"
 };
-
-static const int sk_input_index[STEPHENSON_SIX_BAR_N_INPUTS] = {0};
-static const int sk_unknown_index[SK_K] = {1, 2, 3, 4, 5, 6};
-static const double sk_two_pi = 6.283185307179586476925286766559006;
 
 /* arck(x): arck(x) = (sin x - x cos x)/x^3; Taylor series (10 terms) for |x| < 1.5, else the nested elementary formula. */
 static double symkin_arck(double x)
@@ -1134,8 +1132,9 @@ static void sk_loaded_newton(const double *theta, const double *delta, const dou
 }
 
 /* deviation of the points at level paper (36 operations) */
-static void sk_dev_paper(const double *theta, const double *params, double *out)
+static void sk_dev_paper(const double *theta, const double *delta, const double *params, double *out)
 {
+    (void)delta;
     const double theta_1 = theta[0];
     const double theta_2 = theta[1];
     const double p_0 = params[0];
@@ -1376,8 +1375,9 @@ static void sk_sens_rigid(const double *theta, const double *params, double *out
 }
 
 /* sensitivity at level paper: dD/dtheta, dD/dv (118 operations) */
-static void sk_sens_paper(const double *theta, const double *params, double *out)
+static void sk_sens_paper(const double *theta, const double *delta, const double *params, double *out)
 {
+    (void)delta;
     const double theta_1 = theta[0];
     const double theta_2 = theta[1];
     const double p_0 = params[0];
@@ -2088,59 +2088,24 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     out[111] = _tmp218;
 }
 
-/* Gaussian elimination with partial pivoting on the n x n row-major a, in place; x -> b. */
-static int sk_solve(int n, double *a, double *b)
-{
-    int i, j, c, p, r;
-    for (c = 0; c < n; ++c) {
-        double best = fabs(a[c * n + c]);
-        p = c;
-        for (i = c + 1; i < n; ++i) {
-            if (fabs(a[i * n + c]) > best) {
-                best = fabs(a[i * n + c]);
-                p = i;
-            }
-        }
-        if (!(best > 0.0) || !isfinite(best)) {
-            return 1;
-        }
-        if (p != c) {
-            double t;
-            for (j = 0; j < n; ++j) {
-                t = a[c * n + j];
-                a[c * n + j] = a[p * n + j];
-                a[p * n + j] = t;
-            }
-            for (r = 0; r < 1; ++r) {
-                t = b[c * 1 + r];
-                b[c * 1 + r] = b[p * 1 + r];
-                b[p * 1 + r] = t;
-            }
-        }
-        for (i = c + 1; i < n; ++i) {
-            const double f = a[i * n + c] / a[c * n + c];
-            for (j = c; j < n; ++j) {
-                a[i * n + j] -= f * a[c * n + j];
-            }
-            for (r = 0; r < 1; ++r) {
-                b[i * 1 + r] -= f * b[c * 1 + r];
-            }
-        }
-    }
-    for (r = 0; r < 1; ++r) {
-        for (i = n - 1; i >= 0; --i) {
-            double s = b[i * 1 + r];
-            for (j = i + 1; j < n; ++j) {
-                s -= a[i * n + j] * b[j * 1 + r];
-            }
-            b[i * 1 + r] = s / a[i * n + i];
-        }
-    }
-    return 0;
-}
+/* symkin runtime (templates/c/runtime.c, docs/runtime.md; tested on its own by
+   tests/test_runtime_c.py): dense linear algebra, the Newton and continuation drivers, the
+   evaluation of a configuration at every level, the sensitivities and the batch loops, all
+   driven by the tables of one sk_mechanism (this mechanism's part of it). */
 
-/* The same for m right-hand sides: the n x m row-major b becomes the solution. */
-static int sk_solve_many(int n, double *a, int m, double *b)
+#define SK_TWO_PI 6.283185307179586476925286766559006
+
+/* The routines: one to three input arrays, then the output array. */
+typedef void (*sk_fn1)(const double *a, double *out);
+typedef void (*sk_fn2)(const double *a, const double *b, double *out);
+typedef void (*sk_fn3)(const double *a, const double *b, const double *c, double *out);
+
+/* ---- dense linear algebra ---- */
+
+/* Gaussian elimination with partial pivoting (the first largest pivot) of the n x n row-major
+   a, in place, for the n x m row-major right-hand sides b, which become the solution. Returns 0,
+   or 1 when a pivot is zero or not finite. */
+static int sk_solve(int n, double *a, int m, double *b)
 {
     int i, j, c, p, r;
     for (c = 0; c < n; ++c) {
@@ -2157,7 +2122,7 @@ static int sk_solve_many(int n, double *a, int m, double *b)
         }
         if (p != c) {
             double t;
-            for (j = 0; j < n; ++j) {
+            for (j = c; j < n; ++j) {
                 t = a[c * n + j];
                 a[c * n + j] = a[p * n + j];
                 a[p * n + j] = t;
@@ -2170,7 +2135,7 @@ static int sk_solve_many(int n, double *a, int m, double *b)
         }
         for (i = c + 1; i < n; ++i) {
             const double f = a[i * n + c] / a[c * n + c];
-            for (j = c; j < n; ++j) {
+            for (j = c + 1; j < n; ++j) {
                 a[i * n + j] -= f * a[c * n + j];
             }
             for (r = 0; r < m; ++r) {
@@ -2190,111 +2155,9 @@ static int sk_solve_many(int n, double *a, int m, double *b)
     return 0;
 }
 
-/* Newton on the rigid closure relative to the as-fabricated pose: at most `iterations` steps,
-   stopping once a step is at most `tolerance`; returns the last step size, or -1 when the loop
-   Jacobian is singular. */
-static double sk_rigid_newton(double *theta, const double *params, int iterations,
-                              double tolerance)
-{
-    double lin[SK_K * SK_K + SK_K], res[SK_K];
-    double change = 0.0;
-    int it, i;
-    for (it = 0; it < iterations; ++it) {
-        sk_rigid_res(theta, params, res);
-        sk_linear(theta, params, lin);
-        if (sk_solve(SK_K, lin, res)) {
-            return -1.0;
-        }
-        change = 0.0;
-        for (i = 0; i < SK_K; ++i) {
-            theta[sk_unknown_index[i]] -= res[i];
-            if (fabs(res[i]) > change) {
-                change = fabs(res[i]);
-            }
-        }
-        if (change <= tolerance) {
-            break;
-        }
-    }
-    return change;
-}
 
-typedef void (*sk_linear_fn)(const double *theta, const double *params, double *out);
-
-/* A delta = -r of a closure's linear routine (A, then r): its first-order delta.
-   Returns 0, or 1 when A is singular. */
-static int sk_linear_start(sk_linear_fn linear, const double *theta, const double *params,
-                           double *delta)
-{
-    double lin[SK_K * SK_K + SK_K];
-    int i;
-    linear(theta, params, lin);
-    for (i = 0; i < SK_K; ++i) {
-        delta[i] = -lin[SK_K * SK_K + i];
-    }
-    return sk_solve(SK_K, lin, delta);
-}
-
-/* Level first_order, and the start of every other loop-solving level: A delta = -Phi dz. */
-static int sk_first_order(const double *theta, const double *params, double *delta)
-{
-    return sk_linear_start(sk_linear, theta, params, delta);
-}
-
-typedef void (*sk_newton_fn)(const double *theta, const double *delta, const double *params,
-                             double *out);
-
-/* Newton on a compliant closure (`newton`: F and dF/ddelta) from its first-order delta, ending
-   once a step is below sqrt(eps) of delta (quadratic convergence leaves it exact) or stalls at
-   rounding. Returns 0, 1 when a Jacobian is singular, 2 without convergence. */
-static int sk_newton_solve(sk_linear_fn linear, sk_newton_fn newton, const double *theta,
-                           const double *params, double *delta)
-{
-    double nw[SK_K + SK_K * SK_K];
-    double previous = HUGE_VAL;
-    int it, i, converged = 0;
-    if (sk_linear_start(linear, theta, params, delta)) {
-        return 1;
-    }
-    for (it = 0; it < 40 && !converged; ++it) {
-        double size = 0.0, change = 0.0;
-        newton(theta, delta, params, nw);
-        if (sk_solve(SK_K, nw + SK_K, nw)) {
-            return 1;
-        }
-        for (i = 0; i < SK_K; ++i) {
-            delta[i] -= nw[i];
-            if (fabs(delta[i]) > size) {
-                size = fabs(delta[i]);
-            }
-            if (fabs(nw[i]) > change) {
-                change = fabs(nw[i]);
-            }
-        }
-        converged = change <= 1e-08 * size || size == 0.0
-                    || (change >= 0.5 * previous && change <= 1e-12 * size);
-        previous = change;
-    }
-    return converged ? 0 : 2;
-}
-
-/* Level exact: Newton on the compliant closure from the first-order delta. */
-static int sk_exact(const double *theta, const double *params, double *delta)
-{
-    return sk_newton_solve(sk_linear, sk_newton, theta, params, delta);
-}
-
-/* Level loaded (and loaded_refined, with its own constants): Newton on the loaded closure from
-   its first-order delta; `params` holds the plates' compliance after the parameters
-   (sk_loaded_constants, sk_loaded_refine). */
-static int sk_loaded(const double *theta, const double *params, double *delta)
-{
-    return sk_newton_solve(sk_loaded_linear, sk_loaded_newton, theta, params, delta);
-}
-
-/* LU factorisation with partial pivoting of the n x n row-major a, in place (L below the unit
-   diagonal, U on and above it), the row swaps in piv: sk_solve's elimination, kept for a second
-   right-hand side. Returns 0, or 1 when a is singular. */
+/* sk_solve's elimination kept for later right-hand sides: the multipliers below the diagonal of
+   a, U on and above it, the row swaps in piv. Returns 0, or 1 as sk_solve. */
 static int sk_lu(int n, double *a, int *piv)
 {
     int i, j, c, p;
@@ -2311,13 +2174,11 @@ static int sk_lu(int n, double *a, int *piv)
             return 1;
         }
         piv[c] = p;
-        if (p != c) {
-            /* the multipliers of earlier columns stay: sk_lu_solve replays each swap in turn */
-            for (j = c; j < n; ++j) {
-                const double t = a[c * n + j];
-                a[c * n + j] = a[p * n + j];
-                a[p * n + j] = t;
-            }
+        /* the multipliers of earlier columns stay: sk_lu_solve replays each swap in turn */
+        for (j = c; p != c && j < n; ++j) {
+            const double t = a[c * n + j];
+            a[c * n + j] = a[p * n + j];
+            a[p * n + j] = t;
         }
         for (i = c + 1; i < n; ++i) {
             const double f = a[i * n + c] / a[c * n + c];
@@ -2330,7 +2191,7 @@ static int sk_lu(int n, double *a, int *piv)
     return 0;
 }
 
-/* b -> x of a x = b with sk_lu's factors of a. */
+/* b -> x of a x = b with sk_lu's factors of a: sk_solve's operations for one right-hand side. */
 static void sk_lu_solve(int n, const double *a, const int *piv, double *b)
 {
     int i, j, c;
@@ -2353,93 +2214,312 @@ static void sk_lu_solve(int n, const double *a, const int *piv, double *b)
     }
 }
 
-/* The statics A^T mu0 = Q0, A^T mu = Q(mu0) with A^T factored in (at, piv), and the loaded
-   closure's constants: the parameters, then the plates' compliance under those loads (with
-   `all`, also of the plates only the loaded closure reads). */
-static void sk_loaded_statics(const double *theta, const double *params, const double *at,
-                              const int *piv, int all, double *constants)
+/* remainder(x, 2 pi): x itself when |x| <= pi (exactly what remainder returns), without the
+   call. */
+static double sk_wrap(double x)
 {
-    double mu[SK_K];
-    double mu0[SK_K];
+    return fabs(x) <= 0.5 * SK_TWO_PI ? x : remainder(x, SK_TWO_PI);
+}
+
+/* n entries of x set to NaN (no partial result after a failure); x may be NULL. */
+static void sk_nan(double *x, int n)
+{
     int i;
-    sk_loaded_q0(theta, params, mu0);
-    sk_lu_solve(SK_K, at, piv, mu0);
-    sk_loaded_q(theta, mu0, params, mu);
-    sk_lu_solve(SK_K, at, piv, mu);
-    sk_loaded_compliance(theta, mu, params, constants + STEPHENSON_SIX_BAR_N_PARAMS);
-    (void)all;
-    for (i = 0; i < STEPHENSON_SIX_BAR_N_PARAMS; ++i) {
-        constants[i] = params[i];
+    for (i = 0; x != NULL && i < n; ++i) {
+        x[i] = NAN;
     }
+}
+
+/* ---- Newton and continuation ---- */
+
+/* When a Newton iteration stops (symkin.core.settings): after `iterations` steps at most, and
+   once a step (its largest entry) is at most `tolerance`, or at most `converged` times the
+   largest unknown (with converged > 0: quadratic convergence leaves the unknowns exact; also
+   when they are all zero), or has stalled at rounding: at least `stall_ratio` times the
+   previous step and at most `stalled` times the largest unknown. */
+typedef struct {
+    int iterations;
+    double tolerance;
+    double converged;
+    double stalled;
+    double stall_ratio;
+} sk_rule;
+
+
+/* Whether Newton stops after a step `change` (largest entry), the unknowns now at most `size`
+   in magnitude, the previous step `previous` (HUGE_VAL before the second): the one stopping
+   test of every Newton iteration. */
+static int sk_newton_stop(const sk_rule *rule, double change, double size,
+                          double previous)
+{
+    return change <= rule->tolerance
+           || (rule->converged > 0.0 && (change <= rule->converged * size || size == 0.0))
+           || (change >= rule->stall_ratio * previous && change <= rule->stalled * size);
+}
+
+/* A system of n equations: at the unknowns x, its residual f (n), then its Jacobian (n x n,
+   row-major), into fj. */
+typedef void (*sk_system_fn)(const void *ctx, const double *x, double *fj);
+
+/* Newton on `system` from x: each step solves J s = f and subtracts s from the unknowns
+   (x[index[i]], or x[i] when index is NULL) until `rule` stops it. fj (n + n * n doubles) is
+   workspace; with `evaluated` it holds the system at x already. Returns 0 (stopped), 1 (a
+   Jacobian singular or not finite) or 2 (not stopped within rule->iterations steps). */
+static int sk_newton_solve(sk_system_fn system, const void *ctx, int n, const int *index,
+                           const sk_rule *rule, double *x, double *fj, int evaluated)
+{
+    double previous = HUGE_VAL;
+    int it, i;
+    for (it = 0; it < rule->iterations; ++it) {
+        double change = 0.0, size = 0.0;
+        if (it > 0 || !evaluated) {
+            system(ctx, x, fj);
+        }
+        if (sk_solve(n, fj + n, 1, fj)) {
+            return 1;
+        }
+        for (i = 0; i < n; ++i) {
+            double *u = index == NULL ? x + i : x + index[i];
+            *u -= fj[i];
+            if (fabs(*u) > size) {
+                size = fabs(*u);
+            }
+            if (fabs(fj[i]) > change) {
+                change = fabs(fj[i]);
+            }
+        }
+        if (sk_newton_stop(rule, change, size, previous)) {
+            return 0;
+        }
+        previous = change;
+    }
+    return 2;
+}
+
+
+/* ---- one mechanism's evaluator ---- */
+
+/* Where the blocks of a level's sensitivity routine start (symkin.codegen.plan): with `stage`
+   (the level solves a closure E for delta) M, dE/dtheta_u, dE/dv, then dD/dtheta_u, (dD/ddelta,)
+   dD/dv of the points' deviations D. */
+typedef struct {
+    sk_fn3 fn;
+    int stage;
+    int M, dE_dtheta, dE_dv, dD_dtheta, dD_ddelta, dD_dv;
+} sk_sens;
+
+/* A generated level. */
+typedef struct {
+    int code;           /* the `level` argument that selects it */
+    sk_fn3 dev;         /* the points' deviation (theta, delta, q) */
+    sk_fn2 linear;      /* the closure it solves for delta: A and r (theta, q); NULL: none */
+    sk_fn3 closure;     /* its F and dF/ddelta (theta, delta, q); NULL: A delta = -r only */
+    int loaded;         /* q: 0 the parameters, 1 the loaded constants, 2 refined ones */
+    sk_sens sens;       /* its sensitivities (fn NULL: none) */
+} sk_level;
+
+/* One mechanism: its tables, routines and solver settings. Routines a mechanism lacks are
+   NULL; the layouts of A, r / F, dF / angles, reaches / rotations, deviations are the plan's
+   (symkin.codegen.plan), the composite ones' offsets are here. */
+typedef struct {
+    const double *defaults;         /* the parameters' default values */
+    const int *input_index;         /* theta index of every input */
+    const int *unknown_index;       /* theta index of every entry of delta */
+    int n_fixed;                    /* inputs held at constant angles (derive --fix) */
+    const int *fixed_index;
+    const double *fixed_angle;
+    int n_limits;                   /* hinges whose model holds for |theta| < limit only */
+    const int *limit_index;         /* their theta index */
+    const int *limit_unknown;       /* their index in delta, or -1 */
+    const double *limit;
+    int needs_loops;                /* the points need delta */
+    int loops_for_links;            /* the links' rotations alone need it */
+    sk_fn2 rigid;                   /* closed-form rigid angles and reaches (inputs, params) */
+    int n_dyads;
+    sk_fn2 rigid_res;               /* rigid closure (theta, params): per loop angle, x, y */
+    sk_fn2 linear;                  /* its Jacobian A and r (theta, params) */
+    sk_fn2 rigid_points;            /* (theta, params) */
+    sk_fn2 links;                   /* rotations and their deviations (theta, delta) */
+    sk_fn2 loaded_q0;               /* the loaded level's statics (A^T mu0 = Q0; NULL: one pass) */
+    sk_fn3 loaded_q;                /* A^T mu = Q (theta, mu0, params) */
+    sk_fn3 loaded_compliance;       /* (theta, mu, params) into the constants at compliance_at */
+    sk_fn3 loaded_compliance_more;  /* the plates only the loaded closure reads, at more_at */
+    int compliance_at, more_at;
+    sk_fn2 loaded_linear;           /* the loaded closure: A and r (theta, constants) */
+    sk_fn3 loaded_closure;          /* F and dF/ddelta (theta, delta, constants) */
+    sk_rule rigid_rule;             /* Newton at each continuation step */
+    sk_rule polish_rule;            /* after the rigid start */
+    sk_rule exact_rule;             /* on every compliant closure */
+    double continuation_step;       /* the largest input change of a continuation step */
+    double winding;                 /* a loop angle sum this large: a hinge wrapped */
+    int n_levels;
+    const sk_level *levels;
+    sk_fn2 sens_rigid;              /* (theta, params): A, dG/dv, dR/dtheta_u, dR/dv */
+    int sr_A, sr_dG_dv, sr_dR_dtheta, sr_dR_dv;
+    sk_fn1 sens_chain;              /* d(default of p_j)/dp_k (params); NULL: none */
+} sk_mechanism;
+
+/* The level with C code `code`, or NULL. */
+static const sk_level *sk_find_level(const sk_mechanism *m, int code)
+{
+    int i;
+    for (i = 0; i < m->n_levels; ++i) {
+        if (m->levels[i].code == code) {
+            return m->levels + i;
+        }
+    }
+    return NULL;
+}
+
+
+/* What the rigid closure's Newton reads: theta is its unknowns' array. */
+typedef struct {
+    const sk_mechanism *m;
+    const double *inputs, *params;
+    double *theta;
+} sk_rigid_ctx;
+
+/* The rigid closure and its Jacobian A (the first block of `linear`) at theta. */
+static void sk_rigid_system(const void *ctx, const double *theta, double *fj)
+{
+    const sk_rigid_ctx *c = (const sk_rigid_ctx *)ctx;
+    double lin[SK_K * SK_K + SK_K + 1];
+    int i;
+    c->m->rigid_res(theta, c->params, fj);
+    c->m->linear(theta, c->params, lin);
+    for (i = 0; i < SK_K * SK_K; ++i) {
+        fj[SK_K + i] = lin[i];
+    }
+}
+
+/* The rigid angles of the unknown hinges, theta's inputs set: the closed-form dyads, or
+   continuation from the as-fabricated pose; then the winding rule (every loop's angles sum to
+   0, not +-2 pi) and the polish (the relative accuracy of small angles). Returns a status. */
+static int sk_rigid_pose(const sk_mechanism *m, const double *inputs, const double *params,
+                         double *theta)
+{
+    double fj[SK_K + SK_K * SK_K + 1];
+    sk_rigid_ctx c;
+    int i;
+    c.m = m;
+    c.inputs = inputs;
+    c.params = params;
+    c.theta = theta;
+    if (m->rigid != NULL) {
+        double sol[SK_OUT];
+        m->rigid(inputs, params, sol);
+        for (i = 0; i < m->n_dyads; ++i) {
+            if (!(sol[SK_K + i] >= 0.0)) {
+                return 1;           /* a loop cannot close: beyond a toggle position */
+            }
+        }
+        for (i = 0; i < SK_K; ++i) {
+            theta[m->unknown_index[i]] = sk_wrap(sol[i]);
+        }
+    }
+    sk_rigid_system(&c, theta, fj);
+    for (i = 0; i < SK_K; i += 3) {
+        if (!(fabs(fj[i]) < m->winding)) {
+            return 1;
+        }
+    }
+    return sk_newton_solve(sk_rigid_system, &c, SK_K, m->unknown_index, &m->polish_rule, theta,
+                           fj, 1) == 1;
+}
+
+/* What a compliant closure's Newton reads. */
+typedef struct {
+    sk_fn3 closure;
+    const double *theta, *q;
+} sk_closure_ctx;
+
+static void sk_closure_system(const void *ctx, const double *delta, double *fj)
+{
+    const sk_closure_ctx *c = (const sk_closure_ctx *)ctx;
+    c->closure(c->theta, delta, c->q, fj);
+}
+
+/* delta of a closure: A delta = -r (its first-order delta), then with `closure` (F,
+   dF/ddelta) Newton from there. Returns a status. */
+static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure,
+                            const double *theta, const double *q, double *delta)
+{
+    double lin[SK_K * SK_K + SK_K + 1], fj[SK_K + SK_K * SK_K + 1];
+    sk_closure_ctx c;
+    int i;
+    linear(theta, q, lin);
+    for (i = 0; i < SK_K; ++i) {
+        delta[i] = -lin[SK_K * SK_K + i];
+    }
+    if (sk_solve(SK_K, lin, 1, delta)) {
+        return 1;
+    }
+    if (closure == NULL) {
+        return 0;
+    }
+    c.closure = closure;
+    c.theta = theta;
+    c.q = q;
+    return sk_newton_solve(sk_closure_system, &c, SK_K, NULL, &m->exact_rule, delta, fj, 0);
 }
 
 /* The loaded level's closure constants: the parameters, then every plate's compliance under the
-   loads the pin linkage's statics gives at the rigid pose (A^T mu0 = Q0, then A^T mu = Q).
-   With `all`, also the plates only the loaded closure reads. Returns 0, or 1 when A is
-   singular. */
-static int sk_loaded_constants(const double *theta, const double *params, int all,
-                               double *constants)
+   loads the pin linkage's statics gives (A^T mu0 = Q0 when there are two passes, then
+   A^T mu = Q) with A the rigid loop Jacobian, or `jac` (k x k) when not NULL. With `all`, also
+   the plates only the loaded closure reads. Returns 0, or 1 when A is singular. */
+static int sk_loaded_constants(const sk_mechanism *m, const double *theta, const double *params,
+                               const double *jac, int all, double *constants)
 {
-    double lin[SK_K * SK_K + SK_K], at[SK_K * SK_K];
-    int piv[SK_K], i, j;
-    sk_linear(theta, params, lin);
+    const double *mu = NULL;
+    int i;
+    double lin[SK_K * SK_K + SK_K + 1], at[SK_K * SK_K + 1], mu0[SK_K + 1], loads[SK_K + 1];
+    int j, piv[SK_K + 1];
+    if (jac == NULL) {
+        m->linear(theta, params, lin);
+        jac = lin;
+    }
     for (i = 0; i < SK_K; ++i) {
         for (j = 0; j < SK_K; ++j) {
-            at[i * SK_K + j] = lin[j * SK_K + i];
+            at[i * SK_K + j] = jac[j * SK_K + i];
         }
     }
     if (sk_lu(SK_K, at, piv)) {
         return 1;
     }
-    sk_loaded_statics(theta, params, at, piv, all, constants);
+    if (m->loaded_q0 != NULL) {
+        m->loaded_q0(theta, params, mu0);
+        sk_lu_solve(SK_K, at, piv, mu0);
+    }
+    m->loaded_q(theta, m->loaded_q0 != NULL ? mu0 : NULL, params, loads);
+    sk_lu_solve(SK_K, at, piv, loads);
+    mu = loads;
+    m->loaded_compliance(theta, mu, params, constants + m->compliance_at);
+    if (all && m->loaded_compliance_more != NULL) {
+        m->loaded_compliance_more(theta, mu, params, constants + m->more_at);
+    }
+    for (i = 0; i < SK_NPAR; ++i) {
+        constants[i] = params[i];
+    }
     return 0;
 }
 
-/* Level loaded_refined's constants: from the loaded level's delta, the statics solved again with
-   A the loaded closure's Jacobian there (the plates' arcs at the pose reached, not the rigid pin
-   linkage), and the compliance under those loads. Returns 0, or 1 when A is singular. */
-static int sk_loaded_refine(const double *theta, const double *params, const double *delta,
-                            double *constants)
-{
-    double nw[SK_K + SK_K * SK_K], at[SK_K * SK_K];
-    int piv[SK_K], i, j;
-    sk_loaded_newton(theta, delta, constants, nw);
-    for (i = 0; i < SK_K; ++i) {
-        for (j = 0; j < SK_K; ++j) {
-            at[i * SK_K + j] = nw[SK_K + j * SK_K + i];
-        }
-    }
-    if (sk_lu(SK_K, at, piv)) {
-        return 1;
-    }
-    sk_loaded_statics(theta, params, at, piv, 1, constants);
-    return 0;
-}
-
-/* The configuration: the arguments checked, the rigid angles theta (every hinge) and, at the
-   levels that solve the loops, delta (the non-input hinges; solved for the links' rotations
-   only when want_links). *q is what the level's routines read: params, or at the loaded level
-   the constants (the parameters, then the plates' compliance) computed into `constants`.
-   Returns a status code. */
-static int sk_pose(const double *inputs, const double *params, int level, int want_links,
-                   double *theta, double *delta, double *constants, const double **q)
+/* The configuration at level lv: the arguments checked, the rigid angles theta (every hinge)
+   and, where the level solves the loops, delta (the non-input hinges; solved for the links'
+   rotations only when want_links). *q is what the level's routines read: params, or the loaded
+   constants computed into `constants`. Returns a status code. */
+static int sk_pose(const sk_mechanism *m, const sk_level *lv, const double *inputs,
+                   const double *params, int want_links, double *theta, double *delta,
+                   double *constants, const double **q)
 {
     int i;
-
-    if (inputs == NULL) {
-        return 3;
-    }
     *q = params;
-    if (level != 0 && level != 1 && level != 2 && level != 3 && level != 5) {
-        return 3;
-    }
-    for (i = 0; i < STEPHENSON_SIX_BAR_N_INPUTS; ++i) {
+    for (i = 0; i < SK_NI; ++i) {
         /* an input is a plate's rotation from the as-fabricated pose: |angle| <= pi */
         if (!isfinite(inputs[i]) || !(fabs(inputs[i]) <= 3.141592653589793)) {
             return 3;
         }
     }
-    for (i = 0; i < STEPHENSON_SIX_BAR_N_PARAMS; ++i) {
+    for (i = 0; i < SK_NPAR; ++i) {
         if (!isfinite(params[i])) {
             return 3;
         }
@@ -2447,150 +2527,74 @@ static int sk_pose(const double *inputs, const double *params, int level, int wa
     for (i = 0; i < SK_M; ++i) {
         theta[i] = 0.0;
     }
-    for (i = 0; i < SK_K1; ++i) {
+    for (i = 0; i < SK_K + 1; ++i) {
         delta[i] = 0.0;
     }
-    for (i = 0; i < STEPHENSON_SIX_BAR_N_INPUTS; ++i) {
-        theta[sk_input_index[i]] = inputs[i];
+    for (i = 0; i < SK_NI; ++i) {
+        theta[m->input_index[i]] = inputs[i];
+    }
+    for (i = 0; i < m->n_fixed; ++i) {
+        theta[m->fixed_index[i]] = m->fixed_angle[i];
     }
     {
-        double sol[SK_K + 2 * SK_NDYAD];
-        sk_rigid(inputs, params, sol);
-        for (i = 0; i < SK_NDYAD; ++i) {
-            if (!(sol[SK_K + i] >= 0.0)) {
-                return 1;           /* a loop cannot close: beyond a toggle position */
-            }
-        }
-        for (i = 0; i < SK_K; ++i) {
-            theta[sk_unknown_index[i]] = remainder(sol[i], sk_two_pi);
+        const int status = sk_rigid_pose(m, inputs, params, theta);
+        if (status) {
+            return status;
         }
     }
-    {
-        /* the winding rule (symkin.solver): every loop's angles sum to 0, not +-2*pi */
-        double res[SK_K];
-        sk_rigid_res(theta, params, res);
-        for (i = 0; i < SK_K; i += 3) {
-            if (!(fabs(res[i]) < 3.141592653589793)) {
-                return 1;
-            }
-        }
-    }
-    /* polish: the relative accuracy of small angles */
-    if (sk_rigid_newton(theta, params, 1, 0.0) < 0.0) {
-        return 1;
-    }
-    if (level == 3 || level == 5) {
-        if (sk_loaded_constants(theta, params, level == 5, constants)) {
+    if (lv->loaded) {
+        if (sk_loaded_constants(m, theta, params, NULL, lv->loaded == 2, constants)) {
             return 1;
         }
         *q = constants;
     }
-    if (level == 5) {
-        /* the loaded level's delta, then the statics again with the loaded closure's Jacobian
-           there */
-        int status = sk_loaded(theta, constants, delta);
+    if (lv->loaded == 2) {
+        /* refined: the loaded closure solved, then the statics again with its Jacobian there */
+        double fj[SK_K + SK_K * SK_K + 1];
+        const int status = sk_solve_closure(m, m->loaded_linear, m->loaded_closure, theta,
+                                            constants, delta);
         if (status) {
             return status;
         }
-        if (sk_loaded_refine(theta, params, delta, constants)) {
+        m->loaded_closure(theta, delta, constants, fj);
+        if (sk_loaded_constants(m, theta, params, fj + SK_K, 1, constants)) {
+            return 1;
+        }
+        for (i = 0; !m->needs_loops && i < SK_K; ++i) {
+            delta[i] = 0.0;         /* that delta was the statics' only */
+        }
+    }
+    if (lv->linear != NULL && (m->needs_loops || (m->loops_for_links && want_links))) {
+        const int status = sk_solve_closure(m, lv->linear, lv->closure, theta, *q, delta);
+        if (status) {
+            return status;
+        }
+    }
+    for (i = 0; i < m->n_limits; ++i) {
+        const int h = m->limit_index[i], u = m->limit_unknown[i];
+        /* the hinge's plate holds for |theta| < limit only, rigid and compliant */
+        if (!(fabs(theta[h]) <= m->limit[i])
+            || (u >= 0 && !(fabs(theta[h] + delta[u]) <= m->limit[i]))) {
             return 1;
         }
     }
-    {
-        int status = 0;
-        if (level == 1) {
-            status = sk_first_order(theta, *q, delta);
-        }
-        else if (level == 2) {
-            status = sk_exact(theta, *q, delta);
-        }
-        else if (level == 3) {
-            status = sk_loaded(theta, *q, delta);
-        }
-        else if (level == 5) {
-            status = sk_loaded(theta, *q, delta);
-        }
-        if (status) {
-            return status;
-        }
-    }
-    /* hinge 1: its plate holds for |theta| < 3.141592653589793 only */
-    if (!(fabs(theta[0]) <= 3.141592653589793)) {
-        return 1;
-    }
-    /* hinge 2: its plate holds for |theta| < 3.141592653589793 only */
-    if (!(fabs(theta[1]) <= 3.141592653589793)) {
-        return 1;
-    }
-    if (!(fabs(theta[1] + delta[0]) <= 3.141592653589793)) {
-        return 1;
-    }
-    /* hinge 3: its plate holds for |theta| < 3.141592653589793 only */
-    if (!(fabs(theta[2]) <= 3.141592653589793)) {
-        return 1;
-    }
-    if (!(fabs(theta[2] + delta[1]) <= 3.141592653589793)) {
-        return 1;
-    }
-    /* hinge 4: its plate holds for |theta| < 3.141592653589793 only */
-    if (!(fabs(theta[3]) <= 3.141592653589793)) {
-        return 1;
-    }
-    if (!(fabs(theta[3] + delta[2]) <= 3.141592653589793)) {
-        return 1;
-    }
-    /* hinge 5: its plate holds for |theta| < 3.141592653589793 only */
-    if (!(fabs(theta[4]) <= 3.141592653589793)) {
-        return 1;
-    }
-    if (!(fabs(theta[4] + delta[3]) <= 3.141592653589793)) {
-        return 1;
-    }
-    /* hinge 6: its plate holds for |theta| < 3.141592653589793 only */
-    if (!(fabs(theta[5]) <= 3.141592653589793)) {
-        return 1;
-    }
-    if (!(fabs(theta[5] + delta[4]) <= 3.141592653589793)) {
-        return 1;
-    }
-    /* hinge 7: its plate holds for |theta| < 3.141592653589793 only */
-    if (!(fabs(theta[6]) <= 3.141592653589793)) {
-        return 1;
-    }
-    if (!(fabs(theta[6] + delta[5]) <= 3.141592653589793)) {
-        return 1;
-    }
+    (void)lv;
     (void)want_links;
     (void)constants;
     return 0;
 }
 
 /* The points of a solved configuration: per point rigid x, y, compliant x, y, deviation x, y
-   into out; when angles is not NULL the rigid then the compliant hinge angles; when links is
-   not NULL every reported link's rigid rotation, compliant rotation and deviation. */
-static int sk_outputs(const double *theta, const double *delta, const double *params,
-                      const double *q, int level, double *out, double *angles, double *links)
+   into out; when angles is not NULL the rigid then the compliant hinge angles; when links is not
+   NULL every reported link's rigid rotation, compliant rotation and deviation. */
+static int sk_outputs(const sk_mechanism *m, const sk_level *lv, const double *theta,
+                      const double *delta, const double *params, const double *q, double *out,
+                      double *angles, double *links)
 {
     double rigid[2 * SK_NP + 1], dev[2 * SK_NP + 1];
     int i;
-
-    sk_rigid_points(theta, params, rigid);
-    /* the level is one of these: sk_pose checked it */
-    if (level == 0) {
-        sk_dev_paper(theta, q, dev);
-    }
-    else if (level == 1) {
-        sk_dev_first_order(theta, delta, q, dev);
-    }
-    else if (level == 2) {
-        sk_dev_exact(theta, delta, q, dev);
-    }
-    else if (level == 3) {
-        sk_dev_loaded(theta, delta, q, dev);
-    }
-    else {
-        sk_dev_loaded(theta, delta, q, dev);
-    }
+    m->rigid_points(theta, params, rigid);
+    lv->dev(theta, delta, q, dev);
     for (i = 0; i < 2 * SK_NP; ++i) {
         if (!isfinite(rigid[i]) || !isfinite(dev[i])) {
             return 2;               /* a non-finite result is never a success */
@@ -2610,53 +2614,43 @@ static int sk_outputs(const double *theta, const double *delta, const double *pa
             angles[SK_M + i] = theta[i];
         }
         for (i = 0; i < SK_K; ++i) {
-            angles[SK_M + sk_unknown_index[i]] += delta[i];
+            angles[SK_M + m->unknown_index[i]] += delta[i];
         }
     }
     if (links != NULL) {
-        double rot[2 * SK_NL];
-        sk_links(theta, delta, rot);
+        double rot[2 * SK_NL + 1];
+        m->links(theta, delta, rot);
         for (i = 0; i < 2 * SK_NL; ++i) {
             if (!isfinite(rot[i])) {
                 return 2;
             }
         }
         for (i = 0; i < SK_NL; ++i) {
-            links[3 * i + 0] = remainder(rot[i], sk_two_pi);
+            links[3 * i + 0] = sk_wrap(rot[i]);
             links[3 * i + 1] = links[3 * i + 0] + rot[SK_NL + i];
             links[3 * i + 2] = rot[SK_NL + i];
         }
     }
-    (void)delta;
-    (void)level;
+    (void)links;
     return 0;
 }
 
-/* n entries of x set to NaN (no partial result after a failure); x may be NULL. */
-static void sk_nan(double *x, int n)
+/* <name>_evaluate_pose (the generated header documents the public functions). */
+static int sk_evaluate_pose(const sk_mechanism *m, const double *inputs, const double *params,
+                            int level, double *out, double *angles, double *links)
 {
-    int i;
-    for (i = 0; x != NULL && i < n; ++i) {
-        x[i] = NAN;
-    }
-}
-
-int stephenson_six_bar_evaluate_pose(const double *inputs, const double *params, int level, double *out,
-                    double *angles, double *links)
-{
-    double theta[SK_M];
-    double delta[SK_K1];
-    double constants[SK_NQ];
+    double theta[SK_M], delta[SK_K + 1], constants[SK_NQ];
     const double *q;
+    const sk_level *lv = sk_find_level(m, level);
     int status;
-
     if (params == NULL) {
-        params = stephenson_six_bar_default_params;
+        params = m->defaults;
     }
-    status = out == NULL ? 3 : sk_pose(inputs, params, level, links != NULL, theta, delta,
-                                       constants, &q);
+    status = out == NULL || inputs == NULL || lv == NULL
+                 ? 3
+                 : sk_pose(m, lv, inputs, params, links != NULL, theta, delta, constants, &q);
     if (status == 0) {
-        status = sk_outputs(theta, delta, params, q, level, out, angles, links);
+        status = sk_outputs(m, lv, theta, delta, params, q, out, angles, links);
     }
     if (status != 0) {
         sk_nan(out, 6 * SK_NP);
@@ -2666,26 +2660,17 @@ int stephenson_six_bar_evaluate_pose(const double *inputs, const double *params,
     return status;
 }
 
-int stephenson_six_bar_evaluate_angles(const double *inputs, const double *params, int level, double *out,
-                    double *angles)
-{
-    return stephenson_six_bar_evaluate_pose(inputs, params, level, out, angles, NULL);
-}
-
-int stephenson_six_bar_evaluate(const double *inputs, const double *params, int level, double *out)
-{
-    return stephenson_six_bar_evaluate_pose(inputs, params, level, out, NULL, NULL);
-}
-
-int stephenson_six_bar_evaluate_angles_batch(int n, const double *inputs, const double *params, int level,
-                          double *out, double *angles, int *status)
+/* <name>_evaluate_angles_batch: n rows; the number of rows that failed. */
+static int sk_evaluate_rows(const sk_mechanism *m, int n, const double *inputs,
+                            const double *params, int level, double *out, double *angles,
+                            int *status)
 {
     int j, s, failed = 0;
     for (j = 0; j < n; ++j) {
-        s = inputs == NULL ? 3 : stephenson_six_bar_evaluate_angles(
-            inputs + (size_t)j * STEPHENSON_SIX_BAR_N_INPUTS, params, level,
+        s = inputs == NULL ? 3 : sk_evaluate_pose(
+            m, inputs + (size_t)j * SK_NI, params, level,
             out == NULL ? NULL : out + (size_t)j * 6 * SK_NP,
-            angles == NULL ? NULL : angles + (size_t)j * 2 * SK_M);
+            angles == NULL ? NULL : angles + (size_t)j * 2 * SK_M, NULL);
         failed += s != 0;
         if (status != NULL) {
             status[j] = s;
@@ -2694,195 +2679,281 @@ int stephenson_six_bar_evaluate_angles_batch(int n, const double *inputs, const 
     return failed;
 }
 
-int stephenson_six_bar_evaluate_batch(int n, const double *inputs, const double *params, int level,
-                    double *out, int *status)
-{
-    return stephenson_six_bar_evaluate_angles_batch(n, inputs, params, level, out, NULL, status);
-}
-
-int stephenson_six_bar_evaluate_grid(int n_sets, const double *params, int n, const double *inputs,
-                   int level, double *out, int *status)
+/* <name>_evaluate_grid: every parameter set at every input row; the number that failed. */
+static int sk_evaluate_grid(const sk_mechanism *m, int n_sets, const double *params, int n,
+                            const double *inputs, int level, double *out, int *status)
 {
     int s, failed = 0;
     for (s = 0; s < n_sets; ++s) {
-        failed += stephenson_six_bar_evaluate_angles_batch(
-            n, inputs, params == NULL ? NULL : params + (size_t)s * STEPHENSON_SIX_BAR_N_PARAMS, level,
+        failed += sk_evaluate_rows(
+            m, n, inputs, params == NULL ? NULL : params + (size_t)s * SK_NPAR, level,
             out == NULL ? NULL : out + (size_t)s * n * 6 * SK_NP, NULL,
             status == NULL ? NULL : status + (size_t)s * n);
     }
     return failed;
 }
 
+/* ---- sensitivities (docs/sensitivity.md) ---- */
+
 /* c (m x n) += a (m x p) b (p x n), row-major. */
 static void sk_gemm(int m, int p, int n, const double *a, const double *b, double *c)
 {
-    int i, j, q;
+    int i, j, k;
     for (i = 0; i < m; ++i) {
-        for (q = 0; q < p; ++q) {
-            const double f = a[i * p + q];
+        for (k = 0; k < p; ++k) {
+            const double f = a[i * p + k];
             for (j = 0; j < n; ++j) {
-                c[i * n + j] += f * b[q * n + j];
+                c[i * n + j] += f * b[k * n + j];
             }
         }
     }
 }
 
 /* The total derivatives of the points' deviations (dev) and rigid positions (rig) by every
-   variable, 2 N_POINTS x N_VARIABLES row-major (row 2 p + c: component c of point p; columns:
-   the parameters, then the inputs), by the implicit-function theorem on the closures: with
+   variable, 2 SK_NP x SK_NV row-major (row 2 p + c: component c of point p; columns: the
+   parameters, then the inputs), by the implicit-function theorem on the closures: with
    Theta = d theta_u / dv = -A^-1 dG/dv and, where the level solves a closure E for delta,
    Y = -M^-1 (dE/dv + dE/dtheta_u Theta): dD/dv + dD/dtheta_u Theta + dD/ddelta Y. */
-static int sk_sensitivity(const double *theta, const double *delta, const double *params,
-                          int level, double *dev, double *rig)
+static int sk_sensitivity(const sk_mechanism *m, const sk_level *lv, const double *theta,
+                          const double *delta, const double *params, double *dev, double *rig)
 {
-    double sr[64 + 1];
-    double th[12];
+    double sr[SK_OUT], s[SK_OUT];
+    const sk_sens *b = &lv->sens;
     int i;
-
-    /* the levels without closed-form sensitivities (docs/sensitivity.md) are refused */
-    if (level != 0 && level != 1 && level != 2 && 1) {
-        return 3;
+    double th[SK_K * SK_NV + 1], y[SK_K * SK_NV + 1];
+    if (b->fn == NULL) {
+        return 3;                   /* a level without closed-form sensitivities */
     }
-    sk_sens_rigid(theta, params, sr);
-    for (i = 0; i < 12; ++i) {
-        th[i] = -sr[36 + i];
+    m->sens_rigid(theta, params, sr);
+    for (i = 0; i < SK_K * SK_NV; ++i) {
+        th[i] = -sr[m->sr_dG_dv + i];
     }
-    if (sk_solve_many(SK_K, sr, 2, th)) {
+    if (sk_solve(SK_K, sr + m->sr_A, SK_NV, th)) {
         return 1;
     }
-    for (i = 0; i < 4; ++i) {
-        rig[i] = sr[60 + i];
+    for (i = 0; i < 2 * SK_NP * SK_NV; ++i) {
+        rig[i] = sr[m->sr_dR_dv + i];
     }
-    sk_gemm(2, SK_K, 2, sr + 48, th, rig);
-    if (level == 0) {
-        double s[16 + 1];
-        sk_sens_paper(theta, params, s);
-        for (i = 0; i < 4; ++i) {
-            dev[i] = s[12 + i];
+    sk_gemm(2 * SK_NP, SK_K, SK_NV, sr + m->sr_dR_dtheta, th, rig);
+    b->fn(theta, delta, params, s);
+    if (b->stage) {
+        for (i = 0; i < SK_K * SK_NV; ++i) {
+            y[i] = s[b->dE_dv + i];
         }
-        sk_gemm(2, SK_K, 2, s + 0, th, dev);
-    }
-    else if (level == 1) {
-        double s[112 + 1];
-        double y[12];
-        sk_sens_first_order(theta, delta, params, s);
-        for (i = 0; i < 12; ++i) {
-            y[i] = s[72 + i];
-        }
-        sk_gemm(SK_K, SK_K, 2, s + 36, th, y);
-        for (i = 0; i < 12; ++i) {
+        sk_gemm(SK_K, SK_K, SK_NV, s + b->dE_dtheta, th, y);
+        for (i = 0; i < SK_K * SK_NV; ++i) {
             y[i] = -y[i];
         }
-        if (sk_solve_many(SK_K, s, 2, y)) {
+        if (sk_solve(SK_K, s + b->M, SK_NV, y)) {
             return 1;
         }
-        for (i = 0; i < 4; ++i) {
-            dev[i] = s[108 + i];
-        }
-        sk_gemm(2, SK_K, 2, s + 84, th, dev);
-        sk_gemm(2, SK_K, 2, s + 96, y, dev);
     }
-    else {
-        double s[112 + 1];
-        double y[12];
-        sk_sens_exact(theta, delta, params, s);
-        for (i = 0; i < 12; ++i) {
-            y[i] = s[72 + i];
-        }
-        sk_gemm(SK_K, SK_K, 2, s + 36, th, y);
-        for (i = 0; i < 12; ++i) {
-            y[i] = -y[i];
-        }
-        if (sk_solve_many(SK_K, s, 2, y)) {
-            return 1;
-        }
-        for (i = 0; i < 4; ++i) {
-            dev[i] = s[108 + i];
-        }
-        sk_gemm(2, SK_K, 2, s + 84, th, dev);
-        sk_gemm(2, SK_K, 2, s + 96, y, dev);
+    for (i = 0; i < 2 * SK_NP * SK_NV; ++i) {
+        dev[i] = s[b->dD_dv + i];
     }
-    (void)dev;
-    (void)delta;
-    (void)level;
-    return 0;
-}
-
-int stephenson_six_bar_sensitivity_full(const double *inputs, const double *params, int level,
-                         double *values, double *deviation, double *rigid)
-{
-    double theta[SK_M];
-    double delta[SK_K1];
-    double dev[4 + 1], rig[4 + 1];
-    double constants[SK_NQ];
-    const double *q;
-    int i, v, status;
-
-    if (params == NULL) {
-        params = stephenson_six_bar_default_params;
+    sk_gemm(2 * SK_NP, SK_K, SK_NV, s + b->dD_dtheta, th, dev);
+    if (b->stage) {
+        sk_gemm(2 * SK_NP, SK_K, SK_NV, s + b->dD_ddelta, y, dev);
     }
-    status = deviation == NULL ? 3 : sk_pose(inputs, params, level, 0, theta, delta,
-                                             constants, &q);
-    if (status == 0 && values != NULL) {
-        status = sk_outputs(theta, delta, params, q, level, values, NULL, NULL);
-    }
-    if (status == 0) {
-        status = sk_sensitivity(theta, delta, params, level, dev, rig);
-    }
-    for (i = 0; status == 0 && i < 4; ++i) {
-        if (!isfinite(dev[i]) || !isfinite(rig[i])) {
-            status = 2;             /* a non-finite result is never a success */
-        }
-    }
-    if (status != 0) {
-        sk_nan(values, 6 * SK_NP);
-        sk_nan(deviation, 4);
-        sk_nan(rigid, 4);
-        return status;
-    }
-    for (i = 0; i < 2; ++i) {
-        for (v = 0; v < 2; ++v) {
-            deviation[((i / 2) * 2 + v) * 2 + i % 2] = dev[i * 2 + v];
-            if (rigid != NULL) {
-                rigid[((i / 2) * 2 + v) * 2 + i % 2] = rig[i * 2 + v];
+    if (m->sens_chain != NULL) {
+        /* a parameter's default that reads earlier ones follows them: totals, last first */
+        double c[SK_NPAR * SK_NPAR + 1];
+        int j, r;
+        m->sens_chain(params, c);
+        for (i = SK_NPAR - 1; i >= 0; --i) {
+            for (j = i + 1; j < SK_NPAR; ++j) {
+                for (r = 0; r < 2 * SK_NP; ++r) {
+                    dev[r * SK_NV + i] += c[j * SK_NPAR + i] * dev[r * SK_NV + j];
+                    rig[r * SK_NV + i] += c[j * SK_NPAR + i] * rig[r * SK_NV + j];
+                }
             }
         }
     }
     return 0;
 }
 
-int stephenson_six_bar_sensitivity(const double *inputs, const double *params, int level, double *out)
+/* <name>_sensitivity_full. */
+static int sk_sensitivity_full(const sk_mechanism *m, const double *inputs, const double *params,
+                               int level, double *values, double *deviation, double *rigid)
 {
-    double full[4 + 1];
-    int p, v, status;
+    double theta[SK_M], delta[SK_K + 1], constants[SK_NQ];
+    double dev[2 * SK_NP * SK_NV + 1], rig[2 * SK_NP * SK_NV + 1];
+    const double *q;
+    const sk_level *lv = sk_find_level(m, level);
+    int i, v, status;
+    if (params == NULL) {
+        params = m->defaults;
+    }
+    status = deviation == NULL || inputs == NULL || lv == NULL
+                 ? 3
+                 : sk_pose(m, lv, inputs, params, 0, theta, delta, constants, &q);
+    if (status == 0 && values != NULL) {
+        status = sk_outputs(m, lv, theta, delta, params, q, values, NULL, NULL);
+    }
+    if (status == 0) {
+        status = sk_sensitivity(m, lv, theta, delta, params, dev, rig);
+    }
+    for (i = 0; status == 0 && i < 2 * SK_NP * SK_NV; ++i) {
+        if (!isfinite(dev[i]) || !isfinite(rig[i])) {
+            status = 2;             /* a non-finite result is never a success */
+        }
+    }
+    if (status != 0) {
+        sk_nan(values, 6 * SK_NP);
+        sk_nan(deviation, 2 * SK_NP * SK_NV);
+        sk_nan(rigid, 2 * SK_NP * SK_NV);
+        return status;
+    }
+    /* rows (point, component) x variables -> per point, per variable, dx then dy */
+    for (i = 0; i < 2 * SK_NP; ++i) {
+        for (v = 0; v < SK_NV; ++v) {
+            deviation[((i / 2) * SK_NV + v) * 2 + i % 2] = dev[i * SK_NV + v];
+            if (rigid != NULL) {
+                rigid[((i / 2) * SK_NV + v) * 2 + i % 2] = rig[i * SK_NV + v];
+            }
+        }
+    }
+    return 0;
+}
 
+/* <name>_sensitivity: the parameters' columns of sk_sensitivity_full's deviation. */
+static int sk_sensitivity_params(const sk_mechanism *m, const double *inputs,
+                                 const double *params, int level, double *out)
+{
+    double full[2 * SK_NP * SK_NV + 1];
+    int p, v, status;
     if (out == NULL) {
         return 3;
     }
-    status = stephenson_six_bar_sensitivity_full(inputs, params, level, NULL, full, NULL);
+    status = sk_sensitivity_full(m, inputs, params, level, NULL, full, NULL);
     for (p = 0; p < SK_NP; ++p) {
-        for (v = 0; v < STEPHENSON_SIX_BAR_N_PARAMS; ++v) {
-            out[(p * STEPHENSON_SIX_BAR_N_PARAMS + v) * 2] = full[(p * 2 + v) * 2];
-            out[(p * STEPHENSON_SIX_BAR_N_PARAMS + v) * 2 + 1] = full[(p * 2 + v) * 2 + 1];
+        for (v = 0; v < SK_NPAR; ++v) {
+            out[(p * SK_NPAR + v) * 2] = full[(p * SK_NV + v) * 2];
+            out[(p * SK_NPAR + v) * 2 + 1] = full[(p * SK_NV + v) * 2 + 1];
         }
     }
     return status;
 }
 
-int stephenson_six_bar_sensitivity_batch(int n, const double *inputs, const double *params, int level,
-                          double *values, double *deviation, double *rigid, int *status)
+/* <name>_sensitivity_batch: n rows; the number of rows that failed. */
+static int sk_sensitivity_rows(const sk_mechanism *m, int n, const double *inputs,
+                               const double *params, int level, double *values,
+                               double *deviation, double *rigid, int *status)
 {
     int j, s, failed = 0;
     for (j = 0; j < n; ++j) {
-        s = inputs == NULL || deviation == NULL ? 3 : stephenson_six_bar_sensitivity_full(
-            inputs + (size_t)j * STEPHENSON_SIX_BAR_N_INPUTS, params, level,
+        s = inputs == NULL || deviation == NULL ? 3 : sk_sensitivity_full(
+            m, inputs + (size_t)j * SK_NI, params, level,
             values == NULL ? NULL : values + (size_t)j * 6 * SK_NP,
-            deviation + (size_t)j * 4,
-            rigid == NULL ? NULL : rigid + (size_t)j * 4);
+            deviation + (size_t)j * 2 * SK_NP * SK_NV,
+            rigid == NULL ? NULL : rigid + (size_t)j * 2 * SK_NP * SK_NV);
         failed += s != 0;
         if (status != NULL) {
             status[j] = s;
         }
     }
     return failed;
+}
+/* ---- stephenson_six_bar: its tables for the runtime ---- */
+
+static const int sk_input_index[SK_NI] = {0};
+static const int sk_unknown_index[SK_K + 1] = {1, 2, 3, 4, 5, 6};
+static const int sk_fixed_index[1] = {0};
+static const double sk_fixed_angle[1] = {0};
+static const int sk_limit_index[8] = {0, 1, 2, 3, 4, 5, 6};
+static const int sk_limit_unknown[8] = {-1, 0, 1, 2, 3, 4, 5};
+static const double sk_limit[8] = {3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793};
+
+/* code, deviation, linear and Newton routines of its closure, what it reads; sensitivities */
+static const sk_level sk_levels[] = {
+    {0, sk_dev_paper, NULL, NULL, 0,  /* paper */
+     {sk_sens_paper, 0, 0, 0, 0, 0, 0, 12}},
+    {1, sk_dev_first_order, sk_linear, NULL, 0,  /* first_order */
+     {sk_sens_first_order, 1, 0, 36, 72, 84, 96, 108}},
+    {2, sk_dev_exact, sk_linear, sk_newton, 0,  /* exact */
+     {sk_sens_exact, 1, 0, 36, 72, 84, 96, 108}},
+    {3, sk_dev_loaded, sk_loaded_linear, sk_loaded_newton, 1,  /* loaded */
+     {NULL, 0, 0, 0, 0, 0, 0, 0}},
+    {5, sk_dev_loaded, sk_loaded_linear, sk_loaded_newton, 2,  /* loaded_refined */
+     {NULL, 0, 0, 0, 0, 0, 0, 0}}
+};
+
+static const sk_mechanism sk_mechanism_tables = {
+    .defaults = stephenson_six_bar_default_params, .input_index = sk_input_index,
+    .unknown_index = sk_unknown_index,
+    .n_fixed = 0, .fixed_index = sk_fixed_index, .fixed_angle = sk_fixed_angle,
+    .n_limits = 7, .limit_index = sk_limit_index, .limit_unknown = sk_limit_unknown,
+    .limit = sk_limit, .needs_loops = 1, .loops_for_links = 0,
+    .rigid = sk_rigid,
+    .rigid_res = sk_rigid_res,
+    .linear = sk_linear,
+    .rigid_points = sk_rigid_points,
+    .links = sk_links,
+    .loaded_q0 = sk_loaded_q0,
+    .loaded_q = sk_loaded_q,
+    .loaded_compliance = sk_loaded_compliance,
+    .loaded_linear = sk_loaded_linear,
+    .loaded_closure = sk_loaded_newton,
+    .sens_rigid = sk_sens_rigid,
+    .n_dyads = 2, .compliance_at = 1, .more_at = 15,
+    .rigid_rule = {30, 1e-10, 0.0, 0.0, 0.0},
+    .polish_rule = {1, 0.0, 0.0, 0.0, 0.0},
+    .exact_rule = {40, 0.0, 1e-08, 1e-12, 0.5},
+    .continuation_step = 0.05, .winding = 3.141592653589793,
+    .n_levels = 5, .levels = sk_levels,
+    .sr_A = 0, .sr_dG_dv = 36, .sr_dR_dtheta = 48, .sr_dR_dv = 60
+};
+
+int stephenson_six_bar_evaluate_pose(const double *inputs, const double *params, int level, double *out,
+                    double *angles, double *links)
+{
+    return sk_evaluate_pose(&sk_mechanism_tables, inputs, params, level, out, angles, links);
+}
+
+int stephenson_six_bar_evaluate_angles(const double *inputs, const double *params, int level, double *out,
+                    double *angles)
+{
+    return sk_evaluate_pose(&sk_mechanism_tables, inputs, params, level, out, angles, NULL);
+}
+
+int stephenson_six_bar_evaluate(const double *inputs, const double *params, int level, double *out)
+{
+    return sk_evaluate_pose(&sk_mechanism_tables, inputs, params, level, out, NULL, NULL);
+}
+
+int stephenson_six_bar_evaluate_angles_batch(int n, const double *inputs, const double *params, int level,
+                          double *out, double *angles, int *status)
+{
+    return sk_evaluate_rows(&sk_mechanism_tables, n, inputs, params, level, out, angles, status);
+}
+
+int stephenson_six_bar_evaluate_batch(int n, const double *inputs, const double *params, int level,
+                    double *out, int *status)
+{
+    return sk_evaluate_rows(&sk_mechanism_tables, n, inputs, params, level, out, NULL, status);
+}
+
+int stephenson_six_bar_evaluate_grid(int n_sets, const double *params, int n, const double *inputs,
+                   int level, double *out, int *status)
+{
+    return sk_evaluate_grid(&sk_mechanism_tables, n_sets, params, n, inputs, level, out, status);
+}
+
+int stephenson_six_bar_sensitivity_full(const double *inputs, const double *params, int level,
+                         double *values, double *deviation, double *rigid)
+{
+    return sk_sensitivity_full(&sk_mechanism_tables, inputs, params, level, values, deviation,
+                               rigid);
+}
+
+int stephenson_six_bar_sensitivity(const double *inputs, const double *params, int level, double *out)
+{
+    return sk_sensitivity_params(&sk_mechanism_tables, inputs, params, level, out);
+}
+
+int stephenson_six_bar_sensitivity_batch(int n, const double *inputs, const double *params, int level,
+                          double *values, double *deviation, double *rigid, int *status)
+{
+    return sk_sensitivity_rows(&sk_mechanism_tables, n, inputs, params, level, values, deviation,
+                               rigid, status);
 }

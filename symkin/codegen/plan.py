@@ -8,7 +8,9 @@
     newton       theta, delta, params  -> F, ∂F/∂δ of the exact compliant closure
     rigid_points theta, params         -> rigid x, y of every requested point
     dev_<level>  theta, delta, params  -> deviation x, y of every requested point (a level that
-                                          shares another's, loaded_refined, runs its routine)
+                                          shares another's, loaded_refined, runs its routine;
+                                          every level's reads delta, so the runtimes call them
+                                          alike: zero where the level solves no loop)
     sens_rigid   theta, params         -> A, ∂G/∂v (G the rigid closure), ∂R/∂θ_u, ∂R/∂v
     sens_<level> theta, delta, params  -> M, ∂E/∂θ_u, ∂E/∂v of the closure E the level solves
                                           for δ (where it does), ∂D/∂θ_u, ∂D/∂δ, ∂D/∂v of the
@@ -25,6 +27,12 @@ by the plates' compliance (its closure's constants, computed once per configurat
     loaded_compliance_more  theta, mu, params -> the plates only loaded_refined's closure reads
     loaded_linear      theta, constants    -> A and r of the loaded closure (its first-order start)
     loaded_newton      theta, delta, constants -> F, dF/ddelta of the loaded closure
+
+Every routine's outputs are named row-major blocks (:class:`~symkin.codegen.routines.Block`):
+the runtimes (templates/c/runtime.c, templates/numpy/runtime.py) read the offsets of the
+composite ones (the sensitivities, the loaded level's constants) from the generated tables and
+rely on the order above for the others (A then r, F then dF/ddelta, angles then reaches,
+rotations then their deviations; rigid_res: per loop its angle, then x, y).
 
 Only what the requested points and levels need is derived: a point whose direct path holds only
 input hinges needs no loop solved at any level. Parameters are renamed p_0, p_1, ... so no name
@@ -49,7 +57,7 @@ from ..kinematics.analysis import Analysis
 from ..physics.statics import LoadedDerivation, loaded_derivation
 from .derivation import Derivation, derivation
 from .literals import float_literals, to_double
-from .routines import Argument, Routine, flatten, optimize
+from .routines import Argument, Block, Routine, flatten, layout, optimize
 
 
 @dataclass(frozen=True)
@@ -109,6 +117,7 @@ class LoadedPlan:
     compliance: int
     beam_column: bool = True  # the beam-column series (False: first order only)
     more: int = 0  # the last `more` of them only loaded_refined computes
+    constants: tuple[Block, ...] = ()  # the closure's constants: params, compliance, more
 
 
 @dataclass(frozen=True)
@@ -190,6 +199,7 @@ def plan(
     loops_for_links = solves and links and not needs_loops
     routines: dict[str, Routine] = {}
     sol = an.rigid
+    k, n_dyads, np2 = len(kin.unknowns), len(sol.dyads), 2 * len(names)
     if sol.closed_form and kin.unknowns:
         outs = [sol.phi[kin.hinges[a].M] - sol.phi[kin.hinges[a].P] for a in kin.unknowns]
         outs += [d.reach for d in sol.dyads] + [d.margin for d in sol.dyads]
@@ -199,6 +209,7 @@ def plan(
             sol.assignments,
             tuple(outs),
             "closed-form rigid solution (dyads)",
+            layout(("angles", k, 1), ("reach", n_dyads, 1), ("margin", n_dyads, 1)),
         )
     if kin.unknowns:
         routines["rigid_res"] = Routine(
@@ -207,6 +218,7 @@ def plan(
             (),
             tuple(an.rigid_residual),
             "rigid loop closure relative to the as-fabricated pose",
+            layout(("residual", k, 1)),  # per loop: its angle, then x, y
         )
         a_lin, r_lin = an.linear_system
         routines["linear"] = Routine(
@@ -215,6 +227,7 @@ def plan(
             (),
             flatten(a_lin.tolist()) + tuple(r_lin),
             "rigid loop Jacobian A and r = Phi dz",
+            layout(("A", k, k), ("r", k, 1)),
         )
     if (needs_loops or loops_for_links) and any(lv.name == "exact" for lv in levels):
         routines["newton"] = Routine(
@@ -223,6 +236,7 @@ def plan(
             (),
             tuple(an.residual) + flatten(an.jacobian.tolist()),
             "exact compliant closure F(delta) and dF/ddelta",
+            layout(("F", k, 1), ("J", k, k)),
         )
     routines["rigid_points"] = Routine(
         "rigid_points",
@@ -230,6 +244,7 @@ def plan(
         (),
         tuple(e for n in names for e in an.point_rigid(n)),
         "rigid positions of the points",
+        layout(("points", np2, 1)),
     )
     loaded = None
     physical = [lv.name for lv in levels if lv.name in level_table.LOADED]
@@ -251,14 +266,19 @@ def plan(
     for lv in levels:
         if f"dev_{lv.routine}" in routines:  # a level that shares another's deviation
             continue
-        args = (theta, delta, params) if lv.needs_delta else (theta, params)
+        args = (theta, delta, params)
         if lv.name in level_table.LOADED:
             exprs, args = loaded_exprs, (theta, delta, constants)
         else:
             exprs = tuple(e for n in names for e in an.point_deviation(n, lv.name))
         users = ", ".join(o.name for o in levels if o.routine == lv.routine)
         routines[f"dev_{lv.routine}"] = Routine(
-            f"dev_{lv.routine}", args, (), exprs, f"deviation of the points at level {users}"
+            f"dev_{lv.routine}",
+            args,
+            (),
+            exprs,
+            f"deviation of the points at level {users}",
+            layout(("deviation", np2, 1)),
         )
     s = an.structure
     reported = tuple(range(s.n + 1)) if links else ()
@@ -269,6 +289,7 @@ def plan(
             (),
             tuple(an.link_rotation(i) for i in reported) + tuple(an.delta_phi(i) for i in reported),
             "rotation of every link and how much further the compliant one turns",
+            layout(("rotation", len(reported), 1), ("deviation", len(reported), 1)),
         )
     chain = False
     if sensitivity:
@@ -286,19 +307,17 @@ def plan(
     # Numbers reach the printers as correctly rounded doubles (exact rationals stay in mpmath).
     memo: dict = {}
     routines = {
-        k: Routine(
-            r.name,
-            r.arguments,
-            tuple((s, float_literals(e, memo)) for s, e in r.assignments),
-            tuple(float_literals(e, memo) for e in r.outputs),
-            r.doc,
+        name: dataclasses.replace(
+            r,
+            assignments=tuple((s, float_literals(e, memo)) for s, e in r.assignments),
+            outputs=tuple(float_literals(e, memo) for e in r.outputs),
         )
-        for k, r in routines.items()
+        for name, r in routines.items()
     }
     if cse:
-        routines = {k: optimize(r) for k, r in routines.items()}
+        routines = {name: optimize(r) for name, r in routines.items()}
     rename = {s: sp.Symbol(f"p_{k}", real=True) for k, s in enumerate(an.params)}
-    routines = {k: _renamed(r, rename) for k, r in routines.items()}
+    routines = {name: _renamed(r, rename) for name, r in routines.items()}
     parameters = tuple(
         Parameter(
             p.name, rename[p.symbol], float_literals(p.expr.xreplace(rename)), to_double(p.value)
@@ -366,41 +385,55 @@ def _sensitivity_routines(
     blocks = [rigid.theta, rigid.variables]
     if terms.rigid_stage is not None:
         blocks = [terms.rigid_stage.jacobian, terms.rigid_stage.variables] + blocks
+    names = ["dR_dtheta", "dR_dv"]
+    if terms.rigid_stage is not None:
+        names = ["A", "dG_dv", *names]
+    outputs, shapes = _flat(names, blocks)
     routines["sens_rigid"] = Routine(
         "sens_rigid",
         args,
         (),
-        _flat(blocks),
+        outputs,
         "rigid stage: A, dG/dv; rigid points: dR/dtheta, dR/dv",
+        shapes,
     )
     for lv in (lv for lv in levels if lv.sensitivity):
         part = terms.partials(lv.name)
         stage = terms.stage(lv.name) if needs_loops and lv.needs_delta else None
         blocks = [part.theta] + ([part.delta] if stage is not None else []) + [part.variables]
+        names = ["dD_dtheta"] + (["dD_ddelta"] if stage is not None else []) + ["dD_dv"]
         if stage is not None:
             blocks = [stage.jacobian, stage.theta, stage.variables] + blocks
+            names = ["M", "dE_dtheta", "dE_dv", *names]
+        outputs, shapes = _flat(names, blocks)
         routines[f"sens_{lv.name}"] = Routine(
             f"sens_{lv.name}",
-            args_delta if stage is not None else args,
+            args_delta,
             (),
-            _flat(blocks),
+            outputs,
             f"sensitivity at level {lv.name}: "
             + ("M, dE/dtheta, dE/dv; " if stage else "")
             + "dD/dtheta, "
             + ("dD/ddelta, " if stage else "")
             + "dD/dv",
+            shapes,
         )
     chain = parameter_chain([p.expr for p in an.mechanism.parameters], an.params)
     if not chain.is_zero_matrix:
+        outputs, shapes = _flat(["chain"], [chain])
         routines["sens_chain"] = Routine(
-            "sens_chain", args[1:], (), _flat([chain]), "d(default of p_j)/dp_k of the parameters"
+            "sens_chain", args[1:], (), outputs, "d(default of p_j)/dp_k of the parameters", shapes
         )
         return True
     return False
 
 
-def _flat(blocks: Sequence[sp.Matrix]) -> tuple[sp.Expr, ...]:
-    return tuple(e for b in blocks for e in flatten(b.tolist()))
+def _flat(
+    names: Sequence[str], blocks: Sequence[sp.Matrix]
+) -> tuple[tuple[sp.Expr, ...], tuple[Block, ...]]:
+    """The matrices' entries one after the other, row-major, and their named blocks."""
+    outputs = tuple(e for b in blocks for e in flatten(b.tolist()))
+    return outputs, layout(*((n, *b.shape) for n, b in zip(names, blocks, strict=True)))
 
 
 def _loaded_routines(
@@ -421,6 +454,7 @@ def _loaded_routines(
     (`loaded_refined`) solves the closure whatever the points need, so the other plates' come
     after them (`loaded_compliance_more`)."""
     la = der.analysis
+    k = len(la.kin.unknowns)
     closure = tuple(la.residual) + flatten(la.jacobian.tolist()) if needs_loops or refine else ()
 
     def reading(exprs) -> list[int]:
@@ -439,6 +473,7 @@ def _loaded_routines(
                 (),
                 tuple(der.first_statics[1]),
                 "loaded: generalized forces Q0 of the pin linkage, springs EI/l (A^T mu0 = Q0)",
+                layout(("Q0", k, 1)),
             )
         routines["loaded_q"] = Routine(
             "loaded_q",
@@ -448,6 +483,7 @@ def _loaded_routines(
             "loaded: generalized forces Q with the beam-column springs (A^T mu = Q)"
             if der.mu0
             else "loaded: generalized forces Q of the pin linkage (A^T mu = Q)",
+            layout(("Q", k, 1)),
         )
     for name, which, doc in (
         (
@@ -462,12 +498,14 @@ def _loaded_routines(
         ),
     ):
         if which or name == "loaded_compliance":
+            outputs = tuple(e for a in which for e in der.plate_loads[a].displacement)
             routines[name] = Routine(
                 name,
                 (theta, Argument("mu", der.mu), params),
                 (),
-                tuple(e for a in which for e in der.plate_loads[a].displacement),
+                outputs,
                 doc,
+                layout(("compliance", len(outputs), 1)),
             )
     if closure:
         a_lin, r_lin = la.linear_system
@@ -477,6 +515,7 @@ def _loaded_routines(
             (),
             flatten(a_lin.tolist()) + tuple(r_lin),
             "loaded: A and r = Phi dz of the loaded closure (its first-order start)",
+            layout(("A", k, k), ("r", k, 1)),
         )
         routines["loaded_newton"] = Routine(
             "loaded_newton",
@@ -484,9 +523,16 @@ def _loaded_routines(
             (),
             closure,
             "loaded: the loaded closure F(delta) and dF/ddelta",
+            layout(("F", k, 1), ("J", k, k)),
         )
+    n_more = 2 * len(more)
+    shapes = layout(
+        ("params", len(params.symbols), 1),
+        ("compliance", len(compliance) - n_more, 1),
+        ("more", n_more, 1),
+    )
     return LoadedPlan(
-        2 if der.mu0 else 1, len(compliance), der.beam_column, 2 * len(more)
+        2 if der.mu0 else 1, len(compliance), der.beam_column, n_more, shapes
     ), constants
 
 
@@ -555,7 +601,7 @@ def _substituted(routine: Routine, values: dict[sp.Symbol, sp.Expr]) -> Routine:
     """The routine with the symbols of `values` replaced by them (arguments unchanged)."""
     lines = tuple((s, e.xreplace(values)) for s, e in routine.assignments)
     outs = tuple(sp.sympify(e).xreplace(values) for e in routine.outputs)
-    return Routine(routine.name, routine.arguments, lines, outs, routine.doc)
+    return dataclasses.replace(routine, assignments=lines, outputs=outs)
 
 
 def _renamed(routine: Routine, names: dict[sp.Symbol, sp.Symbol]) -> Routine:
@@ -565,4 +611,4 @@ def _renamed(routine: Routine, names: dict[sp.Symbol, sp.Symbol]) -> Routine:
     )
     lines = tuple((s, e.xreplace(names)) for s, e in routine.assignments)
     outs = tuple(sp.sympify(e).xreplace(names) for e in routine.outputs)
-    return Routine(routine.name, args, lines, outs, routine.doc)
+    return dataclasses.replace(routine, arguments=args, assignments=lines, outputs=outs)

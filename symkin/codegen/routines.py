@@ -2,15 +2,17 @@
 assignments.
 
 A routine has named array arguments (inputs, params, theta, delta, ...), an ordered list of named
-intermediates (already named as they were built, OpenSYMORO style) and outputs. `optimize` runs one
-CSE pass over the whole routine and schedules each temporary just before its first use, so the
-named intermediates keep their order and nothing is computed twice.
+intermediates (already named as they were built, OpenSYMORO style) and outputs, laid out as named
+row-major blocks (A, then r; dD/dtheta, then dD/dv; ...) that the runtimes read by name
+(docs/runtime.md). `optimize` runs one CSE pass over the whole routine and schedules each
+temporary just before its first use, so the named intermediates keep their order and nothing is
+computed twice.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 
 import sympy as sp
@@ -25,14 +27,55 @@ class Argument:
 
 
 @dataclass(frozen=True)
+class Block:
+    """A named rows x cols row-major block of a routine's outputs (or of an argument), starting
+    at `offset`."""
+
+    name: str
+    rows: int
+    cols: int
+    offset: int
+
+    @property
+    def size(self) -> int:
+        return self.rows * self.cols
+
+    @property
+    def end(self) -> int:
+        return self.offset + self.size
+
+
+def layout(*shapes: tuple[str, int, int]) -> tuple[Block, ...]:
+    """Blocks (name, rows, cols) one after the other from offset 0."""
+    blocks, offset = [], 0
+    for name, rows, cols in shapes:
+        blocks.append(Block(name, rows, cols, offset))
+        offset += rows * cols
+    return tuple(blocks)
+
+
+@dataclass(frozen=True)
 class Routine:
-    """A straight-line program: arguments, assignments (symbol, expr) in order, outputs."""
+    """A straight-line program: arguments, assignments (symbol, expr) in order, outputs (the
+    named `blocks` one after the other)."""
 
     name: str
     arguments: tuple[Argument, ...]
     assignments: tuple[tuple[sp.Symbol, sp.Expr], ...]
     outputs: tuple[sp.Expr, ...]
     doc: str = ""
+    blocks: tuple[Block, ...] = ()
+
+    def __post_init__(self) -> None:
+        if self.blocks and self.blocks[-1].end != len(self.outputs):
+            raise ValueError(f"routine {self.name}: its blocks do not cover its outputs")
+
+    def block(self, name: str) -> Block:
+        """The block `name` of the outputs."""
+        for b in self.blocks:
+            if b.name == name:
+                return b
+        raise KeyError(f"routine {self.name} has no block {name}")
 
     @cached_property
     def ops(self) -> int:
@@ -66,7 +109,7 @@ def optimize(routine: Routine, prefix: str = "_tmp") -> Routine:
     outputs = tuple(reduced[len(named) :])
     for expr in outputs:
         need(expr)
-    return Routine(routine.name, routine.arguments, tuple(lines), outputs, routine.doc)
+    return replace(routine, assignments=tuple(lines), outputs=outputs)
 
 
 def _index(symbol: sp.Symbol) -> tuple[int, str]:

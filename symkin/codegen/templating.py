@@ -1,7 +1,10 @@
-"""The Jinja2 environment every emitter and report shares (templates ship in the wheel)."""
+"""The Jinja2 environment every emitter and report shares (templates ship in the wheel), and the
+runtimes the generated files hold (docs/runtime.md)."""
 
 from __future__ import annotations
 
+import re
+from collections.abc import Iterable
 from functools import cache
 from importlib import resources
 
@@ -35,7 +38,56 @@ def environment(latex: bool = False) -> jinja2.Environment:
     # Names from a mechanism file reach generated code only through these escaping filters.
     env.filters["pyrepr"] = repr
     env.filters["cstring"] = c_string
+    env.globals["runtime"] = runtime
     return env
+
+
+#: A runtime file's marker line: what follows it is what every generated file holds.
+RUNTIME_MARKER = "symkin runtime: every generated"
+#: The conditionals of the C runtime's optional sections (docs/runtime.md).
+_IF = re.compile(r"#\s*if\s+(defined\(\w+\)(?:\s*\|\|\s*defined\(\w+\))*)\s*$")
+
+
+def runtime(path: str, features: Iterable[str] | None = ()) -> str:
+    """The text a generated file holds of the runtime `path` (under templates/:
+    c/runtime.c, numpy/runtime.py): everything after its marker line, verbatim but for its
+    optional sections, resolved for `features` as the C preprocessor would with those macros
+    defined (None: kept as they are). What comes before the marker (the includes or imports, the
+    notes on testing it on its own) is for the file alone."""
+    return _runtime(path, None if features is None else frozenset(features))
+
+
+@cache
+def _runtime(path: str, features: frozenset[str] | None) -> str:
+    text = resources.files("symkin.templates").joinpath(path).read_text()
+    _, marker, body = text.partition(RUNTIME_MARKER)
+    if not marker:
+        raise ValueError(f"templates/{path} has no line '{RUNTIME_MARKER} ...'")
+    body = body.partition("\n")[2].lstrip("\n")
+    return body if features is None or not path.endswith(".c") else _sections(body, features)
+
+
+def _sections(text: str, features: frozenset[str]) -> str:
+    """`text` with its `#if defined(A) || defined(B) ...`, `#else`, `#endif` sections resolved:
+    a section is kept when one of its macros is in `features`, its #else part otherwise."""
+    out: list[str] = []
+    kept: list[bool] = []  # per open section: whether its current part is kept
+    for line in text.splitlines(keepends=True):
+        directive = line.strip()
+        if directive.startswith(("#if", "#elif")):
+            condition = _IF.fullmatch(directive)
+            if condition is None:
+                raise ValueError(f"runtime: only '#if defined(X) || ...' is resolved: {line!r}")
+            kept.append(any(m in features for m in re.findall(r"\((\w+)\)", directive)))
+        elif directive == "#else":
+            kept[-1] = not kept[-1]
+        elif directive == "#endif":
+            kept.pop()
+        elif all(kept):
+            out.append(line)
+    if kept:
+        raise ValueError("runtime: a section is not closed")
+    return "".join(out)
 
 
 def c_string(text: str) -> str:

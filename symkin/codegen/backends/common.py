@@ -8,6 +8,7 @@ rest.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from typing import ClassVar
 
@@ -18,7 +19,7 @@ from ...core import levels
 from ...model import special
 from ..plan import Plan, ScenePlan
 from ..routines import Routine
-from ..templating import render
+from ..templating import render, runtime
 
 
 class Backend:
@@ -31,6 +32,8 @@ class Backend:
     printer_settings: ClassVar[dict] = {"order": "none"}
     templates: ClassVar[tuple[str, ...]]  # paths under templates/
     kernel_source: ClassVar[Callable[[str], str]]  # a special function's definition
+    runtime: ClassVar[str]  # the runtime the generated files hold, under templates/
+    routine_prefix: ClassVar[str]  # the generated name of routine r: prefix + r
 
     def __init__(self) -> None:
         self.printer = self.printer_class(dict(self.printer_settings))
@@ -38,6 +41,11 @@ class Backend:
     def render(self, plan: Plan, source: str, precision: str = "float64") -> list[str]:
         """Every template of the backend rendered for `plan` (generated from file `source`) in
         `precision` (float64 or float32)."""
+        clash = {self.routine_prefix + r for r in plan.routines} & defined_names(
+            runtime(self.runtime, None)
+        )
+        if clash:
+            raise ValueError(f"routines named like the runtime's functions: {sorted(clash)}")
         context = self.context(plan, source, precision)
         return [render(template, **context) for template in self.templates]
 
@@ -95,8 +103,90 @@ class Backend:
             "refined": any(lv.name == "loaded_refined" for lv in plan.levels),
             "refined_code": levels.get("loaded_refined").code,
             "routines": [routine_data(r, self.printer) for r in plan.routines.values()],
+            "have": set(plan.routines),
+            "blocks": {
+                name: {b.name: (b.offset, b.rows, b.cols) for b in r.blocks}
+                for name, r in plan.routines.items()
+            },
+            "level_rows": level_rows(plan),
+            "limit_rows": [
+                (i, plan.unknown_index.index(i) if i in plan.unknown_index else -1, repr(lim))
+                for i, lim in plan.limits
+            ],
+            "sens_rigid": offsets(plan, "sens_rigid", ("A", "dG_dv", "dR_dtheta", "dR_dv")),
+            "constants": {b.name: b.offset for b in plan.loaded.constants} if plan.loaded else {},
+            "out_size": max(len(r.outputs) for r in plan.routines.values()) + 1,
             "kernels": [type(self).kernel_source(n) for n in special_functions(plan)],
         }
+
+
+#: The closure each level's loop solver runs: its linear routine (A, r: the first-order delta) and
+#: its Newton routine (F, dF/ddelta; None: the first-order delta is the level's).
+CLOSURES = {
+    "first_order": ("linear", None),
+    "exact": ("linear", "newton"),
+    "loaded": ("loaded_linear", "loaded_newton"),
+}
+#: The blocks of a level's sensitivity routine (symkin.codegen.plan), in order.
+SENS_BLOCKS = ("M", "dE_dtheta", "dE_dv", "dD_dtheta", "dD_ddelta", "dD_dv")
+
+
+def level_rows(plan: Plan) -> list[dict]:
+    """What the runtimes run at each generated level: its deviation routine, the routines of the
+    closure it solves for delta (None where it solves none, or the loops need no solving), what
+    its routines read (`loaded`: 0 the parameters, 1 the loaded level's constants, 2 those
+    refined at the loaded closure's solution) and its sensitivity routine with the offsets of
+    its blocks (`stage`: it goes through the closure solved for delta)."""
+    rows = []
+    for lv in plan.levels:
+        linear, newton = CLOSURES.get(lv.routine, (None, None)) if lv.needs_delta else (None, None)
+        if not (plan.needs_loops or plan.loops_for_links) or not {linear, newton} - {None} <= set(
+            plan.routines
+        ):
+            linear = newton = None
+        sens = f"sens_{lv.name}" if lv.sensitivity and f"sens_{lv.name}" in plan.routines else None
+        rows.append(
+            {
+                "name": lv.name,
+                "code": lv.code,
+                "dev": f"dev_{lv.routine}",
+                "linear": linear,
+                "newton": newton,
+                "loaded": 0
+                if lv.name not in levels.LOADED
+                else 2
+                if lv.name == "loaded_refined"
+                else 1,
+                "sens": sens,
+                "stage": sens is not None and "M" in _names(plan, sens),
+                "blocks": offsets(plan, sens, SENS_BLOCKS) if sens else {},
+            }
+        )
+    return rows
+
+
+def _names(plan: Plan, routine: str) -> set[str]:
+    return {b.name for b in plan.routines[routine].blocks}
+
+
+def offsets(plan: Plan, routine: str, names: tuple[str, ...]) -> dict[str, int]:
+    """Where the blocks `names` of `routine` start, as the runtimes read them (0 for a block
+    the routine lacks: the runtimes do not read it then); {} when there is no such routine."""
+    if routine not in plan.routines:
+        return {}
+    have = {b.name: b.offset for b in plan.routines[routine].blocks}
+    return {n: have.get(n, 0) for n in names}
+
+
+def defined_names(text: str) -> set[str]:
+    """The names a runtime's text defines at its top level: C functions and types, Python
+    functions, classes and constants."""
+    return set(
+        re.findall(r"^(?:static|typedef)\b[^(;=\n]*?\b(\w+)\s*[(;]", text, re.M)
+        + re.findall(r"^(?:def|class)\s+(\w+)", text, re.M)
+        + re.findall(r"^(\w+)\s*=", text, re.M)
+        + re.findall(r"^\}\s*(\w+);", text, re.M)
+    )
 
 
 def default_level(plan: Plan) -> str:

@@ -17,6 +17,8 @@ class NumpyBackend(Backend):
     printer_settings: ClassVar[dict] = {**Backend.printer_settings, "fully_qualified_modules": True}
     templates = ("numpy/module.py.j2",)
     kernel_source = staticmethod(kernels.source)
+    runtime = "numpy/runtime.py"
+    routine_prefix = "_"
 
 
 def emit(plan: Plan, source: str, dtype: str = "float64") -> str:

@@ -1,0 +1,496 @@
+"""symkin's numpy runtime (docs/runtime.md): what every generated numpy module runs around its
+mechanism's routines, elementwise over arrays of configurations.
+
+A generated module `<name>.py` holds the text below the marker line, verbatim
+(templates/numpy/module.py.j2), so it imports only numpy and the standard library: its own
+imports come first, then this text, then its routines, its tables (one _Mechanism) and its
+public functions, each a call into this text. Imported on its own (tests/test_runtime_numpy.py),
+this file is an ordinary module whose functions take small routines of the test's own.
+"""
+
+import math
+
+import numpy
+
+# ---- symkin runtime: every generated module holds what follows ----
+
+# symkin runtime (templates/numpy/runtime.py, docs/runtime.md; tested on its own by
+# tests/test_runtime_numpy.py): dense linear algebra over element arrays, the Newton and
+# continuation drivers, the evaluation at every level, the sensitivities and the blockwise
+# evaluation, all driven by the tables of one _Mechanism.
+
+_TWO_PI = 2.0 * math.pi
+_GAUSS_MAX = 12  # systems up to this size: elementwise elimination, as the C evaluator does
+_CHUNK = 8192  # elements per block: the temporaries of a block stay in the CPU cache
+
+
+class _Mechanism:
+    """One generated module's tables, routines and solver settings (the C sk_mechanism):
+    routines it lacks are None."""
+
+    def __init__(self, **fields):
+        self.__dict__.update(fields)
+
+
+class _Level:
+    """A generated level: its deviation routine, the closure it solves for delta (linear: A and
+    r; newton: F and dF/ddelta, None for the first-order delta; both None: none), what its
+    routines read (loaded: 0 the parameters, 1 the loaded constants, 2 refined ones) and its
+    sensitivity routine with the (offset, rows, cols) of its blocks."""
+
+    def __init__(self, dev, linear=None, newton=None, loaded=0, sens=None, blocks=None):
+        self.dev, self.linear, self.newton, self.loaded = dev, linear, newton, loaded
+        self.sens, self.blocks = sens, blocks or {}
+
+
+class _Rule:
+    """When a Newton iteration stops (symkin.core.settings): after `iterations` steps at most,
+    and once a step is at most `tolerance`, or at most `converged` times the largest unknown
+    (with converged > 0; also when they are all zero), or has stalled at rounding: at least
+    `stall_ratio` times the previous step and at most `stalled` times the largest unknown."""
+
+    def __init__(self, iterations, tolerance=0.0, converged=0.0, stalled=0.0, stall_ratio=0.0):
+        self.iterations, self.tolerance, self.converged = iterations, tolerance, converged
+        self.stalled, self.stall_ratio = stalled, stall_ratio
+
+
+def _value(v, dtype):
+    """A parameter value: a float, or an array for many parameter sets at once."""
+    return float(v) if numpy.ndim(v) == 0 else numpy.asarray(v, dtype=dtype)
+
+
+def _wrap(angle):
+    return angle - _TWO_PI * numpy.round(angle / _TWO_PI)
+
+
+def _matrix(entries, rows, cols, shape, dtype):
+    """A (*shape, rows, cols) array from a row-major list of arrays (or numbers)."""
+    out = numpy.empty(shape + (rows, cols), dtype=dtype)
+    for i in range(rows):
+        for j in range(cols):
+            out[..., i, j] = entries[i * cols + j]
+    return out
+
+
+def _block(entries, block, shape, dtype):
+    """The (offset, rows, cols) block of a routine's outputs as a (*shape, rows, cols) array."""
+    at, rows, cols = block
+    return _matrix(entries[at : at + rows * cols], rows, cols, shape, dtype)
+
+
+def _solve(a, b, ok, m=1, dtype=numpy.float64):
+    """Batched dense solve a x = b (a row-major k*k list, b a row-major k*m list: m right-hand
+    sides); bad elements -> ok False. The solution as a row-major k*m list."""
+    k = len(b) // m
+    if k <= _GAUSS_MAX:
+        return _gauss(a, b, ok, k, m, dtype)
+    shape = ok.shape
+    am = _matrix(a, k, k, shape, dtype)
+    bm = _matrix(b, k, m, shape, dtype)
+    # numpy.array: a writable array even for 0-d input, where & gives a numpy.bool scalar
+    good = numpy.array(
+        ok & numpy.isfinite(am).all(axis=(-1, -2)) & numpy.isfinite(bm).all(axis=(-1, -2))
+    )
+    am[~good] = numpy.eye(k)
+    bm[~good] = 0.0
+    try:
+        x = numpy.linalg.solve(am, bm)
+    except numpy.linalg.LinAlgError:
+        x = numpy.zeros(shape + (k, m), dtype=dtype)
+        for index in numpy.ndindex(*shape):
+            try:
+                x[index] = numpy.linalg.solve(am[index], bm[index])
+            except numpy.linalg.LinAlgError:
+                good[index] = False
+    good &= numpy.isfinite(x).all(axis=(-1, -2))
+    return [x[..., i, j] for i in range(k) for j in range(m)], good
+
+
+def _gauss(a, b, ok, k, m, dtype):
+    """_solve by Gaussian elimination with partial pivoting written out over the element
+    arrays, step for step the C evaluator's sk_solve (one small LAPACK call per element costs
+    more than the whole elimination)."""
+    shape = ok.shape
+    A = [
+        [numpy.array(numpy.broadcast_to(a[i * k + j], shape), dtype=dtype) for j in range(k)]
+        for i in range(k)
+    ]
+    B = [
+        [numpy.array(numpy.broadcast_to(b[i * m + r], shape), dtype=dtype) for r in range(m)]
+        for i in range(k)
+    ]
+    good = numpy.array(ok)
+    for c in range(k):
+        # the pivot: the first row i >= c with the largest |a[i][c]|
+        best = numpy.abs(A[c][c])
+        pivot = numpy.full(shape, c)
+        for i in range(c + 1, k):
+            size = numpy.abs(A[i][c])
+            larger = size > best
+            best = numpy.where(larger, size, best)
+            pivot = numpy.where(larger, i, pivot)
+        good &= (best > 0.0) & numpy.isfinite(best)
+        for i in range(c + 1, k):
+            swap = pivot == i
+            if swap.any():
+                for row in (A, B):
+                    for j in range(len(row[c])):
+                        row[c][j], row[i][j] = (
+                            numpy.where(swap, row[i][j], row[c][j]),
+                            numpy.where(swap, row[c][j], row[i][j]),
+                        )
+        for i in range(c + 1, k):
+            f = A[i][c] / A[c][c]
+            for j in range(c, k):
+                A[i][j] = A[i][j] - f * A[c][j]
+            for r in range(m):
+                B[i][r] = B[i][r] - f * B[c][r]
+    for r in range(m):
+        for i in range(k - 1, -1, -1):
+            s = B[i][r]
+            for j in range(i + 1, k):
+                s = s - A[i][j] * B[j][r]
+            B[i][r] = s / A[i][i]
+    x = [B[i][r] for i in range(k) for r in range(m)]
+    for v in x:
+        good &= numpy.isfinite(v)
+    return x, good
+
+
+def _newton_stop(rule, change, size, previous):
+    """Where Newton stops after a step `change` (largest entry), the unknowns now at most `size`
+    in magnitude, the previous step `previous` (inf before the second): the one stopping test of
+    every Newton iteration."""
+    done = change <= rule.tolerance
+    if rule.converged > 0.0:
+        done = done | (change <= rule.converged * size) | (size == 0)
+    return done | ((change >= rule.stall_ratio * previous) & (change <= rule.stalled * size))
+
+
+def _newton_solve(system, x, index, ok, rule, dtype, evaluated=None):
+    """Newton on `system` (x -> its residual f, then its row-major Jacobian, as one list) from
+    the list of arrays x, stepping the unknowns x[i] for i in `index`, each element until
+    `rule` stops it; `evaluated`: the system at x, when it is known. Returns x, ok (False where
+    a Jacobian is singular or not finite) and where Newton stopped."""
+    k = len(index)
+    active = ok.copy()
+    previous = numpy.full(ok.shape, numpy.inf)
+    out = evaluated
+    for _ in range(rule.iterations):
+        if out is None:
+            out = system(x)
+        step, good = _solve(out[k:], out[:k], active, 1, dtype)
+        out = None
+        ok = ok & (good | ~active)
+        active = active & good
+        for j, i in enumerate(index):
+            x[i] = numpy.where(active, x[i] - step[j], x[i])
+        size = numpy.max(numpy.abs(numpy.array([x[i] for i in index])), axis=0)
+        change = numpy.max(numpy.abs(numpy.array(step)), axis=0)
+        done = _newton_stop(rule, change, size, previous)
+        previous = numpy.where(active, change, previous)
+        active = active & ~done
+        if not active.any():
+            break
+    return x, ok, ~active
+
+
+def _continuation(stage, system, x, index, ok, rule, steps, dtype):
+    """Continuation: stage(t) at t = 1/steps, ..., 1, each followed by Newton on `system` from
+    the previous stage's unknowns (as _newton_solve); where one does not stop, not ok."""
+    for s in range(1, steps + 1):
+        stage(s / steps)
+        x, ok, converged = _newton_solve(system, x, index, ok, rule, dtype)
+        ok = ok & converged
+    return x, ok
+
+
+def _rigid_angles(mech, x, params, ok):
+    """The rigid hinge angles (all hinges, label order) and the updated ok mask: the closed-form
+    dyads, or continuation from the as-fabricated pose; then the winding rule (every loop's
+    angles sum to 0, not +-2 pi) and the polish (the relative accuracy of small angles)."""
+    shape, dtype = ok.shape, mech.dtype
+    theta = [numpy.zeros(shape, dtype=dtype) for _ in range(mech.n_theta)]
+    for j, i in enumerate(mech.input_index):
+        theta[i] = x[j]
+    for i, value in mech.fixed:
+        theta[i] = numpy.full(shape, value, dtype=dtype)
+    if not mech.unknown_index:
+        return theta, ok
+    k = len(mech.unknown_index)
+
+    def system(theta):
+        res = [numpy.broadcast_to(r, shape) for r in mech.rigid_res(theta, params)]
+        return res + mech.linear(theta, params)[: k * k]
+
+    if mech.rigid is not None:
+        out = mech.rigid(x, params)
+        for reach in out[k : k + mech.n_dyads]:
+            ok = ok & (numpy.broadcast_to(reach, shape) >= 0.0)
+        for j, i in enumerate(mech.unknown_index):
+            theta[i] = numpy.where(ok, _wrap(numpy.broadcast_to(out[j], shape)), 0.0)
+    else:
+        top = max(
+            [float(numpy.max(numpy.abs(v))) if v.size else 0.0 for v in x]
+            + [0.0]
+            + [abs(value) for _, value in mech.fixed]
+        )
+
+        def stage(t):
+            for j, i in enumerate(mech.input_index):
+                theta[i] = x[j] * t
+            for i, value in mech.fixed:
+                theta[i] = numpy.full(shape, value * t, dtype=dtype)
+
+        steps = max(1, math.ceil(top / mech.continuation_step))
+        theta, ok = _continuation(
+            stage, system, theta, mech.unknown_index, ok, mech.rigid_rule, steps, dtype
+        )
+    out = system(theta)
+    for n in range(0, k, 3):
+        ok = ok & (numpy.abs(out[n]) < mech.winding)
+    theta, ok, _ = _newton_solve(
+        system, theta, mech.unknown_index, ok, mech.polish_rule, dtype, out
+    )
+    return theta, ok
+
+
+def _solve_closure(mech, linear, newton, theta, q, ok):
+    """delta of a closure: A delta = -r (its first-order delta), then with `newton` (F,
+    dF/ddelta) Newton from there; and ok."""
+    k = len(mech.unknown_index)
+    lin = linear(theta, q)
+    delta, good = _solve(lin[: k * k], [-numpy.asarray(r) for r in lin[k * k :]], ok, 1, mech.dtype)
+    ok = ok & good
+    if newton is None:
+        return delta, ok
+    delta, ok, converged = _newton_solve(
+        lambda delta: newton(theta, delta, q), delta, range(k), ok, mech.exact_rule, mech.dtype
+    )
+    return delta, ok & converged
+
+
+def _loaded_constants(mech, theta, params, ok, jac=None, more=False):
+    """The loaded level's closure constants: the parameters, then every plate's compliance under
+    the loads the pin linkage's statics gives (A^T mu0 = Q0 with two passes, then A^T mu = Q)
+    with A the rigid loop Jacobian, or `jac` (row-major) when given; `more`: also the plates
+    only the loaded closure reads (else zeros in their place)."""
+    mu = []
+    if mech.unknown_index:
+        k = len(mech.unknown_index)
+        if jac is None:
+            jac = mech.linear(theta, params)
+        at = [jac[j * k + i] for i in range(k) for j in range(k)]
+        mu0 = []
+        if mech.loaded_q0 is not None:
+            mu0, ok = _solve(at, mech.loaded_q0(theta, params), ok, 1, mech.dtype)
+        mu, ok = _solve(at, mech.loaded_q(theta, mu0, params), ok, 1, mech.dtype)
+    compliance = mech.loaded_compliance(theta, mu, params)
+    if mech.loaded_more:
+        compliance += (
+            mech.loaded_compliance_more(theta, mu, params) if more else [0.0] * mech.loaded_more
+        )
+    return list(params) + [numpy.broadcast_to(c, ok.shape) for c in compliance], ok
+
+
+def _pose(mech, arrays, level, p, links):
+    """The rigid angles theta (every hinge), delta (the non-input hinges; solved for the links'
+    rotations only when `links`), the ok mask and what the level's routines read (q)."""
+    lv = mech.levels[level]
+    shape = arrays[0].shape
+    ok = numpy.ones(shape, dtype=bool)
+    for a in arrays:
+        # an input is a plate's rotation from the as-fabricated pose: |angle| <= pi
+        ok &= numpy.isfinite(a) & (numpy.abs(a) <= math.pi)
+    x = [numpy.where(ok, a, 0.0) for a in arrays]
+    with numpy.errstate(all="ignore"):
+        theta, ok = _rigid_angles(mech, x, p, ok)
+        q = p  # what the level's routines read: the parameters (loaded: and more)
+        if lv.loaded:
+            q, ok = _loaded_constants(mech, theta, p, ok, more=lv.loaded == 2)
+        if lv.loaded == 2 and mech.unknown_index:
+            # refined: the loaded closure solved, then the statics again with its Jacobian there
+            delta, ok = _solve_closure(mech, mech.loaded_linear, mech.loaded_newton, theta, q, ok)
+            k = len(mech.unknown_index)
+            jac = mech.loaded_newton(theta, delta, q)[k:]
+            q, ok = _loaded_constants(mech, theta, p, ok, jac, more=True)
+        delta = [numpy.zeros(shape, dtype=mech.dtype) for _ in mech.unknown_index]
+        if lv.linear is not None and (mech.needs_loops or (links and mech.loops_for_links)):
+            delta, ok = _solve_closure(mech, lv.linear, lv.newton, theta, q, ok)
+        for i, limit in mech.limits:
+            ok = ok & (numpy.abs(theta[i]) <= limit)
+            if i in mech.unknown_index:
+                ok = ok & (numpy.abs(theta[i] + delta[mech.unknown_index.index(i)]) <= limit)
+    return theta, delta, ok, q
+
+
+def _points(mech, theta, delta, ok, level, p, q, links):
+    """The points, angles and (with `links`) the links' rotations of solved configurations, NaN
+    where not ok; the rigid points read the parameters p, the level's deviation q."""
+    shape, dtype = ok.shape, mech.dtype
+    with numpy.errstate(all="ignore"):
+        rigid = mech.rigid_points(theta, p)
+        dev = mech.levels[level].dev(theta, delta, q)
+        use = links and mech.links is not None
+        rot = [numpy.broadcast_to(v, shape) for v in mech.links(theta, delta)] if use else []
+    rigid = [numpy.broadcast_to(v, shape) for v in rigid]
+    dev = [numpy.broadcast_to(v, shape) for v in dev]
+    for v in rigid + dev + rot:
+        ok = ok & numpy.isfinite(v)  # a non-finite result is never ok
+    compliant = list(theta)
+    for j, i in enumerate(mech.unknown_index):
+        compliant[i] = theta[i] + delta[j]
+    angles = {"rigid": {}, "compliant": {}}
+    for i, name in enumerate(mech.hinge_names):
+        angles["rigid"][name] = numpy.where(ok, numpy.broadcast_to(theta[i], shape), numpy.nan)
+        angles["compliant"][name] = numpy.where(
+            ok, numpy.broadcast_to(compliant[i], shape), numpy.nan
+        )
+    result = {}
+    for n, name in enumerate(mech.point_names):
+        r = numpy.stack(rigid[2 * n : 2 * n + 2])
+        d = numpy.stack(dev[2 * n : 2 * n + 2])
+        r = numpy.where(ok, r, numpy.nan).astype(dtype)
+        d = numpy.where(ok, d, numpy.nan).astype(dtype)
+        result[name] = {"rigid": r, "compliant": r + d, "deviation": d}
+    rotations = {}
+    n_links = len(mech.link_names)
+    for i, name in enumerate(mech.link_names if links else ()):
+        r = numpy.where(ok, _wrap(rot[i]), numpy.nan).astype(dtype)
+        d = numpy.where(ok, rot[n_links + i], numpy.nan).astype(dtype)
+        rotations[name] = {"rigid": r, "compliant": r + d, "deviation": d}
+    return {"points": result, "ok": ok, "angles": angles, "links": rotations}
+
+
+def _prepare(mech, inputs, level, params):
+    """Checked arguments: the broadcast input arrays and the parameter values."""
+    if level not in mech.levels:
+        raise ValueError(f"level must be one of {tuple(mech.levels)}, got {level!r}")
+    names = set(inputs) - set(mech.pruned_inputs)
+    if names != set(mech.input_names):
+        pruned = mech.pruned_inputs
+        ignored = f" (accepted and ignored: {pruned})" if pruned else ""
+        raise ValueError(
+            f"inputs must be exactly {mech.input_names}{ignored}, got {tuple(sorted(inputs))}"
+        )
+    arrays = numpy.broadcast_arrays(
+        *(numpy.asarray(inputs[n], dtype=mech.dtype) for n in mech.input_names)
+    )
+    return arrays, [mech.dtype(v) for v in mech.parameters(params)]
+
+
+def _blocks(run, arrays, *args):
+    """run(arrays, *args) over cache-sized blocks of the flattened inputs, its nested dict of
+    arrays (elements on the last axis) joined and shaped like the inputs."""
+    shape = arrays[0].shape
+    size = arrays[0].size
+    if size <= _CHUNK:
+        return run(arrays, *args)
+    flat = [a.reshape(-1) for a in arrays]
+    parts = [run([a[k : k + _CHUNK] for a in flat], *args) for k in range(0, size, _CHUNK)]
+
+    def join(items):
+        if isinstance(items[0], dict):
+            return {key: join([item[key] for item in items]) for key in items[0]}
+        return numpy.concatenate(items, axis=-1).reshape(items[0].shape[:-1] + shape)
+
+    return join(parts)
+
+
+def _evaluate(mech, inputs, level, params, links):
+    """The module's evaluate()."""
+    arrays, p = _prepare(mech, inputs, level, params)
+    return _blocks(_evaluate_block, arrays, mech, level, p, links)
+
+
+def _evaluate_block(arrays, mech, level, p, links):
+    """evaluate() on one block of broadcast input arrays and parameter values p."""
+    theta, delta, ok, q = _pose(mech, arrays, level, p, links)
+    return _points(mech, theta, delta, ok, level, p, q, links)
+
+
+def _sensitivity_full(mech, inputs, level, params):
+    """The module's sensitivity_full()."""
+    levels = tuple(name for name, lv in mech.levels.items() if lv.sens is not None)
+    if level not in levels:
+        raise ValueError(
+            f"sensitivities are derived at the levels {levels}, not {level!r} (docs/sensitivity.md)"
+        )
+    arrays, p = _prepare(mech, inputs, level, params)
+    return _blocks(_sensitivity_block, arrays, mech, level, p)
+
+
+def _sensitivity_block(arrays, mech, level, p):
+    """sensitivity_full() on one block: the implicit-function theorem on the closures."""
+    theta, delta, ok, q = _pose(mech, arrays, level, p, True)
+    result = _points(mech, theta, delta, ok, level, p, q, True)
+    ok = result["ok"]
+    shape, dtype = ok.shape, mech.dtype
+    k, nv = len(mech.unknown_index), mech.n_variables
+    lv = mech.levels[level]
+    b = lv.blocks
+    with numpy.errstate(all="ignore"):
+        sr = mech.sens_rigid(theta, p)
+        rb = mech.sens_rigid_blocks
+        rig = _block(sr, rb["dR_dv"], shape, dtype)
+        if k:
+            # Theta = d theta_u / dv = -A^-1 dG/dv; rigid: dR/dv + dR/dtheta_u Theta
+            at, size = rb["dG_dv"][0], k * nv
+            a = sr[rb["A"][0] : rb["A"][0] + k * k]
+            th, good = _solve(a, [-numpy.asarray(v) for v in sr[at : at + size]], ok, nv, dtype)
+            ok = ok & good
+            th = _matrix(th, k, nv, shape, dtype)
+            rig = rig + numpy.matmul(_block(sr, rb["dR_dtheta"], shape, dtype), th)
+        s = lv.sens(theta, delta, p)
+        dev = _block(s, b["dD_dv"], shape, dtype)
+        if "M" in b:
+            # Y = -M^-1 (dE/dv + dE/dtheta_u Theta)
+            rhs = -(
+                _block(s, b["dE_dv"], shape, dtype)
+                + numpy.matmul(_block(s, b["dE_dtheta"], shape, dtype), th)
+            )
+            m = s[b["M"][0] : b["M"][0] + k * k]
+            y, good = _solve(
+                m, [rhs[..., i, j] for i in range(k) for j in range(nv)], ok, nv, dtype
+            )
+            ok = ok & good
+            dev = dev + numpy.matmul(
+                _block(s, b["dD_ddelta"], shape, dtype), _matrix(y, k, nv, shape, dtype)
+            )
+        if k:
+            dev = dev + numpy.matmul(_block(s, b["dD_dtheta"], shape, dtype), th)
+        if mech.sens_chain is not None:
+            # a parameter's default that reads earlier ones follows them: totals, last first
+            c = mech.sens_chain(p)
+            n = len(mech.parameter_names)
+            for i in range(n - 1, -1, -1):
+                for j in range(i + 1, n):
+                    dev[..., i] += c[j * n + i] * dev[..., j]
+                    rig[..., i] += c[j * n + i] * rig[..., j]
+    ok = ok & numpy.isfinite(dev).all(axis=(-1, -2)) & numpy.isfinite(rig).all(axis=(-1, -2))
+    if not ok.all():
+        for key in result["points"]:
+            for part in result["points"][key].values():
+                part[..., ~ok] = numpy.nan
+        for kind in result["angles"].values():
+            for h in kind:
+                kind[h] = numpy.where(ok, kind[h], numpy.nan)
+        for link in result["links"].values():
+            for key in link:
+                link[key] = numpy.where(ok, link[key], numpy.nan)
+    dev = numpy.where(ok[..., None, None], dev, numpy.nan)
+    rig = numpy.where(ok[..., None, None], rig, numpy.nan)
+    names = list(mech.parameter_names)
+
+    def table(m, n):
+        rows = numpy.moveaxis(m[..., 2 * n : 2 * n + 2, :], -1, 0)
+        rows = numpy.moveaxis(rows, -1, 1)  # (variable, 2, *shape)
+        return {
+            "params": {q: rows[v] for v, q in enumerate(names)},
+            "inputs": {h: rows[len(names) + v] for v, h in enumerate(mech.input_names)},
+        }
+
+    result["ok"] = ok
+    result["deviation"] = {n: table(dev, i) for i, n in enumerate(mech.point_names)}
+    result["rigid"] = {n: table(rig, i) for i, n in enumerate(mech.point_names)}
+    return result
