@@ -1,22 +1,27 @@
-"""The `equilibrium` level (docs/physics.md): the mechanism's plates as elastica, solved for the
-pose
-that balances them, the actuators and the loads (docs/physics.md).
+"""The `equilibrium` level (docs/physics.md): the mechanism's plates as geometrically exact
+beams (Reissner's or the elastica, each hinge's `beam`), solved for the pose that balances them,
+the actuators and the loads.
 
 Unknowns: the pose (x, y, φ) of every moving link (a point fixed in it at p0 as fabricated is at
-(x, y) + Rot(φ) p0), the end loads (k0, λx, λy) of every plate (symkin.physics.elastica), the
-force of every pin (`rigid` hinges) and the torque of every input's actuator. Equations: each
-plate's elastica reaches M's clamp in P's plate frame with M's rotation (3), each pin joins its
-two links (2), each input hinge holds its angle (1), each moving link is in force and moment
-balance (3): a square system, because the inputs number the mechanism's mobility.
+(x, y) + Rot(φ) p0), the end loads (k0, λx, λy) of every plate (symkin.physics.beams), the force
+of every pin (`rigid` hinges) and the torque of every input's actuator. Equations: each plate
+reaches M's clamp in P's plate frame with M's rotation (3), each pin joins its two links (2), each
+input hinge holds its angle (1), each moving link is in force and moment balance (3): a square
+system, because the inputs number the mechanism's mobility.
 
 It is solved by continuation in the load factor t (inputs and loads times t) from the straight,
 unloaded, as-fabricated pose at t = 0: a tangent predictor and Newton's method in float64 with
-the Jacobian by the complex step, the step halved when Newton fails or det J changes sign (a plate
-buckles or the path passes a limit point: exit 3 naming the hinge whose plate dominates the
-singular mode, and t). At t = 1 Newton polishes the solution in mpmath at a precision chosen from
-the digits the deviation loses against the positions, with the float64 Jacobian. The rigid
+the Jacobian by the complex step, the step halved when Newton fails, det J changes sign or the
+corrector jumps (a plate buckles or the path passes a limit point: exit 3 naming the hinge whose
+plate dominates the singular mode, and t), within a budget of steps and seconds. Loads beyond the
+plates' first buckling load are caught before: a linearised estimate, then a probe of the loads
+alone (`continuation`). At t = 1 Newton polishes the solution in mpmath at a precision chosen
+from the digits the deviation loses against the positions, with the float64 Jacobian. The rigid
 reference is the kinematic levels' rigid linkage (pins at hinge_models.pivot_distance), evaluated
 at the same precision; the deviation is the difference of the two positions.
+
+`buckling_factor` gives the contract's "buckling": the smallest factor on the file's loads at
+which the tangent stiffness with the inputs held becomes singular, by continuation.
 """
 
 from __future__ import annotations
@@ -672,7 +677,7 @@ def solve(
     rigid: Callable[[int], tuple[dict, dict]],
     extra_digits: int = 0,
 ) -> Result:
-    """The elastica equilibrium of `mech` (docs/physics.md) at parameter `values` and the input
+    """The equilibrium of `mech` (docs/physics.md) at parameter `values` and the input
     angles by hinge name, against the rigid pin linkage: `rigid(dps)` gives its hinge angles and
     its point positions by name at `dps` digits (the kinematic levels' rigid solution, exit 3
     out of range). `extra_digits` raises the working precision (to check the error estimate)."""
