@@ -70,6 +70,9 @@ Use
     res["points"]["C"]["deviation"], res["hinges"]["A"]["moment"], res["energy"]
 
 An input given as None is released (no actuator; its rigid reference stays at 0): a cantilever.
+Plates that stretch and shear (Reissner's beam) are in tests/reference_beams.py, which reuses this
+module: ``shoot`` takes their gam = EI/(κGA·l²) beside eps, and each plate's gam is read from the
+owner's ``_shear_ratio`` (absent here: 0).
 
 Validity and measured accuracy
 ------------------------------
@@ -178,6 +181,7 @@ class _Plate:
         "cm0",
         "cp0",
         "eps",
+        "gam",
         "input",
         "l",
         "m",
@@ -213,6 +217,9 @@ class _Mech:
                     if owner.extensible and not r.pin
                     else 0
                 )
+                # EI/(κGA·l²) of a plate that shears (tests/reference_beams.py), else 0
+                shear = getattr(owner, "_shear_ratio", {}).get(h.name)
+                r.gam = num(shear, dps) / r.l**2 if shear is not None and not r.pin else 0
                 self.hinges.append(r)
             self.plates = [r for r in self.hinges if not r.pin]
             self.pins = [r for r in self.hinges if r.pin]
@@ -367,25 +374,32 @@ def _horner(cs: list, h: int, bits: int) -> int:
 
 
 def shoot(
-    u0, mu0, fx, fy, bits: int, jac: bool = True, energy: bool = False, eps=0, kmax: int = 60
+    u0, mu0, fx, fy, bits: int, jac: bool = True, energy: bool = False, eps=0, kmax: int = 60, gam=0
 ) -> tuple:
     """Integrate one plate over σ ∈ [0, 1] from ψ(0) = u0, ψ'(0) = mu0, x = y = 0:
 
-        ψ'' = (1 + e)(f_x sin ψ − f_y cos ψ),   (x, y)' = (1 + e)(cos ψ, sin ψ),
+        ψ'' = (1 + e − g)(f_x sin ψ − f_y cos ψ),
+        (x, y)' = (1 + e)(cos ψ, sin ψ) + g_s·(−sin ψ, cos ψ),
 
-    e = eps·(f_x cos ψ + f_y sin ψ) the axial strain N/EA (eps = EI/(EA·l²); 0: inextensible).
-    Returns ((ψ(1), x(1), y(1), ψ'(1)), J, ∫(ψ'² + eps·n_t²) dσ or None, steps), J[i][j] the
-    derivative of output i with respect to (u0, mu0, fx, fy)[j] (variational equations). Numbers
-    are fixed-point integers scaled by 2^bits inside (exact convolutions, one rounding per
-    coefficient); the truncation of every series is kept below 2^-(bits-12).
+    e = eps·n_t the axial strain N/EA (n_t = f_x cos ψ + f_y sin ψ, eps = EI/(EA·l²); 0:
+    inextensible), g_s = gam·n_s the shear strain Q/(κGA) (n_s = −f_x sin ψ + f_y cos ψ,
+    gam = EI/(κGA·l²); 0: shear-rigid) and g = gam·n_t (Reissner's plane beam; ψ is the angle
+    of the cross-section). Returns ((ψ(1), x(1), y(1), ψ'(1)), J, ∫(ψ'² + eps·n_t² + gam·n_s²)
+    dσ or None, steps), J[i][j] the derivative of output i with respect to (u0, mu0, fx, fy)[j]
+    (variational equations). Numbers are fixed-point integers scaled by 2^bits inside (exact
+    convolutions, one rounding per coefficient); the truncation of every series is kept below
+    2^-(bits-12).
     """
     one = 1 << bits
     tolbits = bits - 12
     U, MU, X, Y = _fix(u0, bits), _fix(mu0, bits), 0, 0
     FX, FY = _fix(fx, bits), _fix(fy, bits)
     EPS = _fix(eps, bits) if eps else 0
-    # ε-terms: ψ'' gets ε[(fx² − fy²) sc + fx fy (1 − 2 cc)], x' gets ε(fx cc + fy sc),
-    # y' gets ε(fx sc + fy (1 − cc)), with cc = cos²ψ, sc = sin ψ cos ψ
+    GAM = _fix(gam, bits) if gam else 0
+    KAP = EPS - GAM
+    # strain terms, with cc = cos²ψ, sc = sin ψ cos ψ and κ = eps − gam: ψ'' gets
+    # κ[(fx² − fy²) sc + fx fy (1 − 2 cc)], x' gets κ(fx cc + fy sc) + gam·fx,
+    # y' gets κ(fx sc − fy cc) + eps·fy
     A2 = (FX * FX - FY * FY) >> bits
     B2 = (FX * FY) >> bits
     nd = 4 if jac else 0
@@ -416,12 +430,12 @@ def shoot(
             delta = one if k == 0 else 0
             num = FX * S[k] - FY * C[k]
             dx_k, dy_k = C[k] << bits, S[k] << bits
-            if EPS:
+            if EPS or GAM:
                 cc.append(conv(C, C, k))
                 sc.append(conv(S, C, k))
-                num += EPS * ((A2 * sc[k] + B2 * (delta - 2 * cc[k])) >> bits)
-                dx_k += EPS * ((FX * cc[k] + FY * sc[k]) >> bits)
-                dy_k += EPS * ((FX * sc[k] + FY * (delta - cc[k])) >> bits)
+                num += KAP * ((A2 * sc[k] + B2 * (delta - 2 * cc[k])) >> bits)
+                dx_k += KAP * ((FX * cc[k] + FY * sc[k]) >> bits) + GAM * FX * delta // one
+                dy_k += KAP * ((FX * sc[k] - FY * cc[k]) >> bits) + EPS * FY * delta // one
             u.append(num // d)
             ju.append((k + 2) * u[k + 2])
             xs.append(dx_k // ((k + 1) << bits))
@@ -436,7 +450,7 @@ def shoot(
                     num += S[k] << bits
                 elif p == 3:
                     num -= C[k] << bits
-                if EPS:
+                if EPS or GAM:
                     Pc = conv(cc, vp, k)  # (cos²ψ · v)_k
                     Ps = conv(sc, vp, k)  # (sin ψ cos ψ · v)_k
                     dsc = 2 * Pc - vp[k]  # ∂(sin ψ cos ψ) = (2cos²ψ − 1) v
@@ -448,13 +462,15 @@ def shoot(
                         e += 2 * FX * sc[k] + FY * (delta - 2 * cc[k])
                         ex += cc[k] << bits
                         ey += sc[k] << bits
+                        ddx += GAM * delta  # ∂(gam·fx)/∂fx
                     elif p == 3:
                         e += -2 * FY * sc[k] + FX * (delta - 2 * cc[k])
                         ex += sc[k] << bits
-                        ey += (delta - cc[k]) << bits
-                    num += (EPS * e) >> bits
-                    ddx += (EPS * ex) >> bits
-                    ddy += (EPS * ey) >> bits
+                        ey -= cc[k] << bits
+                        ddy += EPS * delta  # ∂(eps·fy)/∂fy
+                    num += (KAP * e) >> bits
+                    ddx += (KAP * ex) >> bits
+                    ddy += (KAP * ey) >> bits
                 vp.append(num // d)
                 dxs[p].append(ddx // ((k + 1) << bits))
                 dys[p].append(ddy // ((k + 1) << bits))
@@ -493,19 +509,21 @@ def shoot(
             mu = ju[1:]
             n = len(mu)
             sq = [conv(mu, mu, i) for i in range(n)]
-            if EPS:
-                # cos²ψ, sin ψ cos ψ to the order of C (higher terms are below the tolerance)
+            if EPS or GAM:
+                # cos²ψ, sin ψ cos ψ to the order of C (higher terms are below the tolerance);
+                # eps·n_t² + gam·n_s² = κ(fx² cc + 2 fx fy sc − fy² cc) + gam·fx² + eps·fy²
                 while len(cc) < len(C):
                     cc.append(conv(C, C, len(cc)))
                     sc.append(conv(S, C, len(sc)))
                 for i in range(min(n, len(C))):
-                    delta = one if i == 0 else 0
-                    nt2 = (
-                        (FX * FX >> bits) * cc[i]
-                        + 2 * B2 * sc[i]
-                        + (FY * FY >> bits) * (delta - cc[i])
+                    q2 = (
+                        (FX * FX >> bits) * cc[i] + 2 * B2 * sc[i] - (FY * FY >> bits) * cc[i]
                     ) >> bits
-                    sq[i] += (EPS * nt2) >> bits
+                    if i == 0:
+                        q2 = KAP * q2 + GAM * (FX * FX >> bits) + EPS * (FY * FY >> bits)
+                    else:
+                        q2 = KAP * q2
+                    sq[i] += q2 >> bits
             W += _horner([0] + [sq[i] // (i + 1) for i in range(n)], h, bits)
         U, MU = Un, MUn
         sig += h
@@ -790,7 +808,7 @@ class Equilibrium(_Solver):
             rPc = (xp + rp[0], yp + rp[1])
             rMc = (xm + rm[0], ym + rm[1])
             (u1, x1, y1, mu1), Js, W, _ = shoot(
-                pp + r.alpha, mu0, fx, fy, bits, True, energy, eps=r.eps
+                pp + r.alpha, mu0, fx, fy, bits, True, energy, eps=r.eps, gam=r.gam
             )
             shots[r.name] = (u1, mu1, Js)
             l, EI = r.l, r.EI

@@ -22,6 +22,7 @@ FLOORS: tuple[tuple[str, ...], ...] = (
     ("codegen",),  # the plan, the backends (C, numpy, LaTeX), building and loading
     ("studies",),  # evaluation, compiled evaluators, derive, tradeoff, tolerance, sweep, scene
     ("",),
+    ("fea",),  # the CalculiX model of a mechanism: a client of the public API
     ("cli", "__main__"),
 )
 #: Packages whose __init__ only documents them (no imports): no floor of their own needed.

@@ -395,6 +395,9 @@ def parser() -> argparse.ArgumentParser:
     sw.add_argument("--json", action="store_true", help="machine-readable output")
     sw.add_argument("--plot", metavar="FILE.png", help="histograms (.png, .pdf or .svg)")
     sw.set_defaults(run=_sweep)
+    from ..fea.command import register as register_fea
+
+    register_fea(command)
     return top
 
 
