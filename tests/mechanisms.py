@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 
 
 def q(name: str) -> str:
@@ -150,3 +151,87 @@ def without_stiffness(path) -> str:
 
     text = Path(path).read_text()
     return re.sub(r"^(E|thickness|width) = .*\n", "", text, flags=re.M)
+
+
+def with_beam(text: str, beam: str) -> str:
+    """A file's text with every plate's beam theory set in [defaults] (docs/physics.md):
+    "elastica" where a test compares with the inextensible reference, tests/reference_physics.py."""
+    if "[defaults]\n" in text:
+        return text.replace("[defaults]\n", f'[defaults]\nbeam = "{beam}"\n', 1)
+    return text.replace("\n[[link]]", f'\n[defaults]\nbeam = "{beam}"\n\n[[link]]', 1)
+
+
+# -- a lone plate held by its actuator (tests/test_physics.py, tests/test_buckling.py) -------
+
+
+def lone_plate(
+    units: str = "mm",
+    width: str = "5",
+    nu: str = "0.3",
+    scale: float = 1.0,
+    load: str = "",
+    beam: str = "reissner",
+) -> str:
+    """A plate of length l = 10 along +y from the ground's clamp at the origin to link `arm`,
+    point T on the arm at (0, 3 l); lengths in `units`, all of them times `scale`."""
+    return (
+        f"""format = 1
+name = "lone_plate"
+units = "{units}"
+[parameters]
+l = {10 * scale}
+F = 0
+[defaults]
+E = 200e9
+thickness = {0.2 * scale}
+width = {float(width) * scale}
+nu = {nu}
+beam = "{beam}"
+[[link]]
+name = "ground"
+[[link]]
+name = "arm"
+[[hinge]]
+name = "A"
+links = ["ground", "arm"]
+at = [0, "l/2"]
+plate_angle = "pi/2"
+length = "l"
+input = true
+[[point]]
+name = "T"
+link = "arm"
+at = [0, "3*l"]
+"""
+        + load
+    )
+
+
+def bending_stiffness(width: float, nu: float, unit: float, scale: float = 1.0) -> float:
+    """EI (N m²) of the lone plate, written here from the documented rule: E/(1 - ν²) when the
+    plate is at least 5 thicknesses wide."""
+    b, t = width * scale * unit, 0.2 * scale * unit
+    modulus = 200e9 / (1 - nu**2) if b >= 5 * t else 200e9
+    return modulus * b * t**3 / 12
+
+
+def axial_stiffness(width: float, nu: float, unit: float) -> float:
+    """EA (N) of the lone plate: E' b t, E' as for EI."""
+    b, t = width * unit, 0.2 * unit
+    return (200e9 / (1 - nu**2) if b >= 5 * t else 200e9) * b * t
+
+
+def shear_stiffness(width: float, nu: float, unit: float) -> float:
+    """κGA (N) of the lone plate: κ = 5/6, G = E/(2(1 + ν)), A = b t (Timoshenko)."""
+    return 5 / 6 * 200e9 / (2 * (1 + nu)) * width * unit * 0.2 * unit
+
+
+def column_buckling_load(beam: str, width: float = 5, nu: float = 0.3) -> float:
+    """The fixed–guided lone plate's critical axial load (N): Euler's P_E = π² EI/l² for the
+    elastica; for Reissner's beam the linearised equilibrium EI ψ'' = −P (1 − P/EA + P/κGA) ψ
+    about the compressed straight plate gives P (1 + c P) = P_E, c = 1/κGA − 1/EA."""
+    euler = math.pi**2 * bending_stiffness(width, nu, 1e-3) / 0.01**2
+    if beam == "elastica":
+        return euler
+    c = 1 / shear_stiffness(width, nu, 1e-3) - 1 / axial_stiffness(width, nu, 1e-3)
+    return (math.sqrt(1 + 4 * c * euler) - 1) / (2 * c)

@@ -87,6 +87,8 @@ EXPECTED: dict[str, tuple] = {
     "thickness_log_zero": ("'A'", "thickness"),
     "unknown_key_stiffness": ("'A'", "thicknes", "'thickness'"),
     "pin_unknown": ("'A'", "pin", "center"),
+    "beam_unknown": ("'A'", "beam", "timoshenko", "reissner", "elastica"),
+    "beam_not_a_name": ("'A0'", "beam", "1", "reissner"),
     "units_unknown": ("units", "inch"),
     # loads
     "load_unknown_point": ("[[load]] #1", "'D'"),

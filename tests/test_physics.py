@@ -1,11 +1,15 @@
 """The physical levels (docs/physics.md) against closed forms and published values.
 
-- the elastica integrator (symkin.physics.elastica): a pure end moment bends a circular arc;
-  the Bisshopp–Drucker cantilever (load index α = F L²/EI, α = 1, 2, 5) and Mattiasson's α = 10;
-  the clamped–guided plate's linear limit V l³/(12 EI);
+- the plate integrator (symkin.physics.beams): a pure end moment bends a circular arc (both
+  beams); the elastica's Bisshopp–Drucker cantilever (load index α = F L²/EI, α = 1, 2, 5) and
+  Mattiasson's α = 10; the linear limits, Euler–Bernoulli and Timoshenko (clamped–guided
+  V l³/(12 EI) + V l/(κGA), cantilever V l³/(3 EI) + V l/(κGA), stretch N l/EA); Reissner's first
+  integral at large loads;
 - `equilibrium` and `loaded` on a lone plate held by its actuator: a pure actuator torque (circular
-  arc, moment EI θ/l, energy EI θ²/(2l)), a small transverse load (clamped–guided compliance),
-  Euler's buckling load of the fixed–guided column (exit 3 naming the hinge and the load factor);
+  arc, moment EI θ/l, energy EI θ²/(2l)), a small transverse load (clamped–guided compliance,
+  with shear for a Reissner plate), the fixed–guided column below its buckling load (Euler's
+  for the elastica, P(1 + P (1/κGA − 1/EA)) = π² EI/l² for Reissner's beam; beyond it:
+  test_buckling.py);
 - the pin-linkage statics of `loaded` against a link-by-link force balance written here;
 - the file's length unit, the wide-plate modulus, the error estimate, the command line.
 
@@ -23,42 +27,58 @@ import mpmath
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+from mechanisms import (
+    axial_stiffness,
+    bending_stiffness,
+    column_buckling_load,
+    lone_plate,
+    shear_stiffness,
+)
 from reference_solver import Reference
 
 import symkin
 from symkin.cli.commands import main
-from symkin.physics import arith, elastica
+from symkin.physics import arith, beams
 from symkin.studies import evaluation
 
 DPS = 30
 
 
-def shoot_mp(k0, lx, ly, energy: bool = False) -> elastica.PlateEnd:
-    """One plate at DPS digits."""
-    return elastica.shoot(
+def shoot_mp(k0, lx, ly, energy: bool = False, stretch=None, shear=None) -> beams.PlateEnd:
+    """One plate at DPS digits: an elastica, or a Reissner beam with the compliances
+    stretch = EI/(EA l²) and shear = EI/(κGA l²)."""
+
+    def opt(v):
+        return None if v is None else arith.mp_array([v])
+
+    return beams.shoot(
         arith.mp_array([k0]),
         arith.mp_array([lx]),
         arith.mp_array([ly]),
         tol=10.0 ** (-DPS - 3),
         energy=energy,
+        stretch=opt(stretch),
+        shear=opt(shear),
     )
 
 
 # -- the elastica -----------------------------------------------------------------------------
 
 
+@pytest.mark.parametrize("compliance", [(None, None), ("1e-3", "3e-3"), ("0.05", "0.2")])
 @pytest.mark.parametrize("theta", ["1e-8", "0.3", "2", "6"])
-def test_pure_end_moment_bends_a_circular_arc(theta):
+def test_pure_end_moment_bends_a_circular_arc(theta, compliance):
+    # A pure moment neither stretches nor shears a Reissner beam: the arc is exact for both.
     with mpmath.workdps(DPS):
         t = mpmath.mpf(theta)
-        end = shoot_mp(t, 0, 0, energy=True)
+        end = shoot_mp(t, 0, 0, True, *compliance)
         expected = (mpmath.sin(t) / t, 2 * mpmath.sin(t / 2) ** 2 / t, t, t, t**2)
         got = (end.x[0], end.y[0], end.psi[0], end.omega[0], end.energy[0])
         for g, e in zip(got, expected):
             assert abs(g - e) <= mpmath.mpf(10) ** (3 - DPS) * (1 + abs(e))
 
 
-def cantilever(alpha) -> elastica.PlateEnd:
+def cantilever(alpha) -> beams.PlateEnd:
     """Tip-loaded cantilever (transverse dead force, index α): the M end carries no moment."""
     k0 = mpmath.findroot(lambda k: shoot_mp(k, 0, alpha).omega[0], mpmath.mpf(alpha) * 0.45)
     return shoot_mp(k0, 0, alpha)
@@ -95,25 +115,96 @@ def test_mattiasson_cantilever_alpha_10():
         assert abs(end.psi[0] - mpmath.mpf("1.430286")) < 6e-7
 
 
+#: Reissner compliances (EI/(EA l²), EI/(κGA l²)) of a steel plate with t = l/10 and of an
+#: exaggerated one; (None, None) is the elastica.
+COMPLIANCES = [(None, None), ("8.333e-4", "2.96e-3"), ("0.01", "0.03")]
+
+
+@pytest.mark.parametrize("compliance", COMPLIANCES)
 @pytest.mark.parametrize("shear", ["1e-6", "1e-3"])
-def test_clamped_guided_linear_limit(shear):
-    # Both ends keep their rotation (ψ(1) = 0): the transverse end displacement is V l³/(12 EI),
-    # i.e. λy/12 in units of l, up to O(λ³).
+def test_clamped_guided_linear_limit(shear, compliance):
+    # Both ends keep their rotation (ψ(1) = 0): the transverse end displacement is
+    # V l³/(12 EI) + V l/(κGA), i.e. λy (1/12 + γ_a) in units of l (Timoshenko), up to O(λ³);
+    # the shortening is second order.
     with mpmath.workdps(DPS):
         lam = mpmath.mpf(shear)
-        k0 = mpmath.findroot(lambda k: shoot_mp(k, 0, lam).psi[0], lam / 2)
-        end = shoot_mp(k0, 0, lam)
-        assert abs(end.y[0] / (lam / 12) - 1) < 10 * lam**2
+        gam = mpmath.mpf(compliance[1] or 0)
+        k0 = mpmath.findroot(lambda k: shoot_mp(k, 0, lam, False, *compliance).psi[0], lam / 2)
+        end = shoot_mp(k0, 0, lam, False, *compliance)
+        assert abs(end.y[0] / (lam * (mpmath.mpf(1) / 12 + gam)) - 1) < 10 * lam**2
+        assert abs(end.x[0] - 1) < lam**2
+
+
+@pytest.mark.parametrize("compliance", COMPLIANCES)
+def test_cantilever_linear_limit(compliance):
+    # Free end under a small transverse force λ: deflection λ (1/3 + γ_a), rotation λ/2
+    # (Timoshenko's cantilever: the shear adds V l/(κGA) and no rotation).
+    with mpmath.workdps(DPS):
+        lam = mpmath.mpf("1e-7")
+        gam = mpmath.mpf(compliance[1] or 0)
+        k0 = mpmath.findroot(lambda k: shoot_mp(k, 0, lam, False, *compliance).omega[0], lam)
+        end = shoot_mp(k0, 0, lam, False, *compliance)
+        assert abs(end.y[0] / (lam * (mpmath.mpf(1) / 3 + gam)) - 1) < 10 * lam
+        assert abs(end.psi[0] / (lam / 2) - 1) < 10 * lam
+        assert abs(k0 / lam - 1) < 10 * lam  # the root moment V l
+
+
+@pytest.mark.parametrize("compliance", COMPLIANCES)
+@pytest.mark.parametrize("axial", ["-2", "0.5", "30"])
+def test_an_axial_force_stretches_a_straight_plate(axial, compliance):
+    # Straight under an axial end force: x(1) = 1 + ε_a λ (N l/EA), energy ε_a λ² (N² l/EA).
+    with mpmath.workdps(DPS):
+        lam = mpmath.mpf(axial)
+        eps = mpmath.mpf(compliance[0] or 0)
+        end = shoot_mp(0, lam, 0, True, *compliance)
+        assert abs(end.x[0] - 1 - eps * lam) < mpmath.mpf(10) ** (4 - DPS)
+        assert end.y[0] == 0 and end.psi[0] == 0
+        assert abs(end.energy[0] - eps * lam**2) < mpmath.mpf(10) ** (4 - DPS)
+
+
+@pytest.mark.parametrize("loads", [("0.4", "-3", "2"), ("-6", "4", "-1.5"), ("10", "25", "0")])
+def test_reissner_first_integral_holds_at_large_loads(loads):
+    # ψ'' = −f_Q (1 + d f_N) = −dV/dψ with V = f_N + d f_N²/2 (d = ε_a − γ_a, df_N/dψ = f_Q):
+    # ψ'²/2 + V(ψ) is constant along the plate, a check of the nonlinear terms independent of
+    # the recurrences.
+    eps, gam = mpmath.mpf("0.01"), mpmath.mpf("0.03")
+    with mpmath.workdps(DPS):
+        k0, lx, ly = (mpmath.mpf(v) for v in loads)
+        end = shoot_mp(k0, lx, ly, False, eps, gam)
+
+        def invariant(psi, omega):
+            n = lx * mpmath.cos(psi) + ly * mpmath.sin(psi)
+            return omega**2 / 2 + n + (eps - gam) * n**2 / 2
+
+        start, stop = invariant(0, k0), invariant(end.psi[0], end.omega[0])
+        assert abs(stop - start) < mpmath.mpf(10) ** (5 - DPS) * (1 + abs(start))
 
 
 def test_complex_step_derivative_of_a_straight_plate():
     # A straight plate under the axial load λ: ψ(1) = k0 sin(√λ)/√λ exactly to first order in k0.
     lam = 9.8722
-    end = elastica.shoot(
+    end = beams.shoot(
         np.array([1j * arith.COMPLEX_STEP]), np.array([-lam + 0j]), np.array([0j]), tol=1e-18
     )
     slope = end.psi.imag[0] / arith.COMPLEX_STEP
     assert slope == pytest.approx(math.sin(math.sqrt(lam)) / math.sqrt(lam), rel=1e-12)
+
+
+def test_complex_step_derivative_of_a_straight_reissner_plate():
+    # Linearised about the straight plate under the compression λ (f_N = −λ, f_Q = λ ψ):
+    # ψ'' = −λ (1 − d λ) ψ with d = ε_a − γ_a, so ψ(1) = k0 sin ω/ω, ω² = λ (1 − d λ).
+    lam, eps, gam = 9.0, 0.01, 0.03
+    end = beams.shoot(
+        np.array([1j * arith.COMPLEX_STEP]),
+        np.array([-lam + 0j]),
+        np.array([0j]),
+        tol=1e-18,
+        stretch=np.array([eps]),
+        shear=np.array([gam]),
+    )
+    omega = math.sqrt(lam * (1 - (eps - gam) * lam))
+    slope = end.psi.imag[0] / arith.COMPLEX_STEP
+    assert slope == pytest.approx(math.sin(omega) / omega, rel=1e-12)
 
 
 # -- the beam-column series of `loaded` -------------------------------------------------------
@@ -148,55 +239,11 @@ def test_beam_column_series_against_closed_forms_and_the_beam_constraint_model()
 # -- a lone plate held by its actuator --------------------------------------------------------
 
 
-def lone_plate(
-    units: str = "mm", width: str = "5", nu: str = "0.3", scale: float = 1.0, load: str = ""
-) -> str:
-    """A plate of length l = 10 along +y from the ground's clamp at the origin to link `arm`,
-    point T on the arm at (0, 3 l); lengths in `units`, all of them times `scale`."""
-    return (
-        f"""format = 1
-name = "lone_plate"
-units = "{units}"
-[parameters]
-l = {10 * scale}
-F = 0
-[defaults]
-E = 200e9
-thickness = {0.2 * scale}
-width = {float(width) * scale}
-nu = {nu}
-[[link]]
-name = "ground"
-[[link]]
-name = "arm"
-[[hinge]]
-name = "A"
-links = ["ground", "arm"]
-at = [0, "l/2"]
-plate_angle = "pi/2"
-length = "l"
-input = true
-[[point]]
-name = "T"
-link = "arm"
-at = [0, "3*l"]
-"""
-        + load
-    )
-
-
-def bending_stiffness(width: float, nu: float, unit: float, scale: float = 1.0) -> float:
-    """EI (N m²) of the lone plate, written here from the documented rule: E/(1 - ν²) when the
-    plate is at least 5 thicknesses wide."""
-    b, t = width * scale * unit, 0.2 * scale * unit
-    modulus = 200e9 / (1 - nu**2) if b >= 5 * t else 200e9
-    return modulus * b * t**3 / 12
-
-
+@pytest.mark.parametrize("beam", ["reissner", "elastica"])
 @pytest.mark.parametrize("level", ["equilibrium", "loaded"])
 @pytest.mark.parametrize("theta", [0.05, 0.5, 1.5])
-def test_actuator_torque_alone_bends_a_circular_arc(level, theta):
-    an = symkin.analyze(symkin.loads(lone_plate(), "lone.toml"))
+def test_actuator_torque_alone_bends_a_circular_arc(level, theta, beam):
+    an = symkin.analyze(symkin.loads(lone_plate(beam=beam), "lone.toml"))
     result = symkin.evaluate(an, {"A": theta}, level)
     with mpmath.workdps(DPS):
         t, l = mpmath.mpf(theta), mpmath.mpf(10)
@@ -216,20 +263,29 @@ def test_actuator_torque_alone_bends_a_circular_arc(level, theta):
     assert result.energy == pytest.approx(ei * theta**2 / (2 * 0.01), rel=1e-12)
 
 
+@pytest.mark.parametrize("beam", ["reissner", "elastica"])
 @pytest.mark.parametrize("level", ["equilibrium", "loaded"])
 @pytest.mark.parametrize("width, nu", [("5", "0.3"), ("0.5", "0.3"), ("5", "0")])
-def test_small_transverse_load_moves_the_arm_by_the_clamped_guided_compliance(level, width, nu):
-    # Input held at 0, a force F across the plate at T: the arm translates by F l³/(12 EI).
+def test_small_transverse_load_moves_the_arm_by_the_clamped_guided_compliance(
+    level, width, nu, beam
+):
+    # Input held at 0, a force F across the plate at T: the arm translates by F l³/(12 EI), plus
+    # F l/(κGA) where the plate shears (a Reissner plate at `equilibrium`; `loaded` is the
+    # elastica's approximation whatever `beam` says, docs/physics.md).
     force = 1e-3
-    text = lone_plate(width=width, nu=nu, load='[[load]]\npoint = "T"\nforce = ["F", 0]\n')
+    load = '[[load]]\npoint = "T"\nforce = ["F", 0]\n'
+    text = lone_plate(width=width, nu=nu, load=load, beam=beam)
     an = symkin.analyze(symkin.loads(text, "lone.toml"))
     result = symkin.evaluate(an, {"A": 0}, level, params={"F": force})
     ei = bending_stiffness(float(width), float(nu), 1e-3)
-    expected = force * 0.01**3 / (12 * ei) * 1e3  # metres -> the file's mm
+    compliance = 0.01**3 / (12 * ei)
+    if level == "equilibrium" and beam == "reissner":
+        compliance += 0.01 / shear_stiffness(float(width), float(nu), 1e-3)
+    expected = force * compliance * 1e3  # metres -> the file's mm
     dev = result.points["T"].deviation
     assert dev[0] == pytest.approx(expected, rel=1e-6)
     alpha = force * 0.01**2 / ei
-    assert abs(dev[1]) < expected * alpha  # inextensible: second order only
+    assert abs(dev[1]) < expected * alpha  # no axial force: second order only
 
 
 def test_lengths_in_m_mm_um_give_the_same_physics():
@@ -248,39 +304,22 @@ def test_lengths_in_m_mm_um_give_the_same_physics():
         assert r.energy == pytest.approx(base.energy, rel=1e-12)
 
 
-def test_buckling_exits_3_naming_the_hinge_and_the_load_factor(tmp_path, capsys):
-    # Compressive dead load along the plate, its far end's rotation held: the fixed–guided
-    # column buckles at P = π² EI/l² (Euler), so F = 2 P stops at load factor 1/2.
-    path = tmp_path / "column.toml"
-    path.write_text(lone_plate(load='[[load]]\npoint = "T"\nforce = [0, "-F"]\n'))
-    critical = math.pi**2 * bending_stiffness(5, 0.3, 1e-3) / 0.01**2
-    code = main(
-        [
-            "eval",
-            str(path),
-            "--input",
-            "A=0",
-            "--level",
-            "equilibrium",
-            "--param",
-            f"F={2 * critical!r}",
-        ]
-    )
-    err = capsys.readouterr().err
-    assert code == 3, err
-    assert "'A'" in err and "buckles" in err
-    factor = float(err.split("load factor t = ")[1].split()[0])
-    assert factor == pytest.approx(0.5, abs=2e-6)
-    assert "Traceback" not in err
-
-
-def test_below_the_euler_load_the_column_stays_straight(tmp_path):
-    text = lone_plate(load='[[load]]\npoint = "T"\nforce = [0, "-F"]\n')
+@pytest.mark.parametrize("beam", ["reissner", "elastica"])
+def test_below_the_buckling_load_the_column_stays_straight(tmp_path, beam):
+    # At 0.9 of the critical load the column stays straight; a Reissner plate shortens by P l/EA.
+    text = lone_plate(load='[[load]]\npoint = "T"\nforce = [0, "-F"]\n', beam=beam)
     an = symkin.analyze(symkin.loads(text, "column.toml"))
-    critical = math.pi**2 * bending_stiffness(5, 0.3, 1e-3) / 0.01**2
-    result = symkin.evaluate(an, {"A": 0}, "equilibrium", params={"F": 0.9 * critical})
-    assert result.points["T"].deviation == (0.0, 0.0)
-    assert result.hinges["A"].force[1] == pytest.approx(-0.9 * critical, rel=1e-12)
+    force = 0.9 * column_buckling_load(beam)
+    result = symkin.evaluate(an, {"A": 0}, "equilibrium", params={"F": force})
+    dev = result.points["T"].deviation
+    assert dev[0] == 0.0
+    if beam == "elastica":
+        assert dev[1] == 0.0
+    else:
+        assert dev[1] == pytest.approx(
+            -force * 0.01 / axial_stiffness(5, 0.3, 1e-3) * 1e3, rel=1e-12
+        )
+    assert result.hinges["A"].force[1] == pytest.approx(-force, rel=1e-12)
 
 
 def test_the_error_estimate_is_honest_and_below_1e_10():
@@ -542,3 +581,19 @@ def test_unreachable_input_exits_3_like_the_kinematic_levels(tmp_path, capsys):
         assert main(["eval", str(path), "--input", "A0=1.5", "--level", level]) == 3
         messages.append(capsys.readouterr().err)
     assert messages[0] == messages[1] == messages[2]
+
+
+@pytest.mark.parametrize("hinge_beam", ["elastica", "reissner"])
+def test_a_hinge_beam_key_overrides_the_defaults(hinge_beam):
+    # [defaults] says one theory, the hinge the other: the hinge's own key decides (the
+    # transverse compliance gains F l/(κGA) only for a Reissner plate).
+    other = "reissner" if hinge_beam == "elastica" else "elastica"
+    text = lone_plate(load='[[load]]\npoint = "T"\nforce = ["F", 0]\n', beam=other)
+    text = text.replace("input = true\n", f'input = true\nbeam = "{hinge_beam}"\n')
+    mech = symkin.loads(text, "lone.toml")
+    assert mech.hinge("A").beam == hinge_beam
+    result = symkin.evaluate(symkin.analyze(mech), {"A": 0}, "equilibrium", params={"F": 1e-3})
+    compliance = 0.01**3 / (12 * bending_stiffness(5, 0.3, 1e-3))
+    if hinge_beam == "reissner":
+        compliance += 0.01 / shear_stiffness(5, 0.3, 1e-3)
+    assert result.points["T"].deviation[0] == pytest.approx(1e-3 * compliance * 1e3, rel=1e-6)

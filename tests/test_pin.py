@@ -15,7 +15,7 @@ import mpmath
 import pytest
 
 import symkin
-from symkin.physics import arith, elastica
+from symkin.physics import arith, beams
 
 L = mpmath.mpf("0.002")
 ANGLE = mpmath.pi / 3  # the plate's direction as fabricated
@@ -94,7 +94,7 @@ def test_elastica_force_pin_sits_two_thirds_of_the_plate_from_m_clamp():
             t = mpmath.mpf(theta)
 
             def tip(k0, alpha):
-                return elastica.shoot(
+                return beams.shoot(
                     arith.mp_array([k0]), arith.mp_array([0]), arith.mp_array([alpha]), tol=1e-33
                 )
 

@@ -100,7 +100,7 @@ MODELS: dict[str, ModelSpec] = {
 }
 
 #: Hinge keys that are not model parameters: geometry, model, input, where the rigid reference
-#: pin sits (`pin`), and the plate's stiffness data (docs/physics.md).
+#: pin sits (`pin`), and the plate's stiffness data and beam theory (docs/physics.md).
 HINGE_KEYS = (
     "name",
     "links",
@@ -114,7 +114,11 @@ HINGE_KEYS = (
     "thickness",
     "width",
     "nu",
+    "beam",
 )
+#: Values of the `beam` key, the default first: a geometrically exact beam that stretches and
+#: shears (Reissner 1972), or the inextensible, shear-free elastica (docs/physics.md).
+BEAMS = ("reissner", "elastica")
 #: Values of the `pin` key: the rigid reference pin at the plate midpoint (the paper's R_a), or at
 #: the pivot of the model's pseudo-rigid-body equivalent (see :func:`pivot_distance`).
 PINS = ("midpoint", "prbm")

@@ -27,6 +27,7 @@ import sympy as sp
 from ..core.errors import InputError, suggest
 from . import expressions
 from .hinges import (
+    BEAMS,
     HINGE_KEYS,
     MODEL_KEYS,
     MODELS,
@@ -130,6 +131,7 @@ class Hinge:
     thickness: sp.Expr | None = None  # plate thickness, file unit
     width: sp.Expr | None = None  # out-of-plane width, file unit
     nu: sp.Expr = DEFAULT_NU  # Poisson's ratio
+    beam: str = BEAMS[0]  # the plate's beam theory at the physical levels (hinges.BEAMS)
 
     def param(self, key: str, default: object = None) -> object:
         return dict(self.model_params).get(key, default)
@@ -812,6 +814,15 @@ class _Reader:
                 "model's pseudo-rigid-body pivot)",
             )
         stiffness = self.stiffness(merged, entry, line, length)
+        beam = merged.get("beam", BEAMS[0])
+        if beam not in BEAMS:
+            raise self.error(
+                f"'beam' must be one of {', '.join(BEAMS)}, got {beam!r}"[:200],
+                entry,
+                line,
+                'beam = "reissner" (stretches and shears, the default) or "elastica" '
+                "(inextensible, shear-free), docs/physics.md",
+            )
         return Hinge(
             name,
             i,
@@ -825,6 +836,7 @@ class _Reader:
             line,
             pin,
             **stiffness,
+            beam=beam,
         )
 
     def stiffness(

@@ -1,27 +1,34 @@
-"""The `equilibrium` level (docs/physics.md): the mechanism's plates as elastica, solved for the
-pose
-that balances them, the actuators and the loads (docs/physics.md).
+"""The `equilibrium` level (docs/physics.md): the mechanism's plates as geometrically exact
+beams (Reissner's or the elastica, each hinge's `beam`), solved for the pose that balances them,
+the actuators and the loads.
 
 Unknowns: the pose (x, y, φ) of every moving link (a point fixed in it at p0 as fabricated is at
-(x, y) + Rot(φ) p0), the end loads (k0, λx, λy) of every plate (symkin.physics.elastica), the
-force of every pin (`rigid` hinges) and the torque of every input's actuator. Equations: each
-plate's elastica reaches M's clamp in P's plate frame with M's rotation (3), each pin joins its
-two links (2), each input hinge holds its angle (1), each moving link is in force and moment
-balance (3): a square system, because the inputs number the mechanism's mobility.
+(x, y) + Rot(φ) p0), the end loads (k0, λx, λy) of every plate (symkin.physics.beams), the force
+of every pin (`rigid` hinges) and the torque of every input's actuator. Equations: each plate
+reaches M's clamp in P's plate frame with M's rotation (3), each pin joins its two links (2), each
+input hinge holds its angle (1), each moving link is in force and moment balance (3): a square
+system, because the inputs number the mechanism's mobility.
 
 It is solved by continuation in the load factor t (inputs and loads times t) from the straight,
 unloaded, as-fabricated pose at t = 0: a tangent predictor and Newton's method in float64 with
-the Jacobian by the complex step, the step halved when Newton fails or det J changes sign (a plate
-buckles or the path passes a limit point: exit 3 naming the hinge whose plate dominates the
-singular mode, and t). At t = 1 Newton polishes the solution in mpmath at a precision chosen from
-the digits the deviation loses against the positions, with the float64 Jacobian. The rigid
+the Jacobian by the complex step, the step halved when Newton fails, det J changes sign or the
+corrector jumps (a plate buckles or the path passes a limit point: exit 3 naming the hinge whose
+plate dominates the singular mode, and t), within a budget of steps and seconds. Loads beyond the
+plates' first buckling load are caught before: a linearised estimate, then a probe of the loads
+alone (`continuation`). At t = 1 Newton polishes the solution in mpmath at a precision chosen
+from the digits the deviation loses against the positions, with the float64 Jacobian. The rigid
 reference is the kinematic levels' rigid linkage (pins at hinge_models.pivot_distance), evaluated
 at the same precision; the deviation is the difference of the two positions.
+
+`buckling_factor` gives the contract's "buckling": the smallest factor on the file's loads at
+which the tangent stiffness with the inputs held becomes singular, by continuation.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
@@ -32,7 +39,7 @@ import sympy as sp
 from ..core.errors import AssemblyError
 from ..model.hinges import pivot_distance
 from ..model.mechanism import Mechanism
-from . import arith, elastica
+from . import arith, beams
 from .result import HingeLoad
 from .stiffness import PlateStiffness, plate_stiffness
 
@@ -40,8 +47,27 @@ from .stiffness import PlateStiffness, plate_stiffness
 MIN_STEP = 1e-7
 #: Largest input-angle change per continuation step, rad.
 MAX_TURN = 0.05
-#: Most continuation steps before giving up.
-MAX_STEPS = 2000
+#: The continuation's budget: most steps (accepted or not) and most seconds (wall clock) before
+#: it gives up with exit 3; a solve takes 0.1–1 s and a few dozen steps.
+MAX_STEPS = 1000
+TIME_BUDGET = 20.0
+#: A Newton iterate whose plates need loads this much larger (in the series' rate, |k0| +
+#: √|λ|) than where Newton started, plus a margin a buckling plate stays below, is rejected:
+#: it is far off the path, and the Taylor series would need ever more steps to shoot it.
+RATE_GROWTH, RATE_MARGIN = 4.0, 20.0
+#: `buckling_factor` looks for a singular tangent stiffness up to this factor on the loads.
+BUCKLING_LIMIT = 10.0
+#: Where the loads are beyond the linearised buckling estimate, following them stops once a plate
+#: strains this much (bending plus stretch): no elastic flexure survives it, and the beam
+#: theories' linear constitutive law no longer holds.
+STRAIN_LIMIT = 0.1
+#: ... and after this many accepted continuation steps: a deterministic budget for a path the
+#: estimate already says goes beyond buckling.
+PROBE_STEPS = 30
+#: Loads this many times the linearised estimate are refused without a probe: a slip of units.
+#: (The estimate is rough: 0.6 of Euler's load for a column, up to twice the limit point of a
+#: snap-through, and a load that bends the plates from the start may have none.)
+GROSS_OVERLOAD = 10.0
 
 
 @dataclass
@@ -61,6 +87,11 @@ class _Hinge:
     EI: object
     plate: bool
     theta: object = None
+    # EI/(EA l²) and EI/(κGA l²) of a Reissner plate (beams.shoot), None for an elastica
+    stretch: object = None
+    shear: object = None
+    # thickness over length, t/l = √(12 EI/(EA l²)), for the plate's strain (System.strain)
+    slender: float = 0.0
 
 
 @dataclass
@@ -85,6 +116,10 @@ class System:
     L: object
     F: object
     index: dict = field(default_factory=dict)
+    # the path parameter t drives the inputs by a + b t and the loads by c + d t: (0, 1, 0, 1)
+    # scales both together from the unloaded, as-fabricated pose; (1, 0, 0, 1) holds the inputs
+    # and scales the loads (`buckling_factor`)
+    schedule: tuple = (0.0, 1.0, 0.0, 1.0)
 
     def __post_init__(self) -> None:
         k = 3 * len(self.links)
@@ -96,6 +131,20 @@ class System:
                 self.index["tau:" + h.name] = k
                 k += 1
         self.size = k
+
+    def along(self, schedule: tuple) -> System:
+        """The same equations with another path (`schedule`)."""
+        return dataclasses.replace(self, schedule=schedule, index=dict(self.index))
+
+    def rate(self, u: np.ndarray) -> float:
+        """The plates' largest |k0| + √(|λx| + |λy|): how hard they are to shoot (beams.shoot)."""
+        out = 0.0
+        for h in self.hinges:
+            if h.plate:
+                k = self.index[h.name]
+                k0, lx, ly = (abs(float(np.real(u[k + j]))) for j in range(3))
+                out = max(out, k0 + math.sqrt(lx + ly))
+        return out
 
     def pose(self, u: np.ndarray, i: int):
         """(x, y, φ) of link i (zeros for the ground, i = -1)."""
@@ -129,8 +178,22 @@ class System:
         if plates:
             loads = np.array([u[self.index[h.name] + j] for h in plates for j in range(3)])
             loads = loads.reshape(len(plates), 3, *u.shape[1:])
-            end = elastica.shoot(
-                loads[:, 0], loads[:, 1], loads[:, 2], tol, energy=report is not None
+            stretch = shear = None
+            if any(h.stretch is not None for h in plates):
+                kind = object if arith.is_mp(u) else float
+                shape = (len(plates),) + (1,) * (u.ndim - 1)
+                stretch, shear = (
+                    np.array([getattr(h, key) or 0 for h in plates], dtype=kind).reshape(shape)
+                    for key in ("stretch", "shear")
+                )
+            end = beams.shoot(
+                loads[:, 0],
+                loads[:, 1],
+                loads[:, 2],
+                tol,
+                energy=report is not None,
+                stretch=stretch,
+                shear=shear,
             )
         ends = {h.name: k for k, h in enumerate(plates)}
         for h in self.hinges:
@@ -167,17 +230,19 @@ class System:
                 apply(h.M, (-force[0], -force[1]), (xp, yp), 0)
                 if report is not None:
                     report[h.name] = (force, zero, zero)
+        a, b, c, d = self.schedule
+        drive, load = a + b * t, c + d * t
         for h in self.hinges:
             if h.theta is not None:
                 _, _, phi_p = self.pose(u, h.P)
                 _, _, phi_m = self.pose(u, h.M)
-                rows.append(phi_m - phi_p - t * h.theta)
+                rows.append(phi_m - phi_p - drive * h.theta)
                 tau = u[self.index["tau:" + h.name]] * self.F * self.L
                 apply(h.M, (zero, zero), (zero, zero), tau)
                 apply(h.P, (zero, zero), (zero, zero), -tau)
-        for load in self.loads:
-            at = self.place(u, load.link, load.at)
-            apply(load.link, (t * load.force[0], t * load.force[1]), at, t * load.moment)
+        for ld in self.loads:
+            at = self.place(u, ld.link, ld.at)
+            apply(ld.link, (load * ld.force[0], load * ld.force[1]), at, load * ld.moment)
         for i in range(n):
             rows += [fx[i] / self.F, fy[i] / self.F, mz[i] / (self.F * self.L)]
         return np.array(rows)
@@ -192,6 +257,29 @@ class System:
         r = self.residual(batch, tt, tol)
         d = r.imag / arith.COMPLEX_STEP
         return d[:, :n], d[:, n]
+
+    def strain(self, u: np.ndarray) -> tuple[float, str | None]:
+        """The largest strain of the plates at their ends, bending plus stretch,
+        |ψ'| t/(2l) + |n|/EA, and its hinge: from the unknowns alone (the M end's moment by the
+        plate's moment balance, ω = k0 − X λy + Y λx with (X, Y) M's clamp over l)."""
+        out, where = 0.0, None
+        for h in self.hinges:
+            if not h.plate:
+                continue
+            k = self.index[h.name]
+            k0, lx, ly = (float(np.real(u[k + j])) for j in range(3))
+            _, _, phi_p = self.pose(u, h.P)
+            xp, yp = self.place(u, h.P, h.clamp_p)
+            xm, ym = self.place(u, h.M, h.clamp_m)
+            cb = math.cos(float(phi_p)) * float(h.cos_a) - math.sin(float(phi_p)) * float(h.sin_a)
+            sb = math.sin(float(phi_p)) * float(h.cos_a) + math.cos(float(phi_p)) * float(h.sin_a)
+            dx, dy = float(xm - xp) / float(h.length), float(ym - yp) / float(h.length)
+            x, y = cb * dx + sb * dy, -sb * dx + cb * dy
+            bend = max(abs(k0), abs(k0 - x * ly + y * lx)) * h.slender / 2
+            value = bend + math.hypot(lx, ly) * h.slender**2 / 12
+            if value > out:
+                out, where = value, h.name
+        return out, where
 
     def singular_hinge(self, jac: np.ndarray) -> str:
         """The hinge whose unknowns dominate the singular mode of `jac` (the smallest singular
@@ -242,6 +330,8 @@ def build(
                 num(stiffness[h.name].EI) if plate else None,
                 plate,
                 num(inputs[h.name]) if h.input else None,
+                *_compliances(stiffness.get(h.name) if plate else None, length, num),
+                _slender(stiffness.get(h.name) if plate else None, length, values),
             )
         )
     s = mech.unit_scale
@@ -269,6 +359,20 @@ def build(
     )
 
 
+def _compliances(stiff: PlateStiffness | None, length, num) -> tuple:
+    """(EI/(EA l²), EI/(κGA l²)) of a Reissner plate, (None, None) for an elastica or a pin."""
+    if stiff is None or not stiff.stretches:
+        return None, None
+    return num(stiff.EI / (stiff.EA * length**2)), num(stiff.EI / (stiff.kGA * length**2))
+
+
+def _slender(stiff: PlateStiffness | None, length, values) -> float:
+    """t/l of a plate from its stiffness, √(12 EI/(EA l²)); 0 for a pin."""
+    if stiff is None:
+        return 0.0
+    return math.sqrt(float(sp.N((12 * stiff.EI / (stiff.EA * length**2)).subs(values), 20)))
+
+
 @dataclass(frozen=True)
 class Solution:
     """A converged equilibrium: the unknowns at the working precision `dps` and the size of the
@@ -281,50 +385,152 @@ class Solution:
     tol: float
 
 
-def continuation(system: System, what: str, path: str) -> tuple[np.ndarray, np.ndarray]:
-    """Float64 solution at t = 1 from u = 0 at t = 0, and its Jacobian; AssemblyError (exit 3)
-    when the path buckles, passes a limit point or cannot be followed."""
-    tol = 1e-18
-    u = np.zeros(system.size)
-    jac, _ = system.jacobian(u, 0.0, tol)
-    sign = np.sign(np.linalg.det(jac))
-    turn = max([abs(float(h.theta)) for h in system.hinges if h.theta is not None] + [0.0])
-    largest = min(1.0, MAX_TURN / turn) if turn else 0.25
-    t, dt = 0.0, largest
+@dataclass(frozen=True)
+class Path:
+    """Where a continuation stopped: the float64 unknowns `u` at the path parameter `t`, the
+    Jacobian there, and why: "done" (the end was reached), "singular" (det J changes sign or
+    Newton fails ever closer to t: a plate buckles or the path passes a limit point), "budget"
+    (MAX_STEPS steps or the time allowed), "strain" (a plate strains beyond the limit asked)."""
+
+    u: np.ndarray
+    t: float
+    jac: np.ndarray
+    stop: str
+
+
+def follow(
+    system: System,
+    u: np.ndarray,
+    t: float,
+    end: float,
+    largest: float,
+    seconds: float = TIME_BUDGET,
+    strain: float = math.inf,
+    steps: int = MAX_STEPS,
+    tol: float = 1e-18,
+) -> Path:
+    """Continuation along `system`'s path from the solution `u` at `t` to `end`: a tangent
+    predictor and Newton in float64, the step halved when Newton fails, det J changes sign or
+    the corrector jumps, down to MIN_STEP; at most `steps` accepted steps, MAX_STEPS attempts
+    and `seconds` of wall clock; it stops where a plate strains more than `strain`
+    (System.strain)."""
+    deadline = time.monotonic() + seconds
+    jac, slope = system.jacobian(u, t, tol)
+    sign = np.linalg.slogdet(jac)[0]
+    dt, accepted = largest, 0
     for _ in range(MAX_STEPS):
-        if t >= 1:
+        if t >= end:
+            return Path(u, t, jac, "done")
+        if accepted >= steps or time.monotonic() > deadline:
             break
-        t1 = min(1.0, t + dt)
-        jac, rate = system.jacobian(u, t, tol)
-        guess = u - np.linalg.solve(jac, rate) * (t1 - t)
-        new = _newton(system, guess, t1, tol)
-        ok = new is not None
-        if ok:
-            jac_new, _ = system.jacobian(new[0], t1, tol)
-            ok = np.sign(np.linalg.det(jac_new)) == sign
-        if not ok:
+        t1 = min(end, t + dt)
+        guess = u - np.linalg.solve(jac, slope) * (t1 - t)
+        # an iterate that needs far larger plate loads than the path so far is off the path
+        limit = RATE_GROWTH * system.rate(u) + RATE_MARGIN
+        new = _newton(system, guess, t1, tol, limit) if system.rate(guess) < limit else None
+        if new is not None and _jumped(u, guess, new[0]):
+            new = None
+        if new is not None:
+            jac_new, slope_new = system.jacobian(new[0], t1, tol)
+            if np.linalg.slogdet(jac_new)[0] != sign:
+                new = None
+        if new is None:
             dt /= 2
             if dt < MIN_STEP:
-                name = system.singular_hinge(system.jacobian(u, t, tol)[0])
-                raise AssemblyError(
-                    f"{path}: {what} cannot be followed beyond load factor t = {t:.6g} (of the "
-                    f"requested inputs and loads): the hinge '{name}' buckles there or the "
-                    "mechanism passes a limit point (docs/physics.md)"
-                )
+                return Path(u, t, jac, "singular")
             continue
-        u, t = new[0], t1
-        dt = min(largest, dt * 1.5)
-    else:
+        u, t, jac, slope = new[0], t1, jac_new, slope_new
+        dt, accepted = min(largest, dt * 1.5), accepted + 1
+        if strain < math.inf and system.strain(u)[0] > strain:
+            return Path(u, t, jac, "strain")
+    return Path(u, t, jac, "done" if t >= end else "budget")
+
+
+def _jumped(u: np.ndarray, guess: np.ndarray, new: np.ndarray) -> bool:
+    """Newton's correction took it farther than the predictor's step (plus rounding): it may
+    have left the path for another branch (past a limit point, the path folds back and Newton
+    can land on a distant equilibrium whose det J has the same sign)."""
+    predicted = float(np.max(np.abs(guess - u)))
+    return float(np.max(np.abs(new - guess))) > predicted + 1e-9 * (1 + float(np.max(np.abs(u))))
+
+
+def continuation(
+    system: System, what: str, path: str, units: str = "m"
+) -> tuple[np.ndarray, np.ndarray]:
+    """Float64 solution at t = 1 from u = 0 at t = 0, and its Jacobian; AssemblyError (exit 3)
+    when the loads are beyond the plates' first buckling load, when the path buckles, passes a
+    limit point, or cannot be followed within the budget (MAX_STEPS, TIME_BUDGET).
+
+    With loads, the linearised buckling factor λ at the as-fabricated pose comes first (three
+    Jacobians). Loads beyond GROSS_OVERLOAD/λ exit at once. Loads beyond 1/λ are probed: the
+    loads alone at that pose, at most PROBE_STEPS steps and up to STRAIN_LIMIT; a singular
+    tangent stiffness, a strain past the limit or the step budget exit 3 naming the factor;
+    where the probe reaches the full loads (the linear estimate was pessimistic) the inputs
+    follow from there."""
+    started = time.monotonic()
+
+    def left() -> float:
+        return TIME_BUDGET - (time.monotonic() - started)
+
+    turn = max([abs(float(h.theta)) for h in system.hinges if h.theta is not None] + [0.0])
+    largest = min(1.0, MAX_TURN / turn) if turn else 0.25
+    u, driven = np.zeros(system.size), system
+    if system.loads:
+        first = buckling_estimate(system)
+        if first.factor < 1:
+            loads = system.along((0.0, 0.0, 0.0, 1.0))
+            probe = Path(u, 0.0, np.zeros(0), "gross")
+            if first.factor * GROSS_OVERLOAD >= 1:
+                probe = follow(
+                    loads, u, 0.0, 1.0, first.factor / 2, left(), STRAIN_LIMIT, PROBE_STEPS
+                )
+            if probe.stop != "done":
+                factor, hinge = first.factor, first.hinge
+                how = "a linearised estimate"
+                if probe.stop == "budget":
+                    how += (
+                        f"; the loads alone were followed to {probe.t:.3g} of them in "
+                        f"{PROBE_STEPS} steps"
+                    )
+                if probe.stop == "singular":
+                    factor, hinge = probe.t, loads.singular_hinge(probe.jac)
+                    how = "where the loads alone make the tangent stiffness singular"
+                elif probe.stop == "strain":
+                    value, plate = loads.strain(probe.u)
+                    how += (
+                        f"; at {probe.t:.3g} of the loads the plate of hinge '{plate}' already "
+                        f"strains by {value:.0%}"
+                    )
+                raise AssemblyError(
+                    f"{path}: the loads are {1 / factor:.4g} times the first buckling load of "
+                    f"the plates (hinge '{hinge}', at the as-fabricated pose: {how}); the "
+                    "equilibrium is not computed beyond it: check the file's units "
+                    f'(units = "{units}": lengths in {units}, forces in N, moments in N·m) and '
+                    "the loads' values (docs/physics.md)"
+                )
+            u, driven = probe.u, system.along((0.0, 1.0, 1.0, 0.0))
+    end = follow(driven, u, 0.0, 1.0, largest, left())
+    if end.stop == "singular":
+        name = driven.singular_hinge(end.jac)
+        of = "inputs, the loads held" if driven is not system else "inputs and loads"
         raise AssemblyError(
-            f"{path}: {what} did not reach the requested inputs and loads in "
-            f"{MAX_STEPS} continuation steps (stopped at load factor t = {t:.6g}, "
-            "near a toggle position or a limit point)"
+            f"{path}: {what} cannot be followed beyond load factor t = {end.t:.6g} (of the "
+            f"requested {of}): the hinge '{name}' buckles there or the mechanism passes a "
+            "limit point (docs/physics.md)"
         )
-    return u, system.jacobian(u, 1.0, tol)[0]
+    if end.stop == "budget":
+        raise AssemblyError(
+            f"{path}: {what} did not reach the requested inputs and loads within its budget "
+            f"({MAX_STEPS} continuation steps, {TIME_BUDGET:g} s): stopped at load factor "
+            f"t = {end.t:.6g}, near a toggle position, a limit point or a buckling load "
+            "(docs/physics.md)"
+        )
+    return end.u, end.jac
 
 
-def _newton(system: System, u: np.ndarray, t: float, tol: float):
-    """Newton in float64 from `u`; (u, step) once the step stops shrinking, or None."""
+def _newton(system: System, u: np.ndarray, t: float, tol: float, limit: float = math.inf):
+    """Newton in float64 from `u`; (u, step) once the step stops shrinking, or None (also when
+    an iterate's plate loads exceed `limit` in System.rate)."""
     previous = math.inf
     for _ in range(12):
         jac, _ = system.jacobian(u, t, tol)
@@ -338,10 +544,87 @@ def _newton(system: System, u: np.ndarray, t: float, tol: float):
             size >= previous / 2 > 0 and size < 1e-9
         ):
             return u, size
-        if not np.all(np.isfinite(u)) or size > 1e3:
-            return None
+        if not np.all(np.isfinite(u)) or size > 1e3 or size > previous or system.rate(u) > limit:
+            return None  # diverging, or growing: a shorter step will do better
         previous = size
     return None
+
+
+@dataclass(frozen=True)
+class Buckling:
+    """The smallest factor on the file's loads at which the tangent stiffness of the mechanism
+    (the equilibrium Jacobian, the inputs held) becomes singular — math.inf when there is none
+    up to the factor searched — and the hinge whose plate dominates the singular mode."""
+
+    factor: float
+    hinge: str | None
+
+
+def buckling_estimate(system: System, tol: float = 1e-18) -> Buckling:
+    """The first buckling factor of the loads, linearised at the unloaded, as-fabricated pose
+    (inputs at zero): the smallest λ > 0 with (J0 + λ J1) v = 0, J0 the Jacobian there and J1
+    its derivative along the loads' linear path u = λ u', u' = −J0⁻¹ ∂R/∂λ (a central
+    difference). Classical linear buckling: exact for a column that stays straight, an estimate
+    where the loads bend the plates from the start. Costs three Jacobians."""
+    loads = system.along((0.0, 0.0, 0.0, 1.0))
+    zero = np.zeros(loads.size)
+    jac0, slope = loads.jacobian(zero, 0.0, tol)
+    try:
+        tangent = -np.linalg.solve(jac0, slope)
+    except np.linalg.LinAlgError:
+        return Buckling(0.0, loads.singular_hinge(jac0))
+    h = 1e-4 / max(1.0, float(np.max(np.abs(tangent))))
+    jac1 = (loads.jacobian(h * tangent, h, tol)[0] - loads.jacobian(-h * tangent, -h, tol)[0]) / (
+        2 * h
+    )
+    # (J0 + λ J1) v = 0  <=>  J0⁻¹ J1 v = −v/λ
+    mu = np.linalg.eigvals(np.linalg.solve(jac0, jac1))
+    real = mu[(mu.real < 0) & (np.abs(mu.imag) <= 1e-6 * np.abs(mu))].real
+    if real.size == 0:
+        return Buckling(math.inf, None)
+    factor = float(-1 / real.min())
+    return Buckling(factor, loads.singular_hinge(jac0 + factor * jac1))
+
+
+def buckling_factor(
+    mech: Mechanism,
+    values: Mapping[sp.Symbol, sp.Expr],
+    inputs: Mapping[str, sp.Expr],
+    limit: float = BUCKLING_LIMIT,
+    seconds: float = 2 * TIME_BUDGET,
+) -> Buckling:
+    """The first buckling factor of `mech`'s loads at the input angles by hinge name, properly:
+    continuation to the inputs without loads, then in the load factor λ from 0 to `limit` with
+    the inputs held, until det J changes sign or the path ends in a limit point (located by
+    step halving to MIN_STEP). math.inf when none is met up to `limit` (or the file has no
+    loads); AssemblyError (exit 3) when the inputs cannot be reached or the search runs out of
+    its budget. Cost: a few solves (a second or two on the examples)."""
+    system = build(mech, values, inputs, plate_stiffness(mech, "equilibrium"), _float)
+    if not system.loads:
+        return Buckling(math.inf, None)
+    started = time.monotonic()
+    turn = max([abs(float(h.theta)) for h in system.hinges if h.theta is not None] + [0.0])
+    driven = follow(
+        system.along((0.0, 1.0, 0.0, 0.0)),
+        np.zeros(system.size),
+        0.0,
+        1.0,
+        min(1.0, MAX_TURN / turn) if turn else 1.0,
+        seconds,
+    )
+    held = system.along((1.0, 0.0, 0.0, 1.0))
+    if driven.stop == "done":
+        left = seconds - (time.monotonic() - started)
+        end = follow(held, driven.u, 0.0, limit, 1.0, left)
+        if end.stop == "done":
+            return Buckling(math.inf, None)
+        if end.stop == "singular":
+            return Buckling(end.t, held.singular_hinge(end.jac))
+    what = "the inputs without loads" if driven.stop != "done" else "the load factor"
+    raise AssemblyError(
+        f"{mech.path}: the buckling search could not follow {what} (stopped at "
+        f"t = {driven.t if driven.stop != 'done' else end.t:.6g}, docs/physics.md)"
+    )
 
 
 def polish(system_mp: System, u: np.ndarray, jac: np.ndarray, dps: int) -> Solution:
@@ -394,14 +677,14 @@ def solve(
     rigid: Callable[[int], tuple[dict, dict]],
     extra_digits: int = 0,
 ) -> Result:
-    """The elastica equilibrium of `mech` (docs/physics.md) at parameter `values` and the input
+    """The equilibrium of `mech` (docs/physics.md) at parameter `values` and the input
     angles by hinge name, against the rigid pin linkage: `rigid(dps)` gives its hinge angles and
     its point positions by name at `dps` digits (the kinematic levels' rigid solution, exit 3
     out of range). `extra_digits` raises the working precision (to check the error estimate)."""
     stiffness = plate_stiffness(mech, "equilibrium")
     _, rigid_points = rigid(20)
     system = build(mech, values, inputs, stiffness, _float)
-    u, jac = continuation(system, "the equilibrium", mech.path)
+    u, jac = continuation(system, "the equilibrium", mech.path, mech.units)
     # The digits the deviation loses against the positions decide the working precision.
     span = float(system.L)
     smallest = min(

@@ -222,8 +222,9 @@ def equilibrium(
     params: Mapping[str, object] | None = None,
     extra_digits: int = 0,
 ) -> Evaluation:
-    """The `equilibrium` level (docs/physics.md): the plates as elastica, solved numerically to
-    its own error estimate; `extra_digits` raises the working precision (to check it)."""
+    """The `equilibrium` level (docs/physics.md): the plates as geometrically exact beams (each
+    hinge's `beam`), solved numerically to its own error estimate; `extra_digits` raises the
+    working precision (to check it)."""
     return _mpmath_evaluator(analysis).equilibrium(inputs, params, extra_digits)
 
 

@@ -2,7 +2,7 @@
 per evaluation.
 
 Errors are measured against the most faithful level the file's data allows
-(`levels.reference()`): `equilibrium`, the plates' elastica equilibrium, when every plate has its
+(`levels.reference()`): `equilibrium`, the plates' equilibrium, when every plate has its
 stiffness (docs/physics.md), else the kinematic `exact` level of the file's own hinge models, in
 mpmath at 30 digits. Times are measured in one run: the numpy evaluator vectorized over 10^4
 points, the C evaluator in a loop timed inside C.

@@ -738,9 +738,7 @@ def deviation_figure(
                 for ax in axes:
                     ax.set_xlabel(xlabel)
         if sweep.reference is not None:
-            handles.append(
-                Line2D([], [], ls="none", label="equilibrium (elastica)", **REFERENCE_MARKER)
-            )
+            handles.append(Line2D([], [], ls="none", label="equilibrium", **REFERENCE_MARKER))
         if not sweep.ok.all():
             handles.append(
                 Patch(facecolor="0.85", edgecolor="0.6", hatch="xx", label="cannot be assembled")
