@@ -20,10 +20,8 @@ from symkin.core.levels import LEVELS
 def bench_example(example: str, sizes: Sizes, sf: dict, workroot: Path) -> dict:
     """Every alternative's time per point at the exact level, checked, and the throughput."""
     import symkin
-    from symkin.codegen.backends.c import backend as c_backend
-    from symkin.codegen.backends.numpy import backend as numpy_backend
+    from symkin.codegen import pipeline
     from symkin.codegen.plan import plan as make_plan
-    from symkin.codegen.toolchain import import_numpy_module
 
     log(f"evaluators: {example}")
     mech = symkin.load(ROOT / "examples" / f"{example}.toml")
@@ -35,13 +33,13 @@ def bench_example(example: str, sizes: Sizes, sf: dict, workroot: Path) -> dict:
     def sample(n):
         return np.column_stack([rng.uniform(*ranges[k], n) for k in names])
 
-    p = make_plan(an)
+    p = pipeline.plan_for(an)
     source = f"{example}.toml"
-    header, code = c_backend.emit(p, source)
+    header, code = pipeline.emit(p, "c", source)
     work = workroot / example
     work.mkdir(parents=True, exist_ok=True)
     cb = CBench(compile_c(work, mech.name, header, code), mech.name, len(names), len(p.points))
-    npmod = import_numpy_module(numpy_backend.emit(p, source), mech.name)
+    npmod = pipeline.evaluator(p, "numpy", source)
     res: dict = {
         "inputs": {k: list(v) for k, v in ranges.items()},
         "point": p.points[0],

@@ -63,14 +63,12 @@ class Timed:
 
     def __init__(self, mech, plan_levels=("exact",)):
         import symkin
-        from symkin.codegen import toolchain
-        from symkin.codegen.backends.c import backend as c_backend
-        from symkin.codegen.plan import plan
+        from symkin.codegen import pipeline, toolchain
 
         an = symkin.analyze(mech)
         self.analysis = an
-        self.plan = plan(an, levels=list(plan_levels))
-        header, code = c_backend.emit(self.plan, f"{mech.name}.toml")
+        self.plan = pipeline.plan_for(an, levels=list(plan_levels))
+        header, code = pipeline.emit(self.plan, "c", f"{mech.name}.toml")
         name = mech.name
         extra = TIMER_C.replace("UPPER", name.upper()).replace("NAME", name)
         path = toolchain.build(name, header, code, toolchain.CFLAGS, extra)

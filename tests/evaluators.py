@@ -11,11 +11,7 @@ import pytest
 from conftest import EXAMPLES
 
 import symkin
-from symkin.codegen import toolchain
-from symkin.codegen.backends.c import backend as c_backend
-from symkin.codegen.backends.numpy import backend as numpy_backend
-from symkin.codegen.plan import plan
-from symkin.codegen.toolchain import import_numpy_module
+from symkin.codegen import pipeline
 from symkin.core import levels
 from symkin.studies.evaluation import parameter_values
 
@@ -57,24 +53,14 @@ class Generated:
             mech = symkin.load(source) if not isinstance(source, str) else symkin.loads(source)
         self.mech = mech
         self.analysis = symkin.analyze(self.mech)
-        self.plan = plan(self.analysis)
-        self.numpy = import_numpy_module(numpy_backend.emit(self.plan, "test"), self.mech.name)
+        self.plan, self.numpy = pipeline.build(self.analysis, "numpy", "test")
         self._lib = None
 
     @property
     def lib(self):
         if self._lib is None:
             require_compiler()
-            header, code = c_backend.emit(self.plan, "test")
-            kin = self.analysis.kin
-            self._lib = toolchain.Library(
-                toolchain.build(self.mech.name, header, code),
-                self.mech.name,
-                len(kin.inputs),
-                len(self.analysis.params),
-                len(self.plan.points),
-                len(kin.hinges),
-            )
+            self._lib = pipeline.evaluator(self.plan, "c", "test", links=False)
         return self._lib
 
     def params(self, overrides=None):

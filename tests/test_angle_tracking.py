@@ -126,8 +126,7 @@ def test_inputs_beyond_the_bound_are_refused_alike(value):
 
 def test_the_rule_lives_in_the_solver_settings():
     g = Generated(mech=symkin.load(EXAMPLES / "four_bar.toml"))
-    from symkin.codegen.backends.c import backend as c_backend
-    from symkin.codegen.backends.numpy import backend as numpy_backend
+    from symkin.codegen import pipeline
 
-    assert f"_WINDING = {SOLVER.winding}" in numpy_backend.emit(g.plan, "t")
-    assert f"< {SOLVER.winding})" in c_backend.emit(g.plan, "t")[1]
+    assert f"_WINDING = {SOLVER.winding}" in pipeline.emit(g.plan, "numpy", "t")[0]
+    assert f"< {SOLVER.winding})" in pipeline.emit(g.plan, "c", "t")[1]

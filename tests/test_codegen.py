@@ -19,11 +19,7 @@ from evaluators import INPUTS, SOURCES, generated, rel_err, require_compiler
 from reference_solver import Reference
 
 import symkin
-from symkin.codegen import toolchain
-from symkin.codegen.backends.c import backend as c_backend
-from symkin.codegen.backends.numpy import backend as numpy_backend
-from symkin.codegen.plan import plan
-from symkin.codegen.toolchain import import_numpy_module
+from symkin.codegen import pipeline
 
 
 @pytest.mark.parametrize("key", sorted(SOURCES))
@@ -142,7 +138,7 @@ def test_c_rejects_bad_arguments():
 
 def test_numpy_module_imports_only_numpy_and_the_standard_library():
     g = generated("four_bar")
-    tree = ast.parse(numpy_backend.emit(g.plan, "test"))
+    tree = ast.parse(pipeline.emit(g.plan, "numpy", "test")[0])
     modules = {
         alias.name.split(".")[0]
         for node in ast.walk(tree)
@@ -187,7 +183,7 @@ def test_c_harness_under_address_and_undefined_sanitizers(tmp_path, key):
     require_compiler()
     g = generated(key)
     name = g.mech.name
-    header, code = c_backend.emit(g.plan, "test")
+    header, code = pipeline.emit(g.plan, "c", "test")
     (tmp_path / f"{name}.h").write_text(header)
     (tmp_path / f"{name}.c").write_text(code)
     (tmp_path / "main.c").write_text(
@@ -269,16 +265,13 @@ def test_hostile_names_give_safe_compiling_code(tmp_path):
     require_compiler()
     mech = symkin.loads(HOSTILE)
     an = symkin.analyze(mech)
-    p = plan(an)
-    source = numpy_backend.emit(p, 'x"""y.toml')
-    module = import_numpy_module(source, mech.name)
+    p, module = pipeline.build(an, "numpy", 'x"""y.toml')
     assert module.INPUTS == ("int",)
     assert module.POINTS == ("'; exit(1); '",)
     res = module.evaluate({"int": 0.2}, "exact")
     want = symkin.evaluate(an, {"int": "0.2"}, "exact").points["'; exit(1); '"].deviation
     assert rel_err(res["points"]["'; exit(1); '"]["deviation"], want) <= 1e-12
     assert not (ROOT / "PWNED").exists() and not (tmp_path / "PWNED").exists()
-    header, code = c_backend.emit(p, "x*/y.toml")
-    lib = toolchain.Library(toolchain.build(mech.name, header, code), mech.name, 1, 1, 1, 4)
+    lib = pipeline.evaluator(p, "c", "x*/y.toml", links=False)
     status, out, _ = lib.evaluate([0.2], None, 2)
     assert status == 0 and rel_err(out[4:6], want) <= 1e-12

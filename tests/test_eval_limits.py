@@ -14,9 +14,7 @@ from reference_solver import Reference
 
 import symkin
 from symkin.cli.commands import main
-from symkin.codegen.backends.numpy import backend as numpy_backend
-from symkin.codegen.plan import plan
-from symkin.codegen.toolchain import import_numpy_module
+from symkin.codegen import pipeline
 
 FOUR_BAR = str(EXAMPLES / "four_bar.toml")
 BACKENDS = ["sympy", "numpy", "c"]
@@ -115,8 +113,7 @@ def test_numpy_refuses_inputs_beyond_a_half_turn():
 
 def test_numpy_default_level_is_the_most_faithful_generated():
     an = symkin.analyze(symkin.load(FOUR_BAR))
-    source = numpy_backend.emit(plan(an, levels=["paper", "first_order"]), "test")
-    module = import_numpy_module(source, "four_bar_paper_first_order")
+    _, module = pipeline.build(an, "numpy", "test", levels=["paper", "first_order"])
     assert module.LEVELS == ("paper", "first_order")
     default = module.evaluate({"A0": 0.2})
     explicit = module.evaluate({"A0": 0.2}, "first_order")

@@ -22,8 +22,7 @@ from evaluators import rel_err, require_compiler
 from reference_solver import Reference
 
 import symkin
-from symkin.codegen.backends.numpy import backend as numpy_backend
-from symkin.codegen.plan import plan
+from symkin.codegen import pipeline
 from symkin.codegen.toolchain import import_numpy_module
 from symkin.core.files import COMMIT, TEMP_PREFIX, complete_interrupted, write_atomically
 
@@ -137,7 +136,7 @@ def test_no_numpy_module_is_read_from_the_cache(tmp_path):
     planted or truncated file is never executed."""
     cache = tmp_path / "cache"
     an = symkin.analyze(symkin.load(FOUR_BAR))
-    source = numpy_backend.emit(plan(an), FOUR_BAR.name)
+    (source,) = pipeline.emit(pipeline.plan_for(an), "numpy", FOUR_BAR.name)
     digest = hashlib.sha256(source.encode()).hexdigest()[:20]
     (cache / "numpy").mkdir(parents=True)
     marker = tmp_path / "marker"
@@ -153,7 +152,9 @@ def test_no_numpy_module_is_read_from_the_cache(tmp_path):
 
 def test_threads_import_one_module_at_once():
     source = (
-        numpy_backend.emit(plan(symkin.analyze(symkin.load(FOUR_BAR))), "threads")
+        pipeline.emit(pipeline.plan_for(symkin.analyze(symkin.load(FOUR_BAR))), "numpy", "threads")[
+            0
+        ]
         + f"\n# {random.random()}\n"
     )  # a text no earlier test imported
     start = threading.Barrier(9)

@@ -75,10 +75,8 @@ def write(files: dict[str, bytes], folder: Path) -> Path:
 @pytest.fixture(scope="module")
 def reports() -> dict[str, tuple[dict[str, bytes], dict[str, bytes]]]:
     """example -> (standalone files, appendix files), generated once in this process."""
+    from symkin.codegen import pipeline
     from symkin.codegen.backends.latex import report
-    from symkin.codegen.backends.numpy import backend as numpy_backend
-    from symkin.codegen.plan import plan
-    from symkin.codegen.toolchain import import_numpy_module
     from symkin.graph.structure import build
     from symkin.kinematics.analysis import Analysis
     from symkin.studies.derive import physics_reference
@@ -87,9 +85,8 @@ def reports() -> dict[str, tuple[dict[str, bytes], dict[str, bytes]]]:
     for name in EXAMPLE_NAMES:
         mech = symkin.load(EXAMPLES / f"{name}.toml")
         an = Analysis(build(mech))
-        p = plan(an, report=True)
         source = Path(mech.path).name
-        module = import_numpy_module(numpy_backend.emit(p, source), mech.name)
+        p, module = pipeline.build(an, "numpy", source, report=True)
         physics = physics_reference(an) if p.loaded is not None else None
         out[name] = (
             report.emit(p, source, evaluator=module, physics=physics),

@@ -10,10 +10,7 @@ from evaluators import require_compiler
 
 import symkin
 from symkin.cli.commands import parser
-from symkin.codegen import toolchain
-from symkin.codegen.backends.c import backend as c_backend
-from symkin.codegen.backends.numpy import backend as numpy_backend
-from symkin.codegen.plan import plan
+from symkin.codegen import pipeline
 from symkin.core import levels
 
 
@@ -42,11 +39,8 @@ def test_cli_choices_come_from_the_table():
 def test_generated_code_takes_the_plans_levels_and_their_codes(wanted):
     require_compiler()
     an = symkin.analyze(symkin.load(EXAMPLES / "four_bar.toml"))
-    p = plan(an, levels=wanted)
+    p, module = pipeline.build(an, "numpy", "levels", levels=wanted)
     names = tuple(lv.name for lv in p.levels)
-    module = toolchain.import_numpy_module(
-        numpy_backend.emit(p, "levels"), "four_bar_" + "_".join(names)
-    )
     assert names == module.LEVELS
     # exact when it is generated, else the most faithful level generated
     default = module.evaluate({"A0": np.array([0.2])})
@@ -54,8 +48,7 @@ def test_generated_code_takes_the_plans_levels_and_their_codes(wanted):
         {"A0": np.array([0.2])}, levels.DEFAULT if levels.DEFAULT in names else names[-1]
     )
     assert np.array_equal(default["points"]["C"]["deviation"], given["points"]["C"]["deviation"])
-    header, code = c_backend.emit(p, "levels")
-    lib = toolchain.Library(toolchain.build("four_bar", header, code), "four_bar", 1, 1, 1, 4)
+    lib = pipeline.evaluator(p, "c", "levels", links=False)
     for lv in levels.LEVELS:
         status = lib.evaluate([0.2], None, lv.code)[0]
         assert status == (0 if lv.name in names else 3), lv.name

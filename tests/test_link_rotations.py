@@ -14,8 +14,7 @@ from reference_solver import Reference
 
 import symkin
 from symkin.cli.commands import main
-from symkin.codegen import toolchain
-from symkin.codegen.backends.c import backend as c_backend
+from symkin.codegen import pipeline
 from symkin.codegen.plan import plan
 
 KEYS = ["four_bar", "six_bar", "nine_bar", "five_bar", "triad", "serial_arm"]
@@ -101,10 +100,9 @@ def test_json_and_text_carry_the_links(capsys):
 
 def test_c_pose_fills_nan_on_failure_and_accepts_null():
     g = generated("four_bar")
-    p = plan(g.analysis)
-    header, code = c_backend.emit(p, "test")
+    header, _ = pipeline.emit(g.plan, "c", "test")
     assert "#define FOUR_BAR_N_LINKS 4" in header and "four_bar_evaluate_pose" in header
-    lib = toolchain.Library(toolchain.build("four_bar", header, code), "four_bar", 1, 1, 1, 4, 4)
+    lib = pipeline.evaluator(g.plan, "c", "test")
     status, _, _, links = lib.pose([0.2], None, 2)
     assert status == 0 and links[3 * 1] == 0.2  # the crank turns by its input
     status, out, angles, links = lib.pose([4.0], None, 2)

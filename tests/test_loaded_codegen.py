@@ -17,9 +17,8 @@ from conftest import EXAMPLES
 from evaluators import INPUTS, Generated, generated, rel_err
 
 import symkin
-from symkin.codegen.backends.numpy import backend as numpy_backend
+from symkin.codegen import pipeline
 from symkin.codegen.plan import plan
-from symkin.codegen.toolchain import import_numpy_module
 from symkin.studies import evaluation
 
 LOADED_FOUR_BAR = (
@@ -110,9 +109,8 @@ def test_loaded_with_parameter_overrides(backend):
 
 def test_first_order_variant_matches_its_derivation():
     an = symkin.analyze(symkin.loads(LOADED_FOUR_BAR, "lf.toml"))
-    p = plan(an, levels=["loaded"], beam_column=False)
+    p, module = pipeline.build(an, "numpy", "test", levels=["loaded"], beam_column=False)
     assert p.loaded.passes == 1 and "loaded_q0" not in p.routines
-    module = import_numpy_module(numpy_backend.emit(p, "test"), "loaded_first_order")
     got = module.evaluate({"A0": -0.15}, "loaded")["points"]["C"]["deviation"]
     want = evaluation.loaded(an, {"A0": "-0.15"}, beam_column=False).points["C"].deviation
     assert rel_err([float(v) for v in got], want) <= 1e-12
@@ -120,7 +118,7 @@ def test_first_order_variant_matches_its_derivation():
 
 def test_float32_loaded_stays_in_float32():
     g = generated("four_bar")
-    module = import_numpy_module(numpy_backend.emit(g.plan, "test", "float32"), "four_bar_f32")
+    module = pipeline.evaluator(g.plan, "numpy", "test", "float32")
     res = module.evaluate({"A0": np.linspace(0.02, 0.3, 15)}, "loaded")
     dev = res["points"]["C"]["deviation"]
     assert dev.dtype == np.float32 and res["ok"].all()

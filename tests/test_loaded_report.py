@@ -23,10 +23,9 @@ from reference_physics import Equilibrium
 from reference_solver import Reference
 
 import symkin
+from symkin.codegen import pipeline
 from symkin.codegen.backends.latex import report as latex_report
-from symkin.codegen.backends.numpy import backend as numpy_backend
 from symkin.codegen.plan import plan
-from symkin.codegen.toolchain import import_numpy_module
 from symkin.studies.derive import generate
 
 E, NU, WIDTH = 210e9, 0.3, 5e-3
@@ -114,8 +113,7 @@ def test_figure_reference_points_are_the_elastica(example):
     text = M.with_beam((EXAMPLES / f"{example}.toml").read_text(), "elastica")
     mech = symkin.loads(text, f"{example}.toml")
     an = symkin.analyze(mech)
-    p = plan(an, report=True)
-    module = import_numpy_module(numpy_backend.emit(p, "x.toml"), f"{example}_ref")
+    p, module = pipeline.build(an, "numpy", "x.toml", report=True)
     rep = latex_report.Report(p, "x.toml")
     spans = latex_report.sweep_spans(mech.inputs)
     runs, summary = latex_report.sweep(rep, module, spans, physics_reference(an))

@@ -22,8 +22,7 @@ from evaluators import Generated, generated, rel_err
 from reference_solver import Reference
 
 import symkin
-from symkin.codegen.backends.c import backend as c_backend
-from symkin.codegen.backends.numpy import backend as numpy_backend
+from symkin.codegen import pipeline
 from symkin.model import expressions
 from symkin.model.hinges import PLATE_LENGTH, THETA
 from symkin.studies import derive
@@ -52,13 +51,13 @@ def internal_names(key: str) -> set[str]:
         for level in ("paper", "first_order", "exact"):
             exprs += [*an.point_deviation(p.name, level)]
     names |= {s.name for e in exprs for s in e.free_symbols}
-    source = numpy_backend.emit(g.plan, "test")
+    (source,) = pipeline.emit(g.plan, "numpy", "test")
     for node in ast.walk(ast.parse(source)):
         for field in ("id", "name", "arg", "attr"):
             value = getattr(node, field, None)
             if isinstance(value, str):
                 names.add(value)
-    names |= set(IDENTIFIER.findall("\n".join(c_backend.emit(g.plan, "test"))))
+    names |= set(IDENTIFIER.findall("\n".join(pipeline.emit(g.plan, "c", "test"))))
     return names
 
 

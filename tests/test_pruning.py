@@ -21,7 +21,7 @@ from conftest import EXAMPLES, ROOT
 from evaluators import require_compiler
 
 import symkin
-from symkin.codegen import toolchain
+from symkin.codegen import pipeline
 from symkin.core import levels as level_table
 from symkin.graph.pruning import prune
 from symkin.studies.derive import generate
@@ -141,29 +141,20 @@ def _modules(text: str, points, levels=None, c: bool = True):
     full = generate(mech, emit, levels=levels)
     pruned = generate(mech, emit, points=points, levels=levels)
     out = []
-    for tag, files in (("full", full), ("pruned", pruned)):
-        mod = toolchain.numpy_module_in_memory(
-            files[f"{mech.name}.py"].decode(), f"{mech.name}_{tag}"
-        )
+    for files in (full, pruned):
+
+        def texts(backend: str, files=files) -> tuple[str, ...]:
+            names = pipeline.backend(backend).file_names(mech.name)
+            return tuple(files[name].decode() for name in names)
+
+        mod = pipeline.load("numpy", mech.name, texts("numpy"))
         lib = None
         if c:
             require_compiler()
-            h, src = files[f"{mech.name}.h"].decode(), files[f"{mech.name}.c"].decode()
-            lib = toolchain.Library(
-                toolchain.build(mech.name, h, src),
-                mech.name,
-                len(mod.INPUTS),
-                len(mod.PARAMETERS),
-                len(mod.POINTS),
-                _count(h, "N_HINGES"),
-            )
+            shape = pipeline.Shape(mod.INPUTS, tuple(mod.PARAMETERS), mod.POINTS, mod.HINGES)
+            lib = pipeline.load("c", mech.name, texts("c"), shape)
         out.append((mod, lib, files))
     return mech, out
-
-
-def _count(header: str, key: str) -> int:
-    line = next(x for x in header.splitlines() if x.startswith("#define") and key in x)
-    return int(line.split()[-1])
 
 
 def _agree(mech, modules, points, inputs, levels):

@@ -11,10 +11,7 @@ import pytest
 from evaluators import require_compiler
 
 import symkin
-from symkin.codegen import toolchain
-from symkin.codegen.backends.c import backend as c_backend
-from symkin.codegen.backends.numpy import backend as numpy_backend
-from symkin.codegen.plan import plan
+from symkin.codegen import pipeline
 from symkin.core.settings import SOLVER
 from symkin.studies import evaluation
 
@@ -42,15 +39,9 @@ def triad():
 
 
 def evaluators(an, settings):
-    p = dataclasses.replace(plan(an), solver=settings)
-    module = toolchain.import_numpy_module(
-        numpy_backend.emit(p, "solver"), f"triad_{settings.rigid_iterations}"
-    )
-    header, code = c_backend.emit(p, "solver")
-    lib = toolchain.Library(
-        toolchain.build("triad_six_bar", header, code), "triad_six_bar", 1, 1, 1, len(p.hinges)
-    )
-    return module, lib
+    p = dataclasses.replace(pipeline.plan_for(an), solver=settings)
+    module = pipeline.evaluator(p, "numpy", "solver")
+    return module, pipeline.evaluator(p, "c", "solver", links=False)
 
 
 def test_generated_evaluators_follow_the_settings(triad):

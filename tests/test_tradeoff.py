@@ -20,7 +20,7 @@ from reference_solver import Reference
 
 import symkin
 from symkin.cli.commands import main
-from symkin.codegen.toolchain import import_numpy_module
+from symkin.codegen import pipeline
 from symkin.kinematics.variants import analysis_for
 from symkin.studies.tradeoff import (
     Row,
@@ -215,7 +215,7 @@ def test_tolerance_choice_meets_the_tolerance_on_fresh_inputs(tmp_path, capsys):
     assert code == 0, capsys.readouterr().err
     text = (tmp_path / "four_bar.py").read_text()
     assert "Tolerance 0.0001 over A0 in [-0.15, 0.25]: variant" in text
-    module = import_numpy_module(text, "four_bar_tolerance")
+    module = pipeline.load("numpy", "four_bar", (text,))
     assert len(module.LEVELS) == 1
     rng = np.random.default_rng(7)
     fresh = rng.uniform(-0.15, 0.25, 12)
@@ -277,3 +277,42 @@ def test_with_stiffness_the_trade_is_measured_against_the_physics():
         )
         assert abs(claimed[name] - worst) <= 0.1 * worst, (name, claimed[name], worst)
     assert claimed["loaded"] < 1e-2 < claimed["exact"]
+
+
+def test_a_preloaded_mechanism_is_measured_against_eval_at_its_own_inputs(capsys):
+    """The Scott–Russell amplifier carries a 5 N output preload: its as-fabricated pose (RA0 = 0)
+    deviates too, and is an ordinary sample. Each claimed worst error is recomputed from `symkin
+    eval` at the table's own inputs, the variant's level against `equilibrium`, relative to the
+    reference deviation at each sample (as the JSON states); the plot names the reference."""
+    path = Path(__file__).resolve().parent / "mechanisms" / "scott_russell.toml"
+    mech = symkin.load(path)
+    variants = [Variant("loaded"), Variant("exact")]
+    table = run(mech, {"RA0": (0.0, 0.02)}, n=3, variants=variants, with_c=False)
+    data = table.as_json()
+    assert data["reference_level"] == "equilibrium" and data["samples"] == 3
+    assert [s["RA0"] for s in data["inputs"]] == [0.0, 0.01, 0.02]
+    assert data["zero_deviation"] == 0  # the preload: no sample has a vanishing reference
+    assert "at each sample" in data["relative_error"]
+
+    def deviations(level: str, q: float) -> dict:
+        code = main(["eval", str(path), "--input", f"RA0={q!r}", "--level", level, "--json"])
+        out, err = capsys.readouterr()
+        assert code == 0, err
+        return {p: v["deviation"] for p, v in json.loads(out)["points"].items()}
+
+    want = [deviations("equilibrium", s["RA0"]) for s in data["inputs"]]
+    assert math.hypot(*want[0]["B"]) > 1e-2  # mm: the preload's deviation at RA0 = 0
+    for v in data["variants"]:
+        got = [deviations(v["level"], s["RA0"]) for s in data["inputs"]]
+        for point in ("B", "A_out"):
+            worst = max(
+                math.hypot(g[point][0] - w[point][0], g[point][1] - w[point][1])
+                / math.hypot(*w[point])
+                for g, w in zip(got, want)
+            )
+            claimed = v["errors"][point]
+            assert abs(claimed - worst) <= 1e-6 * worst, (v["name"], point, claimed, worst)
+    loaded = next(v for v in data["variants"] if v["name"] == "loaded")
+    assert loaded["worst_error"] < 0.2  # the survey's eval: 8 % at RA0 = 0, 1-1.5 % elsewhere
+    title = figure(table)._suptitle.get_text()
+    assert "equilibrium" in title and "mpmath" not in title and "each sample" in title

@@ -12,10 +12,12 @@ import traceback
 from collections.abc import Sequence
 
 from .. import __version__, load
+from ..codegen import pipeline
 from ..core import levels
 from ..core.errors import InputError, SymkinError
 from ..core.files import output_dir, output_file
 from ..graph.structure import build
+from ..studies.evaluation import BACKENDS
 from .output import check_text, matrices_json, matrices_text
 
 #: File types `tradeoff --plot` can write (matplotlib picks the format from the suffix).
@@ -167,7 +169,7 @@ def _evaluator(args: argparse.Namespace, mech):
             entry="--level",
             hint="choose one of " + ", ".join(levels.GENERATED),
         )
-    if args.backend == "c":
+    if args.backend == "c":  # no compiler: exit 2 before any derivation
         from ..codegen.toolchain import compiler
 
         compiler()
@@ -183,6 +185,7 @@ def _tolerance(args: argparse.Namespace) -> str:
     nominal = {p.name: float(p.value) for p in mech.parameters}
     vary = variation.parse_vary(args.vary, mech, nominal, kinds=("pm",))
     grid = variation.parse_grid(args.input, mech)
+    tolerance.check_level(args.level)  # before compiling anything
     result = tolerance.run(_evaluator(args, mech), vary, grid, args.level)
     return json.dumps(result.as_json(), indent=2) + "\n" if args.json else tolerance.text(result)
 
@@ -284,7 +287,7 @@ def parser() -> argparse.ArgumentParser:
         help="deviation level (loaded, loaded_refined and equilibrium need the "
         "plates' E, thickness and width: docs/physics.md)",
     )
-    ev.add_argument("--backend", choices=("sympy", "numpy", "c"), default="sympy")
+    ev.add_argument("--backend", choices=BACKENDS, default="sympy")
     ev.add_argument(
         "--sensitivity",
         action="store_true",
@@ -365,7 +368,7 @@ def parser() -> argparse.ArgumentParser:
         help="input range (default -0.2:0.2, 25 values)",
     )
     to.add_argument("--level", choices=levels.GENERATED, default=levels.DEFAULT)
-    to.add_argument("--backend", choices=("c", "numpy"), default="c")
+    to.add_argument("--backend", choices=pipeline.BACKENDS, default="c")
     to.add_argument("--json", action="store_true", help="machine-readable output")
     to.set_defaults(run=_tolerance)
     sw = command("sweep", "Monte Carlo over parameter spreads, on Dask")
@@ -382,7 +385,7 @@ def parser() -> argparse.ArgumentParser:
     sw.add_argument("--samples", type=int, default=1000, metavar="S", help="samples (1000)")
     sw.add_argument("--seed", type=int, default=0, metavar="K", help="random seed (0)")
     sw.add_argument("--level", choices=levels.GENERATED, default=levels.DEFAULT)
-    sw.add_argument("--backend", choices=("c", "numpy"), default="c")
+    sw.add_argument("--backend", choices=pipeline.BACKENDS, default="c")
     sw.add_argument(
         "--scheduler",
         metavar="SPEC",

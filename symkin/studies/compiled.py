@@ -17,24 +17,20 @@ generated module's `evaluate` and `<name>_evaluate_pose` have them).
 
 from __future__ import annotations
 
-import hashlib
-import threading
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
+from typing import Any
 
 import numpy as np
 
-from ..codegen import toolchain
+from ..codegen import pipeline, toolchain
 from ..core import levels as level_table
-from ..core.errors import InputError
 from ..graph.pruning import for_levels
 from ..graph.structure import build
 from ..kinematics.analysis import Analysis
 from ..model.mechanism import Mechanism, load
-
-BACKENDS = ("c", "numpy")
 
 
 @dataclass(frozen=True)
@@ -42,9 +38,8 @@ class Sources:
     """What an evaluator is made of: the generated texts and the names they use."""
 
     name: str
-    backend: str  # "c" or "numpy"
-    header: str  # C header and source ("" for numpy)
-    source: str
+    backend: str  # a generated-code backend (symkin.codegen.pipeline.BACKENDS)
+    texts: tuple[str, ...]  # what the backend emitted, in the order of its files (() for numpy)
     numpy: str  # the numpy module (parameter defaults, numpy backend)
     inputs: tuple[str, ...]
     params: tuple[str, ...]
@@ -54,14 +49,14 @@ class Sources:
     sensitivity: bool
 
     @property
-    def digest(self) -> str:
-        text = "\0".join((self.backend, self.header, self.source, self.numpy))
-        return hashlib.sha256(text.encode()).hexdigest()[:24]
+    def header(self) -> str:
+        """The C header ("" for another backend)."""
+        return self.texts[0] if self.backend == "c" else ""
 
-
-#: The loaded evaluators of this process, by digest: compiled once per process.
-_LOADED: dict[str, tuple[ModuleType, toolchain.Library | None]] = {}
-_LOCK = threading.Lock()
+    @property
+    def source(self) -> str:
+        """The C source ("" for another backend)."""
+        return self.texts[1] if self.backend == "c" else ""
 
 
 class Compiled:
@@ -75,6 +70,7 @@ class Compiled:
         self.points = sources.points
         self.hinges = sources.hinges
         self.levels = sources.levels
+        self._found: tuple[ModuleType, Any] | None = None  # loaded on first use, never pickled
 
     def __reduce__(self):
         return Compiled, (self.sources,)
@@ -83,27 +79,31 @@ class Compiled:
         return f"<symkin.compile {self.name!r} ({self.backend}), levels {', '.join(self.levels)}>"
 
     # -- what is loaded --------------------------------------------------------------------------
-    def _loaded(self) -> tuple[ModuleType, toolchain.Library | None]:
-        key = self.sources.digest
-        found = _LOADED.get(key)
-        if found is None:
-            with _LOCK:
-                found = _LOADED.get(key)
-                if found is None:
-                    s = self.sources
-                    module = toolchain.numpy_module_in_memory(s.numpy, s.name)
-                    lib = None
-                    if s.backend == "c":
-                        lib = toolchain.Library(
-                            toolchain.load_transient(s.name, s.header, s.source),
-                            s.name,
-                            len(s.inputs),
-                            len(s.params),
-                            len(s.points),
-                            len(s.hinges),
-                        )
-                    found = _LOADED[key] = (module, lib)
-        return found
+    def _loaded(self) -> tuple[ModuleType, Any]:
+        """The numpy module (it gives the parameter defaults) and the backend's evaluator (the
+        same module for numpy): loaded once per process, nothing written (pipeline.load,
+        transient)."""
+        if self._found is None:
+            s = self.sources
+            shape = self.shape
+            module = pipeline.load("numpy", s.name, (s.numpy,), shape, transient=True)
+            evaluator = (
+                module
+                if s.backend == "numpy"
+                else pipeline.load(s.backend, s.name, s.texts, shape, transient=True)
+            )
+            self._found = (module, evaluator)
+        return self._found
+
+    @property
+    def _row(self) -> pipeline.Backend:
+        return pipeline.backend(self.backend)
+
+    @property
+    def shape(self) -> pipeline.Shape:
+        """The names its arguments and results are laid out by."""
+        s = self.sources
+        return pipeline.Shape(s.inputs, s.params, s.points, s.hinges)
 
     @property
     def module(self) -> ModuleType:
@@ -113,10 +113,9 @@ class Compiled:
     @property
     def library(self) -> toolchain.Library:
         """The loaded C library (backend c)."""
-        lib = self._loaded()[1]
-        if lib is None:
-            raise ValueError("a numpy evaluator has no C library")
-        return lib
+        if self.backend != "c":
+            raise ValueError(f"a {self.backend} evaluator has no C library")
+        return self._loaded()[1]
 
     # -- parameters ------------------------------------------------------------------------------
     @property
@@ -151,16 +150,7 @@ class Compiled:
         """x (n, n_inputs) -> (status (n,), out (n, 6 n_points)): per row and point rigid x, y,
         compliant x, y, deviation x, y, as the C evaluator writes them; status 0 where it
         succeeded (NaN rows elsewhere). `params`: every parameter's value (None: defaults)."""
-        level = self.code(level)
-        if self.backend == "c":
-            status, out, _ = self.library.evaluate_rows(x, params, level_table.get(level).code)
-            return status, out
-        res = self.module.evaluate(self._columns(x), level, self._named(params))
-        out = np.empty((x.shape[0], 6 * len(self.points)))
-        for i, p in enumerate(self.points):
-            for j, key in enumerate(("rigid", "compliant", "deviation")):
-                out[:, 6 * i + 2 * j : 6 * i + 2 * j + 2] = res["points"][p][key].T
-        return np.where(res["ok"], 0, 1).astype(np.intc), out
+        return self._row.rows(self._loaded()[1], self.shape, x, params, self.code(level))[:2]
 
     def sensitivity_rows(
         self, x: np.ndarray, level: str | None = None, params: Sequence[float] | None = None
@@ -169,23 +159,7 @@ class Compiled:
         derivatives (n, n_points, n_variables, 2)); variables: the parameters, then the
         inputs."""
         level = self.code(level, sensitivity=True)
-        if self.backend == "c":
-            return self.library.sensitivity_rows(x, params, level_table.get(level).code)
-        res = self.module.sensitivity_full(self._columns(x), level, self._named(params))
-        n = x.shape[0]
-        values = np.empty((n, 6 * len(self.points)))
-        dev = np.empty((n, len(self.points), len(self.sources.params) + len(self.inputs), 2))
-        rig = np.empty_like(dev)
-        for i, p in enumerate(self.points):
-            for j, key in enumerate(("rigid", "compliant", "deviation")):
-                values[:, 6 * i + 2 * j : 6 * i + 2 * j + 2] = res["points"][p][key].T
-            for out, kind in ((dev, "deviation"), (rig, "rigid")):
-                table = res[kind][p]
-                for v, name in enumerate(self.sources.params):
-                    out[:, i, v] = table["params"][name].T
-                for v, name in enumerate(self.inputs):
-                    out[:, i, len(self.sources.params) + v] = table["inputs"][name].T
-        return np.where(res["ok"], 0, 1).astype(np.intc), values, dev, rig
+        return self._row.sensitivity_rows(self._loaded()[1], self.shape, x, params, level)
 
     # -- the generated module's interface ---------------------------------------------------------
     def evaluate(
@@ -198,8 +172,8 @@ class Compiled:
         if self.backend == "numpy":
             return self.module.evaluate(inputs, self.code(level), params)
         x, shape = self._rows(inputs)
-        status, out, angles = self.library.evaluate_rows(
-            x, self.parameters(params), level_table.get(self.code(level)).code, angles=True
+        status, out, angles = self._row.rows(
+            self._loaded()[1], self.shape, x, self.parameters(params), self.code(level), True
         )
         m = len(self.hinges)
         return {
@@ -241,8 +215,12 @@ class Compiled:
         if self.backend == "numpy":
             return self.module.sensitivity_full(inputs, self.code(level, sensitivity=True), params)
         x, shape = self._rows(inputs)
-        status, values, dev, rig = self.library.sensitivity_rows(
-            x, self.parameters(params), level_table.get(self.code(level, sensitivity=True)).code
+        status, values, dev, rig = self._row.sensitivity_rows(
+            self._loaded()[1],
+            self.shape,
+            x,
+            self.parameters(params),
+            self.code(level, sensitivity=True),
         )
         names = self.sources.params
 
@@ -301,17 +279,9 @@ def compile(
     """The generated evaluator of a mechanism (file, Mechanism or Analysis), in memory: the
     requested points and levels (all by default), with its sensitivities unless told not to or
     inputs are `fixed` (input -> angle: held constant, folded into the evaluator)."""
-    from ..codegen.backends.c import backend as c_backend
-    from ..codegen.backends.numpy import backend as numpy_backend
-    from ..codegen.plan import plan
     from .evaluation import check_fabricated_pose, fixed_angles
 
-    if backend not in BACKENDS:
-        raise InputError(
-            f"unknown backend '{backend}'",
-            entry="--backend",
-            hint="backends: " + ", ".join(BACKENDS),
-        )
+    pipeline.backend(backend)  # an unknown one is bad input before any work
     pruned: tuple[str, ...] = ()
     if isinstance(mechanism, Analysis):
         analysis = mechanism
@@ -326,24 +296,22 @@ def compile(
     check_fabricated_pose(analysis)
     mech = analysis.mechanism
     held = {k: v for k, v in held.items() if k in analysis.mechanism.inputs}
-    p = plan(
+    p = pipeline.plan_for(
         analysis,
-        points,
-        levels,
+        points=points,
+        levels=levels,
         sensitivity=sensitivity,
         links=False,
         fixed=held,
         pruned_inputs=pruned,
     )
     source = Path(mech.path).name
-    header, code = c_backend.emit(p, source) if backend == "c" else ("", "")
     return Compiled(
         Sources(
             name=mech.name,
             backend=backend,
-            header=header,
-            source=code,
-            numpy=numpy_backend.emit(p, source),
+            texts=() if backend == "numpy" else pipeline.emit(p, backend, source),
+            numpy=pipeline.emit(p, "numpy", source)[0],
             inputs=p.inputs,
             params=tuple(q.name for q in p.parameters),
             points=p.points,

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import sympy as sp
 
+from ..codegen import pipeline
 from ..core.errors import InputError
 from ..core.files import write_atomically
 from ..graph.pruning import for_levels
@@ -19,7 +20,8 @@ from ..graph.structure import build
 from ..kinematics.analysis import Analysis
 from ..model.mechanism import Mechanism, load
 
-EMITTERS = ("latex", "c", "numpy")
+#: What `derive --emit` writes: the LaTeX report and every generated-code backend's files.
+EMITTERS = ("latex", *pipeline.BACKENDS)
 
 
 def parse_list(text: str | None, allowed: Sequence[str] | None, option: str) -> list[str] | None:
@@ -103,10 +105,7 @@ def generate_plan(
     fixed: Mapping[str, object] | None = None,
 ) -> tuple[dict[str, bytes], object]:
     """:func:`generate`, and the Plan the evaluators were emitted from."""
-    from ..codegen import toolchain
-    from ..codegen.backends.c import backend as c_backend
-    from ..codegen.backends.numpy import backend as numpy_backend
-    from ..codegen.plan import plan, with_derivation
+    from ..codegen.plan import with_derivation
     from .evaluation import check_fabricated_pose, fixed_angles
 
     say = progress or (lambda message: None)
@@ -150,41 +149,35 @@ def generate_plan(
         analysis = Analysis(build(mech), points)
     check_fabricated_pose(analysis)
     say("deriving the routines (CSE)")
-    p = plan(
+    p = pipeline.plan_for(
         analysis,
-        points,
-        levels,
+        points=points,
+        levels=levels,
         notes=notes,
         fixed=held,
         pruned_inputs=pruning.dropped_inputs if pruning is not None else (),
     )
     files: dict[str, bytes] = {}
-    numpy_text = None
-    if "numpy" in emit:
-        say("emitting numpy")
-        numpy_text = numpy_backend.emit(p, source, precision)
-        files[f"{mech.name}.py"] = numpy_text.encode()
-    if "c" in emit and precision != "float64":
-        raise InputError(
-            f"the variant {variant.name} is numpy-only (C evaluates in float64)",
-            file=mech.path,
-            entry="--emit",
-            hint="leave c out of --emit",
-        )
-    if "c" in emit:
-        say("emitting C99")
-        header, code = c_backend.emit(p, source)
-        files[f"{mech.name}.h"] = header.encode()
-        files[f"{mech.name}.c"] = code.encode()
+    for name, row in pipeline.REGISTRY.items():
+        if name not in emit:
+            continue
+        if precision not in row.precisions:
+            raise InputError(
+                f"the variant {variant.name} runs in {precision}; {row.language} evaluates in "
+                + " and ".join(row.precisions),
+                file=mech.path,
+                entry="--emit",
+                hint=f"leave {name} out of --emit",
+            )
+        say(f"emitting {row.language}")
+        for file, text in pipeline.files(p, name, source, precision).items():
+            files[file] = text.encode()
     if "latex" in emit:
         say("emitting the LaTeX report")
         from ..codegen.backends.latex import report
 
         # the report's deviation plot runs the generated numpy module
-        evaluator = None
-        if p.points:
-            numpy_text = numpy_text or numpy_backend.emit(p, source, precision)
-            evaluator = toolchain.import_numpy_module(numpy_text, mech.name)
+        evaluator = pipeline.evaluator(p, "numpy", source, precision) if p.points else None
         files.update(
             report.emit(
                 with_derivation(p, analysis),
@@ -257,7 +250,7 @@ def derive(
             "cheapest whose measured worst relative error meets it;"
         ]
         notes += [
-            f"  point {p}: worst relative error {e:.3g} (against mpmath, 30 digits)"
+            f"  point {p}: worst relative error {e:.3g} (against {table.reference_short})"
             for p, e in row.errors.items()
             if points is None or p in points
         ]

@@ -22,6 +22,7 @@ import numpy as np
 import sympy as sp
 from sympy.printing.pycode import MpmathPrinter
 
+from ..codegen import pipeline
 from ..core import levels
 from ..core.errors import AssemblyError, InputError
 from ..core.settings import SOLVER
@@ -32,7 +33,8 @@ from ..physics import equilibrium as physical_equilibrium
 from ..physics import statics
 from ..physics.result import HingeLoad
 
-BACKENDS = ("sympy", "numpy", "c")
+#: The mpmath evaluation of the derivation, then the generated-code backends (their registry).
+BACKENDS = ("sympy", *pipeline.BACKENDS)
 
 
 @dataclass(frozen=True)
@@ -192,7 +194,7 @@ def evaluate(
         if level == "equilibrium":
             return equilibrium(analysis, inputs, params)
         return _mpmath_evaluator(analysis).evaluate(inputs, level, params, dps, sensitivity)
-    if backend in ("numpy", "c"):
+    if backend in pipeline.REGISTRY:
         return _generated(analysis, inputs, level, params, backend, sensitivity)
     raise InputError(
         f"unknown backend '{backend}'", entry="--backend", hint="backends: " + ", ".join(BACKENDS)
@@ -1019,101 +1021,45 @@ def _generated(
     backend: str,
     sensitivity: bool = False,
 ) -> Evaluation:
-    """One configuration through the generated `backend` ('numpy' or 'c'); with `sensitivity`,
-    its generated sensitivity function too."""
+    """One configuration through a generated-code `backend` (symkin.codegen.pipeline); with
+    `sensitivity`, its generated sensitivity function too."""
     if not levels.get(level).generated:
         raise InputError(
             f"level '{level}' has no generated evaluator",
             entry="--backend",
             hint="evaluate it with --backend sympy",
         )
-    from ..codegen import toolchain
-    from ..codegen.backends.c import backend as c_backend
-    from ..codegen.backends.numpy import backend as numpy_backend
-    from ..codegen.plan import plan
-
     given = input_values(analysis, inputs)
     kin = analysis.kin
     names = [kin.hinges[a].name for a in kin.inputs]
     x = [float(sp.N(given[a], 20)) for a in kin.inputs]
     pvals = parameter_values(analysis.mechanism, params)
     pfloat = [float(sp.N(pvals[s], 20)) for s in analysis.params]
-    p = plan(analysis, sensitivity=sensitivity)
-    source = analysis.mechanism.path
-    hinges = [kin.hinges[a].name for a in sorted(kin.hinges)]
-    pnames = [q.name for q in analysis.mechanism.parameters]
+    p, ev = pipeline.build(analysis, backend, analysis.mechanism.path, sensitivity=sensitivity)
+    row, shape = pipeline.backend(backend), pipeline.Shape.of(p)
+    hinges, pnames = shape.hinges, shape.params
     sens = None
-    if backend == "numpy":
-        module = toolchain.import_numpy_module(
-            numpy_backend.emit(p, source), analysis.mechanism.name
+    status, out, angles, rot = row.pose(ev, shape, x, pfloat, level)
+    if status == 3:
+        raise InputError(f"the {backend} evaluator rejected the arguments", entry="--input")
+    if status == 0 and sensitivity:
+        rows = row.sensitivity_rows(ev, shape, np.array([x]), pfloat, level)
+        status = int(rows[0][0])
+        sens = Sensitivity.from_columns(p.points, pnames, names, rows[2][0], rows[3][0])
+    if status:
+        _explain(analysis, inputs, level, params, sensitivity)
+    points = {
+        n: PointResult(
+            (out[6 * i], out[6 * i + 1]),
+            (out[6 * i + 2], out[6 * i + 3]),
+            (out[6 * i + 4], out[6 * i + 5]),
         )
-        call = module.sensitivity_full if sensitivity else module.evaluate
-        res = call(dict(zip(names, x)), level, dict(zip(pnames, pfloat)))
-        if not bool(res["ok"]):
-            _explain(analysis, inputs, level, params, sensitivity)
-        if sensitivity:
-
-            def cols(kind: str, point: str) -> list:
-                table = res[kind][point]
-                return [table["params"][q] for q in pnames] + [table["inputs"][h] for h in names]
-
-            sens = Sensitivity.from_columns(
-                p.points,
-                pnames,
-                names,
-                [cols("deviation", n) for n in p.points],
-                [cols("rigid", n) for n in p.points],
-            )
-        points = {
-            n: PointResult(
-                *(
-                    tuple(float(v) for v in res["points"][n][key])
-                    for key in ("rigid", "compliant", "deviation")
-                )
-            )
-            for n in p.points
-        }
-        rigid = {h: float(res["angles"]["rigid"][h]) for h in hinges}
-        compliant = {h: float(res["angles"]["compliant"][h]) for h in hinges}
-        links = {
-            n: LinkResult(
-                *(float(res["links"][n][key]) for key in ("rigid", "compliant", "deviation"))
-            )
-            for n in p.reported_links
-        }
-    else:
-        header, code = c_backend.emit(p, source)
-        name = analysis.mechanism.name
-        lib = toolchain.Library(
-            toolchain.build(name, header, code),
-            name,
-            len(x),
-            len(pfloat),
-            len(p.points),
-            len(hinges),
-            len(p.reported_links),
-        )
-        status, out, angles, rot = lib.pose(x, pfloat, levels.get(level).code)
-        if status == 3:
-            raise InputError("the C evaluator rejected the arguments", entry="--input")
-        if status == 0 and sensitivity:
-            rows = lib.sensitivity_rows([x], pfloat, levels.get(level).code)
-            status = int(rows[0][0])
-            sens = Sensitivity.from_columns(p.points, pnames, names, rows[2][0], rows[3][0])
-        if status:
-            _explain(analysis, inputs, level, params, sensitivity)
-        points = {
-            n: PointResult(
-                (out[6 * i], out[6 * i + 1]),
-                (out[6 * i + 2], out[6 * i + 3]),
-                (out[6 * i + 4], out[6 * i + 5]),
-            )
-            for i, n in enumerate(p.points)
-        }
-        m = len(hinges)
-        rigid = dict(zip(hinges, angles[:m]))
-        compliant = dict(zip(hinges, angles[m:]))
-        links = {n: LinkResult(*rot[3 * i : 3 * i + 3]) for i, n in enumerate(p.reported_links)}
+        for i, n in enumerate(p.points)
+    }
+    m = len(hinges)
+    rigid = dict(zip(hinges, angles[:m]))
+    compliant = dict(zip(hinges, angles[m:]))
+    links = {n: LinkResult(*rot[3 * i : 3 * i + 3]) for i, n in enumerate(p.reported_links)}
     order = {kin.hinges[a].name: a for a in kin.hinges}
     extra = {}
     if levels.get(level).needs_stiffness:

@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 import sympy as sp
 
+from ..codegen import pipeline
 from ..core import levels as level_table
 from ..core.errors import AssemblyError, InputError, suggest
 from ..kinematics.variants import Variant, analysis_for, default_variants
@@ -41,7 +42,8 @@ POINT_KEYS = (
     "precision",
 )
 REFERENCES = ("exact", "equilibrium")
-BACKENDS = ("c", "numpy")
+#: The backends a scene file may name (its evaluators: the numpy module always, and this one).
+BACKENDS = pipeline.BACKENDS
 PRECISIONS = ("float64", "float32")
 DEFAULT_SAMPLES = 25
 #: Newton steps an iterative closure typically takes from its first-order start (the cost of its
@@ -404,9 +406,6 @@ def measure(
     """Every allowed variant's worst errors per point, each over the point's own samples against
     its own reference at 30 digits (the variant's numpy evaluator, pruned to the scene's points);
     and per point the samples its reference assembled."""
-    from ..codegen import toolchain
-    from ..codegen.backends.numpy import backend as numpy_backend
-    from ..codegen.plan import plan
     from ..graph.pruning import for_levels
     from ..graph.structure import build
     from ..kinematics.analysis import Analysis
@@ -457,9 +456,14 @@ def measure(
     for v in allowed:
         say(f"measuring variant {v.name}")
         pruned, _ = for_levels(mech, names, [v.level])
-        p = plan(analysis_for(pruned, v, names), names, [v.level], sensitivity=False)
-        module = toolchain.import_numpy_module(
-            numpy_backend.emit(p, "scene", v.precision), f"scene_{v.name.replace('/', '_')}"
+        _, module = pipeline.build(
+            analysis_for(pruned, v, names),
+            "numpy",
+            "scene",
+            v.precision,
+            points=names,
+            levels=[v.level],
+            sensitivity=False,
         )
         accepted = set(module.INPUTS) | set(module.PRUNED_INPUTS)
         absolute, relative = {}, {}
@@ -468,7 +472,7 @@ def measure(
             arrays = {h: np.array([r[h] for r in rows]) for h in rows[0] if h in accepted}
             got = module.evaluate(arrays, v.level, links=False)["points"][name]["deviation"]
             got = np.broadcast_to(np.asarray(got, dtype=float), (2, len(rows)))
-            absolute[name], relative[name] = worst_errors(got, wanted[name], rows)
+            absolute[name], relative[name] = worst_errors(got, wanted[name])
         out.append(Measured(v, absolute, relative))
     return out, {n: len(samples[n]) for n in names}
 
@@ -652,16 +656,14 @@ def generate(
 ) -> tuple[dict[str, bytes], Choice]:
     """File name -> content of the scene's evaluators (one per chosen variant and the scene
     evaluator over them) and reports, and the choice made; nothing is written."""
-    from ..codegen.backends.c import backend as c_backend
-    from ..codegen.backends.numpy import backend as numpy_backend
     from ..codegen.literals import to_double
     from ..codegen.plan import SceneGroup, ScenePlan
     from ..graph.structure import build
     from .derive import generate_plan
 
     say = progress or (lambda message: None)
-    if scene.backend == "numpy" and "c" in emit:
-        emit = [e for e in emit if e != "c"]
+    # the numpy modules, and the scene's own backend's evaluators (no C for backend numpy)
+    emit = [e for e in emit if e not in pipeline.REGISTRY or e in ("numpy", scene.backend)]
     measured, counts = measure(scene, say)
     choice = choose(scene, measured, counts, say)
     mech = scene.mechanism
@@ -718,12 +720,10 @@ def generate(
         groups=tuple(groups),
         notes=tuple(notes(scene, choice)),
     )
-    if "numpy" in emit:
-        files[f"{scene.name}.py"] = numpy_backend.emit_scene(scene_plan).encode()
-    if "c" in emit:
-        header, code = c_backend.emit_scene(scene_plan)
-        files[f"{scene.name}.h"] = header.encode()
-        files[f"{scene.name}.c"] = code.encode()
+    for backend, row in pipeline.REGISTRY.items():
+        if backend in emit:
+            texts = row.emit_scene(scene_plan)
+            files.update(zip(row.file_names(scene.name), (t.encode() for t in texts), strict=True))
     return files, choice
 
 
@@ -731,7 +731,7 @@ def derive(
     path: str | Path,
     scene: str | Path,
     out_dir: str | Path = ".",
-    emit: Sequence[str] = ("latex", "c", "numpy"),
+    emit: Sequence[str] = ("latex", *pipeline.BACKENDS),
     progress: Callable[[str], None] | None = None,
     column_width: float | None = None,
     appendix: bool = False,

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core import levels
-from ..core.errors import AssemblyError
+from ..core.errors import AssemblyError, InputError
 from .compiled import Compiled
 from .variation import Grid, Spread
 
@@ -102,10 +102,24 @@ class Tolerance:
         }
 
 
+def check_level(level: str) -> None:
+    """A stack-up needs the level's sensitivities: a level without them is bad input (exit 2),
+    naming the levels that have them."""
+    if not levels.get(level).sensitivity:
+        having = [lv.name for lv in levels.LEVELS if lv.generated and lv.sensitivity]
+        raise InputError(
+            f"the {level} level has no sensitivities, so no tolerance stack-up",
+            entry="--level",
+            hint="choose a level with sensitivities: " + ", ".join(having) + " "
+            "(docs/sensitivity.md)",
+        )
+
+
 def run(
     evaluator: Compiled, vary: Mapping[str, Spread], grid: Grid, level: str = levels.DEFAULT
 ) -> Tolerance:
     """The stack-up of the ±a spreads `vary` over the configurations of `grid`."""
+    check_level(level)
     x = grid.rows
     status, values, dev, _ = evaluator.sensitivity_rows(x, level)
     ok = status == 0

@@ -1,0 +1,414 @@
+"""One build-and-load pipeline for every generated evaluator: plan → emit → compile or import.
+
+Every caller (``symkin eval --backend``, ``symkin.compile``, ``derive``, ``tradeoff``, scenes,
+the tests and benchmarks) goes through here; a backend is one row of :data:`REGISTRY`:
+
+    name     what it emits (files)        what it loads                      precisions
+    numpy    <name>.py                    the module, executed in memory      float64, float32
+    c        <name>.h, <name>.c           the library, compiled, via ctypes  float64
+
+Each step is cached by content: a plan per Analysis and options (:func:`plan_for`), the texts
+per plan, backend, source and precision (:func:`emit`), the loaded evaluator per digest of its
+texts (:func:`load`); the C library is also cached on disk by :mod:`.toolchain` (or compiled in
+a temporary folder that is removed at once, ``transient=True``, when nothing may be written).
+
+A new backend is a folder under ``backends/`` (printer, kernels, templates, ``emit``) and one
+:class:`Backend` row here: its emit adapter and its loader.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import inspect
+import threading
+import weakref
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+
+from ..core import levels
+from ..core.errors import InputError
+from ..kinematics.analysis import Analysis
+from . import toolchain
+from .plan import Plan, ScenePlan, plan
+
+
+@dataclass(frozen=True)
+class Shape:
+    """The names a loaded evaluator's arguments and results are laid out by (in order)."""
+
+    inputs: tuple[str, ...]
+    params: tuple[str, ...]
+    points: tuple[str, ...]
+    hinges: tuple[str, ...]
+    links: tuple[str, ...] = ()  # the links whose rotations it reports
+
+    @classmethod
+    def of(cls, p: Plan, links: bool = True) -> Shape:
+        """The shape of plan `p`'s evaluator; `links=False` leaves the links' rotations out."""
+        return cls(
+            p.inputs,
+            tuple(q.name for q in p.parameters),
+            p.points,
+            p.hinges,
+            p.reported_links if links else (),
+        )
+
+
+#: One configuration in the C evaluator's layout (docs/generated-code.md): status (0: solved),
+#: 6 numbers per point (rigid x, y, compliant x, y, deviation x, y), the hinge angles (rigid then
+#: compliant), 3 per reported link (rigid, compliant rotation, deviation).
+Pose = tuple[int, list[float], list[float], list[float]]
+#: n configurations: status (n,), out (n, 6 points), the hinge angles (n, 2 hinges) when asked.
+Rows = tuple[np.ndarray, np.ndarray, np.ndarray | None]
+#: n configurations with sensitivities: status (n,), values (n, 6 points), the deviation's and
+#: the rigid position's derivatives (n, points, parameters then inputs, 2).
+SensitivityRows = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+
+
+@dataclass(frozen=True)
+class Backend:
+    """One row of the registry: how a backend emits a plan, loads what it emitted, and answers
+    in the neutral layouts (:data:`Pose`, :data:`Rows`, :data:`SensitivityRows`)."""
+
+    name: str
+    language: str  # what its files are written in, for messages
+    files: tuple[str, ...]  # the file names it writes, "{name}" the mechanism's identifier
+    precisions: tuple[str, ...]  # the floating-point types its evaluators run in
+    loads: str  # what :func:`load` gives, in words
+    #: (plan, source file name, precision) -> the texts, in the order of `files`
+    emit: Callable[[Plan, str, str], tuple[str, ...]]
+    #: a scene's plan -> the texts of its scene evaluator (docs/scene.md), in `files` order
+    emit_scene: Callable[[ScenePlan], tuple[str, ...]]
+    #: (mechanism identifier, texts, shape, transient) -> the loaded evaluator
+    load: Callable[[str, tuple[str, ...], Shape | None, bool], Any]
+    #: (evaluator, shape, inputs, parameter values, level) -> one configuration
+    pose: Callable[[Any, Shape, Sequence[float], Sequence[float] | None, str], Pose]
+    #: (evaluator, shape, inputs (n, inputs), parameter values or None, level, with angles)
+    rows: Callable[[Any, Shape, np.ndarray, Sequence[float] | None, str, bool], Rows]
+    sensitivity_rows: Callable[
+        [Any, Shape, np.ndarray, Sequence[float] | None, str], SensitivityRows
+    ]
+
+    def file_names(self, name: str) -> tuple[str, ...]:
+        """The files of mechanism `name`."""
+        return tuple(f.format(name=name) for f in self.files)
+
+
+# -- numpy: the generated module answers with dicts of arrays ------------------------------------
+
+
+def _emit_numpy(p: Plan, source: str, precision: str) -> tuple[str, ...]:
+    from .backends.numpy import backend
+
+    return (backend.emit(p, source, precision),)
+
+
+def _emit_numpy_scene(p: ScenePlan) -> tuple[str, ...]:
+    from .backends.numpy import backend
+
+    return (backend.emit_scene(p),)
+
+
+def _load_numpy(
+    name: str, texts: tuple[str, ...], shape: Shape | None, transient: bool
+) -> ModuleType:
+    (module,) = texts  # the module knows its own names: no shape needed
+    if transient:  # not entered in sys.modules (symkin.compile pickles as its texts)
+        return toolchain.numpy_module_in_memory(module, name)
+    return toolchain.import_numpy_module(module, name)
+
+
+def _named(shape: Shape, params: Sequence[float] | None) -> dict[str, float] | None:
+    return None if params is None else dict(zip(shape.params, params, strict=True))
+
+
+def _columns(shape: Shape, x: np.ndarray) -> dict[str, np.ndarray]:
+    x = np.asarray(x, dtype=float)
+    return {n: x[:, j] for j, n in enumerate(shape.inputs)}
+
+
+def _point_values(res: dict, shape: Shape, n: int) -> np.ndarray:
+    out = np.empty((n, 6 * len(shape.points)))
+    for i, p in enumerate(shape.points):
+        for j, key in enumerate(("rigid", "compliant", "deviation")):
+            out[:, 6 * i + 2 * j : 6 * i + 2 * j + 2] = res["points"][p][key].T
+    return out
+
+
+def _numpy_pose(module, shape: Shape, x, params, level: str) -> Pose:
+    res = module.evaluate(dict(zip(shape.inputs, x)), level, _named(shape, params))
+    out = [
+        float(v)
+        for p in shape.points
+        for key in ("rigid", "compliant", "deviation")
+        for v in res["points"][p][key]
+    ]
+    angles = [
+        float(res["angles"][kind][h]) for kind in ("rigid", "compliant") for h in shape.hinges
+    ]
+    links = [
+        float(res["links"][n][key])
+        for n in shape.links
+        for key in ("rigid", "compliant", "deviation")
+    ]
+    return (0 if bool(res["ok"]) else 1), out, angles, links
+
+
+def _numpy_rows(module, shape: Shape, x, params, level: str, angles: bool = False) -> Rows:
+    res = module.evaluate(_columns(shape, x), level, _named(shape, params))
+    out = _point_values(res, shape, x.shape[0])
+    turned = None
+    if angles:
+        turned = np.stack(
+            [res["angles"][kind][h] for kind in ("rigid", "compliant") for h in shape.hinges],
+            axis=1,
+        )
+    return np.where(res["ok"], 0, 1).astype(np.intc), out, turned
+
+
+def _numpy_sensitivity_rows(module, shape: Shape, x, params, level: str) -> SensitivityRows:
+    res = module.sensitivity_full(_columns(shape, x), level, _named(shape, params))
+    n = x.shape[0]
+    values = _point_values(res, shape, n)
+    dev = np.empty((n, len(shape.points), len(shape.params) + len(shape.inputs), 2))
+    rig = np.empty_like(dev)
+    for i, p in enumerate(shape.points):
+        for out, kind in ((dev, "deviation"), (rig, "rigid")):
+            table = res[kind][p]
+            for v, name in enumerate(shape.params):
+                out[:, i, v] = table["params"][name].T
+            for v, name in enumerate(shape.inputs):
+                out[:, i, len(shape.params) + v] = table["inputs"][name].T
+    return np.where(res["ok"], 0, 1).astype(np.intc), values, dev, rig
+
+
+# -- C: the compiled library's batch entry points already use the neutral layouts ---------------
+
+
+def _emit_c(p: Plan, source: str, precision: str) -> tuple[str, ...]:
+    from .backends.c import backend
+
+    return backend.emit(p, source)
+
+
+def _emit_c_scene(p: ScenePlan) -> tuple[str, ...]:
+    from .backends.c import backend
+
+    return backend.emit_scene(p)
+
+
+def _load_c(
+    name: str, texts: tuple[str, ...], shape: Shape | None, transient: bool
+) -> toolchain.Library:
+    if shape is None:
+        raise ValueError("loading a C library needs the shape of its arguments")
+    header, code = texts
+    lib = (
+        toolchain.load_transient(name, header, code)
+        if transient
+        else toolchain.build(name, header, code)
+    )
+    return toolchain.Library(
+        lib,
+        name,
+        len(shape.inputs),
+        len(shape.params),
+        len(shape.points),
+        len(shape.hinges),
+        len(shape.links),
+    )
+
+
+def _c_pose(lib: toolchain.Library, shape: Shape, x, params, level: str) -> Pose:
+    return lib.pose(x, params, levels.get(level).code)
+
+
+def _c_rows(lib: toolchain.Library, shape: Shape, x, params, level: str, angles=False) -> Rows:
+    return lib.evaluate_rows(x, params, levels.get(level).code, angles)
+
+
+def _c_sensitivity_rows(lib: toolchain.Library, shape: Shape, x, params, level: str):
+    return lib.sensitivity_rows(x, params, levels.get(level).code)
+
+
+#: The generated-code backends, by name; the order is the order of every listing (CLI choices,
+#: hints, derive's files).
+REGISTRY: dict[str, Backend] = {
+    b.name: b
+    for b in (
+        Backend(
+            "numpy",
+            "numpy",
+            ("{name}.py",),
+            ("float64", "float32"),
+            "the generated module, executed in memory",
+            _emit_numpy,
+            _emit_numpy_scene,
+            _load_numpy,
+            _numpy_pose,
+            _numpy_rows,
+            _numpy_sensitivity_rows,
+        ),
+        Backend(
+            "c",
+            "C99",
+            ("{name}.h", "{name}.c"),
+            ("float64",),
+            "the compiled library, called through ctypes (toolchain.Library)",
+            _emit_c,
+            _emit_c_scene,
+            _load_c,
+            _c_pose,
+            _c_rows,
+            _c_sensitivity_rows,
+        ),
+    )
+}
+#: The names of the generated-code backends (the mpmath evaluation, ``sympy``, is not one).
+BACKENDS: tuple[str, ...] = tuple(REGISTRY)
+
+
+def backend(name: str, entry: str = "--backend") -> Backend:
+    """The registry row of `name`; an unknown one is bad input (exit 2)."""
+    try:
+        return REGISTRY[name]
+    except KeyError:
+        raise InputError(
+            f"unknown backend '{name}'", entry=entry, hint="backends: " + ", ".join(BACKENDS)
+        ) from None
+
+
+# -- plan ------------------------------------------------------------------------------------------
+
+_PLANS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_PLANS_LOCK = threading.RLock()
+_PLAN_SIGNATURE = inspect.signature(plan)
+
+
+def _key(value: object) -> object:
+    """A hashable, order-preserving form of a plan option."""
+    if isinstance(value, Mapping):
+        return tuple((k, _key(v)) for k, v in sorted(value.items()))
+    if isinstance(value, list | tuple):
+        return tuple(_key(v) for v in value)
+    return value
+
+
+def plan_for(analysis: Analysis, **options: Any) -> Plan:
+    """:func:`~.plan.plan` of `analysis` with `options`, derived once per analysis and options
+    (kept as long as the analysis is)."""
+    bound = _PLAN_SIGNATURE.bind(analysis, **options)
+    bound.apply_defaults()  # plan(an) and plan(an, sensitivity=True) are one plan
+    key = tuple((k, _key(v)) for k, v in bound.arguments.items() if k != "analysis")
+    with _PLANS_LOCK:
+        plans = _PLANS.setdefault(analysis, {})
+        found = plans.get(key)
+        if found is None:
+            found = plans[key] = plan(analysis, **options)
+        return found
+
+
+# -- emit ------------------------------------------------------------------------------------------
+
+_TEXTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_TEXTS_LOCK = threading.RLock()
+
+
+def emit(p: Plan, name: str, source: str, precision: str = "float64") -> tuple[str, ...]:
+    """The texts backend `name` emits for plan `p` generated from file `source`, in the order of
+    its files; once per plan, source and precision. A precision the backend does not run in is
+    bad input."""
+    b = backend(name)
+    if precision not in b.precisions:
+        raise InputError(
+            f"the {name} backend evaluates in {', '.join(b.precisions)}, not {precision}",
+            entry="--backend",
+            hint="backends with "
+            + precision
+            + ": "
+            + ", ".join(n for n, r in REGISTRY.items() if precision in r.precisions),
+        )
+    key = (name, source, precision)
+    with _TEXTS_LOCK:
+        texts = _TEXTS.setdefault(p, {})
+        found = texts.get(key)
+        if found is None:
+            found = texts[key] = tuple(b.emit(p, source, precision))
+        return found
+
+
+def files(p: Plan, name: str, source: str, precision: str = "float64") -> dict[str, str]:
+    """File name -> text of what backend `name` emits for `p`."""
+    return dict(
+        zip(backend(name).file_names(p.name), emit(p, name, source, precision), strict=True)
+    )
+
+
+# -- load ------------------------------------------------------------------------------------------
+
+_LOADED: dict[str, Any] = {}
+_LOADED_LOCK = threading.Lock()
+
+
+def digest(name: str, mechanism: str, texts: Sequence[str]) -> str:
+    """The content digest of a backend's texts (what a loaded evaluator is cached under)."""
+    return hashlib.sha256("\0".join((name, mechanism, *texts)).encode()).hexdigest()
+
+
+def load(
+    name: str,
+    mechanism: str,
+    texts: Sequence[str],
+    shape: Shape | None = None,
+    transient: bool = False,
+) -> Any:
+    """Backend `name`'s evaluator of the emitted `texts` of `mechanism` (its identifier).
+
+    By default the C library comes from the compiled-code cache, verified on every load
+    (:func:`.toolchain.build`), and the numpy module from the modules of this process by digest
+    (:func:`.toolchain.import_numpy_module`). `transient`: nothing is left on disk or in
+    sys.modules (the C is compiled in a temporary folder that is removed at once); the loaded
+    evaluator is kept for this process by digest, so it is compiled once."""
+    b = backend(name)
+    texts = tuple(texts)
+    if not transient:
+        return b.load(mechanism, texts, shape, False)
+    key = f"{digest(name, mechanism, texts)}{shape!r}"
+    found = _LOADED.get(key)
+    if found is None:
+        with _LOADED_LOCK:
+            found = _LOADED.get(key)
+            if found is None:
+                found = _LOADED[key] = b.load(mechanism, texts, shape, True)
+    return found
+
+
+def evaluator(
+    p: Plan,
+    name: str,
+    source: str,
+    precision: str = "float64",
+    links: bool = True,
+    transient: bool = False,
+) -> Any:
+    """Plan `p` emitted by backend `name` and loaded: the numpy module or the C library."""
+    return load(name, p.name, emit(p, name, source, precision), Shape.of(p, links), transient)
+
+
+def build(
+    analysis: Analysis,
+    name: str,
+    source: str,
+    precision: str = "float64",
+    links: bool = True,
+    transient: bool = False,
+    **options: Any,
+) -> tuple[Plan, Any]:
+    """The whole chain: the plan of `analysis` with `options` (see :func:`~.plan.plan`), and
+    its evaluator from backend `name`."""
+    p = plan_for(analysis, **options)
+    return p, evaluator(p, name, source, precision, links, transient)
