@@ -131,7 +131,7 @@ def _columns(shape: Shape, x: np.ndarray) -> dict[str, np.ndarray]:
     return {n: x[:, j] for j, n in enumerate(shape.inputs)}
 
 
-def _point_values(res: dict, shape: Shape, n: int) -> np.ndarray:
+def _point_values(res: Mapping[str, Any], shape: Shape, n: int) -> np.ndarray:
     out = np.empty((n, 6 * len(shape.points)))
     for i, p in enumerate(shape.points):
         for j, key in enumerate(("rigid", "compliant", "deviation")):
@@ -139,7 +139,9 @@ def _point_values(res: dict, shape: Shape, n: int) -> np.ndarray:
     return out
 
 
-def _numpy_pose(module, shape: Shape, x, params, level: str) -> Pose:
+def _numpy_pose(
+    module: Any, shape: Shape, x: Sequence[float], params: Sequence[float] | None, level: str
+) -> Pose:
     res = module.evaluate(dict(zip(shape.inputs, x)), level, _named(shape, params))
     out = [
         float(v)
@@ -158,7 +160,14 @@ def _numpy_pose(module, shape: Shape, x, params, level: str) -> Pose:
     return (0 if bool(res["ok"]) else 1), out, angles, links
 
 
-def _numpy_rows(module, shape: Shape, x, params, level: str, angles: bool = False) -> Rows:
+def _numpy_rows(
+    module: Any,
+    shape: Shape,
+    x: np.ndarray,
+    params: Sequence[float] | None,
+    level: str,
+    angles: bool = False,
+) -> Rows:
     res = module.evaluate(_columns(shape, x), level, _named(shape, params))
     out = _point_values(res, shape, x.shape[0])
     turned = None
@@ -170,7 +179,9 @@ def _numpy_rows(module, shape: Shape, x, params, level: str, angles: bool = Fals
     return np.where(res["ok"], 0, 1).astype(np.intc), out, turned
 
 
-def _numpy_sensitivity_rows(module, shape: Shape, x, params, level: str) -> SensitivityRows:
+def _numpy_sensitivity_rows(
+    module: Any, shape: Shape, x: np.ndarray, params: Sequence[float] | None, level: str
+) -> SensitivityRows:
     res = module.sensitivity_full(_columns(shape, x), level, _named(shape, params))
     n = x.shape[0]
     values = _point_values(res, shape, n)
@@ -223,15 +234,34 @@ def _load_c(
     )
 
 
-def _c_pose(lib: toolchain.Library, shape: Shape, x, params, level: str) -> Pose:
+def _c_pose(
+    lib: toolchain.Library,
+    shape: Shape,
+    x: Sequence[float],
+    params: Sequence[float] | None,
+    level: str,
+) -> Pose:
     return lib.pose(x, params, levels.get(level).code)
 
 
-def _c_rows(lib: toolchain.Library, shape: Shape, x, params, level: str, angles=False) -> Rows:
+def _c_rows(
+    lib: toolchain.Library,
+    shape: Shape,
+    x: np.ndarray,
+    params: Sequence[float] | None,
+    level: str,
+    angles: bool = False,
+) -> Rows:
     return lib.evaluate_rows(x, params, levels.get(level).code, angles)
 
 
-def _c_sensitivity_rows(lib: toolchain.Library, shape: Shape, x, params, level: str):
+def _c_sensitivity_rows(
+    lib: toolchain.Library,
+    shape: Shape,
+    x: np.ndarray,
+    params: Sequence[float] | None,
+    level: str,
+) -> SensitivityRows:
     return lib.sensitivity_rows(x, params, levels.get(level).code)
 
 
@@ -284,7 +314,9 @@ def backend(name: str, entry: str = "--backend") -> Backend:
 
 # -- plan ------------------------------------------------------------------------------------------
 
-_PLANS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+#: analysis -> (the plan's options as a hashable key -> its plan)
+_PlanKey = tuple[tuple[str, object], ...]
+_PLANS: weakref.WeakKeyDictionary[Analysis, dict[_PlanKey, Plan]] = weakref.WeakKeyDictionary()
 _PLANS_LOCK = threading.RLock()
 _PLAN_SIGNATURE = inspect.signature(plan)
 
@@ -314,7 +346,10 @@ def plan_for(analysis: Analysis, **options: Any) -> Plan:
 
 # -- emit ------------------------------------------------------------------------------------------
 
-_TEXTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+#: plan -> ((backend, source, precision) -> its texts)
+_TEXTS: weakref.WeakKeyDictionary[Plan, dict[tuple[str, str, str], tuple[str, ...]]] = (
+    weakref.WeakKeyDictionary()
+)
 _TEXTS_LOCK = threading.RLock()
 
 

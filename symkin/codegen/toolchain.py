@@ -15,12 +15,21 @@ import subprocess
 import sys
 import tempfile
 import threading
+from collections.abc import Iterable
 from pathlib import Path
 from types import ModuleType
+from typing import TypeAlias
 
 import numpy as np
+import numpy.typing as npt
 
 from ..core.errors import InputError
+
+# What the generated functions take for an array of doubles or ints: a ctypes array or pointer
+# (None where the C accepts NULL).
+_Doubles: TypeAlias = "ctypes.Array[ctypes.c_double]"
+_DoublePointer: TypeAlias = "ctypes._Pointer[ctypes.c_double]"
+_IntPointer: TypeAlias = "ctypes._Pointer[ctypes.c_int]"
 
 CFLAGS = ("-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O2", "-fPIC", "-shared")
 
@@ -113,8 +122,14 @@ def _replace_atomically(
     """Put `data` (or the file `src`) at `final` with a unique temporary name and one rename."""
     fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{final.name}.", suffix=".tmp")
     try:
+        if data is None:
+            if src is None:
+                raise TypeError("_replace_atomically needs data or src")
+            payload = src.read_bytes()
+        else:
+            payload = data
         with os.fdopen(fd, "wb") as f:
-            f.write(data if data is not None else src.read_bytes())
+            f.write(payload)
         os.chmod(tmp, 0o600 if data is not None else 0o700)
         os.replace(tmp, final)
     except BaseException:
@@ -217,7 +232,7 @@ class Library:
         self.n_variables = n_params + n_inputs
 
     def pose(
-        self, inputs, params=None, level: int = 2
+        self, inputs: Iterable[float], params: Iterable[float] | None = None, level: int = 2
     ) -> tuple[int, list[float], list[float], list[float]]:
         """One configuration in one call: (status, out: 6 doubles per point, angles: rigid then
         compliant per hinge, links: rigid, compliant, deviation per link)."""
@@ -235,13 +250,19 @@ class Library:
             list(links)[: 3 * self.n_links],
         )
 
-    def evaluate(self, inputs, params=None, level: int = 2) -> tuple[int, list[float], list[float]]:
+    def evaluate(
+        self, inputs: Iterable[float], params: Iterable[float] | None = None, level: int = 2
+    ) -> tuple[int, list[float], list[float]]:
         """One configuration: (status, out: 6 doubles per point, angles: rigid then compliant
         per hinge)."""
         return self.pose(inputs, params, level)[:3]
 
     def evaluate_rows(
-        self, inputs: np.ndarray, params=None, level: int = 2, angles: bool = False
+        self,
+        inputs: np.ndarray,
+        params: Iterable[float] | None = None,
+        level: int = 2,
+        angles: bool = False,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """n configurations in one call: inputs (n, n_inputs); (status (n,), out (n, 6 n_points),
         angles (n, 2 n_hinges) or None)."""
@@ -278,7 +299,7 @@ class Library:
         return status, out
 
     def sensitivity_rows(
-        self, inputs: np.ndarray, params=None, level: int = 2
+        self, inputs: np.ndarray, params: Iterable[float] | None = None, level: int = 2
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Sensitivities of n configurations in one call: (status (n,), values (n, 6 n_points),
         deviation and rigid (n, n_points, n_variables, 2))."""
@@ -302,7 +323,7 @@ class Library:
         )
         return status, values, dev, rig
 
-    def params(self, params) -> ctypes.Array | None:
+    def params(self, params: Iterable[float] | None) -> _Doubles | None:
         """A parameter array for the C calls (None: the defaults)."""
         if params is None:
             return None
@@ -312,18 +333,18 @@ class Library:
         return (ctypes.c_double * max(1, self.n_params))(*values)
 
 
-def _rows(inputs, width: int) -> np.ndarray:
+def _rows(inputs: npt.ArrayLike, width: int) -> np.ndarray:
     x = np.ascontiguousarray(inputs, dtype=np.float64)
     if x.ndim != 2 or x.shape[1] != width:
         raise ValueError(f"inputs must have shape (n, {width}), got {x.shape}")
     return x
 
 
-def _ptr(array: np.ndarray | None):
+def _ptr(array: np.ndarray | None) -> _DoublePointer | None:
     return None if array is None else array.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
 
 
-def _iptr(array: np.ndarray):
+def _iptr(array: np.ndarray) -> _IntPointer:
     return array.ctypes.data_as(ctypes.POINTER(ctypes.c_int))
 
 
@@ -381,7 +402,7 @@ def time_per_evaluation(
     sink = ctypes.c_double()
     repeats = 1
     while True:
-        elapsed = fn(data, n, repeats, level, ctypes.byref(sink))
+        elapsed: float = fn(data, n, repeats, level, ctypes.byref(sink))
         if elapsed >= budget or repeats >= 1 << 20:
             return elapsed / (n * repeats)
         repeats *= 2 if elapsed <= 0 else max(2, int(budget / elapsed) + 1)
@@ -389,7 +410,10 @@ def time_per_evaluation(
 
 def _evaluate_prefix(header: str) -> str:
     """The mechanism name a generated header declares (<name>_evaluate)."""
-    return re.search(r"int (\w+)_evaluate\(", header).group(1)
+    match = re.search(r"int (\w+)_evaluate\(", header)
+    if match is None:
+        raise ValueError("the header declares no <name>_evaluate function")
+    return match.group(1)
 
 
 def numpy_module_in_memory(source: str, name: str) -> ModuleType:

@@ -11,14 +11,18 @@ from __future__ import annotations
 import ast
 import math
 import re
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING
 
 import sympy as sp
+
+if TYPE_CHECKING:
+    import mpmath
 
 from ..core.errors import suggest
 
 #: Functions an expression may call, by name, with their number of arguments.
-FUNCTIONS: dict[str, tuple[object, int]] = {
+FUNCTIONS: dict[str, tuple[Callable[..., sp.Expr], int]] = {
     "sin": (sp.sin, 1),
     "cos": (sp.cos, 1),
     "tan": (sp.tan, 1),
@@ -44,14 +48,16 @@ SHOWN = 60  # characters of an expression quoted in an error message
 _BINARY = {ast.Add: sp.Add, ast.Sub: None, ast.Mult: sp.Mul, ast.Div: None, ast.Pow: None}
 
 
-class ParameterSymbol(sp.Symbol):
+# sympy ships no type information, so mypy sees sp.Symbol as Any.
+class ParameterSymbol(sp.Symbol):  # type: ignore[misc]
     """The symbol of a file's parameter: a class of its own, so a parameter named like one of
     symkin's internal symbols (theta, theta_1, delta_2, dyad1_reach, _tmp0, p_0, ...) is never
     equal to it. It prints as its name; code printers see it only renamed (p_k) or dummified."""
 
-    def __new__(cls, name: str, **assumptions) -> ParameterSymbol:
+    def __new__(cls, name: str, **assumptions: bool) -> ParameterSymbol:
         assumptions.setdefault("real", True)
-        return super().__new__(cls, name, **assumptions)
+        symbol: ParameterSymbol = super().__new__(cls, name, **assumptions)
+        return symbol
 
 
 class ExpressionError(ValueError):
@@ -288,18 +294,20 @@ _MPMATH = {
 }
 
 
-def numeric(expr: sp.Expr, values: Mapping[sp.Symbol, object], dps: int = NUMERIC_DPS):
+def numeric(
+    expr: sp.Expr, values: Mapping[sp.Symbol, object], dps: int = NUMERIC_DPS
+) -> mpmath.mpf:
     """The value of `expr` (symbols from `values`) as a real mpmath number at `dps` digits,
     computed node by node in bounded time (never sympy's exact or complex arithmetic); NotReal
     when any step leaves the reals (log of a negative, sqrt of a negative, asin(2), 0/0)."""
     import mpmath
 
-    def real(x):
+    def real(x: mpmath.mpf | mpmath.mpc) -> mpmath.mpf:
         if isinstance(x, mpmath.mpc) or not mpmath.isfinite(x):
             raise NotReal(f"{x}")
         return x
 
-    def walk(e):
+    def walk(e: sp.Expr) -> mpmath.mpf:
         if e.is_Symbol:
             if e not in values:
                 raise NoValue(f"no value for {e}")

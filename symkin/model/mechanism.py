@@ -17,7 +17,7 @@ import re
 import stat
 import sys
 import tomllib
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -36,6 +36,7 @@ from .hinges import (
     PRBM_PRESETS,
     THETA,
     ModelParameter,
+    ModelSpec,
 )
 
 FORMAT = 1
@@ -67,8 +68,9 @@ UNITS: dict[str, sp.Rational] = {
 STIFFNESS_REQUIRED = ("E", "thickness", "width")
 #: Poisson's ratio when a hinge gives none (docs/physics.md).
 DEFAULT_NU = sp.Rational(3, 10)
-#: The value rules of the stiffness keys: (holds for the value, what is wrong, how to fix it).
-STIFFNESS_RULES = {
+#: The value rules of the stiffness keys: (holds for the value, what is wrong, how to fix it); the
+#: test's result counts by its truth (a sympy Boolean for a sympy number).
+STIFFNESS_RULES: dict[str, tuple[Callable[[sp.Expr], object], str, str]] = {
     "E": (
         lambda v: v > 0,
         "Young's modulus must be positive (Pa)",
@@ -384,7 +386,9 @@ def name_problem(name: str, longest: int = MAX_NAME) -> tuple[str, str] | None:
     return None
 
 
-def with_points(mech: Mechanism, tables: Sequence[Mapping], file: str, text: str) -> Mechanism:
+def with_points(
+    mech: Mechanism, tables: Sequence[Mapping[str, object]], file: str, text: str
+) -> Mechanism:
     """`mech` with further points, given as [[point]] tables (name, link, at: expressions over
     the file's parameters) of another file (a scene, docs/scene.md), validated as the file's own
     are; a name the mechanism already uses is bad input."""
@@ -409,7 +413,7 @@ def with_points(mech: Mechanism, tables: Sequence[Mapping], file: str, text: str
     )
 
 
-def _entry(kind: str, i: int, table: Mapping) -> str:
+def _entry(kind: str, i: int, table: Mapping[str, object]) -> str:
     """How an error names the i-th [[kind]] entry: by number, and by name once it has one."""
     name = table.get("name")
     return f"[[{kind}]] #{i + 1}" + (f" '{name}'" if isinstance(name, str) and name else "")
@@ -474,7 +478,7 @@ class _Reader:
         return InputError(message, file=self.file, line=line, entry=entry, hint=hint)
 
     def check_keys(
-        self, table: Mapping, allowed: Sequence[str], entry: str, line: int | None
+        self, table: Mapping[str, object], allowed: Sequence[str], entry: str, line: int | None
     ) -> None:
         for key in table:
             if key not in allowed:
@@ -527,13 +531,10 @@ class _Reader:
             )
         return sp.Float(value, expressions.NUMERIC_DPS)
 
-    def text(
-        self, table: Mapping, key: str, entry: str, line: int | None, required: bool = True
-    ) -> str | None:
+    def text(self, table: Mapping[str, object], key: str, entry: str, line: int | None) -> str:
+        """The non-empty string at `key`; missing or anything else is bad input."""
         if key not in table:
-            if required:
-                raise self.error(f"missing required key '{key}'", entry, line, f'add {key} = "..."')
-            return None
+            raise self.error(f"missing required key '{key}'", entry, line, f'add {key} = "..."')
         value = table[key]
         if not isinstance(value, str) or not value.strip():
             raise self.error(
@@ -544,7 +545,7 @@ class _Reader:
             )
         return value
 
-    def array_of_tables(self, data: Mapping, key: str) -> list[Mapping]:
+    def array_of_tables(self, data: Mapping[str, object], key: str) -> list[Mapping[str, object]]:
         value = data.get(key, [])
         if not isinstance(value, list) or not all(isinstance(t, dict) for t in value):
             raise self.error(
@@ -567,7 +568,9 @@ class _Reader:
                 )
             seen[name] = i
 
-    def vector(self, value: object, entry: str, key: str, line: int | None) -> tuple:
+    def vector(
+        self, value: object, entry: str, key: str, line: int | None
+    ) -> tuple[sp.Expr, sp.Expr]:
         if not isinstance(value, list) or len(value) != 2:
             raise self.error(
                 f"'{key}' must be a list of two coordinates [x, y], got {value!r}",
@@ -575,13 +578,13 @@ class _Reader:
                 line,
                 f"write {key} = [x, y] with two numbers or expressions",
             )
-        vec = tuple(self.expr(v, entry, key, line) for v in value)
+        vec = (self.expr(value[0], entry, key, line), self.expr(value[1], entry, key, line))
         for v in vec:
             self.finite(v, entry, key, line)
         return vec
 
     # -- the file ------------------------------------------------------------------------------
-    def read(self, data: Mapping) -> Mechanism:
+    def read(self, data: Mapping[str, object]) -> Mechanism:
         self.check_keys(data, TOP_KEYS, "top level", None)
         fmt = data.get("format")
         if fmt is None:
@@ -672,7 +675,7 @@ class _Reader:
             self.defaults[symbol] = out[-1].value
         return tuple(out)
 
-    def hinge_defaults(self, table: object) -> dict:
+    def hinge_defaults(self, table: object) -> dict[str, object]:
         if not isinstance(table, dict):
             raise self.error(
                 "[defaults] must be a table",
@@ -683,7 +686,7 @@ class _Reader:
         self.check_keys(table, DEFAULT_KEYS, "[defaults]", self.where.key("defaults"))
         return dict(table)
 
-    def links(self, tables: list[Mapping]) -> tuple[Link, ...]:
+    def links(self, tables: list[Mapping[str, object]]) -> tuple[Link, ...]:
         if len(tables) < 2:
             raise self.error(
                 f"a mechanism needs at least two [[link]] entries, found {len(tables)}",
@@ -701,7 +704,10 @@ class _Reader:
         return tuple(out)
 
     def hinges(
-        self, tables: list[Mapping], defaults: Mapping, link_names: list[str]
+        self,
+        tables: list[Mapping[str, object]],
+        defaults: Mapping[str, object],
+        link_names: list[str],
     ) -> tuple[Hinge, ...]:
         if not tables:
             raise self.error(
@@ -714,7 +720,13 @@ class _Reader:
         self.unique("hinge", [h.name for h in out], [h.line for h in out])
         return tuple(out)
 
-    def hinge(self, i: int, table: Mapping, defaults: Mapping, link_names: list[str]) -> Hinge:
+    def hinge(
+        self,
+        i: int,
+        table: Mapping[str, object],
+        defaults: Mapping[str, object],
+        link_names: list[str],
+    ) -> Hinge:
         line = self.where.header("hinge", i)
         entry = f"[[hinge]] #{i + 1}"
         name = self.text(table, "name", entry, line)
@@ -840,7 +852,7 @@ class _Reader:
         )
 
     def stiffness(
-        self, merged: Mapping, entry: str, line: int | None, length: sp.Expr
+        self, merged: Mapping[str, object], entry: str, line: int | None, length: sp.Expr
     ) -> dict[str, sp.Expr]:
         """E, thickness, width, nu of a hinge (docs/physics.md), each checked where given: E > 0,
         0 < thickness < length, width > 0, 0 <= nu < 0.5 (with the default parameters)."""
@@ -866,7 +878,13 @@ class _Reader:
         return out
 
     def model_params(
-        self, spec, table: Mapping, defaults: Mapping, entry: str, line: int | None, length: sp.Expr
+        self,
+        spec: ModelSpec,
+        table: Mapping[str, object],
+        defaults: Mapping[str, object],
+        entry: str,
+        line: int | None,
+        length: sp.Expr,
     ) -> tuple[tuple[str, object], ...]:
         values: dict[str, object] = {}
         given = {k: v for k, v in defaults.items() if spec.parameter(k)}
@@ -900,7 +918,9 @@ class _Reader:
                 raw = given[p.name]
             values[p.name] = self.model_value(p, raw, entry, line)
         if spec.name == "table":
-            values["rows"] = self.table_rows(values["file"], values["degree"], entry, line)
+            file, degree = values["file"], values["degree"]
+            assert isinstance(file, str) and isinstance(degree, int)  # model_value checked them
+            values["rows"] = self.table_rows(file, degree, entry, line)
         if spec.name == "expr":
             self.check_expr_model(values["f"], values["g"], entry, line, length)
         return tuple(sorted(values.items()))
@@ -973,9 +993,11 @@ class _Reader:
                     "at theta = 0 the plate is straight: f(0) = l and g(0) = 0",
                 )
 
-    def table_rows(self, name: str, degree: int, entry: str, line: int | None) -> tuple:
+    def table_rows(
+        self, name: str, degree: int, entry: str, line: int | None
+    ) -> tuple[tuple[float, ...], ...]:
         content = self.table_text(name, entry, line)
-        rows = []
+        rows: list[tuple[float, ...]] = []
         for k, row in enumerate(csv.reader(io.StringIO(content)), start=1):
             if not row or not "".join(row).strip() or row[0].lstrip().startswith("#"):
                 continue
@@ -1064,7 +1086,9 @@ class _Reader:
                 f"cannot read table file '{name}' ({reason})", entry, line, hint
             ) from None
 
-    def points(self, tables: list[Mapping], link_names: list[str]) -> tuple[Point, ...]:
+    def points(
+        self, tables: list[Mapping[str, object]], link_names: list[str]
+    ) -> tuple[Point, ...]:
         out = []
         for i, table in enumerate(tables):
             line = self.where.header("point", i)
@@ -1087,7 +1111,7 @@ class _Reader:
         return tuple(out)
 
     def loads(
-        self, tables: list[Mapping], link_names: list[str], points: tuple[Point, ...]
+        self, tables: list[Mapping[str, object]], link_names: list[str], points: tuple[Point, ...]
     ) -> tuple[Load, ...]:
         """[[load]] entries: on a named point, or on a link at a position; a force, a moment or
         both (docs/physics.md)."""
@@ -1158,7 +1182,7 @@ class _Reader:
         return tuple(out)
 
     def name_list(
-        self, data: Mapping, key: str, known: list[str], kind: str
+        self, data: Mapping[str, object], key: str, known: list[str], kind: str
     ) -> tuple[str, ...] | None:
         if key not in data:
             return None
@@ -1258,10 +1282,10 @@ def check_values(
         centres = {}
         for h in mech.hinges:
             entry = f"[[hinge]] '{h.name}'"
-            at = [_mp(v, values) for v in h.at]
+            x, y = (_mp(v, values) for v in h.at)
             angle = _mp(h.plate_angle, values)
             length = _mp(h.length, values)
-            if None in at or angle is None:
+            if x is None or y is None or angle is None:
                 raise fail(
                     "'at' or 'plate_angle' is not a finite number",
                     entry,
@@ -1303,7 +1327,7 @@ def check_values(
                     h.line,
                     "a flexure plate is thin: make thickness < length",
                 )
-            centres[h.name] = (at, length)
+            centres[h.name] = ((x, y), length)
         for load in mech.loads:
             if None in [_mp(v, values) for v in (*load.force, load.moment)]:
                 raise fail(

@@ -72,7 +72,7 @@ class Compiled:
         self.levels = sources.levels
         self._found: tuple[ModuleType, Any] | None = None  # loaded on first use, never pickled
 
-    def __reduce__(self):
+    def __reduce__(self) -> tuple[type[Compiled], tuple[Sources]]:
         return Compiled, (self.sources,)
 
     def __repr__(self) -> str:
@@ -115,7 +115,8 @@ class Compiled:
         """The loaded C library (backend c)."""
         if self.backend != "c":
             raise ValueError(f"a {self.backend} evaluator has no C library")
-        return self._loaded()[1]
+        library: toolchain.Library = self._loaded()[1]
+        return library
 
     # -- parameters ------------------------------------------------------------------------------
     @property
@@ -150,7 +151,8 @@ class Compiled:
         """x (n, n_inputs) -> (status (n,), out (n, 6 n_points)): per row and point rigid x, y,
         compliant x, y, deviation x, y, as the C evaluator writes them; status 0 where it
         succeeded (NaN rows elsewhere). `params`: every parameter's value (None: defaults)."""
-        return self._row.rows(self._loaded()[1], self.shape, x, params, self.code(level))[:2]
+        ev = self._loaded()[1]
+        return self._row.rows(ev, self.shape, x, params, self.code(level), False)[:2]
 
     def sensitivity_rows(
         self, x: np.ndarray, level: str | None = None, params: Sequence[float] | None = None
@@ -167,14 +169,16 @@ class Compiled:
         inputs: Mapping[str, object],
         level: str | None = None,
         params: Mapping[str, float] | None = None,
-    ) -> dict:
+    ) -> dict[str, Any]:
         """As the generated module's `evaluate` (docs/generated-code.md), in one C call."""
         if self.backend == "numpy":
-            return self.module.evaluate(inputs, self.code(level), params)
+            result: dict[str, Any] = self.module.evaluate(inputs, self.code(level), params)
+            return result
         x, shape = self._rows(inputs)
         status, out, angles = self._row.rows(
             self._loaded()[1], self.shape, x, self.parameters(params), self.code(level), True
         )
+        assert angles is not None  # asked for (the last argument)
         m = len(self.hinges)
         return {
             "points": {
@@ -197,7 +201,7 @@ class Compiled:
         inputs: Mapping[str, object],
         level: str | None = None,
         params: Mapping[str, float] | None = None,
-    ) -> dict:
+    ) -> dict[str, dict[str, np.ndarray]]:
         """{P: {p: a}}: d(dx, dy)/dp, a of shape (2, *broadcast shape) (docs/sensitivity.md)."""
         full = self.sensitivity_full(inputs, level, params)
         return {p: full["deviation"][p]["params"] for p in self.points}
@@ -207,13 +211,15 @@ class Compiled:
         inputs: Mapping[str, object],
         level: str | None = None,
         params: Mapping[str, float] | None = None,
-    ) -> dict:
+    ) -> dict[str, Any]:
         """As the generated module's `sensitivity_full`: the points, ok, and "deviation" and
         "rigid": {P: {"params": {p: a}, "inputs": {H: a}}}."""
         if not self.sources.sensitivity:
             raise ValueError("this evaluator was compiled without sensitivities")
         if self.backend == "numpy":
-            return self.module.sensitivity_full(inputs, self.code(level, sensitivity=True), params)
+            level = self.code(level, sensitivity=True)
+            result: dict[str, Any] = self.module.sensitivity_full(inputs, level, params)
+            return result
         x, shape = self._rows(inputs)
         status, values, dev, rig = self._row.sensitivity_rows(
             self._loaded()[1],
@@ -224,7 +230,7 @@ class Compiled:
         )
         names = self.sources.params
 
-        def table(data: np.ndarray, i: int) -> dict:
+        def table(data: np.ndarray, i: int) -> dict[str, dict[str, np.ndarray]]:
             col = {v: _shaped(data[:, i, v], shape) for v in range(data.shape[2])}
             return {
                 "params": {q: col[v] for v, q in enumerate(names)},
