@@ -4,8 +4,14 @@
                                           (closed form; absent when a group is not a dyad)
     rigid_res    theta, params         -> rigid loop closure relative to the as-fabricated pose,
                                           Σ (Rot(φ_i) - I) V_i and Φ q (polish / continuation)
-    linear       theta, params         -> A (rigid loop Jacobian), r = Φ Δz at the rigid pose
+    linear       theta, params         -> A (rigid loop Jacobian), r = Φ Δz at the rigid pose and
+                                          S, the size of Φ Δz's terms per row (the stopping
+                                          rule of symkin.core.settings, 3b)
     newton       theta, delta, params  -> F, ∂F/∂δ of the exact compliant closure
+    consistency_<form>                 -> redundant loops only (symkin.core.settings, step 4):
+                                          the dropped closure rows and the size of their terms,
+                                          rigid (theta, params), first_order and exact (theta,
+                                          delta, params)
     rigid_points theta, params         -> rigid x, y of every requested point
     dev_<level>  theta, delta, params  -> deviation x, y of every requested point (a level that
                                           shares another's, loaded_refined, runs its routine)
@@ -23,7 +29,7 @@ by the plates' compliance (its closure's constants, computed once per configurat
     loaded_q           theta, mu0, params  -> Q with the beam-column springs: A^T mu = Q
     loaded_compliance  theta, mu, params   -> each plate's end displacement beyond its arc
     loaded_compliance_more  theta, mu, params -> the plates only loaded_refined's closure reads
-    loaded_linear      theta, constants    -> A and r of the loaded closure (its first-order start)
+    loaded_linear      theta, constants    -> A, r and S of the loaded closure (first-order start)
     loaded_newton      theta, delta, constants -> F, dF/ddelta of the loaded closure
 
 Only what the requested points and levels need is derived: a point whose direct path holds only
@@ -92,6 +98,8 @@ class Plan:
     # (docs/pruning.md): accepted and ignored by numpy
     fixed: tuple[tuple[int, float], ...] = ()  # (θ index, angle): inputs held constant,
     # folded into the routines (docs/cli.md, --fix)
+    angular: tuple[int, ...] = ()  # positions of the angular rows among the solved ones
+    dropped: int = 0  # redundant closure rows left out of the solves and checked (consistency_*)
 
     def stage(self, level: Level) -> bool:
         """Whether the sensitivity at `level` goes through a closure solved for δ."""
@@ -175,6 +183,8 @@ def plan(
         for lv in level_table.LEVELS
         if lv.generated
         and (lv.name in levels if levels is not None else stiff or not lv.needs_stiffness)
+        # the loaded level's statics cannot share the loads of redundant loops (docs/levels.md)
+        and not (an.redundant and lv.name in level_table.LOADED)
     )
     held = _fixed_angles(an, fixed or {})
     sensitivity = sensitivity and not held
@@ -213,9 +223,24 @@ def plan(
             "linear",
             (theta, params),
             (),
-            flatten(a_lin.tolist()) + tuple(r_lin),
-            "rigid loop Jacobian A and r = Phi dz",
+            flatten(a_lin.tolist()) + tuple(r_lin) + tuple(an.closure_scale),
+            "rigid loop Jacobian A, r = Phi dz and the size S of its terms",
         )
+    if an.redundant:
+        forms = ["rigid"] + [
+            f
+            for f in ("first_order", "exact")
+            if (needs_loops or loops_for_links) and any(lv.name == f for lv in levels)
+        ]
+        for form in forms:
+            residual, size = an.consistency(form)
+            routines[f"consistency_{form}"] = Routine(
+                f"consistency_{form}",
+                (theta, params) if form == "rigid" else (theta, delta, params),
+                (),
+                tuple(residual) + tuple(size),
+                f"redundant loops, {form}: the dropped closure rows and the size of their terms",
+            )
     if (needs_loops or loops_for_links) and any(lv.name == "exact" for lv in levels):
         routines["newton"] = Routine(
             "newton",
@@ -344,6 +369,8 @@ def plan(
         chain=chain,
         pruned_inputs=tuple(pruned_inputs),
         fixed=tuple((a - 1, to_double(v)) for a, v in sorted(held.items())),
+        angular=an.angular_rows,
+        dropped=len(an.dropped),
     )
     return with_derivation(result, an) if report else result
 
@@ -475,8 +502,9 @@ def _loaded_routines(
             "loaded_linear",
             (theta, constants),
             (),
-            flatten(a_lin.tolist()) + tuple(r_lin),
-            "loaded: A and r = Phi dz of the loaded closure (its first-order start)",
+            flatten(a_lin.tolist()) + tuple(r_lin) + tuple(la.closure_scale),
+            "loaded: A, r = Phi dz of the loaded closure (its first-order start) and the size S "
+            "of its terms",
         )
         routines["loaded_newton"] = Routine(
             "loaded_newton",

@@ -95,6 +95,9 @@ class Backend:
             "refined": any(lv.name == "loaded_refined" for lv in plan.levels),
             "refined_code": levels.get("loaded_refined").code,
             "routines": [routine_data(r, self.printer) for r in plan.routines.values()],
+            "routine_names": list(plan.routines),
+            "angular": list(plan.angular),
+            "dropped": plan.dropped,
             "kernels": [type(self).kernel_source(n) for n in special_functions(plan)],
         }
 
