@@ -3,7 +3,7 @@
  * Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact, loaded, loaded_refined.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, loaded_q0 10, loaded_q 72, loaded_compliance 231, loaded_linear 102, loaded_newton 269, dev_paper 38, dev_first_order 52, dev_exact 62, dev_loaded 72, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339.
+ * Operation counts after CSE: rigid 65, rigid_res 38, linear 114, newton 259, rigid_points 19, loaded_q0 10, loaded_q 72, loaded_compliance 231, loaded_linear 121, loaded_newton 269, dev_paper 38, dev_first_order 52, dev_exact 62, dev_loaded 72, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339.
  */
 #include "four_bar.h"
 
@@ -158,7 +158,7 @@ static void sk_rigid_res(const double *theta, const double *params, double *out)
     out[2] = 0.015*_tmp1 + 0.015*_tmp2 + 0.136*_tmp6 + 0.07*_tmp3 - 0.084*_tmp7 - 0.052*_tmp5;
 }
 
-/* rigid loop Jacobian A and r = Phi dz (92 operations) */
+/* rigid loop Jacobian A, r = Phi dz and the size S of its terms (114 operations) */
 static void sk_linear(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -171,29 +171,39 @@ static void sk_linear(const double *theta, const double *params, double *out)
     const double _tmp2 = cos(_tmp0);
     const double _tmp3 = sin(theta_3);
     const double _tmp4 = cos(theta_3);
-    const double _tmp5 = 0.5*theta_1;
-    const double _tmp6 = 0.25*p_0;
-    const double _tmp7 = _tmp6*pow(theta_1, 2)*symkin_arck(_tmp5);
-    const double _tmp8 = pow(theta_3, 2);
-    const double _tmp9 = 0.5*theta_3;
-    const double _tmp10 = symkin_arck(_tmp9);
-    const double _tmp12 = pow(theta_4, 2);
-    const double _tmp11 = 0.5*theta_4;
-    const double _tmp13 = symkin_arck(_tmp11);
-    const double _tmp14 = _tmp12*_tmp13*_tmp6;
-    const double _tmp15 = _tmp14*sin(_tmp11);
-    const double _tmp16 = cos(_tmp11);
-    const double _tmp17 = sin(theta_1);
-    const double _tmp18 = 0.5*theta_2;
-    const double _tmp19 = sin(_tmp18);
-    const double _tmp20 = pow(theta_2, 2);
-    const double _tmp21 = symkin_arck(_tmp18);
-    const double _tmp22 = _tmp20*_tmp21*p_0;
-    const double _tmp23 = cos(_tmp18);
-    const double _tmp24 = 0.21650635094610965*_tmp22;
-    const double _tmp25 = _tmp23*_tmp24 + 0.125*_tmp19*_tmp22;
-    const double _tmp26 = cos(theta_1);
-    const double _tmp27 = -_tmp19*_tmp24 + 0.125*_tmp20*_tmp21*_tmp23*p_0;
+    const double _tmp5 = sin(theta_1);
+    const double _tmp6 = 0.5*theta_2;
+    const double _tmp7 = sin(_tmp6);
+    const double _tmp8 = pow(theta_2, 2);
+    const double _tmp9 = symkin_arck(_tmp6);
+    const double _tmp10 = _tmp8*_tmp9*p_0;
+    const double _tmp11 = cos(_tmp6);
+    const double _tmp12 = 0.21650635094610965*_tmp10;
+    const double _tmp13 = _tmp11*_tmp12 + 0.125*_tmp10*_tmp7;
+    const double _tmp14 = _tmp13*_tmp5;
+    const double _tmp15 = cos(theta_1);
+    const double _tmp16 = _tmp12*_tmp7 - 0.125*_tmp11*_tmp8*_tmp9*p_0;
+    const double _tmp17 = -_tmp16;
+    const double _tmp18 = 0.25*pow(theta_1, 2);
+    const double _tmp19 = 0.5*theta_1;
+    const double _tmp20 = p_0*symkin_arck(_tmp19);
+    const double _tmp21 = _tmp20*sin(_tmp19);
+    const double _tmp22 = pow(theta_3, 2);
+    const double _tmp23 = 0.5*theta_3;
+    const double _tmp24 = sin(_tmp23);
+    const double _tmp25 = symkin_arck(_tmp23);
+    const double _tmp26 = 0.5*theta_4;
+    const double _tmp27 = 0.25*p_0*pow(theta_4, 2)*symkin_arck(_tmp26);
+    const double _tmp28 = _tmp27*sin(_tmp26);
+    const double _tmp29 = _tmp27*cos(_tmp26);
+    const double _tmp30 = _tmp1*_tmp28 - _tmp2*_tmp29;
+    const double _tmp31 = _tmp20*cos(_tmp19);
+    const double _tmp32 = _tmp25*p_0;
+    const double _tmp33 = _tmp32*cos(_tmp23);
+    const double _tmp34 = 0.25*_tmp22;
+    const double _tmp35 = _tmp13*_tmp15 + _tmp17*_tmp5;
+    const double _tmp36 = _tmp1*_tmp29 + _tmp2*_tmp28;
+    const double _tmp37 = _tmp18*fabs(_tmp21) + _tmp18*fabs(_tmp31) + _tmp34*fabs(_tmp33) + _tmp34*fabs(_tmp24*_tmp32) + fabs(_tmp30) + fabs(_tmp35) + fabs(_tmp36) + fabs(_tmp14 + _tmp15*_tmp16);
     out[0] = 1;
     out[1] = -1;
     out[2] = 1;
@@ -204,8 +214,11 @@ static void sk_linear(const double *theta, const double *params, double *out)
     out[7] = 0.015*_tmp4 + 0.068*_tmp3;
     out[8] = 0;
     out[9] = 0;
-    out[10] = _tmp26*_tmp27 - _tmp1*_tmp15 - _tmp17*_tmp25 - _tmp7*sin(_tmp5) + 0.25*_tmp10*_tmp8*p_0*sin(_tmp9) + 0.25*_tmp12*_tmp13*_tmp16*_tmp2*p_0;
-    out[11] = _tmp15*_tmp2 + _tmp17*_tmp27 + _tmp25*_tmp26 + _tmp7*cos(_tmp5) + _tmp1*_tmp14*_tmp16 - _tmp10*_tmp6*_tmp8*cos(_tmp9);
+    out[10] = -_tmp14 - _tmp30 + _tmp15*_tmp17 - _tmp18*_tmp21 + 0.25*_tmp22*_tmp24*_tmp25*p_0;
+    out[11] = _tmp35 + _tmp36 + _tmp18*_tmp31 - _tmp33*_tmp34;
+    out[12] = 0;
+    out[13] = _tmp37;
+    out[14] = _tmp37;
 }
 
 /* exact compliant closure F(delta) and dF/ddelta (259 operations) */
@@ -444,7 +457,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     out[7] = -_tmp46*_tmp58 + 2400000*_tmp50*_tmp56*_tmp57*_tmp6;
 }
 
-/* loaded: A and r = Phi dz of the loaded closure (its first-order start) (102 operations) */
+/* loaded: A, r = Phi dz of the loaded closure (its first-order start) and the size S of its terms (121 operations) */
 static void sk_loaded_linear(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -465,27 +478,38 @@ static void sk_loaded_linear(const double *theta, const double *params, double *
     const double _tmp2 = cos(_tmp0);
     const double _tmp3 = sin(theta_3);
     const double _tmp4 = cos(theta_3);
-    const double _tmp5 = 0.5*theta_1;
-    const double _tmp6 = 0.25*p_0;
-    const double _tmp7 = _tmp6*pow(theta_1, 2)*symkin_arck(_tmp5);
-    const double _tmp8 = pow(theta_3, 2);
-    const double _tmp9 = 0.5*theta_3;
-    const double _tmp10 = symkin_arck(_tmp9);
-    const double _tmp11 = 0.5*theta_4;
-    const double _tmp12 = _tmp6*pow(theta_4, 2)*symkin_arck(_tmp11);
-    const double _tmp13 = compliance_y_4 + _tmp12*sin(_tmp11);
-    const double _tmp14 = compliance_x_4 + _tmp12*cos(_tmp11);
-    const double _tmp15 = sin(theta_1);
-    const double _tmp16 = 0.5*theta_2;
-    const double _tmp17 = sin(_tmp16);
-    const double _tmp18 = pow(theta_2, 2);
-    const double _tmp19 = symkin_arck(_tmp16);
-    const double _tmp20 = _tmp18*_tmp19*p_0;
-    const double _tmp21 = cos(_tmp16);
-    const double _tmp22 = 0.21650635094610965*_tmp20;
-    const double _tmp23 = 0.5*compliance_y_2 + 0.8660254037844386*compliance_x_2 + _tmp21*_tmp22 + 0.125*_tmp17*_tmp20;
-    const double _tmp24 = cos(theta_1);
-    const double _tmp25 = 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2 - _tmp17*_tmp22 + 0.125*_tmp18*_tmp19*_tmp21*p_0;
+    const double _tmp5 = sin(theta_1);
+    const double _tmp6 = 0.5*theta_2;
+    const double _tmp7 = sin(_tmp6);
+    const double _tmp8 = pow(theta_2, 2);
+    const double _tmp9 = symkin_arck(_tmp6);
+    const double _tmp10 = _tmp8*_tmp9*p_0;
+    const double _tmp11 = cos(_tmp6);
+    const double _tmp12 = 0.21650635094610965*_tmp10;
+    const double _tmp13 = 0.5*compliance_y_2 + 0.8660254037844386*compliance_x_2 + _tmp11*_tmp12 + 0.125*_tmp10*_tmp7;
+    const double _tmp14 = _tmp13*_tmp5;
+    const double _tmp15 = cos(theta_1);
+    const double _tmp16 = 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2 - _tmp12*_tmp7 + 0.125*_tmp11*_tmp8*_tmp9*p_0;
+    const double _tmp17 = _tmp15*_tmp16;
+    const double _tmp18 = pow(theta_3, 2);
+    const double _tmp19 = 0.5*theta_3;
+    const double _tmp20 = sin(_tmp19);
+    const double _tmp21 = symkin_arck(_tmp19);
+    const double _tmp22 = 0.5*theta_1;
+    const double _tmp23 = 0.25*p_0;
+    const double _tmp24 = _tmp23*pow(theta_1, 2)*symkin_arck(_tmp22);
+    const double _tmp25 = compliance_y_1 + _tmp24*sin(_tmp22);
+    const double _tmp26 = 0.5*theta_4;
+    const double _tmp27 = _tmp23*pow(theta_4, 2)*symkin_arck(_tmp26);
+    const double _tmp28 = compliance_y_4 + _tmp27*sin(_tmp26);
+    const double _tmp29 = compliance_x_4 + _tmp27*cos(_tmp26);
+    const double _tmp30 = _tmp1*_tmp28 - _tmp2*_tmp29;
+    const double _tmp31 = _tmp18*_tmp21*_tmp23;
+    const double _tmp32 = _tmp31*cos(_tmp19);
+    const double _tmp33 = compliance_x_1 + _tmp24*cos(_tmp22);
+    const double _tmp34 = _tmp1*_tmp29 + _tmp2*_tmp28;
+    const double _tmp35 = _tmp13*_tmp15 + _tmp16*_tmp5;
+    const double _tmp36 = fabs(_tmp25) + fabs(_tmp30) + fabs(_tmp33) + fabs(_tmp34) + fabs(_tmp35) + fabs(_tmp14 - _tmp17) + fabs(_tmp32 + compliance_x_3) + fabs(compliance_y_3 + _tmp20*_tmp31);
     out[0] = 1;
     out[1] = -1;
     out[2] = 1;
@@ -496,8 +520,11 @@ static void sk_loaded_linear(const double *theta, const double *params, double *
     out[7] = 0.015*_tmp4 + 0.068*_tmp3;
     out[8] = 0;
     out[9] = 0;
-    out[10] = compliance_y_3 - compliance_y_1 + _tmp14*_tmp2 + _tmp24*_tmp25 - _tmp1*_tmp13 - _tmp15*_tmp23 - _tmp7*sin(_tmp5) + 0.25*_tmp10*_tmp8*p_0*sin(_tmp9);
-    out[11] = compliance_x_1 - compliance_x_3 + _tmp1*_tmp14 + _tmp13*_tmp2 + _tmp15*_tmp25 + _tmp23*_tmp24 + _tmp7*cos(_tmp5) - _tmp10*_tmp6*_tmp8*cos(_tmp9);
+    out[10] = _tmp17 + compliance_y_3 - _tmp14 - _tmp25 - _tmp30 + 0.25*_tmp18*_tmp20*_tmp21*p_0;
+    out[11] = _tmp33 + _tmp34 + _tmp35 - _tmp32 - compliance_x_3;
+    out[12] = 0;
+    out[13] = _tmp36;
+    out[14] = _tmp36;
 }
 
 /* loaded: the loaded closure F(delta) and dF/ddelta (269 operations) */
@@ -1263,7 +1290,7 @@ static int sk_solve_many(int n, double *a, int m, double *b)
 static double sk_rigid_newton(double *theta, const double *params, int iterations,
                               double tolerance)
 {
-    double lin[SK_K * SK_K + SK_K], res[SK_K];
+    double lin[SK_K * SK_K + 2 * SK_K], res[SK_K];
     double change = 0.0;
     int it, i;
     for (it = 0; it < iterations; ++it) {
@@ -1288,16 +1315,19 @@ static double sk_rigid_newton(double *theta, const double *params, int iteration
 
 typedef void (*sk_linear_fn)(const double *theta, const double *params, double *out);
 
-/* A delta = -r of a closure's linear routine (A, then r): its first-order delta.
-   Returns 0, or 1 when A is singular. */
+/* A delta = -r of a closure's linear routine (A, r, then S, the size of r's terms): its
+   first-order delta, and S into scale unless NULL. Returns 0, or 1 when A is singular. */
 static int sk_linear_start(sk_linear_fn linear, const double *theta, const double *params,
-                           double *delta)
+                           double *delta, double *scale)
 {
-    double lin[SK_K * SK_K + SK_K];
+    double lin[SK_K * SK_K + 2 * SK_K];
     int i;
     linear(theta, params, lin);
     for (i = 0; i < SK_K; ++i) {
         delta[i] = -lin[SK_K * SK_K + i];
+        if (scale != NULL) {
+            scale[i] = lin[SK_K * SK_K + SK_K + i];
+        }
     }
     return sk_solve(SK_K, lin, delta);
 }
@@ -1305,27 +1335,37 @@ static int sk_linear_start(sk_linear_fn linear, const double *theta, const doubl
 /* Level first_order, and the start of every other loop-solving level: A delta = -Phi dz. */
 static int sk_first_order(const double *theta, const double *params, double *delta)
 {
-    return sk_linear_start(sk_linear, theta, params, delta);
+    return sk_linear_start(sk_linear, theta, params, delta, NULL);
 }
 
 typedef void (*sk_newton_fn)(const double *theta, const double *delta, const double *params,
                              double *out);
 
 /* Newton on a compliant closure (`newton`: F and dF/ddelta) from its first-order delta, ending
-   once a step is below sqrt(eps) of delta (quadratic convergence leaves it exact) or stalls at
-   rounding. Returns 0, 1 when a Jacobian is singular, 2 without convergence. */
+   by the rule of symkin.core.settings (3): a step below sqrt(eps) of delta (quadratic
+   convergence leaves it exact), a residual at the rounding level of its terms (S from the
+   linear routine, plus the links' terms), or a step stalled at rounding. Returns 0, 1 when a
+   Jacobian is singular, 2 without convergence. */
 static int sk_newton_solve(sk_linear_fn linear, sk_newton_fn newton, const double *theta,
                            const double *params, double *delta)
 {
-    double nw[SK_K + SK_K * SK_K];
+    double nw[SK_K + SK_K * SK_K], scale[SK_K];
     double previous = HUGE_VAL;
-    int it, i, converged = 0;
-    if (sk_linear_start(linear, theta, params, delta)) {
+    int it, i, j, converged = 0;
+    if (sk_linear_start(linear, theta, params, delta, scale)) {
         return 1;
     }
     for (it = 0; it < 40 && !converged; ++it) {
         double size = 0.0, change = 0.0;
+        int noise = 1;
         newton(theta, delta, params, nw);
+        for (i = 0; i < SK_K; ++i) {
+            double terms = fabs(scale[i]);
+            for (j = 0; j < SK_K; ++j) {
+                terms += fabs(nw[SK_K + i * SK_K + j] * delta[j]);
+            }
+            noise = noise && fabs(nw[i]) <= 2e-13 * terms;
+        }
         if (sk_solve(SK_K, nw + SK_K, nw)) {
             return 1;
         }
@@ -1338,7 +1378,7 @@ static int sk_newton_solve(sk_linear_fn linear, sk_newton_fn newton, const doubl
                 change = fabs(nw[i]);
             }
         }
-        converged = change <= 1e-08 * size || size == 0.0
+        converged = change <= 1e-08 * size || noise
                     || (change >= 0.5 * previous && change <= 1e-12 * size);
         previous = change;
     }
@@ -1447,7 +1487,7 @@ static void sk_loaded_statics(const double *theta, const double *params, const d
 static int sk_loaded_constants(const double *theta, const double *params, int all,
                                double *constants)
 {
-    double lin[SK_K * SK_K + SK_K], at[SK_K * SK_K];
+    double lin[SK_K * SK_K + 2 * SK_K], at[SK_K * SK_K];
     int piv[SK_K], i, j;
     sk_linear(theta, params, lin);
     for (i = 0; i < SK_K; ++i) {
@@ -1530,6 +1570,21 @@ static int sk_pose(const double *inputs, const double *params, int level, int wa
         }
         for (i = 0; i < SK_K; ++i) {
             theta[sk_unknown_index[i]] = remainder(sol[i], sk_two_pi);
+        }
+        {
+            /* an angle whose inputs are all zero is exactly zero (the formulas round to noise
+               there): theta index, number of inputs it reads, their positions in inputs */
+            static const int rest[] = {1, 1, 0, 2, 1, 0, 3, 1, 0};
+            int r, c, moved;
+            for (r = 0; r < 9; r += 2 + rest[r + 1]) {
+                moved = 0;
+                for (c = 0; c < rest[r + 1]; ++c) {
+                    moved = moved || inputs[rest[r + 2 + c]] != 0.0;
+                }
+                if (!moved) {
+                    theta[rest[r]] = 0.0;
+                }
+            }
         }
     }
     {

@@ -2,7 +2,7 @@
 Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
 Points: C; levels: paper, first_order, exact, loaded, loaded_refined.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, loaded_q0 10, loaded_q 72, loaded_compliance 231, loaded_linear 102, loaded_newton 269, dev_paper 38, dev_first_order 52, dev_exact 62, dev_loaded 72, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339.
+Operation counts after CSE: rigid 65, rigid_res 38, linear 114, newton 259, rigid_points 19, loaded_q0 10, loaded_q 72, loaded_compliance 231, loaded_linear 121, loaded_newton 269, dev_paper 38, dev_first_order 52, dev_exact 62, dev_loaded 72, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -37,6 +37,8 @@ _N_THETA = 4
 _INPUT_INDEX = (0, )
 _UNKNOWN_INDEX = (1, 2, 3, )
 _N_DYADS = 1
+# (theta index, the inputs its closed-form angle reads): zero when they all are
+_REST = ((1, (0,)), (2, (0,)), (3, (0,)))
 _LIMITS = ((0, 3.141592653589793), (1, 3.141592653589793), (2, 3.141592653589793), (3, 3.141592653589793), )  # models valid for |theta| < limit
 _NEEDS_LOOPS = True
 _LOOPS_FOR_LINKS = False  # the links' rotations alone need the loops solved
@@ -47,6 +49,7 @@ _EXACT_ITERATIONS = 40  # Newton cap of the exact level
 _CONVERGED = 1e-08  # ~sqrt(eps): a step this small (relative) ends Newton
 _STALL_RATIO = 0.5  # a step at least this fraction of the previous one has stalled
 _STALLED = 1e-12  # a stalled Newton step this small (relative) is converged
+_RESIDUAL = 2e-13  # a residual this small relative to its terms is rounding noise
 _TWO_PI = 2.0 * math.pi
 
 
@@ -180,7 +183,7 @@ def _rigid_res(theta, params):
 
 
 def _linear(theta, params):
-    """rigid loop Jacobian A and r = Phi dz (92 operations)."""
+    """rigid loop Jacobian A, r = Phi dz and the size S of its terms (114 operations)."""
     theta_1, theta_2, theta_3, theta_4 = theta
     p_0, = params
     _tmp0 = theta_1 + theta_2
@@ -188,29 +191,39 @@ def _linear(theta, params):
     _tmp2 = numpy.cos(_tmp0)
     _tmp3 = numpy.sin(theta_3)
     _tmp4 = numpy.cos(theta_3)
-    _tmp5 = 0.5*theta_1
-    _tmp6 = 0.25*p_0
-    _tmp7 = _tmp6*theta_1**2*arck(_tmp5)
-    _tmp8 = theta_3**2
-    _tmp9 = 0.5*theta_3
-    _tmp10 = arck(_tmp9)
-    _tmp12 = theta_4**2
-    _tmp11 = 0.5*theta_4
-    _tmp13 = arck(_tmp11)
-    _tmp14 = _tmp12*_tmp13*_tmp6
-    _tmp15 = _tmp14*numpy.sin(_tmp11)
-    _tmp16 = numpy.cos(_tmp11)
-    _tmp17 = numpy.sin(theta_1)
-    _tmp18 = 0.5*theta_2
-    _tmp19 = numpy.sin(_tmp18)
-    _tmp20 = theta_2**2
-    _tmp21 = arck(_tmp18)
-    _tmp22 = _tmp20*_tmp21*p_0
-    _tmp23 = numpy.cos(_tmp18)
-    _tmp24 = 0.21650635094610965*_tmp22
-    _tmp25 = _tmp23*_tmp24 + 0.125*_tmp19*_tmp22
-    _tmp26 = numpy.cos(theta_1)
-    _tmp27 = -_tmp19*_tmp24 + 0.125*_tmp20*_tmp21*_tmp23*p_0
+    _tmp5 = numpy.sin(theta_1)
+    _tmp6 = 0.5*theta_2
+    _tmp7 = numpy.sin(_tmp6)
+    _tmp8 = theta_2**2
+    _tmp9 = arck(_tmp6)
+    _tmp10 = _tmp8*_tmp9*p_0
+    _tmp11 = numpy.cos(_tmp6)
+    _tmp12 = 0.21650635094610965*_tmp10
+    _tmp13 = _tmp11*_tmp12 + 0.125*_tmp10*_tmp7
+    _tmp14 = _tmp13*_tmp5
+    _tmp15 = numpy.cos(theta_1)
+    _tmp16 = _tmp12*_tmp7 - 0.125*_tmp11*_tmp8*_tmp9*p_0
+    _tmp17 = -_tmp16
+    _tmp18 = 0.25*theta_1**2
+    _tmp19 = 0.5*theta_1
+    _tmp20 = p_0*arck(_tmp19)
+    _tmp21 = _tmp20*numpy.sin(_tmp19)
+    _tmp22 = theta_3**2
+    _tmp23 = 0.5*theta_3
+    _tmp24 = numpy.sin(_tmp23)
+    _tmp25 = arck(_tmp23)
+    _tmp26 = 0.5*theta_4
+    _tmp27 = 0.25*p_0*theta_4**2*arck(_tmp26)
+    _tmp28 = _tmp27*numpy.sin(_tmp26)
+    _tmp29 = _tmp27*numpy.cos(_tmp26)
+    _tmp30 = _tmp1*_tmp28 - _tmp2*_tmp29
+    _tmp31 = _tmp20*numpy.cos(_tmp19)
+    _tmp32 = _tmp25*p_0
+    _tmp33 = _tmp32*numpy.cos(_tmp23)
+    _tmp34 = 0.25*_tmp22
+    _tmp35 = _tmp13*_tmp15 + _tmp17*_tmp5
+    _tmp36 = _tmp1*_tmp29 + _tmp2*_tmp28
+    _tmp37 = _tmp18*abs(_tmp21) + _tmp18*abs(_tmp31) + _tmp34*abs(_tmp33) + _tmp34*abs(_tmp24*_tmp32) + abs(_tmp30) + abs(_tmp35) + abs(_tmp36) + abs(_tmp14 + _tmp15*_tmp16)
     return [
         1,
         -1,
@@ -222,8 +235,11 @@ def _linear(theta, params):
         0.015*_tmp4 + 0.068*_tmp3,
         0,
         0,
-        _tmp26*_tmp27 - _tmp1*_tmp15 - _tmp17*_tmp25 - _tmp7*numpy.sin(_tmp5) + 0.25*_tmp10*_tmp8*p_0*numpy.sin(_tmp9) + 0.25*_tmp12*_tmp13*_tmp16*_tmp2*p_0,
-        _tmp15*_tmp2 + _tmp17*_tmp27 + _tmp25*_tmp26 + _tmp7*numpy.cos(_tmp5) + _tmp1*_tmp14*_tmp16 - _tmp10*_tmp6*_tmp8*numpy.cos(_tmp9),
+        -_tmp14 - _tmp30 + _tmp15*_tmp17 - _tmp18*_tmp21 + 0.25*_tmp22*_tmp24*_tmp25*p_0,
+        _tmp35 + _tmp36 + _tmp18*_tmp31 - _tmp33*_tmp34,
+        0,
+        _tmp37,
+        _tmp37,
     ]
 
 
@@ -452,7 +468,7 @@ def _loaded_compliance(theta, mu, params):
 
 
 def _loaded_linear(theta, params):
-    """loaded: A and r = Phi dz of the loaded closure (its first-order start) (102 operations)."""
+    """loaded: A, r = Phi dz of the loaded closure (its first-order start) and the size S of its terms (121 operations)."""
     theta_1, theta_2, theta_3, theta_4 = theta
     p_0, compliance_x_1, compliance_y_1, compliance_x_2, compliance_y_2, compliance_x_3, compliance_y_3, compliance_x_4, compliance_y_4 = params
     _tmp0 = theta_1 + theta_2
@@ -460,27 +476,38 @@ def _loaded_linear(theta, params):
     _tmp2 = numpy.cos(_tmp0)
     _tmp3 = numpy.sin(theta_3)
     _tmp4 = numpy.cos(theta_3)
-    _tmp5 = 0.5*theta_1
-    _tmp6 = 0.25*p_0
-    _tmp7 = _tmp6*theta_1**2*arck(_tmp5)
-    _tmp8 = theta_3**2
-    _tmp9 = 0.5*theta_3
-    _tmp10 = arck(_tmp9)
-    _tmp11 = 0.5*theta_4
-    _tmp12 = _tmp6*theta_4**2*arck(_tmp11)
-    _tmp13 = compliance_y_4 + _tmp12*numpy.sin(_tmp11)
-    _tmp14 = compliance_x_4 + _tmp12*numpy.cos(_tmp11)
-    _tmp15 = numpy.sin(theta_1)
-    _tmp16 = 0.5*theta_2
-    _tmp17 = numpy.sin(_tmp16)
-    _tmp18 = theta_2**2
-    _tmp19 = arck(_tmp16)
-    _tmp20 = _tmp18*_tmp19*p_0
-    _tmp21 = numpy.cos(_tmp16)
-    _tmp22 = 0.21650635094610965*_tmp20
-    _tmp23 = 0.5*compliance_y_2 + 0.8660254037844386*compliance_x_2 + _tmp21*_tmp22 + 0.125*_tmp17*_tmp20
-    _tmp24 = numpy.cos(theta_1)
-    _tmp25 = 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2 - _tmp17*_tmp22 + 0.125*_tmp18*_tmp19*_tmp21*p_0
+    _tmp5 = numpy.sin(theta_1)
+    _tmp6 = 0.5*theta_2
+    _tmp7 = numpy.sin(_tmp6)
+    _tmp8 = theta_2**2
+    _tmp9 = arck(_tmp6)
+    _tmp10 = _tmp8*_tmp9*p_0
+    _tmp11 = numpy.cos(_tmp6)
+    _tmp12 = 0.21650635094610965*_tmp10
+    _tmp13 = 0.5*compliance_y_2 + 0.8660254037844386*compliance_x_2 + _tmp11*_tmp12 + 0.125*_tmp10*_tmp7
+    _tmp14 = _tmp13*_tmp5
+    _tmp15 = numpy.cos(theta_1)
+    _tmp16 = 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2 - _tmp12*_tmp7 + 0.125*_tmp11*_tmp8*_tmp9*p_0
+    _tmp17 = _tmp15*_tmp16
+    _tmp18 = theta_3**2
+    _tmp19 = 0.5*theta_3
+    _tmp20 = numpy.sin(_tmp19)
+    _tmp21 = arck(_tmp19)
+    _tmp22 = 0.5*theta_1
+    _tmp23 = 0.25*p_0
+    _tmp24 = _tmp23*theta_1**2*arck(_tmp22)
+    _tmp25 = compliance_y_1 + _tmp24*numpy.sin(_tmp22)
+    _tmp26 = 0.5*theta_4
+    _tmp27 = _tmp23*theta_4**2*arck(_tmp26)
+    _tmp28 = compliance_y_4 + _tmp27*numpy.sin(_tmp26)
+    _tmp29 = compliance_x_4 + _tmp27*numpy.cos(_tmp26)
+    _tmp30 = _tmp1*_tmp28 - _tmp2*_tmp29
+    _tmp31 = _tmp18*_tmp21*_tmp23
+    _tmp32 = _tmp31*numpy.cos(_tmp19)
+    _tmp33 = compliance_x_1 + _tmp24*numpy.cos(_tmp22)
+    _tmp34 = _tmp1*_tmp29 + _tmp2*_tmp28
+    _tmp35 = _tmp13*_tmp15 + _tmp16*_tmp5
+    _tmp36 = abs(_tmp25) + abs(_tmp30) + abs(_tmp33) + abs(_tmp34) + abs(_tmp35) + abs(_tmp14 - _tmp17) + abs(_tmp32 + compliance_x_3) + abs(compliance_y_3 + _tmp20*_tmp31)
     return [
         1,
         -1,
@@ -492,8 +519,11 @@ def _loaded_linear(theta, params):
         0.015*_tmp4 + 0.068*_tmp3,
         0,
         0,
-        compliance_y_3 - compliance_y_1 + _tmp14*_tmp2 + _tmp24*_tmp25 - _tmp1*_tmp13 - _tmp15*_tmp23 - _tmp7*numpy.sin(_tmp5) + 0.25*_tmp10*_tmp8*p_0*numpy.sin(_tmp9),
-        compliance_x_1 - compliance_x_3 + _tmp1*_tmp14 + _tmp13*_tmp2 + _tmp15*_tmp25 + _tmp23*_tmp24 + _tmp7*numpy.cos(_tmp5) - _tmp10*_tmp6*_tmp8*numpy.cos(_tmp9),
+        _tmp17 + compliance_y_3 - _tmp14 - _tmp25 - _tmp30 + 0.25*_tmp18*_tmp20*_tmp21*p_0,
+        _tmp33 + _tmp34 + _tmp35 - _tmp32 - compliance_x_3,
+        0,
+        _tmp36,
+        _tmp36,
     ]
 
 
@@ -1227,6 +1257,12 @@ def _rigid_angles(x, params, ok):
         ok = ok & (numpy.broadcast_to(reach, shape) >= 0.0)
     for j, i in enumerate(_UNKNOWN_INDEX):
         theta[i] = numpy.where(ok, _wrap(numpy.broadcast_to(out[j], shape)), 0.0)
+    # an angle whose inputs are all zero is exactly zero (the formulas round to noise there)
+    for i, reads in _REST:
+        moved = numpy.zeros(shape, dtype=bool)
+        for j in reads:
+            moved = moved | (x[j] != 0.0)
+        theta[i] = numpy.where(moved, theta[i], 0.0)
     # the winding rule (symkin.solver): every loop's angles sum to 0, not +-2*pi (a wrapped hinge)
     res = _rigid_res(theta, params)
     for n in range(0, k, 3):
@@ -1258,26 +1294,35 @@ def _rigid_newton(theta, params, ok, iterations, tolerance=0.0):
 
 
 def _linear_start(theta, params, ok, linear):
-    """A delta = -r of a closure's `linear` routine (A, then r): its first-order delta."""
+    """A delta = -r of a closure's `linear` routine (A, r, then S, the size of r's terms): its
+    first-order delta, ok, and S."""
     k = len(_UNKNOWN_INDEX)
     lin = linear(theta, params)
-    delta, good = _solve(lin[:k * k], [-numpy.asarray(r) for r in lin[k * k:]], ok)
-    return delta, ok & good
+    delta, good = _solve(lin[:k * k], [-numpy.asarray(r) for r in lin[k * k:k * k + k]], ok)
+    return delta, ok & good, lin[k * k + k:]
 
 
 def _first_order(theta, params, ok):
     """Level first_order, and the start of every other loop-solving level: A delta = -Phi dz."""
-    return _linear_start(theta, params, ok, _linear)
+    delta, ok, _ = _linear_start(theta, params, ok, _linear)
+    return delta, ok
 
 
 def _newton_solve(theta, params, ok, linear, newton):
-    """Newton on a compliant closure (`newton`: F and dF/ddelta) from its first-order delta."""
-    delta, ok = _linear_start(theta, params, ok, linear)
+    """Newton on a compliant closure (`newton`: F and dF/ddelta) from its first-order delta,
+    stopping by the rule of symkin.core.settings (3)."""
+    delta, ok, scale = _linear_start(theta, params, ok, linear)
     k = len(_UNKNOWN_INDEX)
     active = ok.copy()
     previous = numpy.full(ok.shape, numpy.inf)
     for _ in range(_EXACT_ITERATIONS):
         out = newton(theta, delta, params)
+        # (3b): every row's residual at the rounding level of its terms
+        floor = numpy.ones(ok.shape, dtype=bool)
+        for r in range(k):
+            terms = numpy.abs(scale[r]) + sum(numpy.abs(out[k + r * k + j] * delta[j])
+                                              for j in range(k))
+            floor = floor & (numpy.abs(out[r]) <= _RESIDUAL * terms)
         step, good = _solve(out[k:], out[:k], active)
         ok = ok & (good | ~active)
         active = active & good
@@ -1286,7 +1331,7 @@ def _newton_solve(theta, params, ok, linear, newton):
         change = numpy.max(numpy.abs(numpy.array(step)), axis=0)
         # Quadratic convergence from the first-order start: once a step is below
         # sqrt(eps) of delta, the updated delta is accurate to rounding.
-        done = (change <= _CONVERGED * size) | (size == 0) | (
+        done = (change <= _CONVERGED * size) | floor | (
             (change >= _STALL_RATIO * previous) & (change <= _STALLED * size))
         previous = numpy.where(active, change, previous)
         active = active & ~done

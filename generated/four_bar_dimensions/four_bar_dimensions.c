@@ -3,7 +3,7 @@
  * Mechanism 'four_bar_dimensions': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 85, rigid_res 46, linear 98, newton 265, rigid_points 21, dev_paper 38, dev_first_order 53, dev_exact 65, links 1, sens_rigid 71, sens_paper 128, sens_first_order 297, sens_exact 360, sens_chain 0.
+ * Operation counts after CSE: rigid 85, rigid_res 46, linear 118, newton 265, rigid_points 21, dev_paper 38, dev_first_order 53, dev_exact 65, links 1, sens_rigid 71, sens_paper 128, sens_first_order 297, sens_exact 360, sens_chain 0.
  */
 #include "four_bar_dimensions.h"
 
@@ -208,7 +208,7 @@ static void sk_rigid_res(const double *theta, const double *params, double *out)
     out[2] = _tmp1*p_5 + _tmp10*_tmp5 + _tmp2*_tmp8 + _tmp9*p_9 - _tmp11*_tmp6 - _tmp4*p_6;
 }
 
-/* rigid loop Jacobian A and r = Phi dz (98 operations) */
+/* rigid loop Jacobian A, r = Phi dz and the size S of its terms (118 operations) */
 static void sk_linear(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -233,28 +233,39 @@ static void sk_linear(const double *theta, const double *params, double *out)
     const double _tmp6 = cos(theta_3);
     const double _tmp7 = sin(theta_3);
     const double _tmp8 = _tmp2 + p_7;
-    const double _tmp9 = 0.5*theta_1;
-    const double _tmp10 = 0.25*p_1*pow(theta_1, 2)*symkin_arck(_tmp9);
-    const double _tmp11 = pow(theta_3, 2);
-    const double _tmp12 = 0.5*theta_3;
-    const double _tmp13 = symkin_arck(_tmp12);
-    const double _tmp15 = pow(theta_4, 2);
-    const double _tmp14 = 0.5*theta_4;
-    const double _tmp16 = symkin_arck(_tmp14);
-    const double _tmp17 = 0.25*_tmp15*_tmp16*p_4;
-    const double _tmp18 = _tmp17*sin(_tmp14);
-    const double _tmp19 = cos(_tmp14);
-    const double _tmp20 = sin(theta_1);
-    const double _tmp21 = 0.5*theta_2;
-    const double _tmp22 = sin(_tmp21);
-    const double _tmp23 = pow(theta_2, 2);
-    const double _tmp24 = symkin_arck(_tmp21);
-    const double _tmp25 = _tmp23*_tmp24*p_2;
-    const double _tmp26 = cos(_tmp21);
-    const double _tmp27 = 0.21650635094610965*_tmp25;
-    const double _tmp28 = _tmp26*_tmp27 + 0.125*_tmp22*_tmp25;
-    const double _tmp29 = cos(theta_1);
-    const double _tmp30 = -_tmp22*_tmp27 + 0.125*_tmp23*_tmp24*_tmp26*p_2;
+    const double _tmp9 = sin(theta_1);
+    const double _tmp10 = 0.5*theta_2;
+    const double _tmp11 = sin(_tmp10);
+    const double _tmp12 = pow(theta_2, 2);
+    const double _tmp13 = symkin_arck(_tmp10);
+    const double _tmp14 = _tmp12*_tmp13*p_2;
+    const double _tmp15 = cos(_tmp10);
+    const double _tmp16 = 0.21650635094610965*_tmp14;
+    const double _tmp17 = _tmp15*_tmp16 + 0.125*_tmp11*_tmp14;
+    const double _tmp18 = _tmp17*_tmp9;
+    const double _tmp19 = cos(theta_1);
+    const double _tmp20 = _tmp11*_tmp16 - 0.125*_tmp12*_tmp13*_tmp15*p_2;
+    const double _tmp21 = -_tmp20;
+    const double _tmp22 = 0.25*pow(theta_1, 2);
+    const double _tmp23 = 0.5*theta_1;
+    const double _tmp24 = p_1*symkin_arck(_tmp23);
+    const double _tmp25 = _tmp24*sin(_tmp23);
+    const double _tmp26 = pow(theta_3, 2);
+    const double _tmp27 = 0.5*theta_3;
+    const double _tmp28 = sin(_tmp27);
+    const double _tmp29 = symkin_arck(_tmp27);
+    const double _tmp30 = 0.5*theta_4;
+    const double _tmp31 = 0.25*p_4*pow(theta_4, 2)*symkin_arck(_tmp30);
+    const double _tmp32 = _tmp31*sin(_tmp30);
+    const double _tmp33 = _tmp31*cos(_tmp30);
+    const double _tmp34 = _tmp1*_tmp32 - _tmp33*_tmp4;
+    const double _tmp35 = _tmp24*cos(_tmp23);
+    const double _tmp36 = _tmp29*p_3;
+    const double _tmp37 = _tmp36*cos(_tmp27);
+    const double _tmp38 = 0.25*_tmp26;
+    const double _tmp39 = _tmp17*_tmp19 + _tmp21*_tmp9;
+    const double _tmp40 = _tmp1*_tmp33 + _tmp32*_tmp4;
+    const double _tmp41 = _tmp22*fabs(_tmp25) + _tmp22*fabs(_tmp35) + _tmp38*fabs(_tmp37) + _tmp38*fabs(_tmp28*_tmp36) + fabs(_tmp34) + fabs(_tmp39) + fabs(_tmp40) + fabs(_tmp18 + _tmp19*_tmp20);
     out[0] = 1;
     out[1] = -1;
     out[2] = 1;
@@ -265,8 +276,11 @@ static void sk_linear(const double *theta, const double *params, double *out)
     out[7] = _tmp6*_tmp8 + _tmp7*p_9;
     out[8] = 0;
     out[9] = 0;
-    out[10] = _tmp29*_tmp30 - _tmp1*_tmp18 - _tmp10*sin(_tmp9) - _tmp20*_tmp28 + 0.25*_tmp11*_tmp13*p_3*sin(_tmp12) + 0.25*_tmp15*_tmp16*_tmp19*_tmp4*p_4;
-    out[11] = _tmp10*cos(_tmp9) + _tmp18*_tmp4 + _tmp20*_tmp30 + _tmp28*_tmp29 + _tmp1*_tmp17*_tmp19 - 0.25*_tmp11*_tmp13*p_3*cos(_tmp12);
+    out[10] = -_tmp18 - _tmp34 + _tmp19*_tmp21 - _tmp22*_tmp25 + 0.25*_tmp26*_tmp28*_tmp29*p_3;
+    out[11] = _tmp39 + _tmp40 + _tmp22*_tmp35 - _tmp37*_tmp38;
+    out[12] = 0;
+    out[13] = _tmp41;
+    out[14] = _tmp41;
 }
 
 /* exact compliant closure F(delta) and dF/ddelta (265 operations) */
@@ -1453,7 +1467,7 @@ static int sk_solve_many(int n, double *a, int m, double *b)
 static double sk_rigid_newton(double *theta, const double *params, int iterations,
                               double tolerance)
 {
-    double lin[SK_K * SK_K + SK_K], res[SK_K];
+    double lin[SK_K * SK_K + 2 * SK_K], res[SK_K];
     double change = 0.0;
     int it, i;
     for (it = 0; it < iterations; ++it) {
@@ -1478,16 +1492,19 @@ static double sk_rigid_newton(double *theta, const double *params, int iteration
 
 typedef void (*sk_linear_fn)(const double *theta, const double *params, double *out);
 
-/* A delta = -r of a closure's linear routine (A, then r): its first-order delta.
-   Returns 0, or 1 when A is singular. */
+/* A delta = -r of a closure's linear routine (A, r, then S, the size of r's terms): its
+   first-order delta, and S into scale unless NULL. Returns 0, or 1 when A is singular. */
 static int sk_linear_start(sk_linear_fn linear, const double *theta, const double *params,
-                           double *delta)
+                           double *delta, double *scale)
 {
-    double lin[SK_K * SK_K + SK_K];
+    double lin[SK_K * SK_K + 2 * SK_K];
     int i;
     linear(theta, params, lin);
     for (i = 0; i < SK_K; ++i) {
         delta[i] = -lin[SK_K * SK_K + i];
+        if (scale != NULL) {
+            scale[i] = lin[SK_K * SK_K + SK_K + i];
+        }
     }
     return sk_solve(SK_K, lin, delta);
 }
@@ -1495,27 +1512,37 @@ static int sk_linear_start(sk_linear_fn linear, const double *theta, const doubl
 /* Level first_order, and the start of every other loop-solving level: A delta = -Phi dz. */
 static int sk_first_order(const double *theta, const double *params, double *delta)
 {
-    return sk_linear_start(sk_linear, theta, params, delta);
+    return sk_linear_start(sk_linear, theta, params, delta, NULL);
 }
 
 typedef void (*sk_newton_fn)(const double *theta, const double *delta, const double *params,
                              double *out);
 
 /* Newton on a compliant closure (`newton`: F and dF/ddelta) from its first-order delta, ending
-   once a step is below sqrt(eps) of delta (quadratic convergence leaves it exact) or stalls at
-   rounding. Returns 0, 1 when a Jacobian is singular, 2 without convergence. */
+   by the rule of symkin.core.settings (3): a step below sqrt(eps) of delta (quadratic
+   convergence leaves it exact), a residual at the rounding level of its terms (S from the
+   linear routine, plus the links' terms), or a step stalled at rounding. Returns 0, 1 when a
+   Jacobian is singular, 2 without convergence. */
 static int sk_newton_solve(sk_linear_fn linear, sk_newton_fn newton, const double *theta,
                            const double *params, double *delta)
 {
-    double nw[SK_K + SK_K * SK_K];
+    double nw[SK_K + SK_K * SK_K], scale[SK_K];
     double previous = HUGE_VAL;
-    int it, i, converged = 0;
-    if (sk_linear_start(linear, theta, params, delta)) {
+    int it, i, j, converged = 0;
+    if (sk_linear_start(linear, theta, params, delta, scale)) {
         return 1;
     }
     for (it = 0; it < 40 && !converged; ++it) {
         double size = 0.0, change = 0.0;
+        int noise = 1;
         newton(theta, delta, params, nw);
+        for (i = 0; i < SK_K; ++i) {
+            double terms = fabs(scale[i]);
+            for (j = 0; j < SK_K; ++j) {
+                terms += fabs(nw[SK_K + i * SK_K + j] * delta[j]);
+            }
+            noise = noise && fabs(nw[i]) <= 2e-13 * terms;
+        }
         if (sk_solve(SK_K, nw + SK_K, nw)) {
             return 1;
         }
@@ -1528,7 +1555,7 @@ static int sk_newton_solve(sk_linear_fn linear, sk_newton_fn newton, const doubl
                 change = fabs(nw[i]);
             }
         }
-        converged = change <= 1e-08 * size || size == 0.0
+        converged = change <= 1e-08 * size || noise
                     || (change >= 0.5 * previous && change <= 1e-12 * size);
         previous = change;
     }
@@ -1588,6 +1615,21 @@ static int sk_pose(const double *inputs, const double *params, int level, int wa
         }
         for (i = 0; i < SK_K; ++i) {
             theta[sk_unknown_index[i]] = remainder(sol[i], sk_two_pi);
+        }
+        {
+            /* an angle whose inputs are all zero is exactly zero (the formulas round to noise
+               there): theta index, number of inputs it reads, their positions in inputs */
+            static const int rest[] = {1, 1, 0, 2, 1, 0, 3, 1, 0};
+            int r, c, moved;
+            for (r = 0; r < 9; r += 2 + rest[r + 1]) {
+                moved = 0;
+                for (c = 0; c < rest[r + 1]; ++c) {
+                    moved = moved || inputs[rest[r + 2 + c]] != 0.0;
+                }
+                if (!moved) {
+                    theta[rest[r]] = 0.0;
+                }
+            }
         }
     }
     {

@@ -2,7 +2,7 @@
 Mechanism 'four_bar_dimensions': 4 links, 4 hinges, 1 loop(s); inputs A0.
 Points: C; levels: paper, first_order, exact.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 85, rigid_res 46, linear 98, newton 265, rigid_points 21, dev_paper 38, dev_first_order 53, dev_exact 65, links 1, sens_rigid 71, sens_paper 128, sens_first_order 297, sens_exact 360, sens_chain 0.
+Operation counts after CSE: rigid 85, rigid_res 46, linear 118, newton 265, rigid_points 21, dev_paper 38, dev_first_order 53, dev_exact 65, links 1, sens_rigid 71, sens_paper 128, sens_first_order 297, sens_exact 360, sens_chain 0.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -37,6 +37,8 @@ _N_THETA = 4
 _INPUT_INDEX = (0, )
 _UNKNOWN_INDEX = (1, 2, 3, )
 _N_DYADS = 1
+# (theta index, the inputs its closed-form angle reads): zero when they all are
+_REST = ((1, (0,)), (2, (0,)), (3, (0,)))
 _LIMITS = ((0, 3.141592653589793), (1, 3.141592653589793), (2, 3.141592653589793), (3, 3.141592653589793), )  # models valid for |theta| < limit
 _NEEDS_LOOPS = True
 _LOOPS_FOR_LINKS = False  # the links' rotations alone need the loops solved
@@ -47,6 +49,7 @@ _EXACT_ITERATIONS = 40  # Newton cap of the exact level
 _CONVERGED = 1e-08  # ~sqrt(eps): a step this small (relative) ends Newton
 _STALL_RATIO = 0.5  # a step at least this fraction of the previous one has stalled
 _STALLED = 1e-12  # a stalled Newton step this small (relative) is converged
+_RESIDUAL = 2e-13  # a residual this small relative to its terms is rounding noise
 _TWO_PI = 2.0 * math.pi
 
 
@@ -235,7 +238,7 @@ def _rigid_res(theta, params):
 
 
 def _linear(theta, params):
-    """rigid loop Jacobian A and r = Phi dz (98 operations)."""
+    """rigid loop Jacobian A, r = Phi dz and the size S of its terms (118 operations)."""
     theta_1, theta_2, theta_3, theta_4 = theta
     _, p_1, p_2, p_3, p_4, p_5, p_6, p_7, p_8, p_9, _, _ = params
     _tmp0 = theta_1 + theta_2
@@ -247,28 +250,39 @@ def _linear(theta, params):
     _tmp6 = numpy.cos(theta_3)
     _tmp7 = numpy.sin(theta_3)
     _tmp8 = _tmp2 + p_7
-    _tmp9 = 0.5*theta_1
-    _tmp10 = 0.25*p_1*theta_1**2*arck(_tmp9)
-    _tmp11 = theta_3**2
-    _tmp12 = 0.5*theta_3
-    _tmp13 = arck(_tmp12)
-    _tmp15 = theta_4**2
-    _tmp14 = 0.5*theta_4
-    _tmp16 = arck(_tmp14)
-    _tmp17 = 0.25*_tmp15*_tmp16*p_4
-    _tmp18 = _tmp17*numpy.sin(_tmp14)
-    _tmp19 = numpy.cos(_tmp14)
-    _tmp20 = numpy.sin(theta_1)
-    _tmp21 = 0.5*theta_2
-    _tmp22 = numpy.sin(_tmp21)
-    _tmp23 = theta_2**2
-    _tmp24 = arck(_tmp21)
-    _tmp25 = _tmp23*_tmp24*p_2
-    _tmp26 = numpy.cos(_tmp21)
-    _tmp27 = 0.21650635094610965*_tmp25
-    _tmp28 = _tmp26*_tmp27 + 0.125*_tmp22*_tmp25
-    _tmp29 = numpy.cos(theta_1)
-    _tmp30 = -_tmp22*_tmp27 + 0.125*_tmp23*_tmp24*_tmp26*p_2
+    _tmp9 = numpy.sin(theta_1)
+    _tmp10 = 0.5*theta_2
+    _tmp11 = numpy.sin(_tmp10)
+    _tmp12 = theta_2**2
+    _tmp13 = arck(_tmp10)
+    _tmp14 = _tmp12*_tmp13*p_2
+    _tmp15 = numpy.cos(_tmp10)
+    _tmp16 = 0.21650635094610965*_tmp14
+    _tmp17 = _tmp15*_tmp16 + 0.125*_tmp11*_tmp14
+    _tmp18 = _tmp17*_tmp9
+    _tmp19 = numpy.cos(theta_1)
+    _tmp20 = _tmp11*_tmp16 - 0.125*_tmp12*_tmp13*_tmp15*p_2
+    _tmp21 = -_tmp20
+    _tmp22 = 0.25*theta_1**2
+    _tmp23 = 0.5*theta_1
+    _tmp24 = p_1*arck(_tmp23)
+    _tmp25 = _tmp24*numpy.sin(_tmp23)
+    _tmp26 = theta_3**2
+    _tmp27 = 0.5*theta_3
+    _tmp28 = numpy.sin(_tmp27)
+    _tmp29 = arck(_tmp27)
+    _tmp30 = 0.5*theta_4
+    _tmp31 = 0.25*p_4*theta_4**2*arck(_tmp30)
+    _tmp32 = _tmp31*numpy.sin(_tmp30)
+    _tmp33 = _tmp31*numpy.cos(_tmp30)
+    _tmp34 = _tmp1*_tmp32 - _tmp33*_tmp4
+    _tmp35 = _tmp24*numpy.cos(_tmp23)
+    _tmp36 = _tmp29*p_3
+    _tmp37 = _tmp36*numpy.cos(_tmp27)
+    _tmp38 = 0.25*_tmp26
+    _tmp39 = _tmp17*_tmp19 + _tmp21*_tmp9
+    _tmp40 = _tmp1*_tmp33 + _tmp32*_tmp4
+    _tmp41 = _tmp22*abs(_tmp25) + _tmp22*abs(_tmp35) + _tmp38*abs(_tmp37) + _tmp38*abs(_tmp28*_tmp36) + abs(_tmp34) + abs(_tmp39) + abs(_tmp40) + abs(_tmp18 + _tmp19*_tmp20)
     return [
         1,
         -1,
@@ -280,8 +294,11 @@ def _linear(theta, params):
         _tmp6*_tmp8 + _tmp7*p_9,
         0,
         0,
-        _tmp29*_tmp30 - _tmp1*_tmp18 - _tmp10*numpy.sin(_tmp9) - _tmp20*_tmp28 + 0.25*_tmp11*_tmp13*p_3*numpy.sin(_tmp12) + 0.25*_tmp15*_tmp16*_tmp19*_tmp4*p_4,
-        _tmp10*numpy.cos(_tmp9) + _tmp18*_tmp4 + _tmp20*_tmp30 + _tmp28*_tmp29 + _tmp1*_tmp17*_tmp19 - 0.25*_tmp11*_tmp13*p_3*numpy.cos(_tmp12),
+        -_tmp18 - _tmp34 + _tmp19*_tmp21 - _tmp22*_tmp25 + 0.25*_tmp26*_tmp28*_tmp29*p_3,
+        _tmp39 + _tmp40 + _tmp22*_tmp35 - _tmp37*_tmp38,
+        0,
+        _tmp41,
+        _tmp41,
     ]
 
 
@@ -1400,6 +1417,12 @@ def _rigid_angles(x, params, ok):
         ok = ok & (numpy.broadcast_to(reach, shape) >= 0.0)
     for j, i in enumerate(_UNKNOWN_INDEX):
         theta[i] = numpy.where(ok, _wrap(numpy.broadcast_to(out[j], shape)), 0.0)
+    # an angle whose inputs are all zero is exactly zero (the formulas round to noise there)
+    for i, reads in _REST:
+        moved = numpy.zeros(shape, dtype=bool)
+        for j in reads:
+            moved = moved | (x[j] != 0.0)
+        theta[i] = numpy.where(moved, theta[i], 0.0)
     # the winding rule (symkin.solver): every loop's angles sum to 0, not +-2*pi (a wrapped hinge)
     res = _rigid_res(theta, params)
     for n in range(0, k, 3):
@@ -1431,26 +1454,35 @@ def _rigid_newton(theta, params, ok, iterations, tolerance=0.0):
 
 
 def _linear_start(theta, params, ok, linear):
-    """A delta = -r of a closure's `linear` routine (A, then r): its first-order delta."""
+    """A delta = -r of a closure's `linear` routine (A, r, then S, the size of r's terms): its
+    first-order delta, ok, and S."""
     k = len(_UNKNOWN_INDEX)
     lin = linear(theta, params)
-    delta, good = _solve(lin[:k * k], [-numpy.asarray(r) for r in lin[k * k:]], ok)
-    return delta, ok & good
+    delta, good = _solve(lin[:k * k], [-numpy.asarray(r) for r in lin[k * k:k * k + k]], ok)
+    return delta, ok & good, lin[k * k + k:]
 
 
 def _first_order(theta, params, ok):
     """Level first_order, and the start of every other loop-solving level: A delta = -Phi dz."""
-    return _linear_start(theta, params, ok, _linear)
+    delta, ok, _ = _linear_start(theta, params, ok, _linear)
+    return delta, ok
 
 
 def _newton_solve(theta, params, ok, linear, newton):
-    """Newton on a compliant closure (`newton`: F and dF/ddelta) from its first-order delta."""
-    delta, ok = _linear_start(theta, params, ok, linear)
+    """Newton on a compliant closure (`newton`: F and dF/ddelta) from its first-order delta,
+    stopping by the rule of symkin.core.settings (3)."""
+    delta, ok, scale = _linear_start(theta, params, ok, linear)
     k = len(_UNKNOWN_INDEX)
     active = ok.copy()
     previous = numpy.full(ok.shape, numpy.inf)
     for _ in range(_EXACT_ITERATIONS):
         out = newton(theta, delta, params)
+        # (3b): every row's residual at the rounding level of its terms
+        floor = numpy.ones(ok.shape, dtype=bool)
+        for r in range(k):
+            terms = numpy.abs(scale[r]) + sum(numpy.abs(out[k + r * k + j] * delta[j])
+                                              for j in range(k))
+            floor = floor & (numpy.abs(out[r]) <= _RESIDUAL * terms)
         step, good = _solve(out[k:], out[:k], active)
         ok = ok & (good | ~active)
         active = active & good
@@ -1459,7 +1491,7 @@ def _newton_solve(theta, params, ok, linear, newton):
         change = numpy.max(numpy.abs(numpy.array(step)), axis=0)
         # Quadratic convergence from the first-order start: once a step is below
         # sqrt(eps) of delta, the updated delta is accurate to rounding.
-        done = (change <= _CONVERGED * size) | (size == 0) | (
+        done = (change <= _CONVERGED * size) | floor | (
             (change >= _STALL_RATIO * previous) & (change <= _STALLED * size))
         previous = numpy.where(active, change, previous)
         active = active & ~done

@@ -3,7 +3,7 @@
  * Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
  * Points: F; levels: paper, first_order, exact, loaded, loaded_refined.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, loaded_q0 16, loaded_q 126, loaded_compliance 562, loaded_linear 239, loaded_newton 539, dev_paper 33, dev_first_order 33, dev_exact 33, dev_loaded 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
+ * Operation counts after CSE: rigid 158, rigid_res 114, linear 275, newton 531, rigid_points 14, loaded_q0 16, loaded_q 126, loaded_compliance 562, loaded_linear 288, loaded_newton 539, dev_paper 33, dev_first_order 33, dev_exact 33, dev_loaded 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
  */
 #include "nine_bar_platform.h"
 
@@ -236,7 +236,7 @@ static void sk_rigid_res(const double *theta, const double *params, double *out)
     out[5] = -_tmp21 + 0.025*_tmp26 - 0.07*_tmp27 - 0.01*_tmp25 - 0.02*_tmp13 - 0.04*_tmp28 - 0.08*_tmp8;
 }
 
-/* rigid loop Jacobian A and r = Phi dz (222 operations) */
+/* rigid loop Jacobian A, r = Phi dz and the size S of its terms (275 operations) */
 static void sk_linear(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -269,62 +269,91 @@ static void sk_linear(const double *theta, const double *params, double *out)
     const double _tmp16 = cos(_tmp14);
     const double _tmp17 = 0.035*_tmp16 + 0.025*_tmp15;
     const double _tmp18 = 0.035*_tmp15 - 0.025*_tmp16;
-    const double _tmp19 = 0.5*theta_9;
-    const double _tmp20 = pow(theta_9, 2);
-    const double _tmp21 = symkin_arck(_tmp19);
-    const double _tmp22 = 0.25*p_0;
-    const double _tmp23 = 0.5*theta_4;
-    const double _tmp24 = sin(_tmp23);
-    const double _tmp25 = _tmp22*sin(_tmp1);
-    const double _tmp26 = pow(theta_4, 2)*symkin_arck(_tmp23);
-    const double _tmp27 = _tmp25*_tmp26;
-    const double _tmp28 = 0.5*theta_5;
-    const double _tmp29 = sin(_tmp28);
-    const double _tmp30 = _tmp22*pow(theta_5, 2)*symkin_arck(_tmp28);
-    const double _tmp31 = _tmp30*sin(_tmp2);
-    const double _tmp32 = 0.5*theta_6;
-    const double _tmp33 = cos(_tmp32);
-    const double _tmp34 = pow(theta_6, 2);
-    const double _tmp35 = symkin_arck(_tmp32);
-    const double _tmp36 = _tmp22*_tmp34*_tmp35;
-    const double _tmp37 = sin(_tmp32);
-    const double _tmp38 = _tmp36*_tmp4;
-    const double _tmp39 = cos(_tmp23);
-    const double _tmp40 = _tmp22*cos(_tmp1);
-    const double _tmp41 = _tmp26*_tmp40;
-    const double _tmp42 = cos(_tmp28);
-    const double _tmp43 = _tmp30*cos(_tmp2);
-    const double _tmp44 = 0.5*theta_1;
-    const double _tmp45 = _tmp22*pow(theta_1, 2)*symkin_arck(_tmp44);
-    const double _tmp46 = sin(theta_1);
-    const double _tmp47 = 0.5*theta_2;
-    const double _tmp48 = _tmp22*pow(theta_2, 2)*symkin_arck(_tmp47);
-    const double _tmp49 = _tmp48*sin(_tmp47);
-    const double _tmp50 = 0.5*theta_3;
-    const double _tmp51 = sin(_tmp50);
-    const double _tmp52 = _tmp22*pow(theta_3, 2)*symkin_arck(_tmp50);
-    const double _tmp53 = _tmp52*sin(_tmp0);
-    const double _tmp54 = cos(theta_1);
-    const double _tmp55 = _tmp48*cos(_tmp47);
-    const double _tmp56 = cos(_tmp50);
-    const double _tmp57 = _tmp52*cos(_tmp0);
-    const double _tmp58 = _tmp45*sin(_tmp44) + _tmp46*_tmp49 + _tmp51*_tmp53 - _tmp54*_tmp55 - _tmp56*_tmp57;
-    const double _tmp59 = _tmp45*cos(_tmp44) + _tmp46*_tmp55 + _tmp49*_tmp54 + _tmp51*_tmp57 + _tmp53*_tmp56;
-    const double _tmp60 = 0.5*theta_10;
-    const double _tmp61 = pow(theta_10, 2);
-    const double _tmp62 = symkin_arck(_tmp60);
-    const double _tmp63 = 0.5*theta_7;
-    const double _tmp64 = sin(_tmp63);
-    const double _tmp65 = pow(theta_7, 2)*symkin_arck(_tmp63);
-    const double _tmp66 = _tmp25*_tmp65;
-    const double _tmp67 = 0.5*theta_8;
-    const double _tmp68 = sin(_tmp67);
-    const double _tmp69 = _tmp22*pow(theta_8, 2)*symkin_arck(_tmp67);
-    const double _tmp70 = _tmp13*_tmp69;
-    const double _tmp71 = cos(_tmp63);
-    const double _tmp72 = _tmp40*_tmp65;
-    const double _tmp73 = cos(_tmp67);
-    const double _tmp74 = _tmp12*_tmp69;
+    const double _tmp19 = pow(theta_9, 2);
+    const double _tmp20 = 0.25*_tmp19;
+    const double _tmp21 = 0.5*theta_9;
+    const double _tmp22 = symkin_arck(_tmp21);
+    const double _tmp23 = _tmp22*p_0;
+    const double _tmp24 = _tmp23*sin(_tmp21);
+    const double _tmp25 = 0.5*theta_4;
+    const double _tmp26 = sin(_tmp25);
+    const double _tmp27 = 0.25*p_0;
+    const double _tmp28 = _tmp27*sin(_tmp1);
+    const double _tmp29 = pow(theta_4, 2)*symkin_arck(_tmp25);
+    const double _tmp30 = _tmp28*_tmp29;
+    const double _tmp31 = cos(_tmp25);
+    const double _tmp32 = _tmp27*cos(_tmp1);
+    const double _tmp33 = _tmp29*_tmp32;
+    const double _tmp34 = _tmp26*_tmp30 - _tmp31*_tmp33;
+    const double _tmp35 = 0.5*theta_5;
+    const double _tmp36 = sin(_tmp35);
+    const double _tmp37 = _tmp27*pow(theta_5, 2)*symkin_arck(_tmp35);
+    const double _tmp38 = _tmp37*sin(_tmp2);
+    const double _tmp39 = cos(_tmp35);
+    const double _tmp40 = _tmp37*cos(_tmp2);
+    const double _tmp41 = _tmp36*_tmp38 - _tmp39*_tmp40;
+    const double _tmp42 = 0.5*theta_6;
+    const double _tmp43 = sin(_tmp42);
+    const double _tmp44 = pow(theta_6, 2);
+    const double _tmp45 = symkin_arck(_tmp42);
+    const double _tmp46 = _tmp27*_tmp44*_tmp45;
+    const double _tmp47 = _tmp4*_tmp46;
+    const double _tmp48 = cos(_tmp42);
+    const double _tmp49 = _tmp46*_tmp5;
+    const double _tmp50 = _tmp43*_tmp47 + _tmp48*_tmp49;
+    const double _tmp51 = 0.25*pow(theta_1, 2);
+    const double _tmp52 = 0.5*theta_1;
+    const double _tmp53 = p_0*symkin_arck(_tmp52);
+    const double _tmp54 = _tmp53*sin(_tmp52);
+    const double _tmp55 = sin(theta_1);
+    const double _tmp56 = 0.5*theta_2;
+    const double _tmp57 = _tmp27*pow(theta_2, 2)*symkin_arck(_tmp56);
+    const double _tmp58 = _tmp57*sin(_tmp56);
+    const double _tmp59 = cos(theta_1);
+    const double _tmp60 = _tmp57*cos(_tmp56);
+    const double _tmp61 = _tmp55*_tmp58 - _tmp59*_tmp60;
+    const double _tmp62 = 0.5*theta_3;
+    const double _tmp63 = sin(_tmp62);
+    const double _tmp64 = _tmp27*pow(theta_3, 2)*symkin_arck(_tmp62);
+    const double _tmp65 = _tmp64*sin(_tmp0);
+    const double _tmp66 = cos(_tmp62);
+    const double _tmp67 = _tmp64*cos(_tmp0);
+    const double _tmp68 = _tmp63*_tmp65 - _tmp66*_tmp67;
+    const double _tmp69 = _tmp61 + _tmp68 + _tmp51*_tmp54;
+    const double _tmp70 = cos(_tmp21);
+    const double _tmp71 = _tmp47*_tmp48;
+    const double _tmp72 = _tmp26*_tmp33 + _tmp30*_tmp31;
+    const double _tmp73 = _tmp36*_tmp40 + _tmp38*_tmp39;
+    const double _tmp74 = _tmp53*cos(_tmp52);
+    const double _tmp75 = _tmp55*_tmp60 + _tmp58*_tmp59;
+    const double _tmp76 = _tmp63*_tmp67 + _tmp65*_tmp66;
+    const double _tmp77 = _tmp75 + _tmp76 + _tmp51*_tmp74;
+    const double _tmp78 = pow(theta_10, 2);
+    const double _tmp79 = 0.25*_tmp78;
+    const double _tmp80 = 0.5*theta_10;
+    const double _tmp81 = symkin_arck(_tmp80);
+    const double _tmp82 = _tmp81*p_0;
+    const double _tmp83 = _tmp82*sin(_tmp80);
+    const double _tmp84 = 0.5*theta_7;
+    const double _tmp85 = sin(_tmp84);
+    const double _tmp86 = pow(theta_7, 2)*symkin_arck(_tmp84);
+    const double _tmp87 = _tmp28*_tmp86;
+    const double _tmp88 = cos(_tmp84);
+    const double _tmp89 = _tmp32*_tmp86;
+    const double _tmp90 = _tmp85*_tmp87 - _tmp88*_tmp89;
+    const double _tmp91 = 0.5*theta_8;
+    const double _tmp92 = sin(_tmp91);
+    const double _tmp93 = _tmp27*pow(theta_8, 2)*symkin_arck(_tmp91);
+    const double _tmp94 = _tmp13*_tmp93;
+    const double _tmp95 = cos(_tmp91);
+    const double _tmp96 = _tmp12*_tmp93;
+    const double _tmp97 = _tmp92*_tmp94 - _tmp95*_tmp96;
+    const double _tmp98 = cos(_tmp80);
+    const double _tmp99 = _tmp85*_tmp89 + _tmp87*_tmp88;
+    const double _tmp100 = _tmp92*_tmp96 + _tmp94*_tmp95;
+    const double _tmp101 = _tmp51*fabs(_tmp54) + _tmp51*fabs(_tmp74) + fabs(_tmp61) + fabs(_tmp68) + fabs(_tmp75) + fabs(_tmp76);
+    const double _tmp102 = _tmp101 + _tmp20*fabs(_tmp24) + _tmp20*fabs(_tmp23*_tmp70) + fabs(_tmp34) + fabs(_tmp41) + fabs(_tmp50) + fabs(_tmp72) + fabs(_tmp73) + fabs(-_tmp71 + _tmp43*_tmp49);
+    const double _tmp103 = _tmp101 + _tmp79*fabs(_tmp83) + _tmp79*fabs(_tmp82*_tmp98) + fabs(_tmp100) + fabs(_tmp90) + fabs(_tmp97) + fabs(_tmp99);
     out[0] = -1;
     out[1] = -1;
     out[2] = 0;
@@ -362,11 +391,17 @@ static void sk_linear(const double *theta, const double *params, double *out)
     out[34] = 0;
     out[35] = 0;
     out[36] = 0;
-    out[37] = _tmp58 + _tmp24*_tmp27 + _tmp29*_tmp31 + _tmp37*_tmp38 - _tmp39*_tmp41 - _tmp42*_tmp43 + _tmp33*_tmp36*_tmp5 - _tmp20*_tmp21*_tmp22*sin(_tmp19);
-    out[38] = -_tmp59 - _tmp24*_tmp41 - _tmp27*_tmp39 - _tmp29*_tmp43 - _tmp31*_tmp42 - _tmp33*_tmp38 + 0.25*_tmp20*_tmp21*p_0*cos(_tmp19) + 0.25*_tmp34*_tmp35*_tmp37*_tmp5*p_0;
+    out[37] = _tmp34 + _tmp41 + _tmp50 + _tmp69 - _tmp20*_tmp24;
+    out[38] = -_tmp71 - _tmp72 - _tmp73 - _tmp77 + 0.25*_tmp19*_tmp22*_tmp70*p_0 + 0.25*_tmp43*_tmp44*_tmp45*_tmp5*p_0;
     out[39] = 0;
-    out[40] = _tmp58 + _tmp64*_tmp66 + _tmp68*_tmp70 - _tmp71*_tmp72 - _tmp73*_tmp74 - _tmp22*_tmp61*_tmp62*sin(_tmp60);
-    out[41] = -_tmp59 - _tmp64*_tmp72 - _tmp66*_tmp71 - _tmp68*_tmp74 - _tmp70*_tmp73 + 0.25*_tmp61*_tmp62*p_0*cos(_tmp60);
+    out[40] = _tmp69 + _tmp90 + _tmp97 - _tmp79*_tmp83;
+    out[41] = -_tmp100 - _tmp77 - _tmp99 + 0.25*_tmp78*_tmp81*_tmp98*p_0;
+    out[42] = 0;
+    out[43] = _tmp102;
+    out[44] = _tmp102;
+    out[45] = 0;
+    out[46] = _tmp103;
+    out[47] = _tmp103;
 }
 
 /* exact compliant closure F(delta) and dF/ddelta (531 operations) */
@@ -873,7 +908,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     out[19] = -_tmp135*_tmp144 + 4000000*_tmp136*_tmp137*_tmp143*_tmp8;
 }
 
-/* loaded: A and r = Phi dz of the loaded closure (its first-order start) (239 operations) */
+/* loaded: A, r = Phi dz of the loaded closure (its first-order start) and the size S of its terms (288 operations) */
 static void sk_loaded_linear(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -926,53 +961,79 @@ static void sk_loaded_linear(const double *theta, const double *params, double *
     const double _tmp16 = cos(_tmp14);
     const double _tmp17 = 0.035*_tmp16 + 0.025*_tmp15;
     const double _tmp18 = 0.035*_tmp15 - 0.025*_tmp16;
-    const double _tmp20 = 0.25*p_0;
     const double _tmp19 = 0.5*theta_6;
+    const double _tmp20 = 0.25*p_0;
     const double _tmp21 = _tmp20*pow(theta_6, 2)*symkin_arck(_tmp19);
     const double _tmp22 = compliance_x_6 + _tmp21*cos(_tmp19);
-    const double _tmp23 = sin(_tmp1);
-    const double _tmp24 = 0.5*theta_4;
-    const double _tmp25 = _tmp20*pow(theta_4, 2)*symkin_arck(_tmp24);
-    const double _tmp26 = compliance_y_4 + _tmp25*sin(_tmp24);
-    const double _tmp27 = sin(_tmp2);
-    const double _tmp28 = 0.5*theta_5;
-    const double _tmp29 = _tmp20*pow(theta_5, 2)*symkin_arck(_tmp28);
-    const double _tmp30 = compliance_y_5 + _tmp29*sin(_tmp28);
-    const double _tmp31 = cos(_tmp1);
-    const double _tmp32 = compliance_x_4 + _tmp25*cos(_tmp24);
-    const double _tmp33 = cos(_tmp2);
-    const double _tmp34 = compliance_x_5 + _tmp29*cos(_tmp28);
-    const double _tmp35 = -compliance_y_6 - _tmp21*sin(_tmp19);
-    const double _tmp36 = 0.5*theta_9;
-    const double _tmp37 = pow(theta_9, 2);
-    const double _tmp38 = symkin_arck(_tmp36);
-    const double _tmp39 = sin(theta_1);
-    const double _tmp40 = 0.5*theta_2;
-    const double _tmp41 = _tmp20*pow(theta_2, 2)*symkin_arck(_tmp40);
-    const double _tmp42 = compliance_y_2 + _tmp41*sin(_tmp40);
-    const double _tmp43 = sin(_tmp0);
-    const double _tmp44 = 0.5*theta_3;
-    const double _tmp45 = _tmp20*pow(theta_3, 2)*symkin_arck(_tmp44);
-    const double _tmp46 = compliance_y_3 + _tmp45*sin(_tmp44);
-    const double _tmp47 = cos(theta_1);
-    const double _tmp48 = compliance_x_2 + _tmp41*cos(_tmp40);
-    const double _tmp49 = cos(_tmp0);
-    const double _tmp50 = compliance_x_3 + _tmp45*cos(_tmp44);
-    const double _tmp51 = 0.5*theta_1;
-    const double _tmp52 = _tmp20*pow(theta_1, 2)*symkin_arck(_tmp51);
-    const double _tmp53 = compliance_y_1 + _tmp39*_tmp42 + _tmp43*_tmp46 + _tmp52*sin(_tmp51) - _tmp47*_tmp48 - _tmp49*_tmp50;
-    const double _tmp54 = compliance_x_1 + _tmp39*_tmp48 + _tmp42*_tmp47 + _tmp43*_tmp50 + _tmp46*_tmp49 + _tmp52*cos(_tmp51);
-    const double _tmp55 = 0.5*theta_7;
-    const double _tmp56 = _tmp20*pow(theta_7, 2)*symkin_arck(_tmp55);
-    const double _tmp57 = compliance_y_7 + _tmp56*sin(_tmp55);
-    const double _tmp58 = 0.5*theta_8;
-    const double _tmp59 = _tmp20*pow(theta_8, 2)*symkin_arck(_tmp58);
-    const double _tmp60 = compliance_y_8 + _tmp59*sin(_tmp58);
-    const double _tmp61 = compliance_x_7 + _tmp56*cos(_tmp55);
-    const double _tmp62 = compliance_x_8 + _tmp59*cos(_tmp58);
-    const double _tmp63 = 0.5*theta_10;
-    const double _tmp64 = pow(theta_10, 2);
-    const double _tmp65 = symkin_arck(_tmp63);
+    const double _tmp23 = _tmp22*_tmp5;
+    const double _tmp24 = compliance_y_6 + _tmp21*sin(_tmp19);
+    const double _tmp25 = -_tmp24;
+    const double _tmp26 = 0.5*theta_9;
+    const double _tmp27 = pow(theta_9, 2);
+    const double _tmp28 = symkin_arck(_tmp26);
+    const double _tmp29 = _tmp20*_tmp27*_tmp28;
+    const double _tmp30 = _tmp29*sin(_tmp26);
+    const double _tmp31 = sin(_tmp1);
+    const double _tmp32 = 0.5*theta_4;
+    const double _tmp33 = _tmp20*pow(theta_4, 2)*symkin_arck(_tmp32);
+    const double _tmp34 = compliance_y_4 + _tmp33*sin(_tmp32);
+    const double _tmp35 = cos(_tmp1);
+    const double _tmp36 = compliance_x_4 + _tmp33*cos(_tmp32);
+    const double _tmp37 = _tmp31*_tmp34 - _tmp35*_tmp36;
+    const double _tmp38 = sin(_tmp2);
+    const double _tmp39 = 0.5*theta_5;
+    const double _tmp40 = _tmp20*pow(theta_5, 2)*symkin_arck(_tmp39);
+    const double _tmp41 = compliance_y_5 + _tmp40*sin(_tmp39);
+    const double _tmp42 = cos(_tmp2);
+    const double _tmp43 = compliance_x_5 + _tmp40*cos(_tmp39);
+    const double _tmp44 = _tmp38*_tmp41 - _tmp42*_tmp43;
+    const double _tmp45 = 0.5*theta_1;
+    const double _tmp46 = _tmp20*pow(theta_1, 2)*symkin_arck(_tmp45);
+    const double _tmp47 = compliance_y_1 + _tmp46*sin(_tmp45);
+    const double _tmp48 = sin(theta_1);
+    const double _tmp49 = 0.5*theta_2;
+    const double _tmp50 = _tmp20*pow(theta_2, 2)*symkin_arck(_tmp49);
+    const double _tmp51 = compliance_y_2 + _tmp50*sin(_tmp49);
+    const double _tmp52 = cos(theta_1);
+    const double _tmp53 = compliance_x_2 + _tmp50*cos(_tmp49);
+    const double _tmp54 = _tmp48*_tmp51 - _tmp52*_tmp53;
+    const double _tmp55 = sin(_tmp0);
+    const double _tmp56 = 0.5*theta_3;
+    const double _tmp57 = _tmp20*pow(theta_3, 2)*symkin_arck(_tmp56);
+    const double _tmp58 = compliance_y_3 + _tmp57*sin(_tmp56);
+    const double _tmp59 = cos(_tmp0);
+    const double _tmp60 = compliance_x_3 + _tmp57*cos(_tmp56);
+    const double _tmp61 = _tmp55*_tmp58 - _tmp59*_tmp60;
+    const double _tmp62 = _tmp47 + _tmp54 + _tmp61;
+    const double _tmp63 = _tmp22*_tmp4;
+    const double _tmp64 = cos(_tmp26);
+    const double _tmp65 = _tmp31*_tmp36 + _tmp34*_tmp35;
+    const double _tmp66 = _tmp38*_tmp43 + _tmp41*_tmp42;
+    const double _tmp67 = compliance_x_1 + _tmp46*cos(_tmp45);
+    const double _tmp68 = _tmp48*_tmp53 + _tmp51*_tmp52;
+    const double _tmp69 = _tmp55*_tmp60 + _tmp58*_tmp59;
+    const double _tmp70 = _tmp67 + _tmp68 + _tmp69;
+    const double _tmp71 = 0.5*theta_10;
+    const double _tmp72 = pow(theta_10, 2);
+    const double _tmp73 = symkin_arck(_tmp71);
+    const double _tmp74 = _tmp20*_tmp72*_tmp73;
+    const double _tmp75 = _tmp74*sin(_tmp71);
+    const double _tmp76 = 0.5*theta_7;
+    const double _tmp77 = _tmp20*pow(theta_7, 2)*symkin_arck(_tmp76);
+    const double _tmp78 = compliance_y_7 + _tmp77*sin(_tmp76);
+    const double _tmp79 = compliance_x_7 + _tmp77*cos(_tmp76);
+    const double _tmp80 = _tmp31*_tmp78 - _tmp35*_tmp79;
+    const double _tmp81 = 0.5*theta_8;
+    const double _tmp82 = _tmp20*pow(theta_8, 2)*symkin_arck(_tmp81);
+    const double _tmp83 = compliance_y_8 + _tmp82*sin(_tmp81);
+    const double _tmp84 = compliance_x_8 + _tmp82*cos(_tmp81);
+    const double _tmp85 = _tmp13*_tmp83 - _tmp12*_tmp84;
+    const double _tmp86 = cos(_tmp71);
+    const double _tmp87 = _tmp31*_tmp79 + _tmp35*_tmp78;
+    const double _tmp88 = _tmp12*_tmp83 + _tmp13*_tmp84;
+    const double _tmp89 = fabs(_tmp47) + fabs(_tmp54) + fabs(_tmp61) + fabs(_tmp67) + fabs(_tmp68) + fabs(_tmp69);
+    const double _tmp90 = _tmp89 + fabs(_tmp37) + fabs(_tmp44) + fabs(_tmp65) + fabs(_tmp66) + fabs(_tmp23 + _tmp24*_tmp4) + fabs(_tmp30 + compliance_y_9) + fabs(compliance_x_9 + _tmp29*_tmp64) + fabs(-_tmp63 + _tmp24*_tmp5);
+    const double _tmp91 = _tmp89 + fabs(_tmp80) + fabs(_tmp85) + fabs(_tmp87) + fabs(_tmp88) + fabs(_tmp75 + compliance_y_10) + fabs(compliance_x_10 + _tmp74*_tmp86);
     out[0] = -1;
     out[1] = -1;
     out[2] = 0;
@@ -1010,11 +1071,17 @@ static void sk_loaded_linear(const double *theta, const double *params, double *
     out[34] = 0;
     out[35] = 0;
     out[36] = 0;
-    out[37] = _tmp53 - compliance_y_9 + _tmp22*_tmp5 + _tmp23*_tmp26 + _tmp27*_tmp30 - _tmp31*_tmp32 - _tmp33*_tmp34 - _tmp35*_tmp4 - _tmp20*_tmp37*_tmp38*sin(_tmp36);
-    out[38] = compliance_x_9 - _tmp54 - _tmp22*_tmp4 - _tmp23*_tmp32 - _tmp26*_tmp31 - _tmp27*_tmp34 - _tmp30*_tmp33 - _tmp35*_tmp5 + 0.25*_tmp37*_tmp38*p_0*cos(_tmp36);
+    out[37] = _tmp23 + _tmp37 + _tmp44 + _tmp62 - _tmp30 - compliance_y_9 - _tmp25*_tmp4;
+    out[38] = compliance_x_9 - _tmp63 - _tmp65 - _tmp66 - _tmp70 - _tmp25*_tmp5 + 0.25*_tmp27*_tmp28*_tmp64*p_0;
     out[39] = 0;
-    out[40] = _tmp53 - compliance_y_10 + _tmp13*_tmp60 + _tmp23*_tmp57 - _tmp12*_tmp62 - _tmp31*_tmp61 - _tmp20*_tmp64*_tmp65*sin(_tmp63);
-    out[41] = compliance_x_10 - _tmp54 - _tmp12*_tmp60 - _tmp13*_tmp62 - _tmp23*_tmp61 - _tmp31*_tmp57 + 0.25*_tmp64*_tmp65*p_0*cos(_tmp63);
+    out[40] = _tmp62 + _tmp80 + _tmp85 - _tmp75 - compliance_y_10;
+    out[41] = compliance_x_10 - _tmp70 - _tmp87 - _tmp88 + 0.25*_tmp72*_tmp73*_tmp86*p_0;
+    out[42] = 0;
+    out[43] = _tmp90;
+    out[44] = _tmp90;
+    out[45] = 0;
+    out[46] = _tmp91;
+    out[47] = _tmp91;
 }
 
 /* loaded: the loaded closure F(delta) and dF/ddelta (539 operations) */
@@ -1852,7 +1919,7 @@ static int sk_solve_many(int n, double *a, int m, double *b)
 static double sk_rigid_newton(double *theta, const double *params, int iterations,
                               double tolerance)
 {
-    double lin[SK_K * SK_K + SK_K], res[SK_K];
+    double lin[SK_K * SK_K + 2 * SK_K], res[SK_K];
     double change = 0.0;
     int it, i;
     for (it = 0; it < iterations; ++it) {
@@ -1877,16 +1944,19 @@ static double sk_rigid_newton(double *theta, const double *params, int iteration
 
 typedef void (*sk_linear_fn)(const double *theta, const double *params, double *out);
 
-/* A delta = -r of a closure's linear routine (A, then r): its first-order delta.
-   Returns 0, or 1 when A is singular. */
+/* A delta = -r of a closure's linear routine (A, r, then S, the size of r's terms): its
+   first-order delta, and S into scale unless NULL. Returns 0, or 1 when A is singular. */
 static int sk_linear_start(sk_linear_fn linear, const double *theta, const double *params,
-                           double *delta)
+                           double *delta, double *scale)
 {
-    double lin[SK_K * SK_K + SK_K];
+    double lin[SK_K * SK_K + 2 * SK_K];
     int i;
     linear(theta, params, lin);
     for (i = 0; i < SK_K; ++i) {
         delta[i] = -lin[SK_K * SK_K + i];
+        if (scale != NULL) {
+            scale[i] = lin[SK_K * SK_K + SK_K + i];
+        }
     }
     return sk_solve(SK_K, lin, delta);
 }
@@ -1894,27 +1964,37 @@ static int sk_linear_start(sk_linear_fn linear, const double *theta, const doubl
 /* Level first_order, and the start of every other loop-solving level: A delta = -Phi dz. */
 static int sk_first_order(const double *theta, const double *params, double *delta)
 {
-    return sk_linear_start(sk_linear, theta, params, delta);
+    return sk_linear_start(sk_linear, theta, params, delta, NULL);
 }
 
 typedef void (*sk_newton_fn)(const double *theta, const double *delta, const double *params,
                              double *out);
 
 /* Newton on a compliant closure (`newton`: F and dF/ddelta) from its first-order delta, ending
-   once a step is below sqrt(eps) of delta (quadratic convergence leaves it exact) or stalls at
-   rounding. Returns 0, 1 when a Jacobian is singular, 2 without convergence. */
+   by the rule of symkin.core.settings (3): a step below sqrt(eps) of delta (quadratic
+   convergence leaves it exact), a residual at the rounding level of its terms (S from the
+   linear routine, plus the links' terms), or a step stalled at rounding. Returns 0, 1 when a
+   Jacobian is singular, 2 without convergence. */
 static int sk_newton_solve(sk_linear_fn linear, sk_newton_fn newton, const double *theta,
                            const double *params, double *delta)
 {
-    double nw[SK_K + SK_K * SK_K];
+    double nw[SK_K + SK_K * SK_K], scale[SK_K];
     double previous = HUGE_VAL;
-    int it, i, converged = 0;
-    if (sk_linear_start(linear, theta, params, delta)) {
+    int it, i, j, converged = 0;
+    if (sk_linear_start(linear, theta, params, delta, scale)) {
         return 1;
     }
     for (it = 0; it < 40 && !converged; ++it) {
         double size = 0.0, change = 0.0;
+        int noise = 1;
         newton(theta, delta, params, nw);
+        for (i = 0; i < SK_K; ++i) {
+            double terms = fabs(scale[i]);
+            for (j = 0; j < SK_K; ++j) {
+                terms += fabs(nw[SK_K + i * SK_K + j] * delta[j]);
+            }
+            noise = noise && fabs(nw[i]) <= 2e-13 * terms;
+        }
         if (sk_solve(SK_K, nw + SK_K, nw)) {
             return 1;
         }
@@ -1927,7 +2007,7 @@ static int sk_newton_solve(sk_linear_fn linear, sk_newton_fn newton, const doubl
                 change = fabs(nw[i]);
             }
         }
-        converged = change <= 1e-08 * size || size == 0.0
+        converged = change <= 1e-08 * size || noise
                     || (change >= 0.5 * previous && change <= 1e-12 * size);
         previous = change;
     }
@@ -2036,7 +2116,7 @@ static void sk_loaded_statics(const double *theta, const double *params, const d
 static int sk_loaded_constants(const double *theta, const double *params, int all,
                                double *constants)
 {
-    double lin[SK_K * SK_K + SK_K], at[SK_K * SK_K];
+    double lin[SK_K * SK_K + 2 * SK_K], at[SK_K * SK_K];
     int piv[SK_K], i, j;
     sk_linear(theta, params, lin);
     for (i = 0; i < SK_K; ++i) {
@@ -2119,6 +2199,21 @@ static int sk_pose(const double *inputs, const double *params, int level, int wa
         }
         for (i = 0; i < SK_K; ++i) {
             theta[sk_unknown_index[i]] = remainder(sol[i], sk_two_pi);
+        }
+        {
+            /* an angle whose inputs are all zero is exactly zero (the formulas round to noise
+               there): theta index, number of inputs it reads, their positions in inputs */
+            static const int rest[] = {4, 4, 0, 1, 2, 3, 5, 4, 0, 1, 2, 3, 6, 3, 0, 1, 2, 7, 3, 0, 1, 2, 8, 4, 0, 1, 2, 3, 9, 3, 0, 1, 2};
+            int r, c, moved;
+            for (r = 0; r < 33; r += 2 + rest[r + 1]) {
+                moved = 0;
+                for (c = 0; c < rest[r + 1]; ++c) {
+                    moved = moved || inputs[rest[r + 2 + c]] != 0.0;
+                }
+                if (!moved) {
+                    theta[rest[r]] = 0.0;
+                }
+            }
         }
     }
     {

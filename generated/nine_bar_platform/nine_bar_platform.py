@@ -2,7 +2,7 @@
 Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
 Points: F; levels: paper, first_order, exact, loaded, loaded_refined.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, loaded_q0 16, loaded_q 126, loaded_compliance 562, loaded_linear 239, loaded_newton 539, dev_paper 33, dev_first_order 33, dev_exact 33, dev_loaded 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
+Operation counts after CSE: rigid 158, rigid_res 114, linear 275, newton 531, rigid_points 14, loaded_q0 16, loaded_q 126, loaded_compliance 562, loaded_linear 288, loaded_newton 539, dev_paper 33, dev_first_order 33, dev_exact 33, dev_loaded 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -37,6 +37,8 @@ _N_THETA = 10
 _INPUT_INDEX = (0, 1, 2, 3, )
 _UNKNOWN_INDEX = (4, 5, 6, 7, 8, 9, )
 _N_DYADS = 2
+# (theta index, the inputs its closed-form angle reads): zero when they all are
+_REST = ((4, (0, 1, 2, 3)), (5, (0, 1, 2, 3)), (6, (0, 1, 2)), (7, (0, 1, 2)), (8, (0, 1, 2, 3)), (9, (0, 1, 2)))
 _LIMITS = ((0, 3.141592653589793), (1, 3.141592653589793), (2, 3.141592653589793), (3, 3.141592653589793), (4, 3.141592653589793), (5, 3.141592653589793), (6, 3.141592653589793), (7, 3.141592653589793), (8, 3.141592653589793), (9, 3.141592653589793), )  # models valid for |theta| < limit
 _NEEDS_LOOPS = False
 _LOOPS_FOR_LINKS = True  # the links' rotations alone need the loops solved
@@ -47,6 +49,7 @@ _EXACT_ITERATIONS = 40  # Newton cap of the exact level
 _CONVERGED = 1e-08  # ~sqrt(eps): a step this small (relative) ends Newton
 _STALL_RATIO = 0.5  # a step at least this fraction of the previous one has stalled
 _STALLED = 1e-12  # a stalled Newton step this small (relative) is converged
+_RESIDUAL = 2e-13  # a residual this small relative to its terms is rounding noise
 _TWO_PI = 2.0 * math.pi
 
 
@@ -235,7 +238,7 @@ def _rigid_res(theta, params):
 
 
 def _linear(theta, params):
-    """rigid loop Jacobian A and r = Phi dz (222 operations)."""
+    """rigid loop Jacobian A, r = Phi dz and the size S of its terms (275 operations)."""
     theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7, theta_8, theta_9, theta_10 = theta
     p_0, = params
     _tmp0 = theta_1 + theta_2
@@ -257,62 +260,91 @@ def _linear(theta, params):
     _tmp16 = numpy.cos(_tmp14)
     _tmp17 = 0.035*_tmp16 + 0.025*_tmp15
     _tmp18 = 0.035*_tmp15 - 0.025*_tmp16
-    _tmp19 = 0.5*theta_9
-    _tmp20 = theta_9**2
-    _tmp21 = arck(_tmp19)
-    _tmp22 = 0.25*p_0
-    _tmp23 = 0.5*theta_4
-    _tmp24 = numpy.sin(_tmp23)
-    _tmp25 = _tmp22*numpy.sin(_tmp1)
-    _tmp26 = theta_4**2*arck(_tmp23)
-    _tmp27 = _tmp25*_tmp26
-    _tmp28 = 0.5*theta_5
-    _tmp29 = numpy.sin(_tmp28)
-    _tmp30 = _tmp22*theta_5**2*arck(_tmp28)
-    _tmp31 = _tmp30*numpy.sin(_tmp2)
-    _tmp32 = 0.5*theta_6
-    _tmp33 = numpy.cos(_tmp32)
-    _tmp34 = theta_6**2
-    _tmp35 = arck(_tmp32)
-    _tmp36 = _tmp22*_tmp34*_tmp35
-    _tmp37 = numpy.sin(_tmp32)
-    _tmp38 = _tmp36*_tmp4
-    _tmp39 = numpy.cos(_tmp23)
-    _tmp40 = _tmp22*numpy.cos(_tmp1)
-    _tmp41 = _tmp26*_tmp40
-    _tmp42 = numpy.cos(_tmp28)
-    _tmp43 = _tmp30*numpy.cos(_tmp2)
-    _tmp44 = 0.5*theta_1
-    _tmp45 = _tmp22*theta_1**2*arck(_tmp44)
-    _tmp46 = numpy.sin(theta_1)
-    _tmp47 = 0.5*theta_2
-    _tmp48 = _tmp22*theta_2**2*arck(_tmp47)
-    _tmp49 = _tmp48*numpy.sin(_tmp47)
-    _tmp50 = 0.5*theta_3
-    _tmp51 = numpy.sin(_tmp50)
-    _tmp52 = _tmp22*theta_3**2*arck(_tmp50)
-    _tmp53 = _tmp52*numpy.sin(_tmp0)
-    _tmp54 = numpy.cos(theta_1)
-    _tmp55 = _tmp48*numpy.cos(_tmp47)
-    _tmp56 = numpy.cos(_tmp50)
-    _tmp57 = _tmp52*numpy.cos(_tmp0)
-    _tmp58 = _tmp45*numpy.sin(_tmp44) + _tmp46*_tmp49 + _tmp51*_tmp53 - _tmp54*_tmp55 - _tmp56*_tmp57
-    _tmp59 = _tmp45*numpy.cos(_tmp44) + _tmp46*_tmp55 + _tmp49*_tmp54 + _tmp51*_tmp57 + _tmp53*_tmp56
-    _tmp60 = 0.5*theta_10
-    _tmp61 = theta_10**2
-    _tmp62 = arck(_tmp60)
-    _tmp63 = 0.5*theta_7
-    _tmp64 = numpy.sin(_tmp63)
-    _tmp65 = theta_7**2*arck(_tmp63)
-    _tmp66 = _tmp25*_tmp65
-    _tmp67 = 0.5*theta_8
-    _tmp68 = numpy.sin(_tmp67)
-    _tmp69 = _tmp22*theta_8**2*arck(_tmp67)
-    _tmp70 = _tmp13*_tmp69
-    _tmp71 = numpy.cos(_tmp63)
-    _tmp72 = _tmp40*_tmp65
-    _tmp73 = numpy.cos(_tmp67)
-    _tmp74 = _tmp12*_tmp69
+    _tmp19 = theta_9**2
+    _tmp20 = 0.25*_tmp19
+    _tmp21 = 0.5*theta_9
+    _tmp22 = arck(_tmp21)
+    _tmp23 = _tmp22*p_0
+    _tmp24 = _tmp23*numpy.sin(_tmp21)
+    _tmp25 = 0.5*theta_4
+    _tmp26 = numpy.sin(_tmp25)
+    _tmp27 = 0.25*p_0
+    _tmp28 = _tmp27*numpy.sin(_tmp1)
+    _tmp29 = theta_4**2*arck(_tmp25)
+    _tmp30 = _tmp28*_tmp29
+    _tmp31 = numpy.cos(_tmp25)
+    _tmp32 = _tmp27*numpy.cos(_tmp1)
+    _tmp33 = _tmp29*_tmp32
+    _tmp34 = _tmp26*_tmp30 - _tmp31*_tmp33
+    _tmp35 = 0.5*theta_5
+    _tmp36 = numpy.sin(_tmp35)
+    _tmp37 = _tmp27*theta_5**2*arck(_tmp35)
+    _tmp38 = _tmp37*numpy.sin(_tmp2)
+    _tmp39 = numpy.cos(_tmp35)
+    _tmp40 = _tmp37*numpy.cos(_tmp2)
+    _tmp41 = _tmp36*_tmp38 - _tmp39*_tmp40
+    _tmp42 = 0.5*theta_6
+    _tmp43 = numpy.sin(_tmp42)
+    _tmp44 = theta_6**2
+    _tmp45 = arck(_tmp42)
+    _tmp46 = _tmp27*_tmp44*_tmp45
+    _tmp47 = _tmp4*_tmp46
+    _tmp48 = numpy.cos(_tmp42)
+    _tmp49 = _tmp46*_tmp5
+    _tmp50 = _tmp43*_tmp47 + _tmp48*_tmp49
+    _tmp51 = 0.25*theta_1**2
+    _tmp52 = 0.5*theta_1
+    _tmp53 = p_0*arck(_tmp52)
+    _tmp54 = _tmp53*numpy.sin(_tmp52)
+    _tmp55 = numpy.sin(theta_1)
+    _tmp56 = 0.5*theta_2
+    _tmp57 = _tmp27*theta_2**2*arck(_tmp56)
+    _tmp58 = _tmp57*numpy.sin(_tmp56)
+    _tmp59 = numpy.cos(theta_1)
+    _tmp60 = _tmp57*numpy.cos(_tmp56)
+    _tmp61 = _tmp55*_tmp58 - _tmp59*_tmp60
+    _tmp62 = 0.5*theta_3
+    _tmp63 = numpy.sin(_tmp62)
+    _tmp64 = _tmp27*theta_3**2*arck(_tmp62)
+    _tmp65 = _tmp64*numpy.sin(_tmp0)
+    _tmp66 = numpy.cos(_tmp62)
+    _tmp67 = _tmp64*numpy.cos(_tmp0)
+    _tmp68 = _tmp63*_tmp65 - _tmp66*_tmp67
+    _tmp69 = _tmp61 + _tmp68 + _tmp51*_tmp54
+    _tmp70 = numpy.cos(_tmp21)
+    _tmp71 = _tmp47*_tmp48
+    _tmp72 = _tmp26*_tmp33 + _tmp30*_tmp31
+    _tmp73 = _tmp36*_tmp40 + _tmp38*_tmp39
+    _tmp74 = _tmp53*numpy.cos(_tmp52)
+    _tmp75 = _tmp55*_tmp60 + _tmp58*_tmp59
+    _tmp76 = _tmp63*_tmp67 + _tmp65*_tmp66
+    _tmp77 = _tmp75 + _tmp76 + _tmp51*_tmp74
+    _tmp78 = theta_10**2
+    _tmp79 = 0.25*_tmp78
+    _tmp80 = 0.5*theta_10
+    _tmp81 = arck(_tmp80)
+    _tmp82 = _tmp81*p_0
+    _tmp83 = _tmp82*numpy.sin(_tmp80)
+    _tmp84 = 0.5*theta_7
+    _tmp85 = numpy.sin(_tmp84)
+    _tmp86 = theta_7**2*arck(_tmp84)
+    _tmp87 = _tmp28*_tmp86
+    _tmp88 = numpy.cos(_tmp84)
+    _tmp89 = _tmp32*_tmp86
+    _tmp90 = _tmp85*_tmp87 - _tmp88*_tmp89
+    _tmp91 = 0.5*theta_8
+    _tmp92 = numpy.sin(_tmp91)
+    _tmp93 = _tmp27*theta_8**2*arck(_tmp91)
+    _tmp94 = _tmp13*_tmp93
+    _tmp95 = numpy.cos(_tmp91)
+    _tmp96 = _tmp12*_tmp93
+    _tmp97 = _tmp92*_tmp94 - _tmp95*_tmp96
+    _tmp98 = numpy.cos(_tmp80)
+    _tmp99 = _tmp85*_tmp89 + _tmp87*_tmp88
+    _tmp100 = _tmp92*_tmp96 + _tmp94*_tmp95
+    _tmp101 = _tmp51*abs(_tmp54) + _tmp51*abs(_tmp74) + abs(_tmp61) + abs(_tmp68) + abs(_tmp75) + abs(_tmp76)
+    _tmp102 = _tmp101 + _tmp20*abs(_tmp24) + _tmp20*abs(_tmp23*_tmp70) + abs(_tmp34) + abs(_tmp41) + abs(_tmp50) + abs(_tmp72) + abs(_tmp73) + abs(-_tmp71 + _tmp43*_tmp49)
+    _tmp103 = _tmp101 + _tmp79*abs(_tmp83) + _tmp79*abs(_tmp82*_tmp98) + abs(_tmp100) + abs(_tmp90) + abs(_tmp97) + abs(_tmp99)
     return [
         -1,
         -1,
@@ -351,11 +383,17 @@ def _linear(theta, params):
         0,
         0,
         0,
-        _tmp58 + _tmp24*_tmp27 + _tmp29*_tmp31 + _tmp37*_tmp38 - _tmp39*_tmp41 - _tmp42*_tmp43 + _tmp33*_tmp36*_tmp5 - _tmp20*_tmp21*_tmp22*numpy.sin(_tmp19),
-        -_tmp59 - _tmp24*_tmp41 - _tmp27*_tmp39 - _tmp29*_tmp43 - _tmp31*_tmp42 - _tmp33*_tmp38 + 0.25*_tmp20*_tmp21*p_0*numpy.cos(_tmp19) + 0.25*_tmp34*_tmp35*_tmp37*_tmp5*p_0,
+        _tmp34 + _tmp41 + _tmp50 + _tmp69 - _tmp20*_tmp24,
+        -_tmp71 - _tmp72 - _tmp73 - _tmp77 + 0.25*_tmp19*_tmp22*_tmp70*p_0 + 0.25*_tmp43*_tmp44*_tmp45*_tmp5*p_0,
         0,
-        _tmp58 + _tmp64*_tmp66 + _tmp68*_tmp70 - _tmp71*_tmp72 - _tmp73*_tmp74 - _tmp22*_tmp61*_tmp62*numpy.sin(_tmp60),
-        -_tmp59 - _tmp64*_tmp72 - _tmp66*_tmp71 - _tmp68*_tmp74 - _tmp70*_tmp73 + 0.25*_tmp61*_tmp62*p_0*numpy.cos(_tmp60),
+        _tmp69 + _tmp90 + _tmp97 - _tmp79*_tmp83,
+        -_tmp100 - _tmp77 - _tmp99 + 0.25*_tmp78*_tmp81*_tmp98*p_0,
+        0,
+        _tmp102,
+        _tmp102,
+        0,
+        _tmp103,
+        _tmp103,
     ]
 
 
@@ -824,7 +862,7 @@ def _loaded_compliance(theta, mu, params):
 
 
 def _loaded_linear(theta, params):
-    """loaded: A and r = Phi dz of the loaded closure (its first-order start) (239 operations)."""
+    """loaded: A, r = Phi dz of the loaded closure (its first-order start) and the size S of its terms (288 operations)."""
     theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7, theta_8, theta_9, theta_10 = theta
     p_0, compliance_x_1, compliance_y_1, compliance_x_2, compliance_y_2, compliance_x_3, compliance_y_3, compliance_x_4, compliance_y_4, compliance_x_5, compliance_y_5, compliance_x_6, compliance_y_6, compliance_x_7, compliance_y_7, compliance_x_8, compliance_y_8, compliance_x_9, compliance_y_9, compliance_x_10, compliance_y_10 = params
     _tmp0 = theta_1 + theta_2
@@ -846,53 +884,79 @@ def _loaded_linear(theta, params):
     _tmp16 = numpy.cos(_tmp14)
     _tmp17 = 0.035*_tmp16 + 0.025*_tmp15
     _tmp18 = 0.035*_tmp15 - 0.025*_tmp16
-    _tmp20 = 0.25*p_0
     _tmp19 = 0.5*theta_6
+    _tmp20 = 0.25*p_0
     _tmp21 = _tmp20*theta_6**2*arck(_tmp19)
     _tmp22 = compliance_x_6 + _tmp21*numpy.cos(_tmp19)
-    _tmp23 = numpy.sin(_tmp1)
-    _tmp24 = 0.5*theta_4
-    _tmp25 = _tmp20*theta_4**2*arck(_tmp24)
-    _tmp26 = compliance_y_4 + _tmp25*numpy.sin(_tmp24)
-    _tmp27 = numpy.sin(_tmp2)
-    _tmp28 = 0.5*theta_5
-    _tmp29 = _tmp20*theta_5**2*arck(_tmp28)
-    _tmp30 = compliance_y_5 + _tmp29*numpy.sin(_tmp28)
-    _tmp31 = numpy.cos(_tmp1)
-    _tmp32 = compliance_x_4 + _tmp25*numpy.cos(_tmp24)
-    _tmp33 = numpy.cos(_tmp2)
-    _tmp34 = compliance_x_5 + _tmp29*numpy.cos(_tmp28)
-    _tmp35 = -compliance_y_6 - _tmp21*numpy.sin(_tmp19)
-    _tmp36 = 0.5*theta_9
-    _tmp37 = theta_9**2
-    _tmp38 = arck(_tmp36)
-    _tmp39 = numpy.sin(theta_1)
-    _tmp40 = 0.5*theta_2
-    _tmp41 = _tmp20*theta_2**2*arck(_tmp40)
-    _tmp42 = compliance_y_2 + _tmp41*numpy.sin(_tmp40)
-    _tmp43 = numpy.sin(_tmp0)
-    _tmp44 = 0.5*theta_3
-    _tmp45 = _tmp20*theta_3**2*arck(_tmp44)
-    _tmp46 = compliance_y_3 + _tmp45*numpy.sin(_tmp44)
-    _tmp47 = numpy.cos(theta_1)
-    _tmp48 = compliance_x_2 + _tmp41*numpy.cos(_tmp40)
-    _tmp49 = numpy.cos(_tmp0)
-    _tmp50 = compliance_x_3 + _tmp45*numpy.cos(_tmp44)
-    _tmp51 = 0.5*theta_1
-    _tmp52 = _tmp20*theta_1**2*arck(_tmp51)
-    _tmp53 = compliance_y_1 + _tmp39*_tmp42 + _tmp43*_tmp46 + _tmp52*numpy.sin(_tmp51) - _tmp47*_tmp48 - _tmp49*_tmp50
-    _tmp54 = compliance_x_1 + _tmp39*_tmp48 + _tmp42*_tmp47 + _tmp43*_tmp50 + _tmp46*_tmp49 + _tmp52*numpy.cos(_tmp51)
-    _tmp55 = 0.5*theta_7
-    _tmp56 = _tmp20*theta_7**2*arck(_tmp55)
-    _tmp57 = compliance_y_7 + _tmp56*numpy.sin(_tmp55)
-    _tmp58 = 0.5*theta_8
-    _tmp59 = _tmp20*theta_8**2*arck(_tmp58)
-    _tmp60 = compliance_y_8 + _tmp59*numpy.sin(_tmp58)
-    _tmp61 = compliance_x_7 + _tmp56*numpy.cos(_tmp55)
-    _tmp62 = compliance_x_8 + _tmp59*numpy.cos(_tmp58)
-    _tmp63 = 0.5*theta_10
-    _tmp64 = theta_10**2
-    _tmp65 = arck(_tmp63)
+    _tmp23 = _tmp22*_tmp5
+    _tmp24 = compliance_y_6 + _tmp21*numpy.sin(_tmp19)
+    _tmp25 = -_tmp24
+    _tmp26 = 0.5*theta_9
+    _tmp27 = theta_9**2
+    _tmp28 = arck(_tmp26)
+    _tmp29 = _tmp20*_tmp27*_tmp28
+    _tmp30 = _tmp29*numpy.sin(_tmp26)
+    _tmp31 = numpy.sin(_tmp1)
+    _tmp32 = 0.5*theta_4
+    _tmp33 = _tmp20*theta_4**2*arck(_tmp32)
+    _tmp34 = compliance_y_4 + _tmp33*numpy.sin(_tmp32)
+    _tmp35 = numpy.cos(_tmp1)
+    _tmp36 = compliance_x_4 + _tmp33*numpy.cos(_tmp32)
+    _tmp37 = _tmp31*_tmp34 - _tmp35*_tmp36
+    _tmp38 = numpy.sin(_tmp2)
+    _tmp39 = 0.5*theta_5
+    _tmp40 = _tmp20*theta_5**2*arck(_tmp39)
+    _tmp41 = compliance_y_5 + _tmp40*numpy.sin(_tmp39)
+    _tmp42 = numpy.cos(_tmp2)
+    _tmp43 = compliance_x_5 + _tmp40*numpy.cos(_tmp39)
+    _tmp44 = _tmp38*_tmp41 - _tmp42*_tmp43
+    _tmp45 = 0.5*theta_1
+    _tmp46 = _tmp20*theta_1**2*arck(_tmp45)
+    _tmp47 = compliance_y_1 + _tmp46*numpy.sin(_tmp45)
+    _tmp48 = numpy.sin(theta_1)
+    _tmp49 = 0.5*theta_2
+    _tmp50 = _tmp20*theta_2**2*arck(_tmp49)
+    _tmp51 = compliance_y_2 + _tmp50*numpy.sin(_tmp49)
+    _tmp52 = numpy.cos(theta_1)
+    _tmp53 = compliance_x_2 + _tmp50*numpy.cos(_tmp49)
+    _tmp54 = _tmp48*_tmp51 - _tmp52*_tmp53
+    _tmp55 = numpy.sin(_tmp0)
+    _tmp56 = 0.5*theta_3
+    _tmp57 = _tmp20*theta_3**2*arck(_tmp56)
+    _tmp58 = compliance_y_3 + _tmp57*numpy.sin(_tmp56)
+    _tmp59 = numpy.cos(_tmp0)
+    _tmp60 = compliance_x_3 + _tmp57*numpy.cos(_tmp56)
+    _tmp61 = _tmp55*_tmp58 - _tmp59*_tmp60
+    _tmp62 = _tmp47 + _tmp54 + _tmp61
+    _tmp63 = _tmp22*_tmp4
+    _tmp64 = numpy.cos(_tmp26)
+    _tmp65 = _tmp31*_tmp36 + _tmp34*_tmp35
+    _tmp66 = _tmp38*_tmp43 + _tmp41*_tmp42
+    _tmp67 = compliance_x_1 + _tmp46*numpy.cos(_tmp45)
+    _tmp68 = _tmp48*_tmp53 + _tmp51*_tmp52
+    _tmp69 = _tmp55*_tmp60 + _tmp58*_tmp59
+    _tmp70 = _tmp67 + _tmp68 + _tmp69
+    _tmp71 = 0.5*theta_10
+    _tmp72 = theta_10**2
+    _tmp73 = arck(_tmp71)
+    _tmp74 = _tmp20*_tmp72*_tmp73
+    _tmp75 = _tmp74*numpy.sin(_tmp71)
+    _tmp76 = 0.5*theta_7
+    _tmp77 = _tmp20*theta_7**2*arck(_tmp76)
+    _tmp78 = compliance_y_7 + _tmp77*numpy.sin(_tmp76)
+    _tmp79 = compliance_x_7 + _tmp77*numpy.cos(_tmp76)
+    _tmp80 = _tmp31*_tmp78 - _tmp35*_tmp79
+    _tmp81 = 0.5*theta_8
+    _tmp82 = _tmp20*theta_8**2*arck(_tmp81)
+    _tmp83 = compliance_y_8 + _tmp82*numpy.sin(_tmp81)
+    _tmp84 = compliance_x_8 + _tmp82*numpy.cos(_tmp81)
+    _tmp85 = _tmp13*_tmp83 - _tmp12*_tmp84
+    _tmp86 = numpy.cos(_tmp71)
+    _tmp87 = _tmp31*_tmp79 + _tmp35*_tmp78
+    _tmp88 = _tmp12*_tmp83 + _tmp13*_tmp84
+    _tmp89 = abs(_tmp47) + abs(_tmp54) + abs(_tmp61) + abs(_tmp67) + abs(_tmp68) + abs(_tmp69)
+    _tmp90 = _tmp89 + abs(_tmp37) + abs(_tmp44) + abs(_tmp65) + abs(_tmp66) + abs(_tmp23 + _tmp24*_tmp4) + abs(_tmp30 + compliance_y_9) + abs(compliance_x_9 + _tmp29*_tmp64) + abs(-_tmp63 + _tmp24*_tmp5)
+    _tmp91 = _tmp89 + abs(_tmp80) + abs(_tmp85) + abs(_tmp87) + abs(_tmp88) + abs(_tmp75 + compliance_y_10) + abs(compliance_x_10 + _tmp74*_tmp86)
     return [
         -1,
         -1,
@@ -931,11 +995,17 @@ def _loaded_linear(theta, params):
         0,
         0,
         0,
-        _tmp53 - compliance_y_9 + _tmp22*_tmp5 + _tmp23*_tmp26 + _tmp27*_tmp30 - _tmp31*_tmp32 - _tmp33*_tmp34 - _tmp35*_tmp4 - _tmp20*_tmp37*_tmp38*numpy.sin(_tmp36),
-        compliance_x_9 - _tmp54 - _tmp22*_tmp4 - _tmp23*_tmp32 - _tmp26*_tmp31 - _tmp27*_tmp34 - _tmp30*_tmp33 - _tmp35*_tmp5 + 0.25*_tmp37*_tmp38*p_0*numpy.cos(_tmp36),
+        _tmp23 + _tmp37 + _tmp44 + _tmp62 - _tmp30 - compliance_y_9 - _tmp25*_tmp4,
+        compliance_x_9 - _tmp63 - _tmp65 - _tmp66 - _tmp70 - _tmp25*_tmp5 + 0.25*_tmp27*_tmp28*_tmp64*p_0,
         0,
-        _tmp53 - compliance_y_10 + _tmp13*_tmp60 + _tmp23*_tmp57 - _tmp12*_tmp62 - _tmp31*_tmp61 - _tmp20*_tmp64*_tmp65*numpy.sin(_tmp63),
-        compliance_x_10 - _tmp54 - _tmp12*_tmp60 - _tmp13*_tmp62 - _tmp23*_tmp61 - _tmp31*_tmp57 + 0.25*_tmp64*_tmp65*p_0*numpy.cos(_tmp63),
+        _tmp62 + _tmp80 + _tmp85 - _tmp75 - compliance_y_10,
+        compliance_x_10 - _tmp70 - _tmp87 - _tmp88 + 0.25*_tmp72*_tmp73*_tmp86*p_0,
+        0,
+        _tmp90,
+        _tmp90,
+        0,
+        _tmp91,
+        _tmp91,
     ]
 
 
@@ -1712,6 +1782,12 @@ def _rigid_angles(x, params, ok):
         ok = ok & (numpy.broadcast_to(reach, shape) >= 0.0)
     for j, i in enumerate(_UNKNOWN_INDEX):
         theta[i] = numpy.where(ok, _wrap(numpy.broadcast_to(out[j], shape)), 0.0)
+    # an angle whose inputs are all zero is exactly zero (the formulas round to noise there)
+    for i, reads in _REST:
+        moved = numpy.zeros(shape, dtype=bool)
+        for j in reads:
+            moved = moved | (x[j] != 0.0)
+        theta[i] = numpy.where(moved, theta[i], 0.0)
     # the winding rule (symkin.solver): every loop's angles sum to 0, not +-2*pi (a wrapped hinge)
     res = _rigid_res(theta, params)
     for n in range(0, k, 3):
@@ -1743,26 +1819,35 @@ def _rigid_newton(theta, params, ok, iterations, tolerance=0.0):
 
 
 def _linear_start(theta, params, ok, linear):
-    """A delta = -r of a closure's `linear` routine (A, then r): its first-order delta."""
+    """A delta = -r of a closure's `linear` routine (A, r, then S, the size of r's terms): its
+    first-order delta, ok, and S."""
     k = len(_UNKNOWN_INDEX)
     lin = linear(theta, params)
-    delta, good = _solve(lin[:k * k], [-numpy.asarray(r) for r in lin[k * k:]], ok)
-    return delta, ok & good
+    delta, good = _solve(lin[:k * k], [-numpy.asarray(r) for r in lin[k * k:k * k + k]], ok)
+    return delta, ok & good, lin[k * k + k:]
 
 
 def _first_order(theta, params, ok):
     """Level first_order, and the start of every other loop-solving level: A delta = -Phi dz."""
-    return _linear_start(theta, params, ok, _linear)
+    delta, ok, _ = _linear_start(theta, params, ok, _linear)
+    return delta, ok
 
 
 def _newton_solve(theta, params, ok, linear, newton):
-    """Newton on a compliant closure (`newton`: F and dF/ddelta) from its first-order delta."""
-    delta, ok = _linear_start(theta, params, ok, linear)
+    """Newton on a compliant closure (`newton`: F and dF/ddelta) from its first-order delta,
+    stopping by the rule of symkin.core.settings (3)."""
+    delta, ok, scale = _linear_start(theta, params, ok, linear)
     k = len(_UNKNOWN_INDEX)
     active = ok.copy()
     previous = numpy.full(ok.shape, numpy.inf)
     for _ in range(_EXACT_ITERATIONS):
         out = newton(theta, delta, params)
+        # (3b): every row's residual at the rounding level of its terms
+        floor = numpy.ones(ok.shape, dtype=bool)
+        for r in range(k):
+            terms = numpy.abs(scale[r]) + sum(numpy.abs(out[k + r * k + j] * delta[j])
+                                              for j in range(k))
+            floor = floor & (numpy.abs(out[r]) <= _RESIDUAL * terms)
         step, good = _solve(out[k:], out[:k], active)
         ok = ok & (good | ~active)
         active = active & good
@@ -1771,7 +1856,7 @@ def _newton_solve(theta, params, ok, linear, newton):
         change = numpy.max(numpy.abs(numpy.array(step)), axis=0)
         # Quadratic convergence from the first-order start: once a step is below
         # sqrt(eps) of delta, the updated delta is accurate to rounding.
-        done = (change <= _CONVERGED * size) | (size == 0) | (
+        done = (change <= _CONVERGED * size) | floor | (
             (change >= _STALL_RATIO * previous) & (change <= _STALLED * size))
         previous = numpy.where(active, change, previous)
         active = active & ~done

@@ -3,7 +3,7 @@
  * Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
  * Points: D; levels: paper, first_order, exact, loaded, loaded_refined.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, loaded_q0 16, loaded_q 128, loaded_compliance 401, loaded_linear 190, loaded_newton 527, dev_paper 36, dev_first_order 50, dev_exact 60, dev_loaded 68, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661.
+ * Operation counts after CSE: rigid 142, rigid_res 81, linear 251, newton 556, rigid_points 19, loaded_q0 16, loaded_q 128, loaded_compliance 401, loaded_linear 235, loaded_newton 527, dev_paper 36, dev_first_order 50, dev_exact 60, dev_loaded 68, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661.
  */
 #include "stephenson_six_bar.h"
 
@@ -206,7 +206,7 @@ static void sk_rigid_res(const double *theta, const double *params, double *out)
     out[5] = _tmp2 - _tmp11 + 0.05*_tmp15 + 0.1*_tmp8 + 0.04*_tmp14 + 0.08*_tmp17 - 0.14*_tmp16 - 0.04*_tmp6;
 }
 
-/* rigid loop Jacobian A and r = Phi dz (208 operations) */
+/* rigid loop Jacobian A, r = Phi dz and the size S of its terms (251 operations) */
 static void sk_linear(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -236,51 +236,75 @@ static void sk_linear(const double *theta, const double *params, double *out)
     const double _tmp16 = 0.05*_tmp15 + 0.04*_tmp13;
     const double _tmp17 = pow(theta_5, 2);
     const double _tmp18 = -0.01556317594302295 + _tmp17*(0.21067334783983213*symkin_sinr1(0.6594566077552098*theta_5) - 0.5*symkin_sinr1(theta_5));
-    const double _tmp19 = 0.5*theta_6;
-    const double _tmp20 = sin(_tmp19);
-    const double _tmp21 = cos(theta_1);
-    const double _tmp22 = pow(theta_6, 2);
-    const double _tmp23 = symkin_arck(_tmp19);
-    const double _tmp24 = 0.25*p_0;
-    const double _tmp25 = _tmp22*_tmp23*_tmp24;
-    const double _tmp26 = cos(_tmp19);
-    const double _tmp27 = sin(theta_1);
-    const double _tmp28 = _tmp25*_tmp27;
-    const double _tmp29 = _tmp2*p_0;
-    const double _tmp30 = 0.3297283038776049*theta_5;
-    const double _tmp31 = 0.5*theta_5;
-    const double _tmp32 = _tmp31*(0.20066894885245268 + 0.25*_tmp17*(-0.347615499514091*symkin_sinr1(_tmp30) + symkin_sinr1(_tmp31)))*(1.2121056059601407*sin(_tmp30) + sin(_tmp31));
-    const double _tmp33 = 0.5*theta_1;
-    const double _tmp34 = pow(theta_1, 2);
-    const double _tmp35 = symkin_arck(_tmp33);
-    const double _tmp36 = _tmp24*_tmp34*_tmp35;
-    const double _tmp37 = pow(theta_3, 2);
-    const double _tmp38 = 0.5*theta_3;
+    const double _tmp19 = _tmp2*p_0;
+    const double _tmp20 = 0.3297283038776049*theta_5;
+    const double _tmp21 = 0.5*theta_5;
+    const double _tmp22 = -symkin_sinr1(_tmp21) + 0.347615499514091*symkin_sinr1(_tmp20);
+    const double _tmp23 = 0.25*_tmp17;
+    const double _tmp24 = _tmp21*(1.2121056059601407*sin(_tmp20) + sin(_tmp21));
+    const double _tmp25 = _tmp24*(0.20066894885245268 - _tmp22*_tmp23);
+    const double _tmp26 = 0.5*theta_6;
+    const double _tmp27 = cos(_tmp26);
+    const double _tmp28 = sin(theta_1);
+    const double _tmp29 = 0.25*p_0;
+    const double _tmp30 = _tmp29*pow(theta_6, 2)*symkin_arck(_tmp26);
+    const double _tmp31 = _tmp28*_tmp30;
+    const double _tmp32 = sin(_tmp26);
+    const double _tmp33 = cos(theta_1);
+    const double _tmp34 = _tmp30*_tmp33;
+    const double _tmp35 = _tmp27*_tmp31 + _tmp32*_tmp34;
+    const double _tmp36 = pow(theta_1, 2);
+    const double _tmp37 = 0.25*_tmp36;
+    const double _tmp38 = 0.5*theta_1;
     const double _tmp39 = symkin_arck(_tmp38);
-    const double _tmp40 = _tmp36*sin(_tmp33) - 0.25*_tmp37*_tmp39*p_0*sin(_tmp38);
-    const double _tmp41 = cos(_tmp33);
-    const double _tmp42 = _tmp24*_tmp37*_tmp39*cos(_tmp38);
-    const double _tmp43 = _tmp0*p_0;
-    const double _tmp45 = pow(theta_2, 2);
-    const double _tmp44 = 0.5*theta_2;
-    const double _tmp46 = symkin_arck(_tmp44);
-    const double _tmp47 = 0.1767766952966369*_tmp45*_tmp46*p_0;
-    const double _tmp48 = _tmp47*sin(_tmp44);
-    const double _tmp49 = cos(_tmp44);
-    const double _tmp50 = _tmp48 + _tmp47*_tmp49;
-    const double _tmp51 = -_tmp48 + 0.1767766952966369*_tmp45*_tmp46*_tmp49*p_0;
-    const double _tmp53 = pow(theta_4, 2);
-    const double _tmp52 = 0.5*theta_4;
-    const double _tmp54 = symkin_arck(_tmp52);
-    const double _tmp55 = 0.25*_tmp53*_tmp54;
-    const double _tmp56 = _tmp55*cos(_tmp52);
-    const double _tmp58 = pow(theta_7, 2);
-    const double _tmp57 = 0.5*theta_7;
-    const double _tmp59 = symkin_arck(_tmp57);
-    const double _tmp60 = _tmp24*_tmp58*_tmp59;
-    const double _tmp61 = _tmp60*sin(_tmp57);
-    const double _tmp62 = sin(_tmp52);
-    const double _tmp63 = cos(_tmp57);
+    const double _tmp40 = _tmp39*p_0;
+    const double _tmp41 = _tmp40*sin(_tmp38);
+    const double _tmp42 = pow(theta_3, 2);
+    const double _tmp43 = 0.5*theta_3;
+    const double _tmp44 = sin(_tmp43);
+    const double _tmp45 = symkin_arck(_tmp43);
+    const double _tmp46 = _tmp37*_tmp41 - 0.25*_tmp42*_tmp44*_tmp45*p_0;
+    const double _tmp47 = _tmp18*theta_5;
+    const double _tmp48 = _tmp19*_tmp47;
+    const double _tmp49 = _tmp45*p_0;
+    const double _tmp50 = _tmp49*cos(_tmp43);
+    const double _tmp51 = 0.25*_tmp42;
+    const double _tmp52 = _tmp50*_tmp51;
+    const double _tmp53 = cos(_tmp38);
+    const double _tmp54 = _tmp0*p_0;
+    const double _tmp55 = _tmp31*_tmp32 - _tmp27*_tmp34;
+    const double _tmp57 = pow(theta_2, 2);
+    const double _tmp56 = 0.5*theta_2;
+    const double _tmp58 = symkin_arck(_tmp56);
+    const double _tmp59 = 0.1767766952966369*_tmp57*_tmp58*p_0;
+    const double _tmp60 = _tmp59*sin(_tmp56);
+    const double _tmp61 = cos(_tmp56);
+    const double _tmp62 = _tmp60 + _tmp59*_tmp61;
+    const double _tmp63 = _tmp28*_tmp62;
+    const double _tmp64 = _tmp60 - 0.1767766952966369*_tmp57*_tmp58*_tmp61*p_0;
+    const double _tmp65 = -_tmp64;
+    const double _tmp67 = pow(theta_4, 2);
+    const double _tmp66 = 0.5*theta_4;
+    const double _tmp68 = symkin_arck(_tmp66);
+    const double _tmp69 = 0.25*_tmp67*_tmp68;
+    const double _tmp70 = _tmp69*cos(_tmp66);
+    const double _tmp71 = _tmp19*_tmp70;
+    const double _tmp72 = sin(_tmp66);
+    const double _tmp73 = 0.5*theta_7;
+    const double _tmp74 = _tmp29*pow(theta_7, 2)*symkin_arck(_tmp73);
+    const double _tmp75 = _tmp74*sin(_tmp73);
+    const double _tmp76 = _tmp74*cos(_tmp73);
+    const double _tmp77 = _tmp10*_tmp75 - _tmp11*_tmp76;
+    const double _tmp78 = _tmp33*_tmp62;
+    const double _tmp79 = _tmp40*_tmp53;
+    const double _tmp80 = _tmp69*_tmp72;
+    const double _tmp81 = _tmp19*_tmp80;
+    const double _tmp82 = _tmp54*_tmp70;
+    const double _tmp83 = _tmp10*_tmp76 + _tmp11*_tmp75;
+    const double _tmp84 = _tmp24*(-0.20066894885245268 + _tmp22*_tmp23);
+    const double _tmp85 = _tmp37*fabs(_tmp41) + _tmp37*fabs(_tmp79) + _tmp51*fabs(_tmp50) + _tmp51*fabs(_tmp44*_tmp49);
+    const double _tmp86 = _tmp85 + fabs(_tmp35) + fabs(_tmp55) + fabs(_tmp48 - _tmp54*_tmp84) + fabs(_tmp19*_tmp84 + _tmp47*_tmp54);
+    const double _tmp87 = _tmp85 + fabs(_tmp77) + fabs(_tmp83) + fabs(_tmp63 + _tmp33*_tmp64) + fabs(_tmp81 + _tmp82) + fabs(-_tmp71 + _tmp54*_tmp80) + fabs(-_tmp78 + _tmp28*_tmp64);
     out[0] = 0;
     out[1] = -1;
     out[2] = 0;
@@ -318,11 +342,17 @@ static void sk_linear(const double *theta, const double *params, double *out)
     out[34] = 0;
     out[35] = 0;
     out[36] = 0;
-    out[37] = -_tmp40 - _tmp26*_tmp28 - _tmp29*_tmp32 - _tmp20*_tmp21*_tmp25 + _tmp0*_tmp18*p_0*theta_5;
-    out[38] = -_tmp42 - _tmp20*_tmp28 - _tmp32*_tmp43 - _tmp18*_tmp29*theta_5 + 0.25*_tmp34*_tmp35*_tmp41*p_0 + 0.25*_tmp21*_tmp22*_tmp23*_tmp26*p_0;
+    out[37] = -_tmp35 - _tmp46 - _tmp19*_tmp25 + _tmp0*_tmp18*p_0*theta_5;
+    out[38] = -_tmp48 - _tmp52 - _tmp55 - _tmp25*_tmp54 + 0.25*_tmp36*_tmp39*_tmp53*p_0;
     out[39] = 0;
-    out[40] = -_tmp40 + _tmp21*_tmp51 - _tmp10*_tmp61 - _tmp27*_tmp50 - _tmp29*_tmp56 + 0.25*_tmp0*_tmp53*_tmp54*_tmp62*p_0 + 0.25*_tmp11*_tmp58*_tmp59*_tmp63*p_0;
-    out[41] = -_tmp42 + _tmp11*_tmp61 + _tmp21*_tmp50 + _tmp27*_tmp51 + _tmp36*_tmp41 - _tmp43*_tmp56 + _tmp10*_tmp60*_tmp63 - _tmp29*_tmp55*_tmp62;
+    out[40] = -_tmp46 - _tmp63 - _tmp71 - _tmp77 + _tmp33*_tmp65 + 0.25*_tmp0*_tmp67*_tmp68*_tmp72*p_0;
+    out[41] = _tmp78 + _tmp83 - _tmp52 - _tmp81 - _tmp82 + _tmp28*_tmp65 + _tmp37*_tmp79;
+    out[42] = 0;
+    out[43] = _tmp86;
+    out[44] = _tmp86;
+    out[45] = 0;
+    out[46] = _tmp87;
+    out[47] = _tmp87;
 }
 
 /* exact compliant closure F(delta) and dF/ddelta (556 operations) */
@@ -770,7 +800,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     out[13] = -_tmp104*_tmp92 + 3000000*_tmp10*_tmp102*_tmp103*_tmp96;
 }
 
-/* loaded: A and r = Phi dz of the loaded closure (its first-order start) (190 operations) */
+/* loaded: A, r = Phi dz of the loaded closure (its first-order start) and the size S of its terms (235 operations) */
 static void sk_loaded_linear(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -812,40 +842,62 @@ static void sk_loaded_linear(const double *theta, const double *params, double *
     const double _tmp14 = 0.05*_tmp13;
     const double _tmp15 = cos(_tmp12);
     const double _tmp16 = 0.05*_tmp15 + 0.04*_tmp13;
-    const double _tmp17 = 0.5*theta_5;
-    const double _tmp18 = 0.25*p_0;
-    const double _tmp19 = _tmp18*pow(theta_5, 2)*symkin_arck(_tmp17);
-    const double _tmp20 = compliance_x_5 + _tmp19*cos(_tmp17);
-    const double _tmp21 = sin(theta_1);
-    const double _tmp22 = 0.5*theta_6;
-    const double _tmp23 = _tmp18*pow(theta_6, 2)*symkin_arck(_tmp22);
-    const double _tmp24 = compliance_x_6 + _tmp23*cos(_tmp22);
-    const double _tmp25 = compliance_y_5 + _tmp19*sin(_tmp17);
-    const double _tmp26 = cos(theta_1);
-    const double _tmp27 = -compliance_y_6 - _tmp23*sin(_tmp22);
-    const double _tmp28 = 0.5*theta_1;
-    const double _tmp29 = _tmp18*pow(theta_1, 2)*symkin_arck(_tmp28);
-    const double _tmp30 = pow(theta_3, 2);
-    const double _tmp31 = 0.5*theta_3;
-    const double _tmp32 = symkin_arck(_tmp31);
-    const double _tmp33 = compliance_y_1 - compliance_y_3 + _tmp29*sin(_tmp28) - 0.25*_tmp30*_tmp32*p_0*sin(_tmp31);
-    const double _tmp34 = compliance_x_1 - compliance_x_3 + _tmp29*cos(_tmp28) - _tmp18*_tmp30*_tmp32*cos(_tmp31);
-    const double _tmp35 = 0.5*theta_4;
-    const double _tmp36 = _tmp18*pow(theta_4, 2)*symkin_arck(_tmp35);
-    const double _tmp37 = compliance_x_4 + _tmp36*cos(_tmp35);
-    const double _tmp38 = 0.5*theta_7;
-    const double _tmp39 = _tmp18*pow(theta_7, 2)*symkin_arck(_tmp38);
-    const double _tmp40 = compliance_y_7 + _tmp39*sin(_tmp38);
-    const double _tmp41 = 0.5*theta_2;
-    const double _tmp42 = cos(_tmp41);
-    const double _tmp43 = pow(theta_2, 2);
-    const double _tmp44 = symkin_arck(_tmp41);
-    const double _tmp45 = 0.1767766952966369*_tmp43*_tmp44*p_0;
-    const double _tmp46 = 0.7071067811865476*compliance_y_2 + _tmp45*sin(_tmp41);
-    const double _tmp47 = _tmp46 + 0.7071067811865476*compliance_x_2 + _tmp42*_tmp45;
-    const double _tmp48 = compliance_x_7 + _tmp39*cos(_tmp38);
-    const double _tmp49 = compliance_y_4 + _tmp36*sin(_tmp35);
-    const double _tmp50 = -_tmp46 + 0.7071067811865476*compliance_x_2 + 0.1767766952966369*_tmp42*_tmp43*_tmp44*p_0;
+    const double _tmp17 = sin(theta_1);
+    const double _tmp18 = 0.5*theta_6;
+    const double _tmp19 = 0.25*p_0;
+    const double _tmp20 = _tmp19*pow(theta_6, 2)*symkin_arck(_tmp18);
+    const double _tmp21 = compliance_x_6 + _tmp20*cos(_tmp18);
+    const double _tmp22 = _tmp17*_tmp21;
+    const double _tmp23 = 0.5*theta_5;
+    const double _tmp24 = _tmp19*pow(theta_5, 2)*symkin_arck(_tmp23);
+    const double _tmp25 = compliance_x_5 + _tmp24*cos(_tmp23);
+    const double _tmp26 = _tmp2*_tmp25;
+    const double _tmp27 = compliance_y_5 + _tmp24*sin(_tmp23);
+    const double _tmp28 = cos(theta_1);
+    const double _tmp29 = compliance_y_6 + _tmp20*sin(_tmp18);
+    const double _tmp30 = -_tmp29;
+    const double _tmp31 = pow(theta_3, 2);
+    const double _tmp32 = 0.5*theta_3;
+    const double _tmp33 = sin(_tmp32);
+    const double _tmp34 = symkin_arck(_tmp32);
+    const double _tmp35 = 0.5*theta_1;
+    const double _tmp36 = _tmp19*pow(theta_1, 2)*symkin_arck(_tmp35);
+    const double _tmp37 = compliance_y_1 + _tmp36*sin(_tmp35);
+    const double _tmp38 = _tmp37 - compliance_y_3 - 0.25*_tmp31*_tmp33*_tmp34*p_0;
+    const double _tmp39 = _tmp21*_tmp28;
+    const double _tmp40 = _tmp0*_tmp25;
+    const double _tmp41 = _tmp2*_tmp27;
+    const double _tmp42 = _tmp19*_tmp31*_tmp34;
+    const double _tmp43 = _tmp42*cos(_tmp32);
+    const double _tmp44 = compliance_x_1 + _tmp36*cos(_tmp35);
+    const double _tmp45 = _tmp44 - _tmp43 - compliance_x_3;
+    const double _tmp46 = 0.5*theta_2;
+    const double _tmp47 = cos(_tmp46);
+    const double _tmp48 = pow(theta_2, 2);
+    const double _tmp49 = symkin_arck(_tmp46);
+    const double _tmp50 = 0.1767766952966369*_tmp48*_tmp49*p_0;
+    const double _tmp51 = 0.7071067811865476*compliance_y_2 + _tmp50*sin(_tmp46);
+    const double _tmp52 = _tmp51 + 0.7071067811865476*compliance_x_2 + _tmp47*_tmp50;
+    const double _tmp53 = _tmp17*_tmp52;
+    const double _tmp54 = 0.5*theta_4;
+    const double _tmp55 = _tmp19*pow(theta_4, 2)*symkin_arck(_tmp54);
+    const double _tmp56 = compliance_x_4 + _tmp55*cos(_tmp54);
+    const double _tmp57 = _tmp2*_tmp56;
+    const double _tmp58 = compliance_y_4 + _tmp55*sin(_tmp54);
+    const double _tmp59 = _tmp51 - 0.7071067811865476*compliance_x_2 - 0.1767766952966369*_tmp47*_tmp48*_tmp49*p_0;
+    const double _tmp60 = -_tmp59;
+    const double _tmp61 = 0.5*theta_7;
+    const double _tmp62 = _tmp19*pow(theta_7, 2)*symkin_arck(_tmp61);
+    const double _tmp63 = compliance_y_7 + _tmp62*sin(_tmp61);
+    const double _tmp64 = compliance_x_7 + _tmp62*cos(_tmp61);
+    const double _tmp65 = _tmp10*_tmp63 - _tmp11*_tmp64;
+    const double _tmp66 = _tmp28*_tmp52;
+    const double _tmp67 = _tmp0*_tmp56;
+    const double _tmp68 = _tmp2*_tmp58;
+    const double _tmp69 = _tmp10*_tmp64 + _tmp11*_tmp63;
+    const double _tmp70 = fabs(_tmp37) + fabs(_tmp44) + fabs(_tmp43 + compliance_x_3) + fabs(compliance_y_3 + _tmp33*_tmp42);
+    const double _tmp71 = _tmp70 + fabs(_tmp22 + _tmp28*_tmp29) + fabs(_tmp40 + _tmp41) + fabs(-_tmp26 + _tmp0*_tmp27) + fabs(-_tmp39 + _tmp17*_tmp29);
+    const double _tmp72 = _tmp70 + fabs(_tmp65) + fabs(_tmp69) + fabs(_tmp53 + _tmp28*_tmp59) + fabs(_tmp67 + _tmp68) + fabs(-_tmp57 + _tmp0*_tmp58) + fabs(-_tmp66 + _tmp17*_tmp59);
     out[0] = 0;
     out[1] = -1;
     out[2] = 0;
@@ -883,11 +935,17 @@ static void sk_loaded_linear(const double *theta, const double *params, double *
     out[34] = 0;
     out[35] = 0;
     out[36] = 0;
-    out[37] = -_tmp33 + _tmp0*_tmp25 + _tmp26*_tmp27 - _tmp2*_tmp20 - _tmp21*_tmp24;
-    out[38] = _tmp34 + _tmp21*_tmp27 + _tmp24*_tmp26 - _tmp0*_tmp20 - _tmp2*_tmp25;
+    out[37] = -_tmp22 - _tmp26 - _tmp38 + _tmp0*_tmp27 + _tmp28*_tmp30;
+    out[38] = _tmp39 + _tmp45 - _tmp40 - _tmp41 + _tmp17*_tmp30;
     out[39] = 0;
-    out[40] = -_tmp33 + _tmp0*_tmp49 + _tmp11*_tmp48 + _tmp26*_tmp50 - _tmp10*_tmp40 - _tmp2*_tmp37 - _tmp21*_tmp47;
-    out[41] = _tmp34 + _tmp10*_tmp48 + _tmp11*_tmp40 + _tmp21*_tmp50 + _tmp26*_tmp47 - _tmp0*_tmp37 - _tmp2*_tmp49;
+    out[40] = -_tmp38 - _tmp53 - _tmp57 - _tmp65 + _tmp0*_tmp58 + _tmp28*_tmp60;
+    out[41] = _tmp45 + _tmp66 + _tmp69 - _tmp67 - _tmp68 + _tmp17*_tmp60;
+    out[42] = 0;
+    out[43] = _tmp71;
+    out[44] = _tmp71;
+    out[45] = 0;
+    out[46] = _tmp72;
+    out[47] = _tmp72;
 }
 
 /* loaded: the loaded closure F(delta) and dF/ddelta (527 operations) */
@@ -2196,7 +2254,7 @@ static int sk_solve_many(int n, double *a, int m, double *b)
 static double sk_rigid_newton(double *theta, const double *params, int iterations,
                               double tolerance)
 {
-    double lin[SK_K * SK_K + SK_K], res[SK_K];
+    double lin[SK_K * SK_K + 2 * SK_K], res[SK_K];
     double change = 0.0;
     int it, i;
     for (it = 0; it < iterations; ++it) {
@@ -2221,16 +2279,19 @@ static double sk_rigid_newton(double *theta, const double *params, int iteration
 
 typedef void (*sk_linear_fn)(const double *theta, const double *params, double *out);
 
-/* A delta = -r of a closure's linear routine (A, then r): its first-order delta.
-   Returns 0, or 1 when A is singular. */
+/* A delta = -r of a closure's linear routine (A, r, then S, the size of r's terms): its
+   first-order delta, and S into scale unless NULL. Returns 0, or 1 when A is singular. */
 static int sk_linear_start(sk_linear_fn linear, const double *theta, const double *params,
-                           double *delta)
+                           double *delta, double *scale)
 {
-    double lin[SK_K * SK_K + SK_K];
+    double lin[SK_K * SK_K + 2 * SK_K];
     int i;
     linear(theta, params, lin);
     for (i = 0; i < SK_K; ++i) {
         delta[i] = -lin[SK_K * SK_K + i];
+        if (scale != NULL) {
+            scale[i] = lin[SK_K * SK_K + SK_K + i];
+        }
     }
     return sk_solve(SK_K, lin, delta);
 }
@@ -2238,27 +2299,37 @@ static int sk_linear_start(sk_linear_fn linear, const double *theta, const doubl
 /* Level first_order, and the start of every other loop-solving level: A delta = -Phi dz. */
 static int sk_first_order(const double *theta, const double *params, double *delta)
 {
-    return sk_linear_start(sk_linear, theta, params, delta);
+    return sk_linear_start(sk_linear, theta, params, delta, NULL);
 }
 
 typedef void (*sk_newton_fn)(const double *theta, const double *delta, const double *params,
                              double *out);
 
 /* Newton on a compliant closure (`newton`: F and dF/ddelta) from its first-order delta, ending
-   once a step is below sqrt(eps) of delta (quadratic convergence leaves it exact) or stalls at
-   rounding. Returns 0, 1 when a Jacobian is singular, 2 without convergence. */
+   by the rule of symkin.core.settings (3): a step below sqrt(eps) of delta (quadratic
+   convergence leaves it exact), a residual at the rounding level of its terms (S from the
+   linear routine, plus the links' terms), or a step stalled at rounding. Returns 0, 1 when a
+   Jacobian is singular, 2 without convergence. */
 static int sk_newton_solve(sk_linear_fn linear, sk_newton_fn newton, const double *theta,
                            const double *params, double *delta)
 {
-    double nw[SK_K + SK_K * SK_K];
+    double nw[SK_K + SK_K * SK_K], scale[SK_K];
     double previous = HUGE_VAL;
-    int it, i, converged = 0;
-    if (sk_linear_start(linear, theta, params, delta)) {
+    int it, i, j, converged = 0;
+    if (sk_linear_start(linear, theta, params, delta, scale)) {
         return 1;
     }
     for (it = 0; it < 40 && !converged; ++it) {
         double size = 0.0, change = 0.0;
+        int noise = 1;
         newton(theta, delta, params, nw);
+        for (i = 0; i < SK_K; ++i) {
+            double terms = fabs(scale[i]);
+            for (j = 0; j < SK_K; ++j) {
+                terms += fabs(nw[SK_K + i * SK_K + j] * delta[j]);
+            }
+            noise = noise && fabs(nw[i]) <= 2e-13 * terms;
+        }
         if (sk_solve(SK_K, nw + SK_K, nw)) {
             return 1;
         }
@@ -2271,7 +2342,7 @@ static int sk_newton_solve(sk_linear_fn linear, sk_newton_fn newton, const doubl
                 change = fabs(nw[i]);
             }
         }
-        converged = change <= 1e-08 * size || size == 0.0
+        converged = change <= 1e-08 * size || noise
                     || (change >= 0.5 * previous && change <= 1e-12 * size);
         previous = change;
     }
@@ -2380,7 +2451,7 @@ static void sk_loaded_statics(const double *theta, const double *params, const d
 static int sk_loaded_constants(const double *theta, const double *params, int all,
                                double *constants)
 {
-    double lin[SK_K * SK_K + SK_K], at[SK_K * SK_K];
+    double lin[SK_K * SK_K + 2 * SK_K], at[SK_K * SK_K];
     int piv[SK_K], i, j;
     sk_linear(theta, params, lin);
     for (i = 0; i < SK_K; ++i) {
@@ -2463,6 +2534,21 @@ static int sk_pose(const double *inputs, const double *params, int level, int wa
         }
         for (i = 0; i < SK_K; ++i) {
             theta[sk_unknown_index[i]] = remainder(sol[i], sk_two_pi);
+        }
+        {
+            /* an angle whose inputs are all zero is exactly zero (the formulas round to noise
+               there): theta index, number of inputs it reads, their positions in inputs */
+            static const int rest[] = {1, 1, 0, 2, 1, 0, 3, 1, 0, 4, 1, 0, 5, 1, 0, 6, 1, 0};
+            int r, c, moved;
+            for (r = 0; r < 18; r += 2 + rest[r + 1]) {
+                moved = 0;
+                for (c = 0; c < rest[r + 1]; ++c) {
+                    moved = moved || inputs[rest[r + 2 + c]] != 0.0;
+                }
+                if (!moved) {
+                    theta[rest[r]] = 0.0;
+                }
+            }
         }
     }
     {

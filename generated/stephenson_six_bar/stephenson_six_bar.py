@@ -2,7 +2,7 @@
 Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
 Points: D; levels: paper, first_order, exact, loaded, loaded_refined.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, loaded_q0 16, loaded_q 128, loaded_compliance 401, loaded_linear 190, loaded_newton 527, dev_paper 36, dev_first_order 50, dev_exact 60, dev_loaded 68, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661.
+Operation counts after CSE: rigid 142, rigid_res 81, linear 251, newton 556, rigid_points 19, loaded_q0 16, loaded_q 128, loaded_compliance 401, loaded_linear 235, loaded_newton 527, dev_paper 36, dev_first_order 50, dev_exact 60, dev_loaded 68, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -37,6 +37,8 @@ _N_THETA = 7
 _INPUT_INDEX = (0, )
 _UNKNOWN_INDEX = (1, 2, 3, 4, 5, 6, )
 _N_DYADS = 2
+# (theta index, the inputs its closed-form angle reads): zero when they all are
+_REST = ((1, (0,)), (2, (0,)), (3, (0,)), (4, (0,)), (5, (0,)), (6, (0,)))
 _LIMITS = ((0, 3.141592653589793), (1, 3.141592653589793), (2, 3.141592653589793), (3, 3.141592653589793), (4, 3.141592653589793), (5, 3.141592653589793), (6, 3.141592653589793), )  # models valid for |theta| < limit
 _NEEDS_LOOPS = True
 _LOOPS_FOR_LINKS = False  # the links' rotations alone need the loops solved
@@ -47,6 +49,7 @@ _EXACT_ITERATIONS = 40  # Newton cap of the exact level
 _CONVERGED = 1e-08  # ~sqrt(eps): a step this small (relative) ends Newton
 _STALL_RATIO = 0.5  # a step at least this fraction of the previous one has stalled
 _STALLED = 1e-12  # a stalled Newton step this small (relative) is converged
+_RESIDUAL = 2e-13  # a residual this small relative to its terms is rounding noise
 _TWO_PI = 2.0 * math.pi
 
 
@@ -220,7 +223,7 @@ def _rigid_res(theta, params):
 
 
 def _linear(theta, params):
-    """rigid loop Jacobian A and r = Phi dz (208 operations)."""
+    """rigid loop Jacobian A, r = Phi dz and the size S of its terms (251 operations)."""
     theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7 = theta
     p_0, = params
     _tmp0 = numpy.sin(theta_3)
@@ -242,51 +245,75 @@ def _linear(theta, params):
     _tmp16 = 0.05*_tmp15 + 0.04*_tmp13
     _tmp17 = theta_5**2
     _tmp18 = -0.01556317594302295 + _tmp17*(0.21067334783983213*sinr1(0.6594566077552098*theta_5) - 0.5*sinr1(theta_5))
-    _tmp19 = 0.5*theta_6
-    _tmp20 = numpy.sin(_tmp19)
-    _tmp21 = numpy.cos(theta_1)
-    _tmp22 = theta_6**2
-    _tmp23 = arck(_tmp19)
-    _tmp24 = 0.25*p_0
-    _tmp25 = _tmp22*_tmp23*_tmp24
-    _tmp26 = numpy.cos(_tmp19)
-    _tmp27 = numpy.sin(theta_1)
-    _tmp28 = _tmp25*_tmp27
-    _tmp29 = _tmp2*p_0
-    _tmp30 = 0.3297283038776049*theta_5
-    _tmp31 = 0.5*theta_5
-    _tmp32 = _tmp31*(0.20066894885245268 + 0.25*_tmp17*(-0.347615499514091*sinr1(_tmp30) + sinr1(_tmp31)))*(1.2121056059601407*numpy.sin(_tmp30) + numpy.sin(_tmp31))
-    _tmp33 = 0.5*theta_1
-    _tmp34 = theta_1**2
-    _tmp35 = arck(_tmp33)
-    _tmp36 = _tmp24*_tmp34*_tmp35
-    _tmp37 = theta_3**2
-    _tmp38 = 0.5*theta_3
+    _tmp19 = _tmp2*p_0
+    _tmp20 = 0.3297283038776049*theta_5
+    _tmp21 = 0.5*theta_5
+    _tmp22 = -sinr1(_tmp21) + 0.347615499514091*sinr1(_tmp20)
+    _tmp23 = 0.25*_tmp17
+    _tmp24 = _tmp21*(1.2121056059601407*numpy.sin(_tmp20) + numpy.sin(_tmp21))
+    _tmp25 = _tmp24*(0.20066894885245268 - _tmp22*_tmp23)
+    _tmp26 = 0.5*theta_6
+    _tmp27 = numpy.cos(_tmp26)
+    _tmp28 = numpy.sin(theta_1)
+    _tmp29 = 0.25*p_0
+    _tmp30 = _tmp29*theta_6**2*arck(_tmp26)
+    _tmp31 = _tmp28*_tmp30
+    _tmp32 = numpy.sin(_tmp26)
+    _tmp33 = numpy.cos(theta_1)
+    _tmp34 = _tmp30*_tmp33
+    _tmp35 = _tmp27*_tmp31 + _tmp32*_tmp34
+    _tmp36 = theta_1**2
+    _tmp37 = 0.25*_tmp36
+    _tmp38 = 0.5*theta_1
     _tmp39 = arck(_tmp38)
-    _tmp40 = _tmp36*numpy.sin(_tmp33) - 0.25*_tmp37*_tmp39*p_0*numpy.sin(_tmp38)
-    _tmp41 = numpy.cos(_tmp33)
-    _tmp42 = _tmp24*_tmp37*_tmp39*numpy.cos(_tmp38)
-    _tmp43 = _tmp0*p_0
-    _tmp45 = theta_2**2
-    _tmp44 = 0.5*theta_2
-    _tmp46 = arck(_tmp44)
-    _tmp47 = 0.1767766952966369*_tmp45*_tmp46*p_0
-    _tmp48 = _tmp47*numpy.sin(_tmp44)
-    _tmp49 = numpy.cos(_tmp44)
-    _tmp50 = _tmp48 + _tmp47*_tmp49
-    _tmp51 = -_tmp48 + 0.1767766952966369*_tmp45*_tmp46*_tmp49*p_0
-    _tmp53 = theta_4**2
-    _tmp52 = 0.5*theta_4
-    _tmp54 = arck(_tmp52)
-    _tmp55 = 0.25*_tmp53*_tmp54
-    _tmp56 = _tmp55*numpy.cos(_tmp52)
-    _tmp58 = theta_7**2
-    _tmp57 = 0.5*theta_7
-    _tmp59 = arck(_tmp57)
-    _tmp60 = _tmp24*_tmp58*_tmp59
-    _tmp61 = _tmp60*numpy.sin(_tmp57)
-    _tmp62 = numpy.sin(_tmp52)
-    _tmp63 = numpy.cos(_tmp57)
+    _tmp40 = _tmp39*p_0
+    _tmp41 = _tmp40*numpy.sin(_tmp38)
+    _tmp42 = theta_3**2
+    _tmp43 = 0.5*theta_3
+    _tmp44 = numpy.sin(_tmp43)
+    _tmp45 = arck(_tmp43)
+    _tmp46 = _tmp37*_tmp41 - 0.25*_tmp42*_tmp44*_tmp45*p_0
+    _tmp47 = _tmp18*theta_5
+    _tmp48 = _tmp19*_tmp47
+    _tmp49 = _tmp45*p_0
+    _tmp50 = _tmp49*numpy.cos(_tmp43)
+    _tmp51 = 0.25*_tmp42
+    _tmp52 = _tmp50*_tmp51
+    _tmp53 = numpy.cos(_tmp38)
+    _tmp54 = _tmp0*p_0
+    _tmp55 = _tmp31*_tmp32 - _tmp27*_tmp34
+    _tmp57 = theta_2**2
+    _tmp56 = 0.5*theta_2
+    _tmp58 = arck(_tmp56)
+    _tmp59 = 0.1767766952966369*_tmp57*_tmp58*p_0
+    _tmp60 = _tmp59*numpy.sin(_tmp56)
+    _tmp61 = numpy.cos(_tmp56)
+    _tmp62 = _tmp60 + _tmp59*_tmp61
+    _tmp63 = _tmp28*_tmp62
+    _tmp64 = _tmp60 - 0.1767766952966369*_tmp57*_tmp58*_tmp61*p_0
+    _tmp65 = -_tmp64
+    _tmp67 = theta_4**2
+    _tmp66 = 0.5*theta_4
+    _tmp68 = arck(_tmp66)
+    _tmp69 = 0.25*_tmp67*_tmp68
+    _tmp70 = _tmp69*numpy.cos(_tmp66)
+    _tmp71 = _tmp19*_tmp70
+    _tmp72 = numpy.sin(_tmp66)
+    _tmp73 = 0.5*theta_7
+    _tmp74 = _tmp29*theta_7**2*arck(_tmp73)
+    _tmp75 = _tmp74*numpy.sin(_tmp73)
+    _tmp76 = _tmp74*numpy.cos(_tmp73)
+    _tmp77 = _tmp10*_tmp75 - _tmp11*_tmp76
+    _tmp78 = _tmp33*_tmp62
+    _tmp79 = _tmp40*_tmp53
+    _tmp80 = _tmp69*_tmp72
+    _tmp81 = _tmp19*_tmp80
+    _tmp82 = _tmp54*_tmp70
+    _tmp83 = _tmp10*_tmp76 + _tmp11*_tmp75
+    _tmp84 = _tmp24*(-0.20066894885245268 + _tmp22*_tmp23)
+    _tmp85 = _tmp37*abs(_tmp41) + _tmp37*abs(_tmp79) + _tmp51*abs(_tmp50) + _tmp51*abs(_tmp44*_tmp49)
+    _tmp86 = _tmp85 + abs(_tmp35) + abs(_tmp55) + abs(_tmp48 - _tmp54*_tmp84) + abs(_tmp19*_tmp84 + _tmp47*_tmp54)
+    _tmp87 = _tmp85 + abs(_tmp77) + abs(_tmp83) + abs(_tmp63 + _tmp33*_tmp64) + abs(_tmp81 + _tmp82) + abs(-_tmp71 + _tmp54*_tmp80) + abs(-_tmp78 + _tmp28*_tmp64)
     return [
         0,
         -1,
@@ -325,11 +352,17 @@ def _linear(theta, params):
         0,
         0,
         0,
-        -_tmp40 - _tmp26*_tmp28 - _tmp29*_tmp32 - _tmp20*_tmp21*_tmp25 + _tmp0*_tmp18*p_0*theta_5,
-        -_tmp42 - _tmp20*_tmp28 - _tmp32*_tmp43 - _tmp18*_tmp29*theta_5 + 0.25*_tmp34*_tmp35*_tmp41*p_0 + 0.25*_tmp21*_tmp22*_tmp23*_tmp26*p_0,
+        -_tmp35 - _tmp46 - _tmp19*_tmp25 + _tmp0*_tmp18*p_0*theta_5,
+        -_tmp48 - _tmp52 - _tmp55 - _tmp25*_tmp54 + 0.25*_tmp36*_tmp39*_tmp53*p_0,
         0,
-        -_tmp40 + _tmp21*_tmp51 - _tmp10*_tmp61 - _tmp27*_tmp50 - _tmp29*_tmp56 + 0.25*_tmp0*_tmp53*_tmp54*_tmp62*p_0 + 0.25*_tmp11*_tmp58*_tmp59*_tmp63*p_0,
-        -_tmp42 + _tmp11*_tmp61 + _tmp21*_tmp50 + _tmp27*_tmp51 + _tmp36*_tmp41 - _tmp43*_tmp56 + _tmp10*_tmp60*_tmp63 - _tmp29*_tmp55*_tmp62,
+        -_tmp46 - _tmp63 - _tmp71 - _tmp77 + _tmp33*_tmp65 + 0.25*_tmp0*_tmp67*_tmp68*_tmp72*p_0,
+        _tmp78 + _tmp83 - _tmp52 - _tmp81 - _tmp82 + _tmp28*_tmp65 + _tmp37*_tmp79,
+        0,
+        _tmp86,
+        _tmp86,
+        0,
+        _tmp87,
+        _tmp87,
     ]
 
 
@@ -748,7 +781,7 @@ def _loaded_compliance(theta, mu, params):
 
 
 def _loaded_linear(theta, params):
-    """loaded: A and r = Phi dz of the loaded closure (its first-order start) (190 operations)."""
+    """loaded: A, r = Phi dz of the loaded closure (its first-order start) and the size S of its terms (235 operations)."""
     theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7 = theta
     p_0, compliance_x_1, compliance_y_1, compliance_x_2, compliance_y_2, compliance_x_3, compliance_y_3, compliance_x_4, compliance_y_4, compliance_x_5, compliance_y_5, compliance_x_6, compliance_y_6, compliance_x_7, compliance_y_7 = params
     _tmp0 = numpy.sin(theta_3)
@@ -768,40 +801,62 @@ def _loaded_linear(theta, params):
     _tmp14 = 0.05*_tmp13
     _tmp15 = numpy.cos(_tmp12)
     _tmp16 = 0.05*_tmp15 + 0.04*_tmp13
-    _tmp17 = 0.5*theta_5
-    _tmp18 = 0.25*p_0
-    _tmp19 = _tmp18*theta_5**2*arck(_tmp17)
-    _tmp20 = compliance_x_5 + _tmp19*numpy.cos(_tmp17)
-    _tmp21 = numpy.sin(theta_1)
-    _tmp22 = 0.5*theta_6
-    _tmp23 = _tmp18*theta_6**2*arck(_tmp22)
-    _tmp24 = compliance_x_6 + _tmp23*numpy.cos(_tmp22)
-    _tmp25 = compliance_y_5 + _tmp19*numpy.sin(_tmp17)
-    _tmp26 = numpy.cos(theta_1)
-    _tmp27 = -compliance_y_6 - _tmp23*numpy.sin(_tmp22)
-    _tmp28 = 0.5*theta_1
-    _tmp29 = _tmp18*theta_1**2*arck(_tmp28)
-    _tmp30 = theta_3**2
-    _tmp31 = 0.5*theta_3
-    _tmp32 = arck(_tmp31)
-    _tmp33 = compliance_y_1 - compliance_y_3 + _tmp29*numpy.sin(_tmp28) - 0.25*_tmp30*_tmp32*p_0*numpy.sin(_tmp31)
-    _tmp34 = compliance_x_1 - compliance_x_3 + _tmp29*numpy.cos(_tmp28) - _tmp18*_tmp30*_tmp32*numpy.cos(_tmp31)
-    _tmp35 = 0.5*theta_4
-    _tmp36 = _tmp18*theta_4**2*arck(_tmp35)
-    _tmp37 = compliance_x_4 + _tmp36*numpy.cos(_tmp35)
-    _tmp38 = 0.5*theta_7
-    _tmp39 = _tmp18*theta_7**2*arck(_tmp38)
-    _tmp40 = compliance_y_7 + _tmp39*numpy.sin(_tmp38)
-    _tmp41 = 0.5*theta_2
-    _tmp42 = numpy.cos(_tmp41)
-    _tmp43 = theta_2**2
-    _tmp44 = arck(_tmp41)
-    _tmp45 = 0.1767766952966369*_tmp43*_tmp44*p_0
-    _tmp46 = 0.7071067811865476*compliance_y_2 + _tmp45*numpy.sin(_tmp41)
-    _tmp47 = _tmp46 + 0.7071067811865476*compliance_x_2 + _tmp42*_tmp45
-    _tmp48 = compliance_x_7 + _tmp39*numpy.cos(_tmp38)
-    _tmp49 = compliance_y_4 + _tmp36*numpy.sin(_tmp35)
-    _tmp50 = -_tmp46 + 0.7071067811865476*compliance_x_2 + 0.1767766952966369*_tmp42*_tmp43*_tmp44*p_0
+    _tmp17 = numpy.sin(theta_1)
+    _tmp18 = 0.5*theta_6
+    _tmp19 = 0.25*p_0
+    _tmp20 = _tmp19*theta_6**2*arck(_tmp18)
+    _tmp21 = compliance_x_6 + _tmp20*numpy.cos(_tmp18)
+    _tmp22 = _tmp17*_tmp21
+    _tmp23 = 0.5*theta_5
+    _tmp24 = _tmp19*theta_5**2*arck(_tmp23)
+    _tmp25 = compliance_x_5 + _tmp24*numpy.cos(_tmp23)
+    _tmp26 = _tmp2*_tmp25
+    _tmp27 = compliance_y_5 + _tmp24*numpy.sin(_tmp23)
+    _tmp28 = numpy.cos(theta_1)
+    _tmp29 = compliance_y_6 + _tmp20*numpy.sin(_tmp18)
+    _tmp30 = -_tmp29
+    _tmp31 = theta_3**2
+    _tmp32 = 0.5*theta_3
+    _tmp33 = numpy.sin(_tmp32)
+    _tmp34 = arck(_tmp32)
+    _tmp35 = 0.5*theta_1
+    _tmp36 = _tmp19*theta_1**2*arck(_tmp35)
+    _tmp37 = compliance_y_1 + _tmp36*numpy.sin(_tmp35)
+    _tmp38 = _tmp37 - compliance_y_3 - 0.25*_tmp31*_tmp33*_tmp34*p_0
+    _tmp39 = _tmp21*_tmp28
+    _tmp40 = _tmp0*_tmp25
+    _tmp41 = _tmp2*_tmp27
+    _tmp42 = _tmp19*_tmp31*_tmp34
+    _tmp43 = _tmp42*numpy.cos(_tmp32)
+    _tmp44 = compliance_x_1 + _tmp36*numpy.cos(_tmp35)
+    _tmp45 = _tmp44 - _tmp43 - compliance_x_3
+    _tmp46 = 0.5*theta_2
+    _tmp47 = numpy.cos(_tmp46)
+    _tmp48 = theta_2**2
+    _tmp49 = arck(_tmp46)
+    _tmp50 = 0.1767766952966369*_tmp48*_tmp49*p_0
+    _tmp51 = 0.7071067811865476*compliance_y_2 + _tmp50*numpy.sin(_tmp46)
+    _tmp52 = _tmp51 + 0.7071067811865476*compliance_x_2 + _tmp47*_tmp50
+    _tmp53 = _tmp17*_tmp52
+    _tmp54 = 0.5*theta_4
+    _tmp55 = _tmp19*theta_4**2*arck(_tmp54)
+    _tmp56 = compliance_x_4 + _tmp55*numpy.cos(_tmp54)
+    _tmp57 = _tmp2*_tmp56
+    _tmp58 = compliance_y_4 + _tmp55*numpy.sin(_tmp54)
+    _tmp59 = _tmp51 - 0.7071067811865476*compliance_x_2 - 0.1767766952966369*_tmp47*_tmp48*_tmp49*p_0
+    _tmp60 = -_tmp59
+    _tmp61 = 0.5*theta_7
+    _tmp62 = _tmp19*theta_7**2*arck(_tmp61)
+    _tmp63 = compliance_y_7 + _tmp62*numpy.sin(_tmp61)
+    _tmp64 = compliance_x_7 + _tmp62*numpy.cos(_tmp61)
+    _tmp65 = _tmp10*_tmp63 - _tmp11*_tmp64
+    _tmp66 = _tmp28*_tmp52
+    _tmp67 = _tmp0*_tmp56
+    _tmp68 = _tmp2*_tmp58
+    _tmp69 = _tmp10*_tmp64 + _tmp11*_tmp63
+    _tmp70 = abs(_tmp37) + abs(_tmp44) + abs(_tmp43 + compliance_x_3) + abs(compliance_y_3 + _tmp33*_tmp42)
+    _tmp71 = _tmp70 + abs(_tmp22 + _tmp28*_tmp29) + abs(_tmp40 + _tmp41) + abs(-_tmp26 + _tmp0*_tmp27) + abs(-_tmp39 + _tmp17*_tmp29)
+    _tmp72 = _tmp70 + abs(_tmp65) + abs(_tmp69) + abs(_tmp53 + _tmp28*_tmp59) + abs(_tmp67 + _tmp68) + abs(-_tmp57 + _tmp0*_tmp58) + abs(-_tmp66 + _tmp17*_tmp59)
     return [
         0,
         -1,
@@ -840,11 +895,17 @@ def _loaded_linear(theta, params):
         0,
         0,
         0,
-        -_tmp33 + _tmp0*_tmp25 + _tmp26*_tmp27 - _tmp2*_tmp20 - _tmp21*_tmp24,
-        _tmp34 + _tmp21*_tmp27 + _tmp24*_tmp26 - _tmp0*_tmp20 - _tmp2*_tmp25,
+        -_tmp22 - _tmp26 - _tmp38 + _tmp0*_tmp27 + _tmp28*_tmp30,
+        _tmp39 + _tmp45 - _tmp40 - _tmp41 + _tmp17*_tmp30,
         0,
-        -_tmp33 + _tmp0*_tmp49 + _tmp11*_tmp48 + _tmp26*_tmp50 - _tmp10*_tmp40 - _tmp2*_tmp37 - _tmp21*_tmp47,
-        _tmp34 + _tmp10*_tmp48 + _tmp11*_tmp40 + _tmp21*_tmp50 + _tmp26*_tmp47 - _tmp0*_tmp37 - _tmp2*_tmp49,
+        -_tmp38 - _tmp53 - _tmp57 - _tmp65 + _tmp0*_tmp58 + _tmp28*_tmp60,
+        _tmp45 + _tmp66 + _tmp69 - _tmp67 - _tmp68 + _tmp17*_tmp60,
+        0,
+        _tmp71,
+        _tmp71,
+        0,
+        _tmp72,
+        _tmp72,
     ]
 
 
@@ -2092,6 +2153,12 @@ def _rigid_angles(x, params, ok):
         ok = ok & (numpy.broadcast_to(reach, shape) >= 0.0)
     for j, i in enumerate(_UNKNOWN_INDEX):
         theta[i] = numpy.where(ok, _wrap(numpy.broadcast_to(out[j], shape)), 0.0)
+    # an angle whose inputs are all zero is exactly zero (the formulas round to noise there)
+    for i, reads in _REST:
+        moved = numpy.zeros(shape, dtype=bool)
+        for j in reads:
+            moved = moved | (x[j] != 0.0)
+        theta[i] = numpy.where(moved, theta[i], 0.0)
     # the winding rule (symkin.solver): every loop's angles sum to 0, not +-2*pi (a wrapped hinge)
     res = _rigid_res(theta, params)
     for n in range(0, k, 3):
@@ -2123,26 +2190,35 @@ def _rigid_newton(theta, params, ok, iterations, tolerance=0.0):
 
 
 def _linear_start(theta, params, ok, linear):
-    """A delta = -r of a closure's `linear` routine (A, then r): its first-order delta."""
+    """A delta = -r of a closure's `linear` routine (A, r, then S, the size of r's terms): its
+    first-order delta, ok, and S."""
     k = len(_UNKNOWN_INDEX)
     lin = linear(theta, params)
-    delta, good = _solve(lin[:k * k], [-numpy.asarray(r) for r in lin[k * k:]], ok)
-    return delta, ok & good
+    delta, good = _solve(lin[:k * k], [-numpy.asarray(r) for r in lin[k * k:k * k + k]], ok)
+    return delta, ok & good, lin[k * k + k:]
 
 
 def _first_order(theta, params, ok):
     """Level first_order, and the start of every other loop-solving level: A delta = -Phi dz."""
-    return _linear_start(theta, params, ok, _linear)
+    delta, ok, _ = _linear_start(theta, params, ok, _linear)
+    return delta, ok
 
 
 def _newton_solve(theta, params, ok, linear, newton):
-    """Newton on a compliant closure (`newton`: F and dF/ddelta) from its first-order delta."""
-    delta, ok = _linear_start(theta, params, ok, linear)
+    """Newton on a compliant closure (`newton`: F and dF/ddelta) from its first-order delta,
+    stopping by the rule of symkin.core.settings (3)."""
+    delta, ok, scale = _linear_start(theta, params, ok, linear)
     k = len(_UNKNOWN_INDEX)
     active = ok.copy()
     previous = numpy.full(ok.shape, numpy.inf)
     for _ in range(_EXACT_ITERATIONS):
         out = newton(theta, delta, params)
+        # (3b): every row's residual at the rounding level of its terms
+        floor = numpy.ones(ok.shape, dtype=bool)
+        for r in range(k):
+            terms = numpy.abs(scale[r]) + sum(numpy.abs(out[k + r * k + j] * delta[j])
+                                              for j in range(k))
+            floor = floor & (numpy.abs(out[r]) <= _RESIDUAL * terms)
         step, good = _solve(out[k:], out[:k], active)
         ok = ok & (good | ~active)
         active = active & good
@@ -2151,7 +2227,7 @@ def _newton_solve(theta, params, ok, linear, newton):
         change = numpy.max(numpy.abs(numpy.array(step)), axis=0)
         # Quadratic convergence from the first-order start: once a step is below
         # sqrt(eps) of delta, the updated delta is accurate to rounding.
-        done = (change <= _CONVERGED * size) | (size == 0) | (
+        done = (change <= _CONVERGED * size) | floor | (
             (change >= _STALL_RATIO * previous) & (change <= _STALLED * size))
         previous = numpy.where(active, change, previous)
         active = active & ~done

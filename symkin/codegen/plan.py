@@ -98,6 +98,10 @@ class Plan:
     # (docs/pruning.md): accepted and ignored by numpy
     fixed: tuple[tuple[int, float], ...] = ()  # (θ index, angle): inputs held constant,
     # folded into the routines (docs/cli.md, --fix)
+    # per non-input hinge (δ order) with a closed-form angle: the positions in `inputs` of the
+    # inputs it reads, when none of them is held at a nonzero angle: with all of them zero
+    # the angle is exactly zero (the formulas round to noise there)
+    rest: tuple[tuple[int, tuple[int, ...]], ...] = ()
     angular: tuple[int, ...] = ()  # positions of the angular rows among the solved ones
     dropped: int = 0  # redundant closure rows left out of the solves and checked (consistency_*)
 
@@ -369,6 +373,7 @@ def plan(
         chain=chain,
         pruned_inputs=tuple(pruned_inputs),
         fixed=tuple((a - 1, to_double(v)) for a, v in sorted(held.items())),
+        rest=_rest(an, free, held),
         angular=an.angular_rows,
         dropped=len(an.dropped),
     )
@@ -544,6 +549,22 @@ def moved_points(analysis: Analysis, points: Sequence[str]) -> frozenset[str]:
             for b in an.structure.tree_path(an.link[an.mechanism.point(n).link])
         )
     )
+
+
+def _rest(
+    an: Analysis, free: Sequence[int], held: Mapping[int, sp.Expr]
+) -> tuple[tuple[int, tuple[int, ...]], ...]:
+    """Plan.rest: for each non-input hinge of a closed-form rigid solution, the positions among
+    the free inputs of the inputs its angle reads, unless it reads an input held off zero."""
+    depends = an.rigid.depends
+    if depends is None:
+        return ()
+    out = []
+    for j, a in enumerate(an.kin.unknowns):
+        if any(b in held and held[b] != 0 for b in depends[a]):
+            continue
+        out.append((j, tuple(free.index(b) for b in sorted(depends[a]) if b in free)))
+    return tuple(out)
 
 
 def _fixed_angles(an: Analysis, fixed: Mapping[str, sp.Expr]) -> dict[int, sp.Expr]:

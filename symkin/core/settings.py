@@ -11,6 +11,8 @@ The algorithm, in every arithmetic:
    kept rows (a square system); the dropped rows are checked after it (step 4);
 1. rigid angles: the closed-form dyads when the linkage decomposes into them (a redundant link,
    hinged to two bodies already placed, takes its rotation from the line between those hinges);
+   a closed-form angle whose inputs are all zero is exactly zero (the formulas round to noise
+   there, which the redundancy check of step 4 would compare with noise);
    otherwise Newton on the rigid closure relative to the as-fabricated pose, with continuation:
    the inputs go from 0 to their values in ``continuation_steps`` equal steps, each solved from
    the previous pose until a Newton step is at most ``rigid`` (radians) in size, at most

@@ -40,6 +40,9 @@ class RigidSolution:
     assignments: tuple[tuple[sp.Symbol, sp.Expr], ...]
     phi: dict[int, sp.Expr] | None  # None: no closed form, solve numerically
     dyads: tuple[Dyad, ...]
+    # non-input hinge -> the input hinges its closed-form angle reads: with all of them zero
+    # the angle is exactly zero (the formulas round to noise there); None without closed form
+    depends: dict[int, frozenset[int]] | None = None
 
     @property
     def closed_form(self) -> bool:
@@ -153,7 +156,23 @@ def solve(kin: Kinematics) -> RigidSolution:
     for link in range(s.n + 1):
         root_phi = known[bodies.body_of[link]][0]
         phi[link] = root_phi + bodies.rho[link]
-    return RigidSolution(tuple(assignments), phi, tuple(dyads))
+    inputs = {kin.theta[a]: a for a in kin.inputs}
+    reads: dict[sp.Symbol, frozenset[int]] = {}
+
+    def depends(expr: sp.Expr) -> frozenset[int]:
+        out: set[int] = set()
+        for symbol in sp.sympify(expr).free_symbols:
+            out |= {inputs[symbol]} if symbol in inputs else reads.get(symbol, frozenset())
+        return frozenset(out)
+
+    for symbol, expr in assignments:
+        reads[symbol] = depends(expr)
+    return RigidSolution(
+        tuple(assignments),
+        phi,
+        tuple(dyads),
+        {a: depends(phi[kin.hinges[a].M] - phi[kin.hinges[a].P]) for a in kin.unknowns},
+    )
 
 
 def _dyad(

@@ -1242,7 +1242,13 @@ class _Reader:
                 f"Grübler {formula}",
                 "input",
                 None,
-                f"mark exactly {dof} hinge(s) with input = true",
+                f"mark exactly {dof} hinge(s) with input = true"
+                + (
+                    "; or, if no loop is meant to be redundant, the as-fabricated pose is a "
+                    "singular position (hinges in line, legs parallel): move a hinge off it"
+                    if dof != mech.grubler
+                    else ""
+                ),
             )
         if rank is not None and rank.dependent:
             dependent = rank.dependent

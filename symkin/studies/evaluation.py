@@ -859,10 +859,10 @@ class _Mpmath:
             fn = self._fn(f"phi:{link}", expr, sorted(expr.free_symbols, key=str))
             phi[link] = fn(*(env[s] for s in sorted(expr.free_symbols, key=str)))
         theta = dict(ivals)
-        rest = all(v == 0 for v in ivals.values())
         for a in kin.unknowns:
             h = kin.hinges[a]
-            # the as-fabricated pose is exactly theta = 0 (the formulas round to noise there)
+            # an angle whose inputs are all zero is exactly zero (the formulas round to noise)
+            rest = all(ivals[b] == 0 for b in sol.depends[a])
             theta[a] = mpmath.mpf(0) if rest else _wrap(phi[h.M] - phi[h.P])
         self._check_winding(pvals, theta, ivals)
         self._check_consistency("rigid", pvals, theta)

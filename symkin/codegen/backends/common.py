@@ -96,6 +96,10 @@ class Backend:
             "refined_code": levels.get("loaded_refined").code,
             "routines": [routine_data(r, self.printer) for r in plan.routines.values()],
             "routine_names": list(plan.routines),
+            "rest": tuple((plan.unknown_index[j], tuple(reads)) for j, reads in plan.rest),
+            "rest_table": [
+                v for j, reads in plan.rest for v in (plan.unknown_index[j], len(reads), *reads)
+            ],
             "angular": list(plan.angular),
             "dropped": plan.dropped,
             "kernels": [type(self).kernel_source(n) for n in special_functions(plan)],
