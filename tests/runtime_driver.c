@@ -49,6 +49,8 @@ static void t_linear(const double *theta, const double *params, double *out)
     out[3] = 1.0;
     out[4] = -0.1 * theta[1];
     out[5] = -0.05 * theta[2] - params[1];
+    out[6] = fabs(0.1 * theta[1]);                 /* S: the size of r's terms */
+    out[7] = fabs(0.05 * theta[2]) + fabs(params[1]);
 }
 
 static void t_newton(const double *theta, const double *delta, const double *params, double *out)
@@ -123,6 +125,8 @@ static void t_loaded_linear(const double *theta, const double *q, double *out)
     t_linear(theta, q, out);
     out[4] = -0.1 * theta[1] - 0.01 * q[2];
     out[5] = -0.05 * theta[2] - q[3];
+    out[6] = fabs(0.1 * theta[1]) + fabs(0.01 * q[2]);
+    out[7] = fabs(0.05 * theta[2]) + fabs(q[3]);
 }
 
 static void t_loaded_newton(const double *theta, const double *delta, const double *q,
@@ -208,13 +212,14 @@ static const double t_fixed_angle[1] = {0.0};
 static const int t_limit_index[1] = {1};
 static const int t_limit_unknown[1] = {0};
 static const double t_limit[1] = {2.0};
+static const int t_angular[1] = {0};
 
 static const sk_level t_levels[] = {
-    {0, t_dev_paper, NULL, NULL, 0, {t_sens_paper, 0, 0, 0, 0, 0, 0, 4}},
-    {1, t_dev, t_linear, NULL, 0, {NULL, 0, 0, 0, 0, 0, 0, 0}},
-    {2, t_dev, t_linear, t_newton, 0, {t_sens_exact, 1, 0, 4, 8, 14, 18, 22}},
-    {3, t_dev, t_loaded_linear, t_loaded_newton, 1, {NULL, 0, 0, 0, 0, 0, 0, 0}},
-    {5, t_dev, t_loaded_linear, t_loaded_newton, 2, {NULL, 0, 0, 0, 0, 0, 0, 0}}
+    {0, t_dev_paper, NULL, NULL, 0, {t_sens_paper, 0, 0, 0, 0, 0, 0, 4}, NULL},
+    {1, t_dev, t_linear, NULL, 0, {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL},
+    {2, t_dev, t_linear, t_newton, 0, {t_sens_exact, 1, 0, 4, 8, 14, 18, 22}, NULL},
+    {3, t_dev, t_loaded_linear, t_loaded_newton, 1, {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL},
+    {5, t_dev, t_loaded_linear, t_loaded_newton, 2, {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL}
 };
 
 static sk_mechanism t_mechanism(int closed_form)
@@ -234,6 +239,8 @@ static sk_mechanism t_mechanism(int closed_form)
     m.rigid = closed_form ? t_rigid : NULL;
     m.n_dyads = 1;
     m.rigid_res = t_rigid_res;
+    m.n_angular = 1;
+    m.angular = t_angular;
     m.linear = t_linear;
     m.rigid_points = t_rigid_points;
     m.links = t_links;
@@ -250,6 +257,7 @@ static sk_mechanism t_mechanism(int closed_form)
     m.exact_rule.converged = 1e-8;
     m.exact_rule.stalled = 1e-12;
     m.exact_rule.stall_ratio = 0.5;
+    m.exact_rule.residual = 2e-13;
     m.continuation_step = 0.05;
     m.winding = 3.141592653589793;
     m.n_levels = 5;
@@ -289,6 +297,16 @@ static void t_system_mapped(const void *ctx, const double *x, double *fj)
     u[0] = x[3];
     u[1] = x[1];
     t_system(ctx, u, fj);
+}
+
+/* f(x) = x0 - (+-1e-17), the sign alternating at each evaluation: a root at zero whose
+   residual never falls below rounding noise (a closure at the as-fabricated pose) */
+static void t_noisy(const void *ctx, const double *x, double *fj)
+{
+    t_ctx *c = (t_ctx *)ctx;
+    c->stages += 1;
+    fj[0] = x[0] - (c->stages % 2 ? 1e-17 : -1e-17);
+    fj[1] = 1.0;
 }
 
 static void t_stage(void *ctx, double t)
@@ -335,6 +353,7 @@ static void rule(sk_rule *r)
     r->converged = num();
     r->stalled = num();
     r->stall_ratio = num();
+    r->residual = 0.0;
 }
 
 int main(void)
@@ -370,7 +389,7 @@ int main(void)
             change = num();
             size = num();
             previous = num();
-            printf("stop %d\n", sk_newton_stop(&r, change, size, previous));
+            printf("stop %d\n", sk_newton_stop(&r, change, size, previous, 0));
         } else if (cmd[0] == 'n') {                        /* newton rule t evaluated mapped x0 x1 */
             sk_rule r;
             t_ctx c = {1.0, 0};
@@ -390,7 +409,8 @@ int main(void)
                 if (evaluated) {
                     t_system_mapped(&c, x, fj);
                 }
-                status = sk_newton_solve(t_system_mapped, &c, 2, index, &r, x, fj, evaluated);
+                status = sk_newton_solve(t_system_mapped, &c, 2, index, &r, NULL, x, fj,
+                                         evaluated);
                 printf("status %d\n", status);
                 print("x", x, 5);
             } else {
@@ -398,10 +418,20 @@ int main(void)
                 if (evaluated) {
                     t_system(&c, x, fj);
                 }
-                status = sk_newton_solve(t_system, &c, 2, NULL, &r, x, fj, evaluated);
+                status = sk_newton_solve(t_system, &c, 2, NULL, &r, NULL, x, fj, evaluated);
                 printf("status %d\n", status);
                 print("x", x, 2);
             }
+        } else if (cmd[0] == 'q') {                        /* quiet rule residual: t_noisy */
+            sk_rule r;
+            t_ctx c = {0.0, 0};
+            const double scale[1] = {1.0};
+            double fj[2];
+            rule(&r);
+            r.residual = num();
+            x[0] = 0.0;
+            status = sk_newton_solve(t_noisy, &c, 1, NULL, &r, scale, x, fj, 0);
+            printf("status %d evaluations %d\n", status, c.stages);
         } else if (cmd[0] == 'c' && cmd[1] == 'o') {     /* continuation rule top step */
             sk_rule r;
             t_ctx c = {0.0, 0};

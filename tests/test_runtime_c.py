@@ -183,6 +183,15 @@ def test_newton_converges_from_any_layout(driver):
     assert mapped.tolist() == [100.0, x[1], 102.0, x[0], 104.0]
 
 
+def test_newton_stops_at_a_residual_at_rounding(driver):
+    """A root at zero whose residual stays at rounding noise (+-1e-17, terms of size 1): without
+    the residual rule Newton chases the noise to its step limit; with it (symkin.core.settings,
+    3b), it stops after the first evaluation, where |f| = 1e-17 <= 2e-13 (1 + |J x|)."""
+    out = run(driver, [f"quiet {RULE} 0", f"quiet {RULE} 2e-13"])
+    assert out[0][1] == ["2", "evaluations", "40"]
+    assert out[1][1] == ["0", "evaluations", "1"]
+
+
 def test_newton_reports_singular_and_unfinished(driver):
     out = run(
         driver,

@@ -161,6 +161,29 @@ def test_newton_per_element(rt):
     assert not stopped[[0, 2]].any()  # one step from there is not enough
 
 
+def test_newton_stops_at_a_residual_at_rounding(rt):
+    """A root at zero whose residual stays at rounding noise (+-1e-17, terms of size 1): without
+    the residual rule Newton chases the noise to its step limit; with it (symkin.core.settings,
+    3b), it stops after the first evaluation, where |f| = 1e-17 <= 2e-13 (1 + |J x|)."""
+    for residual, stops, evaluations in ((0.0, False, 40), (2e-13, True, 1)):
+        calls = []
+
+        def noisy(x, calls=calls):
+            calls.append(1)
+            return [x[0] - (1e-17 if len(calls) % 2 else -1e-17), np.ones_like(x[0])]
+
+        _, good, stopped = rt._newton_solve(
+            noisy,
+            [np.zeros(1)],
+            [0],
+            np.ones(1, dtype=bool),
+            rt._Rule(40, 0.0, 1e-8, 1e-12, 0.5, residual),
+            np.float64,
+            scale=[1.0],
+        )
+        assert good.all() and bool(stopped[0]) is stops and len(calls) == evaluations
+
+
 @pytest.mark.parametrize("steps", [1, 3, 20])
 def test_continuation(rt, steps):
     stages = []
@@ -195,7 +218,9 @@ def mechanism(rt, closed: bool, dtype=np.float64):
         return [theta[1] - params[0] * theta[0], theta[1] + theta[2] - theta[0]]
 
     def linear(theta, params):
-        return [1.0, 0.0, 1.0, 1.0, -0.1 * theta[1], -0.05 * theta[2] - params[1]]
+        r = [-0.1 * theta[1], -0.05 * theta[2] - params[1]]
+        size = [abs(0.1 * theta[1]), abs(0.05 * theta[2]) + abs(params[1])]
+        return [1.0, 0.0, 1.0, 1.0, *r, *size]
 
     def newton(theta, delta, params):
         d0, d1 = delta
@@ -209,7 +234,9 @@ def mechanism(rt, closed: bool, dtype=np.float64):
         ]
 
     def loaded_linear(theta, q):
-        return [1.0, 0.0, 1.0, 1.0, -0.1 * theta[1] - 0.01 * q[2], -0.05 * theta[2] - q[3]]
+        r = [-0.1 * theta[1] - 0.01 * q[2], -0.05 * theta[2] - q[3]]
+        size = [abs(0.1 * theta[1]) + abs(0.01 * q[2]), abs(0.05 * theta[2]) + abs(q[3])]
+        return [1.0, 0.0, 1.0, 1.0, *r, *size]
 
     def loaded_newton(theta, delta, q):
         d0, d1 = delta
@@ -303,8 +330,13 @@ def mechanism(rt, closed: bool, dtype=np.float64):
         },
         rigid_rule=rt._Rule(30, 1e-10),
         polish_rule=rt._Rule(1),
-        exact_rule=rt._Rule(40, 0.0, 1e-8, 1e-12, 0.5),
+        exact_rule=rt._Rule(40, 0.0, 1e-8, 1e-12, 0.5, 2e-13),
         continuation_step=0.05,
+        angular=(0,),
+        rest=(),
+        n_dropped=0,
+        consistent=1e-8,
+        consistency_rigid=None,
         winding=math.pi,
         levels={
             "paper": rt._Level(

@@ -28,6 +28,15 @@ def test_tolerances_by_arithmetic():
     assert SOLVER.tolerances("float32").converged > SOLVER.float64.converged
     assert SOLVER.mpmath(40).converged < SOLVER.float64.stalled
     assert SOLVER.mpmath(40).polish == 0  # the closed form needs no polish at 40 digits
+    # the residual floor (rule 3b) sits near the rounding of each arithmetic, far below the
+    # relative step test; the redundancy check is the same in mpmath and float64 (alike refusals)
+    for tol, eps in (
+        (SOLVER.float64, 2.2e-16),
+        (SOLVER.float32, 1.2e-7),
+        (SOLVER.mpmath(40), 1e-40),
+    ):
+        assert 10 * eps < tol.residual < 1e5 * eps and tol.residual < tol.converged
+    assert SOLVER.mpmath(40).consistent == SOLVER.mpmath(60).consistent == SOLVER.float64.consistent
 
 
 @pytest.fixture(scope="module")

@@ -9,6 +9,7 @@ regular and I, Φ, Ψ must satisfy the paper's identities.
 from __future__ import annotations
 
 import json
+import math
 import os
 import random
 import subprocess
@@ -64,7 +65,8 @@ class _RandomDraws:
 
 
 def make_spec(d) -> Spec:
-    """A random connected, multigraph-free mechanism with mobility 3n - 2m >= 1, scrambled."""
+    """A random connected, multigraph-free mechanism with mobility >= 1 (Grübler's 3n - 2m >= 1,
+    more where a part is overconstrained) and inputs that fix its pose, scrambled."""
     n = d.integer(1, 8)  # n + 1 = 2..9 links
     vertices = list(range(n + 1))
     edges = [(d.integer(0, k - 1), k) for k in range(1, n + 1)]  # a random spanning tree
@@ -82,12 +84,21 @@ def make_spec(d) -> Spec:
     hinge_names = [f"h{v}" for v in d.permutation(list(range(10, 10 + m)))]
     link_order = d.permutation(vertices)
     hinge_order = d.permutation(list(range(m)))
-    ground = link_names[d.integer(0, n)]
-    dof = 3 * n - 2 * m
-    inputs = set(d.permutation(list(range(m)))[:dof])
-    xs = d.permutation(list(range(m)))  # distinct hinge positions
+    g = d.integer(0, n)  # the ground vertex
+    ground = link_names[g]
+    candidates = d.permutation(list(range(m)))
+    # distinct hinge positions, off the grid by irrational amounts: no three hinges on a line or
+    # other special geometry by accident, which would make the as-fabricated pose singular
+    xs = d.permutation(list(range(m)))
     ys = d.permutation(list(range(m)))
-
+    at = [
+        (
+            0.01 * xs[e] + 0.001 + 0.001 * math.modf(ys[e] * math.sqrt(2))[0],
+            0.007 * ys[e] - 0.02 + 0.001 * math.modf(xs[e] * math.sqrt(3))[0],
+        )
+        for e in range(m)
+    ]
+    inputs = fixing_inputs(n, g, edges, at, candidates)
     hinges = []
     for e in hinge_order:
         p, q = edges[e]
@@ -113,7 +124,7 @@ def make_spec(d) -> Spec:
             "[[hinge]]",
             f'name = "{name}"',
             f'links = ["{p}", "{q}"]',
-            f"at = [{0.01 * xs[e] + 0.001:.4f}, {0.007 * ys[e] - 0.02:.4f}]",
+            f"at = [{at[e][0]:.7f}, {at[e][1]:.7f}]",
         ]
         if e in inputs:
             lines.append("input = true")
@@ -125,6 +136,38 @@ def make_spec(d) -> Spec:
         n=n,
         m=m,
     )
+
+
+def fixing_inputs(n: int, ground: int, edges: list, at: list, order: list) -> set[int]:
+    """Input hinges that fix the pose, taken in `order`: each kept when its relative rotation
+    adds to the rank of the pin constraints (2 per hinge, 3 pose velocities per moving link) and
+    the rotations kept, until the rank reaches 3n. Their number is the mobility, which exceeds
+    Grübler's 3n - 2m where a sub-chain is overconstrained (four links all hinged together)."""
+    column = {v: 3 * k for k, v in enumerate(v for v in range(n + 1) if v != ground)}
+
+    def row(entries) -> list[float]:
+        out = [0.0] * 3 * n
+        for v, k, value in entries:
+            if v in column:
+                out[column[v] + k] += value
+        return out
+
+    rows = []
+    for (p, q), (x, y) in zip(edges, at):
+        rows.append(row([(q, 0, 1.0), (q, 2, -y), (p, 0, -1.0), (p, 2, y)]))
+        rows.append(row([(q, 1, 1.0), (q, 2, x), (p, 1, -1.0), (p, 2, -x)]))
+    rank = np.linalg.matrix_rank(np.array(rows)) if rows else 0
+    chosen = set()
+    for e in order:
+        if rank == 3 * n:
+            break
+        p, q = edges[e]
+        more = np.linalg.matrix_rank(np.array([*rows, row([(q, 2, 1.0), (p, 2, -1.0)])]))
+        if more > rank:
+            rows.append(row([(q, 2, 1.0), (p, 2, -1.0)]))
+            rank = more
+            chosen.add(e)
+    return chosen
 
 
 @st.composite

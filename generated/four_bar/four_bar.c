@@ -3,7 +3,7 @@
  * Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact, loaded, loaded_refined.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, loaded_q0 10, loaded_q 72, loaded_compliance 231, loaded_linear 102, loaded_newton 269, dev_paper 38, dev_first_order 52, dev_exact 62, dev_loaded 72, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339.
+ * Operation counts after CSE: rigid 65, rigid_res 38, linear 114, newton 259, rigid_points 19, loaded_q0 10, loaded_q 72, loaded_compliance 231, loaded_linear 121, loaded_newton 269, dev_paper 38, dev_first_order 52, dev_exact 62, dev_loaded 72, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339.
  */
 #include "four_bar.h"
 
@@ -156,7 +156,7 @@ static void sk_rigid_res(const double *theta, const double *params, double *out)
     out[2] = 0.015*_tmp1 + 0.015*_tmp2 + 0.136*_tmp6 + 0.07*_tmp3 - 0.084*_tmp7 - 0.052*_tmp5;
 }
 
-/* rigid loop Jacobian A and r = Phi dz (92 operations) */
+/* rigid loop Jacobian A, r = Phi dz and the size S of its terms (114 operations) */
 static void sk_linear(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -169,29 +169,39 @@ static void sk_linear(const double *theta, const double *params, double *out)
     const double _tmp2 = cos(_tmp0);
     const double _tmp3 = sin(theta_3);
     const double _tmp4 = cos(theta_3);
-    const double _tmp5 = 0.5*theta_1;
-    const double _tmp6 = 0.25*p_0;
-    const double _tmp7 = _tmp6*pow(theta_1, 2)*symkin_arck(_tmp5);
-    const double _tmp8 = pow(theta_3, 2);
-    const double _tmp9 = 0.5*theta_3;
-    const double _tmp10 = symkin_arck(_tmp9);
-    const double _tmp12 = pow(theta_4, 2);
-    const double _tmp11 = 0.5*theta_4;
-    const double _tmp13 = symkin_arck(_tmp11);
-    const double _tmp14 = _tmp12*_tmp13*_tmp6;
-    const double _tmp15 = _tmp14*sin(_tmp11);
-    const double _tmp16 = cos(_tmp11);
-    const double _tmp17 = sin(theta_1);
-    const double _tmp18 = 0.5*theta_2;
-    const double _tmp19 = sin(_tmp18);
-    const double _tmp20 = pow(theta_2, 2);
-    const double _tmp21 = symkin_arck(_tmp18);
-    const double _tmp22 = _tmp20*_tmp21*p_0;
-    const double _tmp23 = cos(_tmp18);
-    const double _tmp24 = 0.21650635094610965*_tmp22;
-    const double _tmp25 = _tmp23*_tmp24 + 0.125*_tmp19*_tmp22;
-    const double _tmp26 = cos(theta_1);
-    const double _tmp27 = -_tmp19*_tmp24 + 0.125*_tmp20*_tmp21*_tmp23*p_0;
+    const double _tmp5 = sin(theta_1);
+    const double _tmp6 = 0.5*theta_2;
+    const double _tmp7 = sin(_tmp6);
+    const double _tmp8 = pow(theta_2, 2);
+    const double _tmp9 = symkin_arck(_tmp6);
+    const double _tmp10 = _tmp8*_tmp9*p_0;
+    const double _tmp11 = cos(_tmp6);
+    const double _tmp12 = 0.21650635094610965*_tmp10;
+    const double _tmp13 = _tmp11*_tmp12 + 0.125*_tmp10*_tmp7;
+    const double _tmp14 = _tmp13*_tmp5;
+    const double _tmp15 = cos(theta_1);
+    const double _tmp16 = _tmp12*_tmp7 - 0.125*_tmp11*_tmp8*_tmp9*p_0;
+    const double _tmp17 = -_tmp16;
+    const double _tmp18 = 0.25*pow(theta_1, 2);
+    const double _tmp19 = 0.5*theta_1;
+    const double _tmp20 = p_0*symkin_arck(_tmp19);
+    const double _tmp21 = _tmp20*sin(_tmp19);
+    const double _tmp22 = pow(theta_3, 2);
+    const double _tmp23 = 0.5*theta_3;
+    const double _tmp24 = sin(_tmp23);
+    const double _tmp25 = symkin_arck(_tmp23);
+    const double _tmp26 = 0.5*theta_4;
+    const double _tmp27 = 0.25*p_0*pow(theta_4, 2)*symkin_arck(_tmp26);
+    const double _tmp28 = _tmp27*sin(_tmp26);
+    const double _tmp29 = _tmp27*cos(_tmp26);
+    const double _tmp30 = _tmp1*_tmp28 - _tmp2*_tmp29;
+    const double _tmp31 = _tmp20*cos(_tmp19);
+    const double _tmp32 = _tmp25*p_0;
+    const double _tmp33 = _tmp32*cos(_tmp23);
+    const double _tmp34 = 0.25*_tmp22;
+    const double _tmp35 = _tmp13*_tmp15 + _tmp17*_tmp5;
+    const double _tmp36 = _tmp1*_tmp29 + _tmp2*_tmp28;
+    const double _tmp37 = _tmp18*fabs(_tmp21) + _tmp18*fabs(_tmp31) + _tmp34*fabs(_tmp33) + _tmp34*fabs(_tmp24*_tmp32) + fabs(_tmp30) + fabs(_tmp35) + fabs(_tmp36) + fabs(_tmp14 + _tmp15*_tmp16);
     out[0] = 1;
     out[1] = -1;
     out[2] = 1;
@@ -202,8 +212,11 @@ static void sk_linear(const double *theta, const double *params, double *out)
     out[7] = 0.015*_tmp4 + 0.068*_tmp3;
     out[8] = 0;
     out[9] = 0;
-    out[10] = _tmp26*_tmp27 - _tmp1*_tmp15 - _tmp17*_tmp25 - _tmp7*sin(_tmp5) + 0.25*_tmp10*_tmp8*p_0*sin(_tmp9) + 0.25*_tmp12*_tmp13*_tmp16*_tmp2*p_0;
-    out[11] = _tmp15*_tmp2 + _tmp17*_tmp27 + _tmp25*_tmp26 + _tmp7*cos(_tmp5) + _tmp1*_tmp14*_tmp16 - _tmp10*_tmp6*_tmp8*cos(_tmp9);
+    out[10] = -_tmp14 - _tmp30 + _tmp15*_tmp17 - _tmp18*_tmp21 + 0.25*_tmp22*_tmp24*_tmp25*p_0;
+    out[11] = _tmp35 + _tmp36 + _tmp18*_tmp31 - _tmp33*_tmp34;
+    out[12] = 0;
+    out[13] = _tmp37;
+    out[14] = _tmp37;
 }
 
 /* exact compliant closure F(delta) and dF/ddelta (259 operations) */
@@ -442,7 +455,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     out[7] = -_tmp46*_tmp58 + 2400000*_tmp50*_tmp56*_tmp57*_tmp6;
 }
 
-/* loaded: A and r = Phi dz of the loaded closure (its first-order start) (102 operations) */
+/* loaded: A, r = Phi dz of the loaded closure (its first-order start) and the size S of its terms (121 operations) */
 static void sk_loaded_linear(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -463,27 +476,38 @@ static void sk_loaded_linear(const double *theta, const double *params, double *
     const double _tmp2 = cos(_tmp0);
     const double _tmp3 = sin(theta_3);
     const double _tmp4 = cos(theta_3);
-    const double _tmp5 = 0.5*theta_1;
-    const double _tmp6 = 0.25*p_0;
-    const double _tmp7 = _tmp6*pow(theta_1, 2)*symkin_arck(_tmp5);
-    const double _tmp8 = pow(theta_3, 2);
-    const double _tmp9 = 0.5*theta_3;
-    const double _tmp10 = symkin_arck(_tmp9);
-    const double _tmp11 = 0.5*theta_4;
-    const double _tmp12 = _tmp6*pow(theta_4, 2)*symkin_arck(_tmp11);
-    const double _tmp13 = compliance_y_4 + _tmp12*sin(_tmp11);
-    const double _tmp14 = compliance_x_4 + _tmp12*cos(_tmp11);
-    const double _tmp15 = sin(theta_1);
-    const double _tmp16 = 0.5*theta_2;
-    const double _tmp17 = sin(_tmp16);
-    const double _tmp18 = pow(theta_2, 2);
-    const double _tmp19 = symkin_arck(_tmp16);
-    const double _tmp20 = _tmp18*_tmp19*p_0;
-    const double _tmp21 = cos(_tmp16);
-    const double _tmp22 = 0.21650635094610965*_tmp20;
-    const double _tmp23 = 0.5*compliance_y_2 + 0.8660254037844386*compliance_x_2 + _tmp21*_tmp22 + 0.125*_tmp17*_tmp20;
-    const double _tmp24 = cos(theta_1);
-    const double _tmp25 = 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2 - _tmp17*_tmp22 + 0.125*_tmp18*_tmp19*_tmp21*p_0;
+    const double _tmp5 = sin(theta_1);
+    const double _tmp6 = 0.5*theta_2;
+    const double _tmp7 = sin(_tmp6);
+    const double _tmp8 = pow(theta_2, 2);
+    const double _tmp9 = symkin_arck(_tmp6);
+    const double _tmp10 = _tmp8*_tmp9*p_0;
+    const double _tmp11 = cos(_tmp6);
+    const double _tmp12 = 0.21650635094610965*_tmp10;
+    const double _tmp13 = 0.5*compliance_y_2 + 0.8660254037844386*compliance_x_2 + _tmp11*_tmp12 + 0.125*_tmp10*_tmp7;
+    const double _tmp14 = _tmp13*_tmp5;
+    const double _tmp15 = cos(theta_1);
+    const double _tmp16 = 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2 - _tmp12*_tmp7 + 0.125*_tmp11*_tmp8*_tmp9*p_0;
+    const double _tmp17 = _tmp15*_tmp16;
+    const double _tmp18 = pow(theta_3, 2);
+    const double _tmp19 = 0.5*theta_3;
+    const double _tmp20 = sin(_tmp19);
+    const double _tmp21 = symkin_arck(_tmp19);
+    const double _tmp22 = 0.5*theta_1;
+    const double _tmp23 = 0.25*p_0;
+    const double _tmp24 = _tmp23*pow(theta_1, 2)*symkin_arck(_tmp22);
+    const double _tmp25 = compliance_y_1 + _tmp24*sin(_tmp22);
+    const double _tmp26 = 0.5*theta_4;
+    const double _tmp27 = _tmp23*pow(theta_4, 2)*symkin_arck(_tmp26);
+    const double _tmp28 = compliance_y_4 + _tmp27*sin(_tmp26);
+    const double _tmp29 = compliance_x_4 + _tmp27*cos(_tmp26);
+    const double _tmp30 = _tmp1*_tmp28 - _tmp2*_tmp29;
+    const double _tmp31 = _tmp18*_tmp21*_tmp23;
+    const double _tmp32 = _tmp31*cos(_tmp19);
+    const double _tmp33 = compliance_x_1 + _tmp24*cos(_tmp22);
+    const double _tmp34 = _tmp1*_tmp29 + _tmp2*_tmp28;
+    const double _tmp35 = _tmp13*_tmp15 + _tmp16*_tmp5;
+    const double _tmp36 = fabs(_tmp25) + fabs(_tmp30) + fabs(_tmp33) + fabs(_tmp34) + fabs(_tmp35) + fabs(_tmp14 - _tmp17) + fabs(_tmp32 + compliance_x_3) + fabs(compliance_y_3 + _tmp20*_tmp31);
     out[0] = 1;
     out[1] = -1;
     out[2] = 1;
@@ -494,8 +518,11 @@ static void sk_loaded_linear(const double *theta, const double *params, double *
     out[7] = 0.015*_tmp4 + 0.068*_tmp3;
     out[8] = 0;
     out[9] = 0;
-    out[10] = compliance_y_3 - compliance_y_1 + _tmp14*_tmp2 + _tmp24*_tmp25 - _tmp1*_tmp13 - _tmp15*_tmp23 - _tmp7*sin(_tmp5) + 0.25*_tmp10*_tmp8*p_0*sin(_tmp9);
-    out[11] = compliance_x_1 - compliance_x_3 + _tmp1*_tmp14 + _tmp13*_tmp2 + _tmp15*_tmp25 + _tmp23*_tmp24 + _tmp7*cos(_tmp5) - _tmp10*_tmp6*_tmp8*cos(_tmp9);
+    out[10] = _tmp17 + compliance_y_3 - _tmp14 - _tmp25 - _tmp30 + 0.25*_tmp18*_tmp20*_tmp21*p_0;
+    out[11] = _tmp33 + _tmp34 + _tmp35 - _tmp32 - compliance_x_3;
+    out[12] = 0;
+    out[13] = _tmp36;
+    out[14] = _tmp36;
 }
 
 /* loaded: the loaded closure F(delta) and dF/ddelta (269 operations) */
@@ -1310,6 +1337,9 @@ typedef struct {
     double converged;
     double stalled;
     double stall_ratio;
+    double residual;    /* > 0: also stop once every residual is this small relative to the size
+                           of its terms (a closure's S, symkin.core.settings 3b); unknowns all zero
+                           then stop only so */
 } sk_rule;
 
 
@@ -1317,11 +1347,30 @@ typedef struct {
    in magnitude, the previous step `previous` (HUGE_VAL before the second): the one stopping
    test of every Newton iteration. */
 static int sk_newton_stop(const sk_rule *rule, double change, double size,
-                          double previous)
+                          double previous, int noise)
 {
-    return change <= rule->tolerance
-           || (rule->converged > 0.0 && (change <= rule->converged * size || size == 0.0))
+    return change <= rule->tolerance || noise
+           || (rule->converged > 0.0
+               && (change <= rule->converged * size || (size == 0.0 && rule->residual == 0.0)))
            || (change >= rule->stall_ratio * previous && change <= rule->stalled * size);
+}
+
+/* Whether every residual f[r] of a system (f, then its row-major Jacobian J, n x n) at x is at
+   the rounding level of its terms: |f_r| <= residual (scale_r + sum_j |J_rj x_j|). */
+static int sk_residual_noise(int n, const double *fj, const double *x, const double *scale,
+                             double residual)
+{
+    int r, j;
+    for (r = 0; r < n; ++r) {
+        double terms = fabs(scale[r]);
+        for (j = 0; j < n; ++j) {
+            terms += fabs(fj[n + r * n + j] * x[j]);
+        }
+        if (!(fabs(fj[r]) <= residual * terms)) {
+            return 0;
+        }
+    }
+    return 1;
 }
 
 /* A system of n equations: at the unknowns x, its residual f (n), then its Jacobian (n x n,
@@ -1331,17 +1380,22 @@ typedef void (*sk_system_fn)(const void *ctx, const double *x, double *fj);
 /* Newton on `system` from x: each step solves J s = f and subtracts s from the unknowns
    (x[index[i]], or x[i] when index is NULL) until `rule` stops it. fj (n + n * n doubles) is
    workspace; with `evaluated` it holds the system at x already. Returns 0 (stopped), 1 (a
-   Jacobian singular or not finite) or 2 (not stopped within rule->iterations steps). */
+   Jacobian singular or not finite) or 2 (not stopped within rule->iterations steps). With
+   rule->residual > 0, `scale` (n: the size of each residual's constant terms; index NULL)
+   lets a residual at rounding stop it too (sk_residual_noise). */
 static int sk_newton_solve(sk_system_fn system, const void *ctx, int n, const int *index,
-                           const sk_rule *rule, double *x, double *fj, int evaluated)
+                           const sk_rule *rule, const double *scale, double *x, double *fj,
+                           int evaluated)
 {
     double previous = HUGE_VAL;
     int it, i;
     for (it = 0; it < rule->iterations; ++it) {
         double change = 0.0, size = 0.0;
+        int noise;
         if (it > 0 || !evaluated) {
             system(ctx, x, fj);
         }
+        noise = rule->residual > 0.0 && sk_residual_noise(n, fj, x, scale, rule->residual);
         if (sk_solve(n, fj + n, 1, fj)) {
             return 1;
         }
@@ -1355,7 +1409,7 @@ static int sk_newton_solve(sk_system_fn system, const void *ctx, int n, const in
                 change = fabs(fj[i]);
             }
         }
-        if (sk_newton_stop(rule, change, size, previous)) {
+        if (sk_newton_stop(rule, change, size, previous, noise)) {
             return 0;
         }
         previous = change;
@@ -1383,6 +1437,8 @@ typedef struct {
     sk_fn3 closure;     /* its F and dF/ddelta (theta, delta, q); NULL: A delta = -r only */
     int loaded;         /* q: 0 the parameters, 1 the loaded constants, 2 refined ones */
     sk_sens sens;       /* its sensitivities (fn NULL: none) */
+    sk_fn3 consistency; /* redundant loops: its closure's dropped rows, then their terms' size
+                           (theta, delta, q); NULL: none */
 } sk_level;
 
 /* One mechanism: its tables, routines and solver settings. Routines a mechanism lacks are
@@ -1404,7 +1460,14 @@ typedef struct {
     sk_fn2 rigid;                   /* closed-form rigid angles and reaches (inputs, params) */
     int n_dyads;
     sk_fn2 rigid_res;               /* rigid closure (theta, params): per loop angle, x, y */
-    sk_fn2 linear;                  /* its Jacobian A and r (theta, params) */
+    int n_angular;                  /* the rows of rigid_res that are loops' angle sums */
+    const int *angular;
+    sk_fn2 linear;                  /* its Jacobian A, r and S (theta, params) */
+    int n_rest;                     /* closed-form angles exactly zero with their inputs: */
+    const int *rest;                /* (theta index, count, the inputs' positions) ... */
+    int n_dropped;                  /* redundant loops: the closure rows left out of the solves */
+    sk_fn2 consistency_rigid;       /* their rigid residuals and terms' size (theta, params) */
+    double consistent;              /* each must vanish to this fraction of its size */
     sk_fn2 rigid_points;            /* (theta, params) */
     sk_fn2 links;                   /* rotations and their deviations (theta, delta) */
     sk_fn2 loaded_q0;               /* the loaded level's statics (A^T mu0 = Q0; NULL: one pass) */
@@ -1412,7 +1475,7 @@ typedef struct {
     sk_fn3 loaded_compliance;       /* (theta, mu, params) into the constants at compliance_at */
     sk_fn3 loaded_compliance_more;  /* the plates only the loaded closure reads, at more_at */
     int compliance_at, more_at;
-    sk_fn2 loaded_linear;           /* the loaded closure: A and r (theta, constants) */
+    sk_fn2 loaded_linear;           /* the loaded closure: A, r and S (theta, constants) */
     sk_fn3 loaded_closure;          /* F and dF/ddelta (theta, delta, constants) */
     sk_rule rigid_rule;             /* Newton at each continuation step */
     sk_rule polish_rule;            /* after the rigid start */
@@ -1439,6 +1502,20 @@ static const sk_level *sk_find_level(const sk_mechanism *m, int code)
 }
 
 
+/* Redundant loops (symkin.core.settings, 4): 0 when each dropped closure row con[i] vanishes
+   to m->consistent of the size of its terms con[n_dropped + i], else 1 (the loops contradict
+   each other). */
+static int sk_consistent(const sk_mechanism *m, const double *con)
+{
+    int i;
+    for (i = 0; i < m->n_dropped; ++i) {
+        if (!(fabs(con[i]) <= m->consistent * con[m->n_dropped + i])) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
 /* What the rigid closure's Newton reads: theta is its unknowns' array. */
 typedef struct {
     const sk_mechanism *m;
@@ -1450,7 +1527,7 @@ typedef struct {
 static void sk_rigid_system(const void *ctx, const double *theta, double *fj)
 {
     const sk_rigid_ctx *c = (const sk_rigid_ctx *)ctx;
-    double lin[SK_K * SK_K + SK_K + 1];
+    double lin[SK_K * SK_K + 2 * SK_K + 1];
     int i;
     c->m->rigid_res(theta, c->params, fj);
     c->m->linear(theta, c->params, lin);
@@ -1483,15 +1560,33 @@ static int sk_rigid_pose(const sk_mechanism *m, const double *inputs, const doub
         for (i = 0; i < SK_K; ++i) {
             theta[m->unknown_index[i]] = sk_wrap(sol[i]);
         }
+        /* an angle whose inputs are all zero is exactly zero (its formula rounds to noise) */
+        for (i = 0; i < m->n_rest; i += 2 + m->rest[i + 1]) {
+            int j, moved = 0;
+            for (j = 0; j < m->rest[i + 1]; ++j) {
+                moved = moved || inputs[m->rest[i + 2 + j]] != 0.0;
+            }
+            if (!moved) {
+                theta[m->rest[i]] = 0.0;
+            }
+        }
     }
     sk_rigid_system(&c, theta, fj);
-    for (i = 0; i < SK_K; i += 3) {
-        if (!(fabs(fj[i]) < m->winding)) {
+    for (i = 0; i < m->n_angular; ++i) {
+        if (!(fabs(fj[m->angular[i]]) < m->winding)) {
             return 1;
         }
     }
-    return sk_newton_solve(sk_rigid_system, &c, SK_K, m->unknown_index, &m->polish_rule, theta,
-                           fj, 1) == 1;
+    if (sk_newton_solve(sk_rigid_system, &c, SK_K, m->unknown_index, &m->polish_rule, NULL,
+                        theta, fj, 1) == 1) {
+        return 1;
+    }
+    if (m->consistency_rigid != NULL) {
+        double con[SK_OUT];
+        m->consistency_rigid(theta, params, con);
+        return sk_consistent(m, con);
+    }
+    return 0;
 }
 
 /* What a compliant closure's Newton reads. */
@@ -1511,12 +1606,13 @@ static void sk_closure_system(const void *ctx, const double *delta, double *fj)
 static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure,
                             const double *theta, const double *q, double *delta)
 {
-    double lin[SK_K * SK_K + SK_K + 1], fj[SK_K + SK_K * SK_K + 1];
+    double lin[SK_K * SK_K + 2 * SK_K + 1], fj[SK_K + SK_K * SK_K + 1], scale[SK_K + 1];
     sk_closure_ctx c;
     int i;
     linear(theta, q, lin);
     for (i = 0; i < SK_K; ++i) {
         delta[i] = -lin[SK_K * SK_K + i];
+        scale[i] = lin[SK_K * SK_K + SK_K + i];
     }
     if (sk_solve(SK_K, lin, 1, delta)) {
         return 1;
@@ -1527,7 +1623,8 @@ static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure
     c.closure = closure;
     c.theta = theta;
     c.q = q;
-    return sk_newton_solve(sk_closure_system, &c, SK_K, NULL, &m->exact_rule, delta, fj, 0);
+    return sk_newton_solve(sk_closure_system, &c, SK_K, NULL, &m->exact_rule, scale, delta, fj,
+                           0);
 }
 
 /* The loaded level's closure constants: the parameters, then every plate's compliance under the
@@ -1539,7 +1636,7 @@ static int sk_loaded_constants(const sk_mechanism *m, const double *theta, const
 {
     const double *mu = NULL;
     int i;
-    double lin[SK_K * SK_K + SK_K + 1], at[SK_K * SK_K + 1], mu0[SK_K + 1], loads[SK_K + 1];
+    double lin[SK_K * SK_K + 2 * SK_K + 1], at[SK_K * SK_K + 1], mu0[SK_K + 1], loads[SK_K + 1];
     int j, piv[SK_K + 1];
     if (jac == NULL) {
         m->linear(theta, params, lin);
@@ -1635,6 +1732,13 @@ static int sk_pose(const sk_mechanism *m, const sk_level *lv, const double *inpu
         const int status = sk_solve_closure(m, lv->linear, lv->closure, theta, *q, delta);
         if (status) {
             return status;
+        }
+        if (lv->consistency != NULL) {
+            double con[SK_OUT];
+            lv->consistency(theta, delta, *q, con);
+            if (sk_consistent(m, con)) {
+                return 1;
+            }
         }
     }
     for (i = 0; i < m->n_limits; ++i) {
@@ -1930,19 +2034,23 @@ static const double sk_fixed_angle[1] = {0};
 static const int sk_limit_index[5] = {0, 1, 2, 3};
 static const int sk_limit_unknown[5] = {-1, 0, 1, 2};
 static const double sk_limit[5] = {3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793};
+static const int sk_angular[2] = {0};
+/* closed-form angles exactly zero with their inputs: theta index, count, the inputs' positions */
+static const int sk_rest[10] = {1, 1, 0, 2, 1, 0, 3, 1, 0};
 
-/* code, deviation, linear and Newton routines of its closure, what it reads; sensitivities */
+/* code, deviation, linear and Newton routines of its closure, what it reads; sensitivities;
+   the dropped rows of its closure (redundant loops) */
 static const sk_level sk_levels[] = {
     {0, sk_dev_paper, NULL, NULL, 0,  /* paper */
-     {sk_sens_paper, 0, 0, 0, 0, 0, 0, 6}},
+     {sk_sens_paper, 0, 0, 0, 0, 0, 0, 6}, NULL},
     {1, sk_dev_first_order, sk_linear, NULL, 0,  /* first_order */
-     {sk_sens_first_order, 1, 0, 9, 18, 24, 30, 36}},
+     {sk_sens_first_order, 1, 0, 9, 18, 24, 30, 36}, NULL},
     {2, sk_dev_exact, sk_linear, sk_newton, 0,  /* exact */
-     {sk_sens_exact, 1, 0, 9, 18, 24, 30, 36}},
+     {sk_sens_exact, 1, 0, 9, 18, 24, 30, 36}, NULL},
     {3, sk_dev_loaded, sk_loaded_linear, sk_loaded_newton, 1,  /* loaded */
-     {NULL, 0, 0, 0, 0, 0, 0, 0}},
+     {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL},
     {5, sk_dev_loaded, sk_loaded_linear, sk_loaded_newton, 2,  /* loaded_refined */
-     {NULL, 0, 0, 0, 0, 0, 0, 0}}
+     {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL}
 };
 
 static const sk_mechanism sk_mechanism_tables = {
@@ -1951,6 +2059,8 @@ static const sk_mechanism sk_mechanism_tables = {
     .n_fixed = 0, .fixed_index = sk_fixed_index, .fixed_angle = sk_fixed_angle,
     .n_limits = 4, .limit_index = sk_limit_index, .limit_unknown = sk_limit_unknown,
     .limit = sk_limit, .needs_loops = 1, .loops_for_links = 0,
+    .n_angular = 1, .angular = sk_angular, .n_rest = 9, .rest = sk_rest,
+    .n_dropped = 0, .consistent = 1e-08,
     .rigid = sk_rigid,
     .rigid_res = sk_rigid_res,
     .linear = sk_linear,
@@ -1965,7 +2075,7 @@ static const sk_mechanism sk_mechanism_tables = {
     .n_dyads = 1, .compliance_at = 1, .more_at = 9,
     .rigid_rule = {30, 1e-10, 0.0, 0.0, 0.0},
     .polish_rule = {1, 0.0, 0.0, 0.0, 0.0},
-    .exact_rule = {40, 0.0, 1e-08, 1e-12, 0.5},
+    .exact_rule = {40, 0.0, 1e-08, 1e-12, 0.5, 2e-13},
     .continuation_step = 0.05, .winding = 3.141592653589793,
     .n_levels = 5, .levels = sk_levels,
     .sr_A = 0, .sr_dG_dv = 9, .sr_dR_dtheta = 15, .sr_dR_dv = 21

@@ -2,7 +2,7 @@
 Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
 Points: C; levels: paper, first_order, exact, loaded, loaded_refined.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 65, rigid_res 38, linear 92, newton 259, rigid_points 19, loaded_q0 10, loaded_q 72, loaded_compliance 231, loaded_linear 102, loaded_newton 269, dev_paper 38, dev_first_order 52, dev_exact 62, dev_loaded 72, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339.
+Operation counts after CSE: rigid 65, rigid_res 38, linear 114, newton 259, rigid_points 19, loaded_q0 10, loaded_q 72, loaded_compliance 231, loaded_linear 121, loaded_newton 269, dev_paper 38, dev_first_order 52, dev_exact 62, dev_loaded 72, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -56,22 +56,29 @@ class _Level:
     """A generated level: its deviation routine, the closure it solves for delta (linear: A and
     r; newton: F and dF/ddelta, None for the first-order delta; both None: none), what its
     routines read (loaded: 0 the parameters, 1 the loaded constants, 2 refined ones) and its
-    sensitivity routine with the (offset, rows, cols) of its blocks."""
+    sensitivity routine with the (offset, rows, cols) of its blocks; with redundant loops,
+    `consistency`: its closure's dropped rows and their terms' size (theta, delta, q)."""
 
-    def __init__(self, dev, linear=None, newton=None, loaded=0, sens=None, blocks=None):
+    def __init__(
+        self, dev, linear=None, newton=None, loaded=0, sens=None, blocks=None, consistency=None
+    ):
         self.dev, self.linear, self.newton, self.loaded = dev, linear, newton, loaded
-        self.sens, self.blocks = sens, blocks or {}
+        self.sens, self.blocks, self.consistency = sens, blocks or {}, consistency
 
 
 class _Rule:
     """When a Newton iteration stops (symkin.core.settings): after `iterations` steps at most,
     and once a step is at most `tolerance`, or at most `converged` times the largest unknown
-    (with converged > 0; also when they are all zero), or has stalled at rounding: at least
-    `stall_ratio` times the previous step and at most `stalled` times the largest unknown."""
+    (with converged > 0; also when they are all zero unless `residual`), or has stalled at
+    rounding: at least `stall_ratio` times the previous step and at most `stalled` times the
+    largest unknown; with `residual` > 0, also once every residual is at most `residual` times
+    the size of its terms (symkin.core.settings, 3b)."""
 
-    def __init__(self, iterations, tolerance=0.0, converged=0.0, stalled=0.0, stall_ratio=0.0):
+    def __init__(
+        self, iterations, tolerance=0.0, converged=0.0, stalled=0.0, stall_ratio=0.0, residual=0.0
+    ):
         self.iterations, self.tolerance, self.converged = iterations, tolerance, converged
-        self.stalled, self.stall_ratio = stalled, stall_ratio
+        self.stalled, self.stall_ratio, self.residual = stalled, stall_ratio, residual
 
 
 def _value(v, dtype):
@@ -177,21 +184,36 @@ def _gauss(a, b, ok, k, m, dtype):
     return x, good
 
 
-def _newton_stop(rule, change, size, previous):
+def _newton_stop(rule, change, size, previous, noise=False):
     """Where Newton stops after a step `change` (largest entry), the unknowns now at most `size`
-    in magnitude, the previous step `previous` (inf before the second): the one stopping test of
-    every Newton iteration."""
-    done = change <= rule.tolerance
+    in magnitude, the previous step `previous` (inf before the second), `noise` where the
+    residuals were at rounding (_residual_noise): the one stopping test of every Newton
+    iteration."""
+    done = (change <= rule.tolerance) | noise
     if rule.converged > 0.0:
-        done = done | (change <= rule.converged * size) | (size == 0)
+        done = done | (change <= rule.converged * size)
+        if rule.residual == 0.0:
+            done = done | (size == 0)
     return done | ((change >= rule.stall_ratio * previous) & (change <= rule.stalled * size))
 
 
-def _newton_solve(system, x, index, ok, rule, dtype, evaluated=None):
+def _residual_noise(out, x, scale, residual):
+    """Where every residual out[r] of a system (f, then its row-major Jacobian J) at x is at the
+    rounding level of its terms: |f_r| <= residual (scale_r + sum_j |J_rj x_j|)."""
+    k = len(x)
+    noise = True
+    for r in range(k):
+        terms = numpy.abs(scale[r]) + sum(numpy.abs(out[k + r * k + j] * x[j]) for j in range(k))
+        noise = noise & (numpy.abs(out[r]) <= residual * terms)
+    return noise
+
+
+def _newton_solve(system, x, index, ok, rule, dtype, evaluated=None, scale=None):
     """Newton on `system` (x -> its residual f, then its row-major Jacobian, as one list) from
     the list of arrays x, stepping the unknowns x[i] for i in `index`, each element until
-    `rule` stops it; `evaluated`: the system at x, when it is known. Returns x, ok (False where
-    a Jacobian is singular or not finite) and where Newton stopped."""
+    `rule` stops it; `evaluated`: the system at x, when it is known; `scale` (with
+    rule.residual > 0, index covering x): the size of each residual's constant terms. Returns
+    x, ok (False where a Jacobian is singular or not finite) and where Newton stopped."""
     k = len(index)
     active = ok.copy()
     previous = numpy.full(ok.shape, numpy.inf)
@@ -199,6 +221,9 @@ def _newton_solve(system, x, index, ok, rule, dtype, evaluated=None):
     for _ in range(rule.iterations):
         if out is None:
             out = system(x)
+        noise = False
+        if rule.residual > 0.0:
+            noise = _residual_noise(out, [x[i] for i in index], scale, rule.residual)
         step, good = _solve(out[k:], out[:k], active, 1, dtype)
         out = None
         ok = ok & (good | ~active)
@@ -207,7 +232,7 @@ def _newton_solve(system, x, index, ok, rule, dtype, evaluated=None):
             x[i] = numpy.where(active, x[i] - step[j], x[i])
         size = numpy.max(numpy.abs(numpy.array([x[i] for i in index])), axis=0)
         change = numpy.max(numpy.abs(numpy.array(step)), axis=0)
-        done = _newton_stop(rule, change, size, previous)
+        done = _newton_stop(rule, change, size, previous, noise)
         previous = numpy.where(active, change, previous)
         active = active & ~done
         if not active.any():
@@ -249,6 +274,12 @@ def _rigid_angles(mech, x, params, ok):
             ok = ok & (numpy.broadcast_to(reach, shape) >= 0.0)
         for j, i in enumerate(mech.unknown_index):
             theta[i] = numpy.where(ok, _wrap(numpy.broadcast_to(out[j], shape)), 0.0)
+        # an angle whose inputs are all zero is exactly zero (its formula rounds to noise there)
+        for i, reads in mech.rest:
+            moved = numpy.zeros(shape, dtype=bool)
+            for j in reads:
+                moved = moved | (x[j] != 0.0)
+            theta[i] = numpy.where(moved, theta[i], 0.0)
     else:
         top = max(
             [float(numpy.max(numpy.abs(v))) if v.size else 0.0 for v in x]
@@ -267,25 +298,43 @@ def _rigid_angles(mech, x, params, ok):
             stage, system, theta, mech.unknown_index, ok, mech.rigid_rule, steps, dtype
         )
     out = system(theta)
-    for n in range(0, k, 3):
+    for n in mech.angular:
         ok = ok & (numpy.abs(out[n]) < mech.winding)
     theta, ok, _ = _newton_solve(
         system, theta, mech.unknown_index, ok, mech.polish_rule, dtype, out
     )
+    if mech.consistency_rigid is not None:
+        ok = _consistent(mech, mech.consistency_rigid(theta, params), ok)
     return theta, ok
+
+
+def _consistent(mech, out, ok):
+    """Redundant loops (symkin.core.settings, 4): where each dropped closure row (out: the rows,
+    then the size of their terms) vanishes to mech.consistent of its size; else not ok."""
+    n = mech.n_dropped
+    for i in range(n):
+        ok = ok & (numpy.abs(out[i]) <= mech.consistent * numpy.asarray(out[n + i]))
+    return ok
 
 
 def _solve_closure(mech, linear, newton, theta, q, ok):
     """delta of a closure: A delta = -r (its first-order delta), then with `newton` (F,
     dF/ddelta) Newton from there; and ok."""
     k = len(mech.unknown_index)
-    lin = linear(theta, q)
-    delta, good = _solve(lin[: k * k], [-numpy.asarray(r) for r in lin[k * k :]], ok, 1, mech.dtype)
+    lin = linear(theta, q)  # A, r, then S: the size of r's terms
+    rhs = [-numpy.asarray(r) for r in lin[k * k : k * k + k]]
+    delta, good = _solve(lin[: k * k], rhs, ok, 1, mech.dtype)
     ok = ok & good
     if newton is None:
         return delta, ok
     delta, ok, converged = _newton_solve(
-        lambda delta: newton(theta, delta, q), delta, range(k), ok, mech.exact_rule, mech.dtype
+        lambda delta: newton(theta, delta, q),
+        delta,
+        range(k),
+        ok,
+        mech.exact_rule,
+        mech.dtype,
+        scale=lin[k * k + k :],
     )
     return delta, ok & converged
 
@@ -337,6 +386,8 @@ def _pose(mech, arrays, level, p, links):
         delta = [numpy.zeros(shape, dtype=mech.dtype) for _ in mech.unknown_index]
         if lv.linear is not None and (mech.needs_loops or (links and mech.loops_for_links)):
             delta, ok = _solve_closure(mech, lv.linear, lv.newton, theta, q, ok)
+            if lv.consistency is not None:
+                ok = _consistent(mech, lv.consistency(theta, delta, q), ok)
         for i, limit in mech.limits:
             ok = ok & (numpy.abs(theta[i]) <= limit)
             if i in mech.unknown_index:
@@ -641,7 +692,7 @@ def _rigid_res(theta, params):
 
 
 def _linear(theta, params):
-    """rigid loop Jacobian A and r = Phi dz (92 operations)."""
+    """rigid loop Jacobian A, r = Phi dz and the size S of its terms (114 operations)."""
     theta_1, theta_2, theta_3, theta_4 = theta
     p_0, = params
     _tmp0 = theta_1 + theta_2
@@ -649,29 +700,39 @@ def _linear(theta, params):
     _tmp2 = numpy.cos(_tmp0)
     _tmp3 = numpy.sin(theta_3)
     _tmp4 = numpy.cos(theta_3)
-    _tmp5 = 0.5*theta_1
-    _tmp6 = 0.25*p_0
-    _tmp7 = _tmp6*theta_1**2*arck(_tmp5)
-    _tmp8 = theta_3**2
-    _tmp9 = 0.5*theta_3
-    _tmp10 = arck(_tmp9)
-    _tmp12 = theta_4**2
-    _tmp11 = 0.5*theta_4
-    _tmp13 = arck(_tmp11)
-    _tmp14 = _tmp12*_tmp13*_tmp6
-    _tmp15 = _tmp14*numpy.sin(_tmp11)
-    _tmp16 = numpy.cos(_tmp11)
-    _tmp17 = numpy.sin(theta_1)
-    _tmp18 = 0.5*theta_2
-    _tmp19 = numpy.sin(_tmp18)
-    _tmp20 = theta_2**2
-    _tmp21 = arck(_tmp18)
-    _tmp22 = _tmp20*_tmp21*p_0
-    _tmp23 = numpy.cos(_tmp18)
-    _tmp24 = 0.21650635094610965*_tmp22
-    _tmp25 = _tmp23*_tmp24 + 0.125*_tmp19*_tmp22
-    _tmp26 = numpy.cos(theta_1)
-    _tmp27 = -_tmp19*_tmp24 + 0.125*_tmp20*_tmp21*_tmp23*p_0
+    _tmp5 = numpy.sin(theta_1)
+    _tmp6 = 0.5*theta_2
+    _tmp7 = numpy.sin(_tmp6)
+    _tmp8 = theta_2**2
+    _tmp9 = arck(_tmp6)
+    _tmp10 = _tmp8*_tmp9*p_0
+    _tmp11 = numpy.cos(_tmp6)
+    _tmp12 = 0.21650635094610965*_tmp10
+    _tmp13 = _tmp11*_tmp12 + 0.125*_tmp10*_tmp7
+    _tmp14 = _tmp13*_tmp5
+    _tmp15 = numpy.cos(theta_1)
+    _tmp16 = _tmp12*_tmp7 - 0.125*_tmp11*_tmp8*_tmp9*p_0
+    _tmp17 = -_tmp16
+    _tmp18 = 0.25*theta_1**2
+    _tmp19 = 0.5*theta_1
+    _tmp20 = p_0*arck(_tmp19)
+    _tmp21 = _tmp20*numpy.sin(_tmp19)
+    _tmp22 = theta_3**2
+    _tmp23 = 0.5*theta_3
+    _tmp24 = numpy.sin(_tmp23)
+    _tmp25 = arck(_tmp23)
+    _tmp26 = 0.5*theta_4
+    _tmp27 = 0.25*p_0*theta_4**2*arck(_tmp26)
+    _tmp28 = _tmp27*numpy.sin(_tmp26)
+    _tmp29 = _tmp27*numpy.cos(_tmp26)
+    _tmp30 = _tmp1*_tmp28 - _tmp2*_tmp29
+    _tmp31 = _tmp20*numpy.cos(_tmp19)
+    _tmp32 = _tmp25*p_0
+    _tmp33 = _tmp32*numpy.cos(_tmp23)
+    _tmp34 = 0.25*_tmp22
+    _tmp35 = _tmp13*_tmp15 + _tmp17*_tmp5
+    _tmp36 = _tmp1*_tmp29 + _tmp2*_tmp28
+    _tmp37 = _tmp18*abs(_tmp21) + _tmp18*abs(_tmp31) + _tmp34*abs(_tmp33) + _tmp34*abs(_tmp24*_tmp32) + abs(_tmp30) + abs(_tmp35) + abs(_tmp36) + abs(_tmp14 + _tmp15*_tmp16)
     return [
         1,
         -1,
@@ -683,8 +744,11 @@ def _linear(theta, params):
         0.015*_tmp4 + 0.068*_tmp3,
         0,
         0,
-        _tmp26*_tmp27 - _tmp1*_tmp15 - _tmp17*_tmp25 - _tmp7*numpy.sin(_tmp5) + 0.25*_tmp10*_tmp8*p_0*numpy.sin(_tmp9) + 0.25*_tmp12*_tmp13*_tmp16*_tmp2*p_0,
-        _tmp15*_tmp2 + _tmp17*_tmp27 + _tmp25*_tmp26 + _tmp7*numpy.cos(_tmp5) + _tmp1*_tmp14*_tmp16 - _tmp10*_tmp6*_tmp8*numpy.cos(_tmp9),
+        -_tmp14 - _tmp30 + _tmp15*_tmp17 - _tmp18*_tmp21 + 0.25*_tmp22*_tmp24*_tmp25*p_0,
+        _tmp35 + _tmp36 + _tmp18*_tmp31 - _tmp33*_tmp34,
+        0,
+        _tmp37,
+        _tmp37,
     ]
 
 
@@ -913,7 +977,7 @@ def _loaded_compliance(theta, mu, params):
 
 
 def _loaded_linear(theta, params):
-    """loaded: A and r = Phi dz of the loaded closure (its first-order start) (102 operations)."""
+    """loaded: A, r = Phi dz of the loaded closure (its first-order start) and the size S of its terms (121 operations)."""
     theta_1, theta_2, theta_3, theta_4 = theta
     p_0, compliance_x_1, compliance_y_1, compliance_x_2, compliance_y_2, compliance_x_3, compliance_y_3, compliance_x_4, compliance_y_4 = params
     _tmp0 = theta_1 + theta_2
@@ -921,27 +985,38 @@ def _loaded_linear(theta, params):
     _tmp2 = numpy.cos(_tmp0)
     _tmp3 = numpy.sin(theta_3)
     _tmp4 = numpy.cos(theta_3)
-    _tmp5 = 0.5*theta_1
-    _tmp6 = 0.25*p_0
-    _tmp7 = _tmp6*theta_1**2*arck(_tmp5)
-    _tmp8 = theta_3**2
-    _tmp9 = 0.5*theta_3
-    _tmp10 = arck(_tmp9)
-    _tmp11 = 0.5*theta_4
-    _tmp12 = _tmp6*theta_4**2*arck(_tmp11)
-    _tmp13 = compliance_y_4 + _tmp12*numpy.sin(_tmp11)
-    _tmp14 = compliance_x_4 + _tmp12*numpy.cos(_tmp11)
-    _tmp15 = numpy.sin(theta_1)
-    _tmp16 = 0.5*theta_2
-    _tmp17 = numpy.sin(_tmp16)
-    _tmp18 = theta_2**2
-    _tmp19 = arck(_tmp16)
-    _tmp20 = _tmp18*_tmp19*p_0
-    _tmp21 = numpy.cos(_tmp16)
-    _tmp22 = 0.21650635094610965*_tmp20
-    _tmp23 = 0.5*compliance_y_2 + 0.8660254037844386*compliance_x_2 + _tmp21*_tmp22 + 0.125*_tmp17*_tmp20
-    _tmp24 = numpy.cos(theta_1)
-    _tmp25 = 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2 - _tmp17*_tmp22 + 0.125*_tmp18*_tmp19*_tmp21*p_0
+    _tmp5 = numpy.sin(theta_1)
+    _tmp6 = 0.5*theta_2
+    _tmp7 = numpy.sin(_tmp6)
+    _tmp8 = theta_2**2
+    _tmp9 = arck(_tmp6)
+    _tmp10 = _tmp8*_tmp9*p_0
+    _tmp11 = numpy.cos(_tmp6)
+    _tmp12 = 0.21650635094610965*_tmp10
+    _tmp13 = 0.5*compliance_y_2 + 0.8660254037844386*compliance_x_2 + _tmp11*_tmp12 + 0.125*_tmp10*_tmp7
+    _tmp14 = _tmp13*_tmp5
+    _tmp15 = numpy.cos(theta_1)
+    _tmp16 = 0.5*compliance_x_2 - 0.8660254037844386*compliance_y_2 - _tmp12*_tmp7 + 0.125*_tmp11*_tmp8*_tmp9*p_0
+    _tmp17 = _tmp15*_tmp16
+    _tmp18 = theta_3**2
+    _tmp19 = 0.5*theta_3
+    _tmp20 = numpy.sin(_tmp19)
+    _tmp21 = arck(_tmp19)
+    _tmp22 = 0.5*theta_1
+    _tmp23 = 0.25*p_0
+    _tmp24 = _tmp23*theta_1**2*arck(_tmp22)
+    _tmp25 = compliance_y_1 + _tmp24*numpy.sin(_tmp22)
+    _tmp26 = 0.5*theta_4
+    _tmp27 = _tmp23*theta_4**2*arck(_tmp26)
+    _tmp28 = compliance_y_4 + _tmp27*numpy.sin(_tmp26)
+    _tmp29 = compliance_x_4 + _tmp27*numpy.cos(_tmp26)
+    _tmp30 = _tmp1*_tmp28 - _tmp2*_tmp29
+    _tmp31 = _tmp18*_tmp21*_tmp23
+    _tmp32 = _tmp31*numpy.cos(_tmp19)
+    _tmp33 = compliance_x_1 + _tmp24*numpy.cos(_tmp22)
+    _tmp34 = _tmp1*_tmp29 + _tmp2*_tmp28
+    _tmp35 = _tmp13*_tmp15 + _tmp16*_tmp5
+    _tmp36 = abs(_tmp25) + abs(_tmp30) + abs(_tmp33) + abs(_tmp34) + abs(_tmp35) + abs(_tmp14 - _tmp17) + abs(_tmp32 + compliance_x_3) + abs(compliance_y_3 + _tmp20*_tmp31)
     return [
         1,
         -1,
@@ -953,8 +1028,11 @@ def _loaded_linear(theta, params):
         0.015*_tmp4 + 0.068*_tmp3,
         0,
         0,
-        compliance_y_3 - compliance_y_1 + _tmp14*_tmp2 + _tmp24*_tmp25 - _tmp1*_tmp13 - _tmp15*_tmp23 - _tmp7*numpy.sin(_tmp5) + 0.25*_tmp10*_tmp8*p_0*numpy.sin(_tmp9),
-        compliance_x_1 - compliance_x_3 + _tmp1*_tmp14 + _tmp13*_tmp2 + _tmp15*_tmp25 + _tmp23*_tmp24 + _tmp7*numpy.cos(_tmp5) - _tmp10*_tmp6*_tmp8*numpy.cos(_tmp9),
+        _tmp17 + compliance_y_3 - _tmp14 - _tmp25 - _tmp30 + 0.25*_tmp18*_tmp20*_tmp21*p_0,
+        _tmp33 + _tmp34 + _tmp35 - _tmp32 - compliance_x_3,
+        0,
+        _tmp36,
+        _tmp36,
     ]
 
 
@@ -1596,6 +1674,9 @@ _MECHANISM = _Mechanism(
     fixed=(),  # inputs held (derive --fix)
     limits=((0, 3.141592653589793), (1, 3.141592653589793), (2, 3.141592653589793), (3, 3.141592653589793), ),  # models valid for |theta| < limit
     needs_loops=True, loops_for_links=False,
+    angular=[0],  # the rigid closure's loop angle sums (winding rule)
+    rest=((1, (0,)), (2, (0,)), (3, (0,))),  # closed-form angles exactly zero with their inputs
+    n_dropped=0, consistent=1e-08,  # redundant loops' dropped rows
     rigid=_rigid,
     rigid_res=_rigid_res,
     linear=_linear,
@@ -1609,18 +1690,19 @@ _MECHANISM = _Mechanism(
     loaded_newton=_loaded_newton,
     sens_rigid=_sens_rigid,
     sens_chain=None,
+    consistency_rigid=None,
     loaded_more=0,
     sens_rigid_blocks={'A': (0, 3, 3), 'dG_dv': (9, 3, 2), 'dR_dtheta': (15, 2, 3), 'dR_dv': (21, 2, 2)},
     rigid_rule=_Rule(30, 1e-10),  # continuation steps
     polish_rule=_Rule(1),  # after the rigid start
-    exact_rule=_Rule(40, 0.0, 1e-08, 1e-12, 0.5),
+    exact_rule=_Rule(40, 0.0, 1e-08, 1e-12, 0.5, 2e-13),
     continuation_step=0.05, winding=3.141592653589793,
     levels={
-        'paper': _Level(_dev_paper, None, None, 0, _sens_paper, {'dD_dtheta': (0, 2, 3), 'dD_dv': (6, 2, 2)}),
-        'first_order': _Level(_dev_first_order, _linear, None, 0, _sens_first_order, {'M': (0, 3, 3), 'dE_dtheta': (9, 3, 3), 'dE_dv': (18, 3, 2), 'dD_dtheta': (24, 2, 3), 'dD_ddelta': (30, 2, 3), 'dD_dv': (36, 2, 2)}),
-        'exact': _Level(_dev_exact, _linear, _newton, 0, _sens_exact, {'M': (0, 3, 3), 'dE_dtheta': (9, 3, 3), 'dE_dv': (18, 3, 2), 'dD_dtheta': (24, 2, 3), 'dD_ddelta': (30, 2, 3), 'dD_dv': (36, 2, 2)}),
-        'loaded': _Level(_dev_loaded, _loaded_linear, _loaded_newton, 1, None, {}),
-        'loaded_refined': _Level(_dev_loaded, _loaded_linear, _loaded_newton, 2, None, {}),
+        'paper': _Level(_dev_paper, None, None, 0, _sens_paper, {'dD_dtheta': (0, 2, 3), 'dD_dv': (6, 2, 2)}, None),
+        'first_order': _Level(_dev_first_order, _linear, None, 0, _sens_first_order, {'M': (0, 3, 3), 'dE_dtheta': (9, 3, 3), 'dE_dv': (18, 3, 2), 'dD_dtheta': (24, 2, 3), 'dD_ddelta': (30, 2, 3), 'dD_dv': (36, 2, 2)}, None),
+        'exact': _Level(_dev_exact, _linear, _newton, 0, _sens_exact, {'M': (0, 3, 3), 'dE_dtheta': (9, 3, 3), 'dE_dv': (18, 3, 2), 'dD_dtheta': (24, 2, 3), 'dD_ddelta': (30, 2, 3), 'dD_dv': (36, 2, 2)}, None),
+        'loaded': _Level(_dev_loaded, _loaded_linear, _loaded_newton, 1, None, {}, None),
+        'loaded_refined': _Level(_dev_loaded, _loaded_linear, _loaded_newton, 2, None, {}, None),
     },
 )
 

@@ -3,7 +3,7 @@
  * Mechanism 'four_bar_dimensions': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 85, rigid_res 46, linear 98, newton 265, rigid_points 21, dev_paper 38, dev_first_order 53, dev_exact 65, links 1, sens_rigid 71, sens_paper 128, sens_first_order 297, sens_exact 360, sens_chain 0.
+ * Operation counts after CSE: rigid 85, rigid_res 46, linear 118, newton 265, rigid_points 21, dev_paper 38, dev_first_order 53, dev_exact 65, links 1, sens_rigid 71, sens_paper 128, sens_first_order 297, sens_exact 360, sens_chain 0.
  */
 #include "four_bar_dimensions.h"
 
@@ -206,7 +206,7 @@ static void sk_rigid_res(const double *theta, const double *params, double *out)
     out[2] = _tmp1*p_5 + _tmp10*_tmp5 + _tmp2*_tmp8 + _tmp9*p_9 - _tmp11*_tmp6 - _tmp4*p_6;
 }
 
-/* rigid loop Jacobian A and r = Phi dz (98 operations) */
+/* rigid loop Jacobian A, r = Phi dz and the size S of its terms (118 operations) */
 static void sk_linear(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -231,28 +231,39 @@ static void sk_linear(const double *theta, const double *params, double *out)
     const double _tmp6 = cos(theta_3);
     const double _tmp7 = sin(theta_3);
     const double _tmp8 = _tmp2 + p_7;
-    const double _tmp9 = 0.5*theta_1;
-    const double _tmp10 = 0.25*p_1*pow(theta_1, 2)*symkin_arck(_tmp9);
-    const double _tmp11 = pow(theta_3, 2);
-    const double _tmp12 = 0.5*theta_3;
-    const double _tmp13 = symkin_arck(_tmp12);
-    const double _tmp15 = pow(theta_4, 2);
-    const double _tmp14 = 0.5*theta_4;
-    const double _tmp16 = symkin_arck(_tmp14);
-    const double _tmp17 = 0.25*_tmp15*_tmp16*p_4;
-    const double _tmp18 = _tmp17*sin(_tmp14);
-    const double _tmp19 = cos(_tmp14);
-    const double _tmp20 = sin(theta_1);
-    const double _tmp21 = 0.5*theta_2;
-    const double _tmp22 = sin(_tmp21);
-    const double _tmp23 = pow(theta_2, 2);
-    const double _tmp24 = symkin_arck(_tmp21);
-    const double _tmp25 = _tmp23*_tmp24*p_2;
-    const double _tmp26 = cos(_tmp21);
-    const double _tmp27 = 0.21650635094610965*_tmp25;
-    const double _tmp28 = _tmp26*_tmp27 + 0.125*_tmp22*_tmp25;
-    const double _tmp29 = cos(theta_1);
-    const double _tmp30 = -_tmp22*_tmp27 + 0.125*_tmp23*_tmp24*_tmp26*p_2;
+    const double _tmp9 = sin(theta_1);
+    const double _tmp10 = 0.5*theta_2;
+    const double _tmp11 = sin(_tmp10);
+    const double _tmp12 = pow(theta_2, 2);
+    const double _tmp13 = symkin_arck(_tmp10);
+    const double _tmp14 = _tmp12*_tmp13*p_2;
+    const double _tmp15 = cos(_tmp10);
+    const double _tmp16 = 0.21650635094610965*_tmp14;
+    const double _tmp17 = _tmp15*_tmp16 + 0.125*_tmp11*_tmp14;
+    const double _tmp18 = _tmp17*_tmp9;
+    const double _tmp19 = cos(theta_1);
+    const double _tmp20 = _tmp11*_tmp16 - 0.125*_tmp12*_tmp13*_tmp15*p_2;
+    const double _tmp21 = -_tmp20;
+    const double _tmp22 = 0.25*pow(theta_1, 2);
+    const double _tmp23 = 0.5*theta_1;
+    const double _tmp24 = p_1*symkin_arck(_tmp23);
+    const double _tmp25 = _tmp24*sin(_tmp23);
+    const double _tmp26 = pow(theta_3, 2);
+    const double _tmp27 = 0.5*theta_3;
+    const double _tmp28 = sin(_tmp27);
+    const double _tmp29 = symkin_arck(_tmp27);
+    const double _tmp30 = 0.5*theta_4;
+    const double _tmp31 = 0.25*p_4*pow(theta_4, 2)*symkin_arck(_tmp30);
+    const double _tmp32 = _tmp31*sin(_tmp30);
+    const double _tmp33 = _tmp31*cos(_tmp30);
+    const double _tmp34 = _tmp1*_tmp32 - _tmp33*_tmp4;
+    const double _tmp35 = _tmp24*cos(_tmp23);
+    const double _tmp36 = _tmp29*p_3;
+    const double _tmp37 = _tmp36*cos(_tmp27);
+    const double _tmp38 = 0.25*_tmp26;
+    const double _tmp39 = _tmp17*_tmp19 + _tmp21*_tmp9;
+    const double _tmp40 = _tmp1*_tmp33 + _tmp32*_tmp4;
+    const double _tmp41 = _tmp22*fabs(_tmp25) + _tmp22*fabs(_tmp35) + _tmp38*fabs(_tmp37) + _tmp38*fabs(_tmp28*_tmp36) + fabs(_tmp34) + fabs(_tmp39) + fabs(_tmp40) + fabs(_tmp18 + _tmp19*_tmp20);
     out[0] = 1;
     out[1] = -1;
     out[2] = 1;
@@ -263,8 +274,11 @@ static void sk_linear(const double *theta, const double *params, double *out)
     out[7] = _tmp6*_tmp8 + _tmp7*p_9;
     out[8] = 0;
     out[9] = 0;
-    out[10] = _tmp29*_tmp30 - _tmp1*_tmp18 - _tmp10*sin(_tmp9) - _tmp20*_tmp28 + 0.25*_tmp11*_tmp13*p_3*sin(_tmp12) + 0.25*_tmp15*_tmp16*_tmp19*_tmp4*p_4;
-    out[11] = _tmp10*cos(_tmp9) + _tmp18*_tmp4 + _tmp20*_tmp30 + _tmp28*_tmp29 + _tmp1*_tmp17*_tmp19 - 0.25*_tmp11*_tmp13*p_3*cos(_tmp12);
+    out[10] = -_tmp18 - _tmp34 + _tmp19*_tmp21 - _tmp22*_tmp25 + 0.25*_tmp26*_tmp28*_tmp29*p_3;
+    out[11] = _tmp39 + _tmp40 + _tmp22*_tmp35 - _tmp37*_tmp38;
+    out[12] = 0;
+    out[13] = _tmp41;
+    out[14] = _tmp41;
 }
 
 /* exact compliant closure F(delta) and dF/ddelta (265 operations) */
@@ -1442,6 +1456,9 @@ typedef struct {
     double converged;
     double stalled;
     double stall_ratio;
+    double residual;    /* > 0: also stop once every residual is this small relative to the size
+                           of its terms (a closure's S, symkin.core.settings 3b); unknowns all zero
+                           then stop only so */
 } sk_rule;
 
 
@@ -1449,11 +1466,30 @@ typedef struct {
    in magnitude, the previous step `previous` (HUGE_VAL before the second): the one stopping
    test of every Newton iteration. */
 static int sk_newton_stop(const sk_rule *rule, double change, double size,
-                          double previous)
+                          double previous, int noise)
 {
-    return change <= rule->tolerance
-           || (rule->converged > 0.0 && (change <= rule->converged * size || size == 0.0))
+    return change <= rule->tolerance || noise
+           || (rule->converged > 0.0
+               && (change <= rule->converged * size || (size == 0.0 && rule->residual == 0.0)))
            || (change >= rule->stall_ratio * previous && change <= rule->stalled * size);
+}
+
+/* Whether every residual f[r] of a system (f, then its row-major Jacobian J, n x n) at x is at
+   the rounding level of its terms: |f_r| <= residual (scale_r + sum_j |J_rj x_j|). */
+static int sk_residual_noise(int n, const double *fj, const double *x, const double *scale,
+                             double residual)
+{
+    int r, j;
+    for (r = 0; r < n; ++r) {
+        double terms = fabs(scale[r]);
+        for (j = 0; j < n; ++j) {
+            terms += fabs(fj[n + r * n + j] * x[j]);
+        }
+        if (!(fabs(fj[r]) <= residual * terms)) {
+            return 0;
+        }
+    }
+    return 1;
 }
 
 /* A system of n equations: at the unknowns x, its residual f (n), then its Jacobian (n x n,
@@ -1463,17 +1499,22 @@ typedef void (*sk_system_fn)(const void *ctx, const double *x, double *fj);
 /* Newton on `system` from x: each step solves J s = f and subtracts s from the unknowns
    (x[index[i]], or x[i] when index is NULL) until `rule` stops it. fj (n + n * n doubles) is
    workspace; with `evaluated` it holds the system at x already. Returns 0 (stopped), 1 (a
-   Jacobian singular or not finite) or 2 (not stopped within rule->iterations steps). */
+   Jacobian singular or not finite) or 2 (not stopped within rule->iterations steps). With
+   rule->residual > 0, `scale` (n: the size of each residual's constant terms; index NULL)
+   lets a residual at rounding stop it too (sk_residual_noise). */
 static int sk_newton_solve(sk_system_fn system, const void *ctx, int n, const int *index,
-                           const sk_rule *rule, double *x, double *fj, int evaluated)
+                           const sk_rule *rule, const double *scale, double *x, double *fj,
+                           int evaluated)
 {
     double previous = HUGE_VAL;
     int it, i;
     for (it = 0; it < rule->iterations; ++it) {
         double change = 0.0, size = 0.0;
+        int noise;
         if (it > 0 || !evaluated) {
             system(ctx, x, fj);
         }
+        noise = rule->residual > 0.0 && sk_residual_noise(n, fj, x, scale, rule->residual);
         if (sk_solve(n, fj + n, 1, fj)) {
             return 1;
         }
@@ -1487,7 +1528,7 @@ static int sk_newton_solve(sk_system_fn system, const void *ctx, int n, const in
                 change = fabs(fj[i]);
             }
         }
-        if (sk_newton_stop(rule, change, size, previous)) {
+        if (sk_newton_stop(rule, change, size, previous, noise)) {
             return 0;
         }
         previous = change;
@@ -1515,6 +1556,8 @@ typedef struct {
     sk_fn3 closure;     /* its F and dF/ddelta (theta, delta, q); NULL: A delta = -r only */
     int loaded;         /* q: 0 the parameters, 1 the loaded constants, 2 refined ones */
     sk_sens sens;       /* its sensitivities (fn NULL: none) */
+    sk_fn3 consistency; /* redundant loops: its closure's dropped rows, then their terms' size
+                           (theta, delta, q); NULL: none */
 } sk_level;
 
 /* One mechanism: its tables, routines and solver settings. Routines a mechanism lacks are
@@ -1536,7 +1579,14 @@ typedef struct {
     sk_fn2 rigid;                   /* closed-form rigid angles and reaches (inputs, params) */
     int n_dyads;
     sk_fn2 rigid_res;               /* rigid closure (theta, params): per loop angle, x, y */
-    sk_fn2 linear;                  /* its Jacobian A and r (theta, params) */
+    int n_angular;                  /* the rows of rigid_res that are loops' angle sums */
+    const int *angular;
+    sk_fn2 linear;                  /* its Jacobian A, r and S (theta, params) */
+    int n_rest;                     /* closed-form angles exactly zero with their inputs: */
+    const int *rest;                /* (theta index, count, the inputs' positions) ... */
+    int n_dropped;                  /* redundant loops: the closure rows left out of the solves */
+    sk_fn2 consistency_rigid;       /* their rigid residuals and terms' size (theta, params) */
+    double consistent;              /* each must vanish to this fraction of its size */
     sk_fn2 rigid_points;            /* (theta, params) */
     sk_fn2 links;                   /* rotations and their deviations (theta, delta) */
     sk_fn2 loaded_q0;               /* the loaded level's statics (A^T mu0 = Q0; NULL: one pass) */
@@ -1544,7 +1594,7 @@ typedef struct {
     sk_fn3 loaded_compliance;       /* (theta, mu, params) into the constants at compliance_at */
     sk_fn3 loaded_compliance_more;  /* the plates only the loaded closure reads, at more_at */
     int compliance_at, more_at;
-    sk_fn2 loaded_linear;           /* the loaded closure: A and r (theta, constants) */
+    sk_fn2 loaded_linear;           /* the loaded closure: A, r and S (theta, constants) */
     sk_fn3 loaded_closure;          /* F and dF/ddelta (theta, delta, constants) */
     sk_rule rigid_rule;             /* Newton at each continuation step */
     sk_rule polish_rule;            /* after the rigid start */
@@ -1571,6 +1621,20 @@ static const sk_level *sk_find_level(const sk_mechanism *m, int code)
 }
 
 
+/* Redundant loops (symkin.core.settings, 4): 0 when each dropped closure row con[i] vanishes
+   to m->consistent of the size of its terms con[n_dropped + i], else 1 (the loops contradict
+   each other). */
+static int sk_consistent(const sk_mechanism *m, const double *con)
+{
+    int i;
+    for (i = 0; i < m->n_dropped; ++i) {
+        if (!(fabs(con[i]) <= m->consistent * con[m->n_dropped + i])) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
 /* What the rigid closure's Newton reads: theta is its unknowns' array. */
 typedef struct {
     const sk_mechanism *m;
@@ -1582,7 +1646,7 @@ typedef struct {
 static void sk_rigid_system(const void *ctx, const double *theta, double *fj)
 {
     const sk_rigid_ctx *c = (const sk_rigid_ctx *)ctx;
-    double lin[SK_K * SK_K + SK_K + 1];
+    double lin[SK_K * SK_K + 2 * SK_K + 1];
     int i;
     c->m->rigid_res(theta, c->params, fj);
     c->m->linear(theta, c->params, lin);
@@ -1615,15 +1679,33 @@ static int sk_rigid_pose(const sk_mechanism *m, const double *inputs, const doub
         for (i = 0; i < SK_K; ++i) {
             theta[m->unknown_index[i]] = sk_wrap(sol[i]);
         }
+        /* an angle whose inputs are all zero is exactly zero (its formula rounds to noise) */
+        for (i = 0; i < m->n_rest; i += 2 + m->rest[i + 1]) {
+            int j, moved = 0;
+            for (j = 0; j < m->rest[i + 1]; ++j) {
+                moved = moved || inputs[m->rest[i + 2 + j]] != 0.0;
+            }
+            if (!moved) {
+                theta[m->rest[i]] = 0.0;
+            }
+        }
     }
     sk_rigid_system(&c, theta, fj);
-    for (i = 0; i < SK_K; i += 3) {
-        if (!(fabs(fj[i]) < m->winding)) {
+    for (i = 0; i < m->n_angular; ++i) {
+        if (!(fabs(fj[m->angular[i]]) < m->winding)) {
             return 1;
         }
     }
-    return sk_newton_solve(sk_rigid_system, &c, SK_K, m->unknown_index, &m->polish_rule, theta,
-                           fj, 1) == 1;
+    if (sk_newton_solve(sk_rigid_system, &c, SK_K, m->unknown_index, &m->polish_rule, NULL,
+                        theta, fj, 1) == 1) {
+        return 1;
+    }
+    if (m->consistency_rigid != NULL) {
+        double con[SK_OUT];
+        m->consistency_rigid(theta, params, con);
+        return sk_consistent(m, con);
+    }
+    return 0;
 }
 
 /* What a compliant closure's Newton reads. */
@@ -1643,12 +1725,13 @@ static void sk_closure_system(const void *ctx, const double *delta, double *fj)
 static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure,
                             const double *theta, const double *q, double *delta)
 {
-    double lin[SK_K * SK_K + SK_K + 1], fj[SK_K + SK_K * SK_K + 1];
+    double lin[SK_K * SK_K + 2 * SK_K + 1], fj[SK_K + SK_K * SK_K + 1], scale[SK_K + 1];
     sk_closure_ctx c;
     int i;
     linear(theta, q, lin);
     for (i = 0; i < SK_K; ++i) {
         delta[i] = -lin[SK_K * SK_K + i];
+        scale[i] = lin[SK_K * SK_K + SK_K + i];
     }
     if (sk_solve(SK_K, lin, 1, delta)) {
         return 1;
@@ -1659,7 +1742,8 @@ static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure
     c.closure = closure;
     c.theta = theta;
     c.q = q;
-    return sk_newton_solve(sk_closure_system, &c, SK_K, NULL, &m->exact_rule, delta, fj, 0);
+    return sk_newton_solve(sk_closure_system, &c, SK_K, NULL, &m->exact_rule, scale, delta, fj,
+                           0);
 }
 
 /* The configuration at level lv: the arguments checked, the rigid angles theta (every hinge)
@@ -1705,6 +1789,13 @@ static int sk_pose(const sk_mechanism *m, const sk_level *lv, const double *inpu
         const int status = sk_solve_closure(m, lv->linear, lv->closure, theta, *q, delta);
         if (status) {
             return status;
+        }
+        if (lv->consistency != NULL) {
+            double con[SK_OUT];
+            lv->consistency(theta, delta, *q, con);
+            if (sk_consistent(m, con)) {
+                return 1;
+            }
         }
     }
     for (i = 0; i < m->n_limits; ++i) {
@@ -2000,15 +2091,19 @@ static const double sk_fixed_angle[1] = {0};
 static const int sk_limit_index[5] = {0, 1, 2, 3};
 static const int sk_limit_unknown[5] = {-1, 0, 1, 2};
 static const double sk_limit[5] = {3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793};
+static const int sk_angular[2] = {0};
+/* closed-form angles exactly zero with their inputs: theta index, count, the inputs' positions */
+static const int sk_rest[10] = {1, 1, 0, 2, 1, 0, 3, 1, 0};
 
-/* code, deviation, linear and Newton routines of its closure, what it reads; sensitivities */
+/* code, deviation, linear and Newton routines of its closure, what it reads; sensitivities;
+   the dropped rows of its closure (redundant loops) */
 static const sk_level sk_levels[] = {
     {0, sk_dev_paper, NULL, NULL, 0,  /* paper */
-     {sk_sens_paper, 0, 0, 0, 0, 0, 0, 6}},
+     {sk_sens_paper, 0, 0, 0, 0, 0, 0, 6}, NULL},
     {1, sk_dev_first_order, sk_linear, NULL, 0,  /* first_order */
-     {sk_sens_first_order, 1, 0, 9, 18, 57, 63, 69}},
+     {sk_sens_first_order, 1, 0, 9, 18, 57, 63, 69}, NULL},
     {2, sk_dev_exact, sk_linear, sk_newton, 0,  /* exact */
-     {sk_sens_exact, 1, 0, 9, 18, 57, 63, 69}}
+     {sk_sens_exact, 1, 0, 9, 18, 57, 63, 69}, NULL}
 };
 
 static const sk_mechanism sk_mechanism_tables = {
@@ -2017,6 +2112,8 @@ static const sk_mechanism sk_mechanism_tables = {
     .n_fixed = 0, .fixed_index = sk_fixed_index, .fixed_angle = sk_fixed_angle,
     .n_limits = 4, .limit_index = sk_limit_index, .limit_unknown = sk_limit_unknown,
     .limit = sk_limit, .needs_loops = 1, .loops_for_links = 0,
+    .n_angular = 1, .angular = sk_angular, .n_rest = 9, .rest = sk_rest,
+    .n_dropped = 0, .consistent = 1e-08,
     .rigid = sk_rigid,
     .rigid_res = sk_rigid_res,
     .linear = sk_linear,
@@ -2027,7 +2124,7 @@ static const sk_mechanism sk_mechanism_tables = {
     .n_dyads = 1, .compliance_at = 0, .more_at = 0,
     .rigid_rule = {30, 1e-10, 0.0, 0.0, 0.0},
     .polish_rule = {1, 0.0, 0.0, 0.0, 0.0},
-    .exact_rule = {40, 0.0, 1e-08, 1e-12, 0.5},
+    .exact_rule = {40, 0.0, 1e-08, 1e-12, 0.5, 2e-13},
     .continuation_step = 0.05, .winding = 3.141592653589793,
     .n_levels = 3, .levels = sk_levels,
     .sr_A = 0, .sr_dG_dv = 9, .sr_dR_dtheta = 48, .sr_dR_dv = 54

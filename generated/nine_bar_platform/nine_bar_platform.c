@@ -3,7 +3,7 @@
  * Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
  * Points: F; levels: paper, first_order, exact, loaded, loaded_refined.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, loaded_q0 16, loaded_q 126, loaded_compliance 562, loaded_linear 239, loaded_newton 539, dev_paper 33, dev_first_order 33, dev_exact 33, dev_loaded 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
+ * Operation counts after CSE: rigid 158, rigid_res 114, linear 275, newton 531, rigid_points 14, loaded_q0 16, loaded_q 126, loaded_compliance 562, loaded_linear 288, loaded_newton 539, dev_paper 33, dev_first_order 33, dev_exact 33, dev_loaded 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
  */
 #include "nine_bar_platform.h"
 
@@ -234,7 +234,7 @@ static void sk_rigid_res(const double *theta, const double *params, double *out)
     out[5] = -_tmp21 + 0.025*_tmp26 - 0.07*_tmp27 - 0.01*_tmp25 - 0.02*_tmp13 - 0.04*_tmp28 - 0.08*_tmp8;
 }
 
-/* rigid loop Jacobian A and r = Phi dz (222 operations) */
+/* rigid loop Jacobian A, r = Phi dz and the size S of its terms (275 operations) */
 static void sk_linear(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -267,62 +267,91 @@ static void sk_linear(const double *theta, const double *params, double *out)
     const double _tmp16 = cos(_tmp14);
     const double _tmp17 = 0.035*_tmp16 + 0.025*_tmp15;
     const double _tmp18 = 0.035*_tmp15 - 0.025*_tmp16;
-    const double _tmp19 = 0.5*theta_9;
-    const double _tmp20 = pow(theta_9, 2);
-    const double _tmp21 = symkin_arck(_tmp19);
-    const double _tmp22 = 0.25*p_0;
-    const double _tmp23 = 0.5*theta_4;
-    const double _tmp24 = sin(_tmp23);
-    const double _tmp25 = _tmp22*sin(_tmp1);
-    const double _tmp26 = pow(theta_4, 2)*symkin_arck(_tmp23);
-    const double _tmp27 = _tmp25*_tmp26;
-    const double _tmp28 = 0.5*theta_5;
-    const double _tmp29 = sin(_tmp28);
-    const double _tmp30 = _tmp22*pow(theta_5, 2)*symkin_arck(_tmp28);
-    const double _tmp31 = _tmp30*sin(_tmp2);
-    const double _tmp32 = 0.5*theta_6;
-    const double _tmp33 = cos(_tmp32);
-    const double _tmp34 = pow(theta_6, 2);
-    const double _tmp35 = symkin_arck(_tmp32);
-    const double _tmp36 = _tmp22*_tmp34*_tmp35;
-    const double _tmp37 = sin(_tmp32);
-    const double _tmp38 = _tmp36*_tmp4;
-    const double _tmp39 = cos(_tmp23);
-    const double _tmp40 = _tmp22*cos(_tmp1);
-    const double _tmp41 = _tmp26*_tmp40;
-    const double _tmp42 = cos(_tmp28);
-    const double _tmp43 = _tmp30*cos(_tmp2);
-    const double _tmp44 = 0.5*theta_1;
-    const double _tmp45 = _tmp22*pow(theta_1, 2)*symkin_arck(_tmp44);
-    const double _tmp46 = sin(theta_1);
-    const double _tmp47 = 0.5*theta_2;
-    const double _tmp48 = _tmp22*pow(theta_2, 2)*symkin_arck(_tmp47);
-    const double _tmp49 = _tmp48*sin(_tmp47);
-    const double _tmp50 = 0.5*theta_3;
-    const double _tmp51 = sin(_tmp50);
-    const double _tmp52 = _tmp22*pow(theta_3, 2)*symkin_arck(_tmp50);
-    const double _tmp53 = _tmp52*sin(_tmp0);
-    const double _tmp54 = cos(theta_1);
-    const double _tmp55 = _tmp48*cos(_tmp47);
-    const double _tmp56 = cos(_tmp50);
-    const double _tmp57 = _tmp52*cos(_tmp0);
-    const double _tmp58 = _tmp45*sin(_tmp44) + _tmp46*_tmp49 + _tmp51*_tmp53 - _tmp54*_tmp55 - _tmp56*_tmp57;
-    const double _tmp59 = _tmp45*cos(_tmp44) + _tmp46*_tmp55 + _tmp49*_tmp54 + _tmp51*_tmp57 + _tmp53*_tmp56;
-    const double _tmp60 = 0.5*theta_10;
-    const double _tmp61 = pow(theta_10, 2);
-    const double _tmp62 = symkin_arck(_tmp60);
-    const double _tmp63 = 0.5*theta_7;
-    const double _tmp64 = sin(_tmp63);
-    const double _tmp65 = pow(theta_7, 2)*symkin_arck(_tmp63);
-    const double _tmp66 = _tmp25*_tmp65;
-    const double _tmp67 = 0.5*theta_8;
-    const double _tmp68 = sin(_tmp67);
-    const double _tmp69 = _tmp22*pow(theta_8, 2)*symkin_arck(_tmp67);
-    const double _tmp70 = _tmp13*_tmp69;
-    const double _tmp71 = cos(_tmp63);
-    const double _tmp72 = _tmp40*_tmp65;
-    const double _tmp73 = cos(_tmp67);
-    const double _tmp74 = _tmp12*_tmp69;
+    const double _tmp19 = pow(theta_9, 2);
+    const double _tmp20 = 0.25*_tmp19;
+    const double _tmp21 = 0.5*theta_9;
+    const double _tmp22 = symkin_arck(_tmp21);
+    const double _tmp23 = _tmp22*p_0;
+    const double _tmp24 = _tmp23*sin(_tmp21);
+    const double _tmp25 = 0.5*theta_4;
+    const double _tmp26 = sin(_tmp25);
+    const double _tmp27 = 0.25*p_0;
+    const double _tmp28 = _tmp27*sin(_tmp1);
+    const double _tmp29 = pow(theta_4, 2)*symkin_arck(_tmp25);
+    const double _tmp30 = _tmp28*_tmp29;
+    const double _tmp31 = cos(_tmp25);
+    const double _tmp32 = _tmp27*cos(_tmp1);
+    const double _tmp33 = _tmp29*_tmp32;
+    const double _tmp34 = _tmp26*_tmp30 - _tmp31*_tmp33;
+    const double _tmp35 = 0.5*theta_5;
+    const double _tmp36 = sin(_tmp35);
+    const double _tmp37 = _tmp27*pow(theta_5, 2)*symkin_arck(_tmp35);
+    const double _tmp38 = _tmp37*sin(_tmp2);
+    const double _tmp39 = cos(_tmp35);
+    const double _tmp40 = _tmp37*cos(_tmp2);
+    const double _tmp41 = _tmp36*_tmp38 - _tmp39*_tmp40;
+    const double _tmp42 = 0.5*theta_6;
+    const double _tmp43 = sin(_tmp42);
+    const double _tmp44 = pow(theta_6, 2);
+    const double _tmp45 = symkin_arck(_tmp42);
+    const double _tmp46 = _tmp27*_tmp44*_tmp45;
+    const double _tmp47 = _tmp4*_tmp46;
+    const double _tmp48 = cos(_tmp42);
+    const double _tmp49 = _tmp46*_tmp5;
+    const double _tmp50 = _tmp43*_tmp47 + _tmp48*_tmp49;
+    const double _tmp51 = 0.25*pow(theta_1, 2);
+    const double _tmp52 = 0.5*theta_1;
+    const double _tmp53 = p_0*symkin_arck(_tmp52);
+    const double _tmp54 = _tmp53*sin(_tmp52);
+    const double _tmp55 = sin(theta_1);
+    const double _tmp56 = 0.5*theta_2;
+    const double _tmp57 = _tmp27*pow(theta_2, 2)*symkin_arck(_tmp56);
+    const double _tmp58 = _tmp57*sin(_tmp56);
+    const double _tmp59 = cos(theta_1);
+    const double _tmp60 = _tmp57*cos(_tmp56);
+    const double _tmp61 = _tmp55*_tmp58 - _tmp59*_tmp60;
+    const double _tmp62 = 0.5*theta_3;
+    const double _tmp63 = sin(_tmp62);
+    const double _tmp64 = _tmp27*pow(theta_3, 2)*symkin_arck(_tmp62);
+    const double _tmp65 = _tmp64*sin(_tmp0);
+    const double _tmp66 = cos(_tmp62);
+    const double _tmp67 = _tmp64*cos(_tmp0);
+    const double _tmp68 = _tmp63*_tmp65 - _tmp66*_tmp67;
+    const double _tmp69 = _tmp61 + _tmp68 + _tmp51*_tmp54;
+    const double _tmp70 = cos(_tmp21);
+    const double _tmp71 = _tmp47*_tmp48;
+    const double _tmp72 = _tmp26*_tmp33 + _tmp30*_tmp31;
+    const double _tmp73 = _tmp36*_tmp40 + _tmp38*_tmp39;
+    const double _tmp74 = _tmp53*cos(_tmp52);
+    const double _tmp75 = _tmp55*_tmp60 + _tmp58*_tmp59;
+    const double _tmp76 = _tmp63*_tmp67 + _tmp65*_tmp66;
+    const double _tmp77 = _tmp75 + _tmp76 + _tmp51*_tmp74;
+    const double _tmp78 = pow(theta_10, 2);
+    const double _tmp79 = 0.25*_tmp78;
+    const double _tmp80 = 0.5*theta_10;
+    const double _tmp81 = symkin_arck(_tmp80);
+    const double _tmp82 = _tmp81*p_0;
+    const double _tmp83 = _tmp82*sin(_tmp80);
+    const double _tmp84 = 0.5*theta_7;
+    const double _tmp85 = sin(_tmp84);
+    const double _tmp86 = pow(theta_7, 2)*symkin_arck(_tmp84);
+    const double _tmp87 = _tmp28*_tmp86;
+    const double _tmp88 = cos(_tmp84);
+    const double _tmp89 = _tmp32*_tmp86;
+    const double _tmp90 = _tmp85*_tmp87 - _tmp88*_tmp89;
+    const double _tmp91 = 0.5*theta_8;
+    const double _tmp92 = sin(_tmp91);
+    const double _tmp93 = _tmp27*pow(theta_8, 2)*symkin_arck(_tmp91);
+    const double _tmp94 = _tmp13*_tmp93;
+    const double _tmp95 = cos(_tmp91);
+    const double _tmp96 = _tmp12*_tmp93;
+    const double _tmp97 = _tmp92*_tmp94 - _tmp95*_tmp96;
+    const double _tmp98 = cos(_tmp80);
+    const double _tmp99 = _tmp85*_tmp89 + _tmp87*_tmp88;
+    const double _tmp100 = _tmp92*_tmp96 + _tmp94*_tmp95;
+    const double _tmp101 = _tmp51*fabs(_tmp54) + _tmp51*fabs(_tmp74) + fabs(_tmp61) + fabs(_tmp68) + fabs(_tmp75) + fabs(_tmp76);
+    const double _tmp102 = _tmp101 + _tmp20*fabs(_tmp24) + _tmp20*fabs(_tmp23*_tmp70) + fabs(_tmp34) + fabs(_tmp41) + fabs(_tmp50) + fabs(_tmp72) + fabs(_tmp73) + fabs(-_tmp71 + _tmp43*_tmp49);
+    const double _tmp103 = _tmp101 + _tmp79*fabs(_tmp83) + _tmp79*fabs(_tmp82*_tmp98) + fabs(_tmp100) + fabs(_tmp90) + fabs(_tmp97) + fabs(_tmp99);
     out[0] = -1;
     out[1] = -1;
     out[2] = 0;
@@ -360,11 +389,17 @@ static void sk_linear(const double *theta, const double *params, double *out)
     out[34] = 0;
     out[35] = 0;
     out[36] = 0;
-    out[37] = _tmp58 + _tmp24*_tmp27 + _tmp29*_tmp31 + _tmp37*_tmp38 - _tmp39*_tmp41 - _tmp42*_tmp43 + _tmp33*_tmp36*_tmp5 - _tmp20*_tmp21*_tmp22*sin(_tmp19);
-    out[38] = -_tmp59 - _tmp24*_tmp41 - _tmp27*_tmp39 - _tmp29*_tmp43 - _tmp31*_tmp42 - _tmp33*_tmp38 + 0.25*_tmp20*_tmp21*p_0*cos(_tmp19) + 0.25*_tmp34*_tmp35*_tmp37*_tmp5*p_0;
+    out[37] = _tmp34 + _tmp41 + _tmp50 + _tmp69 - _tmp20*_tmp24;
+    out[38] = -_tmp71 - _tmp72 - _tmp73 - _tmp77 + 0.25*_tmp19*_tmp22*_tmp70*p_0 + 0.25*_tmp43*_tmp44*_tmp45*_tmp5*p_0;
     out[39] = 0;
-    out[40] = _tmp58 + _tmp64*_tmp66 + _tmp68*_tmp70 - _tmp71*_tmp72 - _tmp73*_tmp74 - _tmp22*_tmp61*_tmp62*sin(_tmp60);
-    out[41] = -_tmp59 - _tmp64*_tmp72 - _tmp66*_tmp71 - _tmp68*_tmp74 - _tmp70*_tmp73 + 0.25*_tmp61*_tmp62*p_0*cos(_tmp60);
+    out[40] = _tmp69 + _tmp90 + _tmp97 - _tmp79*_tmp83;
+    out[41] = -_tmp100 - _tmp77 - _tmp99 + 0.25*_tmp78*_tmp81*_tmp98*p_0;
+    out[42] = 0;
+    out[43] = _tmp102;
+    out[44] = _tmp102;
+    out[45] = 0;
+    out[46] = _tmp103;
+    out[47] = _tmp103;
 }
 
 /* exact compliant closure F(delta) and dF/ddelta (531 operations) */
@@ -871,7 +906,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     out[19] = -_tmp135*_tmp144 + 4000000*_tmp136*_tmp137*_tmp143*_tmp8;
 }
 
-/* loaded: A and r = Phi dz of the loaded closure (its first-order start) (239 operations) */
+/* loaded: A, r = Phi dz of the loaded closure (its first-order start) and the size S of its terms (288 operations) */
 static void sk_loaded_linear(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -924,53 +959,79 @@ static void sk_loaded_linear(const double *theta, const double *params, double *
     const double _tmp16 = cos(_tmp14);
     const double _tmp17 = 0.035*_tmp16 + 0.025*_tmp15;
     const double _tmp18 = 0.035*_tmp15 - 0.025*_tmp16;
-    const double _tmp20 = 0.25*p_0;
     const double _tmp19 = 0.5*theta_6;
+    const double _tmp20 = 0.25*p_0;
     const double _tmp21 = _tmp20*pow(theta_6, 2)*symkin_arck(_tmp19);
     const double _tmp22 = compliance_x_6 + _tmp21*cos(_tmp19);
-    const double _tmp23 = sin(_tmp1);
-    const double _tmp24 = 0.5*theta_4;
-    const double _tmp25 = _tmp20*pow(theta_4, 2)*symkin_arck(_tmp24);
-    const double _tmp26 = compliance_y_4 + _tmp25*sin(_tmp24);
-    const double _tmp27 = sin(_tmp2);
-    const double _tmp28 = 0.5*theta_5;
-    const double _tmp29 = _tmp20*pow(theta_5, 2)*symkin_arck(_tmp28);
-    const double _tmp30 = compliance_y_5 + _tmp29*sin(_tmp28);
-    const double _tmp31 = cos(_tmp1);
-    const double _tmp32 = compliance_x_4 + _tmp25*cos(_tmp24);
-    const double _tmp33 = cos(_tmp2);
-    const double _tmp34 = compliance_x_5 + _tmp29*cos(_tmp28);
-    const double _tmp35 = -compliance_y_6 - _tmp21*sin(_tmp19);
-    const double _tmp36 = 0.5*theta_9;
-    const double _tmp37 = pow(theta_9, 2);
-    const double _tmp38 = symkin_arck(_tmp36);
-    const double _tmp39 = sin(theta_1);
-    const double _tmp40 = 0.5*theta_2;
-    const double _tmp41 = _tmp20*pow(theta_2, 2)*symkin_arck(_tmp40);
-    const double _tmp42 = compliance_y_2 + _tmp41*sin(_tmp40);
-    const double _tmp43 = sin(_tmp0);
-    const double _tmp44 = 0.5*theta_3;
-    const double _tmp45 = _tmp20*pow(theta_3, 2)*symkin_arck(_tmp44);
-    const double _tmp46 = compliance_y_3 + _tmp45*sin(_tmp44);
-    const double _tmp47 = cos(theta_1);
-    const double _tmp48 = compliance_x_2 + _tmp41*cos(_tmp40);
-    const double _tmp49 = cos(_tmp0);
-    const double _tmp50 = compliance_x_3 + _tmp45*cos(_tmp44);
-    const double _tmp51 = 0.5*theta_1;
-    const double _tmp52 = _tmp20*pow(theta_1, 2)*symkin_arck(_tmp51);
-    const double _tmp53 = compliance_y_1 + _tmp39*_tmp42 + _tmp43*_tmp46 + _tmp52*sin(_tmp51) - _tmp47*_tmp48 - _tmp49*_tmp50;
-    const double _tmp54 = compliance_x_1 + _tmp39*_tmp48 + _tmp42*_tmp47 + _tmp43*_tmp50 + _tmp46*_tmp49 + _tmp52*cos(_tmp51);
-    const double _tmp55 = 0.5*theta_7;
-    const double _tmp56 = _tmp20*pow(theta_7, 2)*symkin_arck(_tmp55);
-    const double _tmp57 = compliance_y_7 + _tmp56*sin(_tmp55);
-    const double _tmp58 = 0.5*theta_8;
-    const double _tmp59 = _tmp20*pow(theta_8, 2)*symkin_arck(_tmp58);
-    const double _tmp60 = compliance_y_8 + _tmp59*sin(_tmp58);
-    const double _tmp61 = compliance_x_7 + _tmp56*cos(_tmp55);
-    const double _tmp62 = compliance_x_8 + _tmp59*cos(_tmp58);
-    const double _tmp63 = 0.5*theta_10;
-    const double _tmp64 = pow(theta_10, 2);
-    const double _tmp65 = symkin_arck(_tmp63);
+    const double _tmp23 = _tmp22*_tmp5;
+    const double _tmp24 = compliance_y_6 + _tmp21*sin(_tmp19);
+    const double _tmp25 = -_tmp24;
+    const double _tmp26 = 0.5*theta_9;
+    const double _tmp27 = pow(theta_9, 2);
+    const double _tmp28 = symkin_arck(_tmp26);
+    const double _tmp29 = _tmp20*_tmp27*_tmp28;
+    const double _tmp30 = _tmp29*sin(_tmp26);
+    const double _tmp31 = sin(_tmp1);
+    const double _tmp32 = 0.5*theta_4;
+    const double _tmp33 = _tmp20*pow(theta_4, 2)*symkin_arck(_tmp32);
+    const double _tmp34 = compliance_y_4 + _tmp33*sin(_tmp32);
+    const double _tmp35 = cos(_tmp1);
+    const double _tmp36 = compliance_x_4 + _tmp33*cos(_tmp32);
+    const double _tmp37 = _tmp31*_tmp34 - _tmp35*_tmp36;
+    const double _tmp38 = sin(_tmp2);
+    const double _tmp39 = 0.5*theta_5;
+    const double _tmp40 = _tmp20*pow(theta_5, 2)*symkin_arck(_tmp39);
+    const double _tmp41 = compliance_y_5 + _tmp40*sin(_tmp39);
+    const double _tmp42 = cos(_tmp2);
+    const double _tmp43 = compliance_x_5 + _tmp40*cos(_tmp39);
+    const double _tmp44 = _tmp38*_tmp41 - _tmp42*_tmp43;
+    const double _tmp45 = 0.5*theta_1;
+    const double _tmp46 = _tmp20*pow(theta_1, 2)*symkin_arck(_tmp45);
+    const double _tmp47 = compliance_y_1 + _tmp46*sin(_tmp45);
+    const double _tmp48 = sin(theta_1);
+    const double _tmp49 = 0.5*theta_2;
+    const double _tmp50 = _tmp20*pow(theta_2, 2)*symkin_arck(_tmp49);
+    const double _tmp51 = compliance_y_2 + _tmp50*sin(_tmp49);
+    const double _tmp52 = cos(theta_1);
+    const double _tmp53 = compliance_x_2 + _tmp50*cos(_tmp49);
+    const double _tmp54 = _tmp48*_tmp51 - _tmp52*_tmp53;
+    const double _tmp55 = sin(_tmp0);
+    const double _tmp56 = 0.5*theta_3;
+    const double _tmp57 = _tmp20*pow(theta_3, 2)*symkin_arck(_tmp56);
+    const double _tmp58 = compliance_y_3 + _tmp57*sin(_tmp56);
+    const double _tmp59 = cos(_tmp0);
+    const double _tmp60 = compliance_x_3 + _tmp57*cos(_tmp56);
+    const double _tmp61 = _tmp55*_tmp58 - _tmp59*_tmp60;
+    const double _tmp62 = _tmp47 + _tmp54 + _tmp61;
+    const double _tmp63 = _tmp22*_tmp4;
+    const double _tmp64 = cos(_tmp26);
+    const double _tmp65 = _tmp31*_tmp36 + _tmp34*_tmp35;
+    const double _tmp66 = _tmp38*_tmp43 + _tmp41*_tmp42;
+    const double _tmp67 = compliance_x_1 + _tmp46*cos(_tmp45);
+    const double _tmp68 = _tmp48*_tmp53 + _tmp51*_tmp52;
+    const double _tmp69 = _tmp55*_tmp60 + _tmp58*_tmp59;
+    const double _tmp70 = _tmp67 + _tmp68 + _tmp69;
+    const double _tmp71 = 0.5*theta_10;
+    const double _tmp72 = pow(theta_10, 2);
+    const double _tmp73 = symkin_arck(_tmp71);
+    const double _tmp74 = _tmp20*_tmp72*_tmp73;
+    const double _tmp75 = _tmp74*sin(_tmp71);
+    const double _tmp76 = 0.5*theta_7;
+    const double _tmp77 = _tmp20*pow(theta_7, 2)*symkin_arck(_tmp76);
+    const double _tmp78 = compliance_y_7 + _tmp77*sin(_tmp76);
+    const double _tmp79 = compliance_x_7 + _tmp77*cos(_tmp76);
+    const double _tmp80 = _tmp31*_tmp78 - _tmp35*_tmp79;
+    const double _tmp81 = 0.5*theta_8;
+    const double _tmp82 = _tmp20*pow(theta_8, 2)*symkin_arck(_tmp81);
+    const double _tmp83 = compliance_y_8 + _tmp82*sin(_tmp81);
+    const double _tmp84 = compliance_x_8 + _tmp82*cos(_tmp81);
+    const double _tmp85 = _tmp13*_tmp83 - _tmp12*_tmp84;
+    const double _tmp86 = cos(_tmp71);
+    const double _tmp87 = _tmp31*_tmp79 + _tmp35*_tmp78;
+    const double _tmp88 = _tmp12*_tmp83 + _tmp13*_tmp84;
+    const double _tmp89 = fabs(_tmp47) + fabs(_tmp54) + fabs(_tmp61) + fabs(_tmp67) + fabs(_tmp68) + fabs(_tmp69);
+    const double _tmp90 = _tmp89 + fabs(_tmp37) + fabs(_tmp44) + fabs(_tmp65) + fabs(_tmp66) + fabs(_tmp23 + _tmp24*_tmp4) + fabs(_tmp30 + compliance_y_9) + fabs(compliance_x_9 + _tmp29*_tmp64) + fabs(-_tmp63 + _tmp24*_tmp5);
+    const double _tmp91 = _tmp89 + fabs(_tmp80) + fabs(_tmp85) + fabs(_tmp87) + fabs(_tmp88) + fabs(_tmp75 + compliance_y_10) + fabs(compliance_x_10 + _tmp74*_tmp86);
     out[0] = -1;
     out[1] = -1;
     out[2] = 0;
@@ -1008,11 +1069,17 @@ static void sk_loaded_linear(const double *theta, const double *params, double *
     out[34] = 0;
     out[35] = 0;
     out[36] = 0;
-    out[37] = _tmp53 - compliance_y_9 + _tmp22*_tmp5 + _tmp23*_tmp26 + _tmp27*_tmp30 - _tmp31*_tmp32 - _tmp33*_tmp34 - _tmp35*_tmp4 - _tmp20*_tmp37*_tmp38*sin(_tmp36);
-    out[38] = compliance_x_9 - _tmp54 - _tmp22*_tmp4 - _tmp23*_tmp32 - _tmp26*_tmp31 - _tmp27*_tmp34 - _tmp30*_tmp33 - _tmp35*_tmp5 + 0.25*_tmp37*_tmp38*p_0*cos(_tmp36);
+    out[37] = _tmp23 + _tmp37 + _tmp44 + _tmp62 - _tmp30 - compliance_y_9 - _tmp25*_tmp4;
+    out[38] = compliance_x_9 - _tmp63 - _tmp65 - _tmp66 - _tmp70 - _tmp25*_tmp5 + 0.25*_tmp27*_tmp28*_tmp64*p_0;
     out[39] = 0;
-    out[40] = _tmp53 - compliance_y_10 + _tmp13*_tmp60 + _tmp23*_tmp57 - _tmp12*_tmp62 - _tmp31*_tmp61 - _tmp20*_tmp64*_tmp65*sin(_tmp63);
-    out[41] = compliance_x_10 - _tmp54 - _tmp12*_tmp60 - _tmp13*_tmp62 - _tmp23*_tmp61 - _tmp31*_tmp57 + 0.25*_tmp64*_tmp65*p_0*cos(_tmp63);
+    out[40] = _tmp62 + _tmp80 + _tmp85 - _tmp75 - compliance_y_10;
+    out[41] = compliance_x_10 - _tmp70 - _tmp87 - _tmp88 + 0.25*_tmp72*_tmp73*_tmp86*p_0;
+    out[42] = 0;
+    out[43] = _tmp90;
+    out[44] = _tmp90;
+    out[45] = 0;
+    out[46] = _tmp91;
+    out[47] = _tmp91;
 }
 
 /* loaded: the loaded closure F(delta) and dF/ddelta (539 operations) */
@@ -1901,6 +1968,9 @@ typedef struct {
     double converged;
     double stalled;
     double stall_ratio;
+    double residual;    /* > 0: also stop once every residual is this small relative to the size
+                           of its terms (a closure's S, symkin.core.settings 3b); unknowns all zero
+                           then stop only so */
 } sk_rule;
 
 
@@ -1908,11 +1978,30 @@ typedef struct {
    in magnitude, the previous step `previous` (HUGE_VAL before the second): the one stopping
    test of every Newton iteration. */
 static int sk_newton_stop(const sk_rule *rule, double change, double size,
-                          double previous)
+                          double previous, int noise)
 {
-    return change <= rule->tolerance
-           || (rule->converged > 0.0 && (change <= rule->converged * size || size == 0.0))
+    return change <= rule->tolerance || noise
+           || (rule->converged > 0.0
+               && (change <= rule->converged * size || (size == 0.0 && rule->residual == 0.0)))
            || (change >= rule->stall_ratio * previous && change <= rule->stalled * size);
+}
+
+/* Whether every residual f[r] of a system (f, then its row-major Jacobian J, n x n) at x is at
+   the rounding level of its terms: |f_r| <= residual (scale_r + sum_j |J_rj x_j|). */
+static int sk_residual_noise(int n, const double *fj, const double *x, const double *scale,
+                             double residual)
+{
+    int r, j;
+    for (r = 0; r < n; ++r) {
+        double terms = fabs(scale[r]);
+        for (j = 0; j < n; ++j) {
+            terms += fabs(fj[n + r * n + j] * x[j]);
+        }
+        if (!(fabs(fj[r]) <= residual * terms)) {
+            return 0;
+        }
+    }
+    return 1;
 }
 
 /* A system of n equations: at the unknowns x, its residual f (n), then its Jacobian (n x n,
@@ -1922,17 +2011,22 @@ typedef void (*sk_system_fn)(const void *ctx, const double *x, double *fj);
 /* Newton on `system` from x: each step solves J s = f and subtracts s from the unknowns
    (x[index[i]], or x[i] when index is NULL) until `rule` stops it. fj (n + n * n doubles) is
    workspace; with `evaluated` it holds the system at x already. Returns 0 (stopped), 1 (a
-   Jacobian singular or not finite) or 2 (not stopped within rule->iterations steps). */
+   Jacobian singular or not finite) or 2 (not stopped within rule->iterations steps). With
+   rule->residual > 0, `scale` (n: the size of each residual's constant terms; index NULL)
+   lets a residual at rounding stop it too (sk_residual_noise). */
 static int sk_newton_solve(sk_system_fn system, const void *ctx, int n, const int *index,
-                           const sk_rule *rule, double *x, double *fj, int evaluated)
+                           const sk_rule *rule, const double *scale, double *x, double *fj,
+                           int evaluated)
 {
     double previous = HUGE_VAL;
     int it, i;
     for (it = 0; it < rule->iterations; ++it) {
         double change = 0.0, size = 0.0;
+        int noise;
         if (it > 0 || !evaluated) {
             system(ctx, x, fj);
         }
+        noise = rule->residual > 0.0 && sk_residual_noise(n, fj, x, scale, rule->residual);
         if (sk_solve(n, fj + n, 1, fj)) {
             return 1;
         }
@@ -1946,7 +2040,7 @@ static int sk_newton_solve(sk_system_fn system, const void *ctx, int n, const in
                 change = fabs(fj[i]);
             }
         }
-        if (sk_newton_stop(rule, change, size, previous)) {
+        if (sk_newton_stop(rule, change, size, previous, noise)) {
             return 0;
         }
         previous = change;
@@ -1974,6 +2068,8 @@ typedef struct {
     sk_fn3 closure;     /* its F and dF/ddelta (theta, delta, q); NULL: A delta = -r only */
     int loaded;         /* q: 0 the parameters, 1 the loaded constants, 2 refined ones */
     sk_sens sens;       /* its sensitivities (fn NULL: none) */
+    sk_fn3 consistency; /* redundant loops: its closure's dropped rows, then their terms' size
+                           (theta, delta, q); NULL: none */
 } sk_level;
 
 /* One mechanism: its tables, routines and solver settings. Routines a mechanism lacks are
@@ -1995,7 +2091,14 @@ typedef struct {
     sk_fn2 rigid;                   /* closed-form rigid angles and reaches (inputs, params) */
     int n_dyads;
     sk_fn2 rigid_res;               /* rigid closure (theta, params): per loop angle, x, y */
-    sk_fn2 linear;                  /* its Jacobian A and r (theta, params) */
+    int n_angular;                  /* the rows of rigid_res that are loops' angle sums */
+    const int *angular;
+    sk_fn2 linear;                  /* its Jacobian A, r and S (theta, params) */
+    int n_rest;                     /* closed-form angles exactly zero with their inputs: */
+    const int *rest;                /* (theta index, count, the inputs' positions) ... */
+    int n_dropped;                  /* redundant loops: the closure rows left out of the solves */
+    sk_fn2 consistency_rigid;       /* their rigid residuals and terms' size (theta, params) */
+    double consistent;              /* each must vanish to this fraction of its size */
     sk_fn2 rigid_points;            /* (theta, params) */
     sk_fn2 links;                   /* rotations and their deviations (theta, delta) */
     sk_fn2 loaded_q0;               /* the loaded level's statics (A^T mu0 = Q0; NULL: one pass) */
@@ -2003,7 +2106,7 @@ typedef struct {
     sk_fn3 loaded_compliance;       /* (theta, mu, params) into the constants at compliance_at */
     sk_fn3 loaded_compliance_more;  /* the plates only the loaded closure reads, at more_at */
     int compliance_at, more_at;
-    sk_fn2 loaded_linear;           /* the loaded closure: A and r (theta, constants) */
+    sk_fn2 loaded_linear;           /* the loaded closure: A, r and S (theta, constants) */
     sk_fn3 loaded_closure;          /* F and dF/ddelta (theta, delta, constants) */
     sk_rule rigid_rule;             /* Newton at each continuation step */
     sk_rule polish_rule;            /* after the rigid start */
@@ -2030,6 +2133,20 @@ static const sk_level *sk_find_level(const sk_mechanism *m, int code)
 }
 
 
+/* Redundant loops (symkin.core.settings, 4): 0 when each dropped closure row con[i] vanishes
+   to m->consistent of the size of its terms con[n_dropped + i], else 1 (the loops contradict
+   each other). */
+static int sk_consistent(const sk_mechanism *m, const double *con)
+{
+    int i;
+    for (i = 0; i < m->n_dropped; ++i) {
+        if (!(fabs(con[i]) <= m->consistent * con[m->n_dropped + i])) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
 /* What the rigid closure's Newton reads: theta is its unknowns' array. */
 typedef struct {
     const sk_mechanism *m;
@@ -2041,7 +2158,7 @@ typedef struct {
 static void sk_rigid_system(const void *ctx, const double *theta, double *fj)
 {
     const sk_rigid_ctx *c = (const sk_rigid_ctx *)ctx;
-    double lin[SK_K * SK_K + SK_K + 1];
+    double lin[SK_K * SK_K + 2 * SK_K + 1];
     int i;
     c->m->rigid_res(theta, c->params, fj);
     c->m->linear(theta, c->params, lin);
@@ -2074,15 +2191,33 @@ static int sk_rigid_pose(const sk_mechanism *m, const double *inputs, const doub
         for (i = 0; i < SK_K; ++i) {
             theta[m->unknown_index[i]] = sk_wrap(sol[i]);
         }
+        /* an angle whose inputs are all zero is exactly zero (its formula rounds to noise) */
+        for (i = 0; i < m->n_rest; i += 2 + m->rest[i + 1]) {
+            int j, moved = 0;
+            for (j = 0; j < m->rest[i + 1]; ++j) {
+                moved = moved || inputs[m->rest[i + 2 + j]] != 0.0;
+            }
+            if (!moved) {
+                theta[m->rest[i]] = 0.0;
+            }
+        }
     }
     sk_rigid_system(&c, theta, fj);
-    for (i = 0; i < SK_K; i += 3) {
-        if (!(fabs(fj[i]) < m->winding)) {
+    for (i = 0; i < m->n_angular; ++i) {
+        if (!(fabs(fj[m->angular[i]]) < m->winding)) {
             return 1;
         }
     }
-    return sk_newton_solve(sk_rigid_system, &c, SK_K, m->unknown_index, &m->polish_rule, theta,
-                           fj, 1) == 1;
+    if (sk_newton_solve(sk_rigid_system, &c, SK_K, m->unknown_index, &m->polish_rule, NULL,
+                        theta, fj, 1) == 1) {
+        return 1;
+    }
+    if (m->consistency_rigid != NULL) {
+        double con[SK_OUT];
+        m->consistency_rigid(theta, params, con);
+        return sk_consistent(m, con);
+    }
+    return 0;
 }
 
 /* What a compliant closure's Newton reads. */
@@ -2102,12 +2237,13 @@ static void sk_closure_system(const void *ctx, const double *delta, double *fj)
 static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure,
                             const double *theta, const double *q, double *delta)
 {
-    double lin[SK_K * SK_K + SK_K + 1], fj[SK_K + SK_K * SK_K + 1];
+    double lin[SK_K * SK_K + 2 * SK_K + 1], fj[SK_K + SK_K * SK_K + 1], scale[SK_K + 1];
     sk_closure_ctx c;
     int i;
     linear(theta, q, lin);
     for (i = 0; i < SK_K; ++i) {
         delta[i] = -lin[SK_K * SK_K + i];
+        scale[i] = lin[SK_K * SK_K + SK_K + i];
     }
     if (sk_solve(SK_K, lin, 1, delta)) {
         return 1;
@@ -2118,7 +2254,8 @@ static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure
     c.closure = closure;
     c.theta = theta;
     c.q = q;
-    return sk_newton_solve(sk_closure_system, &c, SK_K, NULL, &m->exact_rule, delta, fj, 0);
+    return sk_newton_solve(sk_closure_system, &c, SK_K, NULL, &m->exact_rule, scale, delta, fj,
+                           0);
 }
 
 /* The loaded level's closure constants: the parameters, then every plate's compliance under the
@@ -2130,7 +2267,7 @@ static int sk_loaded_constants(const sk_mechanism *m, const double *theta, const
 {
     const double *mu = NULL;
     int i;
-    double lin[SK_K * SK_K + SK_K + 1], at[SK_K * SK_K + 1], mu0[SK_K + 1], loads[SK_K + 1];
+    double lin[SK_K * SK_K + 2 * SK_K + 1], at[SK_K * SK_K + 1], mu0[SK_K + 1], loads[SK_K + 1];
     int j, piv[SK_K + 1];
     if (jac == NULL) {
         m->linear(theta, params, lin);
@@ -2226,6 +2363,13 @@ static int sk_pose(const sk_mechanism *m, const sk_level *lv, const double *inpu
         const int status = sk_solve_closure(m, lv->linear, lv->closure, theta, *q, delta);
         if (status) {
             return status;
+        }
+        if (lv->consistency != NULL) {
+            double con[SK_OUT];
+            lv->consistency(theta, delta, *q, con);
+            if (sk_consistent(m, con)) {
+                return 1;
+            }
         }
     }
     for (i = 0; i < m->n_limits; ++i) {
@@ -2521,19 +2665,23 @@ static const double sk_fixed_angle[1] = {0};
 static const int sk_limit_index[11] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9};
 static const int sk_limit_unknown[11] = {-1, -1, -1, -1, 0, 1, 2, 3, 4, 5};
 static const double sk_limit[11] = {3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793};
+static const int sk_angular[3] = {0, 3};
+/* closed-form angles exactly zero with their inputs: theta index, count, the inputs' positions */
+static const int sk_rest[34] = {4, 4, 0, 1, 2, 3, 5, 4, 0, 1, 2, 3, 6, 3, 0, 1, 2, 7, 3, 0, 1, 2, 8, 4, 0, 1, 2, 3, 9, 3, 0, 1, 2};
 
-/* code, deviation, linear and Newton routines of its closure, what it reads; sensitivities */
+/* code, deviation, linear and Newton routines of its closure, what it reads; sensitivities;
+   the dropped rows of its closure (redundant loops) */
 static const sk_level sk_levels[] = {
     {0, sk_dev_paper, NULL, NULL, 0,  /* paper */
-     {sk_sens_paper, 0, 0, 0, 0, 0, 0, 12}},
+     {sk_sens_paper, 0, 0, 0, 0, 0, 0, 12}, NULL},
     {1, sk_dev_first_order, sk_linear, NULL, 0,  /* first_order */
-     {sk_sens_first_order, 0, 0, 0, 0, 0, 0, 12}},
+     {sk_sens_first_order, 0, 0, 0, 0, 0, 0, 12}, NULL},
     {2, sk_dev_exact, sk_linear, sk_newton, 0,  /* exact */
-     {sk_sens_exact, 0, 0, 0, 0, 0, 0, 12}},
+     {sk_sens_exact, 0, 0, 0, 0, 0, 0, 12}, NULL},
     {3, sk_dev_loaded, sk_loaded_linear, sk_loaded_newton, 1,  /* loaded */
-     {NULL, 0, 0, 0, 0, 0, 0, 0}},
+     {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL},
     {5, sk_dev_loaded, sk_loaded_linear, sk_loaded_newton, 2,  /* loaded_refined */
-     {NULL, 0, 0, 0, 0, 0, 0, 0}}
+     {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL}
 };
 
 static const sk_mechanism sk_mechanism_tables = {
@@ -2542,6 +2690,8 @@ static const sk_mechanism sk_mechanism_tables = {
     .n_fixed = 0, .fixed_index = sk_fixed_index, .fixed_angle = sk_fixed_angle,
     .n_limits = 10, .limit_index = sk_limit_index, .limit_unknown = sk_limit_unknown,
     .limit = sk_limit, .needs_loops = 0, .loops_for_links = 1,
+    .n_angular = 2, .angular = sk_angular, .n_rest = 33, .rest = sk_rest,
+    .n_dropped = 0, .consistent = 1e-08,
     .rigid = sk_rigid,
     .rigid_res = sk_rigid_res,
     .linear = sk_linear,
@@ -2556,7 +2706,7 @@ static const sk_mechanism sk_mechanism_tables = {
     .n_dyads = 2, .compliance_at = 1, .more_at = 21,
     .rigid_rule = {30, 1e-10, 0.0, 0.0, 0.0},
     .polish_rule = {1, 0.0, 0.0, 0.0, 0.0},
-    .exact_rule = {40, 0.0, 1e-08, 1e-12, 0.5},
+    .exact_rule = {40, 0.0, 1e-08, 1e-12, 0.5, 2e-13},
     .continuation_step = 0.05, .winding = 3.141592653589793,
     .n_levels = 5, .levels = sk_levels,
     .sr_A = 0, .sr_dG_dv = 36, .sr_dR_dtheta = 66, .sr_dR_dv = 78

@@ -2,7 +2,7 @@
 Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
 Points: F; levels: paper, first_order, exact, loaded, loaded_refined.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 158, rigid_res 114, linear 222, newton 531, rigid_points 14, loaded_q0 16, loaded_q 126, loaded_compliance 562, loaded_linear 239, loaded_newton 539, dev_paper 33, dev_first_order 33, dev_exact 33, dev_loaded 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
+Operation counts after CSE: rigid 158, rigid_res 114, linear 275, newton 531, rigid_points 14, loaded_q0 16, loaded_q 126, loaded_compliance 562, loaded_linear 288, loaded_newton 539, dev_paper 33, dev_first_order 33, dev_exact 33, dev_loaded 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -56,22 +56,29 @@ class _Level:
     """A generated level: its deviation routine, the closure it solves for delta (linear: A and
     r; newton: F and dF/ddelta, None for the first-order delta; both None: none), what its
     routines read (loaded: 0 the parameters, 1 the loaded constants, 2 refined ones) and its
-    sensitivity routine with the (offset, rows, cols) of its blocks."""
+    sensitivity routine with the (offset, rows, cols) of its blocks; with redundant loops,
+    `consistency`: its closure's dropped rows and their terms' size (theta, delta, q)."""
 
-    def __init__(self, dev, linear=None, newton=None, loaded=0, sens=None, blocks=None):
+    def __init__(
+        self, dev, linear=None, newton=None, loaded=0, sens=None, blocks=None, consistency=None
+    ):
         self.dev, self.linear, self.newton, self.loaded = dev, linear, newton, loaded
-        self.sens, self.blocks = sens, blocks or {}
+        self.sens, self.blocks, self.consistency = sens, blocks or {}, consistency
 
 
 class _Rule:
     """When a Newton iteration stops (symkin.core.settings): after `iterations` steps at most,
     and once a step is at most `tolerance`, or at most `converged` times the largest unknown
-    (with converged > 0; also when they are all zero), or has stalled at rounding: at least
-    `stall_ratio` times the previous step and at most `stalled` times the largest unknown."""
+    (with converged > 0; also when they are all zero unless `residual`), or has stalled at
+    rounding: at least `stall_ratio` times the previous step and at most `stalled` times the
+    largest unknown; with `residual` > 0, also once every residual is at most `residual` times
+    the size of its terms (symkin.core.settings, 3b)."""
 
-    def __init__(self, iterations, tolerance=0.0, converged=0.0, stalled=0.0, stall_ratio=0.0):
+    def __init__(
+        self, iterations, tolerance=0.0, converged=0.0, stalled=0.0, stall_ratio=0.0, residual=0.0
+    ):
         self.iterations, self.tolerance, self.converged = iterations, tolerance, converged
-        self.stalled, self.stall_ratio = stalled, stall_ratio
+        self.stalled, self.stall_ratio, self.residual = stalled, stall_ratio, residual
 
 
 def _value(v, dtype):
@@ -177,21 +184,36 @@ def _gauss(a, b, ok, k, m, dtype):
     return x, good
 
 
-def _newton_stop(rule, change, size, previous):
+def _newton_stop(rule, change, size, previous, noise=False):
     """Where Newton stops after a step `change` (largest entry), the unknowns now at most `size`
-    in magnitude, the previous step `previous` (inf before the second): the one stopping test of
-    every Newton iteration."""
-    done = change <= rule.tolerance
+    in magnitude, the previous step `previous` (inf before the second), `noise` where the
+    residuals were at rounding (_residual_noise): the one stopping test of every Newton
+    iteration."""
+    done = (change <= rule.tolerance) | noise
     if rule.converged > 0.0:
-        done = done | (change <= rule.converged * size) | (size == 0)
+        done = done | (change <= rule.converged * size)
+        if rule.residual == 0.0:
+            done = done | (size == 0)
     return done | ((change >= rule.stall_ratio * previous) & (change <= rule.stalled * size))
 
 
-def _newton_solve(system, x, index, ok, rule, dtype, evaluated=None):
+def _residual_noise(out, x, scale, residual):
+    """Where every residual out[r] of a system (f, then its row-major Jacobian J) at x is at the
+    rounding level of its terms: |f_r| <= residual (scale_r + sum_j |J_rj x_j|)."""
+    k = len(x)
+    noise = True
+    for r in range(k):
+        terms = numpy.abs(scale[r]) + sum(numpy.abs(out[k + r * k + j] * x[j]) for j in range(k))
+        noise = noise & (numpy.abs(out[r]) <= residual * terms)
+    return noise
+
+
+def _newton_solve(system, x, index, ok, rule, dtype, evaluated=None, scale=None):
     """Newton on `system` (x -> its residual f, then its row-major Jacobian, as one list) from
     the list of arrays x, stepping the unknowns x[i] for i in `index`, each element until
-    `rule` stops it; `evaluated`: the system at x, when it is known. Returns x, ok (False where
-    a Jacobian is singular or not finite) and where Newton stopped."""
+    `rule` stops it; `evaluated`: the system at x, when it is known; `scale` (with
+    rule.residual > 0, index covering x): the size of each residual's constant terms. Returns
+    x, ok (False where a Jacobian is singular or not finite) and where Newton stopped."""
     k = len(index)
     active = ok.copy()
     previous = numpy.full(ok.shape, numpy.inf)
@@ -199,6 +221,9 @@ def _newton_solve(system, x, index, ok, rule, dtype, evaluated=None):
     for _ in range(rule.iterations):
         if out is None:
             out = system(x)
+        noise = False
+        if rule.residual > 0.0:
+            noise = _residual_noise(out, [x[i] for i in index], scale, rule.residual)
         step, good = _solve(out[k:], out[:k], active, 1, dtype)
         out = None
         ok = ok & (good | ~active)
@@ -207,7 +232,7 @@ def _newton_solve(system, x, index, ok, rule, dtype, evaluated=None):
             x[i] = numpy.where(active, x[i] - step[j], x[i])
         size = numpy.max(numpy.abs(numpy.array([x[i] for i in index])), axis=0)
         change = numpy.max(numpy.abs(numpy.array(step)), axis=0)
-        done = _newton_stop(rule, change, size, previous)
+        done = _newton_stop(rule, change, size, previous, noise)
         previous = numpy.where(active, change, previous)
         active = active & ~done
         if not active.any():
@@ -249,6 +274,12 @@ def _rigid_angles(mech, x, params, ok):
             ok = ok & (numpy.broadcast_to(reach, shape) >= 0.0)
         for j, i in enumerate(mech.unknown_index):
             theta[i] = numpy.where(ok, _wrap(numpy.broadcast_to(out[j], shape)), 0.0)
+        # an angle whose inputs are all zero is exactly zero (its formula rounds to noise there)
+        for i, reads in mech.rest:
+            moved = numpy.zeros(shape, dtype=bool)
+            for j in reads:
+                moved = moved | (x[j] != 0.0)
+            theta[i] = numpy.where(moved, theta[i], 0.0)
     else:
         top = max(
             [float(numpy.max(numpy.abs(v))) if v.size else 0.0 for v in x]
@@ -267,25 +298,43 @@ def _rigid_angles(mech, x, params, ok):
             stage, system, theta, mech.unknown_index, ok, mech.rigid_rule, steps, dtype
         )
     out = system(theta)
-    for n in range(0, k, 3):
+    for n in mech.angular:
         ok = ok & (numpy.abs(out[n]) < mech.winding)
     theta, ok, _ = _newton_solve(
         system, theta, mech.unknown_index, ok, mech.polish_rule, dtype, out
     )
+    if mech.consistency_rigid is not None:
+        ok = _consistent(mech, mech.consistency_rigid(theta, params), ok)
     return theta, ok
+
+
+def _consistent(mech, out, ok):
+    """Redundant loops (symkin.core.settings, 4): where each dropped closure row (out: the rows,
+    then the size of their terms) vanishes to mech.consistent of its size; else not ok."""
+    n = mech.n_dropped
+    for i in range(n):
+        ok = ok & (numpy.abs(out[i]) <= mech.consistent * numpy.asarray(out[n + i]))
+    return ok
 
 
 def _solve_closure(mech, linear, newton, theta, q, ok):
     """delta of a closure: A delta = -r (its first-order delta), then with `newton` (F,
     dF/ddelta) Newton from there; and ok."""
     k = len(mech.unknown_index)
-    lin = linear(theta, q)
-    delta, good = _solve(lin[: k * k], [-numpy.asarray(r) for r in lin[k * k :]], ok, 1, mech.dtype)
+    lin = linear(theta, q)  # A, r, then S: the size of r's terms
+    rhs = [-numpy.asarray(r) for r in lin[k * k : k * k + k]]
+    delta, good = _solve(lin[: k * k], rhs, ok, 1, mech.dtype)
     ok = ok & good
     if newton is None:
         return delta, ok
     delta, ok, converged = _newton_solve(
-        lambda delta: newton(theta, delta, q), delta, range(k), ok, mech.exact_rule, mech.dtype
+        lambda delta: newton(theta, delta, q),
+        delta,
+        range(k),
+        ok,
+        mech.exact_rule,
+        mech.dtype,
+        scale=lin[k * k + k :],
     )
     return delta, ok & converged
 
@@ -337,6 +386,8 @@ def _pose(mech, arrays, level, p, links):
         delta = [numpy.zeros(shape, dtype=mech.dtype) for _ in mech.unknown_index]
         if lv.linear is not None and (mech.needs_loops or (links and mech.loops_for_links)):
             delta, ok = _solve_closure(mech, lv.linear, lv.newton, theta, q, ok)
+            if lv.consistency is not None:
+                ok = _consistent(mech, lv.consistency(theta, delta, q), ok)
         for i, limit in mech.limits:
             ok = ok & (numpy.abs(theta[i]) <= limit)
             if i in mech.unknown_index:
@@ -696,7 +747,7 @@ def _rigid_res(theta, params):
 
 
 def _linear(theta, params):
-    """rigid loop Jacobian A and r = Phi dz (222 operations)."""
+    """rigid loop Jacobian A, r = Phi dz and the size S of its terms (275 operations)."""
     theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7, theta_8, theta_9, theta_10 = theta
     p_0, = params
     _tmp0 = theta_1 + theta_2
@@ -718,62 +769,91 @@ def _linear(theta, params):
     _tmp16 = numpy.cos(_tmp14)
     _tmp17 = 0.035*_tmp16 + 0.025*_tmp15
     _tmp18 = 0.035*_tmp15 - 0.025*_tmp16
-    _tmp19 = 0.5*theta_9
-    _tmp20 = theta_9**2
-    _tmp21 = arck(_tmp19)
-    _tmp22 = 0.25*p_0
-    _tmp23 = 0.5*theta_4
-    _tmp24 = numpy.sin(_tmp23)
-    _tmp25 = _tmp22*numpy.sin(_tmp1)
-    _tmp26 = theta_4**2*arck(_tmp23)
-    _tmp27 = _tmp25*_tmp26
-    _tmp28 = 0.5*theta_5
-    _tmp29 = numpy.sin(_tmp28)
-    _tmp30 = _tmp22*theta_5**2*arck(_tmp28)
-    _tmp31 = _tmp30*numpy.sin(_tmp2)
-    _tmp32 = 0.5*theta_6
-    _tmp33 = numpy.cos(_tmp32)
-    _tmp34 = theta_6**2
-    _tmp35 = arck(_tmp32)
-    _tmp36 = _tmp22*_tmp34*_tmp35
-    _tmp37 = numpy.sin(_tmp32)
-    _tmp38 = _tmp36*_tmp4
-    _tmp39 = numpy.cos(_tmp23)
-    _tmp40 = _tmp22*numpy.cos(_tmp1)
-    _tmp41 = _tmp26*_tmp40
-    _tmp42 = numpy.cos(_tmp28)
-    _tmp43 = _tmp30*numpy.cos(_tmp2)
-    _tmp44 = 0.5*theta_1
-    _tmp45 = _tmp22*theta_1**2*arck(_tmp44)
-    _tmp46 = numpy.sin(theta_1)
-    _tmp47 = 0.5*theta_2
-    _tmp48 = _tmp22*theta_2**2*arck(_tmp47)
-    _tmp49 = _tmp48*numpy.sin(_tmp47)
-    _tmp50 = 0.5*theta_3
-    _tmp51 = numpy.sin(_tmp50)
-    _tmp52 = _tmp22*theta_3**2*arck(_tmp50)
-    _tmp53 = _tmp52*numpy.sin(_tmp0)
-    _tmp54 = numpy.cos(theta_1)
-    _tmp55 = _tmp48*numpy.cos(_tmp47)
-    _tmp56 = numpy.cos(_tmp50)
-    _tmp57 = _tmp52*numpy.cos(_tmp0)
-    _tmp58 = _tmp45*numpy.sin(_tmp44) + _tmp46*_tmp49 + _tmp51*_tmp53 - _tmp54*_tmp55 - _tmp56*_tmp57
-    _tmp59 = _tmp45*numpy.cos(_tmp44) + _tmp46*_tmp55 + _tmp49*_tmp54 + _tmp51*_tmp57 + _tmp53*_tmp56
-    _tmp60 = 0.5*theta_10
-    _tmp61 = theta_10**2
-    _tmp62 = arck(_tmp60)
-    _tmp63 = 0.5*theta_7
-    _tmp64 = numpy.sin(_tmp63)
-    _tmp65 = theta_7**2*arck(_tmp63)
-    _tmp66 = _tmp25*_tmp65
-    _tmp67 = 0.5*theta_8
-    _tmp68 = numpy.sin(_tmp67)
-    _tmp69 = _tmp22*theta_8**2*arck(_tmp67)
-    _tmp70 = _tmp13*_tmp69
-    _tmp71 = numpy.cos(_tmp63)
-    _tmp72 = _tmp40*_tmp65
-    _tmp73 = numpy.cos(_tmp67)
-    _tmp74 = _tmp12*_tmp69
+    _tmp19 = theta_9**2
+    _tmp20 = 0.25*_tmp19
+    _tmp21 = 0.5*theta_9
+    _tmp22 = arck(_tmp21)
+    _tmp23 = _tmp22*p_0
+    _tmp24 = _tmp23*numpy.sin(_tmp21)
+    _tmp25 = 0.5*theta_4
+    _tmp26 = numpy.sin(_tmp25)
+    _tmp27 = 0.25*p_0
+    _tmp28 = _tmp27*numpy.sin(_tmp1)
+    _tmp29 = theta_4**2*arck(_tmp25)
+    _tmp30 = _tmp28*_tmp29
+    _tmp31 = numpy.cos(_tmp25)
+    _tmp32 = _tmp27*numpy.cos(_tmp1)
+    _tmp33 = _tmp29*_tmp32
+    _tmp34 = _tmp26*_tmp30 - _tmp31*_tmp33
+    _tmp35 = 0.5*theta_5
+    _tmp36 = numpy.sin(_tmp35)
+    _tmp37 = _tmp27*theta_5**2*arck(_tmp35)
+    _tmp38 = _tmp37*numpy.sin(_tmp2)
+    _tmp39 = numpy.cos(_tmp35)
+    _tmp40 = _tmp37*numpy.cos(_tmp2)
+    _tmp41 = _tmp36*_tmp38 - _tmp39*_tmp40
+    _tmp42 = 0.5*theta_6
+    _tmp43 = numpy.sin(_tmp42)
+    _tmp44 = theta_6**2
+    _tmp45 = arck(_tmp42)
+    _tmp46 = _tmp27*_tmp44*_tmp45
+    _tmp47 = _tmp4*_tmp46
+    _tmp48 = numpy.cos(_tmp42)
+    _tmp49 = _tmp46*_tmp5
+    _tmp50 = _tmp43*_tmp47 + _tmp48*_tmp49
+    _tmp51 = 0.25*theta_1**2
+    _tmp52 = 0.5*theta_1
+    _tmp53 = p_0*arck(_tmp52)
+    _tmp54 = _tmp53*numpy.sin(_tmp52)
+    _tmp55 = numpy.sin(theta_1)
+    _tmp56 = 0.5*theta_2
+    _tmp57 = _tmp27*theta_2**2*arck(_tmp56)
+    _tmp58 = _tmp57*numpy.sin(_tmp56)
+    _tmp59 = numpy.cos(theta_1)
+    _tmp60 = _tmp57*numpy.cos(_tmp56)
+    _tmp61 = _tmp55*_tmp58 - _tmp59*_tmp60
+    _tmp62 = 0.5*theta_3
+    _tmp63 = numpy.sin(_tmp62)
+    _tmp64 = _tmp27*theta_3**2*arck(_tmp62)
+    _tmp65 = _tmp64*numpy.sin(_tmp0)
+    _tmp66 = numpy.cos(_tmp62)
+    _tmp67 = _tmp64*numpy.cos(_tmp0)
+    _tmp68 = _tmp63*_tmp65 - _tmp66*_tmp67
+    _tmp69 = _tmp61 + _tmp68 + _tmp51*_tmp54
+    _tmp70 = numpy.cos(_tmp21)
+    _tmp71 = _tmp47*_tmp48
+    _tmp72 = _tmp26*_tmp33 + _tmp30*_tmp31
+    _tmp73 = _tmp36*_tmp40 + _tmp38*_tmp39
+    _tmp74 = _tmp53*numpy.cos(_tmp52)
+    _tmp75 = _tmp55*_tmp60 + _tmp58*_tmp59
+    _tmp76 = _tmp63*_tmp67 + _tmp65*_tmp66
+    _tmp77 = _tmp75 + _tmp76 + _tmp51*_tmp74
+    _tmp78 = theta_10**2
+    _tmp79 = 0.25*_tmp78
+    _tmp80 = 0.5*theta_10
+    _tmp81 = arck(_tmp80)
+    _tmp82 = _tmp81*p_0
+    _tmp83 = _tmp82*numpy.sin(_tmp80)
+    _tmp84 = 0.5*theta_7
+    _tmp85 = numpy.sin(_tmp84)
+    _tmp86 = theta_7**2*arck(_tmp84)
+    _tmp87 = _tmp28*_tmp86
+    _tmp88 = numpy.cos(_tmp84)
+    _tmp89 = _tmp32*_tmp86
+    _tmp90 = _tmp85*_tmp87 - _tmp88*_tmp89
+    _tmp91 = 0.5*theta_8
+    _tmp92 = numpy.sin(_tmp91)
+    _tmp93 = _tmp27*theta_8**2*arck(_tmp91)
+    _tmp94 = _tmp13*_tmp93
+    _tmp95 = numpy.cos(_tmp91)
+    _tmp96 = _tmp12*_tmp93
+    _tmp97 = _tmp92*_tmp94 - _tmp95*_tmp96
+    _tmp98 = numpy.cos(_tmp80)
+    _tmp99 = _tmp85*_tmp89 + _tmp87*_tmp88
+    _tmp100 = _tmp92*_tmp96 + _tmp94*_tmp95
+    _tmp101 = _tmp51*abs(_tmp54) + _tmp51*abs(_tmp74) + abs(_tmp61) + abs(_tmp68) + abs(_tmp75) + abs(_tmp76)
+    _tmp102 = _tmp101 + _tmp20*abs(_tmp24) + _tmp20*abs(_tmp23*_tmp70) + abs(_tmp34) + abs(_tmp41) + abs(_tmp50) + abs(_tmp72) + abs(_tmp73) + abs(-_tmp71 + _tmp43*_tmp49)
+    _tmp103 = _tmp101 + _tmp79*abs(_tmp83) + _tmp79*abs(_tmp82*_tmp98) + abs(_tmp100) + abs(_tmp90) + abs(_tmp97) + abs(_tmp99)
     return [
         -1,
         -1,
@@ -812,11 +892,17 @@ def _linear(theta, params):
         0,
         0,
         0,
-        _tmp58 + _tmp24*_tmp27 + _tmp29*_tmp31 + _tmp37*_tmp38 - _tmp39*_tmp41 - _tmp42*_tmp43 + _tmp33*_tmp36*_tmp5 - _tmp20*_tmp21*_tmp22*numpy.sin(_tmp19),
-        -_tmp59 - _tmp24*_tmp41 - _tmp27*_tmp39 - _tmp29*_tmp43 - _tmp31*_tmp42 - _tmp33*_tmp38 + 0.25*_tmp20*_tmp21*p_0*numpy.cos(_tmp19) + 0.25*_tmp34*_tmp35*_tmp37*_tmp5*p_0,
+        _tmp34 + _tmp41 + _tmp50 + _tmp69 - _tmp20*_tmp24,
+        -_tmp71 - _tmp72 - _tmp73 - _tmp77 + 0.25*_tmp19*_tmp22*_tmp70*p_0 + 0.25*_tmp43*_tmp44*_tmp45*_tmp5*p_0,
         0,
-        _tmp58 + _tmp64*_tmp66 + _tmp68*_tmp70 - _tmp71*_tmp72 - _tmp73*_tmp74 - _tmp22*_tmp61*_tmp62*numpy.sin(_tmp60),
-        -_tmp59 - _tmp64*_tmp72 - _tmp66*_tmp71 - _tmp68*_tmp74 - _tmp70*_tmp73 + 0.25*_tmp61*_tmp62*p_0*numpy.cos(_tmp60),
+        _tmp69 + _tmp90 + _tmp97 - _tmp79*_tmp83,
+        -_tmp100 - _tmp77 - _tmp99 + 0.25*_tmp78*_tmp81*_tmp98*p_0,
+        0,
+        _tmp102,
+        _tmp102,
+        0,
+        _tmp103,
+        _tmp103,
     ]
 
 
@@ -1285,7 +1371,7 @@ def _loaded_compliance(theta, mu, params):
 
 
 def _loaded_linear(theta, params):
-    """loaded: A and r = Phi dz of the loaded closure (its first-order start) (239 operations)."""
+    """loaded: A, r = Phi dz of the loaded closure (its first-order start) and the size S of its terms (288 operations)."""
     theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7, theta_8, theta_9, theta_10 = theta
     p_0, compliance_x_1, compliance_y_1, compliance_x_2, compliance_y_2, compliance_x_3, compliance_y_3, compliance_x_4, compliance_y_4, compliance_x_5, compliance_y_5, compliance_x_6, compliance_y_6, compliance_x_7, compliance_y_7, compliance_x_8, compliance_y_8, compliance_x_9, compliance_y_9, compliance_x_10, compliance_y_10 = params
     _tmp0 = theta_1 + theta_2
@@ -1307,53 +1393,79 @@ def _loaded_linear(theta, params):
     _tmp16 = numpy.cos(_tmp14)
     _tmp17 = 0.035*_tmp16 + 0.025*_tmp15
     _tmp18 = 0.035*_tmp15 - 0.025*_tmp16
-    _tmp20 = 0.25*p_0
     _tmp19 = 0.5*theta_6
+    _tmp20 = 0.25*p_0
     _tmp21 = _tmp20*theta_6**2*arck(_tmp19)
     _tmp22 = compliance_x_6 + _tmp21*numpy.cos(_tmp19)
-    _tmp23 = numpy.sin(_tmp1)
-    _tmp24 = 0.5*theta_4
-    _tmp25 = _tmp20*theta_4**2*arck(_tmp24)
-    _tmp26 = compliance_y_4 + _tmp25*numpy.sin(_tmp24)
-    _tmp27 = numpy.sin(_tmp2)
-    _tmp28 = 0.5*theta_5
-    _tmp29 = _tmp20*theta_5**2*arck(_tmp28)
-    _tmp30 = compliance_y_5 + _tmp29*numpy.sin(_tmp28)
-    _tmp31 = numpy.cos(_tmp1)
-    _tmp32 = compliance_x_4 + _tmp25*numpy.cos(_tmp24)
-    _tmp33 = numpy.cos(_tmp2)
-    _tmp34 = compliance_x_5 + _tmp29*numpy.cos(_tmp28)
-    _tmp35 = -compliance_y_6 - _tmp21*numpy.sin(_tmp19)
-    _tmp36 = 0.5*theta_9
-    _tmp37 = theta_9**2
-    _tmp38 = arck(_tmp36)
-    _tmp39 = numpy.sin(theta_1)
-    _tmp40 = 0.5*theta_2
-    _tmp41 = _tmp20*theta_2**2*arck(_tmp40)
-    _tmp42 = compliance_y_2 + _tmp41*numpy.sin(_tmp40)
-    _tmp43 = numpy.sin(_tmp0)
-    _tmp44 = 0.5*theta_3
-    _tmp45 = _tmp20*theta_3**2*arck(_tmp44)
-    _tmp46 = compliance_y_3 + _tmp45*numpy.sin(_tmp44)
-    _tmp47 = numpy.cos(theta_1)
-    _tmp48 = compliance_x_2 + _tmp41*numpy.cos(_tmp40)
-    _tmp49 = numpy.cos(_tmp0)
-    _tmp50 = compliance_x_3 + _tmp45*numpy.cos(_tmp44)
-    _tmp51 = 0.5*theta_1
-    _tmp52 = _tmp20*theta_1**2*arck(_tmp51)
-    _tmp53 = compliance_y_1 + _tmp39*_tmp42 + _tmp43*_tmp46 + _tmp52*numpy.sin(_tmp51) - _tmp47*_tmp48 - _tmp49*_tmp50
-    _tmp54 = compliance_x_1 + _tmp39*_tmp48 + _tmp42*_tmp47 + _tmp43*_tmp50 + _tmp46*_tmp49 + _tmp52*numpy.cos(_tmp51)
-    _tmp55 = 0.5*theta_7
-    _tmp56 = _tmp20*theta_7**2*arck(_tmp55)
-    _tmp57 = compliance_y_7 + _tmp56*numpy.sin(_tmp55)
-    _tmp58 = 0.5*theta_8
-    _tmp59 = _tmp20*theta_8**2*arck(_tmp58)
-    _tmp60 = compliance_y_8 + _tmp59*numpy.sin(_tmp58)
-    _tmp61 = compliance_x_7 + _tmp56*numpy.cos(_tmp55)
-    _tmp62 = compliance_x_8 + _tmp59*numpy.cos(_tmp58)
-    _tmp63 = 0.5*theta_10
-    _tmp64 = theta_10**2
-    _tmp65 = arck(_tmp63)
+    _tmp23 = _tmp22*_tmp5
+    _tmp24 = compliance_y_6 + _tmp21*numpy.sin(_tmp19)
+    _tmp25 = -_tmp24
+    _tmp26 = 0.5*theta_9
+    _tmp27 = theta_9**2
+    _tmp28 = arck(_tmp26)
+    _tmp29 = _tmp20*_tmp27*_tmp28
+    _tmp30 = _tmp29*numpy.sin(_tmp26)
+    _tmp31 = numpy.sin(_tmp1)
+    _tmp32 = 0.5*theta_4
+    _tmp33 = _tmp20*theta_4**2*arck(_tmp32)
+    _tmp34 = compliance_y_4 + _tmp33*numpy.sin(_tmp32)
+    _tmp35 = numpy.cos(_tmp1)
+    _tmp36 = compliance_x_4 + _tmp33*numpy.cos(_tmp32)
+    _tmp37 = _tmp31*_tmp34 - _tmp35*_tmp36
+    _tmp38 = numpy.sin(_tmp2)
+    _tmp39 = 0.5*theta_5
+    _tmp40 = _tmp20*theta_5**2*arck(_tmp39)
+    _tmp41 = compliance_y_5 + _tmp40*numpy.sin(_tmp39)
+    _tmp42 = numpy.cos(_tmp2)
+    _tmp43 = compliance_x_5 + _tmp40*numpy.cos(_tmp39)
+    _tmp44 = _tmp38*_tmp41 - _tmp42*_tmp43
+    _tmp45 = 0.5*theta_1
+    _tmp46 = _tmp20*theta_1**2*arck(_tmp45)
+    _tmp47 = compliance_y_1 + _tmp46*numpy.sin(_tmp45)
+    _tmp48 = numpy.sin(theta_1)
+    _tmp49 = 0.5*theta_2
+    _tmp50 = _tmp20*theta_2**2*arck(_tmp49)
+    _tmp51 = compliance_y_2 + _tmp50*numpy.sin(_tmp49)
+    _tmp52 = numpy.cos(theta_1)
+    _tmp53 = compliance_x_2 + _tmp50*numpy.cos(_tmp49)
+    _tmp54 = _tmp48*_tmp51 - _tmp52*_tmp53
+    _tmp55 = numpy.sin(_tmp0)
+    _tmp56 = 0.5*theta_3
+    _tmp57 = _tmp20*theta_3**2*arck(_tmp56)
+    _tmp58 = compliance_y_3 + _tmp57*numpy.sin(_tmp56)
+    _tmp59 = numpy.cos(_tmp0)
+    _tmp60 = compliance_x_3 + _tmp57*numpy.cos(_tmp56)
+    _tmp61 = _tmp55*_tmp58 - _tmp59*_tmp60
+    _tmp62 = _tmp47 + _tmp54 + _tmp61
+    _tmp63 = _tmp22*_tmp4
+    _tmp64 = numpy.cos(_tmp26)
+    _tmp65 = _tmp31*_tmp36 + _tmp34*_tmp35
+    _tmp66 = _tmp38*_tmp43 + _tmp41*_tmp42
+    _tmp67 = compliance_x_1 + _tmp46*numpy.cos(_tmp45)
+    _tmp68 = _tmp48*_tmp53 + _tmp51*_tmp52
+    _tmp69 = _tmp55*_tmp60 + _tmp58*_tmp59
+    _tmp70 = _tmp67 + _tmp68 + _tmp69
+    _tmp71 = 0.5*theta_10
+    _tmp72 = theta_10**2
+    _tmp73 = arck(_tmp71)
+    _tmp74 = _tmp20*_tmp72*_tmp73
+    _tmp75 = _tmp74*numpy.sin(_tmp71)
+    _tmp76 = 0.5*theta_7
+    _tmp77 = _tmp20*theta_7**2*arck(_tmp76)
+    _tmp78 = compliance_y_7 + _tmp77*numpy.sin(_tmp76)
+    _tmp79 = compliance_x_7 + _tmp77*numpy.cos(_tmp76)
+    _tmp80 = _tmp31*_tmp78 - _tmp35*_tmp79
+    _tmp81 = 0.5*theta_8
+    _tmp82 = _tmp20*theta_8**2*arck(_tmp81)
+    _tmp83 = compliance_y_8 + _tmp82*numpy.sin(_tmp81)
+    _tmp84 = compliance_x_8 + _tmp82*numpy.cos(_tmp81)
+    _tmp85 = _tmp13*_tmp83 - _tmp12*_tmp84
+    _tmp86 = numpy.cos(_tmp71)
+    _tmp87 = _tmp31*_tmp79 + _tmp35*_tmp78
+    _tmp88 = _tmp12*_tmp83 + _tmp13*_tmp84
+    _tmp89 = abs(_tmp47) + abs(_tmp54) + abs(_tmp61) + abs(_tmp67) + abs(_tmp68) + abs(_tmp69)
+    _tmp90 = _tmp89 + abs(_tmp37) + abs(_tmp44) + abs(_tmp65) + abs(_tmp66) + abs(_tmp23 + _tmp24*_tmp4) + abs(_tmp30 + compliance_y_9) + abs(compliance_x_9 + _tmp29*_tmp64) + abs(-_tmp63 + _tmp24*_tmp5)
+    _tmp91 = _tmp89 + abs(_tmp80) + abs(_tmp85) + abs(_tmp87) + abs(_tmp88) + abs(_tmp75 + compliance_y_10) + abs(compliance_x_10 + _tmp74*_tmp86)
     return [
         -1,
         -1,
@@ -1392,11 +1504,17 @@ def _loaded_linear(theta, params):
         0,
         0,
         0,
-        _tmp53 - compliance_y_9 + _tmp22*_tmp5 + _tmp23*_tmp26 + _tmp27*_tmp30 - _tmp31*_tmp32 - _tmp33*_tmp34 - _tmp35*_tmp4 - _tmp20*_tmp37*_tmp38*numpy.sin(_tmp36),
-        compliance_x_9 - _tmp54 - _tmp22*_tmp4 - _tmp23*_tmp32 - _tmp26*_tmp31 - _tmp27*_tmp34 - _tmp30*_tmp33 - _tmp35*_tmp5 + 0.25*_tmp37*_tmp38*p_0*numpy.cos(_tmp36),
+        _tmp23 + _tmp37 + _tmp44 + _tmp62 - _tmp30 - compliance_y_9 - _tmp25*_tmp4,
+        compliance_x_9 - _tmp63 - _tmp65 - _tmp66 - _tmp70 - _tmp25*_tmp5 + 0.25*_tmp27*_tmp28*_tmp64*p_0,
         0,
-        _tmp53 - compliance_y_10 + _tmp13*_tmp60 + _tmp23*_tmp57 - _tmp12*_tmp62 - _tmp31*_tmp61 - _tmp20*_tmp64*_tmp65*numpy.sin(_tmp63),
-        compliance_x_10 - _tmp54 - _tmp12*_tmp60 - _tmp13*_tmp62 - _tmp23*_tmp61 - _tmp31*_tmp57 + 0.25*_tmp64*_tmp65*p_0*numpy.cos(_tmp63),
+        _tmp62 + _tmp80 + _tmp85 - _tmp75 - compliance_y_10,
+        compliance_x_10 - _tmp70 - _tmp87 - _tmp88 + 0.25*_tmp72*_tmp73*_tmp86*p_0,
+        0,
+        _tmp90,
+        _tmp90,
+        0,
+        _tmp91,
+        _tmp91,
     ]
 
 
@@ -2081,6 +2199,9 @@ _MECHANISM = _Mechanism(
     fixed=(),  # inputs held (derive --fix)
     limits=((0, 3.141592653589793), (1, 3.141592653589793), (2, 3.141592653589793), (3, 3.141592653589793), (4, 3.141592653589793), (5, 3.141592653589793), (6, 3.141592653589793), (7, 3.141592653589793), (8, 3.141592653589793), (9, 3.141592653589793), ),  # models valid for |theta| < limit
     needs_loops=False, loops_for_links=True,
+    angular=[0, 3],  # the rigid closure's loop angle sums (winding rule)
+    rest=((4, (0, 1, 2, 3)), (5, (0, 1, 2, 3)), (6, (0, 1, 2)), (7, (0, 1, 2)), (8, (0, 1, 2, 3)), (9, (0, 1, 2))),  # closed-form angles exactly zero with their inputs
+    n_dropped=0, consistent=1e-08,  # redundant loops' dropped rows
     rigid=_rigid,
     rigid_res=_rigid_res,
     linear=_linear,
@@ -2094,18 +2215,19 @@ _MECHANISM = _Mechanism(
     loaded_newton=_loaded_newton,
     sens_rigid=_sens_rigid,
     sens_chain=None,
+    consistency_rigid=None,
     loaded_more=0,
     sens_rigid_blocks={'A': (0, 6, 6), 'dG_dv': (36, 6, 5), 'dR_dtheta': (66, 2, 6), 'dR_dv': (78, 2, 5)},
     rigid_rule=_Rule(30, 1e-10),  # continuation steps
     polish_rule=_Rule(1),  # after the rigid start
-    exact_rule=_Rule(40, 0.0, 1e-08, 1e-12, 0.5),
+    exact_rule=_Rule(40, 0.0, 1e-08, 1e-12, 0.5, 2e-13),
     continuation_step=0.05, winding=3.141592653589793,
     levels={
-        'paper': _Level(_dev_paper, None, None, 0, _sens_paper, {'dD_dtheta': (0, 2, 6), 'dD_dv': (12, 2, 5)}),
-        'first_order': _Level(_dev_first_order, _linear, None, 0, _sens_first_order, {'dD_dtheta': (0, 2, 6), 'dD_dv': (12, 2, 5)}),
-        'exact': _Level(_dev_exact, _linear, _newton, 0, _sens_exact, {'dD_dtheta': (0, 2, 6), 'dD_dv': (12, 2, 5)}),
-        'loaded': _Level(_dev_loaded, _loaded_linear, _loaded_newton, 1, None, {}),
-        'loaded_refined': _Level(_dev_loaded, _loaded_linear, _loaded_newton, 2, None, {}),
+        'paper': _Level(_dev_paper, None, None, 0, _sens_paper, {'dD_dtheta': (0, 2, 6), 'dD_dv': (12, 2, 5)}, None),
+        'first_order': _Level(_dev_first_order, _linear, None, 0, _sens_first_order, {'dD_dtheta': (0, 2, 6), 'dD_dv': (12, 2, 5)}, None),
+        'exact': _Level(_dev_exact, _linear, _newton, 0, _sens_exact, {'dD_dtheta': (0, 2, 6), 'dD_dv': (12, 2, 5)}, None),
+        'loaded': _Level(_dev_loaded, _loaded_linear, _loaded_newton, 1, None, {}, None),
+        'loaded_refined': _Level(_dev_loaded, _loaded_linear, _loaded_newton, 2, None, {}, None),
     },
 )
 

@@ -3,7 +3,7 @@
  * Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
  * Points: D; levels: paper, first_order, exact, loaded, loaded_refined.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, loaded_q0 16, loaded_q 128, loaded_compliance 401, loaded_linear 190, loaded_newton 527, dev_paper 36, dev_first_order 50, dev_exact 60, dev_loaded 68, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661.
+ * Operation counts after CSE: rigid 142, rigid_res 81, linear 251, newton 556, rigid_points 19, loaded_q0 16, loaded_q 128, loaded_compliance 401, loaded_linear 235, loaded_newton 527, dev_paper 36, dev_first_order 50, dev_exact 60, dev_loaded 68, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661.
  */
 #include "stephenson_six_bar.h"
 
@@ -204,7 +204,7 @@ static void sk_rigid_res(const double *theta, const double *params, double *out)
     out[5] = _tmp2 - _tmp11 + 0.05*_tmp15 + 0.1*_tmp8 + 0.04*_tmp14 + 0.08*_tmp17 - 0.14*_tmp16 - 0.04*_tmp6;
 }
 
-/* rigid loop Jacobian A and r = Phi dz (208 operations) */
+/* rigid loop Jacobian A, r = Phi dz and the size S of its terms (251 operations) */
 static void sk_linear(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -234,51 +234,75 @@ static void sk_linear(const double *theta, const double *params, double *out)
     const double _tmp16 = 0.05*_tmp15 + 0.04*_tmp13;
     const double _tmp17 = pow(theta_5, 2);
     const double _tmp18 = -0.01556317594302295 + _tmp17*(0.21067334783983213*symkin_sinr1(0.6594566077552098*theta_5) - 0.5*symkin_sinr1(theta_5));
-    const double _tmp19 = 0.5*theta_6;
-    const double _tmp20 = sin(_tmp19);
-    const double _tmp21 = cos(theta_1);
-    const double _tmp22 = pow(theta_6, 2);
-    const double _tmp23 = symkin_arck(_tmp19);
-    const double _tmp24 = 0.25*p_0;
-    const double _tmp25 = _tmp22*_tmp23*_tmp24;
-    const double _tmp26 = cos(_tmp19);
-    const double _tmp27 = sin(theta_1);
-    const double _tmp28 = _tmp25*_tmp27;
-    const double _tmp29 = _tmp2*p_0;
-    const double _tmp30 = 0.3297283038776049*theta_5;
-    const double _tmp31 = 0.5*theta_5;
-    const double _tmp32 = _tmp31*(0.20066894885245268 + 0.25*_tmp17*(-0.347615499514091*symkin_sinr1(_tmp30) + symkin_sinr1(_tmp31)))*(1.2121056059601407*sin(_tmp30) + sin(_tmp31));
-    const double _tmp33 = 0.5*theta_1;
-    const double _tmp34 = pow(theta_1, 2);
-    const double _tmp35 = symkin_arck(_tmp33);
-    const double _tmp36 = _tmp24*_tmp34*_tmp35;
-    const double _tmp37 = pow(theta_3, 2);
-    const double _tmp38 = 0.5*theta_3;
+    const double _tmp19 = _tmp2*p_0;
+    const double _tmp20 = 0.3297283038776049*theta_5;
+    const double _tmp21 = 0.5*theta_5;
+    const double _tmp22 = -symkin_sinr1(_tmp21) + 0.347615499514091*symkin_sinr1(_tmp20);
+    const double _tmp23 = 0.25*_tmp17;
+    const double _tmp24 = _tmp21*(1.2121056059601407*sin(_tmp20) + sin(_tmp21));
+    const double _tmp25 = _tmp24*(0.20066894885245268 - _tmp22*_tmp23);
+    const double _tmp26 = 0.5*theta_6;
+    const double _tmp27 = cos(_tmp26);
+    const double _tmp28 = sin(theta_1);
+    const double _tmp29 = 0.25*p_0;
+    const double _tmp30 = _tmp29*pow(theta_6, 2)*symkin_arck(_tmp26);
+    const double _tmp31 = _tmp28*_tmp30;
+    const double _tmp32 = sin(_tmp26);
+    const double _tmp33 = cos(theta_1);
+    const double _tmp34 = _tmp30*_tmp33;
+    const double _tmp35 = _tmp27*_tmp31 + _tmp32*_tmp34;
+    const double _tmp36 = pow(theta_1, 2);
+    const double _tmp37 = 0.25*_tmp36;
+    const double _tmp38 = 0.5*theta_1;
     const double _tmp39 = symkin_arck(_tmp38);
-    const double _tmp40 = _tmp36*sin(_tmp33) - 0.25*_tmp37*_tmp39*p_0*sin(_tmp38);
-    const double _tmp41 = cos(_tmp33);
-    const double _tmp42 = _tmp24*_tmp37*_tmp39*cos(_tmp38);
-    const double _tmp43 = _tmp0*p_0;
-    const double _tmp45 = pow(theta_2, 2);
-    const double _tmp44 = 0.5*theta_2;
-    const double _tmp46 = symkin_arck(_tmp44);
-    const double _tmp47 = 0.1767766952966369*_tmp45*_tmp46*p_0;
-    const double _tmp48 = _tmp47*sin(_tmp44);
-    const double _tmp49 = cos(_tmp44);
-    const double _tmp50 = _tmp48 + _tmp47*_tmp49;
-    const double _tmp51 = -_tmp48 + 0.1767766952966369*_tmp45*_tmp46*_tmp49*p_0;
-    const double _tmp53 = pow(theta_4, 2);
-    const double _tmp52 = 0.5*theta_4;
-    const double _tmp54 = symkin_arck(_tmp52);
-    const double _tmp55 = 0.25*_tmp53*_tmp54;
-    const double _tmp56 = _tmp55*cos(_tmp52);
-    const double _tmp58 = pow(theta_7, 2);
-    const double _tmp57 = 0.5*theta_7;
-    const double _tmp59 = symkin_arck(_tmp57);
-    const double _tmp60 = _tmp24*_tmp58*_tmp59;
-    const double _tmp61 = _tmp60*sin(_tmp57);
-    const double _tmp62 = sin(_tmp52);
-    const double _tmp63 = cos(_tmp57);
+    const double _tmp40 = _tmp39*p_0;
+    const double _tmp41 = _tmp40*sin(_tmp38);
+    const double _tmp42 = pow(theta_3, 2);
+    const double _tmp43 = 0.5*theta_3;
+    const double _tmp44 = sin(_tmp43);
+    const double _tmp45 = symkin_arck(_tmp43);
+    const double _tmp46 = _tmp37*_tmp41 - 0.25*_tmp42*_tmp44*_tmp45*p_0;
+    const double _tmp47 = _tmp18*theta_5;
+    const double _tmp48 = _tmp19*_tmp47;
+    const double _tmp49 = _tmp45*p_0;
+    const double _tmp50 = _tmp49*cos(_tmp43);
+    const double _tmp51 = 0.25*_tmp42;
+    const double _tmp52 = _tmp50*_tmp51;
+    const double _tmp53 = cos(_tmp38);
+    const double _tmp54 = _tmp0*p_0;
+    const double _tmp55 = _tmp31*_tmp32 - _tmp27*_tmp34;
+    const double _tmp57 = pow(theta_2, 2);
+    const double _tmp56 = 0.5*theta_2;
+    const double _tmp58 = symkin_arck(_tmp56);
+    const double _tmp59 = 0.1767766952966369*_tmp57*_tmp58*p_0;
+    const double _tmp60 = _tmp59*sin(_tmp56);
+    const double _tmp61 = cos(_tmp56);
+    const double _tmp62 = _tmp60 + _tmp59*_tmp61;
+    const double _tmp63 = _tmp28*_tmp62;
+    const double _tmp64 = _tmp60 - 0.1767766952966369*_tmp57*_tmp58*_tmp61*p_0;
+    const double _tmp65 = -_tmp64;
+    const double _tmp67 = pow(theta_4, 2);
+    const double _tmp66 = 0.5*theta_4;
+    const double _tmp68 = symkin_arck(_tmp66);
+    const double _tmp69 = 0.25*_tmp67*_tmp68;
+    const double _tmp70 = _tmp69*cos(_tmp66);
+    const double _tmp71 = _tmp19*_tmp70;
+    const double _tmp72 = sin(_tmp66);
+    const double _tmp73 = 0.5*theta_7;
+    const double _tmp74 = _tmp29*pow(theta_7, 2)*symkin_arck(_tmp73);
+    const double _tmp75 = _tmp74*sin(_tmp73);
+    const double _tmp76 = _tmp74*cos(_tmp73);
+    const double _tmp77 = _tmp10*_tmp75 - _tmp11*_tmp76;
+    const double _tmp78 = _tmp33*_tmp62;
+    const double _tmp79 = _tmp40*_tmp53;
+    const double _tmp80 = _tmp69*_tmp72;
+    const double _tmp81 = _tmp19*_tmp80;
+    const double _tmp82 = _tmp54*_tmp70;
+    const double _tmp83 = _tmp10*_tmp76 + _tmp11*_tmp75;
+    const double _tmp84 = _tmp24*(-0.20066894885245268 + _tmp22*_tmp23);
+    const double _tmp85 = _tmp37*fabs(_tmp41) + _tmp37*fabs(_tmp79) + _tmp51*fabs(_tmp50) + _tmp51*fabs(_tmp44*_tmp49);
+    const double _tmp86 = _tmp85 + fabs(_tmp35) + fabs(_tmp55) + fabs(_tmp48 - _tmp54*_tmp84) + fabs(_tmp19*_tmp84 + _tmp47*_tmp54);
+    const double _tmp87 = _tmp85 + fabs(_tmp77) + fabs(_tmp83) + fabs(_tmp63 + _tmp33*_tmp64) + fabs(_tmp81 + _tmp82) + fabs(-_tmp71 + _tmp54*_tmp80) + fabs(-_tmp78 + _tmp28*_tmp64);
     out[0] = 0;
     out[1] = -1;
     out[2] = 0;
@@ -316,11 +340,17 @@ static void sk_linear(const double *theta, const double *params, double *out)
     out[34] = 0;
     out[35] = 0;
     out[36] = 0;
-    out[37] = -_tmp40 - _tmp26*_tmp28 - _tmp29*_tmp32 - _tmp20*_tmp21*_tmp25 + _tmp0*_tmp18*p_0*theta_5;
-    out[38] = -_tmp42 - _tmp20*_tmp28 - _tmp32*_tmp43 - _tmp18*_tmp29*theta_5 + 0.25*_tmp34*_tmp35*_tmp41*p_0 + 0.25*_tmp21*_tmp22*_tmp23*_tmp26*p_0;
+    out[37] = -_tmp35 - _tmp46 - _tmp19*_tmp25 + _tmp0*_tmp18*p_0*theta_5;
+    out[38] = -_tmp48 - _tmp52 - _tmp55 - _tmp25*_tmp54 + 0.25*_tmp36*_tmp39*_tmp53*p_0;
     out[39] = 0;
-    out[40] = -_tmp40 + _tmp21*_tmp51 - _tmp10*_tmp61 - _tmp27*_tmp50 - _tmp29*_tmp56 + 0.25*_tmp0*_tmp53*_tmp54*_tmp62*p_0 + 0.25*_tmp11*_tmp58*_tmp59*_tmp63*p_0;
-    out[41] = -_tmp42 + _tmp11*_tmp61 + _tmp21*_tmp50 + _tmp27*_tmp51 + _tmp36*_tmp41 - _tmp43*_tmp56 + _tmp10*_tmp60*_tmp63 - _tmp29*_tmp55*_tmp62;
+    out[40] = -_tmp46 - _tmp63 - _tmp71 - _tmp77 + _tmp33*_tmp65 + 0.25*_tmp0*_tmp67*_tmp68*_tmp72*p_0;
+    out[41] = _tmp78 + _tmp83 - _tmp52 - _tmp81 - _tmp82 + _tmp28*_tmp65 + _tmp37*_tmp79;
+    out[42] = 0;
+    out[43] = _tmp86;
+    out[44] = _tmp86;
+    out[45] = 0;
+    out[46] = _tmp87;
+    out[47] = _tmp87;
 }
 
 /* exact compliant closure F(delta) and dF/ddelta (556 operations) */
@@ -768,7 +798,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     out[13] = -_tmp104*_tmp92 + 3000000*_tmp10*_tmp102*_tmp103*_tmp96;
 }
 
-/* loaded: A and r = Phi dz of the loaded closure (its first-order start) (190 operations) */
+/* loaded: A, r = Phi dz of the loaded closure (its first-order start) and the size S of its terms (235 operations) */
 static void sk_loaded_linear(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -810,40 +840,62 @@ static void sk_loaded_linear(const double *theta, const double *params, double *
     const double _tmp14 = 0.05*_tmp13;
     const double _tmp15 = cos(_tmp12);
     const double _tmp16 = 0.05*_tmp15 + 0.04*_tmp13;
-    const double _tmp17 = 0.5*theta_5;
-    const double _tmp18 = 0.25*p_0;
-    const double _tmp19 = _tmp18*pow(theta_5, 2)*symkin_arck(_tmp17);
-    const double _tmp20 = compliance_x_5 + _tmp19*cos(_tmp17);
-    const double _tmp21 = sin(theta_1);
-    const double _tmp22 = 0.5*theta_6;
-    const double _tmp23 = _tmp18*pow(theta_6, 2)*symkin_arck(_tmp22);
-    const double _tmp24 = compliance_x_6 + _tmp23*cos(_tmp22);
-    const double _tmp25 = compliance_y_5 + _tmp19*sin(_tmp17);
-    const double _tmp26 = cos(theta_1);
-    const double _tmp27 = -compliance_y_6 - _tmp23*sin(_tmp22);
-    const double _tmp28 = 0.5*theta_1;
-    const double _tmp29 = _tmp18*pow(theta_1, 2)*symkin_arck(_tmp28);
-    const double _tmp30 = pow(theta_3, 2);
-    const double _tmp31 = 0.5*theta_3;
-    const double _tmp32 = symkin_arck(_tmp31);
-    const double _tmp33 = compliance_y_1 - compliance_y_3 + _tmp29*sin(_tmp28) - 0.25*_tmp30*_tmp32*p_0*sin(_tmp31);
-    const double _tmp34 = compliance_x_1 - compliance_x_3 + _tmp29*cos(_tmp28) - _tmp18*_tmp30*_tmp32*cos(_tmp31);
-    const double _tmp35 = 0.5*theta_4;
-    const double _tmp36 = _tmp18*pow(theta_4, 2)*symkin_arck(_tmp35);
-    const double _tmp37 = compliance_x_4 + _tmp36*cos(_tmp35);
-    const double _tmp38 = 0.5*theta_7;
-    const double _tmp39 = _tmp18*pow(theta_7, 2)*symkin_arck(_tmp38);
-    const double _tmp40 = compliance_y_7 + _tmp39*sin(_tmp38);
-    const double _tmp41 = 0.5*theta_2;
-    const double _tmp42 = cos(_tmp41);
-    const double _tmp43 = pow(theta_2, 2);
-    const double _tmp44 = symkin_arck(_tmp41);
-    const double _tmp45 = 0.1767766952966369*_tmp43*_tmp44*p_0;
-    const double _tmp46 = 0.7071067811865476*compliance_y_2 + _tmp45*sin(_tmp41);
-    const double _tmp47 = _tmp46 + 0.7071067811865476*compliance_x_2 + _tmp42*_tmp45;
-    const double _tmp48 = compliance_x_7 + _tmp39*cos(_tmp38);
-    const double _tmp49 = compliance_y_4 + _tmp36*sin(_tmp35);
-    const double _tmp50 = -_tmp46 + 0.7071067811865476*compliance_x_2 + 0.1767766952966369*_tmp42*_tmp43*_tmp44*p_0;
+    const double _tmp17 = sin(theta_1);
+    const double _tmp18 = 0.5*theta_6;
+    const double _tmp19 = 0.25*p_0;
+    const double _tmp20 = _tmp19*pow(theta_6, 2)*symkin_arck(_tmp18);
+    const double _tmp21 = compliance_x_6 + _tmp20*cos(_tmp18);
+    const double _tmp22 = _tmp17*_tmp21;
+    const double _tmp23 = 0.5*theta_5;
+    const double _tmp24 = _tmp19*pow(theta_5, 2)*symkin_arck(_tmp23);
+    const double _tmp25 = compliance_x_5 + _tmp24*cos(_tmp23);
+    const double _tmp26 = _tmp2*_tmp25;
+    const double _tmp27 = compliance_y_5 + _tmp24*sin(_tmp23);
+    const double _tmp28 = cos(theta_1);
+    const double _tmp29 = compliance_y_6 + _tmp20*sin(_tmp18);
+    const double _tmp30 = -_tmp29;
+    const double _tmp31 = pow(theta_3, 2);
+    const double _tmp32 = 0.5*theta_3;
+    const double _tmp33 = sin(_tmp32);
+    const double _tmp34 = symkin_arck(_tmp32);
+    const double _tmp35 = 0.5*theta_1;
+    const double _tmp36 = _tmp19*pow(theta_1, 2)*symkin_arck(_tmp35);
+    const double _tmp37 = compliance_y_1 + _tmp36*sin(_tmp35);
+    const double _tmp38 = _tmp37 - compliance_y_3 - 0.25*_tmp31*_tmp33*_tmp34*p_0;
+    const double _tmp39 = _tmp21*_tmp28;
+    const double _tmp40 = _tmp0*_tmp25;
+    const double _tmp41 = _tmp2*_tmp27;
+    const double _tmp42 = _tmp19*_tmp31*_tmp34;
+    const double _tmp43 = _tmp42*cos(_tmp32);
+    const double _tmp44 = compliance_x_1 + _tmp36*cos(_tmp35);
+    const double _tmp45 = _tmp44 - _tmp43 - compliance_x_3;
+    const double _tmp46 = 0.5*theta_2;
+    const double _tmp47 = cos(_tmp46);
+    const double _tmp48 = pow(theta_2, 2);
+    const double _tmp49 = symkin_arck(_tmp46);
+    const double _tmp50 = 0.1767766952966369*_tmp48*_tmp49*p_0;
+    const double _tmp51 = 0.7071067811865476*compliance_y_2 + _tmp50*sin(_tmp46);
+    const double _tmp52 = _tmp51 + 0.7071067811865476*compliance_x_2 + _tmp47*_tmp50;
+    const double _tmp53 = _tmp17*_tmp52;
+    const double _tmp54 = 0.5*theta_4;
+    const double _tmp55 = _tmp19*pow(theta_4, 2)*symkin_arck(_tmp54);
+    const double _tmp56 = compliance_x_4 + _tmp55*cos(_tmp54);
+    const double _tmp57 = _tmp2*_tmp56;
+    const double _tmp58 = compliance_y_4 + _tmp55*sin(_tmp54);
+    const double _tmp59 = _tmp51 - 0.7071067811865476*compliance_x_2 - 0.1767766952966369*_tmp47*_tmp48*_tmp49*p_0;
+    const double _tmp60 = -_tmp59;
+    const double _tmp61 = 0.5*theta_7;
+    const double _tmp62 = _tmp19*pow(theta_7, 2)*symkin_arck(_tmp61);
+    const double _tmp63 = compliance_y_7 + _tmp62*sin(_tmp61);
+    const double _tmp64 = compliance_x_7 + _tmp62*cos(_tmp61);
+    const double _tmp65 = _tmp10*_tmp63 - _tmp11*_tmp64;
+    const double _tmp66 = _tmp28*_tmp52;
+    const double _tmp67 = _tmp0*_tmp56;
+    const double _tmp68 = _tmp2*_tmp58;
+    const double _tmp69 = _tmp10*_tmp64 + _tmp11*_tmp63;
+    const double _tmp70 = fabs(_tmp37) + fabs(_tmp44) + fabs(_tmp43 + compliance_x_3) + fabs(compliance_y_3 + _tmp33*_tmp42);
+    const double _tmp71 = _tmp70 + fabs(_tmp22 + _tmp28*_tmp29) + fabs(_tmp40 + _tmp41) + fabs(-_tmp26 + _tmp0*_tmp27) + fabs(-_tmp39 + _tmp17*_tmp29);
+    const double _tmp72 = _tmp70 + fabs(_tmp65) + fabs(_tmp69) + fabs(_tmp53 + _tmp28*_tmp59) + fabs(_tmp67 + _tmp68) + fabs(-_tmp57 + _tmp0*_tmp58) + fabs(-_tmp66 + _tmp17*_tmp59);
     out[0] = 0;
     out[1] = -1;
     out[2] = 0;
@@ -881,11 +933,17 @@ static void sk_loaded_linear(const double *theta, const double *params, double *
     out[34] = 0;
     out[35] = 0;
     out[36] = 0;
-    out[37] = -_tmp33 + _tmp0*_tmp25 + _tmp26*_tmp27 - _tmp2*_tmp20 - _tmp21*_tmp24;
-    out[38] = _tmp34 + _tmp21*_tmp27 + _tmp24*_tmp26 - _tmp0*_tmp20 - _tmp2*_tmp25;
+    out[37] = -_tmp22 - _tmp26 - _tmp38 + _tmp0*_tmp27 + _tmp28*_tmp30;
+    out[38] = _tmp39 + _tmp45 - _tmp40 - _tmp41 + _tmp17*_tmp30;
     out[39] = 0;
-    out[40] = -_tmp33 + _tmp0*_tmp49 + _tmp11*_tmp48 + _tmp26*_tmp50 - _tmp10*_tmp40 - _tmp2*_tmp37 - _tmp21*_tmp47;
-    out[41] = _tmp34 + _tmp10*_tmp48 + _tmp11*_tmp40 + _tmp21*_tmp50 + _tmp26*_tmp47 - _tmp0*_tmp37 - _tmp2*_tmp49;
+    out[40] = -_tmp38 - _tmp53 - _tmp57 - _tmp65 + _tmp0*_tmp58 + _tmp28*_tmp60;
+    out[41] = _tmp45 + _tmp66 + _tmp69 - _tmp67 - _tmp68 + _tmp17*_tmp60;
+    out[42] = 0;
+    out[43] = _tmp71;
+    out[44] = _tmp71;
+    out[45] = 0;
+    out[46] = _tmp72;
+    out[47] = _tmp72;
 }
 
 /* loaded: the loaded closure F(delta) and dF/ddelta (527 operations) */
@@ -2243,6 +2301,9 @@ typedef struct {
     double converged;
     double stalled;
     double stall_ratio;
+    double residual;    /* > 0: also stop once every residual is this small relative to the size
+                           of its terms (a closure's S, symkin.core.settings 3b); unknowns all zero
+                           then stop only so */
 } sk_rule;
 
 
@@ -2250,11 +2311,30 @@ typedef struct {
    in magnitude, the previous step `previous` (HUGE_VAL before the second): the one stopping
    test of every Newton iteration. */
 static int sk_newton_stop(const sk_rule *rule, double change, double size,
-                          double previous)
+                          double previous, int noise)
 {
-    return change <= rule->tolerance
-           || (rule->converged > 0.0 && (change <= rule->converged * size || size == 0.0))
+    return change <= rule->tolerance || noise
+           || (rule->converged > 0.0
+               && (change <= rule->converged * size || (size == 0.0 && rule->residual == 0.0)))
            || (change >= rule->stall_ratio * previous && change <= rule->stalled * size);
+}
+
+/* Whether every residual f[r] of a system (f, then its row-major Jacobian J, n x n) at x is at
+   the rounding level of its terms: |f_r| <= residual (scale_r + sum_j |J_rj x_j|). */
+static int sk_residual_noise(int n, const double *fj, const double *x, const double *scale,
+                             double residual)
+{
+    int r, j;
+    for (r = 0; r < n; ++r) {
+        double terms = fabs(scale[r]);
+        for (j = 0; j < n; ++j) {
+            terms += fabs(fj[n + r * n + j] * x[j]);
+        }
+        if (!(fabs(fj[r]) <= residual * terms)) {
+            return 0;
+        }
+    }
+    return 1;
 }
 
 /* A system of n equations: at the unknowns x, its residual f (n), then its Jacobian (n x n,
@@ -2264,17 +2344,22 @@ typedef void (*sk_system_fn)(const void *ctx, const double *x, double *fj);
 /* Newton on `system` from x: each step solves J s = f and subtracts s from the unknowns
    (x[index[i]], or x[i] when index is NULL) until `rule` stops it. fj (n + n * n doubles) is
    workspace; with `evaluated` it holds the system at x already. Returns 0 (stopped), 1 (a
-   Jacobian singular or not finite) or 2 (not stopped within rule->iterations steps). */
+   Jacobian singular or not finite) or 2 (not stopped within rule->iterations steps). With
+   rule->residual > 0, `scale` (n: the size of each residual's constant terms; index NULL)
+   lets a residual at rounding stop it too (sk_residual_noise). */
 static int sk_newton_solve(sk_system_fn system, const void *ctx, int n, const int *index,
-                           const sk_rule *rule, double *x, double *fj, int evaluated)
+                           const sk_rule *rule, const double *scale, double *x, double *fj,
+                           int evaluated)
 {
     double previous = HUGE_VAL;
     int it, i;
     for (it = 0; it < rule->iterations; ++it) {
         double change = 0.0, size = 0.0;
+        int noise;
         if (it > 0 || !evaluated) {
             system(ctx, x, fj);
         }
+        noise = rule->residual > 0.0 && sk_residual_noise(n, fj, x, scale, rule->residual);
         if (sk_solve(n, fj + n, 1, fj)) {
             return 1;
         }
@@ -2288,7 +2373,7 @@ static int sk_newton_solve(sk_system_fn system, const void *ctx, int n, const in
                 change = fabs(fj[i]);
             }
         }
-        if (sk_newton_stop(rule, change, size, previous)) {
+        if (sk_newton_stop(rule, change, size, previous, noise)) {
             return 0;
         }
         previous = change;
@@ -2316,6 +2401,8 @@ typedef struct {
     sk_fn3 closure;     /* its F and dF/ddelta (theta, delta, q); NULL: A delta = -r only */
     int loaded;         /* q: 0 the parameters, 1 the loaded constants, 2 refined ones */
     sk_sens sens;       /* its sensitivities (fn NULL: none) */
+    sk_fn3 consistency; /* redundant loops: its closure's dropped rows, then their terms' size
+                           (theta, delta, q); NULL: none */
 } sk_level;
 
 /* One mechanism: its tables, routines and solver settings. Routines a mechanism lacks are
@@ -2337,7 +2424,14 @@ typedef struct {
     sk_fn2 rigid;                   /* closed-form rigid angles and reaches (inputs, params) */
     int n_dyads;
     sk_fn2 rigid_res;               /* rigid closure (theta, params): per loop angle, x, y */
-    sk_fn2 linear;                  /* its Jacobian A and r (theta, params) */
+    int n_angular;                  /* the rows of rigid_res that are loops' angle sums */
+    const int *angular;
+    sk_fn2 linear;                  /* its Jacobian A, r and S (theta, params) */
+    int n_rest;                     /* closed-form angles exactly zero with their inputs: */
+    const int *rest;                /* (theta index, count, the inputs' positions) ... */
+    int n_dropped;                  /* redundant loops: the closure rows left out of the solves */
+    sk_fn2 consistency_rigid;       /* their rigid residuals and terms' size (theta, params) */
+    double consistent;              /* each must vanish to this fraction of its size */
     sk_fn2 rigid_points;            /* (theta, params) */
     sk_fn2 links;                   /* rotations and their deviations (theta, delta) */
     sk_fn2 loaded_q0;               /* the loaded level's statics (A^T mu0 = Q0; NULL: one pass) */
@@ -2345,7 +2439,7 @@ typedef struct {
     sk_fn3 loaded_compliance;       /* (theta, mu, params) into the constants at compliance_at */
     sk_fn3 loaded_compliance_more;  /* the plates only the loaded closure reads, at more_at */
     int compliance_at, more_at;
-    sk_fn2 loaded_linear;           /* the loaded closure: A and r (theta, constants) */
+    sk_fn2 loaded_linear;           /* the loaded closure: A, r and S (theta, constants) */
     sk_fn3 loaded_closure;          /* F and dF/ddelta (theta, delta, constants) */
     sk_rule rigid_rule;             /* Newton at each continuation step */
     sk_rule polish_rule;            /* after the rigid start */
@@ -2372,6 +2466,20 @@ static const sk_level *sk_find_level(const sk_mechanism *m, int code)
 }
 
 
+/* Redundant loops (symkin.core.settings, 4): 0 when each dropped closure row con[i] vanishes
+   to m->consistent of the size of its terms con[n_dropped + i], else 1 (the loops contradict
+   each other). */
+static int sk_consistent(const sk_mechanism *m, const double *con)
+{
+    int i;
+    for (i = 0; i < m->n_dropped; ++i) {
+        if (!(fabs(con[i]) <= m->consistent * con[m->n_dropped + i])) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
 /* What the rigid closure's Newton reads: theta is its unknowns' array. */
 typedef struct {
     const sk_mechanism *m;
@@ -2383,7 +2491,7 @@ typedef struct {
 static void sk_rigid_system(const void *ctx, const double *theta, double *fj)
 {
     const sk_rigid_ctx *c = (const sk_rigid_ctx *)ctx;
-    double lin[SK_K * SK_K + SK_K + 1];
+    double lin[SK_K * SK_K + 2 * SK_K + 1];
     int i;
     c->m->rigid_res(theta, c->params, fj);
     c->m->linear(theta, c->params, lin);
@@ -2416,15 +2524,33 @@ static int sk_rigid_pose(const sk_mechanism *m, const double *inputs, const doub
         for (i = 0; i < SK_K; ++i) {
             theta[m->unknown_index[i]] = sk_wrap(sol[i]);
         }
+        /* an angle whose inputs are all zero is exactly zero (its formula rounds to noise) */
+        for (i = 0; i < m->n_rest; i += 2 + m->rest[i + 1]) {
+            int j, moved = 0;
+            for (j = 0; j < m->rest[i + 1]; ++j) {
+                moved = moved || inputs[m->rest[i + 2 + j]] != 0.0;
+            }
+            if (!moved) {
+                theta[m->rest[i]] = 0.0;
+            }
+        }
     }
     sk_rigid_system(&c, theta, fj);
-    for (i = 0; i < SK_K; i += 3) {
-        if (!(fabs(fj[i]) < m->winding)) {
+    for (i = 0; i < m->n_angular; ++i) {
+        if (!(fabs(fj[m->angular[i]]) < m->winding)) {
             return 1;
         }
     }
-    return sk_newton_solve(sk_rigid_system, &c, SK_K, m->unknown_index, &m->polish_rule, theta,
-                           fj, 1) == 1;
+    if (sk_newton_solve(sk_rigid_system, &c, SK_K, m->unknown_index, &m->polish_rule, NULL,
+                        theta, fj, 1) == 1) {
+        return 1;
+    }
+    if (m->consistency_rigid != NULL) {
+        double con[SK_OUT];
+        m->consistency_rigid(theta, params, con);
+        return sk_consistent(m, con);
+    }
+    return 0;
 }
 
 /* What a compliant closure's Newton reads. */
@@ -2444,12 +2570,13 @@ static void sk_closure_system(const void *ctx, const double *delta, double *fj)
 static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure,
                             const double *theta, const double *q, double *delta)
 {
-    double lin[SK_K * SK_K + SK_K + 1], fj[SK_K + SK_K * SK_K + 1];
+    double lin[SK_K * SK_K + 2 * SK_K + 1], fj[SK_K + SK_K * SK_K + 1], scale[SK_K + 1];
     sk_closure_ctx c;
     int i;
     linear(theta, q, lin);
     for (i = 0; i < SK_K; ++i) {
         delta[i] = -lin[SK_K * SK_K + i];
+        scale[i] = lin[SK_K * SK_K + SK_K + i];
     }
     if (sk_solve(SK_K, lin, 1, delta)) {
         return 1;
@@ -2460,7 +2587,8 @@ static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure
     c.closure = closure;
     c.theta = theta;
     c.q = q;
-    return sk_newton_solve(sk_closure_system, &c, SK_K, NULL, &m->exact_rule, delta, fj, 0);
+    return sk_newton_solve(sk_closure_system, &c, SK_K, NULL, &m->exact_rule, scale, delta, fj,
+                           0);
 }
 
 /* The loaded level's closure constants: the parameters, then every plate's compliance under the
@@ -2472,7 +2600,7 @@ static int sk_loaded_constants(const sk_mechanism *m, const double *theta, const
 {
     const double *mu = NULL;
     int i;
-    double lin[SK_K * SK_K + SK_K + 1], at[SK_K * SK_K + 1], mu0[SK_K + 1], loads[SK_K + 1];
+    double lin[SK_K * SK_K + 2 * SK_K + 1], at[SK_K * SK_K + 1], mu0[SK_K + 1], loads[SK_K + 1];
     int j, piv[SK_K + 1];
     if (jac == NULL) {
         m->linear(theta, params, lin);
@@ -2568,6 +2696,13 @@ static int sk_pose(const sk_mechanism *m, const sk_level *lv, const double *inpu
         const int status = sk_solve_closure(m, lv->linear, lv->closure, theta, *q, delta);
         if (status) {
             return status;
+        }
+        if (lv->consistency != NULL) {
+            double con[SK_OUT];
+            lv->consistency(theta, delta, *q, con);
+            if (sk_consistent(m, con)) {
+                return 1;
+            }
         }
     }
     for (i = 0; i < m->n_limits; ++i) {
@@ -2863,19 +2998,23 @@ static const double sk_fixed_angle[1] = {0};
 static const int sk_limit_index[8] = {0, 1, 2, 3, 4, 5, 6};
 static const int sk_limit_unknown[8] = {-1, 0, 1, 2, 3, 4, 5};
 static const double sk_limit[8] = {3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793, 3.141592653589793};
+static const int sk_angular[3] = {0, 3};
+/* closed-form angles exactly zero with their inputs: theta index, count, the inputs' positions */
+static const int sk_rest[19] = {1, 1, 0, 2, 1, 0, 3, 1, 0, 4, 1, 0, 5, 1, 0, 6, 1, 0};
 
-/* code, deviation, linear and Newton routines of its closure, what it reads; sensitivities */
+/* code, deviation, linear and Newton routines of its closure, what it reads; sensitivities;
+   the dropped rows of its closure (redundant loops) */
 static const sk_level sk_levels[] = {
     {0, sk_dev_paper, NULL, NULL, 0,  /* paper */
-     {sk_sens_paper, 0, 0, 0, 0, 0, 0, 12}},
+     {sk_sens_paper, 0, 0, 0, 0, 0, 0, 12}, NULL},
     {1, sk_dev_first_order, sk_linear, NULL, 0,  /* first_order */
-     {sk_sens_first_order, 1, 0, 36, 72, 84, 96, 108}},
+     {sk_sens_first_order, 1, 0, 36, 72, 84, 96, 108}, NULL},
     {2, sk_dev_exact, sk_linear, sk_newton, 0,  /* exact */
-     {sk_sens_exact, 1, 0, 36, 72, 84, 96, 108}},
+     {sk_sens_exact, 1, 0, 36, 72, 84, 96, 108}, NULL},
     {3, sk_dev_loaded, sk_loaded_linear, sk_loaded_newton, 1,  /* loaded */
-     {NULL, 0, 0, 0, 0, 0, 0, 0}},
+     {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL},
     {5, sk_dev_loaded, sk_loaded_linear, sk_loaded_newton, 2,  /* loaded_refined */
-     {NULL, 0, 0, 0, 0, 0, 0, 0}}
+     {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL}
 };
 
 static const sk_mechanism sk_mechanism_tables = {
@@ -2884,6 +3023,8 @@ static const sk_mechanism sk_mechanism_tables = {
     .n_fixed = 0, .fixed_index = sk_fixed_index, .fixed_angle = sk_fixed_angle,
     .n_limits = 7, .limit_index = sk_limit_index, .limit_unknown = sk_limit_unknown,
     .limit = sk_limit, .needs_loops = 1, .loops_for_links = 0,
+    .n_angular = 2, .angular = sk_angular, .n_rest = 18, .rest = sk_rest,
+    .n_dropped = 0, .consistent = 1e-08,
     .rigid = sk_rigid,
     .rigid_res = sk_rigid_res,
     .linear = sk_linear,
@@ -2898,7 +3039,7 @@ static const sk_mechanism sk_mechanism_tables = {
     .n_dyads = 2, .compliance_at = 1, .more_at = 15,
     .rigid_rule = {30, 1e-10, 0.0, 0.0, 0.0},
     .polish_rule = {1, 0.0, 0.0, 0.0, 0.0},
-    .exact_rule = {40, 0.0, 1e-08, 1e-12, 0.5},
+    .exact_rule = {40, 0.0, 1e-08, 1e-12, 0.5, 2e-13},
     .continuation_step = 0.05, .winding = 3.141592653589793,
     .n_levels = 5, .levels = sk_levels,
     .sr_A = 0, .sr_dG_dv = 36, .sr_dR_dtheta = 48, .sr_dR_dv = 60

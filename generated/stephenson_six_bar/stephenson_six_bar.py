@@ -2,7 +2,7 @@
 Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
 Points: D; levels: paper, first_order, exact, loaded, loaded_refined.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 142, rigid_res 81, linear 208, newton 556, rigid_points 19, loaded_q0 16, loaded_q 128, loaded_compliance 401, loaded_linear 190, loaded_newton 527, dev_paper 36, dev_first_order 50, dev_exact 60, dev_loaded 68, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661.
+Operation counts after CSE: rigid 142, rigid_res 81, linear 251, newton 556, rigid_points 19, loaded_q0 16, loaded_q 128, loaded_compliance 401, loaded_linear 235, loaded_newton 527, dev_paper 36, dev_first_order 50, dev_exact 60, dev_loaded 68, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -56,22 +56,29 @@ class _Level:
     """A generated level: its deviation routine, the closure it solves for delta (linear: A and
     r; newton: F and dF/ddelta, None for the first-order delta; both None: none), what its
     routines read (loaded: 0 the parameters, 1 the loaded constants, 2 refined ones) and its
-    sensitivity routine with the (offset, rows, cols) of its blocks."""
+    sensitivity routine with the (offset, rows, cols) of its blocks; with redundant loops,
+    `consistency`: its closure's dropped rows and their terms' size (theta, delta, q)."""
 
-    def __init__(self, dev, linear=None, newton=None, loaded=0, sens=None, blocks=None):
+    def __init__(
+        self, dev, linear=None, newton=None, loaded=0, sens=None, blocks=None, consistency=None
+    ):
         self.dev, self.linear, self.newton, self.loaded = dev, linear, newton, loaded
-        self.sens, self.blocks = sens, blocks or {}
+        self.sens, self.blocks, self.consistency = sens, blocks or {}, consistency
 
 
 class _Rule:
     """When a Newton iteration stops (symkin.core.settings): after `iterations` steps at most,
     and once a step is at most `tolerance`, or at most `converged` times the largest unknown
-    (with converged > 0; also when they are all zero), or has stalled at rounding: at least
-    `stall_ratio` times the previous step and at most `stalled` times the largest unknown."""
+    (with converged > 0; also when they are all zero unless `residual`), or has stalled at
+    rounding: at least `stall_ratio` times the previous step and at most `stalled` times the
+    largest unknown; with `residual` > 0, also once every residual is at most `residual` times
+    the size of its terms (symkin.core.settings, 3b)."""
 
-    def __init__(self, iterations, tolerance=0.0, converged=0.0, stalled=0.0, stall_ratio=0.0):
+    def __init__(
+        self, iterations, tolerance=0.0, converged=0.0, stalled=0.0, stall_ratio=0.0, residual=0.0
+    ):
         self.iterations, self.tolerance, self.converged = iterations, tolerance, converged
-        self.stalled, self.stall_ratio = stalled, stall_ratio
+        self.stalled, self.stall_ratio, self.residual = stalled, stall_ratio, residual
 
 
 def _value(v, dtype):
@@ -177,21 +184,36 @@ def _gauss(a, b, ok, k, m, dtype):
     return x, good
 
 
-def _newton_stop(rule, change, size, previous):
+def _newton_stop(rule, change, size, previous, noise=False):
     """Where Newton stops after a step `change` (largest entry), the unknowns now at most `size`
-    in magnitude, the previous step `previous` (inf before the second): the one stopping test of
-    every Newton iteration."""
-    done = change <= rule.tolerance
+    in magnitude, the previous step `previous` (inf before the second), `noise` where the
+    residuals were at rounding (_residual_noise): the one stopping test of every Newton
+    iteration."""
+    done = (change <= rule.tolerance) | noise
     if rule.converged > 0.0:
-        done = done | (change <= rule.converged * size) | (size == 0)
+        done = done | (change <= rule.converged * size)
+        if rule.residual == 0.0:
+            done = done | (size == 0)
     return done | ((change >= rule.stall_ratio * previous) & (change <= rule.stalled * size))
 
 
-def _newton_solve(system, x, index, ok, rule, dtype, evaluated=None):
+def _residual_noise(out, x, scale, residual):
+    """Where every residual out[r] of a system (f, then its row-major Jacobian J) at x is at the
+    rounding level of its terms: |f_r| <= residual (scale_r + sum_j |J_rj x_j|)."""
+    k = len(x)
+    noise = True
+    for r in range(k):
+        terms = numpy.abs(scale[r]) + sum(numpy.abs(out[k + r * k + j] * x[j]) for j in range(k))
+        noise = noise & (numpy.abs(out[r]) <= residual * terms)
+    return noise
+
+
+def _newton_solve(system, x, index, ok, rule, dtype, evaluated=None, scale=None):
     """Newton on `system` (x -> its residual f, then its row-major Jacobian, as one list) from
     the list of arrays x, stepping the unknowns x[i] for i in `index`, each element until
-    `rule` stops it; `evaluated`: the system at x, when it is known. Returns x, ok (False where
-    a Jacobian is singular or not finite) and where Newton stopped."""
+    `rule` stops it; `evaluated`: the system at x, when it is known; `scale` (with
+    rule.residual > 0, index covering x): the size of each residual's constant terms. Returns
+    x, ok (False where a Jacobian is singular or not finite) and where Newton stopped."""
     k = len(index)
     active = ok.copy()
     previous = numpy.full(ok.shape, numpy.inf)
@@ -199,6 +221,9 @@ def _newton_solve(system, x, index, ok, rule, dtype, evaluated=None):
     for _ in range(rule.iterations):
         if out is None:
             out = system(x)
+        noise = False
+        if rule.residual > 0.0:
+            noise = _residual_noise(out, [x[i] for i in index], scale, rule.residual)
         step, good = _solve(out[k:], out[:k], active, 1, dtype)
         out = None
         ok = ok & (good | ~active)
@@ -207,7 +232,7 @@ def _newton_solve(system, x, index, ok, rule, dtype, evaluated=None):
             x[i] = numpy.where(active, x[i] - step[j], x[i])
         size = numpy.max(numpy.abs(numpy.array([x[i] for i in index])), axis=0)
         change = numpy.max(numpy.abs(numpy.array(step)), axis=0)
-        done = _newton_stop(rule, change, size, previous)
+        done = _newton_stop(rule, change, size, previous, noise)
         previous = numpy.where(active, change, previous)
         active = active & ~done
         if not active.any():
@@ -249,6 +274,12 @@ def _rigid_angles(mech, x, params, ok):
             ok = ok & (numpy.broadcast_to(reach, shape) >= 0.0)
         for j, i in enumerate(mech.unknown_index):
             theta[i] = numpy.where(ok, _wrap(numpy.broadcast_to(out[j], shape)), 0.0)
+        # an angle whose inputs are all zero is exactly zero (its formula rounds to noise there)
+        for i, reads in mech.rest:
+            moved = numpy.zeros(shape, dtype=bool)
+            for j in reads:
+                moved = moved | (x[j] != 0.0)
+            theta[i] = numpy.where(moved, theta[i], 0.0)
     else:
         top = max(
             [float(numpy.max(numpy.abs(v))) if v.size else 0.0 for v in x]
@@ -267,25 +298,43 @@ def _rigid_angles(mech, x, params, ok):
             stage, system, theta, mech.unknown_index, ok, mech.rigid_rule, steps, dtype
         )
     out = system(theta)
-    for n in range(0, k, 3):
+    for n in mech.angular:
         ok = ok & (numpy.abs(out[n]) < mech.winding)
     theta, ok, _ = _newton_solve(
         system, theta, mech.unknown_index, ok, mech.polish_rule, dtype, out
     )
+    if mech.consistency_rigid is not None:
+        ok = _consistent(mech, mech.consistency_rigid(theta, params), ok)
     return theta, ok
+
+
+def _consistent(mech, out, ok):
+    """Redundant loops (symkin.core.settings, 4): where each dropped closure row (out: the rows,
+    then the size of their terms) vanishes to mech.consistent of its size; else not ok."""
+    n = mech.n_dropped
+    for i in range(n):
+        ok = ok & (numpy.abs(out[i]) <= mech.consistent * numpy.asarray(out[n + i]))
+    return ok
 
 
 def _solve_closure(mech, linear, newton, theta, q, ok):
     """delta of a closure: A delta = -r (its first-order delta), then with `newton` (F,
     dF/ddelta) Newton from there; and ok."""
     k = len(mech.unknown_index)
-    lin = linear(theta, q)
-    delta, good = _solve(lin[: k * k], [-numpy.asarray(r) for r in lin[k * k :]], ok, 1, mech.dtype)
+    lin = linear(theta, q)  # A, r, then S: the size of r's terms
+    rhs = [-numpy.asarray(r) for r in lin[k * k : k * k + k]]
+    delta, good = _solve(lin[: k * k], rhs, ok, 1, mech.dtype)
     ok = ok & good
     if newton is None:
         return delta, ok
     delta, ok, converged = _newton_solve(
-        lambda delta: newton(theta, delta, q), delta, range(k), ok, mech.exact_rule, mech.dtype
+        lambda delta: newton(theta, delta, q),
+        delta,
+        range(k),
+        ok,
+        mech.exact_rule,
+        mech.dtype,
+        scale=lin[k * k + k :],
     )
     return delta, ok & converged
 
@@ -337,6 +386,8 @@ def _pose(mech, arrays, level, p, links):
         delta = [numpy.zeros(shape, dtype=mech.dtype) for _ in mech.unknown_index]
         if lv.linear is not None and (mech.needs_loops or (links and mech.loops_for_links)):
             delta, ok = _solve_closure(mech, lv.linear, lv.newton, theta, q, ok)
+            if lv.consistency is not None:
+                ok = _consistent(mech, lv.consistency(theta, delta, q), ok)
         for i, limit in mech.limits:
             ok = ok & (numpy.abs(theta[i]) <= limit)
             if i in mech.unknown_index:
@@ -681,7 +732,7 @@ def _rigid_res(theta, params):
 
 
 def _linear(theta, params):
-    """rigid loop Jacobian A and r = Phi dz (208 operations)."""
+    """rigid loop Jacobian A, r = Phi dz and the size S of its terms (251 operations)."""
     theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7 = theta
     p_0, = params
     _tmp0 = numpy.sin(theta_3)
@@ -703,51 +754,75 @@ def _linear(theta, params):
     _tmp16 = 0.05*_tmp15 + 0.04*_tmp13
     _tmp17 = theta_5**2
     _tmp18 = -0.01556317594302295 + _tmp17*(0.21067334783983213*sinr1(0.6594566077552098*theta_5) - 0.5*sinr1(theta_5))
-    _tmp19 = 0.5*theta_6
-    _tmp20 = numpy.sin(_tmp19)
-    _tmp21 = numpy.cos(theta_1)
-    _tmp22 = theta_6**2
-    _tmp23 = arck(_tmp19)
-    _tmp24 = 0.25*p_0
-    _tmp25 = _tmp22*_tmp23*_tmp24
-    _tmp26 = numpy.cos(_tmp19)
-    _tmp27 = numpy.sin(theta_1)
-    _tmp28 = _tmp25*_tmp27
-    _tmp29 = _tmp2*p_0
-    _tmp30 = 0.3297283038776049*theta_5
-    _tmp31 = 0.5*theta_5
-    _tmp32 = _tmp31*(0.20066894885245268 + 0.25*_tmp17*(-0.347615499514091*sinr1(_tmp30) + sinr1(_tmp31)))*(1.2121056059601407*numpy.sin(_tmp30) + numpy.sin(_tmp31))
-    _tmp33 = 0.5*theta_1
-    _tmp34 = theta_1**2
-    _tmp35 = arck(_tmp33)
-    _tmp36 = _tmp24*_tmp34*_tmp35
-    _tmp37 = theta_3**2
-    _tmp38 = 0.5*theta_3
+    _tmp19 = _tmp2*p_0
+    _tmp20 = 0.3297283038776049*theta_5
+    _tmp21 = 0.5*theta_5
+    _tmp22 = -sinr1(_tmp21) + 0.347615499514091*sinr1(_tmp20)
+    _tmp23 = 0.25*_tmp17
+    _tmp24 = _tmp21*(1.2121056059601407*numpy.sin(_tmp20) + numpy.sin(_tmp21))
+    _tmp25 = _tmp24*(0.20066894885245268 - _tmp22*_tmp23)
+    _tmp26 = 0.5*theta_6
+    _tmp27 = numpy.cos(_tmp26)
+    _tmp28 = numpy.sin(theta_1)
+    _tmp29 = 0.25*p_0
+    _tmp30 = _tmp29*theta_6**2*arck(_tmp26)
+    _tmp31 = _tmp28*_tmp30
+    _tmp32 = numpy.sin(_tmp26)
+    _tmp33 = numpy.cos(theta_1)
+    _tmp34 = _tmp30*_tmp33
+    _tmp35 = _tmp27*_tmp31 + _tmp32*_tmp34
+    _tmp36 = theta_1**2
+    _tmp37 = 0.25*_tmp36
+    _tmp38 = 0.5*theta_1
     _tmp39 = arck(_tmp38)
-    _tmp40 = _tmp36*numpy.sin(_tmp33) - 0.25*_tmp37*_tmp39*p_0*numpy.sin(_tmp38)
-    _tmp41 = numpy.cos(_tmp33)
-    _tmp42 = _tmp24*_tmp37*_tmp39*numpy.cos(_tmp38)
-    _tmp43 = _tmp0*p_0
-    _tmp45 = theta_2**2
-    _tmp44 = 0.5*theta_2
-    _tmp46 = arck(_tmp44)
-    _tmp47 = 0.1767766952966369*_tmp45*_tmp46*p_0
-    _tmp48 = _tmp47*numpy.sin(_tmp44)
-    _tmp49 = numpy.cos(_tmp44)
-    _tmp50 = _tmp48 + _tmp47*_tmp49
-    _tmp51 = -_tmp48 + 0.1767766952966369*_tmp45*_tmp46*_tmp49*p_0
-    _tmp53 = theta_4**2
-    _tmp52 = 0.5*theta_4
-    _tmp54 = arck(_tmp52)
-    _tmp55 = 0.25*_tmp53*_tmp54
-    _tmp56 = _tmp55*numpy.cos(_tmp52)
-    _tmp58 = theta_7**2
-    _tmp57 = 0.5*theta_7
-    _tmp59 = arck(_tmp57)
-    _tmp60 = _tmp24*_tmp58*_tmp59
-    _tmp61 = _tmp60*numpy.sin(_tmp57)
-    _tmp62 = numpy.sin(_tmp52)
-    _tmp63 = numpy.cos(_tmp57)
+    _tmp40 = _tmp39*p_0
+    _tmp41 = _tmp40*numpy.sin(_tmp38)
+    _tmp42 = theta_3**2
+    _tmp43 = 0.5*theta_3
+    _tmp44 = numpy.sin(_tmp43)
+    _tmp45 = arck(_tmp43)
+    _tmp46 = _tmp37*_tmp41 - 0.25*_tmp42*_tmp44*_tmp45*p_0
+    _tmp47 = _tmp18*theta_5
+    _tmp48 = _tmp19*_tmp47
+    _tmp49 = _tmp45*p_0
+    _tmp50 = _tmp49*numpy.cos(_tmp43)
+    _tmp51 = 0.25*_tmp42
+    _tmp52 = _tmp50*_tmp51
+    _tmp53 = numpy.cos(_tmp38)
+    _tmp54 = _tmp0*p_0
+    _tmp55 = _tmp31*_tmp32 - _tmp27*_tmp34
+    _tmp57 = theta_2**2
+    _tmp56 = 0.5*theta_2
+    _tmp58 = arck(_tmp56)
+    _tmp59 = 0.1767766952966369*_tmp57*_tmp58*p_0
+    _tmp60 = _tmp59*numpy.sin(_tmp56)
+    _tmp61 = numpy.cos(_tmp56)
+    _tmp62 = _tmp60 + _tmp59*_tmp61
+    _tmp63 = _tmp28*_tmp62
+    _tmp64 = _tmp60 - 0.1767766952966369*_tmp57*_tmp58*_tmp61*p_0
+    _tmp65 = -_tmp64
+    _tmp67 = theta_4**2
+    _tmp66 = 0.5*theta_4
+    _tmp68 = arck(_tmp66)
+    _tmp69 = 0.25*_tmp67*_tmp68
+    _tmp70 = _tmp69*numpy.cos(_tmp66)
+    _tmp71 = _tmp19*_tmp70
+    _tmp72 = numpy.sin(_tmp66)
+    _tmp73 = 0.5*theta_7
+    _tmp74 = _tmp29*theta_7**2*arck(_tmp73)
+    _tmp75 = _tmp74*numpy.sin(_tmp73)
+    _tmp76 = _tmp74*numpy.cos(_tmp73)
+    _tmp77 = _tmp10*_tmp75 - _tmp11*_tmp76
+    _tmp78 = _tmp33*_tmp62
+    _tmp79 = _tmp40*_tmp53
+    _tmp80 = _tmp69*_tmp72
+    _tmp81 = _tmp19*_tmp80
+    _tmp82 = _tmp54*_tmp70
+    _tmp83 = _tmp10*_tmp76 + _tmp11*_tmp75
+    _tmp84 = _tmp24*(-0.20066894885245268 + _tmp22*_tmp23)
+    _tmp85 = _tmp37*abs(_tmp41) + _tmp37*abs(_tmp79) + _tmp51*abs(_tmp50) + _tmp51*abs(_tmp44*_tmp49)
+    _tmp86 = _tmp85 + abs(_tmp35) + abs(_tmp55) + abs(_tmp48 - _tmp54*_tmp84) + abs(_tmp19*_tmp84 + _tmp47*_tmp54)
+    _tmp87 = _tmp85 + abs(_tmp77) + abs(_tmp83) + abs(_tmp63 + _tmp33*_tmp64) + abs(_tmp81 + _tmp82) + abs(-_tmp71 + _tmp54*_tmp80) + abs(-_tmp78 + _tmp28*_tmp64)
     return [
         0,
         -1,
@@ -786,11 +861,17 @@ def _linear(theta, params):
         0,
         0,
         0,
-        -_tmp40 - _tmp26*_tmp28 - _tmp29*_tmp32 - _tmp20*_tmp21*_tmp25 + _tmp0*_tmp18*p_0*theta_5,
-        -_tmp42 - _tmp20*_tmp28 - _tmp32*_tmp43 - _tmp18*_tmp29*theta_5 + 0.25*_tmp34*_tmp35*_tmp41*p_0 + 0.25*_tmp21*_tmp22*_tmp23*_tmp26*p_0,
+        -_tmp35 - _tmp46 - _tmp19*_tmp25 + _tmp0*_tmp18*p_0*theta_5,
+        -_tmp48 - _tmp52 - _tmp55 - _tmp25*_tmp54 + 0.25*_tmp36*_tmp39*_tmp53*p_0,
         0,
-        -_tmp40 + _tmp21*_tmp51 - _tmp10*_tmp61 - _tmp27*_tmp50 - _tmp29*_tmp56 + 0.25*_tmp0*_tmp53*_tmp54*_tmp62*p_0 + 0.25*_tmp11*_tmp58*_tmp59*_tmp63*p_0,
-        -_tmp42 + _tmp11*_tmp61 + _tmp21*_tmp50 + _tmp27*_tmp51 + _tmp36*_tmp41 - _tmp43*_tmp56 + _tmp10*_tmp60*_tmp63 - _tmp29*_tmp55*_tmp62,
+        -_tmp46 - _tmp63 - _tmp71 - _tmp77 + _tmp33*_tmp65 + 0.25*_tmp0*_tmp67*_tmp68*_tmp72*p_0,
+        _tmp78 + _tmp83 - _tmp52 - _tmp81 - _tmp82 + _tmp28*_tmp65 + _tmp37*_tmp79,
+        0,
+        _tmp86,
+        _tmp86,
+        0,
+        _tmp87,
+        _tmp87,
     ]
 
 
@@ -1209,7 +1290,7 @@ def _loaded_compliance(theta, mu, params):
 
 
 def _loaded_linear(theta, params):
-    """loaded: A and r = Phi dz of the loaded closure (its first-order start) (190 operations)."""
+    """loaded: A, r = Phi dz of the loaded closure (its first-order start) and the size S of its terms (235 operations)."""
     theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7 = theta
     p_0, compliance_x_1, compliance_y_1, compliance_x_2, compliance_y_2, compliance_x_3, compliance_y_3, compliance_x_4, compliance_y_4, compliance_x_5, compliance_y_5, compliance_x_6, compliance_y_6, compliance_x_7, compliance_y_7 = params
     _tmp0 = numpy.sin(theta_3)
@@ -1229,40 +1310,62 @@ def _loaded_linear(theta, params):
     _tmp14 = 0.05*_tmp13
     _tmp15 = numpy.cos(_tmp12)
     _tmp16 = 0.05*_tmp15 + 0.04*_tmp13
-    _tmp17 = 0.5*theta_5
-    _tmp18 = 0.25*p_0
-    _tmp19 = _tmp18*theta_5**2*arck(_tmp17)
-    _tmp20 = compliance_x_5 + _tmp19*numpy.cos(_tmp17)
-    _tmp21 = numpy.sin(theta_1)
-    _tmp22 = 0.5*theta_6
-    _tmp23 = _tmp18*theta_6**2*arck(_tmp22)
-    _tmp24 = compliance_x_6 + _tmp23*numpy.cos(_tmp22)
-    _tmp25 = compliance_y_5 + _tmp19*numpy.sin(_tmp17)
-    _tmp26 = numpy.cos(theta_1)
-    _tmp27 = -compliance_y_6 - _tmp23*numpy.sin(_tmp22)
-    _tmp28 = 0.5*theta_1
-    _tmp29 = _tmp18*theta_1**2*arck(_tmp28)
-    _tmp30 = theta_3**2
-    _tmp31 = 0.5*theta_3
-    _tmp32 = arck(_tmp31)
-    _tmp33 = compliance_y_1 - compliance_y_3 + _tmp29*numpy.sin(_tmp28) - 0.25*_tmp30*_tmp32*p_0*numpy.sin(_tmp31)
-    _tmp34 = compliance_x_1 - compliance_x_3 + _tmp29*numpy.cos(_tmp28) - _tmp18*_tmp30*_tmp32*numpy.cos(_tmp31)
-    _tmp35 = 0.5*theta_4
-    _tmp36 = _tmp18*theta_4**2*arck(_tmp35)
-    _tmp37 = compliance_x_4 + _tmp36*numpy.cos(_tmp35)
-    _tmp38 = 0.5*theta_7
-    _tmp39 = _tmp18*theta_7**2*arck(_tmp38)
-    _tmp40 = compliance_y_7 + _tmp39*numpy.sin(_tmp38)
-    _tmp41 = 0.5*theta_2
-    _tmp42 = numpy.cos(_tmp41)
-    _tmp43 = theta_2**2
-    _tmp44 = arck(_tmp41)
-    _tmp45 = 0.1767766952966369*_tmp43*_tmp44*p_0
-    _tmp46 = 0.7071067811865476*compliance_y_2 + _tmp45*numpy.sin(_tmp41)
-    _tmp47 = _tmp46 + 0.7071067811865476*compliance_x_2 + _tmp42*_tmp45
-    _tmp48 = compliance_x_7 + _tmp39*numpy.cos(_tmp38)
-    _tmp49 = compliance_y_4 + _tmp36*numpy.sin(_tmp35)
-    _tmp50 = -_tmp46 + 0.7071067811865476*compliance_x_2 + 0.1767766952966369*_tmp42*_tmp43*_tmp44*p_0
+    _tmp17 = numpy.sin(theta_1)
+    _tmp18 = 0.5*theta_6
+    _tmp19 = 0.25*p_0
+    _tmp20 = _tmp19*theta_6**2*arck(_tmp18)
+    _tmp21 = compliance_x_6 + _tmp20*numpy.cos(_tmp18)
+    _tmp22 = _tmp17*_tmp21
+    _tmp23 = 0.5*theta_5
+    _tmp24 = _tmp19*theta_5**2*arck(_tmp23)
+    _tmp25 = compliance_x_5 + _tmp24*numpy.cos(_tmp23)
+    _tmp26 = _tmp2*_tmp25
+    _tmp27 = compliance_y_5 + _tmp24*numpy.sin(_tmp23)
+    _tmp28 = numpy.cos(theta_1)
+    _tmp29 = compliance_y_6 + _tmp20*numpy.sin(_tmp18)
+    _tmp30 = -_tmp29
+    _tmp31 = theta_3**2
+    _tmp32 = 0.5*theta_3
+    _tmp33 = numpy.sin(_tmp32)
+    _tmp34 = arck(_tmp32)
+    _tmp35 = 0.5*theta_1
+    _tmp36 = _tmp19*theta_1**2*arck(_tmp35)
+    _tmp37 = compliance_y_1 + _tmp36*numpy.sin(_tmp35)
+    _tmp38 = _tmp37 - compliance_y_3 - 0.25*_tmp31*_tmp33*_tmp34*p_0
+    _tmp39 = _tmp21*_tmp28
+    _tmp40 = _tmp0*_tmp25
+    _tmp41 = _tmp2*_tmp27
+    _tmp42 = _tmp19*_tmp31*_tmp34
+    _tmp43 = _tmp42*numpy.cos(_tmp32)
+    _tmp44 = compliance_x_1 + _tmp36*numpy.cos(_tmp35)
+    _tmp45 = _tmp44 - _tmp43 - compliance_x_3
+    _tmp46 = 0.5*theta_2
+    _tmp47 = numpy.cos(_tmp46)
+    _tmp48 = theta_2**2
+    _tmp49 = arck(_tmp46)
+    _tmp50 = 0.1767766952966369*_tmp48*_tmp49*p_0
+    _tmp51 = 0.7071067811865476*compliance_y_2 + _tmp50*numpy.sin(_tmp46)
+    _tmp52 = _tmp51 + 0.7071067811865476*compliance_x_2 + _tmp47*_tmp50
+    _tmp53 = _tmp17*_tmp52
+    _tmp54 = 0.5*theta_4
+    _tmp55 = _tmp19*theta_4**2*arck(_tmp54)
+    _tmp56 = compliance_x_4 + _tmp55*numpy.cos(_tmp54)
+    _tmp57 = _tmp2*_tmp56
+    _tmp58 = compliance_y_4 + _tmp55*numpy.sin(_tmp54)
+    _tmp59 = _tmp51 - 0.7071067811865476*compliance_x_2 - 0.1767766952966369*_tmp47*_tmp48*_tmp49*p_0
+    _tmp60 = -_tmp59
+    _tmp61 = 0.5*theta_7
+    _tmp62 = _tmp19*theta_7**2*arck(_tmp61)
+    _tmp63 = compliance_y_7 + _tmp62*numpy.sin(_tmp61)
+    _tmp64 = compliance_x_7 + _tmp62*numpy.cos(_tmp61)
+    _tmp65 = _tmp10*_tmp63 - _tmp11*_tmp64
+    _tmp66 = _tmp28*_tmp52
+    _tmp67 = _tmp0*_tmp56
+    _tmp68 = _tmp2*_tmp58
+    _tmp69 = _tmp10*_tmp64 + _tmp11*_tmp63
+    _tmp70 = abs(_tmp37) + abs(_tmp44) + abs(_tmp43 + compliance_x_3) + abs(compliance_y_3 + _tmp33*_tmp42)
+    _tmp71 = _tmp70 + abs(_tmp22 + _tmp28*_tmp29) + abs(_tmp40 + _tmp41) + abs(-_tmp26 + _tmp0*_tmp27) + abs(-_tmp39 + _tmp17*_tmp29)
+    _tmp72 = _tmp70 + abs(_tmp65) + abs(_tmp69) + abs(_tmp53 + _tmp28*_tmp59) + abs(_tmp67 + _tmp68) + abs(-_tmp57 + _tmp0*_tmp58) + abs(-_tmp66 + _tmp17*_tmp59)
     return [
         0,
         -1,
@@ -1301,11 +1404,17 @@ def _loaded_linear(theta, params):
         0,
         0,
         0,
-        -_tmp33 + _tmp0*_tmp25 + _tmp26*_tmp27 - _tmp2*_tmp20 - _tmp21*_tmp24,
-        _tmp34 + _tmp21*_tmp27 + _tmp24*_tmp26 - _tmp0*_tmp20 - _tmp2*_tmp25,
+        -_tmp22 - _tmp26 - _tmp38 + _tmp0*_tmp27 + _tmp28*_tmp30,
+        _tmp39 + _tmp45 - _tmp40 - _tmp41 + _tmp17*_tmp30,
         0,
-        -_tmp33 + _tmp0*_tmp49 + _tmp11*_tmp48 + _tmp26*_tmp50 - _tmp10*_tmp40 - _tmp2*_tmp37 - _tmp21*_tmp47,
-        _tmp34 + _tmp10*_tmp48 + _tmp11*_tmp40 + _tmp21*_tmp50 + _tmp26*_tmp47 - _tmp0*_tmp37 - _tmp2*_tmp49,
+        -_tmp38 - _tmp53 - _tmp57 - _tmp65 + _tmp0*_tmp58 + _tmp28*_tmp60,
+        _tmp45 + _tmp66 + _tmp69 - _tmp67 - _tmp68 + _tmp17*_tmp60,
+        0,
+        _tmp71,
+        _tmp71,
+        0,
+        _tmp72,
+        _tmp72,
     ]
 
 
@@ -2461,6 +2570,9 @@ _MECHANISM = _Mechanism(
     fixed=(),  # inputs held (derive --fix)
     limits=((0, 3.141592653589793), (1, 3.141592653589793), (2, 3.141592653589793), (3, 3.141592653589793), (4, 3.141592653589793), (5, 3.141592653589793), (6, 3.141592653589793), ),  # models valid for |theta| < limit
     needs_loops=True, loops_for_links=False,
+    angular=[0, 3],  # the rigid closure's loop angle sums (winding rule)
+    rest=((1, (0,)), (2, (0,)), (3, (0,)), (4, (0,)), (5, (0,)), (6, (0,))),  # closed-form angles exactly zero with their inputs
+    n_dropped=0, consistent=1e-08,  # redundant loops' dropped rows
     rigid=_rigid,
     rigid_res=_rigid_res,
     linear=_linear,
@@ -2474,18 +2586,19 @@ _MECHANISM = _Mechanism(
     loaded_newton=_loaded_newton,
     sens_rigid=_sens_rigid,
     sens_chain=None,
+    consistency_rigid=None,
     loaded_more=0,
     sens_rigid_blocks={'A': (0, 6, 6), 'dG_dv': (36, 6, 2), 'dR_dtheta': (48, 2, 6), 'dR_dv': (60, 2, 2)},
     rigid_rule=_Rule(30, 1e-10),  # continuation steps
     polish_rule=_Rule(1),  # after the rigid start
-    exact_rule=_Rule(40, 0.0, 1e-08, 1e-12, 0.5),
+    exact_rule=_Rule(40, 0.0, 1e-08, 1e-12, 0.5, 2e-13),
     continuation_step=0.05, winding=3.141592653589793,
     levels={
-        'paper': _Level(_dev_paper, None, None, 0, _sens_paper, {'dD_dtheta': (0, 2, 6), 'dD_dv': (12, 2, 2)}),
-        'first_order': _Level(_dev_first_order, _linear, None, 0, _sens_first_order, {'M': (0, 6, 6), 'dE_dtheta': (36, 6, 6), 'dE_dv': (72, 6, 2), 'dD_dtheta': (84, 2, 6), 'dD_ddelta': (96, 2, 6), 'dD_dv': (108, 2, 2)}),
-        'exact': _Level(_dev_exact, _linear, _newton, 0, _sens_exact, {'M': (0, 6, 6), 'dE_dtheta': (36, 6, 6), 'dE_dv': (72, 6, 2), 'dD_dtheta': (84, 2, 6), 'dD_ddelta': (96, 2, 6), 'dD_dv': (108, 2, 2)}),
-        'loaded': _Level(_dev_loaded, _loaded_linear, _loaded_newton, 1, None, {}),
-        'loaded_refined': _Level(_dev_loaded, _loaded_linear, _loaded_newton, 2, None, {}),
+        'paper': _Level(_dev_paper, None, None, 0, _sens_paper, {'dD_dtheta': (0, 2, 6), 'dD_dv': (12, 2, 2)}, None),
+        'first_order': _Level(_dev_first_order, _linear, None, 0, _sens_first_order, {'M': (0, 6, 6), 'dE_dtheta': (36, 6, 6), 'dE_dv': (72, 6, 2), 'dD_dtheta': (84, 2, 6), 'dD_ddelta': (96, 2, 6), 'dD_dv': (108, 2, 2)}, None),
+        'exact': _Level(_dev_exact, _linear, _newton, 0, _sens_exact, {'M': (0, 6, 6), 'dE_dtheta': (36, 6, 6), 'dE_dv': (72, 6, 2), 'dD_dtheta': (84, 2, 6), 'dD_ddelta': (96, 2, 6), 'dD_dv': (108, 2, 2)}, None),
+        'loaded': _Level(_dev_loaded, _loaded_linear, _loaded_newton, 1, None, {}, None),
+        'loaded_refined': _Level(_dev_loaded, _loaded_linear, _loaded_newton, 2, None, {}, None),
     },
 )
 

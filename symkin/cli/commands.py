@@ -31,8 +31,9 @@ def _check(args: argparse.Namespace) -> str:
     structure = build(load(args.file))
     # What evaluation would refuse: a dyad at a toggle position as fabricated (raised while
     # decomposing into dyads), inputs that leave the loops singular.
-    check_fabricated_pose(Analysis(structure))
-    return check_text(structure)
+    analysis = Analysis(structure)
+    check_fabricated_pose(analysis)
+    return check_text(structure, analysis.dropped)
 
 
 def _matrices(args: argparse.Namespace) -> str:
@@ -284,10 +285,16 @@ def parser() -> argparse.ArgumentParser:
         "--level",
         choices=levels.NAMES,
         default=levels.DEFAULT,
-        help="deviation level (loaded, loaded_refined and equilibrium need the "
-        "plates' E, thickness and width: docs/physics.md)",
+        help=f"deviation level (default: {levels.DEFAULT}; loaded, loaded_refined and "
+        "equilibrium need the plates' E, thickness and width: docs/physics.md)",
     )
-    ev.add_argument("--backend", choices=BACKENDS, default="sympy")
+    ev.add_argument(
+        "--backend",
+        choices=BACKENDS,
+        default="sympy",
+        help="how to evaluate (default: sympy, the derivation in 40-digit mpmath; numpy: "
+        "the generated module; c: the generated C, compiled and cached)",
+    )
     ev.add_argument(
         "--sensitivity",
         action="store_true",

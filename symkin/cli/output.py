@@ -11,6 +11,7 @@ import numpy as np
 
 from ..codegen.templating import render
 from ..graph.structure import Structure
+from ..model.mechanism import closure_rank
 
 
 def grid(row_labels: Sequence[str], col_labels: Sequence[str], matrix: np.ndarray) -> list[str]:
@@ -25,12 +26,26 @@ def grid(row_labels: Sequence[str], col_labels: Sequence[str], matrix: np.ndarra
     return [head.rstrip()] + body
 
 
-def check_text(s: Structure) -> str:
-    """Human summary printed by `symkin check`."""
+def check_text(s: Structure, dropped: Sequence[int] = ()) -> str:
+    """Human summary printed by `symkin check`; `dropped`: the closure rows (3 per loop:
+    angular, x, y) the solvers leave out as redundant and check at the solution."""
     mech = s.mechanism
     models = [mech.hinge(name).model for name in s.hinges]
     loops = {c: s.loop_text(c) for c in range(s.n + 1, s.m + 1)}
-    return render("text/check.txt.j2", mech=mech, s=s, models=models, loop_text=loops)
+    redundant = [
+        f"the {('angular', 'x', 'y')[r % 3]} closure of the loop of u{s.n + 1 + r // 3} "
+        "is redundant: checked at every solution, not solved"
+        for r in dropped
+    ]
+    return render(
+        "text/check.txt.j2",
+        mech=mech,
+        s=s,
+        models=models,
+        loop_text=loops,
+        rank=closure_rank(mech),
+        redundant=redundant,
+    )
 
 
 def matrices_text(s: Structure) -> str:

@@ -4,8 +4,14 @@
                                           (closed form; absent when a group is not a dyad)
     rigid_res    theta, params         -> rigid loop closure relative to the as-fabricated pose,
                                           Σ (Rot(φ_i) - I) V_i and Φ q (polish / continuation)
-    linear       theta, params         -> A (rigid loop Jacobian), r = Φ Δz at the rigid pose
+    linear       theta, params         -> A (rigid loop Jacobian), r = Φ Δz at the rigid pose and
+                                          S, the size of Φ Δz's terms per row (the stopping
+                                          rule of symkin.core.settings, 3b)
     newton       theta, delta, params  -> F, ∂F/∂δ of the exact compliant closure
+    consistency_<form>                 -> redundant loops only (symkin.core.settings, step 4):
+                                          the dropped closure rows and the size of their terms,
+                                          rigid (theta, params), first_order and exact (theta,
+                                          delta, params)
     rigid_points theta, params         -> rigid x, y of every requested point
     dev_<level>  theta, delta, params  -> deviation x, y of every requested point (a level that
                                           shares another's, loaded_refined, runs its routine;
@@ -25,7 +31,7 @@ by the plates' compliance (its closure's constants, computed once per configurat
     loaded_q           theta, mu0, params  -> Q with the beam-column springs: A^T mu = Q
     loaded_compliance  theta, mu, params   -> each plate's end displacement beyond its arc
     loaded_compliance_more  theta, mu, params -> the plates only loaded_refined's closure reads
-    loaded_linear      theta, constants    -> A and r of the loaded closure (its first-order start)
+    loaded_linear      theta, constants    -> A, r and S of the loaded closure (first-order start)
     loaded_newton      theta, delta, constants -> F, dF/ddelta of the loaded closure
 
 Every routine's outputs are named row-major blocks (:class:`~symkin.codegen.routines.Block`):
@@ -100,6 +106,12 @@ class Plan:
     # (docs/pruning.md): accepted and ignored by numpy
     fixed: tuple[tuple[int, float], ...] = ()  # (θ index, angle): inputs held constant,
     # folded into the routines (docs/cli.md, --fix)
+    # per non-input hinge (δ order) with a closed-form angle: the positions in `inputs` of the
+    # inputs it reads, when none of them is held at a nonzero angle: with all of them zero
+    # the angle is exactly zero (the formulas round to noise there)
+    rest: tuple[tuple[int, tuple[int, ...]], ...] = ()
+    angular: tuple[int, ...] = ()  # positions of the angular rows among the solved ones
+    dropped: int = 0  # redundant closure rows left out of the solves and checked (consistency_*)
 
     def stage(self, level: Level) -> bool:
         """Whether the sensitivity at `level` goes through a closure solved for δ."""
@@ -184,6 +196,8 @@ def plan(
         for lv in level_table.LEVELS
         if lv.generated
         and (lv.name in levels if levels is not None else stiff or not lv.needs_stiffness)
+        # the loaded level's statics cannot share the loads of redundant loops (docs/levels.md)
+        and not (an.redundant and lv.name in level_table.LOADED)
     )
     held = _fixed_angles(an, fixed or {})
     sensitivity = sensitivity and not held
@@ -225,10 +239,26 @@ def plan(
             "linear",
             (theta, params),
             (),
-            flatten(a_lin.tolist()) + tuple(r_lin),
-            "rigid loop Jacobian A and r = Phi dz",
-            layout(("A", k, k), ("r", k, 1)),
+            flatten(a_lin.tolist()) + tuple(r_lin) + tuple(an.closure_scale),
+            "rigid loop Jacobian A, r = Phi dz and the size S of its terms",
+            layout(("A", k, k), ("r", k, 1), ("S", k, 1)),
         )
+    if an.redundant:
+        forms = ["rigid"] + [
+            f
+            for f in ("first_order", "exact")
+            if (needs_loops or loops_for_links) and any(lv.name == f for lv in levels)
+        ]
+        for form in forms:
+            residual, size = an.consistency(form)
+            routines[f"consistency_{form}"] = Routine(
+                f"consistency_{form}",
+                (theta, params) if form == "rigid" else (theta, delta, params),
+                (),
+                tuple(residual) + tuple(size),
+                f"redundant loops, {form}: the dropped closure rows and the size of their terms",
+                layout(("residual", len(residual), 1), ("size", len(size), 1)),
+            )
     if (needs_loops or loops_for_links) and any(lv.name == "exact" for lv in levels):
         routines["newton"] = Routine(
             "newton",
@@ -363,6 +393,9 @@ def plan(
         chain=chain,
         pruned_inputs=tuple(pruned_inputs),
         fixed=tuple((a - 1, to_double(v)) for a, v in sorted(held.items())),
+        rest=_rest(an, free, held),
+        angular=an.angular_rows,
+        dropped=len(an.dropped),
     )
     return with_derivation(result, an) if report else result
 
@@ -513,9 +546,10 @@ def _loaded_routines(
             "loaded_linear",
             (theta, constants),
             (),
-            flatten(a_lin.tolist()) + tuple(r_lin),
-            "loaded: A and r = Phi dz of the loaded closure (its first-order start)",
-            layout(("A", k, k), ("r", k, 1)),
+            flatten(a_lin.tolist()) + tuple(r_lin) + tuple(la.closure_scale),
+            "loaded: A, r = Phi dz of the loaded closure (its first-order start) and the size S "
+            "of its terms",
+            layout(("A", k, k), ("r", k, 1), ("S", k, 1)),
         )
         routines["loaded_newton"] = Routine(
             "loaded_newton",
@@ -562,6 +596,22 @@ def moved_points(analysis: Analysis, points: Sequence[str]) -> frozenset[str]:
             for b in an.structure.tree_path(an.link[an.mechanism.point(n).link])
         )
     )
+
+
+def _rest(
+    an: Analysis, free: Sequence[int], held: Mapping[int, sp.Expr]
+) -> tuple[tuple[int, tuple[int, ...]], ...]:
+    """Plan.rest: for each non-input hinge of a closed-form rigid solution, the positions among
+    the free inputs of the inputs its angle reads, unless it reads an input held off zero."""
+    depends = an.rigid.depends
+    if depends is None:
+        return ()
+    out = []
+    for j, a in enumerate(an.kin.unknowns):
+        if any(b in held and held[b] != 0 for b in depends[a]):
+            continue
+        out.append((j, tuple(free.index(b) for b in sorted(depends[a]) if b in free)))
+    return tuple(out)
 
 
 def _fixed_angles(an: Analysis, fixed: Mapping[str, sp.Expr]) -> dict[int, sp.Expr]:

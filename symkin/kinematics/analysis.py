@@ -19,6 +19,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from functools import cache, cached_property
 
+import mpmath
 import sympy as sp
 
 from ..core import levels
@@ -62,9 +63,47 @@ class Analysis:
             )
         )
 
+    # -- which closure rows are solved (redundant loops) -------------------------------------------
+    #
+    # Every loop gives three rows: its angular closure (5.1), then x and y (5.3). With as many
+    # rows as non-input hinges the closure is square. A redundant mechanism (a parallelogram with
+    # a third leg, CONTRACT §9) has more rows than unknowns, some of them dependent: the rows
+    # solved are chosen once, at the as-fabricated pose (symkin.core.settings, step 0), and the
+    # others are checked at the solution (:meth:`consistency`). Every matrix and residual below
+    # holds the solved rows only, in their order.
+
     @cached_property
-    def residual(self) -> sp.Matrix:
-        """Exact compliant loop closure in δ: angular rows, then x, y rows per loop."""
+    def rows(self) -> tuple[int, ...]:
+        """Indices (3 per loop: angular, x, y) of the closure rows every solve uses."""
+        total = 3 * len(self.kin.chords)
+        k = len(self.kin.unknowns)
+        if total <= k:
+            return tuple(range(total))
+        return select_rows(self._partials_all("first_order", "delta", self.kin.unknowns), k, self)
+
+    @cached_property
+    def dropped(self) -> tuple[int, ...]:
+        """The closure rows left out of the solves (redundant ones): checked at the solution."""
+        return tuple(r for r in range(3 * len(self.kin.chords)) if r not in self.rows)
+
+    @property
+    def redundant(self) -> bool:
+        """Some loop-closure rows are dependent (more rows than non-input hinges)."""
+        return bool(self.dropped)
+
+    def row_chord(self, row: int) -> int:
+        """The chord whose loop a closure row belongs to."""
+        return self.kin.chords[row // 3]
+
+    @cached_property
+    def angular_rows(self) -> tuple[int, ...]:
+        """Positions, among the solved rows, of the loops' angular closures (the winding rule)."""
+        return tuple(k for k, r in enumerate(self.rows) if r % 3 == 0)
+
+    def _pick(self, rows: list) -> sp.Matrix:
+        return sp.Matrix([rows[r] for r in self.rows])
+
+    def _residual_all(self) -> list[sp.Expr]:
         kin = self.kin
         angles = self.compliant_angles()
         rows: list[sp.Expr] = []
@@ -75,12 +114,9 @@ class Analysis:
                 for i, w in kin.loop_weights(c).items()
             ]
             rows.extend(V.add(*rigid_part, kin.loop_deviation(c, angles)))
-        return sp.Matrix(rows)
+        return rows
 
-    @cached_property
-    def rigid_residual(self) -> sp.Matrix:
-        """Rigid loop closure relative to the as-fabricated pose, in the rigid angles θ:
-        Φ q and Σ_i (Rot(φ_i) - I) V_i per loop, exact there since the fabricated pose closes."""
+    def _rigid_residual_all(self) -> list[sp.Expr]:
         kin = self.kin
         rows: list[sp.Expr] = []
         for c in kin.chords:
@@ -90,7 +126,98 @@ class Analysis:
                     *(V.rot_minus_identity(kin.phi(i), w) for i, w in kin.loop_weights(c).items())
                 )
             )
-        return sp.Matrix(rows)
+        return rows
+
+    @cached_property
+    def residual(self) -> sp.Matrix:
+        """Exact compliant loop closure in δ: angular rows, then x, y rows per loop (the solved
+        rows)."""
+        return self._pick(self._residual_all())
+
+    @cached_property
+    def rigid_residual(self) -> sp.Matrix:
+        """Rigid loop closure relative to the as-fabricated pose, in the rigid angles θ:
+        Φ q and Σ_i (Rot(φ_i) - I) V_i per loop, exact there since the fabricated pose closes
+        (the solved rows)."""
+        return self._pick(self._rigid_residual_all())
+
+    # -- the size of a row's terms (the stopping rule and the redundancy check) --------------------
+
+    def _plate_size(self, chord: int, angles: dict[int, sp.Expr] | None = None) -> sp.Expr:
+        """Σ_b |Φ_cb| (|Δz_b,x| + |Δz_b,y|) around the loop of `chord` at `angles` (default the
+        rigid ones): the size of Φ Δz without its cancellation."""
+        kin, s = self.kin, self.structure
+        angles = angles or kin.theta
+        row = s.loops[chord - s.n - 1]
+        terms = []
+        for b in range(1, s.m + 1):
+            if row[b - 1]:
+                dz = kin.hinges[b].delta_z(angles[b], kin.phi(kin.hinges[b].P, angles))
+                terms += [sp.Abs(dz[0]), sp.Abs(dz[1])]
+        return sp.Add(*terms)
+
+    def _link_size(self, chord: int, turn) -> sp.Expr:
+        """Σ_i |turn(i)| (|V_i,x| + |V_i,y|) over the loop of `chord`: the size of its links'
+        terms when link i turns by turn(i)."""
+        return sp.Add(
+            *(
+                sp.Abs(turn(i)) * (sp.Abs(w[0]) + sp.Abs(w[1]))
+                for i, w in self.kin.loop_weights(chord).items()
+                if i != 0
+            )
+        )
+
+    @cached_property
+    def closure_scale(self) -> sp.Matrix:
+        """S_r of the stopping rule (symkin.core.settings, 3b) for every solved row: the size of
+        the plate deviations in it at the rigid pose (0 for an angular row)."""
+        sizes = []
+        for c in self.kin.chords:
+            plates = self._plate_size(c)
+            sizes += [sp.Integer(0), plates, plates]
+        return self._pick(sizes)
+
+    def consistency(self, form: str) -> tuple[sp.Matrix, sp.Matrix]:
+        """(residual, size of its terms) of the dropped rows (redundant loops) at `form`:
+        'rigid' (the rigid closure in θ), 'first_order' (A δ + r) or 'exact' (F(δ)); each row
+        must vanish to SOLVER's `consistent` times its size (symkin.core.settings, step 4)."""
+        return self.closure_terms(form, self.dropped)
+
+    def closure_terms(self, form: str, rows: Sequence[int]) -> tuple[sp.Matrix, sp.Matrix]:
+        """(residual, size of its terms) of the closure rows `rows` (3 per loop, every row
+        counted) at `form`: 'rigid' (the rigid closure in θ, sizes Σ_i |φ_i| (|V_i,x| + |V_i,y|)
+        and Σ_b |θ_b|), 'first_order' (A δ + r) or 'exact' (F(δ)), sizes of the links' terms
+        with δφ_i, plus the plates' (:meth:`_plate_size`), and Σ_b |δ_b| for an angular row."""
+        kin = self.kin
+        if not rows:
+            return sp.zeros(0, 1), sp.zeros(0, 1)
+        if form == "rigid":
+            residual = self._rigid_residual_all()
+        elif form == "first_order":
+            a = self._partials_all("first_order", "delta", kin.unknowns)
+            d = sp.Matrix([kin.delta[b] for b in kin.unknowns])
+            r = []
+            for c in kin.chords:
+                r += [sp.Integer(0), *kin.loop_deviation(c)]
+            residual = list(a * d + sp.Matrix(r))
+        else:
+            residual = self._residual_all()
+        angles = self.compliant_angles() if form == "exact" else kin.theta
+        sizes = {}
+        for c in sorted({self.row_chord(r) for r in rows}):
+            loop = self.structure.loops[c - self.structure.n - 1]
+            hinges = [b for b in range(1, len(loop) + 1) if loop[b - 1]]
+            if form == "rigid":
+                angular = sp.Add(*(sp.Abs(kin.theta[b]) for b in hinges))
+                positional = self._link_size(c, kin.phi)
+            else:
+                angular = sp.Add(*(sp.Abs(kin.delta[b]) for b in hinges if b in kin.unknowns))
+                positional = self._link_size(c, self.delta_phi) + self._plate_size(c, angles)
+            sizes[c] = (angular, positional, positional)
+        return (
+            sp.Matrix([residual[r] for r in rows]),
+            sp.Matrix([sizes[self.row_chord(r)][r % 3] for r in rows]),
+        )
 
     @cached_property
     def jacobian(self) -> sp.Matrix:
@@ -106,7 +233,10 @@ class Analysis:
         for c in self.kin.chords:
             rows_r.append(sp.Integer(0))
             rows_r.extend(self.kin.loop_deviation(c))
-        return self.closure_partials("first_order", "delta", self.kin.unknowns), sp.Matrix(rows_r)
+        return (
+            self.closure_partials("first_order", "delta", self.kin.unknowns),
+            self._pick(rows_r),
+        )
 
     # -- partial derivatives from the structure ----------------------------------------------------
     #
@@ -226,7 +356,14 @@ class Analysis:
     def closure_partials(self, form: str, wrt: str, columns: Sequence) -> sp.Matrix:
         """Partial derivatives of the loop closure of `form` (rigid: the rigid closure relative
         to the as-fabricated pose; first_order: A δ + r; exact: the residual F) by θ_a or δ_a,
-        a in `columns`: an angular row (5.1), then x, y rows (5.3) per loop."""
+        a in `columns`: an angular row (5.1), then x, y rows (5.3) per loop (the solved rows)."""
+        full = self._partials_all(form, wrt, columns)
+        if not self.dropped:
+            return full
+        return full.extract(list(self.rows), list(range(full.cols)))
+
+    def _partials_all(self, form: str, wrt: str, columns: Sequence) -> sp.Matrix:
+        """:meth:`closure_partials` with every row, redundant ones included."""
         kin, s = self.kin, self.structure
         rows: list[list[sp.Expr]] = []
         for c in kin.chords:
@@ -287,6 +424,56 @@ class Analysis:
     def point_rigid(self, name: str) -> V.Vec:
         point = self.mechanism.point(name)
         return self.kin.rigid_position(self.link[point.link], point.at)
+
+
+def select_rows(full: sp.Matrix, k: int, analysis: Analysis) -> tuple[int, ...]:
+    """`k` independent rows of the closure Jacobian `full` (3 rows per loop, non-input hinges
+    as columns) at the as-fabricated pose and the file's parameter values: a pivoted
+    Gram–Schmidt in 30 digits on the rows scaled to unit size, the angular rows first (they are
+    linear and exact), then the positional row with the largest part independent of those kept,
+    until `k` are kept (symkin.core.settings, step 0). Fewer than `k` independent rows leave the
+    pose undetermined (the inputs do not fix it): the rows found are returned, and the solves
+    meet a singular Jacobian that the file checks refuse first."""
+    at_rest = dict.fromkeys(analysis.thetas, 0)
+    values = full.xreplace(at_rest).subs(analysis.mechanism.defaults)
+    with mpmath.workdps(30):
+        rows = []
+        for i in range(values.rows):
+            row = [mpmath.mpf(sp.N(e, 35)) for e in values.row(i)]
+            size = max((abs(x) for x in row), default=mpmath.mpf(0))
+            rows.append([x / size for x in row] if size else row)
+        basis: list[list] = []
+        kept: list[int] = []
+        tol = mpmath.mpf(10) ** -12
+
+        def remainder(row: list) -> list:
+            out = list(row)
+            for q in basis:
+                dot = mpmath.fsum(a * b for a, b in zip(out, q))
+                out = [a - dot * b for a, b in zip(out, q)]
+            return out
+
+        def keep(i: int, rest: list) -> None:
+            norm = mpmath.sqrt(mpmath.fsum(x * x for x in rest))
+            basis.append([x / norm for x in rest])
+            kept.append(i)
+
+        def norm(v: list):
+            return mpmath.sqrt(mpmath.fsum(x * x for x in v))
+
+        for i in range(0, len(rows), 3):  # the angular rows, in order
+            rest = remainder(rows[i])
+            if len(kept) < k and norm(rest) > tol:
+                keep(i, rest)
+        candidates = [i for i in range(len(rows)) if i % 3]
+        while len(kept) < k and candidates:
+            rests = {i: remainder(rows[i]) for i in candidates}
+            best = max(candidates, key=lambda i: norm(rests[i]))  # the first of equals
+            if not norm(rests[best]) > tol:
+                break
+            keep(best, rests[best])
+            candidates.remove(best)
+    return tuple(sorted(kept))
 
 
 @cache

@@ -40,6 +40,9 @@ class RigidSolution:
     assignments: tuple[tuple[sp.Symbol, sp.Expr], ...]
     phi: dict[int, sp.Expr] | None  # None: no closed form, solve numerically
     dyads: tuple[Dyad, ...]
+    # non-input hinge -> the input hinges its closed-form angle reads: with all of them zero
+    # the angle is exactly zero (the formulas round to noise there); None without closed form
+    depends: dict[int, frozenset[int]] | None = None
 
     @property
     def closed_form(self) -> bool:
@@ -134,6 +137,18 @@ def solve(kin: Kinematics) -> RigidSolution:
             )
             progress = True
             break
+        if progress:
+            continue
+        # A redundant link (a third parallel leg): one unknown body hinged to known bodies at
+        # two or more hinges. The line between two of those hinges fixes its rotation; the
+        # other constraints (the distance between them, any further hinge) are the dropped rows
+        # of the closure, checked at the solution (symkin.core.settings, step 4).
+        for body in sorted(set(bodies.body_of.values()) - set(known)):
+            ties = hinges_between(body, set(known))
+            if len(ties) >= 2:
+                _bar(kin, bodies, body, ties[:2], absolute, assign, known)
+                progress = True
+                break
 
     if len(known) < len(set(bodies.body_of.values())):
         return RigidSolution(tuple(assignments), None, tuple(dyads))
@@ -141,7 +156,23 @@ def solve(kin: Kinematics) -> RigidSolution:
     for link in range(s.n + 1):
         root_phi = known[bodies.body_of[link]][0]
         phi[link] = root_phi + bodies.rho[link]
-    return RigidSolution(tuple(assignments), phi, tuple(dyads))
+    inputs = {kin.theta[a]: a for a in kin.inputs}
+    reads: dict[sp.Symbol, frozenset[int]] = {}
+
+    def depends(expr: sp.Expr) -> frozenset[int]:
+        out: set[int] = set()
+        for symbol in sp.sympify(expr).free_symbols:
+            out |= {inputs[symbol]} if symbol in inputs else reads.get(symbol, frozenset())
+        return frozenset(out)
+
+    for symbol, expr in assignments:
+        reads[symbol] = depends(expr)
+    return RigidSolution(
+        tuple(assignments),
+        phi,
+        tuple(dyads),
+        {a: depends(phi[kin.hinges[a].M] - phi[kin.hinges[a].P]) for a in kin.unknowns},
+    )
 
 
 def _dyad(
@@ -213,6 +244,31 @@ def _dyad(
         reach,
         margin,
     )
+
+
+def _bar(
+    kin: Kinematics,
+    bodies: _Bodies,
+    body: int,
+    hinges: list[int],
+    absolute,
+    assign,
+    known: dict,
+) -> None:
+    """Place an unknown body by two of its hinges to known bodies: its rotation turns the
+    as-fabricated line between them onto their present line (atan2); marks the body known."""
+    h1, h3 = (kin.hinges[a] for a in hinges)
+    own = lambda h: h.P if bodies.body_of[h.P] == body else h.M  # noqa: E731
+    other = lambda h: h.M if bodies.body_of[h.P] == body else h.P  # noqa: E731
+    la, lc = bodies.local(own(h1), h1.centre), bodies.local(own(h3), h3.centre)
+    ax, ay = absolute(other(h1), h1.centre)
+    cx, cy = absolute(other(h3), h3.centre)
+    k = body
+    A = (assign(f"bar{k}_ax", ax), assign(f"bar{k}_ay", ay))
+    C = (assign(f"bar{k}_cx", cx), assign(f"bar{k}_cy", cy))
+    v, w = V.sub(lc, la), V.sub(C, A)
+    phi = assign(f"bar{k}_phi", sp.atan2(V.cross(v, w), V.dot(v, w)))
+    known[body] = (phi, la, A)
 
 
 def _closing_chord(kin: Kinematics, hinges: set[int]) -> int:

@@ -19,9 +19,11 @@ import sys
 import tomllib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import mpmath
+import numpy as np
 import sympy as sp
 
 from ..core.errors import InputError, suggest
@@ -37,6 +39,7 @@ from .hinges import (
     THETA,
     ModelParameter,
     ModelSpec,
+    pivot_distance,
 )
 
 FORMAT = 1
@@ -198,10 +201,27 @@ class Mechanism:
         """Names of the input hinges (generalized coordinates), in file order."""
         return tuple(h.name for h in self.hinges if h.input)
 
+    @cached_property
+    def closure_rank(self) -> ClosureRank | None:
+        """See :func:`closure_rank`."""
+        return _closure_rank(self)
+
+    @property
+    def grubler(self) -> int:
+        """Grübler's count 3n - 2m (n moving links, m revolute hinges)."""
+        return 3 * (len(self.links) - 1) - 2 * len(self.hinges)
+
     @property
     def mobility(self) -> int:
-        """Grübler mobility 3n - 2m (n moving links, m revolute hinges)."""
-        return 3 * (len(self.links) - 1) - 2 * len(self.hinges)
+        """The mobility: 3n minus the rank of the closure Jacobian at the as-fabricated pose
+        (:func:`closure_rank`); Grübler's count unless some loops are redundant (CONTRACT §9)."""
+        rank = closure_rank(self)
+        return self.grubler if rank is None else rank.mobility
+
+    @property
+    def redundant(self) -> int:
+        """How many closure equations are dependent at the as-fabricated pose (0: none)."""
+        return self.mobility - self.grubler
 
     @property
     def loop_count(self) -> int:
@@ -641,8 +661,9 @@ class _Reader:
             loads=self.loads(self.array_of_tables(data, "load"), link_names, points),
         )
         self.check_connected(mech)
-        self.check_mobility(mech)
         check_values(mech, self.defaults)
+        # after the values: the rank reads the hinge positions (two pins on one spot, say)
+        self.check_mobility(mech)
         return mech
 
     def parameters(self, table: object) -> tuple[Parameter, ...]:
@@ -1230,9 +1251,19 @@ class _Reader:
             )
 
     def check_mobility(self, mech: Mechanism) -> None:
+        """The inputs number the mobility and fix the pose (CONTRACT §9, "Redundant loops"):
+        Grübler's count, corrected by the rank of the closure Jacobian at the as-fabricated
+        pose when some loop constraints are dependent."""
         n, m = len(mech.links) - 1, len(mech.hinges)
-        dof = mech.mobility
-        formula = f"3n - 2m = 3*{n} - 2*{m} = {dof}, with {mech.loop_count} loop(s)"
+        rank = closure_rank(mech)
+        formula = f"3n - 2m = 3*{n} - 2*{m} = {mech.grubler}, with {mech.loop_count} loop(s)"
+        if rank is not None and rank.mobility != mech.grubler:
+            formula += (
+                f"; the closure Jacobian at the as-fabricated pose has rank {rank.rank} of "
+                f"2m = {2 * m} ({2 * m - rank.rank} redundant), so the mobility is "
+                f"3n - {rank.rank} = {rank.mobility}"
+            )
+        dof = mech.grubler if rank is None else rank.mobility
         if dof < 1:
             raise self.error(
                 f"the mechanism cannot move: Grübler mobility {formula}",
@@ -1243,12 +1274,159 @@ class _Reader:
         if len(mech.inputs) != dof:
             given = ", ".join(mech.inputs) or "none"
             raise self.error(
-                f"{len(mech.inputs)} input hinge(s) ({given}) but the Grübler mobility is "
-                f"{formula}",
+                f"{len(mech.inputs)} input hinge(s) ({given}) but the mobility is {dof}: "
+                f"Grübler {formula}",
                 "input",
                 None,
-                f"mark exactly {dof} hinge(s) with input = true",
+                f"mark exactly {dof} hinge(s) with input = true"
+                + (
+                    "; or, if no loop is meant to be redundant, the as-fabricated pose is a "
+                    "singular position (hinges in line, legs parallel): move a hinge off it"
+                    if dof != mech.grubler
+                    else ""
+                ),
             )
+        if rank is not None and rank.dependent:
+            dependent = rank.dependent
+            inputs = ", ".join(mech.inputs)
+            free = ", ".join(rank.candidates) or "some hinges"
+            if rank.collinear:
+                raise self.error(
+                    f"the hinges {free} are collinear in the as-fabricated pose: a toggle "
+                    f"position, where the inputs ({inputs}) do not determine the pose (a "
+                    "dependent input)",
+                    "input",
+                    None,
+                    "move the middle hinge off the line through the other two",
+                )
+            if len(mech.inputs) == 1:
+                which = f"the loops fix the angle of {dependent[0]}"
+            elif len(dependent) == 1:
+                which = f"the angle of {dependent[0]} follows from the other inputs'"
+            else:
+                which = f"one of {', '.join(dependent)} follows from the " + (
+                    "other" if len(dependent) == 2 else "others"
+                )
+            raise self.error(
+                f"the input hinges {inputs} do not determine the pose: in the as-fabricated "
+                f"pose {which} (a dependent input), which leaves {free} free to move",
+                "input",
+                None,
+                (f"mark one of {free}" if rank.candidates else "mark another hinge")
+                + " as input instead of "
+                + (dependent[0] if len(dependent) == 1 else f"one of {', '.join(dependent)}"),
+            )
+
+
+@dataclass(frozen=True)
+class ClosureRank:
+    """The rank of the closure Jacobian of the rigid linkage at the as-fabricated pose."""
+
+    rank: int  # of J_c: 2 rows per hinge, 3 columns per moving link
+    mobility: int  # 3n - rank
+    dependent: tuple[str, ...]  # inputs whose angle the others (and the loops) already fix
+    candidates: tuple[str, ...]  # other hinges that would fix the pose in their place
+    collinear: bool = False  # those hinges' pins lie on one line: a toggle position
+
+
+def closure_rank(mech: Mechanism) -> ClosureRank | None:
+    """Rank of J_c, the Jacobian of the 2m pin constraints of the rigid linkage (each hinge a
+    pin at its rigid reference, :func:`~symkin.model.hinges.pivot_distance`) by the 3n pose
+    velocities of the moving links at the as-fabricated pose and the file's parameter values
+    (None when those values are not finite numbers: the value checks report them). The
+    mobility is 3n - rank (CONTRACT §9): Grübler's 3n - 2m when the 2m constraints are
+    independent, more when some are redundant (a parallelogram with a third leg has 0 and 1).
+    With the inputs' rows (each holds its hinge's relative rotation) the rank must reach 3n:
+    an input whose row adds nothing is dependent. Computed once per mechanism."""
+    return mech.closure_rank
+
+
+def _closure_rank(mech: Mechanism) -> ClosureRank | None:
+    values = mech.defaults
+    moving = [lk.name for lk in mech.links if lk.name != mech.ground]
+    column = {name: 3 * k for k, name in enumerate(moving)}
+    pins: list[tuple[mpmath.mpf, mpmath.mpf]] = []
+    with mpmath.workdps(30):
+        for h in mech.hinges:
+            shift = h.length / 2 - pivot_distance(h)
+            x, y = (
+                _mp(h.at[i] + shift * f(h.plate_angle), values)
+                for i, f in enumerate((sp.cos, sp.sin))
+            )
+            if x is None or y is None:
+                return None
+            pins.append((x, y))
+        size = max((abs(c) for pin in pins for c in pin), default=mpmath.mpf(0)) or mpmath.mpf(1)
+
+        def rows_of(h: Hinge, pin: tuple[mpmath.mpf, mpmath.mpf]) -> list[list[mpmath.mpf]]:
+            out = [[mpmath.mpf(0)] * (3 * len(moving)) for _ in range(2)]
+            for link, sign in ((h.links[1], 1), (h.links[0], -1)):
+                if link in column:
+                    j = column[link]
+                    out[0][j], out[0][j + 2] = sign, -sign * pin[1] / size
+                    out[1][j + 1], out[1][j + 2] = sign, sign * pin[0] / size
+            return out
+
+        def turn_of(h: Hinge) -> list[mpmath.mpf]:
+            row = [mpmath.mpf(0)] * (3 * len(moving))
+            for link, sign in ((h.links[1], 1), (h.links[0], -1)):
+                if link in column:
+                    row[column[link] + 2] = sign
+            return row
+
+        constraints = [r for h, pin in zip(mech.hinges, pins) for r in rows_of(h, pin)]
+        rank = _rank(constraints)
+        full = 3 * len(moving)
+        inputs = [h for h in mech.hinges if h.input]
+        with_inputs = constraints + [turn_of(h) for h in inputs]
+        dependent: tuple[str, ...] = ()
+        candidates: tuple[str, ...] = ()
+        collinear = False
+        if inputs and rank + len(inputs) == full and _rank(with_inputs) < full:
+            total = _rank(with_inputs)
+            dependent = tuple(
+                h.name
+                for h in inputs
+                if _rank(constraints + [turn_of(g) for g in inputs if g is not h]) == total
+            )
+            # the hinges the remaining free motion turns (the null space of J_c and the inputs)
+            matrix = np.array([[float(x) for x in r] for r in with_inputs])
+            _, sigma, vt = np.linalg.svd(matrix)
+            null = vt[int(np.sum(sigma > 1e-8 * sigma[0])) :]
+            turns = np.array([[float(x) for x in turn_of(h)] for h in mech.hinges]) @ null.T
+            motion = np.abs(turns).max(axis=1) if null.size else np.zeros(len(mech.hinges))
+            candidates = tuple(
+                h.name
+                for h, turn in zip(mech.hinges, motion)
+                if not h.input and turn > 1e-6 * max(motion.max(), 1e-300)
+            )
+            free = [pin for h, pin in zip(mech.hinges, pins) if h.name in candidates]
+            collinear = len(free) >= 3 and all(
+                abs(
+                    (b[0] - free[0][0]) * (free[1][1] - free[0][1])
+                    - (b[1] - free[0][1]) * (free[1][0] - free[0][0])
+                )
+                <= mpmath.mpf(10) ** -12 * size**2
+                for b in free[2:]
+            )
+    return ClosureRank(rank, full - rank, dependent, candidates, collinear)
+
+
+def _rank(rows: list[list[mpmath.mpf]]) -> int:
+    """Numerical rank of a matrix of 30-digit numbers: singular values above 1e-8 of the
+    largest in float64 count at once; the smaller ones are settled by a 30-digit SVD (rank
+    deficient below 1e-20 of the largest), which costs seconds on large matrices and is only
+    needed near a singular pose or for redundant constraints."""
+    if not rows or not rows[0]:
+        return 0
+    sigma = np.linalg.svd(np.array([[float(x) for x in r] for r in rows]), compute_uv=False)
+    if not sigma.size or sigma[0] == 0:
+        return 0
+    if sigma[-1] > 1e-8 * sigma[0]:
+        return int(sigma.size)
+    exact = mpmath.svd_r(mpmath.matrix(rows), compute_uv=False)
+    top = max(exact)
+    return sum(1 for x in exact if x > mpmath.mpf(10) ** -20 * top)
 
 
 def _mp(expr: sp.Expr, values: Mapping[sp.Symbol, sp.Expr]) -> mpmath.mpf | None:

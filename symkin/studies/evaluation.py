@@ -188,6 +188,14 @@ def evaluate(
             entry="--sensitivity",
             hint="ask for them at level exact (docs/sensitivity.md)",
         )
+    if level in levels.LOADED and analysis.redundant:
+        raise AssemblyError(
+            f"{analysis.mechanism.path}: the {level} level cannot share the loads among "
+            f"redundant loops: {len(analysis.dropped)} closure constraint(s) are redundant "
+            "(a statically indeterminate mechanism), and the split of the loop forces follows "
+            "from the plates' compliance, which the loaded level's statics of the pin linkage "
+            "leaves out; ask for --level equilibrium (docs/levels.md)"
+        )
     if backend == "sympy":
         if level in levels.LOADED:
             return loaded(analysis, inputs, params, dps, refine=level == "loaded_refined")
@@ -767,13 +775,25 @@ class _Mpmath:
                     },
                 )
 
-        res = physical_equilibrium.solve(
-            self.mechanism,
-            exact_params,
-            {names[a]: v for a, v in given.items()},
-            rigid,
-            extra_digits,
-        )
+        try:
+            res = physical_equilibrium.solve(
+                self.mechanism,
+                exact_params,
+                {names[a]: v for a, v in given.items()},
+                rigid,
+                extra_digits,
+            )
+        except np.linalg.LinAlgError:
+            if not an.redundant:
+                raise
+            # Inextensible plates cannot share a redundant loop's force along themselves: the
+            # split is undetermined and the equilibrium equations singular (docs/levels.md).
+            raise AssemblyError(
+                f"{self.mechanism.path}: the equilibrium level cannot solve this redundant "
+                f"mechanism ({len(an.dropped)} redundant closure constraint(s)): its plates "
+                "are inextensible elastica, which leave the forces the redundant loops carry "
+                "along the plates undetermined (a singular system)"
+            ) from None
         order = [names[a] for a in sorted(names)]
         with mpmath.workdps(20):
             # The links' rotations: the rigid one from the rigid angles, the deviation from the
@@ -820,6 +840,7 @@ class _Mpmath:
         if not sol.closed_form:
             theta = self._rigid_newton(pvals, ivals)
             self._check_winding(pvals, theta, ivals)
+            self._check_consistency("rigid", pvals, theta)
             return theta, dyads
         for symbol, expr in sol.assignments:
             fn = self._fn(f"assign:{symbol.name}", expr, sorted(expr.free_symbols, key=str))
@@ -843,19 +864,24 @@ class _Mpmath:
         theta = dict(ivals)
         for a in kin.unknowns:
             h = kin.hinges[a]
-            theta[a] = _wrap(phi[h.M] - phi[h.P])
+            # an angle whose inputs are all zero is exactly zero (the formulas round to noise)
+            rest = all(ivals[b] == 0 for b in sol.depends[a])
+            theta[a] = mpmath.mpf(0) if rest else _wrap(phi[h.M] - phi[h.P])
         self._check_winding(pvals, theta, ivals)
+        self._check_consistency("rigid", pvals, theta)
         return theta, dyads
 
     def _check_winding(self, pvals: list, theta: dict, ivals: dict) -> None:
-        """The winding rule of symkin.solver: every loop's angle sum below SOLVER.winding."""
+        """The winding rule of symkin.core.settings: every loop's angle sum below
+        SOLVER.winding (the angular rows solved; a dropped one is checked with the others)."""
         an, kin = self.an, self.kin
         if not kin.unknowns:
             return
         f = self._fn("rigid_residual", list(an.rigid_residual), [*an.params, *an.thetas])
         rows = f(*pvals, *(theta[a] for a in sorted(theta)))
-        for k, c in enumerate(kin.chords):
-            if not abs(rows[3 * k]) < SOLVER.winding:
+        for k in an.angular_rows:
+            c = an.row_chord(an.rows[k])
+            if not abs(rows[k]) < SOLVER.winding:
                 at = ", ".join(
                     f"{kin.hinges[b].name}={float(v):g}" for b, v in sorted(ivals.items())
                 )
@@ -865,6 +891,75 @@ class _Mpmath:
                     "through more than half a turn on the way from the as-fabricated pose (its "
                     "angles sum to 2*pi, not 0): a plate cannot bend that far"
                 )
+
+    def _at(self, theta: dict) -> str:
+        """'F1=0.01, ...': the inputs of a configuration, for messages."""
+        kin = self.kin
+        return ", ".join(f"{kin.hinges[a].name}={float(theta[a]):g}" for a in kin.inputs)
+
+    def _check_consistency(
+        self, form: str, pvals: list, theta: dict, delta: dict | None = None, level: str = ""
+    ) -> None:
+        """Redundant loops (symkin.core.settings, step 4): every dropped closure row of `form`
+        ('rigid', 'first_order', 'exact') vanishes at the solution to SOLVER's `consistent`
+        times the size of its terms, else the loops contradict each other here (exit 3)."""
+        an = self.an
+        if not an.redundant:
+            return
+        residual, size = an.consistency(form)
+        args = [*an.params, *an.thetas] + ([] if form == "rigid" else [*an.deltas])
+        values = [*pvals, *(theta[a] for a in sorted(theta))]
+        if form != "rigid":
+            values += [delta[a] for a in self.kin.unknowns]
+        out = self._fn(f"consistency:{form}", [*residual, *size], args)(*values)
+        tol = SOLVER.mpmath(mpmath.mp.dps).consistent
+        d = len(an.dropped)
+        for k, row in enumerate(an.dropped):
+            if abs(out[k]) <= tol * out[d + k]:
+                continue
+            c = an.row_chord(row)
+            what = ("angular", "x", "y")[row % 3]
+            where = (
+                f"the redundant loop of '{self.kin.hinges[c].name}' ({an.structure.loop_text(c)})"
+            )
+            off = (
+                f"its {what} closure is off by {float(out[k]):.3g} "
+                f"(its terms {float(out[d + k]):.3g})"
+            )
+            if form == "rigid":
+                raise AssemblyError(
+                    f"{self.mechanism.path}: at {self._at(theta)} {where} cannot close with the "
+                    f"other loops: {off}; the rigid linkage locks here (its constraints are "
+                    "redundant in the as-fabricated pose only)"
+                )
+            raise AssemblyError(
+                f"{self.mechanism.path}: at {self._at(theta)} the plates do not close {where} "
+                f"at level {level}: {off}; a kinematic level bends each plate by its model "
+                "alone, which cannot also close a redundant loop (the physical level "
+                "equilibrium shares the deformation among the loops)"
+            )
+
+    def _worst_loop(self, form: str, pvals: list, theta: dict, delta: dict | None = None) -> str:
+        """The loop whose solved closure row is furthest from zero, relative to the size of its
+        terms: "the loop of 'S2' (F1 + S1 - S2 - F2)", for a message."""
+        an = self.an
+        residual, size = an.closure_terms(form, an.rows)
+        args = [*an.params, *an.thetas] + ([] if form == "rigid" else [*an.deltas])
+        values = [*pvals, *(theta[a] for a in sorted(theta))]
+        if form != "rigid":
+            values += [delta[a] for a in self.kin.unknowns]
+        out = self._fn(f"terms:{form}", [*residual, *size], args)(*values)
+        k = len(an.rows)
+
+        def ratio(i: int):
+            r, t = abs(out[i]), out[k + i]
+            if not mpmath.isfinite(r):
+                return mpmath.inf
+            return r / t if t else (mpmath.inf if r else 0)
+
+        worst = max(range(k), key=ratio)
+        c = an.row_chord(an.rows[worst])
+        return f"the loop of '{self.kin.hinges[c].name}' ({an.structure.loop_text(c)})"
 
     def _check_limits(self, theta: dict, ivals: dict) -> None:
         """No plate is driven past its bound: its model's limit (elastica_force: π/2) or π."""
@@ -913,9 +1008,10 @@ class _Mpmath:
                     f"{kin.hinges[a].name}={float(v * t):g}" for a, v in sorted(ivals.items())
                 )
                 raise AssemblyError(
-                    f"{self.mechanism.path}: the rigid loops cannot close at {at} "
-                    "(no convergence: outside the assembly range or at a toggle "
-                    "position)"
+                    f"{self.mechanism.path}: the rigid loops cannot close at {at}: "
+                    f"{self._worst_loop('rigid', pvals, theta)} does not converge in "
+                    f"{SOLVER.rigid_iterations} Newton steps (outside the assembly range or "
+                    "at a toggle position)"
                 )
         return {**ivals, **x}  # tracked continuously: the limits see |theta| > pi
 
@@ -937,7 +1033,8 @@ class _Mpmath:
         return None
 
     def _deltas(self, level: str, pvals: list, theta: dict) -> dict:
-        """δ of the non-input hinges: zero (paper), linear (first_order) or Newton (exact)."""
+        """δ of the non-input hinges: zero (paper), linear (first_order) or Newton (exact), by
+        the stopping rule of symkin.core.settings (3); redundant loops checked (4)."""
         an = self.an
         if not levels.get(level).needs_delta or not an.deltas:
             return {}
@@ -953,19 +1050,31 @@ class _Mpmath:
                 f"{self.mechanism.path}: the mechanism is at a toggle position "
                 "(singular loop Jacobian) for these inputs"
             ) from None
-        delta = {a: d[k] for k, a in enumerate(self.kin.unknowns)}
+        unknowns = self.kin.unknowns
+        delta = {a: d[k] for k, a in enumerate(unknowns)}
         if level == "first_order":
+            self._check_consistency("first_order", pvals, theta, delta, level)
             return delta
+        scale = self._fn("scale", list(an.closure_scale), args)(*values)
         args_d = [*args, *an.deltas]
         f = self._fn("residual", list(an.residual), args_d)
         jac = self._fn("jacobian", an.jacobian.tolist(), args_d)
-        x = mpmath.matrix([delta[a] for a in self.kin.unknowns])
+        x = mpmath.matrix([delta[a] for a in unknowns])
         tol = SOLVER.mpmath(mpmath.mp.dps)
+        k = len(unknowns)
         previous = None
         for _ in range(SOLVER.exact_iterations):
             vals = [*values, *x]
+            res, jm = mpmath.matrix(f(*vals)), mpmath.matrix(jac(*vals))
+            # (3b): the residual at the rounding level of its terms
+            floor = all(
+                abs(res[i])
+                <= tol.residual
+                * (scale[i] + mpmath.fsum(abs(jm[i, j]) * abs(x[j]) for j in range(k)))
+                for i in range(k)
+            )
             try:
-                step = mpmath.lu_solve(mpmath.matrix(jac(*vals)), mpmath.matrix(f(*vals)))
+                step = mpmath.lu_solve(jm, res)
             except ZeroDivisionError:
                 raise AssemblyError(
                     f"{self.mechanism.path}: singular compliant loop Jacobian "
@@ -973,21 +1082,24 @@ class _Mpmath:
                 ) from None
             x = x - step
             size, change = mpmath.norm(x, mpmath.inf), mpmath.norm(step, mpmath.inf)
-            # Converged, or stalled at the working precision's noise floor far below float64.
             if (
                 change <= tol.converged * size
-                or size == 0
+                or floor
                 or (
                     previous is not None
                     and change >= SOLVER.stall_ratio * previous
                     and change <= tol.stalled * size
                 )
             ):
-                return {a: x[k] for k, a in enumerate(self.kin.unknowns)}
+                delta = {a: x[j] for j, a in enumerate(unknowns)}
+                self._check_consistency("exact", pvals, theta, delta, level)
+                return delta
             previous = change
+        last = {a: x[j] for j, a in enumerate(unknowns)}
         raise AssemblyError(
-            f"{self.mechanism.path}: the compliant loops did not converge "
-            f"(no convergence in {SOLVER.exact_iterations} Newton steps)"
+            f"{self.mechanism.path}: at {self._at(theta)} the compliant closure did not "
+            f"converge in {SOLVER.exact_iterations} Newton steps: "
+            f"{self._worst_loop('exact', pvals, theta, last)} stays furthest from closing"
         )
 
 

@@ -292,8 +292,16 @@ def run(
     say(f"reference: {len(samples)} samples at level {level.name}")
     kept, ref = reference(faithful, samples, level.name)
     if not kept:
+        # the first sample's own refusal says why (a level that cannot take the mechanism, say)
+        try:
+            evaluate(faithful, {k: repr(v) for k, v in samples[0].items()}, level.name, dps=30)
+            why = ""
+        except AssemblyError as exc:
+            why = (
+                f" at level {level.name}; the first one: {str(exc).removeprefix(f'{mech.path}: ')}"
+            )
         raise InputError(
-            "no sample of the range can be assembled",
+            f"no sample of the range can be assembled{why}",
             file=mech.path,
             entry="--range",
             hint="choose a range inside the assembly range",

@@ -187,6 +187,9 @@ typedef struct {
     double converged;
     double stalled;
     double stall_ratio;
+    double residual;    /* > 0: also stop once every residual is this small relative to the size
+                           of its terms (a closure's S, symkin.core.settings 3b); unknowns all zero
+                           then stop only so */
 } sk_rule;
 
 #if defined(SK_LOOPS)
@@ -195,11 +198,30 @@ typedef struct {
    in magnitude, the previous step `previous` (HUGE_VAL before the second): the one stopping
    test of every Newton iteration. */
 static int sk_newton_stop(const sk_rule *rule, double change, double size,
-                          double previous)
+                          double previous, int noise)
 {
-    return change <= rule->tolerance
-           || (rule->converged > 0.0 && (change <= rule->converged * size || size == 0.0))
+    return change <= rule->tolerance || noise
+           || (rule->converged > 0.0
+               && (change <= rule->converged * size || (size == 0.0 && rule->residual == 0.0)))
            || (change >= rule->stall_ratio * previous && change <= rule->stalled * size);
+}
+
+/* Whether every residual f[r] of a system (f, then its row-major Jacobian J, n x n) at x is at
+   the rounding level of its terms: |f_r| <= residual (scale_r + sum_j |J_rj x_j|). */
+static int sk_residual_noise(int n, const double *fj, const double *x, const double *scale,
+                             double residual)
+{
+    int r, j;
+    for (r = 0; r < n; ++r) {
+        double terms = fabs(scale[r]);
+        for (j = 0; j < n; ++j) {
+            terms += fabs(fj[n + r * n + j] * x[j]);
+        }
+        if (!(fabs(fj[r]) <= residual * terms)) {
+            return 0;
+        }
+    }
+    return 1;
 }
 
 /* A system of n equations: at the unknowns x, its residual f (n), then its Jacobian (n x n,
@@ -209,17 +231,22 @@ typedef void (*sk_system_fn)(const void *ctx, const double *x, double *fj);
 /* Newton on `system` from x: each step solves J s = f and subtracts s from the unknowns
    (x[index[i]], or x[i] when index is NULL) until `rule` stops it. fj (n + n * n doubles) is
    workspace; with `evaluated` it holds the system at x already. Returns 0 (stopped), 1 (a
-   Jacobian singular or not finite) or 2 (not stopped within rule->iterations steps). */
+   Jacobian singular or not finite) or 2 (not stopped within rule->iterations steps). With
+   rule->residual > 0, `scale` (n: the size of each residual's constant terms; index NULL)
+   lets a residual at rounding stop it too (sk_residual_noise). */
 static int sk_newton_solve(sk_system_fn system, const void *ctx, int n, const int *index,
-                           const sk_rule *rule, double *x, double *fj, int evaluated)
+                           const sk_rule *rule, const double *scale, double *x, double *fj,
+                           int evaluated)
 {
     double previous = HUGE_VAL;
     int it, i;
     for (it = 0; it < rule->iterations; ++it) {
         double change = 0.0, size = 0.0;
+        int noise;
         if (it > 0 || !evaluated) {
             system(ctx, x, fj);
         }
+        noise = rule->residual > 0.0 && sk_residual_noise(n, fj, x, scale, rule->residual);
         if (sk_solve(n, fj + n, 1, fj)) {
             return 1;
         }
@@ -233,7 +260,7 @@ static int sk_newton_solve(sk_system_fn system, const void *ctx, int n, const in
                 change = fabs(fj[i]);
             }
         }
-        if (sk_newton_stop(rule, change, size, previous)) {
+        if (sk_newton_stop(rule, change, size, previous, noise)) {
             return 0;
         }
         previous = change;
@@ -254,7 +281,7 @@ static int sk_continuation(void (*stage)(void *ctx, double t), sk_system_fn syst
     int s, status;
     for (s = 1; s <= steps; ++s) {
         stage(ctx, (double)s / steps);
-        status = sk_newton_solve(system, ctx, n, index, rule, x, fj, 0);
+        status = sk_newton_solve(system, ctx, n, index, rule, NULL, x, fj, 0);
         if (status) {
             return status;
         }
@@ -289,6 +316,8 @@ typedef struct {
     sk_fn3 closure;     /* its F and dF/ddelta (theta, delta, q); NULL: A delta = -r only */
     int loaded;         /* q: 0 the parameters, 1 the loaded constants, 2 refined ones */
     sk_sens sens;       /* its sensitivities (fn NULL: none) */
+    sk_fn3 consistency; /* redundant loops: its closure's dropped rows, then their terms' size
+                           (theta, delta, q); NULL: none */
 } sk_level;
 
 /* One mechanism: its tables, routines and solver settings. Routines a mechanism lacks are
@@ -310,7 +339,14 @@ typedef struct {
     sk_fn2 rigid;                   /* closed-form rigid angles and reaches (inputs, params) */
     int n_dyads;
     sk_fn2 rigid_res;               /* rigid closure (theta, params): per loop angle, x, y */
-    sk_fn2 linear;                  /* its Jacobian A and r (theta, params) */
+    int n_angular;                  /* the rows of rigid_res that are loops' angle sums */
+    const int *angular;
+    sk_fn2 linear;                  /* its Jacobian A, r and S (theta, params) */
+    int n_rest;                     /* closed-form angles exactly zero with their inputs: */
+    const int *rest;                /* (theta index, count, the inputs' positions) ... */
+    int n_dropped;                  /* redundant loops: the closure rows left out of the solves */
+    sk_fn2 consistency_rigid;       /* their rigid residuals and terms' size (theta, params) */
+    double consistent;              /* each must vanish to this fraction of its size */
     sk_fn2 rigid_points;            /* (theta, params) */
     sk_fn2 links;                   /* rotations and their deviations (theta, delta) */
     sk_fn2 loaded_q0;               /* the loaded level's statics (A^T mu0 = Q0; NULL: one pass) */
@@ -318,7 +354,7 @@ typedef struct {
     sk_fn3 loaded_compliance;       /* (theta, mu, params) into the constants at compliance_at */
     sk_fn3 loaded_compliance_more;  /* the plates only the loaded closure reads, at more_at */
     int compliance_at, more_at;
-    sk_fn2 loaded_linear;           /* the loaded closure: A and r (theta, constants) */
+    sk_fn2 loaded_linear;           /* the loaded closure: A, r and S (theta, constants) */
     sk_fn3 loaded_closure;          /* F and dF/ddelta (theta, delta, constants) */
     sk_rule rigid_rule;             /* Newton at each continuation step */
     sk_rule polish_rule;            /* after the rigid start */
@@ -346,6 +382,20 @@ static const sk_level *sk_find_level(const sk_mechanism *m, int code)
 
 #if defined(SK_LOOPS)
 
+/* Redundant loops (symkin.core.settings, 4): 0 when each dropped closure row con[i] vanishes
+   to m->consistent of the size of its terms con[n_dropped + i], else 1 (the loops contradict
+   each other). */
+static int sk_consistent(const sk_mechanism *m, const double *con)
+{
+    int i;
+    for (i = 0; i < m->n_dropped; ++i) {
+        if (!(fabs(con[i]) <= m->consistent * con[m->n_dropped + i])) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
 /* What the rigid closure's Newton reads: theta is its unknowns' array. */
 typedef struct {
     const sk_mechanism *m;
@@ -357,7 +407,7 @@ typedef struct {
 static void sk_rigid_system(const void *ctx, const double *theta, double *fj)
 {
     const sk_rigid_ctx *c = (const sk_rigid_ctx *)ctx;
-    double lin[SK_K * SK_K + SK_K + 1];
+    double lin[SK_K * SK_K + 2 * SK_K + 1];
     int i;
     c->m->rigid_res(theta, c->params, fj);
     c->m->linear(theta, c->params, lin);
@@ -406,6 +456,16 @@ static int sk_rigid_pose(const sk_mechanism *m, const double *inputs, const doub
         for (i = 0; i < SK_K; ++i) {
             theta[m->unknown_index[i]] = sk_wrap(sol[i]);
         }
+        /* an angle whose inputs are all zero is exactly zero (its formula rounds to noise) */
+        for (i = 0; i < m->n_rest; i += 2 + m->rest[i + 1]) {
+            int j, moved = 0;
+            for (j = 0; j < m->rest[i + 1]; ++j) {
+                moved = moved || inputs[m->rest[i + 2 + j]] != 0.0;
+            }
+            if (!moved) {
+                theta[m->rest[i]] = 0.0;
+            }
+        }
     }
 #endif
 #if defined(SK_CONTINUATION)
@@ -431,13 +491,21 @@ static int sk_rigid_pose(const sk_mechanism *m, const double *inputs, const doub
     }
 #endif
     sk_rigid_system(&c, theta, fj);
-    for (i = 0; i < SK_K; i += 3) {
-        if (!(fabs(fj[i]) < m->winding)) {
+    for (i = 0; i < m->n_angular; ++i) {
+        if (!(fabs(fj[m->angular[i]]) < m->winding)) {
             return 1;
         }
     }
-    return sk_newton_solve(sk_rigid_system, &c, SK_K, m->unknown_index, &m->polish_rule, theta,
-                           fj, 1) == 1;
+    if (sk_newton_solve(sk_rigid_system, &c, SK_K, m->unknown_index, &m->polish_rule, NULL,
+                        theta, fj, 1) == 1) {
+        return 1;
+    }
+    if (m->consistency_rigid != NULL) {
+        double con[SK_OUT];
+        m->consistency_rigid(theta, params, con);
+        return sk_consistent(m, con);
+    }
+    return 0;
 }
 
 /* What a compliant closure's Newton reads. */
@@ -457,12 +525,13 @@ static void sk_closure_system(const void *ctx, const double *delta, double *fj)
 static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure,
                             const double *theta, const double *q, double *delta)
 {
-    double lin[SK_K * SK_K + SK_K + 1], fj[SK_K + SK_K * SK_K + 1];
+    double lin[SK_K * SK_K + 2 * SK_K + 1], fj[SK_K + SK_K * SK_K + 1], scale[SK_K + 1];
     sk_closure_ctx c;
     int i;
     linear(theta, q, lin);
     for (i = 0; i < SK_K; ++i) {
         delta[i] = -lin[SK_K * SK_K + i];
+        scale[i] = lin[SK_K * SK_K + SK_K + i];
     }
     if (sk_solve(SK_K, lin, 1, delta)) {
         return 1;
@@ -473,7 +542,8 @@ static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure
     c.closure = closure;
     c.theta = theta;
     c.q = q;
-    return sk_newton_solve(sk_closure_system, &c, SK_K, NULL, &m->exact_rule, delta, fj, 0);
+    return sk_newton_solve(sk_closure_system, &c, SK_K, NULL, &m->exact_rule, scale, delta, fj,
+                           0);
 }
 #endif
 #if defined(SK_LOADED)
@@ -488,7 +558,7 @@ static int sk_loaded_constants(const sk_mechanism *m, const double *theta, const
     const double *mu = NULL;
     int i;
 #if defined(SK_LOOPS)
-    double lin[SK_K * SK_K + SK_K + 1], at[SK_K * SK_K + 1], mu0[SK_K + 1], loads[SK_K + 1];
+    double lin[SK_K * SK_K + 2 * SK_K + 1], at[SK_K * SK_K + 1], mu0[SK_K + 1], loads[SK_K + 1];
     int j, piv[SK_K + 1];
     if (jac == NULL) {
         m->linear(theta, params, lin);
@@ -595,6 +665,13 @@ static int sk_pose(const sk_mechanism *m, const sk_level *lv, const double *inpu
         const int status = sk_solve_closure(m, lv->linear, lv->closure, theta, *q, delta);
         if (status) {
             return status;
+        }
+        if (lv->consistency != NULL) {
+            double con[SK_OUT];
+            lv->consistency(theta, delta, *q, con);
+            if (sk_consistent(m, con)) {
+                return 1;
+            }
         }
     }
 #endif

@@ -36,22 +36,29 @@ class _Level:
     """A generated level: its deviation routine, the closure it solves for delta (linear: A and
     r; newton: F and dF/ddelta, None for the first-order delta; both None: none), what its
     routines read (loaded: 0 the parameters, 1 the loaded constants, 2 refined ones) and its
-    sensitivity routine with the (offset, rows, cols) of its blocks."""
+    sensitivity routine with the (offset, rows, cols) of its blocks; with redundant loops,
+    `consistency`: its closure's dropped rows and their terms' size (theta, delta, q)."""
 
-    def __init__(self, dev, linear=None, newton=None, loaded=0, sens=None, blocks=None):
+    def __init__(
+        self, dev, linear=None, newton=None, loaded=0, sens=None, blocks=None, consistency=None
+    ):
         self.dev, self.linear, self.newton, self.loaded = dev, linear, newton, loaded
-        self.sens, self.blocks = sens, blocks or {}
+        self.sens, self.blocks, self.consistency = sens, blocks or {}, consistency
 
 
 class _Rule:
     """When a Newton iteration stops (symkin.core.settings): after `iterations` steps at most,
     and once a step is at most `tolerance`, or at most `converged` times the largest unknown
-    (with converged > 0; also when they are all zero), or has stalled at rounding: at least
-    `stall_ratio` times the previous step and at most `stalled` times the largest unknown."""
+    (with converged > 0; also when they are all zero unless `residual`), or has stalled at
+    rounding: at least `stall_ratio` times the previous step and at most `stalled` times the
+    largest unknown; with `residual` > 0, also once every residual is at most `residual` times
+    the size of its terms (symkin.core.settings, 3b)."""
 
-    def __init__(self, iterations, tolerance=0.0, converged=0.0, stalled=0.0, stall_ratio=0.0):
+    def __init__(
+        self, iterations, tolerance=0.0, converged=0.0, stalled=0.0, stall_ratio=0.0, residual=0.0
+    ):
         self.iterations, self.tolerance, self.converged = iterations, tolerance, converged
-        self.stalled, self.stall_ratio = stalled, stall_ratio
+        self.stalled, self.stall_ratio, self.residual = stalled, stall_ratio, residual
 
 
 def _value(v, dtype):
@@ -157,21 +164,36 @@ def _gauss(a, b, ok, k, m, dtype):
     return x, good
 
 
-def _newton_stop(rule, change, size, previous):
+def _newton_stop(rule, change, size, previous, noise=False):
     """Where Newton stops after a step `change` (largest entry), the unknowns now at most `size`
-    in magnitude, the previous step `previous` (inf before the second): the one stopping test of
-    every Newton iteration."""
-    done = change <= rule.tolerance
+    in magnitude, the previous step `previous` (inf before the second), `noise` where the
+    residuals were at rounding (_residual_noise): the one stopping test of every Newton
+    iteration."""
+    done = (change <= rule.tolerance) | noise
     if rule.converged > 0.0:
-        done = done | (change <= rule.converged * size) | (size == 0)
+        done = done | (change <= rule.converged * size)
+        if rule.residual == 0.0:
+            done = done | (size == 0)
     return done | ((change >= rule.stall_ratio * previous) & (change <= rule.stalled * size))
 
 
-def _newton_solve(system, x, index, ok, rule, dtype, evaluated=None):
+def _residual_noise(out, x, scale, residual):
+    """Where every residual out[r] of a system (f, then its row-major Jacobian J) at x is at the
+    rounding level of its terms: |f_r| <= residual (scale_r + sum_j |J_rj x_j|)."""
+    k = len(x)
+    noise = True
+    for r in range(k):
+        terms = numpy.abs(scale[r]) + sum(numpy.abs(out[k + r * k + j] * x[j]) for j in range(k))
+        noise = noise & (numpy.abs(out[r]) <= residual * terms)
+    return noise
+
+
+def _newton_solve(system, x, index, ok, rule, dtype, evaluated=None, scale=None):
     """Newton on `system` (x -> its residual f, then its row-major Jacobian, as one list) from
     the list of arrays x, stepping the unknowns x[i] for i in `index`, each element until
-    `rule` stops it; `evaluated`: the system at x, when it is known. Returns x, ok (False where
-    a Jacobian is singular or not finite) and where Newton stopped."""
+    `rule` stops it; `evaluated`: the system at x, when it is known; `scale` (with
+    rule.residual > 0, index covering x): the size of each residual's constant terms. Returns
+    x, ok (False where a Jacobian is singular or not finite) and where Newton stopped."""
     k = len(index)
     active = ok.copy()
     previous = numpy.full(ok.shape, numpy.inf)
@@ -179,6 +201,9 @@ def _newton_solve(system, x, index, ok, rule, dtype, evaluated=None):
     for _ in range(rule.iterations):
         if out is None:
             out = system(x)
+        noise = False
+        if rule.residual > 0.0:
+            noise = _residual_noise(out, [x[i] for i in index], scale, rule.residual)
         step, good = _solve(out[k:], out[:k], active, 1, dtype)
         out = None
         ok = ok & (good | ~active)
@@ -187,7 +212,7 @@ def _newton_solve(system, x, index, ok, rule, dtype, evaluated=None):
             x[i] = numpy.where(active, x[i] - step[j], x[i])
         size = numpy.max(numpy.abs(numpy.array([x[i] for i in index])), axis=0)
         change = numpy.max(numpy.abs(numpy.array(step)), axis=0)
-        done = _newton_stop(rule, change, size, previous)
+        done = _newton_stop(rule, change, size, previous, noise)
         previous = numpy.where(active, change, previous)
         active = active & ~done
         if not active.any():
@@ -229,6 +254,12 @@ def _rigid_angles(mech, x, params, ok):
             ok = ok & (numpy.broadcast_to(reach, shape) >= 0.0)
         for j, i in enumerate(mech.unknown_index):
             theta[i] = numpy.where(ok, _wrap(numpy.broadcast_to(out[j], shape)), 0.0)
+        # an angle whose inputs are all zero is exactly zero (its formula rounds to noise there)
+        for i, reads in mech.rest:
+            moved = numpy.zeros(shape, dtype=bool)
+            for j in reads:
+                moved = moved | (x[j] != 0.0)
+            theta[i] = numpy.where(moved, theta[i], 0.0)
     else:
         top = max(
             [float(numpy.max(numpy.abs(v))) if v.size else 0.0 for v in x]
@@ -247,25 +278,43 @@ def _rigid_angles(mech, x, params, ok):
             stage, system, theta, mech.unknown_index, ok, mech.rigid_rule, steps, dtype
         )
     out = system(theta)
-    for n in range(0, k, 3):
+    for n in mech.angular:
         ok = ok & (numpy.abs(out[n]) < mech.winding)
     theta, ok, _ = _newton_solve(
         system, theta, mech.unknown_index, ok, mech.polish_rule, dtype, out
     )
+    if mech.consistency_rigid is not None:
+        ok = _consistent(mech, mech.consistency_rigid(theta, params), ok)
     return theta, ok
+
+
+def _consistent(mech, out, ok):
+    """Redundant loops (symkin.core.settings, 4): where each dropped closure row (out: the rows,
+    then the size of their terms) vanishes to mech.consistent of its size; else not ok."""
+    n = mech.n_dropped
+    for i in range(n):
+        ok = ok & (numpy.abs(out[i]) <= mech.consistent * numpy.asarray(out[n + i]))
+    return ok
 
 
 def _solve_closure(mech, linear, newton, theta, q, ok):
     """delta of a closure: A delta = -r (its first-order delta), then with `newton` (F,
     dF/ddelta) Newton from there; and ok."""
     k = len(mech.unknown_index)
-    lin = linear(theta, q)
-    delta, good = _solve(lin[: k * k], [-numpy.asarray(r) for r in lin[k * k :]], ok, 1, mech.dtype)
+    lin = linear(theta, q)  # A, r, then S: the size of r's terms
+    rhs = [-numpy.asarray(r) for r in lin[k * k : k * k + k]]
+    delta, good = _solve(lin[: k * k], rhs, ok, 1, mech.dtype)
     ok = ok & good
     if newton is None:
         return delta, ok
     delta, ok, converged = _newton_solve(
-        lambda delta: newton(theta, delta, q), delta, range(k), ok, mech.exact_rule, mech.dtype
+        lambda delta: newton(theta, delta, q),
+        delta,
+        range(k),
+        ok,
+        mech.exact_rule,
+        mech.dtype,
+        scale=lin[k * k + k :],
     )
     return delta, ok & converged
 
@@ -317,6 +366,8 @@ def _pose(mech, arrays, level, p, links):
         delta = [numpy.zeros(shape, dtype=mech.dtype) for _ in mech.unknown_index]
         if lv.linear is not None and (mech.needs_loops or (links and mech.loops_for_links)):
             delta, ok = _solve_closure(mech, lv.linear, lv.newton, theta, q, ok)
+            if lv.consistency is not None:
+                ok = _consistent(mech, lv.consistency(theta, delta, q), ok)
         for i, limit in mech.limits:
             ok = ok & (numpy.abs(theta[i]) <= limit)
             if i in mech.unknown_index:

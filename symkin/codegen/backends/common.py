@@ -116,6 +116,13 @@ class Backend:
             "sens_rigid": offsets(plan, "sens_rigid", ("A", "dG_dv", "dR_dtheta", "dR_dv")),
             "constants": {b.name: b.offset for b in plan.loaded.constants} if plan.loaded else {},
             "out_size": max(len(r.outputs) for r in plan.routines.values()) + 1,
+            "rest": tuple((plan.unknown_index[j], tuple(reads)) for j, reads in plan.rest),
+            "rest_table": [
+                v for j, reads in plan.rest for v in (plan.unknown_index[j], len(reads), *reads)
+            ],
+            # the rigid closure's rows that are loops' angle sums (the winding rule)
+            "angular_rows": list(plan.angular) or list(range(0, len(plan.unknown_index), 3)),
+            "dropped": plan.dropped,
             "kernels": [type(self).kernel_source(n) for n in special_functions(plan)],
         }
 
