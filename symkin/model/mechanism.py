@@ -212,7 +212,8 @@ class Mechanism:
     @property
     def mobility(self) -> int:
         """The mobility: 3n minus the rank of the closure Jacobian at the as-fabricated pose
-        (:func:`closure_rank`); Grübler's count unless some loops are redundant (CONTRACT §9)."""
+        (:func:`closure_rank`); Grübler's count unless some loops are redundant
+        (docs/levels.md, "Redundant loops")."""
         rank = closure_rank(self)
         return self.grubler if rank is None else rank.mobility
 
@@ -1227,7 +1228,7 @@ class _Reader:
             )
 
     def check_mobility(self, mech: Mechanism) -> None:
-        """The inputs number the mobility and fix the pose (CONTRACT §9, "Redundant loops"):
+        """The inputs number the mobility and fix the pose (docs/levels.md, "Redundant loops"):
         Grübler's count, corrected by the rank of the closure Jacobian at the as-fabricated
         pose when some loop constraints are dependent."""
         n, m = len(mech.links) - 1, len(mech.hinges)
@@ -1310,7 +1311,7 @@ def closure_rank(mech: Mechanism) -> ClosureRank | None:
     pin at its rigid reference, :func:`~symkin.model.hinges.pivot_distance`) by the 3n pose
     velocities of the moving links at the as-fabricated pose and the file's parameter values
     (None when those values are not finite numbers: the value checks report them). The
-    mobility is 3n - rank (CONTRACT §9): Grübler's 3n - 2m when the 2m constraints are
+    mobility is 3n - rank (docs/levels.md): Grübler's 3n - 2m when the 2m constraints are
     independent, more when some are redundant (a parallelogram with a third leg has 0 and 1).
     With the inputs' rows (each holds its hinge's relative rotation) the rank must reach 3n:
     an input whose row adds nothing is dependent. Computed once per mechanism."""
