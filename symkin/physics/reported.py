@@ -14,16 +14,28 @@ reports"), from a converged solution u of symkin.physics.equilibrium's System an
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from typing import TYPE_CHECKING
+from collections.abc import Mapping, Sequence
+from typing import Any, Protocol
 
 import numpy as np
 
 from . import beams
 from .result import InputLoad, PlateStress
 
-if TYPE_CHECKING:
-    from .equilibrium import System
+
+class System(Protocol):
+    """What these functions read of symkin.physics.equilibrium.System (which imports this
+    module): its hinges, the unknowns' index and size, the points, the scales and `place`."""
+
+    hinges: Sequence[Any]
+    index: dict
+    size: int
+    points: dict
+    L: Any
+    F: Any
+
+    def place(self, u: np.ndarray, i: int, p0: tuple) -> tuple: ...
+
 
 #: Sections per plate where the stress is sampled (both ends exact; an interior maximum, e.g. of
 #: a buckled plate, is refined by a parabola through the three samples around it).
