@@ -140,7 +140,7 @@ def plates(
             if bend < 0:
                 shift = (a - c) / (2 * bend)
                 value = float(b - (a - c) * shift / 4)
-                where = (j + shift) / sections
+                where = float((j + shift) / sections)
         stress = moduli[h.name] * value
         limit = allowable.get(h.name)
         safety = None if limit is None else (limit / stress if stress > 0 else float("inf"))
