@@ -92,6 +92,12 @@ STIFFNESS_RULES = {
         "Poisson's ratio must be in [0, 0.5)",
         "e.g. nu = 0.3 for steel",
     ),
+    "allowable_stress": (
+        lambda v: v > 0,
+        "the allowable stress must be positive (Pa)",
+        "give allowable_stress in Pa, e.g. allowable_stress = 300e6 (a steel's yield stress "
+        "over a safety margin)",
+    ),
 }
 DEFAULT_KEYS = tuple(k for k in HINGE_KEYS if k not in ("name", "links", "at")) + MODEL_KEYS
 DEFAULT_MODEL = "circular_arc"
@@ -135,6 +141,8 @@ class Hinge:
     width: sp.Expr | None = None  # out-of-plane width, file unit
     nu: sp.Expr = DEFAULT_NU  # Poisson's ratio
     beam: str = BEAMS[0]  # the plate's beam theory at the physical levels (hinges.BEAMS)
+    # the plate's allowable stress, Pa (None: not given): `safety` at the physical levels
+    allowable_stress: sp.Expr | None = None
 
     def param(self, key: str, default: object = None) -> object:
         return dict(self.model_params).get(key, default)
@@ -864,8 +872,9 @@ class _Reader:
     def stiffness(
         self, merged: Mapping, entry: str, line: int | None, length: sp.Expr
     ) -> dict[str, sp.Expr]:
-        """E, thickness, width, nu of a hinge (docs/physics.md), each checked where given: E > 0,
-        0 < thickness < length, width > 0, 0 <= nu < 0.5 (with the default parameters)."""
+        """E, thickness, width, nu, allowable_stress of a hinge (docs/physics.md), each checked
+        where given: E > 0, 0 < thickness < length, width > 0, 0 <= nu < 0.5, allowable_stress
+        > 0 (with the default parameters)."""
         out: dict[str, sp.Expr] = {}
         for key, (ok, message, hint) in STIFFNESS_RULES.items():
             if key not in merged:

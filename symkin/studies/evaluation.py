@@ -31,7 +31,7 @@ from ..model import expressions, special
 from ..model.mechanism import Mechanism, check_values
 from ..physics import equilibrium as physical_equilibrium
 from ..physics import statics
-from ..physics.result import HingeLoad
+from ..physics.result import HingeLoad, InputLoad, PlateStress
 
 #: The mpmath evaluation of the derivation, then the generated-code backends (their registry).
 BACKENDS = ("sympy", *pipeline.BACKENDS)
@@ -131,6 +131,16 @@ class Evaluation:
     hinges: dict[str, HingeLoad] = field(default_factory=dict)
     energy: float | None = None
     error_estimate: float | None = None
+    # At `equilibrium` (docs/physics.md, "What equilibrium reports"): every input's actuator
+    # moment and stiffness, every point's 3×3 tangent stiffness with the inputs held (None: held
+    # rigidly), every plate's largest stress, and with loads their first buckling factor
+    # (math.inf: none up to physics.equilibrium.BUCKLING_LIMIT) and the hinge that buckles.
+    actuation: dict[str, InputLoad] = field(default_factory=dict)
+    stiffness: dict[str, list | None] = field(default_factory=dict)
+    plates: dict[str, PlateStress] = field(default_factory=dict)
+    buckling: float | None = None
+    buckling_hinge: str | None = None
+    units: str = "m"  # the file's length unit (the stiffness's unit)
 
     def as_json(self) -> dict:
         """The `eval --json` document (docs/cli.md; the physical levels' keys: docs/physics.md)."""
@@ -146,6 +156,21 @@ class Evaluation:
             }
             if self.error_estimate is not None:
                 physical["error_estimate"] = self.error_estimate
+            if self.actuation:
+                physical["inputs"] = {
+                    name: {"angle": a.angle, "moment": a.moment, "stiffness": a.stiffness}
+                    for name, a in self.actuation.items()
+                }
+            if self.stiffness:
+                physical["stiffness"] = dict(self.stiffness)
+            if self.plates:
+                physical["plates"] = {
+                    name: {"stress": p.stress, "strain": p.strain, "safety": p.safety}
+                    for name, p in self.plates.items()
+                }
+            if self.buckling is not None:
+                # JSON has no infinity: null is "none up to the factor searched"
+                physical["buckling"] = self.buckling if math.isfinite(self.buckling) else None
         return {
             "level": self.level,
             "backend": self.backend,
@@ -794,6 +819,11 @@ class _Mpmath:
                 "are inextensible elastica, which leave the forces the redundant loops carry "
                 "along the plates undetermined (a singular system)"
             ) from None
+        buckling = None
+        if self.mechanism.loads:
+            buckling = physical_equilibrium.buckling_factor(
+                self.mechanism, exact_params, {names[a]: v for a, v in given.items()}
+            )
         order = [names[a] for a in sorted(names)]
         with mpmath.workdps(20):
             # The links' rotations: the rigid one from the rigid angles, the deviation from the
@@ -818,6 +848,12 @@ class _Mpmath:
             energy=res.energy,
             error_estimate=res.error_estimate,
             links=links,
+            actuation=res.inputs,
+            stiffness=res.stiffness,
+            plates=res.plates,
+            buckling=None if buckling is None else buckling.factor,
+            buckling_hinge=None if buckling is None else buckling.hinge,
+            units=self.mechanism.units,
         )
 
     def dyad_states(
