@@ -2,7 +2,7 @@
 a level's beam theory is from a continuum model of the same plates, per point, relative to |ΔR|.
 
 A beam theory leaves out effects of order (t/l)²: the centre line of a bent continuum changes
-length, −c·(κt)² (St. Venant–Kirchhoff in plane strain: c = (3 − ν/(1 − ν))/24); an inextensible,
+length, −c·(κt)² (St. Venant–Kirchhoff in plane strain: c = (1 − ν/(1 − ν))/8); an inextensible,
 shear-free plate (the elastica, and the `loaded` level, which approximates it) also leaves out
 its stretch N·l/EA and shear V·l/(κGA); and every beam leaves out how the plate meets its links
 (rigid clamp faces stiffen it by O(t/l)) and how wide it is (plane strain only where l ≪ b).
@@ -32,10 +32,11 @@ from .result import HingeLoad
 from .stiffness import WIDE, plate_stiffness
 
 #: The clamp faces' effect on a plate, as measured against a plane-strain continuum with rigid
-#: clamp faces (docs/fea.md): on the transverse compliance 0.073 t/l, on a pure-moment arc's
-#: deviation 0.023 t/l; rounded up.
+#: clamp faces (docs/fea.md): on the transverse compliance 0.073 t/l; on a pure-moment arc's
+#: deviation what the single plate's FE shortening leaves beside the centre line,
+#: 0.026–0.041 t/l at t/l = 0.0125–0.1 (docs/physics.md); rounded up.
 CLAMP_TRANSVERSE = 0.08
-CLAMP_BENDING = 0.025
+CLAMP_BENDING = 0.045
 #: A full-width plate with l ≈ b is 2–4 % softer than plane strain (docs/physics.md): its
 #: stiffness is uncertain by about ν²·min(1, l/(3b)) (ν²/3 ≈ 3 % at l = b, ν = 0.3).
 WIDTH_SHARE = 3.0
@@ -43,8 +44,11 @@ WIDTH_SHARE = 3.0
 
 def centre_line_coefficient(nu: float) -> float:
     """c of the centre-line strain −c·(κt)² of a plane-strain St. Venant–Kirchhoff plate bent by
-    a pure moment (κ its curvature, t its thickness): (3 − ν/(1 − ν))/24."""
-    return (3 - nu / (1 - nu)) / 24
+    a pure moment (κ its curvature, t its thickness): (1 − ν/(1 − ν))/8, from the strip's
+    energy minimised over its through-thickness field (docs/physics.md; 1/8 at ν = 0, 0.0714 at
+    ν = 0.3: the radial stress of the bent strip triples the Poisson term of the estimate that
+    leaves it out)."""
+    return (1 - nu / (1 - nu)) / 8
 
 
 def level_stretches(mech: Mechanism, level: str) -> dict[str, bool]:
@@ -200,7 +204,10 @@ def estimate(
     centre: dict[str, np.ndarray] = {}
     clamp: dict[str, np.ndarray] = {}
     width: dict[str, np.ndarray] = {}
-    floor = min((p.uncertain_modulus for p in plates), default=0.0) if not mech.loads else 0.0
+    # Without loads a uniform change of E' changes nothing (the loop forces scale with the
+    # stiffness, the compliances inversely): only the plates' differences count.
+    loaded = any(_number(v, values) != 0 for ld in mech.loads for v in (*ld.force, ld.moment))
+    floor = 0.0 if loaded else min((p.uncertain_modulus for p in plates), default=0.0)
     for p in plates:
         theta = angles[p.name]
         chord = _rotate((phi[p.P] if p.P >= 0 else 0.0) + theta / 2, p.u)
