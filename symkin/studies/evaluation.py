@@ -12,6 +12,7 @@ configuration, the mpmath evaluation is asked why, so every backend fails with t
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import weakref
 from collections.abc import Mapping, Sequence
@@ -30,6 +31,7 @@ from ..kinematics.analysis import Analysis
 from ..model import expressions, special
 from ..model.mechanism import Mechanism, check_values
 from ..physics import equilibrium as physical_equilibrium
+from ..physics import model_error as physical_model_error
 from ..physics import statics
 from ..physics.result import HingeLoad, InputLoad, PlateStress
 
@@ -141,6 +143,10 @@ class Evaluation:
     buckling: float | None = None
     buckling_hinge: str | None = None
     units: str = "m"  # the file's length unit (the stiffness's unit)
+    # The physical levels' model error per point (docs/physics.md, "Model error"): relative to
+    # |ΔR|, an estimate of the level's beam theory against a continuum, and its parts.
+    model_error: dict[str, float] = field(default_factory=dict)
+    model_error_parts: dict[str, dict[str, float]] = field(default_factory=dict)
 
     def as_json(self) -> dict:
         """The `eval --json` document (docs/cli.md; the physical levels' keys: docs/physics.md)."""
@@ -184,6 +190,7 @@ class Evaluation:
                     "deviation": list(p.deviation),
                     "norm": p.norm,
                 }
+                | ({"model_error": self.model_error[name]} if name in self.model_error else {})
                 for name, p in self.points.items()
             },
             "links": {
@@ -261,6 +268,24 @@ def equilibrium(
     hinge's `beam`), solved numerically to its own error estimate; `extra_digits` raises the
     working precision (to check it)."""
     return _mpmath_evaluator(analysis).equilibrium(inputs, params, extra_digits)
+
+
+def with_model_error(
+    result: Evaluation, mechanism: Mechanism, values: Mapping[sp.Symbol, sp.Expr]
+) -> Evaluation:
+    """`result`, at a physical level, with its model error per point
+    (symkin.physics.model_error; docs/physics.md): `values` the exact parameter values."""
+    found = physical_model_error.estimate(
+        mechanism,
+        values,
+        result.level,
+        physical_model_error.level_stretches(mechanism, result.level),
+        {name: link.compliant for name, link in result.links.items()},
+        result.angles_compliant,
+        result.hinges,
+        {name: p.deviation for name, p in result.points.items()},
+    )
+    return dataclasses.replace(result, model_error=found.total, model_error_parts=found.parts)
 
 
 # -- values from the user -----------------------------------------------------------------------
@@ -727,7 +752,7 @@ class _Mpmath:
                     (float(force[0]), float(force[1])), float(moment * scale)
                 )
             names = {a: h.name for a, h in kin.hinges.items()}
-            return Evaluation(
+            result = Evaluation(
                 level="loaded_refined" if refine else "loaded",
                 backend="sympy",
                 inputs={names[a]: float(ivals[a]) for a in sorted(ivals)},
@@ -743,6 +768,7 @@ class _Mpmath:
                 energy=float(energy * scale),
                 links=links,
             )
+            return with_model_error(result, self.mechanism, exact_params)
 
     def _links(self, an: Analysis, level: str, prefix: str, args: list, values: list) -> dict:
         """Every link's rigid rotation, compliant rotation and deviation at `level` (the
@@ -834,7 +860,7 @@ class _Mpmath:
                 *(mpmath.mpf(res.angle_deviations[names[a]]) for a in self.kin.unknowns),
             ]
             links = self._links(an, "exact", "equilibrium:", [*args, *an.deltas], values)
-        return Evaluation(
+        result = Evaluation(
             level="equilibrium",
             backend="sympy",
             inputs={names[a]: float(sp.N(given[a], 20)) for a in sorted(given)},
@@ -855,6 +881,7 @@ class _Mpmath:
             buckling_hinge=None if buckling is None else buckling.hinge,
             units=self.mechanism.units,
         )
+        return with_model_error(result, self.mechanism, exact_params)
 
     def dyad_states(
         self, inputs: Mapping[str, object], params: Mapping[str, object] | None = None
@@ -1215,7 +1242,7 @@ def _generated(
         # derivation gives them, as it gives the dyad states (docs/physics.md).
         physical = loaded(analysis, inputs, params, refine=level == "loaded_refined")
         extra = {"hinges": physical.hinges, "energy": physical.energy}
-    return Evaluation(
+    result = Evaluation(
         level=level,
         backend=backend,
         inputs=dict(zip(names, x)),
@@ -1229,6 +1256,9 @@ def _generated(
         sensitivity=sens,
         **extra,
     )
+    if levels.get(level).needs_stiffness:
+        return with_model_error(result, analysis.mechanism, pvals)
+    return result
 
 
 def _explain(analysis: Analysis, inputs, level, params, sensitivity: bool = False) -> None:
