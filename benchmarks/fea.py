@@ -1,13 +1,15 @@
 """The finite-element study of docs/fea.md: the mesh convergence of the FE deviation and the
 comparison of CalculiX with symkin's `equilibrium` and `loaded` levels.
 
-    python benchmarks/fea.py [--only mesh|compare|bounds] [--out benchmarks/results-fea.json]
+    python benchmarks/fea.py [--only mesh|compare|bounds|model-error] [--out ...]
 
 Writes the JSON (every number of docs/fea.md's tables) and prints the tables as Markdown; the
 comparison's "bound" is the tests' continuum_bound (tests/test_fea.py). Needs
 ccx (Debian package calculix-ccx). Runs one ccx at a time, single-threaded; ccx's processor time
 is recorded beside the wall-clock time, which depends on the machine's load. About 30 minutes
-of processor time in all.
+of processor time in all. `--only model-error` sets the stored FE deviations beside
+`equilibrium` with both beam theories, `loaded` and their `model_error` (no ccx run: the FE
+model does not depend on the beam theory), a minute or two.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 from test_fea import continuum_bound  # noqa: E402  the tests' bound of continuum - elastica
 
+import symkin  # noqa: E402
 from symkin import fea  # noqa: E402
 from symkin.fea import ccx  # noqa: E402
 
@@ -160,6 +163,49 @@ def bounds(results: dict) -> None:
             c["points"][name]["bound"] = bound
 
 
+def with_beam(path: Path, beam: str) -> symkin.Mechanism:
+    """The mechanism of `path` with every plate's beam theory `beam` (in [defaults])."""
+    text = path.read_text().replace("[defaults]\n", f'[defaults]\nbeam = "{beam}"\n', 1)
+    return symkin.loads(text, str(path), path.parent)
+
+
+def model_errors(results: dict) -> list[dict]:
+    """Per stored comparison and point: the FE deviation, `equilibrium` (Reissner, elastica) and
+    `loaded`, their relative differences from the FE and each level's model_error and parts."""
+    out = []
+    for c in results.get("compare", []):
+        path = ROOT / c["file"]
+        row = {"case": c["case"], "inputs": c["inputs"], "params": c["params"], "points": {}}
+        levels = {}
+        for key, beam, level in (
+            ("reissner", "reissner", "equilibrium"),
+            ("elastica", "elastica", "equilibrium"),
+            ("loaded", "reissner", "loaded"),
+        ):
+            an = symkin.analyze(with_beam(path, beam))
+            t0 = time.perf_counter()
+            levels[key] = symkin.evaluate(an, c["inputs"], level=level, params=c["params"] or None)
+            row[f"{key}_seconds"] = time.perf_counter() - t0
+        for name, p in c["points"].items():
+            fe = p["fea"]
+            norm = math.hypot(*fe)
+            entry = {"fea": fe}
+            for key, r in levels.items():
+                dev = r.points[name].deviation
+                entry[key] = {
+                    "deviation": list(dev),
+                    "difference": math.hypot(dev[0] - fe[0], dev[1] - fe[1]) / norm,
+                    "model_error": r.model_error[name],
+                    "parts": r.model_error_parts[name],
+                }
+            row["points"][name] = entry
+        row["mesh"], row["ccx_seconds"] = c["mesh"], c["ccx_seconds"]
+        row["ccx_cpu_seconds"] = c["ccx_cpu_seconds"]
+        out.append(row)
+        print(f"  {c['case']} {c['inputs']}", flush=True)
+    return out
+
+
 def markdown(results: dict) -> str:
     lines = []
     for case in results.get("mesh", []):
@@ -195,6 +241,26 @@ def markdown(results: dict) -> str:
                     f"{100 * d['equilibrium']:.2f} % | {loaded} | {bound} | "
                     f"{c['ccx_seconds']:.0f} s ({c['ccx_cpu_seconds']:.0f} s) |"
                 )
+    if results.get("model_error"):
+        lines += [
+            "",
+            "| mechanism | inputs (rad) | point | FE ‖ΔR‖ | Reissner: diff. / model_error | "
+            "elastica: diff. / model_error | loaded: diff. / model_error | FE mesh, "
+            "ccx time (processor) |",
+            "| --- | --- | --- | --- | --- | --- | --- | --- |",
+        ]
+        for c in results["model_error"]:
+            inputs = ", ".join(f"{k} = {v}" for k, v in c["inputs"].items())
+            for name, p in c["points"].items():
+                cells = " | ".join(
+                    f"{100 * p[k]['difference']:.2f} % / {100 * p[k]['model_error']:.2f} %"
+                    for k in ("reissner", "elastica", "loaded")
+                )
+                lines.append(
+                    f"| {c['case']} | {inputs} | {name} | {math.hypot(*p['fea']):.4e} | {cells} | "
+                    f"{c['mesh'][0]} x {c['mesh'][1]}, {c['ccx_seconds']:.0f} s "
+                    f"({c['ccx_cpu_seconds']:.0f} s) |"
+                )
     return "\n".join(lines) + "\n"
 
 
@@ -202,7 +268,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument(
         "--only",
-        choices=("mesh", "compare", "bounds"),
+        choices=("mesh", "compare", "bounds", "model-error"),
         help="one part; bounds: add the tests' bound to stored comparisons",
     )
     parser.add_argument("--out", default=str(ROOT / "benchmarks" / "results-fea.json"))
@@ -223,6 +289,10 @@ def main() -> None:
     if args.only in (None, "compare"):
         print("comparison", flush=True)
         results["compare"] = comparison()
+        out.write_text(json.dumps(results, indent=1) + "\n")
+    if args.only in (None, "model-error"):
+        print("model error", flush=True)
+        results["model_error"] = model_errors(results)
         out.write_text(json.dumps(results, indent=1) + "\n")
     if args.only == "bounds":
         bounds(results)

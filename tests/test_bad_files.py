@@ -83,6 +83,7 @@ EXPECTED: dict[str, tuple] = {
     "thickness_not_below_length": ("'A'", "thickness", "length"),
     "youngs_modulus_negative": ("'A'", "E", "-2.1e+11"),
     "poisson_ratio_half": ("'B'", "nu", "0.5"),
+    "allowable_stress_negative": ("allowable_stress", "-2.5e+08", "positive"),
     "width_zero": ("'B0'", "width"),
     "thickness_log_zero": ("'A'", "thickness"),
     "unknown_key_stiffness": ("'A'", "thicknes", "'thickness'"),

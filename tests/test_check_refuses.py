@@ -64,7 +64,7 @@ def test_the_examples_pass_the_check(capsys):
 @pytest.mark.parametrize("backend", ["sympy", "numpy", "c"])
 def test_every_backend_refuses_a_dependent_input_alike(tmp_path, capsys, backend):
     """The reader refuses inputs that leave the pose free (the rank of the closure Jacobian,
-    CONTRACT §9), so every backend exits 2 with the same message."""
+    docs/levels.md), so every backend exits 2 with the same message."""
     path = tmp_path / "nine_d.toml"
     path.write_text(nine_bar_input_moved_to_d())
     args = ["eval", str(path), "--backend", backend]

@@ -4,7 +4,7 @@
   symmetry): the compliant Newton iterate is rounding noise and only a stopping test scaled by
   the plate and link lengths can accept it (symkin.core.settings, rule 3b).
 - A stage with a third leg has Grübler mobility 0 but moves (mobility 1 from the rank of the
-  closure Jacobian, CONTRACT §9): its dependent closure row is dropped from the solves and
+  closure Jacobian, docs/levels.md): its dependent closure row is dropped from the solves and
   checked at the solution (rule 4).
 
 Every deviation is compared with the independent 40-digit reference (tests/reference_solver.py:

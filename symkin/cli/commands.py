@@ -16,6 +16,7 @@ from ..codegen import pipeline
 from ..core import levels
 from ..core.errors import InputError, SymkinError
 from ..core.files import output_dir, output_file
+from ..fea.command import pairs as _pairs
 from ..graph.structure import build
 from ..studies.evaluation import BACKENDS
 from .output import check_text, matrices_json, matrices_text
@@ -39,21 +40,6 @@ def _check(args: argparse.Namespace) -> str:
 def _matrices(args: argparse.Namespace) -> str:
     structure = build(load(args.file))
     return matrices_json(structure) if args.json else matrices_text(structure)
-
-
-def _pairs(items: Sequence[str] | None, option: str) -> dict[str, str]:
-    """NAME=VALUE options as a dict; a malformed one is bad input (exit 2)."""
-    out: dict[str, str] = {}
-    for item in items or ():
-        name, sep, value = item.partition("=")
-        if not sep or not name.strip() or not value.strip():
-            raise InputError(
-                f"'{item}' is not NAME=VALUE", entry=option, hint=f"write e.g. {option} A0=0.2"
-            )
-        if name.strip() in out:
-            raise InputError(f"'{name.strip()}' given twice", entry=option)
-        out[name.strip()] = value.strip()
-    return out
 
 
 def _eval(args: argparse.Namespace) -> str:

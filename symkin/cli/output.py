@@ -12,6 +12,7 @@ import numpy as np
 from ..codegen.templating import render
 from ..graph.structure import Structure
 from ..model.mechanism import closure_rank
+from ..physics.equilibrium import BUCKLING_LIMIT
 
 
 def grid(row_labels: Sequence[str], col_labels: Sequence[str], matrix: np.ndarray) -> list[str]:
@@ -98,7 +99,13 @@ def evaluation_text(result) -> str:
     """Human summary of `symkin eval`: angles, points, deviations and dyad toggle margins, and
     with --sensitivity each point's derivatives, ranked."""
     tables = sensitivity_tables(result) if result.sensitivity is not None else {}
-    return render("text/eval.txt.j2", r=result, sensitivity=tables)
+    return render(
+        "text/eval.txt.j2",
+        r=result,
+        sensitivity=tables,
+        inf=math.inf,
+        buckling_limit=BUCKLING_LIMIT,
+    )
 
 
 def norm_rate(deviation: Sequence[float], rate: Sequence[float]) -> float:

@@ -116,7 +116,11 @@ def _roll_forward(folder: Path) -> None:
                 os.replace(folder / staged / name, folder / name)
         record.unlink()
     for stale in folder.glob(TEMP_PREFIX + "*"):
-        shutil.rmtree(stale, ignore_errors=True)
+        # a staging folder, or the commit record's temporary file (killed before its rename)
+        if stale.is_dir() and not stale.is_symlink():
+            shutil.rmtree(stale, ignore_errors=True)
+        else:
+            stale.unlink(missing_ok=True)
 
 
 def complete_interrupted(folder: str | Path) -> None:

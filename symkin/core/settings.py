@@ -4,7 +4,7 @@ and numpy evaluators and the benchmarks' drivers all read (docs/numerics.md).
 The algorithm, in every arithmetic:
 
 0. the closure's rows: 3 per loop (the angular closure, then x and y). When the loops are
-   redundant (a parallelogram with a third leg: more rows than non-input hinges, CONTRACT §9),
+   redundant (a parallelogram with a third leg: more rows than non-input hinges, docs/levels.md),
    the rows kept are chosen once, at the as-fabricated pose and the file's parameter values, by
    a rank-revealing (pivoted Gram–Schmidt) pass: the angular rows first, then the positional
    ones, each kept when it is independent of those kept before. Every solve below runs on the

@@ -67,7 +67,7 @@ class Analysis:
     #
     # Every loop gives three rows: its angular closure (5.1), then x and y (5.3). With as many
     # rows as non-input hinges the closure is square. A redundant mechanism (a parallelogram with
-    # a third leg, CONTRACT §9) has more rows than unknowns, some of them dependent: the rows
+    # a third leg, docs/levels.md) has more rows than unknowns, some of them dependent: the rows
     # solved are chosen once, at the as-fabricated pose (symkin.core.settings, step 0), and the
     # others are checked at the solution (:meth:`consistency`). Every matrix and residual below
     # holds the solved rows only, in their order.

@@ -115,6 +115,7 @@ HINGE_KEYS = (
     "width",
     "nu",
     "beam",
+    "allowable_stress",
 )
 #: Values of the `beam` key, the default first: a geometrically exact beam that stretches and
 #: shears (Reissner 1972), or the inextensible, shear-free elastica (docs/physics.md).

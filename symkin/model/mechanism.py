@@ -94,6 +94,12 @@ STIFFNESS_RULES: dict[str, tuple[Callable[[sp.Expr], object], str, str]] = {
         "Poisson's ratio must be in [0, 0.5)",
         "e.g. nu = 0.3 for steel",
     ),
+    "allowable_stress": (
+        lambda v: v > 0,
+        "the allowable stress must be positive (Pa)",
+        "give allowable_stress in Pa, e.g. allowable_stress = 300e6 (a steel's yield stress "
+        "over a safety margin)",
+    ),
 }
 DEFAULT_KEYS = tuple(k for k in HINGE_KEYS if k not in ("name", "links", "at")) + MODEL_KEYS
 DEFAULT_MODEL = "circular_arc"
@@ -137,6 +143,8 @@ class Hinge:
     width: sp.Expr | None = None  # out-of-plane width, file unit
     nu: sp.Expr = DEFAULT_NU  # Poisson's ratio
     beam: str = BEAMS[0]  # the plate's beam theory at the physical levels (hinges.BEAMS)
+    # the plate's allowable stress, Pa (None: not given): `safety` at the physical levels
+    allowable_stress: sp.Expr | None = None
 
     def param(self, key: str, default: object = None) -> object:
         return dict(self.model_params).get(key, default)
@@ -214,7 +222,8 @@ class Mechanism:
     @property
     def mobility(self) -> int:
         """The mobility: 3n minus the rank of the closure Jacobian at the as-fabricated pose
-        (:func:`closure_rank`); Grübler's count unless some loops are redundant (CONTRACT §9)."""
+        (:func:`closure_rank`); Grübler's count unless some loops are redundant
+        (docs/levels.md, "Redundant loops")."""
         rank = closure_rank(self)
         return self.grubler if rank is None else rank.mobility
 
@@ -875,8 +884,9 @@ class _Reader:
     def stiffness(
         self, merged: Mapping[str, object], entry: str, line: int | None, length: sp.Expr
     ) -> dict[str, sp.Expr]:
-        """E, thickness, width, nu of a hinge (docs/physics.md), each checked where given: E > 0,
-        0 < thickness < length, width > 0, 0 <= nu < 0.5 (with the default parameters)."""
+        """E, thickness, width, nu, allowable_stress of a hinge (docs/physics.md), each checked
+        where given: E > 0, 0 < thickness < length, width > 0, 0 <= nu < 0.5, allowable_stress
+        > 0 (with the default parameters)."""
         out: dict[str, sp.Expr] = {}
         for key, (ok, message, hint) in STIFFNESS_RULES.items():
             if key not in merged:
@@ -1251,7 +1261,7 @@ class _Reader:
             )
 
     def check_mobility(self, mech: Mechanism) -> None:
-        """The inputs number the mobility and fix the pose (CONTRACT §9, "Redundant loops"):
+        """The inputs number the mobility and fix the pose (docs/levels.md, "Redundant loops"):
         Grübler's count, corrected by the rank of the closure Jacobian at the as-fabricated
         pose when some loop constraints are dependent."""
         n, m = len(mech.links) - 1, len(mech.hinges)
@@ -1334,7 +1344,7 @@ def closure_rank(mech: Mechanism) -> ClosureRank | None:
     pin at its rigid reference, :func:`~symkin.model.hinges.pivot_distance`) by the 3n pose
     velocities of the moving links at the as-fabricated pose and the file's parameter values
     (None when those values are not finite numbers: the value checks report them). The
-    mobility is 3n - rank (CONTRACT §9): Grübler's 3n - 2m when the 2m constraints are
+    mobility is 3n - rank (docs/levels.md): Grübler's 3n - 2m when the 2m constraints are
     independent, more when some are redundant (a parallelogram with a third leg has 0 and 1).
     With the inputs' rows (each holds its hinge's relative rotation) the rank must reach 3n:
     an input whose row adds nothing is dependent. Computed once per mechanism."""

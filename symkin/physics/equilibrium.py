@@ -39,9 +39,9 @@ import sympy as sp
 from ..core.errors import AssemblyError
 from ..model.hinges import pivot_distance
 from ..model.mechanism import Mechanism
-from . import arith, beams
-from .result import HingeLoad
-from .stiffness import PlateStiffness, plate_stiffness
+from . import arith, beams, reported
+from .result import HingeLoad, InputLoad, PlateStress
+from .stiffness import PlateStiffness, modulus, plate_stiffness
 
 #: Smallest load-factor step before the continuation gives up.
 MIN_STEP = 1e-7
@@ -668,6 +668,12 @@ class Result:
     # compliant − rigid angle of every hinge, taken at the working precision (not a difference
     # of the floats above: it keeps its relative accuracy for tiny plates)
     angle_deviations: dict[str, float] = field(default_factory=dict)
+    # what the level reports for the designer (symkin.physics.reported): each input's actuator
+    # moment and stiffness, each point's 3×3 tangent stiffness (None: held rigidly), each
+    # plate's largest stress
+    inputs: dict[str, InputLoad] = field(default_factory=dict)
+    stiffness: dict[str, list | None] = field(default_factory=dict)
+    plates: dict[str, PlateStress] = field(default_factory=dict)
 
 
 def solve(
@@ -722,6 +728,17 @@ def solve(
             )
         s = mpmath.mpf(sp.N(mech.unit_scale, dps))
         plates = {h.name for h in solution.system.hinges if h.plate}
+        # the designer's quantities, in float64 at the polished solution (its Jacobian again)
+        at = np.array([float(v) for v in solution.u])
+        tangent = system.jacobian(at, 1.0, 1e-18)[0]
+        hinge = {h.name: h for h in mech.hinges}
+        moduli = {n: _float(modulus(hinge[n]).subs(values)) for n in plates}
+        allowable = {
+            n: None
+            if hinge[n].allowable_stress is None
+            else _float(sp.sympify(hinge[n].allowable_stress).subs(values))
+            for n in plates
+        }
         return Result(
             angles_rigid={h.name: float(theta[h.name]) for h in solution.system.hinges},
             angles_compliant={
@@ -742,6 +759,9 @@ def solve(
                 h.name: float(_angle(solution.system, solution.u, h.name) - theta[h.name])
                 for h in solution.system.hinges
             },
+            inputs=reported.inputs(system, at, tangent, float(s)),
+            stiffness=reported.point_stiffness(system, at, tangent),
+            plates=reported.plates(system, at, moduli, allowable),
         )
 
 

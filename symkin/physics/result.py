@@ -13,3 +13,31 @@ class HingeLoad:
 
     force: tuple[float, float]
     moment: float
+
+
+@dataclass(frozen=True)
+class InputLoad:
+    """What an input hinge's actuator delivers at equilibrium: its angle (rad), the moment it
+    exerts on link M (N·m, counter-clockwise; −moment on P) and the stiffness dM/dθ (N·m/rad)
+    along the equilibrium path with the other inputs held."""
+
+    angle: float
+    moment: float
+    stiffness: float
+
+
+@dataclass(frozen=True)
+class PlateStress:
+    """A plate's largest normal stress (Pa; bending plus axial, |N|/A + |M| t/(2I), at its worst
+    section and fibre), the strain there (σ/E', E' the plate's modulus) and, when the hinge has
+    an allowable stress, the safety factor allowable/σ (None otherwise)."""
+
+    stress: float
+    strain: float
+    safety: float | None = None
+    section: float = 0.0  # where along the plate, 0 at P's clamp to 1 at M's
+
+    @property
+    def overloaded(self) -> bool:
+        """Past its allowable stress."""
+        return self.safety is not None and self.safety < 1

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import sympy as sp
 
@@ -19,6 +20,9 @@ from ..graph.pruning import for_levels
 from ..graph.structure import build
 from ..kinematics.analysis import Analysis
 from ..model.mechanism import Mechanism, load
+
+if TYPE_CHECKING:
+    from .evaluation import Evaluation
 
 #: What `derive --emit` writes: the LaTeX report and every generated-code backend's files.
 EMITTERS = ("latex", *pipeline.BACKENDS)
@@ -194,21 +198,20 @@ def generate_plan(
 
 def physics_reference(
     analysis: Analysis, fixed: Mapping[str, object] | None = None
-) -> Callable[[Mapping[str, float]], dict]:
-    """The report's physical reference: the `equilibrium` level's point deviations at given
-    inputs and the `fixed` ones (the file's own plates and loads, whatever variant the report
-    derives)."""
+) -> Callable[[Mapping[str, float]], Evaluation]:
+    """The report's physical reference: the `equilibrium` level's evaluation (deviations, plate
+    stresses, input moments, model error) at given inputs and the `fixed` ones (the file's own
+    plates and loads, whatever variant the report derives)."""
     from .evaluation import equilibrium
 
     reference = Analysis(analysis.structure, [p.name for p in analysis.points])
 
-    def deviations(inputs: Mapping[str, float]) -> dict:
+    def evaluated(inputs: Mapping[str, float]) -> Evaluation:
         given = {k: repr(v) for k, v in inputs.items()}
         given.update({k: sp.sstr(v) for k, v in (fixed or {}).items()})
-        result = equilibrium(reference, given)
-        return {name: pt.deviation for name, pt in result.points.items()}
+        return equilibrium(reference, given)
 
-    return deviations
+    return evaluated
 
 
 def derive(

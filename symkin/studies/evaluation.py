@@ -12,6 +12,7 @@ configuration, the mpmath evaluation is asked why, so every backend fails with t
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import weakref
 from collections.abc import Mapping, Sequence
@@ -30,8 +31,9 @@ from ..kinematics.analysis import Analysis
 from ..model import expressions, special
 from ..model.mechanism import Mechanism, check_values
 from ..physics import equilibrium as physical_equilibrium
+from ..physics import model_error as physical_model_error
 from ..physics import statics
-from ..physics.result import HingeLoad
+from ..physics.result import HingeLoad, InputLoad, PlateStress
 
 #: The mpmath evaluation of the derivation, then the generated-code backends (their registry).
 BACKENDS = ("sympy", *pipeline.BACKENDS)
@@ -131,6 +133,20 @@ class Evaluation:
     hinges: dict[str, HingeLoad] = field(default_factory=dict)
     energy: float | None = None
     error_estimate: float | None = None
+    # At `equilibrium` (docs/physics.md, "What equilibrium reports"): every input's actuator
+    # moment and stiffness, every point's 3×3 tangent stiffness with the inputs held (None: held
+    # rigidly), every plate's largest stress, and with loads their first buckling factor
+    # (math.inf: none up to physics.equilibrium.BUCKLING_LIMIT) and the hinge that buckles.
+    actuation: dict[str, InputLoad] = field(default_factory=dict)
+    stiffness: dict[str, list | None] = field(default_factory=dict)
+    plates: dict[str, PlateStress] = field(default_factory=dict)
+    buckling: float | None = None
+    buckling_hinge: str | None = None
+    units: str = "m"  # the file's length unit (the stiffness's unit)
+    # The physical levels' model error per point (docs/physics.md, "Model error"): relative to
+    # |ΔR|, an estimate of the level's beam theory against a continuum, and its parts.
+    model_error: dict[str, float] = field(default_factory=dict)
+    model_error_parts: dict[str, dict[str, float]] = field(default_factory=dict)
 
     def as_json(self) -> dict:
         """The `eval --json` document (docs/cli.md; the physical levels' keys: docs/physics.md)."""
@@ -146,6 +162,21 @@ class Evaluation:
             }
             if self.error_estimate is not None:
                 physical["error_estimate"] = self.error_estimate
+            if self.actuation:
+                physical["inputs"] = {
+                    name: {"angle": a.angle, "moment": a.moment, "stiffness": a.stiffness}
+                    for name, a in self.actuation.items()
+                }
+            if self.stiffness:
+                physical["stiffness"] = dict(self.stiffness)
+            if self.plates:
+                physical["plates"] = {
+                    name: {"stress": p.stress, "strain": p.strain, "safety": p.safety}
+                    for name, p in self.plates.items()
+                }
+            if self.buckling is not None:
+                # JSON has no infinity: null is "none up to the factor searched"
+                physical["buckling"] = self.buckling if math.isfinite(self.buckling) else None
         return {
             "level": self.level,
             "backend": self.backend,
@@ -159,6 +190,7 @@ class Evaluation:
                     "deviation": list(p.deviation),
                     "norm": p.norm,
                 }
+                | ({"model_error": self.model_error[name]} if name in self.model_error else {})
                 for name, p in self.points.items()
             },
             "links": {
@@ -236,6 +268,24 @@ def equilibrium(
     hinge's `beam`), solved numerically to its own error estimate; `extra_digits` raises the
     working precision (to check it)."""
     return _mpmath_evaluator(analysis).equilibrium(inputs, params, extra_digits)
+
+
+def with_model_error(
+    result: Evaluation, mechanism: Mechanism, values: Mapping[sp.Symbol, sp.Expr]
+) -> Evaluation:
+    """`result`, at a physical level, with its model error per point
+    (symkin.physics.model_error; docs/physics.md): `values` the exact parameter values."""
+    found = physical_model_error.estimate(
+        mechanism,
+        values,
+        result.level,
+        physical_model_error.level_stretches(mechanism, result.level),
+        {name: link.compliant for name, link in result.links.items()},
+        result.angles_compliant,
+        result.hinges,
+        {name: p.deviation for name, p in result.points.items()},
+    )
+    return dataclasses.replace(result, model_error=found.total, model_error_parts=found.parts)
 
 
 # -- values from the user -----------------------------------------------------------------------
@@ -702,7 +752,7 @@ class _Mpmath:
                     (float(force[0]), float(force[1])), float(moment * scale)
                 )
             names = {a: h.name for a, h in kin.hinges.items()}
-            return Evaluation(
+            result = Evaluation(
                 level="loaded_refined" if refine else "loaded",
                 backend="sympy",
                 inputs={names[a]: float(ivals[a]) for a in sorted(ivals)},
@@ -718,6 +768,7 @@ class _Mpmath:
                 energy=float(energy * scale),
                 links=links,
             )
+            return with_model_error(result, self.mechanism, exact_params)
 
     def _links(self, an: Analysis, level: str, prefix: str, args: list, values: list) -> dict:
         """Every link's rigid rotation, compliant rotation and deviation at `level` (the
@@ -794,6 +845,11 @@ class _Mpmath:
                 "are inextensible elastica, which leave the forces the redundant loops carry "
                 "along the plates undetermined (a singular system)"
             ) from None
+        buckling = None
+        if self.mechanism.loads:
+            buckling = physical_equilibrium.buckling_factor(
+                self.mechanism, exact_params, {names[a]: v for a, v in given.items()}
+            )
         order = [names[a] for a in sorted(names)]
         with mpmath.workdps(20):
             # The links' rotations: the rigid one from the rigid angles, the deviation from the
@@ -804,7 +860,7 @@ class _Mpmath:
                 *(mpmath.mpf(res.angle_deviations[names[a]]) for a in self.kin.unknowns),
             ]
             links = self._links(an, "exact", "equilibrium:", [*args, *an.deltas], values)
-        return Evaluation(
+        result = Evaluation(
             level="equilibrium",
             backend="sympy",
             inputs={names[a]: float(sp.N(given[a], 20)) for a in sorted(given)},
@@ -818,7 +874,14 @@ class _Mpmath:
             energy=res.energy,
             error_estimate=res.error_estimate,
             links=links,
+            actuation=res.inputs,
+            stiffness=res.stiffness,
+            plates=res.plates,
+            buckling=None if buckling is None else buckling.factor,
+            buckling_hinge=None if buckling is None else buckling.hinge,
+            units=self.mechanism.units,
         )
+        return with_model_error(result, self.mechanism, exact_params)
 
     def dyad_states(
         self, inputs: Mapping[str, object], params: Mapping[str, object] | None = None
@@ -1179,7 +1242,7 @@ def _generated(
         # derivation gives them, as it gives the dyad states (docs/physics.md).
         physical = loaded(analysis, inputs, params, refine=level == "loaded_refined")
         extra = {"hinges": physical.hinges, "energy": physical.energy}
-    return Evaluation(
+    result = Evaluation(
         level=level,
         backend=backend,
         inputs=dict(zip(names, x)),
@@ -1193,6 +1256,9 @@ def _generated(
         sensitivity=sens,
         **extra,
     )
+    if levels.get(level).needs_stiffness:
+        return with_model_error(result, analysis.mechanism, pvals)
+    return result
 
 
 def _explain(analysis: Analysis, inputs, level, params, sensitivity: bool = False) -> None:

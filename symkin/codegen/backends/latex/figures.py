@@ -8,6 +8,8 @@
 - :func:`graph_figure`: the oriented graph, vertices s_i, arcs u_a from i+(a) to i-(a).
 - :func:`deviation_figure`: |ΔR| of each point over an input range at every level, and the
   difference of the approximate levels from the exact one.
+- :func:`stress_figure`: each plate's largest stress over an input range at the level
+  `equilibrium`, with the allowable stresses as lines.
 
 Names from the mechanism file are drawn with math parsing off (no ``$...$`` interpretation).
 Determinism: fixed rcParams (``svg.hashsalt``, ``pdf.compression``, fonts), no timestamps or
@@ -553,6 +555,9 @@ class Sweep:
     #: the physical reference at a few samples: (their indices in t, point -> (2, K) deviation),
     #: NaN where it could not be solved; None without stiffness data
     reference: tuple[np.ndarray, dict[str, np.ndarray]] | None = None
+    #: the physical reference's whole evaluation at those samples (plate stresses, input
+    #: moments, model error; symkin.studies.evaluation.Evaluation), None where not solved
+    reported: tuple = ()
 
 
 #: Colour and dash of each level's curve, by level code (fixed, so figures are deterministic).
@@ -750,4 +755,75 @@ def deviation_figure(
             frameon=False,
             bbox_to_anchor=(0.5, 0.0),
         )
+        return _render(fig)
+
+
+# -- stress over an input range ------------------------------------------------------------------
+
+#: Marker of each plate's stress curve, cycled with LINK_COLOURS (a plate is told by both).
+PLATE_MARKERS = ("o", "s", "^", "v", "D", "<", ">")
+
+
+def stress_figure(
+    t: np.ndarray,
+    stress: dict[str, np.ndarray],
+    allowable: dict[str, float],
+    plain,
+    xlim: tuple[float, float],
+    xlabel: str,
+) -> bytes:
+    """PDF of each plate's largest stress (MPa, NaN where not solved) against the input `t`, in
+    file order, and every distinct allowable stress (MPa; plate -> value) as a horizontal line."""
+    from matplotlib.lines import Line2D
+
+    limits: dict[float, list[str]] = {}
+    for name, value in allowable.items():
+        limits.setdefault(float(value), []).append(name)
+    entries = len(stress) + len(limits)
+    legend_cols = min(entries, 6)
+    legend_rows = math.ceil(entries / legend_cols) if entries else 0
+    legend = 0.16 * legend_rows
+    height = 2.1 + legend
+    with rc_context():
+        fig = _figure(FIG_WIDTH, height)
+        ax = fig.add_axes(
+            (0.11, (0.42 + legend) / height, 0.87, 1 - (0.42 + legend) / height - 0.12 / height)
+        )
+        ax.set_xlim(*xlim)
+        ax.grid(True, lw=0.3, color="0.9")
+        ax.tick_params(direction="in", which="both")
+        handles = []
+        for k, (name, values) in enumerate(stress.items()):
+            (line,) = ax.plot(
+                t,
+                values,
+                color=LINK_COLOURS[k % len(LINK_COLOURS)],
+                marker=PLATE_MARKERS[(k // len(LINK_COLOURS)) % len(PLATE_MARKERS)],
+                markersize=3.0,
+                lw=0.9,
+            )
+            line.set_label(plain(name))
+            handles.append(line)
+        for k, (value, names) in enumerate(sorted(limits.items())):
+            dash = ("--", "-.", ":")[k % 3]
+            ax.axhline(value, color="#c62828", ls=dash, lw=0.9)
+            label = (
+                "allowable"
+                if len(limits) == 1
+                else "allowable: " + ", ".join(plain(n) for n in names)
+            )
+            handles.append(Line2D([], [], color="#c62828", ls=dash, lw=0.9, label=label))
+        ax.set_ylim(bottom=0)
+        ax.set_ylabel(r"$\sigma_{\max}$ (MPa)")
+        ax.set_xlabel(xlabel)
+        if handles:
+            box = fig.legend(
+                handles=handles,
+                loc="lower center",
+                ncol=legend_cols,
+                frameon=False,
+                bbox_to_anchor=(0.5, 0.0),
+            )
+            for text in box.get_texts():  # names from the file, drawn literally
+                text.set_parse_math(False)
         return _render(fig)

@@ -22,6 +22,7 @@ import math
 from collections.abc import Callable, Mapping, Sequence
 from functools import cache
 from types import ModuleType
+from typing import Any
 
 import jinja2
 import numpy as np
@@ -29,6 +30,7 @@ import sympy as sp
 
 from ....core import vectors as V
 from ....core.errors import SymkinError
+from ....physics.equilibrium import BUCKLING_LIMIT
 from ....physics.stiffness import modulus
 from ... import templating
 from ...plan import Plan
@@ -44,6 +46,7 @@ from .figures import (
     plate_scale,
     pose_figure,
     pose_size,
+    stress_figure,
     tree_layout,
 )
 from .text import LINE_WIDTH_EM, Tex, align_lines, escape_latex, math_name, pack, plain_name, width
@@ -55,8 +58,12 @@ SWEEP_RANGE = 0.3
 SWEEP_SAMPLES = 241
 #: Inputs of each swept range at which the physical reference (`equilibrium`) is solved.
 REFERENCE_SAMPLES = 9
-#: The physical reference of a report: input name -> value  to  point name -> (Δx, Δy).
-Physics = Callable[[Mapping[str, float]], Mapping[str, tuple[float, float]]]
+#: The physical reference of a report: input name -> value  to  the `equilibrium` level's
+#: evaluation there (symkin.studies.evaluation.Evaluation: `points` with their `deviation` and
+#: `model_error`, `plates`, `actuation`, `buckling`, `buckling_hinge`).
+Physics = Callable[[Mapping[str, float]], Any]
+#: Pa per MPa: the report gives stresses in MPa.
+MPA = 1e6
 #: Matrices wider than this many columns are printed in column blocks (at the full width).
 MAX_MATRIX_COLS = 14
 #: The column the report is laid out for, in points: an article's one-column text width at
@@ -914,21 +921,23 @@ def reference_points(
     ok: np.ndarray,
     inputs: Mapping[str, np.ndarray],
     physics: Physics,
-) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-    """The physical reference (`physics`: inputs -> point deviations, the `equilibrium` level) at
-    REFERENCE_SAMPLES evenly spaced samples of a sweep; NaN where it cannot be solved."""
+) -> tuple[np.ndarray, dict[str, np.ndarray], tuple]:
+    """The physical reference (`physics`: inputs -> its evaluation, the `equilibrium` level) at
+    REFERENCE_SAMPLES evenly spaced samples of a sweep: their indices, the point deviations (NaN
+    where it cannot be solved) and the evaluations themselves (None there)."""
     at = np.unique(np.round(np.linspace(0, len(t) - 1, REFERENCE_SAMPLES)).astype(int))
     out = {p: np.full((2, len(at)), np.nan) for p in report.plan.points}
+    evaluations: list = [None] * len(at)
     for k, i in enumerate(at):
         if not ok[i]:
             continue
         try:
-            values = physics({n: float(v[i]) for n, v in inputs.items()})
+            evaluations[k] = physics({n: float(v[i]) for n, v in inputs.items()})
         except SymkinError:  # beyond the assembly range, a plate buckling
             continue
         for p in report.plan.points:
-            out[p][:, k] = values[p]
-    return at, out
+            out[p][:, k] = evaluations[k].points[p].deviation
+    return at, out, tuple(evaluations)
 
 
 def sweep(
@@ -973,8 +982,11 @@ def sweep(
             idx = np.flatnonzero(ok)
             a = lo if idx[0] == 0 else max(lo, t[idx[0]] - margin)
             b = hi if idx[-1] == len(t) - 1 else min(hi, t[idx[-1]] + margin)
-        reference = None if physics is None else reference_points(report, t, ok, inputs, physics)
-        runs.append((h, Sweep(t, ok, magnitude, deviation, reference), (a, b)))
+        reference, reported = None, ()
+        if physics is not None:
+            at_ref, ref, reported = reference_points(report, t, ok, inputs, physics)
+            reference = (at_ref, ref)
+        runs.append((h, Sweep(t, ok, magnitude, deviation, reference, reported), (a, b)))
         summary["samples"] += len(t)
         summary["failed"] += int((~ok).sum())
         summary["spans"].append(
@@ -1038,6 +1050,144 @@ def _physics_distance(
     if not np.isfinite(gap_all).any() or not np.nanmax(size_all) > 0:
         return r"\text{--}"
     return sci(float(np.nanmax(gap_all) / np.nanmax(size_all)), 2)
+
+
+def _input_text(values: Mapping[str, float]) -> str:
+    """Inputs as LaTeX text, `A0 = 0.3`, rounded to 1e-9 rad (a swept range's middle is its
+    linspace sample, zero up to rounding)."""
+    return ", ".join(f"{escape_latex(n)}~$= {round(v, 9) + 0.0:g}$" for n, v in values.items())
+
+
+def equilibrium_configurations(
+    runs: Sequence[tuple[str, Sweep, tuple[float, float]]],
+) -> list:
+    """The physical reference's evaluations the report tabulates: the ends and the middle of
+    every swept range (of those it solved), each configuration once, in sweep order."""
+    out, seen = [], set()
+    for _, data, _ in runs:
+        if not data.reported:
+            continue
+        last = len(data.reported) - 1
+        for k in (0, last // 2, last):
+            ev = data.reported[k]
+            if ev is None:
+                continue
+            key = tuple((n, round(v, 9) + 0.0) for n, v in ev.inputs.items())
+            if key not in seen:
+                seen.add(key)
+                out.append(ev)
+    return out
+
+
+#: A reported value at most this fraction of the largest of its kind over the tabulated
+#: configurations is zero up to rounding (the as-fabricated pose: stresses of 1e-23 MPa).
+ROUNDING = 1e-12
+
+
+def _scales(configurations: Sequence) -> dict[tuple[str, str], float]:
+    """The largest plate stress, input moment and |ΔR| of each plate, input and point over the
+    tabulated configurations: what "zero up to rounding" is measured against."""
+    scales: dict[tuple[str, str], float] = {}
+
+    def seen(key: tuple[str, str], value: float) -> None:
+        scales[key] = max(scales.get(key, 0.0), abs(value))
+
+    for ev in configurations:
+        for name, p in ev.plates.items():
+            seen(("plate", name), p.stress)
+        for name, a in ev.actuation.items():
+            seen(("input", name), a.moment)
+        for name, pt in ev.points.items():
+            seen(("point", name), pt.norm)
+    return scales
+
+
+def equilibrium_table(report: Report, ev, scales: Mapping[tuple[str, str], float]) -> dict:
+    """One configuration of the physical reference as the report's table: every plate's largest
+    stress (MPa), strain, where along the plate and safety factor, every input hinge's moment
+    (N·m) and stiffness (N·m/rad), the buckling factor with loads, and every point's deviation
+    (file unit) beside its model error; a value at most ROUNDING of its `scales` entry is 0."""
+
+    def zero(key: tuple[str, str], value: float) -> bool:
+        return abs(value) <= ROUNDING * scales.get(key, 0.0)
+
+    dash = r"\text{--}"
+    plates = []
+    for name, p in ev.plates.items():
+        nil = zero(("plate", name), p.stress)
+        plates.append(
+            {
+                "name": escape_latex(name),
+                "stress": "0" if nil else sci(p.stress / MPA, 4),
+                "strain": "0" if nil else sci(p.strain, 3),
+                "where": dash if nil else f"{p.section:.2f}",
+                "safety": sci(p.safety, 3) if p.safety is not None and not nil else dash,
+                "over": p.overloaded,
+            }
+        )
+    actuation = [
+        {
+            "name": escape_latex(name),
+            "angle": sci(a.angle, 4),
+            "moment": "0" if zero(("input", name), a.moment) else sci(a.moment, 4),
+            "stiffness": sci(a.stiffness, 4),
+        }
+        for name, a in ev.actuation.items()
+    ]
+    points = []
+    for name in report.plan.points:
+        pt = ev.points[name]
+        error = ev.model_error.get(name)
+        if zero(("point", name), pt.norm):
+            row = dict.fromkeys(("dx", "dy", "norm"), "0") | {"error": dash, "spread": dash}
+        else:
+            row = {
+                "dx": sci(pt.deviation[0], 4),
+                "dy": sci(pt.deviation[1], 4),
+                "norm": sci(pt.norm, 4),
+                "error": sci(100 * error, 2) if error is not None else dash,
+                "spread": sci(error * pt.norm, 2) if error is not None else dash,
+            }
+        points.append({"name": escape_latex(name)} | row)
+    buckling = None
+    if ev.buckling is not None:
+        buckling = {
+            "factor": sci(ev.buckling, 4) if math.isfinite(ev.buckling) else None,
+            "limit": f"{BUCKLING_LIMIT:g}",
+            "hinge": escape_latex(ev.buckling_hinge) if ev.buckling_hinge else None,
+        }
+    return {
+        "inputs": _input_text(ev.inputs),
+        "plates": plates,
+        "safety": any(p.safety is not None for p in ev.plates.values()),
+        "over": [row["name"] for row in plates if row["over"]],
+        "actuation": actuation,
+        "points": points,
+        "buckling": buckling,
+    }
+
+
+def allowable_stresses(report: Report) -> dict[str, float]:
+    """Every plate's allowable stress (MPa) where its hinge or `[defaults]` gives one."""
+    return {
+        h.name: _num(h.allowable_stress, report.defaults) / MPA
+        for h in report.mech.hinges
+        if h.allowable_stress is not None
+    }
+
+
+def plate_stresses(data: Sweep) -> dict[str, np.ndarray]:
+    """Each plate's largest stress (MPa) at the physical reference's samples of a sweep, NaN
+    where it was not solved; plates in file order."""
+    solved = [ev for ev in data.reported if ev is not None]
+    if not solved:
+        return {}
+    return {
+        name: np.array(
+            [np.nan if ev is None else ev.plates[name].stress / MPA for ev in data.reported]
+        )
+        for name in solved[0].plates
+    }
 
 
 def sensitivity_table(
@@ -1106,6 +1256,45 @@ def sensitivity_table(
     }
 
 
+def _equilibrium_section(
+    report: Report, runs: Sequence[tuple[str, Sweep, tuple[float, float]]], files: dict
+) -> dict | None:
+    """The context of the report's section on what `equilibrium` reports (docs/physics.md): a
+    table per configuration of :func:`equilibrium_configurations` and, into `files`, a stress
+    figure per swept input; None when the reference was solved nowhere."""
+    configurations = equilibrium_configurations(runs)
+    if not configurations:
+        return None
+    name = report.mech.name
+    allowable = allowable_stresses(report)
+    single = len(runs) == 1
+    figures = []
+    for h, data, xlim in runs:
+        stress = plate_stresses(data)
+        if not stress:
+            continue
+        fname = f"{name}-stress.pdf" if not figures else f"{name}-stress-{len(figures) + 1}.pdf"
+        files[fname] = stress_figure(
+            data.t[data.reference[0]],
+            stress,
+            {p: v for p, v in allowable.items() if p in stress},
+            plain_name,
+            xlim,
+            f"input θ of {plain_name(h)} (rad)",
+        )
+        figures.append({"file": fname, "input": None if single else escape_latex(h)})
+    scales = _scales(configurations)
+    tables = [equilibrium_table(report, ev, scales) for ev in configurations]
+    return {
+        "tables": tables,
+        "figures": figures,
+        "allowable": bool(allowable),
+        "loads": any(t["buckling"] is not None for t in tables),
+        "over": any(t["over"] for t in tables),
+        "actuation": any(t["actuation"] for t in tables),
+    }
+
+
 # -- emit ----------------------------------------------------------------------------------------
 
 
@@ -1154,6 +1343,7 @@ def emit(
     ctx["deviation_figures"] = []
     ctx["sweep"] = None
     ctx["sensitivity"] = None
+    ctx["equilibrium"] = None
     if plan.points and plan.inputs:
         if evaluator is None:
             raise ValueError("the deviation plot needs the plan's generated numpy module")
@@ -1185,6 +1375,7 @@ def emit(
         summary["single_input"] = single
         summary["pruned"] = pruned
         ctx["sweep"] = summary
+        ctx["equilibrium"] = _equilibrium_section(report, runs, files) if physics else None
         ctx["sensitivity"] = sensitivity_table(report, evaluator, runs)
     body = environment().get_template("latex/body.tex.j2").render(**ctx)
     if appendix:

@@ -1,0 +1,148 @@
+"""What the `equilibrium` level reports beyond the deviations (docs/physics.md, "What equilibrium
+reports"), from a converged solution u of symkin.physics.equilibrium's System and its Jacobian J:
+
+- every input hinge's actuator moment (an unknown of the system) and its stiffness dM/dθ: the
+  input's row of R(u) = 0 is φ_M − φ_P − θ = 0, so du/dθ = J⁻¹ e_row and dM/dθ is the moment
+  unknown's entry, the other inputs held (their rows stay);
+- every point's 3×3 tangent stiffness K = C⁻¹, C = d(ΔX, ΔY, Δφ)/d(Fx, Fy, M) the compliance
+  under a virtual load at the point (it enters the point's link's balance rows only), the inputs
+  held: the equilibrium's own Jacobian, with the loads' and the plates' geometric stiffness;
+- every plate's largest normal stress along it, |N|/A + |M| t/(2I) = E'(|ψ'| t/(2l) + |f_N| t²/
+  (12 l²)) in the plate's scaled loads, the plate shot again (symkin.physics.beams) to sections
+  along it (a sub-plate of length σl has loads k0 σ, λ σ² and compliances over σ²).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any, Protocol
+
+import numpy as np
+
+from . import beams
+from .result import InputLoad, PlateStress
+
+
+class System(Protocol):
+    """What these functions read of symkin.physics.equilibrium.System (which imports this
+    module): its hinges, the unknowns' index and size, the points, the scales and `place`."""
+
+    hinges: Sequence[Any]
+    index: dict
+    size: int
+    points: dict
+    L: Any
+    F: Any
+
+    def place(self, u: np.ndarray, i: int, p0: tuple) -> tuple: ...
+
+
+#: Sections per plate where the stress is sampled (both ends exact; an interior maximum, e.g. of
+#: a buckled plate, is refined by a parabola through the three samples around it).
+SECTIONS = 64
+#: A point's scaled compliance this ill-conditioned is singular: the link is held rigidly in some
+#: direction (a frame point, pins only), and its stiffness is reported as None.
+SINGULAR = 1e12
+
+
+def _rows(system: System) -> tuple[dict[str, int], int]:
+    """The row of every input hinge's equation, and the first row of the links' balances
+    (System.residual's order: hinges, inputs, link balances)."""
+    row = sum(3 if h.plate else 2 for h in system.hinges)
+    inputs = {}
+    for h in system.hinges:
+        if h.theta is not None:
+            inputs[h.name] = row
+            row += 1
+    return inputs, row
+
+
+def inputs(system: System, u: np.ndarray, jac: np.ndarray, scale: float) -> dict[str, InputLoad]:
+    """Angle, actuator moment (N·m; `scale` metres per file unit) and dM/dθ of every input."""
+    rows, _ = _rows(system)
+    unit = float(system.F) * float(system.L) * scale  # the moment unknown's unit, in N·m
+    out = {}
+    for h in system.hinges:
+        if h.theta is None:
+            continue
+        k = system.index["tau:" + h.name]
+        e = np.zeros(system.size)
+        e[rows[h.name]] = 1.0  # −∂R/∂θ: the row is φ_M − φ_P − θ
+        du = np.linalg.solve(jac, e)
+        out[h.name] = InputLoad(float(h.theta), float(u[k]) * unit, float(du[k]) * unit)
+    return out
+
+
+def point_stiffness(system: System, u: np.ndarray, jac: np.ndarray) -> dict[str, list | None]:
+    """The 3×3 tangent stiffness of every point (file unit: N/unit, N, N·unit; rows and columns
+    x, y, rotation), or None where the point's link is held rigidly (a point of the frame)."""
+    _, balance = _rows(system)
+    L, F = float(system.L), float(system.F)
+    out: dict[str, list | None] = {}
+    for name, (link, at) in system.points.items():
+        if link < 0:
+            out[name] = None
+            continue
+        x, y = (float(v) for v in system.place(u, link, at))
+        ox, oy = float(u[3 * link]) * L, float(u[3 * link + 1]) * L  # the link's origin now
+        # ∂R/∂(Fx, Fy, M) of a load at (x, y): the link's rows Σfx/F, Σfy/F, Σm/(F L)
+        load = np.zeros((system.size, 3))
+        r = balance + 3 * link
+        load[r, 0] = load[r + 1, 1] = 1 / F
+        load[r + 2] = (-y / (F * L), x / (F * L), 1 / (F * L))
+        du = -np.linalg.solve(jac, load)
+        dphi = du[3 * link + 2]
+        compliance = np.array(
+            [
+                L * du[3 * link] - (y - oy) * dphi,
+                L * du[3 * link + 1] + (x - ox) * dphi,
+                dphi,
+            ]
+        )
+        # dimensionless (lengths over L, forces over F) to judge its conditioning
+        scaled = compliance * np.array([F / L, F / L, F])[:, None] * np.array([1, 1, 1 / L])
+        if np.linalg.cond(scaled) > SINGULAR:
+            out[name] = None
+            continue
+        out[name] = np.linalg.inv(compliance).tolist()
+    return out
+
+
+def plates(
+    system: System,
+    u: np.ndarray,
+    moduli: Mapping[str, float],
+    allowable: Mapping[str, float | None],
+    sections: int = SECTIONS,
+) -> dict[str, PlateStress]:
+    """Largest normal stress (Pa), its strain and the safety factor of every plate; `moduli`:
+    E' of each plate (Pa), `allowable`: its allowable stress (Pa) or None."""
+    out = {}
+    frac = np.arange(1, sections + 1) / sections
+    for h in system.hinges:
+        if not h.plate:
+            continue
+        k = system.index[h.name]
+        k0, lx, ly = (float(u[k + j]) for j in range(3))
+        stretch = None if h.stretch is None else float(h.stretch) / frac**2
+        shear = None if h.shear is None else float(h.shear) / frac**2
+        end = beams.shoot(k0 * frac, lx * frac**2, ly * frac**2, 1e-18, False, stretch, shear)
+        psi = np.concatenate([[0.0], end.psi])
+        curvature = np.concatenate([[k0], end.omega / frac])  # ψ'(s) in units of 1/l
+        normal = lx * np.cos(psi) + ly * np.sin(psi)  # f_N = N l²/EI
+        strain = np.abs(curvature) * h.slender / 2 + np.abs(normal) * h.slender**2 / 12
+        j = int(np.argmax(strain))
+        value, where = float(strain[j]), j / sections
+        if 0 < j < sections:
+            # the parabola's vertex through the three samples around an interior maximum
+            a, b, c = strain[j - 1], strain[j], strain[j + 1]
+            bend = a - 2 * b + c
+            if bend < 0:
+                shift = (a - c) / (2 * bend)
+                value = float(b - (a - c) * shift / 4)
+                where = float((j + shift) / sections)
+        stress = moduli[h.name] * value
+        limit = allowable.get(h.name)
+        safety = None if limit is None else (limit / stress if stress > 0 else float("inf"))
+        out[h.name] = PlateStress(stress, value, safety, where)
+    return out
