@@ -11,6 +11,7 @@ import re
 import shutil
 import subprocess
 import sys
+from collections.abc import Mapping
 from pathlib import Path
 
 import pytest
@@ -72,27 +73,60 @@ def write(files: dict[str, bytes], folder: Path) -> Path:
     return folder
 
 
-@pytest.fixture(scope="module")
-def reports() -> dict[str, tuple[dict[str, bytes], dict[str, bytes]]]:
-    """example -> (standalone files, appendix files), generated once in this process."""
+class _Reports(Mapping):
+    """example -> (standalone files, appendix files), each generated on first use in this
+    process: an xdist worker derives only the examples its tests ask for."""
+
+    def __init__(self) -> None:
+        self._done: dict[str, tuple[dict[str, bytes], dict[str, bytes]]] = {}
+
+    def __getitem__(self, name: str) -> tuple[dict[str, bytes], dict[str, bytes]]:
+        if name not in EXAMPLE_NAMES:
+            raise KeyError(name)
+        if name not in self._done:
+            self._done[name] = _report(name)
+        return self._done[name]
+
+    def __iter__(self):
+        return iter(EXAMPLE_NAMES)
+
+    def __len__(self) -> int:
+        return len(EXAMPLE_NAMES)
+
+
+def _report(name: str) -> tuple[dict[str, bytes], dict[str, bytes]]:
     from symkin.codegen import pipeline
     from symkin.codegen.backends.latex import report
     from symkin.graph.structure import build
     from symkin.kinematics.analysis import Analysis
     from symkin.studies.derive import physics_reference
 
-    out = {}
-    for name in EXAMPLE_NAMES:
-        mech = symkin.load(EXAMPLES / f"{name}.toml")
-        an = Analysis(build(mech))
-        source = Path(mech.path).name
-        p, module = pipeline.build(an, "numpy", source, report=True)
-        physics = physics_reference(an) if p.loaded is not None else None
-        out[name] = (
-            report.emit(p, source, evaluator=module, physics=physics),
-            report.emit(p, source, appendix=True, evaluator=module, physics=physics),
-        )
-    return out
+    mech = symkin.load(EXAMPLES / f"{name}.toml")
+    an = Analysis(build(mech))
+    source = Path(mech.path).name
+    p, module = pipeline.build(an, "numpy", source, report=True)
+    physics = None
+    if p.loaded is not None:
+        # the standalone report and the appendix sweep the same inputs: the physical
+        # reference (40-digit equilibrium solves) is computed once for both
+        reference, solved = physics_reference(an), {}
+
+        def physics(inputs):
+            key = tuple(sorted(inputs.items()))
+            if key not in solved:
+                solved[key] = reference(inputs)
+            return solved[key]
+
+    return (
+        report.emit(p, source, evaluator=module, physics=physics),
+        report.emit(p, source, appendix=True, evaluator=module, physics=physics),
+    )
+
+
+@pytest.fixture(scope="session")
+def reports() -> Mapping[str, tuple[dict[str, bytes], dict[str, bytes]]]:
+    """example -> (standalone files, appendix files), generated once per process."""
+    return _Reports()
 
 
 # -- structure of the output ---------------------------------------------------------------------
