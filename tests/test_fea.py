@@ -42,8 +42,15 @@ needs_ccx = pytest.mark.skipif(
 
 def svk_shortening(t_over_l: float, nu: float = 0.3) -> float:
     """-12 c (t/l)^2: the relative change of a bent plane-strain St. Venant-Kirchhoff plate's
-    end deviation against the inextensible arc (centre-line length change -c (kappa t)^2)."""
-    return -12 * (3 - nu / (1 - nu)) / 24 * t_over_l**2
+    end deviation against the inextensible arc (centre-line length change -c (kappa t)^2,
+    c = (1 - nu/(1 - nu))/8 from the strip's energy, docs/physics.md "Model error")."""
+    return -12 * (1 - nu / (1 - nu)) / 8 * t_over_l**2
+
+
+#: The clamp faces' effect on a bent plate's end deviation, over t/l: the rigid links the
+#: continuum plate is fused into shorten its bending length by O(t). Measured 0.038-0.044 t/l on a
+#: single plate under pure rotation (t/l = 0.02-0.1, test below); the bound is 0.05 t/l.
+CLAMP = 0.05
 
 
 #: The shear share of a plane-strain clamped-guided plate's transverse compliance, over
@@ -55,7 +62,8 @@ def continuum_bound(setup, inputs) -> dict[str, float]:
     """How far a plane-strain continuum's deviation may lie from the elastica's, per point
     (absolute, file unit): the sum of the magnitudes of what the elastica leaves out, each on
     the part of the deviation it acts on (docs/fea.md). The kinematic part (the `exact` level's
-    circular arcs) changes by the centre-line term 12 c (t/l)^2; the force part (`equilibrium`
+    circular arcs) changes by the centre-line term 12 c (t/l)^2 and the clamp faces' CLAMP t/l;
+    the force part (`equilibrium`
     minus `exact`: the plates' compliance under the loop forces and loads) by shear
     SHEAR (t/l)^2, the clamp faces' stiffening 0.1 t/l (measured: 0.073 t/l) and axial
     stretch rho (t/l)^2, rho the largest |N/V| of a plate (its axial over its transverse end
@@ -77,7 +85,7 @@ def continuum_bound(setup, inputs) -> dict[str, float]:
         kin, dev = ex.points[name].deviation, point.deviation
         force = math.hypot(dev[0] - kin[0], dev[1] - kin[1])
         out[name] = (
-            -svk_shortening(tau) * math.hypot(*kin)
+            (-svk_shortening(tau) + CLAMP * tau) * math.hypot(*kin)
             + (SHEAR * tau**2 + 0.1 * tau + rho * tau**2) * force
             + 1e-3 * math.hypot(*dev)
         )
@@ -273,7 +281,7 @@ def test_without_ccx_run_is_bad_input(tmp_path, capsys, monkeypatch):
 def test_single_plate_is_a_shortened_circular_arc(t_over_l, theta):
     """Pure rotation of the arm: the plate's end sits on the circular arc, its deviation from
     the midpoint pin |d| (cos theta/2, sin theta/2) with |d|/l = 2 sin(theta/2)/theta -
-    cos(theta/2), scaled by 1 - 12 c (t/l)^2 within the clamp faces' O(t/l) effect (0.03 t/l)
+    cos(theta/2), scaled by 1 - 12 c (t/l)^2 within the clamp faces' O(t/l) effect (CLAMP t/l)
     and the mesh (0.05 %); both components scaled alike (the arc's shape is kept)."""
     l = 0.01
     _, dev = solve(MECHANISMS / "single_plate.toml", {"H": theta}, params={"t": repr(l * t_over_l)})
@@ -281,7 +289,7 @@ def test_single_plate_is_a_shortened_circular_arc(t_over_l, theta):
     arc = (d * math.cos(theta / 2), d * math.sin(theta / 2))
     rel = [dev["T"][k] / arc[k] - 1 for k in (0, 1)]
     assert abs(rel[0] - rel[1]) < 2e-5
-    assert abs(rel[0] - svk_shortening(t_over_l)) < 0.03 * t_over_l + 5e-4
+    assert abs(rel[0] - svk_shortening(t_over_l)) < CLAMP * t_over_l + 5e-4
 
 
 @needs_ccx
@@ -328,7 +336,7 @@ def test_relative_input_on_an_open_chain():
     exact = symkin.evaluate(setup.analysis, inputs, level="exact").points["T"].deviation
     rel = [dev["T"][k] / exact[k] - 1 for k in (0, 1)]
     assert abs(rel[0] - rel[1]) < 2e-5
-    assert abs(rel[0] - svk_shortening(0.05)) < 0.03 * 0.05 + 5e-4
+    assert abs(rel[0] - svk_shortening(0.05)) < CLAMP * 0.05 + 5e-4
 
 
 @needs_ccx
