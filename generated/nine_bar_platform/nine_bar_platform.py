@@ -349,7 +349,7 @@ def _loaded_constants(mech, theta, params, ok, jac=None, more=False):
     if mech.unknown_index:
         k = len(mech.unknown_index)
         if jac is None:
-            jac = mech.linear(theta, params)
+            jac = mech.rigid_res(theta, params)[k:]  # A follows the residual
         at = [jac[j * k + i] for i in range(k) for j in range(k)]
         mu0 = []
         if mech.loaded_q0 is not None:
