@@ -80,6 +80,11 @@ def _import(path: Path):
     return module
 
 
+#: The tests that read `derived`: one xdist worker runs them all (pyproject's --dist loadgroup),
+#: so the scene is derived and compiled once, not once per worker.
+DERIVED = pytest.mark.xdist_group("scene_derived")
+
+
 @pytest.fixture(scope="module")
 def derived(tmp_path_factory):
     folder = tmp_path_factory.mktemp("scene")
@@ -102,6 +107,7 @@ def _samples(n: int, seed: int = 7) -> list[dict[str, float]]:
     ]
 
 
+@DERIVED
 def test_every_point_meets_its_tolerance_against_the_independent_solver(derived):
     out, _ = derived
     scene = _import(out / "stage.py")
@@ -120,6 +126,7 @@ def test_every_point_meets_its_tolerance_against_the_independent_solver(derived)
     assert scene.VARIANTS["P8"] != scene.VARIANTS["P5"]
 
 
+@DERIVED
 def test_scene_evaluator_in_c_agrees_with_numpy(derived):
     require_compiler()
     out, _ = derived
@@ -184,6 +191,7 @@ def test_scene_evaluator_in_c_agrees_with_numpy(derived):
     assert np.isnan(one).all()
 
 
+@DERIVED
 def test_numpy_scene_checks_its_inputs(derived):
     out, _ = derived
     scene = _import(out / "stage.py")

@@ -39,6 +39,11 @@ FOUR_BAR = Path(tempfile.mkdtemp(prefix="symkin-tradeoff-")) / "four_bar.toml"
 FOUR_BAR.write_text(M.without_stiffness(EXAMPLES / "four_bar.toml"))
 
 
+#: The tests that read `table`: one xdist worker runs them all (pyproject's --dist loadgroup), so
+#: the tradeoff run behind it happens once, not once per worker.
+TABLE = pytest.mark.xdist_group("tradeoff_table")
+
+
 @pytest.fixture(scope="module")
 def table(tmp_path_factory):
     plot = tmp_path_factory.mktemp("plot") / "tradeoff.png"
@@ -70,6 +75,7 @@ def table(tmp_path_factory):
     return json.loads(proc.stdout)
 
 
+@TABLE
 def test_json_lists_every_variant_with_errors_and_times(table):
     names = {v["name"] for v in table["variants"]}
     assert {
@@ -87,6 +93,7 @@ def test_json_lists_every_variant_with_errors_and_times(table):
         assert set(v["errors"]) == {"C"}
 
 
+@TABLE
 def test_claimed_errors_match_an_independent_check(table):
     mech = symkin.load(FOUR_BAR)
     ref_solver = Reference(mech)
@@ -115,6 +122,7 @@ def test_claimed_errors_match_an_independent_check(table):
         assert abs(claimed - worst) <= 0.1 * worst + 1e-13, (v["name"], claimed, worst)
 
 
+@TABLE
 def test_every_sample_is_measured(table):
     assert table["samples"] == 9 and table["skipped"] == 0 and len(table["inputs"]) == 9
 
@@ -128,6 +136,7 @@ def test_a_sample_at_zero_deviation_is_measured_not_dropped():
     assert 0 < table.rows[0].worst < 1e-2
 
 
+@TABLE
 def test_float32_error_is_reported_and_bounded(table):
     f32 = {v["name"]: v["worst_error"] for v in table["variants"] if v["precision"] == "float32"}
     f64 = {v["name"]: v["worst_error"] for v in table["variants"]}
@@ -135,6 +144,7 @@ def test_float32_error_is_reported_and_bounded(table):
     assert f32["first_order/f32"] == pytest.approx(f64["first_order"], rel=1e-2)
 
 
+@TABLE
 @pytest.mark.parametrize("backend", ["c", "numpy"])
 def test_pareto_front_of_each_backend_is_non_dominated(table, backend):
     rows = [v for v in table["variants"] if v[f"time_{backend}"] is not None]
