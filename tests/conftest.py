@@ -1,11 +1,31 @@
-"""Shared fixtures: paths of the project and its examples."""
+"""Shared fixtures: paths of the project and its examples, and work done once per run."""
 
 from __future__ import annotations
 
+import fcntl
+import os
+from collections.abc import Callable
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"
+
+
+def once_per_run(tmp_path_factory, name: str, build: Callable[[Path], None]) -> Path:
+    """A folder that build(folder) filled once in this test run: under xdist the first worker to
+    ask builds it (the others wait on a lock, then read it), so a module fixture whose tests land
+    on several workers is computed once, not once per worker."""
+    root = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        root = root.parent  # the run's folder, shared by its workers
+    folder = root / f"once-{name}"
+    with open(root / f"once-{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+        if not (folder / ".done").exists():
+            folder.mkdir(exist_ok=True)
+            build(folder)
+            (folder / ".done").touch()
+    return folder
 
 
 def pytest_addoption(parser):
@@ -18,10 +38,9 @@ def pytest_addoption(parser):
 
 
 #: The slowest tests (node id prefixes, slowest first; measured with --durations). Under xdist
-#: (`-n auto --dist loadgroup` in pyproject's addopts) they are handed out first, one work unit
-#: at a time, so the run does not end with one worker busy on a long test while the others idle.
-#: A module whose tests share an expensive fixture is one unit (xdist_group): test_scale's
-#: families, test_scene's derived scene, test_tradeoff's table.
+#: (`-n auto` in pyproject's addopts) they are handed out first, so the run does not end with one
+#: worker busy on a long test while the others idle. test_scene's derived scene and
+#: test_tradeoff's table are built once per run (once_per_run), whichever worker asks first.
 SLOW_FIRST = (
     "tests/test_scale.py",
     "tests/test_structure_properties.py::test_structure_identities",

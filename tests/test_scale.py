@@ -32,11 +32,6 @@ def _cases(kind: str) -> list[dict]:
     return [{f"A0_{j}": round(0.05 + 0.3 * ((j * 7) % 11 - 5) / 5, 4) for j in range(1, K + 1)}]
 
 
-# Every test reads `family`: one xdist worker runs them all (pyproject's --dist loadgroup), so each
-# family is derived and compiled once, not once per worker.
-pytestmark = pytest.mark.xdist_group("scale_family")
-
-
 @pytest.fixture(scope="module", params=("ladder", "fan"))
 def family(request):
     mech = symkin.loads(families.family(request.param, K), f"{request.param}_{K}.toml")

@@ -15,7 +15,7 @@ from pathlib import Path
 import mechanisms as M
 import numpy as np
 import pytest
-from conftest import EXAMPLES
+from conftest import EXAMPLES, once_per_run
 from reference_solver import Reference
 
 import symkin
@@ -39,14 +39,8 @@ FOUR_BAR = Path(tempfile.mkdtemp(prefix="symkin-tradeoff-")) / "four_bar.toml"
 FOUR_BAR.write_text(M.without_stiffness(EXAMPLES / "four_bar.toml"))
 
 
-#: The tests that read `table`: one xdist worker runs them all (pyproject's --dist loadgroup), so
-#: the tradeoff run behind it happens once, not once per worker.
-TABLE = pytest.mark.xdist_group("tradeoff_table")
-
-
-@pytest.fixture(scope="module")
-def table(tmp_path_factory):
-    plot = tmp_path_factory.mktemp("plot") / "tradeoff.png"
+def _tradeoff_run(folder: Path) -> None:
+    """`symkin tradeoff` on the four-bar: its JSON and its plot into folder."""
     import subprocess
     import sys
 
@@ -63,7 +57,7 @@ def table(tmp_path_factory):
             "9",
             "--json",
             "--plot",
-            str(plot),
+            str(folder / "tradeoff.png"),
             "--quiet",
         ],
         capture_output=True,
@@ -71,11 +65,17 @@ def table(tmp_path_factory):
         timeout=600,
     )
     assert proc.returncode == 0, proc.stderr
-    assert plot.stat().st_size > 1000
-    return json.loads(proc.stdout)
+    (folder / "table.json").write_text(proc.stdout)
 
 
-@TABLE
+@pytest.fixture(scope="module")
+def table(tmp_path_factory):
+    # the run is shared by the tests on every xdist worker (conftest.once_per_run)
+    folder = once_per_run(tmp_path_factory, "tradeoff-table", _tradeoff_run)
+    assert (folder / "tradeoff.png").stat().st_size > 1000
+    return json.loads((folder / "table.json").read_text())
+
+
 def test_json_lists_every_variant_with_errors_and_times(table):
     names = {v["name"] for v in table["variants"]}
     assert {
@@ -93,7 +93,6 @@ def test_json_lists_every_variant_with_errors_and_times(table):
         assert set(v["errors"]) == {"C"}
 
 
-@TABLE
 def test_claimed_errors_match_an_independent_check(table):
     mech = symkin.load(FOUR_BAR)
     ref_solver = Reference(mech)
@@ -122,7 +121,6 @@ def test_claimed_errors_match_an_independent_check(table):
         assert abs(claimed - worst) <= 0.1 * worst + 1e-13, (v["name"], claimed, worst)
 
 
-@TABLE
 def test_every_sample_is_measured(table):
     assert table["samples"] == 9 and table["skipped"] == 0 and len(table["inputs"]) == 9
 
@@ -136,7 +134,6 @@ def test_a_sample_at_zero_deviation_is_measured_not_dropped():
     assert 0 < table.rows[0].worst < 1e-2
 
 
-@TABLE
 def test_float32_error_is_reported_and_bounded(table):
     f32 = {v["name"]: v["worst_error"] for v in table["variants"] if v["precision"] == "float32"}
     f64 = {v["name"]: v["worst_error"] for v in table["variants"]}
@@ -144,7 +141,6 @@ def test_float32_error_is_reported_and_bounded(table):
     assert f32["first_order/f32"] == pytest.approx(f64["first_order"], rel=1e-2)
 
 
-@TABLE
 @pytest.mark.parametrize("backend", ["c", "numpy"])
 def test_pareto_front_of_each_backend_is_non_dominated(table, backend):
     rows = [v for v in table["variants"] if v[f"time_{backend}"] is not None]
