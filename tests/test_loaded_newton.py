@@ -8,12 +8,16 @@ plates' loads with the closed-form plate relation), the level that is to become 
   1 % with loads up to 80 % of the first buckling factor, 0.1 % for short unloaded plates) on the
   examples and the zoo, a redundant stage included (Reissner plates make it regular), in float64
   (numpy kernels) and mpmath;
-- a load past the mechanism's buckling is refused.
+- a load past the mechanism's buckling is refused;
+- the plate relation's C routine (the per-plate kernel of the generated level to come) against
+  mpmath.
 """
 
 from __future__ import annotations
 
 import math
+import shutil
+import subprocess
 from pathlib import Path
 
 import mpmath as mp
@@ -22,6 +26,8 @@ import sympy as sp
 from reference_beams import cantilever
 
 import symkin
+from symkin.codegen.backends.c.backend import standalone
+from symkin.codegen.plate import SYMBOLS, plate_routine
 from symkin.model import special
 from symkin.physics.plate_relation import relation
 from symkin.studies.evaluation import reduced_equilibrium
@@ -145,3 +151,61 @@ def test_compressed_plates(tmp_path):
     assert _worst(answer, symkin.evaluate(an, {"F1": 0.05}, level="equilibrium")) < 1e-3
     beyond = symkin.analyze(symkin.load(_loaded_parallelogram(tmp_path, 0.93)))
     assert reduced_equilibrium(beyond, {"F1": 0.05}).refused
+
+
+# -- the plate relation in generated C ----------------------------------------------------------
+
+#: (θ, p, f, ε_a, ε_s): both sides of the kernels' series threshold |p| = 2, tension and
+#: compression, tiny and large rotations
+PLATE_POINTS = [
+    (0.02, 0.0, 0.01, 0.0, 0.0),
+    (0.3, -5.0, 0.5, 0.0, 0.0),
+    (1.0, -8.0, 0.2, 8.3e-4, 2.6e-3),
+    (0.5, 7.0, 1.0, 0.0, 0.0),
+    (-0.1, 1.0, -0.3, 1e-4, 3e-4),
+    (1e-9, 1e-8, 1e-9, 0.0, 0.0),
+    (0.05, 30.0, 2.0, 0.0, 0.0),
+]
+
+
+def test_plate_routine_in_c(tmp_path):
+    """The C routine of the plate relation (CSE'd, the kernels' float source) against the
+    relation in mpmath at 30 digits, its partials by mpmath.diff: within 1e-12 of the largest
+    output."""
+    cc = shutil.which("cc") or shutil.which("gcc")
+    assert cc, "no C compiler"
+    rel = relation(*SYMBOLS)
+    fns = [
+        sp.lambdify(SYMBOLS, e, modules=[special.mpmath_namespace(), "mpmath"])
+        for e in (rel.along, rel.across, rel.omega)
+    ]
+    rows = ",".join("{" + ", ".join(repr(v) for v in pt) + "}" for pt in PLATE_POINTS)
+    src = tmp_path / "plate.c"
+    src.write_text(
+        "#include <math.h>\n#include <stdio.h>\n"
+        + standalone(plate_routine(4))
+        + "int main(void)\n{\n    static const double pts[][5] = {"
+        + rows
+        + "};\n    double out[12];\n    int i, k;\n"
+        + f"    for (i = 0; i < {len(PLATE_POINTS)}; ++i) {{\n"
+        + "        sk_plate_relation4(pts[i], out);\n"
+        + '        for (k = 0; k < 12; ++k) printf("%.17g\\n", out[k]);\n    }\n'
+        + "    return 0;\n}\n"
+    )
+    exe = tmp_path / "plate"
+    flags = ["-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O2"]
+    subprocess.run([cc, *flags, str(src), "-o", str(exe), "-lm"], check=True)
+    out = iter(
+        subprocess.run([str(exe)], check=True, capture_output=True, text=True).stdout.split()
+    )
+    for pt in PLATE_POINTS:
+        with mp.workdps(30):
+            x = [mp.mpf(v) for v in pt]
+            want = [fn(*x) for fn in fns]
+            for fn in fns:
+                for k in range(3):
+                    want.append(mp.diff(lambda v, fn=fn, k=k: fn(*x[:k], v, *x[k + 1 :]), x[k]))
+        scale = max(abs(w) for w in want)
+        for k, w in enumerate(want):
+            got = float(next(out))
+            assert abs(got - w) <= 1e-12 * scale, (pt, k, got, float(w))

@@ -40,9 +40,9 @@ P, TT = sp.symbols("p t")
 T_PRIME = ((1 - TT) / P - TT**2 / 4) / 2
 #: Series below this |p| (radius of convergence pi^2: a term shrinks by P_SERIES/pi^2 ~ 0.2).
 P_SERIES = 2.0
-#: Terms of every float series: (P_SERIES/pi^2)^FLOAT_TERMS ~ 1e-22, room for the growth of a
-#: derivative's coefficients.
-FLOAT_TERMS = 32
+#: Exact coefficients from which a float series is cut (FLOAT_TERMS * log10(P_SERIES/pi^2) is
+#: about -33: room for the growth of a derivative's coefficients).
+FLOAT_TERMS = 48
 #: The plate's sway buckling load: every kernel's pole (p = -pi^2).
 BUCKLING = -(math.pi**2)
 
@@ -175,8 +175,11 @@ class AxialKernel(sp.Function):
 
     @classmethod
     def float_series(cls) -> list[float]:
-        """The float coefficients of the series the float algorithm uses below P_SERIES."""
-        return [float(c) for c in cls.coefficients(FLOAT_TERMS)]
+        """The float coefficients of the series the float algorithm uses below P_SERIES: cut
+        where every further term is below 2^-54 of the largest term at |p| = P_SERIES (13 to 31
+        terms: the kernels whose pole is at -pi^2 need the most, those of 1/T, entire up to
+        -4 pi^2, the fewest)."""
+        return _float_series(cls.base, cls.order)
 
     @classmethod
     def float_closed(cls) -> tuple[list[list[float]], list[list[float]]]:
@@ -251,6 +254,19 @@ class AxialKernel(sp.Function):
 
         impl.__name__ = cls.__name__
         return impl
+
+
+@cache
+def _float_series(base: str, order: int) -> list[float]:
+    cs = [float(c) for c in kernel(base, order).coefficients(FLOAT_TERMS)]
+    terms = [abs(c) * P_SERIES**j for j, c in enumerate(cs)]
+    bound = 2.0**-54 * max(terms)
+    n = len(cs)
+    while n > 1 and terms[n - 1] <= bound:
+        n -= 1
+    if n == len(cs):  # pragma: no cover - the coefficients fall by about P_SERIES/pi^2
+        raise ValueError(f"{kernel(base, order).__name__}: its series needs more terms")
+    return cs[:n]
 
 
 @cache

@@ -54,7 +54,7 @@ def _axial(cls: type[axial.AxialKernel]) -> str:
     closed = f"({horner2(num, 't', 'p')}) / ({horner2(den, 't', 'p')})"
     series = horner(cls.float_series(), "p")
     return (
-        f"/* {cls.definition}; Taylor series ({axial.FLOAT_TERMS} terms) for "
+        f"/* {cls.definition}; Taylor series ({len(cls.float_series())} terms) for "
         f"|p| < {literal(axial.P_SERIES)}, else the closed form in p and t = T(p). */\n"
         f"static double symkin_{name}(double p)\n"
         "{\n"

@@ -351,7 +351,7 @@ def _axial(cls: type[axial.AxialKernel], scalar: bool) -> str:
     pcr = literal(axial.BUCKLING)
     series = horner(cls.float_series(), "p")
     doc = (
-        f"{cls.definition}; Taylor series ({axial.FLOAT_TERMS} terms) for |p| < {p0}, "
+        f"{cls.definition}; Taylor series ({len(cls.float_series())} terms) for |p| < {p0}, "
         f"else the closed form in p and t = T(p)"
     )
     if scalar:
