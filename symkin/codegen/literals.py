@@ -154,3 +154,26 @@ def recurrence(constants, var: str) -> list[str]:
         else:
             out.append(f"b = (b + {literal(-a)}) / {var}")
     return out
+
+
+def _sparse_horner(coeffs: list[float], var: str) -> str:
+    """Horner text of sum coeffs[k] var^k that skips the zero coefficients."""
+    coeffs = list(coeffs)
+    while len(coeffs) > 1 and coeffs[-1] == 0:
+        coeffs.pop()
+    text = literal(coeffs[-1])
+    for c in reversed(coeffs[:-1]):
+        text = f"{var} * ({text})" if c == 0 else f"{literal(c)} + {var} * ({text})"
+    return text
+
+
+def horner2(rows: list[list[float]], outer: str, inner: str) -> str:
+    """Source text of sum_i outer^i sum_j rows[i][j] inner^j, nested Horner in both variables
+    that skips zero coefficients (valid Python and C)."""
+    parts = [_sparse_horner(row, inner) for row in rows]
+    while len(parts) > 1 and parts[-1] == "0.0":
+        parts.pop()
+    text = parts[-1]
+    for part in reversed(parts[:-1]):
+        text = f"{outer} * ({text})" if part == "0.0" else f"({part}) + {outer} * ({text})"
+    return text

@@ -24,6 +24,7 @@ import sympy as sp
 from sympy.printing.pycode import MpmathPrinter
 
 from ..codegen import pipeline
+from ..codegen.backends.numpy.kernels import float64_namespace
 from ..core import levels
 from ..core.errors import AssemblyError, InputError
 from ..core.settings import SOLVER
@@ -32,7 +33,7 @@ from ..model import expressions, special
 from ..model.mechanism import Mechanism, check_values
 from ..physics import equilibrium as physical_equilibrium
 from ..physics import model_error as physical_model_error
-from ..physics import statics
+from ..physics import reduced, statics
 from ..physics.result import HingeLoad, InputLoad, PlateStress
 
 #: The mpmath evaluation of the derivation, then the generated-code backends (their registry).
@@ -268,6 +269,45 @@ def equilibrium(
     hinge's `beam`), solved numerically to its own error estimate; `extra_digits` raises the
     working precision (to check it)."""
     return _mpmath_evaluator(analysis).equilibrium(inputs, params, extra_digits)
+
+
+#: The reduced-equilibrium solvers already derived, by (analysis, parameters, backend).
+_REDUCED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def reduced_equilibrium(
+    analysis: Analysis,
+    inputs: Mapping[str, object],
+    params: Mapping[str, object] | None = None,
+    backend: str = "numpy",
+) -> reduced.Answer:
+    """The reduced equilibrium (symkin.physics.reduced, the Newton level that is to become
+    `loaded`) at one configuration: `backend` "numpy" (the numpy backend's float64 kernels) or
+    "sympy" (mpmath). The derivation is kept per analysis, parameter values and backend."""
+    if backend not in ("numpy", "sympy"):
+        raise InputError(f"unknown backend '{backend}'", hint="backends: numpy, sympy")
+    exact_params = parameter_values(analysis.mechanism, params)
+    key = (tuple(sorted((str(k), str(v)) for k, v in exact_params.items())), backend)
+    solvers = _REDUCED.setdefault(analysis, {})
+    if key not in solvers:
+        modules = None
+        if backend == "numpy":
+
+            def modules() -> list:
+                return [float64_namespace(), "math"]
+
+        solvers[key] = reduced.Reduced(analysis.kin, exact_params, modules)
+    ev = _mpmath_evaluator(analysis)
+
+    def rigid(scale: float) -> dict[int, float]:
+        given = input_values(analysis, {k: scale * float(v) for k, v in inputs.items()})
+        with mpmath.workdps(30):
+            pvals = [mpmath.mpf(sp.N(exact_params[s], 35)) for s in analysis.params]
+            ivals = {a: mpmath.mpf(sp.N(v, 35)) for a, v in given.items()}
+            theta, _ = ev._rigid_angles(pvals, ivals)
+        return {a: float(v) for a, v in theta.items()}
+
+    return solvers[key].solve(rigid)
 
 
 def with_model_error(

@@ -3,6 +3,8 @@ tip-force elastica (docs/numerics.md).
 
 - :mod:`.kernels`: sinr_n, cosr_n, arck, sympy functions with exact series, stable derivatives,
   mpmath values at any precision and a language-neutral float algorithm;
+- :mod:`.axial`: the beam-column kernels of the axial load index p (rational in p and
+  T(p) = tanh(sqrt(p)/2)/(sqrt(p)/2)), exact series at p = 0, derivatives in the family;
 - :mod:`.elastica`: the Bisshopp-Drucker cantilever in Carlson's symmetric integrals;
 - :mod:`.registry`: every function by name, its mpmath implementation and the helpers its float
   algorithm calls.
@@ -15,6 +17,8 @@ from __future__ import annotations
 
 import sympy as sp
 
+from . import axial
+from .axial import AxialKernel
 from .elastica_force import (
     ELASTICA_FUNCTIONS,
     ELASTICA_LIMIT,
@@ -33,10 +37,12 @@ from .registry import DomainError, is_special, mpmath_namespace, used_names, wit
 __all__ = [
     "ELASTICA_FUNCTIONS",
     "ELASTICA_LIMIT",
+    "AxialKernel",
     "DomainError",
     "ElasticaFunction",
     "StableKernel",
     "arck",
+    "axial",
     "cosr",
     "elastica_dx",
     "elastica_dx_d1",

@@ -3,9 +3,11 @@
 
 from __future__ import annotations
 
+from ....model import special
 from ...plan import Plan, ScenePlan
+from ...routines import Routine
 from ...templating import render
-from ..common import Backend, scene_context
+from ..common import Backend, routine_data, scene_context
 from . import kernels
 from .printer import CPrinter
 
@@ -50,3 +52,22 @@ def emit_scene(plan: ScenePlan) -> tuple[str, str]:
     """The scene evaluator's header and source (docs/scene.md)."""
     context = scene_context(plan)
     return render("c/scene.h.j2", **context), render("c/scene.c.j2", **context)
+
+
+def standalone(routine: Routine) -> str:
+    """One routine as a self-contained C99 function ``static void sk_<name>(const double *in,
+    ..., double *out)`` preceded by the special functions it calls (for the runtime's own
+    kernels, e.g. the plate relation of the Newton level)."""
+    printer = CPrinter()
+    data = routine_data(routine, printer)
+    exprs = [e for _, e in routine.assignments] + list(routine.outputs)
+    support = kernels.support(special.used_names(*exprs))
+    args = "".join(f"const double *{a}, " for a, _ in data["args"])
+    lines = [f"/* {data['doc']} ({data['ops']} operations) */"]
+    lines.append(f"static void sk_{data['name']}({args}double *out)\n{{")
+    lines += [f"    (void){a};" for a, used in data["args"] if not used]
+    for arg, names in data["unpack"]:
+        lines += [f"    const double {s} = {arg}[{k}];" for k, s in enumerate(names) if s != "_"]
+    lines += [f"    const double {s} = {e};" for s, e in data["lines"]]
+    lines += [f"    out[{k}] = {o};" for k, o in enumerate(data["outputs"])]
+    return support + "\n" + "\n".join(lines) + "\n}\n"

@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from functools import cache
 
-from ....model.special import registry
+from ....model.special import axial, registry
 from ....model.special.elastica_force import (
     A1_SERIES,
     HALF_PI_FLOAT,
@@ -23,7 +23,7 @@ from ....model.special.elastica_force import (
     RF_STOP,
 )
 from ....model.special.kernels import StableKernel
-from ...literals import horner, literal, recurrence
+from ...literals import horner, horner2, literal, recurrence
 
 
 def support(names: Iterable[str]) -> str:
@@ -39,9 +39,34 @@ def source(name: str) -> str:
     if name in OUTPUTS:
         return _elastica_output(name)
     cls = registry.FUNCTIONS[name]
+    if issubclass(cls, axial.AxialKernel):
+        return _axial(cls)
     if not issubclass(cls, StableKernel):
         raise KeyError(f"no C source for '{name}'")
     return _kernel(cls)
+
+
+def _axial(cls: type[axial.AxialKernel]) -> str:
+    """A beam-column kernel: Taylor series in p below P_SERIES, else its closed form at T(p);
+    NaN at and beyond the buckling load p = -pi^2."""
+    name = cls.__name__
+    num, den = cls.float_closed()
+    closed = f"({horner2(num, 't', 'p')}) / ({horner2(den, 't', 'p')})"
+    series = horner(cls.float_series(), "p")
+    return (
+        f"/* {cls.definition}; Taylor series ({len(cls.float_series())} terms) for "
+        f"|p| < {literal(axial.P_SERIES)}, else the closed form in p and t = T(p). */\n"
+        f"static double symkin_{name}(double p)\n"
+        "{\n"
+        "    double t;\n"
+        f"    if (fabs(p) < {literal(axial.P_SERIES)}) {{\n"
+        f"        return {series};\n"
+        "    }\n"
+        f"    if (!(p > {literal(axial.BUCKLING)})) return NAN;\n"
+        "    t = symkin_bcol_t(p);\n"
+        f"    return {closed};\n"
+        "}\n"
+    )
 
 
 def _kernel(cls: type[StableKernel]) -> str:
@@ -178,4 +203,26 @@ def _elastica_output(name: str) -> str:
     )
 
 
-_FIXED = {"carlson_rf": _CARLSON_RF, "carlson_rd": _CARLSON_RD, "elastica_core": _ELASTICA_CORE}
+_BCOL_T = """/* T(p) = tanh(u)/u, u = sqrt(p)/2 (p > 0); tan(v)/v, v = sqrt(-p)/2 (p < 0);
+   1 at p = 0. */
+static double symkin_bcol_t(double p)
+{
+    double u;
+    if (p > 0.0) {
+        u = 0.5 * sqrt(p);
+        return tanh(u) / u;
+    }
+    if (p < 0.0) {
+        u = 0.5 * sqrt(-p);
+        return tan(u) / u;
+    }
+    return 1.0;
+}
+"""
+
+_FIXED = {
+    "bcol_t": _BCOL_T,
+    "carlson_rf": _CARLSON_RF,
+    "carlson_rd": _CARLSON_RD,
+    "elastica_core": _ELASTICA_CORE,
+}

@@ -14,7 +14,7 @@ from functools import cache
 
 import numpy as np
 
-from ....model.special import registry
+from ....model.special import axial, registry
 from ....model.special.elastica_force import (
     A1_SERIES,
     HALF_PI_FLOAT,
@@ -26,7 +26,7 @@ from ....model.special.elastica_force import (
     RF_STOP,
 )
 from ....model.special.kernels import StableKernel
-from ...literals import horner, literal, recurrence
+from ...literals import horner, horner2, literal, recurrence
 
 
 def source(name: str, scalar: bool = False) -> str:
@@ -36,6 +36,8 @@ def source(name: str, scalar: bool = False) -> str:
     if name in OUTPUTS:
         return _elastica_output(name, scalar)
     cls = registry.FUNCTIONS[name]
+    if issubclass(cls, axial.AxialKernel):
+        return _axial(cls, scalar)
     if not issubclass(cls, StableKernel):
         raise KeyError(f"no numpy source for '{name}'")
     return _kernel(cls, scalar)
@@ -310,8 +312,71 @@ def _elastica_output(name: str, scalar: bool) -> str:
 
 
 #: name -> (numpy source, scalar source)
+_NUMPY_BCOL_T = """
+def bcol_t(p):
+    \"\"\"T(p) = tanh(u)/u, u = sqrt(p)/2 (p > 0); tan(v)/v, v = sqrt(-p)/2 (p < 0); 1 at 0
+    (vectorised).\"\"\"
+    p = np.asarray(p, dtype=float)
+    u = 0.5 * np.sqrt(np.where(p == 0.0, 1.0, np.abs(p)))
+    return np.where(p > 0.0, np.tanh(u) / u, np.where(p < 0.0, np.tan(u) / u, 1.0))
+"""
+
+_SCALAR_BCOL_T = """
+def bcol_t(p):
+    \"\"\"T(p) = tanh(u)/u, u = sqrt(p)/2 (p > 0); tan(v)/v, v = sqrt(-p)/2 (p < 0); 1 at 0.\"\"\"
+    if p > 0.0:
+        u = 0.5 * math.sqrt(p)
+        return math.tanh(u) / u
+    if p < 0.0:
+        u = 0.5 * math.sqrt(-p)
+        return math.tan(u) / u
+    return 1.0
+"""
+
 _FIXED = {
+    "bcol_t": (_NUMPY_BCOL_T, _SCALAR_BCOL_T),
     "carlson_rf": (_NUMPY_RF, _SCALAR_RF),
     "carlson_rd": (_NUMPY_RD, _SCALAR_RD),
     "elastica_core": (_NUMPY_CORE, _SCALAR_CORE),
 }
+
+
+def _axial(cls: type[axial.AxialKernel], scalar: bool) -> str:
+    """A beam-column kernel: Taylor series in p below P_SERIES, else its closed form at T(p);
+    NaN (numpy) or DomainError (scalar) at and beyond the buckling load p = -pi^2."""
+    name = cls.__name__
+    num, den = cls.float_closed()
+    closed = f"({horner2(num, 't', 'p')}) / ({horner2(den, 't', 'p')})"
+    p0 = literal(axial.P_SERIES)
+    pcr = literal(axial.BUCKLING)
+    series = horner(cls.float_series(), "p")
+    doc = (
+        f"{cls.definition}; Taylor series ({len(cls.float_series())} terms) for |p| < {p0}, "
+        f"else the closed form in p and t = T(p)"
+    )
+    if scalar:
+        return (
+            f"def {name}(p):\n"
+            f'    """{doc}."""\n'
+            f"    if abs(p) < {p0}:\n"
+            f"        return {series}\n"
+            f"    if not p > {pcr}:\n"
+            f'        raise DomainError("{name}: the axial load index must exceed -pi^2")\n'
+            f"    t = bcol_t(p)\n"
+            f"    return {closed}\n"
+        )
+    return (
+        f"def {name}(x):\n"
+        f'    """{doc} (vectorised)."""\n'
+        f"    x = np.asarray(x, dtype=float)\n"
+        f"    small = np.abs(x) < {p0}\n"
+        f"    p = np.where(small, x, 0.0)\n"
+        f"    series = {series}\n"
+        f"    if small.all():\n"
+        f"        return series\n"
+        f"    inside = x > {pcr}\n"
+        f"    p = np.where(small | ~inside, 3.0, x)\n"
+        f"    t = bcol_t(p)\n"
+        f"    closed = {closed}\n"
+        f"    return np.where(small, series, np.where(inside, closed, np.nan))\n"
+    )

@@ -1,0 +1,479 @@
+"""The reduced equilibrium of a compliant mechanism: Newton on the compliant-minus-rigid angles of
+the non-input hinges and, per loop, the chord plate's end load (docs/physics.md, "The Newton
+level"). The future `loaded` level; for now an internal solver, evaluated through sympy's
+lambdify in float64 (numpy kernels) or mpmath.
+
+Unknowns x (scaled, so every component is O(θ) or O(load/F)): δ_a / (l_min/L) of every
+non-input hinge, n_c/F and μ_c/(F L) of every chord c (the force and moment link M exerts on
+the chord plate at M's clamp); L the largest distance between hinge centres, l_min the shortest
+plate, F = max EI/(l L). Residuals: the `exact` level's loop closure in δ-form, each plate's end
+displacement its circular arc plus the plate relation (symkin.physics.plate_relation) under its
+current end force; the moment balance, at the current pose, of the links beyond every non-input
+tree hinge about M's clamp of its plate; the chord plates' moment relation. The forces in tree
+hinges follow from the loads and the chord forces by statics (pose-independent, linear).
+
+Solve: Newton from x = 0 at load factor 1; where a step would turn a hinge by more than 0.2 rad,
+or the Jacobian's determinant changes sign, continuation along the inputs and loads scaled
+together from the as-fabricated pose. Refusal (the answer is not given): a plate's compression
+at 90 % of its sway buckling load, or the truncation estimate 3 e24² above 1 % (e24: the
+largest relative change of a point's deviation when the quartic terms are dropped, by one Newton
+step with the Jacobian at the solution).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+import sympy as sp
+
+from ..core import vectors as V
+from ..kinematics.positions import Kinematics
+from ..model.special import arck, mpmath_namespace
+from .plate_relation import relation
+from .stiffness import plate_stiffness
+
+#: Newton: stop when the step is below TOL times the largest unknown (scaled).
+TOL = 1e-12
+MAX_ITER = 12
+#: A Newton step that turns a hinge by more than this (rad) hands over to continuation.
+MAX_TURN = 0.2
+#: Refuse when a plate's compression reaches this fraction of its sway buckling load.
+P_LIMIT = 0.9
+#: The order-4 error is about EST_FACTOR e24² (measured against the equilibrium level).
+EST_FACTOR = 3.0
+#: Refuse when the estimated error exceeds this.
+EST_LIMIT = 0.01
+
+
+@dataclass
+class Answer:
+    """The solution at one configuration, or why there is none (`refused` names the rule)."""
+
+    deviations: dict[str, tuple[float, float]]
+    x: np.ndarray
+    iterations: int
+    steps: int  # continuation steps (1: plain Newton)
+    estimate: float  # EST_FACTOR e24²
+    p_over_pcr: float  # the worst plate's compression over its sway buckling load
+    refused: str = ""
+    hinge_loads: dict[str, tuple[float, float, float]] = field(default_factory=dict)
+
+
+class Reduced:
+    """The reduced equilibrium of one mechanism at fixed parameter values, as sympy expressions
+    of the unknowns x, the rigid hinge angles and the load factor, lambdified on demand."""
+
+    def __init__(
+        self,
+        kin: Kinematics,
+        values: Mapping[sp.Symbol, sp.Expr],
+        modules: list | Callable[[], list] | None = None,
+    ) -> None:
+        """`values`: the file's parameters; `modules`: lambdify's (default mpmath with symkin's
+        special functions; the numpy backend's float64 namespace gives float code; a callable is
+        called after each derivation)."""
+        self.kin = kin
+        st = kin.structure
+        mech = kin.mechanism
+        self.modules = modules or [mpmath_namespace(), "mpmath"]
+        self._values_subs = dict(values)
+
+        def num(e) -> sp.Float:
+            return sp.Float(sp.N(sp.sympify(e).subs(values), 30), 30)
+
+        stiff = plate_stiffness(mech, "loaded")
+        self.n, self.m = st.n, st.m
+        self.hinges = kin.hinges
+        self.paths = {i: st.tree_path(i) for i in range(st.n + 1)}
+        self.unknowns = list(kin.unknowns)
+        self.chords = list(range(st.n + 1, st.m + 1))
+        self.beyond = {a: [i for i in range(1, st.n + 1) if a in self.paths[i]] for a in self.paths}
+        for c in self.chords:
+            if self.hinges[c].is_input:
+                raise NotImplementedError("an input hinge that closes a loop")
+        # numbers of every hinge
+        self.plate = {}
+        centres = {}
+        for a, h in self.hinges.items():
+            centres[a] = tuple(num(v) for v in h.centre)
+            if h.midpoint is not None:
+                raise NotImplementedError("pin = 'prbm' (the pivot off the plate's midpoint)")
+            if h.hinge.is_plate:
+                s = stiff[h.name]
+                EI, length = num(s.EI), num(h.length)
+                reissner = s.stretches
+                self.plate[a] = {
+                    "EI": EI,
+                    "l": length,
+                    "ea": EI / (num(s.EA) * length**2) if reissner else sp.S.Zero,
+                    "es": EI / (num(s.kGA) * length**2) if reissner else sp.S.Zero,
+                    "alpha": num(h.angle),
+                }
+        self.centres = centres
+        label = {name: i for i, name in enumerate(st.links)}
+        scale = mech.unit_scale
+        self.loads = [
+            (
+                label[ld.link],
+                tuple(num(v) for v in ld.at),
+                tuple(num(v) for v in ld.force),
+                num(ld.moment / scale),
+            )
+            for ld in mech.loads
+        ]
+        self.points = {p.name: (label[p.link], tuple(num(v) for v in p.at)) for p in mech.points}
+        self.clamp_m = {}
+        for a, h in self.hinges.items():
+            self.clamp_m[a] = tuple(num(v) for v in h.clamp(h.M)) if a in self.plate else centres[a]
+        cs = [tuple(float(v) for v in c) for c in centres.values()]
+        self.L = max([math.dist(a, b) for a in cs for b in cs] + [1e-300])
+        self.lmin = min([float(d["l"]) for d in self.plate.values()], default=self.L)
+        self.F = max([float(d["EI"] / (d["l"] * self.L)) for d in self.plate.values()] or [1.0])
+        nu = len(self.unknowns)
+        self.size = nu + 3 * len(self.chords)
+        self.scale = np.concatenate(
+            [
+                np.full(nu, self.lmin / self.L),
+                np.tile([self.F, self.F, self.F * self.L], len(self.chords)),
+            ]
+        )
+        self.x = sp.symbols(f"x_0:{self.size}", real=True)
+        self.th = {a: sp.Symbol(f"th_{a}", real=True) for a in self.hinges}
+        self.t = sp.Symbol("t", real=True)
+        self._fns: dict = {}
+
+    # -- the equations -------------------------------------------------------------------------
+    @cached_property
+    def _s(self) -> dict:
+        """Every intermediate quantity as a sympy expression of (x, th, t) and the plates'
+        outputs, symbols `out[a]` = (along, across, omega) (the chain rule takes their
+        derivatives from the plate relation's, docs/physics.md)."""
+        nu = len(self.unknowns)
+        X = [xi * sp.Float(float(s), 17) for xi, s in zip(self.x, self.scale)]
+        delta = dict.fromkeys(self.hinges, sp.S.Zero)
+        for k, a in enumerate(self.unknowns):
+            delta[a] = X[k]
+        chord = {
+            c: (X[nu + 3 * j], X[nu + 3 * j + 1], X[nu + 3 * j + 2])
+            for j, c in enumerate(self.chords)
+        }
+        sign = {a: h.sign for a, h in self.hinges.items()}
+        phi = {i: sp.Add(*(sign[b] * self.th[b] for b in self.paths[i])) for i in self.paths}
+        dphi = {i: sp.Add(*(sign[b] * delta[b] for b in self.paths[i])) for i in self.paths}
+        # forces on links: the loads (times t) and the chord plates' reactions
+        on_link = {i: [sp.S.Zero, sp.S.Zero] for i in self.paths}
+        for link, _, force, _ in self.loads:
+            on_link[link][0] += self.t * force[0]
+            on_link[link][1] += self.t * force[1]
+        for c, (nx, ny, _) in chord.items():
+            h = self.hinges[c]
+            on_link[h.M] = [on_link[h.M][0] - nx, on_link[h.M][1] - ny]
+            on_link[h.P] = [on_link[h.P][0] + nx, on_link[h.P][1] + ny]
+        n = {}
+        for a in range(1, self.n + 1):
+            fx = sp.Add(*(on_link[i][0] for i in self.beyond[a]))
+            fy = sp.Add(*(on_link[i][1] for i in self.beyond[a]))
+            n[a] = (sign[a] * fx, sign[a] * fy)
+        for c, (nx, ny, _) in chord.items():
+            n[c] = (nx, ny)
+        dz, mom, pf, out = {}, {}, {}, {}
+        for a, h in self.hinges.items():
+            if a not in self.plate:
+                dz[a], mom[a] = V.ZERO, sp.S.Zero
+                continue
+            d = self.plate[a]
+            tc = self.th[a] + delta[a]
+            frame = phi[h.P] + dphi[h.P] + d["alpha"] + tc / 2
+            k = d["l"] ** 2 / d["EI"]
+            p, f = V.rot(-frame, (n[a][0] * k, n[a][1] * k))
+            out[a] = sp.symbols(f"along_{a} across_{a} omega_{a}", real=True)
+            along, across, omega = out[a]
+            u = tc / 2
+            local = (d["l"] * (u * u * arck(u) + along), d["l"] * across)
+            dz[a] = V.rot(frame, local)
+            mom[a] = omega * d["EI"] / d["l"]
+            pf[a] = (tc, p, f)
+        return {
+            "delta": delta,
+            "chord": chord,
+            "phi": phi,
+            "dphi": dphi,
+            "n": n,
+            "dz": dz,
+            "mom": mom,
+            "pf": pf,
+            "out": out,
+        }
+
+    def _weights(self, link: int, point) -> dict:
+        out, previous = {}, (sp.S.Zero, sp.S.Zero)
+        path = self.paths[link]
+        for i, b in zip((0,) + path, path):
+            out[i] = V.sub(self.centres[b], previous)
+            previous = self.centres[b]
+        out[link] = V.sub(point, previous)
+        return out
+
+    def _path_dz(self, s: dict, link: int):
+        terms = [V.scale(self.hinges[b].sign, s["dz"][b]) for b in self.paths[link]]
+        return V.add(*terms) if terms else V.ZERO
+
+    def _position(self, s: dict, link: int, point):
+        """Current position of a point fixed in `link` (full: it is a moment arm)."""
+        rigid = [
+            V.rot(s["phi"][i] + s["dphi"][i], w) for i, w in self._weights(link, point).items()
+        ]
+        return V.add(*rigid, self._path_dz(s, link))
+
+    def _deviation(self, s: dict, link: int, point):
+        """Compliant minus rigid position, cancellation-free."""
+        parts = [
+            V.rot(s["phi"][i], V.rot_minus_identity(s["dphi"][i], w))
+            for i, w in self._weights(link, point).items()
+        ]
+        return V.add(*parts, self._path_dz(s, link))
+
+    def _rows(self, s: dict) -> list[sp.Expr]:
+        st = self.kin.structure
+        rows = []
+        for c in self.chords:
+            row = st.loops[c - self.n - 1]
+            rows.append(
+                sp.Add(
+                    *(
+                        int(row[b - 1]) * self.hinges[b].sign * s["delta"][b]
+                        for b in range(1, self.m + 1)
+                        if row[b - 1]
+                    )
+                )
+            )
+            lw = self.kin.loop_weights(c)
+            parts = []
+            for i, w in lw.items():
+                w = tuple(sp.Float(sp.N(v.subs(self._values_subs), 30), 30) for v in w)
+                parts.append(V.rot(s["phi"][i], V.rot_minus_identity(s["dphi"][i], w)))
+            for b in range(1, self.m + 1):
+                if row[b - 1]:
+                    parts.append(V.scale(int(row[b - 1]) * self.hinges[b].sign, s["dz"][b]))
+            ox, oy = V.add(*parts)
+            rows += [ox / self.lmin, oy / self.lmin]
+        unit = self.F * self.L
+        for a in range(1, self.n + 1):
+            h = self.hinges[a]
+            if h.is_input:
+                continue
+            xm = self._position(s, h.M, self.clamp_m[a])
+            total = []
+            for link, at, force, moment in self.loads:
+                if link in self.beyond[a]:
+                    arm = V.sub(self._position(s, link, at), xm)
+                    total.append(self.t * (V.cross(arm, force) + moment))
+            for c, (nx, ny, mu) in s["chord"].items():
+                hc = self.hinges[c]
+                xcm = self._position(s, hc.M, self.clamp_m[c])
+                if hc.M in self.beyond[a]:
+                    total.append(V.cross(V.sub(xcm, xm), (-nx, -ny)) - mu)
+                if hc.P in self.beyond[a]:
+                    total.append(V.cross(V.sub(xcm, xm), (nx, ny)) + mu)
+            rows.append((s["mom"][a] - h.sign * sp.Add(*total)) / unit)
+        for c, (_, _, mu) in s["chord"].items():
+            rows.append((mu - s["mom"][c]) / unit)
+        return rows
+
+    # -- numbers -------------------------------------------------------------------------------
+    def _lambdify(self, exprs: list, extra: list | None = None):
+        args = [list(self.x), [self.th[a] for a in sorted(self.hinges)], self.t]
+        if extra is not None:
+            args.append(extra)
+        # a callable gives the modules after the derivation: kernels it created are in them
+        modules = self.modules() if callable(self.modules) else self.modules
+        return sp.lambdify(args, exprs, modules=modules, cse=True)
+
+    def _fn(self, key: str):
+        """The lambdified function `key`: "plates" (x, th, t) -> (θ_c, p, f) of every plate and
+        their x-derivatives; "res", "jac" (x, th, t, outputs) -> residual, ∂/∂x at fixed plate
+        outputs and ∂/∂outputs; "dev" -> the points' deviations; "angles" -> compliant angles;
+        "plate4", "plate2" (θ, p, f, ε_a, ε_s) -> the plate relation and its 9 partials."""
+        if key in self._fns:
+            return self._fns[key]
+        s = self._s
+        outs = [v for a in sorted(self.plate) for v in s["out"][a]]
+        if key == "plates":
+            ins = sp.Matrix([v for a in sorted(self.plate) for v in s["pf"][a]])
+            fn = self._lambdify([list(ins), list(ins.jacobian(self.x))])
+        elif key in ("res", "jac"):
+            rows = sp.Matrix(self._rows(s))
+            if key == "res":
+                fn = self._lambdify(list(rows), outs)
+            else:
+                fn = self._lambdify([list(rows.jacobian(self.x)), list(rows.jacobian(outs))], outs)
+        elif key == "dev":
+            exprs = [
+                c
+                for name, (link, at) in sorted(self.points.items())
+                for c in self._deviation(s, link, at)
+            ]
+            fn = self._lambdify(exprs, outs)
+        elif key == "angles":
+            fn = self._lambdify([self.th[a] + s["delta"][a] for a in sorted(self.hinges)])
+        elif key in ("plate4", "plate2"):
+            th, p, f, ea, es = sp.symbols("theta p f e_a e_s", real=True)
+            rel = relation(th, p, f, ea, es, int(key[-1]))
+            vals = [rel.along, rel.across, rel.omega]
+            parts = [sp.diff(v, w) for v in vals for w in (th, p, f)]
+            modules = self.modules() if callable(self.modules) else self.modules
+            fn = sp.lambdify([th, p, f, ea, es], vals + parts, modules=modules, cse=True)
+        else:  # pragma: no cover
+            raise KeyError(key)
+        self._fns[key] = fn
+        return fn
+
+    def _eval(self, x, theta: Mapping[int, float], t: float, order: int = 4, jac: bool = False):
+        """Plate inputs, outputs and (with `jac`) the chain rule's pieces at (x, θ, t)."""
+        args = (list(map(float, x)), [theta[a] for a in sorted(self.hinges)], t)
+        ins, dins = self._fn("plates")(*args)
+        plate = self._fn(f"plate{order}")
+        outs, parts = [], []
+        for k, a in enumerate(sorted(self.plate)):
+            d = self.plate[a]
+            v = plate(*(float(u) for u in ins[3 * k : 3 * k + 3]), float(d["ea"]), float(d["es"]))
+            outs += [float(u) for u in v[:3]]
+            parts.append(np.array(v[3:], dtype=float).reshape(3, 3))
+        return args, np.array(ins, dtype=float), np.array(dins, dtype=float), outs, parts
+
+    def residual(self, x, theta, t, order: int = 4) -> np.ndarray:
+        args, _, _, outs, _ = self._eval(x, theta, t, order)
+        return np.array(self._fn("res")(*args, outs), dtype=float)
+
+    def jacobian(self, x, theta, t) -> np.ndarray:
+        """dR/dx = ∂R/∂x + ∂R/∂outputs · ∂outputs/∂(θ_c, p, f) · ∂(θ_c, p, f)/∂x."""
+        args, _, dins, outs, parts = self._eval(x, theta, t)
+        jx, jo = self._fn("jac")(*args, outs)
+        jx = np.array(jx, dtype=float).reshape(self.size, self.size)
+        if not parts:
+            return jx
+        jo = np.array(jo, dtype=float).reshape(self.size, len(outs))
+        block = np.zeros((len(outs), len(outs)))
+        for k, d in enumerate(parts):
+            block[3 * k : 3 * k + 3, 3 * k : 3 * k + 3] = d
+        return jx + jo @ block @ dins.reshape(len(outs), self.size)
+
+    def deviations(self, x, theta, order: int = 4) -> dict[str, tuple[float, float]]:
+        args, _, _, outs, _ = self._eval(x, theta, 1.0, order)
+        v = np.array(self._fn("dev")(*args, outs), dtype=float)
+        return {name: (v[2 * k], v[2 * k + 1]) for k, name in enumerate(sorted(self.points))}
+
+    # -- solving -------------------------------------------------------------------------------
+    def newton(self, x, theta, t, damp: bool = False) -> tuple[np.ndarray, int, bool]:
+        """Newton from x; (x, iterations, converged). A step that would turn a hinge by more
+        than MAX_TURN fails (continuation takes over) or, with `damp`, is shortened."""
+        nu = len(self.unknowns)
+        prev = math.inf
+        for it in range(1, MAX_ITER + 1):
+            try:
+                r = self.residual(x, theta, t)
+                step = np.linalg.solve(self.jacobian(x, theta, t), r)
+            except (np.linalg.LinAlgError, ValueError, ZeroDivisionError, OverflowError):
+                # a singular Jacobian, or a plate pushed past its buckling load (the kernels'
+                # DomainError) by the iterate: not this way
+                return x, it, False
+            turn = float(np.max(np.abs(step[:nu]))) * self.scale[0] if nu else 0.0
+            if turn > MAX_TURN:
+                if not damp:
+                    return x, it, False
+                step = step * (MAX_TURN / turn)
+            x = x - step
+            if not np.all(np.isfinite(x)):
+                return x, it, False
+            size, top = float(np.max(np.abs(step))), float(np.max(np.abs(x)))
+            # x is scaled (l/L, EI/(l L)): the whole vector sets the scale, so a δ that is zero
+            # by symmetry cannot block the test
+            if size <= TOL * top or size == 0:
+                return x, it, True
+            if it > 3 and size > 0.5 * prev and size < 1e-9 * top:
+                return x, it, True  # stalled at rounding
+            prev = size
+        return x, MAX_ITER, False
+
+    def _sign(self, x, theta, t) -> float:
+        return float(np.sign(np.linalg.det(self.jacobian(x, theta, t))))
+
+    def _accept(self, x, theta, t, sign: float) -> bool:
+        """A converged x on the branch followed: det J of the same sign as at the unloaded
+        state, every compliant angle within (-π, π)."""
+        try:
+            return self._sign(x, theta, t) == sign and self._plausible(x, theta)
+        except (ValueError, ZeroDivisionError, OverflowError):
+            return False
+
+    def _plausible(self, x, theta) -> bool:
+        """Every compliant hinge angle within (-π, π)."""
+        args = (list(map(float, x)), [theta[a] for a in sorted(self.hinges)], 1.0)
+        angles = np.array(self._fn("angles")(*args), dtype=float)
+        return bool(np.all(np.abs(angles) < math.pi))
+
+    def solve(self, rigid: Callable[[float], Mapping[int, float]]) -> Answer:
+        """The equilibrium at the inputs; `rigid(s)` gives the rigid hinge angles (by label) at
+        the inputs scaled by s (1: the configuration asked for, 0: as fabricated)."""
+        theta = rigid(1.0)
+        zero = np.zeros(self.size)
+        sign0 = self._sign(zero, theta, 0.0)
+        x, total, ok = self.newton(zero, theta, 1.0)
+        steps = 1
+        if ok:
+            ok = self._accept(x, theta, 1.0, sign0)
+        if not ok:
+            # continuation: inputs and loads scaled together by s from the as-fabricated pose
+            # (x = 0 exact at s = 0); the predictor keeps the compliant angles and chord loads
+            s, ds, steps = 0.0, 0.25, 0
+            th_s = rigid(0.0)
+            x = zero
+            sign = self._sign(x, th_s, 0.0)
+            ok = True
+            while s < 1:
+                if ds < 1e-3:
+                    ok = False
+                    break
+                s1 = min(1.0, s + ds)
+                th_1 = rigid(s1)
+                guess = x.copy()
+                for j, a in enumerate(self.unknowns):
+                    guess[j] = (th_s[a] + x[j] * self.scale[j] - th_1[a]) / self.scale[j]
+                xn, it, okn = self.newton(guess, th_1, s1)
+                total += it
+                if okn:
+                    okn = self._accept(xn, th_1, s1, sign)
+                if okn:
+                    x, s, th_s, steps = xn, s1, th_1, steps + 1
+                    ds = min(0.5, ds * 1.5)
+                else:
+                    ds /= 2
+        if not ok:
+            return Answer({}, x, total, steps, math.nan, math.nan, "no convergence")
+        dev = self.deviations(x, theta)
+        ins = self._eval(x, theta, 1.0)[1]
+        worst_p = 0.0
+        for k, a in enumerate(sorted(self.plate)):
+            d = self.plate[a]
+            p = float(ins[3 * k + 1])
+            g = 1 + float(d["ea"] - d["es"]) * p
+            worst_p = max(worst_p, -g * p / math.pi**2)
+        # truncation estimate: one Newton step of the order-2 equations from the solution
+        x2 = x - np.linalg.solve(self.jacobian(x, theta, 1.0), self.residual(x, theta, 1.0, 2))
+        dev2 = self.deviations(x2, theta, 2)
+        e24 = 0.0
+        for name, d4 in dev.items():
+            size = math.hypot(*d4)
+            if size > 0:
+                e24 = max(e24, math.dist(dev2[name], d4) / size)
+        estimate = EST_FACTOR * e24**2
+        refused = ""
+        if worst_p >= P_LIMIT:
+            refused = f"a plate at {worst_p:.0%} of its sway buckling load"
+        elif estimate > EST_LIMIT:
+            refused = f"truncation estimate {estimate:.2%}"
+        return Answer(dev, x, total, steps, estimate, worst_p, refused)

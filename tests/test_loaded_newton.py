@@ -1,0 +1,215 @@
+"""The reduced equilibrium (symkin.physics.reduced: Newton on the compliant angles and the chord
+plates' loads with the closed-form plate relation), the level that is to become `loaded`:
+
+- one plate's relation against the independent shooting solution of tests/reference_beams.py
+  (elastica and Reissner), at the accuracy its fourth-order truncation allows;
+- mechanisms against symkin's `equilibrium` (itself checked against the independent solvers of
+  tests/reference_physics.py and tests/reference_beams.py to 1e-10): within 0.1 % (the target is
+  1 % with loads up to 80 % of the first buckling factor, 0.1 % for short unloaded plates) on the
+  examples and the zoo, a redundant stage included (Reissner plates make it regular), in float64
+  (numpy kernels) and mpmath;
+- a load past the mechanism's buckling is refused;
+- the plate relation's C routine (the per-plate kernel of the generated level to come) against
+  mpmath.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import subprocess
+from pathlib import Path
+
+import mpmath as mp
+import pytest
+import sympy as sp
+from reference_beams import cantilever
+
+import symkin
+from symkin.codegen.backends.c.backend import standalone
+from symkin.codegen.plate import SYMBOLS, plate_routine
+from symkin.model import special
+from symkin.physics import equilibrium as equilibrium_physics
+from symkin.physics.plate_relation import relation
+from symkin.studies.evaluation import reduced_equilibrium
+
+ROOT = Path(__file__).resolve().parent.parent
+ZOO = ROOT / "tests" / "mechanisms"
+
+# -- one plate ----------------------------------------------------------------------------------
+
+#: (f_x, f_y, m1) at M's end in P's plate frame (scaled by l²/EI, l/EI), eps = EI/(EA l²),
+#: gam = EI/(κGA l²), and the bounds on the relative error of the end displacement beyond the
+#: circular arc and of the end moment (order 4 in θ and f: the error is about the square of
+#: the beam-column's, docs/physics.md)
+PLATES = [
+    ((0.0, 0.01, 0.025), 0, 0, 1e-8, 1e-9),
+    ((0.0, 1.0, 0.5), 0, 0, 3e-3, 1e-3),
+    ((-5.0, 0.5, 0.3), 0, 0, 3e-3, 3e-3),
+    ((-8.0, 0.2, 0.05), 0, 0, 1e-5, 1e-5),
+    ((3.0, 1.0, 1.0), 0, 0, 1e-3, 1e-4),
+    ((-5.0, 0.5, 0.3), 8.3e-4, 2.6e-3, 3e-4, 1e-3),
+    ((0.0, 0.01, 0.025), 8.3e-4, 2.6e-3, 1e-5, 1e-7),
+]
+
+
+def test_plate_relation_against_shooting():
+    th, p, f, ea, es = sp.symbols("th p f ea es")
+    rel = relation(th, p, f, ea, es)
+    fns = [
+        sp.lambdify((th, p, f, ea, es), e, modules=[special.mpmath_namespace(), "mpmath"])
+        for e in (rel.along, rel.across, rel.omega)
+    ]
+    for (fx, fy, m1), eps, gam, bound_d, bound_m in PLATES:
+        with mp.workdps(30):
+            ref = cantilever(fx, fy, m1, eps=eps, gam=gam, dps=30)
+            theta = ref["psi"]
+            w = theta / 2
+            # the force in the mid-frame (P's frame turned by θ/2)
+            pv = mp.cos(w) * fx + mp.sin(w) * fy
+            fv = -mp.sin(w) * fx + mp.cos(w) * fy
+            along, across, omega = (fn(theta, pv, fv, mp.mpf(eps), mp.mpf(gam)) for fn in fns)
+            chord = mp.sin(w) / w
+            got = (mp.cos(w) * along - mp.sin(w) * across, mp.sin(w) * along + mp.cos(w) * across)
+            want = (ref["x"] - mp.cos(w) * chord, ref["y"] - mp.sin(w) * chord)
+            err_d = mp.hypot(got[0] - want[0], got[1] - want[1]) / mp.hypot(*want)
+            err_m = abs(omega - m1) / abs(m1)
+        assert err_d < bound_d, (fx, fy, m1, eps, float(err_d))
+        assert err_m < bound_m, (fx, fy, m1, eps, float(err_m))
+
+
+def test_pure_moment_is_the_arc():
+    """Without force the plate is the circular arc at any θ: no correction, ω = θ."""
+    th = sp.Symbol("th")
+    rel = relation(th, sp.S.Zero, sp.S.Zero, sp.Rational(1, 1000), sp.Rational(3, 1000))
+    for value in (sp.Rational(1, 50), sp.Rational(3, 2)):
+        assert abs(rel.along.subs(th, value).evalf(30)) < 1e-28
+        assert abs(rel.across.subs(th, value).evalf(30)) < 1e-28
+        assert abs(rel.omega.subs(th, value).evalf(30) - value) < 1e-28
+
+
+# -- mechanisms against the equilibrium level ---------------------------------------------------
+
+
+def _loaded_parallelogram(tmp: Path, fraction: float) -> Path:
+    """The parallelogram with a dead load pressing the stage down, `fraction` times the force
+    that puts each plate at its Euler load π²EI/l² (E' = E/(1 - ν²): a wide plate)."""
+    ei = 210e9 / (1 - 0.3**2) * 10e-3 * (0.15e-3) ** 3 / 12
+    force = 2 * fraction * math.pi**2 * ei / 5e-3**2
+    text = (ZOO / "parallelogram.toml").read_text()
+    text += f'\n[[load]]\nlink = "stage"\nat = ["w/2", "L"]\nforce = [0.0, {-force!r}]\n'
+    path = tmp / f"parallelogram_load_{fraction}.toml"
+    path.write_text(text)
+    return path
+
+
+#: (file, inputs): the examples and the zoo at their own loads and parameters.
+CASES = [
+    ("examples/four_bar.toml", {"A0": 0.1}),
+    ("tests/mechanisms/parallelogram.toml", {"F1": 0.05}),
+    ("tests/mechanisms/double_parallelogram.toml", {"F1": 0.05, "I1": -0.05}),
+    ("tests/mechanisms/scott_russell.toml", {"RA0": 0.01}),
+    ("tests/mechanisms/lever_amplifier.toml", {"P0": 0.0}),
+    ("tests/mechanisms/roberts.toml", {"O1": 0.1}),
+    ("tests/mechanisms/toggle_four_bar.toml", {"O1": 0.3}),
+    ("tests/mechanisms/three_leg_stage.toml", {"F1": 0.05}),
+]
+
+
+def _worst(answer, reference) -> float:
+    return max(
+        math.dist(answer.deviations[n], p.deviation) / math.hypot(*p.deviation)
+        for n, p in reference.points.items()
+    )
+
+
+@pytest.mark.parametrize(("path", "inputs"), CASES, ids=[Path(c[0]).stem for c in CASES])
+def test_against_equilibrium(path, inputs):
+    an = symkin.analyze(symkin.load(ROOT / path))
+    answer = reduced_equilibrium(an, inputs)
+    assert not answer.refused, answer.refused
+    reference = symkin.evaluate(an, inputs, level="equilibrium")
+    assert _worst(answer, reference) < 1e-3
+
+
+def test_sympy_backend_agrees():
+    """mpmath and float64 kernels give the same solution; both within 0.1 % of equilibrium."""
+    an = symkin.analyze(symkin.load(ROOT / "examples/four_bar.toml"))
+    inputs = {"A0": 0.3}
+    a64 = reduced_equilibrium(an, inputs, backend="numpy")
+    amp = reduced_equilibrium(an, inputs, backend="sympy")
+    for name, d in a64.deviations.items():
+        assert math.dist(d, amp.deviations[name]) < 1e-9 * math.hypot(*d)
+    assert _worst(amp, symkin.evaluate(an, inputs, level="equilibrium")) < 1e-3
+
+
+def test_compressed_plates(tmp_path, monkeypatch):
+    """Plates pressed to half their Euler load (about 60 % of the mechanism's first buckling
+    factor): within 0.1 % of equilibrium; at 93 % (beyond the mechanism's buckling) refused."""
+    # only equilibrium's deviations are compared: its buckling-factor search, which it runs
+    # after solving (and which can stop short this close to the plates' Euler load), is left out
+    monkeypatch.setattr(equilibrium_physics, "buckling_factor", lambda *args, **kwargs: None)
+    an = symkin.analyze(symkin.load(_loaded_parallelogram(tmp_path, 0.5)))
+    answer = reduced_equilibrium(an, {"F1": 0.05})
+    assert not answer.refused and 0.4 < answer.p_over_pcr < 0.6
+    assert _worst(answer, symkin.evaluate(an, {"F1": 0.05}, level="equilibrium")) < 1e-3
+    beyond = symkin.analyze(symkin.load(_loaded_parallelogram(tmp_path, 0.93)))
+    assert reduced_equilibrium(beyond, {"F1": 0.05}).refused
+
+
+# -- the plate relation in generated C ----------------------------------------------------------
+
+#: (θ, p, f, ε_a, ε_s): both sides of the kernels' series threshold |p| = 2, tension and
+#: compression, tiny and large rotations
+PLATE_POINTS = [
+    (0.02, 0.0, 0.01, 0.0, 0.0),
+    (0.3, -5.0, 0.5, 0.0, 0.0),
+    (1.0, -8.0, 0.2, 8.3e-4, 2.6e-3),
+    (0.5, 7.0, 1.0, 0.0, 0.0),
+    (-0.1, 1.0, -0.3, 1e-4, 3e-4),
+    (1e-9, 1e-8, 1e-9, 0.0, 0.0),
+    (0.05, 30.0, 2.0, 0.0, 0.0),
+]
+
+
+def test_plate_routine_in_c(tmp_path):
+    """The C routine of the plate relation (CSE'd, the kernels' float source) against the
+    relation in mpmath at 30 digits, its partials by mpmath.diff: within 1e-12 of the largest
+    output."""
+    cc = shutil.which("cc") or shutil.which("gcc")
+    assert cc, "no C compiler"
+    rel = relation(*SYMBOLS)
+    fns = [
+        sp.lambdify(SYMBOLS, e, modules=[special.mpmath_namespace(), "mpmath"])
+        for e in (rel.along, rel.across, rel.omega)
+    ]
+    rows = ",".join("{" + ", ".join(repr(v) for v in pt) + "}" for pt in PLATE_POINTS)
+    src = tmp_path / "plate.c"
+    src.write_text(
+        "#include <math.h>\n#include <stdio.h>\n"
+        + standalone(plate_routine(4))
+        + "int main(void)\n{\n    static const double pts[][5] = {"
+        + rows
+        + "};\n    double out[12];\n    int i, k;\n"
+        + f"    for (i = 0; i < {len(PLATE_POINTS)}; ++i) {{\n"
+        + "        sk_plate_relation4(pts[i], out);\n"
+        + '        for (k = 0; k < 12; ++k) printf("%.17g\\n", out[k]);\n    }\n'
+        + "    return 0;\n}\n"
+    )
+    exe = tmp_path / "plate"
+    flags = ["-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O2"]
+    subprocess.run([cc, *flags, str(src), "-o", str(exe), "-lm"], check=True)
+    out = iter(
+        subprocess.run([str(exe)], check=True, capture_output=True, text=True).stdout.split()
+    )
+    for pt in PLATE_POINTS:
+        with mp.workdps(30):
+            x = [mp.mpf(v) for v in pt]
+            want = [fn(*x) for fn in fns]
+            for fn in fns:
+                for k in range(3):
+                    want.append(mp.diff(lambda v, fn=fn, k=k: fn(*x[:k], v, *x[k + 1 :]), x[k]))
+        scale = max(abs(w) for w in want)
+        for k, w in enumerate(want):
+            got = float(next(out))
+            assert abs(got - w) <= 1e-12 * scale, (pt, k, got, float(w))
