@@ -333,6 +333,7 @@ def _key(value: object) -> object:
 def plan_for(analysis: Analysis, **options: Any) -> Plan:
     """:func:`~.plan.plan` of `analysis` with `options`, derived once per analysis and options
     (kept as long as the analysis is)."""
+    analysis.mechanism.refuse_actuators("the generated code")
     bound = _PLAN_SIGNATURE.bind(analysis, **options)
     bound.apply_defaults()  # plan(an) and plan(an, sensitivity=True) are one plan
     key = tuple((k, _key(v)) for k, v in bound.arguments.items() if k != "analysis")
