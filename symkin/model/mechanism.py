@@ -1440,12 +1440,12 @@ class _Reader:
             )
         if len(mech.inputs) + len(mech.actuators) != dof:
             given = ", ".join(mech.inputs) or "none"
+            what = f"{len(mech.inputs)} input hinge(s) ({given})"
             if mech.actuators:
-                given += "; actuators: " + ", ".join(a.name for a in mech.actuators)
-            count = len(mech.inputs) + len(mech.actuators)
+                names = ", ".join(a.name for a in mech.actuators)
+                what += f" and {len(mech.actuators)} actuator(s) ({names})"
             raise self.error(
-                f"{count} input(s) (input hinges: {given}) but the mobility is {dof}: "
-                f"Grübler {formula}",
+                f"{what} but the mobility is {dof}: Grübler {formula}",
                 "input",
                 None,
                 f"mark exactly {dof} hinge(s) with input = true"
