@@ -33,7 +33,7 @@ from ..model.mechanism import Mechanism, check_values
 from ..physics import equilibrium as physical_equilibrium
 from ..physics import model_error as physical_model_error
 from ..physics import statics
-from ..physics.result import HingeLoad, InputLoad, PlateStress
+from ..physics.result import ActuatorLoad, HingeLoad, InputLoad, PlateStress
 
 #: The mpmath evaluation of the derivation, then the generated-code backends (their registry).
 BACKENDS = ("sympy", *pipeline.BACKENDS)
@@ -138,6 +138,8 @@ class Evaluation:
     # rigidly), every plate's largest stress, and with loads their first buckling factor
     # (math.inf: none up to physics.equilibrium.BUCKLING_LIMIT) and the hinge that buckles.
     actuation: dict[str, InputLoad] = field(default_factory=dict)
+    # every actuator's stroke, force and dF/ds (docs/physics.md)
+    actuators: dict[str, ActuatorLoad] = field(default_factory=dict)
     stiffness: dict[str, list | None] = field(default_factory=dict)
     plates: dict[str, PlateStress] = field(default_factory=dict)
     buckling: float | None = None
@@ -166,6 +168,11 @@ class Evaluation:
                 physical["inputs"] = {
                     name: {"angle": a.angle, "moment": a.moment, "stiffness": a.stiffness}
                     for name, a in self.actuation.items()
+                }
+            if self.actuators:
+                physical["actuators"] = {
+                    name: {"stroke": a.stroke, "force": a.force, "stiffness": a.stiffness}
+                    for name, a in self.actuators.items()
                 }
             if self.stiffness:
                 physical["stiffness"] = dict(self.stiffness)
@@ -301,14 +308,14 @@ def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity:
             entry=f"[[actuator]] '{forces[0].name}'",
             hint='ask for --level equilibrium, or make it drive = "stroke"',
         )
-    if levels.get(level).needs_stiffness:
-        taker = "" if level == "equilibrium" else "; the equilibrium level will take it"
+    if levels.get(level).needs_stiffness and level != "equilibrium":
         raise InputError(
-            f"the {level} level does not take actuators yet (actuator '{first.name}'){taker}",
+            f"the {level} level does not take actuators yet (actuator '{first.name}'); the "
+            "equilibrium level takes it",
             file=mech.path,
             entry=entry,
-            hint="evaluate a stroke actuator at --level paper, first_order or exact, or drive "
-            "the mechanism by an input hinge",
+            hint="ask for --level equilibrium (or a stroke at paper, first_order or exact), or "
+            "drive the mechanism by an input hinge",
         )
     if backend != "sympy":
         raise InputError(
@@ -343,6 +350,8 @@ def _actuated(
     compliant point has; the deviation is compliant - rigid, each taken at its own angle."""
     mech = analysis.mechanism
     check_actuated_level(mech, level, backend, sensitivity)
+    if level == "equilibrium":
+        return equilibrium(analysis, inputs, params)
     given = actuator_values(mech, inputs)
     hinges = {k: v for k, v in given.items() if k not in {a.name for a in mech.actuators}}
     strokes = [given[a.name] for a in mech.actuators]
@@ -1030,17 +1039,42 @@ class _Mpmath:
         extra_digits: int = 0,
     ) -> Evaluation:
         """The `equilibrium` level (symkin.physics.equilibrium), against this rigid linkage."""
-        an = self.an
-        given = input_values(an, inputs)
-        exact_params = parameter_values(self.mechanism, params)
+        an, mech = self.an, self.mechanism
         names = {a: h.name for a, h in self.kin.hinges.items()}
+        labels = {n: a for a, n in names.items()}
+        driven = {a.name for a in mech.actuators}
+        if mech.actuators:
+            drives = actuator_values(mech, inputs)
+            given = {labels[n]: v for n, v in drives.items() if n not in driven}
+            acting = {n: v for n, v in drives.items() if n in driven}
+        else:
+            given, acting = input_values(an, inputs), {}
+        exact_params = parameter_values(self.mechanism, params)
         args = [*an.params, *an.thetas]
 
-        def rigid(dps: int) -> tuple[dict, dict]:
-            """Rigid hinge angles and point positions at `dps` digits (exit 3 out of range)."""
+        def rigid(dps: int, strokes: Mapping[str, object]) -> tuple[dict, dict]:
+            """Rigid hinge angles and point positions at `dps` digits (exit 3 out of range), the
+            actuators at `strokes` (docs/levels.md, "Actuators")."""
+            surrogates = {}
+            if mech.actuators:
+                found = _stroke_angles(
+                    self,
+                    mech,
+                    {names[a]: v for a, v in given.items()},
+                    [
+                        sp.Float(mpmath.nstr(strokes[a.name], dps + 5), dps + 5)
+                        for a in mech.actuators
+                    ],
+                    "paper",
+                    params,
+                    dps,
+                    compliant=False,
+                )
+                surrogates = {labels[n]: v for n, v in found.items()}
             with mpmath.workdps(dps):
                 pvals = [mpmath.mpf(sp.N(exact_params[s], dps + 5)) for s in an.params]
                 ivals = {a: mpmath.mpf(sp.N(v, dps + 5)) for a, v in given.items()}
+                ivals |= {a: mpmath.mpf(v) for a, v in surrogates.items()}
                 theta, _ = self._rigid_angles(pvals, ivals)
                 at = [*pvals, *(theta[a] for a in sorted(theta))]
                 return (
@@ -1057,7 +1091,7 @@ class _Mpmath:
             res = physical_equilibrium.solve(
                 self.mechanism,
                 exact_params,
-                {names[a]: v for a, v in given.items()},
+                {names[a]: v for a, v in given.items()} | acting,
                 rigid,
                 extra_digits,
             )
@@ -1073,9 +1107,9 @@ class _Mpmath:
                 "along the plates undetermined (a singular system)"
             ) from None
         buckling = None
-        if self.mechanism.loads:
+        if self.mechanism.loads or any(a.drive == "force" for a in mech.actuators):
             buckling = physical_equilibrium.buckling_factor(
-                self.mechanism, exact_params, {names[a]: v for a, v in given.items()}
+                self.mechanism, exact_params, {names[a]: v for a, v in given.items()} | acting
             )
         order = [names[a] for a in sorted(names)]
         with mpmath.workdps(20):
@@ -1087,14 +1121,33 @@ class _Mpmath:
                 *(mpmath.mpf(res.angle_deviations[names[a]]) for a in self.kin.unknowns),
             ]
             links = self._links(an, "exact", "equilibrium:", [*args, *an.deltas], values)
+            if mech.actuators:
+                # the surrogates turn too (they are not held): each link's deviation is the
+                # sum of its direct path's angle deviations, the surrogates' included
+                kin, s = self.kin, an.structure
+                for i in range(s.n + 1):
+                    dev = math.fsum(
+                        kin.hinges[b].sign * res.angle_deviations[names[b]] for b in s.tree_path(i)
+                    )
+                    rigid_i = links[s.links[i]].rigid
+                    links[s.links[i]] = LinkResult(rigid_i, rigid_i + dev, dev)
         result = Evaluation(
             level="equilibrium",
             backend="sympy",
-            inputs={names[a]: float(sp.N(given[a], 20)) for a in sorted(given)},
+            inputs={names[a]: float(sp.N(given[a], 20)) for a in sorted(given)}
+            | {n: float(sp.N(v, 20)) for n, v in acting.items()},
             angles_rigid={n: res.angles_rigid[n] for n in order},
             angles_compliant={n: res.angles_compliant[n] for n in order},
-            points={n: PointResult(*res.points[n]) for n in res.points},
-            dyads=self.dyad_states(inputs, params),
+            points={
+                n: PointResult(*res.points[n])
+                for n in res.points
+                if n not in {a.point for a in mech.actuators}
+            },
+            # the rigid linkage's dyads: with actuators, at its surrogates' angles
+            dyads=self.dyad_states(
+                {n: res.angles_rigid[n] for n in mech.inputs} if mech.actuators else inputs,
+                params,
+            ),
             params=parameter_floats(self.mechanism, exact_params),
             overrides=tuple(params or ()),
             hinges={n: res.hinges[n] for n in order},
@@ -1102,7 +1155,10 @@ class _Mpmath:
             error_estimate=res.error_estimate,
             links=links,
             actuation=res.inputs,
-            stiffness=res.stiffness,
+            actuators=res.actuators,
+            stiffness={
+                n: k for n, k in res.stiffness.items() if n not in {a.point for a in mech.actuators}
+            },
             plates=res.plates,
             buckling=None if buckling is None else buckling.factor,
             buckling_hinge=None if buckling is None else buckling.hinge,
