@@ -745,7 +745,10 @@ class _Reader:
         self.check_connected(mech)
         check_values(mech, self.defaults)
         # after the values: the rank reads the hinge positions (two pins on one spot, say)
-        return self.check_mobility(mech)
+        if mech.actuators and len(mech.drives) == mech.mobility and closure_rank(mech):
+            mech = self.with_surrogates(mech)
+        self.check_mobility(mech)
+        return mech
 
     def parameters(self, table: object) -> tuple[Parameter, ...]:
         if not isinstance(table, dict):
@@ -1416,11 +1419,11 @@ class _Reader:
                 "add the missing hinge or remove the link",
             )
 
-    def check_mobility(self, mech: Mechanism) -> Mechanism:
+    def check_mobility(self, mech: Mechanism) -> None:
         """The inputs (input hinges and actuators) number the mobility and fix the pose
         (docs/levels.md, "Redundant loops"): Grübler's count, corrected by the rank of the
-        closure Jacobian at the as-fabricated pose when some loop constraints are dependent.
-        Returns the mechanism with the actuators' surrogate hinges chosen (marked as inputs)."""
+        closure Jacobian at the as-fabricated pose when some loop constraints are dependent
+        (the actuators' surrogate hinges, once chosen, stand for them)."""
         n, m = len(mech.links) - 1, len(mech.hinges)
         rank = closure_rank(mech)
         formula = f"3n - 2m = 3*{n} - 2*{m} = {mech.grubler}, with {mech.loop_count} loop(s)"
@@ -1438,9 +1441,10 @@ class _Reader:
                 None,
                 "remove hinges or add links",
             )
-        if len(mech.inputs) + len(mech.actuators) != dof:
-            given = ", ".join(mech.inputs) or "none"
-            what = f"{len(mech.inputs)} input hinge(s) ({given})"
+        if len(mech.drives) != dof:
+            hinges = [n for n in mech.inputs if n not in mech.surrogates]
+            given = ", ".join(hinges) or "none"
+            what = f"{len(hinges)} input hinge(s) ({given})"
             if mech.actuators:
                 names = ", ".join(a.name for a in mech.actuators)
                 what += f" and {len(mech.actuators)} actuator(s) ({names})"
@@ -1457,9 +1461,6 @@ class _Reader:
                     else ""
                 ),
             )
-        if mech.actuators and rank is not None:
-            mech = self.with_surrogates(mech)
-            rank = closure_rank(mech)
         if rank is not None and rank.dependent:
             dependent = rank.dependent
             inputs = ", ".join(mech.inputs)
@@ -1490,8 +1491,6 @@ class _Reader:
                 + " as input instead of "
                 + (dependent[0] if len(dependent) == 1 else f"one of {', '.join(dependent)}"),
             )
-
-        return mech
 
     def with_surrogates(self, mech: Mechanism) -> Mechanism:
         """Refuse actuators that do not drive the mechanism (with the input hinges they must
