@@ -50,9 +50,9 @@ class Shape:
     def of(cls, p: Plan, links: bool = True) -> Shape:
         """The shape of plan `p`'s evaluator; `links=False` leaves the links' rotations out."""
         return cls(
-            p.inputs,
+            p.drives or p.inputs,
             tuple(q.name for q in p.parameters),
-            p.points,
+            p.shown_points,
             p.hinges,
             p.reported_links if links else (),
         )
@@ -203,6 +203,12 @@ def _numpy_sensitivity_rows(
 def _emit_c(p: Plan, source: str, precision: str) -> tuple[str, ...]:
     from .backends.c import backend
 
+    if p.actuators:
+        raise InputError(
+            f"the generated C does not take actuators yet (actuator '{p.actuators[0][0]}')",
+            entry="--emit",
+            hint="emit the numpy module (--emit numpy, --backend numpy)",
+        )
     return backend.emit(p, source)
 
 
@@ -333,7 +339,6 @@ def _key(value: object) -> object:
 def plan_for(analysis: Analysis, **options: Any) -> Plan:
     """:func:`~.plan.plan` of `analysis` with `options`, derived once per analysis and options
     (kept as long as the analysis is)."""
-    analysis.mechanism.refuse_actuators("the generated code")
     bound = _PLAN_SIGNATURE.bind(analysis, **options)
     bound.apply_defaults()  # plan(an) and plan(an, sensitivity=True) are one plan
     key = tuple((k, _key(v)) for k, v in bound.arguments.items() if k != "analysis")

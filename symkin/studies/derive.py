@@ -113,6 +113,17 @@ def generate_plan(
     from .evaluation import check_fabricated_pose, fixed_angles
 
     say = progress or (lambda message: None)
+    if mech.actuators:
+        # the generated numpy module takes stroke actuators (docs/levels.md, "Actuators")
+        for what, unsupported in (
+            ("the generated C (derive --emit c)", "c" in emit),
+            ("the LaTeX report (derive --emit latex)", "latex" in emit),
+            ("derive --points", points is not None),
+            ("derive --fix", bool(fixed)),
+            ("a variant (derive --tolerance)", variant is not None),
+        ):
+            if unsupported:
+                mech.refuse_actuators(what)
     source = Path(mech.path).name
     precision = variant.precision if variant is not None else "float64"
     held = fixed_angles(mech, fixed)

@@ -317,13 +317,14 @@ def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity:
             hint="ask for --level equilibrium (or a stroke at paper, first_order or exact), or "
             "drive the mechanism by an input hinge",
         )
-    if backend != "sympy":
+    if backend not in ("sympy", "numpy") or (backend != "sympy" and forces):
         raise InputError(
-            f"the generated {backend} evaluators do not take actuators yet (actuator "
-            f"'{first.name}')",
+            f"the generated {backend} evaluators do not take "
+            + ("force actuators" if forces else "actuators")
+            + f" yet (actuator '{(forces or [first])[0].name}')",
             file=mech.path,
             entry=entry,
-            hint="use --backend sympy",
+            hint="use --backend sympy" + ("" if forces else " or numpy"),
         )
     if sensitivity:
         raise InputError(
@@ -350,6 +351,8 @@ def _actuated(
     compliant point has; the deviation is compliant - rigid, each taken at its own angle."""
     mech = analysis.mechanism
     check_actuated_level(mech, level, backend, sensitivity)
+    if backend != "sympy":  # the generated module solves the strokes itself
+        return _generated(analysis, inputs, level, params, backend)
     if level == "equilibrium":
         return equilibrium(analysis, inputs, params)
     given = actuator_values(mech, inputs)
@@ -1487,10 +1490,15 @@ def _generated(
             entry="--backend",
             hint="evaluate it with --backend sympy",
         )
-    given = input_values(analysis, inputs)
-    kin = analysis.kin
-    names = [kin.hinges[a].name for a in kin.inputs]
-    x = [float(sp.N(given[a], 20)) for a in kin.inputs]
+    kin, mech = analysis.kin, analysis.mechanism
+    if mech.actuators:
+        drives = actuator_values(mech, inputs)
+        names = list(mech.drives)
+        x = [float(sp.N(drives[n], 20)) for n in names]
+    else:
+        given = input_values(analysis, inputs)
+        names = [kin.hinges[a].name for a in kin.inputs]
+        x = [float(sp.N(given[a], 20)) for a in kin.inputs]
     pvals = parameter_values(analysis.mechanism, params)
     pfloat = [float(sp.N(pvals[s], 20)) for s in analysis.params]
     p, ev = pipeline.build(analysis, backend, analysis.mechanism.path, sensitivity=sensitivity)
@@ -1512,7 +1520,7 @@ def _generated(
             (out[6 * i + 2], out[6 * i + 3]),
             (out[6 * i + 4], out[6 * i + 5]),
         )
-        for i, n in enumerate(p.points)
+        for i, n in enumerate(shape.points)
     }
     m = len(hinges)
     rigid = dict(zip(hinges, angles[:m]))
@@ -1532,7 +1540,9 @@ def _generated(
         angles_rigid={h: rigid[h] for h in sorted(rigid, key=order.get)},
         angles_compliant={h: compliant[h] for h in sorted(compliant, key=order.get)},
         points=points,
-        dyads=_mpmath_evaluator(analysis).dyad_states(inputs, params),
+        dyads=_mpmath_evaluator(analysis).dyad_states(
+            {n: rigid[n] for n in mech.inputs} if mech.actuators else inputs, params
+        ),
         params=parameter_floats(analysis.mechanism, pvals),
         overrides=tuple(params or ()),
         links=links,
