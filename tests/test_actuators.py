@@ -103,7 +103,7 @@ def parallelogram_reference(s: float, level: str) -> dict:
         return {"rigid": rigid, "compliant": compliant, "q_r": q_r, "q_c": q_c}
 
 
-@pytest.mark.parametrize("backend", ["sympy", "numpy"])
+@pytest.mark.parametrize("backend", ["sympy", "numpy", "c"])
 @pytest.mark.parametrize("level", KINEMATIC)
 @pytest.mark.parametrize("s", [2e-3, -1e-4, 2e-5])
 def test_parallelogram_stroke_against_closed_form(parallelogram, level, s, backend):
@@ -180,7 +180,7 @@ def test_four_bar_stroke_against_reference_solver(four_bar, s):
     _, an = four_bar
     rigid = four_bar_reference(s, "rigid")
     compliant = four_bar_reference(s, None)
-    for backend in ("sympy", "numpy"):
+    for backend in ("sympy", "numpy", "c"):
         check_four_bar(
             symkin.evaluate(an, {"pusher": s}, "exact", backend=backend), rigid, compliant
         )
@@ -206,9 +206,8 @@ def check_four_bar(ev, rigid: dict, compliant: dict) -> None:
 
 def test_what_does_not_take_actuators_yet_is_refused(parallelogram, tmp_path):
     mech, an = parallelogram
-    for level, backend in (("loaded", "sympy"), ("exact", "c")):
-        with pytest.raises(InputError, match="piezo"):
-            symkin.evaluate(an, {"piezo": 1e-3}, level, backend=backend)
+    with pytest.raises(InputError, match="piezo"):
+        symkin.evaluate(an, {"piezo": 1e-3}, "loaded")
     with pytest.raises(InputError, match="no generated evaluator"):
         symkin.evaluate(an, {"piezo": 1e-3}, "equilibrium", backend="numpy")
     with pytest.raises(InputError, match="piezo"):
@@ -253,9 +252,10 @@ def test_cli_check_and_eval(tmp_path):
 
 
 def test_generated_numpy_module_takes_the_strokes(tmp_path):
-    """derive --emit numpy: the module's INPUTS are the actuators, its POINTS the file's; on an
-    array of strokes it gives what the sympy backend gives one stroke at a time; the C and the
-    report are refused, naming the actuator."""
+    """derive --emit numpy,c: the numpy module's INPUTS are the actuators, its POINTS the
+    file's; on an array of strokes it gives what the sympy backend gives one stroke at a time
+    (the C: test_parallelogram_stroke_against_closed_form); the report is refused, naming the
+    actuator."""
     import importlib.util
 
     import numpy as np
@@ -263,10 +263,13 @@ def test_generated_numpy_module_takes_the_strokes(tmp_path):
     path = tmp_path / "stage.toml"
     path.write_text(stroke_driven(PARALLELOGRAM, "F1", PIEZO))
     run = [sys.executable, "-m", "symkin", "derive", str(path), "-o", str(tmp_path / "out")]
-    out = subprocess.run([*run, "--emit", "numpy"], capture_output=True, text=True)
+    out = subprocess.run([*run, "--emit", "numpy,c"], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
+    header = (tmp_path / "out" / "parallelogram.h").read_text()
+    assert "#define PARALLELOGRAM_N_INPUTS 1" in header and "_N_POINTS 1" in header
+    assert "parallelogram_sensitivity" not in header
     refused = subprocess.run(run, capture_output=True, text=True)
-    assert refused.returncode == 2 and "piezo" in refused.stderr and "C" in refused.stderr
+    assert refused.returncode == 2 and "piezo" in refused.stderr and "LaTeX" in refused.stderr
     spec = importlib.util.spec_from_file_location("stage", tmp_path / "out" / "parallelogram.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)

@@ -203,12 +203,6 @@ def _numpy_sensitivity_rows(
 def _emit_c(p: Plan, source: str, precision: str) -> tuple[str, ...]:
     from .backends.c import backend
 
-    if p.actuators:
-        raise InputError(
-            f"the generated C does not take actuators yet (actuator '{p.actuators[0][0]}')",
-            entry="--emit",
-            hint="emit the numpy module (--emit numpy, --backend numpy)",
-        )
     return backend.emit(p, source)
 
 

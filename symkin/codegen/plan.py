@@ -216,7 +216,7 @@ def plan(
         and not (mech.actuators and lv.needs_stiffness)
     )
     held = _fixed_angles(an, fixed or {})
-    sensitivity = sensitivity and not held
+    sensitivity = sensitivity and not held and not mech.actuators  # none with actuators yet
     free = tuple(a for a in kin.inputs if a not in held)
     inputs = Argument("inputs", tuple(kin.theta[a] for a in free))
     params = Argument("params", an.params)

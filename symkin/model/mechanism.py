@@ -264,8 +264,8 @@ class Mechanism:
                 f"{what} does not take actuators yet (actuator '{a.name}')",
                 file=self.path,
                 entry=f"[[actuator]] #{a.index + 1} '{a.name}'",
-                hint="evaluate it with symkin eval at --level paper, first_order or exact "
-                "(--backend sympy), or drive the mechanism by an input hinge",
+                hint="evaluate it with symkin eval (a stroke at --level paper, first_order or "
+                "exact; a stroke or a force at equilibrium), or derive --emit numpy,c",
             )
 
     @cached_property

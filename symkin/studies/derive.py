@@ -114,9 +114,8 @@ def generate_plan(
 
     say = progress or (lambda message: None)
     if mech.actuators:
-        # the generated numpy module takes stroke actuators (docs/levels.md, "Actuators")
+        # the generated numpy and C take stroke actuators (docs/levels.md, "Actuators")
         for what, unsupported in (
-            ("the generated C (derive --emit c)", "c" in emit),
             ("the LaTeX report (derive --emit latex)", "latex" in emit),
             ("derive --points", points is not None),
             ("derive --fix", bool(fixed)),

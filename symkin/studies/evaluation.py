@@ -317,7 +317,7 @@ def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity:
             hint="ask for --level equilibrium (or a stroke at paper, first_order or exact), or "
             "drive the mechanism by an input hinge",
         )
-    if backend not in ("sympy", "numpy") or (backend != "sympy" and forces):
+    if backend not in ("sympy", *pipeline.REGISTRY) or (backend != "sympy" and forces):
         raise InputError(
             f"the generated {backend} evaluators do not take "
             + ("force actuators" if forces else "actuators")

@@ -64,6 +64,7 @@ class Backend:
             "shown_points": list(plan.shown_points),
             "drives": list(plan.drives),
             "actuators": list(plan.actuators),
+            "actuator_tables": actuator_tables(plan),
             "links": list(plan.reported_links),
             "levels": plan.levels,
             "all_levels": levels.LEVELS,
@@ -315,4 +316,22 @@ def scene_context(plan: ScenePlan) -> dict:
             for g in plan.groups
         ],
         "variants": {p: g.variant for g in plan.groups for p in g.points},
+    }
+
+
+def actuator_tables(plan: Plan) -> dict | None:
+    """The C tables of a mechanism's actuators (templates/c/actuators.c, sk_actuators): per
+    kinematic input its public input's position or -1 - a (the surrogate of actuator a), per
+    actuator its point's position among the points and its stroke's among the public inputs, its
+    direction, and the positions of the reported points. None without actuators."""
+    if not plan.actuators:
+        return None
+    drives, names = list(plan.drives), [a[0] for a in plan.actuators]
+    surrogates = {a[1]: k for k, a in enumerate(plan.actuators)}
+    return {
+        "drive_of": [drives.index(n) if n in drives else -1 - surrogates[n] for n in plan.inputs],
+        "point": [plan.points.index(a[2]) for a in plan.actuators],
+        "stroke": [drives.index(n) for n in names],
+        "direction": [repr(float(c)) for a in plan.actuators for c in a[3]],
+        "shown": [plan.points.index(p) for p in plan.shown_points],
     }
