@@ -145,8 +145,8 @@ def test_stroke_and_hinge_driven_parallelogram_reach_the_same_pose(parallelogram
     assert float(ref["q_r"]) == pytest.approx(-s / 0.040, rel=(s / 0.040) ** 2)
 
 
-def rocker_point(solution: dict, at: tuple) -> tuple:
-    x, y, phi = solution["poses"]["rocker"]
+def rocker_point(solution: dict, at: tuple, link: str = "rocker") -> tuple:
+    x, y, phi = solution["poses"][link]
     c, s = mpmath.cos(phi), mpmath.sin(phi)
     return (x + c * at[0] - s * at[1], y + s * at[0] + c * at[1])
 
@@ -355,3 +355,41 @@ def test_equilibrium_stroke_rigid_reference_is_the_kinematic_one(parallelogram):
     # deviation along x of P is the stage's rotation times P's height above that point
     phi = ev.links["stage"].compliant
     assert ev.points["P"].deviation[0] == pytest.approx(-0.010 * math.sin(phi), rel=1e-6)
+
+
+def test_piezo_amplifier_example_against_reference_solver():
+    """examples/piezo_amplifier.toml (a Scott-Russell amplifier pushed by a piezo on its
+    slider) at the rigid level against the oracle driven by the slider's hinge RA0 at the angle
+    where the piezo's point (39.392, -40) mm has moved by the stroke along -x (secant method);
+    the output B rises by about 27 times the stroke."""
+    mech = symkin.load(ROOT / "examples" / "piezo_amplifier.toml")
+    text = (ROOT / "examples" / "piezo_amplifier.toml").read_text()
+    hinged = symkin.loads(
+        text.rsplit("[[actuator]]", 1)[0].replace(
+            'plate_angle = "pi/2"\n', 'plate_angle = "pi/2"\ninput = true\n', 1
+        ),
+        "hinged.toml",
+    )
+    assert hinged.inputs == ("RA0",)
+    ref = Reference(hinged)
+    s = mpmath.mpf("0.02")
+    with mpmath.workdps(40):
+        at = (40 * mpmath.cos(mpmath.pi / 18), mpmath.mpf(-40))
+
+        def stroke(q):
+            sol = ref.solve({"RA0": q}, model_override="rigid", dps=40)
+            return -(rocker_point(sol, at, "slider")[0] - at[0]) - s, sol
+
+        q0, q1 = mpmath.mpf(0), mpmath.mpf("0.001")
+        f0, f1 = stroke(q0)[0], stroke(q1)[0]
+        while abs(f1) > mpmath.mpf(10) ** -30:
+            q0, q1 = q1, q1 - f1 * (q1 - q0) / (f1 - f0)
+            f0, (f1, sol) = f1, stroke(q1)
+    an = symkin.analyze(mech)
+    b0 = 2 * 20 * math.sin(math.radians(10))
+    for backend in ("sympy", "numpy", "c"):
+        ev = symkin.evaluate(an, {"piezo": 0.02}, "exact", backend=backend)
+        for i in range(2):
+            assert ev.points["B"].rigid[i] == pytest.approx(float(sol["points"]["B"][i]), abs=1e-12)
+        assert ev.angles_rigid["RA0"] == pytest.approx(float(q1), rel=1e-12)
+    assert 25 < (ev.points["B"].rigid[1] - b0) / 0.02 < 29

@@ -1550,6 +1550,8 @@ def surrogate_hinges(mech: Mechanism) -> tuple[str, ...] | Actuator:
             if trial > rank:
                 held, rank = held + [turn_of(h)], trial
                 chosen.append(h.name)
+    if len(chosen) < len(mech.actuators):  # no hinge left that the strokes could stand for
+        return mech.actuators[len(chosen)]
     return tuple(chosen)
 
 

@@ -116,7 +116,6 @@ def generate_plan(
     if mech.actuators:
         # the generated numpy and C take stroke actuators (docs/levels.md, "Actuators")
         for what, unsupported in (
-            ("the LaTeX report (derive --emit latex)", "latex" in emit),
             ("derive --points", points is not None),
             ("derive --fix", bool(fixed)),
             ("a variant (derive --tolerance)", variant is not None),
