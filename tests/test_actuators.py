@@ -393,3 +393,30 @@ def test_piezo_amplifier_example_against_reference_solver():
             assert ev.points["B"].rigid[i] == pytest.approx(float(sol["points"]["B"][i]), abs=1e-12)
         assert ev.angles_rigid["RA0"] == pytest.approx(float(q1), rel=1e-12)
     assert 25 < (ev.points["B"].rigid[1] - b0) / 0.02 < 29
+
+
+def test_report_sweeps_the_stroke(tmp_path):
+    """The report's deviation plot sweeps the actuator's stroke (derive --range sets it), in
+    the file's unit, and states which hinge's angle the stroke fixes."""
+    out = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "symkin",
+            "derive",
+            str(ROOT / "examples" / "piezo_amplifier.toml"),
+            "--emit",
+            "latex",
+            "--range",
+            "piezo=0:0.05",
+            "-o",
+            str(tmp_path),
+        ],
+        capture_output=True,
+        text=True,
+    )
+    assert out.returncode == 0, out.stderr
+    tex = (tmp_path / "piezo_amplifier.tex").read_text()
+    assert r"stroke of piezo from $0$ to $0.05$~$\mathrm{mm}$" in tex
+    assert "the actuator piezo pushes its link" in tex and "(RA0)" in tex
+    assert "@piezo" not in tex

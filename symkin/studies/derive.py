@@ -133,7 +133,7 @@ def generate_plan(
     if spans:
         # the report sweeps the evaluator's own inputs; a --range over another cannot be
         # plotted (with --tolerance, the ranges were the measurement's and are dropped)
-        swept = [k for k in mech.inputs if k not in held]
+        swept = [k for k in mech.drives if k not in held]
         other = [k for k in spans if k not in swept]
         if other and variant is None:
             k = other[0]
@@ -277,7 +277,7 @@ def derive(
                 entry="--range",
                 hint="add --tolerance TOL or --emit latex, or drop --range",
             )
-        spans = tradeoff.parse_ranges(ranges, mech.inputs, mech.path, default=None)
+        spans = tradeoff.parse_ranges(ranges, mech.drives, mech.path, default=None)
     files = generate(
         mech, emit, points, levels, appendix, progress, variant, notes, column_width, spans, fixed
     )
