@@ -750,9 +750,15 @@ def solve(
     strokes by name (a force actuator's: the stroke its force produced). `extra_digits` raises
     the working precision (to check the error estimate)."""
     stiffness = plate_stiffness(mech, "equilibrium")
+    # the rigid linkage first (exit 3 out of its range before any continuation), unless a
+    # force actuator's stroke is only known from the equilibrium
+    forces = any(a.drive == "force" for a in mech.actuators)
+    if not forces:
+        _, rigid_points = rigid(20, {a.name: inputs[a.name] for a in mech.actuators})
     system = build(mech, values, inputs, stiffness, _float)
     u, jac = continuation(system, "the equilibrium", mech.path, mech.units)
-    _, rigid_points = rigid(20, _strokes(system, u))
+    if forces:
+        _, rigid_points = rigid(20, _strokes(system, u))
     # The digits the deviation loses against the positions decide the working precision.
     span = float(system.L)
     smallest = min(

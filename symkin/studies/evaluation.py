@@ -1064,10 +1064,7 @@ class _Mpmath:
                     self,
                     mech,
                     {names[a]: v for a, v in given.items()},
-                    [
-                        sp.Float(mpmath.nstr(strokes[a.name], dps + 5), dps + 5)
-                        for a in mech.actuators
-                    ],
+                    [sp.N(sp.sympify(strokes[a.name]), dps + 5) for a in mech.actuators],
                     "paper",
                     params,
                     dps,
