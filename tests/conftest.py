@@ -1,11 +1,31 @@
-"""Shared fixtures: paths of the project and its examples."""
+"""Shared fixtures: paths of the project and its examples, and work done once per run."""
 
 from __future__ import annotations
 
+import fcntl
+import os
+from collections.abc import Callable
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"
+
+
+def once_per_run(tmp_path_factory, name: str, build: Callable[[Path], None]) -> Path:
+    """A folder that build(folder) filled once in this test run: under xdist the first worker to
+    ask builds it (the others wait on a lock, then read it), so a module fixture whose tests land
+    on several workers is computed once, not once per worker."""
+    root = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        root = root.parent  # the run's folder, shared by its workers
+    folder = root / f"once-{name}"
+    with open(root / f"once-{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+        if not (folder / ".done").exists():
+            folder.mkdir(exist_ok=True)
+            build(folder)
+            (folder / ".done").touch()
+    return folder
 
 
 def pytest_addoption(parser):
@@ -18,24 +38,29 @@ def pytest_addoption(parser):
 
 
 #: The slowest tests (node id prefixes, slowest first; measured with --durations). Under xdist
-#: (`-n auto` in pyproject's addopts) they are handed out first, so the run does not end with
-#: one worker busy on a long test while the others idle.
+#: (`-n auto` in pyproject's addopts) they are handed out first, so the run does not end with one
+#: worker busy on a long test while the others idle. test_scene's derived scene and
+#: test_tradeoff's table are built once per run (once_per_run), whichever worker asks first.
 SLOW_FIRST = (
-    "tests/test_generated.py::test_generated_matches_derive[nine_bar_platform]",
-    "tests/test_latex.py::test_appendix_fits_a_two_column_paper[nine_bar_platform]",
-    "tests/test_latex.py::test_byte_identical_across_processes_and_hash_seeds",
-    "tests/test_fuzz.py::test_fuzzed_mechanisms_never_crash",
-    "tests/test_latex.py::test_files_header_and_figures[stephenson_six_bar]",
-    "tests/test_latex.py::test_files_header_and_figures[four_bar]",
-    "tests/test_namespaces.py::test_parameters_named_like_internal_symbols",
-    "tests/test_latex.py::test_tolerance_choice_is_in_the_rendered_report",
-    "tests/test_packaging.py::test_readme_first_command_in_a_fresh_venv",
     "tests/test_scale.py",
-    "tests/test_angle_tracking.py::test_every_backend_follows_the_oracle_over_the_input_range",
-    "tests/test_latex.py::test_two_reports_input_into_one_paper",
-    "tests/test_pruning.py::test_kept_hinges_are_exactly_those_that_move_the_points",
+    "tests/test_structure_properties.py::test_structure_identities",
+    "tests/test_namespaces.py::test_parameters_named_like_internal_symbols",
     "tests/test_scene.py",
+    "tests/test_packaging.py::test_readme_first_command_in_a_fresh_venv",
+    "tests/test_pruning.py::test_kept_hinges_are_exactly_those_that_move_the_points",
+    "tests/test_latex.py::test_appendix_fits_a_two_column_paper[nine_bar_platform]",
+    "tests/test_latex.py::test_files_header_and_figures[nine_bar_platform]",
+    "tests/test_latex.py::test_byte_identical_across_processes_and_hash_seeds",
+    "tests/test_tradeoff.py",
+    "tests/test_generated.py::test_generated_matches_derive[nine_bar_platform]",
+    "tests/test_fuzz.py::test_fuzzed_mechanisms_never_crash",
+    "tests/test_angle_tracking.py::test_every_backend_follows_the_oracle_over_the_input_range",
     "tests/test_imports.py::test_every_module_has_a_floor",
+    "tests/test_latex.py::test_two_reports_input_into_one_paper",
+    "tests/test_files_and_cache.py::test_a_planted_or_corrupt_library_is_rebuilt_not_loaded",
+    "tests/test_sensitivity.py::test_every_backend_against_central_differences",
+    "tests/test_latex.py::test_files_header_and_figures",
+    "tests/test_latex.py::test_tolerance_choice_is_in_the_rendered_report",
     "tests/test_files_and_cache.py::test_killed_derive_leaves_old_or_new_files",
     "tests/test_hinge_models.py::test_elastica_carlson_equals_legendre_rewrite",
     "tests/test_codegen.py::test_derive_is_deterministic_across_hash_seeds",

@@ -39,6 +39,10 @@ static void t_rigid_res(const double *theta, const double *params, double *out)
 {
     out[0] = theta[1] - params[0] * theta[0];
     out[1] = theta[1] + theta[2] - theta[0];
+    out[2] = 1.0;                               /* A */
+    out[3] = 0.0;
+    out[4] = 1.0;
+    out[5] = 1.0;
 }
 
 static void t_linear(const double *theta, const double *params, double *out)

@@ -275,3 +275,29 @@ def test_hostile_names_give_safe_compiling_code(tmp_path):
     lib = pipeline.evaluator(p, "c", "x*/y.toml", links=False)
     status, out, _ = lib.evaluate([0.2], None, 2)
     assert status == 0 and rel_err(out[4:6], want) <= 1e-12
+
+
+@pytest.mark.parametrize("key", ["four_bar", "nine_bar", "triad"])
+def test_rigid_res_carries_the_jacobian_of_its_residual(key):
+    """rigid_res is the rigid Newton's whole system: its residual, then A, which must be the
+    residual's own derivative by the unknown angles (differentiated here, not taken from the
+    plan's `linear`), at a pose away from the as-fabricated one."""
+    import sympy as sp
+
+    g = generated(key)
+    p = g.plan
+    r = p.routines["rigid_res"]
+    theta = r.arguments[0].symbols
+    assert [b.name for b in r.blocks] == ["residual", "A"]
+    outputs = list(r.outputs)
+    for symbol, expr in reversed(r.assignments):  # the CSE undone: each in terms of theta
+        outputs = [o.xreplace({symbol: expr}) for o in outputs]
+    k = len(p.unknown_index)
+    residual = sp.Matrix(outputs[:k])
+    want = residual.jacobian([theta[i] for i in p.unknown_index])
+    rng = np.random.default_rng(3)
+    values = {s: float(v) for s, v in zip(theta, rng.uniform(-0.4, 0.4, len(theta)))}
+    values |= {q.symbol: q.value for q in p.parameters}
+    got = np.array([float(e.subs(values)) for e in outputs[k:]])
+    ref = np.array([float(e.subs(values)) for e in want])
+    assert np.abs(got - ref).max() <= 1e-12 * max(1.0, np.abs(ref).max())

@@ -300,7 +300,9 @@ def test_other_models_and_topologies_compile(key, tmp_path):
 # -- determinism ---------------------------------------------------------------------------------
 
 
-def test_byte_identical_across_processes_and_hash_seeds(reports, tmp_path):
+@pytest.mark.parametrize("example", EXAMPLE_NAMES)
+def test_byte_identical_across_processes_and_hash_seeds(reports, tmp_path, example):
+    # one example per test (one process each): xdist spreads them over its workers
     seed = "271828" if os.environ.get("PYTHONHASHSEED") != "271828" else "314159"
     script = (
         "import sys, pathlib, symkin\n"
@@ -314,15 +316,14 @@ def test_byte_identical_across_processes_and_hash_seeds(reports, tmp_path):
     )
     env = dict(os.environ, PYTHONHASHSEED=seed)
     subprocess.run(
-        [sys.executable, "-c", script, str(tmp_path), *EXAMPLE_NAMES],
+        [sys.executable, "-c", script, str(tmp_path), example],
         check=True,
         env=env,
         cwd=ROOT,
         timeout=300,
     )
-    for example in EXAMPLE_NAMES:
-        for name, content in reports[example][0].items():
-            assert (tmp_path / name).read_bytes() == content, f"{name} differs between runs"
+    for name, content in reports[example][0].items():
+        assert (tmp_path / name).read_bytes() == content, f"{name} differs between runs"
 
 
 # -- names from the mechanism file ---------------------------------------------------------------

@@ -215,7 +215,7 @@ def mechanism(rt, closed: bool, dtype=np.float64):
         return [p0 * t0, t0 - p0 * t0, 1.0 - t0 * t0, 0.0 * t0]
 
     def rigid_res(theta, params):
-        return [theta[1] - params[0] * theta[0], theta[1] + theta[2] - theta[0]]
+        return [theta[1] - params[0] * theta[0], theta[1] + theta[2] - theta[0], 1.0, 0.0, 1.0, 1.0]
 
     def linear(theta, params):
         r = [-0.1 * theta[1], -0.05 * theta[2] - params[1]]

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import sympy as sp
-from conftest import EXAMPLES
+from conftest import EXAMPLES, once_per_run
 from evaluators import require_compiler
 from reference_solver import Reference
 
@@ -80,14 +80,17 @@ def _import(path: Path):
     return module
 
 
-@pytest.fixture(scope="module")
-def derived(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("scene")
+def _derive_stage(folder: Path) -> None:
+    """The stage scene derived into folder/out (C and numpy)."""
     scene = folder / "stage.toml"
     scene.write_text(SCENE)
-    out = folder / "out"
-    written = derive_scene(NINE_BAR, scene, out, emit=["c", "numpy"])
-    return out, written
+    derive_scene(NINE_BAR, scene, folder / "out", emit=["c", "numpy"])
+
+
+@pytest.fixture(scope="module")
+def derived(tmp_path_factory) -> Path:
+    # derived once for the tests on every xdist worker (conftest.once_per_run)
+    return once_per_run(tmp_path_factory, "scene-stage", _derive_stage) / "out"
 
 
 def _samples(n: int, seed: int = 7) -> list[dict[str, float]]:
@@ -103,7 +106,7 @@ def _samples(n: int, seed: int = 7) -> list[dict[str, float]]:
 
 
 def test_every_point_meets_its_tolerance_against_the_independent_solver(derived):
-    out, _ = derived
+    out = derived
     scene = _import(out / "stage.py")
     assert scene.INPUTS == ("O", "A", "B") and scene.FIXED == {"K": K}
     ref = Reference(_with_points(NINE_BAR))
@@ -122,7 +125,7 @@ def test_every_point_meets_its_tolerance_against_the_independent_solver(derived)
 
 def test_scene_evaluator_in_c_agrees_with_numpy(derived):
     require_compiler()
-    out, _ = derived
+    out = derived
     scene = _import(out / "stage.py")
     lib_path = out / "libstage.so"
     sources = sorted(str(p) for p in out.glob("*.c"))
@@ -185,7 +188,7 @@ def test_scene_evaluator_in_c_agrees_with_numpy(derived):
 
 
 def test_numpy_scene_checks_its_inputs(derived):
-    out, _ = derived
+    out = derived
     scene = _import(out / "stage.py")
     with pytest.raises(ValueError, match="missing"):
         scene.evaluate({"O": 0.0, "A": 0.0})

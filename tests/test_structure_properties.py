@@ -98,6 +98,9 @@ def make_spec(d) -> Spec:
         )
         for e in range(m)
     ]
+    # the positions as the file writes them (7 decimals): the inputs are chosen on the geometry
+    # the reader sees (a near-collinear triple can be flat before rounding and not after)
+    at = [(round(x, 7), round(y, 7)) for x, y in at]
     inputs = fixing_inputs(n, g, edges, at, candidates)
     hinges = []
     for e in hinge_order:

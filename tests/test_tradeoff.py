@@ -15,7 +15,7 @@ from pathlib import Path
 import mechanisms as M
 import numpy as np
 import pytest
-from conftest import EXAMPLES
+from conftest import EXAMPLES, once_per_run
 from reference_solver import Reference
 
 import symkin
@@ -39,9 +39,8 @@ FOUR_BAR = Path(tempfile.mkdtemp(prefix="symkin-tradeoff-")) / "four_bar.toml"
 FOUR_BAR.write_text(M.without_stiffness(EXAMPLES / "four_bar.toml"))
 
 
-@pytest.fixture(scope="module")
-def table(tmp_path_factory):
-    plot = tmp_path_factory.mktemp("plot") / "tradeoff.png"
+def _tradeoff_run(folder: Path) -> None:
+    """`symkin tradeoff` on the four-bar: its JSON and its plot into folder."""
     import subprocess
     import sys
 
@@ -58,7 +57,7 @@ def table(tmp_path_factory):
             "9",
             "--json",
             "--plot",
-            str(plot),
+            str(folder / "tradeoff.png"),
             "--quiet",
         ],
         capture_output=True,
@@ -66,8 +65,15 @@ def table(tmp_path_factory):
         timeout=600,
     )
     assert proc.returncode == 0, proc.stderr
-    assert plot.stat().st_size > 1000
-    return json.loads(proc.stdout)
+    (folder / "table.json").write_text(proc.stdout)
+
+
+@pytest.fixture(scope="module")
+def table(tmp_path_factory):
+    # the run is shared by the tests on every xdist worker (conftest.once_per_run)
+    folder = once_per_run(tmp_path_factory, "tradeoff-table", _tradeoff_run)
+    assert (folder / "tradeoff.png").stat().st_size > 1000
+    return json.loads((folder / "table.json").read_text())
 
 
 def test_json_lists_every_variant_with_errors_and_times(table):

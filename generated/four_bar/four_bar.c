@@ -3,7 +3,7 @@
  * Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact, loaded, loaded_refined.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 65, rigid_res 38, linear 114, newton 259, rigid_points 19, loaded_q0 10, loaded_q 72, loaded_compliance 231, loaded_linear 121, loaded_newton 269, dev_paper 38, dev_first_order 52, dev_exact 62, dev_loaded 72, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339.
+ * Operation counts after CSE: rigid 65, rigid_res 51, linear 114, newton 259, rigid_points 19, loaded_q0 10, loaded_q 72, loaded_compliance 231, loaded_linear 121, loaded_newton 269, dev_paper 38, dev_first_order 52, dev_exact 62, dev_loaded 72, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339.
  */
 #include "four_bar.h"
 
@@ -135,7 +135,7 @@ static void sk_rigid(const double *inputs, const double *params, double *out)
     out[4] = dyad1_margin;
 }
 
-/* rigid loop closure relative to the as-fabricated pose (38 operations) */
+/* rigid loop closure relative to the as-fabricated pose and its Jacobian A (51 operations) */
 static void sk_rigid_res(const double *theta, const double *params, double *out)
 {
     (void)params;
@@ -147,13 +147,27 @@ static void sk_rigid_res(const double *theta, const double *params, double *out)
     const double _tmp1 = sin(theta_1);
     const double _tmp2 = sin(theta_3);
     const double _tmp3 = sin(_tmp0);
-    const double _tmp4 = 0.5*theta_1;
-    const double _tmp5 = pow(sin(_tmp4), 2);
-    const double _tmp6 = pow(sin(0.5*theta_3), 2);
-    const double _tmp7 = pow(sin(_tmp4 + 0.5*theta_2), 2);
+    const double _tmp4 = 0.042*_tmp3;
+    const double _tmp5 = 0.5*theta_1;
+    const double _tmp6 = pow(sin(_tmp5), 2);
+    const double _tmp7 = pow(sin(0.5*theta_3), 2);
+    const double _tmp8 = pow(sin(_tmp5 + 0.5*theta_2), 2);
+    const double _tmp9 = 0.015*_tmp2;
+    const double _tmp10 = 0.07*_tmp3;
+    const double _tmp11 = cos(_tmp0);
+    const double _tmp12 = cos(theta_3);
     out[0] = _tmp0 + theta_4 - theta_3;
-    out[1] = 0.068*_tmp2 - 0.03*_tmp5 - 0.03*_tmp6 - 0.14*_tmp7 - 0.042*_tmp3 - 0.026*_tmp1;
-    out[2] = 0.015*_tmp1 + 0.015*_tmp2 + 0.136*_tmp6 + 0.07*_tmp3 - 0.084*_tmp7 - 0.052*_tmp5;
+    out[1] = -_tmp4 + 0.068*_tmp2 - 0.03*_tmp6 - 0.03*_tmp7 - 0.14*_tmp8 - 0.026*_tmp1;
+    out[2] = _tmp10 + _tmp9 + 0.015*_tmp1 + 0.136*_tmp7 - 0.084*_tmp8 - 0.052*_tmp6;
+    out[3] = 1;
+    out[4] = -1;
+    out[5] = 1;
+    out[6] = -_tmp10 - 0.042*_tmp11;
+    out[7] = -_tmp9 + 0.068*_tmp12;
+    out[8] = 0;
+    out[9] = -_tmp4 + 0.07*_tmp11;
+    out[10] = 0.015*_tmp12 + 0.068*_tmp2;
+    out[11] = 0;
 }
 
 /* rigid loop Jacobian A, r = Phi dz and the size S of its terms (114 operations) */
@@ -287,7 +301,7 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp54 = 0.4330127018922193*_tmp53;
     const double _tmp55 = 0.10825317547305482*_tmp41;
     const double _tmp56 = 0.0625*_tmp41;
-    const double _tmp57 = pow(_tmp37, 3);
+    const double _tmp57 = (_tmp37*_tmp37*_tmp37);
     const double _tmp58 = -3*symkin_sinr2(_tmp39) + 3*symkin_cosr2(_tmp39) + symkin_sinr1(_tmp39);
     const double _tmp59 = _tmp57*_tmp58;
     const double _tmp60 = 0.05412658773652741*_tmp59;
@@ -298,11 +312,11 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp65 = _tmp21*p_0;
     const double _tmp66 = 0.5*_tmp18*_tmp22;
     const double _tmp67 = 0.125*p_0;
-    const double _tmp68 = 0.0625*pow(_tmp18, 3)*(-3*symkin_sinr2(_tmp20) + 3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20));
+    const double _tmp68 = 0.0625*(_tmp18*_tmp18*_tmp18)*(-3*symkin_sinr2(_tmp20) + 3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20));
     const double _tmp69 = 0.5*_tmp27*_tmp28;
     const double _tmp70 = _tmp26*p_0;
     const double _tmp71 = _tmp30*_tmp67;
-    const double _tmp72 = 0.0625*pow(_tmp28, 3)*(-3*symkin_sinr2(_tmp25) + 3*symkin_cosr2(_tmp25) + symkin_sinr1(_tmp25));
+    const double _tmp72 = 0.0625*(_tmp28*_tmp28*_tmp28)*(-3*symkin_sinr2(_tmp25) + 3*symkin_cosr2(_tmp25) + symkin_sinr1(_tmp25));
     const double _tmp73 = _tmp35*_tmp71 + _tmp69*_tmp70 + _tmp70*_tmp72;
     const double _tmp74 = _tmp35*p_0;
     const double _tmp75 = _tmp69*_tmp74 + _tmp72*_tmp74 - _tmp26*_tmp71;
@@ -363,7 +377,7 @@ static void sk_loaded_q(const double *theta, const double *mu0, const double *pa
     const double _tmp1 = -mu0_2*cos(_tmp0) - mu0_3*sin(_tmp0);
     const double _tmp2 = p_0 <= 0.01;
     const double _tmp3 = 200000*((_tmp2) ? (4.333333333333334e-12) : (4.761904761904762e-12))/p_0;
-    const double _tmp4 = 457142857142857.1*((_tmp2) ? (8.137037037037037e-35) : (1.0797969981643451e-34))/pow(p_0, 3);
+    const double _tmp4 = 457142857142857.1*((_tmp2) ? (8.137037037037037e-35) : (1.0797969981643451e-34))/(p_0*p_0*p_0);
     const double _tmp5 = pow(p_0, 2);
     const double _tmp6 = 8000000000*((_tmp2) ? (1.8777777777777777e-23) : (2.267573696145125e-23))/_tmp5;
     const double _tmp7 = 4.1666666666666667e-07*_tmp5*((_tmp2) ? (230769230769.23077) : (210000000000));
@@ -371,9 +385,9 @@ static void sk_loaded_q(const double *theta, const double *mu0, const double *pa
     const double _tmp9 = mu0_3*cos(_tmp8) - mu0_2*sin(_tmp8);
     const double _tmp10 = theta_1 + theta_2 + 0.5*theta_4;
     const double _tmp11 = -mu0_2*cos(_tmp10) - mu0_3*sin(_tmp10);
-    out[0] = -_tmp7*theta_2*(1 + _tmp1*_tmp3 + _tmp4*pow(_tmp1, 3) - _tmp6*pow(_tmp1, 2));
-    out[1] = -_tmp7*theta_3*(1 + _tmp3*_tmp9 + _tmp4*pow(_tmp9, 3) - _tmp6*pow(_tmp9, 2));
-    out[2] = -_tmp7*theta_4*(1 + _tmp11*_tmp3 + _tmp4*pow(_tmp11, 3) - _tmp6*pow(_tmp11, 2));
+    out[0] = -_tmp7*theta_2*(1 + _tmp1*_tmp3 + _tmp4*(_tmp1*_tmp1*_tmp1) - _tmp6*pow(_tmp1, 2));
+    out[1] = -_tmp7*theta_3*(1 + _tmp3*_tmp9 + _tmp4*(_tmp9*_tmp9*_tmp9) - _tmp6*pow(_tmp9, 2));
+    out[2] = -_tmp7*theta_4*(1 + _tmp11*_tmp3 + _tmp4*(_tmp11*_tmp11*_tmp11) - _tmp6*pow(_tmp11, 2));
 }
 
 /* loaded: each plate's end displacement beyond its circular arc under its loads (231 operations) */
@@ -395,8 +409,8 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp6 = ((_tmp5) ? (4.333333333333334e-12) : (4.761904761904762e-12));
     const double _tmp7 = _tmp6/p_0;
     const double _tmp8 = _tmp4*_tmp7;
-    const double _tmp9 = ((_tmp5) ? (8.137037037037037e-35) : (1.0797969981643451e-34))/pow(p_0, 3);
-    const double _tmp10 = _tmp9*pow(_tmp4, 3);
+    const double _tmp9 = ((_tmp5) ? (8.137037037037037e-35) : (1.0797969981643451e-34))/(p_0*p_0*p_0);
+    const double _tmp10 = _tmp9*(_tmp4*_tmp4*_tmp4);
     const double _tmp11 = pow(_tmp4, 2);
     const double _tmp12 = pow(p_0, -2);
     const double _tmp13 = ((_tmp5) ? (1.8777777777777777e-23) : (2.267573696145125e-23));
@@ -414,7 +428,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp25 = _tmp23*mu_2 - _tmp24*mu_3;
     const double _tmp26 = -_tmp23*mu_3 - _tmp24*mu_2;
     const double _tmp27 = _tmp26*_tmp7;
-    const double _tmp28 = _tmp9*pow(_tmp26, 3);
+    const double _tmp28 = _tmp9*(_tmp26*_tmp26*_tmp26);
     const double _tmp29 = pow(_tmp26, 2);
     const double _tmp30 = _tmp14*_tmp29;
     const double _tmp31 = 0.08333333333333333 - 20000*_tmp27 + 4857142857.142858*_tmp30 - 1180952380952381.0*_tmp28;
@@ -426,7 +440,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp37 = -_tmp35*mu_3 - _tmp36*mu_2;
     const double _tmp38 = _tmp36*mu_3 - _tmp35*mu_2;
     const double _tmp39 = _tmp38*_tmp7;
-    const double _tmp40 = _tmp9*pow(_tmp38, 3);
+    const double _tmp40 = _tmp9*(_tmp38*_tmp38*_tmp38);
     const double _tmp41 = pow(_tmp38, 2);
     const double _tmp42 = _tmp14*_tmp41;
     const double _tmp43 = 0.08333333333333333 - 20000*_tmp39 + 4857142857.142858*_tmp42 - 1180952380952381.0*_tmp40;
@@ -439,7 +453,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp50 = _tmp48*mu_2 - _tmp49*mu_3;
     const double _tmp51 = -_tmp48*mu_3 - _tmp49*mu_2;
     const double _tmp52 = _tmp51*_tmp7;
-    const double _tmp53 = _tmp9*pow(_tmp51, 3);
+    const double _tmp53 = _tmp9*(_tmp51*_tmp51*_tmp51);
     const double _tmp54 = pow(_tmp51, 2);
     const double _tmp55 = _tmp14*_tmp54;
     const double _tmp56 = 0.08333333333333333 - 20000*_tmp52 + 4857142857.142858*_tmp55 - 1180952380952381.0*_tmp53;
@@ -603,7 +617,7 @@ static void sk_loaded_newton(const double *theta, const double *delta, const dou
     const double _tmp56 = 0.4330127018922193*_tmp55;
     const double _tmp57 = 0.10825317547305482*_tmp43;
     const double _tmp58 = 0.0625*_tmp43;
-    const double _tmp59 = pow(_tmp39, 3);
+    const double _tmp59 = (_tmp39*_tmp39*_tmp39);
     const double _tmp60 = -3*symkin_sinr2(_tmp41) + 3*symkin_cosr2(_tmp41) + symkin_sinr1(_tmp41);
     const double _tmp61 = _tmp59*_tmp60;
     const double _tmp62 = 0.05412658773652741*_tmp61;
@@ -614,10 +628,10 @@ static void sk_loaded_newton(const double *theta, const double *delta, const dou
     const double _tmp67 = _tmp21*p_0;
     const double _tmp68 = 0.5*_tmp18*_tmp22;
     const double _tmp69 = 0.125*p_0;
-    const double _tmp70 = 0.0625*pow(_tmp18, 3)*(-3*symkin_sinr2(_tmp20) + 3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20));
+    const double _tmp70 = 0.0625*(_tmp18*_tmp18*_tmp18)*(-3*symkin_sinr2(_tmp20) + 3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20));
     const double _tmp71 = 0.5*_tmp25*p_0;
     const double _tmp72 = _tmp26*_tmp69;
-    const double _tmp73 = 0.0625*p_0*pow(_tmp25, 3)*(-3*symkin_sinr2(_tmp28) + 3*symkin_cosr2(_tmp28) + symkin_sinr1(_tmp28));
+    const double _tmp73 = 0.0625*p_0*(_tmp25*_tmp25*_tmp25)*(-3*symkin_sinr2(_tmp28) + 3*symkin_cosr2(_tmp28) + symkin_sinr1(_tmp28));
     const double _tmp74 = _tmp30*_tmp73 + _tmp31*_tmp71 + _tmp36*_tmp72;
     const double _tmp75 = _tmp35*_tmp73 + _tmp36*_tmp71 - _tmp31*_tmp72;
     const double _tmp76 = _tmp52*p_0;
@@ -839,7 +853,7 @@ static void sk_sens_paper(const double *theta, const double *delta, const double
     const double _tmp10 = 0.0625*_tmp9;
     const double _tmp11 = _tmp7*p_0;
     const double _tmp12 = 0.10825317547305482*_tmp9;
-    const double _tmp13 = pow(theta_2, 3);
+    const double _tmp13 = (theta_2*theta_2*theta_2);
     const double _tmp14 = -3*symkin_sinr2(_tmp1) + 3*symkin_cosr2(_tmp1) + symkin_sinr1(_tmp1);
     const double _tmp15 = _tmp13*_tmp14;
     const double _tmp16 = 0.05412658773652741*_tmp15;
@@ -862,7 +876,7 @@ static void sk_sens_paper(const double *theta, const double *delta, const double
     const double _tmp33 = cos(_tmp20);
     const double _tmp34 = _tmp33*p_0;
     const double _tmp35 = 0.125*_tmp23;
-    const double _tmp36 = 0.0625*pow(theta_1, 3)*(-3*symkin_sinr2(_tmp20) + 3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20));
+    const double _tmp36 = 0.0625*(theta_1*theta_1*theta_1)*(-3*symkin_sinr2(_tmp20) + 3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20));
     const double _tmp37 = -_tmp29*p_0 + 0.125*_tmp4*_tmp7*_tmp8*p_0;
     const double _tmp38 = _tmp25*p_0 + _tmp27*p_0;
     out[0] = _tmp0*_tmp17 - _tmp18*_tmp19;
@@ -909,7 +923,7 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp19 = _tmp11*_tmp18;
     const double _tmp20 = 0.10825317547305482*_tmp19;
     const double _tmp21 = 0.0625*_tmp19;
-    const double _tmp22 = pow(theta_2, 3);
+    const double _tmp22 = (theta_2*theta_2*theta_2);
     const double _tmp23 = -3*symkin_sinr2(_tmp10) + 3*symkin_cosr2(_tmp10) + symkin_sinr1(_tmp10);
     const double _tmp24 = _tmp22*_tmp23;
     const double _tmp25 = 0.05412658773652741*_tmp24;
@@ -938,10 +952,10 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp48 = pow(theta_3, 2);
     const double _tmp49 = _tmp45*_tmp48;
     const double _tmp50 = 0.125*p_0;
-    const double _tmp51 = 0.0625*pow(theta_3, 3)*(-3*symkin_sinr2(_tmp42) + 3*symkin_cosr2(_tmp42) + symkin_sinr1(_tmp42));
+    const double _tmp51 = 0.0625*(theta_3*theta_3*theta_3)*(-3*symkin_sinr2(_tmp42) + 3*symkin_cosr2(_tmp42) + symkin_sinr1(_tmp42));
     const double _tmp52 = _tmp30*_tmp33;
     const double _tmp53 = _tmp35*_tmp50;
-    const double _tmp54 = 0.0625*pow(theta_4, 3)*(-3*symkin_sinr2(_tmp30) + 3*symkin_cosr2(_tmp30) + symkin_sinr1(_tmp30));
+    const double _tmp54 = 0.0625*(theta_4*theta_4*theta_4)*(-3*symkin_sinr2(_tmp30) + 3*symkin_cosr2(_tmp30) + symkin_sinr1(_tmp30));
     const double _tmp55 = _tmp31*_tmp53 + _tmp39*_tmp52 + _tmp39*_tmp54;
     const double _tmp56 = _tmp32*_tmp52 + _tmp32*_tmp54 - _tmp38*_tmp53;
     const double _tmp57 = _tmp26*_tmp27 + _tmp28*_tmp9;
@@ -963,7 +977,7 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp73 = -_tmp70*p_0 + 0.125*_tmp11*_tmp15*_tmp18*p_0;
     const double _tmp74 = _tmp66*p_0 + _tmp68*p_0;
     const double _tmp75 = _tmp62*p_0;
-    const double _tmp76 = 0.0625*pow(theta_1, 3)*(-3*symkin_sinr2(_tmp61) + 3*symkin_cosr2(_tmp61) + symkin_sinr1(_tmp61));
+    const double _tmp76 = 0.0625*(theta_1*theta_1*theta_1)*(-3*symkin_sinr2(_tmp61) + 3*symkin_cosr2(_tmp61) + symkin_sinr1(_tmp61));
     const double _tmp77 = cos(_tmp61);
     const double _tmp78 = _tmp50*_tmp64;
     const double _tmp79 = _tmp61*_tmp63;
@@ -1046,7 +1060,7 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp15 = _tmp14*_tmp7;
     const double _tmp16 = 0.10825317547305482*_tmp15;
     const double _tmp17 = 0.0625*_tmp15;
-    const double _tmp18 = pow(_tmp0, 3);
+    const double _tmp18 = (_tmp0*_tmp0*_tmp0);
     const double _tmp19 = -3*symkin_sinr2(_tmp6) + 3*symkin_cosr2(_tmp6) + symkin_sinr1(_tmp6);
     const double _tmp20 = _tmp18*_tmp19;
     const double _tmp21 = 0.05412658773652741*_tmp20;
@@ -1076,7 +1090,7 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp45 = _tmp44 + 0.5*theta_3;
     const double _tmp46 = sin(_tmp45);
     const double _tmp47 = _tmp46*p_0;
-    const double _tmp48 = 0.0625*pow(_tmp41, 3)*(-3*symkin_sinr2(_tmp45) + 3*symkin_cosr2(_tmp45) + symkin_sinr1(_tmp45));
+    const double _tmp48 = 0.0625*(_tmp41*_tmp41*_tmp41)*(-3*symkin_sinr2(_tmp45) + 3*symkin_cosr2(_tmp45) + symkin_sinr1(_tmp45));
     const double _tmp49 = cos(_tmp45);
     const double _tmp50 = pow(_tmp41, 2);
     const double _tmp51 = symkin_arck(_tmp45);
@@ -1087,7 +1101,7 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp56 = 0.5*_tmp31;
     const double _tmp57 = _tmp32*_tmp53;
     const double _tmp58 = _tmp27*_tmp28;
-    const double _tmp59 = 0.0625*pow(_tmp31, 3)*(-3*symkin_sinr2(_tmp26) + 3*symkin_cosr2(_tmp26) + symkin_sinr1(_tmp26));
+    const double _tmp59 = 0.0625*(_tmp31*_tmp31*_tmp31)*(-3*symkin_sinr2(_tmp26) + 3*symkin_cosr2(_tmp26) + symkin_sinr1(_tmp26));
     const double _tmp60 = _tmp37*_tmp56 + _tmp57*_tmp58 + _tmp35*_tmp59*p_0;
     const double _tmp61 = _tmp29*_tmp59 + _tmp30*_tmp56 - _tmp36*_tmp57;
     const double _tmp62 = _tmp3*_tmp61 - _tmp2*_tmp60;
@@ -1128,7 +1142,7 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp97 = -_tmp94*p_0 + 0.125*_tmp11*_tmp14*_tmp7*p_0;
     const double _tmp98 = _tmp90*p_0 + _tmp92*p_0;
     const double _tmp99 = _tmp86*p_0;
-    const double _tmp100 = 0.0625*pow(theta_1, 3)*(-3*symkin_sinr2(_tmp85) + 3*symkin_cosr2(_tmp85) + symkin_sinr1(_tmp85));
+    const double _tmp100 = 0.0625*(theta_1*theta_1*theta_1)*(-3*symkin_sinr2(_tmp85) + 3*symkin_cosr2(_tmp85) + symkin_sinr1(_tmp85));
     const double _tmp101 = cos(_tmp85);
     const double _tmp102 = _tmp53*_tmp88;
     const double _tmp103 = _tmp85*_tmp87;
@@ -1459,7 +1473,8 @@ typedef struct {
     int loops_for_links;            /* the links' rotations alone need it */
     sk_fn2 rigid;                   /* closed-form rigid angles and reaches (inputs, params) */
     int n_dyads;
-    sk_fn2 rigid_res;               /* rigid closure (theta, params): per loop angle, x, y */
+    sk_fn2 rigid_res;               /* rigid closure (theta, params): per loop angle, x, y;
+                                       then its Jacobian A (k x k) */
     int n_angular;                  /* the rows of rigid_res that are loops' angle sums */
     const int *angular;
     sk_fn2 linear;                  /* its Jacobian A, r and S (theta, params) */
@@ -1523,17 +1538,12 @@ typedef struct {
     double *theta;
 } sk_rigid_ctx;
 
-/* The rigid closure and its Jacobian A (the first block of `linear`) at theta. */
+/* The rigid closure and its Jacobian A at theta: rigid_res computes both (A alone, not all of
+   `linear`: a polish step or a continuation step needs no r nor S). */
 static void sk_rigid_system(const void *ctx, const double *theta, double *fj)
 {
     const sk_rigid_ctx *c = (const sk_rigid_ctx *)ctx;
-    double lin[SK_K * SK_K + 2 * SK_K + 1];
-    int i;
     c->m->rigid_res(theta, c->params, fj);
-    c->m->linear(theta, c->params, lin);
-    for (i = 0; i < SK_K * SK_K; ++i) {
-        fj[SK_K + i] = lin[i];
-    }
 }
 
 /* The rigid angles of the unknown hinges, theta's inputs set: the closed-form dyads, or
@@ -1639,8 +1649,8 @@ static int sk_loaded_constants(const sk_mechanism *m, const double *theta, const
     double lin[SK_K * SK_K + 2 * SK_K + 1], at[SK_K * SK_K + 1], mu0[SK_K + 1], loads[SK_K + 1];
     int j, piv[SK_K + 1];
     if (jac == NULL) {
-        m->linear(theta, params, lin);
-        jac = lin;
+        m->rigid_res(theta, params, lin);   /* A follows the residual */
+        jac = lin + SK_K;
     }
     for (i = 0; i < SK_K; ++i) {
         for (j = 0; j < SK_K; ++j) {

@@ -3,7 +3,7 @@
  * Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact, loaded, loaded_refined.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 65, rigid_res 38, linear 114, newton 259, rigid_points 19, loaded_q0 10, loaded_q 72, loaded_compliance 231, loaded_linear 121, loaded_newton 269, dev_paper 38, dev_first_order 52, dev_exact 62, dev_loaded 72, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339.
+ * Operation counts after CSE: rigid 65, rigid_res 51, linear 114, newton 259, rigid_points 19, loaded_q0 10, loaded_q 72, loaded_compliance 231, loaded_linear 121, loaded_newton 269, dev_paper 38, dev_first_order 52, dev_exact 62, dev_loaded 72, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339.
  */
 #ifndef SYMKIN_FOUR_BAR_H
 #define SYMKIN_FOUR_BAR_H

@@ -2,7 +2,7 @@
 Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
 Points: C; levels: paper, first_order, exact, loaded, loaded_refined.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 65, rigid_res 38, linear 114, newton 259, rigid_points 19, loaded_q0 10, loaded_q 72, loaded_compliance 231, loaded_linear 121, loaded_newton 269, dev_paper 38, dev_first_order 52, dev_exact 62, dev_loaded 72, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339.
+Operation counts after CSE: rigid 65, rigid_res 51, linear 114, newton 259, rigid_points 19, loaded_q0 10, loaded_q 72, loaded_compliance 231, loaded_linear 121, loaded_newton 269, dev_paper 38, dev_first_order 52, dev_exact 62, dev_loaded 72, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -265,8 +265,9 @@ def _rigid_angles(mech, x, params, ok):
     k = len(mech.unknown_index)
 
     def system(theta):
-        res = [numpy.broadcast_to(r, shape) for r in mech.rigid_res(theta, params)]
-        return res + mech.linear(theta, params)[: k * k]
+        # the residual, then A (rigid_res holds both)
+        fj = mech.rigid_res(theta, params)
+        return [numpy.broadcast_to(r, shape) for r in fj[:k]] + fj[k:]
 
     if mech.rigid is not None:
         out = mech.rigid(x, params)
@@ -348,7 +349,7 @@ def _loaded_constants(mech, theta, params, ok, jac=None, more=False):
     if mech.unknown_index:
         k = len(mech.unknown_index)
         if jac is None:
-            jac = mech.linear(theta, params)
+            jac = mech.rigid_res(theta, params)[k:]  # A follows the residual
         at = [jac[j * k + i] for i in range(k) for j in range(k)]
         mu0 = []
         if mech.loaded_q0 is not None:
@@ -674,20 +675,34 @@ def _rigid(inputs, params):
 
 
 def _rigid_res(theta, params):
-    """rigid loop closure relative to the as-fabricated pose (38 operations)."""
+    """rigid loop closure relative to the as-fabricated pose and its Jacobian A (51 operations)."""
     theta_1, theta_2, theta_3, theta_4 = theta
     _tmp0 = theta_1 + theta_2
     _tmp1 = numpy.sin(theta_1)
     _tmp2 = numpy.sin(theta_3)
     _tmp3 = numpy.sin(_tmp0)
-    _tmp4 = 0.5*theta_1
-    _tmp5 = numpy.sin(_tmp4)**2
-    _tmp6 = numpy.sin(0.5*theta_3)**2
-    _tmp7 = numpy.sin(_tmp4 + 0.5*theta_2)**2
+    _tmp4 = 0.042*_tmp3
+    _tmp5 = 0.5*theta_1
+    _tmp6 = numpy.sin(_tmp5)**2
+    _tmp7 = numpy.sin(0.5*theta_3)**2
+    _tmp8 = numpy.sin(_tmp5 + 0.5*theta_2)**2
+    _tmp9 = 0.015*_tmp2
+    _tmp10 = 0.07*_tmp3
+    _tmp11 = numpy.cos(_tmp0)
+    _tmp12 = numpy.cos(theta_3)
     return [
         _tmp0 + theta_4 - theta_3,
-        0.068*_tmp2 - 0.03*_tmp5 - 0.03*_tmp6 - 0.14*_tmp7 - 0.042*_tmp3 - 0.026*_tmp1,
-        0.015*_tmp1 + 0.015*_tmp2 + 0.136*_tmp6 + 0.07*_tmp3 - 0.084*_tmp7 - 0.052*_tmp5,
+        -_tmp4 + 0.068*_tmp2 - 0.03*_tmp6 - 0.03*_tmp7 - 0.14*_tmp8 - 0.026*_tmp1,
+        _tmp10 + _tmp9 + 0.015*_tmp1 + 0.136*_tmp7 - 0.084*_tmp8 - 0.052*_tmp6,
+        1,
+        -1,
+        1,
+        -_tmp10 - 0.042*_tmp11,
+        -_tmp9 + 0.068*_tmp12,
+        0,
+        -_tmp4 + 0.07*_tmp11,
+        0.015*_tmp12 + 0.068*_tmp2,
+        0,
     ]
 
 

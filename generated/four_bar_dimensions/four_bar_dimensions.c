@@ -3,7 +3,7 @@
  * Mechanism 'four_bar_dimensions': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 85, rigid_res 46, linear 118, newton 265, rigid_points 21, dev_paper 38, dev_first_order 53, dev_exact 65, links 1, sens_rigid 71, sens_paper 128, sens_first_order 297, sens_exact 360, sens_chain 0.
+ * Operation counts after CSE: rigid 85, rigid_res 60, linear 118, newton 265, rigid_points 21, dev_paper 38, dev_first_order 53, dev_exact 65, links 1, sens_rigid 71, sens_paper 128, sens_first_order 297, sens_exact 360, sens_chain 0.
  */
 #include "four_bar_dimensions.h"
 
@@ -177,7 +177,7 @@ static void sk_rigid(const double *inputs, const double *params, double *out)
     out[4] = dyad1_margin;
 }
 
-/* rigid loop closure relative to the as-fabricated pose (46 operations) */
+/* rigid loop closure relative to the as-fabricated pose and its Jacobian A (60 operations) */
 static void sk_rigid_res(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -195,15 +195,29 @@ static void sk_rigid_res(const double *theta, const double *params, double *out)
     const double _tmp3 = 0.5*theta_1;
     const double _tmp4 = 2*pow(sin(_tmp3), 2);
     const double _tmp5 = sin(_tmp0);
-    const double _tmp6 = p_9 - p_6;
-    const double _tmp7 = -p_8;
-    const double _tmp8 = _tmp7 + p_7;
-    const double _tmp9 = 2*pow(sin(0.5*theta_3), 2);
-    const double _tmp10 = -_tmp7 - p_5;
-    const double _tmp11 = 2*pow(sin(_tmp3 + 0.5*theta_2), 2);
+    const double _tmp6 = p_6 - p_9;
+    const double _tmp7 = -_tmp6;
+    const double _tmp8 = -p_8;
+    const double _tmp9 = _tmp8 + p_7;
+    const double _tmp10 = 2*pow(sin(0.5*theta_3), 2);
+    const double _tmp11 = -_tmp8 - p_5;
+    const double _tmp12 = 2*pow(sin(_tmp3 + 0.5*theta_2), 2);
+    const double _tmp13 = _tmp2*_tmp9;
+    const double _tmp14 = _tmp11*_tmp5;
+    const double _tmp15 = cos(_tmp0);
+    const double _tmp16 = cos(theta_3);
     out[0] = _tmp0 + theta_4 - theta_3;
-    out[1] = _tmp2*p_9 - _tmp1*p_6 - _tmp10*_tmp11 - _tmp4*p_5 - _tmp5*_tmp6 - _tmp8*_tmp9;
-    out[2] = _tmp1*p_5 + _tmp10*_tmp5 + _tmp2*_tmp8 + _tmp9*p_9 - _tmp11*_tmp6 - _tmp4*p_6;
+    out[1] = _tmp2*p_9 - _tmp1*p_6 - _tmp10*_tmp9 - _tmp11*_tmp12 - _tmp4*p_5 - _tmp5*_tmp7;
+    out[2] = _tmp13 + _tmp14 + _tmp1*p_5 + _tmp10*p_9 - _tmp12*_tmp7 - _tmp4*p_6;
+    out[3] = 1;
+    out[4] = -1;
+    out[5] = 1;
+    out[6] = -_tmp14 + _tmp15*_tmp6;
+    out[7] = -_tmp13 + _tmp16*p_9;
+    out[8] = 0;
+    out[9] = _tmp11*_tmp15 + _tmp5*_tmp6;
+    out[10] = _tmp16*_tmp9 + _tmp2*p_9;
+    out[11] = 0;
 }
 
 /* rigid loop Jacobian A, r = Phi dz and the size S of its terms (118 operations) */
@@ -363,7 +377,7 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp60 = 0.4330127018922193*_tmp59;
     const double _tmp61 = 0.10825317547305482*_tmp45;
     const double _tmp62 = 0.0625*_tmp45;
-    const double _tmp63 = pow(_tmp41, 3);
+    const double _tmp63 = (_tmp41*_tmp41*_tmp41);
     const double _tmp64 = -3*symkin_sinr2(_tmp43) + 3*symkin_cosr2(_tmp43) + symkin_sinr1(_tmp43);
     const double _tmp65 = _tmp63*_tmp64;
     const double _tmp66 = 0.05412658773652741*_tmp65;
@@ -374,10 +388,10 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp71 = _tmp14*p_3;
     const double _tmp72 = 0.5*_tmp11*_tmp15;
     const double _tmp73 = 0.125*_tmp53;
-    const double _tmp74 = 0.0625*pow(_tmp11, 3)*(-3*symkin_sinr2(_tmp13) + 3*symkin_cosr2(_tmp13) + symkin_sinr1(_tmp13));
+    const double _tmp74 = 0.0625*(_tmp11*_tmp11*_tmp11)*(-3*symkin_sinr2(_tmp13) + 3*symkin_cosr2(_tmp13) + symkin_sinr1(_tmp13));
     const double _tmp75 = 0.5*_tmp31;
     const double _tmp76 = 0.125*_tmp32;
-    const double _tmp77 = 0.0625*pow(_tmp31, 3)*(-3*symkin_sinr2(_tmp27) + 3*symkin_cosr2(_tmp27) + symkin_sinr1(_tmp27));
+    const double _tmp77 = 0.0625*(_tmp31*_tmp31*_tmp31)*(-3*symkin_sinr2(_tmp27) + 3*symkin_cosr2(_tmp27) + symkin_sinr1(_tmp27));
     const double _tmp78 = _tmp29*_tmp77 + _tmp30*_tmp75 + _tmp56*_tmp76;
     const double _tmp79 = _tmp55*_tmp77 + _tmp56*_tmp75 - _tmp30*_tmp76;
     out[0] = delta_2 + delta_4 - delta_3;
@@ -675,7 +689,7 @@ static void sk_sens_paper(const double *theta, const double *delta, const double
     const double _tmp10 = 0.0625*_tmp9;
     const double _tmp11 = _tmp7*p_2;
     const double _tmp12 = 0.10825317547305482*_tmp9;
-    const double _tmp13 = pow(theta_2, 3);
+    const double _tmp13 = (theta_2*theta_2*theta_2);
     const double _tmp14 = -3*symkin_sinr2(_tmp1) + 3*symkin_cosr2(_tmp1) + symkin_sinr1(_tmp1);
     const double _tmp15 = _tmp13*_tmp14;
     const double _tmp16 = 0.05412658773652741*_tmp15;
@@ -698,7 +712,7 @@ static void sk_sens_paper(const double *theta, const double *delta, const double
     const double _tmp33 = cos(_tmp20);
     const double _tmp34 = _tmp33*p_1;
     const double _tmp35 = 0.125*_tmp23;
-    const double _tmp36 = 0.0625*pow(theta_1, 3)*(-3*symkin_sinr2(_tmp20) + 3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20));
+    const double _tmp36 = 0.0625*(theta_1*theta_1*theta_1)*(-3*symkin_sinr2(_tmp20) + 3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20));
     const double _tmp37 = -_tmp26*p_2 + 0.125*_tmp4*_tmp7*_tmp8*p_2;
     const double _tmp38 = _tmp28*p_2 + _tmp29*p_2;
     out[0] = _tmp0*_tmp17 - _tmp18*_tmp19;
@@ -781,7 +795,7 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp23 = _tmp15*_tmp22;
     const double _tmp24 = 0.10825317547305482*_tmp23;
     const double _tmp25 = 0.0625*_tmp23;
-    const double _tmp26 = pow(theta_2, 3);
+    const double _tmp26 = (theta_2*theta_2*theta_2);
     const double _tmp27 = -3*symkin_sinr2(_tmp14) + 3*symkin_cosr2(_tmp14) + symkin_sinr1(_tmp14);
     const double _tmp28 = _tmp26*_tmp27;
     const double _tmp29 = 0.05412658773652741*_tmp28;
@@ -812,9 +826,9 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp54 = _tmp51*_tmp53;
     const double _tmp55 = cos(_tmp48);
     const double _tmp56 = _tmp55*p_3;
-    const double _tmp57 = 0.0625*pow(theta_3, 3)*(-3*symkin_sinr2(_tmp48) + 3*symkin_cosr2(_tmp48) + symkin_sinr1(_tmp48));
+    const double _tmp57 = 0.0625*(theta_3*theta_3*theta_3)*(-3*symkin_sinr2(_tmp48) + 3*symkin_cosr2(_tmp48) + symkin_sinr1(_tmp48));
     const double _tmp58 = 0.125*_tmp40;
-    const double _tmp59 = 0.0625*pow(theta_4, 3)*(-3*symkin_sinr2(_tmp35) + 3*symkin_cosr2(_tmp35) + symkin_sinr1(_tmp35));
+    const double _tmp59 = 0.0625*(theta_4*theta_4*theta_4)*(-3*symkin_sinr2(_tmp35) + 3*symkin_cosr2(_tmp35) + symkin_sinr1(_tmp35));
     const double _tmp60 = _tmp35*_tmp45 + _tmp39*_tmp58 + _tmp44*_tmp59;
     const double _tmp61 = _tmp35*_tmp39 + _tmp38*_tmp59 - _tmp45*_tmp58;
     const double _tmp62 = _tmp13*_tmp32 + _tmp30*_tmp31;
@@ -843,7 +857,7 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp85 = -_tmp71*p_2 + 0.125*_tmp15*_tmp19*_tmp22*p_2;
     const double _tmp86 = _tmp73*p_2 + _tmp74*p_2;
     const double _tmp87 = _tmp65*p_1;
-    const double _tmp88 = 0.0625*pow(theta_1, 3)*(-3*symkin_sinr2(_tmp64) + 3*symkin_cosr2(_tmp64) + symkin_sinr1(_tmp64));
+    const double _tmp88 = 0.0625*(theta_1*theta_1*theta_1)*(-3*symkin_sinr2(_tmp64) + 3*symkin_cosr2(_tmp64) + symkin_sinr1(_tmp64));
     const double _tmp89 = cos(_tmp64);
     const double _tmp90 = _tmp89*p_1;
     const double _tmp91 = 0.125*_tmp67;
@@ -1000,7 +1014,7 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp18 = _tmp10*_tmp17;
     const double _tmp19 = 0.10825317547305482*_tmp18;
     const double _tmp20 = 0.0625*_tmp18;
-    const double _tmp21 = pow(_tmp2, 3);
+    const double _tmp21 = (_tmp2*_tmp2*_tmp2);
     const double _tmp22 = -3*symkin_sinr2(_tmp9) + 3*symkin_cosr2(_tmp9) + symkin_sinr1(_tmp9);
     const double _tmp23 = _tmp21*_tmp22;
     const double _tmp24 = 0.05412658773652741*_tmp23;
@@ -1031,7 +1045,7 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp49 = _tmp48 + 0.5*theta_3;
     const double _tmp50 = sin(_tmp49);
     const double _tmp51 = _tmp50*p_3;
-    const double _tmp52 = 0.0625*pow(_tmp44, 3)*(-3*symkin_sinr2(_tmp49) + 3*symkin_cosr2(_tmp49) + symkin_sinr1(_tmp49));
+    const double _tmp52 = 0.0625*(_tmp44*_tmp44*_tmp44)*(-3*symkin_sinr2(_tmp49) + 3*symkin_cosr2(_tmp49) + symkin_sinr1(_tmp49));
     const double _tmp53 = symkin_arck(_tmp49);
     const double _tmp54 = _tmp53*pow(_tmp44, 2);
     const double _tmp55 = 0.125*_tmp54;
@@ -1041,7 +1055,7 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp59 = _tmp51*_tmp52 + _tmp51*_tmp58 + _tmp55*_tmp57;
     const double _tmp60 = 0.5*_tmp34;
     const double _tmp61 = 0.125*_tmp35;
-    const double _tmp62 = 0.0625*pow(_tmp34, 3)*(-3*symkin_sinr2(_tmp29) + 3*symkin_cosr2(_tmp29) + symkin_sinr1(_tmp29));
+    const double _tmp62 = 0.0625*(_tmp34*_tmp34*_tmp34)*(-3*symkin_sinr2(_tmp29) + 3*symkin_cosr2(_tmp29) + symkin_sinr1(_tmp29));
     const double _tmp63 = _tmp33*_tmp61 + _tmp39*_tmp62 + _tmp40*_tmp60;
     const double _tmp64 = _tmp32*_tmp62 + _tmp33*_tmp60 - _tmp40*_tmp61;
     const double _tmp65 = _tmp6*_tmp64 - _tmp4*_tmp63;
@@ -1095,7 +1109,7 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp113 = -_tmp95*p_2 + 0.125*_tmp10*_tmp14*_tmp17*p_2;
     const double _tmp114 = _tmp97*p_2 + _tmp98*p_2;
     const double _tmp115 = _tmp89*p_1;
-    const double _tmp116 = 0.0625*pow(theta_1, 3)*(-3*symkin_sinr2(_tmp88) + 3*symkin_cosr2(_tmp88) + symkin_sinr1(_tmp88));
+    const double _tmp116 = 0.0625*(theta_1*theta_1*theta_1)*(-3*symkin_sinr2(_tmp88) + 3*symkin_cosr2(_tmp88) + symkin_sinr1(_tmp88));
     const double _tmp117 = cos(_tmp88);
     const double _tmp118 = _tmp117*p_1;
     const double _tmp119 = 0.125*_tmp91;
@@ -1578,7 +1592,8 @@ typedef struct {
     int loops_for_links;            /* the links' rotations alone need it */
     sk_fn2 rigid;                   /* closed-form rigid angles and reaches (inputs, params) */
     int n_dyads;
-    sk_fn2 rigid_res;               /* rigid closure (theta, params): per loop angle, x, y */
+    sk_fn2 rigid_res;               /* rigid closure (theta, params): per loop angle, x, y;
+                                       then its Jacobian A (k x k) */
     int n_angular;                  /* the rows of rigid_res that are loops' angle sums */
     const int *angular;
     sk_fn2 linear;                  /* its Jacobian A, r and S (theta, params) */
@@ -1642,17 +1657,12 @@ typedef struct {
     double *theta;
 } sk_rigid_ctx;
 
-/* The rigid closure and its Jacobian A (the first block of `linear`) at theta. */
+/* The rigid closure and its Jacobian A at theta: rigid_res computes both (A alone, not all of
+   `linear`: a polish step or a continuation step needs no r nor S). */
 static void sk_rigid_system(const void *ctx, const double *theta, double *fj)
 {
     const sk_rigid_ctx *c = (const sk_rigid_ctx *)ctx;
-    double lin[SK_K * SK_K + 2 * SK_K + 1];
-    int i;
     c->m->rigid_res(theta, c->params, fj);
-    c->m->linear(theta, c->params, lin);
-    for (i = 0; i < SK_K * SK_K; ++i) {
-        fj[SK_K + i] = lin[i];
-    }
 }
 
 /* The rigid angles of the unknown hinges, theta's inputs set: the closed-form dyads, or

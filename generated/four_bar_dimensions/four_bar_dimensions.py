@@ -2,7 +2,7 @@
 Mechanism 'four_bar_dimensions': 4 links, 4 hinges, 1 loop(s); inputs A0.
 Points: C; levels: paper, first_order, exact.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 85, rigid_res 46, linear 118, newton 265, rigid_points 21, dev_paper 38, dev_first_order 53, dev_exact 65, links 1, sens_rigid 71, sens_paper 128, sens_first_order 297, sens_exact 360, sens_chain 0.
+Operation counts after CSE: rigid 85, rigid_res 60, linear 118, newton 265, rigid_points 21, dev_paper 38, dev_first_order 53, dev_exact 65, links 1, sens_rigid 71, sens_paper 128, sens_first_order 297, sens_exact 360, sens_chain 0.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -265,8 +265,9 @@ def _rigid_angles(mech, x, params, ok):
     k = len(mech.unknown_index)
 
     def system(theta):
-        res = [numpy.broadcast_to(r, shape) for r in mech.rigid_res(theta, params)]
-        return res + mech.linear(theta, params)[: k * k]
+        # the residual, then A (rigid_res holds both)
+        fj = mech.rigid_res(theta, params)
+        return [numpy.broadcast_to(r, shape) for r in fj[:k]] + fj[k:]
 
     if mech.rigid is not None:
         out = mech.rigid(x, params)
@@ -348,7 +349,7 @@ def _loaded_constants(mech, theta, params, ok, jac=None, more=False):
     if mech.unknown_index:
         k = len(mech.unknown_index)
         if jac is None:
-            jac = mech.linear(theta, params)
+            jac = mech.rigid_res(theta, params)[k:]  # A follows the residual
         at = [jac[j * k + i] for i in range(k) for j in range(k)]
         mu0 = []
         if mech.loaded_q0 is not None:
@@ -724,7 +725,7 @@ def _rigid(inputs, params):
 
 
 def _rigid_res(theta, params):
-    """rigid loop closure relative to the as-fabricated pose (46 operations)."""
+    """rigid loop closure relative to the as-fabricated pose and its Jacobian A (60 operations)."""
     theta_1, theta_2, theta_3, theta_4 = theta
     _, _, _, _, _, p_5, p_6, p_7, p_8, p_9, _, _ = params
     _tmp0 = theta_1 + theta_2
@@ -733,16 +734,30 @@ def _rigid_res(theta, params):
     _tmp3 = 0.5*theta_1
     _tmp4 = 2*numpy.sin(_tmp3)**2
     _tmp5 = numpy.sin(_tmp0)
-    _tmp6 = p_9 - p_6
-    _tmp7 = -p_8
-    _tmp8 = _tmp7 + p_7
-    _tmp9 = 2*numpy.sin(0.5*theta_3)**2
-    _tmp10 = -_tmp7 - p_5
-    _tmp11 = 2*numpy.sin(_tmp3 + 0.5*theta_2)**2
+    _tmp6 = p_6 - p_9
+    _tmp7 = -_tmp6
+    _tmp8 = -p_8
+    _tmp9 = _tmp8 + p_7
+    _tmp10 = 2*numpy.sin(0.5*theta_3)**2
+    _tmp11 = -_tmp8 - p_5
+    _tmp12 = 2*numpy.sin(_tmp3 + 0.5*theta_2)**2
+    _tmp13 = _tmp2*_tmp9
+    _tmp14 = _tmp11*_tmp5
+    _tmp15 = numpy.cos(_tmp0)
+    _tmp16 = numpy.cos(theta_3)
     return [
         _tmp0 + theta_4 - theta_3,
-        _tmp2*p_9 - _tmp1*p_6 - _tmp10*_tmp11 - _tmp4*p_5 - _tmp5*_tmp6 - _tmp8*_tmp9,
-        _tmp1*p_5 + _tmp10*_tmp5 + _tmp2*_tmp8 + _tmp9*p_9 - _tmp11*_tmp6 - _tmp4*p_6,
+        _tmp2*p_9 - _tmp1*p_6 - _tmp10*_tmp9 - _tmp11*_tmp12 - _tmp4*p_5 - _tmp5*_tmp7,
+        _tmp13 + _tmp14 + _tmp1*p_5 + _tmp10*p_9 - _tmp12*_tmp7 - _tmp4*p_6,
+        1,
+        -1,
+        1,
+        -_tmp14 + _tmp15*_tmp6,
+        -_tmp13 + _tmp16*p_9,
+        0,
+        _tmp11*_tmp15 + _tmp5*_tmp6,
+        _tmp16*_tmp9 + _tmp2*p_9,
+        0,
     ]
 
 

@@ -3,7 +3,7 @@
  * Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
  * Points: F; levels: paper, first_order, exact, loaded, loaded_refined.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 158, rigid_res 114, linear 275, newton 531, rigid_points 14, loaded_q0 16, loaded_q 126, loaded_compliance 562, loaded_linear 288, loaded_newton 539, dev_paper 33, dev_first_order 33, dev_exact 33, dev_loaded 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
+ * Operation counts after CSE: rigid 158, rigid_res 148, linear 275, newton 531, rigid_points 14, loaded_q0 16, loaded_q 126, loaded_compliance 562, loaded_linear 288, loaded_newton 539, dev_paper 33, dev_first_order 33, dev_exact 33, dev_loaded 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
  */
 #include "nine_bar_platform.h"
 
@@ -183,7 +183,7 @@ static void sk_rigid(const double *inputs, const double *params, double *out)
     out[9] = dyad2_margin;
 }
 
-/* rigid loop closure relative to the as-fabricated pose (114 operations) */
+/* rigid loop closure relative to the as-fabricated pose and its Jacobian A (148 operations) */
 static void sk_rigid_res(const double *theta, const double *params, double *out)
 {
     (void)params;
@@ -212,26 +212,78 @@ static void sk_rigid_res(const double *theta, const double *params, double *out)
     const double _tmp12 = pow(sin(_tmp11), 2);
     const double _tmp13 = sin(_tmp1);
     const double _tmp14 = sin(_tmp4);
-    const double _tmp15 = sin(_tmp2);
-    const double _tmp16 = sin(_tmp3);
-    const double _tmp17 = pow(sin(_tmp11 + 0.5*theta_6), 2);
-    const double _tmp18 = pow(sin(_tmp6), 2);
-    const double _tmp19 = sin(_tmp0);
-    const double _tmp20 = 0.06*sin(theta_1) + 0.1*_tmp18 + 0.02*_tmp19;
-    const double _tmp21 = 0.05*_tmp19 - 0.12*pow(sin(_tmp5), 2) - 0.04*_tmp18;
-    const double _tmp22 = _tmp1 + theta_7;
-    const double _tmp23 = _tmp22 + theta_8;
-    const double _tmp24 = _tmp7 + 0.5*theta_7;
-    const double _tmp25 = pow(sin(_tmp24), 2);
-    const double _tmp26 = sin(_tmp23);
-    const double _tmp27 = pow(sin(_tmp24 + 0.5*theta_8), 2);
-    const double _tmp28 = sin(_tmp22);
+    const double _tmp15 = 0.05*_tmp14;
+    const double _tmp16 = sin(_tmp2);
+    const double _tmp17 = sin(_tmp3);
+    const double _tmp18 = 0.02*_tmp17;
+    const double _tmp19 = pow(sin(_tmp11 + 0.5*theta_6), 2);
+    const double _tmp20 = pow(sin(_tmp6), 2);
+    const double _tmp21 = sin(_tmp0);
+    const double _tmp22 = 0.06*sin(theta_1) + 0.1*_tmp20 + 0.02*_tmp21;
+    const double _tmp23 = 0.05*_tmp17;
+    const double _tmp24 = 0.04*_tmp14;
+    const double _tmp25 = 0.05*_tmp21 - 0.12*pow(sin(_tmp5), 2) - 0.04*_tmp20;
+    const double _tmp26 = _tmp1 + theta_7;
+    const double _tmp27 = _tmp26 + theta_8;
+    const double _tmp28 = _tmp7 + 0.5*theta_7;
+    const double _tmp29 = pow(sin(_tmp28), 2);
+    const double _tmp30 = sin(_tmp27);
+    const double _tmp31 = 0.035*_tmp30;
+    const double _tmp32 = pow(sin(_tmp28 + 0.5*theta_8), 2);
+    const double _tmp33 = sin(_tmp26);
+    const double _tmp34 = 0.005*_tmp33;
+    const double _tmp35 = 0.04*_tmp33;
+    const double _tmp36 = 0.025*_tmp30;
+    const double _tmp37 = cos(_tmp3);
+    const double _tmp38 = cos(_tmp4);
+    const double _tmp39 = _tmp24 + 0.05*_tmp38;
+    const double _tmp40 = _tmp15 - 0.04*_tmp38;
+    const double _tmp41 = cos(_tmp26);
+    const double _tmp42 = cos(_tmp27);
+    const double _tmp43 = _tmp36 + 0.035*_tmp42;
+    const double _tmp44 = _tmp31 - 0.025*_tmp42;
     out[0] = theta_9 - _tmp4;
-    out[1] = _tmp20 + 0.1*_tmp10 + 0.1*_tmp12 + 0.1*_tmp8 + 0.01*_tmp13 - 0.05*_tmp14 - 0.02*_tmp15 - 0.02*_tmp16 - 0.08*_tmp17;
-    out[2] = -_tmp21 + 0.02*_tmp8 + 0.04*_tmp14 - 0.05*_tmp13 - 0.05*_tmp15 - 0.05*_tmp16 - 0.1*_tmp17 - 0.04*_tmp10 - 0.04*_tmp12;
-    out[3] = theta_10 - _tmp23;
-    out[4] = _tmp20 + 0.04*_tmp8 + 0.08*_tmp25 - 0.035*_tmp26 - 0.05*_tmp27 - 0.005*_tmp28 - 0.04*_tmp13;
-    out[5] = -_tmp21 + 0.025*_tmp26 - 0.07*_tmp27 - 0.01*_tmp25 - 0.02*_tmp13 - 0.04*_tmp28 - 0.08*_tmp8;
+    out[1] = _tmp22 - _tmp15 - _tmp18 + 0.1*_tmp10 + 0.1*_tmp12 + 0.1*_tmp8 + 0.01*_tmp13 - 0.02*_tmp16 - 0.08*_tmp19;
+    out[2] = _tmp24 - _tmp23 - _tmp25 + 0.02*_tmp8 - 0.05*_tmp13 - 0.05*_tmp16 - 0.1*_tmp19 - 0.04*_tmp10 - 0.04*_tmp12;
+    out[3] = theta_10 - _tmp27;
+    out[4] = _tmp22 - _tmp31 - _tmp34 + 0.04*_tmp8 + 0.08*_tmp29 - 0.05*_tmp32 - 0.04*_tmp13;
+    out[5] = _tmp36 - _tmp25 - _tmp35 - 0.07*_tmp32 - 0.01*_tmp29 - 0.02*_tmp13 - 0.08*_tmp8;
+    out[6] = -1;
+    out[7] = -1;
+    out[8] = 0;
+    out[9] = 0;
+    out[10] = 1;
+    out[11] = 0;
+    out[12] = _tmp23 - _tmp39 - 0.02*_tmp37;
+    out[13] = -_tmp39;
+    out[14] = 0;
+    out[15] = 0;
+    out[16] = 0;
+    out[17] = 0;
+    out[18] = -_tmp18 - _tmp40 - 0.05*_tmp37;
+    out[19] = -_tmp40;
+    out[20] = 0;
+    out[21] = 0;
+    out[22] = 0;
+    out[23] = 0;
+    out[24] = 0;
+    out[25] = 0;
+    out[26] = -1;
+    out[27] = -1;
+    out[28] = 0;
+    out[29] = 1;
+    out[30] = 0;
+    out[31] = 0;
+    out[32] = _tmp35 - _tmp43 - 0.005*_tmp41;
+    out[33] = -_tmp43;
+    out[34] = 0;
+    out[35] = 0;
+    out[36] = 0;
+    out[37] = 0;
+    out[38] = -_tmp34 - _tmp44 - 0.04*_tmp41;
+    out[39] = -_tmp44;
+    out[40] = 0;
+    out[41] = 0;
 }
 
 /* rigid loop Jacobian A, r = Phi dz and the size S of its terms (275 operations) */
@@ -552,7 +604,7 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp127 = 0.5*_tmp36*_tmp37;
     const double _tmp128 = _tmp34*p_0;
     const double _tmp129 = 0.125*_tmp38;
-    const double _tmp130 = 0.0625*pow(_tmp36, 3)*(-3*symkin_sinr2(_tmp33) + 3*symkin_cosr2(_tmp33) + symkin_sinr1(_tmp33));
+    const double _tmp130 = 0.0625*(_tmp36*_tmp36*_tmp36)*(-3*symkin_sinr2(_tmp33) + 3*symkin_cosr2(_tmp33) + symkin_sinr1(_tmp33));
     const double _tmp131 = _tmp126*_tmp127 + _tmp126*_tmp130 - _tmp128*_tmp129;
     const double _tmp132 = _tmp126*_tmp129 + _tmp127*_tmp128 + _tmp128*_tmp130;
     const double _tmp133 = _tmp0 + _tmp10;
@@ -565,14 +617,14 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp140 = _tmp42*p_0;
     const double _tmp141 = _tmp140*_tmp45;
     const double _tmp142 = 0.125*_tmp47;
-    const double _tmp143 = 0.0625*pow(_tmp46, 3)*(-3*symkin_sinr2(_tmp41) + 3*symkin_cosr2(_tmp41) + symkin_sinr1(_tmp41));
+    const double _tmp143 = 0.0625*(_tmp46*_tmp46*_tmp46)*(-3*symkin_sinr2(_tmp41) + 3*symkin_cosr2(_tmp41) + symkin_sinr1(_tmp41));
     const double _tmp144 = -_tmp137*_tmp139 - _tmp138*_tmp143 - _tmp141*_tmp142;
     const double _tmp145 = _tmp137*_tmp141 + _tmp140*_tmp143 - _tmp139*_tmp142;
     const double _tmp146 = _tmp21*p_0;
     const double _tmp147 = 0.5*_tmp23*_tmp25;
     const double _tmp148 = _tmp75*p_0;
     const double _tmp149 = 0.125*_tmp26;
-    const double _tmp150 = 0.0625*pow(_tmp23, 3)*(-3*symkin_sinr2(_tmp20) + 3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20));
+    const double _tmp150 = 0.0625*(_tmp23*_tmp23*_tmp23)*(-3*symkin_sinr2(_tmp20) + 3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20));
     const double _tmp151 = 0.05*_tmp135 - 0.04*_tmp134;
     const double _tmp152 = _tmp79 + _tmp86;
     const double _tmp153 = cos(_tmp152);
@@ -583,21 +635,21 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp158 = 0.5*_tmp104*_tmp105;
     const double _tmp159 = _tmp118*p_0;
     const double _tmp160 = 0.125*_tmp106;
-    const double _tmp161 = 0.0625*pow(_tmp104, 3)*(-3*symkin_sinr2(_tmp102) + 3*symkin_cosr2(_tmp102) + symkin_sinr1(_tmp102));
+    const double _tmp161 = 0.0625*(_tmp104*_tmp104*_tmp104)*(-3*symkin_sinr2(_tmp102) + 3*symkin_cosr2(_tmp102) + symkin_sinr1(_tmp102));
     const double _tmp162 = _tmp157*_tmp158 + _tmp157*_tmp161 + _tmp159*_tmp160;
     const double _tmp163 = _tmp158*_tmp159 + _tmp159*_tmp161 - _tmp157*_tmp160;
     const double _tmp164 = _tmp120*p_0;
     const double _tmp165 = 0.5*_tmp112*_tmp114;
     const double _tmp166 = _tmp109*p_0;
     const double _tmp167 = 0.125*_tmp115;
-    const double _tmp168 = 0.0625*pow(_tmp112, 3)*(-3*symkin_sinr2(_tmp108) + 3*symkin_cosr2(_tmp108) + symkin_sinr1(_tmp108));
+    const double _tmp168 = 0.0625*(_tmp112*_tmp112*_tmp112)*(-3*symkin_sinr2(_tmp108) + 3*symkin_cosr2(_tmp108) + symkin_sinr1(_tmp108));
     const double _tmp169 = _tmp164*_tmp165 + _tmp164*_tmp168 - _tmp166*_tmp167;
     const double _tmp170 = _tmp164*_tmp167 + _tmp165*_tmp166 + _tmp166*_tmp168;
     const double _tmp171 = _tmp97*p_0;
     const double _tmp172 = 0.5*_tmp100*_tmp98;
     const double _tmp173 = _tmp124*p_0;
     const double _tmp174 = 0.125*_tmp101;
-    const double _tmp175 = 0.0625*pow(_tmp98, 3)*(-3*symkin_sinr2(_tmp96) + 3*symkin_cosr2(_tmp96) + symkin_sinr1(_tmp96));
+    const double _tmp175 = 0.0625*(_tmp98*_tmp98*_tmp98)*(-3*symkin_sinr2(_tmp96) + 3*symkin_cosr2(_tmp96) + symkin_sinr1(_tmp96));
     const double _tmp176 = 0.035*_tmp155 - 0.025*_tmp153;
     out[0] = delta_9 - _tmp0;
     out[1] = _tmp74 + _tmp11*_tmp15 + _tmp28*_tmp32 + _tmp34*_tmp40 + _tmp42*_tmp49 + _tmp5*_tmp9 + _tmp50*_tmp52 - _tmp16*_tmp17 - _tmp18*_tmp19 - _tmp53*_tmp56 - _tmp57*_tmp59 - _tmp21*_tmp22*_tmp26;
@@ -699,7 +751,7 @@ static void sk_loaded_q(const double *theta, const double *mu0, const double *pa
     const double _tmp3 = mu0_2*cos(_tmp2) + mu0_3*sin(_tmp2);
     const double _tmp4 = p_0 <= 0.006;
     const double _tmp5 = 333333.3333333333*((_tmp4) ? (4.333333333333334e-12) : (4.761904761904762e-12))/p_0;
-    const double _tmp6 = 2116402116402116.5*((_tmp4) ? (8.137037037037037e-35) : (1.0797969981643451e-34))/pow(p_0, 3);
+    const double _tmp6 = 2116402116402116.5*((_tmp4) ? (8.137037037037037e-35) : (1.0797969981643451e-34))/(p_0*p_0*p_0);
     const double _tmp7 = pow(p_0, 2);
     const double _tmp8 = 22222222222.22222*((_tmp4) ? (1.8777777777777777e-23) : (2.267573696145125e-23))/_tmp7;
     const double _tmp9 = 2.5e-07*_tmp7*((_tmp4) ? (230769230769.23077) : (210000000000));
@@ -713,12 +765,12 @@ static void sk_loaded_q(const double *theta, const double *mu0, const double *pa
     const double _tmp17 = mu0_2*sin(_tmp16) - mu0_3*cos(_tmp16);
     const double _tmp18 = 0.5*theta_10;
     const double _tmp19 = mu0_5*sin(_tmp18) - mu0_6*cos(_tmp18);
-    out[0] = -_tmp9*theta_5*(1 + _tmp3*_tmp5 + _tmp6*pow(_tmp3, 3) - _tmp8*pow(_tmp3, 2));
-    out[1] = -_tmp9*theta_6*(1 + _tmp11*_tmp5 + _tmp6*pow(_tmp11, 3) - _tmp8*pow(_tmp11, 2));
-    out[2] = -_tmp9*theta_7*(1 + _tmp13*_tmp5 + _tmp6*pow(_tmp13, 3) - _tmp8*pow(_tmp13, 2));
-    out[3] = -_tmp9*theta_8*(1 + _tmp15*_tmp5 + _tmp6*pow(_tmp15, 3) - _tmp8*pow(_tmp15, 2));
-    out[4] = -_tmp9*theta_9*(1 + _tmp17*_tmp5 + _tmp6*pow(_tmp17, 3) - _tmp8*pow(_tmp17, 2));
-    out[5] = -_tmp9*theta_10*(1 + _tmp19*_tmp5 + _tmp6*pow(_tmp19, 3) - _tmp8*pow(_tmp19, 2));
+    out[0] = -_tmp9*theta_5*(1 + _tmp3*_tmp5 + _tmp6*(_tmp3*_tmp3*_tmp3) - _tmp8*pow(_tmp3, 2));
+    out[1] = -_tmp9*theta_6*(1 + _tmp11*_tmp5 + _tmp6*(_tmp11*_tmp11*_tmp11) - _tmp8*pow(_tmp11, 2));
+    out[2] = -_tmp9*theta_7*(1 + _tmp13*_tmp5 + _tmp6*(_tmp13*_tmp13*_tmp13) - _tmp8*pow(_tmp13, 2));
+    out[3] = -_tmp9*theta_8*(1 + _tmp15*_tmp5 + _tmp6*(_tmp15*_tmp15*_tmp15) - _tmp8*pow(_tmp15, 2));
+    out[4] = -_tmp9*theta_9*(1 + _tmp17*_tmp5 + _tmp6*(_tmp17*_tmp17*_tmp17) - _tmp8*pow(_tmp17, 2));
+    out[5] = -_tmp9*theta_10*(1 + _tmp19*_tmp5 + _tmp6*(_tmp19*_tmp19*_tmp19) - _tmp8*pow(_tmp19, 2));
 }
 
 /* loaded: each plate's end displacement beyond its circular arc under its loads (562 operations) */
@@ -750,8 +802,8 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp8 = ((_tmp7) ? (4.333333333333334e-12) : (4.761904761904762e-12));
     const double _tmp9 = _tmp8/p_0;
     const double _tmp10 = _tmp6*_tmp9;
-    const double _tmp11 = ((_tmp7) ? (8.137037037037037e-35) : (1.0797969981643451e-34))/pow(p_0, 3);
-    const double _tmp12 = _tmp11*pow(_tmp6, 3);
+    const double _tmp11 = ((_tmp7) ? (8.137037037037037e-35) : (1.0797969981643451e-34))/(p_0*p_0*p_0);
+    const double _tmp12 = _tmp11*(_tmp6*_tmp6*_tmp6);
     const double _tmp13 = pow(_tmp6, 2);
     const double _tmp14 = pow(p_0, -2);
     const double _tmp15 = ((_tmp7) ? (1.8777777777777777e-23) : (2.267573696145125e-23));
@@ -769,7 +821,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp27 = _tmp26*_tmp4 - _tmp2*_tmp25;
     const double _tmp28 = _tmp2*_tmp26 + _tmp25*_tmp4;
     const double _tmp29 = _tmp28*_tmp9;
-    const double _tmp30 = _tmp11*pow(_tmp28, 3);
+    const double _tmp30 = _tmp11*(_tmp28*_tmp28*_tmp28);
     const double _tmp31 = pow(_tmp28, 2);
     const double _tmp32 = _tmp16*_tmp31;
     const double _tmp33 = 0.08333333333333333 + 13492063492.063492*_tmp32 - 33333.333333333336*_tmp29 - 5467372134038801.0*_tmp30;
@@ -784,7 +836,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp42 = _tmp4*_tmp41 - _tmp2*_tmp40;
     const double _tmp43 = _tmp2*_tmp41 + _tmp4*_tmp40;
     const double _tmp44 = _tmp43*_tmp9;
-    const double _tmp45 = _tmp11*pow(_tmp43, 3);
+    const double _tmp45 = _tmp11*(_tmp43*_tmp43*_tmp43);
     const double _tmp46 = pow(_tmp43, 2);
     const double _tmp47 = _tmp16*_tmp46;
     const double _tmp48 = 0.08333333333333333 + 13492063492.063492*_tmp47 - 33333.333333333336*_tmp44 - 5467372134038801.0*_tmp45;
@@ -799,7 +851,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp57 = _tmp56*mu_3 - _tmp55*mu_2;
     const double _tmp58 = _tmp55*mu_3 + _tmp56*mu_2;
     const double _tmp59 = _tmp58*_tmp9;
-    const double _tmp60 = _tmp11*pow(_tmp58, 3);
+    const double _tmp60 = _tmp11*(_tmp58*_tmp58*_tmp58);
     const double _tmp61 = pow(_tmp58, 2);
     const double _tmp62 = _tmp16*_tmp61;
     const double _tmp63 = 0.08333333333333333 + 13492063492.063492*_tmp62 - 33333.333333333336*_tmp59 - 5467372134038801.0*_tmp60;
@@ -814,7 +866,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp72 = _tmp71*mu_3 - _tmp70*mu_2;
     const double _tmp73 = _tmp70*mu_3 + _tmp71*mu_2;
     const double _tmp74 = _tmp73*_tmp9;
-    const double _tmp75 = _tmp11*pow(_tmp73, 3);
+    const double _tmp75 = _tmp11*(_tmp73*_tmp73*_tmp73);
     const double _tmp76 = pow(_tmp73, 2);
     const double _tmp77 = _tmp16*_tmp76;
     const double _tmp78 = 0.08333333333333333 + 13492063492.063492*_tmp77 - 33333.333333333336*_tmp74 - 5467372134038801.0*_tmp75;
@@ -828,7 +880,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp86 = -_tmp84*mu_2 - _tmp85*mu_3;
     const double _tmp87 = _tmp84*mu_3 - _tmp85*mu_2;
     const double _tmp88 = _tmp87*_tmp9;
-    const double _tmp89 = _tmp11*pow(_tmp87, 3);
+    const double _tmp89 = _tmp11*(_tmp87*_tmp87*_tmp87);
     const double _tmp90 = pow(_tmp87, 2);
     const double _tmp91 = _tmp16*_tmp90;
     const double _tmp92 = 0.08333333333333333 + 13492063492.063492*_tmp91 - 33333.333333333336*_tmp88 - 5467372134038801.0*_tmp89;
@@ -842,7 +894,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp100 = _tmp99*mu_6 - _tmp98*mu_5;
     const double _tmp101 = _tmp98*mu_6 + _tmp99*mu_5;
     const double _tmp102 = _tmp101*_tmp9;
-    const double _tmp103 = _tmp11*pow(_tmp101, 3);
+    const double _tmp103 = _tmp11*(_tmp101*_tmp101*_tmp101);
     const double _tmp104 = pow(_tmp101, 2);
     const double _tmp105 = _tmp104*_tmp16;
     const double _tmp106 = 0.08333333333333333 + 13492063492.063492*_tmp105 - 33333.333333333336*_tmp102 - 5467372134038801.0*_tmp103;
@@ -856,7 +908,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp114 = _tmp113*mu_6 - _tmp112*mu_5;
     const double _tmp115 = _tmp112*mu_6 + _tmp113*mu_5;
     const double _tmp116 = _tmp115*_tmp9;
-    const double _tmp117 = _tmp11*pow(_tmp115, 3);
+    const double _tmp117 = _tmp11*(_tmp115*_tmp115*_tmp115);
     const double _tmp118 = pow(_tmp115, 2);
     const double _tmp119 = _tmp118*_tmp16;
     const double _tmp120 = 0.08333333333333333 + 13492063492.063492*_tmp119 - 33333.333333333336*_tmp116 - 5467372134038801.0*_tmp117;
@@ -868,7 +920,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp126 = _tmp124*mu_3 + _tmp125*mu_2;
     const double _tmp127 = _tmp124*mu_2 - _tmp125*mu_3;
     const double _tmp128 = _tmp127*_tmp9;
-    const double _tmp129 = _tmp11*pow(_tmp127, 3);
+    const double _tmp129 = _tmp11*(_tmp127*_tmp127*_tmp127);
     const double _tmp130 = pow(_tmp127, 2);
     const double _tmp131 = _tmp130*_tmp16;
     const double _tmp132 = 0.08333333333333333 + 13492063492.063492*_tmp131 - 33333.333333333336*_tmp128 - 5467372134038801.0*_tmp129;
@@ -879,7 +931,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp137 = _tmp135*mu_6 + _tmp136*mu_5;
     const double _tmp138 = _tmp135*mu_5 - _tmp136*mu_6;
     const double _tmp139 = _tmp138*_tmp9;
-    const double _tmp140 = _tmp11*pow(_tmp138, 3);
+    const double _tmp140 = _tmp11*(_tmp138*_tmp138*_tmp138);
     const double _tmp141 = pow(_tmp138, 2);
     const double _tmp142 = _tmp141*_tmp16;
     const double _tmp143 = 0.08333333333333333 + 13492063492.063492*_tmp142 - 33333.333333333336*_tmp139 - 5467372134038801.0*_tmp140;
@@ -1255,7 +1307,7 @@ static void sk_loaded_newton(const double *theta, const double *delta, const dou
     const double _tmp130 = 0.5*_tmp1*_tmp25;
     const double _tmp131 = _tmp42*p_0;
     const double _tmp132 = 0.125*_tmp26;
-    const double _tmp133 = 0.0625*pow(_tmp1, 3)*(-3*symkin_sinr2(_tmp23) + 3*symkin_cosr2(_tmp23) + symkin_sinr1(_tmp23));
+    const double _tmp133 = 0.0625*(_tmp1*_tmp1*_tmp1)*(-3*symkin_sinr2(_tmp23) + 3*symkin_cosr2(_tmp23) + symkin_sinr1(_tmp23));
     const double _tmp134 = _tmp129*_tmp130 + _tmp129*_tmp133 + _tmp131*_tmp132;
     const double _tmp135 = _tmp130*_tmp131 + _tmp131*_tmp133 - _tmp129*_tmp132;
     const double _tmp136 = 0.5*_tmp12;
@@ -1263,14 +1315,14 @@ static void sk_loaded_newton(const double *theta, const double *delta, const dou
     const double _tmp138 = _tmp11*p_0;
     const double _tmp139 = 0.125*_tmp13;
     const double _tmp140 = 0.0625*p_0;
-    const double _tmp141 = _tmp140*pow(_tmp12, 3)*(-3*symkin_sinr2(_tmp8) + 3*symkin_cosr2(_tmp8) + symkin_sinr1(_tmp8));
+    const double _tmp141 = _tmp140*(_tmp12*_tmp12*_tmp12)*(-3*symkin_sinr2(_tmp8) + 3*symkin_cosr2(_tmp8) + symkin_sinr1(_tmp8));
     const double _tmp142 = -_tmp136*_tmp137 - _tmp138*_tmp139 - _tmp141*_tmp45;
     const double _tmp143 = _tmp10*_tmp141 + _tmp136*_tmp138 - _tmp137*_tmp139;
     const double _tmp144 = _tmp54*p_0;
     const double _tmp145 = 0.5*_tmp55*_tmp57;
     const double _tmp146 = _tmp74*p_0;
     const double _tmp147 = 0.125*_tmp58;
-    const double _tmp148 = _tmp140*pow(_tmp55, 3)*(-3*symkin_sinr2(_tmp53) + 3*symkin_cosr2(_tmp53) + symkin_sinr1(_tmp53));
+    const double _tmp148 = _tmp140*(_tmp55*_tmp55*_tmp55)*(-3*symkin_sinr2(_tmp53) + 3*symkin_cosr2(_tmp53) + symkin_sinr1(_tmp53));
     const double _tmp149 = 0.05*_tmp127 - 0.04*_tmp125;
     const double _tmp150 = _tmp86 + _tmp91;
     const double _tmp151 = cos(_tmp150);
@@ -1281,21 +1333,21 @@ static void sk_loaded_newton(const double *theta, const double *delta, const dou
     const double _tmp156 = 0.5*_tmp81*_tmp82;
     const double _tmp157 = _tmp106*p_0;
     const double _tmp158 = 0.125*_tmp83;
-    const double _tmp159 = _tmp140*pow(_tmp81, 3)*(-3*symkin_sinr2(_tmp79) + 3*symkin_cosr2(_tmp79) + symkin_sinr1(_tmp79));
+    const double _tmp159 = _tmp140*(_tmp81*_tmp81*_tmp81)*(-3*symkin_sinr2(_tmp79) + 3*symkin_cosr2(_tmp79) + symkin_sinr1(_tmp79));
     const double _tmp160 = _tmp155*_tmp156 + _tmp157*_tmp158 + _tmp159*_tmp80;
     const double _tmp161 = _tmp106*_tmp159 + _tmp156*_tmp157 - _tmp155*_tmp158;
     const double _tmp162 = _tmp109*p_0;
     const double _tmp163 = 0.5*_tmp91*_tmp92;
     const double _tmp164 = 0.125*_tmp93;
     const double _tmp165 = _tmp90*p_0;
-    const double _tmp166 = _tmp140*pow(_tmp91, 3)*(-3*symkin_sinr2(_tmp89) + 3*symkin_cosr2(_tmp89) + symkin_sinr1(_tmp89));
+    const double _tmp166 = _tmp140*(_tmp91*_tmp91*_tmp91)*(-3*symkin_sinr2(_tmp89) + 3*symkin_cosr2(_tmp89) + symkin_sinr1(_tmp89));
     const double _tmp167 = _tmp109*_tmp166 + _tmp162*_tmp163 - _tmp164*_tmp165;
     const double _tmp168 = _tmp162*_tmp164 + _tmp163*_tmp165 + _tmp166*_tmp90;
     const double _tmp169 = _tmp117*p_0;
     const double _tmp170 = 0.5*_tmp118*_tmp120;
     const double _tmp171 = _tmp122*p_0;
     const double _tmp172 = 0.125*_tmp121;
-    const double _tmp173 = _tmp140*pow(_tmp118, 3)*(-3*symkin_sinr2(_tmp116) + 3*symkin_cosr2(_tmp116) + symkin_sinr1(_tmp116));
+    const double _tmp173 = _tmp140*(_tmp118*_tmp118*_tmp118)*(-3*symkin_sinr2(_tmp116) + 3*symkin_cosr2(_tmp116) + symkin_sinr1(_tmp116));
     const double _tmp174 = 0.035*_tmp153 - 0.025*_tmp151;
     out[0] = delta_9 - _tmp0;
     out[1] = _tmp73 - _tmp48 - compliance_y_9 + _tmp16*_tmp6 + _tmp17*_tmp20 + _tmp21*_tmp28 + _tmp30*_tmp33 + _tmp35*_tmp38 - _tmp39*_tmp40 - _tmp41*_tmp43 - _tmp49*_tmp50 - _tmp51*_tmp52 - _tmp14*_tmp54*_tmp58;
@@ -1658,10 +1710,10 @@ static void sk_sens_paper(const double *theta, const double *delta, const double
     const double _tmp21 = _tmp12*_tmp20;
     const double _tmp22 = _tmp11*_tmp14;
     const double _tmp23 = _tmp22*_tmp8;
-    const double _tmp24 = 0.0625*pow(theta_1, 3)*(-3*symkin_sinr2(_tmp0) + 3*symkin_cosr2(_tmp0) + symkin_sinr1(_tmp0));
+    const double _tmp24 = 0.0625*(theta_1*theta_1*theta_1)*(-3*symkin_sinr2(_tmp0) + 3*symkin_cosr2(_tmp0) + symkin_sinr1(_tmp0));
     const double _tmp25 = _tmp5*p_0;
     const double _tmp26 = _tmp10*_tmp19;
-    const double _tmp27 = 0.0625*p_0*pow(theta_2, 3)*(-3*symkin_sinr2(_tmp5) + 3*symkin_cosr2(_tmp5) + symkin_sinr1(_tmp5));
+    const double _tmp27 = 0.0625*p_0*(theta_2*theta_2*theta_2)*(-3*symkin_sinr2(_tmp5) + 3*symkin_cosr2(_tmp5) + symkin_sinr1(_tmp5));
     const double _tmp28 = _tmp20*_tmp26 + _tmp25*_tmp8 + _tmp27*_tmp7;
     const double _tmp29 = _tmp15*_tmp27 + _tmp20*_tmp25 - _tmp26*_tmp8;
     const double _tmp30 = _tmp18*p_0;
@@ -1720,10 +1772,10 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp21 = _tmp12*_tmp20;
     const double _tmp22 = _tmp11*_tmp14;
     const double _tmp23 = _tmp22*_tmp8;
-    const double _tmp24 = 0.0625*pow(theta_1, 3)*(-3*symkin_sinr2(_tmp0) + 3*symkin_cosr2(_tmp0) + symkin_sinr1(_tmp0));
+    const double _tmp24 = 0.0625*(theta_1*theta_1*theta_1)*(-3*symkin_sinr2(_tmp0) + 3*symkin_cosr2(_tmp0) + symkin_sinr1(_tmp0));
     const double _tmp25 = _tmp5*p_0;
     const double _tmp26 = _tmp10*_tmp19;
-    const double _tmp27 = 0.0625*p_0*pow(theta_2, 3)*(-3*symkin_sinr2(_tmp5) + 3*symkin_cosr2(_tmp5) + symkin_sinr1(_tmp5));
+    const double _tmp27 = 0.0625*p_0*(theta_2*theta_2*theta_2)*(-3*symkin_sinr2(_tmp5) + 3*symkin_cosr2(_tmp5) + symkin_sinr1(_tmp5));
     const double _tmp28 = _tmp20*_tmp26 + _tmp25*_tmp8 + _tmp27*_tmp7;
     const double _tmp29 = _tmp15*_tmp27 + _tmp20*_tmp25 - _tmp26*_tmp8;
     const double _tmp30 = _tmp18*p_0;
@@ -1782,10 +1834,10 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp21 = _tmp12*_tmp20;
     const double _tmp22 = _tmp11*_tmp14;
     const double _tmp23 = _tmp22*_tmp8;
-    const double _tmp24 = 0.0625*pow(theta_1, 3)*(-3*symkin_sinr2(_tmp0) + 3*symkin_cosr2(_tmp0) + symkin_sinr1(_tmp0));
+    const double _tmp24 = 0.0625*(theta_1*theta_1*theta_1)*(-3*symkin_sinr2(_tmp0) + 3*symkin_cosr2(_tmp0) + symkin_sinr1(_tmp0));
     const double _tmp25 = _tmp5*p_0;
     const double _tmp26 = _tmp10*_tmp19;
-    const double _tmp27 = 0.0625*p_0*pow(theta_2, 3)*(-3*symkin_sinr2(_tmp5) + 3*symkin_cosr2(_tmp5) + symkin_sinr1(_tmp5));
+    const double _tmp27 = 0.0625*p_0*(theta_2*theta_2*theta_2)*(-3*symkin_sinr2(_tmp5) + 3*symkin_cosr2(_tmp5) + symkin_sinr1(_tmp5));
     const double _tmp28 = _tmp20*_tmp26 + _tmp25*_tmp8 + _tmp27*_tmp7;
     const double _tmp29 = _tmp15*_tmp27 + _tmp20*_tmp25 - _tmp26*_tmp8;
     const double _tmp30 = _tmp18*p_0;
@@ -2090,7 +2142,8 @@ typedef struct {
     int loops_for_links;            /* the links' rotations alone need it */
     sk_fn2 rigid;                   /* closed-form rigid angles and reaches (inputs, params) */
     int n_dyads;
-    sk_fn2 rigid_res;               /* rigid closure (theta, params): per loop angle, x, y */
+    sk_fn2 rigid_res;               /* rigid closure (theta, params): per loop angle, x, y;
+                                       then its Jacobian A (k x k) */
     int n_angular;                  /* the rows of rigid_res that are loops' angle sums */
     const int *angular;
     sk_fn2 linear;                  /* its Jacobian A, r and S (theta, params) */
@@ -2154,17 +2207,12 @@ typedef struct {
     double *theta;
 } sk_rigid_ctx;
 
-/* The rigid closure and its Jacobian A (the first block of `linear`) at theta. */
+/* The rigid closure and its Jacobian A at theta: rigid_res computes both (A alone, not all of
+   `linear`: a polish step or a continuation step needs no r nor S). */
 static void sk_rigid_system(const void *ctx, const double *theta, double *fj)
 {
     const sk_rigid_ctx *c = (const sk_rigid_ctx *)ctx;
-    double lin[SK_K * SK_K + 2 * SK_K + 1];
-    int i;
     c->m->rigid_res(theta, c->params, fj);
-    c->m->linear(theta, c->params, lin);
-    for (i = 0; i < SK_K * SK_K; ++i) {
-        fj[SK_K + i] = lin[i];
-    }
 }
 
 /* The rigid angles of the unknown hinges, theta's inputs set: the closed-form dyads, or
@@ -2270,8 +2318,8 @@ static int sk_loaded_constants(const sk_mechanism *m, const double *theta, const
     double lin[SK_K * SK_K + 2 * SK_K + 1], at[SK_K * SK_K + 1], mu0[SK_K + 1], loads[SK_K + 1];
     int j, piv[SK_K + 1];
     if (jac == NULL) {
-        m->linear(theta, params, lin);
-        jac = lin;
+        m->rigid_res(theta, params, lin);   /* A follows the residual */
+        jac = lin + SK_K;
     }
     for (i = 0; i < SK_K; ++i) {
         for (j = 0; j < SK_K; ++j) {

@@ -3,7 +3,7 @@
  * Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
  * Points: F; levels: paper, first_order, exact, loaded, loaded_refined.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 158, rigid_res 114, linear 275, newton 531, rigid_points 14, loaded_q0 16, loaded_q 126, loaded_compliance 562, loaded_linear 288, loaded_newton 539, dev_paper 33, dev_first_order 33, dev_exact 33, dev_loaded 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
+ * Operation counts after CSE: rigid 158, rigid_res 148, linear 275, newton 531, rigid_points 14, loaded_q0 16, loaded_q 126, loaded_compliance 562, loaded_linear 288, loaded_newton 539, dev_paper 33, dev_first_order 33, dev_exact 33, dev_loaded 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
  */
 #ifndef SYMKIN_NINE_BAR_PLATFORM_H
 #define SYMKIN_NINE_BAR_PLATFORM_H

@@ -2,7 +2,7 @@
 Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
 Points: F; levels: paper, first_order, exact, loaded, loaded_refined.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 158, rigid_res 114, linear 275, newton 531, rigid_points 14, loaded_q0 16, loaded_q 126, loaded_compliance 562, loaded_linear 288, loaded_newton 539, dev_paper 33, dev_first_order 33, dev_exact 33, dev_loaded 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
+Operation counts after CSE: rigid 158, rigid_res 148, linear 275, newton 531, rigid_points 14, loaded_q0 16, loaded_q 126, loaded_compliance 562, loaded_linear 288, loaded_newton 539, dev_paper 33, dev_first_order 33, dev_exact 33, dev_loaded 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -265,8 +265,9 @@ def _rigid_angles(mech, x, params, ok):
     k = len(mech.unknown_index)
 
     def system(theta):
-        res = [numpy.broadcast_to(r, shape) for r in mech.rigid_res(theta, params)]
-        return res + mech.linear(theta, params)[: k * k]
+        # the residual, then A (rigid_res holds both)
+        fj = mech.rigid_res(theta, params)
+        return [numpy.broadcast_to(r, shape) for r in fj[:k]] + fj[k:]
 
     if mech.rigid is not None:
         out = mech.rigid(x, params)
@@ -348,7 +349,7 @@ def _loaded_constants(mech, theta, params, ok, jac=None, more=False):
     if mech.unknown_index:
         k = len(mech.unknown_index)
         if jac is None:
-            jac = mech.linear(theta, params)
+            jac = mech.rigid_res(theta, params)[k:]  # A follows the residual
         at = [jac[j * k + i] for i in range(k) for j in range(k)]
         mu0 = []
         if mech.loaded_q0 is not None:
@@ -705,7 +706,7 @@ def _rigid(inputs, params):
 
 
 def _rigid_res(theta, params):
-    """rigid loop closure relative to the as-fabricated pose (114 operations)."""
+    """rigid loop closure relative to the as-fabricated pose and its Jacobian A (148 operations)."""
     theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7, theta_8, theta_9, theta_10 = theta
     _tmp0 = theta_1 + theta_2
     _tmp1 = _tmp0 + theta_3
@@ -722,27 +723,79 @@ def _rigid_res(theta, params):
     _tmp12 = numpy.sin(_tmp11)**2
     _tmp13 = numpy.sin(_tmp1)
     _tmp14 = numpy.sin(_tmp4)
-    _tmp15 = numpy.sin(_tmp2)
-    _tmp16 = numpy.sin(_tmp3)
-    _tmp17 = numpy.sin(_tmp11 + 0.5*theta_6)**2
-    _tmp18 = numpy.sin(_tmp6)**2
-    _tmp19 = numpy.sin(_tmp0)
-    _tmp20 = 0.06*numpy.sin(theta_1) + 0.1*_tmp18 + 0.02*_tmp19
-    _tmp21 = 0.05*_tmp19 - 0.12*numpy.sin(_tmp5)**2 - 0.04*_tmp18
-    _tmp22 = _tmp1 + theta_7
-    _tmp23 = _tmp22 + theta_8
-    _tmp24 = _tmp7 + 0.5*theta_7
-    _tmp25 = numpy.sin(_tmp24)**2
-    _tmp26 = numpy.sin(_tmp23)
-    _tmp27 = numpy.sin(_tmp24 + 0.5*theta_8)**2
-    _tmp28 = numpy.sin(_tmp22)
+    _tmp15 = 0.05*_tmp14
+    _tmp16 = numpy.sin(_tmp2)
+    _tmp17 = numpy.sin(_tmp3)
+    _tmp18 = 0.02*_tmp17
+    _tmp19 = numpy.sin(_tmp11 + 0.5*theta_6)**2
+    _tmp20 = numpy.sin(_tmp6)**2
+    _tmp21 = numpy.sin(_tmp0)
+    _tmp22 = 0.06*numpy.sin(theta_1) + 0.1*_tmp20 + 0.02*_tmp21
+    _tmp23 = 0.05*_tmp17
+    _tmp24 = 0.04*_tmp14
+    _tmp25 = 0.05*_tmp21 - 0.12*numpy.sin(_tmp5)**2 - 0.04*_tmp20
+    _tmp26 = _tmp1 + theta_7
+    _tmp27 = _tmp26 + theta_8
+    _tmp28 = _tmp7 + 0.5*theta_7
+    _tmp29 = numpy.sin(_tmp28)**2
+    _tmp30 = numpy.sin(_tmp27)
+    _tmp31 = 0.035*_tmp30
+    _tmp32 = numpy.sin(_tmp28 + 0.5*theta_8)**2
+    _tmp33 = numpy.sin(_tmp26)
+    _tmp34 = 0.005*_tmp33
+    _tmp35 = 0.04*_tmp33
+    _tmp36 = 0.025*_tmp30
+    _tmp37 = numpy.cos(_tmp3)
+    _tmp38 = numpy.cos(_tmp4)
+    _tmp39 = _tmp24 + 0.05*_tmp38
+    _tmp40 = _tmp15 - 0.04*_tmp38
+    _tmp41 = numpy.cos(_tmp26)
+    _tmp42 = numpy.cos(_tmp27)
+    _tmp43 = _tmp36 + 0.035*_tmp42
+    _tmp44 = _tmp31 - 0.025*_tmp42
     return [
         theta_9 - _tmp4,
-        _tmp20 + 0.1*_tmp10 + 0.1*_tmp12 + 0.1*_tmp8 + 0.01*_tmp13 - 0.05*_tmp14 - 0.02*_tmp15 - 0.02*_tmp16 - 0.08*_tmp17,
-        -_tmp21 + 0.02*_tmp8 + 0.04*_tmp14 - 0.05*_tmp13 - 0.05*_tmp15 - 0.05*_tmp16 - 0.1*_tmp17 - 0.04*_tmp10 - 0.04*_tmp12,
-        theta_10 - _tmp23,
-        _tmp20 + 0.04*_tmp8 + 0.08*_tmp25 - 0.035*_tmp26 - 0.05*_tmp27 - 0.005*_tmp28 - 0.04*_tmp13,
-        -_tmp21 + 0.025*_tmp26 - 0.07*_tmp27 - 0.01*_tmp25 - 0.02*_tmp13 - 0.04*_tmp28 - 0.08*_tmp8,
+        _tmp22 - _tmp15 - _tmp18 + 0.1*_tmp10 + 0.1*_tmp12 + 0.1*_tmp8 + 0.01*_tmp13 - 0.02*_tmp16 - 0.08*_tmp19,
+        _tmp24 - _tmp23 - _tmp25 + 0.02*_tmp8 - 0.05*_tmp13 - 0.05*_tmp16 - 0.1*_tmp19 - 0.04*_tmp10 - 0.04*_tmp12,
+        theta_10 - _tmp27,
+        _tmp22 - _tmp31 - _tmp34 + 0.04*_tmp8 + 0.08*_tmp29 - 0.05*_tmp32 - 0.04*_tmp13,
+        _tmp36 - _tmp25 - _tmp35 - 0.07*_tmp32 - 0.01*_tmp29 - 0.02*_tmp13 - 0.08*_tmp8,
+        -1,
+        -1,
+        0,
+        0,
+        1,
+        0,
+        _tmp23 - _tmp39 - 0.02*_tmp37,
+        -_tmp39,
+        0,
+        0,
+        0,
+        0,
+        -_tmp18 - _tmp40 - 0.05*_tmp37,
+        -_tmp40,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -1,
+        -1,
+        0,
+        1,
+        0,
+        0,
+        _tmp35 - _tmp43 - 0.005*_tmp41,
+        -_tmp43,
+        0,
+        0,
+        0,
+        0,
+        -_tmp34 - _tmp44 - 0.04*_tmp41,
+        -_tmp44,
+        0,
+        0,
     ]
 
 

@@ -3,7 +3,7 @@
  * Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
  * Points: D; levels: paper, first_order, exact, loaded, loaded_refined.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 142, rigid_res 81, linear 251, newton 556, rigid_points 19, loaded_q0 16, loaded_q 128, loaded_compliance 401, loaded_linear 235, loaded_newton 527, dev_paper 36, dev_first_order 50, dev_exact 60, dev_loaded 68, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661.
+ * Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_q0 16, loaded_q 128, loaded_compliance 401, loaded_linear 235, loaded_newton 527, dev_paper 36, dev_first_order 50, dev_exact 60, dev_loaded 68, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661.
  */
 #include "stephenson_six_bar.h"
 
@@ -167,7 +167,7 @@ static void sk_rigid(const double *inputs, const double *params, double *out)
     out[9] = dyad2_margin;
 }
 
-/* rigid loop closure relative to the as-fabricated pose (81 operations) */
+/* rigid loop closure relative to the as-fabricated pose and its Jacobian A (121 operations) */
 static void sk_rigid_res(const double *theta, const double *params, double *out)
 {
     (void)params;
@@ -182,26 +182,76 @@ static void sk_rigid_res(const double *theta, const double *params, double *out)
     const double _tmp1 = sin(theta_1);
     const double _tmp2 = 0.03*_tmp1;
     const double _tmp3 = sin(theta_3);
-    const double _tmp4 = sin(theta_3 + theta_5);
-    const double _tmp5 = 0.5*theta_1;
-    const double _tmp6 = pow(sin(_tmp5), 2);
-    const double _tmp7 = 0.5*theta_3;
+    const double _tmp4 = theta_3 + theta_5;
+    const double _tmp5 = sin(_tmp4);
+    const double _tmp6 = 0.03*_tmp5;
+    const double _tmp7 = 0.5*theta_1;
     const double _tmp8 = pow(sin(_tmp7), 2);
-    const double _tmp9 = 0.04*_tmp8;
-    const double _tmp10 = pow(sin(_tmp7 + 0.5*theta_5), 2);
-    const double _tmp11 = 0.02*_tmp3;
-    const double _tmp12 = 0.06*_tmp6;
-    const double _tmp13 = theta_1 + theta_2;
-    const double _tmp14 = sin(_tmp13);
-    const double _tmp15 = sin(theta_3 + theta_4);
-    const double _tmp16 = pow(sin(_tmp5 + 0.5*theta_2), 2);
-    const double _tmp17 = pow(sin(_tmp7 + 0.5*theta_4), 2);
+    const double _tmp9 = 0.5*theta_3;
+    const double _tmp10 = pow(sin(_tmp9), 2);
+    const double _tmp11 = 0.04*_tmp10;
+    const double _tmp12 = pow(sin(_tmp9 + 0.5*theta_5), 2);
+    const double _tmp13 = 0.02*_tmp3;
+    const double _tmp14 = 0.072*_tmp5;
+    const double _tmp15 = 0.06*_tmp8;
+    const double _tmp16 = theta_1 + theta_2;
+    const double _tmp17 = sin(_tmp16);
+    const double _tmp18 = 0.07*_tmp17;
+    const double _tmp19 = theta_3 + theta_4;
+    const double _tmp20 = sin(_tmp19);
+    const double _tmp21 = pow(sin(_tmp7 + 0.5*theta_2), 2);
+    const double _tmp22 = pow(sin(_tmp9 + 0.5*theta_4), 2);
+    const double _tmp23 = 0.04*_tmp17;
+    const double _tmp24 = 0.05*_tmp20;
+    const double _tmp25 = cos(theta_3);
+    const double _tmp26 = cos(_tmp4);
+    const double _tmp27 = _tmp14 + 0.03*_tmp26;
+    const double _tmp28 = 0.02*_tmp25;
+    const double _tmp29 = cos(_tmp16);
+    const double _tmp30 = cos(_tmp19);
+    const double _tmp31 = 0.05*_tmp30 + 0.04*_tmp20;
     out[0] = _tmp0 + theta_1 + theta_6 - theta_5;
-    out[1] = -_tmp2 - _tmp9 + 0.06*_tmp3 - 0.03*_tmp4 - 0.016*_tmp6 - 0.144*_tmp10;
-    out[2] = _tmp11 - _tmp12 + 0.12*_tmp8 + 0.008*_tmp1 + 0.072*_tmp4 - 0.06*_tmp10;
-    out[3] = _tmp0 + _tmp13 + theta_7 - theta_4;
-    out[4] = _tmp9 - _tmp12 + 0.05*_tmp3 + 0.04*_tmp15 - 0.07*_tmp14 - 0.1*_tmp17 - 0.02*_tmp1 - 0.08*_tmp16;
-    out[5] = _tmp2 - _tmp11 + 0.05*_tmp15 + 0.1*_tmp8 + 0.04*_tmp14 + 0.08*_tmp17 - 0.14*_tmp16 - 0.04*_tmp6;
+    out[1] = -_tmp11 - _tmp2 - _tmp6 + 0.06*_tmp3 - 0.016*_tmp8 - 0.144*_tmp12;
+    out[2] = _tmp13 + _tmp14 - _tmp15 + 0.12*_tmp10 + 0.008*_tmp1 - 0.06*_tmp12;
+    out[3] = _tmp0 + _tmp16 + theta_7 - theta_4;
+    out[4] = _tmp11 - _tmp15 - _tmp18 + 0.05*_tmp3 + 0.04*_tmp20 - 0.1*_tmp22 - 0.02*_tmp1 - 0.08*_tmp21;
+    out[5] = _tmp2 + _tmp23 + _tmp24 - _tmp13 + 0.1*_tmp10 + 0.08*_tmp22 - 0.14*_tmp21 - 0.04*_tmp8;
+    out[6] = 0;
+    out[7] = -1;
+    out[8] = 0;
+    out[9] = -1;
+    out[10] = 1;
+    out[11] = 0;
+    out[12] = 0;
+    out[13] = -_tmp13 - _tmp27 + 0.06*_tmp25;
+    out[14] = 0;
+    out[15] = -_tmp27;
+    out[16] = 0;
+    out[17] = 0;
+    out[18] = 0;
+    out[19] = _tmp28 - _tmp6 + 0.06*_tmp3 + 0.072*_tmp26;
+    out[20] = 0;
+    out[21] = -_tmp6 + 0.072*_tmp26;
+    out[22] = 0;
+    out[23] = 0;
+    out[24] = 1;
+    out[25] = -1;
+    out[26] = -1;
+    out[27] = 0;
+    out[28] = 0;
+    out[29] = 1;
+    out[30] = -_tmp23 - 0.07*_tmp29;
+    out[31] = _tmp13 - _tmp24 + 0.05*_tmp25 + 0.04*_tmp30;
+    out[32] = -_tmp24 + 0.04*_tmp30;
+    out[33] = 0;
+    out[34] = 0;
+    out[35] = 0;
+    out[36] = -_tmp18 + 0.04*_tmp29;
+    out[37] = _tmp31 - _tmp28 + 0.05*_tmp3;
+    out[38] = _tmp31;
+    out[39] = 0;
+    out[40] = 0;
+    out[41] = 0;
 }
 
 /* rigid loop Jacobian A, r = Phi dz and the size S of its terms (251 operations) */
@@ -503,7 +553,7 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp130 = 0.072*_tmp129;
     const double _tmp131 = 0.02*_tmp20;
     const double _tmp132 = 0.0625*p_0;
-    const double _tmp133 = _tmp132*pow(_tmp19, 3)*(-3*symkin_sinr2(_tmp54) + 3*symkin_cosr2(_tmp54) + symkin_sinr1(_tmp54));
+    const double _tmp133 = _tmp132*(_tmp19*_tmp19*_tmp19)*(-3*symkin_sinr2(_tmp54) + 3*symkin_cosr2(_tmp54) + symkin_sinr1(_tmp54));
     const double _tmp134 = 0.125*p_0;
     const double _tmp135 = _tmp134*_tmp53;
     const double _tmp136 = _tmp55*_tmp56;
@@ -514,13 +564,13 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp141 = _tmp137*_tmp46 + _tmp44*_tmp48*(0.5*cos(_tmp41) + 0.39966552557377366*cos(_tmp40)) + _tmp45*_tmp48*(_tmp42*_tmp47 + _tmp43*(0.25*_tmp18*(-3*symkin_sinr2(_tmp41) + symkin_cosr2(_tmp41)) - 0.037793019340658006*_tmp18*(-3*symkin_sinr2(_tmp40) + symkin_cosr2(_tmp40))));
     const double _tmp142 = _tmp137*_tmp30;
     const double _tmp143 = _tmp134*_tmp31;
-    const double _tmp144 = _tmp132*pow(_tmp30, 3)*(-3*symkin_sinr2(_tmp25) + 3*symkin_cosr2(_tmp25) + symkin_sinr1(_tmp25));
+    const double _tmp144 = _tmp132*(_tmp30*_tmp30*_tmp30)*(-3*symkin_sinr2(_tmp25) + 3*symkin_cosr2(_tmp25) + symkin_sinr1(_tmp25));
     const double _tmp145 = -_tmp142*_tmp28 - _tmp143*_tmp36 - _tmp144*_tmp26;
     const double _tmp146 = _tmp142*_tmp36 + _tmp144*_tmp35 - _tmp143*_tmp28;
     const double _tmp147 = 0.02*_tmp39;
     const double _tmp148 = 0.03*_tmp129;
     const double _tmp149 = _tmp135*_tmp136 - _tmp133*_tmp62 - _tmp138*_tmp63;
-    const double _tmp150 = pow(_tmp78, 3);
+    const double _tmp150 = (_tmp78*_tmp78*_tmp78);
     const double _tmp151 = -3*symkin_sinr2(_tmp81) + 3*symkin_cosr2(_tmp81) + symkin_sinr1(_tmp81);
     const double _tmp152 = 0.04419417382415922*_tmp150*_tmp151;
     const double _tmp153 = 0.3535533905932738*_tmp78;
@@ -535,12 +585,12 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp162 = 0.04*_tmp160 - 0.05*_tmp161;
     const double _tmp163 = _tmp100*_tmp137;
     const double _tmp164 = _tmp101*_tmp134;
-    const double _tmp165 = _tmp132*pow(_tmp100, 3)*(-3*symkin_sinr2(_tmp96) + 3*symkin_cosr2(_tmp96) + symkin_sinr1(_tmp96));
+    const double _tmp165 = _tmp132*(_tmp100*_tmp100*_tmp100)*(-3*symkin_sinr2(_tmp96) + 3*symkin_cosr2(_tmp96) + symkin_sinr1(_tmp96));
     const double _tmp166 = _tmp116*_tmp165 + _tmp119*_tmp163 + _tmp164*_tmp99;
     const double _tmp167 = _tmp163*_tmp99 + _tmp165*_tmp98 - _tmp119*_tmp164;
     const double _tmp168 = _tmp111*_tmp137;
     const double _tmp169 = _tmp112*_tmp134;
-    const double _tmp170 = _tmp132*pow(_tmp111, 3)*(-3*symkin_sinr2(_tmp107) + 3*symkin_cosr2(_tmp107) + symkin_sinr1(_tmp107));
+    const double _tmp170 = _tmp132*(_tmp111*_tmp111*_tmp111)*(-3*symkin_sinr2(_tmp107) + 3*symkin_cosr2(_tmp107) + symkin_sinr1(_tmp107));
     const double _tmp171 = _tmp109*_tmp170 + _tmp110*_tmp168 + _tmp123*_tmp169;
     const double _tmp172 = _tmp118*_tmp170 + _tmp123*_tmp168 - _tmp110*_tmp169;
     out[0] = delta_6 - _tmp0;
@@ -640,7 +690,7 @@ static void sk_loaded_q(const double *theta, const double *mu0, const double *pa
     const double _tmp1 = -mu0_5*cos(_tmp0) - mu0_6*sin(_tmp0);
     const double _tmp2 = p_0 <= 0.008;
     const double _tmp3 = 250000*((_tmp2) ? (4.333333333333334e-12) : (4.761904761904762e-12))/p_0;
-    const double _tmp4 = 892857142857142.9*((_tmp2) ? (8.137037037037037e-35) : (1.0797969981643451e-34))/pow(p_0, 3);
+    const double _tmp4 = 892857142857142.9*((_tmp2) ? (8.137037037037037e-35) : (1.0797969981643451e-34))/(p_0*p_0*p_0);
     const double _tmp5 = pow(p_0, 2);
     const double _tmp6 = 12500000000*((_tmp2) ? (1.8777777777777777e-23) : (2.267573696145125e-23))/_tmp5;
     const double _tmp7 = 3.3333333333333335e-07*_tmp5*((_tmp2) ? (230769230769.23077) : (210000000000));
@@ -654,12 +704,12 @@ static void sk_loaded_q(const double *theta, const double *mu0, const double *pa
     const double _tmp15 = mu0_2*sin(_tmp14) - mu0_3*cos(_tmp14);
     const double _tmp16 = theta_1 + theta_2 + 0.5*theta_7;
     const double _tmp17 = -mu0_5*cos(_tmp16) - mu0_6*sin(_tmp16);
-    out[0] = -_tmp7*theta_2*(1 + _tmp1*_tmp3 + _tmp4*pow(_tmp1, 3) - _tmp6*pow(_tmp1, 2));
-    out[1] = -_tmp7*theta_3*(1 + _tmp3*_tmp9 + _tmp4*pow(_tmp9, 3) - _tmp6*pow(_tmp9, 2));
-    out[2] = -_tmp7*theta_4*(1 + _tmp11*_tmp3 + _tmp4*pow(_tmp11, 3) - _tmp6*pow(_tmp11, 2));
-    out[3] = -_tmp7*theta_5*(1 + _tmp13*_tmp3 + _tmp4*pow(_tmp13, 3) - _tmp6*pow(_tmp13, 2));
-    out[4] = -_tmp7*theta_6*(1 + _tmp15*_tmp3 + _tmp4*pow(_tmp15, 3) - _tmp6*pow(_tmp15, 2));
-    out[5] = -_tmp7*theta_7*(1 + _tmp17*_tmp3 + _tmp4*pow(_tmp17, 3) - _tmp6*pow(_tmp17, 2));
+    out[0] = -_tmp7*theta_2*(1 + _tmp1*_tmp3 + _tmp4*(_tmp1*_tmp1*_tmp1) - _tmp6*pow(_tmp1, 2));
+    out[1] = -_tmp7*theta_3*(1 + _tmp3*_tmp9 + _tmp4*(_tmp9*_tmp9*_tmp9) - _tmp6*pow(_tmp9, 2));
+    out[2] = -_tmp7*theta_4*(1 + _tmp11*_tmp3 + _tmp4*(_tmp11*_tmp11*_tmp11) - _tmp6*pow(_tmp11, 2));
+    out[3] = -_tmp7*theta_5*(1 + _tmp13*_tmp3 + _tmp4*(_tmp13*_tmp13*_tmp13) - _tmp6*pow(_tmp13, 2));
+    out[4] = -_tmp7*theta_6*(1 + _tmp15*_tmp3 + _tmp4*(_tmp15*_tmp15*_tmp15) - _tmp6*pow(_tmp15, 2));
+    out[5] = -_tmp7*theta_7*(1 + _tmp17*_tmp3 + _tmp4*(_tmp17*_tmp17*_tmp17) - _tmp6*pow(_tmp17, 2));
 }
 
 /* loaded: each plate's end displacement beyond its circular arc under its loads (401 operations) */
@@ -690,8 +740,8 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp10 = ((_tmp9) ? (4.333333333333334e-12) : (4.761904761904762e-12));
     const double _tmp11 = _tmp10/p_0;
     const double _tmp12 = _tmp11*_tmp8;
-    const double _tmp13 = ((_tmp9) ? (8.137037037037037e-35) : (1.0797969981643451e-34))/pow(p_0, 3);
-    const double _tmp14 = _tmp13*pow(_tmp8, 3);
+    const double _tmp13 = ((_tmp9) ? (8.137037037037037e-35) : (1.0797969981643451e-34))/(p_0*p_0*p_0);
+    const double _tmp14 = _tmp13*(_tmp8*_tmp8*_tmp8);
     const double _tmp15 = pow(_tmp8, 2);
     const double _tmp16 = pow(p_0, -2);
     const double _tmp17 = ((_tmp9) ? (1.8777777777777777e-23) : (2.267573696145125e-23));
@@ -709,7 +759,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp29 = _tmp27*mu_5 - _tmp28*mu_6;
     const double _tmp30 = -_tmp27*mu_6 - _tmp28*mu_5;
     const double _tmp31 = _tmp11*_tmp30;
-    const double _tmp32 = _tmp13*pow(_tmp30, 3);
+    const double _tmp32 = _tmp13*(_tmp30*_tmp30*_tmp30);
     const double _tmp33 = pow(_tmp30, 2);
     const double _tmp34 = _tmp18*_tmp33;
     const double _tmp35 = 0.08333333333333333 - 25000*_tmp31 + 7589285714.285714*_tmp34 - 2306547619047619.0*_tmp32;
@@ -721,7 +771,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp41 = -_tmp3*_tmp40 - _tmp39*_tmp5;
     const double _tmp42 = _tmp40*_tmp5 - _tmp3*_tmp39;
     const double _tmp43 = _tmp11*_tmp42;
-    const double _tmp44 = _tmp13*pow(_tmp42, 3);
+    const double _tmp44 = _tmp13*(_tmp42*_tmp42*_tmp42);
     const double _tmp45 = pow(_tmp42, 2);
     const double _tmp46 = _tmp18*_tmp45;
     const double _tmp47 = 0.08333333333333333 - 25000*_tmp43 + 7589285714.285714*_tmp46 - 2306547619047619.0*_tmp44;
@@ -734,7 +784,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp54 = _tmp53*mu_6 - _tmp52*mu_5;
     const double _tmp55 = _tmp52*mu_6 + _tmp53*mu_5;
     const double _tmp56 = _tmp11*_tmp55;
-    const double _tmp57 = _tmp13*pow(_tmp55, 3);
+    const double _tmp57 = _tmp13*(_tmp55*_tmp55*_tmp55);
     const double _tmp58 = pow(_tmp55, 2);
     const double _tmp59 = _tmp18*_tmp58;
     const double _tmp60 = 0.08333333333333333 - 25000*_tmp56 + 7589285714.285714*_tmp59 - 2306547619047619.0*_tmp57;
@@ -748,7 +798,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp68 = _tmp67*mu_3 - _tmp66*mu_2;
     const double _tmp69 = _tmp66*mu_3 + _tmp67*mu_2;
     const double _tmp70 = _tmp11*_tmp69;
-    const double _tmp71 = _tmp13*pow(_tmp69, 3);
+    const double _tmp71 = _tmp13*(_tmp69*_tmp69*_tmp69);
     const double _tmp72 = pow(_tmp69, 2);
     const double _tmp73 = _tmp18*_tmp72;
     const double _tmp74 = 0.08333333333333333 - 25000*_tmp70 + 7589285714.285714*_tmp73 - 2306547619047619.0*_tmp71;
@@ -762,7 +812,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp82 = _tmp80*mu_2 + _tmp81*mu_3;
     const double _tmp83 = _tmp81*mu_2 - _tmp80*mu_3;
     const double _tmp84 = _tmp11*_tmp83;
-    const double _tmp85 = _tmp13*pow(_tmp83, 3);
+    const double _tmp85 = _tmp13*(_tmp83*_tmp83*_tmp83);
     const double _tmp86 = pow(_tmp83, 2);
     const double _tmp87 = _tmp18*_tmp86;
     const double _tmp88 = 0.08333333333333333 - 25000*_tmp84 + 7589285714.285714*_tmp87 - 2306547619047619.0*_tmp85;
@@ -776,7 +826,7 @@ static void sk_loaded_compliance(const double *theta, const double *mu, const do
     const double _tmp96 = _tmp94*mu_5 - _tmp95*mu_6;
     const double _tmp97 = -_tmp94*mu_6 - _tmp95*mu_5;
     const double _tmp98 = _tmp11*_tmp97;
-    const double _tmp99 = _tmp13*pow(_tmp97, 3);
+    const double _tmp99 = _tmp13*(_tmp97*_tmp97*_tmp97);
     const double _tmp100 = pow(_tmp97, 2);
     const double _tmp101 = _tmp100*_tmp18;
     const double _tmp102 = 0.08333333333333333 - 25000*_tmp98 + 7589285714.285714*_tmp101 - 2306547619047619.0*_tmp99;
@@ -1098,21 +1148,21 @@ static void sk_loaded_newton(const double *theta, const double *delta, const dou
     const double _tmp118 = 0.072*_tmp117;
     const double _tmp119 = 0.02*_tmp32;
     const double _tmp120 = _tmp47*p_0;
-    const double _tmp121 = 0.0625*pow(_tmp1, 3)*(-3*symkin_sinr2(_tmp46) + 3*symkin_cosr2(_tmp46) + symkin_sinr1(_tmp46));
+    const double _tmp121 = 0.0625*(_tmp1*_tmp1*_tmp1)*(-3*symkin_sinr2(_tmp46) + 3*symkin_cosr2(_tmp46) + symkin_sinr1(_tmp46));
     const double _tmp122 = 0.125*p_0;
     const double _tmp123 = 0.5*_tmp1*_tmp48;
     const double _tmp124 = _tmp120*_tmp121 + _tmp120*_tmp123 + _tmp122*_tmp52*_tmp53;
     const double _tmp125 = 0.5*_tmp7*_tmp8;
     const double _tmp126 = _tmp5*p_0;
     const double _tmp127 = _tmp122*_tmp9;
-    const double _tmp128 = 0.0625*pow(_tmp7, 3)*(-3*symkin_sinr2(_tmp4) + 3*symkin_cosr2(_tmp4) + symkin_sinr1(_tmp4));
+    const double _tmp128 = 0.0625*(_tmp7*_tmp7*_tmp7)*(-3*symkin_sinr2(_tmp4) + 3*symkin_cosr2(_tmp4) + symkin_sinr1(_tmp4));
     const double _tmp129 = _tmp125*_tmp126 + _tmp126*_tmp128 - _tmp127*_tmp33;
     const double _tmp130 = _tmp33*p_0;
     const double _tmp131 = _tmp125*_tmp130 + _tmp127*_tmp5 + _tmp128*_tmp130;
     const double _tmp132 = _tmp36*p_0;
     const double _tmp133 = 0.5*_tmp16*_tmp17;
     const double _tmp134 = _tmp122*_tmp18;
-    const double _tmp135 = 0.0625*pow(_tmp16, 3)*(-3*symkin_sinr2(_tmp14) + 3*symkin_cosr2(_tmp14) + symkin_sinr1(_tmp14));
+    const double _tmp135 = 0.0625*(_tmp16*_tmp16*_tmp16)*(-3*symkin_sinr2(_tmp14) + 3*symkin_cosr2(_tmp14) + symkin_sinr1(_tmp14));
     const double _tmp136 = -_tmp132*_tmp133 - _tmp132*_tmp135 - _tmp134*_tmp15;
     const double _tmp137 = _tmp15*p_0;
     const double _tmp138 = _tmp133*_tmp137 + _tmp135*_tmp137 - _tmp134*_tmp36;
@@ -1120,7 +1170,7 @@ static void sk_loaded_newton(const double *theta, const double *delta, const dou
     const double _tmp140 = 0.03*_tmp117;
     const double _tmp141 = _tmp52*p_0;
     const double _tmp142 = -_tmp121*_tmp141 - _tmp123*_tmp141 + 0.125*_tmp120*_tmp53;
-    const double _tmp143 = pow(_tmp92, 3);
+    const double _tmp143 = (_tmp92*_tmp92*_tmp92);
     const double _tmp144 = -3*symkin_sinr2(_tmp87) + 3*symkin_cosr2(_tmp87) + symkin_sinr1(_tmp87);
     const double _tmp145 = 0.04419417382415922*_tmp143*_tmp144;
     const double _tmp146 = 0.3535533905932738*_tmp92;
@@ -1136,13 +1186,13 @@ static void sk_loaded_newton(const double *theta, const double *delta, const dou
     const double _tmp156 = _tmp103*p_0;
     const double _tmp157 = 0.5*_tmp58*_tmp59;
     const double _tmp158 = _tmp122*_tmp60;
-    const double _tmp159 = 0.0625*pow(_tmp58, 3)*(-3*symkin_sinr2(_tmp56) + 3*symkin_cosr2(_tmp56) + symkin_sinr1(_tmp56));
+    const double _tmp159 = 0.0625*(_tmp58*_tmp58*_tmp58)*(-3*symkin_sinr2(_tmp56) + 3*symkin_cosr2(_tmp56) + symkin_sinr1(_tmp56));
     const double _tmp160 = _tmp156*_tmp157 + _tmp156*_tmp159 + _tmp158*_tmp57;
     const double _tmp161 = _tmp57*p_0;
     const double _tmp162 = _tmp157*_tmp161 + _tmp159*_tmp161 - _tmp103*_tmp158;
     const double _tmp163 = 0.5*_tmp67*p_0;
     const double _tmp164 = _tmp122*_tmp68;
-    const double _tmp165 = 0.0625*p_0*pow(_tmp67, 3)*(-3*symkin_sinr2(_tmp70) + 3*symkin_cosr2(_tmp70) + symkin_sinr1(_tmp70));
+    const double _tmp165 = 0.0625*p_0*(_tmp67*_tmp67*_tmp67)*(-3*symkin_sinr2(_tmp70) + 3*symkin_cosr2(_tmp70) + symkin_sinr1(_tmp70));
     const double _tmp166 = _tmp101*_tmp164 + _tmp163*_tmp73 + _tmp165*_tmp72;
     const double _tmp167 = _tmp100*_tmp165 + _tmp101*_tmp163 - _tmp164*_tmp73;
     out[0] = delta_6 - _tmp0;
@@ -1448,7 +1498,7 @@ static void sk_sens_paper(const double *theta, const double *delta, const double
     const double _tmp6 = _tmp4*_tmp5;
     const double _tmp7 = _tmp6*p_0;
     const double _tmp8 = _tmp2*_tmp7;
-    const double _tmp9 = pow(theta_2, 3);
+    const double _tmp9 = (theta_2*theta_2*theta_2);
     const double _tmp10 = cos(_tmp3);
     const double _tmp11 = -3*symkin_sinr2(_tmp3) + 3*symkin_cosr2(_tmp3) + symkin_sinr1(_tmp3);
     const double _tmp12 = 0.04419417382415922*_tmp11*_tmp9*p_0;
@@ -1474,7 +1524,7 @@ static void sk_sens_paper(const double *theta, const double *delta, const double
     const double _tmp32 = cos(_tmp20);
     const double _tmp33 = _tmp32*p_0;
     const double _tmp34 = 0.125*_tmp23;
-    const double _tmp35 = 0.0625*pow(theta_1, 3)*(-3*symkin_sinr2(_tmp20) + 3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20));
+    const double _tmp35 = 0.0625*(theta_1*theta_1*theta_1)*(-3*symkin_sinr2(_tmp20) + 3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20));
     const double _tmp36 = _tmp26*p_0;
     const double _tmp37 = -_tmp36 + 0.1767766952966369*_tmp1*_tmp10*_tmp4*p_0;
     const double _tmp38 = _tmp36 + _tmp27*p_0;
@@ -1556,7 +1606,7 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp42 = 0.5*theta_3;
     const double _tmp43 = sin(_tmp42);
     const double _tmp44 = _tmp43*p_0;
-    const double _tmp45 = 0.0625*pow(theta_3, 3)*(-3*symkin_sinr2(_tmp42) + 3*symkin_cosr2(_tmp42) + symkin_sinr1(_tmp42));
+    const double _tmp45 = 0.0625*(theta_3*theta_3*theta_3)*(-3*symkin_sinr2(_tmp42) + 3*symkin_cosr2(_tmp42) + symkin_sinr1(_tmp42));
     const double _tmp46 = cos(_tmp42);
     const double _tmp47 = pow(theta_3, 2);
     const double _tmp48 = symkin_arck(_tmp42);
@@ -1577,7 +1627,7 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp63 = _tmp58*_tmp62;
     const double _tmp64 = pow(theta_6, 2);
     const double _tmp65 = _tmp50*_tmp64;
-    const double _tmp66 = 0.0625*pow(theta_6, 3)*(-3*symkin_sinr2(_tmp57) + 3*symkin_cosr2(_tmp57) + symkin_sinr1(_tmp57));
+    const double _tmp66 = 0.0625*(theta_6*theta_6*theta_6)*(-3*symkin_sinr2(_tmp57) + 3*symkin_cosr2(_tmp57) + symkin_sinr1(_tmp57));
     const double _tmp67 = -_tmp57*_tmp61 - _tmp60*_tmp66 - _tmp63*_tmp65;
     const double _tmp68 = sin(theta_1);
     const double _tmp69 = _tmp63*p_0;
@@ -1589,7 +1639,7 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp75 = _tmp23*delta_2;
     const double _tmp76 = 0.5*theta_2;
     const double _tmp77 = cos(_tmp76);
-    const double _tmp78 = pow(theta_2, 3);
+    const double _tmp78 = (theta_2*theta_2*theta_2);
     const double _tmp79 = -3*symkin_sinr2(_tmp76) + 3*symkin_cosr2(_tmp76) + symkin_sinr1(_tmp76);
     const double _tmp80 = 0.04419417382415922*_tmp78*_tmp79*p_0;
     const double _tmp81 = symkin_arck(_tmp76);
@@ -1632,13 +1682,13 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp118 = _tmp117*p_0;
     const double _tmp119 = _tmp115*_tmp118;
     const double _tmp120 = _tmp114*_tmp50;
-    const double _tmp121 = 0.0625*pow(theta_4, 3)*(-3*symkin_sinr2(_tmp109) + 3*symkin_cosr2(_tmp109) + symkin_sinr1(_tmp109));
+    const double _tmp121 = 0.0625*(theta_4*theta_4*theta_4)*(-3*symkin_sinr2(_tmp109) + 3*symkin_cosr2(_tmp109) + symkin_sinr1(_tmp109));
     const double _tmp122 = _tmp109*_tmp113 + _tmp112*_tmp121 + _tmp117*_tmp120;
     const double _tmp123 = _tmp110*_tmp111;
     const double _tmp124 = _tmp109*_tmp118 - _tmp120*_tmp123 + _tmp116*_tmp121*p_0;
     const double _tmp125 = _tmp95*_tmp98;
     const double _tmp126 = _tmp100*_tmp50;
-    const double _tmp127 = 0.0625*pow(theta_7, 3)*(-3*symkin_sinr2(_tmp95) + 3*symkin_cosr2(_tmp95) + symkin_sinr1(_tmp95));
+    const double _tmp127 = 0.0625*(theta_7*theta_7*theta_7)*(-3*symkin_sinr2(_tmp95) + 3*symkin_cosr2(_tmp95) + symkin_sinr1(_tmp95));
     const double _tmp128 = _tmp104*_tmp125 + _tmp104*_tmp127 + _tmp126*_tmp96;
     const double _tmp129 = _tmp125*_tmp97 + _tmp127*_tmp97 - _tmp103*_tmp126;
     const double _tmp130 = -_tmp15*delta_2;
@@ -1658,7 +1708,7 @@ static void sk_sens_first_order(const double *theta, const double *delta, const 
     const double _tmp144 = _tmp142*_tmp56;
     const double _tmp145 = _tmp38*_tmp54;
     const double _tmp146 = _tmp135*p_0;
-    const double _tmp147 = pow(theta_1, 3);
+    const double _tmp147 = (theta_1*theta_1*theta_1);
     const double _tmp148 = -3*symkin_sinr2(_tmp134) + 3*symkin_cosr2(_tmp134) + symkin_sinr1(_tmp134);
     const double _tmp149 = 0.0625*_tmp147*_tmp148;
     const double _tmp150 = cos(_tmp134);
@@ -1844,7 +1894,7 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp28 = _tmp27 + 0.5*theta_3;
     const double _tmp29 = sin(_tmp28);
     const double _tmp30 = 0.0625*p_0;
-    const double _tmp31 = _tmp30*pow(_tmp0, 3)*(-3*symkin_sinr2(_tmp28) + 3*symkin_cosr2(_tmp28) + symkin_sinr1(_tmp28));
+    const double _tmp31 = _tmp30*(_tmp0*_tmp0*_tmp0)*(-3*symkin_sinr2(_tmp28) + 3*symkin_cosr2(_tmp28) + symkin_sinr1(_tmp28));
     const double _tmp32 = cos(_tmp28);
     const double _tmp33 = pow(_tmp0, 2);
     const double _tmp34 = symkin_arck(_tmp28);
@@ -1869,7 +1919,7 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp53 = _tmp50*_tmp52;
     const double _tmp54 = pow(_tmp46, 2);
     const double _tmp55 = _tmp36*_tmp54;
-    const double _tmp56 = _tmp30*pow(_tmp46, 3)*(-3*symkin_sinr2(_tmp48) + 3*symkin_cosr2(_tmp48) + symkin_sinr1(_tmp48));
+    const double _tmp56 = _tmp30*(_tmp46*_tmp46*_tmp46)*(-3*symkin_sinr2(_tmp48) + 3*symkin_cosr2(_tmp48) + symkin_sinr1(_tmp48));
     const double _tmp57 = -_tmp47*_tmp51 - _tmp49*_tmp56 - _tmp53*_tmp55;
     const double _tmp58 = sin(theta_1);
     const double _tmp59 = _tmp47*_tmp53 + _tmp52*_tmp56 - _tmp51*_tmp55;
@@ -1887,7 +1937,7 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp71 = 0.5*delta_2;
     const double _tmp72 = _tmp71 + 0.5*theta_2;
     const double _tmp73 = cos(_tmp72);
-    const double _tmp74 = pow(_tmp67, 3);
+    const double _tmp74 = (_tmp67*_tmp67*_tmp67);
     const double _tmp75 = -3*symkin_sinr2(_tmp72) + 3*symkin_cosr2(_tmp72) + symkin_sinr1(_tmp72);
     const double _tmp76 = 0.04419417382415922*_tmp74*_tmp75*p_0;
     const double _tmp77 = symkin_arck(_tmp72);
@@ -1940,13 +1990,13 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp124 = _tmp40 + _tmp119*p_0 + _tmp123*p_0;
     const double _tmp125 = _tmp106*_tmp38;
     const double _tmp126 = _tmp116*_tmp36;
-    const double _tmp127 = _tmp30*pow(_tmp106, 3)*(-3*symkin_sinr2(_tmp112) + 3*symkin_cosr2(_tmp112) + symkin_sinr1(_tmp112));
+    const double _tmp127 = _tmp30*(_tmp106*_tmp106*_tmp106)*(-3*symkin_sinr2(_tmp112) + 3*symkin_cosr2(_tmp112) + symkin_sinr1(_tmp112));
     const double _tmp128 = _tmp113*_tmp127 + _tmp115*_tmp125 + _tmp121*_tmp126;
     const double _tmp129 = _tmp120*_tmp127 + _tmp121*_tmp125 - _tmp115*_tmp126;
     const double _tmp130 = _tmp1*_tmp129;
     const double _tmp131 = _tmp38*_tmp96;
     const double _tmp132 = _tmp36*_tmp97;
-    const double _tmp133 = _tmp30*pow(_tmp96, 3)*(-3*symkin_sinr2(_tmp92) + 3*symkin_cosr2(_tmp92) + symkin_sinr1(_tmp92));
+    const double _tmp133 = _tmp30*(_tmp96*_tmp96*_tmp96)*(-3*symkin_sinr2(_tmp92) + 3*symkin_cosr2(_tmp92) + symkin_sinr1(_tmp92));
     const double _tmp134 = _tmp101*_tmp133 + _tmp102*_tmp131 + _tmp132*_tmp95;
     const double _tmp135 = _tmp131*_tmp95 + _tmp133*_tmp93 - _tmp102*_tmp132;
     const double _tmp136 = _tmp135*_tmp69 - _tmp134*_tmp70;
@@ -2011,7 +2061,7 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     const double _tmp195 = _tmp192*_tmp45;
     const double _tmp196 = _tmp195*_tmp51;
     const double _tmp197 = _tmp23*_tmp24;
-    const double _tmp198 = pow(theta_1, 3);
+    const double _tmp198 = (theta_1*theta_1*theta_1);
     const double _tmp199 = -3*symkin_sinr2(_tmp184) + 3*symkin_cosr2(_tmp184) + symkin_sinr1(_tmp184);
     const double _tmp200 = _tmp198*_tmp199*_tmp30;
     const double _tmp201 = cos(_tmp184);
@@ -2423,7 +2473,8 @@ typedef struct {
     int loops_for_links;            /* the links' rotations alone need it */
     sk_fn2 rigid;                   /* closed-form rigid angles and reaches (inputs, params) */
     int n_dyads;
-    sk_fn2 rigid_res;               /* rigid closure (theta, params): per loop angle, x, y */
+    sk_fn2 rigid_res;               /* rigid closure (theta, params): per loop angle, x, y;
+                                       then its Jacobian A (k x k) */
     int n_angular;                  /* the rows of rigid_res that are loops' angle sums */
     const int *angular;
     sk_fn2 linear;                  /* its Jacobian A, r and S (theta, params) */
@@ -2487,17 +2538,12 @@ typedef struct {
     double *theta;
 } sk_rigid_ctx;
 
-/* The rigid closure and its Jacobian A (the first block of `linear`) at theta. */
+/* The rigid closure and its Jacobian A at theta: rigid_res computes both (A alone, not all of
+   `linear`: a polish step or a continuation step needs no r nor S). */
 static void sk_rigid_system(const void *ctx, const double *theta, double *fj)
 {
     const sk_rigid_ctx *c = (const sk_rigid_ctx *)ctx;
-    double lin[SK_K * SK_K + 2 * SK_K + 1];
-    int i;
     c->m->rigid_res(theta, c->params, fj);
-    c->m->linear(theta, c->params, lin);
-    for (i = 0; i < SK_K * SK_K; ++i) {
-        fj[SK_K + i] = lin[i];
-    }
 }
 
 /* The rigid angles of the unknown hinges, theta's inputs set: the closed-form dyads, or
@@ -2603,8 +2649,8 @@ static int sk_loaded_constants(const sk_mechanism *m, const double *theta, const
     double lin[SK_K * SK_K + 2 * SK_K + 1], at[SK_K * SK_K + 1], mu0[SK_K + 1], loads[SK_K + 1];
     int j, piv[SK_K + 1];
     if (jac == NULL) {
-        m->linear(theta, params, lin);
-        jac = lin;
+        m->rigid_res(theta, params, lin);   /* A follows the residual */
+        jac = lin + SK_K;
     }
     for (i = 0; i < SK_K; ++i) {
         for (j = 0; j < SK_K; ++j) {

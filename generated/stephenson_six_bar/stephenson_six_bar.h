@@ -3,7 +3,7 @@
  * Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
  * Points: D; levels: paper, first_order, exact, loaded, loaded_refined.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 142, rigid_res 81, linear 251, newton 556, rigid_points 19, loaded_q0 16, loaded_q 128, loaded_compliance 401, loaded_linear 235, loaded_newton 527, dev_paper 36, dev_first_order 50, dev_exact 60, dev_loaded 68, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661.
+ * Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_q0 16, loaded_q 128, loaded_compliance 401, loaded_linear 235, loaded_newton 527, dev_paper 36, dev_first_order 50, dev_exact 60, dev_loaded 68, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661.
  */
 #ifndef SYMKIN_STEPHENSON_SIX_BAR_H
 #define SYMKIN_STEPHENSON_SIX_BAR_H

@@ -2,7 +2,7 @@
 Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
 Points: D; levels: paper, first_order, exact, loaded, loaded_refined.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 142, rigid_res 81, linear 251, newton 556, rigid_points 19, loaded_q0 16, loaded_q 128, loaded_compliance 401, loaded_linear 235, loaded_newton 527, dev_paper 36, dev_first_order 50, dev_exact 60, dev_loaded 68, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661.
+Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_q0 16, loaded_q 128, loaded_compliance 401, loaded_linear 235, loaded_newton 527, dev_paper 36, dev_first_order 50, dev_exact 60, dev_loaded 68, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -265,8 +265,9 @@ def _rigid_angles(mech, x, params, ok):
     k = len(mech.unknown_index)
 
     def system(theta):
-        res = [numpy.broadcast_to(r, shape) for r in mech.rigid_res(theta, params)]
-        return res + mech.linear(theta, params)[: k * k]
+        # the residual, then A (rigid_res holds both)
+        fj = mech.rigid_res(theta, params)
+        return [numpy.broadcast_to(r, shape) for r in fj[:k]] + fj[k:]
 
     if mech.rigid is not None:
         out = mech.rigid(x, params)
@@ -348,7 +349,7 @@ def _loaded_constants(mech, theta, params, ok, jac=None, more=False):
     if mech.unknown_index:
         k = len(mech.unknown_index)
         if jac is None:
-            jac = mech.linear(theta, params)
+            jac = mech.rigid_res(theta, params)[k:]  # A follows the residual
         at = [jac[j * k + i] for i in range(k) for j in range(k)]
         mu0 = []
         if mech.loaded_q0 is not None:
@@ -701,33 +702,83 @@ def _rigid(inputs, params):
 
 
 def _rigid_res(theta, params):
-    """rigid loop closure relative to the as-fabricated pose (81 operations)."""
+    """rigid loop closure relative to the as-fabricated pose and its Jacobian A (121 operations)."""
     theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7 = theta
     _tmp0 = -theta_3
     _tmp1 = numpy.sin(theta_1)
     _tmp2 = 0.03*_tmp1
     _tmp3 = numpy.sin(theta_3)
-    _tmp4 = numpy.sin(theta_3 + theta_5)
-    _tmp5 = 0.5*theta_1
-    _tmp6 = numpy.sin(_tmp5)**2
-    _tmp7 = 0.5*theta_3
+    _tmp4 = theta_3 + theta_5
+    _tmp5 = numpy.sin(_tmp4)
+    _tmp6 = 0.03*_tmp5
+    _tmp7 = 0.5*theta_1
     _tmp8 = numpy.sin(_tmp7)**2
-    _tmp9 = 0.04*_tmp8
-    _tmp10 = numpy.sin(_tmp7 + 0.5*theta_5)**2
-    _tmp11 = 0.02*_tmp3
-    _tmp12 = 0.06*_tmp6
-    _tmp13 = theta_1 + theta_2
-    _tmp14 = numpy.sin(_tmp13)
-    _tmp15 = numpy.sin(theta_3 + theta_4)
-    _tmp16 = numpy.sin(_tmp5 + 0.5*theta_2)**2
-    _tmp17 = numpy.sin(_tmp7 + 0.5*theta_4)**2
+    _tmp9 = 0.5*theta_3
+    _tmp10 = numpy.sin(_tmp9)**2
+    _tmp11 = 0.04*_tmp10
+    _tmp12 = numpy.sin(_tmp9 + 0.5*theta_5)**2
+    _tmp13 = 0.02*_tmp3
+    _tmp14 = 0.072*_tmp5
+    _tmp15 = 0.06*_tmp8
+    _tmp16 = theta_1 + theta_2
+    _tmp17 = numpy.sin(_tmp16)
+    _tmp18 = 0.07*_tmp17
+    _tmp19 = theta_3 + theta_4
+    _tmp20 = numpy.sin(_tmp19)
+    _tmp21 = numpy.sin(_tmp7 + 0.5*theta_2)**2
+    _tmp22 = numpy.sin(_tmp9 + 0.5*theta_4)**2
+    _tmp23 = 0.04*_tmp17
+    _tmp24 = 0.05*_tmp20
+    _tmp25 = numpy.cos(theta_3)
+    _tmp26 = numpy.cos(_tmp4)
+    _tmp27 = _tmp14 + 0.03*_tmp26
+    _tmp28 = 0.02*_tmp25
+    _tmp29 = numpy.cos(_tmp16)
+    _tmp30 = numpy.cos(_tmp19)
+    _tmp31 = 0.05*_tmp30 + 0.04*_tmp20
     return [
         _tmp0 + theta_1 + theta_6 - theta_5,
-        -_tmp2 - _tmp9 + 0.06*_tmp3 - 0.03*_tmp4 - 0.016*_tmp6 - 0.144*_tmp10,
-        _tmp11 - _tmp12 + 0.12*_tmp8 + 0.008*_tmp1 + 0.072*_tmp4 - 0.06*_tmp10,
-        _tmp0 + _tmp13 + theta_7 - theta_4,
-        _tmp9 - _tmp12 + 0.05*_tmp3 + 0.04*_tmp15 - 0.07*_tmp14 - 0.1*_tmp17 - 0.02*_tmp1 - 0.08*_tmp16,
-        _tmp2 - _tmp11 + 0.05*_tmp15 + 0.1*_tmp8 + 0.04*_tmp14 + 0.08*_tmp17 - 0.14*_tmp16 - 0.04*_tmp6,
+        -_tmp11 - _tmp2 - _tmp6 + 0.06*_tmp3 - 0.016*_tmp8 - 0.144*_tmp12,
+        _tmp13 + _tmp14 - _tmp15 + 0.12*_tmp10 + 0.008*_tmp1 - 0.06*_tmp12,
+        _tmp0 + _tmp16 + theta_7 - theta_4,
+        _tmp11 - _tmp15 - _tmp18 + 0.05*_tmp3 + 0.04*_tmp20 - 0.1*_tmp22 - 0.02*_tmp1 - 0.08*_tmp21,
+        _tmp2 + _tmp23 + _tmp24 - _tmp13 + 0.1*_tmp10 + 0.08*_tmp22 - 0.14*_tmp21 - 0.04*_tmp8,
+        0,
+        -1,
+        0,
+        -1,
+        1,
+        0,
+        0,
+        -_tmp13 - _tmp27 + 0.06*_tmp25,
+        0,
+        -_tmp27,
+        0,
+        0,
+        0,
+        _tmp28 - _tmp6 + 0.06*_tmp3 + 0.072*_tmp26,
+        0,
+        -_tmp6 + 0.072*_tmp26,
+        0,
+        0,
+        1,
+        -1,
+        -1,
+        0,
+        0,
+        1,
+        -_tmp23 - 0.07*_tmp29,
+        _tmp13 - _tmp24 + 0.05*_tmp25 + 0.04*_tmp30,
+        -_tmp24 + 0.04*_tmp30,
+        0,
+        0,
+        0,
+        -_tmp18 + 0.04*_tmp29,
+        _tmp31 - _tmp28 + 0.05*_tmp3,
+        _tmp31,
+        0,
+        0,
+        0,
     ]
 
 

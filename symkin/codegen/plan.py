@@ -3,7 +3,8 @@
     rigid        inputs, params        -> φ_M - φ_P of every hinge, dyad reach and margin
                                           (closed form; absent when a group is not a dyad)
     rigid_res    theta, params         -> rigid loop closure relative to the as-fabricated pose,
-                                          Σ (Rot(φ_i) - I) V_i and Φ q (polish / continuation)
+                                          Σ (Rot(φ_i) - I) V_i and Φ q, then its Jacobian A
+                                          (polish / continuation: one Newton system)
     linear       theta, params         -> A (rigid loop Jacobian), r = Φ Δz at the rigid pose and
                                           S, the size of Φ Δz's terms per row (the stopping
                                           rule of symkin.core.settings, 3b)
@@ -38,7 +39,7 @@ Every routine's outputs are named row-major blocks (:class:`~symkin.codegen.rout
 the runtimes (templates/c/runtime.c, templates/numpy/runtime.py) read the offsets of the
 composite ones (the sensitivities, the loaded level's constants) from the generated tables and
 rely on the order above for the others (A then r, F then dF/ddelta, angles then reaches,
-rotations then their deviations; rigid_res: per loop its angle, then x, y).
+rotations then their deviations; rigid_res: per loop its angle, then x, y, then A).
 
 Only what the requested points and levels need is derived: a point whose direct path holds only
 input hinges needs no loop solved at any level. Parameters are renamed p_0, p_1, ... so no name
@@ -242,15 +243,17 @@ def plan(
             layout(("angles", k, 1), ("reach", n_dyads, 1), ("margin", n_dyads, 1)),
         )
     if kin.unknowns:
+        a_lin, r_lin = an.linear_system
+        # the rigid Newton's system whole: its Jacobian A here too, so that a step reads one
+        # routine, not `linear` (r and S too) beside it
         routines["rigid_res"] = Routine(
             "rigid_res",
             (theta, params),
             (),
-            tuple(an.rigid_residual),
-            "rigid loop closure relative to the as-fabricated pose",
-            layout(("residual", k, 1)),  # per loop: its angle, then x, y
+            tuple(an.rigid_residual) + flatten(a_lin.tolist()),
+            "rigid loop closure relative to the as-fabricated pose and its Jacobian A",
+            layout(("residual", k, 1), ("A", k, k)),  # residual per loop: its angle, then x, y
         )
-        a_lin, r_lin = an.linear_system
         routines["linear"] = Routine(
             "linear",
             (theta, params),

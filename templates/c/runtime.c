@@ -338,7 +338,8 @@ typedef struct {
     int loops_for_links;            /* the links' rotations alone need it */
     sk_fn2 rigid;                   /* closed-form rigid angles and reaches (inputs, params) */
     int n_dyads;
-    sk_fn2 rigid_res;               /* rigid closure (theta, params): per loop angle, x, y */
+    sk_fn2 rigid_res;               /* rigid closure (theta, params): per loop angle, x, y;
+                                       then its Jacobian A (k x k) */
     int n_angular;                  /* the rows of rigid_res that are loops' angle sums */
     const int *angular;
     sk_fn2 linear;                  /* its Jacobian A, r and S (theta, params) */
@@ -403,17 +404,12 @@ typedef struct {
     double *theta;
 } sk_rigid_ctx;
 
-/* The rigid closure and its Jacobian A (the first block of `linear`) at theta. */
+/* The rigid closure and its Jacobian A at theta: rigid_res computes both (A alone, not all of
+   `linear`: a polish step or a continuation step needs no r nor S). */
 static void sk_rigid_system(const void *ctx, const double *theta, double *fj)
 {
     const sk_rigid_ctx *c = (const sk_rigid_ctx *)ctx;
-    double lin[SK_K * SK_K + 2 * SK_K + 1];
-    int i;
     c->m->rigid_res(theta, c->params, fj);
-    c->m->linear(theta, c->params, lin);
-    for (i = 0; i < SK_K * SK_K; ++i) {
-        fj[SK_K + i] = lin[i];
-    }
 }
 #if defined(SK_CONTINUATION)
 
@@ -561,8 +557,8 @@ static int sk_loaded_constants(const sk_mechanism *m, const double *theta, const
     double lin[SK_K * SK_K + 2 * SK_K + 1], at[SK_K * SK_K + 1], mu0[SK_K + 1], loads[SK_K + 1];
     int j, piv[SK_K + 1];
     if (jac == NULL) {
-        m->linear(theta, params, lin);
-        jac = lin;
+        m->rigid_res(theta, params, lin);   /* A follows the residual */
+        jac = lin + SK_K;
     }
     for (i = 0; i < SK_K; ++i) {
         for (j = 0; j < SK_K; ++j) {

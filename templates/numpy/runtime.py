@@ -245,8 +245,9 @@ def _rigid_angles(mech, x, params, ok):
     k = len(mech.unknown_index)
 
     def system(theta):
-        res = [numpy.broadcast_to(r, shape) for r in mech.rigid_res(theta, params)]
-        return res + mech.linear(theta, params)[: k * k]
+        # the residual, then A (rigid_res holds both)
+        fj = mech.rigid_res(theta, params)
+        return [numpy.broadcast_to(r, shape) for r in fj[:k]] + fj[k:]
 
     if mech.rigid is not None:
         out = mech.rigid(x, params)
@@ -328,7 +329,7 @@ def _loaded_constants(mech, theta, params, ok, jac=None, more=False):
     if mech.unknown_index:
         k = len(mech.unknown_index)
         if jac is None:
-            jac = mech.linear(theta, params)
+            jac = mech.rigid_res(theta, params)[k:]  # A follows the residual
         at = [jac[j * k + i] for i in range(k) for j in range(k)]
         mu0 = []
         if mech.loaded_q0 is not None:
