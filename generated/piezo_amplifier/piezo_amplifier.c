@@ -3,7 +3,7 @@
  * Mechanism 'piezo_amplifier': 4 links, 4 hinges, 1 loop(s); inputs piezo (actuators; their strokes fix the angles of RA0 (piezo)).
  * Points: B; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 66, rigid_res 43, linear 126, newton 266, rigid_points 28, dev_paper 31, dev_first_order 51, dev_exact 62, links 1.
+ * Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, dev_paper 31, dev_first_order 51, dev_exact 62, links 1.
  */
 #include "piezo_amplifier.h"
 
@@ -154,7 +154,7 @@ static void sk_rigid(const double *inputs, const double *params, double *out)
     out[4] = dyad1_margin;
 }
 
-/* rigid loop closure relative to the as-fabricated pose (43 operations) */
+/* rigid loop closure relative to the as-fabricated pose and its Jacobian A (56 operations) */
 static void sk_rigid_res(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -168,15 +168,30 @@ static void sk_rigid_res(const double *theta, const double *params, double *out)
     const double _tmp1 = sin(theta_3);
     const double _tmp2 = sin(p_1);
     const double _tmp3 = _tmp2*p_0;
-    const double _tmp4 = sin(_tmp0);
-    const double _tmp5 = pow(sin(0.5*theta_3), 2);
-    const double _tmp6 = p_0*cos(p_1);
-    const double _tmp7 = 2*_tmp6;
-    const double _tmp8 = 0.5*theta_1;
-    const double _tmp9 = pow(sin(_tmp8 + 0.5*theta_2), 2);
+    const double _tmp4 = _tmp1*_tmp3;
+    const double _tmp5 = sin(_tmp0);
+    const double _tmp6 = _tmp3*_tmp5;
+    const double _tmp7 = pow(sin(0.5*theta_3), 2);
+    const double _tmp8 = p_0*cos(p_1);
+    const double _tmp9 = 2*_tmp8;
+    const double _tmp10 = 0.5*theta_1;
+    const double _tmp11 = pow(sin(_tmp10 + 0.5*theta_2), 2);
+    const double _tmp12 = _tmp1*_tmp8;
+    const double _tmp13 = _tmp5*_tmp8;
+    const double _tmp14 = cos(_tmp0);
+    const double _tmp15 = cos(theta_3);
     out[0] = _tmp0 - theta_3 - theta_4;
-    out[1] = _tmp1*_tmp3 + _tmp5*_tmp7 + _tmp7*_tmp9 - _tmp3*_tmp4 - p_2*sin(theta_1);
-    out[2] = -_tmp1*_tmp6 - _tmp4*_tmp6 - 2*_tmp3*_tmp9 - 2*p_2*pow(sin(_tmp8), 2) + 2*_tmp2*_tmp5*p_0;
+    out[1] = _tmp4 - _tmp6 + _tmp11*_tmp9 + _tmp7*_tmp9 - p_2*sin(theta_1);
+    out[2] = -_tmp12 - _tmp13 - 2*_tmp11*_tmp3 - 2*p_2*pow(sin(_tmp10), 2) + 2*_tmp2*_tmp7*p_0;
+    out[3] = 1;
+    out[4] = -1;
+    out[5] = -1;
+    out[6] = _tmp13 - _tmp14*_tmp3;
+    out[7] = _tmp12 + _tmp15*_tmp3;
+    out[8] = 0;
+    out[9] = -_tmp6 - _tmp14*_tmp8;
+    out[10] = _tmp4 - _tmp15*_tmp8;
+    out[11] = 0;
 }
 
 /* rigid loop Jacobian A, r = Phi dz and the size S of its terms (126 operations) */
@@ -333,14 +348,14 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp63 = 0.5*_tmp26*_tmp27;
     const double _tmp64 = _tmp24*p_3;
     const double _tmp65 = 0.125*_tmp28;
-    const double _tmp66 = 0.0625*pow(_tmp26, 3)*(-3*symkin_sinr2(_tmp23) + 3*symkin_cosr2(_tmp23) + symkin_sinr1(_tmp23));
+    const double _tmp66 = 0.0625*(_tmp26*_tmp26*_tmp26)*(-3*symkin_sinr2(_tmp23) + 3*symkin_cosr2(_tmp23) + symkin_sinr1(_tmp23));
     const double _tmp67 = _tmp62*_tmp63 + _tmp62*_tmp66 - _tmp64*_tmp65;
     const double _tmp68 = -_tmp62*_tmp65 - _tmp63*_tmp64 - _tmp64*_tmp66;
     const double _tmp69 = _tmp42*p_3;
     const double _tmp70 = 0.5*_tmp36*_tmp38;
     const double _tmp71 = _tmp35*p_3;
     const double _tmp72 = 0.125*_tmp39;
-    const double _tmp73 = 0.0625*pow(_tmp36, 3)*(-3*symkin_sinr2(_tmp34) + 3*symkin_cosr2(_tmp34) + symkin_sinr1(_tmp34));
+    const double _tmp73 = 0.0625*(_tmp36*_tmp36*_tmp36)*(-3*symkin_sinr2(_tmp34) + 3*symkin_cosr2(_tmp34) + symkin_sinr1(_tmp34));
     const double _tmp74 = _tmp69*_tmp70 + _tmp69*_tmp73 + _tmp71*_tmp72;
     const double _tmp75 = _tmp70*_tmp71 + _tmp71*_tmp73 - _tmp69*_tmp72;
     const double _tmp76 = 0.5*_tmp48;
@@ -349,7 +364,7 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp79 = _tmp52*p_3;
     const double _tmp80 = _tmp47*_tmp79;
     const double _tmp81 = 0.125*_tmp49;
-    const double _tmp82 = 0.0625*pow(_tmp48, 3)*(-3*symkin_sinr2(_tmp45) + 3*symkin_cosr2(_tmp45) + symkin_sinr1(_tmp45));
+    const double _tmp82 = 0.0625*(_tmp48*_tmp48*_tmp48)*(-3*symkin_sinr2(_tmp45) + 3*symkin_cosr2(_tmp45) + symkin_sinr1(_tmp45));
     const double _tmp83 = _tmp76*_tmp78 + _tmp77*_tmp82 + _tmp80*_tmp81;
     const double _tmp84 = _tmp76*_tmp80 + _tmp79*_tmp82 - _tmp78*_tmp81;
     const double _tmp85 = _tmp3*_tmp84 - _tmp7*_tmp83;
@@ -721,7 +736,8 @@ typedef struct {
     int loops_for_links;            /* the links' rotations alone need it */
     sk_fn2 rigid;                   /* closed-form rigid angles and reaches (inputs, params) */
     int n_dyads;
-    sk_fn2 rigid_res;               /* rigid closure (theta, params): per loop angle, x, y */
+    sk_fn2 rigid_res;               /* rigid closure (theta, params): per loop angle, x, y;
+                                       then its Jacobian A (k x k) */
     int n_angular;                  /* the rows of rigid_res that are loops' angle sums */
     const int *angular;
     sk_fn2 linear;                  /* its Jacobian A, r and S (theta, params) */
@@ -785,17 +801,12 @@ typedef struct {
     double *theta;
 } sk_rigid_ctx;
 
-/* The rigid closure and its Jacobian A (the first block of `linear`) at theta. */
+/* The rigid closure and its Jacobian A at theta: rigid_res computes both (A alone, not all of
+   `linear`: a polish step or a continuation step needs no r nor S). */
 static void sk_rigid_system(const void *ctx, const double *theta, double *fj)
 {
     const sk_rigid_ctx *c = (const sk_rigid_ctx *)ctx;
-    double lin[SK_K * SK_K + 2 * SK_K + 1];
-    int i;
     c->m->rigid_res(theta, c->params, fj);
-    c->m->linear(theta, c->params, lin);
-    for (i = 0; i < SK_K * SK_K; ++i) {
-        fj[SK_K + i] = lin[i];
-    }
 }
 
 /* The rigid angles of the unknown hinges, theta's inputs set: the closed-form dyads, or

@@ -3,7 +3,7 @@
  * Mechanism 'piezo_amplifier': 4 links, 4 hinges, 1 loop(s); inputs piezo (actuators; their strokes fix the angles of RA0 (piezo)).
  * Points: B; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 66, rigid_res 43, linear 126, newton 266, rigid_points 28, dev_paper 31, dev_first_order 51, dev_exact 62, links 1.
+ * Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, dev_paper 31, dev_first_order 51, dev_exact 62, links 1.
  */
 #ifndef SYMKIN_PIEZO_AMPLIFIER_H
 #define SYMKIN_PIEZO_AMPLIFIER_H

@@ -2,7 +2,7 @@
 Mechanism 'piezo_amplifier': 4 links, 4 hinges, 1 loop(s); inputs piezo (actuators; their strokes fix the angles of RA0 (piezo)).
 Points: B; levels: paper, first_order, exact.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 66, rigid_res 43, linear 126, newton 266, rigid_points 28, dev_paper 31, dev_first_order 51, dev_exact 62, links 1.
+Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, dev_paper 31, dev_first_order 51, dev_exact 62, links 1.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -264,8 +264,9 @@ def _rigid_angles(mech, x, params, ok):
     k = len(mech.unknown_index)
 
     def system(theta):
-        res = [numpy.broadcast_to(r, shape) for r in mech.rigid_res(theta, params)]
-        return res + mech.linear(theta, params)[: k * k]
+        # the residual, then A (rigid_res holds both)
+        fj = mech.rigid_res(theta, params)
+        return [numpy.broadcast_to(r, shape) for r in fj[:k]] + fj[k:]
 
     if mech.rigid is not None:
         out = mech.rigid(x, params)
@@ -347,7 +348,7 @@ def _loaded_constants(mech, theta, params, ok, jac=None, more=False):
     if mech.unknown_index:
         k = len(mech.unknown_index)
         if jac is None:
-            jac = mech.linear(theta, params)
+            jac = mech.rigid_res(theta, params)[k:]  # A follows the residual
         at = [jac[j * k + i] for i in range(k) for j in range(k)]
         mu0 = []
         if mech.loaded_q0 is not None:
@@ -783,23 +784,38 @@ def _rigid(inputs, params):
 
 
 def _rigid_res(theta, params):
-    """rigid loop closure relative to the as-fabricated pose (43 operations)."""
+    """rigid loop closure relative to the as-fabricated pose and its Jacobian A (56 operations)."""
     theta_1, theta_2, theta_3, theta_4 = theta
     p_0, p_1, p_2, _, _ = params
     _tmp0 = theta_1 + theta_2
     _tmp1 = numpy.sin(theta_3)
     _tmp2 = numpy.sin(p_1)
     _tmp3 = _tmp2*p_0
-    _tmp4 = numpy.sin(_tmp0)
-    _tmp5 = numpy.sin(0.5*theta_3)**2
-    _tmp6 = p_0*numpy.cos(p_1)
-    _tmp7 = 2*_tmp6
-    _tmp8 = 0.5*theta_1
-    _tmp9 = numpy.sin(_tmp8 + 0.5*theta_2)**2
+    _tmp4 = _tmp1*_tmp3
+    _tmp5 = numpy.sin(_tmp0)
+    _tmp6 = _tmp3*_tmp5
+    _tmp7 = numpy.sin(0.5*theta_3)**2
+    _tmp8 = p_0*numpy.cos(p_1)
+    _tmp9 = 2*_tmp8
+    _tmp10 = 0.5*theta_1
+    _tmp11 = numpy.sin(_tmp10 + 0.5*theta_2)**2
+    _tmp12 = _tmp1*_tmp8
+    _tmp13 = _tmp5*_tmp8
+    _tmp14 = numpy.cos(_tmp0)
+    _tmp15 = numpy.cos(theta_3)
     return [
         _tmp0 - theta_3 - theta_4,
-        _tmp1*_tmp3 + _tmp5*_tmp7 + _tmp7*_tmp9 - _tmp3*_tmp4 - p_2*numpy.sin(theta_1),
-        -_tmp1*_tmp6 - _tmp4*_tmp6 - 2*_tmp3*_tmp9 - 2*p_2*numpy.sin(_tmp8)**2 + 2*_tmp2*_tmp5*p_0,
+        _tmp4 - _tmp6 + _tmp11*_tmp9 + _tmp7*_tmp9 - p_2*numpy.sin(theta_1),
+        -_tmp12 - _tmp13 - 2*_tmp11*_tmp3 - 2*p_2*numpy.sin(_tmp10)**2 + 2*_tmp2*_tmp7*p_0,
+        1,
+        -1,
+        -1,
+        _tmp13 - _tmp14*_tmp3,
+        _tmp12 + _tmp15*_tmp3,
+        0,
+        -_tmp6 - _tmp14*_tmp8,
+        _tmp4 - _tmp15*_tmp8,
+        0,
     ]
 
 
