@@ -12,5 +12,13 @@ from setuptools import find_packages, setup
 setup(
     packages=find_packages(include=["symkin", "symkin.*"]) + ["symkin.templates"],
     package_dir={"symkin.templates": "templates"},
-    package_data={"symkin.templates": ["**/*.j2", "*/runtime.c", "*/runtime.py"]},
+    package_data={
+        "symkin.templates": [
+            "**/*.j2",
+            "*/runtime.c",
+            "*/runtime.py",
+            "*/actuators.c",
+            "*/actuators.py",
+        ]
+    },
 )

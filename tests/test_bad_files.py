@@ -100,6 +100,17 @@ EXPECTED: dict[str, tuple] = {
     "load_force_division_by_zero": ("[[load]] #1", "force", "1/0"),
     "load_moment_log_zero": ("[[load]] #1", "moment"),
     "unknown_key_load": ("[[load]] #1", "forse", "'force'"),
+    # actuators (docs/file-format.md, "[[actuator]]")
+    "actuator_on_frame": ("[[actuator]] #1", "'pusher'", "frame", "moving link"),
+    "actuator_unknown_link": ("[[actuator]] #1", "rocer", "rocker"),
+    "actuator_zero_direction": ("'pusher'", "direction", "zero"),
+    "actuator_direction_division_by_zero": ("'pusher'", "direction", "1/0"),
+    "actuator_unknown_drive": ("'pusher'", "push", "stroke", "force"),
+    "actuator_name_of_hinge": ("[[actuator]] #1", "'B'", "hinge"),
+    "actuator_name_of_parameter": ("[[actuator]] #1", "'l'", "parameter"),
+    "actuator_too_many_inputs": ("input", "A0", "pusher", "mobility is 1"),
+    "actuator_at_unknown_parameter": ("'pusher'", "at", "'w'"),
+    "actuator_does_not_drive": ("'pusher'", "does not drive", "direction"),
     # labeling
     "chord_on_basic_chain": ("chord", "'A'"),
     "chords_disconnect_tree": ("chords", "crank"),

@@ -76,6 +76,7 @@ def test_readme_first_command_in_a_fresh_venv(tmp_path):
         ("*.py", ROOT / "symkin"),
         ("*.j2", ROOT / "templates"),
         ("runtime.*", ROOT / "templates"),  # the runtimes the generated files hold
+        ("actuators.*", ROOT / "templates"),  # and those of mechanisms with actuators
     ):
         found = list(root.rglob(pattern))
         assert found, (pattern, root)

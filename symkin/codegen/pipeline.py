@@ -50,9 +50,9 @@ class Shape:
     def of(cls, p: Plan, links: bool = True) -> Shape:
         """The shape of plan `p`'s evaluator; `links=False` leaves the links' rotations out."""
         return cls(
-            p.inputs,
+            p.drives or p.inputs,
             tuple(q.name for q in p.parameters),
-            p.points,
+            p.shown_points,
             p.hinges,
             p.reported_links if links else (),
         )

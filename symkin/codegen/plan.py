@@ -113,6 +113,17 @@ class Plan:
     rest: tuple[tuple[int, tuple[int, ...]], ...] = ()
     angular: tuple[int, ...] = ()  # positions of the angular rows among the solved ones
     dropped: int = 0  # redundant closure rows left out of the solves and checked (consistency_*)
+    # the actuators (docs/levels.md, "Actuators"): the evaluator's arguments are then `drives`
+    # (input hinges, then actuators), and each actuator is (name, surrogate hinge, its hidden
+    # point among `points`, direction as two doubles)
+    drives: tuple[str, ...] = ()
+    actuators: tuple[tuple[str, str, str, tuple[float, float]], ...] = ()
+
+    @property
+    def shown_points(self) -> tuple[str, ...]:
+        """The points the evaluator reports: `points` without the actuators' hidden ones."""
+        hidden = {a[2] for a in self.actuators}
+        return tuple(p for p in self.points if p not in hidden)
 
     def stage(self, level: Level) -> bool:
         """Whether the sensitivity at `level` goes through a closure solved for δ."""
@@ -190,7 +201,10 @@ def plan(
     module accepts and ignores."""
     an, kin = analysis, analysis.kin
     mech = an.mechanism
-    names = tuple(p.name for p in an.points if points is None or p.name in points)
+    hidden = {a.point for a in mech.actuators}  # the actuators' points: always computed
+    names = tuple(
+        p.name for p in an.points if points is None or p.name in points or p.name in hidden
+    )
     stiff = mech.has_stiffness
     levels = tuple(
         lv
@@ -199,9 +213,11 @@ def plan(
         and (lv.name in levels if levels is not None else stiff or not lv.needs_stiffness)
         # the loaded level's statics cannot share the loads of redundant loops (docs/levels.md)
         and not (an.redundant and lv.name in level_table.LOADED)
+        # nor take actuators yet: a mechanism with actuators gets the kinematic levels
+        and not (mech.actuators and lv.needs_stiffness)
     )
     held = _fixed_angles(an, fixed or {})
-    sensitivity = sensitivity and not held
+    sensitivity = sensitivity and not held and not mech.actuators  # none with actuators yet
     free = tuple(a for a in kin.inputs if a not in held)
     inputs = Argument("inputs", tuple(kin.theta[a] for a in free))
     params = Argument("params", an.params)
@@ -399,8 +415,28 @@ def plan(
         rest=_rest(an, free, held),
         angular=an.angular_rows,
         dropped=len(an.dropped),
+        drives=mech.drives if mech.actuators else (),
+        actuators=_actuators(mech),
     )
     return with_derivation(result, an) if report else result
+
+
+def _actuators(mech) -> tuple[tuple[str, str, str, tuple[float, float]], ...]:
+    """The plan's actuator rows; the generated code takes a direction that is a number (bad
+    input otherwise, naming the actuator)."""
+    out = []
+    for a in mech.actuators:
+        if a.drive != "stroke" or any(sp.sympify(c).free_symbols for c in a.direction):
+            what = "a force" if a.drive != "stroke" else "a direction over the parameters"
+            raise InputError(
+                f"the generated code takes stroke actuators along a fixed direction, not "
+                f"{what} (actuator '{a.name}')",
+                file=mech.path,
+                entry=f"[[actuator]] #{a.index + 1} '{a.name}'",
+                hint="evaluate it with symkin eval --backend sympy",
+            )
+        out.append((a.name, a.surrogate, a.point, tuple(to_double(c) for c in a.direction)))
+    return tuple(out)
 
 
 def _sensitivity_routines(

@@ -50,6 +50,7 @@ def prepare(
     numbers or expression strings) and gather the deck's numbers. Bad inputs raise InputError,
     an input the rigid linkage cannot reach AssemblyError."""
     mech = mechanism if isinstance(mechanism, Mechanism) else load(mechanism)
+    mech.refuse_actuators("symkin fea")
     plan = anchors(mech)
     # The rigid linkage's pose of every link's own reference node: as extra points of the
     # mechanism, evaluated at the `paper` level (its rigid part is every level's).

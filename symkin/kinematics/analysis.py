@@ -42,6 +42,9 @@ class Analysis:
         self.rigid = rigid_solver.solve(kin)
         mech.check_points(points or ())
         self.points = tuple(p for p in mech.points if points is None or p.name in points)
+        # each actuator's point of action, tracked as a hidden point (docs/levels.md,
+        # "Actuators"): the evaluators find the strokes from its positions
+        self.points += tuple(mech.point(a.point) for a in mech.actuators)
         self.link = {name: i for i, name in enumerate(structure.links)}
         self.params = tuple(p.symbol for p in mech.parameters)
         self.thetas = tuple(kin.theta[a] for a in range(1, structure.m + 1))

@@ -56,10 +56,15 @@ TOP_KEYS = (
     "hinge",
     "point",
     "load",
+    "actuator",
 )
 LINK_KEYS = ("name",)
 POINT_KEYS = ("name", "link", "at")
 LOAD_KEYS = ("point", "link", "at", "force", "moment")
+ACTUATOR_KEYS = ("name", "link", "at", "direction", "drive")
+#: How an actuator drives its link (docs/file-format.md, "Actuators"): a prescribed displacement
+#: of its point along its line of action (file unit), or a force along it (N).
+DRIVES = ("stroke", "force")
 #: The file's length unit (`units`), in metres: geometry, lengths, thickness, width and load points
 #: are in it; E is in Pa, forces in N, moments in N·m (docs/physics.md).
 UNITS: dict[str, sp.Rational] = {
@@ -184,6 +189,30 @@ class Load:
 
 
 @dataclass(frozen=True)
+class Actuator:
+    """An actuator between the frame and `link` (docs/file-format.md, "Actuators"): it moves the
+    link's point `at` (as fabricated, file unit) along the unit `direction` (frame axes) by a
+    prescribed stroke (file unit) or pushes it with a force (N). `surrogate` is the hinge whose
+    angle the stroke fixes (chosen by the reader): the kinematics take that hinge as an input
+    and find its angle from the stroke (docs/levels.md, "Actuators")."""
+
+    name: str
+    index: int
+    link: str
+    at: tuple[sp.Expr, sp.Expr]
+    direction: tuple[sp.Expr, sp.Expr]
+    drive: str
+    surrogate: str
+    line: int | None = None
+
+    @property
+    def point(self) -> str:
+        """The name of the hidden point at `at` the evaluators track (no file name can clash:
+        names are identifiers, this one holds a '@')."""
+        return f"@{self.name}"
+
+
+@dataclass(frozen=True)
 class Mechanism:
     """A validated mechanism file: names, exact numbers and sympy expressions, in file order."""
 
@@ -198,6 +227,7 @@ class Mechanism:
     basic_chain: tuple[str, ...] | None = None
     units: str = "m"
     loads: tuple[Load, ...] = ()
+    actuators: tuple[Actuator, ...] = ()
 
     @property
     def unit_scale(self) -> sp.Rational:
@@ -206,8 +236,37 @@ class Mechanism:
 
     @property
     def inputs(self) -> tuple[str, ...]:
-        """Names of the input hinges (generalized coordinates), in file order."""
+        """Names of the hinges whose angle the kinematics take as given, in file order: the
+        input hinges and the actuators' surrogate hinges (see :attr:`drives`)."""
         return tuple(h.name for h in self.hinges if h.input)
+
+    @property
+    def surrogates(self) -> tuple[str, ...]:
+        """The hinges whose angles the actuators' strokes fix, in actuator order."""
+        return tuple(a.surrogate for a in self.actuators)
+
+    @property
+    def drives(self) -> tuple[str, ...]:
+        """What the user gives (`--input`): the input hinges of the file, then the actuators,
+        each in file order."""
+        hinges = tuple(n for n in self.inputs if n not in self.surrogates)
+        return hinges + tuple(a.name for a in self.actuators)
+
+    def actuator(self, name: str) -> Actuator:
+        return next(a for a in self.actuators if a.name == name)
+
+    def refuse_actuators(self, what: str) -> None:
+        """Bad input (exit 2, naming the first actuator) where `what` does not take actuators
+        yet; `symkin eval` at the kinematic levels does (docs/levels.md, "Actuators")."""
+        if self.actuators:
+            a = self.actuators[0]
+            raise InputError(
+                f"{what} does not take actuators yet (actuator '{a.name}')",
+                file=self.path,
+                entry=f"[[actuator]] #{a.index + 1} '{a.name}'",
+                hint="evaluate it with symkin eval (a stroke at --level paper, first_order or "
+                "exact; a stroke or a force at equilibrium), or derive --emit numpy,c",
+            )
 
     @cached_property
     def closure_rank(self) -> ClosureRank | None:
@@ -260,7 +319,13 @@ class Mechanism:
         return next(lk for lk in self.links if lk.name == name)
 
     def point(self, name: str) -> Point:
-        return next(p for p in self.points if p.name == name)
+        """The named point, or an actuator's point of action by its hidden name
+        (:attr:`Actuator.point`)."""
+        for p in self.points:
+            if p.name == name:
+                return p
+        a = next(a for a in self.actuators if a.point == name)
+        return Point(a.point, len(self.points) + a.index, a.link, a.at, a.line)
 
     def check_points(self, names: Sequence[str]) -> None:
         """Every name of `names` (a --points list) is a point of the file, else bad input."""
@@ -668,10 +733,20 @@ class _Reader:
             basic_chain=self.name_list(data, "basic_chain", link_names, "link"),
             units=units,
             loads=self.loads(self.array_of_tables(data, "load"), link_names, points),
+            actuators=self.actuators(
+                self.array_of_tables(data, "actuator"),
+                link_names,
+                ground,
+                parameters,
+                hinges,
+                points,
+            ),
         )
         self.check_connected(mech)
         check_values(mech, self.defaults)
         # after the values: the rank reads the hinge positions (two pins on one spot, say)
+        if mech.actuators and len(mech.drives) == mech.mobility and closure_rank(mech):
+            mech = self.with_surrogates(mech)
         self.check_mobility(mech)
         return mech
 
@@ -1212,6 +1287,90 @@ class _Reader:
             out.append(Load(i, link, at, force, moment, name, line))
         return tuple(out)
 
+    def actuators(
+        self,
+        tables: list[Mapping[str, object]],
+        link_names: list[str],
+        ground: str,
+        parameters: tuple[Parameter, ...],
+        hinges: tuple[Hinge, ...],
+        points: tuple[Point, ...],
+    ) -> tuple[Actuator, ...]:
+        """[[actuator]] entries (docs/file-format.md, "Actuators"): a named stroke or force
+        along a line of action on a moving link; the surrogate hinges are chosen later, with
+        the mobility (:meth:`check_mobility`)."""
+        out = []
+        taken = {h.name: "a hinge" for h in hinges}
+        taken |= {p.name: "a point" for p in points}
+        taken |= {p.name: "a parameter" for p in parameters}
+        for i, table in enumerate(tables):
+            line = self.where.header("actuator", i)
+            entry = _entry("actuator", i, table)
+            self.check_keys(table, ACTUATOR_KEYS, entry, line)
+            name = self.text(table, "name", entry, line)
+            entry = f"[[actuator]] #{i + 1} '{name}'"
+            problem = name_problem(name)
+            if problem is not None:
+                raise self.error(problem[0], entry, line, problem[1])
+            if name in taken:
+                raise self.error(
+                    f"the actuator's name '{name}' is already {taken[name]}'s: an actuator "
+                    "is an input, named like the input hinges",
+                    entry,
+                    line,
+                    "give the actuator a name of its own",
+                )
+            taken[name] = "an actuator"
+            link = self.text(table, "link", entry, line)
+            if link not in link_names:
+                raise self.error(
+                    f"actuator on an unknown link '{link}'",
+                    entry,
+                    line,
+                    suggest(link, link_names) or "name one of the [[link]] entries",
+                )
+            if link == ground:
+                raise self.error(
+                    f"the actuator pushes the frame '{ground}': it acts between the frame and "
+                    "a moving link",
+                    entry,
+                    line,
+                    "name the moving link it pushes in 'link'",
+                )
+            for key in ("at", "direction"):
+                if key not in table:
+                    raise self.error(
+                        f"missing required key '{key}'",
+                        entry,
+                        line,
+                        "add at = [x, y] (the point of action on the link, as fabricated)"
+                        if key == "at"
+                        else "add direction = [dx, dy] (the line of action, frame axes)",
+                    )
+            at = self.vector(table["at"], entry, "at", line)
+            raw = self.vector(table["direction"], entry, "direction", line)
+            size = sp.sqrt(raw[0] ** 2 + raw[1] ** 2)
+            if not expressions.numeric(size, self.defaults) > 0:
+                raise self.error(
+                    f"'direction' is the zero vector {_short(table['direction'])}: it gives "
+                    "no line of action",
+                    entry,
+                    line,
+                    "give the direction the actuator pushes, e.g. direction = [1.0, 0.0]",
+                )
+            drive = table.get("drive", "stroke")
+            if drive not in DRIVES:
+                raise self.error(
+                    f"unknown drive {drive!r}",
+                    entry,
+                    line,
+                    (suggest(str(drive), DRIVES) + "; " if suggest(str(drive), DRIVES) else "")
+                    + 'drive = "stroke" (a displacement, file unit) or "force" (N)',
+                )
+            direction = (raw[0] / size, raw[1] / size)
+            out.append(Actuator(name, i, link, at, direction, drive, "", line))
+        return tuple(out)
+
     def name_list(
         self, data: Mapping[str, object], key: str, known: list[str], kind: str
     ) -> tuple[str, ...] | None:
@@ -1261,9 +1420,10 @@ class _Reader:
             )
 
     def check_mobility(self, mech: Mechanism) -> None:
-        """The inputs number the mobility and fix the pose (docs/levels.md, "Redundant loops"):
-        Grübler's count, corrected by the rank of the closure Jacobian at the as-fabricated
-        pose when some loop constraints are dependent."""
+        """The inputs (input hinges and actuators) number the mobility and fix the pose
+        (docs/levels.md, "Redundant loops"): Grübler's count, corrected by the rank of the
+        closure Jacobian at the as-fabricated pose when some loop constraints are dependent
+        (the actuators' surrogate hinges, once chosen, stand for them)."""
         n, m = len(mech.links) - 1, len(mech.hinges)
         rank = closure_rank(mech)
         formula = f"3n - 2m = 3*{n} - 2*{m} = {mech.grubler}, with {mech.loop_count} loop(s)"
@@ -1281,14 +1441,19 @@ class _Reader:
                 None,
                 "remove hinges or add links",
             )
-        if len(mech.inputs) != dof:
-            given = ", ".join(mech.inputs) or "none"
+        if len(mech.drives) != dof:
+            hinges = [n for n in mech.inputs if n not in mech.surrogates]
+            given = ", ".join(hinges) or "none"
+            what = f"{len(hinges)} input hinge(s) ({given})"
+            if mech.actuators:
+                names = ", ".join(a.name for a in mech.actuators)
+                what += f" and {len(mech.actuators)} actuator(s) ({names})"
             raise self.error(
-                f"{len(mech.inputs)} input hinge(s) ({given}) but the mobility is {dof}: "
-                f"Grübler {formula}",
+                f"{what} but the mobility is {dof}: Grübler {formula}",
                 "input",
                 None,
                 f"mark exactly {dof} hinge(s) with input = true"
+                + (" (the actuators count as inputs)" if mech.actuators else "")
                 + (
                     "; or, if no loop is meant to be redundant, the as-fabricated pose is a "
                     "singular position (hinges in line, legs parallel): move a hinge off it"
@@ -1326,6 +1491,115 @@ class _Reader:
                 + " as input instead of "
                 + (dependent[0] if len(dependent) == 1 else f"one of {', '.join(dependent)}"),
             )
+
+    def with_surrogates(self, mech: Mechanism) -> Mechanism:
+        """Refuse actuators that do not drive the mechanism (with the input hinges they must
+        fix the pose), then choose each one's surrogate hinge (:func:`surrogate_hinges`) and
+        mark it as an input of the kinematics."""
+        found = surrogate_hinges(mech)
+        if isinstance(found, Actuator):
+            others = ", ".join(n for n in mech.drives if n != found.name) or "none"
+            raise self.error(
+                f"the actuator '{found.name}' does not drive the mechanism: in the as-fabricated "
+                f"pose its line of action is normal to every motion of its point that the other "
+                f"inputs ({others}) leave free",
+                f"[[actuator]] #{found.index + 1} '{found.name}'",
+                found.line,
+                "change its direction or its point 'at', or drive a hinge instead (input = true)",
+            )
+        hinges = tuple(
+            dataclasses.replace(h, input=True) if h.name in found else h for h in mech.hinges
+        )
+        actuators = tuple(
+            dataclasses.replace(a, surrogate=s) for a, s in zip(mech.actuators, found)
+        )
+        return dataclasses.replace(mech, hinges=hinges, actuators=actuators)
+
+
+def surrogate_hinges(mech: Mechanism) -> tuple[str, ...] | Actuator:
+    """One hinge per actuator whose angle its stroke fixes: with the input hinges and the other
+    surrogates it fixes the pose (the rank of the closure Jacobian reaches 3n), so the
+    kinematics solve the rigid linkage from those angles and the strokes fix the surrogates'
+    angles by a regular small system (docs/levels.md, "Actuators"). Hinges on the actuated
+    link come first, then hinges on the frame, each in file order. Returns the actuator that
+    does not drive the mechanism (its row adds nothing to the rank) instead, if one does not."""
+    found = _jacobian_rows(mech)
+    if found is None:
+        return tuple(h.name for h in mech.hinges if not h.input)[: len(mech.actuators)]
+    constraints, turn_of, actuator_row, full = found
+    with mpmath.workdps(30):
+        held = constraints + [turn_of(h) for h in mech.hinges if h.input]
+        rows = held + [actuator_row(a) for a in mech.actuators]
+        if _rank(rows) < full:
+            for a in mech.actuators:
+                others = [actuator_row(b) for b in mech.actuators if b is not a]
+                if _rank(held + others) == _rank(rows):
+                    return a
+            return mech.actuators[0]
+        linked = {a.link for a in mech.actuators}
+        order = sorted(
+            (h for h in mech.hinges if not h.input),
+            key=lambda h: 0 if linked & set(h.links) else 1 if mech.ground in h.links else 2,
+        )
+        chosen: list[str] = []
+        rank = _rank(held)
+        for h in order:
+            if len(chosen) == len(mech.actuators):
+                break
+            trial = _rank(held + [turn_of(h)])
+            if trial > rank:
+                held, rank = held + [turn_of(h)], trial
+                chosen.append(h.name)
+    if len(chosen) < len(mech.actuators):  # no hinge left that the strokes could stand for
+        return mech.actuators[len(chosen)]
+    return tuple(chosen)
+
+
+def _jacobian_rows(mech: Mechanism):
+    """(constraint rows, turn row of a hinge, row of an actuator's stroke, 3n) of the rigid
+    linkage at the as-fabricated pose, in 30-digit numbers (None: values not finite)."""
+    values = mech.defaults
+    moving = [lk.name for lk in mech.links if lk.name != mech.ground]
+    column = {name: 3 * k for k, name in enumerate(moving)}
+    pins: list[tuple[mpmath.mpf, mpmath.mpf]] = []
+    with mpmath.workdps(30):
+        for h in mech.hinges:
+            shift = h.length / 2 - pivot_distance(h)
+            x, y = (
+                _mp(h.at[i] + shift * f(h.plate_angle), values)
+                for i, f in enumerate((sp.cos, sp.sin))
+            )
+            if x is None or y is None:
+                return None
+            pins.append((x, y))
+        size = max((abs(c) for pin in pins for c in pin), default=mpmath.mpf(0)) or mpmath.mpf(1)
+        constraints = []
+        for h, pin in zip(mech.hinges, pins):
+            out = [[mpmath.mpf(0)] * (3 * len(moving)) for _ in range(2)]
+            for link, sign in ((h.links[1], 1), (h.links[0], -1)):
+                if link in column:
+                    j = column[link]
+                    out[0][j], out[0][j + 2] = sign, -sign * pin[1] / size
+                    out[1][j + 1], out[1][j + 2] = sign, sign * pin[0] / size
+            constraints += out
+
+    def turn_of(h: Hinge) -> list[mpmath.mpf]:
+        row = [mpmath.mpf(0)] * (3 * len(moving))
+        for link, sign in ((h.links[1], 1), (h.links[0], -1)):
+            if link in column:
+                row[column[link] + 2] = sign
+        return row
+
+    def actuator_row(a: Actuator) -> list[mpmath.mpf]:
+        # the rate of the stroke d·v(at) = d·(v + ω × at), ω scaled by `size` as above
+        row = [mpmath.mpf(0)] * (3 * len(moving))
+        j = column[a.link]
+        with mpmath.workdps(30):
+            dx, dy, x, y = (_mp(e, values) for e in (*a.direction, *a.at))
+            row[j], row[j + 1], row[j + 2] = dx, dy, (dy * x - dx * y) / size
+        return row
+
+    return constraints, turn_of, actuator_row, 3 * len(moving)
 
 
 @dataclass(frozen=True)

@@ -40,7 +40,7 @@ from ..core.errors import AssemblyError
 from ..model.hinges import pivot_distance
 from ..model.mechanism import Mechanism
 from . import arith, beams, reported
-from .result import HingeLoad, InputLoad, PlateStress
+from .result import ActuatorLoad, HingeLoad, InputLoad, PlateStress
 from .stiffness import PlateStiffness, modulus, plate_stiffness
 
 #: Smallest load-factor step before the continuation gives up.
@@ -103,6 +103,24 @@ class _Load:
 
 
 @dataclass
+class _Actuator:
+    """An actuator (docs/file-format.md, "[[actuator]]"): on link `link` (index into the poses)
+    at `at` as fabricated, along the unit `direction`; `value` its stroke (file unit) or force
+    (N) by `drive`."""
+
+    name: str
+    link: int
+    at: tuple
+    direction: tuple
+    drive: str
+    value: object
+
+    @property
+    def stroke(self) -> bool:
+        return self.drive == "stroke"
+
+
+@dataclass
 class System:
     """The equilibrium equations of one mechanism at fixed parameters, in float or mpf numbers.
 
@@ -120,6 +138,10 @@ class System:
     # scales both together from the unloaded, as-fabricated pose; (1, 0, 0, 1) holds the inputs
     # and scales the loads (`buckling_factor`)
     schedule: tuple = (0.0, 1.0, 0.0, 1.0)
+    # the actuators (docs/levels.md, "Actuators"): a stroke holds its point's displacement
+    # along its line (one equation, its force one unknown, after the inputs'), a force is a
+    # dead load along the line, scaled with the loads
+    actuators: list = field(default_factory=list)
 
     def __post_init__(self) -> None:
         k = 3 * len(self.links)
@@ -130,7 +152,16 @@ class System:
             if h.theta is not None:
                 self.index["tau:" + h.name] = k
                 k += 1
+        for a in self.actuators:
+            if a.stroke:
+                self.index["act:" + a.name] = k
+                k += 1
         self.size = k
+
+    def stroke(self, u: np.ndarray, a: _Actuator):
+        """The displacement of actuator `a`'s point along its line in the solution u (batch)."""
+        x, y = self.place(u, a.link, a.at)
+        return a.direction[0] * (x - a.at[0]) + a.direction[1] * (y - a.at[1])
 
     def along(self, schedule: tuple) -> System:
         """The same equations with another path (`schedule`)."""
@@ -240,6 +271,14 @@ class System:
                 tau = u[self.index["tau:" + h.name]] * self.F * self.L
                 apply(h.M, (zero, zero), (zero, zero), tau)
                 apply(h.P, (zero, zero), (zero, zero), -tau)
+        for a in self.actuators:
+            at = self.place(u, a.link, a.at)
+            if a.stroke:
+                rows.append((self.stroke(u, a) - drive * a.value) / self.L)
+                f = u[self.index["act:" + a.name]] * self.F
+            else:
+                f = load * a.value
+            apply(a.link, (f * a.direction[0], f * a.direction[1]), at, zero)
         for ld in self.loads:
             at = self.place(u, ld.link, ld.at)
             apply(ld.link, (load * ld.force[0], load * ld.force[1]), at, load * ld.moment)
@@ -301,8 +340,9 @@ def build(
     stiffness: Mapping[str, PlateStiffness],
     convert,
 ) -> System:
-    """The System of `mech` with parameter `values`, the input angles by hinge name, EI of every
-    plate and `convert` (exact number -> float or mpf)."""
+    """The System of `mech` with parameter `values`, the input angles by hinge name and the
+    actuators' strokes or forces by their names, EI of every plate and `convert` (exact number
+    -> float or mpf). The actuators' surrogate hinges are not held (docs/levels.md)."""
     links = [lk.name for lk in mech.links if lk.name != mech.ground]
     index = {name: k for k, name in enumerate(links)}
     index[mech.ground] = -1
@@ -329,7 +369,7 @@ def build(
                 num(length),
                 num(stiffness[h.name].EI) if plate else None,
                 plate,
-                num(inputs[h.name]) if h.input else None,
+                num(inputs[h.name]) if h.input and h.name not in mech.surrogates else None,
                 *_compliances(stiffness.get(h.name) if plate else None, length, num),
                 _slender(stiffness.get(h.name) if plate else None, length, values),
             )
@@ -345,6 +385,8 @@ def build(
         for ld in mech.loads
     ]
     points = {p.name: (index[p.link], tuple(num(v) for v in p.at)) for p in mech.points}
+    # each actuator's point of action, as the evaluators track it (mechanism.Actuator.point)
+    points |= {a.point: (index[a.link], tuple(num(v) for v in a.at)) for a in mech.actuators}
     centres = [
         (float(sp.N(h.at[0].subs(values))), float(sp.N(h.at[1].subs(values)))) for h in mech.hinges
     ]
@@ -354,8 +396,25 @@ def build(
     )
     plates = [h for h in hinges if h.plate]
     force = max([float(h.EI) / (float(h.length) * span) for h in plates], default=1.0)
+    actuators = [
+        _Actuator(
+            a.name,
+            index[a.link],
+            tuple(num(v) for v in a.at),
+            tuple(num(v) for v in a.direction),
+            a.drive,
+            num(inputs[a.name]),
+        )
+        for a in mech.actuators
+    ]
     return System(
-        links, hinges, loads, points, convert(sp.Float(span, 17)), convert(sp.Float(force, 17))
+        links,
+        hinges,
+        loads,
+        points,
+        convert(sp.Float(span, 17)),
+        convert(sp.Float(force, 17)),
+        actuators=actuators,
     )
 
 
@@ -672,6 +731,7 @@ class Result:
     # moment and stiffness, each point's 3×3 tangent stiffness (None: held rigidly), each
     # plate's largest stress
     inputs: dict[str, InputLoad] = field(default_factory=dict)
+    actuators: dict[str, ActuatorLoad] = field(default_factory=dict)
     stiffness: dict[str, list | None] = field(default_factory=dict)
     plates: dict[str, PlateStress] = field(default_factory=dict)
 
@@ -684,13 +744,21 @@ def solve(
     extra_digits: int = 0,
 ) -> Result:
     """The equilibrium of `mech` (docs/physics.md) at parameter `values` and the input
-    angles by hinge name, against the rigid pin linkage: `rigid(dps)` gives its hinge angles and
-    its point positions by name at `dps` digits (the kinematic levels' rigid solution, exit 3
-    out of range). `extra_digits` raises the working precision (to check the error estimate)."""
+    angles by hinge name (and the actuators' strokes or forces by name), against the rigid pin
+    linkage: `rigid(dps, strokes)` gives its hinge angles and its point positions by name at
+    `dps` digits (the kinematic levels' rigid solution, exit 3 out of range), at the actuators'
+    strokes by name (a force actuator's: the stroke its force produced). `extra_digits` raises
+    the working precision (to check the error estimate)."""
     stiffness = plate_stiffness(mech, "equilibrium")
-    _, rigid_points = rigid(20)
+    # the rigid linkage first (exit 3 out of its range before any continuation), unless a
+    # force actuator's stroke is only known from the equilibrium
+    forces = any(a.drive == "force" for a in mech.actuators)
+    if not forces:
+        _, rigid_points = rigid(20, {a.name: inputs[a.name] for a in mech.actuators})
     system = build(mech, values, inputs, stiffness, _float)
     u, jac = continuation(system, "the equilibrium", mech.path, mech.units)
+    if forces:
+        _, rigid_points = rigid(20, _strokes(system, u))
     # The digits the deviation loses against the positions decide the working precision.
     span = float(system.L)
     smallest = min(
@@ -707,9 +775,10 @@ def solve(
     )
     lost = max(0, math.ceil(math.log10(span / smallest))) if smallest > 0 else 0
     dps = min(400, 24 + lost) + extra_digits
-    theta, rigid_points = rigid(dps)
     with mpmath.workdps(dps):
         solution = polish(build(mech, values, inputs, stiffness, _mp_converter(dps)), u, jac, dps)
+    theta, rigid_points = rigid(dps, _strokes(solution.system, solution.u))
+    with mpmath.workdps(dps):
         report: dict = {}
         solution.system.residual(solution.u[:, None], arith.mp_array([1]), solution.tol, report)
         # The last Newton step bounds the solution's error (Newton shrinks it further); the
@@ -760,9 +829,15 @@ def solve(
                 for h in solution.system.hinges
             },
             inputs=reported.inputs(system, at, tangent, float(s)),
+            actuators=reported.actuators(system, at, tangent),
             stiffness=reported.point_stiffness(system, at, tangent),
             plates=reported.plates(system, at, moduli, allowable),
         )
+
+
+def _strokes(system: System, u: np.ndarray) -> dict:
+    """Every actuator's stroke in the solution u, by name (a stroke actuator's is its input)."""
+    return {a.name: system.stroke(u[:, None], a)[0] for a in system.actuators}
 
 
 def _position(system: System, name: str) -> int:

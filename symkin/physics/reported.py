@@ -20,7 +20,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from . import beams
-from .result import InputLoad, PlateStress
+from .result import ActuatorLoad, InputLoad, PlateStress
 
 
 class System(Protocol):
@@ -54,6 +54,8 @@ def _rows(system: System) -> tuple[dict[str, int], int]:
         if h.theta is not None:
             inputs[h.name] = row
             row += 1
+    # a stroke actuator's row follows the inputs' (symkin.physics.equilibrium.System.residual)
+    row += sum(1 for a in getattr(system, "actuators", ()) if a.stroke)
     return inputs, row
 
 
@@ -70,6 +72,33 @@ def inputs(system: System, u: np.ndarray, jac: np.ndarray, scale: float) -> dict
         e[rows[h.name]] = 1.0  # −∂R/∂θ: the row is φ_M − φ_P − θ
         du = np.linalg.solve(jac, e)
         out[h.name] = InputLoad(float(h.theta), float(u[k]) * unit, float(du[k]) * unit)
+    return out
+
+
+def actuators(system: System, u: np.ndarray, jac: np.ndarray) -> dict[str, ActuatorLoad]:
+    """Stroke, force (N) and dF/ds (N per file unit) of every actuator: the derivative of the
+    solution by the actuator's value, du/dv = −J⁻¹ ∂R/∂v (∂R/∂v by the complex step on v, the
+    other inputs held), gives the force unknown's rate (a stroke) or the stroke's (a force)."""
+    out = {}
+    step = 1e-30
+    for a in getattr(system, "actuators", ()):
+        value = a.value
+        try:
+            a.value = float(value) + 1j * step
+            dr = system.residual(u.astype(complex)[:, None], np.ones(1), 1e-18)[:, 0]
+        finally:
+            a.value = value
+        du = np.linalg.solve(jac, -dr.imag / step)
+        stroke = float(np.real(system.stroke(u[:, None], a)[0]))
+        moved = u.astype(complex) + 1j * step * du
+        rate = float(np.imag(system.stroke(moved[:, None], a)[0])) / step
+        if a.stroke:
+            force = float(u[system.index["act:" + a.name]]) * float(system.F)
+            out[a.name] = ActuatorLoad(
+                stroke, force, float(du[system.index["act:" + a.name]]) * float(system.F)
+            )
+        else:
+            out[a.name] = ActuatorLoad(stroke, float(value), 1.0 / rate if rate else float("inf"))
     return out
 
 

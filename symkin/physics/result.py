@@ -16,6 +16,18 @@ class HingeLoad:
 
 
 @dataclass(frozen=True)
+class ActuatorLoad:
+    """What an actuator delivers at equilibrium (docs/physics.md): its stroke (file unit), the
+    force it exerts on its link along its line (N) and the stiffness dF/ds (N per file unit)
+    along the equilibrium path with the other inputs held (a stroke actuator: d(force)/d(stroke);
+    a force actuator: the inverse of d(stroke)/d(force))."""
+
+    stroke: float
+    force: float
+    stiffness: float
+
+
+@dataclass(frozen=True)
 class InputLoad:
     """What an input hinge's actuator delivers at equilibrium: its angle (rad), the moment it
     exerts on link M (N·m, counter-clockwise; −moment on P) and the stiffness dM/dθ (N·m/rad)

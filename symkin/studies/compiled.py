@@ -301,6 +301,9 @@ def compile(
         analysis = Analysis(build(mech), points)
     check_fabricated_pose(analysis)
     mech = analysis.mechanism
+    # its rows, tolerance and sweep take hinge angles (eval --backend numpy and derive --emit
+    # numpy take actuators)
+    mech.refuse_actuators("symkin.compile (tolerance, sweep)")
     held = {k: v for k, v in held.items() if k in analysis.mechanism.inputs}
     p = pipeline.plan_for(
         analysis,

@@ -113,6 +113,15 @@ def generate_plan(
     from .evaluation import check_fabricated_pose, fixed_angles
 
     say = progress or (lambda message: None)
+    if mech.actuators:
+        # the generated numpy and C take stroke actuators (docs/levels.md, "Actuators")
+        for what, unsupported in (
+            ("derive --points", points is not None),
+            ("derive --fix", bool(fixed)),
+            ("a variant (derive --tolerance)", variant is not None),
+        ):
+            if unsupported:
+                mech.refuse_actuators(what)
     source = Path(mech.path).name
     precision = variant.precision if variant is not None else "float64"
     held = fixed_angles(mech, fixed)
@@ -124,7 +133,7 @@ def generate_plan(
     if spans:
         # the report sweeps the evaluator's own inputs; a --range over another cannot be
         # plotted (with --tolerance, the ranges were the measurement's and are dropped)
-        swept = [k for k in mech.inputs if k not in held]
+        swept = [k for k in mech.drives if k not in held]
         other = [k for k in spans if k not in swept]
         if other and variant is None:
             k = other[0]
@@ -268,7 +277,7 @@ def derive(
                 entry="--range",
                 hint="add --tolerance TOL or --emit latex, or drop --range",
             )
-        spans = tradeoff.parse_ranges(ranges, mech.inputs, mech.path, default=None)
+        spans = tradeoff.parse_ranges(ranges, mech.drives, mech.path, default=None)
     files = generate(
         mech, emit, points, levels, appendix, progress, variant, notes, column_width, spans, fixed
     )

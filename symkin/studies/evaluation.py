@@ -26,7 +26,7 @@ from sympy.printing.pycode import MpmathPrinter
 from ..codegen import pipeline
 from ..codegen.backends.numpy.kernels import float64_namespace
 from ..core import levels
-from ..core.errors import AssemblyError, InputError
+from ..core.errors import AssemblyError, InputError, suggest
 from ..core.settings import SOLVER
 from ..kinematics.analysis import Analysis
 from ..model import expressions, special
@@ -34,7 +34,7 @@ from ..model.mechanism import Mechanism, check_values
 from ..physics import equilibrium as physical_equilibrium
 from ..physics import model_error as physical_model_error
 from ..physics import reduced, statics
-from ..physics.result import HingeLoad, InputLoad, PlateStress
+from ..physics.result import ActuatorLoad, HingeLoad, InputLoad, PlateStress
 
 #: The mpmath evaluation of the derivation, then the generated-code backends (their registry).
 BACKENDS = ("sympy", *pipeline.BACKENDS)
@@ -139,6 +139,8 @@ class Evaluation:
     # rigidly), every plate's largest stress, and with loads their first buckling factor
     # (math.inf: none up to physics.equilibrium.BUCKLING_LIMIT) and the hinge that buckles.
     actuation: dict[str, InputLoad] = field(default_factory=dict)
+    # every actuator's stroke, force and dF/ds (docs/physics.md)
+    actuators: dict[str, ActuatorLoad] = field(default_factory=dict)
     stiffness: dict[str, list | None] = field(default_factory=dict)
     plates: dict[str, PlateStress] = field(default_factory=dict)
     buckling: float | None = None
@@ -167,6 +169,11 @@ class Evaluation:
                 physical["inputs"] = {
                     name: {"angle": a.angle, "moment": a.moment, "stiffness": a.stiffness}
                     for name, a in self.actuation.items()
+                }
+            if self.actuators:
+                physical["actuators"] = {
+                    name: {"stroke": a.stroke, "force": a.force, "stiffness": a.stiffness}
+                    for name, a in self.actuators.items()
                 }
             if self.stiffness:
                 physical["stiffness"] = dict(self.stiffness)
@@ -215,6 +222,21 @@ def evaluate(
     """Evaluate one configuration at `level` through `backend` (sympy: mpmath at `dps` digits);
     with `sensitivity`, also the derivatives by every parameter and input
     (docs/sensitivity.md)."""
+    if analysis.mechanism.actuators:
+        return _actuated(analysis, inputs, level, params, backend, dps, sensitivity)
+    return _evaluate(analysis, inputs, level, params, backend, dps, sensitivity)
+
+
+def _evaluate(
+    analysis: Analysis,
+    inputs: Mapping[str, object],
+    level: str,
+    params: Mapping[str, object] | None,
+    backend: str,
+    dps: int,
+    sensitivity: bool,
+) -> Evaluation:
+    """:func:`evaluate` with every input a hinge angle (the actuators' surrogates included)."""
     if sensitivity and not levels.get(level).sensitivity:
         raise InputError(
             f"the {level} level has no sensitivities",
@@ -239,6 +261,223 @@ def evaluate(
         return _generated(analysis, inputs, level, params, backend, sensitivity)
     raise InputError(
         f"unknown backend '{backend}'", entry="--backend", hint="backends: " + ", ".join(BACKENDS)
+    )
+
+
+# -- actuators (docs/levels.md, "Actuators") ---------------------------------------------------
+
+
+def actuator_values(mech: Mechanism, inputs: Mapping[str, object]) -> dict[str, sp.Expr]:
+    """The exact value of every input the user gives (input hinges and actuators, by name):
+    each given once, nothing else."""
+    names = mech.drives
+    for key in inputs:
+        if key not in names:
+            raise InputError(
+                f"'{key}' is not an input (an input hinge or an actuator)",
+                file=mech.path,
+                entry="--input",
+                hint=(suggest(key, names) + "; " if suggest(key, names) else "")
+                + "inputs: "
+                + ", ".join(names),
+            )
+    missing = [n for n in names if n not in inputs]
+    if missing:
+        raise InputError(
+            f"no value for the input(s) {', '.join(missing)}",
+            file=mech.path,
+            entry="--input",
+            hint="give every input, e.g. --input " + " --input ".join(f"{n}=0.1" for n in missing),
+        )
+    return {k: exact_value(v, f"--input {k}", mech.path) for k, v in inputs.items()}
+
+
+def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity: bool) -> None:
+    """Refuse (exit 2, naming the actuator) what the actuators do not drive yet: a force at a
+    kinematic level (it needs a physical one), the physical levels, the generated backends and
+    sensitivities."""
+    if not mech.actuators:
+        return
+    first = mech.actuators[0]
+    entry = f"[[actuator]] '{first.name}'"
+    forces = [a for a in mech.actuators if a.drive == "force"]
+    if forces and not levels.get(level).needs_stiffness:
+        raise InputError(
+            f"the actuator '{forces[0].name}' drives by force, which needs a physical level "
+            f"(the {level} level has no stiffness)",
+            file=mech.path,
+            entry=f"[[actuator]] '{forces[0].name}'",
+            hint='ask for --level equilibrium, or make it drive = "stroke"',
+        )
+    if levels.get(level).needs_stiffness and level != "equilibrium":
+        raise InputError(
+            f"the {level} level does not take actuators yet (actuator '{first.name}'); the "
+            "equilibrium level takes it",
+            file=mech.path,
+            entry=entry,
+            hint="ask for --level equilibrium (or a stroke at paper, first_order or exact), or "
+            "drive the mechanism by an input hinge",
+        )
+    if backend not in ("sympy", *pipeline.REGISTRY) or (backend != "sympy" and forces):
+        raise InputError(
+            f"the generated {backend} evaluators do not take "
+            + ("force actuators" if forces else "actuators")
+            + f" yet (actuator '{(forces or [first])[0].name}')",
+            file=mech.path,
+            entry=entry,
+            hint="use --backend sympy" + ("" if forces else " or numpy"),
+        )
+    if sensitivity:
+        raise InputError(
+            f"sensitivities with actuators are not available yet (actuator '{first.name}')",
+            file=mech.path,
+            entry="--sensitivity",
+            hint="leave out --sensitivity, or drive the mechanism by an input hinge",
+        )
+
+
+def _actuated(
+    analysis: Analysis,
+    inputs: Mapping[str, object],
+    level: str,
+    params: Mapping[str, object] | None,
+    backend: str,
+    dps: int,
+    sensitivity: bool,
+) -> Evaluation:
+    """One configuration of a mechanism driven by stroke actuators (docs/levels.md,
+    "Actuators"): the rigid linkage and the compliant mechanism each at the strokes. Each
+    actuator's surrogate hinge takes the angle at which the rigid point of action has moved by
+    the stroke along the line of action, and, separately, the (compliant) angle at which the
+    compliant point has; the deviation is compliant - rigid, each taken at its own angle."""
+    mech = analysis.mechanism
+    check_actuated_level(mech, level, backend, sensitivity)
+    if backend != "sympy":  # the generated module solves the strokes itself
+        return _generated(analysis, inputs, level, params, backend)
+    if level == "equilibrium":
+        return equilibrium(analysis, inputs, params)
+    given = actuator_values(mech, inputs)
+    hinges = {k: v for k, v in given.items() if k not in {a.name for a in mech.actuators}}
+    strokes = [given[a.name] for a in mech.actuators]
+    solver = _mpmath_evaluator(analysis)
+    rigid = _stroke_angles(solver, mech, hinges, strokes, level, params, dps, compliant=False)
+    compliant = _stroke_angles(
+        solver, mech, hinges, strokes, level, params, dps, compliant=True, start=rigid
+    )
+
+    def run(angles):
+        state = dict(hinges) | {s: mpmath.nstr(v, dps + 10) for s, v in angles.items()}
+        return _evaluate(analysis, state, level, params, backend, dps, False)
+
+    ev_r, ev_c = run(rigid), run(compliant)
+    hidden = {a.point for a in mech.actuators}
+    points = {}
+    for name, c in ev_c.points.items():
+        if name in hidden:
+            continue
+        r = ev_r.points[name]
+        # compliant - rigid, each at its own surrogate angles: the rigid shift between the two
+        # angles plus the deviation at the compliant ones
+        dev = tuple(c.rigid[i] - r.rigid[i] + c.deviation[i] for i in range(2))
+        points[name] = PointResult(r.rigid, c.compliant, dev)
+    links = {
+        name: LinkResult(
+            ev_r.links[name].rigid,
+            c.compliant,
+            c.rigid - ev_r.links[name].rigid + c.deviation,
+        )
+        for name, c in ev_c.links.items()
+    }
+    return dataclasses.replace(
+        ev_c,
+        inputs={k: float(sp.N(v, 20)) for k, v in given.items()},
+        angles_rigid=dict(ev_r.angles_rigid),
+        points=points,
+        links=links,
+        dyads=ev_r.dyads,
+    )
+
+
+def _stroke_angles(
+    solver: _Mpmath,
+    mech: Mechanism,
+    hinges: Mapping[str, sp.Expr],
+    strokes: Sequence[sp.Expr],
+    level: str,
+    params: Mapping[str, object] | None,
+    dps: int,
+    compliant: bool,
+    start: Mapping[str, mpmath.mpf] | None = None,
+) -> dict[str, mpmath.mpf]:
+    """The surrogate hinges' angles at which the actuators' points have moved by `strokes`
+    along their lines of action: in the rigid linkage, or (`compliant`) in the compliant
+    mechanism at `level`. Newton's method on the k × k system, its Jacobian by central
+    differences at `dps` digits (the strokes are smooth in the angles away from a toggle)."""
+    names = [a.surrogate for a in mech.actuators]
+    k = len(names)
+    with mpmath.workdps(dps + 10):
+        target = [mpmath.mpf(sp.N(s, dps + 10)) for s in strokes]
+        values = parameter_values(mech, params)
+        at = [
+            [mpmath.mpf(sp.N(c.xreplace(values), dps + 10)) for c in a.at] for a in mech.actuators
+        ]
+        scale = max([abs(c) for xy in at for c in xy] + [abs(t) for t in target] + [1e-300])
+        angles = dict(start) if start else dict.fromkeys(names, mpmath.mpf(0))
+        # the surrogate angles reach the evaluators as input values, which hold a double's
+        # 16 digits: the strokes are met to 1e-15 of the mechanism's size
+        tol = scale * mpmath.mpf(10) ** max(-dps + 5, -15)
+        step = mpmath.mpf(10) ** -7
+
+        def residual(trial: Mapping[str, mpmath.mpf]) -> list:
+            state = dict(hinges) | {n: mpmath.nstr(trial[n], dps + 10) for n in names}
+            found = solver.values(state, level if compliant else "paper", params, dps + 10)
+            out = []
+            for a, xy, s in zip(mech.actuators, at, target):
+                rig, dev = found[a.point]
+                pos = [rig[i] + (dev[i] if compliant else 0) for i in range(2)]
+                d = [mpmath.mpf(sp.N(c.xreplace(values), dps + 10)) for c in a.direction]
+                out.append(d[0] * (pos[0] - xy[0]) + d[1] * (pos[1] - xy[1]) - s)
+            return out
+
+        r = residual(angles)
+        for _ in range(60):
+            size = max(abs(x) for x in r)
+            if size <= tol:
+                return angles
+            jac = mpmath.matrix(k, k)
+            for j, n in enumerate(names):
+                plus = residual(angles | {n: angles[n] + step})
+                minus = residual(angles | {n: angles[n] - step})
+                for i in range(k):
+                    jac[i, j] = (plus[i] - minus[i]) / (2 * step)
+            try:
+                delta = mpmath.lu_solve(jac, mpmath.matrix(r))
+            except ZeroDivisionError:
+                delta = None
+            if delta is None or not all(mpmath.isfinite(x) for x in delta):
+                break
+            # damped: a full step may leave the assembly range (past a dyad's toggle) or
+            # grow the residual far from the solution; halve it until it does neither
+            for _ in range(40):
+                trial = {n: angles[n] - delta[j] for j, n in enumerate(names)}
+                try:
+                    found = residual(trial)
+                except AssemblyError:
+                    found = None
+                if found is not None and max(abs(x) for x in found) < size:
+                    break
+                delta = delta / 2
+            else:
+                break
+            angles, r = trial, found
+    raise AssemblyError(
+        f"{mech.path}: no pose of the "
+        + ("compliant mechanism" if compliant else "rigid linkage")
+        + " reaches the strokes "
+        + ", ".join(f"{a.name}={float(sp.N(s, 20)):g}" for a, s in zip(mech.actuators, strokes))
+        + " (the surrogate hinges "
+        + ", ".join(names)
+        + " found no solution: past a toggle or the linkage's reach)"
     )
 
 
@@ -843,17 +1082,39 @@ class _Mpmath:
         extra_digits: int = 0,
     ) -> Evaluation:
         """The `equilibrium` level (symkin.physics.equilibrium), against this rigid linkage."""
-        an = self.an
-        given = input_values(an, inputs)
-        exact_params = parameter_values(self.mechanism, params)
+        an, mech = self.an, self.mechanism
         names = {a: h.name for a, h in self.kin.hinges.items()}
+        labels = {n: a for a, n in names.items()}
+        driven = {a.name for a in mech.actuators}
+        if mech.actuators:
+            drives = actuator_values(mech, inputs)
+            given = {labels[n]: v for n, v in drives.items() if n not in driven}
+            acting = {n: v for n, v in drives.items() if n in driven}
+        else:
+            given, acting = input_values(an, inputs), {}
+        exact_params = parameter_values(self.mechanism, params)
         args = [*an.params, *an.thetas]
 
-        def rigid(dps: int) -> tuple[dict, dict]:
-            """Rigid hinge angles and point positions at `dps` digits (exit 3 out of range)."""
+        def rigid(dps: int, strokes: Mapping[str, object]) -> tuple[dict, dict]:
+            """Rigid hinge angles and point positions at `dps` digits (exit 3 out of range), the
+            actuators at `strokes` (docs/levels.md, "Actuators")."""
+            surrogates = {}
+            if mech.actuators:
+                found = _stroke_angles(
+                    self,
+                    mech,
+                    {names[a]: v for a, v in given.items()},
+                    [sp.N(sp.sympify(strokes[a.name]), dps + 5) for a in mech.actuators],
+                    "paper",
+                    params,
+                    dps,
+                    compliant=False,
+                )
+                surrogates = {labels[n]: v for n, v in found.items()}
             with mpmath.workdps(dps):
                 pvals = [mpmath.mpf(sp.N(exact_params[s], dps + 5)) for s in an.params]
                 ivals = {a: mpmath.mpf(sp.N(v, dps + 5)) for a, v in given.items()}
+                ivals |= {a: mpmath.mpf(v) for a, v in surrogates.items()}
                 theta, _ = self._rigid_angles(pvals, ivals)
                 at = [*pvals, *(theta[a] for a in sorted(theta))]
                 return (
@@ -870,7 +1131,7 @@ class _Mpmath:
             res = physical_equilibrium.solve(
                 self.mechanism,
                 exact_params,
-                {names[a]: v for a, v in given.items()},
+                {names[a]: v for a, v in given.items()} | acting,
                 rigid,
                 extra_digits,
             )
@@ -886,9 +1147,9 @@ class _Mpmath:
                 "along the plates undetermined (a singular system)"
             ) from None
         buckling = None
-        if self.mechanism.loads:
+        if self.mechanism.loads or any(a.drive == "force" for a in mech.actuators):
             buckling = physical_equilibrium.buckling_factor(
-                self.mechanism, exact_params, {names[a]: v for a, v in given.items()}
+                self.mechanism, exact_params, {names[a]: v for a, v in given.items()} | acting
             )
         order = [names[a] for a in sorted(names)]
         with mpmath.workdps(20):
@@ -900,14 +1161,33 @@ class _Mpmath:
                 *(mpmath.mpf(res.angle_deviations[names[a]]) for a in self.kin.unknowns),
             ]
             links = self._links(an, "exact", "equilibrium:", [*args, *an.deltas], values)
+            if mech.actuators:
+                # the surrogates turn too (they are not held): each link's deviation is the
+                # sum of its direct path's angle deviations, the surrogates' included
+                kin, s = self.kin, an.structure
+                for i in range(s.n + 1):
+                    dev = math.fsum(
+                        kin.hinges[b].sign * res.angle_deviations[names[b]] for b in s.tree_path(i)
+                    )
+                    rigid_i = links[s.links[i]].rigid
+                    links[s.links[i]] = LinkResult(rigid_i, rigid_i + dev, dev)
         result = Evaluation(
             level="equilibrium",
             backend="sympy",
-            inputs={names[a]: float(sp.N(given[a], 20)) for a in sorted(given)},
+            inputs={names[a]: float(sp.N(given[a], 20)) for a in sorted(given)}
+            | {n: float(sp.N(v, 20)) for n, v in acting.items()},
             angles_rigid={n: res.angles_rigid[n] for n in order},
             angles_compliant={n: res.angles_compliant[n] for n in order},
-            points={n: PointResult(*res.points[n]) for n in res.points},
-            dyads=self.dyad_states(inputs, params),
+            points={
+                n: PointResult(*res.points[n])
+                for n in res.points
+                if n not in {a.point for a in mech.actuators}
+            },
+            # the rigid linkage's dyads: with actuators, at its surrogates' angles
+            dyads=self.dyad_states(
+                {n: res.angles_rigid[n] for n in mech.inputs} if mech.actuators else inputs,
+                params,
+            ),
             params=parameter_floats(self.mechanism, exact_params),
             overrides=tuple(params or ()),
             hinges={n: res.hinges[n] for n in order},
@@ -915,7 +1195,10 @@ class _Mpmath:
             error_estimate=res.error_estimate,
             links=links,
             actuation=res.inputs,
-            stiffness=res.stiffness,
+            actuators=res.actuators,
+            stiffness={
+                n: k for n, k in res.stiffness.items() if n not in {a.point for a in mech.actuators}
+            },
             plates=res.plates,
             buckling=None if buckling is None else buckling.factor,
             buckling_hinge=None if buckling is None else buckling.hinge,
@@ -1244,10 +1527,15 @@ def _generated(
             entry="--backend",
             hint="evaluate it with --backend sympy",
         )
-    given = input_values(analysis, inputs)
-    kin = analysis.kin
-    names = [kin.hinges[a].name for a in kin.inputs]
-    x = [float(sp.N(given[a], 20)) for a in kin.inputs]
+    kin, mech = analysis.kin, analysis.mechanism
+    if mech.actuators:
+        drives = actuator_values(mech, inputs)
+        names = list(mech.drives)
+        x = [float(sp.N(drives[n], 20)) for n in names]
+    else:
+        given = input_values(analysis, inputs)
+        names = [kin.hinges[a].name for a in kin.inputs]
+        x = [float(sp.N(given[a], 20)) for a in kin.inputs]
     pvals = parameter_values(analysis.mechanism, params)
     pfloat = [float(sp.N(pvals[s], 20)) for s in analysis.params]
     p, ev = pipeline.build(analysis, backend, analysis.mechanism.path, sensitivity=sensitivity)
@@ -1269,7 +1557,7 @@ def _generated(
             (out[6 * i + 2], out[6 * i + 3]),
             (out[6 * i + 4], out[6 * i + 5]),
         )
-        for i, n in enumerate(p.points)
+        for i, n in enumerate(shape.points)
     }
     m = len(hinges)
     rigid = dict(zip(hinges, angles[:m]))
@@ -1289,7 +1577,9 @@ def _generated(
         angles_rigid={h: rigid[h] for h in sorted(rigid, key=order.get)},
         angles_compliant={h: compliant[h] for h in sorted(compliant, key=order.get)},
         points=points,
-        dyads=_mpmath_evaluator(analysis).dyad_states(inputs, params),
+        dyads=_mpmath_evaluator(analysis).dyad_states(
+            {n: rigid[n] for n in mech.inputs} if mech.actuators else inputs, params
+        ),
         params=parameter_floats(analysis.mechanism, pvals),
         overrides=tuple(params or ()),
         links=links,

@@ -741,5 +741,7 @@ def derive(
     from ..model.mechanism import load as load_mechanism
     from .derive import write_files
 
-    files, _ = generate(load(scene, load_mechanism(path)), emit, progress, column_width, appendix)
+    mech = load_mechanism(path)
+    mech.refuse_actuators("a scene (derive --scene)")
+    files, _ = generate(load(scene, mech), emit, progress, column_width, appendix)
     return write_files(files, out_dir)

@@ -285,6 +285,7 @@ def run(
     """The full table for `mech` over `ranges`."""
     from ..graph.structure import build
 
+    mech.refuse_actuators("symkin tradeoff")
     say = progress or (lambda message: None)
     faithful = Analysis(build(mech))
     samples = sample(ranges, n)

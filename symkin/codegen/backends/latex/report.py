@@ -268,7 +268,15 @@ class Report:
             "loops": s.m - s.n,
             "mobility": mech.grubler,
             "rank_mobility": mech.mobility,
-            "inputs": [escape_latex(n) for n in mech.inputs],
+            "inputs": [escape_latex(n) for n in mech.drives],
+            "actuators": [
+                {
+                    "name": escape_latex(a.name),
+                    "hinge": escape_latex(a.surrogate),
+                    "label": s.hinges.index(a.surrogate) + 1,
+                }
+                for a in mech.actuators
+            ],
             "input_labels": list(self.d.inputs),
             "point_names": [escape_latex(p) for p in self.plan.points],
             "levels": [lv.title for lv in self.plan.levels],
@@ -907,12 +915,32 @@ def pose_data(report: Report) -> PoseData:
 
 
 def sweep_spans(
-    inputs: Sequence[str], given: Mapping[str, tuple[float, float]] | None = None
+    inputs: Sequence[str],
+    given: Mapping[str, tuple[float, float]] | None = None,
+    strokes: Mapping[str, float] | None = None,
 ) -> dict[str, tuple[float, float]]:
-    """Each input's plotted range: the `given` ones (derive --range), else ±SWEEP_RANGE."""
-    spans = dict.fromkeys(inputs, (-SWEEP_RANGE, SWEEP_RANGE))
+    """Each input's plotted range: the `given` ones (derive --range), else ±SWEEP_RANGE, or for
+    an actuator ±its `strokes` entry (file unit)."""
+    spans = {
+        h: (-(strokes or {})[h], (strokes or {})[h])
+        if h in (strokes or {})
+        else (-SWEEP_RANGE, SWEEP_RANGE)
+        for h in inputs
+    }
     spans.update({h: (float(lo), float(hi)) for h, (lo, hi) in (given or {}).items()})
     return spans
+
+
+def stroke_spans(mech) -> dict[str, float]:
+    """Each stroke actuator's default plotted half range (file unit): 1e-3 of the distance of
+    its point of action from the frame's origin (a piezo stack's stroke is about 1e-3 of its
+    length); derive --range sets another."""
+    values = mech.defaults
+    return {
+        a.name: 1e-3 * float(sp.sqrt(a.at[0] ** 2 + a.at[1] ** 2).subs(values))
+        for a in mech.actuators
+        if a.drive == "stroke"
+    }
 
 
 def reference_points(
@@ -989,9 +1017,13 @@ def sweep(
         runs.append((h, Sweep(t, ok, magnitude, deviation, reference, reported), (a, b)))
         summary["samples"] += len(t)
         summary["failed"] += int((~ok).sum())
+        stroke = h in {a.name for a in report.mech.actuators}
         summary["spans"].append(
             {
                 "input": escape_latex(h),
+                # what is swept: a hinge's angle (rad) or an actuator's stroke (file unit)
+                "what": "stroke" if stroke else r"input $\theta$",
+                "unit": f"${TEX_UNITS[report.mech.units]}$" if stroke else "rad",
                 "lo": f"{lo:g}",
                 "hi": f"{hi:g}",
                 "held": f"{held[h]:g}",
@@ -1312,6 +1344,15 @@ def emit(
     the plan's generated numpy module (needed when the plan has points), over `spans` (input ->
     (lo, hi) in rad; ±SWEEP_RANGE for inputs not given), with the physical reference's points
     from `physics` (the `equilibrium` level, when the file has stiffness data)."""
+    if plan.actuators:
+        # the report states and plots the file's points, not the actuators' points of action
+        shown = set(plan.shown_points)
+        derivation = plan.derivation
+        if derivation is not None:
+            derivation = dataclasses.replace(
+                derivation, points=tuple(q for q in derivation.points if q.name in shown)
+            )
+        plan = dataclasses.replace(plan, points=plan.shown_points, derivation=derivation)
     report = Report(plan, source, column_width)
     name = report.mech.name
     ctx = report.context(appendix)
@@ -1344,15 +1385,21 @@ def emit(
     ctx["sweep"] = None
     ctx["sensitivity"] = None
     ctx["equilibrium"] = None
-    if plan.points and plan.inputs:
+    drives = plan.drives or plan.inputs
+    if plan.points and drives:
         if evaluator is None:
             raise ValueError("the deviation plot needs the plan's generated numpy module")
-        runs, summary = sweep(report, evaluator, sweep_spans(plan.inputs, spans), physics)
+        strokes = stroke_spans(report.mech)
+        runs, summary = sweep(report, evaluator, sweep_spans(drives, spans, strokes), physics)
         single = len(runs) == 1
         points = list(plan.points)
         pruned = False
         for h, data, xlim in runs:
-            xlabel = f"input θ of {plain_name(h)} (rad)"
+            xlabel = (
+                f"stroke of {plain_name(h)} ({unit})"
+                if h in strokes
+                else f"input θ of {plain_name(h)} (rad)"
+            )
             shown = points
             if not single:  # (the caption says that the other inputs are held)
                 # only the points this input moves (a fan of four-bars: one point per input)

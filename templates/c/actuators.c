@@ -1,0 +1,250 @@
+/*
+ * symkin's C runtime for actuators (docs/levels.md, "Actuators"): what a generated evaluator of
+ * a mechanism with stroke actuators runs around templates/c/runtime.c's sk_evaluate_pose. Only
+ * those evaluators hold it (templates/c/source.c.j2), after the runtime; it reads the same sizes
+ * (SK_M, SK_NI, SK_NP, SK_NL) and the tables of one sk_actuators.
+ */
+#include <math.h>
+#include <stddef.h>
+
+/* ---- symkin runtime: every generated .c holds what follows ---- */
+
+/* symkin actuators runtime (templates/c/actuators.c): the strokes to the surrogate hinges'
+   angles, twice (the rigid linkage and the compliant mechanism), then one evaluation at each. */
+
+/* The actuators of a mechanism: for every kinematic input (an input angle of sk_evaluate_pose)
+   the position of its value among the public inputs, or -1 - a for the surrogate hinge of
+   actuator a; per actuator its point (among the SK_NP points), its stroke's position among the
+   public inputs and its direction; the points the public functions report. */
+typedef struct {
+    int n;
+    const int *drive_of;
+    const int *point;
+    const int *stroke;
+    const double *direction;
+    int n_shown;
+    const int *shown;
+} sk_actuators;
+
+/* Each actuator's stroke residual d.(X - X0) - s at the kinematic inputs x: X the rigid
+   (kind 0) or compliant (kind 1) position of its point. Returns sk_evaluate_pose's status. */
+static int sk_stroke_residual(const sk_mechanism *m, const sk_actuators *t, const double *x,
+                              const double *params, int level, int kind, const double *rest,
+                              const double *drives, double *r)
+{
+    double out[6 * SK_NP];
+    int a, s = sk_evaluate_pose(m, x, params, level, out, NULL, NULL);
+    for (a = 0; a < t->n && s == 0; ++a) {
+        const double *p = out + 6 * t->point[a] + 2 * kind;
+        const double *p0 = rest + 6 * t->point[a];
+        r[a] = t->direction[2 * a] * (p[0] - p0[0]) + t->direction[2 * a + 1] * (p[1] - p0[1])
+               - drives[t->stroke[a]];
+    }
+    return s;
+}
+
+/* Newton's method on the strokes in the surrogates' angles of x (in place), the Jacobian by
+   central differences, the step halved while it leaves the assembly range or grows the
+   residual. Returns 0 when every stroke is met to `tol`, else 1 (or the evaluator's status). */
+static int sk_stroke_solve(const sk_mechanism *m, const sk_actuators *t, double *x,
+                           const double *params, int level, int kind, const double *rest,
+                           const double *drives, double tol)
+{
+    double r[SK_NI + 1], trial[SK_NI + 1], jac[(SK_NI + 1) * (SK_NI + 1)], up[SK_NI + 1];
+    double down[SK_NI + 1], move[SK_NI + 1], size, next;
+    const double step = 1.4901161193847656e-08; /* sqrt(eps) */
+    int where[SK_NI + 1];
+    int i, j, c, p, iter, half, s, n = t->n;
+    for (j = 0; j < SK_NI; ++j) {
+        if (t->drive_of[j] < 0) {
+            where[-1 - t->drive_of[j]] = j;
+        }
+    }
+    s = sk_stroke_residual(m, t, x, params, level, kind, rest, drives, r);
+    if (s != 0) {
+        return s;
+    }
+    for (iter = 0; iter < 40; ++iter) {
+        for (size = 0.0, i = 0; i < n; ++i) {
+            size = fabs(r[i]) > size ? fabs(r[i]) : size;
+        }
+        if (!(size > tol)) {
+            return isfinite(size) ? 0 : 1;
+        }
+        for (j = 0; j < n; ++j) {
+            for (i = 0; i < SK_NI; ++i) {
+                trial[i] = x[i];
+            }
+            trial[where[j]] = x[where[j]] + step;
+            s = sk_stroke_residual(m, t, trial, params, level, kind, rest, drives, up);
+            trial[where[j]] = x[where[j]] - step;
+            s = s != 0 ? s : sk_stroke_residual(m, t, trial, params, level, kind, rest, drives,
+                                                down);
+            if (s != 0) {
+                return s;
+            }
+            for (i = 0; i < n; ++i) {
+                jac[i * n + j] = (up[i] - down[i]) / (2.0 * step);
+            }
+        }
+        /* Gaussian elimination with partial pivoting: move = jac^-1 r */
+        for (i = 0; i < n; ++i) {
+            move[i] = r[i];
+        }
+        for (c = 0; c < n; ++c) {
+            for (p = c, i = c + 1; i < n; ++i) {
+                p = fabs(jac[i * n + c]) > fabs(jac[p * n + c]) ? i : p;
+            }
+            if (!(fabs(jac[p * n + c]) > 0.0)) {
+                return 1;
+            }
+            for (j = 0; j < n; ++j) {
+                double swap = jac[c * n + j];
+                jac[c * n + j] = jac[p * n + j];
+                jac[p * n + j] = swap;
+            }
+            next = move[c];
+            move[c] = move[p];
+            move[p] = next;
+            for (i = c + 1; i < n; ++i) {
+                double f = jac[i * n + c] / jac[c * n + c];
+                for (j = c; j < n; ++j) {
+                    jac[i * n + j] -= f * jac[c * n + j];
+                }
+                move[i] -= f * move[c];
+            }
+        }
+        for (c = n - 1; c >= 0; --c) {
+            for (j = c + 1; j < n; ++j) {
+                move[c] -= jac[c * n + j] * move[j];
+            }
+            move[c] /= jac[c * n + c];
+        }
+        for (half = 0; half < 40; ++half) {
+            for (i = 0; i < SK_NI; ++i) {
+                trial[i] = x[i];
+            }
+            for (j = 0; j < n; ++j) {
+                trial[where[j]] -= move[j];
+            }
+            s = sk_stroke_residual(m, t, trial, params, level, kind, rest, drives, up);
+            for (next = 0.0, i = 0; i < n && s == 0; ++i) {
+                next = fabs(up[i]) > next ? fabs(up[i]) : next;
+            }
+            if (s == 0 && next < size) {
+                break;
+            }
+            for (j = 0; j < n; ++j) {
+                move[j] *= 0.5;
+            }
+        }
+        if (half == 40) {
+            return 1;
+        }
+        for (i = 0; i < SK_NI; ++i) {
+            x[i] = trial[i];
+        }
+        for (i = 0; i < n; ++i) {
+            r[i] = up[i];
+        }
+    }
+    return 1;
+}
+
+/* <name>_evaluate_pose with actuators: the public inputs (input hinges, then strokes), the
+   reported points only; the rigid linkage at the surrogates' rigid angles, the compliant
+   mechanism at their compliant ones, the deviation the rigid motion between the two plus the
+   level's deviation at the compliant angles (docs/levels.md, "Actuators"). */
+static int sk_actuated_pose(const sk_mechanism *m, const sk_actuators *t, const double *drives,
+                            const double *params, int level, double *out, double *angles,
+                            double *links)
+{
+    double rest[6 * SK_NP], xr[SK_NI + 1], xc[SK_NI + 1], zero[SK_NI + 1];
+    double pr[6 * SK_NP], pc[6 * SK_NP], ar[2 * SK_M], ac[2 * SK_M];
+    double lr[3 * SK_NL + 1], lc[3 * SK_NL + 1], scale = 1e-300, tol;
+    int i, j, s;
+    if (drives == NULL || out == NULL) {
+        return 3;
+    }
+    for (j = 0; j < SK_NI; ++j) {
+        zero[j] = 0.0;
+        xr[j] = t->drive_of[j] >= 0 ? drives[t->drive_of[j]] : 0.0;
+    }
+    s = sk_evaluate_pose(m, zero, params, level, rest, NULL, NULL);
+    for (i = 0; i < t->n && s == 0; ++i) {
+        const double *p0 = rest + 6 * t->point[i];
+        scale = fabs(p0[0]) > scale ? fabs(p0[0]) : scale;
+        scale = fabs(p0[1]) > scale ? fabs(p0[1]) : scale;
+    }
+    tol = 64.0 * 2.220446049250313e-16 * scale;
+    s = s != 0 ? s : sk_stroke_solve(m, t, xr, params, level, 0, rest, drives, tol);
+    for (j = 0; j < SK_NI; ++j) {
+        xc[j] = xr[j];
+    }
+    s = s != 0 ? s : sk_stroke_solve(m, t, xc, params, level, 1, rest, drives, tol);
+    s = s != 0 ? s : sk_evaluate_pose(m, xr, params, level, pr, ar, links == NULL ? NULL : lr);
+    s = s != 0 ? s : sk_evaluate_pose(m, xc, params, level, pc, ac, links == NULL ? NULL : lc);
+    if (s != 0) {
+        sk_nan(out, 6 * t->n_shown);
+        sk_nan(angles, 2 * SK_M);
+        sk_nan(links, 3 * SK_NL);
+        return s;
+    }
+    for (i = 0; i < t->n_shown; ++i) {
+        const double *r = pr + 6 * t->shown[i], *c = pc + 6 * t->shown[i];
+        for (j = 0; j < 2; ++j) {
+            out[6 * i + j] = r[j];
+            out[6 * i + 2 + j] = c[2 + j];
+            out[6 * i + 4 + j] = c[j] - r[j] + c[4 + j];
+        }
+    }
+    if (angles != NULL) {
+        for (j = 0; j < SK_M; ++j) {
+            angles[j] = ar[j];
+            angles[SK_M + j] = ac[SK_M + j];
+        }
+    }
+    if (links != NULL) {
+        for (j = 0; j < SK_NL; ++j) {
+            links[3 * j] = lr[3 * j];
+            links[3 * j + 1] = lc[3 * j + 1];
+            links[3 * j + 2] = lc[3 * j] - lr[3 * j] + lc[3 * j + 2];
+        }
+    }
+    return 0;
+}
+
+/* <name>_evaluate_angles_batch with actuators: n rows; the number of rows that failed. */
+static int sk_actuated_rows(const sk_mechanism *m, const sk_actuators *t, int n,
+                            const double *drives, const double *params, int level, double *out,
+                            double *angles, int *status)
+{
+    int j, s, failed = 0;
+    for (j = 0; j < n; ++j) {
+        s = drives == NULL ? 3 : sk_actuated_pose(
+            m, t, drives + (size_t)j * SK_NI, params, level,
+            out == NULL ? NULL : out + (size_t)j * 6 * t->n_shown,
+            angles == NULL ? NULL : angles + (size_t)j * 2 * SK_M, NULL);
+        failed += s != 0;
+        if (status != NULL) {
+            status[j] = s;
+        }
+    }
+    return failed;
+}
+
+/* <name>_evaluate_grid with actuators: every parameter set at every row; the number failed. */
+static int sk_actuated_grid(const sk_mechanism *m, const sk_actuators *t, int n_sets,
+                            const double *params, int n, const double *drives, int level,
+                            double *out, int *status)
+{
+    int s, failed = 0;
+    (void)sk_evaluate_grid; /* the runtime's, for input angles: the public one is this */
+    for (s = 0; s < n_sets; ++s) {
+        failed += sk_actuated_rows(
+            m, t, n, drives, params == NULL ? NULL : params + (size_t)s * SK_NPAR, level,
+            out == NULL ? NULL : out + (size_t)s * n * 6 * t->n_shown, NULL,
+            status == NULL ? NULL : status + (size_t)s * n);
+    }
+    return failed;
+}
