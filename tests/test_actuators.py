@@ -420,3 +420,37 @@ def test_report_sweeps_the_stroke(tmp_path):
     assert r"stroke of piezo from $0$ to $0.05$~$\mathrm{mm}$" in tex
     assert "the actuator piezo pushes its link" in tex and "(RA0)" in tex
     assert "@piezo" not in tex
+
+
+def test_direction_over_the_parameters_is_normalised_and_checked(tmp_path):
+    """A direction written over a parameter, ["-1/z", 0]: sympy normalises it to -x/|x| (an
+    Abs, which the file's numbers are evaluated through) and the pose is the example's with its
+    literal [-1, 0]; z = 0 makes it infinite: exit 2 naming the actuator, not an internal
+    error."""
+    text = (ROOT / "examples" / "piezo_amplifier.toml").read_text()
+    text = text.replace("\nh = 10 ", "\nz = 1\nh = 10 ", 1).replace(
+        "direction = [-1.0, 0.0]", 'direction = ["-1/z", 0]', 1
+    )
+    path = tmp_path / "piezo_z.toml"
+    path.write_text(text)
+    base = symkin.evaluate(
+        symkin.analyze(symkin.load(ROOT / "examples" / "piezo_amplifier.toml")),
+        {"piezo": 0.01},
+        "exact",
+        backend="sympy",
+    )
+    ev = symkin.evaluate(
+        symkin.analyze(symkin.load(path)), {"piezo": 0.01}, "exact", {"z": 2.0}, backend="sympy"
+    )
+    for i in range(2):
+        assert ev.points["B"].deviation[i] == pytest.approx(
+            base.points["B"].deviation[i], rel=1e-12
+        )
+    run = subprocess.run(
+        [sys.executable, "-m", "symkin", "eval", str(path), "--input", "piezo=0.01"]
+        + ["--param", "z=0"],
+        capture_output=True,
+        text=True,
+    )
+    assert run.returncode == 2, run.stderr
+    assert "[[actuator]] 'piezo'" in run.stderr and "not a finite number" in run.stderr

@@ -335,6 +335,8 @@ def numeric(
             if base < 0 and exponent != int(exponent):
                 raise NotReal("a fractional power of a negative number")
             return real(mpmath.power(base, exponent))
+        if isinstance(e, sp.Abs):  # sympy's own: sqrt(x**2) of a real symbol is Abs(x)
+            return abs(walk(e.args[0]))
         if isinstance(e, sp.atan2):
             y, x = walk(e.args[0]), walk(e.args[1])
             return real(mpmath.atan2(y, x))

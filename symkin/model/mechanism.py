@@ -1364,7 +1364,11 @@ class _Reader:
                     f"unknown drive {drive!r}",
                     entry,
                     line,
-                    (suggest(str(drive), DRIVES) + "; " if suggest(str(drive), DRIVES) else "")
+                    (
+                        (suggest(str(drive), DRIVES) or "") + "; "
+                        if suggest(str(drive), DRIVES)
+                        else ""
+                    )
                     + 'drive = "stroke" (a displacement, file unit) or "force" (N)',
                 )
             direction = (raw[0] / size, raw[1] / size)
@@ -1555,7 +1559,17 @@ def surrogate_hinges(mech: Mechanism) -> tuple[str, ...] | Actuator:
     return tuple(chosen)
 
 
-def _jacobian_rows(mech: Mechanism):
+def _jacobian_rows(
+    mech: Mechanism,
+) -> (
+    tuple[
+        list[list[mpmath.mpf]],
+        Callable[[Hinge], list[mpmath.mpf]],
+        Callable[[Actuator], list[mpmath.mpf]],
+        int,
+    ]
+    | None
+):
     """(constraint rows, turn row of a hinge, row of an actuator's stroke, 3n) of the rigid
     linkage at the as-fabricated pose, in 30-digit numbers (None: values not finite)."""
     values = mech.defaults
@@ -1595,7 +1609,9 @@ def _jacobian_rows(mech: Mechanism):
         row = [mpmath.mpf(0)] * (3 * len(moving))
         j = column[a.link]
         with mpmath.workdps(30):
-            dx, dy, x, y = (_mp(e, values) for e in (*a.direction, *a.at))
+            parts = [_mp(e, values) for e in (*a.direction, *a.at)]
+            # the reader has checked `at` and `direction` finite before the rank is taken
+            dx, dy, x, y = (mpmath.mpf(0) if v is None else v for v in parts)
             row[j], row[j + 1], row[j + 2] = dx, dy, (dy * x - dx * y) / size
         return row
 
@@ -1805,6 +1821,14 @@ def check_values(
                     f"[[point]] '{p.name}'",
                     p.line,
                     "keep coordinates finite",
+                )
+        for act in mech.actuators:
+            if None in [_mp(v, values) for v in (*act.at, *act.direction)]:
+                raise fail(
+                    "'at' or 'direction' is not a finite number",
+                    f"[[actuator]] '{act.name}'",
+                    act.line,
+                    "keep the point of action and the line of action finite",
                 )
         for link in mech.links:
             on_link = [h for h in mech.hinges if link.name in h.links]
