@@ -194,7 +194,11 @@ def _newton_stop(rule, change, size, previous, noise=False):
         done = done | (change <= rule.converged * size)
         if rule.residual == 0.0:
             done = done | (size == 0)
-    return done | ((change >= rule.stall_ratio * previous) & (change <= rule.stalled * size))
+    # 0 * inf is nan (a rule without the stall test, before the second step): the comparison is
+    # then false, as in C, and numpy need not warn about it
+    with numpy.errstate(invalid="ignore"):
+        stalled = (change >= rule.stall_ratio * previous) & (change <= rule.stalled * size)
+    return done | stalled
 
 
 def _residual_noise(out, x, scale, residual):
