@@ -488,6 +488,23 @@ def test_actuator_deck_names_it_and_constrains_its_point():
     assert load[1] == f"{load[0].split()[0]}, 1, 0.3"
 
 
+def test_actuator_on_a_pinned_link_is_refused(tmp_path, capsys):
+    """The actuator's point must be its link's reference node, which a pin already is: exit 2
+    naming the actuator, nothing written."""
+    text = (MECHANISMS / "four_bar_pins.toml").read_text()
+    head, tail = text.split('name = "A0"', 1)
+    text = head + 'name = "A0"' + tail.replace("input = true\n", "", 1)
+    text += '\n[[actuator]]\nname = "push"\nlink = "coupler"\nat = [0.06, 0.09]\n'
+    text += "direction = [1.0, 0.0]\n"
+    path = tmp_path / "pinned.toml"
+    path.write_text(text)
+    out = tmp_path / "out"
+    assert main(["fea", str(path), "--input", "push=1e-4", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "[[actuator]] #1 'push'" in err and "the pin 'A'" in err
+    assert not out.exists()
+
+
 @needs_ccx
 def test_stroke_actuator_against_equilibrium():
     """A stroke-driven parallelogram: the FE holds the stroke and its deviation lies within
@@ -526,3 +543,25 @@ def test_force_actuator_against_equilibrium():
     # stroke miss
     shift = math.hypot(f[0] - e[0], f[1] - e[1])
     assert math.hypot(e[0] - d[0], e[1] - d[1]) < bound + shift
+
+
+@needs_ccx
+def test_stroke_along_a_slant_direction_on_the_four_bar():
+    """The example four-bar pushed on its rocker along (0.6, 0.8) (A0 made passive, as
+    tests/test_actuators.py builds it): the two-term *EQUATION holds the stroke, and the FE
+    deviation lies within continuum_bound of `equilibrium`'s."""
+    text = (EXAMPLES / "four_bar.toml").read_text()
+    head, tail = text.split('name = "A0"', 1)
+    text = head + 'name = "A0"' + tail.replace("input = true\n", "", 1)
+    text += '\n[[actuator]]\nname = "pusher"\nlink = "rocker"\nat = [0.1, 0.05]\n'
+    text += "direction = [0.6, 0.8]\n"
+    setup = fea.prepare(symkin.loads(text, "four_bar_pusher.toml"), {"pusher": 1e-3})
+    deck = fea.write_deck(setup, COARSE)
+    assert "*EQUATION\n3\n" in deck.text  # d_y u_y + d_x u_x - A = 0
+    result = fea.compare(setup, deck)
+    assert result.strokes["pusher"] == pytest.approx(1e-3, rel=1e-9)
+    eq = symkin.evaluate(setup.analysis, {"pusher": 1e-3}, level="equilibrium")
+    bound = continuum_bound(setup, {"pusher": 1e-3})
+    for name, d in result.fea.items():
+        e = eq.points[name].deviation
+        assert math.hypot(e[0] - d[0], e[1] - d[1]) < bound[name]
