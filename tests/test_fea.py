@@ -448,3 +448,120 @@ def test_ccx_not_converging_exits_3_quoting_it(tmp_path, capsys, monkeypatch):
     assert "*ERROR" in err and "increments" in err and "load factor 0.5 of 1" in err
     assert "single_plate.log" in err
     assert (out / "single_plate.log").exists() and not (out / "single_plate.frd").exists()
+
+
+# -- actuators -----------------------------------------------------------------------------------
+
+#: The parallelogram of tests/mechanisms/parallelogram.toml with F1 made passive and a piezo
+#: on the stage pushing along x (as tests/test_actuators.py builds it).
+PARALLELOGRAM = (ROOT / "tests" / "mechanisms" / "parallelogram.toml").read_text()
+PIEZO = """
+[[actuator]]
+name = "piezo"
+link = "stage"
+at = ["w/2", "L"]
+direction = [1.0, 0.0]
+drive = "{drive}"
+"""
+
+
+def driven(drive: str) -> symkin.Mechanism:
+    head, tail = PARALLELOGRAM.split('name = "F1"', 1)
+    text = head + 'name = "F1"' + tail.replace("input = true\n", "", 1)
+    return symkin.loads(text + PIEZO.format(drive=drive), f"parallelogram_{drive}.toml")
+
+
+def test_actuator_deck_names_it_and_constrains_its_point():
+    """A stroke: an *EQUATION on the stage's reference node (at the actuator's point) with a
+    prescribed auxiliary node, the surrogate hinge left free; a force: a *CLOAD there."""
+    stroke = fea.write_deck(fea.prepare(driven("stroke"), {"piezo": 2e-3}), COARSE).text
+    assert "** actuator 'piezo' on 'stage': a stroke of 0.002 m" in stroke
+    assert "reference node, at actuator 'piezo's point\n" in stroke
+    # the auxiliary node's comment, the equation, the prescribed stroke
+    eq = stroke.split("** actuator 'piezo': 'stage' at node ")[2].splitlines()
+    ref = eq[0].split()[0]
+    assert eq[1:3] == ["*EQUATION", "2"] and eq[3].startswith(f"{ref}, 1, 1, ")
+    assert "input '" not in stroke  # S1 (the surrogate) is not prescribed
+    force = fea.write_deck(fea.prepare(driven("force"), {"piezo": 0.3}), COARSE).text
+    assert "a force of 0.3 N" in force and "*EQUATION\n2\n" not in force
+    load = force.split("** actuator 'piezo': pushes 'stage' at node ")[1].splitlines()
+    assert load[1] == f"{load[0].split()[0]}, 1, 0.3"
+
+
+def test_actuator_on_a_pinned_link_is_refused(tmp_path, capsys):
+    """The actuator's point must be its link's reference node, which a pin already is: exit 2
+    naming the actuator, nothing written."""
+    text = (MECHANISMS / "four_bar_pins.toml").read_text()
+    head, tail = text.split('name = "A0"', 1)
+    text = head + 'name = "A0"' + tail.replace("input = true\n", "", 1)
+    text += '\n[[actuator]]\nname = "push"\nlink = "coupler"\nat = [0.06, 0.09]\n'
+    text += "direction = [1.0, 0.0]\n"
+    path = tmp_path / "pinned.toml"
+    path.write_text(text)
+    out = tmp_path / "out"
+    assert main(["fea", str(path), "--input", "push=1e-4", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "[[actuator]] #1 'push'" in err and "the pin 'A'" in err
+    assert not out.exists()
+
+
+@needs_ccx
+def test_stroke_actuator_against_equilibrium():
+    """A stroke-driven parallelogram: the FE holds the stroke and its deviation lies within
+    continuum_bound of `equilibrium`'s at that stroke."""
+    setup = fea.prepare(driven("stroke"), {"piezo": 2e-3})
+    result = fea.compare(setup, fea.write_deck(setup, COARSE))
+    eq = symkin.evaluate(setup.analysis, {"piezo": 2e-3}, level="equilibrium")
+    assert result.strokes["piezo"] == pytest.approx(2e-3, rel=1e-9)
+    d, e = result.fea["P"], eq.points["P"].deviation
+    assert math.hypot(e[0] - d[0], e[1] - d[1]) < continuum_bound(setup, {"piezo": 2e-3})["P"]
+    assert "loaded" in result.failed  # `loaded` takes no actuators: reported, not fatal
+
+
+@needs_ccx
+def test_force_actuator_against_equilibrium():
+    """A force-driven parallelogram: the FE's stroke against the stroke `equilibrium` produces,
+    and the FE deviation against the rigid linkage at the FE's own stroke within
+    continuum_bound of `equilibrium`'s (taken against the rigid linkage at its stroke). The
+    bound is the stroke-driven one's at equilibrium's stroke (the same equilibrium)."""
+    setup = fea.prepare(driven("force"), {"piezo": 0.3})
+    result = fea.compare(setup, fea.write_deck(setup, COARSE))
+    eq = symkin.evaluate(setup.analysis, {"piezo": 0.3}, level="equilibrium")
+    s = eq.actuators["piezo"].stroke
+    stroke_setup = fea.prepare(driven("stroke"), {"piezo": s})
+    bound = continuum_bound(stroke_setup, {"piezo": s})["P"]
+    d, e = result.fea["P"], eq.points["P"].deviation
+    assert result.level_strokes["piezo"] == pytest.approx(s, rel=1e-12)
+    s_fe = result.strokes["piezo"]
+    assert abs(s_fe - s) / abs(s) < bound / math.hypot(*e)
+    # the continuum is stiffer: it stops at a slightly shorter stroke, where the deviation (~ s^2)
+    # is smaller; at the FE's own stroke the stroke-driven `equilibrium` is within the bound ...
+    at_fe = symkin.evaluate(stroke_setup.analysis, {"piezo": s_fe}, level="equilibrium")
+    f = at_fe.points["P"].deviation
+    assert math.hypot(f[0] - d[0], f[1] - d[1]) < bound
+    # ... and against the force-driven one, the bound plus the deviation's change over the
+    # stroke miss
+    shift = math.hypot(f[0] - e[0], f[1] - e[1])
+    assert math.hypot(e[0] - d[0], e[1] - d[1]) < bound + shift
+
+
+@needs_ccx
+def test_stroke_along_a_slant_direction_on_the_four_bar():
+    """The example four-bar pushed on its rocker along (0.6, 0.8) (A0 made passive, as
+    tests/test_actuators.py builds it): the two-term *EQUATION holds the stroke, and the FE
+    deviation lies within continuum_bound of `equilibrium`'s."""
+    text = (EXAMPLES / "four_bar.toml").read_text()
+    head, tail = text.split('name = "A0"', 1)
+    text = head + 'name = "A0"' + tail.replace("input = true\n", "", 1)
+    text += '\n[[actuator]]\nname = "pusher"\nlink = "rocker"\nat = [0.1, 0.05]\n'
+    text += "direction = [0.6, 0.8]\n"
+    setup = fea.prepare(symkin.loads(text, "four_bar_pusher.toml"), {"pusher": 1e-3})
+    deck = fea.write_deck(setup, COARSE)
+    assert "*EQUATION\n3\n" in deck.text  # d_y u_y + d_x u_x - A = 0
+    result = fea.compare(setup, deck)
+    assert result.strokes["pusher"] == pytest.approx(1e-3, rel=1e-9)
+    eq = symkin.evaluate(setup.analysis, {"pusher": 1e-3}, level="equilibrium")
+    bound = continuum_bound(setup, {"pusher": 1e-3})
+    for name, d in result.fea.items():
+        e = eq.points[name].deviation
+        assert math.hypot(e[0] - d[0], e[1] - d[1]) < bound[name]

@@ -50,8 +50,17 @@ def prepare(
     numbers or expression strings) and gather the deck's numbers. Bad inputs raise InputError,
     an input the rigid linkage cannot reach AssemblyError."""
     mech = mechanism if isinstance(mechanism, Mechanism) else load(mechanism)
-    mech.refuse_actuators("symkin fea")
     plan = anchors(mech)
+    # A force actuator's rigid pose is the rigid linkage's at the stroke the force produces:
+    # `equilibrium`'s here (the FE's own stroke corrects it after the run, see `compare`).
+    kinematic, forces = _as_strokes(mech), {}
+    if any(a.drive == "force" for a in mech.actuators):
+        eq = evaluate(analyze(mech), inputs, level="equilibrium", params=params)
+        forces = {a.name: float(eq.inputs[a.name]) for a in mech.actuators if a.drive == "force"}
+        inputs = {
+            **eq.inputs,
+            **{n: float(eq.actuators[n].stroke) for n in forces},
+        }
     # The rigid linkage's pose of every link's own reference node: as extra points of the
     # mechanism, evaluated at the `paper` level (its rigid part is every level's).
     taken = {p.name for p in mech.points}
@@ -64,7 +73,7 @@ def prepare(
             taken.add(name)
             extra.append(Point(name, len(mech.points) + len(extra), link, anchor.at))
             plan[link] = dataclasses.replace(anchor, point=name)
-    with_refs = dataclasses.replace(mech, points=mech.points + tuple(extra))
+    with_refs = dataclasses.replace(kinematic, points=mech.points + tuple(extra))
     rigid = evaluate(analyze(with_refs), inputs, level="paper", params=params)
     conf = configuration(
         mech,
@@ -73,10 +82,16 @@ def prepare(
         plan,
         {name: p.rigid for name, p in rigid.points.items()},
         {name: r.rigid for name, r in rigid.links.items()},
+        forces,
     )
-    return Setup(
-        mech, analyze(mech), dict(rigid.inputs), dict(rigid.params), dict(params or {}), conf
-    )
+    given = {**rigid.inputs, **forces}  # what the levels take: a force actuator's force
+    return Setup(mech, analyze(mech), given, dict(rigid.params), dict(params or {}), conf)
+
+
+def _as_strokes(mech: Mechanism) -> Mechanism:
+    """`mech` with every actuator a stroke: the rigid linkage of a force-driven one."""
+    strokes = tuple(dataclasses.replace(a, drive="stroke") for a in mech.actuators)
+    return dataclasses.replace(mech, actuators=strokes) if mech.actuators else mech
 
 
 def write_deck(setup: Setup, mesh: Mesh = DEFAULT_MESH, released: tuple[str, ...] = ()) -> Deck:
@@ -142,6 +157,45 @@ def deviations(deck: Deck, run: ccx.Run) -> dict[str, Vec]:
     return out
 
 
+def strokes(deck: Deck, run: ccx.Run) -> dict[str, float]:
+    """Each actuator's stroke in the FE solution (file unit): the displacement of its point
+    (its link's reference node) along its direction, the deck's rigid one plus the printed
+    deviation at full precision."""
+    links = {r.link: r for r in deck.links}
+    out = {}
+    for d in deck.drives:
+        du, dv, _ = run.displacements[links[d.link].node]
+        out[d.name] = (d.stroke + d.direction[0] * du + d.direction[1] * dv) / deck.scale
+    return out
+
+
+def rigid_shift(setup: Setup, produced: Mapping[str, float]) -> dict[str, Vec]:
+    """Per point, how far the rigid linkage at the `produced` strokes of the force actuators
+    (file unit) lies from the deck's rigid pose (at `equilibrium`'s strokes); subtracted from
+    a deviation against the deck's pose, it gives the deviation at the produced strokes."""
+    forces = {d.name: d for d in setup.conf.drives if d.drive == "force"}
+    if not forces:
+        return {}
+    base = {k: v for k, v in setup.inputs.items() if k not in forces}
+    kinematic = analyze(_as_strokes(setup.mechanism))
+    at_deck = evaluate(
+        kinematic,
+        {**base, **{n: d.stroke / setup.conf.scale for n, d in forces.items()}},
+        level="paper",
+        params=setup.overrides,
+    )
+    at_fe = evaluate(
+        kinematic, {**base, **{n: produced[n] for n in forces}}, "paper", params=setup.overrides
+    )
+    return {
+        name: (
+            p.rigid[0] - at_deck.points[name].rigid[0],
+            p.rigid[1] - at_deck.points[name].rigid[1],
+        )
+        for name, p in at_fe.points.items()
+    }
+
+
 @dataclass(frozen=True)
 class Comparison:
     """FE deviations beside the physical levels' (file unit), per point; a level that could not
@@ -156,6 +210,8 @@ class Comparison:
     ccx_cpu_seconds: float
     deck: Deck
     notes: tuple[str, ...] = field(default=())
+    strokes: dict[str, float] = field(default_factory=dict)  # per actuator: the FE's stroke
+    level_strokes: dict[str, float] = field(default_factory=dict)  # and equilibrium's
 
     def difference(self, point: str, level: str) -> float | None:
         """|dR_level - dR_fea| / |dR_fea| (None where the level failed or dR_fea is 0)."""
@@ -183,6 +239,11 @@ class Comparison:
             "nodes": self.deck.nodes,
             "elements": self.deck.elements,
         }
+        if self.strokes:
+            out["actuators"] = {
+                name: {"fea": s, "equilibrium": self.level_strokes.get(name)}
+                for name, s in self.strokes.items()
+            }
         if self.failed:
             out["failed"] = dict(self.failed)
         return out
@@ -198,8 +259,21 @@ def levels(setup: Setup) -> tuple[dict[str, dict[str, Vec]], dict[str, str]]:
         except AssemblyError as exc:
             failed[level] = str(exc)
             continue
+        except InputError as exc:  # `loaded` takes no actuators
+            if not setup.mechanism.actuators:
+                raise
+            failed[level] = str(exc)
+            continue
         out[level] = {name: tuple(p.deviation) for name, p in ev.points.items()}
     return out, failed
+
+
+def level_strokes(setup: Setup) -> dict[str, float]:
+    """`equilibrium`'s stroke of each actuator (file unit): a force actuator's produced one."""
+    if not setup.mechanism.actuators:
+        return {}
+    ev = evaluate(setup.analysis, setup.inputs, level="equilibrium", params=setup.overrides)
+    return {name: float(a.stroke) for name, a in ev.actuators.items()}
 
 
 def compare(
@@ -227,16 +301,22 @@ def compare(
     if keep is not None:
         save(result.results, keep, name, ".frd")
         save(result.printed, keep, name, ".dat")
+    fe = deviations(deck, result)
+    produced = strokes(deck, result)
+    for point, shift in rigid_shift(setup, produced).items():
+        fe[point] = (fe[point][0] - shift[0], fe[point][1] - shift[1])
     return Comparison(
         setup,
         deck.mesh,
-        deviations(deck, result),
+        fe,
         values,
         failed,
         result.seconds,
         result.cpu_seconds,
         deck,
         plate_notes(setup),
+        produced,
+        level_strokes(setup) if "equilibrium" in values else {},
     )
 
 
@@ -263,6 +343,8 @@ __all__ = [
     "deviations",
     "parse_mesh",
     "prepare",
+    "rigid_shift",
     "save",
+    "strokes",
     "write_deck",
 ]

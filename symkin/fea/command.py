@@ -121,7 +121,11 @@ def text(result: Comparison) -> str:
     relative difference |dR_level - dR_fea| / |dR_fea|."""
     setup = result.setup
     unit = setup.mechanism.units
-    inputs = ", ".join(f"{h} = {v:.6g} rad" for h, v in setup.inputs.items())
+    drives = {a.name: a.drive for a in setup.mechanism.actuators}
+    what = {"stroke": unit, "force": "N"}
+    inputs = ", ".join(
+        f"{h} = {v:.6g} {what.get(drives.get(h, ''), 'rad')}" for h, v in setup.inputs.items()
+    )
     lines = [
         f"{setup.mechanism.name}: {inputs}; mesh {result.mesh.along} x "
         f"{result.mesh.across} per plate, grading {result.mesh.grading:g} "
@@ -140,6 +144,12 @@ def text(result: Comparison) -> str:
                 f"{p if k == 0 else '':<10} {source:<12} {d[0]:>15.7e} {d[1]:>15.7e} "
                 f"{math.hypot(*d):>13.6e} {diff or '':>11}"
             )
+    for name, s in result.strokes.items():
+        at = result.level_strokes.get(name)
+        lines.append(
+            f"actuator {name}: stroke {s:.9g} {unit} (fea)"
+            + (f", {at:.9g} {unit} (equilibrium)" if at is not None else "")
+        )
     for level, message in result.failed.items():
         lines.append(f"{level}: not available ({message})")
     lines += [f"note: {n}" for n in result.notes]

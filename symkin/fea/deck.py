@@ -153,6 +153,22 @@ class Target:
 
 
 @dataclass(frozen=True)
+class Drive:
+    """An actuator of the file (SI units): it moves the point `at` of `link` (the link's
+    reference node) along the unit `direction`, by the prescribed `stroke` (drive "stroke") or
+    pushed by `force` N (drive "force"); `stroke` is then the stroke the deck's rigid pose is
+    taken at."""
+
+    name: str
+    link: str
+    at: Vec
+    direction: Vec
+    drive: str
+    stroke: float
+    force: float = 0.0
+
+
+@dataclass(frozen=True)
 class Reference:
     """Where a moving link's rigid body is referenced (its REF node) and the rigid linkage's
     pose of the link: `displacement` of that node and `angle`, the link's rotation. A link
@@ -184,6 +200,7 @@ class Configuration:
     inputs: tuple[tuple[str, str, str, float], ...]  # (hinge, P, M, angle)
     params: tuple[tuple[str, float], ...]
     scale: float  # metres per file unit
+    drives: tuple[Drive, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -265,6 +282,18 @@ def anchors(mech: Mechanism) -> dict[str, Anchor]:
         out[child] = anchor
         placed.add(child)
         pending.remove(pin)
+    for a in mech.actuators:
+        if a.link in out:
+            taken = out[a.link]
+            why = f"its reference node is {taken.why}" if taken.pin else "it has two actuators"
+            raise InputError(
+                f"symkin fea drives an actuator's link by its reference node, and {why}",
+                file=mech.path,
+                line=a.line,
+                entry=f"[[actuator]] #{a.index + 1} '{a.name}'",
+                hint="push a link without rigid hinges, or give its rigid hinges a plate model",
+            )
+        out[a.link] = Anchor(a.at, f"at actuator '{printable(a.name)}'s point")
     for lk in mech.links:
         if lk.name != mech.ground and lk.name not in out:
             out[lk.name] = _own_anchor(mech, lk.name)
@@ -296,12 +325,14 @@ def configuration(
     plan: Mapping[str, Anchor],
     rigid_points: Mapping[str, Vec],
     rigid_angles: Mapping[str, float],
+    forces: Mapping[str, float] | None = None,
 ) -> Configuration:
     """The numbers of `mech` at these parameter values (every parameter, floats) and input
     angles. `plan` holds the links' reference nodes (:func:`anchors`); `rigid_points` (file
     unit) the rigid linkage's positions of the file's points and of every own reference node,
     keyed by the point's name or, for a reference node on no point, by the link's name;
-    `rigid_angles` the links' rotations."""
+    `rigid_angles` the links' rotations. An actuator's stroke (file unit) is in `inputs`, the
+    stroke the rigid pose is taken at; a force actuator's force (N) in `forces`."""
     scale = float(mech.unit_scale)
     subs = {p.symbol: sp.Float(repr(float(params[p.name])), 30) for p in mech.parameters}
 
@@ -366,8 +397,23 @@ def configuration(
                 anchor.shared,
             )
         )
+    surrogates = {a.surrogate for a in mech.actuators}  # the stroke fixes their angle
     ins = tuple(
-        (h.name, h.links[0], h.links[1], float(inputs[h.name])) for h in mech.hinges if h.input
+        (h.name, h.links[0], h.links[1], float(inputs[h.name]))
+        for h in mech.hinges
+        if h.input and h.name not in surrogates
+    )
+    drives = tuple(
+        Drive(
+            a.name,
+            a.link,
+            vec(a.at),
+            vec(a.direction, 1.0),
+            a.drive,
+            float(inputs[a.name]) * scale,
+            float((forces or {}).get(a.name, 0.0)),
+        )
+        for a in mech.actuators
     )
     return Configuration(
         mech.name,
@@ -382,6 +428,7 @@ def configuration(
         ins,
         tuple((p.name, float(params[p.name])) for p in mech.parameters),
         scale,
+        drives,
     )
 
 
@@ -450,6 +497,7 @@ class Deck:
     elements: int
     scale: float
     mesh: Mesh
+    drives: tuple[Drive, ...] = ()
 
 
 class _Writer:
@@ -545,6 +593,7 @@ class _Writer:
         )
         self.bodies()
         loads = self.loads()
+        drives_eq, drives_bc, drives_load = self.drives()
         for t in conf.targets:
             if t.link != conf.ground:
                 self.member(
@@ -596,15 +645,23 @@ class _Writer:
             if b.ref.parent is None:  # a pin follows the link it moves with
                 out.append(f"{b.ref_node}, 3, 3")
             out.append(f"{b.rot}, 1, 2")
-        out += inputs_eq
+        out += inputs_eq + drives_eq
         out += self.deviation_equations(bodies)
-        out += self.step(inputs_bc, loads, bodies)
+        out += self.step(inputs_bc + drives_bc, loads + drives_load, bodies)
         links = tuple(
             LinkReadout(b.ref.link, b.dev, b.ref.at, b.ref.angle, b.ref.parent) for b in bodies
         )
         text = "\n".join(wrapped for line in out for wrapped in _wrap(line)) + "\n"
         return Deck(
-            text, links, conf.targets, conf.ground, self.count, self.elements, conf.scale, self.mesh
+            text,
+            links,
+            conf.targets,
+            conf.ground,
+            self.count,
+            self.elements,
+            conf.scale,
+            self.mesh,
+            conf.drives,
         )
 
     def header(self) -> list[str]:
@@ -623,9 +680,59 @@ class _Writer:
             "clamps and the faces smaller), one layer through the width, u_z = 0: plane strain",
             "** links: rigid bodies; the frame's nodes fixed; NLGEOM, ramped from the "
             "as-fabricated pose",
+            *(
+                f"** actuator '{printable(d.name)}' on '{printable(d.link)}': "
+                + (
+                    f"a force of {number(d.force)} N (the rigid pose at the stroke "
+                    f"{number(d.stroke)} m)"
+                    if d.drive == "force"
+                    else f"a stroke of {number(d.stroke)} m"
+                )
+                for d in conf.drives
+            ),
             "*HEADING",
             f"symkin fea {printable(conf.name)}",
         ]
+
+    def drives(self) -> tuple[list[str], list[str], list[str]]:
+        """The actuators on their links' reference nodes (placed at the actuator's point): a
+        stroke d_x u_x + d_y u_y = s through an *EQUATION with the u_1 of a prescribed auxiliary
+        node, a force a *CLOAD along d (a dead load: its direction stays)."""
+        eq: list[str] = []
+        bc: list[str] = []
+        load: list[str] = []
+        for d in self.conf.drives:
+            ref = self.body[d.link].ref_node
+            name, link = printable(d.name), printable(d.link)
+            if d.drive == "force":
+                load.append(
+                    f"** actuator '{name}': pushes '{link}' at node {ref} with {number(d.force)} N "
+                    f"along ({number(d.direction[0])}, {number(d.direction[1])})"
+                )
+                load += [
+                    f"{ref}, {dof}, {number(d.force * c)}"
+                    for dof, c in ((1, d.direction[0]), (2, d.direction[1]))
+                    if c
+                ]
+                continue
+            what = (
+                f"actuator '{name}': '{link}' at node {ref} moves by {number(d.stroke)} m along "
+                f"({number(d.direction[0])}, {number(d.direction[1])})"
+            )
+            aux = self.node((0.0, 0.0), comment=f"{what}: this node's u_1")
+            # the larger component first: ccx eliminates the first dof of an equation
+            terms = sorted(
+                ((dof, c) for dof, c in ((1, d.direction[0]), (2, d.direction[1])) if c),
+                key=lambda t: -abs(t[1]),
+            )
+            eq += [
+                f"** {what}",
+                "*EQUATION",
+                str(len(terms) + 1),
+                ", ".join(f"{ref}, {dof}, {number(c)}" for dof, c in terms) + f", {aux}, 1, -1.",
+            ]
+            bc += [f"** {what}", f"{aux}, 1, 1, {number(d.stroke)}"]
+        return eq, bc, load
 
     @staticmethod
     def nset(name: str, nodes: Sequence[int]) -> list[str]:
