@@ -1530,7 +1530,12 @@ def surrogate_hinges(mech: Mechanism) -> tuple[str, ...] | Actuator:
     found = _jacobian_rows(mech)
     if found is None:
         return tuple(h.name for h in mech.hinges if not h.input)[: len(mech.actuators)]
-    constraints, turn_of, actuator_row, full = found
+    constraints, turn_of, actuator_row, full = (
+        found.constraints,
+        found.turn_of,
+        found.actuator_row,
+        found.full,
+    )
     with mpmath.workdps(30):
         held = constraints + [turn_of(h) for h in mech.hinges if h.input]
         rows = held + [actuator_row(a) for a in mech.actuators]
@@ -1559,19 +1564,45 @@ def surrogate_hinges(mech: Mechanism) -> tuple[str, ...] | Actuator:
     return tuple(chosen)
 
 
-def _jacobian_rows(
-    mech: Mechanism,
-) -> (
-    tuple[
-        list[list[mpmath.mpf]],
-        Callable[[Hinge], list[mpmath.mpf]],
-        Callable[[Actuator], list[mpmath.mpf]],
-        int,
-    ]
-    | None
-):
-    """(constraint rows, turn row of a hinge, row of an actuator's stroke, 3n) of the rigid
-    linkage at the as-fabricated pose, in 30-digit numbers (None: values not finite)."""
+@dataclass(frozen=True)
+class _RigidRows:
+    """The rigid linkage's constraint rows at the as-fabricated pose, in 30-digit numbers: 2
+    per hinge (its pin at the rigid reference) by the 3n pose velocities of the moving links,
+    the rotation column scaled by `size` (the largest pin coordinate)."""
+
+    constraints: list[list[mpmath.mpf]]
+    pins: list[tuple[mpmath.mpf, mpmath.mpf]]
+    size: mpmath.mpf
+    column: dict[str, int]  # a moving link's first column
+    values: Mapping[sp.Symbol, sp.Expr]
+
+    @property
+    def full(self) -> int:
+        """3n: the rank that fixes the pose."""
+        return 3 * len(self.column)
+
+    def turn_of(self, h: Hinge) -> list[mpmath.mpf]:
+        """The row holding hinge h's relative rotation (an input)."""
+        row = [mpmath.mpf(0)] * self.full
+        for link, sign in ((h.links[1], 1), (h.links[0], -1)):
+            if link in self.column:
+                row[self.column[link] + 2] = sign
+        return row
+
+    def actuator_row(self, a: Actuator) -> list[mpmath.mpf]:
+        """The rate of actuator a's stroke, d·v(at) = d·(v + ω × at), ω scaled as above."""
+        row = [mpmath.mpf(0)] * self.full
+        j = self.column[a.link]
+        with mpmath.workdps(30):
+            parts = [_mp(e, self.values) for e in (*a.direction, *a.at)]
+            # the reader has checked `at` and `direction` finite before the rank is taken
+            dx, dy, x, y = (mpmath.mpf(0) if v is None else v for v in parts)
+            row[j], row[j + 1], row[j + 2] = dx, dy, (dy * x - dx * y) / self.size
+        return row
+
+
+def _jacobian_rows(mech: Mechanism) -> _RigidRows | None:
+    """The rigid linkage's rows at the as-fabricated pose (None: values not finite)."""
     values = mech.defaults
     moving = [lk.name for lk in mech.links if lk.name != mech.ground]
     column = {name: 3 * k for k, name in enumerate(moving)}
@@ -1596,26 +1627,7 @@ def _jacobian_rows(
                     out[0][j], out[0][j + 2] = sign, -sign * pin[1] / size
                     out[1][j + 1], out[1][j + 2] = sign, sign * pin[0] / size
             constraints += out
-
-    def turn_of(h: Hinge) -> list[mpmath.mpf]:
-        row = [mpmath.mpf(0)] * (3 * len(moving))
-        for link, sign in ((h.links[1], 1), (h.links[0], -1)):
-            if link in column:
-                row[column[link] + 2] = sign
-        return row
-
-    def actuator_row(a: Actuator) -> list[mpmath.mpf]:
-        # the rate of the stroke d·v(at) = d·(v + ω × at), ω scaled by `size` as above
-        row = [mpmath.mpf(0)] * (3 * len(moving))
-        j = column[a.link]
-        with mpmath.workdps(30):
-            parts = [_mp(e, values) for e in (*a.direction, *a.at)]
-            # the reader has checked `at` and `direction` finite before the rank is taken
-            dx, dy, x, y = (mpmath.mpf(0) if v is None else v for v in parts)
-            row[j], row[j + 1], row[j + 2] = dx, dy, (dy * x - dx * y) / size
-        return row
-
-    return constraints, turn_of, actuator_row, 3 * len(moving)
+    return _RigidRows(constraints, pins, size, column, values)
 
 
 @dataclass(frozen=True)
@@ -1642,41 +1654,13 @@ def closure_rank(mech: Mechanism) -> ClosureRank | None:
 
 
 def _closure_rank(mech: Mechanism) -> ClosureRank | None:
-    values = mech.defaults
-    moving = [lk.name for lk in mech.links if lk.name != mech.ground]
-    column = {name: 3 * k for k, name in enumerate(moving)}
-    pins: list[tuple[mpmath.mpf, mpmath.mpf]] = []
+    found = _jacobian_rows(mech)
+    if found is None:
+        return None
+    constraints, pins, size, turn_of = found.constraints, found.pins, found.size, found.turn_of
     with mpmath.workdps(30):
-        for h in mech.hinges:
-            shift = h.length / 2 - pivot_distance(h)
-            x, y = (
-                _mp(h.at[i] + shift * f(h.plate_angle), values)
-                for i, f in enumerate((sp.cos, sp.sin))
-            )
-            if x is None or y is None:
-                return None
-            pins.append((x, y))
-        size = max((abs(c) for pin in pins for c in pin), default=mpmath.mpf(0)) or mpmath.mpf(1)
-
-        def rows_of(h: Hinge, pin: tuple[mpmath.mpf, mpmath.mpf]) -> list[list[mpmath.mpf]]:
-            out = [[mpmath.mpf(0)] * (3 * len(moving)) for _ in range(2)]
-            for link, sign in ((h.links[1], 1), (h.links[0], -1)):
-                if link in column:
-                    j = column[link]
-                    out[0][j], out[0][j + 2] = sign, -sign * pin[1] / size
-                    out[1][j + 1], out[1][j + 2] = sign, sign * pin[0] / size
-            return out
-
-        def turn_of(h: Hinge) -> list[mpmath.mpf]:
-            row = [mpmath.mpf(0)] * (3 * len(moving))
-            for link, sign in ((h.links[1], 1), (h.links[0], -1)):
-                if link in column:
-                    row[column[link] + 2] = sign
-            return row
-
-        constraints = [r for h, pin in zip(mech.hinges, pins) for r in rows_of(h, pin)]
         rank = _rank(constraints)
-        full = 3 * len(moving)
+        full = found.full
         inputs = [h for h in mech.hinges if h.input]
         with_inputs = constraints + [turn_of(h) for h in inputs]
         dependent: tuple[str, ...] = ()
