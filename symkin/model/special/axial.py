@@ -31,7 +31,7 @@ import mpmath
 import sympy as sp
 from sympy.core.function import ArgumentIndexError
 
-from .kernels import _from_mp, _to_mp
+from .kernels import _from_mp, _to_mp, evalf_by_mp
 from .registry import DomainError, register
 
 #: The symbols of the closed forms: the axial load index and T(p).
@@ -202,14 +202,7 @@ class AxialKernel(sp.Function):
         return kernel(self.base, self.order + 1)(self.args[0])
 
     def _eval_evalf(self, prec):
-        x = self.args[0]
-        if not x.is_number:
-            return None
-        try:
-            xv = _to_mp(x, prec + 20)
-        except (TypeError, ValueError, AttributeError):
-            return None
-        return _from_mp(self._mp_value(xv, prec), prec)
+        return evalf_by_mp(self, prec)
 
     def _eval_is_real(self):
         return self.args[0].is_extended_real or None

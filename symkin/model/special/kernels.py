@@ -42,6 +42,19 @@ def _from_mp(value, prec: int) -> sp.Expr:
     return sp.Expr._from_mpmath(value, prec)
 
 
+def evalf_by_mp(f: sp.Function, prec: int) -> sp.Expr | None:
+    """sympy's evalf of a one-argument kernel `f` through its class's ``_mp_value(x, prec)``
+    (20 guard bits on the argument); None where the argument is not a number."""
+    x = f.args[0]
+    if not x.is_number:
+        return None
+    try:
+        xv = _to_mp(x, prec + 20)
+    except (TypeError, ValueError, AttributeError):
+        return None
+    return _from_mp(f._mp_value(xv, prec), prec)
+
+
 class StableKernel(sp.Function):
     """Base of the even, entire kernels: exact Taylor coefficients, a stable float algorithm.
 
@@ -85,14 +98,7 @@ class StableKernel(sp.Function):
         return self._fdiff_expr(self.args[0])
 
     def _eval_evalf(self, prec):
-        x = self.args[0]
-        if not x.is_number:
-            return None
-        try:
-            xv = _to_mp(x, prec + 20)
-        except (TypeError, ValueError, AttributeError):
-            return None
-        return _from_mp(self._mp_value(xv, prec), prec)
+        return evalf_by_mp(self, prec)
 
     def _eval_rewrite_as_elementary(self, x, **kwargs):
         return self.elementary(x)
