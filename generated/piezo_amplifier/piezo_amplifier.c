@@ -3,7 +3,7 @@
  * Mechanism 'piezo_amplifier': 4 links, 4 hinges, 1 loop(s); inputs piezo (actuators; their strokes fix the angles of RA0 (piezo)).
  * Points: B; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, dev_paper 31, dev_first_order 51, dev_exact 62, links 1.
+ * Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, dev_paper 31, dev_first_order 51, dev_exact 62, links 1, sens_rigid 105, sens_paper 108, sens_first_order 355, sens_exact 449.
  */
 #include "piezo_amplifier.h"
 
@@ -19,7 +19,7 @@ enum {
     SK_NL = 4,          /* links whose rotation is reported */
     SK_NV = 6,          /* variables of the sensitivities: parameters, inputs */
     SK_NQ = SK_NPAR + 0 + 1,  /* what the routines read */
-    SK_OUT = 16        /* the largest routine output, and one */
+    SK_OUT = 85        /* the largest routine output, and one */
 };
 
 const double piezo_amplifier_default_params[PIEZO_AMPLIFIER_N_PARAMS > 0 ? PIEZO_AMPLIFIER_N_PARAMS : 1] = {
@@ -515,6 +515,653 @@ static void sk_links(const double *theta, const double *delta, double *out)
     out[5] = 0;
     out[6] = delta_2;
     out[7] = delta_3;
+}
+
+/* rigid stage: A, dG/dv; rigid points: dR/dtheta, dR/dv (105 operations) */
+static void sk_sens_rigid(const double *theta, const double *params, double *out)
+{
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double p_0 = params[0];
+    const double p_1 = params[1];
+    const double p_2 = params[2];
+    const double p_4 = params[4];
+    const double _tmp0 = theta_1 + theta_2;
+    const double _tmp1 = cos(_tmp0);
+    const double _tmp2 = sin(p_1);
+    const double _tmp3 = _tmp2*p_0;
+    const double _tmp4 = _tmp1*_tmp3;
+    const double _tmp5 = cos(p_1);
+    const double _tmp6 = sin(_tmp0);
+    const double _tmp7 = _tmp5*_tmp6;
+    const double _tmp8 = _tmp7*p_0;
+    const double _tmp9 = _tmp4 - _tmp8;
+    const double _tmp10 = cos(theta_3);
+    const double _tmp11 = sin(theta_3);
+    const double _tmp12 = _tmp11*_tmp5;
+    const double _tmp13 = _tmp2*_tmp6;
+    const double _tmp14 = _tmp13*p_0;
+    const double _tmp15 = _tmp5*p_0;
+    const double _tmp16 = _tmp14 + _tmp1*_tmp15;
+    const double _tmp17 = _tmp11*_tmp2;
+    const double _tmp18 = _tmp17*p_0;
+    const double _tmp19 = pow(sin(0.5*theta_3), 2);
+    const double _tmp20 = 2*_tmp5;
+    const double _tmp21 = _tmp19*_tmp20;
+    const double _tmp22 = 0.5*theta_1;
+    const double _tmp23 = pow(sin(_tmp22 + 0.5*theta_2), 2);
+    const double _tmp24 = _tmp20*_tmp23;
+    const double _tmp25 = 2*_tmp3;
+    const double _tmp26 = sin(theta_1);
+    const double _tmp27 = -_tmp26;
+    const double _tmp28 = cos(theta_1);
+    const double _tmp29 = _tmp28*p_2;
+    const double _tmp30 = 2*_tmp2;
+    const double _tmp31 = _tmp26*p_2;
+    const double _tmp32 = 2*_tmp4;
+    const double _tmp33 = 2*_tmp8;
+    const double _tmp34 = _tmp32 - _tmp33;
+    const double _tmp35 = _tmp1*_tmp20;
+    const double _tmp36 = 2*_tmp14 + _tmp35*p_0;
+    out[0] = 1;
+    out[1] = -1;
+    out[2] = -1;
+    out[3] = -_tmp9;
+    out[4] = _tmp10*_tmp3 + _tmp12*p_0;
+    out[5] = 0;
+    out[6] = -_tmp16;
+    out[7] = _tmp18 - _tmp10*_tmp15;
+    out[8] = 0;
+    out[9] = 0;
+    out[10] = 0;
+    out[11] = 0;
+    out[12] = 0;
+    out[13] = 0;
+    out[14] = 1;
+    out[15] = _tmp17 + _tmp21 + _tmp24 - _tmp13;
+    out[16] = -_tmp8 - _tmp19*_tmp25 - _tmp23*_tmp25 + _tmp11*_tmp5*p_0;
+    out[17] = _tmp27;
+    out[18] = 0;
+    out[19] = 0;
+    out[20] = -_tmp29 - _tmp9;
+    out[21] = -_tmp12 - _tmp7 - _tmp23*_tmp30 + 2*_tmp19*_tmp2;
+    out[22] = _tmp14 + _tmp18 + _tmp21*p_0 - _tmp24*p_0;
+    out[23] = -2*pow(sin(_tmp22), 2);
+    out[24] = 0;
+    out[25] = 0;
+    out[26] = -_tmp16 - _tmp31;
+    out[27] = -_tmp34;
+    out[28] = 0;
+    out[29] = 0;
+    out[30] = -_tmp36;
+    out[31] = 0;
+    out[32] = 0;
+    out[33] = 0;
+    out[34] = 0;
+    out[35] = 0;
+    out[36] = 0;
+    out[37] = 0;
+    out[38] = 0;
+    out[39] = -_tmp35 - 2*_tmp13 + 2*_tmp5;
+    out[40] = _tmp32 - _tmp25 - _tmp33;
+    out[41] = _tmp27;
+    out[42] = 0;
+    out[43] = 0;
+    out[44] = -_tmp29 - _tmp34;
+    out[45] = -2*_tmp7 + _tmp1*_tmp30;
+    out[46] = _tmp36;
+    out[47] = -1 + _tmp28;
+    out[48] = 0;
+    out[49] = 0;
+    out[50] = -_tmp31 - _tmp36;
+    out[51] = _tmp20;
+    out[52] = -_tmp25;
+    out[53] = 0;
+    out[54] = 0;
+    out[55] = _tmp27;
+    out[56] = -_tmp28*p_4;
+    out[57] = 0;
+    out[58] = 0;
+    out[59] = -1;
+    out[60] = 0;
+    out[61] = _tmp28;
+    out[62] = -_tmp26*p_4;
+}
+
+/* sensitivity at level paper: dD/dtheta, dD/dv (108 operations) */
+static void sk_sens_paper(const double *theta, const double *delta, const double *params, double *out)
+{
+    (void)delta;
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double p_3 = params[3];
+    const double _tmp0 = cos(theta_1);
+    const double _tmp1 = 0.5*theta_2;
+    const double _tmp2 = sin(_tmp1);
+    const double _tmp3 = _tmp2*p_3;
+    const double _tmp4 = symkin_arck(_tmp1);
+    const double _tmp5 = _tmp1*_tmp4;
+    const double _tmp6 = cos(_tmp1);
+    const double _tmp7 = _tmp6*p_3;
+    const double _tmp8 = pow(theta_2, 2);
+    const double _tmp9 = _tmp4*_tmp8;
+    const double _tmp10 = 0.125*_tmp9;
+    const double _tmp11 = 0.0625*(theta_2*theta_2*theta_2)*(-3*symkin_sinr2(_tmp1) + 3*symkin_cosr2(_tmp1) + symkin_sinr1(_tmp1));
+    const double _tmp12 = -_tmp10*_tmp7 - _tmp11*_tmp3 - _tmp3*_tmp5;
+    const double _tmp13 = sin(theta_1);
+    const double _tmp14 = _tmp11*_tmp7 + _tmp5*_tmp7 - _tmp10*_tmp3;
+    const double _tmp15 = 0.5*theta_1;
+    const double _tmp16 = sin(_tmp15);
+    const double _tmp17 = symkin_arck(_tmp15);
+    const double _tmp18 = _tmp17*pow(theta_1, 2);
+    const double _tmp19 = 0.25*_tmp18;
+    const double _tmp20 = _tmp16*_tmp19;
+    const double _tmp21 = 0.25*_tmp9;
+    const double _tmp22 = _tmp13*_tmp21;
+    const double _tmp23 = _tmp0*_tmp21;
+    const double _tmp24 = _tmp16*p_3;
+    const double _tmp25 = _tmp15*_tmp17;
+    const double _tmp26 = cos(_tmp15);
+    const double _tmp27 = _tmp26*p_3;
+    const double _tmp28 = 0.125*_tmp18;
+    const double _tmp29 = (theta_1*theta_1*theta_1);
+    const double _tmp30 = -3*symkin_sinr2(_tmp15) + 3*symkin_cosr2(_tmp15) + symkin_sinr1(_tmp15);
+    const double _tmp31 = 0.0625*_tmp29*_tmp30;
+    const double _tmp32 = _tmp24*_tmp25 + _tmp24*_tmp31 + _tmp27*_tmp28;
+    const double _tmp33 = _tmp19*_tmp26;
+    const double _tmp34 = _tmp24*_tmp28;
+    out[0] = _tmp0*_tmp12 - _tmp13*_tmp14;
+    out[1] = 0;
+    out[2] = 0;
+    out[3] = _tmp0*_tmp14 + _tmp12*_tmp13;
+    out[4] = 0;
+    out[5] = 0;
+    out[6] = 0;
+    out[7] = 0;
+    out[8] = 0;
+    out[9] = 0;
+    out[10] = 0;
+    out[11] = 0;
+    out[12] = 0;
+    out[13] = 0;
+    out[14] = 0;
+    out[15] = -_tmp20 - _tmp2*_tmp23 - _tmp22*_tmp6;
+    out[16] = 0;
+    out[17] = -_tmp32 - _tmp23*_tmp7 + 0.25*_tmp13*_tmp2*_tmp4*_tmp8*p_3;
+    out[18] = 0;
+    out[19] = 0;
+    out[20] = 0;
+    out[21] = _tmp33 + _tmp23*_tmp6 - _tmp2*_tmp22;
+    out[22] = 0;
+    out[23] = -_tmp34 - _tmp22*_tmp7 - _tmp23*_tmp3 + 0.0625*_tmp26*_tmp29*_tmp30*p_3 + 0.5*_tmp17*_tmp26*p_3*theta_1;
+    out[24] = 0;
+    out[25] = 0;
+    out[26] = 0;
+    out[27] = -_tmp20;
+    out[28] = 0;
+    out[29] = -_tmp32;
+    out[30] = 0;
+    out[31] = 0;
+    out[32] = 0;
+    out[33] = _tmp33;
+    out[34] = 0;
+    out[35] = -_tmp34 + _tmp25*_tmp27 + _tmp27*_tmp31;
+}
+
+/* sensitivity at level first_order: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (355 operations) */
+static void sk_sens_first_order(const double *theta, const double *delta, const double *params, double *out)
+{
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double delta_2 = delta[0];
+    const double delta_3 = delta[1];
+    const double p_0 = params[0];
+    const double p_1 = params[1];
+    const double p_3 = params[3];
+    const double _tmp0 = sin(p_1);
+    const double _tmp1 = theta_1 + theta_2;
+    const double _tmp2 = cos(_tmp1);
+    const double _tmp3 = _tmp0*_tmp2;
+    const double _tmp4 = _tmp3*p_0;
+    const double _tmp5 = cos(p_1);
+    const double _tmp6 = sin(_tmp1);
+    const double _tmp7 = _tmp4 - _tmp5*_tmp6*p_0;
+    const double _tmp8 = cos(theta_3);
+    const double _tmp9 = _tmp0*_tmp8;
+    const double _tmp10 = sin(theta_3);
+    const double _tmp11 = _tmp10*_tmp5;
+    const double _tmp12 = _tmp11*p_0 + _tmp9*p_0;
+    const double _tmp13 = _tmp0*_tmp6;
+    const double _tmp14 = _tmp13*p_0;
+    const double _tmp15 = _tmp2*_tmp5;
+    const double _tmp16 = _tmp15*p_0;
+    const double _tmp17 = -_tmp14 - _tmp16;
+    const double _tmp18 = _tmp0*_tmp10;
+    const double _tmp19 = _tmp5*_tmp8;
+    const double _tmp20 = _tmp18*p_0 - _tmp19*p_0;
+    const double _tmp21 = _tmp17*delta_2;
+    const double _tmp22 = sin(theta_1);
+    const double _tmp23 = 0.5*theta_2;
+    const double _tmp24 = cos(_tmp23);
+    const double _tmp25 = _tmp24*p_3;
+    const double _tmp26 = symkin_arck(_tmp23);
+    const double _tmp27 = _tmp23*_tmp26;
+    const double _tmp28 = sin(_tmp23);
+    const double _tmp29 = _tmp28*p_3;
+    const double _tmp30 = pow(theta_2, 2);
+    const double _tmp31 = _tmp26*_tmp30;
+    const double _tmp32 = 0.125*_tmp31;
+    const double _tmp33 = 0.0625*(theta_2*theta_2*theta_2)*(-3*symkin_sinr2(_tmp23) + 3*symkin_cosr2(_tmp23) + symkin_sinr1(_tmp23));
+    const double _tmp34 = _tmp25*_tmp27 + _tmp25*_tmp33 - _tmp29*_tmp32;
+    const double _tmp35 = cos(theta_1);
+    const double _tmp36 = -_tmp25*_tmp32 - _tmp27*_tmp29 - _tmp29*_tmp33;
+    const double _tmp37 = _tmp22*_tmp34 - _tmp35*_tmp36;
+    const double _tmp38 = 0.25*_tmp0;
+    const double _tmp39 = pow(theta_4, 2);
+    const double _tmp40 = 0.5*theta_4;
+    const double _tmp41 = symkin_arck(_tmp40);
+    const double _tmp42 = sin(_tmp40);
+    const double _tmp43 = _tmp42*p_3;
+    const double _tmp44 = _tmp41*_tmp43;
+    const double _tmp45 = _tmp39*_tmp44;
+    const double _tmp46 = cos(_tmp40);
+    const double _tmp47 = -_tmp38*_tmp45 + 0.25*_tmp39*_tmp41*_tmp46*_tmp5*p_3;
+    const double _tmp48 = _tmp10*_tmp47;
+    const double _tmp49 = _tmp46*p_3;
+    const double _tmp50 = _tmp41*_tmp49;
+    const double _tmp51 = 0.25*_tmp5;
+    const double _tmp52 = _tmp45*_tmp51 + _tmp38*_tmp39*_tmp50;
+    const double _tmp53 = 0.5*theta_3;
+    const double _tmp54 = sin(_tmp53);
+    const double _tmp55 = _tmp54*p_3;
+    const double _tmp56 = symkin_arck(_tmp53);
+    const double _tmp57 = _tmp53*_tmp56;
+    const double _tmp58 = cos(_tmp53);
+    const double _tmp59 = _tmp58*p_3;
+    const double _tmp60 = pow(theta_3, 2);
+    const double _tmp61 = _tmp56*_tmp60;
+    const double _tmp62 = 0.125*_tmp61;
+    const double _tmp63 = 0.0625*(theta_3*theta_3*theta_3)*(-3*symkin_sinr2(_tmp53) + 3*symkin_cosr2(_tmp53) + symkin_sinr1(_tmp53));
+    const double _tmp64 = _tmp55*_tmp57 + _tmp55*_tmp63 + _tmp59*_tmp62;
+    const double _tmp65 = _tmp57*_tmp59 + _tmp59*_tmp63 - _tmp55*_tmp62;
+    const double _tmp66 = 0.125*_tmp39;
+    const double _tmp67 = 0.0625*(theta_4*theta_4*theta_4)*(-3*symkin_sinr2(_tmp40) + 3*symkin_cosr2(_tmp40) + symkin_sinr1(_tmp40));
+    const double _tmp68 = _tmp40*_tmp44 + _tmp43*_tmp67 + _tmp50*_tmp66;
+    const double _tmp69 = _tmp40*_tmp50 + _tmp49*_tmp67 - _tmp44*_tmp66;
+    const double _tmp70 = _tmp5*_tmp69 - _tmp0*_tmp68;
+    const double _tmp71 = _tmp0*_tmp69 + _tmp5*_tmp68;
+    const double _tmp72 = _tmp7*delta_2;
+    const double _tmp73 = _tmp22*_tmp36 + _tmp34*_tmp35;
+    const double _tmp74 = _tmp47*_tmp8;
+    const double _tmp75 = _tmp38*_tmp61;
+    const double _tmp76 = _tmp51*_tmp61;
+    const double _tmp77 = -_tmp52;
+    const double _tmp78 = _tmp39*_tmp41;
+    const double _tmp79 = _tmp42*_tmp78;
+    const double _tmp80 = -_tmp38*_tmp79 + 0.25*_tmp39*_tmp41*_tmp46*_tmp5;
+    const double _tmp81 = _tmp51*_tmp79 + _tmp38*_tmp46*_tmp78;
+    const double _tmp82 = 0.5*theta_1;
+    const double _tmp83 = sin(_tmp82);
+    const double _tmp84 = pow(theta_1, 2);
+    const double _tmp85 = symkin_arck(_tmp82);
+    const double _tmp86 = _tmp84*_tmp85;
+    const double _tmp87 = 0.25*_tmp86;
+    const double _tmp88 = _tmp83*_tmp87;
+    const double _tmp89 = 0.25*_tmp31;
+    const double _tmp90 = _tmp22*_tmp89;
+    const double _tmp91 = _tmp35*_tmp89;
+    const double _tmp92 = _tmp88 + _tmp24*_tmp90 + _tmp28*_tmp91;
+    const double _tmp93 = _tmp83*p_3;
+    const double _tmp94 = _tmp82*_tmp85;
+    const double _tmp95 = cos(_tmp82);
+    const double _tmp96 = _tmp95*p_3;
+    const double _tmp97 = 0.125*_tmp86;
+    const double _tmp98 = (theta_1*theta_1*theta_1);
+    const double _tmp99 = -3*symkin_sinr2(_tmp82) + 3*symkin_cosr2(_tmp82) + symkin_sinr1(_tmp82);
+    const double _tmp100 = 0.0625*_tmp98*_tmp99;
+    const double _tmp101 = _tmp100*_tmp93 + _tmp93*_tmp94 + _tmp96*_tmp97;
+    const double _tmp102 = _tmp101 + _tmp25*_tmp91 - 0.25*_tmp22*_tmp26*_tmp28*_tmp30*p_3;
+    const double _tmp103 = _tmp28*_tmp90;
+    const double _tmp104 = _tmp93*_tmp97;
+    const double _tmp105 = _tmp104 + _tmp25*_tmp90 + _tmp29*_tmp91 - 0.0625*_tmp95*_tmp98*_tmp99*p_3 - 0.5*_tmp85*_tmp95*p_3*theta_1;
+    const double _tmp106 = -2*_tmp14 - 2*_tmp16;
+    const double _tmp107 = _tmp106*delta_2;
+    const double _tmp108 = 2*_tmp4 - 2*_tmp5*_tmp6*p_0;
+    const double _tmp109 = _tmp108*delta_2;
+    const double _tmp110 = _tmp87*_tmp95;
+    out[0] = 1;
+    out[1] = -1;
+    out[2] = -1;
+    out[3] = -_tmp7;
+    out[4] = _tmp12;
+    out[5] = 0;
+    out[6] = _tmp17;
+    out[7] = _tmp20;
+    out[8] = 0;
+    out[9] = 0;
+    out[10] = 0;
+    out[11] = 0;
+    out[12] = -_tmp21 - _tmp37;
+    out[13] = _tmp48 + _tmp0*_tmp64 + _tmp52*_tmp8 - _tmp20*delta_3 - _tmp5*_tmp65;
+    out[14] = _tmp10*_tmp71 - _tmp70*_tmp8;
+    out[15] = _tmp73 - _tmp72;
+    out[16] = -_tmp74 + _tmp10*_tmp52 + _tmp12*delta_3 - _tmp0*_tmp65 - _tmp5*_tmp64;
+    out[17] = -_tmp10*_tmp70 - _tmp71*_tmp8;
+    out[18] = 0;
+    out[19] = 0;
+    out[20] = 0;
+    out[21] = 0;
+    out[22] = 0;
+    out[23] = 0;
+    out[24] = delta_2*(-_tmp3 + _tmp5*_tmp6) + delta_3*(_tmp11 + _tmp9);
+    out[25] = _tmp21 + _tmp48 + _tmp55*_tmp76 + _tmp59*_tmp75 - _tmp20*delta_3 - _tmp77*_tmp8;
+    out[26] = 0;
+    out[27] = -_tmp92 + _tmp10*_tmp81 - _tmp58*_tmp76 - _tmp8*_tmp80 + 0.25*_tmp0*_tmp54*_tmp56*_tmp60;
+    out[28] = 0;
+    out[29] = -_tmp102 - _tmp21;
+    out[30] = delta_2*(-_tmp13 - _tmp15) + delta_3*(_tmp18 - _tmp19);
+    out[31] = _tmp72 - _tmp74 + _tmp12*delta_3 + _tmp55*_tmp75 - _tmp10*_tmp77 - _tmp59*_tmp76;
+    out[32] = 0;
+    out[33] = -_tmp103 - _tmp10*_tmp80 - _tmp54*_tmp76 - _tmp58*_tmp75 - _tmp8*_tmp81 + 0.25*_tmp84*_tmp85*_tmp95 + 0.25*_tmp24*_tmp26*_tmp30*_tmp35;
+    out[34] = 0;
+    out[35] = -_tmp105 - _tmp72;
+    out[36] = -_tmp107 - _tmp37;
+    out[37] = 0;
+    out[38] = 0;
+    out[39] = _tmp73 - _tmp109;
+    out[40] = 0;
+    out[41] = 0;
+    out[42] = 0;
+    out[43] = 0;
+    out[44] = 0;
+    out[45] = 0;
+    out[46] = 0;
+    out[47] = 0;
+    out[48] = -_tmp108;
+    out[49] = 0;
+    out[50] = 0;
+    out[51] = _tmp106;
+    out[52] = 0;
+    out[53] = 0;
+    out[54] = 0;
+    out[55] = 0;
+    out[56] = 0;
+    out[57] = 0;
+    out[58] = 0;
+    out[59] = 0;
+    out[60] = delta_2*(-2*_tmp3 + 2*_tmp5*_tmp6);
+    out[61] = _tmp107;
+    out[62] = 0;
+    out[63] = -_tmp92;
+    out[64] = 0;
+    out[65] = -_tmp102 - _tmp107;
+    out[66] = delta_2*(-2*_tmp13 - 2*_tmp15);
+    out[67] = _tmp109;
+    out[68] = 0;
+    out[69] = _tmp110 - _tmp103 + _tmp24*_tmp91;
+    out[70] = 0;
+    out[71] = -_tmp105 - _tmp109;
+    out[72] = 0;
+    out[73] = 0;
+    out[74] = 0;
+    out[75] = -_tmp88;
+    out[76] = 0;
+    out[77] = -_tmp101;
+    out[78] = 0;
+    out[79] = 0;
+    out[80] = 0;
+    out[81] = _tmp110;
+    out[82] = 0;
+    out[83] = -_tmp104 + _tmp100*_tmp96 + _tmp94*_tmp96;
+}
+
+/* sensitivity at level exact: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (449 operations) */
+static void sk_sens_exact(const double *theta, const double *delta, const double *params, double *out)
+{
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double delta_2 = delta[0];
+    const double delta_3 = delta[1];
+    const double delta_4 = delta[2];
+    const double p_0 = params[0];
+    const double p_1 = params[1];
+    const double p_3 = params[3];
+    const double _tmp0 = delta_2 + theta_2;
+    const double _tmp1 = _tmp0 + theta_1;
+    const double _tmp2 = cos(_tmp1);
+    const double _tmp3 = sin(p_1);
+    const double _tmp4 = _tmp3*p_0;
+    const double _tmp5 = _tmp2*_tmp4;
+    const double _tmp6 = cos(p_1);
+    const double _tmp7 = sin(_tmp1);
+    const double _tmp8 = sin(theta_1);
+    const double _tmp9 = 0.5*delta_2;
+    const double _tmp10 = _tmp9 + 0.5*theta_2;
+    const double _tmp11 = cos(_tmp10);
+    const double _tmp12 = _tmp11*p_3;
+    const double _tmp13 = symkin_arck(_tmp10);
+    const double _tmp14 = 0.5*_tmp0*_tmp13;
+    const double _tmp15 = sin(_tmp10);
+    const double _tmp16 = _tmp15*p_3;
+    const double _tmp17 = pow(_tmp0, 2);
+    const double _tmp18 = _tmp13*_tmp17;
+    const double _tmp19 = 0.125*_tmp18;
+    const double _tmp20 = 0.0625*(_tmp0*_tmp0*_tmp0)*(-3*symkin_sinr2(_tmp10) + 3*symkin_cosr2(_tmp10) + symkin_sinr1(_tmp10));
+    const double _tmp21 = _tmp12*_tmp14 + _tmp12*_tmp20 - _tmp16*_tmp19;
+    const double _tmp22 = _tmp21*_tmp8;
+    const double _tmp23 = cos(theta_1);
+    const double _tmp24 = -_tmp12*_tmp19 - _tmp14*_tmp16 - _tmp16*_tmp20;
+    const double _tmp25 = _tmp22 - _tmp23*_tmp24;
+    const double _tmp26 = delta_3 + theta_3;
+    const double _tmp27 = cos(_tmp26);
+    const double _tmp28 = sin(_tmp26);
+    const double _tmp29 = _tmp6*p_0;
+    const double _tmp30 = 0.25*_tmp3;
+    const double _tmp31 = delta_4 + theta_4;
+    const double _tmp32 = pow(_tmp31, 2);
+    const double _tmp33 = 0.5*delta_4 + 0.5*theta_4;
+    const double _tmp34 = symkin_arck(_tmp33);
+    const double _tmp35 = sin(_tmp33);
+    const double _tmp36 = _tmp35*p_3;
+    const double _tmp37 = _tmp34*_tmp36;
+    const double _tmp38 = _tmp32*_tmp37;
+    const double _tmp39 = cos(_tmp33);
+    const double _tmp40 = -_tmp30*_tmp38 + 0.25*_tmp32*_tmp34*_tmp39*_tmp6*p_3;
+    const double _tmp41 = _tmp28*_tmp40;
+    const double _tmp42 = _tmp39*p_3;
+    const double _tmp43 = _tmp34*_tmp42;
+    const double _tmp44 = 0.25*_tmp6;
+    const double _tmp45 = _tmp38*_tmp44 + _tmp30*_tmp32*_tmp43;
+    const double _tmp46 = 0.5*delta_3;
+    const double _tmp47 = _tmp46 + 0.5*theta_3;
+    const double _tmp48 = sin(_tmp47);
+    const double _tmp49 = _tmp48*p_3;
+    const double _tmp50 = symkin_arck(_tmp47);
+    const double _tmp51 = 0.5*_tmp26*_tmp50;
+    const double _tmp52 = cos(_tmp47);
+    const double _tmp53 = _tmp52*p_3;
+    const double _tmp54 = pow(_tmp26, 2);
+    const double _tmp55 = _tmp50*_tmp54;
+    const double _tmp56 = 0.125*_tmp55;
+    const double _tmp57 = 0.0625*(_tmp26*_tmp26*_tmp26)*(-3*symkin_sinr2(_tmp47) + 3*symkin_cosr2(_tmp47) + symkin_sinr1(_tmp47));
+    const double _tmp58 = _tmp49*_tmp51 + _tmp49*_tmp57 + _tmp53*_tmp56;
+    const double _tmp59 = _tmp51*_tmp53 + _tmp53*_tmp57 - _tmp49*_tmp56;
+    const double _tmp60 = _tmp41 + _tmp27*_tmp45 + _tmp3*_tmp58 - _tmp59*_tmp6;
+    const double _tmp61 = 0.5*_tmp31;
+    const double _tmp62 = 0.125*_tmp32;
+    const double _tmp63 = 0.0625*(_tmp31*_tmp31*_tmp31)*(-3*symkin_sinr2(_tmp33) + 3*symkin_cosr2(_tmp33) + symkin_sinr1(_tmp33));
+    const double _tmp64 = _tmp36*_tmp63 + _tmp37*_tmp61 + _tmp43*_tmp62;
+    const double _tmp65 = _tmp42*_tmp63 + _tmp43*_tmp61 - _tmp37*_tmp62;
+    const double _tmp66 = _tmp6*_tmp65 - _tmp3*_tmp64;
+    const double _tmp67 = _tmp3*_tmp65 + _tmp6*_tmp64;
+    const double _tmp68 = _tmp28*_tmp67 - _tmp27*_tmp66;
+    const double _tmp69 = _tmp2*_tmp29;
+    const double _tmp70 = _tmp4*_tmp7;
+    const double _tmp71 = -_tmp21*_tmp23 - _tmp24*_tmp8;
+    const double _tmp72 = _tmp27*_tmp40;
+    const double _tmp73 = _tmp58*_tmp6;
+    const double _tmp74 = _tmp3*_tmp59;
+    const double _tmp75 = -_tmp27*_tmp67 - _tmp28*_tmp66;
+    const double _tmp76 = theta_1 + theta_2;
+    const double _tmp77 = cos(_tmp76);
+    const double _tmp78 = sin(delta_2);
+    const double _tmp79 = _tmp6*_tmp78;
+    const double _tmp80 = _tmp79*p_0;
+    const double _tmp81 = pow(sin(_tmp9), 2);
+    const double _tmp82 = _tmp80 + 2*_tmp4*_tmp81;
+    const double _tmp83 = sin(_tmp76);
+    const double _tmp84 = _tmp3*_tmp78;
+    const double _tmp85 = _tmp84*p_0;
+    const double _tmp86 = _tmp85 - 2*_tmp6*_tmp81*p_0;
+    const double _tmp87 = -_tmp86;
+    const double _tmp88 = _tmp83*_tmp87;
+    const double _tmp89 = -_tmp22 + _tmp23*_tmp24;
+    const double _tmp90 = cos(theta_3);
+    const double _tmp91 = sin(delta_3);
+    const double _tmp92 = pow(sin(_tmp46), 2);
+    const double _tmp93 = 2*_tmp92;
+    const double _tmp94 = -_tmp4*_tmp93 + _tmp6*_tmp91*p_0;
+    const double _tmp95 = sin(theta_3);
+    const double _tmp96 = _tmp3*_tmp91;
+    const double _tmp97 = _tmp29*_tmp93 + _tmp96*p_0;
+    const double _tmp98 = _tmp90*_tmp94 - _tmp95*_tmp97;
+    const double _tmp99 = _tmp21*_tmp23 + _tmp24*_tmp8;
+    const double _tmp100 = _tmp77*_tmp87 + _tmp82*_tmp83;
+    const double _tmp101 = -_tmp72 + _tmp90*_tmp97 + _tmp94*_tmp95;
+    const double _tmp102 = 2*_tmp3;
+    const double _tmp103 = _tmp102*_tmp92 - _tmp6*_tmp91;
+    const double _tmp104 = _tmp96 + 2*_tmp6*_tmp92;
+    const double _tmp105 = -_tmp79 - _tmp102*_tmp81;
+    const double _tmp106 = -_tmp84 + 2*_tmp6*_tmp81;
+    const double _tmp107 = -_tmp82;
+    const double _tmp108 = -_tmp45;
+    const double _tmp109 = _tmp30*_tmp55;
+    const double _tmp110 = _tmp44*_tmp55;
+    const double _tmp111 = _tmp32*_tmp34;
+    const double _tmp112 = _tmp111*_tmp35;
+    const double _tmp113 = -_tmp112*_tmp30 + 0.25*_tmp32*_tmp34*_tmp39*_tmp6;
+    const double _tmp114 = _tmp112*_tmp44 + _tmp111*_tmp30*_tmp39;
+    const double _tmp115 = 0.5*theta_1;
+    const double _tmp116 = sin(_tmp115);
+    const double _tmp117 = pow(theta_1, 2);
+    const double _tmp118 = symkin_arck(_tmp115);
+    const double _tmp119 = _tmp117*_tmp118;
+    const double _tmp120 = 0.25*_tmp119;
+    const double _tmp121 = _tmp116*_tmp120;
+    const double _tmp122 = 0.25*_tmp18;
+    const double _tmp123 = _tmp122*_tmp8;
+    const double _tmp124 = _tmp122*_tmp23;
+    const double _tmp125 = _tmp121 + _tmp11*_tmp123 + _tmp124*_tmp15;
+    const double _tmp126 = _tmp116*p_3;
+    const double _tmp127 = _tmp115*_tmp118;
+    const double _tmp128 = cos(_tmp115);
+    const double _tmp129 = _tmp128*p_3;
+    const double _tmp130 = 0.125*_tmp119;
+    const double _tmp131 = 0.0625*(theta_1*theta_1*theta_1)*(-3*symkin_sinr2(_tmp115) + 3*symkin_cosr2(_tmp115) + symkin_sinr1(_tmp115));
+    const double _tmp132 = _tmp126*_tmp127 + _tmp126*_tmp131 + _tmp129*_tmp130;
+    const double _tmp133 = _tmp132 + _tmp12*_tmp124 - 0.25*_tmp13*_tmp15*_tmp17*_tmp8*p_3;
+    const double _tmp134 = _tmp123*_tmp15;
+    const double _tmp135 = _tmp127*_tmp129 + _tmp129*_tmp131 - _tmp126*_tmp130;
+    const double _tmp136 = _tmp135 - _tmp12*_tmp123 - _tmp124*_tmp16;
+    const double _tmp137 = 4*_tmp81;
+    const double _tmp138 = 2*_tmp80 + _tmp137*_tmp4;
+    const double _tmp139 = 2*_tmp85 - 4*_tmp6*_tmp81*p_0;
+    const double _tmp140 = -_tmp139;
+    const double _tmp141 = _tmp140*_tmp83;
+    const double _tmp142 = _tmp138*_tmp83 + _tmp140*_tmp77;
+    const double _tmp143 = -2*_tmp79 - _tmp137*_tmp3;
+    const double _tmp144 = -2*_tmp84 + 4*_tmp6*_tmp81;
+    const double _tmp145 = -_tmp138;
+    const double _tmp146 = _tmp120*_tmp128;
+    out[0] = 1;
+    out[1] = -1;
+    out[2] = -1;
+    out[3] = -_tmp25 - _tmp5 + _tmp6*_tmp7*p_0;
+    out[4] = _tmp60 + _tmp27*_tmp4 + _tmp28*_tmp29;
+    out[5] = _tmp68;
+    out[6] = -_tmp69 - _tmp70 - _tmp71;
+    out[7] = -_tmp72 - _tmp73 - _tmp74 + _tmp28*_tmp45 - _tmp27*_tmp29 + _tmp28*_tmp3*p_0;
+    out[8] = _tmp75;
+    out[9] = 0;
+    out[10] = 0;
+    out[11] = 0;
+    out[12] = _tmp89 - _tmp88 + _tmp77*_tmp82;
+    out[13] = _tmp60 + _tmp98;
+    out[14] = _tmp68;
+    out[15] = _tmp100 + _tmp99;
+    out[16] = _tmp101 - _tmp73 - _tmp74 + _tmp28*_tmp45;
+    out[17] = _tmp75;
+    out[18] = 0;
+    out[19] = 0;
+    out[20] = 0;
+    out[21] = 0;
+    out[22] = 0;
+    out[23] = 0;
+    out[24] = _tmp104*_tmp90 + _tmp106*_tmp77 - _tmp103*_tmp95 - _tmp105*_tmp83;
+    out[25] = _tmp41 + _tmp98 + _tmp107*_tmp77 + _tmp109*_tmp53 + _tmp110*_tmp49 - _tmp108*_tmp27 - _tmp83*_tmp86;
+    out[26] = 0;
+    out[27] = -_tmp125 + _tmp114*_tmp28 - _tmp110*_tmp52 - _tmp113*_tmp27 + 0.25*_tmp3*_tmp48*_tmp50*_tmp54;
+    out[28] = 0;
+    out[29] = -_tmp133 - _tmp88 + _tmp77*_tmp82;
+    out[30] = _tmp103*_tmp90 + _tmp104*_tmp95 + _tmp105*_tmp77 + _tmp106*_tmp83;
+    out[31] = _tmp101 + _tmp107*_tmp83 + _tmp109*_tmp49 + _tmp77*_tmp86 - _tmp108*_tmp28 - _tmp110*_tmp53;
+    out[32] = 0;
+    out[33] = -_tmp134 - _tmp109*_tmp52 - _tmp110*_tmp48 - _tmp113*_tmp28 - _tmp114*_tmp27 + 0.25*_tmp117*_tmp118*_tmp128 + 0.25*_tmp11*_tmp13*_tmp17*_tmp23;
+    out[34] = 0;
+    out[35] = _tmp100 + _tmp136;
+    out[36] = _tmp89 - _tmp141 + _tmp138*_tmp77;
+    out[37] = 0;
+    out[38] = 0;
+    out[39] = _tmp142 + _tmp99;
+    out[40] = 0;
+    out[41] = 0;
+    out[42] = 0;
+    out[43] = 0;
+    out[44] = 0;
+    out[45] = 0;
+    out[46] = 0;
+    out[47] = 0;
+    out[48] = -_tmp25 - 2*_tmp5 + 2*_tmp6*_tmp7*p_0;
+    out[49] = 0;
+    out[50] = 0;
+    out[51] = -_tmp71 - 2*_tmp69 - 2*_tmp70;
+    out[52] = 0;
+    out[53] = 0;
+    out[54] = 0;
+    out[55] = 0;
+    out[56] = 0;
+    out[57] = 0;
+    out[58] = 0;
+    out[59] = 0;
+    out[60] = _tmp144*_tmp77 - _tmp143*_tmp83;
+    out[61] = _tmp145*_tmp77 - _tmp139*_tmp83;
+    out[62] = 0;
+    out[63] = -_tmp125;
+    out[64] = 0;
+    out[65] = -_tmp133 - _tmp141 + _tmp138*_tmp77;
+    out[66] = _tmp143*_tmp77 + _tmp144*_tmp83;
+    out[67] = _tmp139*_tmp77 + _tmp145*_tmp83;
+    out[68] = 0;
+    out[69] = _tmp146 - _tmp134 + _tmp11*_tmp124;
+    out[70] = 0;
+    out[71] = _tmp136 + _tmp142;
+    out[72] = 0;
+    out[73] = 0;
+    out[74] = 0;
+    out[75] = -_tmp121;
+    out[76] = 0;
+    out[77] = -_tmp132;
+    out[78] = 0;
+    out[79] = 0;
+    out[80] = 0;
+    out[81] = _tmp146;
+    out[82] = 0;
+    out[83] = _tmp135;
 }
 
 /* symkin runtime (templates/c/runtime.c, docs/runtime.md; tested on its own by
@@ -1075,6 +1722,168 @@ static int sk_evaluate_grid(const sk_mechanism *m, int n_sets, const double *par
     return failed;
 }
 
+/* ---- sensitivities (docs/sensitivity.md) ---- */
+
+/* c (m x n) += a (m x p) b (p x n), row-major. */
+static void sk_gemm(int m, int p, int n, const double *a, const double *b, double *c)
+{
+    int i, j, k;
+    for (i = 0; i < m; ++i) {
+        for (k = 0; k < p; ++k) {
+            const double f = a[i * p + k];
+            for (j = 0; j < n; ++j) {
+                c[i * n + j] += f * b[k * n + j];
+            }
+        }
+    }
+}
+
+/* The total derivatives of the points' deviations (dev) and rigid positions (rig) by every
+   variable, 2 SK_NP x SK_NV row-major (row 2 p + c: component c of point p; columns: the
+   parameters, then the inputs), by the implicit-function theorem on the closures: with
+   Theta = d theta_u / dv = -A^-1 dG/dv and, where the level solves a closure E for delta,
+   Y = -M^-1 (dE/dv + dE/dtheta_u Theta): dD/dv + dD/dtheta_u Theta + dD/ddelta Y. */
+static int sk_sensitivity(const sk_mechanism *m, const sk_level *lv, const double *theta,
+                          const double *delta, const double *params, double *dev, double *rig)
+{
+    double sr[SK_OUT], s[SK_OUT];
+    const sk_sens *b = &lv->sens;
+    int i;
+    double th[SK_K * SK_NV + 1], y[SK_K * SK_NV + 1];
+    if (b->fn == NULL) {
+        return 3;                   /* a level without closed-form sensitivities */
+    }
+    m->sens_rigid(theta, params, sr);
+    for (i = 0; i < SK_K * SK_NV; ++i) {
+        th[i] = -sr[m->sr_dG_dv + i];
+    }
+    if (sk_solve(SK_K, sr + m->sr_A, SK_NV, th)) {
+        return 1;
+    }
+    for (i = 0; i < 2 * SK_NP * SK_NV; ++i) {
+        rig[i] = sr[m->sr_dR_dv + i];
+    }
+    sk_gemm(2 * SK_NP, SK_K, SK_NV, sr + m->sr_dR_dtheta, th, rig);
+    b->fn(theta, delta, params, s);
+    if (b->stage) {
+        for (i = 0; i < SK_K * SK_NV; ++i) {
+            y[i] = s[b->dE_dv + i];
+        }
+        sk_gemm(SK_K, SK_K, SK_NV, s + b->dE_dtheta, th, y);
+        for (i = 0; i < SK_K * SK_NV; ++i) {
+            y[i] = -y[i];
+        }
+        if (sk_solve(SK_K, s + b->M, SK_NV, y)) {
+            return 1;
+        }
+    }
+    for (i = 0; i < 2 * SK_NP * SK_NV; ++i) {
+        dev[i] = s[b->dD_dv + i];
+    }
+    sk_gemm(2 * SK_NP, SK_K, SK_NV, s + b->dD_dtheta, th, dev);
+    if (b->stage) {
+        sk_gemm(2 * SK_NP, SK_K, SK_NV, s + b->dD_ddelta, y, dev);
+    }
+    if (m->sens_chain != NULL) {
+        /* a parameter's default that reads earlier ones follows them: totals, last first */
+        double c[SK_NPAR * SK_NPAR + 1];
+        int j, r;
+        m->sens_chain(params, c);
+        for (i = SK_NPAR - 1; i >= 0; --i) {
+            for (j = i + 1; j < SK_NPAR; ++j) {
+                for (r = 0; r < 2 * SK_NP; ++r) {
+                    dev[r * SK_NV + i] += c[j * SK_NPAR + i] * dev[r * SK_NV + j];
+                    rig[r * SK_NV + i] += c[j * SK_NPAR + i] * rig[r * SK_NV + j];
+                }
+            }
+        }
+    }
+    return 0;
+}
+
+/* <name>_sensitivity_full. */
+static int sk_sensitivity_full(const sk_mechanism *m, const double *inputs, const double *params,
+                               int level, double *values, double *deviation, double *rigid)
+{
+    double theta[SK_M], delta[SK_K + 1], constants[SK_NQ];
+    double dev[2 * SK_NP * SK_NV + 1], rig[2 * SK_NP * SK_NV + 1];
+    const double *q;
+    const sk_level *lv = sk_find_level(m, level);
+    int i, v, status;
+    if (params == NULL) {
+        params = m->defaults;
+    }
+    status = deviation == NULL || inputs == NULL || lv == NULL
+                 ? 3
+                 : sk_pose(m, lv, inputs, params, 0, theta, delta, constants, &q);
+    if (status == 0 && values != NULL) {
+        status = sk_outputs(m, lv, theta, delta, params, q, values, NULL, NULL);
+    }
+    if (status == 0) {
+        status = sk_sensitivity(m, lv, theta, delta, params, dev, rig);
+    }
+    for (i = 0; status == 0 && i < 2 * SK_NP * SK_NV; ++i) {
+        if (!isfinite(dev[i]) || !isfinite(rig[i])) {
+            status = 2;             /* a non-finite result is never a success */
+        }
+    }
+    if (status != 0) {
+        sk_nan(values, 6 * SK_NP);
+        sk_nan(deviation, 2 * SK_NP * SK_NV);
+        sk_nan(rigid, 2 * SK_NP * SK_NV);
+        return status;
+    }
+    /* rows (point, component) x variables -> per point, per variable, dx then dy */
+    for (i = 0; i < 2 * SK_NP; ++i) {
+        for (v = 0; v < SK_NV; ++v) {
+            deviation[((i / 2) * SK_NV + v) * 2 + i % 2] = dev[i * SK_NV + v];
+            if (rigid != NULL) {
+                rigid[((i / 2) * SK_NV + v) * 2 + i % 2] = rig[i * SK_NV + v];
+            }
+        }
+    }
+    return 0;
+}
+
+/* <name>_sensitivity: the parameters' columns of sk_sensitivity_full's deviation. */
+static int sk_sensitivity_params(const sk_mechanism *m, const double *inputs,
+                                 const double *params, int level, double *out)
+{
+    double full[2 * SK_NP * SK_NV + 1];
+    int p, v, status;
+    if (out == NULL) {
+        return 3;
+    }
+    status = sk_sensitivity_full(m, inputs, params, level, NULL, full, NULL);
+    for (p = 0; p < SK_NP; ++p) {
+        for (v = 0; v < SK_NPAR; ++v) {
+            out[(p * SK_NPAR + v) * 2] = full[(p * SK_NV + v) * 2];
+            out[(p * SK_NPAR + v) * 2 + 1] = full[(p * SK_NV + v) * 2 + 1];
+        }
+    }
+    return status;
+}
+
+/* <name>_sensitivity_batch: n rows; the number of rows that failed. */
+static int sk_sensitivity_rows(const sk_mechanism *m, int n, const double *inputs,
+                               const double *params, int level, double *values,
+                               double *deviation, double *rigid, int *status)
+{
+    int j, s, failed = 0;
+    for (j = 0; j < n; ++j) {
+        s = inputs == NULL || deviation == NULL ? 3 : sk_sensitivity_full(
+            m, inputs + (size_t)j * SK_NI, params, level,
+            values == NULL ? NULL : values + (size_t)j * 6 * SK_NP,
+            deviation + (size_t)j * 2 * SK_NP * SK_NV,
+            rigid == NULL ? NULL : rigid + (size_t)j * 2 * SK_NP * SK_NV);
+        failed += s != 0;
+        if (status != NULL) {
+            status[j] = s;
+        }
+    }
+    return failed;
+}
+
 /* symkin actuators runtime (templates/c/actuators.c): the strokes to the surrogate hinges'
    angles, twice (the rigid linkage and the compliant mechanism), then one evaluation at each. */
 
@@ -1091,6 +1900,51 @@ typedef struct {
     int n_shown;
     const int *shown;
 } sk_actuators;
+
+/* Gaussian elimination with partial pivoting of the n x n row-major a (destroyed) for the
+   n x m row-major right-hand sides b, which become the solution (the runtime's sk_solve is only
+   there when the mechanism has loops). Returns 0, or 1 when a pivot is zero or not finite. */
+static int sk_act_solve(int n, double *a, int m, double *b)
+{
+    int i, j, c, p;
+    double f;
+    for (c = 0; c < n; ++c) {
+        for (p = c, i = c + 1; i < n; ++i) {
+            p = fabs(a[i * n + c]) > fabs(a[p * n + c]) ? i : p;
+        }
+        if (!(fabs(a[p * n + c]) > 0.0) || !isfinite(a[p * n + c])) {
+            return 1;
+        }
+        for (j = 0; j < n; ++j) {
+            f = a[c * n + j];
+            a[c * n + j] = a[p * n + j];
+            a[p * n + j] = f;
+        }
+        for (j = 0; j < m; ++j) {
+            f = b[c * m + j];
+            b[c * m + j] = b[p * m + j];
+            b[p * m + j] = f;
+        }
+        for (i = c + 1; i < n; ++i) {
+            f = a[i * n + c] / a[c * n + c];
+            for (j = c; j < n; ++j) {
+                a[i * n + j] -= f * a[c * n + j];
+            }
+            for (j = 0; j < m; ++j) {
+                b[i * m + j] -= f * b[c * m + j];
+            }
+        }
+    }
+    for (c = n - 1; c >= 0; --c) {
+        for (j = 0; j < m; ++j) {
+            for (i = c + 1; i < n; ++i) {
+                b[c * m + j] -= a[c * n + i] * b[i * m + j];
+            }
+            b[c * m + j] /= a[c * n + c];
+        }
+    }
+    return 0;
+}
 
 /* Each actuator's stroke residual d.(X - X0) - s at the kinematic inputs x: X the rigid
    (kind 0) or compliant (kind 1) position of its point. Returns sk_evaluate_pose's status. */
@@ -1120,7 +1974,7 @@ static int sk_stroke_solve(const sk_mechanism *m, const sk_actuators *t, double 
     double down[SK_NI + 1], move[SK_NI + 1], size, next;
     const double step = 1.4901161193847656e-08; /* sqrt(eps) */
     int where[SK_NI + 1];
-    int i, j, c, p, iter, half, s, n = t->n;
+    int i, j, iter, half, s, n = t->n;
     for (j = 0; j < SK_NI; ++j) {
         if (t->drive_of[j] < 0) {
             where[-1 - t->drive_of[j]] = j;
@@ -1153,38 +2007,11 @@ static int sk_stroke_solve(const sk_mechanism *m, const sk_actuators *t, double 
                 jac[i * n + j] = (up[i] - down[i]) / (2.0 * step);
             }
         }
-        /* Gaussian elimination with partial pivoting: move = jac^-1 r */
         for (i = 0; i < n; ++i) {
             move[i] = r[i];
         }
-        for (c = 0; c < n; ++c) {
-            for (p = c, i = c + 1; i < n; ++i) {
-                p = fabs(jac[i * n + c]) > fabs(jac[p * n + c]) ? i : p;
-            }
-            if (!(fabs(jac[p * n + c]) > 0.0)) {
-                return 1;
-            }
-            for (j = 0; j < n; ++j) {
-                double swap = jac[c * n + j];
-                jac[c * n + j] = jac[p * n + j];
-                jac[p * n + j] = swap;
-            }
-            next = move[c];
-            move[c] = move[p];
-            move[p] = next;
-            for (i = c + 1; i < n; ++i) {
-                double f = jac[i * n + c] / jac[c * n + c];
-                for (j = c; j < n; ++j) {
-                    jac[i * n + j] -= f * jac[c * n + j];
-                }
-                move[i] -= f * move[c];
-            }
-        }
-        for (c = n - 1; c >= 0; --c) {
-            for (j = c + 1; j < n; ++j) {
-                move[c] -= jac[c * n + j] * move[j];
-            }
-            move[c] /= jac[c * n + c];
+        if (sk_act_solve(n, jac, 1, move) != 0) {
+            return 1;
         }
         for (half = 0; half < 40; ++half) {
             for (i = 0; i < SK_NI; ++i) {
@@ -1217,21 +2044,15 @@ static int sk_stroke_solve(const sk_mechanism *m, const sk_actuators *t, double 
     return 1;
 }
 
-/* <name>_evaluate_pose with actuators: the public inputs (input hinges, then strokes), the
-   reported points only; the rigid linkage at the surrogates' rigid angles, the compliant
-   mechanism at their compliant ones, the deviation the rigid motion between the two plus the
-   level's deviation at the compliant angles (docs/levels.md, "Actuators"). */
-static int sk_actuated_pose(const sk_mechanism *m, const sk_actuators *t, const double *drives,
-                            const double *params, int level, double *out, double *angles,
-                            double *links)
+/* The kinematic inputs at which the rigid linkage (xr) and the compliant mechanism at `level`
+   (xc) meet the strokes among the public inputs `drives` (docs/levels.md, "Actuators"); `rest`
+   (6 SK_NP) the points as fabricated. Returns 0, or the status of what failed. */
+static int sk_stroke_poses(const sk_mechanism *m, const sk_actuators *t, const double *drives,
+                           const double *params, int level, double *xr, double *xc,
+                           double *rest)
 {
-    double rest[6 * SK_NP], xr[SK_NI + 1], xc[SK_NI + 1], zero[SK_NI + 1];
-    double pr[6 * SK_NP], pc[6 * SK_NP], ar[2 * SK_M], ac[2 * SK_M];
-    double lr[3 * SK_NL + 1], lc[3 * SK_NL + 1], scale = 1e-300, tol;
+    double zero[SK_NI + 1], scale = 1e-300, tol;
     int i, j, s;
-    if (drives == NULL || out == NULL) {
-        return 3;
-    }
     for (j = 0; j < SK_NI; ++j) {
         zero[j] = 0.0;
         xr[j] = t->drive_of[j] >= 0 ? drives[t->drive_of[j]] : 0.0;
@@ -1247,7 +2068,25 @@ static int sk_actuated_pose(const sk_mechanism *m, const sk_actuators *t, const 
     for (j = 0; j < SK_NI; ++j) {
         xc[j] = xr[j];
     }
-    s = s != 0 ? s : sk_stroke_solve(m, t, xc, params, level, 1, rest, drives, tol);
+    return s != 0 ? s : sk_stroke_solve(m, t, xc, params, level, 1, rest, drives, tol);
+}
+
+/* <name>_evaluate_pose with actuators: the public inputs (input hinges, then strokes), the
+   reported points only; the rigid linkage at the surrogates' rigid angles, the compliant
+   mechanism at their compliant ones, the deviation the rigid motion between the two plus the
+   level's deviation at the compliant angles (docs/levels.md, "Actuators"). */
+static int sk_actuated_pose(const sk_mechanism *m, const sk_actuators *t, const double *drives,
+                            const double *params, int level, double *out, double *angles,
+                            double *links)
+{
+    double rest[6 * SK_NP], xr[SK_NI + 1], xc[SK_NI + 1];
+    double pr[6 * SK_NP], pc[6 * SK_NP], ar[2 * SK_M], ac[2 * SK_M];
+    double lr[3 * SK_NL + 1], lc[3 * SK_NL + 1];
+    int i, j, s;
+    if (drives == NULL || out == NULL) {
+        return 3;
+    }
+    s = sk_stroke_poses(m, t, drives, params, level, xr, xc, rest);
     s = s != 0 ? s : sk_evaluate_pose(m, xr, params, level, pr, ar, links == NULL ? NULL : lr);
     s = s != 0 ? s : sk_evaluate_pose(m, xc, params, level, pc, ac, links == NULL ? NULL : lc);
     if (s != 0) {
@@ -1314,6 +2153,166 @@ static int sk_actuated_grid(const sk_mechanism *m, const sk_actuators *t, int n_
     }
     return failed;
 }
+
+/* The surrogates' rates dv/dy (t->n x SK_NV, row-major) at one pose, from that pose's
+   sk_sensitivity_full (dev NULL: the rigid linkage, else the compliant mechanism, whose point
+   of action is rigid + deviation) and the points' rigid rates as fabricated (rest): the
+   implicit-function theorem on g(v, y) = d.(X(v, y) - X0(y)) - s = 0, dv/dy = -(dg/dv)^-1 dg/dy,
+   y the parameters, then the public inputs (input hinges, strokes). Returns 0 or 1 (singular). */
+static int sk_stroke_rates(const sk_actuators *t, const int *where, const double *rig,
+                           const double *dev, const double *rest, double *rate)
+{
+    double jac[(SK_NI + 1) * (SK_NI + 1)];
+    int a, b, j, y, n = t->n;
+    for (a = 0; a < n; ++a) {
+        const double *d = t->direction + 2 * a;
+        const size_t at = (size_t)t->point[a] * SK_NV;
+        for (b = 0; b < n; ++b) {
+            const size_t v = (at + SK_NPAR + where[b]) * 2;
+            jac[a * n + b] = d[0] * (rig[v] + (dev ? dev[v] : 0.0))
+                             + d[1] * (rig[v + 1] + (dev ? dev[v + 1] : 0.0));
+        }
+        for (y = 0; y < SK_NV; ++y) {
+            double g = 0.0;
+            int k = y - SK_NPAR;
+            if (k < 0 || t->drive_of[k] >= 0) {
+                /* a parameter or input hinge k: its kinematic input is the one it drives */
+                int x = y;
+                if (k >= 0) {
+                    for (j = 0; j < SK_NI; ++j) {
+                        x = t->drive_of[j] == k ? SK_NPAR + j : x;
+                    }
+                }
+                g = d[0] * (rig[(at + x) * 2] + (dev ? dev[(at + x) * 2] : 0.0))
+                    + d[1] * (rig[(at + x) * 2 + 1] + (dev ? dev[(at + x) * 2 + 1] : 0.0));
+                if (k < 0) { /* the point of action as fabricated moves with the parameters */
+                    g -= d[0] * rest[(at + y) * 2] + d[1] * rest[(at + y) * 2 + 1];
+                }
+            }
+            rate[a * SK_NV + y] = -g;
+        }
+    }
+    for (a = 0; a < n; ++a) { /* the strokes: dg_a/ds_b = -1 for a = b */
+        rate[a * SK_NV + SK_NPAR + t->stroke[a]] = 1.0;
+    }
+    return sk_act_solve(n, jac, SK_NV, rate);
+}
+
+/* <name>_sensitivity_full with actuators: the shown points' values and the derivatives of their
+   deviation and rigid position by the parameters and the public inputs (docs/sensitivity.md,
+   "Actuators"), from sk_sensitivity_full at the rigid and the compliant pose. */
+static int sk_actuated_sensitivity(const sk_mechanism *m, const sk_actuators *t,
+                                   const double *drives, const double *params, int level,
+                                   double *values, double *deviation, double *rigid)
+{
+    enum { NS = 2 * SK_NP * SK_NV + 1 };
+    double rest[6 * SK_NP], xr[SK_NI + 1], xc[SK_NI + 1], zero[SK_NI + 1];
+    double pr[6 * SK_NP], pc[6 * SK_NP], dr[NS], rr[NS], dc[NS], rc[NS], r0[NS], d0[NS];
+    double rate_r[(SK_NI + 1) * SK_NV], rate_c[(SK_NI + 1) * SK_NV];
+    int where[SK_NI + 1], direct[SK_NV];
+    int i, j, c, y, s;
+    if (drives == NULL || deviation == NULL) {
+        return 3;
+    }
+    for (j = 0; j < SK_NI; ++j) {
+        zero[j] = 0.0;
+        if (t->drive_of[j] < 0) {
+            where[-1 - t->drive_of[j]] = j;
+        }
+    }
+    /* the kinematic variable each public one moves directly (-1: a stroke moves none) */
+    for (y = 0; y < SK_NV; ++y) {
+        direct[y] = y < SK_NPAR ? y : -1;
+    }
+    for (j = 0; j < SK_NI; ++j) {
+        if (t->drive_of[j] >= 0) {
+            direct[SK_NPAR + t->drive_of[j]] = SK_NPAR + j;
+        }
+    }
+    s = sk_stroke_poses(m, t, drives, params, level, xr, xc, rest);
+    s = s != 0 ? s : sk_sensitivity_full(m, xr, params, level, pr, dr, rr);
+    s = s != 0 ? s : sk_sensitivity_full(m, xc, params, level, pc, dc, rc);
+    s = s != 0 ? s : sk_sensitivity_full(m, zero, params, level, NULL, d0, r0);
+    s = s != 0 ? s : sk_stroke_rates(t, where, rr, NULL, r0, rate_r);
+    s = s != 0 ? s : sk_stroke_rates(t, where, rc, dc, r0, rate_c);
+    if (s != 0) {
+        sk_nan(values, 6 * t->n_shown);
+        sk_nan(deviation, 2 * t->n_shown * SK_NV);
+        sk_nan(rigid, 2 * t->n_shown * SK_NV);
+        return s;
+    }
+    for (i = 0; i < t->n_shown; ++i) {
+        const size_t at = (size_t)t->shown[i] * SK_NV;
+        for (c = 0; c < 2; ++c) {
+            if (values != NULL) {
+                values[6 * i + c] = pr[6 * t->shown[i] + c];
+                values[6 * i + 2 + c] = pc[6 * t->shown[i] + 2 + c];
+                values[6 * i + 4 + c] = pc[6 * t->shown[i] + c] - pr[6 * t->shown[i] + c]
+                                        + pc[6 * t->shown[i] + 4 + c];
+            }
+            for (y = 0; y < SK_NV; ++y) {
+                double r = 0.0, k = 0.0;
+                if (direct[y] >= 0) {
+                    r = rr[(at + direct[y]) * 2 + c];
+                    k = rc[(at + direct[y]) * 2 + c] + dc[(at + direct[y]) * 2 + c];
+                }
+                for (j = 0; j < t->n; ++j) {
+                    const size_t v = (at + SK_NPAR + where[j]) * 2 + c;
+                    r += rr[v] * rate_r[j * SK_NV + y];
+                    k += (rc[v] + dc[v]) * rate_c[j * SK_NV + y];
+                }
+                deviation[(i * SK_NV + y) * 2 + c] = k - r;
+                if (rigid != NULL) {
+                    rigid[(i * SK_NV + y) * 2 + c] = r;
+                }
+            }
+        }
+    }
+    return 0;
+}
+
+/* <name>_sensitivity with actuators: the parameters' columns of the deviation's derivatives. */
+static int sk_actuated_sensitivity_params(const sk_mechanism *m, const sk_actuators *t,
+                                          const double *drives, const double *params, int level,
+                                          double *out)
+{
+    double full[2 * SK_NP * SK_NV + 1];
+    int p, v, status;
+    if (out == NULL) {
+        return 3;
+    }
+    status = sk_actuated_sensitivity(m, t, drives, params, level, NULL, full, NULL);
+    for (p = 0; p < t->n_shown; ++p) {
+        for (v = 0; v < SK_NPAR; ++v) {
+            out[(p * SK_NPAR + v) * 2] = full[(p * SK_NV + v) * 2];
+            out[(p * SK_NPAR + v) * 2 + 1] = full[(p * SK_NV + v) * 2 + 1];
+        }
+    }
+    return status;
+}
+
+/* <name>_sensitivity_batch with actuators: n rows; the number of rows that failed. */
+static int sk_actuated_sensitivity_rows(const sk_mechanism *m, const sk_actuators *t, int n,
+                                        const double *drives, const double *params, int level,
+                                        double *values, double *deviation, double *rigid,
+                                        int *status)
+{
+    int j, s, failed = 0;
+    (void)sk_sensitivity_rows; /* the runtime's, for input angles: the public one is this */
+    (void)sk_sensitivity_params;
+    for (j = 0; j < n; ++j) {
+        s = drives == NULL || deviation == NULL ? 3 : sk_actuated_sensitivity(
+            m, t, drives + (size_t)j * SK_NI, params, level,
+            values == NULL ? NULL : values + (size_t)j * 6 * t->n_shown,
+            deviation + (size_t)j * 2 * t->n_shown * SK_NV,
+            rigid == NULL ? NULL : rigid + (size_t)j * 2 * t->n_shown * SK_NV);
+        failed += s != 0;
+        if (status != NULL) {
+            status[j] = s;
+        }
+    }
+    return failed;
+}
 /* ---- piezo_amplifier: its tables for the runtime ---- */
 
 static const int sk_input_index[SK_NI] = {0};
@@ -1331,11 +2330,11 @@ static const int sk_rest[10] = {1, 1, 0, 2, 1, 0, 3, 1, 0};
    the dropped rows of its closure (redundant loops) */
 static const sk_level sk_levels[] = {
     {0, sk_dev_paper, NULL, NULL, 0,  /* paper */
-     {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL},
+     {sk_sens_paper, 0, 0, 0, 0, 0, 0, 12}, NULL},
     {1, sk_dev_first_order, sk_linear, NULL, 0,  /* first_order */
-     {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL},
+     {sk_sens_first_order, 1, 0, 9, 18, 36, 48, 60}, NULL},
     {2, sk_dev_exact, sk_linear, sk_newton, 0,  /* exact */
-     {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL}
+     {sk_sens_exact, 1, 0, 9, 18, 36, 48, 60}, NULL}
 };
 
 static const sk_mechanism sk_mechanism_tables = {
@@ -1351,12 +2350,14 @@ static const sk_mechanism sk_mechanism_tables = {
     .linear = sk_linear,
     .rigid_points = sk_rigid_points,
     .links = sk_links,
+    .sens_rigid = sk_sens_rigid,
     .n_dyads = 1, .compliance_at = 0, .more_at = 0,
     .rigid_rule = {30, 1e-10, 0.0, 0.0, 0.0},
     .polish_rule = {1, 0.0, 0.0, 0.0, 0.0},
     .exact_rule = {40, 0.0, 1e-08, 1e-12, 0.5, 2e-13},
     .continuation_step = 0.05, .winding = 3.141592653589793,
-    .n_levels = 3, .levels = sk_levels
+    .n_levels = 3, .levels = sk_levels,
+    .sr_A = 0, .sr_dG_dv = 9, .sr_dR_dtheta = 27, .sr_dR_dv = 39
 };
 
 /* the actuators (docs/levels.md, "Actuators"; templates/c/actuators.c) */
@@ -1410,4 +2411,24 @@ int piezo_amplifier_evaluate_grid(int n_sets, const double *params, int n, const
 {
     return sk_actuated_grid(&sk_mechanism_tables, &sk_actuator_tables, n_sets, params, n, inputs,
                             level, out, status);
+}
+
+int piezo_amplifier_sensitivity_full(const double *inputs, const double *params, int level,
+                         double *values, double *deviation, double *rigid)
+{
+    return sk_actuated_sensitivity(&sk_mechanism_tables, &sk_actuator_tables, inputs, params,
+                                   level, values, deviation, rigid);
+}
+
+int piezo_amplifier_sensitivity(const double *inputs, const double *params, int level, double *out)
+{
+    return sk_actuated_sensitivity_params(&sk_mechanism_tables, &sk_actuator_tables, inputs,
+                                          params, level, out);
+}
+
+int piezo_amplifier_sensitivity_batch(int n, const double *inputs, const double *params, int level,
+                          double *values, double *deviation, double *rigid, int *status)
+{
+    return sk_actuated_sensitivity_rows(&sk_mechanism_tables, &sk_actuator_tables, n, inputs,
+                                        params, level, values, deviation, rigid, status);
 }

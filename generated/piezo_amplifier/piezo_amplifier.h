@@ -3,7 +3,7 @@
  * Mechanism 'piezo_amplifier': 4 links, 4 hinges, 1 loop(s); inputs piezo (actuators; their strokes fix the angles of RA0 (piezo)).
  * Points: B; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, dev_paper 31, dev_first_order 51, dev_exact 62, links 1.
+ * Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, dev_paper 31, dev_first_order 51, dev_exact 62, links 1, sens_rigid 105, sens_paper 108, sens_first_order 355, sens_exact 449.
  */
 #ifndef SYMKIN_PIEZO_AMPLIFIER_H
 #define SYMKIN_PIEZO_AMPLIFIER_H
@@ -74,5 +74,31 @@ int piezo_amplifier_evaluate_angles_batch(int n, const double *inputs, const dou
  */
 int piezo_amplifier_evaluate_grid(int n_sets, const double *params, int n, const double *inputs,
                    int level, double *out, int *status);
+
+/* Variables of the sensitivities: the parameters in file order, then the inputs. */
+#define PIEZO_AMPLIFIER_N_VARIABLES (PIEZO_AMPLIFIER_N_PARAMS + PIEZO_AMPLIFIER_N_INPUTS)
+
+/*
+ * Derivatives of the points' deviations with respect to every parameter, at level (0 paper,
+ * 1 first_order, 2 exact: the levels generated). out receives, per point in
+ * piezo_amplifier_point_names order and per parameter in file order, d(dx)/dp, d(dy)/dp
+ * (2 * N_POINTS * N_PARAMS doubles). A parameter whose default reads other parameters
+ * moves them along (the total derivative). Same return codes as piezo_amplifier_evaluate; on any
+ * non-zero return out is NaN.
+ */
+int piezo_amplifier_sensitivity(const double *inputs, const double *params, int level, double *out);
+
+/*
+ * The same with the inputs and the rigid positions: deviation receives, per point and per
+ * variable (the parameters, then the inputs), d(dx)/dv, d(dy)/dv (2 * N_POINTS *
+ * N_VARIABLES doubles); rigid (may be NULL) the same for the rigid position; values (may be
+ * NULL) what piezo_amplifier_evaluate writes to out.
+ */
+int piezo_amplifier_sensitivity_full(const double *inputs, const double *params, int level,
+                         double *values, double *deviation, double *rigid);
+
+/* piezo_amplifier_sensitivity_full for n rows of inputs (as piezo_amplifier_evaluate_batch). */
+int piezo_amplifier_sensitivity_batch(int n, const double *inputs, const double *params, int level,
+                          double *values, double *deviation, double *rigid, int *status);
 
 #endif /* SYMKIN_PIEZO_AMPLIFIER_H */

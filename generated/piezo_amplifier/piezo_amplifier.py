@@ -2,7 +2,7 @@
 Mechanism 'piezo_amplifier': 4 links, 4 hinges, 1 loop(s); inputs piezo (actuators; their strokes fix the angles of RA0 (piezo)).
 Points: B; levels: paper, first_order, exact.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, dev_paper 31, dev_first_order 51, dev_exact 62, links 1.
+Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, dev_paper 31, dev_first_order 51, dev_exact 62, links 1, sens_rigid 105, sens_paper 108, sens_first_order 355, sens_exact 449.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -11,6 +11,11 @@ False in ok. It also holds "angles": {"rigid": {H: a}, "compliant": {H: a}}, eve
 angle (radians, the rotation of links[1] relative to links[0] from the as-fabricated pose), and
 "links": {L: {"rigid": a, "compliant": a, "deviation": a}}, the rotation of every link in LINKS
 from the as-fabricated pose (rigid wrapped to (-pi, pi]; the deviation computed directly).
+
+sensitivity(inputs, level, params) gives {P: {p: a}}: d(dx, dy)/dp of every point's deviation
+by every parameter p, each a of shape (2, *broadcast_shape); sensitivity_full(...) adds the
+inputs and the rigid positions. A parameter whose default reads other parameters moves them
+along (the total derivative). NaN where evaluate is not ok.
 """
 
 import math
@@ -31,6 +36,8 @@ HINGES = ('RA0', 'A', 'O', 'C', )
 LINKS = ('frame', 'slider', 'coupler', 'crank', )
 POINTS = ('B', )
 LEVELS = ('paper', 'first_order', 'exact', )
+#: The levels with closed-form sensitivities (docs/sensitivity.md).
+SENSITIVITY_LEVELS = ('paper', 'first_order', 'exact', )
 _DTYPE = numpy.float64
 
 # symkin runtime (templates/numpy/runtime.py, docs/runtime.md; tested on its own by
@@ -575,15 +582,13 @@ def _sensitivity_block(arrays, mech, level, p):
 # angles, twice (the rigid linkage and the compliant mechanism), then one evaluate at each.
 
 
-def _actuated(mech, actuators, drives, shown, inputs, level, params, links):
-    """The module's evaluate() for a mechanism driven by stroke actuators (docs/levels.md,
-    "Actuators"): each actuator's surrogate hinge takes the angle at which the rigid point of
-    action has moved by the stroke along its line, and separately the angle at which the
-    compliant point has (Newton's method, its Jacobian by central differences); the deviation
-    is compliant - rigid, each at its own angles: the rigid motion between them plus the
-    level's deviation at the compliant ones."""
-    if level not in mech.levels or level not in ("paper", "first_order", "exact"):
-        kinematic = tuple(n for n in mech.levels if n in ("paper", "first_order", "exact"))
+def _stroke_poses(mech, actuators, drives, inputs, level, params):
+    """The kinematic inputs at which the rigid linkage and the compliant mechanism meet the
+    strokes (docs/levels.md, "Actuators"): (rigid, compliant, ok), each a dict of the input
+    hinges and the surrogate hinges' angles. Newton's method on the strokes elementwise over the
+    input arrays, its Jacobian by central differences."""
+    kinematic = tuple(n for n in mech.levels if n in ("paper", "first_order", "exact"))
+    if level not in kinematic:
         raise ValueError(f"with actuators, level must be one of {kinematic}, got {level!r}")
     if set(inputs) != set(drives):
         raise ValueError(f"inputs must be exactly {drives}, got {tuple(sorted(inputs))}")
@@ -594,7 +599,9 @@ def _actuated(mech, actuators, drives, shown, inputs, level, params, links):
     strokes = [given[n] for n in names]
     surrogates = [a[1] for a in actuators]
     zero = numpy.zeros_like(arrays[0]) if arrays else mech.dtype(0)
-    rest = _evaluate(mech, dict.fromkeys(mech.input_names, zero), "paper", params, False)["points"]
+    # the rigid positions: at the cheapest level the module holds (every level gives them)
+    cheap = "paper" if "paper" in mech.levels else level
+    rest = _evaluate(mech, dict.fromkeys(mech.input_names, zero), cheap, params, False)["points"]
     at = [rest[a[2]]["rigid"] for a in actuators]
     eps = numpy.finfo(mech.dtype).eps
     scale = max([float(numpy.nanmax(numpy.abs(x))) for x in at] + [1e-300])
@@ -630,11 +637,26 @@ def _actuated(mech, actuators, drives, shown, inputs, level, params, links):
         return theta, numpy.all([numpy.abs(x) <= tol for x in r], axis=0)
 
     start = [zero + numpy.asarray(s) * 0 for s in strokes]
-    rigid, ok_r = solve(start, "paper", "rigid")
+    rigid, ok_r = solve(start, cheap, "rigid")
     compliant, ok_c = solve(rigid, level, "compliant")
-    ev_r = _evaluate(mech, hinges | dict(zip(surrogates, rigid)), level, params, links)
-    ev_c = _evaluate(mech, hinges | dict(zip(surrogates, compliant)), level, params, links)
-    ok = ev_r["ok"] & ev_c["ok"] & ok_r & ok_c
+    return (
+        hinges | dict(zip(surrogates, rigid)),
+        hinges | dict(zip(surrogates, compliant)),
+        ok_r & ok_c,
+    )
+
+
+def _actuated(mech, actuators, drives, shown, inputs, level, params, links):
+    """The module's evaluate() for a mechanism driven by stroke actuators (docs/levels.md,
+    "Actuators"): each actuator's surrogate hinge takes the angle at which the rigid point of
+    action has moved by the stroke along its line, and separately the angle at which the
+    compliant point has (Newton's method, its Jacobian by central differences); the deviation
+    is compliant - rigid, each at its own angles: the rigid motion between them plus the
+    level's deviation at the compliant ones."""
+    rigid, compliant, ok = _stroke_poses(mech, actuators, drives, inputs, level, params)
+    ev_r = _evaluate(mech, rigid, level, params, links)
+    ev_c = _evaluate(mech, compliant, level, params, links)
+    ok = ev_r["ok"] & ev_c["ok"] & ok
     out = {"points": {}, "ok": ok}
     for n in shown:
         r, c = ev_r["points"][n], ev_c["points"][n]
@@ -656,6 +678,86 @@ def _actuated(mech, actuators, drives, shown, inputs, level, params, links):
     for table in out["points"].values():
         for key, v in table.items():
             table[key] = numpy.where(ok, v, numpy.nan)
+    return out
+
+
+def _actuated_sensitivity(mech, actuators, drives, shown, inputs, level, params):
+    """The module's sensitivity_full() with actuators (docs/sensitivity.md, "Actuators"): the
+    implicit-function theorem on the strokes. Each surrogate angle v solves g(v, y) = d.(X(v, y)
+    - X0(y)) - s = 0, X the point of action (rigid, or rigid + deviation), X0 its as-fabricated
+    place, so dv/dy = -(dg/dv)^-1 dg/dy for every parameter, input hinge and stroke y; the
+    derivatives at fixed kinematic inputs come from sensitivity_full at the two poses."""
+    rigid, compliant, ok = _stroke_poses(mech, actuators, drives, inputs, level, params)
+    names = [a[0] for a in actuators]
+    surrogates = [a[1] for a in actuators]
+    k = len(actuators)
+    at_r = _sensitivity_full(mech, rigid, level, params)
+    at_c = _sensitivity_full(mech, compliant, level, params)
+    zero = dict.fromkeys(mech.input_names, numpy.zeros_like(rigid[surrogates[0]]))
+    rest = _sensitivity_full(mech, zero, level, params)["rigid"]
+    ok = ok & at_r["ok"] & at_c["ok"]
+    params_ = list(mech.parameter_names)
+    hinges = [n for n in drives if n not in names]
+    variables = [("params", q) for q in params_] + [("inputs", h) for h in hinges]
+
+    def part(table, point, kind, name):
+        return numpy.asarray(table[point][kind][name])
+
+    def moved(res, point, kind, name, compliant_):
+        out = part(res["rigid"], point, kind, name)
+        return out + part(res["deviation"], point, kind, name) if compliant_ else out
+
+    def dot(d, v):
+        return d[0] * v[0] + d[1] * v[1]
+
+    def surrogate_rates(res, compliant_):
+        """dv/dy of every surrogate by every variable, then by every stroke: a row-major list."""
+        jac = [
+            dot(d, moved(res, point, "inputs", v, compliant_))
+            for (_, _, point, d) in actuators
+            for v in surrogates
+        ]
+        rhs = []
+        for a, (_, _, point, d) in enumerate(actuators):
+            for kind, y in variables:
+                g = dot(d, moved(res, point, kind, y, compliant_))
+                if kind == "params":  # the as-fabricated point of action moves too
+                    g = g - dot(d, part(rest, point, kind, y))
+                rhs.append(-g)
+            # dg_a/ds_b = -1 when a = b
+            rhs += [numpy.full(ok.shape, float(a == b), dtype=mech.dtype) for b in range(k)]
+        return _solve(jac, rhs, numpy.array(ok), len(variables) + k, mech.dtype)
+
+    with numpy.errstate(all="ignore"):
+        rate_r, good_r = surrogate_rates(at_r, False)
+        rate_c, good_c = surrogate_rates(at_c, True)
+    ok = ok & good_r & good_c
+    m = len(variables) + k
+    out = {"points": {}, "deviation": {}, "rigid": {}}
+    for n in shown:
+        rig, dev = {"params": {}, "inputs": {}}, {"params": {}, "inputs": {}}
+        for j, (kind, y) in enumerate(variables + [("inputs", a) for a in names]):
+            stroke = j >= len(variables)
+            r = 0 if stroke else moved(at_r, n, kind, y, False)
+            c = 0 if stroke else moved(at_c, n, kind, y, True)
+            for i, v in enumerate(surrogates):
+                r = r + moved(at_r, n, "inputs", v, False) * rate_r[i * m + j]
+                c = c + moved(at_c, n, "inputs", v, True) * rate_c[i * m + j]
+            rig[kind][y] = numpy.where(ok, r, numpy.nan)
+            dev[kind][y] = numpy.where(ok, c - r, numpy.nan)
+        out["rigid"][n] = {"params": rig["params"], "inputs": {h: rig["inputs"][h] for h in drives}}
+        out["deviation"][n] = {
+            "params": dev["params"],
+            "inputs": {h: dev["inputs"][h] for h in drives},
+        }
+        r, c = at_r["points"][n], at_c["points"][n]
+        out["points"][n] = {
+            "rigid": numpy.where(ok, r["rigid"], numpy.nan),
+            "compliant": numpy.where(ok, c["compliant"], numpy.nan),
+            "deviation": numpy.where(ok, c["rigid"] - r["rigid"] + c["deviation"], numpy.nan),
+        }
+    out["angles"] = {"rigid": at_r["angles"]["rigid"], "compliant": at_c["angles"]["compliant"]}
+    out["ok"] = ok
     return out
 
 
@@ -1126,6 +1228,637 @@ def _links(theta, delta):
     ]
 
 
+def _sens_rigid(theta, params):
+    """rigid stage: A, dG/dv; rigid points: dR/dtheta, dR/dv (105 operations)."""
+    theta_1, theta_2, theta_3, _ = theta
+    p_0, p_1, p_2, _, p_4 = params
+    _tmp0 = theta_1 + theta_2
+    _tmp1 = numpy.cos(_tmp0)
+    _tmp2 = numpy.sin(p_1)
+    _tmp3 = _tmp2*p_0
+    _tmp4 = _tmp1*_tmp3
+    _tmp5 = numpy.cos(p_1)
+    _tmp6 = numpy.sin(_tmp0)
+    _tmp7 = _tmp5*_tmp6
+    _tmp8 = _tmp7*p_0
+    _tmp9 = _tmp4 - _tmp8
+    _tmp10 = numpy.cos(theta_3)
+    _tmp11 = numpy.sin(theta_3)
+    _tmp12 = _tmp11*_tmp5
+    _tmp13 = _tmp2*_tmp6
+    _tmp14 = _tmp13*p_0
+    _tmp15 = _tmp5*p_0
+    _tmp16 = _tmp14 + _tmp1*_tmp15
+    _tmp17 = _tmp11*_tmp2
+    _tmp18 = _tmp17*p_0
+    _tmp19 = numpy.sin(0.5*theta_3)**2
+    _tmp20 = 2*_tmp5
+    _tmp21 = _tmp19*_tmp20
+    _tmp22 = 0.5*theta_1
+    _tmp23 = numpy.sin(_tmp22 + 0.5*theta_2)**2
+    _tmp24 = _tmp20*_tmp23
+    _tmp25 = 2*_tmp3
+    _tmp26 = numpy.sin(theta_1)
+    _tmp27 = -_tmp26
+    _tmp28 = numpy.cos(theta_1)
+    _tmp29 = _tmp28*p_2
+    _tmp30 = 2*_tmp2
+    _tmp31 = _tmp26*p_2
+    _tmp32 = 2*_tmp4
+    _tmp33 = 2*_tmp8
+    _tmp34 = _tmp32 - _tmp33
+    _tmp35 = _tmp1*_tmp20
+    _tmp36 = 2*_tmp14 + _tmp35*p_0
+    return [
+        1,
+        -1,
+        -1,
+        -_tmp9,
+        _tmp10*_tmp3 + _tmp12*p_0,
+        0,
+        -_tmp16,
+        _tmp18 - _tmp10*_tmp15,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        _tmp17 + _tmp21 + _tmp24 - _tmp13,
+        -_tmp8 - _tmp19*_tmp25 - _tmp23*_tmp25 + _tmp11*_tmp5*p_0,
+        _tmp27,
+        0,
+        0,
+        -_tmp29 - _tmp9,
+        -_tmp12 - _tmp7 - _tmp23*_tmp30 + 2*_tmp19*_tmp2,
+        _tmp14 + _tmp18 + _tmp21*p_0 - _tmp24*p_0,
+        -2*numpy.sin(_tmp22)**2,
+        0,
+        0,
+        -_tmp16 - _tmp31,
+        -_tmp34,
+        0,
+        0,
+        -_tmp36,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp35 - 2*_tmp13 + 2*_tmp5,
+        _tmp32 - _tmp25 - _tmp33,
+        _tmp27,
+        0,
+        0,
+        -_tmp29 - _tmp34,
+        -2*_tmp7 + _tmp1*_tmp30,
+        _tmp36,
+        -1 + _tmp28,
+        0,
+        0,
+        -_tmp31 - _tmp36,
+        _tmp20,
+        -_tmp25,
+        0,
+        0,
+        _tmp27,
+        -_tmp28*p_4,
+        0,
+        0,
+        -1,
+        0,
+        _tmp28,
+        -_tmp26*p_4,
+    ]
+
+
+def _sens_paper(theta, delta, params):
+    """sensitivity at level paper: dD/dtheta, dD/dv (108 operations)."""
+    theta_1, theta_2, _, _ = theta
+    _, _, _, p_3, _ = params
+    _tmp0 = numpy.cos(theta_1)
+    _tmp1 = 0.5*theta_2
+    _tmp2 = numpy.sin(_tmp1)
+    _tmp3 = _tmp2*p_3
+    _tmp4 = arck(_tmp1)
+    _tmp5 = _tmp1*_tmp4
+    _tmp6 = numpy.cos(_tmp1)
+    _tmp7 = _tmp6*p_3
+    _tmp8 = theta_2**2
+    _tmp9 = _tmp4*_tmp8
+    _tmp10 = 0.125*_tmp9
+    _tmp11 = 0.0625*theta_2**3*(-3*sinr2(_tmp1) + 3*cosr2(_tmp1) + sinr1(_tmp1))
+    _tmp12 = -_tmp10*_tmp7 - _tmp11*_tmp3 - _tmp3*_tmp5
+    _tmp13 = numpy.sin(theta_1)
+    _tmp14 = _tmp11*_tmp7 + _tmp5*_tmp7 - _tmp10*_tmp3
+    _tmp15 = 0.5*theta_1
+    _tmp16 = numpy.sin(_tmp15)
+    _tmp17 = arck(_tmp15)
+    _tmp18 = _tmp17*theta_1**2
+    _tmp19 = 0.25*_tmp18
+    _tmp20 = _tmp16*_tmp19
+    _tmp21 = 0.25*_tmp9
+    _tmp22 = _tmp13*_tmp21
+    _tmp23 = _tmp0*_tmp21
+    _tmp24 = _tmp16*p_3
+    _tmp25 = _tmp15*_tmp17
+    _tmp26 = numpy.cos(_tmp15)
+    _tmp27 = _tmp26*p_3
+    _tmp28 = 0.125*_tmp18
+    _tmp29 = theta_1**3
+    _tmp30 = -3*sinr2(_tmp15) + 3*cosr2(_tmp15) + sinr1(_tmp15)
+    _tmp31 = 0.0625*_tmp29*_tmp30
+    _tmp32 = _tmp24*_tmp25 + _tmp24*_tmp31 + _tmp27*_tmp28
+    _tmp33 = _tmp19*_tmp26
+    _tmp34 = _tmp24*_tmp28
+    return [
+        _tmp0*_tmp12 - _tmp13*_tmp14,
+        0,
+        0,
+        _tmp0*_tmp14 + _tmp12*_tmp13,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp20 - _tmp2*_tmp23 - _tmp22*_tmp6,
+        0,
+        -_tmp32 - _tmp23*_tmp7 + 0.25*_tmp13*_tmp2*_tmp4*_tmp8*p_3,
+        0,
+        0,
+        0,
+        _tmp33 + _tmp23*_tmp6 - _tmp2*_tmp22,
+        0,
+        -_tmp34 - _tmp22*_tmp7 - _tmp23*_tmp3 + 0.0625*_tmp26*_tmp29*_tmp30*p_3 + 0.5*_tmp17*_tmp26*p_3*theta_1,
+        0,
+        0,
+        0,
+        -_tmp20,
+        0,
+        -_tmp32,
+        0,
+        0,
+        0,
+        _tmp33,
+        0,
+        -_tmp34 + _tmp25*_tmp27 + _tmp27*_tmp31,
+    ]
+
+
+def _sens_first_order(theta, delta, params):
+    """sensitivity at level first_order: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (355 operations)."""
+    theta_1, theta_2, theta_3, theta_4 = theta
+    delta_2, delta_3, _ = delta
+    p_0, p_1, _, p_3, _ = params
+    _tmp0 = numpy.sin(p_1)
+    _tmp1 = theta_1 + theta_2
+    _tmp2 = numpy.cos(_tmp1)
+    _tmp3 = _tmp0*_tmp2
+    _tmp4 = _tmp3*p_0
+    _tmp5 = numpy.cos(p_1)
+    _tmp6 = numpy.sin(_tmp1)
+    _tmp7 = _tmp4 - _tmp5*_tmp6*p_0
+    _tmp8 = numpy.cos(theta_3)
+    _tmp9 = _tmp0*_tmp8
+    _tmp10 = numpy.sin(theta_3)
+    _tmp11 = _tmp10*_tmp5
+    _tmp12 = _tmp11*p_0 + _tmp9*p_0
+    _tmp13 = _tmp0*_tmp6
+    _tmp14 = _tmp13*p_0
+    _tmp15 = _tmp2*_tmp5
+    _tmp16 = _tmp15*p_0
+    _tmp17 = -_tmp14 - _tmp16
+    _tmp18 = _tmp0*_tmp10
+    _tmp19 = _tmp5*_tmp8
+    _tmp20 = _tmp18*p_0 - _tmp19*p_0
+    _tmp21 = _tmp17*delta_2
+    _tmp22 = numpy.sin(theta_1)
+    _tmp23 = 0.5*theta_2
+    _tmp24 = numpy.cos(_tmp23)
+    _tmp25 = _tmp24*p_3
+    _tmp26 = arck(_tmp23)
+    _tmp27 = _tmp23*_tmp26
+    _tmp28 = numpy.sin(_tmp23)
+    _tmp29 = _tmp28*p_3
+    _tmp30 = theta_2**2
+    _tmp31 = _tmp26*_tmp30
+    _tmp32 = 0.125*_tmp31
+    _tmp33 = 0.0625*theta_2**3*(-3*sinr2(_tmp23) + 3*cosr2(_tmp23) + sinr1(_tmp23))
+    _tmp34 = _tmp25*_tmp27 + _tmp25*_tmp33 - _tmp29*_tmp32
+    _tmp35 = numpy.cos(theta_1)
+    _tmp36 = -_tmp25*_tmp32 - _tmp27*_tmp29 - _tmp29*_tmp33
+    _tmp37 = _tmp22*_tmp34 - _tmp35*_tmp36
+    _tmp38 = 0.25*_tmp0
+    _tmp39 = theta_4**2
+    _tmp40 = 0.5*theta_4
+    _tmp41 = arck(_tmp40)
+    _tmp42 = numpy.sin(_tmp40)
+    _tmp43 = _tmp42*p_3
+    _tmp44 = _tmp41*_tmp43
+    _tmp45 = _tmp39*_tmp44
+    _tmp46 = numpy.cos(_tmp40)
+    _tmp47 = -_tmp38*_tmp45 + 0.25*_tmp39*_tmp41*_tmp46*_tmp5*p_3
+    _tmp48 = _tmp10*_tmp47
+    _tmp49 = _tmp46*p_3
+    _tmp50 = _tmp41*_tmp49
+    _tmp51 = 0.25*_tmp5
+    _tmp52 = _tmp45*_tmp51 + _tmp38*_tmp39*_tmp50
+    _tmp53 = 0.5*theta_3
+    _tmp54 = numpy.sin(_tmp53)
+    _tmp55 = _tmp54*p_3
+    _tmp56 = arck(_tmp53)
+    _tmp57 = _tmp53*_tmp56
+    _tmp58 = numpy.cos(_tmp53)
+    _tmp59 = _tmp58*p_3
+    _tmp60 = theta_3**2
+    _tmp61 = _tmp56*_tmp60
+    _tmp62 = 0.125*_tmp61
+    _tmp63 = 0.0625*theta_3**3*(-3*sinr2(_tmp53) + 3*cosr2(_tmp53) + sinr1(_tmp53))
+    _tmp64 = _tmp55*_tmp57 + _tmp55*_tmp63 + _tmp59*_tmp62
+    _tmp65 = _tmp57*_tmp59 + _tmp59*_tmp63 - _tmp55*_tmp62
+    _tmp66 = 0.125*_tmp39
+    _tmp67 = 0.0625*theta_4**3*(-3*sinr2(_tmp40) + 3*cosr2(_tmp40) + sinr1(_tmp40))
+    _tmp68 = _tmp40*_tmp44 + _tmp43*_tmp67 + _tmp50*_tmp66
+    _tmp69 = _tmp40*_tmp50 + _tmp49*_tmp67 - _tmp44*_tmp66
+    _tmp70 = _tmp5*_tmp69 - _tmp0*_tmp68
+    _tmp71 = _tmp0*_tmp69 + _tmp5*_tmp68
+    _tmp72 = _tmp7*delta_2
+    _tmp73 = _tmp22*_tmp36 + _tmp34*_tmp35
+    _tmp74 = _tmp47*_tmp8
+    _tmp75 = _tmp38*_tmp61
+    _tmp76 = _tmp51*_tmp61
+    _tmp77 = -_tmp52
+    _tmp78 = _tmp39*_tmp41
+    _tmp79 = _tmp42*_tmp78
+    _tmp80 = -_tmp38*_tmp79 + 0.25*_tmp39*_tmp41*_tmp46*_tmp5
+    _tmp81 = _tmp51*_tmp79 + _tmp38*_tmp46*_tmp78
+    _tmp82 = 0.5*theta_1
+    _tmp83 = numpy.sin(_tmp82)
+    _tmp84 = theta_1**2
+    _tmp85 = arck(_tmp82)
+    _tmp86 = _tmp84*_tmp85
+    _tmp87 = 0.25*_tmp86
+    _tmp88 = _tmp83*_tmp87
+    _tmp89 = 0.25*_tmp31
+    _tmp90 = _tmp22*_tmp89
+    _tmp91 = _tmp35*_tmp89
+    _tmp92 = _tmp88 + _tmp24*_tmp90 + _tmp28*_tmp91
+    _tmp93 = _tmp83*p_3
+    _tmp94 = _tmp82*_tmp85
+    _tmp95 = numpy.cos(_tmp82)
+    _tmp96 = _tmp95*p_3
+    _tmp97 = 0.125*_tmp86
+    _tmp98 = theta_1**3
+    _tmp99 = -3*sinr2(_tmp82) + 3*cosr2(_tmp82) + sinr1(_tmp82)
+    _tmp100 = 0.0625*_tmp98*_tmp99
+    _tmp101 = _tmp100*_tmp93 + _tmp93*_tmp94 + _tmp96*_tmp97
+    _tmp102 = _tmp101 + _tmp25*_tmp91 - 0.25*_tmp22*_tmp26*_tmp28*_tmp30*p_3
+    _tmp103 = _tmp28*_tmp90
+    _tmp104 = _tmp93*_tmp97
+    _tmp105 = _tmp104 + _tmp25*_tmp90 + _tmp29*_tmp91 - 0.0625*_tmp95*_tmp98*_tmp99*p_3 - 0.5*_tmp85*_tmp95*p_3*theta_1
+    _tmp106 = -2*_tmp14 - 2*_tmp16
+    _tmp107 = _tmp106*delta_2
+    _tmp108 = 2*_tmp4 - 2*_tmp5*_tmp6*p_0
+    _tmp109 = _tmp108*delta_2
+    _tmp110 = _tmp87*_tmp95
+    return [
+        1,
+        -1,
+        -1,
+        -_tmp7,
+        _tmp12,
+        0,
+        _tmp17,
+        _tmp20,
+        0,
+        0,
+        0,
+        0,
+        -_tmp21 - _tmp37,
+        _tmp48 + _tmp0*_tmp64 + _tmp52*_tmp8 - _tmp20*delta_3 - _tmp5*_tmp65,
+        _tmp10*_tmp71 - _tmp70*_tmp8,
+        _tmp73 - _tmp72,
+        -_tmp74 + _tmp10*_tmp52 + _tmp12*delta_3 - _tmp0*_tmp65 - _tmp5*_tmp64,
+        -_tmp10*_tmp70 - _tmp71*_tmp8,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        delta_2*(-_tmp3 + _tmp5*_tmp6) + delta_3*(_tmp11 + _tmp9),
+        _tmp21 + _tmp48 + _tmp55*_tmp76 + _tmp59*_tmp75 - _tmp20*delta_3 - _tmp77*_tmp8,
+        0,
+        -_tmp92 + _tmp10*_tmp81 - _tmp58*_tmp76 - _tmp8*_tmp80 + 0.25*_tmp0*_tmp54*_tmp56*_tmp60,
+        0,
+        -_tmp102 - _tmp21,
+        delta_2*(-_tmp13 - _tmp15) + delta_3*(_tmp18 - _tmp19),
+        _tmp72 - _tmp74 + _tmp12*delta_3 + _tmp55*_tmp75 - _tmp10*_tmp77 - _tmp59*_tmp76,
+        0,
+        -_tmp103 - _tmp10*_tmp80 - _tmp54*_tmp76 - _tmp58*_tmp75 - _tmp8*_tmp81 + 0.25*_tmp84*_tmp85*_tmp95 + 0.25*_tmp24*_tmp26*_tmp30*_tmp35,
+        0,
+        -_tmp105 - _tmp72,
+        -_tmp107 - _tmp37,
+        0,
+        0,
+        _tmp73 - _tmp109,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp108,
+        0,
+        0,
+        _tmp106,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        delta_2*(-2*_tmp3 + 2*_tmp5*_tmp6),
+        _tmp107,
+        0,
+        -_tmp92,
+        0,
+        -_tmp102 - _tmp107,
+        delta_2*(-2*_tmp13 - 2*_tmp15),
+        _tmp109,
+        0,
+        _tmp110 - _tmp103 + _tmp24*_tmp91,
+        0,
+        -_tmp105 - _tmp109,
+        0,
+        0,
+        0,
+        -_tmp88,
+        0,
+        -_tmp101,
+        0,
+        0,
+        0,
+        _tmp110,
+        0,
+        -_tmp104 + _tmp100*_tmp96 + _tmp94*_tmp96,
+    ]
+
+
+def _sens_exact(theta, delta, params):
+    """sensitivity at level exact: M, dE/dtheta, dE/dv; dD/dtheta, dD/ddelta, dD/dv (449 operations)."""
+    theta_1, theta_2, theta_3, theta_4 = theta
+    delta_2, delta_3, delta_4 = delta
+    p_0, p_1, _, p_3, _ = params
+    _tmp0 = delta_2 + theta_2
+    _tmp1 = _tmp0 + theta_1
+    _tmp2 = numpy.cos(_tmp1)
+    _tmp3 = numpy.sin(p_1)
+    _tmp4 = _tmp3*p_0
+    _tmp5 = _tmp2*_tmp4
+    _tmp6 = numpy.cos(p_1)
+    _tmp7 = numpy.sin(_tmp1)
+    _tmp8 = numpy.sin(theta_1)
+    _tmp9 = 0.5*delta_2
+    _tmp10 = _tmp9 + 0.5*theta_2
+    _tmp11 = numpy.cos(_tmp10)
+    _tmp12 = _tmp11*p_3
+    _tmp13 = arck(_tmp10)
+    _tmp14 = 0.5*_tmp0*_tmp13
+    _tmp15 = numpy.sin(_tmp10)
+    _tmp16 = _tmp15*p_3
+    _tmp17 = _tmp0**2
+    _tmp18 = _tmp13*_tmp17
+    _tmp19 = 0.125*_tmp18
+    _tmp20 = 0.0625*_tmp0**3*(-3*sinr2(_tmp10) + 3*cosr2(_tmp10) + sinr1(_tmp10))
+    _tmp21 = _tmp12*_tmp14 + _tmp12*_tmp20 - _tmp16*_tmp19
+    _tmp22 = _tmp21*_tmp8
+    _tmp23 = numpy.cos(theta_1)
+    _tmp24 = -_tmp12*_tmp19 - _tmp14*_tmp16 - _tmp16*_tmp20
+    _tmp25 = _tmp22 - _tmp23*_tmp24
+    _tmp26 = delta_3 + theta_3
+    _tmp27 = numpy.cos(_tmp26)
+    _tmp28 = numpy.sin(_tmp26)
+    _tmp29 = _tmp6*p_0
+    _tmp30 = 0.25*_tmp3
+    _tmp31 = delta_4 + theta_4
+    _tmp32 = _tmp31**2
+    _tmp33 = 0.5*delta_4 + 0.5*theta_4
+    _tmp34 = arck(_tmp33)
+    _tmp35 = numpy.sin(_tmp33)
+    _tmp36 = _tmp35*p_3
+    _tmp37 = _tmp34*_tmp36
+    _tmp38 = _tmp32*_tmp37
+    _tmp39 = numpy.cos(_tmp33)
+    _tmp40 = -_tmp30*_tmp38 + 0.25*_tmp32*_tmp34*_tmp39*_tmp6*p_3
+    _tmp41 = _tmp28*_tmp40
+    _tmp42 = _tmp39*p_3
+    _tmp43 = _tmp34*_tmp42
+    _tmp44 = 0.25*_tmp6
+    _tmp45 = _tmp38*_tmp44 + _tmp30*_tmp32*_tmp43
+    _tmp46 = 0.5*delta_3
+    _tmp47 = _tmp46 + 0.5*theta_3
+    _tmp48 = numpy.sin(_tmp47)
+    _tmp49 = _tmp48*p_3
+    _tmp50 = arck(_tmp47)
+    _tmp51 = 0.5*_tmp26*_tmp50
+    _tmp52 = numpy.cos(_tmp47)
+    _tmp53 = _tmp52*p_3
+    _tmp54 = _tmp26**2
+    _tmp55 = _tmp50*_tmp54
+    _tmp56 = 0.125*_tmp55
+    _tmp57 = 0.0625*_tmp26**3*(-3*sinr2(_tmp47) + 3*cosr2(_tmp47) + sinr1(_tmp47))
+    _tmp58 = _tmp49*_tmp51 + _tmp49*_tmp57 + _tmp53*_tmp56
+    _tmp59 = _tmp51*_tmp53 + _tmp53*_tmp57 - _tmp49*_tmp56
+    _tmp60 = _tmp41 + _tmp27*_tmp45 + _tmp3*_tmp58 - _tmp59*_tmp6
+    _tmp61 = 0.5*_tmp31
+    _tmp62 = 0.125*_tmp32
+    _tmp63 = 0.0625*_tmp31**3*(-3*sinr2(_tmp33) + 3*cosr2(_tmp33) + sinr1(_tmp33))
+    _tmp64 = _tmp36*_tmp63 + _tmp37*_tmp61 + _tmp43*_tmp62
+    _tmp65 = _tmp42*_tmp63 + _tmp43*_tmp61 - _tmp37*_tmp62
+    _tmp66 = _tmp6*_tmp65 - _tmp3*_tmp64
+    _tmp67 = _tmp3*_tmp65 + _tmp6*_tmp64
+    _tmp68 = _tmp28*_tmp67 - _tmp27*_tmp66
+    _tmp69 = _tmp2*_tmp29
+    _tmp70 = _tmp4*_tmp7
+    _tmp71 = -_tmp21*_tmp23 - _tmp24*_tmp8
+    _tmp72 = _tmp27*_tmp40
+    _tmp73 = _tmp58*_tmp6
+    _tmp74 = _tmp3*_tmp59
+    _tmp75 = -_tmp27*_tmp67 - _tmp28*_tmp66
+    _tmp76 = theta_1 + theta_2
+    _tmp77 = numpy.cos(_tmp76)
+    _tmp78 = numpy.sin(delta_2)
+    _tmp79 = _tmp6*_tmp78
+    _tmp80 = _tmp79*p_0
+    _tmp81 = numpy.sin(_tmp9)**2
+    _tmp82 = _tmp80 + 2*_tmp4*_tmp81
+    _tmp83 = numpy.sin(_tmp76)
+    _tmp84 = _tmp3*_tmp78
+    _tmp85 = _tmp84*p_0
+    _tmp86 = _tmp85 - 2*_tmp6*_tmp81*p_0
+    _tmp87 = -_tmp86
+    _tmp88 = _tmp83*_tmp87
+    _tmp89 = -_tmp22 + _tmp23*_tmp24
+    _tmp90 = numpy.cos(theta_3)
+    _tmp91 = numpy.sin(delta_3)
+    _tmp92 = numpy.sin(_tmp46)**2
+    _tmp93 = 2*_tmp92
+    _tmp94 = -_tmp4*_tmp93 + _tmp6*_tmp91*p_0
+    _tmp95 = numpy.sin(theta_3)
+    _tmp96 = _tmp3*_tmp91
+    _tmp97 = _tmp29*_tmp93 + _tmp96*p_0
+    _tmp98 = _tmp90*_tmp94 - _tmp95*_tmp97
+    _tmp99 = _tmp21*_tmp23 + _tmp24*_tmp8
+    _tmp100 = _tmp77*_tmp87 + _tmp82*_tmp83
+    _tmp101 = -_tmp72 + _tmp90*_tmp97 + _tmp94*_tmp95
+    _tmp102 = 2*_tmp3
+    _tmp103 = _tmp102*_tmp92 - _tmp6*_tmp91
+    _tmp104 = _tmp96 + 2*_tmp6*_tmp92
+    _tmp105 = -_tmp79 - _tmp102*_tmp81
+    _tmp106 = -_tmp84 + 2*_tmp6*_tmp81
+    _tmp107 = -_tmp82
+    _tmp108 = -_tmp45
+    _tmp109 = _tmp30*_tmp55
+    _tmp110 = _tmp44*_tmp55
+    _tmp111 = _tmp32*_tmp34
+    _tmp112 = _tmp111*_tmp35
+    _tmp113 = -_tmp112*_tmp30 + 0.25*_tmp32*_tmp34*_tmp39*_tmp6
+    _tmp114 = _tmp112*_tmp44 + _tmp111*_tmp30*_tmp39
+    _tmp115 = 0.5*theta_1
+    _tmp116 = numpy.sin(_tmp115)
+    _tmp117 = theta_1**2
+    _tmp118 = arck(_tmp115)
+    _tmp119 = _tmp117*_tmp118
+    _tmp120 = 0.25*_tmp119
+    _tmp121 = _tmp116*_tmp120
+    _tmp122 = 0.25*_tmp18
+    _tmp123 = _tmp122*_tmp8
+    _tmp124 = _tmp122*_tmp23
+    _tmp125 = _tmp121 + _tmp11*_tmp123 + _tmp124*_tmp15
+    _tmp126 = _tmp116*p_3
+    _tmp127 = _tmp115*_tmp118
+    _tmp128 = numpy.cos(_tmp115)
+    _tmp129 = _tmp128*p_3
+    _tmp130 = 0.125*_tmp119
+    _tmp131 = 0.0625*theta_1**3*(-3*sinr2(_tmp115) + 3*cosr2(_tmp115) + sinr1(_tmp115))
+    _tmp132 = _tmp126*_tmp127 + _tmp126*_tmp131 + _tmp129*_tmp130
+    _tmp133 = _tmp132 + _tmp12*_tmp124 - 0.25*_tmp13*_tmp15*_tmp17*_tmp8*p_3
+    _tmp134 = _tmp123*_tmp15
+    _tmp135 = _tmp127*_tmp129 + _tmp129*_tmp131 - _tmp126*_tmp130
+    _tmp136 = _tmp135 - _tmp12*_tmp123 - _tmp124*_tmp16
+    _tmp137 = 4*_tmp81
+    _tmp138 = 2*_tmp80 + _tmp137*_tmp4
+    _tmp139 = 2*_tmp85 - 4*_tmp6*_tmp81*p_0
+    _tmp140 = -_tmp139
+    _tmp141 = _tmp140*_tmp83
+    _tmp142 = _tmp138*_tmp83 + _tmp140*_tmp77
+    _tmp143 = -2*_tmp79 - _tmp137*_tmp3
+    _tmp144 = -2*_tmp84 + 4*_tmp6*_tmp81
+    _tmp145 = -_tmp138
+    _tmp146 = _tmp120*_tmp128
+    return [
+        1,
+        -1,
+        -1,
+        -_tmp25 - _tmp5 + _tmp6*_tmp7*p_0,
+        _tmp60 + _tmp27*_tmp4 + _tmp28*_tmp29,
+        _tmp68,
+        -_tmp69 - _tmp70 - _tmp71,
+        -_tmp72 - _tmp73 - _tmp74 + _tmp28*_tmp45 - _tmp27*_tmp29 + _tmp28*_tmp3*p_0,
+        _tmp75,
+        0,
+        0,
+        0,
+        _tmp89 - _tmp88 + _tmp77*_tmp82,
+        _tmp60 + _tmp98,
+        _tmp68,
+        _tmp100 + _tmp99,
+        _tmp101 - _tmp73 - _tmp74 + _tmp28*_tmp45,
+        _tmp75,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp104*_tmp90 + _tmp106*_tmp77 - _tmp103*_tmp95 - _tmp105*_tmp83,
+        _tmp41 + _tmp98 + _tmp107*_tmp77 + _tmp109*_tmp53 + _tmp110*_tmp49 - _tmp108*_tmp27 - _tmp83*_tmp86,
+        0,
+        -_tmp125 + _tmp114*_tmp28 - _tmp110*_tmp52 - _tmp113*_tmp27 + 0.25*_tmp3*_tmp48*_tmp50*_tmp54,
+        0,
+        -_tmp133 - _tmp88 + _tmp77*_tmp82,
+        _tmp103*_tmp90 + _tmp104*_tmp95 + _tmp105*_tmp77 + _tmp106*_tmp83,
+        _tmp101 + _tmp107*_tmp83 + _tmp109*_tmp49 + _tmp77*_tmp86 - _tmp108*_tmp28 - _tmp110*_tmp53,
+        0,
+        -_tmp134 - _tmp109*_tmp52 - _tmp110*_tmp48 - _tmp113*_tmp28 - _tmp114*_tmp27 + 0.25*_tmp117*_tmp118*_tmp128 + 0.25*_tmp11*_tmp13*_tmp17*_tmp23,
+        0,
+        _tmp100 + _tmp136,
+        _tmp89 - _tmp141 + _tmp138*_tmp77,
+        0,
+        0,
+        _tmp142 + _tmp99,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp25 - 2*_tmp5 + 2*_tmp6*_tmp7*p_0,
+        0,
+        0,
+        -_tmp71 - 2*_tmp69 - 2*_tmp70,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp144*_tmp77 - _tmp143*_tmp83,
+        _tmp145*_tmp77 - _tmp139*_tmp83,
+        0,
+        -_tmp125,
+        0,
+        -_tmp133 - _tmp141 + _tmp138*_tmp77,
+        _tmp143*_tmp77 + _tmp144*_tmp83,
+        _tmp139*_tmp77 + _tmp145*_tmp83,
+        0,
+        _tmp146 - _tmp134 + _tmp11*_tmp124,
+        0,
+        _tmp136 + _tmp142,
+        0,
+        0,
+        0,
+        -_tmp121,
+        0,
+        -_tmp132,
+        0,
+        0,
+        0,
+        _tmp146,
+        0,
+        _tmp135,
+    ]
+
+
 # piezo_amplifier: its tables for the runtime
 _MECHANISM = _Mechanism(
     input_names=_ANGLES, pruned_inputs=PRUNED_INPUTS, parameter_names=tuple(PARAMETERS),
@@ -1150,19 +1883,19 @@ _MECHANISM = _Mechanism(
     loaded_compliance_more=None,
     loaded_linear=None,
     loaded_newton=None,
-    sens_rigid=None,
+    sens_rigid=_sens_rigid,
     sens_chain=None,
     consistency_rigid=None,
     loaded_more=0,
-    sens_rigid_blocks={},
+    sens_rigid_blocks={'A': (0, 3, 3), 'dG_dv': (9, 3, 6), 'dR_dtheta': (27, 4, 3), 'dR_dv': (39, 4, 6)},
     rigid_rule=_Rule(30, 1e-10),  # continuation steps
     polish_rule=_Rule(1),  # after the rigid start
     exact_rule=_Rule(40, 0.0, 1e-08, 1e-12, 0.5, 2e-13),
     continuation_step=0.05, winding=3.141592653589793,
     levels={
-        'paper': _Level(_dev_paper, None, None, 0, None, {}, None),
-        'first_order': _Level(_dev_first_order, _linear, None, 0, None, {}, None),
-        'exact': _Level(_dev_exact, _linear, _newton, 0, None, {}, None),
+        'paper': _Level(_dev_paper, None, None, 0, _sens_paper, {'dD_dtheta': (0, 4, 3), 'dD_dv': (12, 4, 6)}, None),
+        'first_order': _Level(_dev_first_order, _linear, None, 0, _sens_first_order, {'M': (0, 3, 3), 'dE_dtheta': (9, 3, 3), 'dE_dv': (18, 3, 6), 'dD_dtheta': (36, 4, 3), 'dD_ddelta': (48, 4, 3), 'dD_dv': (60, 4, 6)}, None),
+        'exact': _Level(_dev_exact, _linear, _newton, 0, _sens_exact, {'M': (0, 3, 3), 'dE_dtheta': (9, 3, 3), 'dE_dv': (18, 3, 6), 'dD_dtheta': (36, 4, 3), 'dD_ddelta': (48, 4, 3), 'dD_dv': (60, 4, 6)}, None),
     },
 )
 
@@ -1171,3 +1904,17 @@ def evaluate(inputs, level='exact', params=None, links=True):
     """Deviation of the points at `level` for broadcast input arrays (see the module docstring);
     `links=False` leaves out the links' rotations (and any loop solve only they need)."""
     return _actuated(_MECHANISM, ACTUATORS, INPUTS, POINTS, inputs, level, params, links)
+
+
+def sensitivity(inputs, level='exact', params=None):
+    """{P: {p: a}}: d(dx, dy)/dp of every point's deviation by every parameter, a of shape
+    (2, *broadcast_shape); NaN where the configuration cannot be evaluated."""
+    full = sensitivity_full(inputs, level, params)
+    return {n: full["deviation"][n]["params"] for n in POINTS}
+
+
+def sensitivity_full(inputs, level='exact', params=None):
+    """evaluate()'s result with "deviation" and "rigid": {P: {"params": {p: a}, "inputs":
+    {H: a}}}, the derivatives of every point's deviation and rigid position by every
+    parameter and input, each a of shape (2, *broadcast_shape)."""
+    return _actuated_sensitivity(_MECHANISM, ACTUATORS, INPUTS, POINTS, inputs, level, params)

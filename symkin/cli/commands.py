@@ -169,7 +169,6 @@ def _tolerance(args: argparse.Namespace) -> str:
     from ..studies import tolerance, variation
 
     mech = load(args.file)
-    mech.refuse_actuators("symkin tolerance")
     nominal = {p.name: float(p.value) for p in mech.parameters}
     vary = variation.parse_vary(args.vary, mech, nominal, kinds=("pm",))
     grid = variation.parse_grid(args.input, mech)
@@ -184,7 +183,6 @@ def _sweep(args: argparse.Namespace) -> str:
     from ..studies import sweep, variation
 
     mech = load(args.file)
-    mech.refuse_actuators("symkin sweep")
     nominal = {p.name: float(p.value) for p in mech.parameters}
     vary = variation.parse_vary(args.vary, mech, nominal)
     grid = variation.parse_grid(args.input, mech, points=variation.DEFAULT_POINTS)

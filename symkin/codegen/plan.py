@@ -217,7 +217,7 @@ def plan(
         and not (mech.actuators and lv.needs_stiffness)
     )
     held = _fixed_angles(an, fixed or {})
-    sensitivity = sensitivity and not held and not mech.actuators  # none with actuators yet
+    sensitivity = sensitivity and not held
     free = tuple(a for a in kin.inputs if a not in held)
     inputs = Argument("inputs", tuple(kin.theta[a] for a in free))
     params = Argument("params", an.params)

@@ -255,6 +255,17 @@ class Mechanism:
     def actuator(self, name: str) -> Actuator:
         return next(a for a in self.actuators if a.name == name)
 
+    def stroke_spans(self) -> dict[str, float]:
+        """Each stroke actuator's default half range (file unit), where a sweep or a report
+        plots it: 1e-3 of the distance of its point of action from the frame's origin (a
+        piezo stack's stroke is about 1e-3 of its length); --range / --input set another."""
+        values = self.defaults
+        return {
+            a.name: 1e-3 * float(sp.sqrt(a.at[0] ** 2 + a.at[1] ** 2).subs(values))
+            for a in self.actuators
+            if a.drive == "stroke"
+        }
+
     def refuse_actuators(self, what: str) -> None:
         """Bad input (exit 2, naming the first actuator) where `what` does not take actuators
         yet; `symkin eval` at the kinematic levels does (docs/levels.md, "Actuators")."""

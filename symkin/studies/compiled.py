@@ -301,9 +301,6 @@ def compile(
         analysis = Analysis(build(mech), points)
     check_fabricated_pose(analysis)
     mech = analysis.mechanism
-    # its rows, tolerance and sweep take hinge angles (eval --backend numpy and derive --emit
-    # numpy take actuators)
-    mech.refuse_actuators("symkin.compile (tolerance, sweep)")
     held = {k: v for k, v in held.items() if k in analysis.mechanism.inputs}
     p = pipeline.plan_for(
         analysis,
@@ -321,9 +318,9 @@ def compile(
             backend=backend,
             texts=() if backend == "numpy" else pipeline.emit(p, backend, source),
             numpy=pipeline.emit(p, "numpy", source)[0],
-            inputs=p.inputs,
+            inputs=p.drives or p.inputs,
             params=tuple(q.name for q in p.parameters),
-            points=p.points,
+            points=p.shown_points,
             hinges=p.hinges,
             levels=tuple(lv.name for lv in p.levels),
             sensitivity=p.sensitivity,

@@ -294,8 +294,8 @@ def actuator_values(mech: Mechanism, inputs: Mapping[str, object]) -> dict[str, 
 
 def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity: bool) -> None:
     """Refuse (exit 2, naming the actuator) what the actuators do not drive yet: a force at a
-    kinematic level (it needs a physical one), the physical levels, the generated backends and
-    sensitivities."""
+    kinematic level (it needs a physical one), the physical levels but equilibrium, force
+    actuators in the generated backends."""
     if not mech.actuators:
         return
     first = mech.actuators[0]
@@ -327,13 +327,6 @@ def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity:
             entry=entry,
             hint="use --backend sympy" + ("" if forces else " or numpy"),
         )
-    if sensitivity:
-        raise InputError(
-            f"sensitivities with actuators are not available yet (actuator '{first.name}')",
-            file=mech.path,
-            entry="--sensitivity",
-            hint="leave out --sensitivity, or drive the mechanism by an input hinge",
-        )
 
 
 def _actuated(
@@ -353,7 +346,7 @@ def _actuated(
     mech = analysis.mechanism
     check_actuated_level(mech, level, backend, sensitivity)
     if backend != "sympy":  # the generated module solves the strokes itself
-        return _generated(analysis, inputs, level, params, backend)
+        return _generated(analysis, inputs, level, params, backend, sensitivity)
     if level == "equilibrium":
         return equilibrium(analysis, inputs, params)
     given = actuator_values(mech, inputs)
@@ -365,11 +358,15 @@ def _actuated(
         solver, mech, hinges, strokes, level, params, dps, compliant=True, start=rigid
     )
 
-    def run(angles):
+    def run(angles, with_rates=sensitivity):
         state = dict(hinges) | {s: mpmath.nstr(v, dps + 10) for s, v in angles.items()}
-        return _evaluate(analysis, state, level, params, backend, dps, False)
+        return _evaluate(analysis, state, level, params, backend, dps, with_rates)
 
     ev_r, ev_c = run(rigid), run(compliant)
+    rates = None
+    if sensitivity:
+        rest = run(dict.fromkeys(rigid, mpmath.mpf(0)))
+        rates = _stroke_sensitivity(mech, params, ev_r, ev_c, rest)
     hidden = {a.point for a in mech.actuators}
     points = {}
     for name, c in ev_c.points.items():
@@ -395,7 +392,113 @@ def _actuated(
         points=points,
         links=links,
         dyads=ev_r.dyads,
+        sensitivity=rates,
     )
+
+
+def _stroke_sensitivity(
+    mech: Mechanism,
+    params: Mapping[str, object] | None,
+    ev_r: Evaluation,
+    ev_c: Evaluation,
+    rest: Evaluation,
+) -> Sensitivity:
+    """The derivatives with actuators (docs/sensitivity.md, "Actuators"): each surrogate angle
+    v solves g(v, y) = d(y).(X(v, y) - X0(y)) - s = 0 (X the point of action, rigid or rigid +
+    deviation, X0 as fabricated), so dv/dy = -(dg/dv)^-1 dg/dy for every parameter, input
+    hinge and stroke y; the derivatives at fixed kinematic inputs are the evaluations' own, at
+    the rigid pose (ev_r), the compliant one (ev_c) and as fabricated (rest)."""
+    assert ev_r.sensitivity and ev_c.sensitivity and rest.sensitivity
+    acts = mech.actuators
+    names = [p.name for p in mech.parameters]
+    hinges = [h for h in mech.drives if h not in {a.name for a in acts}]
+    surrogates = [a.surrogate for a in acts]
+    k = len(acts)
+
+    def rate(ev: Evaluation, point: str, y: str, compliant: bool) -> np.ndarray:
+        """d(X)/dy at fixed kinematic inputs, X rigid (+ deviation when compliant)."""
+        sens = ev.sensitivity
+        assert sens is not None
+        table = "params" if y in names else "inputs"
+        rig = (sens.rigid if table == "params" else sens.rigid_inputs)[point][y]
+        out = np.array(rig, dtype=float)
+        if compliant:
+            dev = (sens.deviation if table == "params" else sens.deviation_inputs)[point][y]
+            out = out + np.array(dev, dtype=float)
+        return out
+
+    # the lines of action and their rates by the parameters (a direction may read them):
+    # central differences of the direction alone at 30 digits, its defaults re-evaluated
+    values = parameter_values(mech, params)
+
+    def directions(at: Mapping[sp.Symbol, sp.Expr]) -> list[np.ndarray]:
+        out = []
+        for a in acts:
+            d = [sp.N(c.xreplace(at), 30) for c in a.direction]
+            out.append(np.array([float(c) for c in d]))
+        return out
+
+    d0 = directions(values)
+    dd: dict[str, list[np.ndarray]] = {}
+    for par in mech.parameters:
+        if not any(c.free_symbols for a in acts for c in a.direction):
+            dd[par.name] = [np.zeros(2) for _ in acts]
+            continue
+        h = sp.Float(10, 30) ** -12 * max(1, abs(sp.N(values[par.symbol], 30)))
+        shifted = {q.name: values[q.symbol] for q in mech.parameters if q is not par}
+        up = directions(parameter_values(mech, shifted | {par.name: values[par.symbol] + h}))
+        down = directions(parameter_values(mech, shifted | {par.name: values[par.symbol] - h}))
+        dd[par.name] = [(u - w) / (2 * float(h)) for u, w in zip(up, down)]
+    variables = names + hinges + [a.name for a in acts]
+
+    def surrogate_rates(ev: Evaluation, compliant: bool) -> np.ndarray:
+        """dv/dy, k x variables."""
+        jac = np.array(
+            [
+                [d0[i] @ rate(ev, a.point, v, compliant) for v in surrogates]
+                for i, a in enumerate(acts)
+            ]
+        )
+        rhs = np.zeros((k, len(variables)))
+        for i, a in enumerate(acts):
+            pts = ev.points.get(a.point) if a.point in ev.points else None
+            for j, y in enumerate(variables):
+                if y in names:
+                    moved = rate(ev, a.point, y, compliant) - rate(rest, a.point, y, False)
+                    g = d0[i] @ moved
+                    if pts is not None:
+                        offset = np.array(pts.compliant if compliant else pts.rigid, dtype=float)
+                        offset = offset - np.array(rest.points[a.point].rigid, dtype=float)
+                        g += dd[y][i] @ offset
+                elif y in hinges:
+                    g = d0[i] @ rate(ev, a.point, y, compliant)
+                else:
+                    g = -float(y == a.name)
+                rhs[i, j] = -g
+        return np.linalg.solve(jac, rhs)
+
+    rate_r, rate_c = surrogate_rates(ev_r, False), surrogate_rates(ev_c, True)
+    shown = [p for p in ev_c.points if p not in {a.point for a in acts}]
+    dev: dict[str, dict[str, Pair]] = {}
+    rig: dict[str, dict[str, Pair]] = {}
+    for point in shown:
+        dev[point], rig[point] = {}, {}
+        for j, y in enumerate(variables):
+            stroke = j >= len(names) + len(hinges)
+            r = np.zeros(2) if stroke else rate(ev_r, point, y, False)
+            c = np.zeros(2) if stroke else rate(ev_c, point, y, True)
+            for i, v in enumerate(surrogates):
+                r = r + rate(ev_r, point, v, False) * rate_r[i, j]
+                c = c + rate(ev_c, point, v, True) * rate_c[i, j]
+            rig[point][y] = (float(r[0]), float(r[1]))
+            dev[point][y] = (float(c[0] - r[0]), float(c[1] - r[1]))
+
+    def split(table: dict, params_: bool) -> dict:
+        return {
+            p: {y: v for y, v in row.items() if (y in names) == params_} for p, row in table.items()
+        }
+
+    return Sensitivity(split(dev, True), split(dev, False), split(rig, True), split(rig, False))
 
 
 def _stroke_angles(
@@ -571,9 +674,15 @@ def with_model_error(
 
 
 def exact_value(value: object, entry: str, file: str) -> sp.Expr:
-    """An input or parameter value (number or whitelisted expression string) as an exact number."""
+    """An input or parameter value (number, whitelisted expression string, or an exact sympy
+    number symkin made itself) as an exact number."""
     try:
-        expr = expressions.parse(value, {}) if isinstance(value, str) else expressions.number(value)  # type: ignore[arg-type]
+        if isinstance(value, sp.Rational | sp.Float):
+            expr = value
+        elif isinstance(value, str):
+            expr = expressions.parse(value, {})
+        else:
+            expr = expressions.number(value)  # type: ignore[arg-type]
     except expressions.ExpressionError as exc:
         raise InputError(
             str(exc), file=file, entry=entry, hint="give a number or an expression such as 10*deg"
@@ -1548,7 +1657,7 @@ def _generated(
     if status == 0 and sensitivity:
         rows = row.sensitivity_rows(ev, shape, np.array([x]), pfloat, level)
         status = int(rows[0][0])
-        sens = Sensitivity.from_columns(p.points, pnames, names, rows[2][0], rows[3][0])
+        sens = Sensitivity.from_columns(shape.points, pnames, names, rows[2][0], rows[3][0])
     if status:
         _explain(analysis, inputs, level, params, sensitivity)
     points = {

@@ -217,16 +217,18 @@ def parse_grid(
     option: str = "--input",
     points: int = DEFAULT_POINTS,
 ) -> Grid:
-    """H=V, H=LO:HI or H=LO:HI:N options (radians, expressions allowed); an input not given
-    spans DEFAULT_RANGE with `points` values."""
-    inputs = mech.inputs
+    """H=V, H=LO:HI or H=LO:HI:N options (radians, or a stroke actuator's file unit;
+    expressions allowed); an input hinge not given spans DEFAULT_RANGE with `points` values, an
+    actuator ± its default stroke span (Mechanism.stroke_spans)."""
+    inputs = mech.drives
+    strokes = mech.stroke_spans()
     given: dict[str, np.ndarray] = {}
     for item in items or ():
         name, sep, span = item.partition("=")
         name = name.strip()
         if not sep or name not in inputs:
             raise InputError(
-                f"'{item}' is not INPUT=LO:HI:N for an input hinge",
+                f"'{item}' is not INPUT=LO:HI:N for an input hinge or actuator",
                 file=mech.path,
                 entry=option,
                 hint="inputs: " + ", ".join(inputs),
@@ -262,7 +264,7 @@ def parse_grid(
                 entry=f"{option} {name}",
                 hint="give LO < HI",
             )
-        if any(not abs(v) <= math.pi for v in ends):
+        if name not in strokes and any(not abs(v) <= math.pi for v in ends):
             raise InputError(
                 f"'{item}' goes beyond a half turn",
                 file=mech.path,
@@ -271,4 +273,5 @@ def parse_grid(
                 "pose: keep it within -pi..pi",
             )
         given[name] = np.array(ends[:1]) if len(ends) == 1 else np.linspace(ends[0], ends[1], count)
-    return Grid({n: given.get(n, np.linspace(*DEFAULT_RANGE, points)) for n in inputs})
+    default = {n: (-strokes[n], strokes[n]) if n in strokes else DEFAULT_RANGE for n in inputs}
+    return Grid({n: given.get(n, np.linspace(*default[n], points)) for n in inputs})

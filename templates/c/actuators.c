@@ -26,6 +26,51 @@ typedef struct {
     const int *shown;
 } sk_actuators;
 
+/* Gaussian elimination with partial pivoting of the n x n row-major a (destroyed) for the
+   n x m row-major right-hand sides b, which become the solution (the runtime's sk_solve is only
+   there when the mechanism has loops). Returns 0, or 1 when a pivot is zero or not finite. */
+static int sk_act_solve(int n, double *a, int m, double *b)
+{
+    int i, j, c, p;
+    double f;
+    for (c = 0; c < n; ++c) {
+        for (p = c, i = c + 1; i < n; ++i) {
+            p = fabs(a[i * n + c]) > fabs(a[p * n + c]) ? i : p;
+        }
+        if (!(fabs(a[p * n + c]) > 0.0) || !isfinite(a[p * n + c])) {
+            return 1;
+        }
+        for (j = 0; j < n; ++j) {
+            f = a[c * n + j];
+            a[c * n + j] = a[p * n + j];
+            a[p * n + j] = f;
+        }
+        for (j = 0; j < m; ++j) {
+            f = b[c * m + j];
+            b[c * m + j] = b[p * m + j];
+            b[p * m + j] = f;
+        }
+        for (i = c + 1; i < n; ++i) {
+            f = a[i * n + c] / a[c * n + c];
+            for (j = c; j < n; ++j) {
+                a[i * n + j] -= f * a[c * n + j];
+            }
+            for (j = 0; j < m; ++j) {
+                b[i * m + j] -= f * b[c * m + j];
+            }
+        }
+    }
+    for (c = n - 1; c >= 0; --c) {
+        for (j = 0; j < m; ++j) {
+            for (i = c + 1; i < n; ++i) {
+                b[c * m + j] -= a[c * n + i] * b[i * m + j];
+            }
+            b[c * m + j] /= a[c * n + c];
+        }
+    }
+    return 0;
+}
+
 /* Each actuator's stroke residual d.(X - X0) - s at the kinematic inputs x: X the rigid
    (kind 0) or compliant (kind 1) position of its point. Returns sk_evaluate_pose's status. */
 static int sk_stroke_residual(const sk_mechanism *m, const sk_actuators *t, const double *x,
@@ -54,7 +99,7 @@ static int sk_stroke_solve(const sk_mechanism *m, const sk_actuators *t, double 
     double down[SK_NI + 1], move[SK_NI + 1], size, next;
     const double step = 1.4901161193847656e-08; /* sqrt(eps) */
     int where[SK_NI + 1];
-    int i, j, c, p, iter, half, s, n = t->n;
+    int i, j, iter, half, s, n = t->n;
     for (j = 0; j < SK_NI; ++j) {
         if (t->drive_of[j] < 0) {
             where[-1 - t->drive_of[j]] = j;
@@ -87,38 +132,11 @@ static int sk_stroke_solve(const sk_mechanism *m, const sk_actuators *t, double 
                 jac[i * n + j] = (up[i] - down[i]) / (2.0 * step);
             }
         }
-        /* Gaussian elimination with partial pivoting: move = jac^-1 r */
         for (i = 0; i < n; ++i) {
             move[i] = r[i];
         }
-        for (c = 0; c < n; ++c) {
-            for (p = c, i = c + 1; i < n; ++i) {
-                p = fabs(jac[i * n + c]) > fabs(jac[p * n + c]) ? i : p;
-            }
-            if (!(fabs(jac[p * n + c]) > 0.0)) {
-                return 1;
-            }
-            for (j = 0; j < n; ++j) {
-                double swap = jac[c * n + j];
-                jac[c * n + j] = jac[p * n + j];
-                jac[p * n + j] = swap;
-            }
-            next = move[c];
-            move[c] = move[p];
-            move[p] = next;
-            for (i = c + 1; i < n; ++i) {
-                double f = jac[i * n + c] / jac[c * n + c];
-                for (j = c; j < n; ++j) {
-                    jac[i * n + j] -= f * jac[c * n + j];
-                }
-                move[i] -= f * move[c];
-            }
-        }
-        for (c = n - 1; c >= 0; --c) {
-            for (j = c + 1; j < n; ++j) {
-                move[c] -= jac[c * n + j] * move[j];
-            }
-            move[c] /= jac[c * n + c];
+        if (sk_act_solve(n, jac, 1, move) != 0) {
+            return 1;
         }
         for (half = 0; half < 40; ++half) {
             for (i = 0; i < SK_NI; ++i) {
@@ -151,21 +169,15 @@ static int sk_stroke_solve(const sk_mechanism *m, const sk_actuators *t, double 
     return 1;
 }
 
-/* <name>_evaluate_pose with actuators: the public inputs (input hinges, then strokes), the
-   reported points only; the rigid linkage at the surrogates' rigid angles, the compliant
-   mechanism at their compliant ones, the deviation the rigid motion between the two plus the
-   level's deviation at the compliant angles (docs/levels.md, "Actuators"). */
-static int sk_actuated_pose(const sk_mechanism *m, const sk_actuators *t, const double *drives,
-                            const double *params, int level, double *out, double *angles,
-                            double *links)
+/* The kinematic inputs at which the rigid linkage (xr) and the compliant mechanism at `level`
+   (xc) meet the strokes among the public inputs `drives` (docs/levels.md, "Actuators"); `rest`
+   (6 SK_NP) the points as fabricated. Returns 0, or the status of what failed. */
+static int sk_stroke_poses(const sk_mechanism *m, const sk_actuators *t, const double *drives,
+                           const double *params, int level, double *xr, double *xc,
+                           double *rest)
 {
-    double rest[6 * SK_NP], xr[SK_NI + 1], xc[SK_NI + 1], zero[SK_NI + 1];
-    double pr[6 * SK_NP], pc[6 * SK_NP], ar[2 * SK_M], ac[2 * SK_M];
-    double lr[3 * SK_NL + 1], lc[3 * SK_NL + 1], scale = 1e-300, tol;
+    double zero[SK_NI + 1], scale = 1e-300, tol;
     int i, j, s;
-    if (drives == NULL || out == NULL) {
-        return 3;
-    }
     for (j = 0; j < SK_NI; ++j) {
         zero[j] = 0.0;
         xr[j] = t->drive_of[j] >= 0 ? drives[t->drive_of[j]] : 0.0;
@@ -181,7 +193,25 @@ static int sk_actuated_pose(const sk_mechanism *m, const sk_actuators *t, const 
     for (j = 0; j < SK_NI; ++j) {
         xc[j] = xr[j];
     }
-    s = s != 0 ? s : sk_stroke_solve(m, t, xc, params, level, 1, rest, drives, tol);
+    return s != 0 ? s : sk_stroke_solve(m, t, xc, params, level, 1, rest, drives, tol);
+}
+
+/* <name>_evaluate_pose with actuators: the public inputs (input hinges, then strokes), the
+   reported points only; the rigid linkage at the surrogates' rigid angles, the compliant
+   mechanism at their compliant ones, the deviation the rigid motion between the two plus the
+   level's deviation at the compliant angles (docs/levels.md, "Actuators"). */
+static int sk_actuated_pose(const sk_mechanism *m, const sk_actuators *t, const double *drives,
+                            const double *params, int level, double *out, double *angles,
+                            double *links)
+{
+    double rest[6 * SK_NP], xr[SK_NI + 1], xc[SK_NI + 1];
+    double pr[6 * SK_NP], pc[6 * SK_NP], ar[2 * SK_M], ac[2 * SK_M];
+    double lr[3 * SK_NL + 1], lc[3 * SK_NL + 1];
+    int i, j, s;
+    if (drives == NULL || out == NULL) {
+        return 3;
+    }
+    s = sk_stroke_poses(m, t, drives, params, level, xr, xc, rest);
     s = s != 0 ? s : sk_evaluate_pose(m, xr, params, level, pr, ar, links == NULL ? NULL : lr);
     s = s != 0 ? s : sk_evaluate_pose(m, xc, params, level, pc, ac, links == NULL ? NULL : lc);
     if (s != 0) {
@@ -248,3 +278,165 @@ static int sk_actuated_grid(const sk_mechanism *m, const sk_actuators *t, int n_
     }
     return failed;
 }
+#if defined(SK_SENSITIVITY)
+
+/* The surrogates' rates dv/dy (t->n x SK_NV, row-major) at one pose, from that pose's
+   sk_sensitivity_full (dev NULL: the rigid linkage, else the compliant mechanism, whose point
+   of action is rigid + deviation) and the points' rigid rates as fabricated (rest): the
+   implicit-function theorem on g(v, y) = d.(X(v, y) - X0(y)) - s = 0, dv/dy = -(dg/dv)^-1 dg/dy,
+   y the parameters, then the public inputs (input hinges, strokes). Returns 0 or 1 (singular). */
+static int sk_stroke_rates(const sk_actuators *t, const int *where, const double *rig,
+                           const double *dev, const double *rest, double *rate)
+{
+    double jac[(SK_NI + 1) * (SK_NI + 1)];
+    int a, b, j, y, n = t->n;
+    for (a = 0; a < n; ++a) {
+        const double *d = t->direction + 2 * a;
+        const size_t at = (size_t)t->point[a] * SK_NV;
+        for (b = 0; b < n; ++b) {
+            const size_t v = (at + SK_NPAR + where[b]) * 2;
+            jac[a * n + b] = d[0] * (rig[v] + (dev ? dev[v] : 0.0))
+                             + d[1] * (rig[v + 1] + (dev ? dev[v + 1] : 0.0));
+        }
+        for (y = 0; y < SK_NV; ++y) {
+            double g = 0.0;
+            int k = y - SK_NPAR;
+            if (k < 0 || t->drive_of[k] >= 0) {
+                /* a parameter or input hinge k: its kinematic input is the one it drives */
+                int x = y;
+                if (k >= 0) {
+                    for (j = 0; j < SK_NI; ++j) {
+                        x = t->drive_of[j] == k ? SK_NPAR + j : x;
+                    }
+                }
+                g = d[0] * (rig[(at + x) * 2] + (dev ? dev[(at + x) * 2] : 0.0))
+                    + d[1] * (rig[(at + x) * 2 + 1] + (dev ? dev[(at + x) * 2 + 1] : 0.0));
+                if (k < 0) { /* the point of action as fabricated moves with the parameters */
+                    g -= d[0] * rest[(at + y) * 2] + d[1] * rest[(at + y) * 2 + 1];
+                }
+            }
+            rate[a * SK_NV + y] = -g;
+        }
+    }
+    for (a = 0; a < n; ++a) { /* the strokes: dg_a/ds_b = -1 for a = b */
+        rate[a * SK_NV + SK_NPAR + t->stroke[a]] = 1.0;
+    }
+    return sk_act_solve(n, jac, SK_NV, rate);
+}
+
+/* <name>_sensitivity_full with actuators: the shown points' values and the derivatives of their
+   deviation and rigid position by the parameters and the public inputs (docs/sensitivity.md,
+   "Actuators"), from sk_sensitivity_full at the rigid and the compliant pose. */
+static int sk_actuated_sensitivity(const sk_mechanism *m, const sk_actuators *t,
+                                   const double *drives, const double *params, int level,
+                                   double *values, double *deviation, double *rigid)
+{
+    enum { NS = 2 * SK_NP * SK_NV + 1 };
+    double rest[6 * SK_NP], xr[SK_NI + 1], xc[SK_NI + 1], zero[SK_NI + 1];
+    double pr[6 * SK_NP], pc[6 * SK_NP], dr[NS], rr[NS], dc[NS], rc[NS], r0[NS], d0[NS];
+    double rate_r[(SK_NI + 1) * SK_NV], rate_c[(SK_NI + 1) * SK_NV];
+    int where[SK_NI + 1], direct[SK_NV];
+    int i, j, c, y, s;
+    if (drives == NULL || deviation == NULL) {
+        return 3;
+    }
+    for (j = 0; j < SK_NI; ++j) {
+        zero[j] = 0.0;
+        if (t->drive_of[j] < 0) {
+            where[-1 - t->drive_of[j]] = j;
+        }
+    }
+    /* the kinematic variable each public one moves directly (-1: a stroke moves none) */
+    for (y = 0; y < SK_NV; ++y) {
+        direct[y] = y < SK_NPAR ? y : -1;
+    }
+    for (j = 0; j < SK_NI; ++j) {
+        if (t->drive_of[j] >= 0) {
+            direct[SK_NPAR + t->drive_of[j]] = SK_NPAR + j;
+        }
+    }
+    s = sk_stroke_poses(m, t, drives, params, level, xr, xc, rest);
+    s = s != 0 ? s : sk_sensitivity_full(m, xr, params, level, pr, dr, rr);
+    s = s != 0 ? s : sk_sensitivity_full(m, xc, params, level, pc, dc, rc);
+    s = s != 0 ? s : sk_sensitivity_full(m, zero, params, level, NULL, d0, r0);
+    s = s != 0 ? s : sk_stroke_rates(t, where, rr, NULL, r0, rate_r);
+    s = s != 0 ? s : sk_stroke_rates(t, where, rc, dc, r0, rate_c);
+    if (s != 0) {
+        sk_nan(values, 6 * t->n_shown);
+        sk_nan(deviation, 2 * t->n_shown * SK_NV);
+        sk_nan(rigid, 2 * t->n_shown * SK_NV);
+        return s;
+    }
+    for (i = 0; i < t->n_shown; ++i) {
+        const size_t at = (size_t)t->shown[i] * SK_NV;
+        for (c = 0; c < 2; ++c) {
+            if (values != NULL) {
+                values[6 * i + c] = pr[6 * t->shown[i] + c];
+                values[6 * i + 2 + c] = pc[6 * t->shown[i] + 2 + c];
+                values[6 * i + 4 + c] = pc[6 * t->shown[i] + c] - pr[6 * t->shown[i] + c]
+                                        + pc[6 * t->shown[i] + 4 + c];
+            }
+            for (y = 0; y < SK_NV; ++y) {
+                double r = 0.0, k = 0.0;
+                if (direct[y] >= 0) {
+                    r = rr[(at + direct[y]) * 2 + c];
+                    k = rc[(at + direct[y]) * 2 + c] + dc[(at + direct[y]) * 2 + c];
+                }
+                for (j = 0; j < t->n; ++j) {
+                    const size_t v = (at + SK_NPAR + where[j]) * 2 + c;
+                    r += rr[v] * rate_r[j * SK_NV + y];
+                    k += (rc[v] + dc[v]) * rate_c[j * SK_NV + y];
+                }
+                deviation[(i * SK_NV + y) * 2 + c] = k - r;
+                if (rigid != NULL) {
+                    rigid[(i * SK_NV + y) * 2 + c] = r;
+                }
+            }
+        }
+    }
+    return 0;
+}
+
+/* <name>_sensitivity with actuators: the parameters' columns of the deviation's derivatives. */
+static int sk_actuated_sensitivity_params(const sk_mechanism *m, const sk_actuators *t,
+                                          const double *drives, const double *params, int level,
+                                          double *out)
+{
+    double full[2 * SK_NP * SK_NV + 1];
+    int p, v, status;
+    if (out == NULL) {
+        return 3;
+    }
+    status = sk_actuated_sensitivity(m, t, drives, params, level, NULL, full, NULL);
+    for (p = 0; p < t->n_shown; ++p) {
+        for (v = 0; v < SK_NPAR; ++v) {
+            out[(p * SK_NPAR + v) * 2] = full[(p * SK_NV + v) * 2];
+            out[(p * SK_NPAR + v) * 2 + 1] = full[(p * SK_NV + v) * 2 + 1];
+        }
+    }
+    return status;
+}
+
+/* <name>_sensitivity_batch with actuators: n rows; the number of rows that failed. */
+static int sk_actuated_sensitivity_rows(const sk_mechanism *m, const sk_actuators *t, int n,
+                                        const double *drives, const double *params, int level,
+                                        double *values, double *deviation, double *rigid,
+                                        int *status)
+{
+    int j, s, failed = 0;
+    (void)sk_sensitivity_rows; /* the runtime's, for input angles: the public one is this */
+    (void)sk_sensitivity_params;
+    for (j = 0; j < n; ++j) {
+        s = drives == NULL || deviation == NULL ? 3 : sk_actuated_sensitivity(
+            m, t, drives + (size_t)j * SK_NI, params, level,
+            values == NULL ? NULL : values + (size_t)j * 6 * t->n_shown,
+            deviation + (size_t)j * 2 * t->n_shown * SK_NV,
+            rigid == NULL ? NULL : rigid + (size_t)j * 2 * t->n_shown * SK_NV);
+        failed += s != 0;
+        if (status != NULL) {
+            status[j] = s;
+        }
+    }
+    return failed;
+}
+#endif

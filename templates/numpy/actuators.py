@@ -4,7 +4,7 @@ Only those modules hold it (templates/numpy/module.py.j2), after the runtime.
 """
 
 import numpy
-from runtime import _evaluate  # the module holds both: templates/numpy/runtime.py's
+from runtime import _evaluate, _sensitivity_full, _solve  # the module holds both: runtime.py
 
 # ---- symkin runtime: every generated module holds what follows ----
 
@@ -12,15 +12,13 @@ from runtime import _evaluate  # the module holds both: templates/numpy/runtime.
 # angles, twice (the rigid linkage and the compliant mechanism), then one evaluate at each.
 
 
-def _actuated(mech, actuators, drives, shown, inputs, level, params, links):
-    """The module's evaluate() for a mechanism driven by stroke actuators (docs/levels.md,
-    "Actuators"): each actuator's surrogate hinge takes the angle at which the rigid point of
-    action has moved by the stroke along its line, and separately the angle at which the
-    compliant point has (Newton's method, its Jacobian by central differences); the deviation
-    is compliant - rigid, each at its own angles: the rigid motion between them plus the
-    level's deviation at the compliant ones."""
-    if level not in mech.levels or level not in ("paper", "first_order", "exact"):
-        kinematic = tuple(n for n in mech.levels if n in ("paper", "first_order", "exact"))
+def _stroke_poses(mech, actuators, drives, inputs, level, params):
+    """The kinematic inputs at which the rigid linkage and the compliant mechanism meet the
+    strokes (docs/levels.md, "Actuators"): (rigid, compliant, ok), each a dict of the input
+    hinges and the surrogate hinges' angles. Newton's method on the strokes elementwise over the
+    input arrays, its Jacobian by central differences."""
+    kinematic = tuple(n for n in mech.levels if n in ("paper", "first_order", "exact"))
+    if level not in kinematic:
         raise ValueError(f"with actuators, level must be one of {kinematic}, got {level!r}")
     if set(inputs) != set(drives):
         raise ValueError(f"inputs must be exactly {drives}, got {tuple(sorted(inputs))}")
@@ -31,7 +29,9 @@ def _actuated(mech, actuators, drives, shown, inputs, level, params, links):
     strokes = [given[n] for n in names]
     surrogates = [a[1] for a in actuators]
     zero = numpy.zeros_like(arrays[0]) if arrays else mech.dtype(0)
-    rest = _evaluate(mech, dict.fromkeys(mech.input_names, zero), "paper", params, False)["points"]
+    # the rigid positions: at the cheapest level the module holds (every level gives them)
+    cheap = "paper" if "paper" in mech.levels else level
+    rest = _evaluate(mech, dict.fromkeys(mech.input_names, zero), cheap, params, False)["points"]
     at = [rest[a[2]]["rigid"] for a in actuators]
     eps = numpy.finfo(mech.dtype).eps
     scale = max([float(numpy.nanmax(numpy.abs(x))) for x in at] + [1e-300])
@@ -67,11 +67,26 @@ def _actuated(mech, actuators, drives, shown, inputs, level, params, links):
         return theta, numpy.all([numpy.abs(x) <= tol for x in r], axis=0)
 
     start = [zero + numpy.asarray(s) * 0 for s in strokes]
-    rigid, ok_r = solve(start, "paper", "rigid")
+    rigid, ok_r = solve(start, cheap, "rigid")
     compliant, ok_c = solve(rigid, level, "compliant")
-    ev_r = _evaluate(mech, hinges | dict(zip(surrogates, rigid)), level, params, links)
-    ev_c = _evaluate(mech, hinges | dict(zip(surrogates, compliant)), level, params, links)
-    ok = ev_r["ok"] & ev_c["ok"] & ok_r & ok_c
+    return (
+        hinges | dict(zip(surrogates, rigid)),
+        hinges | dict(zip(surrogates, compliant)),
+        ok_r & ok_c,
+    )
+
+
+def _actuated(mech, actuators, drives, shown, inputs, level, params, links):
+    """The module's evaluate() for a mechanism driven by stroke actuators (docs/levels.md,
+    "Actuators"): each actuator's surrogate hinge takes the angle at which the rigid point of
+    action has moved by the stroke along its line, and separately the angle at which the
+    compliant point has (Newton's method, its Jacobian by central differences); the deviation
+    is compliant - rigid, each at its own angles: the rigid motion between them plus the
+    level's deviation at the compliant ones."""
+    rigid, compliant, ok = _stroke_poses(mech, actuators, drives, inputs, level, params)
+    ev_r = _evaluate(mech, rigid, level, params, links)
+    ev_c = _evaluate(mech, compliant, level, params, links)
+    ok = ev_r["ok"] & ev_c["ok"] & ok
     out = {"points": {}, "ok": ok}
     for n in shown:
         r, c = ev_r["points"][n], ev_c["points"][n]
@@ -93,4 +108,84 @@ def _actuated(mech, actuators, drives, shown, inputs, level, params, links):
     for table in out["points"].values():
         for key, v in table.items():
             table[key] = numpy.where(ok, v, numpy.nan)
+    return out
+
+
+def _actuated_sensitivity(mech, actuators, drives, shown, inputs, level, params):
+    """The module's sensitivity_full() with actuators (docs/sensitivity.md, "Actuators"): the
+    implicit-function theorem on the strokes. Each surrogate angle v solves g(v, y) = d.(X(v, y)
+    - X0(y)) - s = 0, X the point of action (rigid, or rigid + deviation), X0 its as-fabricated
+    place, so dv/dy = -(dg/dv)^-1 dg/dy for every parameter, input hinge and stroke y; the
+    derivatives at fixed kinematic inputs come from sensitivity_full at the two poses."""
+    rigid, compliant, ok = _stroke_poses(mech, actuators, drives, inputs, level, params)
+    names = [a[0] for a in actuators]
+    surrogates = [a[1] for a in actuators]
+    k = len(actuators)
+    at_r = _sensitivity_full(mech, rigid, level, params)
+    at_c = _sensitivity_full(mech, compliant, level, params)
+    zero = dict.fromkeys(mech.input_names, numpy.zeros_like(rigid[surrogates[0]]))
+    rest = _sensitivity_full(mech, zero, level, params)["rigid"]
+    ok = ok & at_r["ok"] & at_c["ok"]
+    params_ = list(mech.parameter_names)
+    hinges = [n for n in drives if n not in names]
+    variables = [("params", q) for q in params_] + [("inputs", h) for h in hinges]
+
+    def part(table, point, kind, name):
+        return numpy.asarray(table[point][kind][name])
+
+    def moved(res, point, kind, name, compliant_):
+        out = part(res["rigid"], point, kind, name)
+        return out + part(res["deviation"], point, kind, name) if compliant_ else out
+
+    def dot(d, v):
+        return d[0] * v[0] + d[1] * v[1]
+
+    def surrogate_rates(res, compliant_):
+        """dv/dy of every surrogate by every variable, then by every stroke: a row-major list."""
+        jac = [
+            dot(d, moved(res, point, "inputs", v, compliant_))
+            for (_, _, point, d) in actuators
+            for v in surrogates
+        ]
+        rhs = []
+        for a, (_, _, point, d) in enumerate(actuators):
+            for kind, y in variables:
+                g = dot(d, moved(res, point, kind, y, compliant_))
+                if kind == "params":  # the as-fabricated point of action moves too
+                    g = g - dot(d, part(rest, point, kind, y))
+                rhs.append(-g)
+            # dg_a/ds_b = -1 when a = b
+            rhs += [numpy.full(ok.shape, float(a == b), dtype=mech.dtype) for b in range(k)]
+        return _solve(jac, rhs, numpy.array(ok), len(variables) + k, mech.dtype)
+
+    with numpy.errstate(all="ignore"):
+        rate_r, good_r = surrogate_rates(at_r, False)
+        rate_c, good_c = surrogate_rates(at_c, True)
+    ok = ok & good_r & good_c
+    m = len(variables) + k
+    out = {"points": {}, "deviation": {}, "rigid": {}}
+    for n in shown:
+        rig, dev = {"params": {}, "inputs": {}}, {"params": {}, "inputs": {}}
+        for j, (kind, y) in enumerate(variables + [("inputs", a) for a in names]):
+            stroke = j >= len(variables)
+            r = 0 if stroke else moved(at_r, n, kind, y, False)
+            c = 0 if stroke else moved(at_c, n, kind, y, True)
+            for i, v in enumerate(surrogates):
+                r = r + moved(at_r, n, "inputs", v, False) * rate_r[i * m + j]
+                c = c + moved(at_c, n, "inputs", v, True) * rate_c[i * m + j]
+            rig[kind][y] = numpy.where(ok, r, numpy.nan)
+            dev[kind][y] = numpy.where(ok, c - r, numpy.nan)
+        out["rigid"][n] = {"params": rig["params"], "inputs": {h: rig["inputs"][h] for h in drives}}
+        out["deviation"][n] = {
+            "params": dev["params"],
+            "inputs": {h: dev["inputs"][h] for h in drives},
+        }
+        r, c = at_r["points"][n], at_c["points"][n]
+        out["points"][n] = {
+            "rigid": numpy.where(ok, r["rigid"], numpy.nan),
+            "compliant": numpy.where(ok, c["compliant"], numpy.nan),
+            "deviation": numpy.where(ok, c["rigid"] - r["rigid"] + c["deviation"], numpy.nan),
+        }
+    out["angles"] = {"rigid": at_r["angles"]["rigid"], "compliant": at_c["angles"]["compliant"]}
+    out["ok"] = ok
     return out

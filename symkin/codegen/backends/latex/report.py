@@ -931,18 +931,6 @@ def sweep_spans(
     return spans
 
 
-def stroke_spans(mech) -> dict[str, float]:
-    """Each stroke actuator's default plotted half range (file unit): 1e-3 of the distance of
-    its point of action from the frame's origin (a piezo stack's stroke is about 1e-3 of its
-    length); derive --range sets another."""
-    values = mech.defaults
-    return {
-        a.name: 1e-3 * float(sp.sqrt(a.at[0] ** 2 + a.at[1] ** 2).subs(values))
-        for a in mech.actuators
-        if a.drive == "stroke"
-    }
-
-
 def reference_points(
     report: Report,
     t: np.ndarray,
@@ -1285,6 +1273,8 @@ def sensitivity_table(
         "rows": rows,
         "single_input": single,
         "inputs": [escape_latex(n) for n in numpy_module.INPUTS],
+        # the actuators' names: their strokes are held, the surrogate angles follow
+        "strokes": [escape_latex(a.name) for a in report.mech.actuators],
     }
 
 
@@ -1389,7 +1379,7 @@ def emit(
     if plan.points and drives:
         if evaluator is None:
             raise ValueError("the deviation plot needs the plan's generated numpy module")
-        strokes = stroke_spans(report.mech)
+        strokes = report.mech.stroke_spans()
         runs, summary = sweep(report, evaluator, sweep_spans(drives, spans, strokes), physics)
         single = len(runs) == 1
         points = list(plan.points)
