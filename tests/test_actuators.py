@@ -25,6 +25,7 @@ import pytest
 
 import symkin
 from symkin.core.errors import InputError
+from symkin.kinematics.variants import Variant
 from symkin.studies import tradeoff
 from tests.reference_solver import Reference
 
@@ -206,20 +207,45 @@ def check_four_bar(ev, rigid: dict, compliant: dict) -> None:
 
 
 def test_what_does_not_take_actuators_yet_is_refused(parallelogram, tmp_path):
-    mech, an = parallelogram
+    _, an = parallelogram
     with pytest.raises(InputError, match="piezo"):
         symkin.evaluate(an, {"piezo": 1e-3}, "loaded")
     with pytest.raises(InputError, match="no generated evaluator"):
         symkin.evaluate(an, {"piezo": 1e-3}, "equilibrium", backend="numpy")
     with pytest.raises(InputError, match="not an input"):
         symkin.evaluate(an, {"F1": 1e-3}, "exact")
-    with pytest.raises(InputError, match=r"tradeoff.*piezo"):
-        tradeoff.run(mech, {"piezo": (0.0, 1e-3)}, n=3, with_c=False)
     force = symkin.loads(
         stroke_driven(PARALLELOGRAM, "F1", PIEZO.replace('"stroke"', '"force"')), "force.toml"
     )
     with pytest.raises(InputError, match=r"force.*physical level"):
         symkin.evaluate(symkin.analyze(force), {"piezo": 1.0}, "exact")
+    with pytest.raises(InputError, match=r"piezo.*force.*kinematic variants"):
+        tradeoff.run(force, {"piezo": (0.0, 1.0)}, n=3, with_c=False)
+
+
+def test_tradeoff_takes_the_strokes(four_bar):
+    """tradeoff over a stroke range: each variant's worst relative error is the one found here
+    from the sympy backend's deviations of that level against the reference level's (the
+    four-bar's plates have their stiffness: `equilibrium`, at the same strokes)."""
+    mech, an = four_bar
+    spans = tradeoff.parse_ranges(None, mech.drives, mech.path, strokes=mech.stroke_spans())
+    assert spans == {"pusher": (-mech.stroke_spans()["pusher"], mech.stroke_spans()["pusher"])}
+    table = tradeoff.run(mech, spans, n=3, variants=[Variant("paper")], with_c=False)
+    (row,) = table.rows
+    assert table.reference == "equilibrium"
+    pairs = []
+    for s in tradeoff.sample(spans, 3):
+        given = {"pusher": repr(s["pusher"])}
+        ref = symkin.evaluate(an, given, table.reference, dps=30).points["C"].deviation
+        got = symkin.evaluate(an, given, "paper", dps=30).points["C"].deviation
+        pairs.append((ref, got))
+    scale = max(math.hypot(*ref) for ref, _ in pairs)
+    # where the reference vanishes (the as-fabricated pose, s = 0) the error is over the scale
+    worst = max(
+        math.dist(got, ref) / (math.hypot(*ref) if math.hypot(*ref) > 1e-12 * scale else scale)
+        for ref, got in pairs
+    )
+    assert row.errors["C"] == pytest.approx(worst, rel=1e-6)
 
 
 def test_cli_check_and_eval(tmp_path):
@@ -454,3 +480,26 @@ def test_direction_over_the_parameters_is_normalised_and_checked(tmp_path):
     )
     assert run.returncode == 2, run.stderr
     assert "[[actuator]] 'piezo'" in run.stderr and "not a finite number" in run.stderr
+
+
+def test_a_chosen_variant_takes_the_strokes(four_bar, tmp_path):
+    """What derive --tolerance writes once the trade chose a variant (here paper/taylor2, its
+    plates' deviation truncated): its numpy module takes the strokes and gives the sympy
+    backend's deviation of the same variant's analysis."""
+    import importlib.util
+
+    from symkin.kinematics.variants import analysis_for
+    from symkin.studies.derive import generate
+
+    mech, _ = four_bar
+    variant = Variant("paper", "taylor2")
+    files = generate(mech, ("numpy",), variant=variant)
+    (name,) = [n for n in files if n.endswith(".py")]
+    (tmp_path / name).write_bytes(files[name])
+    spec = importlib.util.spec_from_file_location("variant", tmp_path / name)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    assert module.INPUTS == ("pusher",)
+    res = module.evaluate({"pusher": 1e-4}, "paper")
+    ref = symkin.evaluate(analysis_for(mech, variant), {"pusher": "1e-4"}, "paper").points["C"]
+    assert list(res["points"]["C"]["deviation"]) == pytest.approx(ref.deviation, rel=1e-10)

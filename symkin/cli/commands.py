@@ -126,7 +126,7 @@ def _tradeoff(args: argparse.Namespace) -> str:
         raise InputError(f"--samples must be at least 3, got {args.samples}", entry="--samples")
     if args.plot:
         output_file(args.plot, "--plot", PLOT_SUFFIXES)
-    spans = tradeoff.parse_ranges(args.range, mech.inputs, mech.path)
+    spans = tradeoff.parse_ranges(args.range, mech.drives, mech.path, strokes=mech.stroke_spans())
 
     def progress(message: str) -> None:
         if not args.quiet:

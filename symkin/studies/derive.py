@@ -118,7 +118,6 @@ def generate_plan(
         for what, unsupported in (
             ("derive --points", points is not None),
             ("derive --fix", bool(fixed)),
-            ("a variant (derive --tolerance)", variant is not None),
         ):
             if unsupported:
                 mech.refuse_actuators(what)
@@ -251,7 +250,7 @@ def derive(
         from . import tradeoff
 
         say = progress or (lambda message: None)
-        spans = tradeoff.parse_ranges(ranges, mech.inputs, mech.path)
+        spans = tradeoff.parse_ranges(ranges, mech.drives, mech.path, strokes=mech.stroke_spans())
         say(f"measuring the variants for tolerance {tolerance:g}")
         table = tradeoff.run(mech, spans, with_c="c" in emit, progress=say)
         row = tradeoff.choose(table, tolerance, points)

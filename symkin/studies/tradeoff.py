@@ -117,16 +117,20 @@ def parse_ranges(
     inputs: Sequence[str],
     file: str,
     default: tuple[float, float] | None = DEFAULT_RANGE,
+    strokes: Mapping[str, float] | None = None,
 ) -> dict[str, tuple[float, float]]:
     """H=LO:HI options (expressions allowed), every other input at `default` (left out when
-    `default` is None)."""
-    ranges = dict.fromkeys(inputs, default)
+    `default` is None), an actuator in `strokes` at ± its entry (Mechanism.stroke_spans)."""
+    half = dict(strokes or {})
+    ranges = {
+        n: (-half[n], half[n]) if n in half and default is not None else default for n in inputs
+    }
     for item in items or ():
         name, sep, span = item.partition("=")
         lo, colon, hi = span.partition(":")
         if not sep or not colon or name.strip() not in ranges:
             raise InputError(
-                f"'{item}' is not INPUT=LO:HI for an input hinge",
+                f"'{item}' is not INPUT=LO:HI for an input hinge or actuator",
                 file=file,
                 entry="--range",
                 hint="inputs: " + ", ".join(inputs),
@@ -188,7 +192,8 @@ def reference(analysis: Analysis, samples: list[dict[str, float]], level: str = 
         except AssemblyError:
             continue
         kept.append(s)
-        devs.append({n: p.deviation for n, p in ev.points.items()})
+        hidden = {a.point for a in analysis.mechanism.actuators}  # the points of action
+        devs.append({n: p.deviation for n, p in ev.points.items() if n not in hidden})
     return kept, devs
 
 
@@ -231,7 +236,7 @@ def measure(
     res = module.evaluate(arrays, variant.level)
     errors = {
         point: worst_errors(res["points"][point]["deviation"], [r[point] for r in ref])[1]
-        for point in p.points
+        for point in p.shown_points
     }
     reps = max(1, TIMING_POINTS // max(1, len(samples)))
     big = {n: np.tile(arrays[n], reps) for n in names}
@@ -285,7 +290,16 @@ def run(
     """The full table for `mech` over `ranges`."""
     from ..graph.structure import build
 
-    mech.refuse_actuators("symkin tradeoff")
+    forces = [a for a in mech.actuators if a.drive == "force"]
+    if forces:
+        raise InputError(
+            f"the actuator '{forces[0].name}' drives by force: the kinematic variants cannot "
+            "take it",
+            file=mech.path,
+            entry=f"[[actuator]] '{forces[0].name}'",
+            hint='make it drive = "stroke" for the trade, or evaluate the force at --level '
+            "equilibrium",
+        )
     say = progress or (lambda message: None)
     faithful = Analysis(build(mech))
     samples = sample(ranges, n)
@@ -308,7 +322,12 @@ def run(
             hint="choose a range inside the assembly range",
         )
     rows = []
-    for v in variants or default_variants(stiffness=level.needs_stiffness):
+    chosen = variants or default_variants(stiffness=level.needs_stiffness)
+    if mech.actuators:
+        # the generated evaluators hold the kinematic levels only with actuators
+        # (symkin.codegen.plan: the same rule)
+        chosen = [v for v in chosen if not levels.get(v.level).needs_stiffness]
+    for v in chosen:
         say(f"variant {v.name}")
         rows.append(measure(mech, v, kept, ref, with_c))
     rows = pareto(rows)
