@@ -15,7 +15,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import weakref
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import mpmath
@@ -838,6 +838,70 @@ def check_fabricated_pose(analysis: Analysis) -> None:
 _EVALUATORS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
+class _ArgumentPrinter(MpmathPrinter):
+    """lambdify's MpmathPrinter that prints each argument symbol by its position (_a0, _a1, ...).
+
+    A parameter may share its name with an internal symbol (a class apart: other assumptions),
+    so arguments are told apart by the symbol, not its name; printing them so costs nothing,
+    where renaming them in the expression first (lambdify's dummify, or an xreplace) re-walks
+    every expression: minutes on a ladder of 20 loops."""
+
+    def __init__(self, names: Mapping[sp.Symbol, str], settings: dict) -> None:
+        super().__init__(settings)
+        self._names = names
+
+    def _print_Symbol(self, expr: sp.Symbol) -> str:
+        name = self._names.get(expr)
+        return name if name is not None else super()._print_Symbol(expr)
+
+
+def mpmath_function(args: Sequence[sp.Symbol], exprs) -> Callable:
+    """`exprs` (an expression or nested lists of them) as a Python function of `args`
+    evaluated with mpmath and symkin's special functions, common subexpressions computed once.
+
+    What sympy.lambdify(args, exprs, modules=[mpmath_namespace(), "mpmath"], cse=True) gives,
+    without its walks of every expression (dummifying, implemented-function lookup, the
+    docstring), which cost more than the printing on large mechanisms."""
+    names = {s: f"_a{k}" for k, s in enumerate(args)}
+    namespace = {**vars(mpmath), **special.mpmath_namespace()}
+    printer = _ArgumentPrinter(
+        names,
+        {
+            "fully_qualified_modules": False,
+            "inline": True,
+            "allow_unknown_functions": True,
+            # sorting the terms of every sum for printing is most of the cost on large mechanisms
+            "order": "none",
+            "user_functions": {k: k for k in special.mpmath_namespace()},
+        },
+    )
+
+    def flat(e) -> list:
+        return [v for x in e for v in flat(x)] if isinstance(e, list | tuple) else [e]
+
+    def nest(e, values):
+        if isinstance(e, list | tuple):
+            return [nest(x, values) for x in e]
+        return next(values)
+
+    leaves = [sp.sympify(e) for e in flat(exprs)]
+    temps, reduced = sp.cse(leaves, symbols=sp.numbered_symbols("_t"), order="none", list=True)
+    body = [f"    {t} = {printer.doprint(v)}" for t, v in temps]
+    shaped = nest(exprs, iter([printer.doprint(v) for v in reduced]))
+
+    def text(e) -> str:
+        return "[" + ", ".join(text(x) for x in e) + "]" if isinstance(e, list) else e
+
+    source = "\n".join(
+        [f"def _f({', '.join(names.values())}):", *body, f"    return {text(shaped)}"]
+    )
+    local: dict = {}
+    # the source is printed from sympy expressions whose every argument is renamed _aK, so no
+    # name from a mechanism file reaches it (lambdify execs its source the same way)
+    exec(compile(source, "<symkin-mpmath>", "exec"), namespace, local)
+    return local["_f"]
+
+
 def _mpmath_evaluator(analysis: Analysis) -> _Mpmath:
     """The mpmath evaluator of `analysis`, kept as long as the analysis (its lambdas are cached)."""
     solver = _EVALUATORS.get(analysis)
@@ -858,31 +922,7 @@ class _Mpmath:
     def _fn(self, key: str, exprs, args) -> object:
         """Lambdified (mpmath) function, cached per key."""
         if key not in self._lambdas:
-            # A parameter may share its name with an internal symbol (a class apart), so the
-            # arguments are renamed _a0, _a1, ... in one pass first. (lambdify's own dummify
-            # re-walks the whole expression per subexpression: minutes on a ladder of 20 loops.)
-            names = {s: sp.Symbol(f"_a{k}") for k, s in enumerate(args)}
-
-            def renamed(e):
-                if isinstance(e, (list, tuple)):
-                    return [renamed(x) for x in e]
-                return sp.sympify(e).xreplace(names)
-
-            namespace = special.mpmath_namespace()
-            # lambdify's own MpmathPrinter settings, plus order="none": sorting the terms of
-            # every sum for printing is most of the cost on large mechanisms.
-            printer = MpmathPrinter(
-                {
-                    "fully_qualified_modules": False,
-                    "inline": True,
-                    "allow_unknown_functions": True,
-                    "order": "none",
-                    "user_functions": {k: k for k in namespace},
-                }
-            )
-            self._lambdas[key] = sp.lambdify(
-                list(names.values()), renamed(exprs), modules=[namespace, "mpmath"], printer=printer
-            )
+            self._lambdas[key] = mpmath_function(args, exprs)
         return self._lambdas[key]
 
     def evaluate(
