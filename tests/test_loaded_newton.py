@@ -132,6 +132,34 @@ def test_against_equilibrium(path, inputs):
     assert _worst(answer, reference) < 1e-3
 
 
+#: (file, inputs): what the file format allows beyond the cases above: an input hinge that is a
+#: loop's chord.
+OWN_CASES = [
+    ("tests/mechanisms/five_bar.toml", {"O1": 0.05, "O2": -0.08}),
+]
+
+
+@pytest.mark.parametrize(
+    ("path", "inputs"),
+    OWN_CASES,
+    ids=[f"{Path(c[0]).stem}-{'-'.join(map(str, c[1].values()))}" for c in OWN_CASES],
+)
+def test_input_chords(path, inputs):
+    """Input chords: within 0.1 % of equilibrium in float64 and in mpmath, the two backends
+    alike."""
+    an = symkin.analyze(symkin.load(ROOT / path))
+    st = an.kin.structure
+    # the file is the case it is meant to be
+    assert any(an.kin.hinges[c].is_input for c in range(st.n + 1, st.m + 1))
+    reference = symkin.evaluate(an, inputs, level="equilibrium")
+    answers = {b: reduced_equilibrium(an, inputs, backend=b) for b in ("numpy", "sympy")}
+    for answer in answers.values():
+        assert not answer.refused, answer.refused
+        assert _worst(answer, reference) < 1e-3
+    for name, d in answers["numpy"].deviations.items():
+        assert math.dist(d, answers["sympy"].deviations[name]) < 1e-9 * math.hypot(*d)
+
+
 def test_sympy_backend_agrees():
     """mpmath and float64 kernels give the same solution; both within 0.1 % of equilibrium."""
     an = symkin.analyze(symkin.load(ROOT / "examples/four_bar.toml"))

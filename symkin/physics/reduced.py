@@ -9,8 +9,10 @@ the chord plate at M's clamp); L the largest distance between hinge centres, l_m
 plate, F = max EI/(l L). Residuals: the `exact` level's loop closure in δ-form, each plate's end
 displacement its circular arc plus the plate relation (symkin.physics.plate_relation) under its
 current end force; the moment balance, at the current pose, of the links beyond every non-input
-tree hinge about M's clamp of its plate; the chord plates' moment relation. The forces in tree
-hinges follow from the loads and the chord forces by statics (pose-independent, linear).
+tree hinge about M's clamp of its plate; the moment relation of every chord plate that is not an
+input (an input chord's μ is its actuator's reaction plus the plate's moment, as an input tree
+hinge has no balance row). The forces in tree hinges follow from the loads and the chord forces
+by statics (pose-independent, linear).
 
 Solve: Newton from x = 0 at load factor 1; where a step would turn a hinge by more than 0.2 rad,
 or the Jacobian's determinant changes sign, continuation along the inputs and loads scaled
@@ -92,9 +94,6 @@ class Reduced:
         self.unknowns = list(kin.unknowns)
         self.chords = list(range(st.n + 1, st.m + 1))
         self.beyond = {a: [i for i in range(1, st.n + 1) if a in self.paths[i]] for a in self.paths}
-        for c in self.chords:
-            if self.hinges[c].is_input:
-                raise NotImplementedError("an input hinge that closes a loop")
         # numbers of every hinge
         self.plate = {}
         centres = {}
@@ -281,7 +280,10 @@ class Reduced:
                     total.append(V.cross(V.sub(xcm, xm), (nx, ny)) + mu)
             rows.append((s["mom"][a] - h.sign * sp.Add(*total)) / unit)
         for c, (_, _, mu) in s["chord"].items():
-            rows.append((mu - s["mom"][c]) / unit)
+            # an input chord's actuator takes up whatever moment the plate does not: μ is its
+            # reaction (plate plus actuator), no relation
+            if not self.hinges[c].is_input:
+                rows.append((mu - s["mom"][c]) / unit)
         return rows
 
     # -- numbers -------------------------------------------------------------------------------
