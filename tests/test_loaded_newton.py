@@ -132,10 +132,14 @@ def test_against_equilibrium(path, inputs):
     assert _worst(answer, reference) < 1e-3
 
 
-#: (file, inputs): what the file format allows beyond the cases above: an input hinge that is a
-#: loop's chord.
+#: (file, inputs): what the file format allows beyond the cases above: rigid pins off the plates'
+#: midpoints (pin = "prbm", three pivots on one four-bar), an input hinge that is a loop's chord
+#: (at the ground, and between two moving links with prbm pins beside it).
 OWN_CASES = [
+    ("tests/mechanisms/prbm_four_bar.toml", {"O1": 0.1}),
+    ("tests/mechanisms/prbm_four_bar.toml", {"O1": -0.15}),
     ("tests/mechanisms/five_bar.toml", {"O1": 0.05, "O2": -0.08}),
+    ("tests/mechanisms/five_bar_coupler_input.toml", {"O1": 0.05, "P": -0.08}),
 ]
 
 
@@ -144,13 +148,15 @@ OWN_CASES = [
     OWN_CASES,
     ids=[f"{Path(c[0]).stem}-{'-'.join(map(str, c[1].values()))}" for c in OWN_CASES],
 )
-def test_input_chords(path, inputs):
-    """Input chords: within 0.1 % of equilibrium in float64 and in mpmath, the two backends
-    alike."""
+def test_prbm_pins_and_input_chords(path, inputs):
+    """Pins at the prbm pivots and input chords: within 0.1 % of equilibrium in float64 and in
+    mpmath, the two backends alike."""
     an = symkin.analyze(symkin.load(ROOT / path))
     st = an.kin.structure
     # the file is the case it is meant to be
-    assert any(an.kin.hinges[c].is_input for c in range(st.n + 1, st.m + 1))
+    assert any(h.midpoint is not None for h in an.kin.hinges.values()) or any(
+        an.kin.hinges[c].is_input for c in range(st.n + 1, st.m + 1)
+    )
     reference = symkin.evaluate(an, inputs, level="equilibrium")
     answers = {b: reduced_equilibrium(an, inputs, backend=b) for b in ("numpy", "sympy")}
     for answer in answers.values():
@@ -158,6 +164,20 @@ def test_input_chords(path, inputs):
         assert _worst(answer, reference) < 1e-3
     for name, d in answers["numpy"].deviations.items():
         assert math.dist(d, answers["sympy"].deviations[name]) < 1e-9 * math.hypot(*d)
+
+
+def test_prbm_pins_matter(tmp_path):
+    """The prbm four-bar's pins off the midpoints move its deviation by far more than the bound
+    above: the same plates against midpoint pins are 10 % or more away from its equilibrium."""
+    path = ROOT / "tests/mechanisms/prbm_four_bar.toml"
+    moved = tmp_path / "prbm_four_bar_midpoint.toml"
+    text = path.read_text()
+    assert 'pin = "prbm"' in text
+    moved.write_text(text.replace('pin = "prbm"', 'pin = "midpoint"'))
+    reference = symkin.evaluate(symkin.analyze(symkin.load(path)), {"O1": 0.1}, level="equilibrium")
+    midpoint = reduced_equilibrium(symkin.analyze(symkin.load(moved)), {"O1": 0.1})
+    assert not midpoint.refused
+    assert _worst(midpoint, reference) > 0.1
 
 
 def test_sympy_backend_agrees():

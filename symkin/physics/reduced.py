@@ -8,11 +8,13 @@ non-input hinge, n_c/F and μ_c/(F L) of every chord c (the force and moment lin
 the chord plate at M's clamp); L the largest distance between hinge centres, l_min the shortest
 plate, F = max EI/(l L). Residuals: the `exact` level's loop closure in δ-form, each plate's end
 displacement its circular arc plus the plate relation (symkin.physics.plate_relation) under its
-current end force; the moment balance, at the current pose, of the links beyond every non-input
-tree hinge about M's clamp of its plate; the moment relation of every chord plate that is not an
-input (an input chord's μ is its actuator's reaction plus the plate's moment, as an input tree
-hinge has no balance row). The forces in tree hinges follow from the loads and the chord forces
-by statics (pose-independent, linear).
+current end force, less the rigid pin's own path (a pin = "prbm" pin off the plate's midpoint
+adds (l - 2d) sin(θ/2) across the arc's chord, d its distance from M's clamp); the moment
+balance, at the current pose, of the links beyond every non-input tree hinge about M's clamp of
+its plate; the moment relation of every chord plate that is not an input (an input chord's μ is
+its actuator's reaction plus the plate's moment, as an input tree hinge has no balance row). The
+forces in tree hinges follow from the loads and the chord forces by statics (pose-independent,
+linear).
 
 Solve: Newton from x = 0 at load factor 1; where a step would turn a hinge by more than 0.2 rad,
 or the Jacobian's determinant changes sign, continuation along the inputs and loads scaled
@@ -99,9 +101,12 @@ class Reduced:
         centres = {}
         for a, h in self.hinges.items():
             centres[a] = tuple(num(v) for v in h.centre)
-            if h.midpoint is not None:
-                raise NotImplementedError("pin = 'prbm' (the pivot off the plate's midpoint)")
             if h.hinge.is_plate:
+                # l - 2d, d the rigid pin's distance from M's clamp: nonzero where pin = "prbm"
+                # puts it off the midpoint, from whose pin the relation's arc is measured
+                offset = sp.S.Zero
+                if h.midpoint is not None:
+                    offset = num(2 * V.dot(V.sub(h.centre, h.midpoint), h.u))
                 s = stiff[h.name]
                 EI, length = num(s.EI), num(h.length)
                 reissner = s.stretches
@@ -111,6 +116,7 @@ class Reduced:
                     "ea": EI / (num(s.EA) * length**2) if reissner else sp.S.Zero,
                     "es": EI / (num(s.kGA) * length**2) if reissner else sp.S.Zero,
                     "alpha": num(h.angle),
+                    "offset": offset,
                 }
         self.centres = centres
         label = {name: i for i, name in enumerate(st.links)}
@@ -192,7 +198,10 @@ class Reduced:
             out[a] = sp.symbols(f"along_{a} across_{a} omega_{a}", real=True)
             along, across, omega = out[a]
             u = tc / 2
-            local = (d["l"] * (u * u * arck(u) + along), d["l"] * across)
+            # M's clamp beyond the rigid pin's path: the arc's chord beyond the midpoint pin's,
+            # the relation's correction, and (pin off the midpoint) the two pins' difference
+            # (l/2 - d)(1 - e^{iθ}), in the mid-frame (0, (l - 2d) sin(θ/2))
+            local = (d["l"] * (u * u * arck(u) + along), d["l"] * across + d["offset"] * sp.sin(u))
             dz[a] = V.rot(frame, local)
             mom[a] = omega * d["EI"] / d["l"]
             pf[a] = (tc, p, f)
