@@ -205,6 +205,38 @@ def test_compressed_plates(tmp_path, monkeypatch):
     assert reduced_equilibrium(beyond, {"F1": 0.05}).refused
 
 
+def test_two_half_plates_near_buckling(tmp_path, monkeypatch):
+    """Plates pressed to 0.654 π²EI/l² (80 % of the mechanism's first buckling factor): one
+    plate relation is refused by its truncation estimate, two chained half plates per plate are
+    within 0.1 % of equilibrium in float64 and in mpmath."""
+    monkeypatch.setattr(equilibrium_physics, "buckling_factor", lambda *args, **kwargs: None)
+    an = symkin.analyze(symkin.load(_loaded_parallelogram(tmp_path, 0.654)))
+    inputs = {"F1": 0.05}
+    assert reduced_equilibrium(an, inputs, segments=1).refused.startswith("truncation")
+    reference = symkin.evaluate(an, inputs, level="equilibrium")
+    answers = {b: reduced_equilibrium(an, inputs, backend=b) for b in ("numpy", "sympy")}
+    for answer in answers.values():
+        assert answer.segments == 2 and not answer.refused, answer.refused
+        assert _worst(answer, reference) < 1e-3
+    for name, d in answers["numpy"].deviations.items():
+        assert math.dist(d, answers["sympy"].deviations[name]) < 1e-9 * math.hypot(*d)
+
+
+@pytest.mark.parametrize(
+    ("path", "inputs"),
+    [CASES[0], OWN_CASES[0], OWN_CASES[3]],
+    ids=["four_bar", "prbm_four_bar", "five_bar_coupler_input"],
+)
+def test_two_half_plates_everywhere(path, inputs):
+    """Two half plates per plate where one would do: the chain's geometry and joint balance
+    agree with equilibrium (3.8e-7, 2.3e-7, 1.5e-6 measured; one plate: 1.5e-6, 9.2e-7, 5.7e-6),
+    pins off the midpoints and an input chord included."""
+    an = symkin.analyze(symkin.load(ROOT / path))
+    answer = reduced_equilibrium(an, inputs, segments=2)
+    assert answer.segments == 2 and not answer.refused, answer.refused
+    assert _worst(answer, symkin.evaluate(an, inputs, level="equilibrium")) < 1e-4
+
+
 # -- the plate relation in generated C ----------------------------------------------------------
 
 #: (θ, p, f, ε_a, ε_s): both sides of the kernels' series threshold |p| = 2, tension and

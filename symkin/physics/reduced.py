@@ -16,6 +16,12 @@ its actuator's reaction plus the plate's moment, as an input tree hinge has no b
 forces in tree hinges follow from the loads and the chord forces by statics (pose-independent,
 linear).
 
+Two segments (`segments=2`, Ma & Chen's chained beam-constraint model with two links): each
+plate is two half plates joined at a section turned by ψ = θ/2 + η, η one more unknown per plate
+(after the chords'), each half with the plate relation under the plate's force, and one more
+residual per plate, the joint's moment balance. The halves see a quarter of the plate's load
+index: where the plate comes near its buckling load, one relation's truncation is too coarse.
+
 Solve: Newton from x = 0 at load factor 1; where a step would turn a hinge by more than 0.2 rad,
 or the Jacobian's determinant changes sign, continuation along the inputs and loads scaled
 together from the as-fabricated pose. Refusal (the answer is not given): a plate's compression
@@ -36,7 +42,7 @@ import sympy as sp
 
 from ..core import vectors as V
 from ..kinematics.positions import Kinematics
-from ..model.special import arck, mpmath_namespace
+from ..model.special import arck, mpmath_namespace, sinr
 from .plate_relation import relation
 from .stiffness import plate_stiffness
 
@@ -51,6 +57,8 @@ P_LIMIT = 0.9
 EST_FACTOR = 3.0
 #: Refuse when the estimated error exceeds this.
 EST_LIMIT = 0.01
+#: How a refusal by the estimate begins (the caller may chain two half plates then).
+TRUNCATION = "truncation estimate"
 
 
 @dataclass
@@ -64,6 +72,7 @@ class Answer:
     estimate: float  # EST_FACTOR e24²
     p_over_pcr: float  # the worst plate's compression over its sway buckling load
     refused: str = ""
+    segments: int = 1  # half plates chained per plate (2: one plate relation was not enough)
     hinge_loads: dict[str, tuple[float, float, float]] = field(default_factory=dict)
 
 
@@ -76,14 +85,20 @@ class Reduced:
         kin: Kinematics,
         values: Mapping[sp.Symbol, sp.Expr],
         modules: list | Callable[[], list] | None = None,
+        segments: int = 1,
     ) -> None:
         """`values`: the file's parameters; `modules`: lambdify's (default mpmath with symkin's
         special functions; the numpy backend's float64 namespace gives float code; a callable is
-        called after each derivation)."""
+        called after each derivation); `segments`: 1, or 2 to chain two half plates per plate
+        (their joint's rotation an unknown, docs/physics.md) where one is not accurate enough."""
+        if segments not in (1, 2):
+            raise ValueError("segments must be 1 or 2")
+        self.segments = segments
         self.kin = kin
         st = kin.structure
         mech = kin.mechanism
-        self.modules = modules or [mpmath_namespace(), "mpmath"]
+        # the namespace is taken after each derivation: the kernels it creates are in it
+        self.modules = modules or (lambda: [mpmath_namespace(), "mpmath"])
         self._values_subs = dict(values)
 
         def num(e) -> sp.Float:
@@ -139,11 +154,19 @@ class Reduced:
         self.lmin = min([float(d["l"]) for d in self.plate.values()], default=self.L)
         self.F = max([float(d["EI"] / (d["l"] * self.L)) for d in self.plate.values()] or [1.0])
         nu = len(self.unknowns)
-        self.size = nu + 3 * len(self.chords)
+        # per plate and segment: (hinge, segment, EI, length, ε_a, ε_s) of the half plates
+        self.segs = [
+            (a, j, d["EI"], d["l"] / segments, d["ea"] * segments**2, d["es"] * segments**2)
+            for a, d in sorted(self.plate.items())
+            for j in range(segments)
+        ]
+        joints = len(self.plate) if segments == 2 else 0
+        self.size = nu + 3 * len(self.chords) + joints
         self.scale = np.concatenate(
             [
                 np.full(nu, self.lmin / self.L),
                 np.tile([self.F, self.F, self.F * self.L], len(self.chords)),
+                np.ones(joints),  # η: the joint's rotation beyond half the plate's, rad
             ]
         )
         self.x = sp.symbols(f"x_0:{self.size}", real=True)
@@ -185,7 +208,8 @@ class Reduced:
             n[a] = (sign[a] * fx, sign[a] * fy)
         for c, (nx, ny, _) in chord.items():
             n[c] = (nx, ny)
-        dz, mom, pf, out = {}, {}, {}, {}
+        dz, mom, pf, out, joint = {}, {}, {}, {}, {}
+        first_eta = nu + 3 * len(self.chords)
         for a, h in self.hinges.items():
             if a not in self.plate:
                 dz[a], mom[a] = V.ZERO, sp.S.Zero
@@ -193,18 +217,26 @@ class Reduced:
             d = self.plate[a]
             tc = self.th[a] + delta[a]
             frame = phi[h.P] + dphi[h.P] + d["alpha"] + tc / 2
-            k = d["l"] ** 2 / d["EI"]
-            p, f = V.rot(-frame, (n[a][0] * k, n[a][1] * k))
-            out[a] = sp.symbols(f"along_{a} across_{a} omega_{a}", real=True)
-            along, across, omega = out[a]
-            u = tc / 2
-            # M's clamp beyond the rigid pin's path: the arc's chord beyond the midpoint pin's,
-            # the relation's correction, and (pin off the midpoint) the two pins' difference
-            # (l/2 - d)(1 - e^{iθ}), in the mid-frame (0, (l - 2d) sin(θ/2))
-            local = (d["l"] * (u * u * arck(u) + along), d["l"] * across + d["offset"] * sp.sin(u))
+            for j in range(self.segments):
+                out[a, j] = sp.symbols(f"along_{a}_{j} across_{a}_{j} omega_{a}_{j}", real=True)
+            if self.segments == 1:
+                k = d["l"] ** 2 / d["EI"]
+                p, f = V.rot(-frame, (n[a][0] * k, n[a][1] * k))
+                along, across, omega = out[a, 0]
+                u = tc / 2
+                # M's clamp beyond the rigid pin's path: the arc's chord beyond the midpoint
+                # pin's, and the relation's correction
+                local = (d["l"] * (u * u * arck(u) + along), d["l"] * across)
+                mom[a] = omega * d["EI"] / d["l"]
+                pf[a, 0] = (tc, p, f)
+            else:
+                local, mom[a], joint[a] = self._chain(
+                    d, tc, X[first_eta + sorted(self.plate).index(a)], frame, n[a], pf, out, a
+                )
+            # a pin off the midpoint (pin = "prbm", d from M's clamp): the two pins' paths
+            # differ by (l/2 - d)(1 - e^{iθ}), in the mid-frame (0, (l - 2d) sin(θ/2))
+            local = (local[0], local[1] + d["offset"] * sp.sin(tc / 2))
             dz[a] = V.rot(frame, local)
-            mom[a] = omega * d["EI"] / d["l"]
-            pf[a] = (tc, p, f)
         return {
             "delta": delta,
             "chord": chord,
@@ -215,7 +247,37 @@ class Reduced:
             "mom": mom,
             "pf": pf,
             "out": out,
+            "joint": joint,
         }
+
+    def _chain(self, d: dict, tc, eta, frame, n, pf: dict, out: dict, a: int):
+        """Two half plates h = l/2 joined at a section turned by ψ = θ/2 + η from P's clamp:
+        M's clamp beyond the midpoint pin's path in the plate's mid-frame (cancellation-free:
+        h (2 sin²(θ/4) - 2 sin²(η/2), sin η) plus each half's own arc and relation), the moment
+        at M's end and the joint's moment balance (half 1's end moment = half 2's plus n's
+        moment about the joint)."""
+        h = d["l"] / 2
+        k = h**2 / d["EI"]
+        psi = tc / 2 + eta
+        # the halves' mid-frames from the plate's: ψ/2 - θ/2 and ψ/2
+        turns = (eta / 2 - tc / 4, tc / 4 + eta / 2)
+        rots = (psi, tc - psi)
+        local = (
+            h * (2 * sp.sin(tc / 4) ** 2 - 2 * sp.sin(eta / 2) ** 2),
+            h * sp.sin(eta),
+        )
+        ends = []
+        for j in range(2):
+            p, f = V.rot(-(frame + turns[j]), (n[0] * k, n[1] * k))
+            pf[a, j] = (rots[j], p, f)
+            along, across, omega = out[a, j]
+            u = rots[j] / 2
+            local = V.add(local, V.rot(turns[j], (h * (u * u * arck(u) + along), h * across)))
+            ends.append(omega * d["EI"] / h)
+        along, across, _ = out[a, 1]
+        u = rots[1] / 2
+        r2 = V.rot(frame + turns[1], (h * (sinr(0)(u) + along), h * across))
+        return local, ends[1], ends[0] - ends[1] - V.cross(r2, n)
 
     def _weights(self, link: int, point) -> dict:
         out, previous = {}, (sp.S.Zero, sp.S.Zero)
@@ -293,6 +355,8 @@ class Reduced:
             # reaction (plate plus actuator), no relation
             if not self.hinges[c].is_input:
                 rows.append((mu - s["mom"][c]) / unit)
+        for a in sorted(s["joint"]):
+            rows.append(s["joint"][a] / unit)
         return rows
 
     # -- numbers -------------------------------------------------------------------------------
@@ -312,9 +376,9 @@ class Reduced:
         if key in self._fns:
             return self._fns[key]
         s = self._s
-        outs = [v for a in sorted(self.plate) for v in s["out"][a]]
+        outs = [v for a, j, *_ in self.segs for v in s["out"][a, j]]
         if key == "plates":
-            ins = sp.Matrix([v for a in sorted(self.plate) for v in s["pf"][a]])
+            ins = sp.Matrix([v for a, j, *_ in self.segs for v in s["pf"][a, j]])
             fn = self._lambdify([list(ins), list(ins.jacobian(self.x))])
         elif key in ("res", "jac"):
             rows = sp.Matrix(self._rows(s))
@@ -349,9 +413,8 @@ class Reduced:
         ins, dins = self._fn("plates")(*args)
         plate = self._fn(f"plate{order}")
         outs, parts = [], []
-        for k, a in enumerate(sorted(self.plate)):
-            d = self.plate[a]
-            v = plate(*(float(u) for u in ins[3 * k : 3 * k + 3]), float(d["ea"]), float(d["es"]))
+        for k, (_, _, _, _, ea, es) in enumerate(self.segs):
+            v = plate(*(float(u) for u in ins[3 * k : 3 * k + 3]), float(ea), float(es))
             outs += [float(u) for u in v[:3]]
             parts.append(np.array(v[3:], dtype=float).reshape(3, 3))
         return args, np.array(ins, dtype=float), np.array(dins, dtype=float), outs, parts
@@ -468,11 +531,10 @@ class Reduced:
         dev = self.deviations(x, theta)
         ins = self._eval(x, theta, 1.0)[1]
         worst_p = 0.0
-        for k, a in enumerate(sorted(self.plate)):
-            d = self.plate[a]
-            p = float(ins[3 * k + 1])
-            g = 1 + float(d["ea"] - d["es"]) * p
-            worst_p = max(worst_p, -g * p / math.pi**2)
+        for k, (_, _, _, _, ea, es) in enumerate(self.segs):
+            p = float(ins[3 * k + 1])  # a half plate's: the plate's over segments²
+            g = 1 + float(ea - es) * p
+            worst_p = max(worst_p, -g * p * self.segments**2 / math.pi**2)
         # truncation estimate: one Newton step of the order-2 equations from the solution
         x2 = x - np.linalg.solve(self.jacobian(x, theta, 1.0), self.residual(x, theta, 1.0, 2))
         dev2 = self.deviations(x2, theta, 2)
@@ -486,5 +548,5 @@ class Reduced:
         if worst_p >= P_LIMIT:
             refused = f"a plate at {worst_p:.0%} of its sway buckling load"
         elif estimate > EST_LIMIT:
-            refused = f"truncation estimate {estimate:.2%}"
-        return Answer(dev, x, total, steps, estimate, worst_p, refused)
+            refused = f"{TRUNCATION} {estimate:.2%}"
+        return Answer(dev, x, total, steps, estimate, worst_p, refused, segments=self.segments)
