@@ -28,6 +28,7 @@ from reference_beams import cantilever
 import symkin
 from symkin.codegen.backends.c.backend import standalone
 from symkin.codegen.plate import SYMBOLS, plate_routine
+from symkin.core.errors import InputError
 from symkin.model import special
 from symkin.physics import equilibrium as equilibrium_physics
 from symkin.physics.plate_relation import relation
@@ -164,6 +165,29 @@ def test_prbm_pins_and_input_chords(path, inputs):
         assert _worst(answer, reference) < 1e-3
     for name, d in answers["numpy"].deviations.items():
         assert math.dist(d, answers["sympy"].deviations[name]) < 1e-9 * math.hypot(*d)
+
+
+def test_open_chain(tmp_path):
+    """Every hinge an input of an open chain (no unknowns: the plates' loads follow from
+    statics), a load at the tip: within 0.1 % of equilibrium in float64 and in mpmath."""
+    path = tmp_path / "serial_pair_loaded.toml"
+    text = (ROOT / "tests/fea/serial_pair.toml").read_text()
+    path.write_text(text + '\n[[load]]\npoint = "T"\nforce = [20.0, -40.0]\nmoment = 0.5\n')
+    an = symkin.analyze(symkin.load(path))
+    inputs = {"S": 0.2, "E": -0.3}
+    reference = symkin.evaluate(an, inputs, level="equilibrium")
+    for backend in ("numpy", "sympy"):
+        answer = reduced_equilibrium(an, inputs, backend=backend)
+        assert answer.x.size == 0 and not answer.refused, answer.refused
+        assert _worst(answer, reference) < 1e-3
+
+
+def test_actuators_refused():
+    """A stroke actuator's force along its line is not an input hinge's torque: refused naming
+    it, not solved as if its surrogate hinge were driven."""
+    an = symkin.analyze(symkin.load(ROOT / "examples/piezo_amplifier.toml"))
+    with pytest.raises(InputError, match="piezo"):
+        reduced_equilibrium(an, {"piezo": 2e-5})
 
 
 def test_prbm_pins_matter(tmp_path):

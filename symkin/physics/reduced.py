@@ -379,13 +379,14 @@ class Reduced:
         outs = [v for a, j, *_ in self.segs for v in s["out"][a, j]]
         if key == "plates":
             ins = sp.Matrix([v for a, j, *_ in self.segs for v in s["pf"][a, j]])
-            fn = self._lambdify([list(ins), list(ins.jacobian(self.x))])
+            fn = self._lambdify([list(ins), list(_jacobian(ins, self.x))])
         elif key in ("res", "jac"):
             rows = sp.Matrix(self._rows(s))
             if key == "res":
                 fn = self._lambdify(list(rows), outs)
             else:
-                fn = self._lambdify([list(rows.jacobian(self.x)), list(rows.jacobian(outs))], outs)
+                parts = [list(_jacobian(rows, self.x)), list(_jacobian(rows, outs))]
+                fn = self._lambdify(parts, outs)
         elif key == "dev":
             exprs = [
                 c
@@ -495,6 +496,9 @@ class Reduced:
         the inputs scaled by s (1: the configuration asked for, 0: as fabricated)."""
         theta = rigid(1.0)
         zero = np.zeros(self.size)
+        if not self.size:
+            # every hinge an input of an open chain: the plates' loads follow from statics
+            return self._answer(zero, theta, 0, 1)
         sign0 = self._sign(zero, theta, 0.0)
         x, total, ok = self.newton(zero, theta, 1.0)
         steps = 1
@@ -528,6 +532,11 @@ class Reduced:
                     ds /= 2
         if not ok:
             return Answer({}, x, total, steps, math.nan, math.nan, "no convergence")
+        return self._answer(x, theta, total, steps)
+
+    def _answer(self, x, theta, total: int, steps: int) -> Answer:
+        """The deviations at the solution x, the worst plate's compression and the truncation
+        estimate, refused where either is too large."""
         dev = self.deviations(x, theta)
         ins = self._eval(x, theta, 1.0)[1]
         worst_p = 0.0
@@ -536,7 +545,9 @@ class Reduced:
             g = 1 + float(ea - es) * p
             worst_p = max(worst_p, -g * p * self.segments**2 / math.pi**2)
         # truncation estimate: one Newton step of the order-2 equations from the solution
-        x2 = x - np.linalg.solve(self.jacobian(x, theta, 1.0), self.residual(x, theta, 1.0, 2))
+        x2 = x
+        if self.size:
+            x2 = x - np.linalg.solve(self.jacobian(x, theta, 1.0), self.residual(x, theta, 1.0, 2))
         dev2 = self.deviations(x2, theta, 2)
         e24 = 0.0
         for name, d4 in dev.items():
@@ -550,3 +561,9 @@ class Reduced:
         elif estimate > EST_LIMIT:
             refused = f"{TRUNCATION} {estimate:.2%}"
         return Answer(dev, x, total, steps, estimate, worst_p, refused, segments=self.segments)
+
+
+def _jacobian(rows: sp.Matrix, by) -> sp.Matrix:
+    """rows' Jacobian by the symbols `by`, empty (len(rows) x 0) when there are none."""
+    by = list(by)
+    return rows.jacobian(by) if by else sp.zeros(len(rows), 0)

@@ -631,7 +631,18 @@ def reduced_equilibrium(
     backend and segments."""
     if backend not in ("numpy", "sympy"):
         raise InputError(f"unknown backend '{backend}'", hint="backends: numpy, sympy")
-    exact_params = parameter_values(analysis.mechanism, params)
+    mech = analysis.mechanism
+    if mech.actuators:
+        # an actuator's force along its line is not an input hinge's torque: not modelled yet
+        first = mech.actuators[0].name
+        raise InputError(
+            f"the reduced equilibrium does not take actuators yet (actuator '{first}'); the "
+            "equilibrium level takes it",
+            file=mech.path,
+            entry=f"[[actuator]] '{first}'",
+            hint="ask for level equilibrium, or drive the mechanism by an input hinge",
+        )
+    exact_params = parameter_values(mech, params)
     solvers = _REDUCED.setdefault(analysis, {})
 
     def solver(count: int) -> reduced.Reduced:
