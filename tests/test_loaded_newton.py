@@ -28,6 +28,7 @@ from reference_beams import cantilever
 import symkin
 from symkin.codegen.backends.c.backend import standalone
 from symkin.codegen.plate import SYMBOLS, plate_routine
+from symkin.core.errors import InputError
 from symkin.model import special
 from symkin.physics import equilibrium as equilibrium_physics
 from symkin.physics.plate_relation import relation
@@ -132,6 +133,77 @@ def test_against_equilibrium(path, inputs):
     assert _worst(answer, reference) < 1e-3
 
 
+#: (file, inputs): what the file format allows beyond the cases above: rigid pins off the plates'
+#: midpoints (pin = "prbm", three pivots on one four-bar), an input hinge that is a loop's chord
+#: (at the ground, and between two moving links with prbm pins beside it).
+OWN_CASES = [
+    ("tests/mechanisms/prbm_four_bar.toml", {"O1": 0.1}),
+    ("tests/mechanisms/prbm_four_bar.toml", {"O1": -0.15}),
+    ("tests/mechanisms/five_bar.toml", {"O1": 0.05, "O2": -0.08}),
+    ("tests/mechanisms/five_bar_coupler_input.toml", {"O1": 0.05, "P": -0.08}),
+]
+
+
+@pytest.mark.parametrize(
+    ("path", "inputs"),
+    OWN_CASES,
+    ids=[f"{Path(c[0]).stem}-{'-'.join(map(str, c[1].values()))}" for c in OWN_CASES],
+)
+def test_prbm_pins_and_input_chords(path, inputs):
+    """Pins at the prbm pivots and input chords: within 0.1 % of equilibrium in float64 and in
+    mpmath, the two backends alike."""
+    an = symkin.analyze(symkin.load(ROOT / path))
+    st = an.kin.structure
+    # the file is the case it is meant to be
+    assert any(h.midpoint is not None for h in an.kin.hinges.values()) or any(
+        an.kin.hinges[c].is_input for c in range(st.n + 1, st.m + 1)
+    )
+    reference = symkin.evaluate(an, inputs, level="equilibrium")
+    answers = {b: reduced_equilibrium(an, inputs, backend=b) for b in ("numpy", "sympy")}
+    for answer in answers.values():
+        assert not answer.refused, answer.refused
+        assert _worst(answer, reference) < 1e-3
+    for name, d in answers["numpy"].deviations.items():
+        assert math.dist(d, answers["sympy"].deviations[name]) < 1e-9 * math.hypot(*d)
+
+
+def test_open_chain(tmp_path):
+    """Every hinge an input of an open chain (no unknowns: the plates' loads follow from
+    statics), a load at the tip: within 0.1 % of equilibrium in float64 and in mpmath."""
+    path = tmp_path / "serial_pair_loaded.toml"
+    text = (ROOT / "tests/fea/serial_pair.toml").read_text()
+    path.write_text(text + '\n[[load]]\npoint = "T"\nforce = [20.0, -40.0]\nmoment = 0.5\n')
+    an = symkin.analyze(symkin.load(path))
+    inputs = {"S": 0.2, "E": -0.3}
+    reference = symkin.evaluate(an, inputs, level="equilibrium")
+    for backend in ("numpy", "sympy"):
+        answer = reduced_equilibrium(an, inputs, backend=backend)
+        assert answer.x.size == 0 and not answer.refused, answer.refused
+        assert _worst(answer, reference) < 1e-3
+
+
+def test_actuators_refused():
+    """A stroke actuator's force along its line is not an input hinge's torque: refused naming
+    it, not solved as if its surrogate hinge were driven."""
+    an = symkin.analyze(symkin.load(ROOT / "examples/piezo_amplifier.toml"))
+    with pytest.raises(InputError, match="piezo"):
+        reduced_equilibrium(an, {"piezo": 2e-5})
+
+
+def test_prbm_pins_matter(tmp_path):
+    """The prbm four-bar's pins off the midpoints move its deviation by far more than the bound
+    above: the same plates against midpoint pins are 10 % or more away from its equilibrium."""
+    path = ROOT / "tests/mechanisms/prbm_four_bar.toml"
+    moved = tmp_path / "prbm_four_bar_midpoint.toml"
+    text = path.read_text()
+    assert 'pin = "prbm"' in text
+    moved.write_text(text.replace('pin = "prbm"', 'pin = "midpoint"'))
+    reference = symkin.evaluate(symkin.analyze(symkin.load(path)), {"O1": 0.1}, level="equilibrium")
+    midpoint = reduced_equilibrium(symkin.analyze(symkin.load(moved)), {"O1": 0.1})
+    assert not midpoint.refused
+    assert _worst(midpoint, reference) > 0.1
+
+
 def test_sympy_backend_agrees():
     """mpmath and float64 kernels give the same solution; both within 0.1 % of equilibrium."""
     an = symkin.analyze(symkin.load(ROOT / "examples/four_bar.toml"))
@@ -155,6 +227,38 @@ def test_compressed_plates(tmp_path, monkeypatch):
     assert _worst(answer, symkin.evaluate(an, {"F1": 0.05}, level="equilibrium")) < 1e-3
     beyond = symkin.analyze(symkin.load(_loaded_parallelogram(tmp_path, 0.93)))
     assert reduced_equilibrium(beyond, {"F1": 0.05}).refused
+
+
+def test_two_half_plates_near_buckling(tmp_path, monkeypatch):
+    """Plates pressed to 0.654 π²EI/l² (80 % of the mechanism's first buckling factor): one
+    plate relation is refused by its truncation estimate, two chained half plates per plate are
+    within 0.1 % of equilibrium in float64 and in mpmath."""
+    monkeypatch.setattr(equilibrium_physics, "buckling_factor", lambda *args, **kwargs: None)
+    an = symkin.analyze(symkin.load(_loaded_parallelogram(tmp_path, 0.654)))
+    inputs = {"F1": 0.05}
+    assert reduced_equilibrium(an, inputs, segments=1).refused.startswith("truncation")
+    reference = symkin.evaluate(an, inputs, level="equilibrium")
+    answers = {b: reduced_equilibrium(an, inputs, backend=b) for b in ("numpy", "sympy")}
+    for answer in answers.values():
+        assert answer.segments == 2 and not answer.refused, answer.refused
+        assert _worst(answer, reference) < 1e-3
+    for name, d in answers["numpy"].deviations.items():
+        assert math.dist(d, answers["sympy"].deviations[name]) < 1e-9 * math.hypot(*d)
+
+
+@pytest.mark.parametrize(
+    ("path", "inputs"),
+    [CASES[0], OWN_CASES[0], OWN_CASES[3]],
+    ids=["four_bar", "prbm_four_bar", "five_bar_coupler_input"],
+)
+def test_two_half_plates_everywhere(path, inputs):
+    """Two half plates per plate where one would do: the chain's geometry and joint balance
+    agree with equilibrium (3.8e-7, 2.3e-7, 1.5e-6 measured; one plate: 1.5e-6, 9.2e-7, 5.7e-6),
+    pins off the midpoints and an input chord included."""
+    an = symkin.analyze(symkin.load(ROOT / path))
+    answer = reduced_equilibrium(an, inputs, segments=2)
+    assert answer.segments == 2 and not answer.refused, answer.refused
+    assert _worst(answer, symkin.evaluate(an, inputs, level="equilibrium")) < 1e-4
 
 
 # -- the plate relation in generated C ----------------------------------------------------------

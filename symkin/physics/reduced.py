@@ -8,9 +8,19 @@ non-input hinge, n_c/F and μ_c/(F L) of every chord c (the force and moment lin
 the chord plate at M's clamp); L the largest distance between hinge centres, l_min the shortest
 plate, F = max EI/(l L). Residuals: the `exact` level's loop closure in δ-form, each plate's end
 displacement its circular arc plus the plate relation (symkin.physics.plate_relation) under its
-current end force; the moment balance, at the current pose, of the links beyond every non-input
-tree hinge about M's clamp of its plate; the chord plates' moment relation. The forces in tree
-hinges follow from the loads and the chord forces by statics (pose-independent, linear).
+current end force, less the rigid pin's own path (a pin = "prbm" pin off the plate's midpoint
+adds (l - 2d) sin(θ/2) across the arc's chord, d its distance from M's clamp); the moment
+balance, at the current pose, of the links beyond every non-input tree hinge about M's clamp of
+its plate; the moment relation of every chord plate that is not an input (an input chord's μ is
+its actuator's reaction plus the plate's moment, as an input tree hinge has no balance row). The
+forces in tree hinges follow from the loads and the chord forces by statics (pose-independent,
+linear).
+
+Two segments (`segments=2`, Ma & Chen's chained beam-constraint model with two links): each
+plate is two half plates joined at a section turned by ψ = θ/2 + η, η one more unknown per plate
+(after the chords'), each half with the plate relation under the plate's force, and one more
+residual per plate, the joint's moment balance. The halves see a quarter of the plate's load
+index: where the plate comes near its buckling load, one relation's truncation is too coarse.
 
 Solve: Newton from x = 0 at load factor 1; where a step would turn a hinge by more than 0.2 rad,
 or the Jacobian's determinant changes sign, continuation along the inputs and loads scaled
@@ -32,7 +42,7 @@ import sympy as sp
 
 from ..core import vectors as V
 from ..kinematics.positions import Kinematics
-from ..model.special import arck, mpmath_namespace
+from ..model.special import arck, mpmath_namespace, sinr
 from .plate_relation import relation
 from .stiffness import plate_stiffness
 
@@ -47,6 +57,8 @@ P_LIMIT = 0.9
 EST_FACTOR = 3.0
 #: Refuse when the estimated error exceeds this.
 EST_LIMIT = 0.01
+#: How a refusal by the estimate begins (the caller may chain two half plates then).
+TRUNCATION = "truncation estimate"
 
 
 @dataclass
@@ -60,6 +72,7 @@ class Answer:
     estimate: float  # EST_FACTOR e24²
     p_over_pcr: float  # the worst plate's compression over its sway buckling load
     refused: str = ""
+    segments: int = 1  # half plates chained per plate (2: one plate relation was not enough)
     hinge_loads: dict[str, tuple[float, float, float]] = field(default_factory=dict)
 
 
@@ -72,14 +85,20 @@ class Reduced:
         kin: Kinematics,
         values: Mapping[sp.Symbol, sp.Expr],
         modules: list | Callable[[], list] | None = None,
+        segments: int = 1,
     ) -> None:
         """`values`: the file's parameters; `modules`: lambdify's (default mpmath with symkin's
         special functions; the numpy backend's float64 namespace gives float code; a callable is
-        called after each derivation)."""
+        called after each derivation); `segments`: 1, or 2 to chain two half plates per plate
+        (their joint's rotation an unknown, docs/physics.md) where one is not accurate enough."""
+        if segments not in (1, 2):
+            raise ValueError("segments must be 1 or 2")
+        self.segments = segments
         self.kin = kin
         st = kin.structure
         mech = kin.mechanism
-        self.modules = modules or [mpmath_namespace(), "mpmath"]
+        # the namespace is taken after each derivation: the kernels it creates are in it
+        self.modules = modules or (lambda: [mpmath_namespace(), "mpmath"])
         self._values_subs = dict(values)
 
         def num(e) -> sp.Float:
@@ -92,17 +111,17 @@ class Reduced:
         self.unknowns = list(kin.unknowns)
         self.chords = list(range(st.n + 1, st.m + 1))
         self.beyond = {a: [i for i in range(1, st.n + 1) if a in self.paths[i]] for a in self.paths}
-        for c in self.chords:
-            if self.hinges[c].is_input:
-                raise NotImplementedError("an input hinge that closes a loop")
         # numbers of every hinge
         self.plate = {}
         centres = {}
         for a, h in self.hinges.items():
             centres[a] = tuple(num(v) for v in h.centre)
-            if h.midpoint is not None:
-                raise NotImplementedError("pin = 'prbm' (the pivot off the plate's midpoint)")
             if h.hinge.is_plate:
+                # l - 2d, d the rigid pin's distance from M's clamp: nonzero where pin = "prbm"
+                # puts it off the midpoint, from whose pin the relation's arc is measured
+                offset = sp.S.Zero
+                if h.midpoint is not None:
+                    offset = num(2 * V.dot(V.sub(h.centre, h.midpoint), h.u))
                 s = stiff[h.name]
                 EI, length = num(s.EI), num(h.length)
                 reissner = s.stretches
@@ -112,6 +131,7 @@ class Reduced:
                     "ea": EI / (num(s.EA) * length**2) if reissner else sp.S.Zero,
                     "es": EI / (num(s.kGA) * length**2) if reissner else sp.S.Zero,
                     "alpha": num(h.angle),
+                    "offset": offset,
                 }
         self.centres = centres
         label = {name: i for i, name in enumerate(st.links)}
@@ -134,11 +154,19 @@ class Reduced:
         self.lmin = min([float(d["l"]) for d in self.plate.values()], default=self.L)
         self.F = max([float(d["EI"] / (d["l"] * self.L)) for d in self.plate.values()] or [1.0])
         nu = len(self.unknowns)
-        self.size = nu + 3 * len(self.chords)
+        # per plate and segment: (hinge, segment, EI, length, ε_a, ε_s) of the half plates
+        self.segs = [
+            (a, j, d["EI"], d["l"] / segments, d["ea"] * segments**2, d["es"] * segments**2)
+            for a, d in sorted(self.plate.items())
+            for j in range(segments)
+        ]
+        joints = len(self.plate) if segments == 2 else 0
+        self.size = nu + 3 * len(self.chords) + joints
         self.scale = np.concatenate(
             [
                 np.full(nu, self.lmin / self.L),
                 np.tile([self.F, self.F, self.F * self.L], len(self.chords)),
+                np.ones(joints),  # η: the joint's rotation beyond half the plate's, rad
             ]
         )
         self.x = sp.symbols(f"x_0:{self.size}", real=True)
@@ -180,7 +208,8 @@ class Reduced:
             n[a] = (sign[a] * fx, sign[a] * fy)
         for c, (nx, ny, _) in chord.items():
             n[c] = (nx, ny)
-        dz, mom, pf, out = {}, {}, {}, {}
+        dz, mom, pf, out, joint = {}, {}, {}, {}, {}
+        first_eta = nu + 3 * len(self.chords)
         for a, h in self.hinges.items():
             if a not in self.plate:
                 dz[a], mom[a] = V.ZERO, sp.S.Zero
@@ -188,15 +217,26 @@ class Reduced:
             d = self.plate[a]
             tc = self.th[a] + delta[a]
             frame = phi[h.P] + dphi[h.P] + d["alpha"] + tc / 2
-            k = d["l"] ** 2 / d["EI"]
-            p, f = V.rot(-frame, (n[a][0] * k, n[a][1] * k))
-            out[a] = sp.symbols(f"along_{a} across_{a} omega_{a}", real=True)
-            along, across, omega = out[a]
-            u = tc / 2
-            local = (d["l"] * (u * u * arck(u) + along), d["l"] * across)
+            for j in range(self.segments):
+                out[a, j] = sp.symbols(f"along_{a}_{j} across_{a}_{j} omega_{a}_{j}", real=True)
+            if self.segments == 1:
+                k = d["l"] ** 2 / d["EI"]
+                p, f = V.rot(-frame, (n[a][0] * k, n[a][1] * k))
+                along, across, omega = out[a, 0]
+                u = tc / 2
+                # M's clamp beyond the rigid pin's path: the arc's chord beyond the midpoint
+                # pin's, and the relation's correction
+                local = (d["l"] * (u * u * arck(u) + along), d["l"] * across)
+                mom[a] = omega * d["EI"] / d["l"]
+                pf[a, 0] = (tc, p, f)
+            else:
+                local, mom[a], joint[a] = self._chain(
+                    d, tc, X[first_eta + sorted(self.plate).index(a)], frame, n[a], pf, out, a
+                )
+            # a pin off the midpoint (pin = "prbm", d from M's clamp): the two pins' paths
+            # differ by (l/2 - d)(1 - e^{iθ}), in the mid-frame (0, (l - 2d) sin(θ/2))
+            local = (local[0], local[1] + d["offset"] * sp.sin(tc / 2))
             dz[a] = V.rot(frame, local)
-            mom[a] = omega * d["EI"] / d["l"]
-            pf[a] = (tc, p, f)
         return {
             "delta": delta,
             "chord": chord,
@@ -207,7 +247,37 @@ class Reduced:
             "mom": mom,
             "pf": pf,
             "out": out,
+            "joint": joint,
         }
+
+    def _chain(self, d: dict, tc, eta, frame, n, pf: dict, out: dict, a: int):
+        """Two half plates h = l/2 joined at a section turned by ψ = θ/2 + η from P's clamp:
+        M's clamp beyond the midpoint pin's path in the plate's mid-frame (cancellation-free:
+        h (2 sin²(θ/4) - 2 sin²(η/2), sin η) plus each half's own arc and relation), the moment
+        at M's end and the joint's moment balance (half 1's end moment = half 2's plus n's
+        moment about the joint)."""
+        h = d["l"] / 2
+        k = h**2 / d["EI"]
+        psi = tc / 2 + eta
+        # the halves' mid-frames from the plate's: ψ/2 - θ/2 and ψ/2
+        turns = (eta / 2 - tc / 4, tc / 4 + eta / 2)
+        rots = (psi, tc - psi)
+        local = (
+            h * (2 * sp.sin(tc / 4) ** 2 - 2 * sp.sin(eta / 2) ** 2),
+            h * sp.sin(eta),
+        )
+        ends = []
+        for j in range(2):
+            p, f = V.rot(-(frame + turns[j]), (n[0] * k, n[1] * k))
+            pf[a, j] = (rots[j], p, f)
+            along, across, omega = out[a, j]
+            u = rots[j] / 2
+            local = V.add(local, V.rot(turns[j], (h * (u * u * arck(u) + along), h * across)))
+            ends.append(omega * d["EI"] / h)
+        along, across, _ = out[a, 1]
+        u = rots[1] / 2
+        r2 = V.rot(frame + turns[1], (h * (sinr(0)(u) + along), h * across))
+        return local, ends[1], ends[0] - ends[1] - V.cross(r2, n)
 
     def _weights(self, link: int, point) -> dict:
         out, previous = {}, (sp.S.Zero, sp.S.Zero)
@@ -281,7 +351,12 @@ class Reduced:
                     total.append(V.cross(V.sub(xcm, xm), (nx, ny)) + mu)
             rows.append((s["mom"][a] - h.sign * sp.Add(*total)) / unit)
         for c, (_, _, mu) in s["chord"].items():
-            rows.append((mu - s["mom"][c]) / unit)
+            # an input chord's actuator takes up whatever moment the plate does not: μ is its
+            # reaction (plate plus actuator), no relation
+            if not self.hinges[c].is_input:
+                rows.append((mu - s["mom"][c]) / unit)
+        for a in sorted(s["joint"]):
+            rows.append(s["joint"][a] / unit)
         return rows
 
     # -- numbers -------------------------------------------------------------------------------
@@ -301,16 +376,17 @@ class Reduced:
         if key in self._fns:
             return self._fns[key]
         s = self._s
-        outs = [v for a in sorted(self.plate) for v in s["out"][a]]
+        outs = [v for a, j, *_ in self.segs for v in s["out"][a, j]]
         if key == "plates":
-            ins = sp.Matrix([v for a in sorted(self.plate) for v in s["pf"][a]])
-            fn = self._lambdify([list(ins), list(ins.jacobian(self.x))])
+            ins = sp.Matrix([v for a, j, *_ in self.segs for v in s["pf"][a, j]])
+            fn = self._lambdify([list(ins), list(_jacobian(ins, self.x))])
         elif key in ("res", "jac"):
             rows = sp.Matrix(self._rows(s))
             if key == "res":
                 fn = self._lambdify(list(rows), outs)
             else:
-                fn = self._lambdify([list(rows.jacobian(self.x)), list(rows.jacobian(outs))], outs)
+                parts = [list(_jacobian(rows, self.x)), list(_jacobian(rows, outs))]
+                fn = self._lambdify(parts, outs)
         elif key == "dev":
             exprs = [
                 c
@@ -338,9 +414,8 @@ class Reduced:
         ins, dins = self._fn("plates")(*args)
         plate = self._fn(f"plate{order}")
         outs, parts = [], []
-        for k, a in enumerate(sorted(self.plate)):
-            d = self.plate[a]
-            v = plate(*(float(u) for u in ins[3 * k : 3 * k + 3]), float(d["ea"]), float(d["es"]))
+        for k, (_, _, _, _, ea, es) in enumerate(self.segs):
+            v = plate(*(float(u) for u in ins[3 * k : 3 * k + 3]), float(ea), float(es))
             outs += [float(u) for u in v[:3]]
             parts.append(np.array(v[3:], dtype=float).reshape(3, 3))
         return args, np.array(ins, dtype=float), np.array(dins, dtype=float), outs, parts
@@ -421,6 +496,9 @@ class Reduced:
         the inputs scaled by s (1: the configuration asked for, 0: as fabricated)."""
         theta = rigid(1.0)
         zero = np.zeros(self.size)
+        if not self.size:
+            # every hinge an input of an open chain: the plates' loads follow from statics
+            return self._answer(zero, theta, 0, 1)
         sign0 = self._sign(zero, theta, 0.0)
         x, total, ok = self.newton(zero, theta, 1.0)
         steps = 1
@@ -454,16 +532,22 @@ class Reduced:
                     ds /= 2
         if not ok:
             return Answer({}, x, total, steps, math.nan, math.nan, "no convergence")
+        return self._answer(x, theta, total, steps)
+
+    def _answer(self, x, theta, total: int, steps: int) -> Answer:
+        """The deviations at the solution x, the worst plate's compression and the truncation
+        estimate, refused where either is too large."""
         dev = self.deviations(x, theta)
         ins = self._eval(x, theta, 1.0)[1]
         worst_p = 0.0
-        for k, a in enumerate(sorted(self.plate)):
-            d = self.plate[a]
-            p = float(ins[3 * k + 1])
-            g = 1 + float(d["ea"] - d["es"]) * p
-            worst_p = max(worst_p, -g * p / math.pi**2)
+        for k, (_, _, _, _, ea, es) in enumerate(self.segs):
+            p = float(ins[3 * k + 1])  # a half plate's: the plate's over segments²
+            g = 1 + float(ea - es) * p
+            worst_p = max(worst_p, -g * p * self.segments**2 / math.pi**2)
         # truncation estimate: one Newton step of the order-2 equations from the solution
-        x2 = x - np.linalg.solve(self.jacobian(x, theta, 1.0), self.residual(x, theta, 1.0, 2))
+        x2 = x
+        if self.size:
+            x2 = x - np.linalg.solve(self.jacobian(x, theta, 1.0), self.residual(x, theta, 1.0, 2))
         dev2 = self.deviations(x2, theta, 2)
         e24 = 0.0
         for name, d4 in dev.items():
@@ -475,5 +559,11 @@ class Reduced:
         if worst_p >= P_LIMIT:
             refused = f"a plate at {worst_p:.0%} of its sway buckling load"
         elif estimate > EST_LIMIT:
-            refused = f"truncation estimate {estimate:.2%}"
-        return Answer(dev, x, total, steps, estimate, worst_p, refused)
+            refused = f"{TRUNCATION} {estimate:.2%}"
+        return Answer(dev, x, total, steps, estimate, worst_p, refused, segments=self.segments)
+
+
+def _jacobian(rows: sp.Matrix, by) -> sp.Matrix:
+    """rows' Jacobian by the symbols `by`, empty (len(rows) x 0) when there are none."""
+    by = list(by)
+    return rows.jacobian(by) if by else sp.zeros(len(rows), 0)

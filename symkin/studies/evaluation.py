@@ -622,23 +622,41 @@ def reduced_equilibrium(
     inputs: Mapping[str, object],
     params: Mapping[str, object] | None = None,
     backend: str = "numpy",
+    segments: int | None = None,
 ) -> reduced.Answer:
     """The reduced equilibrium (symkin.physics.reduced, the Newton level that is to become
     `loaded`) at one configuration: `backend` "numpy" (the numpy backend's float64 kernels) or
-    "sympy" (mpmath). The derivation is kept per analysis, parameter values and backend."""
+    "sympy" (mpmath); `segments` 1 or 2 half plates per plate, by default 1 and 2 where the
+    truncation estimate refuses one. The derivation is kept per analysis, parameter values,
+    backend and segments."""
     if backend not in ("numpy", "sympy"):
         raise InputError(f"unknown backend '{backend}'", hint="backends: numpy, sympy")
-    exact_params = parameter_values(analysis.mechanism, params)
-    key = (tuple(sorted((str(k), str(v)) for k, v in exact_params.items())), backend)
+    mech = analysis.mechanism
+    if mech.actuators:
+        # an actuator's force along its line is not an input hinge's torque: not modelled yet
+        first = mech.actuators[0].name
+        raise InputError(
+            f"the reduced equilibrium does not take actuators yet (actuator '{first}'); the "
+            "equilibrium level takes it",
+            file=mech.path,
+            entry=f"[[actuator]] '{first}'",
+            hint="ask for level equilibrium, or drive the mechanism by an input hinge",
+        )
+    exact_params = parameter_values(mech, params)
     solvers = _REDUCED.setdefault(analysis, {})
-    if key not in solvers:
-        modules = None
-        if backend == "numpy":
 
-            def modules() -> list:
-                return [float64_namespace(), "math"]
+    def solver(count: int) -> reduced.Reduced:
+        key = (tuple(sorted((str(k), str(v)) for k, v in exact_params.items())), backend, count)
+        if key not in solvers:
+            modules = None
+            if backend == "numpy":
 
-        solvers[key] = reduced.Reduced(analysis.kin, exact_params, modules)
+                def modules() -> list:
+                    return [float64_namespace(), "math"]
+
+            solvers[key] = reduced.Reduced(analysis.kin, exact_params, modules, count)
+        return solvers[key]
+
     ev = _mpmath_evaluator(analysis)
 
     def rigid(scale: float) -> dict[int, float]:
@@ -649,7 +667,10 @@ def reduced_equilibrium(
             theta, _ = ev._rigid_angles(pvals, ivals)
         return {a: float(v) for a, v in theta.items()}
 
-    return solvers[key].solve(rigid)
+    answer = solver(segments or 1).solve(rigid)
+    if segments is None and answer.refused.startswith(reduced.TRUNCATION):
+        answer = solver(2).solve(rigid)
+    return answer
 
 
 def with_model_error(
