@@ -171,7 +171,15 @@ def parameter_chain(defaults: Sequence[sp.Expr], symbols: Sequence[sp.Symbol]) -
     """C[j][k] = ∂ defaults[j] / ∂ symbols[k] (k < j; a default reads earlier parameters only):
     how an error added to parameter k moves the parameters defined from it."""
     n = len(symbols)
-    return sp.Matrix(n, n, lambda j, k: sp.diff(defaults[j], symbols[k]) if k < j else 0)
+    out = sp.zeros(n, n)
+    position = {s: k for k, s in enumerate(symbols)}
+    for j, default in enumerate(defaults):
+        # only the parameters the default reads (a file may have a thousand, most of them numbers)
+        for s in sp.sympify(default).free_symbols:
+            k = position.get(s)
+            if k is not None and k < j:
+                out[j, k] = sp.diff(default, s)
+    return out
 
 
 def total(columns: list, chain: Sequence[Sequence[object]]) -> list:

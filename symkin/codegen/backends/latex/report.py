@@ -121,7 +121,11 @@ def gnum(x: float) -> str:
 
 
 def _num(expr: sp.Expr, defaults: dict) -> float:
-    return float(sp.N(sp.sympify(expr).subs(defaults), 30))
+    """`expr` at the parameters' default values (numbers), 30 digits, as a float."""
+    expr = sp.sympify(expr)
+    # only the parameters it reads: subs tries every pair it is given (~1000 in a large file)
+    used = {s: defaults[s] for s in expr.free_symbols if s in defaults}
+    return float(sp.N(expr.subs(used), 30))
 
 
 def _chunks(items: list, size: int) -> list[list]:
