@@ -878,11 +878,12 @@ class _ArgumentPrinter(MpmathPrinter):
 
 def mpmath_function(args: Sequence[sp.Symbol], exprs) -> Callable:
     """`exprs` (an expression or nested lists of them) as a Python function of `args`
-    evaluated with mpmath and symkin's special functions, common subexpressions computed once.
+    evaluated with mpmath and symkin's special functions.
 
-    What sympy.lambdify(args, exprs, modules=[mpmath_namespace(), "mpmath"], cse=True) gives,
-    without its walks of every expression (dummifying, implemented-function lookup, the
-    docstring), which cost more than the printing on large mechanisms."""
+    What sympy.lambdify(args, exprs, modules=[mpmath_namespace(), "mpmath"]) gives, without its
+    walks of every expression (dummifying, implemented-function lookup, the docstring), which
+    cost more than the printing on large mechanisms. No CSE: every row is evaluated as written,
+    so its rounding is what the stopping rule of symkin.core.settings (3b) was measured on."""
     names = {s: f"_a{k}" for k, s in enumerate(args)}
     namespace = {**vars(mpmath), **special.mpmath_namespace()}
     printer = _ArgumentPrinter(
@@ -906,16 +907,12 @@ def mpmath_function(args: Sequence[sp.Symbol], exprs) -> Callable:
         return next(values)
 
     leaves = [sp.sympify(e) for e in flat(exprs)]
-    temps, reduced = sp.cse(leaves, symbols=sp.numbered_symbols("_t"), order="none", list=True)
-    body = [f"    {t} = {printer.doprint(v)}" for t, v in temps]
-    shaped = nest(exprs, iter([printer.doprint(v) for v in reduced]))
+    shaped = nest(exprs, iter([printer.doprint(v) for v in leaves]))
 
     def text(e) -> str:
         return "[" + ", ".join(text(x) for x in e) + "]" if isinstance(e, list) else e
 
-    source = "\n".join(
-        [f"def _f({', '.join(names.values())}):", *body, f"    return {text(shaped)}"]
-    )
+    source = f"def _f({', '.join(names.values())}):\n    return {text(shaped)}"
     local: dict = {}
     # the source is printed from sympy expressions whose every argument is renamed _aK, so no
     # name from a mechanism file reaches it (lambdify execs its source the same way)
