@@ -19,6 +19,8 @@ setup(
             "*/runtime.py",
             "*/actuators.c",
             "*/actuators.py",
+            "*/reduced.c",
+            "*/reduced.py",
         ]
     },
 )

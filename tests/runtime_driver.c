@@ -97,49 +97,32 @@ static void t_links(const double *theta, const double *delta, double *out)
     out[1] = delta[0] + delta[1];
 }
 
-/* statics: Q0 = (theta_1, 1); Q = (mu0_0 + 1, mu0_1); the compliance 1e-3 mu */
-static void t_q0(const double *theta, const double *params, double *out)
+/* the loaded level's driver (templates/c/reduced.c in a generated file), a stand-in:
+   delta = (theta_1 / 50 + p1 / 1000, -3 theta_2 / 100), q = (p0, p1, its deviation
+   (delta_0 + delta_1, 2 delta_0)); refused (status 1) when p1 theta_0 > 1 */
+static int t_loaded_solve(const void *m, const double *inputs, const double *params,
+                          const double *theta, double *delta, double *q)
 {
-    (void)params;
-    out[0] = theta[1];
-    out[1] = 1.0;
+    (void)m;
+    (void)inputs;
+    if (params[1] * theta[0] > 1.0) {
+        return 1;
+    }
+    delta[0] = theta[1] / 50.0 + params[1] / 1000.0;
+    delta[1] = -3.0 * theta[2] / 100.0;
+    q[0] = params[0];
+    q[1] = params[1];
+    q[2] = delta[0] + delta[1];
+    q[3] = 2.0 * delta[0];
+    return 0;
 }
 
-static void t_q(const double *theta, const double *mu0, const double *params, double *out)
+static void t_loaded_dev(const double *theta, const double *delta, const double *q, double *out)
 {
     (void)theta;
-    (void)params;
-    out[0] = mu0[0] + 1.0;
-    out[1] = mu0[1];
-}
-
-static void t_compliance(const double *theta, const double *mu, const double *params,
-                         double *out)
-{
-    (void)theta;
-    (void)params;
-    out[0] = 1e-3 * mu[0];
-    out[1] = 1e-3 * mu[1];
-}
-
-/* the loaded closure, constants q = (p0, p1, c0, c1):
-   (d0 + d0^3 + 0.25 c0 d0^2 - 0.1 theta_1 - 0.01 c0, d0 + d1 - 0.05 theta_2 - c1) */
-static void t_loaded_linear(const double *theta, const double *q, double *out)
-{
-    t_linear(theta, q, out);
-    out[4] = -0.1 * theta[1] - 0.01 * q[2];
-    out[5] = -0.05 * theta[2] - q[3];
-    out[6] = fabs(0.1 * theta[1]) + fabs(0.01 * q[2]);
-    out[7] = fabs(0.05 * theta[2]) + fabs(q[3]);
-}
-
-static void t_loaded_newton(const double *theta, const double *delta, const double *q,
-                            double *out)
-{
-    t_newton(theta, delta, q, out);
-    out[0] += 0.25 * q[2] * delta[0] * delta[0] - 0.01 * q[2];
-    out[1] = delta[0] + delta[1] - 0.05 * theta[2] - q[3];
-    out[2] += 0.5 * q[2] * delta[0];
+    (void)delta;
+    out[0] = q[SK_NPAR];
+    out[1] = q[SK_NPAR + 1];
 }
 
 /* sensitivities by v = (p0, p1, theta_0) */
@@ -222,8 +205,7 @@ static const sk_level t_levels[] = {
     {0, t_dev_paper, NULL, NULL, 0, {t_sens_paper, 0, 0, 0, 0, 0, 0, 4}, NULL},
     {1, t_dev, t_linear, NULL, 0, {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL},
     {2, t_dev, t_linear, t_newton, 0, {t_sens_exact, 1, 0, 4, 8, 14, 18, 22}, NULL},
-    {3, t_dev, t_loaded_linear, t_loaded_newton, 1, {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL},
-    {5, t_dev, t_loaded_linear, t_loaded_newton, 2, {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL}
+    {3, t_loaded_dev, NULL, NULL, 1, {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL}
 };
 
 static sk_mechanism t_mechanism(int closed_form)
@@ -248,12 +230,7 @@ static sk_mechanism t_mechanism(int closed_form)
     m.linear = t_linear;
     m.rigid_points = t_rigid_points;
     m.links = t_links;
-    m.loaded_q0 = t_q0;
-    m.loaded_q = t_q;
-    m.loaded_compliance = t_compliance;
-    m.compliance_at = SK_NPAR;
-    m.loaded_linear = t_loaded_linear;
-    m.loaded_closure = t_loaded_newton;
+    m.loaded_solve = t_loaded_solve;
     m.rigid_rule.iterations = 30;
     m.rigid_rule.tolerance = 1e-10;
     m.polish_rule.iterations = 1;
@@ -264,7 +241,7 @@ static sk_mechanism t_mechanism(int closed_form)
     m.exact_rule.residual = 2e-13;
     m.continuation_step = 0.05;
     m.winding = 3.141592653589793;
-    m.n_levels = 5;
+    m.n_levels = 4;
     m.levels = t_levels;
     m.sens_rigid = t_sens_rigid;
     m.sr_A = 0;

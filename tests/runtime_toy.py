@@ -6,10 +6,9 @@ The toy mechanism: theta_0 the input, theta_1 and theta_2 the unknowns of a clos
     G(theta) = (theta_1 - p0 theta_0, theta_1 + theta_2 - theta_0),  A = [1 0; 1 1],
 a compliant closure E(delta) = (d0 + d0^3 - 0.1 theta_1, d0 + d1 - 0.05 theta_2 - p1), one point
 (cos theta_1, sin theta_2) with deviation delta (paper: (0.1 theta_1, 0.05 theta_2)), one link
-turned by theta_1 + theta_2; at the loaded levels the statics A^T mu0 = (theta_1, 1),
-A^T mu = (mu0_0 + 1, mu0_1) give the constants c = 1e-3 mu of the loaded closure
-(d0 + d0^3 + c0 d0^2 / 4 - 0.1 theta_1 - c0 / 100, d0 + d1 - 0.05 theta_2 - c1); refined, the
-statics again with its Jacobian at its solution.
+turned by theta_1 + theta_2; at the loaded level (3) a stand-in for the reduced equilibrium's
+driver gives delta = (theta_1 / 50 + p1 / 1000, -3 theta_2 / 100) and the deviation
+(delta_0 + delta_1, 2 delta_0), and refuses p1 theta_0 > 1.
 """
 
 from __future__ import annotations
@@ -58,15 +57,6 @@ def _toy(theta0, p0, p1, level: int) -> dict:
     t2 = t0 - t1
     a = mpmath.matrix([[1, 0], [1, 1]])
 
-    def statics(jac):
-        mu0 = mpmath.lu_solve(jac.T, mpmath.matrix([t1, 1]))
-        mu = mpmath.lu_solve(jac.T, mpmath.matrix([mu0[0] + 1, mu0[1]]))
-        return [mpmath.mpf("1e-3") * mu[0], mpmath.mpf("1e-3") * mu[1]]
-
-    def loaded_closure(c):
-        d0 = mpmath.findroot(lambda d: d + d**3 + c[0] * d**2 / 4 - t1 / 10 - c[0] / 100, t1 / 10)
-        return [d0, t2 / 20 + c[1] - d0]
-
     if level == 0:
         dev = [t1 / 10, t2 / 20]
         delta = [0, 0]
@@ -76,13 +66,11 @@ def _toy(theta0, p0, p1, level: int) -> dict:
         d0 = mpmath.findroot(lambda d: d + d**3 - t1 / 10, t1 / 10)
         delta = [d0, t2 / 20 + p1 - d0]
     else:
-        c = statics(a)
-        delta = loaded_closure(c)
-        if level == 5:
-            j = mpmath.matrix([[1 + 3 * delta[0] ** 2 + c[0] * delta[0] / 2, 0], [1, 1]])
-            delta = loaded_closure(statics(j))
-    if level != 0:
+        delta = [t1 / 50 + p1 / 1000, -3 * t2 / 100]
+    if level in (1, 2):
         dev = delta
+    elif level == 3:
+        dev = [delta[0] + delta[1], 2 * delta[0]]
     return {
         "theta": [t0, t1, t2],
         "delta": delta,

@@ -1,190 +1,215 @@
-"""The `loaded` and `loaded_refined` levels in the generated numpy and C evaluators
-(docs/physics.md) against the
-sympy backend's 40-digit evaluation of the same derivation; tests/test_physics_reference.py
-holds that derivation against the independent elastica reference.
+"""The `loaded` level in the generated numpy and C evaluators: the reduced equilibrium
+(docs/physics.md, "The Newton level"; templates/numpy/reduced.py, templates/c/reduced.c)
+against the Python solver symkin.physics.reduced (reduced_equilibrium, float64 kernels) to 1e-9
+and against the `equilibrium` level (mpmath, the geometrically exact beams) within the Python
+solver's own bound, 1e-3 (tests/test_loaded_newton.py).
 
-Cases: the three examples (steel plates), a load on a point with plates narrower than five
-thicknesses (the modulus's other branch), an open chain (no loops: the loads alone bend the
-plates), the first-order variant (beam_column=False), float32, and --param overrides.
+Cases: the four-bar and mechanisms unlike the examples (tests/mechanisms/): a parallelogram, a
+Scott-Russell with its preload, a double parallelogram with a payload, the redundant three-leg
+stage (refused at `loaded` before), the toggle four-bar; the parallelogram pressed to 80 % of its
+first buckling factor (two half plates per plate needed) and past its buckling (refused alike in
+numpy and C); parameter overrides; a batch; a file with actuators (no `loaded`).
 """
 
 from __future__ import annotations
 
-import mechanisms as M
+import math
+from pathlib import Path
+
 import numpy as np
 import pytest
 from conftest import EXAMPLES
-from evaluators import INPUTS, Generated, generated, rel_err
+from evaluators import require_compiler
 
 import symkin
 from symkin.codegen import pipeline
 from symkin.codegen.plan import plan
-from symkin.studies import evaluation
+from symkin.physics import equilibrium as equilibrium_physics
+from symkin.studies.evaluation import reduced_equilibrium
 
-LOADED_FOUR_BAR = (
-    M.without_stiffness(EXAMPLES / "four_bar.toml").replace(
-        'length = "l"\n', 'length = "l"\nE = 70e9\nthickness = "l/8"\nwidth = "l/2"\n'
-    )  # narrower than 5 t: E' = E
-    + '[[load]]\npoint = "C"\nforce = [0.4, -1.5]\nmoment = 0.003\n'
-)
-LOADED_ARM = (
-    M.SERIAL_ARM.replace(
-        'length = "l"\n', 'length = "l"\nE = 210e9\nthickness = "l/10"\nwidth = 4e-3\n'
-    )
-    + '[[load]]\npoint = "T"\nforce = [1.0, -2.0]\n'
-)
+ZOO = Path(__file__).resolve().parent / "mechanisms"
 
-
-def loaded_case(key: str) -> Generated:
-    text = {"loaded_four_bar": LOADED_FOUR_BAR, "loaded_arm": LOADED_ARM}.get(key)
-    return generated(key) if text is None else _cached(key, text)
-
-
-_CASES: dict[str, Generated] = {}
-
-
-def _cached(key: str, text: str) -> Generated:
-    if key not in _CASES:
-        _CASES[key] = Generated(mech=symkin.loads(text, f"{key}.toml"))
-    return _CASES[key]
-
-
+#: (file, inputs): the four-bar and the zoo at their own loads and parameters
 CASES = {
-    "four_bar": INPUTS["four_bar"],
-    "six_bar": INPUTS["six_bar"],
-    "nine_bar": INPUTS["nine_bar"],
-    "loaded_four_bar": {"A0": "-0.15"},
-    "loaded_arm": {"S": "0.3", "E": "-0.2"},
+    "four_bar": (EXAMPLES / "four_bar.toml", {"A0": 0.3}),
+    "parallelogram": (ZOO / "parallelogram.toml", {"F1": 0.05}),
+    "scott_russell": (ZOO / "scott_russell.toml", {"RA0": 0.01}),
+    "double_parallelogram": (ZOO / "double_parallelogram.toml", {"F1": 0.05, "I1": -0.05}),
+    "three_leg_stage": (ZOO / "three_leg_stage.toml", {"F1": 0.05}),
+    "toggle_four_bar": (ZOO / "toggle_four_bar.toml", {"O1": 0.3}),
 }
 
+_BUILT: dict = {}
 
-@pytest.mark.parametrize("level", ["loaded", "loaded_refined"])
+
+def _built(path: Path, backend: str):
+    """(analysis, plan, evaluator) of `path` for `backend`, built once."""
+    key = (str(path), backend)
+    if key not in _BUILT:
+        an = _BUILT.get(str(path)) or symkin.analyze(symkin.load(path))
+        _BUILT[str(path)] = an
+        if backend == "c":
+            require_compiler()
+        p, ev = pipeline.build(an, backend, path.name, sensitivity=False)
+        _BUILT[key] = (an, p, ev)
+    return _BUILT[key]
+
+
+def _pose(path: Path, backend: str, inputs: dict, params: dict | None = None):
+    """(status, {point: deviation}, plan) of the generated evaluator at `loaded`."""
+    _, p, ev = _built(path, backend)
+    row, shape = pipeline.backend(backend), pipeline.Shape.of(p)
+    values = None if params is None else [params.get(n, None) for n in shape.params]
+    if values is not None:
+        defaults = {q.name: q.value for q in p.parameters}
+        values = [defaults[n] if v is None else v for n, v in zip(shape.params, values)]
+    status, out, _, _ = row.pose(ev, shape, [inputs[n] for n in shape.inputs], values, "loaded")
+    return status, {n: tuple(out[6 * i + 4 : 6 * i + 6]) for i, n in enumerate(shape.points)}
+
+
+def _rel(got, want) -> float:
+    return math.dist(got, want) / math.hypot(*want)
+
+
+def _loaded_parallelogram(tmp: Path, fraction: float) -> Path:
+    """The parallelogram with a dead load pressing the stage down, `fraction` times the force
+    that puts each plate at its Euler load π²EI/l² (E' = E/(1 - ν²): a wide plate)."""
+    ei = 210e9 / (1 - 0.3**2) * 10e-3 * (0.15e-3) ** 3 / 12
+    force = 2 * fraction * math.pi**2 * ei / 5e-3**2
+    text = (ZOO / "parallelogram.toml").read_text()
+    text += f'\n[[load]]\nlink = "stage"\nat = ["w/2", "L"]\nforce = [0.0, {-force!r}]\n'
+    path = tmp / f"parallelogram_load_{fraction}.toml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize("backend", ["numpy", "c"])
 @pytest.mark.parametrize("key", sorted(CASES))
-@pytest.mark.parametrize("backend", ["numpy", "c"])
-def test_loaded_matches_the_sympy_backend(key, backend, level):
-    g = loaded_case(key)
-    assert level in [lv.name for lv in g.plan.levels]
-    want = symkin.evaluate(g.analysis, CASES[key], level)
-    got = (g.run_numpy if backend == "numpy" else g.run_c)(CASES[key], level)
+def test_loaded_is_the_reduced_equilibrium(key, backend):
+    """Every point's deviation within 1e-9 of the Python solver's (the same float64 arithmetic
+    in another order)."""
+    path, inputs = CASES[key]
+    an = _built(path, backend)[0]
+    want = reduced_equilibrium(an, inputs, backend="numpy")
+    assert not want.refused, want.refused
+    (
+        status,
+        got,
+    ) = _pose(path, backend, inputs)[:2]
+    assert status == 0
+    assert got.keys() == want.deviations.keys()
     for name, dev in got.items():
-        assert rel_err(dev, want.points[name].deviation) <= 1e-12, name
+        assert _rel(dev, want.deviations[name]) <= 1e-9, name
+
+
+@pytest.mark.parametrize("key", ["four_bar", "three_leg_stage", "scott_russell"])
+def test_loaded_against_equilibrium(key):
+    """C's `loaded` within the Python solver's bound (1e-3) of the `equilibrium` level, and not
+    the old linearised statics' answer: two mechanisms unlike the examples, one redundant."""
+    path, inputs = CASES[key]
+    an = _built(path, "c")[0]
+    reference = symkin.evaluate(an, inputs, level="equilibrium")
+    status, got = _pose(path, "c", inputs)
+    assert status == 0
+    for name, point in reference.points.items():
+        assert _rel(got[name], point.deviation) < 1e-3, name
+
+
+def test_the_redundant_stage_holds_loaded():
+    """The three-leg stage (redundant loops) was refused at `loaded`: its plan holds it now."""
+    an = _built(CASES["three_leg_stage"][0], "numpy")[0]
+    assert an.redundant
+    assert "loaded" in [lv.name for lv in plan(an, sensitivity=False).levels]
+
+
+def test_actuators_stay_refused():
+    an = symkin.analyze(symkin.load(EXAMPLES / "piezo_amplifier.toml"))
+    assert "loaded" not in [lv.name for lv in plan(an, sensitivity=False).levels]
 
 
 @pytest.mark.parametrize("backend", ["numpy", "c"])
-def test_refined_alone_solves_the_loops_it_needs(backend):
-    """The nine-bar's point F is moved by no loop at the kinematic levels, yet loaded_refined
-    needs the loaded closure solved for its statics: a plan with that level alone compiles and
-    agrees with the sympy backend near the toggle position (O = 0.3)."""
-    g = generated("nine_bar")
-    p = plan(g.analysis, levels=["loaded_refined"])
-    assert not p.needs_loops and "loaded_newton" in p.routines
-    inputs = {"O": "0.3", "A": "0", "B": "0", "K": "0"}
-    want = symkin.evaluate(g.analysis, inputs, "loaded_refined").points["F"].deviation
-    got = symkin.compile(g.mech, backend, levels=["loaded_refined"], sensitivity=False).evaluate(
-        {k: np.array([float(v)]) for k, v in inputs.items()}
-    )["points"]["F"]["deviation"][:, 0]
-    assert rel_err([float(v) for v in got], want) <= 1e-12
+def test_parameter_overrides(backend):
+    """The parameters are read at run time: a thinner plate gives the Python solver's answer
+    there (the scales of Newton stay the defaults'), not the defaults'."""
+    path, inputs = CASES["four_bar"]
+    an = _built(path, backend)[0]
+    names = [q.name for q in an.mechanism.parameters]
+    assert "l" in names
+    want = reduced_equilibrium(an, inputs, params={"l": "4e-3"})
+    base = reduced_equilibrium(an, inputs)
+    status, got = _pose(path, backend, inputs, {"l": 4e-3})
+    assert status == 0
+    for name, dev in got.items():
+        assert _rel(dev, want.deviations[name]) <= 1e-9, name
+        assert _rel(dev, base.deviations[name]) > 1e-3, name
 
 
-def test_the_modulus_branch_and_the_load_reach_the_generated_code():
-    """The narrow plates' E' = E and the load on C matter: without them the answer differs."""
-    g = loaded_case("loaded_four_bar")
-    assert g.plan.loaded.passes == 2
-    got = g.run_c(CASES["loaded_four_bar"], "loaded")["C"]
-    wide = symkin.loads(LOADED_FOUR_BAR.replace('width = "l/2"', "width = 5e-3"), "w.toml")
-    unloaded = symkin.loads(LOADED_FOUR_BAR.split("[[load]]")[0], "u.toml")
-    for other in (wide, unloaded):
-        want = symkin.evaluate(symkin.analyze(other), CASES["loaded_four_bar"], "loaded")
-        assert rel_err(got, want.points["C"].deviation) > 1e-3
+def test_numpy_batch_is_elementwise():
+    """A batch (with a configuration beyond pi that is not ok) gives each element's answer."""
+    path, _ = CASES["four_bar"]
+    an, _, module = _built(path, "numpy")
+    values = np.array([0.05, 0.3, -0.2, 4.0])
+    res = module.evaluate({"A0": values}, "loaded")
+    assert res["ok"].tolist() == [True, True, True, False]
+    for k, a in enumerate(values[:3]):
+        want = reduced_equilibrium(an, {"A0": float(a)}).deviations["C"]
+        assert _rel(res["points"]["C"]["deviation"][:, k], want) <= 1e-9
 
 
-@pytest.mark.parametrize("backend", ["numpy", "c"])
-def test_loaded_with_parameter_overrides(backend):
-    g = generated("four_bar")
-    overrides = {"l": "4e-3"}  # thickness l/10 follows; 4 mm plates stay wide (5 mm)
-    want = symkin.evaluate(g.analysis, INPUTS["four_bar"], "loaded", params=overrides)
-    got = (g.run_numpy if backend == "numpy" else g.run_c)(INPUTS["four_bar"], "loaded", overrides)
-    assert rel_err(got["C"], want.points["C"].deviation) <= 1e-12
-
-
-def test_first_order_variant_matches_its_derivation():
-    an = symkin.analyze(symkin.loads(LOADED_FOUR_BAR, "lf.toml"))
-    p, module = pipeline.build(an, "numpy", "test", levels=["loaded"], beam_column=False)
-    assert p.loaded.passes == 1 and "loaded_q0" not in p.routines
-    got = module.evaluate({"A0": -0.15}, "loaded")["points"]["C"]["deviation"]
-    want = evaluation.loaded(an, {"A0": "-0.15"}, beam_column=False).points["C"].deviation
-    assert rel_err([float(v) for v in got], want) <= 1e-12
-
-
-def test_float32_loaded_stays_in_float32():
-    g = generated("four_bar")
-    module = pipeline.evaluator(g.plan, "numpy", "test", "float32")
-    res = module.evaluate({"A0": np.linspace(0.02, 0.3, 15)}, "loaded")
-    dev = res["points"]["C"]["deviation"]
-    assert dev.dtype == np.float32 and res["ok"].all()
-    want = g.numpy.evaluate({"A0": np.linspace(0.02, 0.3, 15)}, "loaded")["points"]["C"]
-    err = np.hypot(*(dev - want["deviation"])) / np.hypot(*want["deviation"])
-    assert err.max() < 1e-3
-
-
-def test_a_file_without_stiffness_generates_no_loaded_level():
-    mech = symkin.loads(M.without_stiffness(EXAMPLES / "four_bar.toml"), "plain.toml")
-    assert [lv.name for lv in plan(symkin.analyze(mech)).levels] == [
-        "paper",
-        "first_order",
-        "exact",
-    ]
-    with pytest.raises(symkin.InputError, match="no 'E'"):
-        plan(symkin.analyze(mech), levels=["loaded"])
-
-
-@pytest.mark.parametrize("key", ["four_bar", "six_bar", "loaded_arm"])
-@pytest.mark.parametrize("backend", ["numpy", "c"])
-def test_loaded_link_rotations_match_the_sympy_backend(key, backend):
-    g = loaded_case(key)
-    want = symkin.evaluate(g.analysis, CASES[key], "loaded").links
-    got = symkin.evaluate(g.analysis, CASES[key], "loaded", backend=backend).links
-    assert want.keys() == got.keys()
-    for name, link in want.items():
-        assert got[name].rigid == pytest.approx(link.rigid, rel=1e-14, abs=1e-16)
-        assert got[name].deviation == pytest.approx(link.deviation, rel=1e-12, abs=1e-18), name
-
-
-@pytest.mark.parametrize("key", ["WATT_II", "FIVE_BAR", "TRIAD_SIX_BAR"])
-@pytest.mark.parametrize("backend", ["numpy", "c"])
-def test_physical_levels_on_other_topologies(key, backend):
-    """A `rigid` pin among the plates, two inputs, a triad solved by continuation (no dyads):
-    both closed-form physical levels agree with the sympy backend's 40-digit evaluation."""
-    text = getattr(M, key).replace(
-        'length = "l"', 'length = "l"\nE = 210e9\nthickness = "l/10"\nwidth = 5e-3\nnu = 0.3\n', 1
-    )
-    mech = symkin.loads(text, f"{key}.toml")
-    an = symkin.analyze(mech)
-    inputs = {n: 0.1 * (i + 1) for i, n in enumerate(mech.inputs)}
-    ev = symkin.compile(mech, backend, sensitivity=False)
-    for level in ("loaded", "loaded_refined"):
-        want = symkin.evaluate(an, {k: repr(v) for k, v in inputs.items()}, level)
-        got = ev.evaluate({k: np.array([v]) for k, v in inputs.items()}, level)
-        assert got["ok"].all()
-        for name, point in want.points.items():
-            assert (
-                rel_err([float(v) for v in got["points"][name]["deviation"][:, 0]], point.deviation)
-                <= 1e-12
-            ), (level, name)
-
-
-def test_refined_reports_the_angles_of_the_other_generated_levels():
-    """The nine-bar's point F needs no loop: the refined statics solves the loaded closure for
-    itself, but an evaluator without the links reports delta = 0 there as at every level that
-    solves no loop, C and numpy alike (C left the statics' delta behind once), and both agree
-    on the deviation with the sympy backend."""
-    g = generated("nine_bar")
-    inputs = {"O": 0.2, "A": 0.05, "B": -0.1, "K": 0.1}
-    arrays = {k: np.array([v]) for k, v in inputs.items()}
-    want = symkin.evaluate(g.analysis, inputs, "loaded_refined").points["F"].deviation
+def test_links_and_angles_agree_between_numpy_and_c():
+    """The links' rotations (the `links` routine reads δ of the non-input hinges) and the
+    compliant angles: numpy and C alike, and the compliant angles move."""
+    path, inputs = CASES["four_bar"]
+    _, p, _ = _built(path, "c")
+    shape = pipeline.Shape.of(p)
+    got = {}
     for backend in ("numpy", "c"):
-        res = symkin.compile(g.mech, backend, sensitivity=False).evaluate(arrays, "loaded_refined")
-        assert res["ok"].all()
-        for hinge, rigid in res["angles"]["rigid"].items():
-            assert np.array_equal(res["angles"]["compliant"][hinge], rigid), (backend, hinge)
-        assert rel_err([float(v) for v in res["points"]["F"]["deviation"][:, 0]], want) <= 1e-12
+        ev = _built(path, backend)[2]
+        row = pipeline.backend(backend)
+        got[backend] = row.pose(ev, shape, [inputs[n] for n in shape.inputs], None, "loaded")
+    (s1, _, a1, l1), (s2, _, a2, l2) = got["numpy"], got["c"]
+    assert s1 == s2 == 0
+    assert np.allclose(a1, a2, rtol=1e-9, atol=1e-15) and np.allclose(l1, l2, rtol=1e-9, atol=1e-15)
+    m = len(shape.hinges)
+    assert max(abs(c - r) for r, c in zip(a1[:m], a1[m:])) > 1e-6
+
+
+@pytest.fixture
+def no_buckling_search(monkeypatch):
+    # only equilibrium's deviations are compared: its buckling-factor search, which it runs
+    # after solving (and which can stop short this close to the plates' Euler load), is left out
+    monkeypatch.setattr(equilibrium_physics, "buckling_factor", lambda *args, **kwargs: None)
+
+
+@pytest.mark.usefixtures("no_buckling_search")
+def test_two_half_plates_near_buckling(tmp_path):
+    """Plates pressed to 80 % of the first buckling factor: one plate relation is refused by its
+    truncation estimate; numpy and C chain two half plates, as the Python solver does."""
+    path = _loaded_parallelogram(tmp_path, 0.654)
+    inputs = {"F1": 0.05}
+    an = _built(path, "numpy")[0]
+    assert reduced_equilibrium(an, inputs, segments=1).refused.startswith("truncation")
+    want = reduced_equilibrium(an, inputs)
+    assert want.segments == 2 and not want.refused
+    reference = symkin.evaluate(an, inputs, level="equilibrium")
+    for backend in ("numpy", "c"):
+        status, got = _pose(path, backend, inputs)
+        assert status == 0, backend
+        for name, dev in got.items():
+            assert _rel(dev, want.deviations[name]) <= 1e-9, (backend, name)
+            assert _rel(dev, reference.points[name].deviation) < 1e-3, (backend, name)
+
+
+def test_past_buckling_is_refused_alike(tmp_path):
+    """A load past the mechanism's buckling: refused by the Python solver, and the generated
+    evaluators give the same status (1, NaN out), which symkin eval turns into exit 3."""
+    path = _loaded_parallelogram(tmp_path, 0.93)
+    inputs = {"F1": 0.05}
+    an = _built(path, "numpy")[0]
+    assert reduced_equilibrium(an, inputs).refused
+    statuses = []
+    for backend in ("numpy", "c"):
+        status, got = _pose(path, backend, inputs)
+        statuses.append(status)
+        assert all(math.isnan(v) for dev in got.values() for v in dev)
+    assert statuses == [1, 1]

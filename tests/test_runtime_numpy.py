@@ -233,21 +233,12 @@ def mechanism(rt, closed: bool, dtype=np.float64):
             1.0,
         ]
 
-    def loaded_linear(theta, q):
-        r = [-0.1 * theta[1] - 0.01 * q[2], -0.05 * theta[2] - q[3]]
-        size = [abs(0.1 * theta[1]) + abs(0.01 * q[2]), abs(0.05 * theta[2]) + abs(q[3])]
-        return [1.0, 0.0, 1.0, 1.0, *r, *size]
-
-    def loaded_newton(theta, delta, q):
-        d0, d1 = delta
-        return [
-            d0 + d0**3 + 0.25 * q[2] * d0 * d0 - 0.1 * theta[1] - 0.01 * q[2],
-            d0 + d1 - 0.05 * theta[2] - q[3],
-            1.0 + 3.0 * d0 * d0 + 0.5 * q[2] * d0,
-            0.0,
-            1.0,
-            1.0,
-        ]
+    def loaded_solve(mech, x, theta, params, ok):
+        # a stand-in for templates/numpy/reduced.py's driver (tests/runtime_toy.py): delta, what
+        # the level's deviation reads, ok (refused where p1 theta_0 > 1)
+        delta = [theta[1] / 50 + params[1] / 1000, -3 * theta[2] / 100]
+        ok = ok & ~(params[1] * theta[0] > 1.0)
+        return delta, [*params, delta[0] + delta[1], 2 * delta[0]], ok
 
     def sens_rigid(theta, params):
         zero = 0.0 * theta[0]
@@ -313,15 +304,10 @@ def mechanism(rt, closed: bool, dtype=np.float64):
         linear=linear,
         rigid_points=lambda theta, params: [np.cos(theta[1]), np.sin(theta[2])],
         links=lambda theta, delta: [theta[1] + theta[2], delta[0] + delta[1]],
-        loaded_q0=lambda theta, params: [theta[1], 1.0],
-        loaded_q=lambda theta, mu0, params: [mu0[0] + 1.0, mu0[1]],
-        loaded_compliance=lambda theta, mu, params: [1e-3 * mu[0], 1e-3 * mu[1]],
-        loaded_compliance_more=None,
-        loaded_linear=loaded_linear,
-        loaded_newton=loaded_newton,
+        loaded=None,
+        loaded_solve=loaded_solve,
         sens_rigid=sens_rigid,
         sens_chain=lambda params: [0.0, 0.0, 2.0, 0.0],
-        loaded_more=0,
         sens_rigid_blocks={
             "A": (0, 2, 2),
             "dG_dv": (4, 2, 3),
@@ -348,13 +334,12 @@ def mechanism(rt, closed: bool, dtype=np.float64):
             "exact": rt._Level(
                 lambda t, d, p: list(d), linear, newton, sens=sens_exact, blocks=stage
             ),
-            "loaded": rt._Level(lambda t, d, p: list(d), loaded_linear, loaded_newton, 1),
-            "loaded_refined": rt._Level(lambda t, d, p: list(d), loaded_linear, loaded_newton, 2),
+            "loaded": rt._Level(lambda t, d, q: q[2:4], loaded=1),
         },
     )
 
 
-CODES = {"paper": 0, "first_order": 1, "exact": 2, "loaded": 3, "loaded_refined": 5}
+CODES = {"paper": 0, "first_order": 1, "exact": 2, "loaded": 3}
 CASES = [(0.3, 0.5, 1.0), (-0.8, 1.7, -0.2), (0.05, -0.4, 0.0)]
 
 
@@ -386,10 +371,12 @@ def test_evaluate_at_every_level(rt, closed, level):
         (1.2, 0.5, "exact"),  # closed form: the dyad's reach 1 - theta_0^2 < 0
         (0.3, 8.0, "paper"),  # hinge 1 beyond its limit 2: theta_1 = 2.4
         (0.3, 6.6, "exact"),  # theta_1 = 1.98, but theta_1 + delta_0 > 2
+        (0.3, 0.5, "loaded"),  # the loaded level's driver refuses (p1 theta_0 = 1.8 > 1)
     ],
 )
 def test_evaluate_failures_are_nan(rt, theta0, p0, level):
-    res = rt._evaluate(mechanism(rt, True), {"t0": [theta0, 0.1]}, level, {"p0": p0}, True)
+    params = {"p0": p0} if level != "loaded" else {"p0": 0.5, "p1": 6.0}
+    res = rt._evaluate(mechanism(rt, True), {"t0": [theta0, 0.1]}, level, params, True)
     assert res["ok"].tolist() == [False, True]
     for part in res["points"]["P"].values():
         assert np.isnan(part[:, 0]).all() and np.isfinite(part[:, 1]).all()

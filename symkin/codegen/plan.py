@@ -15,7 +15,8 @@
                                           delta, params)
     rigid_points theta, params         -> rigid x, y of every requested point
     dev_<level>  theta, delta, params  -> deviation x, y of every requested point (a level that
-                                          shares another's, loaded_refined, runs its routine;
+                                          shares another's runs its routine; `loaded` has none:
+                                          its driver writes the deviation it solved for;
                                           every level's reads delta, so the runtimes call them
                                           alike: zero where the level solves no loop)
     sens_rigid   theta, params         -> A, ∂G/∂v (G the rigid closure), ∂R/∂θ_u, ∂R/∂v
@@ -25,19 +26,22 @@
     sens_chain   params                -> ∂(default of p_j)/∂p_k, when defaults read parameters
     links        theta, delta          -> rotation φ of every reported link and its deviation δφ
 
-and for the `loaded` level (docs/physics.md), whose routines read the file's parameters followed
-by the plates' compliance (its closure's constants, computed once per configuration):
+and for the `loaded` level, the reduced equilibrium (docs/physics.md, "The Newton level";
+symkin.codegen.loaded), for g = 1 and 2 half plates per plate; x holds its scaled unknowns, then
+the load factor t, `plates` every half plate's (along, across, omega):
 
-    loaded_q0          theta, params       -> generalized forces Q0 (springs EI/l): A^T mu0 = Q0
-    loaded_q           theta, mu0, params  -> Q with the beam-column springs: A^T mu = Q
-    loaded_compliance  theta, mu, params   -> each plate's end displacement beyond its arc
-    loaded_compliance_more  theta, mu, params -> the plates only loaded_refined's closure reads
-    loaded_linear      theta, constants    -> A, r and S of the loaded closure (first-order start)
-    loaded_newton      theta, delta, constants -> F, dF/ddelta of the loaded closure
+    loaded_plates<g>   x, theta, params         -> every half plate's (theta_c, p, f, e_a, e_s),
+                                                   then d(theta_c, p, f)/dx
+    loaded_system<g>   x, theta, plates, params -> residual R, dR/dx, dR/d(plates)
+    loaded_dev<g>      x, theta, plates, params -> deviation x, y of every point of the file
+                                                   (the plan's points first)
+    plate_relation<o>  in = (theta, p, f, e_a, e_s) -> (along, across, omega) and their partials
+                                                   by (theta, p, f) (symkin.codegen.plate), o = 4
+                                                   and 2 (the truncation estimate)
 
 Every routine's outputs are named row-major blocks (:class:`~symkin.codegen.routines.Block`):
 the runtimes (templates/c/runtime.c, templates/numpy/runtime.py) read the offsets of the
-composite ones (the sensitivities, the loaded level's constants) from the generated tables and
+composite ones (the sensitivities, the loaded level's sizes) from the generated tables and
 rely on the order above for the others (A then r, F then dF/ddelta, angles then reaches,
 rotations then their deviations; rigid_res: per loop its angle, then x, y, then A).
 
@@ -61,9 +65,11 @@ from ..core.errors import InputError
 from ..core.levels import Level
 from ..core.settings import SOLVER, SolverSettings
 from ..kinematics.analysis import Analysis
-from ..physics.statics import LoadedDerivation, loaded_derivation
+from ..physics.statics import loaded_derivation
 from .derivation import Derivation, derivation
 from .literals import float_literals, to_double
+from .loaded import LoadedPlan, loaded_routines
+from .plate import plate_routine
 from .routines import Argument, Block, Routine, flatten, layout, optimize
 
 
@@ -100,7 +106,7 @@ class Plan:
     notes: tuple[str, ...] = ()  # e.g. the variant a tolerance chose, for the headers
     solver: SolverSettings = SOLVER  # how the generated evaluators solve the loops
     derivation: Derivation | None = None  # what a report restates (plan(..., report=True))
-    loaded: LoadedPlan | None = None  # the `loaded` level's statics, when it is generated
+    loaded: LoadedPlan | None = None  # the `loaded` level's sizes and rules, when generated
     sensitivity: bool = False  # the sens_* routines are there
     chain: bool = False  # some parameter's default reads others (sens_chain)
     pruned_inputs: tuple[str, ...] = ()  # the file's inputs that move none of the points
@@ -128,20 +134,6 @@ class Plan:
     def stage(self, level: Level) -> bool:
         """Whether the sensitivity at `level` goes through a closure solved for δ."""
         return self.needs_loops and level.needs_delta
-
-
-@dataclass(frozen=True)
-class LoadedPlan:
-    """How the generated `loaded` level computes its closure's constants: `passes` statics
-    solves A^T mu = Q (2: springs EI/l, then the beam-column springs at the first pass's axial
-    loads; 1: EI/l only), then `compliance` numbers (x, y of every plate) that follow the file's
-    parameters in the constants its closure, Newton and deviation routines read."""
-
-    passes: int
-    compliance: int
-    beam_column: bool = True  # the beam-column series (False: first order only)
-    more: int = 0  # the last `more` of them only loaded_refined computes
-    constants: tuple[Block, ...] = ()  # the closure's constants: params, compliance, more
 
 
 @dataclass(frozen=True)
@@ -184,7 +176,6 @@ def plan(
     report: bool = False,
     links: bool | None = None,
     sensitivity: bool = True,
-    beam_column: bool = True,
     fixed: Mapping[str, sp.Expr] | None = None,
     pruned_inputs: Sequence[str] = (),
 ) -> Plan:
@@ -193,8 +184,7 @@ def plan(
     statement of the derivation a LaTeX report prints. `links`: report the rotation of every
     link (default: when no points are singled out; their rotations need the loops). With
     `sensitivity`, the routines of the derivatives by the parameters and inputs at the levels
-    that have them (docs/sensitivity.md). `beam_column=False` derives the `loaded` level with the
-    first-order force correction only (a cheaper variant). `fixed` (input name -> exact angle)
+    that have them (docs/sensitivity.md). `fixed` (input name -> exact angle)
     holds those inputs constant: they leave the evaluators' arguments and their values are
     folded into the routines (an evaluator with fixed inputs has no sensitivities).
     `pruned_inputs`: the file's inputs that pruning dropped (docs/pruning.md), which the numpy
@@ -211,8 +201,6 @@ def plan(
         for lv in level_table.LEVELS
         if lv.generated
         and (lv.name in levels if levels is not None else stiff or not lv.needs_stiffness)
-        # the loaded level's statics cannot share the loads of redundant loops (docs/levels.md)
-        and not (an.redundant and lv.name in level_table.LOADED)
         # nor take actuators yet: a mechanism with actuators gets the kinematic levels
         and not (mech.actuators and lv.needs_stiffness)
     )
@@ -296,30 +284,16 @@ def plan(
         layout(("points", np2, 1)),
     )
     loaded = None
-    physical = [lv.name for lv in levels if lv.name in level_table.LOADED]
-    if physical:
-        der = loaded_derivation(an, beam_column=beam_column)
-        loaded_exprs = tuple(e for n in names for e in der.analysis.point_deviation(n, "exact"))
-        # loaded_refined solves the loaded closure whatever the points need: its Jacobian at
-        # the pose reached is the matrix of the second statics
-        loaded, constants = _loaded_routines(
-            der,
-            routines,
-            theta,
-            delta,
-            params,
-            loaded_exprs,
-            needs_loops or loops_for_links,
-            "loaded_refined" in physical and bool(kin.unknowns),
-        )
+    if any(lv.name in level_table.LOADED for lv in levels):
+        # the reduced equilibrium (docs/physics.md, "The Newton level"), one and two half
+        # plates per plate; the runtime's driver writes the points' deviation itself
+        found, loaded = loaded_routines(an, names, theta, params)
+        routines.update(found)
     for lv in levels:
-        if f"dev_{lv.routine}" in routines:  # a level that shares another's deviation
-            continue
+        if f"dev_{lv.routine}" in routines or lv.name in level_table.LOADED:
+            continue  # a level that shares another's deviation, or the runtime's (loaded)
         args = (theta, delta, params)
-        if lv.name in level_table.LOADED:
-            exprs, args = loaded_exprs, (theta, delta, constants)
-        else:
-            exprs = tuple(e for n in names for e in an.point_deviation(n, lv.name))
+        exprs = tuple(e for n in names for e in an.point_deviation(n, lv.name))
         users = ", ".join(o.name for o in levels if o.routine == lv.routine)
         routines[f"dev_{lv.routine}"] = Routine(
             f"dev_{lv.routine}",
@@ -350,7 +324,9 @@ def plan(
         # inputs from the as-fabricated pose like the others); every other routine folds them
         values = {kin.theta[a]: v for a, v in held.items()}
         routines = {
-            k: r if k in ("rigid_res", "linear") else _substituted(r, values)
+            k: r
+            if k in ("rigid_res", "linear") or k.startswith("loaded_")
+            else _substituted(r, values)
             for k, r in routines.items()
         }
     # Numbers reach the printers as correctly rounded doubles (exact rationals stay in mpmath).
@@ -367,6 +343,13 @@ def plan(
         routines = {name: optimize(r) for name, r in routines.items()}
     rename = {s: sp.Symbol(f"p_{k}", real=True) for k, s in enumerate(an.params)}
     routines = {name: _renamed(r, rename) for name, r in routines.items()}
+    if loaded is not None:
+        for order in (4, 2):
+            relation = plate_routine(order)
+            # its array argument renamed: `in` is a Python keyword
+            routines[relation.name] = dataclasses.replace(
+                relation, arguments=(Argument("plate", relation.arguments[0].symbols),)
+            )
     parameters = tuple(
         Parameter(
             p.name, rename[p.symbol], float_literals(p.expr.xreplace(rename)), to_double(p.value)
@@ -508,115 +491,11 @@ def _flat(
     return outputs, layout(*((n, *b.shape) for n, b in zip(names, blocks, strict=True)))
 
 
-def _loaded_routines(
-    der: LoadedDerivation,
-    routines: dict[str, Routine],
-    theta: Argument,
-    delta: Argument,
-    params: Argument,
-    deviation: tuple[sp.Expr, ...],
-    needs_loops: bool,
-    refine: bool,
-) -> tuple[LoadedPlan, Argument]:
-    """The physical levels' statics, compliance and closure routines (added to `routines`, in
-    the order they run) and the constants argument of the loaded closure and `deviation`: the
-    file's parameters, then the compliance they read (the derivation's intermediates mu0, mu and
-    compliance_*, never parameters). A point the loops do not move reads only the plates on its
-    path: `loaded` then computes only their compliance (`loaded_compliance`); `refine`
-    (`loaded_refined`) solves the closure whatever the points need, so the other plates' come
-    after them (`loaded_compliance_more`)."""
-    la = der.analysis
-    k = len(la.kin.unknowns)
-    closure = tuple(la.residual) + flatten(la.jacobian.tolist()) if needs_loops or refine else ()
-
-    def reading(exprs) -> list[int]:
-        read = set().union(*(sp.sympify(e).free_symbols for e in exprs))
-        return [a for a in sorted(der.compliance) if read & set(der.compliance[a])]
-
-    plates = reading(deviation + (closure if needs_loops else ()))
-    more = [a for a in reading(deviation + closure) if a not in plates]
-    compliance = tuple(c for a in plates + more for c in der.compliance[a])
-    constants = Argument("params", (*params.symbols, *compliance))
-    if la.kin.unknowns:
-        if der.mu0:
-            routines["loaded_q0"] = Routine(
-                "loaded_q0",
-                (theta, params),
-                (),
-                tuple(der.first_statics[1]),
-                "loaded: generalized forces Q0 of the pin linkage, springs EI/l (A^T mu0 = Q0)",
-                layout(("Q0", k, 1)),
-            )
-        routines["loaded_q"] = Routine(
-            "loaded_q",
-            (theta, Argument("mu0", der.mu0), params),
-            (),
-            tuple(der.statics[1]),
-            "loaded: generalized forces Q with the beam-column springs (A^T mu = Q)"
-            if der.mu0
-            else "loaded: generalized forces Q of the pin linkage (A^T mu = Q)",
-            layout(("Q", k, 1)),
-        )
-    for name, which, doc in (
-        (
-            "loaded_compliance",
-            plates,
-            "loaded: each plate's end displacement beyond its circular arc under its loads",
-        ),
-        (
-            "loaded_compliance_more",
-            more,
-            "loaded: the same for the plates only the loaded closure reads (loaded_refined)",
-        ),
-    ):
-        if which or name == "loaded_compliance":
-            outputs = tuple(e for a in which for e in der.plate_loads[a].displacement)
-            routines[name] = Routine(
-                name,
-                (theta, Argument("mu", der.mu), params),
-                (),
-                outputs,
-                doc,
-                layout(("compliance", len(outputs), 1)),
-            )
-    if closure:
-        a_lin, r_lin = la.linear_system
-        routines["loaded_linear"] = Routine(
-            "loaded_linear",
-            (theta, constants),
-            (),
-            flatten(a_lin.tolist()) + tuple(r_lin) + tuple(la.closure_scale),
-            "loaded: A, r = Phi dz of the loaded closure (its first-order start) and the size S "
-            "of its terms",
-            layout(("A", k, k), ("r", k, 1), ("S", k, 1)),
-        )
-        routines["loaded_newton"] = Routine(
-            "loaded_newton",
-            (theta, delta, constants),
-            (),
-            closure,
-            "loaded: the loaded closure F(delta) and dF/ddelta",
-            layout(("F", k, 1), ("J", k, k)),
-        )
-    n_more = 2 * len(more)
-    shapes = layout(
-        ("params", len(params.symbols), 1),
-        ("compliance", len(compliance) - n_more, 1),
-        ("more", n_more, 1),
-    )
-    return LoadedPlan(
-        2 if der.mu0 else 1, len(compliance), der.beam_column, n_more, shapes
-    ), constants
-
-
 def with_derivation(plan: Plan, analysis: Analysis) -> Plan:
     """`plan` with the statement of its derivation, for a report (the plan's points; the
     `loaded` level's statics when the plan holds it)."""
-    loaded = (
-        None
-        if plan.loaded is None
-        else loaded_derivation(analysis, beam_column=plan.loaded.beam_column)
-    )
+    # the report restates the pin linkage's statics beside the level (docs/physics.md)
+    loaded = None if plan.loaded is None else loaded_derivation(analysis)
     return dataclasses.replace(
         plan,
         derivation=derivation(analysis, plan.points, moved_points(analysis, plan.points), loaded),

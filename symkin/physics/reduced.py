@@ -86,11 +86,15 @@ class Reduced:
         values: Mapping[sp.Symbol, sp.Expr],
         modules: list | Callable[[], list] | None = None,
         segments: int = 1,
+        symbolic: bool = False,
     ) -> None:
         """`values`: the file's parameters; `modules`: lambdify's (default mpmath with symkin's
         special functions; the numpy backend's float64 namespace gives float code; a callable is
         called after each derivation); `segments`: 1, or 2 to chain two half plates per plate
-        (their joint's rotation an unknown, docs/physics.md) where one is not accurate enough."""
+        (their joint's rotation an unknown, docs/physics.md) where one is not accurate enough.
+        `symbolic`: the expressions keep the file's parameters as symbols (generated code reads
+        them at run time, symkin.codegen.loaded); the scales L, l_min and F, which only
+        condition Newton, stay numbers at `values`."""
         if segments not in (1, 2):
             raise ValueError("segments must be 1 or 2")
         self.segments = segments
@@ -101,8 +105,13 @@ class Reduced:
         self.modules = modules or (lambda: [mpmath_namespace(), "mpmath"])
         self._values_subs = dict(values)
 
-        def num(e) -> sp.Float:
+        def value(e) -> sp.Float:
             return sp.Float(sp.N(sp.sympify(e).subs(values), 30), 30)
+
+        def num(e) -> sp.Expr:
+            return sp.sympify(e) if symbolic else value(e)
+
+        self.symbolic = symbolic
 
         stiff = plate_stiffness(mech, "loaded")
         self.n, self.m = st.n, st.m
@@ -149,10 +158,12 @@ class Reduced:
         self.clamp_m = {}
         for a, h in self.hinges.items():
             self.clamp_m[a] = tuple(num(v) for v in h.clamp(h.M)) if a in self.plate else centres[a]
-        cs = [tuple(float(v) for v in c) for c in centres.values()]
+        cs = [tuple(float(value(v)) for v in c) for c in centres.values()]
         self.L = max([math.dist(a, b) for a in cs for b in cs] + [1e-300])
-        self.lmin = min([float(d["l"]) for d in self.plate.values()], default=self.L)
-        self.F = max([float(d["EI"] / (d["l"] * self.L)) for d in self.plate.values()] or [1.0])
+        self.lmin = min([float(value(d["l"])) for d in self.plate.values()], default=self.L)
+        self.F = max(
+            [float(value(d["EI"] / (d["l"] * self.L))) for d in self.plate.values()] or [1.0]
+        )
         nu = len(self.unknowns)
         # per plate and segment: (hinge, segment, EI, length, ε_a, ε_s) of the half plates
         self.segs = [
@@ -324,7 +335,8 @@ class Reduced:
             lw = self.kin.loop_weights(c)
             parts = []
             for i, w in lw.items():
-                w = tuple(sp.Float(sp.N(v.subs(self._values_subs), 30), 30) for v in w)
+                if not self.symbolic:
+                    w = tuple(sp.Float(sp.N(v.subs(self._values_subs), 30), 30) for v in w)
                 parts.append(V.rot(s["phi"][i], V.rot_minus_identity(s["dphi"][i], w)))
             for b in range(1, self.m + 1):
                 if row[b - 1]:

@@ -479,19 +479,22 @@ def measure(
 
 def cost(routines: Mapping, level: str, closed_form: bool, steps: int) -> int:
     """Weighted operation count of one evaluation: every routine the evaluation of `level` runs
-    once, the Newton closures NEWTON_STEPS times (and the statics twice for loaded_refined),
-    the rigid closure `steps` continuation steps of NEWTON_STEPS when it has no closed form."""
+    once, the Newton closures NEWTON_STEPS times (`loaded`: its one-half-plate system and plate
+    relations; the two-half-plate variant, used only where one is refused, not counted), the
+    rigid closure `steps` continuation steps of NEWTON_STEPS when it has no closed form."""
     total = 0
     for name, r in routines.items():
-        if name.startswith("sens_") or name == "links":
+        if (
+            name.startswith("sens_")
+            or name == "links"
+            or (name.startswith("loaded_") and name.endswith("2"))
+        ):
             continue
         weight = 1
-        if name in ("newton", "loaded_newton"):
+        if name in ("newton", "loaded_system1", "loaded_plates1", "plate_relation4"):
             weight = NEWTON_STEPS
         if name in ("rigid_res", "linear") and not closed_form:
             weight = NEWTON_STEPS * steps
-        if name.startswith("loaded") and level == "loaded_refined":
-            weight *= 2
         total += weight * r.ops
     return total
 

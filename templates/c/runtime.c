@@ -38,7 +38,7 @@ typedef void (*sk_fn1)(const double *a, double *out);
 typedef void (*sk_fn2)(const double *a, const double *b, double *out);
 typedef void (*sk_fn3)(const double *a, const double *b, const double *c, double *out);
 
-#if defined(SK_LOOPS)
+#if defined(SK_LOOPS) || defined(SK_LOADED)
 /* ---- dense linear algebra ---- */
 
 /* Gaussian elimination with partial pivoting (the first largest pivot) of the n x n row-major
@@ -314,7 +314,7 @@ typedef struct {
     sk_fn3 dev;         /* the points' deviation (theta, delta, q) */
     sk_fn2 linear;      /* the closure it solves for delta: A and r (theta, q); NULL: none */
     sk_fn3 closure;     /* its F and dF/ddelta (theta, delta, q); NULL: A delta = -r only */
-    int loaded;         /* q: 0 the parameters, 1 the loaded constants, 2 refined ones */
+    int loaded;         /* 1: m->loaded_solve solves it (q: the parameters, then its deviation) */
     sk_sens sens;       /* its sensitivities (fn NULL: none) */
     sk_fn3 consistency; /* redundant loops: its closure's dropped rows, then their terms' size
                            (theta, delta, q); NULL: none */
@@ -350,13 +350,11 @@ typedef struct {
     double consistent;              /* each must vanish to this fraction of its size */
     sk_fn2 rigid_points;            /* (theta, params) */
     sk_fn2 links;                   /* rotations and their deviations (theta, delta) */
-    sk_fn2 loaded_q0;               /* the loaded level's statics (A^T mu0 = Q0; NULL: one pass) */
-    sk_fn3 loaded_q;                /* A^T mu = Q (theta, mu0, params) */
-    sk_fn3 loaded_compliance;       /* (theta, mu, params) into the constants at compliance_at */
-    sk_fn3 loaded_compliance_more;  /* the plates only the loaded closure reads, at more_at */
-    int compliance_at, more_at;
-    sk_fn2 loaded_linear;           /* the loaded closure: A, r and S (theta, constants) */
-    sk_fn3 loaded_closure;          /* F and dF/ddelta (theta, delta, constants) */
+    /* the loaded level (templates/c/reduced.c): (mechanism, inputs, params, theta) -> delta and
+       q (the parameters, then the points' deviation); a status */
+    int (*loaded_solve)(const void *m, const double *inputs, const double *params,
+                        const double *theta, double *delta, double *q);
+    const void *loaded;             /* its tables (sk_loaded) */
     sk_rule rigid_rule;             /* Newton at each continuation step */
     sk_rule polish_rule;            /* after the rigid start */
     sk_rule exact_rule;             /* on every compliant closure */
@@ -542,57 +540,10 @@ static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure
                            0);
 }
 #endif
-#if defined(SK_LOADED)
-
-/* The loaded level's closure constants: the parameters, then every plate's compliance under the
-   loads the pin linkage's statics gives (A^T mu0 = Q0 when there are two passes, then
-   A^T mu = Q) with A the rigid loop Jacobian, or `jac` (k x k) when not NULL. With `all`, also
-   the plates only the loaded closure reads. Returns 0, or 1 when A is singular. */
-static int sk_loaded_constants(const sk_mechanism *m, const double *theta, const double *params,
-                               const double *jac, int all, double *constants)
-{
-    const double *mu = NULL;
-    int i;
-#if defined(SK_LOOPS)
-    double lin[SK_K * SK_K + 2 * SK_K + 1], at[SK_K * SK_K + 1], mu0[SK_K + 1], loads[SK_K + 1];
-    int j, piv[SK_K + 1];
-    if (jac == NULL) {
-        m->rigid_res(theta, params, lin);   /* A follows the residual */
-        jac = lin + SK_K;
-    }
-    for (i = 0; i < SK_K; ++i) {
-        for (j = 0; j < SK_K; ++j) {
-            at[i * SK_K + j] = jac[j * SK_K + i];
-        }
-    }
-    if (sk_lu(SK_K, at, piv)) {
-        return 1;
-    }
-    if (m->loaded_q0 != NULL) {
-        m->loaded_q0(theta, params, mu0);
-        sk_lu_solve(SK_K, at, piv, mu0);
-    }
-    m->loaded_q(theta, m->loaded_q0 != NULL ? mu0 : NULL, params, loads);
-    sk_lu_solve(SK_K, at, piv, loads);
-    mu = loads;
-#else
-    (void)jac;
-#endif
-    m->loaded_compliance(theta, mu, params, constants + m->compliance_at);
-    if (all && m->loaded_compliance_more != NULL) {
-        m->loaded_compliance_more(theta, mu, params, constants + m->more_at);
-    }
-    for (i = 0; i < SK_NPAR; ++i) {
-        constants[i] = params[i];
-    }
-    return 0;
-}
-#endif
-
 /* The configuration at level lv: the arguments checked, the rigid angles theta (every hinge)
    and, where the level solves the loops, delta (the non-input hinges; solved for the links'
-   rotations only when want_links). *q is what the level's routines read: params, or the loaded
-   constants computed into `constants`. Returns a status code. */
+   rotations only when want_links). *q is what the level's routines read: params, or (loaded) the
+   parameters and the deviation solved, written into `constants`. Returns a status code. */
 static int sk_pose(const sk_mechanism *m, const sk_level *lv, const double *inputs,
                    const double *params, int want_links, double *theta, double *delta,
                    double *constants, const double **q)
@@ -632,29 +583,13 @@ static int sk_pose(const sk_mechanism *m, const sk_level *lv, const double *inpu
 #endif
 #if defined(SK_LOADED)
     if (lv->loaded) {
-        if (sk_loaded_constants(m, theta, params, NULL, lv->loaded == 2, constants)) {
-            return 1;
-        }
-        *q = constants;
-    }
-#if defined(SK_LOOPS)
-    if (lv->loaded == 2) {
-        /* refined: the loaded closure solved, then the statics again with its Jacobian there */
-        double fj[SK_K + SK_K * SK_K + 1];
-        const int status = sk_solve_closure(m, m->loaded_linear, m->loaded_closure, theta,
-                                            constants, delta);
+        /* the reduced equilibrium (templates/c/reduced.c) gives delta and the deviation */
+        const int status = m->loaded_solve(m, inputs, params, theta, delta, constants);
         if (status) {
             return status;
         }
-        m->loaded_closure(theta, delta, constants, fj);
-        if (sk_loaded_constants(m, theta, params, fj + SK_K, 1, constants)) {
-            return 1;
-        }
-        for (i = 0; !m->needs_loops && i < SK_K; ++i) {
-            delta[i] = 0.0;         /* that delta was the statics' only */
-        }
+        *q = constants;
     }
-#endif
 #endif
 #if defined(SK_LOOPS)
     if (lv->linear != NULL && (m->needs_loops || (m->loops_for_links && want_links))) {

@@ -86,13 +86,8 @@ class Backend:
             "closed_form": plan.closed_form,
             "needs_loops": plan.needs_loops,
             "loops_for_links": plan.loops_for_links,
-            # the loop solvers are emitted: some point or the links need them, or the refined
-            # statics (the loaded closure's Jacobian at its solution)
-            "solves": plan.needs_loops
-            or plan.loops_for_links
-            or (
-                bool(plan.unknown_index) and any(lv.name == "loaded_refined" for lv in plan.levels)
-            ),
+            # the loop solvers are emitted: some point or the links need them
+            "solves": plan.needs_loops or plan.loops_for_links,
             "dtype": precision,
             "solver": plan.solver,
             "tol": plan.solver.tolerances(precision),
@@ -104,8 +99,6 @@ class Backend:
             "default_level": default_level(plan),
             "loaded": plan.loaded,
             "loaded_levels": [lv for lv in plan.levels if lv.name in levels.LOADED],
-            "refined": any(lv.name == "loaded_refined" for lv in plan.levels),
-            "refined_code": levels.get("loaded_refined").code,
             "routines": [routine_data(r, self.printer) for r in plan.routines.values()],
             "have": set(plan.routines),
             "blocks": {
@@ -118,7 +111,6 @@ class Backend:
                 for i, lim in plan.limits
             ],
             "sens_rigid": offsets(plan, "sens_rigid", ("A", "dG_dv", "dR_dtheta", "dR_dv")),
-            "constants": {b.name: b.offset for b in plan.loaded.constants} if plan.loaded else {},
             "out_size": max(len(r.outputs) for r in plan.routines.values()) + 1,
             "rest": tuple((plan.unknown_index[j], tuple(reads)) for j, reads in plan.rest),
             "rest_table": [
@@ -136,7 +128,6 @@ class Backend:
 CLOSURES = {
     "first_order": ("linear", None),
     "exact": ("linear", "newton"),
-    "loaded": ("loaded_linear", "loaded_newton"),
 }
 #: The blocks of a level's sensitivity routine (symkin.codegen.plan), in order.
 SENS_BLOCKS = ("M", "dE_dtheta", "dE_dv", "dD_dtheta", "dD_ddelta", "dD_dv")
@@ -144,10 +135,10 @@ SENS_BLOCKS = ("M", "dE_dtheta", "dE_dv", "dD_dtheta", "dD_ddelta", "dD_dv")
 
 def level_rows(plan: Plan) -> list[dict]:
     """What the runtimes run at each generated level: its deviation routine, the routines of the
-    closure it solves for delta (None where it solves none, or the loops need no solving), what
-    its routines read (`loaded`: 0 the parameters, 1 the loaded level's constants, 2 those
-    refined at the loaded closure's solution) and its sensitivity routine with the offsets of
-    its blocks (`stage`: it goes through the closure solved for delta)."""
+    closure it solves for delta (None where it solves none, or the loops need no solving),
+    `loaded` (1: the runtime's reduced-equilibrium driver solves it and writes its deviation,
+    docs/runtime.md; 0 otherwise) and its sensitivity routine with the offsets of its blocks
+    (`stage`: it goes through the closure solved for delta)."""
     rows = []
     for lv in plan.levels:
         linear, newton = CLOSURES.get(lv.routine, (None, None)) if lv.needs_delta else (None, None)
@@ -155,19 +146,16 @@ def level_rows(plan: Plan) -> list[dict]:
             plan.routines
         ):
             linear = newton = None
+        loaded = lv.name in levels.LOADED
         sens = f"sens_{lv.name}" if lv.sensitivity and f"sens_{lv.name}" in plan.routines else None
         rows.append(
             {
                 "name": lv.name,
                 "code": lv.code,
-                "dev": f"dev_{lv.routine}",
+                "dev": "loaded_deviation" if loaded else f"dev_{lv.routine}",
                 "linear": linear,
                 "newton": newton,
-                "loaded": 0
-                if lv.name not in levels.LOADED
-                else 2
-                if lv.name == "loaded_refined"
-                else 1,
+                "loaded": int(loaded),
                 "sens": sens,
                 "stage": sens is not None and "M" in _names(plan, sens),
                 "blocks": offsets(plan, sens, SENS_BLOCKS) if sens else {},

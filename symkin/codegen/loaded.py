@@ -1,0 +1,118 @@
+"""The `loaded` level's routines: the reduced equilibrium of symkin.physics.reduced
+(docs/physics.md, "The Newton level") with the file's parameters kept as symbols, for one and
+for two half plates per plate (the generated runtimes' drivers: templates/numpy/reduced.py,
+templates/c/reduced.c).
+
+    loaded_plates<g>  x, theta, params          -> per half plate (theta_c, p, f, e_a, e_s), the
+                                                   plate relation's `in`; then d(theta_c, p, f)/dx
+    loaded_system<g>  x, theta, plates, params  -> residual R, dR/dx at fixed plate outputs,
+                                                   dR/d(plate outputs)
+    loaded_dev<g>     x, theta, plates, params  -> deviation x, y of every point of the file (the
+                                                   plan's first: the truncation estimate reads all)
+
+x holds the scaled unknowns then the load factor t; `plates` the plate relation's values
+(along, across, omega) of every half plate; g = 1 or 2 half plates per plate.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import sympy as sp
+
+from ..kinematics.analysis import Analysis
+from ..physics import reduced
+from .routines import Argument, Routine, flatten, layout
+
+
+@dataclass(frozen=True)
+class Segments:
+    """The sizes of one variant (g half plates per plate) of the reduced equilibrium."""
+
+    count: int  # g: half plates per plate
+    size: int  # N: scaled unknowns (the δ of the non-input hinges, chord loads, joints' η)
+    plates: int  # half plates (each a plate relation call)
+    scale: tuple[float, ...]  # each unknown's scale (x = unknown / scale)
+
+
+@dataclass(frozen=True)
+class LoadedPlan:
+    """How the generated `loaded` level runs the reduced equilibrium (the rules of
+    symkin.physics.reduced, and per variant its sizes); the routines are the plan's
+    loaded_*<g>, plate_relation4 and plate_relation2."""
+
+    variants: tuple[Segments, ...]  # one, then two half plates per plate
+    unknowns: int  # non-input hinges: the first unknowns, δ / (l_min / L)
+    points: int  # points of the file the deviation routine gives (the plan's first)
+    tol: float = reduced.TOL
+    max_iter: int = reduced.MAX_ITER
+    max_turn: float = reduced.MAX_TURN
+    p_limit: float = reduced.P_LIMIT
+    est_factor: float = reduced.EST_FACTOR
+    est_limit: float = reduced.EST_LIMIT
+
+
+def loaded_routines(
+    analysis: Analysis, names: Sequence[str], theta: Argument, params: Argument
+) -> tuple[dict[str, Routine], LoadedPlan]:
+    """The routines of the reduced equilibrium for one and two half plates per plate (parameters
+    as symbols; the scales at the file's defaults), and their sizes."""
+    an = analysis
+    values = {p.symbol: p.value for p in an.mechanism.parameters}
+    order = list(names) + sorted(n for n in (p.name for p in an.mechanism.points) if n not in names)
+    routines: dict[str, Routine] = {}
+    variants = []
+    for g in (1, 2):
+        r = reduced.Reduced(an.kin, values, segments=g, symbolic=True)
+        s = r._s
+        rename = {r.th[a]: an.kin.theta[a] for a in r.hinges}
+
+        def sub(e, rename=rename):
+            return sp.sympify(e).xreplace(rename)
+
+        x = Argument("x", (*r.x, r.t))
+        outs = tuple(v for a, j, *_ in r.segs for v in s["out"][a, j])
+        plates = Argument("plates", outs)
+        ins = sp.Matrix(
+            [
+                v
+                for a, j, _, _, ea, es in r.segs
+                for v in (*s["pf"][a, j], sp.sympify(ea), sp.sympify(es))
+            ]
+        )
+        moving = sp.Matrix([v for a, j, *_ in r.segs for v in s["pf"][a, j]])
+        dins = reduced._jacobian(moving, r.x)
+        n, ns = r.size, len(r.segs)
+        routines[f"loaded_plates{g}"] = Routine(
+            f"loaded_plates{g}",
+            (x, theta, params),
+            (),
+            tuple(sub(e) for e in (*ins, *flatten(dins.tolist()))),
+            f"loaded ({g} half plate(s) per plate): every half plate's (theta, p, f, e_a, e_s) "
+            "and d(theta, p, f)/dx",
+            layout(("in", ns, 5), ("din_dx", 3 * ns, n)),
+        )
+        rows = sp.Matrix(r._rows(s))
+        jx = reduced._jacobian(rows, r.x)
+        jo = reduced._jacobian(rows, outs)
+        routines[f"loaded_system{g}"] = Routine(
+            f"loaded_system{g}",
+            (x, theta, plates, params),
+            (),
+            tuple(sub(e) for e in (*rows, *flatten(jx.tolist()), *flatten(jo.tolist()))),
+            f"loaded ({g} half plate(s) per plate): the reduced equilibrium's residual R, dR/dx "
+            "at fixed plate outputs and dR/d(plate outputs)",
+            layout(("R", n, 1), ("dR_dx", n, n), ("dR_dout", n, 3 * ns)),
+        )
+        dev = [c for name in order for c in r._deviation(s, *r.points[name])]
+        routines[f"loaded_dev{g}"] = Routine(
+            f"loaded_dev{g}",
+            (x, theta, plates, params),
+            (),
+            tuple(sub(e) for e in dev),
+            f"loaded ({g} half plate(s) per plate): deviation of every point",
+            layout(("deviation", 2 * len(order), 1)),
+        )
+        variants.append(Segments(g, n, ns, tuple(float(v) for v in r.scale)))
+    return routines, LoadedPlan(tuple(variants), len(an.kin.unknowns), len(order))
