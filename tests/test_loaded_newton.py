@@ -26,6 +26,7 @@ import sympy as sp
 from reference_beams import cantilever
 
 import symkin
+from symkin.cli.commands import main
 from symkin.codegen.backends.c.backend import standalone
 from symkin.codegen.plate import SYMBOLS, plate_routine
 from symkin.core.errors import InputError
@@ -299,6 +300,95 @@ def test_two_half_plates_everywhere(path, inputs):
     answer = reduced_equilibrium(an, inputs, segments=2)
     assert answer.segments == 2 and not answer.refused, answer.refused
     assert _worst(answer, symkin.evaluate(an, inputs, level="equilibrium")) < 1e-4
+
+
+# -- the `loaded` level: the reduced equilibrium in mpmath, reported as an Evaluation -----------
+
+#: (file, inputs): every example with stiffness data (the piezo amplifier's actuators are refused)
+#: and the zoo, its own loads included (the Scott–Russell's preload, the double parallelogram's
+#: payload), the redundant stage, prbm pins and input chords.
+LEVEL_CASES = [
+    ("examples/four_bar.toml", {"A0": 0.3}),
+    ("examples/nine_bar_platform.toml", {"O": 0.02, "A": -0.02, "B": 0.01, "K": 0.02}),
+    ("examples/stephenson_six_bar.toml", {"O_A": 0.2}),
+    ("tests/mechanisms/parallelogram.toml", {"F1": 0.05}),
+    ("tests/mechanisms/double_parallelogram.toml", {"F1": 0.05, "I1": -0.05}),
+    ("tests/mechanisms/scott_russell.toml", {"RA0": 0.01}),
+    ("tests/mechanisms/lever_amplifier.toml", {"P0": 0.0}),
+    ("tests/mechanisms/roberts.toml", {"O1": 0.1}),
+    ("tests/mechanisms/toggle_four_bar.toml", {"O1": 0.3}),
+    ("tests/mechanisms/three_leg_stage.toml", {"F1": 0.05}),
+    ("tests/mechanisms/prbm_four_bar.toml", {"O1": 0.1}),
+    ("tests/mechanisms/five_bar.toml", {"O1": 0.05, "O2": -0.08}),
+    ("tests/mechanisms/five_bar_coupler_input.toml", {"O1": 0.05, "P": -0.08}),
+]
+
+
+def _level_against_equilibrium(an, inputs, bound: float) -> None:
+    """`loaded` (sympy backend) against `equilibrium`: every point's deviation, every hinge's and
+    link's angle deviation (relative to the largest), the hinges' end loads and the energy within
+    `bound`; the rigid linkage the same; compliant = rigid + deviation; a model error per point."""
+    got = symkin.evaluate(an, inputs, level="loaded")
+    ref = symkin.evaluate(an, inputs, level="equilibrium")
+    assert got.level == "loaded" and got.backend == "sympy"
+    size = max(math.hypot(*p.rigid) for p in ref.points.values())
+    for name, p in ref.points.items():
+        mine = got.points[name]
+        assert math.dist(mine.rigid, p.rigid) < 1e-12 * size
+        assert math.dist(mine.deviation, p.deviation) < bound * math.hypot(*p.deviation), name
+        assert (
+            math.dist(
+                mine.compliant,
+                (mine.rigid[0] + mine.deviation[0], mine.rigid[1] + mine.deviation[1]),
+            )
+            < 1e-15 * size
+        )
+    assert set(got.model_error) == set(ref.points)
+    turns = {n: ref.angles_compliant[n] - ref.angles_rigid[n] for n in ref.angles_rigid}
+    largest = max(abs(v) for v in turns.values())
+    for name, turn in turns.items():
+        assert got.angles_rigid[name] == pytest.approx(ref.angles_rigid[name], abs=1e-14)
+        assert abs(got.angles_compliant[name] - got.angles_rigid[name] - turn) < bound * largest
+    largest = max(abs(lk.deviation) for lk in ref.links.values())
+    for name, link in ref.links.items():
+        assert got.links[name].rigid == pytest.approx(link.rigid, abs=1e-14)
+        assert abs(got.links[name].deviation - link.deviation) < bound * largest, name
+    hinges = {n: (h.force, h.moment) for n, h in got.hinges.items()}
+    assert set(hinges) == set(ref.hinges)
+    assert max(_load_errors(hinges, got.energy, ref)) < bound
+
+
+@pytest.mark.parametrize(
+    ("path", "inputs"), LEVEL_CASES, ids=[Path(c[0]).stem for c in LEVEL_CASES]
+)
+def test_loaded_level_against_equilibrium(path, inputs):
+    """Within 1e-4 of equilibrium (the target is 1 %; measured 4.2e-7 .. 2.4e-5 for the
+    deviations, 1e-10 .. 1.2e-5 for the loads and energy, docs/physics.md)."""
+    _level_against_equilibrium(symkin.analyze(symkin.load(ROOT / path)), inputs, 1e-4)
+
+
+def test_loaded_level_closes_a_redundant_loop_elastically(tmp_path):
+    """The three-leg stage with its third leg's plates 1 % longer: no kinematic level can close
+    the redundant loop (tests/test_parallelograms.py), the plates' stretch and bending do; within
+    1e-4 of equilibrium."""
+    text = (ZOO / "three_leg_stage.toml").read_text()
+    for old in ('at = ["w/2", 0.0]\n', 'at = ["w/2", "L"]\n'):
+        assert text.count(old) == 1
+        text = text.replace(old, old + 'length = "1.01*l"\n')
+    path = tmp_path / "three_leg_stage_long.toml"
+    path.write_text(text)
+    _level_against_equilibrium(symkin.analyze(symkin.load(path)), {"F1": 0.05}, 1e-4)
+
+
+def test_loaded_level_refuses_past_buckling(tmp_path, capsys):
+    """The parallelogram pressed to 0.93 π²EI/l² per plate (past the mechanism's buckling):
+    exit 3 naming the reason; at 0.5 it answers (exit 0)."""
+    for fraction, code in ((0.5, 0), (0.93, 3)):
+        path = str(_loaded_parallelogram(tmp_path, fraction))
+        assert main(["eval", path, "--input", "F1=0.05", "--level", "loaded"]) == code
+        err = capsys.readouterr().err
+        if code:
+            assert "loaded level refuses" in err and "buckling" in err, err
 
 
 # -- the plate relation in generated C ----------------------------------------------------------

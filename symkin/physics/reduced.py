@@ -1,7 +1,7 @@
 """The reduced equilibrium of a compliant mechanism: Newton on the compliant-minus-rigid angles of
 the non-input hinges and, per loop, the chord plate's end load (docs/physics.md, "The Newton
-level"). The future `loaded` level; for now an internal solver, evaluated through sympy's
-lambdify in float64 (numpy kernels) or mpmath.
+level"). The `loaded` level's solver (symkin.studies.evaluation.loaded runs it in mpmath),
+evaluated through sympy's lambdify in float64 (numpy kernels) or mpmath.
 
 Unknowns x (scaled, so every component is O(θ) or O(load/F)): δ_a / (l_min/L) of every
 non-input hinge, n_c/F and μ_c/(F L) of every chord c (the force and moment link M exerts on
