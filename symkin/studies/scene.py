@@ -47,7 +47,7 @@ BACKENDS = pipeline.BACKENDS
 PRECISIONS = ("float64", "float32")
 DEFAULT_SAMPLES = 25
 #: Newton steps an iterative closure typically takes from its first-order start (the cost of its
-#: routine counts this many times); the refined statics run the loaded ones twice.
+#: routine counts this many times).
 NEWTON_STEPS = 3
 #: The longest variant suffix a group's name adds to the scene's name.
 SUFFIX = len("_first_order_small_deflection_f32")
@@ -479,8 +479,8 @@ def measure(
 
 def cost(routines: Mapping, level: str, closed_form: bool, steps: int) -> int:
     """Weighted operation count of one evaluation: every routine the evaluation of `level` runs
-    once, the Newton closures NEWTON_STEPS times (and the statics twice for loaded_refined),
-    the rigid closure `steps` continuation steps of NEWTON_STEPS when it has no closed form."""
+    once, the Newton closures NEWTON_STEPS times, the rigid closure `steps` continuation steps
+    of NEWTON_STEPS when it has no closed form (`level`: the level evaluated)."""
     total = 0
     for name, r in routines.items():
         if name.startswith("sens_") or name == "links":
@@ -490,8 +490,6 @@ def cost(routines: Mapping, level: str, closed_form: bool, steps: int) -> int:
             weight = NEWTON_STEPS
         if name in ("rigid_res", "linear") and not closed_form:
             weight = NEWTON_STEPS * steps
-        if name.startswith("loaded") and level == "loaded_refined":
-            weight *= 2
         total += weight * r.ops
     return total
 
