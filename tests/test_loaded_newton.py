@@ -23,6 +23,7 @@ from pathlib import Path
 import mpmath as mp
 import pytest
 import sympy as sp
+from mechanisms import with_beam
 from reference_beams import cantilever
 
 import symkin
@@ -378,6 +379,17 @@ def test_loaded_level_closes_a_redundant_loop_elastically(tmp_path):
     path = tmp_path / "three_leg_stage_long.toml"
     path.write_text(text)
     _level_against_equilibrium(symkin.analyze(symkin.load(path)), {"F1": 0.05}, 1e-4)
+
+
+def test_loaded_level_refuses_an_inextensible_redundant_mechanism(tmp_path, capsys):
+    """Elastica plates leave the redundant loop's self-stress undetermined: exit 3 at both
+    physical levels, as equilibrium refuses it (docs/levels.md)."""
+    text = with_beam((ZOO / "three_leg_stage.toml").read_text(), "elastica")
+    path = tmp_path / "three_leg_stage_elastica.toml"
+    path.write_text(text)
+    for level in ("loaded", "equilibrium"):
+        assert main(["eval", str(path), "--input", "F1=0.05", "--level", level]) == 3
+        assert "inextensible elastica" in capsys.readouterr().err
 
 
 def test_loaded_level_refuses_past_buckling(tmp_path, capsys):

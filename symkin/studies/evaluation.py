@@ -1111,6 +1111,15 @@ class _Mpmath:
         linkage solved at `dps` digits; a configuration it refuses (no convergence, a plate
         near buckling, the truncation estimate with two half plates) is exit 3."""
         an, mech = self.an, self.mechanism
+        if an.redundant and not any(h.beam == "reissner" for h in mech.hinges if h.is_plate):
+            # as at equilibrium: inextensible plates leave a redundant loop's self-stress
+            # undetermined (the relation's quartic terms alone would fix it, meaninglessly)
+            raise AssemblyError(
+                f"{mech.path}: the loaded level cannot solve this redundant mechanism "
+                f"({len(an.dropped)} redundant closure constraint(s)): its plates are "
+                "inextensible elastica, which leave the forces the redundant loops carry along "
+                'the plates undetermined; give them beam = "reissner" (docs/levels.md)'
+            )
         answer = reduced_equilibrium(an, inputs, params, backend="sympy")
         if answer.refused:
             raise AssemblyError(
