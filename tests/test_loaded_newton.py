@@ -1,14 +1,18 @@
 """The reduced equilibrium (symkin.physics.reduced: Newton on the compliant angles and the chord
-plates' loads with the closed-form plate relation), the level that is to become `loaded`:
+plates' loads with the closed-form plate relation), the `loaded` level's solver:
 
-- one plate's relation against the independent shooting solution of tests/reference_beams.py
-  (elastica and Reissner), at the accuracy its fourth-order truncation allows;
+- one plate's relation and its elastic energy against the independent shooting solution of
+  tests/reference_beams.py (elastica and Reissner), at the accuracy its fourth-order truncation
+  allows;
 - mechanisms against symkin's `equilibrium` (itself checked against the independent solvers of
   tests/reference_physics.py and tests/reference_beams.py to 1e-10): within 0.1 % (the target is
   1 % with loads up to 80 % of the first buckling factor, 0.1 % for short unloaded plates) on the
   examples and the zoo, a redundant stage included (Reissner plates make it regular), in float64
   (numpy kernels) and mpmath;
 - a load past the mechanism's buckling is refused;
+- the `loaded` level (sympy backend) against `equilibrium`: deviations, angles, links, the
+  hinges' end loads and the energy within 1e-4 on the examples with stiffness data and the zoo,
+  a redundant stage with plates of unequal length included; refusals exit 3 naming the reason;
 - the plate relation's C routine (the per-plate kernel of the generated level to come) against
   mpmath.
 """
@@ -313,6 +317,7 @@ LEVEL_CASES = [
     ("examples/nine_bar_platform.toml", {"O": 0.02, "A": -0.02, "B": 0.01, "K": 0.02}),
     ("examples/stephenson_six_bar.toml", {"O_A": 0.2}),
     ("tests/mechanisms/parallelogram.toml", {"F1": 0.05}),
+    ("tests/mechanisms/parallelogram_mm.toml", {"F1": 0.05}),  # moments and energy from N·mm
     ("tests/mechanisms/double_parallelogram.toml", {"F1": 0.05, "I1": -0.05}),
     ("tests/mechanisms/scott_russell.toml", {"RA0": 0.01}),
     ("tests/mechanisms/lever_amplifier.toml", {"P0": 0.0}),
@@ -325,13 +330,13 @@ LEVEL_CASES = [
 ]
 
 
-def _level_against_equilibrium(an, inputs, bound: float) -> None:
+def _level_against_equilibrium(an, inputs, bound: float, params=None) -> None:
     """`loaded` (sympy backend) against `equilibrium`: every point's deviation, every hinge's and
     link's angle deviation (relative to the largest), the hinges' end loads and the energy within
     `bound`; the rigid linkage the same; compliant = rigid + deviation; a model error per point."""
-    got = symkin.evaluate(an, inputs, level="loaded")
-    ref = symkin.evaluate(an, inputs, level="equilibrium")
-    assert got.level == "loaded" and got.backend == "sympy"
+    got = symkin.evaluate(an, inputs, level="loaded", params=params)
+    ref = symkin.evaluate(an, inputs, level="equilibrium", params=params)
+    assert got.level == "loaded" and got.backend == "sympy" and got.params == ref.params
     size = max(math.hypot(*p.rigid) for p in ref.points.values())
     for name, p in ref.points.items():
         mine = got.points[name]
@@ -366,6 +371,17 @@ def test_loaded_level_against_equilibrium(path, inputs):
     """Within 1e-4 of equilibrium (the target is 1 %; measured 4.2e-7 .. 2.4e-5 for the
     deviations, 1e-10 .. 1.2e-5 for the loads and energy, docs/physics.md)."""
     _level_against_equilibrium(symkin.analyze(symkin.load(ROOT / path)), inputs, 1e-4)
+
+
+def test_loaded_level_takes_parameter_overrides():
+    """--param reaches the reduced equilibrium: the four-bar with plates twice as long (and
+    thick) against equilibrium with the same override."""
+    an = symkin.analyze(symkin.load(ROOT / "examples/four_bar.toml"))
+    _level_against_equilibrium(an, {"A0": 0.1}, 1e-4, params={"l": "2e-3"})
+    default = symkin.evaluate(an, {"A0": 0.1}, level="loaded").points["C"].deviation
+    longer = symkin.evaluate(an, {"A0": 0.1}, level="loaded", params={"l": "2e-3"})
+    assert longer.params["l"] == 2e-3
+    assert math.dist(longer.points["C"].deviation, default) > 0.1 * math.hypot(*default)
 
 
 def test_loaded_level_closes_a_redundant_loop_elastically(tmp_path):
