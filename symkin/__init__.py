@@ -5,10 +5,10 @@
     an = symkin.analyze(mech)                         # symbolic deviation at every level
     symkin.evaluate(an, {"A0": 0.2}, level="exact")   # one configuration, mpmath at 40 digits
     symkin.evaluate(an, {"A0": 0.2}, level="equilibrium")  # the plates as elastica
-    symkin.evaluate(an, {"A0": 0.2}, level="loaded")  # closed form with the plates' loads
+    symkin.evaluate(an, {"A0": 0.2}, level="loaded")  # Newton on the reduced equilibrium
 
-The physical levels need E, thickness and width of the plates (docs/physics.md); their
-derivation is symkin.physics.statics.LoadedDerivation, their solvers are in symkin.physics.
+The physical levels need E, thickness and width of the plates (docs/physics.md); their solvers
+are in symkin.physics (`loaded`: symkin.physics.reduced with the closed-form plate relation).
 """
 
 from __future__ import annotations

@@ -15,8 +15,8 @@ from symkin.core import levels
 
 
 def test_the_table():
-    codes = [lv.code for lv in levels.LEVELS]
-    assert sorted(codes) == list(range(len(codes)))  # unique, none skipped
+    codes = [lv.code for lv in levels.LEVELS] + list(levels.RESERVED.values())
+    assert sorted(codes) == list(range(len(codes)))  # unique (retired ones too), none skipped
     # the contract's codes never change: new levels take the next free one
     assert [
         levels.get(n).code for n in ("paper", "first_order", "exact", "loaded", "equilibrium")
@@ -27,6 +27,10 @@ def test_the_table():
     assert not levels.get("paper").needs_delta and levels.get("exact").needs_delta
     with pytest.raises(symkin.InputError, match="unknown level 'best'"):
         levels.get("best")
+    # a retired level's name is refused, its code reserved (docs/levels.md)
+    assert levels.RESERVED == {"loaded_refined": 5}
+    with pytest.raises(symkin.InputError, match=r"'loaded_refined' \(retired"):
+        levels.get("loaded_refined")
 
 
 def test_cli_choices_come_from_the_table():

@@ -1,14 +1,18 @@
 """The reduced equilibrium (symkin.physics.reduced: Newton on the compliant angles and the chord
-plates' loads with the closed-form plate relation), the level that is to become `loaded`:
+plates' loads with the closed-form plate relation), the `loaded` level's solver:
 
-- one plate's relation against the independent shooting solution of tests/reference_beams.py
-  (elastica and Reissner), at the accuracy its fourth-order truncation allows;
+- one plate's relation and its elastic energy against the independent shooting solution of
+  tests/reference_beams.py (elastica and Reissner), at the accuracy its fourth-order truncation
+  allows;
 - mechanisms against symkin's `equilibrium` (itself checked against the independent solvers of
   tests/reference_physics.py and tests/reference_beams.py to 1e-10): within 0.1 % (the target is
   1 % with loads up to 80 % of the first buckling factor, 0.1 % for short unloaded plates) on the
   examples and the zoo, a redundant stage included (Reissner plates make it regular), in float64
   (numpy kernels) and mpmath;
 - a load past the mechanism's buckling is refused;
+- the `loaded` level (sympy backend) against `equilibrium`: deviations, angles, links, the
+  hinges' end loads and the energy within 1e-4 on the examples with stiffness data and the zoo,
+  a redundant stage with plates of unequal length included; refusals exit 3 naming the reason;
 - the plate relation's C routine (the per-plate kernel of the generated level to come) against
   mpmath.
 """
@@ -23,15 +27,17 @@ from pathlib import Path
 import mpmath as mp
 import pytest
 import sympy as sp
+from mechanisms import with_beam
 from reference_beams import cantilever
 
 import symkin
+from symkin.cli.commands import main
 from symkin.codegen.backends.c.backend import standalone
 from symkin.codegen.plate import SYMBOLS, plate_routine
 from symkin.core.errors import InputError
 from symkin.model import special
 from symkin.physics import equilibrium as equilibrium_physics
-from symkin.physics.plate_relation import relation
+from symkin.physics.plate_relation import energy, relation
 from symkin.studies.evaluation import reduced_equilibrium
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -79,6 +85,28 @@ def test_plate_relation_against_shooting():
         assert err_m < bound_m, (fx, fy, m1, eps, float(err_m))
 
 
+#: the bounds on the energy's relative error, per case of PLATES (measured 1e-11 .. 8.1e-4)
+ENERGY_BOUNDS = [1e-10, 3e-4, 3e-3, 1e-5, 1e-5, 3e-4, 1e-7]
+
+
+def test_plate_energy_against_shooting():
+    """The elastic energy U + p X + f Y from the mixed potential against the shooting solution's
+    ∫ m²/(2EI) + N²/(2EA) + Q²/(2κGA) ds, at the relation's truncation order."""
+    th, p, f, ea, es = sp.symbols("th p f ea es")
+    fn = sp.lambdify(
+        (th, p, f, ea, es), energy(th, p, f, ea, es), modules=[special.mpmath_namespace(), "mpmath"]
+    )
+    for ((fx, fy, m1), eps, gam, _, _), bound in zip(PLATES, ENERGY_BOUNDS, strict=True):
+        with mp.workdps(30):
+            ref = cantilever(fx, fy, m1, eps=eps, gam=gam, dps=30)
+            w = ref["psi"] / 2
+            pv = mp.cos(w) * fx + mp.sin(w) * fy
+            fv = -mp.sin(w) * fx + mp.cos(w) * fy
+            got = fn(ref["psi"], pv, fv, mp.mpf(eps), mp.mpf(gam))
+            err = abs(got - ref["energy"]) / ref["energy"]
+        assert err < bound, (fx, fy, m1, eps, float(err))
+
+
 def test_pure_moment_is_the_arc():
     """Without force the plate is the circular arc at any θ: no correction, ω = θ."""
     th = sp.Symbol("th")
@@ -87,6 +115,8 @@ def test_pure_moment_is_the_arc():
         assert abs(rel.along.subs(th, value).evalf(30)) < 1e-28
         assert abs(rel.across.subs(th, value).evalf(30)) < 1e-28
         assert abs(rel.omega.subs(th, value).evalf(30) - value) < 1e-28
+        work = energy(th, sp.S.Zero, sp.S.Zero, sp.Rational(1, 1000), sp.Rational(3, 1000))
+        assert abs(work.subs(th, value).evalf(30) - value**2 / 2) < 1e-28
 
 
 # -- mechanisms against the equilibrium level ---------------------------------------------------
@@ -124,13 +154,29 @@ def _worst(answer, reference) -> float:
     )
 
 
+def _load_errors(hinges, energy, reference) -> tuple[float, float, float]:
+    """The largest force and moment errors over the hinges, relative to the largest force and
+    moment `reference` reports, and the energy's relative error; `hinges` by name as
+    (force, moment)."""
+    forces = max(math.hypot(*h.force) for h in reference.hinges.values())
+    moments = max(abs(h.moment) for h in reference.hinges.values())
+    df = max(math.dist(hinges[n][0], h.force) for n, h in reference.hinges.items())
+    dm = max(abs(hinges[n][1] - h.moment) for n, h in reference.hinges.items())
+    return df / forces, dm / moments, abs(energy - reference.energy) / reference.energy
+
+
 @pytest.mark.parametrize(("path", "inputs"), CASES, ids=[Path(c[0]).stem for c in CASES])
 def test_against_equilibrium(path, inputs):
+    """Deviations within 0.1 %; the hinges' end loads and the plates' energy (float64 kernels)
+    within 1e-4 (measured up to 1.2e-5, the lever amplifier's energy)."""
     an = symkin.analyze(symkin.load(ROOT / path))
     answer = reduced_equilibrium(an, inputs)
     assert not answer.refused, answer.refused
     reference = symkin.evaluate(an, inputs, level="equilibrium")
     assert _worst(answer, reference) < 1e-3
+    scale = float(an.mechanism.unit_scale)  # moments and energy in N·u -> N·m, J
+    hinges = {n: ((fx, fy), m * scale) for n, (fx, fy, m) in answer.hinge_loads.items()}
+    assert max(_load_errors(hinges, answer.energy * scale, reference)) < 1e-4
 
 
 #: (file, inputs): what the file format allows beyond the cases above: rigid pins off the plates'
@@ -259,6 +305,118 @@ def test_two_half_plates_everywhere(path, inputs):
     answer = reduced_equilibrium(an, inputs, segments=2)
     assert answer.segments == 2 and not answer.refused, answer.refused
     assert _worst(answer, symkin.evaluate(an, inputs, level="equilibrium")) < 1e-4
+
+
+# -- the `loaded` level: the reduced equilibrium in mpmath, reported as an Evaluation -----------
+
+#: (file, inputs): every example with stiffness data (the piezo amplifier's actuators are refused)
+#: and the zoo, its own loads included (the Scott–Russell's preload, the double parallelogram's
+#: payload), the redundant stage, prbm pins and input chords.
+LEVEL_CASES = [
+    ("examples/four_bar.toml", {"A0": 0.3}),
+    ("examples/nine_bar_platform.toml", {"O": 0.02, "A": -0.02, "B": 0.01, "K": 0.02}),
+    ("examples/stephenson_six_bar.toml", {"O_A": 0.2}),
+    ("tests/mechanisms/parallelogram.toml", {"F1": 0.05}),
+    ("tests/mechanisms/parallelogram_mm.toml", {"F1": 0.05}),  # moments and energy from N·mm
+    ("tests/mechanisms/double_parallelogram.toml", {"F1": 0.05, "I1": -0.05}),
+    ("tests/mechanisms/scott_russell.toml", {"RA0": 0.01}),
+    ("tests/mechanisms/lever_amplifier.toml", {"P0": 0.0}),
+    ("tests/mechanisms/roberts.toml", {"O1": 0.1}),
+    ("tests/mechanisms/toggle_four_bar.toml", {"O1": 0.3}),
+    ("tests/mechanisms/three_leg_stage.toml", {"F1": 0.05}),
+    ("tests/mechanisms/prbm_four_bar.toml", {"O1": 0.1}),
+    ("tests/mechanisms/five_bar.toml", {"O1": 0.05, "O2": -0.08}),
+    ("tests/mechanisms/five_bar_coupler_input.toml", {"O1": 0.05, "P": -0.08}),
+]
+
+
+def _level_against_equilibrium(an, inputs, bound: float, params=None) -> None:
+    """`loaded` (sympy backend) against `equilibrium`: every point's deviation, every hinge's and
+    link's angle deviation (relative to the largest), the hinges' end loads and the energy within
+    `bound`; the rigid linkage the same; compliant = rigid + deviation; a model error per point."""
+    got = symkin.evaluate(an, inputs, level="loaded", params=params)
+    ref = symkin.evaluate(an, inputs, level="equilibrium", params=params)
+    assert got.level == "loaded" and got.backend == "sympy" and got.params == ref.params
+    size = max(math.hypot(*p.rigid) for p in ref.points.values())
+    for name, p in ref.points.items():
+        mine = got.points[name]
+        assert math.dist(mine.rigid, p.rigid) < 1e-12 * size
+        assert math.dist(mine.deviation, p.deviation) < bound * math.hypot(*p.deviation), name
+        assert (
+            math.dist(
+                mine.compliant,
+                (mine.rigid[0] + mine.deviation[0], mine.rigid[1] + mine.deviation[1]),
+            )
+            < 1e-15 * size
+        )
+    assert set(got.model_error) == set(ref.points)
+    turns = {n: ref.angles_compliant[n] - ref.angles_rigid[n] for n in ref.angles_rigid}
+    largest = max(abs(v) for v in turns.values())
+    for name, turn in turns.items():
+        assert got.angles_rigid[name] == pytest.approx(ref.angles_rigid[name], abs=1e-14)
+        assert abs(got.angles_compliant[name] - got.angles_rigid[name] - turn) < bound * largest
+    largest = max(abs(lk.deviation) for lk in ref.links.values())
+    for name, link in ref.links.items():
+        assert got.links[name].rigid == pytest.approx(link.rigid, abs=1e-14)
+        assert abs(got.links[name].deviation - link.deviation) < bound * largest, name
+    hinges = {n: (h.force, h.moment) for n, h in got.hinges.items()}
+    assert set(hinges) == set(ref.hinges)
+    assert max(_load_errors(hinges, got.energy, ref)) < bound
+
+
+@pytest.mark.parametrize(
+    ("path", "inputs"), LEVEL_CASES, ids=[Path(c[0]).stem for c in LEVEL_CASES]
+)
+def test_loaded_level_against_equilibrium(path, inputs):
+    """Within 1e-4 of equilibrium (the target is 1 %; measured 4.2e-7 .. 2.4e-5 for the
+    deviations, 1e-10 .. 1.2e-5 for the loads and energy, docs/physics.md)."""
+    _level_against_equilibrium(symkin.analyze(symkin.load(ROOT / path)), inputs, 1e-4)
+
+
+def test_loaded_level_takes_parameter_overrides():
+    """--param reaches the reduced equilibrium: the four-bar with plates twice as long (and
+    thick) against equilibrium with the same override."""
+    an = symkin.analyze(symkin.load(ROOT / "examples/four_bar.toml"))
+    _level_against_equilibrium(an, {"A0": 0.1}, 1e-4, params={"l": "2e-3"})
+    default = symkin.evaluate(an, {"A0": 0.1}, level="loaded").points["C"].deviation
+    longer = symkin.evaluate(an, {"A0": 0.1}, level="loaded", params={"l": "2e-3"})
+    assert longer.params["l"] == 2e-3
+    assert math.dist(longer.points["C"].deviation, default) > 0.1 * math.hypot(*default)
+
+
+def test_loaded_level_closes_a_redundant_loop_elastically(tmp_path):
+    """The three-leg stage with its third leg's plates 1 % longer: no kinematic level can close
+    the redundant loop (tests/test_parallelograms.py), the plates' stretch and bending do; within
+    1e-4 of equilibrium."""
+    text = (ZOO / "three_leg_stage.toml").read_text()
+    for old in ('at = ["w/2", 0.0]\n', 'at = ["w/2", "L"]\n'):
+        assert text.count(old) == 1
+        text = text.replace(old, old + 'length = "1.01*l"\n')
+    path = tmp_path / "three_leg_stage_long.toml"
+    path.write_text(text)
+    _level_against_equilibrium(symkin.analyze(symkin.load(path)), {"F1": 0.05}, 1e-4)
+
+
+def test_loaded_level_refuses_an_inextensible_redundant_mechanism(tmp_path, capsys):
+    """Elastica plates leave the redundant loop's self-stress undetermined: exit 3 at both
+    physical levels, as equilibrium refuses it (docs/levels.md)."""
+    text = with_beam((ZOO / "three_leg_stage.toml").read_text(), "elastica")
+    path = tmp_path / "three_leg_stage_elastica.toml"
+    path.write_text(text)
+    for level in ("loaded", "equilibrium"):
+        assert main(["eval", str(path), "--input", "F1=0.05", "--level", level]) == 3
+        assert "inextensible elastica" in capsys.readouterr().err
+
+
+def test_loaded_level_refuses_past_buckling(tmp_path, capsys):
+    """The parallelogram pressed to 0.93 π²EI/l² per plate (past the mechanism's buckling):
+    exit 3 naming the reason; at 0.5 it answers (exit 0)."""
+    for fraction, code in ((0.5, 0), (0.93, 3)):
+        path = str(_loaded_parallelogram(tmp_path, fraction))
+        assert main(["eval", path, "--input", "F1=0.05", "--level", "loaded"]) == code
+        err = capsys.readouterr().err
+        if code:
+            assert "loaded level refuses" in err and "buckling" in err, err
 
 
 # -- the plate relation in generated C ----------------------------------------------------------

@@ -1,12 +1,13 @@
-"""`equilibrium`, `loaded` and `loaded_refined` against the independent physical reference
+"""`equilibrium` and `loaded` against the independent physical reference
 (tests/reference_physics.py, Taylor-series shooting in fixed-point arithmetic, written apart from
-symkin), on plates that are elastica (`beam = "elastica"`, the reference's physics; `loaded`
-is the elastica's approximation whatever the key says). Reissner plates, the default, are
-checked against tests/reference_beams.py in test_equilibrium_beams.py.
+symkin), on plates that are elastica (`beam = "elastica"`, the reference's physics, which both
+levels follow). Reissner plates, the default, are checked against tests/reference_beams.py in
+test_equilibrium_beams.py.
 
-`equilibrium` must agree to 1e-9 relative in the deviation (it claims 1e-10); `loaded` must meet
-the goals of issue 10: ≤ 1 % relative error of ΔR for l/L ≤ 0.05 and input angles 0.02–0.3 rad,
-≤ 5 % at l/L = 0.2, loads included. L is the shortest moving link (the four-bar's crank, 30 mm).
+`equilibrium` must agree to 1e-9 relative in the deviation (it claims 1e-10); `loaded` (Newton
+on the reduced equilibrium) within LOADED_GOAL, far inside the goals of issue 10 (≤ 1 % relative
+error of ΔR for l/L ≤ 0.05 and input angles 0.02–0.3 rad, ≤ 5 % at l/L = 0.2, loads included),
+near a toggle position too. L is the shortest moving link (the four-bar's crank, 30 mm).
 The reference is given E' = E/(1 − ν²) for these wide plates (width ≥ 5 thicknesses,
 docs/physics.md), written here from the documented rule.
 """
@@ -43,7 +44,8 @@ def relative_gap(ours, ref) -> float:
 
 
 def goal(l_over_L: float) -> float:
-    return 0.01 if l_over_L <= 0.05 else 0.05
+    """`loaded`'s bound on the relative error of ΔR (measured: docs/physics.md)."""
+    return 1e-3 if l_over_L <= 0.05 else 1e-2
 
 
 def compare(mech, reference, point: str, inputs: dict, l_over_L: float):
@@ -63,13 +65,10 @@ def compare(mech, reference, point: str, inputs: dict, l_over_L: float):
         link = eq.links[name]
         assert link.compliant == pytest.approx(float(pose[2]), rel=1e-12, abs=1e-15)
         assert link.deviation == pytest.approx(float(pose[2] - link.rigid), rel=1e-9, abs=1e-16)
-    gaps = []
-    for level in ("loaded", "loaded_refined"):
-        loaded = symkin.evaluate(an, inputs, level)
-        gap = relative_gap(loaded.points[point].deviation, expected)
-        assert gap < goal(l_over_L), f"{level} is {gap:.2%} off at l/L = {l_over_L}, {inputs}"
-        gaps.append(gap)
-    return gaps
+    loaded = symkin.evaluate(an, inputs, "loaded")
+    gap = relative_gap(loaded.points[point].deviation, expected)
+    assert gap < goal(l_over_L), f"loaded is {gap:.2e} off at l/L = {l_over_L}, {inputs}"
+    return gap
 
 
 @pytest.mark.parametrize("l", ["0.2e-3", "1e-3", "5e-3"])
@@ -145,30 +144,6 @@ def test_stephenson_six_bar(angle):
     compare(mech, reference, "D", {"O_A": angle}, 0.8e-3 / CRANK)
 
 
-def test_loaded_with_axial_stretch_against_the_extensible_reference():
-    # With beam = "elastica" both physical levels model inextensible plates; `loaded` can add the
-    # axial stretch N l/EA (extensible=True), and then agrees with the reference's extensible
-    # variant as closely as the inextensible pair does, while the two models differ by 0.6 %
-    # (0.02 rad) to 0.05 % (0.3 rad) here.
-    from symkin.studies import evaluation
-
-    mech = symkin.loads(with_stiffness("four_bar"), "four_bar.toml")
-    stretch = Equilibrium(mech, (PLANE, WIDTH, "l/10"), extensible=True)
-    plain = Equilibrium(mech, (PLANE, WIDTH, "l/10"))
-    an = symkin.analyze(mech)
-    for angle in (0.02, 0.3):
-        inputs = {"A0": str(angle)}
-        ext = stretch.solve(inputs)["points"]["C"]["deviation"]
-        inext = plain.solve(inputs)["points"]["C"]["deviation"]
-        ours = evaluation.loaded(an, {"A0": angle}, extensible=True).points["C"].deviation
-        assert relative_gap(ours, ext) < 5e-4
-        assert (
-            relative_gap(symkin.evaluate(an, {"A0": angle}, "loaded").points["C"].deviation, inext)
-            < 5e-4
-        )
-        assert relative_gap([float(v) for v in ext], inext) > 4e-4  # 0.6 % at 0.02 rad
-
-
 @pytest.mark.parametrize("l, force", [("0.2e-3", 10.0), ("1e-3", 30.0)])
 def test_four_bar_under_a_heavy_load(l, force):
     # Axial load indices p = N l²/EI near 1: the first-order correction is 1.4 % off (0.2 mm,
@@ -199,17 +174,17 @@ def test_mechanisms_with_a_pin_and_with_two_inputs(name, inputs, point):
 
 
 @pytest.mark.parametrize(
-    "inputs, loaded_within",
+    "inputs",
     [
-        ({"O": "0.3", "A": "0", "B": "0", "K": "0"}, 0.03),  # the dyad G-H-I near its toggle
-        ({"O": "0", "A": "0.3", "B": "0", "K": "0"}, 0.01),
-        ({"O": "-0.3", "A": "0", "B": "0", "K": "0"}, 0.01),
+        {"O": "0.3", "A": "0", "B": "0", "K": "0"},  # the dyad G-H-I near its toggle
+        {"O": "0", "A": "0.3", "B": "0", "K": "0"},
+        {"O": "-0.3", "A": "0", "B": "0", "K": "0"},
     ],
 )
-def test_nine_bar_near_a_toggle_position(inputs, loaded_within):
-    """The nine-bar platform's dyad G-H-I has a toggle margin of 0.195 at O = 0.3: the pin
-    linkage's statics is 2 % off there and `loaded` misses the goal (2.5 %); `loaded_refined`,
-    whose second statics uses the loaded closure's Jacobian at its pose, meets it."""
+def test_nine_bar_near_a_toggle_position(inputs):
+    """The nine-bar platform's dyad G-H-I has a toggle margin of 0.195 at O = 0.3, where the old
+    linearised statics of the pin linkage was 2.5 % off; Newton on the reduced equilibrium
+    takes the pose's own geometry and meets the same bound as elsewhere."""
     text = M.with_beam((EXAMPLES / "nine_bar_platform.toml").read_text(), "elastica")
     mech = symkin.loads(text, "nine_bar_platform.toml")
     reference = Equilibrium(mech, (PLANE, WIDTH, "l/10"))
@@ -220,7 +195,4 @@ def test_nine_bar_near_a_toggle_position(inputs, loaded_within):
         < 1e-9
     )
     loaded = relative_gap(symkin.evaluate(an, inputs, "loaded").points["F"].deviation, expected)
-    refined = relative_gap(
-        symkin.evaluate(an, inputs, "loaded_refined").points["F"].deviation, expected
-    )
-    assert loaded < loaded_within and refined < 0.01 and refined < loaded
+    assert loaded < goal(0.6e-3 / CRANK)

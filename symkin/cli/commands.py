@@ -271,8 +271,8 @@ def parser() -> argparse.ArgumentParser:
         "--level",
         choices=levels.NAMES,
         default=levels.DEFAULT,
-        help=f"deviation level (default: {levels.DEFAULT}; loaded, loaded_refined and "
-        "equilibrium need the plates' E, thickness and width: docs/physics.md)",
+        help=f"deviation level (default: {levels.DEFAULT}; loaded and equilibrium need the "
+        "plates' E, thickness and width: docs/physics.md)",
     )
     ev.add_argument(
         "--backend",

@@ -40,23 +40,16 @@ class Level:
         return f"{self.title} {self.equation}" if self.equation else self.title
 
 
-#: Every level, in order of fidelity. Codes are unique and never change once given: a new level
-#: takes the next free code wherever it sits in fidelity.
+#: Every level, in order of fidelity. Codes are unique and never change once given (a retired
+#: level's stays in RESERVED): a new level takes the next free code wherever it sits in fidelity.
 LEVELS: tuple[Level, ...] = (
     Level("paper", 0, "paper", needs_delta=False, equation="(4.8)"),
     Level("first_order", 1, "first order", needs_delta=True),
     Level("exact", 2, "exact", needs_delta=True),
     # The physical levels (docs/physics.md): the plates' stiffness and the file's loads.
+    # Code 5 was `loaded_refined` (a second pass of the old linearised statics), retired when
+    # `loaded` became Newton on the reduced equilibrium: it stays reserved, never given again.
     Level("loaded", 3, "loaded", needs_delta=True, needs_stiffness=True, sensitivity=False),
-    Level(
-        "loaded_refined",
-        5,
-        "loaded (refined)",
-        needs_delta=True,
-        needs_stiffness=True,
-        sensitivity=False,
-        shares="loaded",
-    ),
     Level(
         "equilibrium",
         4,
@@ -67,9 +60,11 @@ LEVELS: tuple[Level, ...] = (
         sensitivity=False,
     ),
 )
-#: The closed-form physical levels: the pin linkage's statics, the plates' compliance and the
-#: loaded closure (symkin.physics.statics); `loaded_refined` solves the statics a second time.
-LOADED: tuple[str, ...] = ("loaded", "loaded_refined")
+#: Codes of retired levels, by their old name: never given to a new level.
+RESERVED: dict[str, int] = {"loaded_refined": 5}
+#: The closed-form physical level: Newton on the reduced equilibrium (symkin.physics.reduced),
+#: the plates by their closed-form relation (symkin.physics.plate_relation).
+LOADED: tuple[str, ...] = ("loaded",)
 
 NAMES: tuple[str, ...] = tuple(lv.name for lv in LEVELS)
 #: The levels the generated C and numpy evaluators can hold (`derive --levels`).
@@ -85,8 +80,9 @@ def get(name: str, entry: str = "--level") -> Level:
     try:
         return _BY_NAME[name]
     except KeyError:
+        retired = " (retired: `loaded` replaces it)" if name in RESERVED else ""
         raise InputError(
-            f"unknown level '{name}'", entry=entry, hint="levels: " + ", ".join(NAMES)
+            f"unknown level '{name}'{retired}", entry=entry, hint="levels: " + ", ".join(NAMES)
         ) from None
 
 

@@ -3,7 +3,7 @@ a level's beam theory is from a continuum model of the same plates, per point, r
 
 A beam theory leaves out effects of order (t/l)²: the centre line of a bent continuum changes
 length, −c·(κt)² (St. Venant–Kirchhoff in plane strain: c = (1 − ν/(1 − ν))/8); an inextensible,
-shear-free plate (the elastica, and the `loaded` level, which approximates it) also leaves out
+shear-free plate (the elastica, at either physical level where the hinge says so) also leaves out
 its stretch N·l/EA and shear V·l/(κGA); and every beam leaves out how the plate meets its links
 (rigid clamp faces stiffen it by O(t/l)) and how wide it is (plane strain only where l ≪ b).
 Each is, per plate, a small displacement of M's clamp against P's with their rotations kept. In
@@ -52,10 +52,11 @@ def centre_line_coefficient(nu: float) -> float:
 
 
 def level_stretches(mech: Mechanism, level: str) -> dict[str, bool]:
-    """By plate, whether `level`'s plates stretch and shear: at `equilibrium` each hinge's `beam`
-    says; `loaded` and `loaded_refined` approximate the inextensible elastica whatever it says
+    """By plate, whether `level`'s plates stretch and shear: at `equilibrium` and `loaded` (whose
+    plate relation takes the Reissner plate's stretch and shear) each hinge's `beam` says
     (docs/physics.md)."""
-    return {h.name: level == "equilibrium" and h.beam == "reissner" for h in mech.hinges}
+    physical = level in ("equilibrium", "loaded")
+    return {h.name: physical and h.beam == "reissner" for h in mech.hinges}
 
 
 @dataclass(frozen=True)

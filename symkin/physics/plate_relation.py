@@ -14,7 +14,9 @@ fourth order in the bending angle and the lateral load; D6(θ) = sinc(θ/2) - (1
 θ⁴/1920) the arc's chord beyond its θ⁴ term; ε_a = EI/(EA l²), ε_s = EI/(κGA l²) the Reissner
 plate's stretch and shear, zero for the elastica, entering through Haringx's g). By the envelope
 theorem X = -∂U/∂p, Y = -∂U/∂f and ω = ∂U/∂θ - X f/2 + Y p/2 (turning θ turns the mid-frame in
-which (p, f) are held). The kernels are symkin.model.special.axial's.
+which (p, f) are held). U is the stationary value of the elastic energy less the end force's work
+p X + f Y at fixed θ, so the plate's elastic energy is U + p X + f Y (:func:`energy`). The kernels
+are symkin.model.special.axial's.
 """
 
 from __future__ import annotations
@@ -79,3 +81,27 @@ def relation(
     chord = sinr(0)(theta / 2) + along  # X: the arc's chord sin(w)/w plus `along`
     omega = dudt - chord * f / 2 + across * p / 2
     return PlateRelation(along, across, omega)
+
+
+def energy(
+    theta: sp.Expr,
+    p: sp.Expr,
+    f: sp.Expr,
+    ea: sp.Expr = 0,
+    es: sp.Expr = 0,
+    order: int = 4,
+) -> sp.Expr:
+    """The plate's elastic energy (units EI/l) at the relation's state: U + p X + f Y, the mixed
+    potential plus the end force's work; the arc's chord 1 + D6 is taken out of p X by hand, so
+    no O(p) terms cancel."""
+    rel = relation(theta, p, f, ea, es, order)
+    de = ea - es
+    g = 1 + de * p
+    pt, ft = g * p, g * f
+    t2 = theta**2
+    # p (X - 1 - D6(θ)), X = sinc(θ/2) + along and 1 + D6 = sinc(θ/2) + θ²/24 - θ⁴/1920
+    work = p * (rel.along - t2 / 24 + t2**2 / 1920) + f * rel.across
+    u = -ea * p**2 / 2 - es * f**2 / 2 + t2 * kernel("invt")(pt) / 2 - ft**2 * kernel("s")(pt) / 2
+    if order == 4:
+        u += t2 * ft**2 * kernel("e1")(pt) + ft**4 * kernel("e2")(pt) + t2**2 * kernel("e3")(pt)
+    return work + u

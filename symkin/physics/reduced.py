@@ -1,7 +1,7 @@
 """The reduced equilibrium of a compliant mechanism: Newton on the compliant-minus-rigid angles of
 the non-input hinges and, per loop, the chord plate's end load (docs/physics.md, "The Newton
-level"). The future `loaded` level; for now an internal solver, evaluated through sympy's
-lambdify in float64 (numpy kernels) or mpmath.
+level"). The `loaded` level's solver (symkin.studies.evaluation.loaded runs it in mpmath),
+evaluated through sympy's lambdify in float64 (numpy kernels) or mpmath.
 
 Unknowns x (scaled, so every component is O(θ) or O(load/F)): δ_a / (l_min/L) of every
 non-input hinge, n_c/F and μ_c/(F L) of every chord c (the force and moment link M exerts on
@@ -43,7 +43,7 @@ import sympy as sp
 from ..core import vectors as V
 from ..kinematics.positions import Kinematics
 from ..model.special import arck, mpmath_namespace, sinr
-from .plate_relation import relation
+from .plate_relation import energy, relation
 from .stiffness import plate_stiffness
 
 #: Newton: stop when the step is below TOL times the largest unknown (scaled).
@@ -73,7 +73,12 @@ class Answer:
     p_over_pcr: float  # the worst plate's compression over its sway buckling load
     refused: str = ""
     segments: int = 1  # half plates chained per plate (2: one plate relation was not enough)
+    # by hinge name: the force (frame axes, N) and the moment (about M's clamp, CCW, N·u, u the
+    # file's length unit) link M exerts on the plate (a pin: on the pin) at its M end
     hinge_loads: dict[str, tuple[float, float, float]] = field(default_factory=dict)
+    energy: float = math.nan  # the plates' elastic energy, N·u (the plate relation's)
+    # by hinge name: compliant minus rigid hinge angle (rad; zero on the inputs)
+    angle_deviations: dict[str, float] = field(default_factory=dict)
 
 
 class Reduced:
@@ -384,7 +389,9 @@ class Reduced:
         """The lambdified function `key`: "plates" (x, th, t) -> (θ_c, p, f) of every plate and
         their x-derivatives; "res", "jac" (x, th, t, outputs) -> residual, ∂/∂x at fixed plate
         outputs and ∂/∂outputs; "dev" -> the points' deviations; "angles" -> compliant angles;
-        "plate4", "plate2" (θ, p, f, ε_a, ε_s) -> the plate relation and its 9 partials."""
+        "loads" -> every hinge's (n_x, n_y, moment) at its M end; "energy" (θ, p, f, ε_a, ε_s)
+        -> one plate's elastic energy (EI/l); "plate4", "plate2" (θ, p, f, ε_a, ε_s) -> the
+        plate relation and its 9 partials."""
         if key in self._fns:
             return self._fns[key]
         s = self._s
@@ -408,6 +415,13 @@ class Reduced:
             fn = self._lambdify(exprs, outs)
         elif key == "angles":
             fn = self._lambdify([self.th[a] + s["delta"][a] for a in sorted(self.hinges)])
+        elif key == "loads":
+            exprs = [v for a in sorted(self.hinges) for v in (*s["n"][a], s["mom"][a])]
+            fn = self._lambdify(exprs, outs)
+        elif key == "energy":
+            th, p, f, ea, es = sp.symbols("theta p f e_a e_s", real=True)
+            modules = self.modules() if callable(self.modules) else self.modules
+            fn = sp.lambdify([th, p, f, ea, es], energy(th, p, f, ea, es), modules=modules)
         elif key in ("plate4", "plate2"):
             th, p, f, ea, es = sp.symbols("theta p f e_a e_s", real=True)
             rel = relation(th, p, f, ea, es, int(key[-1]))
@@ -572,7 +586,41 @@ class Reduced:
             refused = f"a plate at {worst_p:.0%} of its sway buckling load"
         elif estimate > EST_LIMIT:
             refused = f"{TRUNCATION} {estimate:.2%}"
-        return Answer(dev, x, total, steps, estimate, worst_p, refused, segments=self.segments)
+        loads, work = self._loads(x, theta)
+        angles = {
+            self.hinges[a].name: float(x[k] * self.scale[k]) for k, a in enumerate(self.unknowns)
+        }
+        return Answer(
+            dev,
+            x,
+            total,
+            steps,
+            estimate,
+            worst_p,
+            refused,
+            segments=self.segments,
+            hinge_loads=loads,
+            energy=work,
+            angle_deviations={h.name: angles.get(h.name, 0.0) for h in self.hinges.values()},
+        )
+
+    def _loads(self, x, theta) -> tuple[dict[str, tuple[float, float, float]], float]:
+        """Every hinge's end load at the solution x (tree hinges: statics of the loads and the
+        chord forces; moments: the plate relation's ω EI/l) and the plates' elastic energy, the
+        sum of each (half) plate's U + p X + f Y (symkin.physics.plate_relation.energy)."""
+        args, ins, _, outs, _ = self._eval(x, theta, 1.0)
+        v = [float(u) for u in self._fn("loads")(*args, outs)]
+        loads = {
+            self.hinges[a].name: (v[3 * k], v[3 * k + 1], v[3 * k + 2])
+            for k, a in enumerate(sorted(self.hinges))
+        }
+        plate = self._fn("energy")
+        work = math.fsum(
+            float(plate(*(float(u) for u in ins[3 * k : 3 * k + 3]), float(ea), float(es)))
+            * float(ei / length)
+            for k, (_, _, ei, length, ea, es) in enumerate(self.segs)
+        )
+        return loads, work
 
 
 def _jacobian(rows: sp.Matrix, by) -> sp.Matrix:

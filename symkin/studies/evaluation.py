@@ -33,7 +33,7 @@ from ..model import expressions, special
 from ..model.mechanism import Mechanism, check_values
 from ..physics import equilibrium as physical_equilibrium
 from ..physics import model_error as physical_model_error
-from ..physics import reduced, statics
+from ..physics import reduced
 from ..physics.result import ActuatorLoad, HingeLoad, InputLoad, PlateStress
 
 #: The mpmath evaluation of the derivation, then the generated-code backends (their registry).
@@ -243,17 +243,9 @@ def _evaluate(
             entry="--sensitivity",
             hint="ask for them at level exact (docs/sensitivity.md)",
         )
-    if level in levels.LOADED and analysis.redundant:
-        raise AssemblyError(
-            f"{analysis.mechanism.path}: the {level} level cannot share the loads among "
-            f"redundant loops: {len(analysis.dropped)} closure constraint(s) are redundant "
-            "(a statically indeterminate mechanism), and the split of the loop forces follows "
-            "from the plates' compliance, which the loaded level's statics of the pin linkage "
-            "leaves out; ask for --level equilibrium (docs/levels.md)"
-        )
     if backend == "sympy":
         if level in levels.LOADED:
-            return loaded(analysis, inputs, params, dps, refine=level == "loaded_refined")
+            return loaded(analysis, inputs, params, dps)
         if level == "equilibrium":
             return equilibrium(analysis, inputs, params)
         return _mpmath_evaluator(analysis).evaluate(inputs, level, params, dps, sensitivity)
@@ -589,16 +581,10 @@ def loaded(
     inputs: Mapping[str, object],
     params: Mapping[str, object] | None = None,
     dps: int = 40,
-    beam_column: bool = True,
-    extensible: bool = False,
-    refine: bool = False,
 ) -> Evaluation:
-    """The `loaded` level with mpmath at `dps` digits (docs/physics.md); `beam_column=False`
-    keeps the first-order force correction only, `extensible=True` adds the plates' stretch
-    (symkin.physics.statics.LoadedDerivation); `refine=True` is the `loaded_refined` level."""
-    return _mpmath_evaluator(analysis).loaded(
-        inputs, params, dps, refine, beam_column=beam_column, extensible=extensible
-    )
+    """The `loaded` level (docs/physics.md): the reduced equilibrium in mpmath, reported on the
+    rigid linkage solved at `dps` digits."""
+    return _mpmath_evaluator(analysis).loaded(inputs, params, dps)
 
 
 def equilibrium(
@@ -624,8 +610,8 @@ def reduced_equilibrium(
     backend: str = "numpy",
     segments: int | None = None,
 ) -> reduced.Answer:
-    """The reduced equilibrium (symkin.physics.reduced, the Newton level that is to become
-    `loaded`) at one configuration: `backend` "numpy" (the numpy backend's float64 kernels) or
+    """The reduced equilibrium (symkin.physics.reduced, the `loaded` level's solver) at one
+    configuration: `backend` "numpy" (the numpy backend's float64 kernels) or
     "sympy" (mpmath); `segments` 1 or 2 half plates per plate, by default 1 and 2 where the
     truncation estimate refuses one. The derivation is kept per analysis, parameter values,
     backend and segments."""
@@ -1116,105 +1102,76 @@ class _Mpmath:
         inputs: Mapping[str, object],
         params: Mapping[str, object] | None,
         dps: int,
-        refine: bool = False,
-        **options,
     ) -> Evaluation:
-        """The `loaded` level (docs/physics.md), in the order of its derivation
-        (symkin.physics.statics): rigid angles → A^T μ0 = Q0 → A^T μ = Q(μ0) → each plate's
-        compliance → the exact level's Newton on the loaded closure → ΔR, the plates' loads and
-        energy. With `refine` (level `loaded_refined`) the statics is solved again with A the
-        loaded closure's Jacobian at the δ reached, then the compliance and the closure."""
-        an = self.an
-        der = statics.loaded_derivation(an, **options)
-        la, kin = der.analysis, der.kin
-        closure = _mpmath_evaluator(la)  # its params: the file's, μ0, μ and the compliance
-        prefix = "loaded" + "".join(f":{k}={v}" for k, v in sorted(options.items())) + ":"
+        """The `loaded` level (docs/physics.md): the reduced equilibrium (symkin.physics.reduced)
+        in mpmath, its deviations, angle deviations, hinge loads and energy put on the rigid
+        linkage solved at `dps` digits; a configuration it refuses (no convergence, a plate
+        near buckling, the truncation estimate with two half plates) is exit 3."""
+        an, mech = self.an, self.mechanism
+        if an.redundant and not any(h.beam == "reissner" for h in mech.hinges if h.is_plate):
+            # as at equilibrium: inextensible plates leave a redundant loop's self-stress
+            # undetermined (the relation's quartic terms alone would fix it, meaninglessly)
+            raise AssemblyError(
+                f"{mech.path}: the loaded level cannot solve this redundant mechanism "
+                f"({len(an.dropped)} redundant closure constraint(s)): its plates are "
+                "inextensible elastica, which leave the forces the redundant loops carry along "
+                'the plates undetermined; give them beam = "reissner" (docs/levels.md)'
+            )
+        answer = reduced_equilibrium(an, inputs, params, backend="sympy")
+        if answer.refused:
+            raise AssemblyError(
+                f"{mech.path}: the loaded level refuses this configuration: {answer.refused} "
+                "(docs/physics.md); ask for --level equilibrium"
+            )
         given = input_values(an, inputs)
-        exact_params = parameter_values(self.mechanism, params)
-        loads = der.plate_loads
+        exact_params = parameter_values(mech, params)
+        names = {a: h.name for a, h in self.kin.hinges.items()}
+        args = [*an.params, *an.thetas]
         with mpmath.workdps(dps):
             pvals = [mpmath.mpf(sp.N(exact_params[s], dps + 5)) for s in an.params]
             ivals = {a: mpmath.mpf(sp.N(v, dps + 5)) for a, v in given.items()}
             theta, dyads = self._rigid_angles(pvals, ivals)
-            self._check_limits(theta, ivals)
-            known = [*pvals]
-            thetas = [theta[a] for a in sorted(theta)]
-
-            def at_rigid(key: str, exprs):
-                n = len(known)
-                return self._fn(prefix + key, exprs, [*la.params[:n], *la.thetas])(*known, *thetas)
-
-            disp = [e for a in sorted(der.compliance) for e in loads[a].displacement]
-            args = [*la.params, *la.thetas, *la.deltas]
-
-            def constants(transposed=None) -> list:
-                """The parameters, μ0, μ and the compliance; A^T from the rigid loop Jacobian
-                or, `transposed`, the values given."""
-                del known[len(pvals) :]
-                for symbols, system, key in (
-                    (der.mu0, der.first_statics, "mu0"),
-                    (der.mu, der.statics, "mu"),
-                ):
-                    if symbols:
-                        at = (
-                            at_rigid(key + ":AT", system[0].tolist())
-                            if transposed is None
-                            else transposed
-                        )
-                        known.extend(self._multipliers(at, at_rigid(key + ":Q", list(system[1]))))
-                known.extend(list(at_rigid("compliance", disp)) if disp else [])
-                return known
-
-            delta = closure._deltas("exact", constants(), theta)
-            if refine and kin.unknowns:
-                # the loaded closure's Jacobian at the pose reached, transposed
-                jac = self._fn(prefix + "refine", la.jacobian.T.tolist(), args)(
-                    *known, *thetas, *(delta[a] for a in kin.unknowns)
-                )
-                delta = closure._deltas("exact", constants(jac), theta)
-            self._check_limits({a: theta[a] + delta.get(a, 0) for a in theta}, ivals)
-            full = [*known, *thetas, *(delta[a] for a in kin.unknowns)]
+            at = [*pvals, *(theta[a] for a in sorted(theta))]
             points = {}
-            for p in la.points:
-                rig = self._fn(
-                    f"rigid(theta):{p.name}", list(an.point_rigid(p.name)), [*an.params, *an.thetas]
-                )(*pvals, *thetas)
-                dev = self._fn(prefix + p.name, list(la.point_deviation(p.name, "exact")), args)(
-                    *full
-                )
+            for p in an.points:
+                rig = self._fn(f"rigid(theta):{p.name}", list(an.point_rigid(p.name)), args)(*at)
+                dev = answer.deviations[p.name]
                 points[p.name] = PointResult(
                     (float(rig[0]), float(rig[1])),
                     (float(rig[0] + dev[0]), float(rig[1] + dev[1])),
                     (float(dev[0]), float(dev[1])),
                 )
-            links = self._links(la, "exact", prefix, args, full)
-            scale = mpmath.mpf(sp.N(self.mechanism.unit_scale, dps))
-            hinges, energy = {}, mpmath.mpf(0)
-            for a in sorted(kin.hinges):
-                force = self._fn(f"{prefix}force:{a}", list(loads[a].force), args)(*full)
-                moment = self._fn(f"{prefix}moment:{a}", der.end_moment(a), args)(*full)
-                energy += self._fn(f"{prefix}energy:{a}", der.energy(a), args)(*full)
-                hinges[kin.hinges[a].name] = HingeLoad(
-                    (float(force[0]), float(force[1])), float(moment * scale)
+            # the links' rotations: the rigid one from the rigid angles, the deviation from the
+            # solution's angle deviations, as at equilibrium
+            deltas = [mpmath.mpf(answer.angle_deviations[names[a]]) for a in self.kin.unknowns]
+            links = self._links(an, "exact", "equilibrium:", [*args, *an.deltas], at + deltas)
+            scale = mpmath.mpf(sp.N(mech.unit_scale, dps))
+            hinges = {
+                names[a]: HingeLoad(
+                    (answer.hinge_loads[names[a]][0], answer.hinge_loads[names[a]][1]),
+                    float(answer.hinge_loads[names[a]][2] * scale),
                 )
-            names = {a: h.name for a, h in kin.hinges.items()}
+                for a in sorted(names)
+            }
             result = Evaluation(
-                level="loaded_refined" if refine else "loaded",
+                level="loaded",
                 backend="sympy",
                 inputs={names[a]: float(ivals[a]) for a in sorted(ivals)},
                 angles_rigid={names[a]: float(theta[a]) for a in sorted(theta)},
                 angles_compliant={
-                    names[a]: float(theta[a] + delta.get(a, 0)) for a in sorted(theta)
+                    names[a]: float(theta[a] + answer.angle_deviations[names[a]])
+                    for a in sorted(theta)
                 },
                 points=points,
                 dyads=tuple(dyads),
-                params=parameter_floats(self.mechanism, exact_params),
+                params=parameter_floats(mech, exact_params),
                 overrides=tuple(params or ()),
                 hinges=hinges,
-                energy=float(energy * scale),
+                energy=float(answer.energy * scale),
                 links=links,
+                units=mech.units,
             )
-            return with_model_error(result, self.mechanism, exact_params)
+        return with_model_error(result, mech, exact_params)
 
     def _links(self, an: Analysis, level: str, prefix: str, args: list, values: list) -> dict:
         """Every link's rigid rotation, compliant rotation and deviation at `level` (the
@@ -1735,7 +1692,7 @@ def _generated(
     if levels.get(level).needs_stiffness:
         # The plates' loads and energy are not in the generated evaluators' output: the
         # derivation gives them, as it gives the dyad states (docs/physics.md).
-        physical = loaded(analysis, inputs, params, refine=level == "loaded_refined")
+        physical = loaded(analysis, inputs, params)
         extra = {"hinges": physical.hinges, "energy": physical.energy}
     result = Evaluation(
         level=level,

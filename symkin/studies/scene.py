@@ -47,7 +47,7 @@ BACKENDS = pipeline.BACKENDS
 PRECISIONS = ("float64", "float32")
 DEFAULT_SAMPLES = 25
 #: Newton steps an iterative closure typically takes from its first-order start (the cost of its
-#: routine counts this many times); the refined statics run the loaded ones twice.
+#: routine counts this many times).
 NEWTON_STEPS = 3
 #: The longest variant suffix a group's name adds to the scene's name.
 SUFFIX = len("_first_order_small_deflection_f32")
