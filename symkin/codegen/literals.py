@@ -20,6 +20,7 @@ from collections.abc import Callable
 import sympy as sp
 
 from ..core.errors import InputError
+from ..model.special import axial
 
 #: Integers up to this magnitude are exact in a double and stay integers.
 EXACT_INT = 2**53
@@ -177,3 +178,52 @@ def horner2(rows: list[list[float]], outer: str, inner: str) -> str:
     for part in reversed(parts[:-1]):
         text = f"{outer} * ({text})" if part == "0.0" else f"({part}) + {outer} * ({text})"
     return text
+
+
+def estrin(coeffs: list[float], var: str) -> tuple[str, int]:
+    """Source text of sum coeffs[k] var^k in Estrin's form (valid Python and C): halves joined by
+    the powers var2 = var^2, var4, ... (a short dependency chain, where Horner's is as long as
+    the polynomial), and the highest such power it uses (1: none)."""
+    if len(coeffs) == 1:
+        return literal(coeffs[0]), 1
+    if len(coeffs) == 2:
+        return f"{literal(coeffs[0])} + {var} * {literal(coeffs[1])}", 1
+    half = 1 << (len(coeffs) - 1).bit_length() - 1
+    low, _ = estrin(coeffs[:half], var)
+    high, top = estrin(coeffs[half:], var)
+    power = var if half == 1 else f"{var}{half}"
+    return f"({low}) + ({high}) * {power}", max(top, half)
+
+
+def near_text(form: axial.NearForm, var: str = "p") -> str:
+    """A kernel's near form p^j P(d) / (a^m b^n) as C and Python text in `var`, d = var -
+    NEAR_CENTRE, a = var + pi^2, b = var + 4 pi^2 and d's powers (near_names defines them)."""
+    m, n = form.poles
+    text = f"({estrin(list(form.coeffs), 'd')[0]})"
+    if form.zero:
+        text = " * ".join([text] + [var] * form.zero)
+    if m or n:
+        text += " / (" + " * ".join(["a"] * m + ["b"] * n) + ")"
+    return text
+
+
+def near_names(form: axial.NearForm, var: str = "p") -> list[tuple[str, str]]:
+    """The (name, value) pairs near_text uses, as C and Python text, in order."""
+    out = [("d", f"{var} - {literal(axial.NEAR_CENTRE)}")]
+    top, power = estrin(list(form.coeffs), "d")[1], 2
+    while power <= top:
+        out.append((f"d{power}", "d * d" if power == 2 else f"d{power // 2} * d{power // 2}"))
+        power *= 2
+    if form.poles[0]:
+        out.append(("a", f"{var} + {literal(axial.PI2)}"))
+    if form.poles[1]:
+        out.append(("b", f"{var} + {literal(axial.FOUR_PI2)}"))
+    return out
+
+
+def near_doc(form: axial.NearForm) -> str:
+    """One line on a near form, for comments."""
+    return (
+        f"for {literal(axial.NEAR_LOW)} < p < {literal(axial.NEAR_HIGH)} an economised "
+        f"polynomial ({len(form.coeffs)} terms) with the poles divided out"
+    )

@@ -23,7 +23,7 @@ from ....model.special.elastica_force import (
     RF_STOP,
 )
 from ....model.special.kernels import StableKernel
-from ...literals import horner, horner2, literal, recurrence
+from ...literals import horner, horner2, literal, near_doc, near_names, near_text, recurrence
 
 
 def support(names: Iterable[str]) -> str:
@@ -38,33 +38,71 @@ def source(name: str) -> str:
         return _FIXED[name]
     if name in OUTPUTS:
         return _elastica_output(name)
+    if name == "bcol_t":
+        return _bcol_t()
     cls = registry.FUNCTIONS[name]
     if issubclass(cls, axial.AxialKernel):
         return _axial(cls)
+    if issubclass(cls, axial.AxialAt):
+        return _axial_at(cls)
     if not issubclass(cls, StableKernel):
         raise KeyError(f"no C source for '{name}'")
     return _kernel(cls)
 
 
 def _axial(cls: type[axial.AxialKernel]) -> str:
-    """A beam-column kernel: Taylor series in p below P_SERIES, else its closed form at T(p);
-    NaN at and beyond the buckling load p = -pi^2."""
+    """A beam-column kernel: its `_at` form at T(p)."""
     name = cls.__name__
-    num, den = cls.float_closed()
-    closed = f"({horner2(num, 't', 'p')}) / ({horner2(den, 't', 'p')})"
-    series = horner(cls.float_series(), "p")
     return (
-        f"/* {cls.definition}; Taylor series ({len(cls.float_series())} terms) for "
-        f"|p| < {literal(axial.P_SERIES)}, else the closed form in p and t = T(p). */\n"
+        f"/* {cls.definition}. */\n"
         f"static double symkin_{name}(double p)\n"
         "{\n"
-        "    double t;\n"
-        f"    if (fabs(p) < {literal(axial.P_SERIES)}) {{\n"
-        f"        return {series};\n"
+        f"    return symkin_{name}_at(p, symkin_bcol_t(p));\n"
+        "}\n"
+    )
+
+
+def _axial_at(cls: type[axial.AxialAt]) -> str:
+    """A beam-column kernel at (p, t = T(p)): its near form on the near interval, else its closed
+    form at t; NaN at and beyond the buckling load p = -pi^2."""
+    kernel = cls.kernel
+    form = kernel.near_form()
+    num, den = kernel.float_closed()
+    closed = f"({horner2(num, 't', 'p')}) / ({horner2(den, 't', 'p')})"
+    names = "".join(f"        const double {n} = {v};\n" for n, v in near_names(form))
+    return (
+        f"/* {kernel.definition}, at t = T(p): {near_doc(form)}, else the closed form. */\n"
+        f"static double symkin_{cls.__name__}(double p, double t)\n"
+        "{\n"
+        f"    if (p > {literal(axial.NEAR_LOW)} && p < {literal(axial.NEAR_HIGH)}) {{\n"
+        + names
+        + f"        return {near_text(form)};\n"
         "    }\n"
         f"    if (!(p > {literal(axial.BUCKLING)})) return NAN;\n"
-        "    t = symkin_bcol_t(p);\n"
         f"    return {closed};\n"
+        "}\n"
+    )
+
+
+def _bcol_t() -> str:
+    """T(p): its near form on the near interval, else tanh(u)/u or tan(v)/v."""
+    form = axial.t_near_form()
+    return (
+        "/* T(p) = tanh(u)/u, u = sqrt(p)/2 (p > 0); tan(v)/v, v = sqrt(-p)/2 (p < 0): "
+        f"{near_doc(form)}. */\n"
+        "static double symkin_bcol_t(double p)\n"
+        "{\n"
+        "    double u;\n"
+        f"    if (p > {literal(axial.NEAR_LOW)} && p < {literal(axial.NEAR_HIGH)}) {{\n"
+        + "".join(f"        const double {n} = {v};\n" for n, v in near_names(form))
+        + f"        return {near_text(form)};\n"
+        "    }\n"
+        "    if (p > 0.0) {\n"
+        "        u = 0.5 * sqrt(p);\n"
+        "        return tanh(u) / u;\n"
+        "    }\n"
+        "    u = 0.5 * sqrt(-p);\n"
+        "    return tan(u) / u;\n"
         "}\n"
     )
 
@@ -203,25 +241,7 @@ def _elastica_output(name: str) -> str:
     )
 
 
-_BCOL_T = """/* T(p) = tanh(u)/u, u = sqrt(p)/2 (p > 0); tan(v)/v, v = sqrt(-p)/2 (p < 0);
-   1 at p = 0. */
-static double symkin_bcol_t(double p)
-{
-    double u;
-    if (p > 0.0) {
-        u = 0.5 * sqrt(p);
-        return tanh(u) / u;
-    }
-    if (p < 0.0) {
-        u = 0.5 * sqrt(-p);
-        return tan(u) / u;
-    }
-    return 1.0;
-}
-"""
-
 _FIXED = {
-    "bcol_t": _BCOL_T,
     "carlson_rf": _CARLSON_RF,
     "carlson_rd": _CARLSON_RD,
     "elastica_core": _ELASTICA_CORE,

@@ -26,7 +26,7 @@ from ....model.special.elastica_force import (
     RF_STOP,
 )
 from ....model.special.kernels import StableKernel
-from ...literals import horner, horner2, literal, recurrence
+from ...literals import horner, horner2, literal, near_doc, near_names, near_text, recurrence
 
 
 def source(name: str, scalar: bool = False) -> str:
@@ -35,9 +35,13 @@ def source(name: str, scalar: bool = False) -> str:
         return _FIXED[name][scalar].lstrip()
     if name in OUTPUTS:
         return _elastica_output(name, scalar)
+    if name == "bcol_t":
+        return _bcol_t(scalar)
     cls = registry.FUNCTIONS[name]
     if issubclass(cls, axial.AxialKernel):
         return _axial(cls, scalar)
+    if issubclass(cls, axial.AxialAt):
+        return _axial_at(cls, scalar)
     if not issubclass(cls, StableKernel):
         raise KeyError(f"no numpy source for '{name}'")
     return _kernel(cls, scalar)
@@ -312,71 +316,100 @@ def _elastica_output(name: str, scalar: bool) -> str:
 
 
 #: name -> (numpy source, scalar source)
-_NUMPY_BCOL_T = """
-def bcol_t(p):
-    \"\"\"T(p) = tanh(u)/u, u = sqrt(p)/2 (p > 0); tan(v)/v, v = sqrt(-p)/2 (p < 0); 1 at 0
-    (vectorised).\"\"\"
-    p = np.asarray(p, dtype=float)
-    u = 0.5 * np.sqrt(np.where(p == 0.0, 1.0, np.abs(p)))
-    return np.where(p > 0.0, np.tanh(u) / u, np.where(p < 0.0, np.tan(u) / u, 1.0))
-"""
-
-_SCALAR_BCOL_T = """
-def bcol_t(p):
-    \"\"\"T(p) = tanh(u)/u, u = sqrt(p)/2 (p > 0); tan(v)/v, v = sqrt(-p)/2 (p < 0); 1 at 0.\"\"\"
-    if p > 0.0:
-        u = 0.5 * math.sqrt(p)
-        return math.tanh(u) / u
-    if p < 0.0:
-        u = 0.5 * math.sqrt(-p)
-        return math.tan(u) / u
-    return 1.0
-"""
-
 _FIXED = {
-    "bcol_t": (_NUMPY_BCOL_T, _SCALAR_BCOL_T),
     "carlson_rf": (_NUMPY_RF, _SCALAR_RF),
     "carlson_rd": (_NUMPY_RD, _SCALAR_RD),
     "elastica_core": (_NUMPY_CORE, _SCALAR_CORE),
 }
 
 
+def _near(form: axial.NearForm, var: str, indent: str) -> str:
+    """Statements that define d, r, s of a near form at `var` (C and Python share the text)."""
+    return "".join(f"{indent}{n} = {v}\n" for n, v in near_names(form, var))
+
+
 def _axial(cls: type[axial.AxialKernel], scalar: bool) -> str:
-    """A beam-column kernel: Taylor series in p below P_SERIES, else its closed form at T(p);
-    NaN (numpy) or DomainError (scalar) at and beyond the buckling load p = -pi^2."""
+    """A beam-column kernel: its `_at` form at T(p)."""
     name = cls.__name__
-    num, den = cls.float_closed()
-    closed = f"({horner2(num, 't', 'p')}) / ({horner2(den, 't', 'p')})"
-    p0 = literal(axial.P_SERIES)
-    pcr = literal(axial.BUCKLING)
-    series = horner(cls.float_series(), "p")
-    doc = (
-        f"{cls.definition}; Taylor series ({len(cls.float_series())} terms) for |p| < {p0}, "
-        f"else the closed form in p and t = T(p)"
+    note = "" if scalar else " (vectorised)"
+    return (
+        f'def {name}(p):\n    """{cls.definition}{note}."""\n    return {name}_at(p, bcol_t(p))\n'
     )
+
+
+def _axial_at(cls: type[axial.AxialAt], scalar: bool) -> str:
+    """A beam-column kernel at (p, t = T(p)): its near form on the near interval, else its closed
+    form at t; NaN (numpy) or DomainError (scalar) at and beyond the buckling load p = -pi^2."""
+    name = cls.__name__
+    kernel = cls.kernel
+    form = kernel.near_form()
+    num, den = kernel.float_closed()
+    closed = f"({horner2(num, 't', 'p')}) / ({horner2(den, 't', 'p')})"
+    lo, hi = literal(axial.NEAR_LOW), literal(axial.NEAR_HIGH)
+    pcr = literal(axial.BUCKLING)
+    doc = f"{kernel.definition}, at t = T(p): {near_doc(form)}, else the closed form"
     if scalar:
         return (
-            f"def {name}(p):\n"
+            f"def {name}(p, t):\n"
             f'    """{doc}."""\n'
-            f"    if abs(p) < {p0}:\n"
-            f"        return {series}\n"
+            f"    if {lo} < p < {hi}:\n"
+            + _near(form, "p", "        ")
+            + f"        return {near_text(form)}\n"
             f"    if not p > {pcr}:\n"
             f'        raise DomainError("{name}: the axial load index must exceed -pi^2")\n'
-            f"    t = bcol_t(p)\n"
             f"    return {closed}\n"
         )
     return (
-        f"def {name}(x):\n"
+        f"def {name}(x, t):\n"
         f'    """{doc} (vectorised)."""\n'
         f"    x = np.asarray(x, dtype=float)\n"
-        f"    small = np.abs(x) < {p0}\n"
-        f"    p = np.where(small, x, 0.0)\n"
-        f"    series = {series}\n"
-        f"    if small.all():\n"
-        f"        return series\n"
+        f"    near = (x > {lo}) & (x < {hi})\n"
+        f"    p = np.where(near, x, {literal(axial.NEAR_CENTRE)})\n"
+        + _near(form, "p", "    ")
+        + f"    value = {near_text(form)}\n"
+        f"    if near.all():\n"
+        f"        return value\n"
         f"    inside = x > {pcr}\n"
-        f"    p = np.where(small | ~inside, 3.0, x)\n"
-        f"    t = bcol_t(p)\n"
+        f"    far = ~near & inside\n"
+        f"    p = np.where(far, x, {literal(2 * axial.NEAR_HIGH)})\n"
+        f"    t = np.where(far, t, 0.5)\n"
         f"    closed = {closed}\n"
-        f"    return np.where(small, series, np.where(inside, closed, np.nan))\n"
+        f"    return np.where(near, value, np.where(inside, closed, np.nan))\n"
+    )
+
+
+def _bcol_t(scalar: bool) -> str:
+    """T(p): its near form on the near interval, else tanh(u)/u or tan(v)/v."""
+    form = axial.t_near_form()
+    lo, hi = literal(axial.NEAR_LOW), literal(axial.NEAR_HIGH)
+    centre = literal(axial.NEAR_CENTRE)
+    doc = (
+        "T(p) = tanh(u)/u, u = sqrt(p)/2 (p > 0); tan(v)/v, v = sqrt(-p)/2 (p < 0): "
+        f"{near_doc(form)}"
+    )
+    if scalar:
+        return (
+            "def bcol_t(p):\n"
+            f'    """{doc}."""\n'
+            f"    if {lo} < p < {hi}:\n"
+            + _near(form, "p", "        ")
+            + f"        return {near_text(form)}\n"
+            "    if p > 0.0:\n"
+            "        u = 0.5 * math.sqrt(p)\n"
+            "        return math.tanh(u) / u\n"
+            "    u = 0.5 * math.sqrt(-p)\n"
+            "    return math.tan(u) / u\n"
+        )
+    return (
+        "def bcol_t(x):\n"
+        f'    """{doc} (vectorised)."""\n'
+        "    x = np.asarray(x, dtype=float)\n"
+        f"    near = (x > {lo}) & (x < {hi})\n"
+        f"    p = np.where(near, x, {centre})\n"
+        + _near(form, "p", "    ")
+        + f"    value = {near_text(form)}\n"
+        "    if near.all():\n"
+        "        return value\n"
+        "    u = 0.5 * np.sqrt(np.where(near, 1.0, np.abs(x)))\n"
+        "    return np.where(near, value, np.where(x > 0.0, np.tanh(u) / u, np.tan(u) / u))\n"
     )
