@@ -240,6 +240,36 @@ def test_plate_routine_in_c_dense(tmp_path):
     assert worst > 0  # the comparison is not vacuous
 
 
+def test_plate_routine_identities():
+    """The kernels the plate routine writes through others (symkin.codegen.plate._identities), in
+    mpmath at 30 digits: exact, and the sums' terms add to at most 12 (E3' = e3c - 1/1920 over
+    p in [-9.5, 60]) and 1.8 (the sinr/cosr recurrences over x = theta/2 in (0, 5]) times the
+    result."""
+    sinr, cosr = special.sinr, special.cosr
+    sinr(5), cosr(5)  # created on demand: registered before the namespace is taken
+    ns = special.mpmath_namespace()
+    with mp.workdps(30):
+        for p in [mp.mpf(k) / 8 for k in range(-76, 481)]:
+            w = ns["bcol_w"](p)
+            assert abs(ns["bcol_s_d1"](p) + 2 * w) <= 1e-27 * abs(w)
+            a = p * w * ns["bcol_invt"](p) ** 2 / 3
+            assert abs(ns["bcol_a"](p) - a) <= 1e-27 * abs(a)
+            e3c, e3d1 = ns["bcol_e3c"](p), ns["bcol_e3_d1"](p)
+            assert abs(e3d1 - (e3c - mp.mpf(1) / 1920)) <= 1e-27 * abs(e3d1)
+            assert abs(e3c) + mp.mpf(1) / 1920 <= 12 * abs(e3d1)
+        c9, c7, c8 = (mp.mpf(1) / math.factorial(n) for n in (9, 7, 8))
+        for x in [mp.mpf(k) / 64 for k in range(1, 321)]:
+            x2 = x * x
+            for head, constant, tail in (
+                (sinr(4), c9, sinr(5)),
+                (sinr(3), -c7, sinr(4)),
+                (cosr(4), c8, cosr(5)),
+            ):
+                want, rest = ns[head.__name__](x), x2 * ns[tail.__name__](x)
+                assert abs(want - (constant + rest)) <= 1e-27 * abs(want)
+                assert abs(constant) + abs(rest) <= 1.8 * abs(want)
+
+
 def test_plate_routine_in_c(tmp_path):
     """The C routine of the plate relation (CSE'd, the kernels' float source) against the
     relation in mpmath at 30 digits, its partials by mpmath.diff: within 1e-12 of the largest

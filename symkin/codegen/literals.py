@@ -196,28 +196,28 @@ def estrin(coeffs: list[float], var: str) -> tuple[str, int]:
 
 
 def near_text(form: axial.NearForm, var: str = "p") -> str:
-    """A kernel's near form p^j P(d) / (a^m b^n) as C and Python text in `var`, d = var -
-    NEAR_CENTRE, a = var + pi^2, b = var + 4 pi^2 and d's powers (near_names defines them)."""
+    """A kernel's near form p^j P(d) r^m s^n as C and Python text in `var`, d = var -
+    NEAR_CENTRE, r = 1/(var + pi^2), s = 1/(var + 4 pi^2) and d's powers (near_names defines
+    them)."""
     m, n = form.poles
+    factors = [var] * form.zero + ["r"] * m + ["s"] * n
     text = f"({estrin(list(form.coeffs), 'd')[0]})"
-    if form.zero:
-        text = " * ".join([text] + [var] * form.zero)
-    if m or n:
-        text += " / (" + " * ".join(["a"] * m + ["b"] * n) + ")"
-    return text
+    return f"{text} * ({' * '.join(factors)})" if factors else text
 
 
-def near_names(form: axial.NearForm, var: str = "p") -> list[tuple[str, str]]:
-    """The (name, value) pairs near_text uses, as C and Python text, in order."""
+def near_names(form: axial.NearForm | None = None, var: str = "p") -> list[tuple[str, str]]:
+    """The (name, value) pairs near_text uses, as C and Python text, in order (all of them
+    without a `form`: d^2 .. d^8, r and s)."""
+    top = estrin(list(form.coeffs), "d")[1] if form else 8
     out = [("d", f"{var} - {literal(axial.NEAR_CENTRE)}")]
-    top, power = estrin(list(form.coeffs), "d")[1], 2
+    power = 2
     while power <= top:
         out.append((f"d{power}", "d * d" if power == 2 else f"d{power // 2} * d{power // 2}"))
         power *= 2
-    if form.poles[0]:
-        out.append(("a", f"{var} + {literal(axial.PI2)}"))
-    if form.poles[1]:
-        out.append(("b", f"{var} + {literal(axial.FOUR_PI2)}"))
+    if form is None or form.poles[0]:
+        out.append(("r", f"1.0 / ({var} + {literal(axial.PI2)})"))
+    if form is None or form.poles[1]:
+        out.append(("s", f"1.0 / ({var} + {literal(axial.FOUR_PI2)})"))
     return out
 
 

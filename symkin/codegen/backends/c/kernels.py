@@ -64,19 +64,21 @@ def _axial(cls: type[axial.AxialKernel]) -> str:
 
 def _axial_at(cls: type[axial.AxialAt]) -> str:
     """A beam-column kernel at (p, t = T(p)): its near form on the near interval, else its closed
-    form at t; NaN at and beyond the buckling load p = -pi^2."""
+    form at t; NaN at and beyond the buckling load p = -pi^2. The near form's shared values come
+    before the branch: inlined into one routine (the plate relation's), the compiler computes
+    them once for all its kernels, two divisions in all."""
     kernel = cls.kernel
     form = kernel.near_form()
     num, den = kernel.float_closed()
     closed = f"({horner2(num, 't', 'p')}) / ({horner2(den, 't', 'p')})"
-    names = "".join(f"        const double {n} = {v};\n" for n, v in near_names(form))
+    names = "".join(f"    const double {n} = {v};\n" for n, v in near_names(form))
     return (
         f"/* {kernel.definition}, at t = T(p): {near_doc(form)}, else the closed form. */\n"
         f"static double symkin_{cls.__name__}(double p, double t)\n"
         "{\n"
-        f"    if (p > {literal(axial.NEAR_LOW)} && p < {literal(axial.NEAR_HIGH)}) {{\n"
         + names
-        + f"        return {near_text(form)};\n"
+        + f"    if (p > {literal(axial.NEAR_LOW)} && p < {literal(axial.NEAR_HIGH)}) {{\n"
+        f"        return {near_text(form)};\n"
         "    }\n"
         f"    if (!(p > {literal(axial.BUCKLING)})) return NAN;\n"
         f"    return {closed};\n"
