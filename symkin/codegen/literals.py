@@ -180,19 +180,41 @@ def horner2(rows: list[list[float]], outer: str, inner: str) -> str:
     return text
 
 
-def estrin(coeffs: list[float], var: str) -> tuple[str, int]:
+def estrin(
+    coeffs: list[float], var: str, name: Callable[[int], str] | None = None
+) -> tuple[str, int]:
     """Source text of sum coeffs[k] var^k in Estrin's form (valid Python and C): halves joined by
-    the powers var2 = var^2, var4, ... (a short dependency chain, where Horner's is as long as
-    the polynomial), and the highest such power it uses (1: none)."""
+    the powers var^2, var^4, ... (a short dependency chain, where Horner's is as long as the
+    polynomial), var^k named name(k) (default: var followed by k), and the highest such power
+    it uses (1: none)."""
     if len(coeffs) == 1:
         return literal(coeffs[0]), 1
     if len(coeffs) == 2:
         return f"{literal(coeffs[0])} + {var} * {literal(coeffs[1])}", 1
     half = 1 << (len(coeffs) - 1).bit_length() - 1
-    low, _ = estrin(coeffs[:half], var)
-    high, top = estrin(coeffs[half:], var)
-    power = var if half == 1 else f"{var}{half}"
+    low, _ = estrin(coeffs[:half], var, name)
+    high, top = estrin(coeffs[half:], var, name)
+    power = var if half == 1 else (name(half) if name else f"{var}{half}")
     return f"({low}) + ({high}) * {power}", max(top, half)
+
+
+def estrin_powers(
+    top: int, var: str, name: Callable[[int], str] | None = None
+) -> list[tuple[str, str]]:
+    """The (name, value) pairs of the powers var^2 .. var^top an Estrin text uses, in order, as
+    C and Python text."""
+    names = name or (lambda k: f"{var}{k}")
+    out, power = [], 2
+    while power <= top:
+        half = var if power == 2 else names(power // 2)
+        out.append((names(power), f"{half} * {half}"))
+        power *= 2
+    return out
+
+
+def x_power(k: int) -> str:
+    """The name of (x^2)^k in the kernels' Estrin form: x4, x8, ..."""
+    return f"x{2 * k}"
 
 
 def near_text(form: axial.NearForm, var: str = "p") -> str:
@@ -209,11 +231,7 @@ def near_names(form: axial.NearForm | None = None, var: str = "p") -> list[tuple
     """The (name, value) pairs near_text uses, as C and Python text, in order (all of them
     without a `form`: d^2 .. d^8, r and s)."""
     top = estrin(list(form.coeffs), "d")[1] if form else 8
-    out = [("d", f"{var} - {literal(axial.NEAR_CENTRE)}")]
-    power = 2
-    while power <= top:
-        out.append((f"d{power}", "d * d" if power == 2 else f"d{power // 2} * d{power // 2}"))
-        power *= 2
+    out = [("d", f"{var} - {literal(axial.NEAR_CENTRE)}"), *estrin_powers(top, "d")]
     if form is None or form.poles[0]:
         out.append(("r", f"1.0 / ({var} + {literal(axial.PI2)})"))
     if form is None or form.poles[1]:

@@ -23,7 +23,18 @@ from ....model.special.elastica_force import (
     RF_STOP,
 )
 from ....model.special.kernels import StableKernel
-from ...literals import horner, horner2, literal, near_doc, near_names, near_text, recurrence
+from ...literals import (
+    estrin,
+    estrin_powers,
+    horner,
+    horner2,
+    literal,
+    near_doc,
+    near_names,
+    near_text,
+    recurrence,
+    x_power,
+)
 
 
 def support(names: Iterable[str]) -> str:
@@ -115,7 +126,7 @@ def _kernel(cls: type[StableKernel]) -> str:
     coeffs, n = cls.float_series()
     threshold = literal(cls.threshold)
     doc = (
-        f"{cls.definition}; Taylor series ({n} terms) for |x| < {threshold}, "
+        f"{cls.definition}; Taylor series ({n} terms, Estrin's form) for |x| < {threshold}, "
         f"else the nested elementary formula"
     )
     base = {
@@ -124,14 +135,17 @@ def _kernel(cls: type[StableKernel]) -> str:
         "sinc_minus_cos": "sin(x) / x - cos(x)",
     }[cls.float_base]
     steps = "".join(f"    {step};\n" for step in recurrence(cls.float_subtract, "x2"))
+    series, top = estrin(coeffs, "x2", x_power)
+    powers = "".join(
+        f"        const double {n} = {v};\n" for n, v in estrin_powers(top, "x2", x_power)
+    )
     return (
         f"/* {name}(x): {doc}. */\n"
         f"static double symkin_{name}(double x)\n"
         "{\n"
         "    const double x2 = x * x;\n"
         "    double b;\n"
-        f"    if (fabs(x) < {threshold}) {{\n"
-        f"        return {horner(coeffs, 'x2')};\n"
+        f"    if (fabs(x) < {threshold}) {{\n" + powers + f"        return {series};\n"
         "    }\n"
         f"    b = {base};\n" + steps + "    return b;\n"
         "}\n"

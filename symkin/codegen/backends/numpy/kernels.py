@@ -26,7 +26,18 @@ from ....model.special.elastica_force import (
     RF_STOP,
 )
 from ....model.special.kernels import StableKernel
-from ...literals import horner, horner2, literal, near_doc, near_names, near_text, recurrence
+from ...literals import (
+    estrin,
+    estrin_powers,
+    horner,
+    horner2,
+    literal,
+    near_doc,
+    near_names,
+    near_text,
+    recurrence,
+    x_power,
+)
 
 
 def source(name: str, scalar: bool = False) -> str:
@@ -77,9 +88,9 @@ def _kernel(cls: type[StableKernel], scalar: bool) -> str:
     name = cls.__name__
     coeffs, n = cls.float_series()
     threshold = literal(cls.threshold)
-    series = horner(coeffs, "x2")
+    series, top = estrin(coeffs, "x2", x_power)
     doc = (
-        f"{cls.definition}; Taylor series ({n} terms) for |x| < {threshold}, "
+        f"{cls.definition}; Taylor series ({n} terms, Estrin's form) for |x| < {threshold}, "
         f"else the nested elementary formula"
     )
     if scalar:
@@ -93,7 +104,8 @@ def _kernel(cls: type[StableKernel], scalar: bool) -> str:
             f'    """{doc}."""\n'
             f"    x2 = x * x\n"
             f"    if abs(x) < {threshold}:\n"
-            f"        return {series}\n"
+            + "".join(f"        {n} = {v}\n" for n, v in estrin_powers(top, "x2", x_power))
+            + f"        return {series}\n"
             f"    b = {base}\n"
             + "".join(f"    {step}\n" for step in recurrence(cls.float_subtract, "x2"))
             + "    return b\n"
@@ -107,9 +119,10 @@ def _kernel(cls: type[StableKernel], scalar: bool) -> str:
         f"def {name}(x):\n"
         f'    """{doc} (vectorised)."""\n'
         f"    x = np.asarray(x, dtype=float)\n"
-        f"    x2 = x * x\n"
         f"    small = np.abs(x) < {threshold}\n"
-        f"    series = {series}\n"
+        f"    x2 = np.where(small, x * x, 0.0)  # the series where it is used: no overflow\n"
+        + "".join(f"    {n} = {v}\n" for n, v in estrin_powers(top, "x2", x_power))
+        + f"    series = {series}\n"
         f"    if small.all():\n"
         f"        return series\n"
         f"    xs = np.where(small, 1.0, x)\n"
