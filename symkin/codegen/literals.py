@@ -239,9 +239,34 @@ def near_names(form: axial.NearForm | None = None, var: str = "p") -> list[tuple
     return out
 
 
+def far_text(form: axial.FarForm) -> str:
+    """A kernel's far form (S_n (1 + tau) - sigma B_n) / (S_d (1 + tau) - sigma B_d) as C and
+    Python text in u, tau, sigma (names the caller defines)."""
+
+    def part(rows: tuple[list[list[float]], list[list[float]]]) -> str:
+        s, b = (horner2(r, "sigma", "u") for r in rows)
+        return f"({s}) * (1.0 + tau)" + ("" if b == "0.0" else f" - sigma * ({b})")
+
+    return f"({part(form.num)}) / ({part(form.den)})"
+
+
+def far_names(sqrt: str = "sqrt") -> list[tuple[str, str]]:
+    """The far form's names from p and h = bcol_h(p) = 1 - tanh(sqrt(p)/2), as C and Python
+    text (`sqrt` the language's square root)."""
+    return [("u", f"0.5 * {sqrt}(p)"), ("tau", "1.0 - h"), ("sigma", "h * (2.0 - h)")]
+
+
 def near_doc(form: axial.NearForm) -> str:
     """One line on a near form, for comments."""
     return (
         f"for {literal(axial.NEAR_LOW)} < p < {literal(axial.NEAR_HIGH)} an economised "
         f"polynomial ({len(form.coeffs)} terms) with the poles divided out"
+    )
+
+
+def h_doc() -> str:
+    """One line on bcol_h, for comments."""
+    return (
+        f"h(p) = T(p) = tanh(u)/u, u = sqrt(p)/2 (tan(v)/v, v = sqrt(-p)/2, below 0) for p < "
+        f"{literal(axial.NEAR_HIGH)}, 1 - tanh(u) from it on"
     )

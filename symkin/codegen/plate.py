@@ -1,7 +1,7 @@
 """The plate relation (symkin.physics.plate_relation) as a routine of generated code: the
 per-plate kernel of the Newton level (docs/physics.md, "The Newton level"), its three outputs
 and their nine partials by (θ, p, f), which the mechanism's Jacobian takes by the chain rule.
-Every beam-column kernel is called as `<kernel>_at(p, t)` with one t = T(p) for all.
+Every beam-column kernel is called as `<kernel>_at(p, h)` with one h = bcol_h(p) for all.
 
     plate_relation<order>  in = (theta, p, f, e_a, e_s)  ->  values (along, across, omega),
                                                              partials (3 x 3, row-major)
@@ -16,7 +16,7 @@ from functools import cache
 import sympy as sp
 
 from ..model.special import cosr, sinr
-from ..model.special.axial import AxialKernel, bcol_t, kernel, kernel_at
+from ..model.special.axial import AxialKernel, bcol_h, kernel, kernel_at
 from ..physics.plate_relation import relation
 from .literals import float_literals
 from .routines import Argument, Routine, layout, optimize
@@ -38,7 +38,7 @@ def plate_routine(order: int = 4) -> Routine:
     shared = {}
     for k in sp.Tuple(*exprs).atoms(AxialKernel):
         x = k.args[0]
-        shared[k] = kernel_at(k.base, k.order)(x, bcol_t(x))
+        shared[k] = kernel_at(k.base, k.order)(x, bcol_h(x))
     memo: dict = {}
     outputs = tuple(float_literals(e.xreplace(shared), memo) for e in exprs)
     routine = Routine(

@@ -15,18 +15,21 @@ for the beam-column; the quartic terms by the stationarity of the potential, "2n
 Their derivatives stay in the family because T' = ((1 - T)/p - T^2/4)/2 is rational in p and T:
 `bcol_<base>_d<k>` is the k-th p-derivative, created on demand like sinr(n).
 
-Float algorithm (written out by each backend), in two parts so that one T(p) serves every
-kernel of a plate: `bcol_<kernel>_at(p, t)` takes t = T(p) from `bcol_t(p)`, and
-`bcol_<kernel>(p)` is `bcol_<kernel>_at(p, bcol_t(p))`. On the near interval NEAR_LOW < p <
-NEAR_HIGH, where the closed forms cancel, each kernel (and T itself) is an economised polynomial
-with its poles divided out,
+Float algorithm (written out by each backend), in two parts so that one transcendental serves
+every kernel of a plate: `bcol_<kernel>_at(p, h)` takes h = `bcol_h(p)`, and `bcol_<kernel>(p)`
+is `bcol_<kernel>_at(p, bcol_h(p))`. On the near interval NEAR_LOW < p < NEAR_HIGH, where the
+closed forms cancel, each kernel (and T itself, h there) is an economised polynomial with its
+poles divided out,
 
     K(p) = p^j P(p - NEAR_CENTRE) / ((p + pi^2)^m (p + 4 pi^2)^n)
 
 (j its order of zero at 0, m and n its pole orders at T = infinity and T = 0; the next
-singularity, -9 pi^2, is far, so 12 to 15 terms reach 2^-55); elsewhere the rational closed form
-at t. NaN (C, numpy) or DomainError (Python) for p <= -pi^2. mpmath evaluates the exact series at
-high precision near 0 and the closed form with guard bits elsewhere.
+singularity, -9 pi^2, is far, so 12 to 15 terms reach 2^-55). From NEAR_HIGH on, where T ->
+2/sqrt(p) makes the closed forms' leading terms cancel, the far form: the closed form in
+u = sqrt(p)/2, tanh(u) and sech(u)^2 with the cancelling part summed exactly (FarForm), from
+h = 1 - tanh(u). Below NEAR_LOW the rational closed form at h = T(p). NaN (C, numpy) or
+DomainError (Python) for p <= -pi^2. mpmath evaluates the exact series at high precision near 0
+and the closed form with guard bits elsewhere.
 """
 
 from __future__ import annotations
@@ -49,8 +52,10 @@ P, TT = sp.symbols("p t")
 T_PRIME = ((1 - TT) / P - TT**2 / 4) / 2
 #: The plate's sway buckling load: every kernel's pole (p = -pi^2).
 BUCKLING = -(math.pi**2)
-#: The near interval of the float algorithm: beyond it the closed forms lose at most about 1e-14
-#: (measured against mpmath; the e3 family's derivatives more at large p, docs/numerics.md).
+#: The near interval of the float algorithm: below it the closed forms in p and T lose at most
+#: 7e-15 down to p = -8 (measured against mpmath, tests/test_beam_column_kernels.py), above it
+#: the far forms (the closed forms in p and T cancel towards 0, 6e-12 at p = 2, and as
+#: T -> 2/sqrt(p), 4e-12 at p = 60).
 NEAR_LOW, NEAR_HIGH = -4.0, 16.0
 NEAR_CENTRE = 0.5 * (NEAR_LOW + NEAR_HIGH)
 #: The poles the near polynomials divide out, pi^2 and 4 pi^2, as the doubles nearest them.
@@ -189,6 +194,11 @@ class AxialKernel(sp.Function):
     def near_form(cls) -> NearForm:
         """The economised form the float algorithm uses on the near interval."""
         return _near_form(cls.base, cls.order)
+
+    @classmethod
+    def far_form(cls) -> FarForm:
+        """The form the float algorithm uses from NEAR_HIGH on (no cancellation as T -> 0)."""
+        return _far(cls.base, cls.order)
 
     @classmethod
     def float_closed(cls) -> tuple[list[list[float]], list[list[float]]]:
@@ -350,6 +360,59 @@ def t_near_form() -> NearForm:
     return near_fit(lambda p: _mp_t(p) if p else mpmath.mpf(1), 0, (1, 0))
 
 
+#: The symbols of the far forms: u = sqrt(p)/2, tanh(u) and sech(u)^2.
+U, TAU, SIGMA = sp.symbols("u tau sigma")
+
+
+@dataclass(frozen=True)
+class FarForm:
+    """A kernel from NEAR_HIGH on, in u = sqrt(p)/2, tau = tanh(u), sigma = 1 - tau^2:
+    (S_n (1 + tau) - sigma B_n) / (S_d (1 + tau) - sigma B_d), each of S, B given per power of
+    sigma (from 0) as the coefficients of u^0, u^1, ... (integers, exact in float64)."""
+
+    num: tuple[list[list[float]], list[list[float]]]
+    den: tuple[list[list[float]], list[list[float]]]
+
+
+def _far_form(closed: sp.Expr) -> FarForm:
+    """The closed form with p = 4u^2, T = tau/u, over a common power of u, each part A + tau B
+    by tau^2 = 1 - sigma and written (A + B) - sigma B/(1 + tau) (as 1 - tau = sigma/(1 + tau)):
+    A + B is exact where tau -> 1 made the closed form's terms cancel."""
+    num, den = sp.fraction(sp.cancel(sp.together(closed)))
+    parts = [sp.expand(e.subs({P: 4 * U**2, TT: TAU / U})) for e in (num, den)]
+    low = min(sp.Poly(sp.expand(e * U**100), U).monoms()[-1][0] for e in parts) - 100
+    out = []
+    for e in parts:
+        poly = sp.Poly(sp.expand(e * U ** max(0, -low)), TAU)
+        even, odd = sp.S.Zero, sp.S.Zero
+        for (k,), c in poly.terms():
+            term = c * (1 - SIGMA) ** (k // 2)
+            if k % 2:
+                odd += term
+            else:
+                even += term
+        out.append((_rows(sp.expand(even + odd)), _rows(sp.expand(odd))))
+    return FarForm(out[0], out[1])
+
+
+def _rows(expr: sp.Expr) -> list[list[float]]:
+    """A polynomial in (SIGMA, U) as float rows per power of SIGMA (exact integers)."""
+    if expr == 0:
+        return [[0.0]]
+    poly = sp.Poly(expr, SIGMA, U)
+    rows = [[0.0] * (poly.degree(U) + 1) for _ in range(poly.degree(SIGMA) + 1)]
+    for (i, j), c in poly.terms():
+        if not (c.is_Integer and abs(c) < 2**53):
+            raise ValueError(f"coefficient {c} of a far form is not an exact float")
+        rows[i][j] = float(c)
+    return rows
+
+
+@cache
+def _far(base: str, order: int) -> FarForm:
+    return _far_form(closed_form(base, order))
+
+
 @cache
 def _float_closed(expr: sp.Expr) -> tuple[list[list[float]], list[list[float]]]:
     num, den = sp.fraction(sp.cancel(sp.together(expr)))
@@ -393,15 +456,15 @@ def kernel(base: str, order: int = 0) -> type:
         },
     )
     at = _kernel_at(cls)
-    register(name, cls, cls._mpmath_function(), ("bcol_t", at.__name__))
+    register(name, cls, cls._mpmath_function(), ("bcol_h", at.__name__))
     globals()[name] = cls
     return cls
 
 
 class AxialAt(sp.Function):
-    """Base of a beam-column kernel at (p, t), t = T(p) given: what generated code calls so that
-    one T(p) serves every kernel of a plate (symkin.codegen.plate). Subclasses set `kernel`,
-    the one-argument kernel class whose value this is."""
+    """Base of a beam-column kernel at (p, h), h = bcol_h(p) given: what generated code calls so
+    that one transcendental serves every kernel of a plate (symkin.codegen.plate). Subclasses
+    set `kernel`, the one-argument kernel class whose value this is."""
 
     nargs = 2
     kernel: type = AxialKernel
@@ -414,20 +477,20 @@ class AxialAt(sp.Function):
 
 
 def _kernel_at(cls: type) -> type:
-    """The two-argument class `<kernel>_at(p, t)` of a kernel class, registered."""
+    """The two-argument class `<kernel>_at(p, h)` of a kernel class, registered."""
     name = f"{cls.__name__}_at"
     at = type(
         name,
         (AxialAt,),
         {
             "kernel": cls,
-            "__doc__": f"{cls.definition}, at p and t = T(p) (see symkin.model.special.axial).",
+            "__doc__": f"{cls.definition}, at p and h = bcol_h(p) (symkin.model.special.axial).",
             "__module__": __name__,
         },
     )
     value = cls._mpmath_function()
 
-    def impl(p, t, _value=value):
+    def impl(p, h, _value=value):
         return _value(p)
 
     impl.__name__ = name
@@ -437,22 +500,28 @@ def _kernel_at(cls: type) -> type:
 
 
 def kernel_at(base: str, order: int = 0) -> type:
-    """The class `<kernel>_at(p, t)` of the `order`-th p-derivative of `base`."""
+    """The class `<kernel>_at(p, h)` of the `order`-th p-derivative of `base`."""
     return FUNCTIONS[kernel(base, order).__name__ + "_at"]
 
 
-def _mp_t_function(p):
-    """T(p) at the current mpmath precision (the helper of the float algorithm)."""
+def _mp_h_function(p):
+    """h(p), the kernels' shared value, at the current mpmath precision: T(p) below NEAR_HIGH,
+    q = 1 - tanh(sqrt(p)/2) from it on."""
     p = mpmath.mpmathify(p)
     if p == 0:
         return mpmath.mpf(1)
     if not p > -(mpmath.pi**2):
-        raise DomainError(f"bcol_t({p}): the axial load index must exceed -pi^2")
+        raise DomainError(f"bcol_h({p}): the axial load index must exceed -pi^2")
+    if p >= NEAR_HIGH:
+        e = mpmath.exp(-mpmath.sqrt(p))
+        return 2 * e / (1 + e)
     return _mp_t(p)
 
 
-class bcol_t(sp.Function):  # lower case: the registered name, as generated code spells it
-    """T(p) = tanh(sqrt(p)/2)/(sqrt(p)/2) (tan below 0, 1 at 0): the t every `<kernel>_at` takes."""
+class bcol_h(sp.Function):  # lower case: the registered name, as generated code spells it
+    """The value every `<kernel>_at(p, h)` takes: T(p) = tanh(u)/u, u = sqrt(p)/2 (tan below 0,
+    1 at 0) for p < NEAR_HIGH; from NEAR_HIGH on q = 1 - tanh(u), which carries 1 - tanh(u) and
+    sech(u)^2 = q (2 - q) to full relative accuracy, where T(p) cannot."""
 
     nargs = 1
 
@@ -465,7 +534,7 @@ class bcol_t(sp.Function):  # lower case: the registered name, as generated code
     @classmethod
     def _mp_value(cls, p, prec: int):
         with mpmath.workprec(prec):
-            return _mp_t_function(p)
+            return _mp_h_function(p)
 
     def _eval_evalf(self, prec):
         return evalf_by_mp(self, prec)
@@ -474,7 +543,7 @@ class bcol_t(sp.Function):  # lower case: the registered name, as generated code
         return self.args[0].is_extended_real or None
 
 
-register("bcol_t", bcol_t, _mp_t_function)
+register("bcol_h", bcol_h, _mp_h_function)
 
 # The kernels the plate relation and its Jacobian use (and their second derivatives, for a
 # Jacobian's derivative), created and registered at import.

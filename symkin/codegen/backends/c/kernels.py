@@ -26,6 +26,9 @@ from ....model.special.kernels import StableKernel
 from ...literals import (
     estrin,
     estrin_powers,
+    far_names,
+    far_text,
+    h_doc,
     horner,
     horner2,
     literal,
@@ -49,8 +52,8 @@ def source(name: str) -> str:
         return _FIXED[name]
     if name in OUTPUTS:
         return _elastica_output(name)
-    if name == "bcol_t":
-        return _bcol_t()
+    if name == "bcol_h":
+        return _bcol_h()
     cls = registry.FUNCTIONS[name]
     if issubclass(cls, axial.AxialKernel):
         return _axial(cls)
@@ -62,34 +65,40 @@ def source(name: str) -> str:
 
 
 def _axial(cls: type[axial.AxialKernel]) -> str:
-    """A beam-column kernel: its `_at` form at T(p)."""
+    """A beam-column kernel: its `_at` form at h = bcol_h(p)."""
     name = cls.__name__
     return (
         f"/* {cls.definition}. */\n"
         f"static double symkin_{name}(double p)\n"
         "{\n"
-        f"    return symkin_{name}_at(p, symkin_bcol_t(p));\n"
+        f"    return symkin_{name}_at(p, symkin_bcol_h(p));\n"
         "}\n"
     )
 
 
 def _axial_at(cls: type[axial.AxialAt]) -> str:
-    """A beam-column kernel at (p, t = T(p)): its near form on the near interval, else its closed
-    form at t; NaN at and beyond the buckling load p = -pi^2. The near form's shared values come
-    before the branch: inlined into one routine (the plate relation's), the compiler computes
-    them once for all its kernels, two divisions in all."""
+    """A beam-column kernel at (p, h = bcol_h(p)): its near form on the near interval, its far
+    form from NEAR_HIGH on, else its closed form at t = h; NaN at and beyond the buckling load
+    p = -pi^2. The near form's shared values come before the branch: inlined into one routine
+    (the plate relation's), the compiler computes them once for all its kernels."""
     kernel = cls.kernel
     form = kernel.near_form()
     num, den = kernel.float_closed()
-    closed = f"({horner2(num, 't', 'p')}) / ({horner2(den, 't', 'p')})"
+    closed = f"({horner2(num, 'h', 'p')}) / ({horner2(den, 'h', 'p')})"
     names = "".join(f"    const double {n} = {v};\n" for n, v in near_names(form))
+    far = "".join(f"        const double {n} = {v};\n" for n, v in far_names())
     return (
-        f"/* {kernel.definition}, at t = T(p): {near_doc(form)}, else the closed form. */\n"
-        f"static double symkin_{cls.__name__}(double p, double t)\n"
+        f"/* {kernel.definition}, at h = bcol_h(p): {near_doc(form)}, from there on in u, "
+        "tanh(u) and sech(u)^2, below in p and t = T(p). */\n"
+        f"static double symkin_{cls.__name__}(double p, double h)\n"
         "{\n"
         + names
         + f"    if (p > {literal(axial.NEAR_LOW)} && p < {literal(axial.NEAR_HIGH)}) {{\n"
         f"        return {near_text(form)};\n"
+        "    }\n"
+        f"    if (p >= {literal(axial.NEAR_HIGH)}) {{\n"
+        + far
+        + f"        return {far_text(kernel.far_form())};\n"
         "    }\n"
         f"    if (!(p > {literal(axial.BUCKLING)})) return NAN;\n"
         f"    return {closed};\n"
@@ -97,22 +106,22 @@ def _axial_at(cls: type[axial.AxialAt]) -> str:
     )
 
 
-def _bcol_t() -> str:
-    """T(p): its near form on the near interval, else tanh(u)/u or tan(v)/v."""
+def _bcol_h() -> str:
+    """h(p): T's near form on the near interval, 1 - tanh(u) = 2e/(1 + e), e = exp(-sqrt(p)),
+    from NEAR_HIGH on, tan(v)/v below."""
     form = axial.t_near_form()
     return (
-        "/* T(p) = tanh(u)/u, u = sqrt(p)/2 (p > 0); tan(v)/v, v = sqrt(-p)/2 (p < 0): "
-        f"{near_doc(form)}. */\n"
-        "static double symkin_bcol_t(double p)\n"
+        f"/* {h_doc()}: {near_doc(form)}. */\n"
+        "static double symkin_bcol_h(double p)\n"
         "{\n"
         "    double u;\n"
         f"    if (p > {literal(axial.NEAR_LOW)} && p < {literal(axial.NEAR_HIGH)}) {{\n"
         + "".join(f"        const double {n} = {v};\n" for n, v in near_names(form))
         + f"        return {near_text(form)};\n"
         "    }\n"
-        "    if (p > 0.0) {\n"
-        "        u = 0.5 * sqrt(p);\n"
-        "        return tanh(u) / u;\n"
+        f"    if (p >= {literal(axial.NEAR_HIGH)}) {{\n"
+        "        const double e = exp(-sqrt(p));\n"
+        "        return 2.0 * e / (1.0 + e);\n"
         "    }\n"
         "    u = 0.5 * sqrt(-p);\n"
         "    return tan(u) / u;\n"

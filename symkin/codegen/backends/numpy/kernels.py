@@ -29,6 +29,9 @@ from ....model.special.kernels import StableKernel
 from ...literals import (
     estrin,
     estrin_powers,
+    far_names,
+    far_text,
+    h_doc,
     horner,
     horner2,
     literal,
@@ -46,8 +49,8 @@ def source(name: str, scalar: bool = False) -> str:
         return _FIXED[name][scalar].lstrip()
     if name in OUTPUTS:
         return _elastica_output(name, scalar)
-    if name == "bcol_t":
-        return _bcol_t(scalar)
+    if name == "bcol_h":
+        return _bcol_h(scalar)
     cls = registry.FUNCTIONS[name]
     if issubclass(cls, axial.AxialKernel):
         return _axial(cls, scalar)
@@ -342,38 +345,46 @@ def _near(form: axial.NearForm, var: str, indent: str) -> str:
 
 
 def _axial(cls: type[axial.AxialKernel], scalar: bool) -> str:
-    """A beam-column kernel: its `_at` form at T(p)."""
+    """A beam-column kernel: its `_at` form at h = bcol_h(p)."""
     name = cls.__name__
     note = "" if scalar else " (vectorised)"
     return (
-        f'def {name}(p):\n    """{cls.definition}{note}."""\n    return {name}_at(p, bcol_t(p))\n'
+        f'def {name}(p):\n    """{cls.definition}{note}."""\n    return {name}_at(p, bcol_h(p))\n'
     )
 
 
 def _axial_at(cls: type[axial.AxialAt], scalar: bool) -> str:
-    """A beam-column kernel at (p, t = T(p)): its near form on the near interval, else its closed
-    form at t; NaN (numpy) or DomainError (scalar) at and beyond the buckling load p = -pi^2."""
+    """A beam-column kernel at (p, h = bcol_h(p)): its near form on the near interval, its far
+    form from NEAR_HIGH on, else its closed form at t = h; NaN (numpy) or DomainError (scalar)
+    at and beyond the buckling load p = -pi^2."""
     name = cls.__name__
     kernel = cls.kernel
     form = kernel.near_form()
     num, den = kernel.float_closed()
-    closed = f"({horner2(num, 't', 'p')}) / ({horner2(den, 't', 'p')})"
+    closed = f"({horner2(num, 'h', 'p')}) / ({horner2(den, 'h', 'p')})"
+    far = far_text(kernel.far_form())
     lo, hi = literal(axial.NEAR_LOW), literal(axial.NEAR_HIGH)
     pcr = literal(axial.BUCKLING)
-    doc = f"{kernel.definition}, at t = T(p): {near_doc(form)}, else the closed form"
+    doc = (
+        f"{kernel.definition}, at h = bcol_h(p): {near_doc(form)}, from there on in u, tanh(u) "
+        "and sech(u)^2, below in p and t = T(p)"
+    )
     if scalar:
         return (
-            f"def {name}(p, t):\n"
+            f"def {name}(p, h):\n"
             f'    """{doc}."""\n'
             f"    if {lo} < p < {hi}:\n"
             + _near(form, "p", "        ")
             + f"        return {near_text(form)}\n"
+            f"    if p >= {hi}:\n"
+            + "".join(f"        {n} = {v}\n" for n, v in far_names("math.sqrt"))
+            + f"        return {far}\n"
             f"    if not p > {pcr}:\n"
             f'        raise DomainError("{name}: the axial load index must exceed -pi^2")\n'
             f"    return {closed}\n"
         )
     return (
-        f"def {name}(x, t):\n"
+        f"def {name}(x, h):\n"
         f'    """{doc} (vectorised)."""\n'
         f"    x = np.asarray(x, dtype=float)\n"
         f"    near = (x > {lo}) & (x < {hi})\n"
@@ -382,39 +393,43 @@ def _axial_at(cls: type[axial.AxialAt], scalar: bool) -> str:
         + f"    value = {near_text(form)}\n"
         f"    if near.all():\n"
         f"        return value\n"
+        f"    high = x >= {hi}\n"
+        f"    p = np.where(high, x, {literal(2 * axial.NEAR_HIGH)})\n"
+        f"    h0 = h\n"
+        f"    h = np.where(high, h0, 0.01)\n"
+        + "".join(f"    {n} = {v}\n" for n, v in far_names("np.sqrt"))
+        + f"    far = {far}\n"
         f"    inside = x > {pcr}\n"
-        f"    far = ~near & inside\n"
-        f"    p = np.where(far, x, {literal(2 * axial.NEAR_HIGH)})\n"
-        f"    t = np.where(far, t, 0.5)\n"
+        f"    low = ~near & ~high & inside\n"
+        f"    p = np.where(low, x, {literal(2 * axial.NEAR_LOW)})\n"
+        f"    h = np.where(low, h0, 0.5)\n"
         f"    closed = {closed}\n"
-        f"    return np.where(near, value, np.where(inside, closed, np.nan))\n"
+        f"    return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))\n"
     )
 
 
-def _bcol_t(scalar: bool) -> str:
-    """T(p): its near form on the near interval, else tanh(u)/u or tan(v)/v."""
+def _bcol_h(scalar: bool) -> str:
+    """h(p): T's near form on the near interval, 1 - tanh(u) = 2e/(1 + e), e = exp(-sqrt(p)),
+    from NEAR_HIGH on, tan(v)/v below."""
     form = axial.t_near_form()
     lo, hi = literal(axial.NEAR_LOW), literal(axial.NEAR_HIGH)
     centre = literal(axial.NEAR_CENTRE)
-    doc = (
-        "T(p) = tanh(u)/u, u = sqrt(p)/2 (p > 0); tan(v)/v, v = sqrt(-p)/2 (p < 0): "
-        f"{near_doc(form)}"
-    )
+    doc = f"{h_doc()}: {near_doc(form)}"
     if scalar:
         return (
-            "def bcol_t(p):\n"
+            "def bcol_h(p):\n"
             f'    """{doc}."""\n'
             f"    if {lo} < p < {hi}:\n"
             + _near(form, "p", "        ")
             + f"        return {near_text(form)}\n"
-            "    if p > 0.0:\n"
-            "        u = 0.5 * math.sqrt(p)\n"
-            "        return math.tanh(u) / u\n"
+            f"    if p >= {hi}:\n"
+            "        e = math.exp(-math.sqrt(p))\n"
+            "        return 2.0 * e / (1.0 + e)\n"
             "    u = 0.5 * math.sqrt(-p)\n"
             "    return math.tan(u) / u\n"
         )
     return (
-        "def bcol_t(x):\n"
+        "def bcol_h(x):\n"
         f'    """{doc} (vectorised)."""\n'
         "    x = np.asarray(x, dtype=float)\n"
         f"    near = (x > {lo}) & (x < {hi})\n"
@@ -423,6 +438,8 @@ def _bcol_t(scalar: bool) -> str:
         + f"    value = {near_text(form)}\n"
         "    if near.all():\n"
         "        return value\n"
-        "    u = 0.5 * np.sqrt(np.where(near, 1.0, np.abs(x)))\n"
-        "    return np.where(near, value, np.where(x > 0.0, np.tanh(u) / u, np.tan(u) / u))\n"
+        f"    high = x >= {hi}\n"
+        f"    e = np.exp(-np.sqrt(np.where(high, x, {hi})))\n"
+        "    u = 0.5 * np.sqrt(np.where(near | high, 1.0, np.abs(x)))\n"
+        "    return np.where(near, value, np.where(high, 2.0 * e / (1.0 + e), np.tan(u) / u))\n"
     )
