@@ -434,18 +434,11 @@ PLATE_POINTS = [
 ]
 
 
-def test_plate_routine_in_c(tmp_path):
-    """The C routine of the plate relation (CSE'd, the kernels' float source) against the
-    relation in mpmath at 30 digits, its partials by mpmath.diff: within 1e-12 of the largest
-    output."""
+def _run_plate_routine(tmp_path: Path, points: list[tuple]) -> list[float]:
+    """The C routine's 12 outputs at each point, compiled as strictly as the runtime's code."""
     cc = shutil.which("cc") or shutil.which("gcc")
     assert cc, "no C compiler"
-    rel = relation(*SYMBOLS)
-    fns = [
-        sp.lambdify(SYMBOLS, e, modules=[special.mpmath_namespace(), "mpmath"])
-        for e in (rel.along, rel.across, rel.omega)
-    ]
-    rows = ",".join("{" + ", ".join(repr(v) for v in pt) + "}" for pt in PLATE_POINTS)
+    rows = ",".join("{" + ", ".join(repr(v) for v in pt) + "}" for pt in points)
     src = tmp_path / "plate.c"
     src.write_text(
         "#include <math.h>\n#include <stdio.h>\n"
@@ -453,7 +446,7 @@ def test_plate_routine_in_c(tmp_path):
         + "int main(void)\n{\n    static const double pts[][5] = {"
         + rows
         + "};\n    double out[12];\n    int i, k;\n"
-        + f"    for (i = 0; i < {len(PLATE_POINTS)}; ++i) {{\n"
+        + f"    for (i = 0; i < {len(points)}; ++i) {{\n"
         + "        sk_plate_relation4(pts[i], out);\n"
         + '        for (k = 0; k < 12; ++k) printf("%.17g\\n", out[k]);\n    }\n'
         + "    return 0;\n}\n"
@@ -461,9 +454,94 @@ def test_plate_routine_in_c(tmp_path):
     exe = tmp_path / "plate"
     flags = ["-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O2"]
     subprocess.run([cc, *flags, str(src), "-o", str(exe), "-lm"], check=True)
-    out = iter(
-        subprocess.run([str(exe)], check=True, capture_output=True, text=True).stdout.split()
-    )
+    run = subprocess.run([str(exe)], check=True, capture_output=True, text=True)
+    return [float(v) for v in run.stdout.split()]
+
+
+#: A dense grid of (θ, p, f) and both plate theories: p at and around 0, on both sides of the
+#: kernels' switches to the closed form (p = -4, 16, and the old |p| = 2), up to 0.1 % short of
+#: the buckling load -π² and far in tension
+DENSE_THETA = [1e-6, 0.05, 0.4, -1.2]
+DENSE_P = [0.0, 1e-9, -1e-9, 1e-4, -1e-4, 0.3, -1.0, 1.99, 2.01, -1.99, -2.01, -3.99, -4.0]
+DENSE_P += [-4.01, 15.99, 16.0, 16.01, -7.0, -9.0, -9.8, -9.86, 30.0, 60.0, 200.0]
+DENSE_F = [0.01, -0.7, 2.0]
+DENSE_EPS = [(0.0, 0.0), (8.3e-4, 2.6e-3)]
+
+
+def test_plate_routine_in_c_dense(tmp_path):
+    """The C routine on the dense grid against its 12 expressions evaluated by mpmath at 30
+    digits (the kernels' mpmath implementation): each output within 1e-14 of itself plus 1 % of
+    the point's largest output (the outputs are sums whose terms cancel), times pi^2/(p + pi^2)
+    near the buckling load, where T(p) = tan(v)/v is that ill-conditioned in p. (The Taylor
+    series the kernels had on |p| < 2 missed this by 4x at p = 2.01.)"""
+    rel = relation(*SYMBOLS)
+    values = [rel.along, rel.across, rel.omega]
+    exprs = values + [sp.diff(v, w) for v in values for w in SYMBOLS[:3]]
+    fn = sp.lambdify(SYMBOLS, exprs, modules=[special.mpmath_namespace(), "mpmath"], cse=True)
+    points = [
+        (th, p, f, ea, es)
+        for th in DENSE_THETA
+        for p in DENSE_P
+        for f in DENSE_F
+        for ea, es in DENSE_EPS
+        if (1 + (ea - es) * p) * p > -9.865  # the plate's own index p̃ inside the domain
+    ]
+    out = iter(_run_plate_routine(tmp_path, points))
+    worst = 0.0
+    for pt in points:
+        with mp.workdps(30):
+            want = fn(*[mp.mpf(v) for v in pt])
+        pt_tilde = (1 + (pt[3] - pt[4]) * pt[1]) * pt[1]
+        condition = max(1.0, math.pi**2 / (pt_tilde + math.pi**2))
+        largest = max(abs(w) for w in want)
+        for k, w in enumerate(want):
+            got = next(out)
+            err = float(abs(got - w) / ((abs(w) + 1e-2 * largest) * condition))
+            worst = max(worst, err)
+            assert err <= 1e-14, (pt, k, got, float(w))
+    assert worst > 0  # the comparison is not vacuous
+
+
+def test_plate_routine_identities():
+    """The kernels the plate routine writes through others (symkin.codegen.plate._identities), in
+    mpmath at 30 digits: exact, and the sums' terms add to at most 12 (E3' = e3c - 1/1920 over
+    p in [-9.5, 60]) and 1.8 (the sinr/cosr recurrences over x = theta/2 in (0, 5]) times the
+    result."""
+    sinr, cosr = special.sinr, special.cosr
+    sinr(5), cosr(5)  # created on demand: registered before the namespace is taken
+    ns = special.mpmath_namespace()
+    with mp.workdps(30):
+        for p in [mp.mpf(k) / 8 for k in range(-76, 481)]:
+            w = ns["bcol_w"](p)
+            assert abs(ns["bcol_s_d1"](p) + 2 * w) <= 1e-27 * abs(w)
+            a = p * w * ns["bcol_invt"](p) ** 2 / 3
+            assert abs(ns["bcol_a"](p) - a) <= 1e-27 * abs(a)
+            e3c, e3d1 = ns["bcol_e3c"](p), ns["bcol_e3_d1"](p)
+            assert abs(e3d1 - (e3c - mp.mpf(1) / 1920)) <= 1e-27 * abs(e3d1)
+            assert abs(e3c) + mp.mpf(1) / 1920 <= 12 * abs(e3d1)
+        c9, c7, c8 = (mp.mpf(1) / math.factorial(n) for n in (9, 7, 8))
+        for x in [mp.mpf(k) / 64 for k in range(1, 321)]:
+            x2 = x * x
+            for head, constant, tail in (
+                (sinr(4), c9, sinr(5)),
+                (sinr(3), -c7, sinr(4)),
+                (cosr(4), c8, cosr(5)),
+            ):
+                want, rest = ns[head.__name__](x), x2 * ns[tail.__name__](x)
+                assert abs(want - (constant + rest)) <= 1e-27 * abs(want)
+                assert abs(constant) + abs(rest) <= 1.8 * abs(want)
+
+
+def test_plate_routine_in_c(tmp_path):
+    """The C routine of the plate relation (CSE'd, the kernels' float source) against the
+    relation in mpmath at 30 digits, its partials by mpmath.diff: within 1e-12 of the largest
+    output."""
+    rel = relation(*SYMBOLS)
+    fns = [
+        sp.lambdify(SYMBOLS, e, modules=[special.mpmath_namespace(), "mpmath"])
+        for e in (rel.along, rel.across, rel.omega)
+    ]
+    out = iter(_run_plate_routine(tmp_path, PLATE_POINTS))
     for pt in PLATE_POINTS:
         with mp.workdps(30):
             x = [mp.mpf(v) for v in pt]
@@ -473,5 +551,5 @@ def test_plate_routine_in_c(tmp_path):
                     want.append(mp.diff(lambda v, fn=fn, k=k: fn(*x[:k], v, *x[k + 1 :]), x[k]))
         scale = max(abs(w) for w in want)
         for k, w in enumerate(want):
-            got = float(next(out))
+            got = next(out)
             assert abs(got - w) <= 1e-12 * scale, (pt, k, got, float(w))

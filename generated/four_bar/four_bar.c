@@ -52,52 +52,64 @@ const char *const four_bar_hinge_names[FOUR_BAR_N_HINGES] = {
     "B"
 };
 
-/* arck(x): arck(x) = (sin x - x cos x)/x^3; Taylor series (10 terms) for |x| < 1.5, else the nested elementary formula. */
+/* arck(x): arck(x) = (sin x - x cos x)/x^3; Taylor series (10 terms, Estrin's form) for |x| < 1.5, else the nested elementary formula. */
 static double symkin_arck(double x)
 {
     const double x2 = x * x;
     double b;
     if (fabs(x) < 1.5) {
-        return 0.3333333333333333 + x2 * (-0.03333333333333333 + x2 * (0.0011904761904761906 + x2 * (-2.2045855379188714e-05 + x2 * (2.505210838544172e-07 + x2 * (-1.9270852604185937e-09 + x2 * (1.0706029224547743e-11 + x2 * (-4.498331606952833e-14 + x2 * (1.4797143443923793e-16 + x2 * (-3.9145882126782523e-19)))))))));
+        const double x4 = x2 * x2;
+        const double x8 = x4 * x4;
+        const double x16 = x8 * x8;
+        return (((0.3333333333333333 + x2 * -0.03333333333333333) + (0.0011904761904761906 + x2 * -2.2045855379188714e-05) * x4) + ((2.505210838544172e-07 + x2 * -1.9270852604185937e-09) + (1.0706029224547743e-11 + x2 * -4.498331606952833e-14) * x4) * x8) + (1.4797143443923793e-16 + x2 * -3.9145882126782523e-19) * x16;
     }
     b = sin(x) / x - cos(x);
     b = b / x2;
     return b;
 }
 
-/* cosr2(x): cosr2(x) = (cos x - sum_(k<2) (-1)^k x^(2k)/(2k)!) / x^4; Taylor series (12 terms) for |x| < 3.0, else the nested elementary formula. */
+/* cosr2(x): cosr2(x) = (cos x - sum_(k<2) (-1)^k x^(2k)/(2k)!) / x^4; Taylor series (12 terms, Estrin's form) for |x| < 3.0, else the nested elementary formula. */
 static double symkin_cosr2(double x)
 {
     const double x2 = x * x;
     double b;
     if (fabs(x) < 3.0) {
-        return 0.041666666666666664 + x2 * (-0.001388888888888889 + x2 * (2.48015873015873e-05 + x2 * (-2.755731922398589e-07 + x2 * (2.08767569878681e-09 + x2 * (-1.1470745597729725e-11 + x2 * (4.779477332387385e-14 + x2 * (-1.5619206968586225e-16 + x2 * (4.110317623312165e-19 + x2 * (-8.896791392450574e-22 + x2 * (1.6117375710961184e-24 + x2 * (-2.4795962632247976e-27)))))))))));
+        const double x4 = x2 * x2;
+        const double x8 = x4 * x4;
+        const double x16 = x8 * x8;
+        return (((0.041666666666666664 + x2 * -0.001388888888888889) + (2.48015873015873e-05 + x2 * -2.755731922398589e-07) * x4) + ((2.08767569878681e-09 + x2 * -1.1470745597729725e-11) + (4.779477332387385e-14 + x2 * -1.5619206968586225e-16) * x4) * x8) + ((4.110317623312165e-19 + x2 * -8.896791392450574e-22) + (1.6117375710961184e-24 + x2 * -2.4795962632247976e-27) * x4) * x16;
     }
     b = -2.0 * (sin(0.5 * x) / x) * (sin(0.5 * x) / x);
     b = (b + 0.5) / x2;
     return b;
 }
 
-/* sinr1(x): sinr1(x) = (sin x - sum_(k<1) (-1)^k x^(2k+1)/(2k+1)!) / x^3; Taylor series (11 terms) for |x| < 2.0, else the nested elementary formula. */
+/* sinr1(x): sinr1(x) = (sin x - sum_(k<1) (-1)^k x^(2k+1)/(2k+1)!) / x^3; Taylor series (11 terms, Estrin's form) for |x| < 2.0, else the nested elementary formula. */
 static double symkin_sinr1(double x)
 {
     const double x2 = x * x;
     double b;
     if (fabs(x) < 2.0) {
-        return -0.16666666666666666 + x2 * (0.008333333333333333 + x2 * (-0.0001984126984126984 + x2 * (2.7557319223985893e-06 + x2 * (-2.505210838544172e-08 + x2 * (1.6059043836821613e-10 + x2 * (-7.647163731819816e-13 + x2 * (2.8114572543455206e-15 + x2 * (-8.22063524662433e-18 + x2 * (1.9572941063391263e-20 + x2 * (-3.868170170630684e-23))))))))));
+        const double x4 = x2 * x2;
+        const double x8 = x4 * x4;
+        const double x16 = x8 * x8;
+        return (((-0.16666666666666666 + x2 * 0.008333333333333333) + (-0.0001984126984126984 + x2 * 2.7557319223985893e-06) * x4) + ((-2.505210838544172e-08 + x2 * 1.6059043836821613e-10) + (-7.647163731819816e-13 + x2 * 2.8114572543455206e-15) * x4) * x8) + ((-8.22063524662433e-18 + x2 * 1.9572941063391263e-20) + (-3.868170170630684e-23) * x4) * x16;
     }
     b = sin(x) / x;
     b = (b - 1.0) / x2;
     return b;
 }
 
-/* sinr2(x): sinr2(x) = (sin x - sum_(k<2) (-1)^k x^(2k+1)/(2k+1)!) / x^5; Taylor series (12 terms) for |x| < 3.0, else the nested elementary formula. */
+/* sinr2(x): sinr2(x) = (sin x - sum_(k<2) (-1)^k x^(2k+1)/(2k+1)!) / x^5; Taylor series (12 terms, Estrin's form) for |x| < 3.0, else the nested elementary formula. */
 static double symkin_sinr2(double x)
 {
     const double x2 = x * x;
     double b;
     if (fabs(x) < 3.0) {
-        return 0.008333333333333333 + x2 * (-0.0001984126984126984 + x2 * (2.7557319223985893e-06 + x2 * (-2.505210838544172e-08 + x2 * (1.6059043836821613e-10 + x2 * (-7.647163731819816e-13 + x2 * (2.8114572543455206e-15 + x2 * (-8.22063524662433e-18 + x2 * (1.9572941063391263e-20 + x2 * (-3.868170170630684e-23 + x2 * (6.446950284384474e-26 + x2 * (-9.183689863795546e-29)))))))))));
+        const double x4 = x2 * x2;
+        const double x8 = x4 * x4;
+        const double x16 = x8 * x8;
+        return (((0.008333333333333333 + x2 * -0.0001984126984126984) + (2.7557319223985893e-06 + x2 * -2.505210838544172e-08) * x4) + ((1.6059043836821613e-10 + x2 * -7.647163731819816e-13) + (2.8114572543455206e-15 + x2 * -8.22063524662433e-18) * x4) * x8) + ((1.9572941063391263e-20 + x2 * -3.868170170630684e-23) + (6.446950284384474e-26 + x2 * -9.183689863795546e-29) * x4) * x16;
     }
     b = sin(x) / x;
     b = (b - 1.0) / x2;

@@ -20,6 +20,7 @@ from collections.abc import Callable
 import sympy as sp
 
 from ..core.errors import InputError
+from ..model.special import axial
 
 #: Integers up to this magnitude are exact in a double and stay integers.
 EXACT_INT = 2**53
@@ -177,3 +178,95 @@ def horner2(rows: list[list[float]], outer: str, inner: str) -> str:
     for part in reversed(parts[:-1]):
         text = f"{outer} * ({text})" if part == "0.0" else f"({part}) + {outer} * ({text})"
     return text
+
+
+def estrin(
+    coeffs: list[float], var: str, name: Callable[[int], str] | None = None
+) -> tuple[str, int]:
+    """Source text of sum coeffs[k] var^k in Estrin's form (valid Python and C): halves joined by
+    the powers var^2, var^4, ... (a short dependency chain, where Horner's is as long as the
+    polynomial), var^k named name(k) (default: var followed by k), and the highest such power
+    it uses (1: none)."""
+    if len(coeffs) == 1:
+        return literal(coeffs[0]), 1
+    if len(coeffs) == 2:
+        return f"{literal(coeffs[0])} + {var} * {literal(coeffs[1])}", 1
+    half = 1 << (len(coeffs) - 1).bit_length() - 1
+    low, _ = estrin(coeffs[:half], var, name)
+    high, top = estrin(coeffs[half:], var, name)
+    power = var if half == 1 else (name(half) if name else f"{var}{half}")
+    return f"({low}) + ({high}) * {power}", max(top, half)
+
+
+def estrin_powers(
+    top: int, var: str, name: Callable[[int], str] | None = None
+) -> list[tuple[str, str]]:
+    """The (name, value) pairs of the powers var^2 .. var^top an Estrin text uses, in order, as
+    C and Python text."""
+    names = name or (lambda k: f"{var}{k}")
+    out, power = [], 2
+    while power <= top:
+        half = var if power == 2 else names(power // 2)
+        out.append((names(power), f"{half} * {half}"))
+        power *= 2
+    return out
+
+
+def x_power(k: int) -> str:
+    """The name of (x^2)^k in the kernels' Estrin form: x4, x8, ..."""
+    return f"x{2 * k}"
+
+
+def near_text(form: axial.NearForm, var: str = "p") -> str:
+    """A kernel's near form p^j P(d) r^m s^n as C and Python text in `var`, d = var -
+    NEAR_CENTRE, r = 1/(var + pi^2), s = 1/(var + 4 pi^2) and d's powers (near_names defines
+    them)."""
+    m, n = form.poles
+    factors = [var] * form.zero + ["r"] * m + ["s"] * n
+    text = f"({estrin(list(form.coeffs), 'd')[0]})"
+    return f"{text} * ({' * '.join(factors)})" if factors else text
+
+
+def near_names(form: axial.NearForm | None = None, var: str = "p") -> list[tuple[str, str]]:
+    """The (name, value) pairs near_text uses, as C and Python text, in order (all of them
+    without a `form`: d^2 .. d^8, r and s)."""
+    top = estrin(list(form.coeffs), "d")[1] if form else 8
+    out = [("d", f"{var} - {literal(axial.NEAR_CENTRE)}"), *estrin_powers(top, "d")]
+    if form is None or form.poles[0]:
+        out.append(("r", f"1.0 / ({var} + {literal(axial.PI2)})"))
+    if form is None or form.poles[1]:
+        out.append(("s", f"1.0 / ({var} + {literal(axial.FOUR_PI2)})"))
+    return out
+
+
+def far_text(form: axial.FarForm) -> str:
+    """A kernel's far form (S_n (1 + tau) - sigma B_n) / (S_d (1 + tau) - sigma B_d) as C and
+    Python text in u, tau, sigma (names the caller defines)."""
+
+    def part(rows: tuple[list[list[float]], list[list[float]]]) -> str:
+        s, b = (horner2(r, "sigma", "u") for r in rows)
+        return f"({s}) * (1.0 + tau)" + ("" if b == "0.0" else f" - sigma * ({b})")
+
+    return f"({part(form.num)}) / ({part(form.den)})"
+
+
+def far_names(sqrt: str = "sqrt") -> list[tuple[str, str]]:
+    """The far form's names from p and h = bcol_h(p) = 1 - tanh(sqrt(p)/2), as C and Python
+    text (`sqrt` the language's square root)."""
+    return [("u", f"0.5 * {sqrt}(p)"), ("tau", "1.0 - h"), ("sigma", "h * (2.0 - h)")]
+
+
+def near_doc(form: axial.NearForm) -> str:
+    """One line on a near form, for comments."""
+    return (
+        f"for {literal(axial.NEAR_LOW)} < p < {literal(axial.NEAR_HIGH)} an economised "
+        f"polynomial ({len(form.coeffs)} terms) with the poles divided out"
+    )
+
+
+def h_doc() -> str:
+    """One line on bcol_h, for comments."""
+    return (
+        f"h(p) = T(p) = tanh(u)/u, u = sqrt(p)/2 (tan(v)/v, v = sqrt(-p)/2, below 0) for p < "
+        f"{literal(axial.NEAR_HIGH)}, 1 - tanh(u) from it on"
+    )

@@ -15,15 +15,27 @@ for the beam-column; the quartic terms by the stationarity of the potential, "2n
 Their derivatives stay in the family because T' = ((1 - T)/p - T^2/4)/2 is rational in p and T:
 `bcol_<base>_d<k>` is the k-th p-derivative, created on demand like sinr(n).
 
-Float algorithm (written out by each backend): for |p| < P_SERIES the Taylor series (exact
-rational coefficients from the series of tanh(x)/x, Horner in p), else the rational closed form
-at T(p); NaN (C, numpy) or DomainError (Python) for p <= -pi^2. mpmath evaluates the series at
-high precision near 0 and the closed form with guard bits elsewhere.
+Float algorithm (written out by each backend), in two parts so that one transcendental serves
+every kernel of a plate: `bcol_<kernel>_at(p, h)` takes h = `bcol_h(p)`, and `bcol_<kernel>(p)`
+is `bcol_<kernel>_at(p, bcol_h(p))`. On the near interval NEAR_LOW < p < NEAR_HIGH, where the
+closed forms cancel, each kernel (and T itself, h there) is an economised polynomial with its
+poles divided out,
+
+    K(p) = p^j P(p - NEAR_CENTRE) / ((p + pi^2)^m (p + 4 pi^2)^n)
+
+(j its order of zero at 0, m and n its pole orders at T = infinity and T = 0; the next
+singularity, -9 pi^2, is far, so 12 to 15 terms reach 2^-55). From NEAR_HIGH on, where T ->
+2/sqrt(p) makes the closed forms' leading terms cancel, the far form: the closed form in
+u = sqrt(p)/2, tanh(u) and sech(u)^2 with the cancelling part summed exactly (FarForm), from
+h = 1 - tanh(u). Below NEAR_LOW the rational closed form at h = T(p). NaN (C, numpy) or
+DomainError (Python) for p <= -pi^2. mpmath evaluates the exact series at high precision near 0
+and the closed form with guard bits elsewhere.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from fractions import Fraction
 from functools import cache
 
@@ -32,19 +44,24 @@ import sympy as sp
 from sympy.core.function import ArgumentIndexError
 
 from .kernels import _from_mp, _to_mp, evalf_by_mp
-from .registry import DomainError, register
+from .registry import FUNCTIONS, DomainError, register
 
 #: The symbols of the closed forms: the axial load index and T(p).
 P, TT = sp.symbols("p t")
-#: T'(p) in terms of p and T (the series branch handles p near 0).
+#: T'(p) in terms of p and T (the exact series handle p near 0).
 T_PRIME = ((1 - TT) / P - TT**2 / 4) / 2
-#: Series below this |p| (radius of convergence pi^2: a term shrinks by P_SERIES/pi^2 ~ 0.2).
-P_SERIES = 2.0
-#: Exact coefficients from which a float series is cut (FLOAT_TERMS * log10(P_SERIES/pi^2) is
-#: about -33: room for the growth of a derivative's coefficients).
-FLOAT_TERMS = 48
 #: The plate's sway buckling load: every kernel's pole (p = -pi^2).
 BUCKLING = -(math.pi**2)
+#: The near interval of the float algorithm: below it the closed forms in p and T lose at most
+#: 7e-15 down to p = -8 (measured against mpmath, tests/test_beam_column_kernels.py), above it
+#: the far forms (the closed forms in p and T cancel towards 0, 6e-12 at p = 2, and as
+#: T -> 2/sqrt(p), 4e-12 at p = 60).
+NEAR_LOW, NEAR_HIGH = -4.0, 16.0
+NEAR_CENTRE = 0.5 * (NEAR_LOW + NEAR_HIGH)
+#: The poles the near polynomials divide out, pi^2 and 4 pi^2, as the doubles nearest them.
+PI2, FOUR_PI2 = 9.869604401089358, 39.47841760435743
+#: Chebyshev nodes of a near fit (the fits keep 12 to 15 terms).
+NEAR_NODES = 40
 
 _S = (1 - TT) / P
 _W = (12 * _S - TT**2) / (16 * P)
@@ -174,12 +191,14 @@ class AxialKernel(sp.Function):
         return series_of(cls.closed(), 16 * ((n + 15) // 16))[:n]
 
     @classmethod
-    def float_series(cls) -> list[float]:
-        """The float coefficients of the series the float algorithm uses below P_SERIES: cut
-        where every further term is below 2^-54 of the largest term at |p| = P_SERIES (13 to 31
-        terms: the kernels whose pole is at -pi^2 need the most, those of 1/T, entire up to
-        -4 pi^2, the fewest)."""
-        return _float_series(cls.base, cls.order)
+    def near_form(cls) -> NearForm:
+        """The economised form the float algorithm uses on the near interval."""
+        return _near_form(cls.base, cls.order)
+
+    @classmethod
+    def far_form(cls) -> FarForm:
+        """The form the float algorithm uses from NEAR_HIGH on (no cancellation as T -> 0)."""
+        return _far(cls.base, cls.order)
 
     @classmethod
     def float_closed(cls) -> tuple[list[list[float]], list[list[float]]]:
@@ -249,17 +268,149 @@ class AxialKernel(sp.Function):
         return impl
 
 
+@dataclass(frozen=True)
+class NearForm:
+    """A kernel on the near interval: p^zero P(p - NEAR_CENTRE) / ((p + pi^2)^poles[0]
+    (p + 4 pi^2)^poles[1]), P's float coefficients from p^0."""
+
+    coeffs: tuple[float, ...]
+    zero: int
+    poles: tuple[int, int]
+
+
+def _orders(closed: sp.Expr) -> tuple[int, int]:
+    """The pole orders of a closed form at T = infinity (p = -pi^2) and T = 0 (p = -4 pi^2): the
+    excess of the numerator's highest and the denominator's lowest power of T."""
+    num, den = _float_closed(closed)
+
+    def low(rows: list[list[float]]) -> int:
+        return next(i for i, r in enumerate(rows) if any(r))
+
+    return max(0, len(num) - len(den)), max(0, low(den) - low(num))
+
+
+def near_fit(f, zero: int, poles: tuple[int, int]) -> NearForm:
+    """The economised polynomial of g(p) = f(p) (p + pi^2)^m (p + 4 pi^2)^n / p^zero on the near
+    interval (f an mpmath function): Chebyshev interpolation at NEAR_NODES nodes at 40 digits,
+    cut where the dropped coefficients sum below 2^-55 of min |g| on the nodes, then written in
+    powers of p - NEAR_CENTRE."""
+    m, n = poles
+    with mpmath.workdps(40):
+        centre = mpmath.mpf(NEAR_CENTRE)
+        half = (mpmath.mpf(NEAR_HIGH) - NEAR_LOW) / 2
+        pi2 = mpmath.pi**2
+        angles = [mpmath.pi * (i + mpmath.mpf(1) / 2) / NEAR_NODES for i in range(NEAR_NODES)]
+        gs = []
+        for a in angles:
+            p = centre + half * mpmath.cos(a)
+            gs.append(f(p) * (p + pi2) ** m * (p + 4 * pi2) ** n / p**zero)
+        cheb = [
+            2 * mpmath.fsum(g * mpmath.cos(k * a) for g, a in zip(gs, angles)) / NEAR_NODES
+            for k in range(NEAR_NODES)
+        ]
+        cheb[0] /= 2
+        bound = mpmath.ldexp(min(abs(g) for g in gs), -55)
+        size = NEAR_NODES
+        while size > 1 and mpmath.fsum(abs(c) for c in cheb[size - 1 :]) <= bound:
+            size -= 1
+        if size == NEAR_NODES:  # pragma: no cover - the coefficients fall about 30-fold a term
+            raise ValueError("a near fit needs more nodes")
+        # sum_k c_k T_k(d/half) in powers of d: T_k's monomial coefficients, scaled by half^-i
+        mono = [mpmath.mpf(0)] * size
+        for k, c in enumerate(cheb[:size]):
+            for i, t in enumerate(_chebyshev_monomial(k)):
+                mono[i] += c * t / half**i
+        return NearForm(tuple(float(c) for c in mono), zero, poles)
+
+
 @cache
-def _float_series(base: str, order: int) -> list[float]:
-    cs = [float(c) for c in kernel(base, order).coefficients(FLOAT_TERMS)]
-    terms = [abs(c) * P_SERIES**j for j, c in enumerate(cs)]
-    bound = 2.0**-54 * max(terms)
-    n = len(cs)
-    while n > 1 and terms[n - 1] <= bound:
-        n -= 1
-    if n == len(cs):  # pragma: no cover - the coefficients fall by about P_SERIES/pi^2
-        raise ValueError(f"{kernel(base, order).__name__}: its series needs more terms")
-    return cs[:n]
+def _chebyshev_monomial(k: int) -> tuple[int, ...]:
+    """The integer coefficients of T_k(x) in powers of x."""
+    if k == 0:
+        return (1,)
+    if k == 1:
+        return (0, 1)
+    a, b = _chebyshev_monomial(k - 2), _chebyshev_monomial(k - 1)
+    out = [0] * (k + 1)
+    for i, v in enumerate(b):
+        out[i + 1] += 2 * v
+    for i, v in enumerate(a):
+        out[i] -= v
+    return tuple(out)
+
+
+@cache
+def _near_form(base: str, order: int) -> NearForm:
+    cls = kernel(base, order)
+    zero = next(i for i, c in enumerate(cls.coefficients(4)) if c != 0)
+    closed = _mp_closed(base, order)
+
+    def value(p):
+        # the nodes keep |p| > 0.1, where 320 bits leave the closed form's cancellation far
+        # below the fit's 40 digits
+        with mpmath.workprec(320):
+            return closed(p, _mp_t(p))
+
+    return near_fit(value, zero, _orders(cls.closed()))
+
+
+@cache
+def t_near_form() -> NearForm:
+    """T(p) on the near interval (a simple pole at -pi^2, no zero)."""
+    return near_fit(lambda p: _mp_t(p) if p else mpmath.mpf(1), 0, (1, 0))
+
+
+#: The symbols of the far forms: u = sqrt(p)/2, tanh(u) and sech(u)^2.
+U, TAU, SIGMA = sp.symbols("u tau sigma")
+
+
+@dataclass(frozen=True)
+class FarForm:
+    """A kernel from NEAR_HIGH on, in u = sqrt(p)/2, tau = tanh(u), sigma = 1 - tau^2:
+    (S_n (1 + tau) - sigma B_n) / (S_d (1 + tau) - sigma B_d), each of S, B given per power of
+    sigma (from 0) as the coefficients of u^0, u^1, ... (integers, exact in float64)."""
+
+    num: tuple[list[list[float]], list[list[float]]]
+    den: tuple[list[list[float]], list[list[float]]]
+
+
+def _far_form(closed: sp.Expr) -> FarForm:
+    """The closed form with p = 4u^2, T = tau/u, over a common power of u, each part A + tau B
+    by tau^2 = 1 - sigma and written (A + B) - sigma B/(1 + tau) (as 1 - tau = sigma/(1 + tau)):
+    A + B is exact where tau -> 1 made the closed form's terms cancel."""
+    num, den = sp.fraction(sp.cancel(sp.together(closed)))
+    parts = [sp.expand(e.subs({P: 4 * U**2, TT: TAU / U})) for e in (num, den)]
+    low = min(sp.Poly(sp.expand(e * U**100), U).monoms()[-1][0] for e in parts) - 100
+    out = []
+    for e in parts:
+        poly = sp.Poly(sp.expand(e * U ** max(0, -low)), TAU)
+        even, odd = sp.S.Zero, sp.S.Zero
+        for (k,), c in poly.terms():
+            term = c * (1 - SIGMA) ** (k // 2)
+            if k % 2:
+                odd += term
+            else:
+                even += term
+        out.append((_rows(sp.expand(even + odd)), _rows(sp.expand(odd))))
+    return FarForm(out[0], out[1])
+
+
+def _rows(expr: sp.Expr) -> list[list[float]]:
+    """A polynomial in (SIGMA, U) as float rows per power of SIGMA (exact integers)."""
+    if expr == 0:
+        return [[0.0]]
+    poly = sp.Poly(expr, SIGMA, U)
+    rows = [[0.0] * (poly.degree(U) + 1) for _ in range(poly.degree(SIGMA) + 1)]
+    for (i, j), c in poly.terms():
+        if not (c.is_Integer and abs(c) < 2**53):
+            raise ValueError(f"coefficient {c} of a far form is not an exact float")
+        rows[i][j] = float(c)
+    return rows
+
+
+@cache
+def _far(base: str, order: int) -> FarForm:
+    return _far_form(closed_form(base, order))
 
 
 @cache
@@ -304,22 +455,95 @@ def kernel(base: str, order: int = 0) -> type:
             "__module__": __name__,
         },
     )
-    register(name, cls, cls._mpmath_function(), ("bcol_t",))
+    at = _kernel_at(cls)
+    register(name, cls, cls._mpmath_function(), ("bcol_h", at.__name__))
     globals()[name] = cls
     return cls
 
 
-def _mp_t_function(p):
-    """T(p) at the current mpmath precision (the helper of the float algorithm)."""
+class AxialAt(sp.Function):
+    """Base of a beam-column kernel at (p, h), h = bcol_h(p) given: what generated code calls so
+    that one transcendental serves every kernel of a plate (symkin.codegen.plate). Subclasses
+    set `kernel`, the one-argument kernel class whose value this is."""
+
+    nargs = 2
+    kernel: type = AxialKernel
+
+    def _eval_evalf(self, prec):
+        return self.kernel(self.args[0])._eval_evalf(prec)
+
+    def _eval_is_real(self):
+        return self.args[0].is_extended_real or None
+
+
+def _kernel_at(cls: type) -> type:
+    """The two-argument class `<kernel>_at(p, h)` of a kernel class, registered."""
+    name = f"{cls.__name__}_at"
+    at = type(
+        name,
+        (AxialAt,),
+        {
+            "kernel": cls,
+            "__doc__": f"{cls.definition}, at p and h = bcol_h(p) (symkin.model.special.axial).",
+            "__module__": __name__,
+        },
+    )
+    value = cls._mpmath_function()
+
+    def impl(p, h, _value=value):
+        return _value(p)
+
+    impl.__name__ = name
+    register(name, at, impl)
+    globals()[name] = at
+    return at
+
+
+def kernel_at(base: str, order: int = 0) -> type:
+    """The class `<kernel>_at(p, h)` of the `order`-th p-derivative of `base`."""
+    return FUNCTIONS[kernel(base, order).__name__ + "_at"]
+
+
+def _mp_h_function(p):
+    """h(p), the kernels' shared value, at the current mpmath precision: T(p) below NEAR_HIGH,
+    q = 1 - tanh(sqrt(p)/2) from it on."""
     p = mpmath.mpmathify(p)
     if p == 0:
         return mpmath.mpf(1)
     if not p > -(mpmath.pi**2):
-        raise DomainError(f"bcol_t({p}): the axial load index must exceed -pi^2")
+        raise DomainError(f"bcol_h({p}): the axial load index must exceed -pi^2")
+    if p >= NEAR_HIGH:
+        e = mpmath.exp(-mpmath.sqrt(p))
+        return 2 * e / (1 + e)
     return _mp_t(p)
 
 
-register("bcol_t", None, _mp_t_function)
+class bcol_h(sp.Function):  # lower case: the registered name, as generated code spells it
+    """The value every `<kernel>_at(p, h)` takes: T(p) = tanh(u)/u, u = sqrt(p)/2 (tan below 0,
+    1 at 0) for p < NEAR_HIGH; from NEAR_HIGH on q = 1 - tanh(u), which carries 1 - tanh(u) and
+    sech(u)^2 = q (2 - q) to full relative accuracy, where T(p) cannot."""
+
+    nargs = 1
+
+    @classmethod
+    def eval(cls, x):
+        if x.is_zero:
+            return sp.S.One
+        return None
+
+    @classmethod
+    def _mp_value(cls, p, prec: int):
+        with mpmath.workprec(prec):
+            return _mp_h_function(p)
+
+    def _eval_evalf(self, prec):
+        return evalf_by_mp(self, prec)
+
+    def _eval_is_real(self):
+        return self.args[0].is_extended_real or None
+
+
+register("bcol_h", bcol_h, _mp_h_function)
 
 # The kernels the plate relation and its Jacobian use (and their second derivatives, for a
 # Jacobian's derivative), created and registered at import.

@@ -15,7 +15,7 @@ are cancellation-free too:
     arck'(x)   = x (sinr_1(x) + 3 cosr_2(x) - 3 sinr_2(x))
 
 Float algorithm of a kernel (language-neutral data here, written out by each backend): for |x|
-below a threshold T, the Taylor series in x^2 (Horner) with as many terms as make the first
+below a threshold T, the Taylor series in x^2 (Estrin's form) with as many terms as make the first
 dropped term smaller than 2^-53 times the smallest value of the kernel on [0, T]; above T the
 elementary formula, evaluated by the nested recurrence b <- (b - a_j)/x^2, whose cancellation at
 |x| >= T costs at most a few units in the last place.  mpmath evaluates them at any precision.

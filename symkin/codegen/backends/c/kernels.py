@@ -23,7 +23,21 @@ from ....model.special.elastica_force import (
     RF_STOP,
 )
 from ....model.special.kernels import StableKernel
-from ...literals import horner, horner2, literal, recurrence
+from ...literals import (
+    estrin,
+    estrin_powers,
+    far_names,
+    far_text,
+    h_doc,
+    horner,
+    horner2,
+    literal,
+    near_doc,
+    near_names,
+    near_text,
+    recurrence,
+    x_power,
+)
 
 
 def support(names: Iterable[str]) -> str:
@@ -38,33 +52,79 @@ def source(name: str) -> str:
         return _FIXED[name]
     if name in OUTPUTS:
         return _elastica_output(name)
+    if name == "bcol_h":
+        return _bcol_h()
     cls = registry.FUNCTIONS[name]
     if issubclass(cls, axial.AxialKernel):
         return _axial(cls)
+    if issubclass(cls, axial.AxialAt):
+        return _axial_at(cls)
     if not issubclass(cls, StableKernel):
         raise KeyError(f"no C source for '{name}'")
     return _kernel(cls)
 
 
 def _axial(cls: type[axial.AxialKernel]) -> str:
-    """A beam-column kernel: Taylor series in p below P_SERIES, else its closed form at T(p);
-    NaN at and beyond the buckling load p = -pi^2."""
+    """A beam-column kernel: its `_at` form at h = bcol_h(p)."""
     name = cls.__name__
-    num, den = cls.float_closed()
-    closed = f"({horner2(num, 't', 'p')}) / ({horner2(den, 't', 'p')})"
-    series = horner(cls.float_series(), "p")
     return (
-        f"/* {cls.definition}; Taylor series ({len(cls.float_series())} terms) for "
-        f"|p| < {literal(axial.P_SERIES)}, else the closed form in p and t = T(p). */\n"
+        f"/* {cls.definition}. */\n"
         f"static double symkin_{name}(double p)\n"
         "{\n"
-        "    double t;\n"
-        f"    if (fabs(p) < {literal(axial.P_SERIES)}) {{\n"
-        f"        return {series};\n"
+        f"    return symkin_{name}_at(p, symkin_bcol_h(p));\n"
+        "}\n"
+    )
+
+
+def _axial_at(cls: type[axial.AxialAt]) -> str:
+    """A beam-column kernel at (p, h = bcol_h(p)): its near form on the near interval, its far
+    form from NEAR_HIGH on, else its closed form at t = h; NaN at and beyond the buckling load
+    p = -pi^2. The near form's shared values come before the branch: inlined into one routine
+    (the plate relation's), the compiler computes them once for all its kernels."""
+    kernel = cls.kernel
+    form = kernel.near_form()
+    num, den = kernel.float_closed()
+    closed = f"({horner2(num, 'h', 'p')}) / ({horner2(den, 'h', 'p')})"
+    names = "".join(f"    const double {n} = {v};\n" for n, v in near_names(form))
+    far = "".join(f"        const double {n} = {v};\n" for n, v in far_names())
+    return (
+        f"/* {kernel.definition}, at h = bcol_h(p): {near_doc(form)}, from there on in u, "
+        "tanh(u) and sech(u)^2, below in p and t = T(p). */\n"
+        f"static double symkin_{cls.__name__}(double p, double h)\n"
+        "{\n"
+        + names
+        + f"    if (p > {literal(axial.NEAR_LOW)} && p < {literal(axial.NEAR_HIGH)}) {{\n"
+        f"        return {near_text(form)};\n"
+        "    }\n"
+        f"    if (p >= {literal(axial.NEAR_HIGH)}) {{\n"
+        + far
+        + f"        return {far_text(kernel.far_form())};\n"
         "    }\n"
         f"    if (!(p > {literal(axial.BUCKLING)})) return NAN;\n"
-        "    t = symkin_bcol_t(p);\n"
         f"    return {closed};\n"
+        "}\n"
+    )
+
+
+def _bcol_h() -> str:
+    """h(p): T's near form on the near interval, 1 - tanh(u) = 2e/(1 + e), e = exp(-sqrt(p)),
+    from NEAR_HIGH on, tan(v)/v below."""
+    form = axial.t_near_form()
+    return (
+        f"/* {h_doc()}: {near_doc(form)}. */\n"
+        "static double symkin_bcol_h(double p)\n"
+        "{\n"
+        "    double u;\n"
+        f"    if (p > {literal(axial.NEAR_LOW)} && p < {literal(axial.NEAR_HIGH)}) {{\n"
+        + "".join(f"        const double {n} = {v};\n" for n, v in near_names(form))
+        + f"        return {near_text(form)};\n"
+        "    }\n"
+        f"    if (p >= {literal(axial.NEAR_HIGH)}) {{\n"
+        "        const double e = exp(-sqrt(p));\n"
+        "        return 2.0 * e / (1.0 + e);\n"
+        "    }\n"
+        "    u = 0.5 * sqrt(-p);\n"
+        "    return tan(u) / u;\n"
         "}\n"
     )
 
@@ -75,7 +135,7 @@ def _kernel(cls: type[StableKernel]) -> str:
     coeffs, n = cls.float_series()
     threshold = literal(cls.threshold)
     doc = (
-        f"{cls.definition}; Taylor series ({n} terms) for |x| < {threshold}, "
+        f"{cls.definition}; Taylor series ({n} terms, Estrin's form) for |x| < {threshold}, "
         f"else the nested elementary formula"
     )
     base = {
@@ -84,14 +144,17 @@ def _kernel(cls: type[StableKernel]) -> str:
         "sinc_minus_cos": "sin(x) / x - cos(x)",
     }[cls.float_base]
     steps = "".join(f"    {step};\n" for step in recurrence(cls.float_subtract, "x2"))
+    series, top = estrin(coeffs, "x2", x_power)
+    powers = "".join(
+        f"        const double {n} = {v};\n" for n, v in estrin_powers(top, "x2", x_power)
+    )
     return (
         f"/* {name}(x): {doc}. */\n"
         f"static double symkin_{name}(double x)\n"
         "{\n"
         "    const double x2 = x * x;\n"
         "    double b;\n"
-        f"    if (fabs(x) < {threshold}) {{\n"
-        f"        return {horner(coeffs, 'x2')};\n"
+        f"    if (fabs(x) < {threshold}) {{\n" + powers + f"        return {series};\n"
         "    }\n"
         f"    b = {base};\n" + steps + "    return b;\n"
         "}\n"
@@ -203,25 +266,7 @@ def _elastica_output(name: str) -> str:
     )
 
 
-_BCOL_T = """/* T(p) = tanh(u)/u, u = sqrt(p)/2 (p > 0); tan(v)/v, v = sqrt(-p)/2 (p < 0);
-   1 at p = 0. */
-static double symkin_bcol_t(double p)
-{
-    double u;
-    if (p > 0.0) {
-        u = 0.5 * sqrt(p);
-        return tanh(u) / u;
-    }
-    if (p < 0.0) {
-        u = 0.5 * sqrt(-p);
-        return tan(u) / u;
-    }
-    return 1.0;
-}
-"""
-
 _FIXED = {
-    "bcol_t": _BCOL_T,
     "carlson_rf": _CARLSON_RF,
     "carlson_rd": _CARLSON_RD,
     "elastica_core": _ELASTICA_CORE,

@@ -26,7 +26,21 @@ from ....model.special.elastica_force import (
     RF_STOP,
 )
 from ....model.special.kernels import StableKernel
-from ...literals import horner, horner2, literal, recurrence
+from ...literals import (
+    estrin,
+    estrin_powers,
+    far_names,
+    far_text,
+    h_doc,
+    horner,
+    horner2,
+    literal,
+    near_doc,
+    near_names,
+    near_text,
+    recurrence,
+    x_power,
+)
 
 
 def source(name: str, scalar: bool = False) -> str:
@@ -35,9 +49,13 @@ def source(name: str, scalar: bool = False) -> str:
         return _FIXED[name][scalar].lstrip()
     if name in OUTPUTS:
         return _elastica_output(name, scalar)
+    if name == "bcol_h":
+        return _bcol_h(scalar)
     cls = registry.FUNCTIONS[name]
     if issubclass(cls, axial.AxialKernel):
         return _axial(cls, scalar)
+    if issubclass(cls, axial.AxialAt):
+        return _axial_at(cls, scalar)
     if not issubclass(cls, StableKernel):
         raise KeyError(f"no numpy source for '{name}'")
     return _kernel(cls, scalar)
@@ -73,9 +91,9 @@ def _kernel(cls: type[StableKernel], scalar: bool) -> str:
     name = cls.__name__
     coeffs, n = cls.float_series()
     threshold = literal(cls.threshold)
-    series = horner(coeffs, "x2")
+    series, top = estrin(coeffs, "x2", x_power)
     doc = (
-        f"{cls.definition}; Taylor series ({n} terms) for |x| < {threshold}, "
+        f"{cls.definition}; Taylor series ({n} terms, Estrin's form) for |x| < {threshold}, "
         f"else the nested elementary formula"
     )
     if scalar:
@@ -89,7 +107,8 @@ def _kernel(cls: type[StableKernel], scalar: bool) -> str:
             f'    """{doc}."""\n'
             f"    x2 = x * x\n"
             f"    if abs(x) < {threshold}:\n"
-            f"        return {series}\n"
+            + "".join(f"        {n} = {v}\n" for n, v in estrin_powers(top, "x2", x_power))
+            + f"        return {series}\n"
             f"    b = {base}\n"
             + "".join(f"    {step}\n" for step in recurrence(cls.float_subtract, "x2"))
             + "    return b\n"
@@ -103,9 +122,10 @@ def _kernel(cls: type[StableKernel], scalar: bool) -> str:
         f"def {name}(x):\n"
         f'    """{doc} (vectorised)."""\n'
         f"    x = np.asarray(x, dtype=float)\n"
-        f"    x2 = x * x\n"
         f"    small = np.abs(x) < {threshold}\n"
-        f"    series = {series}\n"
+        f"    x2 = np.where(small, x * x, 0.0)  # the series where it is used: no overflow\n"
+        + "".join(f"    {n} = {v}\n" for n, v in estrin_powers(top, "x2", x_power))
+        + f"    series = {series}\n"
         f"    if small.all():\n"
         f"        return series\n"
         f"    xs = np.where(small, 1.0, x)\n"
@@ -312,71 +332,114 @@ def _elastica_output(name: str, scalar: bool) -> str:
 
 
 #: name -> (numpy source, scalar source)
-_NUMPY_BCOL_T = """
-def bcol_t(p):
-    \"\"\"T(p) = tanh(u)/u, u = sqrt(p)/2 (p > 0); tan(v)/v, v = sqrt(-p)/2 (p < 0); 1 at 0
-    (vectorised).\"\"\"
-    p = np.asarray(p, dtype=float)
-    u = 0.5 * np.sqrt(np.where(p == 0.0, 1.0, np.abs(p)))
-    return np.where(p > 0.0, np.tanh(u) / u, np.where(p < 0.0, np.tan(u) / u, 1.0))
-"""
-
-_SCALAR_BCOL_T = """
-def bcol_t(p):
-    \"\"\"T(p) = tanh(u)/u, u = sqrt(p)/2 (p > 0); tan(v)/v, v = sqrt(-p)/2 (p < 0); 1 at 0.\"\"\"
-    if p > 0.0:
-        u = 0.5 * math.sqrt(p)
-        return math.tanh(u) / u
-    if p < 0.0:
-        u = 0.5 * math.sqrt(-p)
-        return math.tan(u) / u
-    return 1.0
-"""
-
 _FIXED = {
-    "bcol_t": (_NUMPY_BCOL_T, _SCALAR_BCOL_T),
     "carlson_rf": (_NUMPY_RF, _SCALAR_RF),
     "carlson_rd": (_NUMPY_RD, _SCALAR_RD),
     "elastica_core": (_NUMPY_CORE, _SCALAR_CORE),
 }
 
 
+def _near(form: axial.NearForm, var: str, indent: str) -> str:
+    """Statements that define d, r, s of a near form at `var` (C and Python share the text)."""
+    return "".join(f"{indent}{n} = {v}\n" for n, v in near_names(form, var))
+
+
 def _axial(cls: type[axial.AxialKernel], scalar: bool) -> str:
-    """A beam-column kernel: Taylor series in p below P_SERIES, else its closed form at T(p);
-    NaN (numpy) or DomainError (scalar) at and beyond the buckling load p = -pi^2."""
+    """A beam-column kernel: its `_at` form at h = bcol_h(p)."""
     name = cls.__name__
-    num, den = cls.float_closed()
-    closed = f"({horner2(num, 't', 'p')}) / ({horner2(den, 't', 'p')})"
-    p0 = literal(axial.P_SERIES)
+    note = "" if scalar else " (vectorised)"
+    return (
+        f'def {name}(p):\n    """{cls.definition}{note}."""\n    return {name}_at(p, bcol_h(p))\n'
+    )
+
+
+def _axial_at(cls: type[axial.AxialAt], scalar: bool) -> str:
+    """A beam-column kernel at (p, h = bcol_h(p)): its near form on the near interval, its far
+    form from NEAR_HIGH on, else its closed form at t = h; NaN (numpy) or DomainError (scalar)
+    at and beyond the buckling load p = -pi^2."""
+    name = cls.__name__
+    kernel = cls.kernel
+    form = kernel.near_form()
+    num, den = kernel.float_closed()
+    closed = f"({horner2(num, 'h', 'p')}) / ({horner2(den, 'h', 'p')})"
+    far = far_text(kernel.far_form())
+    lo, hi = literal(axial.NEAR_LOW), literal(axial.NEAR_HIGH)
     pcr = literal(axial.BUCKLING)
-    series = horner(cls.float_series(), "p")
     doc = (
-        f"{cls.definition}; Taylor series ({len(cls.float_series())} terms) for |p| < {p0}, "
-        f"else the closed form in p and t = T(p)"
+        f"{kernel.definition}, at h = bcol_h(p): {near_doc(form)}, from there on in u, tanh(u) "
+        "and sech(u)^2, below in p and t = T(p)"
     )
     if scalar:
         return (
-            f"def {name}(p):\n"
+            f"def {name}(p, h):\n"
             f'    """{doc}."""\n'
-            f"    if abs(p) < {p0}:\n"
-            f"        return {series}\n"
+            f"    if {lo} < p < {hi}:\n"
+            + _near(form, "p", "        ")
+            + f"        return {near_text(form)}\n"
+            f"    if p >= {hi}:\n"
+            + "".join(f"        {n} = {v}\n" for n, v in far_names("math.sqrt"))
+            + f"        return {far}\n"
             f"    if not p > {pcr}:\n"
             f'        raise DomainError("{name}: the axial load index must exceed -pi^2")\n'
-            f"    t = bcol_t(p)\n"
             f"    return {closed}\n"
         )
     return (
-        f"def {name}(x):\n"
+        f"def {name}(x, h):\n"
         f'    """{doc} (vectorised)."""\n'
         f"    x = np.asarray(x, dtype=float)\n"
-        f"    small = np.abs(x) < {p0}\n"
-        f"    p = np.where(small, x, 0.0)\n"
-        f"    series = {series}\n"
-        f"    if small.all():\n"
-        f"        return series\n"
+        f"    near = (x > {lo}) & (x < {hi})\n"
+        f"    p = np.where(near, x, {literal(axial.NEAR_CENTRE)})\n"
+        + _near(form, "p", "    ")
+        + f"    value = {near_text(form)}\n"
+        f"    if near.all():\n"
+        f"        return value\n"
+        f"    high = x >= {hi}\n"
+        f"    p = np.where(high, x, {literal(2 * axial.NEAR_HIGH)})\n"
+        f"    h0 = h\n"
+        f"    h = np.where(high, h0, 0.01)\n"
+        + "".join(f"    {n} = {v}\n" for n, v in far_names("np.sqrt"))
+        + f"    far = {far}\n"
         f"    inside = x > {pcr}\n"
-        f"    p = np.where(small | ~inside, 3.0, x)\n"
-        f"    t = bcol_t(p)\n"
+        f"    low = ~near & ~high & inside\n"
+        f"    p = np.where(low, x, {literal(2 * axial.NEAR_LOW)})\n"
+        f"    h = np.where(low, h0, 0.5)\n"
         f"    closed = {closed}\n"
-        f"    return np.where(small, series, np.where(inside, closed, np.nan))\n"
+        f"    return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))\n"
+    )
+
+
+def _bcol_h(scalar: bool) -> str:
+    """h(p): T's near form on the near interval, 1 - tanh(u) = 2e/(1 + e), e = exp(-sqrt(p)),
+    from NEAR_HIGH on, tan(v)/v below."""
+    form = axial.t_near_form()
+    lo, hi = literal(axial.NEAR_LOW), literal(axial.NEAR_HIGH)
+    centre = literal(axial.NEAR_CENTRE)
+    doc = f"{h_doc()}: {near_doc(form)}"
+    if scalar:
+        return (
+            "def bcol_h(p):\n"
+            f'    """{doc}."""\n'
+            f"    if {lo} < p < {hi}:\n"
+            + _near(form, "p", "        ")
+            + f"        return {near_text(form)}\n"
+            f"    if p >= {hi}:\n"
+            "        e = math.exp(-math.sqrt(p))\n"
+            "        return 2.0 * e / (1.0 + e)\n"
+            "    u = 0.5 * math.sqrt(-p)\n"
+            "    return math.tan(u) / u\n"
+        )
+    return (
+        "def bcol_h(x):\n"
+        f'    """{doc} (vectorised)."""\n'
+        "    x = np.asarray(x, dtype=float)\n"
+        f"    near = (x > {lo}) & (x < {hi})\n"
+        f"    p = np.where(near, x, {centre})\n"
+        + _near(form, "p", "    ")
+        + f"    value = {near_text(form)}\n"
+        "    if near.all():\n"
+        "        return value\n"
+        f"    high = x >= {hi}\n"
+        f"    e = np.exp(-np.sqrt(np.where(high, x, {hi})))\n"
+        "    u = 0.5 * np.sqrt(np.where(near | high, 1.0, np.abs(x)))\n"
+        "    return np.where(near, value, np.where(high, 2.0 * e / (1.0 + e), np.tan(u) / u))\n"
     )
