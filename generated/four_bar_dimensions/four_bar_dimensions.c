@@ -1580,7 +1580,7 @@ typedef struct {
     sk_fn3 dev;         /* the points' deviation (theta, delta, q) */
     sk_fn2 linear;      /* the closure it solves for delta: A and r (theta, q); NULL: none */
     sk_fn3 closure;     /* its F and dF/ddelta (theta, delta, q); NULL: A delta = -r only */
-    int loaded;         /* q: 0 the parameters, 1 the loaded constants, 2 refined ones */
+    int loaded;         /* 1: m->loaded_solve solves it (q: the parameters, then its deviation) */
     sk_sens sens;       /* its sensitivities (fn NULL: none) */
     sk_fn3 consistency; /* redundant loops: its closure's dropped rows, then their terms' size
                            (theta, delta, q); NULL: none */
@@ -1616,13 +1616,11 @@ typedef struct {
     double consistent;              /* each must vanish to this fraction of its size */
     sk_fn2 rigid_points;            /* (theta, params) */
     sk_fn2 links;                   /* rotations and their deviations (theta, delta) */
-    sk_fn2 loaded_q0;               /* the loaded level's statics (A^T mu0 = Q0; NULL: one pass) */
-    sk_fn3 loaded_q;                /* A^T mu = Q (theta, mu0, params) */
-    sk_fn3 loaded_compliance;       /* (theta, mu, params) into the constants at compliance_at */
-    sk_fn3 loaded_compliance_more;  /* the plates only the loaded closure reads, at more_at */
-    int compliance_at, more_at;
-    sk_fn2 loaded_linear;           /* the loaded closure: A, r and S (theta, constants) */
-    sk_fn3 loaded_closure;          /* F and dF/ddelta (theta, delta, constants) */
+    /* the loaded level (templates/c/reduced.c): (mechanism, inputs, params, theta) -> delta and
+       q (the parameters, then the points' deviation); a status */
+    int (*loaded_solve)(const void *m, const double *inputs, const double *params,
+                        const double *theta, double *delta, double *q);
+    const void *loaded;             /* its tables (sk_loaded) */
     sk_rule rigid_rule;             /* Newton at each continuation step */
     sk_rule polish_rule;            /* after the rigid start */
     sk_rule exact_rule;             /* on every compliant closure */
@@ -1767,11 +1765,10 @@ static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure
     return sk_newton_solve(sk_closure_system, &c, SK_K, NULL, &m->exact_rule, scale, delta, fj,
                            0);
 }
-
 /* The configuration at level lv: the arguments checked, the rigid angles theta (every hinge)
    and, where the level solves the loops, delta (the non-input hinges; solved for the links'
-   rotations only when want_links). *q is what the level's routines read: params, or the loaded
-   constants computed into `constants`. Returns a status code. */
+   rotations only when want_links). *q is what the level's routines read: params, or (loaded) the
+   parameters and the deviation solved, written into `constants`. Returns a status code. */
 static int sk_pose(const sk_mechanism *m, const sk_level *lv, const double *inputs,
                    const double *params, int want_links, double *theta, double *delta,
                    double *constants, const double **q)
@@ -2143,7 +2140,7 @@ static const sk_mechanism sk_mechanism_tables = {
     .links = sk_links,
     .sens_rigid = sk_sens_rigid,
     .sens_chain = sk_sens_chain,
-    .n_dyads = 1, .compliance_at = 0, .more_at = 0,
+    .n_dyads = 1,
     .rigid_rule = {30, 1e-10, 0.0, 0.0, 0.0},
     .polish_rule = {1, 0.0, 0.0, 0.0, 0.0},
     .exact_rule = {40, 0.0, 1e-08, 1e-12, 0.5, 2e-13},

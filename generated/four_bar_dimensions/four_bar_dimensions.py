@@ -54,8 +54,8 @@ class _Mechanism:
 
 class _Level:
     """A generated level: its deviation routine, the closure it solves for delta (linear: A and
-    r; newton: F and dF/ddelta, None for the first-order delta; both None: none), what its
-    routines read (loaded: 0 the parameters, 1 the loaded constants, 2 refined ones) and its
+    r; newton: F and dF/ddelta, None for the first-order delta; both None: none), whether the
+    loaded level's driver solves it (mech.loaded_solve, templates/numpy/reduced.py) and its
     sensitivity routine with the (offset, rows, cols) of its blocks; with redundant loops,
     `consistency`: its closure's dropped rows and their terms' size (theta, delta, q)."""
 
@@ -344,29 +344,6 @@ def _solve_closure(mech, linear, newton, theta, q, ok):
     return delta, ok & converged
 
 
-def _loaded_constants(mech, theta, params, ok, jac=None, more=False):
-    """The loaded level's closure constants: the parameters, then every plate's compliance under
-    the loads the pin linkage's statics gives (A^T mu0 = Q0 with two passes, then A^T mu = Q)
-    with A the rigid loop Jacobian, or `jac` (row-major) when given; `more`: also the plates
-    only the loaded closure reads (else zeros in their place)."""
-    mu = []
-    if mech.unknown_index:
-        k = len(mech.unknown_index)
-        if jac is None:
-            jac = mech.rigid_res(theta, params)[k:]  # A follows the residual
-        at = [jac[j * k + i] for i in range(k) for j in range(k)]
-        mu0 = []
-        if mech.loaded_q0 is not None:
-            mu0, ok = _solve(at, mech.loaded_q0(theta, params), ok, 1, mech.dtype)
-        mu, ok = _solve(at, mech.loaded_q(theta, mu0, params), ok, 1, mech.dtype)
-    compliance = mech.loaded_compliance(theta, mu, params)
-    if mech.loaded_more:
-        compliance += (
-            mech.loaded_compliance_more(theta, mu, params) if more else [0.0] * mech.loaded_more
-        )
-    return list(params) + [numpy.broadcast_to(c, ok.shape) for c in compliance], ok
-
-
 def _pose(mech, arrays, level, p, links):
     """The rigid angles theta (every hinge), delta (the non-input hinges; solved for the links'
     rotations only when `links`), the ok mask and what the level's routines read (q)."""
@@ -379,17 +356,12 @@ def _pose(mech, arrays, level, p, links):
     x = [numpy.where(ok, a, 0.0) for a in arrays]
     with numpy.errstate(all="ignore"):
         theta, ok = _rigid_angles(mech, x, p, ok)
-        q = p  # what the level's routines read: the parameters (loaded: and more)
-        if lv.loaded:
-            q, ok = _loaded_constants(mech, theta, p, ok, more=lv.loaded == 2)
-        if lv.loaded == 2 and mech.unknown_index:
-            # refined: the loaded closure solved, then the statics again with its Jacobian there
-            delta, ok = _solve_closure(mech, mech.loaded_linear, mech.loaded_newton, theta, q, ok)
-            k = len(mech.unknown_index)
-            jac = mech.loaded_newton(theta, delta, q)[k:]
-            q, ok = _loaded_constants(mech, theta, p, ok, jac, more=True)
+        q = p  # what the level's routines read: the parameters (loaded: and its deviation)
         delta = [numpy.zeros(shape, dtype=mech.dtype) for _ in mech.unknown_index]
-        if lv.linear is not None and (mech.needs_loops or (links and mech.loops_for_links)):
+        if lv.loaded:
+            # the reduced equilibrium (templates/numpy/reduced.py) gives delta and the deviation
+            delta, q, ok = mech.loaded_solve(mech, x, theta, p, ok)
+        elif lv.linear is not None and (mech.needs_loops or (links and mech.loops_for_links)):
             delta, ok = _solve_closure(mech, lv.linear, lv.newton, theta, q, ok)
             if lv.consistency is not None:
                 ok = _consistent(mech, lv.consistency(theta, delta, q), ok)
@@ -1873,16 +1845,10 @@ _MECHANISM = _Mechanism(
     linear=_linear,
     rigid_points=_rigid_points,
     links=_links,
-    loaded_q0=None,
-    loaded_q=None,
-    loaded_compliance=None,
-    loaded_compliance_more=None,
-    loaded_linear=None,
-    loaded_newton=None,
     sens_rigid=_sens_rigid,
     sens_chain=_sens_chain,
     consistency_rigid=None,
-    loaded_more=0,
+    loaded=None, loaded_solve=None,
     sens_rigid_blocks={'A': (0, 3, 3), 'dG_dv': (9, 3, 13), 'dR_dtheta': (48, 2, 3), 'dR_dv': (54, 2, 13)},
     rigid_rule=_Rule(30, 1e-10),  # continuation steps
     polish_rule=_Rule(1),  # after the rigid start

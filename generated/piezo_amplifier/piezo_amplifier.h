@@ -28,7 +28,7 @@ extern const char *const piezo_amplifier_link_names[PIEZO_AMPLIFIER_N_LINKS > 0 
  *   inputs: PIEZO_AMPLIFIER_N_INPUTS input hinge angles (radians, |angle| <= pi: rotations from the
  *           as-fabricated pose), in piezo_amplifier_input_names order.
  *   params: PIEZO_AMPLIFIER_N_PARAMS parameter values, or NULL for the defaults.
- *   level:  0 paper, 1 first_order, 2 exact, 3 loaded, 5 loaded_refined (only the levels generated: paper, first_order, exact).
+ *   level:  0 paper, 1 first_order, 2 exact, 3 loaded (only the levels generated: paper, first_order, exact).
  *   out:    per point: rigid x, y, compliant x, y, deviation x, y (6 doubles).
  * Returns 0 on success, 1 cannot assemble (or a plate bent past its limit), 2 no convergence
  * (or a non-finite result), 3 bad argument (NULL, a level not generated, an input that is not
