@@ -45,6 +45,9 @@ class LoadedPlan:
     variants: tuple[Segments, ...]  # one, then two half plates per plate
     unknowns: int  # non-input hinges: the first unknowns, δ / (l_min / L)
     points: int  # points of the file the deviation routine gives (the plan's first)
+    # the load factor t enters the routines (the file has loads); without, det J's sign at the
+    # unloaded state is the first Newton step's (x = 0, the same matrix)
+    loads: bool = True
     tol: float = reduced.TOL
     max_iter: int = reduced.MAX_ITER
     max_turn: float = reduced.MAX_TURN
@@ -115,4 +118,5 @@ def loaded_routines(
             layout(("deviation", 2 * len(order), 1)),
         )
         variants.append(Segments(g, n, ns, tuple(float(v) for v in r.scale)))
-    return routines, LoadedPlan(tuple(variants), len(an.kin.unknowns), len(order))
+    plan = LoadedPlan(tuple(variants), len(an.kin.unknowns), len(order), loads=bool(r.loads))
+    return routines, plan
