@@ -242,3 +242,15 @@ def test_continuation_alike(monkeypatch):
         assert status == 0, backend
         for i, name in enumerate(shape.points):
             assert _rel(out[6 * i + 4 : 6 * i + 6], want.deviations[name]) <= 1e-9, backend
+
+
+def test_rest_relation_is_the_relation_without_force():
+    """plate_rest4 (the drivers' relation where a plate carries no force) gives plate_relation4's
+    values and partials at p = f = 0, to rounding, over the angles the level meets."""
+    module = _built(CASES["four_bar"][0], "numpy")[2]
+    for theta in np.linspace(-2.0, 2.0, 41):
+        for e_a, e_s in ((0.0, 0.0), (3e-5, 1e-4), (1e-3, 4e-3)):
+            plate = [theta, 0.0, 0.0, e_a, e_s]
+            rest = [float(v) for v in module._plate_rest4(plate)]
+            full = [float(v) for v in module._plate_relation4(plate)]
+            assert np.allclose(rest, full, rtol=1e-13, atol=0.0), theta

@@ -12,18 +12,26 @@ templates/c/reduced.c).
 
 x holds the scaled unknowns then the load factor t; `plates` the plate relation's values
 (along, across, omega) of every half plate; g = 1 or 2 half plates per plate.
+
+    plate_rest4       in = (theta, p, f, e_a, e_s)  -> plate_relation4's outputs where p = f = 0
+                                                   (a plate that carries no force: x = 0 in a
+                                                   file without loads, the unloaded state)
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cache
 
 import sympy as sp
 
 from ..kinematics.analysis import Analysis
 from ..physics import reduced
-from .routines import Argument, Routine, flatten, layout
+from ..physics.plate_relation import relation
+from .literals import float_literals
+from .plate import SYMBOLS
+from .routines import Argument, Routine, flatten, layout, optimize
 
 
 @dataclass(frozen=True)
@@ -120,3 +128,27 @@ def loaded_routines(
         variants.append(Segments(g, n, ns, tuple(float(v) for v in r.scale)))
     plan = LoadedPlan(tuple(variants), len(an.kin.unknowns), len(order), loads=bool(r.loads))
     return routines, plan
+
+
+@cache
+def rest_routine() -> Routine:
+    """plate_relation4 (symkin.codegen.plate) at p = f = 0, the same 12 outputs: a few
+    operations where the full relation takes hundreds, for the drivers' steps at x = 0."""
+    th, p, f, ea, es = SYMBOLS
+    rel = relation(th, p, f, ea, es, 4)
+    values = [rel.along, rel.across, rel.omega]
+    partials = [sp.diff(v, w) for v in values for w in (th, p, f)]
+    memo: dict = {}
+    outputs = tuple(
+        float_literals(sp.simplify(e.subs({p: 0, f: 0})), memo) for e in values + partials
+    )
+    routine = Routine(
+        "plate_rest4",
+        (Argument("in", SYMBOLS),),
+        (),
+        outputs,
+        "one plate's relation at order 4 where it carries no force (p = f = 0): (along, across, "
+        "omega) and their partials by (theta, p, f)",
+        layout(("values", 3, 1), ("partials", 3, 3)),
+    )
+    return optimize(routine)

@@ -69,7 +69,11 @@ static void sk_red_relation(const sk_red *r, const double *ins, int order, doubl
 {
     int i, j;
     for (i = 0; i < r->v->plates_n; ++i) {
-        if (order == 4) {
+        if (order == 4 && ins[5 * i + 1] == 0.0 && ins[5 * i + 2] == 0.0) {
+            /* no force on the plate (x = 0 without loads, the unloaded state): the relation's
+               few terms that remain */
+            sk_plate_rest4(ins + 5 * i, rel + 12 * i);
+        } else if (order == 4) {
             sk_plate_relation4(ins + 5 * i, rel + 12 * i);
         } else {
             sk_plate_relation2(ins + 5 * i, rel + 12 * i);

@@ -82,10 +82,19 @@ class _Batch:
         """The plate relation at `order` per half plate (12 (b,) arrays: values, partials) and
         the values (along, across, omega) one half plate after the other."""
         b = ins[0].shape[0] if ins else 0
-        rel = [
-            [_red_column(v, b) for v in self.relations[order](ins[5 * k : 5 * k + 5])]
-            for k in range(self.plates)
-        ]
+        rel = []
+        for k in range(self.plates):
+            plate = ins[5 * k : 5 * k + 5]
+            rest = (plate[1] == 0.0) & (plate[2] == 0.0) if order == 4 else False
+            if numpy.all(rest):
+                # no force on the plate (x = 0 without loads): reduced.c's plate_rest4
+                rel.append([_red_column(v, b) for v in self.t.rest4(plate)])
+                continue
+            out = [_red_column(v, b) for v in self.relations[order](plate)]
+            if numpy.any(rest):
+                at_rest = self.t.rest4(plate)
+                out = [numpy.where(rest, r, v) for r, v in zip(at_rest, out)]
+            rel.append(out)
         return rel, [r[j] for r in rel for j in range(3)]
 
     def system(self, x, theta, p, t):
