@@ -13,6 +13,9 @@ templates/c/reduced.c).
 x holds the scaled unknowns then the load factor t; `plates` the plate relation's values
 (along, across, omega) of every half plate; g = 1 or 2 half plates per plate.
 
+    plate_values2     in = (theta, p, f, e_a, e_s)  -> plate_relation2's values (along, across,
+                                                   omega) alone: the truncation estimate reads
+                                                   no partials
     plate_rest4       in = (theta, p, f, e_a, e_s)  -> plate_relation4's outputs where p = f = 0
                                                    (a plate that carries no force: x = 0 in a
                                                    file without loads, the unloaded state)
@@ -48,7 +51,7 @@ class Segments:
 class LoadedPlan:
     """How the generated `loaded` level runs the reduced equilibrium (the rules of
     symkin.physics.reduced, and per variant its sizes); the routines are the plan's
-    loaded_*<g>, plate_relation4 and plate_relation2."""
+    loaded_*<g>, plate_relation4, plate_values2 and plate_rest4."""
 
     variants: tuple[Segments, ...]  # one, then two half plates per plate
     unknowns: int  # non-input hinges: the first unknowns, δ / (l_min / L)
@@ -150,5 +153,24 @@ def rest_routine() -> Routine:
         "one plate's relation at order 4 where it carries no force (p = f = 0): (along, across, "
         "omega) and their partials by (theta, p, f)",
         layout(("values", 3, 1), ("partials", 3, 3)),
+    )
+    return optimize(routine)
+
+
+@cache
+def values2_routine() -> Routine:
+    """The plate relation at order 2, its values alone (symkin.codegen.plate's plate_relation2
+    without the nine partials): the truncation estimate's residual and deviation read no more."""
+    th, p, f, ea, es = SYMBOLS
+    rel = relation(th, p, f, ea, es, 2)
+    memo: dict = {}
+    outputs = tuple(float_literals(e, memo) for e in (rel.along, rel.across, rel.omega))
+    routine = Routine(
+        "plate_values2",
+        (Argument("in", SYMBOLS),),
+        (),
+        outputs,
+        "one plate's relation at order 2, values alone: (along, across, omega)",
+        layout(("values", 3, 1)),
     )
     return optimize(routine)

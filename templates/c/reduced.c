@@ -2,9 +2,9 @@
  * symkin's C runtime for the `loaded` level (docs/physics.md, "The Newton level"): the reduced
  * equilibrium of symkin.physics.reduced solved by Newton and continuation over the mechanism's
  * loaded_* routines, with the rules of the Python solver. Only evaluators that hold the level
- * hold it (templates/c/source.c.j2), after templates/c/runtime.c, whose sk_solve, sk_lu,
- * sk_lu_solve and sk_rigid_pose it calls; the generated file defines SK_RN (the largest number of
- * unknowns, and one), SK_RS (the most half plates, and one) and SK_RP (the points its deviation
+ * hold it (templates/c/source.c.j2), after templates/c/runtime.c, whose sk_lu, sk_lu_solve and
+ * sk_rigid_pose it calls; the generated file defines SK_RN (the largest number of unknowns, and
+ * one), SK_RS (the most half plates, and one) and SK_RP (the points its deviation
  * routines give: every point of the file, the evaluator's first).
  */
 #include <math.h>
@@ -62,25 +62,31 @@ static void sk_red_inputs(const sk_red *r, const double *x, const double *theta,
     r->v->plates(xt, theta, r->params, ins);
 }
 
-/* The plate relation at `order` (rel: 12 per half plate, values then partials) of the inputs
+/* The plate relation at order 4 (rel: 12 per half plate, values then partials) of the inputs
    ins, and its values (along, across, omega), one half plate after the other, into vals. */
-static void sk_red_relation(const sk_red *r, const double *ins, int order, double *rel,
-                            double *vals)
+static void sk_red_relation(const sk_red *r, const double *ins, double *rel, double *vals)
 {
     int i, j;
     for (i = 0; i < r->v->plates_n; ++i) {
-        if (order == 4 && ins[5 * i + 1] == 0.0 && ins[5 * i + 2] == 0.0) {
+        if (ins[5 * i + 1] == 0.0 && ins[5 * i + 2] == 0.0) {
             /* no force on the plate (x = 0 without loads, the unloaded state): the relation's
                few terms that remain */
             sk_plate_rest4(ins + 5 * i, rel + 12 * i);
-        } else if (order == 4) {
-            sk_plate_relation4(ins + 5 * i, rel + 12 * i);
         } else {
-            sk_plate_relation2(ins + 5 * i, rel + 12 * i);
+            sk_plate_relation4(ins + 5 * i, rel + 12 * i);
         }
         for (j = 0; j < 3; ++j) {
             vals[3 * i + j] = rel[12 * i + j];
         }
+    }
+}
+
+/* The plate relation at order 2, its values alone (the truncation estimate's), into vals. */
+static void sk_red_values2(const sk_red *r, const double *ins, double *vals)
+{
+    int i;
+    for (i = 0; i < r->v->plates_n; ++i) {
+        sk_plate_values2(ins + 5 * i, vals + 3 * i);
     }
 }
 
@@ -105,7 +111,7 @@ static int sk_red_eval(const sk_red *r, const double *x, const double *theta, do
     double *jac = st->lu;
     int i, j, k, c;
     sk_red_inputs(r, x, theta, t, st->xt, st->ins);
-    sk_red_relation(r, st->ins, 4, st->rel, vals);
+    sk_red_relation(r, st->ins, st->rel, vals);
     r->v->system(st->xt, theta, vals, r->params, st->sys);
     for (i = 0; i < n * n; ++i) {
         jac[i] = st->sys[n + i];
@@ -260,7 +266,7 @@ static int sk_red_answer(const sk_red *r, const double *x, const double *theta,
     int i, j;
     sk_red_inputs(r, x, theta, 1.0, xt, ins);
     if (st == NULL) {
-        sk_red_relation(r, ins, 4, rel, vals);
+        sk_red_relation(r, ins, rel, vals);
     } else {
         /* the plate relation at x from st's by its partials: x moved by the last step only,
            below tol, so the remainder (its square) is below rounding */
@@ -288,7 +294,7 @@ static int sk_red_answer(const sk_red *r, const double *x, const double *theta,
         x2[i] = x[i];
     }
     if (n > 0) {
-        sk_red_relation(r, ins, 2, rel, vals);
+        sk_red_values2(r, ins, vals);
         r->v->system(xt, theta, vals, r->params, sys);
         for (i = 0; i < n; ++i) {
             res[i] = sys[i];
@@ -299,7 +305,7 @@ static int sk_red_answer(const sk_red *r, const double *x, const double *theta,
         }
     }
     sk_red_inputs(r, x2, theta, 1.0, xt, ins);
-    sk_red_relation(r, ins, 2, rel, vals);
+    sk_red_values2(r, ins, vals);
     r->v->dev(xt, theta, vals, r->params, dev2);
     for (i = 0; i < SK_RP; ++i) {
         const double size = hypot(dev[2 * i], dev[2 * i + 1]);

@@ -64,11 +64,10 @@ class _Batch:
     them with a mask each, stacked solves; every step elementwise, so a configuration's answer
     does not depend on the others in its batch."""
 
-    def __init__(self, tables, variant, count, relations):
+    def __init__(self, tables, variant, count):
         self.t, self.count = tables, count  # count: half plates per plate
         self.plates_fn, self.system_fn, self.dev_fn, self.size, self.plates, scale = variant
         self.scale = numpy.array(scale, dtype=float)
-        self.relations = relations  # order -> plate_relation routine
 
     def _inputs(self, x, theta, p, t):
         """The routines' x argument (x, then t), the half plates' inputs (5 per half plate) and
@@ -78,31 +77,38 @@ class _Batch:
         out = [_red_column(v, b) for v in self.plates_fn(args, theta, p)]
         return args, out[: 5 * self.plates], out[5 * self.plates :]
 
-    def _relation(self, ins, order):
-        """The plate relation at `order` per half plate (12 (b,) arrays: values, partials) and
+    def _relation(self, ins):
+        """The plate relation at order 4 per half plate (12 (b,) arrays: values, partials) and
         the values (along, across, omega) one half plate after the other."""
         b = ins[0].shape[0] if ins else 0
         rel = []
         for k in range(self.plates):
             plate = ins[5 * k : 5 * k + 5]
-            rest = (plate[1] == 0.0) & (plate[2] == 0.0) if order == 4 else False
+            rest = (plate[1] == 0.0) & (plate[2] == 0.0)
             if numpy.all(rest):
                 # no force on the plate (x = 0 without loads): reduced.c's plate_rest4
                 rel.append([_red_column(v, b) for v in self.t.rest4(plate)])
                 continue
-            out = [_red_column(v, b) for v in self.relations[order](plate)]
+            out = [_red_column(v, b) for v in self.t.relation4(plate)]
             if numpy.any(rest):
                 at_rest = self.t.rest4(plate)
                 out = [numpy.where(rest, r, v) for r, v in zip(at_rest, out)]
             rel.append(out)
         return rel, [r[j] for r in rel for j in range(3)]
 
+    def _values2(self, ins):
+        """The plate relation at order 2, values alone (the truncation estimate's), one half
+        plate after the other."""
+        b = ins[0].shape[0] if ins else 0
+        plates = range(self.plates)
+        return [_red_column(v, b) for k in plates for v in self.t.values2(ins[5 * k : 5 * k + 5])]
+
     def system(self, x, theta, p, t):
         """R (n, b) and J (b, n, n) at order 4: dR/dx + dR/d(plates) . the plates' partials .
         d(theta_c, p, f)/dx, summed in reduced.c's order."""
         n, ns, b = self.size, self.plates, x.shape[1]
         args, ins, dins = self._inputs(x, theta, p, t)
-        rel, vals = self._relation(ins, 4)
+        rel, vals = self._relation(ins)
         sys = numpy.array([_red_column(v, b) for v in self.system_fn(args, theta, vals, p)])
         res = sys[:n]
         jac = sys[n : n + n * n].reshape(n, n, b).copy()
@@ -252,7 +258,7 @@ class _Batch:
         step with jac, the last Newton step's J) is above est_limit."""
         tb, n, b = self.t, self.size, x.shape[1]
         args, ins, _ = self._inputs(x, theta, p, 1.0)
-        _, vals = self._relation(ins, 4)
+        _, vals = self._relation(ins)
         dev = numpy.array([_red_column(v, b) for v in self.dev_fn(args, theta, vals, p)])
         worst = numpy.zeros(b)
         for k in range(self.plates):
@@ -261,12 +267,12 @@ class _Batch:
             worst = numpy.where(w > worst, w, worst)
         x2 = x
         if n:
-            _, vals2 = self._relation(ins, 2)
+            vals2 = self._values2(ins)
             sys = self.system_fn(args, theta, vals2, p)
             res = numpy.array([_red_column(v, b) for v in sys[:n]])
             x2 = x - _red_solve(jac, res)
         args2, ins2, _ = self._inputs(x2, theta, p, 1.0)
-        _, vals2 = self._relation(ins2, 2)
+        vals2 = self._values2(ins2)
         dev2 = numpy.array([_red_column(v, b) for v in self.dev_fn(args2, theta, vals2, p)])
         e24 = numpy.zeros(b)
         for k in range(len(dev) // 2):
@@ -295,7 +301,6 @@ def _reduced_solve(mech, x, theta, p, ok):
         return [numpy.broadcast_to(v, shape).reshape(-1)[where].astype(float) for v in values]
 
     xs, ths, ps = flat(x), flat(theta), flat(p)
-    relations = {4: tb.relation4, 2: tb.relation2}
     todo = numpy.arange(where.size)  # the configurations the next variant solves
     okf = numpy.zeros(where.size, dtype=bool)
     flat_delta = [numpy.zeros(where.size) for _ in mech.unknown_index]
@@ -303,7 +308,7 @@ def _reduced_solve(mech, x, theta, p, ok):
     for count, variant in enumerate(tb.variants, 1):
         if not todo.size:
             break
-        solver = _Batch(tb, variant, count, relations)
+        solver = _Batch(tb, variant, count)
         with numpy.errstate(all="ignore"):
             sx, sdev, status = solver.solve(
                 [v[todo] for v in xs], [v[todo] for v in ths], [v[todo] for v in ps], mech
