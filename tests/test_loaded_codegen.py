@@ -13,6 +13,7 @@ numpy and C); parameter overrides; a batch; a file with actuators (no `loaded`).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
@@ -25,6 +26,7 @@ import symkin
 from symkin.codegen import pipeline
 from symkin.codegen.plan import plan
 from symkin.physics import equilibrium as equilibrium_physics
+from symkin.physics import reduced
 from symkin.studies.evaluation import reduced_equilibrium
 
 ZOO = Path(__file__).resolve().parent / "mechanisms"
@@ -154,6 +156,9 @@ def test_numpy_batch_is_elementwise():
     for k, a in enumerate(values[:3]):
         want = reduced_equilibrium(an, {"A0": float(a)}).deviations["C"]
         assert _rel(res["points"]["C"]["deviation"][:, k], want) <= 1e-9
+        # solved with the batch, bit for bit as alone
+        alone = module.evaluate({"A0": values[k : k + 1]}, "loaded")["points"]["C"]["deviation"]
+        assert np.array_equal(alone[:, 0], res["points"]["C"]["deviation"][:, k])
 
 
 def test_links_and_angles_agree_between_numpy_and_c():
@@ -213,3 +218,39 @@ def test_past_buckling_is_refused_alike(tmp_path):
         statuses.append(status)
         assert all(math.isnan(v) for dev in got.values() for v in dev)
     assert statuses == [1, 1]
+
+
+def test_continuation_alike(monkeypatch):
+    """Newton's turn limit lowered (3e-4 rad) so that the parallelogram needs continuation: numpy
+    and C follow the Python solver's path to its answer (the last Newton step's J at s = 1 is the
+    configuration's own)."""
+    monkeypatch.setattr(reduced, "MAX_TURN", 3e-4)
+    path, inputs = CASES["parallelogram"]
+    an = _built(path, "numpy")[0]
+    want = reduced_equilibrium(an, inputs)
+    assert want.steps > 1 and not want.refused
+    p = pipeline.plan_for(an, sensitivity=False)
+    assert p.loaded is not None
+    p = dataclasses.replace(p, loaded=dataclasses.replace(p.loaded, max_turn=3e-4))
+    shape = pipeline.Shape.of(p)
+    for backend in ("numpy", "c"):
+        if backend == "c":
+            require_compiler()
+        ev = pipeline.evaluator(p, backend, path.name, "float64", True, False)
+        row = pipeline.backend(backend)
+        status, out, _, _ = row.pose(ev, shape, [inputs[n] for n in shape.inputs], None, "loaded")
+        assert status == 0, backend
+        for i, name in enumerate(shape.points):
+            assert _rel(out[6 * i + 4 : 6 * i + 6], want.deviations[name]) <= 1e-9, backend
+
+
+def test_rest_relation_is_the_relation_without_force():
+    """plate_rest4 (the drivers' relation where a plate carries no force) gives plate_relation4's
+    values and partials at p = f = 0, to rounding, over the angles the level meets."""
+    module = _built(CASES["four_bar"][0], "numpy")[2]
+    for theta in np.linspace(-2.0, 2.0, 41):
+        for e_a, e_s in ((0.0, 0.0), (3e-5, 1e-4), (1e-3, 4e-3)):
+            plate = [theta, 0.0, 0.0, e_a, e_s]
+            rest = [float(v) for v in module._plate_rest4(plate)]
+            full = [float(v) for v in module._plate_relation4(plate)]
+            assert np.allclose(rest, full, rtol=1e-13, atol=0.0), theta

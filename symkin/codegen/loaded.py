@@ -12,18 +12,29 @@ templates/c/reduced.c).
 
 x holds the scaled unknowns then the load factor t; `plates` the plate relation's values
 (along, across, omega) of every half plate; g = 1 or 2 half plates per plate.
+
+    plate_values2     in = (theta, p, f, e_a, e_s)  -> plate_relation2's values (along, across,
+                                                   omega) alone: the truncation estimate reads
+                                                   no partials
+    plate_rest4       in = (theta, p, f, e_a, e_s)  -> plate_relation4's outputs where p = f = 0
+                                                   (a plate that carries no force: x = 0 in a
+                                                   file without loads, the unloaded state)
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cache
 
 import sympy as sp
 
 from ..kinematics.analysis import Analysis
 from ..physics import reduced
-from .routines import Argument, Routine, flatten, layout
+from ..physics.plate_relation import relation
+from .literals import float_literals
+from .plate import SYMBOLS
+from .routines import Argument, Routine, flatten, layout, optimize
 
 
 @dataclass(frozen=True)
@@ -40,11 +51,14 @@ class Segments:
 class LoadedPlan:
     """How the generated `loaded` level runs the reduced equilibrium (the rules of
     symkin.physics.reduced, and per variant its sizes); the routines are the plan's
-    loaded_*<g>, plate_relation4 and plate_relation2."""
+    loaded_*<g>, plate_relation4, plate_values2 and plate_rest4."""
 
     variants: tuple[Segments, ...]  # one, then two half plates per plate
     unknowns: int  # non-input hinges: the first unknowns, δ / (l_min / L)
     points: int  # points of the file the deviation routine gives (the plan's first)
+    # the load factor t enters the routines (the file has loads); without, det J's sign at the
+    # unloaded state is the first Newton step's (x = 0, the same matrix)
+    loads: bool = True
     tol: float = reduced.TOL
     max_iter: int = reduced.MAX_ITER
     max_turn: float = reduced.MAX_TURN
@@ -115,4 +129,48 @@ def loaded_routines(
             layout(("deviation", 2 * len(order), 1)),
         )
         variants.append(Segments(g, n, ns, tuple(float(v) for v in r.scale)))
-    return routines, LoadedPlan(tuple(variants), len(an.kin.unknowns), len(order))
+    plan = LoadedPlan(tuple(variants), len(an.kin.unknowns), len(order), loads=bool(r.loads))
+    return routines, plan
+
+
+@cache
+def rest_routine() -> Routine:
+    """plate_relation4 (symkin.codegen.plate) at p = f = 0, the same 12 outputs: a few
+    operations where the full relation takes hundreds, for the drivers' steps at x = 0."""
+    th, p, f, ea, es = SYMBOLS
+    rel = relation(th, p, f, ea, es, 4)
+    values = [rel.along, rel.across, rel.omega]
+    partials = [sp.diff(v, w) for v in values for w in (th, p, f)]
+    memo: dict = {}
+    outputs = tuple(
+        float_literals(sp.simplify(e.subs({p: 0, f: 0})), memo) for e in values + partials
+    )
+    routine = Routine(
+        "plate_rest4",
+        (Argument("in", SYMBOLS),),
+        (),
+        outputs,
+        "one plate's relation at order 4 where it carries no force (p = f = 0): (along, across, "
+        "omega) and their partials by (theta, p, f)",
+        layout(("values", 3, 1), ("partials", 3, 3)),
+    )
+    return optimize(routine)
+
+
+@cache
+def values2_routine() -> Routine:
+    """The plate relation at order 2, its values alone (symkin.codegen.plate's plate_relation2
+    without the nine partials): the truncation estimate's residual and deviation read no more."""
+    th, p, f, ea, es = SYMBOLS
+    rel = relation(th, p, f, ea, es, 2)
+    memo: dict = {}
+    outputs = tuple(float_literals(e, memo) for e in (rel.along, rel.across, rel.omega))
+    routine = Routine(
+        "plate_values2",
+        (Argument("in", SYMBOLS),),
+        (),
+        outputs,
+        "one plate's relation at order 2, values alone: (along, across, omega)",
+        layout(("values", 3, 1)),
+    )
+    return optimize(routine)

@@ -35,9 +35,12 @@ the load factor t, `plates` every half plate's (along, across, omega):
     loaded_system<g>   x, theta, plates, params -> residual R, dR/dx, dR/d(plates)
     loaded_dev<g>      x, theta, plates, params -> deviation x, y of every point of the file
                                                    (the plan's points first)
-    plate_relation<o>  in = (theta, p, f, e_a, e_s) -> (along, across, omega) and their partials
-                                                   by (theta, p, f) (symkin.codegen.plate), o = 4
-                                                   and 2 (the truncation estimate)
+    plate_relation4    in = (theta, p, f, e_a, e_s) -> (along, across, omega) and their partials
+                                                   by (theta, p, f) (symkin.codegen.plate)
+    plate_values2      in                       -> the relation at order 2, values alone (the
+                                                   truncation estimate)
+    plate_rest4        in                       -> plate_relation4's outputs at p = f = 0 (a plate
+                                                   that carries no force: the drivers at x = 0)
 
 Every routine's outputs are named row-major blocks (:class:`~symkin.codegen.routines.Block`):
 the runtimes (templates/c/runtime.c, templates/numpy/runtime.py) read the offsets of the
@@ -68,7 +71,7 @@ from ..kinematics.analysis import Analysis
 from ..physics.statics import loaded_derivation
 from .derivation import Derivation, derivation
 from .literals import float_literals, to_double
-from .loaded import LoadedPlan, loaded_routines
+from .loaded import LoadedPlan, loaded_routines, rest_routine, values2_routine
 from .plate import plate_routine
 from .routines import Argument, Block, Routine, flatten, layout, optimize
 
@@ -344,8 +347,7 @@ def plan(
     rename = {s: sp.Symbol(f"p_{k}", real=True) for k, s in enumerate(an.params)}
     routines = {name: _renamed(r, rename) for name, r in routines.items()}
     if loaded is not None:
-        for order in (4, 2):
-            relation = plate_routine(order)
+        for relation in (plate_routine(4), values2_routine(), rest_routine()):
             # its array argument renamed: `in` is a Python keyword
             routines[relation.name] = dataclasses.replace(
                 relation, arguments=(Argument("plate", relation.arguments[0].symbols),)

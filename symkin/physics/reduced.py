@@ -27,7 +27,9 @@ or the Jacobian's determinant changes sign, continuation along the inputs and lo
 together from the as-fabricated pose. Refusal (the answer is not given): a plate's compression
 at 90 % of its sway buckling load, or the truncation estimate 3 e24² above 1 % (e24: the
 largest relative change of a point's deviation when the quartic terms are dropped, by one Newton
-step with the Jacobian at the solution).
+step with the Jacobian of the last step that converged, a step below TOL from the solution; its
+determinant's sign is also the acceptance's: the generated drivers keep its LU and evaluate
+nothing more at the solution).
 """
 
 from __future__ import annotations
@@ -189,6 +191,8 @@ class Reduced:
         self.th = {a: sp.Symbol(f"th_{a}", real=True) for a in self.hinges}
         self.t = sp.Symbol("t", real=True)
         self._fns: dict = {}
+        # the last Newton step's J (acceptance and truncation estimate, solve)
+        self.last_jacobian = np.zeros((0, 0))
 
     # -- the equations -------------------------------------------------------------------------
     @cached_property
@@ -477,7 +481,10 @@ class Reduced:
         for it in range(1, MAX_ITER + 1):
             try:
                 r = self.residual(x, theta, t)
-                step = np.linalg.solve(self.jacobian(x, theta, t), r)
+                jac = self.jacobian(x, theta, t)
+                # kept: the acceptance's sign and the truncation estimate's step read it
+                self.last_jacobian = jac
+                step = np.linalg.solve(jac, r)
             except (np.linalg.LinAlgError, ValueError, ZeroDivisionError, OverflowError):
                 # a singular Jacobian, or a plate pushed past its buckling load (the kernels'
                 # DomainError) by the iterate: not this way
@@ -503,11 +510,13 @@ class Reduced:
     def _sign(self, x, theta, t) -> float:
         return float(np.sign(np.linalg.det(self.jacobian(x, theta, t))))
 
-    def _accept(self, x, theta, t, sign: float) -> bool:
-        """A converged x on the branch followed: det J of the same sign as at the unloaded
-        state, every compliant angle within (-π, π)."""
+    def _accept(self, x, theta, sign: float) -> bool:
+        """A converged x on the branch followed: det J (the last Newton step's, a step below
+        TOL from x) of the same sign as at the unloaded state, every compliant angle within
+        (-π, π)."""
         try:
-            return self._sign(x, theta, t) == sign and self._plausible(x, theta)
+            same = float(np.sign(np.linalg.det(self.last_jacobian))) == sign
+            return same and self._plausible(x, theta)
         except (ValueError, ZeroDivisionError, OverflowError):
             return False
 
@@ -529,7 +538,7 @@ class Reduced:
         x, total, ok = self.newton(zero, theta, 1.0)
         steps = 1
         if ok:
-            ok = self._accept(x, theta, 1.0, sign0)
+            ok = self._accept(x, theta, sign0)
         if not ok:
             # continuation: inputs and loads scaled together by s from the as-fabricated pose
             # (x = 0 exact at s = 0); the predictor keeps the compliant angles and chord loads
@@ -550,7 +559,7 @@ class Reduced:
                 xn, it, okn = self.newton(guess, th_1, s1)
                 total += it
                 if okn:
-                    okn = self._accept(xn, th_1, s1, sign)
+                    okn = self._accept(xn, th_1, sign)
                 if okn:
                     x, s, th_s, steps = xn, s1, th_1, steps + 1
                     ds = min(0.5, ds * 1.5)
@@ -570,10 +579,11 @@ class Reduced:
             p = float(ins[3 * k + 1])  # a half plate's: the plate's over segments²
             g = 1 + float(ea - es) * p
             worst_p = max(worst_p, -g * p * self.segments**2 / math.pi**2)
-        # truncation estimate: one Newton step of the order-2 equations from the solution
+        # truncation estimate: one Newton step of the order-2 equations from the solution, with
+        # the last Newton step's J (at s = 1: the configuration's own θ)
         x2 = x
         if self.size:
-            x2 = x - np.linalg.solve(self.jacobian(x, theta, 1.0), self.residual(x, theta, 1.0, 2))
+            x2 = x - np.linalg.solve(self.last_jacobian, self.residual(x, theta, 1.0, 2))
         dev2 = self.deviations(x2, theta, 2)
         e24 = 0.0
         for name, d4 in dev.items():

@@ -2,9 +2,9 @@
  * symkin's C runtime for the `loaded` level (docs/physics.md, "The Newton level"): the reduced
  * equilibrium of symkin.physics.reduced solved by Newton and continuation over the mechanism's
  * loaded_* routines, with the rules of the Python solver. Only evaluators that hold the level
- * hold it (templates/c/source.c.j2), after templates/c/runtime.c, whose sk_solve, sk_lu,
- * sk_lu_solve and sk_rigid_pose it calls; the generated file defines SK_RN (the largest number of
- * unknowns, and one), SK_RS (the most half plates, and one) and SK_RP (the points its deviation
+ * hold it (templates/c/source.c.j2), after templates/c/runtime.c, whose sk_lu, sk_lu_solve and
+ * sk_rigid_pose it calls; the generated file defines SK_RN (the largest number of unknowns, and
+ * one), SK_RS (the most half plates, and one) and SK_RP (the points its deviation
  * routines give: every point of the file, the evaluator's first).
  */
 #include <math.h>
@@ -38,6 +38,7 @@ typedef struct {
     int unknowns;       /* non-input hinges: x's first entries, delta / scale */
     double tol, max_turn, p_limit, est_factor, est_limit;
     int max_iter;
+    int loads;          /* the load factor t enters the routines (the file has loads) */
 } sk_loaded;
 
 /* One variant at one configuration. */
@@ -48,10 +49,10 @@ typedef struct {
     const double *params;
 } sk_red;
 
-/* The half plates' inputs (ins: 5 per half plate, then their x-Jacobian) and the plate relation
-   at `order` (rel: 12 per half plate, values then partials) at (x, theta, t); xt: x, then t. */
-static void sk_red_plates(const sk_red *r, const double *x, const double *theta, double t,
-                          int order, double *xt, double *ins, double *rel)
+/* The half plates' inputs (ins: 5 per half plate, then their x-Jacobian) at (x, theta, t); xt:
+   x, then t. */
+static void sk_red_inputs(const sk_red *r, const double *x, const double *theta, double t,
+                          double *xt, double *ins)
 {
     int i;
     for (i = 0; i < r->v->size; ++i) {
@@ -59,50 +60,66 @@ static void sk_red_plates(const sk_red *r, const double *x, const double *theta,
     }
     xt[r->v->size] = t;
     r->v->plates(xt, theta, r->params, ins);
-    for (i = 0; i < r->v->plates_n; ++i) {
-        if (order == 4) {
-            sk_plate_relation4(ins + 5 * i, rel + 12 * i);
-        } else {
-            sk_plate_relation2(ins + 5 * i, rel + 12 * i);
-        }
-    }
 }
 
-/* The plates' values (along, across, omega), one after the other, from rel. */
-static void sk_red_values(const sk_red *r, const double *rel, double *vals)
+/* The plate relation at order 4 (rel: 12 per half plate, values then partials) of the inputs
+   ins, and its values (along, across, omega), one half plate after the other, into vals. */
+static void sk_red_relation(const sk_red *r, const double *ins, double *rel, double *vals)
 {
     int i, j;
     for (i = 0; i < r->v->plates_n; ++i) {
+        if (ins[5 * i + 1] == 0.0 && ins[5 * i + 2] == 0.0) {
+            /* no force on the plate (x = 0 without loads, the unloaded state): the relation's
+               few terms that remain */
+            sk_plate_rest4(ins + 5 * i, rel + 12 * i);
+        } else {
+            sk_plate_relation4(ins + 5 * i, rel + 12 * i);
+        }
         for (j = 0; j < 3; ++j) {
             vals[3 * i + j] = rel[12 * i + j];
         }
     }
 }
 
-/* The residual R at `order` and, with jac not NULL, its Jacobian (order 4, n x n row-major):
-   dR/dx + dR/d(plates) . the plates' partials . d(theta_c, p, f)/dx. */
-static void sk_red_system(const sk_red *r, const double *x, const double *theta, double t,
-                          int order, double *res, double *jac)
+/* The plate relation at order 2, its values alone (the truncation estimate's), into vals. */
+static void sk_red_values2(const sk_red *r, const double *ins, double *vals)
+{
+    int i;
+    for (i = 0; i < r->v->plates_n; ++i) {
+        sk_plate_values2(ins + 5 * i, vals + 3 * i);
+    }
+}
+
+/* One evaluation of the system at order 4 (x, theta, t), kept for what follows it: the plates'
+   inputs and relation, the system's output, J's LU and its determinant's sign. The last Newton
+   step's evaluation also gives the acceptance its sign and the truncation estimate its J (the
+   Python solver's rule: J of the step that converged), and the solution's plate values by one
+   first-order correction (the step is below tol: the remainder is below rounding). */
+typedef struct {
+    double xt[SK_RN + 1], ins[SK_OUT], rel[12 * SK_RS], sys[SK_OUT], lu[SK_RN * SK_RN + 1];
+    int piv[SK_RN + 1];
+    double sign;  /* det J's: 1, -1, NaN where J is singular or not finite */
+} sk_red_state;
+
+/* st at (x, theta, t): 0, or 1 where J is singular or not finite (st->sign NaN). J = dR/dx +
+   dR/d(plates) . the plates' partials . d(theta_c, p, f)/dx, n x n row-major. */
+static int sk_red_eval(const sk_red *r, const double *x, const double *theta, double t,
+                       sk_red_state *st)
 {
     const int n = r->v->size, ns = r->v->plates_n;
-    double xt[SK_RN + 1], ins[SK_OUT], rel[12 * SK_RS], vals[3 * SK_RS], sys[SK_OUT];
+    double vals[3 * SK_RS];
+    double *jac = st->lu;
     int i, j, k, c;
-    sk_red_plates(r, x, theta, t, order, xt, ins, rel);
-    sk_red_values(r, rel, vals);
-    r->v->system(xt, theta, vals, r->params, sys);
-    for (i = 0; i < n; ++i) {
-        res[i] = sys[i];
-    }
-    if (jac == NULL) {
-        return;
-    }
+    sk_red_inputs(r, x, theta, t, st->xt, st->ins);
+    sk_red_relation(r, st->ins, st->rel, vals);
+    r->v->system(st->xt, theta, vals, r->params, st->sys);
     for (i = 0; i < n * n; ++i) {
-        jac[i] = sys[n + i];
+        jac[i] = st->sys[n + i];
     }
     for (i = 0; i < n; ++i) {
-        const double *jo = sys + n + n * n + i * 3 * ns;
+        const double *jo = st->sys + n + n * n + i * 3 * ns;
         for (k = 0; k < ns; ++k) {
-            const double *part = rel + 12 * k + 3, *din = ins + 5 * ns + 3 * k * n;
+            const double *part = st->rel + 12 * k + 3, *din = st->ins + 5 * ns + 3 * k * n;
             double w[3];
             for (c = 0; c < 3; ++c) {
                 w[c] = jo[3 * k] * part[c] + jo[3 * k + 1] * part[3 + c]
@@ -113,42 +130,46 @@ static void sk_red_system(const sk_red *r, const double *x, const double *theta,
             }
         }
     }
-}
-
-/* The sign of det J at (x, theta, t): 1, -1, or NaN where J is singular or not finite. */
-static double sk_red_sign(const sk_red *r, const double *x, const double *theta, double t)
-{
-    double res[SK_RN + 1], jac[SK_RN * SK_RN + 1], sign = 1.0;
-    int piv[SK_RN + 1], i;
-    const int n = r->v->size;
-    sk_red_system(r, x, theta, t, 4, res, jac);
-    if (sk_lu(n, jac, piv)) {
-        return NAN;
+    st->sign = NAN;
+    if (sk_lu(n, jac, st->piv)) {
+        return 1;
     }
+    st->sign = 1.0;
     for (i = 0; i < n; ++i) {
         if (jac[i * n + i] < 0.0) {
-            sign = -sign;
+            st->sign = -st->sign;
         }
-        if (piv[i] != i) {
-            sign = -sign;
+        if (st->piv[i] != i) {
+            st->sign = -st->sign;
         }
     }
-    return sign;
+    return 0;
 }
 
 /* Newton from x at (theta, t): 0 converged, 1 not (a singular or non-finite Jacobian, a step
-   turning a hinge by more than max_turn, a non-finite iterate, too many steps). */
-static int sk_red_newton(const sk_red *r, double *x, const double *theta, double t)
+   turning a hinge by more than max_turn, a non-finite iterate, too many steps). st: the last
+   step's evaluation; first: det J's sign at the first step (NaN where it was singular). */
+static int sk_red_newton(const sk_red *r, double *x, const double *theta, double t,
+                         sk_red_state *st, double *first)
 {
     const int n = r->v->size, nu = r->l->unknowns;
-    double res[SK_RN + 1], jac[SK_RN * SK_RN + 1], prev = HUGE_VAL;
+    double res[SK_RN + 1], prev = HUGE_VAL;
     int it, i;
+    *first = NAN;
     for (it = 1; it <= r->l->max_iter; ++it) {
         double turn = 0.0, size = 0.0, top = 0.0;
-        sk_red_system(r, x, theta, t, 4, res, jac);
-        if (sk_solve(n, jac, 1, res)) {
+        const int singular = sk_red_eval(r, x, theta, t, st);
+        if (it == 1) {
+            *first = st->sign;
+        }
+        if (singular) {
             return 1;
         }
+        /* sk_lu then sk_lu_solve: sk_solve's operations, the factors kept */
+        for (i = 0; i < n; ++i) {
+            res[i] = st->sys[i];
+        }
+        sk_lu_solve(n, st->lu, st->piv, res);
         for (i = 0; i < nu; ++i) {
             if (fabs(res[i]) > turn) {
                 turn = fabs(res[i]);
@@ -182,13 +203,13 @@ static int sk_red_newton(const sk_red *r, double *x, const double *theta, double
     return 1;
 }
 
-/* A converged x on the branch followed: det J of the sign `sign`, every compliant angle within
-   (-pi, pi). */
-static int sk_red_accept(const sk_red *r, const double *x, const double *theta, double t,
-                         double sign)
+/* A converged x on the branch followed: det J of the sign `sign` (J of the last Newton step,
+   st), every compliant angle within (-pi, pi). */
+static int sk_red_accept(const sk_red *r, const double *x, const double *theta,
+                         const sk_red_state *st, double sign)
 {
     int i;
-    if (!(sk_red_sign(r, x, theta, t) == sign)) {
+    if (!(st->sign == sign)) {
         return 0;
     }
     for (i = 0; i < SK_M; ++i) {
@@ -232,18 +253,33 @@ static int sk_red_rigid(const sk_mechanism *m, const double *inputs, const doubl
 }
 
 /* The deviation (dev: every point's) at the solution x and the refusals: 0, 1 a plate at
-   p_limit of its sway buckling load (or J singular there), 4 the truncation estimate above
-   est_limit. */
-static int sk_red_answer(const sk_red *r, const double *x, const double *theta, double *dev)
+   p_limit of its sway buckling load, 4 the truncation estimate above est_limit. st: the last
+   Newton step's evaluation at (theta, 1), a step below tol from x (NULL where x has no entries). */
+static int sk_red_answer(const sk_red *r, const double *x, const double *theta,
+                         const sk_red_state *st, double *dev)
 {
     const int n = r->v->size, ns = r->v->plates_n;
-    double xt[SK_RN + 1], ins[SK_OUT], rel[12 * SK_RS], vals[3 * SK_RS];
-    double x2[SK_RN + 1], res[SK_RN + 1], jac[SK_RN * SK_RN + 1], dev2[2 * SK_RP + 1];
+    double xt[SK_RN + 1], ins[SK_OUT], rel[12 * SK_RS], vals[3 * SK_RS], sys[SK_OUT];
+    double x2[SK_RN + 1], res[SK_RN + 1], dev2[2 * SK_RP + 1];
     double worst = 0.0, e24 = 0.0;
     const double count = r->v->count;
-    int piv[SK_RN + 1], i;
-    sk_red_plates(r, x, theta, 1.0, 4, xt, ins, rel);
-    sk_red_values(r, rel, vals);
+    int i, j;
+    sk_red_inputs(r, x, theta, 1.0, xt, ins);
+    if (st == NULL) {
+        sk_red_relation(r, ins, rel, vals);
+    } else {
+        /* the plate relation at x from st's by its partials: x moved by the last step only,
+           below tol, so the remainder (its square) is below rounding */
+        for (i = 0; i < ns; ++i) {
+            const double *at = st->rel + 12 * i, *part = at + 3;
+            const double d0 = ins[5 * i] - st->ins[5 * i], d1 = ins[5 * i + 1] - st->ins[5 * i + 1];
+            const double d2 = ins[5 * i + 2] - st->ins[5 * i + 2];
+            for (j = 0; j < 3; ++j) {
+                vals[3 * i + j] = at[j] + (part[3 * j] * d0 + part[3 * j + 1] * d1
+                                           + part[3 * j + 2] * d2);
+            }
+        }
+    }
     r->v->dev(xt, theta, vals, r->params, dev);
     for (i = 0; i < ns; ++i) {
         const double p = ins[5 * i + 1], g = 1.0 + (ins[5 * i + 3] - ins[5 * i + 4]) * p;
@@ -252,23 +288,24 @@ static int sk_red_answer(const sk_red *r, const double *x, const double *theta, 
             worst = w;
         }
     }
-    /* the truncation estimate: one Newton step of the order-2 equations from the solution */
+    /* the truncation estimate: one Newton step of the order-2 equations from the solution, with
+       the last Newton step's J (its LU, st) */
     for (i = 0; i < n; ++i) {
         x2[i] = x[i];
     }
     if (n > 0) {
-        sk_red_system(r, x, theta, 1.0, 4, res, jac);
-        sk_red_system(r, x, theta, 1.0, 2, res, NULL);
-        if (sk_lu(n, jac, piv)) {
-            return 1;
+        sk_red_values2(r, ins, vals);
+        r->v->system(xt, theta, vals, r->params, sys);
+        for (i = 0; i < n; ++i) {
+            res[i] = sys[i];
         }
-        sk_lu_solve(n, jac, piv, res);
+        sk_lu_solve(n, st->lu, st->piv, res);
         for (i = 0; i < n; ++i) {
             x2[i] -= res[i];
         }
     }
-    sk_red_plates(r, x2, theta, 1.0, 2, xt, ins, rel);
-    sk_red_values(r, rel, vals);
+    sk_red_inputs(r, x2, theta, 1.0, xt, ins);
+    sk_red_values2(r, ins, vals);
     r->v->dev(xt, theta, vals, r->params, dev2);
     for (i = 0; i < SK_RP; ++i) {
         const double size = hypot(dev[2 * i], dev[2 * i + 1]);
@@ -294,16 +331,27 @@ static int sk_red_solve(const sk_red *r, const double *inputs, const double *the
                         double *dev)
 {
     const int n = r->v->size;
-    double sign0;
+    sk_red_state st;
+    double sign0, first;
     int i, ok;
     for (i = 0; i < n; ++i) {
         x[i] = 0.0;
     }
     if (n == 0) {
-        return sk_red_answer(r, x, theta, dev);
+        return sk_red_answer(r, x, theta, NULL, dev);
     }
-    sign0 = sk_red_sign(r, x, theta, 0.0);
-    ok = !sk_red_newton(r, x, theta, 1.0) && sk_red_accept(r, x, theta, 1.0, sign0);
+    /* det J's sign at the unloaded state (x = 0, t = 0): without loads t enters nowhere and it
+       is the first Newton step's (the same J), else one evaluation of its own */
+    sign0 = NAN;
+    if (r->l->loads) {
+        sk_red_eval(r, x, theta, 0.0, &st);
+        sign0 = st.sign;
+    }
+    ok = !sk_red_newton(r, x, theta, 1.0, &st, &first);
+    if (!r->l->loads) {
+        sign0 = first;
+    }
+    ok = ok && sk_red_accept(r, x, theta, &st, sign0);
     if (!ok) {
         /* continuation: inputs and loads scaled together by s from the as-fabricated pose */
         double s = 0.0, ds = 0.25, sign, th_s[SK_M], th_1[SK_M], guess[SK_RN + 1];
@@ -313,15 +361,23 @@ static int sk_red_solve(const sk_red *r, const double *inputs, const double *the
         for (i = 0; i < n; ++i) {
             x[i] = 0.0;
         }
-        sign = sk_red_sign(r, x, th_s, 0.0);
+        sk_red_eval(r, x, th_s, 0.0, &st);
+        sign = st.sign;
         while (s < 1.0) {
             double s1;
-            int good;
+            int good = 1;
             if (ds < 1e-3) {
                 return 2;
             }
             s1 = s + ds < 1.0 ? s + ds : 1.0;
-            good = !sk_red_rigid(r->m, inputs, r->params, s1, th_1);
+            if (s1 == 1.0) {
+                /* the configuration's own rigid angles: the answer reads the last step's J */
+                for (i = 0; i < SK_M; ++i) {
+                    th_1[i] = theta[i];
+                }
+            } else {
+                good = !sk_red_rigid(r->m, inputs, r->params, s1, th_1);
+            }
             if (good) {
                 for (i = 0; i < n; ++i) {
                     guess[i] = x[i];
@@ -330,8 +386,8 @@ static int sk_red_solve(const sk_red *r, const double *inputs, const double *the
                     const int h = r->m->unknown_index[i];
                     guess[i] = (th_s[h] + x[i] * r->v->scale[i] - th_1[h]) / r->v->scale[i];
                 }
-                good = !sk_red_newton(r, guess, th_1, s1)
-                       && sk_red_accept(r, guess, th_1, s1, sign);
+                good = !sk_red_newton(r, guess, th_1, s1, &st, &first)
+                       && sk_red_accept(r, guess, th_1, &st, sign);
             }
             if (good) {
                 for (i = 0; i < n; ++i) {
@@ -347,7 +403,7 @@ static int sk_red_solve(const sk_red *r, const double *inputs, const double *the
             }
         }
     }
-    return sk_red_answer(r, x, theta, dev);
+    return sk_red_answer(r, x, theta, &st, dev);
 }
 
 /* The loaded level at one configuration (sk_mechanism.loaded_solve): theta holds the rigid

@@ -14,7 +14,7 @@ from runtime import _rigid_angles  # the module holds both: runtime.py
 # symkin reduced-equilibrium runtime (templates/numpy/reduced.py): Newton from x = 0 at load
 # factor 1, continuation in the inputs and loads together where Newton fails, the refusals (a
 # plate at P_LIMIT of its sway buckling load, the truncation estimate), two half plates per plate
-# where one relation is refused by its estimate; elementwise over the configurations.
+# where one relation is refused by its estimate; all configurations at once, each on its own.
 
 
 class _LoadedTables:
@@ -23,14 +23,6 @@ class _LoadedTables:
 
     def __init__(self, **fields):
         self.__dict__.update(fields)
-
-
-class _Refused(Exception):
-    """The reduced equilibrium has no answer here (a refusal rule, or no convergence)."""
-
-    def __init__(self, truncation=False):
-        super().__init__()
-        self.truncation = truncation
 
 
 class _Solved(list):
@@ -42,213 +34,300 @@ def _loaded_deviation(theta, delta, q):
     return q.deviation
 
 
-class _Variant:
-    """One variant of the reduced equilibrium at one configuration's parameters."""
+def _red_column(v, b):
+    """A routine's output as a (b,) float array (constants come back as numbers)."""
+    return numpy.broadcast_to(numpy.asarray(v, dtype=float), (b,))
 
-    def __init__(self, tables, variant, count, relations, params):
+
+def _red_signs(jac):
+    """det J's sign per configuration (jac: (b, n, n)): 1, -1, 0 or NaN."""
+    return numpy.sign(numpy.linalg.det(jac))
+
+
+def _red_solve(jac, res):
+    """J^-1 R per configuration (jac (b, n, n), res (n, b)) -> (n, b); NaN where J is singular."""
+    try:
+        return numpy.linalg.solve(jac, res.T[:, :, None])[:, :, 0].T
+    except numpy.linalg.LinAlgError:
+        # one singular J stops the stacked solve: each on its own (LAPACK's, as stacked)
+        out = numpy.full(res.shape, numpy.nan)
+        for k in range(res.shape[1]):
+            try:
+                out[:, k] = numpy.linalg.solve(jac[k], res[:, k])
+            except numpy.linalg.LinAlgError:
+                continue  # singular: NaN
+        return out
+
+
+class _Batch:
+    """One variant of the reduced equilibrium over b configurations at once: Newton on all of
+    them with a mask each, stacked solves; every step elementwise, so a configuration's answer
+    does not depend on the others in its batch."""
+
+    def __init__(self, tables, variant, count):
         self.t, self.count = tables, count  # count: half plates per plate
         self.plates_fn, self.system_fn, self.dev_fn, self.size, self.plates, scale = variant
         self.scale = numpy.array(scale, dtype=float)
-        self.relations = relations  # order -> plate_relation routine
-        self.p = params
 
-    def _eval(self, x, theta, t, order=4):
-        """Plate inputs, their x-Jacobian, the plates' outputs and partials at (x, theta, t)."""
-        args = list(map(float, x)) + [float(t)]
-        plates = self.plates_fn(args, theta, self.p)
-        n, ns = self.size, self.plates
-        ins = [float(v) for v in plates[: 5 * ns]]
-        dins = numpy.array([float(v) for v in plates[5 * ns :]]).reshape(3 * ns, n)
-        relation = self.relations[order]
-        outs, parts = [], []
+    def _inputs(self, x, theta, p, t):
+        """The routines' x argument (x, then t), the half plates' inputs (5 per half plate) and
+        their x-Jacobian (3 per half plate x n), each a (b,) array."""
+        b = x.shape[1]
+        args = [x[i] for i in range(self.size)] + [numpy.full(b, float(t))]
+        out = [_red_column(v, b) for v in self.plates_fn(args, theta, p)]
+        return args, out[: 5 * self.plates], out[5 * self.plates :]
+
+    def _relation(self, ins):
+        """The plate relation at order 4 per half plate (12 (b,) arrays: values, partials) and
+        the values (along, across, omega) one half plate after the other."""
+        b = ins[0].shape[0] if ins else 0
+        rel = []
+        for k in range(self.plates):
+            plate = ins[5 * k : 5 * k + 5]
+            rest = (plate[1] == 0.0) & (plate[2] == 0.0)
+            if numpy.all(rest):
+                # no force on the plate (x = 0 without loads): reduced.c's plate_rest4
+                rel.append([_red_column(v, b) for v in self.t.rest4(plate)])
+                continue
+            out = [_red_column(v, b) for v in self.t.relation4(plate)]
+            if numpy.any(rest):
+                at_rest = self.t.rest4(plate)
+                out = [numpy.where(rest, r, v) for r, v in zip(at_rest, out)]
+            rel.append(out)
+        return rel, [r[j] for r in rel for j in range(3)]
+
+    def _values2(self, ins):
+        """The plate relation at order 2, values alone (the truncation estimate's), one half
+        plate after the other."""
+        b = ins[0].shape[0] if ins else 0
+        plates = range(self.plates)
+        return [_red_column(v, b) for k in plates for v in self.t.values2(ins[5 * k : 5 * k + 5])]
+
+    def system(self, x, theta, p, t):
+        """R (n, b) and J (b, n, n) at order 4: dR/dx + dR/d(plates) . the plates' partials .
+        d(theta_c, p, f)/dx, summed in reduced.c's order."""
+        n, ns, b = self.size, self.plates, x.shape[1]
+        args, ins, dins = self._inputs(x, theta, p, t)
+        rel, vals = self._relation(ins)
+        sys = numpy.array([_red_column(v, b) for v in self.system_fn(args, theta, vals, p)])
+        res = sys[:n]
+        jac = sys[n : n + n * n].reshape(n, n, b).copy()
+        jo = sys[n + n * n :].reshape(n, 3 * ns, b)
+        d = numpy.array(dins).reshape(3 * ns, n, b) if ns else None
         for k in range(ns):
-            v = [float(u) for u in relation(ins[5 * k : 5 * k + 5])]
-            outs += v[:3]
-            parts.append(numpy.array(v[3:]).reshape(3, 3))
-        return args, ins, dins, outs, parts
+            part = rel[k][3:]
+            w = [
+                jo[:, 3 * k] * part[c]
+                + jo[:, 3 * k + 1] * part[3 + c]
+                + jo[:, 3 * k + 2] * part[6 + c]
+                for c in range(3)
+            ]
+            jac += (
+                w[0][:, None] * d[3 * k][None]
+                + w[1][:, None] * d[3 * k + 1][None]
+                + w[2][:, None] * d[3 * k + 2][None]
+            )
+        return res, numpy.ascontiguousarray(jac.transpose(2, 0, 1))
 
-    def residual(self, x, theta, t, order=4):
-        args, _, _, outs, _ = self._eval(x, theta, t, order)
-        return numpy.array(
-            [float(v) for v in self.system_fn(args, theta, outs, self.p)[: self.size]]
-        )
-
-    def jacobian(self, x, theta, t):
-        """dR/dx = dR/dx at fixed plate outputs + dR/doutputs . d outputs/d in . d in/dx."""
-        args, _, dins, outs, parts = self._eval(x, theta, t)
-        n, ns = self.size, self.plates
-        sys = [float(v) for v in self.system_fn(args, theta, outs, self.p)]
-        jx = numpy.array(sys[n : n + n * n]).reshape(n, n)
-        if not ns:
-            return jx
-        jo = numpy.array(sys[n + n * n :]).reshape(n, 3 * ns)
-        block = numpy.zeros((3 * ns, 3 * ns))
-        for k, d in enumerate(parts):
-            block[3 * k : 3 * k + 3, 3 * k : 3 * k + 3] = d
-        return jx + jo @ block @ dins
-
-    def deviations(self, x, theta, order=4):
-        args, _, _, outs, _ = self._eval(x, theta, 1.0, order)
-        return numpy.array([float(v) for v in self.dev_fn(args, theta, outs, self.p)])
-
-    def newton(self, x, theta, t):
-        """Newton from x: (x, converged); a step that turns a hinge by more than max_turn fails
-        (continuation takes over)."""
-        tb, nu = self.t, self.t.unknowns
-        prev = math.inf
+    def newton(self, x, theta, p, t):
+        """Newton from x (n, b) at (theta, t), each configuration until it converges or fails
+        (a singular or non-finite J, a step turning a hinge by more than max_turn, a non-finite
+        iterate, too many steps): (x, converged, each one's last step's J, det J's sign at the
+        first step)."""
+        tb, n, nu = self.t, self.size, self.t.unknowns
+        b = x.shape[1]
+        x, converged = x.copy(), numpy.zeros(b, dtype=bool)
+        last, first = numpy.zeros((b, n, n)), None
+        prev = numpy.full(b, math.inf)
+        act = numpy.arange(b)
         for it in range(1, tb.max_iter + 1):
-            with numpy.errstate(all="ignore"):
-                try:
-                    step = numpy.linalg.solve(
-                        self.jacobian(x, theta, t), self.residual(x, theta, t)
-                    )
-                except (numpy.linalg.LinAlgError, ValueError, ZeroDivisionError, OverflowError):
-                    return x, False
-            turn = float(numpy.max(numpy.abs(step[:nu]))) * self.scale[0] if nu else 0.0
-            if not turn <= tb.max_turn:
-                return x, False
-            x = x - step
-            if not numpy.all(numpy.isfinite(x)):
-                return x, False
-            size, top = float(numpy.max(numpy.abs(step))), float(numpy.max(numpy.abs(x)))
-            if size <= tb.tol * top or size == 0:
-                return x, True
-            if it > 3 and size > 0.5 * prev and size < 1e-9 * top:
-                return x, True  # stalled at rounding
-            prev = size
-        return x, False
+            res, jac = self.system(x[:, act], [v[act] for v in theta], [v[act] for v in p], t)
+            last[act] = jac
+            if first is None:
+                first = _red_signs(jac)
+            step = _red_solve(jac, res)
+            turn = numpy.max(numpy.abs(step[:nu]), axis=0) * self.scale[0] if nu else 0.0
+            xn = x[:, act] - step
+            fail = ~(turn <= tb.max_turn) | ~numpy.all(numpy.isfinite(xn), axis=0)
+            size = numpy.max(numpy.abs(step), axis=0)
+            top = numpy.max(numpy.abs(xn), axis=0)
+            done = (size <= tb.tol * top) | (size == 0)
+            # stalled at rounding
+            done |= (it > 3) & (size > 0.5 * prev[act]) & (size < 1e-9 * top)
+            x[:, act] = xn
+            converged[act[done & ~fail]] = True
+            prev[act] = size
+            act = act[~done & ~fail]
+            if not act.size:
+                break
+        return x, converged, last, first
 
-    def sign(self, x, theta, t):
-        with numpy.errstate(all="ignore"):
-            return float(numpy.sign(numpy.linalg.det(self.jacobian(x, theta, t))))
+    def accept(self, x, theta, jac, sign):
+        """Converged x on the branch followed: det J (the last Newton step's) of the sign at the
+        unloaded state, every compliant angle within (-pi, pi)."""
+        ok = _red_signs(jac) == sign
+        for i, th in enumerate(theta):
+            angle = th
+            for j, h in enumerate(self.t.unknown_index):
+                if h == i:
+                    angle = angle + x[j] * self.scale[j]
+            ok &= numpy.abs(angle) < math.pi
+        return ok
 
-    def accept(self, x, theta, t, sign):
-        """A converged x on the branch followed: det J of the sign at the unloaded state, every
-        compliant angle within (-pi, pi)."""
-        try:
-            same = self.sign(x, theta, t) == sign
-        except (ValueError, ZeroDivisionError, OverflowError):
-            return False
-        angles = numpy.array(theta, dtype=float)
-        for j, i in enumerate(self.t.unknown_index):
-            angles[i] += x[j] * self.scale[j]
-        return same and bool(numpy.all(numpy.abs(angles) < math.pi))
-
-    def solve(self, rigid):
-        """x at the configuration (rigid(s): the rigid angles at the inputs scaled by s, None
-        where they cannot be reached), its deviation; _Refused where there is none."""
-        theta = rigid(1.0)
-        zero = numpy.zeros(self.size)
-        if not self.size:
-            return self.answer(zero, theta)
-        sign0 = self.sign(zero, theta, 0.0)
-        x, ok = self.newton(zero, theta, 1.0)
-        if ok:
-            ok = self.accept(x, theta, 1.0, sign0)
-        if not ok:
-            # continuation: inputs and loads scaled together by s from the as-fabricated pose
-            s, ds = 0.0, 0.25
-            th_s = rigid(0.0)
-            x = zero
-            sign = self.sign(x, th_s, 0.0)
-            while s < 1:
-                if ds < 1e-3:
-                    raise _Refused()
-                s1 = min(1.0, s + ds)
-                th_1 = rigid(s1)
-                okn = th_1 is not None
-                if okn:
-                    guess = x.copy()
-                    for j, i in enumerate(self.t.unknown_index):
-                        guess[j] = (th_s[i] + x[j] * self.scale[j] - th_1[i]) / self.scale[j]
-                    xn, okn = self.newton(guess, th_1, s1)
-                if okn:
-                    okn = self.accept(xn, th_1, s1, sign)
-                if okn:
-                    x, s, th_s = xn, s1, th_1
-                    ds = min(0.5, ds * 1.5)
+    def solve(self, inputs, theta, p, mech):
+        """Every configuration (inputs, theta, p: lists of (b,) arrays): x (n, b), the deviation
+        (2 per point, b) and a status each: 0, 1 refused or no convergence, 4 refused by the
+        truncation estimate. Newton from x = 0 on all; continuation one by one where it fails."""
+        tb, n, b = self.t, self.size, theta[0].shape[0]
+        x, jac = numpy.zeros((n, b)), numpy.zeros((b, n, n))
+        status = numpy.zeros(b, dtype=int)
+        if n:
+            sign0 = None
+            if tb.loads:
+                sign0 = _red_signs(self.system(x, theta, p, 0.0)[1])
+            xn, converged, jac, first = self.newton(x, theta, p, 1.0)
+            # without loads t enters nowhere: the first step's J is the unloaded state's
+            good = converged & self.accept(xn, theta, jac, first if sign0 is None else sign0)
+            x[:, good] = xn[:, good]
+            for k in numpy.flatnonzero(~good):
+                found = self.continuation(k, inputs, theta, p, mech)
+                if found is None:
+                    status[k] = 1
                 else:
-                    ds /= 2
-        return self.answer(x, theta)
+                    x[:, k], jac[k] = found
+        dev = numpy.full((2 * len(mech.point_names), b), numpy.nan)
+        live = numpy.flatnonzero(status == 0)
+        if live.size:
+            dev[:, live], status[live] = self.answer(
+                x[:, live], [v[live] for v in theta], [v[live] for v in p], jac[live]
+            )
+        return x, dev, status
 
-    def answer(self, x, theta):
-        """The deviation at the solution x; _Refused where a plate is at p_limit of its sway
-        buckling load or the truncation estimate is above est_limit."""
-        tb = self.t
-        with numpy.errstate(all="ignore"):
-            dev = self.deviations(x, theta)
-            ins = self._eval(x, theta, 1.0)[1]
-            worst = 0.0
-            for k in range(self.plates):
-                p, ea, es = ins[5 * k + 1], ins[5 * k + 3], ins[5 * k + 4]
-                worst = max(worst, -(1 + (ea - es) * p) * p * self.count**2 / math.pi**2)
-            x2 = x
-            if self.size:
-                try:
-                    x2 = x - numpy.linalg.solve(
-                        self.jacobian(x, theta, 1.0), self.residual(x, theta, 1.0, 2)
-                    )
-                except numpy.linalg.LinAlgError:
-                    raise _Refused() from None
-            dev2 = self.deviations(x2, theta, 2)
-        e24 = 0.0
-        for k in range(len(dev) // 2):
-            size = math.hypot(dev[2 * k], dev[2 * k + 1])
-            if size > 0:
-                change = math.hypot(dev2[2 * k] - dev[2 * k], dev2[2 * k + 1] - dev[2 * k + 1])
-                e24 = max(e24, change / size)
-        estimate = tb.est_factor * e24**2
-        if not numpy.all(numpy.isfinite(dev)) or not worst < tb.p_limit:
-            raise _Refused()
-        if not estimate <= tb.est_limit:
-            raise _Refused(truncation=True)
-        return x, dev
+    def continuation(self, k, inputs, theta, p, mech):
+        """Configuration k by continuation (inputs and loads scaled together by s from the
+        as-fabricated pose): (x, the last Newton step's J), None where it does not converge."""
+        tb, n = self.t, self.size
+        th = [float(v[k]) for v in theta]
+        pk = [v[k : k + 1] for v in p]
+        xi = [float(v[k]) for v in inputs]
 
-
-def _reduced_solve(mech, x, theta, p, ok):
-    """The loaded level at every configuration where ok: delta of the non-input hinges, what its
-    deviation reads (q: the parameters and the deviation solved) and ok, False where the reduced
-    equilibrium refuses or does not converge."""
-    tb = mech.loaded
-    shape, dtype = ok.shape, mech.dtype
-    ok = numpy.array(ok)
-    delta = [numpy.zeros(shape, dtype=dtype) for _ in mech.unknown_index]
-    n_dev = 2 * len(mech.point_names)
-    dev = [numpy.full(shape, numpy.nan, dtype=dtype) for _ in range(n_dev)]
-    relations = {4: tb.relation4, 2: tb.relation2}
-    for index in numpy.ndindex(*shape):
-        if not ok[index]:
-            continue
-        pi = [float(numpy.broadcast_to(v, shape)[index]) for v in p]
-        th = [float(numpy.broadcast_to(v, shape)[index]) for v in theta]
-        xi = [float(numpy.broadcast_to(v, shape)[index]) for v in x]
-
-        def rigid(s, th=th, xi=xi, pi=pi):
+        def rigid(s):
             if s == 1.0:
                 return th
             with numpy.errstate(all="ignore"):
                 angles, good = _rigid_angles(
-                    mech, [numpy.array(v * s) for v in xi], pi, numpy.array(True)
+                    mech,
+                    [numpy.array(v * s) for v in xi],
+                    [float(v[0]) for v in pk],
+                    numpy.array(True),
                 )
             return [float(v) for v in angles] if bool(good) else None
 
-        found = None
-        for count, variant in enumerate(tb.variants, 1):
-            solver = _Variant(tb, variant, count, relations, pi)
-            try:
-                found = solver.solve(rigid), solver
-                break
-            except _Refused as refused:
-                if not refused.truncation:
-                    break
-        if found is None:
-            ok[index] = False
-            continue
-        (xs, d), solver = found
+        def column(values):
+            return [numpy.array([v]) for v in values]
+
+        s, ds = 0.0, 0.25
+        th_s = rigid(0.0)
+        if th_s is None:
+            return None
+        x = numpy.zeros((n, 1))
+        sign = _red_signs(self.system(x, column(th_s), pk, 0.0)[1])
+        jac = None
+        while s < 1:
+            if ds < 1e-3:
+                return None
+            s1 = min(1.0, s + ds)
+            th_1 = rigid(s1)
+            okn = th_1 is not None
+            if okn:
+                guess = x.copy()
+                for j, i in enumerate(tb.unknown_index):
+                    guess[j] = (th_s[i] + x[j] * self.scale[j] - th_1[i]) / self.scale[j]
+                xn, conv, last, _ = self.newton(guess, column(th_1), pk, s1)
+                okn = bool(conv[0]) and bool(self.accept(xn, column(th_1), last, sign)[0])
+            if okn:
+                x, s, th_s, jac = xn, s1, th_1, last[0]
+                ds = min(0.5, ds * 1.5)
+            else:
+                ds /= 2
+        return x[:, 0], jac
+
+    def answer(self, x, theta, p, jac):
+        """The deviation at each solution x (n, b) and its status: 0, 1 where a plate is at
+        p_limit of its sway buckling load, 4 where the truncation estimate (one order-2 Newton
+        step with jac, the last Newton step's J) is above est_limit."""
+        tb, n, b = self.t, self.size, x.shape[1]
+        args, ins, _ = self._inputs(x, theta, p, 1.0)
+        _, vals = self._relation(ins)
+        dev = numpy.array([_red_column(v, b) for v in self.dev_fn(args, theta, vals, p)])
+        worst = numpy.zeros(b)
+        for k in range(self.plates):
+            pk, ea, es = ins[5 * k + 1], ins[5 * k + 3], ins[5 * k + 4]
+            w = -(1 + (ea - es) * pk) * pk * self.count**2 / math.pi**2
+            worst = numpy.where(w > worst, w, worst)
+        x2 = x
+        if n:
+            vals2 = self._values2(ins)
+            sys = self.system_fn(args, theta, vals2, p)
+            res = numpy.array([_red_column(v, b) for v in sys[:n]])
+            x2 = x - _red_solve(jac, res)
+        args2, ins2, _ = self._inputs(x2, theta, p, 1.0)
+        vals2 = self._values2(ins2)
+        dev2 = numpy.array([_red_column(v, b) for v in self.dev_fn(args2, theta, vals2, p)])
+        e24 = numpy.zeros(b)
+        for k in range(len(dev) // 2):
+            size = numpy.hypot(dev[2 * k], dev[2 * k + 1])
+            e = numpy.hypot(dev2[2 * k] - dev[2 * k], dev2[2 * k + 1] - dev[2 * k + 1]) / size
+            e24 = numpy.where((size > 0) & (e > e24), e, e24)
+        estimate = tb.est_factor * e24**2
+        status = numpy.where(~(estimate <= tb.est_limit), 4, 0)
+        refused = ~numpy.all(numpy.isfinite(dev), axis=0) | ~(worst < tb.p_limit)
+        return dev, numpy.where(refused, 1, status)
+
+
+def _reduced_solve(mech, x, theta, p, ok):
+    """The loaded level at every configuration where ok, all at once: delta of the non-input
+    hinges, what its deviation reads (q: the parameters and the deviation solved) and ok, False
+    where the reduced equilibrium refuses or does not converge."""
+    tb = mech.loaded
+    shape, dtype = ok.shape, mech.dtype
+    ok = numpy.array(ok)
+    n_dev = 2 * len(mech.point_names)
+    delta = [numpy.zeros(shape, dtype=dtype) for _ in mech.unknown_index]
+    dev = [numpy.full(shape, numpy.nan, dtype=dtype) for _ in range(n_dev)]
+    where = numpy.flatnonzero(ok.reshape(-1))
+
+    def flat(values):
+        return [numpy.broadcast_to(v, shape).reshape(-1)[where].astype(float) for v in values]
+
+    xs, ths, ps = flat(x), flat(theta), flat(p)
+    todo = numpy.arange(where.size)  # the configurations the next variant solves
+    okf = numpy.zeros(where.size, dtype=bool)
+    flat_delta = [numpy.zeros(where.size) for _ in mech.unknown_index]
+    flat_dev = [numpy.full(where.size, numpy.nan) for _ in range(n_dev)]
+    for count, variant in enumerate(tb.variants, 1):
+        if not todo.size:
+            break
+        solver = _Batch(tb, variant, count)
+        with numpy.errstate(all="ignore"):
+            sx, sdev, status = solver.solve(
+                [v[todo] for v in xs], [v[todo] for v in ths], [v[todo] for v in ps], mech
+            )
+        good = status == 0
         for j in range(len(mech.unknown_index)):
-            delta[j][index] = xs[j] * solver.scale[j]
+            flat_delta[j][todo[good]] = sx[j, good] * solver.scale[j]
         for i in range(n_dev):
-            dev[i][index] = d[i]
+            flat_dev[i][todo[good]] = sdev[i, good]
+        okf[todo[good]] = True
+        # refused by the truncation estimate: two half plates per plate
+        todo = todo[status == 4]
+    okflat = ok.reshape(-1)
+    okflat[where] = okf
+    ok = okflat.reshape(shape)
+    for j in range(len(mech.unknown_index)):
+        delta[j].reshape(-1)[where] = flat_delta[j]
+    for i in range(n_dev):
+        dev[i].reshape(-1)[where] = flat_dev[i]
     q = _Solved(p)
     q.deviation = dev
     return delta, q, ok
