@@ -205,35 +205,6 @@ def test_complex_step_derivative_of_a_straight_reissner_plate():
     assert slope == pytest.approx(math.sin(omega) / omega, rel=1e-12)
 
 
-# -- the beam-column series of `loaded` -------------------------------------------------------
-
-
-def test_beam_column_series_against_closed_forms_and_the_beam_constraint_model():
-    import sympy as sp
-
-    from symkin.physics.beamcolumn import ORDER, series
-
-    bc = series()
-    p = sp.Symbol("p", positive=True)
-    k = sp.sqrt(p)
-
-    def taylor(expr):
-        return sp.series(expr, p, 0, ORDER + 1).removeO()
-
-    # clamped–guided beam-column in tension: f/δ = k³/(k − 2 tanh(k/2))
-    assert sp.expand(taylor((k - 2 * sp.tanh(k / 2)) / k**3) - bc.value("shear", p)) == 0
-    # the beam constraint model's transverse stiffness 12 + 6p/5 − p²/700 (Awtar et al. 2007)
-    gap = sp.expand(taylor(1 / bc.value("shear", p)) - (12 + sp.Rational(6, 5) * p - p**2 / 700))
-    assert [gap.coeff(p, n) for n in range(3)] == [0, 0, 0]
-    # symmetric bending under tension: M = (EI θ/l)(k/2)/tanh(k/2)
-    assert sp.expand(taylor((k / 2) / sp.tanh(k / 2)) - bc.value("rotation", p)) == 0
-    # p = 0: the arc's chord shortening θ²/24, the clamped–guided bowing (3/5)(f/12)²,
-    # the strain energies θ²/2 and f²/24, the end moment θ − f/2
-    assert (bc.bending[0], bc.bowing[0]) == (sp.Rational(1, 24), sp.Rational(3, 5) / 144)
-    assert (bc.strain_bending[0], bc.strain_shear[0]) == (sp.Rational(1, 2), sp.Rational(1, 24))
-    assert (bc.rotation[0], bc.coupling[0]) == (1, sp.Rational(1, 2))
-
-
 # -- a lone plate held by its actuator --------------------------------------------------------
 
 

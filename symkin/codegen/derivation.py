@@ -6,7 +6,8 @@ plate data and Δz of every hinge, J, J* and the positions (4.7), the hinge mode
 loop equations (5.1)/(5.3) with the signed hinges of each loop, the dyads, the first-order system
 A δ = −Φ Δz, and for every point its path, whether the loops move it, its rigid position, its
 paper-level deviation (4.8) and the link turns the other levels add; with the `loaded` level,
-the plates' stiffness, the statics of the pin linkage and the hinge forces (docs/physics.md).
+the plates' stiffness and the reduced equilibrium's unknowns, rows, hinge forces and plate
+frames (docs/physics.md, "`loaded`: Newton on the reduced equilibrium").
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from ..core import vectors as V
 from ..core.vectors import Vec
 from ..graph.structure import Structure
 from ..kinematics.analysis import Analysis
@@ -26,9 +28,7 @@ from ..model import hinges as hinge_models
 from ..model import special
 from ..model.hinges import PLATE_LENGTH, PRBM_PRESETS, THETA
 from ..model.mechanism import Load
-from ..physics.beamcolumn import BeamColumn
-from ..physics.statics import LoadedDerivation
-from ..physics.stiffness import PlateStiffness
+from ..physics.stiffness import PlateStiffness, plate_stiffness
 
 
 @dataclass(frozen=True, eq=False)
@@ -72,17 +72,17 @@ class ModelStatement:
 
 @dataclass(frozen=True, eq=False)
 class LoadedStatement:
-    """The `loaded` level (docs/physics.md): plate stiffness, the pin linkage's statics
-    A^T mu = Q and the hinge forces in the multipliers mu, as the report states them."""
+    """The `loaded` level's reduced equilibrium (docs/physics.md) as the report states it: its
+    unknowns and rows, each hinge's end force in the chord loads and each plate's mid-frame."""
 
-    beam_column: bool  # two statics passes (beam-column springs) or one
-    plates: tuple[tuple[int, PlateStiffness], ...]  # (hinge label, its plate's EI, EA, l)
+    plates: tuple[tuple[int, PlateStiffness], ...]  # (hinge label, its plate's EI, EA, κGA, l)
     loads: tuple[Load, ...]
-    springs: dict[int, sp.Symbol]  # k_a = EI_a/l_a of every plate, as symbols
-    forces: tuple[tuple[int, sp.Expr], ...]  # (a, Q_a) over the non-input hinges, springs k_a
-    multipliers: tuple[sp.Symbol, ...]  # mu, three per loop (angular, x, y)
-    hinge_forces: tuple[tuple[int, Vec, sp.Expr], ...]  # (a, n_a in mu, mid-direction angle)
-    series: BeamColumn
+    chord_loads: dict[int, tuple[sp.Symbol, sp.Symbol, sp.Symbol]]  # chord c: n_cx, n_cy, μ_c
+    balanced: tuple[int, ...]  # the non-input tree hinges: a moment balance row each
+    related: tuple[int, ...]  # the non-input chords: a moment relation row each
+    forces: tuple[tuple[int, Vec], ...]  # (a, n_a): link M's force on hinge a, in the n_c
+    frames: tuple[tuple[int, sp.Expr], ...]  # (a, β_a): every plate's mid-frame angle
+    offset: bool  # a rigid pin sits off its plate's midpoint (pin = "prbm")
 
 
 @dataclass(frozen=True, eq=False)
@@ -115,10 +115,10 @@ def derivation(
     analysis: Analysis,
     points: Sequence[str],
     moved: frozenset[str],
-    loaded: LoadedDerivation | None = None,
+    loaded: bool = False,
 ) -> Derivation:
     """The statement of `analysis` for the named points (`moved`: those the loops move), with
-    the `loaded` level's statics when `loaded` is given."""
+    the `loaded` level's reduced equilibrium when `loaded`."""
     an, kin, s = analysis, analysis.kin, analysis.structure
     J, Jstar = paper_matrices(s)
     return Derivation(
@@ -141,31 +141,59 @@ def derivation(
         rigid=an.rigid,
         linear=an.linear_system if an.deltas and moved else None,
         points=tuple(_point(an, name, name in moved) for name in points),
-        loaded=None if loaded is None else _loaded(loaded),
+        loaded=_loaded(an) if loaded else None,
     )
 
 
-def _loaded(der: LoadedDerivation) -> LoadedStatement:
-    kin = der.kin
-    springs = {
-        a: sp.Symbol(f"k_{a}", positive=True)
-        for a, h in kin.hinges.items()
-        if h.name in der.stiffness
+def _loaded(an: Analysis) -> LoadedStatement:
+    kin, s = an.kin, an.structure
+    mech = an.mechanism
+    stiffness = plate_stiffness(mech, "loaded")
+    chords = tuple(range(s.n + 1, s.m + 1))
+    chord_loads = {
+        c: (
+            sp.Symbol(f"n_{c}x", real=True),
+            sp.Symbol(f"n_{c}y", real=True),
+            sp.Symbol(f"mu_{c}", real=True),
+        )
+        for c in chords
     }
-    forces = der.generalized_forces(springs)
-    loads = der.plate_loads
+    # the forces on every moving link: its loads and the chord plates' reactions (link M of
+    # chord c exerts n_c on the plate, so the plate pushes M by -n_c and P by +n_c)
+    on_link: dict[int, Vec] = dict.fromkeys(range(s.n + 1), V.ZERO)
+    for load in mech.loads:
+        i = s.links.index(load.link)
+        on_link[i] = V.add(on_link[i], tuple(load.force))
+    for c, (nx, ny, _) in chord_loads.items():
+        h = kin.hinges[c]
+        on_link[h.M] = V.sub(on_link[h.M], (nx, ny))
+        on_link[h.P] = V.add(on_link[h.P], (nx, ny))
+    forces = []
+    for a in range(1, s.m + 1):
+        if a in chord_loads:
+            forces.append((a, chord_loads[a][:2]))
+            continue
+        # a tree hinge carries what acts on the links beyond it (pose-independent statics)
+        beyond = [i for i in range(1, s.n + 1) if a in s.tree_path(i)]
+        total = V.add(*(on_link[i] for i in beyond)) if beyond else V.ZERO
+        forces.append((a, V.scale(kin.hinges[a].sign, total)))
+    plates = tuple(
+        (a, stiffness[h.name]) for a, h in sorted(kin.hinges.items()) if h.name in stiffness
+    )
+    frames = []
+    for a, _ in plates:
+        h = kin.hinges[a]
+        delta = kin.delta[a] if a in kin.unknowns else sp.S.Zero
+        frames.append((a, kin.phi(h.P) + an.delta_phi(h.P) + h.angle + (kin.theta[a] + delta) / 2))
     return LoadedStatement(
-        beam_column=der.beam_column,
-        plates=tuple((a, der.stiffness[kin.hinges[a].name]) for a in sorted(springs)),
-        loads=tuple(der.mechanism.loads),
-        springs=springs,
-        forces=tuple(zip(kin.unknowns, forces)),
-        multipliers=der.mu,
-        hinge_forces=tuple(
-            (a, loads[a].force, kin.phi(h.P) + h.angle + kin.theta[a] / 2)
-            for a, h in sorted(kin.hinges.items())
-        ),
-        series=der.series,
+        plates=plates,
+        loads=tuple(mech.loads),
+        chord_loads=chord_loads,
+        balanced=tuple(a for a in kin.unknowns if a <= s.n),
+        related=tuple(c for c in chords if c in kin.unknowns),
+        forces=tuple(forces),
+        frames=tuple(frames),
+        offset=any(kin.hinges[a].midpoint is not None for a, _ in plates),
     )
 
 

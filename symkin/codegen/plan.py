@@ -68,7 +68,6 @@ from ..core.errors import InputError
 from ..core.levels import Level
 from ..core.settings import SOLVER, SolverSettings
 from ..kinematics.analysis import Analysis
-from ..physics.statics import loaded_derivation
 from .derivation import Derivation, derivation
 from .literals import float_literals, to_double
 from .loaded import LoadedPlan, loaded_routines, rest_routine, values2_routine
@@ -495,9 +494,8 @@ def _flat(
 
 def with_derivation(plan: Plan, analysis: Analysis) -> Plan:
     """`plan` with the statement of its derivation, for a report (the plan's points; the
-    `loaded` level's statics when the plan holds it)."""
-    # the report restates the pin linkage's statics beside the level (docs/physics.md)
-    loaded = None if plan.loaded is None else loaded_derivation(analysis)
+    `loaded` level's reduced equilibrium when the plan holds it)."""
+    loaded = plan.loaded is not None
     return dataclasses.replace(
         plan,
         derivation=derivation(analysis, plan.points, moved_points(analysis, plan.points), loaded),

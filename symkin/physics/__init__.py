@@ -3,9 +3,6 @@
 - `stiffness`: EI, EA and κGA of every plate from its E, thickness, width and nu, and its beam;
 - `plate_relation`, `reduced`: the `loaded` level, Newton on the reduced equilibrium (the
   compliant angles and the chord plates' loads, each plate by its closed-form relation);
-- `beamcolumn`, `statics`: the old linearised `loaded` (pin-linkage statics, the plates'
-  beam-column compliance on their circular arcs), left only for the generated code that still
-  derives it (symkin.codegen); to be removed when that stops;
 - `arith`, `beams`, `equilibrium`: the `equilibrium` level, every plate a geometrically exact beam
   (Reissner's, or the elastica), solved numerically (float64 continuation, mpmath polish), and
   the loads' first buckling factor (`equilibrium.buckling_factor`);

@@ -30,6 +30,7 @@ import sympy as sp
 
 from ....core import vectors as V
 from ....core.errors import SymkinError
+from ....physics import reduced
 from ....physics.equilibrium import BUCKLING_LIMIT
 from ....physics.stiffness import modulus
 from ... import templating
@@ -311,7 +312,7 @@ class Report:
         ctx["first_order_lines"] = [ln for p in ctx["points"] for ln in p["first_order"]]
         ctx["exact_lines"] = [ln for p in ctx["points"] for ln in p["exact"]]
         ctx["matrix_cols"] = max(10, s.m, s.n + 1)
-        ctx["loaded"] = self.loaded_statics()
+        ctx["loaded"] = self.loaded_equilibrium()
         return ctx
 
     def parameters(self) -> list[dict]:
@@ -761,30 +762,39 @@ class Report:
         return out
 
     # -- the loaded level ------------------------------------------------------------------------
-    def loaded_statics(self) -> dict | None:
-        """The `loaded` level's statement (docs/physics.md): the plates' stiffness, the loads, the
-        generalized forces of A^T Λ = Q, the hinge forces in Λ, the beam-column series."""
+    def loaded_equilibrium(self) -> dict | None:
+        """The `loaded` level's statement (docs/physics.md, "`loaded`: Newton on the reduced
+        equilibrium"): the plates' stiffness, the loads, the unknowns and rows, every hinge's
+        force in the chord loads and every plate's mid-frame, the solver's thresholds."""
         ld = self.d.loaded
         if ld is None:
             return None
         mech, tex = self.mech, self.tex
         unit = TEX_UNITS[mech.units]
         hinges = {h.name: h for h in mech.hinges}
-        names = {m: rf"\Lambda_{{{k}}}" for k, m in enumerate(ld.multipliers, start=1)}
+        names = {}
+        for c, (nx, ny, mu) in ld.chord_loads.items():
+            names.update({nx: rf"n_{{{c},x}}", ny: rf"n_{{{c},y}}", mu: rf"\mu_{{{c}}}"})
         ltex = tex.with_names(names)
         plates = []
         for a, stiff in ld.plates:
             h = hinges[stiff.hinge]
+            EI, length = stiff.EI, stiff.length
+            stretch = (EI / (stiff.EA * length**2), EI / (stiff.kGA * length**2))
             plates.append(
                 {
                     "a": a,
                     "name": self.hinge_name(a),
-                    "length": sci(_num(stiff.length, self.defaults)),
+                    "length": sci(_num(length, self.defaults)),
                     "thickness": sci(_num(h.thickness, self.defaults)),
                     "width": sci(_num(h.width, self.defaults)),
                     "modulus": sci(_num(modulus(h), self.defaults)),
-                    "EI": sci(_num(stiff.EI, self.defaults)),
-                    "k": sci(_num(stiff.EI / stiff.length, self.defaults)),
+                    "EI": sci(_num(EI, self.defaults)),
+                    "k": sci(_num(EI / length, self.defaults)),
+                    # the relation's stretch and shear compliances: none in the elastica
+                    "stretch": [
+                        sci(_num(e, self.defaults)) if stiff.stretches else "0" for e in stretch
+                    ],
                 }
             )
         loads = [
@@ -798,59 +808,42 @@ class Report:
             }
             for load in ld.loads
         ]
-        forces = []
-        for a, q in ld.forces:
-            forces += tex.equation(rf"Q^{{0}}_{{{a}}}" if ld.beam_column else rf"Q_{{{a}}}", q)
+        frames = dict(ld.frames)
         pairs = [
-            (rf"\mathbf{{n}}_{{{a}}} &= {ltex.table_vector(n)}", a, chi)
-            for a, n, chi in ld.hinge_forces
+            (rf"\mathbf{{n}}_{{{a}}} &= {ltex.table_vector(n)}", a, frames.get(a))
+            for a, n in ld.forces
         ]
         # side by side when every pair fits (align* shares its columns between the rows), else
-        # each direction on lines of its own
-        if all(width(f) + width(tex(chi)) + 5 <= self.width for f, _, chi in pairs):
-            hinge_forces = [rf"{f}, & \chi_{{{a}}} &= {tex(chi)}" for f, a, chi in pairs]
-        else:
-            hinge_forces = []
-            for f, a, chi in pairs:
-                hinge_forces += [f + ","] + tex.equation(rf"\chi_{{{a}}}", chi)
-        series = []
-        for lhs, key in (
-            ("s(p)", "shear"),
-            ("r(p)", "rotation"),
-            ("b(p)", "bending"),
-            ("w(p)", "bowing"),
-        ):
-            budget = self.width - width(lhs) - 2
-            series += align_lines(
-                lhs, "=", pack(_power_series(getattr(ld.series, key), "p"), budget, budget - 1)
-            )
+        # each frame on lines of its own; a pin has no plate, so no frame
+        fits = all(
+            beta is None or width(f) + width(tex(beta)) + 5 <= self.width for f, _, beta in pairs
+        )
+        forces = []
+        for f, a, beta in pairs:
+            if beta is None:
+                forces.append(f)
+            elif fits:
+                forces.append(rf"{f}, & \beta_{{{a}}} &= {tex(beta)}")
+            else:
+                forces += [f + ","] + tex.equation(rf"\beta_{{{a}}}", beta)
+        unknowns = [tex(self.d.delta[a]) for a in self.d.unknowns]
+        for c in ld.chord_loads:
+            unknowns += [rf"\mathbf{{n}}_{{{c}}}", rf"\mu_{{{c}}}"]
         return {
-            "beam_column": ld.beam_column,
             "plates": plates,
             "loads": loads,
             "forces": forces,
-            "hinge_forces": hinge_forces,
-            "series": series,
-            "loops": len(ld.multipliers) // 3,
+            "unknowns": ", ".join(f"${u}$" for u in unknowns),  # each breakable from the next
+            "chords": [str(c) for c in ld.chord_loads],
+            "balanced": [str(a) for a in ld.balanced],
+            "related": [str(c) for c in ld.related],
+            "offset": ld.offset,
             "unit": unit,
-            "refined": any(lv.name == "loaded_refined" for lv in self.plan.levels)
-            and bool(self.d.unknowns),
+            "max_turn": gnum(reduced.MAX_TURN),
+            "p_limit": gnum(round(100 * reduced.P_LIMIT)),
+            "est_factor": gnum(reduced.EST_FACTOR),
+            "est_limit": gnum(round(100 * reduced.EST_LIMIT)),
         }
-
-
-def _power_series(coefficients: Sequence[sp.Rational], x: str) -> list[str]:
-    r"""The terms of Σ c_k x^k in ascending powers with exact fractions, then ``+ O(x^n)``, for
-    :func:`pack`: the beam-column's coefficients are rationals, shown as derived."""
-    out: list[str] = []
-    for k, c in enumerate(coefficients):
-        if c == 0:
-            continue
-        sign = "-" if c < 0 else ("+" if out else "")
-        mag = abs(c)
-        power = "" if k == 0 else (x if k == 1 else f"{x}^{{{k}}}")
-        body = sp.latex(mag) if k == 0 or mag != 1 else ""
-        out.append(f"{sign} {body}{power}".strip())
-    return out + [f"+ O({x}^{{{len(coefficients)}}})"]
 
 
 def _elastica_lines(tex: Tex, t: sp.Symbol) -> list[str]:
