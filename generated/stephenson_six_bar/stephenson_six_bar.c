@@ -3,7 +3,7 @@
  * Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
  * Points: D; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_dev1 60, loaded_plates2 623, loaded_system2 3042, loaded_dev2 143, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, plate_relation4 312, plate_relation2 190.
+ * Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_dev1 60, loaded_plates2 623, loaded_system2 3042, loaded_dev2 143, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, plate_relation4 312, plate_values2 62, plate_rest4 39.
  */
 #include "stephenson_six_bar.h"
 
@@ -74,6 +74,53 @@ static double symkin_arck(double x)
     b = sin(x) / x - cos(x);
     b = b / x2;
     return b;
+}
+
+/* h(p) = T(p) = tanh(u)/u, u = sqrt(p)/2 (tan(v)/v, v = sqrt(-p)/2, below 0) for p < 16.0, 1 - tanh(u) from it on: for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out. */
+static double symkin_bcol_h(double p)
+{
+    double u;
+    if (p > -4.0 && p < 16.0) {
+        const double d = p - 6.0;
+        const double d2 = d * d;
+        const double d4 = d2 * d2;
+        const double d8 = d4 * d4;
+        const double r = 1.0 / (p + 9.869604401089358);
+        return ((((10.897864068210225 + d * 0.16556156881006512) + (-0.0009157434227891026 + d * 8.365114438681788e-06) * d2) + ((-8.437823084425284e-08 + d * 8.763390715589521e-10) + (-9.191007821271998e-12 + d * 9.672991207222496e-14) * d2) * d4) + (((-1.0193179699964376e-15 + d * 1.0746329406338888e-17) + (-1.1324419365159025e-19 + d * 1.1940538461574364e-21) * d2) + (-1.310325228057343e-23 + d * 1.385670151299953e-25) * d4) * d8) * (r);
+    }
+    if (p >= 16.0) {
+        const double e = exp(-sqrt(p));
+        return 2.0 * e / (1.0 + e);
+    }
+    u = 0.5 * sqrt(-p);
+    return tan(u) / u;
+}
+
+/* bcol_a(p) = p w(p)/(3 T^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (12 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
+static double symkin_bcol_a_at(double p, double h)
+{
+    const double d = p - 6.0;
+    const double d2 = d * d;
+    const double d4 = d2 * d2;
+    const double d8 = d4 * d4;
+    const double s = 1.0 / (p + 39.47841760435743);
+    if (p > -4.0 && p < 16.0) {
+        return ((((2.360461888894849 + d * 0.032905372888943005) + (4.285169200537235e-05 + d * -3.2723308080295325e-07) * d2) + ((2.5572292767146607e-09 + d * -1.9472391567318698e-11) + (1.4390666375039185e-13 + d * -1.0362014406596994e-15) * d2) * d4) + ((7.303641586475798e-18 + d * -5.060739353616422e-20) + (3.5059768868245323e-22 + d * -2.3710003624268237e-24) * d2) * d8) * (p * s * s);
+    }
+    if (p >= 16.0) {
+        const double u = 0.5 * sqrt(p);
+        const double tau = 1.0 - h;
+        const double sigma = h * (2.0 - h);
+        return (((-12.0 + u * (8.0)) + sigma * (u * (4.0))) * (1.0 + tau) - sigma * (-12.0)) / (((u * (192.0)) + sigma * (u * (-192.0))) * (1.0 + tau));
+    }
+    if (!(p > -9.869604401089358)) return NAN;
+    return ((12.0) + h * ((-12.0) + h * (p * (-1.0)))) / (h * (h * (p * (48.0))));
+}
+
+/* bcol_a(p) = p w(p)/(3 T^2). */
+static double symkin_bcol_a(double p)
+{
+    return symkin_bcol_a_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_a_d1(p) = d^1/dp^1 of p w(p)/(3 T^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (13 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -289,26 +336,6 @@ static double symkin_bcol_e3c_d1_at(double p, double h)
     return ((-960.0) + h * ((1152.0) + h * ((-144.0 + p * (528.0)) + h * ((-48.0 + p * (-544.0)) + h * ((p * (56.0 + p * (-84.0))) + h * ((p * (20.0 + p * (64.0))) + h * (p * (p * (-5.0 + p * (3.0)))))))))) / (h * (h * (h * (h * (h * (h * (p * (p * (p * (12288.0))))))))));
 }
 
-/* h(p) = T(p) = tanh(u)/u, u = sqrt(p)/2 (tan(v)/v, v = sqrt(-p)/2, below 0) for p < 16.0, 1 - tanh(u) from it on: for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out. */
-static double symkin_bcol_h(double p)
-{
-    double u;
-    if (p > -4.0 && p < 16.0) {
-        const double d = p - 6.0;
-        const double d2 = d * d;
-        const double d4 = d2 * d2;
-        const double d8 = d4 * d4;
-        const double r = 1.0 / (p + 9.869604401089358);
-        return ((((10.897864068210225 + d * 0.16556156881006512) + (-0.0009157434227891026 + d * 8.365114438681788e-06) * d2) + ((-8.437823084425284e-08 + d * 8.763390715589521e-10) + (-9.191007821271998e-12 + d * 9.672991207222496e-14) * d2) * d4) + (((-1.0193179699964376e-15 + d * 1.0746329406338888e-17) + (-1.1324419365159025e-19 + d * 1.1940538461574364e-21) * d2) + (-1.310325228057343e-23 + d * 1.385670151299953e-25) * d4) * d8) * (r);
-    }
-    if (p >= 16.0) {
-        const double e = exp(-sqrt(p));
-        return 2.0 * e / (1.0 + e);
-    }
-    u = 0.5 * sqrt(-p);
-    return tan(u) / u;
-}
-
 /* bcol_invt(p) = 1/T(p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (12 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_invt_at(double p, double h)
 {
@@ -328,6 +355,12 @@ static double symkin_bcol_invt_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return (1.0) / (h * (1.0));
+}
+
+/* bcol_invt(p) = 1/T(p). */
+static double symkin_bcol_invt(double p)
+{
+    return symkin_bcol_invt_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_invt_d1(p) = d^1/dp^1 of 1/T(p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (12 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -372,6 +405,12 @@ static double symkin_bcol_s_at(double p, double h)
     return ((1.0) + h * (-1.0)) / (p * (1.0));
 }
 
+/* bcol_s(p) = (1 - T)/p. */
+static double symkin_bcol_s(double p)
+{
+    return symkin_bcol_s_at(p, symkin_bcol_h(p));
+}
+
 /* bcol_w(p) = (12 (1 - T)/p - T^2)/(16 p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_w_at(double p, double h)
 {
@@ -391,6 +430,12 @@ static double symkin_bcol_w_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return ((12.0) + h * ((-12.0) + h * (p * (-1.0)))) / (p * (p * (16.0)));
+}
+
+/* bcol_w(p) = (12 (1 - T)/p - T^2)/(16 p). */
+static double symkin_bcol_w(double p)
+{
+    return symkin_bcol_w_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_w_d1(p) = d^1/dp^1 of (12 (1 - T)/p - T^2)/(16 p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -442,6 +487,24 @@ static double symkin_cosr2(double x)
     }
     b = -2.0 * (sin(0.5 * x) / x) * (sin(0.5 * x) / x);
     b = (b + 0.5) / x2;
+    return b;
+}
+
+/* cosr4(x): cosr4(x) = (cos x - sum_(k<4) (-1)^k x^(2k)/(2k)!) / x^8; Taylor series (14 terms, Estrin's form) for |x| < 5.0, else the nested elementary formula. */
+static double symkin_cosr4(double x)
+{
+    const double x2 = x * x;
+    double b;
+    if (fabs(x) < 5.0) {
+        const double x4 = x2 * x2;
+        const double x8 = x4 * x4;
+        const double x16 = x8 * x8;
+        return (((2.48015873015873e-05 + x2 * -2.755731922398589e-07) + (2.08767569878681e-09 + x2 * -1.1470745597729725e-11) * x4) + ((4.779477332387385e-14 + x2 * -1.5619206968586225e-16) + (4.110317623312165e-19 + x2 * -8.896791392450574e-22) * x4) * x8) + (((1.6117375710961184e-24 + x2 * -2.4795962632247976e-27) + (3.279889237069838e-30 + x2 * -3.7699876288159054e-33) * x4) + (3.8003907548547434e-36 + x2 * -3.387157535521162e-39) * x8) * x16;
+    }
+    b = -2.0 * (sin(0.5 * x) / x) * (sin(0.5 * x) / x);
+    b = (b + 0.5) / x2;
+    b = (b - 0.041666666666666664) / x2;
+    b = (b + 0.001388888888888889) / x2;
     return b;
 }
 
@@ -509,6 +572,43 @@ static double symkin_sinr2(double x)
     b = sin(x) / x;
     b = (b - 1.0) / x2;
     b = (b + 0.16666666666666666) / x2;
+    return b;
+}
+
+/* sinr3(x): sinr3(x) = (sin x - sum_(k<3) (-1)^k x^(2k+1)/(2k+1)!) / x^7; Taylor series (13 terms, Estrin's form) for |x| < 4.5, else the nested elementary formula. */
+static double symkin_sinr3(double x)
+{
+    const double x2 = x * x;
+    double b;
+    if (fabs(x) < 4.5) {
+        const double x4 = x2 * x2;
+        const double x8 = x4 * x4;
+        const double x16 = x8 * x8;
+        return (((-0.0001984126984126984 + x2 * 2.7557319223985893e-06) + (-2.505210838544172e-08 + x2 * 1.6059043836821613e-10) * x4) + ((-7.647163731819816e-13 + x2 * 2.8114572543455206e-15) + (-8.22063524662433e-18 + x2 * 1.9572941063391263e-20) * x4) * x8) + (((-3.868170170630684e-23 + x2 * 6.446950284384474e-26) + (-9.183689863795546e-29 + x2 * 1.1309962886447716e-31) * x4) + (-1.216125041553518e-34) * x8) * x16;
+    }
+    b = sin(x) / x;
+    b = (b - 1.0) / x2;
+    b = (b + 0.16666666666666666) / x2;
+    b = (b - 0.008333333333333333) / x2;
+    return b;
+}
+
+/* sinr4(x): sinr4(x) = (sin x - sum_(k<4) (-1)^k x^(2k+1)/(2k+1)!) / x^9; Taylor series (13 terms, Estrin's form) for |x| < 5.0, else the nested elementary formula. */
+static double symkin_sinr4(double x)
+{
+    const double x2 = x * x;
+    double b;
+    if (fabs(x) < 5.0) {
+        const double x4 = x2 * x2;
+        const double x8 = x4 * x4;
+        const double x16 = x8 * x8;
+        return (((2.7557319223985893e-06 + x2 * -2.505210838544172e-08) + (1.6059043836821613e-10 + x2 * -7.647163731819816e-13) * x4) + ((2.8114572543455206e-15 + x2 * -8.22063524662433e-18) + (1.9572941063391263e-20 + x2 * -3.868170170630684e-23) * x4) * x8) + (((6.446950284384474e-26 + x2 * -9.183689863795546e-29) + (1.1309962886447716e-31 + x2 * -1.216125041553518e-34) * x4) + (1.151633562077195e-37) * x8) * x16;
+    }
+    b = sin(x) / x;
+    b = (b - 1.0) / x2;
+    b = (b + 0.16666666666666666) / x2;
+    b = (b - 0.008333333333333333) / x2;
+    b = (b + 0.0001984126984126984) / x2;
     return b;
 }
 
@@ -6338,83 +6438,51 @@ static void sk_plate_relation4(const double *plate, double *out)
     out[11] = -_tmp77 - 0.5*_tmp0 - 0.5*_tmp17 - 0.5*_tmp29 - 0.5*_tmp59 - _tmp60*_tmp75 + 0.5*_tmp1*_tmp11 + 0.5*_tmp39*_tmp4 + 0.5*_tmp79*p;
 }
 
-/* one plate's relation at order 2: (along, across, omega) and their partials by (theta, p, f) (190 operations) */
-static void sk_plate_relation2(const double *plate, double *out)
+/* one plate's relation at order 2, values alone: (along, across, omega) (62 operations) */
+static void sk_plate_values2(const double *plate, double *out)
 {
     const double theta = plate[0];
     const double p = plate[1];
     const double f = plate[2];
     const double e_a = plate[3];
     const double e_s = plate[4];
-    const double theta_sq = pow(theta, 2);
-    const double _tmp0 = e_a*p;
-    const double _tmp1 = -2*e_s + 2*e_a;
-    const double _tmp2 = _tmp1*p;
-    const double _tmp3 = pow(theta_sq, 2);
-    const double _tmp4 = 0.0005208333333333333*_tmp3;
-    const double _tmp5 = e_a - e_s;
-    const double _tmp6 = _tmp5*p;
-    const double _tmp7 = 1 + _tmp6;
-    const double _tmp8 = _tmp7*p;
-    const double _tmp9 = symkin_bcol_h(_tmp8);
-    const double _tmp10 = symkin_bcol_s_at(_tmp8, _tmp9);
-    const double _tmp11 = pow(f, 2);
-    const double _tmp12 = _tmp10*_tmp11;
-    const double _tmp13 = _tmp5*_tmp7;
-    const double _tmp14 = _tmp12*_tmp13;
-    const double _tmp15 = pow(_tmp7, 2);
-    const double _tmp16 = _tmp11*_tmp15;
-    const double _tmp17 = 1 + _tmp2;
-    const double _tmp18 = symkin_bcol_w_at(_tmp8, _tmp9);
-    const double _tmp19 = _tmp17*_tmp18;
-    const double _tmp20 = pow(theta, 2);
-    const double _tmp21 = symkin_bcol_invt_at(_tmp8, _tmp9);
-    const double _tmp22 = pow(_tmp21, 2);
-    const double _tmp23 = -0.041666666666666664*_tmp2 + 0.3333333333333333*_tmp17*_tmp18*_tmp22*_tmp7*p;
-    const double _tmp24 = _tmp20*_tmp23;
-    const double _tmp25 = _tmp0 + _tmp14 + _tmp24 + _tmp2*_tmp4 - _tmp16*_tmp19;
-    const double _tmp26 = e_s*f;
-    const double _tmp27 = _tmp10*_tmp15;
-    const double _tmp28 = _tmp27*f;
-    const double _tmp29 = _tmp26 + _tmp28;
-    const double _tmp32 = 0.25*_tmp20;
-    const double _tmp30 = 0.5*theta;
-    const double _tmp31 = symkin_sinr5(_tmp30);
-    const double _tmp33 = 2.7557319223985893e-06 + _tmp31*_tmp32;
-    const double _tmp34 = -0.0001984126984126984 + _tmp32*_tmp33;
-    const double _tmp35 = 0.09375*_tmp34*theta*pow(theta_sq, 2);
-    const double _tmp36 = symkin_cosr5(_tmp30);
-    const double _tmp37 = 5.5114638447971785e-06 + _tmp32*_tmp36 - 1.75*_tmp20*_tmp31;
-    const double _tmp38 = 0.00390625*theta*(theta_sq*theta_sq*theta_sq);
-    const double _tmp39 = _tmp37*_tmp38;
-    const double _tmp40 = symkin_sinr0(_tmp30);
-    const double _tmp41 = 0.5*f;
-    const double _tmp42 = 2*_tmp23*theta + 0.0020833333333333333*_tmp2*(theta*theta*theta);
-    const double _tmp43 = _tmp1*_tmp18;
-    const double _tmp44 = 2*_tmp13;
-    const double _tmp45 = 1 + 2*_tmp6;
-    const double _tmp46 = _tmp18*_tmp45;
-    const double _tmp47 = _tmp1*_tmp7;
-    const double _tmp48 = _tmp17*_tmp45;
-    const double _tmp49 = e_a + _tmp1*_tmp4 + _tmp12*pow(_tmp5, 2) + _tmp20*(0.08333333333333333*e_s - 0.08333333333333333*e_a + _tmp48*symkin_bcol_a_d1_at(_tmp8, _tmp9) + 0.3333333333333333*_tmp22*_tmp43*_tmp8) - _tmp16*_tmp43 - _tmp11*_tmp19*_tmp47 - _tmp11*_tmp44*_tmp46 - _tmp16*_tmp48*symkin_bcol_w_d1_at(_tmp8, _tmp9);
-    const double _tmp50 = _tmp10*f;
-    const double _tmp51 = 2*_tmp15*f;
-    const double _tmp52 = _tmp44*_tmp50 - _tmp19*_tmp51;
-    const double _tmp53 = _tmp47*_tmp50 - _tmp46*_tmp51;
-    const double _tmp54 = _tmp27 + e_s;
-    const double _tmp55 = 0.25*theta;
-    out[0] = _tmp25;
-    out[1] = _tmp29;
-    out[2] = _tmp21*theta - _tmp41*(_tmp25 + _tmp40) - p*(_tmp35 + _tmp39) + 0.5*_tmp29*p;
-    out[3] = _tmp42;
-    out[4] = _tmp49;
-    out[5] = _tmp52;
+    const double _tmp0 = p*(-2*e_s + 2*e_a);
+    const double _tmp1 = pow(f, 2);
+    const double _tmp2 = e_a - e_s;
+    const double _tmp3 = 1 + _tmp2*p;
+    const double _tmp4 = _tmp3*p;
+    const double _tmp5 = symkin_bcol_s(_tmp4);
+    const double _tmp6 = 1 + _tmp0;
+    const double _tmp7 = pow(_tmp3, 2);
+    const double _tmp8 = e_a*p + pow(theta, 2)*(-0.041666666666666664*_tmp0 + _tmp6*symkin_bcol_a(_tmp4)) + 0.0005208333333333333*_tmp0*pow(theta, 4) + _tmp1*_tmp2*_tmp3*_tmp5 - _tmp1*_tmp6*_tmp7*symkin_bcol_w(_tmp4);
+    const double _tmp9 = e_s*f + _tmp5*_tmp7*f;
+    const double _tmp10 = 0.5*theta;
+    out[0] = _tmp8;
+    out[1] = _tmp9;
+    out[2] = theta*symkin_bcol_invt(_tmp4) - p*(0.00390625*pow(theta, 7)*(-7*symkin_sinr4(_tmp10) + symkin_cosr4(_tmp10)) + 0.09375*pow(theta, 5)*symkin_sinr3(_tmp10)) + 0.5*_tmp9*p - 0.5*f*(_tmp8 + symkin_sinr0(_tmp10));
+}
+
+/* one plate's relation at order 4 where it carries no force (p = f = 0): (along, across, omega) and their partials by (theta, p, f) (39 operations) */
+static void sk_plate_rest4(const double *plate, double *out)
+{
+    const double theta = plate[0];
+    const double e_a = plate[3];
+    const double e_s = plate[4];
+    const double _tmp0 = pow(theta, 2);
+    const double _tmp1 = pow(theta, 4);
+    const double _tmp2 = 0.5*theta;
+    out[0] = 0;
+    out[1] = 0;
+    out[2] = theta;
+    out[3] = 0;
+    out[4] = e_a + 4.96031746031746e-05*_tmp1*(-1 - 21*e_s + 21*e_a) + 0.001388888888888889*_tmp0*(1 - 60*e_a + 60*e_s);
+    out[5] = 0;
     out[6] = 0;
-    out[7] = _tmp53;
-    out[8] = _tmp54;
-    out[9] = _tmp21 - _tmp41*(_tmp42 + _tmp55*(-symkin_sinr1(_tmp30) + symkin_cosr1(_tmp30))) - p*(_tmp38*(-_tmp55*(_tmp33 + 8*_tmp36) - 1.75*theta*(_tmp36 - 9*_tmp31)) + 0.05078125*_tmp37*(theta_sq*theta_sq*theta_sq) + 0.46875*_tmp3*_tmp34);
-    out[10] = -_tmp35 - _tmp39 + 0.5*_tmp26 + 0.5*_tmp28 - _tmp41*_tmp49 + 0.5*_tmp53*p + _tmp45*theta*symkin_bcol_invt_d1_at(_tmp8, _tmp9);
-    out[11] = -0.5*_tmp0 - 0.5*_tmp14 - 0.5*_tmp24 - 0.5*_tmp40 - _tmp41*_tmp52 + 0.5*_tmp54*p - 0.00026041666666666666*_tmp2*_tmp3 + 0.5*_tmp11*_tmp15*_tmp17*_tmp18;
+    out[7] = 0;
+    out[8] = 0.08333333333333333 + e_s - 0.004166666666666667*_tmp0;
+    out[9] = 1;
+    out[10] = 0.00026041666666666666*theta*(320 - 8*_tmp0 - 360*_tmp1*symkin_sinr3(_tmp2) + 15*pow(theta, 6)*(-symkin_cosr4(_tmp2) + 7*symkin_sinr4(_tmp2)));
+    out[11] = -0.5*symkin_sinr0(_tmp2);
 }
 
 /* symkin runtime (templates/c/runtime.c, docs/runtime.md; tested on its own by
@@ -7226,6 +7294,7 @@ typedef struct {
     int unknowns;       /* non-input hinges: x's first entries, delta / scale */
     double tol, max_turn, p_limit, est_factor, est_limit;
     int max_iter;
+    int loads;          /* the load factor t enters the routines (the file has loads) */
 } sk_loaded;
 
 /* One variant at one configuration. */
@@ -7236,10 +7305,10 @@ typedef struct {
     const double *params;
 } sk_red;
 
-/* The half plates' inputs (ins: 5 per half plate, then their x-Jacobian) and the plate relation
-   at `order` (rel: 12 per half plate, values then partials) at (x, theta, t); xt: x, then t. */
-static void sk_red_plates(const sk_red *r, const double *x, const double *theta, double t,
-                          int order, double *xt, double *ins, double *rel)
+/* The half plates' inputs (ins: 5 per half plate, then their x-Jacobian) at (x, theta, t); xt:
+   x, then t. */
+static void sk_red_inputs(const sk_red *r, const double *x, const double *theta, double t,
+                          double *xt, double *ins)
 {
     int i;
     for (i = 0; i < r->v->size; ++i) {
@@ -7247,50 +7316,66 @@ static void sk_red_plates(const sk_red *r, const double *x, const double *theta,
     }
     xt[r->v->size] = t;
     r->v->plates(xt, theta, r->params, ins);
-    for (i = 0; i < r->v->plates_n; ++i) {
-        if (order == 4) {
-            sk_plate_relation4(ins + 5 * i, rel + 12 * i);
-        } else {
-            sk_plate_relation2(ins + 5 * i, rel + 12 * i);
-        }
-    }
 }
 
-/* The plates' values (along, across, omega), one after the other, from rel. */
-static void sk_red_values(const sk_red *r, const double *rel, double *vals)
+/* The plate relation at order 4 (rel: 12 per half plate, values then partials) of the inputs
+   ins, and its values (along, across, omega), one half plate after the other, into vals. */
+static void sk_red_relation(const sk_red *r, const double *ins, double *rel, double *vals)
 {
     int i, j;
     for (i = 0; i < r->v->plates_n; ++i) {
+        if (ins[5 * i + 1] == 0.0 && ins[5 * i + 2] == 0.0) {
+            /* no force on the plate (x = 0 without loads, the unloaded state): the relation's
+               few terms that remain */
+            sk_plate_rest4(ins + 5 * i, rel + 12 * i);
+        } else {
+            sk_plate_relation4(ins + 5 * i, rel + 12 * i);
+        }
         for (j = 0; j < 3; ++j) {
             vals[3 * i + j] = rel[12 * i + j];
         }
     }
 }
 
-/* The residual R at `order` and, with jac not NULL, its Jacobian (order 4, n x n row-major):
-   dR/dx + dR/d(plates) . the plates' partials . d(theta_c, p, f)/dx. */
-static void sk_red_system(const sk_red *r, const double *x, const double *theta, double t,
-                          int order, double *res, double *jac)
+/* The plate relation at order 2, its values alone (the truncation estimate's), into vals. */
+static void sk_red_values2(const sk_red *r, const double *ins, double *vals)
+{
+    int i;
+    for (i = 0; i < r->v->plates_n; ++i) {
+        sk_plate_values2(ins + 5 * i, vals + 3 * i);
+    }
+}
+
+/* One evaluation of the system at order 4 (x, theta, t), kept for what follows it: the plates'
+   inputs and relation, the system's output, J's LU and its determinant's sign. The last Newton
+   step's evaluation also gives the acceptance its sign and the truncation estimate its J (the
+   Python solver's rule: J of the step that converged), and the solution's plate values by one
+   first-order correction (the step is below tol: the remainder is below rounding). */
+typedef struct {
+    double xt[SK_RN + 1], ins[SK_OUT], rel[12 * SK_RS], sys[SK_OUT], lu[SK_RN * SK_RN + 1];
+    int piv[SK_RN + 1];
+    double sign;  /* det J's: 1, -1, NaN where J is singular or not finite */
+} sk_red_state;
+
+/* st at (x, theta, t): 0, or 1 where J is singular or not finite (st->sign NaN). J = dR/dx +
+   dR/d(plates) . the plates' partials . d(theta_c, p, f)/dx, n x n row-major. */
+static int sk_red_eval(const sk_red *r, const double *x, const double *theta, double t,
+                       sk_red_state *st)
 {
     const int n = r->v->size, ns = r->v->plates_n;
-    double xt[SK_RN + 1], ins[SK_OUT], rel[12 * SK_RS], vals[3 * SK_RS], sys[SK_OUT];
+    double vals[3 * SK_RS];
+    double *jac = st->lu;
     int i, j, k, c;
-    sk_red_plates(r, x, theta, t, order, xt, ins, rel);
-    sk_red_values(r, rel, vals);
-    r->v->system(xt, theta, vals, r->params, sys);
-    for (i = 0; i < n; ++i) {
-        res[i] = sys[i];
-    }
-    if (jac == NULL) {
-        return;
-    }
+    sk_red_inputs(r, x, theta, t, st->xt, st->ins);
+    sk_red_relation(r, st->ins, st->rel, vals);
+    r->v->system(st->xt, theta, vals, r->params, st->sys);
     for (i = 0; i < n * n; ++i) {
-        jac[i] = sys[n + i];
+        jac[i] = st->sys[n + i];
     }
     for (i = 0; i < n; ++i) {
-        const double *jo = sys + n + n * n + i * 3 * ns;
+        const double *jo = st->sys + n + n * n + i * 3 * ns;
         for (k = 0; k < ns; ++k) {
-            const double *part = rel + 12 * k + 3, *din = ins + 5 * ns + 3 * k * n;
+            const double *part = st->rel + 12 * k + 3, *din = st->ins + 5 * ns + 3 * k * n;
             double w[3];
             for (c = 0; c < 3; ++c) {
                 w[c] = jo[3 * k] * part[c] + jo[3 * k + 1] * part[3 + c]
@@ -7301,42 +7386,46 @@ static void sk_red_system(const sk_red *r, const double *x, const double *theta,
             }
         }
     }
-}
-
-/* The sign of det J at (x, theta, t): 1, -1, or NaN where J is singular or not finite. */
-static double sk_red_sign(const sk_red *r, const double *x, const double *theta, double t)
-{
-    double res[SK_RN + 1], jac[SK_RN * SK_RN + 1], sign = 1.0;
-    int piv[SK_RN + 1], i;
-    const int n = r->v->size;
-    sk_red_system(r, x, theta, t, 4, res, jac);
-    if (sk_lu(n, jac, piv)) {
-        return NAN;
+    st->sign = NAN;
+    if (sk_lu(n, jac, st->piv)) {
+        return 1;
     }
+    st->sign = 1.0;
     for (i = 0; i < n; ++i) {
         if (jac[i * n + i] < 0.0) {
-            sign = -sign;
+            st->sign = -st->sign;
         }
-        if (piv[i] != i) {
-            sign = -sign;
+        if (st->piv[i] != i) {
+            st->sign = -st->sign;
         }
     }
-    return sign;
+    return 0;
 }
 
 /* Newton from x at (theta, t): 0 converged, 1 not (a singular or non-finite Jacobian, a step
-   turning a hinge by more than max_turn, a non-finite iterate, too many steps). */
-static int sk_red_newton(const sk_red *r, double *x, const double *theta, double t)
+   turning a hinge by more than max_turn, a non-finite iterate, too many steps). st: the last
+   step's evaluation; first: det J's sign at the first step (NaN where it was singular). */
+static int sk_red_newton(const sk_red *r, double *x, const double *theta, double t,
+                         sk_red_state *st, double *first)
 {
     const int n = r->v->size, nu = r->l->unknowns;
-    double res[SK_RN + 1], jac[SK_RN * SK_RN + 1], prev = HUGE_VAL;
+    double res[SK_RN + 1], prev = HUGE_VAL;
     int it, i;
+    *first = NAN;
     for (it = 1; it <= r->l->max_iter; ++it) {
         double turn = 0.0, size = 0.0, top = 0.0;
-        sk_red_system(r, x, theta, t, 4, res, jac);
-        if (sk_solve(n, jac, 1, res)) {
+        const int singular = sk_red_eval(r, x, theta, t, st);
+        if (it == 1) {
+            *first = st->sign;
+        }
+        if (singular) {
             return 1;
         }
+        /* sk_lu then sk_lu_solve: sk_solve's operations, the factors kept */
+        for (i = 0; i < n; ++i) {
+            res[i] = st->sys[i];
+        }
+        sk_lu_solve(n, st->lu, st->piv, res);
         for (i = 0; i < nu; ++i) {
             if (fabs(res[i]) > turn) {
                 turn = fabs(res[i]);
@@ -7370,13 +7459,13 @@ static int sk_red_newton(const sk_red *r, double *x, const double *theta, double
     return 1;
 }
 
-/* A converged x on the branch followed: det J of the sign `sign`, every compliant angle within
-   (-pi, pi). */
-static int sk_red_accept(const sk_red *r, const double *x, const double *theta, double t,
-                         double sign)
+/* A converged x on the branch followed: det J of the sign `sign` (J of the last Newton step,
+   st), every compliant angle within (-pi, pi). */
+static int sk_red_accept(const sk_red *r, const double *x, const double *theta,
+                         const sk_red_state *st, double sign)
 {
     int i;
-    if (!(sk_red_sign(r, x, theta, t) == sign)) {
+    if (!(st->sign == sign)) {
         return 0;
     }
     for (i = 0; i < SK_M; ++i) {
@@ -7415,18 +7504,33 @@ static int sk_red_rigid(const sk_mechanism *m, const double *inputs, const doubl
 }
 
 /* The deviation (dev: every point's) at the solution x and the refusals: 0, 1 a plate at
-   p_limit of its sway buckling load (or J singular there), 4 the truncation estimate above
-   est_limit. */
-static int sk_red_answer(const sk_red *r, const double *x, const double *theta, double *dev)
+   p_limit of its sway buckling load, 4 the truncation estimate above est_limit. st: the last
+   Newton step's evaluation at (theta, 1), a step below tol from x (NULL where x has no entries). */
+static int sk_red_answer(const sk_red *r, const double *x, const double *theta,
+                         const sk_red_state *st, double *dev)
 {
     const int n = r->v->size, ns = r->v->plates_n;
-    double xt[SK_RN + 1], ins[SK_OUT], rel[12 * SK_RS], vals[3 * SK_RS];
-    double x2[SK_RN + 1], res[SK_RN + 1], jac[SK_RN * SK_RN + 1], dev2[2 * SK_RP + 1];
+    double xt[SK_RN + 1], ins[SK_OUT], rel[12 * SK_RS], vals[3 * SK_RS], sys[SK_OUT];
+    double x2[SK_RN + 1], res[SK_RN + 1], dev2[2 * SK_RP + 1];
     double worst = 0.0, e24 = 0.0;
     const double count = r->v->count;
-    int piv[SK_RN + 1], i;
-    sk_red_plates(r, x, theta, 1.0, 4, xt, ins, rel);
-    sk_red_values(r, rel, vals);
+    int i, j;
+    sk_red_inputs(r, x, theta, 1.0, xt, ins);
+    if (st == NULL) {
+        sk_red_relation(r, ins, rel, vals);
+    } else {
+        /* the plate relation at x from st's by its partials: x moved by the last step only,
+           below tol, so the remainder (its square) is below rounding */
+        for (i = 0; i < ns; ++i) {
+            const double *at = st->rel + 12 * i, *part = at + 3;
+            const double d0 = ins[5 * i] - st->ins[5 * i], d1 = ins[5 * i + 1] - st->ins[5 * i + 1];
+            const double d2 = ins[5 * i + 2] - st->ins[5 * i + 2];
+            for (j = 0; j < 3; ++j) {
+                vals[3 * i + j] = at[j] + (part[3 * j] * d0 + part[3 * j + 1] * d1
+                                           + part[3 * j + 2] * d2);
+            }
+        }
+    }
     r->v->dev(xt, theta, vals, r->params, dev);
     for (i = 0; i < ns; ++i) {
         const double p = ins[5 * i + 1], g = 1.0 + (ins[5 * i + 3] - ins[5 * i + 4]) * p;
@@ -7435,23 +7539,24 @@ static int sk_red_answer(const sk_red *r, const double *x, const double *theta, 
             worst = w;
         }
     }
-    /* the truncation estimate: one Newton step of the order-2 equations from the solution */
+    /* the truncation estimate: one Newton step of the order-2 equations from the solution, with
+       the last Newton step's J (its LU, st) */
     for (i = 0; i < n; ++i) {
         x2[i] = x[i];
     }
     if (n > 0) {
-        sk_red_system(r, x, theta, 1.0, 4, res, jac);
-        sk_red_system(r, x, theta, 1.0, 2, res, NULL);
-        if (sk_lu(n, jac, piv)) {
-            return 1;
+        sk_red_values2(r, ins, vals);
+        r->v->system(xt, theta, vals, r->params, sys);
+        for (i = 0; i < n; ++i) {
+            res[i] = sys[i];
         }
-        sk_lu_solve(n, jac, piv, res);
+        sk_lu_solve(n, st->lu, st->piv, res);
         for (i = 0; i < n; ++i) {
             x2[i] -= res[i];
         }
     }
-    sk_red_plates(r, x2, theta, 1.0, 2, xt, ins, rel);
-    sk_red_values(r, rel, vals);
+    sk_red_inputs(r, x2, theta, 1.0, xt, ins);
+    sk_red_values2(r, ins, vals);
     r->v->dev(xt, theta, vals, r->params, dev2);
     for (i = 0; i < SK_RP; ++i) {
         const double size = hypot(dev[2 * i], dev[2 * i + 1]);
@@ -7477,16 +7582,27 @@ static int sk_red_solve(const sk_red *r, const double *inputs, const double *the
                         double *dev)
 {
     const int n = r->v->size;
-    double sign0;
+    sk_red_state st;
+    double sign0, first;
     int i, ok;
     for (i = 0; i < n; ++i) {
         x[i] = 0.0;
     }
     if (n == 0) {
-        return sk_red_answer(r, x, theta, dev);
+        return sk_red_answer(r, x, theta, NULL, dev);
     }
-    sign0 = sk_red_sign(r, x, theta, 0.0);
-    ok = !sk_red_newton(r, x, theta, 1.0) && sk_red_accept(r, x, theta, 1.0, sign0);
+    /* det J's sign at the unloaded state (x = 0, t = 0): without loads t enters nowhere and it
+       is the first Newton step's (the same J), else one evaluation of its own */
+    sign0 = NAN;
+    if (r->l->loads) {
+        sk_red_eval(r, x, theta, 0.0, &st);
+        sign0 = st.sign;
+    }
+    ok = !sk_red_newton(r, x, theta, 1.0, &st, &first);
+    if (!r->l->loads) {
+        sign0 = first;
+    }
+    ok = ok && sk_red_accept(r, x, theta, &st, sign0);
     if (!ok) {
         /* continuation: inputs and loads scaled together by s from the as-fabricated pose */
         double s = 0.0, ds = 0.25, sign, th_s[SK_M], th_1[SK_M], guess[SK_RN + 1];
@@ -7496,15 +7612,23 @@ static int sk_red_solve(const sk_red *r, const double *inputs, const double *the
         for (i = 0; i < n; ++i) {
             x[i] = 0.0;
         }
-        sign = sk_red_sign(r, x, th_s, 0.0);
+        sk_red_eval(r, x, th_s, 0.0, &st);
+        sign = st.sign;
         while (s < 1.0) {
             double s1;
-            int good;
+            int good = 1;
             if (ds < 1e-3) {
                 return 2;
             }
             s1 = s + ds < 1.0 ? s + ds : 1.0;
-            good = !sk_red_rigid(r->m, inputs, r->params, s1, th_1);
+            if (s1 == 1.0) {
+                /* the configuration's own rigid angles: the answer reads the last step's J */
+                for (i = 0; i < SK_M; ++i) {
+                    th_1[i] = theta[i];
+                }
+            } else {
+                good = !sk_red_rigid(r->m, inputs, r->params, s1, th_1);
+            }
             if (good) {
                 for (i = 0; i < n; ++i) {
                     guess[i] = x[i];
@@ -7513,8 +7637,8 @@ static int sk_red_solve(const sk_red *r, const double *inputs, const double *the
                     const int h = r->m->unknown_index[i];
                     guess[i] = (th_s[h] + x[i] * r->v->scale[i] - th_1[h]) / r->v->scale[i];
                 }
-                good = !sk_red_newton(r, guess, th_1, s1)
-                       && sk_red_accept(r, guess, th_1, s1, sign);
+                good = !sk_red_newton(r, guess, th_1, s1, &st, &first)
+                       && sk_red_accept(r, guess, th_1, &st, sign);
             }
             if (good) {
                 for (i = 0; i < n; ++i) {
@@ -7530,7 +7654,7 @@ static int sk_red_solve(const sk_red *r, const double *inputs, const double *the
             }
         }
     }
-    return sk_red_answer(r, x, theta, dev);
+    return sk_red_answer(r, x, theta, &st, dev);
 }
 
 /* The loaded level at one configuration (sk_mechanism.loaded_solve): theta holds the rigid
@@ -7588,7 +7712,7 @@ static const double sk_loaded_scale2[20] = {0.006153846153846154, 0.006153846153
 static const sk_loaded sk_loaded_tables = {
     {{1, sk_loaded_plates1, sk_loaded_system1, sk_loaded_dev1, 12, 7, sk_loaded_scale1}, {2, sk_loaded_plates2, sk_loaded_system2, sk_loaded_dev2, 19, 14, sk_loaded_scale2}},
     6, 1e-12, 0.2, 0.9, 3.0, 0.01,
-    12
+    12, 0
 };
 /* ---- stephenson_six_bar: its tables for the runtime ---- */
 

@@ -2,7 +2,7 @@
 Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
 Points: D; levels: paper, first_order, exact, loaded.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_dev1 60, loaded_plates2 623, loaded_system2 3042, loaded_dev2 143, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, plate_relation4 312, plate_relation2 190.
+Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_dev1 60, loaded_plates2 623, loaded_system2 3042, loaded_dev2 143, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, plate_relation4 312, plate_values2 62, plate_rest4 39.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -547,7 +547,7 @@ def _sensitivity_block(arrays, mech, level, p):
 # symkin reduced-equilibrium runtime (templates/numpy/reduced.py): Newton from x = 0 at load
 # factor 1, continuation in the inputs and loads together where Newton fails, the refusals (a
 # plate at P_LIMIT of its sway buckling load, the truncation estimate), two half plates per plate
-# where one relation is refused by its estimate; elementwise over the configurations.
+# where one relation is refused by its estimate; all configurations at once, each on its own.
 
 
 class _LoadedTables:
@@ -556,14 +556,6 @@ class _LoadedTables:
 
     def __init__(self, **fields):
         self.__dict__.update(fields)
-
-
-class _Refused(Exception):
-    """The reduced equilibrium has no answer here (a refusal rule, or no convergence)."""
-
-    def __init__(self, truncation=False):
-        super().__init__()
-        self.truncation = truncation
 
 
 class _Solved(list):
@@ -575,213 +567,300 @@ def _loaded_deviation(theta, delta, q):
     return q.deviation
 
 
-class _Variant:
-    """One variant of the reduced equilibrium at one configuration's parameters."""
+def _red_column(v, b):
+    """A routine's output as a (b,) float array (constants come back as numbers)."""
+    return numpy.broadcast_to(numpy.asarray(v, dtype=float), (b,))
 
-    def __init__(self, tables, variant, count, relations, params):
+
+def _red_signs(jac):
+    """det J's sign per configuration (jac: (b, n, n)): 1, -1, 0 or NaN."""
+    return numpy.sign(numpy.linalg.det(jac))
+
+
+def _red_solve(jac, res):
+    """J^-1 R per configuration (jac (b, n, n), res (n, b)) -> (n, b); NaN where J is singular."""
+    try:
+        return numpy.linalg.solve(jac, res.T[:, :, None])[:, :, 0].T
+    except numpy.linalg.LinAlgError:
+        # one singular J stops the stacked solve: each on its own (LAPACK's, as stacked)
+        out = numpy.full(res.shape, numpy.nan)
+        for k in range(res.shape[1]):
+            try:
+                out[:, k] = numpy.linalg.solve(jac[k], res[:, k])
+            except numpy.linalg.LinAlgError:
+                continue  # singular: NaN
+        return out
+
+
+class _Batch:
+    """One variant of the reduced equilibrium over b configurations at once: Newton on all of
+    them with a mask each, stacked solves; every step elementwise, so a configuration's answer
+    does not depend on the others in its batch."""
+
+    def __init__(self, tables, variant, count):
         self.t, self.count = tables, count  # count: half plates per plate
         self.plates_fn, self.system_fn, self.dev_fn, self.size, self.plates, scale = variant
         self.scale = numpy.array(scale, dtype=float)
-        self.relations = relations  # order -> plate_relation routine
-        self.p = params
 
-    def _eval(self, x, theta, t, order=4):
-        """Plate inputs, their x-Jacobian, the plates' outputs and partials at (x, theta, t)."""
-        args = list(map(float, x)) + [float(t)]
-        plates = self.plates_fn(args, theta, self.p)
-        n, ns = self.size, self.plates
-        ins = [float(v) for v in plates[: 5 * ns]]
-        dins = numpy.array([float(v) for v in plates[5 * ns :]]).reshape(3 * ns, n)
-        relation = self.relations[order]
-        outs, parts = [], []
+    def _inputs(self, x, theta, p, t):
+        """The routines' x argument (x, then t), the half plates' inputs (5 per half plate) and
+        their x-Jacobian (3 per half plate x n), each a (b,) array."""
+        b = x.shape[1]
+        args = [x[i] for i in range(self.size)] + [numpy.full(b, float(t))]
+        out = [_red_column(v, b) for v in self.plates_fn(args, theta, p)]
+        return args, out[: 5 * self.plates], out[5 * self.plates :]
+
+    def _relation(self, ins):
+        """The plate relation at order 4 per half plate (12 (b,) arrays: values, partials) and
+        the values (along, across, omega) one half plate after the other."""
+        b = ins[0].shape[0] if ins else 0
+        rel = []
+        for k in range(self.plates):
+            plate = ins[5 * k : 5 * k + 5]
+            rest = (plate[1] == 0.0) & (plate[2] == 0.0)
+            if numpy.all(rest):
+                # no force on the plate (x = 0 without loads): reduced.c's plate_rest4
+                rel.append([_red_column(v, b) for v in self.t.rest4(plate)])
+                continue
+            out = [_red_column(v, b) for v in self.t.relation4(plate)]
+            if numpy.any(rest):
+                at_rest = self.t.rest4(plate)
+                out = [numpy.where(rest, r, v) for r, v in zip(at_rest, out)]
+            rel.append(out)
+        return rel, [r[j] for r in rel for j in range(3)]
+
+    def _values2(self, ins):
+        """The plate relation at order 2, values alone (the truncation estimate's), one half
+        plate after the other."""
+        b = ins[0].shape[0] if ins else 0
+        plates = range(self.plates)
+        return [_red_column(v, b) for k in plates for v in self.t.values2(ins[5 * k : 5 * k + 5])]
+
+    def system(self, x, theta, p, t):
+        """R (n, b) and J (b, n, n) at order 4: dR/dx + dR/d(plates) . the plates' partials .
+        d(theta_c, p, f)/dx, summed in reduced.c's order."""
+        n, ns, b = self.size, self.plates, x.shape[1]
+        args, ins, dins = self._inputs(x, theta, p, t)
+        rel, vals = self._relation(ins)
+        sys = numpy.array([_red_column(v, b) for v in self.system_fn(args, theta, vals, p)])
+        res = sys[:n]
+        jac = sys[n : n + n * n].reshape(n, n, b).copy()
+        jo = sys[n + n * n :].reshape(n, 3 * ns, b)
+        d = numpy.array(dins).reshape(3 * ns, n, b) if ns else None
         for k in range(ns):
-            v = [float(u) for u in relation(ins[5 * k : 5 * k + 5])]
-            outs += v[:3]
-            parts.append(numpy.array(v[3:]).reshape(3, 3))
-        return args, ins, dins, outs, parts
+            part = rel[k][3:]
+            w = [
+                jo[:, 3 * k] * part[c]
+                + jo[:, 3 * k + 1] * part[3 + c]
+                + jo[:, 3 * k + 2] * part[6 + c]
+                for c in range(3)
+            ]
+            jac += (
+                w[0][:, None] * d[3 * k][None]
+                + w[1][:, None] * d[3 * k + 1][None]
+                + w[2][:, None] * d[3 * k + 2][None]
+            )
+        return res, numpy.ascontiguousarray(jac.transpose(2, 0, 1))
 
-    def residual(self, x, theta, t, order=4):
-        args, _, _, outs, _ = self._eval(x, theta, t, order)
-        return numpy.array(
-            [float(v) for v in self.system_fn(args, theta, outs, self.p)[: self.size]]
-        )
-
-    def jacobian(self, x, theta, t):
-        """dR/dx = dR/dx at fixed plate outputs + dR/doutputs . d outputs/d in . d in/dx."""
-        args, _, dins, outs, parts = self._eval(x, theta, t)
-        n, ns = self.size, self.plates
-        sys = [float(v) for v in self.system_fn(args, theta, outs, self.p)]
-        jx = numpy.array(sys[n : n + n * n]).reshape(n, n)
-        if not ns:
-            return jx
-        jo = numpy.array(sys[n + n * n :]).reshape(n, 3 * ns)
-        block = numpy.zeros((3 * ns, 3 * ns))
-        for k, d in enumerate(parts):
-            block[3 * k : 3 * k + 3, 3 * k : 3 * k + 3] = d
-        return jx + jo @ block @ dins
-
-    def deviations(self, x, theta, order=4):
-        args, _, _, outs, _ = self._eval(x, theta, 1.0, order)
-        return numpy.array([float(v) for v in self.dev_fn(args, theta, outs, self.p)])
-
-    def newton(self, x, theta, t):
-        """Newton from x: (x, converged); a step that turns a hinge by more than max_turn fails
-        (continuation takes over)."""
-        tb, nu = self.t, self.t.unknowns
-        prev = math.inf
+    def newton(self, x, theta, p, t):
+        """Newton from x (n, b) at (theta, t), each configuration until it converges or fails
+        (a singular or non-finite J, a step turning a hinge by more than max_turn, a non-finite
+        iterate, too many steps): (x, converged, each one's last step's J, det J's sign at the
+        first step)."""
+        tb, n, nu = self.t, self.size, self.t.unknowns
+        b = x.shape[1]
+        x, converged = x.copy(), numpy.zeros(b, dtype=bool)
+        last, first = numpy.zeros((b, n, n)), None
+        prev = numpy.full(b, math.inf)
+        act = numpy.arange(b)
         for it in range(1, tb.max_iter + 1):
-            with numpy.errstate(all="ignore"):
-                try:
-                    step = numpy.linalg.solve(
-                        self.jacobian(x, theta, t), self.residual(x, theta, t)
-                    )
-                except (numpy.linalg.LinAlgError, ValueError, ZeroDivisionError, OverflowError):
-                    return x, False
-            turn = float(numpy.max(numpy.abs(step[:nu]))) * self.scale[0] if nu else 0.0
-            if not turn <= tb.max_turn:
-                return x, False
-            x = x - step
-            if not numpy.all(numpy.isfinite(x)):
-                return x, False
-            size, top = float(numpy.max(numpy.abs(step))), float(numpy.max(numpy.abs(x)))
-            if size <= tb.tol * top or size == 0:
-                return x, True
-            if it > 3 and size > 0.5 * prev and size < 1e-9 * top:
-                return x, True  # stalled at rounding
-            prev = size
-        return x, False
+            res, jac = self.system(x[:, act], [v[act] for v in theta], [v[act] for v in p], t)
+            last[act] = jac
+            if first is None:
+                first = _red_signs(jac)
+            step = _red_solve(jac, res)
+            turn = numpy.max(numpy.abs(step[:nu]), axis=0) * self.scale[0] if nu else 0.0
+            xn = x[:, act] - step
+            fail = ~(turn <= tb.max_turn) | ~numpy.all(numpy.isfinite(xn), axis=0)
+            size = numpy.max(numpy.abs(step), axis=0)
+            top = numpy.max(numpy.abs(xn), axis=0)
+            done = (size <= tb.tol * top) | (size == 0)
+            # stalled at rounding
+            done |= (it > 3) & (size > 0.5 * prev[act]) & (size < 1e-9 * top)
+            x[:, act] = xn
+            converged[act[done & ~fail]] = True
+            prev[act] = size
+            act = act[~done & ~fail]
+            if not act.size:
+                break
+        return x, converged, last, first
 
-    def sign(self, x, theta, t):
-        with numpy.errstate(all="ignore"):
-            return float(numpy.sign(numpy.linalg.det(self.jacobian(x, theta, t))))
+    def accept(self, x, theta, jac, sign):
+        """Converged x on the branch followed: det J (the last Newton step's) of the sign at the
+        unloaded state, every compliant angle within (-pi, pi)."""
+        ok = _red_signs(jac) == sign
+        for i, th in enumerate(theta):
+            angle = th
+            for j, h in enumerate(self.t.unknown_index):
+                if h == i:
+                    angle = angle + x[j] * self.scale[j]
+            ok &= numpy.abs(angle) < math.pi
+        return ok
 
-    def accept(self, x, theta, t, sign):
-        """A converged x on the branch followed: det J of the sign at the unloaded state, every
-        compliant angle within (-pi, pi)."""
-        try:
-            same = self.sign(x, theta, t) == sign
-        except (ValueError, ZeroDivisionError, OverflowError):
-            return False
-        angles = numpy.array(theta, dtype=float)
-        for j, i in enumerate(self.t.unknown_index):
-            angles[i] += x[j] * self.scale[j]
-        return same and bool(numpy.all(numpy.abs(angles) < math.pi))
-
-    def solve(self, rigid):
-        """x at the configuration (rigid(s): the rigid angles at the inputs scaled by s, None
-        where they cannot be reached), its deviation; _Refused where there is none."""
-        theta = rigid(1.0)
-        zero = numpy.zeros(self.size)
-        if not self.size:
-            return self.answer(zero, theta)
-        sign0 = self.sign(zero, theta, 0.0)
-        x, ok = self.newton(zero, theta, 1.0)
-        if ok:
-            ok = self.accept(x, theta, 1.0, sign0)
-        if not ok:
-            # continuation: inputs and loads scaled together by s from the as-fabricated pose
-            s, ds = 0.0, 0.25
-            th_s = rigid(0.0)
-            x = zero
-            sign = self.sign(x, th_s, 0.0)
-            while s < 1:
-                if ds < 1e-3:
-                    raise _Refused()
-                s1 = min(1.0, s + ds)
-                th_1 = rigid(s1)
-                okn = th_1 is not None
-                if okn:
-                    guess = x.copy()
-                    for j, i in enumerate(self.t.unknown_index):
-                        guess[j] = (th_s[i] + x[j] * self.scale[j] - th_1[i]) / self.scale[j]
-                    xn, okn = self.newton(guess, th_1, s1)
-                if okn:
-                    okn = self.accept(xn, th_1, s1, sign)
-                if okn:
-                    x, s, th_s = xn, s1, th_1
-                    ds = min(0.5, ds * 1.5)
+    def solve(self, inputs, theta, p, mech):
+        """Every configuration (inputs, theta, p: lists of (b,) arrays): x (n, b), the deviation
+        (2 per point, b) and a status each: 0, 1 refused or no convergence, 4 refused by the
+        truncation estimate. Newton from x = 0 on all; continuation one by one where it fails."""
+        tb, n, b = self.t, self.size, theta[0].shape[0]
+        x, jac = numpy.zeros((n, b)), numpy.zeros((b, n, n))
+        status = numpy.zeros(b, dtype=int)
+        if n:
+            sign0 = None
+            if tb.loads:
+                sign0 = _red_signs(self.system(x, theta, p, 0.0)[1])
+            xn, converged, jac, first = self.newton(x, theta, p, 1.0)
+            # without loads t enters nowhere: the first step's J is the unloaded state's
+            good = converged & self.accept(xn, theta, jac, first if sign0 is None else sign0)
+            x[:, good] = xn[:, good]
+            for k in numpy.flatnonzero(~good):
+                found = self.continuation(k, inputs, theta, p, mech)
+                if found is None:
+                    status[k] = 1
                 else:
-                    ds /= 2
-        return self.answer(x, theta)
+                    x[:, k], jac[k] = found
+        dev = numpy.full((2 * len(mech.point_names), b), numpy.nan)
+        live = numpy.flatnonzero(status == 0)
+        if live.size:
+            dev[:, live], status[live] = self.answer(
+                x[:, live], [v[live] for v in theta], [v[live] for v in p], jac[live]
+            )
+        return x, dev, status
 
-    def answer(self, x, theta):
-        """The deviation at the solution x; _Refused where a plate is at p_limit of its sway
-        buckling load or the truncation estimate is above est_limit."""
-        tb = self.t
-        with numpy.errstate(all="ignore"):
-            dev = self.deviations(x, theta)
-            ins = self._eval(x, theta, 1.0)[1]
-            worst = 0.0
-            for k in range(self.plates):
-                p, ea, es = ins[5 * k + 1], ins[5 * k + 3], ins[5 * k + 4]
-                worst = max(worst, -(1 + (ea - es) * p) * p * self.count**2 / math.pi**2)
-            x2 = x
-            if self.size:
-                try:
-                    x2 = x - numpy.linalg.solve(
-                        self.jacobian(x, theta, 1.0), self.residual(x, theta, 1.0, 2)
-                    )
-                except numpy.linalg.LinAlgError:
-                    raise _Refused() from None
-            dev2 = self.deviations(x2, theta, 2)
-        e24 = 0.0
-        for k in range(len(dev) // 2):
-            size = math.hypot(dev[2 * k], dev[2 * k + 1])
-            if size > 0:
-                change = math.hypot(dev2[2 * k] - dev[2 * k], dev2[2 * k + 1] - dev[2 * k + 1])
-                e24 = max(e24, change / size)
-        estimate = tb.est_factor * e24**2
-        if not numpy.all(numpy.isfinite(dev)) or not worst < tb.p_limit:
-            raise _Refused()
-        if not estimate <= tb.est_limit:
-            raise _Refused(truncation=True)
-        return x, dev
+    def continuation(self, k, inputs, theta, p, mech):
+        """Configuration k by continuation (inputs and loads scaled together by s from the
+        as-fabricated pose): (x, the last Newton step's J), None where it does not converge."""
+        tb, n = self.t, self.size
+        th = [float(v[k]) for v in theta]
+        pk = [v[k : k + 1] for v in p]
+        xi = [float(v[k]) for v in inputs]
 
-
-def _reduced_solve(mech, x, theta, p, ok):
-    """The loaded level at every configuration where ok: delta of the non-input hinges, what its
-    deviation reads (q: the parameters and the deviation solved) and ok, False where the reduced
-    equilibrium refuses or does not converge."""
-    tb = mech.loaded
-    shape, dtype = ok.shape, mech.dtype
-    ok = numpy.array(ok)
-    delta = [numpy.zeros(shape, dtype=dtype) for _ in mech.unknown_index]
-    n_dev = 2 * len(mech.point_names)
-    dev = [numpy.full(shape, numpy.nan, dtype=dtype) for _ in range(n_dev)]
-    relations = {4: tb.relation4, 2: tb.relation2}
-    for index in numpy.ndindex(*shape):
-        if not ok[index]:
-            continue
-        pi = [float(numpy.broadcast_to(v, shape)[index]) for v in p]
-        th = [float(numpy.broadcast_to(v, shape)[index]) for v in theta]
-        xi = [float(numpy.broadcast_to(v, shape)[index]) for v in x]
-
-        def rigid(s, th=th, xi=xi, pi=pi):
+        def rigid(s):
             if s == 1.0:
                 return th
             with numpy.errstate(all="ignore"):
                 angles, good = _rigid_angles(
-                    mech, [numpy.array(v * s) for v in xi], pi, numpy.array(True)
+                    mech,
+                    [numpy.array(v * s) for v in xi],
+                    [float(v[0]) for v in pk],
+                    numpy.array(True),
                 )
             return [float(v) for v in angles] if bool(good) else None
 
-        found = None
-        for count, variant in enumerate(tb.variants, 1):
-            solver = _Variant(tb, variant, count, relations, pi)
-            try:
-                found = solver.solve(rigid), solver
-                break
-            except _Refused as refused:
-                if not refused.truncation:
-                    break
-        if found is None:
-            ok[index] = False
-            continue
-        (xs, d), solver = found
+        def column(values):
+            return [numpy.array([v]) for v in values]
+
+        s, ds = 0.0, 0.25
+        th_s = rigid(0.0)
+        if th_s is None:
+            return None
+        x = numpy.zeros((n, 1))
+        sign = _red_signs(self.system(x, column(th_s), pk, 0.0)[1])
+        jac = None
+        while s < 1:
+            if ds < 1e-3:
+                return None
+            s1 = min(1.0, s + ds)
+            th_1 = rigid(s1)
+            okn = th_1 is not None
+            if okn:
+                guess = x.copy()
+                for j, i in enumerate(tb.unknown_index):
+                    guess[j] = (th_s[i] + x[j] * self.scale[j] - th_1[i]) / self.scale[j]
+                xn, conv, last, _ = self.newton(guess, column(th_1), pk, s1)
+                okn = bool(conv[0]) and bool(self.accept(xn, column(th_1), last, sign)[0])
+            if okn:
+                x, s, th_s, jac = xn, s1, th_1, last[0]
+                ds = min(0.5, ds * 1.5)
+            else:
+                ds /= 2
+        return x[:, 0], jac
+
+    def answer(self, x, theta, p, jac):
+        """The deviation at each solution x (n, b) and its status: 0, 1 where a plate is at
+        p_limit of its sway buckling load, 4 where the truncation estimate (one order-2 Newton
+        step with jac, the last Newton step's J) is above est_limit."""
+        tb, n, b = self.t, self.size, x.shape[1]
+        args, ins, _ = self._inputs(x, theta, p, 1.0)
+        _, vals = self._relation(ins)
+        dev = numpy.array([_red_column(v, b) for v in self.dev_fn(args, theta, vals, p)])
+        worst = numpy.zeros(b)
+        for k in range(self.plates):
+            pk, ea, es = ins[5 * k + 1], ins[5 * k + 3], ins[5 * k + 4]
+            w = -(1 + (ea - es) * pk) * pk * self.count**2 / math.pi**2
+            worst = numpy.where(w > worst, w, worst)
+        x2 = x
+        if n:
+            vals2 = self._values2(ins)
+            sys = self.system_fn(args, theta, vals2, p)
+            res = numpy.array([_red_column(v, b) for v in sys[:n]])
+            x2 = x - _red_solve(jac, res)
+        args2, ins2, _ = self._inputs(x2, theta, p, 1.0)
+        vals2 = self._values2(ins2)
+        dev2 = numpy.array([_red_column(v, b) for v in self.dev_fn(args2, theta, vals2, p)])
+        e24 = numpy.zeros(b)
+        for k in range(len(dev) // 2):
+            size = numpy.hypot(dev[2 * k], dev[2 * k + 1])
+            e = numpy.hypot(dev2[2 * k] - dev[2 * k], dev2[2 * k + 1] - dev[2 * k + 1]) / size
+            e24 = numpy.where((size > 0) & (e > e24), e, e24)
+        estimate = tb.est_factor * e24**2
+        status = numpy.where(~(estimate <= tb.est_limit), 4, 0)
+        refused = ~numpy.all(numpy.isfinite(dev), axis=0) | ~(worst < tb.p_limit)
+        return dev, numpy.where(refused, 1, status)
+
+
+def _reduced_solve(mech, x, theta, p, ok):
+    """The loaded level at every configuration where ok, all at once: delta of the non-input
+    hinges, what its deviation reads (q: the parameters and the deviation solved) and ok, False
+    where the reduced equilibrium refuses or does not converge."""
+    tb = mech.loaded
+    shape, dtype = ok.shape, mech.dtype
+    ok = numpy.array(ok)
+    n_dev = 2 * len(mech.point_names)
+    delta = [numpy.zeros(shape, dtype=dtype) for _ in mech.unknown_index]
+    dev = [numpy.full(shape, numpy.nan, dtype=dtype) for _ in range(n_dev)]
+    where = numpy.flatnonzero(ok.reshape(-1))
+
+    def flat(values):
+        return [numpy.broadcast_to(v, shape).reshape(-1)[where].astype(float) for v in values]
+
+    xs, ths, ps = flat(x), flat(theta), flat(p)
+    todo = numpy.arange(where.size)  # the configurations the next variant solves
+    okf = numpy.zeros(where.size, dtype=bool)
+    flat_delta = [numpy.zeros(where.size) for _ in mech.unknown_index]
+    flat_dev = [numpy.full(where.size, numpy.nan) for _ in range(n_dev)]
+    for count, variant in enumerate(tb.variants, 1):
+        if not todo.size:
+            break
+        solver = _Batch(tb, variant, count)
+        with numpy.errstate(all="ignore"):
+            sx, sdev, status = solver.solve(
+                [v[todo] for v in xs], [v[todo] for v in ths], [v[todo] for v in ps], mech
+            )
+        good = status == 0
         for j in range(len(mech.unknown_index)):
-            delta[j][index] = xs[j] * solver.scale[j]
+            flat_delta[j][todo[good]] = sx[j, good] * solver.scale[j]
         for i in range(n_dev):
-            dev[i][index] = d[i]
+            flat_dev[i][todo[good]] = sdev[i, good]
+        okf[todo[good]] = True
+        # refused by the truncation estimate: two half plates per plate
+        todo = todo[status == 4]
+    okflat = ok.reshape(-1)
+    okflat[where] = okf
+    ok = okflat.reshape(shape)
+    for j in range(len(mech.unknown_index)):
+        delta[j].reshape(-1)[where] = flat_delta[j]
+    for i in range(n_dev):
+        dev[i].reshape(-1)[where] = flat_dev[i]
     q = _Solved(p)
     q.deviation = dev
     return delta, q, ok
@@ -803,6 +882,59 @@ def arck(x):
     b = np.sin(xs) / xs - np.cos(xs)
     b = b / xs2
     return np.where(small, series, b)
+
+
+def bcol_h(x):
+    """h(p) = T(p) = tanh(u)/u, u = sqrt(p)/2 (tan(v)/v, v = sqrt(-p)/2, below 0) for p < 16.0, 1 - tanh(u) from it on: for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out (vectorised)."""
+    x = np.asarray(x, dtype=float)
+    near = (x > -4.0) & (x < 16.0)
+    p = np.where(near, x, 6.0)
+    d = p - 6.0
+    d2 = d * d
+    d4 = d2 * d2
+    d8 = d4 * d4
+    r = 1.0 / (p + 9.869604401089358)
+    value = ((((10.897864068210225 + d * 0.16556156881006512) + (-0.0009157434227891026 + d * 8.365114438681788e-06) * d2) + ((-8.437823084425284e-08 + d * 8.763390715589521e-10) + (-9.191007821271998e-12 + d * 9.672991207222496e-14) * d2) * d4) + (((-1.0193179699964376e-15 + d * 1.0746329406338888e-17) + (-1.1324419365159025e-19 + d * 1.1940538461574364e-21) * d2) + (-1.310325228057343e-23 + d * 1.385670151299953e-25) * d4) * d8) * (r)
+    if near.all():
+        return value
+    high = x >= 16.0
+    e = np.exp(-np.sqrt(np.where(high, x, 16.0)))
+    u = 0.5 * np.sqrt(np.where(near | high, 1.0, np.abs(x)))
+    return np.where(near, value, np.where(high, 2.0 * e / (1.0 + e), np.tan(u) / u))
+
+
+def bcol_a_at(x, h):
+    """bcol_a(p) = p w(p)/(3 T^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (12 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
+    x = np.asarray(x, dtype=float)
+    near = (x > -4.0) & (x < 16.0)
+    p = np.where(near, x, 6.0)
+    d = p - 6.0
+    d2 = d * d
+    d4 = d2 * d2
+    d8 = d4 * d4
+    s = 1.0 / (p + 39.47841760435743)
+    value = ((((2.360461888894849 + d * 0.032905372888943005) + (4.285169200537235e-05 + d * -3.2723308080295325e-07) * d2) + ((2.5572292767146607e-09 + d * -1.9472391567318698e-11) + (1.4390666375039185e-13 + d * -1.0362014406596994e-15) * d2) * d4) + ((7.303641586475798e-18 + d * -5.060739353616422e-20) + (3.5059768868245323e-22 + d * -2.3710003624268237e-24) * d2) * d8) * (p * s * s)
+    if near.all():
+        return value
+    high = x >= 16.0
+    p = np.where(high, x, 32.0)
+    h0 = h
+    h = np.where(high, h0, 0.01)
+    u = 0.5 * np.sqrt(p)
+    tau = 1.0 - h
+    sigma = h * (2.0 - h)
+    far = (((-12.0 + u * (8.0)) + sigma * (u * (4.0))) * (1.0 + tau) - sigma * (-12.0)) / (((u * (192.0)) + sigma * (u * (-192.0))) * (1.0 + tau))
+    inside = x > -9.869604401089358
+    low = ~near & ~high & inside
+    p = np.where(low, x, -8.0)
+    h = np.where(low, h0, 0.5)
+    closed = ((12.0) + h * ((-12.0) + h * (p * (-1.0)))) / (h * (h * (p * (48.0))))
+    return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_a(p):
+    """bcol_a(p) = p w(p)/(3 T^2) (vectorised)."""
+    return bcol_a_at(p, bcol_h(p))
 
 
 def bcol_a_d1_at(x, h):
@@ -1098,25 +1230,6 @@ def bcol_e3c_d1_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
-def bcol_h(x):
-    """h(p) = T(p) = tanh(u)/u, u = sqrt(p)/2 (tan(v)/v, v = sqrt(-p)/2, below 0) for p < 16.0, 1 - tanh(u) from it on: for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out (vectorised)."""
-    x = np.asarray(x, dtype=float)
-    near = (x > -4.0) & (x < 16.0)
-    p = np.where(near, x, 6.0)
-    d = p - 6.0
-    d2 = d * d
-    d4 = d2 * d2
-    d8 = d4 * d4
-    r = 1.0 / (p + 9.869604401089358)
-    value = ((((10.897864068210225 + d * 0.16556156881006512) + (-0.0009157434227891026 + d * 8.365114438681788e-06) * d2) + ((-8.437823084425284e-08 + d * 8.763390715589521e-10) + (-9.191007821271998e-12 + d * 9.672991207222496e-14) * d2) * d4) + (((-1.0193179699964376e-15 + d * 1.0746329406338888e-17) + (-1.1324419365159025e-19 + d * 1.1940538461574364e-21) * d2) + (-1.310325228057343e-23 + d * 1.385670151299953e-25) * d4) * d8) * (r)
-    if near.all():
-        return value
-    high = x >= 16.0
-    e = np.exp(-np.sqrt(np.where(high, x, 16.0)))
-    u = 0.5 * np.sqrt(np.where(near | high, 1.0, np.abs(x)))
-    return np.where(near, value, np.where(high, 2.0 * e / (1.0 + e), np.tan(u) / u))
-
-
 def bcol_invt_at(x, h):
     """bcol_invt(p) = 1/T(p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (12 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1144,6 +1257,11 @@ def bcol_invt_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = (1.0) / (h * (1.0))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_invt(p):
+    """bcol_invt(p) = 1/T(p) (vectorised)."""
+    return bcol_invt_at(p, bcol_h(p))
 
 
 def bcol_invt_d1_at(x, h):
@@ -1204,6 +1322,11 @@ def bcol_s_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_s(p):
+    """bcol_s(p) = (1 - T)/p (vectorised)."""
+    return bcol_s_at(p, bcol_h(p))
+
+
 def bcol_w_at(x, h):
     """bcol_w(p) = (12 (1 - T)/p - T^2)/(16 p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1231,6 +1354,11 @@ def bcol_w_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((12.0) + h * ((-12.0) + h * (p * (-1.0)))) / (p * (p * (16.0)))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_w(p):
+    """bcol_w(p) = (12 (1 - T)/p - T^2)/(16 p) (vectorised)."""
+    return bcol_w_at(p, bcol_h(p))
 
 
 def bcol_w_d1_at(x, h):
@@ -1294,6 +1422,26 @@ def cosr2(x):
     xs2 = xs * xs
     b = -2.0 * (np.sin(0.5 * xs) / xs) ** 2
     b = (b + 0.5) / xs2
+    return np.where(small, series, b)
+
+
+def cosr4(x):
+    """cosr4(x) = (cos x - sum_(k<4) (-1)^k x^(2k)/(2k)!) / x^8; Taylor series (14 terms, Estrin's form) for |x| < 5.0, else the nested elementary formula (vectorised)."""
+    x = np.asarray(x, dtype=float)
+    small = np.abs(x) < 5.0
+    x2 = np.where(small, x * x, 0.0)  # the series where it is used: no overflow
+    x4 = x2 * x2
+    x8 = x4 * x4
+    x16 = x8 * x8
+    series = (((2.48015873015873e-05 + x2 * -2.755731922398589e-07) + (2.08767569878681e-09 + x2 * -1.1470745597729725e-11) * x4) + ((4.779477332387385e-14 + x2 * -1.5619206968586225e-16) + (4.110317623312165e-19 + x2 * -8.896791392450574e-22) * x4) * x8) + (((1.6117375710961184e-24 + x2 * -2.4795962632247976e-27) + (3.279889237069838e-30 + x2 * -3.7699876288159054e-33) * x4) + (3.8003907548547434e-36 + x2 * -3.387157535521162e-39) * x8) * x16
+    if small.all():
+        return series
+    xs = np.where(small, 1.0, x)
+    xs2 = xs * xs
+    b = -2.0 * (np.sin(0.5 * xs) / xs) ** 2
+    b = (b + 0.5) / xs2
+    b = (b - 0.041666666666666664) / xs2
+    b = (b + 0.001388888888888889) / xs2
     return np.where(small, series, b)
 
 
@@ -1369,6 +1517,47 @@ def sinr2(x):
     b = np.sin(xs) / xs
     b = (b - 1.0) / xs2
     b = (b + 0.16666666666666666) / xs2
+    return np.where(small, series, b)
+
+
+def sinr3(x):
+    """sinr3(x) = (sin x - sum_(k<3) (-1)^k x^(2k+1)/(2k+1)!) / x^7; Taylor series (13 terms, Estrin's form) for |x| < 4.5, else the nested elementary formula (vectorised)."""
+    x = np.asarray(x, dtype=float)
+    small = np.abs(x) < 4.5
+    x2 = np.where(small, x * x, 0.0)  # the series where it is used: no overflow
+    x4 = x2 * x2
+    x8 = x4 * x4
+    x16 = x8 * x8
+    series = (((-0.0001984126984126984 + x2 * 2.7557319223985893e-06) + (-2.505210838544172e-08 + x2 * 1.6059043836821613e-10) * x4) + ((-7.647163731819816e-13 + x2 * 2.8114572543455206e-15) + (-8.22063524662433e-18 + x2 * 1.9572941063391263e-20) * x4) * x8) + (((-3.868170170630684e-23 + x2 * 6.446950284384474e-26) + (-9.183689863795546e-29 + x2 * 1.1309962886447716e-31) * x4) + (-1.216125041553518e-34) * x8) * x16
+    if small.all():
+        return series
+    xs = np.where(small, 1.0, x)
+    xs2 = xs * xs
+    b = np.sin(xs) / xs
+    b = (b - 1.0) / xs2
+    b = (b + 0.16666666666666666) / xs2
+    b = (b - 0.008333333333333333) / xs2
+    return np.where(small, series, b)
+
+
+def sinr4(x):
+    """sinr4(x) = (sin x - sum_(k<4) (-1)^k x^(2k+1)/(2k+1)!) / x^9; Taylor series (13 terms, Estrin's form) for |x| < 5.0, else the nested elementary formula (vectorised)."""
+    x = np.asarray(x, dtype=float)
+    small = np.abs(x) < 5.0
+    x2 = np.where(small, x * x, 0.0)  # the series where it is used: no overflow
+    x4 = x2 * x2
+    x8 = x4 * x4
+    x16 = x8 * x8
+    series = (((2.7557319223985893e-06 + x2 * -2.505210838544172e-08) + (1.6059043836821613e-10 + x2 * -7.647163731819816e-13) * x4) + ((2.8114572543455206e-15 + x2 * -8.22063524662433e-18) + (1.9572941063391263e-20 + x2 * -3.868170170630684e-23) * x4) * x8) + (((6.446950284384474e-26 + x2 * -9.183689863795546e-29) + (1.1309962886447716e-31 + x2 * -1.216125041553518e-34) * x4) + (1.151633562077195e-37) * x8) * x16
+    if small.all():
+        return series
+    xs = np.where(small, 1.0, x)
+    xs2 = xs * xs
+    b = np.sin(xs) / xs
+    b = (b - 1.0) / xs2
+    b = (b + 0.16666666666666666) / xs2
+    b = (b - 0.008333333333333333) / xs2
+    b = (b + 0.0001984126984126984) / xs2
     return np.where(small, series, b)
 
 
@@ -7014,79 +7203,46 @@ def _plate_relation4(plate):
     ]
 
 
-def _plate_relation2(plate):
-    """one plate's relation at order 2: (along, across, omega) and their partials by (theta, p, f) (190 operations)."""
+def _plate_values2(plate):
+    """one plate's relation at order 2, values alone: (along, across, omega) (62 operations)."""
     theta, p, f, e_a, e_s = plate
-    theta_sq = theta**2
-    _tmp0 = e_a*p
-    _tmp1 = -2*e_s + 2*e_a
-    _tmp2 = _tmp1*p
-    _tmp3 = theta_sq**2
-    _tmp4 = 0.0005208333333333333*_tmp3
-    _tmp5 = e_a - e_s
-    _tmp6 = _tmp5*p
-    _tmp7 = 1 + _tmp6
-    _tmp8 = _tmp7*p
-    _tmp9 = bcol_h(_tmp8)
-    _tmp10 = bcol_s_at(_tmp8, _tmp9)
-    _tmp11 = f**2
-    _tmp12 = _tmp10*_tmp11
-    _tmp13 = _tmp5*_tmp7
-    _tmp14 = _tmp12*_tmp13
-    _tmp15 = _tmp7**2
-    _tmp16 = _tmp11*_tmp15
-    _tmp17 = 1 + _tmp2
-    _tmp18 = bcol_w_at(_tmp8, _tmp9)
-    _tmp19 = _tmp17*_tmp18
-    _tmp20 = theta**2
-    _tmp21 = bcol_invt_at(_tmp8, _tmp9)
-    _tmp22 = _tmp21**2
-    _tmp23 = -0.041666666666666664*_tmp2 + 0.3333333333333333*_tmp17*_tmp18*_tmp22*_tmp7*p
-    _tmp24 = _tmp20*_tmp23
-    _tmp25 = _tmp0 + _tmp14 + _tmp24 + _tmp2*_tmp4 - _tmp16*_tmp19
-    _tmp26 = e_s*f
-    _tmp27 = _tmp10*_tmp15
-    _tmp28 = _tmp27*f
-    _tmp29 = _tmp26 + _tmp28
-    _tmp32 = 0.25*_tmp20
-    _tmp30 = 0.5*theta
-    _tmp31 = sinr5(_tmp30)
-    _tmp33 = 2.7557319223985893e-06 + _tmp31*_tmp32
-    _tmp34 = -0.0001984126984126984 + _tmp32*_tmp33
-    _tmp35 = 0.09375*_tmp34*theta*theta_sq**2
-    _tmp36 = cosr5(_tmp30)
-    _tmp37 = 5.5114638447971785e-06 + _tmp32*_tmp36 - 1.75*_tmp20*_tmp31
-    _tmp38 = 0.00390625*theta*theta_sq**3
-    _tmp39 = _tmp37*_tmp38
-    _tmp40 = sinr0(_tmp30)
-    _tmp41 = 0.5*f
-    _tmp42 = 2*_tmp23*theta + 0.0020833333333333333*_tmp2*theta**3
-    _tmp43 = _tmp1*_tmp18
-    _tmp44 = 2*_tmp13
-    _tmp45 = 1 + 2*_tmp6
-    _tmp46 = _tmp18*_tmp45
-    _tmp47 = _tmp1*_tmp7
-    _tmp48 = _tmp17*_tmp45
-    _tmp49 = e_a + _tmp1*_tmp4 + _tmp12*_tmp5**2 + _tmp20*(0.08333333333333333*e_s - 0.08333333333333333*e_a + _tmp48*bcol_a_d1_at(_tmp8, _tmp9) + 0.3333333333333333*_tmp22*_tmp43*_tmp8) - _tmp16*_tmp43 - _tmp11*_tmp19*_tmp47 - _tmp11*_tmp44*_tmp46 - _tmp16*_tmp48*bcol_w_d1_at(_tmp8, _tmp9)
-    _tmp50 = _tmp10*f
-    _tmp51 = 2*_tmp15*f
-    _tmp52 = _tmp44*_tmp50 - _tmp19*_tmp51
-    _tmp53 = _tmp47*_tmp50 - _tmp46*_tmp51
-    _tmp54 = _tmp27 + e_s
-    _tmp55 = 0.25*theta
+    _tmp0 = p*(-2*e_s + 2*e_a)
+    _tmp1 = f**2
+    _tmp2 = e_a - e_s
+    _tmp3 = 1 + _tmp2*p
+    _tmp4 = _tmp3*p
+    _tmp5 = bcol_s(_tmp4)
+    _tmp6 = 1 + _tmp0
+    _tmp7 = _tmp3**2
+    _tmp8 = e_a*p + theta**2*(-0.041666666666666664*_tmp0 + _tmp6*bcol_a(_tmp4)) + 0.0005208333333333333*_tmp0*theta**4 + _tmp1*_tmp2*_tmp3*_tmp5 - _tmp1*_tmp6*_tmp7*bcol_w(_tmp4)
+    _tmp9 = e_s*f + _tmp5*_tmp7*f
+    _tmp10 = 0.5*theta
     return [
-        _tmp25,
-        _tmp29,
-        _tmp21*theta - _tmp41*(_tmp25 + _tmp40) - p*(_tmp35 + _tmp39) + 0.5*_tmp29*p,
-        _tmp42,
-        _tmp49,
-        _tmp52,
+        _tmp8,
+        _tmp9,
+        theta*bcol_invt(_tmp4) - p*(0.00390625*theta**7*(-7*sinr4(_tmp10) + cosr4(_tmp10)) + 0.09375*theta**5*sinr3(_tmp10)) + 0.5*_tmp9*p - 0.5*f*(_tmp8 + sinr0(_tmp10)),
+    ]
+
+
+def _plate_rest4(plate):
+    """one plate's relation at order 4 where it carries no force (p = f = 0): (along, across, omega) and their partials by (theta, p, f) (39 operations)."""
+    theta, _, _, e_a, e_s = plate
+    _tmp0 = theta**2
+    _tmp1 = theta**4
+    _tmp2 = 0.5*theta
+    return [
         0,
-        _tmp53,
-        _tmp54,
-        _tmp21 - _tmp41*(_tmp42 + _tmp55*(-sinr1(_tmp30) + cosr1(_tmp30))) - p*(_tmp38*(-_tmp55*(_tmp33 + 8*_tmp36) - 1.75*theta*(_tmp36 - 9*_tmp31)) + 0.05078125*_tmp37*theta_sq**3 + 0.46875*_tmp3*_tmp34),
-        -_tmp35 - _tmp39 + 0.5*_tmp26 + 0.5*_tmp28 - _tmp41*_tmp49 + 0.5*_tmp53*p + _tmp45*theta*bcol_invt_d1_at(_tmp8, _tmp9),
-        -0.5*_tmp0 - 0.5*_tmp14 - 0.5*_tmp24 - 0.5*_tmp40 - _tmp41*_tmp52 + 0.5*_tmp54*p - 0.00026041666666666666*_tmp2*_tmp3 + 0.5*_tmp11*_tmp15*_tmp17*_tmp18,
+        0,
+        theta,
+        0,
+        e_a + 4.96031746031746e-05*_tmp1*(-1 - 21*e_s + 21*e_a) + 0.001388888888888889*_tmp0*(1 - 60*e_a + 60*e_s),
+        0,
+        0,
+        0,
+        0.08333333333333333 + e_s - 0.004166666666666667*_tmp0,
+        1,
+        0.00026041666666666666*theta*(320 - 8*_tmp0 - 360*_tmp1*sinr3(_tmp2) + 15*theta**6*(-cosr4(_tmp2) + 7*sinr4(_tmp2))),
+        -0.5*sinr0(_tmp2),
     ]
 
 
@@ -7118,10 +7274,11 @@ _MECHANISM = _Mechanism(
             (_loaded_plates1, _loaded_system1, _loaded_dev1, 12, 7, [0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.378698224852071, 0.378698224852071, 0.04923076923076923, 0.378698224852071, 0.378698224852071, 0.04923076923076923]),
             (_loaded_plates2, _loaded_system2, _loaded_dev2, 19, 14, [0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.378698224852071, 0.378698224852071, 0.04923076923076923, 0.378698224852071, 0.378698224852071, 0.04923076923076923, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0]),
         ),
-        relation4=_plate_relation4, relation2=_plate_relation2,
+        relation4=_plate_relation4, values2=_plate_values2, rest4=_plate_rest4,
         unknowns=6, unknown_index=(1, 2, 3, 4, 5, 6, ),
         tol=1e-12, max_iter=12, max_turn=0.2,
         p_limit=0.9, est_factor=3.0, est_limit=0.01,
+        loads=False,
     ),
     loaded_solve=_reduced_solve,
     sens_rigid_blocks={'A': (0, 6, 6), 'dG_dv': (36, 6, 2), 'dR_dtheta': (48, 2, 6), 'dR_dv': (60, 2, 2)},
