@@ -73,14 +73,17 @@ class Tradeoff:
     @property
     def reference_text(self) -> str:
         if self.reference == "equilibrium":
-            return "equilibrium level: the plates' elastica equilibrium under the file's loads"
+            return (
+                "equilibrium level: the plates' equilibrium as geometrically exact beams (the "
+                "file's beam theory: Reissner, or the elastica) under the file's loads"
+            )
         return f"mpmath, 30 digits, {self.reference} level, the file's hinge models"
 
     @property
     def reference_short(self) -> str:
         """The reference in a few words (titles, notes)."""
         if self.reference == "equilibrium":
-            return "the equilibrium level (the plates' elastica)"
+            return "the equilibrium level (the plates as exact beams)"
         return f"the {self.reference} level in mpmath (30 digits)"
 
     def as_json(self) -> dict:
