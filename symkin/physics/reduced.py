@@ -754,4 +754,4 @@ class Reduced:
 def _jacobian(rows: sp.Matrix, by) -> sp.Matrix:
     """rows' Jacobian by the symbols `by`, empty (len(rows) x 0) when there are none."""
     by = list(by)
-    return rows.jacobian(by) if by else sp.zeros(len(rows), 0)
+    return rows.jacobian(by) if by and len(rows) else sp.zeros(len(rows), len(by))

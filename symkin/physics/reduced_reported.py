@@ -33,7 +33,7 @@ from .stiffness import modulus, plate_stiffness
 #: The buckling search stops at this factor on the file's loads (as equilibrium's).
 LIMIT = 10.0
 #: ... and locates a sign change or a limit point to this relative width.
-LOCATE = 1e-7
+LOCATE = 1e-10
 
 
 @dataclass(frozen=True)
@@ -61,7 +61,9 @@ def report(answer: Answer, scale: float, buckling: bool = True) -> Report:
         )
     stiffness: dict[str, list | None] = {}
     first = len(red.inputs)
-    L, F = red.L, red.F
+    # the scales to judge C's conditioning by (a lone hinge has no distance between hinges)
+    L = max(red.L, red.lmin)
+    F = max([float(d["EI"]) / (float(d["l"]) * L) for d in red.plate.values()] or [1.0])
     for k, name in enumerate(sorted(red.points)):
         link = red.points[name][0]
         rows = slice(first + 3 * k, first + 3 * k + 3)
