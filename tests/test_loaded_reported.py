@@ -40,6 +40,8 @@ CASES = {
     "scott_russell": (ZOO / "scott_russell.toml", "", {"RA0": 0.02}),
     "double_parallelogram": (ZOO / "double_parallelogram.toml", "", {"F1": 0.01, "I1": -0.01}),
     "lever_amplifier": (ZOO / "lever_amplifier.toml", "", {"P0": 0.01}),
+    # an input chord: its actuator's moment is the plate's less the chord's μ
+    "five_bar_coupler_input": (ZOO / "five_bar_coupler_input.toml", "", {"O1": 0.02, "P": 0.02}),
 }
 # Measured agreement with `equilibrium` (the relation's quartic truncation against the exact
 # beam; largest over the quantities' entries): input moment and stiffness, plate stress, point
@@ -50,6 +52,7 @@ AGREEMENT = {
     "scott_russell": (1e-5, 3e-5, 3e-5, 1e-4),  # measured 2.4e-6, 8.8e-6, 8.3e-6, 2.9e-5
     "double_parallelogram": (2e-9, 5e-9, 3e-9, 2e-6),  # measured 4.2e-10, 1.3e-9, 6.2e-10, 5.6e-7
     "lever_amplifier": (2e-7, 1e-6, 3e-6, 3e-6),  # measured 3.8e-8, 2.3e-7, 7.5e-7, 6e-7
+    "five_bar_coupler_input": (5e-9, 2e-8, 3e-8, 1e-6),  # measured 1.2e-9, 4.5e-9, 8.5e-9, 3.2e-7
 }
 
 
