@@ -146,14 +146,14 @@ def buckling_factor(answer: Answer, limit: float = LIMIT) -> float:
     if not ok or sign == 0:
         return t
     previous = None
-    dt = 0.25
+    dt = 0.5
     while t < limit:
         t1 = min(limit, t + dt)
         guess = x if previous is None else x + (x - previous[0]) * (t1 - t) / (t - previous[1])
         x1, ok, s1 = state(x, t1, guess)
         if ok and s1 == sign:
             previous, x, t = (x, t), x1, t1
-            dt = min(1.0, dt * 1.5)
+            dt = min(3.0, dt * 2)
             continue
         if ok:
             # a sign change (or a plate's sway load) in (t, t1): bisect
