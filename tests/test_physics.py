@@ -337,10 +337,10 @@ def test_eval_json_adds_hinges_and_energy(tmp_path, capsys, level):
         "hinges",
         "energy",
     }
-    # equilibrium also reports the designer's quantities (tests/test_equilibrium_reported.py);
-    # "buckling" only with loads
-    reported = {"error_estimate", "stiffness", "plates"}
-    assert set(data) == keys | (reported if level == "equilibrium" else set())
+    # both report the designer's quantities (tests/test_equilibrium_reported.py,
+    # tests/test_loaded_reported.py), "buckling" only with loads; equilibrium its error estimate
+    reported = {"stiffness", "plates"} | ({"error_estimate"} if level == "equilibrium" else set())
+    assert set(data) == keys | reported
     assert data["level"] == level
     assert set(data["hinges"]) == {"A0", "A", "B0", "B"}
     for h in data["hinges"].values():

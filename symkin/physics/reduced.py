@@ -81,6 +81,10 @@ class Answer:
     energy: float = math.nan  # the plates' elastic energy, N·u (the plate relation's)
     # by hinge name: compliant minus rigid hinge angle (rad; zero on the inputs)
     angle_deviations: dict[str, float] = field(default_factory=dict)
+    # the rigid hinge angles (by label) it was solved at, and the solver (for what `loaded`
+    # reports beyond the deviations, symkin.physics.reduced_reported)
+    theta: dict[int, float] = field(default_factory=dict)
+    solver: Reduced | None = field(default=None, repr=False, compare=False)
 
 
 class Reduced:
@@ -190,6 +194,15 @@ class Reduced:
         self.x = sp.symbols(f"x_0:{self.size}", real=True)
         self.th = {a: sp.Symbol(f"th_{a}", real=True) for a in self.hinges}
         self.t = sp.Symbol("t", real=True)
+        # the reported quantities' parameters (symkin.physics.reduced_reported), zero at the
+        # solution: each input hinge's compliant angle beyond its rigid one, and a virtual load
+        # (F_x, F_y, M; N and N·u) at every point
+        self.inputs = [a for a in sorted(self.hinges) if self.hinges[a].is_input]
+        self.extra = [sp.Symbol(f"din_{a}", real=True) for a in self.inputs] + [
+            sp.Symbol(f"{c}_{k}", real=True)
+            for k in range(len(self.points))
+            for c in ("vfx", "vfy", "vm")
+        ]
         self._fns: dict = {}
         # the last Newton step's J (acceptance and truncation estimate, solve)
         self.last_jacobian = np.zeros((0, 0))
@@ -200,11 +213,29 @@ class Reduced:
         """Every intermediate quantity as a sympy expression of (x, th, t) and the plates'
         outputs, symbols `out[a]` = (along, across, omega) (the chain rule takes their
         derivatives from the plate relation's, docs/physics.md)."""
+        return self._state(False)
+
+    @cached_property
+    def _se(self) -> dict:
+        """:attr:`_s` with the reported quantities' parameters `extra` in it."""
+        return self._state(True)
+
+    def _state(self, extended: bool) -> dict:
         nu = len(self.unknowns)
         X = [xi * sp.Float(float(s), 17) for xi, s in zip(self.x, self.scale)]
         delta = dict.fromkeys(self.hinges, sp.S.Zero)
         for k, a in enumerate(self.unknowns):
             delta[a] = X[k]
+        # (link, at, force, moment, factor): the file's loads scale with t
+        loads = [(link, at, force, moment, self.t) for link, at, force, moment in self.loads]
+        if extended:
+            for k, a in enumerate(self.inputs):
+                delta[a] = self.extra[k]
+            virtual = self.extra[len(self.inputs) :]
+            for k, name in enumerate(sorted(self.points)):
+                link, at = self.points[name]
+                fx, fy, m = virtual[3 * k : 3 * k + 3]
+                loads.append((link, at, (fx, fy), m, sp.S.One))
         chord = {
             c: (X[nu + 3 * j], X[nu + 3 * j + 1], X[nu + 3 * j + 2])
             for j, c in enumerate(self.chords)
@@ -214,9 +245,9 @@ class Reduced:
         dphi = {i: sp.Add(*(sign[b] * delta[b] for b in self.paths[i])) for i in self.paths}
         # forces on links: the loads (times t) and the chord plates' reactions
         on_link = {i: [sp.S.Zero, sp.S.Zero] for i in self.paths}
-        for link, _, force, _ in self.loads:
-            on_link[link][0] += self.t * force[0]
-            on_link[link][1] += self.t * force[1]
+        for link, _, force, _, factor in loads:
+            on_link[link][0] += factor * force[0]
+            on_link[link][1] += factor * force[1]
         for c, (nx, ny, _) in chord.items():
             h = self.hinges[c]
             on_link[h.M] = [on_link[h.M][0] - nx, on_link[h.M][1] - ny]
@@ -268,6 +299,7 @@ class Reduced:
             "pf": pf,
             "out": out,
             "joint": joint,
+            "loads": loads,
         }
 
     def _chain(self, d: dict, tc, eta, frame, n, pf: dict, out: dict, a: int):
@@ -354,23 +386,8 @@ class Reduced:
             rows += [ox / self.lmin, oy / self.lmin]
         unit = self.F * self.L
         for a in range(1, self.n + 1):
-            h = self.hinges[a]
-            if h.is_input:
-                continue
-            xm = self._position(s, h.M, self.clamp_m[a])
-            total = []
-            for link, at, force, moment in self.loads:
-                if link in self.beyond[a]:
-                    arm = V.sub(self._position(s, link, at), xm)
-                    total.append(self.t * (V.cross(arm, force) + moment))
-            for c, (nx, ny, mu) in s["chord"].items():
-                hc = self.hinges[c]
-                xcm = self._position(s, hc.M, self.clamp_m[c])
-                if hc.M in self.beyond[a]:
-                    total.append(V.cross(V.sub(xcm, xm), (-nx, -ny)) - mu)
-                if hc.P in self.beyond[a]:
-                    total.append(V.cross(V.sub(xcm, xm), (nx, ny)) + mu)
-            rows.append((s["mom"][a] - h.sign * sp.Add(*total)) / unit)
+            if not self.hinges[a].is_input:
+                rows.append(self._balance(s, a) / unit)
         for c, (_, _, mu) in s["chord"].items():
             # an input chord's actuator takes up whatever moment the plate does not: μ is its
             # reaction (plate plus actuator), no relation
@@ -379,6 +396,82 @@ class Reduced:
         for a in sorted(s["joint"]):
             rows.append(s["joint"][a] / unit)
         return rows
+
+    def _balance(self, s: dict, a: int) -> sp.Expr:
+        """The plate's moment at M's clamp of tree hinge `a` less that of the loads and chord
+        loads on the links beyond it (about the clamp): zero at a non-input hinge, the moment
+        its actuator exerts on link M at an input."""
+        h = self.hinges[a]
+        xm = self._position(s, h.M, self.clamp_m[a])
+        total = []
+        for link, at, force, moment, factor in s["loads"]:
+            if link in self.beyond[a]:
+                arm = V.sub(self._position(s, link, at), xm)
+                total.append(factor * (V.cross(arm, force) + moment))
+        for c, (nx, ny, mu) in s["chord"].items():
+            hc = self.hinges[c]
+            xcm = self._position(s, hc.M, self.clamp_m[c])
+            if hc.M in self.beyond[a]:
+                total.append(V.cross(V.sub(xcm, xm), (-nx, -ny)) - mu)
+            if hc.P in self.beyond[a]:
+                total.append(V.cross(V.sub(xcm, xm), (nx, ny)) + mu)
+        return s["mom"][a] - h.sign * sp.Add(*total)
+
+    def _clamp_p(self, a: int):
+        h = self.hinges[a]
+        if self.symbolic:
+            return h.clamp(h.P)
+        return tuple(
+            sp.Float(sp.N(sp.sympify(v).subs(self._values_subs), 30), 30) for v in h.clamp(h.P)
+        )
+
+    def _reported(self, s: dict) -> list[sp.Expr]:
+        """Every input's actuator moment on link M (N·u: a tree hinge's moment balance, an input
+        chord's plate moment less μ), then every point's deviation and its link's rotation
+        beyond the rigid (x, y, φ), sorted by name."""
+        out = []
+        for a in self.inputs:
+            if a <= self.n:
+                out.append(self._balance(s, a))
+            else:
+                out.append(s["mom"][a] - s["chord"][a][2])
+        for name in sorted(self.points):
+            link, at = self.points[name]
+            out += [*self._deviation(s, link, at), s["dphi"][link]]
+        return out
+
+    def reported(self, x, theta, t: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+        """`_reported`'s values at the solution x and their total derivatives by the parameters
+        `extra` (implicit-function theorem: dx/dp = −J⁻¹ dR/dp, the plate relation's outputs
+        through the chain rule)."""
+        args, _, dins, outs, parts = self._eval(x, theta, t)
+        zero = [0.0] * len(self.extra)
+        dr, dins_p, ys, dy_x, dy_p, dy_o = self._fn("report")(*args, outs + zero)
+        q, n, k, o = len(self.extra), self.size, len(ys), len(outs)
+        dr = np.array(dr, dtype=float).reshape(n, q)
+        dins_p = np.array(dins_p, dtype=float).reshape(o, q)
+        ys = np.array(ys, dtype=float)
+        dy_x = np.array(dy_x, dtype=float).reshape(k, n)
+        dy_p = np.array(dy_p, dtype=float).reshape(k, q)
+        dy_o = np.array(dy_o, dtype=float).reshape(k, o)
+        block = np.zeros((o, o))
+        for j, d in enumerate(parts):
+            block[3 * j : 3 * j + 3, 3 * j : 3 * j + 3] = d
+        dins_x = dins.reshape(o, n) if o else np.zeros((0, n))
+        if n:
+            _, jo = self._fn("jac")(*args, outs)
+            jo = np.array(jo, dtype=float).reshape(n, o)
+            dx = -np.linalg.solve(self.jacobian(x, theta, t), dr + jo @ block @ dins_p)
+        else:
+            dx = np.zeros((0, q))
+        total = (dy_x + dy_o @ block @ dins_x) @ dx + dy_p + dy_o @ block @ dins_p
+        return ys, total
+
+    def clamps(self, x, theta, t: float = 1.0) -> dict[int, tuple[float, ...]]:
+        """Every plate's P clamp (x, y), M clamp (x, y) and link P's rotation, compliant."""
+        args, _, _, outs, _ = self._eval(x, theta, t)
+        v = [float(u) for u in self._fn("clamps")(*args, outs)]
+        return {a: tuple(v[5 * k : 5 * k + 5]) for k, a in enumerate(sorted(self.plate))}
 
     # -- numbers -------------------------------------------------------------------------------
     def _lambdify(self, exprs: list, extra: list | None = None):
@@ -421,6 +514,30 @@ class Reduced:
             fn = self._lambdify([self.th[a] + s["delta"][a] for a in sorted(self.hinges)])
         elif key == "loads":
             exprs = [v for a in sorted(self.hinges) for v in (*s["n"][a], s["mom"][a])]
+            fn = self._lambdify(exprs, outs)
+        elif key == "report":
+            se = self._se
+            rows = sp.Matrix(self._rows(se))
+            ins = sp.Matrix([v for a, j, *_ in self.segs for v in se["pf"][a, j]])
+            ys = sp.Matrix(self._reported(se))
+            parts = [
+                list(_jacobian(rows, self.extra)),
+                list(_jacobian(ins, self.extra)),
+                list(ys),
+                list(_jacobian(ys, self.x)),
+                list(_jacobian(ys, self.extra)),
+                list(_jacobian(ys, outs)),
+            ]
+            fn = self._lambdify(parts, outs + self.extra)
+        elif key == "clamps":
+            exprs = []
+            for a in sorted(self.plate):
+                h = self.hinges[a]
+                exprs += [
+                    *self._position(s, h.P, tuple(self._clamp_p(a))),
+                    *self._position(s, h.M, self.clamp_m[a]),
+                    s["phi"][h.P] + s["dphi"][h.P],
+                ]
             fn = self._lambdify(exprs, outs)
         elif key == "energy":
             th, p, f, ea, es = sp.symbols("theta p f e_a e_s", real=True)
@@ -533,7 +650,9 @@ class Reduced:
         zero = np.zeros(self.size)
         if not self.size:
             # every hinge an input of an open chain: the plates' loads follow from statics
-            return self._answer(zero, theta, 0, 1)
+            answer = self._answer(zero, theta, 0, 1)
+            answer.theta, answer.solver = dict(theta), self
+            return answer
         sign0 = self._sign(zero, theta, 0.0)
         x, total, ok = self.newton(zero, theta, 1.0)
         steps = 1
@@ -567,18 +686,27 @@ class Reduced:
                     ds /= 2
         if not ok:
             return Answer({}, x, total, steps, math.nan, math.nan, "no convergence")
-        return self._answer(x, theta, total, steps)
+        answer = self._answer(x, theta, total, steps)
+        answer.theta, answer.solver = dict(theta), self
+        return answer
+
+    def compression(self, x, theta, t: float) -> float:
+        """The worst plate's compression over its sway buckling load (its p̃ over −π²) at
+        (x, θ, t), from the plates' inputs alone (no relation: past buckling too)."""
+        args = (list(map(float, x)), [theta[a] for a in sorted(self.hinges)], t)
+        ins = self._fn("plates")(*args)[0]
+        worst = 0.0
+        for k, (_, _, _, _, ea, es) in enumerate(self.segs):
+            p = float(ins[3 * k + 1])  # a half plate's: the plate's over segments²
+            g = 1 + float(ea - es) * p
+            worst = max(worst, -g * p * self.segments**2 / math.pi**2)
+        return worst
 
     def _answer(self, x, theta, total: int, steps: int) -> Answer:
         """The deviations at the solution x, the worst plate's compression and the truncation
         estimate, refused where either is too large."""
         dev = self.deviations(x, theta)
-        ins = self._eval(x, theta, 1.0)[1]
-        worst_p = 0.0
-        for k, (_, _, _, _, ea, es) in enumerate(self.segs):
-            p = float(ins[3 * k + 1])  # a half plate's: the plate's over segments²
-            g = 1 + float(ea - es) * p
-            worst_p = max(worst_p, -g * p * self.segments**2 / math.pi**2)
+        worst_p = self.compression(x, theta, 1.0)
         # truncation estimate: one Newton step of the order-2 equations from the solution, with
         # the last Newton step's J (at s = 1: the configuration's own θ)
         x2 = x
@@ -636,4 +764,4 @@ class Reduced:
 def _jacobian(rows: sp.Matrix, by) -> sp.Matrix:
     """rows' Jacobian by the symbols `by`, empty (len(rows) x 0) when there are none."""
     by = list(by)
-    return rows.jacobian(by) if by else sp.zeros(len(rows), 0)
+    return rows.jacobian(by) if by and len(rows) else sp.zeros(len(rows), len(by))

@@ -147,31 +147,54 @@ def plates(
     """Largest normal stress (Pa), its strain and the safety factor of every plate; `moduli`:
     E' of each plate (Pa), `allowable`: its allowable stress (Pa) or None."""
     out = {}
-    frac = np.arange(1, sections + 1) / sections
     for h in system.hinges:
         if not h.plate:
             continue
         k = system.index[h.name]
         k0, lx, ly = (float(u[k + j]) for j in range(3))
-        stretch = None if h.stretch is None else float(h.stretch) / frac**2
-        shear = None if h.shear is None else float(h.shear) / frac**2
-        end = beams.shoot(k0 * frac, lx * frac**2, ly * frac**2, 1e-18, False, stretch, shear)
-        psi = np.concatenate([[0.0], end.psi])
-        curvature = np.concatenate([[k0], end.omega / frac])  # ψ'(s) in units of 1/l
-        normal = lx * np.cos(psi) + ly * np.sin(psi)  # f_N = N l²/EI
-        strain = np.abs(curvature) * h.slender / 2 + np.abs(normal) * h.slender**2 / 12
-        j = int(np.argmax(strain))
-        value, where = float(strain[j]), j / sections
-        if 0 < j < sections:
-            # the parabola's vertex through the three samples around an interior maximum
-            a, b, c = strain[j - 1], strain[j], strain[j + 1]
-            bend = a - 2 * b + c
-            if bend < 0:
-                shift = (a - c) / (2 * bend)
-                value = float(b - (a - c) * shift / 4)
-                where = float((j + shift) / sections)
-        stress = moduli[h.name] * value
-        limit = allowable.get(h.name)
-        safety = None if limit is None else (limit / stress if stress > 0 else float("inf"))
-        out[h.name] = PlateStress(stress, value, safety, where)
+        out[h.name] = plate_stress(
+            (k0, lx, ly),
+            h.stretch,
+            h.shear,
+            float(h.slender),
+            moduli[h.name],
+            allowable.get(h.name),
+            sections,
+        )
     return out
+
+
+def plate_stress(
+    loads: tuple[float, float, float],
+    stretch: float | None,
+    shear: float | None,
+    slender: float,
+    modulus: float,
+    limit: float | None,
+    sections: int = SECTIONS,
+) -> PlateStress:
+    """One plate's largest normal stress (Pa) from `loads` (k0, λx, λy) = (m_P l/EI, n l²/EI in
+    P's plate frame), its compliances (None: an elastica), t/l and E' (Pa), shot to `sections`
+    sections; `limit` its allowable stress (Pa) or None."""
+    k0, lx, ly = loads
+    frac = np.arange(1, sections + 1) / sections
+    stretch_s = None if stretch is None else float(stretch) / frac**2
+    shear_s = None if shear is None else float(shear) / frac**2
+    end = beams.shoot(k0 * frac, lx * frac**2, ly * frac**2, 1e-18, False, stretch_s, shear_s)
+    psi = np.concatenate([[0.0], end.psi])
+    curvature = np.concatenate([[k0], end.omega / frac])  # ψ'(s) in units of 1/l
+    normal = lx * np.cos(psi) + ly * np.sin(psi)  # f_N = N l²/EI
+    strain = np.abs(curvature) * slender / 2 + np.abs(normal) * slender**2 / 12
+    j = int(np.argmax(strain))
+    value, where = float(strain[j]), j / sections
+    if 0 < j < sections:
+        # the parabola's vertex through the three samples around an interior maximum
+        a, b, c = strain[j - 1], strain[j], strain[j + 1]
+        bend = a - 2 * b + c
+        if bend < 0:
+            shift = (a - c) / (2 * bend)
+            value = float(b - (a - c) * shift / 4)
+            where = float((j + shift) / sections)
+    stress = modulus * value
+    safety = None if limit is None else (limit / stress if stress > 0 else float("inf"))
+    return PlateStress(stress, value, safety, where)

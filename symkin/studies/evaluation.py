@@ -33,7 +33,7 @@ from ..model import expressions, special
 from ..model.mechanism import Mechanism, check_values
 from ..physics import equilibrium as physical_equilibrium
 from ..physics import model_error as physical_model_error
-from ..physics import reduced
+from ..physics import reduced, reduced_reported
 from ..physics.result import ActuatorLoad, HingeLoad, InputLoad, PlateStress
 
 #: The mpmath evaluation of the derivation, then the generated-code backends (their registry).
@@ -659,6 +659,22 @@ def reduced_equilibrium(
     return answer
 
 
+#: The Evaluation fields `loaded` reports beyond the deviations (docs/physics.md).
+_REPORTED = ("actuation", "stiffness", "plates", "buckling")
+
+
+def _reported_fields(answer: reduced.Answer, scale: float) -> dict:
+    """`loaded`'s input moments and stiffness, point stiffness, plate stress and buckling factor
+    as Evaluation fields (symkin.physics.reduced_reported)."""
+    rep = reduced_reported.report(answer, scale)
+    return {
+        "actuation": rep.inputs,
+        "stiffness": rep.stiffness,
+        "plates": rep.plates,
+        "buckling": rep.buckling,
+    }
+
+
 def with_model_error(
     result: Evaluation, mechanism: Mechanism, values: Mapping[sp.Symbol, sp.Expr]
 ) -> Evaluation:
@@ -1170,6 +1186,7 @@ class _Mpmath:
                 energy=float(answer.energy * scale),
                 links=links,
                 units=mech.units,
+                **_reported_fields(answer, float(scale)),
             )
         return with_model_error(result, mech, exact_params)
 
@@ -1693,7 +1710,8 @@ def _generated(
         # The plates' loads and energy are not in the generated evaluators' output: the
         # derivation gives them, as it gives the dyad states (docs/physics.md).
         physical = loaded(analysis, inputs, params)
-        extra = {"hinges": physical.hinges, "energy": physical.energy}
+        extra = {"hinges": physical.hinges, "energy": physical.energy, "units": mech.units}
+        extra |= {k: getattr(physical, k) for k in _REPORTED}
     result = Evaluation(
         level=level,
         backend=backend,

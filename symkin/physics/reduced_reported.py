@@ -1,0 +1,172 @@
+"""What the `loaded` level reports beyond the deviations (docs/physics.md, "What loaded
+reports"), from the reduced equilibrium's solution (symkin.physics.reduced) and its Jacobian J:
+the quantities `equilibrium` reports (symkin.physics.reported), in the same units.
+
+- every input's actuator moment (a tree hinge's moment balance of the links beyond it, an input
+  chord's plate moment less its μ) and dM/dθ: the input enters as its compliant angle beyond
+  the rigid one, δ_in (zero at the solution; the equations depend on the compliant angles only),
+  so dM/dθ = dM/dδ_in along dx = −J⁻¹ ∂R/∂δ_in, the other inputs held;
+- every point's 3×3 stiffness K = C⁻¹, C = d(ΔX, ΔY, Δφ)/d(Fx, Fy, M) of a virtual load at the
+  point (it enters the tree forces and the moment balances), the inputs held;
+- every plate's largest normal stress along it: its end loads (the solution's force and moment
+  at M's clamp, carried to P's clamp by the plate's moment balance) shot along the plate as a
+  geometrically exact beam (symkin.physics.reported.plate_stress);
+- the buckling factor: continuation in the load factor t from 1 with the inputs held, until
+  det J changes sign, a plate reaches its sway buckling load or Newton cannot go on (a limit
+  point), located by bisection; math.inf when none up to `LIMIT`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import sympy as sp
+
+from ..core import vectors as V
+from .reduced import Answer
+from .reported import SINGULAR, plate_stress
+from .result import InputLoad, PlateStress
+from .stiffness import modulus, plate_stiffness
+
+#: The buckling search stops at this factor on the file's loads (as equilibrium's).
+LIMIT = 10.0
+#: ... and locates a sign change or a limit point to this relative width.
+LOCATE = 1e-10
+
+
+@dataclass(frozen=True)
+class Report:
+    """What `loaded` reports beyond the deviations (symkin.physics.result's types)."""
+
+    inputs: dict[str, InputLoad]
+    stiffness: dict[str, list | None]
+    plates: dict[str, PlateStress]
+    buckling: float | None  # None: the file has no loads
+
+
+def report(answer: Answer, scale: float, buckling: bool = True) -> Report:
+    """The reported quantities at a solved `answer` (not refused); `scale` metres per file
+    unit; `buckling` False skips the search (the loads' factor is then None)."""
+    red = answer.solver
+    assert red is not None
+    theta = answer.theta
+    values, rates = red.reported(answer.x, theta)
+    names = {a: h.name for a, h in red.hinges.items()}
+    inputs = {}
+    for k, a in enumerate(red.inputs):
+        inputs[names[a]] = InputLoad(
+            float(theta[a]), float(values[k]) * scale, float(rates[k, k]) * scale
+        )
+    stiffness: dict[str, list | None] = {}
+    first = len(red.inputs)
+    # the scales to judge C's conditioning by (a lone hinge has no distance between hinges)
+    L = max(red.L, red.lmin)
+    F = max([float(d["EI"]) / (float(d["l"]) * L) for d in red.plate.values()] or [1.0])
+    for k, name in enumerate(sorted(red.points)):
+        link = red.points[name][0]
+        rows = slice(first + 3 * k, first + 3 * k + 3)
+        compliance = rates[rows, rows]
+        scaled = compliance * np.array([F / L, F / L, F])[:, None] * np.array([1, 1, 1 / L])
+        if link == 0 or not np.all(np.isfinite(scaled)) or np.linalg.cond(scaled) > SINGULAR:
+            stiffness[name] = None
+        else:
+            stiffness[name] = np.linalg.inv(compliance).tolist()
+    return Report(
+        inputs,
+        stiffness,
+        plates(answer),
+        buckling_factor(answer) if buckling and red.loads else None,
+    )
+
+
+def plates(answer: Answer) -> dict[str, PlateStress]:
+    """Every plate's largest stress from its end loads at the solution."""
+    red = answer.solver
+    assert red is not None
+    mech = red.kin.mechanism
+    values = red._values_subs
+    stiff = plate_stiffness(mech, "loaded")
+    hinge = {h.name: h for h in mech.hinges}
+    clamps = red.clamps(answer.x, answer.theta)
+    out = {}
+    for a, (px, py, mx, my, turn) in clamps.items():
+        name = red.hinges[a].name
+        d = red.plate[a]
+        ei, length = float(d["EI"]), float(d["l"])
+        nx, ny, mom = answer.hinge_loads[name]
+        # the moment P exerts on the plate at P's clamp, from the plate's moment balance
+        m_p = mom + V.cross((mx - px, my - py), (nx, ny))
+        lx, ly = V.rot(-(turn + float(d["alpha"])), (nx * length**2 / ei, ny * length**2 / ei))
+        s = stiff[name]
+        reissner = s.stretches
+        slender = math.sqrt(float(sp.N((12 * s.EI / (s.EA * s.length**2)).subs(values), 20)))
+        h = hinge[name]
+        limit = None
+        if h.allowable_stress is not None:
+            limit = float(sp.N(sp.sympify(h.allowable_stress).subs(values), 20))
+        out[name] = plate_stress(
+            (m_p * length / ei, float(lx), float(ly)),
+            float(d["ea"]) if reissner else None,
+            float(d["es"]) if reissner else None,
+            slender,
+            float(sp.N(modulus(h).subs(values), 20)),
+            limit,
+        )
+    return out
+
+
+def buckling_factor(answer: Answer, limit: float = LIMIT) -> float:
+    """The smallest factor t ≥ 1 on the file's loads, the inputs held, at which det J changes
+    sign, a plate reaches its sway buckling load (the plate relation's pole) or the path ends
+    in a limit point (Newton fails ever closer to it); math.inf when none up to `limit`."""
+    red = answer.solver
+    assert red is not None
+    theta = answer.theta
+
+    def state(x, t: float, guess) -> tuple[np.ndarray, bool, float]:
+        """(x, converged, det J's sign) at load factor t from `guess`."""
+        if red.size:
+            x, _, ok = red.newton(guess, theta, t)
+        else:
+            x, ok = guess, True
+        if not ok:
+            return x, False, 0.0
+        try:
+            if red.compression(x, theta, t) >= 1:
+                return x, True, 0.0  # a plate at its sway buckling load: as a sign change
+            sign = red._sign(x, theta, t) if red.size else 1.0
+        except (ValueError, ZeroDivisionError, OverflowError, np.linalg.LinAlgError):
+            return x, False, 0.0
+        return x, True, sign
+
+    x, t = answer.x, 1.0
+    x, ok, sign = state(x, t, x)
+    if not ok or sign == 0:
+        return t
+    previous = None
+    dt = 0.5
+    while t < limit:
+        t1 = min(limit, t + dt)
+        guess = x if previous is None else x + (x - previous[0]) * (t1 - t) / (t - previous[1])
+        x1, ok, s1 = state(x, t1, guess)
+        if ok and s1 == sign:
+            previous, x, t = (x, t), x1, t1
+            dt = min(3.0, dt * 2)
+            continue
+        if ok:
+            # a sign change (or a plate's sway load) in (t, t1): bisect
+            lo, hi, xl = t, t1, x
+            while hi - lo > LOCATE * hi:
+                mid = (lo + hi) / 2
+                xm, okm, sm = state(xl, mid, xl)
+                if okm and sm == sign:
+                    lo, xl = mid, xm
+                else:
+                    hi = mid
+            return (lo + hi) / 2
+        if dt <= LOCATE * t:
+            return t  # a limit point: Newton does not go on
+        dt /= 2
+    return math.inf
