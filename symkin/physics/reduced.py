@@ -34,6 +34,7 @@ nothing more at the solution).
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -472,6 +473,17 @@ class Reduced:
         args, _, _, outs, _ = self._eval(x, theta, t)
         v = [float(u) for u in self._fn("clamps")(*args, outs)]
         return {a: tuple(v[5 * k : 5 * k + 5]) for k, a in enumerate(sorted(self.plate))}
+
+    def twin(self, key: str, modules: Callable[[], list] | list) -> Reduced:
+        """This derivation lambdified into other `modules`, kept under `key`: the buckling
+        search's many solves run on the float64 kernels, the derivation shared."""
+        twins = self.__dict__.setdefault("_twins", {})
+        if key not in twins:
+            other = copy.copy(self)
+            other.modules, other._fns = modules, {}
+            other.__dict__.pop("_twins", None)
+            twins[key] = other
+        return twins[key]
 
     # -- numbers -------------------------------------------------------------------------------
     def _lambdify(self, exprs: list, extra: list | None = None):

@@ -25,7 +25,7 @@ import numpy as np
 import sympy as sp
 
 from ..core import vectors as V
-from .reduced import Answer
+from .reduced import Answer, Reduced
 from .reported import SINGULAR, plate_stress
 from .result import InputLoad, PlateStress
 from .stiffness import modulus, plate_stiffness
@@ -46,9 +46,12 @@ class Report:
     buckling: float | None  # None: the file has no loads
 
 
-def report(answer: Answer, scale: float, buckling: bool = True) -> Report:
+def report(
+    answer: Answer, scale: float, buckling: bool = True, search: Reduced | None = None
+) -> Report:
     """The reported quantities at a solved `answer` (not refused); `scale` metres per file
-    unit; `buckling` False skips the search (the loads' factor is then None)."""
+    unit; `buckling` False skips the search (the loads' factor is then None); `search` the
+    solver the buckling search runs on (by default the answer's)."""
     red = answer.solver
     assert red is not None
     theta = answer.theta
@@ -77,7 +80,7 @@ def report(answer: Answer, scale: float, buckling: bool = True) -> Report:
         inputs,
         stiffness,
         plates(answer),
-        buckling_factor(answer) if buckling and red.loads else None,
+        buckling_factor(answer, solver=search) if buckling and red.loads else None,
     )
 
 
@@ -117,11 +120,14 @@ def plates(answer: Answer) -> dict[str, PlateStress]:
     return out
 
 
-def buckling_factor(answer: Answer, limit: float = LIMIT) -> float:
+def buckling_factor(
+    answer: Answer, limit: float = LIMIT, solver: Reduced | None = None
+) -> float:
     """The smallest factor t ≥ 1 on the file's loads, the inputs held, at which det J changes
     sign, a plate reaches its sway buckling load (the plate relation's pole) or the path ends
-    in a limit point (Newton fails ever closer to it); math.inf when none up to `limit`."""
-    red = answer.solver
+    in a limit point (Newton fails ever closer to it); math.inf when none up to `limit`.
+    `solver`: the answer's derivation in other kernels (float64: tens of solves)."""
+    red = solver or answer.solver
     assert red is not None
     theta = answer.theta
 

@@ -603,6 +603,11 @@ def equilibrium(
 _REDUCED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
+def _float_modules() -> list:
+    """lambdify's modules for float64 code with symkin's kernels (taken after a derivation)."""
+    return [float64_namespace(), "math"]
+
+
 def reduced_equilibrium(
     analysis: Analysis,
     inputs: Mapping[str, object],
@@ -634,12 +639,7 @@ def reduced_equilibrium(
     def solver(count: int) -> reduced.Reduced:
         key = (tuple(sorted((str(k), str(v)) for k, v in exact_params.items())), backend, count)
         if key not in solvers:
-            modules = None
-            if backend == "numpy":
-
-                def modules() -> list:
-                    return [float64_namespace(), "math"]
-
+            modules = _float_modules if backend == "numpy" else None
             solvers[key] = reduced.Reduced(analysis.kin, exact_params, modules, count)
         return solvers[key]
 
@@ -665,8 +665,11 @@ _REPORTED = ("actuation", "stiffness", "plates", "buckling")
 
 def _reported_fields(answer: reduced.Answer, scale: float) -> dict:
     """`loaded`'s input moments and stiffness, point stiffness, plate stress and buckling factor
-    as Evaluation fields (symkin.physics.reduced_reported)."""
-    rep = reduced_reported.report(answer, scale)
+    as Evaluation fields (symkin.physics.reduced_reported); the buckling search's solves in
+    float64 (an mpmath one is seconds per solve)."""
+    assert answer.solver is not None
+    search = answer.solver.twin("float64", _float_modules)
+    rep = reduced_reported.report(answer, scale, search=search)
     return {
         "actuation": rep.inputs,
         "stiffness": rep.stiffness,
