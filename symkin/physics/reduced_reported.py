@@ -120,9 +120,7 @@ def plates(answer: Answer) -> dict[str, PlateStress]:
     return out
 
 
-def buckling_factor(
-    answer: Answer, limit: float = LIMIT, solver: Reduced | None = None
-) -> float:
+def buckling_factor(answer: Answer, limit: float = LIMIT, solver: Reduced | None = None) -> float:
     """The smallest factor t ≥ 1 on the file's loads, the inputs held, at which det J changes
     sign, a plate reaches its sway buckling load (the plate relation's pole) or the path ends
     in a limit point (Newton fails ever closer to it); math.inf when none up to `limit`.
