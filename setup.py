@@ -21,6 +21,8 @@ setup(
             "*/actuators.py",
             "*/reduced.c",
             "*/reduced.py",
+            "*/reduced_sens.c",
+            "*/reduced_sens.py",
         ]
     },
 )

@@ -302,12 +302,16 @@ def test_sweep_refuses_bad_options_before_work(args, fragment, tmp_path, capsys)
 
 
 def test_tolerance_at_a_level_without_sensitivities_names_the_levels_that_have_them(capsys):
-    """`loaded` has no sensitivities: that is what the message says (exit 2), not that the
-    mechanism cannot be evaluated."""
+    """Every generated level has sensitivities (`loaded` too); `equilibrium` has none: the
+    command line does not offer it (exit 2), and the check says so, naming the levels that
+    have them."""
     path = str(EXAMPLES / "four_bar.toml")
-    for level in ("loaded",):
-        code = main(["tolerance", path, "--vary", "l=±1e-5", "--level", level])
-        err = capsys.readouterr().err
-        assert code == 2, err
-        assert f"the {level} level has no sensitivities" in err, err
-        assert "paper, first_order, exact" in err and "cannot be evaluated" not in err
+    with pytest.raises(SystemExit) as stopped:
+        main(["tolerance", path, "--vary", "l=±1e-5", "--level", "equilibrium"])
+    err = capsys.readouterr().err
+    assert stopped.value.code == 2 and "invalid choice" in err, err
+    with pytest.raises(symkin.InputError) as found:
+        tolerance.check_level("equilibrium")
+    err = found.value.render()
+    assert "the equilibrium level has no sensitivities" in err, err
+    assert "paper, first_order, exact, loaded" in err

@@ -3,7 +3,7 @@
  * Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 65, rigid_res 51, linear 114, newton 259, rigid_points 19, loaded_plates1 132, loaded_system1 523, loaded_dev1 60, loaded_plates2 349, loaded_system2 1557, loaded_dev2 143, dev_paper 38, dev_first_order 52, dev_exact 62, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339, plate_relation4 312, plate_values2 62, plate_rest4 39.
+ * Operation counts after CSE: rigid 65, rigid_res 51, linear 114, newton 259, rigid_points 19, loaded_plates1 132, loaded_system1 523, loaded_dev1 60, loaded_plates2 349, loaded_system2 1557, loaded_dev2 143, dev_paper 38, dev_first_order 52, dev_exact 62, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339, loaded_sens1 581, loaded_sens2 1581, plate_relation4 312, plate_values2 62, plate_rest4 39, plate_eps4 158.
  */
 #include "four_bar.h"
 
@@ -18,7 +18,8 @@ enum {
     SK_NP = 1,          /* points */
     SK_NL = 4,          /* links whose rotation is reported */
     SK_NV = 2,          /* variables of the sensitivities: parameters, inputs */
-    SK_NQ = SK_NPAR + 2 + 1,  /* what the routines read */
+    /* what the routines read: the parameters (loaded: its deviation, variant and x) */
+    SK_NQ = SK_NPAR + 13 + 1,
     SK_RN = 10 + 1,  /* loaded: the most unknowns */
     SK_RS = 8 + 1,  /* loaded: the most half plates */
     SK_RP = 1,  /* loaded: the points its deviation routines give */
@@ -139,6 +140,12 @@ static double symkin_bcol_a_d1_at(double p, double h)
     return ((-8.0) + h * ((4.0) + h * ((4.0 + p * (2.0)) + h * (p * (-1.0))))) / (h * (h * (h * (p * (p * (32.0))))));
 }
 
+/* bcol_a_d1(p) = d^1/dp^1 of p w(p)/(3 T^2). */
+static double symkin_bcol_a_d1(double p)
+{
+    return symkin_bcol_a_d1_at(p, symkin_bcol_h(p));
+}
+
 /* bcol_e1(p) = (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_e1_at(double p, double h)
 {
@@ -159,6 +166,12 @@ static double symkin_bcol_e1_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return ((-48.0) + h * ((48.0) + h * ((p * (8.0)) + h * ((p * (-4.0)) + h * (p * (p * (1.0))))))) / (h * (h * (p * (p * (512.0)))));
+}
+
+/* bcol_e1(p) = (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2). */
+static double symkin_bcol_e1(double p)
+{
+    return symkin_bcol_e1_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_e1_d1(p) = d^1/dp^1 of (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (15 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -183,6 +196,12 @@ static double symkin_bcol_e1_d1_at(double p, double h)
     return ((192.0) + h * ((96.0) + h * ((-288.0 + p * (-48.0)) + h * ((p * (-16.0)) + h * ((p * (24.0 + p * (4.0))) + h * ((p * (p * (-2.0))) + h * (p * (p * (p * (-1.0)))))))))) / (h * (h * (h * (p * (p * (p * (2048.0)))))));
 }
 
+/* bcol_e1_d1(p) = d^1/dp^1 of (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2). */
+static double symkin_bcol_e1_d1(double p)
+{
+    return symkin_bcol_e1_d1_at(p, symkin_bcol_h(p));
+}
+
 /* bcol_e1_d2(p) = d^2/dp^2 of (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (15 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_e1_d2_at(double p, double h)
 {
@@ -203,6 +222,12 @@ static double symkin_bcol_e1_d2_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return ((-2304.0) + h * ((-3072.0) + h * ((-384.0 + p * (768.0)) + h * ((5760.0 + p * (768.0)) + h * ((p * (64.0 + p * (-32.0))) + h * ((p * (-480.0 + p * (-64.0))) + h * ((p * (p * (8.0 + p * (-16.0)))) + h * ((p * (p * (p * (16.0)))) + h * (p * (p * (p * (p * (3.0))))))))))))) / (h * (h * (h * (h * (p * (p * (p * (p * (16384.0)))))))));
+}
+
+/* bcol_e1_d2(p) = d^2/dp^2 of (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2). */
+static double symkin_bcol_e1_d2(double p)
+{
+    return symkin_bcol_e1_d2_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_e2(p) = -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -226,6 +251,12 @@ static double symkin_bcol_e2_at(double p, double h)
     return ((240.0) + h * ((-240.0) + h * ((p * (-24.0)) + h * ((p * (4.0)) + h * (p * (p * (-1.0))))))) / (p * (p * (p * (1024.0))));
 }
 
+/* bcol_e2(p) = -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3). */
+static double symkin_bcol_e2(double p)
+{
+    return symkin_bcol_e2_at(p, symkin_bcol_h(p));
+}
+
 /* bcol_e2_d1(p) = d^1/dp^1 of -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_e2_d1_at(double p, double h)
 {
@@ -245,6 +276,12 @@ static double symkin_bcol_e2_d1_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return ((-1680.0) + h * ((1680.0 + p * (-48.0)) + h * ((p * (216.0)) + h * ((p * (-28.0 + p * (8.0))) + h * ((p * (p * (3.0))) + h * (p * (p * (p * (1.0))))))))) / (p * (p * (p * (p * (2048.0)))));
+}
+
+/* bcol_e2_d1(p) = d^1/dp^1 of -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3). */
+static double symkin_bcol_e2_d1(double p)
+{
+    return symkin_bcol_e2_d1_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_e2_d2(p) = d^2/dp^2 of -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -268,6 +305,12 @@ static double symkin_bcol_e2_d2_at(double p, double h)
     return ((60480.0 + p * (-192.0)) + h * ((-60480.0 + p * (3072.0)) + h * ((p * (-8928.0 + p * (144.0))) + h * ((p * (1008.0 + p * (-608.0))) + h * ((p * (p * (-12.0 + p * (-4.0)))) + h * ((p * (p * (p * (-40.0)))) + h * (p * (p * (p * (p * (-5.0))))))))))) / (p * (p * (p * (p * (p * (16384.0))))));
 }
 
+/* bcol_e2_d2(p) = d^2/dp^2 of -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3). */
+static double symkin_bcol_e2_d2(double p)
+{
+    return symkin_bcol_e2_d2_at(p, symkin_bcol_h(p));
+}
+
 /* bcol_e3(p) = -(3T^4p^2 + 20T^3p - 24T^2p - 48T + 48)/(3072 T^4 p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (13 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_e3_at(double p, double h)
 {
@@ -287,6 +330,33 @@ static double symkin_bcol_e3_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return ((-48.0) + h * ((48.0) + h * ((p * (24.0)) + h * ((p * (-20.0)) + h * (p * (p * (-3.0))))))) / (h * (h * (h * (h * (p * (3072.0))))));
+}
+
+/* bcol_e3_d1(p) = d^1/dp^1 of -(3T^4p^2 + 20T^3p - 24T^2p - 48T + 48)/(3072 T^4 p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
+static double symkin_bcol_e3_d1_at(double p, double h)
+{
+    const double d = p - 6.0;
+    const double d2 = d * d;
+    const double d4 = d2 * d2;
+    const double d8 = d4 * d4;
+    const double s = 1.0 / (p + 39.47841760435743);
+    if (p > -4.0 && p < 16.0) {
+        return ((((-62317.1090282084 + d * -2601.803112996573) + (-98.24150073157513 + d * -1.449920896321523) * d2) + ((-0.012275915872263935 + d * -1.1390294659006214e-05) + (-5.8952099340217056e-08 + d * 3.428021782217453e-10) * d2) * d4) + (((2.3149571793056234e-12 + d * -8.658295175739011e-14) + (1.41785207937709e-15 + d * -1.8163666924134298e-17) * d2) + (2.1127919490076908e-19 + d * -2.172980716945177e-21) * d4) * d8) * (s * s * s * s * s);
+    }
+    if (p >= 16.0) {
+        const double u = 0.5 * sqrt(p);
+        const double tau = 1.0 - h;
+        const double sigma = h * (2.0 - h);
+        return (((-32.0) + sigma * ((112.0 + u * (-64.0)) + sigma * (-80.0 + u * (-176.0 + u * (192.0))))) * (1.0 + tau) - sigma * (sigma * ((u * (-64.0)) + sigma * (u * (-176.0))))) / (((u * (98304.0)) + sigma * ((u * (-196608.0)) + sigma * (u * (98304.0)))) * (1.0 + tau) - sigma * ((u * (98304.0)) + sigma * ((u * (-196608.0)) + sigma * (u * (98304.0)))));
+    }
+    if (!(p > -9.869604401089358)) return NAN;
+    return ((192.0) + h * ((-240.0) + h * ((48.0 + p * (-96.0)) + h * ((p * (104.0)) + h * ((p * (-20.0 + p * (12.0))) + h * (p * (p * (-11.0)))))))) / (h * (h * (h * (h * (h * (p * (p * (6144.0))))))));
+}
+
+/* bcol_e3_d1(p) = d^1/dp^1 of -(3T^4p^2 + 20T^3p - 24T^2p - 48T + 48)/(3072 T^4 p). */
+static double symkin_bcol_e3_d1(double p)
+{
+    return symkin_bcol_e3_d1_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_e3c(p) = e3'(p) + 1/1920, at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (13 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -310,6 +380,12 @@ static double symkin_bcol_e3c_at(double p, double h)
     return ((960.0) + h * ((-1200.0) + h * ((240.0 + p * (-480.0)) + h * ((p * (520.0)) + h * ((p * (-100.0 + p * (60.0))) + h * (p * (p * (-39.0)))))))) / (h * (h * (h * (h * (h * (p * (p * (30720.0))))))));
 }
 
+/* bcol_e3c(p) = e3'(p) + 1/1920. */
+static double symkin_bcol_e3c(double p)
+{
+    return symkin_bcol_e3c_at(p, symkin_bcol_h(p));
+}
+
 /* bcol_e3c_d1(p) = d^1/dp^1 of e3'(p) + 1/1920, at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_e3c_d1_at(double p, double h)
 {
@@ -329,6 +405,12 @@ static double symkin_bcol_e3c_d1_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return ((-960.0) + h * ((1152.0) + h * ((-144.0 + p * (528.0)) + h * ((-48.0 + p * (-544.0)) + h * ((p * (56.0 + p * (-84.0))) + h * ((p * (20.0 + p * (64.0))) + h * (p * (p * (-5.0 + p * (3.0)))))))))) / (h * (h * (h * (h * (h * (h * (p * (p * (p * (12288.0))))))))));
+}
+
+/* bcol_e3c_d1(p) = d^1/dp^1 of e3'(p) + 1/1920. */
+static double symkin_bcol_e3c_d1(double p)
+{
+    return symkin_bcol_e3c_d1_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_invt(p) = 1/T(p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (12 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -379,6 +461,12 @@ static double symkin_bcol_invt_d1_at(double p, double h)
     return ((-4.0) + h * ((4.0) + h * (p * (1.0)))) / (h * (h * (p * (8.0))));
 }
 
+/* bcol_invt_d1(p) = d^1/dp^1 of 1/T(p). */
+static double symkin_bcol_invt_d1(double p)
+{
+    return symkin_bcol_invt_d1_at(p, symkin_bcol_h(p));
+}
+
 /* bcol_s(p) = (1 - T)/p, at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (13 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_s_at(double p, double h)
 {
@@ -404,6 +492,33 @@ static double symkin_bcol_s_at(double p, double h)
 static double symkin_bcol_s(double p)
 {
     return symkin_bcol_s_at(p, symkin_bcol_h(p));
+}
+
+/* bcol_s_d1(p) = d^1/dp^1 of (1 - T)/p, at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
+static double symkin_bcol_s_d1_at(double p, double h)
+{
+    const double d = p - 6.0;
+    const double d2 = d * d;
+    const double d4 = d2 * d2;
+    const double d8 = d4 * d4;
+    const double r = 1.0 / (p + 9.869604401089358);
+    if (p > -4.0 && p < 16.0) {
+        return ((((-0.8132429851307679 + d * -0.00028263927661945) + (-4.62076041242041e-06 + d * 1.2061372014718943e-07) * d2) + ((-2.027158719940083e-09 + d * 2.941018614006343e-11) + (-3.9541483920524393e-13 + d * 5.072415794354741e-15) * d2) * d4) + (((-6.302768016745823e-17 + d * 7.653122930054966e-19) + (-9.124106052786141e-21 + d * 1.0739523739919228e-22) * d2) + (-1.3113722098199768e-24 + d * 1.5174003904817066e-26) * d4) * d8) * (r * r);
+    }
+    if (p >= 16.0) {
+        const double u = 0.5 * sqrt(p);
+        const double tau = 1.0 - h;
+        const double sigma = h * (2.0 - h);
+        return (((12.0 + u * (-8.0)) + sigma * (u * (-4.0))) * (1.0 + tau) - sigma * (12.0)) / ((u * (u * (u * (u * (u * (128.0)))))) * (1.0 + tau));
+    }
+    if (!(p > -9.869604401089358)) return NAN;
+    return ((-12.0) + h * ((12.0) + h * (p * (1.0)))) / (p * (p * (8.0)));
+}
+
+/* bcol_s_d1(p) = d^1/dp^1 of (1 - T)/p. */
+static double symkin_bcol_s_d1(double p)
+{
+    return symkin_bcol_s_d1_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_w(p) = (12 (1 - T)/p - T^2)/(16 p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -452,6 +567,12 @@ static double symkin_bcol_w_d1_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return ((-120.0) + h * ((120.0 + p * (-4.0)) + h * ((p * (14.0)) + h * (p * (p * (1.0)))))) / (p * (p * (p * (64.0))));
+}
+
+/* bcol_w_d1(p) = d^1/dp^1 of (12 (1 - T)/p - T^2)/(16 p). */
+static double symkin_bcol_w_d1(double p)
+{
+    return symkin_bcol_w_d1_at(p, symkin_bcol_h(p));
 }
 
 /* cosr1(x): cosr1(x) = (cos x - sum_(k<1) (-1)^k x^(2k)/(2k)!) / x^2; Taylor series (9 terms, Estrin's form) for |x| < 1.0, else the nested elementary formula. */
@@ -2999,6 +3120,1091 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     out[39] = _tmp107 + _tmp111;
 }
 
+/* loaded (1 half plate(s) per plate), sensitivities: dR/dtheta, dR/dp, din/dtheta, din/dp, dD/dx, dD/dtheta, dD/dp, dD/dout (581 operations) */
+static void sk_loaded_sens1(const double *x, const double *theta, const double *plates, const double *params, double *out)
+{
+    const double x_0 = x[0];
+    const double x_1 = x[1];
+    const double x_2 = x[2];
+    const double x_3 = x[3];
+    const double x_4 = x[4];
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double along_1_0 = plates[0];
+    const double across_1_0 = plates[1];
+    const double along_2_0 = plates[3];
+    const double across_2_0 = plates[4];
+    const double omega_2_0 = plates[5];
+    const double along_3_0 = plates[6];
+    const double across_3_0 = plates[7];
+    const double omega_3_0 = plates[8];
+    const double along_4_0 = plates[9];
+    const double across_4_0 = plates[10];
+    const double omega_4_0 = plates[11];
+    const double p_0 = params[0];
+    const double _tmp0 = 0.5*theta_1;
+    const double _tmp1 = cos(_tmp0);
+    const double _tmp2 = symkin_arck(_tmp0);
+    const double _tmp3 = along_1_0 + 0.25*_tmp2*pow(theta_1, 2);
+    const double _tmp4 = _tmp1*_tmp3;
+    const double _tmp5 = 500.0*p_0;
+    const double _tmp6 = 0.004593345937900178*x_0;
+    const double _tmp7 = _tmp6 + 0.5*theta_2;
+    const double _tmp8 = 1.0471975511965979 + _tmp7 + theta_1;
+    const double _tmp9 = cos(_tmp8);
+    const double _tmp10 = _tmp9*across_2_0;
+    const double _tmp11 = _tmp10*p_0;
+    const double _tmp12 = sin(_tmp8);
+    const double _tmp13 = symkin_arck(_tmp7);
+    const double _tmp14 = along_2_0 + _tmp13*pow(_tmp7, 2);
+    const double _tmp15 = _tmp12*_tmp14;
+    const double _tmp16 = _tmp15*p_0;
+    const double _tmp18 = sin(_tmp0);
+    const double _tmp17 = _tmp0*_tmp2 + 0.0625*(theta_1*theta_1*theta_1)*(-3*symkin_sinr2(_tmp0) + 3*symkin_cosr2(_tmp0) + symkin_sinr1(_tmp0));
+    const double _tmp19 = _tmp18*p_0;
+    const double _tmp20 = _tmp17*_tmp19;
+    const double _tmp21 = 0.009186691875800356*x_0;
+    const double _tmp22 = sin(_tmp21);
+    const double _tmp23 = sin(_tmp6);
+    const double _tmp24 = pow(_tmp23, 2);
+    const double _tmp25 = 0.07*_tmp22 - 0.084*_tmp24;
+    const double _tmp26 = theta_1 + theta_2;
+    const double _tmp27 = cos(_tmp26);
+    const double _tmp28 = 1000.0*_tmp27;
+    const double _tmp29 = -0.14*_tmp24 - 0.042*_tmp22;
+    const double _tmp30 = sin(_tmp26);
+    const double _tmp31 = 1000.0*_tmp30;
+    const double _tmp32 = 0.5*theta_4 + 0.004593345937900178*x_2;
+    const double _tmp33 = _tmp21 + _tmp26;
+    const double _tmp34 = _tmp32 + _tmp33;
+    const double _tmp35 = cos(_tmp34);
+    const double _tmp36 = 1000.0*_tmp35;
+    const double _tmp37 = _tmp36*across_4_0;
+    const double _tmp38 = symkin_arck(_tmp32);
+    const double _tmp39 = along_4_0 + _tmp38*pow(_tmp32, 2);
+    const double _tmp40 = sin(_tmp34);
+    const double _tmp41 = 1000.0*_tmp40;
+    const double _tmp42 = _tmp39*_tmp41;
+    const double _tmp43 = _tmp25*_tmp28 + _tmp29*_tmp31 + _tmp37*p_0 + _tmp42*p_0;
+    const double _tmp44 = (_tmp7*_tmp7*_tmp7)*(-3*symkin_sinr2(_tmp7) + 3*symkin_cosr2(_tmp7) + symkin_sinr1(_tmp7));
+    const double _tmp45 = 0.5*_tmp44 + _tmp13*_tmp7;
+    const double _tmp46 = 0.004593345937900178*x_1;
+    const double _tmp47 = _tmp46 + 0.5*theta_3;
+    const double _tmp48 = sin(_tmp47);
+    const double _tmp49 = _tmp48*across_3_0;
+    const double _tmp50 = 0.009186691875800356*x_1;
+    const double _tmp51 = sin(_tmp50);
+    const double _tmp52 = pow(sin(_tmp46), 2);
+    const double _tmp53 = 0.068*_tmp51 - 0.03*_tmp52;
+    const double _tmp54 = 1000.0*sin(theta_3);
+    const double _tmp55 = 0.015*_tmp51 + 0.136*_tmp52;
+    const double _tmp56 = 1000.0*cos(theta_3);
+    const double _tmp57 = cos(_tmp47);
+    const double _tmp58 = symkin_arck(_tmp47);
+    const double _tmp59 = along_3_0 + _tmp58*pow(_tmp47, 2);
+    const double _tmp60 = _tmp47*_tmp58 + 0.5*(_tmp47*_tmp47*_tmp47)*(-3*symkin_sinr2(_tmp47) + 3*symkin_cosr2(_tmp47) + symkin_sinr1(_tmp47));
+    const double _tmp61 = _tmp35*_tmp5;
+    const double _tmp62 = _tmp40*_tmp5;
+    const double _tmp63 = _tmp32*_tmp38 + 0.5*(_tmp32*_tmp32*_tmp32)*(-3*symkin_sinr2(_tmp32) + 3*symkin_cosr2(_tmp32) + symkin_sinr1(_tmp32));
+    const double _tmp64 = _tmp1*across_1_0;
+    const double _tmp65 = _tmp12*across_2_0;
+    const double _tmp66 = _tmp65*p_0;
+    const double _tmp67 = _tmp41*across_4_0;
+    const double _tmp68 = _tmp67*p_0;
+    const double _tmp69 = _tmp18*_tmp3;
+    const double _tmp70 = _tmp25*_tmp31;
+    const double _tmp71 = _tmp14*_tmp9;
+    const double _tmp72 = _tmp71*p_0;
+    const double _tmp73 = _tmp12*p_0;
+    const double _tmp74 = _tmp45*_tmp73;
+    const double _tmp75 = _tmp57*across_3_0;
+    const double _tmp76 = _tmp48*_tmp59;
+    const double _tmp77 = _tmp60*p_0;
+    const double _tmp78 = sin(theta_1);
+    const double _tmp79 = cos(theta_1);
+    const double _tmp80 = sin(_tmp33);
+    const double _tmp81 = 0.25*_tmp80;
+    const double _tmp82 = cos(_tmp33);
+    const double _tmp83 = 0.4330127018922193*_tmp82;
+    const double _tmp84 = _tmp81*p_0 + _tmp83*p_0;
+    const double _tmp85 = 0.5*p_0;
+    const double _tmp86 = _tmp18*across_1_0;
+    const double _tmp87 = _tmp11 + _tmp16 + _tmp20 + _tmp4*_tmp85 - _tmp85*_tmp86;
+    const double _tmp88 = 9.186691875800356*x_4;
+    const double _tmp89 = 0.4330127018922193*_tmp80;
+    const double _tmp90 = 0.25*_tmp82;
+    const double _tmp91 = _tmp90*p_0;
+    const double _tmp92 = _tmp1*p_0;
+    const double _tmp93 = _tmp66 - _tmp72 + _tmp64*_tmp85 + _tmp69*_tmp85 - _tmp17*_tmp92;
+    const double _tmp94 = 9.186691875800356*x_3;
+    const double _tmp95 = _tmp74 + _tmp71*_tmp85 - _tmp65*_tmp85;
+    const double _tmp96 = _tmp9*p_0;
+    const double _tmp97 = _tmp10*_tmp85 + _tmp15*_tmp85 - _tmp45*_tmp96;
+    const double _tmp98 = _tmp50 + theta_3;
+    const double _tmp99 = sin(_tmp98);
+    const double _tmp100 = 0.068*_tmp99;
+    const double _tmp101 = -0.015 + _tmp85;
+    const double _tmp102 = cos(_tmp98);
+    const double _tmp103 = _tmp57*_tmp59;
+    const double _tmp104 = 0.068*_tmp102 + _tmp101*_tmp99;
+    const double _tmp105 = p_0 <= 0.01;
+    const double _tmp106 = 8.666666666666666e-06*p_0*((_tmp105) ? (230769230769.23077) : (210000000000));
+    const double _tmp107 = 0.5*_tmp102;
+    const double _tmp108 = _tmp64 + _tmp65 + _tmp69 - _tmp71;
+    const double _tmp109 = _tmp10 + _tmp15 + _tmp4 - _tmp86;
+    const double _tmp110 = 0.5*_tmp99;
+    const double _tmp111 = 1.0/p_0;
+    const double _tmp112 = ((_tmp105) ? (4.333333333333334e-12) : (4.761904761904762e-12));
+    const double _tmp113 = _tmp111*_tmp112;
+    const double _tmp114 = 1060002.908746195*_tmp113;
+    const double _tmp115 = _tmp1*x_3;
+    const double _tmp116 = _tmp114*_tmp18;
+    const double _tmp117 = _tmp114*x_4;
+    const double _tmp118 = 2120005.81749239*_tmp113;
+    const double _tmp119 = _tmp12*x_3;
+    const double _tmp120 = _tmp118*x_4;
+    const double _tmp121 = _tmp114*x_3;
+    const double _tmp122 = _tmp118*x_3;
+    const double _tmp123 = -_tmp122*_tmp40 + 2120005.81749239*_tmp111*_tmp112*_tmp35*x_4;
+    const double _tmp124 = -_tmp120*_tmp40 - _tmp122*_tmp35;
+    const double _tmp125 = pow(p_0, -2);
+    const double _tmp126 = 2120005.81749239*_tmp112*_tmp125;
+    const double _tmp127 = _tmp126*_tmp18;
+    const double _tmp128 = _tmp126*x_4;
+    const double _tmp129 = _tmp126*x_3;
+    const double _tmp130 = cos(_tmp21);
+    const double _tmp131 = _tmp23*cos(_tmp6);
+    const double _tmp132 = 0.00041340113441101604*_tmp130 - 0.0011758965601024456*_tmp131;
+    const double _tmp133 = -0.0008268022688220321*_tmp131 - 0.0005879482800512228*_tmp130;
+    const double _tmp134 = 0.004593345937900178*_tmp44 + _tmp13*(0.004593345937900178*theta_2 + 4.219765381044813e-05*x_0);
+    const double _tmp135 = 0.045*_tmp22 - 0.128*_tmp24;
+    const double _tmp136 = -0.064*_tmp22 - 0.09*_tmp24;
+    const double _tmp137 = _tmp135*_tmp27 + _tmp136*_tmp30;
+    const double _tmp138 = _tmp135*_tmp30;
+    const double _tmp139 = -_tmp19;
+    out[0] = 0;
+    out[1] = 0;
+    out[2] = 0;
+    out[3] = 0;
+    out[4] = -_tmp43 - 1000.0*_tmp11 - 1000.0*_tmp16 - 1000.0*_tmp20 - _tmp4*_tmp5 + 500.0*_tmp18*across_1_0*p_0;
+    out[5] = -_tmp43 - 500.0*_tmp11 - 500.0*_tmp16 + 1000.0*_tmp45*_tmp9*p_0;
+    out[6] = -_tmp49*_tmp5 - _tmp53*_tmp54 - _tmp55*_tmp56 + 500.0*_tmp57*_tmp59*p_0 + 1000.0*_tmp48*_tmp60*p_0;
+    out[7] = -_tmp39*_tmp62 - _tmp61*across_4_0 + 1000.0*_tmp35*_tmp63*p_0;
+    out[8] = -_tmp68 - _tmp70 - 1000.0*_tmp66 - _tmp5*_tmp64 - _tmp5*_tmp69 + 1000.0*_tmp27*_tmp29 + 1000.0*_tmp1*_tmp17*p_0 + 1000.0*_tmp14*_tmp9*p_0 + 1000.0*_tmp35*_tmp39*p_0;
+    out[9] = -_tmp68 - _tmp70 + 500.0*_tmp72 + 1000.0*_tmp74 - 500.0*_tmp66 + _tmp28*_tmp29 + _tmp36*_tmp39*p_0;
+    out[10] = _tmp5*_tmp75 + _tmp5*_tmp76 + _tmp53*_tmp56 - _tmp54*_tmp55 - 1000.0*_tmp57*_tmp77;
+    out[11] = _tmp39*_tmp61 - _tmp62*across_4_0 + _tmp41*_tmp63*p_0;
+    out[12] = _tmp94*(_tmp93 - _tmp91 + 0.026*_tmp78 - 0.015*_tmp79 + _tmp89*p_0) - _tmp88*(_tmp84 + _tmp87 + 0.015*_tmp78 + 0.026*_tmp79);
+    out[13] = _tmp94*(-_tmp91 - _tmp95 + 0.4330127018922193*_tmp80*p_0) - _tmp88*(_tmp84 + _tmp97);
+    out[14] = _tmp94*(-_tmp100 + _tmp101*_tmp102 - _tmp75*_tmp85 - _tmp76*_tmp85 + _tmp57*_tmp60*p_0) - _tmp88*(-_tmp104 - _tmp103*_tmp85 - _tmp48*_tmp77 + 0.5*_tmp48*across_3_0*p_0);
+    out[15] = 0;
+    out[16] = 0;
+    out[17] = 0;
+    out[18] = -_tmp94*(-_tmp100 + _tmp101*_tmp102 + _tmp85*_tmp99) + 9.186691875800356*x_4*(-_tmp104 + 0.5*_tmp102*p_0);
+    out[19] = 0;
+    out[20] = 0;
+    out[21] = 0;
+    out[22] = 0;
+    out[23] = 0;
+    out[24] = 0;
+    out[25] = -_tmp67 - 1000.0*_tmp64 - 1000.0*_tmp65 - 1000.0*_tmp69 + 1000.0*_tmp14*_tmp9 + 1000.0*_tmp35*_tmp39 + 1000.0*_tmp48*_tmp59 + 1000.0*_tmp57*across_3_0;
+    out[26] = _tmp37 + _tmp42 + 1000.0*_tmp10 + 1000.0*_tmp15 + 1000.0*_tmp4 + 1000.0*_tmp49 - 1000.0*_tmp103 - 1000.0*_tmp86;
+    out[27] = _tmp106*omega_2_0 + _tmp94*(-_tmp109 - _tmp49 - _tmp81 - _tmp83 + 0.5*_tmp99 + _tmp57*_tmp59) - _tmp88*(_tmp107 + _tmp108 + _tmp89 - _tmp75 - _tmp76 - _tmp90);
+    out[28] = _tmp106*omega_3_0 + _tmp88*(_tmp107 + _tmp110) - _tmp94*(_tmp110 - _tmp107);
+    out[29] = -_tmp106*omega_4_0;
+    out[30] = 1;
+    out[31] = 0;
+    out[32] = 0;
+    out[33] = 0;
+    out[34] = -_tmp114*_tmp115 - _tmp116*x_4;
+    out[35] = 0;
+    out[36] = 0;
+    out[37] = 0;
+    out[38] = _tmp116*x_3 - _tmp1*_tmp117;
+    out[39] = 0;
+    out[40] = 0;
+    out[41] = 0;
+    out[42] = 0;
+    out[43] = 0;
+    out[44] = 0;
+    out[45] = 0;
+    out[46] = 0;
+    out[47] = 0;
+    out[48] = 0;
+    out[49] = 0;
+    out[50] = 0;
+    out[51] = 1;
+    out[52] = 0;
+    out[53] = 0;
+    out[54] = -_tmp118*_tmp119 + 2120005.81749239*_tmp111*_tmp112*_tmp9*x_4;
+    out[55] = -_tmp114*_tmp119 + 1060002.908746195*_tmp111*_tmp112*_tmp9*x_4;
+    out[56] = 0;
+    out[57] = 0;
+    out[58] = -_tmp12*_tmp120 - _tmp118*_tmp9*x_3;
+    out[59] = -_tmp117*_tmp12 - _tmp121*_tmp9;
+    out[60] = 0;
+    out[61] = 0;
+    out[62] = 0;
+    out[63] = 0;
+    out[64] = 0;
+    out[65] = 0;
+    out[66] = 0;
+    out[67] = 0;
+    out[68] = 0;
+    out[69] = 0;
+    out[70] = 0;
+    out[71] = 0;
+    out[72] = 1;
+    out[73] = 0;
+    out[74] = 0;
+    out[75] = 0;
+    out[76] = _tmp117*_tmp48 + _tmp121*_tmp57;
+    out[77] = 0;
+    out[78] = 0;
+    out[79] = 0;
+    out[80] = -_tmp121*_tmp48 + 1060002.908746195*_tmp111*_tmp112*_tmp57*x_4;
+    out[81] = 0;
+    out[82] = 0;
+    out[83] = 0;
+    out[84] = 0;
+    out[85] = 0;
+    out[86] = 0;
+    out[87] = 0;
+    out[88] = 0;
+    out[89] = 0;
+    out[90] = 0;
+    out[91] = 0;
+    out[92] = 0;
+    out[93] = 1;
+    out[94] = _tmp123;
+    out[95] = _tmp123;
+    out[96] = 0;
+    out[97] = -_tmp121*_tmp40 + 1060002.908746195*_tmp111*_tmp112*_tmp35*x_4;
+    out[98] = _tmp124;
+    out[99] = _tmp124;
+    out[100] = 0;
+    out[101] = -_tmp117*_tmp40 - _tmp121*_tmp35;
+    out[102] = 0;
+    out[103] = 0;
+    out[104] = 0;
+    out[105] = 0;
+    out[106] = 0;
+    out[107] = 0;
+    out[108] = 0;
+    out[109] = 0;
+    out[110] = 0;
+    out[111] = _tmp127*x_3 - _tmp1*_tmp128;
+    out[112] = _tmp115*_tmp126 + _tmp127*x_4;
+    out[113] = 0;
+    out[114] = 0;
+    out[115] = 0;
+    out[116] = -_tmp12*_tmp128 - _tmp129*_tmp9;
+    out[117] = _tmp119*_tmp126 - _tmp128*_tmp9;
+    out[118] = 0;
+    out[119] = 0;
+    out[120] = 0;
+    out[121] = -_tmp129*_tmp48 + 2120005.81749239*_tmp112*_tmp125*_tmp57*x_4;
+    out[122] = -_tmp128*_tmp48 - _tmp129*_tmp57;
+    out[123] = 0;
+    out[124] = 0;
+    out[125] = 0;
+    out[126] = -_tmp128*_tmp40 - _tmp129*_tmp35;
+    out[127] = _tmp129*_tmp40 - _tmp128*_tmp35;
+    out[128] = 0;
+    out[129] = 0;
+    out[130] = -0.004593345937900178*_tmp11 - 0.004593345937900178*_tmp16 + _tmp133*_tmp27 - _tmp132*_tmp30 + _tmp134*_tmp9*p_0;
+    out[131] = 0;
+    out[132] = 0;
+    out[133] = 0;
+    out[134] = 0;
+    out[135] = 0;
+    out[136] = 0.004593345937900178*_tmp72 - 0.004593345937900178*_tmp66 + _tmp132*_tmp27 + _tmp133*_tmp30 + _tmp134*_tmp73;
+    out[137] = 0;
+    out[138] = 0;
+    out[139] = 0;
+    out[140] = 0;
+    out[141] = 0;
+    out[142] = -_tmp137 - _tmp87;
+    out[143] = -_tmp137 - _tmp97;
+    out[144] = 0;
+    out[145] = 0;
+    out[146] = -_tmp138 - _tmp93 + _tmp136*_tmp27;
+    out[147] = _tmp95 - _tmp138 + _tmp136*_tmp27;
+    out[148] = 0;
+    out[149] = 0;
+    out[150] = -_tmp108;
+    out[151] = _tmp109;
+    out[152] = _tmp139;
+    out[153] = -_tmp92;
+    out[154] = 0;
+    out[155] = _tmp96;
+    out[156] = -_tmp73;
+    out[157] = 0;
+    out[158] = 0;
+    out[159] = 0;
+    out[160] = 0;
+    out[161] = 0;
+    out[162] = 0;
+    out[163] = 0;
+    out[164] = _tmp92;
+    out[165] = _tmp139;
+    out[166] = 0;
+    out[167] = _tmp73;
+    out[168] = _tmp96;
+    out[169] = 0;
+    out[170] = 0;
+    out[171] = 0;
+    out[172] = 0;
+    out[173] = 0;
+    out[174] = 0;
+    out[175] = 0;
+}
+
+/* loaded (2 half plate(s) per plate), sensitivities: dR/dtheta, dR/dp, din/dtheta, din/dp, dD/dx, dD/dtheta, dD/dp, dD/dout (1581 operations) */
+static void sk_loaded_sens2(const double *x, const double *theta, const double *plates, const double *params, double *out)
+{
+    const double x_0 = x[0];
+    const double x_1 = x[1];
+    const double x_2 = x[2];
+    const double x_3 = x[3];
+    const double x_4 = x[4];
+    const double x_6 = x[6];
+    const double x_7 = x[7];
+    const double x_8 = x[8];
+    const double x_9 = x[9];
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double along_1_0 = plates[0];
+    const double across_1_0 = plates[1];
+    const double omega_1_0 = plates[2];
+    const double along_1_1 = plates[3];
+    const double across_1_1 = plates[4];
+    const double omega_1_1 = plates[5];
+    const double along_2_0 = plates[6];
+    const double across_2_0 = plates[7];
+    const double omega_2_0 = plates[8];
+    const double along_2_1 = plates[9];
+    const double across_2_1 = plates[10];
+    const double omega_2_1 = plates[11];
+    const double along_3_0 = plates[12];
+    const double across_3_0 = plates[13];
+    const double omega_3_0 = plates[14];
+    const double along_3_1 = plates[15];
+    const double across_3_1 = plates[16];
+    const double omega_3_1 = plates[17];
+    const double along_4_0 = plates[18];
+    const double across_4_0 = plates[19];
+    const double omega_4_0 = plates[20];
+    const double along_4_1 = plates[21];
+    const double across_4_1 = plates[22];
+    const double omega_4_1 = plates[23];
+    const double p_0 = params[0];
+    const double _tmp0 = 0.25*theta_1;
+    const double _tmp1 = 0.5*x_6;
+    const double _tmp2 = _tmp0 - _tmp1;
+    const double _tmp3 = sin(_tmp2);
+    const double _tmp4 = 0.5*p_0;
+    const double _tmp5 = _tmp4*across_1_0;
+    const double _tmp6 = _tmp0 + _tmp1;
+    const double _tmp7 = sin(_tmp6);
+    const double _tmp8 = _tmp4*_tmp7;
+    const double _tmp9 = sin(_tmp0);
+    const double _tmp10 = pow(_tmp9, 2);
+    const double _tmp11 = sin(_tmp1);
+    const double _tmp12 = pow(_tmp11, 2);
+    const double _tmp13 = cos(_tmp2);
+    const double _tmp14 = symkin_arck(_tmp6);
+    const double _tmp15 = along_1_0 + _tmp14*pow(_tmp6, 2);
+    const double _tmp16 = _tmp15*_tmp4;
+    const double _tmp17 = symkin_arck(_tmp2);
+    const double _tmp18 = along_1_1 + _tmp17*pow(_tmp2, 2);
+    const double _tmp19 = cos(_tmp6);
+    const double _tmp20 = _tmp19*_tmp4;
+    const double _tmp21 = _tmp13*_tmp16 + _tmp18*_tmp20 + _tmp3*_tmp5 + _tmp4*(-2*_tmp12 + 2*_tmp10) - _tmp8*across_1_1;
+    const double _tmp22 = 0.5*theta_1;
+    const double _tmp23 = cos(_tmp22);
+    const double _tmp24 = 500.0*_tmp23;
+    const double _tmp25 = 0.004593345937900178*x_0;
+    const double _tmp26 = 1.0471975511965979 + theta_1;
+    const double _tmp27 = _tmp25 + _tmp26 + 0.5*theta_2;
+    const double _tmp28 = sin(_tmp27);
+    const double _tmp29 = 0.5*x_7;
+    const double _tmp30 = 0.25*theta_2 + 0.002296672968950089*x_0;
+    const double _tmp31 = _tmp30 - _tmp29;
+    const double _tmp32 = sin(_tmp31);
+    const double _tmp33 = _tmp4*across_2_0;
+    const double _tmp34 = _tmp29 + _tmp30;
+    const double _tmp35 = sin(_tmp34);
+    const double _tmp36 = _tmp35*_tmp4;
+    const double _tmp37 = sin(_tmp29);
+    const double _tmp38 = pow(_tmp37, 2);
+    const double _tmp39 = sin(_tmp30);
+    const double _tmp40 = pow(_tmp39, 2);
+    const double _tmp41 = cos(_tmp31);
+    const double _tmp42 = symkin_arck(_tmp34);
+    const double _tmp43 = along_2_0 + _tmp42*pow(_tmp34, 2);
+    const double _tmp44 = _tmp4*_tmp43;
+    const double _tmp45 = symkin_arck(_tmp31);
+    const double _tmp46 = along_2_1 + _tmp45*pow(_tmp31, 2);
+    const double _tmp47 = cos(_tmp34);
+    const double _tmp48 = _tmp4*_tmp47;
+    const double _tmp49 = _tmp32*_tmp33 + _tmp4*(-2*_tmp38 + 2*_tmp40) + _tmp41*_tmp44 + _tmp46*_tmp48 - _tmp36*across_2_1;
+    const double _tmp50 = _tmp28*_tmp49;
+    const double _tmp51 = cos(_tmp27);
+    const double _tmp52 = 1.0*x_7;
+    const double _tmp53 = sin(_tmp52);
+    const double _tmp54 = _tmp33*_tmp41 + _tmp36*_tmp46 + _tmp4*_tmp53 + _tmp48*across_2_1 - _tmp32*_tmp44;
+    const double _tmp55 = _tmp51*_tmp54;
+    const double _tmp56 = 0.125*p_0;
+    const double _tmp57 = _tmp56*across_1_0;
+    const double _tmp58 = _tmp56*_tmp7;
+    const double _tmp59 = _tmp15*_tmp56;
+    const double _tmp60 = 0.125*theta_1;
+    const double _tmp61 = 0.25*x_6;
+    const double _tmp62 = symkin_sinr1(_tmp2);
+    const double _tmp63 = (_tmp2*_tmp2*_tmp2)*(_tmp62 - 3*symkin_sinr2(_tmp2) + 3*symkin_cosr2(_tmp2));
+    const double _tmp64 = 0.25*_tmp63 + _tmp17*(_tmp60 - _tmp61);
+    const double _tmp65 = (_tmp6*_tmp6*_tmp6)*(-3*symkin_sinr2(_tmp6) + 3*symkin_cosr2(_tmp6) + symkin_sinr1(_tmp6));
+    const double _tmp66 = _tmp4*(0.25*_tmp65 + _tmp14*(_tmp60 + _tmp61));
+    const double _tmp67 = -_tmp13*_tmp59 - _tmp3*_tmp57 - _tmp3*_tmp66 - _tmp58*across_1_1 + 0.125*_tmp18*_tmp19*p_0 + 0.5*_tmp64*_tmp7*p_0;
+    const double _tmp68 = _tmp23*_tmp67;
+    const double _tmp69 = sin(_tmp22);
+    const double _tmp70 = _tmp13*_tmp57 + _tmp13*_tmp66 + _tmp20*_tmp64 - _tmp18*_tmp58 - _tmp3*_tmp59 + _tmp4*_tmp9*cos(_tmp0) - _tmp19*_tmp56*across_1_1;
+    const double _tmp71 = _tmp69*_tmp70;
+    const double _tmp72 = 1.0*x_6;
+    const double _tmp73 = sin(_tmp72);
+    const double _tmp74 = _tmp13*_tmp5 + _tmp18*_tmp8 + _tmp20*across_1_1 + _tmp4*_tmp73 - _tmp16*_tmp3;
+    const double _tmp75 = 0.009186691875800356*x_0;
+    const double _tmp76 = sin(_tmp75);
+    const double _tmp77 = sin(_tmp25);
+    const double _tmp78 = pow(_tmp77, 2);
+    const double _tmp79 = 0.07*_tmp76 - 0.084*_tmp78;
+    const double _tmp80 = theta_1 + theta_2;
+    const double _tmp81 = cos(_tmp80);
+    const double _tmp82 = 1000.0*_tmp81;
+    const double _tmp83 = -0.14*_tmp78 - 0.042*_tmp76;
+    const double _tmp84 = sin(_tmp80);
+    const double _tmp85 = 1000.0*_tmp84;
+    const double _tmp86 = 0.5*x_9;
+    const double _tmp87 = 0.25*theta_4 + 0.002296672968950089*x_2;
+    const double _tmp88 = _tmp87 - _tmp86;
+    const double _tmp89 = sin(_tmp88);
+    const double _tmp90 = _tmp4*across_4_0;
+    const double _tmp91 = _tmp86 + _tmp87;
+    const double _tmp92 = sin(_tmp91);
+    const double _tmp93 = _tmp4*_tmp92;
+    const double _tmp94 = pow(sin(_tmp86), 2);
+    const double _tmp95 = sin(_tmp87);
+    const double _tmp96 = pow(_tmp95, 2);
+    const double _tmp97 = cos(_tmp88);
+    const double _tmp98 = symkin_arck(_tmp91);
+    const double _tmp99 = along_4_0 + _tmp98*pow(_tmp91, 2);
+    const double _tmp100 = _tmp4*_tmp99;
+    const double _tmp101 = symkin_arck(_tmp88);
+    const double _tmp102 = along_4_1 + _tmp101*pow(_tmp88, 2);
+    const double _tmp103 = cos(_tmp91);
+    const double _tmp104 = _tmp103*_tmp4;
+    const double _tmp105 = _tmp100*_tmp97 + _tmp102*_tmp104 + _tmp4*(-2*_tmp94 + 2*_tmp96) + _tmp89*_tmp90 - _tmp93*across_4_1;
+    const double _tmp106 = _tmp75 + _tmp80;
+    const double _tmp107 = _tmp106 + 0.5*theta_4 + 0.004593345937900178*x_2;
+    const double _tmp108 = sin(_tmp107);
+    const double _tmp109 = _tmp105*_tmp108;
+    const double _tmp110 = sin(1.0*x_9);
+    const double _tmp111 = _tmp102*_tmp93 + _tmp104*across_4_1 + _tmp110*_tmp4 + _tmp90*_tmp97 - _tmp100*_tmp89;
+    const double _tmp112 = cos(_tmp107);
+    const double _tmp113 = 1000.0*_tmp112;
+    const double _tmp114 = 1000.0*_tmp109 + _tmp111*_tmp113 + _tmp79*_tmp82 + _tmp83*_tmp85;
+    const double _tmp115 = _tmp56*across_2_0;
+    const double _tmp116 = _tmp35*_tmp56;
+    const double _tmp117 = _tmp43*_tmp56;
+    const double _tmp118 = 0.25*x_7;
+    const double _tmp119 = 0.125*theta_2 + 0.0011483364844750445*x_0;
+    const double _tmp120 = symkin_sinr1(_tmp31);
+    const double _tmp121 = (_tmp31*_tmp31*_tmp31)*(_tmp120 - 3*symkin_sinr2(_tmp31) + 3*symkin_cosr2(_tmp31));
+    const double _tmp122 = 0.25*_tmp121 + _tmp45*(_tmp119 - _tmp118);
+    const double _tmp123 = (_tmp34*_tmp34*_tmp34)*(-3*symkin_sinr2(_tmp34) + 3*symkin_cosr2(_tmp34) + symkin_sinr1(_tmp34));
+    const double _tmp124 = _tmp4*(0.25*_tmp123 + _tmp42*(_tmp118 + _tmp119));
+    const double _tmp125 = -_tmp115*_tmp32 - _tmp116*across_2_1 - _tmp117*_tmp41 - _tmp124*_tmp32 + 0.125*_tmp46*_tmp47*p_0 + 0.5*_tmp122*_tmp35*p_0;
+    const double _tmp126 = _tmp125*_tmp28;
+    const double _tmp127 = _tmp39*cos(_tmp30);
+    const double _tmp128 = _tmp115*_tmp41 + _tmp122*_tmp48 + _tmp124*_tmp41 + _tmp127*_tmp4 - _tmp116*_tmp46 - _tmp117*_tmp32 - _tmp47*_tmp56*across_2_1;
+    const double _tmp129 = 0.009186691875800356*x_1;
+    const double _tmp130 = sin(_tmp129);
+    const double _tmp131 = 0.004593345937900178*x_1;
+    const double _tmp132 = pow(sin(_tmp131), 2);
+    const double _tmp133 = 0.068*_tmp130 - 0.03*_tmp132;
+    const double _tmp134 = 1000.0*sin(theta_3);
+    const double _tmp135 = 0.015*_tmp130 + 0.136*_tmp132;
+    const double _tmp136 = 1000.0*cos(theta_3);
+    const double _tmp137 = _tmp131 + 0.5*theta_3;
+    const double _tmp138 = sin(_tmp137);
+    const double _tmp139 = sin(1.0*x_8);
+    const double _tmp140 = 0.5*x_8;
+    const double _tmp141 = 0.25*theta_3 + 0.002296672968950089*x_1;
+    const double _tmp142 = _tmp141 - _tmp140;
+    const double _tmp143 = cos(_tmp142);
+    const double _tmp144 = _tmp143*across_3_0;
+    const double _tmp145 = _tmp140 + _tmp141;
+    const double _tmp146 = cos(_tmp145);
+    const double _tmp147 = _tmp146*_tmp4;
+    const double _tmp148 = symkin_arck(_tmp145);
+    const double _tmp149 = along_3_0 + _tmp148*pow(_tmp145, 2);
+    const double _tmp150 = sin(_tmp142);
+    const double _tmp151 = _tmp149*_tmp150;
+    const double _tmp152 = symkin_arck(_tmp142);
+    const double _tmp153 = along_3_1 + _tmp152*pow(_tmp142, 2);
+    const double _tmp154 = sin(_tmp145);
+    const double _tmp155 = _tmp154*_tmp4;
+    const double _tmp156 = _tmp139*_tmp4 + _tmp144*_tmp4 + _tmp147*across_3_1 + _tmp153*_tmp155 - _tmp151*_tmp4;
+    const double _tmp157 = 500.0*_tmp156;
+    const double _tmp158 = cos(_tmp137);
+    const double _tmp159 = _tmp150*across_3_0;
+    const double _tmp160 = pow(sin(_tmp140), 2);
+    const double _tmp161 = sin(_tmp141);
+    const double _tmp162 = pow(_tmp161, 2);
+    const double _tmp163 = _tmp143*_tmp149;
+    const double _tmp164 = _tmp159*_tmp4 + _tmp163*_tmp4 + _tmp4*(-2*_tmp160 + 2*_tmp162) - _tmp155*across_3_1 + _tmp146*_tmp153*_tmp4;
+    const double _tmp165 = _tmp56*across_3_1;
+    const double _tmp166 = 0.25*x_8;
+    const double _tmp167 = 0.125*theta_3 + 0.0011483364844750445*x_1;
+    const double _tmp168 = symkin_sinr1(_tmp142);
+    const double _tmp169 = _tmp152*(_tmp167 - _tmp166) + 0.25*(_tmp142*_tmp142*_tmp142)*(_tmp168 - 3*symkin_sinr2(_tmp142) + 3*symkin_cosr2(_tmp142));
+    const double _tmp170 = _tmp4*(_tmp148*(_tmp166 + _tmp167) + 0.25*(_tmp145*_tmp145*_tmp145)*(-3*symkin_sinr2(_tmp145) + 3*symkin_cosr2(_tmp145) + symkin_sinr1(_tmp145)));
+    const double _tmp171 = -_tmp150*_tmp170 - _tmp154*_tmp165 - _tmp159*_tmp56 - _tmp163*_tmp56 + 0.125*_tmp146*_tmp153*p_0 + 0.5*_tmp154*_tmp169*p_0;
+    const double _tmp172 = _tmp143*_tmp170 + _tmp144*_tmp56 + _tmp147*_tmp169 - _tmp146*_tmp165 - _tmp151*_tmp56 + _tmp161*_tmp4*cos(_tmp141) - _tmp153*_tmp154*_tmp56;
+    const double _tmp173 = 500.0*_tmp112;
+    const double _tmp174 = _tmp56*across_4_0;
+    const double _tmp175 = _tmp56*_tmp92;
+    const double _tmp176 = _tmp56*_tmp99;
+    const double _tmp177 = 0.25*x_9;
+    const double _tmp178 = 0.125*theta_4 + 0.0011483364844750445*x_2;
+    const double _tmp179 = symkin_sinr1(_tmp88);
+    const double _tmp180 = _tmp101*(_tmp178 - _tmp177) + 0.25*(_tmp88*_tmp88*_tmp88)*(_tmp179 - 3*symkin_sinr2(_tmp88) + 3*symkin_cosr2(_tmp88));
+    const double _tmp181 = _tmp4*(_tmp98*(_tmp177 + _tmp178) + 0.25*(_tmp91*_tmp91*_tmp91)*(-3*symkin_sinr2(_tmp91) + 3*symkin_cosr2(_tmp91) + symkin_sinr1(_tmp91)));
+    const double _tmp182 = -_tmp174*_tmp89 - _tmp175*across_4_1 - _tmp176*_tmp97 - _tmp181*_tmp89 + 0.125*_tmp102*_tmp103*p_0 + 0.5*_tmp180*_tmp92*p_0;
+    const double _tmp183 = 1000.0*_tmp108;
+    const double _tmp184 = _tmp104*_tmp180 + _tmp174*_tmp97 + _tmp181*_tmp97 - _tmp102*_tmp175 - _tmp176*_tmp89 + _tmp4*_tmp95*cos(_tmp87) - _tmp103*_tmp56*across_4_1;
+    const double _tmp185 = _tmp79*_tmp85;
+    const double _tmp186 = _tmp28*_tmp54;
+    const double _tmp187 = _tmp111*_tmp183;
+    const double _tmp188 = _tmp67*_tmp69;
+    const double _tmp189 = _tmp49*_tmp51;
+    const double _tmp190 = _tmp125*_tmp51;
+    const double _tmp191 = _tmp128*_tmp28;
+    const double _tmp192 = _tmp138*_tmp171;
+    const double _tmp193 = sin(theta_1);
+    const double _tmp194 = cos(theta_1);
+    const double _tmp195 = sin(_tmp106);
+    const double _tmp196 = 0.25*_tmp195;
+    const double _tmp197 = cos(_tmp106);
+    const double _tmp198 = 0.4330127018922193*_tmp197;
+    const double _tmp199 = _tmp196*p_0 + _tmp198*p_0;
+    const double _tmp200 = 0.5*_tmp21;
+    const double _tmp201 = 0.5*_tmp74;
+    const double _tmp202 = _tmp50 + _tmp55 + _tmp68 + _tmp71 + _tmp200*_tmp23 - _tmp201*_tmp69;
+    const double _tmp203 = 9.186691875800356*x_4;
+    const double _tmp204 = 0.4330127018922193*_tmp195;
+    const double _tmp205 = 0.25*_tmp197;
+    const double _tmp206 = _tmp205*p_0;
+    const double _tmp207 = _tmp186 + _tmp188 - _tmp189 + _tmp200*_tmp69 + _tmp201*_tmp23 - _tmp23*_tmp70;
+    const double _tmp208 = 9.186691875800356*x_3;
+    const double _tmp209 = _tmp126 + 0.5*_tmp50 + 0.5*_tmp55 - _tmp128*_tmp51;
+    const double _tmp210 = _tmp190 + _tmp191 + 0.5*_tmp189 - 0.5*_tmp186;
+    const double _tmp211 = _tmp129 + theta_3;
+    const double _tmp212 = sin(_tmp211);
+    const double _tmp213 = 0.068*_tmp212;
+    const double _tmp214 = -0.015 + _tmp4;
+    const double _tmp215 = cos(_tmp211);
+    const double _tmp216 = 0.5*_tmp158;
+    const double _tmp217 = 0.068*_tmp215 + _tmp212*_tmp214;
+    const double _tmp218 = _tmp1 + 0.75*theta_1;
+    const double _tmp219 = cos(_tmp218);
+    const double _tmp220 = 0.375*p_0;
+    const double _tmp221 = sin(_tmp218);
+    const double _tmp222 = along_1_1 + symkin_sinr0(_tmp2);
+    const double _tmp223 = _tmp220*_tmp222;
+    const double _tmp224 = -_tmp62 + symkin_cosr1(_tmp2);
+    const double _tmp225 = _tmp26 + _tmp29 + 0.75*theta_2 + 0.006890018906850267*x_0;
+    const double _tmp226 = sin(_tmp225);
+    const double _tmp227 = _tmp226*_tmp4;
+    const double _tmp228 = cos(_tmp225);
+    const double _tmp229 = along_2_1 + symkin_sinr0(_tmp31);
+    const double _tmp230 = _tmp220*_tmp226;
+    const double _tmp231 = _tmp220*_tmp228;
+    const double _tmp232 = -_tmp120 + symkin_cosr1(_tmp31);
+    const double _tmp233 = _tmp140 + 0.75*theta_3 + 0.006890018906850267*x_1;
+    const double _tmp234 = cos(_tmp233);
+    const double _tmp235 = sin(_tmp233);
+    const double _tmp236 = along_3_1 + symkin_sinr0(_tmp142);
+    const double _tmp237 = _tmp220*_tmp236;
+    const double _tmp238 = -_tmp168 + symkin_cosr1(_tmp142);
+    const double _tmp239 = _tmp106 + _tmp86 + 0.75*theta_4 + 0.006890018906850267*x_2;
+    const double _tmp240 = sin(_tmp239);
+    const double _tmp241 = _tmp240*_tmp4;
+    const double _tmp242 = along_4_1 + symkin_sinr0(_tmp88);
+    const double _tmp243 = cos(_tmp239);
+    const double _tmp244 = _tmp208*(-_tmp241*across_4_1 + 0.5*_tmp242*_tmp243*p_0) - _tmp203*(-_tmp241*_tmp242 - _tmp243*_tmp4*across_4_1);
+    const double _tmp245 = _tmp220*_tmp240;
+    const double _tmp246 = _tmp220*_tmp243;
+    const double _tmp247 = -_tmp179 + symkin_cosr1(_tmp88);
+    const double _tmp248 = 0.5*across_1_0;
+    const double _tmp249 = 0.5*_tmp19;
+    const double _tmp250 = 0.5*_tmp15;
+    const double _tmp251 = 0.5*_tmp7;
+    const double _tmp252 = 0.5*_tmp73 + _tmp13*_tmp248 + _tmp18*_tmp251 + _tmp249*across_1_1 - _tmp250*_tmp3;
+    const double _tmp253 = _tmp23*_tmp252;
+    const double _tmp254 = _tmp10 - _tmp12 + _tmp13*_tmp250 + _tmp18*_tmp249 + _tmp248*_tmp3 - _tmp251*across_1_1;
+    const double _tmp255 = _tmp254*_tmp69;
+    const double _tmp256 = 0.5*across_3_0;
+    const double _tmp257 = 0.5*_tmp146;
+    const double _tmp258 = 0.5*_tmp149;
+    const double _tmp259 = 0.5*_tmp154;
+    const double _tmp260 = 0.5*_tmp139 + _tmp143*_tmp256 + _tmp153*_tmp259 + _tmp257*across_3_1 - _tmp150*_tmp258;
+    const double _tmp261 = 0.5*across_2_0;
+    const double _tmp262 = 0.5*_tmp47;
+    const double _tmp263 = 0.5*_tmp43;
+    const double _tmp264 = 0.5*_tmp35;
+    const double _tmp265 = 0.5*_tmp53 + _tmp261*_tmp41 + _tmp262*across_2_1 + _tmp264*_tmp46 - _tmp263*_tmp32;
+    const double _tmp266 = _tmp265*_tmp28;
+    const double _tmp267 = 0.5*across_4_0;
+    const double _tmp268 = 0.5*_tmp103;
+    const double _tmp269 = 0.5*_tmp99;
+    const double _tmp270 = 0.5*_tmp92;
+    const double _tmp271 = 0.5*_tmp110 + _tmp102*_tmp270 + _tmp267*_tmp97 + _tmp268*across_4_1 - _tmp269*_tmp89;
+    const double _tmp272 = _tmp162 - _tmp160 + _tmp143*_tmp258 + _tmp150*_tmp256 + _tmp153*_tmp257 - _tmp259*across_3_1;
+    const double _tmp273 = _tmp40 - _tmp38 + _tmp261*_tmp32 + _tmp262*_tmp46 + _tmp263*_tmp41 - _tmp264*across_2_1;
+    const double _tmp274 = _tmp96 - _tmp94 + _tmp102*_tmp268 + _tmp267*_tmp89 + _tmp269*_tmp97 - _tmp270*across_4_1;
+    const double _tmp275 = _tmp252*_tmp69;
+    const double _tmp276 = _tmp23*_tmp254;
+    const double _tmp277 = _tmp138*_tmp260;
+    const double _tmp278 = _tmp265*_tmp51;
+    const double _tmp279 = _tmp273*_tmp28;
+    const double _tmp280 = p_0 <= 0.01;
+    const double _tmp281 = 1.7333333333333332e-05*p_0*((_tmp280) ? (230769230769.23077) : (210000000000));
+    const double _tmp282 = _tmp281*omega_2_1;
+    const double _tmp283 = 0.5*_tmp215;
+    const double _tmp284 = _tmp253 + _tmp255 + _tmp266 - _tmp273*_tmp51;
+    const double _tmp285 = _tmp276 + _tmp278 + _tmp279 - _tmp275;
+    const double _tmp286 = _tmp281*omega_3_1;
+    const double _tmp287 = 0.5*_tmp212;
+    const double _tmp288 = -_tmp281*omega_4_1;
+    const double _tmp289 = 0.5*_tmp221;
+    const double _tmp290 = 0.5*_tmp226;
+    const double _tmp291 = 0.5*_tmp235;
+    const double _tmp292 = 0.5*_tmp240;
+    const double _tmp293 = 1.0/p_0;
+    const double _tmp294 = ((_tmp280) ? (4.333333333333334e-12) : (4.761904761904762e-12));
+    const double _tmp295 = _tmp293*_tmp294;
+    const double _tmp296 = 132500.36359327438*_tmp295;
+    const double _tmp297 = _tmp19*x_3;
+    const double _tmp298 = _tmp296*_tmp7;
+    const double _tmp299 = _tmp296*x_4;
+    const double _tmp300 = 397501.09077982313*_tmp295;
+    const double _tmp301 = _tmp219*x_3;
+    const double _tmp302 = _tmp221*_tmp300;
+    const double _tmp303 = _tmp300*x_4;
+    const double _tmp304 = 530001.4543730975*_tmp295;
+    const double _tmp305 = _tmp26 + _tmp34;
+    const double _tmp306 = sin(_tmp305);
+    const double _tmp307 = _tmp306*x_3;
+    const double _tmp308 = cos(_tmp305);
+    const double _tmp309 = _tmp304*x_4;
+    const double _tmp310 = _tmp296*x_3;
+    const double _tmp311 = _tmp226*x_3;
+    const double _tmp312 = _tmp228*x_3;
+    const double _tmp313 = _tmp300*x_3;
+    const double _tmp314 = _tmp106 + _tmp91;
+    const double _tmp315 = sin(_tmp314);
+    const double _tmp316 = _tmp304*x_3;
+    const double _tmp317 = cos(_tmp314);
+    const double _tmp318 = -_tmp315*_tmp316 + 530001.4543730975*_tmp293*_tmp294*_tmp317*x_4;
+    const double _tmp319 = -_tmp309*_tmp315 - _tmp316*_tmp317;
+    const double _tmp320 = -_tmp240*_tmp316 + 530001.4543730975*_tmp243*_tmp293*_tmp294*x_4;
+    const double _tmp321 = -_tmp240*_tmp309 - _tmp243*_tmp316;
+    const double _tmp322 = pow(p_0, -2);
+    const double _tmp323 = 530001.4543730975*_tmp294*_tmp322;
+    const double _tmp324 = _tmp323*_tmp7;
+    const double _tmp325 = _tmp323*x_4;
+    const double _tmp326 = _tmp323*x_3;
+    const double _tmp327 = cos(_tmp75);
+    const double _tmp328 = _tmp77*cos(_tmp25);
+    const double _tmp329 = 0.00041340113441101604*_tmp327 - 0.0011758965601024456*_tmp328;
+    const double _tmp330 = -0.0008268022688220321*_tmp328 - 0.0005879482800512228*_tmp327;
+    const double _tmp331 = 0.0011483364844750445*p_0;
+    const double _tmp332 = _tmp331*across_2_0;
+    const double _tmp333 = _tmp331*_tmp35;
+    const double _tmp334 = _tmp331*_tmp43;
+    const double _tmp335 = 0.002296672968950089*x_7;
+    const double _tmp336 = 0.0011483364844750445*theta_2 + 1.0549413452612033e-05*x_0;
+    const double _tmp337 = 0.002296672968950089*_tmp121 + _tmp45*(_tmp336 - _tmp335);
+    const double _tmp338 = _tmp4*(0.002296672968950089*_tmp123 + _tmp42*(_tmp335 + _tmp336));
+    const double _tmp339 = -_tmp32*_tmp332 - _tmp32*_tmp338 - _tmp333*across_2_1 - _tmp334*_tmp41 + 0.5*_tmp337*_tmp35*p_0 + 0.0011483364844750445*_tmp46*_tmp47*p_0;
+    const double _tmp340 = _tmp332*_tmp41 + _tmp337*_tmp48 + _tmp338*_tmp41 - _tmp32*_tmp334 - _tmp333*_tmp46 + 0.004593345937900178*_tmp127*p_0 - _tmp331*_tmp47*across_2_1;
+    const double _tmp341 = 0.25*p_0;
+    const double _tmp342 = _tmp341*_tmp7;
+    const double _tmp343 = _tmp13*_tmp341;
+    const double _tmp344 = _tmp19*_tmp341;
+    const double _tmp345 = -0.5*_tmp63 - _tmp17*_tmp2;
+    const double _tmp346 = 0.5*_tmp65 + _tmp14*_tmp6;
+    const double _tmp347 = _tmp15*_tmp343 + _tmp18*_tmp344 + _tmp345*_tmp8 + _tmp4*cos(_tmp72) - _tmp342*across_1_1 + _tmp3*_tmp341*across_1_0 - _tmp3*_tmp346*_tmp4;
+    const double _tmp348 = 1.0*p_0;
+    const double _tmp349 = -_tmp18*_tmp342 - _tmp343*across_1_0 - _tmp344*across_1_1 - _tmp11*_tmp348*cos(_tmp1) + 0.25*_tmp15*_tmp3*p_0 + 0.5*_tmp13*_tmp346*p_0 + 0.5*_tmp19*_tmp345*p_0;
+    const double _tmp350 = _tmp341*_tmp35;
+    const double _tmp351 = _tmp341*_tmp41;
+    const double _tmp352 = _tmp341*_tmp47;
+    const double _tmp353 = -0.5*_tmp121 - _tmp31*_tmp45;
+    const double _tmp354 = 0.5*_tmp123 + _tmp34*_tmp42;
+    const double _tmp355 = _tmp351*_tmp43 + _tmp352*_tmp46 + _tmp353*_tmp36 + _tmp4*cos(_tmp52) - _tmp350*across_2_1 + _tmp32*_tmp341*across_2_0 - _tmp32*_tmp354*_tmp4;
+    const double _tmp356 = -_tmp350*_tmp46 - _tmp351*across_2_0 - _tmp352*across_2_1 - _tmp348*_tmp37*cos(_tmp29) + 0.25*_tmp32*_tmp43*p_0 + 0.5*_tmp353*_tmp47*p_0 + 0.5*_tmp354*_tmp41*p_0;
+    const double _tmp357 = 0.045*_tmp76 - 0.128*_tmp78;
+    const double _tmp358 = -0.064*_tmp76 - 0.09*_tmp78;
+    const double _tmp359 = _tmp357*_tmp81 + _tmp358*_tmp84;
+    const double _tmp360 = _tmp357*_tmp84;
+    const double _tmp361 = _tmp4*_tmp69;
+    const double _tmp362 = -_tmp13*_tmp361 + 0.5*_tmp23*_tmp3*p_0;
+    const double _tmp363 = _tmp3*_tmp361 + _tmp13*_tmp23*_tmp4;
+    const double _tmp364 = -_tmp20*_tmp69 - _tmp23*_tmp8;
+    const double _tmp365 = _tmp69*_tmp8 - _tmp20*_tmp23;
+    const double _tmp366 = _tmp28*_tmp4;
+    const double _tmp367 = _tmp4*_tmp51;
+    const double _tmp368 = _tmp32*_tmp366 + _tmp367*_tmp41;
+    const double _tmp369 = _tmp32*_tmp367 - _tmp366*_tmp41;
+    const double _tmp370 = -_tmp28*_tmp36 + 0.5*_tmp47*_tmp51*p_0;
+    const double _tmp371 = _tmp28*_tmp48 + _tmp36*_tmp51;
+    out[0] = 0;
+    out[1] = 0;
+    out[2] = 0;
+    out[3] = 0;
+    out[4] = -_tmp114 - 1000.0*_tmp50 - 1000.0*_tmp55 - 1000.0*_tmp68 - 1000.0*_tmp71 - _tmp21*_tmp24 + 500.0*_tmp69*_tmp74;
+    out[5] = -_tmp114 - 500.0*_tmp50 - 500.0*_tmp55 - 1000.0*_tmp126 + 1000.0*_tmp128*_tmp51;
+    out[6] = -_tmp133*_tmp134 - _tmp135*_tmp136 - _tmp138*_tmp157 + 500.0*_tmp158*_tmp164 + 1000.0*_tmp138*_tmp172 + 1000.0*_tmp158*_tmp171;
+    out[7] = -500.0*_tmp109 - _tmp111*_tmp173 - _tmp182*_tmp183 + 1000.0*_tmp112*_tmp184;
+    out[8] = -_tmp185 - _tmp187 - 1000.0*_tmp186 - 1000.0*_tmp188 - _tmp24*_tmp74 + 1000.0*_tmp105*_tmp112 + 1000.0*_tmp23*_tmp70 + 1000.0*_tmp49*_tmp51 + 1000.0*_tmp81*_tmp83 - 500.0*_tmp21*_tmp69;
+    out[9] = -_tmp185 - _tmp187 + 500.0*_tmp189 + 1000.0*_tmp190 + 1000.0*_tmp191 - 500.0*_tmp186 + _tmp105*_tmp113 + _tmp82*_tmp83;
+    out[10] = 1000.0*_tmp192 + _tmp133*_tmp136 + _tmp157*_tmp158 - _tmp134*_tmp135 + 500.0*_tmp138*_tmp164 - 1000.0*_tmp158*_tmp172;
+    out[11] = _tmp105*_tmp173 + _tmp113*_tmp182 + _tmp183*_tmp184 - 500.0*_tmp108*_tmp111;
+    out[12] = _tmp208*(_tmp207 - _tmp206 + 0.026*_tmp193 - 0.015*_tmp194 + _tmp204*p_0) - _tmp203*(_tmp199 + _tmp202 + 0.015*_tmp193 + 0.026*_tmp194);
+    out[13] = _tmp208*(-_tmp206 - _tmp210 + 0.4330127018922193*_tmp195*p_0) - _tmp203*(_tmp199 + _tmp209);
+    out[14] = _tmp208*(-_tmp192 - _tmp213 + _tmp158*_tmp172 + _tmp214*_tmp215 - _tmp156*_tmp216 - 0.5*_tmp138*_tmp164) - _tmp203*(-_tmp217 - _tmp138*_tmp172 - _tmp158*_tmp171 - _tmp164*_tmp216 + 0.5*_tmp138*_tmp156);
+    out[15] = 0;
+    out[16] = 0;
+    out[17] = 0;
+    out[18] = -_tmp208*(-_tmp213 + _tmp212*_tmp4 + _tmp214*_tmp215) + 9.186691875800356*x_4*(-_tmp217 + 0.5*_tmp215*p_0);
+    out[19] = 0;
+    out[20] = 0;
+    out[21] = 0;
+    out[22] = 0;
+    out[23] = 0;
+    out[24] = _tmp208*(-_tmp221*_tmp223 - _tmp219*_tmp220*across_1_1 + 0.125*_tmp2*_tmp219*_tmp224*p_0) - _tmp203*(-_tmp219*_tmp223 + 0.375*_tmp221*across_1_1*p_0 - _tmp2*_tmp221*_tmp224*_tmp56);
+    out[25] = 0;
+    out[26] = 0;
+    out[27] = 0;
+    out[28] = _tmp208*(-_tmp227*across_2_1 + 0.5*_tmp228*_tmp229*p_0) - _tmp203*(-_tmp227*_tmp229 - _tmp228*_tmp4*across_2_1);
+    out[29] = _tmp208*(_tmp229*_tmp231 - _tmp230*across_2_1 + _tmp226*_tmp232*_tmp31*_tmp56) - _tmp203*(-_tmp229*_tmp230 - _tmp231*across_2_1 + 0.125*_tmp228*_tmp232*_tmp31*p_0);
+    out[30] = 0;
+    out[31] = 0;
+    out[32] = 0;
+    out[33] = 0;
+    out[34] = -_tmp208*(-_tmp235*_tmp237 - _tmp220*_tmp234*across_3_1 + 0.125*_tmp142*_tmp234*_tmp238*p_0) + 9.186691875800356*x_4*(-_tmp234*_tmp237 + 0.375*_tmp235*across_3_1*p_0 - _tmp142*_tmp235*_tmp238*_tmp56);
+    out[35] = 0;
+    out[36] = _tmp244;
+    out[37] = _tmp244;
+    out[38] = 0;
+    out[39] = _tmp208*(_tmp242*_tmp246 - _tmp245*across_4_1 + _tmp240*_tmp247*_tmp56*_tmp88) - _tmp203*(-_tmp242*_tmp245 - _tmp246*across_4_1 + 0.125*_tmp243*_tmp247*_tmp88*p_0);
+    out[40] = 0;
+    out[41] = -1000.0*_tmp253 - 1000.0*_tmp255 - 1000.0*_tmp266 - _tmp183*_tmp271 + 1000.0*_tmp112*_tmp274 + 1000.0*_tmp138*_tmp272 + 1000.0*_tmp158*_tmp260 + 1000.0*_tmp273*_tmp51;
+    out[42] = 1000.0*_tmp276 + 1000.0*_tmp277 + 1000.0*_tmp278 + 1000.0*_tmp279 - 1000.0*_tmp275 + _tmp113*_tmp271 + _tmp183*_tmp274 - 1000.0*_tmp158*_tmp272;
+    out[43] = _tmp282 + _tmp208*(-_tmp196 - _tmp198 - _tmp277 - _tmp285 + 0.5*_tmp212 + _tmp158*_tmp272) - _tmp203*(_tmp204 + _tmp283 + _tmp284 - _tmp205 - _tmp138*_tmp272 - _tmp158*_tmp260);
+    out[44] = _tmp286 + _tmp203*(_tmp283 + _tmp287) - _tmp208*(_tmp287 - _tmp283);
+    out[45] = _tmp288;
+    out[46] = _tmp208*(-_tmp289*across_1_1 + 0.5*_tmp219*_tmp222) + _tmp281*omega_1_0 - _tmp203*(-_tmp222*_tmp289 - 0.5*_tmp219*across_1_1) - _tmp281*omega_1_1;
+    out[47] = -_tmp282 + _tmp208*(_tmp229*_tmp290 + 0.5*_tmp228*across_2_1) + _tmp281*omega_2_0 - _tmp203*(-_tmp290*across_2_1 + 0.5*_tmp228*_tmp229);
+    out[48] = -_tmp286 + _tmp203*(-_tmp236*_tmp291 - 0.5*_tmp234*across_3_1) + _tmp281*omega_3_0 - _tmp208*(-_tmp291*across_3_1 + 0.5*_tmp234*_tmp236);
+    out[49] = _tmp288 + _tmp208*(_tmp242*_tmp292 + 0.5*_tmp243*across_4_1) + _tmp281*omega_4_0 - _tmp203*(-_tmp292*across_4_1 + 0.5*_tmp242*_tmp243);
+    out[50] = 0.5;
+    out[51] = 0;
+    out[52] = 0;
+    out[53] = 0;
+    out[54] = -_tmp296*_tmp297 - _tmp298*x_4;
+    out[55] = 0;
+    out[56] = 0;
+    out[57] = 0;
+    out[58] = _tmp298*x_3 - _tmp19*_tmp299;
+    out[59] = 0;
+    out[60] = 0;
+    out[61] = 0;
+    out[62] = 0;
+    out[63] = 0;
+    out[64] = 0;
+    out[65] = 0;
+    out[66] = 0;
+    out[67] = 0;
+    out[68] = 0;
+    out[69] = 0;
+    out[70] = 0.5;
+    out[71] = 0;
+    out[72] = 0;
+    out[73] = 0;
+    out[74] = -_tmp300*_tmp301 - _tmp302*x_4;
+    out[75] = 0;
+    out[76] = 0;
+    out[77] = 0;
+    out[78] = _tmp302*x_3 - _tmp219*_tmp303;
+    out[79] = 0;
+    out[80] = 0;
+    out[81] = 0;
+    out[82] = 0;
+    out[83] = 0;
+    out[84] = 0;
+    out[85] = 0;
+    out[86] = 0;
+    out[87] = 0;
+    out[88] = 0;
+    out[89] = 0;
+    out[90] = 0;
+    out[91] = 0.5;
+    out[92] = 0;
+    out[93] = 0;
+    out[94] = -_tmp304*_tmp307 + 530001.4543730975*_tmp293*_tmp294*_tmp308*x_4;
+    out[95] = -_tmp296*_tmp307 + 132500.36359327438*_tmp293*_tmp294*_tmp308*x_4;
+    out[96] = 0;
+    out[97] = 0;
+    out[98] = -_tmp306*_tmp309 - _tmp304*_tmp308*x_3;
+    out[99] = -_tmp299*_tmp306 - _tmp308*_tmp310;
+    out[100] = 0;
+    out[101] = 0;
+    out[102] = 0;
+    out[103] = 0;
+    out[104] = 0;
+    out[105] = 0;
+    out[106] = 0;
+    out[107] = 0;
+    out[108] = 0;
+    out[109] = 0;
+    out[110] = 0;
+    out[111] = 0.5;
+    out[112] = 0;
+    out[113] = 0;
+    out[114] = -_tmp304*_tmp311 + 530001.4543730975*_tmp228*_tmp293*_tmp294*x_4;
+    out[115] = -_tmp300*_tmp311 + 397501.09077982313*_tmp228*_tmp293*_tmp294*x_4;
+    out[116] = 0;
+    out[117] = 0;
+    out[118] = -_tmp226*_tmp309 - _tmp304*_tmp312;
+    out[119] = -_tmp226*_tmp303 - _tmp300*_tmp312;
+    out[120] = 0;
+    out[121] = 0;
+    out[122] = 0;
+    out[123] = 0;
+    out[124] = 0;
+    out[125] = 0;
+    out[126] = 0;
+    out[127] = 0;
+    out[128] = 0;
+    out[129] = 0;
+    out[130] = 0;
+    out[131] = 0;
+    out[132] = 0.5;
+    out[133] = 0;
+    out[134] = 0;
+    out[135] = 0;
+    out[136] = _tmp146*_tmp310 + _tmp154*_tmp299;
+    out[137] = 0;
+    out[138] = 0;
+    out[139] = 0;
+    out[140] = -_tmp154*_tmp310 + 132500.36359327438*_tmp146*_tmp293*_tmp294*x_4;
+    out[141] = 0;
+    out[142] = 0;
+    out[143] = 0;
+    out[144] = 0;
+    out[145] = 0;
+    out[146] = 0;
+    out[147] = 0;
+    out[148] = 0;
+    out[149] = 0;
+    out[150] = 0;
+    out[151] = 0;
+    out[152] = 0.5;
+    out[153] = 0;
+    out[154] = 0;
+    out[155] = 0;
+    out[156] = _tmp234*_tmp313 + _tmp235*_tmp303;
+    out[157] = 0;
+    out[158] = 0;
+    out[159] = 0;
+    out[160] = -_tmp235*_tmp313 + 397501.09077982313*_tmp234*_tmp293*_tmp294*x_4;
+    out[161] = 0;
+    out[162] = 0;
+    out[163] = 0;
+    out[164] = 0;
+    out[165] = 0;
+    out[166] = 0;
+    out[167] = 0;
+    out[168] = 0;
+    out[169] = 0;
+    out[170] = 0;
+    out[171] = 0;
+    out[172] = 0;
+    out[173] = 0.5;
+    out[174] = _tmp318;
+    out[175] = _tmp318;
+    out[176] = 0;
+    out[177] = -_tmp310*_tmp315 + 132500.36359327438*_tmp293*_tmp294*_tmp317*x_4;
+    out[178] = _tmp319;
+    out[179] = _tmp319;
+    out[180] = 0;
+    out[181] = -_tmp299*_tmp315 - _tmp310*_tmp317;
+    out[182] = 0;
+    out[183] = 0;
+    out[184] = 0;
+    out[185] = 0;
+    out[186] = 0;
+    out[187] = 0;
+    out[188] = 0;
+    out[189] = 0;
+    out[190] = 0;
+    out[191] = 0;
+    out[192] = 0;
+    out[193] = 0.5;
+    out[194] = _tmp320;
+    out[195] = _tmp320;
+    out[196] = 0;
+    out[197] = -_tmp240*_tmp313 + 397501.09077982313*_tmp243*_tmp293*_tmp294*x_4;
+    out[198] = _tmp321;
+    out[199] = _tmp321;
+    out[200] = 0;
+    out[201] = -_tmp240*_tmp303 - _tmp243*_tmp313;
+    out[202] = 0;
+    out[203] = 0;
+    out[204] = 0;
+    out[205] = 0;
+    out[206] = 0;
+    out[207] = 0;
+    out[208] = 0;
+    out[209] = 0;
+    out[210] = 0;
+    out[211] = _tmp324*x_3 - _tmp19*_tmp325;
+    out[212] = _tmp297*_tmp323 + _tmp324*x_4;
+    out[213] = 0;
+    out[214] = 0;
+    out[215] = 0;
+    out[216] = _tmp221*_tmp326 - _tmp219*_tmp325;
+    out[217] = _tmp221*_tmp325 + _tmp301*_tmp323;
+    out[218] = 0;
+    out[219] = 0;
+    out[220] = 0;
+    out[221] = -_tmp306*_tmp325 - _tmp308*_tmp326;
+    out[222] = _tmp307*_tmp323 - _tmp308*_tmp325;
+    out[223] = 0;
+    out[224] = 0;
+    out[225] = 0;
+    out[226] = -_tmp226*_tmp325 - _tmp312*_tmp323;
+    out[227] = _tmp311*_tmp323 - _tmp228*_tmp325;
+    out[228] = 0;
+    out[229] = 0;
+    out[230] = 0;
+    out[231] = -_tmp154*_tmp326 + 530001.4543730975*_tmp146*_tmp294*_tmp322*x_4;
+    out[232] = -_tmp146*_tmp326 - _tmp154*_tmp325;
+    out[233] = 0;
+    out[234] = 0;
+    out[235] = 0;
+    out[236] = -_tmp235*_tmp326 + 530001.4543730975*_tmp234*_tmp294*_tmp322*x_4;
+    out[237] = -_tmp234*_tmp326 - _tmp235*_tmp325;
+    out[238] = 0;
+    out[239] = 0;
+    out[240] = 0;
+    out[241] = -_tmp315*_tmp325 - _tmp317*_tmp326;
+    out[242] = _tmp315*_tmp326 - _tmp317*_tmp325;
+    out[243] = 0;
+    out[244] = 0;
+    out[245] = 0;
+    out[246] = -_tmp240*_tmp325 - _tmp243*_tmp326;
+    out[247] = _tmp240*_tmp326 - _tmp243*_tmp325;
+    out[248] = 0;
+    out[249] = 0;
+    out[250] = -0.004593345937900178*_tmp50 - 0.004593345937900178*_tmp55 + _tmp330*_tmp81 + _tmp340*_tmp51 - _tmp28*_tmp339 - _tmp329*_tmp84;
+    out[251] = 0;
+    out[252] = 0;
+    out[253] = 0;
+    out[254] = 0;
+    out[255] = 0;
+    out[256] = -_tmp23*_tmp347 - _tmp349*_tmp69;
+    out[257] = _tmp356*_tmp51 - _tmp28*_tmp355;
+    out[258] = 0;
+    out[259] = 0;
+    out[260] = 0.004593345937900178*_tmp189 - 0.004593345937900178*_tmp186 + _tmp28*_tmp340 + _tmp329*_tmp81 + _tmp330*_tmp84 + _tmp339*_tmp51;
+    out[261] = 0;
+    out[262] = 0;
+    out[263] = 0;
+    out[264] = 0;
+    out[265] = 0;
+    out[266] = _tmp23*_tmp349 - _tmp347*_tmp69;
+    out[267] = _tmp28*_tmp356 + _tmp355*_tmp51;
+    out[268] = 0;
+    out[269] = 0;
+    out[270] = -_tmp202 - _tmp359;
+    out[271] = -_tmp209 - _tmp359;
+    out[272] = 0;
+    out[273] = 0;
+    out[274] = -_tmp207 - _tmp360 + _tmp358*_tmp81;
+    out[275] = _tmp210 - _tmp360 + _tmp358*_tmp81;
+    out[276] = 0;
+    out[277] = 0;
+    out[278] = -_tmp284;
+    out[279] = _tmp285;
+    out[280] = _tmp362;
+    out[281] = -_tmp363;
+    out[282] = 0;
+    out[283] = _tmp364;
+    out[284] = _tmp365;
+    out[285] = 0;
+    out[286] = _tmp368;
+    out[287] = _tmp369;
+    out[288] = 0;
+    out[289] = _tmp370;
+    out[290] = -_tmp371;
+    out[291] = 0;
+    out[292] = 0;
+    out[293] = 0;
+    out[294] = 0;
+    out[295] = 0;
+    out[296] = 0;
+    out[297] = 0;
+    out[298] = 0;
+    out[299] = 0;
+    out[300] = 0;
+    out[301] = 0;
+    out[302] = 0;
+    out[303] = 0;
+    out[304] = _tmp363;
+    out[305] = _tmp362;
+    out[306] = 0;
+    out[307] = -_tmp365;
+    out[308] = _tmp364;
+    out[309] = 0;
+    out[310] = -_tmp369;
+    out[311] = _tmp368;
+    out[312] = 0;
+    out[313] = _tmp371;
+    out[314] = _tmp370;
+    out[315] = 0;
+    out[316] = 0;
+    out[317] = 0;
+    out[318] = 0;
+    out[319] = 0;
+    out[320] = 0;
+    out[321] = 0;
+    out[322] = 0;
+    out[323] = 0;
+    out[324] = 0;
+    out[325] = 0;
+    out[326] = 0;
+    out[327] = 0;
+}
+
 /* one plate's relation at order 4: (along, across, omega) and their partials by (theta, p, f) (312 operations) */
 static void sk_plate_relation4(const double *plate, double *out)
 {
@@ -3150,6 +4356,68 @@ static void sk_plate_rest4(const double *plate, double *out)
     out[9] = 1;
     out[10] = 0.00026041666666666666*theta*(320 - 8*_tmp0 - 360*_tmp1*symkin_sinr3(_tmp2) + 15*pow(theta, 6)*(-symkin_cosr4(_tmp2) + 7*symkin_sinr4(_tmp2)));
     out[11] = -0.5*symkin_sinr0(_tmp2);
+}
+
+/* one plate's relation at order 4: d(along, across, omega)/d(e_a, e_s) (158 operations) */
+static void sk_plate_eps4(const double *plate, double *out)
+{
+    const double theta = plate[0];
+    const double p = plate[1];
+    const double f = plate[2];
+    const double e_a = plate[3];
+    const double e_s = plate[4];
+    const double _tmp0 = pow(theta, 2);
+    const double _tmp5 = 1 + p*(-2*e_s + 2*e_a);
+    const double _tmp1 = e_a - e_s;
+    const double _tmp2 = 1 + _tmp1*p;
+    const double _tmp3 = _tmp2*p;
+    const double _tmp4 = 2*p;
+    const double _tmp6 = pow(p, 2);
+    const double _tmp7 = _tmp5*_tmp6;
+    const double _tmp8 = -0.08333333333333333*p + _tmp4*symkin_bcol_a(_tmp3) + _tmp7*symkin_bcol_a_d1(_tmp3);
+    const double _tmp9 = pow(theta, 4);
+    const double _tmp10 = -0.0010416666666666667*p + _tmp4*symkin_bcol_e3c(_tmp3) + _tmp7*symkin_bcol_e3c_d1(_tmp3);
+    const double _tmp11 = symkin_bcol_s(_tmp3);
+    const double _tmp12 = _tmp2*f;
+    const double _tmp13 = symkin_bcol_e1(_tmp3);
+    const double _tmp14 = _tmp0*_tmp13;
+    const double _tmp15 = 4*(_tmp2*_tmp2*_tmp2);
+    const double _tmp16 = (f*f*f);
+    const double _tmp17 = _tmp16*symkin_bcol_e2(_tmp3);
+    const double _tmp18 = -_tmp15*_tmp17 - 2*_tmp12*_tmp14 + _tmp11*_tmp2*f;
+    const double _tmp19 = _tmp18*f;
+    const double _tmp20 = symkin_bcol_w(_tmp3);
+    const double _tmp21 = pow(f, 2);
+    const double _tmp22 = pow(_tmp2, 2);
+    const double _tmp23 = _tmp21*_tmp22;
+    const double _tmp24 = symkin_bcol_e2_d1(_tmp3);
+    const double _tmp25 = pow(f, 4);
+    const double _tmp26 = _tmp25*pow(_tmp2, 4);
+    const double _tmp27 = symkin_bcol_e1_d1(_tmp3);
+    const double _tmp28 = _tmp0*_tmp27;
+    const double _tmp29 = _tmp4*(_tmp20*_tmp23 + _tmp23*_tmp28 + _tmp24*_tmp26);
+    const double _tmp30 = _tmp15*_tmp24;
+    const double _tmp31 = _tmp14*_tmp4*f + _tmp16*_tmp30*_tmp6 - _tmp11*f*p + 2*_tmp12*_tmp28*_tmp6 + 12*_tmp17*_tmp22*p - _tmp2*_tmp6*f*symkin_bcol_s_d1(_tmp3);
+    const double _tmp32 = -_tmp31;
+    const double _tmp33 = _tmp1*f;
+    const double _tmp34 = _tmp21*_tmp3;
+    const double _tmp35 = 2*_tmp34;
+    const double _tmp36 = _tmp23*_tmp6;
+    const double _tmp37 = _tmp20*_tmp35 + _tmp28*_tmp35 + _tmp36*symkin_bcol_w_d1(_tmp3) + _tmp0*_tmp36*symkin_bcol_e1_d2(_tmp3) + _tmp25*_tmp30*p + _tmp26*_tmp6*symkin_bcol_e2_d2(_tmp3);
+    const double _tmp38 = _tmp19 + p - _tmp29 + _tmp0*_tmp8 + _tmp32*_tmp33 - _tmp10*_tmp9 - _tmp37*_tmp5;
+    const double _tmp39 = _tmp29 - _tmp19 + _tmp10*_tmp9 + _tmp31*_tmp33 + _tmp37*_tmp5 - _tmp0*_tmp8;
+    const double _tmp40 = _tmp18*p;
+    const double _tmp41 = _tmp40 + _tmp2*_tmp32;
+    const double _tmp42 = f - _tmp40 + _tmp2*_tmp31;
+    const double _tmp43 = 0.5*f;
+    const double _tmp44 = _tmp6*theta;
+    const double _tmp45 = _tmp44*symkin_bcol_invt_d1(_tmp3) + 2*_tmp23*_tmp27*_tmp44 + 4*_tmp13*_tmp34*theta + 4*_tmp6*(theta*theta*theta)*symkin_bcol_e3_d1(_tmp3);
+    out[0] = _tmp38;
+    out[1] = _tmp39;
+    out[2] = _tmp41;
+    out[3] = _tmp42;
+    out[4] = _tmp45 - _tmp38*_tmp43 + 0.5*_tmp41*p;
+    out[5] = -_tmp45 - _tmp39*_tmp43 + 0.5*_tmp42*p;
 }
 
 /* symkin runtime (templates/c/runtime.c, docs/runtime.md; tested on its own by
@@ -3446,6 +4714,11 @@ typedef struct {
     int (*loaded_solve)(const void *m, const double *inputs, const double *params,
                         const double *theta, double *delta, double *q);
     const void *loaded;             /* its tables (sk_loaded) */
+    /* its sensitivities (templates/c/reduced_sens.c): (mechanism, theta, q, dtheta_u/dv) -> the
+       deviation's by every variable; NULL: none */
+    int (*loaded_rates)(const void *m, const double *theta, const double *q, const double *thu,
+                        double *dev);
+    const void *loaded_sens;        /* its tables (sk_loaded_sens) */
     sk_rule rigid_rule;             /* Newton at each continuation step */
     sk_rule polish_rule;            /* after the rigid start */
     sk_rule exact_rule;             /* on every compliant closure */
@@ -3789,19 +5062,44 @@ static void sk_gemm(int m, int p, int n, const double *a, const double *b, doubl
     }
 }
 
+/* The parameters' columns of dev and rig (2 SK_NP x SK_NV) made totals: a parameter's default
+   that reads earlier ones follows them, last first. Returns 0. */
+static int sk_sensitivity_chain(const sk_mechanism *m, const double *params, double *dev,
+                                double *rig)
+{
+    if (m->sens_chain != NULL) {
+        double c[SK_NPAR * SK_NPAR + 1];
+        int i, j, r;
+        m->sens_chain(params, c);
+        for (i = SK_NPAR - 1; i >= 0; --i) {
+            for (j = i + 1; j < SK_NPAR; ++j) {
+                for (r = 0; r < 2 * SK_NP; ++r) {
+                    dev[r * SK_NV + i] += c[j * SK_NPAR + i] * dev[r * SK_NV + j];
+                    rig[r * SK_NV + i] += c[j * SK_NPAR + i] * rig[r * SK_NV + j];
+                }
+            }
+        }
+    }
+    return 0;
+}
+
 /* The total derivatives of the points' deviations (dev) and rigid positions (rig) by every
    variable, 2 SK_NP x SK_NV row-major (row 2 p + c: component c of point p; columns: the
    parameters, then the inputs), by the implicit-function theorem on the closures: with
    Theta = d theta_u / dv = -A^-1 dG/dv and, where the level solves a closure E for delta,
    Y = -M^-1 (dE/dv + dE/dtheta_u Theta): dD/dv + dD/dtheta_u Theta + dD/ddelta Y. */
 static int sk_sensitivity(const sk_mechanism *m, const sk_level *lv, const double *theta,
-                          const double *delta, const double *params, double *dev, double *rig)
+                          const double *delta, const double *params, const double *q,
+                          double *dev, double *rig)
 {
     double sr[SK_OUT], s[SK_OUT];
     const sk_sens *b = &lv->sens;
+    const double *thu = NULL;
     int i;
     double th[SK_K * SK_NV + 1], y[SK_K * SK_NV + 1];
-    if (b->fn == NULL) {
+    (void)q;
+    (void)thu;
+    if (b->fn == NULL && !(lv->loaded && m->loaded_rates != NULL)) {
         return 3;                   /* a level without closed-form sensitivities */
     }
     m->sens_rigid(theta, params, sr);
@@ -3815,6 +5113,14 @@ static int sk_sensitivity(const sk_mechanism *m, const sk_level *lv, const doubl
         rig[i] = sr[m->sr_dR_dv + i];
     }
     sk_gemm(2 * SK_NP, SK_K, SK_NV, sr + m->sr_dR_dtheta, th, rig);
+    thu = th;
+    if (b->fn == NULL) {
+        /* the loaded level: the reduced equilibrium's own (templates/c/reduced_sens.c) */
+        if (m->loaded_rates(m, theta, q, thu, dev)) {
+            return 1;
+        }
+        return sk_sensitivity_chain(m, params, dev, rig);
+    }
     b->fn(theta, delta, params, s);
     if (b->stage) {
         for (i = 0; i < SK_K * SK_NV; ++i) {
@@ -3835,21 +5141,7 @@ static int sk_sensitivity(const sk_mechanism *m, const sk_level *lv, const doubl
     if (b->stage) {
         sk_gemm(2 * SK_NP, SK_K, SK_NV, s + b->dD_ddelta, y, dev);
     }
-    if (m->sens_chain != NULL) {
-        /* a parameter's default that reads earlier ones follows them: totals, last first */
-        double c[SK_NPAR * SK_NPAR + 1];
-        int j, r;
-        m->sens_chain(params, c);
-        for (i = SK_NPAR - 1; i >= 0; --i) {
-            for (j = i + 1; j < SK_NPAR; ++j) {
-                for (r = 0; r < 2 * SK_NP; ++r) {
-                    dev[r * SK_NV + i] += c[j * SK_NPAR + i] * dev[r * SK_NV + j];
-                    rig[r * SK_NV + i] += c[j * SK_NPAR + i] * rig[r * SK_NV + j];
-                }
-            }
-        }
-    }
-    return 0;
+    return sk_sensitivity_chain(m, params, dev, rig);
 }
 
 /* <name>_sensitivity_full. */
@@ -3871,7 +5163,7 @@ static int sk_sensitivity_full(const sk_mechanism *m, const double *inputs, cons
         status = sk_outputs(m, lv, theta, delta, params, q, values, NULL, NULL);
     }
     if (status == 0) {
-        status = sk_sensitivity(m, lv, theta, delta, params, dev, rig);
+        status = sk_sensitivity(m, lv, theta, delta, params, q, dev, rig);
     }
     for (i = 0; status == 0 && i < 2 * SK_NP * SK_NV; ++i) {
         if (!isfinite(dev[i]) || !isfinite(rig[i])) {
@@ -4358,6 +5650,11 @@ static int sk_reduced_pose(const void *mechanism, const double *inputs, const do
     for (i = 0; i < 2 * SK_NP; ++i) {
         q[SK_NPAR + i] = dev[i];
     }
+    /* the variant and its solution, for the sensitivities (templates/c/reduced_sens.c) */
+    q[SK_NPAR + 2 * SK_NP] = v;
+    for (i = 0; i < r.v->size; ++i) {
+        q[SK_NPAR + 2 * SK_NP + 1 + i] = x[i];
+    }
     return 0;
 }
 
@@ -4380,6 +5677,164 @@ static const sk_loaded sk_loaded_tables = {
     {{1, sk_loaded_plates1, sk_loaded_system1, sk_loaded_dev1, 6, 4, sk_loaded_scale1}, {2, sk_loaded_plates2, sk_loaded_system2, sk_loaded_dev2, 10, 8, sk_loaded_scale2}},
     3, 1e-12, 0.2, 0.9, 3.0, 0.01,
     12, 0
+};
+
+/* One variant's sensitivity routine (x, theta, plates, params) and where its blocks start:
+   dR/dtheta (n x m), dR/dp (n x n_p), din/dtheta (5 n_s x m), din/dp (5 n_s x n_p), dD/dx
+   (2 n_P x n), dD/dtheta (2 n_P x m), dD/dp (2 n_P x n_p), dD/dout (2 n_P x 3 n_s). */
+typedef struct {
+    sk_fn4 fn;
+    int dR_dtheta, dR_dp, din_dtheta, din_dp, dD_dx, dD_dtheta, dD_dp, dD_dout;
+} sk_red_sens;
+
+/* The loaded level's sensitivity routines, one per variant of sk_loaded. */
+typedef struct {
+    sk_red_sens variants[2];
+} sk_loaded_sens;
+
+/* dev (2 SK_NP x SK_NV) of the loaded level at its solution: q holds the parameters, the
+   deviation, the variant solved and its x (sk_reduced_pose); thu dtheta_u/dv of the non-input
+   hinges (SK_K x SK_NV, NULL without). J is evaluated once more at the solution (its LU, the
+   plates' inputs and relation there: everything the chain rule reads), then
+   dx/dv = -J^-1 (dR/dtheta dtheta/dv + dR/dp + dR/dout dout/din din/dv) and
+   dD/dv = dD/dx dx/dv + dD/dtheta dtheta/dv + dD/dp + dD/dout dout/din (din/dv + din/dx dx/dv).
+   Returns 0, or 1 where J is singular. */
+static int sk_reduced_rates(const void *mechanism, const double *theta, const double *q,
+                            const double *thu, double *dev)
+{
+    const sk_mechanism *m = (const sk_mechanism *)mechanism;
+    const sk_loaded *l = (const sk_loaded *)m->loaded;
+    const int v = (int)q[SK_NPAR + 2 * SK_NP];
+    const sk_red_sens *rs = ((const sk_loaded_sens *)m->loaded_sens)->variants + v;
+    const double *x = q + SK_NPAR + 2 * SK_NP + 1;
+    double s[SK_OUT], vals[3 * SK_RS], eps[6];
+    double dth[SK_M * SK_NV + 1], din[5 * SK_RS * SK_NV + 1], dout[3 * SK_RS * SK_NV + 1];
+    double dx[SK_RN * SK_NV + 1], col[SK_RN + 1], part[3 * SK_RS * 5 + 1];
+    sk_red_state st;
+    sk_red r;
+    int n, ns, i, j, k, c, e;
+    r.m = m;
+    r.l = l;
+    r.v = l->variants + v;
+    r.params = q;
+    n = r.v->size;
+    ns = r.v->plates_n;
+    if (n > 0 && sk_red_eval(&r, x, theta, 1.0, &st)) {
+        return 1;
+    }
+    if (n == 0) {
+        double rel[12 * SK_RS];
+        sk_red_inputs(&r, x, theta, 1.0, st.xt, st.ins);
+        sk_red_relation(&r, st.ins, rel, vals);
+        for (i = 0; i < 12 * ns; ++i) {
+            st.rel[i] = rel[i];
+        }
+    }
+    for (k = 0; k < ns; ++k) {
+        for (c = 0; c < 3; ++c) {
+            vals[3 * k + c] = st.rel[12 * k + c];
+        }
+    }
+    rs->fn(st.xt, theta, vals, q, s);
+    /* dtheta/dv of every hinge: the non-input ones' from the rigid closure, an input's own 1 */
+    for (i = 0; i < SK_M * SK_NV; ++i) {
+        dth[i] = 0.0;
+    }
+    for (j = 0; j < SK_K && thu != NULL; ++j) {
+        for (c = 0; c < SK_NV; ++c) {
+            dth[m->unknown_index[j] * SK_NV + c] = thu[j * SK_NV + c];
+        }
+    }
+    for (i = 0; i < SK_NI; ++i) {
+        dth[m->input_index[i] * SK_NV + SK_NPAR + i] = 1.0;
+    }
+    /* the relation's partials by (theta_c, p, f, e_a, e_s), 3 x 5 per half plate */
+    for (k = 0; k < ns; ++k) {
+        sk_plate_eps4(st.ins + 5 * k, eps);
+        for (i = 0; i < 3; ++i) {
+            for (c = 0; c < 3; ++c) {
+                part[15 * k + 5 * i + c] = st.rel[12 * k + 3 + 3 * i + c];
+            }
+            part[15 * k + 5 * i + 3] = eps[2 * i];
+            part[15 * k + 5 * i + 4] = eps[2 * i + 1];
+        }
+    }
+    /* din/dv at fixed x, then dout/dv = dout/din din/dv */
+    for (i = 0; i < 5 * ns; ++i) {
+        for (c = 0; c < SK_NV; ++c) {
+            double sum = c < SK_NPAR ? s[rs->din_dp + i * SK_NPAR + c] : 0.0;
+            for (e = 0; e < SK_M; ++e) {
+                sum += s[rs->din_dtheta + i * SK_M + e] * dth[e * SK_NV + c];
+            }
+            din[i * SK_NV + c] = sum;
+        }
+    }
+    for (k = 0; k < ns; ++k) {
+        for (i = 0; i < 3; ++i) {
+            for (c = 0; c < SK_NV; ++c) {
+                double sum = 0.0;
+                for (e = 0; e < 5; ++e) {
+                    sum += part[15 * k + 5 * i + e] * din[(5 * k + e) * SK_NV + c];
+                }
+                dout[(3 * k + i) * SK_NV + c] = sum;
+            }
+        }
+    }
+    /* dx/dv = -J^-1 dR/dv at fixed x, column by column with J's LU */
+    for (c = 0; c < SK_NV; ++c) {
+        for (i = 0; i < n; ++i) {
+            const double *jo = st.sys + n + n * n + i * 3 * ns;
+            double sum = c < SK_NPAR ? s[rs->dR_dp + i * SK_NPAR + c] : 0.0;
+            for (e = 0; e < SK_M; ++e) {
+                sum += s[rs->dR_dtheta + i * SK_M + e] * dth[e * SK_NV + c];
+            }
+            for (e = 0; e < 3 * ns; ++e) {
+                sum += jo[e] * dout[e * SK_NV + c];
+            }
+            col[i] = -sum;
+        }
+        if (n > 0) {
+            sk_lu_solve(n, st.lu, st.piv, col);
+        }
+        for (i = 0; i < n; ++i) {
+            dx[i * SK_NV + c] = col[i];
+        }
+    }
+    /* dout/dv along the solution: + dout/din din/dx dx/dv (theta_c, p, f move with x) */
+    for (k = 0; k < ns; ++k) {
+        for (i = 0; i < 3; ++i) {
+            for (c = 0; c < SK_NV; ++c) {
+                double sum = 0.0;
+                for (e = 0; e < 3; ++e) {
+                    const double *dinx = st.ins + 5 * ns + (3 * k + e) * n;
+                    for (j = 0; j < n; ++j) {
+                        sum += part[15 * k + 5 * i + e] * dinx[j] * dx[j * SK_NV + c];
+                    }
+                }
+                dout[(3 * k + i) * SK_NV + c] += sum;
+            }
+        }
+    }
+    for (i = 0; i < 2 * SK_NP; ++i) {
+        for (c = 0; c < SK_NV; ++c) {
+            double sum = c < SK_NPAR ? s[rs->dD_dp + i * SK_NPAR + c] : 0.0;
+            for (e = 0; e < n; ++e) {
+                sum += s[rs->dD_dx + i * n + e] * dx[e * SK_NV + c];
+            }
+            for (e = 0; e < SK_M; ++e) {
+                sum += s[rs->dD_dtheta + i * SK_M + e] * dth[e * SK_NV + c];
+            }
+            for (e = 0; e < 3 * ns; ++e) {
+                sum += s[rs->dD_dout + i * 3 * ns + e] * dout[e * SK_NV + c];
+            }
+            dev[i * SK_NV + c] = sum;
+        }
+    }
+    return 0;
+}
+/* the loaded level's sensitivity routines, per variant, and where their blocks start */
+static const sk_loaded_sens sk_loaded_sens_tables = {
+    {{sk_loaded_sens1, 0, 24, 30, 110, 130, 142, 150, 152}, {sk_loaded_sens2, 0, 40, 50, 210, 250, 270, 278, 280}}
 };
 /* ---- four_bar: its tables for the runtime ---- */
 
@@ -4422,6 +5877,7 @@ static const sk_mechanism sk_mechanism_tables = {
     .links = sk_links,
     .sens_rigid = sk_sens_rigid,
     .loaded_solve = sk_reduced_pose, .loaded = &sk_loaded_tables,
+    .loaded_rates = sk_reduced_rates, .loaded_sens = &sk_loaded_sens_tables,
     .n_dyads = 1,
     .rigid_rule = {30, 1e-10, 0.0, 0.0, 0.0},
     .polish_rule = {1, 0.0, 0.0, 0.0, 0.0},

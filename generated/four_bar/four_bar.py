@@ -2,7 +2,7 @@
 Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
 Points: C; levels: paper, first_order, exact, loaded.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 65, rigid_res 51, linear 114, newton 259, rigid_points 19, loaded_plates1 132, loaded_system1 523, loaded_dev1 60, loaded_plates2 349, loaded_system2 1557, loaded_dev2 143, dev_paper 38, dev_first_order 52, dev_exact 62, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339, plate_relation4 312, plate_values2 62, plate_rest4 39.
+Operation counts after CSE: rigid 65, rigid_res 51, linear 114, newton 259, rigid_points 19, loaded_plates1 132, loaded_system1 523, loaded_dev1 60, loaded_plates2 349, loaded_system2 1557, loaded_dev2 143, dev_paper 38, dev_first_order 52, dev_exact 62, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339, loaded_sens1 581, loaded_sens2 1581, plate_relation4 312, plate_values2 62, plate_rest4 39, plate_eps4 158.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -31,7 +31,7 @@ LINKS = ('frame', 'crank', 'coupler', 'rocker', )
 POINTS = ('C', )
 LEVELS = ('paper', 'first_order', 'exact', 'loaded', )
 #: The levels with closed-form sensitivities (docs/sensitivity.md).
-SENSITIVITY_LEVELS = ('paper', 'first_order', 'exact', )
+SENSITIVITY_LEVELS = ('paper', 'first_order', 'exact', 'loaded', )
 _DTYPE = numpy.float64
 
 # symkin runtime (templates/numpy/runtime.py, docs/runtime.md; tested on its own by
@@ -489,8 +489,12 @@ def _sensitivity_block(arrays, mech, level, p):
             ok = ok & good
             th = _matrix(th, k, nv, shape, dtype)
             rig = rig + numpy.matmul(_block(sr, rb["dR_dtheta"], shape, dtype), th)
-        s = lv.sens(theta, delta, p)
-        dev = _block(s, b["dD_dv"], shape, dtype)
+        if lv.loaded:
+            # the reduced equilibrium's own (templates/numpy/reduced_sens.py)
+            dev = lv.sens(mech, theta, p, q, th if k else None, ok).astype(dtype)
+        else:
+            s = lv.sens(theta, delta, p)
+            dev = _block(s, b["dD_dv"], shape, dtype)
         if "M" in b:
             # Y = -M^-1 (dE/dv + dE/dtheta_u Theta)
             rhs = -(
@@ -505,7 +509,7 @@ def _sensitivity_block(arrays, mech, level, p):
             dev = dev + numpy.matmul(
                 _block(s, b["dD_ddelta"], shape, dtype), _matrix(y, k, nv, shape, dtype)
             )
-        if k:
+        if k and not lv.loaded:
             dev = dev + numpy.matmul(_block(s, b["dD_dtheta"], shape, dtype), th)
         if mech.sens_chain is not None:
             # a parameter's default that reads earlier ones follows them: totals, last first
@@ -838,6 +842,9 @@ def _reduced_solve(mech, x, theta, p, ok):
     okf = numpy.zeros(where.size, dtype=bool)
     flat_delta = [numpy.zeros(where.size) for _ in mech.unknown_index]
     flat_dev = [numpy.full(where.size, numpy.nan) for _ in range(n_dev)]
+    # the variant and its solution x, for the sensitivities (templates/numpy/reduced_sens.py)
+    flat_x = [numpy.full(where.size, numpy.nan) for _ in range(max(v[3] for v in tb.variants))]
+    flat_variant = numpy.full(where.size, -1)
     for count, variant in enumerate(tb.variants, 1):
         if not todo.size:
             break
@@ -851,6 +858,9 @@ def _reduced_solve(mech, x, theta, p, ok):
             flat_delta[j][todo[good]] = sx[j, good] * solver.scale[j]
         for i in range(n_dev):
             flat_dev[i][todo[good]] = sdev[i, good]
+        for i in range(solver.size):
+            flat_x[i][todo[good]] = sx[i, good]
+        flat_variant[todo[good]] = count - 1
         okf[todo[good]] = True
         # refused by the truncation estimate: two half plates per plate
         todo = todo[status == 4]
@@ -863,7 +873,97 @@ def _reduced_solve(mech, x, theta, p, ok):
         dev[i].reshape(-1)[where] = flat_dev[i]
     q = _Solved(p)
     q.deviation = dev
+    q.x = [numpy.zeros(shape) for _ in flat_x]
+    q.variant = numpy.full(shape, -1)
+    for i, v in enumerate(flat_x):
+        q.x[i].reshape(-1)[where] = v
+    q.variant.reshape(-1)[where] = flat_variant
     return delta, q, ok
+
+
+def _red_block(out, block, b):
+    """A routine's block (offset, rows, cols) as a (b, rows, cols) array."""
+    at, rows, cols = block
+    if not rows * cols:
+        return numpy.zeros((b, rows, cols))
+    values = [_red_column(out[at + i], b) for i in range(rows * cols)]
+    return numpy.stack(values, axis=-1).reshape(b, rows, cols)
+
+
+def _reduced_rates(mech, theta, p, q, thu, ok):
+    """dev (*shape, 2 n_P, n_v) of the loaded level at its solutions (q: the variant solved and
+    its x, templates/numpy/reduced.py); thu dtheta_u/dv (*shape, k, n_v), None without. J is
+    evaluated once more at the solution, then dx/dv = -J^-1 dR/dv at fixed x and
+    dD/dv = dD/dx dx/dv + dD/dtheta dtheta/dv + dD/dp + dD/dout dout/dv (reduced_sens.c)."""
+    tb = mech.loaded
+    shape = ok.shape
+    npar, nv, m = len(mech.parameter_names), mech.n_variables, mech.n_theta
+    npt = 2 * len(mech.point_names)
+    dev = numpy.full((ok.size, npt, nv), numpy.nan)
+    variant = numpy.broadcast_to(q.variant, shape).reshape(-1)
+    good = numpy.broadcast_to(ok, shape).reshape(-1)
+
+    def flat(values, where):
+        return [numpy.broadcast_to(v, shape).reshape(-1)[where].astype(float) for v in values]
+
+    for index, (variant_row, (fn, blocks)) in enumerate(zip(tb.variants, tb.sens)):
+        where = numpy.flatnonzero(good & (variant == index))
+        b = where.size
+        if not b:
+            continue
+        solver = _Batch(tb, variant_row, index + 1)
+        n, ns = solver.size, solver.plates
+        x = numpy.array(flat(q.x[:n], where)).reshape(n, b)
+        th, pb = flat(theta, where), flat(p, where)
+        with numpy.errstate(all="ignore"):
+            _, jac = solver.system(x, th, pb, 1.0)
+            args, ins, dins = solver._inputs(x, th, pb, 1.0)
+            rel, vals = solver._relation(ins)
+            sys = solver.system_fn(args, th, vals, pb)
+            s = fn(args, th, vals, pb)
+        jo = _red_block(sys, (n + n * n, n, 3 * ns), b)
+        # dtheta/dv of every hinge: the non-input ones' from the rigid closure, an input's own 1
+        dth = numpy.zeros((b, m, nv))
+        if thu is not None:
+            tu = numpy.broadcast_to(thu, shape + thu.shape[-2:]).reshape(-1, *thu.shape[-2:])
+            for j, i in enumerate(mech.unknown_index):
+                dth[:, i] = tu[where, j]
+        for j, i in enumerate(mech.input_index):
+            dth[:, i, npar + j] = 1.0
+        # the relation's partials by (theta_c, p, f, e_a, e_s), 3 x 5 per half plate
+        part = numpy.zeros((b, 3 * ns, 5 * ns))
+        dinx = numpy.zeros((b, 5 * ns, n))
+        d = numpy.array(dins).reshape(3 * ns, n, b) if ns and n else numpy.zeros((3 * ns, n, b))
+        for k in range(ns):
+            eps = [_red_column(v, b) for v in tb.eps4(ins[5 * k : 5 * k + 5])]
+            for i in range(3):
+                for c in range(3):
+                    part[:, 3 * k + i, 5 * k + c] = rel[k][3 + 3 * i + c]
+                part[:, 3 * k + i, 5 * k + 3] = eps[2 * i]
+                part[:, 3 * k + i, 5 * k + 4] = eps[2 * i + 1]
+            dinx[:, 5 * k : 5 * k + 3] = d[3 * k : 3 * k + 3].transpose(2, 0, 1)
+
+        def by_v(theta_block, p_block):
+            out = numpy.matmul(_red_block(s, blocks[theta_block], b), dth)
+            out[:, :, :npar] += _red_block(s, blocks[p_block], b)
+            return out
+
+        din = by_v("din_dtheta", "din_dp")
+        dout = numpy.matmul(part, din)
+        rhs = by_v("dR_dtheta", "dR_dp") + numpy.matmul(jo, dout)
+        dx = numpy.full((b, n, nv), numpy.nan)
+        for c in range(b):
+            try:
+                dx[c] = -numpy.linalg.solve(jac[c], rhs[c]) if n else dx[c]
+            except numpy.linalg.LinAlgError:
+                continue  # singular: NaN
+        dout = dout + numpy.matmul(part, numpy.matmul(dinx, dx))
+        dev[where] = (
+            numpy.matmul(_red_block(s, blocks["dD_dx"], b), dx)
+            + by_v("dD_dtheta", "dD_dp")
+            + numpy.matmul(_red_block(s, blocks["dD_dout"], b), dout)
+        )
+    return dev.reshape(shape + (npt, nv))
 
 
 def arck(x):
@@ -966,6 +1066,11 @@ def bcol_a_d1_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_a_d1(p):
+    """bcol_a_d1(p) = d^1/dp^1 of p w(p)/(3 T^2) (vectorised)."""
+    return bcol_a_d1_at(p, bcol_h(p))
+
+
 def bcol_e1_at(x, h):
     """bcol_e1(p) = (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -994,6 +1099,11 @@ def bcol_e1_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((-48.0) + h * ((48.0) + h * ((p * (8.0)) + h * ((p * (-4.0)) + h * (p * (p * (1.0))))))) / (h * (h * (p * (p * (512.0)))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_e1(p):
+    """bcol_e1(p) = (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2) (vectorised)."""
+    return bcol_e1_at(p, bcol_h(p))
 
 
 def bcol_e1_d1_at(x, h):
@@ -1026,6 +1136,11 @@ def bcol_e1_d1_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_e1_d1(p):
+    """bcol_e1_d1(p) = d^1/dp^1 of (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2) (vectorised)."""
+    return bcol_e1_d1_at(p, bcol_h(p))
+
+
 def bcol_e1_d2_at(x, h):
     """bcol_e1_d2(p) = d^2/dp^2 of (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (15 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1054,6 +1169,11 @@ def bcol_e1_d2_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((-2304.0) + h * ((-3072.0) + h * ((-384.0 + p * (768.0)) + h * ((5760.0 + p * (768.0)) + h * ((p * (64.0 + p * (-32.0))) + h * ((p * (-480.0 + p * (-64.0))) + h * ((p * (p * (8.0 + p * (-16.0)))) + h * ((p * (p * (p * (16.0)))) + h * (p * (p * (p * (p * (3.0))))))))))))) / (h * (h * (h * (h * (p * (p * (p * (p * (16384.0)))))))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_e1_d2(p):
+    """bcol_e1_d2(p) = d^2/dp^2 of (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2) (vectorised)."""
+    return bcol_e1_d2_at(p, bcol_h(p))
 
 
 def bcol_e2_at(x, h):
@@ -1085,6 +1205,11 @@ def bcol_e2_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_e2(p):
+    """bcol_e2(p) = -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3) (vectorised)."""
+    return bcol_e2_at(p, bcol_h(p))
+
+
 def bcol_e2_d1_at(x, h):
     """bcol_e2_d1(p) = d^1/dp^1 of -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1112,6 +1237,11 @@ def bcol_e2_d1_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((-1680.0) + h * ((1680.0 + p * (-48.0)) + h * ((p * (216.0)) + h * ((p * (-28.0 + p * (8.0))) + h * ((p * (p * (3.0))) + h * (p * (p * (p * (1.0))))))))) / (p * (p * (p * (p * (2048.0)))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_e2_d1(p):
+    """bcol_e2_d1(p) = d^1/dp^1 of -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3) (vectorised)."""
+    return bcol_e2_d1_at(p, bcol_h(p))
 
 
 def bcol_e2_d2_at(x, h):
@@ -1143,6 +1273,11 @@ def bcol_e2_d2_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_e2_d2(p):
+    """bcol_e2_d2(p) = d^2/dp^2 of -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3) (vectorised)."""
+    return bcol_e2_d2_at(p, bcol_h(p))
+
+
 def bcol_e3_at(x, h):
     """bcol_e3(p) = -(3T^4p^2 + 20T^3p - 24T^2p - 48T + 48)/(3072 T^4 p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (13 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1170,6 +1305,40 @@ def bcol_e3_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((-48.0) + h * ((48.0) + h * ((p * (24.0)) + h * ((p * (-20.0)) + h * (p * (p * (-3.0))))))) / (h * (h * (h * (h * (p * (3072.0))))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_e3_d1_at(x, h):
+    """bcol_e3_d1(p) = d^1/dp^1 of -(3T^4p^2 + 20T^3p - 24T^2p - 48T + 48)/(3072 T^4 p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
+    x = np.asarray(x, dtype=float)
+    near = (x > -4.0) & (x < 16.0)
+    p = np.where(near, x, 6.0)
+    d = p - 6.0
+    d2 = d * d
+    d4 = d2 * d2
+    d8 = d4 * d4
+    s = 1.0 / (p + 39.47841760435743)
+    value = ((((-62317.1090282084 + d * -2601.803112996573) + (-98.24150073157513 + d * -1.449920896321523) * d2) + ((-0.012275915872263935 + d * -1.1390294659006214e-05) + (-5.8952099340217056e-08 + d * 3.428021782217453e-10) * d2) * d4) + (((2.3149571793056234e-12 + d * -8.658295175739011e-14) + (1.41785207937709e-15 + d * -1.8163666924134298e-17) * d2) + (2.1127919490076908e-19 + d * -2.172980716945177e-21) * d4) * d8) * (s * s * s * s * s)
+    if near.all():
+        return value
+    high = x >= 16.0
+    p = np.where(high, x, 32.0)
+    h0 = h
+    h = np.where(high, h0, 0.01)
+    u = 0.5 * np.sqrt(p)
+    tau = 1.0 - h
+    sigma = h * (2.0 - h)
+    far = (((-32.0) + sigma * ((112.0 + u * (-64.0)) + sigma * (-80.0 + u * (-176.0 + u * (192.0))))) * (1.0 + tau) - sigma * (sigma * ((u * (-64.0)) + sigma * (u * (-176.0))))) / (((u * (98304.0)) + sigma * ((u * (-196608.0)) + sigma * (u * (98304.0)))) * (1.0 + tau) - sigma * ((u * (98304.0)) + sigma * ((u * (-196608.0)) + sigma * (u * (98304.0)))))
+    inside = x > -9.869604401089358
+    low = ~near & ~high & inside
+    p = np.where(low, x, -8.0)
+    h = np.where(low, h0, 0.5)
+    closed = ((192.0) + h * ((-240.0) + h * ((48.0 + p * (-96.0)) + h * ((p * (104.0)) + h * ((p * (-20.0 + p * (12.0))) + h * (p * (p * (-11.0)))))))) / (h * (h * (h * (h * (h * (p * (p * (6144.0))))))))
+    return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_e3_d1(p):
+    """bcol_e3_d1(p) = d^1/dp^1 of -(3T^4p^2 + 20T^3p - 24T^2p - 48T + 48)/(3072 T^4 p) (vectorised)."""
+    return bcol_e3_d1_at(p, bcol_h(p))
 
 
 def bcol_e3c_at(x, h):
@@ -1201,6 +1370,11 @@ def bcol_e3c_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_e3c(p):
+    """bcol_e3c(p) = e3'(p) + 1/1920 (vectorised)."""
+    return bcol_e3c_at(p, bcol_h(p))
+
+
 def bcol_e3c_d1_at(x, h):
     """bcol_e3c_d1(p) = d^1/dp^1 of e3'(p) + 1/1920, at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1228,6 +1402,11 @@ def bcol_e3c_d1_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((-960.0) + h * ((1152.0) + h * ((-144.0 + p * (528.0)) + h * ((-48.0 + p * (-544.0)) + h * ((p * (56.0 + p * (-84.0))) + h * ((p * (20.0 + p * (64.0))) + h * (p * (p * (-5.0 + p * (3.0)))))))))) / (h * (h * (h * (h * (h * (h * (p * (p * (p * (12288.0))))))))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_e3c_d1(p):
+    """bcol_e3c_d1(p) = d^1/dp^1 of e3'(p) + 1/1920 (vectorised)."""
+    return bcol_e3c_d1_at(p, bcol_h(p))
 
 
 def bcol_invt_at(x, h):
@@ -1293,6 +1472,11 @@ def bcol_invt_d1_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_invt_d1(p):
+    """bcol_invt_d1(p) = d^1/dp^1 of 1/T(p) (vectorised)."""
+    return bcol_invt_d1_at(p, bcol_h(p))
+
+
 def bcol_s_at(x, h):
     """bcol_s(p) = (1 - T)/p, at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (13 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1325,6 +1509,40 @@ def bcol_s_at(x, h):
 def bcol_s(p):
     """bcol_s(p) = (1 - T)/p (vectorised)."""
     return bcol_s_at(p, bcol_h(p))
+
+
+def bcol_s_d1_at(x, h):
+    """bcol_s_d1(p) = d^1/dp^1 of (1 - T)/p, at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
+    x = np.asarray(x, dtype=float)
+    near = (x > -4.0) & (x < 16.0)
+    p = np.where(near, x, 6.0)
+    d = p - 6.0
+    d2 = d * d
+    d4 = d2 * d2
+    d8 = d4 * d4
+    r = 1.0 / (p + 9.869604401089358)
+    value = ((((-0.8132429851307679 + d * -0.00028263927661945) + (-4.62076041242041e-06 + d * 1.2061372014718943e-07) * d2) + ((-2.027158719940083e-09 + d * 2.941018614006343e-11) + (-3.9541483920524393e-13 + d * 5.072415794354741e-15) * d2) * d4) + (((-6.302768016745823e-17 + d * 7.653122930054966e-19) + (-9.124106052786141e-21 + d * 1.0739523739919228e-22) * d2) + (-1.3113722098199768e-24 + d * 1.5174003904817066e-26) * d4) * d8) * (r * r)
+    if near.all():
+        return value
+    high = x >= 16.0
+    p = np.where(high, x, 32.0)
+    h0 = h
+    h = np.where(high, h0, 0.01)
+    u = 0.5 * np.sqrt(p)
+    tau = 1.0 - h
+    sigma = h * (2.0 - h)
+    far = (((12.0 + u * (-8.0)) + sigma * (u * (-4.0))) * (1.0 + tau) - sigma * (12.0)) / ((u * (u * (u * (u * (u * (128.0)))))) * (1.0 + tau))
+    inside = x > -9.869604401089358
+    low = ~near & ~high & inside
+    p = np.where(low, x, -8.0)
+    h = np.where(low, h0, 0.5)
+    closed = ((-12.0) + h * ((12.0) + h * (p * (1.0)))) / (p * (p * (8.0)))
+    return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_s_d1(p):
+    """bcol_s_d1(p) = d^1/dp^1 of (1 - T)/p (vectorised)."""
+    return bcol_s_d1_at(p, bcol_h(p))
 
 
 def bcol_w_at(x, h):
@@ -1388,6 +1606,11 @@ def bcol_w_d1_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((-120.0) + h * ((120.0 + p * (-4.0)) + h * ((p * (14.0)) + h * (p * (p * (1.0)))))) / (p * (p * (p * (64.0))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_w_d1(p):
+    """bcol_w_d1(p) = d^1/dp^1 of (12 (1 - T)/p - T^2)/(16 p) (vectorised)."""
+    return bcol_w_d1_at(p, bcol_h(p))
 
 
 def cosr1(x):
@@ -3868,6 +4091,1042 @@ def _sens_exact(theta, delta, params):
     ]
 
 
+def _loaded_sens1(x, theta, plates, params):
+    """loaded (1 half plate(s) per plate), sensitivities: dR/dtheta, dR/dp, din/dtheta, din/dp, dD/dx, dD/dtheta, dD/dp, dD/dout (581 operations)."""
+    x_0, x_1, x_2, x_3, x_4, _, _ = x
+    theta_1, theta_2, theta_3, theta_4 = theta
+    along_1_0, across_1_0, _, along_2_0, across_2_0, omega_2_0, along_3_0, across_3_0, omega_3_0, along_4_0, across_4_0, omega_4_0 = plates
+    p_0, = params
+    _tmp0 = 0.5*theta_1
+    _tmp1 = numpy.cos(_tmp0)
+    _tmp2 = arck(_tmp0)
+    _tmp3 = along_1_0 + 0.25*_tmp2*theta_1**2
+    _tmp4 = _tmp1*_tmp3
+    _tmp5 = 500.0*p_0
+    _tmp6 = 0.004593345937900178*x_0
+    _tmp7 = _tmp6 + 0.5*theta_2
+    _tmp8 = 1.0471975511965979 + _tmp7 + theta_1
+    _tmp9 = numpy.cos(_tmp8)
+    _tmp10 = _tmp9*across_2_0
+    _tmp11 = _tmp10*p_0
+    _tmp12 = numpy.sin(_tmp8)
+    _tmp13 = arck(_tmp7)
+    _tmp14 = along_2_0 + _tmp13*_tmp7**2
+    _tmp15 = _tmp12*_tmp14
+    _tmp16 = _tmp15*p_0
+    _tmp18 = numpy.sin(_tmp0)
+    _tmp17 = _tmp0*_tmp2 + 0.0625*theta_1**3*(-3*sinr2(_tmp0) + 3*cosr2(_tmp0) + sinr1(_tmp0))
+    _tmp19 = _tmp18*p_0
+    _tmp20 = _tmp17*_tmp19
+    _tmp21 = 0.009186691875800356*x_0
+    _tmp22 = numpy.sin(_tmp21)
+    _tmp23 = numpy.sin(_tmp6)
+    _tmp24 = _tmp23**2
+    _tmp25 = 0.07*_tmp22 - 0.084*_tmp24
+    _tmp26 = theta_1 + theta_2
+    _tmp27 = numpy.cos(_tmp26)
+    _tmp28 = 1000.0*_tmp27
+    _tmp29 = -0.14*_tmp24 - 0.042*_tmp22
+    _tmp30 = numpy.sin(_tmp26)
+    _tmp31 = 1000.0*_tmp30
+    _tmp32 = 0.5*theta_4 + 0.004593345937900178*x_2
+    _tmp33 = _tmp21 + _tmp26
+    _tmp34 = _tmp32 + _tmp33
+    _tmp35 = numpy.cos(_tmp34)
+    _tmp36 = 1000.0*_tmp35
+    _tmp37 = _tmp36*across_4_0
+    _tmp38 = arck(_tmp32)
+    _tmp39 = along_4_0 + _tmp38*_tmp32**2
+    _tmp40 = numpy.sin(_tmp34)
+    _tmp41 = 1000.0*_tmp40
+    _tmp42 = _tmp39*_tmp41
+    _tmp43 = _tmp25*_tmp28 + _tmp29*_tmp31 + _tmp37*p_0 + _tmp42*p_0
+    _tmp44 = _tmp7**3*(-3*sinr2(_tmp7) + 3*cosr2(_tmp7) + sinr1(_tmp7))
+    _tmp45 = 0.5*_tmp44 + _tmp13*_tmp7
+    _tmp46 = 0.004593345937900178*x_1
+    _tmp47 = _tmp46 + 0.5*theta_3
+    _tmp48 = numpy.sin(_tmp47)
+    _tmp49 = _tmp48*across_3_0
+    _tmp50 = 0.009186691875800356*x_1
+    _tmp51 = numpy.sin(_tmp50)
+    _tmp52 = numpy.sin(_tmp46)**2
+    _tmp53 = 0.068*_tmp51 - 0.03*_tmp52
+    _tmp54 = 1000.0*numpy.sin(theta_3)
+    _tmp55 = 0.015*_tmp51 + 0.136*_tmp52
+    _tmp56 = 1000.0*numpy.cos(theta_3)
+    _tmp57 = numpy.cos(_tmp47)
+    _tmp58 = arck(_tmp47)
+    _tmp59 = along_3_0 + _tmp58*_tmp47**2
+    _tmp60 = _tmp47*_tmp58 + 0.5*_tmp47**3*(-3*sinr2(_tmp47) + 3*cosr2(_tmp47) + sinr1(_tmp47))
+    _tmp61 = _tmp35*_tmp5
+    _tmp62 = _tmp40*_tmp5
+    _tmp63 = _tmp32*_tmp38 + 0.5*_tmp32**3*(-3*sinr2(_tmp32) + 3*cosr2(_tmp32) + sinr1(_tmp32))
+    _tmp64 = _tmp1*across_1_0
+    _tmp65 = _tmp12*across_2_0
+    _tmp66 = _tmp65*p_0
+    _tmp67 = _tmp41*across_4_0
+    _tmp68 = _tmp67*p_0
+    _tmp69 = _tmp18*_tmp3
+    _tmp70 = _tmp25*_tmp31
+    _tmp71 = _tmp14*_tmp9
+    _tmp72 = _tmp71*p_0
+    _tmp73 = _tmp12*p_0
+    _tmp74 = _tmp45*_tmp73
+    _tmp75 = _tmp57*across_3_0
+    _tmp76 = _tmp48*_tmp59
+    _tmp77 = _tmp60*p_0
+    _tmp78 = numpy.sin(theta_1)
+    _tmp79 = numpy.cos(theta_1)
+    _tmp80 = numpy.sin(_tmp33)
+    _tmp81 = 0.25*_tmp80
+    _tmp82 = numpy.cos(_tmp33)
+    _tmp83 = 0.4330127018922193*_tmp82
+    _tmp84 = _tmp81*p_0 + _tmp83*p_0
+    _tmp85 = 0.5*p_0
+    _tmp86 = _tmp18*across_1_0
+    _tmp87 = _tmp11 + _tmp16 + _tmp20 + _tmp4*_tmp85 - _tmp85*_tmp86
+    _tmp88 = 9.186691875800356*x_4
+    _tmp89 = 0.4330127018922193*_tmp80
+    _tmp90 = 0.25*_tmp82
+    _tmp91 = _tmp90*p_0
+    _tmp92 = _tmp1*p_0
+    _tmp93 = _tmp66 - _tmp72 + _tmp64*_tmp85 + _tmp69*_tmp85 - _tmp17*_tmp92
+    _tmp94 = 9.186691875800356*x_3
+    _tmp95 = _tmp74 + _tmp71*_tmp85 - _tmp65*_tmp85
+    _tmp96 = _tmp9*p_0
+    _tmp97 = _tmp10*_tmp85 + _tmp15*_tmp85 - _tmp45*_tmp96
+    _tmp98 = _tmp50 + theta_3
+    _tmp99 = numpy.sin(_tmp98)
+    _tmp100 = 0.068*_tmp99
+    _tmp101 = -0.015 + _tmp85
+    _tmp102 = numpy.cos(_tmp98)
+    _tmp103 = _tmp57*_tmp59
+    _tmp104 = 0.068*_tmp102 + _tmp101*_tmp99
+    _tmp105 = numpy.less_equal(p_0, 0.01)
+    _tmp106 = 8.666666666666666e-06*p_0*_DTYPE(numpy.where(_tmp105, 230769230769.23077, 210000000000))
+    _tmp107 = 0.5*_tmp102
+    _tmp108 = _tmp64 + _tmp65 + _tmp69 - _tmp71
+    _tmp109 = _tmp10 + _tmp15 + _tmp4 - _tmp86
+    _tmp110 = 0.5*_tmp99
+    _tmp111 = p_0**(-1.0)
+    _tmp112 = _DTYPE(numpy.where(_tmp105, 4.333333333333334e-12, 4.761904761904762e-12))
+    _tmp113 = _tmp111*_tmp112
+    _tmp114 = 1060002.908746195*_tmp113
+    _tmp115 = _tmp1*x_3
+    _tmp116 = _tmp114*_tmp18
+    _tmp117 = _tmp114*x_4
+    _tmp118 = 2120005.81749239*_tmp113
+    _tmp119 = _tmp12*x_3
+    _tmp120 = _tmp118*x_4
+    _tmp121 = _tmp114*x_3
+    _tmp122 = _tmp118*x_3
+    _tmp123 = -_tmp122*_tmp40 + 2120005.81749239*_tmp111*_tmp112*_tmp35*x_4
+    _tmp124 = -_tmp120*_tmp40 - _tmp122*_tmp35
+    _tmp125 = p_0**(-2.0)
+    _tmp126 = 2120005.81749239*_tmp112*_tmp125
+    _tmp127 = _tmp126*_tmp18
+    _tmp128 = _tmp126*x_4
+    _tmp129 = _tmp126*x_3
+    _tmp130 = numpy.cos(_tmp21)
+    _tmp131 = _tmp23*numpy.cos(_tmp6)
+    _tmp132 = 0.00041340113441101604*_tmp130 - 0.0011758965601024456*_tmp131
+    _tmp133 = -0.0008268022688220321*_tmp131 - 0.0005879482800512228*_tmp130
+    _tmp134 = 0.004593345937900178*_tmp44 + _tmp13*(0.004593345937900178*theta_2 + 4.219765381044813e-05*x_0)
+    _tmp135 = 0.045*_tmp22 - 0.128*_tmp24
+    _tmp136 = -0.064*_tmp22 - 0.09*_tmp24
+    _tmp137 = _tmp135*_tmp27 + _tmp136*_tmp30
+    _tmp138 = _tmp135*_tmp30
+    _tmp139 = -_tmp19
+    return [
+        0,
+        0,
+        0,
+        0,
+        -_tmp43 - 1000.0*_tmp11 - 1000.0*_tmp16 - 1000.0*_tmp20 - _tmp4*_tmp5 + 500.0*_tmp18*across_1_0*p_0,
+        -_tmp43 - 500.0*_tmp11 - 500.0*_tmp16 + 1000.0*_tmp45*_tmp9*p_0,
+        -_tmp49*_tmp5 - _tmp53*_tmp54 - _tmp55*_tmp56 + 500.0*_tmp57*_tmp59*p_0 + 1000.0*_tmp48*_tmp60*p_0,
+        -_tmp39*_tmp62 - _tmp61*across_4_0 + 1000.0*_tmp35*_tmp63*p_0,
+        -_tmp68 - _tmp70 - 1000.0*_tmp66 - _tmp5*_tmp64 - _tmp5*_tmp69 + 1000.0*_tmp27*_tmp29 + 1000.0*_tmp1*_tmp17*p_0 + 1000.0*_tmp14*_tmp9*p_0 + 1000.0*_tmp35*_tmp39*p_0,
+        -_tmp68 - _tmp70 + 500.0*_tmp72 + 1000.0*_tmp74 - 500.0*_tmp66 + _tmp28*_tmp29 + _tmp36*_tmp39*p_0,
+        _tmp5*_tmp75 + _tmp5*_tmp76 + _tmp53*_tmp56 - _tmp54*_tmp55 - 1000.0*_tmp57*_tmp77,
+        _tmp39*_tmp61 - _tmp62*across_4_0 + _tmp41*_tmp63*p_0,
+        _tmp94*(_tmp93 - _tmp91 + 0.026*_tmp78 - 0.015*_tmp79 + _tmp89*p_0) - _tmp88*(_tmp84 + _tmp87 + 0.015*_tmp78 + 0.026*_tmp79),
+        _tmp94*(-_tmp91 - _tmp95 + 0.4330127018922193*_tmp80*p_0) - _tmp88*(_tmp84 + _tmp97),
+        _tmp94*(-_tmp100 + _tmp101*_tmp102 - _tmp75*_tmp85 - _tmp76*_tmp85 + _tmp57*_tmp60*p_0) - _tmp88*(-_tmp104 - _tmp103*_tmp85 - _tmp48*_tmp77 + 0.5*_tmp48*across_3_0*p_0),
+        0,
+        0,
+        0,
+        -_tmp94*(-_tmp100 + _tmp101*_tmp102 + _tmp85*_tmp99) + 9.186691875800356*x_4*(-_tmp104 + 0.5*_tmp102*p_0),
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp67 - 1000.0*_tmp64 - 1000.0*_tmp65 - 1000.0*_tmp69 + 1000.0*_tmp14*_tmp9 + 1000.0*_tmp35*_tmp39 + 1000.0*_tmp48*_tmp59 + 1000.0*_tmp57*across_3_0,
+        _tmp37 + _tmp42 + 1000.0*_tmp10 + 1000.0*_tmp15 + 1000.0*_tmp4 + 1000.0*_tmp49 - 1000.0*_tmp103 - 1000.0*_tmp86,
+        _tmp106*omega_2_0 + _tmp94*(-_tmp109 - _tmp49 - _tmp81 - _tmp83 + 0.5*_tmp99 + _tmp57*_tmp59) - _tmp88*(_tmp107 + _tmp108 + _tmp89 - _tmp75 - _tmp76 - _tmp90),
+        _tmp106*omega_3_0 + _tmp88*(_tmp107 + _tmp110) - _tmp94*(_tmp110 - _tmp107),
+        -_tmp106*omega_4_0,
+        1,
+        0,
+        0,
+        0,
+        -_tmp114*_tmp115 - _tmp116*x_4,
+        0,
+        0,
+        0,
+        _tmp116*x_3 - _tmp1*_tmp117,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        -_tmp118*_tmp119 + 2120005.81749239*_tmp111*_tmp112*_tmp9*x_4,
+        -_tmp114*_tmp119 + 1060002.908746195*_tmp111*_tmp112*_tmp9*x_4,
+        0,
+        0,
+        -_tmp12*_tmp120 - _tmp118*_tmp9*x_3,
+        -_tmp117*_tmp12 - _tmp121*_tmp9,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        _tmp117*_tmp48 + _tmp121*_tmp57,
+        0,
+        0,
+        0,
+        -_tmp121*_tmp48 + 1060002.908746195*_tmp111*_tmp112*_tmp57*x_4,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        _tmp123,
+        _tmp123,
+        0,
+        -_tmp121*_tmp40 + 1060002.908746195*_tmp111*_tmp112*_tmp35*x_4,
+        _tmp124,
+        _tmp124,
+        0,
+        -_tmp117*_tmp40 - _tmp121*_tmp35,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp127*x_3 - _tmp1*_tmp128,
+        _tmp115*_tmp126 + _tmp127*x_4,
+        0,
+        0,
+        0,
+        -_tmp12*_tmp128 - _tmp129*_tmp9,
+        _tmp119*_tmp126 - _tmp128*_tmp9,
+        0,
+        0,
+        0,
+        -_tmp129*_tmp48 + 2120005.81749239*_tmp112*_tmp125*_tmp57*x_4,
+        -_tmp128*_tmp48 - _tmp129*_tmp57,
+        0,
+        0,
+        0,
+        -_tmp128*_tmp40 - _tmp129*_tmp35,
+        _tmp129*_tmp40 - _tmp128*_tmp35,
+        0,
+        0,
+        -0.004593345937900178*_tmp11 - 0.004593345937900178*_tmp16 + _tmp133*_tmp27 - _tmp132*_tmp30 + _tmp134*_tmp9*p_0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.004593345937900178*_tmp72 - 0.004593345937900178*_tmp66 + _tmp132*_tmp27 + _tmp133*_tmp30 + _tmp134*_tmp73,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp137 - _tmp87,
+        -_tmp137 - _tmp97,
+        0,
+        0,
+        -_tmp138 - _tmp93 + _tmp136*_tmp27,
+        _tmp95 - _tmp138 + _tmp136*_tmp27,
+        0,
+        0,
+        -_tmp108,
+        _tmp109,
+        _tmp139,
+        -_tmp92,
+        0,
+        _tmp96,
+        -_tmp73,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp92,
+        _tmp139,
+        0,
+        _tmp73,
+        _tmp96,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+    ]
+
+
+def _loaded_sens2(x, theta, plates, params):
+    """loaded (2 half plate(s) per plate), sensitivities: dR/dtheta, dR/dp, din/dtheta, din/dp, dD/dx, dD/dtheta, dD/dp, dD/dout (1581 operations)."""
+    x_0, x_1, x_2, x_3, x_4, _, x_6, x_7, x_8, x_9, _ = x
+    theta_1, theta_2, theta_3, theta_4 = theta
+    along_1_0, across_1_0, omega_1_0, along_1_1, across_1_1, omega_1_1, along_2_0, across_2_0, omega_2_0, along_2_1, across_2_1, omega_2_1, along_3_0, across_3_0, omega_3_0, along_3_1, across_3_1, omega_3_1, along_4_0, across_4_0, omega_4_0, along_4_1, across_4_1, omega_4_1 = plates
+    p_0, = params
+    _tmp0 = 0.25*theta_1
+    _tmp1 = 0.5*x_6
+    _tmp2 = _tmp0 - _tmp1
+    _tmp3 = numpy.sin(_tmp2)
+    _tmp4 = 0.5*p_0
+    _tmp5 = _tmp4*across_1_0
+    _tmp6 = _tmp0 + _tmp1
+    _tmp7 = numpy.sin(_tmp6)
+    _tmp8 = _tmp4*_tmp7
+    _tmp9 = numpy.sin(_tmp0)
+    _tmp10 = _tmp9**2
+    _tmp11 = numpy.sin(_tmp1)
+    _tmp12 = _tmp11**2
+    _tmp13 = numpy.cos(_tmp2)
+    _tmp14 = arck(_tmp6)
+    _tmp15 = along_1_0 + _tmp14*_tmp6**2
+    _tmp16 = _tmp15*_tmp4
+    _tmp17 = arck(_tmp2)
+    _tmp18 = along_1_1 + _tmp17*_tmp2**2
+    _tmp19 = numpy.cos(_tmp6)
+    _tmp20 = _tmp19*_tmp4
+    _tmp21 = _tmp13*_tmp16 + _tmp18*_tmp20 + _tmp3*_tmp5 + _tmp4*(-2*_tmp12 + 2*_tmp10) - _tmp8*across_1_1
+    _tmp22 = 0.5*theta_1
+    _tmp23 = numpy.cos(_tmp22)
+    _tmp24 = 500.0*_tmp23
+    _tmp25 = 0.004593345937900178*x_0
+    _tmp26 = 1.0471975511965979 + theta_1
+    _tmp27 = _tmp25 + _tmp26 + 0.5*theta_2
+    _tmp28 = numpy.sin(_tmp27)
+    _tmp29 = 0.5*x_7
+    _tmp30 = 0.25*theta_2 + 0.002296672968950089*x_0
+    _tmp31 = _tmp30 - _tmp29
+    _tmp32 = numpy.sin(_tmp31)
+    _tmp33 = _tmp4*across_2_0
+    _tmp34 = _tmp29 + _tmp30
+    _tmp35 = numpy.sin(_tmp34)
+    _tmp36 = _tmp35*_tmp4
+    _tmp37 = numpy.sin(_tmp29)
+    _tmp38 = _tmp37**2
+    _tmp39 = numpy.sin(_tmp30)
+    _tmp40 = _tmp39**2
+    _tmp41 = numpy.cos(_tmp31)
+    _tmp42 = arck(_tmp34)
+    _tmp43 = along_2_0 + _tmp42*_tmp34**2
+    _tmp44 = _tmp4*_tmp43
+    _tmp45 = arck(_tmp31)
+    _tmp46 = along_2_1 + _tmp45*_tmp31**2
+    _tmp47 = numpy.cos(_tmp34)
+    _tmp48 = _tmp4*_tmp47
+    _tmp49 = _tmp32*_tmp33 + _tmp4*(-2*_tmp38 + 2*_tmp40) + _tmp41*_tmp44 + _tmp46*_tmp48 - _tmp36*across_2_1
+    _tmp50 = _tmp28*_tmp49
+    _tmp51 = numpy.cos(_tmp27)
+    _tmp52 = 1.0*x_7
+    _tmp53 = numpy.sin(_tmp52)
+    _tmp54 = _tmp33*_tmp41 + _tmp36*_tmp46 + _tmp4*_tmp53 + _tmp48*across_2_1 - _tmp32*_tmp44
+    _tmp55 = _tmp51*_tmp54
+    _tmp56 = 0.125*p_0
+    _tmp57 = _tmp56*across_1_0
+    _tmp58 = _tmp56*_tmp7
+    _tmp59 = _tmp15*_tmp56
+    _tmp60 = 0.125*theta_1
+    _tmp61 = 0.25*x_6
+    _tmp62 = sinr1(_tmp2)
+    _tmp63 = _tmp2**3*(_tmp62 - 3*sinr2(_tmp2) + 3*cosr2(_tmp2))
+    _tmp64 = 0.25*_tmp63 + _tmp17*(_tmp60 - _tmp61)
+    _tmp65 = _tmp6**3*(-3*sinr2(_tmp6) + 3*cosr2(_tmp6) + sinr1(_tmp6))
+    _tmp66 = _tmp4*(0.25*_tmp65 + _tmp14*(_tmp60 + _tmp61))
+    _tmp67 = -_tmp13*_tmp59 - _tmp3*_tmp57 - _tmp3*_tmp66 - _tmp58*across_1_1 + 0.125*_tmp18*_tmp19*p_0 + 0.5*_tmp64*_tmp7*p_0
+    _tmp68 = _tmp23*_tmp67
+    _tmp69 = numpy.sin(_tmp22)
+    _tmp70 = _tmp13*_tmp57 + _tmp13*_tmp66 + _tmp20*_tmp64 - _tmp18*_tmp58 - _tmp3*_tmp59 + _tmp4*_tmp9*numpy.cos(_tmp0) - _tmp19*_tmp56*across_1_1
+    _tmp71 = _tmp69*_tmp70
+    _tmp72 = 1.0*x_6
+    _tmp73 = numpy.sin(_tmp72)
+    _tmp74 = _tmp13*_tmp5 + _tmp18*_tmp8 + _tmp20*across_1_1 + _tmp4*_tmp73 - _tmp16*_tmp3
+    _tmp75 = 0.009186691875800356*x_0
+    _tmp76 = numpy.sin(_tmp75)
+    _tmp77 = numpy.sin(_tmp25)
+    _tmp78 = _tmp77**2
+    _tmp79 = 0.07*_tmp76 - 0.084*_tmp78
+    _tmp80 = theta_1 + theta_2
+    _tmp81 = numpy.cos(_tmp80)
+    _tmp82 = 1000.0*_tmp81
+    _tmp83 = -0.14*_tmp78 - 0.042*_tmp76
+    _tmp84 = numpy.sin(_tmp80)
+    _tmp85 = 1000.0*_tmp84
+    _tmp86 = 0.5*x_9
+    _tmp87 = 0.25*theta_4 + 0.002296672968950089*x_2
+    _tmp88 = _tmp87 - _tmp86
+    _tmp89 = numpy.sin(_tmp88)
+    _tmp90 = _tmp4*across_4_0
+    _tmp91 = _tmp86 + _tmp87
+    _tmp92 = numpy.sin(_tmp91)
+    _tmp93 = _tmp4*_tmp92
+    _tmp94 = numpy.sin(_tmp86)**2
+    _tmp95 = numpy.sin(_tmp87)
+    _tmp96 = _tmp95**2
+    _tmp97 = numpy.cos(_tmp88)
+    _tmp98 = arck(_tmp91)
+    _tmp99 = along_4_0 + _tmp98*_tmp91**2
+    _tmp100 = _tmp4*_tmp99
+    _tmp101 = arck(_tmp88)
+    _tmp102 = along_4_1 + _tmp101*_tmp88**2
+    _tmp103 = numpy.cos(_tmp91)
+    _tmp104 = _tmp103*_tmp4
+    _tmp105 = _tmp100*_tmp97 + _tmp102*_tmp104 + _tmp4*(-2*_tmp94 + 2*_tmp96) + _tmp89*_tmp90 - _tmp93*across_4_1
+    _tmp106 = _tmp75 + _tmp80
+    _tmp107 = _tmp106 + 0.5*theta_4 + 0.004593345937900178*x_2
+    _tmp108 = numpy.sin(_tmp107)
+    _tmp109 = _tmp105*_tmp108
+    _tmp110 = numpy.sin(1.0*x_9)
+    _tmp111 = _tmp102*_tmp93 + _tmp104*across_4_1 + _tmp110*_tmp4 + _tmp90*_tmp97 - _tmp100*_tmp89
+    _tmp112 = numpy.cos(_tmp107)
+    _tmp113 = 1000.0*_tmp112
+    _tmp114 = 1000.0*_tmp109 + _tmp111*_tmp113 + _tmp79*_tmp82 + _tmp83*_tmp85
+    _tmp115 = _tmp56*across_2_0
+    _tmp116 = _tmp35*_tmp56
+    _tmp117 = _tmp43*_tmp56
+    _tmp118 = 0.25*x_7
+    _tmp119 = 0.125*theta_2 + 0.0011483364844750445*x_0
+    _tmp120 = sinr1(_tmp31)
+    _tmp121 = _tmp31**3*(_tmp120 - 3*sinr2(_tmp31) + 3*cosr2(_tmp31))
+    _tmp122 = 0.25*_tmp121 + _tmp45*(_tmp119 - _tmp118)
+    _tmp123 = _tmp34**3*(-3*sinr2(_tmp34) + 3*cosr2(_tmp34) + sinr1(_tmp34))
+    _tmp124 = _tmp4*(0.25*_tmp123 + _tmp42*(_tmp118 + _tmp119))
+    _tmp125 = -_tmp115*_tmp32 - _tmp116*across_2_1 - _tmp117*_tmp41 - _tmp124*_tmp32 + 0.125*_tmp46*_tmp47*p_0 + 0.5*_tmp122*_tmp35*p_0
+    _tmp126 = _tmp125*_tmp28
+    _tmp127 = _tmp39*numpy.cos(_tmp30)
+    _tmp128 = _tmp115*_tmp41 + _tmp122*_tmp48 + _tmp124*_tmp41 + _tmp127*_tmp4 - _tmp116*_tmp46 - _tmp117*_tmp32 - _tmp47*_tmp56*across_2_1
+    _tmp129 = 0.009186691875800356*x_1
+    _tmp130 = numpy.sin(_tmp129)
+    _tmp131 = 0.004593345937900178*x_1
+    _tmp132 = numpy.sin(_tmp131)**2
+    _tmp133 = 0.068*_tmp130 - 0.03*_tmp132
+    _tmp134 = 1000.0*numpy.sin(theta_3)
+    _tmp135 = 0.015*_tmp130 + 0.136*_tmp132
+    _tmp136 = 1000.0*numpy.cos(theta_3)
+    _tmp137 = _tmp131 + 0.5*theta_3
+    _tmp138 = numpy.sin(_tmp137)
+    _tmp139 = numpy.sin(1.0*x_8)
+    _tmp140 = 0.5*x_8
+    _tmp141 = 0.25*theta_3 + 0.002296672968950089*x_1
+    _tmp142 = _tmp141 - _tmp140
+    _tmp143 = numpy.cos(_tmp142)
+    _tmp144 = _tmp143*across_3_0
+    _tmp145 = _tmp140 + _tmp141
+    _tmp146 = numpy.cos(_tmp145)
+    _tmp147 = _tmp146*_tmp4
+    _tmp148 = arck(_tmp145)
+    _tmp149 = along_3_0 + _tmp148*_tmp145**2
+    _tmp150 = numpy.sin(_tmp142)
+    _tmp151 = _tmp149*_tmp150
+    _tmp152 = arck(_tmp142)
+    _tmp153 = along_3_1 + _tmp152*_tmp142**2
+    _tmp154 = numpy.sin(_tmp145)
+    _tmp155 = _tmp154*_tmp4
+    _tmp156 = _tmp139*_tmp4 + _tmp144*_tmp4 + _tmp147*across_3_1 + _tmp153*_tmp155 - _tmp151*_tmp4
+    _tmp157 = 500.0*_tmp156
+    _tmp158 = numpy.cos(_tmp137)
+    _tmp159 = _tmp150*across_3_0
+    _tmp160 = numpy.sin(_tmp140)**2
+    _tmp161 = numpy.sin(_tmp141)
+    _tmp162 = _tmp161**2
+    _tmp163 = _tmp143*_tmp149
+    _tmp164 = _tmp159*_tmp4 + _tmp163*_tmp4 + _tmp4*(-2*_tmp160 + 2*_tmp162) - _tmp155*across_3_1 + _tmp146*_tmp153*_tmp4
+    _tmp165 = _tmp56*across_3_1
+    _tmp166 = 0.25*x_8
+    _tmp167 = 0.125*theta_3 + 0.0011483364844750445*x_1
+    _tmp168 = sinr1(_tmp142)
+    _tmp169 = _tmp152*(_tmp167 - _tmp166) + 0.25*_tmp142**3*(_tmp168 - 3*sinr2(_tmp142) + 3*cosr2(_tmp142))
+    _tmp170 = _tmp4*(_tmp148*(_tmp166 + _tmp167) + 0.25*_tmp145**3*(-3*sinr2(_tmp145) + 3*cosr2(_tmp145) + sinr1(_tmp145)))
+    _tmp171 = -_tmp150*_tmp170 - _tmp154*_tmp165 - _tmp159*_tmp56 - _tmp163*_tmp56 + 0.125*_tmp146*_tmp153*p_0 + 0.5*_tmp154*_tmp169*p_0
+    _tmp172 = _tmp143*_tmp170 + _tmp144*_tmp56 + _tmp147*_tmp169 - _tmp146*_tmp165 - _tmp151*_tmp56 + _tmp161*_tmp4*numpy.cos(_tmp141) - _tmp153*_tmp154*_tmp56
+    _tmp173 = 500.0*_tmp112
+    _tmp174 = _tmp56*across_4_0
+    _tmp175 = _tmp56*_tmp92
+    _tmp176 = _tmp56*_tmp99
+    _tmp177 = 0.25*x_9
+    _tmp178 = 0.125*theta_4 + 0.0011483364844750445*x_2
+    _tmp179 = sinr1(_tmp88)
+    _tmp180 = _tmp101*(_tmp178 - _tmp177) + 0.25*_tmp88**3*(_tmp179 - 3*sinr2(_tmp88) + 3*cosr2(_tmp88))
+    _tmp181 = _tmp4*(_tmp98*(_tmp177 + _tmp178) + 0.25*_tmp91**3*(-3*sinr2(_tmp91) + 3*cosr2(_tmp91) + sinr1(_tmp91)))
+    _tmp182 = -_tmp174*_tmp89 - _tmp175*across_4_1 - _tmp176*_tmp97 - _tmp181*_tmp89 + 0.125*_tmp102*_tmp103*p_0 + 0.5*_tmp180*_tmp92*p_0
+    _tmp183 = 1000.0*_tmp108
+    _tmp184 = _tmp104*_tmp180 + _tmp174*_tmp97 + _tmp181*_tmp97 - _tmp102*_tmp175 - _tmp176*_tmp89 + _tmp4*_tmp95*numpy.cos(_tmp87) - _tmp103*_tmp56*across_4_1
+    _tmp185 = _tmp79*_tmp85
+    _tmp186 = _tmp28*_tmp54
+    _tmp187 = _tmp111*_tmp183
+    _tmp188 = _tmp67*_tmp69
+    _tmp189 = _tmp49*_tmp51
+    _tmp190 = _tmp125*_tmp51
+    _tmp191 = _tmp128*_tmp28
+    _tmp192 = _tmp138*_tmp171
+    _tmp193 = numpy.sin(theta_1)
+    _tmp194 = numpy.cos(theta_1)
+    _tmp195 = numpy.sin(_tmp106)
+    _tmp196 = 0.25*_tmp195
+    _tmp197 = numpy.cos(_tmp106)
+    _tmp198 = 0.4330127018922193*_tmp197
+    _tmp199 = _tmp196*p_0 + _tmp198*p_0
+    _tmp200 = 0.5*_tmp21
+    _tmp201 = 0.5*_tmp74
+    _tmp202 = _tmp50 + _tmp55 + _tmp68 + _tmp71 + _tmp200*_tmp23 - _tmp201*_tmp69
+    _tmp203 = 9.186691875800356*x_4
+    _tmp204 = 0.4330127018922193*_tmp195
+    _tmp205 = 0.25*_tmp197
+    _tmp206 = _tmp205*p_0
+    _tmp207 = _tmp186 + _tmp188 - _tmp189 + _tmp200*_tmp69 + _tmp201*_tmp23 - _tmp23*_tmp70
+    _tmp208 = 9.186691875800356*x_3
+    _tmp209 = _tmp126 + 0.5*_tmp50 + 0.5*_tmp55 - _tmp128*_tmp51
+    _tmp210 = _tmp190 + _tmp191 + 0.5*_tmp189 - 0.5*_tmp186
+    _tmp211 = _tmp129 + theta_3
+    _tmp212 = numpy.sin(_tmp211)
+    _tmp213 = 0.068*_tmp212
+    _tmp214 = -0.015 + _tmp4
+    _tmp215 = numpy.cos(_tmp211)
+    _tmp216 = 0.5*_tmp158
+    _tmp217 = 0.068*_tmp215 + _tmp212*_tmp214
+    _tmp218 = _tmp1 + 0.75*theta_1
+    _tmp219 = numpy.cos(_tmp218)
+    _tmp220 = 0.375*p_0
+    _tmp221 = numpy.sin(_tmp218)
+    _tmp222 = along_1_1 + sinr0(_tmp2)
+    _tmp223 = _tmp220*_tmp222
+    _tmp224 = -_tmp62 + cosr1(_tmp2)
+    _tmp225 = _tmp26 + _tmp29 + 0.75*theta_2 + 0.006890018906850267*x_0
+    _tmp226 = numpy.sin(_tmp225)
+    _tmp227 = _tmp226*_tmp4
+    _tmp228 = numpy.cos(_tmp225)
+    _tmp229 = along_2_1 + sinr0(_tmp31)
+    _tmp230 = _tmp220*_tmp226
+    _tmp231 = _tmp220*_tmp228
+    _tmp232 = -_tmp120 + cosr1(_tmp31)
+    _tmp233 = _tmp140 + 0.75*theta_3 + 0.006890018906850267*x_1
+    _tmp234 = numpy.cos(_tmp233)
+    _tmp235 = numpy.sin(_tmp233)
+    _tmp236 = along_3_1 + sinr0(_tmp142)
+    _tmp237 = _tmp220*_tmp236
+    _tmp238 = -_tmp168 + cosr1(_tmp142)
+    _tmp239 = _tmp106 + _tmp86 + 0.75*theta_4 + 0.006890018906850267*x_2
+    _tmp240 = numpy.sin(_tmp239)
+    _tmp241 = _tmp240*_tmp4
+    _tmp242 = along_4_1 + sinr0(_tmp88)
+    _tmp243 = numpy.cos(_tmp239)
+    _tmp244 = _tmp208*(-_tmp241*across_4_1 + 0.5*_tmp242*_tmp243*p_0) - _tmp203*(-_tmp241*_tmp242 - _tmp243*_tmp4*across_4_1)
+    _tmp245 = _tmp220*_tmp240
+    _tmp246 = _tmp220*_tmp243
+    _tmp247 = -_tmp179 + cosr1(_tmp88)
+    _tmp248 = 0.5*across_1_0
+    _tmp249 = 0.5*_tmp19
+    _tmp250 = 0.5*_tmp15
+    _tmp251 = 0.5*_tmp7
+    _tmp252 = 0.5*_tmp73 + _tmp13*_tmp248 + _tmp18*_tmp251 + _tmp249*across_1_1 - _tmp250*_tmp3
+    _tmp253 = _tmp23*_tmp252
+    _tmp254 = _tmp10 - _tmp12 + _tmp13*_tmp250 + _tmp18*_tmp249 + _tmp248*_tmp3 - _tmp251*across_1_1
+    _tmp255 = _tmp254*_tmp69
+    _tmp256 = 0.5*across_3_0
+    _tmp257 = 0.5*_tmp146
+    _tmp258 = 0.5*_tmp149
+    _tmp259 = 0.5*_tmp154
+    _tmp260 = 0.5*_tmp139 + _tmp143*_tmp256 + _tmp153*_tmp259 + _tmp257*across_3_1 - _tmp150*_tmp258
+    _tmp261 = 0.5*across_2_0
+    _tmp262 = 0.5*_tmp47
+    _tmp263 = 0.5*_tmp43
+    _tmp264 = 0.5*_tmp35
+    _tmp265 = 0.5*_tmp53 + _tmp261*_tmp41 + _tmp262*across_2_1 + _tmp264*_tmp46 - _tmp263*_tmp32
+    _tmp266 = _tmp265*_tmp28
+    _tmp267 = 0.5*across_4_0
+    _tmp268 = 0.5*_tmp103
+    _tmp269 = 0.5*_tmp99
+    _tmp270 = 0.5*_tmp92
+    _tmp271 = 0.5*_tmp110 + _tmp102*_tmp270 + _tmp267*_tmp97 + _tmp268*across_4_1 - _tmp269*_tmp89
+    _tmp272 = _tmp162 - _tmp160 + _tmp143*_tmp258 + _tmp150*_tmp256 + _tmp153*_tmp257 - _tmp259*across_3_1
+    _tmp273 = _tmp40 - _tmp38 + _tmp261*_tmp32 + _tmp262*_tmp46 + _tmp263*_tmp41 - _tmp264*across_2_1
+    _tmp274 = _tmp96 - _tmp94 + _tmp102*_tmp268 + _tmp267*_tmp89 + _tmp269*_tmp97 - _tmp270*across_4_1
+    _tmp275 = _tmp252*_tmp69
+    _tmp276 = _tmp23*_tmp254
+    _tmp277 = _tmp138*_tmp260
+    _tmp278 = _tmp265*_tmp51
+    _tmp279 = _tmp273*_tmp28
+    _tmp280 = numpy.less_equal(p_0, 0.01)
+    _tmp281 = 1.7333333333333332e-05*p_0*_DTYPE(numpy.where(_tmp280, 230769230769.23077, 210000000000))
+    _tmp282 = _tmp281*omega_2_1
+    _tmp283 = 0.5*_tmp215
+    _tmp284 = _tmp253 + _tmp255 + _tmp266 - _tmp273*_tmp51
+    _tmp285 = _tmp276 + _tmp278 + _tmp279 - _tmp275
+    _tmp286 = _tmp281*omega_3_1
+    _tmp287 = 0.5*_tmp212
+    _tmp288 = -_tmp281*omega_4_1
+    _tmp289 = 0.5*_tmp221
+    _tmp290 = 0.5*_tmp226
+    _tmp291 = 0.5*_tmp235
+    _tmp292 = 0.5*_tmp240
+    _tmp293 = p_0**(-1.0)
+    _tmp294 = _DTYPE(numpy.where(_tmp280, 4.333333333333334e-12, 4.761904761904762e-12))
+    _tmp295 = _tmp293*_tmp294
+    _tmp296 = 132500.36359327438*_tmp295
+    _tmp297 = _tmp19*x_3
+    _tmp298 = _tmp296*_tmp7
+    _tmp299 = _tmp296*x_4
+    _tmp300 = 397501.09077982313*_tmp295
+    _tmp301 = _tmp219*x_3
+    _tmp302 = _tmp221*_tmp300
+    _tmp303 = _tmp300*x_4
+    _tmp304 = 530001.4543730975*_tmp295
+    _tmp305 = _tmp26 + _tmp34
+    _tmp306 = numpy.sin(_tmp305)
+    _tmp307 = _tmp306*x_3
+    _tmp308 = numpy.cos(_tmp305)
+    _tmp309 = _tmp304*x_4
+    _tmp310 = _tmp296*x_3
+    _tmp311 = _tmp226*x_3
+    _tmp312 = _tmp228*x_3
+    _tmp313 = _tmp300*x_3
+    _tmp314 = _tmp106 + _tmp91
+    _tmp315 = numpy.sin(_tmp314)
+    _tmp316 = _tmp304*x_3
+    _tmp317 = numpy.cos(_tmp314)
+    _tmp318 = -_tmp315*_tmp316 + 530001.4543730975*_tmp293*_tmp294*_tmp317*x_4
+    _tmp319 = -_tmp309*_tmp315 - _tmp316*_tmp317
+    _tmp320 = -_tmp240*_tmp316 + 530001.4543730975*_tmp243*_tmp293*_tmp294*x_4
+    _tmp321 = -_tmp240*_tmp309 - _tmp243*_tmp316
+    _tmp322 = p_0**(-2.0)
+    _tmp323 = 530001.4543730975*_tmp294*_tmp322
+    _tmp324 = _tmp323*_tmp7
+    _tmp325 = _tmp323*x_4
+    _tmp326 = _tmp323*x_3
+    _tmp327 = numpy.cos(_tmp75)
+    _tmp328 = _tmp77*numpy.cos(_tmp25)
+    _tmp329 = 0.00041340113441101604*_tmp327 - 0.0011758965601024456*_tmp328
+    _tmp330 = -0.0008268022688220321*_tmp328 - 0.0005879482800512228*_tmp327
+    _tmp331 = 0.0011483364844750445*p_0
+    _tmp332 = _tmp331*across_2_0
+    _tmp333 = _tmp331*_tmp35
+    _tmp334 = _tmp331*_tmp43
+    _tmp335 = 0.002296672968950089*x_7
+    _tmp336 = 0.0011483364844750445*theta_2 + 1.0549413452612033e-05*x_0
+    _tmp337 = 0.002296672968950089*_tmp121 + _tmp45*(_tmp336 - _tmp335)
+    _tmp338 = _tmp4*(0.002296672968950089*_tmp123 + _tmp42*(_tmp335 + _tmp336))
+    _tmp339 = -_tmp32*_tmp332 - _tmp32*_tmp338 - _tmp333*across_2_1 - _tmp334*_tmp41 + 0.5*_tmp337*_tmp35*p_0 + 0.0011483364844750445*_tmp46*_tmp47*p_0
+    _tmp340 = _tmp332*_tmp41 + _tmp337*_tmp48 + _tmp338*_tmp41 - _tmp32*_tmp334 - _tmp333*_tmp46 + 0.004593345937900178*_tmp127*p_0 - _tmp331*_tmp47*across_2_1
+    _tmp341 = 0.25*p_0
+    _tmp342 = _tmp341*_tmp7
+    _tmp343 = _tmp13*_tmp341
+    _tmp344 = _tmp19*_tmp341
+    _tmp345 = -0.5*_tmp63 - _tmp17*_tmp2
+    _tmp346 = 0.5*_tmp65 + _tmp14*_tmp6
+    _tmp347 = _tmp15*_tmp343 + _tmp18*_tmp344 + _tmp345*_tmp8 + _tmp4*numpy.cos(_tmp72) - _tmp342*across_1_1 + _tmp3*_tmp341*across_1_0 - _tmp3*_tmp346*_tmp4
+    _tmp348 = 1.0*p_0
+    _tmp349 = -_tmp18*_tmp342 - _tmp343*across_1_0 - _tmp344*across_1_1 - _tmp11*_tmp348*numpy.cos(_tmp1) + 0.25*_tmp15*_tmp3*p_0 + 0.5*_tmp13*_tmp346*p_0 + 0.5*_tmp19*_tmp345*p_0
+    _tmp350 = _tmp341*_tmp35
+    _tmp351 = _tmp341*_tmp41
+    _tmp352 = _tmp341*_tmp47
+    _tmp353 = -0.5*_tmp121 - _tmp31*_tmp45
+    _tmp354 = 0.5*_tmp123 + _tmp34*_tmp42
+    _tmp355 = _tmp351*_tmp43 + _tmp352*_tmp46 + _tmp353*_tmp36 + _tmp4*numpy.cos(_tmp52) - _tmp350*across_2_1 + _tmp32*_tmp341*across_2_0 - _tmp32*_tmp354*_tmp4
+    _tmp356 = -_tmp350*_tmp46 - _tmp351*across_2_0 - _tmp352*across_2_1 - _tmp348*_tmp37*numpy.cos(_tmp29) + 0.25*_tmp32*_tmp43*p_0 + 0.5*_tmp353*_tmp47*p_0 + 0.5*_tmp354*_tmp41*p_0
+    _tmp357 = 0.045*_tmp76 - 0.128*_tmp78
+    _tmp358 = -0.064*_tmp76 - 0.09*_tmp78
+    _tmp359 = _tmp357*_tmp81 + _tmp358*_tmp84
+    _tmp360 = _tmp357*_tmp84
+    _tmp361 = _tmp4*_tmp69
+    _tmp362 = -_tmp13*_tmp361 + 0.5*_tmp23*_tmp3*p_0
+    _tmp363 = _tmp3*_tmp361 + _tmp13*_tmp23*_tmp4
+    _tmp364 = -_tmp20*_tmp69 - _tmp23*_tmp8
+    _tmp365 = _tmp69*_tmp8 - _tmp20*_tmp23
+    _tmp366 = _tmp28*_tmp4
+    _tmp367 = _tmp4*_tmp51
+    _tmp368 = _tmp32*_tmp366 + _tmp367*_tmp41
+    _tmp369 = _tmp32*_tmp367 - _tmp366*_tmp41
+    _tmp370 = -_tmp28*_tmp36 + 0.5*_tmp47*_tmp51*p_0
+    _tmp371 = _tmp28*_tmp48 + _tmp36*_tmp51
+    return [
+        0,
+        0,
+        0,
+        0,
+        -_tmp114 - 1000.0*_tmp50 - 1000.0*_tmp55 - 1000.0*_tmp68 - 1000.0*_tmp71 - _tmp21*_tmp24 + 500.0*_tmp69*_tmp74,
+        -_tmp114 - 500.0*_tmp50 - 500.0*_tmp55 - 1000.0*_tmp126 + 1000.0*_tmp128*_tmp51,
+        -_tmp133*_tmp134 - _tmp135*_tmp136 - _tmp138*_tmp157 + 500.0*_tmp158*_tmp164 + 1000.0*_tmp138*_tmp172 + 1000.0*_tmp158*_tmp171,
+        -500.0*_tmp109 - _tmp111*_tmp173 - _tmp182*_tmp183 + 1000.0*_tmp112*_tmp184,
+        -_tmp185 - _tmp187 - 1000.0*_tmp186 - 1000.0*_tmp188 - _tmp24*_tmp74 + 1000.0*_tmp105*_tmp112 + 1000.0*_tmp23*_tmp70 + 1000.0*_tmp49*_tmp51 + 1000.0*_tmp81*_tmp83 - 500.0*_tmp21*_tmp69,
+        -_tmp185 - _tmp187 + 500.0*_tmp189 + 1000.0*_tmp190 + 1000.0*_tmp191 - 500.0*_tmp186 + _tmp105*_tmp113 + _tmp82*_tmp83,
+        1000.0*_tmp192 + _tmp133*_tmp136 + _tmp157*_tmp158 - _tmp134*_tmp135 + 500.0*_tmp138*_tmp164 - 1000.0*_tmp158*_tmp172,
+        _tmp105*_tmp173 + _tmp113*_tmp182 + _tmp183*_tmp184 - 500.0*_tmp108*_tmp111,
+        _tmp208*(_tmp207 - _tmp206 + 0.026*_tmp193 - 0.015*_tmp194 + _tmp204*p_0) - _tmp203*(_tmp199 + _tmp202 + 0.015*_tmp193 + 0.026*_tmp194),
+        _tmp208*(-_tmp206 - _tmp210 + 0.4330127018922193*_tmp195*p_0) - _tmp203*(_tmp199 + _tmp209),
+        _tmp208*(-_tmp192 - _tmp213 + _tmp158*_tmp172 + _tmp214*_tmp215 - _tmp156*_tmp216 - 0.5*_tmp138*_tmp164) - _tmp203*(-_tmp217 - _tmp138*_tmp172 - _tmp158*_tmp171 - _tmp164*_tmp216 + 0.5*_tmp138*_tmp156),
+        0,
+        0,
+        0,
+        -_tmp208*(-_tmp213 + _tmp212*_tmp4 + _tmp214*_tmp215) + 9.186691875800356*x_4*(-_tmp217 + 0.5*_tmp215*p_0),
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp208*(-_tmp221*_tmp223 - _tmp219*_tmp220*across_1_1 + 0.125*_tmp2*_tmp219*_tmp224*p_0) - _tmp203*(-_tmp219*_tmp223 + 0.375*_tmp221*across_1_1*p_0 - _tmp2*_tmp221*_tmp224*_tmp56),
+        0,
+        0,
+        0,
+        _tmp208*(-_tmp227*across_2_1 + 0.5*_tmp228*_tmp229*p_0) - _tmp203*(-_tmp227*_tmp229 - _tmp228*_tmp4*across_2_1),
+        _tmp208*(_tmp229*_tmp231 - _tmp230*across_2_1 + _tmp226*_tmp232*_tmp31*_tmp56) - _tmp203*(-_tmp229*_tmp230 - _tmp231*across_2_1 + 0.125*_tmp228*_tmp232*_tmp31*p_0),
+        0,
+        0,
+        0,
+        0,
+        -_tmp208*(-_tmp235*_tmp237 - _tmp220*_tmp234*across_3_1 + 0.125*_tmp142*_tmp234*_tmp238*p_0) + 9.186691875800356*x_4*(-_tmp234*_tmp237 + 0.375*_tmp235*across_3_1*p_0 - _tmp142*_tmp235*_tmp238*_tmp56),
+        0,
+        _tmp244,
+        _tmp244,
+        0,
+        _tmp208*(_tmp242*_tmp246 - _tmp245*across_4_1 + _tmp240*_tmp247*_tmp56*_tmp88) - _tmp203*(-_tmp242*_tmp245 - _tmp246*across_4_1 + 0.125*_tmp243*_tmp247*_tmp88*p_0),
+        0,
+        -1000.0*_tmp253 - 1000.0*_tmp255 - 1000.0*_tmp266 - _tmp183*_tmp271 + 1000.0*_tmp112*_tmp274 + 1000.0*_tmp138*_tmp272 + 1000.0*_tmp158*_tmp260 + 1000.0*_tmp273*_tmp51,
+        1000.0*_tmp276 + 1000.0*_tmp277 + 1000.0*_tmp278 + 1000.0*_tmp279 - 1000.0*_tmp275 + _tmp113*_tmp271 + _tmp183*_tmp274 - 1000.0*_tmp158*_tmp272,
+        _tmp282 + _tmp208*(-_tmp196 - _tmp198 - _tmp277 - _tmp285 + 0.5*_tmp212 + _tmp158*_tmp272) - _tmp203*(_tmp204 + _tmp283 + _tmp284 - _tmp205 - _tmp138*_tmp272 - _tmp158*_tmp260),
+        _tmp286 + _tmp203*(_tmp283 + _tmp287) - _tmp208*(_tmp287 - _tmp283),
+        _tmp288,
+        _tmp208*(-_tmp289*across_1_1 + 0.5*_tmp219*_tmp222) + _tmp281*omega_1_0 - _tmp203*(-_tmp222*_tmp289 - 0.5*_tmp219*across_1_1) - _tmp281*omega_1_1,
+        -_tmp282 + _tmp208*(_tmp229*_tmp290 + 0.5*_tmp228*across_2_1) + _tmp281*omega_2_0 - _tmp203*(-_tmp290*across_2_1 + 0.5*_tmp228*_tmp229),
+        -_tmp286 + _tmp203*(-_tmp236*_tmp291 - 0.5*_tmp234*across_3_1) + _tmp281*omega_3_0 - _tmp208*(-_tmp291*across_3_1 + 0.5*_tmp234*_tmp236),
+        _tmp288 + _tmp208*(_tmp242*_tmp292 + 0.5*_tmp243*across_4_1) + _tmp281*omega_4_0 - _tmp203*(-_tmp292*across_4_1 + 0.5*_tmp242*_tmp243),
+        0.5,
+        0,
+        0,
+        0,
+        -_tmp296*_tmp297 - _tmp298*x_4,
+        0,
+        0,
+        0,
+        _tmp298*x_3 - _tmp19*_tmp299,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        -_tmp300*_tmp301 - _tmp302*x_4,
+        0,
+        0,
+        0,
+        _tmp302*x_3 - _tmp219*_tmp303,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        -_tmp304*_tmp307 + 530001.4543730975*_tmp293*_tmp294*_tmp308*x_4,
+        -_tmp296*_tmp307 + 132500.36359327438*_tmp293*_tmp294*_tmp308*x_4,
+        0,
+        0,
+        -_tmp306*_tmp309 - _tmp304*_tmp308*x_3,
+        -_tmp299*_tmp306 - _tmp308*_tmp310,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        -_tmp304*_tmp311 + 530001.4543730975*_tmp228*_tmp293*_tmp294*x_4,
+        -_tmp300*_tmp311 + 397501.09077982313*_tmp228*_tmp293*_tmp294*x_4,
+        0,
+        0,
+        -_tmp226*_tmp309 - _tmp304*_tmp312,
+        -_tmp226*_tmp303 - _tmp300*_tmp312,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        _tmp146*_tmp310 + _tmp154*_tmp299,
+        0,
+        0,
+        0,
+        -_tmp154*_tmp310 + 132500.36359327438*_tmp146*_tmp293*_tmp294*x_4,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        _tmp234*_tmp313 + _tmp235*_tmp303,
+        0,
+        0,
+        0,
+        -_tmp235*_tmp313 + 397501.09077982313*_tmp234*_tmp293*_tmp294*x_4,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        _tmp318,
+        _tmp318,
+        0,
+        -_tmp310*_tmp315 + 132500.36359327438*_tmp293*_tmp294*_tmp317*x_4,
+        _tmp319,
+        _tmp319,
+        0,
+        -_tmp299*_tmp315 - _tmp310*_tmp317,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        _tmp320,
+        _tmp320,
+        0,
+        -_tmp240*_tmp313 + 397501.09077982313*_tmp243*_tmp293*_tmp294*x_4,
+        _tmp321,
+        _tmp321,
+        0,
+        -_tmp240*_tmp303 - _tmp243*_tmp313,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp324*x_3 - _tmp19*_tmp325,
+        _tmp297*_tmp323 + _tmp324*x_4,
+        0,
+        0,
+        0,
+        _tmp221*_tmp326 - _tmp219*_tmp325,
+        _tmp221*_tmp325 + _tmp301*_tmp323,
+        0,
+        0,
+        0,
+        -_tmp306*_tmp325 - _tmp308*_tmp326,
+        _tmp307*_tmp323 - _tmp308*_tmp325,
+        0,
+        0,
+        0,
+        -_tmp226*_tmp325 - _tmp312*_tmp323,
+        _tmp311*_tmp323 - _tmp228*_tmp325,
+        0,
+        0,
+        0,
+        -_tmp154*_tmp326 + 530001.4543730975*_tmp146*_tmp294*_tmp322*x_4,
+        -_tmp146*_tmp326 - _tmp154*_tmp325,
+        0,
+        0,
+        0,
+        -_tmp235*_tmp326 + 530001.4543730975*_tmp234*_tmp294*_tmp322*x_4,
+        -_tmp234*_tmp326 - _tmp235*_tmp325,
+        0,
+        0,
+        0,
+        -_tmp315*_tmp325 - _tmp317*_tmp326,
+        _tmp315*_tmp326 - _tmp317*_tmp325,
+        0,
+        0,
+        0,
+        -_tmp240*_tmp325 - _tmp243*_tmp326,
+        _tmp240*_tmp326 - _tmp243*_tmp325,
+        0,
+        0,
+        -0.004593345937900178*_tmp50 - 0.004593345937900178*_tmp55 + _tmp330*_tmp81 + _tmp340*_tmp51 - _tmp28*_tmp339 - _tmp329*_tmp84,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp23*_tmp347 - _tmp349*_tmp69,
+        _tmp356*_tmp51 - _tmp28*_tmp355,
+        0,
+        0,
+        0.004593345937900178*_tmp189 - 0.004593345937900178*_tmp186 + _tmp28*_tmp340 + _tmp329*_tmp81 + _tmp330*_tmp84 + _tmp339*_tmp51,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp23*_tmp349 - _tmp347*_tmp69,
+        _tmp28*_tmp356 + _tmp355*_tmp51,
+        0,
+        0,
+        -_tmp202 - _tmp359,
+        -_tmp209 - _tmp359,
+        0,
+        0,
+        -_tmp207 - _tmp360 + _tmp358*_tmp81,
+        _tmp210 - _tmp360 + _tmp358*_tmp81,
+        0,
+        0,
+        -_tmp284,
+        _tmp285,
+        _tmp362,
+        -_tmp363,
+        0,
+        _tmp364,
+        _tmp365,
+        0,
+        _tmp368,
+        _tmp369,
+        0,
+        _tmp370,
+        -_tmp371,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp363,
+        _tmp362,
+        0,
+        -_tmp365,
+        _tmp364,
+        0,
+        -_tmp369,
+        _tmp368,
+        0,
+        _tmp371,
+        _tmp370,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+    ]
+
+
 def _plate_relation4(plate):
     """one plate's relation at order 4: (along, across, omega) and their partials by (theta, p, f) (312 operations)."""
     theta, p, f, e_a, e_s = plate
@@ -4014,6 +5273,65 @@ def _plate_rest4(plate):
     ]
 
 
+def _plate_eps4(plate):
+    """one plate's relation at order 4: d(along, across, omega)/d(e_a, e_s) (158 operations)."""
+    theta, p, f, e_a, e_s = plate
+    _tmp0 = theta**2
+    _tmp5 = 1 + p*(-2*e_s + 2*e_a)
+    _tmp1 = e_a - e_s
+    _tmp2 = 1 + _tmp1*p
+    _tmp3 = _tmp2*p
+    _tmp4 = 2*p
+    _tmp6 = p**2
+    _tmp7 = _tmp5*_tmp6
+    _tmp8 = -0.08333333333333333*p + _tmp4*bcol_a(_tmp3) + _tmp7*bcol_a_d1(_tmp3)
+    _tmp9 = theta**4
+    _tmp10 = -0.0010416666666666667*p + _tmp4*bcol_e3c(_tmp3) + _tmp7*bcol_e3c_d1(_tmp3)
+    _tmp11 = bcol_s(_tmp3)
+    _tmp12 = _tmp2*f
+    _tmp13 = bcol_e1(_tmp3)
+    _tmp14 = _tmp0*_tmp13
+    _tmp15 = 4*_tmp2**3
+    _tmp16 = f**3
+    _tmp17 = _tmp16*bcol_e2(_tmp3)
+    _tmp18 = -_tmp15*_tmp17 - 2*_tmp12*_tmp14 + _tmp11*_tmp2*f
+    _tmp19 = _tmp18*f
+    _tmp20 = bcol_w(_tmp3)
+    _tmp21 = f**2
+    _tmp22 = _tmp2**2
+    _tmp23 = _tmp21*_tmp22
+    _tmp24 = bcol_e2_d1(_tmp3)
+    _tmp25 = f**4
+    _tmp26 = _tmp25*_tmp2**4
+    _tmp27 = bcol_e1_d1(_tmp3)
+    _tmp28 = _tmp0*_tmp27
+    _tmp29 = _tmp4*(_tmp20*_tmp23 + _tmp23*_tmp28 + _tmp24*_tmp26)
+    _tmp30 = _tmp15*_tmp24
+    _tmp31 = _tmp14*_tmp4*f + _tmp16*_tmp30*_tmp6 - _tmp11*f*p + 2*_tmp12*_tmp28*_tmp6 + 12*_tmp17*_tmp22*p - _tmp2*_tmp6*f*bcol_s_d1(_tmp3)
+    _tmp32 = -_tmp31
+    _tmp33 = _tmp1*f
+    _tmp34 = _tmp21*_tmp3
+    _tmp35 = 2*_tmp34
+    _tmp36 = _tmp23*_tmp6
+    _tmp37 = _tmp20*_tmp35 + _tmp28*_tmp35 + _tmp36*bcol_w_d1(_tmp3) + _tmp0*_tmp36*bcol_e1_d2(_tmp3) + _tmp25*_tmp30*p + _tmp26*_tmp6*bcol_e2_d2(_tmp3)
+    _tmp38 = _tmp19 + p - _tmp29 + _tmp0*_tmp8 + _tmp32*_tmp33 - _tmp10*_tmp9 - _tmp37*_tmp5
+    _tmp39 = _tmp29 - _tmp19 + _tmp10*_tmp9 + _tmp31*_tmp33 + _tmp37*_tmp5 - _tmp0*_tmp8
+    _tmp40 = _tmp18*p
+    _tmp41 = _tmp40 + _tmp2*_tmp32
+    _tmp42 = f - _tmp40 + _tmp2*_tmp31
+    _tmp43 = 0.5*f
+    _tmp44 = _tmp6*theta
+    _tmp45 = _tmp44*bcol_invt_d1(_tmp3) + 2*_tmp23*_tmp27*_tmp44 + 4*_tmp13*_tmp34*theta + 4*_tmp6*theta**3*bcol_e3_d1(_tmp3)
+    return [
+        _tmp38,
+        _tmp39,
+        _tmp41,
+        _tmp42,
+        _tmp45 - _tmp38*_tmp43 + 0.5*_tmp41*p,
+        -_tmp45 - _tmp39*_tmp43 + 0.5*_tmp42*p,
+    ]
+
+
 # four_bar: its tables for the runtime
 _MECHANISM = _Mechanism(
     input_names=INPUTS, pruned_inputs=PRUNED_INPUTS, parameter_names=tuple(PARAMETERS),
@@ -4047,6 +5365,9 @@ _MECHANISM = _Mechanism(
         tol=1e-12, max_iter=12, max_turn=0.2,
         p_limit=0.9, est_factor=3.0, est_limit=0.01,
         loads=False,
+        # the sensitivities (templates/numpy/reduced_sens.py): per variant its routine and blocks
+        sens=((_loaded_sens1, {'dR_dtheta': (0, 6, 4), 'dR_dp': (24, 6, 1), 'din_dtheta': (30, 20, 4), 'din_dp': (110, 20, 1), 'dD_dx': (130, 2, 6), 'dD_dtheta': (142, 2, 4), 'dD_dp': (150, 2, 1), 'dD_dout': (152, 2, 12)}), (_loaded_sens2, {'dR_dtheta': (0, 10, 4), 'dR_dp': (40, 10, 1), 'din_dtheta': (50, 40, 4), 'din_dp': (210, 40, 1), 'dD_dx': (250, 2, 10), 'dD_dtheta': (270, 2, 4), 'dD_dp': (278, 2, 1), 'dD_dout': (280, 2, 24)}), ),
+        eps4=_plate_eps4,
     ),
     loaded_solve=_reduced_solve,
     sens_rigid_blocks={'A': (0, 3, 3), 'dG_dv': (9, 3, 2), 'dR_dtheta': (15, 2, 3), 'dR_dv': (21, 2, 2)},
@@ -4058,7 +5379,7 @@ _MECHANISM = _Mechanism(
         'paper': _Level(_dev_paper, None, None, 0, _sens_paper, {'dD_dtheta': (0, 2, 3), 'dD_dv': (6, 2, 2)}, None),
         'first_order': _Level(_dev_first_order, _linear, None, 0, _sens_first_order, {'M': (0, 3, 3), 'dE_dtheta': (9, 3, 3), 'dE_dv': (18, 3, 2), 'dD_dtheta': (24, 2, 3), 'dD_ddelta': (30, 2, 3), 'dD_dv': (36, 2, 2)}, None),
         'exact': _Level(_dev_exact, _linear, _newton, 0, _sens_exact, {'M': (0, 3, 3), 'dE_dtheta': (9, 3, 3), 'dE_dv': (18, 3, 2), 'dD_dtheta': (24, 2, 3), 'dD_ddelta': (30, 2, 3), 'dD_dv': (36, 2, 2)}, None),
-        'loaded': _Level(_loaded_deviation, None, None, 1, None, {}, None),
+        'loaded': _Level(_loaded_deviation, None, None, 1, _reduced_rates, {}, None),
     },
 )
 

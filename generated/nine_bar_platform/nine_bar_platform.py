@@ -2,7 +2,7 @@
 Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
 Points: F; levels: paper, first_order, exact, loaded.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 158, rigid_res 148, linear 275, newton 531, rigid_points 14, loaded_plates1 285, loaded_system1 937, loaded_dev1 36, loaded_plates2 775, loaded_system2 3363, loaded_dev2 116, dev_paper 33, dev_first_order 33, dev_exact 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97, plate_relation4 312, plate_values2 62, plate_rest4 39.
+Operation counts after CSE: rigid 158, rigid_res 148, linear 275, newton 531, rigid_points 14, loaded_plates1 285, loaded_system1 937, loaded_dev1 36, loaded_plates2 775, loaded_system2 3363, loaded_dev2 116, dev_paper 33, dev_first_order 33, dev_exact 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97, loaded_sens1 1245, loaded_sens2 3457, plate_relation4 312, plate_values2 62, plate_rest4 39, plate_eps4 158.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -31,7 +31,7 @@ LINKS = ('frame', 'b1', 'b2', 'b3', 'b4', 'b5', 'b6', 'b7', 'b8', )
 POINTS = ('F', )
 LEVELS = ('paper', 'first_order', 'exact', 'loaded', )
 #: The levels with closed-form sensitivities (docs/sensitivity.md).
-SENSITIVITY_LEVELS = ('paper', 'first_order', 'exact', )
+SENSITIVITY_LEVELS = ('paper', 'first_order', 'exact', 'loaded', )
 _DTYPE = numpy.float64
 
 # symkin runtime (templates/numpy/runtime.py, docs/runtime.md; tested on its own by
@@ -489,8 +489,12 @@ def _sensitivity_block(arrays, mech, level, p):
             ok = ok & good
             th = _matrix(th, k, nv, shape, dtype)
             rig = rig + numpy.matmul(_block(sr, rb["dR_dtheta"], shape, dtype), th)
-        s = lv.sens(theta, delta, p)
-        dev = _block(s, b["dD_dv"], shape, dtype)
+        if lv.loaded:
+            # the reduced equilibrium's own (templates/numpy/reduced_sens.py)
+            dev = lv.sens(mech, theta, p, q, th if k else None, ok).astype(dtype)
+        else:
+            s = lv.sens(theta, delta, p)
+            dev = _block(s, b["dD_dv"], shape, dtype)
         if "M" in b:
             # Y = -M^-1 (dE/dv + dE/dtheta_u Theta)
             rhs = -(
@@ -505,7 +509,7 @@ def _sensitivity_block(arrays, mech, level, p):
             dev = dev + numpy.matmul(
                 _block(s, b["dD_ddelta"], shape, dtype), _matrix(y, k, nv, shape, dtype)
             )
-        if k:
+        if k and not lv.loaded:
             dev = dev + numpy.matmul(_block(s, b["dD_dtheta"], shape, dtype), th)
         if mech.sens_chain is not None:
             # a parameter's default that reads earlier ones follows them: totals, last first
@@ -838,6 +842,9 @@ def _reduced_solve(mech, x, theta, p, ok):
     okf = numpy.zeros(where.size, dtype=bool)
     flat_delta = [numpy.zeros(where.size) for _ in mech.unknown_index]
     flat_dev = [numpy.full(where.size, numpy.nan) for _ in range(n_dev)]
+    # the variant and its solution x, for the sensitivities (templates/numpy/reduced_sens.py)
+    flat_x = [numpy.full(where.size, numpy.nan) for _ in range(max(v[3] for v in tb.variants))]
+    flat_variant = numpy.full(where.size, -1)
     for count, variant in enumerate(tb.variants, 1):
         if not todo.size:
             break
@@ -851,6 +858,9 @@ def _reduced_solve(mech, x, theta, p, ok):
             flat_delta[j][todo[good]] = sx[j, good] * solver.scale[j]
         for i in range(n_dev):
             flat_dev[i][todo[good]] = sdev[i, good]
+        for i in range(solver.size):
+            flat_x[i][todo[good]] = sx[i, good]
+        flat_variant[todo[good]] = count - 1
         okf[todo[good]] = True
         # refused by the truncation estimate: two half plates per plate
         todo = todo[status == 4]
@@ -863,7 +873,97 @@ def _reduced_solve(mech, x, theta, p, ok):
         dev[i].reshape(-1)[where] = flat_dev[i]
     q = _Solved(p)
     q.deviation = dev
+    q.x = [numpy.zeros(shape) for _ in flat_x]
+    q.variant = numpy.full(shape, -1)
+    for i, v in enumerate(flat_x):
+        q.x[i].reshape(-1)[where] = v
+    q.variant.reshape(-1)[where] = flat_variant
     return delta, q, ok
+
+
+def _red_block(out, block, b):
+    """A routine's block (offset, rows, cols) as a (b, rows, cols) array."""
+    at, rows, cols = block
+    if not rows * cols:
+        return numpy.zeros((b, rows, cols))
+    values = [_red_column(out[at + i], b) for i in range(rows * cols)]
+    return numpy.stack(values, axis=-1).reshape(b, rows, cols)
+
+
+def _reduced_rates(mech, theta, p, q, thu, ok):
+    """dev (*shape, 2 n_P, n_v) of the loaded level at its solutions (q: the variant solved and
+    its x, templates/numpy/reduced.py); thu dtheta_u/dv (*shape, k, n_v), None without. J is
+    evaluated once more at the solution, then dx/dv = -J^-1 dR/dv at fixed x and
+    dD/dv = dD/dx dx/dv + dD/dtheta dtheta/dv + dD/dp + dD/dout dout/dv (reduced_sens.c)."""
+    tb = mech.loaded
+    shape = ok.shape
+    npar, nv, m = len(mech.parameter_names), mech.n_variables, mech.n_theta
+    npt = 2 * len(mech.point_names)
+    dev = numpy.full((ok.size, npt, nv), numpy.nan)
+    variant = numpy.broadcast_to(q.variant, shape).reshape(-1)
+    good = numpy.broadcast_to(ok, shape).reshape(-1)
+
+    def flat(values, where):
+        return [numpy.broadcast_to(v, shape).reshape(-1)[where].astype(float) for v in values]
+
+    for index, (variant_row, (fn, blocks)) in enumerate(zip(tb.variants, tb.sens)):
+        where = numpy.flatnonzero(good & (variant == index))
+        b = where.size
+        if not b:
+            continue
+        solver = _Batch(tb, variant_row, index + 1)
+        n, ns = solver.size, solver.plates
+        x = numpy.array(flat(q.x[:n], where)).reshape(n, b)
+        th, pb = flat(theta, where), flat(p, where)
+        with numpy.errstate(all="ignore"):
+            _, jac = solver.system(x, th, pb, 1.0)
+            args, ins, dins = solver._inputs(x, th, pb, 1.0)
+            rel, vals = solver._relation(ins)
+            sys = solver.system_fn(args, th, vals, pb)
+            s = fn(args, th, vals, pb)
+        jo = _red_block(sys, (n + n * n, n, 3 * ns), b)
+        # dtheta/dv of every hinge: the non-input ones' from the rigid closure, an input's own 1
+        dth = numpy.zeros((b, m, nv))
+        if thu is not None:
+            tu = numpy.broadcast_to(thu, shape + thu.shape[-2:]).reshape(-1, *thu.shape[-2:])
+            for j, i in enumerate(mech.unknown_index):
+                dth[:, i] = tu[where, j]
+        for j, i in enumerate(mech.input_index):
+            dth[:, i, npar + j] = 1.0
+        # the relation's partials by (theta_c, p, f, e_a, e_s), 3 x 5 per half plate
+        part = numpy.zeros((b, 3 * ns, 5 * ns))
+        dinx = numpy.zeros((b, 5 * ns, n))
+        d = numpy.array(dins).reshape(3 * ns, n, b) if ns and n else numpy.zeros((3 * ns, n, b))
+        for k in range(ns):
+            eps = [_red_column(v, b) for v in tb.eps4(ins[5 * k : 5 * k + 5])]
+            for i in range(3):
+                for c in range(3):
+                    part[:, 3 * k + i, 5 * k + c] = rel[k][3 + 3 * i + c]
+                part[:, 3 * k + i, 5 * k + 3] = eps[2 * i]
+                part[:, 3 * k + i, 5 * k + 4] = eps[2 * i + 1]
+            dinx[:, 5 * k : 5 * k + 3] = d[3 * k : 3 * k + 3].transpose(2, 0, 1)
+
+        def by_v(theta_block, p_block):
+            out = numpy.matmul(_red_block(s, blocks[theta_block], b), dth)
+            out[:, :, :npar] += _red_block(s, blocks[p_block], b)
+            return out
+
+        din = by_v("din_dtheta", "din_dp")
+        dout = numpy.matmul(part, din)
+        rhs = by_v("dR_dtheta", "dR_dp") + numpy.matmul(jo, dout)
+        dx = numpy.full((b, n, nv), numpy.nan)
+        for c in range(b):
+            try:
+                dx[c] = -numpy.linalg.solve(jac[c], rhs[c]) if n else dx[c]
+            except numpy.linalg.LinAlgError:
+                continue  # singular: NaN
+        dout = dout + numpy.matmul(part, numpy.matmul(dinx, dx))
+        dev[where] = (
+            numpy.matmul(_red_block(s, blocks["dD_dx"], b), dx)
+            + by_v("dD_dtheta", "dD_dp")
+            + numpy.matmul(_red_block(s, blocks["dD_dout"], b), dout)
+        )
+    return dev.reshape(shape + (npt, nv))
 
 
 def arck(x):
@@ -966,6 +1066,11 @@ def bcol_a_d1_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_a_d1(p):
+    """bcol_a_d1(p) = d^1/dp^1 of p w(p)/(3 T^2) (vectorised)."""
+    return bcol_a_d1_at(p, bcol_h(p))
+
+
 def bcol_e1_at(x, h):
     """bcol_e1(p) = (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -994,6 +1099,11 @@ def bcol_e1_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((-48.0) + h * ((48.0) + h * ((p * (8.0)) + h * ((p * (-4.0)) + h * (p * (p * (1.0))))))) / (h * (h * (p * (p * (512.0)))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_e1(p):
+    """bcol_e1(p) = (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2) (vectorised)."""
+    return bcol_e1_at(p, bcol_h(p))
 
 
 def bcol_e1_d1_at(x, h):
@@ -1026,6 +1136,11 @@ def bcol_e1_d1_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_e1_d1(p):
+    """bcol_e1_d1(p) = d^1/dp^1 of (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2) (vectorised)."""
+    return bcol_e1_d1_at(p, bcol_h(p))
+
+
 def bcol_e1_d2_at(x, h):
     """bcol_e1_d2(p) = d^2/dp^2 of (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (15 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1054,6 +1169,11 @@ def bcol_e1_d2_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((-2304.0) + h * ((-3072.0) + h * ((-384.0 + p * (768.0)) + h * ((5760.0 + p * (768.0)) + h * ((p * (64.0 + p * (-32.0))) + h * ((p * (-480.0 + p * (-64.0))) + h * ((p * (p * (8.0 + p * (-16.0)))) + h * ((p * (p * (p * (16.0)))) + h * (p * (p * (p * (p * (3.0))))))))))))) / (h * (h * (h * (h * (p * (p * (p * (p * (16384.0)))))))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_e1_d2(p):
+    """bcol_e1_d2(p) = d^2/dp^2 of (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2) (vectorised)."""
+    return bcol_e1_d2_at(p, bcol_h(p))
 
 
 def bcol_e2_at(x, h):
@@ -1085,6 +1205,11 @@ def bcol_e2_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_e2(p):
+    """bcol_e2(p) = -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3) (vectorised)."""
+    return bcol_e2_at(p, bcol_h(p))
+
+
 def bcol_e2_d1_at(x, h):
     """bcol_e2_d1(p) = d^1/dp^1 of -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1112,6 +1237,11 @@ def bcol_e2_d1_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((-1680.0) + h * ((1680.0 + p * (-48.0)) + h * ((p * (216.0)) + h * ((p * (-28.0 + p * (8.0))) + h * ((p * (p * (3.0))) + h * (p * (p * (p * (1.0))))))))) / (p * (p * (p * (p * (2048.0)))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_e2_d1(p):
+    """bcol_e2_d1(p) = d^1/dp^1 of -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3) (vectorised)."""
+    return bcol_e2_d1_at(p, bcol_h(p))
 
 
 def bcol_e2_d2_at(x, h):
@@ -1143,6 +1273,11 @@ def bcol_e2_d2_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_e2_d2(p):
+    """bcol_e2_d2(p) = d^2/dp^2 of -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3) (vectorised)."""
+    return bcol_e2_d2_at(p, bcol_h(p))
+
+
 def bcol_e3_at(x, h):
     """bcol_e3(p) = -(3T^4p^2 + 20T^3p - 24T^2p - 48T + 48)/(3072 T^4 p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (13 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1170,6 +1305,40 @@ def bcol_e3_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((-48.0) + h * ((48.0) + h * ((p * (24.0)) + h * ((p * (-20.0)) + h * (p * (p * (-3.0))))))) / (h * (h * (h * (h * (p * (3072.0))))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_e3_d1_at(x, h):
+    """bcol_e3_d1(p) = d^1/dp^1 of -(3T^4p^2 + 20T^3p - 24T^2p - 48T + 48)/(3072 T^4 p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
+    x = np.asarray(x, dtype=float)
+    near = (x > -4.0) & (x < 16.0)
+    p = np.where(near, x, 6.0)
+    d = p - 6.0
+    d2 = d * d
+    d4 = d2 * d2
+    d8 = d4 * d4
+    s = 1.0 / (p + 39.47841760435743)
+    value = ((((-62317.1090282084 + d * -2601.803112996573) + (-98.24150073157513 + d * -1.449920896321523) * d2) + ((-0.012275915872263935 + d * -1.1390294659006214e-05) + (-5.8952099340217056e-08 + d * 3.428021782217453e-10) * d2) * d4) + (((2.3149571793056234e-12 + d * -8.658295175739011e-14) + (1.41785207937709e-15 + d * -1.8163666924134298e-17) * d2) + (2.1127919490076908e-19 + d * -2.172980716945177e-21) * d4) * d8) * (s * s * s * s * s)
+    if near.all():
+        return value
+    high = x >= 16.0
+    p = np.where(high, x, 32.0)
+    h0 = h
+    h = np.where(high, h0, 0.01)
+    u = 0.5 * np.sqrt(p)
+    tau = 1.0 - h
+    sigma = h * (2.0 - h)
+    far = (((-32.0) + sigma * ((112.0 + u * (-64.0)) + sigma * (-80.0 + u * (-176.0 + u * (192.0))))) * (1.0 + tau) - sigma * (sigma * ((u * (-64.0)) + sigma * (u * (-176.0))))) / (((u * (98304.0)) + sigma * ((u * (-196608.0)) + sigma * (u * (98304.0)))) * (1.0 + tau) - sigma * ((u * (98304.0)) + sigma * ((u * (-196608.0)) + sigma * (u * (98304.0)))))
+    inside = x > -9.869604401089358
+    low = ~near & ~high & inside
+    p = np.where(low, x, -8.0)
+    h = np.where(low, h0, 0.5)
+    closed = ((192.0) + h * ((-240.0) + h * ((48.0 + p * (-96.0)) + h * ((p * (104.0)) + h * ((p * (-20.0 + p * (12.0))) + h * (p * (p * (-11.0)))))))) / (h * (h * (h * (h * (h * (p * (p * (6144.0))))))))
+    return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_e3_d1(p):
+    """bcol_e3_d1(p) = d^1/dp^1 of -(3T^4p^2 + 20T^3p - 24T^2p - 48T + 48)/(3072 T^4 p) (vectorised)."""
+    return bcol_e3_d1_at(p, bcol_h(p))
 
 
 def bcol_e3c_at(x, h):
@@ -1201,6 +1370,11 @@ def bcol_e3c_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_e3c(p):
+    """bcol_e3c(p) = e3'(p) + 1/1920 (vectorised)."""
+    return bcol_e3c_at(p, bcol_h(p))
+
+
 def bcol_e3c_d1_at(x, h):
     """bcol_e3c_d1(p) = d^1/dp^1 of e3'(p) + 1/1920, at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1228,6 +1402,11 @@ def bcol_e3c_d1_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((-960.0) + h * ((1152.0) + h * ((-144.0 + p * (528.0)) + h * ((-48.0 + p * (-544.0)) + h * ((p * (56.0 + p * (-84.0))) + h * ((p * (20.0 + p * (64.0))) + h * (p * (p * (-5.0 + p * (3.0)))))))))) / (h * (h * (h * (h * (h * (h * (p * (p * (p * (12288.0))))))))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_e3c_d1(p):
+    """bcol_e3c_d1(p) = d^1/dp^1 of e3'(p) + 1/1920 (vectorised)."""
+    return bcol_e3c_d1_at(p, bcol_h(p))
 
 
 def bcol_invt_at(x, h):
@@ -1293,6 +1472,11 @@ def bcol_invt_d1_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_invt_d1(p):
+    """bcol_invt_d1(p) = d^1/dp^1 of 1/T(p) (vectorised)."""
+    return bcol_invt_d1_at(p, bcol_h(p))
+
+
 def bcol_s_at(x, h):
     """bcol_s(p) = (1 - T)/p, at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (13 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1325,6 +1509,40 @@ def bcol_s_at(x, h):
 def bcol_s(p):
     """bcol_s(p) = (1 - T)/p (vectorised)."""
     return bcol_s_at(p, bcol_h(p))
+
+
+def bcol_s_d1_at(x, h):
+    """bcol_s_d1(p) = d^1/dp^1 of (1 - T)/p, at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
+    x = np.asarray(x, dtype=float)
+    near = (x > -4.0) & (x < 16.0)
+    p = np.where(near, x, 6.0)
+    d = p - 6.0
+    d2 = d * d
+    d4 = d2 * d2
+    d8 = d4 * d4
+    r = 1.0 / (p + 9.869604401089358)
+    value = ((((-0.8132429851307679 + d * -0.00028263927661945) + (-4.62076041242041e-06 + d * 1.2061372014718943e-07) * d2) + ((-2.027158719940083e-09 + d * 2.941018614006343e-11) + (-3.9541483920524393e-13 + d * 5.072415794354741e-15) * d2) * d4) + (((-6.302768016745823e-17 + d * 7.653122930054966e-19) + (-9.124106052786141e-21 + d * 1.0739523739919228e-22) * d2) + (-1.3113722098199768e-24 + d * 1.5174003904817066e-26) * d4) * d8) * (r * r)
+    if near.all():
+        return value
+    high = x >= 16.0
+    p = np.where(high, x, 32.0)
+    h0 = h
+    h = np.where(high, h0, 0.01)
+    u = 0.5 * np.sqrt(p)
+    tau = 1.0 - h
+    sigma = h * (2.0 - h)
+    far = (((12.0 + u * (-8.0)) + sigma * (u * (-4.0))) * (1.0 + tau) - sigma * (12.0)) / ((u * (u * (u * (u * (u * (128.0)))))) * (1.0 + tau))
+    inside = x > -9.869604401089358
+    low = ~near & ~high & inside
+    p = np.where(low, x, -8.0)
+    h = np.where(low, h0, 0.5)
+    closed = ((-12.0) + h * ((12.0) + h * (p * (1.0)))) / (p * (p * (8.0)))
+    return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_s_d1(p):
+    """bcol_s_d1(p) = d^1/dp^1 of (1 - T)/p (vectorised)."""
+    return bcol_s_d1_at(p, bcol_h(p))
 
 
 def bcol_w_at(x, h):
@@ -1388,6 +1606,11 @@ def bcol_w_d1_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((-120.0) + h * ((120.0 + p * (-4.0)) + h * ((p * (14.0)) + h * (p * (p * (1.0)))))) / (p * (p * (p * (64.0))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_w_d1(p):
+    """bcol_w_d1(p) = d^1/dp^1 of (12 (1 - T)/p - T^2)/(16 p) (vectorised)."""
+    return bcol_w_d1_at(p, bcol_h(p))
 
 
 def cosr1(x):
@@ -8160,6 +8383,3483 @@ def _sens_exact(theta, delta, params):
     ]
 
 
+def _loaded_sens1(x, theta, plates, params):
+    """loaded (1 half plate(s) per plate), sensitivities: dR/dtheta, dR/dp, din/dtheta, din/dp, dD/dx, dD/dtheta, dD/dp, dD/dout (1245 operations)."""
+    x_0, x_1, x_2, x_3, x_4, x_5, x_6, x_7, _, x_9, x_10, _, _ = x
+    theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7, theta_8, theta_9, theta_10 = theta
+    along_1_0, across_1_0, _, along_2_0, across_2_0, _, along_3_0, across_3_0, _, along_4_0, across_4_0, _, along_5_0, across_5_0, omega_5_0, along_6_0, across_6_0, omega_6_0, along_7_0, across_7_0, omega_7_0, along_8_0, across_8_0, omega_8_0, along_9_0, across_9_0, omega_9_0, along_10_0, across_10_0, omega_10_0 = plates
+    p_0, = params
+    _tmp0 = theta_1 + theta_2
+    _tmp1 = _tmp0 + theta_3
+    _tmp2 = _tmp1 + theta_4
+    _tmp3 = _tmp2 + theta_5
+    _tmp4 = numpy.sin(_tmp3)
+    _tmp5 = 0.0029104275004359953*x_0
+    _tmp6 = numpy.sin(_tmp5)
+    _tmp7 = 0.0014552137502179977*x_0
+    _tmp8 = numpy.sin(_tmp7)**2
+    _tmp9 = 166.66666666666669*_tmp8 - 33.333333333333336*_tmp6
+    _tmp10 = _tmp4*_tmp9
+    _tmp11 = _tmp5 + 0.0029104275004359953*x_1
+    _tmp12 = numpy.sin(_tmp11)
+    _tmp13 = 0.0014552137502179977*x_1
+    _tmp14 = numpy.sin(_tmp13 + _tmp7)**2
+    _tmp15 = 0.04*_tmp12 - 0.1*_tmp14
+    _tmp16 = _tmp3 + theta_6
+    _tmp17 = 1666.6666666666667*numpy.cos(_tmp16)
+    _tmp18 = _tmp15*_tmp17
+    _tmp19 = numpy.cos(_tmp3)
+    _tmp20 = -83.33333333333334*_tmp6 - 66.66666666666667*_tmp8
+    _tmp21 = _tmp19*_tmp20
+    _tmp22 = -0.05*_tmp12 - 0.08*_tmp14
+    _tmp23 = 1666.6666666666667*numpy.sin(_tmp16)
+    _tmp24 = _tmp22*_tmp23
+    _tmp25 = 0.5*theta_4
+    _tmp26 = _tmp1 + _tmp25
+    _tmp27 = numpy.cos(_tmp26)
+    _tmp28 = 1666.6666666666667*across_4_0
+    _tmp29 = _tmp27*_tmp28
+    _tmp30 = _tmp7 + 0.5*theta_5
+    _tmp31 = _tmp2 + _tmp30
+    _tmp32 = numpy.cos(_tmp31)
+    _tmp33 = 1666.6666666666667*across_5_0
+    _tmp34 = _tmp32*_tmp33
+    _tmp35 = numpy.sin(_tmp26)
+    _tmp36 = arck(_tmp25)
+    _tmp37 = along_4_0 + 0.25*_tmp36*theta_4**2
+    _tmp38 = 1666.6666666666667*_tmp37
+    _tmp39 = _tmp35*_tmp38
+    _tmp40 = numpy.sin(_tmp31)
+    _tmp41 = arck(_tmp30)
+    _tmp42 = along_5_0 + _tmp41*_tmp30**2
+    _tmp43 = 1666.6666666666667*_tmp42
+    _tmp44 = _tmp40*_tmp43
+    _tmp45 = _tmp13 + 0.5*theta_6
+    _tmp46 = _tmp3 + _tmp5
+    _tmp47 = _tmp45 + _tmp46
+    _tmp48 = numpy.cos(_tmp47)
+    _tmp49 = arck(_tmp45)
+    _tmp50 = along_6_0 + _tmp49*_tmp45**2
+    _tmp51 = _tmp48*_tmp50
+    _tmp52 = _tmp51*p_0
+    _tmp53 = numpy.sin(_tmp47)
+    _tmp54 = _tmp53*across_6_0
+    _tmp55 = _tmp54*p_0
+    _tmp56 = 1666.6666666666667*_tmp55
+    _tmp57 = -_tmp10 - _tmp18 - _tmp21 - _tmp24 - _tmp56 + 1666.6666666666667*_tmp52 + _tmp29*p_0 + _tmp34*p_0 + _tmp39*p_0 + _tmp44*p_0
+    _tmp58 = 0.5*theta_3
+    _tmp59 = _tmp0 + _tmp58
+    _tmp60 = numpy.cos(_tmp59)
+    _tmp61 = 1666.6666666666667*across_3_0
+    _tmp62 = _tmp60*_tmp61
+    _tmp63 = numpy.sin(_tmp59)
+    _tmp64 = arck(_tmp58)
+    _tmp65 = along_3_0 + 0.25*_tmp64*theta_3**2
+    _tmp66 = 1666.6666666666667*_tmp65
+    _tmp67 = _tmp63*_tmp66
+    _tmp68 = _tmp62*p_0 + _tmp67*p_0
+    _tmp69 = _tmp57 + _tmp68
+    _tmp70 = 0.5*theta_1
+    _tmp71 = numpy.cos(_tmp70)
+    _tmp72 = arck(_tmp70)
+    _tmp73 = along_1_0 + 0.25*_tmp72*theta_1**2
+    _tmp74 = _tmp71*_tmp73
+    _tmp75 = 833.3333333333334*p_0
+    _tmp76 = 0.5*theta_2
+    _tmp77 = _tmp76 + theta_1
+    _tmp78 = numpy.cos(_tmp77)
+    _tmp79 = _tmp78*across_2_0
+    _tmp80 = 1666.6666666666667*_tmp79
+    _tmp81 = numpy.sin(_tmp77)
+    _tmp82 = arck(_tmp76)
+    _tmp83 = along_2_0 + 0.25*_tmp82*theta_2**2
+    _tmp84 = _tmp81*_tmp83
+    _tmp85 = 1666.6666666666667*_tmp84
+    _tmp86 = _tmp70*_tmp72 + 0.0625*theta_1**3*(-3*sinr2(_tmp70) + 3*cosr2(_tmp70) + sinr1(_tmp70))
+    _tmp87 = numpy.sin(_tmp70)
+    _tmp88 = _tmp87*p_0
+    _tmp89 = _tmp86*_tmp88
+    _tmp90 = _tmp87*across_1_0
+    _tmp91 = 1666.6666666666667*_tmp89 + _tmp74*_tmp75 + _tmp80*p_0 + _tmp85*p_0 - _tmp75*_tmp90
+    _tmp92 = _tmp79*p_0
+    _tmp93 = _tmp84*p_0
+    _tmp94 = _tmp76*_tmp82 + 0.0625*theta_2**3*(-3*sinr2(_tmp76) + 3*cosr2(_tmp76) + sinr1(_tmp76))
+    _tmp95 = _tmp78*p_0
+    _tmp96 = 833.3333333333334*_tmp92 + 833.3333333333334*_tmp93 - 1666.6666666666667*_tmp94*_tmp95
+    _tmp97 = _tmp75*across_3_0
+    _tmp98 = _tmp65*_tmp75
+    _tmp99 = 1666.6666666666667*p_0
+    _tmp100 = _tmp99*(_tmp58*_tmp64 + 0.0625*theta_3**3*(-3*sinr2(_tmp58) + 3*cosr2(_tmp58) + sinr1(_tmp58)))
+    _tmp101 = _tmp60*_tmp97 + _tmp63*_tmp98 - _tmp100*_tmp60
+    _tmp102 = _tmp99*(_tmp25*_tmp36 + 0.0625*theta_4**3*(-3*sinr2(_tmp25) + 3*cosr2(_tmp25) + sinr1(_tmp25)))
+    _tmp103 = _tmp18 + _tmp24
+    _tmp104 = _tmp10 + _tmp103 + _tmp21 + _tmp56 - 1666.6666666666667*_tmp48*_tmp50*p_0
+    _tmp105 = _tmp99*(_tmp30*_tmp41 + 0.5*_tmp30**3*(-3*sinr2(_tmp30) + 3*cosr2(_tmp30) + sinr1(_tmp30)))
+    _tmp106 = _tmp45*_tmp49 + 0.5*_tmp45**3*(-3*sinr2(_tmp45) + 3*cosr2(_tmp45) + sinr1(_tmp45))
+    _tmp107 = 0.5*theta_9 + 0.0014552137502179977*x_4
+    _tmp108 = numpy.sin(_tmp107)
+    _tmp109 = numpy.cos(_tmp107)
+    _tmp110 = arck(_tmp107)
+    _tmp111 = along_9_0 + _tmp110*_tmp107**2
+    _tmp112 = _tmp111*_tmp75
+    _tmp113 = 1666.6666666666667*_tmp108
+    _tmp114 = _tmp107*_tmp110 + 0.5*_tmp107**3*(-3*sinr2(_tmp107) + 3*cosr2(_tmp107) + sinr1(_tmp107))
+    _tmp115 = _tmp28*_tmp35
+    _tmp116 = _tmp27*_tmp38
+    _tmp117 = _tmp33*_tmp40
+    _tmp118 = _tmp32*_tmp43
+    _tmp119 = _tmp48*across_6_0
+    _tmp120 = _tmp119*p_0
+    _tmp121 = _tmp50*_tmp53
+    _tmp122 = _tmp121*p_0
+    _tmp123 = _tmp17*_tmp22 - _tmp15*_tmp23
+    _tmp124 = _tmp123 + 1666.6666666666667*_tmp120 + 1666.6666666666667*_tmp122 + _tmp19*_tmp9 - _tmp20*_tmp4
+    _tmp125 = _tmp124 + _tmp117*p_0 - _tmp118*p_0
+    _tmp126 = _tmp125 + _tmp115*p_0 - _tmp116*p_0
+    _tmp127 = _tmp61*_tmp63
+    _tmp128 = _tmp60*_tmp66
+    _tmp129 = _tmp128*p_0
+    _tmp130 = -_tmp129 + _tmp127*p_0
+    _tmp131 = _tmp126 + _tmp130
+    _tmp132 = _tmp71*across_1_0
+    _tmp133 = _tmp73*_tmp87
+    _tmp134 = _tmp81*across_2_0
+    _tmp135 = 1666.6666666666667*_tmp134
+    _tmp136 = _tmp78*_tmp83
+    _tmp137 = 1666.6666666666667*_tmp136
+    _tmp138 = _tmp71*p_0
+    _tmp139 = _tmp132*_tmp75 + _tmp133*_tmp75 + _tmp135*p_0 - _tmp137*p_0 - 1666.6666666666667*_tmp138*_tmp86
+    _tmp140 = _tmp134*p_0
+    _tmp141 = 833.3333333333334*_tmp136*p_0
+    _tmp142 = _tmp81*p_0
+    _tmp143 = _tmp142*_tmp94
+    _tmp144 = 1666.6666666666667*_tmp143
+    _tmp145 = _tmp60*_tmp98
+    _tmp146 = _tmp100*_tmp63
+    _tmp147 = _tmp106*p_0
+    _tmp148 = 0.0029104275004359953*x_2
+    _tmp149 = _tmp148 + 0.0029104275004359953*x_3
+    _tmp150 = numpy.sin(_tmp149)
+    _tmp151 = 0.0014552137502179977*x_2
+    _tmp152 = 0.0014552137502179977*x_3
+    _tmp153 = numpy.sin(_tmp151 + _tmp152)**2
+    _tmp154 = 0.025*_tmp150 - 0.07*_tmp153
+    _tmp155 = _tmp1 + theta_7
+    _tmp156 = _tmp155 + theta_8
+    _tmp157 = numpy.cos(_tmp156)
+    _tmp158 = 1666.6666666666667*_tmp157
+    _tmp159 = _tmp154*_tmp158
+    _tmp160 = numpy.sin(_tmp155)
+    _tmp161 = numpy.sin(_tmp148)
+    _tmp162 = numpy.sin(_tmp151)**2
+    _tmp163 = 0.08*_tmp162 - 0.005*_tmp161
+    _tmp164 = 1666.6666666666667*_tmp163
+    _tmp165 = _tmp160*_tmp164
+    _tmp166 = -0.035*_tmp150 - 0.05*_tmp153
+    _tmp167 = 1666.6666666666667*numpy.sin(_tmp156)
+    _tmp168 = _tmp166*_tmp167
+    _tmp169 = numpy.cos(_tmp155)
+    _tmp170 = -16.666666666666668*_tmp162 - 66.66666666666667*_tmp161
+    _tmp171 = _tmp169*_tmp170
+    _tmp172 = _tmp151 + 0.5*theta_7
+    _tmp173 = _tmp1 + _tmp172
+    _tmp174 = numpy.cos(_tmp173)
+    _tmp175 = 1666.6666666666667*across_7_0
+    _tmp176 = _tmp174*_tmp175
+    _tmp177 = _tmp152 + 0.5*theta_8
+    _tmp178 = _tmp148 + _tmp155
+    _tmp179 = _tmp177 + _tmp178
+    _tmp180 = numpy.cos(_tmp179)
+    _tmp181 = _tmp180*across_8_0
+    _tmp182 = _tmp181*p_0
+    _tmp183 = numpy.sin(_tmp173)
+    _tmp184 = arck(_tmp172)
+    _tmp185 = along_7_0 + _tmp184*_tmp172**2
+    _tmp186 = 1666.6666666666667*_tmp185
+    _tmp187 = _tmp183*_tmp186
+    _tmp188 = numpy.sin(_tmp179)
+    _tmp189 = arck(_tmp177)
+    _tmp190 = along_8_0 + _tmp189*_tmp177**2
+    _tmp191 = _tmp188*_tmp190
+    _tmp192 = _tmp191*p_0
+    _tmp193 = -_tmp159 - _tmp165 - _tmp168 - _tmp171 + 1666.6666666666667*_tmp182 + 1666.6666666666667*_tmp192 + _tmp176*p_0 + _tmp187*p_0
+    _tmp194 = _tmp193 + _tmp68
+    _tmp195 = _tmp99*(_tmp172*_tmp184 + 0.5*_tmp172**3*(-3*sinr2(_tmp172) + 3*cosr2(_tmp172) + sinr1(_tmp172)))
+    _tmp196 = _tmp159 + _tmp168
+    _tmp197 = _tmp177*_tmp189 + 0.5*_tmp177**3*(-3*sinr2(_tmp177) + 3*cosr2(_tmp177) + sinr1(_tmp177))
+    _tmp198 = _tmp197*p_0
+    _tmp199 = 0.5*theta_10 + 0.0014552137502179977*x_5
+    _tmp200 = numpy.sin(_tmp199)
+    _tmp201 = numpy.cos(_tmp199)
+    _tmp202 = arck(_tmp199)
+    _tmp203 = along_10_0 + _tmp202*_tmp199**2
+    _tmp204 = _tmp203*_tmp75
+    _tmp205 = 1666.6666666666667*_tmp200
+    _tmp206 = _tmp199*_tmp202 + 0.5*_tmp199**3*(-3*sinr2(_tmp199) + 3*cosr2(_tmp199) + sinr1(_tmp199))
+    _tmp207 = _tmp154*_tmp167
+    _tmp208 = _tmp160*_tmp170
+    _tmp209 = _tmp188*across_8_0
+    _tmp210 = _tmp209*p_0
+    _tmp211 = _tmp174*_tmp186
+    _tmp212 = _tmp211*p_0
+    _tmp213 = _tmp180*_tmp190
+    _tmp214 = _tmp213*p_0
+    _tmp215 = 1666.6666666666667*_tmp214
+    _tmp216 = _tmp207 - 1666.6666666666667*_tmp157*_tmp166
+    _tmp217 = _tmp208 + _tmp215 + _tmp216 - 1666.6666666666667*_tmp163*_tmp169 - 1666.6666666666667*_tmp188*across_8_0*p_0
+    _tmp218 = _tmp212 + _tmp217 - 1666.6666666666667*_tmp183*across_7_0*p_0
+    _tmp219 = numpy.cos(_tmp46)
+    _tmp220 = numpy.sin(_tmp46)
+    _tmp221 = 0.5*p_0
+    _tmp222 = _tmp11 + _tmp16
+    _tmp223 = numpy.sin(_tmp222)
+    _tmp224 = -0.05 + _tmp221
+    _tmp225 = numpy.cos(_tmp222)
+    _tmp226 = _tmp224*_tmp225
+    _tmp227 = -_tmp226 + 0.04*_tmp223
+    _tmp228 = 0.04*_tmp225 + _tmp223*_tmp224
+    _tmp229 = 4.850712500726659*x_6
+    _tmp230 = -_tmp229*(-_tmp120 - _tmp122 - _tmp228 + 0.05*_tmp219 + 0.02*_tmp220 - _tmp219*_tmp221) + 4.850712500726659*x_7*(_tmp227 + _tmp55 - _tmp52 + 0.02*_tmp219 - 0.05*_tmp220 + _tmp220*_tmp221)
+    _tmp231 = -_tmp229*(-_tmp228 + 0.5*_tmp223*p_0) + 4.850712500726659*x_7*(_tmp227 + _tmp221*_tmp225)
+    _tmp232 = numpy.sin(_tmp178)
+    _tmp233 = numpy.cos(_tmp178)
+    _tmp234 = _tmp149 + _tmp156
+    _tmp235 = numpy.cos(_tmp234)
+    _tmp236 = -0.035 + _tmp221
+    _tmp237 = numpy.sin(_tmp234)
+    _tmp238 = 0.025*_tmp235 + _tmp236*_tmp237
+    _tmp239 = 4.850712500726659*x_9
+    _tmp240 = _tmp235*_tmp236
+    _tmp241 = _tmp240 - 0.025*_tmp237
+    _tmp242 = 4.850712500726659*x_10
+    _tmp243 = _tmp242*(-_tmp182 - _tmp192 - _tmp241 + 0.005*_tmp233 - 0.04*_tmp232 + 0.5*_tmp232*p_0) - _tmp239*(-_tmp210 - _tmp238 + 0.005*_tmp232 + 0.04*_tmp233 - _tmp221*_tmp233 + _tmp180*_tmp190*p_0)
+    _tmp244 = _tmp242*(-_tmp240 + 0.025*_tmp237 + _tmp221*_tmp237) - _tmp239*(-_tmp238 - _tmp221*_tmp235)
+    _tmp245 = _tmp62 + _tmp67 + _tmp80 + _tmp85 + 1666.6666666666667*_tmp74 - 1666.6666666666667*_tmp87*across_1_0
+    _tmp246 = numpy.less_equal(p_0, 0.006)
+    _tmp247 = 2.407407407407407e-05*p_0*_DTYPE(numpy.where(_tmp246, 230769230769.23077, 210000000000))
+    _tmp248 = 0.5*_tmp235
+    _tmp249 = 0.5*_tmp237
+    _tmp250 = p_0**(-1.0)
+    _tmp251 = _DTYPE(numpy.where(_tmp246, 4.333333333333334e-12, 4.761904761904762e-12))
+    _tmp252 = _tmp250*_tmp251
+    _tmp253 = 2000000*_tmp252
+    _tmp254 = -0.10074556732278446*x_10 - 0.10074556732278446*x_7
+    _tmp255 = _tmp254*_tmp87
+    _tmp256 = -0.10074556732278446*x_6 - 0.10074556732278446*x_9
+    _tmp257 = _tmp253*_tmp71
+    _tmp258 = 4000000*_tmp252
+    _tmp259 = _tmp254*_tmp78
+    _tmp260 = _tmp258*_tmp81
+    _tmp261 = _tmp253*_tmp256
+    _tmp262 = _tmp256*_tmp258
+    _tmp263 = _tmp253*_tmp254
+    _tmp264 = _tmp254*_tmp258
+    _tmp265 = _tmp264*_tmp60 - _tmp262*_tmp63
+    _tmp266 = -_tmp262*_tmp60 - _tmp264*_tmp63
+    _tmp267 = 402982.2692911378*_tmp252
+    _tmp268 = _tmp35*x_6
+    _tmp269 = _tmp27*x_7
+    _tmp270 = _tmp267*_tmp268 - _tmp267*_tmp269
+    _tmp271 = 201491.1346455689*_tmp252
+    _tmp272 = _tmp27*x_6
+    _tmp273 = _tmp35*x_7
+    _tmp274 = _tmp267*_tmp272 + _tmp267*_tmp273
+    _tmp275 = _tmp40*x_6
+    _tmp276 = _tmp32*x_7
+    _tmp277 = _tmp267*_tmp275 - _tmp267*_tmp276
+    _tmp278 = _tmp32*x_6
+    _tmp279 = _tmp40*x_7
+    _tmp280 = _tmp267*_tmp278 + _tmp267*_tmp279
+    _tmp281 = _tmp48*x_6
+    _tmp282 = _tmp53*x_7
+    _tmp283 = _tmp267*_tmp281 + _tmp267*_tmp282
+    _tmp284 = _tmp53*x_6
+    _tmp285 = -_tmp267*_tmp284 + 402982.2692911378*_tmp250*_tmp251*_tmp48*x_7
+    _tmp286 = _tmp174*x_10
+    _tmp287 = -_tmp267*_tmp286 + 402982.2692911378*_tmp183*_tmp250*_tmp251*x_9
+    _tmp288 = _tmp183*x_10
+    _tmp289 = _tmp174*x_9
+    _tmp290 = _tmp267*_tmp288 + _tmp267*_tmp289
+    _tmp291 = _tmp180*x_10
+    _tmp292 = -_tmp267*_tmp291 + 402982.2692911378*_tmp188*_tmp250*_tmp251*x_9
+    _tmp293 = _tmp188*x_10
+    _tmp294 = _tmp180*x_9
+    _tmp295 = _tmp267*_tmp293 + _tmp267*_tmp294
+    _tmp296 = _tmp271*x_6
+    _tmp297 = _tmp271*x_7
+    _tmp298 = _tmp201*_tmp271
+    _tmp299 = p_0**(-2.0)
+    _tmp300 = _tmp251*_tmp299
+    _tmp301 = 4000000*_tmp300
+    _tmp302 = _tmp301*_tmp71
+    _tmp303 = _tmp254*_tmp301
+    _tmp304 = _tmp256*_tmp301
+    _tmp305 = 402982.2692911378*_tmp300
+    _tmp306 = _tmp305*x_6
+    _tmp307 = _tmp305*x_7
+    _tmp308 = _tmp201*_tmp305
+    _tmp309 = -_tmp88
+    return [
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp69 + _tmp91,
+        _tmp69 + _tmp96,
+        _tmp101 + _tmp57,
+        -_tmp104 - _tmp102*_tmp27 + 833.3333333333334*_tmp27*across_4_0*p_0 + 833.3333333333334*_tmp35*_tmp37*p_0 + 1666.6666666666667*_tmp32*across_5_0*p_0 + 1666.6666666666667*_tmp40*_tmp42*p_0,
+        -_tmp104 - _tmp105*_tmp32 + 833.3333333333334*_tmp32*across_5_0*p_0 + 833.3333333333334*_tmp40*_tmp42*p_0,
+        -_tmp103 - 833.3333333333334*_tmp55 + 833.3333333333334*_tmp48*_tmp50*p_0 + 1666.6666666666667*_tmp106*_tmp53*p_0,
+        0,
+        0,
+        -_tmp109*_tmp112 - _tmp113*_tmp114*p_0 + 833.3333333333334*_tmp108*across_9_0*p_0,
+        0,
+        _tmp131 + _tmp139,
+        _tmp131 - _tmp141 - _tmp144 + 833.3333333333334*_tmp140,
+        _tmp126 - _tmp145 - _tmp146 + _tmp63*_tmp97,
+        _tmp125 - _tmp102*_tmp35 + _tmp35*_tmp75*across_4_0 - _tmp27*_tmp37*_tmp75,
+        _tmp124 - _tmp105*_tmp40 + _tmp40*_tmp75*across_5_0 - _tmp32*_tmp42*_tmp75,
+        _tmp123 + 833.3333333333334*_tmp120 + 833.3333333333334*_tmp122 - 1666.6666666666667*_tmp147*_tmp48,
+        0,
+        0,
+        -_tmp108*_tmp112 - _tmp109*_tmp75*across_9_0 + 1666.6666666666667*_tmp109*_tmp114*p_0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp194 + _tmp91,
+        _tmp194 + _tmp96,
+        _tmp101 + _tmp193,
+        0,
+        0,
+        0,
+        -_tmp165 - _tmp171 - _tmp196 - _tmp174*_tmp195 + 833.3333333333334*_tmp174*across_7_0*p_0 + 833.3333333333334*_tmp183*_tmp185*p_0 + 1666.6666666666667*_tmp180*across_8_0*p_0 + 1666.6666666666667*_tmp188*_tmp190*p_0,
+        -_tmp196 - 1666.6666666666667*_tmp180*_tmp198 + 833.3333333333334*_tmp180*across_8_0*p_0 + 833.3333333333334*_tmp188*_tmp190*p_0,
+        0,
+        -_tmp201*_tmp204 - _tmp205*_tmp206*p_0 + 833.3333333333334*_tmp200*across_10_0*p_0,
+        _tmp130 + _tmp139 - _tmp207 - _tmp208 - _tmp212 - _tmp215 + 1666.6666666666667*_tmp210 + _tmp158*_tmp166 + _tmp164*_tmp169 + _tmp175*_tmp183*p_0,
+        -_tmp129 - _tmp141 - _tmp144 - _tmp218 + 833.3333333333334*_tmp81*across_2_0*p_0 + 1666.6666666666667*_tmp63*across_3_0*p_0,
+        -_tmp145 - _tmp146 - _tmp218 + 833.3333333333334*_tmp63*across_3_0*p_0,
+        0,
+        0,
+        0,
+        -_tmp217 - _tmp183*_tmp195 - _tmp174*_tmp185*_tmp75 + 833.3333333333334*_tmp183*across_7_0*p_0,
+        -_tmp216 - 833.3333333333334*_tmp214 - 1666.6666666666667*_tmp188*_tmp198 + 833.3333333333334*_tmp188*across_8_0*p_0,
+        0,
+        -_tmp200*_tmp204 - _tmp201*_tmp75*across_10_0 + 1666.6666666666667*_tmp201*_tmp206*p_0,
+        _tmp230,
+        _tmp230,
+        _tmp230,
+        _tmp230,
+        _tmp230,
+        -_tmp229*(-_tmp228 - _tmp119*_tmp221 - _tmp121*_tmp221 + _tmp106*_tmp48*p_0) + 4.850712500726659*x_7*(-_tmp226 + 0.04*_tmp223 - _tmp147*_tmp53 - _tmp221*_tmp51 + 0.5*_tmp53*across_6_0*p_0),
+        0,
+        0,
+        0,
+        0,
+        _tmp231,
+        _tmp231,
+        _tmp231,
+        _tmp231,
+        _tmp231,
+        _tmp231,
+        0,
+        0,
+        0,
+        0,
+        _tmp243,
+        _tmp243,
+        _tmp243,
+        0,
+        0,
+        0,
+        _tmp243,
+        _tmp242*(-_tmp241 - _tmp181*_tmp221 - _tmp191*_tmp221 + _tmp180*_tmp197*p_0) - _tmp239*(-_tmp238 - _tmp209*_tmp221 + _tmp188*_tmp197*p_0 + 0.5*_tmp180*_tmp190*p_0),
+        0,
+        0,
+        _tmp244,
+        _tmp244,
+        _tmp244,
+        0,
+        0,
+        0,
+        _tmp244,
+        _tmp244,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp115 + _tmp117 + _tmp127 + _tmp135 - _tmp116 - _tmp118 - _tmp128 - _tmp137 + 1666.6666666666667*_tmp119 + 1666.6666666666667*_tmp121 + 1666.6666666666667*_tmp132 + 1666.6666666666667*_tmp133 - _tmp111*_tmp113 - 1666.6666666666667*_tmp109*across_9_0,
+        -_tmp245 - _tmp29 - _tmp34 - _tmp39 - _tmp44 - 1666.6666666666667*_tmp51 - _tmp113*across_9_0 + 1666.6666666666667*_tmp109*_tmp111 + 1666.6666666666667*_tmp53*across_6_0,
+        0,
+        -_tmp128 - _tmp137 - _tmp211 - 1666.6666666666667*_tmp213 - _tmp203*_tmp205 + 1666.6666666666667*_tmp183*across_7_0 + 1666.6666666666667*_tmp188*across_8_0 + 1666.6666666666667*_tmp63*across_3_0 + 1666.6666666666667*_tmp71*across_1_0 + 1666.6666666666667*_tmp73*_tmp87 + 1666.6666666666667*_tmp81*across_2_0 - 1666.6666666666667*_tmp201*across_10_0,
+        -_tmp176 - _tmp187 - _tmp245 - 1666.6666666666667*_tmp181 - 1666.6666666666667*_tmp191 - _tmp205*across_10_0 + 1666.6666666666667*_tmp201*_tmp203,
+        _tmp247*omega_5_0 - _tmp229*(-_tmp54 + 0.5*_tmp225 - 0.5*_tmp220 + _tmp48*_tmp50) + 4.850712500726659*x_7*(-_tmp119 - _tmp121 - 0.5*_tmp219 - 0.5*_tmp223),
+        _tmp247*omega_6_0,
+        _tmp242*(-_tmp209 - _tmp249 - 0.5*_tmp233 + _tmp180*_tmp190) + _tmp247*omega_7_0 - _tmp239*(_tmp181 + _tmp191 + _tmp248 - 0.5*_tmp232),
+        _tmp242*(-_tmp248 - _tmp249) + _tmp247*omega_8_0 - _tmp239*(_tmp248 - _tmp249),
+        -_tmp247*omega_9_0,
+        -_tmp247*omega_10_0,
+        1,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp253*_tmp255 - _tmp256*_tmp257,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp254*_tmp257 + 2000000*_tmp250*_tmp251*_tmp256*_tmp87,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp258*_tmp259 - _tmp256*_tmp260,
+        _tmp253*_tmp259 - _tmp261*_tmp81,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp254*_tmp260 - _tmp262*_tmp78,
+        -_tmp261*_tmp78 - _tmp263*_tmp81,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp265,
+        _tmp265,
+        _tmp263*_tmp60 - _tmp261*_tmp63,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp266,
+        _tmp266,
+        -_tmp261*_tmp60 - _tmp263*_tmp63,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp270,
+        _tmp270,
+        _tmp270,
+        _tmp268*_tmp271 - _tmp269*_tmp271,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp274,
+        _tmp274,
+        _tmp274,
+        _tmp271*_tmp272 + _tmp271*_tmp273,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp277,
+        _tmp277,
+        _tmp277,
+        _tmp277,
+        _tmp271*_tmp275 - _tmp271*_tmp276,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp280,
+        _tmp280,
+        _tmp280,
+        _tmp280,
+        _tmp271*_tmp278 + _tmp271*_tmp279,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        0,
+        _tmp283,
+        _tmp283,
+        _tmp283,
+        _tmp283,
+        _tmp283,
+        _tmp271*_tmp281 + _tmp271*_tmp282,
+        0,
+        0,
+        0,
+        0,
+        _tmp285,
+        _tmp285,
+        _tmp285,
+        _tmp285,
+        _tmp285,
+        -_tmp271*_tmp284 + 201491.1346455689*_tmp250*_tmp251*_tmp48*x_7,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        _tmp287,
+        _tmp287,
+        _tmp287,
+        0,
+        0,
+        0,
+        -_tmp271*_tmp286 + 201491.1346455689*_tmp183*_tmp250*_tmp251*x_9,
+        0,
+        0,
+        0,
+        _tmp290,
+        _tmp290,
+        _tmp290,
+        0,
+        0,
+        0,
+        _tmp271*_tmp288 + _tmp271*_tmp289,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        _tmp292,
+        _tmp292,
+        _tmp292,
+        0,
+        0,
+        0,
+        _tmp292,
+        -_tmp271*_tmp291 + 201491.1346455689*_tmp188*_tmp250*_tmp251*x_9,
+        0,
+        0,
+        _tmp295,
+        _tmp295,
+        _tmp295,
+        0,
+        0,
+        0,
+        _tmp295,
+        _tmp271*_tmp293 + _tmp271*_tmp294,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp108*_tmp297 - _tmp109*_tmp296,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp108*_tmp296 - _tmp109*_tmp297,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp298*x_9 - _tmp200*_tmp271*x_10,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp298*x_10 + 201491.1346455689*_tmp200*_tmp250*_tmp251*x_9,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp254*_tmp302 + 4000000*_tmp251*_tmp256*_tmp299*_tmp87,
+        _tmp255*_tmp301 + _tmp256*_tmp302,
+        0,
+        0,
+        0,
+        -_tmp303*_tmp81 - _tmp304*_tmp78,
+        -_tmp259*_tmp301 + 4000000*_tmp251*_tmp256*_tmp299*_tmp81,
+        0,
+        0,
+        0,
+        -_tmp303*_tmp63 - _tmp304*_tmp60,
+        -_tmp303*_tmp60 + 4000000*_tmp251*_tmp256*_tmp299*_tmp63,
+        0,
+        0,
+        0,
+        _tmp272*_tmp305 + _tmp273*_tmp305,
+        -_tmp268*_tmp305 + 402982.2692911378*_tmp251*_tmp27*_tmp299*x_7,
+        0,
+        0,
+        0,
+        _tmp278*_tmp305 + _tmp279*_tmp305,
+        -_tmp275*_tmp305 + 402982.2692911378*_tmp251*_tmp299*_tmp32*x_7,
+        0,
+        0,
+        0,
+        -_tmp284*_tmp305 + 402982.2692911378*_tmp251*_tmp299*_tmp48*x_7,
+        -_tmp281*_tmp305 - _tmp282*_tmp305,
+        0,
+        0,
+        0,
+        _tmp288*_tmp305 + _tmp289*_tmp305,
+        _tmp286*_tmp305 - _tmp183*_tmp305*x_9,
+        0,
+        0,
+        0,
+        _tmp293*_tmp305 + _tmp294*_tmp305,
+        _tmp291*_tmp305 - _tmp188*_tmp305*x_9,
+        0,
+        0,
+        0,
+        _tmp108*_tmp306 - _tmp109*_tmp307,
+        _tmp108*_tmp307 + _tmp109*_tmp306,
+        0,
+        0,
+        0,
+        -_tmp308*x_10 + 402982.2692911378*_tmp200*_tmp251*_tmp299*x_9,
+        _tmp308*x_9 + _tmp200*_tmp305*x_10,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp89 - _tmp92 - _tmp93 - _tmp221*_tmp74 + 0.5*_tmp87*across_1_0*p_0,
+        -_tmp221*_tmp79 - _tmp221*_tmp84 + _tmp78*_tmp94*p_0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp140 - _tmp132*_tmp221 - _tmp133*_tmp221 + _tmp71*_tmp86*p_0 + _tmp78*_tmp83*p_0,
+        _tmp143 + _tmp136*_tmp221 - _tmp134*_tmp221,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp132 - _tmp133 - _tmp134 + _tmp78*_tmp83,
+        _tmp74 + _tmp79 + _tmp84 - _tmp90,
+        _tmp309,
+        -_tmp138,
+        0,
+        _tmp95,
+        -_tmp142,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp138,
+        _tmp309,
+        0,
+        _tmp142,
+        _tmp95,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+    ]
+
+
+def _loaded_sens2(x, theta, plates, params):
+    """loaded (2 half plate(s) per plate), sensitivities: dR/dtheta, dR/dp, din/dtheta, din/dp, dD/dx, dD/dtheta, dD/dp, dD/dout (3457 operations)."""
+    x_0, x_1, x_2, x_3, x_4, x_5, x_6, x_7, _, x_9, x_10, _, x_12, x_13, x_14, x_15, x_16, x_17, x_18, x_19, x_20, x_21, _ = x
+    theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7, theta_8, theta_9, theta_10 = theta
+    along_1_0, across_1_0, omega_1_0, along_1_1, across_1_1, omega_1_1, along_2_0, across_2_0, omega_2_0, along_2_1, across_2_1, omega_2_1, along_3_0, across_3_0, omega_3_0, along_3_1, across_3_1, omega_3_1, along_4_0, across_4_0, omega_4_0, along_4_1, across_4_1, omega_4_1, along_5_0, across_5_0, omega_5_0, along_5_1, across_5_1, omega_5_1, along_6_0, across_6_0, omega_6_0, along_6_1, across_6_1, omega_6_1, along_7_0, across_7_0, omega_7_0, along_7_1, across_7_1, omega_7_1, along_8_0, across_8_0, omega_8_0, along_8_1, across_8_1, omega_8_1, along_9_0, across_9_0, omega_9_0, along_9_1, across_9_1, omega_9_1, along_10_0, across_10_0, omega_10_0, along_10_1, across_10_1, omega_10_1 = plates
+    p_0, = params
+    _tmp0 = 0.25*theta_4
+    _tmp1 = 0.5*x_15
+    _tmp2 = _tmp0 - _tmp1
+    _tmp3 = numpy.sin(_tmp2)
+    _tmp4 = 0.5*p_0
+    _tmp5 = _tmp4*across_4_0
+    _tmp6 = _tmp0 + _tmp1
+    _tmp7 = numpy.sin(_tmp6)
+    _tmp8 = _tmp4*_tmp7
+    _tmp9 = numpy.sin(_tmp0)
+    _tmp10 = _tmp9**2
+    _tmp11 = numpy.sin(_tmp1)**2
+    _tmp12 = numpy.cos(_tmp2)
+    _tmp13 = arck(_tmp6)
+    _tmp14 = along_4_0 + _tmp13*_tmp6**2
+    _tmp15 = _tmp14*_tmp4
+    _tmp16 = arck(_tmp2)
+    _tmp17 = along_4_1 + _tmp16*_tmp2**2
+    _tmp18 = numpy.cos(_tmp6)
+    _tmp19 = _tmp18*_tmp4
+    _tmp20 = _tmp12*_tmp15 + _tmp17*_tmp19 + _tmp3*_tmp5 + _tmp4*(-2*_tmp11 + 2*_tmp10) - _tmp8*across_4_1
+    _tmp21 = theta_1 + theta_2
+    _tmp22 = _tmp21 + theta_3
+    _tmp23 = _tmp22 + 0.5*theta_4
+    _tmp24 = numpy.sin(_tmp23)
+    _tmp25 = 0.5*x_16
+    _tmp26 = 0.25*theta_5 + 0.0007276068751089988*x_0
+    _tmp27 = _tmp26 - _tmp25
+    _tmp28 = numpy.sin(_tmp27)
+    _tmp29 = _tmp4*across_5_0
+    _tmp30 = _tmp25 + _tmp26
+    _tmp31 = numpy.sin(_tmp30)
+    _tmp32 = _tmp31*_tmp4
+    _tmp33 = numpy.sin(_tmp25)**2
+    _tmp34 = numpy.sin(_tmp26)
+    _tmp35 = _tmp34**2
+    _tmp36 = numpy.cos(_tmp27)
+    _tmp37 = arck(_tmp30)
+    _tmp38 = along_5_0 + _tmp37*_tmp30**2
+    _tmp39 = _tmp38*_tmp4
+    _tmp40 = arck(_tmp27)
+    _tmp41 = along_5_1 + _tmp40*_tmp27**2
+    _tmp42 = numpy.cos(_tmp30)
+    _tmp43 = _tmp4*_tmp42
+    _tmp44 = _tmp28*_tmp29 + _tmp36*_tmp39 + _tmp4*(-2*_tmp33 + 2*_tmp35) + _tmp41*_tmp43 - _tmp32*across_5_1
+    _tmp45 = 0.0014552137502179977*x_0
+    _tmp46 = _tmp22 + theta_4
+    _tmp47 = _tmp45 + _tmp46 + 0.5*theta_5
+    _tmp48 = numpy.sin(_tmp47)
+    _tmp49 = 0.0014552137502179977*x_1
+    _tmp50 = 0.0029104275004359953*x_0
+    _tmp51 = _tmp46 + theta_5
+    _tmp52 = _tmp50 + _tmp51
+    _tmp53 = _tmp49 + _tmp52 + 0.5*theta_6
+    _tmp54 = numpy.cos(_tmp53)
+    _tmp55 = 0.5*x_17
+    _tmp56 = 0.25*theta_6 + 0.0007276068751089988*x_1
+    _tmp57 = _tmp56 - _tmp55
+    _tmp58 = numpy.sin(_tmp57)
+    _tmp59 = _tmp4*across_6_0
+    _tmp60 = _tmp55 + _tmp56
+    _tmp61 = numpy.sin(_tmp60)
+    _tmp62 = _tmp4*_tmp61
+    _tmp63 = numpy.sin(_tmp55)**2
+    _tmp64 = numpy.sin(_tmp56)
+    _tmp65 = _tmp64**2
+    _tmp66 = numpy.cos(_tmp57)
+    _tmp67 = arck(_tmp60)
+    _tmp68 = along_6_0 + _tmp67*_tmp60**2
+    _tmp69 = _tmp4*_tmp68
+    _tmp70 = arck(_tmp57)
+    _tmp71 = along_6_1 + _tmp70*_tmp57**2
+    _tmp72 = numpy.cos(_tmp60)
+    _tmp73 = _tmp4*_tmp72
+    _tmp74 = _tmp4*(-2*_tmp63 + 2*_tmp65) + _tmp58*_tmp59 + _tmp66*_tmp69 + _tmp71*_tmp73 - _tmp62*across_6_1
+    _tmp75 = _tmp54*_tmp74
+    _tmp76 = numpy.sin(1.0*x_15)
+    _tmp77 = _tmp12*_tmp5 + _tmp17*_tmp8 + _tmp19*across_4_1 + _tmp4*_tmp76 - _tmp15*_tmp3
+    _tmp78 = numpy.cos(_tmp23)
+    _tmp79 = numpy.sin(1.0*x_16)
+    _tmp80 = _tmp29*_tmp36 + _tmp32*_tmp41 + _tmp4*_tmp79 + _tmp43*across_5_1 - _tmp28*_tmp39
+    _tmp81 = numpy.cos(_tmp47)
+    _tmp82 = numpy.sin(_tmp51)
+    _tmp83 = numpy.sin(_tmp50)
+    _tmp84 = numpy.sin(_tmp45)**2
+    _tmp85 = 0.1*_tmp84 - 0.02*_tmp83
+    _tmp86 = 1666.6666666666667*_tmp85
+    _tmp87 = _tmp82*_tmp86
+    _tmp88 = _tmp50 + 0.0029104275004359953*x_1
+    _tmp89 = numpy.sin(_tmp88)
+    _tmp90 = numpy.sin(_tmp45 + _tmp49)**2
+    _tmp91 = 0.04*_tmp89 - 0.1*_tmp90
+    _tmp92 = _tmp51 + theta_6
+    _tmp93 = numpy.cos(_tmp92)
+    _tmp94 = 1666.6666666666667*_tmp93
+    _tmp95 = _tmp91*_tmp94
+    _tmp96 = numpy.cos(_tmp51)
+    _tmp97 = -83.33333333333334*_tmp83 - 66.66666666666667*_tmp84
+    _tmp98 = _tmp96*_tmp97
+    _tmp99 = -0.05*_tmp89 - 0.08*_tmp90
+    _tmp100 = 1666.6666666666667*numpy.sin(_tmp92)
+    _tmp101 = _tmp100*_tmp99
+    _tmp102 = numpy.sin(_tmp53)
+    _tmp103 = numpy.sin(1.0*x_17)
+    _tmp104 = _tmp103*_tmp4 + _tmp59*_tmp66 + _tmp62*_tmp71 + _tmp73*across_6_1 - _tmp58*_tmp69
+    _tmp105 = _tmp102*_tmp104
+    _tmp106 = 1666.6666666666667*_tmp105
+    _tmp107 = -_tmp101 - _tmp106 - _tmp87 - _tmp95 - _tmp98 + 1666.6666666666667*_tmp75 + 1666.6666666666667*_tmp20*_tmp24 + 1666.6666666666667*_tmp44*_tmp48 + 1666.6666666666667*_tmp77*_tmp78 + 1666.6666666666667*_tmp80*_tmp81
+    _tmp108 = 0.25*theta_3
+    _tmp109 = 0.5*x_14
+    _tmp110 = _tmp108 - _tmp109
+    _tmp111 = numpy.sin(_tmp110)
+    _tmp112 = _tmp4*across_3_0
+    _tmp113 = _tmp108 + _tmp109
+    _tmp114 = numpy.sin(_tmp113)
+    _tmp115 = _tmp114*_tmp4
+    _tmp116 = numpy.sin(_tmp108)
+    _tmp117 = _tmp116**2
+    _tmp118 = numpy.sin(_tmp109)**2
+    _tmp119 = numpy.cos(_tmp110)
+    _tmp120 = arck(_tmp113)
+    _tmp121 = along_3_0 + _tmp120*_tmp113**2
+    _tmp122 = _tmp121*_tmp4
+    _tmp123 = arck(_tmp110)
+    _tmp124 = along_3_1 + _tmp123*_tmp110**2
+    _tmp125 = numpy.cos(_tmp113)
+    _tmp126 = _tmp125*_tmp4
+    _tmp127 = _tmp111*_tmp112 + _tmp119*_tmp122 + _tmp124*_tmp126 + _tmp4*(-2*_tmp118 + 2*_tmp117) - _tmp115*across_3_1
+    _tmp128 = _tmp21 + 0.5*theta_3
+    _tmp129 = numpy.sin(_tmp128)
+    _tmp130 = _tmp127*_tmp129
+    _tmp131 = numpy.sin(1.0*x_14)
+    _tmp132 = _tmp112*_tmp119 + _tmp115*_tmp124 + _tmp126*across_3_1 + _tmp131*_tmp4 - _tmp111*_tmp122
+    _tmp133 = numpy.cos(_tmp128)
+    _tmp134 = _tmp132*_tmp133
+    _tmp135 = 1666.6666666666667*_tmp130 + 1666.6666666666667*_tmp134
+    _tmp136 = _tmp107 + _tmp135
+    _tmp137 = 0.5*theta_1
+    _tmp138 = numpy.cos(_tmp137)
+    _tmp139 = 0.25*theta_1
+    _tmp140 = 0.5*x_12
+    _tmp141 = _tmp139 - _tmp140
+    _tmp142 = numpy.sin(_tmp141)
+    _tmp143 = _tmp142*across_1_0
+    _tmp144 = _tmp139 + _tmp140
+    _tmp145 = numpy.sin(_tmp144)
+    _tmp146 = _tmp145*_tmp4
+    _tmp147 = numpy.sin(_tmp139)
+    _tmp148 = _tmp147**2
+    _tmp149 = numpy.sin(_tmp140)
+    _tmp150 = _tmp149**2
+    _tmp151 = numpy.cos(_tmp141)
+    _tmp152 = arck(_tmp144)
+    _tmp153 = along_1_0 + _tmp152*_tmp144**2
+    _tmp154 = _tmp151*_tmp153
+    _tmp155 = numpy.cos(_tmp144)
+    _tmp156 = arck(_tmp141)
+    _tmp157 = along_1_1 + _tmp156*_tmp141**2
+    _tmp158 = _tmp155*_tmp157
+    _tmp159 = _tmp143*_tmp4 + _tmp154*_tmp4 + _tmp158*_tmp4 + _tmp4*(-2*_tmp150 + 2*_tmp148) - _tmp146*across_1_1
+    _tmp160 = 833.3333333333334*_tmp159
+    _tmp161 = theta_1 + 0.5*theta_2
+    _tmp162 = numpy.sin(_tmp161)
+    _tmp163 = 0.25*theta_2
+    _tmp164 = 0.5*x_13
+    _tmp165 = _tmp163 - _tmp164
+    _tmp166 = numpy.sin(_tmp165)
+    _tmp167 = _tmp4*across_2_0
+    _tmp168 = _tmp163 + _tmp164
+    _tmp169 = numpy.sin(_tmp168)
+    _tmp170 = _tmp169*_tmp4
+    _tmp171 = numpy.sin(_tmp163)
+    _tmp172 = _tmp171**2
+    _tmp173 = numpy.sin(_tmp164)
+    _tmp174 = _tmp173**2
+    _tmp175 = numpy.cos(_tmp165)
+    _tmp176 = arck(_tmp168)
+    _tmp177 = along_2_0 + _tmp176*_tmp168**2
+    _tmp178 = _tmp177*_tmp4
+    _tmp179 = arck(_tmp165)
+    _tmp180 = along_2_1 + _tmp179*_tmp165**2
+    _tmp181 = numpy.cos(_tmp168)
+    _tmp182 = _tmp181*_tmp4
+    _tmp183 = _tmp166*_tmp167 + _tmp175*_tmp178 + _tmp180*_tmp182 + _tmp4*(-2*_tmp174 + 2*_tmp172) - _tmp170*across_2_1
+    _tmp184 = _tmp162*_tmp183
+    _tmp185 = numpy.cos(_tmp161)
+    _tmp186 = 1.0*x_13
+    _tmp187 = numpy.sin(_tmp186)
+    _tmp188 = _tmp167*_tmp175 + _tmp170*_tmp180 + _tmp182*across_2_1 + _tmp187*_tmp4 - _tmp166*_tmp178
+    _tmp189 = _tmp185*_tmp188
+    _tmp190 = 0.125*p_0
+    _tmp191 = _tmp190*across_1_1
+    _tmp192 = 0.125*theta_1
+    _tmp193 = 0.25*x_12
+    _tmp194 = sinr1(_tmp141)
+    _tmp195 = _tmp141**3*(_tmp194 - 3*sinr2(_tmp141) + 3*cosr2(_tmp141))
+    _tmp196 = 0.25*_tmp195 + _tmp156*(_tmp192 - _tmp193)
+    _tmp197 = _tmp144**3*(-3*sinr2(_tmp144) + 3*cosr2(_tmp144) + sinr1(_tmp144))
+    _tmp198 = _tmp4*(0.25*_tmp197 + _tmp152*(_tmp192 + _tmp193))
+    _tmp199 = -_tmp142*_tmp198 - _tmp143*_tmp190 - _tmp145*_tmp191 - _tmp154*_tmp190 + 0.125*_tmp155*_tmp157*p_0 + 0.5*_tmp145*_tmp196*p_0
+    _tmp200 = _tmp138*_tmp199
+    _tmp201 = numpy.sin(_tmp137)
+    _tmp202 = _tmp151*across_1_0
+    _tmp203 = _tmp142*_tmp153
+    _tmp204 = _tmp145*_tmp157
+    _tmp205 = _tmp155*_tmp4
+    _tmp206 = _tmp151*_tmp198 + _tmp190*_tmp202 + _tmp196*_tmp205 - _tmp155*_tmp191 - _tmp190*_tmp203 - _tmp190*_tmp204 + _tmp147*_tmp4*numpy.cos(_tmp139)
+    _tmp207 = _tmp201*_tmp206
+    _tmp208 = 1.0*x_12
+    _tmp209 = numpy.sin(_tmp208)
+    _tmp210 = _tmp146*_tmp157 + _tmp202*_tmp4 + _tmp205*across_1_1 + _tmp209*_tmp4 - _tmp203*_tmp4
+    _tmp211 = 833.3333333333334*_tmp210
+    _tmp212 = 1666.6666666666667*_tmp184 + 1666.6666666666667*_tmp189 + 1666.6666666666667*_tmp200 + 1666.6666666666667*_tmp207 + _tmp138*_tmp160 - _tmp201*_tmp211
+    _tmp213 = _tmp190*across_2_0
+    _tmp214 = _tmp169*_tmp190
+    _tmp215 = _tmp177*_tmp190
+    _tmp216 = 0.125*theta_2
+    _tmp217 = 0.25*x_13
+    _tmp218 = sinr1(_tmp165)
+    _tmp219 = _tmp165**3*(_tmp218 - 3*sinr2(_tmp165) + 3*cosr2(_tmp165))
+    _tmp220 = 0.25*_tmp219 + _tmp179*(_tmp216 - _tmp217)
+    _tmp221 = _tmp168**3*(-3*sinr2(_tmp168) + 3*cosr2(_tmp168) + sinr1(_tmp168))
+    _tmp222 = _tmp4*(0.25*_tmp221 + _tmp176*(_tmp216 + _tmp217))
+    _tmp223 = -_tmp166*_tmp213 - _tmp166*_tmp222 - _tmp175*_tmp215 - _tmp214*across_2_1 + 0.125*_tmp180*_tmp181*p_0 + 0.5*_tmp169*_tmp220*p_0
+    _tmp224 = _tmp162*_tmp223
+    _tmp225 = _tmp175*_tmp213 + _tmp175*_tmp222 + _tmp182*_tmp220 - _tmp166*_tmp215 - _tmp180*_tmp214 + _tmp171*_tmp4*numpy.cos(_tmp163) - _tmp181*_tmp190*across_2_1
+    _tmp226 = 833.3333333333334*_tmp184 + 833.3333333333334*_tmp189 + 1666.6666666666667*_tmp224 - 1666.6666666666667*_tmp185*_tmp225
+    _tmp227 = _tmp190*across_3_0
+    _tmp228 = _tmp114*_tmp190
+    _tmp229 = _tmp121*_tmp190
+    _tmp230 = 0.125*theta_3
+    _tmp231 = 0.25*x_14
+    _tmp232 = sinr1(_tmp110)
+    _tmp233 = _tmp123*(_tmp230 - _tmp231) + 0.25*_tmp110**3*(_tmp232 - 3*sinr2(_tmp110) + 3*cosr2(_tmp110))
+    _tmp234 = _tmp4*(_tmp120*(_tmp230 + _tmp231) + 0.25*_tmp113**3*(-3*sinr2(_tmp113) + 3*cosr2(_tmp113) + sinr1(_tmp113)))
+    _tmp235 = -_tmp111*_tmp227 - _tmp111*_tmp234 - _tmp119*_tmp229 - _tmp228*across_3_1 + 0.125*_tmp124*_tmp125*p_0 + 0.5*_tmp114*_tmp233*p_0
+    _tmp236 = 1666.6666666666667*_tmp129
+    _tmp237 = _tmp119*_tmp227 + _tmp119*_tmp234 + _tmp126*_tmp233 - _tmp111*_tmp229 - _tmp124*_tmp228 + _tmp116*_tmp4*numpy.cos(_tmp108) - _tmp125*_tmp190*across_3_1
+    _tmp238 = 1666.6666666666667*_tmp133
+    _tmp239 = 833.3333333333334*_tmp130 + 833.3333333333334*_tmp134 + _tmp235*_tmp236 - _tmp237*_tmp238
+    _tmp240 = _tmp190*across_4_0
+    _tmp241 = _tmp14*_tmp190
+    _tmp242 = _tmp190*_tmp7
+    _tmp243 = 0.125*theta_4
+    _tmp244 = 0.25*x_15
+    _tmp245 = sinr1(_tmp2)
+    _tmp246 = _tmp16*(_tmp243 - _tmp244) + 0.25*_tmp2**3*(_tmp245 - 3*sinr2(_tmp2) + 3*cosr2(_tmp2))
+    _tmp247 = _tmp4*(_tmp13*(_tmp243 + _tmp244) + 0.25*_tmp6**3*(-3*sinr2(_tmp6) + 3*cosr2(_tmp6) + sinr1(_tmp6)))
+    _tmp248 = _tmp12*_tmp240 + _tmp12*_tmp247 + _tmp19*_tmp246 - _tmp17*_tmp242 - _tmp241*_tmp3 + _tmp4*_tmp9*numpy.cos(_tmp0) - _tmp18*_tmp190*across_4_1
+    _tmp249 = 1666.6666666666667*_tmp78
+    _tmp250 = -_tmp12*_tmp241 - _tmp240*_tmp3 - _tmp242*across_4_1 - _tmp247*_tmp3 + 0.125*_tmp17*_tmp18*p_0 + 0.5*_tmp246*_tmp7*p_0
+    _tmp251 = _tmp101 + _tmp95
+    _tmp252 = _tmp106 + _tmp251 + _tmp87 + _tmp98 - 1666.6666666666667*_tmp54*_tmp74
+    _tmp253 = _tmp190*across_5_0
+    _tmp254 = _tmp190*_tmp38
+    _tmp255 = _tmp190*_tmp31
+    _tmp256 = 0.25*x_16
+    _tmp257 = 0.125*theta_5 + 0.0003638034375544994*x_0
+    _tmp258 = sinr1(_tmp27)
+    _tmp259 = _tmp40*(_tmp257 - _tmp256) + 0.25*_tmp27**3*(_tmp258 - 3*sinr2(_tmp27) + 3*cosr2(_tmp27))
+    _tmp260 = _tmp4*(_tmp37*(_tmp256 + _tmp257) + 0.25*_tmp30**3*(-3*sinr2(_tmp30) + 3*cosr2(_tmp30) + sinr1(_tmp30)))
+    _tmp261 = _tmp253*_tmp36 + _tmp259*_tmp43 + _tmp260*_tmp36 - _tmp254*_tmp28 - _tmp255*_tmp41 + _tmp34*_tmp4*numpy.cos(_tmp26) - _tmp190*_tmp42*across_5_1
+    _tmp262 = 1666.6666666666667*_tmp81
+    _tmp263 = -_tmp253*_tmp28 - _tmp254*_tmp36 - _tmp255*across_5_1 - _tmp260*_tmp28 + 0.125*_tmp41*_tmp42*p_0 + 0.5*_tmp259*_tmp31*p_0
+    _tmp264 = _tmp190*across_6_0
+    _tmp265 = _tmp190*_tmp61
+    _tmp266 = _tmp190*_tmp68
+    _tmp267 = 0.25*x_17
+    _tmp268 = 0.125*theta_6 + 0.0003638034375544994*x_1
+    _tmp269 = sinr1(_tmp57)
+    _tmp270 = _tmp70*(_tmp268 - _tmp267) + 0.25*_tmp57**3*(_tmp269 - 3*sinr2(_tmp57) + 3*cosr2(_tmp57))
+    _tmp271 = _tmp4*(_tmp67*(_tmp267 + _tmp268) + 0.25*_tmp60**3*(-3*sinr2(_tmp60) + 3*cosr2(_tmp60) + sinr1(_tmp60)))
+    _tmp272 = -_tmp264*_tmp58 - _tmp265*across_6_1 - _tmp266*_tmp66 - _tmp271*_tmp58 + 0.125*_tmp71*_tmp72*p_0 + 0.5*_tmp270*_tmp61*p_0
+    _tmp273 = _tmp264*_tmp66 + _tmp270*_tmp73 + _tmp271*_tmp66 - _tmp265*_tmp71 - _tmp266*_tmp58 + _tmp4*_tmp64*numpy.cos(_tmp56) - _tmp190*_tmp72*across_6_1
+    _tmp274 = 0.5*theta_9 + 0.0014552137502179977*x_4
+    _tmp275 = numpy.sin(_tmp274)
+    _tmp276 = numpy.sin(1.0*x_20)
+    _tmp277 = 0.5*x_20
+    _tmp278 = 0.25*theta_9 + 0.0007276068751089988*x_4
+    _tmp279 = _tmp278 - _tmp277
+    _tmp280 = numpy.cos(_tmp279)
+    _tmp281 = _tmp4*across_9_0
+    _tmp282 = _tmp277 + _tmp278
+    _tmp283 = numpy.cos(_tmp282)
+    _tmp284 = _tmp283*_tmp4
+    _tmp285 = numpy.sin(_tmp279)
+    _tmp286 = arck(_tmp282)
+    _tmp287 = along_9_0 + _tmp286*_tmp282**2
+    _tmp288 = _tmp287*_tmp4
+    _tmp289 = arck(_tmp279)
+    _tmp290 = along_9_1 + _tmp289*_tmp279**2
+    _tmp291 = numpy.sin(_tmp282)
+    _tmp292 = _tmp291*_tmp4
+    _tmp293 = _tmp276*_tmp4 + _tmp280*_tmp281 + _tmp284*across_9_1 + _tmp290*_tmp292 - _tmp285*_tmp288
+    _tmp294 = numpy.sin(_tmp277)**2
+    _tmp295 = numpy.sin(_tmp278)
+    _tmp296 = _tmp295**2
+    _tmp297 = _tmp280*_tmp288 + _tmp281*_tmp285 + _tmp284*_tmp290 + _tmp4*(-2*_tmp294 + 2*_tmp296) - _tmp292*across_9_1
+    _tmp298 = numpy.cos(_tmp274)
+    _tmp299 = 833.3333333333334*_tmp298
+    _tmp300 = _tmp190*across_9_0
+    _tmp301 = _tmp190*_tmp291
+    _tmp302 = _tmp190*_tmp287
+    _tmp303 = 0.25*x_20
+    _tmp304 = 0.125*theta_9 + 0.0003638034375544994*x_4
+    _tmp305 = sinr1(_tmp279)
+    _tmp306 = _tmp289*(_tmp304 - _tmp303) + 0.25*_tmp279**3*(_tmp305 - 3*sinr2(_tmp279) + 3*cosr2(_tmp279))
+    _tmp307 = _tmp4*(_tmp286*(_tmp303 + _tmp304) + 0.25*_tmp282**3*(-3*sinr2(_tmp282) + 3*cosr2(_tmp282) + sinr1(_tmp282)))
+    _tmp308 = -_tmp280*_tmp302 - _tmp285*_tmp300 - _tmp285*_tmp307 - _tmp301*across_9_1 + 0.125*_tmp283*_tmp290*p_0 + 0.5*_tmp291*_tmp306*p_0
+    _tmp309 = 1666.6666666666667*_tmp298
+    _tmp310 = _tmp280*_tmp300 + _tmp280*_tmp307 + _tmp284*_tmp306 - _tmp285*_tmp302 - _tmp290*_tmp301 + _tmp295*_tmp4*numpy.cos(_tmp278) - _tmp190*_tmp283*across_9_1
+    _tmp311 = 1666.6666666666667*_tmp275
+    _tmp312 = _tmp102*_tmp74
+    _tmp313 = 1666.6666666666667*_tmp24
+    _tmp314 = 1666.6666666666667*_tmp48
+    _tmp315 = _tmp104*_tmp54
+    _tmp316 = _tmp82*_tmp97
+    _tmp317 = _tmp20*_tmp249
+    _tmp318 = _tmp262*_tmp44
+    _tmp319 = _tmp100*_tmp91
+    _tmp320 = -_tmp319 + _tmp94*_tmp99
+    _tmp321 = _tmp162*_tmp188
+    _tmp322 = _tmp199*_tmp201
+    _tmp323 = _tmp183*_tmp185
+    _tmp324 = _tmp127*_tmp238
+    _tmp325 = -_tmp324 + 1666.6666666666667*_tmp321 + 1666.6666666666667*_tmp322 - 1666.6666666666667*_tmp323 + _tmp132*_tmp236 + _tmp138*_tmp211 + _tmp160*_tmp201 - 1666.6666666666667*_tmp138*_tmp206
+    _tmp326 = _tmp316 + _tmp319 - 1666.6666666666667*_tmp102*_tmp74 - 1666.6666666666667*_tmp104*_tmp54 - 1666.6666666666667*_tmp85*_tmp96 - 1666.6666666666667*_tmp93*_tmp99
+    _tmp327 = _tmp318 + _tmp326 - 1666.6666666666667*_tmp48*_tmp80
+    _tmp328 = _tmp317 + _tmp327 - 1666.6666666666667*_tmp24*_tmp77
+    _tmp329 = _tmp185*_tmp223
+    _tmp330 = _tmp162*_tmp225
+    _tmp331 = _tmp324 + 833.3333333333334*_tmp323 + 1666.6666666666667*_tmp329 + 1666.6666666666667*_tmp330 - 833.3333333333334*_tmp162*_tmp188 - 1666.6666666666667*_tmp129*_tmp132
+    _tmp332 = _tmp235*_tmp238 + _tmp236*_tmp237 + 833.3333333333334*_tmp127*_tmp133 - 833.3333333333334*_tmp129*_tmp132
+    _tmp333 = _tmp102*_tmp272
+    _tmp334 = 0.5*x_18
+    _tmp335 = 0.25*theta_7 + 0.0007276068751089988*x_2
+    _tmp336 = _tmp335 - _tmp334
+    _tmp337 = numpy.sin(_tmp336)
+    _tmp338 = _tmp4*across_7_0
+    _tmp339 = _tmp334 + _tmp335
+    _tmp340 = numpy.sin(_tmp339)
+    _tmp341 = _tmp340*_tmp4
+    _tmp342 = numpy.sin(_tmp334)**2
+    _tmp343 = numpy.sin(_tmp335)
+    _tmp344 = _tmp343**2
+    _tmp345 = numpy.cos(_tmp336)
+    _tmp346 = arck(_tmp339)
+    _tmp347 = along_7_0 + _tmp346*_tmp339**2
+    _tmp348 = _tmp347*_tmp4
+    _tmp349 = arck(_tmp336)
+    _tmp350 = along_7_1 + _tmp349*_tmp336**2
+    _tmp351 = numpy.cos(_tmp339)
+    _tmp352 = _tmp351*_tmp4
+    _tmp353 = _tmp337*_tmp338 + _tmp345*_tmp348 + _tmp350*_tmp352 + _tmp4*(-2*_tmp342 + 2*_tmp344) - _tmp341*across_7_1
+    _tmp354 = 0.0014552137502179977*x_2
+    _tmp355 = _tmp22 + _tmp354 + 0.5*theta_7
+    _tmp356 = numpy.sin(_tmp355)
+    _tmp357 = 0.0014552137502179977*x_3
+    _tmp358 = 0.0029104275004359953*x_2
+    _tmp359 = _tmp22 + theta_7
+    _tmp360 = _tmp358 + _tmp359
+    _tmp361 = _tmp357 + _tmp360 + 0.5*theta_8
+    _tmp362 = numpy.sin(_tmp361)
+    _tmp363 = 0.5*x_19
+    _tmp364 = 0.25*theta_8 + 0.0007276068751089988*x_3
+    _tmp365 = _tmp364 - _tmp363
+    _tmp366 = numpy.sin(_tmp365)
+    _tmp367 = _tmp4*across_8_0
+    _tmp368 = _tmp363 + _tmp364
+    _tmp369 = numpy.sin(_tmp368)
+    _tmp370 = _tmp369*_tmp4
+    _tmp371 = numpy.sin(_tmp363)**2
+    _tmp372 = numpy.sin(_tmp364)
+    _tmp373 = _tmp372**2
+    _tmp374 = numpy.cos(_tmp365)
+    _tmp375 = arck(_tmp368)
+    _tmp376 = along_8_0 + _tmp375*_tmp368**2
+    _tmp377 = _tmp376*_tmp4
+    _tmp378 = arck(_tmp365)
+    _tmp379 = along_8_1 + _tmp378*_tmp365**2
+    _tmp380 = numpy.cos(_tmp368)
+    _tmp381 = _tmp380*_tmp4
+    _tmp382 = _tmp366*_tmp367 + _tmp374*_tmp377 + _tmp379*_tmp381 + _tmp4*(-2*_tmp371 + 2*_tmp373) - _tmp370*across_8_1
+    _tmp383 = _tmp362*_tmp382
+    _tmp384 = numpy.sin(1.0*x_18)
+    _tmp385 = _tmp338*_tmp345 + _tmp341*_tmp350 + _tmp352*across_7_1 + _tmp384*_tmp4 - _tmp337*_tmp348
+    _tmp386 = numpy.cos(_tmp355)
+    _tmp387 = numpy.cos(_tmp361)
+    _tmp388 = numpy.sin(1.0*x_19)
+    _tmp389 = _tmp367*_tmp374 + _tmp370*_tmp379 + _tmp381*across_8_1 + _tmp388*_tmp4 - _tmp366*_tmp377
+    _tmp390 = _tmp387*_tmp389
+    _tmp391 = _tmp358 + 0.0029104275004359953*x_3
+    _tmp392 = numpy.sin(_tmp391)
+    _tmp393 = numpy.sin(_tmp354 + _tmp357)**2
+    _tmp394 = 0.025*_tmp392 - 0.07*_tmp393
+    _tmp395 = _tmp359 + theta_8
+    _tmp396 = numpy.cos(_tmp395)
+    _tmp397 = 1666.6666666666667*_tmp396
+    _tmp398 = _tmp394*_tmp397
+    _tmp399 = numpy.sin(_tmp359)
+    _tmp400 = numpy.sin(_tmp358)
+    _tmp401 = numpy.sin(_tmp354)**2
+    _tmp402 = 0.08*_tmp401 - 0.005*_tmp400
+    _tmp403 = 1666.6666666666667*_tmp402
+    _tmp404 = _tmp399*_tmp403
+    _tmp405 = -0.035*_tmp392 - 0.05*_tmp393
+    _tmp406 = 1666.6666666666667*numpy.sin(_tmp395)
+    _tmp407 = _tmp405*_tmp406
+    _tmp408 = numpy.cos(_tmp359)
+    _tmp409 = -16.666666666666668*_tmp401 - 66.66666666666667*_tmp400
+    _tmp410 = _tmp408*_tmp409
+    _tmp411 = -_tmp398 - _tmp404 - _tmp407 - _tmp410 + 1666.6666666666667*_tmp383 + 1666.6666666666667*_tmp390 + 1666.6666666666667*_tmp353*_tmp356 + 1666.6666666666667*_tmp385*_tmp386
+    _tmp412 = _tmp135 + _tmp411
+    _tmp413 = _tmp190*across_7_0
+    _tmp414 = _tmp190*_tmp347
+    _tmp415 = _tmp190*_tmp340
+    _tmp416 = 0.25*x_18
+    _tmp417 = 0.125*theta_7 + 0.0003638034375544994*x_2
+    _tmp418 = sinr1(_tmp336)
+    _tmp419 = _tmp349*(_tmp417 - _tmp416) + 0.25*_tmp336**3*(_tmp418 - 3*sinr2(_tmp336) + 3*cosr2(_tmp336))
+    _tmp420 = _tmp4*(_tmp346*(_tmp416 + _tmp417) + 0.25*_tmp339**3*(-3*sinr2(_tmp339) + 3*cosr2(_tmp339) + sinr1(_tmp339)))
+    _tmp421 = _tmp345*_tmp413 + _tmp345*_tmp420 + _tmp352*_tmp419 - _tmp337*_tmp414 - _tmp350*_tmp415 + _tmp343*_tmp4*numpy.cos(_tmp335) - _tmp190*_tmp351*across_7_1
+    _tmp422 = 1666.6666666666667*_tmp386
+    _tmp423 = -_tmp337*_tmp413 - _tmp337*_tmp420 - _tmp345*_tmp414 - _tmp415*across_7_1 + 0.125*_tmp350*_tmp351*p_0 + 0.5*_tmp340*_tmp419*p_0
+    _tmp424 = _tmp398 + _tmp407
+    _tmp425 = _tmp190*across_8_0
+    _tmp426 = _tmp190*_tmp376
+    _tmp427 = _tmp190*_tmp369
+    _tmp428 = 0.25*x_19
+    _tmp429 = 0.125*theta_8 + 0.0003638034375544994*x_3
+    _tmp430 = sinr1(_tmp365)
+    _tmp431 = _tmp378*(_tmp429 - _tmp428) + 0.25*_tmp365**3*(_tmp430 - 3*sinr2(_tmp365) + 3*cosr2(_tmp365))
+    _tmp432 = _tmp4*(_tmp375*(_tmp428 + _tmp429) + 0.25*_tmp368**3*(-3*sinr2(_tmp368) + 3*cosr2(_tmp368) + sinr1(_tmp368)))
+    _tmp433 = _tmp374*_tmp425 + _tmp374*_tmp432 + _tmp381*_tmp431 - _tmp366*_tmp426 - _tmp379*_tmp427 + _tmp372*_tmp4*numpy.cos(_tmp364) - _tmp190*_tmp380*across_8_1
+    _tmp434 = -_tmp366*_tmp425 - _tmp366*_tmp432 - _tmp374*_tmp426 - _tmp427*across_8_1 + 0.125*_tmp379*_tmp380*p_0 + 0.5*_tmp369*_tmp431*p_0
+    _tmp435 = 0.5*theta_10 + 0.0014552137502179977*x_5
+    _tmp436 = numpy.sin(_tmp435)
+    _tmp437 = numpy.sin(1.0*x_21)
+    _tmp438 = 0.5*x_21
+    _tmp439 = 0.25*theta_10 + 0.0007276068751089988*x_5
+    _tmp440 = _tmp439 - _tmp438
+    _tmp441 = numpy.cos(_tmp440)
+    _tmp442 = _tmp4*across_10_0
+    _tmp443 = _tmp438 + _tmp439
+    _tmp444 = numpy.cos(_tmp443)
+    _tmp445 = _tmp4*_tmp444
+    _tmp446 = numpy.sin(_tmp440)
+    _tmp447 = arck(_tmp443)
+    _tmp448 = along_10_0 + _tmp447*_tmp443**2
+    _tmp449 = _tmp4*_tmp448
+    _tmp450 = arck(_tmp440)
+    _tmp451 = along_10_1 + _tmp450*_tmp440**2
+    _tmp452 = numpy.sin(_tmp443)
+    _tmp453 = _tmp4*_tmp452
+    _tmp454 = _tmp4*_tmp437 + _tmp441*_tmp442 + _tmp445*across_10_1 + _tmp451*_tmp453 - _tmp446*_tmp449
+    _tmp455 = numpy.sin(_tmp438)**2
+    _tmp456 = numpy.sin(_tmp439)
+    _tmp457 = _tmp456**2
+    _tmp458 = _tmp4*(-2*_tmp455 + 2*_tmp457) + _tmp441*_tmp449 + _tmp442*_tmp446 + _tmp445*_tmp451 - _tmp453*across_10_1
+    _tmp459 = numpy.cos(_tmp435)
+    _tmp460 = 833.3333333333334*_tmp459
+    _tmp461 = _tmp190*across_10_0
+    _tmp462 = _tmp190*_tmp452
+    _tmp463 = _tmp190*_tmp448
+    _tmp464 = 0.25*x_21
+    _tmp465 = 0.125*theta_10 + 0.0003638034375544994*x_5
+    _tmp466 = sinr1(_tmp440)
+    _tmp467 = _tmp450*(_tmp465 - _tmp464) + 0.25*_tmp440**3*(_tmp466 - 3*sinr2(_tmp440) + 3*cosr2(_tmp440))
+    _tmp468 = _tmp4*(_tmp447*(_tmp464 + _tmp465) + 0.25*_tmp443**3*(-3*sinr2(_tmp443) + 3*cosr2(_tmp443) + sinr1(_tmp443)))
+    _tmp469 = -_tmp441*_tmp463 - _tmp446*_tmp461 - _tmp446*_tmp468 - _tmp462*across_10_1 + 0.125*_tmp444*_tmp451*p_0 + 0.5*_tmp452*_tmp467*p_0
+    _tmp470 = 1666.6666666666667*_tmp459
+    _tmp471 = _tmp441*_tmp461 + _tmp441*_tmp468 + _tmp445*_tmp467 - _tmp446*_tmp463 - _tmp451*_tmp462 + _tmp4*_tmp456*numpy.cos(_tmp439) - _tmp190*_tmp444*across_10_1
+    _tmp472 = 1666.6666666666667*_tmp436
+    _tmp473 = 1666.6666666666667*_tmp356
+    _tmp474 = _tmp362*_tmp389
+    _tmp475 = _tmp394*_tmp406
+    _tmp476 = _tmp399*_tmp409
+    _tmp477 = _tmp353*_tmp422
+    _tmp478 = _tmp382*_tmp387
+    _tmp479 = 1666.6666666666667*_tmp478
+    _tmp480 = _tmp475 - 1666.6666666666667*_tmp396*_tmp405
+    _tmp481 = _tmp476 + _tmp479 + _tmp480 - 1666.6666666666667*_tmp362*_tmp389 - 1666.6666666666667*_tmp402*_tmp408
+    _tmp482 = _tmp477 + _tmp481 - 1666.6666666666667*_tmp356*_tmp385
+    _tmp483 = numpy.cos(_tmp52)
+    _tmp484 = numpy.sin(_tmp52)
+    _tmp485 = _tmp88 + _tmp92
+    _tmp486 = numpy.sin(_tmp485)
+    _tmp487 = -0.05 + _tmp4
+    _tmp488 = numpy.cos(_tmp485)
+    _tmp489 = _tmp487*_tmp488
+    _tmp490 = -_tmp489 + 0.04*_tmp486
+    _tmp491 = 0.04*_tmp488 + _tmp486*_tmp487
+    _tmp492 = 4.850712500726659*x_6
+    _tmp493 = -_tmp492*(-_tmp312 - _tmp315 - _tmp491 + 0.05*_tmp483 + 0.02*_tmp484 - _tmp4*_tmp483) + 4.850712500726659*x_7*(_tmp105 + _tmp490 - _tmp75 + 0.02*_tmp483 - 0.05*_tmp484 + _tmp4*_tmp484)
+    _tmp494 = -_tmp492*(-_tmp491 + 0.5*_tmp486*p_0) + 4.850712500726659*x_7*(_tmp490 + _tmp4*_tmp488)
+    _tmp495 = numpy.sin(_tmp360)
+    _tmp496 = numpy.cos(_tmp360)
+    _tmp497 = _tmp391 + _tmp395
+    _tmp498 = numpy.cos(_tmp497)
+    _tmp499 = -0.035 + _tmp4
+    _tmp500 = numpy.sin(_tmp497)
+    _tmp501 = 0.025*_tmp498 + _tmp499*_tmp500
+    _tmp502 = 4.850712500726659*x_9
+    _tmp503 = _tmp498*_tmp499
+    _tmp504 = _tmp503 - 0.025*_tmp500
+    _tmp505 = 4.850712500726659*x_10
+    _tmp506 = _tmp505*(-_tmp383 - _tmp390 - _tmp504 + 0.005*_tmp496 - 0.04*_tmp495 + 0.5*_tmp495*p_0) - _tmp502*(-_tmp474 - _tmp501 + 0.005*_tmp495 + 0.04*_tmp496 + _tmp382*_tmp387 - _tmp4*_tmp496)
+    _tmp507 = _tmp505*(-_tmp503 + 0.025*_tmp500 + _tmp4*_tmp500) - _tmp502*(-_tmp501 - _tmp4*_tmp498)
+    _tmp508 = _tmp140 + 0.75*theta_1
+    _tmp509 = numpy.sin(_tmp508)
+    _tmp510 = numpy.cos(_tmp508)
+    _tmp512 = 0.375*p_0
+    _tmp511 = along_1_1 + sinr0(_tmp141)
+    _tmp513 = _tmp511*_tmp512
+    _tmp514 = -_tmp194 + cosr1(_tmp141)
+    _tmp515 = -0.10074556732278446*x_10 - 0.10074556732278446*x_7
+    _tmp516 = 48.148148148148145*_tmp515
+    _tmp517 = -0.10074556732278446*x_6 - 0.10074556732278446*x_9
+    _tmp518 = _tmp164 + theta_1 + 0.75*theta_2
+    _tmp519 = numpy.cos(_tmp518)
+    _tmp520 = along_2_1 + sinr0(_tmp165)
+    _tmp521 = numpy.sin(_tmp518)
+    _tmp522 = _tmp4*_tmp521
+    _tmp523 = _tmp512*_tmp519
+    _tmp524 = _tmp512*_tmp521
+    _tmp525 = -_tmp218 + cosr1(_tmp165)
+    _tmp526 = _tmp109 + _tmp21 + 0.75*theta_3
+    _tmp527 = numpy.cos(_tmp526)
+    _tmp528 = along_3_1 + sinr0(_tmp110)
+    _tmp529 = numpy.sin(_tmp526)
+    _tmp530 = _tmp4*_tmp529
+    _tmp531 = -_tmp516*(-_tmp528*_tmp530 - _tmp4*_tmp527*across_3_1) + 48.148148148148145*_tmp517*(-_tmp530*across_3_1 + 0.5*_tmp527*_tmp528*p_0)
+    _tmp532 = _tmp512*_tmp527
+    _tmp533 = _tmp512*_tmp529
+    _tmp534 = -_tmp232 + cosr1(_tmp110)
+    _tmp535 = _tmp1 + _tmp22 + 0.75*theta_4
+    _tmp536 = numpy.sin(_tmp535)
+    _tmp537 = _tmp4*_tmp536
+    _tmp538 = along_4_1 + sinr0(_tmp2)
+    _tmp539 = numpy.cos(_tmp535)
+    _tmp540 = -_tmp492*(-_tmp537*across_4_1 + 0.5*_tmp538*_tmp539*p_0) + 4.850712500726659*x_7*(-_tmp537*_tmp538 - _tmp4*_tmp539*across_4_1)
+    _tmp541 = _tmp512*_tmp536
+    _tmp542 = _tmp512*_tmp539
+    _tmp543 = -_tmp245 + cosr1(_tmp2)
+    _tmp544 = _tmp25 + _tmp46 + 0.75*theta_5 + 0.0021828206253269966*x_0
+    _tmp545 = numpy.sin(_tmp544)
+    _tmp546 = _tmp4*_tmp545
+    _tmp547 = along_5_1 + sinr0(_tmp27)
+    _tmp548 = numpy.cos(_tmp544)
+    _tmp549 = -_tmp492*(-_tmp546*across_5_1 + 0.5*_tmp547*_tmp548*p_0) + 4.850712500726659*x_7*(-_tmp546*_tmp547 - _tmp4*_tmp548*across_5_1)
+    _tmp550 = _tmp512*_tmp545
+    _tmp551 = _tmp512*_tmp548
+    _tmp552 = -_tmp258 + cosr1(_tmp27)
+    _tmp553 = _tmp52 + _tmp55 + 0.75*theta_6 + 0.0021828206253269966*x_1
+    _tmp554 = numpy.cos(_tmp553)
+    _tmp555 = _tmp4*across_6_1
+    _tmp556 = numpy.sin(_tmp553)
+    _tmp557 = along_6_1 + sinr0(_tmp57)
+    _tmp558 = _tmp4*_tmp557
+    _tmp559 = -_tmp492*(-_tmp554*_tmp555 - _tmp556*_tmp558) + 4.850712500726659*x_7*(_tmp555*_tmp556 - _tmp554*_tmp558)
+    _tmp560 = _tmp512*_tmp557
+    _tmp561 = -_tmp269 + cosr1(_tmp57)
+    _tmp562 = _tmp22 + _tmp334 + 0.75*theta_7 + 0.0021828206253269966*x_2
+    _tmp563 = numpy.cos(_tmp562)
+    _tmp564 = along_7_1 + sinr0(_tmp336)
+    _tmp565 = numpy.sin(_tmp562)
+    _tmp566 = _tmp4*_tmp565
+    _tmp567 = _tmp505*(-_tmp564*_tmp566 - _tmp4*_tmp563*across_7_1) - _tmp502*(-_tmp566*across_7_1 + 0.5*_tmp563*_tmp564*p_0)
+    _tmp568 = _tmp512*_tmp563
+    _tmp569 = _tmp512*_tmp565
+    _tmp570 = -_tmp418 + cosr1(_tmp336)
+    _tmp571 = _tmp360 + _tmp363 + 0.75*theta_8 + 0.0021828206253269966*x_3
+    _tmp572 = numpy.cos(_tmp571)
+    _tmp573 = along_8_1 + sinr0(_tmp365)
+    _tmp574 = numpy.sin(_tmp571)
+    _tmp575 = _tmp4*_tmp574
+    _tmp576 = _tmp505*(-_tmp573*_tmp575 - _tmp4*_tmp572*across_8_1) - _tmp502*(-_tmp575*across_8_1 + 0.5*_tmp572*_tmp573*p_0)
+    _tmp577 = _tmp512*_tmp572
+    _tmp578 = _tmp512*_tmp574
+    _tmp579 = -_tmp430 + cosr1(_tmp365)
+    _tmp580 = _tmp277 + 0.75*theta_9 + 0.0021828206253269966*x_4
+    _tmp581 = numpy.cos(_tmp580)
+    _tmp582 = numpy.sin(_tmp580)
+    _tmp583 = along_9_1 + sinr0(_tmp279)
+    _tmp584 = _tmp512*_tmp583
+    _tmp585 = -_tmp305 + cosr1(_tmp279)
+    _tmp586 = 4.850712500726659*x_7
+    _tmp587 = _tmp438 + 0.75*theta_10 + 0.0021828206253269966*x_5
+    _tmp588 = numpy.sin(_tmp587)
+    _tmp589 = numpy.cos(_tmp587)
+    _tmp590 = along_10_1 + sinr0(_tmp440)
+    _tmp591 = _tmp512*_tmp590
+    _tmp592 = -_tmp466 + cosr1(_tmp440)
+    _tmp593 = 0.5*across_1_0
+    _tmp594 = 0.5*_tmp155
+    _tmp595 = 0.5*_tmp153
+    _tmp596 = 0.5*_tmp145
+    _tmp597 = 0.5*_tmp209 + _tmp151*_tmp593 + _tmp157*_tmp596 + _tmp594*across_1_1 - _tmp142*_tmp595
+    _tmp598 = _tmp138*_tmp597
+    _tmp599 = 0.5*across_2_0
+    _tmp600 = 0.5*_tmp181
+    _tmp601 = 0.5*_tmp177
+    _tmp602 = 0.5*_tmp169
+    _tmp603 = 0.5*_tmp187 + _tmp175*_tmp599 + _tmp180*_tmp602 + _tmp600*across_2_1 - _tmp166*_tmp601
+    _tmp604 = _tmp162*_tmp603
+    _tmp605 = 0.5*across_3_0
+    _tmp606 = 0.5*_tmp125
+    _tmp607 = 0.5*_tmp121
+    _tmp608 = 0.5*_tmp114
+    _tmp609 = 0.5*_tmp131 + _tmp119*_tmp605 + _tmp124*_tmp608 + _tmp606*across_3_1 - _tmp111*_tmp607
+    _tmp610 = 0.5*across_4_0
+    _tmp611 = 0.5*_tmp18
+    _tmp612 = 0.5*_tmp14
+    _tmp613 = 0.5*_tmp7
+    _tmp614 = 0.5*_tmp76 + _tmp12*_tmp610 + _tmp17*_tmp613 + _tmp611*across_4_1 - _tmp3*_tmp612
+    _tmp615 = _tmp148 - _tmp150 + _tmp142*_tmp593 + _tmp151*_tmp595 + _tmp157*_tmp594 - _tmp596*across_1_1
+    _tmp616 = _tmp201*_tmp615
+    _tmp617 = _tmp172 - _tmp174 + _tmp166*_tmp599 + _tmp175*_tmp601 + _tmp180*_tmp600 - _tmp602*across_2_1
+    _tmp618 = 1666.6666666666667*_tmp185*_tmp617
+    _tmp619 = _tmp117 - _tmp118 + _tmp111*_tmp605 + _tmp119*_tmp607 + _tmp124*_tmp606 - _tmp608*across_3_1
+    _tmp620 = _tmp238*_tmp619
+    _tmp621 = _tmp10 - _tmp11 + _tmp12*_tmp612 + _tmp17*_tmp611 + _tmp3*_tmp610 - _tmp613*across_4_1
+    _tmp622 = 0.5*across_9_0
+    _tmp623 = 0.5*_tmp283
+    _tmp624 = 0.5*_tmp287
+    _tmp625 = 0.5*_tmp291
+    _tmp626 = 0.5*_tmp276 + _tmp280*_tmp622 + _tmp290*_tmp625 + _tmp623*across_9_1 - _tmp285*_tmp624
+    _tmp627 = 0.5*across_5_0
+    _tmp628 = 0.5*_tmp42
+    _tmp629 = 0.5*_tmp38
+    _tmp630 = 0.5*_tmp31
+    _tmp631 = 0.5*_tmp79 + _tmp36*_tmp627 + _tmp41*_tmp630 + _tmp628*across_5_1 - _tmp28*_tmp629
+    _tmp632 = 0.5*across_6_0
+    _tmp633 = 0.5*_tmp72
+    _tmp634 = 0.5*_tmp68
+    _tmp635 = 0.5*_tmp61
+    _tmp636 = 0.5*_tmp103 + _tmp632*_tmp66 + _tmp633*across_6_1 + _tmp635*_tmp71 - _tmp58*_tmp634
+    _tmp637 = _tmp54*_tmp636
+    _tmp638 = _tmp296 - _tmp294 + _tmp280*_tmp624 + _tmp285*_tmp622 + _tmp290*_tmp623 - _tmp625*across_9_1
+    _tmp639 = _tmp35 - _tmp33 + _tmp28*_tmp627 + _tmp36*_tmp629 + _tmp41*_tmp628 - _tmp630*across_5_1
+    _tmp640 = _tmp65 - _tmp63 + _tmp58*_tmp632 + _tmp633*_tmp71 + _tmp634*_tmp66 - _tmp635*across_6_1
+    _tmp641 = _tmp102*_tmp640
+    _tmp642 = _tmp185*_tmp603
+    _tmp643 = _tmp138*_tmp615
+    _tmp644 = _tmp162*_tmp617
+    _tmp645 = 1666.6666666666667*_tmp642 + 1666.6666666666667*_tmp643 + 1666.6666666666667*_tmp644 + _tmp236*_tmp619 + _tmp238*_tmp609 - 1666.6666666666667*_tmp201*_tmp597
+    _tmp646 = 0.5*across_10_0
+    _tmp647 = 0.5*_tmp444
+    _tmp648 = 0.5*_tmp448
+    _tmp649 = 0.5*_tmp452
+    _tmp650 = 0.5*_tmp437 + _tmp441*_tmp646 + _tmp451*_tmp649 + _tmp647*across_10_1 - _tmp446*_tmp648
+    _tmp651 = 0.5*across_7_0
+    _tmp652 = 0.5*_tmp351
+    _tmp653 = 0.5*_tmp347
+    _tmp654 = 0.5*_tmp340
+    _tmp655 = 0.5*_tmp384 + _tmp345*_tmp651 + _tmp350*_tmp654 + _tmp652*across_7_1 - _tmp337*_tmp653
+    _tmp656 = 0.5*across_8_0
+    _tmp657 = 0.5*_tmp380
+    _tmp658 = 0.5*_tmp376
+    _tmp659 = 0.5*_tmp369
+    _tmp660 = 0.5*_tmp388 + _tmp374*_tmp656 + _tmp379*_tmp659 + _tmp657*across_8_1 - _tmp366*_tmp658
+    _tmp661 = _tmp457 - _tmp455 + _tmp441*_tmp648 + _tmp446*_tmp646 + _tmp451*_tmp647 - _tmp649*across_10_1
+    _tmp662 = _tmp344 - _tmp342 + _tmp337*_tmp651 + _tmp345*_tmp653 + _tmp350*_tmp652 - _tmp654*across_7_1
+    _tmp663 = _tmp373 - _tmp371 + _tmp366*_tmp656 + _tmp374*_tmp658 + _tmp379*_tmp657 - _tmp659*across_8_1
+    _tmp664 = _tmp387*_tmp660
+    _tmp665 = _tmp362*_tmp663
+    _tmp666 = numpy.less_equal(p_0, 0.006)
+    _tmp667 = 4.814814814814814e-05*p_0*_DTYPE(numpy.where(_tmp666, 230769230769.23077, 210000000000))
+    _tmp668 = _tmp667*omega_5_1
+    _tmp669 = _tmp667*omega_6_1
+    _tmp670 = _tmp667*omega_7_1
+    _tmp671 = 0.5*_tmp498
+    _tmp672 = 0.5*_tmp500
+    _tmp673 = _tmp667*omega_8_1
+    _tmp674 = -_tmp667*omega_9_1
+    _tmp675 = -_tmp667*omega_10_1
+    _tmp676 = 0.5*_tmp509
+    _tmp677 = 48.148148148148145*_tmp517
+    _tmp678 = 0.5*_tmp521
+    _tmp679 = 0.5*_tmp529
+    _tmp680 = 0.5*_tmp536
+    _tmp681 = 0.5*_tmp545
+    _tmp682 = 0.5*_tmp556
+    _tmp683 = 0.5*_tmp565
+    _tmp684 = 0.5*_tmp574
+    _tmp685 = 0.5*_tmp582
+    _tmp686 = 0.5*_tmp588
+    _tmp687 = p_0**(-1.0)
+    _tmp688 = _DTYPE(numpy.where(_tmp666, 4.333333333333334e-12, 4.761904761904762e-12))
+    _tmp689 = _tmp687*_tmp688
+    _tmp690 = 250000*_tmp689
+    _tmp691 = _tmp145*_tmp515
+    _tmp692 = _tmp155*_tmp690
+    _tmp693 = 750000*_tmp689
+    _tmp694 = _tmp509*_tmp515
+    _tmp695 = _tmp510*_tmp693
+    _tmp696 = 1000000*_tmp689
+    _tmp697 = _tmp168 + theta_1
+    _tmp698 = numpy.cos(_tmp697)
+    _tmp699 = _tmp515*_tmp698
+    _tmp700 = numpy.sin(_tmp697)
+    _tmp701 = _tmp696*_tmp700
+    _tmp702 = _tmp517*_tmp690
+    _tmp703 = _tmp517*_tmp696
+    _tmp704 = _tmp515*_tmp690
+    _tmp705 = _tmp515*_tmp519
+    _tmp706 = _tmp517*_tmp693
+    _tmp707 = _tmp515*_tmp521
+    _tmp708 = _tmp113 + _tmp21
+    _tmp709 = numpy.cos(_tmp708)
+    _tmp710 = _tmp515*_tmp696
+    _tmp711 = numpy.sin(_tmp708)
+    _tmp712 = _tmp709*_tmp710 - _tmp703*_tmp711
+    _tmp713 = -_tmp703*_tmp709 - _tmp710*_tmp711
+    _tmp714 = _tmp527*_tmp710 - _tmp529*_tmp703
+    _tmp715 = _tmp515*_tmp693
+    _tmp716 = -_tmp527*_tmp703 - _tmp529*_tmp710
+    _tmp717 = 100745.56732278445*_tmp689
+    _tmp718 = _tmp22 + _tmp6
+    _tmp719 = numpy.sin(_tmp718)
+    _tmp720 = _tmp719*x_6
+    _tmp721 = numpy.cos(_tmp718)
+    _tmp722 = _tmp721*x_7
+    _tmp723 = _tmp717*_tmp720 - _tmp717*_tmp722
+    _tmp724 = 25186.391830696113*_tmp689
+    _tmp725 = _tmp721*x_6
+    _tmp726 = _tmp719*x_7
+    _tmp727 = _tmp717*_tmp725 + _tmp717*_tmp726
+    _tmp728 = _tmp536*x_6
+    _tmp729 = _tmp539*x_7
+    _tmp730 = _tmp717*_tmp728 - _tmp717*_tmp729
+    _tmp731 = 75559.17549208834*_tmp689
+    _tmp732 = _tmp539*x_6
+    _tmp733 = _tmp536*x_7
+    _tmp734 = _tmp717*_tmp732 + _tmp717*_tmp733
+    _tmp735 = _tmp30 + _tmp46
+    _tmp736 = numpy.sin(_tmp735)
+    _tmp737 = _tmp736*x_6
+    _tmp738 = numpy.cos(_tmp735)
+    _tmp739 = _tmp738*x_7
+    _tmp740 = _tmp717*_tmp737 - _tmp717*_tmp739
+    _tmp741 = _tmp738*x_6
+    _tmp742 = _tmp736*x_7
+    _tmp743 = _tmp717*_tmp741 + _tmp717*_tmp742
+    _tmp744 = _tmp545*x_6
+    _tmp745 = _tmp548*x_7
+    _tmp746 = _tmp717*_tmp744 - _tmp717*_tmp745
+    _tmp747 = _tmp548*x_6
+    _tmp748 = _tmp545*x_7
+    _tmp749 = _tmp717*_tmp747 + _tmp717*_tmp748
+    _tmp750 = _tmp52 + _tmp60
+    _tmp751 = numpy.cos(_tmp750)
+    _tmp752 = _tmp751*x_6
+    _tmp753 = numpy.sin(_tmp750)
+    _tmp754 = _tmp753*x_7
+    _tmp755 = _tmp717*_tmp752 + _tmp717*_tmp754
+    _tmp756 = _tmp753*x_6
+    _tmp757 = -_tmp717*_tmp756 + 100745.56732278445*_tmp687*_tmp688*_tmp751*x_7
+    _tmp758 = _tmp554*x_6
+    _tmp759 = _tmp556*x_7
+    _tmp760 = _tmp717*_tmp758 + _tmp717*_tmp759
+    _tmp761 = _tmp556*x_6
+    _tmp762 = -_tmp717*_tmp761 + 100745.56732278445*_tmp554*_tmp687*_tmp688*x_7
+    _tmp763 = _tmp22 + _tmp339
+    _tmp764 = numpy.cos(_tmp763)
+    _tmp765 = _tmp764*x_10
+    _tmp766 = numpy.sin(_tmp763)
+    _tmp767 = -_tmp717*_tmp765 + 100745.56732278445*_tmp687*_tmp688*_tmp766*x_9
+    _tmp768 = _tmp766*x_10
+    _tmp769 = _tmp764*x_9
+    _tmp770 = _tmp717*_tmp768 + _tmp717*_tmp769
+    _tmp771 = _tmp563*x_10
+    _tmp772 = -_tmp717*_tmp771 + 100745.56732278445*_tmp565*_tmp687*_tmp688*x_9
+    _tmp773 = _tmp565*x_10
+    _tmp774 = _tmp563*x_9
+    _tmp775 = _tmp717*_tmp773 + _tmp717*_tmp774
+    _tmp776 = _tmp360 + _tmp368
+    _tmp777 = numpy.cos(_tmp776)
+    _tmp778 = _tmp777*x_10
+    _tmp779 = numpy.sin(_tmp776)
+    _tmp780 = -_tmp717*_tmp778 + 100745.56732278445*_tmp687*_tmp688*_tmp779*x_9
+    _tmp781 = _tmp779*x_10
+    _tmp782 = _tmp777*x_9
+    _tmp783 = _tmp717*_tmp781 + _tmp717*_tmp782
+    _tmp784 = _tmp572*x_10
+    _tmp785 = -_tmp717*_tmp784 + 100745.56732278445*_tmp574*_tmp687*_tmp688*x_9
+    _tmp786 = _tmp574*x_10
+    _tmp787 = _tmp572*x_9
+    _tmp788 = _tmp717*_tmp786 + _tmp717*_tmp787
+    _tmp789 = _tmp724*x_6
+    _tmp790 = _tmp724*x_7
+    _tmp791 = _tmp731*x_6
+    _tmp792 = _tmp731*x_7
+    _tmp793 = _tmp444*_tmp724
+    _tmp794 = _tmp589*_tmp731
+    _tmp795 = p_0**(-2.0)
+    _tmp796 = _tmp688*_tmp795
+    _tmp797 = 1000000*_tmp796
+    _tmp798 = _tmp155*_tmp797
+    _tmp799 = _tmp515*_tmp797
+    _tmp800 = _tmp517*_tmp797
+    _tmp801 = 100745.56732278445*_tmp796
+    _tmp802 = _tmp801*x_6
+    _tmp803 = _tmp801*x_7
+    _tmp804 = _tmp444*_tmp801
+    _tmp805 = _tmp589*_tmp801
+    _tmp806 = 0.25*p_0
+    _tmp807 = _tmp806*across_1_1
+    _tmp808 = -0.5*_tmp195 - _tmp141*_tmp156
+    _tmp809 = 0.5*_tmp197 + _tmp144*_tmp152
+    _tmp810 = _tmp143*_tmp806 + _tmp146*_tmp808 + _tmp154*_tmp806 + _tmp158*_tmp806 + _tmp4*numpy.cos(_tmp208) - _tmp145*_tmp807 - _tmp142*_tmp4*_tmp809
+    _tmp811 = 1.0*p_0
+    _tmp812 = -_tmp155*_tmp807 - _tmp202*_tmp806 - _tmp204*_tmp806 - _tmp149*_tmp811*numpy.cos(_tmp140) + 0.25*_tmp142*_tmp153*p_0 + 0.5*_tmp151*_tmp809*p_0 + 0.5*_tmp155*_tmp808*p_0
+    _tmp813 = _tmp169*_tmp806
+    _tmp814 = _tmp175*_tmp806
+    _tmp815 = _tmp181*_tmp806
+    _tmp816 = -0.5*_tmp219 - _tmp165*_tmp179
+    _tmp817 = 0.5*_tmp221 + _tmp168*_tmp176
+    _tmp818 = _tmp170*_tmp816 + _tmp177*_tmp814 + _tmp180*_tmp815 + _tmp4*numpy.cos(_tmp186) - _tmp813*across_2_1 + _tmp166*_tmp806*across_2_0 - _tmp166*_tmp4*_tmp817
+    _tmp819 = -_tmp180*_tmp813 - _tmp814*across_2_0 - _tmp815*across_2_1 - _tmp173*_tmp811*numpy.cos(_tmp164) + 0.25*_tmp166*_tmp177*p_0 + 0.5*_tmp175*_tmp817*p_0 + 0.5*_tmp181*_tmp816*p_0
+    _tmp820 = 0.5*_tmp138
+    _tmp821 = _tmp201*_tmp4
+    _tmp822 = -_tmp151*_tmp821 + 0.5*_tmp138*_tmp142*p_0
+    _tmp823 = _tmp142*_tmp821 + _tmp138*_tmp151*_tmp4
+    _tmp824 = -_tmp138*_tmp146 - _tmp201*_tmp205
+    _tmp825 = _tmp146*_tmp201 - _tmp138*_tmp205
+    _tmp826 = _tmp162*_tmp4
+    _tmp827 = _tmp166*_tmp826 + _tmp175*_tmp185*_tmp4
+    _tmp828 = _tmp175*_tmp826 - 0.5*_tmp166*_tmp185*p_0
+    _tmp829 = -_tmp162*_tmp170 + 0.5*_tmp181*_tmp185*p_0
+    _tmp830 = _tmp162*_tmp182 + _tmp170*_tmp185
+    return [
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp136 + _tmp212,
+        _tmp136 + _tmp226,
+        _tmp107 + _tmp239,
+        -_tmp252 - _tmp248*_tmp249 + 833.3333333333334*_tmp20*_tmp24 + 833.3333333333334*_tmp77*_tmp78 + 1666.6666666666667*_tmp24*_tmp250 + 1666.6666666666667*_tmp44*_tmp48 + 1666.6666666666667*_tmp80*_tmp81,
+        -_tmp252 - _tmp261*_tmp262 + 833.3333333333334*_tmp44*_tmp48 + 833.3333333333334*_tmp80*_tmp81 + 1666.6666666666667*_tmp263*_tmp48,
+        -_tmp251 - 833.3333333333334*_tmp105 + 833.3333333333334*_tmp54*_tmp74 + 1666.6666666666667*_tmp102*_tmp273 + 1666.6666666666667*_tmp272*_tmp54,
+        0,
+        0,
+        -_tmp297*_tmp299 - _tmp308*_tmp309 - _tmp310*_tmp311 + 833.3333333333334*_tmp275*_tmp293,
+        0,
+        _tmp320 + _tmp325 - _tmp316 - _tmp317 - _tmp318 + 1666.6666666666667*_tmp312 + 1666.6666666666667*_tmp315 + _tmp313*_tmp77 + _tmp314*_tmp80 + _tmp86*_tmp96,
+        -_tmp328 - _tmp331,
+        -_tmp328 - _tmp332,
+        -_tmp327 - _tmp248*_tmp313 - _tmp249*_tmp250 + 833.3333333333334*_tmp24*_tmp77 - 833.3333333333334*_tmp20*_tmp78,
+        -_tmp326 - _tmp261*_tmp314 - _tmp262*_tmp263 + 833.3333333333334*_tmp48*_tmp80 - 833.3333333333334*_tmp44*_tmp81,
+        _tmp320 + 833.3333333333334*_tmp312 + 833.3333333333334*_tmp315 + 1666.6666666666667*_tmp333 - 1666.6666666666667*_tmp273*_tmp54,
+        0,
+        0,
+        -_tmp293*_tmp299 - _tmp308*_tmp311 + 1666.6666666666667*_tmp298*_tmp310 - 833.3333333333334*_tmp275*_tmp297,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp212 + _tmp412,
+        _tmp226 + _tmp412,
+        _tmp239 + _tmp411,
+        0,
+        0,
+        0,
+        -_tmp404 - _tmp410 - _tmp424 - _tmp421*_tmp422 + 833.3333333333334*_tmp353*_tmp356 + 833.3333333333334*_tmp385*_tmp386 + 1666.6666666666667*_tmp356*_tmp423 + 1666.6666666666667*_tmp362*_tmp382 + 1666.6666666666667*_tmp387*_tmp389,
+        -_tmp424 + 833.3333333333334*_tmp362*_tmp382 + 833.3333333333334*_tmp387*_tmp389 + 1666.6666666666667*_tmp362*_tmp434 - 1666.6666666666667*_tmp387*_tmp433,
+        0,
+        -_tmp458*_tmp460 - _tmp469*_tmp470 - _tmp471*_tmp472 + 833.3333333333334*_tmp436*_tmp454,
+        _tmp325 - _tmp475 - _tmp476 - _tmp477 - _tmp479 + 1666.6666666666667*_tmp474 + _tmp385*_tmp473 + _tmp397*_tmp405 + _tmp403*_tmp408,
+        -_tmp331 - _tmp482,
+        -_tmp332 - _tmp482,
+        0,
+        0,
+        0,
+        -_tmp481 - _tmp421*_tmp473 - _tmp422*_tmp423 + 833.3333333333334*_tmp356*_tmp385 - 833.3333333333334*_tmp353*_tmp386,
+        -_tmp480 - 833.3333333333334*_tmp478 + 833.3333333333334*_tmp362*_tmp389 - 1666.6666666666667*_tmp362*_tmp433 - 1666.6666666666667*_tmp387*_tmp434,
+        0,
+        -_tmp454*_tmp460 - _tmp469*_tmp472 + 1666.6666666666667*_tmp459*_tmp471 - 833.3333333333334*_tmp436*_tmp458,
+        _tmp493,
+        _tmp493,
+        _tmp493,
+        _tmp493,
+        _tmp493,
+        -_tmp492*(-_tmp333 - _tmp491 - 0.5*_tmp312 - 0.5*_tmp315 + _tmp273*_tmp54) + 4.850712500726659*x_7*(-_tmp489 + 0.04*_tmp486 - 0.5*_tmp75 - _tmp102*_tmp273 - _tmp272*_tmp54 + 0.5*_tmp102*_tmp104),
+        0,
+        0,
+        0,
+        0,
+        _tmp494,
+        _tmp494,
+        _tmp494,
+        _tmp494,
+        _tmp494,
+        _tmp494,
+        0,
+        0,
+        0,
+        0,
+        _tmp506,
+        _tmp506,
+        _tmp506,
+        0,
+        0,
+        0,
+        _tmp506,
+        _tmp505*(-_tmp504 - 0.5*_tmp383 - 0.5*_tmp390 + _tmp387*_tmp433 - _tmp362*_tmp434) - _tmp502*(-_tmp501 - 0.5*_tmp474 + _tmp362*_tmp433 + _tmp387*_tmp434 + 0.5*_tmp382*_tmp387),
+        0,
+        0,
+        _tmp507,
+        _tmp507,
+        _tmp507,
+        0,
+        0,
+        0,
+        _tmp507,
+        _tmp507,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp516*(-_tmp510*_tmp513 + 0.375*_tmp509*across_1_1*p_0 - _tmp141*_tmp190*_tmp509*_tmp514) + 48.148148148148145*_tmp517*(-_tmp509*_tmp513 - _tmp510*_tmp512*across_1_1 + 0.125*_tmp141*_tmp510*_tmp514*p_0),
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp516*(-_tmp520*_tmp522 - _tmp4*_tmp519*across_2_1) + 48.148148148148145*_tmp517*(-_tmp522*across_2_1 + 0.5*_tmp519*_tmp520*p_0),
+        -_tmp516*(-_tmp520*_tmp524 - _tmp523*across_2_1 + 0.125*_tmp165*_tmp519*_tmp525*p_0) + 48.148148148148145*_tmp517*(_tmp520*_tmp523 - _tmp524*across_2_1 + _tmp165*_tmp190*_tmp521*_tmp525),
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp531,
+        _tmp531,
+        -_tmp516*(-_tmp528*_tmp533 - _tmp532*across_3_1 + 0.125*_tmp110*_tmp527*_tmp534*p_0) + 48.148148148148145*_tmp517*(_tmp528*_tmp532 - _tmp533*across_3_1 + _tmp110*_tmp190*_tmp529*_tmp534),
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp540,
+        _tmp540,
+        _tmp540,
+        -_tmp492*(_tmp538*_tmp542 - _tmp541*across_4_1 + _tmp190*_tmp2*_tmp536*_tmp543) + 4.850712500726659*x_7*(-_tmp538*_tmp541 - _tmp542*across_4_1 + 0.125*_tmp2*_tmp539*_tmp543*p_0),
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp549,
+        _tmp549,
+        _tmp549,
+        _tmp549,
+        -_tmp492*(_tmp547*_tmp551 - _tmp550*across_5_1 + _tmp190*_tmp27*_tmp545*_tmp552) + 4.850712500726659*x_7*(-_tmp547*_tmp550 - _tmp551*across_5_1 + 0.125*_tmp27*_tmp548*_tmp552*p_0),
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp559,
+        _tmp559,
+        _tmp559,
+        _tmp559,
+        _tmp559,
+        -_tmp492*(-_tmp556*_tmp560 - _tmp512*_tmp554*across_6_1 + 0.125*_tmp554*_tmp561*_tmp57*p_0) + 4.850712500726659*x_7*(-_tmp554*_tmp560 + 0.375*_tmp556*across_6_1*p_0 - _tmp190*_tmp556*_tmp561*_tmp57),
+        0,
+        0,
+        0,
+        0,
+        _tmp567,
+        _tmp567,
+        _tmp567,
+        0,
+        0,
+        0,
+        _tmp505*(-_tmp564*_tmp569 - _tmp568*across_7_1 + 0.125*_tmp336*_tmp563*_tmp570*p_0) - _tmp502*(_tmp564*_tmp568 - _tmp569*across_7_1 + _tmp190*_tmp336*_tmp565*_tmp570),
+        0,
+        0,
+        0,
+        _tmp576,
+        _tmp576,
+        _tmp576,
+        0,
+        0,
+        0,
+        _tmp576,
+        _tmp505*(-_tmp573*_tmp578 - _tmp577*across_8_1 + 0.125*_tmp365*_tmp572*_tmp579*p_0) - _tmp502*(_tmp573*_tmp577 - _tmp578*across_8_1 + _tmp190*_tmp365*_tmp574*_tmp579),
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp492*(-_tmp582*_tmp584 - _tmp512*_tmp581*across_9_1 + 0.125*_tmp279*_tmp581*_tmp585*p_0) - _tmp586*(-_tmp581*_tmp584 + 0.375*_tmp582*across_9_1*p_0 - _tmp190*_tmp279*_tmp582*_tmp585),
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp505*(-_tmp589*_tmp591 + 0.375*_tmp588*across_10_1*p_0 - _tmp190*_tmp440*_tmp588*_tmp592) + 4.850712500726659*x_9*(-_tmp588*_tmp591 - _tmp512*_tmp589*across_10_1 + 0.125*_tmp440*_tmp589*_tmp592*p_0),
+        0,
+        -_tmp618 - _tmp620 + 1666.6666666666667*_tmp598 + 1666.6666666666667*_tmp604 + 1666.6666666666667*_tmp616 + 1666.6666666666667*_tmp637 + 1666.6666666666667*_tmp641 + _tmp236*_tmp609 + _tmp313*_tmp614 + _tmp314*_tmp631 - _tmp249*_tmp621 - _tmp262*_tmp639 - _tmp309*_tmp626 - _tmp311*_tmp638,
+        -_tmp645 - _tmp249*_tmp614 - _tmp262*_tmp631 - _tmp311*_tmp626 - _tmp313*_tmp621 - _tmp314*_tmp639 + 1666.6666666666667*_tmp102*_tmp636 + 1666.6666666666667*_tmp298*_tmp638 - 1666.6666666666667*_tmp54*_tmp640,
+        0,
+        -_tmp618 - _tmp620 - _tmp422*_tmp662 - _tmp470*_tmp650 - _tmp472*_tmp661 + 1666.6666666666667*_tmp129*_tmp609 + 1666.6666666666667*_tmp138*_tmp597 + 1666.6666666666667*_tmp162*_tmp603 + 1666.6666666666667*_tmp201*_tmp615 + 1666.6666666666667*_tmp356*_tmp655 + 1666.6666666666667*_tmp362*_tmp660 - 1666.6666666666667*_tmp387*_tmp663,
+        -_tmp645 - 1666.6666666666667*_tmp664 - 1666.6666666666667*_tmp665 - _tmp422*_tmp655 - _tmp472*_tmp650 - _tmp473*_tmp662 + 1666.6666666666667*_tmp459*_tmp661,
+        _tmp668 + _tmp586*(-_tmp637 - _tmp641 - 0.5*_tmp483 - 0.5*_tmp486) - _tmp492*(0.5*_tmp488 - 0.5*_tmp484 + _tmp54*_tmp640 - _tmp102*_tmp636),
+        _tmp669,
+        _tmp670 + _tmp505*(-_tmp672 - 0.5*_tmp496 + _tmp387*_tmp663 - _tmp362*_tmp660) - _tmp502*(_tmp664 + _tmp665 + _tmp671 - 0.5*_tmp495),
+        _tmp673 + _tmp505*(-_tmp671 - _tmp672) - _tmp502*(_tmp671 - _tmp672),
+        _tmp674,
+        _tmp675,
+        _tmp667*omega_1_0 + _tmp677*(-_tmp676*across_1_1 + 0.5*_tmp510*_tmp511) - _tmp516*(-_tmp511*_tmp676 - 0.5*_tmp510*across_1_1) - _tmp667*omega_1_1,
+        _tmp667*omega_2_0 + _tmp677*(_tmp520*_tmp678 + 0.5*_tmp519*across_2_1) - _tmp516*(-_tmp678*across_2_1 + 0.5*_tmp519*_tmp520) - _tmp667*omega_2_1,
+        _tmp667*omega_3_0 + _tmp677*(_tmp528*_tmp679 + 0.5*_tmp527*across_3_1) - _tmp516*(-_tmp679*across_3_1 + 0.5*_tmp527*_tmp528) - _tmp667*omega_3_1,
+        _tmp586*(-_tmp680*across_4_1 + 0.5*_tmp538*_tmp539) + _tmp667*omega_4_0 - _tmp492*(_tmp538*_tmp680 + 0.5*_tmp539*across_4_1) - _tmp667*omega_4_1,
+        -_tmp668 + _tmp586*(-_tmp681*across_5_1 + 0.5*_tmp547*_tmp548) + _tmp667*omega_5_0 - _tmp492*(_tmp547*_tmp681 + 0.5*_tmp548*across_5_1),
+        -_tmp669 + _tmp586*(-_tmp557*_tmp682 - 0.5*_tmp554*across_6_1) + _tmp667*omega_6_0 - _tmp492*(-_tmp682*across_6_1 + 0.5*_tmp554*_tmp557),
+        -_tmp670 + _tmp505*(-_tmp683*across_7_1 + 0.5*_tmp563*_tmp564) + _tmp667*omega_7_0 - _tmp502*(_tmp564*_tmp683 + 0.5*_tmp563*across_7_1),
+        -_tmp673 + _tmp505*(-_tmp684*across_8_1 + 0.5*_tmp572*_tmp573) + _tmp667*omega_8_0 - _tmp502*(_tmp573*_tmp684 + 0.5*_tmp572*across_8_1),
+        _tmp674 + _tmp492*(-_tmp685*across_9_1 + 0.5*_tmp581*_tmp583) + _tmp667*omega_9_0 - _tmp586*(-_tmp583*_tmp685 - 0.5*_tmp581*across_9_1),
+        _tmp675 + _tmp502*(-_tmp686*across_10_1 + 0.5*_tmp589*_tmp590) + _tmp667*omega_10_0 - _tmp505*(-_tmp590*_tmp686 - 0.5*_tmp589*across_10_1),
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp517*_tmp692 - _tmp690*_tmp691,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp515*_tmp692 + 250000*_tmp145*_tmp517*_tmp687*_tmp688,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp517*_tmp695 - _tmp693*_tmp694,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp515*_tmp695 + 750000*_tmp509*_tmp517*_tmp687*_tmp688,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp696*_tmp699 - _tmp517*_tmp701,
+        _tmp690*_tmp699 - _tmp700*_tmp702,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp515*_tmp701 - _tmp698*_tmp703,
+        -_tmp698*_tmp702 - _tmp700*_tmp704,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp696*_tmp705 - _tmp521*_tmp703,
+        _tmp693*_tmp705 - _tmp521*_tmp706,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp519*_tmp703 - _tmp696*_tmp707,
+        -_tmp519*_tmp706 - _tmp693*_tmp707,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp712,
+        _tmp712,
+        _tmp704*_tmp709 - _tmp702*_tmp711,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp713,
+        _tmp713,
+        -_tmp702*_tmp709 - _tmp704*_tmp711,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp714,
+        _tmp714,
+        _tmp527*_tmp715 - _tmp529*_tmp706,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp716,
+        _tmp716,
+        -_tmp527*_tmp706 - _tmp529*_tmp715,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp723,
+        _tmp723,
+        _tmp723,
+        _tmp720*_tmp724 - _tmp722*_tmp724,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp727,
+        _tmp727,
+        _tmp727,
+        _tmp724*_tmp725 + _tmp724*_tmp726,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp730,
+        _tmp730,
+        _tmp730,
+        _tmp728*_tmp731 - _tmp729*_tmp731,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp734,
+        _tmp734,
+        _tmp734,
+        _tmp731*_tmp732 + _tmp731*_tmp733,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp740,
+        _tmp740,
+        _tmp740,
+        _tmp740,
+        _tmp724*_tmp737 - _tmp724*_tmp739,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp743,
+        _tmp743,
+        _tmp743,
+        _tmp743,
+        _tmp724*_tmp741 + _tmp724*_tmp742,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp746,
+        _tmp746,
+        _tmp746,
+        _tmp746,
+        _tmp731*_tmp744 - _tmp731*_tmp745,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp749,
+        _tmp749,
+        _tmp749,
+        _tmp749,
+        _tmp731*_tmp747 + _tmp731*_tmp748,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        _tmp755,
+        _tmp755,
+        _tmp755,
+        _tmp755,
+        _tmp755,
+        _tmp724*_tmp752 + _tmp724*_tmp754,
+        0,
+        0,
+        0,
+        0,
+        _tmp757,
+        _tmp757,
+        _tmp757,
+        _tmp757,
+        _tmp757,
+        -_tmp724*_tmp756 + 25186.391830696113*_tmp687*_tmp688*_tmp751*x_7,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        _tmp760,
+        _tmp760,
+        _tmp760,
+        _tmp760,
+        _tmp760,
+        _tmp731*_tmp758 + _tmp731*_tmp759,
+        0,
+        0,
+        0,
+        0,
+        _tmp762,
+        _tmp762,
+        _tmp762,
+        _tmp762,
+        _tmp762,
+        -_tmp731*_tmp761 + 75559.17549208834*_tmp554*_tmp687*_tmp688*x_7,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        _tmp767,
+        _tmp767,
+        _tmp767,
+        0,
+        0,
+        0,
+        -_tmp724*_tmp765 + 25186.391830696113*_tmp687*_tmp688*_tmp766*x_9,
+        0,
+        0,
+        0,
+        _tmp770,
+        _tmp770,
+        _tmp770,
+        0,
+        0,
+        0,
+        _tmp724*_tmp768 + _tmp724*_tmp769,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        _tmp772,
+        _tmp772,
+        _tmp772,
+        0,
+        0,
+        0,
+        -_tmp731*_tmp771 + 75559.17549208834*_tmp565*_tmp687*_tmp688*x_9,
+        0,
+        0,
+        0,
+        _tmp775,
+        _tmp775,
+        _tmp775,
+        0,
+        0,
+        0,
+        _tmp731*_tmp773 + _tmp731*_tmp774,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        _tmp780,
+        _tmp780,
+        _tmp780,
+        0,
+        0,
+        0,
+        _tmp780,
+        -_tmp724*_tmp778 + 25186.391830696113*_tmp687*_tmp688*_tmp779*x_9,
+        0,
+        0,
+        _tmp783,
+        _tmp783,
+        _tmp783,
+        0,
+        0,
+        0,
+        _tmp783,
+        _tmp724*_tmp781 + _tmp724*_tmp782,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        _tmp785,
+        _tmp785,
+        _tmp785,
+        0,
+        0,
+        0,
+        _tmp785,
+        -_tmp731*_tmp784 + 75559.17549208834*_tmp574*_tmp687*_tmp688*x_9,
+        0,
+        0,
+        _tmp788,
+        _tmp788,
+        _tmp788,
+        0,
+        0,
+        0,
+        _tmp788,
+        _tmp731*_tmp786 + _tmp731*_tmp787,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp283*_tmp789 - _tmp291*_tmp790,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp291*_tmp789 - _tmp283*_tmp790,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp581*_tmp791 - _tmp582*_tmp792,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp582*_tmp791 - _tmp581*_tmp792,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp793*x_9 - _tmp452*_tmp724*x_10,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp793*x_10 + 25186.391830696113*_tmp452*_tmp687*_tmp688*x_9,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp794*x_9 - _tmp588*_tmp731*x_10,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp794*x_10 + 75559.17549208834*_tmp588*_tmp687*_tmp688*x_9,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp515*_tmp798 + 1000000*_tmp145*_tmp517*_tmp688*_tmp795,
+        _tmp517*_tmp798 + _tmp691*_tmp797,
+        0,
+        0,
+        0,
+        -_tmp510*_tmp799 + 1000000*_tmp509*_tmp517*_tmp688*_tmp795,
+        _tmp510*_tmp800 + _tmp694*_tmp797,
+        0,
+        0,
+        0,
+        -_tmp698*_tmp800 - _tmp700*_tmp799,
+        -_tmp699*_tmp797 + 1000000*_tmp517*_tmp688*_tmp700*_tmp795,
+        0,
+        0,
+        0,
+        -_tmp519*_tmp800 - _tmp707*_tmp797,
+        -_tmp705*_tmp797 + 1000000*_tmp517*_tmp521*_tmp688*_tmp795,
+        0,
+        0,
+        0,
+        -_tmp709*_tmp800 - _tmp711*_tmp799,
+        -_tmp709*_tmp799 + 1000000*_tmp517*_tmp688*_tmp711*_tmp795,
+        0,
+        0,
+        0,
+        -_tmp527*_tmp800 - _tmp529*_tmp799,
+        -_tmp527*_tmp799 + 1000000*_tmp517*_tmp529*_tmp688*_tmp795,
+        0,
+        0,
+        0,
+        _tmp725*_tmp801 + _tmp726*_tmp801,
+        -_tmp720*_tmp801 + 100745.56732278445*_tmp688*_tmp721*_tmp795*x_7,
+        0,
+        0,
+        0,
+        _tmp732*_tmp801 + _tmp733*_tmp801,
+        -_tmp728*_tmp801 + 100745.56732278445*_tmp539*_tmp688*_tmp795*x_7,
+        0,
+        0,
+        0,
+        _tmp741*_tmp801 + _tmp742*_tmp801,
+        -_tmp737*_tmp801 + 100745.56732278445*_tmp688*_tmp738*_tmp795*x_7,
+        0,
+        0,
+        0,
+        _tmp747*_tmp801 + _tmp748*_tmp801,
+        -_tmp744*_tmp801 + 100745.56732278445*_tmp548*_tmp688*_tmp795*x_7,
+        0,
+        0,
+        0,
+        -_tmp756*_tmp801 + 100745.56732278445*_tmp688*_tmp751*_tmp795*x_7,
+        -_tmp752*_tmp801 - _tmp754*_tmp801,
+        0,
+        0,
+        0,
+        -_tmp761*_tmp801 + 100745.56732278445*_tmp554*_tmp688*_tmp795*x_7,
+        -_tmp758*_tmp801 - _tmp759*_tmp801,
+        0,
+        0,
+        0,
+        _tmp768*_tmp801 + _tmp769*_tmp801,
+        _tmp765*_tmp801 - _tmp766*_tmp801*x_9,
+        0,
+        0,
+        0,
+        _tmp773*_tmp801 + _tmp774*_tmp801,
+        _tmp771*_tmp801 - _tmp565*_tmp801*x_9,
+        0,
+        0,
+        0,
+        _tmp781*_tmp801 + _tmp782*_tmp801,
+        _tmp778*_tmp801 - _tmp779*_tmp801*x_9,
+        0,
+        0,
+        0,
+        _tmp786*_tmp801 + _tmp787*_tmp801,
+        _tmp784*_tmp801 - _tmp574*_tmp801*x_9,
+        0,
+        0,
+        0,
+        _tmp291*_tmp802 - _tmp283*_tmp803,
+        _tmp283*_tmp802 + _tmp291*_tmp803,
+        0,
+        0,
+        0,
+        _tmp582*_tmp802 - _tmp581*_tmp803,
+        _tmp581*_tmp802 + _tmp582*_tmp803,
+        0,
+        0,
+        0,
+        -_tmp804*x_10 + 100745.56732278445*_tmp452*_tmp688*_tmp795*x_9,
+        _tmp804*x_9 + _tmp452*_tmp801*x_10,
+        0,
+        0,
+        0,
+        -_tmp805*x_10 + 100745.56732278445*_tmp588*_tmp688*_tmp795*x_9,
+        _tmp805*x_9 + _tmp588*_tmp801*x_10,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp138*_tmp810 - _tmp201*_tmp812,
+        _tmp185*_tmp819 - _tmp162*_tmp818,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp138*_tmp812 - _tmp201*_tmp810,
+        _tmp162*_tmp819 + _tmp185*_tmp818,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp184 - _tmp189 - _tmp200 - _tmp207 - _tmp159*_tmp820 + 0.5*_tmp201*_tmp210,
+        -_tmp224 - 0.5*_tmp184 - 0.5*_tmp189 + _tmp185*_tmp225,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp321 - _tmp322 + _tmp138*_tmp206 + _tmp183*_tmp185 - _tmp210*_tmp820 - 0.5*_tmp159*_tmp201,
+        _tmp329 + _tmp330 + 0.5*_tmp323 - 0.5*_tmp321,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp598 - _tmp604 - _tmp616 + _tmp185*_tmp617,
+        _tmp642 + _tmp643 + _tmp644 - _tmp201*_tmp597,
+        _tmp822,
+        -_tmp823,
+        0,
+        _tmp824,
+        _tmp825,
+        0,
+        _tmp827,
+        -_tmp828,
+        0,
+        _tmp829,
+        -_tmp830,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp823,
+        _tmp822,
+        0,
+        -_tmp825,
+        _tmp824,
+        0,
+        _tmp828,
+        _tmp827,
+        0,
+        _tmp830,
+        _tmp829,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+    ]
+
+
 def _plate_relation4(plate):
     """one plate's relation at order 4: (along, across, omega) and their partials by (theta, p, f) (312 operations)."""
     theta, p, f, e_a, e_s = plate
@@ -8306,6 +12006,65 @@ def _plate_rest4(plate):
     ]
 
 
+def _plate_eps4(plate):
+    """one plate's relation at order 4: d(along, across, omega)/d(e_a, e_s) (158 operations)."""
+    theta, p, f, e_a, e_s = plate
+    _tmp0 = theta**2
+    _tmp5 = 1 + p*(-2*e_s + 2*e_a)
+    _tmp1 = e_a - e_s
+    _tmp2 = 1 + _tmp1*p
+    _tmp3 = _tmp2*p
+    _tmp4 = 2*p
+    _tmp6 = p**2
+    _tmp7 = _tmp5*_tmp6
+    _tmp8 = -0.08333333333333333*p + _tmp4*bcol_a(_tmp3) + _tmp7*bcol_a_d1(_tmp3)
+    _tmp9 = theta**4
+    _tmp10 = -0.0010416666666666667*p + _tmp4*bcol_e3c(_tmp3) + _tmp7*bcol_e3c_d1(_tmp3)
+    _tmp11 = bcol_s(_tmp3)
+    _tmp12 = _tmp2*f
+    _tmp13 = bcol_e1(_tmp3)
+    _tmp14 = _tmp0*_tmp13
+    _tmp15 = 4*_tmp2**3
+    _tmp16 = f**3
+    _tmp17 = _tmp16*bcol_e2(_tmp3)
+    _tmp18 = -_tmp15*_tmp17 - 2*_tmp12*_tmp14 + _tmp11*_tmp2*f
+    _tmp19 = _tmp18*f
+    _tmp20 = bcol_w(_tmp3)
+    _tmp21 = f**2
+    _tmp22 = _tmp2**2
+    _tmp23 = _tmp21*_tmp22
+    _tmp24 = bcol_e2_d1(_tmp3)
+    _tmp25 = f**4
+    _tmp26 = _tmp25*_tmp2**4
+    _tmp27 = bcol_e1_d1(_tmp3)
+    _tmp28 = _tmp0*_tmp27
+    _tmp29 = _tmp4*(_tmp20*_tmp23 + _tmp23*_tmp28 + _tmp24*_tmp26)
+    _tmp30 = _tmp15*_tmp24
+    _tmp31 = _tmp14*_tmp4*f + _tmp16*_tmp30*_tmp6 - _tmp11*f*p + 2*_tmp12*_tmp28*_tmp6 + 12*_tmp17*_tmp22*p - _tmp2*_tmp6*f*bcol_s_d1(_tmp3)
+    _tmp32 = -_tmp31
+    _tmp33 = _tmp1*f
+    _tmp34 = _tmp21*_tmp3
+    _tmp35 = 2*_tmp34
+    _tmp36 = _tmp23*_tmp6
+    _tmp37 = _tmp20*_tmp35 + _tmp28*_tmp35 + _tmp36*bcol_w_d1(_tmp3) + _tmp0*_tmp36*bcol_e1_d2(_tmp3) + _tmp25*_tmp30*p + _tmp26*_tmp6*bcol_e2_d2(_tmp3)
+    _tmp38 = _tmp19 + p - _tmp29 + _tmp0*_tmp8 + _tmp32*_tmp33 - _tmp10*_tmp9 - _tmp37*_tmp5
+    _tmp39 = _tmp29 - _tmp19 + _tmp10*_tmp9 + _tmp31*_tmp33 + _tmp37*_tmp5 - _tmp0*_tmp8
+    _tmp40 = _tmp18*p
+    _tmp41 = _tmp40 + _tmp2*_tmp32
+    _tmp42 = f - _tmp40 + _tmp2*_tmp31
+    _tmp43 = 0.5*f
+    _tmp44 = _tmp6*theta
+    _tmp45 = _tmp44*bcol_invt_d1(_tmp3) + 2*_tmp23*_tmp27*_tmp44 + 4*_tmp13*_tmp34*theta + 4*_tmp6*theta**3*bcol_e3_d1(_tmp3)
+    return [
+        _tmp38,
+        _tmp39,
+        _tmp41,
+        _tmp42,
+        _tmp45 - _tmp38*_tmp43 + 0.5*_tmp41*p,
+        -_tmp45 - _tmp39*_tmp43 + 0.5*_tmp42*p,
+    ]
+
+
 # nine_bar_platform: its tables for the runtime
 _MECHANISM = _Mechanism(
     input_names=INPUTS, pruned_inputs=PRUNED_INPUTS, parameter_names=tuple(PARAMETERS),
@@ -8339,6 +12098,9 @@ _MECHANISM = _Mechanism(
         tol=1e-12, max_iter=12, max_turn=0.2,
         p_limit=0.9, est_factor=3.0, est_limit=0.01,
         loads=False,
+        # the sensitivities (templates/numpy/reduced_sens.py): per variant its routine and blocks
+        sens=((_loaded_sens1, {'dR_dtheta': (0, 12, 10), 'dR_dp': (120, 12, 1), 'din_dtheta': (132, 50, 10), 'din_dp': (632, 50, 1), 'dD_dx': (682, 2, 12), 'dD_dtheta': (706, 2, 10), 'dD_dp': (726, 2, 1), 'dD_dout': (728, 2, 30)}), (_loaded_sens2, {'dR_dtheta': (0, 22, 10), 'dR_dp': (220, 22, 1), 'din_dtheta': (242, 100, 10), 'din_dp': (1242, 100, 1), 'dD_dx': (1342, 2, 22), 'dD_dtheta': (1386, 2, 10), 'dD_dp': (1406, 2, 1), 'dD_dout': (1408, 2, 60)}), ),
+        eps4=_plate_eps4,
     ),
     loaded_solve=_reduced_solve,
     sens_rigid_blocks={'A': (0, 6, 6), 'dG_dv': (36, 6, 5), 'dR_dtheta': (66, 2, 6), 'dR_dv': (78, 2, 5)},
@@ -8350,7 +12112,7 @@ _MECHANISM = _Mechanism(
         'paper': _Level(_dev_paper, None, None, 0, _sens_paper, {'dD_dtheta': (0, 2, 6), 'dD_dv': (12, 2, 5)}, None),
         'first_order': _Level(_dev_first_order, _linear, None, 0, _sens_first_order, {'dD_dtheta': (0, 2, 6), 'dD_dv': (12, 2, 5)}, None),
         'exact': _Level(_dev_exact, _linear, _newton, 0, _sens_exact, {'dD_dtheta': (0, 2, 6), 'dD_dv': (12, 2, 5)}, None),
-        'loaded': _Level(_loaded_deviation, None, None, 1, None, {}, None),
+        'loaded': _Level(_loaded_deviation, None, None, 1, _reduced_rates, {}, None),
     },
 )
 

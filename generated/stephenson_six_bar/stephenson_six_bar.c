@@ -3,7 +3,7 @@
  * Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
  * Points: D; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_dev1 60, loaded_plates2 623, loaded_system2 3042, loaded_dev2 143, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, plate_relation4 312, plate_values2 62, plate_rest4 39.
+ * Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_dev1 60, loaded_plates2 623, loaded_system2 3042, loaded_dev2 143, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, loaded_sens1 1094, loaded_sens2 2741, plate_relation4 312, plate_values2 62, plate_rest4 39, plate_eps4 158.
  */
 #include "stephenson_six_bar.h"
 
@@ -18,7 +18,8 @@ enum {
     SK_NP = 1,          /* points */
     SK_NL = 6,          /* links whose rotation is reported */
     SK_NV = 2,          /* variables of the sensitivities: parameters, inputs */
-    SK_NQ = SK_NPAR + 2 + 1,  /* what the routines read */
+    /* what the routines read: the parameters (loaded: its deviation, variant and x) */
+    SK_NQ = SK_NPAR + 22 + 1,
     SK_RN = 19 + 1,  /* loaded: the most unknowns */
     SK_RS = 14 + 1,  /* loaded: the most half plates */
     SK_RP = 1,  /* loaded: the points its deviation routines give */
@@ -144,6 +145,12 @@ static double symkin_bcol_a_d1_at(double p, double h)
     return ((-8.0) + h * ((4.0) + h * ((4.0 + p * (2.0)) + h * (p * (-1.0))))) / (h * (h * (h * (p * (p * (32.0))))));
 }
 
+/* bcol_a_d1(p) = d^1/dp^1 of p w(p)/(3 T^2). */
+static double symkin_bcol_a_d1(double p)
+{
+    return symkin_bcol_a_d1_at(p, symkin_bcol_h(p));
+}
+
 /* bcol_e1(p) = (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_e1_at(double p, double h)
 {
@@ -164,6 +171,12 @@ static double symkin_bcol_e1_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return ((-48.0) + h * ((48.0) + h * ((p * (8.0)) + h * ((p * (-4.0)) + h * (p * (p * (1.0))))))) / (h * (h * (p * (p * (512.0)))));
+}
+
+/* bcol_e1(p) = (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2). */
+static double symkin_bcol_e1(double p)
+{
+    return symkin_bcol_e1_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_e1_d1(p) = d^1/dp^1 of (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (15 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -188,6 +201,12 @@ static double symkin_bcol_e1_d1_at(double p, double h)
     return ((192.0) + h * ((96.0) + h * ((-288.0 + p * (-48.0)) + h * ((p * (-16.0)) + h * ((p * (24.0 + p * (4.0))) + h * ((p * (p * (-2.0))) + h * (p * (p * (p * (-1.0)))))))))) / (h * (h * (h * (p * (p * (p * (2048.0)))))));
 }
 
+/* bcol_e1_d1(p) = d^1/dp^1 of (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2). */
+static double symkin_bcol_e1_d1(double p)
+{
+    return symkin_bcol_e1_d1_at(p, symkin_bcol_h(p));
+}
+
 /* bcol_e1_d2(p) = d^2/dp^2 of (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (15 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_e1_d2_at(double p, double h)
 {
@@ -208,6 +227,12 @@ static double symkin_bcol_e1_d2_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return ((-2304.0) + h * ((-3072.0) + h * ((-384.0 + p * (768.0)) + h * ((5760.0 + p * (768.0)) + h * ((p * (64.0 + p * (-32.0))) + h * ((p * (-480.0 + p * (-64.0))) + h * ((p * (p * (8.0 + p * (-16.0)))) + h * ((p * (p * (p * (16.0)))) + h * (p * (p * (p * (p * (3.0))))))))))))) / (h * (h * (h * (h * (p * (p * (p * (p * (16384.0)))))))));
+}
+
+/* bcol_e1_d2(p) = d^2/dp^2 of (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2). */
+static double symkin_bcol_e1_d2(double p)
+{
+    return symkin_bcol_e1_d2_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_e2(p) = -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -231,6 +256,12 @@ static double symkin_bcol_e2_at(double p, double h)
     return ((240.0) + h * ((-240.0) + h * ((p * (-24.0)) + h * ((p * (4.0)) + h * (p * (p * (-1.0))))))) / (p * (p * (p * (1024.0))));
 }
 
+/* bcol_e2(p) = -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3). */
+static double symkin_bcol_e2(double p)
+{
+    return symkin_bcol_e2_at(p, symkin_bcol_h(p));
+}
+
 /* bcol_e2_d1(p) = d^1/dp^1 of -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_e2_d1_at(double p, double h)
 {
@@ -250,6 +281,12 @@ static double symkin_bcol_e2_d1_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return ((-1680.0) + h * ((1680.0 + p * (-48.0)) + h * ((p * (216.0)) + h * ((p * (-28.0 + p * (8.0))) + h * ((p * (p * (3.0))) + h * (p * (p * (p * (1.0))))))))) / (p * (p * (p * (p * (2048.0)))));
+}
+
+/* bcol_e2_d1(p) = d^1/dp^1 of -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3). */
+static double symkin_bcol_e2_d1(double p)
+{
+    return symkin_bcol_e2_d1_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_e2_d2(p) = d^2/dp^2 of -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -273,6 +310,12 @@ static double symkin_bcol_e2_d2_at(double p, double h)
     return ((60480.0 + p * (-192.0)) + h * ((-60480.0 + p * (3072.0)) + h * ((p * (-8928.0 + p * (144.0))) + h * ((p * (1008.0 + p * (-608.0))) + h * ((p * (p * (-12.0 + p * (-4.0)))) + h * ((p * (p * (p * (-40.0)))) + h * (p * (p * (p * (p * (-5.0))))))))))) / (p * (p * (p * (p * (p * (16384.0))))));
 }
 
+/* bcol_e2_d2(p) = d^2/dp^2 of -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3). */
+static double symkin_bcol_e2_d2(double p)
+{
+    return symkin_bcol_e2_d2_at(p, symkin_bcol_h(p));
+}
+
 /* bcol_e3(p) = -(3T^4p^2 + 20T^3p - 24T^2p - 48T + 48)/(3072 T^4 p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (13 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_e3_at(double p, double h)
 {
@@ -292,6 +335,33 @@ static double symkin_bcol_e3_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return ((-48.0) + h * ((48.0) + h * ((p * (24.0)) + h * ((p * (-20.0)) + h * (p * (p * (-3.0))))))) / (h * (h * (h * (h * (p * (3072.0))))));
+}
+
+/* bcol_e3_d1(p) = d^1/dp^1 of -(3T^4p^2 + 20T^3p - 24T^2p - 48T + 48)/(3072 T^4 p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
+static double symkin_bcol_e3_d1_at(double p, double h)
+{
+    const double d = p - 6.0;
+    const double d2 = d * d;
+    const double d4 = d2 * d2;
+    const double d8 = d4 * d4;
+    const double s = 1.0 / (p + 39.47841760435743);
+    if (p > -4.0 && p < 16.0) {
+        return ((((-62317.1090282084 + d * -2601.803112996573) + (-98.24150073157513 + d * -1.449920896321523) * d2) + ((-0.012275915872263935 + d * -1.1390294659006214e-05) + (-5.8952099340217056e-08 + d * 3.428021782217453e-10) * d2) * d4) + (((2.3149571793056234e-12 + d * -8.658295175739011e-14) + (1.41785207937709e-15 + d * -1.8163666924134298e-17) * d2) + (2.1127919490076908e-19 + d * -2.172980716945177e-21) * d4) * d8) * (s * s * s * s * s);
+    }
+    if (p >= 16.0) {
+        const double u = 0.5 * sqrt(p);
+        const double tau = 1.0 - h;
+        const double sigma = h * (2.0 - h);
+        return (((-32.0) + sigma * ((112.0 + u * (-64.0)) + sigma * (-80.0 + u * (-176.0 + u * (192.0))))) * (1.0 + tau) - sigma * (sigma * ((u * (-64.0)) + sigma * (u * (-176.0))))) / (((u * (98304.0)) + sigma * ((u * (-196608.0)) + sigma * (u * (98304.0)))) * (1.0 + tau) - sigma * ((u * (98304.0)) + sigma * ((u * (-196608.0)) + sigma * (u * (98304.0)))));
+    }
+    if (!(p > -9.869604401089358)) return NAN;
+    return ((192.0) + h * ((-240.0) + h * ((48.0 + p * (-96.0)) + h * ((p * (104.0)) + h * ((p * (-20.0 + p * (12.0))) + h * (p * (p * (-11.0)))))))) / (h * (h * (h * (h * (h * (p * (p * (6144.0))))))));
+}
+
+/* bcol_e3_d1(p) = d^1/dp^1 of -(3T^4p^2 + 20T^3p - 24T^2p - 48T + 48)/(3072 T^4 p). */
+static double symkin_bcol_e3_d1(double p)
+{
+    return symkin_bcol_e3_d1_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_e3c(p) = e3'(p) + 1/1920, at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (13 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -315,6 +385,12 @@ static double symkin_bcol_e3c_at(double p, double h)
     return ((960.0) + h * ((-1200.0) + h * ((240.0 + p * (-480.0)) + h * ((p * (520.0)) + h * ((p * (-100.0 + p * (60.0))) + h * (p * (p * (-39.0)))))))) / (h * (h * (h * (h * (h * (p * (p * (30720.0))))))));
 }
 
+/* bcol_e3c(p) = e3'(p) + 1/1920. */
+static double symkin_bcol_e3c(double p)
+{
+    return symkin_bcol_e3c_at(p, symkin_bcol_h(p));
+}
+
 /* bcol_e3c_d1(p) = d^1/dp^1 of e3'(p) + 1/1920, at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_e3c_d1_at(double p, double h)
 {
@@ -334,6 +410,12 @@ static double symkin_bcol_e3c_d1_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return ((-960.0) + h * ((1152.0) + h * ((-144.0 + p * (528.0)) + h * ((-48.0 + p * (-544.0)) + h * ((p * (56.0 + p * (-84.0))) + h * ((p * (20.0 + p * (64.0))) + h * (p * (p * (-5.0 + p * (3.0)))))))))) / (h * (h * (h * (h * (h * (h * (p * (p * (p * (12288.0))))))))));
+}
+
+/* bcol_e3c_d1(p) = d^1/dp^1 of e3'(p) + 1/1920. */
+static double symkin_bcol_e3c_d1(double p)
+{
+    return symkin_bcol_e3c_d1_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_invt(p) = 1/T(p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (12 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -384,6 +466,12 @@ static double symkin_bcol_invt_d1_at(double p, double h)
     return ((-4.0) + h * ((4.0) + h * (p * (1.0)))) / (h * (h * (p * (8.0))));
 }
 
+/* bcol_invt_d1(p) = d^1/dp^1 of 1/T(p). */
+static double symkin_bcol_invt_d1(double p)
+{
+    return symkin_bcol_invt_d1_at(p, symkin_bcol_h(p));
+}
+
 /* bcol_s(p) = (1 - T)/p, at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (13 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_s_at(double p, double h)
 {
@@ -409,6 +497,33 @@ static double symkin_bcol_s_at(double p, double h)
 static double symkin_bcol_s(double p)
 {
     return symkin_bcol_s_at(p, symkin_bcol_h(p));
+}
+
+/* bcol_s_d1(p) = d^1/dp^1 of (1 - T)/p, at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
+static double symkin_bcol_s_d1_at(double p, double h)
+{
+    const double d = p - 6.0;
+    const double d2 = d * d;
+    const double d4 = d2 * d2;
+    const double d8 = d4 * d4;
+    const double r = 1.0 / (p + 9.869604401089358);
+    if (p > -4.0 && p < 16.0) {
+        return ((((-0.8132429851307679 + d * -0.00028263927661945) + (-4.62076041242041e-06 + d * 1.2061372014718943e-07) * d2) + ((-2.027158719940083e-09 + d * 2.941018614006343e-11) + (-3.9541483920524393e-13 + d * 5.072415794354741e-15) * d2) * d4) + (((-6.302768016745823e-17 + d * 7.653122930054966e-19) + (-9.124106052786141e-21 + d * 1.0739523739919228e-22) * d2) + (-1.3113722098199768e-24 + d * 1.5174003904817066e-26) * d4) * d8) * (r * r);
+    }
+    if (p >= 16.0) {
+        const double u = 0.5 * sqrt(p);
+        const double tau = 1.0 - h;
+        const double sigma = h * (2.0 - h);
+        return (((12.0 + u * (-8.0)) + sigma * (u * (-4.0))) * (1.0 + tau) - sigma * (12.0)) / ((u * (u * (u * (u * (u * (128.0)))))) * (1.0 + tau));
+    }
+    if (!(p > -9.869604401089358)) return NAN;
+    return ((-12.0) + h * ((12.0) + h * (p * (1.0)))) / (p * (p * (8.0)));
+}
+
+/* bcol_s_d1(p) = d^1/dp^1 of (1 - T)/p. */
+static double symkin_bcol_s_d1(double p)
+{
+    return symkin_bcol_s_d1_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_w(p) = (12 (1 - T)/p - T^2)/(16 p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -457,6 +572,12 @@ static double symkin_bcol_w_d1_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return ((-120.0) + h * ((120.0 + p * (-4.0)) + h * ((p * (14.0)) + h * (p * (p * (1.0)))))) / (p * (p * (p * (64.0))));
+}
+
+/* bcol_w_d1(p) = d^1/dp^1 of (12 (1 - T)/p - T^2)/(16 p). */
+static double symkin_bcol_w_d1(double p)
+{
+    return symkin_bcol_w_d1_at(p, symkin_bcol_h(p));
 }
 
 /* cosr1(x): cosr1(x) = (cos x - sum_(k<1) (-1)^k x^(2k)/(2k)!) / x^2; Taylor series (9 terms, Estrin's form) for |x| < 1.0, else the nested elementary formula. */
@@ -6332,6 +6453,2337 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     out[111] = _tmp218;
 }
 
+/* loaded (1 half plate(s) per plate), sensitivities: dR/dtheta, dR/dp, din/dtheta, din/dp, dD/dx, dD/dtheta, dD/dp, dD/dout (1094 operations) */
+static void sk_loaded_sens1(const double *x, const double *theta, const double *plates, const double *params, double *out)
+{
+    const double x_0 = x[0];
+    const double x_1 = x[1];
+    const double x_2 = x[2];
+    const double x_3 = x[3];
+    const double x_4 = x[4];
+    const double x_5 = x[5];
+    const double x_6 = x[6];
+    const double x_7 = x[7];
+    const double x_9 = x[9];
+    const double x_10 = x[10];
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double theta_5 = theta[4];
+    const double theta_6 = theta[5];
+    const double theta_7 = theta[6];
+    const double along_1_0 = plates[0];
+    const double across_1_0 = plates[1];
+    const double along_2_0 = plates[3];
+    const double across_2_0 = plates[4];
+    const double omega_2_0 = plates[5];
+    const double along_3_0 = plates[6];
+    const double across_3_0 = plates[7];
+    const double omega_3_0 = plates[8];
+    const double along_4_0 = plates[9];
+    const double across_4_0 = plates[10];
+    const double omega_4_0 = plates[11];
+    const double along_5_0 = plates[12];
+    const double across_5_0 = plates[13];
+    const double omega_5_0 = plates[14];
+    const double along_6_0 = plates[15];
+    const double across_6_0 = plates[16];
+    const double omega_6_0 = plates[17];
+    const double along_7_0 = plates[18];
+    const double across_7_0 = plates[19];
+    const double omega_7_0 = plates[20];
+    const double p_0 = params[0];
+    const double _tmp0 = 0.5*theta_6 + 0.003076923076923077*x_4;
+    const double _tmp1 = symkin_arck(_tmp0);
+    const double _tmp2 = along_6_0 + _tmp1*pow(_tmp0, 2);
+    const double _tmp3 = _tmp0 + theta_1;
+    const double _tmp4 = cos(_tmp3);
+    const double _tmp5 = 1250.0*_tmp4;
+    const double _tmp6 = sin(_tmp3);
+    const double _tmp7 = 0.5*theta_1;
+    const double _tmp8 = cos(_tmp7);
+    const double _tmp9 = symkin_arck(_tmp7);
+    const double _tmp10 = along_1_0 + 0.25*_tmp9*pow(theta_1, 2);
+    const double _tmp11 = _tmp10*_tmp8;
+    const double _tmp12 = 625.0*p_0;
+    const double _tmp14 = sin(_tmp7);
+    const double _tmp13 = _tmp7*_tmp9 + 0.0625*(theta_1*theta_1*theta_1)*(-3*symkin_sinr2(_tmp7) + 3*symkin_cosr2(_tmp7) + symkin_sinr1(_tmp7));
+    const double _tmp15 = _tmp14*p_0;
+    const double _tmp16 = _tmp13*_tmp15;
+    const double _tmp17 = 1250.0*_tmp16 + _tmp11*_tmp12 - 625.0*_tmp14*across_1_0*p_0;
+    const double _tmp18 = sin(theta_3);
+    const double _tmp19 = 0.006153846153846154*x_1;
+    const double _tmp20 = sin(_tmp19);
+    const double _tmp21 = 0.003076923076923077*x_1;
+    const double _tmp22 = pow(sin(_tmp21), 2);
+    const double _tmp23 = 0.04*_tmp22;
+    const double _tmp24 = 75.0*_tmp20 - 1250.0*_tmp23;
+    const double _tmp25 = cos(theta_3);
+    const double _tmp26 = 0.02*_tmp20;
+    const double _tmp27 = 1250.0*_tmp26 + 150.0*_tmp22;
+    const double _tmp28 = 0.003076923076923077*x_3;
+    const double _tmp29 = _tmp28 + 0.5*theta_5;
+    const double _tmp30 = _tmp19 + theta_3;
+    const double _tmp31 = _tmp29 + _tmp30;
+    const double _tmp32 = cos(_tmp31);
+    const double _tmp33 = sin(_tmp31);
+    const double _tmp34 = symkin_arck(_tmp29);
+    const double _tmp35 = along_5_0 + _tmp34*pow(_tmp29, 2);
+    const double _tmp36 = _tmp19 + 0.006153846153846154*x_3;
+    const double _tmp37 = sin(_tmp36);
+    const double _tmp38 = pow(sin(_tmp21 + _tmp28), 2);
+    const double _tmp39 = 0.072*_tmp37 - 0.06*_tmp38;
+    const double _tmp40 = theta_3 + theta_5;
+    const double _tmp41 = cos(_tmp40);
+    const double _tmp42 = 1250.0*_tmp41;
+    const double _tmp43 = -0.03*_tmp37 - 0.144*_tmp38;
+    const double _tmp44 = 1250.0*sin(_tmp40);
+    const double _tmp45 = _tmp39*_tmp42 + _tmp43*_tmp44;
+    const double _tmp46 = _tmp21 + 0.5*theta_3;
+    const double _tmp47 = sin(_tmp46);
+    const double _tmp48 = _tmp47*across_3_0;
+    const double _tmp49 = cos(_tmp46);
+    const double _tmp50 = symkin_arck(_tmp46);
+    const double _tmp51 = along_3_0 + _tmp50*pow(_tmp46, 2);
+    const double _tmp52 = _tmp46*_tmp50 + 0.5*(_tmp46*_tmp46*_tmp46)*(-3*symkin_sinr2(_tmp46) + 3*symkin_cosr2(_tmp46) + symkin_sinr1(_tmp46));
+    const double _tmp53 = _tmp12*_tmp48 - 625.0*_tmp49*_tmp51*p_0 - 1250.0*_tmp47*_tmp52*p_0;
+    const double _tmp54 = _tmp29*_tmp34 + 0.5*(_tmp29*_tmp29*_tmp29)*(-3*symkin_sinr2(_tmp29) + 3*symkin_cosr2(_tmp29) + symkin_sinr1(_tmp29));
+    const double _tmp55 = _tmp54*p_0;
+    const double _tmp56 = _tmp12*_tmp2;
+    const double _tmp57 = 1250.0*_tmp6;
+    const double _tmp58 = _tmp0*_tmp1 + 0.5*(_tmp0*_tmp0*_tmp0)*(-3*symkin_sinr2(_tmp0) + 3*symkin_cosr2(_tmp0) + symkin_sinr1(_tmp0));
+    const double _tmp59 = _tmp5*across_6_0;
+    const double _tmp60 = _tmp2*_tmp57;
+    const double _tmp61 = _tmp8*across_1_0;
+    const double _tmp62 = _tmp10*_tmp14;
+    const double _tmp63 = _tmp12*_tmp61 + _tmp12*_tmp62 - 1250.0*_tmp13*_tmp8*p_0;
+    const double _tmp64 = _tmp39*_tmp44;
+    const double _tmp65 = _tmp33*across_5_0;
+    const double _tmp66 = _tmp65*p_0;
+    const double _tmp67 = _tmp32*_tmp35;
+    const double _tmp68 = _tmp67*p_0;
+    const double _tmp69 = _tmp49*across_3_0;
+    const double _tmp70 = _tmp47*_tmp51;
+    const double _tmp71 = _tmp52*p_0;
+    const double _tmp72 = _tmp12*_tmp69 + _tmp12*_tmp70 - 1250.0*_tmp49*_tmp71;
+    const double _tmp73 = 0.003076923076923077*x_0;
+    const double _tmp74 = _tmp73 + 0.5*theta_2;
+    const double _tmp75 = 0.7853981633974483 + _tmp74 + theta_1;
+    const double _tmp76 = cos(_tmp75);
+    const double _tmp77 = _tmp76*across_2_0;
+    const double _tmp78 = _tmp77*p_0;
+    const double _tmp79 = sin(_tmp75);
+    const double _tmp80 = symkin_arck(_tmp74);
+    const double _tmp81 = along_2_0 + _tmp80*pow(_tmp74, 2);
+    const double _tmp82 = _tmp79*_tmp81;
+    const double _tmp83 = _tmp82*p_0;
+    const double _tmp84 = theta_1 + theta_2;
+    const double _tmp85 = cos(_tmp84);
+    const double _tmp86 = 0.006153846153846154*x_0;
+    const double _tmp87 = sin(_tmp86);
+    const double _tmp88 = sin(_tmp73);
+    const double _tmp89 = pow(_tmp88, 2);
+    const double _tmp90 = 0.04*_tmp87 - 0.14*_tmp89;
+    const double _tmp91 = _tmp85*_tmp90;
+    const double _tmp92 = sin(_tmp84);
+    const double _tmp93 = -0.07*_tmp87 - 0.08*_tmp89;
+    const double _tmp94 = _tmp92*_tmp93;
+    const double _tmp95 = 0.5*theta_7 + 0.003076923076923077*x_5;
+    const double _tmp96 = _tmp84 + _tmp86;
+    const double _tmp97 = _tmp95 + _tmp96;
+    const double _tmp98 = cos(_tmp97);
+    const double _tmp99 = 1250.0*_tmp98;
+    const double _tmp100 = _tmp99*across_7_0;
+    const double _tmp101 = symkin_arck(_tmp95);
+    const double _tmp102 = along_7_0 + _tmp101*pow(_tmp95, 2);
+    const double _tmp103 = sin(_tmp97);
+    const double _tmp104 = 1250.0*_tmp103;
+    const double _tmp105 = _tmp102*_tmp104;
+    const double _tmp106 = 1250.0*_tmp91 + 1250.0*_tmp94 + _tmp100*p_0 + _tmp105*p_0;
+    const double _tmp107 = (_tmp74*_tmp74*_tmp74)*(-3*symkin_sinr2(_tmp74) + 3*symkin_cosr2(_tmp74) + symkin_sinr1(_tmp74));
+    const double _tmp108 = 0.5*_tmp107 + _tmp74*_tmp80;
+    const double _tmp109 = 1250.0*_tmp23 + 62.5*_tmp20;
+    const double _tmp110 = 125.0*_tmp22 - 1250.0*_tmp26;
+    const double _tmp111 = 0.003076923076923077*x_2;
+    const double _tmp112 = _tmp111 + 0.5*theta_4;
+    const double _tmp113 = _tmp112 + _tmp30;
+    const double _tmp114 = cos(_tmp113);
+    const double _tmp115 = sin(_tmp113);
+    const double _tmp116 = symkin_arck(_tmp112);
+    const double _tmp117 = along_4_0 + _tmp116*pow(_tmp112, 2);
+    const double _tmp118 = _tmp19 + 0.006153846153846154*x_2;
+    const double _tmp119 = sin(_tmp118);
+    const double _tmp120 = pow(sin(_tmp111 + _tmp21), 2);
+    const double _tmp121 = 0.05*_tmp119 + 0.08*_tmp120;
+    const double _tmp122 = theta_3 + theta_4;
+    const double _tmp123 = cos(_tmp122);
+    const double _tmp124 = 1250.0*_tmp123;
+    const double _tmp125 = 0.04*_tmp119 - 0.1*_tmp120;
+    const double _tmp126 = 1250.0*sin(_tmp122);
+    const double _tmp127 = _tmp121*_tmp124 + _tmp125*_tmp126;
+    const double _tmp128 = _tmp112*_tmp116 + 0.5*(_tmp112*_tmp112*_tmp112)*(-3*symkin_sinr2(_tmp112) + 3*symkin_cosr2(_tmp112) + symkin_sinr1(_tmp112));
+    const double _tmp129 = _tmp128*p_0;
+    const double _tmp130 = _tmp12*_tmp98;
+    const double _tmp131 = _tmp103*_tmp12;
+    const double _tmp132 = _tmp101*_tmp95 + 0.5*(_tmp95*_tmp95*_tmp95)*(-3*symkin_sinr2(_tmp95) + 3*symkin_cosr2(_tmp95) + symkin_sinr1(_tmp95));
+    const double _tmp133 = _tmp90*_tmp92;
+    const double _tmp134 = 1250.0*_tmp133;
+    const double _tmp135 = _tmp79*across_2_0;
+    const double _tmp136 = _tmp135*p_0;
+    const double _tmp137 = _tmp104*across_7_0;
+    const double _tmp138 = _tmp137*p_0;
+    const double _tmp139 = _tmp85*_tmp93;
+    const double _tmp140 = _tmp76*_tmp81;
+    const double _tmp141 = _tmp140*p_0;
+    const double _tmp142 = _tmp79*p_0;
+    const double _tmp143 = _tmp108*_tmp142;
+    const double _tmp144 = _tmp121*_tmp126;
+    const double _tmp145 = _tmp115*across_4_0;
+    const double _tmp146 = _tmp145*p_0;
+    const double _tmp147 = _tmp114*_tmp117;
+    const double _tmp148 = _tmp147*p_0;
+    const double _tmp149 = _tmp115*_tmp129;
+    const double _tmp150 = sin(theta_1);
+    const double _tmp151 = cos(theta_1);
+    const double _tmp152 = 0.3535533905932738*cos(_tmp96);
+    const double _tmp153 = _tmp152*p_0;
+    const double _tmp154 = sin(_tmp96);
+    const double _tmp155 = 0.3535533905932738*_tmp154;
+    const double _tmp156 = _tmp155*p_0;
+    const double _tmp157 = _tmp153 + _tmp156;
+    const double _tmp158 = 0.5*p_0;
+    const double _tmp159 = _tmp14*across_1_0;
+    const double _tmp160 = _tmp16 + _tmp78 + _tmp83 + _tmp11*_tmp158 - _tmp158*_tmp159;
+    const double _tmp161 = 7.6923076923076925*x_10;
+    const double _tmp162 = _tmp8*p_0;
+    const double _tmp163 = _tmp136 - _tmp141 + _tmp158*_tmp61 + _tmp158*_tmp62 - _tmp13*_tmp162;
+    const double _tmp164 = _tmp76*p_0;
+    const double _tmp165 = _tmp158*_tmp77 + _tmp158*_tmp82 - _tmp108*_tmp164;
+    const double _tmp166 = _tmp143 + _tmp140*_tmp158 - _tmp135*_tmp158;
+    const double _tmp167 = sin(_tmp30);
+    const double _tmp168 = 0.05*_tmp167;
+    const double _tmp169 = cos(_tmp30);
+    const double _tmp170 = 0.02*_tmp169;
+    const double _tmp171 = _tmp118 + _tmp122;
+    const double _tmp172 = sin(_tmp171);
+    const double _tmp173 = 0.04*_tmp172;
+    const double _tmp174 = -0.05 + _tmp158;
+    const double _tmp175 = cos(_tmp171);
+    const double _tmp176 = _tmp173 - _tmp174*_tmp175;
+    const double _tmp177 = _tmp49*_tmp51;
+    const double _tmp178 = 0.02*_tmp167;
+    const double _tmp179 = _tmp114*across_4_0;
+    const double _tmp180 = _tmp115*_tmp117;
+    const double _tmp181 = 0.04*_tmp175 + _tmp172*_tmp174;
+    const double _tmp182 = _tmp178 + _tmp181 + 0.05*_tmp169 + _tmp179*p_0 + _tmp180*p_0;
+    const double _tmp183 = -_tmp173 + _tmp174*_tmp175;
+    const double _tmp184 = _tmp161*(-_tmp181 - _tmp158*_tmp179 - _tmp158*_tmp180 + _tmp114*_tmp128*p_0) - 7.6923076923076925*x_9*(_tmp149 + _tmp183 + _tmp147*_tmp158 - _tmp145*_tmp158);
+    const double _tmp185 = 7.6923076923076925*x_9;
+    const double _tmp186 = _tmp36 + _tmp40;
+    const double _tmp187 = cos(_tmp186);
+    const double _tmp188 = -0.03 + _tmp158;
+    const double _tmp189 = sin(_tmp186);
+    const double _tmp190 = 0.072*_tmp187 + _tmp188*_tmp189;
+    const double _tmp191 = 7.6923076923076925*x_6;
+    const double _tmp192 = -0.5*_tmp169*p_0;
+    const double _tmp193 = _tmp32*across_5_0;
+    const double _tmp194 = _tmp33*_tmp35;
+    const double _tmp195 = _tmp187*_tmp188;
+    const double _tmp196 = _tmp195 - 0.072*_tmp189;
+    const double _tmp197 = 7.6923076923076925*x_7;
+    const double _tmp198 = _tmp161*(-_tmp181 + 0.5*_tmp172*p_0) - _tmp185*(-_tmp176 - _tmp158*_tmp175);
+    const double _tmp199 = -_tmp191*(-_tmp190 - _tmp158*_tmp187) + 7.6923076923076925*x_7*(-_tmp195 + 0.072*_tmp189 + _tmp158*_tmp189);
+    const double _tmp200 = 1250.0*_tmp61 + 1250.0*_tmp62 - 1250.0*_tmp47*_tmp51 - 1250.0*_tmp49*across_3_0;
+    const double _tmp201 = 1250.0*_tmp159;
+    const double _tmp202 = 1250.0*_tmp177;
+    const double _tmp203 = p_0 <= 0.008;
+    const double _tmp204 = 1.3541666666666668e-05*p_0*((_tmp203) ? (230769230769.23077) : (210000000000));
+    const double _tmp205 = _tmp147 - _tmp145 + 0.5*_tmp175;
+    const double _tmp206 = _tmp135 + _tmp61 + _tmp62 - _tmp140;
+    const double _tmp207 = _tmp11 + _tmp77 + _tmp82 - _tmp159;
+    const double _tmp208 = -0.5*_tmp169;
+    const double _tmp209 = 0.5*_tmp187;
+    const double _tmp210 = 0.5*_tmp189;
+    const double _tmp211 = 1.0/p_0;
+    const double _tmp212 = ((_tmp203) ? (4.333333333333334e-12) : (4.761904761904762e-12));
+    const double _tmp213 = _tmp211*_tmp212;
+    const double _tmp214 = 1500000*_tmp213;
+    const double _tmp215 = 0.378698224852071*x_10 + 0.378698224852071*x_7;
+    const double _tmp216 = _tmp14*_tmp215;
+    const double _tmp217 = 0.378698224852071*x_6 + 0.378698224852071*x_9;
+    const double _tmp218 = _tmp214*_tmp8;
+    const double _tmp219 = 1136094.674556213*_tmp213;
+    const double _tmp220 = _tmp76*x_10;
+    const double _tmp221 = _tmp79*x_9;
+    const double _tmp222 = 568047.3372781065*_tmp213;
+    const double _tmp223 = _tmp79*x_10;
+    const double _tmp224 = _tmp76*x_9;
+    const double _tmp225 = -_tmp215;
+    const double _tmp226 = _tmp214*_tmp225;
+    const double _tmp227 = -_tmp217;
+    const double _tmp228 = _tmp114*x_10;
+    const double _tmp229 = _tmp115*x_10;
+    const double _tmp230 = _tmp114*x_9;
+    const double _tmp231 = _tmp33*x_6;
+    const double _tmp232 = _tmp32*x_7;
+    const double _tmp233 = _tmp32*x_6;
+    const double _tmp234 = _tmp33*x_7;
+    const double _tmp235 = _tmp4*x_6;
+    const double _tmp236 = _tmp6*x_7;
+    const double _tmp237 = _tmp6*x_6;
+    const double _tmp238 = _tmp4*x_7;
+    const double _tmp239 = _tmp98*x_10;
+    const double _tmp240 = _tmp103*x_9;
+    const double _tmp241 = _tmp219*_tmp239 - _tmp219*_tmp240;
+    const double _tmp242 = _tmp103*x_10;
+    const double _tmp243 = _tmp98*x_9;
+    const double _tmp244 = -_tmp219*_tmp242 - _tmp219*_tmp243;
+    const double _tmp245 = pow(p_0, -2);
+    const double _tmp246 = _tmp212*_tmp245;
+    const double _tmp247 = 3000000*_tmp246;
+    const double _tmp248 = _tmp247*_tmp8;
+    const double _tmp249 = 1136094.674556213*_tmp246;
+    const double _tmp250 = _tmp225*_tmp247;
+    const double _tmp251 = cos(_tmp86);
+    const double _tmp252 = _tmp88*cos(_tmp73);
+    const double _tmp253 = 0.00024615384615384614*_tmp251 - 0.0008615384615384615*_tmp252;
+    const double _tmp254 = -0.0004923076923076923*_tmp252 - 0.0004307692307692308*_tmp251;
+    const double _tmp255 = 0.003076923076923077*_tmp107 + _tmp80*(1.893491124260355e-05*x_0 + 0.003076923076923077*theta_2);
+    const double _tmp256 = _tmp91 + _tmp94;
+    const double _tmp257 = -_tmp15;
+    out[0] = 0;
+    out[1] = 0;
+    out[2] = 0;
+    out[3] = 0;
+    out[4] = 0;
+    out[5] = 0;
+    out[6] = 0;
+    out[7] = -_tmp17 - _tmp2*_tmp5*p_0 + 1250.0*_tmp6*across_6_0*p_0;
+    out[8] = 0;
+    out[9] = -_tmp45 - _tmp53 - _tmp18*_tmp24 - _tmp25*_tmp27 + 1250.0*_tmp32*across_5_0*p_0 + 1250.0*_tmp33*_tmp35*p_0;
+    out[10] = 0;
+    out[11] = -_tmp45 - 1250.0*_tmp32*_tmp55 + 625.0*_tmp32*across_5_0*p_0 + 625.0*_tmp33*_tmp35*p_0;
+    out[12] = -_tmp4*_tmp56 - _tmp57*_tmp58*p_0 + 625.0*_tmp6*across_6_0*p_0;
+    out[13] = 0;
+    out[14] = -_tmp63 - _tmp59*p_0 - _tmp60*p_0;
+    out[15] = 0;
+    out[16] = _tmp72 - _tmp64 + 1250.0*_tmp66 - 1250.0*_tmp68 + _tmp24*_tmp25 + _tmp42*_tmp43 - _tmp18*_tmp27;
+    out[17] = 0;
+    out[18] = -_tmp64 - 625.0*_tmp68 + 1250.0*_tmp41*_tmp43 - 1250.0*_tmp33*_tmp55 + 625.0*_tmp33*across_5_0*p_0;
+    out[19] = -_tmp56*_tmp6 - _tmp12*_tmp4*across_6_0 + 1250.0*_tmp4*_tmp58*p_0;
+    out[20] = 0;
+    out[21] = 0;
+    out[22] = 0;
+    out[23] = 0;
+    out[24] = 0;
+    out[25] = 0;
+    out[26] = 0;
+    out[27] = 0;
+    out[28] = -_tmp106 - _tmp17 - 1250.0*_tmp78 - 1250.0*_tmp83;
+    out[29] = -_tmp106 - 625.0*_tmp78 - 625.0*_tmp83 + 1250.0*_tmp108*_tmp76*p_0;
+    out[30] = -_tmp127 - _tmp53 - _tmp109*_tmp18 - _tmp110*_tmp25 + 1250.0*_tmp114*across_4_0*p_0 + 1250.0*_tmp115*_tmp117*p_0;
+    out[31] = -_tmp127 - 1250.0*_tmp114*_tmp129 + 625.0*_tmp114*across_4_0*p_0 + 625.0*_tmp115*_tmp117*p_0;
+    out[32] = 0;
+    out[33] = 0;
+    out[34] = -_tmp102*_tmp131 - _tmp130*across_7_0 + 1250.0*_tmp132*_tmp98*p_0;
+    out[35] = -_tmp134 - _tmp138 - _tmp63 - 1250.0*_tmp136 + 1250.0*_tmp85*_tmp93 + 1250.0*_tmp102*_tmp98*p_0 + 1250.0*_tmp76*_tmp81*p_0;
+    out[36] = -_tmp134 - _tmp138 + 625.0*_tmp141 + 1250.0*_tmp139 + 1250.0*_tmp143 - 625.0*_tmp136 + _tmp102*_tmp99*p_0;
+    out[37] = _tmp72 - _tmp144 + 1250.0*_tmp146 - 1250.0*_tmp148 + _tmp109*_tmp25 + _tmp124*_tmp125 - _tmp110*_tmp18;
+    out[38] = -_tmp144 - 625.0*_tmp148 - 1250.0*_tmp149 + 1250.0*_tmp123*_tmp125 + 625.0*_tmp115*across_4_0*p_0;
+    out[39] = 0;
+    out[40] = 0;
+    out[41] = _tmp102*_tmp130 - _tmp131*across_7_0 + _tmp104*_tmp132*p_0;
+    out[42] = -_tmp161*(_tmp157 + _tmp160 + 0.03*_tmp150 + 0.02*_tmp151) + 7.6923076923076925*x_9*(_tmp156 + _tmp163 - _tmp153 + 0.02*_tmp150 - 0.03*_tmp151);
+    out[43] = -_tmp161*(_tmp157 + _tmp165) + 7.6923076923076925*x_9*(-_tmp153 - _tmp166 + 0.3535533905932738*_tmp154*p_0);
+    out[44] = -_tmp161*(-_tmp182 - _tmp158*_tmp177 - _tmp47*_tmp71 + 0.5*_tmp47*across_3_0*p_0) + 7.6923076923076925*x_9*(_tmp170 - _tmp146 - _tmp168 - _tmp176 - _tmp158*_tmp69 - _tmp158*_tmp70 + _tmp114*_tmp117*p_0 + _tmp49*_tmp52*p_0);
+    out[45] = -_tmp184;
+    out[46] = 0;
+    out[47] = 0;
+    out[48] = 0;
+    out[49] = 0;
+    out[50] = 0;
+    out[51] = _tmp161*(-_tmp182 - _tmp192) + _tmp197*(_tmp178 - _tmp192 - _tmp196 - 0.06*_tmp169 - _tmp193*p_0 - _tmp194*p_0) - _tmp185*(_tmp148 + _tmp170 + _tmp183 - _tmp146 - _tmp168 + _tmp158*_tmp167) - _tmp191*(-_tmp170 - _tmp190 - _tmp66 - 0.06*_tmp167 + 0.5*_tmp167*p_0 + _tmp32*_tmp35*p_0);
+    out[52] = _tmp184;
+    out[53] = -_tmp191*(-_tmp190 - _tmp158*_tmp65 + _tmp33*_tmp54*p_0 + 0.5*_tmp32*_tmp35*p_0) + 7.6923076923076925*x_7*(-_tmp196 - _tmp158*_tmp193 - _tmp158*_tmp194 + _tmp32*_tmp54*p_0);
+    out[54] = 0;
+    out[55] = 0;
+    out[56] = 0;
+    out[57] = 0;
+    out[58] = _tmp198;
+    out[59] = _tmp198;
+    out[60] = 0;
+    out[61] = 0;
+    out[62] = 0;
+    out[63] = 0;
+    out[64] = 0;
+    out[65] = _tmp199;
+    out[66] = 0;
+    out[67] = _tmp199;
+    out[68] = 0;
+    out[69] = 0;
+    out[70] = 0;
+    out[71] = 0;
+    out[72] = 0;
+    out[73] = 0;
+    out[74] = 0;
+    out[75] = 0;
+    out[76] = 0;
+    out[77] = 0;
+    out[78] = 0;
+    out[79] = 0;
+    out[80] = 0;
+    out[81] = 0;
+    out[82] = 0;
+    out[83] = 0;
+    out[84] = 0;
+    out[85] = -_tmp200 - _tmp59 - _tmp60 - 1250.0*_tmp67 + 1250.0*_tmp33*across_5_0;
+    out[86] = -_tmp201 - _tmp202 - 1250.0*_tmp193 - 1250.0*_tmp194 - _tmp57*across_6_0 + 1250.0*_tmp10*_tmp8 + 1250.0*_tmp2*_tmp4 + 1250.0*_tmp47*across_3_0;
+    out[87] = 0;
+    out[88] = -_tmp137 - _tmp200 - 1250.0*_tmp135 - 1250.0*_tmp147 + 1250.0*_tmp102*_tmp98 + 1250.0*_tmp115*across_4_0 + 1250.0*_tmp76*_tmp81;
+    out[89] = _tmp100 + _tmp105 - _tmp201 - _tmp202 + 1250.0*_tmp11 + 1250.0*_tmp48 + 1250.0*_tmp77 + 1250.0*_tmp82 - 1250.0*_tmp179 - 1250.0*_tmp180;
+    out[90] = _tmp185*(-_tmp152 - _tmp155 - _tmp207 - _tmp48 + 0.5*_tmp172 + _tmp114*across_4_0 + _tmp115*_tmp117 + _tmp49*_tmp51) + _tmp204*omega_2_0 - _tmp161*(_tmp155 + _tmp205 + _tmp206 - _tmp152 - _tmp69 - _tmp70);
+    out[91] = _tmp161*(_tmp205 + 0.5*_tmp167) + _tmp197*(-_tmp210 - _tmp65 + 0.5*_tmp167 + _tmp32*_tmp35) + _tmp204*omega_3_0 - _tmp185*(_tmp179 + _tmp180 + _tmp208 + 0.5*_tmp172) - _tmp191*(_tmp193 + _tmp194 + _tmp208 + _tmp209);
+    out[92] = _tmp204*omega_4_0;
+    out[93] = _tmp197*(-_tmp209 - _tmp210) + _tmp204*omega_5_0 - _tmp191*(_tmp209 - _tmp210);
+    out[94] = -_tmp204*omega_6_0;
+    out[95] = -_tmp204*omega_7_0;
+    out[96] = 1;
+    out[97] = 0;
+    out[98] = 0;
+    out[99] = 0;
+    out[100] = 0;
+    out[101] = 0;
+    out[102] = 0;
+    out[103] = -_tmp214*_tmp216 - _tmp217*_tmp218;
+    out[104] = 0;
+    out[105] = 0;
+    out[106] = 0;
+    out[107] = 0;
+    out[108] = 0;
+    out[109] = 0;
+    out[110] = -_tmp215*_tmp218 + 1500000*_tmp14*_tmp211*_tmp212*_tmp217;
+    out[111] = 0;
+    out[112] = 0;
+    out[113] = 0;
+    out[114] = 0;
+    out[115] = 0;
+    out[116] = 0;
+    out[117] = 0;
+    out[118] = 0;
+    out[119] = 0;
+    out[120] = 0;
+    out[121] = 0;
+    out[122] = 0;
+    out[123] = 0;
+    out[124] = 0;
+    out[125] = 0;
+    out[126] = 0;
+    out[127] = 0;
+    out[128] = 0;
+    out[129] = 0;
+    out[130] = 0;
+    out[131] = 0;
+    out[132] = 1;
+    out[133] = 0;
+    out[134] = 0;
+    out[135] = 0;
+    out[136] = 0;
+    out[137] = 0;
+    out[138] = _tmp219*_tmp220 - _tmp219*_tmp221;
+    out[139] = _tmp220*_tmp222 - _tmp221*_tmp222;
+    out[140] = 0;
+    out[141] = 0;
+    out[142] = 0;
+    out[143] = 0;
+    out[144] = 0;
+    out[145] = -_tmp219*_tmp223 - _tmp219*_tmp224;
+    out[146] = -_tmp222*_tmp223 - _tmp222*_tmp224;
+    out[147] = 0;
+    out[148] = 0;
+    out[149] = 0;
+    out[150] = 0;
+    out[151] = 0;
+    out[152] = 0;
+    out[153] = 0;
+    out[154] = 0;
+    out[155] = 0;
+    out[156] = 0;
+    out[157] = 0;
+    out[158] = 0;
+    out[159] = 0;
+    out[160] = 0;
+    out[161] = 0;
+    out[162] = 0;
+    out[163] = 0;
+    out[164] = 0;
+    out[165] = 0;
+    out[166] = 0;
+    out[167] = 0;
+    out[168] = 1;
+    out[169] = 0;
+    out[170] = 0;
+    out[171] = 0;
+    out[172] = 0;
+    out[173] = 0;
+    out[174] = 0;
+    out[175] = -_tmp226*_tmp47 - _tmp214*_tmp227*_tmp49;
+    out[176] = 0;
+    out[177] = 0;
+    out[178] = 0;
+    out[179] = 0;
+    out[180] = 0;
+    out[181] = 0;
+    out[182] = -_tmp226*_tmp49 + 1500000*_tmp211*_tmp212*_tmp227*_tmp47;
+    out[183] = 0;
+    out[184] = 0;
+    out[185] = 0;
+    out[186] = 0;
+    out[187] = 0;
+    out[188] = 0;
+    out[189] = 0;
+    out[190] = 0;
+    out[191] = 0;
+    out[192] = 0;
+    out[193] = 0;
+    out[194] = 0;
+    out[195] = 0;
+    out[196] = 0;
+    out[197] = 0;
+    out[198] = 0;
+    out[199] = 0;
+    out[200] = 0;
+    out[201] = 0;
+    out[202] = 0;
+    out[203] = 0;
+    out[204] = 1;
+    out[205] = 0;
+    out[206] = 0;
+    out[207] = 0;
+    out[208] = 0;
+    out[209] = 0;
+    out[210] = -_tmp219*_tmp228 + 1136094.674556213*_tmp115*_tmp211*_tmp212*x_9;
+    out[211] = -_tmp222*_tmp228 + 568047.3372781065*_tmp115*_tmp211*_tmp212*x_9;
+    out[212] = 0;
+    out[213] = 0;
+    out[214] = 0;
+    out[215] = 0;
+    out[216] = 0;
+    out[217] = _tmp219*_tmp229 + _tmp219*_tmp230;
+    out[218] = _tmp222*_tmp229 + _tmp222*_tmp230;
+    out[219] = 0;
+    out[220] = 0;
+    out[221] = 0;
+    out[222] = 0;
+    out[223] = 0;
+    out[224] = 0;
+    out[225] = 0;
+    out[226] = 0;
+    out[227] = 0;
+    out[228] = 0;
+    out[229] = 0;
+    out[230] = 0;
+    out[231] = 0;
+    out[232] = 0;
+    out[233] = 0;
+    out[234] = 0;
+    out[235] = 0;
+    out[236] = 0;
+    out[237] = 0;
+    out[238] = 0;
+    out[239] = 0;
+    out[240] = 1;
+    out[241] = 0;
+    out[242] = 0;
+    out[243] = 0;
+    out[244] = 0;
+    out[245] = _tmp219*_tmp231 - _tmp219*_tmp232;
+    out[246] = 0;
+    out[247] = _tmp222*_tmp231 - _tmp222*_tmp232;
+    out[248] = 0;
+    out[249] = 0;
+    out[250] = 0;
+    out[251] = 0;
+    out[252] = _tmp219*_tmp233 + _tmp219*_tmp234;
+    out[253] = 0;
+    out[254] = _tmp222*_tmp233 + _tmp222*_tmp234;
+    out[255] = 0;
+    out[256] = 0;
+    out[257] = 0;
+    out[258] = 0;
+    out[259] = 0;
+    out[260] = 0;
+    out[261] = 0;
+    out[262] = 0;
+    out[263] = 0;
+    out[264] = 0;
+    out[265] = 0;
+    out[266] = 0;
+    out[267] = 0;
+    out[268] = 0;
+    out[269] = 0;
+    out[270] = 0;
+    out[271] = 0;
+    out[272] = 0;
+    out[273] = 0;
+    out[274] = 0;
+    out[275] = 0;
+    out[276] = 1;
+    out[277] = 0;
+    out[278] = -_tmp219*_tmp235 - _tmp219*_tmp236;
+    out[279] = 0;
+    out[280] = 0;
+    out[281] = 0;
+    out[282] = 0;
+    out[283] = -_tmp222*_tmp235 - _tmp222*_tmp236;
+    out[284] = 0;
+    out[285] = _tmp219*_tmp237 - _tmp219*_tmp238;
+    out[286] = 0;
+    out[287] = 0;
+    out[288] = 0;
+    out[289] = 0;
+    out[290] = _tmp222*_tmp237 - _tmp222*_tmp238;
+    out[291] = 0;
+    out[292] = 0;
+    out[293] = 0;
+    out[294] = 0;
+    out[295] = 0;
+    out[296] = 0;
+    out[297] = 0;
+    out[298] = 0;
+    out[299] = 0;
+    out[300] = 0;
+    out[301] = 0;
+    out[302] = 0;
+    out[303] = 0;
+    out[304] = 0;
+    out[305] = 0;
+    out[306] = 0;
+    out[307] = 0;
+    out[308] = 0;
+    out[309] = 0;
+    out[310] = 0;
+    out[311] = 0;
+    out[312] = 1;
+    out[313] = _tmp241;
+    out[314] = _tmp241;
+    out[315] = 0;
+    out[316] = 0;
+    out[317] = 0;
+    out[318] = 0;
+    out[319] = _tmp222*_tmp239 - _tmp222*_tmp240;
+    out[320] = _tmp244;
+    out[321] = _tmp244;
+    out[322] = 0;
+    out[323] = 0;
+    out[324] = 0;
+    out[325] = 0;
+    out[326] = -_tmp222*_tmp242 - _tmp222*_tmp243;
+    out[327] = 0;
+    out[328] = 0;
+    out[329] = 0;
+    out[330] = 0;
+    out[331] = 0;
+    out[332] = 0;
+    out[333] = 0;
+    out[334] = 0;
+    out[335] = 0;
+    out[336] = 0;
+    out[337] = 0;
+    out[338] = 0;
+    out[339] = 0;
+    out[340] = 0;
+    out[341] = 0;
+    out[342] = -_tmp215*_tmp248 + 3000000*_tmp14*_tmp212*_tmp217*_tmp245;
+    out[343] = _tmp216*_tmp247 + _tmp217*_tmp248;
+    out[344] = 0;
+    out[345] = 0;
+    out[346] = 0;
+    out[347] = -_tmp223*_tmp249 - _tmp224*_tmp249;
+    out[348] = -_tmp220*_tmp249 + 1136094.674556213*_tmp212*_tmp245*_tmp79*x_9;
+    out[349] = 0;
+    out[350] = 0;
+    out[351] = 0;
+    out[352] = -_tmp250*_tmp49 + 3000000*_tmp212*_tmp227*_tmp245*_tmp47;
+    out[353] = _tmp250*_tmp47 + _tmp227*_tmp247*_tmp49;
+    out[354] = 0;
+    out[355] = 0;
+    out[356] = 0;
+    out[357] = _tmp229*_tmp249 + _tmp230*_tmp249;
+    out[358] = _tmp228*_tmp249 - _tmp115*_tmp249*x_9;
+    out[359] = 0;
+    out[360] = 0;
+    out[361] = 0;
+    out[362] = _tmp233*_tmp249 + _tmp234*_tmp249;
+    out[363] = -_tmp231*_tmp249 + 1136094.674556213*_tmp212*_tmp245*_tmp32*x_7;
+    out[364] = 0;
+    out[365] = 0;
+    out[366] = 0;
+    out[367] = _tmp237*_tmp249 - _tmp238*_tmp249;
+    out[368] = _tmp235*_tmp249 + _tmp236*_tmp249;
+    out[369] = 0;
+    out[370] = 0;
+    out[371] = 0;
+    out[372] = -_tmp242*_tmp249 - _tmp243*_tmp249;
+    out[373] = -_tmp239*_tmp249 + 1136094.674556213*_tmp103*_tmp212*_tmp245*x_9;
+    out[374] = 0;
+    out[375] = 0;
+    out[376] = -0.003076923076923077*_tmp78 - 0.003076923076923077*_tmp83 + _tmp254*_tmp85 - _tmp253*_tmp92 + _tmp255*_tmp76*p_0;
+    out[377] = 0;
+    out[378] = 0;
+    out[379] = 0;
+    out[380] = 0;
+    out[381] = 0;
+    out[382] = 0;
+    out[383] = 0;
+    out[384] = 0;
+    out[385] = 0;
+    out[386] = 0;
+    out[387] = 0;
+    out[388] = 0.003076923076923077*_tmp141 - 0.003076923076923077*_tmp136 + _tmp142*_tmp255 + _tmp253*_tmp85 + _tmp254*_tmp92;
+    out[389] = 0;
+    out[390] = 0;
+    out[391] = 0;
+    out[392] = 0;
+    out[393] = 0;
+    out[394] = 0;
+    out[395] = 0;
+    out[396] = 0;
+    out[397] = 0;
+    out[398] = 0;
+    out[399] = 0;
+    out[400] = -_tmp160 - _tmp256;
+    out[401] = -_tmp165 - _tmp256;
+    out[402] = 0;
+    out[403] = 0;
+    out[404] = 0;
+    out[405] = 0;
+    out[406] = 0;
+    out[407] = -_tmp133 - _tmp163 + _tmp85*_tmp93;
+    out[408] = _tmp139 + _tmp166 - _tmp133;
+    out[409] = 0;
+    out[410] = 0;
+    out[411] = 0;
+    out[412] = 0;
+    out[413] = 0;
+    out[414] = -_tmp206;
+    out[415] = _tmp207;
+    out[416] = _tmp257;
+    out[417] = -_tmp162;
+    out[418] = 0;
+    out[419] = _tmp164;
+    out[420] = -_tmp142;
+    out[421] = 0;
+    out[422] = 0;
+    out[423] = 0;
+    out[424] = 0;
+    out[425] = 0;
+    out[426] = 0;
+    out[427] = 0;
+    out[428] = 0;
+    out[429] = 0;
+    out[430] = 0;
+    out[431] = 0;
+    out[432] = 0;
+    out[433] = 0;
+    out[434] = 0;
+    out[435] = 0;
+    out[436] = 0;
+    out[437] = _tmp162;
+    out[438] = _tmp257;
+    out[439] = 0;
+    out[440] = _tmp142;
+    out[441] = _tmp164;
+    out[442] = 0;
+    out[443] = 0;
+    out[444] = 0;
+    out[445] = 0;
+    out[446] = 0;
+    out[447] = 0;
+    out[448] = 0;
+    out[449] = 0;
+    out[450] = 0;
+    out[451] = 0;
+    out[452] = 0;
+    out[453] = 0;
+    out[454] = 0;
+    out[455] = 0;
+    out[456] = 0;
+    out[457] = 0;
+}
+
+/* loaded (2 half plate(s) per plate), sensitivities: dR/dtheta, dR/dp, din/dtheta, din/dp, dD/dx, dD/dtheta, dD/dp, dD/dout (2741 operations) */
+static void sk_loaded_sens2(const double *x, const double *theta, const double *plates, const double *params, double *out)
+{
+    const double x_0 = x[0];
+    const double x_1 = x[1];
+    const double x_2 = x[2];
+    const double x_3 = x[3];
+    const double x_4 = x[4];
+    const double x_5 = x[5];
+    const double x_6 = x[6];
+    const double x_7 = x[7];
+    const double x_9 = x[9];
+    const double x_10 = x[10];
+    const double x_12 = x[12];
+    const double x_13 = x[13];
+    const double x_14 = x[14];
+    const double x_15 = x[15];
+    const double x_16 = x[16];
+    const double x_17 = x[17];
+    const double x_18 = x[18];
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double theta_5 = theta[4];
+    const double theta_6 = theta[5];
+    const double theta_7 = theta[6];
+    const double along_1_0 = plates[0];
+    const double across_1_0 = plates[1];
+    const double omega_1_0 = plates[2];
+    const double along_1_1 = plates[3];
+    const double across_1_1 = plates[4];
+    const double omega_1_1 = plates[5];
+    const double along_2_0 = plates[6];
+    const double across_2_0 = plates[7];
+    const double omega_2_0 = plates[8];
+    const double along_2_1 = plates[9];
+    const double across_2_1 = plates[10];
+    const double omega_2_1 = plates[11];
+    const double along_3_0 = plates[12];
+    const double across_3_0 = plates[13];
+    const double omega_3_0 = plates[14];
+    const double along_3_1 = plates[15];
+    const double across_3_1 = plates[16];
+    const double omega_3_1 = plates[17];
+    const double along_4_0 = plates[18];
+    const double across_4_0 = plates[19];
+    const double omega_4_0 = plates[20];
+    const double along_4_1 = plates[21];
+    const double across_4_1 = plates[22];
+    const double omega_4_1 = plates[23];
+    const double along_5_0 = plates[24];
+    const double across_5_0 = plates[25];
+    const double omega_5_0 = plates[26];
+    const double along_5_1 = plates[27];
+    const double across_5_1 = plates[28];
+    const double omega_5_1 = plates[29];
+    const double along_6_0 = plates[30];
+    const double across_6_0 = plates[31];
+    const double omega_6_0 = plates[32];
+    const double along_6_1 = plates[33];
+    const double across_6_1 = plates[34];
+    const double omega_6_1 = plates[35];
+    const double along_7_0 = plates[36];
+    const double across_7_0 = plates[37];
+    const double omega_7_0 = plates[38];
+    const double along_7_1 = plates[39];
+    const double across_7_1 = plates[40];
+    const double omega_7_1 = plates[41];
+    const double p_0 = params[0];
+    const double _tmp0 = 0.5*x_17;
+    const double _tmp1 = 0.25*theta_6 + 0.0015384615384615385*x_4;
+    const double _tmp2 = _tmp1 - _tmp0;
+    const double _tmp3 = sin(_tmp2);
+    const double _tmp4 = 0.5*p_0;
+    const double _tmp5 = _tmp4*across_6_0;
+    const double _tmp6 = _tmp0 + _tmp1;
+    const double _tmp7 = sin(_tmp6);
+    const double _tmp8 = _tmp4*_tmp7;
+    const double _tmp9 = pow(sin(_tmp0), 2);
+    const double _tmp10 = sin(_tmp1);
+    const double _tmp11 = pow(_tmp10, 2);
+    const double _tmp12 = cos(_tmp2);
+    const double _tmp13 = symkin_arck(_tmp6);
+    const double _tmp14 = along_6_0 + _tmp13*pow(_tmp6, 2);
+    const double _tmp15 = _tmp14*_tmp4;
+    const double _tmp16 = symkin_arck(_tmp2);
+    const double _tmp17 = along_6_1 + _tmp16*pow(_tmp2, 2);
+    const double _tmp18 = cos(_tmp6);
+    const double _tmp19 = _tmp18*_tmp4;
+    const double _tmp20 = _tmp12*_tmp15 + _tmp17*_tmp19 + _tmp3*_tmp5 + _tmp4*(-2*_tmp9 + 2*_tmp11) - _tmp8*across_6_1;
+    const double _tmp21 = theta_1 + 0.5*theta_6 + 0.003076923076923077*x_4;
+    const double _tmp22 = cos(_tmp21);
+    const double _tmp23 = _tmp20*_tmp22;
+    const double _tmp24 = sin(_tmp21);
+    const double _tmp25 = sin(1.0*x_17);
+    const double _tmp26 = _tmp12*_tmp5 + _tmp17*_tmp8 + _tmp19*across_6_1 + _tmp25*_tmp4 - _tmp15*_tmp3;
+    const double _tmp27 = 0.25*theta_1;
+    const double _tmp28 = 0.5*x_12;
+    const double _tmp29 = _tmp27 - _tmp28;
+    const double _tmp30 = sin(_tmp29);
+    const double _tmp31 = _tmp4*across_1_0;
+    const double _tmp32 = _tmp27 + _tmp28;
+    const double _tmp33 = sin(_tmp32);
+    const double _tmp34 = _tmp33*_tmp4;
+    const double _tmp35 = sin(_tmp27);
+    const double _tmp36 = pow(_tmp35, 2);
+    const double _tmp37 = sin(_tmp28);
+    const double _tmp38 = pow(_tmp37, 2);
+    const double _tmp39 = cos(_tmp29);
+    const double _tmp40 = symkin_arck(_tmp32);
+    const double _tmp41 = along_1_0 + _tmp40*pow(_tmp32, 2);
+    const double _tmp42 = _tmp4*_tmp41;
+    const double _tmp43 = symkin_arck(_tmp29);
+    const double _tmp44 = along_1_1 + _tmp43*pow(_tmp29, 2);
+    const double _tmp45 = cos(_tmp32);
+    const double _tmp46 = _tmp4*_tmp45;
+    const double _tmp47 = _tmp30*_tmp31 + _tmp39*_tmp42 + _tmp4*(-2*_tmp38 + 2*_tmp36) + _tmp44*_tmp46 - _tmp34*across_1_1;
+    const double _tmp48 = 0.5*theta_1;
+    const double _tmp49 = cos(_tmp48);
+    const double _tmp50 = 625.0*_tmp49;
+    const double _tmp51 = 0.125*p_0;
+    const double _tmp52 = _tmp51*across_1_0;
+    const double _tmp53 = _tmp33*_tmp51;
+    const double _tmp54 = _tmp41*_tmp51;
+    const double _tmp55 = 0.125*theta_1;
+    const double _tmp56 = 0.25*x_12;
+    const double _tmp57 = symkin_sinr1(_tmp29);
+    const double _tmp58 = (_tmp29*_tmp29*_tmp29)*(_tmp57 - 3*symkin_sinr2(_tmp29) + 3*symkin_cosr2(_tmp29));
+    const double _tmp59 = 0.25*_tmp58 + _tmp43*(_tmp55 - _tmp56);
+    const double _tmp60 = (_tmp32*_tmp32*_tmp32)*(-3*symkin_sinr2(_tmp32) + 3*symkin_cosr2(_tmp32) + symkin_sinr1(_tmp32));
+    const double _tmp61 = _tmp4*(0.25*_tmp60 + _tmp40*(_tmp55 + _tmp56));
+    const double _tmp62 = -_tmp30*_tmp52 - _tmp30*_tmp61 - _tmp39*_tmp54 - _tmp53*across_1_1 + 0.125*_tmp44*_tmp45*p_0 + 0.5*_tmp33*_tmp59*p_0;
+    const double _tmp63 = _tmp49*_tmp62;
+    const double _tmp64 = sin(_tmp48);
+    const double _tmp65 = _tmp39*_tmp52 + _tmp39*_tmp61 + _tmp46*_tmp59 - _tmp30*_tmp54 - _tmp44*_tmp53 + _tmp35*_tmp4*cos(_tmp27) - _tmp45*_tmp51*across_1_1;
+    const double _tmp66 = _tmp64*_tmp65;
+    const double _tmp67 = 1.0*x_12;
+    const double _tmp68 = sin(_tmp67);
+    const double _tmp69 = _tmp31*_tmp39 + _tmp34*_tmp44 + _tmp4*_tmp68 + _tmp46*across_1_1 - _tmp30*_tmp42;
+    const double _tmp70 = 1250.0*_tmp63 + 1250.0*_tmp66 + _tmp47*_tmp50 - 625.0*_tmp64*_tmp69;
+    const double _tmp71 = sin(theta_3);
+    const double _tmp72 = 0.006153846153846154*x_1;
+    const double _tmp73 = sin(_tmp72);
+    const double _tmp74 = 0.003076923076923077*x_1;
+    const double _tmp75 = pow(sin(_tmp74), 2);
+    const double _tmp76 = 0.04*_tmp75;
+    const double _tmp77 = 75.0*_tmp73 - 1250.0*_tmp76;
+    const double _tmp78 = cos(theta_3);
+    const double _tmp79 = 0.02*_tmp73;
+    const double _tmp80 = 1250.0*_tmp79 + 150.0*_tmp75;
+    const double _tmp81 = 0.003076923076923077*x_3;
+    const double _tmp82 = _tmp72 + theta_3;
+    const double _tmp83 = _tmp81 + _tmp82 + 0.5*theta_5;
+    const double _tmp84 = sin(_tmp83);
+    const double _tmp85 = 0.5*x_16;
+    const double _tmp86 = 0.25*theta_5 + 0.0015384615384615385*x_3;
+    const double _tmp87 = _tmp86 - _tmp85;
+    const double _tmp88 = sin(_tmp87);
+    const double _tmp89 = _tmp4*across_5_0;
+    const double _tmp90 = _tmp85 + _tmp86;
+    const double _tmp91 = sin(_tmp90);
+    const double _tmp92 = _tmp4*_tmp91;
+    const double _tmp93 = pow(sin(_tmp85), 2);
+    const double _tmp94 = sin(_tmp86);
+    const double _tmp95 = pow(_tmp94, 2);
+    const double _tmp96 = cos(_tmp87);
+    const double _tmp97 = symkin_arck(_tmp90);
+    const double _tmp98 = along_5_0 + _tmp97*pow(_tmp90, 2);
+    const double _tmp99 = _tmp4*_tmp98;
+    const double _tmp100 = symkin_arck(_tmp87);
+    const double _tmp101 = along_5_1 + _tmp100*pow(_tmp87, 2);
+    const double _tmp102 = cos(_tmp90);
+    const double _tmp103 = _tmp102*_tmp4;
+    const double _tmp104 = _tmp101*_tmp103 + _tmp4*(-2*_tmp93 + 2*_tmp95) + _tmp88*_tmp89 + _tmp96*_tmp99 - _tmp92*across_5_1;
+    const double _tmp105 = cos(_tmp83);
+    const double _tmp106 = sin(1.0*x_16);
+    const double _tmp107 = _tmp101*_tmp92 + _tmp103*across_5_1 + _tmp106*_tmp4 + _tmp89*_tmp96 - _tmp88*_tmp99;
+    const double _tmp108 = _tmp72 + 0.006153846153846154*x_3;
+    const double _tmp109 = sin(_tmp108);
+    const double _tmp110 = pow(sin(_tmp74 + _tmp81), 2);
+    const double _tmp111 = 0.072*_tmp109 - 0.06*_tmp110;
+    const double _tmp112 = theta_3 + theta_5;
+    const double _tmp113 = cos(_tmp112);
+    const double _tmp114 = 1250.0*_tmp113;
+    const double _tmp115 = -0.03*_tmp109 - 0.144*_tmp110;
+    const double _tmp116 = 1250.0*sin(_tmp112);
+    const double _tmp117 = _tmp111*_tmp114 + _tmp115*_tmp116;
+    const double _tmp118 = _tmp74 + 0.5*theta_3;
+    const double _tmp119 = sin(_tmp118);
+    const double _tmp120 = sin(1.0*x_14);
+    const double _tmp121 = 0.5*x_14;
+    const double _tmp122 = 0.25*theta_3 + 0.0015384615384615385*x_1;
+    const double _tmp123 = _tmp122 - _tmp121;
+    const double _tmp124 = cos(_tmp123);
+    const double _tmp125 = _tmp124*across_3_0;
+    const double _tmp126 = _tmp121 + _tmp122;
+    const double _tmp127 = cos(_tmp126);
+    const double _tmp128 = _tmp127*_tmp4;
+    const double _tmp129 = symkin_arck(_tmp126);
+    const double _tmp130 = along_3_0 + _tmp129*pow(_tmp126, 2);
+    const double _tmp131 = sin(_tmp123);
+    const double _tmp132 = _tmp130*_tmp131;
+    const double _tmp133 = symkin_arck(_tmp123);
+    const double _tmp134 = along_3_1 + _tmp133*pow(_tmp123, 2);
+    const double _tmp135 = sin(_tmp126);
+    const double _tmp136 = _tmp135*_tmp4;
+    const double _tmp137 = _tmp120*_tmp4 + _tmp125*_tmp4 + _tmp128*across_3_1 + _tmp134*_tmp136 - _tmp132*_tmp4;
+    const double _tmp138 = 625.0*_tmp137;
+    const double _tmp139 = cos(_tmp118);
+    const double _tmp140 = _tmp131*across_3_0;
+    const double _tmp141 = pow(sin(_tmp121), 2);
+    const double _tmp142 = sin(_tmp122);
+    const double _tmp143 = pow(_tmp142, 2);
+    const double _tmp144 = _tmp124*_tmp130;
+    const double _tmp145 = _tmp140*_tmp4 + _tmp144*_tmp4 + _tmp4*(-2*_tmp141 + 2*_tmp143) - _tmp136*across_3_1 + _tmp127*_tmp134*_tmp4;
+    const double _tmp146 = _tmp51*across_3_1;
+    const double _tmp147 = 0.25*x_14;
+    const double _tmp148 = 0.125*theta_3 + 0.0007692307692307692*x_1;
+    const double _tmp149 = symkin_sinr1(_tmp123);
+    const double _tmp150 = _tmp133*(_tmp148 - _tmp147) + 0.25*(_tmp123*_tmp123*_tmp123)*(_tmp149 - 3*symkin_sinr2(_tmp123) + 3*symkin_cosr2(_tmp123));
+    const double _tmp151 = _tmp4*(_tmp129*(_tmp147 + _tmp148) + 0.25*(_tmp126*_tmp126*_tmp126)*(-3*symkin_sinr2(_tmp126) + 3*symkin_cosr2(_tmp126) + symkin_sinr1(_tmp126)));
+    const double _tmp152 = -_tmp131*_tmp151 - _tmp135*_tmp146 - _tmp140*_tmp51 - _tmp144*_tmp51 + 0.125*_tmp127*_tmp134*p_0 + 0.5*_tmp135*_tmp150*p_0;
+    const double _tmp153 = _tmp124*_tmp151 + _tmp125*_tmp51 + _tmp128*_tmp150 - _tmp127*_tmp146 - _tmp132*_tmp51 + _tmp142*_tmp4*cos(_tmp122) - _tmp134*_tmp135*_tmp51;
+    const double _tmp154 = _tmp119*_tmp138 - 625.0*_tmp139*_tmp145 - 1250.0*_tmp119*_tmp153 - 1250.0*_tmp139*_tmp152;
+    const double _tmp155 = _tmp51*across_5_0;
+    const double _tmp156 = _tmp51*_tmp98;
+    const double _tmp157 = _tmp51*_tmp91;
+    const double _tmp158 = 0.25*x_16;
+    const double _tmp159 = 0.125*theta_5 + 0.0007692307692307692*x_3;
+    const double _tmp160 = symkin_sinr1(_tmp87);
+    const double _tmp161 = _tmp100*(_tmp159 - _tmp158) + 0.25*(_tmp87*_tmp87*_tmp87)*(_tmp160 - 3*symkin_sinr2(_tmp87) + 3*symkin_cosr2(_tmp87));
+    const double _tmp162 = _tmp4*(_tmp97*(_tmp158 + _tmp159) + 0.25*(_tmp90*_tmp90*_tmp90)*(-3*symkin_sinr2(_tmp90) + 3*symkin_cosr2(_tmp90) + symkin_sinr1(_tmp90)));
+    const double _tmp163 = _tmp103*_tmp161 + _tmp155*_tmp96 + _tmp162*_tmp96 - _tmp101*_tmp157 - _tmp156*_tmp88 + _tmp4*_tmp94*cos(_tmp86) - _tmp102*_tmp51*across_5_1;
+    const double _tmp164 = -_tmp155*_tmp88 - _tmp156*_tmp96 - _tmp157*across_5_1 - _tmp162*_tmp88 + 0.125*_tmp101*_tmp102*p_0 + 0.5*_tmp161*_tmp91*p_0;
+    const double _tmp165 = _tmp51*across_6_0;
+    const double _tmp166 = _tmp51*_tmp7;
+    const double _tmp167 = _tmp14*_tmp51;
+    const double _tmp168 = 0.25*x_17;
+    const double _tmp169 = 0.125*theta_6 + 0.0007692307692307692*x_4;
+    const double _tmp170 = symkin_sinr1(_tmp2);
+    const double _tmp171 = _tmp16*(_tmp169 - _tmp168) + 0.25*(_tmp2*_tmp2*_tmp2)*(_tmp170 - 3*symkin_sinr2(_tmp2) + 3*symkin_cosr2(_tmp2));
+    const double _tmp172 = _tmp4*(_tmp13*(_tmp168 + _tmp169) + 0.25*(_tmp6*_tmp6*_tmp6)*(-3*symkin_sinr2(_tmp6) + 3*symkin_cosr2(_tmp6) + symkin_sinr1(_tmp6)));
+    const double _tmp173 = -_tmp12*_tmp167 - _tmp165*_tmp3 - _tmp166*across_6_1 - _tmp172*_tmp3 + 0.125*_tmp17*_tmp18*p_0 + 0.5*_tmp171*_tmp7*p_0;
+    const double _tmp174 = 1250.0*_tmp22;
+    const double _tmp175 = _tmp12*_tmp165 + _tmp12*_tmp172 + _tmp171*_tmp19 - _tmp166*_tmp17 - _tmp167*_tmp3 + _tmp10*_tmp4*cos(_tmp1) - _tmp18*_tmp51*across_6_1;
+    const double _tmp176 = 1250.0*_tmp24;
+    const double _tmp177 = _tmp62*_tmp64;
+    const double _tmp178 = 1250.0*_tmp177 + _tmp50*_tmp69 + 625.0*_tmp47*_tmp64 - 1250.0*_tmp49*_tmp65;
+    const double _tmp179 = _tmp107*_tmp84;
+    const double _tmp180 = _tmp111*_tmp116;
+    const double _tmp181 = _tmp104*_tmp105;
+    const double _tmp182 = _tmp119*_tmp152;
+    const double _tmp183 = 1250.0*_tmp182 + _tmp138*_tmp139 + 625.0*_tmp119*_tmp145 - 1250.0*_tmp139*_tmp153;
+    const double _tmp184 = 0.003076923076923077*x_0;
+    const double _tmp185 = 0.7853981633974483 + theta_1;
+    const double _tmp186 = _tmp184 + _tmp185 + 0.5*theta_2;
+    const double _tmp187 = sin(_tmp186);
+    const double _tmp188 = 0.5*x_13;
+    const double _tmp189 = 0.25*theta_2 + 0.0015384615384615385*x_0;
+    const double _tmp190 = _tmp189 - _tmp188;
+    const double _tmp191 = sin(_tmp190);
+    const double _tmp192 = _tmp4*across_2_0;
+    const double _tmp193 = _tmp188 + _tmp189;
+    const double _tmp194 = sin(_tmp193);
+    const double _tmp195 = _tmp194*_tmp4;
+    const double _tmp196 = sin(_tmp188);
+    const double _tmp197 = pow(_tmp196, 2);
+    const double _tmp198 = sin(_tmp189);
+    const double _tmp199 = pow(_tmp198, 2);
+    const double _tmp200 = cos(_tmp190);
+    const double _tmp201 = symkin_arck(_tmp193);
+    const double _tmp202 = along_2_0 + _tmp201*pow(_tmp193, 2);
+    const double _tmp203 = _tmp202*_tmp4;
+    const double _tmp204 = symkin_arck(_tmp190);
+    const double _tmp205 = along_2_1 + _tmp204*pow(_tmp190, 2);
+    const double _tmp206 = cos(_tmp193);
+    const double _tmp207 = _tmp206*_tmp4;
+    const double _tmp208 = _tmp191*_tmp192 + _tmp200*_tmp203 + _tmp205*_tmp207 + _tmp4*(-2*_tmp197 + 2*_tmp199) - _tmp195*across_2_1;
+    const double _tmp209 = _tmp187*_tmp208;
+    const double _tmp210 = cos(_tmp186);
+    const double _tmp211 = 1.0*x_13;
+    const double _tmp212 = sin(_tmp211);
+    const double _tmp213 = _tmp192*_tmp200 + _tmp195*_tmp205 + _tmp207*across_2_1 + _tmp212*_tmp4 - _tmp191*_tmp203;
+    const double _tmp214 = _tmp210*_tmp213;
+    const double _tmp215 = theta_1 + theta_2;
+    const double _tmp216 = cos(_tmp215);
+    const double _tmp217 = 0.006153846153846154*x_0;
+    const double _tmp218 = sin(_tmp217);
+    const double _tmp219 = sin(_tmp184);
+    const double _tmp220 = pow(_tmp219, 2);
+    const double _tmp221 = 0.04*_tmp218 - 0.14*_tmp220;
+    const double _tmp222 = _tmp216*_tmp221;
+    const double _tmp223 = sin(_tmp215);
+    const double _tmp224 = -0.07*_tmp218 - 0.08*_tmp220;
+    const double _tmp225 = _tmp223*_tmp224;
+    const double _tmp226 = 0.5*x_18;
+    const double _tmp227 = 0.25*theta_7 + 0.0015384615384615385*x_5;
+    const double _tmp228 = _tmp227 - _tmp226;
+    const double _tmp229 = sin(_tmp228);
+    const double _tmp230 = _tmp4*across_7_0;
+    const double _tmp231 = _tmp226 + _tmp227;
+    const double _tmp232 = sin(_tmp231);
+    const double _tmp233 = _tmp232*_tmp4;
+    const double _tmp234 = pow(sin(_tmp226), 2);
+    const double _tmp235 = sin(_tmp227);
+    const double _tmp236 = pow(_tmp235, 2);
+    const double _tmp237 = cos(_tmp228);
+    const double _tmp238 = symkin_arck(_tmp231);
+    const double _tmp239 = along_7_0 + _tmp238*pow(_tmp231, 2);
+    const double _tmp240 = _tmp239*_tmp4;
+    const double _tmp241 = symkin_arck(_tmp228);
+    const double _tmp242 = along_7_1 + _tmp241*pow(_tmp228, 2);
+    const double _tmp243 = cos(_tmp231);
+    const double _tmp244 = _tmp243*_tmp4;
+    const double _tmp245 = _tmp229*_tmp230 + _tmp237*_tmp240 + _tmp242*_tmp244 + _tmp4*(-2*_tmp234 + 2*_tmp236) - _tmp233*across_7_1;
+    const double _tmp246 = _tmp215 + _tmp217;
+    const double _tmp247 = _tmp246 + 0.5*theta_7 + 0.003076923076923077*x_5;
+    const double _tmp248 = sin(_tmp247);
+    const double _tmp249 = _tmp245*_tmp248;
+    const double _tmp250 = sin(1.0*x_18);
+    const double _tmp251 = _tmp230*_tmp237 + _tmp233*_tmp242 + _tmp244*across_7_1 + _tmp250*_tmp4 - _tmp229*_tmp240;
+    const double _tmp252 = cos(_tmp247);
+    const double _tmp253 = 1250.0*_tmp252;
+    const double _tmp254 = 1250.0*_tmp222 + 1250.0*_tmp225 + 1250.0*_tmp249 + _tmp251*_tmp253;
+    const double _tmp255 = _tmp51*across_2_0;
+    const double _tmp256 = _tmp194*_tmp51;
+    const double _tmp257 = _tmp202*_tmp51;
+    const double _tmp258 = 0.25*x_13;
+    const double _tmp259 = 0.125*theta_2 + 0.0007692307692307692*x_0;
+    const double _tmp260 = symkin_sinr1(_tmp190);
+    const double _tmp261 = (_tmp190*_tmp190*_tmp190)*(_tmp260 - 3*symkin_sinr2(_tmp190) + 3*symkin_cosr2(_tmp190));
+    const double _tmp262 = 0.25*_tmp261 + _tmp204*(_tmp259 - _tmp258);
+    const double _tmp263 = (_tmp193*_tmp193*_tmp193)*(-3*symkin_sinr2(_tmp193) + 3*symkin_cosr2(_tmp193) + symkin_sinr1(_tmp193));
+    const double _tmp264 = _tmp4*(0.25*_tmp263 + _tmp201*(_tmp258 + _tmp259));
+    const double _tmp265 = -_tmp191*_tmp255 - _tmp191*_tmp264 - _tmp200*_tmp257 - _tmp256*across_2_1 + 0.125*_tmp205*_tmp206*p_0 + 0.5*_tmp194*_tmp262*p_0;
+    const double _tmp266 = _tmp187*_tmp265;
+    const double _tmp267 = _tmp198*cos(_tmp189);
+    const double _tmp268 = _tmp200*_tmp255 + _tmp200*_tmp264 + _tmp207*_tmp262 + _tmp267*_tmp4 - _tmp191*_tmp257 - _tmp205*_tmp256 - _tmp206*_tmp51*across_2_1;
+    const double _tmp269 = 1250.0*_tmp76 + 62.5*_tmp73;
+    const double _tmp270 = 125.0*_tmp75 - 1250.0*_tmp79;
+    const double _tmp271 = 0.003076923076923077*x_2;
+    const double _tmp272 = _tmp271 + _tmp82 + 0.5*theta_4;
+    const double _tmp273 = sin(_tmp272);
+    const double _tmp274 = 0.5*x_15;
+    const double _tmp275 = 0.25*theta_4 + 0.0015384615384615385*x_2;
+    const double _tmp276 = _tmp275 - _tmp274;
+    const double _tmp277 = sin(_tmp276);
+    const double _tmp278 = _tmp4*across_4_0;
+    const double _tmp279 = _tmp274 + _tmp275;
+    const double _tmp280 = sin(_tmp279);
+    const double _tmp281 = _tmp280*_tmp4;
+    const double _tmp282 = pow(sin(_tmp274), 2);
+    const double _tmp283 = sin(_tmp275);
+    const double _tmp284 = pow(_tmp283, 2);
+    const double _tmp285 = cos(_tmp276);
+    const double _tmp286 = symkin_arck(_tmp279);
+    const double _tmp287 = along_4_0 + _tmp286*pow(_tmp279, 2);
+    const double _tmp288 = _tmp287*_tmp4;
+    const double _tmp289 = symkin_arck(_tmp276);
+    const double _tmp290 = along_4_1 + _tmp289*pow(_tmp276, 2);
+    const double _tmp291 = cos(_tmp279);
+    const double _tmp292 = _tmp291*_tmp4;
+    const double _tmp293 = _tmp277*_tmp278 + _tmp285*_tmp288 + _tmp290*_tmp292 + _tmp4*(-2*_tmp282 + 2*_tmp284) - _tmp281*across_4_1;
+    const double _tmp294 = cos(_tmp272);
+    const double _tmp295 = sin(1.0*x_15);
+    const double _tmp296 = _tmp278*_tmp285 + _tmp281*_tmp290 + _tmp292*across_4_1 + _tmp295*_tmp4 - _tmp277*_tmp288;
+    const double _tmp297 = _tmp72 + 0.006153846153846154*x_2;
+    const double _tmp298 = sin(_tmp297);
+    const double _tmp299 = pow(sin(_tmp271 + _tmp74), 2);
+    const double _tmp300 = 0.05*_tmp298 + 0.08*_tmp299;
+    const double _tmp301 = theta_3 + theta_4;
+    const double _tmp302 = cos(_tmp301);
+    const double _tmp303 = 1250.0*_tmp302;
+    const double _tmp304 = 0.04*_tmp298 - 0.1*_tmp299;
+    const double _tmp305 = 1250.0*sin(_tmp301);
+    const double _tmp306 = _tmp300*_tmp303 + _tmp304*_tmp305;
+    const double _tmp307 = _tmp51*across_4_0;
+    const double _tmp308 = _tmp287*_tmp51;
+    const double _tmp309 = _tmp280*_tmp51;
+    const double _tmp310 = 0.25*x_15;
+    const double _tmp311 = 0.125*theta_4 + 0.0007692307692307692*x_2;
+    const double _tmp312 = symkin_sinr1(_tmp276);
+    const double _tmp313 = _tmp289*(_tmp311 - _tmp310) + 0.25*(_tmp276*_tmp276*_tmp276)*(_tmp312 - 3*symkin_sinr2(_tmp276) + 3*symkin_cosr2(_tmp276));
+    const double _tmp314 = _tmp4*(_tmp286*(_tmp310 + _tmp311) + 0.25*(_tmp279*_tmp279*_tmp279)*(-3*symkin_sinr2(_tmp279) + 3*symkin_cosr2(_tmp279) + symkin_sinr1(_tmp279)));
+    const double _tmp315 = _tmp285*_tmp307 + _tmp285*_tmp314 + _tmp292*_tmp313 - _tmp277*_tmp308 - _tmp290*_tmp309 + _tmp283*_tmp4*cos(_tmp275) - _tmp291*_tmp51*across_4_1;
+    const double _tmp316 = -_tmp277*_tmp307 - _tmp277*_tmp314 - _tmp285*_tmp308 - _tmp309*across_4_1 + 0.125*_tmp290*_tmp291*p_0 + 0.5*_tmp280*_tmp313*p_0;
+    const double _tmp317 = 625.0*_tmp252;
+    const double _tmp318 = _tmp51*across_7_0;
+    const double _tmp319 = _tmp232*_tmp51;
+    const double _tmp320 = _tmp239*_tmp51;
+    const double _tmp321 = 0.25*x_18;
+    const double _tmp322 = 0.125*theta_7 + 0.0007692307692307692*x_5;
+    const double _tmp323 = symkin_sinr1(_tmp228);
+    const double _tmp324 = _tmp241*(_tmp322 - _tmp321) + 0.25*(_tmp228*_tmp228*_tmp228)*(_tmp323 - 3*symkin_sinr2(_tmp228) + 3*symkin_cosr2(_tmp228));
+    const double _tmp325 = _tmp4*(_tmp238*(_tmp321 + _tmp322) + 0.25*(_tmp231*_tmp231*_tmp231)*(-3*symkin_sinr2(_tmp231) + 3*symkin_cosr2(_tmp231) + symkin_sinr1(_tmp231)));
+    const double _tmp326 = -_tmp229*_tmp318 - _tmp229*_tmp325 - _tmp237*_tmp320 - _tmp319*across_7_1 + 0.125*_tmp242*_tmp243*p_0 + 0.5*_tmp232*_tmp324*p_0;
+    const double _tmp327 = 1250.0*_tmp248;
+    const double _tmp328 = _tmp237*_tmp318 + _tmp237*_tmp325 + _tmp244*_tmp324 - _tmp229*_tmp320 - _tmp242*_tmp319 + _tmp235*_tmp4*cos(_tmp227) - _tmp243*_tmp51*across_7_1;
+    const double _tmp329 = _tmp221*_tmp223;
+    const double _tmp330 = 1250.0*_tmp329;
+    const double _tmp331 = _tmp187*_tmp213;
+    const double _tmp332 = _tmp251*_tmp327;
+    const double _tmp333 = _tmp216*_tmp224;
+    const double _tmp334 = _tmp208*_tmp210;
+    const double _tmp335 = _tmp210*_tmp265;
+    const double _tmp336 = _tmp187*_tmp268;
+    const double _tmp337 = _tmp273*_tmp296;
+    const double _tmp338 = _tmp300*_tmp305;
+    const double _tmp339 = _tmp293*_tmp294;
+    const double _tmp340 = _tmp294*_tmp316;
+    const double _tmp341 = _tmp273*_tmp315;
+    const double _tmp342 = sin(theta_1);
+    const double _tmp343 = cos(theta_1);
+    const double _tmp344 = 0.3535533905932738*cos(_tmp246);
+    const double _tmp345 = _tmp344*p_0;
+    const double _tmp346 = sin(_tmp246);
+    const double _tmp347 = 0.3535533905932738*_tmp346;
+    const double _tmp348 = _tmp347*p_0;
+    const double _tmp349 = _tmp345 + _tmp348;
+    const double _tmp350 = 0.5*_tmp47;
+    const double _tmp351 = 0.5*_tmp69;
+    const double _tmp352 = _tmp209 + _tmp214 + _tmp63 + _tmp66 + _tmp350*_tmp49 - _tmp351*_tmp64;
+    const double _tmp353 = 7.6923076923076925*x_10;
+    const double _tmp354 = _tmp177 + _tmp331 - _tmp334 + _tmp350*_tmp64 + _tmp351*_tmp49 - _tmp49*_tmp65;
+    const double _tmp355 = _tmp266 + 0.5*_tmp209 + 0.5*_tmp214 - _tmp210*_tmp268;
+    const double _tmp356 = _tmp335 + _tmp336 + 0.5*_tmp334 - 0.5*_tmp331;
+    const double _tmp357 = sin(_tmp82);
+    const double _tmp358 = 0.05*_tmp357;
+    const double _tmp359 = cos(_tmp82);
+    const double _tmp360 = 0.02*_tmp359;
+    const double _tmp361 = 0.5*_tmp139;
+    const double _tmp362 = _tmp297 + _tmp301;
+    const double _tmp363 = sin(_tmp362);
+    const double _tmp364 = 0.04*_tmp363;
+    const double _tmp365 = -0.05 + _tmp4;
+    const double _tmp366 = cos(_tmp362);
+    const double _tmp367 = _tmp364 - _tmp365*_tmp366;
+    const double _tmp368 = 0.02*_tmp357;
+    const double _tmp369 = _tmp273*_tmp293;
+    const double _tmp370 = _tmp294*_tmp296;
+    const double _tmp371 = 0.04*_tmp366 + _tmp363*_tmp365;
+    const double _tmp372 = _tmp368 + _tmp369 + _tmp370 + _tmp371 + 0.05*_tmp359;
+    const double _tmp373 = -_tmp364 + _tmp365*_tmp366;
+    const double _tmp374 = _tmp353*(-_tmp371 - 0.5*_tmp369 - 0.5*_tmp370 + _tmp294*_tmp315 - _tmp273*_tmp316) - 7.6923076923076925*x_9*(_tmp340 + _tmp341 + _tmp373 + 0.5*_tmp339 - 0.5*_tmp337);
+    const double _tmp375 = 7.6923076923076925*x_9;
+    const double _tmp376 = _tmp108 + _tmp112;
+    const double _tmp377 = cos(_tmp376);
+    const double _tmp378 = -0.03 + _tmp4;
+    const double _tmp379 = sin(_tmp376);
+    const double _tmp380 = 0.072*_tmp377 + _tmp378*_tmp379;
+    const double _tmp381 = 7.6923076923076925*x_6;
+    const double _tmp382 = -0.5*_tmp359*p_0;
+    const double _tmp383 = _tmp104*_tmp84;
+    const double _tmp384 = _tmp105*_tmp107;
+    const double _tmp385 = _tmp377*_tmp378;
+    const double _tmp386 = _tmp385 - 0.072*_tmp379;
+    const double _tmp387 = 7.6923076923076925*x_7;
+    const double _tmp388 = _tmp353*(-_tmp371 + 0.5*_tmp363*p_0) - _tmp375*(-_tmp367 - _tmp366*_tmp4);
+    const double _tmp389 = -_tmp381*(-_tmp380 - _tmp377*_tmp4) + 7.6923076923076925*x_7*(-_tmp385 + 0.072*_tmp379 + _tmp379*_tmp4);
+    const double _tmp390 = _tmp28 + 0.75*theta_1;
+    const double _tmp391 = sin(_tmp390);
+    const double _tmp392 = cos(_tmp390);
+    const double _tmp394 = 0.375*p_0;
+    const double _tmp393 = along_1_1 + symkin_sinr0(_tmp29);
+    const double _tmp395 = _tmp393*_tmp394;
+    const double _tmp396 = -_tmp57 + symkin_cosr1(_tmp29);
+    const double _tmp397 = 0.378698224852071*x_10 + 0.378698224852071*x_7;
+    const double _tmp398 = 20.3125*_tmp397;
+    const double _tmp399 = 0.378698224852071*x_6 + 0.378698224852071*x_9;
+    const double _tmp400 = _tmp185 + _tmp188 + 0.75*theta_2 + 0.004615384615384615*x_0;
+    const double _tmp401 = cos(_tmp400);
+    const double _tmp402 = along_2_1 + symkin_sinr0(_tmp190);
+    const double _tmp403 = sin(_tmp400);
+    const double _tmp404 = _tmp4*_tmp403;
+    const double _tmp405 = _tmp394*_tmp401;
+    const double _tmp406 = _tmp394*_tmp403;
+    const double _tmp407 = -_tmp260 + symkin_cosr1(_tmp190);
+    const double _tmp408 = _tmp121 + 0.75*theta_3 + 0.004615384615384615*x_1;
+    const double _tmp409 = sin(_tmp408);
+    const double _tmp410 = cos(_tmp408);
+    const double _tmp411 = along_3_1 + symkin_sinr0(_tmp123);
+    const double _tmp412 = _tmp394*_tmp411;
+    const double _tmp413 = -_tmp149 + symkin_cosr1(_tmp123);
+    const double _tmp414 = -_tmp397;
+    const double _tmp415 = 20.3125*_tmp414;
+    const double _tmp416 = -_tmp399;
+    const double _tmp417 = _tmp274 + _tmp82 + 0.75*theta_4 + 0.004615384615384615*x_2;
+    const double _tmp418 = cos(_tmp417);
+    const double _tmp419 = along_4_1 + symkin_sinr0(_tmp276);
+    const double _tmp420 = sin(_tmp417);
+    const double _tmp421 = _tmp4*_tmp420;
+    const double _tmp422 = _tmp394*_tmp418;
+    const double _tmp423 = _tmp394*_tmp420;
+    const double _tmp424 = -_tmp312 + symkin_cosr1(_tmp276);
+    const double _tmp425 = _tmp82 + _tmp85 + 0.75*theta_5 + 0.004615384615384615*x_3;
+    const double _tmp426 = sin(_tmp425);
+    const double _tmp427 = _tmp4*_tmp426;
+    const double _tmp428 = along_5_1 + symkin_sinr0(_tmp87);
+    const double _tmp429 = cos(_tmp425);
+    const double _tmp430 = _tmp394*_tmp426;
+    const double _tmp431 = _tmp394*_tmp429;
+    const double _tmp432 = -_tmp160 + symkin_cosr1(_tmp87);
+    const double _tmp433 = _tmp0 + theta_1 + 0.75*theta_6 + 0.004615384615384615*x_4;
+    const double _tmp434 = cos(_tmp433);
+    const double _tmp435 = _tmp4*across_6_1;
+    const double _tmp436 = sin(_tmp433);
+    const double _tmp437 = along_6_1 + symkin_sinr0(_tmp2);
+    const double _tmp438 = _tmp4*_tmp437;
+    const double _tmp439 = _tmp394*_tmp437;
+    const double _tmp440 = -_tmp170 + symkin_cosr1(_tmp2);
+    const double _tmp441 = _tmp226 + _tmp246 + 0.75*theta_7 + 0.004615384615384615*x_5;
+    const double _tmp442 = cos(_tmp441);
+    const double _tmp443 = along_7_1 + symkin_sinr0(_tmp228);
+    const double _tmp444 = sin(_tmp441);
+    const double _tmp445 = _tmp4*_tmp444;
+    const double _tmp446 = -_tmp353*(-_tmp443*_tmp445 - _tmp4*_tmp442*across_7_1) + 7.6923076923076925*x_9*(-_tmp445*across_7_1 + 0.5*_tmp442*_tmp443*p_0);
+    const double _tmp447 = _tmp394*_tmp442;
+    const double _tmp448 = _tmp394*_tmp444;
+    const double _tmp449 = -_tmp323 + symkin_cosr1(_tmp228);
+    const double _tmp450 = 0.5*across_6_0;
+    const double _tmp451 = 0.5*_tmp18;
+    const double _tmp452 = 0.5*_tmp14;
+    const double _tmp453 = 0.5*_tmp7;
+    const double _tmp454 = 0.5*_tmp25 + _tmp12*_tmp450 + _tmp17*_tmp453 + _tmp451*across_6_1 - _tmp3*_tmp452;
+    const double _tmp455 = 0.5*across_5_0;
+    const double _tmp456 = 0.5*_tmp91;
+    const double _tmp457 = 0.5*_tmp98;
+    const double _tmp458 = 0.5*_tmp102;
+    const double _tmp459 = _tmp95 - _tmp93 + _tmp101*_tmp458 + _tmp455*_tmp88 + _tmp457*_tmp96 - _tmp456*across_5_1;
+    const double _tmp460 = _tmp11 - _tmp9 + _tmp12*_tmp452 + _tmp17*_tmp451 + _tmp3*_tmp450 - _tmp453*across_6_1;
+    const double _tmp461 = 0.5*_tmp106 + _tmp101*_tmp456 + _tmp455*_tmp96 + _tmp458*across_5_1 - _tmp457*_tmp88;
+    const double _tmp462 = 0.5*across_1_0;
+    const double _tmp463 = 0.5*_tmp45;
+    const double _tmp464 = 0.5*_tmp41;
+    const double _tmp465 = 0.5*_tmp33;
+    const double _tmp466 = 0.5*_tmp68 + _tmp39*_tmp462 + _tmp44*_tmp465 + _tmp463*across_1_1 - _tmp30*_tmp464;
+    const double _tmp467 = _tmp466*_tmp49;
+    const double _tmp468 = _tmp36 - _tmp38 + _tmp30*_tmp462 + _tmp39*_tmp464 + _tmp44*_tmp463 - _tmp465*across_1_1;
+    const double _tmp469 = _tmp468*_tmp64;
+    const double _tmp470 = 0.5*across_3_0;
+    const double _tmp471 = 0.5*_tmp127;
+    const double _tmp472 = 0.5*_tmp130;
+    const double _tmp473 = 0.5*_tmp135;
+    const double _tmp474 = 0.5*_tmp120 + _tmp124*_tmp470 + _tmp134*_tmp473 + _tmp471*across_3_1 - _tmp131*_tmp472;
+    const double _tmp475 = _tmp143 - _tmp141 + _tmp124*_tmp472 + _tmp131*_tmp470 + _tmp134*_tmp471 - _tmp473*across_3_1;
+    const double _tmp476 = 1250.0*_tmp467 + 1250.0*_tmp469 - 1250.0*_tmp119*_tmp475 - 1250.0*_tmp139*_tmp474;
+    const double _tmp477 = _tmp466*_tmp64;
+    const double _tmp478 = 1250.0*_tmp477;
+    const double _tmp479 = _tmp105*_tmp461;
+    const double _tmp480 = 1250.0*_tmp139*_tmp475;
+    const double _tmp481 = _tmp459*_tmp84;
+    const double _tmp482 = 0.5*across_2_0;
+    const double _tmp483 = 0.5*_tmp206;
+    const double _tmp484 = 0.5*_tmp202;
+    const double _tmp485 = 0.5*_tmp194;
+    const double _tmp486 = 0.5*_tmp212 + _tmp200*_tmp482 + _tmp205*_tmp485 + _tmp483*across_2_1 - _tmp191*_tmp484;
+    const double _tmp487 = _tmp187*_tmp486;
+    const double _tmp488 = 0.5*across_7_0;
+    const double _tmp489 = 0.5*_tmp243;
+    const double _tmp490 = 0.5*_tmp239;
+    const double _tmp491 = 0.5*_tmp232;
+    const double _tmp492 = 0.5*_tmp250 + _tmp237*_tmp488 + _tmp242*_tmp491 + _tmp489*across_7_1 - _tmp229*_tmp490;
+    const double _tmp493 = 0.5*across_4_0;
+    const double _tmp494 = 0.5*_tmp280;
+    const double _tmp495 = 0.5*_tmp287;
+    const double _tmp496 = 0.5*_tmp291;
+    const double _tmp497 = _tmp284 - _tmp282 + _tmp277*_tmp493 + _tmp285*_tmp495 + _tmp290*_tmp496 - _tmp494*across_4_1;
+    const double _tmp498 = _tmp294*_tmp497;
+    const double _tmp499 = 0.5*_tmp295 + _tmp285*_tmp493 + _tmp290*_tmp494 + _tmp496*across_4_1 - _tmp277*_tmp495;
+    const double _tmp500 = _tmp199 - _tmp197 + _tmp191*_tmp482 + _tmp200*_tmp484 + _tmp205*_tmp483 - _tmp485*across_2_1;
+    const double _tmp501 = _tmp236 - _tmp234 + _tmp229*_tmp488 + _tmp237*_tmp490 + _tmp242*_tmp489 - _tmp491*across_7_1;
+    const double _tmp502 = _tmp468*_tmp49;
+    const double _tmp503 = _tmp119*_tmp474;
+    const double _tmp504 = _tmp210*_tmp486;
+    const double _tmp505 = _tmp294*_tmp499;
+    const double _tmp506 = _tmp187*_tmp500;
+    const double _tmp507 = _tmp273*_tmp497;
+    const double _tmp508 = p_0 <= 0.008;
+    const double _tmp509 = 2.7083333333333335e-05*p_0*((_tmp508) ? (230769230769.23077) : (210000000000));
+    const double _tmp510 = _tmp509*omega_2_1;
+    const double _tmp511 = _tmp498 + 0.5*_tmp366 - _tmp273*_tmp499;
+    const double _tmp512 = _tmp467 + _tmp469 + _tmp487 - _tmp210*_tmp500;
+    const double _tmp513 = _tmp502 + _tmp504 + _tmp506 - _tmp477;
+    const double _tmp514 = _tmp509*omega_3_1;
+    const double _tmp515 = -0.5*_tmp359;
+    const double _tmp516 = 0.5*_tmp377;
+    const double _tmp517 = 0.5*_tmp379;
+    const double _tmp518 = _tmp509*omega_4_1;
+    const double _tmp519 = _tmp509*omega_5_1;
+    const double _tmp520 = -_tmp509*omega_6_1;
+    const double _tmp521 = -_tmp509*omega_7_1;
+    const double _tmp522 = 0.5*_tmp391;
+    const double _tmp523 = 0.5*_tmp403;
+    const double _tmp524 = 0.5*_tmp409;
+    const double _tmp525 = 0.5*_tmp420;
+    const double _tmp526 = 0.5*_tmp426;
+    const double _tmp527 = 0.5*_tmp436;
+    const double _tmp528 = 0.5*_tmp444;
+    const double _tmp529 = 1.0/p_0;
+    const double _tmp530 = ((_tmp508) ? (4.333333333333334e-12) : (4.761904761904762e-12));
+    const double _tmp531 = _tmp529*_tmp530;
+    const double _tmp532 = 187500*_tmp531;
+    const double _tmp533 = _tmp33*_tmp397;
+    const double _tmp534 = _tmp45*_tmp532;
+    const double _tmp535 = 562500*_tmp531;
+    const double _tmp536 = _tmp391*_tmp397;
+    const double _tmp537 = _tmp392*_tmp535;
+    const double _tmp538 = 284023.66863905324*_tmp531;
+    const double _tmp539 = _tmp185 + _tmp193;
+    const double _tmp540 = cos(_tmp539);
+    const double _tmp541 = _tmp540*x_10;
+    const double _tmp542 = sin(_tmp539);
+    const double _tmp543 = _tmp542*x_9;
+    const double _tmp544 = 71005.91715976331*_tmp531;
+    const double _tmp545 = _tmp542*x_10;
+    const double _tmp546 = _tmp540*x_9;
+    const double _tmp547 = _tmp401*x_10;
+    const double _tmp548 = _tmp403*x_9;
+    const double _tmp549 = 213017.75147928993*_tmp531;
+    const double _tmp550 = _tmp403*x_10;
+    const double _tmp551 = _tmp401*x_9;
+    const double _tmp552 = _tmp414*_tmp532;
+    const double _tmp553 = _tmp414*_tmp535;
+    const double _tmp554 = _tmp279 + _tmp82;
+    const double _tmp555 = cos(_tmp554);
+    const double _tmp556 = _tmp555*x_10;
+    const double _tmp557 = sin(_tmp554);
+    const double _tmp558 = _tmp557*x_10;
+    const double _tmp559 = _tmp555*x_9;
+    const double _tmp560 = _tmp418*x_10;
+    const double _tmp561 = _tmp420*x_10;
+    const double _tmp562 = _tmp418*x_9;
+    const double _tmp563 = _tmp82 + _tmp90;
+    const double _tmp564 = sin(_tmp563);
+    const double _tmp565 = _tmp564*x_6;
+    const double _tmp566 = cos(_tmp563);
+    const double _tmp567 = _tmp566*x_7;
+    const double _tmp568 = _tmp566*x_6;
+    const double _tmp569 = _tmp564*x_7;
+    const double _tmp570 = _tmp426*x_6;
+    const double _tmp571 = _tmp429*x_7;
+    const double _tmp572 = _tmp429*x_6;
+    const double _tmp573 = _tmp426*x_7;
+    const double _tmp574 = _tmp6 + theta_1;
+    const double _tmp575 = cos(_tmp574);
+    const double _tmp576 = _tmp575*x_6;
+    const double _tmp577 = sin(_tmp574);
+    const double _tmp578 = _tmp577*x_7;
+    const double _tmp579 = _tmp577*x_6;
+    const double _tmp580 = _tmp575*x_7;
+    const double _tmp581 = _tmp434*x_6;
+    const double _tmp582 = _tmp436*x_7;
+    const double _tmp583 = _tmp436*x_6;
+    const double _tmp584 = _tmp434*x_7;
+    const double _tmp585 = _tmp231 + _tmp246;
+    const double _tmp586 = cos(_tmp585);
+    const double _tmp587 = _tmp586*x_10;
+    const double _tmp588 = sin(_tmp585);
+    const double _tmp589 = _tmp588*x_9;
+    const double _tmp590 = _tmp538*_tmp587 - _tmp538*_tmp589;
+    const double _tmp591 = _tmp588*x_10;
+    const double _tmp592 = _tmp586*x_9;
+    const double _tmp593 = -_tmp538*_tmp591 - _tmp538*_tmp592;
+    const double _tmp594 = _tmp442*x_10;
+    const double _tmp595 = _tmp444*x_9;
+    const double _tmp596 = _tmp538*_tmp594 - _tmp538*_tmp595;
+    const double _tmp597 = _tmp444*x_10;
+    const double _tmp598 = _tmp442*x_9;
+    const double _tmp599 = -_tmp538*_tmp597 - _tmp538*_tmp598;
+    const double _tmp600 = pow(p_0, -2);
+    const double _tmp601 = _tmp530*_tmp600;
+    const double _tmp602 = 750000*_tmp601;
+    const double _tmp603 = _tmp45*_tmp602;
+    const double _tmp604 = _tmp392*_tmp602;
+    const double _tmp605 = 284023.66863905324*_tmp601;
+    const double _tmp606 = _tmp414*_tmp602;
+    const double _tmp607 = _tmp416*_tmp602;
+    const double _tmp608 = cos(_tmp217);
+    const double _tmp609 = _tmp219*cos(_tmp184);
+    const double _tmp610 = 0.00024615384615384614*_tmp608 - 0.0008615384615384615*_tmp609;
+    const double _tmp611 = -0.0004923076923076923*_tmp609 - 0.0004307692307692308*_tmp608;
+    const double _tmp612 = 0.0007692307692307692*p_0;
+    const double _tmp613 = _tmp612*across_2_0;
+    const double _tmp614 = _tmp194*_tmp612;
+    const double _tmp615 = _tmp202*_tmp612;
+    const double _tmp616 = 0.0015384615384615385*x_13;
+    const double _tmp617 = 4.733727810650887e-06*x_0 + 0.0007692307692307692*theta_2;
+    const double _tmp618 = 0.0015384615384615385*_tmp261 + _tmp204*(_tmp617 - _tmp616);
+    const double _tmp619 = _tmp4*(0.0015384615384615385*_tmp263 + _tmp201*(_tmp616 + _tmp617));
+    const double _tmp620 = -_tmp191*_tmp613 - _tmp191*_tmp619 - _tmp200*_tmp615 - _tmp614*across_2_1 + 0.5*_tmp194*_tmp618*p_0 + 0.0007692307692307692*_tmp205*_tmp206*p_0;
+    const double _tmp621 = _tmp200*_tmp613 + _tmp200*_tmp619 + _tmp207*_tmp618 - _tmp191*_tmp615 - _tmp205*_tmp614 + 0.003076923076923077*_tmp267*p_0 - _tmp206*_tmp612*across_2_1;
+    const double _tmp622 = 0.25*p_0;
+    const double _tmp623 = _tmp33*_tmp622;
+    const double _tmp624 = _tmp39*_tmp622;
+    const double _tmp625 = _tmp45*_tmp622;
+    const double _tmp626 = -0.5*_tmp58 - _tmp29*_tmp43;
+    const double _tmp627 = 0.5*_tmp60 + _tmp32*_tmp40;
+    const double _tmp628 = _tmp34*_tmp626 + _tmp4*cos(_tmp67) + _tmp41*_tmp624 + _tmp44*_tmp625 - _tmp623*across_1_1 + _tmp30*_tmp622*across_1_0 - _tmp30*_tmp4*_tmp627;
+    const double _tmp629 = 1.0*p_0;
+    const double _tmp630 = -_tmp44*_tmp623 - _tmp624*across_1_0 - _tmp625*across_1_1 - _tmp37*_tmp629*cos(_tmp28) + 0.25*_tmp30*_tmp41*p_0 + 0.5*_tmp39*_tmp627*p_0 + 0.5*_tmp45*_tmp626*p_0;
+    const double _tmp631 = _tmp194*_tmp622;
+    const double _tmp632 = _tmp200*_tmp622;
+    const double _tmp633 = _tmp206*_tmp622;
+    const double _tmp634 = -0.5*_tmp261 - _tmp190*_tmp204;
+    const double _tmp635 = 0.5*_tmp263 + _tmp193*_tmp201;
+    const double _tmp636 = _tmp195*_tmp634 + _tmp202*_tmp632 + _tmp205*_tmp633 + _tmp4*cos(_tmp211) - _tmp631*across_2_1 + _tmp191*_tmp622*across_2_0 - _tmp191*_tmp4*_tmp635;
+    const double _tmp637 = -_tmp205*_tmp631 - _tmp632*across_2_0 - _tmp633*across_2_1 - _tmp196*_tmp629*cos(_tmp188) + 0.25*_tmp191*_tmp202*p_0 + 0.5*_tmp200*_tmp635*p_0 + 0.5*_tmp206*_tmp634*p_0;
+    const double _tmp638 = _tmp222 + _tmp225;
+    const double _tmp639 = _tmp4*_tmp64;
+    const double _tmp640 = -_tmp39*_tmp639 + 0.5*_tmp30*_tmp49*p_0;
+    const double _tmp641 = _tmp30*_tmp639 + _tmp39*_tmp4*_tmp49;
+    const double _tmp642 = -_tmp34*_tmp49 - _tmp46*_tmp64;
+    const double _tmp643 = _tmp34*_tmp64 - _tmp46*_tmp49;
+    const double _tmp644 = _tmp187*_tmp4;
+    const double _tmp645 = _tmp210*_tmp4;
+    const double _tmp646 = _tmp191*_tmp644 + _tmp200*_tmp645;
+    const double _tmp647 = _tmp191*_tmp645 - _tmp200*_tmp644;
+    const double _tmp648 = -_tmp187*_tmp195 + 0.5*_tmp206*_tmp210*p_0;
+    const double _tmp649 = _tmp187*_tmp207 + _tmp195*_tmp210;
+    out[0] = 0;
+    out[1] = 0;
+    out[2] = 0;
+    out[3] = 0;
+    out[4] = 0;
+    out[5] = 0;
+    out[6] = 0;
+    out[7] = -_tmp70 - 1250.0*_tmp23 + 1250.0*_tmp24*_tmp26;
+    out[8] = 0;
+    out[9] = -_tmp117 - _tmp154 - _tmp71*_tmp77 - _tmp78*_tmp80 + 1250.0*_tmp104*_tmp84 + 1250.0*_tmp105*_tmp107;
+    out[10] = 0;
+    out[11] = -_tmp117 + 625.0*_tmp104*_tmp84 + 625.0*_tmp105*_tmp107 + 1250.0*_tmp164*_tmp84 - 1250.0*_tmp105*_tmp163;
+    out[12] = -625.0*_tmp23 - _tmp173*_tmp174 - _tmp175*_tmp176 + 625.0*_tmp24*_tmp26;
+    out[13] = 0;
+    out[14] = -_tmp178 - _tmp174*_tmp26 - _tmp176*_tmp20;
+    out[15] = 0;
+    out[16] = _tmp183 - _tmp180 + 1250.0*_tmp179 - 1250.0*_tmp181 + _tmp114*_tmp115 + _tmp77*_tmp78 - _tmp71*_tmp80;
+    out[17] = 0;
+    out[18] = -_tmp180 - 625.0*_tmp181 + 625.0*_tmp107*_tmp84 + 1250.0*_tmp113*_tmp115 - 1250.0*_tmp105*_tmp164 - 1250.0*_tmp163*_tmp84;
+    out[19] = -_tmp173*_tmp176 + 1250.0*_tmp175*_tmp22 - 625.0*_tmp20*_tmp24 - 625.0*_tmp22*_tmp26;
+    out[20] = 0;
+    out[21] = 0;
+    out[22] = 0;
+    out[23] = 0;
+    out[24] = 0;
+    out[25] = 0;
+    out[26] = 0;
+    out[27] = 0;
+    out[28] = -_tmp254 - _tmp70 - 1250.0*_tmp209 - 1250.0*_tmp214;
+    out[29] = -_tmp254 - 625.0*_tmp209 - 625.0*_tmp214 - 1250.0*_tmp266 + 1250.0*_tmp210*_tmp268;
+    out[30] = -_tmp154 - _tmp306 - _tmp269*_tmp71 - _tmp270*_tmp78 + 1250.0*_tmp273*_tmp293 + 1250.0*_tmp294*_tmp296;
+    out[31] = -_tmp306 + 625.0*_tmp273*_tmp293 + 625.0*_tmp294*_tmp296 + 1250.0*_tmp273*_tmp316 - 1250.0*_tmp294*_tmp315;
+    out[32] = 0;
+    out[33] = 0;
+    out[34] = -625.0*_tmp249 - _tmp251*_tmp317 - _tmp326*_tmp327 + 1250.0*_tmp252*_tmp328;
+    out[35] = -_tmp178 - _tmp330 - _tmp332 - 1250.0*_tmp331 + 1250.0*_tmp208*_tmp210 + 1250.0*_tmp216*_tmp224 + 1250.0*_tmp245*_tmp252;
+    out[36] = -_tmp330 - _tmp332 + 625.0*_tmp334 + 1250.0*_tmp333 + 1250.0*_tmp335 + 1250.0*_tmp336 - 625.0*_tmp331 + _tmp245*_tmp253;
+    out[37] = _tmp183 - _tmp338 + 1250.0*_tmp337 - 1250.0*_tmp339 + _tmp269*_tmp78 + _tmp303*_tmp304 - _tmp270*_tmp71;
+    out[38] = -_tmp338 - 625.0*_tmp339 - 1250.0*_tmp340 - 1250.0*_tmp341 + 625.0*_tmp273*_tmp296 + 1250.0*_tmp302*_tmp304;
+    out[39] = 0;
+    out[40] = 0;
+    out[41] = _tmp245*_tmp317 + _tmp253*_tmp326 + _tmp327*_tmp328 - 625.0*_tmp248*_tmp251;
+    out[42] = -_tmp353*(_tmp349 + _tmp352 + 0.03*_tmp342 + 0.02*_tmp343) + 7.6923076923076925*x_9*(_tmp348 + _tmp354 - _tmp345 + 0.02*_tmp342 - 0.03*_tmp343);
+    out[43] = -_tmp353*(_tmp349 + _tmp355) + 7.6923076923076925*x_9*(-_tmp345 - _tmp356 + 0.3535533905932738*_tmp346*p_0);
+    out[44] = -_tmp353*(-_tmp372 - _tmp119*_tmp153 - _tmp139*_tmp152 - _tmp145*_tmp361 + 0.5*_tmp119*_tmp137) + 7.6923076923076925*x_9*(_tmp360 - _tmp182 - _tmp337 - _tmp358 - _tmp367 + _tmp139*_tmp153 + _tmp293*_tmp294 - _tmp137*_tmp361 - 0.5*_tmp119*_tmp145);
+    out[45] = -_tmp374;
+    out[46] = 0;
+    out[47] = 0;
+    out[48] = 0;
+    out[49] = 0;
+    out[50] = 0;
+    out[51] = _tmp353*(-_tmp372 - _tmp382) + _tmp387*(_tmp368 - _tmp382 - _tmp383 - _tmp384 - _tmp386 - 0.06*_tmp359) - _tmp375*(_tmp339 + _tmp360 + _tmp373 - _tmp337 - _tmp358 + _tmp357*_tmp4) - _tmp381*(-_tmp179 - _tmp360 - _tmp380 - 0.06*_tmp357 + _tmp104*_tmp105 + 0.5*_tmp357*p_0);
+    out[52] = _tmp374;
+    out[53] = -_tmp381*(-_tmp380 - 0.5*_tmp179 + _tmp105*_tmp164 + _tmp163*_tmp84 + 0.5*_tmp104*_tmp105) + 7.6923076923076925*x_7*(-_tmp386 - 0.5*_tmp383 - 0.5*_tmp384 + _tmp105*_tmp163 - _tmp164*_tmp84);
+    out[54] = 0;
+    out[55] = 0;
+    out[56] = 0;
+    out[57] = 0;
+    out[58] = _tmp388;
+    out[59] = _tmp388;
+    out[60] = 0;
+    out[61] = 0;
+    out[62] = 0;
+    out[63] = 0;
+    out[64] = 0;
+    out[65] = _tmp389;
+    out[66] = 0;
+    out[67] = _tmp389;
+    out[68] = 0;
+    out[69] = 0;
+    out[70] = 0;
+    out[71] = 0;
+    out[72] = 0;
+    out[73] = 0;
+    out[74] = 0;
+    out[75] = 0;
+    out[76] = 0;
+    out[77] = 0;
+    out[78] = 0;
+    out[79] = 0;
+    out[80] = 0;
+    out[81] = 0;
+    out[82] = 0;
+    out[83] = 0;
+    out[84] = -_tmp398*(-_tmp392*_tmp395 + 0.375*_tmp391*across_1_1*p_0 - _tmp29*_tmp391*_tmp396*_tmp51) + 20.3125*_tmp399*(-_tmp391*_tmp395 - _tmp392*_tmp394*across_1_1 + 0.125*_tmp29*_tmp392*_tmp396*p_0);
+    out[85] = 0;
+    out[86] = 0;
+    out[87] = 0;
+    out[88] = 0;
+    out[89] = 0;
+    out[90] = 0;
+    out[91] = -_tmp353*(-_tmp402*_tmp404 - _tmp4*_tmp401*across_2_1) + 7.6923076923076925*x_9*(-_tmp404*across_2_1 + 0.5*_tmp401*_tmp402*p_0);
+    out[92] = -_tmp353*(-_tmp402*_tmp406 - _tmp405*across_2_1 + 0.125*_tmp190*_tmp401*_tmp407*p_0) + 7.6923076923076925*x_9*(_tmp402*_tmp405 - _tmp406*across_2_1 + _tmp190*_tmp403*_tmp407*_tmp51);
+    out[93] = 0;
+    out[94] = 0;
+    out[95] = 0;
+    out[96] = 0;
+    out[97] = 0;
+    out[98] = 0;
+    out[99] = 0;
+    out[100] = -_tmp415*(-_tmp410*_tmp412 + 0.375*_tmp409*across_3_1*p_0 - _tmp123*_tmp409*_tmp413*_tmp51) + 20.3125*_tmp416*(-_tmp409*_tmp412 - _tmp394*_tmp410*across_3_1 + 0.125*_tmp123*_tmp410*_tmp413*p_0);
+    out[101] = 0;
+    out[102] = 0;
+    out[103] = 0;
+    out[104] = 0;
+    out[105] = 0;
+    out[106] = 0;
+    out[107] = _tmp353*(-_tmp419*_tmp421 - _tmp4*_tmp418*across_4_1) - _tmp375*(-_tmp421*across_4_1 + 0.5*_tmp418*_tmp419*p_0);
+    out[108] = _tmp353*(-_tmp419*_tmp423 - _tmp422*across_4_1 + 0.125*_tmp276*_tmp418*_tmp424*p_0) - _tmp375*(_tmp419*_tmp422 - _tmp423*across_4_1 + _tmp276*_tmp420*_tmp424*_tmp51);
+    out[109] = 0;
+    out[110] = 0;
+    out[111] = 0;
+    out[112] = 0;
+    out[113] = 0;
+    out[114] = -_tmp381*(-_tmp427*across_5_1 + 0.5*_tmp428*_tmp429*p_0) + 7.6923076923076925*x_7*(-_tmp427*_tmp428 - _tmp4*_tmp429*across_5_1);
+    out[115] = 0;
+    out[116] = -_tmp381*(_tmp428*_tmp431 - _tmp430*across_5_1 + _tmp426*_tmp432*_tmp51*_tmp87) + 7.6923076923076925*x_7*(-_tmp428*_tmp430 - _tmp431*across_5_1 + 0.125*_tmp429*_tmp432*_tmp87*p_0);
+    out[117] = 0;
+    out[118] = 0;
+    out[119] = _tmp381*(-_tmp434*_tmp435 - _tmp436*_tmp438) - _tmp387*(_tmp435*_tmp436 - _tmp434*_tmp438);
+    out[120] = 0;
+    out[121] = 0;
+    out[122] = 0;
+    out[123] = 0;
+    out[124] = _tmp381*(-_tmp436*_tmp439 - _tmp394*_tmp434*across_6_1 + 0.125*_tmp2*_tmp434*_tmp440*p_0) - _tmp387*(-_tmp434*_tmp439 + 0.375*_tmp436*across_6_1*p_0 - _tmp2*_tmp436*_tmp440*_tmp51);
+    out[125] = 0;
+    out[126] = _tmp446;
+    out[127] = _tmp446;
+    out[128] = 0;
+    out[129] = 0;
+    out[130] = 0;
+    out[131] = 0;
+    out[132] = -_tmp353*(-_tmp443*_tmp448 - _tmp447*across_7_1 + 0.125*_tmp228*_tmp442*_tmp449*p_0) + 7.6923076923076925*x_9*(_tmp443*_tmp447 - _tmp448*across_7_1 + _tmp228*_tmp444*_tmp449*_tmp51);
+    out[133] = 0;
+    out[134] = -_tmp476 - _tmp174*_tmp454 - _tmp176*_tmp460 + 1250.0*_tmp461*_tmp84 - 1250.0*_tmp105*_tmp459;
+    out[135] = -_tmp478 - _tmp480 - 1250.0*_tmp479 - 1250.0*_tmp481 - _tmp176*_tmp454 + 1250.0*_tmp119*_tmp474 + 1250.0*_tmp22*_tmp460 + 1250.0*_tmp468*_tmp49;
+    out[136] = 0;
+    out[137] = -_tmp476 - 1250.0*_tmp487 - 1250.0*_tmp498 - _tmp327*_tmp492 + 1250.0*_tmp210*_tmp500 + 1250.0*_tmp252*_tmp501 + 1250.0*_tmp273*_tmp499;
+    out[138] = -_tmp478 - _tmp480 + 1250.0*_tmp502 + 1250.0*_tmp503 + 1250.0*_tmp504 + 1250.0*_tmp506 - 1250.0*_tmp505 - 1250.0*_tmp507 + _tmp253*_tmp492 + _tmp327*_tmp501;
+    out[139] = _tmp510 + _tmp375*(-_tmp344 - _tmp347 - _tmp503 - _tmp513 + 0.5*_tmp363 + _tmp139*_tmp475 + _tmp273*_tmp497 + _tmp294*_tmp499) - _tmp353*(_tmp347 + _tmp511 + _tmp512 - _tmp344 - _tmp119*_tmp475 - _tmp139*_tmp474);
+    out[140] = _tmp514 + _tmp353*(_tmp511 + 0.5*_tmp357) + _tmp387*(-_tmp517 + 0.5*_tmp357 + _tmp105*_tmp459 - _tmp461*_tmp84) - _tmp375*(_tmp505 + _tmp507 + _tmp515 + 0.5*_tmp363) - _tmp381*(_tmp479 + _tmp481 + _tmp515 + _tmp516);
+    out[141] = _tmp518;
+    out[142] = _tmp519 + _tmp387*(-_tmp516 - _tmp517) - _tmp381*(_tmp516 - _tmp517);
+    out[143] = _tmp520;
+    out[144] = _tmp521;
+    out[145] = _tmp509*omega_1_0 - _tmp398*(-_tmp393*_tmp522 - 0.5*_tmp392*across_1_1) - _tmp509*omega_1_1 + 20.3125*_tmp399*(-_tmp522*across_1_1 + 0.5*_tmp392*_tmp393);
+    out[146] = -_tmp510 + _tmp375*(_tmp402*_tmp523 + 0.5*_tmp401*across_2_1) + _tmp509*omega_2_0 - _tmp353*(-_tmp523*across_2_1 + 0.5*_tmp401*_tmp402);
+    out[147] = -_tmp514 + _tmp509*omega_3_0 - _tmp415*(-_tmp411*_tmp524 - 0.5*_tmp410*across_3_1) + 20.3125*_tmp416*(-_tmp524*across_3_1 + 0.5*_tmp410*_tmp411);
+    out[148] = -_tmp518 + _tmp353*(-_tmp525*across_4_1 + 0.5*_tmp418*_tmp419) + _tmp509*omega_4_0 - _tmp375*(_tmp419*_tmp525 + 0.5*_tmp418*across_4_1);
+    out[149] = -_tmp519 + _tmp387*(-_tmp526*across_5_1 + 0.5*_tmp428*_tmp429) + _tmp509*omega_5_0 - _tmp381*(_tmp428*_tmp526 + 0.5*_tmp429*across_5_1);
+    out[150] = _tmp520 + _tmp381*(-_tmp527*across_6_1 + 0.5*_tmp434*_tmp437) + _tmp509*omega_6_0 - _tmp387*(-_tmp437*_tmp527 - 0.5*_tmp434*across_6_1);
+    out[151] = _tmp521 + _tmp375*(_tmp443*_tmp528 + 0.5*_tmp442*across_7_1) + _tmp509*omega_7_0 - _tmp353*(-_tmp528*across_7_1 + 0.5*_tmp442*_tmp443);
+    out[152] = 0.5;
+    out[153] = 0;
+    out[154] = 0;
+    out[155] = 0;
+    out[156] = 0;
+    out[157] = 0;
+    out[158] = 0;
+    out[159] = -_tmp399*_tmp534 - _tmp532*_tmp533;
+    out[160] = 0;
+    out[161] = 0;
+    out[162] = 0;
+    out[163] = 0;
+    out[164] = 0;
+    out[165] = 0;
+    out[166] = -_tmp397*_tmp534 + 187500*_tmp33*_tmp399*_tmp529*_tmp530;
+    out[167] = 0;
+    out[168] = 0;
+    out[169] = 0;
+    out[170] = 0;
+    out[171] = 0;
+    out[172] = 0;
+    out[173] = 0;
+    out[174] = 0;
+    out[175] = 0;
+    out[176] = 0;
+    out[177] = 0;
+    out[178] = 0;
+    out[179] = 0;
+    out[180] = 0;
+    out[181] = 0;
+    out[182] = 0;
+    out[183] = 0;
+    out[184] = 0;
+    out[185] = 0;
+    out[186] = 0;
+    out[187] = 0.5;
+    out[188] = 0;
+    out[189] = 0;
+    out[190] = 0;
+    out[191] = 0;
+    out[192] = 0;
+    out[193] = 0;
+    out[194] = -_tmp399*_tmp537 - _tmp535*_tmp536;
+    out[195] = 0;
+    out[196] = 0;
+    out[197] = 0;
+    out[198] = 0;
+    out[199] = 0;
+    out[200] = 0;
+    out[201] = -_tmp397*_tmp537 + 562500*_tmp391*_tmp399*_tmp529*_tmp530;
+    out[202] = 0;
+    out[203] = 0;
+    out[204] = 0;
+    out[205] = 0;
+    out[206] = 0;
+    out[207] = 0;
+    out[208] = 0;
+    out[209] = 0;
+    out[210] = 0;
+    out[211] = 0;
+    out[212] = 0;
+    out[213] = 0;
+    out[214] = 0;
+    out[215] = 0;
+    out[216] = 0;
+    out[217] = 0;
+    out[218] = 0;
+    out[219] = 0;
+    out[220] = 0;
+    out[221] = 0;
+    out[222] = 0;
+    out[223] = 0.5;
+    out[224] = 0;
+    out[225] = 0;
+    out[226] = 0;
+    out[227] = 0;
+    out[228] = 0;
+    out[229] = _tmp538*_tmp541 - _tmp538*_tmp543;
+    out[230] = _tmp541*_tmp544 - _tmp543*_tmp544;
+    out[231] = 0;
+    out[232] = 0;
+    out[233] = 0;
+    out[234] = 0;
+    out[235] = 0;
+    out[236] = -_tmp538*_tmp545 - _tmp538*_tmp546;
+    out[237] = -_tmp544*_tmp545 - _tmp544*_tmp546;
+    out[238] = 0;
+    out[239] = 0;
+    out[240] = 0;
+    out[241] = 0;
+    out[242] = 0;
+    out[243] = 0;
+    out[244] = 0;
+    out[245] = 0;
+    out[246] = 0;
+    out[247] = 0;
+    out[248] = 0;
+    out[249] = 0;
+    out[250] = 0;
+    out[251] = 0;
+    out[252] = 0;
+    out[253] = 0;
+    out[254] = 0;
+    out[255] = 0;
+    out[256] = 0;
+    out[257] = 0;
+    out[258] = 0.5;
+    out[259] = 0;
+    out[260] = 0;
+    out[261] = 0;
+    out[262] = 0;
+    out[263] = 0;
+    out[264] = _tmp538*_tmp547 - _tmp538*_tmp548;
+    out[265] = _tmp547*_tmp549 - _tmp548*_tmp549;
+    out[266] = 0;
+    out[267] = 0;
+    out[268] = 0;
+    out[269] = 0;
+    out[270] = 0;
+    out[271] = -_tmp538*_tmp550 - _tmp538*_tmp551;
+    out[272] = -_tmp549*_tmp550 - _tmp549*_tmp551;
+    out[273] = 0;
+    out[274] = 0;
+    out[275] = 0;
+    out[276] = 0;
+    out[277] = 0;
+    out[278] = 0;
+    out[279] = 0;
+    out[280] = 0;
+    out[281] = 0;
+    out[282] = 0;
+    out[283] = 0;
+    out[284] = 0;
+    out[285] = 0;
+    out[286] = 0;
+    out[287] = 0;
+    out[288] = 0;
+    out[289] = 0;
+    out[290] = 0;
+    out[291] = 0;
+    out[292] = 0;
+    out[293] = 0;
+    out[294] = 0.5;
+    out[295] = 0;
+    out[296] = 0;
+    out[297] = 0;
+    out[298] = 0;
+    out[299] = 0;
+    out[300] = 0;
+    out[301] = -_tmp135*_tmp552 - _tmp127*_tmp416*_tmp532;
+    out[302] = 0;
+    out[303] = 0;
+    out[304] = 0;
+    out[305] = 0;
+    out[306] = 0;
+    out[307] = 0;
+    out[308] = -_tmp127*_tmp552 + 187500*_tmp135*_tmp416*_tmp529*_tmp530;
+    out[309] = 0;
+    out[310] = 0;
+    out[311] = 0;
+    out[312] = 0;
+    out[313] = 0;
+    out[314] = 0;
+    out[315] = 0;
+    out[316] = 0;
+    out[317] = 0;
+    out[318] = 0;
+    out[319] = 0;
+    out[320] = 0;
+    out[321] = 0;
+    out[322] = 0;
+    out[323] = 0;
+    out[324] = 0;
+    out[325] = 0;
+    out[326] = 0;
+    out[327] = 0;
+    out[328] = 0;
+    out[329] = 0.5;
+    out[330] = 0;
+    out[331] = 0;
+    out[332] = 0;
+    out[333] = 0;
+    out[334] = 0;
+    out[335] = 0;
+    out[336] = -_tmp409*_tmp553 - _tmp410*_tmp416*_tmp535;
+    out[337] = 0;
+    out[338] = 0;
+    out[339] = 0;
+    out[340] = 0;
+    out[341] = 0;
+    out[342] = 0;
+    out[343] = -_tmp410*_tmp553 + 562500*_tmp409*_tmp416*_tmp529*_tmp530;
+    out[344] = 0;
+    out[345] = 0;
+    out[346] = 0;
+    out[347] = 0;
+    out[348] = 0;
+    out[349] = 0;
+    out[350] = 0;
+    out[351] = 0;
+    out[352] = 0;
+    out[353] = 0;
+    out[354] = 0;
+    out[355] = 0;
+    out[356] = 0;
+    out[357] = 0;
+    out[358] = 0;
+    out[359] = 0;
+    out[360] = 0;
+    out[361] = 0;
+    out[362] = 0;
+    out[363] = 0;
+    out[364] = 0;
+    out[365] = 0.5;
+    out[366] = 0;
+    out[367] = 0;
+    out[368] = 0;
+    out[369] = 0;
+    out[370] = 0;
+    out[371] = -_tmp538*_tmp556 + 284023.66863905324*_tmp529*_tmp530*_tmp557*x_9;
+    out[372] = -_tmp544*_tmp556 + 71005.91715976331*_tmp529*_tmp530*_tmp557*x_9;
+    out[373] = 0;
+    out[374] = 0;
+    out[375] = 0;
+    out[376] = 0;
+    out[377] = 0;
+    out[378] = _tmp538*_tmp558 + _tmp538*_tmp559;
+    out[379] = _tmp544*_tmp558 + _tmp544*_tmp559;
+    out[380] = 0;
+    out[381] = 0;
+    out[382] = 0;
+    out[383] = 0;
+    out[384] = 0;
+    out[385] = 0;
+    out[386] = 0;
+    out[387] = 0;
+    out[388] = 0;
+    out[389] = 0;
+    out[390] = 0;
+    out[391] = 0;
+    out[392] = 0;
+    out[393] = 0;
+    out[394] = 0;
+    out[395] = 0;
+    out[396] = 0;
+    out[397] = 0;
+    out[398] = 0;
+    out[399] = 0;
+    out[400] = 0.5;
+    out[401] = 0;
+    out[402] = 0;
+    out[403] = 0;
+    out[404] = 0;
+    out[405] = 0;
+    out[406] = -_tmp538*_tmp560 + 284023.66863905324*_tmp420*_tmp529*_tmp530*x_9;
+    out[407] = -_tmp549*_tmp560 + 213017.75147928993*_tmp420*_tmp529*_tmp530*x_9;
+    out[408] = 0;
+    out[409] = 0;
+    out[410] = 0;
+    out[411] = 0;
+    out[412] = 0;
+    out[413] = _tmp538*_tmp561 + _tmp538*_tmp562;
+    out[414] = _tmp549*_tmp561 + _tmp549*_tmp562;
+    out[415] = 0;
+    out[416] = 0;
+    out[417] = 0;
+    out[418] = 0;
+    out[419] = 0;
+    out[420] = 0;
+    out[421] = 0;
+    out[422] = 0;
+    out[423] = 0;
+    out[424] = 0;
+    out[425] = 0;
+    out[426] = 0;
+    out[427] = 0;
+    out[428] = 0;
+    out[429] = 0;
+    out[430] = 0;
+    out[431] = 0;
+    out[432] = 0;
+    out[433] = 0;
+    out[434] = 0;
+    out[435] = 0;
+    out[436] = 0.5;
+    out[437] = 0;
+    out[438] = 0;
+    out[439] = 0;
+    out[440] = 0;
+    out[441] = _tmp538*_tmp565 - _tmp538*_tmp567;
+    out[442] = 0;
+    out[443] = _tmp544*_tmp565 - _tmp544*_tmp567;
+    out[444] = 0;
+    out[445] = 0;
+    out[446] = 0;
+    out[447] = 0;
+    out[448] = _tmp538*_tmp568 + _tmp538*_tmp569;
+    out[449] = 0;
+    out[450] = _tmp544*_tmp568 + _tmp544*_tmp569;
+    out[451] = 0;
+    out[452] = 0;
+    out[453] = 0;
+    out[454] = 0;
+    out[455] = 0;
+    out[456] = 0;
+    out[457] = 0;
+    out[458] = 0;
+    out[459] = 0;
+    out[460] = 0;
+    out[461] = 0;
+    out[462] = 0;
+    out[463] = 0;
+    out[464] = 0;
+    out[465] = 0;
+    out[466] = 0;
+    out[467] = 0;
+    out[468] = 0;
+    out[469] = 0;
+    out[470] = 0;
+    out[471] = 0.5;
+    out[472] = 0;
+    out[473] = 0;
+    out[474] = 0;
+    out[475] = 0;
+    out[476] = _tmp538*_tmp570 - _tmp538*_tmp571;
+    out[477] = 0;
+    out[478] = _tmp549*_tmp570 - _tmp549*_tmp571;
+    out[479] = 0;
+    out[480] = 0;
+    out[481] = 0;
+    out[482] = 0;
+    out[483] = _tmp538*_tmp572 + _tmp538*_tmp573;
+    out[484] = 0;
+    out[485] = _tmp549*_tmp572 + _tmp549*_tmp573;
+    out[486] = 0;
+    out[487] = 0;
+    out[488] = 0;
+    out[489] = 0;
+    out[490] = 0;
+    out[491] = 0;
+    out[492] = 0;
+    out[493] = 0;
+    out[494] = 0;
+    out[495] = 0;
+    out[496] = 0;
+    out[497] = 0;
+    out[498] = 0;
+    out[499] = 0;
+    out[500] = 0;
+    out[501] = 0;
+    out[502] = 0;
+    out[503] = 0;
+    out[504] = 0;
+    out[505] = 0;
+    out[506] = 0;
+    out[507] = 0.5;
+    out[508] = 0;
+    out[509] = -_tmp538*_tmp576 - _tmp538*_tmp578;
+    out[510] = 0;
+    out[511] = 0;
+    out[512] = 0;
+    out[513] = 0;
+    out[514] = -_tmp544*_tmp576 - _tmp544*_tmp578;
+    out[515] = 0;
+    out[516] = _tmp538*_tmp579 - _tmp538*_tmp580;
+    out[517] = 0;
+    out[518] = 0;
+    out[519] = 0;
+    out[520] = 0;
+    out[521] = _tmp544*_tmp579 - _tmp544*_tmp580;
+    out[522] = 0;
+    out[523] = 0;
+    out[524] = 0;
+    out[525] = 0;
+    out[526] = 0;
+    out[527] = 0;
+    out[528] = 0;
+    out[529] = 0;
+    out[530] = 0;
+    out[531] = 0;
+    out[532] = 0;
+    out[533] = 0;
+    out[534] = 0;
+    out[535] = 0;
+    out[536] = 0;
+    out[537] = 0;
+    out[538] = 0;
+    out[539] = 0;
+    out[540] = 0;
+    out[541] = 0;
+    out[542] = 0.5;
+    out[543] = 0;
+    out[544] = -_tmp538*_tmp581 - _tmp538*_tmp582;
+    out[545] = 0;
+    out[546] = 0;
+    out[547] = 0;
+    out[548] = 0;
+    out[549] = -_tmp549*_tmp581 - _tmp549*_tmp582;
+    out[550] = 0;
+    out[551] = _tmp538*_tmp583 - _tmp538*_tmp584;
+    out[552] = 0;
+    out[553] = 0;
+    out[554] = 0;
+    out[555] = 0;
+    out[556] = _tmp549*_tmp583 - _tmp549*_tmp584;
+    out[557] = 0;
+    out[558] = 0;
+    out[559] = 0;
+    out[560] = 0;
+    out[561] = 0;
+    out[562] = 0;
+    out[563] = 0;
+    out[564] = 0;
+    out[565] = 0;
+    out[566] = 0;
+    out[567] = 0;
+    out[568] = 0;
+    out[569] = 0;
+    out[570] = 0;
+    out[571] = 0;
+    out[572] = 0;
+    out[573] = 0;
+    out[574] = 0;
+    out[575] = 0;
+    out[576] = 0;
+    out[577] = 0;
+    out[578] = 0.5;
+    out[579] = _tmp590;
+    out[580] = _tmp590;
+    out[581] = 0;
+    out[582] = 0;
+    out[583] = 0;
+    out[584] = 0;
+    out[585] = _tmp544*_tmp587 - _tmp544*_tmp589;
+    out[586] = _tmp593;
+    out[587] = _tmp593;
+    out[588] = 0;
+    out[589] = 0;
+    out[590] = 0;
+    out[591] = 0;
+    out[592] = -_tmp544*_tmp591 - _tmp544*_tmp592;
+    out[593] = 0;
+    out[594] = 0;
+    out[595] = 0;
+    out[596] = 0;
+    out[597] = 0;
+    out[598] = 0;
+    out[599] = 0;
+    out[600] = 0;
+    out[601] = 0;
+    out[602] = 0;
+    out[603] = 0;
+    out[604] = 0;
+    out[605] = 0;
+    out[606] = 0;
+    out[607] = 0;
+    out[608] = 0;
+    out[609] = 0;
+    out[610] = 0;
+    out[611] = 0;
+    out[612] = 0;
+    out[613] = 0.5;
+    out[614] = _tmp596;
+    out[615] = _tmp596;
+    out[616] = 0;
+    out[617] = 0;
+    out[618] = 0;
+    out[619] = 0;
+    out[620] = _tmp549*_tmp594 - _tmp549*_tmp595;
+    out[621] = _tmp599;
+    out[622] = _tmp599;
+    out[623] = 0;
+    out[624] = 0;
+    out[625] = 0;
+    out[626] = 0;
+    out[627] = -_tmp549*_tmp597 - _tmp549*_tmp598;
+    out[628] = 0;
+    out[629] = 0;
+    out[630] = 0;
+    out[631] = 0;
+    out[632] = 0;
+    out[633] = 0;
+    out[634] = 0;
+    out[635] = 0;
+    out[636] = 0;
+    out[637] = 0;
+    out[638] = 0;
+    out[639] = 0;
+    out[640] = 0;
+    out[641] = 0;
+    out[642] = 0;
+    out[643] = -_tmp397*_tmp603 + 750000*_tmp33*_tmp399*_tmp530*_tmp600;
+    out[644] = _tmp399*_tmp603 + _tmp533*_tmp602;
+    out[645] = 0;
+    out[646] = 0;
+    out[647] = 0;
+    out[648] = -_tmp397*_tmp604 + 750000*_tmp391*_tmp399*_tmp530*_tmp600;
+    out[649] = _tmp399*_tmp604 + _tmp536*_tmp602;
+    out[650] = 0;
+    out[651] = 0;
+    out[652] = 0;
+    out[653] = -_tmp545*_tmp605 - _tmp546*_tmp605;
+    out[654] = -_tmp541*_tmp605 + 284023.66863905324*_tmp530*_tmp542*_tmp600*x_9;
+    out[655] = 0;
+    out[656] = 0;
+    out[657] = 0;
+    out[658] = -_tmp550*_tmp605 - _tmp551*_tmp605;
+    out[659] = -_tmp547*_tmp605 + 284023.66863905324*_tmp403*_tmp530*_tmp600*x_9;
+    out[660] = 0;
+    out[661] = 0;
+    out[662] = 0;
+    out[663] = -_tmp127*_tmp606 + 750000*_tmp135*_tmp416*_tmp530*_tmp600;
+    out[664] = _tmp127*_tmp607 + _tmp135*_tmp606;
+    out[665] = 0;
+    out[666] = 0;
+    out[667] = 0;
+    out[668] = -_tmp410*_tmp606 + 750000*_tmp409*_tmp416*_tmp530*_tmp600;
+    out[669] = _tmp409*_tmp606 + _tmp410*_tmp607;
+    out[670] = 0;
+    out[671] = 0;
+    out[672] = 0;
+    out[673] = _tmp558*_tmp605 + _tmp559*_tmp605;
+    out[674] = _tmp556*_tmp605 - _tmp557*_tmp605*x_9;
+    out[675] = 0;
+    out[676] = 0;
+    out[677] = 0;
+    out[678] = _tmp561*_tmp605 + _tmp562*_tmp605;
+    out[679] = _tmp560*_tmp605 - _tmp420*_tmp605*x_9;
+    out[680] = 0;
+    out[681] = 0;
+    out[682] = 0;
+    out[683] = _tmp568*_tmp605 + _tmp569*_tmp605;
+    out[684] = -_tmp565*_tmp605 + 284023.66863905324*_tmp530*_tmp566*_tmp600*x_7;
+    out[685] = 0;
+    out[686] = 0;
+    out[687] = 0;
+    out[688] = _tmp572*_tmp605 + _tmp573*_tmp605;
+    out[689] = -_tmp570*_tmp605 + 284023.66863905324*_tmp429*_tmp530*_tmp600*x_7;
+    out[690] = 0;
+    out[691] = 0;
+    out[692] = 0;
+    out[693] = _tmp579*_tmp605 - _tmp580*_tmp605;
+    out[694] = _tmp576*_tmp605 + _tmp578*_tmp605;
+    out[695] = 0;
+    out[696] = 0;
+    out[697] = 0;
+    out[698] = _tmp583*_tmp605 - _tmp584*_tmp605;
+    out[699] = _tmp581*_tmp605 + _tmp582*_tmp605;
+    out[700] = 0;
+    out[701] = 0;
+    out[702] = 0;
+    out[703] = -_tmp591*_tmp605 - _tmp592*_tmp605;
+    out[704] = -_tmp587*_tmp605 + 284023.66863905324*_tmp530*_tmp588*_tmp600*x_9;
+    out[705] = 0;
+    out[706] = 0;
+    out[707] = 0;
+    out[708] = -_tmp597*_tmp605 - _tmp598*_tmp605;
+    out[709] = -_tmp594*_tmp605 + 284023.66863905324*_tmp444*_tmp530*_tmp600*x_9;
+    out[710] = 0;
+    out[711] = 0;
+    out[712] = -0.003076923076923077*_tmp209 - 0.003076923076923077*_tmp214 + _tmp210*_tmp621 + _tmp216*_tmp611 - _tmp187*_tmp620 - _tmp223*_tmp610;
+    out[713] = 0;
+    out[714] = 0;
+    out[715] = 0;
+    out[716] = 0;
+    out[717] = 0;
+    out[718] = 0;
+    out[719] = 0;
+    out[720] = 0;
+    out[721] = 0;
+    out[722] = 0;
+    out[723] = 0;
+    out[724] = -_tmp49*_tmp628 - _tmp630*_tmp64;
+    out[725] = _tmp210*_tmp637 - _tmp187*_tmp636;
+    out[726] = 0;
+    out[727] = 0;
+    out[728] = 0;
+    out[729] = 0;
+    out[730] = 0;
+    out[731] = 0.003076923076923077*_tmp334 - 0.003076923076923077*_tmp331 + _tmp187*_tmp621 + _tmp210*_tmp620 + _tmp216*_tmp610 + _tmp223*_tmp611;
+    out[732] = 0;
+    out[733] = 0;
+    out[734] = 0;
+    out[735] = 0;
+    out[736] = 0;
+    out[737] = 0;
+    out[738] = 0;
+    out[739] = 0;
+    out[740] = 0;
+    out[741] = 0;
+    out[742] = 0;
+    out[743] = _tmp49*_tmp630 - _tmp628*_tmp64;
+    out[744] = _tmp187*_tmp637 + _tmp210*_tmp636;
+    out[745] = 0;
+    out[746] = 0;
+    out[747] = 0;
+    out[748] = 0;
+    out[749] = 0;
+    out[750] = -_tmp352 - _tmp638;
+    out[751] = -_tmp355 - _tmp638;
+    out[752] = 0;
+    out[753] = 0;
+    out[754] = 0;
+    out[755] = 0;
+    out[756] = 0;
+    out[757] = -_tmp329 - _tmp354 + _tmp216*_tmp224;
+    out[758] = _tmp333 + _tmp356 - _tmp329;
+    out[759] = 0;
+    out[760] = 0;
+    out[761] = 0;
+    out[762] = 0;
+    out[763] = 0;
+    out[764] = -_tmp512;
+    out[765] = _tmp513;
+    out[766] = _tmp640;
+    out[767] = -_tmp641;
+    out[768] = 0;
+    out[769] = _tmp642;
+    out[770] = _tmp643;
+    out[771] = 0;
+    out[772] = _tmp646;
+    out[773] = _tmp647;
+    out[774] = 0;
+    out[775] = _tmp648;
+    out[776] = -_tmp649;
+    out[777] = 0;
+    out[778] = 0;
+    out[779] = 0;
+    out[780] = 0;
+    out[781] = 0;
+    out[782] = 0;
+    out[783] = 0;
+    out[784] = 0;
+    out[785] = 0;
+    out[786] = 0;
+    out[787] = 0;
+    out[788] = 0;
+    out[789] = 0;
+    out[790] = 0;
+    out[791] = 0;
+    out[792] = 0;
+    out[793] = 0;
+    out[794] = 0;
+    out[795] = 0;
+    out[796] = 0;
+    out[797] = 0;
+    out[798] = 0;
+    out[799] = 0;
+    out[800] = 0;
+    out[801] = 0;
+    out[802] = 0;
+    out[803] = 0;
+    out[804] = 0;
+    out[805] = 0;
+    out[806] = 0;
+    out[807] = 0;
+    out[808] = _tmp641;
+    out[809] = _tmp640;
+    out[810] = 0;
+    out[811] = -_tmp643;
+    out[812] = _tmp642;
+    out[813] = 0;
+    out[814] = -_tmp647;
+    out[815] = _tmp646;
+    out[816] = 0;
+    out[817] = _tmp649;
+    out[818] = _tmp648;
+    out[819] = 0;
+    out[820] = 0;
+    out[821] = 0;
+    out[822] = 0;
+    out[823] = 0;
+    out[824] = 0;
+    out[825] = 0;
+    out[826] = 0;
+    out[827] = 0;
+    out[828] = 0;
+    out[829] = 0;
+    out[830] = 0;
+    out[831] = 0;
+    out[832] = 0;
+    out[833] = 0;
+    out[834] = 0;
+    out[835] = 0;
+    out[836] = 0;
+    out[837] = 0;
+    out[838] = 0;
+    out[839] = 0;
+    out[840] = 0;
+    out[841] = 0;
+    out[842] = 0;
+    out[843] = 0;
+    out[844] = 0;
+    out[845] = 0;
+    out[846] = 0;
+    out[847] = 0;
+    out[848] = 0;
+    out[849] = 0;
+}
+
 /* one plate's relation at order 4: (along, across, omega) and their partials by (theta, p, f) (312 operations) */
 static void sk_plate_relation4(const double *plate, double *out)
 {
@@ -6483,6 +8935,68 @@ static void sk_plate_rest4(const double *plate, double *out)
     out[9] = 1;
     out[10] = 0.00026041666666666666*theta*(320 - 8*_tmp0 - 360*_tmp1*symkin_sinr3(_tmp2) + 15*pow(theta, 6)*(-symkin_cosr4(_tmp2) + 7*symkin_sinr4(_tmp2)));
     out[11] = -0.5*symkin_sinr0(_tmp2);
+}
+
+/* one plate's relation at order 4: d(along, across, omega)/d(e_a, e_s) (158 operations) */
+static void sk_plate_eps4(const double *plate, double *out)
+{
+    const double theta = plate[0];
+    const double p = plate[1];
+    const double f = plate[2];
+    const double e_a = plate[3];
+    const double e_s = plate[4];
+    const double _tmp0 = pow(theta, 2);
+    const double _tmp5 = 1 + p*(-2*e_s + 2*e_a);
+    const double _tmp1 = e_a - e_s;
+    const double _tmp2 = 1 + _tmp1*p;
+    const double _tmp3 = _tmp2*p;
+    const double _tmp4 = 2*p;
+    const double _tmp6 = pow(p, 2);
+    const double _tmp7 = _tmp5*_tmp6;
+    const double _tmp8 = -0.08333333333333333*p + _tmp4*symkin_bcol_a(_tmp3) + _tmp7*symkin_bcol_a_d1(_tmp3);
+    const double _tmp9 = pow(theta, 4);
+    const double _tmp10 = -0.0010416666666666667*p + _tmp4*symkin_bcol_e3c(_tmp3) + _tmp7*symkin_bcol_e3c_d1(_tmp3);
+    const double _tmp11 = symkin_bcol_s(_tmp3);
+    const double _tmp12 = _tmp2*f;
+    const double _tmp13 = symkin_bcol_e1(_tmp3);
+    const double _tmp14 = _tmp0*_tmp13;
+    const double _tmp15 = 4*(_tmp2*_tmp2*_tmp2);
+    const double _tmp16 = (f*f*f);
+    const double _tmp17 = _tmp16*symkin_bcol_e2(_tmp3);
+    const double _tmp18 = -_tmp15*_tmp17 - 2*_tmp12*_tmp14 + _tmp11*_tmp2*f;
+    const double _tmp19 = _tmp18*f;
+    const double _tmp20 = symkin_bcol_w(_tmp3);
+    const double _tmp21 = pow(f, 2);
+    const double _tmp22 = pow(_tmp2, 2);
+    const double _tmp23 = _tmp21*_tmp22;
+    const double _tmp24 = symkin_bcol_e2_d1(_tmp3);
+    const double _tmp25 = pow(f, 4);
+    const double _tmp26 = _tmp25*pow(_tmp2, 4);
+    const double _tmp27 = symkin_bcol_e1_d1(_tmp3);
+    const double _tmp28 = _tmp0*_tmp27;
+    const double _tmp29 = _tmp4*(_tmp20*_tmp23 + _tmp23*_tmp28 + _tmp24*_tmp26);
+    const double _tmp30 = _tmp15*_tmp24;
+    const double _tmp31 = _tmp14*_tmp4*f + _tmp16*_tmp30*_tmp6 - _tmp11*f*p + 2*_tmp12*_tmp28*_tmp6 + 12*_tmp17*_tmp22*p - _tmp2*_tmp6*f*symkin_bcol_s_d1(_tmp3);
+    const double _tmp32 = -_tmp31;
+    const double _tmp33 = _tmp1*f;
+    const double _tmp34 = _tmp21*_tmp3;
+    const double _tmp35 = 2*_tmp34;
+    const double _tmp36 = _tmp23*_tmp6;
+    const double _tmp37 = _tmp20*_tmp35 + _tmp28*_tmp35 + _tmp36*symkin_bcol_w_d1(_tmp3) + _tmp0*_tmp36*symkin_bcol_e1_d2(_tmp3) + _tmp25*_tmp30*p + _tmp26*_tmp6*symkin_bcol_e2_d2(_tmp3);
+    const double _tmp38 = _tmp19 + p - _tmp29 + _tmp0*_tmp8 + _tmp32*_tmp33 - _tmp10*_tmp9 - _tmp37*_tmp5;
+    const double _tmp39 = _tmp29 - _tmp19 + _tmp10*_tmp9 + _tmp31*_tmp33 + _tmp37*_tmp5 - _tmp0*_tmp8;
+    const double _tmp40 = _tmp18*p;
+    const double _tmp41 = _tmp40 + _tmp2*_tmp32;
+    const double _tmp42 = f - _tmp40 + _tmp2*_tmp31;
+    const double _tmp43 = 0.5*f;
+    const double _tmp44 = _tmp6*theta;
+    const double _tmp45 = _tmp44*symkin_bcol_invt_d1(_tmp3) + 2*_tmp23*_tmp27*_tmp44 + 4*_tmp13*_tmp34*theta + 4*_tmp6*(theta*theta*theta)*symkin_bcol_e3_d1(_tmp3);
+    out[0] = _tmp38;
+    out[1] = _tmp39;
+    out[2] = _tmp41;
+    out[3] = _tmp42;
+    out[4] = _tmp45 - _tmp38*_tmp43 + 0.5*_tmp41*p;
+    out[5] = -_tmp45 - _tmp39*_tmp43 + 0.5*_tmp42*p;
 }
 
 /* symkin runtime (templates/c/runtime.c, docs/runtime.md; tested on its own by
@@ -6779,6 +9293,11 @@ typedef struct {
     int (*loaded_solve)(const void *m, const double *inputs, const double *params,
                         const double *theta, double *delta, double *q);
     const void *loaded;             /* its tables (sk_loaded) */
+    /* its sensitivities (templates/c/reduced_sens.c): (mechanism, theta, q, dtheta_u/dv) -> the
+       deviation's by every variable; NULL: none */
+    int (*loaded_rates)(const void *m, const double *theta, const double *q, const double *thu,
+                        double *dev);
+    const void *loaded_sens;        /* its tables (sk_loaded_sens) */
     sk_rule rigid_rule;             /* Newton at each continuation step */
     sk_rule polish_rule;            /* after the rigid start */
     sk_rule exact_rule;             /* on every compliant closure */
@@ -7122,19 +9641,44 @@ static void sk_gemm(int m, int p, int n, const double *a, const double *b, doubl
     }
 }
 
+/* The parameters' columns of dev and rig (2 SK_NP x SK_NV) made totals: a parameter's default
+   that reads earlier ones follows them, last first. Returns 0. */
+static int sk_sensitivity_chain(const sk_mechanism *m, const double *params, double *dev,
+                                double *rig)
+{
+    if (m->sens_chain != NULL) {
+        double c[SK_NPAR * SK_NPAR + 1];
+        int i, j, r;
+        m->sens_chain(params, c);
+        for (i = SK_NPAR - 1; i >= 0; --i) {
+            for (j = i + 1; j < SK_NPAR; ++j) {
+                for (r = 0; r < 2 * SK_NP; ++r) {
+                    dev[r * SK_NV + i] += c[j * SK_NPAR + i] * dev[r * SK_NV + j];
+                    rig[r * SK_NV + i] += c[j * SK_NPAR + i] * rig[r * SK_NV + j];
+                }
+            }
+        }
+    }
+    return 0;
+}
+
 /* The total derivatives of the points' deviations (dev) and rigid positions (rig) by every
    variable, 2 SK_NP x SK_NV row-major (row 2 p + c: component c of point p; columns: the
    parameters, then the inputs), by the implicit-function theorem on the closures: with
    Theta = d theta_u / dv = -A^-1 dG/dv and, where the level solves a closure E for delta,
    Y = -M^-1 (dE/dv + dE/dtheta_u Theta): dD/dv + dD/dtheta_u Theta + dD/ddelta Y. */
 static int sk_sensitivity(const sk_mechanism *m, const sk_level *lv, const double *theta,
-                          const double *delta, const double *params, double *dev, double *rig)
+                          const double *delta, const double *params, const double *q,
+                          double *dev, double *rig)
 {
     double sr[SK_OUT], s[SK_OUT];
     const sk_sens *b = &lv->sens;
+    const double *thu = NULL;
     int i;
     double th[SK_K * SK_NV + 1], y[SK_K * SK_NV + 1];
-    if (b->fn == NULL) {
+    (void)q;
+    (void)thu;
+    if (b->fn == NULL && !(lv->loaded && m->loaded_rates != NULL)) {
         return 3;                   /* a level without closed-form sensitivities */
     }
     m->sens_rigid(theta, params, sr);
@@ -7148,6 +9692,14 @@ static int sk_sensitivity(const sk_mechanism *m, const sk_level *lv, const doubl
         rig[i] = sr[m->sr_dR_dv + i];
     }
     sk_gemm(2 * SK_NP, SK_K, SK_NV, sr + m->sr_dR_dtheta, th, rig);
+    thu = th;
+    if (b->fn == NULL) {
+        /* the loaded level: the reduced equilibrium's own (templates/c/reduced_sens.c) */
+        if (m->loaded_rates(m, theta, q, thu, dev)) {
+            return 1;
+        }
+        return sk_sensitivity_chain(m, params, dev, rig);
+    }
     b->fn(theta, delta, params, s);
     if (b->stage) {
         for (i = 0; i < SK_K * SK_NV; ++i) {
@@ -7168,21 +9720,7 @@ static int sk_sensitivity(const sk_mechanism *m, const sk_level *lv, const doubl
     if (b->stage) {
         sk_gemm(2 * SK_NP, SK_K, SK_NV, s + b->dD_ddelta, y, dev);
     }
-    if (m->sens_chain != NULL) {
-        /* a parameter's default that reads earlier ones follows them: totals, last first */
-        double c[SK_NPAR * SK_NPAR + 1];
-        int j, r;
-        m->sens_chain(params, c);
-        for (i = SK_NPAR - 1; i >= 0; --i) {
-            for (j = i + 1; j < SK_NPAR; ++j) {
-                for (r = 0; r < 2 * SK_NP; ++r) {
-                    dev[r * SK_NV + i] += c[j * SK_NPAR + i] * dev[r * SK_NV + j];
-                    rig[r * SK_NV + i] += c[j * SK_NPAR + i] * rig[r * SK_NV + j];
-                }
-            }
-        }
-    }
-    return 0;
+    return sk_sensitivity_chain(m, params, dev, rig);
 }
 
 /* <name>_sensitivity_full. */
@@ -7204,7 +9742,7 @@ static int sk_sensitivity_full(const sk_mechanism *m, const double *inputs, cons
         status = sk_outputs(m, lv, theta, delta, params, q, values, NULL, NULL);
     }
     if (status == 0) {
-        status = sk_sensitivity(m, lv, theta, delta, params, dev, rig);
+        status = sk_sensitivity(m, lv, theta, delta, params, q, dev, rig);
     }
     for (i = 0; status == 0 && i < 2 * SK_NP * SK_NV; ++i) {
         if (!isfinite(dev[i]) || !isfinite(rig[i])) {
@@ -7691,6 +10229,11 @@ static int sk_reduced_pose(const void *mechanism, const double *inputs, const do
     for (i = 0; i < 2 * SK_NP; ++i) {
         q[SK_NPAR + i] = dev[i];
     }
+    /* the variant and its solution, for the sensitivities (templates/c/reduced_sens.c) */
+    q[SK_NPAR + 2 * SK_NP] = v;
+    for (i = 0; i < r.v->size; ++i) {
+        q[SK_NPAR + 2 * SK_NP + 1 + i] = x[i];
+    }
     return 0;
 }
 
@@ -7713,6 +10256,164 @@ static const sk_loaded sk_loaded_tables = {
     {{1, sk_loaded_plates1, sk_loaded_system1, sk_loaded_dev1, 12, 7, sk_loaded_scale1}, {2, sk_loaded_plates2, sk_loaded_system2, sk_loaded_dev2, 19, 14, sk_loaded_scale2}},
     6, 1e-12, 0.2, 0.9, 3.0, 0.01,
     12, 0
+};
+
+/* One variant's sensitivity routine (x, theta, plates, params) and where its blocks start:
+   dR/dtheta (n x m), dR/dp (n x n_p), din/dtheta (5 n_s x m), din/dp (5 n_s x n_p), dD/dx
+   (2 n_P x n), dD/dtheta (2 n_P x m), dD/dp (2 n_P x n_p), dD/dout (2 n_P x 3 n_s). */
+typedef struct {
+    sk_fn4 fn;
+    int dR_dtheta, dR_dp, din_dtheta, din_dp, dD_dx, dD_dtheta, dD_dp, dD_dout;
+} sk_red_sens;
+
+/* The loaded level's sensitivity routines, one per variant of sk_loaded. */
+typedef struct {
+    sk_red_sens variants[2];
+} sk_loaded_sens;
+
+/* dev (2 SK_NP x SK_NV) of the loaded level at its solution: q holds the parameters, the
+   deviation, the variant solved and its x (sk_reduced_pose); thu dtheta_u/dv of the non-input
+   hinges (SK_K x SK_NV, NULL without). J is evaluated once more at the solution (its LU, the
+   plates' inputs and relation there: everything the chain rule reads), then
+   dx/dv = -J^-1 (dR/dtheta dtheta/dv + dR/dp + dR/dout dout/din din/dv) and
+   dD/dv = dD/dx dx/dv + dD/dtheta dtheta/dv + dD/dp + dD/dout dout/din (din/dv + din/dx dx/dv).
+   Returns 0, or 1 where J is singular. */
+static int sk_reduced_rates(const void *mechanism, const double *theta, const double *q,
+                            const double *thu, double *dev)
+{
+    const sk_mechanism *m = (const sk_mechanism *)mechanism;
+    const sk_loaded *l = (const sk_loaded *)m->loaded;
+    const int v = (int)q[SK_NPAR + 2 * SK_NP];
+    const sk_red_sens *rs = ((const sk_loaded_sens *)m->loaded_sens)->variants + v;
+    const double *x = q + SK_NPAR + 2 * SK_NP + 1;
+    double s[SK_OUT], vals[3 * SK_RS], eps[6];
+    double dth[SK_M * SK_NV + 1], din[5 * SK_RS * SK_NV + 1], dout[3 * SK_RS * SK_NV + 1];
+    double dx[SK_RN * SK_NV + 1], col[SK_RN + 1], part[3 * SK_RS * 5 + 1];
+    sk_red_state st;
+    sk_red r;
+    int n, ns, i, j, k, c, e;
+    r.m = m;
+    r.l = l;
+    r.v = l->variants + v;
+    r.params = q;
+    n = r.v->size;
+    ns = r.v->plates_n;
+    if (n > 0 && sk_red_eval(&r, x, theta, 1.0, &st)) {
+        return 1;
+    }
+    if (n == 0) {
+        double rel[12 * SK_RS];
+        sk_red_inputs(&r, x, theta, 1.0, st.xt, st.ins);
+        sk_red_relation(&r, st.ins, rel, vals);
+        for (i = 0; i < 12 * ns; ++i) {
+            st.rel[i] = rel[i];
+        }
+    }
+    for (k = 0; k < ns; ++k) {
+        for (c = 0; c < 3; ++c) {
+            vals[3 * k + c] = st.rel[12 * k + c];
+        }
+    }
+    rs->fn(st.xt, theta, vals, q, s);
+    /* dtheta/dv of every hinge: the non-input ones' from the rigid closure, an input's own 1 */
+    for (i = 0; i < SK_M * SK_NV; ++i) {
+        dth[i] = 0.0;
+    }
+    for (j = 0; j < SK_K && thu != NULL; ++j) {
+        for (c = 0; c < SK_NV; ++c) {
+            dth[m->unknown_index[j] * SK_NV + c] = thu[j * SK_NV + c];
+        }
+    }
+    for (i = 0; i < SK_NI; ++i) {
+        dth[m->input_index[i] * SK_NV + SK_NPAR + i] = 1.0;
+    }
+    /* the relation's partials by (theta_c, p, f, e_a, e_s), 3 x 5 per half plate */
+    for (k = 0; k < ns; ++k) {
+        sk_plate_eps4(st.ins + 5 * k, eps);
+        for (i = 0; i < 3; ++i) {
+            for (c = 0; c < 3; ++c) {
+                part[15 * k + 5 * i + c] = st.rel[12 * k + 3 + 3 * i + c];
+            }
+            part[15 * k + 5 * i + 3] = eps[2 * i];
+            part[15 * k + 5 * i + 4] = eps[2 * i + 1];
+        }
+    }
+    /* din/dv at fixed x, then dout/dv = dout/din din/dv */
+    for (i = 0; i < 5 * ns; ++i) {
+        for (c = 0; c < SK_NV; ++c) {
+            double sum = c < SK_NPAR ? s[rs->din_dp + i * SK_NPAR + c] : 0.0;
+            for (e = 0; e < SK_M; ++e) {
+                sum += s[rs->din_dtheta + i * SK_M + e] * dth[e * SK_NV + c];
+            }
+            din[i * SK_NV + c] = sum;
+        }
+    }
+    for (k = 0; k < ns; ++k) {
+        for (i = 0; i < 3; ++i) {
+            for (c = 0; c < SK_NV; ++c) {
+                double sum = 0.0;
+                for (e = 0; e < 5; ++e) {
+                    sum += part[15 * k + 5 * i + e] * din[(5 * k + e) * SK_NV + c];
+                }
+                dout[(3 * k + i) * SK_NV + c] = sum;
+            }
+        }
+    }
+    /* dx/dv = -J^-1 dR/dv at fixed x, column by column with J's LU */
+    for (c = 0; c < SK_NV; ++c) {
+        for (i = 0; i < n; ++i) {
+            const double *jo = st.sys + n + n * n + i * 3 * ns;
+            double sum = c < SK_NPAR ? s[rs->dR_dp + i * SK_NPAR + c] : 0.0;
+            for (e = 0; e < SK_M; ++e) {
+                sum += s[rs->dR_dtheta + i * SK_M + e] * dth[e * SK_NV + c];
+            }
+            for (e = 0; e < 3 * ns; ++e) {
+                sum += jo[e] * dout[e * SK_NV + c];
+            }
+            col[i] = -sum;
+        }
+        if (n > 0) {
+            sk_lu_solve(n, st.lu, st.piv, col);
+        }
+        for (i = 0; i < n; ++i) {
+            dx[i * SK_NV + c] = col[i];
+        }
+    }
+    /* dout/dv along the solution: + dout/din din/dx dx/dv (theta_c, p, f move with x) */
+    for (k = 0; k < ns; ++k) {
+        for (i = 0; i < 3; ++i) {
+            for (c = 0; c < SK_NV; ++c) {
+                double sum = 0.0;
+                for (e = 0; e < 3; ++e) {
+                    const double *dinx = st.ins + 5 * ns + (3 * k + e) * n;
+                    for (j = 0; j < n; ++j) {
+                        sum += part[15 * k + 5 * i + e] * dinx[j] * dx[j * SK_NV + c];
+                    }
+                }
+                dout[(3 * k + i) * SK_NV + c] += sum;
+            }
+        }
+    }
+    for (i = 0; i < 2 * SK_NP; ++i) {
+        for (c = 0; c < SK_NV; ++c) {
+            double sum = c < SK_NPAR ? s[rs->dD_dp + i * SK_NPAR + c] : 0.0;
+            for (e = 0; e < n; ++e) {
+                sum += s[rs->dD_dx + i * n + e] * dx[e * SK_NV + c];
+            }
+            for (e = 0; e < SK_M; ++e) {
+                sum += s[rs->dD_dtheta + i * SK_M + e] * dth[e * SK_NV + c];
+            }
+            for (e = 0; e < 3 * ns; ++e) {
+                sum += s[rs->dD_dout + i * 3 * ns + e] * dout[e * SK_NV + c];
+            }
+            dev[i * SK_NV + c] = sum;
+        }
+    }
+    return 0;
+}
+/* the loaded level's sensitivity routines, per variant, and where their blocks start */
+static const sk_loaded_sens sk_loaded_sens_tables = {
+    {{sk_loaded_sens1, 0, 84, 96, 341, 376, 400, 414, 416}, {sk_loaded_sens2, 0, 133, 152, 642, 712, 750, 764, 766}}
 };
 /* ---- stephenson_six_bar: its tables for the runtime ---- */
 
@@ -7755,6 +10456,7 @@ static const sk_mechanism sk_mechanism_tables = {
     .links = sk_links,
     .sens_rigid = sk_sens_rigid,
     .loaded_solve = sk_reduced_pose, .loaded = &sk_loaded_tables,
+    .loaded_rates = sk_reduced_rates, .loaded_sens = &sk_loaded_sens_tables,
     .n_dyads = 2,
     .rigid_rule = {30, 1e-10, 0.0, 0.0, 0.0},
     .polish_rule = {1, 0.0, 0.0, 0.0, 0.0},

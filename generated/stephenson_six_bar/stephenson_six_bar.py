@@ -2,7 +2,7 @@
 Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
 Points: D; levels: paper, first_order, exact, loaded.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_dev1 60, loaded_plates2 623, loaded_system2 3042, loaded_dev2 143, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, plate_relation4 312, plate_values2 62, plate_rest4 39.
+Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_dev1 60, loaded_plates2 623, loaded_system2 3042, loaded_dev2 143, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, loaded_sens1 1094, loaded_sens2 2741, plate_relation4 312, plate_values2 62, plate_rest4 39, plate_eps4 158.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -31,7 +31,7 @@ LINKS = ('frame', 'input', 'coupler', 'rocker', 'link_ED', 'link_AB', )
 POINTS = ('D', )
 LEVELS = ('paper', 'first_order', 'exact', 'loaded', )
 #: The levels with closed-form sensitivities (docs/sensitivity.md).
-SENSITIVITY_LEVELS = ('paper', 'first_order', 'exact', )
+SENSITIVITY_LEVELS = ('paper', 'first_order', 'exact', 'loaded', )
 _DTYPE = numpy.float64
 
 # symkin runtime (templates/numpy/runtime.py, docs/runtime.md; tested on its own by
@@ -489,8 +489,12 @@ def _sensitivity_block(arrays, mech, level, p):
             ok = ok & good
             th = _matrix(th, k, nv, shape, dtype)
             rig = rig + numpy.matmul(_block(sr, rb["dR_dtheta"], shape, dtype), th)
-        s = lv.sens(theta, delta, p)
-        dev = _block(s, b["dD_dv"], shape, dtype)
+        if lv.loaded:
+            # the reduced equilibrium's own (templates/numpy/reduced_sens.py)
+            dev = lv.sens(mech, theta, p, q, th if k else None, ok).astype(dtype)
+        else:
+            s = lv.sens(theta, delta, p)
+            dev = _block(s, b["dD_dv"], shape, dtype)
         if "M" in b:
             # Y = -M^-1 (dE/dv + dE/dtheta_u Theta)
             rhs = -(
@@ -505,7 +509,7 @@ def _sensitivity_block(arrays, mech, level, p):
             dev = dev + numpy.matmul(
                 _block(s, b["dD_ddelta"], shape, dtype), _matrix(y, k, nv, shape, dtype)
             )
-        if k:
+        if k and not lv.loaded:
             dev = dev + numpy.matmul(_block(s, b["dD_dtheta"], shape, dtype), th)
         if mech.sens_chain is not None:
             # a parameter's default that reads earlier ones follows them: totals, last first
@@ -838,6 +842,9 @@ def _reduced_solve(mech, x, theta, p, ok):
     okf = numpy.zeros(where.size, dtype=bool)
     flat_delta = [numpy.zeros(where.size) for _ in mech.unknown_index]
     flat_dev = [numpy.full(where.size, numpy.nan) for _ in range(n_dev)]
+    # the variant and its solution x, for the sensitivities (templates/numpy/reduced_sens.py)
+    flat_x = [numpy.full(where.size, numpy.nan) for _ in range(max(v[3] for v in tb.variants))]
+    flat_variant = numpy.full(where.size, -1)
     for count, variant in enumerate(tb.variants, 1):
         if not todo.size:
             break
@@ -851,6 +858,9 @@ def _reduced_solve(mech, x, theta, p, ok):
             flat_delta[j][todo[good]] = sx[j, good] * solver.scale[j]
         for i in range(n_dev):
             flat_dev[i][todo[good]] = sdev[i, good]
+        for i in range(solver.size):
+            flat_x[i][todo[good]] = sx[i, good]
+        flat_variant[todo[good]] = count - 1
         okf[todo[good]] = True
         # refused by the truncation estimate: two half plates per plate
         todo = todo[status == 4]
@@ -863,7 +873,97 @@ def _reduced_solve(mech, x, theta, p, ok):
         dev[i].reshape(-1)[where] = flat_dev[i]
     q = _Solved(p)
     q.deviation = dev
+    q.x = [numpy.zeros(shape) for _ in flat_x]
+    q.variant = numpy.full(shape, -1)
+    for i, v in enumerate(flat_x):
+        q.x[i].reshape(-1)[where] = v
+    q.variant.reshape(-1)[where] = flat_variant
     return delta, q, ok
+
+
+def _red_block(out, block, b):
+    """A routine's block (offset, rows, cols) as a (b, rows, cols) array."""
+    at, rows, cols = block
+    if not rows * cols:
+        return numpy.zeros((b, rows, cols))
+    values = [_red_column(out[at + i], b) for i in range(rows * cols)]
+    return numpy.stack(values, axis=-1).reshape(b, rows, cols)
+
+
+def _reduced_rates(mech, theta, p, q, thu, ok):
+    """dev (*shape, 2 n_P, n_v) of the loaded level at its solutions (q: the variant solved and
+    its x, templates/numpy/reduced.py); thu dtheta_u/dv (*shape, k, n_v), None without. J is
+    evaluated once more at the solution, then dx/dv = -J^-1 dR/dv at fixed x and
+    dD/dv = dD/dx dx/dv + dD/dtheta dtheta/dv + dD/dp + dD/dout dout/dv (reduced_sens.c)."""
+    tb = mech.loaded
+    shape = ok.shape
+    npar, nv, m = len(mech.parameter_names), mech.n_variables, mech.n_theta
+    npt = 2 * len(mech.point_names)
+    dev = numpy.full((ok.size, npt, nv), numpy.nan)
+    variant = numpy.broadcast_to(q.variant, shape).reshape(-1)
+    good = numpy.broadcast_to(ok, shape).reshape(-1)
+
+    def flat(values, where):
+        return [numpy.broadcast_to(v, shape).reshape(-1)[where].astype(float) for v in values]
+
+    for index, (variant_row, (fn, blocks)) in enumerate(zip(tb.variants, tb.sens)):
+        where = numpy.flatnonzero(good & (variant == index))
+        b = where.size
+        if not b:
+            continue
+        solver = _Batch(tb, variant_row, index + 1)
+        n, ns = solver.size, solver.plates
+        x = numpy.array(flat(q.x[:n], where)).reshape(n, b)
+        th, pb = flat(theta, where), flat(p, where)
+        with numpy.errstate(all="ignore"):
+            _, jac = solver.system(x, th, pb, 1.0)
+            args, ins, dins = solver._inputs(x, th, pb, 1.0)
+            rel, vals = solver._relation(ins)
+            sys = solver.system_fn(args, th, vals, pb)
+            s = fn(args, th, vals, pb)
+        jo = _red_block(sys, (n + n * n, n, 3 * ns), b)
+        # dtheta/dv of every hinge: the non-input ones' from the rigid closure, an input's own 1
+        dth = numpy.zeros((b, m, nv))
+        if thu is not None:
+            tu = numpy.broadcast_to(thu, shape + thu.shape[-2:]).reshape(-1, *thu.shape[-2:])
+            for j, i in enumerate(mech.unknown_index):
+                dth[:, i] = tu[where, j]
+        for j, i in enumerate(mech.input_index):
+            dth[:, i, npar + j] = 1.0
+        # the relation's partials by (theta_c, p, f, e_a, e_s), 3 x 5 per half plate
+        part = numpy.zeros((b, 3 * ns, 5 * ns))
+        dinx = numpy.zeros((b, 5 * ns, n))
+        d = numpy.array(dins).reshape(3 * ns, n, b) if ns and n else numpy.zeros((3 * ns, n, b))
+        for k in range(ns):
+            eps = [_red_column(v, b) for v in tb.eps4(ins[5 * k : 5 * k + 5])]
+            for i in range(3):
+                for c in range(3):
+                    part[:, 3 * k + i, 5 * k + c] = rel[k][3 + 3 * i + c]
+                part[:, 3 * k + i, 5 * k + 3] = eps[2 * i]
+                part[:, 3 * k + i, 5 * k + 4] = eps[2 * i + 1]
+            dinx[:, 5 * k : 5 * k + 3] = d[3 * k : 3 * k + 3].transpose(2, 0, 1)
+
+        def by_v(theta_block, p_block):
+            out = numpy.matmul(_red_block(s, blocks[theta_block], b), dth)
+            out[:, :, :npar] += _red_block(s, blocks[p_block], b)
+            return out
+
+        din = by_v("din_dtheta", "din_dp")
+        dout = numpy.matmul(part, din)
+        rhs = by_v("dR_dtheta", "dR_dp") + numpy.matmul(jo, dout)
+        dx = numpy.full((b, n, nv), numpy.nan)
+        for c in range(b):
+            try:
+                dx[c] = -numpy.linalg.solve(jac[c], rhs[c]) if n else dx[c]
+            except numpy.linalg.LinAlgError:
+                continue  # singular: NaN
+        dout = dout + numpy.matmul(part, numpy.matmul(dinx, dx))
+        dev[where] = (
+            numpy.matmul(_red_block(s, blocks["dD_dx"], b), dx)
+            + by_v("dD_dtheta", "dD_dp")
+            + numpy.matmul(_red_block(s, blocks["dD_dout"], b), dout)
+        )
+    return dev.reshape(shape + (npt, nv))
 
 
 def arck(x):
@@ -966,6 +1066,11 @@ def bcol_a_d1_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_a_d1(p):
+    """bcol_a_d1(p) = d^1/dp^1 of p w(p)/(3 T^2) (vectorised)."""
+    return bcol_a_d1_at(p, bcol_h(p))
+
+
 def bcol_e1_at(x, h):
     """bcol_e1(p) = (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -994,6 +1099,11 @@ def bcol_e1_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((-48.0) + h * ((48.0) + h * ((p * (8.0)) + h * ((p * (-4.0)) + h * (p * (p * (1.0))))))) / (h * (h * (p * (p * (512.0)))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_e1(p):
+    """bcol_e1(p) = (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2) (vectorised)."""
+    return bcol_e1_at(p, bcol_h(p))
 
 
 def bcol_e1_d1_at(x, h):
@@ -1026,6 +1136,11 @@ def bcol_e1_d1_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_e1_d1(p):
+    """bcol_e1_d1(p) = d^1/dp^1 of (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2) (vectorised)."""
+    return bcol_e1_d1_at(p, bcol_h(p))
+
+
 def bcol_e1_d2_at(x, h):
     """bcol_e1_d2(p) = d^2/dp^2 of (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (15 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1054,6 +1169,11 @@ def bcol_e1_d2_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((-2304.0) + h * ((-3072.0) + h * ((-384.0 + p * (768.0)) + h * ((5760.0 + p * (768.0)) + h * ((p * (64.0 + p * (-32.0))) + h * ((p * (-480.0 + p * (-64.0))) + h * ((p * (p * (8.0 + p * (-16.0)))) + h * ((p * (p * (p * (16.0)))) + h * (p * (p * (p * (p * (3.0))))))))))))) / (h * (h * (h * (h * (p * (p * (p * (p * (16384.0)))))))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_e1_d2(p):
+    """bcol_e1_d2(p) = d^2/dp^2 of (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2) (vectorised)."""
+    return bcol_e1_d2_at(p, bcol_h(p))
 
 
 def bcol_e2_at(x, h):
@@ -1085,6 +1205,11 @@ def bcol_e2_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_e2(p):
+    """bcol_e2(p) = -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3) (vectorised)."""
+    return bcol_e2_at(p, bcol_h(p))
+
+
 def bcol_e2_d1_at(x, h):
     """bcol_e2_d1(p) = d^1/dp^1 of -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1112,6 +1237,11 @@ def bcol_e2_d1_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((-1680.0) + h * ((1680.0 + p * (-48.0)) + h * ((p * (216.0)) + h * ((p * (-28.0 + p * (8.0))) + h * ((p * (p * (3.0))) + h * (p * (p * (p * (1.0))))))))) / (p * (p * (p * (p * (2048.0)))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_e2_d1(p):
+    """bcol_e2_d1(p) = d^1/dp^1 of -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3) (vectorised)."""
+    return bcol_e2_d1_at(p, bcol_h(p))
 
 
 def bcol_e2_d2_at(x, h):
@@ -1143,6 +1273,11 @@ def bcol_e2_d2_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_e2_d2(p):
+    """bcol_e2_d2(p) = d^2/dp^2 of -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3) (vectorised)."""
+    return bcol_e2_d2_at(p, bcol_h(p))
+
+
 def bcol_e3_at(x, h):
     """bcol_e3(p) = -(3T^4p^2 + 20T^3p - 24T^2p - 48T + 48)/(3072 T^4 p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (13 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1170,6 +1305,40 @@ def bcol_e3_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((-48.0) + h * ((48.0) + h * ((p * (24.0)) + h * ((p * (-20.0)) + h * (p * (p * (-3.0))))))) / (h * (h * (h * (h * (p * (3072.0))))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_e3_d1_at(x, h):
+    """bcol_e3_d1(p) = d^1/dp^1 of -(3T^4p^2 + 20T^3p - 24T^2p - 48T + 48)/(3072 T^4 p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
+    x = np.asarray(x, dtype=float)
+    near = (x > -4.0) & (x < 16.0)
+    p = np.where(near, x, 6.0)
+    d = p - 6.0
+    d2 = d * d
+    d4 = d2 * d2
+    d8 = d4 * d4
+    s = 1.0 / (p + 39.47841760435743)
+    value = ((((-62317.1090282084 + d * -2601.803112996573) + (-98.24150073157513 + d * -1.449920896321523) * d2) + ((-0.012275915872263935 + d * -1.1390294659006214e-05) + (-5.8952099340217056e-08 + d * 3.428021782217453e-10) * d2) * d4) + (((2.3149571793056234e-12 + d * -8.658295175739011e-14) + (1.41785207937709e-15 + d * -1.8163666924134298e-17) * d2) + (2.1127919490076908e-19 + d * -2.172980716945177e-21) * d4) * d8) * (s * s * s * s * s)
+    if near.all():
+        return value
+    high = x >= 16.0
+    p = np.where(high, x, 32.0)
+    h0 = h
+    h = np.where(high, h0, 0.01)
+    u = 0.5 * np.sqrt(p)
+    tau = 1.0 - h
+    sigma = h * (2.0 - h)
+    far = (((-32.0) + sigma * ((112.0 + u * (-64.0)) + sigma * (-80.0 + u * (-176.0 + u * (192.0))))) * (1.0 + tau) - sigma * (sigma * ((u * (-64.0)) + sigma * (u * (-176.0))))) / (((u * (98304.0)) + sigma * ((u * (-196608.0)) + sigma * (u * (98304.0)))) * (1.0 + tau) - sigma * ((u * (98304.0)) + sigma * ((u * (-196608.0)) + sigma * (u * (98304.0)))))
+    inside = x > -9.869604401089358
+    low = ~near & ~high & inside
+    p = np.where(low, x, -8.0)
+    h = np.where(low, h0, 0.5)
+    closed = ((192.0) + h * ((-240.0) + h * ((48.0 + p * (-96.0)) + h * ((p * (104.0)) + h * ((p * (-20.0 + p * (12.0))) + h * (p * (p * (-11.0)))))))) / (h * (h * (h * (h * (h * (p * (p * (6144.0))))))))
+    return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_e3_d1(p):
+    """bcol_e3_d1(p) = d^1/dp^1 of -(3T^4p^2 + 20T^3p - 24T^2p - 48T + 48)/(3072 T^4 p) (vectorised)."""
+    return bcol_e3_d1_at(p, bcol_h(p))
 
 
 def bcol_e3c_at(x, h):
@@ -1201,6 +1370,11 @@ def bcol_e3c_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_e3c(p):
+    """bcol_e3c(p) = e3'(p) + 1/1920 (vectorised)."""
+    return bcol_e3c_at(p, bcol_h(p))
+
+
 def bcol_e3c_d1_at(x, h):
     """bcol_e3c_d1(p) = d^1/dp^1 of e3'(p) + 1/1920, at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1228,6 +1402,11 @@ def bcol_e3c_d1_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((-960.0) + h * ((1152.0) + h * ((-144.0 + p * (528.0)) + h * ((-48.0 + p * (-544.0)) + h * ((p * (56.0 + p * (-84.0))) + h * ((p * (20.0 + p * (64.0))) + h * (p * (p * (-5.0 + p * (3.0)))))))))) / (h * (h * (h * (h * (h * (h * (p * (p * (p * (12288.0))))))))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_e3c_d1(p):
+    """bcol_e3c_d1(p) = d^1/dp^1 of e3'(p) + 1/1920 (vectorised)."""
+    return bcol_e3c_d1_at(p, bcol_h(p))
 
 
 def bcol_invt_at(x, h):
@@ -1293,6 +1472,11 @@ def bcol_invt_d1_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_invt_d1(p):
+    """bcol_invt_d1(p) = d^1/dp^1 of 1/T(p) (vectorised)."""
+    return bcol_invt_d1_at(p, bcol_h(p))
+
+
 def bcol_s_at(x, h):
     """bcol_s(p) = (1 - T)/p, at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (13 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1325,6 +1509,40 @@ def bcol_s_at(x, h):
 def bcol_s(p):
     """bcol_s(p) = (1 - T)/p (vectorised)."""
     return bcol_s_at(p, bcol_h(p))
+
+
+def bcol_s_d1_at(x, h):
+    """bcol_s_d1(p) = d^1/dp^1 of (1 - T)/p, at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
+    x = np.asarray(x, dtype=float)
+    near = (x > -4.0) & (x < 16.0)
+    p = np.where(near, x, 6.0)
+    d = p - 6.0
+    d2 = d * d
+    d4 = d2 * d2
+    d8 = d4 * d4
+    r = 1.0 / (p + 9.869604401089358)
+    value = ((((-0.8132429851307679 + d * -0.00028263927661945) + (-4.62076041242041e-06 + d * 1.2061372014718943e-07) * d2) + ((-2.027158719940083e-09 + d * 2.941018614006343e-11) + (-3.9541483920524393e-13 + d * 5.072415794354741e-15) * d2) * d4) + (((-6.302768016745823e-17 + d * 7.653122930054966e-19) + (-9.124106052786141e-21 + d * 1.0739523739919228e-22) * d2) + (-1.3113722098199768e-24 + d * 1.5174003904817066e-26) * d4) * d8) * (r * r)
+    if near.all():
+        return value
+    high = x >= 16.0
+    p = np.where(high, x, 32.0)
+    h0 = h
+    h = np.where(high, h0, 0.01)
+    u = 0.5 * np.sqrt(p)
+    tau = 1.0 - h
+    sigma = h * (2.0 - h)
+    far = (((12.0 + u * (-8.0)) + sigma * (u * (-4.0))) * (1.0 + tau) - sigma * (12.0)) / ((u * (u * (u * (u * (u * (128.0)))))) * (1.0 + tau))
+    inside = x > -9.869604401089358
+    low = ~near & ~high & inside
+    p = np.where(low, x, -8.0)
+    h = np.where(low, h0, 0.5)
+    closed = ((-12.0) + h * ((12.0) + h * (p * (1.0)))) / (p * (p * (8.0)))
+    return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_s_d1(p):
+    """bcol_s_d1(p) = d^1/dp^1 of (1 - T)/p (vectorised)."""
+    return bcol_s_d1_at(p, bcol_h(p))
 
 
 def bcol_w_at(x, h):
@@ -1388,6 +1606,11 @@ def bcol_w_d1_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((-120.0) + h * ((120.0 + p * (-4.0)) + h * ((p * (14.0)) + h * (p * (p * (1.0)))))) / (p * (p * (p * (64.0))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_w_d1(p):
+    """bcol_w_d1(p) = d^1/dp^1 of (12 (1 - T)/p - T^2)/(16 p) (vectorised)."""
+    return bcol_w_d1_at(p, bcol_h(p))
 
 
 def cosr1(x):
@@ -7100,6 +7323,2242 @@ def _sens_exact(theta, delta, params):
     ]
 
 
+def _loaded_sens1(x, theta, plates, params):
+    """loaded (1 half plate(s) per plate), sensitivities: dR/dtheta, dR/dp, din/dtheta, din/dp, dD/dx, dD/dtheta, dD/dp, dD/dout (1094 operations)."""
+    x_0, x_1, x_2, x_3, x_4, x_5, x_6, x_7, _, x_9, x_10, _, _ = x
+    theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7 = theta
+    along_1_0, across_1_0, _, along_2_0, across_2_0, omega_2_0, along_3_0, across_3_0, omega_3_0, along_4_0, across_4_0, omega_4_0, along_5_0, across_5_0, omega_5_0, along_6_0, across_6_0, omega_6_0, along_7_0, across_7_0, omega_7_0 = plates
+    p_0, = params
+    _tmp0 = 0.5*theta_6 + 0.003076923076923077*x_4
+    _tmp1 = arck(_tmp0)
+    _tmp2 = along_6_0 + _tmp1*_tmp0**2
+    _tmp3 = _tmp0 + theta_1
+    _tmp4 = numpy.cos(_tmp3)
+    _tmp5 = 1250.0*_tmp4
+    _tmp6 = numpy.sin(_tmp3)
+    _tmp7 = 0.5*theta_1
+    _tmp8 = numpy.cos(_tmp7)
+    _tmp9 = arck(_tmp7)
+    _tmp10 = along_1_0 + 0.25*_tmp9*theta_1**2
+    _tmp11 = _tmp10*_tmp8
+    _tmp12 = 625.0*p_0
+    _tmp14 = numpy.sin(_tmp7)
+    _tmp13 = _tmp7*_tmp9 + 0.0625*theta_1**3*(-3*sinr2(_tmp7) + 3*cosr2(_tmp7) + sinr1(_tmp7))
+    _tmp15 = _tmp14*p_0
+    _tmp16 = _tmp13*_tmp15
+    _tmp17 = 1250.0*_tmp16 + _tmp11*_tmp12 - 625.0*_tmp14*across_1_0*p_0
+    _tmp18 = numpy.sin(theta_3)
+    _tmp19 = 0.006153846153846154*x_1
+    _tmp20 = numpy.sin(_tmp19)
+    _tmp21 = 0.003076923076923077*x_1
+    _tmp22 = numpy.sin(_tmp21)**2
+    _tmp23 = 0.04*_tmp22
+    _tmp24 = 75.0*_tmp20 - 1250.0*_tmp23
+    _tmp25 = numpy.cos(theta_3)
+    _tmp26 = 0.02*_tmp20
+    _tmp27 = 1250.0*_tmp26 + 150.0*_tmp22
+    _tmp28 = 0.003076923076923077*x_3
+    _tmp29 = _tmp28 + 0.5*theta_5
+    _tmp30 = _tmp19 + theta_3
+    _tmp31 = _tmp29 + _tmp30
+    _tmp32 = numpy.cos(_tmp31)
+    _tmp33 = numpy.sin(_tmp31)
+    _tmp34 = arck(_tmp29)
+    _tmp35 = along_5_0 + _tmp34*_tmp29**2
+    _tmp36 = _tmp19 + 0.006153846153846154*x_3
+    _tmp37 = numpy.sin(_tmp36)
+    _tmp38 = numpy.sin(_tmp21 + _tmp28)**2
+    _tmp39 = 0.072*_tmp37 - 0.06*_tmp38
+    _tmp40 = theta_3 + theta_5
+    _tmp41 = numpy.cos(_tmp40)
+    _tmp42 = 1250.0*_tmp41
+    _tmp43 = -0.03*_tmp37 - 0.144*_tmp38
+    _tmp44 = 1250.0*numpy.sin(_tmp40)
+    _tmp45 = _tmp39*_tmp42 + _tmp43*_tmp44
+    _tmp46 = _tmp21 + 0.5*theta_3
+    _tmp47 = numpy.sin(_tmp46)
+    _tmp48 = _tmp47*across_3_0
+    _tmp49 = numpy.cos(_tmp46)
+    _tmp50 = arck(_tmp46)
+    _tmp51 = along_3_0 + _tmp50*_tmp46**2
+    _tmp52 = _tmp46*_tmp50 + 0.5*_tmp46**3*(-3*sinr2(_tmp46) + 3*cosr2(_tmp46) + sinr1(_tmp46))
+    _tmp53 = _tmp12*_tmp48 - 625.0*_tmp49*_tmp51*p_0 - 1250.0*_tmp47*_tmp52*p_0
+    _tmp54 = _tmp29*_tmp34 + 0.5*_tmp29**3*(-3*sinr2(_tmp29) + 3*cosr2(_tmp29) + sinr1(_tmp29))
+    _tmp55 = _tmp54*p_0
+    _tmp56 = _tmp12*_tmp2
+    _tmp57 = 1250.0*_tmp6
+    _tmp58 = _tmp0*_tmp1 + 0.5*_tmp0**3*(-3*sinr2(_tmp0) + 3*cosr2(_tmp0) + sinr1(_tmp0))
+    _tmp59 = _tmp5*across_6_0
+    _tmp60 = _tmp2*_tmp57
+    _tmp61 = _tmp8*across_1_0
+    _tmp62 = _tmp10*_tmp14
+    _tmp63 = _tmp12*_tmp61 + _tmp12*_tmp62 - 1250.0*_tmp13*_tmp8*p_0
+    _tmp64 = _tmp39*_tmp44
+    _tmp65 = _tmp33*across_5_0
+    _tmp66 = _tmp65*p_0
+    _tmp67 = _tmp32*_tmp35
+    _tmp68 = _tmp67*p_0
+    _tmp69 = _tmp49*across_3_0
+    _tmp70 = _tmp47*_tmp51
+    _tmp71 = _tmp52*p_0
+    _tmp72 = _tmp12*_tmp69 + _tmp12*_tmp70 - 1250.0*_tmp49*_tmp71
+    _tmp73 = 0.003076923076923077*x_0
+    _tmp74 = _tmp73 + 0.5*theta_2
+    _tmp75 = 0.7853981633974483 + _tmp74 + theta_1
+    _tmp76 = numpy.cos(_tmp75)
+    _tmp77 = _tmp76*across_2_0
+    _tmp78 = _tmp77*p_0
+    _tmp79 = numpy.sin(_tmp75)
+    _tmp80 = arck(_tmp74)
+    _tmp81 = along_2_0 + _tmp80*_tmp74**2
+    _tmp82 = _tmp79*_tmp81
+    _tmp83 = _tmp82*p_0
+    _tmp84 = theta_1 + theta_2
+    _tmp85 = numpy.cos(_tmp84)
+    _tmp86 = 0.006153846153846154*x_0
+    _tmp87 = numpy.sin(_tmp86)
+    _tmp88 = numpy.sin(_tmp73)
+    _tmp89 = _tmp88**2
+    _tmp90 = 0.04*_tmp87 - 0.14*_tmp89
+    _tmp91 = _tmp85*_tmp90
+    _tmp92 = numpy.sin(_tmp84)
+    _tmp93 = -0.07*_tmp87 - 0.08*_tmp89
+    _tmp94 = _tmp92*_tmp93
+    _tmp95 = 0.5*theta_7 + 0.003076923076923077*x_5
+    _tmp96 = _tmp84 + _tmp86
+    _tmp97 = _tmp95 + _tmp96
+    _tmp98 = numpy.cos(_tmp97)
+    _tmp99 = 1250.0*_tmp98
+    _tmp100 = _tmp99*across_7_0
+    _tmp101 = arck(_tmp95)
+    _tmp102 = along_7_0 + _tmp101*_tmp95**2
+    _tmp103 = numpy.sin(_tmp97)
+    _tmp104 = 1250.0*_tmp103
+    _tmp105 = _tmp102*_tmp104
+    _tmp106 = 1250.0*_tmp91 + 1250.0*_tmp94 + _tmp100*p_0 + _tmp105*p_0
+    _tmp107 = _tmp74**3*(-3*sinr2(_tmp74) + 3*cosr2(_tmp74) + sinr1(_tmp74))
+    _tmp108 = 0.5*_tmp107 + _tmp74*_tmp80
+    _tmp109 = 1250.0*_tmp23 + 62.5*_tmp20
+    _tmp110 = 125.0*_tmp22 - 1250.0*_tmp26
+    _tmp111 = 0.003076923076923077*x_2
+    _tmp112 = _tmp111 + 0.5*theta_4
+    _tmp113 = _tmp112 + _tmp30
+    _tmp114 = numpy.cos(_tmp113)
+    _tmp115 = numpy.sin(_tmp113)
+    _tmp116 = arck(_tmp112)
+    _tmp117 = along_4_0 + _tmp116*_tmp112**2
+    _tmp118 = _tmp19 + 0.006153846153846154*x_2
+    _tmp119 = numpy.sin(_tmp118)
+    _tmp120 = numpy.sin(_tmp111 + _tmp21)**2
+    _tmp121 = 0.05*_tmp119 + 0.08*_tmp120
+    _tmp122 = theta_3 + theta_4
+    _tmp123 = numpy.cos(_tmp122)
+    _tmp124 = 1250.0*_tmp123
+    _tmp125 = 0.04*_tmp119 - 0.1*_tmp120
+    _tmp126 = 1250.0*numpy.sin(_tmp122)
+    _tmp127 = _tmp121*_tmp124 + _tmp125*_tmp126
+    _tmp128 = _tmp112*_tmp116 + 0.5*_tmp112**3*(-3*sinr2(_tmp112) + 3*cosr2(_tmp112) + sinr1(_tmp112))
+    _tmp129 = _tmp128*p_0
+    _tmp130 = _tmp12*_tmp98
+    _tmp131 = _tmp103*_tmp12
+    _tmp132 = _tmp101*_tmp95 + 0.5*_tmp95**3*(-3*sinr2(_tmp95) + 3*cosr2(_tmp95) + sinr1(_tmp95))
+    _tmp133 = _tmp90*_tmp92
+    _tmp134 = 1250.0*_tmp133
+    _tmp135 = _tmp79*across_2_0
+    _tmp136 = _tmp135*p_0
+    _tmp137 = _tmp104*across_7_0
+    _tmp138 = _tmp137*p_0
+    _tmp139 = _tmp85*_tmp93
+    _tmp140 = _tmp76*_tmp81
+    _tmp141 = _tmp140*p_0
+    _tmp142 = _tmp79*p_0
+    _tmp143 = _tmp108*_tmp142
+    _tmp144 = _tmp121*_tmp126
+    _tmp145 = _tmp115*across_4_0
+    _tmp146 = _tmp145*p_0
+    _tmp147 = _tmp114*_tmp117
+    _tmp148 = _tmp147*p_0
+    _tmp149 = _tmp115*_tmp129
+    _tmp150 = numpy.sin(theta_1)
+    _tmp151 = numpy.cos(theta_1)
+    _tmp152 = 0.3535533905932738*numpy.cos(_tmp96)
+    _tmp153 = _tmp152*p_0
+    _tmp154 = numpy.sin(_tmp96)
+    _tmp155 = 0.3535533905932738*_tmp154
+    _tmp156 = _tmp155*p_0
+    _tmp157 = _tmp153 + _tmp156
+    _tmp158 = 0.5*p_0
+    _tmp159 = _tmp14*across_1_0
+    _tmp160 = _tmp16 + _tmp78 + _tmp83 + _tmp11*_tmp158 - _tmp158*_tmp159
+    _tmp161 = 7.6923076923076925*x_10
+    _tmp162 = _tmp8*p_0
+    _tmp163 = _tmp136 - _tmp141 + _tmp158*_tmp61 + _tmp158*_tmp62 - _tmp13*_tmp162
+    _tmp164 = _tmp76*p_0
+    _tmp165 = _tmp158*_tmp77 + _tmp158*_tmp82 - _tmp108*_tmp164
+    _tmp166 = _tmp143 + _tmp140*_tmp158 - _tmp135*_tmp158
+    _tmp167 = numpy.sin(_tmp30)
+    _tmp168 = 0.05*_tmp167
+    _tmp169 = numpy.cos(_tmp30)
+    _tmp170 = 0.02*_tmp169
+    _tmp171 = _tmp118 + _tmp122
+    _tmp172 = numpy.sin(_tmp171)
+    _tmp173 = 0.04*_tmp172
+    _tmp174 = -0.05 + _tmp158
+    _tmp175 = numpy.cos(_tmp171)
+    _tmp176 = _tmp173 - _tmp174*_tmp175
+    _tmp177 = _tmp49*_tmp51
+    _tmp178 = 0.02*_tmp167
+    _tmp179 = _tmp114*across_4_0
+    _tmp180 = _tmp115*_tmp117
+    _tmp181 = 0.04*_tmp175 + _tmp172*_tmp174
+    _tmp182 = _tmp178 + _tmp181 + 0.05*_tmp169 + _tmp179*p_0 + _tmp180*p_0
+    _tmp183 = -_tmp173 + _tmp174*_tmp175
+    _tmp184 = _tmp161*(-_tmp181 - _tmp158*_tmp179 - _tmp158*_tmp180 + _tmp114*_tmp128*p_0) - 7.6923076923076925*x_9*(_tmp149 + _tmp183 + _tmp147*_tmp158 - _tmp145*_tmp158)
+    _tmp185 = 7.6923076923076925*x_9
+    _tmp186 = _tmp36 + _tmp40
+    _tmp187 = numpy.cos(_tmp186)
+    _tmp188 = -0.03 + _tmp158
+    _tmp189 = numpy.sin(_tmp186)
+    _tmp190 = 0.072*_tmp187 + _tmp188*_tmp189
+    _tmp191 = 7.6923076923076925*x_6
+    _tmp192 = -0.5*_tmp169*p_0
+    _tmp193 = _tmp32*across_5_0
+    _tmp194 = _tmp33*_tmp35
+    _tmp195 = _tmp187*_tmp188
+    _tmp196 = _tmp195 - 0.072*_tmp189
+    _tmp197 = 7.6923076923076925*x_7
+    _tmp198 = _tmp161*(-_tmp181 + 0.5*_tmp172*p_0) - _tmp185*(-_tmp176 - _tmp158*_tmp175)
+    _tmp199 = -_tmp191*(-_tmp190 - _tmp158*_tmp187) + 7.6923076923076925*x_7*(-_tmp195 + 0.072*_tmp189 + _tmp158*_tmp189)
+    _tmp200 = 1250.0*_tmp61 + 1250.0*_tmp62 - 1250.0*_tmp47*_tmp51 - 1250.0*_tmp49*across_3_0
+    _tmp201 = 1250.0*_tmp159
+    _tmp202 = 1250.0*_tmp177
+    _tmp203 = numpy.less_equal(p_0, 0.008)
+    _tmp204 = 1.3541666666666668e-05*p_0*_DTYPE(numpy.where(_tmp203, 230769230769.23077, 210000000000))
+    _tmp205 = _tmp147 - _tmp145 + 0.5*_tmp175
+    _tmp206 = _tmp135 + _tmp61 + _tmp62 - _tmp140
+    _tmp207 = _tmp11 + _tmp77 + _tmp82 - _tmp159
+    _tmp208 = -0.5*_tmp169
+    _tmp209 = 0.5*_tmp187
+    _tmp210 = 0.5*_tmp189
+    _tmp211 = p_0**(-1.0)
+    _tmp212 = _DTYPE(numpy.where(_tmp203, 4.333333333333334e-12, 4.761904761904762e-12))
+    _tmp213 = _tmp211*_tmp212
+    _tmp214 = 1500000*_tmp213
+    _tmp215 = 0.378698224852071*x_10 + 0.378698224852071*x_7
+    _tmp216 = _tmp14*_tmp215
+    _tmp217 = 0.378698224852071*x_6 + 0.378698224852071*x_9
+    _tmp218 = _tmp214*_tmp8
+    _tmp219 = 1136094.674556213*_tmp213
+    _tmp220 = _tmp76*x_10
+    _tmp221 = _tmp79*x_9
+    _tmp222 = 568047.3372781065*_tmp213
+    _tmp223 = _tmp79*x_10
+    _tmp224 = _tmp76*x_9
+    _tmp225 = -_tmp215
+    _tmp226 = _tmp214*_tmp225
+    _tmp227 = -_tmp217
+    _tmp228 = _tmp114*x_10
+    _tmp229 = _tmp115*x_10
+    _tmp230 = _tmp114*x_9
+    _tmp231 = _tmp33*x_6
+    _tmp232 = _tmp32*x_7
+    _tmp233 = _tmp32*x_6
+    _tmp234 = _tmp33*x_7
+    _tmp235 = _tmp4*x_6
+    _tmp236 = _tmp6*x_7
+    _tmp237 = _tmp6*x_6
+    _tmp238 = _tmp4*x_7
+    _tmp239 = _tmp98*x_10
+    _tmp240 = _tmp103*x_9
+    _tmp241 = _tmp219*_tmp239 - _tmp219*_tmp240
+    _tmp242 = _tmp103*x_10
+    _tmp243 = _tmp98*x_9
+    _tmp244 = -_tmp219*_tmp242 - _tmp219*_tmp243
+    _tmp245 = p_0**(-2.0)
+    _tmp246 = _tmp212*_tmp245
+    _tmp247 = 3000000*_tmp246
+    _tmp248 = _tmp247*_tmp8
+    _tmp249 = 1136094.674556213*_tmp246
+    _tmp250 = _tmp225*_tmp247
+    _tmp251 = numpy.cos(_tmp86)
+    _tmp252 = _tmp88*numpy.cos(_tmp73)
+    _tmp253 = 0.00024615384615384614*_tmp251 - 0.0008615384615384615*_tmp252
+    _tmp254 = -0.0004923076923076923*_tmp252 - 0.0004307692307692308*_tmp251
+    _tmp255 = 0.003076923076923077*_tmp107 + _tmp80*(1.893491124260355e-05*x_0 + 0.003076923076923077*theta_2)
+    _tmp256 = _tmp91 + _tmp94
+    _tmp257 = -_tmp15
+    return [
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp17 - _tmp2*_tmp5*p_0 + 1250.0*_tmp6*across_6_0*p_0,
+        0,
+        -_tmp45 - _tmp53 - _tmp18*_tmp24 - _tmp25*_tmp27 + 1250.0*_tmp32*across_5_0*p_0 + 1250.0*_tmp33*_tmp35*p_0,
+        0,
+        -_tmp45 - 1250.0*_tmp32*_tmp55 + 625.0*_tmp32*across_5_0*p_0 + 625.0*_tmp33*_tmp35*p_0,
+        -_tmp4*_tmp56 - _tmp57*_tmp58*p_0 + 625.0*_tmp6*across_6_0*p_0,
+        0,
+        -_tmp63 - _tmp59*p_0 - _tmp60*p_0,
+        0,
+        _tmp72 - _tmp64 + 1250.0*_tmp66 - 1250.0*_tmp68 + _tmp24*_tmp25 + _tmp42*_tmp43 - _tmp18*_tmp27,
+        0,
+        -_tmp64 - 625.0*_tmp68 + 1250.0*_tmp41*_tmp43 - 1250.0*_tmp33*_tmp55 + 625.0*_tmp33*across_5_0*p_0,
+        -_tmp56*_tmp6 - _tmp12*_tmp4*across_6_0 + 1250.0*_tmp4*_tmp58*p_0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp106 - _tmp17 - 1250.0*_tmp78 - 1250.0*_tmp83,
+        -_tmp106 - 625.0*_tmp78 - 625.0*_tmp83 + 1250.0*_tmp108*_tmp76*p_0,
+        -_tmp127 - _tmp53 - _tmp109*_tmp18 - _tmp110*_tmp25 + 1250.0*_tmp114*across_4_0*p_0 + 1250.0*_tmp115*_tmp117*p_0,
+        -_tmp127 - 1250.0*_tmp114*_tmp129 + 625.0*_tmp114*across_4_0*p_0 + 625.0*_tmp115*_tmp117*p_0,
+        0,
+        0,
+        -_tmp102*_tmp131 - _tmp130*across_7_0 + 1250.0*_tmp132*_tmp98*p_0,
+        -_tmp134 - _tmp138 - _tmp63 - 1250.0*_tmp136 + 1250.0*_tmp85*_tmp93 + 1250.0*_tmp102*_tmp98*p_0 + 1250.0*_tmp76*_tmp81*p_0,
+        -_tmp134 - _tmp138 + 625.0*_tmp141 + 1250.0*_tmp139 + 1250.0*_tmp143 - 625.0*_tmp136 + _tmp102*_tmp99*p_0,
+        _tmp72 - _tmp144 + 1250.0*_tmp146 - 1250.0*_tmp148 + _tmp109*_tmp25 + _tmp124*_tmp125 - _tmp110*_tmp18,
+        -_tmp144 - 625.0*_tmp148 - 1250.0*_tmp149 + 1250.0*_tmp123*_tmp125 + 625.0*_tmp115*across_4_0*p_0,
+        0,
+        0,
+        _tmp102*_tmp130 - _tmp131*across_7_0 + _tmp104*_tmp132*p_0,
+        -_tmp161*(_tmp157 + _tmp160 + 0.03*_tmp150 + 0.02*_tmp151) + 7.6923076923076925*x_9*(_tmp156 + _tmp163 - _tmp153 + 0.02*_tmp150 - 0.03*_tmp151),
+        -_tmp161*(_tmp157 + _tmp165) + 7.6923076923076925*x_9*(-_tmp153 - _tmp166 + 0.3535533905932738*_tmp154*p_0),
+        -_tmp161*(-_tmp182 - _tmp158*_tmp177 - _tmp47*_tmp71 + 0.5*_tmp47*across_3_0*p_0) + 7.6923076923076925*x_9*(_tmp170 - _tmp146 - _tmp168 - _tmp176 - _tmp158*_tmp69 - _tmp158*_tmp70 + _tmp114*_tmp117*p_0 + _tmp49*_tmp52*p_0),
+        -_tmp184,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp161*(-_tmp182 - _tmp192) + _tmp197*(_tmp178 - _tmp192 - _tmp196 - 0.06*_tmp169 - _tmp193*p_0 - _tmp194*p_0) - _tmp185*(_tmp148 + _tmp170 + _tmp183 - _tmp146 - _tmp168 + _tmp158*_tmp167) - _tmp191*(-_tmp170 - _tmp190 - _tmp66 - 0.06*_tmp167 + 0.5*_tmp167*p_0 + _tmp32*_tmp35*p_0),
+        _tmp184,
+        -_tmp191*(-_tmp190 - _tmp158*_tmp65 + _tmp33*_tmp54*p_0 + 0.5*_tmp32*_tmp35*p_0) + 7.6923076923076925*x_7*(-_tmp196 - _tmp158*_tmp193 - _tmp158*_tmp194 + _tmp32*_tmp54*p_0),
+        0,
+        0,
+        0,
+        0,
+        _tmp198,
+        _tmp198,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp199,
+        0,
+        _tmp199,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp200 - _tmp59 - _tmp60 - 1250.0*_tmp67 + 1250.0*_tmp33*across_5_0,
+        -_tmp201 - _tmp202 - 1250.0*_tmp193 - 1250.0*_tmp194 - _tmp57*across_6_0 + 1250.0*_tmp10*_tmp8 + 1250.0*_tmp2*_tmp4 + 1250.0*_tmp47*across_3_0,
+        0,
+        -_tmp137 - _tmp200 - 1250.0*_tmp135 - 1250.0*_tmp147 + 1250.0*_tmp102*_tmp98 + 1250.0*_tmp115*across_4_0 + 1250.0*_tmp76*_tmp81,
+        _tmp100 + _tmp105 - _tmp201 - _tmp202 + 1250.0*_tmp11 + 1250.0*_tmp48 + 1250.0*_tmp77 + 1250.0*_tmp82 - 1250.0*_tmp179 - 1250.0*_tmp180,
+        _tmp185*(-_tmp152 - _tmp155 - _tmp207 - _tmp48 + 0.5*_tmp172 + _tmp114*across_4_0 + _tmp115*_tmp117 + _tmp49*_tmp51) + _tmp204*omega_2_0 - _tmp161*(_tmp155 + _tmp205 + _tmp206 - _tmp152 - _tmp69 - _tmp70),
+        _tmp161*(_tmp205 + 0.5*_tmp167) + _tmp197*(-_tmp210 - _tmp65 + 0.5*_tmp167 + _tmp32*_tmp35) + _tmp204*omega_3_0 - _tmp185*(_tmp179 + _tmp180 + _tmp208 + 0.5*_tmp172) - _tmp191*(_tmp193 + _tmp194 + _tmp208 + _tmp209),
+        _tmp204*omega_4_0,
+        _tmp197*(-_tmp209 - _tmp210) + _tmp204*omega_5_0 - _tmp191*(_tmp209 - _tmp210),
+        -_tmp204*omega_6_0,
+        -_tmp204*omega_7_0,
+        1,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp214*_tmp216 - _tmp217*_tmp218,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp215*_tmp218 + 1500000*_tmp14*_tmp211*_tmp212*_tmp217,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp219*_tmp220 - _tmp219*_tmp221,
+        _tmp220*_tmp222 - _tmp221*_tmp222,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp219*_tmp223 - _tmp219*_tmp224,
+        -_tmp222*_tmp223 - _tmp222*_tmp224,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp226*_tmp47 - _tmp214*_tmp227*_tmp49,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp226*_tmp49 + 1500000*_tmp211*_tmp212*_tmp227*_tmp47,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp219*_tmp228 + 1136094.674556213*_tmp115*_tmp211*_tmp212*x_9,
+        -_tmp222*_tmp228 + 568047.3372781065*_tmp115*_tmp211*_tmp212*x_9,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp219*_tmp229 + _tmp219*_tmp230,
+        _tmp222*_tmp229 + _tmp222*_tmp230,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        0,
+        _tmp219*_tmp231 - _tmp219*_tmp232,
+        0,
+        _tmp222*_tmp231 - _tmp222*_tmp232,
+        0,
+        0,
+        0,
+        0,
+        _tmp219*_tmp233 + _tmp219*_tmp234,
+        0,
+        _tmp222*_tmp233 + _tmp222*_tmp234,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        -_tmp219*_tmp235 - _tmp219*_tmp236,
+        0,
+        0,
+        0,
+        0,
+        -_tmp222*_tmp235 - _tmp222*_tmp236,
+        0,
+        _tmp219*_tmp237 - _tmp219*_tmp238,
+        0,
+        0,
+        0,
+        0,
+        _tmp222*_tmp237 - _tmp222*_tmp238,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        _tmp241,
+        _tmp241,
+        0,
+        0,
+        0,
+        0,
+        _tmp222*_tmp239 - _tmp222*_tmp240,
+        _tmp244,
+        _tmp244,
+        0,
+        0,
+        0,
+        0,
+        -_tmp222*_tmp242 - _tmp222*_tmp243,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp215*_tmp248 + 3000000*_tmp14*_tmp212*_tmp217*_tmp245,
+        _tmp216*_tmp247 + _tmp217*_tmp248,
+        0,
+        0,
+        0,
+        -_tmp223*_tmp249 - _tmp224*_tmp249,
+        -_tmp220*_tmp249 + 1136094.674556213*_tmp212*_tmp245*_tmp79*x_9,
+        0,
+        0,
+        0,
+        -_tmp250*_tmp49 + 3000000*_tmp212*_tmp227*_tmp245*_tmp47,
+        _tmp250*_tmp47 + _tmp227*_tmp247*_tmp49,
+        0,
+        0,
+        0,
+        _tmp229*_tmp249 + _tmp230*_tmp249,
+        _tmp228*_tmp249 - _tmp115*_tmp249*x_9,
+        0,
+        0,
+        0,
+        _tmp233*_tmp249 + _tmp234*_tmp249,
+        -_tmp231*_tmp249 + 1136094.674556213*_tmp212*_tmp245*_tmp32*x_7,
+        0,
+        0,
+        0,
+        _tmp237*_tmp249 - _tmp238*_tmp249,
+        _tmp235*_tmp249 + _tmp236*_tmp249,
+        0,
+        0,
+        0,
+        -_tmp242*_tmp249 - _tmp243*_tmp249,
+        -_tmp239*_tmp249 + 1136094.674556213*_tmp103*_tmp212*_tmp245*x_9,
+        0,
+        0,
+        -0.003076923076923077*_tmp78 - 0.003076923076923077*_tmp83 + _tmp254*_tmp85 - _tmp253*_tmp92 + _tmp255*_tmp76*p_0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.003076923076923077*_tmp141 - 0.003076923076923077*_tmp136 + _tmp142*_tmp255 + _tmp253*_tmp85 + _tmp254*_tmp92,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp160 - _tmp256,
+        -_tmp165 - _tmp256,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp133 - _tmp163 + _tmp85*_tmp93,
+        _tmp139 + _tmp166 - _tmp133,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp206,
+        _tmp207,
+        _tmp257,
+        -_tmp162,
+        0,
+        _tmp164,
+        -_tmp142,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp162,
+        _tmp257,
+        0,
+        _tmp142,
+        _tmp164,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+    ]
+
+
+def _loaded_sens2(x, theta, plates, params):
+    """loaded (2 half plate(s) per plate), sensitivities: dR/dtheta, dR/dp, din/dtheta, din/dp, dD/dx, dD/dtheta, dD/dp, dD/dout (2741 operations)."""
+    x_0, x_1, x_2, x_3, x_4, x_5, x_6, x_7, _, x_9, x_10, _, x_12, x_13, x_14, x_15, x_16, x_17, x_18, _ = x
+    theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7 = theta
+    along_1_0, across_1_0, omega_1_0, along_1_1, across_1_1, omega_1_1, along_2_0, across_2_0, omega_2_0, along_2_1, across_2_1, omega_2_1, along_3_0, across_3_0, omega_3_0, along_3_1, across_3_1, omega_3_1, along_4_0, across_4_0, omega_4_0, along_4_1, across_4_1, omega_4_1, along_5_0, across_5_0, omega_5_0, along_5_1, across_5_1, omega_5_1, along_6_0, across_6_0, omega_6_0, along_6_1, across_6_1, omega_6_1, along_7_0, across_7_0, omega_7_0, along_7_1, across_7_1, omega_7_1 = plates
+    p_0, = params
+    _tmp0 = 0.5*x_17
+    _tmp1 = 0.25*theta_6 + 0.0015384615384615385*x_4
+    _tmp2 = _tmp1 - _tmp0
+    _tmp3 = numpy.sin(_tmp2)
+    _tmp4 = 0.5*p_0
+    _tmp5 = _tmp4*across_6_0
+    _tmp6 = _tmp0 + _tmp1
+    _tmp7 = numpy.sin(_tmp6)
+    _tmp8 = _tmp4*_tmp7
+    _tmp9 = numpy.sin(_tmp0)**2
+    _tmp10 = numpy.sin(_tmp1)
+    _tmp11 = _tmp10**2
+    _tmp12 = numpy.cos(_tmp2)
+    _tmp13 = arck(_tmp6)
+    _tmp14 = along_6_0 + _tmp13*_tmp6**2
+    _tmp15 = _tmp14*_tmp4
+    _tmp16 = arck(_tmp2)
+    _tmp17 = along_6_1 + _tmp16*_tmp2**2
+    _tmp18 = numpy.cos(_tmp6)
+    _tmp19 = _tmp18*_tmp4
+    _tmp20 = _tmp12*_tmp15 + _tmp17*_tmp19 + _tmp3*_tmp5 + _tmp4*(-2*_tmp9 + 2*_tmp11) - _tmp8*across_6_1
+    _tmp21 = theta_1 + 0.5*theta_6 + 0.003076923076923077*x_4
+    _tmp22 = numpy.cos(_tmp21)
+    _tmp23 = _tmp20*_tmp22
+    _tmp24 = numpy.sin(_tmp21)
+    _tmp25 = numpy.sin(1.0*x_17)
+    _tmp26 = _tmp12*_tmp5 + _tmp17*_tmp8 + _tmp19*across_6_1 + _tmp25*_tmp4 - _tmp15*_tmp3
+    _tmp27 = 0.25*theta_1
+    _tmp28 = 0.5*x_12
+    _tmp29 = _tmp27 - _tmp28
+    _tmp30 = numpy.sin(_tmp29)
+    _tmp31 = _tmp4*across_1_0
+    _tmp32 = _tmp27 + _tmp28
+    _tmp33 = numpy.sin(_tmp32)
+    _tmp34 = _tmp33*_tmp4
+    _tmp35 = numpy.sin(_tmp27)
+    _tmp36 = _tmp35**2
+    _tmp37 = numpy.sin(_tmp28)
+    _tmp38 = _tmp37**2
+    _tmp39 = numpy.cos(_tmp29)
+    _tmp40 = arck(_tmp32)
+    _tmp41 = along_1_0 + _tmp40*_tmp32**2
+    _tmp42 = _tmp4*_tmp41
+    _tmp43 = arck(_tmp29)
+    _tmp44 = along_1_1 + _tmp43*_tmp29**2
+    _tmp45 = numpy.cos(_tmp32)
+    _tmp46 = _tmp4*_tmp45
+    _tmp47 = _tmp30*_tmp31 + _tmp39*_tmp42 + _tmp4*(-2*_tmp38 + 2*_tmp36) + _tmp44*_tmp46 - _tmp34*across_1_1
+    _tmp48 = 0.5*theta_1
+    _tmp49 = numpy.cos(_tmp48)
+    _tmp50 = 625.0*_tmp49
+    _tmp51 = 0.125*p_0
+    _tmp52 = _tmp51*across_1_0
+    _tmp53 = _tmp33*_tmp51
+    _tmp54 = _tmp41*_tmp51
+    _tmp55 = 0.125*theta_1
+    _tmp56 = 0.25*x_12
+    _tmp57 = sinr1(_tmp29)
+    _tmp58 = _tmp29**3*(_tmp57 - 3*sinr2(_tmp29) + 3*cosr2(_tmp29))
+    _tmp59 = 0.25*_tmp58 + _tmp43*(_tmp55 - _tmp56)
+    _tmp60 = _tmp32**3*(-3*sinr2(_tmp32) + 3*cosr2(_tmp32) + sinr1(_tmp32))
+    _tmp61 = _tmp4*(0.25*_tmp60 + _tmp40*(_tmp55 + _tmp56))
+    _tmp62 = -_tmp30*_tmp52 - _tmp30*_tmp61 - _tmp39*_tmp54 - _tmp53*across_1_1 + 0.125*_tmp44*_tmp45*p_0 + 0.5*_tmp33*_tmp59*p_0
+    _tmp63 = _tmp49*_tmp62
+    _tmp64 = numpy.sin(_tmp48)
+    _tmp65 = _tmp39*_tmp52 + _tmp39*_tmp61 + _tmp46*_tmp59 - _tmp30*_tmp54 - _tmp44*_tmp53 + _tmp35*_tmp4*numpy.cos(_tmp27) - _tmp45*_tmp51*across_1_1
+    _tmp66 = _tmp64*_tmp65
+    _tmp67 = 1.0*x_12
+    _tmp68 = numpy.sin(_tmp67)
+    _tmp69 = _tmp31*_tmp39 + _tmp34*_tmp44 + _tmp4*_tmp68 + _tmp46*across_1_1 - _tmp30*_tmp42
+    _tmp70 = 1250.0*_tmp63 + 1250.0*_tmp66 + _tmp47*_tmp50 - 625.0*_tmp64*_tmp69
+    _tmp71 = numpy.sin(theta_3)
+    _tmp72 = 0.006153846153846154*x_1
+    _tmp73 = numpy.sin(_tmp72)
+    _tmp74 = 0.003076923076923077*x_1
+    _tmp75 = numpy.sin(_tmp74)**2
+    _tmp76 = 0.04*_tmp75
+    _tmp77 = 75.0*_tmp73 - 1250.0*_tmp76
+    _tmp78 = numpy.cos(theta_3)
+    _tmp79 = 0.02*_tmp73
+    _tmp80 = 1250.0*_tmp79 + 150.0*_tmp75
+    _tmp81 = 0.003076923076923077*x_3
+    _tmp82 = _tmp72 + theta_3
+    _tmp83 = _tmp81 + _tmp82 + 0.5*theta_5
+    _tmp84 = numpy.sin(_tmp83)
+    _tmp85 = 0.5*x_16
+    _tmp86 = 0.25*theta_5 + 0.0015384615384615385*x_3
+    _tmp87 = _tmp86 - _tmp85
+    _tmp88 = numpy.sin(_tmp87)
+    _tmp89 = _tmp4*across_5_0
+    _tmp90 = _tmp85 + _tmp86
+    _tmp91 = numpy.sin(_tmp90)
+    _tmp92 = _tmp4*_tmp91
+    _tmp93 = numpy.sin(_tmp85)**2
+    _tmp94 = numpy.sin(_tmp86)
+    _tmp95 = _tmp94**2
+    _tmp96 = numpy.cos(_tmp87)
+    _tmp97 = arck(_tmp90)
+    _tmp98 = along_5_0 + _tmp97*_tmp90**2
+    _tmp99 = _tmp4*_tmp98
+    _tmp100 = arck(_tmp87)
+    _tmp101 = along_5_1 + _tmp100*_tmp87**2
+    _tmp102 = numpy.cos(_tmp90)
+    _tmp103 = _tmp102*_tmp4
+    _tmp104 = _tmp101*_tmp103 + _tmp4*(-2*_tmp93 + 2*_tmp95) + _tmp88*_tmp89 + _tmp96*_tmp99 - _tmp92*across_5_1
+    _tmp105 = numpy.cos(_tmp83)
+    _tmp106 = numpy.sin(1.0*x_16)
+    _tmp107 = _tmp101*_tmp92 + _tmp103*across_5_1 + _tmp106*_tmp4 + _tmp89*_tmp96 - _tmp88*_tmp99
+    _tmp108 = _tmp72 + 0.006153846153846154*x_3
+    _tmp109 = numpy.sin(_tmp108)
+    _tmp110 = numpy.sin(_tmp74 + _tmp81)**2
+    _tmp111 = 0.072*_tmp109 - 0.06*_tmp110
+    _tmp112 = theta_3 + theta_5
+    _tmp113 = numpy.cos(_tmp112)
+    _tmp114 = 1250.0*_tmp113
+    _tmp115 = -0.03*_tmp109 - 0.144*_tmp110
+    _tmp116 = 1250.0*numpy.sin(_tmp112)
+    _tmp117 = _tmp111*_tmp114 + _tmp115*_tmp116
+    _tmp118 = _tmp74 + 0.5*theta_3
+    _tmp119 = numpy.sin(_tmp118)
+    _tmp120 = numpy.sin(1.0*x_14)
+    _tmp121 = 0.5*x_14
+    _tmp122 = 0.25*theta_3 + 0.0015384615384615385*x_1
+    _tmp123 = _tmp122 - _tmp121
+    _tmp124 = numpy.cos(_tmp123)
+    _tmp125 = _tmp124*across_3_0
+    _tmp126 = _tmp121 + _tmp122
+    _tmp127 = numpy.cos(_tmp126)
+    _tmp128 = _tmp127*_tmp4
+    _tmp129 = arck(_tmp126)
+    _tmp130 = along_3_0 + _tmp129*_tmp126**2
+    _tmp131 = numpy.sin(_tmp123)
+    _tmp132 = _tmp130*_tmp131
+    _tmp133 = arck(_tmp123)
+    _tmp134 = along_3_1 + _tmp133*_tmp123**2
+    _tmp135 = numpy.sin(_tmp126)
+    _tmp136 = _tmp135*_tmp4
+    _tmp137 = _tmp120*_tmp4 + _tmp125*_tmp4 + _tmp128*across_3_1 + _tmp134*_tmp136 - _tmp132*_tmp4
+    _tmp138 = 625.0*_tmp137
+    _tmp139 = numpy.cos(_tmp118)
+    _tmp140 = _tmp131*across_3_0
+    _tmp141 = numpy.sin(_tmp121)**2
+    _tmp142 = numpy.sin(_tmp122)
+    _tmp143 = _tmp142**2
+    _tmp144 = _tmp124*_tmp130
+    _tmp145 = _tmp140*_tmp4 + _tmp144*_tmp4 + _tmp4*(-2*_tmp141 + 2*_tmp143) - _tmp136*across_3_1 + _tmp127*_tmp134*_tmp4
+    _tmp146 = _tmp51*across_3_1
+    _tmp147 = 0.25*x_14
+    _tmp148 = 0.125*theta_3 + 0.0007692307692307692*x_1
+    _tmp149 = sinr1(_tmp123)
+    _tmp150 = _tmp133*(_tmp148 - _tmp147) + 0.25*_tmp123**3*(_tmp149 - 3*sinr2(_tmp123) + 3*cosr2(_tmp123))
+    _tmp151 = _tmp4*(_tmp129*(_tmp147 + _tmp148) + 0.25*_tmp126**3*(-3*sinr2(_tmp126) + 3*cosr2(_tmp126) + sinr1(_tmp126)))
+    _tmp152 = -_tmp131*_tmp151 - _tmp135*_tmp146 - _tmp140*_tmp51 - _tmp144*_tmp51 + 0.125*_tmp127*_tmp134*p_0 + 0.5*_tmp135*_tmp150*p_0
+    _tmp153 = _tmp124*_tmp151 + _tmp125*_tmp51 + _tmp128*_tmp150 - _tmp127*_tmp146 - _tmp132*_tmp51 + _tmp142*_tmp4*numpy.cos(_tmp122) - _tmp134*_tmp135*_tmp51
+    _tmp154 = _tmp119*_tmp138 - 625.0*_tmp139*_tmp145 - 1250.0*_tmp119*_tmp153 - 1250.0*_tmp139*_tmp152
+    _tmp155 = _tmp51*across_5_0
+    _tmp156 = _tmp51*_tmp98
+    _tmp157 = _tmp51*_tmp91
+    _tmp158 = 0.25*x_16
+    _tmp159 = 0.125*theta_5 + 0.0007692307692307692*x_3
+    _tmp160 = sinr1(_tmp87)
+    _tmp161 = _tmp100*(_tmp159 - _tmp158) + 0.25*_tmp87**3*(_tmp160 - 3*sinr2(_tmp87) + 3*cosr2(_tmp87))
+    _tmp162 = _tmp4*(_tmp97*(_tmp158 + _tmp159) + 0.25*_tmp90**3*(-3*sinr2(_tmp90) + 3*cosr2(_tmp90) + sinr1(_tmp90)))
+    _tmp163 = _tmp103*_tmp161 + _tmp155*_tmp96 + _tmp162*_tmp96 - _tmp101*_tmp157 - _tmp156*_tmp88 + _tmp4*_tmp94*numpy.cos(_tmp86) - _tmp102*_tmp51*across_5_1
+    _tmp164 = -_tmp155*_tmp88 - _tmp156*_tmp96 - _tmp157*across_5_1 - _tmp162*_tmp88 + 0.125*_tmp101*_tmp102*p_0 + 0.5*_tmp161*_tmp91*p_0
+    _tmp165 = _tmp51*across_6_0
+    _tmp166 = _tmp51*_tmp7
+    _tmp167 = _tmp14*_tmp51
+    _tmp168 = 0.25*x_17
+    _tmp169 = 0.125*theta_6 + 0.0007692307692307692*x_4
+    _tmp170 = sinr1(_tmp2)
+    _tmp171 = _tmp16*(_tmp169 - _tmp168) + 0.25*_tmp2**3*(_tmp170 - 3*sinr2(_tmp2) + 3*cosr2(_tmp2))
+    _tmp172 = _tmp4*(_tmp13*(_tmp168 + _tmp169) + 0.25*_tmp6**3*(-3*sinr2(_tmp6) + 3*cosr2(_tmp6) + sinr1(_tmp6)))
+    _tmp173 = -_tmp12*_tmp167 - _tmp165*_tmp3 - _tmp166*across_6_1 - _tmp172*_tmp3 + 0.125*_tmp17*_tmp18*p_0 + 0.5*_tmp171*_tmp7*p_0
+    _tmp174 = 1250.0*_tmp22
+    _tmp175 = _tmp12*_tmp165 + _tmp12*_tmp172 + _tmp171*_tmp19 - _tmp166*_tmp17 - _tmp167*_tmp3 + _tmp10*_tmp4*numpy.cos(_tmp1) - _tmp18*_tmp51*across_6_1
+    _tmp176 = 1250.0*_tmp24
+    _tmp177 = _tmp62*_tmp64
+    _tmp178 = 1250.0*_tmp177 + _tmp50*_tmp69 + 625.0*_tmp47*_tmp64 - 1250.0*_tmp49*_tmp65
+    _tmp179 = _tmp107*_tmp84
+    _tmp180 = _tmp111*_tmp116
+    _tmp181 = _tmp104*_tmp105
+    _tmp182 = _tmp119*_tmp152
+    _tmp183 = 1250.0*_tmp182 + _tmp138*_tmp139 + 625.0*_tmp119*_tmp145 - 1250.0*_tmp139*_tmp153
+    _tmp184 = 0.003076923076923077*x_0
+    _tmp185 = 0.7853981633974483 + theta_1
+    _tmp186 = _tmp184 + _tmp185 + 0.5*theta_2
+    _tmp187 = numpy.sin(_tmp186)
+    _tmp188 = 0.5*x_13
+    _tmp189 = 0.25*theta_2 + 0.0015384615384615385*x_0
+    _tmp190 = _tmp189 - _tmp188
+    _tmp191 = numpy.sin(_tmp190)
+    _tmp192 = _tmp4*across_2_0
+    _tmp193 = _tmp188 + _tmp189
+    _tmp194 = numpy.sin(_tmp193)
+    _tmp195 = _tmp194*_tmp4
+    _tmp196 = numpy.sin(_tmp188)
+    _tmp197 = _tmp196**2
+    _tmp198 = numpy.sin(_tmp189)
+    _tmp199 = _tmp198**2
+    _tmp200 = numpy.cos(_tmp190)
+    _tmp201 = arck(_tmp193)
+    _tmp202 = along_2_0 + _tmp201*_tmp193**2
+    _tmp203 = _tmp202*_tmp4
+    _tmp204 = arck(_tmp190)
+    _tmp205 = along_2_1 + _tmp204*_tmp190**2
+    _tmp206 = numpy.cos(_tmp193)
+    _tmp207 = _tmp206*_tmp4
+    _tmp208 = _tmp191*_tmp192 + _tmp200*_tmp203 + _tmp205*_tmp207 + _tmp4*(-2*_tmp197 + 2*_tmp199) - _tmp195*across_2_1
+    _tmp209 = _tmp187*_tmp208
+    _tmp210 = numpy.cos(_tmp186)
+    _tmp211 = 1.0*x_13
+    _tmp212 = numpy.sin(_tmp211)
+    _tmp213 = _tmp192*_tmp200 + _tmp195*_tmp205 + _tmp207*across_2_1 + _tmp212*_tmp4 - _tmp191*_tmp203
+    _tmp214 = _tmp210*_tmp213
+    _tmp215 = theta_1 + theta_2
+    _tmp216 = numpy.cos(_tmp215)
+    _tmp217 = 0.006153846153846154*x_0
+    _tmp218 = numpy.sin(_tmp217)
+    _tmp219 = numpy.sin(_tmp184)
+    _tmp220 = _tmp219**2
+    _tmp221 = 0.04*_tmp218 - 0.14*_tmp220
+    _tmp222 = _tmp216*_tmp221
+    _tmp223 = numpy.sin(_tmp215)
+    _tmp224 = -0.07*_tmp218 - 0.08*_tmp220
+    _tmp225 = _tmp223*_tmp224
+    _tmp226 = 0.5*x_18
+    _tmp227 = 0.25*theta_7 + 0.0015384615384615385*x_5
+    _tmp228 = _tmp227 - _tmp226
+    _tmp229 = numpy.sin(_tmp228)
+    _tmp230 = _tmp4*across_7_0
+    _tmp231 = _tmp226 + _tmp227
+    _tmp232 = numpy.sin(_tmp231)
+    _tmp233 = _tmp232*_tmp4
+    _tmp234 = numpy.sin(_tmp226)**2
+    _tmp235 = numpy.sin(_tmp227)
+    _tmp236 = _tmp235**2
+    _tmp237 = numpy.cos(_tmp228)
+    _tmp238 = arck(_tmp231)
+    _tmp239 = along_7_0 + _tmp238*_tmp231**2
+    _tmp240 = _tmp239*_tmp4
+    _tmp241 = arck(_tmp228)
+    _tmp242 = along_7_1 + _tmp241*_tmp228**2
+    _tmp243 = numpy.cos(_tmp231)
+    _tmp244 = _tmp243*_tmp4
+    _tmp245 = _tmp229*_tmp230 + _tmp237*_tmp240 + _tmp242*_tmp244 + _tmp4*(-2*_tmp234 + 2*_tmp236) - _tmp233*across_7_1
+    _tmp246 = _tmp215 + _tmp217
+    _tmp247 = _tmp246 + 0.5*theta_7 + 0.003076923076923077*x_5
+    _tmp248 = numpy.sin(_tmp247)
+    _tmp249 = _tmp245*_tmp248
+    _tmp250 = numpy.sin(1.0*x_18)
+    _tmp251 = _tmp230*_tmp237 + _tmp233*_tmp242 + _tmp244*across_7_1 + _tmp250*_tmp4 - _tmp229*_tmp240
+    _tmp252 = numpy.cos(_tmp247)
+    _tmp253 = 1250.0*_tmp252
+    _tmp254 = 1250.0*_tmp222 + 1250.0*_tmp225 + 1250.0*_tmp249 + _tmp251*_tmp253
+    _tmp255 = _tmp51*across_2_0
+    _tmp256 = _tmp194*_tmp51
+    _tmp257 = _tmp202*_tmp51
+    _tmp258 = 0.25*x_13
+    _tmp259 = 0.125*theta_2 + 0.0007692307692307692*x_0
+    _tmp260 = sinr1(_tmp190)
+    _tmp261 = _tmp190**3*(_tmp260 - 3*sinr2(_tmp190) + 3*cosr2(_tmp190))
+    _tmp262 = 0.25*_tmp261 + _tmp204*(_tmp259 - _tmp258)
+    _tmp263 = _tmp193**3*(-3*sinr2(_tmp193) + 3*cosr2(_tmp193) + sinr1(_tmp193))
+    _tmp264 = _tmp4*(0.25*_tmp263 + _tmp201*(_tmp258 + _tmp259))
+    _tmp265 = -_tmp191*_tmp255 - _tmp191*_tmp264 - _tmp200*_tmp257 - _tmp256*across_2_1 + 0.125*_tmp205*_tmp206*p_0 + 0.5*_tmp194*_tmp262*p_0
+    _tmp266 = _tmp187*_tmp265
+    _tmp267 = _tmp198*numpy.cos(_tmp189)
+    _tmp268 = _tmp200*_tmp255 + _tmp200*_tmp264 + _tmp207*_tmp262 + _tmp267*_tmp4 - _tmp191*_tmp257 - _tmp205*_tmp256 - _tmp206*_tmp51*across_2_1
+    _tmp269 = 1250.0*_tmp76 + 62.5*_tmp73
+    _tmp270 = 125.0*_tmp75 - 1250.0*_tmp79
+    _tmp271 = 0.003076923076923077*x_2
+    _tmp272 = _tmp271 + _tmp82 + 0.5*theta_4
+    _tmp273 = numpy.sin(_tmp272)
+    _tmp274 = 0.5*x_15
+    _tmp275 = 0.25*theta_4 + 0.0015384615384615385*x_2
+    _tmp276 = _tmp275 - _tmp274
+    _tmp277 = numpy.sin(_tmp276)
+    _tmp278 = _tmp4*across_4_0
+    _tmp279 = _tmp274 + _tmp275
+    _tmp280 = numpy.sin(_tmp279)
+    _tmp281 = _tmp280*_tmp4
+    _tmp282 = numpy.sin(_tmp274)**2
+    _tmp283 = numpy.sin(_tmp275)
+    _tmp284 = _tmp283**2
+    _tmp285 = numpy.cos(_tmp276)
+    _tmp286 = arck(_tmp279)
+    _tmp287 = along_4_0 + _tmp286*_tmp279**2
+    _tmp288 = _tmp287*_tmp4
+    _tmp289 = arck(_tmp276)
+    _tmp290 = along_4_1 + _tmp289*_tmp276**2
+    _tmp291 = numpy.cos(_tmp279)
+    _tmp292 = _tmp291*_tmp4
+    _tmp293 = _tmp277*_tmp278 + _tmp285*_tmp288 + _tmp290*_tmp292 + _tmp4*(-2*_tmp282 + 2*_tmp284) - _tmp281*across_4_1
+    _tmp294 = numpy.cos(_tmp272)
+    _tmp295 = numpy.sin(1.0*x_15)
+    _tmp296 = _tmp278*_tmp285 + _tmp281*_tmp290 + _tmp292*across_4_1 + _tmp295*_tmp4 - _tmp277*_tmp288
+    _tmp297 = _tmp72 + 0.006153846153846154*x_2
+    _tmp298 = numpy.sin(_tmp297)
+    _tmp299 = numpy.sin(_tmp271 + _tmp74)**2
+    _tmp300 = 0.05*_tmp298 + 0.08*_tmp299
+    _tmp301 = theta_3 + theta_4
+    _tmp302 = numpy.cos(_tmp301)
+    _tmp303 = 1250.0*_tmp302
+    _tmp304 = 0.04*_tmp298 - 0.1*_tmp299
+    _tmp305 = 1250.0*numpy.sin(_tmp301)
+    _tmp306 = _tmp300*_tmp303 + _tmp304*_tmp305
+    _tmp307 = _tmp51*across_4_0
+    _tmp308 = _tmp287*_tmp51
+    _tmp309 = _tmp280*_tmp51
+    _tmp310 = 0.25*x_15
+    _tmp311 = 0.125*theta_4 + 0.0007692307692307692*x_2
+    _tmp312 = sinr1(_tmp276)
+    _tmp313 = _tmp289*(_tmp311 - _tmp310) + 0.25*_tmp276**3*(_tmp312 - 3*sinr2(_tmp276) + 3*cosr2(_tmp276))
+    _tmp314 = _tmp4*(_tmp286*(_tmp310 + _tmp311) + 0.25*_tmp279**3*(-3*sinr2(_tmp279) + 3*cosr2(_tmp279) + sinr1(_tmp279)))
+    _tmp315 = _tmp285*_tmp307 + _tmp285*_tmp314 + _tmp292*_tmp313 - _tmp277*_tmp308 - _tmp290*_tmp309 + _tmp283*_tmp4*numpy.cos(_tmp275) - _tmp291*_tmp51*across_4_1
+    _tmp316 = -_tmp277*_tmp307 - _tmp277*_tmp314 - _tmp285*_tmp308 - _tmp309*across_4_1 + 0.125*_tmp290*_tmp291*p_0 + 0.5*_tmp280*_tmp313*p_0
+    _tmp317 = 625.0*_tmp252
+    _tmp318 = _tmp51*across_7_0
+    _tmp319 = _tmp232*_tmp51
+    _tmp320 = _tmp239*_tmp51
+    _tmp321 = 0.25*x_18
+    _tmp322 = 0.125*theta_7 + 0.0007692307692307692*x_5
+    _tmp323 = sinr1(_tmp228)
+    _tmp324 = _tmp241*(_tmp322 - _tmp321) + 0.25*_tmp228**3*(_tmp323 - 3*sinr2(_tmp228) + 3*cosr2(_tmp228))
+    _tmp325 = _tmp4*(_tmp238*(_tmp321 + _tmp322) + 0.25*_tmp231**3*(-3*sinr2(_tmp231) + 3*cosr2(_tmp231) + sinr1(_tmp231)))
+    _tmp326 = -_tmp229*_tmp318 - _tmp229*_tmp325 - _tmp237*_tmp320 - _tmp319*across_7_1 + 0.125*_tmp242*_tmp243*p_0 + 0.5*_tmp232*_tmp324*p_0
+    _tmp327 = 1250.0*_tmp248
+    _tmp328 = _tmp237*_tmp318 + _tmp237*_tmp325 + _tmp244*_tmp324 - _tmp229*_tmp320 - _tmp242*_tmp319 + _tmp235*_tmp4*numpy.cos(_tmp227) - _tmp243*_tmp51*across_7_1
+    _tmp329 = _tmp221*_tmp223
+    _tmp330 = 1250.0*_tmp329
+    _tmp331 = _tmp187*_tmp213
+    _tmp332 = _tmp251*_tmp327
+    _tmp333 = _tmp216*_tmp224
+    _tmp334 = _tmp208*_tmp210
+    _tmp335 = _tmp210*_tmp265
+    _tmp336 = _tmp187*_tmp268
+    _tmp337 = _tmp273*_tmp296
+    _tmp338 = _tmp300*_tmp305
+    _tmp339 = _tmp293*_tmp294
+    _tmp340 = _tmp294*_tmp316
+    _tmp341 = _tmp273*_tmp315
+    _tmp342 = numpy.sin(theta_1)
+    _tmp343 = numpy.cos(theta_1)
+    _tmp344 = 0.3535533905932738*numpy.cos(_tmp246)
+    _tmp345 = _tmp344*p_0
+    _tmp346 = numpy.sin(_tmp246)
+    _tmp347 = 0.3535533905932738*_tmp346
+    _tmp348 = _tmp347*p_0
+    _tmp349 = _tmp345 + _tmp348
+    _tmp350 = 0.5*_tmp47
+    _tmp351 = 0.5*_tmp69
+    _tmp352 = _tmp209 + _tmp214 + _tmp63 + _tmp66 + _tmp350*_tmp49 - _tmp351*_tmp64
+    _tmp353 = 7.6923076923076925*x_10
+    _tmp354 = _tmp177 + _tmp331 - _tmp334 + _tmp350*_tmp64 + _tmp351*_tmp49 - _tmp49*_tmp65
+    _tmp355 = _tmp266 + 0.5*_tmp209 + 0.5*_tmp214 - _tmp210*_tmp268
+    _tmp356 = _tmp335 + _tmp336 + 0.5*_tmp334 - 0.5*_tmp331
+    _tmp357 = numpy.sin(_tmp82)
+    _tmp358 = 0.05*_tmp357
+    _tmp359 = numpy.cos(_tmp82)
+    _tmp360 = 0.02*_tmp359
+    _tmp361 = 0.5*_tmp139
+    _tmp362 = _tmp297 + _tmp301
+    _tmp363 = numpy.sin(_tmp362)
+    _tmp364 = 0.04*_tmp363
+    _tmp365 = -0.05 + _tmp4
+    _tmp366 = numpy.cos(_tmp362)
+    _tmp367 = _tmp364 - _tmp365*_tmp366
+    _tmp368 = 0.02*_tmp357
+    _tmp369 = _tmp273*_tmp293
+    _tmp370 = _tmp294*_tmp296
+    _tmp371 = 0.04*_tmp366 + _tmp363*_tmp365
+    _tmp372 = _tmp368 + _tmp369 + _tmp370 + _tmp371 + 0.05*_tmp359
+    _tmp373 = -_tmp364 + _tmp365*_tmp366
+    _tmp374 = _tmp353*(-_tmp371 - 0.5*_tmp369 - 0.5*_tmp370 + _tmp294*_tmp315 - _tmp273*_tmp316) - 7.6923076923076925*x_9*(_tmp340 + _tmp341 + _tmp373 + 0.5*_tmp339 - 0.5*_tmp337)
+    _tmp375 = 7.6923076923076925*x_9
+    _tmp376 = _tmp108 + _tmp112
+    _tmp377 = numpy.cos(_tmp376)
+    _tmp378 = -0.03 + _tmp4
+    _tmp379 = numpy.sin(_tmp376)
+    _tmp380 = 0.072*_tmp377 + _tmp378*_tmp379
+    _tmp381 = 7.6923076923076925*x_6
+    _tmp382 = -0.5*_tmp359*p_0
+    _tmp383 = _tmp104*_tmp84
+    _tmp384 = _tmp105*_tmp107
+    _tmp385 = _tmp377*_tmp378
+    _tmp386 = _tmp385 - 0.072*_tmp379
+    _tmp387 = 7.6923076923076925*x_7
+    _tmp388 = _tmp353*(-_tmp371 + 0.5*_tmp363*p_0) - _tmp375*(-_tmp367 - _tmp366*_tmp4)
+    _tmp389 = -_tmp381*(-_tmp380 - _tmp377*_tmp4) + 7.6923076923076925*x_7*(-_tmp385 + 0.072*_tmp379 + _tmp379*_tmp4)
+    _tmp390 = _tmp28 + 0.75*theta_1
+    _tmp391 = numpy.sin(_tmp390)
+    _tmp392 = numpy.cos(_tmp390)
+    _tmp394 = 0.375*p_0
+    _tmp393 = along_1_1 + sinr0(_tmp29)
+    _tmp395 = _tmp393*_tmp394
+    _tmp396 = -_tmp57 + cosr1(_tmp29)
+    _tmp397 = 0.378698224852071*x_10 + 0.378698224852071*x_7
+    _tmp398 = 20.3125*_tmp397
+    _tmp399 = 0.378698224852071*x_6 + 0.378698224852071*x_9
+    _tmp400 = _tmp185 + _tmp188 + 0.75*theta_2 + 0.004615384615384615*x_0
+    _tmp401 = numpy.cos(_tmp400)
+    _tmp402 = along_2_1 + sinr0(_tmp190)
+    _tmp403 = numpy.sin(_tmp400)
+    _tmp404 = _tmp4*_tmp403
+    _tmp405 = _tmp394*_tmp401
+    _tmp406 = _tmp394*_tmp403
+    _tmp407 = -_tmp260 + cosr1(_tmp190)
+    _tmp408 = _tmp121 + 0.75*theta_3 + 0.004615384615384615*x_1
+    _tmp409 = numpy.sin(_tmp408)
+    _tmp410 = numpy.cos(_tmp408)
+    _tmp411 = along_3_1 + sinr0(_tmp123)
+    _tmp412 = _tmp394*_tmp411
+    _tmp413 = -_tmp149 + cosr1(_tmp123)
+    _tmp414 = -_tmp397
+    _tmp415 = 20.3125*_tmp414
+    _tmp416 = -_tmp399
+    _tmp417 = _tmp274 + _tmp82 + 0.75*theta_4 + 0.004615384615384615*x_2
+    _tmp418 = numpy.cos(_tmp417)
+    _tmp419 = along_4_1 + sinr0(_tmp276)
+    _tmp420 = numpy.sin(_tmp417)
+    _tmp421 = _tmp4*_tmp420
+    _tmp422 = _tmp394*_tmp418
+    _tmp423 = _tmp394*_tmp420
+    _tmp424 = -_tmp312 + cosr1(_tmp276)
+    _tmp425 = _tmp82 + _tmp85 + 0.75*theta_5 + 0.004615384615384615*x_3
+    _tmp426 = numpy.sin(_tmp425)
+    _tmp427 = _tmp4*_tmp426
+    _tmp428 = along_5_1 + sinr0(_tmp87)
+    _tmp429 = numpy.cos(_tmp425)
+    _tmp430 = _tmp394*_tmp426
+    _tmp431 = _tmp394*_tmp429
+    _tmp432 = -_tmp160 + cosr1(_tmp87)
+    _tmp433 = _tmp0 + theta_1 + 0.75*theta_6 + 0.004615384615384615*x_4
+    _tmp434 = numpy.cos(_tmp433)
+    _tmp435 = _tmp4*across_6_1
+    _tmp436 = numpy.sin(_tmp433)
+    _tmp437 = along_6_1 + sinr0(_tmp2)
+    _tmp438 = _tmp4*_tmp437
+    _tmp439 = _tmp394*_tmp437
+    _tmp440 = -_tmp170 + cosr1(_tmp2)
+    _tmp441 = _tmp226 + _tmp246 + 0.75*theta_7 + 0.004615384615384615*x_5
+    _tmp442 = numpy.cos(_tmp441)
+    _tmp443 = along_7_1 + sinr0(_tmp228)
+    _tmp444 = numpy.sin(_tmp441)
+    _tmp445 = _tmp4*_tmp444
+    _tmp446 = -_tmp353*(-_tmp443*_tmp445 - _tmp4*_tmp442*across_7_1) + 7.6923076923076925*x_9*(-_tmp445*across_7_1 + 0.5*_tmp442*_tmp443*p_0)
+    _tmp447 = _tmp394*_tmp442
+    _tmp448 = _tmp394*_tmp444
+    _tmp449 = -_tmp323 + cosr1(_tmp228)
+    _tmp450 = 0.5*across_6_0
+    _tmp451 = 0.5*_tmp18
+    _tmp452 = 0.5*_tmp14
+    _tmp453 = 0.5*_tmp7
+    _tmp454 = 0.5*_tmp25 + _tmp12*_tmp450 + _tmp17*_tmp453 + _tmp451*across_6_1 - _tmp3*_tmp452
+    _tmp455 = 0.5*across_5_0
+    _tmp456 = 0.5*_tmp91
+    _tmp457 = 0.5*_tmp98
+    _tmp458 = 0.5*_tmp102
+    _tmp459 = _tmp95 - _tmp93 + _tmp101*_tmp458 + _tmp455*_tmp88 + _tmp457*_tmp96 - _tmp456*across_5_1
+    _tmp460 = _tmp11 - _tmp9 + _tmp12*_tmp452 + _tmp17*_tmp451 + _tmp3*_tmp450 - _tmp453*across_6_1
+    _tmp461 = 0.5*_tmp106 + _tmp101*_tmp456 + _tmp455*_tmp96 + _tmp458*across_5_1 - _tmp457*_tmp88
+    _tmp462 = 0.5*across_1_0
+    _tmp463 = 0.5*_tmp45
+    _tmp464 = 0.5*_tmp41
+    _tmp465 = 0.5*_tmp33
+    _tmp466 = 0.5*_tmp68 + _tmp39*_tmp462 + _tmp44*_tmp465 + _tmp463*across_1_1 - _tmp30*_tmp464
+    _tmp467 = _tmp466*_tmp49
+    _tmp468 = _tmp36 - _tmp38 + _tmp30*_tmp462 + _tmp39*_tmp464 + _tmp44*_tmp463 - _tmp465*across_1_1
+    _tmp469 = _tmp468*_tmp64
+    _tmp470 = 0.5*across_3_0
+    _tmp471 = 0.5*_tmp127
+    _tmp472 = 0.5*_tmp130
+    _tmp473 = 0.5*_tmp135
+    _tmp474 = 0.5*_tmp120 + _tmp124*_tmp470 + _tmp134*_tmp473 + _tmp471*across_3_1 - _tmp131*_tmp472
+    _tmp475 = _tmp143 - _tmp141 + _tmp124*_tmp472 + _tmp131*_tmp470 + _tmp134*_tmp471 - _tmp473*across_3_1
+    _tmp476 = 1250.0*_tmp467 + 1250.0*_tmp469 - 1250.0*_tmp119*_tmp475 - 1250.0*_tmp139*_tmp474
+    _tmp477 = _tmp466*_tmp64
+    _tmp478 = 1250.0*_tmp477
+    _tmp479 = _tmp105*_tmp461
+    _tmp480 = 1250.0*_tmp139*_tmp475
+    _tmp481 = _tmp459*_tmp84
+    _tmp482 = 0.5*across_2_0
+    _tmp483 = 0.5*_tmp206
+    _tmp484 = 0.5*_tmp202
+    _tmp485 = 0.5*_tmp194
+    _tmp486 = 0.5*_tmp212 + _tmp200*_tmp482 + _tmp205*_tmp485 + _tmp483*across_2_1 - _tmp191*_tmp484
+    _tmp487 = _tmp187*_tmp486
+    _tmp488 = 0.5*across_7_0
+    _tmp489 = 0.5*_tmp243
+    _tmp490 = 0.5*_tmp239
+    _tmp491 = 0.5*_tmp232
+    _tmp492 = 0.5*_tmp250 + _tmp237*_tmp488 + _tmp242*_tmp491 + _tmp489*across_7_1 - _tmp229*_tmp490
+    _tmp493 = 0.5*across_4_0
+    _tmp494 = 0.5*_tmp280
+    _tmp495 = 0.5*_tmp287
+    _tmp496 = 0.5*_tmp291
+    _tmp497 = _tmp284 - _tmp282 + _tmp277*_tmp493 + _tmp285*_tmp495 + _tmp290*_tmp496 - _tmp494*across_4_1
+    _tmp498 = _tmp294*_tmp497
+    _tmp499 = 0.5*_tmp295 + _tmp285*_tmp493 + _tmp290*_tmp494 + _tmp496*across_4_1 - _tmp277*_tmp495
+    _tmp500 = _tmp199 - _tmp197 + _tmp191*_tmp482 + _tmp200*_tmp484 + _tmp205*_tmp483 - _tmp485*across_2_1
+    _tmp501 = _tmp236 - _tmp234 + _tmp229*_tmp488 + _tmp237*_tmp490 + _tmp242*_tmp489 - _tmp491*across_7_1
+    _tmp502 = _tmp468*_tmp49
+    _tmp503 = _tmp119*_tmp474
+    _tmp504 = _tmp210*_tmp486
+    _tmp505 = _tmp294*_tmp499
+    _tmp506 = _tmp187*_tmp500
+    _tmp507 = _tmp273*_tmp497
+    _tmp508 = numpy.less_equal(p_0, 0.008)
+    _tmp509 = 2.7083333333333335e-05*p_0*_DTYPE(numpy.where(_tmp508, 230769230769.23077, 210000000000))
+    _tmp510 = _tmp509*omega_2_1
+    _tmp511 = _tmp498 + 0.5*_tmp366 - _tmp273*_tmp499
+    _tmp512 = _tmp467 + _tmp469 + _tmp487 - _tmp210*_tmp500
+    _tmp513 = _tmp502 + _tmp504 + _tmp506 - _tmp477
+    _tmp514 = _tmp509*omega_3_1
+    _tmp515 = -0.5*_tmp359
+    _tmp516 = 0.5*_tmp377
+    _tmp517 = 0.5*_tmp379
+    _tmp518 = _tmp509*omega_4_1
+    _tmp519 = _tmp509*omega_5_1
+    _tmp520 = -_tmp509*omega_6_1
+    _tmp521 = -_tmp509*omega_7_1
+    _tmp522 = 0.5*_tmp391
+    _tmp523 = 0.5*_tmp403
+    _tmp524 = 0.5*_tmp409
+    _tmp525 = 0.5*_tmp420
+    _tmp526 = 0.5*_tmp426
+    _tmp527 = 0.5*_tmp436
+    _tmp528 = 0.5*_tmp444
+    _tmp529 = p_0**(-1.0)
+    _tmp530 = _DTYPE(numpy.where(_tmp508, 4.333333333333334e-12, 4.761904761904762e-12))
+    _tmp531 = _tmp529*_tmp530
+    _tmp532 = 187500*_tmp531
+    _tmp533 = _tmp33*_tmp397
+    _tmp534 = _tmp45*_tmp532
+    _tmp535 = 562500*_tmp531
+    _tmp536 = _tmp391*_tmp397
+    _tmp537 = _tmp392*_tmp535
+    _tmp538 = 284023.66863905324*_tmp531
+    _tmp539 = _tmp185 + _tmp193
+    _tmp540 = numpy.cos(_tmp539)
+    _tmp541 = _tmp540*x_10
+    _tmp542 = numpy.sin(_tmp539)
+    _tmp543 = _tmp542*x_9
+    _tmp544 = 71005.91715976331*_tmp531
+    _tmp545 = _tmp542*x_10
+    _tmp546 = _tmp540*x_9
+    _tmp547 = _tmp401*x_10
+    _tmp548 = _tmp403*x_9
+    _tmp549 = 213017.75147928993*_tmp531
+    _tmp550 = _tmp403*x_10
+    _tmp551 = _tmp401*x_9
+    _tmp552 = _tmp414*_tmp532
+    _tmp553 = _tmp414*_tmp535
+    _tmp554 = _tmp279 + _tmp82
+    _tmp555 = numpy.cos(_tmp554)
+    _tmp556 = _tmp555*x_10
+    _tmp557 = numpy.sin(_tmp554)
+    _tmp558 = _tmp557*x_10
+    _tmp559 = _tmp555*x_9
+    _tmp560 = _tmp418*x_10
+    _tmp561 = _tmp420*x_10
+    _tmp562 = _tmp418*x_9
+    _tmp563 = _tmp82 + _tmp90
+    _tmp564 = numpy.sin(_tmp563)
+    _tmp565 = _tmp564*x_6
+    _tmp566 = numpy.cos(_tmp563)
+    _tmp567 = _tmp566*x_7
+    _tmp568 = _tmp566*x_6
+    _tmp569 = _tmp564*x_7
+    _tmp570 = _tmp426*x_6
+    _tmp571 = _tmp429*x_7
+    _tmp572 = _tmp429*x_6
+    _tmp573 = _tmp426*x_7
+    _tmp574 = _tmp6 + theta_1
+    _tmp575 = numpy.cos(_tmp574)
+    _tmp576 = _tmp575*x_6
+    _tmp577 = numpy.sin(_tmp574)
+    _tmp578 = _tmp577*x_7
+    _tmp579 = _tmp577*x_6
+    _tmp580 = _tmp575*x_7
+    _tmp581 = _tmp434*x_6
+    _tmp582 = _tmp436*x_7
+    _tmp583 = _tmp436*x_6
+    _tmp584 = _tmp434*x_7
+    _tmp585 = _tmp231 + _tmp246
+    _tmp586 = numpy.cos(_tmp585)
+    _tmp587 = _tmp586*x_10
+    _tmp588 = numpy.sin(_tmp585)
+    _tmp589 = _tmp588*x_9
+    _tmp590 = _tmp538*_tmp587 - _tmp538*_tmp589
+    _tmp591 = _tmp588*x_10
+    _tmp592 = _tmp586*x_9
+    _tmp593 = -_tmp538*_tmp591 - _tmp538*_tmp592
+    _tmp594 = _tmp442*x_10
+    _tmp595 = _tmp444*x_9
+    _tmp596 = _tmp538*_tmp594 - _tmp538*_tmp595
+    _tmp597 = _tmp444*x_10
+    _tmp598 = _tmp442*x_9
+    _tmp599 = -_tmp538*_tmp597 - _tmp538*_tmp598
+    _tmp600 = p_0**(-2.0)
+    _tmp601 = _tmp530*_tmp600
+    _tmp602 = 750000*_tmp601
+    _tmp603 = _tmp45*_tmp602
+    _tmp604 = _tmp392*_tmp602
+    _tmp605 = 284023.66863905324*_tmp601
+    _tmp606 = _tmp414*_tmp602
+    _tmp607 = _tmp416*_tmp602
+    _tmp608 = numpy.cos(_tmp217)
+    _tmp609 = _tmp219*numpy.cos(_tmp184)
+    _tmp610 = 0.00024615384615384614*_tmp608 - 0.0008615384615384615*_tmp609
+    _tmp611 = -0.0004923076923076923*_tmp609 - 0.0004307692307692308*_tmp608
+    _tmp612 = 0.0007692307692307692*p_0
+    _tmp613 = _tmp612*across_2_0
+    _tmp614 = _tmp194*_tmp612
+    _tmp615 = _tmp202*_tmp612
+    _tmp616 = 0.0015384615384615385*x_13
+    _tmp617 = 4.733727810650887e-06*x_0 + 0.0007692307692307692*theta_2
+    _tmp618 = 0.0015384615384615385*_tmp261 + _tmp204*(_tmp617 - _tmp616)
+    _tmp619 = _tmp4*(0.0015384615384615385*_tmp263 + _tmp201*(_tmp616 + _tmp617))
+    _tmp620 = -_tmp191*_tmp613 - _tmp191*_tmp619 - _tmp200*_tmp615 - _tmp614*across_2_1 + 0.5*_tmp194*_tmp618*p_0 + 0.0007692307692307692*_tmp205*_tmp206*p_0
+    _tmp621 = _tmp200*_tmp613 + _tmp200*_tmp619 + _tmp207*_tmp618 - _tmp191*_tmp615 - _tmp205*_tmp614 + 0.003076923076923077*_tmp267*p_0 - _tmp206*_tmp612*across_2_1
+    _tmp622 = 0.25*p_0
+    _tmp623 = _tmp33*_tmp622
+    _tmp624 = _tmp39*_tmp622
+    _tmp625 = _tmp45*_tmp622
+    _tmp626 = -0.5*_tmp58 - _tmp29*_tmp43
+    _tmp627 = 0.5*_tmp60 + _tmp32*_tmp40
+    _tmp628 = _tmp34*_tmp626 + _tmp4*numpy.cos(_tmp67) + _tmp41*_tmp624 + _tmp44*_tmp625 - _tmp623*across_1_1 + _tmp30*_tmp622*across_1_0 - _tmp30*_tmp4*_tmp627
+    _tmp629 = 1.0*p_0
+    _tmp630 = -_tmp44*_tmp623 - _tmp624*across_1_0 - _tmp625*across_1_1 - _tmp37*_tmp629*numpy.cos(_tmp28) + 0.25*_tmp30*_tmp41*p_0 + 0.5*_tmp39*_tmp627*p_0 + 0.5*_tmp45*_tmp626*p_0
+    _tmp631 = _tmp194*_tmp622
+    _tmp632 = _tmp200*_tmp622
+    _tmp633 = _tmp206*_tmp622
+    _tmp634 = -0.5*_tmp261 - _tmp190*_tmp204
+    _tmp635 = 0.5*_tmp263 + _tmp193*_tmp201
+    _tmp636 = _tmp195*_tmp634 + _tmp202*_tmp632 + _tmp205*_tmp633 + _tmp4*numpy.cos(_tmp211) - _tmp631*across_2_1 + _tmp191*_tmp622*across_2_0 - _tmp191*_tmp4*_tmp635
+    _tmp637 = -_tmp205*_tmp631 - _tmp632*across_2_0 - _tmp633*across_2_1 - _tmp196*_tmp629*numpy.cos(_tmp188) + 0.25*_tmp191*_tmp202*p_0 + 0.5*_tmp200*_tmp635*p_0 + 0.5*_tmp206*_tmp634*p_0
+    _tmp638 = _tmp222 + _tmp225
+    _tmp639 = _tmp4*_tmp64
+    _tmp640 = -_tmp39*_tmp639 + 0.5*_tmp30*_tmp49*p_0
+    _tmp641 = _tmp30*_tmp639 + _tmp39*_tmp4*_tmp49
+    _tmp642 = -_tmp34*_tmp49 - _tmp46*_tmp64
+    _tmp643 = _tmp34*_tmp64 - _tmp46*_tmp49
+    _tmp644 = _tmp187*_tmp4
+    _tmp645 = _tmp210*_tmp4
+    _tmp646 = _tmp191*_tmp644 + _tmp200*_tmp645
+    _tmp647 = _tmp191*_tmp645 - _tmp200*_tmp644
+    _tmp648 = -_tmp187*_tmp195 + 0.5*_tmp206*_tmp210*p_0
+    _tmp649 = _tmp187*_tmp207 + _tmp195*_tmp210
+    return [
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp70 - 1250.0*_tmp23 + 1250.0*_tmp24*_tmp26,
+        0,
+        -_tmp117 - _tmp154 - _tmp71*_tmp77 - _tmp78*_tmp80 + 1250.0*_tmp104*_tmp84 + 1250.0*_tmp105*_tmp107,
+        0,
+        -_tmp117 + 625.0*_tmp104*_tmp84 + 625.0*_tmp105*_tmp107 + 1250.0*_tmp164*_tmp84 - 1250.0*_tmp105*_tmp163,
+        -625.0*_tmp23 - _tmp173*_tmp174 - _tmp175*_tmp176 + 625.0*_tmp24*_tmp26,
+        0,
+        -_tmp178 - _tmp174*_tmp26 - _tmp176*_tmp20,
+        0,
+        _tmp183 - _tmp180 + 1250.0*_tmp179 - 1250.0*_tmp181 + _tmp114*_tmp115 + _tmp77*_tmp78 - _tmp71*_tmp80,
+        0,
+        -_tmp180 - 625.0*_tmp181 + 625.0*_tmp107*_tmp84 + 1250.0*_tmp113*_tmp115 - 1250.0*_tmp105*_tmp164 - 1250.0*_tmp163*_tmp84,
+        -_tmp173*_tmp176 + 1250.0*_tmp175*_tmp22 - 625.0*_tmp20*_tmp24 - 625.0*_tmp22*_tmp26,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp254 - _tmp70 - 1250.0*_tmp209 - 1250.0*_tmp214,
+        -_tmp254 - 625.0*_tmp209 - 625.0*_tmp214 - 1250.0*_tmp266 + 1250.0*_tmp210*_tmp268,
+        -_tmp154 - _tmp306 - _tmp269*_tmp71 - _tmp270*_tmp78 + 1250.0*_tmp273*_tmp293 + 1250.0*_tmp294*_tmp296,
+        -_tmp306 + 625.0*_tmp273*_tmp293 + 625.0*_tmp294*_tmp296 + 1250.0*_tmp273*_tmp316 - 1250.0*_tmp294*_tmp315,
+        0,
+        0,
+        -625.0*_tmp249 - _tmp251*_tmp317 - _tmp326*_tmp327 + 1250.0*_tmp252*_tmp328,
+        -_tmp178 - _tmp330 - _tmp332 - 1250.0*_tmp331 + 1250.0*_tmp208*_tmp210 + 1250.0*_tmp216*_tmp224 + 1250.0*_tmp245*_tmp252,
+        -_tmp330 - _tmp332 + 625.0*_tmp334 + 1250.0*_tmp333 + 1250.0*_tmp335 + 1250.0*_tmp336 - 625.0*_tmp331 + _tmp245*_tmp253,
+        _tmp183 - _tmp338 + 1250.0*_tmp337 - 1250.0*_tmp339 + _tmp269*_tmp78 + _tmp303*_tmp304 - _tmp270*_tmp71,
+        -_tmp338 - 625.0*_tmp339 - 1250.0*_tmp340 - 1250.0*_tmp341 + 625.0*_tmp273*_tmp296 + 1250.0*_tmp302*_tmp304,
+        0,
+        0,
+        _tmp245*_tmp317 + _tmp253*_tmp326 + _tmp327*_tmp328 - 625.0*_tmp248*_tmp251,
+        -_tmp353*(_tmp349 + _tmp352 + 0.03*_tmp342 + 0.02*_tmp343) + 7.6923076923076925*x_9*(_tmp348 + _tmp354 - _tmp345 + 0.02*_tmp342 - 0.03*_tmp343),
+        -_tmp353*(_tmp349 + _tmp355) + 7.6923076923076925*x_9*(-_tmp345 - _tmp356 + 0.3535533905932738*_tmp346*p_0),
+        -_tmp353*(-_tmp372 - _tmp119*_tmp153 - _tmp139*_tmp152 - _tmp145*_tmp361 + 0.5*_tmp119*_tmp137) + 7.6923076923076925*x_9*(_tmp360 - _tmp182 - _tmp337 - _tmp358 - _tmp367 + _tmp139*_tmp153 + _tmp293*_tmp294 - _tmp137*_tmp361 - 0.5*_tmp119*_tmp145),
+        -_tmp374,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp353*(-_tmp372 - _tmp382) + _tmp387*(_tmp368 - _tmp382 - _tmp383 - _tmp384 - _tmp386 - 0.06*_tmp359) - _tmp375*(_tmp339 + _tmp360 + _tmp373 - _tmp337 - _tmp358 + _tmp357*_tmp4) - _tmp381*(-_tmp179 - _tmp360 - _tmp380 - 0.06*_tmp357 + _tmp104*_tmp105 + 0.5*_tmp357*p_0),
+        _tmp374,
+        -_tmp381*(-_tmp380 - 0.5*_tmp179 + _tmp105*_tmp164 + _tmp163*_tmp84 + 0.5*_tmp104*_tmp105) + 7.6923076923076925*x_7*(-_tmp386 - 0.5*_tmp383 - 0.5*_tmp384 + _tmp105*_tmp163 - _tmp164*_tmp84),
+        0,
+        0,
+        0,
+        0,
+        _tmp388,
+        _tmp388,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp389,
+        0,
+        _tmp389,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp398*(-_tmp392*_tmp395 + 0.375*_tmp391*across_1_1*p_0 - _tmp29*_tmp391*_tmp396*_tmp51) + 20.3125*_tmp399*(-_tmp391*_tmp395 - _tmp392*_tmp394*across_1_1 + 0.125*_tmp29*_tmp392*_tmp396*p_0),
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp353*(-_tmp402*_tmp404 - _tmp4*_tmp401*across_2_1) + 7.6923076923076925*x_9*(-_tmp404*across_2_1 + 0.5*_tmp401*_tmp402*p_0),
+        -_tmp353*(-_tmp402*_tmp406 - _tmp405*across_2_1 + 0.125*_tmp190*_tmp401*_tmp407*p_0) + 7.6923076923076925*x_9*(_tmp402*_tmp405 - _tmp406*across_2_1 + _tmp190*_tmp403*_tmp407*_tmp51),
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp415*(-_tmp410*_tmp412 + 0.375*_tmp409*across_3_1*p_0 - _tmp123*_tmp409*_tmp413*_tmp51) + 20.3125*_tmp416*(-_tmp409*_tmp412 - _tmp394*_tmp410*across_3_1 + 0.125*_tmp123*_tmp410*_tmp413*p_0),
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp353*(-_tmp419*_tmp421 - _tmp4*_tmp418*across_4_1) - _tmp375*(-_tmp421*across_4_1 + 0.5*_tmp418*_tmp419*p_0),
+        _tmp353*(-_tmp419*_tmp423 - _tmp422*across_4_1 + 0.125*_tmp276*_tmp418*_tmp424*p_0) - _tmp375*(_tmp419*_tmp422 - _tmp423*across_4_1 + _tmp276*_tmp420*_tmp424*_tmp51),
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp381*(-_tmp427*across_5_1 + 0.5*_tmp428*_tmp429*p_0) + 7.6923076923076925*x_7*(-_tmp427*_tmp428 - _tmp4*_tmp429*across_5_1),
+        0,
+        -_tmp381*(_tmp428*_tmp431 - _tmp430*across_5_1 + _tmp426*_tmp432*_tmp51*_tmp87) + 7.6923076923076925*x_7*(-_tmp428*_tmp430 - _tmp431*across_5_1 + 0.125*_tmp429*_tmp432*_tmp87*p_0),
+        0,
+        0,
+        _tmp381*(-_tmp434*_tmp435 - _tmp436*_tmp438) - _tmp387*(_tmp435*_tmp436 - _tmp434*_tmp438),
+        0,
+        0,
+        0,
+        0,
+        _tmp381*(-_tmp436*_tmp439 - _tmp394*_tmp434*across_6_1 + 0.125*_tmp2*_tmp434*_tmp440*p_0) - _tmp387*(-_tmp434*_tmp439 + 0.375*_tmp436*across_6_1*p_0 - _tmp2*_tmp436*_tmp440*_tmp51),
+        0,
+        _tmp446,
+        _tmp446,
+        0,
+        0,
+        0,
+        0,
+        -_tmp353*(-_tmp443*_tmp448 - _tmp447*across_7_1 + 0.125*_tmp228*_tmp442*_tmp449*p_0) + 7.6923076923076925*x_9*(_tmp443*_tmp447 - _tmp448*across_7_1 + _tmp228*_tmp444*_tmp449*_tmp51),
+        0,
+        -_tmp476 - _tmp174*_tmp454 - _tmp176*_tmp460 + 1250.0*_tmp461*_tmp84 - 1250.0*_tmp105*_tmp459,
+        -_tmp478 - _tmp480 - 1250.0*_tmp479 - 1250.0*_tmp481 - _tmp176*_tmp454 + 1250.0*_tmp119*_tmp474 + 1250.0*_tmp22*_tmp460 + 1250.0*_tmp468*_tmp49,
+        0,
+        -_tmp476 - 1250.0*_tmp487 - 1250.0*_tmp498 - _tmp327*_tmp492 + 1250.0*_tmp210*_tmp500 + 1250.0*_tmp252*_tmp501 + 1250.0*_tmp273*_tmp499,
+        -_tmp478 - _tmp480 + 1250.0*_tmp502 + 1250.0*_tmp503 + 1250.0*_tmp504 + 1250.0*_tmp506 - 1250.0*_tmp505 - 1250.0*_tmp507 + _tmp253*_tmp492 + _tmp327*_tmp501,
+        _tmp510 + _tmp375*(-_tmp344 - _tmp347 - _tmp503 - _tmp513 + 0.5*_tmp363 + _tmp139*_tmp475 + _tmp273*_tmp497 + _tmp294*_tmp499) - _tmp353*(_tmp347 + _tmp511 + _tmp512 - _tmp344 - _tmp119*_tmp475 - _tmp139*_tmp474),
+        _tmp514 + _tmp353*(_tmp511 + 0.5*_tmp357) + _tmp387*(-_tmp517 + 0.5*_tmp357 + _tmp105*_tmp459 - _tmp461*_tmp84) - _tmp375*(_tmp505 + _tmp507 + _tmp515 + 0.5*_tmp363) - _tmp381*(_tmp479 + _tmp481 + _tmp515 + _tmp516),
+        _tmp518,
+        _tmp519 + _tmp387*(-_tmp516 - _tmp517) - _tmp381*(_tmp516 - _tmp517),
+        _tmp520,
+        _tmp521,
+        _tmp509*omega_1_0 - _tmp398*(-_tmp393*_tmp522 - 0.5*_tmp392*across_1_1) - _tmp509*omega_1_1 + 20.3125*_tmp399*(-_tmp522*across_1_1 + 0.5*_tmp392*_tmp393),
+        -_tmp510 + _tmp375*(_tmp402*_tmp523 + 0.5*_tmp401*across_2_1) + _tmp509*omega_2_0 - _tmp353*(-_tmp523*across_2_1 + 0.5*_tmp401*_tmp402),
+        -_tmp514 + _tmp509*omega_3_0 - _tmp415*(-_tmp411*_tmp524 - 0.5*_tmp410*across_3_1) + 20.3125*_tmp416*(-_tmp524*across_3_1 + 0.5*_tmp410*_tmp411),
+        -_tmp518 + _tmp353*(-_tmp525*across_4_1 + 0.5*_tmp418*_tmp419) + _tmp509*omega_4_0 - _tmp375*(_tmp419*_tmp525 + 0.5*_tmp418*across_4_1),
+        -_tmp519 + _tmp387*(-_tmp526*across_5_1 + 0.5*_tmp428*_tmp429) + _tmp509*omega_5_0 - _tmp381*(_tmp428*_tmp526 + 0.5*_tmp429*across_5_1),
+        _tmp520 + _tmp381*(-_tmp527*across_6_1 + 0.5*_tmp434*_tmp437) + _tmp509*omega_6_0 - _tmp387*(-_tmp437*_tmp527 - 0.5*_tmp434*across_6_1),
+        _tmp521 + _tmp375*(_tmp443*_tmp528 + 0.5*_tmp442*across_7_1) + _tmp509*omega_7_0 - _tmp353*(-_tmp528*across_7_1 + 0.5*_tmp442*_tmp443),
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp399*_tmp534 - _tmp532*_tmp533,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp397*_tmp534 + 187500*_tmp33*_tmp399*_tmp529*_tmp530,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp399*_tmp537 - _tmp535*_tmp536,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp397*_tmp537 + 562500*_tmp391*_tmp399*_tmp529*_tmp530,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp538*_tmp541 - _tmp538*_tmp543,
+        _tmp541*_tmp544 - _tmp543*_tmp544,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp538*_tmp545 - _tmp538*_tmp546,
+        -_tmp544*_tmp545 - _tmp544*_tmp546,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp538*_tmp547 - _tmp538*_tmp548,
+        _tmp547*_tmp549 - _tmp548*_tmp549,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp538*_tmp550 - _tmp538*_tmp551,
+        -_tmp549*_tmp550 - _tmp549*_tmp551,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp135*_tmp552 - _tmp127*_tmp416*_tmp532,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp127*_tmp552 + 187500*_tmp135*_tmp416*_tmp529*_tmp530,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp409*_tmp553 - _tmp410*_tmp416*_tmp535,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp410*_tmp553 + 562500*_tmp409*_tmp416*_tmp529*_tmp530,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp538*_tmp556 + 284023.66863905324*_tmp529*_tmp530*_tmp557*x_9,
+        -_tmp544*_tmp556 + 71005.91715976331*_tmp529*_tmp530*_tmp557*x_9,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp538*_tmp558 + _tmp538*_tmp559,
+        _tmp544*_tmp558 + _tmp544*_tmp559,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp538*_tmp560 + 284023.66863905324*_tmp420*_tmp529*_tmp530*x_9,
+        -_tmp549*_tmp560 + 213017.75147928993*_tmp420*_tmp529*_tmp530*x_9,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp538*_tmp561 + _tmp538*_tmp562,
+        _tmp549*_tmp561 + _tmp549*_tmp562,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        _tmp538*_tmp565 - _tmp538*_tmp567,
+        0,
+        _tmp544*_tmp565 - _tmp544*_tmp567,
+        0,
+        0,
+        0,
+        0,
+        _tmp538*_tmp568 + _tmp538*_tmp569,
+        0,
+        _tmp544*_tmp568 + _tmp544*_tmp569,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        _tmp538*_tmp570 - _tmp538*_tmp571,
+        0,
+        _tmp549*_tmp570 - _tmp549*_tmp571,
+        0,
+        0,
+        0,
+        0,
+        _tmp538*_tmp572 + _tmp538*_tmp573,
+        0,
+        _tmp549*_tmp572 + _tmp549*_tmp573,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        -_tmp538*_tmp576 - _tmp538*_tmp578,
+        0,
+        0,
+        0,
+        0,
+        -_tmp544*_tmp576 - _tmp544*_tmp578,
+        0,
+        _tmp538*_tmp579 - _tmp538*_tmp580,
+        0,
+        0,
+        0,
+        0,
+        _tmp544*_tmp579 - _tmp544*_tmp580,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        -_tmp538*_tmp581 - _tmp538*_tmp582,
+        0,
+        0,
+        0,
+        0,
+        -_tmp549*_tmp581 - _tmp549*_tmp582,
+        0,
+        _tmp538*_tmp583 - _tmp538*_tmp584,
+        0,
+        0,
+        0,
+        0,
+        _tmp549*_tmp583 - _tmp549*_tmp584,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        _tmp590,
+        _tmp590,
+        0,
+        0,
+        0,
+        0,
+        _tmp544*_tmp587 - _tmp544*_tmp589,
+        _tmp593,
+        _tmp593,
+        0,
+        0,
+        0,
+        0,
+        -_tmp544*_tmp591 - _tmp544*_tmp592,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        _tmp596,
+        _tmp596,
+        0,
+        0,
+        0,
+        0,
+        _tmp549*_tmp594 - _tmp549*_tmp595,
+        _tmp599,
+        _tmp599,
+        0,
+        0,
+        0,
+        0,
+        -_tmp549*_tmp597 - _tmp549*_tmp598,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp397*_tmp603 + 750000*_tmp33*_tmp399*_tmp530*_tmp600,
+        _tmp399*_tmp603 + _tmp533*_tmp602,
+        0,
+        0,
+        0,
+        -_tmp397*_tmp604 + 750000*_tmp391*_tmp399*_tmp530*_tmp600,
+        _tmp399*_tmp604 + _tmp536*_tmp602,
+        0,
+        0,
+        0,
+        -_tmp545*_tmp605 - _tmp546*_tmp605,
+        -_tmp541*_tmp605 + 284023.66863905324*_tmp530*_tmp542*_tmp600*x_9,
+        0,
+        0,
+        0,
+        -_tmp550*_tmp605 - _tmp551*_tmp605,
+        -_tmp547*_tmp605 + 284023.66863905324*_tmp403*_tmp530*_tmp600*x_9,
+        0,
+        0,
+        0,
+        -_tmp127*_tmp606 + 750000*_tmp135*_tmp416*_tmp530*_tmp600,
+        _tmp127*_tmp607 + _tmp135*_tmp606,
+        0,
+        0,
+        0,
+        -_tmp410*_tmp606 + 750000*_tmp409*_tmp416*_tmp530*_tmp600,
+        _tmp409*_tmp606 + _tmp410*_tmp607,
+        0,
+        0,
+        0,
+        _tmp558*_tmp605 + _tmp559*_tmp605,
+        _tmp556*_tmp605 - _tmp557*_tmp605*x_9,
+        0,
+        0,
+        0,
+        _tmp561*_tmp605 + _tmp562*_tmp605,
+        _tmp560*_tmp605 - _tmp420*_tmp605*x_9,
+        0,
+        0,
+        0,
+        _tmp568*_tmp605 + _tmp569*_tmp605,
+        -_tmp565*_tmp605 + 284023.66863905324*_tmp530*_tmp566*_tmp600*x_7,
+        0,
+        0,
+        0,
+        _tmp572*_tmp605 + _tmp573*_tmp605,
+        -_tmp570*_tmp605 + 284023.66863905324*_tmp429*_tmp530*_tmp600*x_7,
+        0,
+        0,
+        0,
+        _tmp579*_tmp605 - _tmp580*_tmp605,
+        _tmp576*_tmp605 + _tmp578*_tmp605,
+        0,
+        0,
+        0,
+        _tmp583*_tmp605 - _tmp584*_tmp605,
+        _tmp581*_tmp605 + _tmp582*_tmp605,
+        0,
+        0,
+        0,
+        -_tmp591*_tmp605 - _tmp592*_tmp605,
+        -_tmp587*_tmp605 + 284023.66863905324*_tmp530*_tmp588*_tmp600*x_9,
+        0,
+        0,
+        0,
+        -_tmp597*_tmp605 - _tmp598*_tmp605,
+        -_tmp594*_tmp605 + 284023.66863905324*_tmp444*_tmp530*_tmp600*x_9,
+        0,
+        0,
+        -0.003076923076923077*_tmp209 - 0.003076923076923077*_tmp214 + _tmp210*_tmp621 + _tmp216*_tmp611 - _tmp187*_tmp620 - _tmp223*_tmp610,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp49*_tmp628 - _tmp630*_tmp64,
+        _tmp210*_tmp637 - _tmp187*_tmp636,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.003076923076923077*_tmp334 - 0.003076923076923077*_tmp331 + _tmp187*_tmp621 + _tmp210*_tmp620 + _tmp216*_tmp610 + _tmp223*_tmp611,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp49*_tmp630 - _tmp628*_tmp64,
+        _tmp187*_tmp637 + _tmp210*_tmp636,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp352 - _tmp638,
+        -_tmp355 - _tmp638,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp329 - _tmp354 + _tmp216*_tmp224,
+        _tmp333 + _tmp356 - _tmp329,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp512,
+        _tmp513,
+        _tmp640,
+        -_tmp641,
+        0,
+        _tmp642,
+        _tmp643,
+        0,
+        _tmp646,
+        _tmp647,
+        0,
+        _tmp648,
+        -_tmp649,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp641,
+        _tmp640,
+        0,
+        -_tmp643,
+        _tmp642,
+        0,
+        -_tmp647,
+        _tmp646,
+        0,
+        _tmp649,
+        _tmp648,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+    ]
+
+
 def _plate_relation4(plate):
     """one plate's relation at order 4: (along, across, omega) and their partials by (theta, p, f) (312 operations)."""
     theta, p, f, e_a, e_s = plate
@@ -7246,6 +9705,65 @@ def _plate_rest4(plate):
     ]
 
 
+def _plate_eps4(plate):
+    """one plate's relation at order 4: d(along, across, omega)/d(e_a, e_s) (158 operations)."""
+    theta, p, f, e_a, e_s = plate
+    _tmp0 = theta**2
+    _tmp5 = 1 + p*(-2*e_s + 2*e_a)
+    _tmp1 = e_a - e_s
+    _tmp2 = 1 + _tmp1*p
+    _tmp3 = _tmp2*p
+    _tmp4 = 2*p
+    _tmp6 = p**2
+    _tmp7 = _tmp5*_tmp6
+    _tmp8 = -0.08333333333333333*p + _tmp4*bcol_a(_tmp3) + _tmp7*bcol_a_d1(_tmp3)
+    _tmp9 = theta**4
+    _tmp10 = -0.0010416666666666667*p + _tmp4*bcol_e3c(_tmp3) + _tmp7*bcol_e3c_d1(_tmp3)
+    _tmp11 = bcol_s(_tmp3)
+    _tmp12 = _tmp2*f
+    _tmp13 = bcol_e1(_tmp3)
+    _tmp14 = _tmp0*_tmp13
+    _tmp15 = 4*_tmp2**3
+    _tmp16 = f**3
+    _tmp17 = _tmp16*bcol_e2(_tmp3)
+    _tmp18 = -_tmp15*_tmp17 - 2*_tmp12*_tmp14 + _tmp11*_tmp2*f
+    _tmp19 = _tmp18*f
+    _tmp20 = bcol_w(_tmp3)
+    _tmp21 = f**2
+    _tmp22 = _tmp2**2
+    _tmp23 = _tmp21*_tmp22
+    _tmp24 = bcol_e2_d1(_tmp3)
+    _tmp25 = f**4
+    _tmp26 = _tmp25*_tmp2**4
+    _tmp27 = bcol_e1_d1(_tmp3)
+    _tmp28 = _tmp0*_tmp27
+    _tmp29 = _tmp4*(_tmp20*_tmp23 + _tmp23*_tmp28 + _tmp24*_tmp26)
+    _tmp30 = _tmp15*_tmp24
+    _tmp31 = _tmp14*_tmp4*f + _tmp16*_tmp30*_tmp6 - _tmp11*f*p + 2*_tmp12*_tmp28*_tmp6 + 12*_tmp17*_tmp22*p - _tmp2*_tmp6*f*bcol_s_d1(_tmp3)
+    _tmp32 = -_tmp31
+    _tmp33 = _tmp1*f
+    _tmp34 = _tmp21*_tmp3
+    _tmp35 = 2*_tmp34
+    _tmp36 = _tmp23*_tmp6
+    _tmp37 = _tmp20*_tmp35 + _tmp28*_tmp35 + _tmp36*bcol_w_d1(_tmp3) + _tmp0*_tmp36*bcol_e1_d2(_tmp3) + _tmp25*_tmp30*p + _tmp26*_tmp6*bcol_e2_d2(_tmp3)
+    _tmp38 = _tmp19 + p - _tmp29 + _tmp0*_tmp8 + _tmp32*_tmp33 - _tmp10*_tmp9 - _tmp37*_tmp5
+    _tmp39 = _tmp29 - _tmp19 + _tmp10*_tmp9 + _tmp31*_tmp33 + _tmp37*_tmp5 - _tmp0*_tmp8
+    _tmp40 = _tmp18*p
+    _tmp41 = _tmp40 + _tmp2*_tmp32
+    _tmp42 = f - _tmp40 + _tmp2*_tmp31
+    _tmp43 = 0.5*f
+    _tmp44 = _tmp6*theta
+    _tmp45 = _tmp44*bcol_invt_d1(_tmp3) + 2*_tmp23*_tmp27*_tmp44 + 4*_tmp13*_tmp34*theta + 4*_tmp6*theta**3*bcol_e3_d1(_tmp3)
+    return [
+        _tmp38,
+        _tmp39,
+        _tmp41,
+        _tmp42,
+        _tmp45 - _tmp38*_tmp43 + 0.5*_tmp41*p,
+        -_tmp45 - _tmp39*_tmp43 + 0.5*_tmp42*p,
+    ]
+
+
 # stephenson_six_bar: its tables for the runtime
 _MECHANISM = _Mechanism(
     input_names=INPUTS, pruned_inputs=PRUNED_INPUTS, parameter_names=tuple(PARAMETERS),
@@ -7279,6 +9797,9 @@ _MECHANISM = _Mechanism(
         tol=1e-12, max_iter=12, max_turn=0.2,
         p_limit=0.9, est_factor=3.0, est_limit=0.01,
         loads=False,
+        # the sensitivities (templates/numpy/reduced_sens.py): per variant its routine and blocks
+        sens=((_loaded_sens1, {'dR_dtheta': (0, 12, 7), 'dR_dp': (84, 12, 1), 'din_dtheta': (96, 35, 7), 'din_dp': (341, 35, 1), 'dD_dx': (376, 2, 12), 'dD_dtheta': (400, 2, 7), 'dD_dp': (414, 2, 1), 'dD_dout': (416, 2, 21)}), (_loaded_sens2, {'dR_dtheta': (0, 19, 7), 'dR_dp': (133, 19, 1), 'din_dtheta': (152, 70, 7), 'din_dp': (642, 70, 1), 'dD_dx': (712, 2, 19), 'dD_dtheta': (750, 2, 7), 'dD_dp': (764, 2, 1), 'dD_dout': (766, 2, 42)}), ),
+        eps4=_plate_eps4,
     ),
     loaded_solve=_reduced_solve,
     sens_rigid_blocks={'A': (0, 6, 6), 'dG_dv': (36, 6, 2), 'dR_dtheta': (48, 2, 6), 'dR_dv': (60, 2, 2)},
@@ -7290,7 +9811,7 @@ _MECHANISM = _Mechanism(
         'paper': _Level(_dev_paper, None, None, 0, _sens_paper, {'dD_dtheta': (0, 2, 6), 'dD_dv': (12, 2, 2)}, None),
         'first_order': _Level(_dev_first_order, _linear, None, 0, _sens_first_order, {'M': (0, 6, 6), 'dE_dtheta': (36, 6, 6), 'dE_dv': (72, 6, 2), 'dD_dtheta': (84, 2, 6), 'dD_ddelta': (96, 2, 6), 'dD_dv': (108, 2, 2)}, None),
         'exact': _Level(_dev_exact, _linear, _newton, 0, _sens_exact, {'M': (0, 6, 6), 'dE_dtheta': (36, 6, 6), 'dE_dv': (72, 6, 2), 'dD_dtheta': (84, 2, 6), 'dD_ddelta': (96, 2, 6), 'dD_dv': (108, 2, 2)}, None),
-        'loaded': _Level(_loaded_deviation, None, None, 1, None, {}, None),
+        'loaded': _Level(_loaded_deviation, None, None, 1, _reduced_rates, {}, None),
     },
 )
 

@@ -24,6 +24,7 @@
                                           for δ (where it does), ∂D/∂θ_u, ∂D/∂δ, ∂D/∂v of the
                                           points' deviations D (symkin.sensitivity)
     sens_chain   params                -> ∂(default of p_j)/∂p_k, when defaults read parameters
+    loaded_sens<g>, plate_eps4         -> the `loaded` level's (symkin.codegen.loaded_sens)
     links        theta, delta          -> rotation φ of every reported link and its deviation δφ
 
 and for the `loaded` level, the reduced equilibrium (docs/physics.md, "The Newton level";
@@ -71,6 +72,7 @@ from ..kinematics.analysis import Analysis
 from .derivation import Derivation, derivation
 from .literals import float_literals, to_double
 from .loaded import LoadedPlan, loaded_routines, rest_routine, values2_routine
+from .loaded_sens import eps_routine, loaded_sens_routines
 from .plate import plate_routine
 from .routines import Argument, Block, Routine, flatten, layout, optimize
 
@@ -346,7 +348,8 @@ def plan(
     rename = {s: sp.Symbol(f"p_{k}", real=True) for k, s in enumerate(an.params)}
     routines = {name: _renamed(r, rename) for name, r in routines.items()}
     if loaded is not None:
-        for relation in (plate_routine(4), values2_routine(), rest_routine()):
+        extra = (eps_routine(),) if "loaded_sens1" in routines else ()
+        for relation in (plate_routine(4), values2_routine(), rest_routine(), *extra):
             # its array argument renamed: `in` is a Python keyword
             routines[relation.name] = dataclasses.replace(
                 relation, arguments=(Argument("plate", relation.arguments[0].symbols),)
@@ -454,6 +457,11 @@ def _sensitivity_routines(
         shapes,
     )
     for lv in (lv for lv in levels if lv.sensitivity):
+        if lv.name in level_table.LOADED:
+            # the reduced equilibrium's pieces (symkin.codegen.loaded_sens); its driver
+            # assembles them
+            routines.update(loaded_sens_routines(an, points, *args))
+            continue
         part = terms.partials(lv.name)
         stage = terms.stage(lv.name) if needs_loops and lv.needs_delta else None
         blocks = [part.theta] + ([part.delta] if stage is not None else []) + [part.variables]

@@ -49,7 +49,7 @@ LEVELS: tuple[Level, ...] = (
     # The physical levels (docs/physics.md): the plates' stiffness and the file's loads.
     # Code 5 was `loaded_refined` (a second pass of the old linearised statics), retired when
     # `loaded` became Newton on the reduced equilibrium: it stays reserved, never given again.
-    Level("loaded", 3, "loaded", needs_delta=True, needs_stiffness=True, sensitivity=False),
+    Level("loaded", 3, "loaded", needs_delta=True, needs_stiffness=True),
     Level(
         "equilibrium",
         4,

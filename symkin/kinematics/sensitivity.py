@@ -118,8 +118,8 @@ class Sensitivities:
         kin = an.kin
         out: dict[str, Stage | None] = {}
         for lv in levels.LEVELS:
-            if not lv.sensitivity:
-                continue
+            if not lv.sensitivity or lv.name in levels.LOADED:
+                continue  # loaded: symkin.physics.reduced_sensitivity
             if not lv.generated or not lv.needs_delta or not kin.unknowns:
                 out[lv.name] = None
                 continue
@@ -140,7 +140,7 @@ class Sensitivities:
         kin = an.kin
         out: dict[str, Partials] = {}
         for lv in levels.LEVELS:
-            if not lv.generated or not lv.sensitivity:
+            if not lv.generated or not lv.sensitivity or lv.name in levels.LOADED:
                 continue
             rows_v, rows_t, rows_d = [], [], []
             for name in self.points:

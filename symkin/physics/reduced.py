@@ -459,14 +459,12 @@ class Reduced:
         for j, d in enumerate(parts):
             block[3 * j : 3 * j + 3, 3 * j : 3 * j + 3] = d
         dins_x = dins.reshape(o, n) if o else np.zeros((0, n))
+        jac, jo = np.zeros((0, 0)), np.zeros((0, o))
         if n:
             _, jo = self._fn("jac")(*args, outs)
             jo = np.array(jo, dtype=float).reshape(n, o)
-            dx = -np.linalg.solve(self.jacobian(x, theta, t), dr + jo @ block @ dins_p)
-        else:
-            dx = np.zeros((0, q))
-        total = (dy_x + dy_o @ block @ dins_x) @ dx + dy_p + dy_o @ block @ dins_p
-        return ys, total
+            jac = self.jacobian(x, theta, t)
+        return ys, implicit_rates(jac, jo, block, dins_x, dr, dins_p, dy_x, dy_o, dy_p)
 
     def clamps(self, x, theta, t: float = 1.0) -> dict[int, tuple[float, ...]]:
         """Every plate's P clamp (x, y), M clamp (x, y) and link P's rotation, compliant."""
@@ -771,6 +769,19 @@ class Reduced:
             for k, (_, _, ei, length, ea, es) in enumerate(self.segs)
         )
         return loads, work
+
+
+def implicit_rates(jac, jo, block, dins_x, dr_by, dins_by, dy_x, dy_o, dy_by) -> np.ndarray:
+    """The total derivatives of quantities y(x, o, v) by variables v at a solution x of R = 0,
+    the plate relation's outputs o = rel(i(x, v)) through the chain rule: dx/dv = −J⁻¹ (∂R/∂v +
+    ∂R/∂o ∂rel/∂i ∂i/∂v), dy/dv = (∂y/∂x + ∂y/∂o ∂rel/∂i ∂i/∂x) dx/dv + ∂y/∂v + ∂y/∂o ∂rel/∂i
+    ∂i/∂v. `jac` J (n × n), `jo` ∂R/∂o, `block` ∂rel/∂i, `dins_x` ∂i/∂x; the `_by` arguments
+    the partial derivatives by v (x and o held), `dy_x`, `dy_o` y's by x and o."""
+    if len(jac):
+        dx = -np.linalg.solve(jac, dr_by + jo @ block @ dins_by)
+    else:
+        dx = np.zeros((0, dy_by.shape[1]))
+    return (dy_x + dy_o @ block @ dins_x) @ dx + dy_by + dy_o @ block @ dins_by
 
 
 def _jacobian(rows: sp.Matrix, by) -> sp.Matrix:

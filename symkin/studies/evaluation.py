@@ -33,7 +33,7 @@ from ..model import expressions, special
 from ..model.mechanism import Mechanism, check_values
 from ..physics import equilibrium as physical_equilibrium
 from ..physics import model_error as physical_model_error
-from ..physics import reduced, reduced_reported
+from ..physics import reduced, reduced_reported, reduced_sensitivity
 from ..physics.result import ActuatorLoad, HingeLoad, InputLoad, PlateStress
 
 #: The mpmath evaluation of the derivation, then the generated-code backends (their registry).
@@ -245,7 +245,7 @@ def _evaluate(
         )
     if backend == "sympy":
         if level in levels.LOADED:
-            return loaded(analysis, inputs, params, dps)
+            return loaded(analysis, inputs, params, dps, sensitivity)
         if level == "equilibrium":
             return equilibrium(analysis, inputs, params)
         return _mpmath_evaluator(analysis).evaluate(inputs, level, params, dps, sensitivity)
@@ -581,10 +581,12 @@ def loaded(
     inputs: Mapping[str, object],
     params: Mapping[str, object] | None = None,
     dps: int = 40,
+    sensitivity: bool = False,
 ) -> Evaluation:
     """The `loaded` level (docs/physics.md): the reduced equilibrium in mpmath, reported on the
-    rigid linkage solved at `dps` digits."""
-    return _mpmath_evaluator(analysis).loaded(inputs, params, dps)
+    rigid linkage solved at `dps` digits; with `sensitivity`, its derivatives by every parameter
+    and input (docs/sensitivity.md)."""
+    return _mpmath_evaluator(analysis).loaded(inputs, params, dps, sensitivity)
 
 
 def equilibrium(
@@ -941,6 +943,7 @@ class _Mpmath:
         self.kin = analysis.kin
         self.mechanism = analysis.mechanism
         self._lambdas: dict[str, object] = {}
+        self._loaded_terms: reduced_sensitivity.LoadedSensitivity | None = None
 
     def _fn(self, key: str, exprs, args) -> object:
         """Lambdified (mpmath) function, cached per key."""
@@ -1041,9 +1044,9 @@ class _Mpmath:
             out[p.name] = ((rig[0], rig[1]), (dev[0], dev[1]))
         return out
 
-    def _sensitivity(self, state: _State) -> Sensitivity:
+    def _sensitivity(self, state: _State, answer: reduced.Answer | None = None) -> Sensitivity:
         """Total derivatives by the implicit-function theorem on the closures
-        (symkin.sensitivity), in mpmath."""
+        (symkin.sensitivity), in mpmath; at `loaded`, on its reduced equilibrium (`answer`)."""
         from ..kinematics import sensitivity
 
         an, kin = self.an, self.kin
@@ -1079,18 +1082,13 @@ class _Mpmath:
             theta_v = -solve(matrix("A", rigid_stage.jacobian), matrix("Gv", rigid_stage.variables))
         rig = terms.rigid
         total_r = matrix("Rv", rig.variables) + (matrix("Rt", rig.theta) * theta_v if k else 0)
-        part = terms.partials(level)
-        total_d = matrix(f"{level}:Dv", part.variables)
-        if k:
-            total_d += matrix(f"{level}:Dt", part.theta) * theta_v
-            stage = terms.stage(level)
-            if stage is not None:
-                rhs = (
-                    matrix(f"{level}:Ev", stage.variables)
-                    + matrix(f"{level}:Et", stage.theta) * theta_v
-                )
-                delta_v = -solve(matrix(f"{level}:M", stage.jacobian), rhs)
-                total_d += matrix(f"{level}:Dd", part.delta) * delta_v
+        if level in levels.LOADED:
+            # the reduced equilibrium's (symkin.physics.reduced_sensitivity), in float64 as its
+            # solution
+            assert answer is not None
+            total_d = mpmath.matrix(self._loaded_rates(state, answer, theta_v).tolist())
+        else:
+            total_d = self._level_rates(state, terms, matrix, solve, theta_v)
         chain = self._fn(
             "sens:chain",
             sensitivity.parameter_chain(
@@ -1116,11 +1114,51 @@ class _Mpmath:
             per_point(total_r),
         )
 
+    def _level_rates(self, state: _State, terms, matrix, solve, theta_v):
+        """dΔR/dv at a kinematic level (partial by the parameters: no chain yet)."""
+        level, k = state.level, len(self.kin.unknowns)
+        part = terms.partials(level)
+        total_d = matrix(f"{level}:Dv", part.variables)
+        if k:
+            total_d += matrix(f"{level}:Dt", part.theta) * theta_v
+            stage = terms.stage(level)
+            if stage is not None:
+                rhs = (
+                    matrix(f"{level}:Ev", stage.variables)
+                    + matrix(f"{level}:Et", stage.theta) * theta_v
+                )
+                delta_v = -solve(matrix(f"{level}:M", stage.jacobian), rhs)
+                total_d += matrix(f"{level}:Dd", part.delta) * delta_v
+        return total_d
+
+    def _loaded_rates(self, state: _State, answer: reduced.Answer, theta_v) -> np.ndarray:
+        """dΔR/dv at `loaded` from its solution (symkin.physics.reduced_sensitivity)."""
+        an, kin = self.an, self.kin
+        if self._loaded_terms is None:
+            # float64 kernels: the solution is float64 (as the solver's, symkin.physics.reduced)
+            self._loaded_terms = reduced_sensitivity.LoadedSensitivity(
+                an, lambda: [float64_namespace(), "math"]
+            )
+        red = answer.solver
+        assert red is not None
+        npar = len(an.params)
+        theta_u = np.array(theta_v.tolist(), dtype=float).reshape(len(kin.unknowns), -1)
+        rates = reduced_sensitivity.theta_rates(an, theta_u, npar, kin.inputs)
+        return self._loaded_terms.rates(
+            answer.x,
+            red.scale,
+            answer.segments,
+            answer.theta,
+            [float(v) for v in state.pvals],
+            rates,
+        )
+
     def loaded(
         self,
         inputs: Mapping[str, object],
         params: Mapping[str, object] | None,
         dps: int,
+        sensitivity: bool = False,
     ) -> Evaluation:
         """The `loaded` level (docs/physics.md): the reduced equilibrium (symkin.physics.reduced)
         in mpmath, its deviations, angle deviations, hinge loads and energy put on the rigid
@@ -1191,6 +1229,9 @@ class _Mpmath:
                 units=mech.units,
                 **_reported_fields(answer, float(scale)),
             )
+            if sensitivity:
+                state = _State("loaded", exact_params, pvals, ivals, theta, {}, dyads)
+                result = dataclasses.replace(result, sensitivity=self._sensitivity(state, answer))
         return with_model_error(result, mech, exact_params)
 
     def _links(self, an: Analysis, level: str, prefix: str, args: list, values: list) -> dict:

@@ -440,6 +440,11 @@ static int sk_reduced_pose(const void *mechanism, const double *inputs, const do
     for (i = 0; i < 2 * SK_NP; ++i) {
         q[SK_NPAR + i] = dev[i];
     }
+    /* the variant and its solution, for the sensitivities (templates/c/reduced_sens.c) */
+    q[SK_NPAR + 2 * SK_NP] = v;
+    for (i = 0; i < r.v->size; ++i) {
+        q[SK_NPAR + 2 * SK_NP + 1 + i] = x[i];
+    }
     return 0;
 }
 

@@ -355,6 +355,11 @@ typedef struct {
     int (*loaded_solve)(const void *m, const double *inputs, const double *params,
                         const double *theta, double *delta, double *q);
     const void *loaded;             /* its tables (sk_loaded) */
+    /* its sensitivities (templates/c/reduced_sens.c): (mechanism, theta, q, dtheta_u/dv) -> the
+       deviation's by every variable; NULL: none */
+    int (*loaded_rates)(const void *m, const double *theta, const double *q, const double *thu,
+                        double *dev);
+    const void *loaded_sens;        /* its tables (sk_loaded_sens) */
     sk_rule rigid_rule;             /* Newton at each continuation step */
     sk_rule polish_rule;            /* after the rigid start */
     sk_rule exact_rule;             /* on every compliant closure */
@@ -750,21 +755,46 @@ static void sk_gemm(int m, int p, int n, const double *a, const double *b, doubl
 }
 #endif
 
+/* The parameters' columns of dev and rig (2 SK_NP x SK_NV) made totals: a parameter's default
+   that reads earlier ones follows them, last first. Returns 0. */
+static int sk_sensitivity_chain(const sk_mechanism *m, const double *params, double *dev,
+                                double *rig)
+{
+    if (m->sens_chain != NULL) {
+        double c[SK_NPAR * SK_NPAR + 1];
+        int i, j, r;
+        m->sens_chain(params, c);
+        for (i = SK_NPAR - 1; i >= 0; --i) {
+            for (j = i + 1; j < SK_NPAR; ++j) {
+                for (r = 0; r < 2 * SK_NP; ++r) {
+                    dev[r * SK_NV + i] += c[j * SK_NPAR + i] * dev[r * SK_NV + j];
+                    rig[r * SK_NV + i] += c[j * SK_NPAR + i] * rig[r * SK_NV + j];
+                }
+            }
+        }
+    }
+    return 0;
+}
+
 /* The total derivatives of the points' deviations (dev) and rigid positions (rig) by every
    variable, 2 SK_NP x SK_NV row-major (row 2 p + c: component c of point p; columns: the
    parameters, then the inputs), by the implicit-function theorem on the closures: with
    Theta = d theta_u / dv = -A^-1 dG/dv and, where the level solves a closure E for delta,
    Y = -M^-1 (dE/dv + dE/dtheta_u Theta): dD/dv + dD/dtheta_u Theta + dD/ddelta Y. */
 static int sk_sensitivity(const sk_mechanism *m, const sk_level *lv, const double *theta,
-                          const double *delta, const double *params, double *dev, double *rig)
+                          const double *delta, const double *params, const double *q,
+                          double *dev, double *rig)
 {
     double sr[SK_OUT], s[SK_OUT];
     const sk_sens *b = &lv->sens;
+    const double *thu = NULL;
     int i;
 #if defined(SK_LOOPS)
     double th[SK_K * SK_NV + 1], y[SK_K * SK_NV + 1];
 #endif
-    if (b->fn == NULL) {
+    (void)q;
+    (void)thu;
+    if (b->fn == NULL && !(lv->loaded && m->loaded_rates != NULL)) {
         return 3;                   /* a level without closed-form sensitivities */
     }
     m->sens_rigid(theta, params, sr);
@@ -781,7 +811,15 @@ static int sk_sensitivity(const sk_mechanism *m, const sk_level *lv, const doubl
     }
 #if defined(SK_LOOPS)
     sk_gemm(2 * SK_NP, SK_K, SK_NV, sr + m->sr_dR_dtheta, th, rig);
+    thu = th;
 #endif
+    if (b->fn == NULL) {
+        /* the loaded level: the reduced equilibrium's own (templates/c/reduced_sens.c) */
+        if (m->loaded_rates(m, theta, q, thu, dev)) {
+            return 1;
+        }
+        return sk_sensitivity_chain(m, params, dev, rig);
+    }
     b->fn(theta, delta, params, s);
 #if defined(SK_LOOPS)
     if (b->stage) {
@@ -806,21 +844,7 @@ static int sk_sensitivity(const sk_mechanism *m, const sk_level *lv, const doubl
         sk_gemm(2 * SK_NP, SK_K, SK_NV, s + b->dD_ddelta, y, dev);
     }
 #endif
-    if (m->sens_chain != NULL) {
-        /* a parameter's default that reads earlier ones follows them: totals, last first */
-        double c[SK_NPAR * SK_NPAR + 1];
-        int j, r;
-        m->sens_chain(params, c);
-        for (i = SK_NPAR - 1; i >= 0; --i) {
-            for (j = i + 1; j < SK_NPAR; ++j) {
-                for (r = 0; r < 2 * SK_NP; ++r) {
-                    dev[r * SK_NV + i] += c[j * SK_NPAR + i] * dev[r * SK_NV + j];
-                    rig[r * SK_NV + i] += c[j * SK_NPAR + i] * rig[r * SK_NV + j];
-                }
-            }
-        }
-    }
-    return 0;
+    return sk_sensitivity_chain(m, params, dev, rig);
 }
 
 /* <name>_sensitivity_full. */
@@ -842,7 +866,7 @@ static int sk_sensitivity_full(const sk_mechanism *m, const double *inputs, cons
         status = sk_outputs(m, lv, theta, delta, params, q, values, NULL, NULL);
     }
     if (status == 0) {
-        status = sk_sensitivity(m, lv, theta, delta, params, dev, rig);
+        status = sk_sensitivity(m, lv, theta, delta, params, q, dev, rig);
     }
     for (i = 0; status == 0 && i < 2 * SK_NP * SK_NV; ++i) {
         if (!isfinite(dev[i]) || !isfinite(rig[i])) {

@@ -305,6 +305,9 @@ def _reduced_solve(mech, x, theta, p, ok):
     okf = numpy.zeros(where.size, dtype=bool)
     flat_delta = [numpy.zeros(where.size) for _ in mech.unknown_index]
     flat_dev = [numpy.full(where.size, numpy.nan) for _ in range(n_dev)]
+    # the variant and its solution x, for the sensitivities (templates/numpy/reduced_sens.py)
+    flat_x = [numpy.full(where.size, numpy.nan) for _ in range(max(v[3] for v in tb.variants))]
+    flat_variant = numpy.full(where.size, -1)
     for count, variant in enumerate(tb.variants, 1):
         if not todo.size:
             break
@@ -318,6 +321,9 @@ def _reduced_solve(mech, x, theta, p, ok):
             flat_delta[j][todo[good]] = sx[j, good] * solver.scale[j]
         for i in range(n_dev):
             flat_dev[i][todo[good]] = sdev[i, good]
+        for i in range(solver.size):
+            flat_x[i][todo[good]] = sx[i, good]
+        flat_variant[todo[good]] = count - 1
         okf[todo[good]] = True
         # refused by the truncation estimate: two half plates per plate
         todo = todo[status == 4]
@@ -330,4 +336,9 @@ def _reduced_solve(mech, x, theta, p, ok):
         dev[i].reshape(-1)[where] = flat_dev[i]
     q = _Solved(p)
     q.deviation = dev
+    q.x = [numpy.zeros(shape) for _ in flat_x]
+    q.variant = numpy.full(shape, -1)
+    for i, v in enumerate(flat_x):
+        q.x[i].reshape(-1)[where] = v
+    q.variant.reshape(-1)[where] = flat_variant
     return delta, q, ok

@@ -469,8 +469,12 @@ def _sensitivity_block(arrays, mech, level, p):
             ok = ok & good
             th = _matrix(th, k, nv, shape, dtype)
             rig = rig + numpy.matmul(_block(sr, rb["dR_dtheta"], shape, dtype), th)
-        s = lv.sens(theta, delta, p)
-        dev = _block(s, b["dD_dv"], shape, dtype)
+        if lv.loaded:
+            # the reduced equilibrium's own (templates/numpy/reduced_sens.py)
+            dev = lv.sens(mech, theta, p, q, th if k else None, ok).astype(dtype)
+        else:
+            s = lv.sens(theta, delta, p)
+            dev = _block(s, b["dD_dv"], shape, dtype)
         if "M" in b:
             # Y = -M^-1 (dE/dv + dE/dtheta_u Theta)
             rhs = -(
@@ -485,7 +489,7 @@ def _sensitivity_block(arrays, mech, level, p):
             dev = dev + numpy.matmul(
                 _block(s, b["dD_ddelta"], shape, dtype), _matrix(y, k, nv, shape, dtype)
             )
-        if k:
+        if k and not lv.loaded:
             dev = dev + numpy.matmul(_block(s, b["dD_dtheta"], shape, dtype), th)
         if mech.sens_chain is not None:
             # a parameter's default that reads earlier ones follows them: totals, last first

@@ -99,6 +99,12 @@ class Backend:
             "default_level": default_level(plan),
             "loaded": plan.loaded,
             "loaded_levels": [lv for lv in plan.levels if lv.name in levels.LOADED],
+            # the loaded level's sensitivity routines: per variant the offsets of their blocks
+            "loaded_sens": [
+                offsets(plan, f"loaded_sens{g}", LOADED_SENS_BLOCKS)
+                for g in (1, 2)
+                if f"loaded_sens{g}" in plan.routines
+            ],
             "routines": [routine_data(r, self.printer) for r in plan.routines.values()],
             "have": set(plan.routines),
             "blocks": {
@@ -131,6 +137,17 @@ CLOSURES = {
 }
 #: The blocks of a level's sensitivity routine (symkin.codegen.plan), in order.
 SENS_BLOCKS = ("M", "dE_dtheta", "dE_dv", "dD_dtheta", "dD_ddelta", "dD_dv")
+#: The blocks of the loaded level's (symkin.codegen.loaded_sens), in order.
+LOADED_SENS_BLOCKS = (
+    "dR_dtheta",
+    "dR_dp",
+    "din_dtheta",
+    "din_dp",
+    "dD_dx",
+    "dD_dtheta",
+    "dD_dp",
+    "dD_dout",
+)
 
 
 def level_rows(plan: Plan) -> list[dict]:
@@ -148,6 +165,8 @@ def level_rows(plan: Plan) -> list[dict]:
             linear = newton = None
         loaded = lv.name in levels.LOADED
         sens = f"sens_{lv.name}" if lv.sensitivity and f"sens_{lv.name}" in plan.routines else None
+        # `loaded`: its driver's own (templates/*/reduced_sens.*) over loaded_sens<g>
+        rates = loaded and lv.sensitivity and "loaded_sens1" in plan.routines
         rows.append(
             {
                 "name": lv.name,
@@ -157,6 +176,7 @@ def level_rows(plan: Plan) -> list[dict]:
                 "newton": newton,
                 "loaded": int(loaded),
                 "sens": sens,
+                "rates": rates,
                 "stage": sens is not None and "M" in _names(plan, sens),
                 "blocks": offsets(plan, sens, SENS_BLOCKS) if sens else {},
             }

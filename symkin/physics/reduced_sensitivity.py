@@ -1,0 +1,241 @@
+"""Closed-form sensitivities of the `loaded` level (docs/sensitivity.md): the derivatives of the
+points' deviations by the file's parameters and the inputs, by the implicit-function theorem on
+the reduced equilibrium R(x, θ, p) = 0 of symkin.physics.reduced.
+
+At the solution x, with v a parameter or an input and θ every hinge's rigid angle (dθ/dv from
+the rigid closure, as at the kinematic levels; an input's own angle moves by 1), the plates'
+relation outputs o = rel(i) of their inputs i = (θ_c, p, f, ε_a, ε_s)(x, θ, p):
+
+    di/dv|_x = ∂i/∂θ dθ/dv + ∂i/∂p                    (ε_a, ε_s read the parameters only)
+    dR/dv|_x = ∂R/∂θ dθ/dv + ∂R/∂p + ∂R/∂o ∂rel/∂i di/dv|_x
+    dx/dv    = −J⁻¹ dR/dv|_x                          (J the Newton Jacobian, plate relation in)
+    dD/dv    = (∂D/∂x + ∂D/∂o ∂rel/∂i ∂i/∂x) dx/dv + ∂D/∂θ dθ/dv + ∂D/∂p + ∂D/∂o ∂rel/∂i di/dv|_x
+
+(:func:`symkin.physics.reduced.implicit_rates`, which `loaded`'s reported quantities use too).
+The parameters are those of the file, the scales of x numbers (they only condition Newton).
+:func:`partials` states the symbolic pieces for the generated code (symkin.codegen.plan's
+loaded_sens<g>) and for :class:`LoadedSensitivity`, the sympy backend's evaluation.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from functools import cache
+
+import numpy as np
+import sympy as sp
+
+from ..kinematics.analysis import Analysis
+from .plate_relation import relation
+from .reduced import Reduced, _jacobian, implicit_rates
+
+
+@dataclass(frozen=True)
+class LoadedPartials:
+    """The partial derivatives of one variant (half plates per plate) of the reduced equilibrium
+    at fixed x and plate outputs: θ every hinge's rigid angle (label order), p the parameters,
+    i every half plate's (θ_c, p, f, ε_a, ε_s), o its relation's (along, across, omega), D the
+    points' deviations (x, y per point)."""
+
+    R_theta: sp.Matrix  # n × m
+    R_p: sp.Matrix  # n × n_p
+    i_theta: sp.Matrix  # 5 n_s × m
+    i_p: sp.Matrix  # 5 n_s × n_p
+    D_x: sp.Matrix  # 2 n_P × n
+    D_theta: sp.Matrix  # 2 n_P × m
+    D_p: sp.Matrix  # 2 n_P × n_p
+    D_o: sp.Matrix  # 2 n_P × 3 n_s
+
+    def blocks(self) -> tuple[tuple[str, sp.Matrix], ...]:
+        """The matrices by name, in the generated routine's order."""
+        return (
+            ("dR_dtheta", self.R_theta),
+            ("dR_dp", self.R_p),
+            ("din_dtheta", self.i_theta),
+            ("din_dp", self.i_p),
+            ("dD_dx", self.D_x),
+            ("dD_dtheta", self.D_theta),
+            ("dD_dp", self.D_p),
+            ("dD_dout", self.D_o),
+        )
+
+
+def plate_inputs(r: Reduced) -> sp.Matrix:
+    """Every half plate's (θ_c, p, f, ε_a, ε_s), as the plate relation reads them."""
+    s = r._s
+    return sp.Matrix(
+        [
+            v
+            for a, j, _, _, ea, es in r.segs
+            for v in (*s["pf"][a, j], sp.sympify(ea), sp.sympify(es))
+        ]
+    )
+
+
+def partials(r: Reduced, params: Sequence[sp.Symbol], points: Sequence[str]) -> LoadedPartials:
+    """The pieces of the module docstring for the symbolic reduced equilibrium `r` (built with
+    symbolic=True), by the parameters `params`, for the deviations of `points`."""
+    s = r._s
+    thetas = [r.th[a] for a in sorted(r.hinges)]
+    rows = sp.Matrix(r._rows(s))
+    ins = plate_inputs(r)
+    dev = sp.Matrix([c for name in points for c in r._deviation(s, *r.points[name])])
+    outs = [v for a, j, *_ in r.segs for v in s["out"][a, j]]
+    return LoadedPartials(
+        _jacobian(rows, thetas),
+        _jacobian(rows, params),
+        _jacobian(ins, thetas),
+        _jacobian(ins, params),
+        _jacobian(dev, r.x),
+        _jacobian(dev, thetas),
+        _jacobian(dev, params),
+        _jacobian(dev, outs),
+    )
+
+
+@cache
+def eps_relation() -> tuple[tuple[sp.Symbol, ...], list[sp.Expr]]:
+    """The plate relation's (order 4) partials by ε_a and ε_s: ∂(along, across, omega)/∂(ε_a,
+    ε_s), row-major (3 × 2), over the symbols (θ, p, f, ε_a, ε_s)."""
+    th, p, f, ea, es = sp.symbols("theta p f e_a e_s", real=True)
+    rel = relation(th, p, f, ea, es, 4)
+    return (th, p, f, ea, es), [
+        sp.diff(v, w) for v in (rel.along, rel.across, rel.omega) for w in (ea, es)
+    ]
+
+
+def relation_block(parts: Sequence[np.ndarray], eps: Sequence[np.ndarray]) -> np.ndarray:
+    """∂o/∂i, block diagonal (3 n_s × 5 n_s): per half plate its relation's 3 × 3 partials by
+    (θ_c, p, f) beside its 3 × 2 by (ε_a, ε_s)."""
+    ns = len(parts)
+    out = np.zeros((3 * ns, 5 * ns))
+    for k in range(ns):
+        out[3 * k : 3 * k + 3, 5 * k : 5 * k + 3] = parts[k]
+        out[3 * k : 3 * k + 3, 5 * k + 3 : 5 * k + 5] = eps[k]
+    return out
+
+
+def theta_rates(
+    analysis: Analysis, theta_u: np.ndarray, n_params: int, inputs: Sequence[int]
+) -> np.ndarray:
+    """dθ/dv of every hinge (label order) × (parameters, then `inputs`): the non-input hinges'
+    rows from the rigid closure (`theta_u`, k × n_v), an input's own angle moving by 1, a held
+    one by nothing."""
+    kin = analysis.kin
+    nv = n_params + len(inputs)
+    out = np.zeros((len(kin.hinges), nv))
+    for row, a in enumerate(sorted(kin.hinges)):
+        if a in kin.unknowns:
+            out[row] = theta_u[kin.unknowns.index(a)]
+        elif a in inputs:
+            out[row, n_params + list(inputs).index(a)] = 1.0
+    return out
+
+
+class LoadedSensitivity:
+    """The sympy backend's `loaded` sensitivities of one analysis: per variant, the symbolic
+    reduced equilibrium (parameters as symbols, scales at the file's defaults) and its pieces,
+    lambdified (float64 kernels, as the solver's)."""
+
+    def __init__(self, analysis: Analysis, modules) -> None:
+        self.an = analysis
+        self.modules = modules
+        self.params = list(analysis.params)
+        self.points = [p.name for p in analysis.points]
+        self._variants: dict[int, tuple] = {}
+
+    def _variant(self, count: int) -> tuple:
+        if count in self._variants:
+            return self._variants[count]
+        an = self.an
+        values = {p.symbol: p.value for p in an.mechanism.parameters}
+        r = Reduced(an.kin, values, self.modules, count, symbolic=True)
+        s = r._s
+        outs = [v for a, j, *_ in r.segs for v in s["out"][a, j]]
+        rows = sp.Matrix(r._rows(s))
+        ins = plate_inputs(r)
+        moving = sp.Matrix([v for a, j, *_ in r.segs for v in s["pf"][a, j]])
+        part = partials(r, self.params, self.points)
+        # the parameters renamed p_0, p_1, ... (as in generated code): a file's parameter may
+        # be called like the equilibrium's own symbols (t, x_0, ...)
+        rename = {q: sp.Symbol(f"p_{k}", real=True) for k, q in enumerate(self.params)}
+        args = [list(r.x), [r.th[a] for a in sorted(r.hinges)], r.t, outs, list(rename.values())]
+        modules = self.modules() if callable(self.modules) else self.modules
+        exprs = [
+            [sp.sympify(e).xreplace(rename) for e in m]
+            for m in (
+                _jacobian(moving, r.x),
+                _jacobian(rows, r.x),
+                _jacobian(rows, outs),
+                *(m for _, m in part.blocks()),
+            )
+        ]
+        fn = sp.lambdify(args, exprs, modules=modules, cse=True)
+        ins_fn = sp.lambdify(
+            args[:3] + args[4:], [e.xreplace(rename) for e in ins], modules=modules, cse=True
+        )
+        symbols, eps = eps_relation()
+        eps_fn = sp.lambdify(symbols, eps, modules=modules)
+        found = self._variants[count] = (r, ins_fn, fn, eps_fn)
+        return found
+
+    def rates(
+        self,
+        x: np.ndarray,
+        scale: np.ndarray,
+        count: int,
+        theta: Mapping[int, float],
+        values: Sequence[float],
+        theta_v: np.ndarray,
+    ) -> np.ndarray:
+        """dD/dv (2 n_P × n_v, the parameters' columns partial: no chain) at the solution x
+        (scaled by `scale`, the solver's) of the variant with `count` half plates per plate, the
+        rigid angles `theta`, parameter values `values` and dθ/dv `theta_v`
+        (:func:`theta_rates`)."""
+        r, ins_fn, fn, eps_fn = self._variant(count)
+        n, ns, npar = r.size, len(r.segs), len(self.params)
+        xs = [float(v) for v in np.asarray(x, dtype=float) * scale / r.scale] if n else []
+        th = [float(theta[a]) for a in sorted(r.hinges)]
+        # the plates' inputs first (the relation's outputs are arguments of the rest)
+        ins = np.array(ins_fn(xs, th, 1.0, list(values)), dtype=float)
+        plate = r._fn("plate4")
+        outs, parts, eps = [], [], []
+        for k in range(ns):
+            i = [float(u) for u in ins[5 * k : 5 * k + 5]]
+            v = plate(*i)
+            outs += [float(u) for u in v[:3]]
+            parts.append(np.array(v[3:], dtype=float).reshape(3, 3))
+            eps.append(np.array(eps_fn(*i), dtype=float).reshape(3, 2))
+        got = fn(xs, th, 1.0, outs, list(values))
+        dins_x, jx, jo, r_t, r_p, i_t, i_p, d_x, d_t, d_p, d_o = (
+            np.array(g, dtype=float) for g in got
+        )
+        m, npt, nv = len(th), 2 * len(self.points), theta_v.shape[1]
+        block = relation_block(parts, eps)
+        # ∂i/∂x: (θ_c, p, f) move with x, ε_a and ε_s do not
+        di_x = np.zeros((5 * ns, n))
+        for k in range(ns):
+            di_x[5 * k : 5 * k + 3] = dins_x.reshape(3 * ns, n)[3 * k : 3 * k + 3]
+        jac = jx.reshape(n, n) + jo.reshape(n, 3 * ns) @ block @ di_x if n else np.zeros((0, 0))
+
+        def by_v(d_theta: np.ndarray, d_p: np.ndarray, rows: int) -> np.ndarray:
+            out = d_theta.reshape(rows, m) @ theta_v
+            out[:, :npar] += d_p.reshape(rows, npar)
+            return out
+
+        return (
+            implicit_rates(
+                jac,
+                jo.reshape(n, 3 * ns),
+                block,
+                di_x,
+                by_v(r_t, r_p, n),
+                by_v(i_t, i_p, 5 * ns),
+                d_x.reshape(npt, n),
+                d_o.reshape(npt, 3 * ns),
+                by_v(d_t, d_p, npt),
+            )
+            if nv
+            else np.zeros((npt, 0))
+        )
