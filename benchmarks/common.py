@@ -14,6 +14,9 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+# derivation times are measured: every plan is derived, none found in the cache (docs/cli.md)
+os.environ.setdefault("SYMKIN_PLAN_CACHE", "off")
+
 import families
 import numpy as np
 

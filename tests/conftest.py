@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import fcntl
 import os
+import shutil
+import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
@@ -26,6 +28,24 @@ def once_per_run(tmp_path_factory, name: str, build: Callable[[Path], None]) -> 
             build(folder)
             (folder / ".done").touch()
     return folder
+
+
+def pytest_configure(config):
+    """One compiled-code and plan cache for the run (docs/cli.md), empty at its start and removed
+    at its end: shared by the xdist workers and the CLI subprocesses (they inherit it), never the
+    user's own, so a run measures a fresh machine's cost."""
+    if os.environ.get("PYTEST_XDIST_WORKER") or os.environ.get("SYMKIN_CACHE"):
+        return
+    folder = tempfile.mkdtemp(prefix="symkin-test-cache-")
+    os.environ["SYMKIN_CACHE"] = folder
+    config._symkin_cache = folder
+
+
+def pytest_unconfigure(config):
+    folder = getattr(config, "_symkin_cache", None)
+    if folder:
+        shutil.rmtree(folder, ignore_errors=True)
+        os.environ.pop("SYMKIN_CACHE", None)
 
 
 def pytest_addoption(parser):

@@ -32,7 +32,7 @@ import numpy as np
 from ..core import levels
 from ..core.errors import InputError
 from ..kinematics.analysis import Analysis
-from . import toolchain
+from . import plan_cache, toolchain
 from .plan import Plan, ScenePlan, plan
 
 
@@ -332,7 +332,8 @@ def _key(value: object) -> object:
 
 def plan_for(analysis: Analysis, **options: Any) -> Plan:
     """:func:`~.plan.plan` of `analysis` with `options`, derived once per analysis and options
-    (kept as long as the analysis is)."""
+    (kept as long as the analysis is), and found by content where the same file was derived
+    before (symkin.codegen.plan_cache)."""
     bound = _PLAN_SIGNATURE.bind(analysis, **options)
     bound.apply_defaults()  # plan(an) and plan(an, sensitivity=True) are one plan
     key = tuple((k, _key(v)) for k, v in bound.arguments.items() if k != "analysis")
@@ -340,7 +341,10 @@ def plan_for(analysis: Analysis, **options: Any) -> Plan:
         plans = _PLANS.setdefault(analysis, {})
         found = plans.get(key)
         if found is None:
-            found = plans[key] = plan(analysis, **options)
+            options_ = {k: v for k, v in bound.arguments.items() if k != "analysis"}
+            found = plans[key] = plan_cache.cached(
+                analysis, options_, lambda: plan(analysis, **options)
+            )
         return found
 
 

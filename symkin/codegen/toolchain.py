@@ -101,10 +101,19 @@ def _sha256(path: Path) -> str:
     return h.hexdigest()
 
 
-def _verified(target: Path, record: Path, source_digest: str) -> bool:
-    """The cached library is ours and intact: both files private regular files, the record
-    names the source digest and the library's own sha256 (a planted, truncated or corrupt
-    library fails this and is rebuilt, never loaded)."""
+def private_folder(folder: Path) -> bool:
+    """A folder (not a link to one) of this user's that no one else can write."""
+    try:
+        info = os.lstat(folder)
+    except OSError:
+        return False
+    return stat.S_ISDIR(info.st_mode) and _private(info)
+
+
+def verified(target: Path, record: Path, source_digest: str) -> bool:
+    """A cached file (a library, a plan) is ours and intact: both files private regular files,
+    the record names the source digest and the file's own sha256 (a planted, truncated or
+    corrupt file fails this and is rebuilt, never loaded)."""
     try:
         for p in (target, record):
             info = os.lstat(p)
@@ -116,7 +125,7 @@ def _verified(target: Path, record: Path, source_digest: str) -> bool:
         return False
 
 
-def _replace_atomically(
+def replace_atomically(
     folder: Path, final: Path, data: bytes | None = None, src: Path | None = None
 ) -> None:
     """Put `data` (or the file `src`) at `final` with a unique temporary name and one rename."""
@@ -124,7 +133,7 @@ def _replace_atomically(
     try:
         if data is None:
             if src is None:
-                raise TypeError("_replace_atomically needs data or src")
+                raise TypeError("replace_atomically needs data or src")
             payload = src.read_bytes()
         else:
             payload = data
@@ -142,22 +151,22 @@ def build(
     name: str, header: str, source: str, flags: tuple[str, ...] = CFLAGS, extra: str = ""
 ) -> Path:
     """Shared library of the generated pair (and an `extra` C file, e.g. a timer), cached by the
-    hash of its texts and flags; a cached library is loaded only when verified (see _verified)
+    hash of its texts and flags; a cached library is loaded only when verified (see verified)
     and rebuilt otherwise."""
     cc = compiler()
     full = hashlib.sha256("\0".join((cc, *flags, header, source, extra)).encode()).hexdigest()
     folder = safe_cache_dir()
     target = folder / f"{name}-{full[:20]}.so"
     record = folder / f"{name}-{full[:20]}.sha256"
-    if _verified(target, record, full):
+    if verified(target, record, full):
         return target
     with tempfile.TemporaryDirectory() as tmp:
         built = _compile(cc, flags, name, header, source, extra, Path(tmp))
         digest = _sha256(built)
         # atomic, unique temporary names: a concurrent build never sees half a file; the
         # record last, so a reader that sees it finds the library it describes
-        _replace_atomically(folder, target, src=built)
-        _replace_atomically(folder, record, data=f"{full}\n{digest}\n".encode())
+        replace_atomically(folder, target, src=built)
+        replace_atomically(folder, record, data=f"{full}\n{digest}\n".encode())
     return target
 
 

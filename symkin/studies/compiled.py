@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from ..codegen import pipeline, toolchain
+from ..codegen import pipeline, plan_cache, toolchain
 from ..core import levels as level_table
 from ..graph.pruning import for_levels
 from ..graph.structure import build
@@ -302,15 +302,16 @@ def compile(
     check_fabricated_pose(analysis)
     mech = analysis.mechanism
     held = {k: v for k, v in held.items() if k in analysis.mechanism.inputs}
-    p = pipeline.plan_for(
-        analysis,
-        points=points,
-        levels=levels,
-        sensitivity=sensitivity,
-        links=False,
-        fixed=held,
-        pruned_inputs=pruned,
-    )
+    with plan_cache.memory_only():  # nothing written, not even the plan (docs/generated-code.md)
+        p = pipeline.plan_for(
+            analysis,
+            points=points,
+            levels=levels,
+            sensitivity=sensitivity,
+            links=False,
+            fixed=held,
+            pruned_inputs=pruned,
+        )
     source = Path(mech.path).name
     return Compiled(
         Sources(

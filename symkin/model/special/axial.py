@@ -550,3 +550,15 @@ register("bcol_h", bcol_h, _mp_h_function)
 for _b in BASES:
     for _order in range(3):
         kernel(_b, _order)
+
+
+def __getattr__(name: str) -> type:
+    """The beam-column kernels made on demand (bcol_<base>[_d<k>][_at]) by name: a pickled
+    expression (a plan kept by symkin.codegen.plan_cache) names its kernels' classes."""
+    stem = name[: -len("_at")] if name.endswith("_at") else name
+    if stem.startswith("bcol_"):
+        base, _, order = stem[len("bcol_") :].partition("_d")
+        if base in BASES and (not order or order.isdigit()):
+            cls = kernel(base, int(order or 0))
+            return globals()[name] if name.endswith("_at") else cls
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -346,3 +346,12 @@ for _n in range(5):
     sinr(_n)
     if _n:
         cosr(_n)
+
+
+def __getattr__(name: str) -> type:
+    """The kernels made on demand (sinr<n>, cosr<n>) by name: a pickled expression (a plan kept
+    by symkin.codegen.plan_cache) names its kernels' classes, made again here."""
+    for prefix, make in (("sinr", sinr), ("cosr", cosr)):
+        if name.startswith(prefix) and name[len(prefix) :].isdigit():
+            return make(int(name[len(prefix) :]))
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,0 +1,184 @@
+"""Plans kept by content (docs/cli.md, "The cache"): a derivation is the slow step of every
+command, and the same file is derived again and again (each `symkin eval --backend c`, each
+test). A plan is found again by a digest of what it is derived from: the analysis (the file's
+mechanism, its points, the hinge models), the plan's options, the versions of symkin's own
+source, sympy, numpy and Python. In memory for the process; on disk under the compiled-code
+cache (toolchain.safe_cache_dir), written atomically and read back only when verified as the
+compiled libraries are (a private regular file whose sha256 its record names).
+
+Anything the digest cannot describe exactly (an object that is neither a dataclass, a sympy
+expression, a number, a string nor a container of those) is derived, never looked up.
+SYMKIN_PLAN_CACHE=memory keeps plans in memory only, =off not at all (benchmarks of the
+derivation use it).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import os
+import pickle
+import sys
+import threading
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
+from contextvars import ContextVar
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import sympy as sp
+
+from ..core.errors import InputError
+from ..kinematics.analysis import Analysis
+from . import toolchain
+from .plan import Plan
+
+
+class _Opaque(Exception):
+    """An object the digest cannot describe exactly: its plan is derived, not looked up."""
+
+
+def _describe(obj: Any, out: list[str]) -> None:
+    """Append an exact, deterministic description of `obj` (no ids, no hash-seed order)."""
+    if obj is None or isinstance(obj, bool | int | str):
+        out.append(repr(obj))
+    elif isinstance(obj, float):
+        out.append(obj.hex())
+    elif isinstance(obj, sp.Basic | sp.MatrixBase):
+        # srepr names every class and exact value; a parameter symbol and a plain symbol differ
+        out.append(f"{type(obj).__name__}:{sp.srepr(obj)}")
+    elif isinstance(obj, np.ndarray):
+        out.append(f"ndarray:{obj.dtype.str}:{obj.shape}:{obj.tobytes().hex()}")
+    elif dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        out.append(f"{type(obj).__module__}.{type(obj).__qualname__}(")
+        for f in dataclasses.fields(obj):
+            out.append(f.name + "=")
+            _describe(getattr(obj, f.name), out)
+        out.append(")")
+    elif isinstance(obj, tuple | list):
+        out.append(f"{type(obj).__name__}[")
+        for item in obj:
+            _describe(item, out)
+        out.append("]")
+    elif isinstance(obj, Mapping):
+        items = []
+        for k, v in obj.items():
+            key: list[str] = []
+            _describe(k, key)
+            items.append(("".join(key), v))
+        out.append("{")
+        for k, v in sorted(items, key=lambda kv: kv[0]):
+            out.append(k + ":")
+            _describe(v, out)
+        out.append("}")
+    else:
+        raise _Opaque(type(obj).__qualname__)
+
+
+@cache
+def _code_digest() -> str:
+    """The digest of symkin's own Python source and of the libraries a plan is made of."""
+    h = hashlib.sha256()
+    root = Path(__file__).resolve().parent.parent
+    for path in sorted(root.rglob("*.py")):
+        h.update(str(path.relative_to(root)).encode() + b"\0" + path.read_bytes() + b"\0")
+    h.update(f"{sp.__version__} {np.__version__} {sys.version}".encode())
+    return h.hexdigest()
+
+
+def digest(analysis: Analysis, options: Mapping[str, Any]) -> str | None:
+    """The content digest of the plan of `analysis` with `options`; None when some part of them
+    cannot be described exactly."""
+    out: list[str] = [_code_digest()]
+    kin = analysis.kin
+    try:
+        _describe(analysis.mechanism, out)
+        _describe(tuple(p.name for p in analysis.points), out)
+        # the hinge models as the analysis has them (a variant overrides them)
+        _describe([(a, kin.hinges[a]) for a in sorted(kin.hinges)], out)
+        _describe(dict(options), out)
+    except _Opaque:
+        return None
+    return hashlib.sha256("\x1f".join(out).encode()).hexdigest()
+
+
+_MEMORY: dict[str, Plan] = {}
+_LOCK = threading.RLock()
+_NO_DISK: ContextVar[bool] = ContextVar("symkin_plan_cache_no_disk", default=False)
+
+
+@contextmanager
+def memory_only() -> Iterator[None]:
+    """Within it plans are neither read from nor written to disk (symkin.compile leaves no
+    file anywhere)."""
+    token = _NO_DISK.set(True)
+    try:
+        yield
+    finally:
+        _NO_DISK.reset(token)
+
+
+def _mode() -> str:
+    mode = os.environ.get("SYMKIN_PLAN_CACHE", "disk")
+    mode = mode if mode in ("disk", "memory", "off") else "disk"
+    return "memory" if mode == "disk" and _NO_DISK.get() else mode
+
+
+def _folder() -> Path | None:
+    """The plans' folder in the private cache, or None where the cache is unusable (a plan is
+    then derived: only compiling needs the cache)."""
+    try:
+        folder = toolchain.safe_cache_dir() / "plans"
+        os.makedirs(folder, mode=0o700, exist_ok=True)
+    except (InputError, OSError):
+        return None
+    return folder if toolchain.private_folder(folder) else None
+
+
+def cached(analysis: Analysis, options: Mapping[str, Any], derive: Callable[[], Plan]) -> Plan:
+    """The plan of `analysis` with `options`: found by content in memory or on disk, else
+    `derive()`d and kept."""
+    mode = _mode()
+    key = digest(analysis, options) if mode != "off" else None
+    if key is None:
+        return derive()
+    with _LOCK:
+        found = _MEMORY.get(key)
+    if found is not None:
+        return found
+    folder = _folder() if mode == "disk" else None
+    if folder is not None:
+        found = _read(folder, key)
+    if found is None:
+        found = derive()
+        if folder is not None:
+            _write(folder, key, found)
+    with _LOCK:
+        return _MEMORY.setdefault(key, found)
+
+
+def _read(folder: Path, key: str) -> Plan | None:
+    target, record = folder / f"{key}.pickle", folder / f"{key}.sha256"
+    try:
+        if not toolchain.verified(target, record, key):
+            return None
+        found = pickle.loads(target.read_bytes())
+    except Exception:  # a corrupt or stale file: derive again (and overwrite it)
+        return None
+    return found if isinstance(found, Plan) else None
+
+
+def _write(folder: Path, key: str, found: Plan) -> None:
+    try:
+        data = pickle.dumps(found, protocol=pickle.HIGHEST_PROTOCOL)
+    except Exception:  # something in it does not pickle: kept in memory only
+        return
+    target, record = folder / f"{key}.pickle", folder / f"{key}.sha256"
+    try:
+        toolchain.replace_atomically(folder, target, data=data)
+        digest_ = hashlib.sha256(data).hexdigest()
+        toolchain.replace_atomically(folder, record, data=f"{key}\n{digest_}\n".encode())
+    except OSError:  # a full disk, a read-only cache: kept in memory only
+        return
