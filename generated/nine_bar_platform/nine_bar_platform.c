@@ -3,7 +3,7 @@
  * Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
  * Points: F; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 158, rigid_res 148, linear 275, newton 531, rigid_points 14, loaded_plates1 285, loaded_system1 937, loaded_dev1 36, loaded_plates2 775, loaded_system2 3363, loaded_dev2 116, dev_paper 33, dev_first_order 33, dev_exact 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97, plate_relation4 312, plate_values2 62, plate_rest4 39.
+ * Operation counts after CSE: rigid 158, rigid_res 148, linear 275, newton 531, rigid_points 14, loaded_plates1 285, loaded_system1 937, loaded_dev1 36, loaded_plates2 775, loaded_system2 3363, loaded_dev2 116, dev_paper 33, dev_first_order 33, dev_exact 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97, plate_relation4 312, plate_values2 66, plate_rest4 40.
  */
 #include "nine_bar_platform.h"
 
@@ -85,26 +85,6 @@ static double symkin_arck(double x)
     return b;
 }
 
-/* h(p) = T(p) = tanh(u)/u, u = sqrt(p)/2 (tan(v)/v, v = sqrt(-p)/2, below 0) for p < 16.0, 1 - tanh(u) from it on: for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out. */
-static double symkin_bcol_h(double p)
-{
-    double u;
-    if (p > -4.0 && p < 16.0) {
-        const double d = p - 6.0;
-        const double d2 = d * d;
-        const double d4 = d2 * d2;
-        const double d8 = d4 * d4;
-        const double r = 1.0 / (p + 9.869604401089358);
-        return ((((10.897864068210225 + d * 0.16556156881006512) + (-0.0009157434227891026 + d * 8.365114438681788e-06) * d2) + ((-8.437823084425284e-08 + d * 8.763390715589521e-10) + (-9.191007821271998e-12 + d * 9.672991207222496e-14) * d2) * d4) + (((-1.0193179699964376e-15 + d * 1.0746329406338888e-17) + (-1.1324419365159025e-19 + d * 1.1940538461574364e-21) * d2) + (-1.310325228057343e-23 + d * 1.385670151299953e-25) * d4) * d8) * (r);
-    }
-    if (p >= 16.0) {
-        const double e = exp(-sqrt(p));
-        return 2.0 * e / (1.0 + e);
-    }
-    u = 0.5 * sqrt(-p);
-    return tan(u) / u;
-}
-
 /* bcol_a(p) = p w(p)/(3 T^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (12 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_a_at(double p, double h)
 {
@@ -124,12 +104,6 @@ static double symkin_bcol_a_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return ((12.0) + h * ((-12.0) + h * (p * (-1.0)))) / (h * (h * (p * (48.0))));
-}
-
-/* bcol_a(p) = p w(p)/(3 T^2). */
-static double symkin_bcol_a(double p)
-{
-    return symkin_bcol_a_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_a_d1(p) = d^1/dp^1 of p w(p)/(3 T^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (13 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -345,6 +319,26 @@ static double symkin_bcol_e3c_d1_at(double p, double h)
     return ((-960.0) + h * ((1152.0) + h * ((-144.0 + p * (528.0)) + h * ((-48.0 + p * (-544.0)) + h * ((p * (56.0 + p * (-84.0))) + h * ((p * (20.0 + p * (64.0))) + h * (p * (p * (-5.0 + p * (3.0)))))))))) / (h * (h * (h * (h * (h * (h * (p * (p * (p * (12288.0))))))))));
 }
 
+/* h(p) = T(p) = tanh(u)/u, u = sqrt(p)/2 (tan(v)/v, v = sqrt(-p)/2, below 0) for p < 16.0, 1 - tanh(u) from it on: for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out. */
+static double symkin_bcol_h(double p)
+{
+    double u;
+    if (p > -4.0 && p < 16.0) {
+        const double d = p - 6.0;
+        const double d2 = d * d;
+        const double d4 = d2 * d2;
+        const double d8 = d4 * d4;
+        const double r = 1.0 / (p + 9.869604401089358);
+        return ((((10.897864068210225 + d * 0.16556156881006512) + (-0.0009157434227891026 + d * 8.365114438681788e-06) * d2) + ((-8.437823084425284e-08 + d * 8.763390715589521e-10) + (-9.191007821271998e-12 + d * 9.672991207222496e-14) * d2) * d4) + (((-1.0193179699964376e-15 + d * 1.0746329406338888e-17) + (-1.1324419365159025e-19 + d * 1.1940538461574364e-21) * d2) + (-1.310325228057343e-23 + d * 1.385670151299953e-25) * d4) * d8) * (r);
+    }
+    if (p >= 16.0) {
+        const double e = exp(-sqrt(p));
+        return 2.0 * e / (1.0 + e);
+    }
+    u = 0.5 * sqrt(-p);
+    return tan(u) / u;
+}
+
 /* bcol_invt(p) = 1/T(p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (12 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_invt_at(double p, double h)
 {
@@ -364,12 +358,6 @@ static double symkin_bcol_invt_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return (1.0) / (h * (1.0));
-}
-
-/* bcol_invt(p) = 1/T(p). */
-static double symkin_bcol_invt(double p)
-{
-    return symkin_bcol_invt_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_invt_d1(p) = d^1/dp^1 of 1/T(p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (12 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -414,12 +402,6 @@ static double symkin_bcol_s_at(double p, double h)
     return ((1.0) + h * (-1.0)) / (p * (1.0));
 }
 
-/* bcol_s(p) = (1 - T)/p. */
-static double symkin_bcol_s(double p)
-{
-    return symkin_bcol_s_at(p, symkin_bcol_h(p));
-}
-
 /* bcol_w(p) = (12 (1 - T)/p - T^2)/(16 p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_w_at(double p, double h)
 {
@@ -439,12 +421,6 @@ static double symkin_bcol_w_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return ((12.0) + h * ((-12.0) + h * (p * (-1.0)))) / (p * (p * (16.0)));
-}
-
-/* bcol_w(p) = (12 (1 - T)/p - T^2)/(16 p). */
-static double symkin_bcol_w(double p)
-{
-    return symkin_bcol_w_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_w_d1(p) = d^1/dp^1 of (12 (1 - T)/p - T^2)/(16 p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -7553,7 +7529,7 @@ static void sk_plate_relation4(const double *plate, double *out)
     out[11] = -_tmp77 - 0.5*_tmp0 - 0.5*_tmp17 - 0.5*_tmp29 - 0.5*_tmp59 - _tmp60*_tmp75 + 0.5*_tmp1*_tmp11 + 0.5*_tmp39*_tmp4 + 0.5*_tmp79*p;
 }
 
-/* one plate's relation at order 2, values alone: (along, across, omega) (62 operations) */
+/* one plate's relation at order 2, values alone: (along, across, omega) (66 operations) */
 static void sk_plate_values2(const double *plate, double *out)
 {
     const double theta = plate[0];
@@ -7561,30 +7537,33 @@ static void sk_plate_values2(const double *plate, double *out)
     const double f = plate[2];
     const double e_a = plate[3];
     const double e_s = plate[4];
+    const double theta_sq = pow(theta, 2);
     const double _tmp0 = p*(-2*e_s + 2*e_a);
     const double _tmp1 = pow(f, 2);
     const double _tmp2 = e_a - e_s;
     const double _tmp3 = 1 + _tmp2*p;
     const double _tmp4 = _tmp3*p;
-    const double _tmp5 = symkin_bcol_s(_tmp4);
-    const double _tmp6 = 1 + _tmp0;
-    const double _tmp7 = pow(_tmp3, 2);
-    const double _tmp8 = e_a*p + pow(theta, 2)*(-0.041666666666666664*_tmp0 + _tmp6*symkin_bcol_a(_tmp4)) + 0.0005208333333333333*_tmp0*pow(theta, 4) + _tmp1*_tmp2*_tmp3*_tmp5 - _tmp1*_tmp6*_tmp7*symkin_bcol_w(_tmp4);
-    const double _tmp9 = e_s*f + _tmp5*_tmp7*f;
-    const double _tmp10 = 0.5*theta;
-    out[0] = _tmp8;
-    out[1] = _tmp9;
-    out[2] = theta*symkin_bcol_invt(_tmp4) - p*(0.00390625*pow(theta, 7)*(-7*symkin_sinr4(_tmp10) + symkin_cosr4(_tmp10)) + 0.09375*pow(theta, 5)*symkin_sinr3(_tmp10)) + 0.5*_tmp9*p - 0.5*f*(_tmp8 + symkin_sinr0(_tmp10));
+    const double _tmp5 = symkin_bcol_h(_tmp4);
+    const double _tmp6 = symkin_bcol_s_at(_tmp4, _tmp5);
+    const double _tmp7 = 1 + _tmp0;
+    const double _tmp8 = pow(_tmp3, 2);
+    const double _tmp9 = e_a*p + pow(theta, 2)*(-0.041666666666666664*_tmp0 + _tmp7*symkin_bcol_a_at(_tmp4, _tmp5)) + 0.0005208333333333333*_tmp0*pow(theta_sq, 2) + _tmp1*_tmp2*_tmp3*_tmp6 - _tmp1*_tmp7*_tmp8*symkin_bcol_w_at(_tmp4, _tmp5);
+    const double _tmp10 = e_s*f + _tmp6*_tmp8*f;
+    const double _tmp11 = 0.5*theta;
+    out[0] = _tmp9;
+    out[1] = _tmp10;
+    out[2] = theta*symkin_bcol_invt_at(_tmp4, _tmp5) - p*(0.00390625*theta*(theta_sq*theta_sq*theta_sq)*(-7*symkin_sinr4(_tmp11) + symkin_cosr4(_tmp11)) + 0.09375*theta*pow(theta_sq, 2)*symkin_sinr3(_tmp11)) + 0.5*_tmp10*p - 0.5*f*(_tmp9 + symkin_sinr0(_tmp11));
 }
 
-/* one plate's relation at order 4 where it carries no force (p = f = 0): (along, across, omega) and their partials by (theta, p, f) (39 operations) */
+/* one plate's relation at order 4 where it carries no force (p = f = 0): (along, across, omega) and their partials by (theta, p, f) (40 operations) */
 static void sk_plate_rest4(const double *plate, double *out)
 {
     const double theta = plate[0];
     const double e_a = plate[3];
     const double e_s = plate[4];
+    const double theta_sq = pow(theta, 2);
     const double _tmp0 = pow(theta, 2);
-    const double _tmp1 = pow(theta, 4);
+    const double _tmp1 = pow(theta_sq, 2);
     const double _tmp2 = 0.5*theta;
     out[0] = 0;
     out[1] = 0;
@@ -7596,7 +7575,7 @@ static void sk_plate_rest4(const double *plate, double *out)
     out[7] = 0;
     out[8] = 0.08333333333333333 + e_s - 0.004166666666666667*_tmp0;
     out[9] = 1;
-    out[10] = 0.00026041666666666666*theta*(320 - 8*_tmp0 - 360*_tmp1*symkin_sinr3(_tmp2) + 15*pow(theta, 6)*(-symkin_cosr4(_tmp2) + 7*symkin_sinr4(_tmp2)));
+    out[10] = 0.00026041666666666666*theta*(320 - 8*_tmp0 - 360*_tmp1*symkin_sinr3(_tmp2) + 15*(theta_sq*theta_sq*theta_sq)*(-symkin_cosr4(_tmp2) + 7*symkin_sinr4(_tmp2)));
     out[11] = -0.5*symkin_sinr0(_tmp2);
 }
 

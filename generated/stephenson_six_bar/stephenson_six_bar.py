@@ -2,7 +2,7 @@
 Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
 Points: D; levels: paper, first_order, exact, loaded.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_dev1 60, loaded_plates2 623, loaded_system2 3042, loaded_dev2 143, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, plate_relation4 312, plate_values2 62, plate_rest4 39.
+Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_dev1 60, loaded_plates2 623, loaded_system2 3042, loaded_dev2 143, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, plate_relation4 312, plate_values2 66, plate_rest4 40.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -884,25 +884,6 @@ def arck(x):
     return np.where(small, series, b)
 
 
-def bcol_h(x):
-    """h(p) = T(p) = tanh(u)/u, u = sqrt(p)/2 (tan(v)/v, v = sqrt(-p)/2, below 0) for p < 16.0, 1 - tanh(u) from it on: for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out (vectorised)."""
-    x = np.asarray(x, dtype=float)
-    near = (x > -4.0) & (x < 16.0)
-    p = np.where(near, x, 6.0)
-    d = p - 6.0
-    d2 = d * d
-    d4 = d2 * d2
-    d8 = d4 * d4
-    r = 1.0 / (p + 9.869604401089358)
-    value = ((((10.897864068210225 + d * 0.16556156881006512) + (-0.0009157434227891026 + d * 8.365114438681788e-06) * d2) + ((-8.437823084425284e-08 + d * 8.763390715589521e-10) + (-9.191007821271998e-12 + d * 9.672991207222496e-14) * d2) * d4) + (((-1.0193179699964376e-15 + d * 1.0746329406338888e-17) + (-1.1324419365159025e-19 + d * 1.1940538461574364e-21) * d2) + (-1.310325228057343e-23 + d * 1.385670151299953e-25) * d4) * d8) * (r)
-    if near.all():
-        return value
-    high = x >= 16.0
-    e = np.exp(-np.sqrt(np.where(high, x, 16.0)))
-    u = 0.5 * np.sqrt(np.where(near | high, 1.0, np.abs(x)))
-    return np.where(near, value, np.where(high, 2.0 * e / (1.0 + e), np.tan(u) / u))
-
-
 def bcol_a_at(x, h):
     """bcol_a(p) = p w(p)/(3 T^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (12 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -930,11 +911,6 @@ def bcol_a_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((12.0) + h * ((-12.0) + h * (p * (-1.0)))) / (h * (h * (p * (48.0))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
-
-
-def bcol_a(p):
-    """bcol_a(p) = p w(p)/(3 T^2) (vectorised)."""
-    return bcol_a_at(p, bcol_h(p))
 
 
 def bcol_a_d1_at(x, h):
@@ -1230,6 +1206,25 @@ def bcol_e3c_d1_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_h(x):
+    """h(p) = T(p) = tanh(u)/u, u = sqrt(p)/2 (tan(v)/v, v = sqrt(-p)/2, below 0) for p < 16.0, 1 - tanh(u) from it on: for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out (vectorised)."""
+    x = np.asarray(x, dtype=float)
+    near = (x > -4.0) & (x < 16.0)
+    p = np.where(near, x, 6.0)
+    d = p - 6.0
+    d2 = d * d
+    d4 = d2 * d2
+    d8 = d4 * d4
+    r = 1.0 / (p + 9.869604401089358)
+    value = ((((10.897864068210225 + d * 0.16556156881006512) + (-0.0009157434227891026 + d * 8.365114438681788e-06) * d2) + ((-8.437823084425284e-08 + d * 8.763390715589521e-10) + (-9.191007821271998e-12 + d * 9.672991207222496e-14) * d2) * d4) + (((-1.0193179699964376e-15 + d * 1.0746329406338888e-17) + (-1.1324419365159025e-19 + d * 1.1940538461574364e-21) * d2) + (-1.310325228057343e-23 + d * 1.385670151299953e-25) * d4) * d8) * (r)
+    if near.all():
+        return value
+    high = x >= 16.0
+    e = np.exp(-np.sqrt(np.where(high, x, 16.0)))
+    u = 0.5 * np.sqrt(np.where(near | high, 1.0, np.abs(x)))
+    return np.where(near, value, np.where(high, 2.0 * e / (1.0 + e), np.tan(u) / u))
+
+
 def bcol_invt_at(x, h):
     """bcol_invt(p) = 1/T(p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (12 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1257,11 +1252,6 @@ def bcol_invt_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = (1.0) / (h * (1.0))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
-
-
-def bcol_invt(p):
-    """bcol_invt(p) = 1/T(p) (vectorised)."""
-    return bcol_invt_at(p, bcol_h(p))
 
 
 def bcol_invt_d1_at(x, h):
@@ -1322,11 +1312,6 @@ def bcol_s_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
-def bcol_s(p):
-    """bcol_s(p) = (1 - T)/p (vectorised)."""
-    return bcol_s_at(p, bcol_h(p))
-
-
 def bcol_w_at(x, h):
     """bcol_w(p) = (12 (1 - T)/p - T^2)/(16 p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1354,11 +1339,6 @@ def bcol_w_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((12.0) + h * ((-12.0) + h * (p * (-1.0)))) / (p * (p * (16.0)))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
-
-
-def bcol_w(p):
-    """bcol_w(p) = (12 (1 - T)/p - T^2)/(16 p) (vectorised)."""
-    return bcol_w_at(p, bcol_h(p))
 
 
 def bcol_w_d1_at(x, h):
@@ -7204,31 +7184,34 @@ def _plate_relation4(plate):
 
 
 def _plate_values2(plate):
-    """one plate's relation at order 2, values alone: (along, across, omega) (62 operations)."""
+    """one plate's relation at order 2, values alone: (along, across, omega) (66 operations)."""
     theta, p, f, e_a, e_s = plate
+    theta_sq = theta**2
     _tmp0 = p*(-2*e_s + 2*e_a)
     _tmp1 = f**2
     _tmp2 = e_a - e_s
     _tmp3 = 1 + _tmp2*p
     _tmp4 = _tmp3*p
-    _tmp5 = bcol_s(_tmp4)
-    _tmp6 = 1 + _tmp0
-    _tmp7 = _tmp3**2
-    _tmp8 = e_a*p + theta**2*(-0.041666666666666664*_tmp0 + _tmp6*bcol_a(_tmp4)) + 0.0005208333333333333*_tmp0*theta**4 + _tmp1*_tmp2*_tmp3*_tmp5 - _tmp1*_tmp6*_tmp7*bcol_w(_tmp4)
-    _tmp9 = e_s*f + _tmp5*_tmp7*f
-    _tmp10 = 0.5*theta
+    _tmp5 = bcol_h(_tmp4)
+    _tmp6 = bcol_s_at(_tmp4, _tmp5)
+    _tmp7 = 1 + _tmp0
+    _tmp8 = _tmp3**2
+    _tmp9 = e_a*p + theta**2*(-0.041666666666666664*_tmp0 + _tmp7*bcol_a_at(_tmp4, _tmp5)) + 0.0005208333333333333*_tmp0*theta_sq**2 + _tmp1*_tmp2*_tmp3*_tmp6 - _tmp1*_tmp7*_tmp8*bcol_w_at(_tmp4, _tmp5)
+    _tmp10 = e_s*f + _tmp6*_tmp8*f
+    _tmp11 = 0.5*theta
     return [
-        _tmp8,
         _tmp9,
-        theta*bcol_invt(_tmp4) - p*(0.00390625*theta**7*(-7*sinr4(_tmp10) + cosr4(_tmp10)) + 0.09375*theta**5*sinr3(_tmp10)) + 0.5*_tmp9*p - 0.5*f*(_tmp8 + sinr0(_tmp10)),
+        _tmp10,
+        theta*bcol_invt_at(_tmp4, _tmp5) - p*(0.00390625*theta*theta_sq**3*(-7*sinr4(_tmp11) + cosr4(_tmp11)) + 0.09375*theta*theta_sq**2*sinr3(_tmp11)) + 0.5*_tmp10*p - 0.5*f*(_tmp9 + sinr0(_tmp11)),
     ]
 
 
 def _plate_rest4(plate):
-    """one plate's relation at order 4 where it carries no force (p = f = 0): (along, across, omega) and their partials by (theta, p, f) (39 operations)."""
+    """one plate's relation at order 4 where it carries no force (p = f = 0): (along, across, omega) and their partials by (theta, p, f) (40 operations)."""
     theta, _, _, e_a, e_s = plate
+    theta_sq = theta**2
     _tmp0 = theta**2
-    _tmp1 = theta**4
+    _tmp1 = theta_sq**2
     _tmp2 = 0.5*theta
     return [
         0,
@@ -7241,7 +7224,7 @@ def _plate_rest4(plate):
         0,
         0.08333333333333333 + e_s - 0.004166666666666667*_tmp0,
         1,
-        0.00026041666666666666*theta*(320 - 8*_tmp0 - 360*_tmp1*sinr3(_tmp2) + 15*theta**6*(-cosr4(_tmp2) + 7*sinr4(_tmp2))),
+        0.00026041666666666666*theta*(320 - 8*_tmp0 - 360*_tmp1*sinr3(_tmp2) + 15*theta_sq**3*(-cosr4(_tmp2) + 7*sinr4(_tmp2))),
         -0.5*sinr0(_tmp2),
     ]
 

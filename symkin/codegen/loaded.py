@@ -33,7 +33,7 @@ from ..kinematics.analysis import Analysis
 from ..physics import reduced
 from ..physics.plate_relation import relation
 from .literals import float_literals
-from .plate import SYMBOLS
+from .plate import SYMBOLS, shared_h, squares
 from .routines import Argument, Routine, flatten, layout, optimize
 
 
@@ -143,7 +143,8 @@ def rest_routine() -> Routine:
     partials = [sp.diff(v, w) for v in values for w in (th, p, f)]
     memo: dict = {}
     outputs = tuple(
-        float_literals(sp.simplify(e.subs({p: 0, f: 0})), memo) for e in values + partials
+        float_literals(e, memo)
+        for e in shared_h([sp.simplify(e.subs({p: 0, f: 0})) for e in values + partials])
     )
     routine = Routine(
         "plate_rest4",
@@ -154,7 +155,7 @@ def rest_routine() -> Routine:
         "omega) and their partials by (theta, p, f)",
         layout(("values", 3, 1), ("partials", 3, 3)),
     )
-    return optimize(routine)
+    return squares(optimize(routine))
 
 
 @cache
@@ -164,7 +165,7 @@ def values2_routine() -> Routine:
     th, p, f, ea, es = SYMBOLS
     rel = relation(th, p, f, ea, es, 2)
     memo: dict = {}
-    outputs = tuple(float_literals(e, memo) for e in (rel.along, rel.across, rel.omega))
+    outputs = tuple(float_literals(e, memo) for e in shared_h([rel.along, rel.across, rel.omega]))
     routine = Routine(
         "plate_values2",
         (Argument("in", SYMBOLS),),
@@ -173,4 +174,4 @@ def values2_routine() -> Routine:
         "one plate's relation at order 2, values alone: (along, across, omega)",
         layout(("values", 3, 1)),
     )
-    return optimize(routine)
+    return squares(optimize(routine))
