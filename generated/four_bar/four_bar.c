@@ -3,7 +3,7 @@
  * Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 65, rigid_res 51, linear 114, newton 259, rigid_points 19, loaded_plates1 132, loaded_system1 523, loaded_dev1 60, loaded_plates2 349, loaded_system2 1557, loaded_dev2 143, dev_paper 38, dev_first_order 52, dev_exact 62, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339, loaded_sens1 581, loaded_sens2 1581, plate_relation4 312, plate_values2 62, plate_rest4 39, plate_eps4 158.
+ * Operation counts after CSE: rigid 65, rigid_res 51, linear 114, newton 259, rigid_points 19, loaded_plates1 132, loaded_system1 523, loaded_res1 229, loaded_dev1 60, loaded_plates2 349, loaded_system2 1557, loaded_res2 494, loaded_dev2 143, dev_paper 38, dev_first_order 52, dev_exact 62, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339, loaded_sens1 581, loaded_sens2 1581, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
  */
 #include "four_bar.h"
 
@@ -432,12 +432,6 @@ static double symkin_bcol_invt_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return (1.0) / (h * (1.0));
-}
-
-/* bcol_invt(p) = 1/T(p). */
-static double symkin_bcol_invt(double p)
-{
-    return symkin_bcol_invt_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_invt_d1(p) = d^1/dp^1 of 1/T(p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (12 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -1389,6 +1383,103 @@ static void sk_loaded_system1(const double *x, const double *theta, const double
     out[111] = 0;
     out[112] = 0;
     out[113] = -_tmp61;
+}
+
+/* loaded (1 half plate(s) per plate): the reduced equilibrium's residual R alone (229 operations) */
+static void sk_loaded_res1(const double *x, const double *theta, const double *plates, const double *params, double *out)
+{
+    const double x_0 = x[0];
+    const double x_1 = x[1];
+    const double x_2 = x[2];
+    const double x_3 = x[3];
+    const double x_4 = x[4];
+    const double x_5 = x[5];
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double along_1_0 = plates[0];
+    const double across_1_0 = plates[1];
+    const double along_2_0 = plates[3];
+    const double across_2_0 = plates[4];
+    const double omega_2_0 = plates[5];
+    const double along_3_0 = plates[6];
+    const double across_3_0 = plates[7];
+    const double omega_3_0 = plates[8];
+    const double along_4_0 = plates[9];
+    const double across_4_0 = plates[10];
+    const double omega_4_0 = plates[11];
+    const double p_0 = params[0];
+    const double _tmp0 = 0.009186691875800356*x_0;
+    const double _tmp1 = 0.009186691875800356*x_1;
+    const double _tmp2 = 0.5*theta_1;
+    const double _tmp3 = cos(_tmp2);
+    const double _tmp4 = across_1_0*p_0;
+    const double _tmp5 = _tmp3*_tmp4;
+    const double _tmp6 = 0.004593345937900178*x_1;
+    const double _tmp7 = _tmp6 + 0.5*theta_3;
+    const double _tmp8 = cos(_tmp7);
+    const double _tmp9 = 0.004593345937900178*x_0;
+    const double _tmp10 = _tmp9 + 0.5*theta_2;
+    const double _tmp11 = 1.0471975511965979 + _tmp10 + theta_1;
+    const double _tmp12 = sin(_tmp11);
+    const double _tmp13 = across_2_0*p_0;
+    const double _tmp14 = _tmp12*_tmp13;
+    const double _tmp15 = 0.5*theta_4 + 0.004593345937900178*x_2;
+    const double _tmp16 = theta_1 + theta_2;
+    const double _tmp17 = _tmp0 + _tmp16;
+    const double _tmp18 = _tmp15 + _tmp17;
+    const double _tmp19 = 1000.0*p_0;
+    const double _tmp20 = _tmp19*sin(_tmp18);
+    const double _tmp21 = sin(_tmp2);
+    const double _tmp22 = p_0*(along_1_0 + 0.25*pow(theta_1, 2)*symkin_arck(_tmp2));
+    const double _tmp23 = _tmp21*_tmp22;
+    const double _tmp24 = cos(theta_3);
+    const double _tmp25 = sin(_tmp1);
+    const double _tmp26 = pow(sin(_tmp6), 2);
+    const double _tmp27 = 0.068*_tmp25 - 0.03*_tmp26;
+    const double _tmp28 = 0.015*_tmp25 + 0.136*_tmp26;
+    const double _tmp29 = 1000.0*sin(theta_3);
+    const double _tmp30 = cos(_tmp16);
+    const double _tmp31 = sin(_tmp0);
+    const double _tmp32 = pow(sin(_tmp9), 2);
+    const double _tmp33 = -0.14*_tmp32 - 0.042*_tmp31;
+    const double _tmp34 = 0.07*_tmp31 - 0.084*_tmp32;
+    const double _tmp35 = 1000.0*sin(_tmp16);
+    const double _tmp36 = sin(_tmp7);
+    const double _tmp37 = along_3_0 + pow(_tmp7, 2)*symkin_arck(_tmp7);
+    const double _tmp38 = cos(_tmp11);
+    const double _tmp39 = along_2_0 + pow(_tmp10, 2)*symkin_arck(_tmp10);
+    const double _tmp40 = cos(_tmp18);
+    const double _tmp41 = along_4_0 + pow(_tmp15, 2)*symkin_arck(_tmp15);
+    const double _tmp42 = _tmp36*p_0;
+    const double _tmp43 = _tmp42*across_3_0;
+    const double _tmp44 = _tmp13*_tmp38;
+    const double _tmp45 = _tmp22*_tmp3;
+    const double _tmp46 = _tmp8*p_0;
+    const double _tmp47 = _tmp39*p_0;
+    const double _tmp48 = _tmp12*_tmp47;
+    const double _tmp49 = 0.9999999999999999*x_5;
+    const double _tmp50 = -_tmp49;
+    const double _tmp51 = 4.333333333333333e-06*pow(p_0, 2)*((p_0 <= 0.01) ? (230769230769.23077) : (210000000000));
+    const double _tmp52 = sin(theta_1);
+    const double _tmp53 = cos(theta_1);
+    const double _tmp54 = p_0*sin(_tmp17);
+    const double _tmp55 = p_0*cos(_tmp17);
+    const double _tmp56 = _tmp1 + theta_3;
+    const double _tmp57 = sin(_tmp56);
+    const double _tmp58 = 0.5*p_0;
+    const double _tmp59 = -0.015 + _tmp58;
+    const double _tmp60 = cos(_tmp56);
+    const double _tmp61 = -0.068*_tmp57 + _tmp59*_tmp60;
+    const double _tmp62 = 9.186691875800356*x_4;
+    const double _tmp63 = 9.186691875800356*x_3;
+    out[0] = _tmp0 - _tmp1 + 0.009186691875800356*x_2;
+    out[1] = -1000.0*_tmp14 - 1000.0*_tmp23 - 1000.0*_tmp5 - _tmp20*across_4_0 - _tmp28*_tmp29 - _tmp34*_tmp35 + 1000.0*_tmp24*_tmp27 + 1000.0*_tmp30*_tmp33 + 1000.0*_tmp36*_tmp37*p_0 + 1000.0*_tmp38*_tmp39*p_0 + 1000.0*_tmp40*_tmp41*p_0 + 1000.0*_tmp8*across_3_0*p_0;
+    out[2] = 1000.0*_tmp43 + 1000.0*_tmp44 + 1000.0*_tmp45 + 1000.0*_tmp48 + _tmp20*_tmp41 + _tmp27*_tmp29 + _tmp33*_tmp35 + 1000.0*_tmp24*_tmp28 + 1000.0*_tmp30*_tmp34 - 1000.0*_tmp21*_tmp4 - 1000.0*_tmp37*_tmp46 + _tmp19*_tmp40*across_4_0;
+    out[3] = _tmp50 + _tmp51*omega_2_0 + _tmp63*(-_tmp43 - _tmp44 - _tmp45 - _tmp48 + 0.068*_tmp60 - 0.25*_tmp54 - 0.015*_tmp52 - 0.4330127018922193*_tmp55 - 0.026*_tmp53 + _tmp57*_tmp59 + _tmp21*across_1_0*p_0 + _tmp37*_tmp8*p_0) - _tmp62*(0.1 + _tmp14 + _tmp23 + _tmp5 + _tmp61 + 0.4330127018922193*_tmp54 + 0.026*_tmp52 - 0.25*_tmp55 - 0.015*_tmp53 - _tmp37*_tmp42 - _tmp38*_tmp47 - _tmp46*across_3_0);
+    out[4] = _tmp49 + _tmp51*omega_3_0 + _tmp62*(_tmp61 + _tmp57*_tmp58) - _tmp63*(0.068*_tmp60 + _tmp57*_tmp59 - _tmp58*_tmp60);
+    out[5] = -_tmp50 - _tmp51*omega_4_0;
 }
 
 /* loaded (1 half plate(s) per plate): deviation of every point (60 operations) */
@@ -2545,6 +2636,187 @@ static void sk_loaded_system2(const double *x, const double *theta, const double
     out[347] = _tmp170*_tmp351 - _tmp168*_tmp352;
     out[348] = _tmp168*_tmp351 + _tmp170*_tmp352;
     out[349] = _tmp350;
+}
+
+/* loaded (2 half plate(s) per plate): the reduced equilibrium's residual R alone (494 operations) */
+static void sk_loaded_res2(const double *x, const double *theta, const double *plates, const double *params, double *out)
+{
+    const double x_0 = x[0];
+    const double x_1 = x[1];
+    const double x_2 = x[2];
+    const double x_3 = x[3];
+    const double x_4 = x[4];
+    const double x_5 = x[5];
+    const double x_6 = x[6];
+    const double x_7 = x[7];
+    const double x_8 = x[8];
+    const double x_9 = x[9];
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double along_1_0 = plates[0];
+    const double across_1_0 = plates[1];
+    const double omega_1_0 = plates[2];
+    const double along_1_1 = plates[3];
+    const double across_1_1 = plates[4];
+    const double omega_1_1 = plates[5];
+    const double along_2_0 = plates[6];
+    const double across_2_0 = plates[7];
+    const double omega_2_0 = plates[8];
+    const double along_2_1 = plates[9];
+    const double across_2_1 = plates[10];
+    const double omega_2_1 = plates[11];
+    const double along_3_0 = plates[12];
+    const double across_3_0 = plates[13];
+    const double omega_3_0 = plates[14];
+    const double along_3_1 = plates[15];
+    const double across_3_1 = plates[16];
+    const double omega_3_1 = plates[17];
+    const double along_4_0 = plates[18];
+    const double across_4_0 = plates[19];
+    const double omega_4_0 = plates[20];
+    const double along_4_1 = plates[21];
+    const double across_4_1 = plates[22];
+    const double omega_4_1 = plates[23];
+    const double p_0 = params[0];
+    const double _tmp0 = 0.009186691875800356*x_0;
+    const double _tmp1 = 0.009186691875800356*x_1;
+    const double _tmp2 = sin(_tmp1);
+    const double _tmp3 = 0.004593345937900178*x_1;
+    const double _tmp4 = pow(sin(_tmp3), 2);
+    const double _tmp5 = 0.068*_tmp2 - 0.03*_tmp4;
+    const double _tmp6 = 1000.0*cos(theta_3);
+    const double _tmp7 = 0.015*_tmp2 + 0.136*_tmp4;
+    const double _tmp8 = 1000.0*sin(theta_3);
+    const double _tmp9 = sin(_tmp0);
+    const double _tmp10 = 0.004593345937900178*x_0;
+    const double _tmp11 = pow(sin(_tmp10), 2);
+    const double _tmp12 = -0.14*_tmp11 - 0.042*_tmp9;
+    const double _tmp13 = theta_1 + theta_2;
+    const double _tmp14 = 1000.0*cos(_tmp13);
+    const double _tmp15 = 0.07*_tmp9 - 0.084*_tmp11;
+    const double _tmp16 = 1000.0*sin(_tmp13);
+    const double _tmp17 = 0.5*theta_1;
+    const double _tmp18 = cos(_tmp17);
+    const double _tmp19 = 0.5*p_0;
+    const double _tmp20 = 0.25*theta_1;
+    const double _tmp21 = 0.5*x_6;
+    const double _tmp22 = _tmp20 - _tmp21;
+    const double _tmp23 = cos(_tmp22);
+    const double _tmp24 = _tmp19*across_1_0;
+    const double _tmp25 = _tmp20 + _tmp21;
+    const double _tmp26 = _tmp19*cos(_tmp25);
+    const double _tmp27 = sin(_tmp22);
+    const double _tmp28 = _tmp19*(along_1_0 + pow(_tmp25, 2)*symkin_arck(_tmp25));
+    const double _tmp29 = along_1_1 + pow(_tmp22, 2)*symkin_arck(_tmp22);
+    const double _tmp30 = _tmp19*sin(_tmp25);
+    const double _tmp31 = _tmp19*sin(1.0*x_6) + _tmp23*_tmp24 + _tmp26*across_1_1 + _tmp29*_tmp30 - _tmp27*_tmp28;
+    const double _tmp32 = _tmp18*_tmp31;
+    const double _tmp33 = sin(_tmp17);
+    const double _tmp34 = _tmp19*(-2*pow(sin(_tmp21), 2) + 2*pow(sin(_tmp20), 2)) + _tmp23*_tmp28 + _tmp24*_tmp27 + _tmp26*_tmp29 - _tmp30*across_1_1;
+    const double _tmp35 = _tmp33*_tmp34;
+    const double _tmp36 = _tmp3 + 0.5*theta_3;
+    const double _tmp37 = cos(_tmp36);
+    const double _tmp38 = 0.5*x_8;
+    const double _tmp39 = 0.25*theta_3 + 0.002296672968950089*x_1;
+    const double _tmp40 = _tmp39 - _tmp38;
+    const double _tmp41 = cos(_tmp40);
+    const double _tmp42 = _tmp19*across_3_0;
+    const double _tmp43 = _tmp38 + _tmp39;
+    const double _tmp44 = _tmp19*cos(_tmp43);
+    const double _tmp45 = sin(_tmp40);
+    const double _tmp46 = _tmp19*(along_3_0 + pow(_tmp43, 2)*symkin_arck(_tmp43));
+    const double _tmp47 = along_3_1 + pow(_tmp40, 2)*symkin_arck(_tmp40);
+    const double _tmp48 = _tmp19*sin(_tmp43);
+    const double _tmp49 = _tmp19*sin(1.0*x_8) + _tmp41*_tmp42 + _tmp44*across_3_1 + _tmp47*_tmp48 - _tmp45*_tmp46;
+    const double _tmp50 = _tmp37*_tmp49;
+    const double _tmp51 = 1.0471975511965979 + theta_1;
+    const double _tmp52 = _tmp10 + _tmp51 + 0.5*theta_2;
+    const double _tmp53 = sin(_tmp52);
+    const double _tmp54 = 0.5*x_7;
+    const double _tmp55 = 0.25*theta_2 + 0.002296672968950089*x_0;
+    const double _tmp56 = _tmp55 - _tmp54;
+    const double _tmp57 = cos(_tmp56);
+    const double _tmp58 = _tmp19*across_2_0;
+    const double _tmp59 = _tmp54 + _tmp55;
+    const double _tmp60 = _tmp19*cos(_tmp59);
+    const double _tmp61 = sin(_tmp56);
+    const double _tmp62 = _tmp19*(along_2_0 + pow(_tmp59, 2)*symkin_arck(_tmp59));
+    const double _tmp63 = along_2_1 + pow(_tmp56, 2)*symkin_arck(_tmp56);
+    const double _tmp64 = _tmp19*sin(_tmp59);
+    const double _tmp65 = _tmp19*sin(1.0*x_7) + _tmp57*_tmp58 + _tmp60*across_2_1 + _tmp63*_tmp64 - _tmp61*_tmp62;
+    const double _tmp66 = _tmp53*_tmp65;
+    const double _tmp67 = _tmp0 + _tmp13;
+    const double _tmp68 = _tmp67 + 0.5*theta_4 + 0.004593345937900178*x_2;
+    const double _tmp69 = sin(_tmp68);
+    const double _tmp70 = 0.5*x_9;
+    const double _tmp71 = 0.25*theta_4 + 0.002296672968950089*x_2;
+    const double _tmp72 = _tmp71 - _tmp70;
+    const double _tmp73 = cos(_tmp72);
+    const double _tmp74 = _tmp19*across_4_0;
+    const double _tmp75 = _tmp70 + _tmp71;
+    const double _tmp76 = _tmp19*cos(_tmp75);
+    const double _tmp77 = sin(_tmp72);
+    const double _tmp78 = _tmp19*(along_4_0 + pow(_tmp75, 2)*symkin_arck(_tmp75));
+    const double _tmp79 = along_4_1 + pow(_tmp72, 2)*symkin_arck(_tmp72);
+    const double _tmp80 = _tmp19*sin(_tmp75);
+    const double _tmp81 = 1000.0*_tmp19*sin(1.0*x_9) + 1000.0*_tmp73*_tmp74 + 1000.0*_tmp76*across_4_1 + 1000.0*_tmp79*_tmp80 - 1000.0*_tmp77*_tmp78;
+    const double _tmp82 = sin(_tmp36);
+    const double _tmp83 = _tmp19*(-2*pow(sin(_tmp38), 2) + 2*pow(sin(_tmp39), 2)) + _tmp41*_tmp46 + _tmp42*_tmp45 + _tmp44*_tmp47 - _tmp48*across_3_1;
+    const double _tmp84 = _tmp82*_tmp83;
+    const double _tmp85 = cos(_tmp52);
+    const double _tmp86 = _tmp19*(-2*pow(sin(_tmp54), 2) + 2*pow(sin(_tmp55), 2)) + _tmp57*_tmp62 + _tmp58*_tmp61 + _tmp60*_tmp63 - _tmp64*across_2_1;
+    const double _tmp87 = _tmp85*_tmp86;
+    const double _tmp88 = cos(_tmp68);
+    const double _tmp89 = 1000.0*_tmp19*(-2*pow(sin(_tmp70), 2) + 2*pow(sin(_tmp71), 2)) + 1000.0*_tmp73*_tmp78 + 1000.0*_tmp74*_tmp77 + 1000.0*_tmp76*_tmp79 - 1000.0*_tmp80*across_4_1;
+    const double _tmp90 = _tmp18*_tmp34;
+    const double _tmp91 = _tmp49*_tmp82;
+    const double _tmp92 = _tmp65*_tmp85;
+    const double _tmp93 = _tmp53*_tmp86;
+    const double _tmp94 = 0.9999999999999999*x_5;
+    const double _tmp95 = -_tmp94;
+    const double _tmp96 = 8.666666666666666e-06*pow(p_0, 2)*((p_0 <= 0.01) ? (230769230769.23077) : (210000000000));
+    const double _tmp97 = _tmp96*omega_2_1;
+    const double _tmp98 = sin(theta_1);
+    const double _tmp99 = cos(theta_1);
+    const double _tmp100 = p_0*sin(_tmp67);
+    const double _tmp101 = p_0*cos(_tmp67);
+    const double _tmp102 = _tmp1 + theta_3;
+    const double _tmp103 = sin(_tmp102);
+    const double _tmp104 = -0.015 + _tmp19;
+    const double _tmp105 = cos(_tmp102);
+    const double _tmp106 = -0.068*_tmp103 + _tmp104*_tmp105;
+    const double _tmp107 = 9.186691875800356*x_4;
+    const double _tmp108 = 9.186691875800356*x_3;
+    const double _tmp109 = _tmp96*omega_3_1;
+    const double _tmp110 = _tmp96*omega_4_1;
+    const double _tmp111 = _tmp21 + 0.75*theta_1;
+    const double _tmp112 = _tmp19*sin(_tmp111);
+    const double _tmp113 = cos(_tmp111);
+    const double _tmp114 = along_1_1 + symkin_sinr0(_tmp22);
+    const double _tmp115 = _tmp51 + _tmp54 + 0.75*theta_2 + 0.006890018906850267*x_0;
+    const double _tmp116 = cos(_tmp115);
+    const double _tmp117 = along_2_1 + symkin_sinr0(_tmp56);
+    const double _tmp118 = _tmp19*sin(_tmp115);
+    const double _tmp119 = _tmp38 + 0.75*theta_3 + 0.006890018906850267*x_1;
+    const double _tmp120 = _tmp19*sin(_tmp119);
+    const double _tmp121 = cos(_tmp119);
+    const double _tmp122 = along_3_1 + symkin_sinr0(_tmp40);
+    const double _tmp123 = _tmp67 + _tmp70 + 0.75*theta_4 + 0.006890018906850267*x_2;
+    const double _tmp124 = cos(_tmp123);
+    const double _tmp125 = along_4_1 + symkin_sinr0(_tmp72);
+    const double _tmp126 = _tmp19*sin(_tmp123);
+    out[0] = _tmp0 - _tmp1 + 0.009186691875800356*x_2;
+    out[1] = 1000.0*_tmp50 + 1000.0*_tmp84 + 1000.0*_tmp87 - 1000.0*_tmp32 - 1000.0*_tmp35 - 1000.0*_tmp66 + _tmp12*_tmp14 + _tmp5*_tmp6 + _tmp88*_tmp89 - _tmp15*_tmp16 - _tmp69*_tmp81 - _tmp7*_tmp8;
+    out[2] = 1000.0*_tmp90 + 1000.0*_tmp91 + 1000.0*_tmp92 + 1000.0*_tmp93 + _tmp12*_tmp16 + _tmp14*_tmp15 + _tmp5*_tmp8 + _tmp6*_tmp7 + _tmp69*_tmp89 + _tmp81*_tmp88 - 1000.0*_tmp31*_tmp33 - 1000.0*_tmp37*_tmp83;
+    out[3] = _tmp95 + _tmp97 + _tmp108*(-_tmp90 - _tmp91 - _tmp92 - _tmp93 + 0.068*_tmp105 - 0.25*_tmp100 - 0.015*_tmp98 - 0.4330127018922193*_tmp101 - 0.026*_tmp99 + _tmp103*_tmp104 + _tmp31*_tmp33 + _tmp37*_tmp83) - _tmp107*(0.1 + _tmp106 + _tmp32 + _tmp35 + _tmp66 - _tmp50 - _tmp84 - _tmp87 + 0.4330127018922193*_tmp100 + 0.026*_tmp98 - 0.25*_tmp101 - 0.015*_tmp99);
+    out[4] = _tmp109 + _tmp94 + _tmp107*(_tmp106 + _tmp103*_tmp19) - _tmp108*(0.068*_tmp105 + _tmp103*_tmp104 - _tmp105*_tmp19);
+    out[5] = -_tmp110 - _tmp95;
+    out[6] = _tmp108*(-_tmp112*across_1_1 + 0.5*_tmp113*_tmp114*p_0) + _tmp96*omega_1_0 - _tmp107*(-_tmp112*_tmp114 - _tmp113*_tmp19*across_1_1) - _tmp96*omega_1_1;
+    out[7] = -_tmp97 + _tmp108*(_tmp117*_tmp118 + _tmp116*_tmp19*across_2_1) + _tmp96*omega_2_0 - _tmp107*(-_tmp118*across_2_1 + 0.5*_tmp116*_tmp117*p_0);
+    out[8] = -_tmp109 + _tmp107*(-_tmp120*_tmp122 - _tmp121*_tmp19*across_3_1) + _tmp96*omega_3_0 - _tmp108*(-_tmp120*across_3_1 + 0.5*_tmp121*_tmp122*p_0);
+    out[9] = -_tmp110 + _tmp108*(_tmp125*_tmp126 + _tmp124*_tmp19*across_4_1) + _tmp96*omega_4_0 - _tmp107*(-_tmp126*across_4_1 + 0.5*_tmp124*_tmp125*p_0);
 }
 
 /* loaded (2 half plate(s) per plate): deviation of every point (143 operations) */
@@ -4311,7 +4583,84 @@ static void sk_plate_relation4(const double *plate, double *out)
     out[11] = -_tmp77 - 0.5*_tmp0 - 0.5*_tmp17 - 0.5*_tmp29 - 0.5*_tmp59 - _tmp60*_tmp75 + 0.5*_tmp1*_tmp11 + 0.5*_tmp39*_tmp4 + 0.5*_tmp79*p;
 }
 
-/* one plate's relation at order 2, values alone: (along, across, omega) (62 operations) */
+/* one plate's relation at order 4, values alone: (along, across, omega) (114 operations) */
+static void sk_plate_values4(const double *plate, double *out)
+{
+    const double theta = plate[0];
+    const double p = plate[1];
+    const double f = plate[2];
+    const double e_a = plate[3];
+    const double e_s = plate[4];
+    const double theta_sq = pow(theta, 2);
+    const double f_sq = pow(f, 2);
+    const double _tmp0 = e_a*p;
+    const double _tmp1 = pow(theta_sq, 2);
+    const double _tmp2 = -2*e_s + 2*e_a;
+    const double _tmp3 = _tmp2*p;
+    const double _tmp4 = 1 + _tmp3;
+    const double _tmp5 = e_a - e_s;
+    const double _tmp6 = _tmp5*p;
+    const double _tmp7 = 1 + _tmp6;
+    const double _tmp7_sq = pow(_tmp7, 2);
+    const double _tmp8 = _tmp7*p;
+    const double _tmp9 = symkin_bcol_h(_tmp8);
+    const double _tmp10 = symkin_bcol_e3c_at(_tmp8, _tmp9);
+    const double _tmp11 = -0.0005208333333333333*_tmp3 + _tmp10*_tmp4;
+    const double _tmp12 = pow(theta, 2);
+    const double _tmp13 = symkin_bcol_w_at(_tmp8, _tmp9);
+    const double _tmp14 = symkin_bcol_invt_at(_tmp8, _tmp9);
+    const double _tmp15 = pow(_tmp14, 2);
+    const double _tmp16 = -0.041666666666666664*_tmp3 + 0.3333333333333333*_tmp13*_tmp15*_tmp4*_tmp7*p;
+    const double _tmp17 = _tmp12*_tmp16;
+    const double _tmp18 = symkin_bcol_s_at(_tmp8, _tmp9);
+    const double _tmp19 = symkin_bcol_e1_at(_tmp8, _tmp9);
+    const double _tmp20 = 2*f;
+    const double _tmp21 = _tmp12*_tmp7;
+    const double _tmp22 = _tmp20*_tmp21;
+    const double _tmp23 = 4*(f*f*f);
+    const double _tmp24 = (_tmp7*_tmp7*_tmp7);
+    const double _tmp25 = symkin_bcol_e2_at(_tmp8, _tmp9);
+    const double _tmp26 = _tmp24*_tmp25;
+    const double _tmp27 = -_tmp19*_tmp22 - _tmp23*_tmp26 + _tmp18*_tmp7*f;
+    const double _tmp28 = _tmp27*_tmp5;
+    const double _tmp29 = _tmp28*f;
+    const double _tmp30 = pow(f, 2);
+    const double _tmp31 = pow(_tmp7, 2);
+    const double _tmp32 = _tmp30*_tmp31;
+    const double _tmp33 = pow(_tmp7_sq, 2);
+    const double _tmp34 = pow(f_sq, 2);
+    const double _tmp35 = symkin_bcol_e2_d1_at(_tmp8, _tmp9);
+    const double _tmp36 = _tmp34*_tmp35;
+    const double _tmp37 = symkin_bcol_e1_d1_at(_tmp8, _tmp9);
+    const double _tmp38 = _tmp12*_tmp32;
+    const double _tmp39 = _tmp13*_tmp32 + _tmp33*_tmp36 + _tmp37*_tmp38;
+    const double _tmp40 = _tmp0 + _tmp17 + _tmp29 - _tmp1*_tmp11 - _tmp39*_tmp4;
+    const double _tmp41 = e_s*f;
+    const double _tmp42 = _tmp27*_tmp7;
+    const double _tmp43 = _tmp41 + _tmp42;
+    const double _tmp44 = symkin_bcol_e3_at(_tmp8, _tmp9);
+    const double _tmp45 = 4*(theta*theta*theta);
+    const double _tmp46 = 2*theta;
+    const double _tmp47 = _tmp32*_tmp46;
+    const double _tmp50 = 0.25*_tmp12;
+    const double _tmp48 = 0.5*theta;
+    const double _tmp49 = symkin_sinr5(_tmp48);
+    const double _tmp51 = 2.7557319223985893e-06 + _tmp49*_tmp50;
+    const double _tmp52 = -0.0001984126984126984 + _tmp50*_tmp51;
+    const double _tmp53 = 0.09375*_tmp52*theta*pow(theta_sq, 2);
+    const double _tmp54 = symkin_cosr5(_tmp48);
+    const double _tmp55 = 5.5114638447971785e-06 + _tmp50*_tmp54 - 1.75*_tmp12*_tmp49;
+    const double _tmp56 = 0.00390625*theta*(theta_sq*theta_sq*theta_sq);
+    const double _tmp57 = _tmp55*_tmp56;
+    const double _tmp58 = 0.5*p;
+    const double _tmp59 = symkin_sinr0(_tmp48);
+    const double _tmp60 = 0.5*f;
+    out[0] = _tmp40;
+    out[1] = _tmp43;
+    out[2] = _tmp14*theta + _tmp19*_tmp47 + _tmp43*_tmp58 + _tmp44*_tmp45 - _tmp60*(_tmp40 + _tmp59) - p*(_tmp53 + _tmp57);
+}
+
+/* one plate's relation at order 2, values alone: (along, across, omega) (66 operations) */
 static void sk_plate_values2(const double *plate, double *out)
 {
     const double theta = plate[0];
@@ -4319,30 +4668,33 @@ static void sk_plate_values2(const double *plate, double *out)
     const double f = plate[2];
     const double e_a = plate[3];
     const double e_s = plate[4];
+    const double theta_sq = pow(theta, 2);
     const double _tmp0 = p*(-2*e_s + 2*e_a);
     const double _tmp1 = pow(f, 2);
     const double _tmp2 = e_a - e_s;
     const double _tmp3 = 1 + _tmp2*p;
     const double _tmp4 = _tmp3*p;
-    const double _tmp5 = symkin_bcol_s(_tmp4);
-    const double _tmp6 = 1 + _tmp0;
-    const double _tmp7 = pow(_tmp3, 2);
-    const double _tmp8 = e_a*p + pow(theta, 2)*(-0.041666666666666664*_tmp0 + _tmp6*symkin_bcol_a(_tmp4)) + 0.0005208333333333333*_tmp0*pow(theta, 4) + _tmp1*_tmp2*_tmp3*_tmp5 - _tmp1*_tmp6*_tmp7*symkin_bcol_w(_tmp4);
-    const double _tmp9 = e_s*f + _tmp5*_tmp7*f;
-    const double _tmp10 = 0.5*theta;
-    out[0] = _tmp8;
-    out[1] = _tmp9;
-    out[2] = theta*symkin_bcol_invt(_tmp4) - p*(0.00390625*pow(theta, 7)*(-7*symkin_sinr4(_tmp10) + symkin_cosr4(_tmp10)) + 0.09375*pow(theta, 5)*symkin_sinr3(_tmp10)) + 0.5*_tmp9*p - 0.5*f*(_tmp8 + symkin_sinr0(_tmp10));
+    const double _tmp5 = symkin_bcol_h(_tmp4);
+    const double _tmp6 = symkin_bcol_s_at(_tmp4, _tmp5);
+    const double _tmp7 = 1 + _tmp0;
+    const double _tmp8 = pow(_tmp3, 2);
+    const double _tmp9 = e_a*p + pow(theta, 2)*(-0.041666666666666664*_tmp0 + _tmp7*symkin_bcol_a_at(_tmp4, _tmp5)) + 0.0005208333333333333*_tmp0*pow(theta_sq, 2) + _tmp1*_tmp2*_tmp3*_tmp6 - _tmp1*_tmp7*_tmp8*symkin_bcol_w_at(_tmp4, _tmp5);
+    const double _tmp10 = e_s*f + _tmp6*_tmp8*f;
+    const double _tmp11 = 0.5*theta;
+    out[0] = _tmp9;
+    out[1] = _tmp10;
+    out[2] = theta*symkin_bcol_invt_at(_tmp4, _tmp5) - p*(0.00390625*theta*(theta_sq*theta_sq*theta_sq)*(-7*symkin_sinr4(_tmp11) + symkin_cosr4(_tmp11)) + 0.09375*theta*pow(theta_sq, 2)*symkin_sinr3(_tmp11)) + 0.5*_tmp10*p - 0.5*f*(_tmp9 + symkin_sinr0(_tmp11));
 }
 
-/* one plate's relation at order 4 where it carries no force (p = f = 0): (along, across, omega) and their partials by (theta, p, f) (39 operations) */
+/* one plate's relation at order 4 where it carries no force (p = f = 0): (along, across, omega) and their partials by (theta, p, f) (40 operations) */
 static void sk_plate_rest4(const double *plate, double *out)
 {
     const double theta = plate[0];
     const double e_a = plate[3];
     const double e_s = plate[4];
+    const double theta_sq = pow(theta, 2);
     const double _tmp0 = pow(theta, 2);
-    const double _tmp1 = pow(theta, 4);
+    const double _tmp1 = pow(theta_sq, 2);
     const double _tmp2 = 0.5*theta;
     out[0] = 0;
     out[1] = 0;
@@ -4354,7 +4706,7 @@ static void sk_plate_rest4(const double *plate, double *out)
     out[7] = 0;
     out[8] = 0.08333333333333333 + e_s - 0.004166666666666667*_tmp0;
     out[9] = 1;
-    out[10] = 0.00026041666666666666*theta*(320 - 8*_tmp0 - 360*_tmp1*symkin_sinr3(_tmp2) + 15*pow(theta, 6)*(-symkin_cosr4(_tmp2) + 7*symkin_sinr4(_tmp2)));
+    out[10] = 0.00026041666666666666*theta*(320 - 8*_tmp0 - 360*_tmp1*symkin_sinr3(_tmp2) + 15*(theta_sq*theta_sq*theta_sq)*(-symkin_cosr4(_tmp2) + 7*symkin_sinr4(_tmp2)));
     out[11] = -0.5*symkin_sinr0(_tmp2);
 }
 
@@ -5241,6 +5593,7 @@ typedef struct {
     sk_fn3 plates;      /* (x, theta, params): per half plate (theta_c, p, f, e_a, e_s), then
                            d(theta_c, p, f)/dx (3 half plates x size) */
     sk_fn4 system;      /* (x, theta, plates, params): R, dR/dx, dR/d(plates) */
+    sk_fn4 residual;    /* (x, theta, plates, params): R alone (chord steps, the estimate) */
     sk_fn4 dev;         /* (x, theta, plates, params): every point's deviation */
     int size;           /* N: the scaled unknowns (x holds them, then the load factor t) */
     int plates_n;       /* half plates */
@@ -5254,6 +5607,7 @@ typedef struct {
     double tol, max_turn, p_limit, est_factor, est_limit;
     int max_iter;
     int loads;          /* the load factor t enters the routines (the file has loads) */
+    double chord, chord_error;  /* Newton's chord steps (symkin.codegen.loaded.CHORD) */
 } sk_loaded;
 
 /* One variant at one configuration. */
@@ -5296,6 +5650,23 @@ static void sk_red_relation(const sk_red *r, const double *ins, double *rel, dou
     }
 }
 
+/* The plate relation at order 4, its values alone (a chord step's), into vals. */
+static void sk_red_values4(const sk_red *r, const double *ins, double *vals)
+{
+    int i, j;
+    for (i = 0; i < r->v->plates_n; ++i) {
+        if (ins[5 * i + 1] == 0.0 && ins[5 * i + 2] == 0.0) {
+            double rest[12];
+            sk_plate_rest4(ins + 5 * i, rest);
+            for (j = 0; j < 3; ++j) {
+                vals[3 * i + j] = rest[j];
+            }
+        } else {
+            sk_plate_values4(ins + 5 * i, vals + 3 * i);
+        }
+    }
+}
+
 /* The plate relation at order 2, its values alone (the truncation estimate's), into vals. */
 static void sk_red_values2(const sk_red *r, const double *ins, double *vals)
 {
@@ -5307,9 +5678,11 @@ static void sk_red_values2(const sk_red *r, const double *ins, double *vals)
 
 /* One evaluation of the system at order 4 (x, theta, t), kept for what follows it: the plates'
    inputs and relation, the system's output, J's LU and its determinant's sign. The last Newton
-   step's evaluation also gives the acceptance its sign and the truncation estimate its J (the
-   Python solver's rule: J of the step that converged), and the solution's plate values by one
-   first-order correction (the step is below tol: the remainder is below rounding). */
+   step's J also gives the acceptance its sign and the truncation estimate its step (the Python
+   solver's rule: J of the step that converged; here that of the last full step where chord
+   steps followed it, its step below CHORD), and the last evaluation's plate values the
+   solution's by one first-order correction (the step is below tol: the remainder is below
+   rounding). */
 typedef struct {
     double xt[SK_RN + 1], ins[SK_OUT], rel[12 * SK_RS], sys[SK_OUT], lu[SK_RN * SK_RN + 1];
     int piv[SK_RN + 1];
@@ -5361,24 +5734,47 @@ static int sk_red_eval(const sk_red *r, const double *x, const double *theta, do
     return 0;
 }
 
+/* A chord step's evaluation at (x, theta, t) into st: the plates' inputs, the relation's values
+   (their partials and J's LU stay the last full step's) and R. */
+static void sk_red_residual(const sk_red *r, const double *x, const double *theta, double t,
+                            sk_red_state *st)
+{
+    double vals[3 * SK_RS];
+    int i, j;
+    sk_red_inputs(r, x, theta, t, st->xt, st->ins);
+    sk_red_values4(r, st->ins, vals);
+    for (i = 0; i < r->v->plates_n; ++i) {
+        for (j = 0; j < 3; ++j) {
+            st->rel[12 * i + j] = vals[3 * i + j];
+        }
+    }
+    r->v->residual(st->xt, theta, vals, r->params, st->sys);
+}
+
 /* Newton from x at (theta, t): 0 converged, 1 not (a singular or non-finite Jacobian, a step
-   turning a hinge by more than max_turn, a non-finite iterate, too many steps). st: the last
-   step's evaluation; first: det J's sign at the first step (NaN where it was singular). */
+   turning a hinge by more than max_turn, a non-finite iterate, too many steps). After a step
+   below chord times the largest unknown the next reuse its J (chord steps: R alone, J's
+   partials move by about that step) while each shrinks tenfold. st: the last evaluation (J's
+   that of the last full step); first: det J's sign at the first step (NaN where singular). */
 static int sk_red_newton(const sk_red *r, double *x, const double *theta, double t,
                          sk_red_state *st, double *first)
 {
     const int n = r->v->size, nu = r->l->unknowns;
     double res[SK_RN + 1], prev = HUGE_VAL;
-    int it, i;
+    int it, i, chord = 0;
     *first = NAN;
     for (it = 1; it <= r->l->max_iter; ++it) {
         double turn = 0.0, size = 0.0, top = 0.0;
-        const int singular = sk_red_eval(r, x, theta, t, st);
-        if (it == 1) {
-            *first = st->sign;
-        }
-        if (singular) {
-            return 1;
+        if (chord) {
+            sk_red_residual(r, x, theta, t, st);
+        } else {
+            const int singular = sk_red_eval(r, x, theta, t, st);
+            if (it == 1) {
+                *first = st->sign;
+            }
+            if (singular) {
+                return 1;
+            }
         }
         /* sk_lu then sk_lu_solve: sk_solve's operations, the factors kept */
         for (i = 0; i < n; ++i) {
@@ -5407,12 +5803,17 @@ static int sk_red_newton(const sk_red *r, double *x, const double *theta, double
                 top = fabs(x[i]);
             }
         }
-        if (size <= r->l->tol * top || size == 0.0) {
+        /* a Newton step leaves about its square, below rounding; a chord step its size times
+           the contraction (size / prev) */
+        if (size == 0.0
+            || (size <= r->l->tol * top
+                && (!chord || size * size <= r->l->chord_error * top * prev))) {
             return 0;
         }
         if (it > 3 && size > 0.5 * prev && size < 1e-9 * top) {
             return 0;   /* stalled at rounding */
         }
+        chord = size <= r->l->chord * top && (!chord || size <= 0.1 * prev);
         prev = size;
     }
     return 1;
@@ -5464,7 +5865,8 @@ static int sk_red_rigid(const sk_mechanism *m, const double *inputs, const doubl
 
 /* The deviation (dev: every point's) at the solution x and the refusals: 0, 1 a plate at
    p_limit of its sway buckling load, 4 the truncation estimate above est_limit. st: the last
-   Newton step's evaluation at (theta, 1), a step below tol from x (NULL where x has no entries). */
+   Newton step's evaluation at (theta, 1), a step below tol from x (NULL where x has no entries);
+   its J that of the last full step. */
 static int sk_red_answer(const sk_red *r, const double *x, const double *theta,
                          const sk_red_state *st, double *dev)
 {
@@ -5505,7 +5907,7 @@ static int sk_red_answer(const sk_red *r, const double *x, const double *theta,
     }
     if (n > 0) {
         sk_red_values2(r, ins, vals);
-        r->v->system(xt, theta, vals, r->params, sys);
+        r->v->residual(xt, theta, vals, r->params, sys);
         for (i = 0; i < n; ++i) {
             res[i] = sys[i];
         }
@@ -5674,9 +6076,9 @@ static const double sk_loaded_scale2[11] = {0.009186691875800356, 0.009186691875
 /* the loaded level: per variant (one, two half plates per plate) its routines, size, half
    plates and the unknowns' scales; the unknowns; the rules of symkin.physics.reduced */
 static const sk_loaded sk_loaded_tables = {
-    {{1, sk_loaded_plates1, sk_loaded_system1, sk_loaded_dev1, 6, 4, sk_loaded_scale1}, {2, sk_loaded_plates2, sk_loaded_system2, sk_loaded_dev2, 10, 8, sk_loaded_scale2}},
+    {{1, sk_loaded_plates1, sk_loaded_system1, sk_loaded_res1, sk_loaded_dev1, 6, 4, sk_loaded_scale1}, {2, sk_loaded_plates2, sk_loaded_system2, sk_loaded_res2, sk_loaded_dev2, 10, 8, sk_loaded_scale2}},
     3, 1e-12, 0.2, 0.9, 3.0, 0.01,
-    12, 0
+    12, 0, 0.001, 1e-15
 };
 
 /* One variant's sensitivity routine (x, theta, plates, params) and where its blocks start:

@@ -2,7 +2,7 @@
 Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
 Points: C; levels: paper, first_order, exact, loaded.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 65, rigid_res 51, linear 114, newton 259, rigid_points 19, loaded_plates1 132, loaded_system1 523, loaded_dev1 60, loaded_plates2 349, loaded_system2 1557, loaded_dev2 143, dev_paper 38, dev_first_order 52, dev_exact 62, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339, loaded_sens1 581, loaded_sens2 1581, plate_relation4 312, plate_values2 62, plate_rest4 39, plate_eps4 158.
+Operation counts after CSE: rigid 65, rigid_res 51, linear 114, newton 259, rigid_points 19, loaded_plates1 132, loaded_system1 523, loaded_res1 229, loaded_dev1 60, loaded_plates2 349, loaded_system2 1557, loaded_res2 494, loaded_dev2 143, dev_paper 38, dev_first_order 52, dev_exact 62, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339, loaded_sens1 581, loaded_sens2 1581, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -556,7 +556,8 @@ def _sensitivity_block(arrays, mech, level, p):
 
 class _LoadedTables:
     """The loaded level's routines and rules: per variant (one, two half plates per plate) its
-    (plates, system, dev) routines, its size, its half plates and its unknowns' scales."""
+    (plates, system, residual, dev) routines, its size, its half plates and its unknowns'
+    scales."""
 
     def __init__(self, **fields):
         self.__dict__.update(fields)
@@ -603,7 +604,10 @@ class _Batch:
 
     def __init__(self, tables, variant, count):
         self.t, self.count = tables, count  # count: half plates per plate
-        self.plates_fn, self.system_fn, self.dev_fn, self.size, self.plates, scale = variant
+        self.plates_fn, self.system_fn, self.res_fn, self.dev_fn, self.size, self.plates = variant[
+            :6
+        ]
+        scale = variant[6]
         self.scale = numpy.array(scale, dtype=float)
 
     def _inputs(self, x, theta, p, t):
@@ -632,6 +636,31 @@ class _Batch:
                 out = [numpy.where(rest, r, v) for r, v in zip(at_rest, out)]
             rel.append(out)
         return rel, [r[j] for r in rel for j in range(3)]
+
+    def _values4(self, ins):
+        """The plate relation at order 4, values alone (a chord step's; reduced.c's
+        sk_red_values4), one half plate after the other."""
+        b = ins[0].shape[0] if ins else 0
+        vals = []
+        for k in range(self.plates):
+            plate = ins[5 * k : 5 * k + 5]
+            rest = (plate[1] == 0.0) & (plate[2] == 0.0)
+            if numpy.all(rest):
+                out = [_red_column(v, b) for v in self.t.rest4(plate)[:3]]
+            else:
+                out = [_red_column(v, b) for v in self.t.values4(plate)]
+                if numpy.any(rest):
+                    at_rest = self.t.rest4(plate)[:3]
+                    out = [numpy.where(rest, r, v) for r, v in zip(at_rest, out)]
+            vals += out
+        return vals
+
+    def residual(self, x, theta, p, t):
+        """R (n, b) at order 4 from the relation's values alone (a chord step's)."""
+        b = x.shape[1]
+        args, ins, _ = self._inputs(x, theta, p, t)
+        vals = self._values4(ins)
+        return numpy.array([_red_column(v, b) for v in self.res_fn(args, theta, vals, p)])
 
     def _values2(self, ins):
         """The plate relation at order 2, values alone (the truncation estimate's), one half
@@ -669,30 +698,45 @@ class _Batch:
     def newton(self, x, theta, p, t):
         """Newton from x (n, b) at (theta, t), each configuration until it converges or fails
         (a singular or non-finite J, a step turning a hinge by more than max_turn, a non-finite
-        iterate, too many steps): (x, converged, each one's last step's J, det J's sign at the
-        first step)."""
+        iterate, too many steps), with reduced.c's chord steps (after a step below chord, R
+        alone with that step's J while each step shrinks tenfold): (x, converged, each one's
+        last full step's J, det J's sign at the first step)."""
         tb, n, nu = self.t, self.size, self.t.unknowns
         b = x.shape[1]
         x, converged = x.copy(), numpy.zeros(b, dtype=bool)
         last, first = numpy.zeros((b, n, n)), None
         prev = numpy.full(b, math.inf)
+        chord = numpy.zeros(b, dtype=bool)
         act = numpy.arange(b)
         for it in range(1, tb.max_iter + 1):
-            res, jac = self.system(x[:, act], [v[act] for v in theta], [v[act] for v in p], t)
-            last[act] = jac
-            if first is None:
-                first = _red_signs(jac)
-            step = _red_solve(jac, res)
+            c = chord[act]
+            step = numpy.zeros((n, act.size))
+            full = act[~c]
+            if full.size:
+                res, jac = self.system(
+                    x[:, full], [v[full] for v in theta], [v[full] for v in p], t
+                )
+                last[full] = jac
+                if first is None:
+                    first = _red_signs(jac)  # the first step: every configuration's full
+                step[:, ~c] = _red_solve(jac, res)
+            if c.any():
+                k = act[c]
+                res = self.residual(x[:, k], [v[k] for v in theta], [v[k] for v in p], t)
+                step[:, c] = _red_solve(last[k], res)
             turn = numpy.max(numpy.abs(step[:nu]), axis=0) * self.scale[0] if nu else 0.0
             xn = x[:, act] - step
             fail = ~(turn <= tb.max_turn) | ~numpy.all(numpy.isfinite(xn), axis=0)
             size = numpy.max(numpy.abs(step), axis=0)
             top = numpy.max(numpy.abs(xn), axis=0)
-            done = (size <= tb.tol * top) | (size == 0)
+            # a Newton step leaves about its square; a chord step its size times the contraction
+            left = ~c | (size * size <= tb.chord_error * top * prev[act])
+            done = ((size <= tb.tol * top) & left) | (size == 0)
             # stalled at rounding
             done |= (it > 3) & (size > 0.5 * prev[act]) & (size < 1e-9 * top)
             x[:, act] = xn
             converged[act[done & ~fail]] = True
+            chord[act] = (size <= tb.chord * top) & (~c | (size <= 0.1 * prev[act]))
             prev[act] = size
             act = act[~done & ~fail]
             if not act.size:
@@ -805,8 +849,8 @@ class _Batch:
         x2 = x
         if n:
             vals2 = self._values2(ins)
-            sys = self.system_fn(args, theta, vals2, p)
-            res = numpy.array([_red_column(v, b) for v in sys[:n]])
+            sys = self.res_fn(args, theta, vals2, p)
+            res = numpy.array([_red_column(v, b) for v in sys])
             x2 = x - _red_solve(jac, res)
         args2, ins2, _ = self._inputs(x2, theta, p, 1.0)
         vals2 = self._values2(ins2)
@@ -843,7 +887,7 @@ def _reduced_solve(mech, x, theta, p, ok):
     flat_delta = [numpy.zeros(where.size) for _ in mech.unknown_index]
     flat_dev = [numpy.full(where.size, numpy.nan) for _ in range(n_dev)]
     # the variant and its solution x, for the sensitivities (templates/numpy/reduced_sens.py)
-    flat_x = [numpy.full(where.size, numpy.nan) for _ in range(max(v[3] for v in tb.variants))]
+    flat_x = [numpy.full(where.size, numpy.nan) for _ in range(max(v[4] for v in tb.variants))]
     flat_variant = numpy.full(where.size, -1)
     for count, variant in enumerate(tb.variants, 1):
         if not todo.size:
@@ -1436,11 +1480,6 @@ def bcol_invt_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = (1.0) / (h * (1.0))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
-
-
-def bcol_invt(p):
-    """bcol_invt(p) = 1/T(p) (vectorised)."""
-    return bcol_invt_at(p, bcol_h(p))
 
 
 def bcol_invt_d1_at(x, h):
@@ -2428,6 +2467,86 @@ def _loaded_system1(x, theta, plates, params):
         0,
         0,
         -_tmp61,
+    ]
+
+
+def _loaded_res1(x, theta, plates, params):
+    """loaded (1 half plate(s) per plate): the reduced equilibrium's residual R alone (229 operations)."""
+    x_0, x_1, x_2, x_3, x_4, x_5, _ = x
+    theta_1, theta_2, theta_3, theta_4 = theta
+    along_1_0, across_1_0, _, along_2_0, across_2_0, omega_2_0, along_3_0, across_3_0, omega_3_0, along_4_0, across_4_0, omega_4_0 = plates
+    p_0, = params
+    _tmp0 = 0.009186691875800356*x_0
+    _tmp1 = 0.009186691875800356*x_1
+    _tmp2 = 0.5*theta_1
+    _tmp3 = numpy.cos(_tmp2)
+    _tmp4 = across_1_0*p_0
+    _tmp5 = _tmp3*_tmp4
+    _tmp6 = 0.004593345937900178*x_1
+    _tmp7 = _tmp6 + 0.5*theta_3
+    _tmp8 = numpy.cos(_tmp7)
+    _tmp9 = 0.004593345937900178*x_0
+    _tmp10 = _tmp9 + 0.5*theta_2
+    _tmp11 = 1.0471975511965979 + _tmp10 + theta_1
+    _tmp12 = numpy.sin(_tmp11)
+    _tmp13 = across_2_0*p_0
+    _tmp14 = _tmp12*_tmp13
+    _tmp15 = 0.5*theta_4 + 0.004593345937900178*x_2
+    _tmp16 = theta_1 + theta_2
+    _tmp17 = _tmp0 + _tmp16
+    _tmp18 = _tmp15 + _tmp17
+    _tmp19 = 1000.0*p_0
+    _tmp20 = _tmp19*numpy.sin(_tmp18)
+    _tmp21 = numpy.sin(_tmp2)
+    _tmp22 = p_0*(along_1_0 + 0.25*theta_1**2*arck(_tmp2))
+    _tmp23 = _tmp21*_tmp22
+    _tmp24 = numpy.cos(theta_3)
+    _tmp25 = numpy.sin(_tmp1)
+    _tmp26 = numpy.sin(_tmp6)**2
+    _tmp27 = 0.068*_tmp25 - 0.03*_tmp26
+    _tmp28 = 0.015*_tmp25 + 0.136*_tmp26
+    _tmp29 = 1000.0*numpy.sin(theta_3)
+    _tmp30 = numpy.cos(_tmp16)
+    _tmp31 = numpy.sin(_tmp0)
+    _tmp32 = numpy.sin(_tmp9)**2
+    _tmp33 = -0.14*_tmp32 - 0.042*_tmp31
+    _tmp34 = 0.07*_tmp31 - 0.084*_tmp32
+    _tmp35 = 1000.0*numpy.sin(_tmp16)
+    _tmp36 = numpy.sin(_tmp7)
+    _tmp37 = along_3_0 + _tmp7**2*arck(_tmp7)
+    _tmp38 = numpy.cos(_tmp11)
+    _tmp39 = along_2_0 + _tmp10**2*arck(_tmp10)
+    _tmp40 = numpy.cos(_tmp18)
+    _tmp41 = along_4_0 + _tmp15**2*arck(_tmp15)
+    _tmp42 = _tmp36*p_0
+    _tmp43 = _tmp42*across_3_0
+    _tmp44 = _tmp13*_tmp38
+    _tmp45 = _tmp22*_tmp3
+    _tmp46 = _tmp8*p_0
+    _tmp47 = _tmp39*p_0
+    _tmp48 = _tmp12*_tmp47
+    _tmp49 = 0.9999999999999999*x_5
+    _tmp50 = -_tmp49
+    _tmp51 = 4.333333333333333e-06*p_0**2*_DTYPE(numpy.where(numpy.less_equal(p_0, 0.01), 230769230769.23077, 210000000000))
+    _tmp52 = numpy.sin(theta_1)
+    _tmp53 = numpy.cos(theta_1)
+    _tmp54 = p_0*numpy.sin(_tmp17)
+    _tmp55 = p_0*numpy.cos(_tmp17)
+    _tmp56 = _tmp1 + theta_3
+    _tmp57 = numpy.sin(_tmp56)
+    _tmp58 = 0.5*p_0
+    _tmp59 = -0.015 + _tmp58
+    _tmp60 = numpy.cos(_tmp56)
+    _tmp61 = -0.068*_tmp57 + _tmp59*_tmp60
+    _tmp62 = 9.186691875800356*x_4
+    _tmp63 = 9.186691875800356*x_3
+    return [
+        _tmp0 - _tmp1 + 0.009186691875800356*x_2,
+        -1000.0*_tmp14 - 1000.0*_tmp23 - 1000.0*_tmp5 - _tmp20*across_4_0 - _tmp28*_tmp29 - _tmp34*_tmp35 + 1000.0*_tmp24*_tmp27 + 1000.0*_tmp30*_tmp33 + 1000.0*_tmp36*_tmp37*p_0 + 1000.0*_tmp38*_tmp39*p_0 + 1000.0*_tmp40*_tmp41*p_0 + 1000.0*_tmp8*across_3_0*p_0,
+        1000.0*_tmp43 + 1000.0*_tmp44 + 1000.0*_tmp45 + 1000.0*_tmp48 + _tmp20*_tmp41 + _tmp27*_tmp29 + _tmp33*_tmp35 + 1000.0*_tmp24*_tmp28 + 1000.0*_tmp30*_tmp34 - 1000.0*_tmp21*_tmp4 - 1000.0*_tmp37*_tmp46 + _tmp19*_tmp40*across_4_0,
+        _tmp50 + _tmp51*omega_2_0 + _tmp63*(-_tmp43 - _tmp44 - _tmp45 - _tmp48 + 0.068*_tmp60 - 0.25*_tmp54 - 0.015*_tmp52 - 0.4330127018922193*_tmp55 - 0.026*_tmp53 + _tmp57*_tmp59 + _tmp21*across_1_0*p_0 + _tmp37*_tmp8*p_0) - _tmp62*(0.1 + _tmp14 + _tmp23 + _tmp5 + _tmp61 + 0.4330127018922193*_tmp54 + 0.026*_tmp52 - 0.25*_tmp55 - 0.015*_tmp53 - _tmp37*_tmp42 - _tmp38*_tmp47 - _tmp46*across_3_0),
+        _tmp49 + _tmp51*omega_3_0 + _tmp62*(_tmp61 + _tmp57*_tmp58) - _tmp63*(0.068*_tmp60 + _tmp57*_tmp59 - _tmp58*_tmp60),
+        -_tmp50 - _tmp51*omega_4_0,
     ]
 
 
@@ -3537,6 +3656,153 @@ def _loaded_system2(x, theta, plates, params):
         _tmp170*_tmp351 - _tmp168*_tmp352,
         _tmp168*_tmp351 + _tmp170*_tmp352,
         _tmp350,
+    ]
+
+
+def _loaded_res2(x, theta, plates, params):
+    """loaded (2 half plate(s) per plate): the reduced equilibrium's residual R alone (494 operations)."""
+    x_0, x_1, x_2, x_3, x_4, x_5, x_6, x_7, x_8, x_9, _ = x
+    theta_1, theta_2, theta_3, theta_4 = theta
+    along_1_0, across_1_0, omega_1_0, along_1_1, across_1_1, omega_1_1, along_2_0, across_2_0, omega_2_0, along_2_1, across_2_1, omega_2_1, along_3_0, across_3_0, omega_3_0, along_3_1, across_3_1, omega_3_1, along_4_0, across_4_0, omega_4_0, along_4_1, across_4_1, omega_4_1 = plates
+    p_0, = params
+    _tmp0 = 0.009186691875800356*x_0
+    _tmp1 = 0.009186691875800356*x_1
+    _tmp2 = numpy.sin(_tmp1)
+    _tmp3 = 0.004593345937900178*x_1
+    _tmp4 = numpy.sin(_tmp3)**2
+    _tmp5 = 0.068*_tmp2 - 0.03*_tmp4
+    _tmp6 = 1000.0*numpy.cos(theta_3)
+    _tmp7 = 0.015*_tmp2 + 0.136*_tmp4
+    _tmp8 = 1000.0*numpy.sin(theta_3)
+    _tmp9 = numpy.sin(_tmp0)
+    _tmp10 = 0.004593345937900178*x_0
+    _tmp11 = numpy.sin(_tmp10)**2
+    _tmp12 = -0.14*_tmp11 - 0.042*_tmp9
+    _tmp13 = theta_1 + theta_2
+    _tmp14 = 1000.0*numpy.cos(_tmp13)
+    _tmp15 = 0.07*_tmp9 - 0.084*_tmp11
+    _tmp16 = 1000.0*numpy.sin(_tmp13)
+    _tmp17 = 0.5*theta_1
+    _tmp18 = numpy.cos(_tmp17)
+    _tmp19 = 0.5*p_0
+    _tmp20 = 0.25*theta_1
+    _tmp21 = 0.5*x_6
+    _tmp22 = _tmp20 - _tmp21
+    _tmp23 = numpy.cos(_tmp22)
+    _tmp24 = _tmp19*across_1_0
+    _tmp25 = _tmp20 + _tmp21
+    _tmp26 = _tmp19*numpy.cos(_tmp25)
+    _tmp27 = numpy.sin(_tmp22)
+    _tmp28 = _tmp19*(along_1_0 + _tmp25**2*arck(_tmp25))
+    _tmp29 = along_1_1 + _tmp22**2*arck(_tmp22)
+    _tmp30 = _tmp19*numpy.sin(_tmp25)
+    _tmp31 = _tmp19*numpy.sin(1.0*x_6) + _tmp23*_tmp24 + _tmp26*across_1_1 + _tmp29*_tmp30 - _tmp27*_tmp28
+    _tmp32 = _tmp18*_tmp31
+    _tmp33 = numpy.sin(_tmp17)
+    _tmp34 = _tmp19*(-2*numpy.sin(_tmp21)**2 + 2*numpy.sin(_tmp20)**2) + _tmp23*_tmp28 + _tmp24*_tmp27 + _tmp26*_tmp29 - _tmp30*across_1_1
+    _tmp35 = _tmp33*_tmp34
+    _tmp36 = _tmp3 + 0.5*theta_3
+    _tmp37 = numpy.cos(_tmp36)
+    _tmp38 = 0.5*x_8
+    _tmp39 = 0.25*theta_3 + 0.002296672968950089*x_1
+    _tmp40 = _tmp39 - _tmp38
+    _tmp41 = numpy.cos(_tmp40)
+    _tmp42 = _tmp19*across_3_0
+    _tmp43 = _tmp38 + _tmp39
+    _tmp44 = _tmp19*numpy.cos(_tmp43)
+    _tmp45 = numpy.sin(_tmp40)
+    _tmp46 = _tmp19*(along_3_0 + _tmp43**2*arck(_tmp43))
+    _tmp47 = along_3_1 + _tmp40**2*arck(_tmp40)
+    _tmp48 = _tmp19*numpy.sin(_tmp43)
+    _tmp49 = _tmp19*numpy.sin(1.0*x_8) + _tmp41*_tmp42 + _tmp44*across_3_1 + _tmp47*_tmp48 - _tmp45*_tmp46
+    _tmp50 = _tmp37*_tmp49
+    _tmp51 = 1.0471975511965979 + theta_1
+    _tmp52 = _tmp10 + _tmp51 + 0.5*theta_2
+    _tmp53 = numpy.sin(_tmp52)
+    _tmp54 = 0.5*x_7
+    _tmp55 = 0.25*theta_2 + 0.002296672968950089*x_0
+    _tmp56 = _tmp55 - _tmp54
+    _tmp57 = numpy.cos(_tmp56)
+    _tmp58 = _tmp19*across_2_0
+    _tmp59 = _tmp54 + _tmp55
+    _tmp60 = _tmp19*numpy.cos(_tmp59)
+    _tmp61 = numpy.sin(_tmp56)
+    _tmp62 = _tmp19*(along_2_0 + _tmp59**2*arck(_tmp59))
+    _tmp63 = along_2_1 + _tmp56**2*arck(_tmp56)
+    _tmp64 = _tmp19*numpy.sin(_tmp59)
+    _tmp65 = _tmp19*numpy.sin(1.0*x_7) + _tmp57*_tmp58 + _tmp60*across_2_1 + _tmp63*_tmp64 - _tmp61*_tmp62
+    _tmp66 = _tmp53*_tmp65
+    _tmp67 = _tmp0 + _tmp13
+    _tmp68 = _tmp67 + 0.5*theta_4 + 0.004593345937900178*x_2
+    _tmp69 = numpy.sin(_tmp68)
+    _tmp70 = 0.5*x_9
+    _tmp71 = 0.25*theta_4 + 0.002296672968950089*x_2
+    _tmp72 = _tmp71 - _tmp70
+    _tmp73 = numpy.cos(_tmp72)
+    _tmp74 = _tmp19*across_4_0
+    _tmp75 = _tmp70 + _tmp71
+    _tmp76 = _tmp19*numpy.cos(_tmp75)
+    _tmp77 = numpy.sin(_tmp72)
+    _tmp78 = _tmp19*(along_4_0 + _tmp75**2*arck(_tmp75))
+    _tmp79 = along_4_1 + _tmp72**2*arck(_tmp72)
+    _tmp80 = _tmp19*numpy.sin(_tmp75)
+    _tmp81 = 1000.0*_tmp19*numpy.sin(1.0*x_9) + 1000.0*_tmp73*_tmp74 + 1000.0*_tmp76*across_4_1 + 1000.0*_tmp79*_tmp80 - 1000.0*_tmp77*_tmp78
+    _tmp82 = numpy.sin(_tmp36)
+    _tmp83 = _tmp19*(-2*numpy.sin(_tmp38)**2 + 2*numpy.sin(_tmp39)**2) + _tmp41*_tmp46 + _tmp42*_tmp45 + _tmp44*_tmp47 - _tmp48*across_3_1
+    _tmp84 = _tmp82*_tmp83
+    _tmp85 = numpy.cos(_tmp52)
+    _tmp86 = _tmp19*(-2*numpy.sin(_tmp54)**2 + 2*numpy.sin(_tmp55)**2) + _tmp57*_tmp62 + _tmp58*_tmp61 + _tmp60*_tmp63 - _tmp64*across_2_1
+    _tmp87 = _tmp85*_tmp86
+    _tmp88 = numpy.cos(_tmp68)
+    _tmp89 = 1000.0*_tmp19*(-2*numpy.sin(_tmp70)**2 + 2*numpy.sin(_tmp71)**2) + 1000.0*_tmp73*_tmp78 + 1000.0*_tmp74*_tmp77 + 1000.0*_tmp76*_tmp79 - 1000.0*_tmp80*across_4_1
+    _tmp90 = _tmp18*_tmp34
+    _tmp91 = _tmp49*_tmp82
+    _tmp92 = _tmp65*_tmp85
+    _tmp93 = _tmp53*_tmp86
+    _tmp94 = 0.9999999999999999*x_5
+    _tmp95 = -_tmp94
+    _tmp96 = 8.666666666666666e-06*p_0**2*_DTYPE(numpy.where(numpy.less_equal(p_0, 0.01), 230769230769.23077, 210000000000))
+    _tmp97 = _tmp96*omega_2_1
+    _tmp98 = numpy.sin(theta_1)
+    _tmp99 = numpy.cos(theta_1)
+    _tmp100 = p_0*numpy.sin(_tmp67)
+    _tmp101 = p_0*numpy.cos(_tmp67)
+    _tmp102 = _tmp1 + theta_3
+    _tmp103 = numpy.sin(_tmp102)
+    _tmp104 = -0.015 + _tmp19
+    _tmp105 = numpy.cos(_tmp102)
+    _tmp106 = -0.068*_tmp103 + _tmp104*_tmp105
+    _tmp107 = 9.186691875800356*x_4
+    _tmp108 = 9.186691875800356*x_3
+    _tmp109 = _tmp96*omega_3_1
+    _tmp110 = _tmp96*omega_4_1
+    _tmp111 = _tmp21 + 0.75*theta_1
+    _tmp112 = _tmp19*numpy.sin(_tmp111)
+    _tmp113 = numpy.cos(_tmp111)
+    _tmp114 = along_1_1 + sinr0(_tmp22)
+    _tmp115 = _tmp51 + _tmp54 + 0.75*theta_2 + 0.006890018906850267*x_0
+    _tmp116 = numpy.cos(_tmp115)
+    _tmp117 = along_2_1 + sinr0(_tmp56)
+    _tmp118 = _tmp19*numpy.sin(_tmp115)
+    _tmp119 = _tmp38 + 0.75*theta_3 + 0.006890018906850267*x_1
+    _tmp120 = _tmp19*numpy.sin(_tmp119)
+    _tmp121 = numpy.cos(_tmp119)
+    _tmp122 = along_3_1 + sinr0(_tmp40)
+    _tmp123 = _tmp67 + _tmp70 + 0.75*theta_4 + 0.006890018906850267*x_2
+    _tmp124 = numpy.cos(_tmp123)
+    _tmp125 = along_4_1 + sinr0(_tmp72)
+    _tmp126 = _tmp19*numpy.sin(_tmp123)
+    return [
+        _tmp0 - _tmp1 + 0.009186691875800356*x_2,
+        1000.0*_tmp50 + 1000.0*_tmp84 + 1000.0*_tmp87 - 1000.0*_tmp32 - 1000.0*_tmp35 - 1000.0*_tmp66 + _tmp12*_tmp14 + _tmp5*_tmp6 + _tmp88*_tmp89 - _tmp15*_tmp16 - _tmp69*_tmp81 - _tmp7*_tmp8,
+        1000.0*_tmp90 + 1000.0*_tmp91 + 1000.0*_tmp92 + 1000.0*_tmp93 + _tmp12*_tmp16 + _tmp14*_tmp15 + _tmp5*_tmp8 + _tmp6*_tmp7 + _tmp69*_tmp89 + _tmp81*_tmp88 - 1000.0*_tmp31*_tmp33 - 1000.0*_tmp37*_tmp83,
+        _tmp95 + _tmp97 + _tmp108*(-_tmp90 - _tmp91 - _tmp92 - _tmp93 + 0.068*_tmp105 - 0.25*_tmp100 - 0.015*_tmp98 - 0.4330127018922193*_tmp101 - 0.026*_tmp99 + _tmp103*_tmp104 + _tmp31*_tmp33 + _tmp37*_tmp83) - _tmp107*(0.1 + _tmp106 + _tmp32 + _tmp35 + _tmp66 - _tmp50 - _tmp84 - _tmp87 + 0.4330127018922193*_tmp100 + 0.026*_tmp98 - 0.25*_tmp101 - 0.015*_tmp99),
+        _tmp109 + _tmp94 + _tmp107*(_tmp106 + _tmp103*_tmp19) - _tmp108*(0.068*_tmp105 + _tmp103*_tmp104 - _tmp105*_tmp19),
+        -_tmp110 - _tmp95,
+        _tmp108*(-_tmp112*across_1_1 + 0.5*_tmp113*_tmp114*p_0) + _tmp96*omega_1_0 - _tmp107*(-_tmp112*_tmp114 - _tmp113*_tmp19*across_1_1) - _tmp96*omega_1_1,
+        -_tmp97 + _tmp108*(_tmp117*_tmp118 + _tmp116*_tmp19*across_2_1) + _tmp96*omega_2_0 - _tmp107*(-_tmp118*across_2_1 + 0.5*_tmp116*_tmp117*p_0),
+        -_tmp109 + _tmp107*(-_tmp120*_tmp122 - _tmp121*_tmp19*across_3_1) + _tmp96*omega_3_0 - _tmp108*(-_tmp120*across_3_1 + 0.5*_tmp121*_tmp122*p_0),
+        -_tmp110 + _tmp108*(_tmp125*_tmp126 + _tmp124*_tmp19*across_4_1) + _tmp96*omega_4_0 - _tmp107*(-_tmp126*across_4_1 + 0.5*_tmp124*_tmp125*p_0),
     ]
 
 
@@ -5230,32 +5496,109 @@ def _plate_relation4(plate):
     ]
 
 
-def _plate_values2(plate):
-    """one plate's relation at order 2, values alone: (along, across, omega) (62 operations)."""
+def _plate_values4(plate):
+    """one plate's relation at order 4, values alone: (along, across, omega) (114 operations)."""
     theta, p, f, e_a, e_s = plate
+    theta_sq = theta**2
+    f_sq = f**2
+    _tmp0 = e_a*p
+    _tmp1 = theta_sq**2
+    _tmp2 = -2*e_s + 2*e_a
+    _tmp3 = _tmp2*p
+    _tmp4 = 1 + _tmp3
+    _tmp5 = e_a - e_s
+    _tmp6 = _tmp5*p
+    _tmp7 = 1 + _tmp6
+    _tmp7_sq = _tmp7**2
+    _tmp8 = _tmp7*p
+    _tmp9 = bcol_h(_tmp8)
+    _tmp10 = bcol_e3c_at(_tmp8, _tmp9)
+    _tmp11 = -0.0005208333333333333*_tmp3 + _tmp10*_tmp4
+    _tmp12 = theta**2
+    _tmp13 = bcol_w_at(_tmp8, _tmp9)
+    _tmp14 = bcol_invt_at(_tmp8, _tmp9)
+    _tmp15 = _tmp14**2
+    _tmp16 = -0.041666666666666664*_tmp3 + 0.3333333333333333*_tmp13*_tmp15*_tmp4*_tmp7*p
+    _tmp17 = _tmp12*_tmp16
+    _tmp18 = bcol_s_at(_tmp8, _tmp9)
+    _tmp19 = bcol_e1_at(_tmp8, _tmp9)
+    _tmp20 = 2*f
+    _tmp21 = _tmp12*_tmp7
+    _tmp22 = _tmp20*_tmp21
+    _tmp23 = 4*f**3
+    _tmp24 = _tmp7**3
+    _tmp25 = bcol_e2_at(_tmp8, _tmp9)
+    _tmp26 = _tmp24*_tmp25
+    _tmp27 = -_tmp19*_tmp22 - _tmp23*_tmp26 + _tmp18*_tmp7*f
+    _tmp28 = _tmp27*_tmp5
+    _tmp29 = _tmp28*f
+    _tmp30 = f**2
+    _tmp31 = _tmp7**2
+    _tmp32 = _tmp30*_tmp31
+    _tmp33 = _tmp7_sq**2
+    _tmp34 = f_sq**2
+    _tmp35 = bcol_e2_d1_at(_tmp8, _tmp9)
+    _tmp36 = _tmp34*_tmp35
+    _tmp37 = bcol_e1_d1_at(_tmp8, _tmp9)
+    _tmp38 = _tmp12*_tmp32
+    _tmp39 = _tmp13*_tmp32 + _tmp33*_tmp36 + _tmp37*_tmp38
+    _tmp40 = _tmp0 + _tmp17 + _tmp29 - _tmp1*_tmp11 - _tmp39*_tmp4
+    _tmp41 = e_s*f
+    _tmp42 = _tmp27*_tmp7
+    _tmp43 = _tmp41 + _tmp42
+    _tmp44 = bcol_e3_at(_tmp8, _tmp9)
+    _tmp45 = 4*theta**3
+    _tmp46 = 2*theta
+    _tmp47 = _tmp32*_tmp46
+    _tmp50 = 0.25*_tmp12
+    _tmp48 = 0.5*theta
+    _tmp49 = sinr5(_tmp48)
+    _tmp51 = 2.7557319223985893e-06 + _tmp49*_tmp50
+    _tmp52 = -0.0001984126984126984 + _tmp50*_tmp51
+    _tmp53 = 0.09375*_tmp52*theta*theta_sq**2
+    _tmp54 = cosr5(_tmp48)
+    _tmp55 = 5.5114638447971785e-06 + _tmp50*_tmp54 - 1.75*_tmp12*_tmp49
+    _tmp56 = 0.00390625*theta*theta_sq**3
+    _tmp57 = _tmp55*_tmp56
+    _tmp58 = 0.5*p
+    _tmp59 = sinr0(_tmp48)
+    _tmp60 = 0.5*f
+    return [
+        _tmp40,
+        _tmp43,
+        _tmp14*theta + _tmp19*_tmp47 + _tmp43*_tmp58 + _tmp44*_tmp45 - _tmp60*(_tmp40 + _tmp59) - p*(_tmp53 + _tmp57),
+    ]
+
+
+def _plate_values2(plate):
+    """one plate's relation at order 2, values alone: (along, across, omega) (66 operations)."""
+    theta, p, f, e_a, e_s = plate
+    theta_sq = theta**2
     _tmp0 = p*(-2*e_s + 2*e_a)
     _tmp1 = f**2
     _tmp2 = e_a - e_s
     _tmp3 = 1 + _tmp2*p
     _tmp4 = _tmp3*p
-    _tmp5 = bcol_s(_tmp4)
-    _tmp6 = 1 + _tmp0
-    _tmp7 = _tmp3**2
-    _tmp8 = e_a*p + theta**2*(-0.041666666666666664*_tmp0 + _tmp6*bcol_a(_tmp4)) + 0.0005208333333333333*_tmp0*theta**4 + _tmp1*_tmp2*_tmp3*_tmp5 - _tmp1*_tmp6*_tmp7*bcol_w(_tmp4)
-    _tmp9 = e_s*f + _tmp5*_tmp7*f
-    _tmp10 = 0.5*theta
+    _tmp5 = bcol_h(_tmp4)
+    _tmp6 = bcol_s_at(_tmp4, _tmp5)
+    _tmp7 = 1 + _tmp0
+    _tmp8 = _tmp3**2
+    _tmp9 = e_a*p + theta**2*(-0.041666666666666664*_tmp0 + _tmp7*bcol_a_at(_tmp4, _tmp5)) + 0.0005208333333333333*_tmp0*theta_sq**2 + _tmp1*_tmp2*_tmp3*_tmp6 - _tmp1*_tmp7*_tmp8*bcol_w_at(_tmp4, _tmp5)
+    _tmp10 = e_s*f + _tmp6*_tmp8*f
+    _tmp11 = 0.5*theta
     return [
-        _tmp8,
         _tmp9,
-        theta*bcol_invt(_tmp4) - p*(0.00390625*theta**7*(-7*sinr4(_tmp10) + cosr4(_tmp10)) + 0.09375*theta**5*sinr3(_tmp10)) + 0.5*_tmp9*p - 0.5*f*(_tmp8 + sinr0(_tmp10)),
+        _tmp10,
+        theta*bcol_invt_at(_tmp4, _tmp5) - p*(0.00390625*theta*theta_sq**3*(-7*sinr4(_tmp11) + cosr4(_tmp11)) + 0.09375*theta*theta_sq**2*sinr3(_tmp11)) + 0.5*_tmp10*p - 0.5*f*(_tmp9 + sinr0(_tmp11)),
     ]
 
 
 def _plate_rest4(plate):
-    """one plate's relation at order 4 where it carries no force (p = f = 0): (along, across, omega) and their partials by (theta, p, f) (39 operations)."""
+    """one plate's relation at order 4 where it carries no force (p = f = 0): (along, across, omega) and their partials by (theta, p, f) (40 operations)."""
     theta, _, _, e_a, e_s = plate
+    theta_sq = theta**2
     _tmp0 = theta**2
-    _tmp1 = theta**4
+    _tmp1 = theta_sq**2
     _tmp2 = 0.5*theta
     return [
         0,
@@ -5268,7 +5611,7 @@ def _plate_rest4(plate):
         0,
         0.08333333333333333 + e_s - 0.004166666666666667*_tmp0,
         1,
-        0.00026041666666666666*theta*(320 - 8*_tmp0 - 360*_tmp1*sinr3(_tmp2) + 15*theta**6*(-cosr4(_tmp2) + 7*sinr4(_tmp2))),
+        0.00026041666666666666*theta*(320 - 8*_tmp0 - 360*_tmp1*sinr3(_tmp2) + 15*theta_sq**3*(-cosr4(_tmp2) + 7*sinr4(_tmp2))),
         -0.5*sinr0(_tmp2),
     ]
 
@@ -5357,14 +5700,14 @@ _MECHANISM = _Mechanism(
     # two half plates per plate) its routines, size, half plates and the unknowns' scales
     loaded=_LoadedTables(
         variants=(
-            (_loaded_plates1, _loaded_system1, _loaded_dev1, 6, 4, [0.009186691875800356, 0.009186691875800356, 0.009186691875800356, 0.8833357572884959, 0.8833357572884959, 0.09615384615384616]),
-            (_loaded_plates2, _loaded_system2, _loaded_dev2, 10, 8, [0.009186691875800356, 0.009186691875800356, 0.009186691875800356, 0.8833357572884959, 0.8833357572884959, 0.09615384615384616, 1.0, 1.0, 1.0, 1.0]),
+            (_loaded_plates1, _loaded_system1, _loaded_res1, _loaded_dev1, 6, 4, [0.009186691875800356, 0.009186691875800356, 0.009186691875800356, 0.8833357572884959, 0.8833357572884959, 0.09615384615384616]),
+            (_loaded_plates2, _loaded_system2, _loaded_res2, _loaded_dev2, 10, 8, [0.009186691875800356, 0.009186691875800356, 0.009186691875800356, 0.8833357572884959, 0.8833357572884959, 0.09615384615384616, 1.0, 1.0, 1.0, 1.0]),
         ),
-        relation4=_plate_relation4, values2=_plate_values2, rest4=_plate_rest4,
+        relation4=_plate_relation4, values4=_plate_values4, values2=_plate_values2, rest4=_plate_rest4,
         unknowns=3, unknown_index=(1, 2, 3, ),
         tol=1e-12, max_iter=12, max_turn=0.2,
         p_limit=0.9, est_factor=3.0, est_limit=0.01,
-        loads=False,
+        loads=False, chord=0.001, chord_error=1e-15,
         # the sensitivities (templates/numpy/reduced_sens.py): per variant its routine and blocks
         sens=((_loaded_sens1, {'dR_dtheta': (0, 6, 4), 'dR_dp': (24, 6, 1), 'din_dtheta': (30, 20, 4), 'din_dp': (110, 20, 1), 'dD_dx': (130, 2, 6), 'dD_dtheta': (142, 2, 4), 'dD_dp': (150, 2, 1), 'dD_dout': (152, 2, 12)}), (_loaded_sens2, {'dR_dtheta': (0, 10, 4), 'dR_dp': (40, 10, 1), 'din_dtheta': (50, 40, 4), 'din_dp': (210, 40, 1), 'dD_dx': (250, 2, 10), 'dD_dtheta': (270, 2, 4), 'dD_dp': (278, 2, 1), 'dD_dout': (280, 2, 24)}), ),
         eps4=_plate_eps4,

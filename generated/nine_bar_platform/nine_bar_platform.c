@@ -3,7 +3,7 @@
  * Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
  * Points: F; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 158, rigid_res 148, linear 275, newton 531, rigid_points 14, loaded_plates1 285, loaded_system1 937, loaded_dev1 36, loaded_plates2 775, loaded_system2 3363, loaded_dev2 116, dev_paper 33, dev_first_order 33, dev_exact 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97, loaded_sens1 1245, loaded_sens2 3457, plate_relation4 312, plate_values2 62, plate_rest4 39, plate_eps4 158.
+ * Operation counts after CSE: rigid 158, rigid_res 148, linear 275, newton 531, rigid_points 14, loaded_plates1 285, loaded_system1 937, loaded_res1 460, loaded_dev1 36, loaded_plates2 775, loaded_system2 3363, loaded_res2 1144, loaded_dev2 116, dev_paper 33, dev_first_order 33, dev_exact 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97, loaded_sens1 1245, loaded_sens2 3457, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
  */
 #include "nine_bar_platform.h"
 
@@ -446,12 +446,6 @@ static double symkin_bcol_invt_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return (1.0) / (h * (1.0));
-}
-
-/* bcol_invt(p) = 1/T(p). */
-static double symkin_bcol_invt(double p)
-{
-    return symkin_bcol_invt_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_invt_d1(p) = d^1/dp^1 of 1/T(p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (12 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -2671,6 +2665,201 @@ static void sk_loaded_system1(const double *x, const double *theta, const double
     out[513] = 0;
     out[514] = 0;
     out[515] = _tmp226;
+}
+
+/* loaded (1 half plate(s) per plate): the reduced equilibrium's residual R alone (460 operations) */
+static void sk_loaded_res1(const double *x, const double *theta, const double *plates, const double *params, double *out)
+{
+    const double x_0 = x[0];
+    const double x_1 = x[1];
+    const double x_2 = x[2];
+    const double x_3 = x[3];
+    const double x_4 = x[4];
+    const double x_5 = x[5];
+    const double x_6 = x[6];
+    const double x_7 = x[7];
+    const double x_8 = x[8];
+    const double x_9 = x[9];
+    const double x_10 = x[10];
+    const double x_11 = x[11];
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double theta_5 = theta[4];
+    const double theta_6 = theta[5];
+    const double theta_7 = theta[6];
+    const double theta_8 = theta[7];
+    const double theta_9 = theta[8];
+    const double theta_10 = theta[9];
+    const double along_1_0 = plates[0];
+    const double across_1_0 = plates[1];
+    const double along_2_0 = plates[3];
+    const double across_2_0 = plates[4];
+    const double along_3_0 = plates[6];
+    const double across_3_0 = plates[7];
+    const double along_4_0 = plates[9];
+    const double across_4_0 = plates[10];
+    const double along_5_0 = plates[12];
+    const double across_5_0 = plates[13];
+    const double omega_5_0 = plates[14];
+    const double along_6_0 = plates[15];
+    const double across_6_0 = plates[16];
+    const double omega_6_0 = plates[17];
+    const double along_7_0 = plates[18];
+    const double across_7_0 = plates[19];
+    const double omega_7_0 = plates[20];
+    const double along_8_0 = plates[21];
+    const double across_8_0 = plates[22];
+    const double omega_8_0 = plates[23];
+    const double along_9_0 = plates[24];
+    const double across_9_0 = plates[25];
+    const double omega_9_0 = plates[26];
+    const double along_10_0 = plates[27];
+    const double across_10_0 = plates[28];
+    const double omega_10_0 = plates[29];
+    const double p_0 = params[0];
+    const double _tmp0 = 0.0029104275004359953*x_0;
+    const double _tmp1 = _tmp0 + 0.0029104275004359953*x_1;
+    const double _tmp2 = 0.5*theta_1;
+    const double _tmp3 = cos(_tmp2);
+    const double _tmp4 = 1666.6666666666667*p_0;
+    const double _tmp5 = 0.5*theta_2;
+    const double _tmp6 = _tmp5 + theta_1;
+    const double _tmp7 = sin(_tmp6);
+    const double _tmp8 = _tmp4*across_2_0;
+    const double _tmp9 = 0.5*theta_3;
+    const double _tmp10 = theta_1 + theta_2;
+    const double _tmp11 = _tmp10 + _tmp9;
+    const double _tmp12 = sin(_tmp11);
+    const double _tmp13 = _tmp4*across_3_0;
+    const double _tmp14 = 0.5*theta_9 + 0.0014552137502179977*x_4;
+    const double _tmp15 = cos(_tmp14);
+    const double _tmp16 = 0.5*theta_4;
+    const double _tmp17 = _tmp10 + theta_3;
+    const double _tmp18 = _tmp16 + _tmp17;
+    const double _tmp19 = sin(_tmp18);
+    const double _tmp20 = _tmp4*across_4_0;
+    const double _tmp21 = 0.0014552137502179977*x_0;
+    const double _tmp22 = _tmp21 + 0.5*theta_5;
+    const double _tmp23 = _tmp17 + theta_4;
+    const double _tmp24 = _tmp22 + _tmp23;
+    const double _tmp25 = sin(_tmp24);
+    const double _tmp26 = _tmp4*across_5_0;
+    const double _tmp27 = sin(_tmp2);
+    const double _tmp28 = along_1_0 + 0.25*pow(theta_1, 2)*symkin_arck(_tmp2);
+    const double _tmp29 = _tmp28*_tmp4;
+    const double _tmp30 = 0.0014552137502179977*x_1;
+    const double _tmp31 = _tmp30 + 0.5*theta_6;
+    const double _tmp32 = _tmp23 + theta_5;
+    const double _tmp33 = _tmp0 + _tmp32;
+    const double _tmp34 = _tmp31 + _tmp33;
+    const double _tmp35 = cos(_tmp34);
+    const double _tmp36 = _tmp35*p_0;
+    const double _tmp37 = _tmp36*across_6_0;
+    const double _tmp38 = cos(_tmp6);
+    const double _tmp39 = _tmp4*(along_2_0 + 0.25*pow(theta_2, 2)*symkin_arck(_tmp5));
+    const double _tmp40 = _tmp38*_tmp39;
+    const double _tmp41 = cos(_tmp11);
+    const double _tmp42 = _tmp4*(along_3_0 + 0.25*pow(theta_3, 2)*symkin_arck(_tmp9));
+    const double _tmp43 = _tmp41*_tmp42;
+    const double _tmp44 = cos(_tmp18);
+    const double _tmp45 = _tmp4*(along_4_0 + 0.25*pow(theta_4, 2)*symkin_arck(_tmp16));
+    const double _tmp46 = sin(_tmp32);
+    const double _tmp47 = sin(_tmp0);
+    const double _tmp48 = pow(sin(_tmp21), 2);
+    const double _tmp49 = -0.05*_tmp47 - 0.04*_tmp48;
+    const double _tmp50 = cos(_tmp32);
+    const double _tmp51 = 0.1*_tmp48 - 0.02*_tmp47;
+    const double _tmp52 = along_9_0 + pow(_tmp14, 2)*symkin_arck(_tmp14);
+    const double _tmp53 = _tmp4*sin(_tmp14);
+    const double _tmp54 = sin(_tmp1);
+    const double _tmp55 = pow(sin(_tmp21 + _tmp30), 2);
+    const double _tmp56 = 0.04*_tmp54 - 0.1*_tmp55;
+    const double _tmp57 = _tmp32 + theta_6;
+    const double _tmp58 = sin(_tmp57);
+    const double _tmp59 = -0.05*_tmp54 - 0.08*_tmp55;
+    const double _tmp60 = cos(_tmp57);
+    const double _tmp61 = cos(_tmp24);
+    const double _tmp62 = _tmp4*(along_5_0 + pow(_tmp22, 2)*symkin_arck(_tmp22));
+    const double _tmp63 = along_6_0 + pow(_tmp31, 2)*symkin_arck(_tmp31);
+    const double _tmp64 = sin(_tmp34);
+    const double _tmp65 = _tmp64*p_0;
+    const double _tmp66 = _tmp63*_tmp65;
+    const double _tmp67 = _tmp12*_tmp42 + _tmp13*_tmp41 + _tmp29*_tmp3 + _tmp38*_tmp8 + _tmp39*_tmp7 - 1666.6666666666667*_tmp27*across_1_0*p_0;
+    const double _tmp68 = 0.0029104275004359953*x_2;
+    const double _tmp69 = _tmp68 + 0.0029104275004359953*x_3;
+    const double _tmp70 = 0.5*theta_10 + 0.0014552137502179977*x_5;
+    const double _tmp71 = cos(_tmp70);
+    const double _tmp72 = 0.0014552137502179977*x_2;
+    const double _tmp73 = _tmp72 + 0.5*theta_7;
+    const double _tmp74 = _tmp17 + _tmp73;
+    const double _tmp75 = sin(_tmp74);
+    const double _tmp76 = 0.0014552137502179977*x_3;
+    const double _tmp77 = _tmp76 + 0.5*theta_8;
+    const double _tmp78 = _tmp17 + theta_7;
+    const double _tmp79 = _tmp68 + _tmp78;
+    const double _tmp80 = _tmp77 + _tmp79;
+    const double _tmp81 = sin(_tmp80);
+    const double _tmp82 = sin(_tmp78);
+    const double _tmp83 = sin(_tmp68);
+    const double _tmp84 = pow(sin(_tmp72), 2);
+    const double _tmp85 = -0.01*_tmp84 - 0.04*_tmp83;
+    const double _tmp86 = cos(_tmp78);
+    const double _tmp87 = 0.08*_tmp84 - 0.005*_tmp83;
+    const double _tmp88 = along_10_0 + pow(_tmp70, 2)*symkin_arck(_tmp70);
+    const double _tmp89 = _tmp4*sin(_tmp70);
+    const double _tmp90 = sin(_tmp69);
+    const double _tmp91 = pow(sin(_tmp72 + _tmp76), 2);
+    const double _tmp92 = 0.025*_tmp90 - 0.07*_tmp91;
+    const double _tmp93 = _tmp78 + theta_8;
+    const double _tmp94 = sin(_tmp93);
+    const double _tmp95 = cos(_tmp93);
+    const double _tmp96 = -0.035*_tmp90 - 0.05*_tmp91;
+    const double _tmp97 = cos(_tmp74);
+    const double _tmp98 = _tmp4*(along_7_0 + pow(_tmp73, 2)*symkin_arck(_tmp73));
+    const double _tmp99 = along_8_0 + pow(_tmp77, 2)*symkin_arck(_tmp77);
+    const double _tmp100 = cos(_tmp80);
+    const double _tmp101 = _tmp100*p_0;
+    const double _tmp102 = _tmp101*across_8_0;
+    const double _tmp103 = _tmp81*p_0;
+    const double _tmp104 = _tmp103*_tmp99;
+    const double _tmp105 = 0.9999999999999999*x_8;
+    const double _tmp106 = 1.2037037037037035e-05*pow(p_0, 2)*((p_0 <= 0.006) ? (230769230769.23077) : (210000000000));
+    const double _tmp107 = cos(_tmp33);
+    const double _tmp108 = sin(_tmp33);
+    const double _tmp109 = 0.5*p_0;
+    const double _tmp110 = _tmp1 + _tmp57;
+    const double _tmp111 = sin(_tmp110);
+    const double _tmp112 = -0.05 + _tmp109;
+    const double _tmp113 = cos(_tmp110);
+    const double _tmp114 = 0.04*_tmp111 - _tmp112*_tmp113;
+    const double _tmp115 = 4.850712500726659*x_6;
+    const double _tmp116 = 0.04*_tmp113 + _tmp111*_tmp112;
+    const double _tmp117 = 4.850712500726659*x_7;
+    const double _tmp118 = 0.9999999999999999*x_11;
+    const double _tmp119 = sin(_tmp79);
+    const double _tmp120 = cos(_tmp79);
+    const double _tmp121 = _tmp69 + _tmp93;
+    const double _tmp122 = sin(_tmp121);
+    const double _tmp123 = 0.025*_tmp122;
+    const double _tmp124 = -0.035 + _tmp109;
+    const double _tmp125 = cos(_tmp121);
+    const double _tmp126 = 4.850712500726659*x_9;
+    const double _tmp127 = 0.025*_tmp125 + _tmp122*_tmp124;
+    const double _tmp128 = 4.850712500726659*x_10;
+    out[0] = -_tmp1 + 0.0029104275004359953*x_4;
+    out[1] = -_tmp40 - _tmp43 + 1666.6666666666667*_tmp37 + 1666.6666666666667*_tmp66 + _tmp12*_tmp13 + _tmp19*_tmp20 + _tmp25*_tmp26 + _tmp27*_tmp29 + _tmp7*_tmp8 - _tmp44*_tmp45 - _tmp52*_tmp53 - _tmp61*_tmp62 + 1666.6666666666667*_tmp50*_tmp51 + 1666.6666666666667*_tmp59*_tmp60 - 1666.6666666666667*_tmp46*_tmp49 - 1666.6666666666667*_tmp56*_tmp58 + _tmp3*_tmp4*across_1_0 - _tmp15*_tmp4*across_9_0;
+    out[2] = -_tmp67 - _tmp19*_tmp45 - _tmp20*_tmp44 - _tmp25*_tmp62 - _tmp26*_tmp61 - _tmp53*across_9_0 + 1666.6666666666667*_tmp46*_tmp51 + 1666.6666666666667*_tmp49*_tmp50 + 1666.6666666666667*_tmp56*_tmp60 + 1666.6666666666667*_tmp58*_tmp59 - 1666.6666666666667*_tmp36*_tmp63 + 1666.6666666666667*_tmp15*_tmp52*p_0 + 1666.6666666666667*_tmp64*across_6_0*p_0;
+    out[3] = -_tmp69 + 0.0029104275004359953*x_5;
+    out[4] = -_tmp40 - _tmp43 - _tmp88*_tmp89 - _tmp97*_tmp98 + 1666.6666666666667*_tmp86*_tmp87 + 1666.6666666666667*_tmp95*_tmp96 - 1666.6666666666667*_tmp101*_tmp99 - 1666.6666666666667*_tmp82*_tmp85 - 1666.6666666666667*_tmp92*_tmp94 - _tmp4*_tmp71*across_10_0 + 1666.6666666666667*_tmp12*across_3_0*p_0 + 1666.6666666666667*_tmp27*_tmp28*p_0 + 1666.6666666666667*_tmp3*across_1_0*p_0 + 1666.6666666666667*_tmp7*across_2_0*p_0 + 1666.6666666666667*_tmp75*across_7_0*p_0 + 1666.6666666666667*_tmp81*across_8_0*p_0;
+    out[5] = -_tmp67 - 1666.6666666666667*_tmp102 - 1666.6666666666667*_tmp104 - _tmp75*_tmp98 - _tmp89*across_10_0 + 1666.6666666666667*_tmp82*_tmp87 + 1666.6666666666667*_tmp85*_tmp86 + 1666.6666666666667*_tmp92*_tmp95 + 1666.6666666666667*_tmp94*_tmp96 - _tmp4*_tmp97*across_7_0 + 1666.6666666666667*_tmp71*_tmp88*p_0;
+    out[6] = _tmp105 + _tmp106*omega_5_0 + _tmp117*(-_tmp116 - _tmp37 - _tmp66 + 0.05*_tmp107 + 0.02*_tmp108 - _tmp107*_tmp109) - _tmp115*(-_tmp114 + 0.05*_tmp108 - 0.02*_tmp107 - _tmp108*_tmp109 - _tmp65*across_6_0 + _tmp35*_tmp63*p_0);
+    out[7] = _tmp105 + _tmp106*omega_6_0 + _tmp117*(-_tmp116 + 0.5*_tmp111*p_0) - _tmp115*(-_tmp114 - _tmp109*_tmp113);
+    out[8] = _tmp118 + _tmp106*omega_7_0 + _tmp128*(-_tmp127 + 0.005*_tmp119 + 0.04*_tmp120 - _tmp103*across_8_0 - _tmp109*_tmp120 + _tmp100*_tmp99*p_0) - _tmp126*(_tmp102 + _tmp104 - _tmp123 + 0.04*_tmp119 - 0.005*_tmp120 + _tmp124*_tmp125 - _tmp109*_tmp119);
+    out[9] = _tmp118 + _tmp106*omega_8_0 + _tmp128*(-_tmp127 - _tmp109*_tmp125) - _tmp126*(-_tmp123 + _tmp124*_tmp125 - _tmp109*_tmp122);
+    out[10] = 0.9999999999999999*x_8 - _tmp106*omega_9_0;
+    out[11] = 0.9999999999999999*x_11 - _tmp106*omega_10_0;
 }
 
 /* loaded (1 half plate(s) per plate): deviation of every point (36 operations) */
@@ -7067,6 +7256,409 @@ static void sk_loaded_system2(const double *x, const double *theta, const double
     out[1825] = _tmp774;
 }
 
+/* loaded (2 half plate(s) per plate): the reduced equilibrium's residual R alone (1144 operations) */
+static void sk_loaded_res2(const double *x, const double *theta, const double *plates, const double *params, double *out)
+{
+    const double x_0 = x[0];
+    const double x_1 = x[1];
+    const double x_2 = x[2];
+    const double x_3 = x[3];
+    const double x_4 = x[4];
+    const double x_5 = x[5];
+    const double x_6 = x[6];
+    const double x_7 = x[7];
+    const double x_8 = x[8];
+    const double x_9 = x[9];
+    const double x_10 = x[10];
+    const double x_11 = x[11];
+    const double x_12 = x[12];
+    const double x_13 = x[13];
+    const double x_14 = x[14];
+    const double x_15 = x[15];
+    const double x_16 = x[16];
+    const double x_17 = x[17];
+    const double x_18 = x[18];
+    const double x_19 = x[19];
+    const double x_20 = x[20];
+    const double x_21 = x[21];
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double theta_5 = theta[4];
+    const double theta_6 = theta[5];
+    const double theta_7 = theta[6];
+    const double theta_8 = theta[7];
+    const double theta_9 = theta[8];
+    const double theta_10 = theta[9];
+    const double along_1_0 = plates[0];
+    const double across_1_0 = plates[1];
+    const double omega_1_0 = plates[2];
+    const double along_1_1 = plates[3];
+    const double across_1_1 = plates[4];
+    const double omega_1_1 = plates[5];
+    const double along_2_0 = plates[6];
+    const double across_2_0 = plates[7];
+    const double omega_2_0 = plates[8];
+    const double along_2_1 = plates[9];
+    const double across_2_1 = plates[10];
+    const double omega_2_1 = plates[11];
+    const double along_3_0 = plates[12];
+    const double across_3_0 = plates[13];
+    const double omega_3_0 = plates[14];
+    const double along_3_1 = plates[15];
+    const double across_3_1 = plates[16];
+    const double omega_3_1 = plates[17];
+    const double along_4_0 = plates[18];
+    const double across_4_0 = plates[19];
+    const double omega_4_0 = plates[20];
+    const double along_4_1 = plates[21];
+    const double across_4_1 = plates[22];
+    const double omega_4_1 = plates[23];
+    const double along_5_0 = plates[24];
+    const double across_5_0 = plates[25];
+    const double omega_5_0 = plates[26];
+    const double along_5_1 = plates[27];
+    const double across_5_1 = plates[28];
+    const double omega_5_1 = plates[29];
+    const double along_6_0 = plates[30];
+    const double across_6_0 = plates[31];
+    const double omega_6_0 = plates[32];
+    const double along_6_1 = plates[33];
+    const double across_6_1 = plates[34];
+    const double omega_6_1 = plates[35];
+    const double along_7_0 = plates[36];
+    const double across_7_0 = plates[37];
+    const double omega_7_0 = plates[38];
+    const double along_7_1 = plates[39];
+    const double across_7_1 = plates[40];
+    const double omega_7_1 = plates[41];
+    const double along_8_0 = plates[42];
+    const double across_8_0 = plates[43];
+    const double omega_8_0 = plates[44];
+    const double along_8_1 = plates[45];
+    const double across_8_1 = plates[46];
+    const double omega_8_1 = plates[47];
+    const double along_9_0 = plates[48];
+    const double across_9_0 = plates[49];
+    const double omega_9_0 = plates[50];
+    const double along_9_1 = plates[51];
+    const double across_9_1 = plates[52];
+    const double omega_9_1 = plates[53];
+    const double along_10_0 = plates[54];
+    const double across_10_0 = plates[55];
+    const double omega_10_0 = plates[56];
+    const double along_10_1 = plates[57];
+    const double across_10_1 = plates[58];
+    const double omega_10_1 = plates[59];
+    const double p_0 = params[0];
+    const double _tmp0 = 0.0029104275004359953*x_0;
+    const double _tmp1 = _tmp0 + 0.0029104275004359953*x_1;
+    const double _tmp2 = theta_1 + theta_2;
+    const double _tmp3 = _tmp2 + theta_3;
+    const double _tmp4 = _tmp3 + theta_4;
+    const double _tmp5 = _tmp4 + theta_5;
+    const double _tmp6 = sin(_tmp5);
+    const double _tmp7 = sin(_tmp0);
+    const double _tmp8 = 0.0014552137502179977*x_0;
+    const double _tmp9 = pow(sin(_tmp8), 2);
+    const double _tmp10 = -0.05*_tmp7 - 0.04*_tmp9;
+    const double _tmp11 = cos(_tmp5);
+    const double _tmp12 = 0.1*_tmp9 - 0.02*_tmp7;
+    const double _tmp13 = sin(_tmp1);
+    const double _tmp14 = 0.0014552137502179977*x_1;
+    const double _tmp15 = pow(sin(_tmp14 + _tmp8), 2);
+    const double _tmp16 = 0.04*_tmp13 - 0.1*_tmp15;
+    const double _tmp17 = _tmp5 + theta_6;
+    const double _tmp18 = sin(_tmp17);
+    const double _tmp19 = -0.05*_tmp13 - 0.08*_tmp15;
+    const double _tmp20 = cos(_tmp17);
+    const double _tmp21 = 0.5*p_0;
+    const double _tmp22 = 0.25*theta_1;
+    const double _tmp23 = 0.5*x_12;
+    const double _tmp24 = _tmp22 - _tmp23;
+    const double _tmp25 = cos(_tmp24);
+    const double _tmp26 = _tmp21*across_1_0;
+    const double _tmp27 = _tmp22 + _tmp23;
+    const double _tmp28 = _tmp21*cos(_tmp27);
+    const double _tmp29 = sin(_tmp24);
+    const double _tmp30 = _tmp21*(along_1_0 + pow(_tmp27, 2)*symkin_arck(_tmp27));
+    const double _tmp31 = along_1_1 + pow(_tmp24, 2)*symkin_arck(_tmp24);
+    const double _tmp32 = _tmp21*sin(_tmp27);
+    const double _tmp33 = _tmp21*sin(1.0*x_12) + _tmp25*_tmp26 + _tmp28*across_1_1 + _tmp31*_tmp32 - _tmp29*_tmp30;
+    const double _tmp34 = 0.5*theta_1;
+    const double _tmp35 = cos(_tmp34);
+    const double _tmp36 = 1666.6666666666667*_tmp35;
+    const double _tmp37 = 0.25*theta_2;
+    const double _tmp38 = 0.5*x_13;
+    const double _tmp39 = _tmp37 - _tmp38;
+    const double _tmp40 = cos(_tmp39);
+    const double _tmp41 = _tmp21*across_2_0;
+    const double _tmp42 = _tmp37 + _tmp38;
+    const double _tmp43 = _tmp21*cos(_tmp42);
+    const double _tmp44 = sin(_tmp39);
+    const double _tmp45 = _tmp21*(along_2_0 + pow(_tmp42, 2)*symkin_arck(_tmp42));
+    const double _tmp46 = along_2_1 + pow(_tmp39, 2)*symkin_arck(_tmp39);
+    const double _tmp47 = _tmp21*sin(_tmp42);
+    const double _tmp48 = _tmp21*sin(1.0*x_13) + _tmp40*_tmp41 + _tmp43*across_2_1 + _tmp46*_tmp47 - _tmp44*_tmp45;
+    const double _tmp49 = theta_1 + 0.5*theta_2;
+    const double _tmp50 = sin(_tmp49);
+    const double _tmp51 = 1666.6666666666667*_tmp50;
+    const double _tmp52 = 0.25*theta_3;
+    const double _tmp53 = 0.5*x_14;
+    const double _tmp54 = _tmp52 - _tmp53;
+    const double _tmp55 = cos(_tmp54);
+    const double _tmp56 = _tmp21*across_3_0;
+    const double _tmp57 = _tmp52 + _tmp53;
+    const double _tmp58 = _tmp21*cos(_tmp57);
+    const double _tmp59 = sin(_tmp54);
+    const double _tmp60 = _tmp21*(along_3_0 + pow(_tmp57, 2)*symkin_arck(_tmp57));
+    const double _tmp61 = along_3_1 + pow(_tmp54, 2)*symkin_arck(_tmp54);
+    const double _tmp62 = _tmp21*sin(_tmp57);
+    const double _tmp63 = _tmp21*sin(1.0*x_14) + _tmp55*_tmp56 + _tmp58*across_3_1 + _tmp61*_tmp62 - _tmp59*_tmp60;
+    const double _tmp64 = _tmp2 + 0.5*theta_3;
+    const double _tmp65 = sin(_tmp64);
+    const double _tmp66 = 1666.6666666666667*_tmp65;
+    const double _tmp67 = 0.25*theta_4;
+    const double _tmp68 = 0.5*x_15;
+    const double _tmp69 = _tmp67 - _tmp68;
+    const double _tmp70 = cos(_tmp69);
+    const double _tmp71 = _tmp21*across_4_0;
+    const double _tmp72 = _tmp67 + _tmp68;
+    const double _tmp73 = _tmp21*cos(_tmp72);
+    const double _tmp74 = sin(_tmp69);
+    const double _tmp75 = _tmp21*(along_4_0 + pow(_tmp72, 2)*symkin_arck(_tmp72));
+    const double _tmp76 = along_4_1 + pow(_tmp69, 2)*symkin_arck(_tmp69);
+    const double _tmp77 = _tmp21*sin(_tmp72);
+    const double _tmp78 = _tmp21*sin(1.0*x_15) + _tmp70*_tmp71 + _tmp73*across_4_1 + _tmp76*_tmp77 - _tmp74*_tmp75;
+    const double _tmp79 = _tmp3 + 0.5*theta_4;
+    const double _tmp80 = 1666.6666666666667*sin(_tmp79);
+    const double _tmp81 = _tmp21*(-2*pow(sin(_tmp23), 2) + 2*pow(sin(_tmp22), 2)) + _tmp25*_tmp30 + _tmp26*_tmp29 + _tmp28*_tmp31 - _tmp32*across_1_1;
+    const double _tmp82 = sin(_tmp34);
+    const double _tmp83 = _tmp21*(-2*pow(sin(_tmp38), 2) + 2*pow(sin(_tmp37), 2)) + _tmp40*_tmp45 + _tmp41*_tmp44 + _tmp43*_tmp46 - _tmp47*across_2_1;
+    const double _tmp84 = 1666.6666666666667*cos(_tmp49);
+    const double _tmp85 = _tmp83*_tmp84;
+    const double _tmp86 = _tmp21*(-2*pow(sin(_tmp53), 2) + 2*pow(sin(_tmp52), 2)) + _tmp55*_tmp60 + _tmp56*_tmp59 + _tmp58*_tmp61 - _tmp62*across_3_1;
+    const double _tmp87 = 1666.6666666666667*cos(_tmp64);
+    const double _tmp88 = _tmp86*_tmp87;
+    const double _tmp89 = _tmp21*(-2*pow(sin(_tmp68), 2) + 2*pow(sin(_tmp67), 2)) + _tmp70*_tmp75 + _tmp71*_tmp74 + _tmp73*_tmp76 - _tmp77*across_4_1;
+    const double _tmp90 = 1666.6666666666667*cos(_tmp79);
+    const double _tmp91 = 0.5*theta_9 + 0.0014552137502179977*x_4;
+    const double _tmp92 = cos(_tmp91);
+    const double _tmp93 = 0.5*x_20;
+    const double _tmp94 = 0.25*theta_9 + 0.0007276068751089988*x_4;
+    const double _tmp95 = _tmp94 - _tmp93;
+    const double _tmp96 = cos(_tmp95);
+    const double _tmp97 = _tmp21*across_9_0;
+    const double _tmp98 = _tmp93 + _tmp94;
+    const double _tmp99 = _tmp21*cos(_tmp98);
+    const double _tmp100 = sin(_tmp95);
+    const double _tmp101 = _tmp21*(along_9_0 + pow(_tmp98, 2)*symkin_arck(_tmp98));
+    const double _tmp102 = along_9_1 + pow(_tmp95, 2)*symkin_arck(_tmp95);
+    const double _tmp103 = _tmp21*sin(_tmp98);
+    const double _tmp104 = 1666.6666666666667*_tmp102*_tmp103 + 1666.6666666666667*_tmp21*sin(1.0*x_20) + 1666.6666666666667*_tmp96*_tmp97 + 1666.6666666666667*_tmp99*across_9_1 - 1666.6666666666667*_tmp100*_tmp101;
+    const double _tmp105 = 0.5*x_16;
+    const double _tmp106 = 0.25*theta_5 + 0.0007276068751089988*x_0;
+    const double _tmp107 = _tmp106 - _tmp105;
+    const double _tmp108 = cos(_tmp107);
+    const double _tmp109 = _tmp21*across_5_0;
+    const double _tmp110 = _tmp105 + _tmp106;
+    const double _tmp111 = _tmp21*cos(_tmp110);
+    const double _tmp112 = sin(_tmp107);
+    const double _tmp113 = _tmp21*(along_5_0 + pow(_tmp110, 2)*symkin_arck(_tmp110));
+    const double _tmp114 = along_5_1 + pow(_tmp107, 2)*symkin_arck(_tmp107);
+    const double _tmp115 = _tmp21*sin(_tmp110);
+    const double _tmp116 = _tmp108*_tmp109 + _tmp111*across_5_1 + _tmp114*_tmp115 + _tmp21*sin(1.0*x_16) - _tmp112*_tmp113;
+    const double _tmp117 = _tmp4 + _tmp8 + 0.5*theta_5;
+    const double _tmp118 = 1666.6666666666667*sin(_tmp117);
+    const double _tmp119 = _tmp0 + _tmp5;
+    const double _tmp120 = _tmp119 + _tmp14 + 0.5*theta_6;
+    const double _tmp121 = cos(_tmp120);
+    const double _tmp122 = 0.5*x_17;
+    const double _tmp123 = 0.25*theta_6 + 0.0007276068751089988*x_1;
+    const double _tmp124 = _tmp123 - _tmp122;
+    const double _tmp125 = cos(_tmp124);
+    const double _tmp126 = _tmp21*across_6_0;
+    const double _tmp127 = _tmp122 + _tmp123;
+    const double _tmp128 = _tmp21*cos(_tmp127);
+    const double _tmp129 = sin(_tmp124);
+    const double _tmp130 = _tmp21*(along_6_0 + pow(_tmp127, 2)*symkin_arck(_tmp127));
+    const double _tmp131 = along_6_1 + pow(_tmp124, 2)*symkin_arck(_tmp124);
+    const double _tmp132 = _tmp21*sin(_tmp127);
+    const double _tmp133 = _tmp125*_tmp126 + _tmp128*across_6_1 + _tmp131*_tmp132 + _tmp21*sin(1.0*x_17) - _tmp129*_tmp130;
+    const double _tmp134 = _tmp121*_tmp133;
+    const double _tmp135 = sin(_tmp91);
+    const double _tmp136 = _tmp100*_tmp97 + _tmp101*_tmp96 + _tmp102*_tmp99 + _tmp21*(-2*pow(sin(_tmp93), 2) + 2*pow(sin(_tmp94), 2)) - _tmp103*across_9_1;
+    const double _tmp137 = _tmp108*_tmp113 + _tmp109*_tmp112 + _tmp111*_tmp114 + _tmp21*(-2*pow(sin(_tmp105), 2) + 2*pow(sin(_tmp106), 2)) - _tmp115*across_5_1;
+    const double _tmp138 = 1666.6666666666667*cos(_tmp117);
+    const double _tmp139 = sin(_tmp120);
+    const double _tmp140 = _tmp125*_tmp130 + _tmp126*_tmp129 + _tmp128*_tmp131 + _tmp21*(-2*pow(sin(_tmp122), 2) + 2*pow(sin(_tmp123), 2)) - _tmp132*across_6_1;
+    const double _tmp141 = _tmp139*_tmp140;
+    const double _tmp142 = _tmp36*_tmp81 + _tmp48*_tmp84 + _tmp51*_tmp83 + _tmp63*_tmp87 + _tmp66*_tmp86 - 1666.6666666666667*_tmp33*_tmp82;
+    const double _tmp143 = 0.0029104275004359953*x_2;
+    const double _tmp144 = _tmp143 + 0.0029104275004359953*x_3;
+    const double _tmp145 = _tmp3 + theta_7;
+    const double _tmp146 = sin(_tmp145);
+    const double _tmp147 = sin(_tmp143);
+    const double _tmp148 = 0.0014552137502179977*x_2;
+    const double _tmp149 = pow(sin(_tmp148), 2);
+    const double _tmp150 = -0.01*_tmp149 - 0.04*_tmp147;
+    const double _tmp151 = cos(_tmp145);
+    const double _tmp152 = 0.08*_tmp149 - 0.005*_tmp147;
+    const double _tmp153 = sin(_tmp144);
+    const double _tmp154 = 0.0014552137502179977*x_3;
+    const double _tmp155 = pow(sin(_tmp148 + _tmp154), 2);
+    const double _tmp156 = 0.025*_tmp153 - 0.07*_tmp155;
+    const double _tmp157 = _tmp145 + theta_8;
+    const double _tmp158 = sin(_tmp157);
+    const double _tmp159 = cos(_tmp157);
+    const double _tmp160 = -0.035*_tmp153 - 0.05*_tmp155;
+    const double _tmp161 = 0.5*theta_10 + 0.0014552137502179977*x_5;
+    const double _tmp162 = cos(_tmp161);
+    const double _tmp163 = 0.5*x_21;
+    const double _tmp164 = 0.25*theta_10 + 0.0007276068751089988*x_5;
+    const double _tmp165 = _tmp164 - _tmp163;
+    const double _tmp166 = cos(_tmp165);
+    const double _tmp167 = _tmp21*across_10_0;
+    const double _tmp168 = _tmp163 + _tmp164;
+    const double _tmp169 = _tmp21*cos(_tmp168);
+    const double _tmp170 = sin(_tmp165);
+    const double _tmp171 = _tmp21*(along_10_0 + pow(_tmp168, 2)*symkin_arck(_tmp168));
+    const double _tmp172 = along_10_1 + pow(_tmp165, 2)*symkin_arck(_tmp165);
+    const double _tmp173 = _tmp21*sin(_tmp168);
+    const double _tmp174 = 1666.6666666666667*_tmp166*_tmp167 + 1666.6666666666667*_tmp169*across_10_1 + 1666.6666666666667*_tmp172*_tmp173 + 1666.6666666666667*_tmp21*sin(1.0*x_21) - 1666.6666666666667*_tmp170*_tmp171;
+    const double _tmp175 = _tmp148 + _tmp3 + 0.5*theta_7;
+    const double _tmp176 = sin(_tmp175);
+    const double _tmp177 = 0.5*x_18;
+    const double _tmp178 = 0.25*theta_7 + 0.0007276068751089988*x_2;
+    const double _tmp179 = _tmp178 - _tmp177;
+    const double _tmp180 = cos(_tmp179);
+    const double _tmp181 = _tmp21*across_7_0;
+    const double _tmp182 = _tmp177 + _tmp178;
+    const double _tmp183 = _tmp21*cos(_tmp182);
+    const double _tmp184 = sin(_tmp179);
+    const double _tmp185 = _tmp21*(along_7_0 + pow(_tmp182, 2)*symkin_arck(_tmp182));
+    const double _tmp186 = along_7_1 + pow(_tmp179, 2)*symkin_arck(_tmp179);
+    const double _tmp187 = _tmp21*sin(_tmp182);
+    const double _tmp188 = _tmp180*_tmp181 + _tmp183*across_7_1 + _tmp186*_tmp187 + _tmp21*sin(1.0*x_18) - _tmp184*_tmp185;
+    const double _tmp189 = _tmp143 + _tmp145;
+    const double _tmp190 = _tmp154 + _tmp189 + 0.5*theta_8;
+    const double _tmp191 = sin(_tmp190);
+    const double _tmp192 = 0.5*x_19;
+    const double _tmp193 = 0.25*theta_8 + 0.0007276068751089988*x_3;
+    const double _tmp194 = _tmp193 - _tmp192;
+    const double _tmp195 = cos(_tmp194);
+    const double _tmp196 = _tmp21*across_8_0;
+    const double _tmp197 = _tmp192 + _tmp193;
+    const double _tmp198 = _tmp21*cos(_tmp197);
+    const double _tmp199 = sin(_tmp194);
+    const double _tmp200 = _tmp21*(along_8_0 + pow(_tmp197, 2)*symkin_arck(_tmp197));
+    const double _tmp201 = along_8_1 + pow(_tmp194, 2)*symkin_arck(_tmp194);
+    const double _tmp202 = _tmp21*sin(_tmp197);
+    const double _tmp203 = _tmp195*_tmp196 + _tmp198*across_8_1 + _tmp201*_tmp202 + _tmp21*sin(1.0*x_19) - _tmp199*_tmp200;
+    const double _tmp204 = sin(_tmp161);
+    const double _tmp205 = _tmp166*_tmp171 + _tmp167*_tmp170 + _tmp169*_tmp172 + _tmp21*(-2*pow(sin(_tmp163), 2) + 2*pow(sin(_tmp164), 2)) - _tmp173*across_10_1;
+    const double _tmp206 = _tmp180*_tmp185 + _tmp181*_tmp184 + _tmp183*_tmp186 + _tmp21*(-2*pow(sin(_tmp177), 2) + 2*pow(sin(_tmp178), 2)) - _tmp187*across_7_1;
+    const double _tmp207 = 1666.6666666666667*cos(_tmp175);
+    const double _tmp208 = cos(_tmp190);
+    const double _tmp209 = _tmp195*_tmp200 + _tmp196*_tmp199 + _tmp198*_tmp201 + _tmp21*(-2*pow(sin(_tmp192), 2) + 2*pow(sin(_tmp193), 2)) - _tmp202*across_8_1;
+    const double _tmp210 = _tmp191*_tmp209;
+    const double _tmp211 = _tmp203*_tmp208;
+    const double _tmp212 = 0.9999999999999999*x_8;
+    const double _tmp213 = 2.407407407407407e-05*pow(p_0, 2)*((p_0 <= 0.006) ? (230769230769.23077) : (210000000000));
+    const double _tmp214 = _tmp213*omega_5_1;
+    const double _tmp215 = cos(_tmp119);
+    const double _tmp216 = sin(_tmp119);
+    const double _tmp217 = _tmp1 + _tmp17;
+    const double _tmp218 = sin(_tmp217);
+    const double _tmp219 = -0.05 + _tmp21;
+    const double _tmp220 = cos(_tmp217);
+    const double _tmp221 = 0.04*_tmp218 - _tmp219*_tmp220;
+    const double _tmp222 = 4.850712500726659*x_6;
+    const double _tmp223 = 0.04*_tmp220 + _tmp218*_tmp219;
+    const double _tmp224 = 4.850712500726659*x_7;
+    const double _tmp225 = _tmp213*omega_6_1;
+    const double _tmp226 = 0.9999999999999999*x_11;
+    const double _tmp227 = _tmp213*omega_7_1;
+    const double _tmp228 = sin(_tmp189);
+    const double _tmp229 = cos(_tmp189);
+    const double _tmp230 = _tmp144 + _tmp157;
+    const double _tmp231 = sin(_tmp230);
+    const double _tmp232 = 0.025*_tmp231;
+    const double _tmp233 = -0.035 + _tmp21;
+    const double _tmp234 = cos(_tmp230);
+    const double _tmp235 = 4.850712500726659*x_9;
+    const double _tmp236 = 0.025*_tmp234 + _tmp231*_tmp233;
+    const double _tmp237 = 4.850712500726659*x_10;
+    const double _tmp238 = _tmp213*omega_8_1;
+    const double _tmp239 = _tmp213*omega_9_1;
+    const double _tmp240 = _tmp213*omega_10_1;
+    const double _tmp241 = _tmp23 + 0.75*theta_1;
+    const double _tmp242 = cos(_tmp241);
+    const double _tmp243 = along_1_1 + symkin_sinr0(_tmp24);
+    const double _tmp244 = _tmp21*sin(_tmp241);
+    const double _tmp245 = -4.850712500726659*x_10 - 4.850712500726659*x_7;
+    const double _tmp246 = -4.850712500726659*x_6 - 4.850712500726659*x_9;
+    const double _tmp247 = _tmp38 + theta_1 + 0.75*theta_2;
+    const double _tmp248 = _tmp21*sin(_tmp247);
+    const double _tmp249 = cos(_tmp247);
+    const double _tmp250 = along_2_1 + symkin_sinr0(_tmp39);
+    const double _tmp251 = _tmp2 + _tmp53 + 0.75*theta_3;
+    const double _tmp252 = _tmp21*sin(_tmp251);
+    const double _tmp253 = along_3_1 + symkin_sinr0(_tmp54);
+    const double _tmp254 = cos(_tmp251);
+    const double _tmp255 = _tmp3 + _tmp68 + 0.75*theta_4;
+    const double _tmp256 = cos(_tmp255);
+    const double _tmp257 = along_4_1 + symkin_sinr0(_tmp69);
+    const double _tmp258 = _tmp21*sin(_tmp255);
+    const double _tmp259 = _tmp105 + _tmp4 + 0.75*theta_5 + 0.0021828206253269966*x_0;
+    const double _tmp260 = cos(_tmp259);
+    const double _tmp261 = along_5_1 + symkin_sinr0(_tmp107);
+    const double _tmp262 = _tmp21*sin(_tmp259);
+    const double _tmp263 = _tmp119 + _tmp122 + 0.75*theta_6 + 0.0021828206253269966*x_1;
+    const double _tmp264 = _tmp21*sin(_tmp263);
+    const double _tmp265 = along_6_1 + symkin_sinr0(_tmp124);
+    const double _tmp266 = cos(_tmp263);
+    const double _tmp267 = _tmp177 + _tmp3 + 0.75*theta_7 + 0.0021828206253269966*x_2;
+    const double _tmp268 = _tmp21*sin(_tmp267);
+    const double _tmp269 = along_7_1 + symkin_sinr0(_tmp179);
+    const double _tmp270 = cos(_tmp267);
+    const double _tmp271 = _tmp189 + _tmp192 + 0.75*theta_8 + 0.0021828206253269966*x_3;
+    const double _tmp272 = _tmp21*sin(_tmp271);
+    const double _tmp273 = along_8_1 + symkin_sinr0(_tmp194);
+    const double _tmp274 = cos(_tmp271);
+    const double _tmp275 = _tmp93 + 0.75*theta_9 + 0.0021828206253269966*x_4;
+    const double _tmp276 = _tmp21*sin(_tmp275);
+    const double _tmp277 = cos(_tmp275);
+    const double _tmp278 = along_9_1 + symkin_sinr0(_tmp95);
+    const double _tmp279 = _tmp163 + 0.75*theta_10 + 0.0021828206253269966*x_5;
+    const double _tmp280 = cos(_tmp279);
+    const double _tmp281 = along_10_1 + symkin_sinr0(_tmp165);
+    const double _tmp282 = _tmp21*sin(_tmp279);
+    out[0] = -_tmp1 + 0.0029104275004359953*x_4;
+    out[1] = -_tmp85 - _tmp88 + 1666.6666666666667*_tmp134 + 1666.6666666666667*_tmp141 + _tmp116*_tmp118 + _tmp33*_tmp36 + _tmp48*_tmp51 + _tmp63*_tmp66 + _tmp78*_tmp80 - _tmp104*_tmp92 - _tmp137*_tmp138 - _tmp89*_tmp90 + 1666.6666666666667*_tmp11*_tmp12 + 1666.6666666666667*_tmp19*_tmp20 + 1666.6666666666667*_tmp81*_tmp82 - 1666.6666666666667*_tmp10*_tmp6 - 1666.6666666666667*_tmp135*_tmp136 - 1666.6666666666667*_tmp16*_tmp18;
+    out[2] = -_tmp142 - _tmp104*_tmp135 - _tmp116*_tmp138 - _tmp118*_tmp137 - _tmp78*_tmp90 - _tmp80*_tmp89 + 1666.6666666666667*_tmp10*_tmp11 + 1666.6666666666667*_tmp12*_tmp6 + 1666.6666666666667*_tmp133*_tmp139 + 1666.6666666666667*_tmp136*_tmp92 + 1666.6666666666667*_tmp16*_tmp20 + 1666.6666666666667*_tmp18*_tmp19 - 1666.6666666666667*_tmp121*_tmp140;
+    out[3] = -_tmp144 + 0.0029104275004359953*x_5;
+    out[4] = -_tmp85 - _tmp88 - _tmp162*_tmp174 - _tmp206*_tmp207 + 1666.6666666666667*_tmp151*_tmp152 + 1666.6666666666667*_tmp159*_tmp160 + 1666.6666666666667*_tmp176*_tmp188 + 1666.6666666666667*_tmp191*_tmp203 + 1666.6666666666667*_tmp33*_tmp35 + 1666.6666666666667*_tmp48*_tmp50 + 1666.6666666666667*_tmp63*_tmp65 + 1666.6666666666667*_tmp81*_tmp82 - 1666.6666666666667*_tmp146*_tmp150 - 1666.6666666666667*_tmp156*_tmp158 - 1666.6666666666667*_tmp204*_tmp205 - 1666.6666666666667*_tmp208*_tmp209;
+    out[5] = -_tmp142 - 1666.6666666666667*_tmp210 - 1666.6666666666667*_tmp211 - _tmp174*_tmp204 - _tmp188*_tmp207 + 1666.6666666666667*_tmp146*_tmp152 + 1666.6666666666667*_tmp150*_tmp151 + 1666.6666666666667*_tmp156*_tmp159 + 1666.6666666666667*_tmp158*_tmp160 + 1666.6666666666667*_tmp162*_tmp205 - 1666.6666666666667*_tmp176*_tmp206;
+    out[6] = _tmp212 + _tmp214 + _tmp224*(-_tmp134 - _tmp141 - _tmp223 + 0.05*_tmp215 + 0.02*_tmp216 - _tmp21*_tmp215) - _tmp222*(-_tmp221 + 0.05*_tmp216 - 0.02*_tmp215 + _tmp121*_tmp140 - _tmp133*_tmp139 - _tmp21*_tmp216);
+    out[7] = _tmp212 + _tmp225 + _tmp224*(-_tmp223 + 0.5*_tmp218*p_0) - _tmp222*(-_tmp221 - _tmp21*_tmp220);
+    out[8] = _tmp226 + _tmp227 + _tmp237*(-_tmp236 + 0.005*_tmp228 + 0.04*_tmp229 + _tmp208*_tmp209 - _tmp191*_tmp203 - _tmp21*_tmp229) - _tmp235*(_tmp210 + _tmp211 - _tmp232 + 0.04*_tmp228 - 0.005*_tmp229 + _tmp233*_tmp234 - _tmp21*_tmp228);
+    out[9] = _tmp226 + _tmp238 + _tmp237*(-_tmp236 - _tmp21*_tmp234) - _tmp235*(-_tmp232 + _tmp233*_tmp234 - _tmp21*_tmp231);
+    out[10] = -_tmp239 + 0.9999999999999999*x_8;
+    out[11] = -_tmp240 + 0.9999999999999999*x_11;
+    out[12] = _tmp213*omega_1_0 + _tmp246*(-_tmp244*across_1_1 + 0.5*_tmp242*_tmp243*p_0) - _tmp213*omega_1_1 - _tmp245*(-_tmp243*_tmp244 - _tmp21*_tmp242*across_1_1);
+    out[13] = _tmp213*omega_2_0 + _tmp246*(_tmp248*_tmp250 + _tmp21*_tmp249*across_2_1) - _tmp213*omega_2_1 - _tmp245*(-_tmp248*across_2_1 + 0.5*_tmp249*_tmp250*p_0);
+    out[14] = _tmp213*omega_3_0 + _tmp246*(_tmp252*_tmp253 + _tmp21*_tmp254*across_3_1) - _tmp213*omega_3_1 - _tmp245*(-_tmp252*across_3_1 + 0.5*_tmp253*_tmp254*p_0);
+    out[15] = _tmp213*omega_4_0 + _tmp224*(-_tmp258*across_4_1 + 0.5*_tmp256*_tmp257*p_0) - _tmp213*omega_4_1 - _tmp222*(_tmp257*_tmp258 + _tmp21*_tmp256*across_4_1);
+    out[16] = -_tmp214 + _tmp213*omega_5_0 + _tmp224*(-_tmp262*across_5_1 + 0.5*_tmp260*_tmp261*p_0) - _tmp222*(_tmp261*_tmp262 + _tmp21*_tmp260*across_5_1);
+    out[17] = -_tmp225 + _tmp213*omega_6_0 + _tmp224*(-_tmp264*_tmp265 - _tmp21*_tmp266*across_6_1) - _tmp222*(-_tmp264*across_6_1 + 0.5*_tmp265*_tmp266*p_0);
+    out[18] = -_tmp227 + _tmp213*omega_7_0 + _tmp237*(-_tmp268*across_7_1 + 0.5*_tmp269*_tmp270*p_0) - _tmp235*(_tmp268*_tmp269 + _tmp21*_tmp270*across_7_1);
+    out[19] = -_tmp238 + _tmp213*omega_8_0 + _tmp237*(-_tmp272*across_8_1 + 0.5*_tmp273*_tmp274*p_0) - _tmp235*(_tmp272*_tmp273 + _tmp21*_tmp274*across_8_1);
+    out[20] = -_tmp239 + _tmp213*omega_9_0 + _tmp222*(-_tmp276*across_9_1 + 0.5*_tmp277*_tmp278*p_0) - _tmp224*(-_tmp276*_tmp278 - _tmp21*_tmp277*across_9_1);
+    out[21] = -_tmp240 + _tmp213*omega_10_0 + _tmp235*(-_tmp282*across_10_1 + 0.5*_tmp280*_tmp281*p_0) - _tmp237*(-_tmp281*_tmp282 - _tmp21*_tmp280*across_10_1);
+}
+
 /* loaded (2 half plate(s) per plate): deviation of every point (116 operations) */
 static void sk_loaded_dev2(const double *x, const double *theta, const double *plates, const double *params, double *out)
 {
@@ -11279,7 +11871,84 @@ static void sk_plate_relation4(const double *plate, double *out)
     out[11] = -_tmp77 - 0.5*_tmp0 - 0.5*_tmp17 - 0.5*_tmp29 - 0.5*_tmp59 - _tmp60*_tmp75 + 0.5*_tmp1*_tmp11 + 0.5*_tmp39*_tmp4 + 0.5*_tmp79*p;
 }
 
-/* one plate's relation at order 2, values alone: (along, across, omega) (62 operations) */
+/* one plate's relation at order 4, values alone: (along, across, omega) (114 operations) */
+static void sk_plate_values4(const double *plate, double *out)
+{
+    const double theta = plate[0];
+    const double p = plate[1];
+    const double f = plate[2];
+    const double e_a = plate[3];
+    const double e_s = plate[4];
+    const double theta_sq = pow(theta, 2);
+    const double f_sq = pow(f, 2);
+    const double _tmp0 = e_a*p;
+    const double _tmp1 = pow(theta_sq, 2);
+    const double _tmp2 = -2*e_s + 2*e_a;
+    const double _tmp3 = _tmp2*p;
+    const double _tmp4 = 1 + _tmp3;
+    const double _tmp5 = e_a - e_s;
+    const double _tmp6 = _tmp5*p;
+    const double _tmp7 = 1 + _tmp6;
+    const double _tmp7_sq = pow(_tmp7, 2);
+    const double _tmp8 = _tmp7*p;
+    const double _tmp9 = symkin_bcol_h(_tmp8);
+    const double _tmp10 = symkin_bcol_e3c_at(_tmp8, _tmp9);
+    const double _tmp11 = -0.0005208333333333333*_tmp3 + _tmp10*_tmp4;
+    const double _tmp12 = pow(theta, 2);
+    const double _tmp13 = symkin_bcol_w_at(_tmp8, _tmp9);
+    const double _tmp14 = symkin_bcol_invt_at(_tmp8, _tmp9);
+    const double _tmp15 = pow(_tmp14, 2);
+    const double _tmp16 = -0.041666666666666664*_tmp3 + 0.3333333333333333*_tmp13*_tmp15*_tmp4*_tmp7*p;
+    const double _tmp17 = _tmp12*_tmp16;
+    const double _tmp18 = symkin_bcol_s_at(_tmp8, _tmp9);
+    const double _tmp19 = symkin_bcol_e1_at(_tmp8, _tmp9);
+    const double _tmp20 = 2*f;
+    const double _tmp21 = _tmp12*_tmp7;
+    const double _tmp22 = _tmp20*_tmp21;
+    const double _tmp23 = 4*(f*f*f);
+    const double _tmp24 = (_tmp7*_tmp7*_tmp7);
+    const double _tmp25 = symkin_bcol_e2_at(_tmp8, _tmp9);
+    const double _tmp26 = _tmp24*_tmp25;
+    const double _tmp27 = -_tmp19*_tmp22 - _tmp23*_tmp26 + _tmp18*_tmp7*f;
+    const double _tmp28 = _tmp27*_tmp5;
+    const double _tmp29 = _tmp28*f;
+    const double _tmp30 = pow(f, 2);
+    const double _tmp31 = pow(_tmp7, 2);
+    const double _tmp32 = _tmp30*_tmp31;
+    const double _tmp33 = pow(_tmp7_sq, 2);
+    const double _tmp34 = pow(f_sq, 2);
+    const double _tmp35 = symkin_bcol_e2_d1_at(_tmp8, _tmp9);
+    const double _tmp36 = _tmp34*_tmp35;
+    const double _tmp37 = symkin_bcol_e1_d1_at(_tmp8, _tmp9);
+    const double _tmp38 = _tmp12*_tmp32;
+    const double _tmp39 = _tmp13*_tmp32 + _tmp33*_tmp36 + _tmp37*_tmp38;
+    const double _tmp40 = _tmp0 + _tmp17 + _tmp29 - _tmp1*_tmp11 - _tmp39*_tmp4;
+    const double _tmp41 = e_s*f;
+    const double _tmp42 = _tmp27*_tmp7;
+    const double _tmp43 = _tmp41 + _tmp42;
+    const double _tmp44 = symkin_bcol_e3_at(_tmp8, _tmp9);
+    const double _tmp45 = 4*(theta*theta*theta);
+    const double _tmp46 = 2*theta;
+    const double _tmp47 = _tmp32*_tmp46;
+    const double _tmp50 = 0.25*_tmp12;
+    const double _tmp48 = 0.5*theta;
+    const double _tmp49 = symkin_sinr5(_tmp48);
+    const double _tmp51 = 2.7557319223985893e-06 + _tmp49*_tmp50;
+    const double _tmp52 = -0.0001984126984126984 + _tmp50*_tmp51;
+    const double _tmp53 = 0.09375*_tmp52*theta*pow(theta_sq, 2);
+    const double _tmp54 = symkin_cosr5(_tmp48);
+    const double _tmp55 = 5.5114638447971785e-06 + _tmp50*_tmp54 - 1.75*_tmp12*_tmp49;
+    const double _tmp56 = 0.00390625*theta*(theta_sq*theta_sq*theta_sq);
+    const double _tmp57 = _tmp55*_tmp56;
+    const double _tmp58 = 0.5*p;
+    const double _tmp59 = symkin_sinr0(_tmp48);
+    const double _tmp60 = 0.5*f;
+    out[0] = _tmp40;
+    out[1] = _tmp43;
+    out[2] = _tmp14*theta + _tmp19*_tmp47 + _tmp43*_tmp58 + _tmp44*_tmp45 - _tmp60*(_tmp40 + _tmp59) - p*(_tmp53 + _tmp57);
+}
+
+/* one plate's relation at order 2, values alone: (along, across, omega) (66 operations) */
 static void sk_plate_values2(const double *plate, double *out)
 {
     const double theta = plate[0];
@@ -11287,30 +11956,33 @@ static void sk_plate_values2(const double *plate, double *out)
     const double f = plate[2];
     const double e_a = plate[3];
     const double e_s = plate[4];
+    const double theta_sq = pow(theta, 2);
     const double _tmp0 = p*(-2*e_s + 2*e_a);
     const double _tmp1 = pow(f, 2);
     const double _tmp2 = e_a - e_s;
     const double _tmp3 = 1 + _tmp2*p;
     const double _tmp4 = _tmp3*p;
-    const double _tmp5 = symkin_bcol_s(_tmp4);
-    const double _tmp6 = 1 + _tmp0;
-    const double _tmp7 = pow(_tmp3, 2);
-    const double _tmp8 = e_a*p + pow(theta, 2)*(-0.041666666666666664*_tmp0 + _tmp6*symkin_bcol_a(_tmp4)) + 0.0005208333333333333*_tmp0*pow(theta, 4) + _tmp1*_tmp2*_tmp3*_tmp5 - _tmp1*_tmp6*_tmp7*symkin_bcol_w(_tmp4);
-    const double _tmp9 = e_s*f + _tmp5*_tmp7*f;
-    const double _tmp10 = 0.5*theta;
-    out[0] = _tmp8;
-    out[1] = _tmp9;
-    out[2] = theta*symkin_bcol_invt(_tmp4) - p*(0.00390625*pow(theta, 7)*(-7*symkin_sinr4(_tmp10) + symkin_cosr4(_tmp10)) + 0.09375*pow(theta, 5)*symkin_sinr3(_tmp10)) + 0.5*_tmp9*p - 0.5*f*(_tmp8 + symkin_sinr0(_tmp10));
+    const double _tmp5 = symkin_bcol_h(_tmp4);
+    const double _tmp6 = symkin_bcol_s_at(_tmp4, _tmp5);
+    const double _tmp7 = 1 + _tmp0;
+    const double _tmp8 = pow(_tmp3, 2);
+    const double _tmp9 = e_a*p + pow(theta, 2)*(-0.041666666666666664*_tmp0 + _tmp7*symkin_bcol_a_at(_tmp4, _tmp5)) + 0.0005208333333333333*_tmp0*pow(theta_sq, 2) + _tmp1*_tmp2*_tmp3*_tmp6 - _tmp1*_tmp7*_tmp8*symkin_bcol_w_at(_tmp4, _tmp5);
+    const double _tmp10 = e_s*f + _tmp6*_tmp8*f;
+    const double _tmp11 = 0.5*theta;
+    out[0] = _tmp9;
+    out[1] = _tmp10;
+    out[2] = theta*symkin_bcol_invt_at(_tmp4, _tmp5) - p*(0.00390625*theta*(theta_sq*theta_sq*theta_sq)*(-7*symkin_sinr4(_tmp11) + symkin_cosr4(_tmp11)) + 0.09375*theta*pow(theta_sq, 2)*symkin_sinr3(_tmp11)) + 0.5*_tmp10*p - 0.5*f*(_tmp9 + symkin_sinr0(_tmp11));
 }
 
-/* one plate's relation at order 4 where it carries no force (p = f = 0): (along, across, omega) and their partials by (theta, p, f) (39 operations) */
+/* one plate's relation at order 4 where it carries no force (p = f = 0): (along, across, omega) and their partials by (theta, p, f) (40 operations) */
 static void sk_plate_rest4(const double *plate, double *out)
 {
     const double theta = plate[0];
     const double e_a = plate[3];
     const double e_s = plate[4];
+    const double theta_sq = pow(theta, 2);
     const double _tmp0 = pow(theta, 2);
-    const double _tmp1 = pow(theta, 4);
+    const double _tmp1 = pow(theta_sq, 2);
     const double _tmp2 = 0.5*theta;
     out[0] = 0;
     out[1] = 0;
@@ -11322,7 +11994,7 @@ static void sk_plate_rest4(const double *plate, double *out)
     out[7] = 0;
     out[8] = 0.08333333333333333 + e_s - 0.004166666666666667*_tmp0;
     out[9] = 1;
-    out[10] = 0.00026041666666666666*theta*(320 - 8*_tmp0 - 360*_tmp1*symkin_sinr3(_tmp2) + 15*pow(theta, 6)*(-symkin_cosr4(_tmp2) + 7*symkin_sinr4(_tmp2)));
+    out[10] = 0.00026041666666666666*theta*(320 - 8*_tmp0 - 360*_tmp1*symkin_sinr3(_tmp2) + 15*(theta_sq*theta_sq*theta_sq)*(-symkin_cosr4(_tmp2) + 7*symkin_sinr4(_tmp2)));
     out[11] = -0.5*symkin_sinr0(_tmp2);
 }
 
@@ -12209,6 +12881,7 @@ typedef struct {
     sk_fn3 plates;      /* (x, theta, params): per half plate (theta_c, p, f, e_a, e_s), then
                            d(theta_c, p, f)/dx (3 half plates x size) */
     sk_fn4 system;      /* (x, theta, plates, params): R, dR/dx, dR/d(plates) */
+    sk_fn4 residual;    /* (x, theta, plates, params): R alone (chord steps, the estimate) */
     sk_fn4 dev;         /* (x, theta, plates, params): every point's deviation */
     int size;           /* N: the scaled unknowns (x holds them, then the load factor t) */
     int plates_n;       /* half plates */
@@ -12222,6 +12895,7 @@ typedef struct {
     double tol, max_turn, p_limit, est_factor, est_limit;
     int max_iter;
     int loads;          /* the load factor t enters the routines (the file has loads) */
+    double chord, chord_error;  /* Newton's chord steps (symkin.codegen.loaded.CHORD) */
 } sk_loaded;
 
 /* One variant at one configuration. */
@@ -12264,6 +12938,23 @@ static void sk_red_relation(const sk_red *r, const double *ins, double *rel, dou
     }
 }
 
+/* The plate relation at order 4, its values alone (a chord step's), into vals. */
+static void sk_red_values4(const sk_red *r, const double *ins, double *vals)
+{
+    int i, j;
+    for (i = 0; i < r->v->plates_n; ++i) {
+        if (ins[5 * i + 1] == 0.0 && ins[5 * i + 2] == 0.0) {
+            double rest[12];
+            sk_plate_rest4(ins + 5 * i, rest);
+            for (j = 0; j < 3; ++j) {
+                vals[3 * i + j] = rest[j];
+            }
+        } else {
+            sk_plate_values4(ins + 5 * i, vals + 3 * i);
+        }
+    }
+}
+
 /* The plate relation at order 2, its values alone (the truncation estimate's), into vals. */
 static void sk_red_values2(const sk_red *r, const double *ins, double *vals)
 {
@@ -12275,9 +12966,11 @@ static void sk_red_values2(const sk_red *r, const double *ins, double *vals)
 
 /* One evaluation of the system at order 4 (x, theta, t), kept for what follows it: the plates'
    inputs and relation, the system's output, J's LU and its determinant's sign. The last Newton
-   step's evaluation also gives the acceptance its sign and the truncation estimate its J (the
-   Python solver's rule: J of the step that converged), and the solution's plate values by one
-   first-order correction (the step is below tol: the remainder is below rounding). */
+   step's J also gives the acceptance its sign and the truncation estimate its step (the Python
+   solver's rule: J of the step that converged; here that of the last full step where chord
+   steps followed it, its step below CHORD), and the last evaluation's plate values the
+   solution's by one first-order correction (the step is below tol: the remainder is below
+   rounding). */
 typedef struct {
     double xt[SK_RN + 1], ins[SK_OUT], rel[12 * SK_RS], sys[SK_OUT], lu[SK_RN * SK_RN + 1];
     int piv[SK_RN + 1];
@@ -12329,24 +13022,47 @@ static int sk_red_eval(const sk_red *r, const double *x, const double *theta, do
     return 0;
 }
 
+/* A chord step's evaluation at (x, theta, t) into st: the plates' inputs, the relation's values
+   (their partials and J's LU stay the last full step's) and R. */
+static void sk_red_residual(const sk_red *r, const double *x, const double *theta, double t,
+                            sk_red_state *st)
+{
+    double vals[3 * SK_RS];
+    int i, j;
+    sk_red_inputs(r, x, theta, t, st->xt, st->ins);
+    sk_red_values4(r, st->ins, vals);
+    for (i = 0; i < r->v->plates_n; ++i) {
+        for (j = 0; j < 3; ++j) {
+            st->rel[12 * i + j] = vals[3 * i + j];
+        }
+    }
+    r->v->residual(st->xt, theta, vals, r->params, st->sys);
+}
+
 /* Newton from x at (theta, t): 0 converged, 1 not (a singular or non-finite Jacobian, a step
-   turning a hinge by more than max_turn, a non-finite iterate, too many steps). st: the last
-   step's evaluation; first: det J's sign at the first step (NaN where it was singular). */
+   turning a hinge by more than max_turn, a non-finite iterate, too many steps). After a step
+   below chord times the largest unknown the next reuse its J (chord steps: R alone, J's
+   partials move by about that step) while each shrinks tenfold. st: the last evaluation (J's
+   that of the last full step); first: det J's sign at the first step (NaN where singular). */
 static int sk_red_newton(const sk_red *r, double *x, const double *theta, double t,
                          sk_red_state *st, double *first)
 {
     const int n = r->v->size, nu = r->l->unknowns;
     double res[SK_RN + 1], prev = HUGE_VAL;
-    int it, i;
+    int it, i, chord = 0;
     *first = NAN;
     for (it = 1; it <= r->l->max_iter; ++it) {
         double turn = 0.0, size = 0.0, top = 0.0;
-        const int singular = sk_red_eval(r, x, theta, t, st);
-        if (it == 1) {
-            *first = st->sign;
-        }
-        if (singular) {
-            return 1;
+        if (chord) {
+            sk_red_residual(r, x, theta, t, st);
+        } else {
+            const int singular = sk_red_eval(r, x, theta, t, st);
+            if (it == 1) {
+                *first = st->sign;
+            }
+            if (singular) {
+                return 1;
+            }
         }
         /* sk_lu then sk_lu_solve: sk_solve's operations, the factors kept */
         for (i = 0; i < n; ++i) {
@@ -12375,12 +13091,17 @@ static int sk_red_newton(const sk_red *r, double *x, const double *theta, double
                 top = fabs(x[i]);
             }
         }
-        if (size <= r->l->tol * top || size == 0.0) {
+        /* a Newton step leaves about its square, below rounding; a chord step its size times
+           the contraction (size / prev) */
+        if (size == 0.0
+            || (size <= r->l->tol * top
+                && (!chord || size * size <= r->l->chord_error * top * prev))) {
             return 0;
         }
         if (it > 3 && size > 0.5 * prev && size < 1e-9 * top) {
             return 0;   /* stalled at rounding */
         }
+        chord = size <= r->l->chord * top && (!chord || size <= 0.1 * prev);
         prev = size;
     }
     return 1;
@@ -12432,7 +13153,8 @@ static int sk_red_rigid(const sk_mechanism *m, const double *inputs, const doubl
 
 /* The deviation (dev: every point's) at the solution x and the refusals: 0, 1 a plate at
    p_limit of its sway buckling load, 4 the truncation estimate above est_limit. st: the last
-   Newton step's evaluation at (theta, 1), a step below tol from x (NULL where x has no entries). */
+   Newton step's evaluation at (theta, 1), a step below tol from x (NULL where x has no entries);
+   its J that of the last full step. */
 static int sk_red_answer(const sk_red *r, const double *x, const double *theta,
                          const sk_red_state *st, double *dev)
 {
@@ -12473,7 +13195,7 @@ static int sk_red_answer(const sk_red *r, const double *x, const double *theta,
     }
     if (n > 0) {
         sk_red_values2(r, ins, vals);
-        r->v->system(xt, theta, vals, r->params, sys);
+        r->v->residual(xt, theta, vals, r->params, sys);
         for (i = 0; i < n; ++i) {
             res[i] = sys[i];
         }
@@ -12642,9 +13364,9 @@ static const double sk_loaded_scale2[23] = {0.0029104275004359953, 0.00291042750
 /* the loaded level: per variant (one, two half plates per plate) its routines, size, half
    plates and the unknowns' scales; the unknowns; the rules of symkin.physics.reduced */
 static const sk_loaded sk_loaded_tables = {
-    {{1, sk_loaded_plates1, sk_loaded_system1, sk_loaded_dev1, 12, 10, sk_loaded_scale1}, {2, sk_loaded_plates2, sk_loaded_system2, sk_loaded_dev2, 22, 20, sk_loaded_scale2}},
+    {{1, sk_loaded_plates1, sk_loaded_system1, sk_loaded_res1, sk_loaded_dev1, 12, 10, sk_loaded_scale1}, {2, sk_loaded_plates2, sk_loaded_system2, sk_loaded_res2, sk_loaded_dev2, 22, 20, sk_loaded_scale2}},
     6, 1e-12, 0.2, 0.9, 3.0, 0.01,
-    12, 0
+    12, 0, 0.001, 1e-15
 };
 
 /* One variant's sensitivity routine (x, theta, plates, params) and where its blocks start:

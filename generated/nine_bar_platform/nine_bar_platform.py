@@ -2,7 +2,7 @@
 Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
 Points: F; levels: paper, first_order, exact, loaded.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 158, rigid_res 148, linear 275, newton 531, rigid_points 14, loaded_plates1 285, loaded_system1 937, loaded_dev1 36, loaded_plates2 775, loaded_system2 3363, loaded_dev2 116, dev_paper 33, dev_first_order 33, dev_exact 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97, loaded_sens1 1245, loaded_sens2 3457, plate_relation4 312, plate_values2 62, plate_rest4 39, plate_eps4 158.
+Operation counts after CSE: rigid 158, rigid_res 148, linear 275, newton 531, rigid_points 14, loaded_plates1 285, loaded_system1 937, loaded_res1 460, loaded_dev1 36, loaded_plates2 775, loaded_system2 3363, loaded_res2 1144, loaded_dev2 116, dev_paper 33, dev_first_order 33, dev_exact 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97, loaded_sens1 1245, loaded_sens2 3457, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -556,7 +556,8 @@ def _sensitivity_block(arrays, mech, level, p):
 
 class _LoadedTables:
     """The loaded level's routines and rules: per variant (one, two half plates per plate) its
-    (plates, system, dev) routines, its size, its half plates and its unknowns' scales."""
+    (plates, system, residual, dev) routines, its size, its half plates and its unknowns'
+    scales."""
 
     def __init__(self, **fields):
         self.__dict__.update(fields)
@@ -603,7 +604,10 @@ class _Batch:
 
     def __init__(self, tables, variant, count):
         self.t, self.count = tables, count  # count: half plates per plate
-        self.plates_fn, self.system_fn, self.dev_fn, self.size, self.plates, scale = variant
+        self.plates_fn, self.system_fn, self.res_fn, self.dev_fn, self.size, self.plates = variant[
+            :6
+        ]
+        scale = variant[6]
         self.scale = numpy.array(scale, dtype=float)
 
     def _inputs(self, x, theta, p, t):
@@ -632,6 +636,31 @@ class _Batch:
                 out = [numpy.where(rest, r, v) for r, v in zip(at_rest, out)]
             rel.append(out)
         return rel, [r[j] for r in rel for j in range(3)]
+
+    def _values4(self, ins):
+        """The plate relation at order 4, values alone (a chord step's; reduced.c's
+        sk_red_values4), one half plate after the other."""
+        b = ins[0].shape[0] if ins else 0
+        vals = []
+        for k in range(self.plates):
+            plate = ins[5 * k : 5 * k + 5]
+            rest = (plate[1] == 0.0) & (plate[2] == 0.0)
+            if numpy.all(rest):
+                out = [_red_column(v, b) for v in self.t.rest4(plate)[:3]]
+            else:
+                out = [_red_column(v, b) for v in self.t.values4(plate)]
+                if numpy.any(rest):
+                    at_rest = self.t.rest4(plate)[:3]
+                    out = [numpy.where(rest, r, v) for r, v in zip(at_rest, out)]
+            vals += out
+        return vals
+
+    def residual(self, x, theta, p, t):
+        """R (n, b) at order 4 from the relation's values alone (a chord step's)."""
+        b = x.shape[1]
+        args, ins, _ = self._inputs(x, theta, p, t)
+        vals = self._values4(ins)
+        return numpy.array([_red_column(v, b) for v in self.res_fn(args, theta, vals, p)])
 
     def _values2(self, ins):
         """The plate relation at order 2, values alone (the truncation estimate's), one half
@@ -669,30 +698,45 @@ class _Batch:
     def newton(self, x, theta, p, t):
         """Newton from x (n, b) at (theta, t), each configuration until it converges or fails
         (a singular or non-finite J, a step turning a hinge by more than max_turn, a non-finite
-        iterate, too many steps): (x, converged, each one's last step's J, det J's sign at the
-        first step)."""
+        iterate, too many steps), with reduced.c's chord steps (after a step below chord, R
+        alone with that step's J while each step shrinks tenfold): (x, converged, each one's
+        last full step's J, det J's sign at the first step)."""
         tb, n, nu = self.t, self.size, self.t.unknowns
         b = x.shape[1]
         x, converged = x.copy(), numpy.zeros(b, dtype=bool)
         last, first = numpy.zeros((b, n, n)), None
         prev = numpy.full(b, math.inf)
+        chord = numpy.zeros(b, dtype=bool)
         act = numpy.arange(b)
         for it in range(1, tb.max_iter + 1):
-            res, jac = self.system(x[:, act], [v[act] for v in theta], [v[act] for v in p], t)
-            last[act] = jac
-            if first is None:
-                first = _red_signs(jac)
-            step = _red_solve(jac, res)
+            c = chord[act]
+            step = numpy.zeros((n, act.size))
+            full = act[~c]
+            if full.size:
+                res, jac = self.system(
+                    x[:, full], [v[full] for v in theta], [v[full] for v in p], t
+                )
+                last[full] = jac
+                if first is None:
+                    first = _red_signs(jac)  # the first step: every configuration's full
+                step[:, ~c] = _red_solve(jac, res)
+            if c.any():
+                k = act[c]
+                res = self.residual(x[:, k], [v[k] for v in theta], [v[k] for v in p], t)
+                step[:, c] = _red_solve(last[k], res)
             turn = numpy.max(numpy.abs(step[:nu]), axis=0) * self.scale[0] if nu else 0.0
             xn = x[:, act] - step
             fail = ~(turn <= tb.max_turn) | ~numpy.all(numpy.isfinite(xn), axis=0)
             size = numpy.max(numpy.abs(step), axis=0)
             top = numpy.max(numpy.abs(xn), axis=0)
-            done = (size <= tb.tol * top) | (size == 0)
+            # a Newton step leaves about its square; a chord step its size times the contraction
+            left = ~c | (size * size <= tb.chord_error * top * prev[act])
+            done = ((size <= tb.tol * top) & left) | (size == 0)
             # stalled at rounding
             done |= (it > 3) & (size > 0.5 * prev[act]) & (size < 1e-9 * top)
             x[:, act] = xn
             converged[act[done & ~fail]] = True
+            chord[act] = (size <= tb.chord * top) & (~c | (size <= 0.1 * prev[act]))
             prev[act] = size
             act = act[~done & ~fail]
             if not act.size:
@@ -805,8 +849,8 @@ class _Batch:
         x2 = x
         if n:
             vals2 = self._values2(ins)
-            sys = self.system_fn(args, theta, vals2, p)
-            res = numpy.array([_red_column(v, b) for v in sys[:n]])
+            sys = self.res_fn(args, theta, vals2, p)
+            res = numpy.array([_red_column(v, b) for v in sys])
             x2 = x - _red_solve(jac, res)
         args2, ins2, _ = self._inputs(x2, theta, p, 1.0)
         vals2 = self._values2(ins2)
@@ -843,7 +887,7 @@ def _reduced_solve(mech, x, theta, p, ok):
     flat_delta = [numpy.zeros(where.size) for _ in mech.unknown_index]
     flat_dev = [numpy.full(where.size, numpy.nan) for _ in range(n_dev)]
     # the variant and its solution x, for the sensitivities (templates/numpy/reduced_sens.py)
-    flat_x = [numpy.full(where.size, numpy.nan) for _ in range(max(v[3] for v in tb.variants))]
+    flat_x = [numpy.full(where.size, numpy.nan) for _ in range(max(v[4] for v in tb.variants))]
     flat_variant = numpy.full(where.size, -1)
     for count, variant in enumerate(tb.variants, 1):
         if not todo.size:
@@ -1436,11 +1480,6 @@ def bcol_invt_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = (1.0) / (h * (1.0))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
-
-
-def bcol_invt(p):
-    """bcol_invt(p) = 1/T(p) (vectorised)."""
-    return bcol_invt_at(p, bcol_h(p))
 
 
 def bcol_invt_d1_at(x, h):
@@ -3634,6 +3673,157 @@ def _loaded_system1(x, theta, plates, params):
         0,
         0,
         _tmp226,
+    ]
+
+
+def _loaded_res1(x, theta, plates, params):
+    """loaded (1 half plate(s) per plate): the reduced equilibrium's residual R alone (460 operations)."""
+    x_0, x_1, x_2, x_3, x_4, x_5, x_6, x_7, x_8, x_9, x_10, x_11, _ = x
+    theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7, theta_8, theta_9, theta_10 = theta
+    along_1_0, across_1_0, _, along_2_0, across_2_0, _, along_3_0, across_3_0, _, along_4_0, across_4_0, _, along_5_0, across_5_0, omega_5_0, along_6_0, across_6_0, omega_6_0, along_7_0, across_7_0, omega_7_0, along_8_0, across_8_0, omega_8_0, along_9_0, across_9_0, omega_9_0, along_10_0, across_10_0, omega_10_0 = plates
+    p_0, = params
+    _tmp0 = 0.0029104275004359953*x_0
+    _tmp1 = _tmp0 + 0.0029104275004359953*x_1
+    _tmp2 = 0.5*theta_1
+    _tmp3 = numpy.cos(_tmp2)
+    _tmp4 = 1666.6666666666667*p_0
+    _tmp5 = 0.5*theta_2
+    _tmp6 = _tmp5 + theta_1
+    _tmp7 = numpy.sin(_tmp6)
+    _tmp8 = _tmp4*across_2_0
+    _tmp9 = 0.5*theta_3
+    _tmp10 = theta_1 + theta_2
+    _tmp11 = _tmp10 + _tmp9
+    _tmp12 = numpy.sin(_tmp11)
+    _tmp13 = _tmp4*across_3_0
+    _tmp14 = 0.5*theta_9 + 0.0014552137502179977*x_4
+    _tmp15 = numpy.cos(_tmp14)
+    _tmp16 = 0.5*theta_4
+    _tmp17 = _tmp10 + theta_3
+    _tmp18 = _tmp16 + _tmp17
+    _tmp19 = numpy.sin(_tmp18)
+    _tmp20 = _tmp4*across_4_0
+    _tmp21 = 0.0014552137502179977*x_0
+    _tmp22 = _tmp21 + 0.5*theta_5
+    _tmp23 = _tmp17 + theta_4
+    _tmp24 = _tmp22 + _tmp23
+    _tmp25 = numpy.sin(_tmp24)
+    _tmp26 = _tmp4*across_5_0
+    _tmp27 = numpy.sin(_tmp2)
+    _tmp28 = along_1_0 + 0.25*theta_1**2*arck(_tmp2)
+    _tmp29 = _tmp28*_tmp4
+    _tmp30 = 0.0014552137502179977*x_1
+    _tmp31 = _tmp30 + 0.5*theta_6
+    _tmp32 = _tmp23 + theta_5
+    _tmp33 = _tmp0 + _tmp32
+    _tmp34 = _tmp31 + _tmp33
+    _tmp35 = numpy.cos(_tmp34)
+    _tmp36 = _tmp35*p_0
+    _tmp37 = _tmp36*across_6_0
+    _tmp38 = numpy.cos(_tmp6)
+    _tmp39 = _tmp4*(along_2_0 + 0.25*theta_2**2*arck(_tmp5))
+    _tmp40 = _tmp38*_tmp39
+    _tmp41 = numpy.cos(_tmp11)
+    _tmp42 = _tmp4*(along_3_0 + 0.25*theta_3**2*arck(_tmp9))
+    _tmp43 = _tmp41*_tmp42
+    _tmp44 = numpy.cos(_tmp18)
+    _tmp45 = _tmp4*(along_4_0 + 0.25*theta_4**2*arck(_tmp16))
+    _tmp46 = numpy.sin(_tmp32)
+    _tmp47 = numpy.sin(_tmp0)
+    _tmp48 = numpy.sin(_tmp21)**2
+    _tmp49 = -0.05*_tmp47 - 0.04*_tmp48
+    _tmp50 = numpy.cos(_tmp32)
+    _tmp51 = 0.1*_tmp48 - 0.02*_tmp47
+    _tmp52 = along_9_0 + _tmp14**2*arck(_tmp14)
+    _tmp53 = _tmp4*numpy.sin(_tmp14)
+    _tmp54 = numpy.sin(_tmp1)
+    _tmp55 = numpy.sin(_tmp21 + _tmp30)**2
+    _tmp56 = 0.04*_tmp54 - 0.1*_tmp55
+    _tmp57 = _tmp32 + theta_6
+    _tmp58 = numpy.sin(_tmp57)
+    _tmp59 = -0.05*_tmp54 - 0.08*_tmp55
+    _tmp60 = numpy.cos(_tmp57)
+    _tmp61 = numpy.cos(_tmp24)
+    _tmp62 = _tmp4*(along_5_0 + _tmp22**2*arck(_tmp22))
+    _tmp63 = along_6_0 + _tmp31**2*arck(_tmp31)
+    _tmp64 = numpy.sin(_tmp34)
+    _tmp65 = _tmp64*p_0
+    _tmp66 = _tmp63*_tmp65
+    _tmp67 = _tmp12*_tmp42 + _tmp13*_tmp41 + _tmp29*_tmp3 + _tmp38*_tmp8 + _tmp39*_tmp7 - 1666.6666666666667*_tmp27*across_1_0*p_0
+    _tmp68 = 0.0029104275004359953*x_2
+    _tmp69 = _tmp68 + 0.0029104275004359953*x_3
+    _tmp70 = 0.5*theta_10 + 0.0014552137502179977*x_5
+    _tmp71 = numpy.cos(_tmp70)
+    _tmp72 = 0.0014552137502179977*x_2
+    _tmp73 = _tmp72 + 0.5*theta_7
+    _tmp74 = _tmp17 + _tmp73
+    _tmp75 = numpy.sin(_tmp74)
+    _tmp76 = 0.0014552137502179977*x_3
+    _tmp77 = _tmp76 + 0.5*theta_8
+    _tmp78 = _tmp17 + theta_7
+    _tmp79 = _tmp68 + _tmp78
+    _tmp80 = _tmp77 + _tmp79
+    _tmp81 = numpy.sin(_tmp80)
+    _tmp82 = numpy.sin(_tmp78)
+    _tmp83 = numpy.sin(_tmp68)
+    _tmp84 = numpy.sin(_tmp72)**2
+    _tmp85 = -0.01*_tmp84 - 0.04*_tmp83
+    _tmp86 = numpy.cos(_tmp78)
+    _tmp87 = 0.08*_tmp84 - 0.005*_tmp83
+    _tmp88 = along_10_0 + _tmp70**2*arck(_tmp70)
+    _tmp89 = _tmp4*numpy.sin(_tmp70)
+    _tmp90 = numpy.sin(_tmp69)
+    _tmp91 = numpy.sin(_tmp72 + _tmp76)**2
+    _tmp92 = 0.025*_tmp90 - 0.07*_tmp91
+    _tmp93 = _tmp78 + theta_8
+    _tmp94 = numpy.sin(_tmp93)
+    _tmp95 = numpy.cos(_tmp93)
+    _tmp96 = -0.035*_tmp90 - 0.05*_tmp91
+    _tmp97 = numpy.cos(_tmp74)
+    _tmp98 = _tmp4*(along_7_0 + _tmp73**2*arck(_tmp73))
+    _tmp99 = along_8_0 + _tmp77**2*arck(_tmp77)
+    _tmp100 = numpy.cos(_tmp80)
+    _tmp101 = _tmp100*p_0
+    _tmp102 = _tmp101*across_8_0
+    _tmp103 = _tmp81*p_0
+    _tmp104 = _tmp103*_tmp99
+    _tmp105 = 0.9999999999999999*x_8
+    _tmp106 = 1.2037037037037035e-05*p_0**2*_DTYPE(numpy.where(numpy.less_equal(p_0, 0.006), 230769230769.23077, 210000000000))
+    _tmp107 = numpy.cos(_tmp33)
+    _tmp108 = numpy.sin(_tmp33)
+    _tmp109 = 0.5*p_0
+    _tmp110 = _tmp1 + _tmp57
+    _tmp111 = numpy.sin(_tmp110)
+    _tmp112 = -0.05 + _tmp109
+    _tmp113 = numpy.cos(_tmp110)
+    _tmp114 = 0.04*_tmp111 - _tmp112*_tmp113
+    _tmp115 = 4.850712500726659*x_6
+    _tmp116 = 0.04*_tmp113 + _tmp111*_tmp112
+    _tmp117 = 4.850712500726659*x_7
+    _tmp118 = 0.9999999999999999*x_11
+    _tmp119 = numpy.sin(_tmp79)
+    _tmp120 = numpy.cos(_tmp79)
+    _tmp121 = _tmp69 + _tmp93
+    _tmp122 = numpy.sin(_tmp121)
+    _tmp123 = 0.025*_tmp122
+    _tmp124 = -0.035 + _tmp109
+    _tmp125 = numpy.cos(_tmp121)
+    _tmp126 = 4.850712500726659*x_9
+    _tmp127 = 0.025*_tmp125 + _tmp122*_tmp124
+    _tmp128 = 4.850712500726659*x_10
+    return [
+        -_tmp1 + 0.0029104275004359953*x_4,
+        -_tmp40 - _tmp43 + 1666.6666666666667*_tmp37 + 1666.6666666666667*_tmp66 + _tmp12*_tmp13 + _tmp19*_tmp20 + _tmp25*_tmp26 + _tmp27*_tmp29 + _tmp7*_tmp8 - _tmp44*_tmp45 - _tmp52*_tmp53 - _tmp61*_tmp62 + 1666.6666666666667*_tmp50*_tmp51 + 1666.6666666666667*_tmp59*_tmp60 - 1666.6666666666667*_tmp46*_tmp49 - 1666.6666666666667*_tmp56*_tmp58 + _tmp3*_tmp4*across_1_0 - _tmp15*_tmp4*across_9_0,
+        -_tmp67 - _tmp19*_tmp45 - _tmp20*_tmp44 - _tmp25*_tmp62 - _tmp26*_tmp61 - _tmp53*across_9_0 + 1666.6666666666667*_tmp46*_tmp51 + 1666.6666666666667*_tmp49*_tmp50 + 1666.6666666666667*_tmp56*_tmp60 + 1666.6666666666667*_tmp58*_tmp59 - 1666.6666666666667*_tmp36*_tmp63 + 1666.6666666666667*_tmp15*_tmp52*p_0 + 1666.6666666666667*_tmp64*across_6_0*p_0,
+        -_tmp69 + 0.0029104275004359953*x_5,
+        -_tmp40 - _tmp43 - _tmp88*_tmp89 - _tmp97*_tmp98 + 1666.6666666666667*_tmp86*_tmp87 + 1666.6666666666667*_tmp95*_tmp96 - 1666.6666666666667*_tmp101*_tmp99 - 1666.6666666666667*_tmp82*_tmp85 - 1666.6666666666667*_tmp92*_tmp94 - _tmp4*_tmp71*across_10_0 + 1666.6666666666667*_tmp12*across_3_0*p_0 + 1666.6666666666667*_tmp27*_tmp28*p_0 + 1666.6666666666667*_tmp3*across_1_0*p_0 + 1666.6666666666667*_tmp7*across_2_0*p_0 + 1666.6666666666667*_tmp75*across_7_0*p_0 + 1666.6666666666667*_tmp81*across_8_0*p_0,
+        -_tmp67 - 1666.6666666666667*_tmp102 - 1666.6666666666667*_tmp104 - _tmp75*_tmp98 - _tmp89*across_10_0 + 1666.6666666666667*_tmp82*_tmp87 + 1666.6666666666667*_tmp85*_tmp86 + 1666.6666666666667*_tmp92*_tmp95 + 1666.6666666666667*_tmp94*_tmp96 - _tmp4*_tmp97*across_7_0 + 1666.6666666666667*_tmp71*_tmp88*p_0,
+        _tmp105 + _tmp106*omega_5_0 + _tmp117*(-_tmp116 - _tmp37 - _tmp66 + 0.05*_tmp107 + 0.02*_tmp108 - _tmp107*_tmp109) - _tmp115*(-_tmp114 + 0.05*_tmp108 - 0.02*_tmp107 - _tmp108*_tmp109 - _tmp65*across_6_0 + _tmp35*_tmp63*p_0),
+        _tmp105 + _tmp106*omega_6_0 + _tmp117*(-_tmp116 + 0.5*_tmp111*p_0) - _tmp115*(-_tmp114 - _tmp109*_tmp113),
+        _tmp118 + _tmp106*omega_7_0 + _tmp128*(-_tmp127 + 0.005*_tmp119 + 0.04*_tmp120 - _tmp103*across_8_0 - _tmp109*_tmp120 + _tmp100*_tmp99*p_0) - _tmp126*(_tmp102 + _tmp104 - _tmp123 + 0.04*_tmp119 - 0.005*_tmp120 + _tmp124*_tmp125 - _tmp109*_tmp119),
+        _tmp118 + _tmp106*omega_8_0 + _tmp128*(-_tmp127 - _tmp109*_tmp125) - _tmp126*(-_tmp123 + _tmp124*_tmp125 - _tmp109*_tmp122),
+        0.9999999999999999*x_8 - _tmp106*omega_9_0,
+        0.9999999999999999*x_11 - _tmp106*omega_10_0,
     ]
 
 
@@ -7912,6 +8102,321 @@ def _loaded_system2(x, theta, plates, params):
     ]
 
 
+def _loaded_res2(x, theta, plates, params):
+    """loaded (2 half plate(s) per plate): the reduced equilibrium's residual R alone (1144 operations)."""
+    x_0, x_1, x_2, x_3, x_4, x_5, x_6, x_7, x_8, x_9, x_10, x_11, x_12, x_13, x_14, x_15, x_16, x_17, x_18, x_19, x_20, x_21, _ = x
+    theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7, theta_8, theta_9, theta_10 = theta
+    along_1_0, across_1_0, omega_1_0, along_1_1, across_1_1, omega_1_1, along_2_0, across_2_0, omega_2_0, along_2_1, across_2_1, omega_2_1, along_3_0, across_3_0, omega_3_0, along_3_1, across_3_1, omega_3_1, along_4_0, across_4_0, omega_4_0, along_4_1, across_4_1, omega_4_1, along_5_0, across_5_0, omega_5_0, along_5_1, across_5_1, omega_5_1, along_6_0, across_6_0, omega_6_0, along_6_1, across_6_1, omega_6_1, along_7_0, across_7_0, omega_7_0, along_7_1, across_7_1, omega_7_1, along_8_0, across_8_0, omega_8_0, along_8_1, across_8_1, omega_8_1, along_9_0, across_9_0, omega_9_0, along_9_1, across_9_1, omega_9_1, along_10_0, across_10_0, omega_10_0, along_10_1, across_10_1, omega_10_1 = plates
+    p_0, = params
+    _tmp0 = 0.0029104275004359953*x_0
+    _tmp1 = _tmp0 + 0.0029104275004359953*x_1
+    _tmp2 = theta_1 + theta_2
+    _tmp3 = _tmp2 + theta_3
+    _tmp4 = _tmp3 + theta_4
+    _tmp5 = _tmp4 + theta_5
+    _tmp6 = numpy.sin(_tmp5)
+    _tmp7 = numpy.sin(_tmp0)
+    _tmp8 = 0.0014552137502179977*x_0
+    _tmp9 = numpy.sin(_tmp8)**2
+    _tmp10 = -0.05*_tmp7 - 0.04*_tmp9
+    _tmp11 = numpy.cos(_tmp5)
+    _tmp12 = 0.1*_tmp9 - 0.02*_tmp7
+    _tmp13 = numpy.sin(_tmp1)
+    _tmp14 = 0.0014552137502179977*x_1
+    _tmp15 = numpy.sin(_tmp14 + _tmp8)**2
+    _tmp16 = 0.04*_tmp13 - 0.1*_tmp15
+    _tmp17 = _tmp5 + theta_6
+    _tmp18 = numpy.sin(_tmp17)
+    _tmp19 = -0.05*_tmp13 - 0.08*_tmp15
+    _tmp20 = numpy.cos(_tmp17)
+    _tmp21 = 0.5*p_0
+    _tmp22 = 0.25*theta_1
+    _tmp23 = 0.5*x_12
+    _tmp24 = _tmp22 - _tmp23
+    _tmp25 = numpy.cos(_tmp24)
+    _tmp26 = _tmp21*across_1_0
+    _tmp27 = _tmp22 + _tmp23
+    _tmp28 = _tmp21*numpy.cos(_tmp27)
+    _tmp29 = numpy.sin(_tmp24)
+    _tmp30 = _tmp21*(along_1_0 + _tmp27**2*arck(_tmp27))
+    _tmp31 = along_1_1 + _tmp24**2*arck(_tmp24)
+    _tmp32 = _tmp21*numpy.sin(_tmp27)
+    _tmp33 = _tmp21*numpy.sin(1.0*x_12) + _tmp25*_tmp26 + _tmp28*across_1_1 + _tmp31*_tmp32 - _tmp29*_tmp30
+    _tmp34 = 0.5*theta_1
+    _tmp35 = numpy.cos(_tmp34)
+    _tmp36 = 1666.6666666666667*_tmp35
+    _tmp37 = 0.25*theta_2
+    _tmp38 = 0.5*x_13
+    _tmp39 = _tmp37 - _tmp38
+    _tmp40 = numpy.cos(_tmp39)
+    _tmp41 = _tmp21*across_2_0
+    _tmp42 = _tmp37 + _tmp38
+    _tmp43 = _tmp21*numpy.cos(_tmp42)
+    _tmp44 = numpy.sin(_tmp39)
+    _tmp45 = _tmp21*(along_2_0 + _tmp42**2*arck(_tmp42))
+    _tmp46 = along_2_1 + _tmp39**2*arck(_tmp39)
+    _tmp47 = _tmp21*numpy.sin(_tmp42)
+    _tmp48 = _tmp21*numpy.sin(1.0*x_13) + _tmp40*_tmp41 + _tmp43*across_2_1 + _tmp46*_tmp47 - _tmp44*_tmp45
+    _tmp49 = theta_1 + 0.5*theta_2
+    _tmp50 = numpy.sin(_tmp49)
+    _tmp51 = 1666.6666666666667*_tmp50
+    _tmp52 = 0.25*theta_3
+    _tmp53 = 0.5*x_14
+    _tmp54 = _tmp52 - _tmp53
+    _tmp55 = numpy.cos(_tmp54)
+    _tmp56 = _tmp21*across_3_0
+    _tmp57 = _tmp52 + _tmp53
+    _tmp58 = _tmp21*numpy.cos(_tmp57)
+    _tmp59 = numpy.sin(_tmp54)
+    _tmp60 = _tmp21*(along_3_0 + _tmp57**2*arck(_tmp57))
+    _tmp61 = along_3_1 + _tmp54**2*arck(_tmp54)
+    _tmp62 = _tmp21*numpy.sin(_tmp57)
+    _tmp63 = _tmp21*numpy.sin(1.0*x_14) + _tmp55*_tmp56 + _tmp58*across_3_1 + _tmp61*_tmp62 - _tmp59*_tmp60
+    _tmp64 = _tmp2 + 0.5*theta_3
+    _tmp65 = numpy.sin(_tmp64)
+    _tmp66 = 1666.6666666666667*_tmp65
+    _tmp67 = 0.25*theta_4
+    _tmp68 = 0.5*x_15
+    _tmp69 = _tmp67 - _tmp68
+    _tmp70 = numpy.cos(_tmp69)
+    _tmp71 = _tmp21*across_4_0
+    _tmp72 = _tmp67 + _tmp68
+    _tmp73 = _tmp21*numpy.cos(_tmp72)
+    _tmp74 = numpy.sin(_tmp69)
+    _tmp75 = _tmp21*(along_4_0 + _tmp72**2*arck(_tmp72))
+    _tmp76 = along_4_1 + _tmp69**2*arck(_tmp69)
+    _tmp77 = _tmp21*numpy.sin(_tmp72)
+    _tmp78 = _tmp21*numpy.sin(1.0*x_15) + _tmp70*_tmp71 + _tmp73*across_4_1 + _tmp76*_tmp77 - _tmp74*_tmp75
+    _tmp79 = _tmp3 + 0.5*theta_4
+    _tmp80 = 1666.6666666666667*numpy.sin(_tmp79)
+    _tmp81 = _tmp21*(-2*numpy.sin(_tmp23)**2 + 2*numpy.sin(_tmp22)**2) + _tmp25*_tmp30 + _tmp26*_tmp29 + _tmp28*_tmp31 - _tmp32*across_1_1
+    _tmp82 = numpy.sin(_tmp34)
+    _tmp83 = _tmp21*(-2*numpy.sin(_tmp38)**2 + 2*numpy.sin(_tmp37)**2) + _tmp40*_tmp45 + _tmp41*_tmp44 + _tmp43*_tmp46 - _tmp47*across_2_1
+    _tmp84 = 1666.6666666666667*numpy.cos(_tmp49)
+    _tmp85 = _tmp83*_tmp84
+    _tmp86 = _tmp21*(-2*numpy.sin(_tmp53)**2 + 2*numpy.sin(_tmp52)**2) + _tmp55*_tmp60 + _tmp56*_tmp59 + _tmp58*_tmp61 - _tmp62*across_3_1
+    _tmp87 = 1666.6666666666667*numpy.cos(_tmp64)
+    _tmp88 = _tmp86*_tmp87
+    _tmp89 = _tmp21*(-2*numpy.sin(_tmp68)**2 + 2*numpy.sin(_tmp67)**2) + _tmp70*_tmp75 + _tmp71*_tmp74 + _tmp73*_tmp76 - _tmp77*across_4_1
+    _tmp90 = 1666.6666666666667*numpy.cos(_tmp79)
+    _tmp91 = 0.5*theta_9 + 0.0014552137502179977*x_4
+    _tmp92 = numpy.cos(_tmp91)
+    _tmp93 = 0.5*x_20
+    _tmp94 = 0.25*theta_9 + 0.0007276068751089988*x_4
+    _tmp95 = _tmp94 - _tmp93
+    _tmp96 = numpy.cos(_tmp95)
+    _tmp97 = _tmp21*across_9_0
+    _tmp98 = _tmp93 + _tmp94
+    _tmp99 = _tmp21*numpy.cos(_tmp98)
+    _tmp100 = numpy.sin(_tmp95)
+    _tmp101 = _tmp21*(along_9_0 + _tmp98**2*arck(_tmp98))
+    _tmp102 = along_9_1 + _tmp95**2*arck(_tmp95)
+    _tmp103 = _tmp21*numpy.sin(_tmp98)
+    _tmp104 = 1666.6666666666667*_tmp102*_tmp103 + 1666.6666666666667*_tmp21*numpy.sin(1.0*x_20) + 1666.6666666666667*_tmp96*_tmp97 + 1666.6666666666667*_tmp99*across_9_1 - 1666.6666666666667*_tmp100*_tmp101
+    _tmp105 = 0.5*x_16
+    _tmp106 = 0.25*theta_5 + 0.0007276068751089988*x_0
+    _tmp107 = _tmp106 - _tmp105
+    _tmp108 = numpy.cos(_tmp107)
+    _tmp109 = _tmp21*across_5_0
+    _tmp110 = _tmp105 + _tmp106
+    _tmp111 = _tmp21*numpy.cos(_tmp110)
+    _tmp112 = numpy.sin(_tmp107)
+    _tmp113 = _tmp21*(along_5_0 + _tmp110**2*arck(_tmp110))
+    _tmp114 = along_5_1 + _tmp107**2*arck(_tmp107)
+    _tmp115 = _tmp21*numpy.sin(_tmp110)
+    _tmp116 = _tmp108*_tmp109 + _tmp111*across_5_1 + _tmp114*_tmp115 + _tmp21*numpy.sin(1.0*x_16) - _tmp112*_tmp113
+    _tmp117 = _tmp4 + _tmp8 + 0.5*theta_5
+    _tmp118 = 1666.6666666666667*numpy.sin(_tmp117)
+    _tmp119 = _tmp0 + _tmp5
+    _tmp120 = _tmp119 + _tmp14 + 0.5*theta_6
+    _tmp121 = numpy.cos(_tmp120)
+    _tmp122 = 0.5*x_17
+    _tmp123 = 0.25*theta_6 + 0.0007276068751089988*x_1
+    _tmp124 = _tmp123 - _tmp122
+    _tmp125 = numpy.cos(_tmp124)
+    _tmp126 = _tmp21*across_6_0
+    _tmp127 = _tmp122 + _tmp123
+    _tmp128 = _tmp21*numpy.cos(_tmp127)
+    _tmp129 = numpy.sin(_tmp124)
+    _tmp130 = _tmp21*(along_6_0 + _tmp127**2*arck(_tmp127))
+    _tmp131 = along_6_1 + _tmp124**2*arck(_tmp124)
+    _tmp132 = _tmp21*numpy.sin(_tmp127)
+    _tmp133 = _tmp125*_tmp126 + _tmp128*across_6_1 + _tmp131*_tmp132 + _tmp21*numpy.sin(1.0*x_17) - _tmp129*_tmp130
+    _tmp134 = _tmp121*_tmp133
+    _tmp135 = numpy.sin(_tmp91)
+    _tmp136 = _tmp100*_tmp97 + _tmp101*_tmp96 + _tmp102*_tmp99 + _tmp21*(-2*numpy.sin(_tmp93)**2 + 2*numpy.sin(_tmp94)**2) - _tmp103*across_9_1
+    _tmp137 = _tmp108*_tmp113 + _tmp109*_tmp112 + _tmp111*_tmp114 + _tmp21*(-2*numpy.sin(_tmp105)**2 + 2*numpy.sin(_tmp106)**2) - _tmp115*across_5_1
+    _tmp138 = 1666.6666666666667*numpy.cos(_tmp117)
+    _tmp139 = numpy.sin(_tmp120)
+    _tmp140 = _tmp125*_tmp130 + _tmp126*_tmp129 + _tmp128*_tmp131 + _tmp21*(-2*numpy.sin(_tmp122)**2 + 2*numpy.sin(_tmp123)**2) - _tmp132*across_6_1
+    _tmp141 = _tmp139*_tmp140
+    _tmp142 = _tmp36*_tmp81 + _tmp48*_tmp84 + _tmp51*_tmp83 + _tmp63*_tmp87 + _tmp66*_tmp86 - 1666.6666666666667*_tmp33*_tmp82
+    _tmp143 = 0.0029104275004359953*x_2
+    _tmp144 = _tmp143 + 0.0029104275004359953*x_3
+    _tmp145 = _tmp3 + theta_7
+    _tmp146 = numpy.sin(_tmp145)
+    _tmp147 = numpy.sin(_tmp143)
+    _tmp148 = 0.0014552137502179977*x_2
+    _tmp149 = numpy.sin(_tmp148)**2
+    _tmp150 = -0.01*_tmp149 - 0.04*_tmp147
+    _tmp151 = numpy.cos(_tmp145)
+    _tmp152 = 0.08*_tmp149 - 0.005*_tmp147
+    _tmp153 = numpy.sin(_tmp144)
+    _tmp154 = 0.0014552137502179977*x_3
+    _tmp155 = numpy.sin(_tmp148 + _tmp154)**2
+    _tmp156 = 0.025*_tmp153 - 0.07*_tmp155
+    _tmp157 = _tmp145 + theta_8
+    _tmp158 = numpy.sin(_tmp157)
+    _tmp159 = numpy.cos(_tmp157)
+    _tmp160 = -0.035*_tmp153 - 0.05*_tmp155
+    _tmp161 = 0.5*theta_10 + 0.0014552137502179977*x_5
+    _tmp162 = numpy.cos(_tmp161)
+    _tmp163 = 0.5*x_21
+    _tmp164 = 0.25*theta_10 + 0.0007276068751089988*x_5
+    _tmp165 = _tmp164 - _tmp163
+    _tmp166 = numpy.cos(_tmp165)
+    _tmp167 = _tmp21*across_10_0
+    _tmp168 = _tmp163 + _tmp164
+    _tmp169 = _tmp21*numpy.cos(_tmp168)
+    _tmp170 = numpy.sin(_tmp165)
+    _tmp171 = _tmp21*(along_10_0 + _tmp168**2*arck(_tmp168))
+    _tmp172 = along_10_1 + _tmp165**2*arck(_tmp165)
+    _tmp173 = _tmp21*numpy.sin(_tmp168)
+    _tmp174 = 1666.6666666666667*_tmp166*_tmp167 + 1666.6666666666667*_tmp169*across_10_1 + 1666.6666666666667*_tmp172*_tmp173 + 1666.6666666666667*_tmp21*numpy.sin(1.0*x_21) - 1666.6666666666667*_tmp170*_tmp171
+    _tmp175 = _tmp148 + _tmp3 + 0.5*theta_7
+    _tmp176 = numpy.sin(_tmp175)
+    _tmp177 = 0.5*x_18
+    _tmp178 = 0.25*theta_7 + 0.0007276068751089988*x_2
+    _tmp179 = _tmp178 - _tmp177
+    _tmp180 = numpy.cos(_tmp179)
+    _tmp181 = _tmp21*across_7_0
+    _tmp182 = _tmp177 + _tmp178
+    _tmp183 = _tmp21*numpy.cos(_tmp182)
+    _tmp184 = numpy.sin(_tmp179)
+    _tmp185 = _tmp21*(along_7_0 + _tmp182**2*arck(_tmp182))
+    _tmp186 = along_7_1 + _tmp179**2*arck(_tmp179)
+    _tmp187 = _tmp21*numpy.sin(_tmp182)
+    _tmp188 = _tmp180*_tmp181 + _tmp183*across_7_1 + _tmp186*_tmp187 + _tmp21*numpy.sin(1.0*x_18) - _tmp184*_tmp185
+    _tmp189 = _tmp143 + _tmp145
+    _tmp190 = _tmp154 + _tmp189 + 0.5*theta_8
+    _tmp191 = numpy.sin(_tmp190)
+    _tmp192 = 0.5*x_19
+    _tmp193 = 0.25*theta_8 + 0.0007276068751089988*x_3
+    _tmp194 = _tmp193 - _tmp192
+    _tmp195 = numpy.cos(_tmp194)
+    _tmp196 = _tmp21*across_8_0
+    _tmp197 = _tmp192 + _tmp193
+    _tmp198 = _tmp21*numpy.cos(_tmp197)
+    _tmp199 = numpy.sin(_tmp194)
+    _tmp200 = _tmp21*(along_8_0 + _tmp197**2*arck(_tmp197))
+    _tmp201 = along_8_1 + _tmp194**2*arck(_tmp194)
+    _tmp202 = _tmp21*numpy.sin(_tmp197)
+    _tmp203 = _tmp195*_tmp196 + _tmp198*across_8_1 + _tmp201*_tmp202 + _tmp21*numpy.sin(1.0*x_19) - _tmp199*_tmp200
+    _tmp204 = numpy.sin(_tmp161)
+    _tmp205 = _tmp166*_tmp171 + _tmp167*_tmp170 + _tmp169*_tmp172 + _tmp21*(-2*numpy.sin(_tmp163)**2 + 2*numpy.sin(_tmp164)**2) - _tmp173*across_10_1
+    _tmp206 = _tmp180*_tmp185 + _tmp181*_tmp184 + _tmp183*_tmp186 + _tmp21*(-2*numpy.sin(_tmp177)**2 + 2*numpy.sin(_tmp178)**2) - _tmp187*across_7_1
+    _tmp207 = 1666.6666666666667*numpy.cos(_tmp175)
+    _tmp208 = numpy.cos(_tmp190)
+    _tmp209 = _tmp195*_tmp200 + _tmp196*_tmp199 + _tmp198*_tmp201 + _tmp21*(-2*numpy.sin(_tmp192)**2 + 2*numpy.sin(_tmp193)**2) - _tmp202*across_8_1
+    _tmp210 = _tmp191*_tmp209
+    _tmp211 = _tmp203*_tmp208
+    _tmp212 = 0.9999999999999999*x_8
+    _tmp213 = 2.407407407407407e-05*p_0**2*_DTYPE(numpy.where(numpy.less_equal(p_0, 0.006), 230769230769.23077, 210000000000))
+    _tmp214 = _tmp213*omega_5_1
+    _tmp215 = numpy.cos(_tmp119)
+    _tmp216 = numpy.sin(_tmp119)
+    _tmp217 = _tmp1 + _tmp17
+    _tmp218 = numpy.sin(_tmp217)
+    _tmp219 = -0.05 + _tmp21
+    _tmp220 = numpy.cos(_tmp217)
+    _tmp221 = 0.04*_tmp218 - _tmp219*_tmp220
+    _tmp222 = 4.850712500726659*x_6
+    _tmp223 = 0.04*_tmp220 + _tmp218*_tmp219
+    _tmp224 = 4.850712500726659*x_7
+    _tmp225 = _tmp213*omega_6_1
+    _tmp226 = 0.9999999999999999*x_11
+    _tmp227 = _tmp213*omega_7_1
+    _tmp228 = numpy.sin(_tmp189)
+    _tmp229 = numpy.cos(_tmp189)
+    _tmp230 = _tmp144 + _tmp157
+    _tmp231 = numpy.sin(_tmp230)
+    _tmp232 = 0.025*_tmp231
+    _tmp233 = -0.035 + _tmp21
+    _tmp234 = numpy.cos(_tmp230)
+    _tmp235 = 4.850712500726659*x_9
+    _tmp236 = 0.025*_tmp234 + _tmp231*_tmp233
+    _tmp237 = 4.850712500726659*x_10
+    _tmp238 = _tmp213*omega_8_1
+    _tmp239 = _tmp213*omega_9_1
+    _tmp240 = _tmp213*omega_10_1
+    _tmp241 = _tmp23 + 0.75*theta_1
+    _tmp242 = numpy.cos(_tmp241)
+    _tmp243 = along_1_1 + sinr0(_tmp24)
+    _tmp244 = _tmp21*numpy.sin(_tmp241)
+    _tmp245 = -4.850712500726659*x_10 - 4.850712500726659*x_7
+    _tmp246 = -4.850712500726659*x_6 - 4.850712500726659*x_9
+    _tmp247 = _tmp38 + theta_1 + 0.75*theta_2
+    _tmp248 = _tmp21*numpy.sin(_tmp247)
+    _tmp249 = numpy.cos(_tmp247)
+    _tmp250 = along_2_1 + sinr0(_tmp39)
+    _tmp251 = _tmp2 + _tmp53 + 0.75*theta_3
+    _tmp252 = _tmp21*numpy.sin(_tmp251)
+    _tmp253 = along_3_1 + sinr0(_tmp54)
+    _tmp254 = numpy.cos(_tmp251)
+    _tmp255 = _tmp3 + _tmp68 + 0.75*theta_4
+    _tmp256 = numpy.cos(_tmp255)
+    _tmp257 = along_4_1 + sinr0(_tmp69)
+    _tmp258 = _tmp21*numpy.sin(_tmp255)
+    _tmp259 = _tmp105 + _tmp4 + 0.75*theta_5 + 0.0021828206253269966*x_0
+    _tmp260 = numpy.cos(_tmp259)
+    _tmp261 = along_5_1 + sinr0(_tmp107)
+    _tmp262 = _tmp21*numpy.sin(_tmp259)
+    _tmp263 = _tmp119 + _tmp122 + 0.75*theta_6 + 0.0021828206253269966*x_1
+    _tmp264 = _tmp21*numpy.sin(_tmp263)
+    _tmp265 = along_6_1 + sinr0(_tmp124)
+    _tmp266 = numpy.cos(_tmp263)
+    _tmp267 = _tmp177 + _tmp3 + 0.75*theta_7 + 0.0021828206253269966*x_2
+    _tmp268 = _tmp21*numpy.sin(_tmp267)
+    _tmp269 = along_7_1 + sinr0(_tmp179)
+    _tmp270 = numpy.cos(_tmp267)
+    _tmp271 = _tmp189 + _tmp192 + 0.75*theta_8 + 0.0021828206253269966*x_3
+    _tmp272 = _tmp21*numpy.sin(_tmp271)
+    _tmp273 = along_8_1 + sinr0(_tmp194)
+    _tmp274 = numpy.cos(_tmp271)
+    _tmp275 = _tmp93 + 0.75*theta_9 + 0.0021828206253269966*x_4
+    _tmp276 = _tmp21*numpy.sin(_tmp275)
+    _tmp277 = numpy.cos(_tmp275)
+    _tmp278 = along_9_1 + sinr0(_tmp95)
+    _tmp279 = _tmp163 + 0.75*theta_10 + 0.0021828206253269966*x_5
+    _tmp280 = numpy.cos(_tmp279)
+    _tmp281 = along_10_1 + sinr0(_tmp165)
+    _tmp282 = _tmp21*numpy.sin(_tmp279)
+    return [
+        -_tmp1 + 0.0029104275004359953*x_4,
+        -_tmp85 - _tmp88 + 1666.6666666666667*_tmp134 + 1666.6666666666667*_tmp141 + _tmp116*_tmp118 + _tmp33*_tmp36 + _tmp48*_tmp51 + _tmp63*_tmp66 + _tmp78*_tmp80 - _tmp104*_tmp92 - _tmp137*_tmp138 - _tmp89*_tmp90 + 1666.6666666666667*_tmp11*_tmp12 + 1666.6666666666667*_tmp19*_tmp20 + 1666.6666666666667*_tmp81*_tmp82 - 1666.6666666666667*_tmp10*_tmp6 - 1666.6666666666667*_tmp135*_tmp136 - 1666.6666666666667*_tmp16*_tmp18,
+        -_tmp142 - _tmp104*_tmp135 - _tmp116*_tmp138 - _tmp118*_tmp137 - _tmp78*_tmp90 - _tmp80*_tmp89 + 1666.6666666666667*_tmp10*_tmp11 + 1666.6666666666667*_tmp12*_tmp6 + 1666.6666666666667*_tmp133*_tmp139 + 1666.6666666666667*_tmp136*_tmp92 + 1666.6666666666667*_tmp16*_tmp20 + 1666.6666666666667*_tmp18*_tmp19 - 1666.6666666666667*_tmp121*_tmp140,
+        -_tmp144 + 0.0029104275004359953*x_5,
+        -_tmp85 - _tmp88 - _tmp162*_tmp174 - _tmp206*_tmp207 + 1666.6666666666667*_tmp151*_tmp152 + 1666.6666666666667*_tmp159*_tmp160 + 1666.6666666666667*_tmp176*_tmp188 + 1666.6666666666667*_tmp191*_tmp203 + 1666.6666666666667*_tmp33*_tmp35 + 1666.6666666666667*_tmp48*_tmp50 + 1666.6666666666667*_tmp63*_tmp65 + 1666.6666666666667*_tmp81*_tmp82 - 1666.6666666666667*_tmp146*_tmp150 - 1666.6666666666667*_tmp156*_tmp158 - 1666.6666666666667*_tmp204*_tmp205 - 1666.6666666666667*_tmp208*_tmp209,
+        -_tmp142 - 1666.6666666666667*_tmp210 - 1666.6666666666667*_tmp211 - _tmp174*_tmp204 - _tmp188*_tmp207 + 1666.6666666666667*_tmp146*_tmp152 + 1666.6666666666667*_tmp150*_tmp151 + 1666.6666666666667*_tmp156*_tmp159 + 1666.6666666666667*_tmp158*_tmp160 + 1666.6666666666667*_tmp162*_tmp205 - 1666.6666666666667*_tmp176*_tmp206,
+        _tmp212 + _tmp214 + _tmp224*(-_tmp134 - _tmp141 - _tmp223 + 0.05*_tmp215 + 0.02*_tmp216 - _tmp21*_tmp215) - _tmp222*(-_tmp221 + 0.05*_tmp216 - 0.02*_tmp215 + _tmp121*_tmp140 - _tmp133*_tmp139 - _tmp21*_tmp216),
+        _tmp212 + _tmp225 + _tmp224*(-_tmp223 + 0.5*_tmp218*p_0) - _tmp222*(-_tmp221 - _tmp21*_tmp220),
+        _tmp226 + _tmp227 + _tmp237*(-_tmp236 + 0.005*_tmp228 + 0.04*_tmp229 + _tmp208*_tmp209 - _tmp191*_tmp203 - _tmp21*_tmp229) - _tmp235*(_tmp210 + _tmp211 - _tmp232 + 0.04*_tmp228 - 0.005*_tmp229 + _tmp233*_tmp234 - _tmp21*_tmp228),
+        _tmp226 + _tmp238 + _tmp237*(-_tmp236 - _tmp21*_tmp234) - _tmp235*(-_tmp232 + _tmp233*_tmp234 - _tmp21*_tmp231),
+        -_tmp239 + 0.9999999999999999*x_8,
+        -_tmp240 + 0.9999999999999999*x_11,
+        _tmp213*omega_1_0 + _tmp246*(-_tmp244*across_1_1 + 0.5*_tmp242*_tmp243*p_0) - _tmp213*omega_1_1 - _tmp245*(-_tmp243*_tmp244 - _tmp21*_tmp242*across_1_1),
+        _tmp213*omega_2_0 + _tmp246*(_tmp248*_tmp250 + _tmp21*_tmp249*across_2_1) - _tmp213*omega_2_1 - _tmp245*(-_tmp248*across_2_1 + 0.5*_tmp249*_tmp250*p_0),
+        _tmp213*omega_3_0 + _tmp246*(_tmp252*_tmp253 + _tmp21*_tmp254*across_3_1) - _tmp213*omega_3_1 - _tmp245*(-_tmp252*across_3_1 + 0.5*_tmp253*_tmp254*p_0),
+        _tmp213*omega_4_0 + _tmp224*(-_tmp258*across_4_1 + 0.5*_tmp256*_tmp257*p_0) - _tmp213*omega_4_1 - _tmp222*(_tmp257*_tmp258 + _tmp21*_tmp256*across_4_1),
+        -_tmp214 + _tmp213*omega_5_0 + _tmp224*(-_tmp262*across_5_1 + 0.5*_tmp260*_tmp261*p_0) - _tmp222*(_tmp261*_tmp262 + _tmp21*_tmp260*across_5_1),
+        -_tmp225 + _tmp213*omega_6_0 + _tmp224*(-_tmp264*_tmp265 - _tmp21*_tmp266*across_6_1) - _tmp222*(-_tmp264*across_6_1 + 0.5*_tmp265*_tmp266*p_0),
+        -_tmp227 + _tmp213*omega_7_0 + _tmp237*(-_tmp268*across_7_1 + 0.5*_tmp269*_tmp270*p_0) - _tmp235*(_tmp268*_tmp269 + _tmp21*_tmp270*across_7_1),
+        -_tmp238 + _tmp213*omega_8_0 + _tmp237*(-_tmp272*across_8_1 + 0.5*_tmp273*_tmp274*p_0) - _tmp235*(_tmp272*_tmp273 + _tmp21*_tmp274*across_8_1),
+        -_tmp239 + _tmp213*omega_9_0 + _tmp222*(-_tmp276*across_9_1 + 0.5*_tmp277*_tmp278*p_0) - _tmp224*(-_tmp276*_tmp278 - _tmp21*_tmp277*across_9_1),
+        -_tmp240 + _tmp213*omega_10_0 + _tmp235*(-_tmp282*across_10_1 + 0.5*_tmp280*_tmp281*p_0) - _tmp237*(-_tmp281*_tmp282 - _tmp21*_tmp280*across_10_1),
+    ]
+
+
 def _loaded_dev2(x, theta, plates, params):
     """loaded (2 half plate(s) per plate): deviation of every point (116 operations)."""
     _, _, _, _, _, _, _, _, _, _, _, _, x_12, x_13, _, _, _, _, _, _, _, _, _ = x
@@ -11963,32 +12468,109 @@ def _plate_relation4(plate):
     ]
 
 
-def _plate_values2(plate):
-    """one plate's relation at order 2, values alone: (along, across, omega) (62 operations)."""
+def _plate_values4(plate):
+    """one plate's relation at order 4, values alone: (along, across, omega) (114 operations)."""
     theta, p, f, e_a, e_s = plate
+    theta_sq = theta**2
+    f_sq = f**2
+    _tmp0 = e_a*p
+    _tmp1 = theta_sq**2
+    _tmp2 = -2*e_s + 2*e_a
+    _tmp3 = _tmp2*p
+    _tmp4 = 1 + _tmp3
+    _tmp5 = e_a - e_s
+    _tmp6 = _tmp5*p
+    _tmp7 = 1 + _tmp6
+    _tmp7_sq = _tmp7**2
+    _tmp8 = _tmp7*p
+    _tmp9 = bcol_h(_tmp8)
+    _tmp10 = bcol_e3c_at(_tmp8, _tmp9)
+    _tmp11 = -0.0005208333333333333*_tmp3 + _tmp10*_tmp4
+    _tmp12 = theta**2
+    _tmp13 = bcol_w_at(_tmp8, _tmp9)
+    _tmp14 = bcol_invt_at(_tmp8, _tmp9)
+    _tmp15 = _tmp14**2
+    _tmp16 = -0.041666666666666664*_tmp3 + 0.3333333333333333*_tmp13*_tmp15*_tmp4*_tmp7*p
+    _tmp17 = _tmp12*_tmp16
+    _tmp18 = bcol_s_at(_tmp8, _tmp9)
+    _tmp19 = bcol_e1_at(_tmp8, _tmp9)
+    _tmp20 = 2*f
+    _tmp21 = _tmp12*_tmp7
+    _tmp22 = _tmp20*_tmp21
+    _tmp23 = 4*f**3
+    _tmp24 = _tmp7**3
+    _tmp25 = bcol_e2_at(_tmp8, _tmp9)
+    _tmp26 = _tmp24*_tmp25
+    _tmp27 = -_tmp19*_tmp22 - _tmp23*_tmp26 + _tmp18*_tmp7*f
+    _tmp28 = _tmp27*_tmp5
+    _tmp29 = _tmp28*f
+    _tmp30 = f**2
+    _tmp31 = _tmp7**2
+    _tmp32 = _tmp30*_tmp31
+    _tmp33 = _tmp7_sq**2
+    _tmp34 = f_sq**2
+    _tmp35 = bcol_e2_d1_at(_tmp8, _tmp9)
+    _tmp36 = _tmp34*_tmp35
+    _tmp37 = bcol_e1_d1_at(_tmp8, _tmp9)
+    _tmp38 = _tmp12*_tmp32
+    _tmp39 = _tmp13*_tmp32 + _tmp33*_tmp36 + _tmp37*_tmp38
+    _tmp40 = _tmp0 + _tmp17 + _tmp29 - _tmp1*_tmp11 - _tmp39*_tmp4
+    _tmp41 = e_s*f
+    _tmp42 = _tmp27*_tmp7
+    _tmp43 = _tmp41 + _tmp42
+    _tmp44 = bcol_e3_at(_tmp8, _tmp9)
+    _tmp45 = 4*theta**3
+    _tmp46 = 2*theta
+    _tmp47 = _tmp32*_tmp46
+    _tmp50 = 0.25*_tmp12
+    _tmp48 = 0.5*theta
+    _tmp49 = sinr5(_tmp48)
+    _tmp51 = 2.7557319223985893e-06 + _tmp49*_tmp50
+    _tmp52 = -0.0001984126984126984 + _tmp50*_tmp51
+    _tmp53 = 0.09375*_tmp52*theta*theta_sq**2
+    _tmp54 = cosr5(_tmp48)
+    _tmp55 = 5.5114638447971785e-06 + _tmp50*_tmp54 - 1.75*_tmp12*_tmp49
+    _tmp56 = 0.00390625*theta*theta_sq**3
+    _tmp57 = _tmp55*_tmp56
+    _tmp58 = 0.5*p
+    _tmp59 = sinr0(_tmp48)
+    _tmp60 = 0.5*f
+    return [
+        _tmp40,
+        _tmp43,
+        _tmp14*theta + _tmp19*_tmp47 + _tmp43*_tmp58 + _tmp44*_tmp45 - _tmp60*(_tmp40 + _tmp59) - p*(_tmp53 + _tmp57),
+    ]
+
+
+def _plate_values2(plate):
+    """one plate's relation at order 2, values alone: (along, across, omega) (66 operations)."""
+    theta, p, f, e_a, e_s = plate
+    theta_sq = theta**2
     _tmp0 = p*(-2*e_s + 2*e_a)
     _tmp1 = f**2
     _tmp2 = e_a - e_s
     _tmp3 = 1 + _tmp2*p
     _tmp4 = _tmp3*p
-    _tmp5 = bcol_s(_tmp4)
-    _tmp6 = 1 + _tmp0
-    _tmp7 = _tmp3**2
-    _tmp8 = e_a*p + theta**2*(-0.041666666666666664*_tmp0 + _tmp6*bcol_a(_tmp4)) + 0.0005208333333333333*_tmp0*theta**4 + _tmp1*_tmp2*_tmp3*_tmp5 - _tmp1*_tmp6*_tmp7*bcol_w(_tmp4)
-    _tmp9 = e_s*f + _tmp5*_tmp7*f
-    _tmp10 = 0.5*theta
+    _tmp5 = bcol_h(_tmp4)
+    _tmp6 = bcol_s_at(_tmp4, _tmp5)
+    _tmp7 = 1 + _tmp0
+    _tmp8 = _tmp3**2
+    _tmp9 = e_a*p + theta**2*(-0.041666666666666664*_tmp0 + _tmp7*bcol_a_at(_tmp4, _tmp5)) + 0.0005208333333333333*_tmp0*theta_sq**2 + _tmp1*_tmp2*_tmp3*_tmp6 - _tmp1*_tmp7*_tmp8*bcol_w_at(_tmp4, _tmp5)
+    _tmp10 = e_s*f + _tmp6*_tmp8*f
+    _tmp11 = 0.5*theta
     return [
-        _tmp8,
         _tmp9,
-        theta*bcol_invt(_tmp4) - p*(0.00390625*theta**7*(-7*sinr4(_tmp10) + cosr4(_tmp10)) + 0.09375*theta**5*sinr3(_tmp10)) + 0.5*_tmp9*p - 0.5*f*(_tmp8 + sinr0(_tmp10)),
+        _tmp10,
+        theta*bcol_invt_at(_tmp4, _tmp5) - p*(0.00390625*theta*theta_sq**3*(-7*sinr4(_tmp11) + cosr4(_tmp11)) + 0.09375*theta*theta_sq**2*sinr3(_tmp11)) + 0.5*_tmp10*p - 0.5*f*(_tmp9 + sinr0(_tmp11)),
     ]
 
 
 def _plate_rest4(plate):
-    """one plate's relation at order 4 where it carries no force (p = f = 0): (along, across, omega) and their partials by (theta, p, f) (39 operations)."""
+    """one plate's relation at order 4 where it carries no force (p = f = 0): (along, across, omega) and their partials by (theta, p, f) (40 operations)."""
     theta, _, _, e_a, e_s = plate
+    theta_sq = theta**2
     _tmp0 = theta**2
-    _tmp1 = theta**4
+    _tmp1 = theta_sq**2
     _tmp2 = 0.5*theta
     return [
         0,
@@ -12001,7 +12583,7 @@ def _plate_rest4(plate):
         0,
         0.08333333333333333 + e_s - 0.004166666666666667*_tmp0,
         1,
-        0.00026041666666666666*theta*(320 - 8*_tmp0 - 360*_tmp1*sinr3(_tmp2) + 15*theta**6*(-cosr4(_tmp2) + 7*sinr4(_tmp2))),
+        0.00026041666666666666*theta*(320 - 8*_tmp0 - 360*_tmp1*sinr3(_tmp2) + 15*theta_sq**3*(-cosr4(_tmp2) + 7*sinr4(_tmp2))),
         -0.5*sinr0(_tmp2),
     ]
 
@@ -12090,14 +12672,14 @@ _MECHANISM = _Mechanism(
     # two half plates per plate) its routines, size, half plates and the unknowns' scales
     loaded=_LoadedTables(
         variants=(
-            (_loaded_plates1, _loaded_system1, _loaded_dev1, 12, 10, [0.0029104275004359953, 0.0029104275004359953, 0.0029104275004359953, 0.0029104275004359953, 0.0029104275004359953, 0.0029104275004359953, 0.10074556732278446, 0.10074556732278446, 0.02076923076923077, 0.10074556732278446, 0.10074556732278446, 0.02076923076923077]),
-            (_loaded_plates2, _loaded_system2, _loaded_dev2, 22, 20, [0.0029104275004359953, 0.0029104275004359953, 0.0029104275004359953, 0.0029104275004359953, 0.0029104275004359953, 0.0029104275004359953, 0.10074556732278446, 0.10074556732278446, 0.02076923076923077, 0.10074556732278446, 0.10074556732278446, 0.02076923076923077, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0]),
+            (_loaded_plates1, _loaded_system1, _loaded_res1, _loaded_dev1, 12, 10, [0.0029104275004359953, 0.0029104275004359953, 0.0029104275004359953, 0.0029104275004359953, 0.0029104275004359953, 0.0029104275004359953, 0.10074556732278446, 0.10074556732278446, 0.02076923076923077, 0.10074556732278446, 0.10074556732278446, 0.02076923076923077]),
+            (_loaded_plates2, _loaded_system2, _loaded_res2, _loaded_dev2, 22, 20, [0.0029104275004359953, 0.0029104275004359953, 0.0029104275004359953, 0.0029104275004359953, 0.0029104275004359953, 0.0029104275004359953, 0.10074556732278446, 0.10074556732278446, 0.02076923076923077, 0.10074556732278446, 0.10074556732278446, 0.02076923076923077, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0]),
         ),
-        relation4=_plate_relation4, values2=_plate_values2, rest4=_plate_rest4,
+        relation4=_plate_relation4, values4=_plate_values4, values2=_plate_values2, rest4=_plate_rest4,
         unknowns=6, unknown_index=(4, 5, 6, 7, 8, 9, ),
         tol=1e-12, max_iter=12, max_turn=0.2,
         p_limit=0.9, est_factor=3.0, est_limit=0.01,
-        loads=False,
+        loads=False, chord=0.001, chord_error=1e-15,
         # the sensitivities (templates/numpy/reduced_sens.py): per variant its routine and blocks
         sens=((_loaded_sens1, {'dR_dtheta': (0, 12, 10), 'dR_dp': (120, 12, 1), 'din_dtheta': (132, 50, 10), 'din_dp': (632, 50, 1), 'dD_dx': (682, 2, 12), 'dD_dtheta': (706, 2, 10), 'dD_dp': (726, 2, 1), 'dD_dout': (728, 2, 30)}), (_loaded_sens2, {'dR_dtheta': (0, 22, 10), 'dR_dp': (220, 22, 1), 'din_dtheta': (242, 100, 10), 'din_dp': (1242, 100, 1), 'dD_dx': (1342, 2, 22), 'dD_dtheta': (1386, 2, 10), 'dD_dp': (1406, 2, 1), 'dD_dout': (1408, 2, 60)}), ),
         eps4=_plate_eps4,

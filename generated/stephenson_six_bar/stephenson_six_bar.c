@@ -3,7 +3,7 @@
  * Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
  * Points: D; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_dev1 60, loaded_plates2 623, loaded_system2 3042, loaded_dev2 143, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, loaded_sens1 1094, loaded_sens2 2741, plate_relation4 312, plate_values2 62, plate_rest4 39, plate_eps4 158.
+ * Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_res1 441, loaded_dev1 60, loaded_plates2 623, loaded_system2 3042, loaded_res2 944, loaded_dev2 143, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, loaded_sens1 1094, loaded_sens2 2741, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
  */
 #include "stephenson_six_bar.h"
 
@@ -437,12 +437,6 @@ static double symkin_bcol_invt_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return (1.0) / (h * (1.0));
-}
-
-/* bcol_invt(p) = 1/T(p). */
-static double symkin_bcol_invt(double p)
-{
-    return symkin_bcol_invt_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_invt_d1(p) = d^1/dp^1 of 1/T(p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (12 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -2396,6 +2390,196 @@ static void sk_loaded_system1(const double *x, const double *theta, const double
     out[405] = 0;
     out[406] = 0;
     out[407] = _tmp265;
+}
+
+/* loaded (1 half plate(s) per plate): the reduced equilibrium's residual R alone (441 operations) */
+static void sk_loaded_res1(const double *x, const double *theta, const double *plates, const double *params, double *out)
+{
+    const double x_0 = x[0];
+    const double x_1 = x[1];
+    const double x_2 = x[2];
+    const double x_3 = x[3];
+    const double x_4 = x[4];
+    const double x_5 = x[5];
+    const double x_6 = x[6];
+    const double x_7 = x[7];
+    const double x_8 = x[8];
+    const double x_9 = x[9];
+    const double x_10 = x[10];
+    const double x_11 = x[11];
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double theta_5 = theta[4];
+    const double theta_6 = theta[5];
+    const double theta_7 = theta[6];
+    const double along_1_0 = plates[0];
+    const double across_1_0 = plates[1];
+    const double along_2_0 = plates[3];
+    const double across_2_0 = plates[4];
+    const double omega_2_0 = plates[5];
+    const double along_3_0 = plates[6];
+    const double across_3_0 = plates[7];
+    const double omega_3_0 = plates[8];
+    const double along_4_0 = plates[9];
+    const double across_4_0 = plates[10];
+    const double omega_4_0 = plates[11];
+    const double along_5_0 = plates[12];
+    const double across_5_0 = plates[13];
+    const double omega_5_0 = plates[14];
+    const double along_6_0 = plates[15];
+    const double across_6_0 = plates[16];
+    const double omega_6_0 = plates[17];
+    const double along_7_0 = plates[18];
+    const double across_7_0 = plates[19];
+    const double omega_7_0 = plates[20];
+    const double p_0 = params[0];
+    const double _tmp0 = 0.006153846153846154*x_1;
+    const double _tmp1 = _tmp0 + 0.006153846153846154*x_3;
+    const double _tmp2 = sin(theta_3);
+    const double _tmp3 = sin(_tmp0);
+    const double _tmp4 = 0.02*_tmp3;
+    const double _tmp5 = 0.003076923076923077*x_1;
+    const double _tmp6 = pow(sin(_tmp5), 2);
+    const double _tmp7 = 1250.0*_tmp4 + 150.0*_tmp6;
+    const double _tmp8 = sin(_tmp1);
+    const double _tmp9 = 0.003076923076923077*x_3;
+    const double _tmp10 = pow(sin(_tmp5 + _tmp9), 2);
+    const double _tmp11 = 0.072*_tmp8 - 0.06*_tmp10;
+    const double _tmp12 = theta_3 + theta_5;
+    const double _tmp13 = 1250.0*sin(_tmp12);
+    const double _tmp14 = cos(theta_3);
+    const double _tmp15 = 0.04*_tmp6;
+    const double _tmp16 = -_tmp15 + 0.06*_tmp3;
+    const double _tmp17 = cos(_tmp12);
+    const double _tmp18 = -0.03*_tmp8 - 0.144*_tmp10;
+    const double _tmp19 = 0.5*theta_6 + 0.003076923076923077*x_4;
+    const double _tmp20 = _tmp19 + theta_1;
+    const double _tmp21 = 1250.0*p_0;
+    const double _tmp22 = _tmp21*cos(_tmp20);
+    const double _tmp23 = _tmp9 + 0.5*theta_5;
+    const double _tmp24 = along_5_0 + pow(_tmp23, 2)*symkin_arck(_tmp23);
+    const double _tmp25 = _tmp0 + theta_3;
+    const double _tmp26 = _tmp23 + _tmp25;
+    const double _tmp27 = cos(_tmp26);
+    const double _tmp28 = _tmp27*p_0;
+    const double _tmp29 = along_6_0 + pow(_tmp19, 2)*symkin_arck(_tmp19);
+    const double _tmp30 = _tmp21*sin(_tmp20);
+    const double _tmp31 = sin(_tmp26);
+    const double _tmp32 = 0.5*theta_1;
+    const double _tmp33 = cos(_tmp32);
+    const double _tmp34 = across_1_0*p_0;
+    const double _tmp35 = _tmp33*_tmp34;
+    const double _tmp36 = sin(_tmp32);
+    const double _tmp37 = p_0*(along_1_0 + 0.25*pow(theta_1, 2)*symkin_arck(_tmp32));
+    const double _tmp38 = _tmp36*_tmp37;
+    const double _tmp39 = _tmp5 + 0.5*theta_3;
+    const double _tmp40 = cos(_tmp39);
+    const double _tmp41 = sin(_tmp39);
+    const double _tmp42 = along_3_0 + pow(_tmp39, 2)*symkin_arck(_tmp39);
+    const double _tmp43 = 1250.0*_tmp35 + 1250.0*_tmp38 - 1250.0*_tmp40*across_3_0*p_0 - 1250.0*_tmp41*_tmp42*p_0;
+    const double _tmp44 = _tmp28*across_5_0;
+    const double _tmp45 = _tmp31*p_0;
+    const double _tmp46 = _tmp24*_tmp45;
+    const double _tmp47 = _tmp41*p_0;
+    const double _tmp48 = _tmp47*across_3_0;
+    const double _tmp49 = _tmp33*_tmp37;
+    const double _tmp50 = _tmp34*_tmp36;
+    const double _tmp51 = _tmp40*p_0;
+    const double _tmp52 = _tmp42*_tmp51;
+    const double _tmp53 = 1250.0*_tmp48 + 1250.0*_tmp49 - 1250.0*_tmp50 - 1250.0*_tmp52;
+    const double _tmp54 = 0.006153846153846154*x_0;
+    const double _tmp55 = 0.006153846153846154*x_2;
+    const double _tmp56 = _tmp0 + _tmp55;
+    const double _tmp57 = sin(_tmp56);
+    const double _tmp58 = 0.003076923076923077*x_2;
+    const double _tmp59 = pow(sin(_tmp5 + _tmp58), 2);
+    const double _tmp60 = 0.05*_tmp57 + 0.08*_tmp59;
+    const double _tmp61 = theta_3 + theta_4;
+    const double _tmp62 = 1250.0*sin(_tmp61);
+    const double _tmp63 = 125.0*_tmp6 - 1250.0*_tmp4;
+    const double _tmp64 = sin(_tmp54);
+    const double _tmp65 = 0.003076923076923077*x_0;
+    const double _tmp66 = pow(sin(_tmp65), 2);
+    const double _tmp67 = 0.04*_tmp64 - 0.14*_tmp66;
+    const double _tmp68 = theta_1 + theta_2;
+    const double _tmp69 = 1250.0*sin(_tmp68);
+    const double _tmp70 = _tmp15 + 0.05*_tmp3;
+    const double _tmp71 = cos(_tmp61);
+    const double _tmp72 = 0.04*_tmp57 - 0.1*_tmp59;
+    const double _tmp73 = cos(_tmp68);
+    const double _tmp74 = -0.07*_tmp64 - 0.08*_tmp66;
+    const double _tmp75 = _tmp65 + 0.5*theta_2;
+    const double _tmp76 = 0.7853981633974483 + _tmp75 + theta_1;
+    const double _tmp77 = sin(_tmp76);
+    const double _tmp78 = across_2_0*p_0;
+    const double _tmp79 = _tmp77*_tmp78;
+    const double _tmp80 = 0.5*theta_7 + 0.003076923076923077*x_5;
+    const double _tmp81 = _tmp54 + _tmp68;
+    const double _tmp82 = _tmp80 + _tmp81;
+    const double _tmp83 = _tmp21*sin(_tmp82);
+    const double _tmp84 = _tmp58 + 0.5*theta_4;
+    const double _tmp85 = along_4_0 + pow(_tmp84, 2)*symkin_arck(_tmp84);
+    const double _tmp86 = _tmp25 + _tmp84;
+    const double _tmp87 = p_0*cos(_tmp86);
+    const double _tmp88 = _tmp85*_tmp87;
+    const double _tmp89 = sin(_tmp86);
+    const double _tmp90 = cos(_tmp76);
+    const double _tmp91 = along_2_0 + pow(_tmp75, 2)*symkin_arck(_tmp75);
+    const double _tmp92 = cos(_tmp82);
+    const double _tmp93 = along_7_0 + pow(_tmp80, 2)*symkin_arck(_tmp80);
+    const double _tmp94 = _tmp78*_tmp90;
+    const double _tmp95 = _tmp91*p_0;
+    const double _tmp96 = _tmp77*_tmp95;
+    const double _tmp97 = _tmp87*across_4_0;
+    const double _tmp98 = _tmp89*p_0;
+    const double _tmp99 = _tmp85*_tmp98;
+    const double _tmp100 = 1.0*x_11;
+    const double _tmp101 = -_tmp100;
+    const double _tmp102 = 6.770833333333334e-06*pow(p_0, 2)*((p_0 <= 0.008) ? (230769230769.23077) : (210000000000));
+    const double _tmp103 = sin(theta_1);
+    const double _tmp104 = cos(theta_1);
+    const double _tmp105 = 0.3535533905932738*p_0;
+    const double _tmp106 = -_tmp105*cos(_tmp81);
+    const double _tmp107 = _tmp105*sin(_tmp81);
+    const double _tmp108 = cos(_tmp25);
+    const double _tmp109 = sin(_tmp25);
+    const double _tmp110 = 0.02*_tmp109;
+    const double _tmp111 = _tmp56 + _tmp61;
+    const double _tmp112 = cos(_tmp111);
+    const double _tmp113 = 0.5*p_0;
+    const double _tmp114 = -0.05 + _tmp113;
+    const double _tmp115 = sin(_tmp111);
+    const double _tmp116 = 0.04*_tmp112 + _tmp114*_tmp115;
+    const double _tmp117 = _tmp110 + _tmp116 + _tmp97 + _tmp99 + 0.05*_tmp108;
+    const double _tmp118 = 7.6923076923076925*x_9;
+    const double _tmp119 = 0.02*_tmp108;
+    const double _tmp120 = 0.04*_tmp115;
+    const double _tmp121 = _tmp119 + _tmp88 - _tmp120 - 0.05*_tmp109 + _tmp112*_tmp114 - _tmp98*across_4_0;
+    const double _tmp122 = 7.6923076923076925*x_10;
+    const double _tmp123 = 1.0*x_8;
+    const double _tmp124 = -_tmp108*_tmp113;
+    const double _tmp125 = _tmp1 + _tmp12;
+    const double _tmp126 = sin(_tmp125);
+    const double _tmp127 = 0.072*_tmp126;
+    const double _tmp128 = -0.03 + _tmp113;
+    const double _tmp129 = cos(_tmp125);
+    const double _tmp130 = 7.6923076923076925*x_6;
+    const double _tmp131 = 0.072*_tmp129 + _tmp126*_tmp128;
+    const double _tmp132 = 7.6923076923076925*x_7;
+    out[0] = -_tmp1 + 0.006153846153846154*x_4;
+    out[1] = -_tmp43 - _tmp11*_tmp13 - _tmp2*_tmp7 - _tmp22*across_6_0 - _tmp29*_tmp30 + 1250.0*_tmp14*_tmp16 + 1250.0*_tmp17*_tmp18 - 1250.0*_tmp24*_tmp28 + 1250.0*_tmp31*across_5_0*p_0;
+    out[2] = _tmp53 - 1250.0*_tmp44 - 1250.0*_tmp46 + _tmp13*_tmp18 + _tmp14*_tmp7 + _tmp22*_tmp29 - _tmp30*across_6_0 + 1250.0*_tmp11*_tmp17 + 1250.0*_tmp16*_tmp2;
+    out[3] = _tmp54 - _tmp0 - _tmp55 + 0.006153846153846154*x_5;
+    out[4] = -_tmp43 - 1250.0*_tmp79 - 1250.0*_tmp88 - _tmp2*_tmp63 - _tmp60*_tmp62 - _tmp67*_tmp69 - _tmp83*across_7_0 + 1250.0*_tmp14*_tmp70 + 1250.0*_tmp71*_tmp72 + 1250.0*_tmp73*_tmp74 + 1250.0*_tmp89*across_4_0*p_0 + 1250.0*_tmp90*_tmp91*p_0 + 1250.0*_tmp92*_tmp93*p_0;
+    out[5] = _tmp53 + 1250.0*_tmp94 + 1250.0*_tmp96 - 1250.0*_tmp97 - 1250.0*_tmp99 + _tmp14*_tmp63 + _tmp62*_tmp72 + _tmp69*_tmp74 + _tmp83*_tmp93 + 1250.0*_tmp2*_tmp70 + 1250.0*_tmp60*_tmp71 + 1250.0*_tmp67*_tmp73 + _tmp21*_tmp92*across_7_0;
+    out[6] = _tmp101 + _tmp102*omega_2_0 + _tmp118*(_tmp106 + _tmp117 + _tmp50 + _tmp52 - _tmp107 - _tmp48 - _tmp49 - _tmp94 - _tmp96 - 0.03*_tmp103 - 0.02*_tmp104) - _tmp122*(0.1 + _tmp106 + _tmp107 + _tmp121 + _tmp35 + _tmp38 + _tmp79 + 0.02*_tmp103 - 0.03*_tmp104 - _tmp42*_tmp47 - _tmp51*across_3_0 - _tmp90*_tmp95);
+    out[7] = _tmp100 + _tmp123 + _tmp102*omega_3_0 + _tmp122*(_tmp121 + _tmp109*_tmp113) + _tmp132*(-_tmp119 - _tmp131 - 0.06*_tmp109 - _tmp45*across_5_0 + 0.5*_tmp109*p_0 + _tmp24*_tmp27*p_0) - _tmp118*(_tmp117 + _tmp124) - _tmp130*(_tmp124 + _tmp44 + _tmp46 - _tmp110 - _tmp127 + 0.06*_tmp108 + _tmp128*_tmp129);
+    out[8] = _tmp100 + _tmp102*omega_4_0 + _tmp122*(-_tmp120 + _tmp112*_tmp114 - _tmp112*_tmp113) - _tmp118*(_tmp116 - _tmp113*_tmp115);
+    out[9] = _tmp123 + _tmp102*omega_5_0 + _tmp132*(-_tmp131 - _tmp113*_tmp129) - _tmp130*(-_tmp127 + _tmp128*_tmp129 - _tmp113*_tmp126);
+    out[10] = 1.0*x_8 - _tmp102*omega_6_0;
+    out[11] = -_tmp101 - _tmp102*omega_7_0;
 }
 
 /* loaded (1 half plate(s) per plate): deviation of every point (60 operations) */
@@ -5467,6 +5651,337 @@ static void sk_loaded_system2(const double *x, const double *theta, const double
     out[1175] = -_tmp712*x_10 + 3.8461538461538463*_tmp325*p_0*x_9;
     out[1176] = _tmp712*x_9 + _tmp325*_tmp561*x_10;
     out[1177] = _tmp705;
+}
+
+/* loaded (2 half plate(s) per plate): the reduced equilibrium's residual R alone (944 operations) */
+static void sk_loaded_res2(const double *x, const double *theta, const double *plates, const double *params, double *out)
+{
+    const double x_0 = x[0];
+    const double x_1 = x[1];
+    const double x_2 = x[2];
+    const double x_3 = x[3];
+    const double x_4 = x[4];
+    const double x_5 = x[5];
+    const double x_6 = x[6];
+    const double x_7 = x[7];
+    const double x_8 = x[8];
+    const double x_9 = x[9];
+    const double x_10 = x[10];
+    const double x_11 = x[11];
+    const double x_12 = x[12];
+    const double x_13 = x[13];
+    const double x_14 = x[14];
+    const double x_15 = x[15];
+    const double x_16 = x[16];
+    const double x_17 = x[17];
+    const double x_18 = x[18];
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double theta_5 = theta[4];
+    const double theta_6 = theta[5];
+    const double theta_7 = theta[6];
+    const double along_1_0 = plates[0];
+    const double across_1_0 = plates[1];
+    const double omega_1_0 = plates[2];
+    const double along_1_1 = plates[3];
+    const double across_1_1 = plates[4];
+    const double omega_1_1 = plates[5];
+    const double along_2_0 = plates[6];
+    const double across_2_0 = plates[7];
+    const double omega_2_0 = plates[8];
+    const double along_2_1 = plates[9];
+    const double across_2_1 = plates[10];
+    const double omega_2_1 = plates[11];
+    const double along_3_0 = plates[12];
+    const double across_3_0 = plates[13];
+    const double omega_3_0 = plates[14];
+    const double along_3_1 = plates[15];
+    const double across_3_1 = plates[16];
+    const double omega_3_1 = plates[17];
+    const double along_4_0 = plates[18];
+    const double across_4_0 = plates[19];
+    const double omega_4_0 = plates[20];
+    const double along_4_1 = plates[21];
+    const double across_4_1 = plates[22];
+    const double omega_4_1 = plates[23];
+    const double along_5_0 = plates[24];
+    const double across_5_0 = plates[25];
+    const double omega_5_0 = plates[26];
+    const double along_5_1 = plates[27];
+    const double across_5_1 = plates[28];
+    const double omega_5_1 = plates[29];
+    const double along_6_0 = plates[30];
+    const double across_6_0 = plates[31];
+    const double omega_6_0 = plates[32];
+    const double along_6_1 = plates[33];
+    const double across_6_1 = plates[34];
+    const double omega_6_1 = plates[35];
+    const double along_7_0 = plates[36];
+    const double across_7_0 = plates[37];
+    const double omega_7_0 = plates[38];
+    const double along_7_1 = plates[39];
+    const double across_7_1 = plates[40];
+    const double omega_7_1 = plates[41];
+    const double p_0 = params[0];
+    const double _tmp0 = 0.006153846153846154*x_1;
+    const double _tmp1 = _tmp0 + 0.006153846153846154*x_3;
+    const double _tmp2 = sin(theta_3);
+    const double _tmp3 = sin(_tmp0);
+    const double _tmp4 = 0.02*_tmp3;
+    const double _tmp5 = 0.003076923076923077*x_1;
+    const double _tmp6 = pow(sin(_tmp5), 2);
+    const double _tmp7 = 1250.0*_tmp4 + 150.0*_tmp6;
+    const double _tmp8 = sin(_tmp1);
+    const double _tmp9 = 0.003076923076923077*x_3;
+    const double _tmp10 = pow(sin(_tmp5 + _tmp9), 2);
+    const double _tmp11 = 0.072*_tmp8 - 0.06*_tmp10;
+    const double _tmp12 = theta_3 + theta_5;
+    const double _tmp13 = 1250.0*sin(_tmp12);
+    const double _tmp14 = _tmp0 + theta_3;
+    const double _tmp15 = _tmp14 + _tmp9 + 0.5*theta_5;
+    const double _tmp16 = cos(_tmp15);
+    const double _tmp17 = 0.5*x_16;
+    const double _tmp18 = 0.25*theta_5 + 0.0015384615384615385*x_3;
+    const double _tmp19 = _tmp18 - _tmp17;
+    const double _tmp20 = sin(_tmp19);
+    const double _tmp21 = 0.5*p_0;
+    const double _tmp22 = _tmp21*across_5_0;
+    const double _tmp23 = _tmp17 + _tmp18;
+    const double _tmp24 = _tmp21*sin(_tmp23);
+    const double _tmp25 = cos(_tmp19);
+    const double _tmp26 = _tmp21*(along_5_0 + pow(_tmp23, 2)*symkin_arck(_tmp23));
+    const double _tmp27 = along_5_1 + pow(_tmp19, 2)*symkin_arck(_tmp19);
+    const double _tmp28 = _tmp21*cos(_tmp23);
+    const double _tmp29 = _tmp20*_tmp22 + _tmp21*(-2*pow(sin(_tmp17), 2) + 2*pow(sin(_tmp18), 2)) + _tmp25*_tmp26 + _tmp27*_tmp28 - _tmp24*across_5_1;
+    const double _tmp30 = theta_1 + 0.5*theta_6 + 0.003076923076923077*x_4;
+    const double _tmp31 = sin(_tmp30);
+    const double _tmp32 = 0.5*x_17;
+    const double _tmp33 = 0.25*theta_6 + 0.0015384615384615385*x_4;
+    const double _tmp34 = _tmp33 - _tmp32;
+    const double _tmp35 = sin(_tmp34);
+    const double _tmp36 = _tmp21*across_6_0;
+    const double _tmp37 = _tmp32 + _tmp33;
+    const double _tmp38 = _tmp21*sin(_tmp37);
+    const double _tmp39 = cos(_tmp34);
+    const double _tmp40 = _tmp21*(along_6_0 + pow(_tmp37, 2)*symkin_arck(_tmp37));
+    const double _tmp41 = along_6_1 + pow(_tmp34, 2)*symkin_arck(_tmp34);
+    const double _tmp42 = _tmp21*cos(_tmp37);
+    const double _tmp43 = 1250.0*_tmp21*(-2*pow(sin(_tmp32), 2) + 2*pow(sin(_tmp33), 2)) + 1250.0*_tmp35*_tmp36 + 1250.0*_tmp39*_tmp40 + 1250.0*_tmp41*_tmp42 - 1250.0*_tmp38*across_6_1;
+    const double _tmp44 = cos(_tmp30);
+    const double _tmp45 = 1250.0*_tmp21*sin(1.0*x_17) + 1250.0*_tmp36*_tmp39 + 1250.0*_tmp38*_tmp41 + 1250.0*_tmp42*across_6_1 - 1250.0*_tmp35*_tmp40;
+    const double _tmp46 = cos(theta_3);
+    const double _tmp47 = 0.04*_tmp6;
+    const double _tmp48 = -_tmp47 + 0.06*_tmp3;
+    const double _tmp49 = cos(_tmp12);
+    const double _tmp50 = -0.03*_tmp8 - 0.144*_tmp10;
+    const double _tmp51 = sin(_tmp15);
+    const double _tmp52 = _tmp21*sin(1.0*x_16) + _tmp22*_tmp25 + _tmp24*_tmp27 + _tmp28*across_5_1 - _tmp20*_tmp26;
+    const double _tmp53 = 0.5*theta_1;
+    const double _tmp54 = sin(_tmp53);
+    const double _tmp55 = 0.25*theta_1;
+    const double _tmp56 = 0.5*x_12;
+    const double _tmp57 = _tmp55 - _tmp56;
+    const double _tmp58 = sin(_tmp57);
+    const double _tmp59 = _tmp21*across_1_0;
+    const double _tmp60 = _tmp55 + _tmp56;
+    const double _tmp61 = _tmp21*sin(_tmp60);
+    const double _tmp62 = cos(_tmp57);
+    const double _tmp63 = _tmp21*(along_1_0 + pow(_tmp60, 2)*symkin_arck(_tmp60));
+    const double _tmp64 = along_1_1 + pow(_tmp57, 2)*symkin_arck(_tmp57);
+    const double _tmp65 = _tmp21*cos(_tmp60);
+    const double _tmp66 = _tmp21*(-2*pow(sin(_tmp56), 2) + 2*pow(sin(_tmp55), 2)) + _tmp58*_tmp59 + _tmp62*_tmp63 + _tmp64*_tmp65 - _tmp61*across_1_1;
+    const double _tmp67 = _tmp54*_tmp66;
+    const double _tmp68 = cos(_tmp53);
+    const double _tmp69 = _tmp21*sin(1.0*x_12) + _tmp59*_tmp62 + _tmp61*_tmp64 + _tmp65*across_1_1 - _tmp58*_tmp63;
+    const double _tmp70 = _tmp68*_tmp69;
+    const double _tmp71 = _tmp5 + 0.5*theta_3;
+    const double _tmp72 = sin(_tmp71);
+    const double _tmp73 = 0.5*x_14;
+    const double _tmp74 = 0.25*theta_3 + 0.0015384615384615385*x_1;
+    const double _tmp75 = _tmp74 - _tmp73;
+    const double _tmp76 = sin(_tmp75);
+    const double _tmp77 = _tmp21*across_3_0;
+    const double _tmp78 = _tmp73 + _tmp74;
+    const double _tmp79 = _tmp21*sin(_tmp78);
+    const double _tmp80 = cos(_tmp75);
+    const double _tmp81 = _tmp21*(along_3_0 + pow(_tmp78, 2)*symkin_arck(_tmp78));
+    const double _tmp82 = along_3_1 + pow(_tmp75, 2)*symkin_arck(_tmp75);
+    const double _tmp83 = _tmp21*cos(_tmp78);
+    const double _tmp84 = _tmp21*(-2*pow(sin(_tmp73), 2) + 2*pow(sin(_tmp74), 2)) + _tmp76*_tmp77 + _tmp80*_tmp81 + _tmp82*_tmp83 - _tmp79*across_3_1;
+    const double _tmp85 = cos(_tmp71);
+    const double _tmp86 = _tmp21*sin(1.0*x_14) + _tmp77*_tmp80 + _tmp79*_tmp82 + _tmp83*across_3_1 - _tmp76*_tmp81;
+    const double _tmp87 = 1250.0*_tmp67 + 1250.0*_tmp70 - 1250.0*_tmp72*_tmp84 - 1250.0*_tmp85*_tmp86;
+    const double _tmp88 = _tmp29*_tmp51;
+    const double _tmp89 = _tmp16*_tmp52;
+    const double _tmp90 = _tmp66*_tmp68;
+    const double _tmp91 = _tmp72*_tmp86;
+    const double _tmp92 = 1250.0*_tmp90 + 1250.0*_tmp91 - 1250.0*_tmp54*_tmp69 - 1250.0*_tmp84*_tmp85;
+    const double _tmp93 = 0.006153846153846154*x_0;
+    const double _tmp94 = 0.006153846153846154*x_2;
+    const double _tmp95 = _tmp0 + _tmp94;
+    const double _tmp96 = sin(_tmp95);
+    const double _tmp97 = 0.003076923076923077*x_2;
+    const double _tmp98 = pow(sin(_tmp5 + _tmp97), 2);
+    const double _tmp99 = 0.05*_tmp96 + 0.08*_tmp98;
+    const double _tmp100 = theta_3 + theta_4;
+    const double _tmp101 = 1250.0*sin(_tmp100);
+    const double _tmp102 = 125.0*_tmp6 - 1250.0*_tmp4;
+    const double _tmp103 = sin(_tmp93);
+    const double _tmp104 = 0.003076923076923077*x_0;
+    const double _tmp105 = pow(sin(_tmp104), 2);
+    const double _tmp106 = 0.04*_tmp103 - 0.14*_tmp105;
+    const double _tmp107 = theta_1 + theta_2;
+    const double _tmp108 = 1250.0*sin(_tmp107);
+    const double _tmp109 = _tmp14 + _tmp97 + 0.5*theta_4;
+    const double _tmp110 = cos(_tmp109);
+    const double _tmp111 = 0.5*x_15;
+    const double _tmp112 = 0.25*theta_4 + 0.0015384615384615385*x_2;
+    const double _tmp113 = _tmp112 - _tmp111;
+    const double _tmp114 = sin(_tmp113);
+    const double _tmp115 = _tmp21*across_4_0;
+    const double _tmp116 = _tmp111 + _tmp112;
+    const double _tmp117 = _tmp21*sin(_tmp116);
+    const double _tmp118 = cos(_tmp113);
+    const double _tmp119 = _tmp21*(along_4_0 + pow(_tmp116, 2)*symkin_arck(_tmp116));
+    const double _tmp120 = along_4_1 + pow(_tmp113, 2)*symkin_arck(_tmp113);
+    const double _tmp121 = _tmp21*cos(_tmp116);
+    const double _tmp122 = _tmp114*_tmp115 + _tmp118*_tmp119 + _tmp120*_tmp121 + _tmp21*(-2*pow(sin(_tmp111), 2) + 2*pow(sin(_tmp112), 2)) - _tmp117*across_4_1;
+    const double _tmp123 = _tmp110*_tmp122;
+    const double _tmp124 = 0.7853981633974483 + theta_1;
+    const double _tmp125 = _tmp104 + _tmp124 + 0.5*theta_2;
+    const double _tmp126 = sin(_tmp125);
+    const double _tmp127 = 0.5*x_13;
+    const double _tmp128 = 0.25*theta_2 + 0.0015384615384615385*x_0;
+    const double _tmp129 = _tmp128 - _tmp127;
+    const double _tmp130 = cos(_tmp129);
+    const double _tmp131 = _tmp21*across_2_0;
+    const double _tmp132 = _tmp127 + _tmp128;
+    const double _tmp133 = _tmp21*cos(_tmp132);
+    const double _tmp134 = sin(_tmp129);
+    const double _tmp135 = _tmp21*(along_2_0 + pow(_tmp132, 2)*symkin_arck(_tmp132));
+    const double _tmp136 = along_2_1 + pow(_tmp129, 2)*symkin_arck(_tmp129);
+    const double _tmp137 = _tmp21*sin(_tmp132);
+    const double _tmp138 = _tmp130*_tmp131 + _tmp133*across_2_1 + _tmp136*_tmp137 + _tmp21*sin(1.0*x_13) - _tmp134*_tmp135;
+    const double _tmp139 = _tmp126*_tmp138;
+    const double _tmp140 = _tmp107 + _tmp93;
+    const double _tmp141 = _tmp140 + 0.5*theta_7 + 0.003076923076923077*x_5;
+    const double _tmp142 = sin(_tmp141);
+    const double _tmp143 = 0.5*x_18;
+    const double _tmp144 = 0.25*theta_7 + 0.0015384615384615385*x_5;
+    const double _tmp145 = _tmp144 - _tmp143;
+    const double _tmp146 = cos(_tmp145);
+    const double _tmp147 = _tmp21*across_7_0;
+    const double _tmp148 = _tmp143 + _tmp144;
+    const double _tmp149 = _tmp21*cos(_tmp148);
+    const double _tmp150 = sin(_tmp145);
+    const double _tmp151 = _tmp21*(along_7_0 + pow(_tmp148, 2)*symkin_arck(_tmp148));
+    const double _tmp152 = along_7_1 + pow(_tmp145, 2)*symkin_arck(_tmp145);
+    const double _tmp153 = _tmp21*sin(_tmp148);
+    const double _tmp154 = 1250.0*_tmp146*_tmp147 + 1250.0*_tmp149*across_7_1 + 1250.0*_tmp152*_tmp153 + 1250.0*_tmp21*sin(1.0*x_18) - 1250.0*_tmp150*_tmp151;
+    const double _tmp155 = _tmp47 + 0.05*_tmp3;
+    const double _tmp156 = cos(_tmp100);
+    const double _tmp157 = 0.04*_tmp96 - 0.1*_tmp98;
+    const double _tmp158 = cos(_tmp107);
+    const double _tmp159 = -0.07*_tmp103 - 0.08*_tmp105;
+    const double _tmp160 = cos(_tmp125);
+    const double _tmp161 = _tmp130*_tmp135 + _tmp131*_tmp134 + _tmp133*_tmp136 + _tmp21*(-2*pow(sin(_tmp127), 2) + 2*pow(sin(_tmp128), 2)) - _tmp137*across_2_1;
+    const double _tmp162 = cos(_tmp141);
+    const double _tmp163 = _tmp146*_tmp151 + _tmp147*_tmp150 + _tmp149*_tmp152 + _tmp21*(-2*pow(sin(_tmp143), 2) + 2*pow(sin(_tmp144), 2)) - _tmp153*across_7_1;
+    const double _tmp164 = sin(_tmp109);
+    const double _tmp165 = _tmp115*_tmp118 + _tmp117*_tmp120 + _tmp121*across_4_1 + _tmp21*sin(1.0*x_15) - _tmp114*_tmp119;
+    const double _tmp166 = _tmp126*_tmp161;
+    const double _tmp167 = _tmp138*_tmp160;
+    const double _tmp168 = _tmp122*_tmp164;
+    const double _tmp169 = _tmp110*_tmp165;
+    const double _tmp170 = 1.0*x_11;
+    const double _tmp171 = -_tmp170;
+    const double _tmp172 = 1.3541666666666668e-05*pow(p_0, 2)*((p_0 <= 0.008) ? (230769230769.23077) : (210000000000));
+    const double _tmp173 = _tmp172*omega_2_1;
+    const double _tmp174 = sin(theta_1);
+    const double _tmp175 = cos(theta_1);
+    const double _tmp176 = sin(_tmp14);
+    const double _tmp177 = 0.02*_tmp176;
+    const double _tmp178 = -_tmp177;
+    const double _tmp179 = cos(_tmp14);
+    const double _tmp180 = 0.3535533905932738*p_0;
+    const double _tmp181 = _tmp180*sin(_tmp140);
+    const double _tmp182 = _tmp180*cos(_tmp140);
+    const double _tmp183 = _tmp100 + _tmp95;
+    const double _tmp184 = cos(_tmp183);
+    const double _tmp185 = -0.05 + _tmp21;
+    const double _tmp186 = sin(_tmp183);
+    const double _tmp187 = 7.6923076923076925*x_9;
+    const double _tmp188 = 0.02*_tmp179;
+    const double _tmp189 = 0.04*_tmp186;
+    const double _tmp190 = _tmp123 + _tmp188 - _tmp189 - 0.05*_tmp176 + _tmp184*_tmp185 - _tmp164*_tmp165;
+    const double _tmp191 = 7.6923076923076925*x_10;
+    const double _tmp192 = 1.0*x_8;
+    const double _tmp193 = _tmp172*omega_3_1;
+    const double _tmp194 = -_tmp179*_tmp21;
+    const double _tmp195 = _tmp1 + _tmp12;
+    const double _tmp196 = sin(_tmp195);
+    const double _tmp197 = 0.072*_tmp196;
+    const double _tmp198 = -0.03 + _tmp21;
+    const double _tmp199 = cos(_tmp195);
+    const double _tmp200 = 7.6923076923076925*x_6;
+    const double _tmp201 = 0.04*_tmp184 + _tmp185*_tmp186;
+    const double _tmp202 = 0.072*_tmp199 + _tmp196*_tmp198;
+    const double _tmp203 = 7.6923076923076925*x_7;
+    const double _tmp204 = _tmp172*omega_4_1;
+    const double _tmp205 = _tmp172*omega_5_1;
+    const double _tmp206 = _tmp172*omega_6_1;
+    const double _tmp207 = _tmp172*omega_7_1;
+    const double _tmp208 = 0.378698224852071*x_10 + 0.378698224852071*x_7;
+    const double _tmp209 = _tmp56 + 0.75*theta_1;
+    const double _tmp210 = cos(_tmp209);
+    const double _tmp211 = along_1_1 + symkin_sinr0(_tmp57);
+    const double _tmp212 = _tmp21*sin(_tmp209);
+    const double _tmp213 = 0.378698224852071*x_6 + 0.378698224852071*x_9;
+    const double _tmp214 = _tmp124 + _tmp127 + 0.75*theta_2 + 0.004615384615384615*x_0;
+    const double _tmp215 = _tmp21*sin(_tmp214);
+    const double _tmp216 = cos(_tmp214);
+    const double _tmp217 = along_2_1 + symkin_sinr0(_tmp129);
+    const double _tmp218 = _tmp73 + 0.75*theta_3 + 0.004615384615384615*x_1;
+    const double _tmp219 = cos(_tmp218);
+    const double _tmp220 = along_3_1 + symkin_sinr0(_tmp75);
+    const double _tmp221 = _tmp21*sin(_tmp218);
+    const double _tmp222 = _tmp111 + _tmp14 + 0.75*theta_4 + 0.004615384615384615*x_2;
+    const double _tmp223 = _tmp21*sin(_tmp222);
+    const double _tmp224 = along_4_1 + symkin_sinr0(_tmp113);
+    const double _tmp225 = cos(_tmp222);
+    const double _tmp226 = _tmp14 + _tmp17 + 0.75*theta_5 + 0.004615384615384615*x_3;
+    const double _tmp227 = cos(_tmp226);
+    const double _tmp228 = along_5_1 + symkin_sinr0(_tmp19);
+    const double _tmp229 = _tmp21*sin(_tmp226);
+    const double _tmp230 = _tmp32 + theta_1 + 0.75*theta_6 + 0.004615384615384615*x_4;
+    const double _tmp231 = _tmp21*sin(_tmp230);
+    const double _tmp232 = cos(_tmp230);
+    const double _tmp233 = along_6_1 + symkin_sinr0(_tmp34);
+    const double _tmp234 = _tmp140 + _tmp143 + 0.75*theta_7 + 0.004615384615384615*x_5;
+    const double _tmp235 = _tmp21*sin(_tmp234);
+    const double _tmp236 = along_7_1 + symkin_sinr0(_tmp145);
+    const double _tmp237 = cos(_tmp234);
+    out[0] = -_tmp1 + 0.006153846153846154*x_4;
+    out[1] = -_tmp87 - _tmp11*_tmp13 - _tmp2*_tmp7 - _tmp31*_tmp43 - _tmp44*_tmp45 + 1250.0*_tmp46*_tmp48 + 1250.0*_tmp49*_tmp50 + 1250.0*_tmp51*_tmp52 - 1250.0*_tmp16*_tmp29;
+    out[2] = _tmp92 - 1250.0*_tmp88 - 1250.0*_tmp89 + _tmp13*_tmp50 + _tmp43*_tmp44 + _tmp46*_tmp7 - _tmp31*_tmp45 + 1250.0*_tmp11*_tmp49 + 1250.0*_tmp2*_tmp48;
+    out[3] = _tmp93 - _tmp0 - _tmp94 + 0.006153846153846154*x_5;
+    out[4] = -_tmp87 - 1250.0*_tmp123 - 1250.0*_tmp139 - _tmp101*_tmp99 - _tmp102*_tmp2 - _tmp106*_tmp108 - _tmp142*_tmp154 + 1250.0*_tmp155*_tmp46 + 1250.0*_tmp156*_tmp157 + 1250.0*_tmp158*_tmp159 + 1250.0*_tmp160*_tmp161 + 1250.0*_tmp162*_tmp163 + 1250.0*_tmp164*_tmp165;
+    out[5] = _tmp92 + 1250.0*_tmp166 + 1250.0*_tmp167 - 1250.0*_tmp168 - 1250.0*_tmp169 + _tmp101*_tmp157 + _tmp102*_tmp46 + _tmp108*_tmp159 + _tmp154*_tmp162 + 1250.0*_tmp106*_tmp158 + 1250.0*_tmp142*_tmp163 + 1250.0*_tmp155*_tmp2 + 1250.0*_tmp156*_tmp99;
+    out[6] = _tmp171 + _tmp173 + _tmp187*(-_tmp166 - _tmp167 - _tmp178 - _tmp181 - _tmp182 - _tmp90 - _tmp91 + 0.05*_tmp179 + 0.04*_tmp184 - 0.03*_tmp174 - 0.02*_tmp175 + _tmp110*_tmp165 + _tmp122*_tmp164 + _tmp185*_tmp186 + _tmp54*_tmp69 + _tmp84*_tmp85) - _tmp191*(0.1 + _tmp139 + _tmp181 + _tmp190 + _tmp67 + _tmp70 - _tmp182 + 0.02*_tmp174 - 0.03*_tmp175 - _tmp160*_tmp161 - _tmp72*_tmp84 - _tmp85*_tmp86);
+    out[7] = _tmp170 + _tmp192 + _tmp193 + _tmp191*(_tmp190 + _tmp176*_tmp21) + _tmp203*(-_tmp188 - _tmp202 - 0.06*_tmp176 + _tmp16*_tmp29 - _tmp51*_tmp52 + 0.5*_tmp176*p_0) - _tmp187*(_tmp168 + _tmp169 + _tmp177 + _tmp194 + _tmp201 + 0.05*_tmp179) - _tmp200*(_tmp178 + _tmp194 + _tmp88 + _tmp89 - _tmp197 + 0.06*_tmp179 + _tmp198*_tmp199);
+    out[8] = _tmp170 + _tmp204 + _tmp191*(-_tmp189 + _tmp184*_tmp185 - _tmp184*_tmp21) - _tmp187*(_tmp201 - _tmp186*_tmp21);
+    out[9] = _tmp192 + _tmp205 + _tmp203*(-_tmp202 - _tmp199*_tmp21) - _tmp200*(-_tmp197 + _tmp198*_tmp199 - _tmp196*_tmp21);
+    out[10] = -_tmp206 + 1.0*x_8;
+    out[11] = -_tmp171 - _tmp207;
+    out[12] = _tmp172*omega_1_0 - _tmp172*omega_1_1 + 20.3125*_tmp213*(-_tmp212*across_1_1 + 0.5*_tmp210*_tmp211*p_0) - 20.3125*_tmp208*(-_tmp211*_tmp212 - _tmp21*_tmp210*across_1_1);
+    out[13] = -_tmp173 + _tmp172*omega_2_0 + _tmp187*(_tmp215*_tmp217 + _tmp21*_tmp216*across_2_1) - _tmp191*(-_tmp215*across_2_1 + 0.5*_tmp216*_tmp217*p_0);
+    out[14] = -_tmp193 + _tmp172*omega_3_0 + 20.3125*_tmp208*(-_tmp220*_tmp221 - _tmp21*_tmp219*across_3_1) - 20.3125*_tmp213*(-_tmp221*across_3_1 + 0.5*_tmp219*_tmp220*p_0);
+    out[15] = -_tmp204 + _tmp172*omega_4_0 + _tmp191*(-_tmp223*across_4_1 + 0.5*_tmp224*_tmp225*p_0) - _tmp187*(_tmp223*_tmp224 + _tmp21*_tmp225*across_4_1);
+    out[16] = -_tmp205 + _tmp172*omega_5_0 + _tmp203*(-_tmp229*across_5_1 + 0.5*_tmp227*_tmp228*p_0) - _tmp200*(_tmp228*_tmp229 + _tmp21*_tmp227*across_5_1);
+    out[17] = -_tmp206 + _tmp172*omega_6_0 + _tmp200*(-_tmp231*across_6_1 + 0.5*_tmp232*_tmp233*p_0) - _tmp203*(-_tmp231*_tmp233 - _tmp21*_tmp232*across_6_1);
+    out[18] = -_tmp207 + _tmp172*omega_7_0 + _tmp187*(_tmp235*_tmp236 + _tmp21*_tmp237*across_7_1) - _tmp191*(-_tmp235*across_7_1 + 0.5*_tmp236*_tmp237*p_0);
 }
 
 /* loaded (2 half plate(s) per plate): deviation of every point (143 operations) */
@@ -8890,7 +9405,84 @@ static void sk_plate_relation4(const double *plate, double *out)
     out[11] = -_tmp77 - 0.5*_tmp0 - 0.5*_tmp17 - 0.5*_tmp29 - 0.5*_tmp59 - _tmp60*_tmp75 + 0.5*_tmp1*_tmp11 + 0.5*_tmp39*_tmp4 + 0.5*_tmp79*p;
 }
 
-/* one plate's relation at order 2, values alone: (along, across, omega) (62 operations) */
+/* one plate's relation at order 4, values alone: (along, across, omega) (114 operations) */
+static void sk_plate_values4(const double *plate, double *out)
+{
+    const double theta = plate[0];
+    const double p = plate[1];
+    const double f = plate[2];
+    const double e_a = plate[3];
+    const double e_s = plate[4];
+    const double theta_sq = pow(theta, 2);
+    const double f_sq = pow(f, 2);
+    const double _tmp0 = e_a*p;
+    const double _tmp1 = pow(theta_sq, 2);
+    const double _tmp2 = -2*e_s + 2*e_a;
+    const double _tmp3 = _tmp2*p;
+    const double _tmp4 = 1 + _tmp3;
+    const double _tmp5 = e_a - e_s;
+    const double _tmp6 = _tmp5*p;
+    const double _tmp7 = 1 + _tmp6;
+    const double _tmp7_sq = pow(_tmp7, 2);
+    const double _tmp8 = _tmp7*p;
+    const double _tmp9 = symkin_bcol_h(_tmp8);
+    const double _tmp10 = symkin_bcol_e3c_at(_tmp8, _tmp9);
+    const double _tmp11 = -0.0005208333333333333*_tmp3 + _tmp10*_tmp4;
+    const double _tmp12 = pow(theta, 2);
+    const double _tmp13 = symkin_bcol_w_at(_tmp8, _tmp9);
+    const double _tmp14 = symkin_bcol_invt_at(_tmp8, _tmp9);
+    const double _tmp15 = pow(_tmp14, 2);
+    const double _tmp16 = -0.041666666666666664*_tmp3 + 0.3333333333333333*_tmp13*_tmp15*_tmp4*_tmp7*p;
+    const double _tmp17 = _tmp12*_tmp16;
+    const double _tmp18 = symkin_bcol_s_at(_tmp8, _tmp9);
+    const double _tmp19 = symkin_bcol_e1_at(_tmp8, _tmp9);
+    const double _tmp20 = 2*f;
+    const double _tmp21 = _tmp12*_tmp7;
+    const double _tmp22 = _tmp20*_tmp21;
+    const double _tmp23 = 4*(f*f*f);
+    const double _tmp24 = (_tmp7*_tmp7*_tmp7);
+    const double _tmp25 = symkin_bcol_e2_at(_tmp8, _tmp9);
+    const double _tmp26 = _tmp24*_tmp25;
+    const double _tmp27 = -_tmp19*_tmp22 - _tmp23*_tmp26 + _tmp18*_tmp7*f;
+    const double _tmp28 = _tmp27*_tmp5;
+    const double _tmp29 = _tmp28*f;
+    const double _tmp30 = pow(f, 2);
+    const double _tmp31 = pow(_tmp7, 2);
+    const double _tmp32 = _tmp30*_tmp31;
+    const double _tmp33 = pow(_tmp7_sq, 2);
+    const double _tmp34 = pow(f_sq, 2);
+    const double _tmp35 = symkin_bcol_e2_d1_at(_tmp8, _tmp9);
+    const double _tmp36 = _tmp34*_tmp35;
+    const double _tmp37 = symkin_bcol_e1_d1_at(_tmp8, _tmp9);
+    const double _tmp38 = _tmp12*_tmp32;
+    const double _tmp39 = _tmp13*_tmp32 + _tmp33*_tmp36 + _tmp37*_tmp38;
+    const double _tmp40 = _tmp0 + _tmp17 + _tmp29 - _tmp1*_tmp11 - _tmp39*_tmp4;
+    const double _tmp41 = e_s*f;
+    const double _tmp42 = _tmp27*_tmp7;
+    const double _tmp43 = _tmp41 + _tmp42;
+    const double _tmp44 = symkin_bcol_e3_at(_tmp8, _tmp9);
+    const double _tmp45 = 4*(theta*theta*theta);
+    const double _tmp46 = 2*theta;
+    const double _tmp47 = _tmp32*_tmp46;
+    const double _tmp50 = 0.25*_tmp12;
+    const double _tmp48 = 0.5*theta;
+    const double _tmp49 = symkin_sinr5(_tmp48);
+    const double _tmp51 = 2.7557319223985893e-06 + _tmp49*_tmp50;
+    const double _tmp52 = -0.0001984126984126984 + _tmp50*_tmp51;
+    const double _tmp53 = 0.09375*_tmp52*theta*pow(theta_sq, 2);
+    const double _tmp54 = symkin_cosr5(_tmp48);
+    const double _tmp55 = 5.5114638447971785e-06 + _tmp50*_tmp54 - 1.75*_tmp12*_tmp49;
+    const double _tmp56 = 0.00390625*theta*(theta_sq*theta_sq*theta_sq);
+    const double _tmp57 = _tmp55*_tmp56;
+    const double _tmp58 = 0.5*p;
+    const double _tmp59 = symkin_sinr0(_tmp48);
+    const double _tmp60 = 0.5*f;
+    out[0] = _tmp40;
+    out[1] = _tmp43;
+    out[2] = _tmp14*theta + _tmp19*_tmp47 + _tmp43*_tmp58 + _tmp44*_tmp45 - _tmp60*(_tmp40 + _tmp59) - p*(_tmp53 + _tmp57);
+}
+
+/* one plate's relation at order 2, values alone: (along, across, omega) (66 operations) */
 static void sk_plate_values2(const double *plate, double *out)
 {
     const double theta = plate[0];
@@ -8898,30 +9490,33 @@ static void sk_plate_values2(const double *plate, double *out)
     const double f = plate[2];
     const double e_a = plate[3];
     const double e_s = plate[4];
+    const double theta_sq = pow(theta, 2);
     const double _tmp0 = p*(-2*e_s + 2*e_a);
     const double _tmp1 = pow(f, 2);
     const double _tmp2 = e_a - e_s;
     const double _tmp3 = 1 + _tmp2*p;
     const double _tmp4 = _tmp3*p;
-    const double _tmp5 = symkin_bcol_s(_tmp4);
-    const double _tmp6 = 1 + _tmp0;
-    const double _tmp7 = pow(_tmp3, 2);
-    const double _tmp8 = e_a*p + pow(theta, 2)*(-0.041666666666666664*_tmp0 + _tmp6*symkin_bcol_a(_tmp4)) + 0.0005208333333333333*_tmp0*pow(theta, 4) + _tmp1*_tmp2*_tmp3*_tmp5 - _tmp1*_tmp6*_tmp7*symkin_bcol_w(_tmp4);
-    const double _tmp9 = e_s*f + _tmp5*_tmp7*f;
-    const double _tmp10 = 0.5*theta;
-    out[0] = _tmp8;
-    out[1] = _tmp9;
-    out[2] = theta*symkin_bcol_invt(_tmp4) - p*(0.00390625*pow(theta, 7)*(-7*symkin_sinr4(_tmp10) + symkin_cosr4(_tmp10)) + 0.09375*pow(theta, 5)*symkin_sinr3(_tmp10)) + 0.5*_tmp9*p - 0.5*f*(_tmp8 + symkin_sinr0(_tmp10));
+    const double _tmp5 = symkin_bcol_h(_tmp4);
+    const double _tmp6 = symkin_bcol_s_at(_tmp4, _tmp5);
+    const double _tmp7 = 1 + _tmp0;
+    const double _tmp8 = pow(_tmp3, 2);
+    const double _tmp9 = e_a*p + pow(theta, 2)*(-0.041666666666666664*_tmp0 + _tmp7*symkin_bcol_a_at(_tmp4, _tmp5)) + 0.0005208333333333333*_tmp0*pow(theta_sq, 2) + _tmp1*_tmp2*_tmp3*_tmp6 - _tmp1*_tmp7*_tmp8*symkin_bcol_w_at(_tmp4, _tmp5);
+    const double _tmp10 = e_s*f + _tmp6*_tmp8*f;
+    const double _tmp11 = 0.5*theta;
+    out[0] = _tmp9;
+    out[1] = _tmp10;
+    out[2] = theta*symkin_bcol_invt_at(_tmp4, _tmp5) - p*(0.00390625*theta*(theta_sq*theta_sq*theta_sq)*(-7*symkin_sinr4(_tmp11) + symkin_cosr4(_tmp11)) + 0.09375*theta*pow(theta_sq, 2)*symkin_sinr3(_tmp11)) + 0.5*_tmp10*p - 0.5*f*(_tmp9 + symkin_sinr0(_tmp11));
 }
 
-/* one plate's relation at order 4 where it carries no force (p = f = 0): (along, across, omega) and their partials by (theta, p, f) (39 operations) */
+/* one plate's relation at order 4 where it carries no force (p = f = 0): (along, across, omega) and their partials by (theta, p, f) (40 operations) */
 static void sk_plate_rest4(const double *plate, double *out)
 {
     const double theta = plate[0];
     const double e_a = plate[3];
     const double e_s = plate[4];
+    const double theta_sq = pow(theta, 2);
     const double _tmp0 = pow(theta, 2);
-    const double _tmp1 = pow(theta, 4);
+    const double _tmp1 = pow(theta_sq, 2);
     const double _tmp2 = 0.5*theta;
     out[0] = 0;
     out[1] = 0;
@@ -8933,7 +9528,7 @@ static void sk_plate_rest4(const double *plate, double *out)
     out[7] = 0;
     out[8] = 0.08333333333333333 + e_s - 0.004166666666666667*_tmp0;
     out[9] = 1;
-    out[10] = 0.00026041666666666666*theta*(320 - 8*_tmp0 - 360*_tmp1*symkin_sinr3(_tmp2) + 15*pow(theta, 6)*(-symkin_cosr4(_tmp2) + 7*symkin_sinr4(_tmp2)));
+    out[10] = 0.00026041666666666666*theta*(320 - 8*_tmp0 - 360*_tmp1*symkin_sinr3(_tmp2) + 15*(theta_sq*theta_sq*theta_sq)*(-symkin_cosr4(_tmp2) + 7*symkin_sinr4(_tmp2)));
     out[11] = -0.5*symkin_sinr0(_tmp2);
 }
 
@@ -9820,6 +10415,7 @@ typedef struct {
     sk_fn3 plates;      /* (x, theta, params): per half plate (theta_c, p, f, e_a, e_s), then
                            d(theta_c, p, f)/dx (3 half plates x size) */
     sk_fn4 system;      /* (x, theta, plates, params): R, dR/dx, dR/d(plates) */
+    sk_fn4 residual;    /* (x, theta, plates, params): R alone (chord steps, the estimate) */
     sk_fn4 dev;         /* (x, theta, plates, params): every point's deviation */
     int size;           /* N: the scaled unknowns (x holds them, then the load factor t) */
     int plates_n;       /* half plates */
@@ -9833,6 +10429,7 @@ typedef struct {
     double tol, max_turn, p_limit, est_factor, est_limit;
     int max_iter;
     int loads;          /* the load factor t enters the routines (the file has loads) */
+    double chord, chord_error;  /* Newton's chord steps (symkin.codegen.loaded.CHORD) */
 } sk_loaded;
 
 /* One variant at one configuration. */
@@ -9875,6 +10472,23 @@ static void sk_red_relation(const sk_red *r, const double *ins, double *rel, dou
     }
 }
 
+/* The plate relation at order 4, its values alone (a chord step's), into vals. */
+static void sk_red_values4(const sk_red *r, const double *ins, double *vals)
+{
+    int i, j;
+    for (i = 0; i < r->v->plates_n; ++i) {
+        if (ins[5 * i + 1] == 0.0 && ins[5 * i + 2] == 0.0) {
+            double rest[12];
+            sk_plate_rest4(ins + 5 * i, rest);
+            for (j = 0; j < 3; ++j) {
+                vals[3 * i + j] = rest[j];
+            }
+        } else {
+            sk_plate_values4(ins + 5 * i, vals + 3 * i);
+        }
+    }
+}
+
 /* The plate relation at order 2, its values alone (the truncation estimate's), into vals. */
 static void sk_red_values2(const sk_red *r, const double *ins, double *vals)
 {
@@ -9886,9 +10500,11 @@ static void sk_red_values2(const sk_red *r, const double *ins, double *vals)
 
 /* One evaluation of the system at order 4 (x, theta, t), kept for what follows it: the plates'
    inputs and relation, the system's output, J's LU and its determinant's sign. The last Newton
-   step's evaluation also gives the acceptance its sign and the truncation estimate its J (the
-   Python solver's rule: J of the step that converged), and the solution's plate values by one
-   first-order correction (the step is below tol: the remainder is below rounding). */
+   step's J also gives the acceptance its sign and the truncation estimate its step (the Python
+   solver's rule: J of the step that converged; here that of the last full step where chord
+   steps followed it, its step below CHORD), and the last evaluation's plate values the
+   solution's by one first-order correction (the step is below tol: the remainder is below
+   rounding). */
 typedef struct {
     double xt[SK_RN + 1], ins[SK_OUT], rel[12 * SK_RS], sys[SK_OUT], lu[SK_RN * SK_RN + 1];
     int piv[SK_RN + 1];
@@ -9940,24 +10556,47 @@ static int sk_red_eval(const sk_red *r, const double *x, const double *theta, do
     return 0;
 }
 
+/* A chord step's evaluation at (x, theta, t) into st: the plates' inputs, the relation's values
+   (their partials and J's LU stay the last full step's) and R. */
+static void sk_red_residual(const sk_red *r, const double *x, const double *theta, double t,
+                            sk_red_state *st)
+{
+    double vals[3 * SK_RS];
+    int i, j;
+    sk_red_inputs(r, x, theta, t, st->xt, st->ins);
+    sk_red_values4(r, st->ins, vals);
+    for (i = 0; i < r->v->plates_n; ++i) {
+        for (j = 0; j < 3; ++j) {
+            st->rel[12 * i + j] = vals[3 * i + j];
+        }
+    }
+    r->v->residual(st->xt, theta, vals, r->params, st->sys);
+}
+
 /* Newton from x at (theta, t): 0 converged, 1 not (a singular or non-finite Jacobian, a step
-   turning a hinge by more than max_turn, a non-finite iterate, too many steps). st: the last
-   step's evaluation; first: det J's sign at the first step (NaN where it was singular). */
+   turning a hinge by more than max_turn, a non-finite iterate, too many steps). After a step
+   below chord times the largest unknown the next reuse its J (chord steps: R alone, J's
+   partials move by about that step) while each shrinks tenfold. st: the last evaluation (J's
+   that of the last full step); first: det J's sign at the first step (NaN where singular). */
 static int sk_red_newton(const sk_red *r, double *x, const double *theta, double t,
                          sk_red_state *st, double *first)
 {
     const int n = r->v->size, nu = r->l->unknowns;
     double res[SK_RN + 1], prev = HUGE_VAL;
-    int it, i;
+    int it, i, chord = 0;
     *first = NAN;
     for (it = 1; it <= r->l->max_iter; ++it) {
         double turn = 0.0, size = 0.0, top = 0.0;
-        const int singular = sk_red_eval(r, x, theta, t, st);
-        if (it == 1) {
-            *first = st->sign;
-        }
-        if (singular) {
-            return 1;
+        if (chord) {
+            sk_red_residual(r, x, theta, t, st);
+        } else {
+            const int singular = sk_red_eval(r, x, theta, t, st);
+            if (it == 1) {
+                *first = st->sign;
+            }
+            if (singular) {
+                return 1;
+            }
         }
         /* sk_lu then sk_lu_solve: sk_solve's operations, the factors kept */
         for (i = 0; i < n; ++i) {
@@ -9986,12 +10625,17 @@ static int sk_red_newton(const sk_red *r, double *x, const double *theta, double
                 top = fabs(x[i]);
             }
         }
-        if (size <= r->l->tol * top || size == 0.0) {
+        /* a Newton step leaves about its square, below rounding; a chord step its size times
+           the contraction (size / prev) */
+        if (size == 0.0
+            || (size <= r->l->tol * top
+                && (!chord || size * size <= r->l->chord_error * top * prev))) {
             return 0;
         }
         if (it > 3 && size > 0.5 * prev && size < 1e-9 * top) {
             return 0;   /* stalled at rounding */
         }
+        chord = size <= r->l->chord * top && (!chord || size <= 0.1 * prev);
         prev = size;
     }
     return 1;
@@ -10043,7 +10687,8 @@ static int sk_red_rigid(const sk_mechanism *m, const double *inputs, const doubl
 
 /* The deviation (dev: every point's) at the solution x and the refusals: 0, 1 a plate at
    p_limit of its sway buckling load, 4 the truncation estimate above est_limit. st: the last
-   Newton step's evaluation at (theta, 1), a step below tol from x (NULL where x has no entries). */
+   Newton step's evaluation at (theta, 1), a step below tol from x (NULL where x has no entries);
+   its J that of the last full step. */
 static int sk_red_answer(const sk_red *r, const double *x, const double *theta,
                          const sk_red_state *st, double *dev)
 {
@@ -10084,7 +10729,7 @@ static int sk_red_answer(const sk_red *r, const double *x, const double *theta,
     }
     if (n > 0) {
         sk_red_values2(r, ins, vals);
-        r->v->system(xt, theta, vals, r->params, sys);
+        r->v->residual(xt, theta, vals, r->params, sys);
         for (i = 0; i < n; ++i) {
             res[i] = sys[i];
         }
@@ -10253,9 +10898,9 @@ static const double sk_loaded_scale2[20] = {0.006153846153846154, 0.006153846153
 /* the loaded level: per variant (one, two half plates per plate) its routines, size, half
    plates and the unknowns' scales; the unknowns; the rules of symkin.physics.reduced */
 static const sk_loaded sk_loaded_tables = {
-    {{1, sk_loaded_plates1, sk_loaded_system1, sk_loaded_dev1, 12, 7, sk_loaded_scale1}, {2, sk_loaded_plates2, sk_loaded_system2, sk_loaded_dev2, 19, 14, sk_loaded_scale2}},
+    {{1, sk_loaded_plates1, sk_loaded_system1, sk_loaded_res1, sk_loaded_dev1, 12, 7, sk_loaded_scale1}, {2, sk_loaded_plates2, sk_loaded_system2, sk_loaded_res2, sk_loaded_dev2, 19, 14, sk_loaded_scale2}},
     6, 1e-12, 0.2, 0.9, 3.0, 0.01,
-    12, 0
+    12, 0, 0.001, 1e-15
 };
 
 /* One variant's sensitivity routine (x, theta, plates, params) and where its blocks start:

@@ -2,7 +2,7 @@
 Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
 Points: D; levels: paper, first_order, exact, loaded.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_dev1 60, loaded_plates2 623, loaded_system2 3042, loaded_dev2 143, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, loaded_sens1 1094, loaded_sens2 2741, plate_relation4 312, plate_values2 62, plate_rest4 39, plate_eps4 158.
+Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_res1 441, loaded_dev1 60, loaded_plates2 623, loaded_system2 3042, loaded_res2 944, loaded_dev2 143, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, loaded_sens1 1094, loaded_sens2 2741, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -556,7 +556,8 @@ def _sensitivity_block(arrays, mech, level, p):
 
 class _LoadedTables:
     """The loaded level's routines and rules: per variant (one, two half plates per plate) its
-    (plates, system, dev) routines, its size, its half plates and its unknowns' scales."""
+    (plates, system, residual, dev) routines, its size, its half plates and its unknowns'
+    scales."""
 
     def __init__(self, **fields):
         self.__dict__.update(fields)
@@ -603,7 +604,10 @@ class _Batch:
 
     def __init__(self, tables, variant, count):
         self.t, self.count = tables, count  # count: half plates per plate
-        self.plates_fn, self.system_fn, self.dev_fn, self.size, self.plates, scale = variant
+        self.plates_fn, self.system_fn, self.res_fn, self.dev_fn, self.size, self.plates = variant[
+            :6
+        ]
+        scale = variant[6]
         self.scale = numpy.array(scale, dtype=float)
 
     def _inputs(self, x, theta, p, t):
@@ -632,6 +636,31 @@ class _Batch:
                 out = [numpy.where(rest, r, v) for r, v in zip(at_rest, out)]
             rel.append(out)
         return rel, [r[j] for r in rel for j in range(3)]
+
+    def _values4(self, ins):
+        """The plate relation at order 4, values alone (a chord step's; reduced.c's
+        sk_red_values4), one half plate after the other."""
+        b = ins[0].shape[0] if ins else 0
+        vals = []
+        for k in range(self.plates):
+            plate = ins[5 * k : 5 * k + 5]
+            rest = (plate[1] == 0.0) & (plate[2] == 0.0)
+            if numpy.all(rest):
+                out = [_red_column(v, b) for v in self.t.rest4(plate)[:3]]
+            else:
+                out = [_red_column(v, b) for v in self.t.values4(plate)]
+                if numpy.any(rest):
+                    at_rest = self.t.rest4(plate)[:3]
+                    out = [numpy.where(rest, r, v) for r, v in zip(at_rest, out)]
+            vals += out
+        return vals
+
+    def residual(self, x, theta, p, t):
+        """R (n, b) at order 4 from the relation's values alone (a chord step's)."""
+        b = x.shape[1]
+        args, ins, _ = self._inputs(x, theta, p, t)
+        vals = self._values4(ins)
+        return numpy.array([_red_column(v, b) for v in self.res_fn(args, theta, vals, p)])
 
     def _values2(self, ins):
         """The plate relation at order 2, values alone (the truncation estimate's), one half
@@ -669,30 +698,45 @@ class _Batch:
     def newton(self, x, theta, p, t):
         """Newton from x (n, b) at (theta, t), each configuration until it converges or fails
         (a singular or non-finite J, a step turning a hinge by more than max_turn, a non-finite
-        iterate, too many steps): (x, converged, each one's last step's J, det J's sign at the
-        first step)."""
+        iterate, too many steps), with reduced.c's chord steps (after a step below chord, R
+        alone with that step's J while each step shrinks tenfold): (x, converged, each one's
+        last full step's J, det J's sign at the first step)."""
         tb, n, nu = self.t, self.size, self.t.unknowns
         b = x.shape[1]
         x, converged = x.copy(), numpy.zeros(b, dtype=bool)
         last, first = numpy.zeros((b, n, n)), None
         prev = numpy.full(b, math.inf)
+        chord = numpy.zeros(b, dtype=bool)
         act = numpy.arange(b)
         for it in range(1, tb.max_iter + 1):
-            res, jac = self.system(x[:, act], [v[act] for v in theta], [v[act] for v in p], t)
-            last[act] = jac
-            if first is None:
-                first = _red_signs(jac)
-            step = _red_solve(jac, res)
+            c = chord[act]
+            step = numpy.zeros((n, act.size))
+            full = act[~c]
+            if full.size:
+                res, jac = self.system(
+                    x[:, full], [v[full] for v in theta], [v[full] for v in p], t
+                )
+                last[full] = jac
+                if first is None:
+                    first = _red_signs(jac)  # the first step: every configuration's full
+                step[:, ~c] = _red_solve(jac, res)
+            if c.any():
+                k = act[c]
+                res = self.residual(x[:, k], [v[k] for v in theta], [v[k] for v in p], t)
+                step[:, c] = _red_solve(last[k], res)
             turn = numpy.max(numpy.abs(step[:nu]), axis=0) * self.scale[0] if nu else 0.0
             xn = x[:, act] - step
             fail = ~(turn <= tb.max_turn) | ~numpy.all(numpy.isfinite(xn), axis=0)
             size = numpy.max(numpy.abs(step), axis=0)
             top = numpy.max(numpy.abs(xn), axis=0)
-            done = (size <= tb.tol * top) | (size == 0)
+            # a Newton step leaves about its square; a chord step its size times the contraction
+            left = ~c | (size * size <= tb.chord_error * top * prev[act])
+            done = ((size <= tb.tol * top) & left) | (size == 0)
             # stalled at rounding
             done |= (it > 3) & (size > 0.5 * prev[act]) & (size < 1e-9 * top)
             x[:, act] = xn
             converged[act[done & ~fail]] = True
+            chord[act] = (size <= tb.chord * top) & (~c | (size <= 0.1 * prev[act]))
             prev[act] = size
             act = act[~done & ~fail]
             if not act.size:
@@ -805,8 +849,8 @@ class _Batch:
         x2 = x
         if n:
             vals2 = self._values2(ins)
-            sys = self.system_fn(args, theta, vals2, p)
-            res = numpy.array([_red_column(v, b) for v in sys[:n]])
+            sys = self.res_fn(args, theta, vals2, p)
+            res = numpy.array([_red_column(v, b) for v in sys])
             x2 = x - _red_solve(jac, res)
         args2, ins2, _ = self._inputs(x2, theta, p, 1.0)
         vals2 = self._values2(ins2)
@@ -843,7 +887,7 @@ def _reduced_solve(mech, x, theta, p, ok):
     flat_delta = [numpy.zeros(where.size) for _ in mech.unknown_index]
     flat_dev = [numpy.full(where.size, numpy.nan) for _ in range(n_dev)]
     # the variant and its solution x, for the sensitivities (templates/numpy/reduced_sens.py)
-    flat_x = [numpy.full(where.size, numpy.nan) for _ in range(max(v[3] for v in tb.variants))]
+    flat_x = [numpy.full(where.size, numpy.nan) for _ in range(max(v[4] for v in tb.variants))]
     flat_variant = numpy.full(where.size, -1)
     for count, variant in enumerate(tb.variants, 1):
         if not todo.size:
@@ -1436,11 +1480,6 @@ def bcol_invt_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = (1.0) / (h * (1.0))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
-
-
-def bcol_invt(p):
-    """bcol_invt(p) = 1/T(p) (vectorised)."""
-    return bcol_invt_at(p, bcol_h(p))
 
 
 def bcol_invt_d1_at(x, h):
@@ -3392,6 +3431,161 @@ def _loaded_system1(x, theta, plates, params):
         0,
         0,
         _tmp265,
+    ]
+
+
+def _loaded_res1(x, theta, plates, params):
+    """loaded (1 half plate(s) per plate): the reduced equilibrium's residual R alone (441 operations)."""
+    x_0, x_1, x_2, x_3, x_4, x_5, x_6, x_7, x_8, x_9, x_10, x_11, _ = x
+    theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7 = theta
+    along_1_0, across_1_0, _, along_2_0, across_2_0, omega_2_0, along_3_0, across_3_0, omega_3_0, along_4_0, across_4_0, omega_4_0, along_5_0, across_5_0, omega_5_0, along_6_0, across_6_0, omega_6_0, along_7_0, across_7_0, omega_7_0 = plates
+    p_0, = params
+    _tmp0 = 0.006153846153846154*x_1
+    _tmp1 = _tmp0 + 0.006153846153846154*x_3
+    _tmp2 = numpy.sin(theta_3)
+    _tmp3 = numpy.sin(_tmp0)
+    _tmp4 = 0.02*_tmp3
+    _tmp5 = 0.003076923076923077*x_1
+    _tmp6 = numpy.sin(_tmp5)**2
+    _tmp7 = 1250.0*_tmp4 + 150.0*_tmp6
+    _tmp8 = numpy.sin(_tmp1)
+    _tmp9 = 0.003076923076923077*x_3
+    _tmp10 = numpy.sin(_tmp5 + _tmp9)**2
+    _tmp11 = 0.072*_tmp8 - 0.06*_tmp10
+    _tmp12 = theta_3 + theta_5
+    _tmp13 = 1250.0*numpy.sin(_tmp12)
+    _tmp14 = numpy.cos(theta_3)
+    _tmp15 = 0.04*_tmp6
+    _tmp16 = -_tmp15 + 0.06*_tmp3
+    _tmp17 = numpy.cos(_tmp12)
+    _tmp18 = -0.03*_tmp8 - 0.144*_tmp10
+    _tmp19 = 0.5*theta_6 + 0.003076923076923077*x_4
+    _tmp20 = _tmp19 + theta_1
+    _tmp21 = 1250.0*p_0
+    _tmp22 = _tmp21*numpy.cos(_tmp20)
+    _tmp23 = _tmp9 + 0.5*theta_5
+    _tmp24 = along_5_0 + _tmp23**2*arck(_tmp23)
+    _tmp25 = _tmp0 + theta_3
+    _tmp26 = _tmp23 + _tmp25
+    _tmp27 = numpy.cos(_tmp26)
+    _tmp28 = _tmp27*p_0
+    _tmp29 = along_6_0 + _tmp19**2*arck(_tmp19)
+    _tmp30 = _tmp21*numpy.sin(_tmp20)
+    _tmp31 = numpy.sin(_tmp26)
+    _tmp32 = 0.5*theta_1
+    _tmp33 = numpy.cos(_tmp32)
+    _tmp34 = across_1_0*p_0
+    _tmp35 = _tmp33*_tmp34
+    _tmp36 = numpy.sin(_tmp32)
+    _tmp37 = p_0*(along_1_0 + 0.25*theta_1**2*arck(_tmp32))
+    _tmp38 = _tmp36*_tmp37
+    _tmp39 = _tmp5 + 0.5*theta_3
+    _tmp40 = numpy.cos(_tmp39)
+    _tmp41 = numpy.sin(_tmp39)
+    _tmp42 = along_3_0 + _tmp39**2*arck(_tmp39)
+    _tmp43 = 1250.0*_tmp35 + 1250.0*_tmp38 - 1250.0*_tmp40*across_3_0*p_0 - 1250.0*_tmp41*_tmp42*p_0
+    _tmp44 = _tmp28*across_5_0
+    _tmp45 = _tmp31*p_0
+    _tmp46 = _tmp24*_tmp45
+    _tmp47 = _tmp41*p_0
+    _tmp48 = _tmp47*across_3_0
+    _tmp49 = _tmp33*_tmp37
+    _tmp50 = _tmp34*_tmp36
+    _tmp51 = _tmp40*p_0
+    _tmp52 = _tmp42*_tmp51
+    _tmp53 = 1250.0*_tmp48 + 1250.0*_tmp49 - 1250.0*_tmp50 - 1250.0*_tmp52
+    _tmp54 = 0.006153846153846154*x_0
+    _tmp55 = 0.006153846153846154*x_2
+    _tmp56 = _tmp0 + _tmp55
+    _tmp57 = numpy.sin(_tmp56)
+    _tmp58 = 0.003076923076923077*x_2
+    _tmp59 = numpy.sin(_tmp5 + _tmp58)**2
+    _tmp60 = 0.05*_tmp57 + 0.08*_tmp59
+    _tmp61 = theta_3 + theta_4
+    _tmp62 = 1250.0*numpy.sin(_tmp61)
+    _tmp63 = 125.0*_tmp6 - 1250.0*_tmp4
+    _tmp64 = numpy.sin(_tmp54)
+    _tmp65 = 0.003076923076923077*x_0
+    _tmp66 = numpy.sin(_tmp65)**2
+    _tmp67 = 0.04*_tmp64 - 0.14*_tmp66
+    _tmp68 = theta_1 + theta_2
+    _tmp69 = 1250.0*numpy.sin(_tmp68)
+    _tmp70 = _tmp15 + 0.05*_tmp3
+    _tmp71 = numpy.cos(_tmp61)
+    _tmp72 = 0.04*_tmp57 - 0.1*_tmp59
+    _tmp73 = numpy.cos(_tmp68)
+    _tmp74 = -0.07*_tmp64 - 0.08*_tmp66
+    _tmp75 = _tmp65 + 0.5*theta_2
+    _tmp76 = 0.7853981633974483 + _tmp75 + theta_1
+    _tmp77 = numpy.sin(_tmp76)
+    _tmp78 = across_2_0*p_0
+    _tmp79 = _tmp77*_tmp78
+    _tmp80 = 0.5*theta_7 + 0.003076923076923077*x_5
+    _tmp81 = _tmp54 + _tmp68
+    _tmp82 = _tmp80 + _tmp81
+    _tmp83 = _tmp21*numpy.sin(_tmp82)
+    _tmp84 = _tmp58 + 0.5*theta_4
+    _tmp85 = along_4_0 + _tmp84**2*arck(_tmp84)
+    _tmp86 = _tmp25 + _tmp84
+    _tmp87 = p_0*numpy.cos(_tmp86)
+    _tmp88 = _tmp85*_tmp87
+    _tmp89 = numpy.sin(_tmp86)
+    _tmp90 = numpy.cos(_tmp76)
+    _tmp91 = along_2_0 + _tmp75**2*arck(_tmp75)
+    _tmp92 = numpy.cos(_tmp82)
+    _tmp93 = along_7_0 + _tmp80**2*arck(_tmp80)
+    _tmp94 = _tmp78*_tmp90
+    _tmp95 = _tmp91*p_0
+    _tmp96 = _tmp77*_tmp95
+    _tmp97 = _tmp87*across_4_0
+    _tmp98 = _tmp89*p_0
+    _tmp99 = _tmp85*_tmp98
+    _tmp100 = 1.0*x_11
+    _tmp101 = -_tmp100
+    _tmp102 = 6.770833333333334e-06*p_0**2*_DTYPE(numpy.where(numpy.less_equal(p_0, 0.008), 230769230769.23077, 210000000000))
+    _tmp103 = numpy.sin(theta_1)
+    _tmp104 = numpy.cos(theta_1)
+    _tmp105 = 0.3535533905932738*p_0
+    _tmp106 = -_tmp105*numpy.cos(_tmp81)
+    _tmp107 = _tmp105*numpy.sin(_tmp81)
+    _tmp108 = numpy.cos(_tmp25)
+    _tmp109 = numpy.sin(_tmp25)
+    _tmp110 = 0.02*_tmp109
+    _tmp111 = _tmp56 + _tmp61
+    _tmp112 = numpy.cos(_tmp111)
+    _tmp113 = 0.5*p_0
+    _tmp114 = -0.05 + _tmp113
+    _tmp115 = numpy.sin(_tmp111)
+    _tmp116 = 0.04*_tmp112 + _tmp114*_tmp115
+    _tmp117 = _tmp110 + _tmp116 + _tmp97 + _tmp99 + 0.05*_tmp108
+    _tmp118 = 7.6923076923076925*x_9
+    _tmp119 = 0.02*_tmp108
+    _tmp120 = 0.04*_tmp115
+    _tmp121 = _tmp119 + _tmp88 - _tmp120 - 0.05*_tmp109 + _tmp112*_tmp114 - _tmp98*across_4_0
+    _tmp122 = 7.6923076923076925*x_10
+    _tmp123 = 1.0*x_8
+    _tmp124 = -_tmp108*_tmp113
+    _tmp125 = _tmp1 + _tmp12
+    _tmp126 = numpy.sin(_tmp125)
+    _tmp127 = 0.072*_tmp126
+    _tmp128 = -0.03 + _tmp113
+    _tmp129 = numpy.cos(_tmp125)
+    _tmp130 = 7.6923076923076925*x_6
+    _tmp131 = 0.072*_tmp129 + _tmp126*_tmp128
+    _tmp132 = 7.6923076923076925*x_7
+    return [
+        -_tmp1 + 0.006153846153846154*x_4,
+        -_tmp43 - _tmp11*_tmp13 - _tmp2*_tmp7 - _tmp22*across_6_0 - _tmp29*_tmp30 + 1250.0*_tmp14*_tmp16 + 1250.0*_tmp17*_tmp18 - 1250.0*_tmp24*_tmp28 + 1250.0*_tmp31*across_5_0*p_0,
+        _tmp53 - 1250.0*_tmp44 - 1250.0*_tmp46 + _tmp13*_tmp18 + _tmp14*_tmp7 + _tmp22*_tmp29 - _tmp30*across_6_0 + 1250.0*_tmp11*_tmp17 + 1250.0*_tmp16*_tmp2,
+        _tmp54 - _tmp0 - _tmp55 + 0.006153846153846154*x_5,
+        -_tmp43 - 1250.0*_tmp79 - 1250.0*_tmp88 - _tmp2*_tmp63 - _tmp60*_tmp62 - _tmp67*_tmp69 - _tmp83*across_7_0 + 1250.0*_tmp14*_tmp70 + 1250.0*_tmp71*_tmp72 + 1250.0*_tmp73*_tmp74 + 1250.0*_tmp89*across_4_0*p_0 + 1250.0*_tmp90*_tmp91*p_0 + 1250.0*_tmp92*_tmp93*p_0,
+        _tmp53 + 1250.0*_tmp94 + 1250.0*_tmp96 - 1250.0*_tmp97 - 1250.0*_tmp99 + _tmp14*_tmp63 + _tmp62*_tmp72 + _tmp69*_tmp74 + _tmp83*_tmp93 + 1250.0*_tmp2*_tmp70 + 1250.0*_tmp60*_tmp71 + 1250.0*_tmp67*_tmp73 + _tmp21*_tmp92*across_7_0,
+        _tmp101 + _tmp102*omega_2_0 + _tmp118*(_tmp106 + _tmp117 + _tmp50 + _tmp52 - _tmp107 - _tmp48 - _tmp49 - _tmp94 - _tmp96 - 0.03*_tmp103 - 0.02*_tmp104) - _tmp122*(0.1 + _tmp106 + _tmp107 + _tmp121 + _tmp35 + _tmp38 + _tmp79 + 0.02*_tmp103 - 0.03*_tmp104 - _tmp42*_tmp47 - _tmp51*across_3_0 - _tmp90*_tmp95),
+        _tmp100 + _tmp123 + _tmp102*omega_3_0 + _tmp122*(_tmp121 + _tmp109*_tmp113) + _tmp132*(-_tmp119 - _tmp131 - 0.06*_tmp109 - _tmp45*across_5_0 + 0.5*_tmp109*p_0 + _tmp24*_tmp27*p_0) - _tmp118*(_tmp117 + _tmp124) - _tmp130*(_tmp124 + _tmp44 + _tmp46 - _tmp110 - _tmp127 + 0.06*_tmp108 + _tmp128*_tmp129),
+        _tmp100 + _tmp102*omega_4_0 + _tmp122*(-_tmp120 + _tmp112*_tmp114 - _tmp112*_tmp113) - _tmp118*(_tmp116 - _tmp113*_tmp115),
+        _tmp123 + _tmp102*omega_5_0 + _tmp132*(-_tmp131 - _tmp113*_tmp129) - _tmp130*(-_tmp127 + _tmp128*_tmp129 - _tmp113*_tmp126),
+        1.0*x_8 - _tmp102*omega_6_0,
+        -_tmp101 - _tmp102*omega_7_0,
     ]
 
 
@@ -6375,6 +6569,273 @@ def _loaded_system2(x, theta, plates, params):
         -_tmp712*x_10 + 3.8461538461538463*_tmp325*p_0*x_9,
         _tmp712*x_9 + _tmp325*_tmp561*x_10,
         _tmp705,
+    ]
+
+
+def _loaded_res2(x, theta, plates, params):
+    """loaded (2 half plate(s) per plate): the reduced equilibrium's residual R alone (944 operations)."""
+    x_0, x_1, x_2, x_3, x_4, x_5, x_6, x_7, x_8, x_9, x_10, x_11, x_12, x_13, x_14, x_15, x_16, x_17, x_18, _ = x
+    theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7 = theta
+    along_1_0, across_1_0, omega_1_0, along_1_1, across_1_1, omega_1_1, along_2_0, across_2_0, omega_2_0, along_2_1, across_2_1, omega_2_1, along_3_0, across_3_0, omega_3_0, along_3_1, across_3_1, omega_3_1, along_4_0, across_4_0, omega_4_0, along_4_1, across_4_1, omega_4_1, along_5_0, across_5_0, omega_5_0, along_5_1, across_5_1, omega_5_1, along_6_0, across_6_0, omega_6_0, along_6_1, across_6_1, omega_6_1, along_7_0, across_7_0, omega_7_0, along_7_1, across_7_1, omega_7_1 = plates
+    p_0, = params
+    _tmp0 = 0.006153846153846154*x_1
+    _tmp1 = _tmp0 + 0.006153846153846154*x_3
+    _tmp2 = numpy.sin(theta_3)
+    _tmp3 = numpy.sin(_tmp0)
+    _tmp4 = 0.02*_tmp3
+    _tmp5 = 0.003076923076923077*x_1
+    _tmp6 = numpy.sin(_tmp5)**2
+    _tmp7 = 1250.0*_tmp4 + 150.0*_tmp6
+    _tmp8 = numpy.sin(_tmp1)
+    _tmp9 = 0.003076923076923077*x_3
+    _tmp10 = numpy.sin(_tmp5 + _tmp9)**2
+    _tmp11 = 0.072*_tmp8 - 0.06*_tmp10
+    _tmp12 = theta_3 + theta_5
+    _tmp13 = 1250.0*numpy.sin(_tmp12)
+    _tmp14 = _tmp0 + theta_3
+    _tmp15 = _tmp14 + _tmp9 + 0.5*theta_5
+    _tmp16 = numpy.cos(_tmp15)
+    _tmp17 = 0.5*x_16
+    _tmp18 = 0.25*theta_5 + 0.0015384615384615385*x_3
+    _tmp19 = _tmp18 - _tmp17
+    _tmp20 = numpy.sin(_tmp19)
+    _tmp21 = 0.5*p_0
+    _tmp22 = _tmp21*across_5_0
+    _tmp23 = _tmp17 + _tmp18
+    _tmp24 = _tmp21*numpy.sin(_tmp23)
+    _tmp25 = numpy.cos(_tmp19)
+    _tmp26 = _tmp21*(along_5_0 + _tmp23**2*arck(_tmp23))
+    _tmp27 = along_5_1 + _tmp19**2*arck(_tmp19)
+    _tmp28 = _tmp21*numpy.cos(_tmp23)
+    _tmp29 = _tmp20*_tmp22 + _tmp21*(-2*numpy.sin(_tmp17)**2 + 2*numpy.sin(_tmp18)**2) + _tmp25*_tmp26 + _tmp27*_tmp28 - _tmp24*across_5_1
+    _tmp30 = theta_1 + 0.5*theta_6 + 0.003076923076923077*x_4
+    _tmp31 = numpy.sin(_tmp30)
+    _tmp32 = 0.5*x_17
+    _tmp33 = 0.25*theta_6 + 0.0015384615384615385*x_4
+    _tmp34 = _tmp33 - _tmp32
+    _tmp35 = numpy.sin(_tmp34)
+    _tmp36 = _tmp21*across_6_0
+    _tmp37 = _tmp32 + _tmp33
+    _tmp38 = _tmp21*numpy.sin(_tmp37)
+    _tmp39 = numpy.cos(_tmp34)
+    _tmp40 = _tmp21*(along_6_0 + _tmp37**2*arck(_tmp37))
+    _tmp41 = along_6_1 + _tmp34**2*arck(_tmp34)
+    _tmp42 = _tmp21*numpy.cos(_tmp37)
+    _tmp43 = 1250.0*_tmp21*(-2*numpy.sin(_tmp32)**2 + 2*numpy.sin(_tmp33)**2) + 1250.0*_tmp35*_tmp36 + 1250.0*_tmp39*_tmp40 + 1250.0*_tmp41*_tmp42 - 1250.0*_tmp38*across_6_1
+    _tmp44 = numpy.cos(_tmp30)
+    _tmp45 = 1250.0*_tmp21*numpy.sin(1.0*x_17) + 1250.0*_tmp36*_tmp39 + 1250.0*_tmp38*_tmp41 + 1250.0*_tmp42*across_6_1 - 1250.0*_tmp35*_tmp40
+    _tmp46 = numpy.cos(theta_3)
+    _tmp47 = 0.04*_tmp6
+    _tmp48 = -_tmp47 + 0.06*_tmp3
+    _tmp49 = numpy.cos(_tmp12)
+    _tmp50 = -0.03*_tmp8 - 0.144*_tmp10
+    _tmp51 = numpy.sin(_tmp15)
+    _tmp52 = _tmp21*numpy.sin(1.0*x_16) + _tmp22*_tmp25 + _tmp24*_tmp27 + _tmp28*across_5_1 - _tmp20*_tmp26
+    _tmp53 = 0.5*theta_1
+    _tmp54 = numpy.sin(_tmp53)
+    _tmp55 = 0.25*theta_1
+    _tmp56 = 0.5*x_12
+    _tmp57 = _tmp55 - _tmp56
+    _tmp58 = numpy.sin(_tmp57)
+    _tmp59 = _tmp21*across_1_0
+    _tmp60 = _tmp55 + _tmp56
+    _tmp61 = _tmp21*numpy.sin(_tmp60)
+    _tmp62 = numpy.cos(_tmp57)
+    _tmp63 = _tmp21*(along_1_0 + _tmp60**2*arck(_tmp60))
+    _tmp64 = along_1_1 + _tmp57**2*arck(_tmp57)
+    _tmp65 = _tmp21*numpy.cos(_tmp60)
+    _tmp66 = _tmp21*(-2*numpy.sin(_tmp56)**2 + 2*numpy.sin(_tmp55)**2) + _tmp58*_tmp59 + _tmp62*_tmp63 + _tmp64*_tmp65 - _tmp61*across_1_1
+    _tmp67 = _tmp54*_tmp66
+    _tmp68 = numpy.cos(_tmp53)
+    _tmp69 = _tmp21*numpy.sin(1.0*x_12) + _tmp59*_tmp62 + _tmp61*_tmp64 + _tmp65*across_1_1 - _tmp58*_tmp63
+    _tmp70 = _tmp68*_tmp69
+    _tmp71 = _tmp5 + 0.5*theta_3
+    _tmp72 = numpy.sin(_tmp71)
+    _tmp73 = 0.5*x_14
+    _tmp74 = 0.25*theta_3 + 0.0015384615384615385*x_1
+    _tmp75 = _tmp74 - _tmp73
+    _tmp76 = numpy.sin(_tmp75)
+    _tmp77 = _tmp21*across_3_0
+    _tmp78 = _tmp73 + _tmp74
+    _tmp79 = _tmp21*numpy.sin(_tmp78)
+    _tmp80 = numpy.cos(_tmp75)
+    _tmp81 = _tmp21*(along_3_0 + _tmp78**2*arck(_tmp78))
+    _tmp82 = along_3_1 + _tmp75**2*arck(_tmp75)
+    _tmp83 = _tmp21*numpy.cos(_tmp78)
+    _tmp84 = _tmp21*(-2*numpy.sin(_tmp73)**2 + 2*numpy.sin(_tmp74)**2) + _tmp76*_tmp77 + _tmp80*_tmp81 + _tmp82*_tmp83 - _tmp79*across_3_1
+    _tmp85 = numpy.cos(_tmp71)
+    _tmp86 = _tmp21*numpy.sin(1.0*x_14) + _tmp77*_tmp80 + _tmp79*_tmp82 + _tmp83*across_3_1 - _tmp76*_tmp81
+    _tmp87 = 1250.0*_tmp67 + 1250.0*_tmp70 - 1250.0*_tmp72*_tmp84 - 1250.0*_tmp85*_tmp86
+    _tmp88 = _tmp29*_tmp51
+    _tmp89 = _tmp16*_tmp52
+    _tmp90 = _tmp66*_tmp68
+    _tmp91 = _tmp72*_tmp86
+    _tmp92 = 1250.0*_tmp90 + 1250.0*_tmp91 - 1250.0*_tmp54*_tmp69 - 1250.0*_tmp84*_tmp85
+    _tmp93 = 0.006153846153846154*x_0
+    _tmp94 = 0.006153846153846154*x_2
+    _tmp95 = _tmp0 + _tmp94
+    _tmp96 = numpy.sin(_tmp95)
+    _tmp97 = 0.003076923076923077*x_2
+    _tmp98 = numpy.sin(_tmp5 + _tmp97)**2
+    _tmp99 = 0.05*_tmp96 + 0.08*_tmp98
+    _tmp100 = theta_3 + theta_4
+    _tmp101 = 1250.0*numpy.sin(_tmp100)
+    _tmp102 = 125.0*_tmp6 - 1250.0*_tmp4
+    _tmp103 = numpy.sin(_tmp93)
+    _tmp104 = 0.003076923076923077*x_0
+    _tmp105 = numpy.sin(_tmp104)**2
+    _tmp106 = 0.04*_tmp103 - 0.14*_tmp105
+    _tmp107 = theta_1 + theta_2
+    _tmp108 = 1250.0*numpy.sin(_tmp107)
+    _tmp109 = _tmp14 + _tmp97 + 0.5*theta_4
+    _tmp110 = numpy.cos(_tmp109)
+    _tmp111 = 0.5*x_15
+    _tmp112 = 0.25*theta_4 + 0.0015384615384615385*x_2
+    _tmp113 = _tmp112 - _tmp111
+    _tmp114 = numpy.sin(_tmp113)
+    _tmp115 = _tmp21*across_4_0
+    _tmp116 = _tmp111 + _tmp112
+    _tmp117 = _tmp21*numpy.sin(_tmp116)
+    _tmp118 = numpy.cos(_tmp113)
+    _tmp119 = _tmp21*(along_4_0 + _tmp116**2*arck(_tmp116))
+    _tmp120 = along_4_1 + _tmp113**2*arck(_tmp113)
+    _tmp121 = _tmp21*numpy.cos(_tmp116)
+    _tmp122 = _tmp114*_tmp115 + _tmp118*_tmp119 + _tmp120*_tmp121 + _tmp21*(-2*numpy.sin(_tmp111)**2 + 2*numpy.sin(_tmp112)**2) - _tmp117*across_4_1
+    _tmp123 = _tmp110*_tmp122
+    _tmp124 = 0.7853981633974483 + theta_1
+    _tmp125 = _tmp104 + _tmp124 + 0.5*theta_2
+    _tmp126 = numpy.sin(_tmp125)
+    _tmp127 = 0.5*x_13
+    _tmp128 = 0.25*theta_2 + 0.0015384615384615385*x_0
+    _tmp129 = _tmp128 - _tmp127
+    _tmp130 = numpy.cos(_tmp129)
+    _tmp131 = _tmp21*across_2_0
+    _tmp132 = _tmp127 + _tmp128
+    _tmp133 = _tmp21*numpy.cos(_tmp132)
+    _tmp134 = numpy.sin(_tmp129)
+    _tmp135 = _tmp21*(along_2_0 + _tmp132**2*arck(_tmp132))
+    _tmp136 = along_2_1 + _tmp129**2*arck(_tmp129)
+    _tmp137 = _tmp21*numpy.sin(_tmp132)
+    _tmp138 = _tmp130*_tmp131 + _tmp133*across_2_1 + _tmp136*_tmp137 + _tmp21*numpy.sin(1.0*x_13) - _tmp134*_tmp135
+    _tmp139 = _tmp126*_tmp138
+    _tmp140 = _tmp107 + _tmp93
+    _tmp141 = _tmp140 + 0.5*theta_7 + 0.003076923076923077*x_5
+    _tmp142 = numpy.sin(_tmp141)
+    _tmp143 = 0.5*x_18
+    _tmp144 = 0.25*theta_7 + 0.0015384615384615385*x_5
+    _tmp145 = _tmp144 - _tmp143
+    _tmp146 = numpy.cos(_tmp145)
+    _tmp147 = _tmp21*across_7_0
+    _tmp148 = _tmp143 + _tmp144
+    _tmp149 = _tmp21*numpy.cos(_tmp148)
+    _tmp150 = numpy.sin(_tmp145)
+    _tmp151 = _tmp21*(along_7_0 + _tmp148**2*arck(_tmp148))
+    _tmp152 = along_7_1 + _tmp145**2*arck(_tmp145)
+    _tmp153 = _tmp21*numpy.sin(_tmp148)
+    _tmp154 = 1250.0*_tmp146*_tmp147 + 1250.0*_tmp149*across_7_1 + 1250.0*_tmp152*_tmp153 + 1250.0*_tmp21*numpy.sin(1.0*x_18) - 1250.0*_tmp150*_tmp151
+    _tmp155 = _tmp47 + 0.05*_tmp3
+    _tmp156 = numpy.cos(_tmp100)
+    _tmp157 = 0.04*_tmp96 - 0.1*_tmp98
+    _tmp158 = numpy.cos(_tmp107)
+    _tmp159 = -0.07*_tmp103 - 0.08*_tmp105
+    _tmp160 = numpy.cos(_tmp125)
+    _tmp161 = _tmp130*_tmp135 + _tmp131*_tmp134 + _tmp133*_tmp136 + _tmp21*(-2*numpy.sin(_tmp127)**2 + 2*numpy.sin(_tmp128)**2) - _tmp137*across_2_1
+    _tmp162 = numpy.cos(_tmp141)
+    _tmp163 = _tmp146*_tmp151 + _tmp147*_tmp150 + _tmp149*_tmp152 + _tmp21*(-2*numpy.sin(_tmp143)**2 + 2*numpy.sin(_tmp144)**2) - _tmp153*across_7_1
+    _tmp164 = numpy.sin(_tmp109)
+    _tmp165 = _tmp115*_tmp118 + _tmp117*_tmp120 + _tmp121*across_4_1 + _tmp21*numpy.sin(1.0*x_15) - _tmp114*_tmp119
+    _tmp166 = _tmp126*_tmp161
+    _tmp167 = _tmp138*_tmp160
+    _tmp168 = _tmp122*_tmp164
+    _tmp169 = _tmp110*_tmp165
+    _tmp170 = 1.0*x_11
+    _tmp171 = -_tmp170
+    _tmp172 = 1.3541666666666668e-05*p_0**2*_DTYPE(numpy.where(numpy.less_equal(p_0, 0.008), 230769230769.23077, 210000000000))
+    _tmp173 = _tmp172*omega_2_1
+    _tmp174 = numpy.sin(theta_1)
+    _tmp175 = numpy.cos(theta_1)
+    _tmp176 = numpy.sin(_tmp14)
+    _tmp177 = 0.02*_tmp176
+    _tmp178 = -_tmp177
+    _tmp179 = numpy.cos(_tmp14)
+    _tmp180 = 0.3535533905932738*p_0
+    _tmp181 = _tmp180*numpy.sin(_tmp140)
+    _tmp182 = _tmp180*numpy.cos(_tmp140)
+    _tmp183 = _tmp100 + _tmp95
+    _tmp184 = numpy.cos(_tmp183)
+    _tmp185 = -0.05 + _tmp21
+    _tmp186 = numpy.sin(_tmp183)
+    _tmp187 = 7.6923076923076925*x_9
+    _tmp188 = 0.02*_tmp179
+    _tmp189 = 0.04*_tmp186
+    _tmp190 = _tmp123 + _tmp188 - _tmp189 - 0.05*_tmp176 + _tmp184*_tmp185 - _tmp164*_tmp165
+    _tmp191 = 7.6923076923076925*x_10
+    _tmp192 = 1.0*x_8
+    _tmp193 = _tmp172*omega_3_1
+    _tmp194 = -_tmp179*_tmp21
+    _tmp195 = _tmp1 + _tmp12
+    _tmp196 = numpy.sin(_tmp195)
+    _tmp197 = 0.072*_tmp196
+    _tmp198 = -0.03 + _tmp21
+    _tmp199 = numpy.cos(_tmp195)
+    _tmp200 = 7.6923076923076925*x_6
+    _tmp201 = 0.04*_tmp184 + _tmp185*_tmp186
+    _tmp202 = 0.072*_tmp199 + _tmp196*_tmp198
+    _tmp203 = 7.6923076923076925*x_7
+    _tmp204 = _tmp172*omega_4_1
+    _tmp205 = _tmp172*omega_5_1
+    _tmp206 = _tmp172*omega_6_1
+    _tmp207 = _tmp172*omega_7_1
+    _tmp208 = 0.378698224852071*x_10 + 0.378698224852071*x_7
+    _tmp209 = _tmp56 + 0.75*theta_1
+    _tmp210 = numpy.cos(_tmp209)
+    _tmp211 = along_1_1 + sinr0(_tmp57)
+    _tmp212 = _tmp21*numpy.sin(_tmp209)
+    _tmp213 = 0.378698224852071*x_6 + 0.378698224852071*x_9
+    _tmp214 = _tmp124 + _tmp127 + 0.75*theta_2 + 0.004615384615384615*x_0
+    _tmp215 = _tmp21*numpy.sin(_tmp214)
+    _tmp216 = numpy.cos(_tmp214)
+    _tmp217 = along_2_1 + sinr0(_tmp129)
+    _tmp218 = _tmp73 + 0.75*theta_3 + 0.004615384615384615*x_1
+    _tmp219 = numpy.cos(_tmp218)
+    _tmp220 = along_3_1 + sinr0(_tmp75)
+    _tmp221 = _tmp21*numpy.sin(_tmp218)
+    _tmp222 = _tmp111 + _tmp14 + 0.75*theta_4 + 0.004615384615384615*x_2
+    _tmp223 = _tmp21*numpy.sin(_tmp222)
+    _tmp224 = along_4_1 + sinr0(_tmp113)
+    _tmp225 = numpy.cos(_tmp222)
+    _tmp226 = _tmp14 + _tmp17 + 0.75*theta_5 + 0.004615384615384615*x_3
+    _tmp227 = numpy.cos(_tmp226)
+    _tmp228 = along_5_1 + sinr0(_tmp19)
+    _tmp229 = _tmp21*numpy.sin(_tmp226)
+    _tmp230 = _tmp32 + theta_1 + 0.75*theta_6 + 0.004615384615384615*x_4
+    _tmp231 = _tmp21*numpy.sin(_tmp230)
+    _tmp232 = numpy.cos(_tmp230)
+    _tmp233 = along_6_1 + sinr0(_tmp34)
+    _tmp234 = _tmp140 + _tmp143 + 0.75*theta_7 + 0.004615384615384615*x_5
+    _tmp235 = _tmp21*numpy.sin(_tmp234)
+    _tmp236 = along_7_1 + sinr0(_tmp145)
+    _tmp237 = numpy.cos(_tmp234)
+    return [
+        -_tmp1 + 0.006153846153846154*x_4,
+        -_tmp87 - _tmp11*_tmp13 - _tmp2*_tmp7 - _tmp31*_tmp43 - _tmp44*_tmp45 + 1250.0*_tmp46*_tmp48 + 1250.0*_tmp49*_tmp50 + 1250.0*_tmp51*_tmp52 - 1250.0*_tmp16*_tmp29,
+        _tmp92 - 1250.0*_tmp88 - 1250.0*_tmp89 + _tmp13*_tmp50 + _tmp43*_tmp44 + _tmp46*_tmp7 - _tmp31*_tmp45 + 1250.0*_tmp11*_tmp49 + 1250.0*_tmp2*_tmp48,
+        _tmp93 - _tmp0 - _tmp94 + 0.006153846153846154*x_5,
+        -_tmp87 - 1250.0*_tmp123 - 1250.0*_tmp139 - _tmp101*_tmp99 - _tmp102*_tmp2 - _tmp106*_tmp108 - _tmp142*_tmp154 + 1250.0*_tmp155*_tmp46 + 1250.0*_tmp156*_tmp157 + 1250.0*_tmp158*_tmp159 + 1250.0*_tmp160*_tmp161 + 1250.0*_tmp162*_tmp163 + 1250.0*_tmp164*_tmp165,
+        _tmp92 + 1250.0*_tmp166 + 1250.0*_tmp167 - 1250.0*_tmp168 - 1250.0*_tmp169 + _tmp101*_tmp157 + _tmp102*_tmp46 + _tmp108*_tmp159 + _tmp154*_tmp162 + 1250.0*_tmp106*_tmp158 + 1250.0*_tmp142*_tmp163 + 1250.0*_tmp155*_tmp2 + 1250.0*_tmp156*_tmp99,
+        _tmp171 + _tmp173 + _tmp187*(-_tmp166 - _tmp167 - _tmp178 - _tmp181 - _tmp182 - _tmp90 - _tmp91 + 0.05*_tmp179 + 0.04*_tmp184 - 0.03*_tmp174 - 0.02*_tmp175 + _tmp110*_tmp165 + _tmp122*_tmp164 + _tmp185*_tmp186 + _tmp54*_tmp69 + _tmp84*_tmp85) - _tmp191*(0.1 + _tmp139 + _tmp181 + _tmp190 + _tmp67 + _tmp70 - _tmp182 + 0.02*_tmp174 - 0.03*_tmp175 - _tmp160*_tmp161 - _tmp72*_tmp84 - _tmp85*_tmp86),
+        _tmp170 + _tmp192 + _tmp193 + _tmp191*(_tmp190 + _tmp176*_tmp21) + _tmp203*(-_tmp188 - _tmp202 - 0.06*_tmp176 + _tmp16*_tmp29 - _tmp51*_tmp52 + 0.5*_tmp176*p_0) - _tmp187*(_tmp168 + _tmp169 + _tmp177 + _tmp194 + _tmp201 + 0.05*_tmp179) - _tmp200*(_tmp178 + _tmp194 + _tmp88 + _tmp89 - _tmp197 + 0.06*_tmp179 + _tmp198*_tmp199),
+        _tmp170 + _tmp204 + _tmp191*(-_tmp189 + _tmp184*_tmp185 - _tmp184*_tmp21) - _tmp187*(_tmp201 - _tmp186*_tmp21),
+        _tmp192 + _tmp205 + _tmp203*(-_tmp202 - _tmp199*_tmp21) - _tmp200*(-_tmp197 + _tmp198*_tmp199 - _tmp196*_tmp21),
+        -_tmp206 + 1.0*x_8,
+        -_tmp171 - _tmp207,
+        _tmp172*omega_1_0 - _tmp172*omega_1_1 + 20.3125*_tmp213*(-_tmp212*across_1_1 + 0.5*_tmp210*_tmp211*p_0) - 20.3125*_tmp208*(-_tmp211*_tmp212 - _tmp21*_tmp210*across_1_1),
+        -_tmp173 + _tmp172*omega_2_0 + _tmp187*(_tmp215*_tmp217 + _tmp21*_tmp216*across_2_1) - _tmp191*(-_tmp215*across_2_1 + 0.5*_tmp216*_tmp217*p_0),
+        -_tmp193 + _tmp172*omega_3_0 + 20.3125*_tmp208*(-_tmp220*_tmp221 - _tmp21*_tmp219*across_3_1) - 20.3125*_tmp213*(-_tmp221*across_3_1 + 0.5*_tmp219*_tmp220*p_0),
+        -_tmp204 + _tmp172*omega_4_0 + _tmp191*(-_tmp223*across_4_1 + 0.5*_tmp224*_tmp225*p_0) - _tmp187*(_tmp223*_tmp224 + _tmp21*_tmp225*across_4_1),
+        -_tmp205 + _tmp172*omega_5_0 + _tmp203*(-_tmp229*across_5_1 + 0.5*_tmp227*_tmp228*p_0) - _tmp200*(_tmp228*_tmp229 + _tmp21*_tmp227*across_5_1),
+        -_tmp206 + _tmp172*omega_6_0 + _tmp200*(-_tmp231*across_6_1 + 0.5*_tmp232*_tmp233*p_0) - _tmp203*(-_tmp231*_tmp233 - _tmp21*_tmp232*across_6_1),
+        -_tmp207 + _tmp172*omega_7_0 + _tmp187*(_tmp235*_tmp236 + _tmp21*_tmp237*across_7_1) - _tmp191*(-_tmp235*across_7_1 + 0.5*_tmp236*_tmp237*p_0),
     ]
 
 
@@ -9662,32 +10123,109 @@ def _plate_relation4(plate):
     ]
 
 
-def _plate_values2(plate):
-    """one plate's relation at order 2, values alone: (along, across, omega) (62 operations)."""
+def _plate_values4(plate):
+    """one plate's relation at order 4, values alone: (along, across, omega) (114 operations)."""
     theta, p, f, e_a, e_s = plate
+    theta_sq = theta**2
+    f_sq = f**2
+    _tmp0 = e_a*p
+    _tmp1 = theta_sq**2
+    _tmp2 = -2*e_s + 2*e_a
+    _tmp3 = _tmp2*p
+    _tmp4 = 1 + _tmp3
+    _tmp5 = e_a - e_s
+    _tmp6 = _tmp5*p
+    _tmp7 = 1 + _tmp6
+    _tmp7_sq = _tmp7**2
+    _tmp8 = _tmp7*p
+    _tmp9 = bcol_h(_tmp8)
+    _tmp10 = bcol_e3c_at(_tmp8, _tmp9)
+    _tmp11 = -0.0005208333333333333*_tmp3 + _tmp10*_tmp4
+    _tmp12 = theta**2
+    _tmp13 = bcol_w_at(_tmp8, _tmp9)
+    _tmp14 = bcol_invt_at(_tmp8, _tmp9)
+    _tmp15 = _tmp14**2
+    _tmp16 = -0.041666666666666664*_tmp3 + 0.3333333333333333*_tmp13*_tmp15*_tmp4*_tmp7*p
+    _tmp17 = _tmp12*_tmp16
+    _tmp18 = bcol_s_at(_tmp8, _tmp9)
+    _tmp19 = bcol_e1_at(_tmp8, _tmp9)
+    _tmp20 = 2*f
+    _tmp21 = _tmp12*_tmp7
+    _tmp22 = _tmp20*_tmp21
+    _tmp23 = 4*f**3
+    _tmp24 = _tmp7**3
+    _tmp25 = bcol_e2_at(_tmp8, _tmp9)
+    _tmp26 = _tmp24*_tmp25
+    _tmp27 = -_tmp19*_tmp22 - _tmp23*_tmp26 + _tmp18*_tmp7*f
+    _tmp28 = _tmp27*_tmp5
+    _tmp29 = _tmp28*f
+    _tmp30 = f**2
+    _tmp31 = _tmp7**2
+    _tmp32 = _tmp30*_tmp31
+    _tmp33 = _tmp7_sq**2
+    _tmp34 = f_sq**2
+    _tmp35 = bcol_e2_d1_at(_tmp8, _tmp9)
+    _tmp36 = _tmp34*_tmp35
+    _tmp37 = bcol_e1_d1_at(_tmp8, _tmp9)
+    _tmp38 = _tmp12*_tmp32
+    _tmp39 = _tmp13*_tmp32 + _tmp33*_tmp36 + _tmp37*_tmp38
+    _tmp40 = _tmp0 + _tmp17 + _tmp29 - _tmp1*_tmp11 - _tmp39*_tmp4
+    _tmp41 = e_s*f
+    _tmp42 = _tmp27*_tmp7
+    _tmp43 = _tmp41 + _tmp42
+    _tmp44 = bcol_e3_at(_tmp8, _tmp9)
+    _tmp45 = 4*theta**3
+    _tmp46 = 2*theta
+    _tmp47 = _tmp32*_tmp46
+    _tmp50 = 0.25*_tmp12
+    _tmp48 = 0.5*theta
+    _tmp49 = sinr5(_tmp48)
+    _tmp51 = 2.7557319223985893e-06 + _tmp49*_tmp50
+    _tmp52 = -0.0001984126984126984 + _tmp50*_tmp51
+    _tmp53 = 0.09375*_tmp52*theta*theta_sq**2
+    _tmp54 = cosr5(_tmp48)
+    _tmp55 = 5.5114638447971785e-06 + _tmp50*_tmp54 - 1.75*_tmp12*_tmp49
+    _tmp56 = 0.00390625*theta*theta_sq**3
+    _tmp57 = _tmp55*_tmp56
+    _tmp58 = 0.5*p
+    _tmp59 = sinr0(_tmp48)
+    _tmp60 = 0.5*f
+    return [
+        _tmp40,
+        _tmp43,
+        _tmp14*theta + _tmp19*_tmp47 + _tmp43*_tmp58 + _tmp44*_tmp45 - _tmp60*(_tmp40 + _tmp59) - p*(_tmp53 + _tmp57),
+    ]
+
+
+def _plate_values2(plate):
+    """one plate's relation at order 2, values alone: (along, across, omega) (66 operations)."""
+    theta, p, f, e_a, e_s = plate
+    theta_sq = theta**2
     _tmp0 = p*(-2*e_s + 2*e_a)
     _tmp1 = f**2
     _tmp2 = e_a - e_s
     _tmp3 = 1 + _tmp2*p
     _tmp4 = _tmp3*p
-    _tmp5 = bcol_s(_tmp4)
-    _tmp6 = 1 + _tmp0
-    _tmp7 = _tmp3**2
-    _tmp8 = e_a*p + theta**2*(-0.041666666666666664*_tmp0 + _tmp6*bcol_a(_tmp4)) + 0.0005208333333333333*_tmp0*theta**4 + _tmp1*_tmp2*_tmp3*_tmp5 - _tmp1*_tmp6*_tmp7*bcol_w(_tmp4)
-    _tmp9 = e_s*f + _tmp5*_tmp7*f
-    _tmp10 = 0.5*theta
+    _tmp5 = bcol_h(_tmp4)
+    _tmp6 = bcol_s_at(_tmp4, _tmp5)
+    _tmp7 = 1 + _tmp0
+    _tmp8 = _tmp3**2
+    _tmp9 = e_a*p + theta**2*(-0.041666666666666664*_tmp0 + _tmp7*bcol_a_at(_tmp4, _tmp5)) + 0.0005208333333333333*_tmp0*theta_sq**2 + _tmp1*_tmp2*_tmp3*_tmp6 - _tmp1*_tmp7*_tmp8*bcol_w_at(_tmp4, _tmp5)
+    _tmp10 = e_s*f + _tmp6*_tmp8*f
+    _tmp11 = 0.5*theta
     return [
-        _tmp8,
         _tmp9,
-        theta*bcol_invt(_tmp4) - p*(0.00390625*theta**7*(-7*sinr4(_tmp10) + cosr4(_tmp10)) + 0.09375*theta**5*sinr3(_tmp10)) + 0.5*_tmp9*p - 0.5*f*(_tmp8 + sinr0(_tmp10)),
+        _tmp10,
+        theta*bcol_invt_at(_tmp4, _tmp5) - p*(0.00390625*theta*theta_sq**3*(-7*sinr4(_tmp11) + cosr4(_tmp11)) + 0.09375*theta*theta_sq**2*sinr3(_tmp11)) + 0.5*_tmp10*p - 0.5*f*(_tmp9 + sinr0(_tmp11)),
     ]
 
 
 def _plate_rest4(plate):
-    """one plate's relation at order 4 where it carries no force (p = f = 0): (along, across, omega) and their partials by (theta, p, f) (39 operations)."""
+    """one plate's relation at order 4 where it carries no force (p = f = 0): (along, across, omega) and their partials by (theta, p, f) (40 operations)."""
     theta, _, _, e_a, e_s = plate
+    theta_sq = theta**2
     _tmp0 = theta**2
-    _tmp1 = theta**4
+    _tmp1 = theta_sq**2
     _tmp2 = 0.5*theta
     return [
         0,
@@ -9700,7 +10238,7 @@ def _plate_rest4(plate):
         0,
         0.08333333333333333 + e_s - 0.004166666666666667*_tmp0,
         1,
-        0.00026041666666666666*theta*(320 - 8*_tmp0 - 360*_tmp1*sinr3(_tmp2) + 15*theta**6*(-cosr4(_tmp2) + 7*sinr4(_tmp2))),
+        0.00026041666666666666*theta*(320 - 8*_tmp0 - 360*_tmp1*sinr3(_tmp2) + 15*theta_sq**3*(-cosr4(_tmp2) + 7*sinr4(_tmp2))),
         -0.5*sinr0(_tmp2),
     ]
 
@@ -9789,14 +10327,14 @@ _MECHANISM = _Mechanism(
     # two half plates per plate) its routines, size, half plates and the unknowns' scales
     loaded=_LoadedTables(
         variants=(
-            (_loaded_plates1, _loaded_system1, _loaded_dev1, 12, 7, [0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.378698224852071, 0.378698224852071, 0.04923076923076923, 0.378698224852071, 0.378698224852071, 0.04923076923076923]),
-            (_loaded_plates2, _loaded_system2, _loaded_dev2, 19, 14, [0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.378698224852071, 0.378698224852071, 0.04923076923076923, 0.378698224852071, 0.378698224852071, 0.04923076923076923, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0]),
+            (_loaded_plates1, _loaded_system1, _loaded_res1, _loaded_dev1, 12, 7, [0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.378698224852071, 0.378698224852071, 0.04923076923076923, 0.378698224852071, 0.378698224852071, 0.04923076923076923]),
+            (_loaded_plates2, _loaded_system2, _loaded_res2, _loaded_dev2, 19, 14, [0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.378698224852071, 0.378698224852071, 0.04923076923076923, 0.378698224852071, 0.378698224852071, 0.04923076923076923, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0]),
         ),
-        relation4=_plate_relation4, values2=_plate_values2, rest4=_plate_rest4,
+        relation4=_plate_relation4, values4=_plate_values4, values2=_plate_values2, rest4=_plate_rest4,
         unknowns=6, unknown_index=(1, 2, 3, 4, 5, 6, ),
         tol=1e-12, max_iter=12, max_turn=0.2,
         p_limit=0.9, est_factor=3.0, est_limit=0.01,
-        loads=False,
+        loads=False, chord=0.001, chord_error=1e-15,
         # the sensitivities (templates/numpy/reduced_sens.py): per variant its routine and blocks
         sens=((_loaded_sens1, {'dR_dtheta': (0, 12, 7), 'dR_dp': (84, 12, 1), 'din_dtheta': (96, 35, 7), 'din_dp': (341, 35, 1), 'dD_dx': (376, 2, 12), 'dD_dtheta': (400, 2, 7), 'dD_dp': (414, 2, 1), 'dD_dout': (416, 2, 21)}), (_loaded_sens2, {'dR_dtheta': (0, 19, 7), 'dR_dp': (133, 19, 1), 'din_dtheta': (152, 70, 7), 'din_dp': (642, 70, 1), 'dD_dx': (712, 2, 19), 'dD_dtheta': (750, 2, 7), 'dD_dp': (764, 2, 1), 'dD_dout': (766, 2, 42)}), ),
         eps4=_plate_eps4,

@@ -7,6 +7,8 @@ templates/c/reduced.c).
                                                    plate relation's `in`; then d(theta_c, p, f)/dx
     loaded_system<g>  x, theta, plates, params  -> residual R, dR/dx at fixed plate outputs,
                                                    dR/d(plate outputs)
+    loaded_res<g>     x, theta, plates, params  -> residual R alone (the drivers' chord steps and
+                                                   the truncation estimate read no Jacobian)
     loaded_dev<g>     x, theta, plates, params  -> deviation x, y of every point of the file (the
                                                    plan's first: the truncation estimate reads all)
 
@@ -16,6 +18,8 @@ x holds the scaled unknowns then the load factor t; `plates` the plate relation'
     plate_values2     in = (theta, p, f, e_a, e_s)  -> plate_relation2's values (along, across,
                                                    omega) alone: the truncation estimate reads
                                                    no partials
+    plate_values4     in = (theta, p, f, e_a, e_s)  -> plate_relation4's values alone, the same
+                                                   arithmetic (a chord step's)
     plate_rest4       in = (theta, p, f, e_a, e_s)  -> plate_relation4's outputs where p = f = 0
                                                    (a plate that carries no force: x = 0 in a
                                                    file without loads, the unloaded state)
@@ -24,7 +28,7 @@ x holds the scaled unknowns then the load factor t; `plates` the plate relation'
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cache
 
 import sympy as sp
@@ -33,8 +37,16 @@ from ..kinematics.analysis import Analysis
 from ..physics import reduced
 from ..physics.plate_relation import relation
 from .literals import float_literals
-from .plate import SYMBOLS
+from .plate import SYMBOLS, plate_routine, shared_h, squares
 from .routines import Argument, Routine, flatten, layout, optimize
+
+#: The drivers' Newton: after a step below CHORD times the largest unknown, the next steps reuse
+#: its Jacobian (chord steps: R alone) while each shrinks the step tenfold or more.
+CHORD = 1e-3
+#: A chord step below TOL converges where what it leaves, its size times the contraction
+#: (size / previous size), is below CHORD_ERROR times the largest unknown (a Newton step leaves
+#: its square, below rounding; the Python solver's answer agrees to about this).
+CHORD_ERROR = 1e-15
 
 
 @dataclass(frozen=True)
@@ -65,6 +77,8 @@ class LoadedPlan:
     p_limit: float = reduced.P_LIMIT
     est_factor: float = reduced.EST_FACTOR
     est_limit: float = reduced.EST_LIMIT
+    chord: float = CHORD
+    chord_error: float = CHORD_ERROR
 
 
 def loaded_routines(
@@ -119,6 +133,14 @@ def loaded_routines(
             "at fixed plate outputs and dR/d(plate outputs)",
             layout(("R", n, 1), ("dR_dx", n, n), ("dR_dout", n, 3 * ns)),
         )
+        routines[f"loaded_res{g}"] = Routine(
+            f"loaded_res{g}",
+            (x, theta, plates, params),
+            (),
+            tuple(sub(e) for e in rows),
+            f"loaded ({g} half plate(s) per plate): the reduced equilibrium's residual R alone",
+            layout(("R", n, 1)),
+        )
         dev = [c for name in order for c in r._deviation(s, *r.points[name])]
         routines[f"loaded_dev{g}"] = Routine(
             f"loaded_dev{g}",
@@ -143,7 +165,8 @@ def rest_routine() -> Routine:
     partials = [sp.diff(v, w) for v in values for w in (th, p, f)]
     memo: dict = {}
     outputs = tuple(
-        float_literals(sp.simplify(e.subs({p: 0, f: 0})), memo) for e in values + partials
+        float_literals(e, memo)
+        for e in shared_h([sp.simplify(e.subs({p: 0, f: 0})) for e in values + partials])
     )
     routine = Routine(
         "plate_rest4",
@@ -154,7 +177,7 @@ def rest_routine() -> Routine:
         "omega) and their partials by (theta, p, f)",
         layout(("values", 3, 1), ("partials", 3, 3)),
     )
-    return optimize(routine)
+    return squares(optimize(routine))
 
 
 @cache
@@ -164,7 +187,7 @@ def values2_routine() -> Routine:
     th, p, f, ea, es = SYMBOLS
     rel = relation(th, p, f, ea, es, 2)
     memo: dict = {}
-    outputs = tuple(float_literals(e, memo) for e in (rel.along, rel.across, rel.omega))
+    outputs = tuple(float_literals(e, memo) for e in shared_h([rel.along, rel.across, rel.omega]))
     routine = Routine(
         "plate_values2",
         (Argument("in", SYMBOLS),),
@@ -173,4 +196,25 @@ def values2_routine() -> Routine:
         "one plate's relation at order 2, values alone: (along, across, omega)",
         layout(("values", 3, 1)),
     )
-    return optimize(routine)
+    return squares(optimize(routine))
+
+
+@cache
+def values4_routine() -> Routine:
+    """plate_relation4's three values alone (symkin.codegen.plate), with the assignments they
+    read: the same arithmetic, so a chord step's residual is the Newton step's."""
+    full = plate_routine(4)
+    needed: set = set().union(*(e.free_symbols for e in full.outputs[:3]))
+    lines = []
+    for s, e in reversed(full.assignments):
+        if s in needed:
+            lines.append((s, e))
+            needed |= e.free_symbols
+    return replace(
+        full,
+        name="plate_values4",
+        assignments=tuple(reversed(lines)),
+        outputs=full.outputs[:3],
+        doc="one plate's relation at order 4, values alone: (along, across, omega)",
+        blocks=layout(("values", 3, 1)),
+    )

@@ -34,6 +34,7 @@ the load factor t, `plates` every half plate's (along, across, omega):
     loaded_plates<g>   x, theta, params         -> every half plate's (theta_c, p, f, e_a, e_s),
                                                    then d(theta_c, p, f)/dx
     loaded_system<g>   x, theta, plates, params -> residual R, dR/dx, dR/d(plates)
+    loaded_res<g>      x, theta, plates, params -> residual R alone
     loaded_dev<g>      x, theta, plates, params -> deviation x, y of every point of the file
                                                    (the plan's points first)
     plate_relation4    in = (theta, p, f, e_a, e_s) -> (along, across, omega) and their partials
@@ -71,7 +72,13 @@ from ..core.settings import SOLVER, SolverSettings
 from ..kinematics.analysis import Analysis
 from .derivation import Derivation, derivation
 from .literals import float_literals, to_double
-from .loaded import LoadedPlan, loaded_routines, rest_routine, values2_routine
+from .loaded import (
+    LoadedPlan,
+    loaded_routines,
+    rest_routine,
+    values2_routine,
+    values4_routine,
+)
 from .loaded_sens import eps_routine, loaded_sens_routines
 from .plate import plate_routine
 from .routines import Argument, Block, Routine, flatten, layout, optimize
@@ -349,7 +356,8 @@ def plan(
     routines = {name: _renamed(r, rename) for name, r in routines.items()}
     if loaded is not None:
         extra = (eps_routine(),) if "loaded_sens1" in routines else ()
-        for relation in (plate_routine(4), values2_routine(), rest_routine(), *extra):
+        relations = (plate_routine(4), values4_routine(), values2_routine(), rest_routine())
+        for relation in (*relations, *extra):
             # its array argument renamed: `in` is a Python keyword
             routines[relation.name] = dataclasses.replace(
                 relation, arguments=(Argument("plate", relation.arguments[0].symbols),)

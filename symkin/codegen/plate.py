@@ -35,12 +35,8 @@ def plate_routine(order: int = 4) -> Routine:
     partials = [sp.diff(v, w) for v in values for w in (th, p, f)]
     identities = _identities(sp.Tuple(*values, *partials))
     exprs = [e.xreplace(identities) for e in values + partials]
-    shared = {}
-    for k in sp.Tuple(*exprs).atoms(AxialKernel):
-        x = k.args[0]
-        shared[k] = kernel_at(k.base, k.order)(x, bcol_h(x))
     memo: dict = {}
-    outputs = tuple(float_literals(e.xreplace(shared), memo) for e in exprs)
+    outputs = tuple(float_literals(e, memo) for e in shared_h(exprs))
     routine = Routine(
         f"plate_relation{order}",
         (Argument("in", SYMBOLS),),
@@ -50,7 +46,7 @@ def plate_routine(order: int = 4) -> Routine:
         "(theta, p, f)",
         layout(("values", 3, 1), ("partials", 3, 3)),
     )
-    return _squares(optimize(routine))
+    return squares(optimize(routine))
 
 
 def _identities(expr: sp.Expr) -> dict:
@@ -80,7 +76,17 @@ def _identities(expr: sp.Expr) -> dict:
     return out
 
 
-def _squares(routine: Routine) -> Routine:
+def shared_h(exprs: list[sp.Expr]) -> list[sp.Expr]:
+    """exprs with every beam-column kernel called as `<kernel>_at(p, h)`, h = bcol_h(p) one
+    value for all (the CSE keeps one call of bcol_h per argument, not one per kernel)."""
+    shared = {}
+    for k in sp.Tuple(*exprs).atoms(AxialKernel):
+        x = k.args[0]
+        shared[k] = kernel_at(k.base, k.order)(x, bcol_h(x))
+    return [e.xreplace(shared) for e in exprs]
+
+
+def squares(routine: Routine) -> Routine:
     """The routine with every power b^n, 4 <= n <= 7, of a named value b written through its
     square b_sq = b^2 (b_sq^2, b_sq^2 b, b_sq^3, b_sq^3 b): products the compiler keeps, not a
     call of pow (gcc turns only pow(b, 2) into a product)."""

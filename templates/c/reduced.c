@@ -26,6 +26,7 @@ typedef struct {
     sk_fn3 plates;      /* (x, theta, params): per half plate (theta_c, p, f, e_a, e_s), then
                            d(theta_c, p, f)/dx (3 half plates x size) */
     sk_fn4 system;      /* (x, theta, plates, params): R, dR/dx, dR/d(plates) */
+    sk_fn4 residual;    /* (x, theta, plates, params): R alone (chord steps, the estimate) */
     sk_fn4 dev;         /* (x, theta, plates, params): every point's deviation */
     int size;           /* N: the scaled unknowns (x holds them, then the load factor t) */
     int plates_n;       /* half plates */
@@ -39,6 +40,7 @@ typedef struct {
     double tol, max_turn, p_limit, est_factor, est_limit;
     int max_iter;
     int loads;          /* the load factor t enters the routines (the file has loads) */
+    double chord, chord_error;  /* Newton's chord steps (symkin.codegen.loaded.CHORD) */
 } sk_loaded;
 
 /* One variant at one configuration. */
@@ -81,6 +83,23 @@ static void sk_red_relation(const sk_red *r, const double *ins, double *rel, dou
     }
 }
 
+/* The plate relation at order 4, its values alone (a chord step's), into vals. */
+static void sk_red_values4(const sk_red *r, const double *ins, double *vals)
+{
+    int i, j;
+    for (i = 0; i < r->v->plates_n; ++i) {
+        if (ins[5 * i + 1] == 0.0 && ins[5 * i + 2] == 0.0) {
+            double rest[12];
+            sk_plate_rest4(ins + 5 * i, rest);
+            for (j = 0; j < 3; ++j) {
+                vals[3 * i + j] = rest[j];
+            }
+        } else {
+            sk_plate_values4(ins + 5 * i, vals + 3 * i);
+        }
+    }
+}
+
 /* The plate relation at order 2, its values alone (the truncation estimate's), into vals. */
 static void sk_red_values2(const sk_red *r, const double *ins, double *vals)
 {
@@ -92,9 +111,11 @@ static void sk_red_values2(const sk_red *r, const double *ins, double *vals)
 
 /* One evaluation of the system at order 4 (x, theta, t), kept for what follows it: the plates'
    inputs and relation, the system's output, J's LU and its determinant's sign. The last Newton
-   step's evaluation also gives the acceptance its sign and the truncation estimate its J (the
-   Python solver's rule: J of the step that converged), and the solution's plate values by one
-   first-order correction (the step is below tol: the remainder is below rounding). */
+   step's J also gives the acceptance its sign and the truncation estimate its step (the Python
+   solver's rule: J of the step that converged; here that of the last full step where chord
+   steps followed it, its step below CHORD), and the last evaluation's plate values the
+   solution's by one first-order correction (the step is below tol: the remainder is below
+   rounding). */
 typedef struct {
     double xt[SK_RN + 1], ins[SK_OUT], rel[12 * SK_RS], sys[SK_OUT], lu[SK_RN * SK_RN + 1];
     int piv[SK_RN + 1];
@@ -146,24 +167,47 @@ static int sk_red_eval(const sk_red *r, const double *x, const double *theta, do
     return 0;
 }
 
+/* A chord step's evaluation at (x, theta, t) into st: the plates' inputs, the relation's values
+   (their partials and J's LU stay the last full step's) and R. */
+static void sk_red_residual(const sk_red *r, const double *x, const double *theta, double t,
+                            sk_red_state *st)
+{
+    double vals[3 * SK_RS];
+    int i, j;
+    sk_red_inputs(r, x, theta, t, st->xt, st->ins);
+    sk_red_values4(r, st->ins, vals);
+    for (i = 0; i < r->v->plates_n; ++i) {
+        for (j = 0; j < 3; ++j) {
+            st->rel[12 * i + j] = vals[3 * i + j];
+        }
+    }
+    r->v->residual(st->xt, theta, vals, r->params, st->sys);
+}
+
 /* Newton from x at (theta, t): 0 converged, 1 not (a singular or non-finite Jacobian, a step
-   turning a hinge by more than max_turn, a non-finite iterate, too many steps). st: the last
-   step's evaluation; first: det J's sign at the first step (NaN where it was singular). */
+   turning a hinge by more than max_turn, a non-finite iterate, too many steps). After a step
+   below chord times the largest unknown the next reuse its J (chord steps: R alone, J's
+   partials move by about that step) while each shrinks tenfold. st: the last evaluation (J's
+   that of the last full step); first: det J's sign at the first step (NaN where singular). */
 static int sk_red_newton(const sk_red *r, double *x, const double *theta, double t,
                          sk_red_state *st, double *first)
 {
     const int n = r->v->size, nu = r->l->unknowns;
     double res[SK_RN + 1], prev = HUGE_VAL;
-    int it, i;
+    int it, i, chord = 0;
     *first = NAN;
     for (it = 1; it <= r->l->max_iter; ++it) {
         double turn = 0.0, size = 0.0, top = 0.0;
-        const int singular = sk_red_eval(r, x, theta, t, st);
-        if (it == 1) {
-            *first = st->sign;
-        }
-        if (singular) {
-            return 1;
+        if (chord) {
+            sk_red_residual(r, x, theta, t, st);
+        } else {
+            const int singular = sk_red_eval(r, x, theta, t, st);
+            if (it == 1) {
+                *first = st->sign;
+            }
+            if (singular) {
+                return 1;
+            }
         }
         /* sk_lu then sk_lu_solve: sk_solve's operations, the factors kept */
         for (i = 0; i < n; ++i) {
@@ -192,12 +236,17 @@ static int sk_red_newton(const sk_red *r, double *x, const double *theta, double
                 top = fabs(x[i]);
             }
         }
-        if (size <= r->l->tol * top || size == 0.0) {
+        /* a Newton step leaves about its square, below rounding; a chord step its size times
+           the contraction (size / prev) */
+        if (size == 0.0
+            || (size <= r->l->tol * top
+                && (!chord || size * size <= r->l->chord_error * top * prev))) {
             return 0;
         }
         if (it > 3 && size > 0.5 * prev && size < 1e-9 * top) {
             return 0;   /* stalled at rounding */
         }
+        chord = size <= r->l->chord * top && (!chord || size <= 0.1 * prev);
         prev = size;
     }
     return 1;
@@ -254,7 +303,8 @@ static int sk_red_rigid(const sk_mechanism *m, const double *inputs, const doubl
 
 /* The deviation (dev: every point's) at the solution x and the refusals: 0, 1 a plate at
    p_limit of its sway buckling load, 4 the truncation estimate above est_limit. st: the last
-   Newton step's evaluation at (theta, 1), a step below tol from x (NULL where x has no entries). */
+   Newton step's evaluation at (theta, 1), a step below tol from x (NULL where x has no entries);
+   its J that of the last full step. */
 static int sk_red_answer(const sk_red *r, const double *x, const double *theta,
                          const sk_red_state *st, double *dev)
 {
@@ -295,7 +345,7 @@ static int sk_red_answer(const sk_red *r, const double *x, const double *theta,
     }
     if (n > 0) {
         sk_red_values2(r, ins, vals);
-        r->v->system(xt, theta, vals, r->params, sys);
+        r->v->residual(xt, theta, vals, r->params, sys);
         for (i = 0; i < n; ++i) {
             res[i] = sys[i];
         }

@@ -19,7 +19,8 @@ from runtime import _rigid_angles  # the module holds both: runtime.py
 
 class _LoadedTables:
     """The loaded level's routines and rules: per variant (one, two half plates per plate) its
-    (plates, system, dev) routines, its size, its half plates and its unknowns' scales."""
+    (plates, system, residual, dev) routines, its size, its half plates and its unknowns'
+    scales."""
 
     def __init__(self, **fields):
         self.__dict__.update(fields)
@@ -66,7 +67,10 @@ class _Batch:
 
     def __init__(self, tables, variant, count):
         self.t, self.count = tables, count  # count: half plates per plate
-        self.plates_fn, self.system_fn, self.dev_fn, self.size, self.plates, scale = variant
+        self.plates_fn, self.system_fn, self.res_fn, self.dev_fn, self.size, self.plates = variant[
+            :6
+        ]
+        scale = variant[6]
         self.scale = numpy.array(scale, dtype=float)
 
     def _inputs(self, x, theta, p, t):
@@ -95,6 +99,31 @@ class _Batch:
                 out = [numpy.where(rest, r, v) for r, v in zip(at_rest, out)]
             rel.append(out)
         return rel, [r[j] for r in rel for j in range(3)]
+
+    def _values4(self, ins):
+        """The plate relation at order 4, values alone (a chord step's; reduced.c's
+        sk_red_values4), one half plate after the other."""
+        b = ins[0].shape[0] if ins else 0
+        vals = []
+        for k in range(self.plates):
+            plate = ins[5 * k : 5 * k + 5]
+            rest = (plate[1] == 0.0) & (plate[2] == 0.0)
+            if numpy.all(rest):
+                out = [_red_column(v, b) for v in self.t.rest4(plate)[:3]]
+            else:
+                out = [_red_column(v, b) for v in self.t.values4(plate)]
+                if numpy.any(rest):
+                    at_rest = self.t.rest4(plate)[:3]
+                    out = [numpy.where(rest, r, v) for r, v in zip(at_rest, out)]
+            vals += out
+        return vals
+
+    def residual(self, x, theta, p, t):
+        """R (n, b) at order 4 from the relation's values alone (a chord step's)."""
+        b = x.shape[1]
+        args, ins, _ = self._inputs(x, theta, p, t)
+        vals = self._values4(ins)
+        return numpy.array([_red_column(v, b) for v in self.res_fn(args, theta, vals, p)])
 
     def _values2(self, ins):
         """The plate relation at order 2, values alone (the truncation estimate's), one half
@@ -132,30 +161,45 @@ class _Batch:
     def newton(self, x, theta, p, t):
         """Newton from x (n, b) at (theta, t), each configuration until it converges or fails
         (a singular or non-finite J, a step turning a hinge by more than max_turn, a non-finite
-        iterate, too many steps): (x, converged, each one's last step's J, det J's sign at the
-        first step)."""
+        iterate, too many steps), with reduced.c's chord steps (after a step below chord, R
+        alone with that step's J while each step shrinks tenfold): (x, converged, each one's
+        last full step's J, det J's sign at the first step)."""
         tb, n, nu = self.t, self.size, self.t.unknowns
         b = x.shape[1]
         x, converged = x.copy(), numpy.zeros(b, dtype=bool)
         last, first = numpy.zeros((b, n, n)), None
         prev = numpy.full(b, math.inf)
+        chord = numpy.zeros(b, dtype=bool)
         act = numpy.arange(b)
         for it in range(1, tb.max_iter + 1):
-            res, jac = self.system(x[:, act], [v[act] for v in theta], [v[act] for v in p], t)
-            last[act] = jac
-            if first is None:
-                first = _red_signs(jac)
-            step = _red_solve(jac, res)
+            c = chord[act]
+            step = numpy.zeros((n, act.size))
+            full = act[~c]
+            if full.size:
+                res, jac = self.system(
+                    x[:, full], [v[full] for v in theta], [v[full] for v in p], t
+                )
+                last[full] = jac
+                if first is None:
+                    first = _red_signs(jac)  # the first step: every configuration's full
+                step[:, ~c] = _red_solve(jac, res)
+            if c.any():
+                k = act[c]
+                res = self.residual(x[:, k], [v[k] for v in theta], [v[k] for v in p], t)
+                step[:, c] = _red_solve(last[k], res)
             turn = numpy.max(numpy.abs(step[:nu]), axis=0) * self.scale[0] if nu else 0.0
             xn = x[:, act] - step
             fail = ~(turn <= tb.max_turn) | ~numpy.all(numpy.isfinite(xn), axis=0)
             size = numpy.max(numpy.abs(step), axis=0)
             top = numpy.max(numpy.abs(xn), axis=0)
-            done = (size <= tb.tol * top) | (size == 0)
+            # a Newton step leaves about its square; a chord step its size times the contraction
+            left = ~c | (size * size <= tb.chord_error * top * prev[act])
+            done = ((size <= tb.tol * top) & left) | (size == 0)
             # stalled at rounding
             done |= (it > 3) & (size > 0.5 * prev[act]) & (size < 1e-9 * top)
             x[:, act] = xn
             converged[act[done & ~fail]] = True
+            chord[act] = (size <= tb.chord * top) & (~c | (size <= 0.1 * prev[act]))
             prev[act] = size
             act = act[~done & ~fail]
             if not act.size:
@@ -268,8 +312,8 @@ class _Batch:
         x2 = x
         if n:
             vals2 = self._values2(ins)
-            sys = self.system_fn(args, theta, vals2, p)
-            res = numpy.array([_red_column(v, b) for v in sys[:n]])
+            sys = self.res_fn(args, theta, vals2, p)
+            res = numpy.array([_red_column(v, b) for v in sys])
             x2 = x - _red_solve(jac, res)
         args2, ins2, _ = self._inputs(x2, theta, p, 1.0)
         vals2 = self._values2(ins2)
@@ -306,7 +350,7 @@ def _reduced_solve(mech, x, theta, p, ok):
     flat_delta = [numpy.zeros(where.size) for _ in mech.unknown_index]
     flat_dev = [numpy.full(where.size, numpy.nan) for _ in range(n_dev)]
     # the variant and its solution x, for the sensitivities (templates/numpy/reduced_sens.py)
-    flat_x = [numpy.full(where.size, numpy.nan) for _ in range(max(v[3] for v in tb.variants))]
+    flat_x = [numpy.full(where.size, numpy.nan) for _ in range(max(v[4] for v in tb.variants))]
     flat_variant = numpy.full(where.size, -1)
     for count, variant in enumerate(tb.variants, 1):
         if not todo.size:
