@@ -1,0 +1,168 @@
+"""Plans kept by content (symkin.codegen.plan_cache, docs/cli.md "Derivations are kept too"): a
+second process reads the plan instead of deriving it and emits the same code; any change to the
+file derives afresh; a planted or tampered plan is never unpickled; symkin.compile and
+SYMKIN_PLAN_CACHE=off/memory write nothing."""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import pickle
+import stat
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from conftest import ROOT
+
+import symkin
+from symkin.codegen import pipeline, plan_cache
+
+PARALLELOGRAM = ROOT / "tests" / "mechanisms" / "parallelogram.toml"
+
+# derives (or reads) the parallelogram's plan and prints the digest of its C and numpy texts;
+# with "forbid", deriving raises: the plan must come from the cache
+SCRIPT = """
+import hashlib, sys
+import symkin
+from symkin.codegen import pipeline
+if sys.argv[2] == "forbid":
+    def boom(*args, **kwargs):
+        raise AssertionError("derived although the plan was kept")
+    pipeline.plan = boom
+an = symkin.analyze(symkin.load(sys.argv[1]))
+p = pipeline.plan_for(an)
+texts = pipeline.emit(p, "c", "x") + pipeline.emit(p, "numpy", "x")
+print(hashlib.sha256("\\0".join(texts).encode()).hexdigest())
+"""
+
+
+def run(cache: Path, mode: str, **env: str) -> str:
+    proc = subprocess.run(
+        [sys.executable, "-c", SCRIPT, str(PARALLELOGRAM), mode],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        env={**os.environ, "SYMKIN_CACHE": str(cache), **env},
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return proc.stdout.strip()
+
+
+def plans(cache: Path) -> list[str]:
+    folder = cache / "plans"
+    return sorted(p.name for p in folder.iterdir()) if folder.exists() else []
+
+
+def test_a_second_process_reads_the_plan_and_emits_the_same_code(tmp_path):
+    cache = tmp_path / "cache"
+    first = run(cache, "derive", PYTHONHASHSEED="1")
+    kept = plans(cache)
+    assert len(kept) == 2 and kept[0].endswith(".pickle") and kept[1].endswith(".sha256")
+    for name in kept:
+        assert stat.S_IMODE((cache / "plans" / name).stat().st_mode) == 0o600
+    # another process, another hash seed: nothing derived, the same code
+    assert run(cache, "forbid", PYTHONHASHSEED="2") == first
+    # the kept plan is the one a fresh derivation gives: the same texts without the cache
+    assert run(tmp_path / "other", "derive", SYMKIN_PLAN_CACHE="off") == first
+    assert plans(tmp_path / "other") == []
+
+
+def test_memory_mode_writes_nothing(tmp_path):
+    cache = tmp_path / "cache"
+    run(cache, "derive", SYMKIN_PLAN_CACHE="memory")
+    assert plans(cache) == []
+
+
+def _key(text: str, **options) -> str | None:
+    an = symkin.analyze(symkin.loads(text, "m.toml"))
+    bound = pipeline._PLAN_SIGNATURE.bind(an, **options)
+    bound.apply_defaults()
+    return plan_cache.digest(an, {k: v for k, v in bound.arguments.items() if k != "analysis"})
+
+
+def test_any_change_to_the_file_or_the_options_derives_afresh():
+    text = PARALLELOGRAM.read_text()
+    base = _key(text)
+    assert base is not None and base == _key(text)
+    changed = {
+        "a digit of a parameter": text.replace("l = 5e-3", "l = 5.0000000001e-3"),
+        "the thickness": text.replace("thickness = 0.15e-3", "thickness = 0.16e-3"),
+        "a name": text.replace('"F1"', '"F9"'),
+        "a comment only": text + "\n# a comment\n",
+    }
+    for what, other in changed.items():
+        assert other != text or what == "a comment only", what
+        key = _key(other)
+        if what == "a comment only":
+            assert key == base, "a comment changes nothing derived"
+        else:
+            assert key != base, what
+    assert _key(text, sensitivity=False) != base
+    assert _key(text, levels=("exact",)) != base
+
+
+def test_the_digest_is_the_same_under_every_hash_seed(tmp_path):
+    script = (
+        "import sys; sys.path.insert(0, 'tests'); from test_plan_cache import _key, PARALLELOGRAM;"
+        "print(_key(PARALLELOGRAM.read_text()))"
+    )
+    keys = {
+        subprocess.run(
+            [sys.executable, "-c", script],
+            capture_output=True,
+            text=True,
+            cwd=ROOT,
+            env={**os.environ, "PYTHONHASHSEED": seed},
+            check=True,
+            timeout=300,
+        ).stdout.strip()
+        for seed in ("0", "12345")
+    }
+    assert len(keys) == 1 and None not in keys
+
+
+def test_what_the_digest_cannot_describe_is_derived_not_looked_up():
+    an = symkin.analyze(symkin.load(PARALLELOGRAM))
+    assert plan_cache.digest(an, {"strange": object()}) is None
+
+
+class _Planted:
+    """Unpickling it writes the marker: what a planted plan would do."""
+
+    def __init__(self, marker: str) -> None:
+        self.marker = marker
+
+    def __reduce__(self):
+        return (Path(self.marker).write_text, ("ran",))
+
+
+@pytest.mark.parametrize("tamper", ["wrong record", "others can write it", "a link"])
+def test_a_planted_plan_is_never_unpickled(tmp_path, tamper):
+    folder = tmp_path / "plans"
+    folder.mkdir(mode=0o700)
+    key = "ab" * 32
+    marker = tmp_path / "marker"
+    data = pickle.dumps(_Planted(str(marker)))
+    digest = hashlib.sha256(data).hexdigest()
+    target, record = folder / f"{key}.pickle", folder / f"{key}.sha256"
+    if tamper == "a link":
+        elsewhere = tmp_path / "elsewhere.pickle"
+        elsewhere.write_bytes(data)
+        elsewhere.chmod(0o600)
+        target.symlink_to(elsewhere)
+    else:
+        target.write_bytes(data)
+        target.chmod(0o666 if tamper == "others can write it" else 0o600)
+    record.write_text(f"{key}\n{'0' * 64 if tamper == 'wrong record' else digest}\n")
+    record.chmod(0o600)
+    assert plan_cache._read(folder, key) is None
+    assert not marker.exists()
+
+
+def test_compile_writes_no_plan(tmp_path, monkeypatch):
+    monkeypatch.setenv("SYMKIN_CACHE", str(tmp_path / "cache"))
+    symkin.compile(PARALLELOGRAM, backend="numpy", levels=["exact"], sensitivity=False)
+    assert plans(tmp_path / "cache") == []
