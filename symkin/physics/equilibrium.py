@@ -467,21 +467,32 @@ def follow(
     strain: float = math.inf,
     steps: int = MAX_STEPS,
     tol: float = 1e-18,
+    approach: bool = False,
 ) -> Path:
     """Continuation along `system`'s path from the solution `u` at `t` to `end`: a tangent
     predictor and Newton in float64, the step halved when Newton fails, det J changes sign or
     the corrector jumps, down to MIN_STEP; at most `steps` accepted steps, MAX_STEPS attempts
     and `seconds` of wall clock; it stops where a plate strains more than `strain`
-    (System.strain)."""
+    (System.strain). With `approach`, no step goes more than half way to where J's smallest
+    singular value, extrapolated from the last two steps, vanishes: a singular point is
+    approached, never stepped over (a symmetric structure's sway, where Newton from a long
+    step lands on a buckled branch whose det J has the old sign)."""
     deadline = time.monotonic() + seconds
     jac, slope = system.jacobian(u, t, tol)
     sign = np.linalg.slogdet(jac)[0]
     dt, accepted = largest, 0
+    smallest = [(t, _smallest(jac))] if approach else []
     for _ in range(MAX_STEPS):
         if t >= end:
             return Path(u, t, jac, "done")
         if accepted >= steps or time.monotonic() > deadline:
             break
+        if len(smallest) == 2:
+            (t0, s0), (ta, sa) = smallest
+            if sa < s0:  # falling: at most half way to its extrapolated zero
+                dt = min(dt, 0.5 * sa * (ta - t0) / (s0 - sa))
+                if dt < MIN_STEP:
+                    return Path(u, t, jac, "singular")
         t1 = min(end, t + dt)
         guess = u - np.linalg.solve(jac, slope) * (t1 - t)
         # an iterate that needs far larger plate loads than the path so far is off the path
@@ -500,9 +511,17 @@ def follow(
             continue
         u, t, jac, slope = new[0], t1, jac_new, slope_new
         dt, accepted = min(largest, dt * 1.5), accepted + 1
+        if approach:
+            smallest = [smallest[-1], (t, _smallest(jac))]
         if strain < math.inf and system.strain(u)[0] > strain:
             return Path(u, t, jac, "strain")
     return Path(u, t, jac, "done" if t >= end else "budget")
+
+
+def _smallest(jac: np.ndarray) -> float:
+    """J's smallest singular value over its largest (scale-free)."""
+    sv = np.linalg.svd(jac, compute_uv=False)
+    return float(sv[-1] / sv[0]) if sv[0] > 0 else 0.0
 
 
 def _jumped(u: np.ndarray, guess: np.ndarray, new: np.ndarray) -> bool:
@@ -674,7 +693,7 @@ def buckling_factor(
     held = system.along((1.0, 0.0, 0.0, 1.0))
     if driven.stop == "done":
         left = seconds - (time.monotonic() - started)
-        end = follow(held, driven.u, 0.0, limit, 1.0, left)
+        end = follow(held, driven.u, 0.0, limit, 1.0, left, approach=True)
         if end.stop == "done":
             return Buckling(math.inf, None)
         if end.stop == "singular":
