@@ -291,6 +291,9 @@ def test_buckling_of_the_parallelogram_stage_where_its_stiffness_vanishes():
     roots = np.roots(np.polyfit(loads, kxx, 2))
     critical = float(min(r.real for r in roots if r.real > loads[-1] and abs(r.imag) < 1e-9))
     assert ours.buckling * 200 == pytest.approx(critical, rel=1e-4)  # measured 1.1e-5
+    # equilibrium's own search finds the same sway (it once stepped over it to a buckled branch)
+    exact = symkin.evaluate(an, {"F1": 0.0}, "equilibrium")
+    assert exact.buckling * 200 == pytest.approx(critical, rel=1e-4)  # measured 1.0e-5
     # Euler's clamped–guided load of one plate, π²EI/l² per leg, bounds it from above
     ei = E_PRIME * WIDTH * THICK**3 / 12
     assert ours.buckling * 200 < 2 * math.pi**2 * ei / 5e-3**2

@@ -158,7 +158,7 @@ def test_a_planted_plan_is_never_unpickled(tmp_path, tamper):
         target.chmod(0o666 if tamper == "others can write it" else 0o600)
     record.write_text(f"{key}\n{'0' * 64 if tamper == 'wrong record' else digest}\n")
     record.chmod(0o600)
-    assert plan_cache._read(folder, key) is None
+    assert plan_cache._read(folder, key, object) is None
     assert not marker.exists()
 
 

@@ -1,14 +1,15 @@
-"""Plans kept by content (docs/cli.md, "The cache"): a derivation is the slow step of every
-command, and the same file is derived again and again (each `symkin eval --backend c`, each
-test). A plan is found again by a digest of what it is derived from: the analysis (the file's
-mechanism, its points, the hinge models), the plan's options, the versions of symkin's own
-source, sympy, numpy and Python. In memory for the process; on disk under the compiled-code
-cache (toolchain.safe_cache_dir), written atomically and read back only when verified as the
-compiled libraries are (a private regular file whose sha256 its record names).
+"""Derivations kept by content (docs/cli.md, "Derivations are kept too"): a derivation is the
+slow step of every command, and the same file is derived again and again (each `symkin eval
+--backend c`, each test); so are the LaTeX report's reference solves (40-digit `equilibrium`).
+A plan (or a reference solve) is found again by a digest of what it is derived from: the
+analysis (the file's mechanism, its points, the hinge models), the options, the versions of
+symkin's own source, sympy, numpy and Python. In memory for the process; on disk under the
+compiled-code cache (toolchain.safe_cache_dir), written atomically and read back only when
+verified as the compiled libraries are (a private regular file whose sha256 its record names).
 
 Anything the digest cannot describe exactly (an object that is neither a dataclass, a sympy
 expression, a number, a string nor a container of those) is derived, never looked up.
-SYMKIN_PLAN_CACHE=memory keeps plans in memory only, =off not at all (benchmarks of the
+SYMKIN_PLAN_CACHE=memory keeps them in memory only, =off not at all (benchmarks of the
 derivation use it).
 """
 
@@ -25,7 +26,7 @@ from contextlib import contextmanager
 from contextvars import ContextVar
 from functools import cache
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 import sympy as sp
@@ -104,7 +105,8 @@ def digest(analysis: Analysis, options: Mapping[str, Any]) -> str | None:
     return hashlib.sha256("\x1f".join(out).encode()).hexdigest()
 
 
-_MEMORY: dict[str, Plan] = {}
+_T = TypeVar("_T")
+_MEMORY: dict[str, Any] = {}
 _LOCK = threading.RLock()
 _NO_DISK: ContextVar[bool] = ContextVar("symkin_plan_cache_no_disk", default=False)
 
@@ -140,26 +142,34 @@ def _folder() -> Path | None:
 def cached(analysis: Analysis, options: Mapping[str, Any], derive: Callable[[], Plan]) -> Plan:
     """The plan of `analysis` with `options`: found by content in memory or on disk, else
     `derive()`d and kept."""
+    return kept(analysis, options, derive, Plan)
+
+
+def kept(
+    analysis: Analysis, options: Mapping[str, Any], derive: Callable[[], _T], kind: type[_T]
+) -> _T:
+    """What `derive()` gives for `analysis` and `options` (a plan; the report's reference
+    solves), an instance of `kind`: found by content in memory or on disk, else derived and
+    kept. `options` name what is derived besides the analysis."""
     mode = _mode()
-    key = digest(analysis, options) if mode != "off" else None
+    key = digest(analysis, {"kind": kind.__qualname__, **options}) if mode != "off" else None
     if key is None:
         return derive()
     with _LOCK:
         found = _MEMORY.get(key)
-    if found is not None:
+    if isinstance(found, kind):
         return found
     folder = _folder() if mode == "disk" else None
-    if folder is not None:
-        found = _read(folder, key)
-    if found is None:
-        found = derive()
+    value = _read(folder, key, kind) if folder is not None else None
+    if value is None:
+        value = derive()
         if folder is not None:
-            _write(folder, key, found)
+            _write(folder, key, value)
     with _LOCK:
-        return _MEMORY.setdefault(key, found)
+        return _MEMORY.setdefault(key, value)
 
 
-def _read(folder: Path, key: str) -> Plan | None:
+def _read(folder: Path, key: str, kind: type[_T]) -> _T | None:
     target, record = folder / f"{key}.pickle", folder / f"{key}.sha256"
     try:
         if not toolchain.verified(target, record, key):
@@ -167,10 +177,10 @@ def _read(folder: Path, key: str) -> Plan | None:
         found = pickle.loads(target.read_bytes())
     except Exception:  # a corrupt or stale file: derive again (and overwrite it)
         return None
-    return found if isinstance(found, Plan) else None
+    return found if isinstance(found, kind) else None
 
 
-def _write(folder: Path, key: str, found: Plan) -> None:
+def _write(folder: Path, key: str, found: object) -> None:
     try:
         data = pickle.dumps(found, protocol=pickle.HIGHEST_PROTOCOL)
     except Exception:  # something in it does not pickle: kept in memory only

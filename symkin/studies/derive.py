@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 
 import sympy as sp
 
-from ..codegen import pipeline
+from ..codegen import pipeline, plan_cache
 from ..core.errors import InputError
 from ..core.files import write_atomically
 from ..graph.pruning import for_levels
@@ -210,14 +210,20 @@ def physics_reference(
     """The report's physical reference: the `equilibrium` level's evaluation (deviations, plate
     stresses, input moments, model error) at given inputs and the `fixed` ones (the file's own
     plates and loads, whatever variant the report derives)."""
-    from .evaluation import equilibrium
+    from .evaluation import Evaluation, equilibrium
 
     reference = Analysis(analysis.structure, [p.name for p in analysis.points])
 
     def evaluated(inputs: Mapping[str, float]) -> Evaluation:
         given = {k: repr(v) for k, v in inputs.items()}
         given.update({k: sp.sstr(v) for k, v in (fixed or {}).items()})
-        return equilibrium(reference, given)
+        # a report of the same file derives the same solves: kept by content (docs/cli.md)
+        return plan_cache.kept(
+            reference,
+            {"level": "equilibrium", "inputs": given},
+            lambda: equilibrium(reference, given),
+            Evaluation,
+        )
 
     return evaluated
 
