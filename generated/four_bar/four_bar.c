@@ -5810,8 +5810,8 @@ static int sk_red_newton(const sk_red *r, double *x, const double *theta, double
                 && (!chord || size * size <= r->l->chord_error * top * prev))) {
             return 0;
         }
-        if (it > 3 && size > 0.5 * prev && size < 1e-9 * top) {
-            return 0;   /* stalled at rounding */
+        if (!chord && it > 3 && size > 0.5 * prev && size < 1e-9 * top) {
+            return 0;   /* stalled at rounding (a full step's: a chord step's is its J's) */
         }
         chord = size <= r->l->chord * top && (!chord || size <= 0.1 * prev);
         prev = size;

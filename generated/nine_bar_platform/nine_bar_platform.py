@@ -732,8 +732,8 @@ class _Batch:
             # a Newton step leaves about its square; a chord step its size times the contraction
             left = ~c | (size * size <= tb.chord_error * top * prev[act])
             done = ((size <= tb.tol * top) & left) | (size == 0)
-            # stalled at rounding
-            done |= (it > 3) & (size > 0.5 * prev[act]) & (size < 1e-9 * top)
+            # stalled at rounding (a full step's: a slow chord step's is its J's, not rounding)
+            done |= ~c & (it > 3) & (size > 0.5 * prev[act]) & (size < 1e-9 * top)
             x[:, act] = xn
             converged[act[done & ~fail]] = True
             chord[act] = (size <= tb.chord * top) & (~c | (size <= 0.1 * prev[act]))

@@ -17,17 +17,19 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import importlib.metadata
 import os
 import pickle
 import sys
 import threading
+from collections import OrderedDict
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from contextvars import ContextVar
-from functools import cache
 from pathlib import Path
 from typing import Any, TypeVar
 
+import mpmath
 import numpy as np
 import sympy as sp
 
@@ -50,7 +52,7 @@ def _describe(obj: Any, out: list[str]) -> None:
     elif isinstance(obj, sp.Basic | sp.MatrixBase):
         # srepr names every class and exact value; a parameter symbol and a plain symbol differ
         out.append(f"{type(obj).__name__}:{sp.srepr(obj)}")
-    elif isinstance(obj, np.ndarray):
+    elif isinstance(obj, np.ndarray) and obj.dtype != object:
         out.append(f"ndarray:{obj.dtype.str}:{obj.shape}:{obj.tobytes().hex()}")
     elif dataclasses.is_dataclass(obj) and not isinstance(obj, type):
         out.append(f"{type(obj).__module__}.{type(obj).__qualname__}(")
@@ -78,15 +80,29 @@ def _describe(obj: Any, out: list[str]) -> None:
         raise _Opaque(type(obj).__qualname__)
 
 
-@cache
-def _code_digest() -> str:
-    """The digest of symkin's own Python source and of the libraries a plan is made of."""
+def _source_digest() -> str:
+    """The digest of symkin's own Python source (as on disk now), its version and the libraries
+    a plan is made of."""
     h = hashlib.sha256()
     root = Path(__file__).resolve().parent.parent
     for path in sorted(root.rglob("*.py")):
         h.update(str(path.relative_to(root)).encode() + b"\0" + path.read_bytes() + b"\0")
-    h.update(f"{sp.__version__} {np.__version__} {sys.version}".encode())
+    try:
+        version = importlib.metadata.version("symkin")
+    except importlib.metadata.PackageNotFoundError:
+        version = "?"
+    h.update(
+        f"{version} {sp.__version__} {np.__version__} {mpmath.__version__} {sys.version}".encode()
+    )
     return h.hexdigest()
+
+
+#: taken when symkin is imported: the code this process runs (a file edited later is not)
+_CODE = _source_digest()
+
+
+def _code_digest() -> str:
+    return _CODE
 
 
 def digest(analysis: Analysis, options: Mapping[str, Any]) -> str | None:
@@ -106,7 +122,9 @@ def digest(analysis: Analysis, options: Mapping[str, Any]) -> str | None:
 
 
 _T = TypeVar("_T")
-_MEMORY: dict[str, Any] = {}
+#: the last MEMORY derivations, most recent last (a long run does not keep every plan alive)
+MEMORY = 64
+_MEMORY: OrderedDict[str, Any] = OrderedDict()
 _LOCK = threading.RLock()
 _NO_DISK: ContextVar[bool] = ContextVar("symkin_plan_cache_no_disk", default=False)
 
@@ -157,8 +175,9 @@ def kept(
         return derive()
     with _LOCK:
         found = _MEMORY.get(key)
-    if isinstance(found, kind):
-        return found
+        if isinstance(found, kind):
+            _MEMORY.move_to_end(key)
+            return found
     folder = _folder() if mode == "disk" else None
     value = _read(folder, key, kind) if folder is not None else None
     if value is None:
@@ -166,7 +185,11 @@ def kept(
         if folder is not None:
             _write(folder, key, value)
     with _LOCK:
-        return _MEMORY.setdefault(key, value)
+        value = _MEMORY.setdefault(key, value)
+        _MEMORY.move_to_end(key)
+        while len(_MEMORY) > MEMORY:
+            _MEMORY.popitem(last=False)
+        return value
 
 
 def _read(folder: Path, key: str, kind: type[_T]) -> _T | None:
@@ -181,6 +204,8 @@ def _read(folder: Path, key: str, kind: type[_T]) -> _T | None:
 
 
 def _write(folder: Path, key: str, found: object) -> None:
+    if _source_digest() != _CODE:  # symkin's source changed under this process: not ours to keep
+        return
     try:
         data = pickle.dumps(found, protocol=pickle.HIGHEST_PROTOCOL)
     except Exception:  # something in it does not pickle: kept in memory only

@@ -490,9 +490,12 @@ def follow(
         if len(smallest) == 2:
             (t0, s0), (ta, sa) = smallest
             if sa < s0:  # falling: at most half way to its extrapolated zero
-                dt = min(dt, 0.5 * sa * (ta - t0) / (s0 - sa))
-                if dt < MIN_STEP:
+                capped = 0.5 * sa * (ta - t0) / (s0 - sa)
+                if capped >= MIN_STEP:
+                    dt = min(dt, capped)
+                elif sa < SINGULAR_RATIO:
                     return Path(u, t, jac, "singular")
+                # else a dip that stays clear of zero: the step's own tests decide
         t1 = min(end, t + dt)
         guess = u - np.linalg.solve(jac, slope) * (t1 - t)
         # an iterate that needs far larger plate loads than the path so far is off the path
@@ -516,6 +519,11 @@ def follow(
         if strain < math.inf and system.strain(u)[0] > strain:
             return Path(u, t, jac, "strain")
     return Path(u, t, jac, "done" if t >= end else "budget")
+
+
+#: J's smallest singular value over its largest below which a falling one that the step control
+#: cannot approach further counts as singular (the sway of the parallelogram stage stops at 1e-11).
+SINGULAR_RATIO = 1e-8
 
 
 def _smallest(jac: np.ndarray) -> float:

@@ -433,12 +433,16 @@ def _mp_closed(base: str, order: int):
     return sp.lambdify((P, TT), closed_form(base, order), "mpmath")
 
 
-@cache
 def kernel(base: str, order: int = 0) -> type:
-    """The kernel class of the `order`-th p-derivative of the base kernel `base` (BASES)."""
+    """The kernel class of the `order`-th p-derivative of the base kernel `base` (BASES): one
+    class per (base, order) however the order is written (kernel("s") is kernel("s", 0))."""
     if base not in BASES:
         raise ValueError(f"no beam-column kernel '{base}' (kernels: {', '.join(BASES)})")
-    order = int(order)
+    return _kernel(base, int(order))
+
+
+@cache
+def _kernel(base: str, order: int) -> type:
     if order < 0:
         raise ValueError("derivative order must be >= 0")
     name = f"bcol_{base}" + (f"_d{order}" if order else "")
@@ -558,7 +562,8 @@ def __getattr__(name: str) -> type:
     stem = name[: -len("_at")] if name.endswith("_at") else name
     if stem.startswith("bcol_"):
         base, _, order = stem[len("bcol_") :].partition("_d")
-        if base in BASES and (not order or order.isdigit()):
-            cls = kernel(base, int(order or 0))
-            return globals()[name] if name.endswith("_at") else cls
+        if base in BASES and (not order or (order.isascii() and order.isdecimal())):
+            kernel(base, int(order or 0))  # made (once), and its _at class with it
+            if name in globals():  # bcol_s_d0 is not a name: bcol_s is
+                return globals()[name]
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

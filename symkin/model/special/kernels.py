@@ -222,8 +222,13 @@ def _default_threshold(n: int) -> float:
     return 5.0 + 0.5 * (n - 4)
 
 
-@cache
 def sinr(n: int) -> type:
+    """The kernel class sinr_n, one class per order however it is written (sinr(3.0) is sinr(3))."""
+    return _sinr(int(n))
+
+
+@cache
+def _sinr(n: int) -> type:
     """The kernel class sinr_n: (sin x - its Taylor polynomial through x^(2n-1)) / x^(2n+1)."""
     n = int(n)
     if n < 0:
@@ -272,8 +277,13 @@ def sinr(n: int) -> type:
     return cls
 
 
-@cache
 def cosr(n: int) -> type:
+    """The kernel class cosr_n, one class per order however it is written (cosr(3.0) is cosr(3))."""
+    return _cosr(int(n))
+
+
+@cache
+def _cosr(n: int) -> type:
     """The kernel class cosr_n: (cos x - its Taylor polynomial through x^(2n-2)) / x^(2n)."""
     n = int(n)
     if n < 1:
@@ -352,6 +362,10 @@ def __getattr__(name: str) -> type:
     """The kernels made on demand (sinr<n>, cosr<n>) by name: a pickled expression (a plan kept
     by symkin.codegen.plan_cache) names its kernels' classes, made again here."""
     for prefix, make in (("sinr", sinr), ("cosr", cosr)):
-        if name.startswith(prefix) and name[len(prefix) :].isdigit():
-            return make(int(name[len(prefix) :]))
+        order = name[len(prefix) :]
+        if name.startswith(prefix) and order.isascii() and order.isdecimal():
+            try:
+                return make(int(order))
+            except ValueError:  # an order the family does not have (cosr0)
+                break
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
