@@ -47,13 +47,15 @@ def require_compiler():
 class Generated:
     """A mechanism with its analysis, numpy module and compiled C library."""
 
-    def __init__(self, key=None, mech=None):
+    def __init__(self, key=None, mech=None, sensitivity=True):
         if mech is None:
             source = SOURCES[key]
             mech = symkin.load(source) if not isinstance(source, str) else symkin.loads(source)
         self.mech = mech
         self.analysis = symkin.analyze(self.mech)
-        self.plan, self.numpy = pipeline.build(self.analysis, "numpy", "test")
+        self.plan, self.numpy = pipeline.build(
+            self.analysis, "numpy", "test", sensitivity=sensitivity
+        )
         self._lib = None
 
     @property

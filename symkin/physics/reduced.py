@@ -785,6 +785,17 @@ def implicit_rates(jac, jo, block, dins_x, dr_by, dins_by, dy_x, dy_o, dy_by) ->
 
 
 def _jacobian(rows: sp.Matrix, by) -> sp.Matrix:
-    """rows' Jacobian by the symbols `by`, empty (len(rows) x 0) when there are none."""
+    """rows' Jacobian by the symbols `by` (Matrix.jacobian's entries), each row differentiated
+    only by the symbols it holds: by hundreds of parameters, of which a row reads a few, most
+    entries are zero without a walk of the row per symbol."""
     by = list(by)
-    return rows.jacobian(by) if by and len(rows) else sp.zeros(len(rows), len(by))
+    out = sp.zeros(len(rows), len(by))
+    if not by or not len(rows):
+        return out
+    column = {s: k for k, s in enumerate(by)}
+    for i, row in enumerate(rows):
+        for s in row.free_symbols:
+            k = column.get(s)
+            if k is not None:
+                out[i, k] = row.diff(s)
+    return out
