@@ -1,0 +1,186 @@
+"""What the generated numpy evaluator's result dict holds at the `loaded` level beyond the
+deviations (docs/physics.md, "What loaded reports"): the input moments and stiffness, every
+point's 3×3 stiffness with the inputs held, every plate's largest stress.
+
+References, none of them the code under test: symkin's Python `loaded` report
+(symkin.physics.reduced_reported, lambdified in mpmath; its plate stress by the Taylor-series
+beam integrator, not RK4); central differences of the Python solver under a small load added at
+the point (the mechanism solved again); the closed forms of a lone plate under a pure moment
+(M = E'I θ/l, dM/dθ = E'I/l, σ = E' t θ/(2l)). Mechanisms unlike each other: the four-bar
+example, a parallelogram stage with a payload load, a five-bar whose input is a chord, the lone
+plate in millimetres with an allowable stress; the piezo amplifier (actuators) has no generated
+`loaded` level.
+"""
+
+from __future__ import annotations
+
+import math
+
+import mechanisms as M
+import numpy as np
+import pytest
+from conftest import EXAMPLES, ROOT
+from test_loaded_reported import CASES, solve
+
+import symkin
+from symkin.codegen import pipeline
+from symkin.physics import reduced_reported
+
+ZOO = ROOT / "tests" / "mechanisms"
+#: the configurations each module evaluates at once (a batch: every one on its own)
+BATCH = {
+    "four_bar": {"A0": [0.3, -0.15]},
+    "parallelogram": {"F1": [0.05, -0.02]},
+    "five_bar_coupler_input": {"O1": [0.02, -0.01], "P": [0.02, 0.015]},
+}
+#: generated against Python: moments and rates, point stiffness (of each row's largest entry),
+#: plate stress (RK4 against the Taylor series); measured 1.3e-15, 7.5e-13, 4.9e-12 (the
+#: parallelogram's stress under its payload)
+MOMENT, STIFFNESS, STRESS = 1e-10, 1e-10, 1e-9
+
+
+def text(name: str, extra: str = "") -> tuple[str, str]:
+    path, load, _ = CASES[name]
+    return path.read_text() + load + extra, str(path)
+
+
+@pytest.fixture(scope="module")
+def built():
+    """The analysis and numpy module of each case (derived on first use)."""
+    cache: dict = {}
+
+    def get(name: str):
+        if name not in cache:
+            an = symkin.analyze(symkin.loads(*text(name)))
+            _, module = pipeline.build(an, "numpy", "test", sensitivity=False)
+            cache[name] = an, module
+        return cache[name]
+
+    return get
+
+
+def python_report(an, inputs: dict[str, float]):
+    return reduced_reported.report(
+        solve(an, inputs), float(an.mechanism.unit_scale), buckling=False
+    )
+
+
+def relative(a: float, b: float) -> float:
+    return abs(a - b) / abs(b)
+
+
+def rows_close(got, want, tol: float) -> bool:
+    got, want = np.asarray(got, dtype=float), np.asarray(want, dtype=float)
+    scale = np.abs(want).max(axis=1, keepdims=True)
+    return bool(np.all(np.abs(got - want) <= tol * scale))
+
+
+@pytest.mark.parametrize("name", list(BATCH))
+def test_numpy_reports_what_the_python_loaded_level_reports(built, name):
+    an, module = built(name)
+    batch = BATCH[name]
+    res = module.evaluate({k: np.array(v) for k, v in batch.items()}, "loaded")
+    assert res["ok"].all()
+    for c in range(len(next(iter(batch.values())))):
+        inputs = {k: v[c] for k, v in batch.items()}
+        want = python_report(an, inputs)
+        assert set(res["inputs"]) == set(want.inputs) != set()
+        for h, w in want.inputs.items():
+            got = res["inputs"][h]
+            assert got["angle"][c] == w.angle
+            assert relative(got["moment"][c], w.moment) <= MOMENT, h
+            assert relative(got["stiffness"][c], w.stiffness) <= MOMENT, h
+        assert set(res["stiffness"]) == set(want.stiffness) != set()
+        for p, w in want.stiffness.items():
+            got = res["stiffness"][p][..., c]
+            if w is None:
+                assert np.isnan(got).all(), p
+            else:
+                assert rows_close(got, w, STIFFNESS), (p, got, w)
+        assert set(res["plates"]) == set(want.plates) != set()
+        for h, w in want.plates.items():
+            got = res["plates"][h]
+            assert relative(got["stress"][c], w.stress) <= STRESS, h
+            assert relative(got["strain"][c], w.strain) <= STRESS, h
+            assert got["section"][c] == pytest.approx(w.section, abs=1e-6)
+            assert w.safety is None and math.isnan(got["safety"][c])
+
+
+@pytest.mark.parametrize("name, point", [("four_bar", "C"), ("parallelogram", "P")])
+def test_point_stiffness_by_central_differences_of_the_solver(built, name, point):
+    """C = d(x, y, φ)/d(Fx, Fy, M) of a small load added at the point, the Python solver run
+    again; K = C⁻¹ against the generated evaluator's."""
+    _, module = built(name)
+    inputs = {k: v[0] for k, v in BATCH[name].items()}
+    res = module.evaluate(inputs, "loaded")
+    got = res["stiffness"][point]
+    source, path = text(
+        name, f'\n[[load]]\npoint = "{point}"\nforce = ["vx", "vy"]\nmoment = "vm"\n'
+    )
+    source = source.replace("[parameters]\n", "[parameters]\nvx = 0\nvy = 0\nvm = 0\n")
+    an = symkin.analyze(symkin.loads(source, path))
+    red = solve(an, inputs).solver
+    link = red.points[point][0]
+    names = {a: h.name for a, h in red.hinges.items()}
+
+    def state(answer) -> np.ndarray:
+        # the point's deviation and its link's rotation beyond the rigid (the inputs held)
+        turn = math.fsum(
+            red.hinges[b].sign * answer.angle_deviations[names[b]] for b in red.paths[link]
+        )
+        return np.array([*answer.deviations[point], turn])
+
+    steps = [1e-4 * red.F, 1e-4 * red.F, 1e-4 * red.F * red.L]
+    columns = []
+    for key, h in zip(("vx", "vy", "vm"), steps, strict=True):
+        pair = [state(solve(an, inputs, params={key: repr(float(s * h))})) for s in (1, -1)]
+        columns.append((pair[0] - pair[1]) / (2 * h))
+    want = np.linalg.inv(np.array(columns).T)
+    # measured: four-bar 1e-10, parallelogram 7e-10 (of each row's largest entry)
+    assert rows_close(got, want, 1e-8), (got, want)
+
+
+@pytest.mark.parametrize("theta", [0.02, 0.3])
+def test_lone_plate_under_a_pure_moment_is_a_circular_arc(theta):
+    """In millimetres (the moments in N m), with an allowable stress (the safety factor)."""
+    source = M.lone_plate().replace("[defaults]\n", "[defaults]\nallowable_stress = 900e6\n")
+    an = symkin.analyze(symkin.loads(source, "lone_plate.toml"))
+    _, module = pipeline.build(an, "numpy", "test", sensitivity=False)
+    res = module.evaluate({"A": theta}, "loaded")
+    ei = M.bending_stiffness(5, 0.3, 1e-3)  # N m²
+    modulus, t, length = 200e9 / (1 - 0.3**2), 0.2e-3, 10e-3
+    a = res["inputs"]["A"]
+    assert float(a["moment"]) == pytest.approx(ei * theta / length, rel=1e-12)
+    assert float(a["stiffness"]) == pytest.approx(ei / length, rel=1e-12)
+    plate = res["plates"]["A"]
+    stress = modulus * t * theta / (2 * length)
+    assert float(plate["stress"]) == pytest.approx(stress, rel=1e-12)
+    assert float(plate["safety"]) == pytest.approx(900e6 / stress, rel=1e-12)
+    assert np.isnan(res["stiffness"]["T"]).all()  # the input holds the arm
+
+
+def test_what_the_other_levels_and_modules_hold():
+    """The report only at `loaded`; a module with actuators has no generated `loaded` level;
+    the C evaluator does not report yet (its source holds no loaded_report routine)."""
+    an = symkin.analyze(symkin.load(EXAMPLES / "four_bar.toml"))
+    plan, module = pipeline.build(an, "numpy", "test", sensitivity=False)
+    assert "inputs" not in module.evaluate({"A0": 0.3}, "exact")
+    assert {"loaded_report1", "loaded_report2"} <= set(plan.routines)
+    assert "loaded_report" not in "".join(pipeline.emit(plan, "c", "four_bar.toml"))
+    piezo = symkin.analyze(symkin.load(EXAMPLES / "piezo_amplifier.toml"))
+    _, module = pipeline.build(piezo, "numpy", "test", sensitivity=False)
+    assert "loaded" not in module.LEVELS
+
+
+def test_the_report_takes_the_inputs_shape(built):
+    """Entries shaped like the broadcast inputs (the stiffness (3, 3, *shape)), the same values
+    as a flat batch; `report=False` leaves them out."""
+    _, module = built("four_bar")
+    flat = module.evaluate({"A0": np.array([0.3, -0.15, 0.1, 0.0])}, "loaded")
+    grid = module.evaluate({"A0": np.array([[0.3, -0.15], [0.1, 0.0]])}, "loaded")
+    assert grid["stiffness"]["C"].shape == (3, 3, 2, 2)
+    assert np.array_equal(grid["stiffness"]["C"].reshape(3, 3, 4), flat["stiffness"]["C"])
+    for h, plate in flat["plates"].items():
+        assert np.array_equal(grid["plates"][h]["stress"].reshape(4), plate["stress"])
+    assert grid["inputs"]["A0"]["moment"].shape == (2, 2)
+    assert "plates" not in module.evaluate({"A0": 0.3}, "loaded", report=False)
