@@ -23,6 +23,7 @@ setup(
             "*/reduced.py",
             "*/reduced_sens.c",
             "*/reduced_sens.py",
+            "*/reduced_report.c",
             "*/reduced_report.py",
         ]
     },

@@ -27,7 +27,7 @@
     loaded_sens<g>, plate_eps4         -> the `loaded` level's (symkin.codegen.loaded_sens)
     loaded_report<g>                   -> what `loaded` reports beyond the deviations: input
                                           moments, point stiffness, plate stress
-                                          (symkin.codegen.loaded; numpy only, for now)
+                                          (symkin.codegen.loaded)
     links        theta, delta          -> rotation φ of every reported link and its deviation δφ
 
 and for the `loaded` level, the reduced equilibrium (docs/physics.md, "The Newton level";

@@ -3,8 +3,6 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 from ....model import special
 from ...plan import Plan, ScenePlan
 from ...routines import Routine
@@ -22,12 +20,7 @@ class CBackend(Backend):
     routine_prefix = "sk_"
 
     def context(self, plan: Plan, source: str, precision: str = "float64") -> dict:
-        """The common context and the runtime's sections the evaluator runs. The C evaluator
-        does not report the `loaded` level's moments, stiffness and stress yet: it leaves out
-        the loaded_report<g> routines (the numpy one reads them)."""
-        kept = {k: r for k, r in plan.routines.items() if not k.startswith("loaded_report")}
-        if len(kept) < len(plan.routines):
-            plan = dataclasses.replace(plan, routines=kept)
+        """The common context and the runtime's sections the evaluator runs."""
         return {**super().context(plan, source, precision), "features": features(plan)}
 
 
