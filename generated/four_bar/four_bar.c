@@ -7117,6 +7117,41 @@ static void sk_loaded_deviation(const double *theta, const double *delta, const 
         out[i] = q[SK_NPAR + i];
     }
 }
+
+/* The solution q holds (the parameters, the deviation, the variant solved and its x,
+   sk_reduced_pose) evaluated again for the implicit-function theorem (templates/c/
+   reduced_sens.c, reduced_report.c): r its variant at the parameters, st J's LU, the plates'
+   inputs and relation and the system's output there, vals the relation's values per half plate.
+   Returns 0, or 1 where J is singular. */
+static int sk_red_at_solution(const sk_mechanism *m, const double *theta, const double *q,
+                              sk_red *r, sk_red_state *st, double *vals)
+{
+    const sk_loaded *l = (const sk_loaded *)m->loaded;
+    const double *x = q + SK_NPAR + 2 * SK_NP + 1;
+    int n, i, k, c;
+    r->m = m;
+    r->l = l;
+    r->v = l->variants + (int)q[SK_NPAR + 2 * SK_NP];
+    r->params = q;
+    n = r->v->size;
+    if (n > 0 && sk_red_eval(r, x, theta, 1.0, st)) {
+        return 1;
+    }
+    if (n == 0) {
+        double rel[12 * SK_RS];
+        sk_red_inputs(r, x, theta, 1.0, st->xt, st->ins);
+        sk_red_relation(r, st->ins, rel, vals);
+        for (i = 0; i < 12 * r->v->plates_n; ++i) {
+            st->rel[i] = rel[i];
+        }
+    }
+    for (k = 0; k < r->v->plates_n; ++k) {
+        for (c = 0; c < 3; ++c) {
+            vals[3 * k + c] = st->rel[12 * k + c];
+        }
+    }
+    return 0;
+}
 static const double sk_loaded_scale1[7] = {0.009186691875800356, 0.009186691875800356, 0.009186691875800356, 0.8833357572884959, 0.8833357572884959, 0.09615384615384616};
 static const double sk_loaded_scale2[11] = {0.009186691875800356, 0.009186691875800356, 0.009186691875800356, 0.8833357572884959, 0.8833357572884959, 0.09615384615384616, 1.0, 1.0, 1.0, 1.0};
 /* the loaded level: per variant (one, two half plates per plate) its routines, size, half
@@ -7151,38 +7186,19 @@ static int sk_reduced_rates(const void *mechanism, const double *theta, const do
                             const double *thu, double *dev)
 {
     const sk_mechanism *m = (const sk_mechanism *)mechanism;
-    const sk_loaded *l = (const sk_loaded *)m->loaded;
     const int v = (int)q[SK_NPAR + 2 * SK_NP];
     const sk_red_sens *rs = ((const sk_loaded_sens *)m->loaded_sens)->variants + v;
-    const double *x = q + SK_NPAR + 2 * SK_NP + 1;
     double s[SK_OUT], vals[3 * SK_RS], eps[6];
     double dth[SK_M * SK_NV + 1], din[5 * SK_RS * SK_NV + 1], dout[3 * SK_RS * SK_NV + 1];
     double dx[SK_RN * SK_NV + 1], col[SK_RN + 1], part[3 * SK_RS * 5 + 1];
     sk_red_state st;
     sk_red r;
     int n, ns, i, j, k, c, e;
-    r.m = m;
-    r.l = l;
-    r.v = l->variants + v;
-    r.params = q;
-    n = r.v->size;
-    ns = r.v->plates_n;
-    if (n > 0 && sk_red_eval(&r, x, theta, 1.0, &st)) {
+    if (sk_red_at_solution(m, theta, q, &r, &st, vals)) {
         return 1;
     }
-    if (n == 0) {
-        double rel[12 * SK_RS];
-        sk_red_inputs(&r, x, theta, 1.0, st.xt, st.ins);
-        sk_red_relation(&r, st.ins, rel, vals);
-        for (i = 0; i < 12 * ns; ++i) {
-            st.rel[i] = rel[i];
-        }
-    }
-    for (k = 0; k < ns; ++k) {
-        for (c = 0; c < 3; ++c) {
-            vals[3 * k + c] = st.rel[12 * k + c];
-        }
-    }
+    n = r.v->size;
+    ns = r.v->plates_n;
     rs->fn(st.xt, theta, vals, q, s);
     /* dtheta/dv of every hinge: the non-input ones' from the rigid closure, an input's own 1 */
     for (i = 0; i < SK_M * SK_NV; ++i) {
@@ -7416,41 +7432,21 @@ static void sk_rep_stiffness(const sk_loaded_report *rp, const double *c, double
    (N m/rad), per point its stiffness K (9, row-major; NaN on the frame or where singular), per
    plate its stress (Pa), strain, safety factor and section. Returns 0, or 1 where J is
    singular. */
-static int sk_reduced_report(const sk_mechanism *m, const sk_loaded *l,
-                             const sk_loaded_report *rp, const double *theta, const double *q,
-                             double *out)
+static int sk_reduced_report(const sk_mechanism *m, const sk_loaded_report *rp,
+                             const double *theta, const double *q, double *out)
 {
-    const int v = (int)q[SK_NPAR + 2 * SK_NP];
-    const sk_red_rep *rr = rp->variants + v;
-    const double *x = q + SK_NPAR + 2 * SK_NP + 1;
+    const sk_red_rep *rr = rp->variants + (int)q[SK_NPAR + 2 * SK_NP];
     const int nin = rp->n_inputs, nq = nin + 3 * rp->n_points;
     double s[SK_OUT], vals[3 * SK_RS], dout[3 * SK_RS], col[SK_RN + 1];
     double rates[SK_RQ * SK_RQ];
     sk_red_state st;
     sk_red r;
     int n, ns, i, j, k, c, e;
-    r.m = m;
-    r.l = l;
-    r.v = l->variants + v;
-    r.params = q;
-    n = r.v->size;
-    ns = r.v->plates_n;
-    if (n > 0 && sk_red_eval(&r, x, theta, 1.0, &st)) {
+    if (sk_red_at_solution(m, theta, q, &r, &st, vals)) {
         return 1;
     }
-    if (n == 0) {
-        double rel[12 * SK_RS];
-        sk_red_inputs(&r, x, theta, 1.0, st.xt, st.ins);
-        sk_red_relation(&r, st.ins, rel, vals);
-        for (i = 0; i < 12 * ns; ++i) {
-            st.rel[i] = rel[i];
-        }
-    }
-    for (k = 0; k < ns; ++k) {
-        for (c = 0; c < 3; ++c) {
-            vals[3 * k + c] = st.rel[12 * k + c];
-        }
-    }
+    n = r.v->size;
+    ns = r.v->plates_n;
     rr->fn(st.xt, theta, vals, q, s);
     for (c = 0; c < nq; ++c) {
         /* dout/dv at fixed x: the relation's partials . din/dv */
@@ -7543,7 +7539,7 @@ static int sk_loaded_report_pose(const sk_mechanism *m, const sk_loaded_report *
                  ? 3
                  : sk_pose(m, lv, inputs, params, 0, theta, delta, constants, &q);
     if (status == 0) {
-        status = sk_reduced_report(m, (const sk_loaded *)m->loaded, rp, theta, q, out);
+        status = sk_reduced_report(m, rp, theta, q, out);
     }
     for (i = 0; status == 0 && i < 2 * rp->n_inputs; ++i) {
         if (!isfinite(out[i])) {

@@ -942,23 +942,20 @@ def _red_block(out, block, b):
     return numpy.stack(values, axis=-1).reshape(b, rows, cols)
 
 
-def _reduced_rates(mech, theta, p, q, thu, ok):
-    """dev (*shape, 2 n_P, n_v) of the loaded level at its solutions (q: the variant solved and
-    its x, templates/numpy/reduced.py); thu dtheta_u/dv (*shape, k, n_v), None without. J is
-    evaluated once more at the solution, then dx/dv = -J^-1 dR/dv at fixed x and
-    dD/dv = dD/dx dx/dv + dD/dtheta dtheta/dv + dD/dp + dD/dout dout/dv (reduced_sens.c)."""
+def _red_solutions(mech, theta, p, q, shape, good, routines):
+    """The configurations the loaded level solved (q: the variant and its x; shape: the
+    configurations', good: a flat mask of them),
+    variant by variant, evaluated again at their solution for the implicit-function theorem
+    (templates/numpy/reduced_sens.py, reduced_report.py): per variant solved (where, solver,
+    routines[variant]'s output, J (b, n, n), dR/d(plates) (b, n, 3 n_s), the half plates'
+    inputs, their x-Jacobian and the relation there)."""
     tb = mech.loaded
-    shape = ok.shape
-    npar, nv, m = len(mech.parameter_names), mech.n_variables, mech.n_theta
-    npt = 2 * len(mech.point_names)
-    dev = numpy.full((ok.size, npt, nv), numpy.nan)
     variant = numpy.broadcast_to(q.variant, shape).reshape(-1)
-    good = numpy.broadcast_to(ok, shape).reshape(-1)
 
     def flat(values, where):
         return [numpy.broadcast_to(v, shape).reshape(-1)[where].astype(float) for v in values]
 
-    for index, (variant_row, (fn, blocks)) in enumerate(zip(tb.variants, tb.sens)):
+    for index, (variant_row, fn) in enumerate(zip(tb.variants, routines)):
         where = numpy.flatnonzero(good & (variant == index))
         b = where.size
         if not b:
@@ -972,8 +969,28 @@ def _reduced_rates(mech, theta, p, q, thu, ok):
             args, ins, dins = solver._inputs(x, th, pb, 1.0)
             rel, vals = solver._relation(ins)
             sys = solver.system_fn(args, th, vals, pb)
-            s = fn(args, th, vals, pb)
+            out = fn(args, th, vals, pb)
         jo = _red_block(sys, (n + n * n, n, 3 * ns), b)
+        yield where, solver, out, jac, jo, ins, dins, rel
+
+
+def _reduced_rates(mech, theta, p, q, thu, ok):
+    """dev (*shape, 2 n_P, n_v) of the loaded level at its solutions (q: the variant solved and
+    its x, templates/numpy/reduced.py); thu dtheta_u/dv (*shape, k, n_v), None without. J is
+    evaluated once more at the solution, then dx/dv = -J^-1 dR/dv at fixed x and
+    dD/dv = dD/dx dx/dv + dD/dtheta dtheta/dv + dD/dp + dD/dout dout/dv (reduced_sens.c)."""
+    tb = mech.loaded
+    shape = ok.shape
+    npar, nv, m = len(mech.parameter_names), mech.n_variables, mech.n_theta
+    npt = 2 * len(mech.point_names)
+    dev = numpy.full((ok.size, npt, nv), numpy.nan)
+    good = numpy.broadcast_to(ok, shape).reshape(-1)
+    routines = [fn for fn, _ in tb.sens]
+    for where, solver, s, jac, jo, ins, dins, rel in _red_solutions(
+        mech, theta, p, q, shape, good, routines
+    ):
+        blocks = tb.sens[solver.count - 1][1]
+        b, n, ns = where.size, solver.size, solver.plates
         # dtheta/dv of every hinge: the non-input ones' from the rigid closure, an input's own 1
         dth = numpy.zeros((b, m, nv))
         if thu is not None:
@@ -1044,15 +1061,6 @@ def _reported_block(arrays, mech, level, p, links, report):
     return result
 
 
-def _rep_block(out, block, b):
-    """A routine's block (offset, rows, cols) as a (b, rows, cols) array."""
-    at, rows, cols = block
-    if not rows * cols:
-        return numpy.zeros((b, rows, cols))
-    values = [_red_column(out[at + i], b) for i in range(rows * cols)]
-    return numpy.stack(values, axis=-1).reshape(b, rows, cols)
-
-
 def _plate_stress(k0, lx, ly, ea, es, slender, modulus, limit, has_limit):
     """Largest normal stress (Pa), its strain, the safety factor (NaN without an allowable
     stress) and where along the plate (0..1), per configuration ((b,) arrays): the plate's IVP
@@ -1115,30 +1123,13 @@ def _reduced_report(mech, theta, p, q, ok):
     ys = numpy.full((size, nin + 3 * npt), numpy.nan)
     rates = numpy.full((size, nin + 3 * npt, nin + 3 * npt), numpy.nan)
     stress = numpy.full((size, npl, 8), numpy.nan)
-    variant = numpy.broadcast_to(q.variant, shape).reshape(-1)
     good = numpy.broadcast_to(ok, shape).reshape(-1)
-
-    def flat(values, where):
-        return [numpy.broadcast_to(v, shape).reshape(-1)[where].astype(float) for v in values]
-
-    for index, (variant_row, (fn, blocks)) in enumerate(zip(tb.variants, rep.routines)):
-        where = numpy.flatnonzero(good & (variant == index))
-        b = where.size
-        if not b:
-            continue
-        solver = _Batch(tb, variant_row, index + 1)
-        n, ns = solver.size, solver.plates
-        x = numpy.array(flat(q.x[:n], where)).reshape(n, b)
-        th, pb = flat(theta, where), flat(p, where)
-        with numpy.errstate(all="ignore"):
-            args, ins, dins = solver._inputs(x, th, pb, 1.0)
-            rel, vals = solver._relation(ins)
-            out = fn(args, th, vals, pb)
-            jac = jo = None
-            if n:
-                _, jac = solver.system(x, th, pb, 1.0)
-                sys = solver.system_fn(args, th, vals, pb)
-                jo = _rep_block(sys, (n + n * n, n, 3 * ns), b)
+    routines = [fn for fn, _ in rep.routines]
+    for where, solver, out, jac, jo, _, dins, rel in _red_solutions(
+        mech, theta, p, q, shape, good, routines
+    ):
+        blocks = rep.routines[solver.count - 1][1]
+        b, n, ns = where.size, solver.size, solver.plates
         # the plate relation's partials by (theta_c, p, f), block diagonal
         part = numpy.zeros((b, 3 * ns, 3 * ns))
         for k in range(ns):
@@ -1149,11 +1140,11 @@ def _reduced_report(mech, theta, p, q, ok):
         if ns and n:
             dinx = numpy.array([_red_column(v, b) for v in dins]).reshape(3 * ns, n, b)
             dinx = dinx.transpose(2, 0, 1)
-        dr_v = _rep_block(out, blocks["dR_dv"], b)
-        din_v = _rep_block(out, blocks["din_dv"], b)
-        dy_o = _rep_block(out, blocks["dy_dout"], b)
+        dr_v = _red_block(out, blocks["dR_dv"], b)
+        din_v = _red_block(out, blocks["din_dv"], b)
+        dy_o = _red_block(out, blocks["dy_dout"], b)
         by_o = numpy.matmul(dy_o, part)
-        total = _rep_block(out, blocks["dy_dv"], b) + numpy.matmul(by_o, din_v)
+        total = _red_block(out, blocks["dy_dv"], b) + numpy.matmul(by_o, din_v)
         if n:
             rhs = dr_v + numpy.matmul(jo, numpy.matmul(part, din_v))
             try:
@@ -1166,11 +1157,11 @@ def _reduced_report(mech, theta, p, q, ok):
                         dx[c] = -numpy.linalg.solve(jac[c], rhs[c])
                     except numpy.linalg.LinAlgError:
                         continue  # singular: NaN
-            dy_x = _rep_block(out, blocks["dy_dx"], b) + numpy.matmul(by_o, dinx)
+            dy_x = _red_block(out, blocks["dy_dx"], b) + numpy.matmul(by_o, dinx)
             total = total + numpy.matmul(dy_x, dx)
-        ys[where] = _rep_block(out, blocks["y"], b)[:, :, 0]
+        ys[where] = _red_block(out, blocks["y"], b)[:, :, 0]
         rates[where] = total
-        stress[where] = _rep_block(out, blocks["stress"], b)
+        stress[where] = _red_block(out, blocks["stress"], b)
     ok_flat = good
     result = {"inputs": {}, "stiffness": {}, "plates": {}}
     angles = {name: theta[i] for name, i in zip(mech.hinge_names, range(len(theta)))}

@@ -5,8 +5,8 @@
  * at the solution templates/c/reduced.c found (the mechanism's loaded_report<g> routines), every
  * plate's largest normal stress by integrating the plate from its end loads with RK4, as
  * templates/numpy/reduced_report.py. Only evaluators with the level's loaded_report<g> routines
- * hold it (templates/c/source.c.j2), after templates/c/reduced.c, whose sk_red_eval it calls,
- * and runtime.c's sk_pose; the generated file defines SK_RQ (the inputs and three per point:
+ * hold it (templates/c/source.c.j2), after templates/c/reduced.c, whose sk_red_at_solution it
+ * calls, and runtime.c's sk_pose; the generated file defines SK_RQ (the inputs and three per point:
  * the report's variables, and one).
  */
 #include <math.h>
@@ -145,41 +145,21 @@ static void sk_rep_stiffness(const sk_loaded_report *rp, const double *c, double
    (N m/rad), per point its stiffness K (9, row-major; NaN on the frame or where singular), per
    plate its stress (Pa), strain, safety factor and section. Returns 0, or 1 where J is
    singular. */
-static int sk_reduced_report(const sk_mechanism *m, const sk_loaded *l,
-                             const sk_loaded_report *rp, const double *theta, const double *q,
-                             double *out)
+static int sk_reduced_report(const sk_mechanism *m, const sk_loaded_report *rp,
+                             const double *theta, const double *q, double *out)
 {
-    const int v = (int)q[SK_NPAR + 2 * SK_NP];
-    const sk_red_rep *rr = rp->variants + v;
-    const double *x = q + SK_NPAR + 2 * SK_NP + 1;
+    const sk_red_rep *rr = rp->variants + (int)q[SK_NPAR + 2 * SK_NP];
     const int nin = rp->n_inputs, nq = nin + 3 * rp->n_points;
     double s[SK_OUT], vals[3 * SK_RS], dout[3 * SK_RS], col[SK_RN + 1];
     double rates[SK_RQ * SK_RQ];
     sk_red_state st;
     sk_red r;
     int n, ns, i, j, k, c, e;
-    r.m = m;
-    r.l = l;
-    r.v = l->variants + v;
-    r.params = q;
-    n = r.v->size;
-    ns = r.v->plates_n;
-    if (n > 0 && sk_red_eval(&r, x, theta, 1.0, &st)) {
+    if (sk_red_at_solution(m, theta, q, &r, &st, vals)) {
         return 1;
     }
-    if (n == 0) {
-        double rel[12 * SK_RS];
-        sk_red_inputs(&r, x, theta, 1.0, st.xt, st.ins);
-        sk_red_relation(&r, st.ins, rel, vals);
-        for (i = 0; i < 12 * ns; ++i) {
-            st.rel[i] = rel[i];
-        }
-    }
-    for (k = 0; k < ns; ++k) {
-        for (c = 0; c < 3; ++c) {
-            vals[3 * k + c] = st.rel[12 * k + c];
-        }
-    }
+    n = r.v->size;
+    ns = r.v->plates_n;
     rr->fn(st.xt, theta, vals, q, s);
     for (c = 0; c < nq; ++c) {
         /* dout/dv at fixed x: the relation's partials . din/dv */
@@ -272,7 +252,7 @@ static int sk_loaded_report_pose(const sk_mechanism *m, const sk_loaded_report *
                  ? 3
                  : sk_pose(m, lv, inputs, params, 0, theta, delta, constants, &q);
     if (status == 0) {
-        status = sk_reduced_report(m, (const sk_loaded *)m->loaded, rp, theta, q, out);
+        status = sk_reduced_report(m, rp, theta, q, out);
     }
     for (i = 0; status == 0 && i < 2 * rp->n_inputs; ++i) {
         if (!isfinite(out[i])) {

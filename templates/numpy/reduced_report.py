@@ -10,7 +10,7 @@ RK4. Only modules with the level's loaded_report<g> routines hold it
 import math
 
 import numpy
-from reduced import _Batch, _red_column  # the module holds them all: reduced.py, runtime.py
+from reduced import _red_block, _red_column, _red_solutions  # the module holds them all
 from runtime import _blocks, _points, _pose, _prepare
 
 # ---- symkin runtime: every generated module with the loaded level's report holds it ----
@@ -39,15 +39,6 @@ def _reported_block(arrays, mech, level, p, links, report):
     if report and mech.levels[level].loaded:
         result.update(_reduced_report(mech, theta, p, q, result["ok"]))
     return result
-
-
-def _rep_block(out, block, b):
-    """A routine's block (offset, rows, cols) as a (b, rows, cols) array."""
-    at, rows, cols = block
-    if not rows * cols:
-        return numpy.zeros((b, rows, cols))
-    values = [_red_column(out[at + i], b) for i in range(rows * cols)]
-    return numpy.stack(values, axis=-1).reshape(b, rows, cols)
 
 
 def _plate_stress(k0, lx, ly, ea, es, slender, modulus, limit, has_limit):
@@ -112,30 +103,13 @@ def _reduced_report(mech, theta, p, q, ok):
     ys = numpy.full((size, nin + 3 * npt), numpy.nan)
     rates = numpy.full((size, nin + 3 * npt, nin + 3 * npt), numpy.nan)
     stress = numpy.full((size, npl, 8), numpy.nan)
-    variant = numpy.broadcast_to(q.variant, shape).reshape(-1)
     good = numpy.broadcast_to(ok, shape).reshape(-1)
-
-    def flat(values, where):
-        return [numpy.broadcast_to(v, shape).reshape(-1)[where].astype(float) for v in values]
-
-    for index, (variant_row, (fn, blocks)) in enumerate(zip(tb.variants, rep.routines)):
-        where = numpy.flatnonzero(good & (variant == index))
-        b = where.size
-        if not b:
-            continue
-        solver = _Batch(tb, variant_row, index + 1)
-        n, ns = solver.size, solver.plates
-        x = numpy.array(flat(q.x[:n], where)).reshape(n, b)
-        th, pb = flat(theta, where), flat(p, where)
-        with numpy.errstate(all="ignore"):
-            args, ins, dins = solver._inputs(x, th, pb, 1.0)
-            rel, vals = solver._relation(ins)
-            out = fn(args, th, vals, pb)
-            jac = jo = None
-            if n:
-                _, jac = solver.system(x, th, pb, 1.0)
-                sys = solver.system_fn(args, th, vals, pb)
-                jo = _rep_block(sys, (n + n * n, n, 3 * ns), b)
+    routines = [fn for fn, _ in rep.routines]
+    for where, solver, out, jac, jo, _, dins, rel in _red_solutions(
+        mech, theta, p, q, shape, good, routines
+    ):
+        blocks = rep.routines[solver.count - 1][1]
+        b, n, ns = where.size, solver.size, solver.plates
         # the plate relation's partials by (theta_c, p, f), block diagonal
         part = numpy.zeros((b, 3 * ns, 3 * ns))
         for k in range(ns):
@@ -146,11 +120,11 @@ def _reduced_report(mech, theta, p, q, ok):
         if ns and n:
             dinx = numpy.array([_red_column(v, b) for v in dins]).reshape(3 * ns, n, b)
             dinx = dinx.transpose(2, 0, 1)
-        dr_v = _rep_block(out, blocks["dR_dv"], b)
-        din_v = _rep_block(out, blocks["din_dv"], b)
-        dy_o = _rep_block(out, blocks["dy_dout"], b)
+        dr_v = _red_block(out, blocks["dR_dv"], b)
+        din_v = _red_block(out, blocks["din_dv"], b)
+        dy_o = _red_block(out, blocks["dy_dout"], b)
         by_o = numpy.matmul(dy_o, part)
-        total = _rep_block(out, blocks["dy_dv"], b) + numpy.matmul(by_o, din_v)
+        total = _red_block(out, blocks["dy_dv"], b) + numpy.matmul(by_o, din_v)
         if n:
             rhs = dr_v + numpy.matmul(jo, numpy.matmul(part, din_v))
             try:
@@ -163,11 +137,11 @@ def _reduced_report(mech, theta, p, q, ok):
                         dx[c] = -numpy.linalg.solve(jac[c], rhs[c])
                     except numpy.linalg.LinAlgError:
                         continue  # singular: NaN
-            dy_x = _rep_block(out, blocks["dy_dx"], b) + numpy.matmul(by_o, dinx)
+            dy_x = _red_block(out, blocks["dy_dx"], b) + numpy.matmul(by_o, dinx)
             total = total + numpy.matmul(dy_x, dx)
-        ys[where] = _rep_block(out, blocks["y"], b)[:, :, 0]
+        ys[where] = _red_block(out, blocks["y"], b)[:, :, 0]
         rates[where] = total
-        stress[where] = _rep_block(out, blocks["stress"], b)
+        stress[where] = _red_block(out, blocks["stress"], b)
     ok_flat = good
     result = {"inputs": {}, "stiffness": {}, "plates": {}}
     angles = {name: theta[i] for name, i in zip(mech.hinge_names, range(len(theta)))}
