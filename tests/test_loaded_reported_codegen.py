@@ -22,6 +22,7 @@ import math
 import mechanisms as M
 import numpy as np
 import pytest
+import sympy as sp
 from conftest import EXAMPLES, ROOT
 from evaluators import require_compiler
 from test_loaded_reported import CASES, central_stiffness, solve
@@ -83,7 +84,12 @@ def c_report(plan, inputs: dict[str, list[float]]) -> dict:
     return {
         "ok": np.ones(count, dtype=bool),
         "inputs": {
-            h: {"angle": np.array(inputs[h]), "moment": v[2 * k], "stiffness": v[2 * k + 1]}
+            # a held input (derive --fix) is not an argument: its angle is the plan's
+            h: {
+                "angle": np.array(inputs.get(h, [math.nan] * count)),
+                "moment": v[2 * k],
+                "stiffness": v[2 * k + 1],
+            }
             for k, h in enumerate(rep.inputs)
         },
         "stiffness": {
@@ -233,6 +239,25 @@ def test_what_the_other_levels_and_modules_hold(built):
     piezo = symkin.analyze(symkin.load(EXAMPLES / "piezo_amplifier.toml"))
     _, module = pipeline.build(piezo, "numpy", "test", sensitivity=False)
     assert "loaded" not in module.LEVELS
+
+
+def test_a_held_input_is_reported_too():
+    """derive --fix: the held input leaves the arguments, its moment and stiffness stay in the
+    report (the Python report at its angle)."""
+    an = symkin.analyze(symkin.loads(*text("five_bar_coupler_input")))
+    plan, module = pipeline.build(
+        an, "numpy", "test", sensitivity=False, fixed={"P": sp.Rational(3, 200)}
+    )
+    want = python_report(an, {"O1": 0.02, "P": 0.015})
+    for backend in ["numpy"] + (["c"] if compiler_or_fail() else []):
+        res = reported(backend, plan, module, {"O1": [0.02]})
+        assert set(res["inputs"]) == {"O1", "P"}
+        for h, w in want.inputs.items():
+            assert relative(res["inputs"][h]["moment"][0], w.moment) <= MOMENT, (backend, h)
+            assert relative(res["inputs"][h]["stiffness"][0], w.stiffness) <= MOMENT, (backend, h)
+        for p, w in want.stiffness.items():
+            assert rows_close(res["stiffness"][p][..., 0], w, STIFFNESS), (backend, p)
+    assert float(module.evaluate({"O1": 0.02}, "loaded")["inputs"]["P"]["angle"]) == 0.015
 
 
 def test_the_report_takes_the_inputs_shape(built):
