@@ -23,6 +23,8 @@ setup(
             "*/reduced.py",
             "*/reduced_sens.c",
             "*/reduced_sens.py",
+            "*/reduced_report.c",
+            "*/reduced_report.py",
         ]
     },
 )

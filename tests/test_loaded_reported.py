@@ -167,17 +167,14 @@ def reduced_equilibrium_report(an, inputs, scale):
     return reduced_reported.report(solve(an, inputs), scale, buckling=False)
 
 
-@pytest.mark.parametrize("name, point", [("four_bar", "C"), ("parallelogram", "P")])
-def test_point_stiffness_by_central_differences_of_the_solver(name, point):
-    """C = d(x, y, φ)/d(Fx, Fy, M) of a small load added at the point (file units), the
-    mechanism solved again; K = C⁻¹ against the reported."""
-    path, extra, inputs = CASES[name]
+def central_stiffness(name: str, point: str, inputs: dict[str, float]) -> np.ndarray:
+    """K = C⁻¹, C = d(x, y, φ)/d(Fx, Fy, M) by central differences of the Python solver under a
+    small load added at the point (file units), the mechanism solved again (the inputs held)."""
+    path, extra, _ = CASES[name]
     text = path.read_text().replace("[parameters]\n", "[parameters]\nvx = 0\nvy = 0\nvm = 0\n")
     text += extra + f'\n[[load]]\npoint = "{point}"\nforce = ["vx", "vy"]\nmoment = "vm"\n'
     an = symkin.analyze(symkin.loads(text, str(path)))
-    base = solve(an, inputs)
-    red = base.solver
-    want = np.array(reduced_reported.report(base, 1.0, buckling=False).stiffness[point])
+    red = solve(an, inputs).solver
     link = red.points[point][0]
     names = {a: h.name for a, h in red.hinges.items()}
 
@@ -191,10 +188,20 @@ def test_point_stiffness_by_central_differences_of_the_solver(name, point):
     # small against the plates' load scale F = EI/(l L): the load stiffens them
     steps = [1e-4 * red.F, 1e-4 * red.F, 1e-4 * red.F * red.L]
     columns = []
-    for key, h in zip(("vx", "vy", "vm"), steps):
+    for key, h in zip(("vx", "vy", "vm"), steps, strict=True):
         pair = [state(solve(an, inputs, params={key: repr(float(s * h))})) for s in (1, -1)]
         columns.append((pair[0] - pair[1]) / (2 * h))
-    got = np.linalg.inv(np.array(columns).T)
+    return np.linalg.inv(np.array(columns).T)
+
+
+@pytest.mark.parametrize("name, point", [("four_bar", "C"), ("parallelogram", "P")])
+def test_point_stiffness_by_central_differences_of_the_solver(name, point):
+    """The reported K against central differences of the solver under a load at the point."""
+    an, inputs = mechanism(name)
+    want = np.array(
+        reduced_reported.report(solve(an, inputs), 1.0, buckling=False).stiffness[point]
+    )
+    got = central_stiffness(name, point, inputs)
     scale = np.abs(want).max(axis=1, keepdims=True)
     # measured: four-bar 1e-10, parallelogram 7e-10 (of each row's largest entry)
     assert np.all(np.abs(got - want) <= 1e-8 * scale), (got, want)

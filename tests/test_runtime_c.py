@@ -335,7 +335,17 @@ def test_generated_c_holds_the_runtime_sections_it_runs():
     from symkin.codegen.backends.c import backend as c_backend
 
     for key, wanted in (
-        ("four_bar", {"SK_LOOPS", "SK_CLOSED_FORM", "SK_LOADED", "SK_LINKS", "SK_SENSITIVITY"}),
+        (
+            "four_bar",
+            {
+                "SK_LOOPS",
+                "SK_CLOSED_FORM",
+                "SK_LOADED",
+                "SK_LOADED_IFT",
+                "SK_LINKS",
+                "SK_SENSITIVITY",
+            },
+        ),
         ("triad", {"SK_LOOPS", "SK_CONTINUATION", "SK_LINKS", "SK_SENSITIVITY"}),
         ("serial_arm", {"SK_LINKS", "SK_SENSITIVITY"}),
     ):

@@ -3,7 +3,7 @@
  * Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 65, rigid_res 51, linear 114, newton 259, rigid_points 19, loaded_plates1 132, loaded_system1 523, loaded_res1 229, loaded_dev1 60, loaded_plates2 349, loaded_system2 1557, loaded_res2 494, loaded_dev2 143, dev_paper 38, dev_first_order 52, dev_exact 62, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339, loaded_sens1 581, loaded_sens2 1581, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
+ * Operation counts after CSE: rigid 65, rigid_res 51, linear 114, newton 259, rigid_points 19, loaded_plates1 132, loaded_system1 523, loaded_res1 229, loaded_dev1 60, loaded_report1 560, loaded_plates2 349, loaded_system2 1557, loaded_res2 494, loaded_dev2 143, loaded_report2 1279, dev_paper 38, dev_first_order 52, dev_exact 62, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339, loaded_sens1 581, loaded_sens2 1581, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
  */
 #include "four_bar.h"
 
@@ -23,6 +23,7 @@ enum {
     SK_RN = 10 + 1,  /* loaded: the most unknowns */
     SK_RS = 8 + 1,  /* loaded: the most half plates */
     SK_RP = 1,  /* loaded: the points its deviation routines give */
+    SK_RQ = 4 + 1,  /* loaded: the report's variables */
     SK_OUT = 351        /* the largest routine output, and one */
 };
 
@@ -1514,6 +1515,371 @@ static void sk_loaded_dev1(const double *x, const double *theta, const double *p
     out[1] = _tmp1*_tmp6 + _tmp12*_tmp13 + _tmp14*_tmp9 + _tmp16*_tmp5 - _tmp7*across_1_0 + _tmp15*across_2_0*p_0;
 }
 
+/* loaded (1 half plate(s) per plate), what it reports: dR/dv, din/dv, y, dy/dx, dy/dv, dy/dout (v: the inputs' angles and virtual loads at the points, y: the inputs' moments and the points' (dx, dy, dphi)), then per plate (k0, lx, ly, e_a, e_s, t/l, E', allowable) (560 operations) */
+static void sk_loaded_report1(const double *x, const double *theta, const double *plates, const double *params, double *out)
+{
+    const double x_0 = x[0];
+    const double x_1 = x[1];
+    const double x_2 = x[2];
+    const double x_3 = x[3];
+    const double x_4 = x[4];
+    const double x_5 = x[5];
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double along_1_0 = plates[0];
+    const double across_1_0 = plates[1];
+    const double omega_1_0 = plates[2];
+    const double along_2_0 = plates[3];
+    const double across_2_0 = plates[4];
+    const double omega_2_0 = plates[5];
+    const double along_3_0 = plates[6];
+    const double across_3_0 = plates[7];
+    const double omega_3_0 = plates[8];
+    const double along_4_0 = plates[9];
+    const double across_4_0 = plates[10];
+    const double omega_4_0 = plates[11];
+    const double p_0 = params[0];
+    const double _tmp0 = sin(theta_1);
+    const double _tmp1 = cos(theta_1);
+    const double _tmp2 = 0.5*theta_1;
+    const double _tmp3 = sin(_tmp2);
+    const double _tmp4 = 0.004593345937900178*x_0;
+    const double _tmp5 = _tmp4 + 0.5*theta_2;
+    const double _tmp6 = 1.0471975511965979 + theta_1;
+    const double _tmp7 = _tmp5 + _tmp6;
+    const double _tmp8 = cos(_tmp7);
+    const double _tmp9 = _tmp8*p_0;
+    const double _tmp10 = _tmp9*across_2_0;
+    const double _tmp11 = 0.5*theta_4 + 0.004593345937900178*x_2;
+    const double _tmp12 = 0.009186691875800356*x_0;
+    const double _tmp13 = theta_1 + theta_2;
+    const double _tmp14 = _tmp12 + _tmp13;
+    const double _tmp15 = _tmp11 + _tmp14;
+    const double _tmp16 = cos(_tmp15);
+    const double _tmp17 = 1000.0*p_0;
+    const double _tmp18 = _tmp16*_tmp17;
+    const double _tmp19 = symkin_arck(_tmp2);
+    const double _tmp20 = along_1_0 + 0.25*_tmp19*pow(theta_1, 2);
+    const double _tmp21 = cos(_tmp2);
+    const double _tmp22 = _tmp21*p_0;
+    const double _tmp23 = _tmp20*_tmp22;
+    const double _tmp24 = cos(_tmp13);
+    const double _tmp25 = cos(_tmp12);
+    const double _tmp26 = sin(_tmp4);
+    const double _tmp27 = _tmp26*cos(_tmp4);
+    const double _tmp28 = -0.14*_tmp27 - 0.042*_tmp25;
+    const double _tmp29 = 0.07*_tmp25 - 0.084*_tmp27;
+    const double _tmp30 = sin(_tmp13);
+    const double _tmp31 = 1000.0*_tmp30;
+    const double _tmp32 = symkin_arck(_tmp5);
+    const double _tmp33 = along_2_0 + _tmp32*pow(_tmp5, 2);
+    const double _tmp34 = sin(_tmp7);
+    const double _tmp35 = _tmp34*p_0;
+    const double _tmp36 = _tmp33*_tmp35;
+    const double _tmp37 = along_4_0 + pow(_tmp11, 2)*symkin_arck(_tmp11);
+    const double _tmp38 = sin(_tmp15);
+    const double _tmp39 = _tmp17*_tmp38;
+    const double _tmp40 = _tmp19*_tmp2 + 0.0625*(theta_1*theta_1*theta_1)*(-3*symkin_sinr2(_tmp2) + 3*symkin_cosr2(_tmp2) + symkin_sinr1(_tmp2));
+    const double _tmp41 = _tmp3*p_0;
+    const double _tmp42 = _tmp40*_tmp41;
+    const double _tmp43 = _tmp22*across_1_0;
+    const double _tmp44 = _tmp35*across_2_0;
+    const double _tmp45 = _tmp20*_tmp41;
+    const double _tmp46 = _tmp33*_tmp9;
+    const double _tmp47 = _tmp22*_tmp40;
+    const double _tmp48 = 0.5*p_0;
+    const double _tmp49 = _tmp21*_tmp48;
+    const double _tmp50 = _tmp3*_tmp48;
+    const double _tmp51 = _tmp42 + _tmp20*_tmp49 - _tmp50*across_1_0;
+    const double _tmp52 = sin(_tmp14);
+    const double _tmp53 = 0.25*p_0;
+    const double _tmp54 = cos(_tmp14);
+    const double _tmp55 = 0.4330127018922193*p_0;
+    const double _tmp56 = _tmp10 + _tmp36;
+    const double _tmp57 = 0.015*_tmp0 + 0.026*_tmp1;
+    const double _tmp58 = _tmp56 + _tmp57;
+    const double _tmp59 = _tmp58 + _tmp52*_tmp53 + _tmp54*_tmp55;
+    const double _tmp60 = _tmp49*across_1_0;
+    const double _tmp61 = _tmp20*_tmp50;
+    const double _tmp62 = _tmp60 + _tmp61 - _tmp47;
+    const double _tmp63 = _tmp44 - _tmp46;
+    const double _tmp64 = 0.026*_tmp0;
+    const double _tmp65 = 0.015*_tmp1;
+    const double _tmp66 = _tmp64 - _tmp65;
+    const double _tmp67 = _tmp63 + _tmp66 + _tmp52*_tmp55 - _tmp53*_tmp54;
+    const double _tmp68 = 4.50333209967908*p_0;
+    const double _tmp69 = p_0 <= 0.01;
+    const double _tmp70 = ((_tmp69) ? (4.333333333333334e-12) : (4.761904761904762e-12));
+    const double _tmp71 = 1.0/p_0;
+    const double _tmp72 = _tmp70*_tmp71;
+    const double _tmp73 = 1060002.908746195*_tmp72;
+    const double _tmp74 = _tmp73*x_3;
+    const double _tmp75 = _tmp73*x_4;
+    const double _tmp76 = 2400000*_tmp70;
+    const double _tmp77 = _tmp71*_tmp76;
+    const double _tmp78 = -_tmp3*_tmp77;
+    const double _tmp79 = _tmp21*_tmp77;
+    const double _tmp80 = 2120005.81749239*_tmp72;
+    const double _tmp81 = _tmp80*x_3;
+    const double _tmp82 = _tmp77*_tmp8;
+    const double _tmp83 = _tmp34*_tmp77;
+    const double _tmp84 = _tmp80*x_4;
+    const double _tmp85 = pow(p_0, 2);
+    const double _tmp86 = ((_tmp69) ? (230769230769.23077) : (210000000000));
+    const double _tmp87 = 4.1666666666666667e-07*_tmp85*_tmp86;
+    const double _tmp88 = _tmp87*omega_1_0;
+    const double _tmp89 = theta_3 + 0.009186691875800356*x_1;
+    const double _tmp90 = cos(_tmp89);
+    const double _tmp91 = -0.015 + _tmp48;
+    const double _tmp92 = sin(_tmp89);
+    const double _tmp93 = _tmp91*_tmp92;
+    const double _tmp94 = _tmp1*_tmp48;
+    const double _tmp95 = -_tmp94;
+    const double _tmp96 = _tmp41*across_1_0;
+    const double _tmp97 = 0.5*theta_3 + 0.004593345937900178*x_1;
+    const double _tmp98 = symkin_arck(_tmp97);
+    const double _tmp99 = along_3_0 + _tmp98*pow(_tmp97, 2);
+    const double _tmp100 = cos(_tmp97);
+    const double _tmp101 = _tmp100*p_0;
+    const double _tmp102 = _tmp101*_tmp99;
+    const double _tmp103 = sin(_tmp97);
+    const double _tmp104 = _tmp103*p_0;
+    const double _tmp105 = _tmp104*across_3_0;
+    const double _tmp106 = _tmp102 - _tmp105;
+    const double _tmp107 = 0.8833357572884959*x_3;
+    const double _tmp108 = _tmp0*_tmp48;
+    const double _tmp109 = _tmp43 + _tmp45;
+    const double _tmp110 = _tmp108 + _tmp109;
+    const double _tmp111 = _tmp90*_tmp91;
+    const double _tmp112 = _tmp101*across_3_0;
+    const double _tmp113 = _tmp104*_tmp99;
+    const double _tmp114 = 0.1 + _tmp111 - _tmp112 - _tmp113 - 0.068*_tmp92;
+    const double _tmp115 = 0.8833357572884959*x_4;
+    const double _tmp116 = sin(_tmp12);
+    const double _tmp117 = pow(_tmp26, 2);
+    const double _tmp118 = 0.045*_tmp116 - 0.128*_tmp117;
+    const double _tmp119 = -0.064*_tmp116 - 0.09*_tmp117;
+    const double _tmp120 = _tmp109 + _tmp63;
+    const double _tmp121 = _tmp23 - _tmp96;
+    const double _tmp122 = _tmp121 + _tmp56;
+    const double _tmp123 = _tmp98*(0.004593345937900178*theta_3 + 4.219765381044813e-05*x_1) + 0.004593345937900178*(_tmp97*_tmp97*_tmp97)*(-3*symkin_sinr2(_tmp97) + 3*symkin_cosr2(_tmp97) + symkin_sinr1(_tmp97));
+    const double _tmp124 = 0.44166787864424795*p_0;
+    const double _tmp125 = 0.00041340113441101604*_tmp25 - 0.0011758965601024456*_tmp27;
+    const double _tmp126 = -0.0008268022688220321*_tmp27 - 0.0005879482800512228*_tmp25;
+    const double _tmp127 = _tmp32*(0.004593345937900178*theta_2 + 4.219765381044813e-05*x_0) + 0.004593345937900178*(_tmp5*_tmp5*_tmp5)*(-3*symkin_sinr2(_tmp5) + 3*symkin_cosr2(_tmp5) + symkin_sinr1(_tmp5));
+    const double _tmp128 = _tmp46 + _tmp65 - _tmp44 - _tmp64;
+    const double _tmp129 = 0.045*_tmp25 - 0.128*_tmp27;
+    const double _tmp130 = -0.064*_tmp25 - 0.09*_tmp27;
+    const double _tmp131 = -_tmp41;
+    const double _tmp132 = _tmp76/_tmp85;
+    const double _tmp133 = 0.0008333333333333334*_tmp70*_tmp86;
+    const double _tmp134 = 1.2380952380952381e-14*_tmp86;
+    const double _tmp135 = 0.1*((_tmp69) ? (480384.4614152614) : (458257.569495584))*((_tmp69) ? (2.0816659994661327e-06) : (2.1821789023599237e-06));
+    const double _tmp136 = 0.015 - _tmp53;
+    const double _tmp137 = 0.026 - _tmp55;
+    const double _tmp138 = cos(_tmp6);
+    const double _tmp139 = sin(_tmp6);
+    const double _tmp140 = 0.07 - _tmp48;
+    out[0] = 1;
+    out[1] = 0;
+    out[2] = 0;
+    out[3] = 0;
+    out[4] = -26.0*_tmp1 - 15.0*_tmp0 - 500.0*_tmp23 - 1000.0*_tmp10 - 1000.0*_tmp36 - 1000.0*_tmp42 - _tmp18*across_4_0 - _tmp29*_tmp31 - _tmp37*_tmp39 + 1000.0*_tmp24*_tmp28 + 500.0*_tmp3*across_1_0*p_0;
+    out[5] = 0;
+    out[6] = 0;
+    out[7] = 0;
+    out[8] = 15.0*_tmp1 + 1000.0*_tmp46 + 1000.0*_tmp47 - 26.0*_tmp0 - 500.0*_tmp43 - 500.0*_tmp45 - 1000.0*_tmp44 + _tmp18*_tmp37 + _tmp28*_tmp31 - _tmp39*across_4_0 + 1000.0*_tmp24*_tmp29;
+    out[9] = 0;
+    out[10] = 0;
+    out[11] = 0;
+    out[12] = 9.186691875800356*x_3*(_tmp62 + _tmp67) - 9.186691875800356*x_4*(_tmp51 + _tmp59);
+    out[13] = 0.6656*_tmp54 + 0.4679999999999999*_tmp52 - _tmp54*_tmp68 - 2.5999999999999996*_tmp52*p_0;
+    out[14] = 0.6656*_tmp52 - 0.4679999999999999*_tmp54 - _tmp52*_tmp68 + 2.5999999999999996*_tmp54*p_0;
+    out[15] = -10.399999999999999;
+    out[16] = 0;
+    out[17] = 0;
+    out[18] = 0;
+    out[19] = 0;
+    out[20] = 0;
+    out[21] = 0;
+    out[22] = 0;
+    out[23] = 0;
+    out[24] = 1;
+    out[25] = 0;
+    out[26] = 0;
+    out[27] = 0;
+    out[28] = -_tmp21*_tmp74 - _tmp3*_tmp75;
+    out[29] = _tmp78;
+    out[30] = _tmp79;
+    out[31] = 0;
+    out[32] = _tmp3*_tmp74 - _tmp21*_tmp75;
+    out[33] = -_tmp79;
+    out[34] = _tmp78;
+    out[35] = 0;
+    out[36] = 0;
+    out[37] = 0;
+    out[38] = 0;
+    out[39] = 0;
+    out[40] = -_tmp34*_tmp81 + 2120005.81749239*_tmp70*_tmp71*_tmp8*x_4;
+    out[41] = _tmp82;
+    out[42] = _tmp83;
+    out[43] = 0;
+    out[44] = -_tmp34*_tmp84 - _tmp8*_tmp81;
+    out[45] = -_tmp83;
+    out[46] = _tmp82;
+    out[47] = 0;
+    out[48] = 0;
+    out[49] = 0;
+    out[50] = 0;
+    out[51] = 0;
+    out[52] = 0;
+    out[53] = 0;
+    out[54] = 0;
+    out[55] = 0;
+    out[56] = 0;
+    out[57] = 0;
+    out[58] = 0;
+    out[59] = 0;
+    out[60] = 0;
+    out[61] = 0;
+    out[62] = 0;
+    out[63] = 0;
+    out[64] = -_tmp38*_tmp81 + 2120005.81749239*_tmp16*_tmp70*_tmp71*x_4;
+    out[65] = 0;
+    out[66] = 0;
+    out[67] = 0;
+    out[68] = -_tmp16*_tmp81 - _tmp38*_tmp84;
+    out[69] = 0;
+    out[70] = 0;
+    out[71] = 0;
+    out[72] = _tmp88 - 0.09615384615384616*x_5 + _tmp107*(_tmp106 + _tmp93 + _tmp95 + _tmp96 - _tmp23 + 0.068*_tmp90) - _tmp115*(_tmp110 + _tmp114);
+    out[73] = -_tmp120 + _tmp119*_tmp24 - _tmp118*_tmp30;
+    out[74] = _tmp122 + _tmp118*_tmp24 + _tmp119*_tmp30;
+    out[75] = _tmp12;
+    out[76] = 0;
+    out[77] = _tmp107*(-0.004593345937900178*_tmp112 - 0.004593345937900178*_tmp113 - 0.0006246950475544242*_tmp92 + 0.009186691875800356*_tmp90*_tmp91 + _tmp100*_tmp123*p_0) - _tmp115*(-0.004593345937900178*_tmp102 - 0.009186691875800356*_tmp93 - 0.0006246950475544242*_tmp90 - _tmp104*_tmp123 + 0.004593345937900178*_tmp103*across_3_0*p_0);
+    out[78] = 0;
+    out[79] = 0.8833357572884959*_tmp102 + 0.8833357572884959*_tmp93 + 0.8833357572884959*_tmp96 + 0.06006683149561772*_tmp90 - 0.8833357572884959*_tmp105 - 0.8833357572884959*_tmp23 - _tmp1*_tmp124;
+    out[80] = -0.08833357572884959 + 0.06006683149561772*_tmp92 - 0.8833357572884959*_tmp111 - 0.8833357572884959*_tmp43 - 0.8833357572884959*_tmp45 - _tmp0*_tmp124 + 0.8833357572884959*_tmp100*across_3_0*p_0 + 0.8833357572884959*_tmp103*_tmp99*p_0;
+    out[81] = -0.09615384615384616;
+    out[82] = -0.004593345937900178*_tmp10 - 0.004593345937900178*_tmp36 + _tmp126*_tmp24 - _tmp125*_tmp30 + _tmp127*_tmp8*p_0;
+    out[83] = 0;
+    out[84] = 0;
+    out[85] = 0;
+    out[86] = 0;
+    out[87] = 0;
+    out[88] = 0.004593345937900178*_tmp46 - 0.004593345937900178*_tmp44 + _tmp125*_tmp24 + _tmp126*_tmp30 + _tmp127*_tmp35;
+    out[89] = 0;
+    out[90] = 0;
+    out[91] = 0;
+    out[92] = 0;
+    out[93] = 0;
+    out[94] = 0.009186691875800356;
+    out[95] = 0;
+    out[96] = 0;
+    out[97] = 0;
+    out[98] = 0;
+    out[99] = 0;
+    out[100] = _tmp107*(_tmp108 + _tmp62) - _tmp115*(_tmp51 + _tmp94);
+    out[101] = _tmp58 + _tmp95 + 0.064*_tmp54 + 0.045*_tmp52;
+    out[102] = -_tmp108 - _tmp128 + 0.064*_tmp52 - 0.045*_tmp54;
+    out[103] = -1;
+    out[104] = -_tmp51 - _tmp58 + _tmp130*_tmp24 - _tmp129*_tmp30;
+    out[105] = 0;
+    out[106] = 0;
+    out[107] = 0;
+    out[108] = _tmp128 + _tmp47 - _tmp60 - _tmp61 + _tmp129*_tmp24 + _tmp130*_tmp30;
+    out[109] = 0;
+    out[110] = 0;
+    out[111] = 0;
+    out[112] = 1;
+    out[113] = 0;
+    out[114] = 0;
+    out[115] = 0;
+    out[116] = -_tmp107*_tmp22 - _tmp115*_tmp41;
+    out[117] = _tmp107*_tmp41 - _tmp115*_tmp22;
+    out[118] = _tmp87;
+    out[119] = 0;
+    out[120] = 0;
+    out[121] = 0;
+    out[122] = _tmp101*_tmp107 + _tmp104*_tmp115;
+    out[123] = -_tmp104*_tmp107 + 0.8833357572884959*_tmp100*p_0*x_4;
+    out[124] = 0;
+    out[125] = 0;
+    out[126] = 0;
+    out[127] = 0;
+    out[128] = _tmp131;
+    out[129] = -_tmp22;
+    out[130] = 0;
+    out[131] = _tmp9;
+    out[132] = -_tmp35;
+    out[133] = 0;
+    out[134] = 0;
+    out[135] = 0;
+    out[136] = 0;
+    out[137] = 0;
+    out[138] = 0;
+    out[139] = 0;
+    out[140] = _tmp22;
+    out[141] = _tmp131;
+    out[142] = 0;
+    out[143] = _tmp35;
+    out[144] = _tmp9;
+    out[145] = 0;
+    out[146] = 0;
+    out[147] = 0;
+    out[148] = 0;
+    out[149] = 0;
+    out[150] = 0;
+    out[151] = 0;
+    out[152] = 0;
+    out[153] = 0;
+    out[154] = 0;
+    out[155] = 0;
+    out[156] = 0;
+    out[157] = 0;
+    out[158] = 0;
+    out[159] = 0;
+    out[160] = 0;
+    out[161] = 0;
+    out[162] = 0;
+    out[163] = 0;
+    out[164] = _tmp132*(_tmp88 - _tmp107*(_tmp121 + _tmp48 + _tmp94) - _tmp110*_tmp115);
+    out[165] = _tmp84;
+    out[166] = -_tmp81;
+    out[167] = _tmp133;
+    out[168] = _tmp134;
+    out[169] = _tmp135;
+    out[170] = _tmp86;
+    out[171] = 0;
+    out[172] = _tmp132*(_tmp115*(-_tmp67 + _tmp0*_tmp137 - _tmp1*_tmp136) + _tmp87*omega_2_0 - _tmp107*(_tmp59 - _tmp0*_tmp136 - _tmp1*_tmp137));
+    out[173] = _tmp138*_tmp81 + _tmp139*_tmp84;
+    out[174] = -_tmp139*_tmp81 + 2120005.81749239*_tmp138*_tmp70*_tmp71*x_4;
+    out[175] = _tmp133;
+    out[176] = _tmp134;
+    out[177] = _tmp135;
+    out[178] = _tmp86;
+    out[179] = 0;
+    out[180] = _tmp132*(_tmp107*(_tmp106 + _tmp48 + _tmp48*_tmp90) + _tmp87*omega_3_0 - _tmp115*(-_tmp112 - _tmp113 - _tmp48*_tmp92));
+    out[181] = -_tmp84;
+    out[182] = _tmp81;
+    out[183] = _tmp133;
+    out[184] = _tmp134;
+    out[185] = _tmp135;
+    out[186] = _tmp86;
+    out[187] = 0;
+    out[188] = _tmp132*(_tmp115*(_tmp114 + _tmp120 + _tmp66 + 0.042*_tmp52 - _tmp140*_tmp54) + _tmp87*omega_4_0 - _tmp107*(-_tmp105 - _tmp122 - _tmp57 + 0.068*_tmp90 - 0.042*_tmp54 + _tmp91*_tmp92 - _tmp140*_tmp52 + _tmp100*_tmp99*p_0));
+    out[189] = _tmp52*_tmp84 + _tmp54*_tmp81;
+    out[190] = -_tmp52*_tmp81 + 2120005.81749239*_tmp54*_tmp70*_tmp71*x_4;
+    out[191] = _tmp133;
+    out[192] = _tmp134;
+    out[193] = _tmp135;
+    out[194] = _tmp86;
+    out[195] = 0;
+}
+
 /* loaded (2 half plate(s) per plate): every half plate's (theta, p, f, e_a, e_s) and d(theta, p, f)/dx (349 operations) */
 static void sk_loaded_plates2(const double *x, const double *theta, const double *params, double *out)
 {
@@ -2879,6 +3245,686 @@ static void sk_loaded_dev2(const double *x, const double *theta, const double *p
     const double _tmp40 = _tmp10*(-2*pow(sin(_tmp27), 2) + 2*pow(sin(_tmp28), 2)) + _tmp30*_tmp35 + _tmp31*_tmp34 + _tmp33*_tmp36 - _tmp37*across_2_1;
     out[0] = _tmp39*_tmp40 + _tmp6*_tmp7 - _tmp1*_tmp5 - _tmp22*_tmp9 - _tmp23*_tmp24 - _tmp26*_tmp38;
     out[1] = _tmp1*_tmp7 + _tmp24*_tmp9 + _tmp26*_tmp40 + _tmp38*_tmp39 + _tmp5*_tmp6 - _tmp22*_tmp23;
+}
+
+/* loaded (2 half plate(s) per plate), what it reports: dR/dv, din/dv, y, dy/dx, dy/dv, dy/dout (v: the inputs' angles and virtual loads at the points, y: the inputs' moments and the points' (dx, dy, dphi)), then per plate (k0, lx, ly, e_a, e_s, t/l, E', allowable) (1279 operations) */
+static void sk_loaded_report2(const double *x, const double *theta, const double *plates, const double *params, double *out)
+{
+    const double x_0 = x[0];
+    const double x_1 = x[1];
+    const double x_2 = x[2];
+    const double x_3 = x[3];
+    const double x_4 = x[4];
+    const double x_5 = x[5];
+    const double x_6 = x[6];
+    const double x_7 = x[7];
+    const double x_8 = x[8];
+    const double x_9 = x[9];
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double along_1_0 = plates[0];
+    const double across_1_0 = plates[1];
+    const double along_1_1 = plates[3];
+    const double across_1_1 = plates[4];
+    const double omega_1_1 = plates[5];
+    const double along_2_0 = plates[6];
+    const double across_2_0 = plates[7];
+    const double along_2_1 = plates[9];
+    const double across_2_1 = plates[10];
+    const double omega_2_1 = plates[11];
+    const double along_3_0 = plates[12];
+    const double across_3_0 = plates[13];
+    const double along_3_1 = plates[15];
+    const double across_3_1 = plates[16];
+    const double omega_3_1 = plates[17];
+    const double along_4_0 = plates[18];
+    const double across_4_0 = plates[19];
+    const double along_4_1 = plates[21];
+    const double across_4_1 = plates[22];
+    const double omega_4_1 = plates[23];
+    const double p_0 = params[0];
+    const double _tmp0 = sin(theta_1);
+    const double _tmp1 = cos(theta_1);
+    const double _tmp2 = theta_1 + theta_2;
+    const double _tmp3 = cos(_tmp2);
+    const double _tmp4 = 0.009186691875800356*x_0;
+    const double _tmp5 = cos(_tmp4);
+    const double _tmp6 = 0.004593345937900178*x_0;
+    const double _tmp7 = sin(_tmp6);
+    const double _tmp8 = _tmp7*cos(_tmp6);
+    const double _tmp9 = -0.14*_tmp8 - 0.042*_tmp5;
+    const double _tmp10 = 0.07*_tmp5 - 0.084*_tmp8;
+    const double _tmp11 = sin(_tmp2);
+    const double _tmp12 = 1000.0*_tmp11;
+    const double _tmp13 = 0.5*theta_1;
+    const double _tmp14 = sin(_tmp13);
+    const double _tmp15 = 1.0*x_6;
+    const double _tmp16 = 0.5*p_0;
+    const double _tmp17 = 0.25*theta_1;
+    const double _tmp18 = 0.5*x_6;
+    const double _tmp19 = _tmp17 - _tmp18;
+    const double _tmp20 = cos(_tmp19);
+    const double _tmp21 = _tmp16*across_1_0;
+    const double _tmp22 = _tmp17 + _tmp18;
+    const double _tmp23 = cos(_tmp22);
+    const double _tmp24 = _tmp16*_tmp23;
+    const double _tmp25 = sin(_tmp19);
+    const double _tmp26 = symkin_arck(_tmp22);
+    const double _tmp27 = along_1_0 + _tmp26*pow(_tmp22, 2);
+    const double _tmp28 = _tmp16*_tmp27;
+    const double _tmp29 = symkin_arck(_tmp19);
+    const double _tmp30 = along_1_1 + _tmp29*pow(_tmp19, 2);
+    const double _tmp31 = sin(_tmp22);
+    const double _tmp32 = _tmp16*_tmp31;
+    const double _tmp33 = _tmp16*sin(_tmp15) + _tmp20*_tmp21 + _tmp24*across_1_1 + _tmp30*_tmp32 - _tmp25*_tmp28;
+    const double _tmp34 = cos(_tmp13);
+    const double _tmp35 = sin(_tmp17);
+    const double _tmp36 = sin(_tmp18);
+    const double _tmp37 = _tmp16*(-2*pow(_tmp36, 2) + 2*pow(_tmp35, 2)) + _tmp20*_tmp28 + _tmp21*_tmp25 + _tmp24*_tmp30 - _tmp32*across_1_1;
+    const double _tmp38 = _tmp34*_tmp37;
+    const double _tmp39 = 1.0471975511965979 + theta_1;
+    const double _tmp40 = _tmp39 + _tmp6 + 0.5*theta_2;
+    const double _tmp41 = cos(_tmp40);
+    const double _tmp42 = 1.0*x_7;
+    const double _tmp43 = 0.5*x_7;
+    const double _tmp44 = 0.25*theta_2 + 0.002296672968950089*x_0;
+    const double _tmp45 = _tmp44 - _tmp43;
+    const double _tmp46 = cos(_tmp45);
+    const double _tmp47 = _tmp16*across_2_0;
+    const double _tmp48 = _tmp43 + _tmp44;
+    const double _tmp49 = cos(_tmp48);
+    const double _tmp50 = _tmp16*_tmp49;
+    const double _tmp51 = sin(_tmp45);
+    const double _tmp52 = symkin_arck(_tmp48);
+    const double _tmp53 = along_2_0 + _tmp52*pow(_tmp48, 2);
+    const double _tmp54 = _tmp16*_tmp53;
+    const double _tmp55 = symkin_arck(_tmp45);
+    const double _tmp56 = along_2_1 + _tmp55*pow(_tmp45, 2);
+    const double _tmp57 = sin(_tmp48);
+    const double _tmp58 = _tmp16*_tmp57;
+    const double _tmp59 = _tmp16*sin(_tmp42) + _tmp46*_tmp47 + _tmp50*across_2_1 + _tmp56*_tmp58 - _tmp51*_tmp54;
+    const double _tmp60 = _tmp41*_tmp59;
+    const double _tmp61 = _tmp2 + _tmp4;
+    const double _tmp62 = _tmp61 + 0.5*theta_4 + 0.004593345937900178*x_2;
+    const double _tmp63 = cos(_tmp62);
+    const double _tmp64 = 0.5*x_9;
+    const double _tmp65 = 0.25*theta_4 + 0.002296672968950089*x_2;
+    const double _tmp66 = _tmp65 - _tmp64;
+    const double _tmp67 = cos(_tmp66);
+    const double _tmp68 = _tmp16*across_4_0;
+    const double _tmp69 = _tmp64 + _tmp65;
+    const double _tmp70 = _tmp16*cos(_tmp69);
+    const double _tmp71 = sin(_tmp66);
+    const double _tmp72 = _tmp16*(along_4_0 + pow(_tmp69, 2)*symkin_arck(_tmp69));
+    const double _tmp73 = along_4_1 + pow(_tmp66, 2)*symkin_arck(_tmp66);
+    const double _tmp74 = _tmp16*sin(_tmp69);
+    const double _tmp75 = 1000.0*_tmp16*sin(1.0*x_9) + 1000.0*_tmp67*_tmp68 + 1000.0*_tmp70*across_4_1 + 1000.0*_tmp73*_tmp74 - 1000.0*_tmp71*_tmp72;
+    const double _tmp76 = sin(_tmp40);
+    const double _tmp77 = sin(_tmp43);
+    const double _tmp78 = sin(_tmp44);
+    const double _tmp79 = _tmp16*(-2*pow(_tmp77, 2) + 2*pow(_tmp78, 2)) + _tmp46*_tmp54 + _tmp47*_tmp51 + _tmp50*_tmp56 - _tmp58*across_2_1;
+    const double _tmp80 = _tmp76*_tmp79;
+    const double _tmp81 = sin(_tmp62);
+    const double _tmp82 = 1000.0*_tmp16*(-2*pow(sin(_tmp64), 2) + 2*pow(sin(_tmp65), 2)) + 1000.0*_tmp67*_tmp72 + 1000.0*_tmp68*_tmp71 + 1000.0*_tmp70*_tmp73 - 1000.0*_tmp74*across_4_1;
+    const double _tmp83 = 0.125*p_0;
+    const double _tmp84 = _tmp83*across_1_0;
+    const double _tmp85 = _tmp83*across_1_1;
+    const double _tmp86 = _tmp27*_tmp83;
+    const double _tmp87 = 0.125*theta_1;
+    const double _tmp88 = 0.25*x_6;
+    const double _tmp89 = symkin_sinr1(_tmp19);
+    const double _tmp90 = (_tmp19*_tmp19*_tmp19)*(_tmp89 - 3*symkin_sinr2(_tmp19) + 3*symkin_cosr2(_tmp19));
+    const double _tmp91 = 0.25*_tmp90 + _tmp29*(_tmp87 - _tmp88);
+    const double _tmp92 = (_tmp22*_tmp22*_tmp22)*(-3*symkin_sinr2(_tmp22) + 3*symkin_cosr2(_tmp22) + symkin_sinr1(_tmp22));
+    const double _tmp93 = _tmp16*(0.25*_tmp92 + _tmp26*(_tmp87 + _tmp88));
+    const double _tmp94 = -_tmp20*_tmp86 - _tmp25*_tmp84 - _tmp25*_tmp93 - _tmp31*_tmp85 + 0.125*_tmp23*_tmp30*p_0 + 0.5*_tmp31*_tmp91*p_0;
+    const double _tmp95 = _tmp34*_tmp94;
+    const double _tmp96 = _tmp30*_tmp31;
+    const double _tmp97 = _tmp20*_tmp84 + _tmp20*_tmp93 + _tmp24*_tmp91 - _tmp23*_tmp85 - _tmp25*_tmp86 - _tmp83*_tmp96 + _tmp16*_tmp35*cos(_tmp17);
+    const double _tmp98 = _tmp14*_tmp97;
+    const double _tmp99 = _tmp33*_tmp34;
+    const double _tmp100 = _tmp14*_tmp37;
+    const double _tmp101 = _tmp59*_tmp76;
+    const double _tmp102 = _tmp41*_tmp79;
+    const double _tmp103 = _tmp14*_tmp94;
+    const double _tmp104 = _tmp34*_tmp97;
+    const double _tmp105 = _tmp14*_tmp33;
+    const double _tmp106 = _tmp95 + _tmp98 + 0.5*_tmp38 - 0.5*_tmp105;
+    const double _tmp107 = sin(_tmp61);
+    const double _tmp108 = 0.25*p_0;
+    const double _tmp109 = cos(_tmp61);
+    const double _tmp110 = 0.4330127018922193*p_0;
+    const double _tmp111 = _tmp60 + _tmp80;
+    const double _tmp112 = 0.015*_tmp0 + 0.026*_tmp1;
+    const double _tmp113 = _tmp111 + _tmp112;
+    const double _tmp114 = _tmp113 + _tmp107*_tmp108 + _tmp109*_tmp110;
+    const double _tmp115 = 9.186691875800356*x_4;
+    const double _tmp116 = 0.5*_tmp100;
+    const double _tmp117 = 0.5*_tmp99;
+    const double _tmp118 = _tmp103 + _tmp116 + _tmp117 - _tmp104;
+    const double _tmp119 = _tmp101 - _tmp102;
+    const double _tmp120 = 0.026*_tmp0;
+    const double _tmp121 = 0.015*_tmp1;
+    const double _tmp122 = _tmp120 - _tmp121;
+    const double _tmp123 = _tmp119 + _tmp122 + _tmp107*_tmp110 - _tmp108*_tmp109;
+    const double _tmp124 = 9.186691875800356*x_3;
+    const double _tmp125 = 4.50333209967908*p_0;
+    const double _tmp126 = _tmp18 + 0.75*theta_1;
+    const double _tmp127 = cos(_tmp126);
+    const double _tmp128 = 0.375*p_0;
+    const double _tmp129 = sin(_tmp126);
+    const double _tmp130 = along_1_1 + symkin_sinr0(_tmp19);
+    const double _tmp131 = _tmp128*_tmp130;
+    const double _tmp132 = -_tmp89 + symkin_cosr1(_tmp19);
+    const double _tmp133 = 5.199999999999999*p_0;
+    const double _tmp134 = _tmp129*_tmp133;
+    const double _tmp135 = _tmp39 + _tmp43 + 0.75*theta_2 + 0.006890018906850267*x_0;
+    const double _tmp136 = sin(_tmp135);
+    const double _tmp137 = _tmp136*_tmp16;
+    const double _tmp138 = cos(_tmp135);
+    const double _tmp139 = along_2_1 + symkin_sinr0(_tmp45);
+    const double _tmp140 = _tmp133*across_2_1;
+    const double _tmp141 = _tmp133*_tmp139;
+    const double _tmp142 = _tmp61 + _tmp64 + 0.75*theta_4 + 0.006890018906850267*x_2;
+    const double _tmp143 = sin(_tmp142);
+    const double _tmp144 = _tmp143*_tmp16;
+    const double _tmp145 = along_4_1 + symkin_sinr0(_tmp66);
+    const double _tmp146 = cos(_tmp142);
+    const double _tmp147 = p_0 <= 0.01;
+    const double _tmp148 = ((_tmp147) ? (4.333333333333334e-12) : (4.761904761904762e-12));
+    const double _tmp149 = 1.0/p_0;
+    const double _tmp150 = _tmp148*_tmp149;
+    const double _tmp151 = 132500.36359327438*_tmp150;
+    const double _tmp152 = _tmp151*x_3;
+    const double _tmp153 = _tmp151*x_4;
+    const double _tmp154 = 600000*_tmp150;
+    const double _tmp155 = -_tmp154*_tmp31;
+    const double _tmp156 = _tmp154*_tmp23;
+    const double _tmp157 = 397501.09077982313*_tmp150;
+    const double _tmp158 = _tmp157*x_3;
+    const double _tmp159 = _tmp157*x_4;
+    const double _tmp160 = -_tmp129*_tmp154;
+    const double _tmp161 = _tmp127*_tmp154;
+    const double _tmp162 = _tmp39 + _tmp48;
+    const double _tmp163 = sin(_tmp162);
+    const double _tmp164 = 530001.4543730975*_tmp150;
+    const double _tmp165 = _tmp163*_tmp164;
+    const double _tmp166 = cos(_tmp162);
+    const double _tmp167 = _tmp154*_tmp166;
+    const double _tmp168 = _tmp154*_tmp163;
+    const double _tmp169 = _tmp136*_tmp164;
+    const double _tmp170 = _tmp138*_tmp154;
+    const double _tmp171 = _tmp136*_tmp154;
+    const double _tmp172 = _tmp61 + _tmp69;
+    const double _tmp173 = _tmp164*sin(_tmp172);
+    const double _tmp174 = cos(_tmp172);
+    const double _tmp175 = _tmp143*_tmp164;
+    const double _tmp176 = pow(p_0, 2);
+    const double _tmp177 = ((_tmp147) ? (230769230769.23077) : (210000000000));
+    const double _tmp178 = 8.333333333333333e-07*_tmp176*_tmp177;
+    const double _tmp179 = _tmp178*omega_1_1;
+    const double _tmp180 = theta_3 + 0.009186691875800356*x_1;
+    const double _tmp181 = cos(_tmp180);
+    const double _tmp182 = -0.015 + _tmp16;
+    const double _tmp183 = sin(_tmp180);
+    const double _tmp184 = _tmp182*_tmp183;
+    const double _tmp185 = _tmp1*_tmp16;
+    const double _tmp186 = -_tmp185;
+    const double _tmp187 = 0.5*theta_3 + 0.004593345937900178*x_1;
+    const double _tmp188 = cos(_tmp187);
+    const double _tmp189 = 0.5*x_8;
+    const double _tmp190 = 0.25*theta_3 + 0.002296672968950089*x_1;
+    const double _tmp191 = _tmp190 - _tmp189;
+    const double _tmp192 = sin(_tmp191);
+    const double _tmp193 = _tmp16*across_3_0;
+    const double _tmp194 = _tmp189 + _tmp190;
+    const double _tmp195 = sin(_tmp194);
+    const double _tmp196 = _tmp16*_tmp195;
+    const double _tmp197 = sin(_tmp189);
+    const double _tmp198 = sin(_tmp190);
+    const double _tmp199 = cos(_tmp191);
+    const double _tmp200 = symkin_arck(_tmp194);
+    const double _tmp201 = along_3_0 + _tmp200*pow(_tmp194, 2);
+    const double _tmp202 = _tmp16*_tmp201;
+    const double _tmp203 = symkin_arck(_tmp191);
+    const double _tmp204 = along_3_1 + _tmp203*pow(_tmp191, 2);
+    const double _tmp205 = cos(_tmp194);
+    const double _tmp206 = _tmp16*_tmp205;
+    const double _tmp207 = _tmp16*(-2*pow(_tmp197, 2) + 2*pow(_tmp198, 2)) + _tmp192*_tmp193 + _tmp199*_tmp202 + _tmp204*_tmp206 - _tmp196*across_3_1;
+    const double _tmp208 = _tmp188*_tmp207;
+    const double _tmp209 = sin(_tmp187);
+    const double _tmp210 = 1.0*x_8;
+    const double _tmp211 = _tmp16*sin(_tmp210) + _tmp193*_tmp199 + _tmp196*_tmp204 + _tmp206*across_3_1 - _tmp192*_tmp202;
+    const double _tmp212 = _tmp209*_tmp211;
+    const double _tmp213 = _tmp208 - _tmp212;
+    const double _tmp214 = 0.8833357572884959*x_3;
+    const double _tmp215 = _tmp0*_tmp16;
+    const double _tmp216 = _tmp100 + _tmp99;
+    const double _tmp217 = _tmp215 + _tmp216;
+    const double _tmp218 = _tmp181*_tmp182;
+    const double _tmp219 = _tmp207*_tmp209;
+    const double _tmp220 = _tmp188*_tmp211;
+    const double _tmp221 = 0.1 + _tmp218 - _tmp219 - _tmp220 - 0.068*_tmp183;
+    const double _tmp222 = 0.8833357572884959*x_4;
+    const double _tmp223 = sin(_tmp4);
+    const double _tmp224 = pow(_tmp7, 2);
+    const double _tmp225 = 0.045*_tmp223 - 0.128*_tmp224;
+    const double _tmp226 = -0.064*_tmp223 - 0.09*_tmp224;
+    const double _tmp227 = _tmp119 + _tmp216;
+    const double _tmp228 = _tmp38 - _tmp105;
+    const double _tmp229 = _tmp111 + _tmp228;
+    const double _tmp230 = 0.0011483364844750445*p_0;
+    const double _tmp231 = _tmp192*_tmp230;
+    const double _tmp232 = _tmp195*_tmp230;
+    const double _tmp233 = _tmp199*_tmp201;
+    const double _tmp234 = 0.002296672968950089*x_8;
+    const double _tmp235 = 0.0011483364844750445*theta_3 + 1.0549413452612033e-05*x_1;
+    const double _tmp236 = (_tmp191*_tmp191*_tmp191)*(-3*symkin_sinr2(_tmp191) + 3*symkin_cosr2(_tmp191) + symkin_sinr1(_tmp191));
+    const double _tmp237 = 0.002296672968950089*_tmp236 + _tmp203*(_tmp235 - _tmp234);
+    const double _tmp238 = (_tmp194*_tmp194*_tmp194)*(-3*symkin_sinr2(_tmp194) + 3*symkin_cosr2(_tmp194) + symkin_sinr1(_tmp194));
+    const double _tmp239 = _tmp16*(0.002296672968950089*_tmp238 + _tmp200*(_tmp234 + _tmp235));
+    const double _tmp240 = -_tmp192*_tmp239 - _tmp230*_tmp233 - _tmp231*across_3_0 - _tmp232*across_3_1 + 0.5*_tmp195*_tmp237*p_0 + 0.0011483364844750445*_tmp204*_tmp205*p_0;
+    const double _tmp241 = _tmp199*across_3_0;
+    const double _tmp242 = 0.004593345937900178*p_0;
+    const double _tmp243 = _tmp199*_tmp239 + _tmp206*_tmp237 + _tmp230*_tmp241 - _tmp201*_tmp231 - _tmp204*_tmp232 + _tmp198*_tmp242*cos(_tmp190) - _tmp205*_tmp230*across_3_1;
+    const double _tmp244 = 0.44166787864424795*p_0;
+    const double _tmp245 = _tmp108*across_1_1;
+    const double _tmp246 = _tmp108*_tmp20;
+    const double _tmp247 = -0.5*_tmp90 - _tmp19*_tmp29;
+    const double _tmp248 = 0.5*_tmp92 + _tmp22*_tmp26;
+    const double _tmp249 = _tmp16*cos(_tmp15) + _tmp246*_tmp27 + _tmp247*_tmp32 - _tmp245*_tmp31 + _tmp108*_tmp23*_tmp30 + _tmp108*_tmp25*across_1_0 - _tmp16*_tmp248*_tmp25;
+    const double _tmp250 = 1.0*p_0;
+    const double _tmp251 = -_tmp108*_tmp96 - _tmp23*_tmp245 - _tmp246*across_1_0 - _tmp250*_tmp36*cos(_tmp18) + 0.25*_tmp25*_tmp27*p_0 + 0.5*_tmp20*_tmp248*p_0 + 0.5*_tmp23*_tmp247*p_0;
+    const double _tmp252 = _tmp14*_tmp251 + _tmp249*_tmp34;
+    const double _tmp253 = _tmp14*_tmp249 - _tmp251*_tmp34;
+    const double _tmp254 = _tmp108*_tmp195;
+    const double _tmp255 = _tmp108*_tmp205;
+    const double _tmp256 = -0.5*_tmp236 - _tmp191*_tmp203;
+    const double _tmp257 = 0.5*_tmp238 + _tmp194*_tmp200;
+    const double _tmp258 = _tmp108*_tmp233 + _tmp16*cos(_tmp210) + _tmp196*_tmp256 + _tmp204*_tmp255 - _tmp254*across_3_1 + _tmp108*_tmp192*across_3_0 - _tmp16*_tmp192*_tmp257;
+    const double _tmp259 = -_tmp108*_tmp241 - _tmp204*_tmp254 - _tmp255*across_3_1 - _tmp197*_tmp250*cos(_tmp189) + 0.25*_tmp192*_tmp201*p_0 + 0.5*_tmp199*_tmp257*p_0 + 0.5*_tmp205*_tmp256*p_0;
+    const double _tmp260 = 0.00041340113441101604*_tmp5 - 0.0011758965601024456*_tmp8;
+    const double _tmp261 = -0.0008268022688220321*_tmp8 - 0.0005879482800512228*_tmp5;
+    const double _tmp262 = _tmp230*across_2_0;
+    const double _tmp263 = _tmp230*_tmp57;
+    const double _tmp264 = _tmp230*_tmp53;
+    const double _tmp265 = 0.002296672968950089*x_7;
+    const double _tmp266 = 0.0011483364844750445*theta_2 + 1.0549413452612033e-05*x_0;
+    const double _tmp267 = (_tmp45*_tmp45*_tmp45)*(-3*symkin_sinr2(_tmp45) + 3*symkin_cosr2(_tmp45) + symkin_sinr1(_tmp45));
+    const double _tmp268 = 0.002296672968950089*_tmp267 + _tmp55*(_tmp266 - _tmp265);
+    const double _tmp269 = (_tmp48*_tmp48*_tmp48)*(-3*symkin_sinr2(_tmp48) + 3*symkin_cosr2(_tmp48) + symkin_sinr1(_tmp48));
+    const double _tmp270 = _tmp16*(0.002296672968950089*_tmp269 + _tmp52*(_tmp265 + _tmp266));
+    const double _tmp271 = -_tmp262*_tmp51 - _tmp263*across_2_1 - _tmp264*_tmp46 - _tmp270*_tmp51 + 0.5*_tmp268*_tmp57*p_0 + 0.0011483364844750445*_tmp49*_tmp56*p_0;
+    const double _tmp272 = _tmp262*_tmp46 + _tmp268*_tmp50 + _tmp270*_tmp46 - _tmp263*_tmp56 - _tmp264*_tmp51 + _tmp242*_tmp78*cos(_tmp44) - _tmp230*_tmp49*across_2_1;
+    const double _tmp273 = _tmp108*_tmp57;
+    const double _tmp274 = _tmp108*_tmp46;
+    const double _tmp275 = _tmp108*_tmp49;
+    const double _tmp276 = -0.5*_tmp267 - _tmp45*_tmp55;
+    const double _tmp277 = 0.5*_tmp269 + _tmp48*_tmp52;
+    const double _tmp278 = _tmp16*cos(_tmp42) + _tmp274*_tmp53 + _tmp275*_tmp56 + _tmp276*_tmp58 - _tmp273*across_2_1 + _tmp108*_tmp51*across_2_0 - _tmp16*_tmp277*_tmp51;
+    const double _tmp279 = -_tmp273*_tmp56 - _tmp274*across_2_0 - _tmp275*across_2_1 - _tmp250*_tmp77*cos(_tmp43) + 0.25*_tmp51*_tmp53*p_0 + 0.5*_tmp276*_tmp49*p_0 + 0.5*_tmp277*_tmp46*p_0;
+    const double _tmp280 = _tmp102 + _tmp121 - _tmp101 - _tmp120;
+    const double _tmp281 = 0.045*_tmp5 - 0.128*_tmp8;
+    const double _tmp282 = -0.064*_tmp5 - 0.09*_tmp8;
+    const double _tmp283 = _tmp16*_tmp25;
+    const double _tmp284 = _tmp16*_tmp20;
+    const double _tmp285 = _tmp14*_tmp283 + _tmp284*_tmp34;
+    const double _tmp286 = -_tmp285;
+    const double _tmp287 = _tmp14*_tmp284 - _tmp283*_tmp34;
+    const double _tmp288 = _tmp14*_tmp32 - _tmp24*_tmp34;
+    const double _tmp289 = _tmp14*_tmp24 + _tmp32*_tmp34;
+    const double _tmp290 = -_tmp288;
+    const double _tmp291 = _tmp16*_tmp209;
+    const double _tmp292 = _tmp192*_tmp291 + _tmp16*_tmp188*_tmp199;
+    const double _tmp293 = -_tmp199*_tmp291 + 0.5*_tmp188*_tmp192*p_0;
+    const double _tmp294 = _tmp196*_tmp209 - 0.5*_tmp188*_tmp205*p_0;
+    const double _tmp295 = -_tmp188*_tmp196 - _tmp206*_tmp209;
+    const double _tmp296 = -_tmp287;
+    const double _tmp297 = -_tmp289;
+    const double _tmp298 = _tmp16*_tmp76;
+    const double _tmp299 = _tmp16*_tmp41;
+    const double _tmp300 = _tmp298*_tmp51 + _tmp299*_tmp46;
+    const double _tmp301 = _tmp299*_tmp51 - _tmp298*_tmp46;
+    const double _tmp302 = -_tmp58*_tmp76 + 0.5*_tmp41*_tmp49*p_0;
+    const double _tmp303 = _tmp41*_tmp58 + _tmp50*_tmp76;
+    const double _tmp304 = 2400000*_tmp148/_tmp176;
+    const double _tmp305 = 2120005.81749239*_tmp150;
+    const double _tmp306 = _tmp305*x_4;
+    const double _tmp307 = _tmp305*x_3;
+    const double _tmp308 = 0.0008333333333333334*_tmp148*_tmp177;
+    const double _tmp309 = 1.2380952380952381e-14*_tmp177;
+    const double _tmp310 = 0.1*((_tmp147) ? (480384.4614152614) : (458257.569495584))*((_tmp147) ? (2.0816659994661327e-06) : (2.1821789023599237e-06));
+    const double _tmp311 = 0.015 - _tmp108;
+    const double _tmp312 = 0.026 - _tmp110;
+    const double _tmp313 = cos(_tmp39);
+    const double _tmp314 = sin(_tmp39);
+    const double _tmp315 = 0.07 - _tmp16;
+    out[0] = 1;
+    out[1] = 0;
+    out[2] = 0;
+    out[3] = 0;
+    out[4] = -26.0*_tmp1 - 15.0*_tmp0 - 500.0*_tmp38 - 1000.0*_tmp60 - 1000.0*_tmp80 - 1000.0*_tmp95 - 1000.0*_tmp98 - _tmp10*_tmp12 - _tmp63*_tmp75 - _tmp81*_tmp82 + 500.0*_tmp14*_tmp33 + 1000.0*_tmp3*_tmp9;
+    out[5] = 0;
+    out[6] = 0;
+    out[7] = 0;
+    out[8] = 15.0*_tmp1 + 1000.0*_tmp102 + 1000.0*_tmp104 - 26.0*_tmp0 - 500.0*_tmp100 - 500.0*_tmp99 - 1000.0*_tmp101 - 1000.0*_tmp103 + _tmp12*_tmp9 + _tmp63*_tmp82 - _tmp75*_tmp81 + 1000.0*_tmp10*_tmp3;
+    out[9] = 0;
+    out[10] = 0;
+    out[11] = 0;
+    out[12] = _tmp124*(_tmp118 + _tmp123) - _tmp115*(_tmp106 + _tmp114);
+    out[13] = 0.6656*_tmp109 + 0.4679999999999999*_tmp107 - _tmp109*_tmp125 - 2.5999999999999996*_tmp107*p_0;
+    out[14] = 0.6656*_tmp107 - 0.4679999999999999*_tmp109 - _tmp107*_tmp125 + 2.5999999999999996*_tmp109*p_0;
+    out[15] = -10.399999999999999;
+    out[16] = 0;
+    out[17] = 0;
+    out[18] = 0;
+    out[19] = 0;
+    out[20] = 0;
+    out[21] = 0;
+    out[22] = 0;
+    out[23] = 0;
+    out[24] = _tmp124*(-_tmp129*_tmp131 - _tmp127*_tmp128*across_1_1 + 0.125*_tmp127*_tmp132*_tmp19*p_0) - _tmp115*(-_tmp127*_tmp131 + 0.375*_tmp129*across_1_1*p_0 - _tmp129*_tmp132*_tmp19*_tmp83);
+    out[25] = -_tmp134*across_1_1 + 5.199999999999999*_tmp127*_tmp130*p_0;
+    out[26] = _tmp130*_tmp134 + _tmp127*_tmp133*across_1_1;
+    out[27] = 0;
+    out[28] = _tmp124*(-_tmp137*across_2_1 + 0.5*_tmp138*_tmp139*p_0) - _tmp115*(-_tmp137*_tmp139 - _tmp138*_tmp16*across_2_1);
+    out[29] = _tmp136*_tmp141 + _tmp138*_tmp140;
+    out[30] = _tmp136*_tmp140 - _tmp138*_tmp141;
+    out[31] = 0;
+    out[32] = 0;
+    out[33] = 0;
+    out[34] = 0;
+    out[35] = 0;
+    out[36] = _tmp124*(-_tmp144*across_4_1 + 0.5*_tmp145*_tmp146*p_0) - _tmp115*(-_tmp144*_tmp145 - _tmp146*_tmp16*across_4_1);
+    out[37] = 0;
+    out[38] = 0;
+    out[39] = 0;
+    out[40] = 0.5;
+    out[41] = 0;
+    out[42] = 0;
+    out[43] = 0;
+    out[44] = -_tmp152*_tmp23 - _tmp153*_tmp31;
+    out[45] = _tmp155;
+    out[46] = _tmp156;
+    out[47] = 0;
+    out[48] = _tmp152*_tmp31 - _tmp153*_tmp23;
+    out[49] = -_tmp156;
+    out[50] = _tmp155;
+    out[51] = 0;
+    out[52] = 0.5;
+    out[53] = 0;
+    out[54] = 0;
+    out[55] = 0;
+    out[56] = -_tmp127*_tmp158 - _tmp129*_tmp159;
+    out[57] = _tmp160;
+    out[58] = _tmp161;
+    out[59] = 0;
+    out[60] = _tmp129*_tmp158 - _tmp127*_tmp159;
+    out[61] = -_tmp161;
+    out[62] = _tmp160;
+    out[63] = 0;
+    out[64] = 0;
+    out[65] = 0;
+    out[66] = 0;
+    out[67] = 0;
+    out[68] = -_tmp165*x_3 + 530001.4543730975*_tmp148*_tmp149*_tmp166*x_4;
+    out[69] = _tmp167;
+    out[70] = _tmp168;
+    out[71] = 0;
+    out[72] = -_tmp165*x_4 - _tmp164*_tmp166*x_3;
+    out[73] = -_tmp168;
+    out[74] = _tmp167;
+    out[75] = 0;
+    out[76] = 0;
+    out[77] = 0;
+    out[78] = 0;
+    out[79] = 0;
+    out[80] = -_tmp169*x_3 + 530001.4543730975*_tmp138*_tmp148*_tmp149*x_4;
+    out[81] = _tmp170;
+    out[82] = _tmp171;
+    out[83] = 0;
+    out[84] = -_tmp169*x_4 - _tmp138*_tmp164*x_3;
+    out[85] = -_tmp171;
+    out[86] = _tmp170;
+    out[87] = 0;
+    out[88] = 0;
+    out[89] = 0;
+    out[90] = 0;
+    out[91] = 0;
+    out[92] = 0;
+    out[93] = 0;
+    out[94] = 0;
+    out[95] = 0;
+    out[96] = 0;
+    out[97] = 0;
+    out[98] = 0;
+    out[99] = 0;
+    out[100] = 0;
+    out[101] = 0;
+    out[102] = 0;
+    out[103] = 0;
+    out[104] = 0;
+    out[105] = 0;
+    out[106] = 0;
+    out[107] = 0;
+    out[108] = 0;
+    out[109] = 0;
+    out[110] = 0;
+    out[111] = 0;
+    out[112] = 0;
+    out[113] = 0;
+    out[114] = 0;
+    out[115] = 0;
+    out[116] = -_tmp173*x_3 + 530001.4543730975*_tmp148*_tmp149*_tmp174*x_4;
+    out[117] = 0;
+    out[118] = 0;
+    out[119] = 0;
+    out[120] = -_tmp173*x_4 - _tmp164*_tmp174*x_3;
+    out[121] = 0;
+    out[122] = 0;
+    out[123] = 0;
+    out[124] = 0;
+    out[125] = 0;
+    out[126] = 0;
+    out[127] = 0;
+    out[128] = -_tmp175*x_3 + 530001.4543730975*_tmp146*_tmp148*_tmp149*x_4;
+    out[129] = 0;
+    out[130] = 0;
+    out[131] = 0;
+    out[132] = -_tmp175*x_4 - _tmp146*_tmp164*x_3;
+    out[133] = 0;
+    out[134] = 0;
+    out[135] = 0;
+    out[136] = _tmp179 - 0.09615384615384616*x_5 + _tmp214*(_tmp105 + _tmp184 + _tmp186 + _tmp213 - _tmp38 + 0.068*_tmp181) - _tmp222*(_tmp217 + _tmp221);
+    out[137] = -_tmp227 + _tmp226*_tmp3 - _tmp11*_tmp225;
+    out[138] = _tmp229 + _tmp11*_tmp226 + _tmp225*_tmp3;
+    out[139] = _tmp4;
+    out[140] = 0;
+    out[141] = _tmp214*(-0.004593345937900178*_tmp219 - 0.004593345937900178*_tmp220 - 0.0006246950475544242*_tmp183 + _tmp188*_tmp243 - _tmp209*_tmp240 + 0.009186691875800356*_tmp181*_tmp182) - _tmp222*(-0.004593345937900178*_tmp208 - 0.009186691875800356*_tmp184 - 0.0006246950475544242*_tmp181 - _tmp188*_tmp240 - _tmp209*_tmp243 + 0.004593345937900178*_tmp209*_tmp211);
+    out[142] = 0;
+    out[143] = 0.8833357572884959*_tmp105 + 0.8833357572884959*_tmp184 + 0.8833357572884959*_tmp208 + 0.06006683149561772*_tmp181 - 0.8833357572884959*_tmp212 - 0.8833357572884959*_tmp38 - _tmp1*_tmp244;
+    out[144] = -0.08833357572884959 + 0.06006683149561772*_tmp183 - 0.8833357572884959*_tmp100 - 0.8833357572884959*_tmp218 - 0.8833357572884959*_tmp99 - _tmp0*_tmp244 + 0.8833357572884959*_tmp188*_tmp211 + 0.8833357572884959*_tmp207*_tmp209;
+    out[145] = -0.09615384615384616;
+    out[146] = _tmp214*_tmp253 - _tmp222*_tmp252;
+    out[147] = 0;
+    out[148] = _tmp214*(_tmp188*_tmp259 - _tmp209*_tmp258) - _tmp222*(-_tmp188*_tmp258 - _tmp209*_tmp259);
+    out[149] = 0;
+    out[150] = -0.004593345937900178*_tmp60 - 0.004593345937900178*_tmp80 + _tmp261*_tmp3 + _tmp272*_tmp41 - _tmp11*_tmp260 - _tmp271*_tmp76;
+    out[151] = 0;
+    out[152] = 0;
+    out[153] = 0;
+    out[154] = 0;
+    out[155] = 0;
+    out[156] = -_tmp252;
+    out[157] = _tmp279*_tmp41 - _tmp278*_tmp76;
+    out[158] = 0;
+    out[159] = 0;
+    out[160] = 0.004593345937900178*_tmp102 - 0.004593345937900178*_tmp101 + _tmp11*_tmp261 + _tmp260*_tmp3 + _tmp271*_tmp41 + _tmp272*_tmp76;
+    out[161] = 0;
+    out[162] = 0;
+    out[163] = 0;
+    out[164] = 0;
+    out[165] = 0;
+    out[166] = -_tmp253;
+    out[167] = _tmp278*_tmp41 + _tmp279*_tmp76;
+    out[168] = 0;
+    out[169] = 0;
+    out[170] = 0.009186691875800356;
+    out[171] = 0;
+    out[172] = 0;
+    out[173] = 0;
+    out[174] = 0;
+    out[175] = 0;
+    out[176] = 0;
+    out[177] = 0;
+    out[178] = 0;
+    out[179] = 0;
+    out[180] = _tmp214*(_tmp118 + _tmp215) - _tmp222*(_tmp106 + _tmp185);
+    out[181] = _tmp113 + _tmp186 + 0.064*_tmp109 + 0.045*_tmp107;
+    out[182] = -_tmp215 - _tmp280 + 0.064*_tmp107 - 0.045*_tmp109;
+    out[183] = -1;
+    out[184] = -_tmp106 - _tmp113 + _tmp282*_tmp3 - _tmp11*_tmp281;
+    out[185] = 0;
+    out[186] = 0;
+    out[187] = 0;
+    out[188] = _tmp104 + _tmp280 - _tmp103 - _tmp116 - _tmp117 + _tmp11*_tmp282 + _tmp281*_tmp3;
+    out[189] = 0;
+    out[190] = 0;
+    out[191] = 0;
+    out[192] = 1;
+    out[193] = 0;
+    out[194] = 0;
+    out[195] = 0;
+    out[196] = _tmp214*_tmp286 - _tmp222*_tmp287;
+    out[197] = _tmp214*_tmp287 - _tmp222*_tmp285;
+    out[198] = 0;
+    out[199] = _tmp214*_tmp288 - _tmp222*_tmp289;
+    out[200] = _tmp214*_tmp289 - _tmp222*_tmp290;
+    out[201] = _tmp178;
+    out[202] = 0;
+    out[203] = 0;
+    out[204] = 0;
+    out[205] = 0;
+    out[206] = 0;
+    out[207] = 0;
+    out[208] = _tmp214*_tmp292 - _tmp222*_tmp293;
+    out[209] = _tmp214*_tmp293 + _tmp222*_tmp292;
+    out[210] = 0;
+    out[211] = -_tmp214*_tmp294 - _tmp222*_tmp295;
+    out[212] = _tmp214*_tmp295 - _tmp222*_tmp294;
+    out[213] = 0;
+    out[214] = 0;
+    out[215] = 0;
+    out[216] = 0;
+    out[217] = 0;
+    out[218] = 0;
+    out[219] = 0;
+    out[220] = _tmp296;
+    out[221] = _tmp286;
+    out[222] = 0;
+    out[223] = _tmp297;
+    out[224] = _tmp288;
+    out[225] = 0;
+    out[226] = _tmp300;
+    out[227] = _tmp301;
+    out[228] = 0;
+    out[229] = _tmp302;
+    out[230] = -_tmp303;
+    out[231] = 0;
+    out[232] = 0;
+    out[233] = 0;
+    out[234] = 0;
+    out[235] = 0;
+    out[236] = 0;
+    out[237] = 0;
+    out[238] = 0;
+    out[239] = 0;
+    out[240] = 0;
+    out[241] = 0;
+    out[242] = 0;
+    out[243] = 0;
+    out[244] = _tmp285;
+    out[245] = _tmp296;
+    out[246] = 0;
+    out[247] = _tmp290;
+    out[248] = _tmp297;
+    out[249] = 0;
+    out[250] = -_tmp301;
+    out[251] = _tmp300;
+    out[252] = 0;
+    out[253] = _tmp303;
+    out[254] = _tmp302;
+    out[255] = 0;
+    out[256] = 0;
+    out[257] = 0;
+    out[258] = 0;
+    out[259] = 0;
+    out[260] = 0;
+    out[261] = 0;
+    out[262] = 0;
+    out[263] = 0;
+    out[264] = 0;
+    out[265] = 0;
+    out[266] = 0;
+    out[267] = 0;
+    out[268] = 0;
+    out[269] = 0;
+    out[270] = 0;
+    out[271] = 0;
+    out[272] = 0;
+    out[273] = 0;
+    out[274] = 0;
+    out[275] = 0;
+    out[276] = 0;
+    out[277] = 0;
+    out[278] = 0;
+    out[279] = 0;
+    out[280] = 0;
+    out[281] = 0;
+    out[282] = 0;
+    out[283] = 0;
+    out[284] = 0;
+    out[285] = 0;
+    out[286] = 0;
+    out[287] = 0;
+    out[288] = 0;
+    out[289] = 0;
+    out[290] = 0;
+    out[291] = 0;
+    out[292] = _tmp304*(_tmp179 - _tmp214*(_tmp16 + _tmp185 + _tmp228) - _tmp217*_tmp222);
+    out[293] = _tmp306;
+    out[294] = -_tmp307;
+    out[295] = _tmp308;
+    out[296] = _tmp309;
+    out[297] = _tmp310;
+    out[298] = _tmp177;
+    out[299] = 0;
+    out[300] = _tmp304*(_tmp178*omega_2_1 + _tmp222*(-_tmp123 + _tmp0*_tmp312 - _tmp1*_tmp311) - _tmp214*(_tmp114 - _tmp0*_tmp311 - _tmp1*_tmp312));
+    out[301] = _tmp306*_tmp314 + _tmp307*_tmp313;
+    out[302] = -_tmp307*_tmp314 + 2120005.81749239*_tmp148*_tmp149*_tmp313*x_4;
+    out[303] = _tmp308;
+    out[304] = _tmp309;
+    out[305] = _tmp310;
+    out[306] = _tmp177;
+    out[307] = 0;
+    out[308] = _tmp304*(_tmp178*omega_3_1 + _tmp214*(_tmp16 + _tmp213 + _tmp16*_tmp181) - _tmp222*(-_tmp219 - _tmp220 - _tmp16*_tmp183));
+    out[309] = -_tmp306;
+    out[310] = _tmp307;
+    out[311] = _tmp308;
+    out[312] = _tmp309;
+    out[313] = _tmp310;
+    out[314] = _tmp177;
+    out[315] = 0;
+    out[316] = _tmp304*(_tmp178*omega_4_1 + _tmp222*(_tmp122 + _tmp221 + _tmp227 + 0.042*_tmp107 - _tmp109*_tmp315) - _tmp214*(-_tmp112 - _tmp212 - _tmp229 + 0.068*_tmp181 - 0.042*_tmp109 + _tmp182*_tmp183 + _tmp188*_tmp207 - _tmp107*_tmp315));
+    out[317] = _tmp107*_tmp306 + _tmp109*_tmp307;
+    out[318] = -_tmp107*_tmp307 + 2120005.81749239*_tmp109*_tmp148*_tmp149*x_4;
+    out[319] = _tmp308;
+    out[320] = _tmp309;
+    out[321] = _tmp310;
+    out[322] = _tmp177;
+    out[323] = 0;
 }
 
 /* deviation of the points at level paper (38 operations) */
@@ -6071,6 +7117,41 @@ static void sk_loaded_deviation(const double *theta, const double *delta, const 
         out[i] = q[SK_NPAR + i];
     }
 }
+
+/* The solution q holds (the parameters, the deviation, the variant solved and its x,
+   sk_reduced_pose) evaluated again for the implicit-function theorem (templates/c/
+   reduced_sens.c, reduced_report.c): r its variant at the parameters, st J's LU, the plates'
+   inputs and relation and the system's output there, vals the relation's values per half plate.
+   Returns 0, or 1 where J is singular. */
+static int sk_red_at_solution(const sk_mechanism *m, const double *theta, const double *q,
+                              sk_red *r, sk_red_state *st, double *vals)
+{
+    const sk_loaded *l = (const sk_loaded *)m->loaded;
+    const double *x = q + SK_NPAR + 2 * SK_NP + 1;
+    int n, i, k, c;
+    r->m = m;
+    r->l = l;
+    r->v = l->variants + (int)q[SK_NPAR + 2 * SK_NP];
+    r->params = q;
+    n = r->v->size;
+    if (n > 0 && sk_red_eval(r, x, theta, 1.0, st)) {
+        return 1;
+    }
+    if (n == 0) {
+        double rel[12 * SK_RS];
+        sk_red_inputs(r, x, theta, 1.0, st->xt, st->ins);
+        sk_red_relation(r, st->ins, rel, vals);
+        for (i = 0; i < 12 * r->v->plates_n; ++i) {
+            st->rel[i] = rel[i];
+        }
+    }
+    for (k = 0; k < r->v->plates_n; ++k) {
+        for (c = 0; c < 3; ++c) {
+            vals[3 * k + c] = st->rel[12 * k + c];
+        }
+    }
+    return 0;
+}
 static const double sk_loaded_scale1[7] = {0.009186691875800356, 0.009186691875800356, 0.009186691875800356, 0.8833357572884959, 0.8833357572884959, 0.09615384615384616};
 static const double sk_loaded_scale2[11] = {0.009186691875800356, 0.009186691875800356, 0.009186691875800356, 0.8833357572884959, 0.8833357572884959, 0.09615384615384616, 1.0, 1.0, 1.0, 1.0};
 /* the loaded level: per variant (one, two half plates per plate) its routines, size, half
@@ -6105,38 +7186,19 @@ static int sk_reduced_rates(const void *mechanism, const double *theta, const do
                             const double *thu, double *dev)
 {
     const sk_mechanism *m = (const sk_mechanism *)mechanism;
-    const sk_loaded *l = (const sk_loaded *)m->loaded;
     const int v = (int)q[SK_NPAR + 2 * SK_NP];
     const sk_red_sens *rs = ((const sk_loaded_sens *)m->loaded_sens)->variants + v;
-    const double *x = q + SK_NPAR + 2 * SK_NP + 1;
     double s[SK_OUT], vals[3 * SK_RS], eps[6];
     double dth[SK_M * SK_NV + 1], din[5 * SK_RS * SK_NV + 1], dout[3 * SK_RS * SK_NV + 1];
     double dx[SK_RN * SK_NV + 1], col[SK_RN + 1], part[3 * SK_RS * 5 + 1];
     sk_red_state st;
     sk_red r;
     int n, ns, i, j, k, c, e;
-    r.m = m;
-    r.l = l;
-    r.v = l->variants + v;
-    r.params = q;
-    n = r.v->size;
-    ns = r.v->plates_n;
-    if (n > 0 && sk_red_eval(&r, x, theta, 1.0, &st)) {
+    if (sk_red_at_solution(m, theta, q, &r, &st, vals)) {
         return 1;
     }
-    if (n == 0) {
-        double rel[12 * SK_RS];
-        sk_red_inputs(&r, x, theta, 1.0, st.xt, st.ins);
-        sk_red_relation(&r, st.ins, rel, vals);
-        for (i = 0; i < 12 * ns; ++i) {
-            st.rel[i] = rel[i];
-        }
-    }
-    for (k = 0; k < ns; ++k) {
-        for (c = 0; c < 3; ++c) {
-            vals[3 * k + c] = st.rel[12 * k + c];
-        }
-    }
+    n = r.v->size;
+    ns = r.v->plates_n;
     rs->fn(st.xt, theta, vals, q, s);
     /* dtheta/dv of every hinge: the non-input ones' from the rigid closure, an input's own 1 */
     for (i = 0; i < SK_M * SK_NV; ++i) {
@@ -6237,6 +7299,266 @@ static int sk_reduced_rates(const void *mechanism, const double *theta, const do
 /* the loaded level's sensitivity routines, per variant, and where their blocks start */
 static const sk_loaded_sens sk_loaded_sens_tables = {
     {{sk_loaded_sens1, 0, 24, 30, 110, 130, 142, 150, 152}, {sk_loaded_sens2, 0, 40, 50, 210, 250, 270, 278, 280}}
+};
+
+/* One variant's report routine (x, theta, plates, params) and where its blocks start, with q
+   the report's variables (the inputs' compliant angles, a virtual load (Fx, Fy, M) at every
+   point) and k its quantities (the inputs' moments, every point's dx, dy, dphi; as many):
+   dR/dv (n x q), din/dv (3 n_s x q), y (k), dy/dx (k x n), dy/dv (k x q), dy/dout (k x 3 n_s),
+   then per plate (k0, lx, ly, e_a, e_s, t/l, E', allowable stress). */
+typedef struct {
+    sk_fn4 fn;
+    int dR_dv, din_dv, y, dy_dx, dy_dv, dy_dout, stress;
+} sk_red_rep;
+
+/* What the report is of: per variant its routine; the inputs, points (on the frame or not),
+   plates (with an allowable stress or not); metres per file unit; the scales L, F C's
+   conditioning is judged by. */
+typedef struct {
+    sk_red_rep variants[2];
+    int n_inputs, n_points, n_plates;
+    const int *frame, *limits;
+    double unit_scale, L, F;
+} sk_loaded_report;
+
+/* Sections per plate where the stress is sampled (symkin.physics.reported.SECTIONS), one RK4
+   step each; a point's compliance this ill-conditioned (1-norm, scaled) is singular. */
+#define SK_REP_SECTIONS 64
+#define SK_REP_SINGULAR 1e12
+
+/* psi'' of the plate's IVP (symkin.physics.beams): -f_Q (1 + (e_a - e_s) f_N). */
+static double sk_rep_bend(double psi, double lx, double ly, double d)
+{
+    const double c = cos(psi), s = sin(psi);
+    return -(ly * c - lx * s) * (1.0 + d * (lx * c + ly * s));
+}
+
+/* One plate's largest normal stress, its strain, safety factor (NaN without an allowable
+   stress) and where along the plate (0..1) into out[0..3], from row = (k0, lx, ly, e_a, e_s,
+   t/l, E', allowable): psi(0) = 0, psi'(0) = k0 by fixed-step RK4, the strain
+   |psi'| t/(2l) + |f_N| (t/l)^2/12 at every section, the parabola's vertex through the three
+   samples around an interior maximum (symkin.physics.reported.plate_stress). */
+static void sk_rep_plate(const double *row, int has_limit, double *out)
+{
+    const double lx = row[1], ly = row[2], d = row[3] - row[4], t = row[5];
+    const double h = 1.0 / SK_REP_SECTIONS;
+    double strain[SK_REP_SECTIONS + 1], psi = 0.0, om = row[0], value, where, stress;
+    int i, j = 0;
+    for (i = 0; i <= SK_REP_SECTIONS; ++i) {
+        strain[i] = fabs(om) * t / 2.0 + fabs(lx * cos(psi) + ly * sin(psi)) * t * t / 12.0;
+        if (strain[i] > strain[j]) {
+            j = i;                  /* the first largest, as numpy's argmax */
+        }
+        if (i < SK_REP_SECTIONS) {
+            const double a1 = om, b1 = sk_rep_bend(psi, lx, ly, d);
+            const double a2 = om + h / 2 * b1, b2 = sk_rep_bend(psi + h / 2 * a1, lx, ly, d);
+            const double a3 = om + h / 2 * b2, b3 = sk_rep_bend(psi + h / 2 * a2, lx, ly, d);
+            const double a4 = om + h * b3, b4 = sk_rep_bend(psi + h * a3, lx, ly, d);
+            psi += h / 6 * (a1 + 2 * a2 + 2 * a3 + a4);
+            om += h / 6 * (b1 + 2 * b2 + 2 * b3 + b4);
+        }
+    }
+    value = strain[j];
+    where = (double)j / SK_REP_SECTIONS;
+    if (j > 0 && j < SK_REP_SECTIONS) {
+        const double a = strain[j - 1], b = strain[j], c = strain[j + 1];
+        const double bend = a - 2 * b + c;
+        if (bend < 0) {
+            const double shift = (a - c) / (2 * bend);
+            value = b - (a - c) * shift / 4;
+            where = (j + shift) / SK_REP_SECTIONS;
+        }
+    }
+    stress = row[6] * value;
+    out[0] = stress;
+    out[1] = value;
+    out[2] = !has_limit ? NAN : stress > 0 ? row[7] / stress : HUGE_VAL;
+    out[3] = where;
+}
+
+/* The 1-norm of a 3 x 3 matrix. */
+static double sk_rep_norm1(const double *a)
+{
+    double best = 0.0;
+    int c;
+    for (c = 0; c < 3; ++c) {
+        const double s = fabs(a[c]) + fabs(a[3 + c]) + fabs(a[6 + c]);
+        best = s > best ? s : best;
+    }
+    return best;
+}
+
+/* K = C^-1 of a point's compliance C (3 x 3) into k, NaN where C is singular: its 1-norm
+   condition, scaled by L and F as reduced_reported.report scales it (there the 2-norm's),
+   above SK_REP_SINGULAR or not finite. */
+static void sk_rep_stiffness(const sk_loaded_report *rp, const double *c, double *k)
+{
+    const double w[3] = {rp->F / rp->L, rp->F / rp->L, rp->F}, u[3] = {1.0, 1.0, 1.0 / rp->L};
+    double lu[9], scaled[9], inv[9], col[3];
+    int piv[3], i, j;
+    for (i = 0; i < 9; ++i) {
+        lu[i] = c[i];
+        scaled[i] = c[i] * w[i / 3] * u[i % 3];
+        k[i] = NAN;
+    }
+    if (sk_lu(3, lu, piv)) {
+        return;
+    }
+    for (j = 0; j < 3; ++j) {
+        col[0] = col[1] = col[2] = 0.0;
+        col[j] = 1.0;
+        sk_lu_solve(3, lu, piv, col);
+        for (i = 0; i < 3; ++i) {
+            inv[3 * i + j] = col[i];
+        }
+    }
+    {
+        /* the scaled compliance's inverse: inv with rows over u, columns over w */
+        double sinv[9];
+        for (i = 0; i < 9; ++i) {
+            sinv[i] = inv[i] / (u[i / 3] * w[i % 3]);
+        }
+        if (!(sk_rep_norm1(scaled) * sk_rep_norm1(sinv) <= SK_REP_SINGULAR)) {
+            return;
+        }
+    }
+    for (i = 0; i < 9; ++i) {
+        k[i] = inv[i];
+    }
+}
+
+/* What the loaded level reports at its solution (q: the parameters, the deviation, the variant
+   solved and its x, sk_reduced_pose) into out: per input its moment (N m) and dM/dtheta
+   (N m/rad), per point its stiffness K (9, row-major; NaN on the frame or where singular), per
+   plate its stress (Pa), strain, safety factor and section. Returns 0, or 1 where J is
+   singular. */
+static int sk_reduced_report(const sk_mechanism *m, const sk_loaded_report *rp,
+                             const double *theta, const double *q, double *out)
+{
+    const sk_red_rep *rr = rp->variants + (int)q[SK_NPAR + 2 * SK_NP];
+    const int nin = rp->n_inputs, nq = nin + 3 * rp->n_points;
+    double s[SK_OUT], vals[3 * SK_RS], dout[3 * SK_RS], col[SK_RN + 1];
+    double rates[SK_RQ * SK_RQ];
+    sk_red_state st;
+    sk_red r;
+    int n, ns, i, j, k, c, e;
+    if (sk_red_at_solution(m, theta, q, &r, &st, vals)) {
+        return 1;
+    }
+    n = r.v->size;
+    ns = r.v->plates_n;
+    rr->fn(st.xt, theta, vals, q, s);
+    for (c = 0; c < nq; ++c) {
+        /* dout/dv at fixed x: the relation's partials . din/dv */
+        for (k = 0; k < ns; ++k) {
+            for (i = 0; i < 3; ++i) {
+                double sum = 0.0;
+                for (e = 0; e < 3; ++e) {
+                    sum += st.rel[12 * k + 3 + 3 * i + e] * s[rr->din_dv + (3 * k + e) * nq + c];
+                }
+                dout[3 * k + i] = sum;
+            }
+        }
+        /* dx/dv = -J^-1 (dR/dv + dR/dout dout/dv) with J's LU */
+        for (i = 0; i < n; ++i) {
+            const double *jo = st.sys + n + n * n + i * 3 * ns;
+            double sum = s[rr->dR_dv + i * nq + c];
+            for (e = 0; e < 3 * ns; ++e) {
+                sum += jo[e] * dout[e];
+            }
+            col[i] = -sum;
+        }
+        if (n > 0) {
+            sk_lu_solve(n, st.lu, st.piv, col);
+        }
+        /* dout/dv along the solution: + the partials . din/dx dx/dv */
+        for (k = 0; k < ns; ++k) {
+            for (i = 0; i < 3; ++i) {
+                double sum = 0.0;
+                for (e = 0; e < 3; ++e) {
+                    const double *dinx = st.ins + 5 * ns + (3 * k + e) * n;
+                    for (j = 0; j < n; ++j) {
+                        sum += st.rel[12 * k + 3 + 3 * i + e] * dinx[j] * col[j];
+                    }
+                }
+                dout[3 * k + i] += sum;
+            }
+        }
+        for (i = 0; i < nq; ++i) {
+            double sum = s[rr->dy_dv + i * nq + c];
+            for (e = 0; e < n; ++e) {
+                sum += s[rr->dy_dx + i * n + e] * col[e];
+            }
+            for (e = 0; e < 3 * ns; ++e) {
+                sum += s[rr->dy_dout + i * 3 * ns + e] * dout[e];
+            }
+            rates[i * nq + c] = sum;
+        }
+    }
+    for (i = 0; i < nin; ++i) {
+        out[2 * i] = s[rr->y + i] * rp->unit_scale;
+        out[2 * i + 1] = rates[i * nq + i] * rp->unit_scale;
+    }
+    out += 2 * nin;
+    for (k = 0; k < rp->n_points; ++k) {
+        double cm[9];
+        for (i = 0; i < 3; ++i) {
+            for (c = 0; c < 3; ++c) {
+                cm[3 * i + c] = rates[(nin + 3 * k + i) * nq + nin + 3 * k + c];
+            }
+        }
+        sk_rep_stiffness(rp, cm, out + 9 * k);
+        if (rp->frame[k]) {
+            sk_nan(out + 9 * k, 9);
+        }
+    }
+    out += 9 * rp->n_points;
+    for (k = 0; k < rp->n_plates; ++k) {
+        sk_rep_plate(s + rr->stress + 8 * k, rp->limits[k], out + 4 * k);
+    }
+    return 0;
+}
+
+/* <name>_loaded_report (the generated header documents it): the configuration solved at the
+   loaded level `level`, then sk_reduced_report; out NaN on any non-zero return. */
+static int sk_loaded_report_pose(const sk_mechanism *m, const sk_loaded_report *rp, int level,
+                                 const double *inputs, const double *params, double *out)
+{
+    double theta[SK_M], delta[SK_K + 1], constants[SK_NQ];
+    const double *q;
+    const sk_level *lv = sk_find_level(m, level);
+    const int size = 2 * rp->n_inputs + 9 * rp->n_points + 4 * rp->n_plates;
+    int status, i;
+    if (out == NULL) {
+        return 3;
+    }
+    if (params == NULL) {
+        params = m->defaults;
+    }
+    status = inputs == NULL || lv == NULL
+                 ? 3
+                 : sk_pose(m, lv, inputs, params, 0, theta, delta, constants, &q);
+    if (status == 0) {
+        status = sk_reduced_report(m, rp, theta, q, out);
+    }
+    for (i = 0; status == 0 && i < 2 * rp->n_inputs; ++i) {
+        if (!isfinite(out[i])) {
+            status = 2;             /* a non-finite moment is never a success */
+        }
+    }
+    if (status != 0) {
+        sk_nan(out, size);
+    }
+    return status;
+}
+static const int sk_report_frame[2] = {0};
+static const int sk_report_limits[5] = {0, 0, 0, 0};
+/* what the loaded level reports: per variant its routine and where its blocks start; the
+   inputs, points, plates; metres per file unit, the scales L and F */
+static const sk_loaded_report sk_loaded_report_tables = {
+    {{sk_loaded_report1, 0, 24, 72, 76, 100, 116, 164}, {sk_loaded_report2, 0, 40, 136, 140, 180, 196, 292}},
+    1, 1, 4, sk_report_frame, sk_report_limits,
+    1.0, 0.10885311203635843, 0.8833357572884958
 };
 /* ---- four_bar: its tables for the runtime ---- */
 
@@ -6341,4 +7663,21 @@ int four_bar_sensitivity_batch(int n, const double *inputs, const double *params
 {
     return sk_sensitivity_rows(&sk_mechanism_tables, n, inputs, params, level, values, deviation,
                                rigid, status);
+}
+
+const char *const four_bar_report_input_names[FOUR_BAR_N_REPORT_INPUTS > 0 ? FOUR_BAR_N_REPORT_INPUTS : 1] = {
+    "A0"
+};
+
+const char *const four_bar_report_plate_names[FOUR_BAR_N_REPORT_PLATES > 0 ? FOUR_BAR_N_REPORT_PLATES : 1] = {
+    "A0",
+    "A",
+    "B0",
+    "B"
+};
+
+int four_bar_loaded_report(const double *inputs, const double *params, double *out)
+{
+    return sk_loaded_report_pose(&sk_mechanism_tables, &sk_loaded_report_tables, 3, inputs,
+                                 params, out);
 }

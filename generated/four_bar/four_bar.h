@@ -3,7 +3,7 @@
  * Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 65, rigid_res 51, linear 114, newton 259, rigid_points 19, loaded_plates1 132, loaded_system1 523, loaded_res1 229, loaded_dev1 60, loaded_plates2 349, loaded_system2 1557, loaded_res2 494, loaded_dev2 143, dev_paper 38, dev_first_order 52, dev_exact 62, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339, loaded_sens1 581, loaded_sens2 1581, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
+ * Operation counts after CSE: rigid 65, rigid_res 51, linear 114, newton 259, rigid_points 19, loaded_plates1 132, loaded_system1 523, loaded_res1 229, loaded_dev1 60, loaded_report1 560, loaded_plates2 349, loaded_system2 1557, loaded_res2 494, loaded_dev2 143, loaded_report2 1279, dev_paper 38, dev_first_order 52, dev_exact 62, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339, loaded_sens1 581, loaded_sens2 1581, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
  */
 #ifndef SYMKIN_FOUR_BAR_H
 #define SYMKIN_FOUR_BAR_H
@@ -100,5 +100,24 @@ int four_bar_sensitivity_full(const double *inputs, const double *params, int le
 /* four_bar_sensitivity_full for n rows of inputs (as four_bar_evaluate_batch). */
 int four_bar_sensitivity_batch(int n, const double *inputs, const double *params, int level,
                           double *values, double *deviation, double *rigid, int *status);
+
+/*
+ * What the `loaded` level reports beyond the deviations (docs/physics.md, "What loaded
+ * reports"), for one configuration (inputs and params as four_bar_evaluate's) solved at
+ * `loaded`. out receives FOUR_BAR_N_REPORT doubles: per input hinge in
+ * four_bar_report_input_names order its moment (N m) and dM/dtheta (N m/rad); per point in
+ * four_bar_point_names order its 3 x 3 stiffness with every input held (9 doubles, row-major,
+ * rows and columns x, y, rotation, in the file's length unit; NaN where the point is on the frame
+ * or its compliance is singular); per plate in four_bar_report_plate_names order its largest
+ * normal stress (Pa), strain, safety factor (the allowable stress over the stress; NaN without
+ * one) and where along the plate (0..1) (4 doubles). Not the buckling factor (symkin eval's).
+ * Same return codes as four_bar_evaluate at `loaded`; on any non-zero return out is NaN.
+ */
+#define FOUR_BAR_N_REPORT_INPUTS 1
+#define FOUR_BAR_N_REPORT_PLATES 4
+#define FOUR_BAR_N_REPORT (2 * FOUR_BAR_N_REPORT_INPUTS + 9 * FOUR_BAR_N_POINTS + 4 * FOUR_BAR_N_REPORT_PLATES)
+extern const char *const four_bar_report_input_names[FOUR_BAR_N_REPORT_INPUTS > 0 ? FOUR_BAR_N_REPORT_INPUTS : 1];
+extern const char *const four_bar_report_plate_names[FOUR_BAR_N_REPORT_PLATES > 0 ? FOUR_BAR_N_REPORT_PLATES : 1];
+int four_bar_loaded_report(const double *inputs, const double *params, double *out);
 
 #endif /* SYMKIN_FOUR_BAR_H */

@@ -2,7 +2,7 @@
 Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
 Points: C; levels: paper, first_order, exact, loaded.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 65, rigid_res 51, linear 114, newton 259, rigid_points 19, loaded_plates1 132, loaded_system1 523, loaded_res1 229, loaded_dev1 60, loaded_plates2 349, loaded_system2 1557, loaded_res2 494, loaded_dev2 143, dev_paper 38, dev_first_order 52, dev_exact 62, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339, loaded_sens1 581, loaded_sens2 1581, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
+Operation counts after CSE: rigid 65, rigid_res 51, linear 114, newton 259, rigid_points 19, loaded_plates1 132, loaded_system1 523, loaded_res1 229, loaded_dev1 60, loaded_report1 560, loaded_plates2 349, loaded_system2 1557, loaded_res2 494, loaded_dev2 143, loaded_report2 1279, dev_paper 38, dev_first_order 52, dev_exact 62, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339, loaded_sens1 581, loaded_sens2 1581, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -11,6 +11,14 @@ False in ok. It also holds "angles": {"rigid": {H: a}, "compliant": {H: a}}, eve
 angle (radians, the rotation of links[1] relative to links[0] from the as-fabricated pose), and
 "links": {L: {"rigid": a, "compliant": a, "deviation": a}}, the rotation of every link in LINKS
 from the as-fabricated pose (rigid wrapped to (-pi, pi]; the deviation computed directly).
+
+At level "loaded" it also holds what the level reports beyond the deviations (docs/physics.md,
+"What loaded reports"): "inputs": {H: {"angle", "moment", "stiffness"}} of every input hinge
+(rad, N m, N m/rad), "stiffness": {P: K}, K of shape (3, 3, *broadcast_shape) the point's
+stiffness with every input held (rows and columns x, y, rotation; N/u, N, N u with u the file's
+length unit; NaN where the point is on the frame or its compliance is singular), "plates": {H:
+{"stress", "strain", "safety", "section"}} of every plate (Pa; safety NaN without an allowable
+stress; section where along the plate, 0..1). Not the buckling factor (symkin eval's).
 
 sensitivity(inputs, level, params) gives {P: {p: a}}: d(dx, dy)/dp of every point's deviation
 by every parameter p, each a of shape (2, *broadcast_shape); sensitivity_full(...) adds the
@@ -934,23 +942,20 @@ def _red_block(out, block, b):
     return numpy.stack(values, axis=-1).reshape(b, rows, cols)
 
 
-def _reduced_rates(mech, theta, p, q, thu, ok):
-    """dev (*shape, 2 n_P, n_v) of the loaded level at its solutions (q: the variant solved and
-    its x, templates/numpy/reduced.py); thu dtheta_u/dv (*shape, k, n_v), None without. J is
-    evaluated once more at the solution, then dx/dv = -J^-1 dR/dv at fixed x and
-    dD/dv = dD/dx dx/dv + dD/dtheta dtheta/dv + dD/dp + dD/dout dout/dv (reduced_sens.c)."""
+def _red_solutions(mech, theta, p, q, shape, good, routines):
+    """The configurations the loaded level solved (q: the variant and its x; shape: the
+    configurations', good: a flat mask of them),
+    variant by variant, evaluated again at their solution for the implicit-function theorem
+    (templates/numpy/reduced_sens.py, reduced_report.py): per variant solved (where, solver,
+    routines[variant]'s output, J (b, n, n), dR/d(plates) (b, n, 3 n_s), the half plates'
+    inputs, their x-Jacobian and the relation there)."""
     tb = mech.loaded
-    shape = ok.shape
-    npar, nv, m = len(mech.parameter_names), mech.n_variables, mech.n_theta
-    npt = 2 * len(mech.point_names)
-    dev = numpy.full((ok.size, npt, nv), numpy.nan)
     variant = numpy.broadcast_to(q.variant, shape).reshape(-1)
-    good = numpy.broadcast_to(ok, shape).reshape(-1)
 
     def flat(values, where):
         return [numpy.broadcast_to(v, shape).reshape(-1)[where].astype(float) for v in values]
 
-    for index, (variant_row, (fn, blocks)) in enumerate(zip(tb.variants, tb.sens)):
+    for index, (variant_row, fn) in enumerate(zip(tb.variants, routines)):
         where = numpy.flatnonzero(good & (variant == index))
         b = where.size
         if not b:
@@ -964,8 +969,28 @@ def _reduced_rates(mech, theta, p, q, thu, ok):
             args, ins, dins = solver._inputs(x, th, pb, 1.0)
             rel, vals = solver._relation(ins)
             sys = solver.system_fn(args, th, vals, pb)
-            s = fn(args, th, vals, pb)
+            out = fn(args, th, vals, pb)
         jo = _red_block(sys, (n + n * n, n, 3 * ns), b)
+        yield where, solver, out, jac, jo, ins, dins, rel
+
+
+def _reduced_rates(mech, theta, p, q, thu, ok):
+    """dev (*shape, 2 n_P, n_v) of the loaded level at its solutions (q: the variant solved and
+    its x, templates/numpy/reduced.py); thu dtheta_u/dv (*shape, k, n_v), None without. J is
+    evaluated once more at the solution, then dx/dv = -J^-1 dR/dv at fixed x and
+    dD/dv = dD/dx dx/dv + dD/dtheta dtheta/dv + dD/dp + dD/dout dout/dv (reduced_sens.c)."""
+    tb = mech.loaded
+    shape = ok.shape
+    npar, nv, m = len(mech.parameter_names), mech.n_variables, mech.n_theta
+    npt = 2 * len(mech.point_names)
+    dev = numpy.full((ok.size, npt, nv), numpy.nan)
+    good = numpy.broadcast_to(ok, shape).reshape(-1)
+    routines = [fn for fn, _ in tb.sens]
+    for where, solver, s, jac, jo, ins, dins, rel in _red_solutions(
+        mech, theta, p, q, shape, good, routines
+    ):
+        blocks = tb.sens[solver.count - 1][1]
+        b, n, ns = where.size, solver.size, solver.plates
         # dtheta/dv of every hinge: the non-input ones' from the rigid closure, an input's own 1
         dth = numpy.zeros((b, m, nv))
         if thu is not None:
@@ -1008,6 +1033,175 @@ def _reduced_rates(mech, theta, p, q, thu, ok):
             + numpy.matmul(_red_block(s, blocks["dD_dout"], b), dout)
         )
     return dev.reshape(shape + (npt, nv))
+
+
+#: Sections per plate where the stress is sampled (symkin.physics.reported.SECTIONS), one RK4
+#: step each (against the Python path's Taylor series: 5e-12 of the stress, tests/
+#: test_loaded_reported_codegen.py).
+_STRESS_SECTIONS = 64
+#: A point's scaled compliance this ill-conditioned is singular (reported.SINGULAR): NaN.
+_SINGULAR = 1e12
+
+
+def _evaluate_reported(mech, inputs, level, params, links, report=True):
+    """The module's evaluate() (runtime.py's _evaluate) with, at the loaded level and with
+    `report`, what it reports beyond the deviations: "inputs", "stiffness", "plates"
+    (_reduced_report)."""
+    arrays, p = _prepare(mech, inputs, level, params)
+    return _blocks(_reported_block, arrays, mech, level, p, links, report)
+
+
+def _reported_block(arrays, mech, level, p, links, report):
+    """evaluate() on one block of broadcast input arrays (runtime.py's _evaluate_block), the
+    report added at the loaded level."""
+    theta, delta, ok, q = _pose(mech, arrays, level, p, links)
+    result = _points(mech, theta, delta, ok, level, p, q, links)
+    if report and mech.levels[level].loaded:
+        result.update(_reduced_report(mech, theta, p, q, result["ok"]))
+    return result
+
+
+def _plate_stress(k0, lx, ly, ea, es, slender, modulus, limit, has_limit):
+    """Largest normal stress (Pa), its strain, the safety factor (NaN without an allowable
+    stress) and where along the plate (0..1), per configuration ((b,) arrays): the plate's IVP
+    psi'' = -f_Q (1 + (e_a - e_s) f_N), psi(0) = 0, psi'(0) = k0 (symkin.physics.beams) by
+    fixed-step RK4, the strain |psi'| t/(2l) + |f_N| (t/l)^2/12 at every section and the
+    parabola's vertex through the three samples around an interior maximum
+    (symkin.physics.reported.plate_stress)."""
+    d = ea - es
+
+    def rate(psi, om):
+        c, s = numpy.cos(psi), numpy.sin(psi)
+        return om, -(ly * c - lx * s) * (1 + d * (lx * c + ly * s))
+
+    n = _STRESS_SECTIONS
+    h = 1.0 / n
+    psi, om = numpy.zeros_like(k0), numpy.array(k0, dtype=float)
+    psis, oms = [psi], [om]
+    for _ in range(n):
+        a1, b1 = rate(psi, om)
+        a2, b2 = rate(psi + h / 2 * a1, om + h / 2 * b1)
+        a3, b3 = rate(psi + h / 2 * a2, om + h / 2 * b2)
+        a4, b4 = rate(psi + h * a3, om + h * b3)
+        psi = psi + h / 6 * (a1 + 2 * a2 + 2 * a3 + a4)
+        om = om + h / 6 * (b1 + 2 * b2 + 2 * b3 + b4)
+        psis.append(psi)
+        oms.append(om)
+    psi, om = numpy.array(psis), numpy.array(oms)  # (n + 1, b)
+    normal = lx * numpy.cos(psi) + ly * numpy.sin(psi)
+    strain = numpy.abs(om) * slender / 2 + numpy.abs(normal) * slender**2 / 12
+    b = k0.shape[0]
+    j = numpy.argmax(strain, axis=0)
+    cols = numpy.arange(b)
+    value = strain[j, cols]
+    where = j / n
+    inner = (j > 0) & (j < n)
+    ja, jc = numpy.clip(j - 1, 0, n), numpy.clip(j + 1, 0, n)
+    sa, sc = strain[ja, cols], strain[jc, cols]
+    bend = sa - 2 * value + sc
+    vertex = inner & (bend < 0)
+    with numpy.errstate(all="ignore"):
+        shift = (sa - sc) / (2 * bend)
+        value = numpy.where(vertex, value - (sa - sc) * shift / 4, value)
+        where = numpy.where(vertex, (j + shift) / n, where)
+        stress = modulus * value
+        safety = numpy.where(stress > 0, limit / stress, math.inf)
+    safety = numpy.where(has_limit, safety, numpy.nan)
+    return stress, value, safety, where
+
+
+def _reduced_report(mech, theta, p, q, ok):
+    """What the loaded level reports at its solutions (q: the variant solved and its x,
+    templates/numpy/reduced.py), NaN where not ok: {"inputs": {H: {"angle", "moment",
+    "stiffness"}}, "stiffness": {P: (3, 3, *shape)}, "plates": {H: {"stress", "strain",
+    "safety", "section"}}} (N m, N m/rad; the stiffness in the file's length unit; Pa)."""
+    tb = mech.loaded
+    rep = tb.report
+    shape = ok.shape
+    nin, npt, npl = len(rep.inputs), len(rep.points), len(rep.plates)
+    size = ok.size
+    ys = numpy.full((size, nin + 3 * npt), numpy.nan)
+    rates = numpy.full((size, nin + 3 * npt, nin + 3 * npt), numpy.nan)
+    stress = numpy.full((size, npl, 8), numpy.nan)
+    good = numpy.broadcast_to(ok, shape).reshape(-1)
+    routines = [fn for fn, _ in rep.routines]
+    for where, solver, out, jac, jo, _, dins, rel in _red_solutions(
+        mech, theta, p, q, shape, good, routines
+    ):
+        blocks = rep.routines[solver.count - 1][1]
+        b, n, ns = where.size, solver.size, solver.plates
+        # the plate relation's partials by (theta_c, p, f), block diagonal
+        part = numpy.zeros((b, 3 * ns, 3 * ns))
+        for k in range(ns):
+            for i in range(3):
+                for c in range(3):
+                    part[:, 3 * k + i, 3 * k + c] = rel[k][3 + 3 * i + c]
+        dinx = numpy.zeros((b, 3 * ns, n))
+        if ns and n:
+            dinx = numpy.array([_red_column(v, b) for v in dins]).reshape(3 * ns, n, b)
+            dinx = dinx.transpose(2, 0, 1)
+        dr_v = _red_block(out, blocks["dR_dv"], b)
+        din_v = _red_block(out, blocks["din_dv"], b)
+        dy_o = _red_block(out, blocks["dy_dout"], b)
+        by_o = numpy.matmul(dy_o, part)
+        total = _red_block(out, blocks["dy_dv"], b) + numpy.matmul(by_o, din_v)
+        if n:
+            rhs = dr_v + numpy.matmul(jo, numpy.matmul(part, din_v))
+            try:
+                dx = -numpy.linalg.solve(jac, rhs)
+            except numpy.linalg.LinAlgError:
+                # one singular J stops the stacked solve: each on its own
+                dx = numpy.full(rhs.shape, numpy.nan)
+                for c in range(b):
+                    try:
+                        dx[c] = -numpy.linalg.solve(jac[c], rhs[c])
+                    except numpy.linalg.LinAlgError:
+                        continue  # singular: NaN
+            dy_x = _red_block(out, blocks["dy_dx"], b) + numpy.matmul(by_o, dinx)
+            total = total + numpy.matmul(dy_x, dx)
+        ys[where] = _red_block(out, blocks["y"], b)[:, :, 0]
+        rates[where] = total
+        stress[where] = _red_block(out, blocks["stress"], b)
+    ok_flat = good
+    result = {"inputs": {}, "stiffness": {}, "plates": {}}
+    angles = {name: theta[i] for name, i in zip(mech.hinge_names, range(len(theta)))}
+
+    def shaped(v):
+        return numpy.where(ok_flat, v, numpy.nan).reshape(shape)
+
+    for k, name in enumerate(rep.inputs):
+        result["inputs"][name] = {
+            "angle": numpy.where(ok, numpy.broadcast_to(angles[name], shape), numpy.nan),
+            "moment": shaped(ys[:, k] * rep.unit_scale),
+            "stiffness": shaped(rates[:, k, k] * rep.unit_scale),
+        }
+    big_l, big_f = rep.L, rep.F
+    norm = numpy.array([big_f / big_l, big_f / big_l, big_f])[:, None] * numpy.array(
+        [1, 1, 1 / big_l]
+    )
+    for k, name in enumerate(rep.points):
+        rows = slice(nin + 3 * k, nin + 3 * k + 3)
+        c = rates[:, rows, rows]
+        live = ok_flat & numpy.all(numpy.isfinite(c), axis=(1, 2)) & (not rep.frame[k])
+        stiff = numpy.full((size, 3, 3), numpy.nan)
+        if live.any():
+            cond = numpy.linalg.cond(c[live] * norm)
+            keep = numpy.flatnonzero(live)[cond <= _SINGULAR]
+            if keep.size:
+                stiff[keep] = numpy.linalg.inv(c[keep])
+        result["stiffness"][name] = numpy.moveaxis(stiff, 0, -1).reshape((3, 3) + shape)
+    for k, name in enumerate(rep.plates):
+        row = [stress[:, k, c] for c in range(8)]
+        live = numpy.flatnonzero(ok_flat)
+        values = [numpy.full(size, numpy.nan) for _ in range(4)]
+        if live.size:
+            found = _plate_stress(*(v[live] for v in row), rep.limits[k])
+            for v, f in zip(values, found):
+                v[live] = f
+        result["plates"][name] = {
+            key: shaped(v) for key, v in zip(("stress", "strain", "safety", "section"), values)
+        }
+    return result
 
 
 def arck(x):
@@ -2579,6 +2773,353 @@ def _loaded_dev1(x, theta, plates, params):
     ]
 
 
+def _loaded_report1(x, theta, plates, params):
+    """loaded (1 half plate(s) per plate), what it reports: dR/dv, din/dv, y, dy/dx, dy/dv, dy/dout (v: the inputs' angles and virtual loads at the points, y: the inputs' moments and the points' (dx, dy, dphi)), then per plate (k0, lx, ly, e_a, e_s, t/l, E', allowable) (560 operations)."""
+    x_0, x_1, x_2, x_3, x_4, x_5, _ = x
+    theta_1, theta_2, theta_3, theta_4 = theta
+    along_1_0, across_1_0, omega_1_0, along_2_0, across_2_0, omega_2_0, along_3_0, across_3_0, omega_3_0, along_4_0, across_4_0, omega_4_0 = plates
+    p_0, = params
+    _tmp0 = numpy.sin(theta_1)
+    _tmp1 = numpy.cos(theta_1)
+    _tmp2 = 0.5*theta_1
+    _tmp3 = numpy.sin(_tmp2)
+    _tmp4 = 0.004593345937900178*x_0
+    _tmp5 = _tmp4 + 0.5*theta_2
+    _tmp6 = 1.0471975511965979 + theta_1
+    _tmp7 = _tmp5 + _tmp6
+    _tmp8 = numpy.cos(_tmp7)
+    _tmp9 = _tmp8*p_0
+    _tmp10 = _tmp9*across_2_0
+    _tmp11 = 0.5*theta_4 + 0.004593345937900178*x_2
+    _tmp12 = 0.009186691875800356*x_0
+    _tmp13 = theta_1 + theta_2
+    _tmp14 = _tmp12 + _tmp13
+    _tmp15 = _tmp11 + _tmp14
+    _tmp16 = numpy.cos(_tmp15)
+    _tmp17 = 1000.0*p_0
+    _tmp18 = _tmp16*_tmp17
+    _tmp19 = arck(_tmp2)
+    _tmp20 = along_1_0 + 0.25*_tmp19*theta_1**2
+    _tmp21 = numpy.cos(_tmp2)
+    _tmp22 = _tmp21*p_0
+    _tmp23 = _tmp20*_tmp22
+    _tmp24 = numpy.cos(_tmp13)
+    _tmp25 = numpy.cos(_tmp12)
+    _tmp26 = numpy.sin(_tmp4)
+    _tmp27 = _tmp26*numpy.cos(_tmp4)
+    _tmp28 = -0.14*_tmp27 - 0.042*_tmp25
+    _tmp29 = 0.07*_tmp25 - 0.084*_tmp27
+    _tmp30 = numpy.sin(_tmp13)
+    _tmp31 = 1000.0*_tmp30
+    _tmp32 = arck(_tmp5)
+    _tmp33 = along_2_0 + _tmp32*_tmp5**2
+    _tmp34 = numpy.sin(_tmp7)
+    _tmp35 = _tmp34*p_0
+    _tmp36 = _tmp33*_tmp35
+    _tmp37 = along_4_0 + _tmp11**2*arck(_tmp11)
+    _tmp38 = numpy.sin(_tmp15)
+    _tmp39 = _tmp17*_tmp38
+    _tmp40 = _tmp19*_tmp2 + 0.0625*theta_1**3*(-3*sinr2(_tmp2) + 3*cosr2(_tmp2) + sinr1(_tmp2))
+    _tmp41 = _tmp3*p_0
+    _tmp42 = _tmp40*_tmp41
+    _tmp43 = _tmp22*across_1_0
+    _tmp44 = _tmp35*across_2_0
+    _tmp45 = _tmp20*_tmp41
+    _tmp46 = _tmp33*_tmp9
+    _tmp47 = _tmp22*_tmp40
+    _tmp48 = 0.5*p_0
+    _tmp49 = _tmp21*_tmp48
+    _tmp50 = _tmp3*_tmp48
+    _tmp51 = _tmp42 + _tmp20*_tmp49 - _tmp50*across_1_0
+    _tmp52 = numpy.sin(_tmp14)
+    _tmp53 = 0.25*p_0
+    _tmp54 = numpy.cos(_tmp14)
+    _tmp55 = 0.4330127018922193*p_0
+    _tmp56 = _tmp10 + _tmp36
+    _tmp57 = 0.015*_tmp0 + 0.026*_tmp1
+    _tmp58 = _tmp56 + _tmp57
+    _tmp59 = _tmp58 + _tmp52*_tmp53 + _tmp54*_tmp55
+    _tmp60 = _tmp49*across_1_0
+    _tmp61 = _tmp20*_tmp50
+    _tmp62 = _tmp60 + _tmp61 - _tmp47
+    _tmp63 = _tmp44 - _tmp46
+    _tmp64 = 0.026*_tmp0
+    _tmp65 = 0.015*_tmp1
+    _tmp66 = _tmp64 - _tmp65
+    _tmp67 = _tmp63 + _tmp66 + _tmp52*_tmp55 - _tmp53*_tmp54
+    _tmp68 = 4.50333209967908*p_0
+    _tmp69 = numpy.less_equal(p_0, 0.01)
+    _tmp70 = _DTYPE(numpy.where(_tmp69, 4.333333333333334e-12, 4.761904761904762e-12))
+    _tmp71 = p_0**(-1.0)
+    _tmp72 = _tmp70*_tmp71
+    _tmp73 = 1060002.908746195*_tmp72
+    _tmp74 = _tmp73*x_3
+    _tmp75 = _tmp73*x_4
+    _tmp76 = 2400000*_tmp70
+    _tmp77 = _tmp71*_tmp76
+    _tmp78 = -_tmp3*_tmp77
+    _tmp79 = _tmp21*_tmp77
+    _tmp80 = 2120005.81749239*_tmp72
+    _tmp81 = _tmp80*x_3
+    _tmp82 = _tmp77*_tmp8
+    _tmp83 = _tmp34*_tmp77
+    _tmp84 = _tmp80*x_4
+    _tmp85 = p_0**2
+    _tmp86 = _DTYPE(numpy.where(_tmp69, 230769230769.23077, 210000000000))
+    _tmp87 = 4.1666666666666667e-07*_tmp85*_tmp86
+    _tmp88 = _tmp87*omega_1_0
+    _tmp89 = theta_3 + 0.009186691875800356*x_1
+    _tmp90 = numpy.cos(_tmp89)
+    _tmp91 = -0.015 + _tmp48
+    _tmp92 = numpy.sin(_tmp89)
+    _tmp93 = _tmp91*_tmp92
+    _tmp94 = _tmp1*_tmp48
+    _tmp95 = -_tmp94
+    _tmp96 = _tmp41*across_1_0
+    _tmp97 = 0.5*theta_3 + 0.004593345937900178*x_1
+    _tmp98 = arck(_tmp97)
+    _tmp99 = along_3_0 + _tmp98*_tmp97**2
+    _tmp100 = numpy.cos(_tmp97)
+    _tmp101 = _tmp100*p_0
+    _tmp102 = _tmp101*_tmp99
+    _tmp103 = numpy.sin(_tmp97)
+    _tmp104 = _tmp103*p_0
+    _tmp105 = _tmp104*across_3_0
+    _tmp106 = _tmp102 - _tmp105
+    _tmp107 = 0.8833357572884959*x_3
+    _tmp108 = _tmp0*_tmp48
+    _tmp109 = _tmp43 + _tmp45
+    _tmp110 = _tmp108 + _tmp109
+    _tmp111 = _tmp90*_tmp91
+    _tmp112 = _tmp101*across_3_0
+    _tmp113 = _tmp104*_tmp99
+    _tmp114 = 0.1 + _tmp111 - _tmp112 - _tmp113 - 0.068*_tmp92
+    _tmp115 = 0.8833357572884959*x_4
+    _tmp116 = numpy.sin(_tmp12)
+    _tmp117 = _tmp26**2
+    _tmp118 = 0.045*_tmp116 - 0.128*_tmp117
+    _tmp119 = -0.064*_tmp116 - 0.09*_tmp117
+    _tmp120 = _tmp109 + _tmp63
+    _tmp121 = _tmp23 - _tmp96
+    _tmp122 = _tmp121 + _tmp56
+    _tmp123 = _tmp98*(0.004593345937900178*theta_3 + 4.219765381044813e-05*x_1) + 0.004593345937900178*_tmp97**3*(-3*sinr2(_tmp97) + 3*cosr2(_tmp97) + sinr1(_tmp97))
+    _tmp124 = 0.44166787864424795*p_0
+    _tmp125 = 0.00041340113441101604*_tmp25 - 0.0011758965601024456*_tmp27
+    _tmp126 = -0.0008268022688220321*_tmp27 - 0.0005879482800512228*_tmp25
+    _tmp127 = _tmp32*(0.004593345937900178*theta_2 + 4.219765381044813e-05*x_0) + 0.004593345937900178*_tmp5**3*(-3*sinr2(_tmp5) + 3*cosr2(_tmp5) + sinr1(_tmp5))
+    _tmp128 = _tmp46 + _tmp65 - _tmp44 - _tmp64
+    _tmp129 = 0.045*_tmp25 - 0.128*_tmp27
+    _tmp130 = -0.064*_tmp25 - 0.09*_tmp27
+    _tmp131 = -_tmp41
+    _tmp132 = _tmp76/_tmp85
+    _tmp133 = 0.0008333333333333334*_tmp70*_tmp86
+    _tmp134 = 1.2380952380952381e-14*_tmp86
+    _tmp135 = 0.1*_DTYPE(numpy.where(_tmp69, 480384.4614152614, 458257.569495584))*_DTYPE(numpy.where(_tmp69, 2.0816659994661327e-06, 2.1821789023599237e-06))
+    _tmp136 = 0.015 - _tmp53
+    _tmp137 = 0.026 - _tmp55
+    _tmp138 = numpy.cos(_tmp6)
+    _tmp139 = numpy.sin(_tmp6)
+    _tmp140 = 0.07 - _tmp48
+    return [
+        1,
+        0,
+        0,
+        0,
+        -26.0*_tmp1 - 15.0*_tmp0 - 500.0*_tmp23 - 1000.0*_tmp10 - 1000.0*_tmp36 - 1000.0*_tmp42 - _tmp18*across_4_0 - _tmp29*_tmp31 - _tmp37*_tmp39 + 1000.0*_tmp24*_tmp28 + 500.0*_tmp3*across_1_0*p_0,
+        0,
+        0,
+        0,
+        15.0*_tmp1 + 1000.0*_tmp46 + 1000.0*_tmp47 - 26.0*_tmp0 - 500.0*_tmp43 - 500.0*_tmp45 - 1000.0*_tmp44 + _tmp18*_tmp37 + _tmp28*_tmp31 - _tmp39*across_4_0 + 1000.0*_tmp24*_tmp29,
+        0,
+        0,
+        0,
+        9.186691875800356*x_3*(_tmp62 + _tmp67) - 9.186691875800356*x_4*(_tmp51 + _tmp59),
+        0.6656*_tmp54 + 0.4679999999999999*_tmp52 - _tmp54*_tmp68 - 2.5999999999999996*_tmp52*p_0,
+        0.6656*_tmp52 - 0.4679999999999999*_tmp54 - _tmp52*_tmp68 + 2.5999999999999996*_tmp54*p_0,
+        -10.399999999999999,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        -_tmp21*_tmp74 - _tmp3*_tmp75,
+        _tmp78,
+        _tmp79,
+        0,
+        _tmp3*_tmp74 - _tmp21*_tmp75,
+        -_tmp79,
+        _tmp78,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp34*_tmp81 + 2120005.81749239*_tmp70*_tmp71*_tmp8*x_4,
+        _tmp82,
+        _tmp83,
+        0,
+        -_tmp34*_tmp84 - _tmp8*_tmp81,
+        -_tmp83,
+        _tmp82,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp38*_tmp81 + 2120005.81749239*_tmp16*_tmp70*_tmp71*x_4,
+        0,
+        0,
+        0,
+        -_tmp16*_tmp81 - _tmp38*_tmp84,
+        0,
+        0,
+        0,
+        _tmp88 - 0.09615384615384616*x_5 + _tmp107*(_tmp106 + _tmp93 + _tmp95 + _tmp96 - _tmp23 + 0.068*_tmp90) - _tmp115*(_tmp110 + _tmp114),
+        -_tmp120 + _tmp119*_tmp24 - _tmp118*_tmp30,
+        _tmp122 + _tmp118*_tmp24 + _tmp119*_tmp30,
+        _tmp12,
+        0,
+        _tmp107*(-0.004593345937900178*_tmp112 - 0.004593345937900178*_tmp113 - 0.0006246950475544242*_tmp92 + 0.009186691875800356*_tmp90*_tmp91 + _tmp100*_tmp123*p_0) - _tmp115*(-0.004593345937900178*_tmp102 - 0.009186691875800356*_tmp93 - 0.0006246950475544242*_tmp90 - _tmp104*_tmp123 + 0.004593345937900178*_tmp103*across_3_0*p_0),
+        0,
+        0.8833357572884959*_tmp102 + 0.8833357572884959*_tmp93 + 0.8833357572884959*_tmp96 + 0.06006683149561772*_tmp90 - 0.8833357572884959*_tmp105 - 0.8833357572884959*_tmp23 - _tmp1*_tmp124,
+        -0.08833357572884959 + 0.06006683149561772*_tmp92 - 0.8833357572884959*_tmp111 - 0.8833357572884959*_tmp43 - 0.8833357572884959*_tmp45 - _tmp0*_tmp124 + 0.8833357572884959*_tmp100*across_3_0*p_0 + 0.8833357572884959*_tmp103*_tmp99*p_0,
+        -0.09615384615384616,
+        -0.004593345937900178*_tmp10 - 0.004593345937900178*_tmp36 + _tmp126*_tmp24 - _tmp125*_tmp30 + _tmp127*_tmp8*p_0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.004593345937900178*_tmp46 - 0.004593345937900178*_tmp44 + _tmp125*_tmp24 + _tmp126*_tmp30 + _tmp127*_tmp35,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.009186691875800356,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp107*(_tmp108 + _tmp62) - _tmp115*(_tmp51 + _tmp94),
+        _tmp58 + _tmp95 + 0.064*_tmp54 + 0.045*_tmp52,
+        -_tmp108 - _tmp128 + 0.064*_tmp52 - 0.045*_tmp54,
+        -1,
+        -_tmp51 - _tmp58 + _tmp130*_tmp24 - _tmp129*_tmp30,
+        0,
+        0,
+        0,
+        _tmp128 + _tmp47 - _tmp60 - _tmp61 + _tmp129*_tmp24 + _tmp130*_tmp30,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        -_tmp107*_tmp22 - _tmp115*_tmp41,
+        _tmp107*_tmp41 - _tmp115*_tmp22,
+        _tmp87,
+        0,
+        0,
+        0,
+        _tmp101*_tmp107 + _tmp104*_tmp115,
+        -_tmp104*_tmp107 + 0.8833357572884959*_tmp100*p_0*x_4,
+        0,
+        0,
+        0,
+        0,
+        _tmp131,
+        -_tmp22,
+        0,
+        _tmp9,
+        -_tmp35,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp22,
+        _tmp131,
+        0,
+        _tmp35,
+        _tmp9,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp132*(_tmp88 - _tmp107*(_tmp121 + _tmp48 + _tmp94) - _tmp110*_tmp115),
+        _tmp84,
+        -_tmp81,
+        _tmp133,
+        _tmp134,
+        _tmp135,
+        _tmp86,
+        0,
+        _tmp132*(_tmp115*(-_tmp67 + _tmp0*_tmp137 - _tmp1*_tmp136) + _tmp87*omega_2_0 - _tmp107*(_tmp59 - _tmp0*_tmp136 - _tmp1*_tmp137)),
+        _tmp138*_tmp81 + _tmp139*_tmp84,
+        -_tmp139*_tmp81 + 2120005.81749239*_tmp138*_tmp70*_tmp71*x_4,
+        _tmp133,
+        _tmp134,
+        _tmp135,
+        _tmp86,
+        0,
+        _tmp132*(_tmp107*(_tmp106 + _tmp48 + _tmp48*_tmp90) + _tmp87*omega_3_0 - _tmp115*(-_tmp112 - _tmp113 - _tmp48*_tmp92)),
+        -_tmp84,
+        _tmp81,
+        _tmp133,
+        _tmp134,
+        _tmp135,
+        _tmp86,
+        0,
+        _tmp132*(_tmp115*(_tmp114 + _tmp120 + _tmp66 + 0.042*_tmp52 - _tmp140*_tmp54) + _tmp87*omega_4_0 - _tmp107*(-_tmp105 - _tmp122 - _tmp57 + 0.068*_tmp90 - 0.042*_tmp54 + _tmp91*_tmp92 - _tmp140*_tmp52 + _tmp100*_tmp99*p_0)),
+        _tmp52*_tmp84 + _tmp54*_tmp81,
+        -_tmp52*_tmp81 + 2120005.81749239*_tmp54*_tmp70*_tmp71*x_4,
+        _tmp133,
+        _tmp134,
+        _tmp135,
+        _tmp86,
+        0,
+    ]
+
+
 def _loaded_plates2(x, theta, params):
     """loaded (2 half plate(s) per plate): every half plate's (theta, p, f, e_a, e_s) and d(theta, p, f)/dx (349 operations)."""
     x_0, x_1, x_2, x_3, x_4, _, x_6, x_7, x_8, x_9, _ = x
@@ -3856,6 +4397,656 @@ def _loaded_dev2(x, theta, plates, params):
     return [
         _tmp39*_tmp40 + _tmp6*_tmp7 - _tmp1*_tmp5 - _tmp22*_tmp9 - _tmp23*_tmp24 - _tmp26*_tmp38,
         _tmp1*_tmp7 + _tmp24*_tmp9 + _tmp26*_tmp40 + _tmp38*_tmp39 + _tmp5*_tmp6 - _tmp22*_tmp23,
+    ]
+
+
+def _loaded_report2(x, theta, plates, params):
+    """loaded (2 half plate(s) per plate), what it reports: dR/dv, din/dv, y, dy/dx, dy/dv, dy/dout (v: the inputs' angles and virtual loads at the points, y: the inputs' moments and the points' (dx, dy, dphi)), then per plate (k0, lx, ly, e_a, e_s, t/l, E', allowable) (1279 operations)."""
+    x_0, x_1, x_2, x_3, x_4, x_5, x_6, x_7, x_8, x_9, _ = x
+    theta_1, theta_2, theta_3, theta_4 = theta
+    along_1_0, across_1_0, _, along_1_1, across_1_1, omega_1_1, along_2_0, across_2_0, _, along_2_1, across_2_1, omega_2_1, along_3_0, across_3_0, _, along_3_1, across_3_1, omega_3_1, along_4_0, across_4_0, _, along_4_1, across_4_1, omega_4_1 = plates
+    p_0, = params
+    _tmp0 = numpy.sin(theta_1)
+    _tmp1 = numpy.cos(theta_1)
+    _tmp2 = theta_1 + theta_2
+    _tmp3 = numpy.cos(_tmp2)
+    _tmp4 = 0.009186691875800356*x_0
+    _tmp5 = numpy.cos(_tmp4)
+    _tmp6 = 0.004593345937900178*x_0
+    _tmp7 = numpy.sin(_tmp6)
+    _tmp8 = _tmp7*numpy.cos(_tmp6)
+    _tmp9 = -0.14*_tmp8 - 0.042*_tmp5
+    _tmp10 = 0.07*_tmp5 - 0.084*_tmp8
+    _tmp11 = numpy.sin(_tmp2)
+    _tmp12 = 1000.0*_tmp11
+    _tmp13 = 0.5*theta_1
+    _tmp14 = numpy.sin(_tmp13)
+    _tmp15 = 1.0*x_6
+    _tmp16 = 0.5*p_0
+    _tmp17 = 0.25*theta_1
+    _tmp18 = 0.5*x_6
+    _tmp19 = _tmp17 - _tmp18
+    _tmp20 = numpy.cos(_tmp19)
+    _tmp21 = _tmp16*across_1_0
+    _tmp22 = _tmp17 + _tmp18
+    _tmp23 = numpy.cos(_tmp22)
+    _tmp24 = _tmp16*_tmp23
+    _tmp25 = numpy.sin(_tmp19)
+    _tmp26 = arck(_tmp22)
+    _tmp27 = along_1_0 + _tmp26*_tmp22**2
+    _tmp28 = _tmp16*_tmp27
+    _tmp29 = arck(_tmp19)
+    _tmp30 = along_1_1 + _tmp29*_tmp19**2
+    _tmp31 = numpy.sin(_tmp22)
+    _tmp32 = _tmp16*_tmp31
+    _tmp33 = _tmp16*numpy.sin(_tmp15) + _tmp20*_tmp21 + _tmp24*across_1_1 + _tmp30*_tmp32 - _tmp25*_tmp28
+    _tmp34 = numpy.cos(_tmp13)
+    _tmp35 = numpy.sin(_tmp17)
+    _tmp36 = numpy.sin(_tmp18)
+    _tmp37 = _tmp16*(-2*_tmp36**2 + 2*_tmp35**2) + _tmp20*_tmp28 + _tmp21*_tmp25 + _tmp24*_tmp30 - _tmp32*across_1_1
+    _tmp38 = _tmp34*_tmp37
+    _tmp39 = 1.0471975511965979 + theta_1
+    _tmp40 = _tmp39 + _tmp6 + 0.5*theta_2
+    _tmp41 = numpy.cos(_tmp40)
+    _tmp42 = 1.0*x_7
+    _tmp43 = 0.5*x_7
+    _tmp44 = 0.25*theta_2 + 0.002296672968950089*x_0
+    _tmp45 = _tmp44 - _tmp43
+    _tmp46 = numpy.cos(_tmp45)
+    _tmp47 = _tmp16*across_2_0
+    _tmp48 = _tmp43 + _tmp44
+    _tmp49 = numpy.cos(_tmp48)
+    _tmp50 = _tmp16*_tmp49
+    _tmp51 = numpy.sin(_tmp45)
+    _tmp52 = arck(_tmp48)
+    _tmp53 = along_2_0 + _tmp52*_tmp48**2
+    _tmp54 = _tmp16*_tmp53
+    _tmp55 = arck(_tmp45)
+    _tmp56 = along_2_1 + _tmp55*_tmp45**2
+    _tmp57 = numpy.sin(_tmp48)
+    _tmp58 = _tmp16*_tmp57
+    _tmp59 = _tmp16*numpy.sin(_tmp42) + _tmp46*_tmp47 + _tmp50*across_2_1 + _tmp56*_tmp58 - _tmp51*_tmp54
+    _tmp60 = _tmp41*_tmp59
+    _tmp61 = _tmp2 + _tmp4
+    _tmp62 = _tmp61 + 0.5*theta_4 + 0.004593345937900178*x_2
+    _tmp63 = numpy.cos(_tmp62)
+    _tmp64 = 0.5*x_9
+    _tmp65 = 0.25*theta_4 + 0.002296672968950089*x_2
+    _tmp66 = _tmp65 - _tmp64
+    _tmp67 = numpy.cos(_tmp66)
+    _tmp68 = _tmp16*across_4_0
+    _tmp69 = _tmp64 + _tmp65
+    _tmp70 = _tmp16*numpy.cos(_tmp69)
+    _tmp71 = numpy.sin(_tmp66)
+    _tmp72 = _tmp16*(along_4_0 + _tmp69**2*arck(_tmp69))
+    _tmp73 = along_4_1 + _tmp66**2*arck(_tmp66)
+    _tmp74 = _tmp16*numpy.sin(_tmp69)
+    _tmp75 = 1000.0*_tmp16*numpy.sin(1.0*x_9) + 1000.0*_tmp67*_tmp68 + 1000.0*_tmp70*across_4_1 + 1000.0*_tmp73*_tmp74 - 1000.0*_tmp71*_tmp72
+    _tmp76 = numpy.sin(_tmp40)
+    _tmp77 = numpy.sin(_tmp43)
+    _tmp78 = numpy.sin(_tmp44)
+    _tmp79 = _tmp16*(-2*_tmp77**2 + 2*_tmp78**2) + _tmp46*_tmp54 + _tmp47*_tmp51 + _tmp50*_tmp56 - _tmp58*across_2_1
+    _tmp80 = _tmp76*_tmp79
+    _tmp81 = numpy.sin(_tmp62)
+    _tmp82 = 1000.0*_tmp16*(-2*numpy.sin(_tmp64)**2 + 2*numpy.sin(_tmp65)**2) + 1000.0*_tmp67*_tmp72 + 1000.0*_tmp68*_tmp71 + 1000.0*_tmp70*_tmp73 - 1000.0*_tmp74*across_4_1
+    _tmp83 = 0.125*p_0
+    _tmp84 = _tmp83*across_1_0
+    _tmp85 = _tmp83*across_1_1
+    _tmp86 = _tmp27*_tmp83
+    _tmp87 = 0.125*theta_1
+    _tmp88 = 0.25*x_6
+    _tmp89 = sinr1(_tmp19)
+    _tmp90 = _tmp19**3*(_tmp89 - 3*sinr2(_tmp19) + 3*cosr2(_tmp19))
+    _tmp91 = 0.25*_tmp90 + _tmp29*(_tmp87 - _tmp88)
+    _tmp92 = _tmp22**3*(-3*sinr2(_tmp22) + 3*cosr2(_tmp22) + sinr1(_tmp22))
+    _tmp93 = _tmp16*(0.25*_tmp92 + _tmp26*(_tmp87 + _tmp88))
+    _tmp94 = -_tmp20*_tmp86 - _tmp25*_tmp84 - _tmp25*_tmp93 - _tmp31*_tmp85 + 0.125*_tmp23*_tmp30*p_0 + 0.5*_tmp31*_tmp91*p_0
+    _tmp95 = _tmp34*_tmp94
+    _tmp96 = _tmp30*_tmp31
+    _tmp97 = _tmp20*_tmp84 + _tmp20*_tmp93 + _tmp24*_tmp91 - _tmp23*_tmp85 - _tmp25*_tmp86 - _tmp83*_tmp96 + _tmp16*_tmp35*numpy.cos(_tmp17)
+    _tmp98 = _tmp14*_tmp97
+    _tmp99 = _tmp33*_tmp34
+    _tmp100 = _tmp14*_tmp37
+    _tmp101 = _tmp59*_tmp76
+    _tmp102 = _tmp41*_tmp79
+    _tmp103 = _tmp14*_tmp94
+    _tmp104 = _tmp34*_tmp97
+    _tmp105 = _tmp14*_tmp33
+    _tmp106 = _tmp95 + _tmp98 + 0.5*_tmp38 - 0.5*_tmp105
+    _tmp107 = numpy.sin(_tmp61)
+    _tmp108 = 0.25*p_0
+    _tmp109 = numpy.cos(_tmp61)
+    _tmp110 = 0.4330127018922193*p_0
+    _tmp111 = _tmp60 + _tmp80
+    _tmp112 = 0.015*_tmp0 + 0.026*_tmp1
+    _tmp113 = _tmp111 + _tmp112
+    _tmp114 = _tmp113 + _tmp107*_tmp108 + _tmp109*_tmp110
+    _tmp115 = 9.186691875800356*x_4
+    _tmp116 = 0.5*_tmp100
+    _tmp117 = 0.5*_tmp99
+    _tmp118 = _tmp103 + _tmp116 + _tmp117 - _tmp104
+    _tmp119 = _tmp101 - _tmp102
+    _tmp120 = 0.026*_tmp0
+    _tmp121 = 0.015*_tmp1
+    _tmp122 = _tmp120 - _tmp121
+    _tmp123 = _tmp119 + _tmp122 + _tmp107*_tmp110 - _tmp108*_tmp109
+    _tmp124 = 9.186691875800356*x_3
+    _tmp125 = 4.50333209967908*p_0
+    _tmp126 = _tmp18 + 0.75*theta_1
+    _tmp127 = numpy.cos(_tmp126)
+    _tmp128 = 0.375*p_0
+    _tmp129 = numpy.sin(_tmp126)
+    _tmp130 = along_1_1 + sinr0(_tmp19)
+    _tmp131 = _tmp128*_tmp130
+    _tmp132 = -_tmp89 + cosr1(_tmp19)
+    _tmp133 = 5.199999999999999*p_0
+    _tmp134 = _tmp129*_tmp133
+    _tmp135 = _tmp39 + _tmp43 + 0.75*theta_2 + 0.006890018906850267*x_0
+    _tmp136 = numpy.sin(_tmp135)
+    _tmp137 = _tmp136*_tmp16
+    _tmp138 = numpy.cos(_tmp135)
+    _tmp139 = along_2_1 + sinr0(_tmp45)
+    _tmp140 = _tmp133*across_2_1
+    _tmp141 = _tmp133*_tmp139
+    _tmp142 = _tmp61 + _tmp64 + 0.75*theta_4 + 0.006890018906850267*x_2
+    _tmp143 = numpy.sin(_tmp142)
+    _tmp144 = _tmp143*_tmp16
+    _tmp145 = along_4_1 + sinr0(_tmp66)
+    _tmp146 = numpy.cos(_tmp142)
+    _tmp147 = numpy.less_equal(p_0, 0.01)
+    _tmp148 = _DTYPE(numpy.where(_tmp147, 4.333333333333334e-12, 4.761904761904762e-12))
+    _tmp149 = p_0**(-1.0)
+    _tmp150 = _tmp148*_tmp149
+    _tmp151 = 132500.36359327438*_tmp150
+    _tmp152 = _tmp151*x_3
+    _tmp153 = _tmp151*x_4
+    _tmp154 = 600000*_tmp150
+    _tmp155 = -_tmp154*_tmp31
+    _tmp156 = _tmp154*_tmp23
+    _tmp157 = 397501.09077982313*_tmp150
+    _tmp158 = _tmp157*x_3
+    _tmp159 = _tmp157*x_4
+    _tmp160 = -_tmp129*_tmp154
+    _tmp161 = _tmp127*_tmp154
+    _tmp162 = _tmp39 + _tmp48
+    _tmp163 = numpy.sin(_tmp162)
+    _tmp164 = 530001.4543730975*_tmp150
+    _tmp165 = _tmp163*_tmp164
+    _tmp166 = numpy.cos(_tmp162)
+    _tmp167 = _tmp154*_tmp166
+    _tmp168 = _tmp154*_tmp163
+    _tmp169 = _tmp136*_tmp164
+    _tmp170 = _tmp138*_tmp154
+    _tmp171 = _tmp136*_tmp154
+    _tmp172 = _tmp61 + _tmp69
+    _tmp173 = _tmp164*numpy.sin(_tmp172)
+    _tmp174 = numpy.cos(_tmp172)
+    _tmp175 = _tmp143*_tmp164
+    _tmp176 = p_0**2
+    _tmp177 = _DTYPE(numpy.where(_tmp147, 230769230769.23077, 210000000000))
+    _tmp178 = 8.333333333333333e-07*_tmp176*_tmp177
+    _tmp179 = _tmp178*omega_1_1
+    _tmp180 = theta_3 + 0.009186691875800356*x_1
+    _tmp181 = numpy.cos(_tmp180)
+    _tmp182 = -0.015 + _tmp16
+    _tmp183 = numpy.sin(_tmp180)
+    _tmp184 = _tmp182*_tmp183
+    _tmp185 = _tmp1*_tmp16
+    _tmp186 = -_tmp185
+    _tmp187 = 0.5*theta_3 + 0.004593345937900178*x_1
+    _tmp188 = numpy.cos(_tmp187)
+    _tmp189 = 0.5*x_8
+    _tmp190 = 0.25*theta_3 + 0.002296672968950089*x_1
+    _tmp191 = _tmp190 - _tmp189
+    _tmp192 = numpy.sin(_tmp191)
+    _tmp193 = _tmp16*across_3_0
+    _tmp194 = _tmp189 + _tmp190
+    _tmp195 = numpy.sin(_tmp194)
+    _tmp196 = _tmp16*_tmp195
+    _tmp197 = numpy.sin(_tmp189)
+    _tmp198 = numpy.sin(_tmp190)
+    _tmp199 = numpy.cos(_tmp191)
+    _tmp200 = arck(_tmp194)
+    _tmp201 = along_3_0 + _tmp200*_tmp194**2
+    _tmp202 = _tmp16*_tmp201
+    _tmp203 = arck(_tmp191)
+    _tmp204 = along_3_1 + _tmp203*_tmp191**2
+    _tmp205 = numpy.cos(_tmp194)
+    _tmp206 = _tmp16*_tmp205
+    _tmp207 = _tmp16*(-2*_tmp197**2 + 2*_tmp198**2) + _tmp192*_tmp193 + _tmp199*_tmp202 + _tmp204*_tmp206 - _tmp196*across_3_1
+    _tmp208 = _tmp188*_tmp207
+    _tmp209 = numpy.sin(_tmp187)
+    _tmp210 = 1.0*x_8
+    _tmp211 = _tmp16*numpy.sin(_tmp210) + _tmp193*_tmp199 + _tmp196*_tmp204 + _tmp206*across_3_1 - _tmp192*_tmp202
+    _tmp212 = _tmp209*_tmp211
+    _tmp213 = _tmp208 - _tmp212
+    _tmp214 = 0.8833357572884959*x_3
+    _tmp215 = _tmp0*_tmp16
+    _tmp216 = _tmp100 + _tmp99
+    _tmp217 = _tmp215 + _tmp216
+    _tmp218 = _tmp181*_tmp182
+    _tmp219 = _tmp207*_tmp209
+    _tmp220 = _tmp188*_tmp211
+    _tmp221 = 0.1 + _tmp218 - _tmp219 - _tmp220 - 0.068*_tmp183
+    _tmp222 = 0.8833357572884959*x_4
+    _tmp223 = numpy.sin(_tmp4)
+    _tmp224 = _tmp7**2
+    _tmp225 = 0.045*_tmp223 - 0.128*_tmp224
+    _tmp226 = -0.064*_tmp223 - 0.09*_tmp224
+    _tmp227 = _tmp119 + _tmp216
+    _tmp228 = _tmp38 - _tmp105
+    _tmp229 = _tmp111 + _tmp228
+    _tmp230 = 0.0011483364844750445*p_0
+    _tmp231 = _tmp192*_tmp230
+    _tmp232 = _tmp195*_tmp230
+    _tmp233 = _tmp199*_tmp201
+    _tmp234 = 0.002296672968950089*x_8
+    _tmp235 = 0.0011483364844750445*theta_3 + 1.0549413452612033e-05*x_1
+    _tmp236 = _tmp191**3*(-3*sinr2(_tmp191) + 3*cosr2(_tmp191) + sinr1(_tmp191))
+    _tmp237 = 0.002296672968950089*_tmp236 + _tmp203*(_tmp235 - _tmp234)
+    _tmp238 = _tmp194**3*(-3*sinr2(_tmp194) + 3*cosr2(_tmp194) + sinr1(_tmp194))
+    _tmp239 = _tmp16*(0.002296672968950089*_tmp238 + _tmp200*(_tmp234 + _tmp235))
+    _tmp240 = -_tmp192*_tmp239 - _tmp230*_tmp233 - _tmp231*across_3_0 - _tmp232*across_3_1 + 0.5*_tmp195*_tmp237*p_0 + 0.0011483364844750445*_tmp204*_tmp205*p_0
+    _tmp241 = _tmp199*across_3_0
+    _tmp242 = 0.004593345937900178*p_0
+    _tmp243 = _tmp199*_tmp239 + _tmp206*_tmp237 + _tmp230*_tmp241 - _tmp201*_tmp231 - _tmp204*_tmp232 + _tmp198*_tmp242*numpy.cos(_tmp190) - _tmp205*_tmp230*across_3_1
+    _tmp244 = 0.44166787864424795*p_0
+    _tmp245 = _tmp108*across_1_1
+    _tmp246 = _tmp108*_tmp20
+    _tmp247 = -0.5*_tmp90 - _tmp19*_tmp29
+    _tmp248 = 0.5*_tmp92 + _tmp22*_tmp26
+    _tmp249 = _tmp16*numpy.cos(_tmp15) + _tmp246*_tmp27 + _tmp247*_tmp32 - _tmp245*_tmp31 + _tmp108*_tmp23*_tmp30 + _tmp108*_tmp25*across_1_0 - _tmp16*_tmp248*_tmp25
+    _tmp250 = 1.0*p_0
+    _tmp251 = -_tmp108*_tmp96 - _tmp23*_tmp245 - _tmp246*across_1_0 - _tmp250*_tmp36*numpy.cos(_tmp18) + 0.25*_tmp25*_tmp27*p_0 + 0.5*_tmp20*_tmp248*p_0 + 0.5*_tmp23*_tmp247*p_0
+    _tmp252 = _tmp14*_tmp251 + _tmp249*_tmp34
+    _tmp253 = _tmp14*_tmp249 - _tmp251*_tmp34
+    _tmp254 = _tmp108*_tmp195
+    _tmp255 = _tmp108*_tmp205
+    _tmp256 = -0.5*_tmp236 - _tmp191*_tmp203
+    _tmp257 = 0.5*_tmp238 + _tmp194*_tmp200
+    _tmp258 = _tmp108*_tmp233 + _tmp16*numpy.cos(_tmp210) + _tmp196*_tmp256 + _tmp204*_tmp255 - _tmp254*across_3_1 + _tmp108*_tmp192*across_3_0 - _tmp16*_tmp192*_tmp257
+    _tmp259 = -_tmp108*_tmp241 - _tmp204*_tmp254 - _tmp255*across_3_1 - _tmp197*_tmp250*numpy.cos(_tmp189) + 0.25*_tmp192*_tmp201*p_0 + 0.5*_tmp199*_tmp257*p_0 + 0.5*_tmp205*_tmp256*p_0
+    _tmp260 = 0.00041340113441101604*_tmp5 - 0.0011758965601024456*_tmp8
+    _tmp261 = -0.0008268022688220321*_tmp8 - 0.0005879482800512228*_tmp5
+    _tmp262 = _tmp230*across_2_0
+    _tmp263 = _tmp230*_tmp57
+    _tmp264 = _tmp230*_tmp53
+    _tmp265 = 0.002296672968950089*x_7
+    _tmp266 = 0.0011483364844750445*theta_2 + 1.0549413452612033e-05*x_0
+    _tmp267 = _tmp45**3*(-3*sinr2(_tmp45) + 3*cosr2(_tmp45) + sinr1(_tmp45))
+    _tmp268 = 0.002296672968950089*_tmp267 + _tmp55*(_tmp266 - _tmp265)
+    _tmp269 = _tmp48**3*(-3*sinr2(_tmp48) + 3*cosr2(_tmp48) + sinr1(_tmp48))
+    _tmp270 = _tmp16*(0.002296672968950089*_tmp269 + _tmp52*(_tmp265 + _tmp266))
+    _tmp271 = -_tmp262*_tmp51 - _tmp263*across_2_1 - _tmp264*_tmp46 - _tmp270*_tmp51 + 0.5*_tmp268*_tmp57*p_0 + 0.0011483364844750445*_tmp49*_tmp56*p_0
+    _tmp272 = _tmp262*_tmp46 + _tmp268*_tmp50 + _tmp270*_tmp46 - _tmp263*_tmp56 - _tmp264*_tmp51 + _tmp242*_tmp78*numpy.cos(_tmp44) - _tmp230*_tmp49*across_2_1
+    _tmp273 = _tmp108*_tmp57
+    _tmp274 = _tmp108*_tmp46
+    _tmp275 = _tmp108*_tmp49
+    _tmp276 = -0.5*_tmp267 - _tmp45*_tmp55
+    _tmp277 = 0.5*_tmp269 + _tmp48*_tmp52
+    _tmp278 = _tmp16*numpy.cos(_tmp42) + _tmp274*_tmp53 + _tmp275*_tmp56 + _tmp276*_tmp58 - _tmp273*across_2_1 + _tmp108*_tmp51*across_2_0 - _tmp16*_tmp277*_tmp51
+    _tmp279 = -_tmp273*_tmp56 - _tmp274*across_2_0 - _tmp275*across_2_1 - _tmp250*_tmp77*numpy.cos(_tmp43) + 0.25*_tmp51*_tmp53*p_0 + 0.5*_tmp276*_tmp49*p_0 + 0.5*_tmp277*_tmp46*p_0
+    _tmp280 = _tmp102 + _tmp121 - _tmp101 - _tmp120
+    _tmp281 = 0.045*_tmp5 - 0.128*_tmp8
+    _tmp282 = -0.064*_tmp5 - 0.09*_tmp8
+    _tmp283 = _tmp16*_tmp25
+    _tmp284 = _tmp16*_tmp20
+    _tmp285 = _tmp14*_tmp283 + _tmp284*_tmp34
+    _tmp286 = -_tmp285
+    _tmp287 = _tmp14*_tmp284 - _tmp283*_tmp34
+    _tmp288 = _tmp14*_tmp32 - _tmp24*_tmp34
+    _tmp289 = _tmp14*_tmp24 + _tmp32*_tmp34
+    _tmp290 = -_tmp288
+    _tmp291 = _tmp16*_tmp209
+    _tmp292 = _tmp192*_tmp291 + _tmp16*_tmp188*_tmp199
+    _tmp293 = -_tmp199*_tmp291 + 0.5*_tmp188*_tmp192*p_0
+    _tmp294 = _tmp196*_tmp209 - 0.5*_tmp188*_tmp205*p_0
+    _tmp295 = -_tmp188*_tmp196 - _tmp206*_tmp209
+    _tmp296 = -_tmp287
+    _tmp297 = -_tmp289
+    _tmp298 = _tmp16*_tmp76
+    _tmp299 = _tmp16*_tmp41
+    _tmp300 = _tmp298*_tmp51 + _tmp299*_tmp46
+    _tmp301 = _tmp299*_tmp51 - _tmp298*_tmp46
+    _tmp302 = -_tmp58*_tmp76 + 0.5*_tmp41*_tmp49*p_0
+    _tmp303 = _tmp41*_tmp58 + _tmp50*_tmp76
+    _tmp304 = 2400000*_tmp148/_tmp176
+    _tmp305 = 2120005.81749239*_tmp150
+    _tmp306 = _tmp305*x_4
+    _tmp307 = _tmp305*x_3
+    _tmp308 = 0.0008333333333333334*_tmp148*_tmp177
+    _tmp309 = 1.2380952380952381e-14*_tmp177
+    _tmp310 = 0.1*_DTYPE(numpy.where(_tmp147, 480384.4614152614, 458257.569495584))*_DTYPE(numpy.where(_tmp147, 2.0816659994661327e-06, 2.1821789023599237e-06))
+    _tmp311 = 0.015 - _tmp108
+    _tmp312 = 0.026 - _tmp110
+    _tmp313 = numpy.cos(_tmp39)
+    _tmp314 = numpy.sin(_tmp39)
+    _tmp315 = 0.07 - _tmp16
+    return [
+        1,
+        0,
+        0,
+        0,
+        -26.0*_tmp1 - 15.0*_tmp0 - 500.0*_tmp38 - 1000.0*_tmp60 - 1000.0*_tmp80 - 1000.0*_tmp95 - 1000.0*_tmp98 - _tmp10*_tmp12 - _tmp63*_tmp75 - _tmp81*_tmp82 + 500.0*_tmp14*_tmp33 + 1000.0*_tmp3*_tmp9,
+        0,
+        0,
+        0,
+        15.0*_tmp1 + 1000.0*_tmp102 + 1000.0*_tmp104 - 26.0*_tmp0 - 500.0*_tmp100 - 500.0*_tmp99 - 1000.0*_tmp101 - 1000.0*_tmp103 + _tmp12*_tmp9 + _tmp63*_tmp82 - _tmp75*_tmp81 + 1000.0*_tmp10*_tmp3,
+        0,
+        0,
+        0,
+        _tmp124*(_tmp118 + _tmp123) - _tmp115*(_tmp106 + _tmp114),
+        0.6656*_tmp109 + 0.4679999999999999*_tmp107 - _tmp109*_tmp125 - 2.5999999999999996*_tmp107*p_0,
+        0.6656*_tmp107 - 0.4679999999999999*_tmp109 - _tmp107*_tmp125 + 2.5999999999999996*_tmp109*p_0,
+        -10.399999999999999,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp124*(-_tmp129*_tmp131 - _tmp127*_tmp128*across_1_1 + 0.125*_tmp127*_tmp132*_tmp19*p_0) - _tmp115*(-_tmp127*_tmp131 + 0.375*_tmp129*across_1_1*p_0 - _tmp129*_tmp132*_tmp19*_tmp83),
+        -_tmp134*across_1_1 + 5.199999999999999*_tmp127*_tmp130*p_0,
+        _tmp130*_tmp134 + _tmp127*_tmp133*across_1_1,
+        0,
+        _tmp124*(-_tmp137*across_2_1 + 0.5*_tmp138*_tmp139*p_0) - _tmp115*(-_tmp137*_tmp139 - _tmp138*_tmp16*across_2_1),
+        _tmp136*_tmp141 + _tmp138*_tmp140,
+        _tmp136*_tmp140 - _tmp138*_tmp141,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp124*(-_tmp144*across_4_1 + 0.5*_tmp145*_tmp146*p_0) - _tmp115*(-_tmp144*_tmp145 - _tmp146*_tmp16*across_4_1),
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        -_tmp152*_tmp23 - _tmp153*_tmp31,
+        _tmp155,
+        _tmp156,
+        0,
+        _tmp152*_tmp31 - _tmp153*_tmp23,
+        -_tmp156,
+        _tmp155,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        -_tmp127*_tmp158 - _tmp129*_tmp159,
+        _tmp160,
+        _tmp161,
+        0,
+        _tmp129*_tmp158 - _tmp127*_tmp159,
+        -_tmp161,
+        _tmp160,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp165*x_3 + 530001.4543730975*_tmp148*_tmp149*_tmp166*x_4,
+        _tmp167,
+        _tmp168,
+        0,
+        -_tmp165*x_4 - _tmp164*_tmp166*x_3,
+        -_tmp168,
+        _tmp167,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp169*x_3 + 530001.4543730975*_tmp138*_tmp148*_tmp149*x_4,
+        _tmp170,
+        _tmp171,
+        0,
+        -_tmp169*x_4 - _tmp138*_tmp164*x_3,
+        -_tmp171,
+        _tmp170,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp173*x_3 + 530001.4543730975*_tmp148*_tmp149*_tmp174*x_4,
+        0,
+        0,
+        0,
+        -_tmp173*x_4 - _tmp164*_tmp174*x_3,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp175*x_3 + 530001.4543730975*_tmp146*_tmp148*_tmp149*x_4,
+        0,
+        0,
+        0,
+        -_tmp175*x_4 - _tmp146*_tmp164*x_3,
+        0,
+        0,
+        0,
+        _tmp179 - 0.09615384615384616*x_5 + _tmp214*(_tmp105 + _tmp184 + _tmp186 + _tmp213 - _tmp38 + 0.068*_tmp181) - _tmp222*(_tmp217 + _tmp221),
+        -_tmp227 + _tmp226*_tmp3 - _tmp11*_tmp225,
+        _tmp229 + _tmp11*_tmp226 + _tmp225*_tmp3,
+        _tmp4,
+        0,
+        _tmp214*(-0.004593345937900178*_tmp219 - 0.004593345937900178*_tmp220 - 0.0006246950475544242*_tmp183 + _tmp188*_tmp243 - _tmp209*_tmp240 + 0.009186691875800356*_tmp181*_tmp182) - _tmp222*(-0.004593345937900178*_tmp208 - 0.009186691875800356*_tmp184 - 0.0006246950475544242*_tmp181 - _tmp188*_tmp240 - _tmp209*_tmp243 + 0.004593345937900178*_tmp209*_tmp211),
+        0,
+        0.8833357572884959*_tmp105 + 0.8833357572884959*_tmp184 + 0.8833357572884959*_tmp208 + 0.06006683149561772*_tmp181 - 0.8833357572884959*_tmp212 - 0.8833357572884959*_tmp38 - _tmp1*_tmp244,
+        -0.08833357572884959 + 0.06006683149561772*_tmp183 - 0.8833357572884959*_tmp100 - 0.8833357572884959*_tmp218 - 0.8833357572884959*_tmp99 - _tmp0*_tmp244 + 0.8833357572884959*_tmp188*_tmp211 + 0.8833357572884959*_tmp207*_tmp209,
+        -0.09615384615384616,
+        _tmp214*_tmp253 - _tmp222*_tmp252,
+        0,
+        _tmp214*(_tmp188*_tmp259 - _tmp209*_tmp258) - _tmp222*(-_tmp188*_tmp258 - _tmp209*_tmp259),
+        0,
+        -0.004593345937900178*_tmp60 - 0.004593345937900178*_tmp80 + _tmp261*_tmp3 + _tmp272*_tmp41 - _tmp11*_tmp260 - _tmp271*_tmp76,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp252,
+        _tmp279*_tmp41 - _tmp278*_tmp76,
+        0,
+        0,
+        0.004593345937900178*_tmp102 - 0.004593345937900178*_tmp101 + _tmp11*_tmp261 + _tmp260*_tmp3 + _tmp271*_tmp41 + _tmp272*_tmp76,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp253,
+        _tmp278*_tmp41 + _tmp279*_tmp76,
+        0,
+        0,
+        0.009186691875800356,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp214*(_tmp118 + _tmp215) - _tmp222*(_tmp106 + _tmp185),
+        _tmp113 + _tmp186 + 0.064*_tmp109 + 0.045*_tmp107,
+        -_tmp215 - _tmp280 + 0.064*_tmp107 - 0.045*_tmp109,
+        -1,
+        -_tmp106 - _tmp113 + _tmp282*_tmp3 - _tmp11*_tmp281,
+        0,
+        0,
+        0,
+        _tmp104 + _tmp280 - _tmp103 - _tmp116 - _tmp117 + _tmp11*_tmp282 + _tmp281*_tmp3,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        _tmp214*_tmp286 - _tmp222*_tmp287,
+        _tmp214*_tmp287 - _tmp222*_tmp285,
+        0,
+        _tmp214*_tmp288 - _tmp222*_tmp289,
+        _tmp214*_tmp289 - _tmp222*_tmp290,
+        _tmp178,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp214*_tmp292 - _tmp222*_tmp293,
+        _tmp214*_tmp293 + _tmp222*_tmp292,
+        0,
+        -_tmp214*_tmp294 - _tmp222*_tmp295,
+        _tmp214*_tmp295 - _tmp222*_tmp294,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp296,
+        _tmp286,
+        0,
+        _tmp297,
+        _tmp288,
+        0,
+        _tmp300,
+        _tmp301,
+        0,
+        _tmp302,
+        -_tmp303,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp285,
+        _tmp296,
+        0,
+        _tmp290,
+        _tmp297,
+        0,
+        -_tmp301,
+        _tmp300,
+        0,
+        _tmp303,
+        _tmp302,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp304*(_tmp179 - _tmp214*(_tmp16 + _tmp185 + _tmp228) - _tmp217*_tmp222),
+        _tmp306,
+        -_tmp307,
+        _tmp308,
+        _tmp309,
+        _tmp310,
+        _tmp177,
+        0,
+        _tmp304*(_tmp178*omega_2_1 + _tmp222*(-_tmp123 + _tmp0*_tmp312 - _tmp1*_tmp311) - _tmp214*(_tmp114 - _tmp0*_tmp311 - _tmp1*_tmp312)),
+        _tmp306*_tmp314 + _tmp307*_tmp313,
+        -_tmp307*_tmp314 + 2120005.81749239*_tmp148*_tmp149*_tmp313*x_4,
+        _tmp308,
+        _tmp309,
+        _tmp310,
+        _tmp177,
+        0,
+        _tmp304*(_tmp178*omega_3_1 + _tmp214*(_tmp16 + _tmp213 + _tmp16*_tmp181) - _tmp222*(-_tmp219 - _tmp220 - _tmp16*_tmp183)),
+        -_tmp306,
+        _tmp307,
+        _tmp308,
+        _tmp309,
+        _tmp310,
+        _tmp177,
+        0,
+        _tmp304*(_tmp178*omega_4_1 + _tmp222*(_tmp122 + _tmp221 + _tmp227 + 0.042*_tmp107 - _tmp109*_tmp315) - _tmp214*(-_tmp112 - _tmp212 - _tmp229 + 0.068*_tmp181 - 0.042*_tmp109 + _tmp182*_tmp183 + _tmp188*_tmp207 - _tmp107*_tmp315)),
+        _tmp107*_tmp306 + _tmp109*_tmp307,
+        -_tmp107*_tmp307 + 2120005.81749239*_tmp109*_tmp148*_tmp149*x_4,
+        _tmp308,
+        _tmp309,
+        _tmp310,
+        _tmp177,
+        0,
     ]
 
 
@@ -5711,6 +6902,16 @@ _MECHANISM = _Mechanism(
         # the sensitivities (templates/numpy/reduced_sens.py): per variant its routine and blocks
         sens=((_loaded_sens1, {'dR_dtheta': (0, 6, 4), 'dR_dp': (24, 6, 1), 'din_dtheta': (30, 20, 4), 'din_dp': (110, 20, 1), 'dD_dx': (130, 2, 6), 'dD_dtheta': (142, 2, 4), 'dD_dp': (150, 2, 1), 'dD_dout': (152, 2, 12)}), (_loaded_sens2, {'dR_dtheta': (0, 10, 4), 'dR_dp': (40, 10, 1), 'din_dtheta': (50, 40, 4), 'din_dp': (210, 40, 1), 'dD_dx': (250, 2, 10), 'dD_dtheta': (270, 2, 4), 'dD_dp': (278, 2, 1), 'dD_dout': (280, 2, 24)}), ),
         eps4=_plate_eps4,
+        # what the level reports beyond the deviations (templates/numpy/reduced_report.py): per
+        # variant its routine and blocks; the inputs, points (on the frame or not), plates
+        # (with an allowable stress or not), metres per file unit and the scales L, F
+        report=_LoadedTables(
+            routines=((_loaded_report1, {'dR_dv': (0, 6, 4), 'din_dv': (24, 12, 4), 'y': (72, 4, 1), 'dy_dx': (76, 4, 6), 'dy_dv': (100, 4, 4), 'dy_dout': (116, 4, 12), 'stress': (164, 4, 8)}), (_loaded_report2, {'dR_dv': (0, 10, 4), 'din_dv': (40, 24, 4), 'y': (136, 4, 1), 'dy_dx': (140, 4, 10), 'dy_dv': (180, 4, 4), 'dy_dout': (196, 4, 24), 'stress': (292, 4, 8)}), ),
+            inputs=('A0',), points=('C',),
+            frame=(False,), plates=('A0', 'A', 'B0', 'B'),
+            limits=(False, False, False, False), unit_scale=1.0,
+            L=0.10885311203635843, F=0.8833357572884958,
+        ),
     ),
     loaded_solve=_reduced_solve,
     sens_rigid_blocks={'A': (0, 3, 3), 'dG_dv': (9, 3, 2), 'dR_dtheta': (15, 2, 3), 'dR_dv': (21, 2, 2)},
@@ -5727,10 +6928,11 @@ _MECHANISM = _Mechanism(
 )
 
 
-def evaluate(inputs, level='exact', params=None, links=True):
+def evaluate(inputs, level='exact', params=None, links=True, report=True):
     """Deviation of the points at `level` for broadcast input arrays (see the module docstring);
-    `links=False` leaves out the links' rotations (and any loop solve only they need)."""
-    return _evaluate(_MECHANISM, inputs, level, params, links)
+    `links=False` leaves out the links' rotations (and any loop solve only they need),
+    `report=False` what `loaded` reports beyond the deviations."""
+    return _evaluate_reported(_MECHANISM, inputs, level, params, links, report)
 
 
 def sensitivity(inputs, level='exact', params=None):

@@ -3,7 +3,7 @@
  * Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
  * Points: F; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 158, rigid_res 148, linear 275, newton 531, rigid_points 14, loaded_plates1 285, loaded_system1 937, loaded_res1 460, loaded_dev1 36, loaded_plates2 775, loaded_system2 3363, loaded_res2 1144, loaded_dev2 116, dev_paper 33, dev_first_order 33, dev_exact 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97, loaded_sens1 1245, loaded_sens2 3457, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
+ * Operation counts after CSE: rigid 158, rigid_res 148, linear 275, newton 531, rigid_points 14, loaded_plates1 285, loaded_system1 937, loaded_res1 460, loaded_dev1 36, loaded_report1 1589, loaded_plates2 775, loaded_system2 3363, loaded_res2 1144, loaded_dev2 116, loaded_report2 3431, dev_paper 33, dev_first_order 33, dev_exact 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97, loaded_sens1 1245, loaded_sens2 3457, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
  */
 #ifndef SYMKIN_NINE_BAR_PLATFORM_H
 #define SYMKIN_NINE_BAR_PLATFORM_H
@@ -100,5 +100,24 @@ int nine_bar_platform_sensitivity_full(const double *inputs, const double *param
 /* nine_bar_platform_sensitivity_full for n rows of inputs (as nine_bar_platform_evaluate_batch). */
 int nine_bar_platform_sensitivity_batch(int n, const double *inputs, const double *params, int level,
                           double *values, double *deviation, double *rigid, int *status);
+
+/*
+ * What the `loaded` level reports beyond the deviations (docs/physics.md, "What loaded
+ * reports"), for one configuration (inputs and params as nine_bar_platform_evaluate's) solved at
+ * `loaded`. out receives NINE_BAR_PLATFORM_N_REPORT doubles: per input hinge in
+ * nine_bar_platform_report_input_names order its moment (N m) and dM/dtheta (N m/rad); per point in
+ * nine_bar_platform_point_names order its 3 x 3 stiffness with every input held (9 doubles, row-major,
+ * rows and columns x, y, rotation, in the file's length unit; NaN where the point is on the frame
+ * or its compliance is singular); per plate in nine_bar_platform_report_plate_names order its largest
+ * normal stress (Pa), strain, safety factor (the allowable stress over the stress; NaN without
+ * one) and where along the plate (0..1) (4 doubles). Not the buckling factor (symkin eval's).
+ * Same return codes as nine_bar_platform_evaluate at `loaded`; on any non-zero return out is NaN.
+ */
+#define NINE_BAR_PLATFORM_N_REPORT_INPUTS 4
+#define NINE_BAR_PLATFORM_N_REPORT_PLATES 10
+#define NINE_BAR_PLATFORM_N_REPORT (2 * NINE_BAR_PLATFORM_N_REPORT_INPUTS + 9 * NINE_BAR_PLATFORM_N_POINTS + 4 * NINE_BAR_PLATFORM_N_REPORT_PLATES)
+extern const char *const nine_bar_platform_report_input_names[NINE_BAR_PLATFORM_N_REPORT_INPUTS > 0 ? NINE_BAR_PLATFORM_N_REPORT_INPUTS : 1];
+extern const char *const nine_bar_platform_report_plate_names[NINE_BAR_PLATFORM_N_REPORT_PLATES > 0 ? NINE_BAR_PLATFORM_N_REPORT_PLATES : 1];
+int nine_bar_platform_loaded_report(const double *inputs, const double *params, double *out);
 
 #endif /* SYMKIN_NINE_BAR_PLATFORM_H */

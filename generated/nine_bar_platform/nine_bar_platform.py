@@ -2,7 +2,7 @@
 Mechanism 'nine_bar_platform': 9 links, 10 hinges, 2 loop(s); inputs O, A, B, K.
 Points: F; levels: paper, first_order, exact, loaded.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 158, rigid_res 148, linear 275, newton 531, rigid_points 14, loaded_plates1 285, loaded_system1 937, loaded_res1 460, loaded_dev1 36, loaded_plates2 775, loaded_system2 3363, loaded_res2 1144, loaded_dev2 116, dev_paper 33, dev_first_order 33, dev_exact 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97, loaded_sens1 1245, loaded_sens2 3457, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
+Operation counts after CSE: rigid 158, rigid_res 148, linear 275, newton 531, rigid_points 14, loaded_plates1 285, loaded_system1 937, loaded_res1 460, loaded_dev1 36, loaded_report1 1589, loaded_plates2 775, loaded_system2 3363, loaded_res2 1144, loaded_dev2 116, loaded_report2 3431, dev_paper 33, dev_first_order 33, dev_exact 33, links 9, sens_rigid 142, sens_paper 97, sens_first_order 97, sens_exact 97, loaded_sens1 1245, loaded_sens2 3457, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -11,6 +11,14 @@ False in ok. It also holds "angles": {"rigid": {H: a}, "compliant": {H: a}}, eve
 angle (radians, the rotation of links[1] relative to links[0] from the as-fabricated pose), and
 "links": {L: {"rigid": a, "compliant": a, "deviation": a}}, the rotation of every link in LINKS
 from the as-fabricated pose (rigid wrapped to (-pi, pi]; the deviation computed directly).
+
+At level "loaded" it also holds what the level reports beyond the deviations (docs/physics.md,
+"What loaded reports"): "inputs": {H: {"angle", "moment", "stiffness"}} of every input hinge
+(rad, N m, N m/rad), "stiffness": {P: K}, K of shape (3, 3, *broadcast_shape) the point's
+stiffness with every input held (rows and columns x, y, rotation; N/u, N, N u with u the file's
+length unit; NaN where the point is on the frame or its compliance is singular), "plates": {H:
+{"stress", "strain", "safety", "section"}} of every plate (Pa; safety NaN without an allowable
+stress; section where along the plate, 0..1). Not the buckling factor (symkin eval's).
 
 sensitivity(inputs, level, params) gives {P: {p: a}}: d(dx, dy)/dp of every point's deviation
 by every parameter p, each a of shape (2, *broadcast_shape); sensitivity_full(...) adds the
@@ -934,23 +942,20 @@ def _red_block(out, block, b):
     return numpy.stack(values, axis=-1).reshape(b, rows, cols)
 
 
-def _reduced_rates(mech, theta, p, q, thu, ok):
-    """dev (*shape, 2 n_P, n_v) of the loaded level at its solutions (q: the variant solved and
-    its x, templates/numpy/reduced.py); thu dtheta_u/dv (*shape, k, n_v), None without. J is
-    evaluated once more at the solution, then dx/dv = -J^-1 dR/dv at fixed x and
-    dD/dv = dD/dx dx/dv + dD/dtheta dtheta/dv + dD/dp + dD/dout dout/dv (reduced_sens.c)."""
+def _red_solutions(mech, theta, p, q, shape, good, routines):
+    """The configurations the loaded level solved (q: the variant and its x; shape: the
+    configurations', good: a flat mask of them),
+    variant by variant, evaluated again at their solution for the implicit-function theorem
+    (templates/numpy/reduced_sens.py, reduced_report.py): per variant solved (where, solver,
+    routines[variant]'s output, J (b, n, n), dR/d(plates) (b, n, 3 n_s), the half plates'
+    inputs, their x-Jacobian and the relation there)."""
     tb = mech.loaded
-    shape = ok.shape
-    npar, nv, m = len(mech.parameter_names), mech.n_variables, mech.n_theta
-    npt = 2 * len(mech.point_names)
-    dev = numpy.full((ok.size, npt, nv), numpy.nan)
     variant = numpy.broadcast_to(q.variant, shape).reshape(-1)
-    good = numpy.broadcast_to(ok, shape).reshape(-1)
 
     def flat(values, where):
         return [numpy.broadcast_to(v, shape).reshape(-1)[where].astype(float) for v in values]
 
-    for index, (variant_row, (fn, blocks)) in enumerate(zip(tb.variants, tb.sens)):
+    for index, (variant_row, fn) in enumerate(zip(tb.variants, routines)):
         where = numpy.flatnonzero(good & (variant == index))
         b = where.size
         if not b:
@@ -964,8 +969,28 @@ def _reduced_rates(mech, theta, p, q, thu, ok):
             args, ins, dins = solver._inputs(x, th, pb, 1.0)
             rel, vals = solver._relation(ins)
             sys = solver.system_fn(args, th, vals, pb)
-            s = fn(args, th, vals, pb)
+            out = fn(args, th, vals, pb)
         jo = _red_block(sys, (n + n * n, n, 3 * ns), b)
+        yield where, solver, out, jac, jo, ins, dins, rel
+
+
+def _reduced_rates(mech, theta, p, q, thu, ok):
+    """dev (*shape, 2 n_P, n_v) of the loaded level at its solutions (q: the variant solved and
+    its x, templates/numpy/reduced.py); thu dtheta_u/dv (*shape, k, n_v), None without. J is
+    evaluated once more at the solution, then dx/dv = -J^-1 dR/dv at fixed x and
+    dD/dv = dD/dx dx/dv + dD/dtheta dtheta/dv + dD/dp + dD/dout dout/dv (reduced_sens.c)."""
+    tb = mech.loaded
+    shape = ok.shape
+    npar, nv, m = len(mech.parameter_names), mech.n_variables, mech.n_theta
+    npt = 2 * len(mech.point_names)
+    dev = numpy.full((ok.size, npt, nv), numpy.nan)
+    good = numpy.broadcast_to(ok, shape).reshape(-1)
+    routines = [fn for fn, _ in tb.sens]
+    for where, solver, s, jac, jo, ins, dins, rel in _red_solutions(
+        mech, theta, p, q, shape, good, routines
+    ):
+        blocks = tb.sens[solver.count - 1][1]
+        b, n, ns = where.size, solver.size, solver.plates
         # dtheta/dv of every hinge: the non-input ones' from the rigid closure, an input's own 1
         dth = numpy.zeros((b, m, nv))
         if thu is not None:
@@ -1008,6 +1033,175 @@ def _reduced_rates(mech, theta, p, q, thu, ok):
             + numpy.matmul(_red_block(s, blocks["dD_dout"], b), dout)
         )
     return dev.reshape(shape + (npt, nv))
+
+
+#: Sections per plate where the stress is sampled (symkin.physics.reported.SECTIONS), one RK4
+#: step each (against the Python path's Taylor series: 5e-12 of the stress, tests/
+#: test_loaded_reported_codegen.py).
+_STRESS_SECTIONS = 64
+#: A point's scaled compliance this ill-conditioned is singular (reported.SINGULAR): NaN.
+_SINGULAR = 1e12
+
+
+def _evaluate_reported(mech, inputs, level, params, links, report=True):
+    """The module's evaluate() (runtime.py's _evaluate) with, at the loaded level and with
+    `report`, what it reports beyond the deviations: "inputs", "stiffness", "plates"
+    (_reduced_report)."""
+    arrays, p = _prepare(mech, inputs, level, params)
+    return _blocks(_reported_block, arrays, mech, level, p, links, report)
+
+
+def _reported_block(arrays, mech, level, p, links, report):
+    """evaluate() on one block of broadcast input arrays (runtime.py's _evaluate_block), the
+    report added at the loaded level."""
+    theta, delta, ok, q = _pose(mech, arrays, level, p, links)
+    result = _points(mech, theta, delta, ok, level, p, q, links)
+    if report and mech.levels[level].loaded:
+        result.update(_reduced_report(mech, theta, p, q, result["ok"]))
+    return result
+
+
+def _plate_stress(k0, lx, ly, ea, es, slender, modulus, limit, has_limit):
+    """Largest normal stress (Pa), its strain, the safety factor (NaN without an allowable
+    stress) and where along the plate (0..1), per configuration ((b,) arrays): the plate's IVP
+    psi'' = -f_Q (1 + (e_a - e_s) f_N), psi(0) = 0, psi'(0) = k0 (symkin.physics.beams) by
+    fixed-step RK4, the strain |psi'| t/(2l) + |f_N| (t/l)^2/12 at every section and the
+    parabola's vertex through the three samples around an interior maximum
+    (symkin.physics.reported.plate_stress)."""
+    d = ea - es
+
+    def rate(psi, om):
+        c, s = numpy.cos(psi), numpy.sin(psi)
+        return om, -(ly * c - lx * s) * (1 + d * (lx * c + ly * s))
+
+    n = _STRESS_SECTIONS
+    h = 1.0 / n
+    psi, om = numpy.zeros_like(k0), numpy.array(k0, dtype=float)
+    psis, oms = [psi], [om]
+    for _ in range(n):
+        a1, b1 = rate(psi, om)
+        a2, b2 = rate(psi + h / 2 * a1, om + h / 2 * b1)
+        a3, b3 = rate(psi + h / 2 * a2, om + h / 2 * b2)
+        a4, b4 = rate(psi + h * a3, om + h * b3)
+        psi = psi + h / 6 * (a1 + 2 * a2 + 2 * a3 + a4)
+        om = om + h / 6 * (b1 + 2 * b2 + 2 * b3 + b4)
+        psis.append(psi)
+        oms.append(om)
+    psi, om = numpy.array(psis), numpy.array(oms)  # (n + 1, b)
+    normal = lx * numpy.cos(psi) + ly * numpy.sin(psi)
+    strain = numpy.abs(om) * slender / 2 + numpy.abs(normal) * slender**2 / 12
+    b = k0.shape[0]
+    j = numpy.argmax(strain, axis=0)
+    cols = numpy.arange(b)
+    value = strain[j, cols]
+    where = j / n
+    inner = (j > 0) & (j < n)
+    ja, jc = numpy.clip(j - 1, 0, n), numpy.clip(j + 1, 0, n)
+    sa, sc = strain[ja, cols], strain[jc, cols]
+    bend = sa - 2 * value + sc
+    vertex = inner & (bend < 0)
+    with numpy.errstate(all="ignore"):
+        shift = (sa - sc) / (2 * bend)
+        value = numpy.where(vertex, value - (sa - sc) * shift / 4, value)
+        where = numpy.where(vertex, (j + shift) / n, where)
+        stress = modulus * value
+        safety = numpy.where(stress > 0, limit / stress, math.inf)
+    safety = numpy.where(has_limit, safety, numpy.nan)
+    return stress, value, safety, where
+
+
+def _reduced_report(mech, theta, p, q, ok):
+    """What the loaded level reports at its solutions (q: the variant solved and its x,
+    templates/numpy/reduced.py), NaN where not ok: {"inputs": {H: {"angle", "moment",
+    "stiffness"}}, "stiffness": {P: (3, 3, *shape)}, "plates": {H: {"stress", "strain",
+    "safety", "section"}}} (N m, N m/rad; the stiffness in the file's length unit; Pa)."""
+    tb = mech.loaded
+    rep = tb.report
+    shape = ok.shape
+    nin, npt, npl = len(rep.inputs), len(rep.points), len(rep.plates)
+    size = ok.size
+    ys = numpy.full((size, nin + 3 * npt), numpy.nan)
+    rates = numpy.full((size, nin + 3 * npt, nin + 3 * npt), numpy.nan)
+    stress = numpy.full((size, npl, 8), numpy.nan)
+    good = numpy.broadcast_to(ok, shape).reshape(-1)
+    routines = [fn for fn, _ in rep.routines]
+    for where, solver, out, jac, jo, _, dins, rel in _red_solutions(
+        mech, theta, p, q, shape, good, routines
+    ):
+        blocks = rep.routines[solver.count - 1][1]
+        b, n, ns = where.size, solver.size, solver.plates
+        # the plate relation's partials by (theta_c, p, f), block diagonal
+        part = numpy.zeros((b, 3 * ns, 3 * ns))
+        for k in range(ns):
+            for i in range(3):
+                for c in range(3):
+                    part[:, 3 * k + i, 3 * k + c] = rel[k][3 + 3 * i + c]
+        dinx = numpy.zeros((b, 3 * ns, n))
+        if ns and n:
+            dinx = numpy.array([_red_column(v, b) for v in dins]).reshape(3 * ns, n, b)
+            dinx = dinx.transpose(2, 0, 1)
+        dr_v = _red_block(out, blocks["dR_dv"], b)
+        din_v = _red_block(out, blocks["din_dv"], b)
+        dy_o = _red_block(out, blocks["dy_dout"], b)
+        by_o = numpy.matmul(dy_o, part)
+        total = _red_block(out, blocks["dy_dv"], b) + numpy.matmul(by_o, din_v)
+        if n:
+            rhs = dr_v + numpy.matmul(jo, numpy.matmul(part, din_v))
+            try:
+                dx = -numpy.linalg.solve(jac, rhs)
+            except numpy.linalg.LinAlgError:
+                # one singular J stops the stacked solve: each on its own
+                dx = numpy.full(rhs.shape, numpy.nan)
+                for c in range(b):
+                    try:
+                        dx[c] = -numpy.linalg.solve(jac[c], rhs[c])
+                    except numpy.linalg.LinAlgError:
+                        continue  # singular: NaN
+            dy_x = _red_block(out, blocks["dy_dx"], b) + numpy.matmul(by_o, dinx)
+            total = total + numpy.matmul(dy_x, dx)
+        ys[where] = _red_block(out, blocks["y"], b)[:, :, 0]
+        rates[where] = total
+        stress[where] = _red_block(out, blocks["stress"], b)
+    ok_flat = good
+    result = {"inputs": {}, "stiffness": {}, "plates": {}}
+    angles = {name: theta[i] for name, i in zip(mech.hinge_names, range(len(theta)))}
+
+    def shaped(v):
+        return numpy.where(ok_flat, v, numpy.nan).reshape(shape)
+
+    for k, name in enumerate(rep.inputs):
+        result["inputs"][name] = {
+            "angle": numpy.where(ok, numpy.broadcast_to(angles[name], shape), numpy.nan),
+            "moment": shaped(ys[:, k] * rep.unit_scale),
+            "stiffness": shaped(rates[:, k, k] * rep.unit_scale),
+        }
+    big_l, big_f = rep.L, rep.F
+    norm = numpy.array([big_f / big_l, big_f / big_l, big_f])[:, None] * numpy.array(
+        [1, 1, 1 / big_l]
+    )
+    for k, name in enumerate(rep.points):
+        rows = slice(nin + 3 * k, nin + 3 * k + 3)
+        c = rates[:, rows, rows]
+        live = ok_flat & numpy.all(numpy.isfinite(c), axis=(1, 2)) & (not rep.frame[k])
+        stiff = numpy.full((size, 3, 3), numpy.nan)
+        if live.any():
+            cond = numpy.linalg.cond(c[live] * norm)
+            keep = numpy.flatnonzero(live)[cond <= _SINGULAR]
+            if keep.size:
+                stiff[keep] = numpy.linalg.inv(c[keep])
+        result["stiffness"][name] = numpy.moveaxis(stiff, 0, -1).reshape((3, 3) + shape)
+    for k, name in enumerate(rep.plates):
+        row = [stress[:, k, c] for c in range(8)]
+        live = numpy.flatnonzero(ok_flat)
+        values = [numpy.full(size, numpy.nan) for _ in range(4)]
+        if live.size:
+            found = _plate_stress(*(v[live] for v in row), rep.limits[k])
+            for v, f in zip(values, found):
+                v[live] = f
+        result["plates"][name] = {
+            key: shaped(v) for key, v in zip(("stress", "strain", "safety", "section"), values)
+        }
+    return result
 
 
 def arck(x):
@@ -3844,6 +4038,1151 @@ def _loaded_dev1(x, theta, plates, params):
     return [
         -_tmp1*across_1_0 - _tmp4*across_2_0 - _tmp5*_tmp6 + _tmp7*_tmp8*p_0,
         _tmp1*_tmp5 + _tmp4*_tmp8 - _tmp6*across_1_0 + _tmp7*across_2_0*p_0,
+    ]
+
+
+def _loaded_report1(x, theta, plates, params):
+    """loaded (1 half plate(s) per plate), what it reports: dR/dv, din/dv, y, dy/dx, dy/dv, dy/dout (v: the inputs' angles and virtual loads at the points, y: the inputs' moments and the points' (dx, dy, dphi)), then per plate (k0, lx, ly, e_a, e_s, t/l, E', allowable) (1589 operations)."""
+    x_0, x_1, x_2, x_3, _, _, x_6, x_7, x_8, x_9, x_10, x_11, _ = x
+    theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7, theta_8, _, _ = theta
+    along_1_0, across_1_0, omega_1_0, along_2_0, across_2_0, omega_2_0, along_3_0, across_3_0, omega_3_0, along_4_0, across_4_0, omega_4_0, along_5_0, across_5_0, omega_5_0, along_6_0, across_6_0, omega_6_0, along_7_0, across_7_0, omega_7_0, along_8_0, across_8_0, omega_8_0, _, _, omega_9_0, _, _, omega_10_0 = plates
+    p_0, = params
+    _tmp0 = numpy.cos(theta_1)
+    _tmp1 = 0.5*theta_1
+    _tmp2 = arck(_tmp1)
+    _tmp3 = along_1_0 + 0.25*_tmp2*theta_1**2
+    _tmp4 = numpy.cos(_tmp1)
+    _tmp5 = _tmp4*p_0
+    _tmp6 = _tmp3*_tmp5
+    _tmp7 = 0.5*theta_2
+    _tmp8 = _tmp7 + theta_1
+    _tmp9 = numpy.cos(_tmp8)
+    _tmp10 = _tmp9*p_0
+    _tmp11 = _tmp10*across_2_0
+    _tmp12 = arck(_tmp7)
+    _tmp13 = along_2_0 + 0.25*_tmp12*theta_2**2
+    _tmp14 = numpy.sin(_tmp8)
+    _tmp15 = _tmp14*p_0
+    _tmp16 = _tmp13*_tmp15
+    _tmp17 = _tmp1*_tmp2 + 0.0625*theta_1**3*(-3*sinr2(_tmp1) + 3*cosr2(_tmp1) + sinr1(_tmp1))
+    _tmp18 = numpy.sin(_tmp1)
+    _tmp19 = _tmp18*p_0
+    _tmp20 = _tmp17*_tmp19
+    _tmp21 = _tmp19*across_1_0
+    _tmp22 = 100.0*_tmp0 + 833.3333333333334*_tmp6 + 1666.6666666666667*_tmp11 + 1666.6666666666667*_tmp16 + 1666.6666666666667*_tmp20 - 833.3333333333334*_tmp21
+    _tmp23 = theta_1 + theta_2
+    _tmp24 = _tmp23 + theta_3
+    _tmp25 = numpy.sin(_tmp24)
+    _tmp26 = numpy.cos(_tmp24)
+    _tmp27 = 0.5*theta_4
+    _tmp28 = _tmp24 + _tmp27
+    _tmp29 = numpy.cos(_tmp28)
+    _tmp30 = _tmp29*p_0
+    _tmp31 = _tmp30*across_4_0
+    _tmp32 = arck(_tmp27)
+    _tmp33 = along_4_0 + 0.25*_tmp32*theta_4**2
+    _tmp34 = numpy.sin(_tmp28)
+    _tmp35 = _tmp34*p_0
+    _tmp36 = _tmp33*_tmp35
+    _tmp37 = _tmp24 + theta_4
+    _tmp38 = numpy.sin(_tmp37)
+    _tmp39 = numpy.cos(_tmp37)
+    _tmp40 = 0.0029104275004359953*x_0
+    _tmp41 = _tmp40 + 0.0029104275004359953*x_1
+    _tmp42 = numpy.cos(_tmp41)
+    _tmp43 = 0.0014552137502179977*x_0
+    _tmp44 = 0.0014552137502179977*x_1
+    _tmp45 = _tmp43 + _tmp44
+    _tmp46 = numpy.cos(_tmp45)*numpy.sin(_tmp45)
+    _tmp47 = -0.05*_tmp42 - 0.08*_tmp46
+    _tmp48 = _tmp37 + theta_5
+    _tmp49 = _tmp48 + theta_6
+    _tmp50 = 1666.6666666666667*numpy.cos(_tmp49)
+    _tmp51 = numpy.cos(_tmp40)
+    _tmp52 = numpy.cos(_tmp43)*numpy.sin(_tmp43)
+    _tmp53 = 0.1*_tmp52 - 0.02*_tmp51
+    _tmp54 = 1666.6666666666667*numpy.cos(_tmp48)
+    _tmp55 = 0.04*_tmp42 - 0.1*_tmp46
+    _tmp56 = 1666.6666666666667*numpy.sin(_tmp49)
+    _tmp57 = -0.05*_tmp51 - 0.04*_tmp52
+    _tmp58 = 1666.6666666666667*numpy.sin(_tmp48)
+    _tmp59 = _tmp43 + 0.5*theta_5
+    _tmp60 = _tmp37 + _tmp59
+    _tmp61 = numpy.cos(_tmp60)
+    _tmp62 = _tmp61*p_0
+    _tmp63 = _tmp62*across_5_0
+    _tmp64 = arck(_tmp59)
+    _tmp65 = along_5_0 + _tmp64*_tmp59**2
+    _tmp66 = numpy.sin(_tmp60)
+    _tmp67 = _tmp66*p_0
+    _tmp68 = _tmp65*_tmp67
+    _tmp69 = _tmp44 + 0.5*theta_6
+    _tmp70 = _tmp40 + _tmp48
+    _tmp71 = _tmp69 + _tmp70
+    _tmp72 = numpy.cos(_tmp71)
+    _tmp73 = arck(_tmp69)
+    _tmp74 = p_0*(along_6_0 + _tmp73*_tmp69**2)
+    _tmp75 = _tmp72*_tmp74
+    _tmp76 = numpy.sin(_tmp71)
+    _tmp77 = across_6_0*p_0
+    _tmp78 = _tmp76*_tmp77
+    _tmp79 = 83.33333333333334*_tmp38 + 1666.6666666666667*_tmp63 + 1666.6666666666667*_tmp68 + 1666.6666666666667*_tmp75 - 33.333333333333336*_tmp39 - 1666.6666666666667*_tmp78 + _tmp47*_tmp50 + _tmp53*_tmp54 - _tmp55*_tmp56 - _tmp57*_tmp58
+    _tmp80 = _tmp79 + 83.33333333333334*_tmp25 + 16.666666666666668*_tmp26 + 1666.6666666666667*_tmp31 + 1666.6666666666667*_tmp36
+    _tmp81 = numpy.sin(_tmp23)
+    _tmp82 = numpy.cos(_tmp23)
+    _tmp83 = 0.5*theta_3
+    _tmp84 = _tmp23 + _tmp83
+    _tmp85 = numpy.cos(_tmp84)
+    _tmp86 = _tmp85*p_0
+    _tmp87 = _tmp86*across_3_0
+    _tmp88 = arck(_tmp83)
+    _tmp89 = along_3_0 + 0.25*_tmp88*theta_3**2
+    _tmp90 = numpy.sin(_tmp84)
+    _tmp91 = _tmp90*p_0
+    _tmp92 = _tmp89*_tmp91
+    _tmp93 = 83.33333333333334*_tmp81 + 33.333333333333336*_tmp82 + 1666.6666666666667*_tmp87 + 1666.6666666666667*_tmp92
+    _tmp94 = _tmp80 + _tmp93
+    _tmp95 = _tmp12*_tmp7 + 0.0625*theta_2**3*(-3*sinr2(_tmp7) + 3*cosr2(_tmp7) + sinr1(_tmp7))
+    _tmp96 = 833.3333333333334*_tmp11 + 833.3333333333334*_tmp16 - 1666.6666666666667*_tmp10*_tmp95
+    _tmp97 = _tmp83*_tmp88 + 0.0625*theta_3**3*(-3*sinr2(_tmp83) + 3*cosr2(_tmp83) + sinr1(_tmp83))
+    _tmp98 = 833.3333333333334*_tmp87 + 833.3333333333334*_tmp92 - 1666.6666666666667*_tmp86*_tmp97
+    _tmp99 = _tmp27*_tmp32 + 0.0625*theta_4**3*(-3*sinr2(_tmp27) + 3*cosr2(_tmp27) + sinr1(_tmp27))
+    _tmp100 = numpy.sin(theta_1)
+    _tmp101 = _tmp5*across_1_0
+    _tmp102 = _tmp19*_tmp3
+    _tmp103 = _tmp15*across_2_0
+    _tmp104 = _tmp10*_tmp13
+    _tmp105 = 100.0*_tmp100 + 833.3333333333334*_tmp101 + 833.3333333333334*_tmp102 + 1666.6666666666667*_tmp103 - 1666.6666666666667*_tmp104 - 1666.6666666666667*_tmp17*_tmp5
+    _tmp106 = _tmp35*across_4_0
+    _tmp107 = _tmp30*_tmp33
+    _tmp108 = _tmp67*across_5_0
+    _tmp109 = _tmp72*_tmp77
+    _tmp110 = _tmp74*_tmp76
+    _tmp111 = _tmp62*_tmp65
+    _tmp112 = 1666.6666666666667*_tmp108 + 1666.6666666666667*_tmp109 + 1666.6666666666667*_tmp110 - 83.33333333333334*_tmp39 - 33.333333333333336*_tmp38 - 1666.6666666666667*_tmp111 + _tmp47*_tmp56 + _tmp50*_tmp55 + _tmp53*_tmp58 + _tmp54*_tmp57
+    _tmp113 = _tmp112 + 16.666666666666668*_tmp25 + 1666.6666666666667*_tmp106 - 83.33333333333334*_tmp26 - 1666.6666666666667*_tmp107
+    _tmp114 = _tmp91*across_3_0
+    _tmp115 = _tmp86*_tmp89
+    _tmp116 = 33.333333333333336*_tmp81 + 1666.6666666666667*_tmp114 - 83.33333333333334*_tmp82 - 1666.6666666666667*_tmp115
+    _tmp117 = _tmp113 + _tmp116
+    _tmp118 = _tmp15*_tmp95
+    _tmp119 = 833.3333333333334*_tmp103 - 833.3333333333334*_tmp104 - 1666.6666666666667*_tmp118
+    _tmp120 = _tmp91*_tmp97
+    _tmp121 = 833.3333333333334*_tmp114 - 833.3333333333334*_tmp115 - 1666.6666666666667*_tmp120
+    _tmp122 = _tmp35*_tmp99
+    _tmp123 = 0.0029104275004359953*x_2
+    _tmp124 = _tmp123 + 0.0029104275004359953*x_3
+    _tmp125 = numpy.cos(_tmp124)
+    _tmp126 = 0.0014552137502179977*x_2
+    _tmp127 = 0.0014552137502179977*x_3
+    _tmp128 = _tmp126 + _tmp127
+    _tmp129 = numpy.cos(_tmp128)*numpy.sin(_tmp128)
+    _tmp130 = -0.035*_tmp125 - 0.05*_tmp129
+    _tmp131 = _tmp24 + theta_7
+    _tmp132 = _tmp131 + theta_8
+    _tmp133 = 1666.6666666666667*numpy.cos(_tmp132)
+    _tmp134 = numpy.cos(_tmp131)
+    _tmp135 = numpy.cos(_tmp123)
+    _tmp136 = numpy.cos(_tmp126)*numpy.sin(_tmp126)
+    _tmp137 = 133.33333333333334*_tmp136 - 8.333333333333334*_tmp135
+    _tmp138 = 0.025*_tmp125 - 0.07*_tmp129
+    _tmp139 = 1666.6666666666667*numpy.sin(_tmp132)
+    _tmp140 = numpy.sin(_tmp131)
+    _tmp141 = -16.666666666666668*_tmp136 - 66.66666666666667*_tmp135
+    _tmp142 = _tmp126 + 0.5*theta_7
+    _tmp143 = _tmp142 + _tmp24
+    _tmp144 = numpy.cos(_tmp143)
+    _tmp145 = _tmp144*p_0
+    _tmp146 = _tmp145*across_7_0
+    _tmp147 = _tmp127 + 0.5*theta_8
+    _tmp148 = _tmp123 + _tmp131
+    _tmp149 = _tmp147 + _tmp148
+    _tmp150 = numpy.cos(_tmp149)
+    _tmp151 = _tmp150*p_0
+    _tmp152 = _tmp151*across_8_0
+    _tmp153 = arck(_tmp142)
+    _tmp154 = along_7_0 + _tmp153*_tmp142**2
+    _tmp155 = numpy.sin(_tmp143)
+    _tmp156 = _tmp155*p_0
+    _tmp157 = _tmp154*_tmp156
+    _tmp158 = arck(_tmp147)
+    _tmp159 = along_8_0 + _tmp158*_tmp147**2
+    _tmp160 = numpy.sin(_tmp149)
+    _tmp161 = _tmp160*p_0
+    _tmp162 = _tmp159*_tmp161
+    _tmp163 = 33.333333333333336*_tmp25 + 1666.6666666666667*_tmp146 + 1666.6666666666667*_tmp152 + 1666.6666666666667*_tmp157 + 1666.6666666666667*_tmp162 - 66.66666666666667*_tmp26 + _tmp130*_tmp133 + _tmp134*_tmp137 - _tmp138*_tmp139 - _tmp140*_tmp141
+    _tmp164 = _tmp163 + _tmp93
+    _tmp165 = _tmp156*across_7_0
+    _tmp166 = _tmp161*across_8_0
+    _tmp167 = _tmp145*_tmp154
+    _tmp168 = _tmp151*_tmp159
+    _tmp169 = 1666.6666666666667*_tmp165 + 1666.6666666666667*_tmp166 - 33.333333333333336*_tmp26 - 66.66666666666667*_tmp25 - 1666.6666666666667*_tmp167 - 1666.6666666666667*_tmp168 + _tmp130*_tmp139 + _tmp133*_tmp138 + _tmp134*_tmp141 + _tmp137*_tmp140
+    _tmp170 = _tmp116 + _tmp169
+    _tmp171 = numpy.sin(_tmp70)
+    _tmp172 = 0.5*p_0
+    _tmp173 = _tmp171*_tmp172
+    _tmp174 = 0.05*_tmp171
+    _tmp175 = _tmp41 + _tmp49
+    _tmp176 = numpy.sin(_tmp175)
+    _tmp177 = 0.04*_tmp176
+    _tmp178 = -0.05 + _tmp172
+    _tmp179 = numpy.cos(_tmp175)
+    _tmp180 = _tmp178*_tmp179
+    _tmp181 = _tmp177 - _tmp180
+    _tmp182 = numpy.cos(_tmp70)
+    _tmp183 = 0.02*_tmp182
+    _tmp184 = _tmp183 + _tmp78 - _tmp75
+    _tmp185 = _tmp172*_tmp182
+    _tmp186 = 0.04*_tmp179
+    _tmp187 = _tmp176*_tmp178
+    _tmp188 = _tmp186 + _tmp187
+    _tmp189 = _tmp109 + _tmp110 - 0.02*_tmp171
+    _tmp190 = _tmp188 + _tmp189 - 0.05*_tmp182
+    _tmp191 = 4.850712500726659*x_6
+    _tmp192 = -_tmp191*(-_tmp185 - _tmp190) + 4.850712500726659*x_7*(_tmp173 + _tmp181 + _tmp184 - _tmp174)
+    _tmp193 = _tmp172*_tmp176
+    _tmp194 = -_tmp191*(_tmp193 - _tmp188) + 4.850712500726659*x_7*(_tmp181 + _tmp172*_tmp179)
+    _tmp195 = numpy.cos(_tmp148)
+    _tmp196 = _tmp172*_tmp195
+    _tmp197 = numpy.sin(_tmp148)
+    _tmp198 = _tmp124 + _tmp132
+    _tmp199 = numpy.cos(_tmp198)
+    _tmp200 = 0.025*_tmp199
+    _tmp201 = -0.035 + _tmp172
+    _tmp202 = numpy.sin(_tmp198)
+    _tmp203 = _tmp201*_tmp202
+    _tmp204 = _tmp200 + _tmp203
+    _tmp205 = _tmp166 + _tmp204 - 0.005*_tmp197 - 0.04*_tmp195 - _tmp150*_tmp159*p_0
+    _tmp206 = 4.850712500726659*x_9
+    _tmp207 = 0.025*_tmp202
+    _tmp208 = _tmp199*_tmp201
+    _tmp209 = _tmp152 + _tmp162 + 0.04*_tmp197
+    _tmp210 = _tmp208 + _tmp209 - _tmp207 - 0.005*_tmp195
+    _tmp211 = 4.850712500726659*x_10
+    _tmp212 = _tmp211*(-_tmp210 + 0.5*_tmp197*p_0) - _tmp206*(-_tmp196 - _tmp205)
+    _tmp213 = _tmp172*_tmp202
+    _tmp214 = _tmp172*_tmp199
+    _tmp215 = _tmp211*(_tmp207 + _tmp213 - _tmp208) - _tmp206*(-_tmp204 - _tmp214)
+    _tmp216 = 0.10074556732278446*x_10
+    _tmp217 = 0.10074556732278446*x_7
+    _tmp218 = -_tmp216 - _tmp217
+    _tmp219 = numpy.less_equal(p_0, 0.006)
+    _tmp220 = _DTYPE(numpy.where(_tmp219, 4.333333333333334e-12, 4.761904761904762e-12))
+    _tmp221 = p_0**(-1.0)
+    _tmp222 = _tmp220*_tmp221
+    _tmp223 = 2000000*_tmp222
+    _tmp224 = _tmp218*_tmp223
+    _tmp225 = 0.10074556732278446*x_6
+    _tmp226 = 0.10074556732278446*x_9
+    _tmp227 = -_tmp225 - _tmp226
+    _tmp228 = _tmp223*_tmp227
+    _tmp229 = 4000000*_tmp220
+    _tmp230 = _tmp221*_tmp229
+    _tmp231 = -_tmp18*_tmp230
+    _tmp232 = _tmp230*_tmp4
+    _tmp233 = _tmp230*_tmp9
+    _tmp234 = _tmp14*_tmp230
+    _tmp235 = _tmp218*_tmp230
+    _tmp236 = _tmp227*_tmp230
+    _tmp237 = _tmp235*_tmp85 - _tmp236*_tmp90
+    _tmp238 = -_tmp235*_tmp90 - _tmp236*_tmp85
+    _tmp239 = 402982.2692911378*_tmp222
+    _tmp240 = _tmp239*x_6
+    _tmp241 = _tmp239*x_7
+    _tmp242 = _tmp240*_tmp34 - _tmp241*_tmp29
+    _tmp243 = 201491.1346455689*_tmp222
+    _tmp244 = _tmp243*x_6
+    _tmp245 = _tmp243*x_7
+    _tmp246 = _tmp240*_tmp29 + _tmp241*_tmp34
+    _tmp247 = _tmp240*_tmp66 - _tmp241*_tmp61
+    _tmp248 = _tmp240*_tmp61 + _tmp241*_tmp66
+    _tmp249 = _tmp240*_tmp72 + _tmp241*_tmp76
+    _tmp250 = -_tmp240*_tmp76 + 402982.2692911378*_tmp220*_tmp221*_tmp72*x_7
+    _tmp251 = _tmp239*x_10
+    _tmp252 = -_tmp144*_tmp251 + 402982.2692911378*_tmp155*_tmp220*_tmp221*x_9
+    _tmp253 = _tmp239*x_9
+    _tmp254 = _tmp144*_tmp253 + _tmp155*_tmp251
+    _tmp255 = -_tmp150*_tmp251 + 402982.2692911378*_tmp160*_tmp220*_tmp221*x_9
+    _tmp256 = _tmp150*_tmp253 + _tmp160*_tmp251
+    _tmp257 = p_0**2
+    _tmp258 = _DTYPE(numpy.where(_tmp219, 230769230769.23077, 210000000000))
+    _tmp259 = 2.5e-07*_tmp257*_tmp258
+    _tmp260 = _tmp259*omega_1_0
+    _tmp261 = _tmp100*_tmp172
+    _tmp262 = 0.06*_tmp100
+    _tmp263 = _tmp104 - _tmp103
+    _tmp264 = _tmp167 - _tmp165 + 0.02*_tmp26
+    _tmp265 = _tmp168 - _tmp166 + 0.04*_tmp195
+    _tmp266 = _tmp264 + _tmp265 - _tmp200 - _tmp203 + 0.005*_tmp197 + 0.04*_tmp25
+    _tmp267 = 0.02*_tmp81
+    _tmp268 = _tmp115 - _tmp114 + 0.05*_tmp82
+    _tmp269 = _tmp268 - _tmp267
+    _tmp270 = _tmp266 + _tmp269
+    _tmp271 = _tmp261 + _tmp263 + _tmp270 - _tmp262
+    _tmp272 = -_tmp261
+    _tmp273 = _tmp103 - _tmp104
+    _tmp274 = 0.01*_tmp25
+    _tmp275 = _tmp108 + _tmp190 - 0.05*_tmp39 - 0.02*_tmp38 - _tmp61*_tmp65*p_0
+    _tmp276 = _tmp106 + _tmp274 + _tmp275 - 0.05*_tmp26 - _tmp29*_tmp33*p_0
+    _tmp277 = _tmp114 + _tmp267 - 0.05*_tmp82 - _tmp85*_tmp89*p_0
+    _tmp278 = _tmp276 + _tmp277
+    _tmp279 = -_tmp262 - _tmp272 - _tmp273 - _tmp278
+    _tmp280 = _tmp0*_tmp172
+    _tmp281 = -_tmp280
+    _tmp282 = _tmp11 + _tmp16
+    _tmp283 = _tmp281 + _tmp282
+    _tmp284 = 0.06*_tmp0
+    _tmp285 = _tmp87 + _tmp92 + 0.05*_tmp81
+    _tmp286 = _tmp285 + 0.02*_tmp82
+    _tmp287 = _tmp31 + _tmp36 + 0.05*_tmp25
+    _tmp288 = _tmp63 + _tmp68 + 0.05*_tmp38
+    _tmp289 = _tmp174 + _tmp180 + _tmp288 + _tmp75 - _tmp177 - _tmp183 - _tmp78 - 0.02*_tmp39
+    _tmp290 = _tmp287 + _tmp289 + 0.01*_tmp26
+    _tmp291 = _tmp286 + _tmp290
+    _tmp292 = _tmp284 + _tmp291
+    _tmp293 = _tmp283 + _tmp292
+    _tmp294 = _tmp146 + _tmp157 + 0.02*_tmp25
+    _tmp295 = _tmp210 + _tmp294 - 0.04*_tmp26
+    _tmp296 = _tmp286 + _tmp295
+    _tmp297 = _tmp284 + _tmp296
+    _tmp298 = _tmp283 + _tmp297
+    _tmp299 = 0.02076923076923077*x_8
+    _tmp300 = _tmp299 + 0.02076923076923077*x_11
+    _tmp301 = _tmp259*omega_2_0
+    _tmp302 = _tmp172*_tmp82
+    _tmp303 = _tmp270 - _tmp302
+    _tmp304 = -_tmp278 - _tmp302
+    _tmp305 = _tmp172*_tmp81
+    _tmp306 = -_tmp305
+    _tmp307 = _tmp291 + _tmp306
+    _tmp308 = _tmp296 + _tmp306
+    _tmp309 = _tmp259*omega_3_0
+    _tmp310 = _tmp172*_tmp26
+    _tmp311 = _tmp266 - _tmp310
+    _tmp312 = -_tmp276 - _tmp310
+    _tmp313 = _tmp172*_tmp25
+    _tmp314 = -_tmp313
+    _tmp315 = _tmp290 + _tmp314
+    _tmp316 = _tmp295 + _tmp314
+    _tmp317 = _tmp259*omega_4_0
+    _tmp318 = _tmp172*_tmp38
+    _tmp319 = _tmp289 - _tmp318
+    _tmp320 = _tmp172*_tmp39
+    _tmp321 = -_tmp275 - _tmp320
+    _tmp322 = _tmp101 + _tmp102
+    _tmp323 = _tmp273 + _tmp322
+    _tmp324 = _tmp6 - _tmp21
+    _tmp325 = _tmp282 + _tmp324
+    _tmp326 = _tmp64*(4.2352941176470574e-06*x_0 + 0.0014552137502179977*theta_5) + 0.0014552137502179977*_tmp59**3*(-3*sinr2(_tmp59) + 3*cosr2(_tmp59) + sinr1(_tmp59))
+    _tmp327 = 0.00011641710001743981*_tmp179 + 0.0029104275004359953*_tmp187
+    _tmp328 = 0.0029104275004359953*_tmp180 - 0.00011641710001743981*_tmp176
+    _tmp329 = -_tmp225*(-_tmp327 + 5.8208550008719906e-05*_tmp171 + 0.00014552137502179977*_tmp182 - 0.0014552137502179977*_tmp108 - 0.0029104275004359953*_tmp109 - 0.0029104275004359953*_tmp110 + _tmp326*_tmp66*p_0 + 0.0014552137502179977*_tmp61*_tmp65*p_0) + 0.10074556732278446*x_7*(-_tmp328 + 5.8208550008719906e-05*_tmp182 - 0.00014552137502179977*_tmp171 - 0.0014552137502179977*_tmp63 - 0.0014552137502179977*_tmp68 - 0.0029104275004359953*_tmp75 + _tmp326*_tmp61*p_0 + 0.0029104275004359953*_tmp76*across_6_0*p_0)
+    _tmp330 = _tmp73*(4.2352941176470574e-06*x_1 + 0.0014552137502179977*theta_6) + 0.0014552137502179977*_tmp69**3*(-3*sinr2(_tmp69) + 3*cosr2(_tmp69) + sinr1(_tmp69))
+    _tmp331 = -_tmp225*(-_tmp327 - 0.0014552137502179977*_tmp109 - 0.0014552137502179977*_tmp110 + _tmp330*_tmp72*p_0) + 0.10074556732278446*x_7*(-_tmp328 - 0.0014552137502179977*_tmp75 - _tmp330*_tmp76*p_0 + 0.0014552137502179977*_tmp76*across_6_0*p_0)
+    _tmp332 = _tmp153*(4.2352941176470574e-06*x_2 + 0.0014552137502179977*theta_7) + 0.0014552137502179977*_tmp142**3*(-3*sinr2(_tmp142) + 3*cosr2(_tmp142) + sinr1(_tmp142))
+    _tmp333 = 0.0029104275004359953*_tmp208 - 7.276068751089988e-05*_tmp202
+    _tmp334 = 7.276068751089988e-05*_tmp199
+    _tmp335 = 0.0029104275004359953*_tmp203
+    _tmp336 = _tmp216*(-_tmp333 + 1.4552137502179977e-05*_tmp195 - 0.00011641710001743981*_tmp197 - 0.0014552137502179977*_tmp146 - 0.0014552137502179977*_tmp157 - 0.0029104275004359953*_tmp152 - 0.0029104275004359953*_tmp162 + _tmp144*_tmp332*p_0) - _tmp226*(-_tmp334 - _tmp335 + 1.4552137502179977e-05*_tmp197 + 0.00011641710001743981*_tmp195 + 0.0014552137502179977*_tmp167 + 0.0029104275004359953*_tmp168 - 0.0014552137502179977*_tmp165 - 0.0029104275004359953*_tmp166 + _tmp156*_tmp332)
+    _tmp337 = _tmp158*(4.2352941176470574e-06*x_3 + 0.0014552137502179977*theta_8) + 0.0014552137502179977*_tmp147**3*(-3*sinr2(_tmp147) + 3*cosr2(_tmp147) + sinr1(_tmp147))
+    _tmp338 = _tmp216*(-_tmp333 - 0.0014552137502179977*_tmp152 - 0.0014552137502179977*_tmp162 + _tmp150*_tmp337*p_0) - _tmp226*(-_tmp334 - _tmp335 - 0.0014552137502179977*_tmp166 + _tmp160*_tmp337*p_0 + 0.0014552137502179977*_tmp150*_tmp159*p_0)
+    _tmp339 = 0.006044734039367067*_tmp0 + 0.10074556732278446*_tmp11 + 0.10074556732278446*_tmp16 - 0.05037278366139223*_tmp0*p_0
+    _tmp340 = 0.002014911346455689*_tmp82 + 0.005037278366139223*_tmp81 + 0.10074556732278446*_tmp87 + 0.10074556732278446*_tmp92
+    _tmp341 = 0.005037278366139223*_tmp171 + 0.005037278366139223*_tmp38 + 0.10074556732278446*_tmp180 + 0.10074556732278446*_tmp63 + 0.10074556732278446*_tmp68 + 0.10074556732278446*_tmp75 - 0.002014911346455689*_tmp182 - 0.002014911346455689*_tmp39 - 0.004029822692911378*_tmp176 - 0.10074556732278446*_tmp76*across_6_0*p_0
+    _tmp342 = _tmp341 + 0.0010074556732278445*_tmp26 + 0.005037278366139223*_tmp25 + 0.10074556732278446*_tmp31 + 0.10074556732278446*_tmp36
+    _tmp343 = _tmp340 + _tmp342
+    _tmp344 = 0.006044734039367067*_tmp100
+    _tmp345 = 0.10074556732278446*_tmp103
+    _tmp346 = 0.002014911346455689*_tmp81
+    _tmp347 = 0.10074556732278446*_tmp114
+    _tmp348 = 0.004029822692911378*_tmp179 + 0.10074556732278446*_tmp108 + 0.10074556732278446*_tmp109 + 0.10074556732278446*_tmp110 + 0.10074556732278446*_tmp187 - 0.002014911346455689*_tmp171 - 0.002014911346455689*_tmp38 - 0.005037278366139223*_tmp182 - 0.005037278366139223*_tmp39 - 0.10074556732278446*_tmp61*_tmp65*p_0
+    _tmp349 = _tmp348 + 0.0010074556732278445*_tmp25 + 0.10074556732278446*_tmp106 - 0.005037278366139223*_tmp26 - 0.10074556732278446*_tmp29*_tmp33*p_0
+    _tmp350 = _tmp346 + _tmp347 + _tmp349 - 0.005037278366139223*_tmp82 - 0.10074556732278446*_tmp85*_tmp89*p_0
+    _tmp351 = 0.002014911346455689*_tmp25 + 0.004029822692911378*_tmp197 + 0.10074556732278446*_tmp146 + 0.10074556732278446*_tmp152 + 0.10074556732278446*_tmp157 + 0.10074556732278446*_tmp162 + 0.10074556732278446*_tmp208 - 0.0005037278366139223*_tmp195 - 0.004029822692911378*_tmp26 - 0.0025186391830696116*_tmp202
+    _tmp352 = _tmp340 + _tmp351
+    _tmp353 = 0.05037278366139223*p_0
+    _tmp354 = 0.0005037278366139223*_tmp197 + 0.002014911346455689*_tmp26 + 0.004029822692911378*_tmp195 + 0.004029822692911378*_tmp25 + 0.10074556732278446*_tmp167 + 0.10074556732278446*_tmp168 - 0.0025186391830696116*_tmp199 - 0.10074556732278446*_tmp165 - 0.10074556732278446*_tmp166 - 0.10074556732278446*_tmp203
+    _tmp355 = _tmp354 - _tmp346 - _tmp347 + 0.005037278366139223*_tmp82 + 0.10074556732278446*_tmp115
+    _tmp356 = -0.05037278366139223*_tmp81*p_0
+    _tmp357 = _tmp353*_tmp82
+    _tmp358 = -0.05037278366139223*_tmp25*p_0
+    _tmp359 = _tmp26*_tmp353
+    _tmp360 = _tmp172*_tmp9
+    _tmp361 = _tmp14*_tmp172
+    _tmp362 = _tmp118 + _tmp13*_tmp360 - _tmp361*across_2_0
+    _tmp363 = _tmp13*_tmp361 + _tmp360*across_2_0 - _tmp9*_tmp95*p_0
+    _tmp364 = _tmp107 - _tmp106 + 0.05*_tmp26
+    _tmp365 = _tmp111 - _tmp108 + 0.05*_tmp39
+    _tmp366 = _tmp365 - _tmp109 - _tmp110 - _tmp186 - _tmp187 + 0.05*_tmp182 + 0.02*_tmp171 + 0.02*_tmp38
+    _tmp367 = _tmp364 + _tmp366 - _tmp274
+    _tmp368 = _tmp172*_tmp85
+    _tmp369 = _tmp172*_tmp90
+    _tmp370 = _tmp120 + _tmp368*_tmp89 - _tmp369*across_3_0
+    _tmp371 = _tmp368*across_3_0 + _tmp369*_tmp89 - _tmp85*_tmp97*p_0
+    _tmp372 = _tmp216*(-_tmp295 - _tmp371) + _tmp217*(-_tmp290 - _tmp371) - _tmp225*(_tmp367 + _tmp370) - _tmp226*(_tmp266 + _tmp370)
+    _tmp373 = _tmp172*_tmp29
+    _tmp374 = _tmp172*_tmp34
+    _tmp375 = -_tmp225*(_tmp122 + _tmp366 + _tmp33*_tmp373 - _tmp374*across_4_0) + 0.10074556732278446*x_7*(-_tmp289 - _tmp33*_tmp374 - _tmp373*across_4_0 + _tmp29*_tmp99*p_0)
+    _tmp376 = 0.03*_tmp82
+    _tmp377 = 0.03*_tmp81
+    _tmp378 = _tmp376 + _tmp377
+    _tmp379 = _tmp282 + _tmp284 + _tmp378
+    _tmp380 = _tmp377 - _tmp376
+    _tmp381 = _tmp262 + _tmp273 + _tmp380
+    _tmp382 = -_tmp216*_tmp308 - _tmp217*_tmp307 - _tmp225*_tmp304 - _tmp226*_tmp303
+    _tmp383 = -_tmp216*_tmp316 - _tmp217*_tmp315 - _tmp225*_tmp312 - _tmp226*_tmp311
+    _tmp384 = -_tmp225*_tmp321 - 0.10074556732278446*_tmp319*x_7
+    _tmp385 = _tmp172*_tmp3
+    _tmp386 = _tmp216*_tmp86 + _tmp217*_tmp86 - _tmp225*_tmp91 - _tmp226*_tmp91
+    _tmp387 = -_tmp216*_tmp91 - _tmp217*_tmp91 - _tmp225*_tmp86 - _tmp226*_tmp86
+    _tmp388 = -_tmp225*_tmp35 + 0.10074556732278446*_tmp29*p_0*x_7
+    _tmp389 = -_tmp217*_tmp35 - _tmp225*_tmp30
+    _tmp390 = -_tmp225*_tmp67 + 0.10074556732278446*_tmp61*p_0*x_7
+    _tmp391 = -_tmp217*_tmp67 - _tmp225*_tmp62
+    _tmp392 = _tmp225*p_0
+    _tmp393 = _tmp217*p_0
+    _tmp394 = -_tmp392*_tmp72 - _tmp393*_tmp76
+    _tmp395 = _tmp392*_tmp76 - _tmp393*_tmp72
+    _tmp396 = _tmp145*_tmp216 - _tmp156*_tmp226
+    _tmp397 = -_tmp145*_tmp226 - _tmp156*_tmp216
+    _tmp398 = _tmp151*_tmp216 - _tmp161*_tmp226
+    _tmp399 = -_tmp151*_tmp226 - _tmp161*_tmp216
+    _tmp400 = -_tmp19
+    _tmp401 = _tmp229/_tmp257
+    _tmp402 = 0.0008333333333333334*_tmp220*_tmp258
+    _tmp403 = 1.2380952380952381e-14*_tmp258
+    _tmp404 = 0.1*_DTYPE(numpy.where(_tmp219, 480384.4614152614, 458257.569495584))*_DTYPE(numpy.where(_tmp219, 2.0816659994661327e-06, 2.1821789023599237e-06))
+    _tmp405 = -_tmp178
+    _tmp406 = -0.02 - _tmp172
+    _tmp407 = 0.02 - _tmp172
+    _tmp408 = 0.04 - _tmp172
+    _tmp409 = _tmp172 + _tmp325
+    _tmp410 = _tmp262 + _tmp323
+    return [
+        -1,
+        -1,
+        -1,
+        -1,
+        0,
+        0,
+        0,
+        _tmp22 + _tmp94,
+        _tmp94 + _tmp96,
+        _tmp80 + _tmp98,
+        _tmp79 + 833.3333333333334*_tmp31 + 833.3333333333334*_tmp36 - 1666.6666666666667*_tmp30*_tmp99,
+        0,
+        0,
+        0,
+        _tmp105 + _tmp117,
+        _tmp117 + _tmp119,
+        _tmp113 + _tmp121,
+        _tmp112 + 833.3333333333334*_tmp106 - 833.3333333333334*_tmp107 - 1666.6666666666667*_tmp122,
+        0,
+        0,
+        0,
+        -1,
+        -1,
+        -1,
+        0,
+        0,
+        0,
+        0,
+        _tmp164 + _tmp22,
+        _tmp164 + _tmp96,
+        _tmp163 + _tmp98,
+        0,
+        0,
+        0,
+        0,
+        _tmp105 + _tmp170,
+        _tmp119 + _tmp170,
+        _tmp121 + _tmp169,
+        0,
+        0,
+        0,
+        0,
+        _tmp192,
+        _tmp192,
+        _tmp192,
+        _tmp192,
+        0,
+        0,
+        0,
+        _tmp194,
+        _tmp194,
+        _tmp194,
+        _tmp194,
+        0,
+        0,
+        0,
+        _tmp212,
+        _tmp212,
+        _tmp212,
+        0,
+        0,
+        0,
+        0,
+        _tmp215,
+        _tmp215,
+        _tmp215,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp18*_tmp224 - _tmp228*_tmp4,
+        0,
+        0,
+        0,
+        _tmp231,
+        _tmp232,
+        0,
+        -_tmp224*_tmp4 + 2000000*_tmp18*_tmp220*_tmp221*_tmp227,
+        0,
+        0,
+        0,
+        -_tmp232,
+        _tmp231,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp218*_tmp233 - _tmp227*_tmp234,
+        _tmp224*_tmp9 - _tmp14*_tmp228,
+        0,
+        0,
+        _tmp233,
+        _tmp234,
+        0,
+        -_tmp218*_tmp234 - _tmp227*_tmp233,
+        -_tmp14*_tmp224 - _tmp228*_tmp9,
+        0,
+        0,
+        -_tmp234,
+        _tmp233,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        0,
+        _tmp237,
+        _tmp237,
+        _tmp224*_tmp85 - _tmp228*_tmp90,
+        0,
+        0,
+        0,
+        0,
+        _tmp238,
+        _tmp238,
+        -_tmp224*_tmp90 - _tmp228*_tmp85,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        _tmp242,
+        _tmp242,
+        _tmp242,
+        _tmp244*_tmp34 - _tmp245*_tmp29,
+        0,
+        0,
+        0,
+        _tmp246,
+        _tmp246,
+        _tmp246,
+        _tmp244*_tmp29 + _tmp245*_tmp34,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp247,
+        _tmp247,
+        _tmp247,
+        _tmp247,
+        0,
+        0,
+        0,
+        _tmp248,
+        _tmp248,
+        _tmp248,
+        _tmp248,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp249,
+        _tmp249,
+        _tmp249,
+        _tmp249,
+        0,
+        0,
+        0,
+        _tmp250,
+        _tmp250,
+        _tmp250,
+        _tmp250,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp252,
+        _tmp252,
+        _tmp252,
+        0,
+        0,
+        0,
+        0,
+        _tmp254,
+        _tmp254,
+        _tmp254,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp255,
+        _tmp255,
+        _tmp255,
+        0,
+        0,
+        0,
+        0,
+        _tmp256,
+        _tmp256,
+        _tmp256,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp260 + _tmp300 + _tmp216*_tmp271 + _tmp217*_tmp279 - _tmp225*_tmp293 - _tmp226*_tmp298,
+        _tmp300 + _tmp301 + _tmp216*_tmp303 + _tmp217*_tmp304 - _tmp225*_tmp307 - _tmp226*_tmp308,
+        _tmp300 + _tmp309 + _tmp216*_tmp311 + _tmp217*_tmp312 - _tmp225*_tmp315 - _tmp226*_tmp316,
+        _tmp299 + _tmp317 + _tmp217*_tmp321 - _tmp225*_tmp319,
+        -_tmp323,
+        _tmp325,
+        0,
+        _tmp329,
+        _tmp331,
+        _tmp336,
+        _tmp338,
+        0,
+        0,
+        -_tmp339 - _tmp343,
+        -_tmp344 - _tmp345 - _tmp350 + 0.05037278366139223*_tmp100*p_0 + 0.10074556732278446*_tmp13*_tmp9*p_0,
+        0.02076923076923077,
+        -_tmp339 - _tmp352,
+        _tmp355 - _tmp344 - _tmp345 + 0.10074556732278446*_tmp104 + _tmp100*_tmp353,
+        0.02076923076923077,
+        _tmp329,
+        _tmp331,
+        _tmp336,
+        _tmp338,
+        0,
+        0,
+        -_tmp343 - _tmp356,
+        -_tmp350 - _tmp357,
+        0.02076923076923077,
+        -_tmp352 - _tmp356,
+        _tmp355 - _tmp357,
+        0.02076923076923077,
+        _tmp329,
+        _tmp331,
+        _tmp336,
+        _tmp338,
+        0,
+        0,
+        -_tmp342 - _tmp358,
+        -_tmp349 - _tmp359,
+        0.02076923076923077,
+        -_tmp351 - _tmp358,
+        _tmp354 - _tmp359,
+        0.02076923076923077,
+        _tmp329,
+        _tmp331,
+        0,
+        0,
+        0,
+        0,
+        -_tmp341 + 0.05037278366139223*_tmp38*p_0,
+        -_tmp348 - _tmp353*_tmp39,
+        0.02076923076923077,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp216*_tmp298 - _tmp217*_tmp293 - _tmp225*_tmp279 - _tmp226*_tmp271,
+        _tmp216*(-_tmp296 - _tmp363) + _tmp217*(-_tmp291 - _tmp363) - _tmp225*(_tmp269 + _tmp362 + _tmp367) - _tmp226*(_tmp270 + _tmp362),
+        _tmp372,
+        _tmp375,
+        _tmp281 + _tmp379,
+        _tmp272 + _tmp381,
+        -1,
+        _tmp382,
+        _tmp382,
+        _tmp372,
+        _tmp375,
+        _tmp306 + _tmp378,
+        _tmp302 + _tmp380,
+        -1,
+        _tmp383,
+        _tmp383,
+        _tmp383,
+        _tmp375,
+        0,
+        0,
+        0,
+        _tmp384,
+        _tmp384,
+        _tmp384,
+        _tmp384,
+        0,
+        0,
+        0,
+        -_tmp20 - _tmp379 - _tmp385*_tmp4 + 0.5*_tmp18*across_1_0*p_0,
+        -_tmp363 - _tmp378,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp381 - _tmp18*_tmp385 + _tmp17*_tmp4*p_0 - _tmp172*_tmp4*across_1_0,
+        _tmp362 + _tmp376 - _tmp377,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        1,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp259,
+        _tmp10*_tmp216 + _tmp10*_tmp217 - _tmp15*_tmp225 - _tmp15*_tmp226,
+        -_tmp10*_tmp225 - _tmp10*_tmp226 - _tmp15*_tmp216 - _tmp15*_tmp217,
+        0,
+        _tmp386,
+        _tmp387,
+        0,
+        _tmp388,
+        _tmp389,
+        0,
+        _tmp390,
+        _tmp391,
+        0,
+        _tmp394,
+        _tmp395,
+        0,
+        _tmp396,
+        _tmp397,
+        0,
+        _tmp398,
+        _tmp399,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp259,
+        _tmp386,
+        _tmp387,
+        0,
+        _tmp388,
+        _tmp389,
+        0,
+        _tmp390,
+        _tmp391,
+        0,
+        _tmp394,
+        _tmp395,
+        0,
+        _tmp396,
+        _tmp397,
+        0,
+        _tmp398,
+        _tmp399,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp259,
+        _tmp388,
+        _tmp389,
+        0,
+        _tmp390,
+        _tmp391,
+        0,
+        _tmp394,
+        _tmp395,
+        0,
+        _tmp396,
+        _tmp397,
+        0,
+        _tmp398,
+        _tmp399,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp259,
+        _tmp390,
+        _tmp391,
+        0,
+        _tmp394,
+        _tmp395,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp400,
+        -_tmp5,
+        0,
+        _tmp10,
+        -_tmp15,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp5,
+        _tmp400,
+        0,
+        _tmp15,
+        _tmp10,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp401*(_tmp260 + _tmp218*(-_tmp261 - _tmp322) - _tmp227*(_tmp172 + _tmp280 + _tmp324)),
+        _tmp235,
+        -_tmp236,
+        _tmp402,
+        _tmp403,
+        _tmp404,
+        _tmp258,
+        0,
+        _tmp401*(_tmp301 + _tmp218*(_tmp263 + _tmp280 + _tmp302) - _tmp227*(_tmp261 + _tmp282 + _tmp305)),
+        _tmp0*_tmp236 + _tmp100*_tmp235,
+        _tmp0*_tmp235 - _tmp100*_tmp236,
+        _tmp402,
+        _tmp403,
+        _tmp404,
+        _tmp258,
+        0,
+        _tmp401*(_tmp309 + _tmp218*(_tmp268 + _tmp310 - _tmp405*_tmp82) - _tmp227*(_tmp285 + _tmp313 - _tmp405*_tmp81)),
+        _tmp235*_tmp81 + _tmp236*_tmp82,
+        _tmp235*_tmp82 - _tmp236*_tmp81,
+        _tmp402,
+        _tmp403,
+        _tmp404,
+        _tmp258,
+        0,
+        _tmp401*(_tmp317 + _tmp225*(_tmp287 + _tmp318 - _tmp25*_tmp405) - _tmp217*(_tmp320 + _tmp364 - _tmp26*_tmp405)),
+        -_tmp240*_tmp26 - _tmp241*_tmp25,
+        _tmp240*_tmp25 - _tmp241*_tmp26,
+        _tmp402,
+        _tmp403,
+        _tmp404,
+        _tmp258,
+        0,
+        _tmp401*(_tmp225*(_tmp173 + _tmp288 - _tmp38*_tmp405) + _tmp259*omega_5_0 - _tmp217*(_tmp185 + _tmp365 - _tmp39*_tmp405)),
+        -_tmp240*_tmp39 - _tmp241*_tmp38,
+        _tmp240*_tmp38 - _tmp241*_tmp39,
+        _tmp402,
+        _tmp403,
+        _tmp404,
+        _tmp258,
+        0,
+        _tmp401*(_tmp225*(-_tmp184 - _tmp182*_tmp406 + 0.5*_tmp179*p_0) + _tmp259*omega_6_0 - _tmp217*(-_tmp189 - _tmp193 + _tmp171*_tmp406)),
+        _tmp171*_tmp240 - _tmp182*_tmp241,
+        _tmp171*_tmp241 + _tmp182*_tmp240,
+        _tmp402,
+        _tmp403,
+        _tmp404,
+        _tmp258,
+        0,
+        _tmp401*(_tmp226*(_tmp294 + _tmp172*_tmp197 - _tmp25*_tmp407) + _tmp259*omega_7_0 - _tmp216*(_tmp196 + _tmp264 - _tmp26*_tmp407)),
+        -_tmp25*_tmp251 - _tmp253*_tmp26,
+        -_tmp251*_tmp26 + 402982.2692911378*_tmp220*_tmp221*_tmp25*x_9,
+        _tmp402,
+        _tmp403,
+        _tmp404,
+        _tmp258,
+        0,
+        _tmp401*(_tmp226*(_tmp209 + _tmp213 - _tmp197*_tmp408) + _tmp259*omega_8_0 - _tmp216*(_tmp214 + _tmp265 - _tmp195*_tmp408)),
+        -_tmp195*_tmp253 - _tmp197*_tmp251,
+        -_tmp195*_tmp251 + 402982.2692911378*_tmp197*_tmp220*_tmp221*x_9,
+        _tmp402,
+        _tmp403,
+        _tmp404,
+        _tmp258,
+        0,
+        _tmp401*(_tmp217*(-0.16 - _tmp278 - _tmp410) + _tmp259*omega_9_0 - _tmp225*(_tmp292 + _tmp409)),
+        _tmp241,
+        -_tmp240,
+        _tmp402,
+        _tmp403,
+        _tmp404,
+        _tmp258,
+        0,
+        _tmp401*(_tmp216*(-0.085 - _tmp165 - _tmp205 - _tmp277 - _tmp410 + 0.02*_tmp26 + 0.04*_tmp25 + _tmp144*_tmp154*p_0) + _tmp259*omega_10_0 - _tmp226*(_tmp297 + _tmp409)),
+        _tmp251,
+        -_tmp253,
+        _tmp402,
+        _tmp403,
+        _tmp404,
+        _tmp258,
+        0,
     ]
 
 
@@ -8462,6 +9801,2177 @@ def _loaded_dev2(x, theta, plates, params):
     ]
 
 
+def _loaded_report2(x, theta, plates, params):
+    """loaded (2 half plate(s) per plate), what it reports: dR/dv, din/dv, y, dy/dx, dy/dv, dy/dout (v: the inputs' angles and virtual loads at the points, y: the inputs' moments and the points' (dx, dy, dphi)), then per plate (k0, lx, ly, e_a, e_s, t/l, E', allowable) (3431 operations)."""
+    x_0, x_1, x_2, x_3, _, _, x_6, x_7, x_8, x_9, x_10, x_11, x_12, x_13, x_14, x_15, x_16, x_17, x_18, x_19, _, _, _ = x
+    theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7, theta_8, _, _ = theta
+    along_1_0, across_1_0, _, along_1_1, across_1_1, omega_1_1, along_2_0, across_2_0, _, along_2_1, across_2_1, omega_2_1, along_3_0, across_3_0, _, along_3_1, across_3_1, omega_3_1, along_4_0, across_4_0, _, along_4_1, across_4_1, omega_4_1, along_5_0, across_5_0, _, along_5_1, across_5_1, omega_5_1, along_6_0, across_6_0, _, along_6_1, across_6_1, omega_6_1, along_7_0, across_7_0, _, along_7_1, across_7_1, omega_7_1, along_8_0, across_8_0, _, along_8_1, across_8_1, omega_8_1, _, _, _, _, _, omega_9_1, _, _, _, _, _, omega_10_1 = plates
+    p_0, = params
+    _tmp0 = numpy.cos(theta_1)
+    _tmp1 = 0.5*theta_1
+    _tmp2 = numpy.cos(_tmp1)
+    _tmp3 = 0.5*p_0
+    _tmp4 = 0.25*theta_1
+    _tmp5 = 0.5*x_12
+    _tmp6 = _tmp4 - _tmp5
+    _tmp7 = numpy.sin(_tmp6)
+    _tmp8 = _tmp7*across_1_0
+    _tmp9 = _tmp4 + _tmp5
+    _tmp10 = numpy.sin(_tmp9)
+    _tmp11 = _tmp10*_tmp3
+    _tmp12 = numpy.sin(_tmp4)
+    _tmp13 = numpy.sin(_tmp5)
+    _tmp14 = arck(_tmp9)
+    _tmp15 = along_1_0 + _tmp14*_tmp9**2
+    _tmp16 = numpy.cos(_tmp6)
+    _tmp17 = _tmp15*_tmp16
+    _tmp18 = arck(_tmp6)
+    _tmp19 = along_1_1 + _tmp18*_tmp6**2
+    _tmp20 = numpy.cos(_tmp9)
+    _tmp21 = _tmp19*_tmp20
+    _tmp22 = _tmp17*_tmp3 + _tmp21*_tmp3 + _tmp3*_tmp8 + _tmp3*(-2*_tmp13**2 + 2*_tmp12**2) - _tmp11*across_1_1
+    _tmp23 = _tmp2*_tmp22
+    _tmp24 = theta_1 + 0.5*theta_2
+    _tmp25 = numpy.sin(_tmp24)
+    _tmp26 = 0.25*theta_2
+    _tmp27 = 0.5*x_13
+    _tmp28 = _tmp26 - _tmp27
+    _tmp29 = numpy.sin(_tmp28)
+    _tmp30 = _tmp3*across_2_0
+    _tmp31 = _tmp26 + _tmp27
+    _tmp32 = numpy.sin(_tmp31)
+    _tmp33 = _tmp3*_tmp32
+    _tmp34 = numpy.sin(_tmp26)
+    _tmp35 = numpy.sin(_tmp27)
+    _tmp36 = numpy.cos(_tmp28)
+    _tmp37 = arck(_tmp31)
+    _tmp38 = along_2_0 + _tmp37*_tmp31**2
+    _tmp39 = _tmp3*_tmp38
+    _tmp40 = arck(_tmp28)
+    _tmp41 = along_2_1 + _tmp40*_tmp28**2
+    _tmp42 = numpy.cos(_tmp31)
+    _tmp43 = _tmp3*_tmp42
+    _tmp44 = _tmp29*_tmp30 + _tmp3*(-2*_tmp35**2 + 2*_tmp34**2) + _tmp36*_tmp39 + _tmp41*_tmp43 - _tmp33*across_2_1
+    _tmp45 = _tmp25*_tmp44
+    _tmp46 = numpy.cos(_tmp24)
+    _tmp47 = 1.0*x_13
+    _tmp48 = _tmp3*numpy.sin(_tmp47) + _tmp30*_tmp36 + _tmp33*_tmp41 + _tmp43*across_2_1 - _tmp29*_tmp39
+    _tmp49 = _tmp46*_tmp48
+    _tmp50 = 0.125*p_0
+    _tmp51 = _tmp50*across_1_1
+    _tmp52 = 0.125*theta_1
+    _tmp53 = 0.25*x_12
+    _tmp54 = sinr1(_tmp6)
+    _tmp55 = _tmp6**3*(_tmp54 - 3*sinr2(_tmp6) + 3*cosr2(_tmp6))
+    _tmp56 = 0.25*_tmp55 + _tmp18*(_tmp52 - _tmp53)
+    _tmp57 = _tmp9**3*(-3*sinr2(_tmp9) + 3*cosr2(_tmp9) + sinr1(_tmp9))
+    _tmp58 = _tmp3*(0.25*_tmp57 + _tmp14*(_tmp52 + _tmp53))
+    _tmp59 = -_tmp10*_tmp51 - _tmp17*_tmp50 - _tmp50*_tmp8 - _tmp58*_tmp7 + 0.125*_tmp19*_tmp20*p_0 + 0.5*_tmp10*_tmp56*p_0
+    _tmp60 = _tmp2*_tmp59
+    _tmp61 = numpy.sin(_tmp1)
+    _tmp62 = _tmp16*across_1_0
+    _tmp63 = _tmp15*_tmp7
+    _tmp64 = _tmp10*_tmp19
+    _tmp65 = _tmp20*_tmp3
+    _tmp66 = _tmp16*_tmp58 + _tmp50*_tmp62 + _tmp56*_tmp65 - _tmp20*_tmp51 - _tmp50*_tmp63 - _tmp50*_tmp64 + _tmp12*_tmp3*numpy.cos(_tmp4)
+    _tmp67 = _tmp61*_tmp66
+    _tmp68 = 1.0*x_12
+    _tmp69 = _tmp11*_tmp19 + _tmp3*_tmp62 + _tmp3*numpy.sin(_tmp68) + _tmp65*across_1_1 - _tmp3*_tmp63
+    _tmp70 = _tmp61*_tmp69
+    _tmp71 = 100.0*_tmp0 + 833.3333333333334*_tmp23 + 1666.6666666666667*_tmp45 + 1666.6666666666667*_tmp49 + 1666.6666666666667*_tmp60 + 1666.6666666666667*_tmp67 - 833.3333333333334*_tmp70
+    _tmp72 = theta_1 + theta_2
+    _tmp73 = _tmp72 + theta_3
+    _tmp74 = numpy.sin(_tmp73)
+    _tmp75 = numpy.cos(_tmp73)
+    _tmp76 = _tmp73 + 0.5*theta_4
+    _tmp77 = numpy.sin(_tmp76)
+    _tmp78 = 0.25*theta_4
+    _tmp79 = 0.5*x_15
+    _tmp80 = _tmp78 - _tmp79
+    _tmp81 = numpy.sin(_tmp80)
+    _tmp82 = _tmp3*across_4_0
+    _tmp83 = _tmp78 + _tmp79
+    _tmp84 = numpy.sin(_tmp83)
+    _tmp85 = _tmp3*_tmp84
+    _tmp86 = numpy.sin(_tmp78)
+    _tmp87 = numpy.sin(_tmp79)
+    _tmp88 = numpy.cos(_tmp80)
+    _tmp89 = arck(_tmp83)
+    _tmp90 = along_4_0 + _tmp89*_tmp83**2
+    _tmp91 = _tmp3*_tmp90
+    _tmp92 = arck(_tmp80)
+    _tmp93 = along_4_1 + _tmp92*_tmp80**2
+    _tmp94 = numpy.cos(_tmp83)
+    _tmp95 = _tmp3*_tmp94
+    _tmp96 = _tmp3*(-2*_tmp87**2 + 2*_tmp86**2) + _tmp81*_tmp82 + _tmp88*_tmp91 + _tmp93*_tmp95 - _tmp85*across_4_1
+    _tmp97 = _tmp77*_tmp96
+    _tmp98 = numpy.cos(_tmp76)
+    _tmp99 = 1.0*x_15
+    _tmp100 = _tmp3*numpy.sin(_tmp99) + _tmp82*_tmp88 + _tmp85*_tmp93 + _tmp95*across_4_1 - _tmp81*_tmp91
+    _tmp101 = _tmp100*_tmp98
+    _tmp102 = _tmp73 + theta_4
+    _tmp103 = numpy.sin(_tmp102)
+    _tmp104 = numpy.cos(_tmp102)
+    _tmp105 = 0.0029104275004359953*x_0
+    _tmp106 = _tmp105 + 0.0029104275004359953*x_1
+    _tmp107 = numpy.cos(_tmp106)
+    _tmp108 = 0.0014552137502179977*x_0
+    _tmp109 = 0.0014552137502179977*x_1
+    _tmp110 = _tmp108 + _tmp109
+    _tmp111 = numpy.cos(_tmp110)*numpy.sin(_tmp110)
+    _tmp112 = -0.05*_tmp107 - 0.08*_tmp111
+    _tmp113 = _tmp102 + theta_5
+    _tmp114 = _tmp113 + theta_6
+    _tmp115 = 1666.6666666666667*numpy.cos(_tmp114)
+    _tmp116 = numpy.cos(_tmp105)
+    _tmp117 = numpy.cos(_tmp108)*numpy.sin(_tmp108)
+    _tmp118 = 0.1*_tmp117 - 0.02*_tmp116
+    _tmp119 = 1666.6666666666667*numpy.cos(_tmp113)
+    _tmp120 = _tmp102 + _tmp108 + 0.5*theta_5
+    _tmp121 = numpy.sin(_tmp120)
+    _tmp122 = 0.5*x_16
+    _tmp123 = 0.25*theta_5 + 0.0007276068751089988*x_0
+    _tmp124 = _tmp123 - _tmp122
+    _tmp125 = numpy.sin(_tmp124)
+    _tmp126 = _tmp3*across_5_0
+    _tmp127 = _tmp122 + _tmp123
+    _tmp128 = numpy.sin(_tmp127)
+    _tmp129 = _tmp128*_tmp3
+    _tmp130 = numpy.sin(_tmp122)
+    _tmp131 = numpy.sin(_tmp123)
+    _tmp132 = numpy.cos(_tmp124)
+    _tmp133 = arck(_tmp127)
+    _tmp134 = along_5_0 + _tmp133*_tmp127**2
+    _tmp135 = _tmp134*_tmp3
+    _tmp136 = arck(_tmp124)
+    _tmp137 = along_5_1 + _tmp136*_tmp124**2
+    _tmp138 = numpy.cos(_tmp127)
+    _tmp139 = _tmp138*_tmp3
+    _tmp140 = _tmp125*_tmp126 + _tmp132*_tmp135 + _tmp137*_tmp139 + _tmp3*(-2*_tmp130**2 + 2*_tmp131**2) - _tmp129*across_5_1
+    _tmp141 = _tmp121*_tmp140
+    _tmp142 = _tmp105 + _tmp113
+    _tmp143 = _tmp109 + _tmp142 + 0.5*theta_6
+    _tmp144 = numpy.cos(_tmp143)
+    _tmp145 = 0.5*x_17
+    _tmp146 = 0.25*theta_6 + 0.0007276068751089988*x_1
+    _tmp147 = _tmp146 - _tmp145
+    _tmp148 = numpy.sin(_tmp147)
+    _tmp149 = _tmp3*across_6_0
+    _tmp150 = _tmp145 + _tmp146
+    _tmp151 = numpy.sin(_tmp150)
+    _tmp152 = _tmp151*_tmp3
+    _tmp153 = numpy.sin(_tmp145)
+    _tmp154 = numpy.sin(_tmp146)
+    _tmp155 = numpy.cos(_tmp147)
+    _tmp156 = arck(_tmp150)
+    _tmp157 = along_6_0 + _tmp156*_tmp150**2
+    _tmp158 = _tmp157*_tmp3
+    _tmp159 = arck(_tmp147)
+    _tmp160 = along_6_1 + _tmp159*_tmp147**2
+    _tmp161 = numpy.cos(_tmp150)
+    _tmp162 = _tmp161*_tmp3
+    _tmp163 = _tmp148*_tmp149 + _tmp155*_tmp158 + _tmp160*_tmp162 + _tmp3*(-2*_tmp153**2 + 2*_tmp154**2) - _tmp152*across_6_1
+    _tmp164 = _tmp144*_tmp163
+    _tmp165 = numpy.cos(_tmp120)
+    _tmp166 = 1.0*x_16
+    _tmp167 = _tmp126*_tmp132 + _tmp129*_tmp137 + _tmp139*across_5_1 + _tmp3*numpy.sin(_tmp166) - _tmp125*_tmp135
+    _tmp168 = _tmp165*_tmp167
+    _tmp169 = 0.04*_tmp107 - 0.1*_tmp111
+    _tmp170 = 1666.6666666666667*numpy.sin(_tmp114)
+    _tmp171 = -0.05*_tmp116 - 0.04*_tmp117
+    _tmp172 = 1666.6666666666667*numpy.sin(_tmp113)
+    _tmp173 = numpy.sin(_tmp143)
+    _tmp174 = 1.0*x_17
+    _tmp175 = _tmp149*_tmp155 + _tmp152*_tmp160 + _tmp162*across_6_1 + _tmp3*numpy.sin(_tmp174) - _tmp148*_tmp158
+    _tmp176 = _tmp173*_tmp175
+    _tmp177 = 83.33333333333334*_tmp103 + 1666.6666666666667*_tmp141 + 1666.6666666666667*_tmp164 + 1666.6666666666667*_tmp168 - 33.333333333333336*_tmp104 - 1666.6666666666667*_tmp176 + _tmp112*_tmp115 + _tmp118*_tmp119 - _tmp169*_tmp170 - _tmp171*_tmp172
+    _tmp178 = _tmp177 + 83.33333333333334*_tmp74 + 16.666666666666668*_tmp75 + 1666.6666666666667*_tmp101 + 1666.6666666666667*_tmp97
+    _tmp179 = numpy.sin(_tmp72)
+    _tmp180 = numpy.cos(_tmp72)
+    _tmp181 = _tmp72 + 0.5*theta_3
+    _tmp182 = numpy.sin(_tmp181)
+    _tmp183 = 0.25*theta_3
+    _tmp184 = 0.5*x_14
+    _tmp185 = _tmp183 - _tmp184
+    _tmp186 = numpy.sin(_tmp185)
+    _tmp187 = _tmp3*across_3_0
+    _tmp188 = _tmp183 + _tmp184
+    _tmp189 = numpy.sin(_tmp188)
+    _tmp190 = _tmp189*_tmp3
+    _tmp191 = numpy.sin(_tmp183)
+    _tmp192 = numpy.sin(_tmp184)
+    _tmp193 = numpy.cos(_tmp185)
+    _tmp194 = arck(_tmp188)
+    _tmp195 = along_3_0 + _tmp194*_tmp188**2
+    _tmp196 = _tmp195*_tmp3
+    _tmp197 = arck(_tmp185)
+    _tmp198 = along_3_1 + _tmp197*_tmp185**2
+    _tmp199 = numpy.cos(_tmp188)
+    _tmp200 = _tmp199*_tmp3
+    _tmp201 = _tmp186*_tmp187 + _tmp193*_tmp196 + _tmp198*_tmp200 + _tmp3*(-2*_tmp192**2 + 2*_tmp191**2) - _tmp190*across_3_1
+    _tmp202 = _tmp182*_tmp201
+    _tmp203 = numpy.cos(_tmp181)
+    _tmp204 = 1.0*x_14
+    _tmp205 = _tmp187*_tmp193 + _tmp190*_tmp198 + _tmp200*across_3_1 + _tmp3*numpy.sin(_tmp204) - _tmp186*_tmp196
+    _tmp206 = _tmp203*_tmp205
+    _tmp207 = 83.33333333333334*_tmp179 + 33.333333333333336*_tmp180 + 1666.6666666666667*_tmp202 + 1666.6666666666667*_tmp206
+    _tmp208 = _tmp178 + _tmp207
+    _tmp209 = _tmp50*across_2_0
+    _tmp210 = _tmp32*_tmp50
+    _tmp211 = _tmp38*_tmp50
+    _tmp212 = 0.125*theta_2
+    _tmp213 = 0.25*x_13
+    _tmp214 = sinr1(_tmp28)
+    _tmp215 = _tmp28**3*(_tmp214 - 3*sinr2(_tmp28) + 3*cosr2(_tmp28))
+    _tmp216 = 0.25*_tmp215 + _tmp40*(_tmp212 - _tmp213)
+    _tmp217 = _tmp31**3*(-3*sinr2(_tmp31) + 3*cosr2(_tmp31) + sinr1(_tmp31))
+    _tmp218 = _tmp3*(0.25*_tmp217 + _tmp37*(_tmp212 + _tmp213))
+    _tmp219 = -_tmp209*_tmp29 - _tmp210*across_2_1 - _tmp211*_tmp36 - _tmp218*_tmp29 + 0.125*_tmp41*_tmp42*p_0 + 0.5*_tmp216*_tmp32*p_0
+    _tmp220 = _tmp219*_tmp25
+    _tmp221 = _tmp209*_tmp36 + _tmp216*_tmp43 + _tmp218*_tmp36 - _tmp210*_tmp41 - _tmp211*_tmp29 + _tmp3*_tmp34*numpy.cos(_tmp26) - _tmp42*_tmp50*across_2_1
+    _tmp222 = 833.3333333333334*_tmp45 + 833.3333333333334*_tmp49 + 1666.6666666666667*_tmp220 - 1666.6666666666667*_tmp221*_tmp46
+    _tmp223 = _tmp50*across_3_0
+    _tmp224 = _tmp189*_tmp50
+    _tmp225 = _tmp195*_tmp50
+    _tmp226 = 0.125*theta_3
+    _tmp227 = 0.25*x_14
+    _tmp228 = sinr1(_tmp185)
+    _tmp229 = _tmp185**3*(_tmp228 - 3*sinr2(_tmp185) + 3*cosr2(_tmp185))
+    _tmp230 = 0.25*_tmp229 + _tmp197*(_tmp226 - _tmp227)
+    _tmp231 = _tmp188**3*(-3*sinr2(_tmp188) + 3*cosr2(_tmp188) + sinr1(_tmp188))
+    _tmp232 = _tmp3*(0.25*_tmp231 + _tmp194*(_tmp226 + _tmp227))
+    _tmp233 = -_tmp186*_tmp223 - _tmp186*_tmp232 - _tmp193*_tmp225 - _tmp224*across_3_1 + 0.125*_tmp198*_tmp199*p_0 + 0.5*_tmp189*_tmp230*p_0
+    _tmp234 = _tmp182*_tmp233
+    _tmp235 = _tmp193*_tmp223 + _tmp193*_tmp232 + _tmp200*_tmp230 - _tmp186*_tmp225 - _tmp198*_tmp224 + _tmp191*_tmp3*numpy.cos(_tmp183) - _tmp199*_tmp50*across_3_1
+    _tmp236 = 833.3333333333334*_tmp202 + 833.3333333333334*_tmp206 + 1666.6666666666667*_tmp234 - 1666.6666666666667*_tmp203*_tmp235
+    _tmp237 = _tmp50*across_4_0
+    _tmp238 = _tmp50*_tmp84
+    _tmp239 = _tmp50*_tmp90
+    _tmp240 = 0.125*theta_4
+    _tmp241 = 0.25*x_15
+    _tmp242 = sinr1(_tmp80)
+    _tmp243 = _tmp80**3*(_tmp242 - 3*sinr2(_tmp80) + 3*cosr2(_tmp80))
+    _tmp244 = 0.25*_tmp243 + _tmp92*(_tmp240 - _tmp241)
+    _tmp245 = _tmp83**3*(-3*sinr2(_tmp83) + 3*cosr2(_tmp83) + sinr1(_tmp83))
+    _tmp246 = _tmp3*(0.25*_tmp245 + _tmp89*(_tmp240 + _tmp241))
+    _tmp247 = -_tmp237*_tmp81 - _tmp238*across_4_1 - _tmp239*_tmp88 - _tmp246*_tmp81 + 0.125*_tmp93*_tmp94*p_0 + 0.5*_tmp244*_tmp84*p_0
+    _tmp248 = _tmp247*_tmp77
+    _tmp249 = _tmp237*_tmp88 + _tmp244*_tmp95 + _tmp246*_tmp88 - _tmp238*_tmp93 - _tmp239*_tmp81 + _tmp3*_tmp86*numpy.cos(_tmp78) - _tmp50*_tmp94*across_4_1
+    _tmp250 = numpy.sin(theta_1)
+    _tmp251 = _tmp22*_tmp61
+    _tmp252 = _tmp2*_tmp69
+    _tmp253 = _tmp25*_tmp48
+    _tmp254 = _tmp59*_tmp61
+    _tmp255 = _tmp44*_tmp46
+    _tmp256 = 100.0*_tmp250 + 833.3333333333334*_tmp251 + 833.3333333333334*_tmp252 + 1666.6666666666667*_tmp253 + 1666.6666666666667*_tmp254 - 1666.6666666666667*_tmp255 - 1666.6666666666667*_tmp2*_tmp66
+    _tmp257 = _tmp100*_tmp77
+    _tmp258 = _tmp96*_tmp98
+    _tmp259 = _tmp163*_tmp173
+    _tmp260 = _tmp121*_tmp167
+    _tmp261 = _tmp144*_tmp175
+    _tmp262 = _tmp140*_tmp165
+    _tmp263 = 1666.6666666666667*_tmp259 + 1666.6666666666667*_tmp260 + 1666.6666666666667*_tmp261 - 83.33333333333334*_tmp104 - 33.333333333333336*_tmp103 - 1666.6666666666667*_tmp262 + _tmp112*_tmp170 + _tmp115*_tmp169 + _tmp118*_tmp172 + _tmp119*_tmp171
+    _tmp264 = _tmp263 + 16.666666666666668*_tmp74 + 1666.6666666666667*_tmp257 - 83.33333333333334*_tmp75 - 1666.6666666666667*_tmp258
+    _tmp265 = _tmp182*_tmp205
+    _tmp266 = _tmp201*_tmp203
+    _tmp267 = 33.333333333333336*_tmp179 + 1666.6666666666667*_tmp265 - 83.33333333333334*_tmp180 - 1666.6666666666667*_tmp266
+    _tmp268 = _tmp264 + _tmp267
+    _tmp269 = _tmp219*_tmp46
+    _tmp270 = _tmp221*_tmp25
+    _tmp271 = 833.3333333333334*_tmp253 - 833.3333333333334*_tmp255 - 1666.6666666666667*_tmp269 - 1666.6666666666667*_tmp270
+    _tmp272 = _tmp203*_tmp233
+    _tmp273 = _tmp182*_tmp235
+    _tmp274 = 833.3333333333334*_tmp265 - 833.3333333333334*_tmp266 - 1666.6666666666667*_tmp272 - 1666.6666666666667*_tmp273
+    _tmp275 = _tmp247*_tmp98
+    _tmp276 = _tmp249*_tmp77
+    _tmp277 = 0.0029104275004359953*x_2
+    _tmp278 = _tmp277 + 0.0029104275004359953*x_3
+    _tmp279 = numpy.cos(_tmp278)
+    _tmp280 = 0.0014552137502179977*x_2
+    _tmp281 = 0.0014552137502179977*x_3
+    _tmp282 = _tmp280 + _tmp281
+    _tmp283 = numpy.cos(_tmp282)*numpy.sin(_tmp282)
+    _tmp284 = -0.035*_tmp279 - 0.05*_tmp283
+    _tmp285 = _tmp73 + theta_7
+    _tmp286 = _tmp285 + theta_8
+    _tmp287 = 1666.6666666666667*numpy.cos(_tmp286)
+    _tmp288 = numpy.cos(_tmp285)
+    _tmp289 = numpy.cos(_tmp277)
+    _tmp290 = numpy.cos(_tmp280)*numpy.sin(_tmp280)
+    _tmp291 = 133.33333333333334*_tmp290 - 8.333333333333334*_tmp289
+    _tmp292 = _tmp280 + _tmp73 + 0.5*theta_7
+    _tmp293 = numpy.sin(_tmp292)
+    _tmp294 = 0.5*x_18
+    _tmp295 = 0.25*theta_7 + 0.0007276068751089988*x_2
+    _tmp296 = _tmp295 - _tmp294
+    _tmp297 = numpy.sin(_tmp296)
+    _tmp298 = _tmp3*across_7_0
+    _tmp299 = _tmp294 + _tmp295
+    _tmp300 = numpy.sin(_tmp299)
+    _tmp301 = _tmp3*_tmp300
+    _tmp302 = numpy.sin(_tmp294)
+    _tmp303 = numpy.sin(_tmp295)
+    _tmp304 = numpy.cos(_tmp296)
+    _tmp305 = arck(_tmp299)
+    _tmp306 = along_7_0 + _tmp305*_tmp299**2
+    _tmp307 = _tmp3*_tmp306
+    _tmp308 = arck(_tmp296)
+    _tmp309 = along_7_1 + _tmp308*_tmp296**2
+    _tmp310 = numpy.cos(_tmp299)
+    _tmp311 = _tmp3*_tmp310
+    _tmp312 = _tmp297*_tmp298 + _tmp3*(-2*_tmp302**2 + 2*_tmp303**2) + _tmp304*_tmp307 + _tmp309*_tmp311 - _tmp301*across_7_1
+    _tmp313 = _tmp293*_tmp312
+    _tmp314 = _tmp277 + _tmp285
+    _tmp315 = _tmp281 + _tmp314 + 0.5*theta_8
+    _tmp316 = numpy.sin(_tmp315)
+    _tmp317 = 0.5*x_19
+    _tmp318 = 0.25*theta_8 + 0.0007276068751089988*x_3
+    _tmp319 = _tmp318 - _tmp317
+    _tmp320 = numpy.sin(_tmp319)
+    _tmp321 = _tmp3*across_8_0
+    _tmp322 = _tmp317 + _tmp318
+    _tmp323 = numpy.sin(_tmp322)
+    _tmp324 = _tmp3*_tmp323
+    _tmp325 = numpy.sin(_tmp317)
+    _tmp326 = numpy.sin(_tmp318)
+    _tmp327 = numpy.cos(_tmp319)
+    _tmp328 = arck(_tmp322)
+    _tmp329 = along_8_0 + _tmp328*_tmp322**2
+    _tmp330 = _tmp3*_tmp329
+    _tmp331 = arck(_tmp319)
+    _tmp332 = along_8_1 + _tmp331*_tmp319**2
+    _tmp333 = numpy.cos(_tmp322)
+    _tmp334 = _tmp3*_tmp333
+    _tmp335 = _tmp3*(-2*_tmp325**2 + 2*_tmp326**2) + _tmp320*_tmp321 + _tmp327*_tmp330 + _tmp332*_tmp334 - _tmp324*across_8_1
+    _tmp336 = _tmp316*_tmp335
+    _tmp337 = numpy.cos(_tmp292)
+    _tmp338 = 1.0*x_18
+    _tmp339 = _tmp298*_tmp304 + _tmp3*numpy.sin(_tmp338) + _tmp301*_tmp309 + _tmp311*across_7_1 - _tmp297*_tmp307
+    _tmp340 = _tmp337*_tmp339
+    _tmp341 = numpy.cos(_tmp315)
+    _tmp342 = 1.0*x_19
+    _tmp343 = _tmp3*numpy.sin(_tmp342) + _tmp321*_tmp327 + _tmp324*_tmp332 + _tmp334*across_8_1 - _tmp320*_tmp330
+    _tmp344 = _tmp341*_tmp343
+    _tmp345 = 0.025*_tmp279 - 0.07*_tmp283
+    _tmp346 = 1666.6666666666667*numpy.sin(_tmp286)
+    _tmp347 = numpy.sin(_tmp285)
+    _tmp348 = -16.666666666666668*_tmp290 - 66.66666666666667*_tmp289
+    _tmp349 = 33.333333333333336*_tmp74 + 1666.6666666666667*_tmp313 + 1666.6666666666667*_tmp336 + 1666.6666666666667*_tmp340 + 1666.6666666666667*_tmp344 - 66.66666666666667*_tmp75 + _tmp284*_tmp287 + _tmp288*_tmp291 - _tmp345*_tmp346 - _tmp347*_tmp348
+    _tmp350 = _tmp207 + _tmp349
+    _tmp351 = _tmp293*_tmp339
+    _tmp352 = _tmp316*_tmp343
+    _tmp353 = _tmp312*_tmp337
+    _tmp354 = _tmp335*_tmp341
+    _tmp355 = 1666.6666666666667*_tmp351 + 1666.6666666666667*_tmp352 - 33.333333333333336*_tmp75 - 66.66666666666667*_tmp74 - 1666.6666666666667*_tmp353 - 1666.6666666666667*_tmp354 + _tmp284*_tmp346 + _tmp287*_tmp345 + _tmp288*_tmp348 + _tmp291*_tmp347
+    _tmp356 = _tmp267 + _tmp355
+    _tmp357 = numpy.sin(_tmp142)
+    _tmp358 = _tmp3*_tmp357
+    _tmp359 = 0.05*_tmp357
+    _tmp360 = _tmp106 + _tmp114
+    _tmp361 = numpy.sin(_tmp360)
+    _tmp362 = 0.04*_tmp361
+    _tmp363 = -0.05 + _tmp3
+    _tmp364 = numpy.cos(_tmp360)
+    _tmp365 = _tmp363*_tmp364
+    _tmp366 = _tmp362 - _tmp365
+    _tmp367 = numpy.cos(_tmp142)
+    _tmp368 = 0.02*_tmp367
+    _tmp369 = _tmp176 + _tmp368 - _tmp164
+    _tmp370 = _tmp3*_tmp367
+    _tmp371 = 0.04*_tmp364
+    _tmp372 = _tmp361*_tmp363
+    _tmp373 = _tmp371 + _tmp372
+    _tmp374 = _tmp259 + _tmp261 - 0.02*_tmp357
+    _tmp375 = _tmp373 + _tmp374 - 0.05*_tmp367
+    _tmp376 = 4.850712500726659*x_6
+    _tmp377 = -_tmp376*(-_tmp370 - _tmp375) + 4.850712500726659*x_7*(_tmp358 + _tmp366 + _tmp369 - _tmp359)
+    _tmp378 = _tmp3*_tmp361
+    _tmp379 = -_tmp376*(_tmp378 - _tmp373) + 4.850712500726659*x_7*(_tmp366 + _tmp3*_tmp364)
+    _tmp380 = numpy.cos(_tmp314)
+    _tmp381 = _tmp3*_tmp380
+    _tmp382 = numpy.sin(_tmp314)
+    _tmp383 = _tmp278 + _tmp286
+    _tmp384 = numpy.cos(_tmp383)
+    _tmp385 = 0.025*_tmp384
+    _tmp386 = -0.035 + _tmp3
+    _tmp387 = numpy.sin(_tmp383)
+    _tmp388 = _tmp386*_tmp387
+    _tmp389 = _tmp385 + _tmp388
+    _tmp390 = _tmp352 + _tmp389 - 0.005*_tmp382 - 0.04*_tmp380 - _tmp335*_tmp341
+    _tmp391 = 4.850712500726659*x_9
+    _tmp392 = 0.025*_tmp387
+    _tmp393 = _tmp384*_tmp386
+    _tmp394 = _tmp336 + _tmp344 + 0.04*_tmp382
+    _tmp395 = _tmp393 + _tmp394 - _tmp392 - 0.005*_tmp380
+    _tmp396 = 4.850712500726659*x_10
+    _tmp397 = _tmp396*(-_tmp395 + 0.5*_tmp382*p_0) - _tmp391*(-_tmp381 - _tmp390)
+    _tmp398 = _tmp3*_tmp387
+    _tmp399 = _tmp3*_tmp384
+    _tmp400 = _tmp396*(_tmp392 + _tmp398 - _tmp393) - _tmp391*(-_tmp389 - _tmp399)
+    _tmp401 = _tmp5 + 0.75*theta_1
+    _tmp402 = numpy.sin(_tmp401)
+    _tmp403 = numpy.cos(_tmp401)
+    _tmp405 = 0.375*p_0
+    _tmp404 = along_1_1 + sinr0(_tmp6)
+    _tmp406 = _tmp404*_tmp405
+    _tmp407 = -_tmp54 + cosr1(_tmp6)
+    _tmp408 = 0.10074556732278446*x_10
+    _tmp409 = 0.10074556732278446*x_7
+    _tmp410 = -_tmp408 - _tmp409
+    _tmp411 = 48.148148148148145*_tmp410
+    _tmp412 = 0.10074556732278446*x_6
+    _tmp413 = 0.10074556732278446*x_9
+    _tmp414 = -_tmp412 - _tmp413
+    _tmp415 = 24.074074074074073*p_0
+    _tmp416 = _tmp402*_tmp415
+    _tmp417 = _tmp27 + theta_1 + 0.75*theta_2
+    _tmp418 = numpy.cos(_tmp417)
+    _tmp419 = along_2_1 + sinr0(_tmp28)
+    _tmp420 = numpy.sin(_tmp417)
+    _tmp421 = _tmp3*_tmp420
+    _tmp422 = _tmp405*_tmp418
+    _tmp423 = _tmp405*_tmp420
+    _tmp424 = -_tmp214 + cosr1(_tmp28)
+    _tmp425 = _tmp415*across_2_1
+    _tmp426 = _tmp415*_tmp419
+    _tmp427 = _tmp184 + _tmp72 + 0.75*theta_3
+    _tmp428 = numpy.cos(_tmp427)
+    _tmp429 = along_3_1 + sinr0(_tmp185)
+    _tmp430 = numpy.sin(_tmp427)
+    _tmp431 = _tmp3*_tmp430
+    _tmp432 = -_tmp411*(-_tmp429*_tmp431 - _tmp3*_tmp428*across_3_1) + 48.148148148148145*_tmp414*(-_tmp431*across_3_1 + 0.5*_tmp428*_tmp429*p_0)
+    _tmp433 = _tmp405*_tmp428
+    _tmp434 = _tmp405*_tmp430
+    _tmp435 = -_tmp228 + cosr1(_tmp185)
+    _tmp436 = _tmp73 + _tmp79 + 0.75*theta_4
+    _tmp437 = numpy.sin(_tmp436)
+    _tmp438 = _tmp3*_tmp437
+    _tmp439 = along_4_1 + sinr0(_tmp80)
+    _tmp440 = numpy.cos(_tmp436)
+    _tmp441 = -_tmp376*(-_tmp438*across_4_1 + 0.5*_tmp439*_tmp440*p_0) + 4.850712500726659*x_7*(-_tmp438*_tmp439 - _tmp3*_tmp440*across_4_1)
+    _tmp442 = _tmp405*_tmp437
+    _tmp443 = _tmp405*_tmp440
+    _tmp444 = -_tmp242 + cosr1(_tmp80)
+    _tmp445 = _tmp102 + _tmp122 + 0.75*theta_5 + 0.0021828206253269966*x_0
+    _tmp446 = numpy.sin(_tmp445)
+    _tmp447 = _tmp3*_tmp446
+    _tmp448 = along_5_1 + sinr0(_tmp124)
+    _tmp449 = numpy.cos(_tmp445)
+    _tmp450 = -_tmp376*(-_tmp447*across_5_1 + 0.5*_tmp448*_tmp449*p_0) + 4.850712500726659*x_7*(-_tmp447*_tmp448 - _tmp3*_tmp449*across_5_1)
+    _tmp451 = _tmp142 + _tmp145 + 0.75*theta_6 + 0.0021828206253269966*x_1
+    _tmp452 = numpy.cos(_tmp451)
+    _tmp453 = _tmp3*across_6_1
+    _tmp454 = numpy.sin(_tmp451)
+    _tmp455 = _tmp3*(along_6_1 + sinr0(_tmp147))
+    _tmp456 = -_tmp376*(-_tmp452*_tmp453 - _tmp454*_tmp455) + 4.850712500726659*x_7*(_tmp453*_tmp454 - _tmp452*_tmp455)
+    _tmp457 = _tmp294 + _tmp73 + 0.75*theta_7 + 0.0021828206253269966*x_2
+    _tmp458 = numpy.cos(_tmp457)
+    _tmp459 = along_7_1 + sinr0(_tmp296)
+    _tmp460 = numpy.sin(_tmp457)
+    _tmp461 = _tmp3*_tmp460
+    _tmp462 = _tmp396*(-_tmp459*_tmp461 - _tmp3*_tmp458*across_7_1) - _tmp391*(-_tmp461*across_7_1 + 0.5*_tmp458*_tmp459*p_0)
+    _tmp463 = _tmp314 + _tmp317 + 0.75*theta_8 + 0.0021828206253269966*x_3
+    _tmp464 = numpy.cos(_tmp463)
+    _tmp465 = along_8_1 + sinr0(_tmp319)
+    _tmp466 = numpy.sin(_tmp463)
+    _tmp467 = _tmp3*_tmp466
+    _tmp468 = _tmp396*(-_tmp465*_tmp467 - _tmp3*_tmp464*across_8_1) - _tmp391*(-_tmp467*across_8_1 + 0.5*_tmp464*_tmp465*p_0)
+    _tmp469 = numpy.less_equal(p_0, 0.006)
+    _tmp470 = _DTYPE(numpy.where(_tmp469, 4.333333333333334e-12, 4.761904761904762e-12))
+    _tmp471 = p_0**(-1.0)
+    _tmp472 = _tmp470*_tmp471
+    _tmp473 = 250000*_tmp472
+    _tmp474 = _tmp410*_tmp473
+    _tmp475 = _tmp414*_tmp473
+    _tmp476 = 1000000*_tmp472
+    _tmp477 = -_tmp10*_tmp476
+    _tmp478 = _tmp20*_tmp476
+    _tmp479 = 750000*_tmp472
+    _tmp480 = _tmp410*_tmp479
+    _tmp481 = _tmp414*_tmp479
+    _tmp482 = -_tmp402*_tmp476
+    _tmp483 = _tmp403*_tmp476
+    _tmp484 = _tmp31 + theta_1
+    _tmp485 = numpy.cos(_tmp484)
+    _tmp486 = _tmp476*_tmp485
+    _tmp487 = numpy.sin(_tmp484)
+    _tmp488 = _tmp476*_tmp487
+    _tmp489 = _tmp418*_tmp476
+    _tmp490 = _tmp420*_tmp476
+    _tmp491 = _tmp188 + _tmp72
+    _tmp492 = numpy.cos(_tmp491)
+    _tmp493 = _tmp476*_tmp492
+    _tmp494 = numpy.sin(_tmp491)
+    _tmp495 = _tmp476*_tmp494
+    _tmp496 = _tmp410*_tmp493 - _tmp414*_tmp495
+    _tmp497 = -_tmp410*_tmp495 - _tmp414*_tmp493
+    _tmp498 = _tmp428*_tmp476
+    _tmp499 = _tmp430*_tmp476
+    _tmp500 = _tmp410*_tmp498 - _tmp414*_tmp499
+    _tmp501 = -_tmp410*_tmp499 - _tmp414*_tmp498
+    _tmp502 = 100745.56732278445*_tmp472
+    _tmp503 = _tmp73 + _tmp83
+    _tmp504 = numpy.sin(_tmp503)
+    _tmp505 = _tmp504*x_6
+    _tmp506 = numpy.cos(_tmp503)
+    _tmp507 = _tmp506*x_7
+    _tmp508 = _tmp502*_tmp505 - _tmp502*_tmp507
+    _tmp509 = 25186.391830696113*_tmp472
+    _tmp510 = _tmp506*x_6
+    _tmp511 = _tmp504*x_7
+    _tmp512 = _tmp502*_tmp510 + _tmp502*_tmp511
+    _tmp513 = _tmp437*x_6
+    _tmp514 = _tmp440*x_7
+    _tmp515 = _tmp502*_tmp513 - _tmp502*_tmp514
+    _tmp516 = 75559.17549208834*_tmp472
+    _tmp517 = _tmp440*x_6
+    _tmp518 = _tmp437*x_7
+    _tmp519 = _tmp502*_tmp517 + _tmp502*_tmp518
+    _tmp520 = _tmp102 + _tmp127
+    _tmp521 = numpy.sin(_tmp520)
+    _tmp522 = _tmp502*x_6
+    _tmp523 = numpy.cos(_tmp520)
+    _tmp524 = _tmp502*x_7
+    _tmp525 = _tmp521*_tmp522 - _tmp523*_tmp524
+    _tmp526 = _tmp521*_tmp524 + _tmp522*_tmp523
+    _tmp527 = _tmp446*_tmp522 - _tmp449*_tmp524
+    _tmp528 = _tmp446*_tmp524 + _tmp449*_tmp522
+    _tmp529 = _tmp142 + _tmp150
+    _tmp530 = numpy.cos(_tmp529)
+    _tmp531 = numpy.sin(_tmp529)
+    _tmp532 = _tmp522*_tmp530 + _tmp524*_tmp531
+    _tmp533 = -_tmp522*_tmp531 + 100745.56732278445*_tmp470*_tmp471*_tmp530*x_7
+    _tmp534 = _tmp452*_tmp522 + _tmp454*_tmp524
+    _tmp535 = -_tmp454*_tmp522 + 100745.56732278445*_tmp452*_tmp470*_tmp471*x_7
+    _tmp536 = _tmp299 + _tmp73
+    _tmp537 = _tmp502*numpy.cos(_tmp536)
+    _tmp538 = numpy.sin(_tmp536)
+    _tmp539 = -_tmp537*x_10 + 100745.56732278445*_tmp470*_tmp471*_tmp538*x_9
+    _tmp540 = _tmp537*x_9 + _tmp502*_tmp538*x_10
+    _tmp541 = _tmp458*_tmp502
+    _tmp542 = -_tmp541*x_10 + 100745.56732278445*_tmp460*_tmp470*_tmp471*x_9
+    _tmp543 = _tmp541*x_9 + _tmp460*_tmp502*x_10
+    _tmp544 = _tmp314 + _tmp322
+    _tmp545 = _tmp502*numpy.cos(_tmp544)
+    _tmp546 = numpy.sin(_tmp544)
+    _tmp547 = -_tmp545*x_10 + 100745.56732278445*_tmp470*_tmp471*_tmp546*x_9
+    _tmp548 = _tmp545*x_9 + _tmp502*_tmp546*x_10
+    _tmp549 = _tmp464*_tmp502
+    _tmp550 = -_tmp549*x_10 + 100745.56732278445*_tmp466*_tmp470*_tmp471*x_9
+    _tmp551 = _tmp549*x_9 + _tmp466*_tmp502*x_10
+    _tmp552 = p_0**2
+    _tmp553 = _DTYPE(numpy.where(_tmp469, 230769230769.23077, 210000000000))
+    _tmp554 = 5e-07*_tmp552*_tmp553
+    _tmp555 = _tmp554*omega_1_1
+    _tmp556 = _tmp250*_tmp3
+    _tmp557 = 0.06*_tmp250
+    _tmp558 = _tmp255 - _tmp253
+    _tmp559 = _tmp556 + _tmp558 - _tmp557
+    _tmp560 = _tmp353 - _tmp351 + 0.02*_tmp75
+    _tmp561 = _tmp354 - _tmp352 + 0.04*_tmp380
+    _tmp562 = _tmp560 + _tmp561 - _tmp385 - _tmp388 + 0.005*_tmp382 + 0.04*_tmp74
+    _tmp563 = 0.02*_tmp179
+    _tmp564 = _tmp266 - _tmp265 + 0.05*_tmp180
+    _tmp565 = _tmp564 - _tmp563
+    _tmp566 = _tmp562 + _tmp565
+    _tmp567 = _tmp559 + _tmp566
+    _tmp568 = 0.01*_tmp74
+    _tmp569 = _tmp258 - _tmp257 + 0.05*_tmp75
+    _tmp570 = _tmp262 - _tmp260 + 0.05*_tmp104
+    _tmp571 = _tmp570 - _tmp259 - _tmp261 - _tmp371 - _tmp372 + 0.05*_tmp367 + 0.02*_tmp103 + 0.02*_tmp357
+    _tmp572 = _tmp569 + _tmp571 - _tmp568
+    _tmp573 = _tmp565 + _tmp572
+    _tmp574 = _tmp559 + _tmp573
+    _tmp575 = _tmp0*_tmp3
+    _tmp576 = -_tmp575
+    _tmp577 = _tmp45 + _tmp49
+    _tmp578 = _tmp576 + _tmp577
+    _tmp579 = 0.06*_tmp0
+    _tmp580 = _tmp202 + _tmp206 + 0.05*_tmp179
+    _tmp581 = _tmp580 + 0.02*_tmp180
+    _tmp582 = _tmp101 + _tmp97 + 0.05*_tmp74
+    _tmp583 = _tmp141 + _tmp168 + 0.05*_tmp103
+    _tmp584 = _tmp164 + _tmp359 + _tmp365 + _tmp583 - _tmp176 - _tmp362 - _tmp368 - 0.02*_tmp104
+    _tmp585 = _tmp582 + _tmp584 + 0.01*_tmp75
+    _tmp586 = _tmp581 + _tmp585
+    _tmp587 = _tmp579 + _tmp586
+    _tmp588 = _tmp578 + _tmp587
+    _tmp589 = _tmp313 + _tmp340 + 0.02*_tmp74
+    _tmp590 = _tmp395 + _tmp589 - 0.04*_tmp75
+    _tmp591 = _tmp581 + _tmp590
+    _tmp592 = _tmp579 + _tmp591
+    _tmp593 = _tmp578 + _tmp592
+    _tmp594 = 0.02076923076923077*x_8
+    _tmp595 = _tmp594 + 0.02076923076923077*x_11
+    _tmp596 = _tmp554*omega_2_1
+    _tmp597 = _tmp180*_tmp3
+    _tmp598 = _tmp566 - _tmp597
+    _tmp599 = _tmp260 + _tmp375 - 0.05*_tmp104 - 0.02*_tmp103 - _tmp140*_tmp165
+    _tmp600 = _tmp257 + _tmp568 + _tmp599 - 0.05*_tmp75 - _tmp96*_tmp98
+    _tmp601 = _tmp265 + _tmp563 - 0.05*_tmp180 - _tmp201*_tmp203
+    _tmp602 = _tmp600 + _tmp601
+    _tmp603 = -_tmp597 - _tmp602
+    _tmp604 = _tmp179*_tmp3
+    _tmp605 = -_tmp604
+    _tmp606 = _tmp586 + _tmp605
+    _tmp607 = _tmp591 + _tmp605
+    _tmp608 = _tmp554*omega_3_1
+    _tmp609 = _tmp3*_tmp75
+    _tmp610 = _tmp562 - _tmp609
+    _tmp611 = -_tmp600 - _tmp609
+    _tmp612 = _tmp3*_tmp74
+    _tmp613 = -_tmp612
+    _tmp614 = _tmp585 + _tmp613
+    _tmp615 = _tmp590 + _tmp613
+    _tmp616 = _tmp554*omega_4_1
+    _tmp617 = _tmp103*_tmp3
+    _tmp618 = _tmp584 - _tmp617
+    _tmp619 = _tmp104*_tmp3
+    _tmp620 = -_tmp599 - _tmp619
+    _tmp621 = _tmp251 + _tmp252
+    _tmp622 = _tmp253 - _tmp255
+    _tmp623 = _tmp621 + _tmp622
+    _tmp624 = _tmp23 - _tmp70
+    _tmp625 = _tmp577 + _tmp624
+    _tmp626 = 0.0003638034375544994*p_0
+    _tmp627 = _tmp626*across_5_0
+    _tmp628 = _tmp128*_tmp626
+    _tmp629 = _tmp134*_tmp626
+    _tmp630 = 0.0007276068751089988*x_16
+    _tmp631 = 1.0588235294117644e-06*x_0 + 0.0003638034375544994*theta_5
+    _tmp632 = _tmp124**3*(-3*sinr2(_tmp124) + 3*cosr2(_tmp124) + sinr1(_tmp124))
+    _tmp633 = 0.0007276068751089988*_tmp632 + _tmp136*(_tmp631 - _tmp630)
+    _tmp634 = _tmp127**3*(-3*sinr2(_tmp127) + 3*cosr2(_tmp127) + sinr1(_tmp127))
+    _tmp635 = _tmp3*(0.0007276068751089988*_tmp634 + _tmp133*(_tmp630 + _tmp631))
+    _tmp636 = -_tmp125*_tmp627 - _tmp125*_tmp635 - _tmp132*_tmp629 - _tmp628*across_5_1 + 0.5*_tmp128*_tmp633*p_0 + 0.0003638034375544994*_tmp137*_tmp138*p_0
+    _tmp637 = 0.0014552137502179977*p_0
+    _tmp638 = _tmp132*_tmp627 + _tmp132*_tmp635 + _tmp139*_tmp633 - _tmp125*_tmp629 - _tmp137*_tmp628 + _tmp131*_tmp637*numpy.cos(_tmp123) - _tmp138*_tmp626*across_5_1
+    _tmp639 = 0.00011641710001743981*_tmp364 + 0.0029104275004359953*_tmp372
+    _tmp640 = 0.0029104275004359953*_tmp365 - 0.00011641710001743981*_tmp361
+    _tmp641 = -_tmp412*(-_tmp639 + 5.8208550008719906e-05*_tmp357 + 0.00014552137502179977*_tmp367 - 0.0014552137502179977*_tmp260 - 0.0029104275004359953*_tmp259 - 0.0029104275004359953*_tmp261 + _tmp121*_tmp638 + _tmp165*_tmp636 + 0.0014552137502179977*_tmp140*_tmp165) + 0.10074556732278446*x_7*(-_tmp640 + 5.8208550008719906e-05*_tmp367 - 0.00014552137502179977*_tmp357 - 0.0014552137502179977*_tmp141 - 0.0014552137502179977*_tmp168 - 0.0029104275004359953*_tmp164 + _tmp165*_tmp638 - _tmp121*_tmp636 + 0.0029104275004359953*_tmp173*_tmp175)
+    _tmp642 = _tmp626*across_6_0
+    _tmp643 = _tmp151*_tmp626
+    _tmp644 = _tmp157*_tmp626
+    _tmp645 = 0.0007276068751089988*x_17
+    _tmp646 = 1.0588235294117644e-06*x_1 + 0.0003638034375544994*theta_6
+    _tmp647 = _tmp147**3*(-3*sinr2(_tmp147) + 3*cosr2(_tmp147) + sinr1(_tmp147))
+    _tmp648 = 0.0007276068751089988*_tmp647 + _tmp159*(_tmp646 - _tmp645)
+    _tmp649 = _tmp150**3*(-3*sinr2(_tmp150) + 3*cosr2(_tmp150) + sinr1(_tmp150))
+    _tmp650 = _tmp3*(0.0007276068751089988*_tmp649 + _tmp156*(_tmp645 + _tmp646))
+    _tmp651 = -_tmp148*_tmp642 - _tmp148*_tmp650 - _tmp155*_tmp644 - _tmp643*across_6_1 + 0.5*_tmp151*_tmp648*p_0 + 0.0003638034375544994*_tmp160*_tmp161*p_0
+    _tmp652 = _tmp155*_tmp642 + _tmp155*_tmp650 + _tmp162*_tmp648 - _tmp148*_tmp644 - _tmp160*_tmp643 + _tmp154*_tmp637*numpy.cos(_tmp146) - _tmp161*_tmp626*across_6_1
+    _tmp653 = -_tmp412*(-_tmp639 - 0.0014552137502179977*_tmp259 - 0.0014552137502179977*_tmp261 + _tmp144*_tmp652 - _tmp173*_tmp651) + 0.10074556732278446*x_7*(-_tmp640 - 0.0014552137502179977*_tmp164 - _tmp144*_tmp651 - _tmp173*_tmp652 + 0.0014552137502179977*_tmp173*_tmp175)
+    _tmp654 = 7.276068751089988e-05*_tmp384
+    _tmp655 = 0.0029104275004359953*_tmp388
+    _tmp656 = _tmp626*across_7_0
+    _tmp657 = _tmp300*_tmp626
+    _tmp658 = _tmp306*_tmp626
+    _tmp659 = 0.0007276068751089988*x_18
+    _tmp660 = 1.0588235294117644e-06*x_2 + 0.0003638034375544994*theta_7
+    _tmp661 = _tmp296**3*(-3*sinr2(_tmp296) + 3*cosr2(_tmp296) + sinr1(_tmp296))
+    _tmp662 = 0.0007276068751089988*_tmp661 + _tmp308*(_tmp660 - _tmp659)
+    _tmp663 = _tmp299**3*(-3*sinr2(_tmp299) + 3*cosr2(_tmp299) + sinr1(_tmp299))
+    _tmp664 = _tmp3*(0.0007276068751089988*_tmp663 + _tmp305*(_tmp659 + _tmp660))
+    _tmp665 = -_tmp297*_tmp656 - _tmp297*_tmp664 - _tmp304*_tmp658 - _tmp657*across_7_1 + 0.5*_tmp300*_tmp662*p_0 + 0.0003638034375544994*_tmp309*_tmp310*p_0
+    _tmp666 = _tmp304*_tmp656 + _tmp304*_tmp664 + _tmp311*_tmp662 - _tmp297*_tmp658 - _tmp309*_tmp657 + _tmp303*_tmp637*numpy.cos(_tmp295) - _tmp310*_tmp626*across_7_1
+    _tmp667 = 0.0029104275004359953*_tmp393 - 7.276068751089988e-05*_tmp387
+    _tmp668 = _tmp408*(-_tmp667 + 1.4552137502179977e-05*_tmp380 - 0.00011641710001743981*_tmp382 - 0.0014552137502179977*_tmp313 - 0.0014552137502179977*_tmp340 - 0.0029104275004359953*_tmp336 - 0.0029104275004359953*_tmp344 + _tmp337*_tmp666 - _tmp293*_tmp665) - _tmp413*(-_tmp654 - _tmp655 + 1.4552137502179977e-05*_tmp382 + 0.00011641710001743981*_tmp380 + 0.0014552137502179977*_tmp353 + 0.0029104275004359953*_tmp354 - 0.0014552137502179977*_tmp351 - 0.0029104275004359953*_tmp352 + _tmp293*_tmp666 + _tmp337*_tmp665)
+    _tmp669 = _tmp626*across_8_0
+    _tmp670 = _tmp323*_tmp626
+    _tmp671 = _tmp329*_tmp626
+    _tmp672 = 0.0007276068751089988*x_19
+    _tmp673 = 1.0588235294117644e-06*x_3 + 0.0003638034375544994*theta_8
+    _tmp674 = _tmp319**3*(-3*sinr2(_tmp319) + 3*cosr2(_tmp319) + sinr1(_tmp319))
+    _tmp675 = 0.0007276068751089988*_tmp674 + _tmp331*(_tmp673 - _tmp672)
+    _tmp676 = _tmp322**3*(-3*sinr2(_tmp322) + 3*cosr2(_tmp322) + sinr1(_tmp322))
+    _tmp677 = _tmp3*(0.0007276068751089988*_tmp676 + _tmp328*(_tmp672 + _tmp673))
+    _tmp678 = -_tmp320*_tmp669 - _tmp320*_tmp677 - _tmp327*_tmp671 - _tmp670*across_8_1 + 0.5*_tmp323*_tmp675*p_0 + 0.0003638034375544994*_tmp332*_tmp333*p_0
+    _tmp679 = _tmp327*_tmp669 + _tmp327*_tmp677 + _tmp334*_tmp675 - _tmp320*_tmp671 - _tmp332*_tmp670 + _tmp326*_tmp637*numpy.cos(_tmp318) - _tmp333*_tmp626*across_8_1
+    _tmp680 = _tmp408*(-_tmp667 - 0.0014552137502179977*_tmp336 - 0.0014552137502179977*_tmp344 + _tmp341*_tmp679 - _tmp316*_tmp678) - _tmp413*(-_tmp654 - _tmp655 - 0.0014552137502179977*_tmp352 + _tmp316*_tmp679 + _tmp341*_tmp678 + 0.0014552137502179977*_tmp335*_tmp341)
+    _tmp681 = 0.006044734039367067*_tmp0 + 0.10074556732278446*_tmp45 + 0.10074556732278446*_tmp49 - 0.05037278366139223*_tmp0*p_0
+    _tmp682 = 0.002014911346455689*_tmp180 + 0.005037278366139223*_tmp179 + 0.10074556732278446*_tmp202 + 0.10074556732278446*_tmp206
+    _tmp683 = 0.005037278366139223*_tmp103 + 0.005037278366139223*_tmp357 + 0.10074556732278446*_tmp141 + 0.10074556732278446*_tmp164 + 0.10074556732278446*_tmp168 + 0.10074556732278446*_tmp365 - 0.002014911346455689*_tmp104 - 0.002014911346455689*_tmp367 - 0.004029822692911378*_tmp361 - 0.10074556732278446*_tmp173*_tmp175
+    _tmp684 = _tmp683 + 0.0010074556732278445*_tmp75 + 0.005037278366139223*_tmp74 + 0.10074556732278446*_tmp101 + 0.10074556732278446*_tmp97
+    _tmp685 = _tmp682 + _tmp684
+    _tmp686 = 0.0010074556732278445*_tmp74
+    _tmp687 = 0.004029822692911378*_tmp364
+    _tmp688 = 0.10074556732278446*_tmp372
+    _tmp689 = 0.10074556732278446*_tmp259
+    _tmp690 = 0.10074556732278446*_tmp257
+    _tmp691 = 0.10074556732278446*_tmp260
+    _tmp692 = 0.10074556732278446*_tmp261
+    _tmp693 = 0.002014911346455689*_tmp179
+    _tmp694 = 0.10074556732278446*_tmp265
+    _tmp695 = -_tmp693 - _tmp694 + 0.005037278366139223*_tmp180 + 0.10074556732278446*_tmp266
+    _tmp696 = 0.05037278366139223*p_0
+    _tmp697 = 0.10074556732278446*_tmp255 - 0.006044734039367067*_tmp250 - 0.10074556732278446*_tmp253 + _tmp250*_tmp696
+    _tmp698 = 0.002014911346455689*_tmp74 + 0.004029822692911378*_tmp382 + 0.10074556732278446*_tmp313 + 0.10074556732278446*_tmp336 + 0.10074556732278446*_tmp340 + 0.10074556732278446*_tmp344 + 0.10074556732278446*_tmp393 - 0.0005037278366139223*_tmp380 - 0.004029822692911378*_tmp75 - 0.0025186391830696116*_tmp387
+    _tmp699 = _tmp682 + _tmp698
+    _tmp700 = 0.0005037278366139223*_tmp382 + 0.002014911346455689*_tmp75 + 0.004029822692911378*_tmp380 + 0.004029822692911378*_tmp74 + 0.10074556732278446*_tmp353 + 0.10074556732278446*_tmp354 - 0.0025186391830696116*_tmp384 - 0.10074556732278446*_tmp351 - 0.10074556732278446*_tmp352 - 0.10074556732278446*_tmp388
+    _tmp701 = _tmp695 + _tmp700
+    _tmp702 = 0.25*p_0
+    _tmp703 = _tmp32*_tmp702
+    _tmp704 = _tmp36*_tmp702
+    _tmp705 = _tmp42*_tmp702
+    _tmp706 = -0.5*_tmp215 - _tmp28*_tmp40
+    _tmp707 = 0.5*_tmp217 + _tmp31*_tmp37
+    _tmp708 = _tmp3*numpy.cos(_tmp47) + _tmp33*_tmp706 + _tmp38*_tmp704 + _tmp41*_tmp705 - _tmp703*across_2_1 + _tmp29*_tmp702*across_2_0 - _tmp29*_tmp3*_tmp707
+    _tmp709 = 1.0*p_0
+    _tmp710 = -_tmp41*_tmp703 - _tmp704*across_2_0 - _tmp705*across_2_1 - _tmp35*_tmp709*numpy.cos(_tmp27) + 0.25*_tmp29*_tmp38*p_0 + 0.5*_tmp36*_tmp707*p_0 + 0.5*_tmp42*_tmp706*p_0
+    _tmp711 = _tmp25*_tmp710 + _tmp46*_tmp708
+    _tmp712 = _tmp46*_tmp710 - _tmp25*_tmp708
+    _tmp713 = _tmp189*_tmp702
+    _tmp714 = _tmp193*_tmp702
+    _tmp715 = _tmp199*_tmp702
+    _tmp716 = -0.5*_tmp229 - _tmp185*_tmp197
+    _tmp717 = 0.5*_tmp231 + _tmp188*_tmp194
+    _tmp718 = _tmp190*_tmp716 + _tmp195*_tmp714 + _tmp198*_tmp715 + _tmp3*numpy.cos(_tmp204) - _tmp713*across_3_1 + _tmp186*_tmp702*across_3_0 - _tmp186*_tmp3*_tmp717
+    _tmp719 = -_tmp198*_tmp713 - _tmp714*across_3_0 - _tmp715*across_3_1 - _tmp192*_tmp709*numpy.cos(_tmp184) + 0.25*_tmp186*_tmp195*p_0 + 0.5*_tmp193*_tmp717*p_0 + 0.5*_tmp199*_tmp716*p_0
+    _tmp720 = _tmp182*_tmp719 + _tmp203*_tmp718
+    _tmp721 = _tmp203*_tmp719 - _tmp182*_tmp718
+    _tmp722 = _tmp408*_tmp721 + _tmp409*_tmp721 - _tmp412*_tmp720 - _tmp413*_tmp720
+    _tmp723 = _tmp702*_tmp84
+    _tmp724 = _tmp702*_tmp88
+    _tmp725 = _tmp702*_tmp94
+    _tmp726 = -0.5*_tmp243 - _tmp80*_tmp92
+    _tmp727 = 0.5*_tmp245 + _tmp83*_tmp89
+    _tmp728 = _tmp3*numpy.cos(_tmp99) + _tmp724*_tmp90 + _tmp725*_tmp93 + _tmp726*_tmp85 - _tmp723*across_4_1 + _tmp702*_tmp81*across_4_0 - _tmp3*_tmp727*_tmp81
+    _tmp729 = -_tmp723*_tmp93 - _tmp724*across_4_0 - _tmp725*across_4_1 - _tmp709*_tmp87*numpy.cos(_tmp79) + 0.25*_tmp81*_tmp90*p_0 + 0.5*_tmp726*_tmp94*p_0 + 0.5*_tmp727*_tmp88*p_0
+    _tmp730 = -_tmp412*(_tmp728*_tmp98 + _tmp729*_tmp77) + 0.10074556732278446*x_7*(_tmp729*_tmp98 - _tmp728*_tmp77)
+    _tmp731 = _tmp128*_tmp702
+    _tmp732 = _tmp132*_tmp702
+    _tmp733 = _tmp138*_tmp702
+    _tmp734 = -0.5*_tmp632 - _tmp124*_tmp136
+    _tmp735 = 0.5*_tmp634 + _tmp127*_tmp133
+    _tmp736 = _tmp129*_tmp734 + _tmp134*_tmp732 + _tmp137*_tmp733 + _tmp3*numpy.cos(_tmp166) - _tmp731*across_5_1 + _tmp125*_tmp702*across_5_0 - _tmp125*_tmp3*_tmp735
+    _tmp737 = -_tmp137*_tmp731 - _tmp732*across_5_0 - _tmp733*across_5_1 - _tmp130*_tmp709*numpy.cos(_tmp122) + 0.25*_tmp125*_tmp134*p_0 + 0.5*_tmp132*_tmp735*p_0 + 0.5*_tmp138*_tmp734*p_0
+    _tmp738 = -_tmp412*(_tmp121*_tmp737 + _tmp165*_tmp736) + 0.10074556732278446*x_7*(_tmp165*_tmp737 - _tmp121*_tmp736)
+    _tmp739 = _tmp151*_tmp702
+    _tmp740 = _tmp155*_tmp702
+    _tmp741 = _tmp161*_tmp702
+    _tmp742 = -0.5*_tmp647 - _tmp147*_tmp159
+    _tmp743 = 0.5*_tmp649 + _tmp150*_tmp156
+    _tmp744 = _tmp152*_tmp742 + _tmp157*_tmp740 + _tmp160*_tmp741 + _tmp3*numpy.cos(_tmp174) - _tmp739*across_6_1 + _tmp148*_tmp702*across_6_0 - _tmp148*_tmp3*_tmp743
+    _tmp745 = -_tmp160*_tmp739 - _tmp740*across_6_0 - _tmp741*across_6_1 - _tmp153*_tmp709*numpy.cos(_tmp145) + 0.25*_tmp148*_tmp157*p_0 + 0.5*_tmp155*_tmp743*p_0 + 0.5*_tmp161*_tmp742*p_0
+    _tmp746 = -_tmp412*(_tmp144*_tmp745 - _tmp173*_tmp744) + 0.10074556732278446*x_7*(-_tmp144*_tmp744 - _tmp173*_tmp745)
+    _tmp747 = _tmp300*_tmp702
+    _tmp748 = _tmp304*_tmp702
+    _tmp749 = _tmp310*_tmp702
+    _tmp750 = -0.5*_tmp661 - _tmp296*_tmp308
+    _tmp751 = 0.5*_tmp663 + _tmp299*_tmp305
+    _tmp752 = _tmp3*numpy.cos(_tmp338) + _tmp301*_tmp750 + _tmp306*_tmp748 + _tmp309*_tmp749 - _tmp747*across_7_1 + _tmp297*_tmp702*across_7_0 - _tmp297*_tmp3*_tmp751
+    _tmp753 = -_tmp309*_tmp747 - _tmp748*across_7_0 - _tmp749*across_7_1 - _tmp302*_tmp709*numpy.cos(_tmp294) + 0.25*_tmp297*_tmp306*p_0 + 0.5*_tmp304*_tmp751*p_0 + 0.5*_tmp310*_tmp750*p_0
+    _tmp754 = _tmp408*(_tmp337*_tmp753 - _tmp293*_tmp752) - _tmp413*(_tmp293*_tmp753 + _tmp337*_tmp752)
+    _tmp755 = _tmp323*_tmp702
+    _tmp756 = _tmp327*_tmp702
+    _tmp757 = _tmp333*_tmp702
+    _tmp758 = -0.5*_tmp674 - _tmp319*_tmp331
+    _tmp759 = 0.5*_tmp676 + _tmp322*_tmp328
+    _tmp760 = _tmp3*numpy.cos(_tmp342) + _tmp324*_tmp758 + _tmp329*_tmp756 + _tmp332*_tmp757 - _tmp755*across_8_1 + _tmp320*_tmp702*across_8_0 - _tmp3*_tmp320*_tmp759
+    _tmp761 = -_tmp332*_tmp755 - _tmp756*across_8_0 - _tmp757*across_8_1 - _tmp325*_tmp709*numpy.cos(_tmp317) + 0.25*_tmp320*_tmp329*p_0 + 0.5*_tmp327*_tmp759*p_0 + 0.5*_tmp333*_tmp758*p_0
+    _tmp762 = _tmp408*(_tmp341*_tmp761 - _tmp316*_tmp760) - _tmp413*(_tmp316*_tmp761 + _tmp341*_tmp760)
+    _tmp763 = -0.05037278366139223*_tmp179*p_0
+    _tmp764 = _tmp180*_tmp696
+    _tmp765 = _tmp687 + _tmp688 + _tmp689 + _tmp691 + _tmp692 - 0.002014911346455689*_tmp103 - 0.002014911346455689*_tmp357 - 0.005037278366139223*_tmp104 - 0.005037278366139223*_tmp367 - 0.10074556732278446*_tmp140*_tmp165
+    _tmp766 = _tmp686 + _tmp690 + _tmp765 - 0.005037278366139223*_tmp75 - 0.10074556732278446*_tmp96*_tmp98
+    _tmp767 = -0.05037278366139223*_tmp74*p_0
+    _tmp768 = _tmp696*_tmp75
+    _tmp769 = _tmp702*across_1_1
+    _tmp770 = -0.5*_tmp55 - _tmp18*_tmp6
+    _tmp771 = 0.5*_tmp57 + _tmp14*_tmp9
+    _tmp772 = _tmp11*_tmp770 + _tmp17*_tmp702 + _tmp21*_tmp702 + _tmp3*numpy.cos(_tmp68) + _tmp702*_tmp8 - _tmp10*_tmp769 - _tmp3*_tmp7*_tmp771
+    _tmp773 = -_tmp20*_tmp769 - _tmp62*_tmp702 - _tmp64*_tmp702 - _tmp13*_tmp709*numpy.cos(_tmp5) + 0.25*_tmp15*_tmp7*p_0 + 0.5*_tmp16*_tmp771*p_0 + 0.5*_tmp20*_tmp770*p_0
+    _tmp774 = _tmp269 + _tmp270 + 0.5*_tmp255 - 0.5*_tmp253
+    _tmp775 = _tmp220 + 0.5*_tmp45 + 0.5*_tmp49 - _tmp221*_tmp46
+    _tmp776 = _tmp272 + _tmp273 + 0.5*_tmp266 - 0.5*_tmp265
+    _tmp777 = _tmp234 + 0.5*_tmp202 + 0.5*_tmp206 - _tmp203*_tmp235
+    _tmp778 = _tmp408*(-_tmp590 - _tmp777) + _tmp409*(-_tmp585 - _tmp777) - _tmp412*(_tmp572 + _tmp776) - _tmp413*(_tmp562 + _tmp776)
+    _tmp779 = -_tmp412*(_tmp275 + _tmp276 + _tmp571 + 0.5*_tmp258 - 0.5*_tmp257) + 0.10074556732278446*x_7*(-_tmp248 - _tmp584 - 0.5*_tmp101 - 0.5*_tmp97 + _tmp249*_tmp98)
+    _tmp780 = 0.03*_tmp180
+    _tmp781 = 0.03*_tmp179
+    _tmp782 = _tmp780 + _tmp781
+    _tmp783 = _tmp577 + _tmp579 + _tmp782
+    _tmp784 = _tmp780 - _tmp781
+    _tmp785 = -_tmp408*_tmp607 - _tmp409*_tmp606 - _tmp412*_tmp603 - _tmp413*_tmp598
+    _tmp786 = _tmp781 - _tmp780
+    _tmp787 = -_tmp408*_tmp615 - _tmp409*_tmp614 - _tmp412*_tmp611 - _tmp413*_tmp610
+    _tmp788 = -_tmp412*_tmp620 - 0.10074556732278446*_tmp618*x_7
+    _tmp789 = _tmp29*_tmp3
+    _tmp790 = _tmp3*_tmp36
+    _tmp791 = _tmp25*_tmp789 + _tmp46*_tmp790
+    _tmp792 = _tmp25*_tmp790 - _tmp46*_tmp789
+    _tmp793 = -_tmp792
+    _tmp794 = -_tmp25*_tmp33 + 0.5*_tmp42*_tmp46*p_0
+    _tmp795 = _tmp25*_tmp43 + _tmp33*_tmp46
+    _tmp796 = -_tmp795
+    _tmp797 = _tmp186*_tmp3
+    _tmp798 = _tmp182*_tmp797 + _tmp193*_tmp203*_tmp3
+    _tmp799 = _tmp203*_tmp797 - 0.5*_tmp182*_tmp193*p_0
+    _tmp800 = -_tmp799
+    _tmp801 = _tmp408*_tmp798 + _tmp409*_tmp798 - _tmp412*_tmp800 - _tmp413*_tmp800
+    _tmp802 = _tmp408*_tmp799 + _tmp409*_tmp799 - _tmp412*_tmp798 - _tmp413*_tmp798
+    _tmp803 = -_tmp182*_tmp190 + 0.5*_tmp199*_tmp203*p_0
+    _tmp804 = _tmp182*_tmp200 + _tmp190*_tmp203
+    _tmp805 = _tmp408*_tmp803 + _tmp409*_tmp803 - _tmp412*_tmp804 - _tmp413*_tmp804
+    _tmp806 = -_tmp804
+    _tmp807 = _tmp408*_tmp806 + _tmp409*_tmp806 - _tmp412*_tmp803 - _tmp413*_tmp803
+    _tmp808 = _tmp3*_tmp81
+    _tmp809 = _tmp808*_tmp98 - 0.5*_tmp77*_tmp88*p_0
+    _tmp810 = _tmp77*_tmp808 + _tmp3*_tmp88*_tmp98
+    _tmp811 = _tmp412*_tmp809 + 0.10074556732278446*_tmp810*x_7
+    _tmp812 = -_tmp412*_tmp810 + 0.10074556732278446*_tmp809*x_7
+    _tmp813 = _tmp77*_tmp95 + _tmp85*_tmp98
+    _tmp814 = -_tmp77*_tmp85 + 0.5*_tmp94*_tmp98*p_0
+    _tmp815 = -_tmp412*_tmp813 + 0.10074556732278446*_tmp814*x_7
+    _tmp816 = -_tmp412*_tmp814 - 0.10074556732278446*_tmp813*x_7
+    _tmp817 = _tmp125*_tmp3
+    _tmp818 = _tmp165*_tmp817 - 0.5*_tmp121*_tmp132*p_0
+    _tmp819 = _tmp121*_tmp817 + _tmp132*_tmp165*_tmp3
+    _tmp820 = _tmp412*_tmp818 + 0.10074556732278446*_tmp819*x_7
+    _tmp821 = -_tmp412*_tmp819 + 0.10074556732278446*_tmp818*x_7
+    _tmp822 = _tmp121*_tmp139 + _tmp129*_tmp165
+    _tmp823 = -_tmp121*_tmp129 + 0.5*_tmp138*_tmp165*p_0
+    _tmp824 = -_tmp412*_tmp822 + 0.10074556732278446*_tmp823*x_7
+    _tmp825 = -_tmp412*_tmp823 - 0.10074556732278446*_tmp822*x_7
+    _tmp826 = _tmp173*_tmp3
+    _tmp827 = _tmp144*_tmp3
+    _tmp828 = _tmp148*_tmp826 + _tmp155*_tmp827
+    _tmp829 = _tmp148*_tmp827 - _tmp155*_tmp826
+    _tmp830 = -_tmp412*_tmp828 + 0.10074556732278446*_tmp829*x_7
+    _tmp831 = -_tmp412*_tmp829 - 0.10074556732278446*_tmp828*x_7
+    _tmp832 = _tmp152*_tmp173 - 0.5*_tmp144*_tmp161*p_0
+    _tmp833 = -_tmp144*_tmp152 - _tmp162*_tmp173
+    _tmp834 = _tmp412*_tmp832 + 0.10074556732278446*_tmp833*x_7
+    _tmp835 = -_tmp412*_tmp833 + 0.10074556732278446*_tmp832*x_7
+    _tmp836 = _tmp297*_tmp3
+    _tmp837 = _tmp293*_tmp836 + _tmp3*_tmp304*_tmp337
+    _tmp838 = _tmp337*_tmp836 - 0.5*_tmp293*_tmp304*p_0
+    _tmp839 = _tmp408*_tmp837 + _tmp413*_tmp838
+    _tmp840 = _tmp408*_tmp838 - _tmp413*_tmp837
+    _tmp841 = -_tmp293*_tmp301 + 0.5*_tmp310*_tmp337*p_0
+    _tmp842 = _tmp293*_tmp311 + _tmp301*_tmp337
+    _tmp843 = _tmp408*_tmp841 - _tmp413*_tmp842
+    _tmp844 = -_tmp408*_tmp842 - _tmp413*_tmp841
+    _tmp845 = _tmp3*_tmp320
+    _tmp846 = _tmp316*_tmp845 + _tmp3*_tmp327*_tmp341
+    _tmp847 = _tmp341*_tmp845 - 0.5*_tmp316*_tmp327*p_0
+    _tmp848 = _tmp408*_tmp846 + _tmp413*_tmp847
+    _tmp849 = _tmp408*_tmp847 - _tmp413*_tmp846
+    _tmp850 = -_tmp316*_tmp324 + 0.5*_tmp333*_tmp341*p_0
+    _tmp851 = _tmp316*_tmp334 + _tmp324*_tmp341
+    _tmp852 = _tmp408*_tmp850 - _tmp413*_tmp851
+    _tmp853 = -_tmp408*_tmp851 - _tmp413*_tmp850
+    _tmp854 = _tmp3*_tmp61
+    _tmp855 = -_tmp16*_tmp854 + 0.5*_tmp2*_tmp7*p_0
+    _tmp856 = _tmp7*_tmp854 + _tmp16*_tmp2*_tmp3
+    _tmp857 = -_tmp11*_tmp2 - _tmp61*_tmp65
+    _tmp858 = _tmp11*_tmp61 - _tmp2*_tmp65
+    _tmp859 = 4000000*_tmp470/_tmp552
+    _tmp860 = 4000000*_tmp472
+    _tmp861 = _tmp410*_tmp860
+    _tmp862 = _tmp414*_tmp860
+    _tmp863 = 0.0008333333333333334*_tmp470*_tmp553
+    _tmp864 = 1.2380952380952381e-14*_tmp553
+    _tmp865 = 0.1*_DTYPE(numpy.where(_tmp469, 480384.4614152614, 458257.569495584))*_DTYPE(numpy.where(_tmp469, 2.0816659994661327e-06, 2.1821789023599237e-06))
+    _tmp866 = -_tmp363
+    _tmp867 = 402982.2692911378*_tmp472
+    _tmp868 = _tmp867*x_6
+    _tmp869 = _tmp867*x_7
+    _tmp870 = -0.02 - _tmp3
+    _tmp871 = 0.02 - _tmp3
+    _tmp872 = _tmp867*x_10
+    _tmp873 = _tmp867*x_9
+    _tmp874 = 0.04 - _tmp3
+    _tmp875 = _tmp3 + _tmp625
+    _tmp876 = _tmp557 + _tmp623
+    return [
+        -1,
+        -1,
+        -1,
+        -1,
+        0,
+        0,
+        0,
+        _tmp208 + _tmp71,
+        _tmp208 + _tmp222,
+        _tmp178 + _tmp236,
+        _tmp177 + 833.3333333333334*_tmp101 + 833.3333333333334*_tmp97 + 1666.6666666666667*_tmp248 - 1666.6666666666667*_tmp249*_tmp98,
+        0,
+        0,
+        0,
+        _tmp256 + _tmp268,
+        _tmp268 + _tmp271,
+        _tmp264 + _tmp274,
+        _tmp263 + 833.3333333333334*_tmp257 - 833.3333333333334*_tmp258 - 1666.6666666666667*_tmp275 - 1666.6666666666667*_tmp276,
+        0,
+        0,
+        0,
+        -1,
+        -1,
+        -1,
+        0,
+        0,
+        0,
+        0,
+        _tmp350 + _tmp71,
+        _tmp222 + _tmp350,
+        _tmp236 + _tmp349,
+        0,
+        0,
+        0,
+        0,
+        _tmp256 + _tmp356,
+        _tmp271 + _tmp356,
+        _tmp274 + _tmp355,
+        0,
+        0,
+        0,
+        0,
+        _tmp377,
+        _tmp377,
+        _tmp377,
+        _tmp377,
+        0,
+        0,
+        0,
+        _tmp379,
+        _tmp379,
+        _tmp379,
+        _tmp379,
+        0,
+        0,
+        0,
+        _tmp397,
+        _tmp397,
+        _tmp397,
+        0,
+        0,
+        0,
+        0,
+        _tmp400,
+        _tmp400,
+        _tmp400,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp411*(-_tmp403*_tmp406 + 0.375*_tmp402*across_1_1*p_0 - _tmp402*_tmp407*_tmp50*_tmp6) + 48.148148148148145*_tmp414*(-_tmp402*_tmp406 - _tmp403*_tmp405*across_1_1 + 0.125*_tmp403*_tmp407*_tmp6*p_0),
+        0,
+        0,
+        0,
+        -_tmp416*across_1_1 + 24.074074074074073*_tmp403*_tmp404*p_0,
+        _tmp404*_tmp416 + _tmp403*_tmp415*across_1_1,
+        0,
+        -_tmp411*(-_tmp419*_tmp421 - _tmp3*_tmp418*across_2_1) + 48.148148148148145*_tmp414*(-_tmp421*across_2_1 + 0.5*_tmp418*_tmp419*p_0),
+        -_tmp411*(-_tmp419*_tmp423 - _tmp422*across_2_1 + 0.125*_tmp28*_tmp418*_tmp424*p_0) + 48.148148148148145*_tmp414*(_tmp419*_tmp422 - _tmp423*across_2_1 + _tmp28*_tmp420*_tmp424*_tmp50),
+        0,
+        0,
+        _tmp418*_tmp425 + _tmp420*_tmp426,
+        _tmp420*_tmp425 - _tmp418*_tmp426,
+        0,
+        _tmp432,
+        _tmp432,
+        -_tmp411*(-_tmp429*_tmp434 - _tmp433*across_3_1 + 0.125*_tmp185*_tmp428*_tmp435*p_0) + 48.148148148148145*_tmp414*(_tmp429*_tmp433 - _tmp434*across_3_1 + _tmp185*_tmp430*_tmp435*_tmp50),
+        0,
+        0,
+        0,
+        0,
+        _tmp441,
+        _tmp441,
+        _tmp441,
+        -_tmp376*(_tmp439*_tmp443 - _tmp442*across_4_1 + _tmp437*_tmp444*_tmp50*_tmp80) + 4.850712500726659*x_7*(-_tmp439*_tmp442 - _tmp443*across_4_1 + 0.125*_tmp440*_tmp444*_tmp80*p_0),
+        0,
+        0,
+        0,
+        _tmp450,
+        _tmp450,
+        _tmp450,
+        _tmp450,
+        0,
+        0,
+        0,
+        _tmp456,
+        _tmp456,
+        _tmp456,
+        _tmp456,
+        0,
+        0,
+        0,
+        _tmp462,
+        _tmp462,
+        _tmp462,
+        0,
+        0,
+        0,
+        0,
+        _tmp468,
+        _tmp468,
+        _tmp468,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp10*_tmp474 - _tmp20*_tmp475,
+        0,
+        0,
+        0,
+        _tmp477,
+        _tmp478,
+        0,
+        -_tmp20*_tmp474 + 250000*_tmp10*_tmp414*_tmp470*_tmp471,
+        0,
+        0,
+        0,
+        -_tmp478,
+        _tmp477,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp402*_tmp480 - _tmp403*_tmp481,
+        0,
+        0,
+        0,
+        _tmp482,
+        _tmp483,
+        0,
+        -_tmp403*_tmp480 + 750000*_tmp402*_tmp414*_tmp470*_tmp471,
+        0,
+        0,
+        0,
+        -_tmp483,
+        _tmp482,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp410*_tmp486 - _tmp414*_tmp488,
+        _tmp474*_tmp485 - _tmp475*_tmp487,
+        0,
+        0,
+        _tmp486,
+        _tmp488,
+        0,
+        -_tmp410*_tmp488 - _tmp414*_tmp486,
+        -_tmp474*_tmp487 - _tmp475*_tmp485,
+        0,
+        0,
+        -_tmp488,
+        _tmp486,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp410*_tmp489 - _tmp414*_tmp490,
+        _tmp418*_tmp480 - _tmp420*_tmp481,
+        0,
+        0,
+        _tmp489,
+        _tmp490,
+        0,
+        -_tmp410*_tmp490 - _tmp414*_tmp489,
+        -_tmp418*_tmp481 - _tmp420*_tmp480,
+        0,
+        0,
+        -_tmp490,
+        _tmp489,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        _tmp496,
+        _tmp496,
+        _tmp474*_tmp492 - _tmp475*_tmp494,
+        0,
+        0,
+        0,
+        0,
+        _tmp497,
+        _tmp497,
+        -_tmp474*_tmp494 - _tmp475*_tmp492,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        0,
+        _tmp500,
+        _tmp500,
+        _tmp428*_tmp480 - _tmp430*_tmp481,
+        0,
+        0,
+        0,
+        0,
+        _tmp501,
+        _tmp501,
+        -_tmp428*_tmp481 - _tmp430*_tmp480,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        _tmp508,
+        _tmp508,
+        _tmp508,
+        _tmp505*_tmp509 - _tmp507*_tmp509,
+        0,
+        0,
+        0,
+        _tmp512,
+        _tmp512,
+        _tmp512,
+        _tmp509*_tmp510 + _tmp509*_tmp511,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        _tmp515,
+        _tmp515,
+        _tmp515,
+        _tmp513*_tmp516 - _tmp514*_tmp516,
+        0,
+        0,
+        0,
+        _tmp519,
+        _tmp519,
+        _tmp519,
+        _tmp516*_tmp517 + _tmp516*_tmp518,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp525,
+        _tmp525,
+        _tmp525,
+        _tmp525,
+        0,
+        0,
+        0,
+        _tmp526,
+        _tmp526,
+        _tmp526,
+        _tmp526,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp527,
+        _tmp527,
+        _tmp527,
+        _tmp527,
+        0,
+        0,
+        0,
+        _tmp528,
+        _tmp528,
+        _tmp528,
+        _tmp528,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp532,
+        _tmp532,
+        _tmp532,
+        _tmp532,
+        0,
+        0,
+        0,
+        _tmp533,
+        _tmp533,
+        _tmp533,
+        _tmp533,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp534,
+        _tmp534,
+        _tmp534,
+        _tmp534,
+        0,
+        0,
+        0,
+        _tmp535,
+        _tmp535,
+        _tmp535,
+        _tmp535,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp539,
+        _tmp539,
+        _tmp539,
+        0,
+        0,
+        0,
+        0,
+        _tmp540,
+        _tmp540,
+        _tmp540,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp542,
+        _tmp542,
+        _tmp542,
+        0,
+        0,
+        0,
+        0,
+        _tmp543,
+        _tmp543,
+        _tmp543,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp547,
+        _tmp547,
+        _tmp547,
+        0,
+        0,
+        0,
+        0,
+        _tmp548,
+        _tmp548,
+        _tmp548,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp550,
+        _tmp550,
+        _tmp550,
+        0,
+        0,
+        0,
+        0,
+        _tmp551,
+        _tmp551,
+        _tmp551,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp555 + _tmp595 + _tmp408*_tmp567 + _tmp409*_tmp574 - _tmp412*_tmp588 - _tmp413*_tmp593,
+        _tmp595 + _tmp596 + _tmp408*_tmp598 + _tmp409*_tmp603 - _tmp412*_tmp606 - _tmp413*_tmp607,
+        _tmp595 + _tmp608 + _tmp408*_tmp610 + _tmp409*_tmp611 - _tmp412*_tmp614 - _tmp413*_tmp615,
+        _tmp594 + _tmp616 + _tmp409*_tmp620 - _tmp412*_tmp618,
+        -_tmp623,
+        _tmp625,
+        0,
+        _tmp641,
+        _tmp653,
+        _tmp668,
+        _tmp680,
+        0,
+        0,
+        -_tmp681 - _tmp685,
+        _tmp695 + _tmp697 - _tmp686 - _tmp687 - _tmp688 - _tmp689 - _tmp690 - _tmp691 - _tmp692 + 0.002014911346455689*_tmp103 + 0.002014911346455689*_tmp357 + 0.005037278366139223*_tmp104 + 0.005037278366139223*_tmp367 + 0.005037278366139223*_tmp75 + 0.10074556732278446*_tmp258 + 0.10074556732278446*_tmp262,
+        0.02076923076923077,
+        -_tmp681 - _tmp699,
+        _tmp697 + _tmp701,
+        0.02076923076923077,
+        0,
+        _tmp408*_tmp712 + _tmp409*_tmp712 - _tmp412*_tmp711 - _tmp413*_tmp711,
+        _tmp722,
+        _tmp730,
+        _tmp738,
+        _tmp746,
+        _tmp754,
+        _tmp762,
+        0,
+        0,
+        _tmp641,
+        _tmp653,
+        _tmp668,
+        _tmp680,
+        0,
+        0,
+        -_tmp685 - _tmp763,
+        -_tmp693 - _tmp694 - _tmp764 - _tmp766 + 0.005037278366139223*_tmp180 + 0.10074556732278446*_tmp201*_tmp203,
+        0.02076923076923077,
+        -_tmp699 - _tmp763,
+        _tmp701 - _tmp764,
+        0.02076923076923077,
+        0,
+        0,
+        _tmp722,
+        _tmp730,
+        _tmp738,
+        _tmp746,
+        _tmp754,
+        _tmp762,
+        0,
+        0,
+        _tmp641,
+        _tmp653,
+        _tmp668,
+        _tmp680,
+        0,
+        0,
+        -_tmp684 - _tmp767,
+        -_tmp766 - _tmp768,
+        0.02076923076923077,
+        -_tmp698 - _tmp767,
+        _tmp700 - _tmp768,
+        0.02076923076923077,
+        0,
+        0,
+        0,
+        _tmp730,
+        _tmp738,
+        _tmp746,
+        _tmp754,
+        _tmp762,
+        0,
+        0,
+        _tmp641,
+        _tmp653,
+        0,
+        0,
+        0,
+        0,
+        -_tmp683 + 0.05037278366139223*_tmp103*p_0,
+        -_tmp765 - _tmp104*_tmp696,
+        0.02076923076923077,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp738,
+        _tmp746,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp2*_tmp772 - _tmp61*_tmp773,
+        _tmp712,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp2*_tmp773 - _tmp61*_tmp772,
+        _tmp711,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp408*_tmp593 - _tmp409*_tmp588 - _tmp412*_tmp574 - _tmp413*_tmp567,
+        _tmp408*(-_tmp591 - _tmp775) + _tmp409*(-_tmp586 - _tmp775) - _tmp412*(_tmp573 + _tmp774) - _tmp413*(_tmp566 + _tmp774),
+        _tmp778,
+        _tmp779,
+        _tmp576 + _tmp783,
+        -_tmp559 - _tmp784,
+        -1,
+        _tmp785,
+        _tmp785,
+        _tmp778,
+        _tmp779,
+        _tmp605 + _tmp782,
+        _tmp597 + _tmp786,
+        -1,
+        _tmp787,
+        _tmp787,
+        _tmp787,
+        _tmp779,
+        0,
+        0,
+        0,
+        _tmp788,
+        _tmp788,
+        _tmp788,
+        _tmp788,
+        0,
+        0,
+        0,
+        -_tmp60 - _tmp67 - _tmp783 - 0.5*_tmp23 + 0.5*_tmp61*_tmp69,
+        -_tmp775 - _tmp782,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp254 - _tmp557 - _tmp622 - _tmp786 - 0.5*_tmp251 - 0.5*_tmp252 + _tmp2*_tmp66,
+        _tmp774 + _tmp784,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        1,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp554,
+        _tmp408*_tmp791 + _tmp409*_tmp791 - _tmp412*_tmp792 - _tmp413*_tmp792,
+        _tmp408*_tmp793 + _tmp409*_tmp793 - _tmp412*_tmp791 - _tmp413*_tmp791,
+        0,
+        _tmp408*_tmp794 + _tmp409*_tmp794 - _tmp412*_tmp795 - _tmp413*_tmp795,
+        _tmp408*_tmp796 + _tmp409*_tmp796 - _tmp412*_tmp794 - _tmp413*_tmp794,
+        0,
+        _tmp801,
+        _tmp802,
+        0,
+        _tmp805,
+        _tmp807,
+        0,
+        _tmp811,
+        _tmp812,
+        0,
+        _tmp815,
+        _tmp816,
+        0,
+        _tmp820,
+        _tmp821,
+        0,
+        _tmp824,
+        _tmp825,
+        0,
+        _tmp830,
+        _tmp831,
+        0,
+        _tmp834,
+        _tmp835,
+        0,
+        _tmp839,
+        _tmp840,
+        0,
+        _tmp843,
+        _tmp844,
+        0,
+        _tmp848,
+        _tmp849,
+        0,
+        _tmp852,
+        _tmp853,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp554,
+        _tmp801,
+        _tmp802,
+        0,
+        _tmp805,
+        _tmp807,
+        0,
+        _tmp811,
+        _tmp812,
+        0,
+        _tmp815,
+        _tmp816,
+        0,
+        _tmp820,
+        _tmp821,
+        0,
+        _tmp824,
+        _tmp825,
+        0,
+        _tmp830,
+        _tmp831,
+        0,
+        _tmp834,
+        _tmp835,
+        0,
+        _tmp839,
+        _tmp840,
+        0,
+        _tmp843,
+        _tmp844,
+        0,
+        _tmp848,
+        _tmp849,
+        0,
+        _tmp852,
+        _tmp853,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp554,
+        _tmp811,
+        _tmp812,
+        0,
+        _tmp815,
+        _tmp816,
+        0,
+        _tmp820,
+        _tmp821,
+        0,
+        _tmp824,
+        _tmp825,
+        0,
+        _tmp830,
+        _tmp831,
+        0,
+        _tmp834,
+        _tmp835,
+        0,
+        _tmp839,
+        _tmp840,
+        0,
+        _tmp843,
+        _tmp844,
+        0,
+        _tmp848,
+        _tmp849,
+        0,
+        _tmp852,
+        _tmp853,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp554,
+        _tmp820,
+        _tmp821,
+        0,
+        _tmp824,
+        _tmp825,
+        0,
+        _tmp830,
+        _tmp831,
+        0,
+        _tmp834,
+        _tmp835,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp855,
+        -_tmp856,
+        0,
+        _tmp857,
+        _tmp858,
+        0,
+        _tmp791,
+        _tmp793,
+        0,
+        _tmp794,
+        _tmp796,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp856,
+        _tmp855,
+        0,
+        -_tmp858,
+        _tmp857,
+        0,
+        _tmp792,
+        _tmp791,
+        0,
+        _tmp795,
+        _tmp794,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp859*(_tmp555 + _tmp410*(-_tmp556 - _tmp621) - _tmp414*(_tmp3 + _tmp575 + _tmp624)),
+        _tmp861,
+        -_tmp862,
+        _tmp863,
+        _tmp864,
+        _tmp865,
+        _tmp553,
+        0,
+        _tmp859*(_tmp596 + _tmp410*(_tmp558 + _tmp575 + _tmp597) - _tmp414*(_tmp556 + _tmp577 + _tmp604)),
+        _tmp0*_tmp862 + _tmp250*_tmp861,
+        _tmp0*_tmp861 - _tmp250*_tmp862,
+        _tmp863,
+        _tmp864,
+        _tmp865,
+        _tmp553,
+        0,
+        _tmp859*(_tmp608 + _tmp410*(_tmp564 + _tmp609 - _tmp180*_tmp866) - _tmp414*(_tmp580 + _tmp612 - _tmp179*_tmp866)),
+        _tmp179*_tmp861 + _tmp180*_tmp862,
+        _tmp180*_tmp861 - _tmp179*_tmp862,
+        _tmp863,
+        _tmp864,
+        _tmp865,
+        _tmp553,
+        0,
+        _tmp859*(_tmp616 + _tmp412*(_tmp582 + _tmp617 - _tmp74*_tmp866) - _tmp409*(_tmp569 + _tmp619 - _tmp75*_tmp866)),
+        -_tmp74*_tmp869 - _tmp75*_tmp868,
+        _tmp74*_tmp868 - _tmp75*_tmp869,
+        _tmp863,
+        _tmp864,
+        _tmp865,
+        _tmp553,
+        0,
+        _tmp859*(_tmp412*(_tmp358 + _tmp583 - _tmp103*_tmp866) + _tmp554*omega_5_1 - _tmp409*(_tmp370 + _tmp570 - _tmp104*_tmp866)),
+        -_tmp103*_tmp869 - _tmp104*_tmp868,
+        _tmp103*_tmp868 - _tmp104*_tmp869,
+        _tmp863,
+        _tmp864,
+        _tmp865,
+        _tmp553,
+        0,
+        _tmp859*(_tmp412*(-_tmp369 - _tmp367*_tmp870 + 0.5*_tmp364*p_0) + _tmp554*omega_6_1 - _tmp409*(-_tmp374 - _tmp378 + _tmp357*_tmp870)),
+        _tmp357*_tmp868 - _tmp367*_tmp869,
+        _tmp357*_tmp869 + _tmp367*_tmp868,
+        _tmp863,
+        _tmp864,
+        _tmp865,
+        _tmp553,
+        0,
+        _tmp859*(_tmp413*(_tmp589 + _tmp3*_tmp382 - _tmp74*_tmp871) + _tmp554*omega_7_1 - _tmp408*(_tmp381 + _tmp560 - _tmp75*_tmp871)),
+        -_tmp74*_tmp872 - _tmp75*_tmp873,
+        -_tmp75*_tmp872 + 402982.2692911378*_tmp470*_tmp471*_tmp74*x_9,
+        _tmp863,
+        _tmp864,
+        _tmp865,
+        _tmp553,
+        0,
+        _tmp859*(_tmp413*(_tmp394 + _tmp398 - _tmp382*_tmp874) + _tmp554*omega_8_1 - _tmp408*(_tmp399 + _tmp561 - _tmp380*_tmp874)),
+        -_tmp380*_tmp873 - _tmp382*_tmp872,
+        -_tmp380*_tmp872 + 402982.2692911378*_tmp382*_tmp470*_tmp471*x_9,
+        _tmp863,
+        _tmp864,
+        _tmp865,
+        _tmp553,
+        0,
+        _tmp859*(_tmp409*(-0.16 - _tmp602 - _tmp876) + _tmp554*omega_9_1 - _tmp412*(_tmp587 + _tmp875)),
+        _tmp869,
+        -_tmp868,
+        _tmp863,
+        _tmp864,
+        _tmp865,
+        _tmp553,
+        0,
+        _tmp859*(_tmp408*(-0.085 - _tmp351 - _tmp390 - _tmp601 - _tmp876 + 0.02*_tmp75 + 0.04*_tmp74 + _tmp312*_tmp337) + _tmp554*omega_10_1 - _tmp413*(_tmp592 + _tmp875)),
+        _tmp872,
+        -_tmp873,
+        _tmp863,
+        _tmp864,
+        _tmp865,
+        _tmp553,
+        0,
+    ]
+
+
 def _dev_paper(theta, delta, params):
     """deviation of the points at level paper (33 operations)."""
     theta_1, theta_2, _, _, _, _, _, _, _, _ = theta
@@ -12683,6 +16193,16 @@ _MECHANISM = _Mechanism(
         # the sensitivities (templates/numpy/reduced_sens.py): per variant its routine and blocks
         sens=((_loaded_sens1, {'dR_dtheta': (0, 12, 10), 'dR_dp': (120, 12, 1), 'din_dtheta': (132, 50, 10), 'din_dp': (632, 50, 1), 'dD_dx': (682, 2, 12), 'dD_dtheta': (706, 2, 10), 'dD_dp': (726, 2, 1), 'dD_dout': (728, 2, 30)}), (_loaded_sens2, {'dR_dtheta': (0, 22, 10), 'dR_dp': (220, 22, 1), 'din_dtheta': (242, 100, 10), 'din_dp': (1242, 100, 1), 'dD_dx': (1342, 2, 22), 'dD_dtheta': (1386, 2, 10), 'dD_dp': (1406, 2, 1), 'dD_dout': (1408, 2, 60)}), ),
         eps4=_plate_eps4,
+        # what the level reports beyond the deviations (templates/numpy/reduced_report.py): per
+        # variant its routine and blocks; the inputs, points (on the frame or not), plates
+        # (with an allowable stress or not), metres per file unit and the scales L, F
+        report=_LoadedTables(
+            routines=((_loaded_report1, {'dR_dv': (0, 12, 7), 'din_dv': (84, 30, 7), 'y': (294, 7, 1), 'dy_dx': (301, 7, 12), 'dy_dv': (385, 7, 7), 'dy_dout': (434, 7, 30), 'stress': (644, 10, 8)}), (_loaded_report2, {'dR_dv': (0, 22, 7), 'din_dv': (154, 60, 7), 'y': (574, 7, 1), 'dy_dx': (581, 7, 22), 'dy_dv': (735, 7, 7), 'dy_dout': (784, 7, 60), 'stress': (1204, 10, 8)}), ),
+            inputs=('O', 'A', 'B', 'K'), points=('F',),
+            frame=(False,), plates=('O', 'A', 'B', 'K', 'G', 'H', 'C', 'D', 'I', 'E'),
+            limits=(False, False, False, False, False, False, False, False, False, False), unit_scale=1.0,
+            L=0.20615528128088303, F=0.10074556732278447,
+        ),
     ),
     loaded_solve=_reduced_solve,
     sens_rigid_blocks={'A': (0, 6, 6), 'dG_dv': (36, 6, 5), 'dR_dtheta': (66, 2, 6), 'dR_dv': (78, 2, 5)},
@@ -12699,10 +16219,11 @@ _MECHANISM = _Mechanism(
 )
 
 
-def evaluate(inputs, level='exact', params=None, links=True):
+def evaluate(inputs, level='exact', params=None, links=True, report=True):
     """Deviation of the points at `level` for broadcast input arrays (see the module docstring);
-    `links=False` leaves out the links' rotations (and any loop solve only they need)."""
-    return _evaluate(_MECHANISM, inputs, level, params, links)
+    `links=False` leaves out the links' rotations (and any loop solve only they need),
+    `report=False` what `loaded` reports beyond the deviations."""
+    return _evaluate_reported(_MECHANISM, inputs, level, params, links, report)
 
 
 def sensitivity(inputs, level='exact', params=None):

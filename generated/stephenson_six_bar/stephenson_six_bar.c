@@ -3,7 +3,7 @@
  * Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
  * Points: D; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_res1 441, loaded_dev1 60, loaded_plates2 623, loaded_system2 3042, loaded_res2 944, loaded_dev2 143, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, loaded_sens1 1094, loaded_sens2 2741, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
+ * Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_res1 441, loaded_dev1 60, loaded_report1 949, loaded_plates2 623, loaded_system2 3042, loaded_res2 944, loaded_dev2 143, loaded_report2 2161, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, loaded_sens1 1094, loaded_sens2 2741, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
  */
 #include "stephenson_six_bar.h"
 
@@ -23,6 +23,7 @@ enum {
     SK_RN = 19 + 1,  /* loaded: the most unknowns */
     SK_RS = 14 + 1,  /* loaded: the most half plates */
     SK_RP = 1,  /* loaded: the points its deviation routines give */
+    SK_RQ = 4 + 1,  /* loaded: the report's variables */
     SK_OUT = 1179        /* the largest routine output, and one */
 };
 
@@ -2612,6 +2613,618 @@ static void sk_loaded_dev1(const double *x, const double *theta, const double *p
     const double _tmp16 = along_2_0 + pow(_tmp3, 2)*symkin_arck(_tmp3);
     out[0] = _tmp13*_tmp14 - _tmp1*across_1_0 - _tmp12*_tmp9 - _tmp5*across_2_0 - _tmp6*_tmp7 + _tmp15*_tmp16*p_0;
     out[1] = _tmp1*_tmp6 + _tmp12*_tmp13 + _tmp14*_tmp9 + _tmp16*_tmp5 - _tmp7*across_1_0 + _tmp15*across_2_0*p_0;
+}
+
+/* loaded (1 half plate(s) per plate), what it reports: dR/dv, din/dv, y, dy/dx, dy/dv, dy/dout (v: the inputs' angles and virtual loads at the points, y: the inputs' moments and the points' (dx, dy, dphi)), then per plate (k0, lx, ly, e_a, e_s, t/l, E', allowable) (949 operations) */
+static void sk_loaded_report1(const double *x, const double *theta, const double *plates, const double *params, double *out)
+{
+    const double x_0 = x[0];
+    const double x_1 = x[1];
+    const double x_2 = x[2];
+    const double x_3 = x[3];
+    const double x_4 = x[4];
+    const double x_5 = x[5];
+    const double x_6 = x[6];
+    const double x_7 = x[7];
+    const double x_8 = x[8];
+    const double x_9 = x[9];
+    const double x_10 = x[10];
+    const double x_11 = x[11];
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double theta_5 = theta[4];
+    const double theta_6 = theta[5];
+    const double theta_7 = theta[6];
+    const double along_1_0 = plates[0];
+    const double across_1_0 = plates[1];
+    const double omega_1_0 = plates[2];
+    const double along_2_0 = plates[3];
+    const double across_2_0 = plates[4];
+    const double omega_2_0 = plates[5];
+    const double along_3_0 = plates[6];
+    const double across_3_0 = plates[7];
+    const double omega_3_0 = plates[8];
+    const double along_4_0 = plates[9];
+    const double across_4_0 = plates[10];
+    const double omega_4_0 = plates[11];
+    const double along_5_0 = plates[12];
+    const double across_5_0 = plates[13];
+    const double omega_5_0 = plates[14];
+    const double along_6_0 = plates[15];
+    const double across_6_0 = plates[16];
+    const double omega_6_0 = plates[17];
+    const double along_7_0 = plates[18];
+    const double across_7_0 = plates[19];
+    const double omega_7_0 = plates[20];
+    const double p_0 = params[0];
+    const double _tmp0 = sin(theta_1);
+    const double _tmp1 = cos(theta_1);
+    const double _tmp2 = 37.5*_tmp1;
+    const double _tmp3 = 0.5*theta_6 + 0.003076923076923077*x_4;
+    const double _tmp4 = _tmp3 + theta_1;
+    const double _tmp5 = cos(_tmp4);
+    const double _tmp6 = 1250.0*p_0;
+    const double _tmp7 = _tmp6*(along_6_0 + pow(_tmp3, 2)*symkin_arck(_tmp3));
+    const double _tmp8 = sin(_tmp4);
+    const double _tmp9 = 0.5*theta_1;
+    const double _tmp10 = symkin_arck(_tmp9);
+    const double _tmp11 = along_1_0 + 0.25*_tmp10*pow(theta_1, 2);
+    const double _tmp12 = cos(_tmp9);
+    const double _tmp13 = _tmp12*p_0;
+    const double _tmp14 = _tmp11*_tmp13;
+    const double _tmp16 = sin(_tmp9);
+    const double _tmp15 = _tmp10*_tmp9 + 0.0625*(theta_1*theta_1*theta_1)*(-3*symkin_sinr2(_tmp9) + 3*symkin_cosr2(_tmp9) + symkin_sinr1(_tmp9));
+    const double _tmp17 = _tmp16*p_0;
+    const double _tmp18 = _tmp15*_tmp17;
+    const double _tmp19 = 625.0*_tmp14 + 1250.0*_tmp18 - 625.0*_tmp16*across_1_0*p_0;
+    const double _tmp20 = 37.5*_tmp0;
+    const double _tmp21 = _tmp13*across_1_0;
+    const double _tmp22 = 625.0*_tmp21;
+    const double _tmp23 = _tmp11*_tmp17;
+    const double _tmp24 = 625.0*_tmp23;
+    const double _tmp25 = theta_1 + theta_2;
+    const double _tmp26 = sin(_tmp25);
+    const double _tmp27 = 0.006153846153846154*x_0;
+    const double _tmp28 = cos(_tmp27);
+    const double _tmp29 = 0.003076923076923077*x_0;
+    const double _tmp30 = sin(_tmp29);
+    const double _tmp31 = _tmp30*cos(_tmp29);
+    const double _tmp32 = 0.04*_tmp28 - 0.14*_tmp31;
+    const double _tmp33 = _tmp26*_tmp32;
+    const double _tmp34 = cos(_tmp25);
+    const double _tmp35 = -0.07*_tmp28 - 0.08*_tmp31;
+    const double _tmp36 = _tmp29 + 0.5*theta_2;
+    const double _tmp37 = 0.7853981633974483 + theta_1;
+    const double _tmp38 = _tmp36 + _tmp37;
+    const double _tmp39 = cos(_tmp38);
+    const double _tmp40 = _tmp39*p_0;
+    const double _tmp41 = _tmp40*across_2_0;
+    const double _tmp42 = 0.5*theta_7 + 0.003076923076923077*x_5;
+    const double _tmp43 = _tmp25 + _tmp27;
+    const double _tmp44 = _tmp42 + _tmp43;
+    const double _tmp45 = cos(_tmp44);
+    const double _tmp46 = _tmp45*_tmp6;
+    const double _tmp47 = symkin_arck(_tmp36);
+    const double _tmp48 = along_2_0 + _tmp47*pow(_tmp36, 2);
+    const double _tmp49 = sin(_tmp38);
+    const double _tmp50 = _tmp49*p_0;
+    const double _tmp51 = _tmp48*_tmp50;
+    const double _tmp52 = along_7_0 + pow(_tmp42, 2)*symkin_arck(_tmp42);
+    const double _tmp53 = sin(_tmp44);
+    const double _tmp54 = _tmp53*_tmp6;
+    const double _tmp55 = _tmp50*across_2_0;
+    const double _tmp56 = _tmp32*_tmp34;
+    const double _tmp57 = _tmp26*_tmp35;
+    const double _tmp58 = _tmp40*_tmp48;
+    const double _tmp59 = _tmp13*_tmp15;
+    const double _tmp60 = 0.5*p_0;
+    const double _tmp61 = _tmp12*_tmp60;
+    const double _tmp62 = _tmp16*_tmp60;
+    const double _tmp63 = _tmp18 + _tmp11*_tmp61 - _tmp62*across_1_0;
+    const double _tmp64 = sin(_tmp43);
+    const double _tmp65 = 0.3535533905932738*p_0;
+    const double _tmp66 = _tmp64*_tmp65;
+    const double _tmp67 = cos(_tmp43);
+    const double _tmp68 = _tmp65*_tmp67;
+    const double _tmp69 = 0.03*_tmp0;
+    const double _tmp70 = 0.02*_tmp1;
+    const double _tmp71 = _tmp41 + _tmp51;
+    const double _tmp72 = _tmp69 + _tmp70 + _tmp71;
+    const double _tmp73 = _tmp66 + _tmp68 + _tmp72;
+    const double _tmp74 = _tmp61*across_1_0;
+    const double _tmp75 = _tmp11*_tmp62;
+    const double _tmp76 = _tmp74 + _tmp75 - _tmp59;
+    const double _tmp77 = _tmp55 - _tmp58;
+    const double _tmp78 = 0.02*_tmp0;
+    const double _tmp79 = 0.03*_tmp1;
+    const double _tmp80 = _tmp78 - _tmp79;
+    const double _tmp81 = _tmp66 + _tmp77 + _tmp80 - _tmp68;
+    const double _tmp82 = 7.181553246425874*p_0;
+    const double _tmp83 = _tmp64*_tmp82;
+    const double _tmp84 = _tmp67*_tmp82;
+    const double _tmp88 = p_0 <= 0.008;
+    const double _tmp89 = ((_tmp88) ? (4.333333333333334e-12) : (4.761904761904762e-12));
+    const double _tmp90 = 1.0/p_0;
+    const double _tmp91 = _tmp89*_tmp90;
+    const double _tmp92 = 1500000*_tmp91;
+    const double _tmp85 = 0.378698224852071*x_10;
+    const double _tmp86 = 0.378698224852071*x_7;
+    const double _tmp87 = _tmp85 + _tmp86;
+    const double _tmp93 = _tmp87*_tmp92;
+    const double _tmp94 = 0.378698224852071*x_6;
+    const double _tmp95 = 0.378698224852071*x_9;
+    const double _tmp96 = _tmp94 + _tmp95;
+    const double _tmp97 = 3000000*_tmp89;
+    const double _tmp98 = _tmp90*_tmp97;
+    const double _tmp99 = -_tmp16*_tmp98;
+    const double _tmp100 = _tmp12*_tmp98;
+    const double _tmp101 = 1136094.674556213*_tmp91;
+    const double _tmp102 = _tmp101*x_10;
+    const double _tmp103 = _tmp101*x_9;
+    const double _tmp104 = _tmp39*_tmp98;
+    const double _tmp105 = _tmp49*_tmp98;
+    const double _tmp106 = _tmp101*x_6;
+    const double _tmp107 = _tmp101*x_7;
+    const double _tmp108 = pow(p_0, 2);
+    const double _tmp109 = ((_tmp88) ? (230769230769.23077) : (210000000000));
+    const double _tmp110 = _tmp1*_tmp60;
+    const double _tmp111 = -_tmp110;
+    const double _tmp112 = _tmp17*across_1_0;
+    const double _tmp113 = 0.5*theta_3 + 0.003076923076923077*x_1;
+    const double _tmp114 = symkin_arck(_tmp113);
+    const double _tmp115 = along_3_0 + _tmp114*pow(_tmp113, 2);
+    const double _tmp116 = cos(_tmp113);
+    const double _tmp117 = _tmp116*p_0;
+    const double _tmp118 = _tmp115*_tmp117;
+    const double _tmp119 = sin(_tmp113);
+    const double _tmp120 = _tmp119*p_0;
+    const double _tmp121 = _tmp120*across_3_0;
+    const double _tmp122 = _tmp118 - _tmp121;
+    const double _tmp123 = _tmp112 + _tmp122 - _tmp14;
+    const double _tmp124 = _tmp111 + _tmp123;
+    const double _tmp125 = theta_3 + 0.006153846153846154*x_1;
+    const double _tmp126 = cos(_tmp125);
+    const double _tmp127 = _tmp125 + theta_5 + 0.006153846153846154*x_3;
+    const double _tmp128 = sin(_tmp127);
+    const double _tmp129 = -0.03 + _tmp60;
+    const double _tmp130 = cos(_tmp127);
+    const double _tmp131 = _tmp129*_tmp130;
+    const double _tmp132 = sin(_tmp125);
+    const double _tmp133 = 0.02*_tmp132;
+    const double _tmp134 = 0.5*theta_5 + 0.003076923076923077*x_3;
+    const double _tmp135 = _tmp125 + _tmp134;
+    const double _tmp136 = cos(_tmp135);
+    const double _tmp137 = _tmp136*p_0;
+    const double _tmp138 = _tmp137*across_5_0;
+    const double _tmp139 = symkin_arck(_tmp134);
+    const double _tmp140 = along_5_0 + _tmp139*pow(_tmp134, 2);
+    const double _tmp141 = sin(_tmp135);
+    const double _tmp142 = _tmp141*p_0;
+    const double _tmp143 = _tmp140*_tmp142;
+    const double _tmp144 = _tmp138 + _tmp143 - _tmp133;
+    const double _tmp145 = _tmp131 + _tmp144 + 0.06*_tmp126 - 0.072*_tmp128;
+    const double _tmp146 = _tmp125 + theta_4 + 0.006153846153846154*x_2;
+    const double _tmp147 = cos(_tmp146);
+    const double _tmp148 = -0.05 + _tmp60;
+    const double _tmp149 = sin(_tmp146);
+    const double _tmp150 = _tmp148*_tmp149;
+    const double _tmp151 = 0.5*theta_4 + 0.003076923076923077*x_2;
+    const double _tmp152 = _tmp125 + _tmp151;
+    const double _tmp153 = cos(_tmp152);
+    const double _tmp154 = _tmp153*p_0;
+    const double _tmp155 = _tmp154*across_4_0;
+    const double _tmp156 = symkin_arck(_tmp151);
+    const double _tmp157 = along_4_0 + _tmp156*pow(_tmp151, 2);
+    const double _tmp158 = sin(_tmp152);
+    const double _tmp159 = _tmp158*p_0;
+    const double _tmp160 = _tmp157*_tmp159;
+    const double _tmp161 = _tmp133 + _tmp155 + _tmp160;
+    const double _tmp162 = _tmp150 + _tmp161 + 0.05*_tmp126 + 0.04*_tmp147;
+    const double _tmp163 = _tmp0*_tmp60;
+    const double _tmp164 = _tmp21 + _tmp23;
+    const double _tmp165 = _tmp163 + _tmp164;
+    const double _tmp166 = _tmp147*_tmp148;
+    const double _tmp167 = _tmp117*across_3_0;
+    const double _tmp168 = _tmp115*_tmp120;
+    const double _tmp169 = 0.02*_tmp126;
+    const double _tmp170 = _tmp154*_tmp157;
+    const double _tmp171 = _tmp159*across_4_0;
+    const double _tmp172 = _tmp169 + _tmp170 - _tmp171;
+    const double _tmp173 = 0.1 + _tmp166 + _tmp172 - _tmp167 - _tmp168 - 0.05*_tmp132 - 0.04*_tmp149;
+    const double _tmp174 = _tmp128*_tmp129;
+    const double _tmp175 = _tmp167 + _tmp168;
+    const double _tmp176 = _tmp142*across_5_0;
+    const double _tmp177 = _tmp169 + _tmp176 - _tmp136*_tmp140*p_0;
+    const double _tmp178 = -0.1 + _tmp174 + _tmp175 + _tmp177 - _tmp21 - _tmp23 + 0.06*_tmp132 + 0.072*_tmp130;
+    const double _tmp179 = sin(_tmp27);
+    const double _tmp180 = pow(_tmp30, 2);
+    const double _tmp181 = 0.04*_tmp179 - 0.14*_tmp180;
+    const double _tmp182 = -0.07*_tmp179 - 0.08*_tmp180;
+    const double _tmp183 = _tmp164 + _tmp77;
+    const double _tmp184 = _tmp14 - _tmp112;
+    const double _tmp185 = 0.00012307692307692307*_tmp126;
+    const double _tmp186 = 0.006153846153846154*_tmp174 + 0.0004430769230769231*_tmp130;
+    const double _tmp187 = _tmp114*(1.893491124260355e-05*x_1 + 0.003076923076923077*theta_3) + 0.003076923076923077*(_tmp113*_tmp113*_tmp113)*(-3*symkin_sinr2(_tmp113) + 3*symkin_cosr2(_tmp113) + symkin_sinr1(_tmp113));
+    const double _tmp188 = 0.003076923076923077*_tmp167 + 0.003076923076923077*_tmp168 - _tmp116*_tmp187*p_0;
+    const double _tmp189 = 0.00024615384615384614*_tmp149;
+    const double _tmp190 = 0.00012307692307692307*_tmp132;
+    const double _tmp191 = 0.00024615384615384614*_tmp147 + 0.006153846153846154*_tmp150;
+    const double _tmp192 = 0.003076923076923077*_tmp118 + _tmp120*_tmp187 - 0.003076923076923077*_tmp119*across_3_0*p_0;
+    const double _tmp193 = 0.006153846153846154*_tmp131 - 0.0004430769230769231*_tmp128;
+    const double _tmp194 = _tmp156*(1.893491124260355e-05*x_2 + 0.003076923076923077*theta_4) + 0.003076923076923077*(_tmp151*_tmp151*_tmp151)*(-3*symkin_sinr2(_tmp151) + 3*symkin_cosr2(_tmp151) + symkin_sinr1(_tmp151));
+    const double _tmp195 = _tmp139*(1.893491124260355e-05*x_3 + 0.003076923076923077*theta_5) + 0.003076923076923077*(_tmp134*_tmp134*_tmp134)*(-3*symkin_sinr2(_tmp134) + 3*symkin_cosr2(_tmp134) + symkin_sinr1(_tmp134));
+    const double _tmp196 = 0.00757396449704142*_tmp132;
+    const double _tmp197 = 0.1893491124260355*p_0;
+    const double _tmp198 = 0.378698224852071*_tmp112 + 0.378698224852071*_tmp118 - 0.378698224852071*_tmp121 - 0.378698224852071*_tmp14 - _tmp1*_tmp197;
+    const double _tmp199 = _tmp0*_tmp197;
+    const double _tmp200 = 0.378698224852071*_tmp21;
+    const double _tmp201 = 0.00757396449704142*_tmp126;
+    const double _tmp202 = 0.378698224852071*_tmp23;
+    const double _tmp203 = 0.00024615384615384614*_tmp28 - 0.0008615384615384615*_tmp31;
+    const double _tmp204 = -0.0004923076923076923*_tmp31 - 0.0004307692307692308*_tmp28;
+    const double _tmp205 = _tmp47*(1.893491124260355e-05*x_0 + 0.003076923076923077*theta_2) + 0.003076923076923077*(_tmp36*_tmp36*_tmp36)*(-3*symkin_sinr2(_tmp36) + 3*symkin_cosr2(_tmp36) + symkin_sinr1(_tmp36));
+    const double _tmp206 = _tmp110 + _tmp63;
+    const double _tmp207 = _tmp163 + _tmp76;
+    const double _tmp208 = 0.07*_tmp67;
+    const double _tmp209 = _tmp58 + _tmp79 - _tmp55 - _tmp78;
+    const double _tmp210 = 3.3333333333333335e-07*_tmp108*_tmp109;
+    const double _tmp211 = -_tmp17;
+    const double _tmp212 = _tmp97/_tmp108;
+    const double _tmp213 = 0.0008333333333333334*_tmp109*_tmp89;
+    const double _tmp214 = 1.2380952380952381e-14*_tmp109;
+    const double _tmp215 = 0.1*((_tmp88) ? (480384.4614152614) : (458257.569495584))*((_tmp88) ? (2.0816659994661327e-06) : (2.1821789023599237e-06));
+    const double _tmp216 = 0.03 - _tmp65;
+    const double _tmp217 = 0.02 - _tmp65;
+    const double _tmp218 = sin(_tmp37);
+    const double _tmp219 = cos(_tmp37);
+    const double _tmp220 = -_tmp87;
+    const double _tmp221 = -_tmp96;
+    const double _tmp222 = 0.02 - _tmp60;
+    const double _tmp223 = -0.02 - _tmp60;
+    const double _tmp224 = -_tmp129;
+    const double _tmp225 = 0.04 - _tmp60;
+    out[0] = 1;
+    out[1] = 0;
+    out[2] = 0;
+    out[3] = 0;
+    out[4] = -_tmp19 - _tmp2 - 10.0*_tmp0 - _tmp5*_tmp7 + 1250.0*_tmp8*across_6_0*p_0;
+    out[5] = 0;
+    out[6] = 0;
+    out[7] = 0;
+    out[8] = -_tmp20 - _tmp22 - _tmp24 + 10.0*_tmp1 - _tmp7*_tmp8 - _tmp5*_tmp6*across_6_0 + 1250.0*_tmp12*_tmp15*p_0;
+    out[9] = 0;
+    out[10] = 0;
+    out[11] = 0;
+    out[12] = 1;
+    out[13] = 0;
+    out[14] = 0;
+    out[15] = 0;
+    out[16] = -_tmp19 - _tmp20 - 25.0*_tmp1 - 1250.0*_tmp33 - 1250.0*_tmp41 - 1250.0*_tmp51 - _tmp46*across_7_0 - _tmp52*_tmp54 + 1250.0*_tmp34*_tmp35;
+    out[17] = 0;
+    out[18] = 0;
+    out[19] = 0;
+    out[20] = _tmp2 - _tmp22 - _tmp24 + 1250.0*_tmp56 + 1250.0*_tmp57 + 1250.0*_tmp58 + 1250.0*_tmp59 - 25.0*_tmp0 - 1250.0*_tmp55 + _tmp46*_tmp52 - _tmp54*across_7_0;
+    out[21] = 0;
+    out[22] = 0;
+    out[23] = 0;
+    out[24] = 7.6923076923076925*x_9*(_tmp76 + _tmp81) - 7.6923076923076925*x_10*(_tmp63 + _tmp73);
+    out[25] = -_tmp83 - _tmp84 + 0.8125*_tmp64 + 1.4218750000000002*_tmp67;
+    out[26] = _tmp84 - _tmp83 + 1.4218750000000002*_tmp64 - 0.8125*_tmp67;
+    out[27] = -20.3125;
+    out[28] = 0;
+    out[29] = 0;
+    out[30] = 0;
+    out[31] = 0;
+    out[32] = 0;
+    out[33] = 0;
+    out[34] = 0;
+    out[35] = 0;
+    out[36] = 0;
+    out[37] = 0;
+    out[38] = 0;
+    out[39] = 0;
+    out[40] = 0;
+    out[41] = 0;
+    out[42] = 0;
+    out[43] = 0;
+    out[44] = 0;
+    out[45] = 0;
+    out[46] = 0;
+    out[47] = 0;
+    out[48] = 1;
+    out[49] = 0;
+    out[50] = 0;
+    out[51] = 0;
+    out[52] = -_tmp16*_tmp93 - _tmp12*_tmp92*_tmp96;
+    out[53] = _tmp99;
+    out[54] = _tmp100;
+    out[55] = 0;
+    out[56] = -_tmp12*_tmp93 + 1500000*_tmp16*_tmp89*_tmp90*_tmp96;
+    out[57] = -_tmp100;
+    out[58] = _tmp99;
+    out[59] = 0;
+    out[60] = 0;
+    out[61] = 0;
+    out[62] = 0;
+    out[63] = 0;
+    out[64] = _tmp102*_tmp39 - _tmp103*_tmp49;
+    out[65] = _tmp104;
+    out[66] = _tmp105;
+    out[67] = 0;
+    out[68] = -_tmp102*_tmp49 - _tmp103*_tmp39;
+    out[69] = -_tmp105;
+    out[70] = _tmp104;
+    out[71] = 0;
+    out[72] = 0;
+    out[73] = 0;
+    out[74] = 0;
+    out[75] = 0;
+    out[76] = 0;
+    out[77] = 0;
+    out[78] = 0;
+    out[79] = 0;
+    out[80] = 0;
+    out[81] = 0;
+    out[82] = 0;
+    out[83] = 0;
+    out[84] = 0;
+    out[85] = 0;
+    out[86] = 0;
+    out[87] = 0;
+    out[88] = 0;
+    out[89] = 0;
+    out[90] = 0;
+    out[91] = 0;
+    out[92] = 0;
+    out[93] = 0;
+    out[94] = 0;
+    out[95] = 0;
+    out[96] = 0;
+    out[97] = 0;
+    out[98] = 0;
+    out[99] = 0;
+    out[100] = 0;
+    out[101] = 0;
+    out[102] = 0;
+    out[103] = 0;
+    out[104] = 0;
+    out[105] = 0;
+    out[106] = 0;
+    out[107] = 0;
+    out[108] = 0;
+    out[109] = 0;
+    out[110] = 0;
+    out[111] = 0;
+    out[112] = -_tmp106*_tmp5 - _tmp107*_tmp8;
+    out[113] = 0;
+    out[114] = 0;
+    out[115] = 0;
+    out[116] = _tmp106*_tmp8 - _tmp107*_tmp5;
+    out[117] = 0;
+    out[118] = 0;
+    out[119] = 0;
+    out[120] = 0;
+    out[121] = 0;
+    out[122] = 0;
+    out[123] = 0;
+    out[124] = _tmp102*_tmp45 - _tmp103*_tmp53;
+    out[125] = 0;
+    out[126] = 0;
+    out[127] = 0;
+    out[128] = -_tmp102*_tmp53 - _tmp103*_tmp45;
+    out[129] = 0;
+    out[130] = 0;
+    out[131] = 0;
+    out[132] = -0.04923076923076923*x_11 - 0.04923076923076923*x_8 - _tmp85*(_tmp165 + _tmp173) - _tmp86*(_tmp163 - _tmp178) + 0.378698224852071*x_6*(_tmp124 + _tmp145) + 0.378698224852071*x_9*(_tmp124 + _tmp162) + 3.3333333333333335e-07*_tmp108*_tmp109*omega_1_0;
+    out[133] = -_tmp183 + _tmp182*_tmp34 - _tmp181*_tmp26;
+    out[134] = _tmp184 + _tmp71 + _tmp181*_tmp34 + _tmp182*_tmp26;
+    out[135] = _tmp27;
+    out[136] = 0;
+    out[137] = -_tmp85*(-_tmp190 - _tmp191 - _tmp192 - 0.006153846153846154*_tmp155 - 0.006153846153846154*_tmp160 - 0.0003076923076923077*_tmp126) - _tmp86*(_tmp190 - _tmp192 - _tmp193 - 0.006153846153846154*_tmp138 - 0.006153846153846154*_tmp143 - 0.0003692307692307692*_tmp126) + 0.378698224852071*x_6*(-_tmp185 - _tmp186 - _tmp188 - 0.006153846153846154*_tmp176 - 0.0003692307692307692*_tmp132 + 0.006153846153846154*_tmp136*_tmp140*p_0) + 0.378698224852071*x_9*(_tmp185 - _tmp188 - _tmp189 - 0.006153846153846154*_tmp171 - 0.0003076923076923077*_tmp132 + 0.006153846153846154*_tmp147*_tmp148 + 0.006153846153846154*_tmp153*_tmp157*p_0);
+    out[138] = -_tmp85*(-_tmp191 - 0.003076923076923077*_tmp155 - 0.003076923076923077*_tmp160 + _tmp153*_tmp194*p_0) + 0.378698224852071*x_9*(-_tmp189 + 0.003076923076923077*_tmp170 + 0.006153846153846154*_tmp166 - 0.003076923076923077*_tmp171 + _tmp159*_tmp194);
+    out[139] = _tmp94*(-_tmp186 - 0.003076923076923077*_tmp176 + _tmp141*_tmp195*p_0 + 0.003076923076923077*_tmp136*_tmp140*p_0) - _tmp86*(-_tmp193 - 0.003076923076923077*_tmp138 - 0.003076923076923077*_tmp143 + _tmp136*_tmp195*p_0);
+    out[140] = 0;
+    out[141] = 0;
+    out[142] = _tmp198 - _tmp196 + 0.02272189349112426*_tmp126 + 0.378698224852071*_tmp131 + 0.378698224852071*_tmp138 + 0.378698224852071*_tmp143 - 0.02726627218934911*_tmp128;
+    out[143] = -0.0378698224852071 + _tmp201 - _tmp199 - _tmp200 - _tmp202 + 0.02272189349112426*_tmp132 + 0.378698224852071*_tmp167 + 0.378698224852071*_tmp168 + 0.378698224852071*_tmp174 + 0.378698224852071*_tmp176 + 0.02726627218934911*_tmp130 - 0.378698224852071*_tmp137*_tmp140;
+    out[144] = -0.04923076923076923;
+    out[145] = _tmp196 + _tmp198 + 0.01893491124260355*_tmp126 + 0.378698224852071*_tmp150 + 0.378698224852071*_tmp155 + 0.378698224852071*_tmp160 + 0.01514792899408284*_tmp147;
+    out[146] = -0.0378698224852071 - _tmp199 - _tmp200 - _tmp201 - _tmp202 + 0.01893491124260355*_tmp132 + 0.01514792899408284*_tmp149 - 0.378698224852071*_tmp166 - 0.378698224852071*_tmp170 + 0.378698224852071*_tmp115*_tmp119*p_0 + 0.378698224852071*_tmp116*across_3_0*p_0 + 0.378698224852071*_tmp158*across_4_0*p_0;
+    out[147] = -0.04923076923076923;
+    out[148] = -0.003076923076923077*_tmp41 - 0.003076923076923077*_tmp51 + _tmp204*_tmp34 - _tmp203*_tmp26 + _tmp205*_tmp39*p_0;
+    out[149] = 0;
+    out[150] = 0;
+    out[151] = 0;
+    out[152] = 0;
+    out[153] = 0;
+    out[154] = 0;
+    out[155] = 0;
+    out[156] = 0;
+    out[157] = 0;
+    out[158] = 0;
+    out[159] = 0;
+    out[160] = 0.003076923076923077*_tmp58 - 0.003076923076923077*_tmp55 + _tmp203*_tmp34 + _tmp204*_tmp26 + _tmp205*_tmp50;
+    out[161] = 0;
+    out[162] = 0;
+    out[163] = 0;
+    out[164] = 0;
+    out[165] = 0;
+    out[166] = 0;
+    out[167] = 0;
+    out[168] = 0;
+    out[169] = 0;
+    out[170] = 0;
+    out[171] = 0;
+    out[172] = 0.006153846153846154;
+    out[173] = 0;
+    out[174] = 0;
+    out[175] = 0;
+    out[176] = 0;
+    out[177] = 0;
+    out[178] = 0;
+    out[179] = 0;
+    out[180] = 0;
+    out[181] = 0;
+    out[182] = 0;
+    out[183] = 0;
+    out[184] = -_tmp206*_tmp85 - _tmp206*_tmp86 + 0.378698224852071*_tmp207*x_6 + 0.378698224852071*_tmp207*x_9;
+    out[185] = _tmp111 + _tmp208 + _tmp72 + 0.04*_tmp64;
+    out[186] = -_tmp163 - _tmp209 + 0.07*_tmp64 - 0.04*_tmp67;
+    out[187] = -1;
+    out[188] = -_tmp33 - _tmp63 - _tmp72 + _tmp34*_tmp35;
+    out[189] = 0;
+    out[190] = 0;
+    out[191] = 0;
+    out[192] = _tmp209 + _tmp56 + _tmp57 + _tmp59 - _tmp74 - _tmp75;
+    out[193] = 0;
+    out[194] = 0;
+    out[195] = 0;
+    out[196] = 1;
+    out[197] = 0;
+    out[198] = 0;
+    out[199] = 0;
+    out[200] = -_tmp13*_tmp94 - _tmp13*_tmp95 - _tmp17*_tmp85 - _tmp17*_tmp86;
+    out[201] = -_tmp13*_tmp85 - _tmp13*_tmp86 + 0.378698224852071*_tmp16*p_0*x_6 + 0.378698224852071*_tmp16*p_0*x_9;
+    out[202] = _tmp210;
+    out[203] = 0;
+    out[204] = 0;
+    out[205] = 0;
+    out[206] = _tmp117*_tmp94 + _tmp117*_tmp95 + _tmp120*_tmp85 + _tmp120*_tmp86;
+    out[207] = _tmp117*_tmp85 + _tmp117*_tmp86 - _tmp120*_tmp94 - _tmp120*_tmp95;
+    out[208] = 0;
+    out[209] = -_tmp154*_tmp85 + 0.378698224852071*_tmp158*p_0*x_9;
+    out[210] = _tmp154*_tmp95 + _tmp159*_tmp85;
+    out[211] = 0;
+    out[212] = _tmp142*_tmp94 - _tmp137*_tmp86;
+    out[213] = _tmp137*_tmp94 + _tmp142*_tmp86;
+    out[214] = 0;
+    out[215] = 0;
+    out[216] = 0;
+    out[217] = 0;
+    out[218] = 0;
+    out[219] = 0;
+    out[220] = 0;
+    out[221] = _tmp211;
+    out[222] = -_tmp13;
+    out[223] = 0;
+    out[224] = _tmp40;
+    out[225] = -_tmp50;
+    out[226] = 0;
+    out[227] = 0;
+    out[228] = 0;
+    out[229] = 0;
+    out[230] = 0;
+    out[231] = 0;
+    out[232] = 0;
+    out[233] = 0;
+    out[234] = 0;
+    out[235] = 0;
+    out[236] = 0;
+    out[237] = 0;
+    out[238] = 0;
+    out[239] = 0;
+    out[240] = 0;
+    out[241] = 0;
+    out[242] = _tmp13;
+    out[243] = _tmp211;
+    out[244] = 0;
+    out[245] = _tmp50;
+    out[246] = _tmp40;
+    out[247] = 0;
+    out[248] = 0;
+    out[249] = 0;
+    out[250] = 0;
+    out[251] = 0;
+    out[252] = 0;
+    out[253] = 0;
+    out[254] = 0;
+    out[255] = 0;
+    out[256] = 0;
+    out[257] = 0;
+    out[258] = 0;
+    out[259] = 0;
+    out[260] = 0;
+    out[261] = 0;
+    out[262] = 0;
+    out[263] = 0;
+    out[264] = 0;
+    out[265] = 0;
+    out[266] = 0;
+    out[267] = 0;
+    out[268] = 0;
+    out[269] = 0;
+    out[270] = 0;
+    out[271] = 0;
+    out[272] = 0;
+    out[273] = 0;
+    out[274] = 0;
+    out[275] = 0;
+    out[276] = 0;
+    out[277] = 0;
+    out[278] = 0;
+    out[279] = 0;
+    out[280] = 0;
+    out[281] = 0;
+    out[282] = 0;
+    out[283] = 0;
+    out[284] = _tmp212*(_tmp210*omega_1_0 - _tmp165*_tmp87 - _tmp96*(_tmp110 + _tmp184 + _tmp60));
+    out[285] = _tmp87*_tmp98;
+    out[286] = -_tmp96*_tmp98;
+    out[287] = _tmp213;
+    out[288] = _tmp214;
+    out[289] = _tmp215;
+    out[290] = _tmp109;
+    out[291] = 0;
+    out[292] = _tmp212*(_tmp210*omega_2_0 + _tmp85*(-_tmp81 + _tmp0*_tmp217 - _tmp1*_tmp216) - _tmp95*(_tmp73 - _tmp0*_tmp216 - _tmp1*_tmp217));
+    out[293] = _tmp102*_tmp218 + _tmp103*_tmp219;
+    out[294] = _tmp102*_tmp219 - _tmp103*_tmp218;
+    out[295] = _tmp213;
+    out[296] = _tmp214;
+    out[297] = _tmp215;
+    out[298] = _tmp109;
+    out[299] = 0;
+    out[300] = _tmp212*(_tmp210*omega_3_0 + _tmp220*(-_tmp175 - _tmp132*_tmp60) - _tmp221*(_tmp122 + _tmp60 + _tmp126*_tmp60));
+    out[301] = _tmp220*_tmp98;
+    out[302] = -_tmp221*_tmp98;
+    out[303] = _tmp213;
+    out[304] = _tmp214;
+    out[305] = _tmp215;
+    out[306] = _tmp109;
+    out[307] = 0;
+    out[308] = _tmp212*(_tmp210*omega_4_0 + _tmp95*(_tmp161 + _tmp149*_tmp60 - _tmp132*_tmp222) - _tmp85*(_tmp172 + _tmp147*_tmp60 - _tmp126*_tmp222));
+    out[309] = -_tmp102*_tmp132 - _tmp103*_tmp126;
+    out[310] = -_tmp102*_tmp126 + 1136094.674556213*_tmp132*_tmp89*_tmp90*x_9;
+    out[311] = _tmp213;
+    out[312] = _tmp214;
+    out[313] = _tmp215;
+    out[314] = _tmp109;
+    out[315] = 0;
+    out[316] = _tmp212*(_tmp210*omega_5_0 + _tmp94*(_tmp144 + _tmp128*_tmp60 - _tmp132*_tmp223) - _tmp86*(-_tmp177 - _tmp126*_tmp223 + 0.5*_tmp130*p_0));
+    out[317] = -_tmp106*_tmp126 - _tmp107*_tmp132;
+    out[318] = _tmp106*_tmp132 - _tmp107*_tmp126;
+    out[319] = _tmp213;
+    out[320] = _tmp214;
+    out[321] = _tmp215;
+    out[322] = _tmp109;
+    out[323] = 0;
+    out[324] = _tmp212*(_tmp210*omega_6_0 + _tmp86*(-_tmp178 - 0.008*_tmp1 + _tmp0*_tmp224) - _tmp94*(_tmp123 + _tmp145 - 0.008*_tmp0 - _tmp1*_tmp224));
+    out[325] = -_tmp0*_tmp106 + 1136094.674556213*_tmp1*_tmp89*_tmp90*x_7;
+    out[326] = -_tmp0*_tmp107 - _tmp1*_tmp106;
+    out[327] = _tmp213;
+    out[328] = _tmp214;
+    out[329] = _tmp215;
+    out[330] = _tmp109;
+    out[331] = 0;
+    out[332] = _tmp212*(_tmp210*omega_7_0 + _tmp85*(_tmp173 + _tmp183 + _tmp80 + 0.07*_tmp64 - _tmp225*_tmp67) - _tmp95*(_tmp123 + _tmp162 - _tmp208 - _tmp41 - _tmp51 - _tmp69 - _tmp70 - _tmp225*_tmp64));
+    out[333] = _tmp102*_tmp64 + _tmp103*_tmp67;
+    out[334] = _tmp102*_tmp67 - _tmp103*_tmp64;
+    out[335] = _tmp213;
+    out[336] = _tmp214;
+    out[337] = _tmp215;
+    out[338] = _tmp109;
+    out[339] = 0;
 }
 
 /* loaded (2 half plate(s) per plate): every half plate's (theta, p, f, e_a, e_s) and d(theta, p, f)/dx (623 operations) */
@@ -6044,6 +6657,1140 @@ static void sk_loaded_dev2(const double *x, const double *theta, const double *p
     const double _tmp40 = _tmp10*(-2*pow(sin(_tmp27), 2) + 2*pow(sin(_tmp28), 2)) + _tmp30*_tmp35 + _tmp31*_tmp34 + _tmp33*_tmp36 - _tmp37*across_2_1;
     out[0] = _tmp39*_tmp40 + _tmp6*_tmp7 - _tmp1*_tmp5 - _tmp22*_tmp9 - _tmp23*_tmp24 - _tmp26*_tmp38;
     out[1] = _tmp1*_tmp7 + _tmp24*_tmp9 + _tmp26*_tmp40 + _tmp38*_tmp39 + _tmp5*_tmp6 - _tmp22*_tmp23;
+}
+
+/* loaded (2 half plate(s) per plate), what it reports: dR/dv, din/dv, y, dy/dx, dy/dv, dy/dout (v: the inputs' angles and virtual loads at the points, y: the inputs' moments and the points' (dx, dy, dphi)), then per plate (k0, lx, ly, e_a, e_s, t/l, E', allowable) (2161 operations) */
+static void sk_loaded_report2(const double *x, const double *theta, const double *plates, const double *params, double *out)
+{
+    const double x_0 = x[0];
+    const double x_1 = x[1];
+    const double x_2 = x[2];
+    const double x_3 = x[3];
+    const double x_4 = x[4];
+    const double x_5 = x[5];
+    const double x_6 = x[6];
+    const double x_7 = x[7];
+    const double x_8 = x[8];
+    const double x_9 = x[9];
+    const double x_10 = x[10];
+    const double x_11 = x[11];
+    const double x_12 = x[12];
+    const double x_13 = x[13];
+    const double x_14 = x[14];
+    const double x_15 = x[15];
+    const double x_16 = x[16];
+    const double x_17 = x[17];
+    const double x_18 = x[18];
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double theta_5 = theta[4];
+    const double theta_6 = theta[5];
+    const double theta_7 = theta[6];
+    const double along_1_0 = plates[0];
+    const double across_1_0 = plates[1];
+    const double along_1_1 = plates[3];
+    const double across_1_1 = plates[4];
+    const double omega_1_1 = plates[5];
+    const double along_2_0 = plates[6];
+    const double across_2_0 = plates[7];
+    const double along_2_1 = plates[9];
+    const double across_2_1 = plates[10];
+    const double omega_2_1 = plates[11];
+    const double along_3_0 = plates[12];
+    const double across_3_0 = plates[13];
+    const double along_3_1 = plates[15];
+    const double across_3_1 = plates[16];
+    const double omega_3_1 = plates[17];
+    const double along_4_0 = plates[18];
+    const double across_4_0 = plates[19];
+    const double along_4_1 = plates[21];
+    const double across_4_1 = plates[22];
+    const double omega_4_1 = plates[23];
+    const double along_5_0 = plates[24];
+    const double across_5_0 = plates[25];
+    const double along_5_1 = plates[27];
+    const double across_5_1 = plates[28];
+    const double omega_5_1 = plates[29];
+    const double along_6_0 = plates[30];
+    const double across_6_0 = plates[31];
+    const double along_6_1 = plates[33];
+    const double across_6_1 = plates[34];
+    const double omega_6_1 = plates[35];
+    const double along_7_0 = plates[36];
+    const double across_7_0 = plates[37];
+    const double along_7_1 = plates[39];
+    const double across_7_1 = plates[40];
+    const double omega_7_1 = plates[41];
+    const double p_0 = params[0];
+    const double _tmp0 = sin(theta_1);
+    const double _tmp1 = cos(theta_1);
+    const double _tmp2 = 37.5*_tmp1;
+    const double _tmp3 = 0.5*x_17;
+    const double _tmp4 = 0.25*theta_6 + 0.0015384615384615385*x_4;
+    const double _tmp5 = _tmp4 - _tmp3;
+    const double _tmp6 = sin(_tmp5);
+    const double _tmp7 = 0.5*p_0;
+    const double _tmp8 = _tmp7*across_6_0;
+    const double _tmp9 = _tmp3 + _tmp4;
+    const double _tmp10 = _tmp7*sin(_tmp9);
+    const double _tmp11 = cos(_tmp5);
+    const double _tmp12 = _tmp7*(along_6_0 + pow(_tmp9, 2)*symkin_arck(_tmp9));
+    const double _tmp13 = along_6_1 + pow(_tmp5, 2)*symkin_arck(_tmp5);
+    const double _tmp14 = _tmp7*cos(_tmp9);
+    const double _tmp15 = _tmp11*_tmp12 + _tmp13*_tmp14 + _tmp6*_tmp8 + _tmp7*(-2*pow(sin(_tmp3), 2) + 2*pow(sin(_tmp4), 2)) - _tmp10*across_6_1;
+    const double _tmp16 = theta_1 + 0.5*theta_6 + 0.003076923076923077*x_4;
+    const double _tmp17 = 1250.0*cos(_tmp16);
+    const double _tmp18 = sin(_tmp16);
+    const double _tmp19 = _tmp10*_tmp13 + _tmp11*_tmp8 + _tmp14*across_6_1 + _tmp7*sin(1.0*x_17) - _tmp12*_tmp6;
+    const double _tmp20 = 0.5*theta_1;
+    const double _tmp21 = cos(_tmp20);
+    const double _tmp22 = 0.25*theta_1;
+    const double _tmp23 = 0.5*x_12;
+    const double _tmp24 = _tmp22 - _tmp23;
+    const double _tmp25 = sin(_tmp24);
+    const double _tmp26 = _tmp7*across_1_0;
+    const double _tmp27 = _tmp22 + _tmp23;
+    const double _tmp28 = sin(_tmp27);
+    const double _tmp29 = _tmp28*_tmp7;
+    const double _tmp30 = sin(_tmp22);
+    const double _tmp31 = sin(_tmp23);
+    const double _tmp32 = cos(_tmp24);
+    const double _tmp33 = symkin_arck(_tmp27);
+    const double _tmp34 = along_1_0 + _tmp33*pow(_tmp27, 2);
+    const double _tmp35 = _tmp34*_tmp7;
+    const double _tmp36 = symkin_arck(_tmp24);
+    const double _tmp37 = along_1_1 + _tmp36*pow(_tmp24, 2);
+    const double _tmp38 = cos(_tmp27);
+    const double _tmp39 = _tmp38*_tmp7;
+    const double _tmp40 = _tmp25*_tmp26 + _tmp32*_tmp35 + _tmp37*_tmp39 + _tmp7*(-2*pow(_tmp31, 2) + 2*pow(_tmp30, 2)) - _tmp29*across_1_1;
+    const double _tmp41 = _tmp21*_tmp40;
+    const double _tmp42 = 0.125*p_0;
+    const double _tmp43 = _tmp42*across_1_0;
+    const double _tmp44 = _tmp28*_tmp42;
+    const double _tmp45 = _tmp34*_tmp42;
+    const double _tmp46 = 0.125*theta_1;
+    const double _tmp47 = 0.25*x_12;
+    const double _tmp48 = symkin_sinr1(_tmp24);
+    const double _tmp49 = (_tmp24*_tmp24*_tmp24)*(_tmp48 - 3*symkin_sinr2(_tmp24) + 3*symkin_cosr2(_tmp24));
+    const double _tmp50 = 0.25*_tmp49 + _tmp36*(_tmp46 - _tmp47);
+    const double _tmp51 = (_tmp27*_tmp27*_tmp27)*(-3*symkin_sinr2(_tmp27) + 3*symkin_cosr2(_tmp27) + symkin_sinr1(_tmp27));
+    const double _tmp52 = _tmp7*(0.25*_tmp51 + _tmp33*(_tmp46 + _tmp47));
+    const double _tmp53 = -_tmp25*_tmp43 - _tmp25*_tmp52 - _tmp32*_tmp45 - _tmp44*across_1_1 + 0.125*_tmp37*_tmp38*p_0 + 0.5*_tmp28*_tmp50*p_0;
+    const double _tmp54 = _tmp21*_tmp53;
+    const double _tmp55 = sin(_tmp20);
+    const double _tmp56 = _tmp32*_tmp43 + _tmp32*_tmp52 + _tmp39*_tmp50 - _tmp25*_tmp45 - _tmp37*_tmp44 + _tmp30*_tmp7*cos(_tmp22) - _tmp38*_tmp42*across_1_1;
+    const double _tmp57 = _tmp55*_tmp56;
+    const double _tmp58 = 1.0*x_12;
+    const double _tmp59 = _tmp26*_tmp32 + _tmp29*_tmp37 + _tmp39*across_1_1 + _tmp7*sin(_tmp58) - _tmp25*_tmp35;
+    const double _tmp60 = 625.0*_tmp41 + 1250.0*_tmp54 + 1250.0*_tmp57 - 625.0*_tmp55*_tmp59;
+    const double _tmp61 = 37.5*_tmp0;
+    const double _tmp62 = _tmp21*_tmp59;
+    const double _tmp63 = 625.0*_tmp62;
+    const double _tmp64 = _tmp40*_tmp55;
+    const double _tmp65 = 625.0*_tmp64;
+    const double _tmp66 = _tmp53*_tmp55;
+    const double _tmp67 = 1250.0*_tmp66;
+    const double _tmp68 = theta_1 + theta_2;
+    const double _tmp69 = sin(_tmp68);
+    const double _tmp70 = 0.006153846153846154*x_0;
+    const double _tmp71 = cos(_tmp70);
+    const double _tmp72 = 0.003076923076923077*x_0;
+    const double _tmp73 = sin(_tmp72);
+    const double _tmp74 = _tmp73*cos(_tmp72);
+    const double _tmp75 = 0.04*_tmp71 - 0.14*_tmp74;
+    const double _tmp76 = _tmp69*_tmp75;
+    const double _tmp77 = 0.7853981633974483 + theta_1;
+    const double _tmp78 = _tmp72 + _tmp77 + 0.5*theta_2;
+    const double _tmp79 = sin(_tmp78);
+    const double _tmp80 = 0.5*x_13;
+    const double _tmp81 = 0.25*theta_2 + 0.0015384615384615385*x_0;
+    const double _tmp82 = _tmp81 - _tmp80;
+    const double _tmp83 = sin(_tmp82);
+    const double _tmp84 = _tmp7*across_2_0;
+    const double _tmp85 = _tmp80 + _tmp81;
+    const double _tmp86 = sin(_tmp85);
+    const double _tmp87 = _tmp7*_tmp86;
+    const double _tmp88 = sin(_tmp80);
+    const double _tmp89 = sin(_tmp81);
+    const double _tmp90 = cos(_tmp82);
+    const double _tmp91 = symkin_arck(_tmp85);
+    const double _tmp92 = along_2_0 + _tmp91*pow(_tmp85, 2);
+    const double _tmp93 = _tmp7*_tmp92;
+    const double _tmp94 = symkin_arck(_tmp82);
+    const double _tmp95 = along_2_1 + _tmp94*pow(_tmp82, 2);
+    const double _tmp96 = cos(_tmp85);
+    const double _tmp97 = _tmp7*_tmp96;
+    const double _tmp98 = _tmp7*(-2*pow(_tmp88, 2) + 2*pow(_tmp89, 2)) + _tmp83*_tmp84 + _tmp90*_tmp93 + _tmp95*_tmp97 - _tmp87*across_2_1;
+    const double _tmp99 = _tmp79*_tmp98;
+    const double _tmp100 = _tmp68 + _tmp70;
+    const double _tmp101 = _tmp100 + 0.5*theta_7 + 0.003076923076923077*x_5;
+    const double _tmp102 = sin(_tmp101);
+    const double _tmp103 = 0.5*x_18;
+    const double _tmp104 = 0.25*theta_7 + 0.0015384615384615385*x_5;
+    const double _tmp105 = _tmp104 - _tmp103;
+    const double _tmp106 = sin(_tmp105);
+    const double _tmp107 = _tmp7*across_7_0;
+    const double _tmp108 = _tmp103 + _tmp104;
+    const double _tmp109 = _tmp7*sin(_tmp108);
+    const double _tmp110 = cos(_tmp105);
+    const double _tmp111 = _tmp7*(along_7_0 + pow(_tmp108, 2)*symkin_arck(_tmp108));
+    const double _tmp112 = along_7_1 + pow(_tmp105, 2)*symkin_arck(_tmp105);
+    const double _tmp113 = _tmp7*cos(_tmp108);
+    const double _tmp114 = 1250.0*_tmp106*_tmp107 + 1250.0*_tmp110*_tmp111 + 1250.0*_tmp112*_tmp113 + 1250.0*_tmp7*(-2*pow(sin(_tmp103), 2) + 2*pow(sin(_tmp104), 2)) - 1250.0*_tmp109*across_7_1;
+    const double _tmp115 = cos(_tmp78);
+    const double _tmp116 = 1.0*x_13;
+    const double _tmp117 = _tmp7*sin(_tmp116) + _tmp84*_tmp90 + _tmp87*_tmp95 + _tmp97*across_2_1 - _tmp83*_tmp93;
+    const double _tmp118 = _tmp115*_tmp117;
+    const double _tmp119 = cos(_tmp101);
+    const double _tmp120 = 1250.0*_tmp107*_tmp110 + 1250.0*_tmp109*_tmp112 + 1250.0*_tmp113*across_7_1 + 1250.0*_tmp7*sin(1.0*x_18) - 1250.0*_tmp106*_tmp111;
+    const double _tmp121 = cos(_tmp68);
+    const double _tmp122 = -0.07*_tmp71 - 0.08*_tmp74;
+    const double _tmp123 = _tmp121*_tmp75;
+    const double _tmp124 = _tmp122*_tmp69;
+    const double _tmp125 = _tmp117*_tmp79;
+    const double _tmp126 = _tmp115*_tmp98;
+    const double _tmp127 = _tmp21*_tmp56;
+    const double _tmp128 = _tmp55*_tmp59;
+    const double _tmp129 = _tmp54 + _tmp57 + 0.5*_tmp41 - 0.5*_tmp128;
+    const double _tmp130 = sin(_tmp100);
+    const double _tmp131 = 0.3535533905932738*p_0;
+    const double _tmp132 = _tmp130*_tmp131;
+    const double _tmp133 = cos(_tmp100);
+    const double _tmp134 = _tmp131*_tmp133;
+    const double _tmp135 = 0.03*_tmp0;
+    const double _tmp136 = 0.02*_tmp1;
+    const double _tmp137 = _tmp118 + _tmp99;
+    const double _tmp138 = _tmp135 + _tmp136 + _tmp137;
+    const double _tmp139 = _tmp132 + _tmp134 + _tmp138;
+    const double _tmp140 = 7.6923076923076925*x_10;
+    const double _tmp141 = 0.5*_tmp64;
+    const double _tmp142 = 0.5*_tmp62;
+    const double _tmp143 = _tmp141 + _tmp142 + _tmp66 - _tmp127;
+    const double _tmp144 = _tmp125 - _tmp126;
+    const double _tmp145 = 0.02*_tmp0;
+    const double _tmp146 = 0.03*_tmp1;
+    const double _tmp147 = _tmp145 - _tmp146;
+    const double _tmp148 = _tmp132 + _tmp144 + _tmp147 - _tmp134;
+    const double _tmp149 = 7.181553246425874*p_0;
+    const double _tmp150 = _tmp130*_tmp149;
+    const double _tmp151 = _tmp133*_tmp149;
+    const double _tmp152 = 0.378698224852071*x_10;
+    const double _tmp153 = 0.378698224852071*x_7;
+    const double _tmp154 = _tmp152 + _tmp153;
+    const double _tmp155 = _tmp23 + 0.75*theta_1;
+    const double _tmp156 = sin(_tmp155);
+    const double _tmp157 = cos(_tmp155);
+    const double _tmp159 = 0.375*p_0;
+    const double _tmp158 = along_1_1 + symkin_sinr0(_tmp24);
+    const double _tmp160 = _tmp158*_tmp159;
+    const double _tmp161 = -_tmp48 + symkin_cosr1(_tmp24);
+    const double _tmp162 = 0.378698224852071*x_6;
+    const double _tmp163 = 0.378698224852071*x_9;
+    const double _tmp164 = _tmp162 + _tmp163;
+    const double _tmp165 = 10.15625*p_0;
+    const double _tmp166 = _tmp156*_tmp165;
+    const double _tmp167 = _tmp77 + _tmp80 + 0.75*theta_2 + 0.004615384615384615*x_0;
+    const double _tmp168 = cos(_tmp167);
+    const double _tmp169 = along_2_1 + symkin_sinr0(_tmp82);
+    const double _tmp170 = sin(_tmp167);
+    const double _tmp171 = _tmp170*_tmp7;
+    const double _tmp172 = _tmp165*across_2_1;
+    const double _tmp173 = _tmp165*_tmp169;
+    const double _tmp174 = _tmp3 + theta_1 + 0.75*theta_6 + 0.004615384615384615*x_4;
+    const double _tmp175 = cos(_tmp174);
+    const double _tmp176 = _tmp7*across_6_1;
+    const double _tmp177 = sin(_tmp174);
+    const double _tmp178 = _tmp7*(along_6_1 + symkin_sinr0(_tmp5));
+    const double _tmp179 = _tmp100 + _tmp103 + 0.75*theta_7 + 0.004615384615384615*x_5;
+    const double _tmp180 = cos(_tmp179);
+    const double _tmp181 = along_7_1 + symkin_sinr0(_tmp105);
+    const double _tmp182 = sin(_tmp179);
+    const double _tmp183 = _tmp182*_tmp7;
+    const double _tmp184 = p_0 <= 0.008;
+    const double _tmp185 = ((_tmp184) ? (4.333333333333334e-12) : (4.761904761904762e-12));
+    const double _tmp186 = 1.0/p_0;
+    const double _tmp187 = _tmp185*_tmp186;
+    const double _tmp188 = 187500*_tmp187;
+    const double _tmp189 = _tmp154*_tmp188;
+    const double _tmp190 = 750000*_tmp187;
+    const double _tmp191 = -_tmp190*_tmp28;
+    const double _tmp192 = _tmp190*_tmp38;
+    const double _tmp193 = 562500*_tmp187;
+    const double _tmp194 = _tmp154*_tmp193;
+    const double _tmp195 = -_tmp156*_tmp190;
+    const double _tmp196 = _tmp157*_tmp190;
+    const double _tmp197 = _tmp77 + _tmp85;
+    const double _tmp198 = cos(_tmp197);
+    const double _tmp199 = 284023.66863905324*_tmp187;
+    const double _tmp200 = _tmp199*x_10;
+    const double _tmp201 = sin(_tmp197);
+    const double _tmp202 = _tmp199*x_9;
+    const double _tmp203 = _tmp190*_tmp198;
+    const double _tmp204 = _tmp190*_tmp201;
+    const double _tmp205 = _tmp168*_tmp190;
+    const double _tmp206 = _tmp170*_tmp190;
+    const double _tmp207 = _tmp9 + theta_1;
+    const double _tmp208 = cos(_tmp207);
+    const double _tmp209 = _tmp199*x_6;
+    const double _tmp210 = sin(_tmp207);
+    const double _tmp211 = _tmp199*x_7;
+    const double _tmp212 = _tmp100 + _tmp108;
+    const double _tmp213 = cos(_tmp212);
+    const double _tmp214 = sin(_tmp212);
+    const double _tmp215 = pow(p_0, 2);
+    const double _tmp216 = ((_tmp184) ? (230769230769.23077) : (210000000000));
+    const double _tmp217 = theta_3 + 0.006153846153846154*x_1;
+    const double _tmp218 = cos(_tmp217);
+    const double _tmp219 = _tmp217 + theta_5 + 0.006153846153846154*x_3;
+    const double _tmp220 = sin(_tmp219);
+    const double _tmp221 = 0.072*_tmp220;
+    const double _tmp222 = -0.03 + _tmp7;
+    const double _tmp223 = cos(_tmp219);
+    const double _tmp224 = _tmp222*_tmp223;
+    const double _tmp225 = sin(_tmp217);
+    const double _tmp226 = 0.02*_tmp225;
+    const double _tmp227 = -_tmp226;
+    const double _tmp228 = _tmp217 + 0.5*theta_5 + 0.003076923076923077*x_3;
+    const double _tmp229 = sin(_tmp228);
+    const double _tmp230 = 0.5*x_16;
+    const double _tmp231 = 0.25*theta_5 + 0.0015384615384615385*x_3;
+    const double _tmp232 = _tmp231 - _tmp230;
+    const double _tmp233 = sin(_tmp232);
+    const double _tmp234 = _tmp7*across_5_0;
+    const double _tmp235 = _tmp230 + _tmp231;
+    const double _tmp236 = sin(_tmp235);
+    const double _tmp237 = _tmp236*_tmp7;
+    const double _tmp238 = sin(_tmp230);
+    const double _tmp239 = sin(_tmp231);
+    const double _tmp240 = cos(_tmp232);
+    const double _tmp241 = symkin_arck(_tmp235);
+    const double _tmp242 = along_5_0 + _tmp241*pow(_tmp235, 2);
+    const double _tmp243 = _tmp242*_tmp7;
+    const double _tmp244 = symkin_arck(_tmp232);
+    const double _tmp245 = along_5_1 + _tmp244*pow(_tmp232, 2);
+    const double _tmp246 = cos(_tmp235);
+    const double _tmp247 = _tmp246*_tmp7;
+    const double _tmp248 = _tmp233*_tmp234 + _tmp240*_tmp243 + _tmp245*_tmp247 + _tmp7*(-2*pow(_tmp238, 2) + 2*pow(_tmp239, 2)) - _tmp237*across_5_1;
+    const double _tmp249 = _tmp229*_tmp248;
+    const double _tmp250 = cos(_tmp228);
+    const double _tmp251 = 1.0*x_16;
+    const double _tmp252 = _tmp234*_tmp240 + _tmp237*_tmp245 + _tmp247*across_5_1 + _tmp7*sin(_tmp251) - _tmp233*_tmp243;
+    const double _tmp253 = _tmp250*_tmp252;
+    const double _tmp254 = _tmp227 + _tmp249 + _tmp253;
+    const double _tmp255 = _tmp1*_tmp7;
+    const double _tmp256 = -_tmp255;
+    const double _tmp257 = 0.5*theta_3 + 0.003076923076923077*x_1;
+    const double _tmp258 = cos(_tmp257);
+    const double _tmp259 = 0.5*x_14;
+    const double _tmp260 = 0.25*theta_3 + 0.0015384615384615385*x_1;
+    const double _tmp261 = _tmp260 - _tmp259;
+    const double _tmp262 = sin(_tmp261);
+    const double _tmp263 = _tmp7*across_3_0;
+    const double _tmp264 = _tmp259 + _tmp260;
+    const double _tmp265 = sin(_tmp264);
+    const double _tmp266 = _tmp265*_tmp7;
+    const double _tmp267 = sin(_tmp259);
+    const double _tmp268 = sin(_tmp260);
+    const double _tmp269 = cos(_tmp261);
+    const double _tmp270 = symkin_arck(_tmp264);
+    const double _tmp271 = along_3_0 + _tmp270*pow(_tmp264, 2);
+    const double _tmp272 = _tmp271*_tmp7;
+    const double _tmp273 = symkin_arck(_tmp261);
+    const double _tmp274 = along_3_1 + _tmp273*pow(_tmp261, 2);
+    const double _tmp275 = cos(_tmp264);
+    const double _tmp276 = _tmp275*_tmp7;
+    const double _tmp277 = _tmp262*_tmp263 + _tmp269*_tmp272 + _tmp274*_tmp276 + _tmp7*(-2*pow(_tmp267, 2) + 2*pow(_tmp268, 2)) - _tmp266*across_3_1;
+    const double _tmp278 = _tmp258*_tmp277;
+    const double _tmp279 = sin(_tmp257);
+    const double _tmp280 = 1.0*x_14;
+    const double _tmp281 = _tmp263*_tmp269 + _tmp266*_tmp274 + _tmp276*across_3_1 + _tmp7*sin(_tmp280) - _tmp262*_tmp272;
+    const double _tmp282 = _tmp279*_tmp281;
+    const double _tmp283 = _tmp278 - _tmp282;
+    const double _tmp284 = _tmp128 + _tmp256 + _tmp283 - _tmp41;
+    const double _tmp285 = _tmp217 + theta_4 + 0.006153846153846154*x_2;
+    const double _tmp286 = cos(_tmp285);
+    const double _tmp287 = -0.05 + _tmp7;
+    const double _tmp288 = sin(_tmp285);
+    const double _tmp289 = _tmp287*_tmp288;
+    const double _tmp290 = _tmp217 + 0.5*theta_4 + 0.003076923076923077*x_2;
+    const double _tmp291 = sin(_tmp290);
+    const double _tmp292 = 0.5*x_15;
+    const double _tmp293 = 0.25*theta_4 + 0.0015384615384615385*x_2;
+    const double _tmp294 = _tmp293 - _tmp292;
+    const double _tmp295 = sin(_tmp294);
+    const double _tmp296 = _tmp7*across_4_0;
+    const double _tmp297 = _tmp292 + _tmp293;
+    const double _tmp298 = sin(_tmp297);
+    const double _tmp299 = _tmp298*_tmp7;
+    const double _tmp300 = sin(_tmp292);
+    const double _tmp301 = sin(_tmp293);
+    const double _tmp302 = cos(_tmp294);
+    const double _tmp303 = symkin_arck(_tmp297);
+    const double _tmp304 = along_4_0 + _tmp303*pow(_tmp297, 2);
+    const double _tmp305 = _tmp304*_tmp7;
+    const double _tmp306 = symkin_arck(_tmp294);
+    const double _tmp307 = along_4_1 + _tmp306*pow(_tmp294, 2);
+    const double _tmp308 = cos(_tmp297);
+    const double _tmp309 = _tmp308*_tmp7;
+    const double _tmp310 = _tmp295*_tmp296 + _tmp302*_tmp305 + _tmp307*_tmp309 + _tmp7*(-2*pow(_tmp300, 2) + 2*pow(_tmp301, 2)) - _tmp299*across_4_1;
+    const double _tmp311 = _tmp291*_tmp310;
+    const double _tmp312 = cos(_tmp290);
+    const double _tmp313 = 1.0*x_15;
+    const double _tmp314 = _tmp296*_tmp302 + _tmp299*_tmp307 + _tmp309*across_4_1 + _tmp7*sin(_tmp313) - _tmp295*_tmp305;
+    const double _tmp315 = _tmp312*_tmp314;
+    const double _tmp316 = _tmp226 + _tmp311 + _tmp315;
+    const double _tmp317 = _tmp0*_tmp7;
+    const double _tmp318 = _tmp62 + _tmp64;
+    const double _tmp319 = _tmp317 + _tmp318;
+    const double _tmp320 = _tmp286*_tmp287;
+    const double _tmp321 = _tmp277*_tmp279;
+    const double _tmp322 = _tmp258*_tmp281;
+    const double _tmp323 = 0.02*_tmp218;
+    const double _tmp324 = _tmp310*_tmp312;
+    const double _tmp325 = _tmp291*_tmp314;
+    const double _tmp326 = _tmp323 + _tmp324 - _tmp325;
+    const double _tmp327 = 0.1 + _tmp320 + _tmp326 - _tmp321 - _tmp322 - 0.05*_tmp225 - 0.04*_tmp288;
+    const double _tmp328 = _tmp220*_tmp222;
+    const double _tmp329 = _tmp321 + _tmp322;
+    const double _tmp330 = _tmp229*_tmp252;
+    const double _tmp331 = _tmp323 + _tmp330 - _tmp248*_tmp250;
+    const double _tmp332 = -0.1 + _tmp328 + _tmp329 + _tmp331 - _tmp62 - _tmp64 + 0.06*_tmp225 + 0.072*_tmp223;
+    const double _tmp333 = sin(_tmp70);
+    const double _tmp334 = pow(_tmp73, 2);
+    const double _tmp335 = 0.04*_tmp333 - 0.14*_tmp334;
+    const double _tmp336 = -0.07*_tmp333 - 0.08*_tmp334;
+    const double _tmp337 = _tmp144 + _tmp318;
+    const double _tmp338 = _tmp41 - _tmp128;
+    const double _tmp339 = _tmp137 + _tmp338;
+    const double _tmp340 = 0.00012307692307692307*_tmp218;
+    const double _tmp341 = 0.006153846153846154*_tmp328 + 0.0004430769230769231*_tmp223;
+    const double _tmp342 = 0.0007692307692307692*p_0;
+    const double _tmp343 = _tmp342*across_3_0;
+    const double _tmp344 = _tmp265*_tmp342;
+    const double _tmp345 = _tmp271*_tmp342;
+    const double _tmp346 = 0.0015384615384615385*x_14;
+    const double _tmp347 = 4.733727810650887e-06*x_1 + 0.0007692307692307692*theta_3;
+    const double _tmp348 = (_tmp261*_tmp261*_tmp261)*(-3*symkin_sinr2(_tmp261) + 3*symkin_cosr2(_tmp261) + symkin_sinr1(_tmp261));
+    const double _tmp349 = 0.0015384615384615385*_tmp348 + _tmp273*(_tmp347 - _tmp346);
+    const double _tmp350 = (_tmp264*_tmp264*_tmp264)*(-3*symkin_sinr2(_tmp264) + 3*symkin_cosr2(_tmp264) + symkin_sinr1(_tmp264));
+    const double _tmp351 = _tmp7*(0.0015384615384615385*_tmp350 + _tmp270*(_tmp346 + _tmp347));
+    const double _tmp352 = -_tmp262*_tmp343 - _tmp262*_tmp351 - _tmp269*_tmp345 - _tmp344*across_3_1 + 0.5*_tmp265*_tmp349*p_0 + 0.0007692307692307692*_tmp274*_tmp275*p_0;
+    const double _tmp353 = 0.003076923076923077*p_0;
+    const double _tmp354 = _tmp269*_tmp343 + _tmp269*_tmp351 + _tmp276*_tmp349 - _tmp262*_tmp345 - _tmp274*_tmp344 + _tmp268*_tmp353*cos(_tmp260) - _tmp275*_tmp342*across_3_1;
+    const double _tmp355 = 0.003076923076923077*_tmp321 + 0.003076923076923077*_tmp322 + _tmp279*_tmp352 - _tmp258*_tmp354;
+    const double _tmp356 = 0.00024615384615384614*_tmp288;
+    const double _tmp357 = 0.00012307692307692307*_tmp225;
+    const double _tmp358 = 0.00024615384615384614*_tmp286 + 0.006153846153846154*_tmp289;
+    const double _tmp359 = 0.003076923076923077*_tmp278 + _tmp258*_tmp352 + _tmp279*_tmp354 - 0.003076923076923077*_tmp279*_tmp281;
+    const double _tmp360 = 0.006153846153846154*_tmp224 - 0.0004430769230769231*_tmp220;
+    const double _tmp361 = _tmp342*across_4_0;
+    const double _tmp362 = _tmp298*_tmp342;
+    const double _tmp363 = _tmp304*_tmp342;
+    const double _tmp364 = 0.0015384615384615385*x_15;
+    const double _tmp365 = 4.733727810650887e-06*x_2 + 0.0007692307692307692*theta_4;
+    const double _tmp366 = (_tmp294*_tmp294*_tmp294)*(-3*symkin_sinr2(_tmp294) + 3*symkin_cosr2(_tmp294) + symkin_sinr1(_tmp294));
+    const double _tmp367 = 0.0015384615384615385*_tmp366 + _tmp306*(_tmp365 - _tmp364);
+    const double _tmp368 = (_tmp297*_tmp297*_tmp297)*(-3*symkin_sinr2(_tmp297) + 3*symkin_cosr2(_tmp297) + symkin_sinr1(_tmp297));
+    const double _tmp369 = _tmp7*(0.0015384615384615385*_tmp368 + _tmp303*(_tmp364 + _tmp365));
+    const double _tmp370 = -_tmp295*_tmp361 - _tmp295*_tmp369 - _tmp302*_tmp363 - _tmp362*across_4_1 + 0.5*_tmp298*_tmp367*p_0 + 0.0007692307692307692*_tmp307*_tmp308*p_0;
+    const double _tmp371 = _tmp302*_tmp361 + _tmp302*_tmp369 + _tmp309*_tmp367 - _tmp295*_tmp363 - _tmp307*_tmp362 + _tmp301*_tmp353*cos(_tmp293) - _tmp308*_tmp342*across_4_1;
+    const double _tmp372 = _tmp342*across_5_0;
+    const double _tmp373 = _tmp236*_tmp342;
+    const double _tmp374 = _tmp242*_tmp342;
+    const double _tmp375 = 0.0015384615384615385*x_16;
+    const double _tmp376 = 4.733727810650887e-06*x_3 + 0.0007692307692307692*theta_5;
+    const double _tmp377 = (_tmp232*_tmp232*_tmp232)*(-3*symkin_sinr2(_tmp232) + 3*symkin_cosr2(_tmp232) + symkin_sinr1(_tmp232));
+    const double _tmp378 = 0.0015384615384615385*_tmp377 + _tmp244*(_tmp376 - _tmp375);
+    const double _tmp379 = (_tmp235*_tmp235*_tmp235)*(-3*symkin_sinr2(_tmp235) + 3*symkin_cosr2(_tmp235) + symkin_sinr1(_tmp235));
+    const double _tmp380 = _tmp7*(0.0015384615384615385*_tmp379 + _tmp241*(_tmp375 + _tmp376));
+    const double _tmp381 = -_tmp233*_tmp372 - _tmp233*_tmp380 - _tmp240*_tmp374 - _tmp373*across_5_1 + 0.5*_tmp236*_tmp378*p_0 + 0.0007692307692307692*_tmp245*_tmp246*p_0;
+    const double _tmp382 = _tmp240*_tmp372 + _tmp240*_tmp380 + _tmp247*_tmp378 - _tmp233*_tmp374 - _tmp245*_tmp373 + _tmp239*_tmp353*cos(_tmp231) - _tmp246*_tmp342*across_5_1;
+    const double _tmp383 = 0.00757396449704142*_tmp225;
+    const double _tmp384 = 0.1893491124260355*p_0;
+    const double _tmp385 = 0.378698224852071*_tmp128 + 0.378698224852071*_tmp278 - 0.378698224852071*_tmp282 - 0.378698224852071*_tmp41 - _tmp1*_tmp384;
+    const double _tmp386 = _tmp0*_tmp384;
+    const double _tmp387 = 0.00757396449704142*_tmp218;
+    const double _tmp388 = 0.378698224852071*_tmp62;
+    const double _tmp389 = 0.378698224852071*_tmp64;
+    const double _tmp390 = 0.25*p_0;
+    const double _tmp391 = _tmp28*_tmp390;
+    const double _tmp392 = _tmp32*_tmp390;
+    const double _tmp393 = _tmp38*_tmp390;
+    const double _tmp394 = -0.5*_tmp49 - _tmp24*_tmp36;
+    const double _tmp395 = 0.5*_tmp51 + _tmp27*_tmp33;
+    const double _tmp396 = _tmp29*_tmp394 + _tmp34*_tmp392 + _tmp37*_tmp393 + _tmp7*cos(_tmp58) - _tmp391*across_1_1 + _tmp25*_tmp390*across_1_0 - _tmp25*_tmp395*_tmp7;
+    const double _tmp397 = 1.0*p_0;
+    const double _tmp398 = -_tmp37*_tmp391 - _tmp392*across_1_0 - _tmp393*across_1_1 - _tmp31*_tmp397*cos(_tmp23) + 0.25*_tmp25*_tmp34*p_0 + 0.5*_tmp32*_tmp395*p_0 + 0.5*_tmp38*_tmp394*p_0;
+    const double _tmp399 = _tmp21*_tmp396 + _tmp398*_tmp55;
+    const double _tmp400 = _tmp396*_tmp55 - _tmp21*_tmp398;
+    const double _tmp401 = _tmp265*_tmp390;
+    const double _tmp402 = _tmp269*_tmp390;
+    const double _tmp403 = _tmp275*_tmp390;
+    const double _tmp404 = -0.5*_tmp348 - _tmp261*_tmp273;
+    const double _tmp405 = 0.5*_tmp350 + _tmp264*_tmp270;
+    const double _tmp406 = _tmp266*_tmp404 + _tmp271*_tmp402 + _tmp274*_tmp403 + _tmp7*cos(_tmp280) - _tmp401*across_3_1 + _tmp262*_tmp390*across_3_0 - _tmp262*_tmp405*_tmp7;
+    const double _tmp407 = -_tmp274*_tmp401 - _tmp402*across_3_0 - _tmp403*across_3_1 - _tmp267*_tmp397*cos(_tmp259) + 0.25*_tmp262*_tmp271*p_0 + 0.5*_tmp269*_tmp405*p_0 + 0.5*_tmp275*_tmp404*p_0;
+    const double _tmp408 = _tmp258*_tmp407 - _tmp279*_tmp406;
+    const double _tmp409 = -_tmp258*_tmp406 - _tmp279*_tmp407;
+    const double _tmp410 = _tmp298*_tmp390;
+    const double _tmp411 = _tmp302*_tmp390;
+    const double _tmp412 = _tmp308*_tmp390;
+    const double _tmp413 = -0.5*_tmp366 - _tmp294*_tmp306;
+    const double _tmp414 = 0.5*_tmp368 + _tmp297*_tmp303;
+    const double _tmp415 = _tmp299*_tmp413 + _tmp304*_tmp411 + _tmp307*_tmp412 + _tmp7*cos(_tmp313) - _tmp410*across_4_1 + _tmp295*_tmp390*across_4_0 - _tmp295*_tmp414*_tmp7;
+    const double _tmp416 = -_tmp307*_tmp410 - _tmp411*across_4_0 - _tmp412*across_4_1 - _tmp300*_tmp397*cos(_tmp292) + 0.25*_tmp295*_tmp304*p_0 + 0.5*_tmp302*_tmp414*p_0 + 0.5*_tmp308*_tmp413*p_0;
+    const double _tmp417 = _tmp236*_tmp390;
+    const double _tmp418 = _tmp240*_tmp390;
+    const double _tmp419 = _tmp246*_tmp390;
+    const double _tmp420 = -0.5*_tmp377 - _tmp232*_tmp244;
+    const double _tmp421 = 0.5*_tmp379 + _tmp235*_tmp241;
+    const double _tmp422 = _tmp237*_tmp420 + _tmp242*_tmp418 + _tmp245*_tmp419 + _tmp7*cos(_tmp251) - _tmp417*across_5_1 + _tmp233*_tmp390*across_5_0 - _tmp233*_tmp421*_tmp7;
+    const double _tmp423 = -_tmp245*_tmp417 - _tmp418*across_5_0 - _tmp419*across_5_1 - _tmp238*_tmp397*cos(_tmp230) + 0.25*_tmp233*_tmp242*p_0 + 0.5*_tmp240*_tmp421*p_0 + 0.5*_tmp246*_tmp420*p_0;
+    const double _tmp424 = 0.00024615384615384614*_tmp71 - 0.0008615384615384615*_tmp74;
+    const double _tmp425 = -0.0004923076923076923*_tmp74 - 0.0004307692307692308*_tmp71;
+    const double _tmp426 = _tmp342*across_2_0;
+    const double _tmp427 = _tmp342*_tmp86;
+    const double _tmp428 = _tmp342*_tmp92;
+    const double _tmp429 = 0.0015384615384615385*x_13;
+    const double _tmp430 = 4.733727810650887e-06*x_0 + 0.0007692307692307692*theta_2;
+    const double _tmp431 = (_tmp82*_tmp82*_tmp82)*(-3*symkin_sinr2(_tmp82) + 3*symkin_cosr2(_tmp82) + symkin_sinr1(_tmp82));
+    const double _tmp432 = 0.0015384615384615385*_tmp431 + _tmp94*(_tmp430 - _tmp429);
+    const double _tmp433 = (_tmp85*_tmp85*_tmp85)*(-3*symkin_sinr2(_tmp85) + 3*symkin_cosr2(_tmp85) + symkin_sinr1(_tmp85));
+    const double _tmp434 = _tmp7*(0.0015384615384615385*_tmp433 + _tmp91*(_tmp429 + _tmp430));
+    const double _tmp435 = -_tmp426*_tmp83 - _tmp427*across_2_1 - _tmp428*_tmp90 - _tmp434*_tmp83 + 0.5*_tmp432*_tmp86*p_0 + 0.0007692307692307692*_tmp95*_tmp96*p_0;
+    const double _tmp436 = _tmp426*_tmp90 + _tmp432*_tmp97 + _tmp434*_tmp90 - _tmp427*_tmp95 - _tmp428*_tmp83 + _tmp353*_tmp89*cos(_tmp81) - _tmp342*_tmp96*across_2_1;
+    const double _tmp437 = _tmp390*_tmp86;
+    const double _tmp438 = _tmp390*_tmp90;
+    const double _tmp439 = _tmp390*_tmp96;
+    const double _tmp440 = -0.5*_tmp431 - _tmp82*_tmp94;
+    const double _tmp441 = 0.5*_tmp433 + _tmp85*_tmp91;
+    const double _tmp442 = _tmp438*_tmp92 + _tmp439*_tmp95 + _tmp440*_tmp87 + _tmp7*cos(_tmp116) - _tmp437*across_2_1 + _tmp390*_tmp83*across_2_0 - _tmp441*_tmp7*_tmp83;
+    const double _tmp443 = -_tmp437*_tmp95 - _tmp438*across_2_0 - _tmp439*across_2_1 - _tmp397*_tmp88*cos(_tmp80) + 0.25*_tmp83*_tmp92*p_0 + 0.5*_tmp440*_tmp96*p_0 + 0.5*_tmp441*_tmp90*p_0;
+    const double _tmp444 = _tmp129 + _tmp255;
+    const double _tmp445 = _tmp143 + _tmp317;
+    const double _tmp446 = 0.07*_tmp133;
+    const double _tmp447 = _tmp126 + _tmp146 - _tmp125 - _tmp145;
+    const double _tmp448 = _tmp32*_tmp7;
+    const double _tmp449 = _tmp25*_tmp7;
+    const double _tmp450 = _tmp448*_tmp55 - _tmp21*_tmp449;
+    const double _tmp451 = _tmp21*_tmp448 + _tmp449*_tmp55;
+    const double _tmp452 = -_tmp451;
+    const double _tmp453 = _tmp21*_tmp29 + _tmp39*_tmp55;
+    const double _tmp454 = _tmp29*_tmp55 - _tmp21*_tmp39;
+    const double _tmp455 = -_tmp454;
+    const double _tmp456 = 6.666666666666667e-07*_tmp215*_tmp216;
+    const double _tmp457 = _tmp279*_tmp7;
+    const double _tmp458 = -_tmp269*_tmp457 + 0.5*_tmp258*_tmp262*p_0;
+    const double _tmp459 = _tmp262*_tmp457 + _tmp258*_tmp269*_tmp7;
+    const double _tmp460 = -_tmp459;
+    const double _tmp461 = -_tmp258*_tmp266 - _tmp276*_tmp279;
+    const double _tmp462 = _tmp266*_tmp279 - 0.5*_tmp258*_tmp275*p_0;
+    const double _tmp463 = -_tmp462;
+    const double _tmp464 = _tmp295*_tmp7;
+    const double _tmp465 = _tmp291*_tmp464 + _tmp302*_tmp312*_tmp7;
+    const double _tmp466 = _tmp312*_tmp464 - 0.5*_tmp291*_tmp302*p_0;
+    const double _tmp467 = -_tmp291*_tmp299 + 0.5*_tmp308*_tmp312*p_0;
+    const double _tmp468 = _tmp291*_tmp309 + _tmp299*_tmp312;
+    const double _tmp469 = _tmp233*_tmp7;
+    const double _tmp470 = _tmp250*_tmp469 - 0.5*_tmp229*_tmp240*p_0;
+    const double _tmp471 = _tmp229*_tmp469 + _tmp240*_tmp250*_tmp7;
+    const double _tmp472 = _tmp229*_tmp247 + _tmp237*_tmp250;
+    const double _tmp473 = -_tmp229*_tmp237 + 0.5*_tmp246*_tmp250*p_0;
+    const double _tmp474 = -_tmp450;
+    const double _tmp475 = -_tmp453;
+    const double _tmp476 = _tmp7*_tmp79;
+    const double _tmp477 = _tmp115*_tmp7;
+    const double _tmp478 = _tmp476*_tmp83 + _tmp477*_tmp90;
+    const double _tmp479 = _tmp477*_tmp83 - _tmp476*_tmp90;
+    const double _tmp480 = -_tmp79*_tmp87 + 0.5*_tmp115*_tmp96*p_0;
+    const double _tmp481 = _tmp115*_tmp87 + _tmp79*_tmp97;
+    const double _tmp482 = 3000000*_tmp185/_tmp215;
+    const double _tmp483 = 3000000*_tmp187;
+    const double _tmp484 = 0.0008333333333333334*_tmp185*_tmp216;
+    const double _tmp485 = 1.2380952380952381e-14*_tmp216;
+    const double _tmp486 = 0.1*((_tmp184) ? (480384.4614152614) : (458257.569495584))*((_tmp184) ? (2.0816659994661327e-06) : (2.1821789023599237e-06));
+    const double _tmp487 = 0.03 - _tmp131;
+    const double _tmp488 = 0.02 - _tmp131;
+    const double _tmp489 = sin(_tmp77);
+    const double _tmp490 = 1136094.674556213*_tmp187;
+    const double _tmp491 = _tmp490*x_10;
+    const double _tmp492 = cos(_tmp77);
+    const double _tmp493 = _tmp490*x_9;
+    const double _tmp494 = -_tmp154;
+    const double _tmp495 = -_tmp164;
+    const double _tmp496 = 0.02 - _tmp7;
+    const double _tmp497 = -0.02 - _tmp7;
+    const double _tmp498 = _tmp490*x_6;
+    const double _tmp499 = _tmp490*x_7;
+    const double _tmp500 = -_tmp222;
+    const double _tmp501 = _tmp282 - _tmp258*_tmp277;
+    const double _tmp502 = 0.04 - _tmp7;
+    out[0] = 1;
+    out[1] = 0;
+    out[2] = 0;
+    out[3] = 0;
+    out[4] = -_tmp2 - _tmp60 - 10.0*_tmp0 - _tmp15*_tmp17 + 1250.0*_tmp18*_tmp19;
+    out[5] = 0;
+    out[6] = 0;
+    out[7] = 0;
+    out[8] = -_tmp61 - _tmp63 - _tmp65 - _tmp67 + 10.0*_tmp1 - _tmp17*_tmp19 + 1250.0*_tmp21*_tmp56 - 1250.0*_tmp15*_tmp18;
+    out[9] = 0;
+    out[10] = 0;
+    out[11] = 0;
+    out[12] = 1;
+    out[13] = 0;
+    out[14] = 0;
+    out[15] = 0;
+    out[16] = -_tmp60 - _tmp61 - 25.0*_tmp1 - 1250.0*_tmp118 - 1250.0*_tmp76 - 1250.0*_tmp99 - _tmp102*_tmp114 - _tmp119*_tmp120 + 1250.0*_tmp121*_tmp122;
+    out[17] = 0;
+    out[18] = 0;
+    out[19] = 0;
+    out[20] = _tmp2 - _tmp63 - _tmp65 - _tmp67 + 1250.0*_tmp123 + 1250.0*_tmp124 + 1250.0*_tmp126 + 1250.0*_tmp127 - 25.0*_tmp0 - 1250.0*_tmp125 + _tmp114*_tmp119 - _tmp102*_tmp120;
+    out[21] = 0;
+    out[22] = 0;
+    out[23] = 0;
+    out[24] = -_tmp140*(_tmp129 + _tmp139) + 7.6923076923076925*x_9*(_tmp143 + _tmp148);
+    out[25] = -_tmp150 - _tmp151 + 0.8125*_tmp130 + 1.4218750000000002*_tmp133;
+    out[26] = _tmp151 - _tmp150 + 1.4218750000000002*_tmp130 - 0.8125*_tmp133;
+    out[27] = -20.3125;
+    out[28] = 0;
+    out[29] = 0;
+    out[30] = 0;
+    out[31] = 0;
+    out[32] = 0;
+    out[33] = 0;
+    out[34] = 0;
+    out[35] = 0;
+    out[36] = 0;
+    out[37] = 0;
+    out[38] = 0;
+    out[39] = 0;
+    out[40] = 0;
+    out[41] = 0;
+    out[42] = 0;
+    out[43] = 0;
+    out[44] = 0;
+    out[45] = 0;
+    out[46] = 0;
+    out[47] = 0;
+    out[48] = 20.3125*_tmp164*(-_tmp156*_tmp160 - _tmp157*_tmp159*across_1_1 + 0.125*_tmp157*_tmp161*_tmp24*p_0) - 20.3125*_tmp154*(-_tmp157*_tmp160 + 0.375*_tmp156*across_1_1*p_0 - _tmp156*_tmp161*_tmp24*_tmp42);
+    out[49] = -_tmp166*across_1_1 + 10.15625*_tmp157*_tmp158*p_0;
+    out[50] = _tmp158*_tmp166 + _tmp157*_tmp165*across_1_1;
+    out[51] = 0;
+    out[52] = -_tmp140*(-_tmp169*_tmp171 - _tmp168*_tmp7*across_2_1) + 7.6923076923076925*x_9*(-_tmp171*across_2_1 + 0.5*_tmp168*_tmp169*p_0);
+    out[53] = _tmp168*_tmp172 + _tmp170*_tmp173;
+    out[54] = _tmp170*_tmp172 - _tmp168*_tmp173;
+    out[55] = 0;
+    out[56] = 0;
+    out[57] = 0;
+    out[58] = 0;
+    out[59] = 0;
+    out[60] = 0;
+    out[61] = 0;
+    out[62] = 0;
+    out[63] = 0;
+    out[64] = 0;
+    out[65] = 0;
+    out[66] = 0;
+    out[67] = 0;
+    out[68] = 7.6923076923076925*x_6*(-_tmp175*_tmp176 - _tmp177*_tmp178) - 7.6923076923076925*x_7*(_tmp176*_tmp177 - _tmp175*_tmp178);
+    out[69] = 0;
+    out[70] = 0;
+    out[71] = 0;
+    out[72] = -_tmp140*(-_tmp181*_tmp183 - _tmp180*_tmp7*across_7_1) + 7.6923076923076925*x_9*(-_tmp183*across_7_1 + 0.5*_tmp180*_tmp181*p_0);
+    out[73] = 0;
+    out[74] = 0;
+    out[75] = 0;
+    out[76] = 0.5;
+    out[77] = 0;
+    out[78] = 0;
+    out[79] = 0;
+    out[80] = -_tmp189*_tmp28 - _tmp164*_tmp188*_tmp38;
+    out[81] = _tmp191;
+    out[82] = _tmp192;
+    out[83] = 0;
+    out[84] = -_tmp189*_tmp38 + 187500*_tmp164*_tmp185*_tmp186*_tmp28;
+    out[85] = -_tmp192;
+    out[86] = _tmp191;
+    out[87] = 0;
+    out[88] = 0.5;
+    out[89] = 0;
+    out[90] = 0;
+    out[91] = 0;
+    out[92] = -_tmp156*_tmp194 - _tmp157*_tmp164*_tmp193;
+    out[93] = _tmp195;
+    out[94] = _tmp196;
+    out[95] = 0;
+    out[96] = -_tmp157*_tmp194 + 562500*_tmp156*_tmp164*_tmp185*_tmp186;
+    out[97] = -_tmp196;
+    out[98] = _tmp195;
+    out[99] = 0;
+    out[100] = 0;
+    out[101] = 0;
+    out[102] = 0;
+    out[103] = 0;
+    out[104] = _tmp198*_tmp200 - _tmp201*_tmp202;
+    out[105] = _tmp203;
+    out[106] = _tmp204;
+    out[107] = 0;
+    out[108] = -_tmp198*_tmp202 - _tmp200*_tmp201;
+    out[109] = -_tmp204;
+    out[110] = _tmp203;
+    out[111] = 0;
+    out[112] = 0;
+    out[113] = 0;
+    out[114] = 0;
+    out[115] = 0;
+    out[116] = _tmp168*_tmp200 - _tmp170*_tmp202;
+    out[117] = _tmp205;
+    out[118] = _tmp206;
+    out[119] = 0;
+    out[120] = -_tmp168*_tmp202 - _tmp170*_tmp200;
+    out[121] = -_tmp206;
+    out[122] = _tmp205;
+    out[123] = 0;
+    out[124] = 0;
+    out[125] = 0;
+    out[126] = 0;
+    out[127] = 0;
+    out[128] = 0;
+    out[129] = 0;
+    out[130] = 0;
+    out[131] = 0;
+    out[132] = 0;
+    out[133] = 0;
+    out[134] = 0;
+    out[135] = 0;
+    out[136] = 0;
+    out[137] = 0;
+    out[138] = 0;
+    out[139] = 0;
+    out[140] = 0;
+    out[141] = 0;
+    out[142] = 0;
+    out[143] = 0;
+    out[144] = 0;
+    out[145] = 0;
+    out[146] = 0;
+    out[147] = 0;
+    out[148] = 0;
+    out[149] = 0;
+    out[150] = 0;
+    out[151] = 0;
+    out[152] = 0;
+    out[153] = 0;
+    out[154] = 0;
+    out[155] = 0;
+    out[156] = 0;
+    out[157] = 0;
+    out[158] = 0;
+    out[159] = 0;
+    out[160] = 0;
+    out[161] = 0;
+    out[162] = 0;
+    out[163] = 0;
+    out[164] = 0;
+    out[165] = 0;
+    out[166] = 0;
+    out[167] = 0;
+    out[168] = 0;
+    out[169] = 0;
+    out[170] = 0;
+    out[171] = 0;
+    out[172] = 0;
+    out[173] = 0;
+    out[174] = 0;
+    out[175] = 0;
+    out[176] = 0;
+    out[177] = 0;
+    out[178] = 0;
+    out[179] = 0;
+    out[180] = 0;
+    out[181] = 0;
+    out[182] = 0;
+    out[183] = 0;
+    out[184] = 0;
+    out[185] = 0;
+    out[186] = 0;
+    out[187] = 0;
+    out[188] = 0;
+    out[189] = 0;
+    out[190] = 0;
+    out[191] = 0;
+    out[192] = 0;
+    out[193] = 0;
+    out[194] = 0;
+    out[195] = 0;
+    out[196] = 0;
+    out[197] = 0;
+    out[198] = 0;
+    out[199] = 0;
+    out[200] = -_tmp208*_tmp209 - _tmp210*_tmp211;
+    out[201] = 0;
+    out[202] = 0;
+    out[203] = 0;
+    out[204] = _tmp209*_tmp210 - _tmp208*_tmp211;
+    out[205] = 0;
+    out[206] = 0;
+    out[207] = 0;
+    out[208] = 0;
+    out[209] = 0;
+    out[210] = 0;
+    out[211] = 0;
+    out[212] = -_tmp175*_tmp209 - _tmp177*_tmp211;
+    out[213] = 0;
+    out[214] = 0;
+    out[215] = 0;
+    out[216] = _tmp177*_tmp209 - _tmp175*_tmp211;
+    out[217] = 0;
+    out[218] = 0;
+    out[219] = 0;
+    out[220] = 0;
+    out[221] = 0;
+    out[222] = 0;
+    out[223] = 0;
+    out[224] = _tmp200*_tmp213 - _tmp202*_tmp214;
+    out[225] = 0;
+    out[226] = 0;
+    out[227] = 0;
+    out[228] = -_tmp200*_tmp214 - _tmp202*_tmp213;
+    out[229] = 0;
+    out[230] = 0;
+    out[231] = 0;
+    out[232] = 0;
+    out[233] = 0;
+    out[234] = 0;
+    out[235] = 0;
+    out[236] = _tmp180*_tmp200 - _tmp182*_tmp202;
+    out[237] = 0;
+    out[238] = 0;
+    out[239] = 0;
+    out[240] = -_tmp180*_tmp202 - _tmp182*_tmp200;
+    out[241] = 0;
+    out[242] = 0;
+    out[243] = 0;
+    out[244] = -0.04923076923076923*x_11 - 0.04923076923076923*x_8 - _tmp152*(_tmp319 + _tmp327) - _tmp153*(_tmp317 - _tmp332) + 0.378698224852071*x_6*(_tmp224 + _tmp254 + _tmp284 - _tmp221 + 0.06*_tmp218) + 0.378698224852071*x_9*(_tmp284 + _tmp289 + _tmp316 + 0.05*_tmp218 + 0.04*_tmp286) + 6.666666666666667e-07*_tmp215*_tmp216*omega_1_1;
+    out[245] = -_tmp337 + _tmp121*_tmp336 - _tmp335*_tmp69;
+    out[246] = _tmp339 + _tmp121*_tmp335 + _tmp336*_tmp69;
+    out[247] = _tmp70;
+    out[248] = 0;
+    out[249] = -_tmp152*(-_tmp357 - _tmp358 - _tmp359 - 0.006153846153846154*_tmp311 - 0.006153846153846154*_tmp315 - 0.0003076923076923077*_tmp218) - _tmp153*(_tmp357 - _tmp359 - _tmp360 - 0.006153846153846154*_tmp249 - 0.006153846153846154*_tmp253 - 0.0003692307692307692*_tmp218) + 0.378698224852071*x_6*(-_tmp340 - _tmp341 - _tmp355 - 0.006153846153846154*_tmp330 - 0.0003692307692307692*_tmp225 + 0.006153846153846154*_tmp248*_tmp250) + 0.378698224852071*x_9*(_tmp340 - _tmp355 - _tmp356 - 0.006153846153846154*_tmp325 - 0.0003076923076923077*_tmp225 + 0.006153846153846154*_tmp286*_tmp287 + 0.006153846153846154*_tmp310*_tmp312);
+    out[250] = -_tmp152*(-_tmp358 - 0.003076923076923077*_tmp311 - 0.003076923076923077*_tmp315 + _tmp312*_tmp371 - _tmp291*_tmp370) + 0.378698224852071*x_9*(-_tmp356 + 0.003076923076923077*_tmp324 + 0.006153846153846154*_tmp320 - 0.003076923076923077*_tmp325 + _tmp291*_tmp371 + _tmp312*_tmp370);
+    out[251] = _tmp162*(-_tmp341 - 0.003076923076923077*_tmp330 + _tmp229*_tmp382 + _tmp250*_tmp381 + 0.003076923076923077*_tmp248*_tmp250) - _tmp153*(-_tmp360 - 0.003076923076923077*_tmp249 - 0.003076923076923077*_tmp253 + _tmp250*_tmp382 - _tmp229*_tmp381);
+    out[252] = 0;
+    out[253] = 0;
+    out[254] = _tmp385 - _tmp383 + 0.02272189349112426*_tmp218 + 0.378698224852071*_tmp224 + 0.378698224852071*_tmp249 + 0.378698224852071*_tmp253 - 0.02726627218934911*_tmp220;
+    out[255] = -0.0378698224852071 + _tmp387 - _tmp386 - _tmp388 - _tmp389 + 0.02272189349112426*_tmp225 + 0.378698224852071*_tmp321 + 0.378698224852071*_tmp322 + 0.378698224852071*_tmp328 + 0.378698224852071*_tmp330 + 0.02726627218934911*_tmp223 - 0.378698224852071*_tmp248*_tmp250;
+    out[256] = -0.04923076923076923;
+    out[257] = _tmp383 + _tmp385 + 0.01893491124260355*_tmp218 + 0.378698224852071*_tmp289 + 0.378698224852071*_tmp311 + 0.378698224852071*_tmp315 + 0.01514792899408284*_tmp286;
+    out[258] = -0.0378698224852071 - _tmp386 - _tmp387 - _tmp388 - _tmp389 + 0.01893491124260355*_tmp225 + 0.01514792899408284*_tmp288 - 0.378698224852071*_tmp320 - 0.378698224852071*_tmp324 + 0.378698224852071*_tmp258*_tmp281 + 0.378698224852071*_tmp277*_tmp279 + 0.378698224852071*_tmp291*_tmp314;
+    out[259] = -0.04923076923076923;
+    out[260] = -_tmp152*_tmp399 - _tmp153*_tmp399 + 0.378698224852071*_tmp400*x_6 + 0.378698224852071*_tmp400*x_9;
+    out[261] = 0;
+    out[262] = -_tmp152*_tmp409 - _tmp153*_tmp409 + 0.378698224852071*_tmp408*x_6 + 0.378698224852071*_tmp408*x_9;
+    out[263] = -_tmp152*(_tmp312*_tmp416 - _tmp291*_tmp415) + 0.378698224852071*x_9*(_tmp291*_tmp416 + _tmp312*_tmp415);
+    out[264] = _tmp162*(_tmp229*_tmp423 + _tmp250*_tmp422) - _tmp153*(_tmp250*_tmp423 - _tmp229*_tmp422);
+    out[265] = 0;
+    out[266] = 0;
+    out[267] = -0.003076923076923077*_tmp118 - 0.003076923076923077*_tmp99 + _tmp115*_tmp436 + _tmp121*_tmp425 - _tmp424*_tmp69 - _tmp435*_tmp79;
+    out[268] = 0;
+    out[269] = 0;
+    out[270] = 0;
+    out[271] = 0;
+    out[272] = 0;
+    out[273] = 0;
+    out[274] = 0;
+    out[275] = 0;
+    out[276] = 0;
+    out[277] = 0;
+    out[278] = 0;
+    out[279] = -_tmp399;
+    out[280] = _tmp115*_tmp443 - _tmp442*_tmp79;
+    out[281] = 0;
+    out[282] = 0;
+    out[283] = 0;
+    out[284] = 0;
+    out[285] = 0;
+    out[286] = 0.003076923076923077*_tmp126 - 0.003076923076923077*_tmp125 + _tmp115*_tmp435 + _tmp121*_tmp424 + _tmp425*_tmp69 + _tmp436*_tmp79;
+    out[287] = 0;
+    out[288] = 0;
+    out[289] = 0;
+    out[290] = 0;
+    out[291] = 0;
+    out[292] = 0;
+    out[293] = 0;
+    out[294] = 0;
+    out[295] = 0;
+    out[296] = 0;
+    out[297] = 0;
+    out[298] = -_tmp400;
+    out[299] = _tmp115*_tmp442 + _tmp443*_tmp79;
+    out[300] = 0;
+    out[301] = 0;
+    out[302] = 0;
+    out[303] = 0;
+    out[304] = 0;
+    out[305] = 0.006153846153846154;
+    out[306] = 0;
+    out[307] = 0;
+    out[308] = 0;
+    out[309] = 0;
+    out[310] = 0;
+    out[311] = 0;
+    out[312] = 0;
+    out[313] = 0;
+    out[314] = 0;
+    out[315] = 0;
+    out[316] = 0;
+    out[317] = 0;
+    out[318] = 0;
+    out[319] = 0;
+    out[320] = 0;
+    out[321] = 0;
+    out[322] = 0;
+    out[323] = 0;
+    out[324] = -_tmp152*_tmp444 - _tmp153*_tmp444 + 0.378698224852071*_tmp445*x_6 + 0.378698224852071*_tmp445*x_9;
+    out[325] = _tmp138 + _tmp256 + _tmp446 + 0.04*_tmp130;
+    out[326] = -_tmp317 - _tmp447 + 0.07*_tmp130 - 0.04*_tmp133;
+    out[327] = -1;
+    out[328] = -_tmp129 - _tmp138 - _tmp76 + _tmp121*_tmp122;
+    out[329] = 0;
+    out[330] = 0;
+    out[331] = 0;
+    out[332] = _tmp123 + _tmp124 + _tmp127 + _tmp447 - _tmp141 - _tmp142 - _tmp66;
+    out[333] = 0;
+    out[334] = 0;
+    out[335] = 0;
+    out[336] = 1;
+    out[337] = 0;
+    out[338] = 0;
+    out[339] = 0;
+    out[340] = -_tmp152*_tmp450 - _tmp153*_tmp450 + 0.378698224852071*_tmp452*x_6 + 0.378698224852071*_tmp452*x_9;
+    out[341] = -_tmp152*_tmp451 - _tmp153*_tmp451 + 0.378698224852071*_tmp450*x_6 + 0.378698224852071*_tmp450*x_9;
+    out[342] = 0;
+    out[343] = -_tmp152*_tmp453 - _tmp153*_tmp453 + 0.378698224852071*_tmp454*x_6 + 0.378698224852071*_tmp454*x_9;
+    out[344] = -_tmp152*_tmp455 - _tmp153*_tmp455 + 0.378698224852071*_tmp453*x_6 + 0.378698224852071*_tmp453*x_9;
+    out[345] = _tmp456;
+    out[346] = 0;
+    out[347] = 0;
+    out[348] = 0;
+    out[349] = 0;
+    out[350] = 0;
+    out[351] = 0;
+    out[352] = -_tmp152*_tmp458 - _tmp153*_tmp458 + 0.378698224852071*_tmp459*x_6 + 0.378698224852071*_tmp459*x_9;
+    out[353] = -_tmp152*_tmp460 - _tmp153*_tmp460 + 0.378698224852071*_tmp458*x_6 + 0.378698224852071*_tmp458*x_9;
+    out[354] = 0;
+    out[355] = -_tmp152*_tmp461 - _tmp153*_tmp461 + 0.378698224852071*_tmp463*x_6 + 0.378698224852071*_tmp463*x_9;
+    out[356] = -_tmp152*_tmp462 - _tmp153*_tmp462 + 0.378698224852071*_tmp461*x_6 + 0.378698224852071*_tmp461*x_9;
+    out[357] = 0;
+    out[358] = -_tmp152*_tmp465 - 0.378698224852071*_tmp466*x_9;
+    out[359] = -_tmp152*_tmp466 + 0.378698224852071*_tmp465*x_9;
+    out[360] = 0;
+    out[361] = -_tmp152*_tmp467 + 0.378698224852071*_tmp468*x_9;
+    out[362] = _tmp152*_tmp468 + 0.378698224852071*_tmp467*x_9;
+    out[363] = 0;
+    out[364] = -_tmp153*_tmp471 - _tmp162*_tmp470;
+    out[365] = _tmp162*_tmp471 - _tmp153*_tmp470;
+    out[366] = 0;
+    out[367] = _tmp162*_tmp472 - _tmp153*_tmp473;
+    out[368] = _tmp153*_tmp472 + _tmp162*_tmp473;
+    out[369] = 0;
+    out[370] = 0;
+    out[371] = 0;
+    out[372] = 0;
+    out[373] = 0;
+    out[374] = 0;
+    out[375] = 0;
+    out[376] = 0;
+    out[377] = 0;
+    out[378] = 0;
+    out[379] = 0;
+    out[380] = 0;
+    out[381] = 0;
+    out[382] = _tmp474;
+    out[383] = _tmp452;
+    out[384] = 0;
+    out[385] = _tmp475;
+    out[386] = _tmp454;
+    out[387] = 0;
+    out[388] = _tmp478;
+    out[389] = _tmp479;
+    out[390] = 0;
+    out[391] = _tmp480;
+    out[392] = -_tmp481;
+    out[393] = 0;
+    out[394] = 0;
+    out[395] = 0;
+    out[396] = 0;
+    out[397] = 0;
+    out[398] = 0;
+    out[399] = 0;
+    out[400] = 0;
+    out[401] = 0;
+    out[402] = 0;
+    out[403] = 0;
+    out[404] = 0;
+    out[405] = 0;
+    out[406] = 0;
+    out[407] = 0;
+    out[408] = 0;
+    out[409] = 0;
+    out[410] = 0;
+    out[411] = 0;
+    out[412] = 0;
+    out[413] = 0;
+    out[414] = 0;
+    out[415] = 0;
+    out[416] = 0;
+    out[417] = 0;
+    out[418] = 0;
+    out[419] = 0;
+    out[420] = 0;
+    out[421] = 0;
+    out[422] = 0;
+    out[423] = 0;
+    out[424] = _tmp451;
+    out[425] = _tmp474;
+    out[426] = 0;
+    out[427] = _tmp455;
+    out[428] = _tmp475;
+    out[429] = 0;
+    out[430] = -_tmp479;
+    out[431] = _tmp478;
+    out[432] = 0;
+    out[433] = _tmp481;
+    out[434] = _tmp480;
+    out[435] = 0;
+    out[436] = 0;
+    out[437] = 0;
+    out[438] = 0;
+    out[439] = 0;
+    out[440] = 0;
+    out[441] = 0;
+    out[442] = 0;
+    out[443] = 0;
+    out[444] = 0;
+    out[445] = 0;
+    out[446] = 0;
+    out[447] = 0;
+    out[448] = 0;
+    out[449] = 0;
+    out[450] = 0;
+    out[451] = 0;
+    out[452] = 0;
+    out[453] = 0;
+    out[454] = 0;
+    out[455] = 0;
+    out[456] = 0;
+    out[457] = 0;
+    out[458] = 0;
+    out[459] = 0;
+    out[460] = 0;
+    out[461] = 0;
+    out[462] = 0;
+    out[463] = 0;
+    out[464] = 0;
+    out[465] = 0;
+    out[466] = 0;
+    out[467] = 0;
+    out[468] = 0;
+    out[469] = 0;
+    out[470] = 0;
+    out[471] = 0;
+    out[472] = 0;
+    out[473] = 0;
+    out[474] = 0;
+    out[475] = 0;
+    out[476] = 0;
+    out[477] = 0;
+    out[478] = 0;
+    out[479] = 0;
+    out[480] = 0;
+    out[481] = 0;
+    out[482] = 0;
+    out[483] = 0;
+    out[484] = 0;
+    out[485] = 0;
+    out[486] = 0;
+    out[487] = 0;
+    out[488] = 0;
+    out[489] = 0;
+    out[490] = 0;
+    out[491] = 0;
+    out[492] = 0;
+    out[493] = 0;
+    out[494] = 0;
+    out[495] = 0;
+    out[496] = 0;
+    out[497] = 0;
+    out[498] = 0;
+    out[499] = 0;
+    out[500] = 0;
+    out[501] = 0;
+    out[502] = 0;
+    out[503] = 0;
+    out[504] = 0;
+    out[505] = 0;
+    out[506] = 0;
+    out[507] = 0;
+    out[508] = _tmp482*(_tmp456*omega_1_1 - _tmp154*_tmp319 - _tmp164*(_tmp255 + _tmp338 + _tmp7));
+    out[509] = _tmp154*_tmp483;
+    out[510] = -_tmp164*_tmp483;
+    out[511] = _tmp484;
+    out[512] = _tmp485;
+    out[513] = _tmp486;
+    out[514] = _tmp216;
+    out[515] = 0;
+    out[516] = _tmp482*(_tmp152*(-_tmp148 + _tmp0*_tmp488 - _tmp1*_tmp487) + _tmp456*omega_2_1 - _tmp163*(_tmp139 - _tmp0*_tmp487 - _tmp1*_tmp488));
+    out[517] = _tmp489*_tmp491 + _tmp492*_tmp493;
+    out[518] = _tmp491*_tmp492 - _tmp489*_tmp493;
+    out[519] = _tmp484;
+    out[520] = _tmp485;
+    out[521] = _tmp486;
+    out[522] = _tmp216;
+    out[523] = 0;
+    out[524] = _tmp482*(_tmp456*omega_3_1 + _tmp494*(-_tmp329 - _tmp225*_tmp7) - _tmp495*(_tmp283 + _tmp7 + _tmp218*_tmp7));
+    out[525] = _tmp483*_tmp494;
+    out[526] = -_tmp483*_tmp495;
+    out[527] = _tmp484;
+    out[528] = _tmp485;
+    out[529] = _tmp486;
+    out[530] = _tmp216;
+    out[531] = 0;
+    out[532] = _tmp482*(_tmp163*(_tmp316 + _tmp288*_tmp7 - _tmp225*_tmp496) + _tmp456*omega_4_1 - _tmp152*(_tmp326 + _tmp286*_tmp7 - _tmp218*_tmp496));
+    out[533] = -_tmp218*_tmp493 - _tmp225*_tmp491;
+    out[534] = -_tmp218*_tmp491 + 1136094.674556213*_tmp185*_tmp186*_tmp225*x_9;
+    out[535] = _tmp484;
+    out[536] = _tmp485;
+    out[537] = _tmp486;
+    out[538] = _tmp216;
+    out[539] = 0;
+    out[540] = _tmp482*(_tmp162*(_tmp254 + _tmp220*_tmp7 - _tmp225*_tmp497) + _tmp456*omega_5_1 - _tmp153*(-_tmp331 - _tmp218*_tmp497 + 0.5*_tmp223*p_0));
+    out[541] = -_tmp218*_tmp498 - _tmp225*_tmp499;
+    out[542] = _tmp225*_tmp498 - _tmp218*_tmp499;
+    out[543] = _tmp484;
+    out[544] = _tmp485;
+    out[545] = _tmp486;
+    out[546] = _tmp216;
+    out[547] = 0;
+    out[548] = _tmp482*(_tmp153*(-_tmp332 - 0.008*_tmp1 + _tmp0*_tmp500) + _tmp456*omega_6_1 - _tmp162*(-_tmp221 - _tmp226 - _tmp338 - _tmp501 + 0.06*_tmp218 - 0.008*_tmp0 + _tmp222*_tmp223 + _tmp229*_tmp248 + _tmp250*_tmp252 - _tmp1*_tmp500));
+    out[549] = -_tmp0*_tmp498 + 1136094.674556213*_tmp1*_tmp185*_tmp186*x_7;
+    out[550] = -_tmp0*_tmp499 - _tmp1*_tmp498;
+    out[551] = _tmp484;
+    out[552] = _tmp485;
+    out[553] = _tmp486;
+    out[554] = _tmp216;
+    out[555] = 0;
+    out[556] = _tmp482*(_tmp152*(_tmp147 + _tmp327 + _tmp337 + 0.07*_tmp130 - _tmp133*_tmp502) + _tmp456*omega_7_1 - _tmp163*(-_tmp135 - _tmp136 - _tmp227 - _tmp339 - _tmp446 - _tmp501 + 0.05*_tmp218 + 0.04*_tmp286 + _tmp287*_tmp288 + _tmp291*_tmp310 + _tmp312*_tmp314 - _tmp130*_tmp502));
+    out[557] = _tmp130*_tmp491 + _tmp133*_tmp493;
+    out[558] = _tmp133*_tmp491 - _tmp130*_tmp493;
+    out[559] = _tmp484;
+    out[560] = _tmp485;
+    out[561] = _tmp486;
+    out[562] = _tmp216;
+    out[563] = 0;
 }
 
 /* deviation of the points at level paper (36 operations) */
@@ -10893,6 +12640,41 @@ static void sk_loaded_deviation(const double *theta, const double *delta, const 
         out[i] = q[SK_NPAR + i];
     }
 }
+
+/* The solution q holds (the parameters, the deviation, the variant solved and its x,
+   sk_reduced_pose) evaluated again for the implicit-function theorem (templates/c/
+   reduced_sens.c, reduced_report.c): r its variant at the parameters, st J's LU, the plates'
+   inputs and relation and the system's output there, vals the relation's values per half plate.
+   Returns 0, or 1 where J is singular. */
+static int sk_red_at_solution(const sk_mechanism *m, const double *theta, const double *q,
+                              sk_red *r, sk_red_state *st, double *vals)
+{
+    const sk_loaded *l = (const sk_loaded *)m->loaded;
+    const double *x = q + SK_NPAR + 2 * SK_NP + 1;
+    int n, i, k, c;
+    r->m = m;
+    r->l = l;
+    r->v = l->variants + (int)q[SK_NPAR + 2 * SK_NP];
+    r->params = q;
+    n = r->v->size;
+    if (n > 0 && sk_red_eval(r, x, theta, 1.0, st)) {
+        return 1;
+    }
+    if (n == 0) {
+        double rel[12 * SK_RS];
+        sk_red_inputs(r, x, theta, 1.0, st->xt, st->ins);
+        sk_red_relation(r, st->ins, rel, vals);
+        for (i = 0; i < 12 * r->v->plates_n; ++i) {
+            st->rel[i] = rel[i];
+        }
+    }
+    for (k = 0; k < r->v->plates_n; ++k) {
+        for (c = 0; c < 3; ++c) {
+            vals[3 * k + c] = st->rel[12 * k + c];
+        }
+    }
+    return 0;
+}
 static const double sk_loaded_scale1[13] = {0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.378698224852071, 0.378698224852071, 0.04923076923076923, 0.378698224852071, 0.378698224852071, 0.04923076923076923};
 static const double sk_loaded_scale2[20] = {0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.378698224852071, 0.378698224852071, 0.04923076923076923, 0.378698224852071, 0.378698224852071, 0.04923076923076923, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0};
 /* the loaded level: per variant (one, two half plates per plate) its routines, size, half
@@ -10927,38 +12709,19 @@ static int sk_reduced_rates(const void *mechanism, const double *theta, const do
                             const double *thu, double *dev)
 {
     const sk_mechanism *m = (const sk_mechanism *)mechanism;
-    const sk_loaded *l = (const sk_loaded *)m->loaded;
     const int v = (int)q[SK_NPAR + 2 * SK_NP];
     const sk_red_sens *rs = ((const sk_loaded_sens *)m->loaded_sens)->variants + v;
-    const double *x = q + SK_NPAR + 2 * SK_NP + 1;
     double s[SK_OUT], vals[3 * SK_RS], eps[6];
     double dth[SK_M * SK_NV + 1], din[5 * SK_RS * SK_NV + 1], dout[3 * SK_RS * SK_NV + 1];
     double dx[SK_RN * SK_NV + 1], col[SK_RN + 1], part[3 * SK_RS * 5 + 1];
     sk_red_state st;
     sk_red r;
     int n, ns, i, j, k, c, e;
-    r.m = m;
-    r.l = l;
-    r.v = l->variants + v;
-    r.params = q;
-    n = r.v->size;
-    ns = r.v->plates_n;
-    if (n > 0 && sk_red_eval(&r, x, theta, 1.0, &st)) {
+    if (sk_red_at_solution(m, theta, q, &r, &st, vals)) {
         return 1;
     }
-    if (n == 0) {
-        double rel[12 * SK_RS];
-        sk_red_inputs(&r, x, theta, 1.0, st.xt, st.ins);
-        sk_red_relation(&r, st.ins, rel, vals);
-        for (i = 0; i < 12 * ns; ++i) {
-            st.rel[i] = rel[i];
-        }
-    }
-    for (k = 0; k < ns; ++k) {
-        for (c = 0; c < 3; ++c) {
-            vals[3 * k + c] = st.rel[12 * k + c];
-        }
-    }
+    n = r.v->size;
+    ns = r.v->plates_n;
     rs->fn(st.xt, theta, vals, q, s);
     /* dtheta/dv of every hinge: the non-input ones' from the rigid closure, an input's own 1 */
     for (i = 0; i < SK_M * SK_NV; ++i) {
@@ -11059,6 +12822,266 @@ static int sk_reduced_rates(const void *mechanism, const double *theta, const do
 /* the loaded level's sensitivity routines, per variant, and where their blocks start */
 static const sk_loaded_sens sk_loaded_sens_tables = {
     {{sk_loaded_sens1, 0, 84, 96, 341, 376, 400, 414, 416}, {sk_loaded_sens2, 0, 133, 152, 642, 712, 750, 764, 766}}
+};
+
+/* One variant's report routine (x, theta, plates, params) and where its blocks start, with q
+   the report's variables (the inputs' compliant angles, a virtual load (Fx, Fy, M) at every
+   point) and k its quantities (the inputs' moments, every point's dx, dy, dphi; as many):
+   dR/dv (n x q), din/dv (3 n_s x q), y (k), dy/dx (k x n), dy/dv (k x q), dy/dout (k x 3 n_s),
+   then per plate (k0, lx, ly, e_a, e_s, t/l, E', allowable stress). */
+typedef struct {
+    sk_fn4 fn;
+    int dR_dv, din_dv, y, dy_dx, dy_dv, dy_dout, stress;
+} sk_red_rep;
+
+/* What the report is of: per variant its routine; the inputs, points (on the frame or not),
+   plates (with an allowable stress or not); metres per file unit; the scales L, F C's
+   conditioning is judged by. */
+typedef struct {
+    sk_red_rep variants[2];
+    int n_inputs, n_points, n_plates;
+    const int *frame, *limits;
+    double unit_scale, L, F;
+} sk_loaded_report;
+
+/* Sections per plate where the stress is sampled (symkin.physics.reported.SECTIONS), one RK4
+   step each; a point's compliance this ill-conditioned (1-norm, scaled) is singular. */
+#define SK_REP_SECTIONS 64
+#define SK_REP_SINGULAR 1e12
+
+/* psi'' of the plate's IVP (symkin.physics.beams): -f_Q (1 + (e_a - e_s) f_N). */
+static double sk_rep_bend(double psi, double lx, double ly, double d)
+{
+    const double c = cos(psi), s = sin(psi);
+    return -(ly * c - lx * s) * (1.0 + d * (lx * c + ly * s));
+}
+
+/* One plate's largest normal stress, its strain, safety factor (NaN without an allowable
+   stress) and where along the plate (0..1) into out[0..3], from row = (k0, lx, ly, e_a, e_s,
+   t/l, E', allowable): psi(0) = 0, psi'(0) = k0 by fixed-step RK4, the strain
+   |psi'| t/(2l) + |f_N| (t/l)^2/12 at every section, the parabola's vertex through the three
+   samples around an interior maximum (symkin.physics.reported.plate_stress). */
+static void sk_rep_plate(const double *row, int has_limit, double *out)
+{
+    const double lx = row[1], ly = row[2], d = row[3] - row[4], t = row[5];
+    const double h = 1.0 / SK_REP_SECTIONS;
+    double strain[SK_REP_SECTIONS + 1], psi = 0.0, om = row[0], value, where, stress;
+    int i, j = 0;
+    for (i = 0; i <= SK_REP_SECTIONS; ++i) {
+        strain[i] = fabs(om) * t / 2.0 + fabs(lx * cos(psi) + ly * sin(psi)) * t * t / 12.0;
+        if (strain[i] > strain[j]) {
+            j = i;                  /* the first largest, as numpy's argmax */
+        }
+        if (i < SK_REP_SECTIONS) {
+            const double a1 = om, b1 = sk_rep_bend(psi, lx, ly, d);
+            const double a2 = om + h / 2 * b1, b2 = sk_rep_bend(psi + h / 2 * a1, lx, ly, d);
+            const double a3 = om + h / 2 * b2, b3 = sk_rep_bend(psi + h / 2 * a2, lx, ly, d);
+            const double a4 = om + h * b3, b4 = sk_rep_bend(psi + h * a3, lx, ly, d);
+            psi += h / 6 * (a1 + 2 * a2 + 2 * a3 + a4);
+            om += h / 6 * (b1 + 2 * b2 + 2 * b3 + b4);
+        }
+    }
+    value = strain[j];
+    where = (double)j / SK_REP_SECTIONS;
+    if (j > 0 && j < SK_REP_SECTIONS) {
+        const double a = strain[j - 1], b = strain[j], c = strain[j + 1];
+        const double bend = a - 2 * b + c;
+        if (bend < 0) {
+            const double shift = (a - c) / (2 * bend);
+            value = b - (a - c) * shift / 4;
+            where = (j + shift) / SK_REP_SECTIONS;
+        }
+    }
+    stress = row[6] * value;
+    out[0] = stress;
+    out[1] = value;
+    out[2] = !has_limit ? NAN : stress > 0 ? row[7] / stress : HUGE_VAL;
+    out[3] = where;
+}
+
+/* The 1-norm of a 3 x 3 matrix. */
+static double sk_rep_norm1(const double *a)
+{
+    double best = 0.0;
+    int c;
+    for (c = 0; c < 3; ++c) {
+        const double s = fabs(a[c]) + fabs(a[3 + c]) + fabs(a[6 + c]);
+        best = s > best ? s : best;
+    }
+    return best;
+}
+
+/* K = C^-1 of a point's compliance C (3 x 3) into k, NaN where C is singular: its 1-norm
+   condition, scaled by L and F as reduced_reported.report scales it (there the 2-norm's),
+   above SK_REP_SINGULAR or not finite. */
+static void sk_rep_stiffness(const sk_loaded_report *rp, const double *c, double *k)
+{
+    const double w[3] = {rp->F / rp->L, rp->F / rp->L, rp->F}, u[3] = {1.0, 1.0, 1.0 / rp->L};
+    double lu[9], scaled[9], inv[9], col[3];
+    int piv[3], i, j;
+    for (i = 0; i < 9; ++i) {
+        lu[i] = c[i];
+        scaled[i] = c[i] * w[i / 3] * u[i % 3];
+        k[i] = NAN;
+    }
+    if (sk_lu(3, lu, piv)) {
+        return;
+    }
+    for (j = 0; j < 3; ++j) {
+        col[0] = col[1] = col[2] = 0.0;
+        col[j] = 1.0;
+        sk_lu_solve(3, lu, piv, col);
+        for (i = 0; i < 3; ++i) {
+            inv[3 * i + j] = col[i];
+        }
+    }
+    {
+        /* the scaled compliance's inverse: inv with rows over u, columns over w */
+        double sinv[9];
+        for (i = 0; i < 9; ++i) {
+            sinv[i] = inv[i] / (u[i / 3] * w[i % 3]);
+        }
+        if (!(sk_rep_norm1(scaled) * sk_rep_norm1(sinv) <= SK_REP_SINGULAR)) {
+            return;
+        }
+    }
+    for (i = 0; i < 9; ++i) {
+        k[i] = inv[i];
+    }
+}
+
+/* What the loaded level reports at its solution (q: the parameters, the deviation, the variant
+   solved and its x, sk_reduced_pose) into out: per input its moment (N m) and dM/dtheta
+   (N m/rad), per point its stiffness K (9, row-major; NaN on the frame or where singular), per
+   plate its stress (Pa), strain, safety factor and section. Returns 0, or 1 where J is
+   singular. */
+static int sk_reduced_report(const sk_mechanism *m, const sk_loaded_report *rp,
+                             const double *theta, const double *q, double *out)
+{
+    const sk_red_rep *rr = rp->variants + (int)q[SK_NPAR + 2 * SK_NP];
+    const int nin = rp->n_inputs, nq = nin + 3 * rp->n_points;
+    double s[SK_OUT], vals[3 * SK_RS], dout[3 * SK_RS], col[SK_RN + 1];
+    double rates[SK_RQ * SK_RQ];
+    sk_red_state st;
+    sk_red r;
+    int n, ns, i, j, k, c, e;
+    if (sk_red_at_solution(m, theta, q, &r, &st, vals)) {
+        return 1;
+    }
+    n = r.v->size;
+    ns = r.v->plates_n;
+    rr->fn(st.xt, theta, vals, q, s);
+    for (c = 0; c < nq; ++c) {
+        /* dout/dv at fixed x: the relation's partials . din/dv */
+        for (k = 0; k < ns; ++k) {
+            for (i = 0; i < 3; ++i) {
+                double sum = 0.0;
+                for (e = 0; e < 3; ++e) {
+                    sum += st.rel[12 * k + 3 + 3 * i + e] * s[rr->din_dv + (3 * k + e) * nq + c];
+                }
+                dout[3 * k + i] = sum;
+            }
+        }
+        /* dx/dv = -J^-1 (dR/dv + dR/dout dout/dv) with J's LU */
+        for (i = 0; i < n; ++i) {
+            const double *jo = st.sys + n + n * n + i * 3 * ns;
+            double sum = s[rr->dR_dv + i * nq + c];
+            for (e = 0; e < 3 * ns; ++e) {
+                sum += jo[e] * dout[e];
+            }
+            col[i] = -sum;
+        }
+        if (n > 0) {
+            sk_lu_solve(n, st.lu, st.piv, col);
+        }
+        /* dout/dv along the solution: + the partials . din/dx dx/dv */
+        for (k = 0; k < ns; ++k) {
+            for (i = 0; i < 3; ++i) {
+                double sum = 0.0;
+                for (e = 0; e < 3; ++e) {
+                    const double *dinx = st.ins + 5 * ns + (3 * k + e) * n;
+                    for (j = 0; j < n; ++j) {
+                        sum += st.rel[12 * k + 3 + 3 * i + e] * dinx[j] * col[j];
+                    }
+                }
+                dout[3 * k + i] += sum;
+            }
+        }
+        for (i = 0; i < nq; ++i) {
+            double sum = s[rr->dy_dv + i * nq + c];
+            for (e = 0; e < n; ++e) {
+                sum += s[rr->dy_dx + i * n + e] * col[e];
+            }
+            for (e = 0; e < 3 * ns; ++e) {
+                sum += s[rr->dy_dout + i * 3 * ns + e] * dout[e];
+            }
+            rates[i * nq + c] = sum;
+        }
+    }
+    for (i = 0; i < nin; ++i) {
+        out[2 * i] = s[rr->y + i] * rp->unit_scale;
+        out[2 * i + 1] = rates[i * nq + i] * rp->unit_scale;
+    }
+    out += 2 * nin;
+    for (k = 0; k < rp->n_points; ++k) {
+        double cm[9];
+        for (i = 0; i < 3; ++i) {
+            for (c = 0; c < 3; ++c) {
+                cm[3 * i + c] = rates[(nin + 3 * k + i) * nq + nin + 3 * k + c];
+            }
+        }
+        sk_rep_stiffness(rp, cm, out + 9 * k);
+        if (rp->frame[k]) {
+            sk_nan(out + 9 * k, 9);
+        }
+    }
+    out += 9 * rp->n_points;
+    for (k = 0; k < rp->n_plates; ++k) {
+        sk_rep_plate(s + rr->stress + 8 * k, rp->limits[k], out + 4 * k);
+    }
+    return 0;
+}
+
+/* <name>_loaded_report (the generated header documents it): the configuration solved at the
+   loaded level `level`, then sk_reduced_report; out NaN on any non-zero return. */
+static int sk_loaded_report_pose(const sk_mechanism *m, const sk_loaded_report *rp, int level,
+                                 const double *inputs, const double *params, double *out)
+{
+    double theta[SK_M], delta[SK_K + 1], constants[SK_NQ];
+    const double *q;
+    const sk_level *lv = sk_find_level(m, level);
+    const int size = 2 * rp->n_inputs + 9 * rp->n_points + 4 * rp->n_plates;
+    int status, i;
+    if (out == NULL) {
+        return 3;
+    }
+    if (params == NULL) {
+        params = m->defaults;
+    }
+    status = inputs == NULL || lv == NULL
+                 ? 3
+                 : sk_pose(m, lv, inputs, params, 0, theta, delta, constants, &q);
+    if (status == 0) {
+        status = sk_reduced_report(m, rp, theta, q, out);
+    }
+    for (i = 0; status == 0 && i < 2 * rp->n_inputs; ++i) {
+        if (!isfinite(out[i])) {
+            status = 2;             /* a non-finite moment is never a success */
+        }
+    }
+    if (status != 0) {
+        sk_nan(out, size);
+    }
+    return status;
+}
+static const int sk_report_frame[2] = {0};
+static const int sk_report_limits[8] = {0, 0, 0, 0, 0, 0, 0};
+/* what the loaded level reports: per variant its routine and where its blocks start; the
+   inputs, points, plates; metres per file unit, the scales L and F */
+static const sk_loaded_report sk_loaded_report_tables = {
+    {{sk_loaded_report1, 0, 48, 132, 136, 184, 200, 284}, {sk_loaded_report2, 0, 76, 244, 248, 324, 340, 508}},
+    1, 1, 7, sk_report_frame, sk_report_limits,
+    1.0, 0.13, 0.378698224852071
 };
 /* ---- stephenson_six_bar: its tables for the runtime ---- */
 
@@ -11163,4 +13186,24 @@ int stephenson_six_bar_sensitivity_batch(int n, const double *inputs, const doub
 {
     return sk_sensitivity_rows(&sk_mechanism_tables, n, inputs, params, level, values, deviation,
                                rigid, status);
+}
+
+const char *const stephenson_six_bar_report_input_names[STEPHENSON_SIX_BAR_N_REPORT_INPUTS > 0 ? STEPHENSON_SIX_BAR_N_REPORT_INPUTS : 1] = {
+    "O_A"
+};
+
+const char *const stephenson_six_bar_report_plate_names[STEPHENSON_SIX_BAR_N_REPORT_PLATES > 0 ? STEPHENSON_SIX_BAR_N_REPORT_PLATES : 1] = {
+    "O_A",
+    "C",
+    "O_B",
+    "E",
+    "B",
+    "A",
+    "D"
+};
+
+int stephenson_six_bar_loaded_report(const double *inputs, const double *params, double *out)
+{
+    return sk_loaded_report_pose(&sk_mechanism_tables, &sk_loaded_report_tables, 3, inputs,
+                                 params, out);
 }

@@ -3,7 +3,7 @@
  * Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
  * Points: D; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_res1 441, loaded_dev1 60, loaded_plates2 623, loaded_system2 3042, loaded_res2 944, loaded_dev2 143, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, loaded_sens1 1094, loaded_sens2 2741, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
+ * Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_res1 441, loaded_dev1 60, loaded_report1 949, loaded_plates2 623, loaded_system2 3042, loaded_res2 944, loaded_dev2 143, loaded_report2 2161, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, loaded_sens1 1094, loaded_sens2 2741, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
  */
 #ifndef SYMKIN_STEPHENSON_SIX_BAR_H
 #define SYMKIN_STEPHENSON_SIX_BAR_H
@@ -100,5 +100,24 @@ int stephenson_six_bar_sensitivity_full(const double *inputs, const double *para
 /* stephenson_six_bar_sensitivity_full for n rows of inputs (as stephenson_six_bar_evaluate_batch). */
 int stephenson_six_bar_sensitivity_batch(int n, const double *inputs, const double *params, int level,
                           double *values, double *deviation, double *rigid, int *status);
+
+/*
+ * What the `loaded` level reports beyond the deviations (docs/physics.md, "What loaded
+ * reports"), for one configuration (inputs and params as stephenson_six_bar_evaluate's) solved at
+ * `loaded`. out receives STEPHENSON_SIX_BAR_N_REPORT doubles: per input hinge in
+ * stephenson_six_bar_report_input_names order its moment (N m) and dM/dtheta (N m/rad); per point in
+ * stephenson_six_bar_point_names order its 3 x 3 stiffness with every input held (9 doubles, row-major,
+ * rows and columns x, y, rotation, in the file's length unit; NaN where the point is on the frame
+ * or its compliance is singular); per plate in stephenson_six_bar_report_plate_names order its largest
+ * normal stress (Pa), strain, safety factor (the allowable stress over the stress; NaN without
+ * one) and where along the plate (0..1) (4 doubles). Not the buckling factor (symkin eval's).
+ * Same return codes as stephenson_six_bar_evaluate at `loaded`; on any non-zero return out is NaN.
+ */
+#define STEPHENSON_SIX_BAR_N_REPORT_INPUTS 1
+#define STEPHENSON_SIX_BAR_N_REPORT_PLATES 7
+#define STEPHENSON_SIX_BAR_N_REPORT (2 * STEPHENSON_SIX_BAR_N_REPORT_INPUTS + 9 * STEPHENSON_SIX_BAR_N_POINTS + 4 * STEPHENSON_SIX_BAR_N_REPORT_PLATES)
+extern const char *const stephenson_six_bar_report_input_names[STEPHENSON_SIX_BAR_N_REPORT_INPUTS > 0 ? STEPHENSON_SIX_BAR_N_REPORT_INPUTS : 1];
+extern const char *const stephenson_six_bar_report_plate_names[STEPHENSON_SIX_BAR_N_REPORT_PLATES > 0 ? STEPHENSON_SIX_BAR_N_REPORT_PLATES : 1];
+int stephenson_six_bar_loaded_report(const double *inputs, const double *params, double *out);
 
 #endif /* SYMKIN_STEPHENSON_SIX_BAR_H */

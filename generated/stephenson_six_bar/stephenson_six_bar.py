@@ -2,7 +2,7 @@
 Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
 Points: D; levels: paper, first_order, exact, loaded.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_res1 441, loaded_dev1 60, loaded_plates2 623, loaded_system2 3042, loaded_res2 944, loaded_dev2 143, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, loaded_sens1 1094, loaded_sens2 2741, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
+Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_res1 441, loaded_dev1 60, loaded_report1 949, loaded_plates2 623, loaded_system2 3042, loaded_res2 944, loaded_dev2 143, loaded_report2 2161, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, loaded_sens1 1094, loaded_sens2 2741, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -11,6 +11,14 @@ False in ok. It also holds "angles": {"rigid": {H: a}, "compliant": {H: a}}, eve
 angle (radians, the rotation of links[1] relative to links[0] from the as-fabricated pose), and
 "links": {L: {"rigid": a, "compliant": a, "deviation": a}}, the rotation of every link in LINKS
 from the as-fabricated pose (rigid wrapped to (-pi, pi]; the deviation computed directly).
+
+At level "loaded" it also holds what the level reports beyond the deviations (docs/physics.md,
+"What loaded reports"): "inputs": {H: {"angle", "moment", "stiffness"}} of every input hinge
+(rad, N m, N m/rad), "stiffness": {P: K}, K of shape (3, 3, *broadcast_shape) the point's
+stiffness with every input held (rows and columns x, y, rotation; N/u, N, N u with u the file's
+length unit; NaN where the point is on the frame or its compliance is singular), "plates": {H:
+{"stress", "strain", "safety", "section"}} of every plate (Pa; safety NaN without an allowable
+stress; section where along the plate, 0..1). Not the buckling factor (symkin eval's).
 
 sensitivity(inputs, level, params) gives {P: {p: a}}: d(dx, dy)/dp of every point's deviation
 by every parameter p, each a of shape (2, *broadcast_shape); sensitivity_full(...) adds the
@@ -934,23 +942,20 @@ def _red_block(out, block, b):
     return numpy.stack(values, axis=-1).reshape(b, rows, cols)
 
 
-def _reduced_rates(mech, theta, p, q, thu, ok):
-    """dev (*shape, 2 n_P, n_v) of the loaded level at its solutions (q: the variant solved and
-    its x, templates/numpy/reduced.py); thu dtheta_u/dv (*shape, k, n_v), None without. J is
-    evaluated once more at the solution, then dx/dv = -J^-1 dR/dv at fixed x and
-    dD/dv = dD/dx dx/dv + dD/dtheta dtheta/dv + dD/dp + dD/dout dout/dv (reduced_sens.c)."""
+def _red_solutions(mech, theta, p, q, shape, good, routines):
+    """The configurations the loaded level solved (q: the variant and its x; shape: the
+    configurations', good: a flat mask of them),
+    variant by variant, evaluated again at their solution for the implicit-function theorem
+    (templates/numpy/reduced_sens.py, reduced_report.py): per variant solved (where, solver,
+    routines[variant]'s output, J (b, n, n), dR/d(plates) (b, n, 3 n_s), the half plates'
+    inputs, their x-Jacobian and the relation there)."""
     tb = mech.loaded
-    shape = ok.shape
-    npar, nv, m = len(mech.parameter_names), mech.n_variables, mech.n_theta
-    npt = 2 * len(mech.point_names)
-    dev = numpy.full((ok.size, npt, nv), numpy.nan)
     variant = numpy.broadcast_to(q.variant, shape).reshape(-1)
-    good = numpy.broadcast_to(ok, shape).reshape(-1)
 
     def flat(values, where):
         return [numpy.broadcast_to(v, shape).reshape(-1)[where].astype(float) for v in values]
 
-    for index, (variant_row, (fn, blocks)) in enumerate(zip(tb.variants, tb.sens)):
+    for index, (variant_row, fn) in enumerate(zip(tb.variants, routines)):
         where = numpy.flatnonzero(good & (variant == index))
         b = where.size
         if not b:
@@ -964,8 +969,28 @@ def _reduced_rates(mech, theta, p, q, thu, ok):
             args, ins, dins = solver._inputs(x, th, pb, 1.0)
             rel, vals = solver._relation(ins)
             sys = solver.system_fn(args, th, vals, pb)
-            s = fn(args, th, vals, pb)
+            out = fn(args, th, vals, pb)
         jo = _red_block(sys, (n + n * n, n, 3 * ns), b)
+        yield where, solver, out, jac, jo, ins, dins, rel
+
+
+def _reduced_rates(mech, theta, p, q, thu, ok):
+    """dev (*shape, 2 n_P, n_v) of the loaded level at its solutions (q: the variant solved and
+    its x, templates/numpy/reduced.py); thu dtheta_u/dv (*shape, k, n_v), None without. J is
+    evaluated once more at the solution, then dx/dv = -J^-1 dR/dv at fixed x and
+    dD/dv = dD/dx dx/dv + dD/dtheta dtheta/dv + dD/dp + dD/dout dout/dv (reduced_sens.c)."""
+    tb = mech.loaded
+    shape = ok.shape
+    npar, nv, m = len(mech.parameter_names), mech.n_variables, mech.n_theta
+    npt = 2 * len(mech.point_names)
+    dev = numpy.full((ok.size, npt, nv), numpy.nan)
+    good = numpy.broadcast_to(ok, shape).reshape(-1)
+    routines = [fn for fn, _ in tb.sens]
+    for where, solver, s, jac, jo, ins, dins, rel in _red_solutions(
+        mech, theta, p, q, shape, good, routines
+    ):
+        blocks = tb.sens[solver.count - 1][1]
+        b, n, ns = where.size, solver.size, solver.plates
         # dtheta/dv of every hinge: the non-input ones' from the rigid closure, an input's own 1
         dth = numpy.zeros((b, m, nv))
         if thu is not None:
@@ -1008,6 +1033,175 @@ def _reduced_rates(mech, theta, p, q, thu, ok):
             + numpy.matmul(_red_block(s, blocks["dD_dout"], b), dout)
         )
     return dev.reshape(shape + (npt, nv))
+
+
+#: Sections per plate where the stress is sampled (symkin.physics.reported.SECTIONS), one RK4
+#: step each (against the Python path's Taylor series: 5e-12 of the stress, tests/
+#: test_loaded_reported_codegen.py).
+_STRESS_SECTIONS = 64
+#: A point's scaled compliance this ill-conditioned is singular (reported.SINGULAR): NaN.
+_SINGULAR = 1e12
+
+
+def _evaluate_reported(mech, inputs, level, params, links, report=True):
+    """The module's evaluate() (runtime.py's _evaluate) with, at the loaded level and with
+    `report`, what it reports beyond the deviations: "inputs", "stiffness", "plates"
+    (_reduced_report)."""
+    arrays, p = _prepare(mech, inputs, level, params)
+    return _blocks(_reported_block, arrays, mech, level, p, links, report)
+
+
+def _reported_block(arrays, mech, level, p, links, report):
+    """evaluate() on one block of broadcast input arrays (runtime.py's _evaluate_block), the
+    report added at the loaded level."""
+    theta, delta, ok, q = _pose(mech, arrays, level, p, links)
+    result = _points(mech, theta, delta, ok, level, p, q, links)
+    if report and mech.levels[level].loaded:
+        result.update(_reduced_report(mech, theta, p, q, result["ok"]))
+    return result
+
+
+def _plate_stress(k0, lx, ly, ea, es, slender, modulus, limit, has_limit):
+    """Largest normal stress (Pa), its strain, the safety factor (NaN without an allowable
+    stress) and where along the plate (0..1), per configuration ((b,) arrays): the plate's IVP
+    psi'' = -f_Q (1 + (e_a - e_s) f_N), psi(0) = 0, psi'(0) = k0 (symkin.physics.beams) by
+    fixed-step RK4, the strain |psi'| t/(2l) + |f_N| (t/l)^2/12 at every section and the
+    parabola's vertex through the three samples around an interior maximum
+    (symkin.physics.reported.plate_stress)."""
+    d = ea - es
+
+    def rate(psi, om):
+        c, s = numpy.cos(psi), numpy.sin(psi)
+        return om, -(ly * c - lx * s) * (1 + d * (lx * c + ly * s))
+
+    n = _STRESS_SECTIONS
+    h = 1.0 / n
+    psi, om = numpy.zeros_like(k0), numpy.array(k0, dtype=float)
+    psis, oms = [psi], [om]
+    for _ in range(n):
+        a1, b1 = rate(psi, om)
+        a2, b2 = rate(psi + h / 2 * a1, om + h / 2 * b1)
+        a3, b3 = rate(psi + h / 2 * a2, om + h / 2 * b2)
+        a4, b4 = rate(psi + h * a3, om + h * b3)
+        psi = psi + h / 6 * (a1 + 2 * a2 + 2 * a3 + a4)
+        om = om + h / 6 * (b1 + 2 * b2 + 2 * b3 + b4)
+        psis.append(psi)
+        oms.append(om)
+    psi, om = numpy.array(psis), numpy.array(oms)  # (n + 1, b)
+    normal = lx * numpy.cos(psi) + ly * numpy.sin(psi)
+    strain = numpy.abs(om) * slender / 2 + numpy.abs(normal) * slender**2 / 12
+    b = k0.shape[0]
+    j = numpy.argmax(strain, axis=0)
+    cols = numpy.arange(b)
+    value = strain[j, cols]
+    where = j / n
+    inner = (j > 0) & (j < n)
+    ja, jc = numpy.clip(j - 1, 0, n), numpy.clip(j + 1, 0, n)
+    sa, sc = strain[ja, cols], strain[jc, cols]
+    bend = sa - 2 * value + sc
+    vertex = inner & (bend < 0)
+    with numpy.errstate(all="ignore"):
+        shift = (sa - sc) / (2 * bend)
+        value = numpy.where(vertex, value - (sa - sc) * shift / 4, value)
+        where = numpy.where(vertex, (j + shift) / n, where)
+        stress = modulus * value
+        safety = numpy.where(stress > 0, limit / stress, math.inf)
+    safety = numpy.where(has_limit, safety, numpy.nan)
+    return stress, value, safety, where
+
+
+def _reduced_report(mech, theta, p, q, ok):
+    """What the loaded level reports at its solutions (q: the variant solved and its x,
+    templates/numpy/reduced.py), NaN where not ok: {"inputs": {H: {"angle", "moment",
+    "stiffness"}}, "stiffness": {P: (3, 3, *shape)}, "plates": {H: {"stress", "strain",
+    "safety", "section"}}} (N m, N m/rad; the stiffness in the file's length unit; Pa)."""
+    tb = mech.loaded
+    rep = tb.report
+    shape = ok.shape
+    nin, npt, npl = len(rep.inputs), len(rep.points), len(rep.plates)
+    size = ok.size
+    ys = numpy.full((size, nin + 3 * npt), numpy.nan)
+    rates = numpy.full((size, nin + 3 * npt, nin + 3 * npt), numpy.nan)
+    stress = numpy.full((size, npl, 8), numpy.nan)
+    good = numpy.broadcast_to(ok, shape).reshape(-1)
+    routines = [fn for fn, _ in rep.routines]
+    for where, solver, out, jac, jo, _, dins, rel in _red_solutions(
+        mech, theta, p, q, shape, good, routines
+    ):
+        blocks = rep.routines[solver.count - 1][1]
+        b, n, ns = where.size, solver.size, solver.plates
+        # the plate relation's partials by (theta_c, p, f), block diagonal
+        part = numpy.zeros((b, 3 * ns, 3 * ns))
+        for k in range(ns):
+            for i in range(3):
+                for c in range(3):
+                    part[:, 3 * k + i, 3 * k + c] = rel[k][3 + 3 * i + c]
+        dinx = numpy.zeros((b, 3 * ns, n))
+        if ns and n:
+            dinx = numpy.array([_red_column(v, b) for v in dins]).reshape(3 * ns, n, b)
+            dinx = dinx.transpose(2, 0, 1)
+        dr_v = _red_block(out, blocks["dR_dv"], b)
+        din_v = _red_block(out, blocks["din_dv"], b)
+        dy_o = _red_block(out, blocks["dy_dout"], b)
+        by_o = numpy.matmul(dy_o, part)
+        total = _red_block(out, blocks["dy_dv"], b) + numpy.matmul(by_o, din_v)
+        if n:
+            rhs = dr_v + numpy.matmul(jo, numpy.matmul(part, din_v))
+            try:
+                dx = -numpy.linalg.solve(jac, rhs)
+            except numpy.linalg.LinAlgError:
+                # one singular J stops the stacked solve: each on its own
+                dx = numpy.full(rhs.shape, numpy.nan)
+                for c in range(b):
+                    try:
+                        dx[c] = -numpy.linalg.solve(jac[c], rhs[c])
+                    except numpy.linalg.LinAlgError:
+                        continue  # singular: NaN
+            dy_x = _red_block(out, blocks["dy_dx"], b) + numpy.matmul(by_o, dinx)
+            total = total + numpy.matmul(dy_x, dx)
+        ys[where] = _red_block(out, blocks["y"], b)[:, :, 0]
+        rates[where] = total
+        stress[where] = _red_block(out, blocks["stress"], b)
+    ok_flat = good
+    result = {"inputs": {}, "stiffness": {}, "plates": {}}
+    angles = {name: theta[i] for name, i in zip(mech.hinge_names, range(len(theta)))}
+
+    def shaped(v):
+        return numpy.where(ok_flat, v, numpy.nan).reshape(shape)
+
+    for k, name in enumerate(rep.inputs):
+        result["inputs"][name] = {
+            "angle": numpy.where(ok, numpy.broadcast_to(angles[name], shape), numpy.nan),
+            "moment": shaped(ys[:, k] * rep.unit_scale),
+            "stiffness": shaped(rates[:, k, k] * rep.unit_scale),
+        }
+    big_l, big_f = rep.L, rep.F
+    norm = numpy.array([big_f / big_l, big_f / big_l, big_f])[:, None] * numpy.array(
+        [1, 1, 1 / big_l]
+    )
+    for k, name in enumerate(rep.points):
+        rows = slice(nin + 3 * k, nin + 3 * k + 3)
+        c = rates[:, rows, rows]
+        live = ok_flat & numpy.all(numpy.isfinite(c), axis=(1, 2)) & (not rep.frame[k])
+        stiff = numpy.full((size, 3, 3), numpy.nan)
+        if live.any():
+            cond = numpy.linalg.cond(c[live] * norm)
+            keep = numpy.flatnonzero(live)[cond <= _SINGULAR]
+            if keep.size:
+                stiff[keep] = numpy.linalg.inv(c[keep])
+        result["stiffness"][name] = numpy.moveaxis(stiff, 0, -1).reshape((3, 3) + shape)
+    for k, name in enumerate(rep.plates):
+        row = [stress[:, k, c] for c in range(8)]
+        live = numpy.flatnonzero(ok_flat)
+        values = [numpy.full(size, numpy.nan) for _ in range(4)]
+        if live.size:
+            found = _plate_stress(*(v[live] for v in row), rep.limits[k])
+            for v, f in zip(values, found):
+                v[live] = f
+        result["plates"][name] = {
+            key: shaped(v) for key, v in zip(("stress", "strain", "safety", "section"), values)
+        }
+    return result
 
 
 def arck(x):
@@ -3615,6 +3809,582 @@ def _loaded_dev1(x, theta, plates, params):
     return [
         _tmp13*_tmp14 - _tmp1*across_1_0 - _tmp12*_tmp9 - _tmp5*across_2_0 - _tmp6*_tmp7 + _tmp15*_tmp16*p_0,
         _tmp1*_tmp6 + _tmp12*_tmp13 + _tmp14*_tmp9 + _tmp16*_tmp5 - _tmp7*across_1_0 + _tmp15*across_2_0*p_0,
+    ]
+
+
+def _loaded_report1(x, theta, plates, params):
+    """loaded (1 half plate(s) per plate), what it reports: dR/dv, din/dv, y, dy/dx, dy/dv, dy/dout (v: the inputs' angles and virtual loads at the points, y: the inputs' moments and the points' (dx, dy, dphi)), then per plate (k0, lx, ly, e_a, e_s, t/l, E', allowable) (949 operations)."""
+    x_0, x_1, x_2, x_3, x_4, x_5, x_6, x_7, x_8, x_9, x_10, x_11, _ = x
+    theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7 = theta
+    along_1_0, across_1_0, omega_1_0, along_2_0, across_2_0, omega_2_0, along_3_0, across_3_0, omega_3_0, along_4_0, across_4_0, omega_4_0, along_5_0, across_5_0, omega_5_0, along_6_0, across_6_0, omega_6_0, along_7_0, across_7_0, omega_7_0 = plates
+    p_0, = params
+    _tmp0 = numpy.sin(theta_1)
+    _tmp1 = numpy.cos(theta_1)
+    _tmp2 = 37.5*_tmp1
+    _tmp3 = 0.5*theta_6 + 0.003076923076923077*x_4
+    _tmp4 = _tmp3 + theta_1
+    _tmp5 = numpy.cos(_tmp4)
+    _tmp6 = 1250.0*p_0
+    _tmp7 = _tmp6*(along_6_0 + _tmp3**2*arck(_tmp3))
+    _tmp8 = numpy.sin(_tmp4)
+    _tmp9 = 0.5*theta_1
+    _tmp10 = arck(_tmp9)
+    _tmp11 = along_1_0 + 0.25*_tmp10*theta_1**2
+    _tmp12 = numpy.cos(_tmp9)
+    _tmp13 = _tmp12*p_0
+    _tmp14 = _tmp11*_tmp13
+    _tmp16 = numpy.sin(_tmp9)
+    _tmp15 = _tmp10*_tmp9 + 0.0625*theta_1**3*(-3*sinr2(_tmp9) + 3*cosr2(_tmp9) + sinr1(_tmp9))
+    _tmp17 = _tmp16*p_0
+    _tmp18 = _tmp15*_tmp17
+    _tmp19 = 625.0*_tmp14 + 1250.0*_tmp18 - 625.0*_tmp16*across_1_0*p_0
+    _tmp20 = 37.5*_tmp0
+    _tmp21 = _tmp13*across_1_0
+    _tmp22 = 625.0*_tmp21
+    _tmp23 = _tmp11*_tmp17
+    _tmp24 = 625.0*_tmp23
+    _tmp25 = theta_1 + theta_2
+    _tmp26 = numpy.sin(_tmp25)
+    _tmp27 = 0.006153846153846154*x_0
+    _tmp28 = numpy.cos(_tmp27)
+    _tmp29 = 0.003076923076923077*x_0
+    _tmp30 = numpy.sin(_tmp29)
+    _tmp31 = _tmp30*numpy.cos(_tmp29)
+    _tmp32 = 0.04*_tmp28 - 0.14*_tmp31
+    _tmp33 = _tmp26*_tmp32
+    _tmp34 = numpy.cos(_tmp25)
+    _tmp35 = -0.07*_tmp28 - 0.08*_tmp31
+    _tmp36 = _tmp29 + 0.5*theta_2
+    _tmp37 = 0.7853981633974483 + theta_1
+    _tmp38 = _tmp36 + _tmp37
+    _tmp39 = numpy.cos(_tmp38)
+    _tmp40 = _tmp39*p_0
+    _tmp41 = _tmp40*across_2_0
+    _tmp42 = 0.5*theta_7 + 0.003076923076923077*x_5
+    _tmp43 = _tmp25 + _tmp27
+    _tmp44 = _tmp42 + _tmp43
+    _tmp45 = numpy.cos(_tmp44)
+    _tmp46 = _tmp45*_tmp6
+    _tmp47 = arck(_tmp36)
+    _tmp48 = along_2_0 + _tmp47*_tmp36**2
+    _tmp49 = numpy.sin(_tmp38)
+    _tmp50 = _tmp49*p_0
+    _tmp51 = _tmp48*_tmp50
+    _tmp52 = along_7_0 + _tmp42**2*arck(_tmp42)
+    _tmp53 = numpy.sin(_tmp44)
+    _tmp54 = _tmp53*_tmp6
+    _tmp55 = _tmp50*across_2_0
+    _tmp56 = _tmp32*_tmp34
+    _tmp57 = _tmp26*_tmp35
+    _tmp58 = _tmp40*_tmp48
+    _tmp59 = _tmp13*_tmp15
+    _tmp60 = 0.5*p_0
+    _tmp61 = _tmp12*_tmp60
+    _tmp62 = _tmp16*_tmp60
+    _tmp63 = _tmp18 + _tmp11*_tmp61 - _tmp62*across_1_0
+    _tmp64 = numpy.sin(_tmp43)
+    _tmp65 = 0.3535533905932738*p_0
+    _tmp66 = _tmp64*_tmp65
+    _tmp67 = numpy.cos(_tmp43)
+    _tmp68 = _tmp65*_tmp67
+    _tmp69 = 0.03*_tmp0
+    _tmp70 = 0.02*_tmp1
+    _tmp71 = _tmp41 + _tmp51
+    _tmp72 = _tmp69 + _tmp70 + _tmp71
+    _tmp73 = _tmp66 + _tmp68 + _tmp72
+    _tmp74 = _tmp61*across_1_0
+    _tmp75 = _tmp11*_tmp62
+    _tmp76 = _tmp74 + _tmp75 - _tmp59
+    _tmp77 = _tmp55 - _tmp58
+    _tmp78 = 0.02*_tmp0
+    _tmp79 = 0.03*_tmp1
+    _tmp80 = _tmp78 - _tmp79
+    _tmp81 = _tmp66 + _tmp77 + _tmp80 - _tmp68
+    _tmp82 = 7.181553246425874*p_0
+    _tmp83 = _tmp64*_tmp82
+    _tmp84 = _tmp67*_tmp82
+    _tmp88 = numpy.less_equal(p_0, 0.008)
+    _tmp89 = _DTYPE(numpy.where(_tmp88, 4.333333333333334e-12, 4.761904761904762e-12))
+    _tmp90 = p_0**(-1.0)
+    _tmp91 = _tmp89*_tmp90
+    _tmp92 = 1500000*_tmp91
+    _tmp85 = 0.378698224852071*x_10
+    _tmp86 = 0.378698224852071*x_7
+    _tmp87 = _tmp85 + _tmp86
+    _tmp93 = _tmp87*_tmp92
+    _tmp94 = 0.378698224852071*x_6
+    _tmp95 = 0.378698224852071*x_9
+    _tmp96 = _tmp94 + _tmp95
+    _tmp97 = 3000000*_tmp89
+    _tmp98 = _tmp90*_tmp97
+    _tmp99 = -_tmp16*_tmp98
+    _tmp100 = _tmp12*_tmp98
+    _tmp101 = 1136094.674556213*_tmp91
+    _tmp102 = _tmp101*x_10
+    _tmp103 = _tmp101*x_9
+    _tmp104 = _tmp39*_tmp98
+    _tmp105 = _tmp49*_tmp98
+    _tmp106 = _tmp101*x_6
+    _tmp107 = _tmp101*x_7
+    _tmp108 = p_0**2
+    _tmp109 = _DTYPE(numpy.where(_tmp88, 230769230769.23077, 210000000000))
+    _tmp110 = _tmp1*_tmp60
+    _tmp111 = -_tmp110
+    _tmp112 = _tmp17*across_1_0
+    _tmp113 = 0.5*theta_3 + 0.003076923076923077*x_1
+    _tmp114 = arck(_tmp113)
+    _tmp115 = along_3_0 + _tmp114*_tmp113**2
+    _tmp116 = numpy.cos(_tmp113)
+    _tmp117 = _tmp116*p_0
+    _tmp118 = _tmp115*_tmp117
+    _tmp119 = numpy.sin(_tmp113)
+    _tmp120 = _tmp119*p_0
+    _tmp121 = _tmp120*across_3_0
+    _tmp122 = _tmp118 - _tmp121
+    _tmp123 = _tmp112 + _tmp122 - _tmp14
+    _tmp124 = _tmp111 + _tmp123
+    _tmp125 = theta_3 + 0.006153846153846154*x_1
+    _tmp126 = numpy.cos(_tmp125)
+    _tmp127 = _tmp125 + theta_5 + 0.006153846153846154*x_3
+    _tmp128 = numpy.sin(_tmp127)
+    _tmp129 = -0.03 + _tmp60
+    _tmp130 = numpy.cos(_tmp127)
+    _tmp131 = _tmp129*_tmp130
+    _tmp132 = numpy.sin(_tmp125)
+    _tmp133 = 0.02*_tmp132
+    _tmp134 = 0.5*theta_5 + 0.003076923076923077*x_3
+    _tmp135 = _tmp125 + _tmp134
+    _tmp136 = numpy.cos(_tmp135)
+    _tmp137 = _tmp136*p_0
+    _tmp138 = _tmp137*across_5_0
+    _tmp139 = arck(_tmp134)
+    _tmp140 = along_5_0 + _tmp139*_tmp134**2
+    _tmp141 = numpy.sin(_tmp135)
+    _tmp142 = _tmp141*p_0
+    _tmp143 = _tmp140*_tmp142
+    _tmp144 = _tmp138 + _tmp143 - _tmp133
+    _tmp145 = _tmp131 + _tmp144 + 0.06*_tmp126 - 0.072*_tmp128
+    _tmp146 = _tmp125 + theta_4 + 0.006153846153846154*x_2
+    _tmp147 = numpy.cos(_tmp146)
+    _tmp148 = -0.05 + _tmp60
+    _tmp149 = numpy.sin(_tmp146)
+    _tmp150 = _tmp148*_tmp149
+    _tmp151 = 0.5*theta_4 + 0.003076923076923077*x_2
+    _tmp152 = _tmp125 + _tmp151
+    _tmp153 = numpy.cos(_tmp152)
+    _tmp154 = _tmp153*p_0
+    _tmp155 = _tmp154*across_4_0
+    _tmp156 = arck(_tmp151)
+    _tmp157 = along_4_0 + _tmp156*_tmp151**2
+    _tmp158 = numpy.sin(_tmp152)
+    _tmp159 = _tmp158*p_0
+    _tmp160 = _tmp157*_tmp159
+    _tmp161 = _tmp133 + _tmp155 + _tmp160
+    _tmp162 = _tmp150 + _tmp161 + 0.05*_tmp126 + 0.04*_tmp147
+    _tmp163 = _tmp0*_tmp60
+    _tmp164 = _tmp21 + _tmp23
+    _tmp165 = _tmp163 + _tmp164
+    _tmp166 = _tmp147*_tmp148
+    _tmp167 = _tmp117*across_3_0
+    _tmp168 = _tmp115*_tmp120
+    _tmp169 = 0.02*_tmp126
+    _tmp170 = _tmp154*_tmp157
+    _tmp171 = _tmp159*across_4_0
+    _tmp172 = _tmp169 + _tmp170 - _tmp171
+    _tmp173 = 0.1 + _tmp166 + _tmp172 - _tmp167 - _tmp168 - 0.05*_tmp132 - 0.04*_tmp149
+    _tmp174 = _tmp128*_tmp129
+    _tmp175 = _tmp167 + _tmp168
+    _tmp176 = _tmp142*across_5_0
+    _tmp177 = _tmp169 + _tmp176 - _tmp136*_tmp140*p_0
+    _tmp178 = -0.1 + _tmp174 + _tmp175 + _tmp177 - _tmp21 - _tmp23 + 0.06*_tmp132 + 0.072*_tmp130
+    _tmp179 = numpy.sin(_tmp27)
+    _tmp180 = _tmp30**2
+    _tmp181 = 0.04*_tmp179 - 0.14*_tmp180
+    _tmp182 = -0.07*_tmp179 - 0.08*_tmp180
+    _tmp183 = _tmp164 + _tmp77
+    _tmp184 = _tmp14 - _tmp112
+    _tmp185 = 0.00012307692307692307*_tmp126
+    _tmp186 = 0.006153846153846154*_tmp174 + 0.0004430769230769231*_tmp130
+    _tmp187 = _tmp114*(1.893491124260355e-05*x_1 + 0.003076923076923077*theta_3) + 0.003076923076923077*_tmp113**3*(-3*sinr2(_tmp113) + 3*cosr2(_tmp113) + sinr1(_tmp113))
+    _tmp188 = 0.003076923076923077*_tmp167 + 0.003076923076923077*_tmp168 - _tmp116*_tmp187*p_0
+    _tmp189 = 0.00024615384615384614*_tmp149
+    _tmp190 = 0.00012307692307692307*_tmp132
+    _tmp191 = 0.00024615384615384614*_tmp147 + 0.006153846153846154*_tmp150
+    _tmp192 = 0.003076923076923077*_tmp118 + _tmp120*_tmp187 - 0.003076923076923077*_tmp119*across_3_0*p_0
+    _tmp193 = 0.006153846153846154*_tmp131 - 0.0004430769230769231*_tmp128
+    _tmp194 = _tmp156*(1.893491124260355e-05*x_2 + 0.003076923076923077*theta_4) + 0.003076923076923077*_tmp151**3*(-3*sinr2(_tmp151) + 3*cosr2(_tmp151) + sinr1(_tmp151))
+    _tmp195 = _tmp139*(1.893491124260355e-05*x_3 + 0.003076923076923077*theta_5) + 0.003076923076923077*_tmp134**3*(-3*sinr2(_tmp134) + 3*cosr2(_tmp134) + sinr1(_tmp134))
+    _tmp196 = 0.00757396449704142*_tmp132
+    _tmp197 = 0.1893491124260355*p_0
+    _tmp198 = 0.378698224852071*_tmp112 + 0.378698224852071*_tmp118 - 0.378698224852071*_tmp121 - 0.378698224852071*_tmp14 - _tmp1*_tmp197
+    _tmp199 = _tmp0*_tmp197
+    _tmp200 = 0.378698224852071*_tmp21
+    _tmp201 = 0.00757396449704142*_tmp126
+    _tmp202 = 0.378698224852071*_tmp23
+    _tmp203 = 0.00024615384615384614*_tmp28 - 0.0008615384615384615*_tmp31
+    _tmp204 = -0.0004923076923076923*_tmp31 - 0.0004307692307692308*_tmp28
+    _tmp205 = _tmp47*(1.893491124260355e-05*x_0 + 0.003076923076923077*theta_2) + 0.003076923076923077*_tmp36**3*(-3*sinr2(_tmp36) + 3*cosr2(_tmp36) + sinr1(_tmp36))
+    _tmp206 = _tmp110 + _tmp63
+    _tmp207 = _tmp163 + _tmp76
+    _tmp208 = 0.07*_tmp67
+    _tmp209 = _tmp58 + _tmp79 - _tmp55 - _tmp78
+    _tmp210 = 3.3333333333333335e-07*_tmp108*_tmp109
+    _tmp211 = -_tmp17
+    _tmp212 = _tmp97/_tmp108
+    _tmp213 = 0.0008333333333333334*_tmp109*_tmp89
+    _tmp214 = 1.2380952380952381e-14*_tmp109
+    _tmp215 = 0.1*_DTYPE(numpy.where(_tmp88, 480384.4614152614, 458257.569495584))*_DTYPE(numpy.where(_tmp88, 2.0816659994661327e-06, 2.1821789023599237e-06))
+    _tmp216 = 0.03 - _tmp65
+    _tmp217 = 0.02 - _tmp65
+    _tmp218 = numpy.sin(_tmp37)
+    _tmp219 = numpy.cos(_tmp37)
+    _tmp220 = -_tmp87
+    _tmp221 = -_tmp96
+    _tmp222 = 0.02 - _tmp60
+    _tmp223 = -0.02 - _tmp60
+    _tmp224 = -_tmp129
+    _tmp225 = 0.04 - _tmp60
+    return [
+        1,
+        0,
+        0,
+        0,
+        -_tmp19 - _tmp2 - 10.0*_tmp0 - _tmp5*_tmp7 + 1250.0*_tmp8*across_6_0*p_0,
+        0,
+        0,
+        0,
+        -_tmp20 - _tmp22 - _tmp24 + 10.0*_tmp1 - _tmp7*_tmp8 - _tmp5*_tmp6*across_6_0 + 1250.0*_tmp12*_tmp15*p_0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        -_tmp19 - _tmp20 - 25.0*_tmp1 - 1250.0*_tmp33 - 1250.0*_tmp41 - 1250.0*_tmp51 - _tmp46*across_7_0 - _tmp52*_tmp54 + 1250.0*_tmp34*_tmp35,
+        0,
+        0,
+        0,
+        _tmp2 - _tmp22 - _tmp24 + 1250.0*_tmp56 + 1250.0*_tmp57 + 1250.0*_tmp58 + 1250.0*_tmp59 - 25.0*_tmp0 - 1250.0*_tmp55 + _tmp46*_tmp52 - _tmp54*across_7_0,
+        0,
+        0,
+        0,
+        7.6923076923076925*x_9*(_tmp76 + _tmp81) - 7.6923076923076925*x_10*(_tmp63 + _tmp73),
+        -_tmp83 - _tmp84 + 0.8125*_tmp64 + 1.4218750000000002*_tmp67,
+        _tmp84 - _tmp83 + 1.4218750000000002*_tmp64 - 0.8125*_tmp67,
+        -20.3125,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        -_tmp16*_tmp93 - _tmp12*_tmp92*_tmp96,
+        _tmp99,
+        _tmp100,
+        0,
+        -_tmp12*_tmp93 + 1500000*_tmp16*_tmp89*_tmp90*_tmp96,
+        -_tmp100,
+        _tmp99,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp102*_tmp39 - _tmp103*_tmp49,
+        _tmp104,
+        _tmp105,
+        0,
+        -_tmp102*_tmp49 - _tmp103*_tmp39,
+        -_tmp105,
+        _tmp104,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp106*_tmp5 - _tmp107*_tmp8,
+        0,
+        0,
+        0,
+        _tmp106*_tmp8 - _tmp107*_tmp5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp102*_tmp45 - _tmp103*_tmp53,
+        0,
+        0,
+        0,
+        -_tmp102*_tmp53 - _tmp103*_tmp45,
+        0,
+        0,
+        0,
+        -0.04923076923076923*x_11 - 0.04923076923076923*x_8 - _tmp85*(_tmp165 + _tmp173) - _tmp86*(_tmp163 - _tmp178) + 0.378698224852071*x_6*(_tmp124 + _tmp145) + 0.378698224852071*x_9*(_tmp124 + _tmp162) + 3.3333333333333335e-07*_tmp108*_tmp109*omega_1_0,
+        -_tmp183 + _tmp182*_tmp34 - _tmp181*_tmp26,
+        _tmp184 + _tmp71 + _tmp181*_tmp34 + _tmp182*_tmp26,
+        _tmp27,
+        0,
+        -_tmp85*(-_tmp190 - _tmp191 - _tmp192 - 0.006153846153846154*_tmp155 - 0.006153846153846154*_tmp160 - 0.0003076923076923077*_tmp126) - _tmp86*(_tmp190 - _tmp192 - _tmp193 - 0.006153846153846154*_tmp138 - 0.006153846153846154*_tmp143 - 0.0003692307692307692*_tmp126) + 0.378698224852071*x_6*(-_tmp185 - _tmp186 - _tmp188 - 0.006153846153846154*_tmp176 - 0.0003692307692307692*_tmp132 + 0.006153846153846154*_tmp136*_tmp140*p_0) + 0.378698224852071*x_9*(_tmp185 - _tmp188 - _tmp189 - 0.006153846153846154*_tmp171 - 0.0003076923076923077*_tmp132 + 0.006153846153846154*_tmp147*_tmp148 + 0.006153846153846154*_tmp153*_tmp157*p_0),
+        -_tmp85*(-_tmp191 - 0.003076923076923077*_tmp155 - 0.003076923076923077*_tmp160 + _tmp153*_tmp194*p_0) + 0.378698224852071*x_9*(-_tmp189 + 0.003076923076923077*_tmp170 + 0.006153846153846154*_tmp166 - 0.003076923076923077*_tmp171 + _tmp159*_tmp194),
+        _tmp94*(-_tmp186 - 0.003076923076923077*_tmp176 + _tmp141*_tmp195*p_0 + 0.003076923076923077*_tmp136*_tmp140*p_0) - _tmp86*(-_tmp193 - 0.003076923076923077*_tmp138 - 0.003076923076923077*_tmp143 + _tmp136*_tmp195*p_0),
+        0,
+        0,
+        _tmp198 - _tmp196 + 0.02272189349112426*_tmp126 + 0.378698224852071*_tmp131 + 0.378698224852071*_tmp138 + 0.378698224852071*_tmp143 - 0.02726627218934911*_tmp128,
+        -0.0378698224852071 + _tmp201 - _tmp199 - _tmp200 - _tmp202 + 0.02272189349112426*_tmp132 + 0.378698224852071*_tmp167 + 0.378698224852071*_tmp168 + 0.378698224852071*_tmp174 + 0.378698224852071*_tmp176 + 0.02726627218934911*_tmp130 - 0.378698224852071*_tmp137*_tmp140,
+        -0.04923076923076923,
+        _tmp196 + _tmp198 + 0.01893491124260355*_tmp126 + 0.378698224852071*_tmp150 + 0.378698224852071*_tmp155 + 0.378698224852071*_tmp160 + 0.01514792899408284*_tmp147,
+        -0.0378698224852071 - _tmp199 - _tmp200 - _tmp201 - _tmp202 + 0.01893491124260355*_tmp132 + 0.01514792899408284*_tmp149 - 0.378698224852071*_tmp166 - 0.378698224852071*_tmp170 + 0.378698224852071*_tmp115*_tmp119*p_0 + 0.378698224852071*_tmp116*across_3_0*p_0 + 0.378698224852071*_tmp158*across_4_0*p_0,
+        -0.04923076923076923,
+        -0.003076923076923077*_tmp41 - 0.003076923076923077*_tmp51 + _tmp204*_tmp34 - _tmp203*_tmp26 + _tmp205*_tmp39*p_0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.003076923076923077*_tmp58 - 0.003076923076923077*_tmp55 + _tmp203*_tmp34 + _tmp204*_tmp26 + _tmp205*_tmp50,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.006153846153846154,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp206*_tmp85 - _tmp206*_tmp86 + 0.378698224852071*_tmp207*x_6 + 0.378698224852071*_tmp207*x_9,
+        _tmp111 + _tmp208 + _tmp72 + 0.04*_tmp64,
+        -_tmp163 - _tmp209 + 0.07*_tmp64 - 0.04*_tmp67,
+        -1,
+        -_tmp33 - _tmp63 - _tmp72 + _tmp34*_tmp35,
+        0,
+        0,
+        0,
+        _tmp209 + _tmp56 + _tmp57 + _tmp59 - _tmp74 - _tmp75,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        -_tmp13*_tmp94 - _tmp13*_tmp95 - _tmp17*_tmp85 - _tmp17*_tmp86,
+        -_tmp13*_tmp85 - _tmp13*_tmp86 + 0.378698224852071*_tmp16*p_0*x_6 + 0.378698224852071*_tmp16*p_0*x_9,
+        _tmp210,
+        0,
+        0,
+        0,
+        _tmp117*_tmp94 + _tmp117*_tmp95 + _tmp120*_tmp85 + _tmp120*_tmp86,
+        _tmp117*_tmp85 + _tmp117*_tmp86 - _tmp120*_tmp94 - _tmp120*_tmp95,
+        0,
+        -_tmp154*_tmp85 + 0.378698224852071*_tmp158*p_0*x_9,
+        _tmp154*_tmp95 + _tmp159*_tmp85,
+        0,
+        _tmp142*_tmp94 - _tmp137*_tmp86,
+        _tmp137*_tmp94 + _tmp142*_tmp86,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp211,
+        -_tmp13,
+        0,
+        _tmp40,
+        -_tmp50,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp13,
+        _tmp211,
+        0,
+        _tmp50,
+        _tmp40,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp212*(_tmp210*omega_1_0 - _tmp165*_tmp87 - _tmp96*(_tmp110 + _tmp184 + _tmp60)),
+        _tmp87*_tmp98,
+        -_tmp96*_tmp98,
+        _tmp213,
+        _tmp214,
+        _tmp215,
+        _tmp109,
+        0,
+        _tmp212*(_tmp210*omega_2_0 + _tmp85*(-_tmp81 + _tmp0*_tmp217 - _tmp1*_tmp216) - _tmp95*(_tmp73 - _tmp0*_tmp216 - _tmp1*_tmp217)),
+        _tmp102*_tmp218 + _tmp103*_tmp219,
+        _tmp102*_tmp219 - _tmp103*_tmp218,
+        _tmp213,
+        _tmp214,
+        _tmp215,
+        _tmp109,
+        0,
+        _tmp212*(_tmp210*omega_3_0 + _tmp220*(-_tmp175 - _tmp132*_tmp60) - _tmp221*(_tmp122 + _tmp60 + _tmp126*_tmp60)),
+        _tmp220*_tmp98,
+        -_tmp221*_tmp98,
+        _tmp213,
+        _tmp214,
+        _tmp215,
+        _tmp109,
+        0,
+        _tmp212*(_tmp210*omega_4_0 + _tmp95*(_tmp161 + _tmp149*_tmp60 - _tmp132*_tmp222) - _tmp85*(_tmp172 + _tmp147*_tmp60 - _tmp126*_tmp222)),
+        -_tmp102*_tmp132 - _tmp103*_tmp126,
+        -_tmp102*_tmp126 + 1136094.674556213*_tmp132*_tmp89*_tmp90*x_9,
+        _tmp213,
+        _tmp214,
+        _tmp215,
+        _tmp109,
+        0,
+        _tmp212*(_tmp210*omega_5_0 + _tmp94*(_tmp144 + _tmp128*_tmp60 - _tmp132*_tmp223) - _tmp86*(-_tmp177 - _tmp126*_tmp223 + 0.5*_tmp130*p_0)),
+        -_tmp106*_tmp126 - _tmp107*_tmp132,
+        _tmp106*_tmp132 - _tmp107*_tmp126,
+        _tmp213,
+        _tmp214,
+        _tmp215,
+        _tmp109,
+        0,
+        _tmp212*(_tmp210*omega_6_0 + _tmp86*(-_tmp178 - 0.008*_tmp1 + _tmp0*_tmp224) - _tmp94*(_tmp123 + _tmp145 - 0.008*_tmp0 - _tmp1*_tmp224)),
+        -_tmp0*_tmp106 + 1136094.674556213*_tmp1*_tmp89*_tmp90*x_7,
+        -_tmp0*_tmp107 - _tmp1*_tmp106,
+        _tmp213,
+        _tmp214,
+        _tmp215,
+        _tmp109,
+        0,
+        _tmp212*(_tmp210*omega_7_0 + _tmp85*(_tmp173 + _tmp183 + _tmp80 + 0.07*_tmp64 - _tmp225*_tmp67) - _tmp95*(_tmp123 + _tmp162 - _tmp208 - _tmp41 - _tmp51 - _tmp69 - _tmp70 - _tmp225*_tmp64)),
+        _tmp102*_tmp64 + _tmp103*_tmp67,
+        _tmp102*_tmp67 - _tmp103*_tmp64,
+        _tmp213,
+        _tmp214,
+        _tmp215,
+        _tmp109,
+        0,
     ]
 
 
@@ -6889,6 +7659,1083 @@ def _loaded_dev2(x, theta, plates, params):
     return [
         _tmp39*_tmp40 + _tmp6*_tmp7 - _tmp1*_tmp5 - _tmp22*_tmp9 - _tmp23*_tmp24 - _tmp26*_tmp38,
         _tmp1*_tmp7 + _tmp24*_tmp9 + _tmp26*_tmp40 + _tmp38*_tmp39 + _tmp5*_tmp6 - _tmp22*_tmp23,
+    ]
+
+
+def _loaded_report2(x, theta, plates, params):
+    """loaded (2 half plate(s) per plate), what it reports: dR/dv, din/dv, y, dy/dx, dy/dv, dy/dout (v: the inputs' angles and virtual loads at the points, y: the inputs' moments and the points' (dx, dy, dphi)), then per plate (k0, lx, ly, e_a, e_s, t/l, E', allowable) (2161 operations)."""
+    x_0, x_1, x_2, x_3, x_4, x_5, x_6, x_7, x_8, x_9, x_10, x_11, x_12, x_13, x_14, x_15, x_16, x_17, x_18, _ = x
+    theta_1, theta_2, theta_3, theta_4, theta_5, theta_6, theta_7 = theta
+    along_1_0, across_1_0, _, along_1_1, across_1_1, omega_1_1, along_2_0, across_2_0, _, along_2_1, across_2_1, omega_2_1, along_3_0, across_3_0, _, along_3_1, across_3_1, omega_3_1, along_4_0, across_4_0, _, along_4_1, across_4_1, omega_4_1, along_5_0, across_5_0, _, along_5_1, across_5_1, omega_5_1, along_6_0, across_6_0, _, along_6_1, across_6_1, omega_6_1, along_7_0, across_7_0, _, along_7_1, across_7_1, omega_7_1 = plates
+    p_0, = params
+    _tmp0 = numpy.sin(theta_1)
+    _tmp1 = numpy.cos(theta_1)
+    _tmp2 = 37.5*_tmp1
+    _tmp3 = 0.5*x_17
+    _tmp4 = 0.25*theta_6 + 0.0015384615384615385*x_4
+    _tmp5 = _tmp4 - _tmp3
+    _tmp6 = numpy.sin(_tmp5)
+    _tmp7 = 0.5*p_0
+    _tmp8 = _tmp7*across_6_0
+    _tmp9 = _tmp3 + _tmp4
+    _tmp10 = _tmp7*numpy.sin(_tmp9)
+    _tmp11 = numpy.cos(_tmp5)
+    _tmp12 = _tmp7*(along_6_0 + _tmp9**2*arck(_tmp9))
+    _tmp13 = along_6_1 + _tmp5**2*arck(_tmp5)
+    _tmp14 = _tmp7*numpy.cos(_tmp9)
+    _tmp15 = _tmp11*_tmp12 + _tmp13*_tmp14 + _tmp6*_tmp8 + _tmp7*(-2*numpy.sin(_tmp3)**2 + 2*numpy.sin(_tmp4)**2) - _tmp10*across_6_1
+    _tmp16 = theta_1 + 0.5*theta_6 + 0.003076923076923077*x_4
+    _tmp17 = 1250.0*numpy.cos(_tmp16)
+    _tmp18 = numpy.sin(_tmp16)
+    _tmp19 = _tmp10*_tmp13 + _tmp11*_tmp8 + _tmp14*across_6_1 + _tmp7*numpy.sin(1.0*x_17) - _tmp12*_tmp6
+    _tmp20 = 0.5*theta_1
+    _tmp21 = numpy.cos(_tmp20)
+    _tmp22 = 0.25*theta_1
+    _tmp23 = 0.5*x_12
+    _tmp24 = _tmp22 - _tmp23
+    _tmp25 = numpy.sin(_tmp24)
+    _tmp26 = _tmp7*across_1_0
+    _tmp27 = _tmp22 + _tmp23
+    _tmp28 = numpy.sin(_tmp27)
+    _tmp29 = _tmp28*_tmp7
+    _tmp30 = numpy.sin(_tmp22)
+    _tmp31 = numpy.sin(_tmp23)
+    _tmp32 = numpy.cos(_tmp24)
+    _tmp33 = arck(_tmp27)
+    _tmp34 = along_1_0 + _tmp33*_tmp27**2
+    _tmp35 = _tmp34*_tmp7
+    _tmp36 = arck(_tmp24)
+    _tmp37 = along_1_1 + _tmp36*_tmp24**2
+    _tmp38 = numpy.cos(_tmp27)
+    _tmp39 = _tmp38*_tmp7
+    _tmp40 = _tmp25*_tmp26 + _tmp32*_tmp35 + _tmp37*_tmp39 + _tmp7*(-2*_tmp31**2 + 2*_tmp30**2) - _tmp29*across_1_1
+    _tmp41 = _tmp21*_tmp40
+    _tmp42 = 0.125*p_0
+    _tmp43 = _tmp42*across_1_0
+    _tmp44 = _tmp28*_tmp42
+    _tmp45 = _tmp34*_tmp42
+    _tmp46 = 0.125*theta_1
+    _tmp47 = 0.25*x_12
+    _tmp48 = sinr1(_tmp24)
+    _tmp49 = _tmp24**3*(_tmp48 - 3*sinr2(_tmp24) + 3*cosr2(_tmp24))
+    _tmp50 = 0.25*_tmp49 + _tmp36*(_tmp46 - _tmp47)
+    _tmp51 = _tmp27**3*(-3*sinr2(_tmp27) + 3*cosr2(_tmp27) + sinr1(_tmp27))
+    _tmp52 = _tmp7*(0.25*_tmp51 + _tmp33*(_tmp46 + _tmp47))
+    _tmp53 = -_tmp25*_tmp43 - _tmp25*_tmp52 - _tmp32*_tmp45 - _tmp44*across_1_1 + 0.125*_tmp37*_tmp38*p_0 + 0.5*_tmp28*_tmp50*p_0
+    _tmp54 = _tmp21*_tmp53
+    _tmp55 = numpy.sin(_tmp20)
+    _tmp56 = _tmp32*_tmp43 + _tmp32*_tmp52 + _tmp39*_tmp50 - _tmp25*_tmp45 - _tmp37*_tmp44 + _tmp30*_tmp7*numpy.cos(_tmp22) - _tmp38*_tmp42*across_1_1
+    _tmp57 = _tmp55*_tmp56
+    _tmp58 = 1.0*x_12
+    _tmp59 = _tmp26*_tmp32 + _tmp29*_tmp37 + _tmp39*across_1_1 + _tmp7*numpy.sin(_tmp58) - _tmp25*_tmp35
+    _tmp60 = 625.0*_tmp41 + 1250.0*_tmp54 + 1250.0*_tmp57 - 625.0*_tmp55*_tmp59
+    _tmp61 = 37.5*_tmp0
+    _tmp62 = _tmp21*_tmp59
+    _tmp63 = 625.0*_tmp62
+    _tmp64 = _tmp40*_tmp55
+    _tmp65 = 625.0*_tmp64
+    _tmp66 = _tmp53*_tmp55
+    _tmp67 = 1250.0*_tmp66
+    _tmp68 = theta_1 + theta_2
+    _tmp69 = numpy.sin(_tmp68)
+    _tmp70 = 0.006153846153846154*x_0
+    _tmp71 = numpy.cos(_tmp70)
+    _tmp72 = 0.003076923076923077*x_0
+    _tmp73 = numpy.sin(_tmp72)
+    _tmp74 = _tmp73*numpy.cos(_tmp72)
+    _tmp75 = 0.04*_tmp71 - 0.14*_tmp74
+    _tmp76 = _tmp69*_tmp75
+    _tmp77 = 0.7853981633974483 + theta_1
+    _tmp78 = _tmp72 + _tmp77 + 0.5*theta_2
+    _tmp79 = numpy.sin(_tmp78)
+    _tmp80 = 0.5*x_13
+    _tmp81 = 0.25*theta_2 + 0.0015384615384615385*x_0
+    _tmp82 = _tmp81 - _tmp80
+    _tmp83 = numpy.sin(_tmp82)
+    _tmp84 = _tmp7*across_2_0
+    _tmp85 = _tmp80 + _tmp81
+    _tmp86 = numpy.sin(_tmp85)
+    _tmp87 = _tmp7*_tmp86
+    _tmp88 = numpy.sin(_tmp80)
+    _tmp89 = numpy.sin(_tmp81)
+    _tmp90 = numpy.cos(_tmp82)
+    _tmp91 = arck(_tmp85)
+    _tmp92 = along_2_0 + _tmp91*_tmp85**2
+    _tmp93 = _tmp7*_tmp92
+    _tmp94 = arck(_tmp82)
+    _tmp95 = along_2_1 + _tmp94*_tmp82**2
+    _tmp96 = numpy.cos(_tmp85)
+    _tmp97 = _tmp7*_tmp96
+    _tmp98 = _tmp7*(-2*_tmp88**2 + 2*_tmp89**2) + _tmp83*_tmp84 + _tmp90*_tmp93 + _tmp95*_tmp97 - _tmp87*across_2_1
+    _tmp99 = _tmp79*_tmp98
+    _tmp100 = _tmp68 + _tmp70
+    _tmp101 = _tmp100 + 0.5*theta_7 + 0.003076923076923077*x_5
+    _tmp102 = numpy.sin(_tmp101)
+    _tmp103 = 0.5*x_18
+    _tmp104 = 0.25*theta_7 + 0.0015384615384615385*x_5
+    _tmp105 = _tmp104 - _tmp103
+    _tmp106 = numpy.sin(_tmp105)
+    _tmp107 = _tmp7*across_7_0
+    _tmp108 = _tmp103 + _tmp104
+    _tmp109 = _tmp7*numpy.sin(_tmp108)
+    _tmp110 = numpy.cos(_tmp105)
+    _tmp111 = _tmp7*(along_7_0 + _tmp108**2*arck(_tmp108))
+    _tmp112 = along_7_1 + _tmp105**2*arck(_tmp105)
+    _tmp113 = _tmp7*numpy.cos(_tmp108)
+    _tmp114 = 1250.0*_tmp106*_tmp107 + 1250.0*_tmp110*_tmp111 + 1250.0*_tmp112*_tmp113 + 1250.0*_tmp7*(-2*numpy.sin(_tmp103)**2 + 2*numpy.sin(_tmp104)**2) - 1250.0*_tmp109*across_7_1
+    _tmp115 = numpy.cos(_tmp78)
+    _tmp116 = 1.0*x_13
+    _tmp117 = _tmp7*numpy.sin(_tmp116) + _tmp84*_tmp90 + _tmp87*_tmp95 + _tmp97*across_2_1 - _tmp83*_tmp93
+    _tmp118 = _tmp115*_tmp117
+    _tmp119 = numpy.cos(_tmp101)
+    _tmp120 = 1250.0*_tmp107*_tmp110 + 1250.0*_tmp109*_tmp112 + 1250.0*_tmp113*across_7_1 + 1250.0*_tmp7*numpy.sin(1.0*x_18) - 1250.0*_tmp106*_tmp111
+    _tmp121 = numpy.cos(_tmp68)
+    _tmp122 = -0.07*_tmp71 - 0.08*_tmp74
+    _tmp123 = _tmp121*_tmp75
+    _tmp124 = _tmp122*_tmp69
+    _tmp125 = _tmp117*_tmp79
+    _tmp126 = _tmp115*_tmp98
+    _tmp127 = _tmp21*_tmp56
+    _tmp128 = _tmp55*_tmp59
+    _tmp129 = _tmp54 + _tmp57 + 0.5*_tmp41 - 0.5*_tmp128
+    _tmp130 = numpy.sin(_tmp100)
+    _tmp131 = 0.3535533905932738*p_0
+    _tmp132 = _tmp130*_tmp131
+    _tmp133 = numpy.cos(_tmp100)
+    _tmp134 = _tmp131*_tmp133
+    _tmp135 = 0.03*_tmp0
+    _tmp136 = 0.02*_tmp1
+    _tmp137 = _tmp118 + _tmp99
+    _tmp138 = _tmp135 + _tmp136 + _tmp137
+    _tmp139 = _tmp132 + _tmp134 + _tmp138
+    _tmp140 = 7.6923076923076925*x_10
+    _tmp141 = 0.5*_tmp64
+    _tmp142 = 0.5*_tmp62
+    _tmp143 = _tmp141 + _tmp142 + _tmp66 - _tmp127
+    _tmp144 = _tmp125 - _tmp126
+    _tmp145 = 0.02*_tmp0
+    _tmp146 = 0.03*_tmp1
+    _tmp147 = _tmp145 - _tmp146
+    _tmp148 = _tmp132 + _tmp144 + _tmp147 - _tmp134
+    _tmp149 = 7.181553246425874*p_0
+    _tmp150 = _tmp130*_tmp149
+    _tmp151 = _tmp133*_tmp149
+    _tmp152 = 0.378698224852071*x_10
+    _tmp153 = 0.378698224852071*x_7
+    _tmp154 = _tmp152 + _tmp153
+    _tmp155 = _tmp23 + 0.75*theta_1
+    _tmp156 = numpy.sin(_tmp155)
+    _tmp157 = numpy.cos(_tmp155)
+    _tmp159 = 0.375*p_0
+    _tmp158 = along_1_1 + sinr0(_tmp24)
+    _tmp160 = _tmp158*_tmp159
+    _tmp161 = -_tmp48 + cosr1(_tmp24)
+    _tmp162 = 0.378698224852071*x_6
+    _tmp163 = 0.378698224852071*x_9
+    _tmp164 = _tmp162 + _tmp163
+    _tmp165 = 10.15625*p_0
+    _tmp166 = _tmp156*_tmp165
+    _tmp167 = _tmp77 + _tmp80 + 0.75*theta_2 + 0.004615384615384615*x_0
+    _tmp168 = numpy.cos(_tmp167)
+    _tmp169 = along_2_1 + sinr0(_tmp82)
+    _tmp170 = numpy.sin(_tmp167)
+    _tmp171 = _tmp170*_tmp7
+    _tmp172 = _tmp165*across_2_1
+    _tmp173 = _tmp165*_tmp169
+    _tmp174 = _tmp3 + theta_1 + 0.75*theta_6 + 0.004615384615384615*x_4
+    _tmp175 = numpy.cos(_tmp174)
+    _tmp176 = _tmp7*across_6_1
+    _tmp177 = numpy.sin(_tmp174)
+    _tmp178 = _tmp7*(along_6_1 + sinr0(_tmp5))
+    _tmp179 = _tmp100 + _tmp103 + 0.75*theta_7 + 0.004615384615384615*x_5
+    _tmp180 = numpy.cos(_tmp179)
+    _tmp181 = along_7_1 + sinr0(_tmp105)
+    _tmp182 = numpy.sin(_tmp179)
+    _tmp183 = _tmp182*_tmp7
+    _tmp184 = numpy.less_equal(p_0, 0.008)
+    _tmp185 = _DTYPE(numpy.where(_tmp184, 4.333333333333334e-12, 4.761904761904762e-12))
+    _tmp186 = p_0**(-1.0)
+    _tmp187 = _tmp185*_tmp186
+    _tmp188 = 187500*_tmp187
+    _tmp189 = _tmp154*_tmp188
+    _tmp190 = 750000*_tmp187
+    _tmp191 = -_tmp190*_tmp28
+    _tmp192 = _tmp190*_tmp38
+    _tmp193 = 562500*_tmp187
+    _tmp194 = _tmp154*_tmp193
+    _tmp195 = -_tmp156*_tmp190
+    _tmp196 = _tmp157*_tmp190
+    _tmp197 = _tmp77 + _tmp85
+    _tmp198 = numpy.cos(_tmp197)
+    _tmp199 = 284023.66863905324*_tmp187
+    _tmp200 = _tmp199*x_10
+    _tmp201 = numpy.sin(_tmp197)
+    _tmp202 = _tmp199*x_9
+    _tmp203 = _tmp190*_tmp198
+    _tmp204 = _tmp190*_tmp201
+    _tmp205 = _tmp168*_tmp190
+    _tmp206 = _tmp170*_tmp190
+    _tmp207 = _tmp9 + theta_1
+    _tmp208 = numpy.cos(_tmp207)
+    _tmp209 = _tmp199*x_6
+    _tmp210 = numpy.sin(_tmp207)
+    _tmp211 = _tmp199*x_7
+    _tmp212 = _tmp100 + _tmp108
+    _tmp213 = numpy.cos(_tmp212)
+    _tmp214 = numpy.sin(_tmp212)
+    _tmp215 = p_0**2
+    _tmp216 = _DTYPE(numpy.where(_tmp184, 230769230769.23077, 210000000000))
+    _tmp217 = theta_3 + 0.006153846153846154*x_1
+    _tmp218 = numpy.cos(_tmp217)
+    _tmp219 = _tmp217 + theta_5 + 0.006153846153846154*x_3
+    _tmp220 = numpy.sin(_tmp219)
+    _tmp221 = 0.072*_tmp220
+    _tmp222 = -0.03 + _tmp7
+    _tmp223 = numpy.cos(_tmp219)
+    _tmp224 = _tmp222*_tmp223
+    _tmp225 = numpy.sin(_tmp217)
+    _tmp226 = 0.02*_tmp225
+    _tmp227 = -_tmp226
+    _tmp228 = _tmp217 + 0.5*theta_5 + 0.003076923076923077*x_3
+    _tmp229 = numpy.sin(_tmp228)
+    _tmp230 = 0.5*x_16
+    _tmp231 = 0.25*theta_5 + 0.0015384615384615385*x_3
+    _tmp232 = _tmp231 - _tmp230
+    _tmp233 = numpy.sin(_tmp232)
+    _tmp234 = _tmp7*across_5_0
+    _tmp235 = _tmp230 + _tmp231
+    _tmp236 = numpy.sin(_tmp235)
+    _tmp237 = _tmp236*_tmp7
+    _tmp238 = numpy.sin(_tmp230)
+    _tmp239 = numpy.sin(_tmp231)
+    _tmp240 = numpy.cos(_tmp232)
+    _tmp241 = arck(_tmp235)
+    _tmp242 = along_5_0 + _tmp241*_tmp235**2
+    _tmp243 = _tmp242*_tmp7
+    _tmp244 = arck(_tmp232)
+    _tmp245 = along_5_1 + _tmp244*_tmp232**2
+    _tmp246 = numpy.cos(_tmp235)
+    _tmp247 = _tmp246*_tmp7
+    _tmp248 = _tmp233*_tmp234 + _tmp240*_tmp243 + _tmp245*_tmp247 + _tmp7*(-2*_tmp238**2 + 2*_tmp239**2) - _tmp237*across_5_1
+    _tmp249 = _tmp229*_tmp248
+    _tmp250 = numpy.cos(_tmp228)
+    _tmp251 = 1.0*x_16
+    _tmp252 = _tmp234*_tmp240 + _tmp237*_tmp245 + _tmp247*across_5_1 + _tmp7*numpy.sin(_tmp251) - _tmp233*_tmp243
+    _tmp253 = _tmp250*_tmp252
+    _tmp254 = _tmp227 + _tmp249 + _tmp253
+    _tmp255 = _tmp1*_tmp7
+    _tmp256 = -_tmp255
+    _tmp257 = 0.5*theta_3 + 0.003076923076923077*x_1
+    _tmp258 = numpy.cos(_tmp257)
+    _tmp259 = 0.5*x_14
+    _tmp260 = 0.25*theta_3 + 0.0015384615384615385*x_1
+    _tmp261 = _tmp260 - _tmp259
+    _tmp262 = numpy.sin(_tmp261)
+    _tmp263 = _tmp7*across_3_0
+    _tmp264 = _tmp259 + _tmp260
+    _tmp265 = numpy.sin(_tmp264)
+    _tmp266 = _tmp265*_tmp7
+    _tmp267 = numpy.sin(_tmp259)
+    _tmp268 = numpy.sin(_tmp260)
+    _tmp269 = numpy.cos(_tmp261)
+    _tmp270 = arck(_tmp264)
+    _tmp271 = along_3_0 + _tmp270*_tmp264**2
+    _tmp272 = _tmp271*_tmp7
+    _tmp273 = arck(_tmp261)
+    _tmp274 = along_3_1 + _tmp273*_tmp261**2
+    _tmp275 = numpy.cos(_tmp264)
+    _tmp276 = _tmp275*_tmp7
+    _tmp277 = _tmp262*_tmp263 + _tmp269*_tmp272 + _tmp274*_tmp276 + _tmp7*(-2*_tmp267**2 + 2*_tmp268**2) - _tmp266*across_3_1
+    _tmp278 = _tmp258*_tmp277
+    _tmp279 = numpy.sin(_tmp257)
+    _tmp280 = 1.0*x_14
+    _tmp281 = _tmp263*_tmp269 + _tmp266*_tmp274 + _tmp276*across_3_1 + _tmp7*numpy.sin(_tmp280) - _tmp262*_tmp272
+    _tmp282 = _tmp279*_tmp281
+    _tmp283 = _tmp278 - _tmp282
+    _tmp284 = _tmp128 + _tmp256 + _tmp283 - _tmp41
+    _tmp285 = _tmp217 + theta_4 + 0.006153846153846154*x_2
+    _tmp286 = numpy.cos(_tmp285)
+    _tmp287 = -0.05 + _tmp7
+    _tmp288 = numpy.sin(_tmp285)
+    _tmp289 = _tmp287*_tmp288
+    _tmp290 = _tmp217 + 0.5*theta_4 + 0.003076923076923077*x_2
+    _tmp291 = numpy.sin(_tmp290)
+    _tmp292 = 0.5*x_15
+    _tmp293 = 0.25*theta_4 + 0.0015384615384615385*x_2
+    _tmp294 = _tmp293 - _tmp292
+    _tmp295 = numpy.sin(_tmp294)
+    _tmp296 = _tmp7*across_4_0
+    _tmp297 = _tmp292 + _tmp293
+    _tmp298 = numpy.sin(_tmp297)
+    _tmp299 = _tmp298*_tmp7
+    _tmp300 = numpy.sin(_tmp292)
+    _tmp301 = numpy.sin(_tmp293)
+    _tmp302 = numpy.cos(_tmp294)
+    _tmp303 = arck(_tmp297)
+    _tmp304 = along_4_0 + _tmp303*_tmp297**2
+    _tmp305 = _tmp304*_tmp7
+    _tmp306 = arck(_tmp294)
+    _tmp307 = along_4_1 + _tmp306*_tmp294**2
+    _tmp308 = numpy.cos(_tmp297)
+    _tmp309 = _tmp308*_tmp7
+    _tmp310 = _tmp295*_tmp296 + _tmp302*_tmp305 + _tmp307*_tmp309 + _tmp7*(-2*_tmp300**2 + 2*_tmp301**2) - _tmp299*across_4_1
+    _tmp311 = _tmp291*_tmp310
+    _tmp312 = numpy.cos(_tmp290)
+    _tmp313 = 1.0*x_15
+    _tmp314 = _tmp296*_tmp302 + _tmp299*_tmp307 + _tmp309*across_4_1 + _tmp7*numpy.sin(_tmp313) - _tmp295*_tmp305
+    _tmp315 = _tmp312*_tmp314
+    _tmp316 = _tmp226 + _tmp311 + _tmp315
+    _tmp317 = _tmp0*_tmp7
+    _tmp318 = _tmp62 + _tmp64
+    _tmp319 = _tmp317 + _tmp318
+    _tmp320 = _tmp286*_tmp287
+    _tmp321 = _tmp277*_tmp279
+    _tmp322 = _tmp258*_tmp281
+    _tmp323 = 0.02*_tmp218
+    _tmp324 = _tmp310*_tmp312
+    _tmp325 = _tmp291*_tmp314
+    _tmp326 = _tmp323 + _tmp324 - _tmp325
+    _tmp327 = 0.1 + _tmp320 + _tmp326 - _tmp321 - _tmp322 - 0.05*_tmp225 - 0.04*_tmp288
+    _tmp328 = _tmp220*_tmp222
+    _tmp329 = _tmp321 + _tmp322
+    _tmp330 = _tmp229*_tmp252
+    _tmp331 = _tmp323 + _tmp330 - _tmp248*_tmp250
+    _tmp332 = -0.1 + _tmp328 + _tmp329 + _tmp331 - _tmp62 - _tmp64 + 0.06*_tmp225 + 0.072*_tmp223
+    _tmp333 = numpy.sin(_tmp70)
+    _tmp334 = _tmp73**2
+    _tmp335 = 0.04*_tmp333 - 0.14*_tmp334
+    _tmp336 = -0.07*_tmp333 - 0.08*_tmp334
+    _tmp337 = _tmp144 + _tmp318
+    _tmp338 = _tmp41 - _tmp128
+    _tmp339 = _tmp137 + _tmp338
+    _tmp340 = 0.00012307692307692307*_tmp218
+    _tmp341 = 0.006153846153846154*_tmp328 + 0.0004430769230769231*_tmp223
+    _tmp342 = 0.0007692307692307692*p_0
+    _tmp343 = _tmp342*across_3_0
+    _tmp344 = _tmp265*_tmp342
+    _tmp345 = _tmp271*_tmp342
+    _tmp346 = 0.0015384615384615385*x_14
+    _tmp347 = 4.733727810650887e-06*x_1 + 0.0007692307692307692*theta_3
+    _tmp348 = _tmp261**3*(-3*sinr2(_tmp261) + 3*cosr2(_tmp261) + sinr1(_tmp261))
+    _tmp349 = 0.0015384615384615385*_tmp348 + _tmp273*(_tmp347 - _tmp346)
+    _tmp350 = _tmp264**3*(-3*sinr2(_tmp264) + 3*cosr2(_tmp264) + sinr1(_tmp264))
+    _tmp351 = _tmp7*(0.0015384615384615385*_tmp350 + _tmp270*(_tmp346 + _tmp347))
+    _tmp352 = -_tmp262*_tmp343 - _tmp262*_tmp351 - _tmp269*_tmp345 - _tmp344*across_3_1 + 0.5*_tmp265*_tmp349*p_0 + 0.0007692307692307692*_tmp274*_tmp275*p_0
+    _tmp353 = 0.003076923076923077*p_0
+    _tmp354 = _tmp269*_tmp343 + _tmp269*_tmp351 + _tmp276*_tmp349 - _tmp262*_tmp345 - _tmp274*_tmp344 + _tmp268*_tmp353*numpy.cos(_tmp260) - _tmp275*_tmp342*across_3_1
+    _tmp355 = 0.003076923076923077*_tmp321 + 0.003076923076923077*_tmp322 + _tmp279*_tmp352 - _tmp258*_tmp354
+    _tmp356 = 0.00024615384615384614*_tmp288
+    _tmp357 = 0.00012307692307692307*_tmp225
+    _tmp358 = 0.00024615384615384614*_tmp286 + 0.006153846153846154*_tmp289
+    _tmp359 = 0.003076923076923077*_tmp278 + _tmp258*_tmp352 + _tmp279*_tmp354 - 0.003076923076923077*_tmp279*_tmp281
+    _tmp360 = 0.006153846153846154*_tmp224 - 0.0004430769230769231*_tmp220
+    _tmp361 = _tmp342*across_4_0
+    _tmp362 = _tmp298*_tmp342
+    _tmp363 = _tmp304*_tmp342
+    _tmp364 = 0.0015384615384615385*x_15
+    _tmp365 = 4.733727810650887e-06*x_2 + 0.0007692307692307692*theta_4
+    _tmp366 = _tmp294**3*(-3*sinr2(_tmp294) + 3*cosr2(_tmp294) + sinr1(_tmp294))
+    _tmp367 = 0.0015384615384615385*_tmp366 + _tmp306*(_tmp365 - _tmp364)
+    _tmp368 = _tmp297**3*(-3*sinr2(_tmp297) + 3*cosr2(_tmp297) + sinr1(_tmp297))
+    _tmp369 = _tmp7*(0.0015384615384615385*_tmp368 + _tmp303*(_tmp364 + _tmp365))
+    _tmp370 = -_tmp295*_tmp361 - _tmp295*_tmp369 - _tmp302*_tmp363 - _tmp362*across_4_1 + 0.5*_tmp298*_tmp367*p_0 + 0.0007692307692307692*_tmp307*_tmp308*p_0
+    _tmp371 = _tmp302*_tmp361 + _tmp302*_tmp369 + _tmp309*_tmp367 - _tmp295*_tmp363 - _tmp307*_tmp362 + _tmp301*_tmp353*numpy.cos(_tmp293) - _tmp308*_tmp342*across_4_1
+    _tmp372 = _tmp342*across_5_0
+    _tmp373 = _tmp236*_tmp342
+    _tmp374 = _tmp242*_tmp342
+    _tmp375 = 0.0015384615384615385*x_16
+    _tmp376 = 4.733727810650887e-06*x_3 + 0.0007692307692307692*theta_5
+    _tmp377 = _tmp232**3*(-3*sinr2(_tmp232) + 3*cosr2(_tmp232) + sinr1(_tmp232))
+    _tmp378 = 0.0015384615384615385*_tmp377 + _tmp244*(_tmp376 - _tmp375)
+    _tmp379 = _tmp235**3*(-3*sinr2(_tmp235) + 3*cosr2(_tmp235) + sinr1(_tmp235))
+    _tmp380 = _tmp7*(0.0015384615384615385*_tmp379 + _tmp241*(_tmp375 + _tmp376))
+    _tmp381 = -_tmp233*_tmp372 - _tmp233*_tmp380 - _tmp240*_tmp374 - _tmp373*across_5_1 + 0.5*_tmp236*_tmp378*p_0 + 0.0007692307692307692*_tmp245*_tmp246*p_0
+    _tmp382 = _tmp240*_tmp372 + _tmp240*_tmp380 + _tmp247*_tmp378 - _tmp233*_tmp374 - _tmp245*_tmp373 + _tmp239*_tmp353*numpy.cos(_tmp231) - _tmp246*_tmp342*across_5_1
+    _tmp383 = 0.00757396449704142*_tmp225
+    _tmp384 = 0.1893491124260355*p_0
+    _tmp385 = 0.378698224852071*_tmp128 + 0.378698224852071*_tmp278 - 0.378698224852071*_tmp282 - 0.378698224852071*_tmp41 - _tmp1*_tmp384
+    _tmp386 = _tmp0*_tmp384
+    _tmp387 = 0.00757396449704142*_tmp218
+    _tmp388 = 0.378698224852071*_tmp62
+    _tmp389 = 0.378698224852071*_tmp64
+    _tmp390 = 0.25*p_0
+    _tmp391 = _tmp28*_tmp390
+    _tmp392 = _tmp32*_tmp390
+    _tmp393 = _tmp38*_tmp390
+    _tmp394 = -0.5*_tmp49 - _tmp24*_tmp36
+    _tmp395 = 0.5*_tmp51 + _tmp27*_tmp33
+    _tmp396 = _tmp29*_tmp394 + _tmp34*_tmp392 + _tmp37*_tmp393 + _tmp7*numpy.cos(_tmp58) - _tmp391*across_1_1 + _tmp25*_tmp390*across_1_0 - _tmp25*_tmp395*_tmp7
+    _tmp397 = 1.0*p_0
+    _tmp398 = -_tmp37*_tmp391 - _tmp392*across_1_0 - _tmp393*across_1_1 - _tmp31*_tmp397*numpy.cos(_tmp23) + 0.25*_tmp25*_tmp34*p_0 + 0.5*_tmp32*_tmp395*p_0 + 0.5*_tmp38*_tmp394*p_0
+    _tmp399 = _tmp21*_tmp396 + _tmp398*_tmp55
+    _tmp400 = _tmp396*_tmp55 - _tmp21*_tmp398
+    _tmp401 = _tmp265*_tmp390
+    _tmp402 = _tmp269*_tmp390
+    _tmp403 = _tmp275*_tmp390
+    _tmp404 = -0.5*_tmp348 - _tmp261*_tmp273
+    _tmp405 = 0.5*_tmp350 + _tmp264*_tmp270
+    _tmp406 = _tmp266*_tmp404 + _tmp271*_tmp402 + _tmp274*_tmp403 + _tmp7*numpy.cos(_tmp280) - _tmp401*across_3_1 + _tmp262*_tmp390*across_3_0 - _tmp262*_tmp405*_tmp7
+    _tmp407 = -_tmp274*_tmp401 - _tmp402*across_3_0 - _tmp403*across_3_1 - _tmp267*_tmp397*numpy.cos(_tmp259) + 0.25*_tmp262*_tmp271*p_0 + 0.5*_tmp269*_tmp405*p_0 + 0.5*_tmp275*_tmp404*p_0
+    _tmp408 = _tmp258*_tmp407 - _tmp279*_tmp406
+    _tmp409 = -_tmp258*_tmp406 - _tmp279*_tmp407
+    _tmp410 = _tmp298*_tmp390
+    _tmp411 = _tmp302*_tmp390
+    _tmp412 = _tmp308*_tmp390
+    _tmp413 = -0.5*_tmp366 - _tmp294*_tmp306
+    _tmp414 = 0.5*_tmp368 + _tmp297*_tmp303
+    _tmp415 = _tmp299*_tmp413 + _tmp304*_tmp411 + _tmp307*_tmp412 + _tmp7*numpy.cos(_tmp313) - _tmp410*across_4_1 + _tmp295*_tmp390*across_4_0 - _tmp295*_tmp414*_tmp7
+    _tmp416 = -_tmp307*_tmp410 - _tmp411*across_4_0 - _tmp412*across_4_1 - _tmp300*_tmp397*numpy.cos(_tmp292) + 0.25*_tmp295*_tmp304*p_0 + 0.5*_tmp302*_tmp414*p_0 + 0.5*_tmp308*_tmp413*p_0
+    _tmp417 = _tmp236*_tmp390
+    _tmp418 = _tmp240*_tmp390
+    _tmp419 = _tmp246*_tmp390
+    _tmp420 = -0.5*_tmp377 - _tmp232*_tmp244
+    _tmp421 = 0.5*_tmp379 + _tmp235*_tmp241
+    _tmp422 = _tmp237*_tmp420 + _tmp242*_tmp418 + _tmp245*_tmp419 + _tmp7*numpy.cos(_tmp251) - _tmp417*across_5_1 + _tmp233*_tmp390*across_5_0 - _tmp233*_tmp421*_tmp7
+    _tmp423 = -_tmp245*_tmp417 - _tmp418*across_5_0 - _tmp419*across_5_1 - _tmp238*_tmp397*numpy.cos(_tmp230) + 0.25*_tmp233*_tmp242*p_0 + 0.5*_tmp240*_tmp421*p_0 + 0.5*_tmp246*_tmp420*p_0
+    _tmp424 = 0.00024615384615384614*_tmp71 - 0.0008615384615384615*_tmp74
+    _tmp425 = -0.0004923076923076923*_tmp74 - 0.0004307692307692308*_tmp71
+    _tmp426 = _tmp342*across_2_0
+    _tmp427 = _tmp342*_tmp86
+    _tmp428 = _tmp342*_tmp92
+    _tmp429 = 0.0015384615384615385*x_13
+    _tmp430 = 4.733727810650887e-06*x_0 + 0.0007692307692307692*theta_2
+    _tmp431 = _tmp82**3*(-3*sinr2(_tmp82) + 3*cosr2(_tmp82) + sinr1(_tmp82))
+    _tmp432 = 0.0015384615384615385*_tmp431 + _tmp94*(_tmp430 - _tmp429)
+    _tmp433 = _tmp85**3*(-3*sinr2(_tmp85) + 3*cosr2(_tmp85) + sinr1(_tmp85))
+    _tmp434 = _tmp7*(0.0015384615384615385*_tmp433 + _tmp91*(_tmp429 + _tmp430))
+    _tmp435 = -_tmp426*_tmp83 - _tmp427*across_2_1 - _tmp428*_tmp90 - _tmp434*_tmp83 + 0.5*_tmp432*_tmp86*p_0 + 0.0007692307692307692*_tmp95*_tmp96*p_0
+    _tmp436 = _tmp426*_tmp90 + _tmp432*_tmp97 + _tmp434*_tmp90 - _tmp427*_tmp95 - _tmp428*_tmp83 + _tmp353*_tmp89*numpy.cos(_tmp81) - _tmp342*_tmp96*across_2_1
+    _tmp437 = _tmp390*_tmp86
+    _tmp438 = _tmp390*_tmp90
+    _tmp439 = _tmp390*_tmp96
+    _tmp440 = -0.5*_tmp431 - _tmp82*_tmp94
+    _tmp441 = 0.5*_tmp433 + _tmp85*_tmp91
+    _tmp442 = _tmp438*_tmp92 + _tmp439*_tmp95 + _tmp440*_tmp87 + _tmp7*numpy.cos(_tmp116) - _tmp437*across_2_1 + _tmp390*_tmp83*across_2_0 - _tmp441*_tmp7*_tmp83
+    _tmp443 = -_tmp437*_tmp95 - _tmp438*across_2_0 - _tmp439*across_2_1 - _tmp397*_tmp88*numpy.cos(_tmp80) + 0.25*_tmp83*_tmp92*p_0 + 0.5*_tmp440*_tmp96*p_0 + 0.5*_tmp441*_tmp90*p_0
+    _tmp444 = _tmp129 + _tmp255
+    _tmp445 = _tmp143 + _tmp317
+    _tmp446 = 0.07*_tmp133
+    _tmp447 = _tmp126 + _tmp146 - _tmp125 - _tmp145
+    _tmp448 = _tmp32*_tmp7
+    _tmp449 = _tmp25*_tmp7
+    _tmp450 = _tmp448*_tmp55 - _tmp21*_tmp449
+    _tmp451 = _tmp21*_tmp448 + _tmp449*_tmp55
+    _tmp452 = -_tmp451
+    _tmp453 = _tmp21*_tmp29 + _tmp39*_tmp55
+    _tmp454 = _tmp29*_tmp55 - _tmp21*_tmp39
+    _tmp455 = -_tmp454
+    _tmp456 = 6.666666666666667e-07*_tmp215*_tmp216
+    _tmp457 = _tmp279*_tmp7
+    _tmp458 = -_tmp269*_tmp457 + 0.5*_tmp258*_tmp262*p_0
+    _tmp459 = _tmp262*_tmp457 + _tmp258*_tmp269*_tmp7
+    _tmp460 = -_tmp459
+    _tmp461 = -_tmp258*_tmp266 - _tmp276*_tmp279
+    _tmp462 = _tmp266*_tmp279 - 0.5*_tmp258*_tmp275*p_0
+    _tmp463 = -_tmp462
+    _tmp464 = _tmp295*_tmp7
+    _tmp465 = _tmp291*_tmp464 + _tmp302*_tmp312*_tmp7
+    _tmp466 = _tmp312*_tmp464 - 0.5*_tmp291*_tmp302*p_0
+    _tmp467 = -_tmp291*_tmp299 + 0.5*_tmp308*_tmp312*p_0
+    _tmp468 = _tmp291*_tmp309 + _tmp299*_tmp312
+    _tmp469 = _tmp233*_tmp7
+    _tmp470 = _tmp250*_tmp469 - 0.5*_tmp229*_tmp240*p_0
+    _tmp471 = _tmp229*_tmp469 + _tmp240*_tmp250*_tmp7
+    _tmp472 = _tmp229*_tmp247 + _tmp237*_tmp250
+    _tmp473 = -_tmp229*_tmp237 + 0.5*_tmp246*_tmp250*p_0
+    _tmp474 = -_tmp450
+    _tmp475 = -_tmp453
+    _tmp476 = _tmp7*_tmp79
+    _tmp477 = _tmp115*_tmp7
+    _tmp478 = _tmp476*_tmp83 + _tmp477*_tmp90
+    _tmp479 = _tmp477*_tmp83 - _tmp476*_tmp90
+    _tmp480 = -_tmp79*_tmp87 + 0.5*_tmp115*_tmp96*p_0
+    _tmp481 = _tmp115*_tmp87 + _tmp79*_tmp97
+    _tmp482 = 3000000*_tmp185/_tmp215
+    _tmp483 = 3000000*_tmp187
+    _tmp484 = 0.0008333333333333334*_tmp185*_tmp216
+    _tmp485 = 1.2380952380952381e-14*_tmp216
+    _tmp486 = 0.1*_DTYPE(numpy.where(_tmp184, 480384.4614152614, 458257.569495584))*_DTYPE(numpy.where(_tmp184, 2.0816659994661327e-06, 2.1821789023599237e-06))
+    _tmp487 = 0.03 - _tmp131
+    _tmp488 = 0.02 - _tmp131
+    _tmp489 = numpy.sin(_tmp77)
+    _tmp490 = 1136094.674556213*_tmp187
+    _tmp491 = _tmp490*x_10
+    _tmp492 = numpy.cos(_tmp77)
+    _tmp493 = _tmp490*x_9
+    _tmp494 = -_tmp154
+    _tmp495 = -_tmp164
+    _tmp496 = 0.02 - _tmp7
+    _tmp497 = -0.02 - _tmp7
+    _tmp498 = _tmp490*x_6
+    _tmp499 = _tmp490*x_7
+    _tmp500 = -_tmp222
+    _tmp501 = _tmp282 - _tmp258*_tmp277
+    _tmp502 = 0.04 - _tmp7
+    return [
+        1,
+        0,
+        0,
+        0,
+        -_tmp2 - _tmp60 - 10.0*_tmp0 - _tmp15*_tmp17 + 1250.0*_tmp18*_tmp19,
+        0,
+        0,
+        0,
+        -_tmp61 - _tmp63 - _tmp65 - _tmp67 + 10.0*_tmp1 - _tmp17*_tmp19 + 1250.0*_tmp21*_tmp56 - 1250.0*_tmp15*_tmp18,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        -_tmp60 - _tmp61 - 25.0*_tmp1 - 1250.0*_tmp118 - 1250.0*_tmp76 - 1250.0*_tmp99 - _tmp102*_tmp114 - _tmp119*_tmp120 + 1250.0*_tmp121*_tmp122,
+        0,
+        0,
+        0,
+        _tmp2 - _tmp63 - _tmp65 - _tmp67 + 1250.0*_tmp123 + 1250.0*_tmp124 + 1250.0*_tmp126 + 1250.0*_tmp127 - 25.0*_tmp0 - 1250.0*_tmp125 + _tmp114*_tmp119 - _tmp102*_tmp120,
+        0,
+        0,
+        0,
+        -_tmp140*(_tmp129 + _tmp139) + 7.6923076923076925*x_9*(_tmp143 + _tmp148),
+        -_tmp150 - _tmp151 + 0.8125*_tmp130 + 1.4218750000000002*_tmp133,
+        _tmp151 - _tmp150 + 1.4218750000000002*_tmp130 - 0.8125*_tmp133,
+        -20.3125,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        20.3125*_tmp164*(-_tmp156*_tmp160 - _tmp157*_tmp159*across_1_1 + 0.125*_tmp157*_tmp161*_tmp24*p_0) - 20.3125*_tmp154*(-_tmp157*_tmp160 + 0.375*_tmp156*across_1_1*p_0 - _tmp156*_tmp161*_tmp24*_tmp42),
+        -_tmp166*across_1_1 + 10.15625*_tmp157*_tmp158*p_0,
+        _tmp158*_tmp166 + _tmp157*_tmp165*across_1_1,
+        0,
+        -_tmp140*(-_tmp169*_tmp171 - _tmp168*_tmp7*across_2_1) + 7.6923076923076925*x_9*(-_tmp171*across_2_1 + 0.5*_tmp168*_tmp169*p_0),
+        _tmp168*_tmp172 + _tmp170*_tmp173,
+        _tmp170*_tmp172 - _tmp168*_tmp173,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        7.6923076923076925*x_6*(-_tmp175*_tmp176 - _tmp177*_tmp178) - 7.6923076923076925*x_7*(_tmp176*_tmp177 - _tmp175*_tmp178),
+        0,
+        0,
+        0,
+        -_tmp140*(-_tmp181*_tmp183 - _tmp180*_tmp7*across_7_1) + 7.6923076923076925*x_9*(-_tmp183*across_7_1 + 0.5*_tmp180*_tmp181*p_0),
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        -_tmp189*_tmp28 - _tmp164*_tmp188*_tmp38,
+        _tmp191,
+        _tmp192,
+        0,
+        -_tmp189*_tmp38 + 187500*_tmp164*_tmp185*_tmp186*_tmp28,
+        -_tmp192,
+        _tmp191,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        -_tmp156*_tmp194 - _tmp157*_tmp164*_tmp193,
+        _tmp195,
+        _tmp196,
+        0,
+        -_tmp157*_tmp194 + 562500*_tmp156*_tmp164*_tmp185*_tmp186,
+        -_tmp196,
+        _tmp195,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp198*_tmp200 - _tmp201*_tmp202,
+        _tmp203,
+        _tmp204,
+        0,
+        -_tmp198*_tmp202 - _tmp200*_tmp201,
+        -_tmp204,
+        _tmp203,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp168*_tmp200 - _tmp170*_tmp202,
+        _tmp205,
+        _tmp206,
+        0,
+        -_tmp168*_tmp202 - _tmp170*_tmp200,
+        -_tmp206,
+        _tmp205,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp208*_tmp209 - _tmp210*_tmp211,
+        0,
+        0,
+        0,
+        _tmp209*_tmp210 - _tmp208*_tmp211,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp175*_tmp209 - _tmp177*_tmp211,
+        0,
+        0,
+        0,
+        _tmp177*_tmp209 - _tmp175*_tmp211,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp200*_tmp213 - _tmp202*_tmp214,
+        0,
+        0,
+        0,
+        -_tmp200*_tmp214 - _tmp202*_tmp213,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp180*_tmp200 - _tmp182*_tmp202,
+        0,
+        0,
+        0,
+        -_tmp180*_tmp202 - _tmp182*_tmp200,
+        0,
+        0,
+        0,
+        -0.04923076923076923*x_11 - 0.04923076923076923*x_8 - _tmp152*(_tmp319 + _tmp327) - _tmp153*(_tmp317 - _tmp332) + 0.378698224852071*x_6*(_tmp224 + _tmp254 + _tmp284 - _tmp221 + 0.06*_tmp218) + 0.378698224852071*x_9*(_tmp284 + _tmp289 + _tmp316 + 0.05*_tmp218 + 0.04*_tmp286) + 6.666666666666667e-07*_tmp215*_tmp216*omega_1_1,
+        -_tmp337 + _tmp121*_tmp336 - _tmp335*_tmp69,
+        _tmp339 + _tmp121*_tmp335 + _tmp336*_tmp69,
+        _tmp70,
+        0,
+        -_tmp152*(-_tmp357 - _tmp358 - _tmp359 - 0.006153846153846154*_tmp311 - 0.006153846153846154*_tmp315 - 0.0003076923076923077*_tmp218) - _tmp153*(_tmp357 - _tmp359 - _tmp360 - 0.006153846153846154*_tmp249 - 0.006153846153846154*_tmp253 - 0.0003692307692307692*_tmp218) + 0.378698224852071*x_6*(-_tmp340 - _tmp341 - _tmp355 - 0.006153846153846154*_tmp330 - 0.0003692307692307692*_tmp225 + 0.006153846153846154*_tmp248*_tmp250) + 0.378698224852071*x_9*(_tmp340 - _tmp355 - _tmp356 - 0.006153846153846154*_tmp325 - 0.0003076923076923077*_tmp225 + 0.006153846153846154*_tmp286*_tmp287 + 0.006153846153846154*_tmp310*_tmp312),
+        -_tmp152*(-_tmp358 - 0.003076923076923077*_tmp311 - 0.003076923076923077*_tmp315 + _tmp312*_tmp371 - _tmp291*_tmp370) + 0.378698224852071*x_9*(-_tmp356 + 0.003076923076923077*_tmp324 + 0.006153846153846154*_tmp320 - 0.003076923076923077*_tmp325 + _tmp291*_tmp371 + _tmp312*_tmp370),
+        _tmp162*(-_tmp341 - 0.003076923076923077*_tmp330 + _tmp229*_tmp382 + _tmp250*_tmp381 + 0.003076923076923077*_tmp248*_tmp250) - _tmp153*(-_tmp360 - 0.003076923076923077*_tmp249 - 0.003076923076923077*_tmp253 + _tmp250*_tmp382 - _tmp229*_tmp381),
+        0,
+        0,
+        _tmp385 - _tmp383 + 0.02272189349112426*_tmp218 + 0.378698224852071*_tmp224 + 0.378698224852071*_tmp249 + 0.378698224852071*_tmp253 - 0.02726627218934911*_tmp220,
+        -0.0378698224852071 + _tmp387 - _tmp386 - _tmp388 - _tmp389 + 0.02272189349112426*_tmp225 + 0.378698224852071*_tmp321 + 0.378698224852071*_tmp322 + 0.378698224852071*_tmp328 + 0.378698224852071*_tmp330 + 0.02726627218934911*_tmp223 - 0.378698224852071*_tmp248*_tmp250,
+        -0.04923076923076923,
+        _tmp383 + _tmp385 + 0.01893491124260355*_tmp218 + 0.378698224852071*_tmp289 + 0.378698224852071*_tmp311 + 0.378698224852071*_tmp315 + 0.01514792899408284*_tmp286,
+        -0.0378698224852071 - _tmp386 - _tmp387 - _tmp388 - _tmp389 + 0.01893491124260355*_tmp225 + 0.01514792899408284*_tmp288 - 0.378698224852071*_tmp320 - 0.378698224852071*_tmp324 + 0.378698224852071*_tmp258*_tmp281 + 0.378698224852071*_tmp277*_tmp279 + 0.378698224852071*_tmp291*_tmp314,
+        -0.04923076923076923,
+        -_tmp152*_tmp399 - _tmp153*_tmp399 + 0.378698224852071*_tmp400*x_6 + 0.378698224852071*_tmp400*x_9,
+        0,
+        -_tmp152*_tmp409 - _tmp153*_tmp409 + 0.378698224852071*_tmp408*x_6 + 0.378698224852071*_tmp408*x_9,
+        -_tmp152*(_tmp312*_tmp416 - _tmp291*_tmp415) + 0.378698224852071*x_9*(_tmp291*_tmp416 + _tmp312*_tmp415),
+        _tmp162*(_tmp229*_tmp423 + _tmp250*_tmp422) - _tmp153*(_tmp250*_tmp423 - _tmp229*_tmp422),
+        0,
+        0,
+        -0.003076923076923077*_tmp118 - 0.003076923076923077*_tmp99 + _tmp115*_tmp436 + _tmp121*_tmp425 - _tmp424*_tmp69 - _tmp435*_tmp79,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp399,
+        _tmp115*_tmp443 - _tmp442*_tmp79,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.003076923076923077*_tmp126 - 0.003076923076923077*_tmp125 + _tmp115*_tmp435 + _tmp121*_tmp424 + _tmp425*_tmp69 + _tmp436*_tmp79,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp400,
+        _tmp115*_tmp442 + _tmp443*_tmp79,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.006153846153846154,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp152*_tmp444 - _tmp153*_tmp444 + 0.378698224852071*_tmp445*x_6 + 0.378698224852071*_tmp445*x_9,
+        _tmp138 + _tmp256 + _tmp446 + 0.04*_tmp130,
+        -_tmp317 - _tmp447 + 0.07*_tmp130 - 0.04*_tmp133,
+        -1,
+        -_tmp129 - _tmp138 - _tmp76 + _tmp121*_tmp122,
+        0,
+        0,
+        0,
+        _tmp123 + _tmp124 + _tmp127 + _tmp447 - _tmp141 - _tmp142 - _tmp66,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        -_tmp152*_tmp450 - _tmp153*_tmp450 + 0.378698224852071*_tmp452*x_6 + 0.378698224852071*_tmp452*x_9,
+        -_tmp152*_tmp451 - _tmp153*_tmp451 + 0.378698224852071*_tmp450*x_6 + 0.378698224852071*_tmp450*x_9,
+        0,
+        -_tmp152*_tmp453 - _tmp153*_tmp453 + 0.378698224852071*_tmp454*x_6 + 0.378698224852071*_tmp454*x_9,
+        -_tmp152*_tmp455 - _tmp153*_tmp455 + 0.378698224852071*_tmp453*x_6 + 0.378698224852071*_tmp453*x_9,
+        _tmp456,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp152*_tmp458 - _tmp153*_tmp458 + 0.378698224852071*_tmp459*x_6 + 0.378698224852071*_tmp459*x_9,
+        -_tmp152*_tmp460 - _tmp153*_tmp460 + 0.378698224852071*_tmp458*x_6 + 0.378698224852071*_tmp458*x_9,
+        0,
+        -_tmp152*_tmp461 - _tmp153*_tmp461 + 0.378698224852071*_tmp463*x_6 + 0.378698224852071*_tmp463*x_9,
+        -_tmp152*_tmp462 - _tmp153*_tmp462 + 0.378698224852071*_tmp461*x_6 + 0.378698224852071*_tmp461*x_9,
+        0,
+        -_tmp152*_tmp465 - 0.378698224852071*_tmp466*x_9,
+        -_tmp152*_tmp466 + 0.378698224852071*_tmp465*x_9,
+        0,
+        -_tmp152*_tmp467 + 0.378698224852071*_tmp468*x_9,
+        _tmp152*_tmp468 + 0.378698224852071*_tmp467*x_9,
+        0,
+        -_tmp153*_tmp471 - _tmp162*_tmp470,
+        _tmp162*_tmp471 - _tmp153*_tmp470,
+        0,
+        _tmp162*_tmp472 - _tmp153*_tmp473,
+        _tmp153*_tmp472 + _tmp162*_tmp473,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp474,
+        _tmp452,
+        0,
+        _tmp475,
+        _tmp454,
+        0,
+        _tmp478,
+        _tmp479,
+        0,
+        _tmp480,
+        -_tmp481,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp451,
+        _tmp474,
+        0,
+        _tmp455,
+        _tmp475,
+        0,
+        -_tmp479,
+        _tmp478,
+        0,
+        _tmp481,
+        _tmp480,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp482*(_tmp456*omega_1_1 - _tmp154*_tmp319 - _tmp164*(_tmp255 + _tmp338 + _tmp7)),
+        _tmp154*_tmp483,
+        -_tmp164*_tmp483,
+        _tmp484,
+        _tmp485,
+        _tmp486,
+        _tmp216,
+        0,
+        _tmp482*(_tmp152*(-_tmp148 + _tmp0*_tmp488 - _tmp1*_tmp487) + _tmp456*omega_2_1 - _tmp163*(_tmp139 - _tmp0*_tmp487 - _tmp1*_tmp488)),
+        _tmp489*_tmp491 + _tmp492*_tmp493,
+        _tmp491*_tmp492 - _tmp489*_tmp493,
+        _tmp484,
+        _tmp485,
+        _tmp486,
+        _tmp216,
+        0,
+        _tmp482*(_tmp456*omega_3_1 + _tmp494*(-_tmp329 - _tmp225*_tmp7) - _tmp495*(_tmp283 + _tmp7 + _tmp218*_tmp7)),
+        _tmp483*_tmp494,
+        -_tmp483*_tmp495,
+        _tmp484,
+        _tmp485,
+        _tmp486,
+        _tmp216,
+        0,
+        _tmp482*(_tmp163*(_tmp316 + _tmp288*_tmp7 - _tmp225*_tmp496) + _tmp456*omega_4_1 - _tmp152*(_tmp326 + _tmp286*_tmp7 - _tmp218*_tmp496)),
+        -_tmp218*_tmp493 - _tmp225*_tmp491,
+        -_tmp218*_tmp491 + 1136094.674556213*_tmp185*_tmp186*_tmp225*x_9,
+        _tmp484,
+        _tmp485,
+        _tmp486,
+        _tmp216,
+        0,
+        _tmp482*(_tmp162*(_tmp254 + _tmp220*_tmp7 - _tmp225*_tmp497) + _tmp456*omega_5_1 - _tmp153*(-_tmp331 - _tmp218*_tmp497 + 0.5*_tmp223*p_0)),
+        -_tmp218*_tmp498 - _tmp225*_tmp499,
+        _tmp225*_tmp498 - _tmp218*_tmp499,
+        _tmp484,
+        _tmp485,
+        _tmp486,
+        _tmp216,
+        0,
+        _tmp482*(_tmp153*(-_tmp332 - 0.008*_tmp1 + _tmp0*_tmp500) + _tmp456*omega_6_1 - _tmp162*(-_tmp221 - _tmp226 - _tmp338 - _tmp501 + 0.06*_tmp218 - 0.008*_tmp0 + _tmp222*_tmp223 + _tmp229*_tmp248 + _tmp250*_tmp252 - _tmp1*_tmp500)),
+        -_tmp0*_tmp498 + 1136094.674556213*_tmp1*_tmp185*_tmp186*x_7,
+        -_tmp0*_tmp499 - _tmp1*_tmp498,
+        _tmp484,
+        _tmp485,
+        _tmp486,
+        _tmp216,
+        0,
+        _tmp482*(_tmp152*(_tmp147 + _tmp327 + _tmp337 + 0.07*_tmp130 - _tmp133*_tmp502) + _tmp456*omega_7_1 - _tmp163*(-_tmp135 - _tmp136 - _tmp227 - _tmp339 - _tmp446 - _tmp501 + 0.05*_tmp218 + 0.04*_tmp286 + _tmp287*_tmp288 + _tmp291*_tmp310 + _tmp312*_tmp314 - _tmp130*_tmp502)),
+        _tmp130*_tmp491 + _tmp133*_tmp493,
+        _tmp133*_tmp491 - _tmp130*_tmp493,
+        _tmp484,
+        _tmp485,
+        _tmp486,
+        _tmp216,
+        0,
     ]
 
 
@@ -10338,6 +12185,16 @@ _MECHANISM = _Mechanism(
         # the sensitivities (templates/numpy/reduced_sens.py): per variant its routine and blocks
         sens=((_loaded_sens1, {'dR_dtheta': (0, 12, 7), 'dR_dp': (84, 12, 1), 'din_dtheta': (96, 35, 7), 'din_dp': (341, 35, 1), 'dD_dx': (376, 2, 12), 'dD_dtheta': (400, 2, 7), 'dD_dp': (414, 2, 1), 'dD_dout': (416, 2, 21)}), (_loaded_sens2, {'dR_dtheta': (0, 19, 7), 'dR_dp': (133, 19, 1), 'din_dtheta': (152, 70, 7), 'din_dp': (642, 70, 1), 'dD_dx': (712, 2, 19), 'dD_dtheta': (750, 2, 7), 'dD_dp': (764, 2, 1), 'dD_dout': (766, 2, 42)}), ),
         eps4=_plate_eps4,
+        # what the level reports beyond the deviations (templates/numpy/reduced_report.py): per
+        # variant its routine and blocks; the inputs, points (on the frame or not), plates
+        # (with an allowable stress or not), metres per file unit and the scales L, F
+        report=_LoadedTables(
+            routines=((_loaded_report1, {'dR_dv': (0, 12, 4), 'din_dv': (48, 21, 4), 'y': (132, 4, 1), 'dy_dx': (136, 4, 12), 'dy_dv': (184, 4, 4), 'dy_dout': (200, 4, 21), 'stress': (284, 7, 8)}), (_loaded_report2, {'dR_dv': (0, 19, 4), 'din_dv': (76, 42, 4), 'y': (244, 4, 1), 'dy_dx': (248, 4, 19), 'dy_dv': (324, 4, 4), 'dy_dout': (340, 4, 42), 'stress': (508, 7, 8)}), ),
+            inputs=('O_A',), points=('D',),
+            frame=(False,), plates=('O_A', 'C', 'O_B', 'E', 'B', 'A', 'D'),
+            limits=(False, False, False, False, False, False, False), unit_scale=1.0,
+            L=0.13, F=0.378698224852071,
+        ),
     ),
     loaded_solve=_reduced_solve,
     sens_rigid_blocks={'A': (0, 6, 6), 'dG_dv': (36, 6, 2), 'dR_dtheta': (48, 2, 6), 'dR_dv': (60, 2, 2)},
@@ -10354,10 +12211,11 @@ _MECHANISM = _Mechanism(
 )
 
 
-def evaluate(inputs, level='exact', params=None, links=True):
+def evaluate(inputs, level='exact', params=None, links=True, report=True):
     """Deviation of the points at `level` for broadcast input arrays (see the module docstring);
-    `links=False` leaves out the links' rotations (and any loop solve only they need)."""
-    return _evaluate(_MECHANISM, inputs, level, params, links)
+    `links=False` leaves out the links' rotations (and any loop solve only they need),
+    `report=False` what `loaded` reports beyond the deviations."""
+    return _evaluate_reported(_MECHANISM, inputs, level, params, links, report)
 
 
 def sensitivity(inputs, level='exact', params=None):

@@ -15,6 +15,16 @@ templates/c/reduced.c).
 x holds the scaled unknowns then the load factor t; `plates` the plate relation's values
 (along, across, omega) of every half plate; g = 1 or 2 half plates per plate.
 
+    loaded_report<g>  x, theta, plates, params  -> what `loaded` reports beyond the deviations
+                                                   (symkin.physics.reduced_reported): with v the
+                                                   inputs' compliant angles beyond the rigid and a
+                                                   virtual load (F_x, F_y, M) at every point of the
+                                                   plan, y every input's moment and every point's
+                                                   (dx, dy, dphi): dR/dv, din/dv, y, dy/dx, dy/dv,
+                                                   dy/d(plates) at v = 0; then per plate (k0, lx,
+                                                   ly, e_a, e_s, t/l, E', allowable stress or 0),
+                                                   its end loads in P's plate frame (the stress's)
+
     plate_values2     in = (theta, p, f, e_a, e_s)  -> plate_relation2's values (along, across,
                                                    omega) alone: the truncation estimate reads
                                                    no partials
@@ -33,9 +43,11 @@ from functools import cache
 
 import sympy as sp
 
+from ..core import vectors as V
 from ..kinematics.analysis import Analysis
 from ..physics import reduced
 from ..physics.plate_relation import relation
+from ..physics.stiffness import modulus, plate_stiffness
 from .literals import float_literals
 from .plate import SYMBOLS, plate_routine, shared_h, squares
 from .routines import Argument, Routine, flatten, layout, optimize
@@ -79,13 +91,34 @@ class LoadedPlan:
     est_limit: float = reduced.EST_LIMIT
     chord: float = CHORD
     chord_error: float = CHORD_ERROR
+    # what the loaded_report<g> routines report (None: not derived, symkin.codegen.loaded)
+    report: Reported | None = None
+
+
+@dataclass(frozen=True)
+class Reported:
+    """What the loaded_report<g> routines' outputs are of (symkin.physics.reduced_reported)."""
+
+    inputs: tuple[str, ...]  # the input hinges (label order): their moments' rows
+    points: tuple[str, ...]  # the points (the plan's order): each one's 3 rows after them
+    frame: tuple[bool, ...]  # per point: on the frame (no stiffness)
+    plates: tuple[str, ...]  # the plates (label order): the stress block's rows
+    limits: tuple[bool, ...]  # per plate: an allowable stress is given
+    unit_scale: float  # metres per file length unit (the moments in N m)
+    L: float  # the scales C's conditioning is judged by (reduced_reported.report)
+    F: float
 
 
 def loaded_routines(
-    analysis: Analysis, names: Sequence[str], theta: Argument, params: Argument
+    analysis: Analysis,
+    names: Sequence[str],
+    theta: Argument,
+    params: Argument,
+    reported: bool = True,
 ) -> tuple[dict[str, Routine], LoadedPlan]:
     """The routines of the reduced equilibrium for one and two half plates per plate (parameters
-    as symbols; the scales at the file's defaults), and their sizes."""
+    as symbols; the scales at the file's defaults), and their sizes; with `reported`, the
+    loaded_report<g> routines of what the level reports beyond the deviations."""
     an = analysis
     values = {p.symbol: p.value for p in an.mechanism.parameters}
     order = list(names) + sorted(n for n in (p.name for p in an.mechanism.points) if n not in names)
@@ -150,9 +183,117 @@ def loaded_routines(
             f"loaded ({g} half plate(s) per plate): deviation of every point",
             layout(("deviation", 2 * len(order), 1)),
         )
+        if reported:
+            routines[f"loaded_report{g}"] = _report_routine(r, names, x, theta, plates, params, sub)
         variants.append(Segments(g, n, ns, tuple(float(v) for v in r.scale)))
-    plan = LoadedPlan(tuple(variants), len(an.kin.unknowns), len(order), loads=bool(r.loads))
+    report = _reported(r, names) if reported else None
+    plan = LoadedPlan(
+        tuple(variants), len(an.kin.unknowns), len(order), loads=bool(r.loads), report=report
+    )
     return routines, plan
+
+
+def _reported(r: reduced.Reduced, names: Sequence[str]) -> Reported:
+    """The sizes and names of what loaded_report<g> gives."""
+    mech = r.kin.mechanism
+    hinge = {h.name: h for h in mech.hinges}
+    plates = tuple(r.hinges[a].name for a in sorted(r.plate))
+    L = max(r.L, r.lmin)
+    F = max(
+        [
+            float(d["EI"].subs(r._values_subs)) / (float(d["l"].subs(r._values_subs)) * L)
+            for d in r.plate.values()
+        ]
+        or [1.0]
+    )
+    return Reported(
+        inputs=tuple(r.hinges[a].name for a in r.inputs),
+        points=tuple(names),
+        frame=tuple(r.points[p][0] == 0 for p in names),
+        plates=plates,
+        limits=tuple(hinge[h].allowable_stress is not None for h in plates),
+        unit_scale=float(mech.unit_scale),
+        L=float(L),
+        F=float(F),
+    )
+
+
+def _report_routine(r: reduced.Reduced, names, x, theta, plates, params, sub) -> Routine:
+    """loaded_report<g>: the pieces symkin.physics.reduced.Reduced.reported assembles by the
+    implicit-function theorem (its "report" function's, at the plan's points), and the plates'
+    end loads in P's plate frame with what the stress formula reads (reduced_reported.plates)."""
+    g = r.segments
+    se = r._se
+    ordered = sorted(r.points)
+    nin = len(r.inputs)
+    virtual = r.extra[nin:]
+    by = list(r.extra[:nin]) + [
+        v for p in names for v in virtual[3 * ordered.index(p) : 3 * ordered.index(p) + 3]
+    ]
+    every = r._reported(se)
+    ys = sp.Matrix(
+        every[:nin]
+        + [
+            v
+            for p in names
+            for v in every[nin + 3 * ordered.index(p) : nin + 3 * ordered.index(p) + 3]
+        ]
+    )
+    rows = sp.Matrix(r._rows(se))
+    moving = sp.Matrix([v for a, j, *_ in r.segs for v in se["pf"][a, j]])
+    outs = list(plates.symbols)
+    zero = dict.fromkeys(r.extra, sp.S.Zero)
+    blocks = [
+        ("dR_dv", reduced._jacobian(rows, by)),
+        ("din_dv", reduced._jacobian(moving, by)),
+        ("y", ys),
+        ("dy_dx", reduced._jacobian(ys, r.x)),
+        ("dy_dv", reduced._jacobian(ys, by)),
+        ("dy_dout", reduced._jacobian(ys, outs)),
+    ]
+    exprs = [sub(sp.sympify(e).xreplace(zero)) for _, m in blocks for e in flatten(m.tolist())]
+    # every plate's end loads at its P clamp, scaled, and its stress formula's numbers
+    s = r._s
+    mech = r.kin.mechanism
+    stiff = plate_stiffness(mech, "loaded")
+    hinge = {h.name: h for h in mech.hinges}
+    for a in sorted(r.plate):
+        h = r.hinges[a]
+        d = r.plate[a]
+        px, py = r._position(s, h.P, tuple(r._clamp_p(a)))
+        mx, my = r._position(s, h.M, r.clamp_m[a])
+        turn = s["phi"][h.P] + s["dphi"][h.P]
+        nx, ny = s["n"][a]
+        m_p = s["mom"][a] + V.cross((mx - px, my - py), (nx, ny))
+        ei, length = d["EI"], d["l"]
+        lx, ly = V.rot(-(turn + d["alpha"]), (nx * length**2 / ei, ny * length**2 / ei))
+        st = stiff[h.name]
+        limit = hinge[h.name].allowable_stress
+        exprs += [
+            sub(e)
+            for e in (
+                m_p * length / ei,
+                lx,
+                ly,
+                d["ea"],
+                d["es"],
+                sp.sqrt(12 * st.EI / (st.EA * st.length**2)),
+                modulus(hinge[h.name]),
+                sp.S.Zero if limit is None else sp.sympify(limit),
+            )
+        ]
+    shapes = [(name, *m.shape) for name, m in blocks] + [("stress", len(r.plate), 8)]
+    return Routine(
+        f"loaded_report{g}",
+        (x, theta, plates, params),
+        (),
+        tuple(exprs),
+        f"loaded ({g} half plate(s) per plate), what it reports: dR/dv, din/dv, y, dy/dx, dy/dv, "
+        "dy/dout (v: the inputs' angles and virtual loads at the points, y: the inputs' moments "
+        "and the points' (dx, dy, dphi)), then per plate (k0, lx, ly, e_a, e_s, t/l, E', "
+        "allowable)",
+        layout(*shapes),
+    )
 
 
 @cache

@@ -25,6 +25,9 @@
                                           points' deviations D (symkin.sensitivity)
     sens_chain   params                -> ∂(default of p_j)/∂p_k, when defaults read parameters
     loaded_sens<g>, plate_eps4         -> the `loaded` level's (symkin.codegen.loaded_sens)
+    loaded_report<g>                   -> what `loaded` reports beyond the deviations: input
+                                          moments, point stiffness, plate stress
+                                          (symkin.codegen.loaded)
     links        theta, delta          -> rotation φ of every reported link and its deviation δφ
 
 and for the `loaded` level, the reduced equilibrium (docs/physics.md, "The Newton level";
@@ -189,6 +192,7 @@ def plan(
     sensitivity: bool = True,
     fixed: Mapping[str, sp.Expr] | None = None,
     pruned_inputs: Sequence[str] = (),
+    reported: bool = True,
 ) -> Plan:
     """Derive the routines for the requested points and levels (by default every generated level
     the file's data allows: `loaded` needs the plates' stiffness); with `report`, also the
@@ -199,7 +203,8 @@ def plan(
     holds those inputs constant: they leave the evaluators' arguments and their values are
     folded into the routines (an evaluator with fixed inputs has no sensitivities).
     `pruned_inputs`: the file's inputs that pruning dropped (docs/pruning.md), which the numpy
-    module accepts and ignores."""
+    module accepts and ignores. `reported`: at the `loaded` level, the loaded_report<g>
+    routines of the input moments, point stiffness and plate stress (symkin.codegen.loaded)."""
     an, kin = analysis, analysis.kin
     mech = an.mechanism
     hidden = {a.point for a in mech.actuators}  # the actuators' points: always computed
@@ -298,7 +303,7 @@ def plan(
     if any(lv.name in level_table.LOADED for lv in levels):
         # the reduced equilibrium (docs/physics.md, "The Newton level"), one and two half
         # plates per plate; the runtime's driver writes the points' deviation itself
-        found, loaded = loaded_routines(an, names, theta, params)
+        found, loaded = loaded_routines(an, names, theta, params, reported)
         routines.update(found)
     for lv in levels:
         if f"dev_{lv.routine}" in routines or lv.name in level_table.LOADED:

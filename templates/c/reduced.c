@@ -509,3 +509,40 @@ static void sk_loaded_deviation(const double *theta, const double *delta, const 
         out[i] = q[SK_NPAR + i];
     }
 }
+#if defined(SK_LOADED_IFT)
+
+/* The solution q holds (the parameters, the deviation, the variant solved and its x,
+   sk_reduced_pose) evaluated again for the implicit-function theorem (templates/c/
+   reduced_sens.c, reduced_report.c): r its variant at the parameters, st J's LU, the plates'
+   inputs and relation and the system's output there, vals the relation's values per half plate.
+   Returns 0, or 1 where J is singular. */
+static int sk_red_at_solution(const sk_mechanism *m, const double *theta, const double *q,
+                              sk_red *r, sk_red_state *st, double *vals)
+{
+    const sk_loaded *l = (const sk_loaded *)m->loaded;
+    const double *x = q + SK_NPAR + 2 * SK_NP + 1;
+    int n, i, k, c;
+    r->m = m;
+    r->l = l;
+    r->v = l->variants + (int)q[SK_NPAR + 2 * SK_NP];
+    r->params = q;
+    n = r->v->size;
+    if (n > 0 && sk_red_eval(r, x, theta, 1.0, st)) {
+        return 1;
+    }
+    if (n == 0) {
+        double rel[12 * SK_RS];
+        sk_red_inputs(r, x, theta, 1.0, st->xt, st->ins);
+        sk_red_relation(r, st->ins, rel, vals);
+        for (i = 0; i < 12 * r->v->plates_n; ++i) {
+            st->rel[i] = rel[i];
+        }
+    }
+    for (k = 0; k < r->v->plates_n; ++k) {
+        for (c = 0; c < 3; ++c) {
+            vals[3 * k + c] = st->rel[12 * k + c];
+        }
+    }
+    return 0;
+}
+#endif

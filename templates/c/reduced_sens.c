@@ -3,7 +3,7 @@
  * symkin.physics.reduced_sensitivity): the implicit-function theorem on the reduced equilibrium
  * R(x, theta, p) = 0 at the solution templates/c/reduced.c found, over the mechanism's
  * loaded_sens<g> and plate_eps4 routines. Only evaluators with the level and sensitivities hold
- * it (templates/c/source.c.j2), after templates/c/reduced.c, whose sk_red_eval it calls.
+ * it (templates/c/source.c.j2), after templates/c/reduced.c, whose sk_red_at_solution it calls.
  */
 #include <math.h>
 #include <stddef.h>
@@ -34,38 +34,19 @@ static int sk_reduced_rates(const void *mechanism, const double *theta, const do
                             const double *thu, double *dev)
 {
     const sk_mechanism *m = (const sk_mechanism *)mechanism;
-    const sk_loaded *l = (const sk_loaded *)m->loaded;
     const int v = (int)q[SK_NPAR + 2 * SK_NP];
     const sk_red_sens *rs = ((const sk_loaded_sens *)m->loaded_sens)->variants + v;
-    const double *x = q + SK_NPAR + 2 * SK_NP + 1;
     double s[SK_OUT], vals[3 * SK_RS], eps[6];
     double dth[SK_M * SK_NV + 1], din[5 * SK_RS * SK_NV + 1], dout[3 * SK_RS * SK_NV + 1];
     double dx[SK_RN * SK_NV + 1], col[SK_RN + 1], part[3 * SK_RS * 5 + 1];
     sk_red_state st;
     sk_red r;
     int n, ns, i, j, k, c, e;
-    r.m = m;
-    r.l = l;
-    r.v = l->variants + v;
-    r.params = q;
-    n = r.v->size;
-    ns = r.v->plates_n;
-    if (n > 0 && sk_red_eval(&r, x, theta, 1.0, &st)) {
+    if (sk_red_at_solution(m, theta, q, &r, &st, vals)) {
         return 1;
     }
-    if (n == 0) {
-        double rel[12 * SK_RS];
-        sk_red_inputs(&r, x, theta, 1.0, st.xt, st.ins);
-        sk_red_relation(&r, st.ins, rel, vals);
-        for (i = 0; i < 12 * ns; ++i) {
-            st.rel[i] = rel[i];
-        }
-    }
-    for (k = 0; k < ns; ++k) {
-        for (c = 0; c < 3; ++c) {
-            vals[3 * k + c] = st.rel[12 * k + c];
-        }
-    }
+    n = r.v->size;
+    ns = r.v->plates_n;
     rs->fn(st.xt, theta, vals, q, s);
     /* dtheta/dv of every hinge: the non-input ones' from the rigid closure, an input's own 1 */
     for (i = 0; i < SK_M * SK_NV; ++i) {

@@ -41,6 +41,7 @@ typedef void (*sk_fn3)(const double *a, const double *b, const double *c, double
 #if defined(SK_LOOPS) || defined(SK_LOADED)
 /* ---- dense linear algebra ---- */
 
+#if defined(SK_LOOPS)
 /* Gaussian elimination with partial pivoting (the first largest pivot) of the n x n row-major
    a, in place, for the n x m row-major right-hand sides b, which become the solution. Returns 0,
    or 1 when a pivot is zero or not finite. */
@@ -93,6 +94,7 @@ static int sk_solve(int n, double *a, int m, double *b)
     }
     return 0;
 }
+#endif
 
 #if defined(SK_LOADED)
 

@@ -386,3 +386,44 @@ def _reduced_solve(mech, x, theta, p, ok):
         q.x[i].reshape(-1)[where] = v
     q.variant.reshape(-1)[where] = flat_variant
     return delta, q, ok
+
+
+def _red_block(out, block, b):
+    """A routine's block (offset, rows, cols) as a (b, rows, cols) array."""
+    at, rows, cols = block
+    if not rows * cols:
+        return numpy.zeros((b, rows, cols))
+    values = [_red_column(out[at + i], b) for i in range(rows * cols)]
+    return numpy.stack(values, axis=-1).reshape(b, rows, cols)
+
+
+def _red_solutions(mech, theta, p, q, shape, good, routines):
+    """The configurations the loaded level solved (q: the variant and its x; shape: the
+    configurations', good: a flat mask of them),
+    variant by variant, evaluated again at their solution for the implicit-function theorem
+    (templates/numpy/reduced_sens.py, reduced_report.py): per variant solved (where, solver,
+    routines[variant]'s output, J (b, n, n), dR/d(plates) (b, n, 3 n_s), the half plates'
+    inputs, their x-Jacobian and the relation there)."""
+    tb = mech.loaded
+    variant = numpy.broadcast_to(q.variant, shape).reshape(-1)
+
+    def flat(values, where):
+        return [numpy.broadcast_to(v, shape).reshape(-1)[where].astype(float) for v in values]
+
+    for index, (variant_row, fn) in enumerate(zip(tb.variants, routines)):
+        where = numpy.flatnonzero(good & (variant == index))
+        b = where.size
+        if not b:
+            continue
+        solver = _Batch(tb, variant_row, index + 1)
+        n, ns = solver.size, solver.plates
+        x = numpy.array(flat(q.x[:n], where)).reshape(n, b)
+        th, pb = flat(theta, where), flat(p, where)
+        with numpy.errstate(all="ignore"):
+            _, jac = solver.system(x, th, pb, 1.0)
+            args, ins, dins = solver._inputs(x, th, pb, 1.0)
+            rel, vals = solver._relation(ins)
+            sys = solver.system_fn(args, th, vals, pb)
+            out = fn(args, th, vals, pb)
+        jo = _red_block(sys, (n + n * n, n, 3 * ns), b)
+        yield where, solver, out, jac, jo, ins, dins, rel

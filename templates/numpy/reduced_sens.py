@@ -6,18 +6,9 @@ sensitivities hold it (templates/numpy/module.py.j2), after templates/numpy/redu
 """
 
 import numpy
-from reduced import _Batch, _red_column  # the module holds both: reduced.py
+from reduced import _red_block, _red_column, _red_solutions  # the module holds them: reduced.py
 
 # ---- symkin runtime: every generated module with the loaded level's sensitivities holds it ----
-
-
-def _red_block(out, block, b):
-    """A routine's block (offset, rows, cols) as a (b, rows, cols) array."""
-    at, rows, cols = block
-    if not rows * cols:
-        return numpy.zeros((b, rows, cols))
-    values = [_red_column(out[at + i], b) for i in range(rows * cols)]
-    return numpy.stack(values, axis=-1).reshape(b, rows, cols)
 
 
 def _reduced_rates(mech, theta, p, q, thu, ok):
@@ -30,28 +21,13 @@ def _reduced_rates(mech, theta, p, q, thu, ok):
     npar, nv, m = len(mech.parameter_names), mech.n_variables, mech.n_theta
     npt = 2 * len(mech.point_names)
     dev = numpy.full((ok.size, npt, nv), numpy.nan)
-    variant = numpy.broadcast_to(q.variant, shape).reshape(-1)
     good = numpy.broadcast_to(ok, shape).reshape(-1)
-
-    def flat(values, where):
-        return [numpy.broadcast_to(v, shape).reshape(-1)[where].astype(float) for v in values]
-
-    for index, (variant_row, (fn, blocks)) in enumerate(zip(tb.variants, tb.sens)):
-        where = numpy.flatnonzero(good & (variant == index))
-        b = where.size
-        if not b:
-            continue
-        solver = _Batch(tb, variant_row, index + 1)
-        n, ns = solver.size, solver.plates
-        x = numpy.array(flat(q.x[:n], where)).reshape(n, b)
-        th, pb = flat(theta, where), flat(p, where)
-        with numpy.errstate(all="ignore"):
-            _, jac = solver.system(x, th, pb, 1.0)
-            args, ins, dins = solver._inputs(x, th, pb, 1.0)
-            rel, vals = solver._relation(ins)
-            sys = solver.system_fn(args, th, vals, pb)
-            s = fn(args, th, vals, pb)
-        jo = _red_block(sys, (n + n * n, n, 3 * ns), b)
+    routines = [fn for fn, _ in tb.sens]
+    for where, solver, s, jac, jo, ins, dins, rel in _red_solutions(
+        mech, theta, p, q, shape, good, routines
+    ):
+        blocks = tb.sens[solver.count - 1][1]
+        b, n, ns = where.size, solver.size, solver.plates
         # dtheta/dv of every hinge: the non-input ones' from the rigid closure, an input's own 1
         dth = numpy.zeros((b, m, nv))
         if thu is not None:

@@ -105,6 +105,12 @@ class Backend:
                 for g in (1, 2)
                 if f"loaded_sens{g}" in plan.routines
             ],
+            # the loaded level's report routines: per variant the offsets of their blocks
+            "loaded_report": [
+                offsets(plan, f"loaded_report{g}", LOADED_REPORT_BLOCKS)
+                for g in (1, 2)
+                if f"loaded_report{g}" in plan.routines
+            ],
             "routines": [routine_data(r, self.printer) for r in plan.routines.values()],
             "have": set(plan.routines),
             "blocks": {
@@ -148,6 +154,10 @@ LOADED_SENS_BLOCKS = (
     "dD_dp",
     "dD_dout",
 )
+
+
+#: The blocks of the loaded level's report routines (symkin.codegen.loaded), in order.
+LOADED_REPORT_BLOCKS = ("dR_dv", "din_dv", "y", "dy_dx", "dy_dv", "dy_dout", "stress")
 
 
 def level_rows(plan: Plan) -> list[dict]:

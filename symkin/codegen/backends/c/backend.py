@@ -35,6 +35,13 @@ def features(plan: Plan) -> list[str]:
             ("SK_CLOSED_FORM", loops and plan.closed_form),
             ("SK_CONTINUATION", loops and not plan.closed_form),
             ("SK_LOADED", plan.loaded is not None),
+            # the loaded level's implicit-function theorem at its solution: its sensitivities
+            # (templates/c/reduced_sens.c) or its report (reduced_report.c)
+            (
+                "SK_LOADED_IFT",
+                plan.loaded is not None
+                and ("loaded_sens1" in plan.routines or "loaded_report1" in plan.routines),
+            ),
             ("SK_LINKS", bool(plan.reported_links)),
             ("SK_SENSITIVITY", plan.sensitivity),
         )

@@ -1,0 +1,266 @@
+/*
+ * symkin's C runtime for what the `loaded` level reports beyond the deviations (docs/physics.md,
+ * "What loaded reports"; symkin.physics.reduced_reported): every input's moment and dM/dtheta
+ * and every point's 3 x 3 stiffness by the implicit-function theorem on the reduced equilibrium
+ * at the solution templates/c/reduced.c found (the mechanism's loaded_report<g> routines), every
+ * plate's largest normal stress by integrating the plate from its end loads with RK4, as
+ * templates/numpy/reduced_report.py. Only evaluators with the level's loaded_report<g> routines
+ * hold it (templates/c/source.c.j2), after templates/c/reduced.c, whose sk_red_at_solution it
+ * calls, and runtime.c's sk_pose; the generated file defines SK_RQ (the inputs and three per point:
+ * the report's variables, and one).
+ */
+#include <math.h>
+#include <stddef.h>
+
+/* ---- symkin runtime: every generated .c with the loaded level's report holds what follows ---- */
+
+/* One variant's report routine (x, theta, plates, params) and where its blocks start, with q
+   the report's variables (the inputs' compliant angles, a virtual load (Fx, Fy, M) at every
+   point) and k its quantities (the inputs' moments, every point's dx, dy, dphi; as many):
+   dR/dv (n x q), din/dv (3 n_s x q), y (k), dy/dx (k x n), dy/dv (k x q), dy/dout (k x 3 n_s),
+   then per plate (k0, lx, ly, e_a, e_s, t/l, E', allowable stress). */
+typedef struct {
+    sk_fn4 fn;
+    int dR_dv, din_dv, y, dy_dx, dy_dv, dy_dout, stress;
+} sk_red_rep;
+
+/* What the report is of: per variant its routine; the inputs, points (on the frame or not),
+   plates (with an allowable stress or not); metres per file unit; the scales L, F C's
+   conditioning is judged by. */
+typedef struct {
+    sk_red_rep variants[2];
+    int n_inputs, n_points, n_plates;
+    const int *frame, *limits;
+    double unit_scale, L, F;
+} sk_loaded_report;
+
+/* Sections per plate where the stress is sampled (symkin.physics.reported.SECTIONS), one RK4
+   step each; a point's compliance this ill-conditioned (1-norm, scaled) is singular. */
+#define SK_REP_SECTIONS 64
+#define SK_REP_SINGULAR 1e12
+
+/* psi'' of the plate's IVP (symkin.physics.beams): -f_Q (1 + (e_a - e_s) f_N). */
+static double sk_rep_bend(double psi, double lx, double ly, double d)
+{
+    const double c = cos(psi), s = sin(psi);
+    return -(ly * c - lx * s) * (1.0 + d * (lx * c + ly * s));
+}
+
+/* One plate's largest normal stress, its strain, safety factor (NaN without an allowable
+   stress) and where along the plate (0..1) into out[0..3], from row = (k0, lx, ly, e_a, e_s,
+   t/l, E', allowable): psi(0) = 0, psi'(0) = k0 by fixed-step RK4, the strain
+   |psi'| t/(2l) + |f_N| (t/l)^2/12 at every section, the parabola's vertex through the three
+   samples around an interior maximum (symkin.physics.reported.plate_stress). */
+static void sk_rep_plate(const double *row, int has_limit, double *out)
+{
+    const double lx = row[1], ly = row[2], d = row[3] - row[4], t = row[5];
+    const double h = 1.0 / SK_REP_SECTIONS;
+    double strain[SK_REP_SECTIONS + 1], psi = 0.0, om = row[0], value, where, stress;
+    int i, j = 0;
+    for (i = 0; i <= SK_REP_SECTIONS; ++i) {
+        strain[i] = fabs(om) * t / 2.0 + fabs(lx * cos(psi) + ly * sin(psi)) * t * t / 12.0;
+        if (strain[i] > strain[j]) {
+            j = i;                  /* the first largest, as numpy's argmax */
+        }
+        if (i < SK_REP_SECTIONS) {
+            const double a1 = om, b1 = sk_rep_bend(psi, lx, ly, d);
+            const double a2 = om + h / 2 * b1, b2 = sk_rep_bend(psi + h / 2 * a1, lx, ly, d);
+            const double a3 = om + h / 2 * b2, b3 = sk_rep_bend(psi + h / 2 * a2, lx, ly, d);
+            const double a4 = om + h * b3, b4 = sk_rep_bend(psi + h * a3, lx, ly, d);
+            psi += h / 6 * (a1 + 2 * a2 + 2 * a3 + a4);
+            om += h / 6 * (b1 + 2 * b2 + 2 * b3 + b4);
+        }
+    }
+    value = strain[j];
+    where = (double)j / SK_REP_SECTIONS;
+    if (j > 0 && j < SK_REP_SECTIONS) {
+        const double a = strain[j - 1], b = strain[j], c = strain[j + 1];
+        const double bend = a - 2 * b + c;
+        if (bend < 0) {
+            const double shift = (a - c) / (2 * bend);
+            value = b - (a - c) * shift / 4;
+            where = (j + shift) / SK_REP_SECTIONS;
+        }
+    }
+    stress = row[6] * value;
+    out[0] = stress;
+    out[1] = value;
+    out[2] = !has_limit ? NAN : stress > 0 ? row[7] / stress : HUGE_VAL;
+    out[3] = where;
+}
+
+/* The 1-norm of a 3 x 3 matrix. */
+static double sk_rep_norm1(const double *a)
+{
+    double best = 0.0;
+    int c;
+    for (c = 0; c < 3; ++c) {
+        const double s = fabs(a[c]) + fabs(a[3 + c]) + fabs(a[6 + c]);
+        best = s > best ? s : best;
+    }
+    return best;
+}
+
+/* K = C^-1 of a point's compliance C (3 x 3) into k, NaN where C is singular: its 1-norm
+   condition, scaled by L and F as reduced_reported.report scales it (there the 2-norm's),
+   above SK_REP_SINGULAR or not finite. */
+static void sk_rep_stiffness(const sk_loaded_report *rp, const double *c, double *k)
+{
+    const double w[3] = {rp->F / rp->L, rp->F / rp->L, rp->F}, u[3] = {1.0, 1.0, 1.0 / rp->L};
+    double lu[9], scaled[9], inv[9], col[3];
+    int piv[3], i, j;
+    for (i = 0; i < 9; ++i) {
+        lu[i] = c[i];
+        scaled[i] = c[i] * w[i / 3] * u[i % 3];
+        k[i] = NAN;
+    }
+    if (sk_lu(3, lu, piv)) {
+        return;
+    }
+    for (j = 0; j < 3; ++j) {
+        col[0] = col[1] = col[2] = 0.0;
+        col[j] = 1.0;
+        sk_lu_solve(3, lu, piv, col);
+        for (i = 0; i < 3; ++i) {
+            inv[3 * i + j] = col[i];
+        }
+    }
+    {
+        /* the scaled compliance's inverse: inv with rows over u, columns over w */
+        double sinv[9];
+        for (i = 0; i < 9; ++i) {
+            sinv[i] = inv[i] / (u[i / 3] * w[i % 3]);
+        }
+        if (!(sk_rep_norm1(scaled) * sk_rep_norm1(sinv) <= SK_REP_SINGULAR)) {
+            return;
+        }
+    }
+    for (i = 0; i < 9; ++i) {
+        k[i] = inv[i];
+    }
+}
+
+/* What the loaded level reports at its solution (q: the parameters, the deviation, the variant
+   solved and its x, sk_reduced_pose) into out: per input its moment (N m) and dM/dtheta
+   (N m/rad), per point its stiffness K (9, row-major; NaN on the frame or where singular), per
+   plate its stress (Pa), strain, safety factor and section. Returns 0, or 1 where J is
+   singular. */
+static int sk_reduced_report(const sk_mechanism *m, const sk_loaded_report *rp,
+                             const double *theta, const double *q, double *out)
+{
+    const sk_red_rep *rr = rp->variants + (int)q[SK_NPAR + 2 * SK_NP];
+    const int nin = rp->n_inputs, nq = nin + 3 * rp->n_points;
+    double s[SK_OUT], vals[3 * SK_RS], dout[3 * SK_RS], col[SK_RN + 1];
+    double rates[SK_RQ * SK_RQ];
+    sk_red_state st;
+    sk_red r;
+    int n, ns, i, j, k, c, e;
+    if (sk_red_at_solution(m, theta, q, &r, &st, vals)) {
+        return 1;
+    }
+    n = r.v->size;
+    ns = r.v->plates_n;
+    rr->fn(st.xt, theta, vals, q, s);
+    for (c = 0; c < nq; ++c) {
+        /* dout/dv at fixed x: the relation's partials . din/dv */
+        for (k = 0; k < ns; ++k) {
+            for (i = 0; i < 3; ++i) {
+                double sum = 0.0;
+                for (e = 0; e < 3; ++e) {
+                    sum += st.rel[12 * k + 3 + 3 * i + e] * s[rr->din_dv + (3 * k + e) * nq + c];
+                }
+                dout[3 * k + i] = sum;
+            }
+        }
+        /* dx/dv = -J^-1 (dR/dv + dR/dout dout/dv) with J's LU */
+        for (i = 0; i < n; ++i) {
+            const double *jo = st.sys + n + n * n + i * 3 * ns;
+            double sum = s[rr->dR_dv + i * nq + c];
+            for (e = 0; e < 3 * ns; ++e) {
+                sum += jo[e] * dout[e];
+            }
+            col[i] = -sum;
+        }
+        if (n > 0) {
+            sk_lu_solve(n, st.lu, st.piv, col);
+        }
+        /* dout/dv along the solution: + the partials . din/dx dx/dv */
+        for (k = 0; k < ns; ++k) {
+            for (i = 0; i < 3; ++i) {
+                double sum = 0.0;
+                for (e = 0; e < 3; ++e) {
+                    const double *dinx = st.ins + 5 * ns + (3 * k + e) * n;
+                    for (j = 0; j < n; ++j) {
+                        sum += st.rel[12 * k + 3 + 3 * i + e] * dinx[j] * col[j];
+                    }
+                }
+                dout[3 * k + i] += sum;
+            }
+        }
+        for (i = 0; i < nq; ++i) {
+            double sum = s[rr->dy_dv + i * nq + c];
+            for (e = 0; e < n; ++e) {
+                sum += s[rr->dy_dx + i * n + e] * col[e];
+            }
+            for (e = 0; e < 3 * ns; ++e) {
+                sum += s[rr->dy_dout + i * 3 * ns + e] * dout[e];
+            }
+            rates[i * nq + c] = sum;
+        }
+    }
+    for (i = 0; i < nin; ++i) {
+        out[2 * i] = s[rr->y + i] * rp->unit_scale;
+        out[2 * i + 1] = rates[i * nq + i] * rp->unit_scale;
+    }
+    out += 2 * nin;
+    for (k = 0; k < rp->n_points; ++k) {
+        double cm[9];
+        for (i = 0; i < 3; ++i) {
+            for (c = 0; c < 3; ++c) {
+                cm[3 * i + c] = rates[(nin + 3 * k + i) * nq + nin + 3 * k + c];
+            }
+        }
+        sk_rep_stiffness(rp, cm, out + 9 * k);
+        if (rp->frame[k]) {
+            sk_nan(out + 9 * k, 9);
+        }
+    }
+    out += 9 * rp->n_points;
+    for (k = 0; k < rp->n_plates; ++k) {
+        sk_rep_plate(s + rr->stress + 8 * k, rp->limits[k], out + 4 * k);
+    }
+    return 0;
+}
+
+/* <name>_loaded_report (the generated header documents it): the configuration solved at the
+   loaded level `level`, then sk_reduced_report; out NaN on any non-zero return. */
+static int sk_loaded_report_pose(const sk_mechanism *m, const sk_loaded_report *rp, int level,
+                                 const double *inputs, const double *params, double *out)
+{
+    double theta[SK_M], delta[SK_K + 1], constants[SK_NQ];
+    const double *q;
+    const sk_level *lv = sk_find_level(m, level);
+    const int size = 2 * rp->n_inputs + 9 * rp->n_points + 4 * rp->n_plates;
+    int status, i;
+    if (out == NULL) {
+        return 3;
+    }
+    if (params == NULL) {
+        params = m->defaults;
+    }
+    status = inputs == NULL || lv == NULL
+                 ? 3
+                 : sk_pose(m, lv, inputs, params, 0, theta, delta, constants, &q);
+    if (status == 0) {
+        status = sk_reduced_report(m, rp, theta, q, out);
+    }
+    for (i = 0; status == 0 && i < 2 * rp->n_inputs; ++i) {
+        if (!isfinite(out[i])) {
+            status = 2;             /* a non-finite moment is never a success */
+        }
+    }
+    if (status != 0) {
+        sk_nan(out, size);
+    }
+    return status;
+}
