@@ -15,7 +15,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 import pytest
-from conftest import EXAMPLES, ROOT
+from conftest import EXAMPLES, ROOT, once_per_run
 
 import symkin
 from symkin.cli.commands import main
@@ -74,17 +74,28 @@ def write(files: dict[str, bytes], folder: Path) -> Path:
 
 
 class _Reports(Mapping):
-    """example -> (standalone files, appendix files), each generated on first use in this
-    process: an xdist worker derives only the examples its tests ask for."""
+    """example -> (standalone files, appendix files), each generated on first use in this run:
+    by the first xdist worker that asks (conftest.once_per_run), read back by the others."""
 
-    def __init__(self) -> None:
+    def __init__(self, factory) -> None:
+        self._factory = factory
         self._done: dict[str, tuple[dict[str, bytes], dict[str, bytes]]] = {}
 
     def __getitem__(self, name: str) -> tuple[dict[str, bytes], dict[str, bytes]]:
         if name not in EXAMPLE_NAMES:
             raise KeyError(name)
         if name not in self._done:
-            self._done[name] = _report(name)
+
+            def build(folder: Path) -> None:
+                for part, files in zip(("standalone", "appendix"), _report(name), strict=True):
+                    write(files, folder / part)
+
+            folder = once_per_run(self._factory, f"report-{name}", build)
+            standalone, appendix = (
+                {p.name: p.read_bytes() for p in sorted((folder / part).iterdir())}
+                for part in ("standalone", "appendix")
+            )
+            self._done[name] = (standalone, appendix)
         return self._done[name]
 
     def __iter__(self):
@@ -124,9 +135,9 @@ def _report(name: str) -> tuple[dict[str, bytes], dict[str, bytes]]:
 
 
 @pytest.fixture(scope="session")
-def reports() -> Mapping[str, tuple[dict[str, bytes], dict[str, bytes]]]:
-    """example -> (standalone files, appendix files), generated once per process."""
-    return _Reports()
+def reports(tmp_path_factory) -> Mapping[str, tuple[dict[str, bytes], dict[str, bytes]]]:
+    """example -> (standalone files, appendix files), generated once per run."""
+    return _Reports(tmp_path_factory)
 
 
 # -- structure of the output ---------------------------------------------------------------------

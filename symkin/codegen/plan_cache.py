@@ -210,10 +210,15 @@ def kept(
         return derive()
     folder = _folder() if _mode() == "disk" else None
     value = _lookup(key, kind, folder)
-    if value is None:
+    if value is None and folder is None:
         value = derive()
-        if folder is not None:
-            _write(folder, key, value)
+    elif value is None:
+        # one process derives, another that needs it meanwhile waits and reads it
+        with toolchain.exclusive(f"plan-{key}"):
+            value = _read(folder, key, kind)
+            if value is None:
+                value = derive()
+                _write(folder, key, value)
     return _remember(key, value)
 
 
