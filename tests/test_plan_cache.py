@@ -31,6 +31,13 @@ if sys.argv[2] == "forbid":
     def boom(*args, **kwargs):
         raise AssertionError("derived although the plan was kept")
     pipeline.plan = boom
+if sys.argv[2] == "count":
+    derive = pipeline.plan
+    def counted(*args, **kwargs):
+        with open(sys.argv[3], "a") as tally:
+            tally.write("derived\\n")
+        return derive(*args, **kwargs)
+    pipeline.plan = counted
 an = symkin.analyze(symkin.load(sys.argv[1]))
 p = pipeline.plan_for(an)
 texts = pipeline.emit(p, "c", "x") + pipeline.emit(p, "numpy", "x")
@@ -196,3 +203,18 @@ def test_an_evaluation_reuses_a_plan_with_sensitivities_and_gives_the_same_numbe
     for backend, w in want.items():
         got = evaluate(again, {"F1": "0.03"}, "exact", backend=backend)
         assert got.points == w.points, backend
+
+
+def test_two_processes_at_once_derive_the_plan_once(tmp_path):
+    """The second process waits for the first's plan (toolchain.exclusive) and reads it."""
+    cache, tally = tmp_path / "cache", tmp_path / "tally"
+    env = {**os.environ, "SYMKIN_CACHE": str(cache)}
+    args = [sys.executable, "-c", SCRIPT, str(PARALLELOGRAM), "count", str(tally)]
+    procs = [
+        subprocess.Popen(args, cwd=ROOT, env=env, stdout=subprocess.PIPE, text=True)
+        for _ in range(2)
+    ]
+    outs = [p.communicate(timeout=600)[0].strip() for p in procs]
+    assert [p.returncode for p in procs] == [0, 0]
+    assert outs[0] == outs[1] and len(outs[0]) == 64
+    assert tally.read_text() == "derived\n"
