@@ -639,10 +639,16 @@ def reduced_equilibrium(
     solvers = _REDUCED.setdefault(analysis, {})
 
     def solver(count: int) -> reduced.Reduced:
-        key = (tuple(sorted((str(k), str(v)) for k, v in exact_params.items())), backend, count)
+        values = tuple(sorted((str(k), str(v)) for k, v in exact_params.items()))
+        key = (values, backend, count)
         if key not in solvers:
             modules = _float_modules if backend == "numpy" else None
-            solvers[key] = reduced.Reduced(analysis.kin, exact_params, modules, count)
+            other = solvers.get((values, "sympy" if backend == "numpy" else "numpy", count))
+            if other is not None:  # the other backend's derivation, lambdified anew
+                modules = modules or (lambda: [special.mpmath_namespace(), "mpmath"])
+                solvers[key] = other.twin(backend, modules)
+            else:
+                solvers[key] = reduced.Reduced(analysis.kin, exact_params, modules, count)
         return solvers[key]
 
     ev = _mpmath_evaluator(analysis)
