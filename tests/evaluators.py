@@ -47,14 +47,17 @@ def require_compiler():
 class Generated:
     """A mechanism with its analysis, numpy module and compiled C library."""
 
-    def __init__(self, key=None, mech=None, sensitivity=True):
+    def __init__(self, key=None, mech=None, sensitivity=True, levels=None):
+        """`sensitivity` False and `levels` (names) derive less where a test needs less:
+        symkin.evaluate finds this plan then (pipeline.plan_covering)."""
         if mech is None:
             source = SOURCES[key]
             mech = symkin.load(source) if not isinstance(source, str) else symkin.loads(source)
         self.mech = mech
         self.analysis = symkin.analyze(self.mech)
+        # emitted for the file's own path, as evaluate's are: one compile serves both
         self.plan, self.numpy = pipeline.build(
-            self.analysis, "numpy", "test", sensitivity=sensitivity
+            self.analysis, "numpy", self.mech.path, sensitivity=sensitivity, levels=levels
         )
         self._lib = None
 
@@ -62,7 +65,7 @@ class Generated:
     def lib(self):
         if self._lib is None:
             require_compiler()
-            self._lib = pipeline.evaluator(self.plan, "c", "test", links=False)
+            self._lib = pipeline.evaluator(self.plan, "c", self.mech.path, links=False)
         return self._lib
 
     def params(self, overrides=None):

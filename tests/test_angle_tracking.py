@@ -59,7 +59,7 @@ def reference(ref: Reference, name: str, value: float) -> dict | None:
 @pytest.mark.parametrize("key", sorted(CASES))
 def test_every_backend_follows_the_oracle_over_the_input_range(key):
     text, name = CASES[key]
-    g = Generated(mech=symkin.loads(text, f"{key}.toml"))
+    g = Generated(mech=symkin.loads(text, f"{key}.toml"), sensitivity=False, levels=["exact"])
     ref = Reference(g.mech)
     outcomes = {"refused": 0, "agreed": 0}
     for value in GRID:
@@ -102,7 +102,7 @@ def test_every_backend_follows_the_oracle_over_the_input_range(key):
 def test_the_four_bar_beyond_half_a_turn_is_refused_not_wrapped():
     """A0 = -3: the oracle's hinge A reaches +3.35 rad continuously; the dyad formula wraps it
     to -2.93. Every backend refuses, and says why."""
-    g = Generated(mech=symkin.load(EXAMPLES / "four_bar.toml"))
+    g = Generated(mech=symkin.load(EXAMPLES / "four_bar.toml"), sensitivity=False, levels=["exact"])
     with mpmath.workdps(25):
         a = Reference(g.mech).solve({"A0": "-3.0"}, dps=25)["angles"]["A"]
     assert 3.3 < a < 3.4
@@ -116,7 +116,7 @@ def test_the_four_bar_beyond_half_a_turn_is_refused_not_wrapped():
 
 @pytest.mark.parametrize("value", ["1e8", "-1e8", "1e12", "1e16", "-1e16", "6.3"])
 def test_inputs_beyond_the_bound_are_refused_alike(value):
-    g = Generated(mech=symkin.load(EXAMPLES / "four_bar.toml"))
+    g = Generated(mech=symkin.load(EXAMPLES / "four_bar.toml"), sensitivity=False, levels=["exact"])
     for backend in ("sympy", "numpy", "c"):
         with pytest.raises(AssemblyError, match=r"\|angle\| <= pi"):
             evaluate(g.analysis, {"A0": value}, "exact", backend=backend)
@@ -125,7 +125,7 @@ def test_inputs_beyond_the_bound_are_refused_alike(value):
 
 
 def test_the_rule_lives_in_the_solver_settings():
-    g = Generated(mech=symkin.load(EXAMPLES / "four_bar.toml"))
+    g = Generated(mech=symkin.load(EXAMPLES / "four_bar.toml"), sensitivity=False, levels=["exact"])
     from symkin.codegen import pipeline
 
     # the generated tables carry it to the runtimes' winding test

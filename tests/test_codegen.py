@@ -138,7 +138,7 @@ def test_c_rejects_bad_arguments():
 
 def test_numpy_module_imports_only_numpy_and_the_standard_library():
     g = generated("four_bar")
-    tree = ast.parse(pipeline.emit(g.plan, "numpy", "test")[0])
+    tree = ast.parse(pipeline.emit(g.plan, "numpy", g.mech.path)[0])
     modules = {
         alias.name.split(".")[0]
         for node in ast.walk(tree)
@@ -183,7 +183,7 @@ def test_c_harness_under_address_and_undefined_sanitizers(tmp_path, key):
     require_compiler()
     g = generated(key)
     name = g.mech.name
-    header, code = pipeline.emit(g.plan, "c", "test")
+    header, code = pipeline.emit(g.plan, "c", g.mech.path)
     (tmp_path / f"{name}.h").write_text(header)
     (tmp_path / f"{name}.c").write_text(code)
     (tmp_path / "main.c").write_text(

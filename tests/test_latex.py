@@ -15,7 +15,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 import pytest
-from conftest import EXAMPLES, ROOT
+from conftest import EXAMPLES, ROOT, once_per_run
 
 import symkin
 from symkin.cli.commands import main
@@ -74,17 +74,28 @@ def write(files: dict[str, bytes], folder: Path) -> Path:
 
 
 class _Reports(Mapping):
-    """example -> (standalone files, appendix files), each generated on first use in this
-    process: an xdist worker derives only the examples its tests ask for."""
+    """example -> (standalone files, appendix files), each generated on first use in this run:
+    by the first xdist worker that asks (conftest.once_per_run), read back by the others."""
 
-    def __init__(self) -> None:
+    def __init__(self, factory) -> None:
+        self._factory = factory
         self._done: dict[str, tuple[dict[str, bytes], dict[str, bytes]]] = {}
 
     def __getitem__(self, name: str) -> tuple[dict[str, bytes], dict[str, bytes]]:
         if name not in EXAMPLE_NAMES:
             raise KeyError(name)
         if name not in self._done:
-            self._done[name] = _report(name)
+
+            def build(folder: Path) -> None:
+                for part, files in zip(("standalone", "appendix"), _report(name), strict=True):
+                    write(files, folder / part)
+
+            folder = once_per_run(self._factory, f"report-{name}", build)
+            standalone, appendix = (
+                {p.name: p.read_bytes() for p in sorted((folder / part).iterdir())}
+                for part in ("standalone", "appendix")
+            )
+            self._done[name] = (standalone, appendix)
         return self._done[name]
 
     def __iter__(self):
@@ -95,38 +106,17 @@ class _Reports(Mapping):
 
 
 def _report(name: str) -> tuple[dict[str, bytes], dict[str, bytes]]:
-    from symkin.codegen import pipeline
-    from symkin.codegen.backends.latex import report
-    from symkin.graph.structure import build
-    from symkin.kinematics.analysis import Analysis
-    from symkin.studies.derive import physics_reference
-
+    """The standalone report and the appendix, as `derive` makes them: the plan and the
+    physical reference's 40-digit solves are derived once for both (kept by content,
+    docs/cli.md), and shared with the other tests that derive the file."""
     mech = symkin.load(EXAMPLES / f"{name}.toml")
-    an = Analysis(build(mech))
-    source = Path(mech.path).name
-    p, module = pipeline.build(an, "numpy", source, report=True)
-    physics = None
-    if p.loaded is not None:
-        # the standalone report and the appendix sweep the same inputs: the physical
-        # reference (40-digit equilibrium solves) is computed once for both
-        reference, solved = physics_reference(an), {}
-
-        def physics(inputs):
-            key = tuple(sorted(inputs.items()))
-            if key not in solved:
-                solved[key] = reference(inputs)
-            return solved[key]
-
-    return (
-        report.emit(p, source, evaluator=module, physics=physics),
-        report.emit(p, source, appendix=True, evaluator=module, physics=physics),
-    )
+    return generate(mech, emit=["latex"]), generate(mech, emit=["latex"], appendix=True)
 
 
 @pytest.fixture(scope="session")
-def reports() -> Mapping[str, tuple[dict[str, bytes], dict[str, bytes]]]:
-    """example -> (standalone files, appendix files), generated once per process."""
-    return _Reports()
+def reports(tmp_path_factory) -> Mapping[str, tuple[dict[str, bytes], dict[str, bytes]]]:
+    """example -> (standalone files, appendix files), generated once per run."""
+    return _Reports(tmp_path_factory)
 
 
 # -- structure of the output ---------------------------------------------------------------------
@@ -163,9 +153,14 @@ def test_files_header_and_figures(example, reports):
         assert needed in tex, needed
 
 
-def test_report_is_generated_by_derive(reports):
-    files = generate(symkin.load(EXAMPLES / "four_bar.toml"), emit=["latex"])
-    assert files == reports["four_bar"][0]
+def test_report_is_generated_by_derive(reports, tmp_path):
+    """`symkin derive --emit latex` writes the report these tests read, and nothing else."""
+    code = main(
+        ["derive", str(EXAMPLES / "four_bar.toml"), "-o", str(tmp_path)]
+        + ["--emit", "latex", "--quiet"]
+    )
+    assert code == 0
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == reports["four_bar"][0]
 
 
 # -- pdflatex ------------------------------------------------------------------------------------

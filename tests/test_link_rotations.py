@@ -100,9 +100,9 @@ def test_json_and_text_carry_the_links(capsys):
 
 def test_c_pose_fills_nan_on_failure_and_accepts_null():
     g = generated("four_bar")
-    header, _ = pipeline.emit(g.plan, "c", "test")
+    header, _ = pipeline.emit(g.plan, "c", g.mech.path)
     assert "#define FOUR_BAR_N_LINKS 4" in header and "four_bar_evaluate_pose" in header
-    lib = pipeline.evaluator(g.plan, "c", "test")
+    lib = pipeline.evaluator(g.plan, "c", g.mech.path)
     status, _, _, links = lib.pose([0.2], None, 2)
     assert status == 0 and links[3 * 1] == 0.2  # the crank turns by its input
     status, out, angles, links = lib.pose([4.0], None, 2)

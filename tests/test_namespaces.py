@@ -51,13 +51,13 @@ def internal_names(key: str) -> set[str]:
         for level in ("paper", "first_order", "exact"):
             exprs += [*an.point_deviation(p.name, level)]
     names |= {s.name for e in exprs for s in e.free_symbols}
-    (source,) = pipeline.emit(g.plan, "numpy", "test")
+    (source,) = pipeline.emit(g.plan, "numpy", g.mech.path)
     for node in ast.walk(ast.parse(source)):
         for field in ("id", "name", "arg", "attr"):
             value = getattr(node, field, None)
             if isinstance(value, str):
                 names.add(value)
-    names |= set(IDENTIFIER.findall("\n".join(pipeline.emit(g.plan, "c", "test"))))
+    names |= set(IDENTIFIER.findall("\n".join(pipeline.emit(g.plan, "c", g.mech.path))))
     return names
 
 

@@ -31,6 +31,13 @@ if sys.argv[2] == "forbid":
     def boom(*args, **kwargs):
         raise AssertionError("derived although the plan was kept")
     pipeline.plan = boom
+if sys.argv[2] == "count":
+    derive = pipeline.plan
+    def counted(*args, **kwargs):
+        with open(sys.argv[3], "a") as tally:
+            tally.write("derived\\n")
+        return derive(*args, **kwargs)
+    pipeline.plan = counted
 an = symkin.analyze(symkin.load(sys.argv[1]))
 p = pipeline.plan_for(an)
 texts = pipeline.emit(p, "c", "x") + pipeline.emit(p, "numpy", "x")
@@ -166,3 +173,48 @@ def test_compile_writes_no_plan(tmp_path, monkeypatch):
     monkeypatch.setenv("SYMKIN_CACHE", str(tmp_path / "cache"))
     symkin.compile(PARALLELOGRAM, backend="numpy", levels=["exact"], sensitivity=False)
     assert plans(tmp_path / "cache") == []
+
+
+def test_an_evaluation_reuses_a_plan_with_sensitivities_and_gives_the_same_numbers(monkeypatch):
+    """evaluate (no sensitivities) takes the plan with sensitivities derived before; its numbers
+    are those of the narrower plan's evaluators, bit for bit, in numpy and C."""
+    from symkin.studies.evaluation import evaluate
+
+    monkeypatch.setenv("SYMKIN_PLAN_CACHE", "off")  # nothing kept from other tests
+    fresh = symkin.analyze(symkin.load(PARALLELOGRAM))
+    narrow = pipeline.plan_for(fresh, sensitivity=False)
+    assert pipeline.plan_covering(fresh, sensitivity=False) is narrow  # nothing wider yet
+    want = {b: evaluate(fresh, {"F1": "0.03"}, "exact", backend=b) for b in ("numpy", "c")}
+    monkeypatch.setenv("SYMKIN_PLAN_CACHE", "memory")
+    an = symkin.analyze(symkin.load(PARALLELOGRAM))
+    wide = pipeline.plan_for(an, sensitivity=True)
+    assert pipeline.plan_covering(an, sensitivity=False) is wide
+    exact = pipeline.plan_covering(an, sensitivity=False, levels=["exact"])
+    assert exact is not wide  # other options: not served by the plan of every level
+    # a plan of fewer levels serves an evaluation at one of them, not at another
+    other = symkin.analyze(symkin.load(PARALLELOGRAM))
+    only = pipeline.plan_for(other, sensitivity=False, levels=["exact"])
+    assert pipeline.plan_covering(other, "exact", sensitivity=False) is only
+    assert pipeline.plan_covering(other, "exact", sensitivity=True) is not only
+    assert pipeline.plan_covering(other, "paper", sensitivity=False) is not only
+    # another analysis of the same file finds it by content
+    again = symkin.analyze(symkin.load(PARALLELOGRAM))
+    assert pipeline.plan_covering(again, sensitivity=False) is wide
+    for backend, w in want.items():
+        got = evaluate(again, {"F1": "0.03"}, "exact", backend=backend)
+        assert got.points == w.points, backend
+
+
+def test_two_processes_at_once_derive_the_plan_once(tmp_path):
+    """The second process waits for the first's plan (toolchain.exclusive) and reads it."""
+    cache, tally = tmp_path / "cache", tmp_path / "tally"
+    env = {**os.environ, "SYMKIN_CACHE": str(cache)}
+    args = [sys.executable, "-c", SCRIPT, str(PARALLELOGRAM), "count", str(tally)]
+    procs = [
+        subprocess.Popen(args, cwd=ROOT, env=env, stdout=subprocess.PIPE, text=True)
+        for _ in range(2)
+    ]
+    outs = [p.communicate(timeout=600)[0].strip() for p in procs]
+    assert [p.returncode for p in procs] == [0, 0]
+    assert outs[0] == outs[1] and len(outs[0]) == 64
+    assert tally.read_text() == "derived\n"

@@ -348,6 +348,45 @@ def plan_for(analysis: Analysis, **options: Any) -> Plan:
         return found
 
 
+def plan_covering(analysis: Analysis, level: str | None = None, **options: Any) -> Plan:
+    """A plan whose evaluators compute what plan_for(analysis, **options)'s do at `level` (all
+    its levels when None): one derived already for this analysis with the same options, or
+    with sensitivities besides, or with more levels than `level`; else the plan with
+    sensitivities found by content (symkin.codegen.plan_cache); else plan_for's. For
+    evaluating, not for writing files (derive writes what was asked)."""
+    bound = _PLAN_SIGNATURE.bind(analysis, **options)
+    bound.apply_defaults()
+    want = {k: _key(v) for k, v in bound.arguments.items() if k != "analysis"}
+
+    def covers(have: dict[str, object], p: Plan) -> bool:
+        same = all(have[k] == v for k, v in want.items() if k not in ("sensitivity", "levels"))
+        if level is None:
+            levels_ok = have["levels"] == want["levels"]
+        else:
+            levels_ok = any(lv.name == level for lv in p.levels)
+        return same and levels_ok and (p.sensitivity or not want["sensitivity"])
+
+    with _PLANS_LOCK:
+        derived = list(_PLANS.get(analysis, {}).items())
+    for key, found in derived:
+        if covers(dict(key), found):
+            return found
+    asked = {k: v for k, v in bound.arguments.items() if k != "analysis"}
+    # kept by content: with sensitivities besides, or (for one level) every level
+    tried = [want]
+    for lv in (asked["levels"], None if level else asked["levels"]):
+        for sens in (asked["sensitivity"], True):
+            wider = {**asked, "sensitivity": sens, "levels": lv}
+            shape = {k: _key(v) for k, v in wider.items()}
+            if shape in tried:
+                continue  # plan_for looks the asked one up itself
+            tried.append(shape)
+            kept = plan_cache.find(analysis, wider, Plan)
+            if kept is not None and covers(shape, kept):
+                return kept
+    return plan_for(analysis, **options)
+
+
 # -- emit ------------------------------------------------------------------------------------------
 
 #: plan -> ((backend, source, precision) -> its texts)

@@ -163,33 +163,63 @@ def cached(analysis: Analysis, options: Mapping[str, Any], derive: Callable[[], 
     return kept(analysis, options, derive, Plan)
 
 
-def kept(
-    analysis: Analysis, options: Mapping[str, Any], derive: Callable[[], _T], kind: type[_T]
-) -> _T:
-    """What `derive()` gives for `analysis` and `options` (a plan; the report's reference
-    solves), an instance of `kind`: found by content in memory or on disk, else derived and
-    kept. `options` name what is derived besides the analysis."""
-    mode = _mode()
-    key = digest(analysis, {"kind": kind.__qualname__, **options}) if mode != "off" else None
-    if key is None:
-        return derive()
-    with _LOCK:
-        found = _MEMORY.get(key)
-        if isinstance(found, kind):
-            _MEMORY.move_to_end(key)
-            return found
-    folder = _folder() if mode == "disk" else None
-    value = _read(folder, key, kind) if folder is not None else None
-    if value is None:
-        value = derive()
-        if folder is not None:
-            _write(folder, key, value)
+def _remember(key: str, value: _T) -> _T:
+    """`value` kept in memory under `key` (the one already there wins), most recent last."""
     with _LOCK:
         value = _MEMORY.setdefault(key, value)
         _MEMORY.move_to_end(key)
         while len(_MEMORY) > MEMORY:
             _MEMORY.popitem(last=False)
         return value
+
+
+def _lookup(key: str, kind: type[_T], folder: Path | None) -> _T | None:
+    """What is kept under `key` in memory, else in `folder` (then remembered), else None."""
+    with _LOCK:
+        found = _MEMORY.get(key)
+        if isinstance(found, kind):
+            _MEMORY.move_to_end(key)
+            return found
+    value = _read(folder, key, kind) if folder is not None else None
+    return None if value is None else _remember(key, value)
+
+
+def _key_of(analysis: Analysis, options: Mapping[str, Any], kind: type) -> str | None:
+    if _mode() == "off":
+        return None
+    return digest(analysis, {"kind": kind.__qualname__, **options})
+
+
+def find(analysis: Analysis, options: Mapping[str, Any], kind: type[_T]) -> _T | None:
+    """What :func:`kept` holds for `analysis` and `options` in memory or on disk, derived
+    before; None where nothing is (nothing is derived)."""
+    key = _key_of(analysis, options, kind)
+    if key is None:
+        return None
+    return _lookup(key, kind, _folder() if _mode() == "disk" else None)
+
+
+def kept(
+    analysis: Analysis, options: Mapping[str, Any], derive: Callable[[], _T], kind: type[_T]
+) -> _T:
+    """What `derive()` gives for `analysis` and `options` (a plan; the report's reference
+    solves), an instance of `kind`: found by content in memory or on disk, else derived and
+    kept. `options` name what is derived besides the analysis."""
+    key = _key_of(analysis, options, kind)
+    if key is None:
+        return derive()
+    folder = _folder() if _mode() == "disk" else None
+    value = _lookup(key, kind, folder)
+    if value is None and folder is None:
+        value = derive()
+    elif value is None:
+        # one process derives, another that needs it meanwhile waits and reads it
+        with toolchain.exclusive(f"plan-{key}"):
+            value = _read(folder, key, kind)
+            if value is None:
+                value = derive()
+                _write(folder, key, value)
+    return _remember(key, value)
 
 
 def _read(folder: Path, key: str, kind: type[_T]) -> _T | None:

@@ -15,7 +15,7 @@ import subprocess
 import sys
 import tempfile
 import threading
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 from types import ModuleType
 from typing import TypeAlias
@@ -110,6 +110,30 @@ def private_folder(folder: Path) -> bool:
     return stat.S_ISDIR(info.st_mode) and _private(info)
 
 
+@contextlib.contextmanager
+def exclusive(name: str) -> Iterator[None]:
+    """Held by one process (and thread) at a time per `name`, through a lock file in the
+    cache's private `locks` folder: two processes that need the same library or plan build it
+    once, the second reading what the first wrote. Without a usable folder (or fcntl), a no-op:
+    then both build it, as before."""
+    try:
+        import fcntl
+
+        folder = safe_cache_dir() / "locks"
+        os.makedirs(folder, mode=0o700, exist_ok=True)
+        if not private_folder(folder):
+            raise OSError("not private")
+        fd = os.open(folder / f"{name}.lock", os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o600)
+    except (ImportError, InputError, OSError):
+        yield
+        return
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)  # released when fd closes
+        yield
+    finally:
+        os.close(fd)
+
+
 def verified(target: Path, record: Path, source_digest: str) -> bool:
     """A cached file (a library, a plan) is ours and intact: both files private regular files,
     the record names the source digest and the file's own sha256 (a planted, truncated or
@@ -160,13 +184,16 @@ def build(
     record = folder / f"{name}-{full[:20]}.sha256"
     if verified(target, record, full):
         return target
-    with tempfile.TemporaryDirectory() as tmp:
-        built = _compile(cc, flags, name, header, source, extra, Path(tmp))
-        digest = _sha256(built)
-        # atomic, unique temporary names: a concurrent build never sees half a file; the
-        # record last, so a reader that sees it finds the library it describes
-        replace_atomically(folder, target, src=built)
-        replace_atomically(folder, record, data=f"{full}\n{digest}\n".encode())
+    with exclusive(target.stem):
+        if verified(target, record, full):  # built by another process while we waited
+            return target
+        with tempfile.TemporaryDirectory() as tmp:
+            built = _compile(cc, flags, name, header, source, extra, Path(tmp))
+            digest = _sha256(built)
+            # atomic, unique temporary names: a concurrent build never sees half a file; the
+            # record last, so a reader that sees it finds the library it describes
+            replace_atomically(folder, target, src=built)
+            replace_atomically(folder, record, data=f"{full}\n{digest}\n".encode())
     return target
 
 

@@ -83,15 +83,29 @@ def generate(
     column_width: float | None = None,
     spans: Mapping[str, tuple[float, float]] | None = None,
     fixed: Mapping[str, object] | None = None,
+    *,
+    sensitivity: bool = True,
 ) -> dict[str, bytes]:
     """File name -> content of every requested artifact (nothing is written). A `variant`
     (symkin.variants.Variant) derives that cheaper variant instead of the file's models (a
     float32 one: its numpy module in float32, no C); `column_width` (points) lays the LaTeX
     report out for that column and `spans` (input -> (lo, hi) rad) sets its deviation plots'
     ranges; `fixed` (input -> angle, numbers or expressions) holds inputs constant, folded into
-    the evaluators."""
+    the evaluators; `sensitivity` False leaves the evaluators' sensitivity functions out
+    (docs/sensitivity.md: most of a stiff file's derivation)."""
     return generate_plan(
-        mech, emit, points, levels, appendix, progress, variant, notes, column_width, spans, fixed
+        mech,
+        emit,
+        points,
+        levels,
+        appendix,
+        progress,
+        variant,
+        notes,
+        column_width,
+        spans,
+        fixed,
+        sensitivity=sensitivity,
     )[0]
 
 
@@ -107,6 +121,8 @@ def generate_plan(
     column_width: float | None = None,
     spans: Mapping[str, tuple[float, float]] | None = None,
     fixed: Mapping[str, object] | None = None,
+    *,
+    sensitivity: bool = True,
 ) -> tuple[dict[str, bytes], object]:
     """:func:`generate`, and the Plan the evaluators were emitted from."""
     from ..codegen.plan import with_derivation
@@ -168,6 +184,7 @@ def generate_plan(
         notes=notes,
         fixed=held,
         pruned_inputs=pruning.dropped_inputs if pruning is not None else (),
+        sensitivity=sensitivity,
     )
     files: dict[str, bytes] = {}
     for name, row in pipeline.REGISTRY.items():

@@ -639,10 +639,16 @@ def reduced_equilibrium(
     solvers = _REDUCED.setdefault(analysis, {})
 
     def solver(count: int) -> reduced.Reduced:
-        key = (tuple(sorted((str(k), str(v)) for k, v in exact_params.items())), backend, count)
+        values = tuple(sorted((str(k), str(v)) for k, v in exact_params.items()))
+        key = (values, backend, count)
         if key not in solvers:
             modules = _float_modules if backend == "numpy" else None
-            solvers[key] = reduced.Reduced(analysis.kin, exact_params, modules, count)
+            other = solvers.get((values, "sympy" if backend == "numpy" else "numpy", count))
+            if other is not None:  # the other backend's derivation, lambdified anew
+                modules = modules or (lambda: [special.mpmath_namespace(), "mpmath"])
+                solvers[key] = other.twin(backend, modules)
+            else:
+                solvers[key] = reduced.Reduced(analysis.kin, exact_params, modules, count)
         return solvers[key]
 
     ev = _mpmath_evaluator(analysis)
@@ -1723,7 +1729,14 @@ def _generated(
         x = [float(sp.N(given[a], 20)) for a in kin.inputs]
     pvals = parameter_values(analysis.mechanism, params)
     pfloat = [float(sp.N(pvals[s], 20)) for s in analysis.params]
-    p, ev = pipeline.build(analysis, backend, analysis.mechanism.path, sensitivity=sensitivity)
+    # a plan derived with sensitivities or more levels serves (the same values); else the
+    # kinematic levels are derived without the physical ones (the reduced equilibrium's
+    # routines are most of a plan's derivation)
+    scope = None
+    if not levels.get(level).needs_stiffness:
+        scope = [lv.name for lv in levels.LEVELS if lv.generated and not lv.needs_stiffness]
+    p = pipeline.plan_covering(analysis, level, sensitivity=sensitivity, levels=scope)
+    ev = pipeline.evaluator(p, backend, analysis.mechanism.path)
     row, shape = pipeline.backend(backend), pipeline.Shape.of(p)
     hinges, pnames = shape.hinges, shape.params
     sens = None
