@@ -464,6 +464,7 @@ def measure(
             points=names,
             levels=[v.level],
             sensitivity=False,
+            reported=False,
         )
         accepted = set(module.INPUTS) | set(module.PRUNED_INPUTS)
         absolute, relative = {}, {}

@@ -231,7 +231,13 @@ def measure(
 
     analysis = analysis_for(mech, variant)
     p, module = pipeline.build(
-        analysis, "numpy", "tradeoff", variant.precision, levels=[variant.level], sensitivity=False
+        analysis,
+        "numpy",
+        "tradeoff",
+        variant.precision,
+        levels=[variant.level],
+        sensitivity=False,
+        reported=False,  # the trade times the deviations alone
     )
     tag = f"{mech.name}_{variant.name.replace('/', '_')}"
     names = list(module.INPUTS)
