@@ -145,8 +145,9 @@ def _tradeoff(args: argparse.Namespace) -> str:
     return json.dumps(table.as_json(), indent=2) + "\n" if args.json else tradeoff.text(table)
 
 
-def _evaluator(args: argparse.Namespace, mech):
-    """The compiled evaluator of `mech` at args.level (C unless --backend numpy)."""
+def _evaluator(args: argparse.Namespace, mech, sensitivity: bool = True):
+    """The compiled evaluator of `mech` at args.level (C unless --backend numpy); without its
+    sensitivities where they are not read (a sweep)."""
     from ..studies.compiled import compile as build_evaluator
 
     level = levels.get(args.level)
@@ -160,7 +161,7 @@ def _evaluator(args: argparse.Namespace, mech):
         from ..codegen.toolchain import compiler
 
         compiler()
-    return build_evaluator(mech, args.backend, levels=[level.name])
+    return build_evaluator(mech, args.backend, levels=[level.name], sensitivity=sensitivity)
 
 
 def _tolerance(args: argparse.Namespace) -> str:
@@ -201,7 +202,7 @@ def _sweep(args: argparse.Namespace) -> str:
     scheduler = sweep.parse_scheduler(args.scheduler)
     client = sweep.connect(scheduler) if scheduler.kind == "distributed" else None
     try:
-        evaluator = _evaluator(args, mech)
+        evaluator = _evaluator(args, mech, sensitivity=False)
         sweep.check_grid(evaluator, grid, args.level)
     except BaseException:
         if client is not None:

@@ -113,6 +113,7 @@ class Task:
     samples: int
     checks: tuple[tuple[str, sp.Expr, bool], ...]  # (rule, expression > 0, also <= 1)
     symbols: tuple[sp.Symbol, ...]  # the parameters the checks read
+    plates: tuple[str, ...] = ()  # at `loaded`: the plates whose largest stress is kept
 
 
 def geometry_checks(mech: Mechanism) -> tuple[tuple[str, sp.Expr, bool], ...]:
@@ -191,18 +192,20 @@ def sample_block(task: Task, block: int) -> tuple[np.ndarray, np.ndarray]:
     return params, valid
 
 
-def run_blocks(task: Task, first: int, last: int) -> tuple[np.ndarray, np.ndarray]:
+def run_blocks(task: Task, first: int, last: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Blocks first..last-1: (worst |ΔR| per sample and point (n, n_points), NaN where failed;
     flag per sample: 0 evaluated, 1 cannot be assembled (or no convergence) somewhere on the
-    grid, 2 parameters that break the file's rules)."""
+    grid, 2 parameters that break the file's rules; at `loaded`, every plate's largest stress
+    over the grid per sample (n, n_plates), NaN where failed)."""
     ev = task.evaluator
     n_points = len(ev.points)
-    worst_all, flags_all = [], []
+    worst_all, flags_all, stress_all = [], [], []
     buffer = None
     for block in range(first, last):
         params, valid = sample_block(task, block)
         n = len(params)
         worst = np.full((n, n_points), np.nan)
+        stress = np.full((n, len(task.plates)), np.nan)
         flags = np.where(valid, 0, 2).astype(np.int8)
         good = np.flatnonzero(valid)
         if len(good):
@@ -220,9 +223,45 @@ def run_blocks(task: Task, first: int, last: int) -> tuple[np.ndarray, np.ndarra
             values[failed] = np.nan
             worst[good] = values
             flags[good[failed]] = 1
+            for s in good[~failed] if task.plates else ():
+                stress[s] = largest_stress(ev, task.inputs, params[s], task.plates)
         worst_all.append(worst)
         flags_all.append(flags)
-    return np.concatenate(worst_all), np.concatenate(flags_all)
+        stress_all.append(stress)
+    return np.concatenate(worst_all), np.concatenate(flags_all), np.concatenate(stress_all)
+
+
+def largest_stress(
+    ev: Compiled, inputs: np.ndarray, params: Sequence[float] | None, plates: Sequence[str]
+) -> np.ndarray:
+    """Every plate's largest stress (Pa) over the configurations `inputs` (n, n_inputs) at
+    `loaded`, by the generated numpy module's report (docs/generated-code.md); NaN for a plate
+    where some configuration failed. `params` every parameter's value (None: defaults)."""
+    given = None if params is None else dict(zip(ev.sources.params, map(float, params)))
+    res = ev.module.evaluate(
+        {h: inputs[:, j] for j, h in enumerate(ev.inputs)}, "loaded", given, links=False
+    )
+    out = np.full(len(plates), np.nan)
+    for k, h in enumerate(plates):
+        values = np.asarray(res["plates"][h]["stress"], dtype=float)
+        if np.isfinite(values).all():
+            out[k] = values.max()
+    return out
+
+
+def _statistics(v: np.ndarray) -> dict[str, float | None]:
+    """mean, std (n - 1), p50, p99, p99.9 and max of `v`."""
+    out: dict[str, float | None] = {}
+    for key, q in STATISTICS:
+        if len(v) == 0 or (key == "std" and len(v) < 2):
+            out[key] = None
+        elif key == "mean":
+            out[key] = float(np.mean(v))
+        elif key == "std":
+            out[key] = float(np.std(v, ddof=1))
+        else:
+            out[key] = float(np.percentile(v, q))
+    return out
 
 
 def level_code(level: str) -> int:
@@ -258,6 +297,9 @@ class Sweep:
     flags: np.ndarray = field(repr=False)  # (samples,): 0 ok, 1 cannot assemble, 2 invalid
     nominal: dict[str, float] = field(default_factory=dict)  # worst |ΔR| at nominal values
     points: tuple[str, ...] = ()
+    plates: tuple[str, ...] = ()  # at `loaded`: the plates whose largest stress is kept
+    stress: np.ndarray | None = field(default=None, repr=False)  # (samples, n_plates), Pa
+    nominal_stress: dict[str, float] = field(default_factory=dict)  # at nominal values
 
     @property
     def failed(self) -> int:
@@ -269,18 +311,15 @@ class Sweep:
 
     def statistics(self, point: str) -> dict[str, float | None]:
         """mean, std (n - 1), p50, p99, p99.9 and max of the evaluated samples' worst |ΔR|."""
-        v = self.values[self.flags == 0, self.points.index(point)]
-        out: dict[str, float | None] = {}
-        for key, q in STATISTICS:
-            if len(v) == 0 or (key == "std" and len(v) < 2):
-                out[key] = None
-            elif key == "mean":
-                out[key] = float(np.mean(v))
-            elif key == "std":
-                out[key] = float(np.std(v, ddof=1))
-            else:
-                out[key] = float(np.percentile(v, q))
+        out = _statistics(self.values[self.flags == 0, self.points.index(point)])
         out["nominal"] = self.nominal.get(point)
+        return out
+
+    def stress_statistics(self, plate: str) -> dict[str, float | None]:
+        """The same statistics of the evaluated samples' largest stress of `plate` (Pa)."""
+        assert self.stress is not None
+        out = _statistics(self.stress[self.flags == 0, self.plates.index(plate)])
+        out["nominal"] = self.nominal_stress.get(plate)
         return out
 
     def as_json(self) -> dict:
@@ -299,6 +338,11 @@ class Sweep:
             "configurations": len(self.grid.rows),
             "vary": dict(self.vary),
             "points": {p: self.statistics(p) for p in self.points},
+            **(
+                {"plates": {h: self.stress_statistics(h) for h in self.plates}}
+                if self.plates
+                else {}
+            ),
         }
 
 
@@ -320,6 +364,15 @@ def run(
     it is closed at the end."""
     scheduler = scheduler or parse_scheduler(None)
     nominal = evaluator.defaults
+    plates: tuple[str, ...] = ()
+    nominal_stress: dict[str, float] = {}
+    if level == "loaded" and "loaded" in evaluator.levels:
+        # the plates the generated module reports on (none without the level's report)
+        first = {h: grid.rows[:1, j] for j, h in enumerate(evaluator.inputs)}
+        plates = tuple(evaluator.module.evaluate(first, "loaded", links=False).get("plates", ()))
+        if plates:
+            stress = largest_stress(evaluator, grid.rows, None, plates)
+            nominal_stress = {h: float(v) for h, v in zip(plates, stress) if np.isfinite(v)}
     task = Task(
         evaluator,
         level,
@@ -329,6 +382,7 @@ def run(
         int(samples),
         geometry_checks(mech),
         tuple(p.symbol for p in mech.parameters),
+        plates,
     )
     blocks = math.ceil(samples / BLOCK)
     if client is None and scheduler.kind == "distributed":
@@ -349,6 +403,7 @@ def run(
             client.close()
     values = np.concatenate([p[0] for p in parts])
     flags = np.concatenate([p[1] for p in parts])
+    stress = np.concatenate([p[2] for p in parts])
     status, out = evaluator.evaluate_rows(grid.rows, level)
     nominal_worst = {}
     if (status == 0).all():
@@ -369,6 +424,9 @@ def run(
         flags,
         nominal_worst,
         tuple(evaluator.points),
+        plates,
+        stress if plates else None,
+        nominal_stress,
     )
 
 
@@ -454,16 +512,19 @@ def text(result: Sweep) -> str:
             else ""
         ),
     ]
-    header = f"  {'point':<10}" + "".join(
-        f"{k:>12}" for k in ("nominal", "mean", "std", "p50", "p99", "p99.9", "max")
-    )
-    lines += ["", header]
-    for p in result.points:
-        s = result.statistics(p)
-        cells = [s["nominal"], s["mean"], s["std"], s["p50"], s["p99"], s["p999"], s["max"]]
-        lines.append(
-            f"  {p:<10}" + "".join(f"{c:>12.4e}" if c is not None else f"{'-':>12}" for c in cells)
+    header = "".join(f"{k:>12}" for k in ("nominal", "mean", "std", "p50", "p99", "p99.9", "max"))
+
+    def row(name: str, s: Mapping[str, float | None]) -> str:
+        cells = [s[k] for k in ("nominal", "mean", "std", "p50", "p99", "p999", "max")]
+        return f"  {name:<10}" + "".join(
+            f"{c:>12.4e}" if c is not None else f"{'-':>12}" for c in cells
         )
+
+    lines += ["", f"  {'point':<10}" + header]
+    lines += [row(p, result.statistics(p)) for p in result.points]
+    if result.plates:
+        lines += ["", "largest stress over the grid (Pa)", f"  {'plate':<10}" + header]
+        lines += [row(h, result.stress_statistics(h)) for h in result.plates]
     return "\n".join(lines) + "\n"
 
 

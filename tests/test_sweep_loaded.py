@@ -1,0 +1,98 @@
+"""`symkin sweep --level loaded` (docs/cli.md): besides every point's worst |ΔR|, every plate's
+largest stress over the input grid per sample, from the generated module's report; checked
+against symkin's Python `loaded` level (its own plate shooting) at the nominal parameters and at
+sampled ones."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from conftest import ROOT
+from evaluators import require_compiler
+
+import symkin
+from symkin.cli.commands import main
+from symkin.studies import sweep, variation
+
+FIVE = ROOT / "tests" / "mechanisms" / "five_bar_params.toml"
+GRID = ["O1=0:0.03:2", "O2=-0.02"]
+
+
+def python_stress(an, rows, params=None) -> dict[str, float]:
+    """Every plate's largest stress over the configurations `rows` by the Python level."""
+    out: dict[str, float] = {}
+    for row in rows:
+        res = symkin.evaluate(
+            an, {"O1": repr(float(row[0])), "O2": repr(float(row[1]))}, "loaded", params
+        )
+        for name, plate in res.plates.items():
+            out[name] = max(out.get(name, 0.0), plate.stress)
+    return out
+
+
+@pytest.fixture(scope="module")
+def five():
+    require_compiler()
+    mech = symkin.load(FIVE)
+    an = symkin.analyze(mech)
+    ev = symkin.compile(an, levels=["loaded"], sensitivity=False)
+    vary = variation.parse_vary(["t=±5e-6"], mech, ev.defaults)
+    grid = variation.parse_grid(GRID, mech)
+    result = sweep.run(
+        ev, mech, vary, grid, 6, seed=3, scheduler=sweep.parse_scheduler("sync"), level="loaded"
+    )
+    return mech, an, ev, vary, grid, result
+
+
+def test_the_nominal_stress_is_the_python_levels(five):
+    mech, an, _, _, grid, result = five
+    assert set(result.plates) == {h.name for h in mech.hinges}
+    want = python_stress(an, grid.rows)
+    for name in result.plates:
+        got = result.nominal_stress[name]
+        assert abs(got - want[name]) <= 1e-8 * want[name], (name, got, want[name])
+
+
+def test_every_samples_stress_is_the_python_levels_at_its_parameters(five):
+    mech, an, ev, vary, grid, result = five
+    assert result.failed == 0 and result.stress is not None
+    task = sweep.Task(
+        ev,
+        "loaded",
+        grid.rows,
+        tuple((p, s, ev.defaults[p]) for p, s in vary.items()),
+        3,
+        6,
+        sweep.geometry_checks(mech),
+        tuple(p.symbol for p in mech.parameters),
+        result.plates,
+    )
+    params, valid = sweep.sample_block(task, 0)
+    assert valid.all()
+    t = list(ev.sources.params).index("t")
+    for k in (0, 1):
+        assert params[k, t] != ev.defaults["t"]
+        want = python_stress(an, grid.rows, {"t": repr(float(params[k, t]))})
+        for j, name in enumerate(result.plates):
+            got = result.stress[k, j]
+            assert abs(got - want[name]) <= 1e-8 * want[name], (k, name, got, want[name])
+    # thicker plates bend to the same angles with more stress: the spread is not zero
+    stats = result.stress_statistics(result.plates[0])
+    assert stats["std"] is not None and stats["std"] > 0
+
+
+def test_json_and_text_carry_the_stress(five, capsys):
+    *_, result = five
+    doc = result.as_json()
+    assert set(doc["plates"]) == set(result.plates)
+    for stats in doc["plates"].values():
+        assert {"mean", "std", "p50", "p99", "p999", "max", "nominal"} <= set(stats)
+    assert "largest stress over the grid (Pa)" in sweep.text(result)
+    args = ["sweep", str(FIVE), "--level", "loaded", "--vary", "t=±5e-6", "--samples", "4"]
+    for item in GRID:
+        args += ["--input", item]
+    code = main([*args, "--json", "--scheduler", "sync"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    assert set(json.loads(out)["plates"]) == set(result.plates)
