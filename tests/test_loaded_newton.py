@@ -34,7 +34,6 @@ import symkin
 from symkin.cli.commands import main
 from symkin.codegen.backends.c.backend import standalone
 from symkin.codegen.plate import SYMBOLS, plate_routine
-from symkin.core.errors import InputError
 from symkin.model import special
 from symkin.physics import equilibrium as equilibrium_physics
 from symkin.physics.plate_relation import energy, relation
@@ -228,14 +227,6 @@ def test_open_chain(tmp_path):
         assert _worst(answer, reference) < 1e-3
 
 
-def test_actuators_refused():
-    """A stroke actuator's force along its line is not an input hinge's torque: refused naming
-    it, not solved as if its surrogate hinge were driven."""
-    an = symkin.analyze(symkin.load(ROOT / "examples/piezo_amplifier.toml"))
-    with pytest.raises(InputError, match="piezo"):
-        reduced_equilibrium(an, {"piezo": 2e-5})
-
-
 def test_prbm_pins_matter(tmp_path):
     """The prbm four-bar's pins off the midpoints move its deviation by far more than the bound
     above: the same plates against midpoint pins are 10 % or more away from its equilibrium."""
@@ -309,9 +300,9 @@ def test_two_half_plates_everywhere(path, inputs):
 
 # -- the `loaded` level: the reduced equilibrium in mpmath, reported as an Evaluation -----------
 
-#: (file, inputs): every example with stiffness data (the piezo amplifier's actuators are refused)
-#: and the zoo, its own loads included (the Scott–Russell's preload, the double parallelogram's
-#: payload), the redundant stage, prbm pins and input chords.
+#: (file, inputs): every example with stiffness data (the piezo amplifier's actuators:
+#: tests/test_loaded_actuators.py) and the zoo, its own loads included (the Scott–Russell's
+#: preload, the double parallelogram's payload), the redundant stage, prbm pins and input chords.
 LEVEL_CASES = [
     ("examples/four_bar.toml", {"A0": 0.3}),
     ("examples/nine_bar_platform.toml", {"O": 0.02, "A": -0.02, "B": 0.01, "K": 0.02}),

@@ -207,6 +207,7 @@ def plan(
     routines of the input moments, point stiffness and plate stress (symkin.codegen.loaded)."""
     an, kin = analysis, analysis.kin
     mech = an.mechanism
+    requested = levels
     hidden = {a.point for a in mech.actuators}  # the actuators' points: always computed
     names = tuple(
         p.name for p in an.points if points is None or p.name in points or p.name in hidden
@@ -220,6 +221,16 @@ def plan(
         # nor take actuators yet: a mechanism with actuators gets the kinematic levels
         and not (mech.actuators and lv.needs_stiffness)
     )
+    if requested is not None and mech.actuators and not levels:
+        act = mech.actuators[0]
+        raise InputError(
+            f"the generated evaluators do not take actuators at the "
+            f"{', '.join(requested)} level yet (actuator '{act.name}')",
+            file=mech.path,
+            entry=f"[[actuator]] #{act.index + 1} '{act.name}'",
+            hint="ask for a kinematic level (paper, first_order, exact), or use "
+            "`symkin eval --level loaded --backend sympy`",
+        )
     held = _fixed_angles(an, fixed or {})
     sensitivity = sensitivity and not held
     free = tuple(a for a in kin.inputs if a not in held)

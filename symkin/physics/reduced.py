@@ -86,6 +86,8 @@ class Answer:
     # reports beyond the deviations, symkin.physics.reduced_reported)
     theta: dict[int, float] = field(default_factory=dict)
     solver: Reduced | None = field(default=None, repr=False, compare=False)
+    # by actuator name: the stroke the rigid reference is at (file unit; set by the caller)
+    strokes: dict[str, float] = field(default_factory=dict)
 
 
 class Reduced:
@@ -129,7 +131,7 @@ class Reduced:
         self.n, self.m = st.n, st.m
         self.hinges = kin.hinges
         self.paths = {i: st.tree_path(i) for i in range(st.n + 1)}
-        self.unknowns = list(kin.unknowns)
+        self.unknowns = list(kin.unknowns)  # the actuators' surrogates are appended below
         self.chords = list(range(st.n + 1, st.m + 1))
         self.beyond = {a: [i for i in range(1, st.n + 1) if a in self.paths[i]] for a in self.paths}
         # numbers of every hinge
@@ -167,6 +169,25 @@ class Reduced:
             for ld in mech.loads
         ]
         self.points = {p.name: (label[p.link], tuple(num(v) for v in p.at)) for p in mech.points}
+        # the actuators (docs/physics.md, "Actuators at the physical levels"): a stroke is one
+        # more unknown, its force along d at its point, and one more row, its point's deviation
+        # along d zero (the rigid reference meets the stroke); a force is a dead load t F d,
+        # F an argument after the rigid angles. Their surrogate hinges are not held.
+        hinge_label = {h.name: a for a, h in self.hinges.items()}
+        self.acts = [
+            (
+                act.name,
+                label[act.link],
+                tuple(num(v) for v in act.at),
+                tuple(num(v) for v in act.direction),
+                act.drive,
+            )
+            for act in mech.actuators
+        ]
+        surrogates = {hinge_label[act.surrogate] for act in mech.actuators}
+        self.strokes = [k for k, act in enumerate(self.acts) if act[4] == "stroke"]
+        self.forces = [act[0] for act in self.acts if act[4] == "force"]
+        self.fa = [sp.Symbol(f"fa_{k}", real=True) for k in range(len(self.forces))]
         self.clamp_m = {}
         for a, h in self.hinges.items():
             self.clamp_m[a] = tuple(num(v) for v in h.clamp(h.M)) if a in self.plate else centres[a]
@@ -176,6 +197,7 @@ class Reduced:
         self.F = max(
             [float(value(d["EI"] / (d["l"] * self.L))) for d in self.plate.values()] or [1.0]
         )
+        self.unknowns += sorted(surrogates)
         nu = len(self.unknowns)
         # per plate and segment: (hinge, segment, EI, length, ε_a, ε_s) of the half plates
         self.segs = [
@@ -184,11 +206,12 @@ class Reduced:
             for j in range(segments)
         ]
         joints = len(self.plate) if segments == 2 else 0
-        self.size = nu + 3 * len(self.chords) + joints
+        self.size = nu + 3 * len(self.chords) + len(self.strokes) + joints
         self.scale = np.concatenate(
             [
                 np.full(nu, self.lmin / self.L),
                 np.tile([self.F, self.F, self.F * self.L], len(self.chords)),
+                np.full(len(self.strokes), self.F),  # the stroke actuators' forces, N
                 np.ones(joints),  # η: the joint's rotation beyond half the plate's, rad
             ]
         )
@@ -198,12 +221,20 @@ class Reduced:
         # the reported quantities' parameters (symkin.physics.reduced_reported), zero at the
         # solution: each input hinge's compliant angle beyond its rigid one, and a virtual load
         # (F_x, F_y, M; N and N·u) at every point
-        self.inputs = [a for a in sorted(self.hinges) if self.hinges[a].is_input]
-        self.extra = [sp.Symbol(f"din_{a}", real=True) for a in self.inputs] + [
-            sp.Symbol(f"{c}_{k}", real=True)
-            for k in range(len(self.points))
-            for c in ("vfx", "vfy", "vm")
+        # and each actuator's value beyond the given one (a stroke, a force)
+        self.inputs = [
+            a for a in sorted(self.hinges) if self.hinges[a].is_input and a not in surrogates
         ]
+        self.held = set(self.inputs)
+        self.extra = (
+            [sp.Symbol(f"din_{a}", real=True) for a in self.inputs]
+            + [sp.Symbol(f"dact_{k}", real=True) for k in range(len(self.acts))]
+            + [
+                sp.Symbol(f"{c}_{k}", real=True)
+                for k in range(len(self.points))
+                for c in ("vfx", "vfy", "vm")
+            ]
+        )
         self._fns: dict = {}
         # the last Newton step's J (acceptance and truncation estimate, solve)
         self.last_jacobian = np.zeros((0, 0))
@@ -229,14 +260,28 @@ class Reduced:
             delta[a] = X[k]
         # (link, at, force, moment, factor): the file's loads scale with t
         loads = [(link, at, force, moment, self.t) for link, at, force, moment in self.loads]
+        # the actuators' forces along their lines (stroke: an unknown; force: t F)
+        act_force = [
+            X[nu + 3 * len(self.chords) + self.strokes.index(k)]
+            if act[4] == "stroke"
+            else self.t * self.fa[self.forces.index(act[0])]
+            for k, act in enumerate(self.acts)
+        ]
+        dact = [sp.S.Zero] * len(self.acts)
         if extended:
             for k, a in enumerate(self.inputs):
                 delta[a] = self.extra[k]
-            virtual = self.extra[len(self.inputs) :]
+            dact = list(self.extra[len(self.inputs) : len(self.inputs) + len(self.acts)])
+            for k, act in enumerate(self.acts):
+                if act[4] == "force":
+                    act_force[k] += dact[k]
+            virtual = self.extra[len(self.inputs) + len(self.acts) :]
             for k, name in enumerate(sorted(self.points)):
                 link, at = self.points[name]
                 fx, fy, m = virtual[3 * k : 3 * k + 3]
                 loads.append((link, at, (fx, fy), m, sp.S.One))
+        for (_, link, at, d, _), f in zip(self.acts, act_force):
+            loads.append((link, at, (f * d[0], f * d[1]), sp.S.Zero, sp.S.One))
         chord = {
             c: (X[nu + 3 * j], X[nu + 3 * j + 1], X[nu + 3 * j + 2])
             for j, c in enumerate(self.chords)
@@ -261,7 +306,7 @@ class Reduced:
         for c, (nx, ny, _) in chord.items():
             n[c] = (nx, ny)
         dz, mom, pf, out, joint = {}, {}, {}, {}, {}
-        first_eta = nu + 3 * len(self.chords)
+        first_eta = nu + 3 * len(self.chords) + len(self.strokes)
         for a, h in self.hinges.items():
             if a not in self.plate:
                 dz[a], mom[a] = V.ZERO, sp.S.Zero
@@ -301,6 +346,8 @@ class Reduced:
             "out": out,
             "joint": joint,
             "loads": loads,
+            "act_force": act_force,
+            "dact": dact,
         }
 
     def _chain(self, d: dict, tc, eta, frame, n, pf: dict, out: dict, a: int):
@@ -387,13 +434,17 @@ class Reduced:
             rows += [ox / self.lmin, oy / self.lmin]
         unit = self.F * self.L
         for a in range(1, self.n + 1):
-            if not self.hinges[a].is_input:
+            if a not in self.held:
                 rows.append(self._balance(s, a) / unit)
         for c, (_, _, mu) in s["chord"].items():
             # an input chord's actuator takes up whatever moment the plate does not: μ is its
             # reaction (plate plus actuator), no relation
-            if not self.hinges[c].is_input:
+            if c not in self.held:
                 rows.append((mu - s["mom"][c]) / unit)
+        for k in self.strokes:
+            # the stroke: the point of action's deviation along d is zero (beyond `dact`)
+            _, link, at, d, _ = self.acts[k]
+            rows.append((V.dot(d, self._deviation(s, link, at)) - s["dact"][k]) / self.lmin)
         for a in sorted(s["joint"]):
             rows.append(s["joint"][a] / unit)
         return rows
@@ -428,14 +479,21 @@ class Reduced:
 
     def _reported(self, s: dict) -> list[sp.Expr]:
         """Every input's actuator moment on link M (N·u: a tree hinge's moment balance, an input
-        chord's plate moment less μ), then every point's deviation and its link's rotation
-        beyond the rigid (x, y, φ), sorted by name."""
+        chord's plate moment less μ), every actuator's force (stroke) or stroke beyond the rigid
+        reference's (force), then every point's deviation and its link's rotation beyond the
+        rigid (x, y, φ), sorted by name."""
         out = []
         for a in self.inputs:
             if a <= self.n:
                 out.append(self._balance(s, a))
             else:
                 out.append(s["mom"][a] - s["chord"][a][2])
+        for k, (_, link, at, d, drive) in enumerate(self.acts):
+            # a stroke's force, a force's stroke beyond the rigid reference's
+            if drive == "stroke":
+                out.append(s["act_force"][k])
+            else:
+                out.append(V.dot(d, self._deviation(s, link, at)))
         for name in sorted(self.points):
             link, at = self.points[name]
             out += [*self._deviation(s, link, at), s["dphi"][link]]
@@ -484,8 +542,13 @@ class Reduced:
         return twins[key]
 
     # -- numbers -------------------------------------------------------------------------------
+    def angles(self, theta: Mapping) -> list:
+        """The functions' second argument: the rigid hinge angles by label, then the force
+        actuators' forces by name (N; `theta` holds both)."""
+        return [theta[a] for a in sorted(self.hinges)] + [theta[n] for n in self.forces]
+
     def _lambdify(self, exprs: list, extra: list | None = None):
-        args = [list(self.x), [self.th[a] for a in sorted(self.hinges)], self.t]
+        args = [list(self.x), [self.th[a] for a in sorted(self.hinges)] + self.fa, self.t]
         if extra is not None:
             args.append(extra)
         # a callable gives the modules after the derivation: kernels it created are in them
@@ -519,6 +582,8 @@ class Reduced:
                 for name, (link, at) in sorted(self.points.items())
                 for c in self._deviation(s, link, at)
             ]
+            # then each actuator's point's deviation along its line of action
+            exprs += [V.dot(d, self._deviation(s, link, at)) for _, link, at, d, _ in self.acts]
             fn = self._lambdify(exprs, outs)
         elif key == "angles":
             fn = self._lambdify([self.th[a] + s["delta"][a] for a in sorted(self.hinges)])
@@ -567,7 +632,7 @@ class Reduced:
 
     def _eval(self, x, theta: Mapping[int, float], t: float, order: int = 4, jac: bool = False):
         """Plate inputs, outputs and (with `jac`) the chain rule's pieces at (x, θ, t)."""
-        args = (list(map(float, x)), [theta[a] for a in sorted(self.hinges)], t)
+        args = (list(map(float, x)), self.angles(theta), t)
         ins, dins = self._fn("plates")(*args)
         plate = self._fn(f"plate{order}")
         outs, parts = [], []
@@ -598,6 +663,12 @@ class Reduced:
         args, _, _, outs, _ = self._eval(x, theta, 1.0, order)
         v = np.array(self._fn("dev")(*args, outs), dtype=float)
         return {name: (v[2 * k], v[2 * k + 1]) for k, name in enumerate(sorted(self.points))}
+
+    def along(self, x, theta) -> dict[str, float]:
+        """Every actuator's point's deviation along its line of action (file unit), by name."""
+        args, _, _, outs, _ = self._eval(x, theta, 1.0)
+        v = self._fn("dev")(*args, outs)[2 * len(self.points) :]
+        return {act[0]: float(u) for act, u in zip(self.acts, v)}
 
     # -- solving -------------------------------------------------------------------------------
     def newton(self, x, theta, t, damp: bool = False) -> tuple[np.ndarray, int, bool]:
@@ -649,7 +720,7 @@ class Reduced:
 
     def _plausible(self, x, theta) -> bool:
         """Every compliant hinge angle within (-π, π)."""
-        args = (list(map(float, x)), [theta[a] for a in sorted(self.hinges)], 1.0)
+        args = (list(map(float, x)), self.angles(theta), 1.0)
         angles = np.array(self._fn("angles")(*args), dtype=float)
         return bool(np.all(np.abs(angles) < math.pi))
 
@@ -703,7 +774,7 @@ class Reduced:
     def compression(self, x, theta, t: float) -> float:
         """The worst plate's compression over its sway buckling load (its p̃ over −π²) at
         (x, θ, t), from the plates' inputs alone (no relation: past buckling too)."""
-        args = (list(map(float, x)), [theta[a] for a in sorted(self.hinges)], t)
+        args = (list(map(float, x)), self.angles(theta), t)
         ins = self._fn("plates")(*args)[0]
         worst = 0.0
         for k, (_, _, _, _, ea, es) in enumerate(self.segs):

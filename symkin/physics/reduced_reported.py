@@ -27,7 +27,7 @@ import sympy as sp
 from ..core import vectors as V
 from .reduced import Answer, Reduced
 from .reported import SINGULAR, plate_stress
-from .result import InputLoad, PlateStress
+from .result import ActuatorLoad, InputLoad, PlateStress
 from .stiffness import modulus, plate_stiffness
 
 #: The buckling search stops at this factor on the file's loads (as equilibrium's).
@@ -41,6 +41,7 @@ class Report:
     """What `loaded` reports beyond the deviations (symkin.physics.result's types)."""
 
     inputs: dict[str, InputLoad]
+    actuators: dict[str, ActuatorLoad]
     stiffness: dict[str, list | None]
     plates: dict[str, PlateStress]
     buckling: float | None  # None: the file has no loads
@@ -62,8 +63,18 @@ def report(
         inputs[names[a]] = InputLoad(
             float(theta[a]), float(values[k]) * scale, float(rates[k, k]) * scale
         )
+    actuators = {}
+    for k, (name, *_, drive) in enumerate(red.acts):
+        j = len(red.inputs) + k
+        value, rate = float(values[j]), float(rates[j, j])
+        reference = answer.strokes.get(name, 0.0)
+        if drive == "stroke":
+            actuators[name] = ActuatorLoad(reference, value, rate)
+        else:  # the stroke beyond the reference's, and its rate by the force
+            stiff = 1 / rate if rate != 0 else math.inf
+            actuators[name] = ActuatorLoad(reference + value, float(theta[name]), stiff)
     stiffness: dict[str, list | None] = {}
-    first = len(red.inputs)
+    first = len(red.inputs) + len(red.acts)
     # the scales to judge C's conditioning by (a lone hinge has no distance between hinges)
     L = max(red.L, red.lmin)
     F = max([float(d["EI"]) / (float(d["l"]) * L) for d in red.plate.values()] or [1.0])
@@ -76,11 +87,13 @@ def report(
             stiffness[name] = None
         else:
             stiffness[name] = np.linalg.inv(compliance).tolist()
+    loaded = red.loads or red.forces  # a force actuator is a load (scaled with the file's)
     return Report(
         inputs,
+        actuators,
         stiffness,
         plates(answer),
-        buckling_factor(answer, solver=search) if buckling and red.loads else None,
+        buckling_factor(answer, solver=search) if buckling and loaded else None,
     )
 
 

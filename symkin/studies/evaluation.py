@@ -13,6 +13,7 @@ configuration, the mpmath evaluation is asked why, so every backend fails with t
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import weakref
 from collections.abc import Callable, Mapping, Sequence
@@ -301,14 +302,20 @@ def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity:
             entry=f"[[actuator]] '{forces[0].name}'",
             hint='ask for --level equilibrium, or make it drive = "stroke"',
         )
-    if levels.get(level).needs_stiffness and level != "equilibrium":
+    if level in levels.LOADED and backend != "sympy":
         raise InputError(
-            f"the {level} level does not take actuators yet (actuator '{first.name}'); the "
-            "equilibrium level takes it",
+            f"the generated {backend} evaluators do not take actuators at the {level} level "
+            f"yet (actuator '{first.name}')",
             file=mech.path,
             entry=entry,
-            hint="ask for --level equilibrium (or a stroke at paper, first_order or exact), or "
-            "drive the mechanism by an input hinge",
+            hint=f"use --backend sympy at --level {level}",
+        )
+    if level in levels.LOADED and sensitivity:
+        raise InputError(
+            f"the {level} level has no sensitivities with actuators yet (actuator '{first.name}')",
+            file=mech.path,
+            entry=entry,
+            hint="ask for them at level exact, or drive the mechanism by an input hinge",
         )
     if backend not in ("sympy", *pipeline.REGISTRY) or (backend != "sympy" and forces):
         raise InputError(
@@ -341,6 +348,8 @@ def _actuated(
         return _generated(analysis, inputs, level, params, backend, sensitivity)
     if level == "equilibrium":
         return equilibrium(analysis, inputs, params)
+    if level in levels.LOADED:
+        return loaded(analysis, inputs, params, dps)
     given = actuator_values(mech, inputs)
     hinges = {k: v for k, v in given.items() if k not in {a.name for a in mech.actuators}}
     strokes = [given[a.name] for a in mech.actuators]
@@ -625,16 +634,6 @@ def reduced_equilibrium(
     if backend not in ("numpy", "sympy"):
         raise InputError(f"unknown backend '{backend}'", hint="backends: numpy, sympy")
     mech = analysis.mechanism
-    if mech.actuators:
-        # an actuator's force along its line is not an input hinge's torque: not modelled yet
-        first = mech.actuators[0].name
-        raise InputError(
-            f"the reduced equilibrium does not take actuators yet (actuator '{first}'); the "
-            "equilibrium level takes it",
-            file=mech.path,
-            entry=f"[[actuator]] '{first}'",
-            hint="ask for level equilibrium, or drive the mechanism by an input hinge",
-        )
     exact_params = parameter_values(mech, params)
     solvers = _REDUCED.setdefault(analysis, {})
 
@@ -652,23 +651,67 @@ def reduced_equilibrium(
         return solvers[key]
 
     ev = _mpmath_evaluator(analysis)
+    hinges: Mapping[str, object] = inputs
+    strokes: dict[str, object] = {}
+    forces: dict[str, float] = {}
+    if mech.actuators:
+        drives = actuator_values(mech, inputs)
+        hinges = {k: v for k, v in drives.items() if k not in {a.name for a in mech.actuators}}
+        for a in mech.actuators:
+            if a.drive == "stroke":
+                strokes[a.name] = drives[a.name]
+            else:  # first against the as-fabricated pose, then at the stroke it produced
+                strokes[a.name], forces[a.name] = 0, float(sp.N(drives[a.name], 20))
 
-    def rigid(scale: float) -> dict[int, float]:
-        given = input_values(analysis, {k: scale * float(v) for k, v in inputs.items()})
-        with mpmath.workdps(30):
-            pvals = [mpmath.mpf(sp.N(exact_params[s], 35)) for s in analysis.params]
-            ivals = {a: mpmath.mpf(sp.N(v, 35)) for a, v in given.items()}
-            theta, _ = ev._rigid_angles(pvals, ivals)
-        return {a: float(v) for a, v in theta.items()}
+    def run(strokes: Mapping[str, object]) -> reduced.Answer:
+        @functools.cache
+        def rigid(scale: float) -> dict:
+            given = {k: scale * float(v) for k, v in hinges.items()}
+            if mech.actuators:
+                found = _stroke_angles(
+                    ev,
+                    mech,
+                    given,
+                    [scale * sp.N(sp.sympify(strokes[a.name]), 25) for a in mech.actuators],
+                    "paper",
+                    params,
+                    20,
+                    compliant=False,
+                )
+                given |= {n: mpmath.nstr(v, 25) for n, v in found.items()}
+            angles = input_values(analysis, given)
+            with mpmath.workdps(30):
+                pvals = [mpmath.mpf(sp.N(exact_params[s], 35)) for s in analysis.params]
+                ivals = {a: mpmath.mpf(sp.N(v, 35)) for a, v in angles.items()}
+                theta, _ = ev._rigid_angles(pvals, ivals)
+            return {a: float(v) for a, v in theta.items()} | forces
 
-    answer = solver(segments or 1).solve(rigid)
-    if segments is None and answer.refused.startswith(reduced.TRUNCATION):
-        answer = solver(2).solve(rigid)
+        answer = solver(segments or 1).solve(rigid)
+        if segments is None and answer.refused.startswith(reduced.TRUNCATION):
+            answer = solver(2).solve(rigid)
+        answer.strokes = {n: float(sp.N(sp.sympify(v), 20)) for n, v in strokes.items()}
+        return answer
+
+    answer = run(strokes)
+    # a force actuator: the rigid reference at the stroke the force produced (the compliant
+    # mechanism's pose does not depend on the reference; one more solve expresses it against
+    # the new one, whose point of action then has no deviation along d)
+    for _ in range(3):
+        if not forces or answer.refused:
+            break
+        assert answer.solver is not None
+        along = {
+            n: v for n, v in answer.solver.along(answer.x, answer.theta).items() if n in forces
+        }
+        if max(abs(v) for v in along.values()) <= 1e-14 * answer.solver.L:
+            break
+        strokes = strokes | {n: answer.strokes[n] + v for n, v in along.items()}
+        answer = run(strokes)
     return answer
 
 
 #: The Evaluation fields `loaded` reports beyond the deviations (docs/physics.md).
-_REPORTED = ("actuation", "stiffness", "plates", "buckling")
+_REPORTED = ("actuation", "actuators", "stiffness", "plates", "buckling")
 
 
 def _reported_fields(answer: reduced.Answer, scale: float) -> dict:
@@ -678,9 +721,11 @@ def _reported_fields(answer: reduced.Answer, scale: float) -> dict:
     assert answer.solver is not None
     search = answer.solver.twin("float64", _float_modules)
     rep = reduced_reported.report(answer, scale, search=search)
+    hidden = {a.point for a in answer.solver.kin.mechanism.actuators}
     return {
         "actuation": rep.inputs,
-        "stiffness": rep.stiffness,
+        "actuators": rep.actuators,
+        "stiffness": {n: k for n, k in rep.stiffness.items() if n not in hidden},
         "plates": rep.plates,
         "buckling": rep.buckling,
     }
@@ -1186,9 +1231,30 @@ class _Mpmath:
                 f"{mech.path}: the loaded level refuses this configuration: {answer.refused} "
                 "(docs/physics.md); ask for --level equilibrium"
             )
-        given = input_values(an, inputs)
         exact_params = parameter_values(mech, params)
         names = {a: h.name for a, h in self.kin.hinges.items()}
+        hidden = {a.point for a in mech.actuators}
+        acting: dict[str, sp.Expr] = {}
+        if mech.actuators:
+            # the rigid linkage at the strokes (a force actuator's: the one it produced)
+            drives = actuator_values(mech, inputs)
+            acting = {a.name: drives[a.name] for a in mech.actuators}
+            hinge_inputs = {k: v for k, v in drives.items() if k not in acting}
+            found = _stroke_angles(
+                self,
+                mech,
+                hinge_inputs,
+                [sp.Float(answer.strokes[a.name], 17) for a in mech.actuators],
+                "paper",
+                params,
+                dps,
+                compliant=False,
+            )
+            given = input_values(
+                an, dict(hinge_inputs) | {n: mpmath.nstr(v, dps + 5) for n, v in found.items()}
+            )
+        else:
+            given = input_values(an, inputs)
         args = [*an.params, *an.thetas]
         with mpmath.workdps(dps):
             pvals = [mpmath.mpf(sp.N(exact_params[s], dps + 5)) for s in an.params]
@@ -1197,6 +1263,8 @@ class _Mpmath:
             at = [*pvals, *(theta[a] for a in sorted(theta))]
             points = {}
             for p in an.points:
+                if p.name in hidden:
+                    continue
                 rig = self._fn(f"rigid(theta):{p.name}", list(an.point_rigid(p.name)), args)(*at)
                 dev = answer.deviations[p.name]
                 points[p.name] = PointResult(
@@ -1208,6 +1276,8 @@ class _Mpmath:
             # solution's angle deviations, as at equilibrium
             deltas = [mpmath.mpf(answer.angle_deviations[names[a]]) for a in self.kin.unknowns]
             links = self._links(an, "exact", "equilibrium:", [*args, *an.deltas], at + deltas)
+            if mech.actuators:
+                links = self._turned_surrogates(links, answer.angle_deviations)
             scale = mpmath.mpf(sp.N(mech.unit_scale, dps))
             hinges = {
                 names[a]: HingeLoad(
@@ -1219,7 +1289,8 @@ class _Mpmath:
             result = Evaluation(
                 level="loaded",
                 backend="sympy",
-                inputs={names[a]: float(ivals[a]) for a in sorted(ivals)},
+                inputs={names[a]: float(ivals[a]) for a in sorted(ivals) if names[a] in mech.drives}
+                | {n: float(sp.N(v, 20)) for n, v in acting.items()},
                 angles_rigid={names[a]: float(theta[a]) for a in sorted(theta)},
                 angles_compliant={
                     names[a]: float(theta[a] + answer.angle_deviations[names[a]])
@@ -1255,6 +1326,22 @@ class _Mpmath:
             rigid, dev = _wrap(rot[i]), rot[s.n + 1 + i]
             links[s.links[i]] = LinkResult(float(rigid), float(rigid + dev), float(dev))
         return links
+
+    def _turned_surrogates(
+        self, links: dict[str, LinkResult], angle_deviations: Mapping[str, float]
+    ) -> dict[str, LinkResult]:
+        """`links` with the actuators' surrogates turned too (they are not held at the
+        physical levels): each link's deviation the sum of its direct path's angle deviations
+        (by hinge name), the surrogates' included."""
+        kin, s = self.kin, self.an.structure
+        out = dict(links)
+        for i in range(s.n + 1):
+            dev = math.fsum(
+                kin.hinges[b].sign * angle_deviations[kin.hinges[b].name] for b in s.tree_path(i)
+            )
+            rigid = links[s.links[i]].rigid
+            out[s.links[i]] = LinkResult(rigid, rigid + dev, dev)
+        return out
 
     def _multipliers(self, a_t: list, q: list) -> list:
         """μ of A^T μ = Q at the rigid pose (the loop's chord forces and moments)."""
@@ -1353,15 +1440,7 @@ class _Mpmath:
             ]
             links = self._links(an, "exact", "equilibrium:", [*args, *an.deltas], values)
             if mech.actuators:
-                # the surrogates turn too (they are not held): each link's deviation is the
-                # sum of its direct path's angle deviations, the surrogates' included
-                kin, s = self.kin, an.structure
-                for i in range(s.n + 1):
-                    dev = math.fsum(
-                        kin.hinges[b].sign * res.angle_deviations[names[b]] for b in s.tree_path(i)
-                    )
-                    rigid_i = links[s.links[i]].rigid
-                    links[s.links[i]] = LinkResult(rigid_i, rigid_i + dev, dev)
+                links = self._turned_surrogates(links, res.angle_deviations)
         result = Evaluation(
             level="equilibrium",
             backend="sympy",
