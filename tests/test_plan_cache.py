@@ -218,3 +218,20 @@ def test_two_processes_at_once_derive_the_plan_once(tmp_path):
     assert [p.returncode for p in procs] == [0, 0]
     assert outs[0] == outs[1] and len(outs[0]) == 64
     assert tally.read_text() == "derived\n"
+
+
+def test_without_a_usable_lock_folder_the_body_runs_plainly(tmp_path, monkeypatch):
+    """toolchain.exclusive on a cache folder others can write (no lock file is made there):
+    the body runs unlocked, and its own error carries no trace of the refused folder."""
+    from symkin.codegen import toolchain
+
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    shared.chmod(0o777)
+    monkeypatch.setenv("SYMKIN_CACHE", str(shared))
+    ran = []
+    with pytest.raises(ValueError, match="body") as err, toolchain.exclusive("x"):
+        ran.append(True)
+        raise ValueError("body")
+    assert ran == [True] and err.value.__context__ is None
+    assert not (shared / "locks").exists()

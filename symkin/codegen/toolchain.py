@@ -116,6 +116,7 @@ def exclusive(name: str) -> Iterator[None]:
     cache's private `locks` folder: two processes that need the same library or plan build it
     once, the second reading what the first wrote. Without a usable folder (or fcntl), a no-op:
     then both build it, as before."""
+    fd: int | None
     try:
         import fcntl
 
@@ -125,6 +126,8 @@ def exclusive(name: str) -> Iterator[None]:
             raise OSError("not private")
         fd = os.open(folder / f"{name}.lock", os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o600)
     except (ImportError, InputError, OSError):
+        fd = None  # yielded below, outside the handler: the body's errors carry no context
+    if fd is None:
         yield
         return
     try:
