@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
+
+ZOO = Path(__file__).resolve().parent / "mechanisms"
 
 
 def q(name: str) -> str:
@@ -235,3 +238,28 @@ def column_buckling_load(beam: str, width: float = 5, nu: float = 0.3) -> float:
         return euler
     c = 1 / shear_stiffness(width, nu, 1e-3) - 1 / axial_stiffness(width, nu, 1e-3)
     return (math.sqrt(1 + 4 * c * euler) - 1) / (2 * c)
+
+
+# -- actuators ----------------------------------------------------------------------------------
+
+#: A piezo on the stage of tests/mechanisms/parallelogram.toml pushing along x (format `drive`).
+PIEZO = """
+[[actuator]]
+name = "piezo"
+link = "stage"
+at = ["w/2", "L"]
+direction = [1.0, 0.0]
+drive = "{drive}"
+"""
+
+
+def made_passive(text: str, hinge: str) -> str:
+    """`text` with the input hinge `hinge` made passive (its `input = true` removed)."""
+    head, tail = text.split(f"name = {q(hinge)}", 1)
+    return head + f"name = {q(hinge)}" + tail.replace("input = true\n", "", 1)
+
+
+def parallelogram_driven(drive: str = "stroke", extra: str = "") -> str:
+    """The parallelogram with F1 passive, `extra` (say a load) and the piezo driving by `drive`."""
+    text = (ZOO / "parallelogram.toml").read_text()
+    return made_passive(text, "F1") + extra + PIEZO.format(drive=drive)

@@ -20,6 +20,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import mechanisms as M
 import mpmath
 import pytest
 
@@ -34,14 +35,7 @@ PARALLELOGRAM = (ROOT / "tests" / "mechanisms" / "parallelogram.toml").read_text
 FOUR_BAR = (ROOT / "examples" / "four_bar.toml").read_text()
 KINEMATIC = ("paper", "first_order", "exact")
 
-PIEZO = """
-[[actuator]]
-name = "piezo"
-link = "stage"
-at = ["w/2", "L"]
-direction = [1.0, 0.0]
-drive = "stroke"
-"""
+PIEZO = M.PIEZO.format(drive="stroke")
 
 PUSHER = """
 [[actuator]]
@@ -54,9 +48,7 @@ direction = [0.6, 0.8]
 
 def stroke_driven(text: str, hinge: str, actuator: str) -> str:
     """`text` with the input hinge `hinge` made passive and `actuator` appended."""
-    head, tail = text.split(f'name = "{hinge}"', 1)
-    tail = tail.replace("input = true\n", "", 1)
-    return head + f'name = "{hinge}"' + tail + actuator
+    return M.made_passive(text, hinge) + actuator
 
 
 @pytest.fixture(scope="module")

@@ -23,6 +23,7 @@ import math
 import os
 import shutil
 
+import mechanisms as M
 import pytest
 from conftest import EXAMPLES, ROOT
 
@@ -452,23 +453,10 @@ def test_ccx_not_converging_exits_3_quoting_it(tmp_path, capsys, monkeypatch):
 
 # -- actuators -----------------------------------------------------------------------------------
 
-#: The parallelogram of tests/mechanisms/parallelogram.toml with F1 made passive and a piezo
-#: on the stage pushing along x (as tests/test_actuators.py builds it).
-PARALLELOGRAM = (ROOT / "tests" / "mechanisms" / "parallelogram.toml").read_text()
-PIEZO = """
-[[actuator]]
-name = "piezo"
-link = "stage"
-at = ["w/2", "L"]
-direction = [1.0, 0.0]
-drive = "{drive}"
-"""
-
 
 def driven(drive: str) -> symkin.Mechanism:
-    head, tail = PARALLELOGRAM.split('name = "F1"', 1)
-    text = head + 'name = "F1"' + tail.replace("input = true\n", "", 1)
-    return symkin.loads(text + PIEZO.format(drive=drive), f"parallelogram_{drive}.toml")
+    """The parallelogram with F1 passive and a piezo on the stage pushing along x."""
+    return symkin.loads(M.parallelogram_driven(drive), f"parallelogram_{drive}.toml")
 
 
 def test_actuator_deck_names_it_and_constrains_its_point():

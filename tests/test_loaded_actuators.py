@@ -19,9 +19,10 @@ from __future__ import annotations
 import json
 import math
 
+import mechanisms as M
 import numpy as np
 import pytest
-from conftest import EXAMPLES, ROOT
+from conftest import EXAMPLES
 
 import symkin
 from symkin.cli.commands import main
@@ -29,35 +30,19 @@ from symkin.core.errors import InputError
 from symkin.physics import reduced_reported
 from symkin.studies.evaluation import reduced_equilibrium
 
-PARALLELOGRAM = (ROOT / "tests" / "mechanisms" / "parallelogram.toml").read_text()
-PIEZO = """
-[[actuator]]
-name = "piezo"
-link = "stage"
-at = ["w/2", "L"]
-direction = [1.0, 0.0]
-drive = "stroke"
-"""
 PAYLOAD = '\n[[load]]\npoint = "P"\nforce = [0.0, -5.0]\n'
 E_PRIME, WIDTH, THICK, PLATE, LEG = 210e9 / (1 - 0.3**2), 10e-3, 0.15e-3, 5e-3, 0.040
 
 
-def driven(drive: str = "stroke", extra: str = "") -> str:
-    """The parallelogram with its input hinge F1 passive and a piezo pushing the stage along x."""
-    head, tail = PARALLELOGRAM.split('name = "F1"', 1)
-    tail = tail.replace("input = true\n", "", 1)
-    return head + 'name = "F1"' + tail + extra + PIEZO.replace('"stroke"', f'"{drive}"')
+driven = M.parallelogram_driven
 
 
 def five_bar(drive: str) -> str:
     """The five-bar of tests/mechanisms/five_bar.toml (a load at T) with its input hinge O1
     kept and O2 passive, an actuator pushing its crank c2 along x: inputs of both kinds."""
-    head, tail = (
-        (ROOT / "tests" / "mechanisms" / "five_bar.toml").read_text().split('name = "O2"', 1)
-    )
-    tail = tail.replace("input = true\n", "", 1)
-    actuator = PIEZO.replace('"stage"', '"c2"').replace('["w/2", "L"]', "[0.040, 0.012]")
-    return head + 'name = "O2"' + tail + actuator.replace('"stroke"', f'"{drive}"')
+    text = M.made_passive((M.ZOO / "five_bar.toml").read_text(), "O2")
+    actuator = M.PIEZO.replace('"stage"', '"c2"').replace('["w/2", "L"]', "[0.040, 0.012]")
+    return text + actuator.format(drive=drive)
 
 
 CASES = {
