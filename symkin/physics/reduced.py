@@ -541,6 +541,13 @@ class Reduced:
             twins[key] = other
         return twins[key]
 
+    def located(self, name: str) -> tuple[int, tuple]:
+        """(link, position as fabricated) of a point, an actuator's hidden one ("@name") too."""
+        if name in self.points:
+            return self.points[name]
+        _, link, at, _, _ = next(a for a in self.acts if f"@{a[0]}" == name)
+        return link, at
+
     # -- numbers -------------------------------------------------------------------------------
     def angles(self, theta: Mapping) -> list:
         """The functions' second argument: the rigid hinge angles by label, then the force

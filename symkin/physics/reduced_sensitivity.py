@@ -80,7 +80,7 @@ def partials(r: Reduced, params: Sequence[sp.Symbol], points: Sequence[str]) -> 
     thetas = [r.th[a] for a in sorted(r.hinges)]
     rows = sp.Matrix(r._rows(s))
     ins = plate_inputs(r)
-    dev = sp.Matrix([c for name in points for c in r._deviation(s, *r.points[name])])
+    dev = sp.Matrix([c for name in points for c in r._deviation(s, *r.located(name))])
     outs = [v for a, j, *_ in r.segs for v in s["out"][a, j]]
     return LoadedPartials(
         _jacobian(rows, thetas),

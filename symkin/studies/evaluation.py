@@ -310,12 +310,13 @@ def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity:
             entry=entry,
             hint=f"use --backend sympy at --level {level}",
         )
-    if level in levels.LOADED and sensitivity:
+    if level in levels.LOADED and sensitivity and forces:
         raise InputError(
-            f"the {level} level has no sensitivities with actuators yet (actuator '{first.name}')",
+            f"the {level} level has no sensitivities with force actuators yet (actuator "
+            f"'{forces[0].name}')",
             file=mech.path,
-            entry=entry,
-            hint="ask for them at level exact, or drive the mechanism by an input hinge",
+            entry=f"[[actuator]] '{forces[0].name}'",
+            hint='ask for them with drive = "stroke", or at level exact',
         )
     if backend not in ("sympy", *pipeline.REGISTRY) or (backend != "sympy" and forces):
         raise InputError(
@@ -349,7 +350,7 @@ def _actuated(
     if level == "equilibrium":
         return equilibrium(analysis, inputs, params)
     if level in levels.LOADED:
-        return loaded(analysis, inputs, params, dps)
+        return loaded(analysis, inputs, params, dps, sensitivity)
     given = actuator_values(mech, inputs)
     hinges = {k: v for k, v in given.items() if k not in {a.name for a in mech.actuators}}
     strokes = [given[a.name] for a in mech.actuators]
@@ -1148,6 +1149,14 @@ class _Mpmath:
             args,
         )(*values)
         n_p = len(an.params)
+        inputs = [kin.hinges[a].name for a in kin.inputs]
+        by_strokes = bool(self.mechanism.actuators) and level in levels.LOADED
+        if by_strokes:
+            # by the strokes instead of the surrogates' angles (at `loaded`; the kinematic
+            # levels' are carried over by _stroke_sensitivity, which reads the surrogates')
+            to_drives = self._stroke_columns(state, total_r)
+            total_d, total_r = total_d * to_drives, total_r * to_drives
+            inputs, nv = list(self.mechanism.drives), to_drives.cols
 
         def per_point(m) -> list:
             cols = [
@@ -1157,13 +1166,72 @@ class _Mpmath:
             return [[cols[j][i] for j in range(nv)] for i in range(len(an.points))]
 
         names = [p.name for p in an.points]
-        return Sensitivity.from_columns(
+        found = Sensitivity.from_columns(
             names,
             [p.name for p in self.mechanism.parameters],
-            [kin.hinges[a].name for a in kin.inputs],
+            inputs,
             per_point(total_d),
             per_point(total_r),
         )
+        if not by_strokes:
+            return found
+        hidden = {a.point for a in self.mechanism.actuators}
+        return Sensitivity(
+            *(
+                {p: row for p, row in table.items() if p not in hidden}
+                for table in vars(found).values()
+            )
+        )
+
+    def _stroke_columns(self, state: _State, total_r):
+        """d(parameters, kinematic inputs)/d(parameters, drives): each actuator's surrogate
+        angle θ_v solves g = d·(X_a(θ) − a) − s = 0 for the rigid linkage (docs/sensitivity.md,
+        "Actuators"), so dθ_v/dy = −(∂g/∂θ_v)⁻¹ ∂g/∂y for every parameter (partial: the chain
+        follows), input hinge and stroke y; `total_r` the rigid positions' rates by (parameters,
+        kinematic inputs), the actuators' hidden points among them."""
+        an, kin, mech = self.an, self.kin, self.mechanism
+        acts = mech.actuators
+        n_p, k = len(an.params), len(acts)
+        labels = {h.name: a for a, h in kin.hinges.items()}
+        drives = list(mech.drives)
+        hinges = [n for n in drives if n not in {a.name for a in acts}]
+        row = {p.name: 2 * i for i, p in enumerate(an.points)}
+        column = {a: n_p + j for j, a in enumerate(kin.inputs)}
+        params = list(an.params)
+        args = [*an.params, *an.thetas]
+        at = [*state.pvals, *(state.theta[a] for a in sorted(state.theta))]
+        out = mpmath.zeros(n_p + len(kin.inputs), n_p + len(drives))
+        for c in range(n_p):
+            out[c, c] = 1
+        for j, name in enumerate(hinges):
+            out[column[labels[name]], n_p + j] = 1
+        jac, rhs = mpmath.zeros(k, k), mpmath.zeros(k, n_p + len(drives))
+        for i, act in enumerate(acts):
+            exprs = [*act.direction, *act.at]
+            exprs += [sp.diff(e, q) for e in exprs for q in params]
+            got = self._fn(f"stroke:{act.name}", exprs, params)(*state.pvals)
+            d, a0 = got[:2], got[2:4]
+            dd = [[got[4 + m * n_p + c] for c in range(n_p)] for m in range(2)]
+            da = [[got[4 + (2 + m) * n_p + c] for c in range(n_p)] for m in range(2)]
+            x = self._fn(f"rigid(theta):{act.point}", list(an.point_rigid(act.point)), args)(*at)
+            r = row[act.point]
+
+            def along(col: int, d=d, r=r):
+                return d[0] * total_r[r, col] + d[1] * total_r[r + 1, col]
+
+            for j, other in enumerate(acts):
+                jac[i, j] = along(column[labels[other.surrogate]])
+            for c in range(n_p):
+                rhs[i, c] = along(c) - d[0] * da[0][c] - d[1] * da[1][c]
+                rhs[i, c] += dd[0][c] * (x[0] - a0[0]) + dd[1][c] * (x[1] - a0[1])
+            for j, name in enumerate(hinges):
+                rhs[i, n_p + j] = along(column[labels[name]])
+            rhs[i, n_p + len(hinges) + i] = -1
+        rates = -(jac**-1) * rhs
+        for j, act in enumerate(acts):
+            for c in range(rhs.cols):
+                out[column[labels[act.surrogate]], c] = rates[j, c]
+        return out
 
     def _level_rates(self, state: _State, terms, matrix, solve, theta_v):
         """dΔR/dv at a kinematic level (partial by the parameters: no chain yet)."""
