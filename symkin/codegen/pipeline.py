@@ -373,15 +373,15 @@ def plan_covering(analysis: Analysis, level: str | None = None, **options: Any) 
             return found
     asked = {k: v for k, v in bound.arguments.items() if k != "analysis"}
     # kept by content: with sensitivities besides, or (for one level) every level
-    tried = [want]
-    for lv in (asked["levels"], None if level else asked["levels"]):
-        for sens in (asked["sensitivity"], True):
-            wider = {**asked, "sensitivity": sens, "levels": lv}
-            shape = {k: _key(v) for k, v in wider.items()}
-            if shape in tried:
-                continue  # plan_for looks the asked one up itself
+    wider = [{**asked, "sensitivity": True}]
+    if level is not None:
+        wider += [{**asked, "levels": None}, {**asked, "levels": None, "sensitivity": True}]
+    tried = [want]  # plan_for looks the asked one up itself
+    for options_ in wider:
+        shape = {k: _key(v) for k, v in options_.items()}
+        if shape not in tried:
             tried.append(shape)
-            kept = plan_cache.find(analysis, wider, Plan)
+            kept = plan_cache.find(analysis, options_, Plan)
             if kept is not None and covers(shape, kept):
                 return kept
     return plan_for(analysis, **options)
