@@ -227,42 +227,48 @@ def test_stage_stiffness_under_a_force_actuator_by_central_differences():
     assert np.all(np.abs(got - want) <= 5e-8 * scale), (got, want)  # measured 7.5e-9
 
 
-def test_sensitivities_by_the_stroke_and_the_parameters_against_central_differences():
-    """eval --sensitivity at `loaded` with a stroke actuator: the surrogate's rigid angle moves
-    with the parameters and the stroke (its rigid stroke equation), the reduced equilibrium
-    with it; against central differences of the solver's deviations (the parameters changed in
-    the file, the stroke given). The piezo sits at (w/2, L): w and L move its point too."""
-    an = symkin.analyze(symkin.loads(driven(), "stroke.toml"))
-    s = 1.5e-3
-    ev = symkin.evaluate(an, {"piezo": s}, "loaded", sensitivity=True)
+@pytest.mark.parametrize("drive, value", [("stroke", 1.5e-3), ("force", 0.5)])
+def test_sensitivities_by_the_drive_and_the_parameters_against_central_differences(drive, value):
+    """eval --sensitivity at `loaded` with an actuator: the surrogate's rigid angle moves with
+    the parameters and the drive (a stroke: the rigid stroke equation; a force: the reference
+    at the stroke it produced), the reduced equilibrium with it; against central differences of
+    the solver's deviations (the parameters changed in the file, the drive given; steps of 1e-4
+    of the value, the force's reference being met to 1e-14 of the size). The piezo sits at
+    (w/2, L): w and L move its point too."""
+    an = symkin.analyze(symkin.loads(driven(drive), f"{drive}.toml"))
+    ev = symkin.evaluate(an, {"piezo": value}, "loaded", sensitivity=True)
     sens = ev.sensitivity
     assert set(sens.deviation) == {"P"} and set(sens.deviation_inputs["P"]) == {"piezo"}
 
-    def deviation(stroke: float, params=None) -> np.ndarray:
-        found = reduced_equilibrium(an, {"piezo": stroke}, params, backend="sympy")
+    def deviation(given: float, params=None) -> np.ndarray:
+        found = reduced_equilibrium(an, {"piezo": given}, params, backend="sympy")
         return np.array(found.deviations["P"])
 
     wanted = {"piezo": sens.deviation_inputs["P"]["piezo"]} | sens.deviation["P"]
-    defaults = {"L": 0.040, "w": 0.030, "l": 5e-3}
+    defaults = {"piezo": value, "L": 0.040, "w": 0.030, "l": 5e-3}
     for name, rate in wanted.items():
-        h = 1e-6 if name == "piezo" else 1e-6 * defaults[name]
+        h = 1e-4 * defaults[name]
         if name == "piezo":
-            pair = [deviation(s + k * h) for k in (1, -1)]
+            pair = [deviation(value + k * h) for k in (1, -1)]
         else:
-            pair = [deviation(s, {name: repr(defaults[name] + k * h)}) for k in (1, -1)]
+            pair = [deviation(value, {name: repr(defaults[name] + k * h)}) for k in (1, -1)]
         got = (pair[0] - pair[1]) / (2 * h)
-        # measured 7e-8 (the stroke) and 1e-8 (the parameters) of the rate's size
+        # measured: up to 1.6e-7 of the rate's size (w of the force-driven stage)
         assert np.linalg.norm(got - np.array(rate)) <= 1e-6 * np.linalg.norm(got), name
 
 
-def test_sensitivities_by_an_input_hinge_beside_a_stroke():
-    """The five-bar (a load at T) with O1 held and a stroke on its other crank: the deviations'
-    rates by O1 and by the stroke against central differences (measured 1.7e-11, 4.8e-12)."""
-    an = symkin.analyze(symkin.loads(five_bar("stroke"), "five_bar_stroke.toml"))
-    inputs = {"O1": 0.03, "piezo": 2e-4}
+@pytest.mark.parametrize("drive, value", [("stroke", 2e-4), ("force", 0.5)])
+def test_sensitivities_by_an_input_hinge_beside_an_actuator(drive, value):
+    """The five-bar (a load at T) with O1 held and an actuator on its other crank: the
+    deviations' rates by O1 and by the stroke or force against central differences (measured
+    1.7e-11 and 4.8e-12 with the stroke; 1.1e-9 with the force, steps 1e-4 of the value)."""
+    an = symkin.analyze(symkin.loads(five_bar(drive), f"five_bar_{drive}.toml"))
+    inputs = {"O1": 0.03, "piezo": value}
     sens = symkin.evaluate(an, inputs, "loaded", sensitivity=True).sensitivity
     assert set(sens.deviation_inputs["T"]) == {"O1", "piezo"}
-    for name, h in (("O1", 1e-6), ("piezo", 1e-8)):
+    # a force's reference is met to 1e-14 of the size: larger steps there
+    steps = {"O1": 1e-6, "piezo": 1e-8} if drive == "stroke" else {"O1": 3e-6, "piezo": 5e-5}
+    for name, h in steps.items():
         pair = [
             reduced_equilibrium(an, inputs | {name: inputs[name] + k * h}, backend="sympy")
             for k in (1, -1)
@@ -284,8 +290,8 @@ def test_the_solvers_agree_across_backends():
 
 
 def test_cli(tmp_path, capsys):
-    """eval --json reports the actuator; what loaded with actuators does not do yet is bad
-    input (exit 2) naming the actuator."""
+    """eval --json reports the actuator (and the sensitivities by it); what loaded with
+    actuators does not do yet is bad input (exit 2) naming the actuator."""
     path = EXAMPLES / "piezo_amplifier.toml"
     assert main(["eval", str(path), "--input", "piezo=0.02", "--level", "loaded", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
@@ -296,11 +302,13 @@ def test_cli(tmp_path, capsys):
         ["eval", str(path), "--input", "piezo=0.02", "--level", "loaded", "--backend", "numpy"]
     )
     assert code == 2 and "piezo" in capsys.readouterr().err
-    # sensitivities by the stroke (tests above), not yet by a force
+    # sensitivities by the drive (tests above), in the JSON too
     force = tmp_path / "force.toml"
     force.write_text(driven("force"))
-    code = main(["eval", str(force), "--input", "piezo=0.5", "--level", "loaded", "--sensitivity"])
-    assert code == 2 and "force actuators" in capsys.readouterr().err
+    argv = ["eval", str(force), "--input", "piezo=0.5", "--level", "loaded", "--sensitivity"]
+    assert main([*argv, "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert set(out["sensitivity_inputs"]["P"]) == {"piezo"} and "@piezo" not in out["sensitivity"]
     an = symkin.analyze(symkin.load(path))
     with pytest.raises(InputError, match="piezo"):
         symkin.evaluate(an, {"piezo": 0.02}, "loaded", backend="c")

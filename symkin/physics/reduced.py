@@ -589,8 +589,10 @@ class Reduced:
                 for name, (link, at) in sorted(self.points.items())
                 for c in self._deviation(s, link, at)
             ]
-            # then each actuator's point's deviation along its line of action
-            exprs += [V.dot(d, self._deviation(s, link, at)) for _, link, at, d, _ in self.acts]
+            # then each actuator's point's deviation along its line of action, and x, y
+            for _, link, at, d, _ in self.acts:
+                dev = self._deviation(s, link, at)
+                exprs += [V.dot(d, dev), *dev]
             fn = self._lambdify(exprs, outs)
         elif key == "angles":
             fn = self._lambdify([self.th[a] + s["delta"][a] for a in sorted(self.hinges)])
@@ -673,9 +675,16 @@ class Reduced:
 
     def along(self, x, theta) -> dict[str, float]:
         """Every actuator's point's deviation along its line of action (file unit), by name."""
+        return {name: v[0] for name, v in self._acted(x, theta).items()}
+
+    def acted(self, x, theta) -> dict[str, tuple[float, float]]:
+        """Every actuator's point's deviation (x, y; file unit), by actuator name."""
+        return {name: (v[1], v[2]) for name, v in self._acted(x, theta).items()}
+
+    def _acted(self, x, theta) -> dict[str, tuple[float, float, float]]:
         args, _, _, outs, _ = self._eval(x, theta, 1.0)
-        v = self._fn("dev")(*args, outs)[2 * len(self.points) :]
-        return {act[0]: float(u) for act, u in zip(self.acts, v)}
+        v = [float(u) for u in self._fn("dev")(*args, outs)[2 * len(self.points) :]]
+        return {act[0]: tuple(v[3 * k : 3 * k + 3]) for k, act in enumerate(self.acts)}
 
     # -- solving -------------------------------------------------------------------------------
     def newton(self, x, theta, t, damp: bool = False) -> tuple[np.ndarray, int, bool]:

@@ -34,9 +34,9 @@ from .reduced import Reduced, _jacobian, implicit_rates
 @dataclass(frozen=True)
 class LoadedPartials:
     """The partial derivatives of one variant (half plates per plate) of the reduced equilibrium
-    at fixed x and plate outputs: θ every hinge's rigid angle (label order), p the parameters,
-    i every half plate's (θ_c, p, f, ε_a, ε_s), o its relation's (along, across, omega), D the
-    points' deviations (x, y per point)."""
+    at fixed x and plate outputs: θ every hinge's rigid angle (label order) then the force
+    actuators' forces (Reduced.angles), p the parameters, i every half plate's (θ_c, p, f, ε_a,
+    ε_s), o its relation's (along, across, omega), D the points' deviations (x, y per point)."""
 
     R_theta: sp.Matrix  # n × m
     R_p: sp.Matrix  # n × n_p
@@ -77,7 +77,7 @@ def partials(r: Reduced, params: Sequence[sp.Symbol], points: Sequence[str]) -> 
     """The pieces of the module docstring for the symbolic reduced equilibrium `r` (built with
     symbolic=True), by the parameters `params`, for the deviations of `points`."""
     s = r._s
-    thetas = [r.th[a] for a in sorted(r.hinges)]
+    thetas = [r.th[a] for a in sorted(r.hinges)] + r.fa  # the force actuators' forces too
     rows = sp.Matrix(r._rows(s))
     ins = plate_inputs(r)
     dev = sp.Matrix([c for name in points for c in r._deviation(s, *r.located(name))])
@@ -160,7 +160,8 @@ class LoadedSensitivity:
         # the parameters renamed p_0, p_1, ... (as in generated code): a file's parameter may
         # be called like the equilibrium's own symbols (t, x_0, ...)
         rename = {q: sp.Symbol(f"p_{k}", real=True) for k, q in enumerate(self.params)}
-        args = [list(r.x), [r.th[a] for a in sorted(r.hinges)], r.t, outs, list(rename.values())]
+        thetas = [r.th[a] for a in sorted(r.hinges)] + r.fa
+        args = [list(r.x), thetas, r.t, outs, list(rename.values())]
         modules = self.modules() if callable(self.modules) else self.modules
         exprs = [
             [sp.sympify(e).xreplace(rename) for e in m]
@@ -196,7 +197,7 @@ class LoadedSensitivity:
         r, ins_fn, fn, eps_fn = self._variant(count)
         n, ns, npar = r.size, len(r.segs), len(self.params)
         xs = [float(v) for v in np.asarray(x, dtype=float) * scale / r.scale] if n else []
-        th = [float(theta[a]) for a in sorted(r.hinges)]
+        th = [float(v) for v in r.angles(theta)]
         # the plates' inputs first (the relation's outputs are arguments of the rest)
         ins = np.array(ins_fn(xs, th, 1.0, list(values)), dtype=float)
         plate = r._fn("plate4")

@@ -310,14 +310,6 @@ def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity:
             entry=entry,
             hint=f"use --backend sympy at --level {level}",
         )
-    if level in levels.LOADED and sensitivity and forces:
-        raise InputError(
-            f"the {level} level has no sensitivities with force actuators yet (actuator "
-            f"'{forces[0].name}')",
-            file=mech.path,
-            entry=f"[[actuator]] '{forces[0].name}'",
-            hint='ask for them with drive = "stroke", or at level exact',
-        )
     if backend not in ("sympy", *pipeline.REGISTRY) or (backend != "sympy" and forces):
         raise InputError(
             f"the generated {backend} evaluators do not take "
@@ -1154,7 +1146,12 @@ class _Mpmath:
         if by_strokes:
             # by the strokes instead of the surrogates' angles (at `loaded`; the kinematic
             # levels' are carried over by _stroke_sensitivity, which reads the surrogates')
-            to_drives = self._stroke_columns(state, total_r)
+            assert answer is not None
+            forces = len(answer.solver.forces) if answer.solver else 0
+            if forces:  # the rigid positions do not read the forces
+                total_r = total_r.T.tolist() + [[0] * total_r.rows for _ in range(forces)]
+                total_r = mpmath.matrix(total_r).T
+            to_drives = self._stroke_columns(state, total_r, total_d, answer)
             total_d, total_r = total_d * to_drives, total_r * to_drives
             inputs, nv = list(self.mechanism.drives), to_drives.cols
 
@@ -1183,28 +1180,38 @@ class _Mpmath:
             )
         )
 
-    def _stroke_columns(self, state: _State, total_r):
-        """d(parameters, kinematic inputs)/d(parameters, drives): each actuator's surrogate
-        angle θ_v solves g = d·(X_a(θ) − a) − s = 0 for the rigid linkage (docs/sensitivity.md,
-        "Actuators"), so dθ_v/dy = −(∂g/∂θ_v)⁻¹ ∂g/∂y for every parameter (partial: the chain
-        follows), input hinge and stroke y; `total_r` the rigid positions' rates by (parameters,
-        kinematic inputs), the actuators' hidden points among them."""
+    def _stroke_columns(self, state: _State, total_r, total_d, answer: reduced.Answer):
+        """d(parameters, kinematic inputs, forces)/d(parameters, drives) at `loaded`
+        (docs/sensitivity.md, "Actuators"): each actuator's surrogate angle θ_v of the rigid
+        reference solves, for a stroke, g = d·(X_a(θ) − a) − s = 0 (the rigid linkage at the
+        stroke) and, for a force, c = d·ΔX_a = 0 (the reference at the stroke the force
+        produced), so dθ_v/dy = −(∂(g, c)/∂θ_v)⁻¹ ∂(g, c)/∂y for every parameter (partial: the
+        chain follows), input hinge, stroke and force y. `total_r` and `total_d` the rigid
+        positions' and the deviations' rates by (parameters, kinematic inputs, forces), the
+        actuators' hidden points among them."""
         an, kin, mech = self.an, self.kin, self.mechanism
+        red = answer.solver
+        assert red is not None
         acts = mech.actuators
-        n_p, k = len(an.params), len(acts)
+        n_p, k, n_in = len(an.params), len(acts), len(kin.inputs)
         labels = {h.name: a for a, h in kin.hinges.items()}
         drives = list(mech.drives)
         hinges = [n for n in drives if n not in {a.name for a in acts}]
+        user = {name: n_p + j for j, name in enumerate(drives)}
         row = {p.name: 2 * i for i, p in enumerate(an.points)}
         column = {a: n_p + j for j, a in enumerate(kin.inputs)}
+        column |= {name: n_p + n_in + j for j, name in enumerate(red.forces)}
         params = list(an.params)
         args = [*an.params, *an.thetas]
         at = [*state.pvals, *(state.theta[a] for a in sorted(state.theta))]
-        out = mpmath.zeros(n_p + len(kin.inputs), n_p + len(drives))
+        acted = red.acted(answer.x, answer.theta)
+        out = mpmath.zeros(n_p + n_in + len(red.forces), n_p + len(drives))
         for c in range(n_p):
             out[c, c] = 1
-        for j, name in enumerate(hinges):
-            out[column[labels[name]], n_p + j] = 1
+        for name in hinges:
+            out[column[labels[name]], user[name]] = 1
+        for name in red.forces:
+            out[column[name], user[name]] = 1
         jac, rhs = mpmath.zeros(k, k), mpmath.zeros(k, n_p + len(drives))
         for i, act in enumerate(acts):
             exprs = [*act.direction, *act.at]
@@ -1213,20 +1220,33 @@ class _Mpmath:
             d, a0 = got[:2], got[2:4]
             dd = [[got[4 + m * n_p + c] for c in range(n_p)] for m in range(2)]
             da = [[got[4 + (2 + m) * n_p + c] for c in range(n_p)] for m in range(2)]
-            x = self._fn(f"rigid(theta):{act.point}", list(an.point_rigid(act.point)), args)(*at)
             r = row[act.point]
+            stroke = act.drive == "stroke"
+            table = total_r if stroke else total_d
 
-            def along(col: int, d=d, r=r):
-                return d[0] * total_r[r, col] + d[1] * total_r[r + 1, col]
+            def along(col: int, d=d, r=r, table=table):
+                return d[0] * table[r, col] + d[1] * table[r + 1, col]
 
             for j, other in enumerate(acts):
                 jac[i, j] = along(column[labels[other.surrogate]])
-            for c in range(n_p):
-                rhs[i, c] = along(c) - d[0] * da[0][c] - d[1] * da[1][c]
-                rhs[i, c] += dd[0][c] * (x[0] - a0[0]) + dd[1][c] * (x[1] - a0[1])
-            for j, name in enumerate(hinges):
-                rhs[i, n_p + j] = along(column[labels[name]])
-            rhs[i, n_p + len(hinges) + i] = -1
+            for name in hinges:
+                rhs[i, user[name]] = along(column[labels[name]])
+            if stroke:  # g: the rigid point's stroke
+                x = self._fn(f"rigid(theta):{act.point}", list(an.point_rigid(act.point)), args)(
+                    *at
+                )
+                offset = [x[0] - a0[0], x[1] - a0[1]]
+                for c in range(n_p):
+                    rhs[i, c] = along(c) - d[0] * da[0][c] - d[1] * da[1][c]
+                rhs[i, user[act.name]] = -1
+            else:  # c: the point's deviation along d
+                offset = list(acted[act.name])
+                for c in range(n_p):
+                    rhs[i, c] = along(c)
+                for name in red.forces:
+                    rhs[i, user[name]] = along(column[name])
+            for c in range(n_p):  # a line of action that reads the parameters turns with them
+                rhs[i, c] += dd[0][c] * offset[0] + dd[1][c] * offset[1]
         rates = -(jac**-1) * rhs
         for j, act in enumerate(acts):
             for c in range(rhs.cols):
@@ -1263,6 +1283,11 @@ class _Mpmath:
         npar = len(an.params)
         theta_u = np.array(theta_v.tolist(), dtype=float).reshape(len(kin.unknowns), -1)
         rates = reduced_sensitivity.theta_rates(an, theta_u, npar, kin.inputs)
+        if red.forces:  # the force actuators' forces: arguments beside θ, a column each
+            m, nv, nf = rates.shape[0], rates.shape[1], len(red.forces)
+            wider = np.zeros((m + nf, nv + nf))
+            wider[:m, :nv], wider[m:, nv:] = rates, np.eye(nf)
+            rates = wider
         return self._loaded_terms.rates(
             answer.x,
             red.scale,
