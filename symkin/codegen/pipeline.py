@@ -202,8 +202,10 @@ def _numpy_sensitivity_rows(
 
 def _emit_c(p: Plan, source: str, precision: str) -> tuple[str, ...]:
     from .backends.c import backend
+    from .plan import without_loaded
 
-    return backend.emit(p, source)
+    # with actuators the C runtime has the kinematic levels alone (numpy's has `loaded` too)
+    return backend.emit(without_loaded(p) if p.actuators else p, source)
 
 
 def _emit_c_scene(p: ScenePlan) -> tuple[str, ...]:
