@@ -242,10 +242,15 @@ def test_cli(tmp_path, capsys):
     assert out["level"] == "loaded" and set(out["actuators"]) == {"piezo"}
     assert out["actuators"]["piezo"]["stroke"] == 0.02 and out["actuators"]["piezo"]["force"] > 0
     assert "@piezo" not in out["points"] and "@piezo" not in out["stiffness"]
-    for extra in (["--backend", "numpy"], ["--sensitivity"]):
+    for extra in (["--backend", "c"], ["--sensitivity"]):
         code = main(["eval", str(path), "--input", "piezo=0.02", "--level", "loaded", *extra])
         assert code == 2
         assert "piezo" in capsys.readouterr().err
+    # the generated numpy module takes it (tests/test_loaded_actuators_codegen.py)
+    args = ["eval", str(path), "--input", "piezo=0.02", "--level", "loaded", "--json"]
+    assert main([*args, "--backend", "numpy"]) == 0
+    got = json.loads(capsys.readouterr().out)["points"]["B"]["deviation"]
+    assert math.dist(got, out["points"]["B"]["deviation"]) <= 1e-9 * math.hypot(*got)
     an = symkin.analyze(symkin.load(path))
     with pytest.raises(InputError, match="piezo"):
         symkin.evaluate(an, {"piezo": 0.02}, "loaded", backend="c")

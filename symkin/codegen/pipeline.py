@@ -205,7 +205,16 @@ def _emit_c(p: Plan, source: str, precision: str) -> tuple[str, ...]:
     from .plan import without_loaded
 
     # with actuators the C runtime has the kinematic levels alone (numpy's has `loaded` too)
-    return backend.emit(without_loaded(p) if p.actuators else p, source)
+    if p.actuators and p.loaded is not None:
+        p = without_loaded(p)
+        if not p.levels:
+            raise InputError(
+                "the generated C evaluator does not take actuators at the loaded level yet "
+                f"(actuator '{p.actuators[0][0]}')",
+                entry="[[actuator]]",
+                hint="use the numpy backend (eval --backend numpy) or symkin eval --backend sympy",
+            )
+    return backend.emit(p, source)
 
 
 def _emit_c_scene(p: ScenePlan) -> tuple[str, ...]:

@@ -287,8 +287,8 @@ def actuator_values(mech: Mechanism, inputs: Mapping[str, object]) -> dict[str, 
 
 def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity: bool) -> None:
     """Refuse (exit 2, naming the actuator) what the actuators do not drive yet: a force at a
-    kinematic level (it needs a physical one), the physical levels but equilibrium, force
-    actuators in the generated backends."""
+    kinematic level (it needs a physical one), the generated C evaluator at loaded, force
+    actuators in the generated backends but numpy's at loaded, sensitivities at loaded."""
     if not mech.actuators:
         return
     first = mech.actuators[0]
@@ -302,13 +302,14 @@ def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity:
             entry=f"[[actuator]] '{forces[0].name}'",
             hint='ask for --level equilibrium, or make it drive = "stroke"',
         )
-    if level in levels.LOADED and backend != "sympy":
+    if level in levels.LOADED and backend not in ("sympy", "numpy"):
+        # the generated numpy module takes them at loaded (templates/numpy/reduced_actuators.py)
         raise InputError(
             f"the generated {backend} evaluators do not take actuators at the {level} level "
             f"yet (actuator '{first.name}')",
             file=mech.path,
             entry=entry,
-            hint=f"use --backend sympy at --level {level}",
+            hint=f"use --backend numpy or --backend sympy at --level {level}",
         )
     if level in levels.LOADED and sensitivity:
         raise InputError(
@@ -317,7 +318,10 @@ def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity:
             entry=entry,
             hint="ask for them at level exact, or drive the mechanism by an input hinge",
         )
-    if backend not in ("sympy", *pipeline.REGISTRY) or (backend != "sympy" and forces):
+    at_loaded = level in levels.LOADED and backend == "numpy"
+    if backend not in ("sympy", *pipeline.REGISTRY) or (
+        backend != "sympy" and forces and not at_loaded
+    ):
         raise InputError(
             f"the generated {backend} evaluators do not take "
             + ("force actuators" if forces else "actuators")
