@@ -242,22 +242,25 @@ def test_cli(tmp_path, capsys):
     assert out["level"] == "loaded" and set(out["actuators"]) == {"piezo"}
     assert out["actuators"]["piezo"]["stroke"] == 0.02 and out["actuators"]["piezo"]["force"] > 0
     assert "@piezo" not in out["points"] and "@piezo" not in out["stiffness"]
-    for extra in (["--backend", "c"], ["--sensitivity"]):
-        code = main(["eval", str(path), "--input", "piezo=0.02", "--level", "loaded", *extra])
-        assert code == 2
-        assert "piezo" in capsys.readouterr().err
-    # the generated numpy module takes it (tests/test_loaded_actuators_codegen.py)
+    code = main(["eval", str(path), "--input", "piezo=0.02", "--level", "loaded", "--sensitivity"])
+    assert code == 2
+    assert "piezo" in capsys.readouterr().err
+    # the generated numpy and C take the stroke (tests/test_loaded_actuators_codegen.py)
     args = ["eval", str(path), "--input", "piezo=0.02", "--level", "loaded", "--json"]
-    assert main([*args, "--backend", "numpy"]) == 0
-    got = json.loads(capsys.readouterr().out)["points"]["B"]["deviation"]
-    assert math.dist(got, out["points"]["B"]["deviation"]) <= 1e-9 * math.hypot(*got)
-    an = symkin.analyze(symkin.load(path))
+    for backend in ("numpy", "c"):
+        assert main([*args, "--backend", backend]) == 0
+        got = json.loads(capsys.readouterr().out)["points"]["B"]["deviation"]
+        assert math.dist(got, out["points"]["B"]["deviation"]) <= 1e-9 * math.hypot(*got)
+    force = tmp_path / "force.toml"
+    force.write_text(driven("force"))
+    an = symkin.analyze(symkin.load(force))
     with pytest.raises(InputError, match="piezo"):
-        symkin.evaluate(an, {"piezo": 0.02}, "loaded", backend="c")
-    # the commands that evaluate through generated code (an internal error before)
+        symkin.evaluate(an, {"piezo": 0.5}, "loaded", backend="c")
+    # the commands that evaluate through generated code (an internal error before): tolerance
+    # needs the sensitivities, sweep the C (a force actuator's loaded is numpy's alone)
     for command in (
         ["tolerance", str(path), "--input", "piezo=0.02"],
-        ["sweep", str(path), "--input", "piezo=0:0.02:3", "--samples", "2"],
+        ["sweep", str(force), "--input", "piezo=0:0.5:3", "--samples", "2"],
     ):
-        assert main([*command, "--level", "loaded", "--vary", "a=±1e-5"]) == 2
+        assert main([*command, "--level", "loaded", "--vary", "l=±1e-5"]) == 2
         assert "actuator 'piezo'" in capsys.readouterr().err

@@ -7,8 +7,9 @@ References, none of them the code under test: symkin's Python `loaded` level (th
 equilibrium lambdified in mpmath, its rigid references from the mpmath kinematics) and the
 `equilibrium` level (geometrically exact beams, another solver), on the piezo amplifier example
 (a stroke, two strokes in one call) and the parallelogram stage pushed by a stroke and by a
-force under a payload (tests/test_loaded_actuators.py's files). The C evaluator keeps the
-kinematic levels for them: its `loaded` is refused naming the actuator.
+force under a payload (tests/test_loaded_actuators.py's files). The C evaluator takes stroke
+actuators at loaded (templates/c/actuators.c); with a force actuator it keeps the kinematic
+levels, its `loaded` refused naming the actuator.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import numpy as np
 import pytest
 from conftest import EXAMPLES
 from test_loaded_actuators import AGREEMENT, PAYLOAD, driven
+from test_loaded_reported_codegen import compiler_or_fail
 
 import symkin
 from symkin.codegen import pipeline
@@ -92,15 +94,38 @@ def test_generated_loaded_against_python_and_equilibrium(runs, name):
             assert abs(got["links"][link]["deviation"][k] - v.deviation) <= 1e-9 * top, link
 
 
+@pytest.mark.parametrize("name", ["piezo_amplifier", "parallelogram_stroke"])
+def test_generated_c_loaded_with_a_stroke(runs, name):
+    """The C evaluator (templates/c/actuators.c, reduced.c) at loaded with a stroke actuator:
+    symkin.evaluate --backend c, one configuration per call, against the Python level and
+    equilibrium; the surrogates' turn in the compliant angles and the links."""
+    if not compiler_or_fail():
+        return
+    an, _, _, refs = runs(name)
+    tol = AGREEMENT[CASES[name][2]]
+    for v, (python, exact) in zip(CASES[name][1], refs):
+        got = symkin.evaluate(an, {"piezo": v}, "loaded", backend="c")
+        assert got.inputs == {"piezo": v}
+        for p, q in python.points.items():
+            assert math.dist(got.points[p].deviation, q.deviation) <= AGAINST_PYTHON * q.norm
+            e = exact.points[p]
+            assert math.dist(got.points[p].deviation, e.deviation) <= tol * e.norm, (p, v)
+        for h, a in python.angles_compliant.items():
+            assert abs(got.angles_compliant[h] - a) <= 1e-11, h
+        top = max(abs(x.deviation) for x in python.links.values())
+        for link, x in python.links.items():
+            assert abs(got.links[link].deviation - x.deviation) <= 1e-9 * top, link
+
+
 def test_cli_numpy_backend_and_the_c_refusal():
     """eval --level loaded --backend numpy takes the actuator (the Python level's deviation);
-    the C evaluator does not take it at loaded yet: bad input naming the actuator."""
+    the C evaluator does not take a force actuator at loaded yet: bad input naming it."""
     an = symkin.analyze(symkin.load(EXAMPLES / "piezo_amplifier.toml"))
     want = symkin.evaluate(an, {"piezo": 0.02}, "loaded").points["B"]
     got = symkin.evaluate(an, {"piezo": 0.02}, "loaded", backend="numpy").points["B"]
     assert math.dist(got.deviation, want.deviation) <= AGAINST_PYTHON * want.norm
-    with pytest.raises(InputError, match=r"generated c.*loaded.*piezo"):
-        symkin.evaluate(an, {"piezo": 0.02}, "loaded", backend="c")
     force = symkin.analyze(symkin.loads(driven("force"), "force.toml"))
-    with pytest.raises(InputError, match=r"C evaluator.*loaded.*piezo"):
+    with pytest.raises(InputError, match=r"generated c.*force.*piezo"):
+        symkin.evaluate(force, {"piezo": 0.5}, "loaded", backend="c")
+    with pytest.raises(InputError, match=r"C evaluator.*force.*loaded.*piezo"):
         pipeline.emit(pipeline.plan_for(force, sensitivity=False), "c", "force.toml")

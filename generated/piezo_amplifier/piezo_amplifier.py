@@ -1226,7 +1226,7 @@ class _ActuatedBatch(_Batch):
 
 
 # reduced.py's _reduced_solve and _red_solutions build this module's batches
-_Batch = _ActuatedBatch  # noqa: F811
+_Batch = _ActuatedBatch
 
 
 def _rigid_at(mech, kinematic, params):

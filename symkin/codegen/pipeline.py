@@ -204,13 +204,13 @@ def _emit_c(p: Plan, source: str, precision: str) -> tuple[str, ...]:
     from .backends.c import backend
     from .plan import without_loaded
 
-    # with actuators the C runtime has the kinematic levels alone (numpy's has `loaded` too)
-    if p.actuators and p.loaded is not None:
+    # with a force actuator the C runtime has the kinematic levels alone (numpy's has `loaded`)
+    if p.forces and p.loaded is not None:
         p = without_loaded(p)
         if not p.levels:
             raise InputError(
-                "the generated C evaluator does not take actuators at the loaded level yet "
-                f"(actuator '{p.actuators[0][0]}')",
+                "the generated C evaluator does not take force actuators at the loaded level "
+                f"yet (actuator '{p.forces[0]}')",
                 entry="[[actuator]]",
                 hint="use the numpy backend (eval --backend numpy) or symkin eval --backend sympy",
             )

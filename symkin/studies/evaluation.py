@@ -287,8 +287,8 @@ def actuator_values(mech: Mechanism, inputs: Mapping[str, object]) -> dict[str, 
 
 def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity: bool) -> None:
     """Refuse (exit 2, naming the actuator) what the actuators do not drive yet: a force at a
-    kinematic level (it needs a physical one), the generated C evaluator at loaded, force
-    actuators in the generated backends but numpy's at loaded, sensitivities at loaded."""
+    kinematic level (it needs a physical one), force actuators in the generated backends but
+    numpy's at loaded, sensitivities at loaded."""
     if not mech.actuators:
         return
     first = mech.actuators[0]
@@ -301,15 +301,6 @@ def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity:
             file=mech.path,
             entry=f"[[actuator]] '{forces[0].name}'",
             hint='ask for --level equilibrium, or make it drive = "stroke"',
-        )
-    if level in levels.LOADED and backend not in ("sympy", "numpy"):
-        # the generated numpy module takes them at loaded (templates/numpy/reduced_actuators.py)
-        raise InputError(
-            f"the generated {backend} evaluators do not take actuators at the {level} level "
-            f"yet (actuator '{first.name}')",
-            file=mech.path,
-            entry=entry,
-            hint=f"use --backend numpy or --backend sympy at --level {level}",
         )
     if level in levels.LOADED and sensitivity:
         raise InputError(
@@ -328,7 +319,8 @@ def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity:
             + f" yet (actuator '{(forces or [first])[0].name}')",
             file=mech.path,
             entry=entry,
-            hint="use --backend sympy" + ("" if forces else " or numpy"),
+            hint="use --backend sympy"
+            + (" or numpy" if not forces or level in levels.LOADED else ""),
         )
 
 
