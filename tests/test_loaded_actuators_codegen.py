@@ -129,3 +129,18 @@ def test_cli_numpy_backend_and_the_c_refusal():
         symkin.evaluate(force, {"piezo": 0.5}, "loaded", backend="c")
     with pytest.raises(InputError, match=r"C evaluator.*force.*loaded.*piezo"):
         pipeline.emit(pipeline.plan_for(force, sensitivity=False), "c", "force.toml")
+
+
+def test_a_force_without_the_plates_stiffness_has_no_generated_level():
+    """A force actuator drives the generated `loaded` level alone: without the plates' E,
+    thickness and width there is none, bad input naming the actuator."""
+    import re
+
+    text = "\n".join(
+        line
+        for line in driven("force").splitlines()
+        if not re.match(r"(E|thickness|width)\b", line)
+    )
+    an = symkin.analyze(symkin.loads(text + "\n", "bare.toml"))
+    with pytest.raises(InputError, match=r"actuator 'piezo'.*force.*loaded level alone"):
+        pipeline.plan_for(an, sensitivity=False)

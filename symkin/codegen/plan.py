@@ -224,15 +224,17 @@ def plan(
         # a force actuator drives the `loaded` level alone (the kinematic levels take strokes)
         and not (forced and lv.name not in level_table.LOADED)
     )
-    if requested is not None and mech.actuators and not levels:
-        act = mech.actuators[0]
+    if mech.actuators and not levels and (requested is not None or forced):
+        act = next((a for a in mech.actuators if a.drive != "stroke"), mech.actuators[0])
+        asked = ", ".join(requested) if requested is not None else "kinematic"
         raise InputError(
-            f"the generated evaluators do not take actuators at the "
-            f"{', '.join(requested)} level yet (actuator '{act.name}')",
+            f"the generated evaluators do not take this actuator at the {asked} level(s) "
+            f"(actuator '{act.name}'; a force: at the loaded level alone, which needs every "
+            "plate's E, thickness and width)",
             file=mech.path,
             entry=f"[[actuator]] #{act.index + 1} '{act.name}'",
-            hint="ask for a kinematic level (paper, first_order, exact), or use "
-            "`symkin eval --level loaded --backend sympy`",
+            hint="ask for a level the actuator drives (a stroke: paper, first_order, exact, "
+            "loaded; a force: loaded), or use `symkin eval --backend sympy`",
         )
     held = _fixed_angles(an, fixed or {})
     sensitivity = sensitivity and not held
