@@ -1358,6 +1358,7 @@ def _actuated_loaded(mech, actuators, forces, drives, shown, inputs, params, lin
         }
         for kind, v in (("rigid", reference), ("compliant", compliant))
     }
+    out["links"] = {}  # as the other levels' (empty without `links`)
     if links and mech.links is not None:
         # each link's deviation: its rotation at the compliant angles (the surrogates turned)
         # less the reference's, plus the non-input hinges' deviation (computed directly)
@@ -1368,7 +1369,6 @@ def _actuated_loaded(mech, actuators, forces, drives, shown, inputs, params, lin
             at_t = mech.links(turned_theta, delta)
             at_r = mech.links(reference, delta)
         m = len(mech.link_names)
-        out["links"] = {}
         for i, name in enumerate(mech.link_names):
             dev = at_t[i] - at_r[i] + at_t[m + i]
             r = _wrap(numpy.broadcast_to(at_r[i], shape))
