@@ -25,6 +25,7 @@ setup(
             "*/reduced_sens.py",
             "*/reduced_report.c",
             "*/reduced_report.py",
+            "*/reduced_actuators.py",
         ]
     },
 )

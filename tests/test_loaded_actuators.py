@@ -298,9 +298,13 @@ def test_cli(tmp_path, capsys):
     assert out["level"] == "loaded" and set(out["actuators"]) == {"piezo"}
     assert out["actuators"]["piezo"]["stroke"] == 0.02 and out["actuators"]["piezo"]["force"] > 0
     assert "@piezo" not in out["points"] and "@piezo" not in out["stiffness"]
-    code = main(
-        ["eval", str(path), "--input", "piezo=0.02", "--level", "loaded", "--backend", "numpy"]
-    )
+    # the generated numpy and C take the stroke (tests/test_loaded_actuators_codegen.py)
+    args = ["eval", str(path), "--input", "piezo=0.02", "--level", "loaded", "--json"]
+    for backend in ("numpy", "c"):
+        assert main([*args, "--backend", backend]) == 0
+        got = json.loads(capsys.readouterr().out)["points"]["B"]["deviation"]
+        assert math.dist(got, out["points"]["B"]["deviation"]) <= 1e-9 * math.hypot(*got)
+    code = main([*args, "--backend", "numpy", "--sensitivity"])
     assert code == 2 and "piezo" in capsys.readouterr().err
     # sensitivities by the drive (tests above), in the JSON too
     force = tmp_path / "force.toml"
@@ -309,13 +313,14 @@ def test_cli(tmp_path, capsys):
     assert main([*argv, "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert set(out["sensitivity_inputs"]["P"]) == {"piezo"} and "@piezo" not in out["sensitivity"]
-    an = symkin.analyze(symkin.load(path))
+    an = symkin.analyze(symkin.load(force))
     with pytest.raises(InputError, match="piezo"):
-        symkin.evaluate(an, {"piezo": 0.02}, "loaded", backend="c")
-    # the commands that evaluate through generated code (an internal error before)
+        symkin.evaluate(an, {"piezo": 0.5}, "loaded", backend="c")
+    # the commands that evaluate through generated code (an internal error before): tolerance
+    # needs the sensitivities, sweep the C (a force actuator's loaded is numpy's alone)
     for command in (
         ["tolerance", str(path), "--input", "piezo=0.02"],
-        ["sweep", str(path), "--input", "piezo=0:0.02:3", "--samples", "2"],
+        ["sweep", str(force), "--input", "piezo=0:0.5:3", "--samples", "2"],
     ):
-        assert main([*command, "--level", "loaded", "--vary", "a=±1e-5"]) == 2
+        assert main([*command, "--level", "loaded", "--vary", "l=±1e-5"]) == 2
         assert "actuator 'piezo'" in capsys.readouterr().err

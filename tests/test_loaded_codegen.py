@@ -124,9 +124,17 @@ def test_the_redundant_stage_holds_loaded():
     assert "loaded" in [lv.name for lv in plan(an, sensitivity=False).levels]
 
 
-def test_actuators_stay_refused():
+def test_actuators_get_loaded():
+    """A file with stroke actuators gets the generated `loaded` level, numpy and C
+    (tests/test_loaded_actuators_codegen.py); with a force actuator its C keeps the kinematic
+    levels (none here: a force needs a physical level)."""
     an = symkin.analyze(symkin.load(EXAMPLES / "piezo_amplifier.toml"))
-    assert "loaded" not in [lv.name for lv in plan(an, sensitivity=False).levels]
+    p = plan(an, sensitivity=False)
+    assert "loaded" in [lv.name for lv in p.levels]
+    assert p.loaded is not None and p.loaded.surrogate_index == (0,)  # RA0, the piezo's
+    header, source = pipeline.emit(p, "c", "piezo_amplifier.toml")
+    assert "levels: paper, first_order, exact, loaded.\n" in header
+    assert "sk_loaded_unknown_index" in source
 
 
 @pytest.mark.parametrize("backend", ["numpy", "c"])

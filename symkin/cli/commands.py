@@ -168,12 +168,16 @@ def _tolerance(args: argparse.Namespace) -> str:
     import json
 
     from ..studies import tolerance, variation
+    from ..studies.evaluation import check_actuated_level
 
     mech = load(args.file)
     nominal = {p.name: float(p.value) for p in mech.parameters}
     vary = variation.parse_vary(args.vary, mech, nominal, kinds=("pm",))
     grid = variation.parse_grid(args.input, mech)
     tolerance.check_level(args.level)  # before compiling anything
+    if mech.actuators and args.level in levels.LOADED:
+        # the generated `loaded` takes them without its sensitivities yet
+        check_actuated_level(mech, args.level, args.backend, sensitivity=True)
     result = tolerance.run(_evaluator(args, mech), vary, grid, args.level)
     return json.dumps(result.as_json(), indent=2) + "\n" if args.json else tolerance.text(result)
 

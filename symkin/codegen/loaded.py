@@ -78,7 +78,7 @@ class LoadedPlan:
     loaded_*<g>, plate_relation4, plate_values2 and plate_rest4."""
 
     variants: tuple[Segments, ...]  # one, then two half plates per plate
-    unknowns: int  # non-input hinges: the first unknowns, δ / (l_min / L)
+    unknowns: int  # non-input hinges (then surrogates): the first unknowns, δ / (l_min / L)
     points: int  # points of the file the deviation routine gives (the plan's first)
     # the load factor t enters the routines (the file has loads); without, det J's sign at the
     # unloaded state is the first Newton step's (x = 0, the same matrix)
@@ -93,6 +93,11 @@ class LoadedPlan:
     chord_error: float = CHORD_ERROR
     # what the loaded_report<g> routines report (None: not derived, symkin.codegen.loaded)
     report: Reported | None = None
+    # the actuators' surrogate hinges (their position in theta): unknowns after the non-input
+    # hinges' (docs/physics.md, "Actuators at loaded"); the force actuators' forces follow the
+    # rigid angles in the routines' theta argument
+    surrogate_index: tuple[int, ...] = ()
+    forces: int = 0
 
 
 @dataclass(frozen=True)
@@ -124,9 +129,12 @@ def loaded_routines(
     order = list(names) + sorted(n for n in (p.name for p in an.mechanism.points) if n not in names)
     routines: dict[str, Routine] = {}
     variants = []
+    angles = theta
     for g in (1, 2):
         r = reduced.Reduced(an.kin, values, segments=g, symbolic=True)
         s = r._s
+        # the force actuators' forces after the rigid angles (Reduced.angles)
+        theta = Argument(angles.name, (*angles.symbols, *r.fa))
         rename = {r.th[a]: an.kin.theta[a] for a in r.hinges}
 
         def sub(e, rename=rename):
@@ -174,7 +182,11 @@ def loaded_routines(
             f"loaded ({g} half plate(s) per plate): the reduced equilibrium's residual R alone",
             layout(("R", n, 1)),
         )
-        dev = [c for name in order for c in r._deviation(s, *r.points[name])]
+        # the actuators' hidden points of action (among `names`): on their links
+        where = r.points | {
+            a.point: (act[1], act[2]) for a, act in zip(an.mechanism.actuators, r.acts)
+        }
+        dev = [c for name in order for c in r._deviation(s, *where[name])]
         routines[f"loaded_dev{g}"] = Routine(
             f"loaded_dev{g}",
             (x, theta, plates, params),
@@ -187,8 +199,15 @@ def loaded_routines(
             routines[f"loaded_report{g}"] = _report_routine(r, names, x, theta, plates, params, sub)
         variants.append(Segments(g, n, ns, tuple(float(v) for v in r.scale)))
     report = _reported(r, names) if reported else None
+    surrogates = tuple(a - 1 for a in r.unknowns[len(an.kin.unknowns) :])
     plan = LoadedPlan(
-        tuple(variants), len(an.kin.unknowns), len(order), loads=bool(r.loads), report=report
+        tuple(variants),
+        len(r.unknowns),
+        len(order),
+        loads=bool(r.loads or r.forces),
+        report=report,
+        surrogate_index=surrogates,
+        forces=len(r.forces),
     )
     return routines, plan
 

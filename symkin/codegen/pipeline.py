@@ -202,7 +202,18 @@ def _numpy_sensitivity_rows(
 
 def _emit_c(p: Plan, source: str, precision: str) -> tuple[str, ...]:
     from .backends.c import backend
+    from .plan import without_loaded
 
+    # with a force actuator the C runtime has the kinematic levels alone (numpy's has `loaded`)
+    if p.forces and p.loaded is not None:
+        p = without_loaded(p)
+        if not p.levels:
+            raise InputError(
+                "the generated C evaluator does not take force actuators at the loaded level "
+                f"yet (actuator '{p.forces[0]}')",
+                entry="[[actuator]]",
+                hint="use the numpy backend (eval --backend numpy) or symkin eval --backend sympy",
+            )
     return backend.emit(p, source)
 
 

@@ -138,6 +138,8 @@ class Plan:
     # point among `points`, direction as two doubles)
     drives: tuple[str, ...] = ()
     actuators: tuple[tuple[str, str, str, tuple[float, float]], ...] = ()
+    # the actuators driven by a force (at the `loaded` level alone), in file order
+    forces: tuple[str, ...] = ()
 
     @property
     def shown_points(self) -> tuple[str, ...]:
@@ -208,6 +210,7 @@ def plan(
     an, kin = analysis, analysis.kin
     mech = an.mechanism
     requested = levels
+    forced = any(a.drive != "stroke" for a in mech.actuators)
     hidden = {a.point for a in mech.actuators}  # the actuators' points: always computed
     names = tuple(
         p.name for p in an.points if points is None or p.name in points or p.name in hidden
@@ -218,18 +221,20 @@ def plan(
         for lv in level_table.LEVELS
         if lv.generated
         and (lv.name in levels if levels is not None else stiff or not lv.needs_stiffness)
-        # nor take actuators yet: a mechanism with actuators gets the kinematic levels
-        and not (mech.actuators and lv.needs_stiffness)
+        # a force actuator drives the `loaded` level alone (the kinematic levels take strokes)
+        and not (forced and lv.name not in level_table.LOADED)
     )
-    if requested is not None and mech.actuators and not levels:
-        act = mech.actuators[0]
+    if mech.actuators and not levels and (requested is not None or forced):
+        act = next((a for a in mech.actuators if a.drive != "stroke"), mech.actuators[0])
+        asked = ", ".join(requested) if requested is not None else "kinematic"
         raise InputError(
-            f"the generated evaluators do not take actuators at the "
-            f"{', '.join(requested)} level yet (actuator '{act.name}')",
+            f"the generated evaluators do not take this actuator at the {asked} level(s) "
+            f"(actuator '{act.name}'; a force: at the loaded level alone, which needs every "
+            "plate's E, thickness and width)",
             file=mech.path,
             entry=f"[[actuator]] #{act.index + 1} '{act.name}'",
-            hint="ask for a kinematic level (paper, first_order, exact), or use "
-            "`symkin eval --level loaded --backend sympy`",
+            hint="ask for a level the actuator drives (a stroke: paper, first_order, exact, "
+            "loaded; a force: loaded), or use `symkin eval --backend sympy`",
         )
     held = _fixed_angles(an, fixed or {})
     sensitivity = sensitivity and not held
@@ -314,7 +319,8 @@ def plan(
     if any(lv.name in level_table.LOADED for lv in levels):
         # the reduced equilibrium (docs/physics.md, "The Newton level"), one and two half
         # plates per plate; the runtime's driver writes the points' deviation itself
-        found, loaded = loaded_routines(an, names, theta, params, reported)
+        # (with actuators: no report routines yet, the numpy runtime's own driver)
+        found, loaded = loaded_routines(an, names, theta, params, reported and not mech.actuators)
         routines.update(found)
     for lv in levels:
         if f"dev_{lv.routine}" in routines or lv.name in level_table.LOADED:
@@ -427,21 +433,39 @@ def plan(
         angular=an.angular_rows,
         dropped=len(an.dropped),
         drives=mech.drives if mech.actuators else (),
-        actuators=_actuators(mech),
+        actuators=_actuators(mech, levels),
+        forces=tuple(a.name for a in mech.actuators if a.drive != "stroke"),
     )
     return with_derivation(result, an) if report else result
 
 
-def _actuators(mech) -> tuple[tuple[str, str, str, tuple[float, float]], ...]:
-    """The plan's actuator rows; the generated code takes a direction that is a number (bad
-    input otherwise, naming the actuator)."""
+def without_loaded(p: Plan) -> Plan:
+    """`p` without the `loaded` level (its routines and its driver's tables): what the C backend
+    emits for a mechanism with actuators, whose `loaded` level the generated numpy module alone
+    evaluates (docs/generated-code.md)."""
+    if p.loaded is None:
+        return p
+    return dataclasses.replace(
+        p,
+        levels=tuple(lv for lv in p.levels if lv.name not in level_table.LOADED),
+        loaded=None,
+        routines={k: r for k, r in p.routines.items() if not k.startswith(("loaded_", "plate_"))},
+    )
+
+
+def _actuators(mech, levels) -> tuple[tuple[str, str, str, tuple[float, float]], ...]:
+    """The plan's actuator rows; the generated code takes a direction that is a number, and a
+    force at the `loaded` level alone (bad input otherwise, naming the actuator)."""
     out = []
+    loaded_only = all(lv.name in level_table.LOADED for lv in levels)
     for a in mech.actuators:
-        if a.drive != "stroke" or any(sp.sympify(c).free_symbols for c in a.direction):
+        if (a.drive != "stroke" and not loaded_only) or any(
+            sp.sympify(c).free_symbols for c in a.direction
+        ):
             what = "a force" if a.drive != "stroke" else "a direction over the parameters"
             raise InputError(
                 f"the generated code takes stroke actuators along a fixed direction, not "
-                f"{what} (actuator '{a.name}')",
+                f"{what} (actuator '{a.name}'; a force at the loaded level alone)",
                 file=mech.path,
                 entry=f"[[actuator]] #{a.index + 1} '{a.name}'",
                 hint="evaluate it with symkin eval --backend sympy",
@@ -481,6 +505,8 @@ def _sensitivity_routines(
         shapes,
     )
     for lv in (lv for lv in levels if lv.sensitivity):
+        if lv.name in level_table.LOADED and an.mechanism.actuators:
+            continue  # no sensitivities at loaded with actuators yet
         if lv.name in level_table.LOADED:
             # the reduced equilibrium's pieces (symkin.codegen.loaded_sens); its driver
             # assembles them

@@ -229,7 +229,10 @@ def physics_reference(
     plates and loads, whatever variant the report derives)."""
     from .evaluation import Evaluation, equilibrium
 
-    reference = Analysis(analysis.structure, [p.name for p in analysis.points])
+    hidden = {a.point for a in analysis.mechanism.actuators}  # tracked by the levels themselves
+    reference = Analysis(
+        analysis.structure, [p.name for p in analysis.points if p.name not in hidden]
+    )
 
     def evaluated(inputs: Mapping[str, float]) -> Evaluation:
         given = {k: repr(v) for k, v in inputs.items()}

@@ -287,8 +287,8 @@ def actuator_values(mech: Mechanism, inputs: Mapping[str, object]) -> dict[str, 
 
 def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity: bool) -> None:
     """Refuse (exit 2, naming the actuator) what the actuators do not drive yet: a force at a
-    kinematic level (it needs a physical one), the physical levels but equilibrium, force
-    actuators in the generated backends."""
+    kinematic level (it needs a physical one), force actuators in the generated backends but
+    numpy's at loaded, sensitivities at loaded."""
     if not mech.actuators:
         return
     first = mech.actuators[0]
@@ -302,22 +302,26 @@ def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity:
             entry=f"[[actuator]] '{forces[0].name}'",
             hint='ask for --level equilibrium, or make it drive = "stroke"',
         )
-    if level in levels.LOADED and backend != "sympy":
+    if level in levels.LOADED and sensitivity and backend != "sympy":
         raise InputError(
-            f"the generated {backend} evaluators do not take actuators at the {level} level "
+            f"the generated {backend} evaluators have no {level} sensitivities with actuators "
             f"yet (actuator '{first.name}')",
             file=mech.path,
             entry=entry,
             hint=f"use --backend sympy at --level {level}",
         )
-    if backend not in ("sympy", *pipeline.REGISTRY) or (backend != "sympy" and forces):
+    at_loaded = level in levels.LOADED and backend == "numpy"
+    if backend not in ("sympy", *pipeline.REGISTRY) or (
+        backend != "sympy" and forces and not at_loaded
+    ):
         raise InputError(
             f"the generated {backend} evaluators do not take "
             + ("force actuators" if forces else "actuators")
             + f" yet (actuator '{(forces or [first])[0].name}')",
             file=mech.path,
             entry=entry,
-            hint="use --backend sympy" + ("" if forces else " or numpy"),
+            hint="use --backend sympy"
+            + (" or numpy" if not forces or level in levels.LOADED else ""),
         )
 
 

@@ -196,6 +196,31 @@ static int sk_stroke_poses(const sk_mechanism *m, const sk_actuators *t, const d
     return s != 0 ? s : sk_stroke_solve(m, t, xc, params, level, 1, rest, drives, tol);
 }
 
+#if defined(SK_ACT_LOADED)
+/* The kinematic inputs xr at which the rigid linkage meets the strokes among the public inputs
+   `drives` (the rigid positions of the evaluator's first level, SK_LEVEL_RIGID); `rest` (6 SK_NP)
+   the points as fabricated. Returns 0, or the status of what failed. */
+static int sk_stroke_rigid(const sk_mechanism *m, const sk_actuators *t, const double *drives,
+                           const double *params, double *xr, double *rest)
+{
+    double zero[SK_NI + 1], scale = 1e-300;
+    int i, j, s;
+    for (j = 0; j < SK_NI; ++j) {
+        zero[j] = 0.0;
+        xr[j] = t->drive_of[j] >= 0 ? drives[t->drive_of[j]] : 0.0;
+    }
+    s = sk_evaluate_pose(m, zero, params, SK_LEVEL_RIGID, rest, NULL, NULL);
+    for (i = 0; i < t->n && s == 0; ++i) {
+        const double *p0 = rest + 6 * t->point[i];
+        scale = fabs(p0[0]) > scale ? fabs(p0[0]) : scale;
+        scale = fabs(p0[1]) > scale ? fabs(p0[1]) : scale;
+    }
+    return s != 0 ? s
+                  : sk_stroke_solve(m, t, xr, params, SK_LEVEL_RIGID, 0, rest, drives,
+                                    64.0 * 2.220446049250313e-16 * scale);
+}
+
+#endif
 /* <name>_evaluate_pose with actuators: the public inputs (input hinges, then strokes), the
    reported points only; the rigid linkage at the surrogates' rigid angles, the compliant
    mechanism at their compliant ones, the deviation the rigid motion between the two plus the
@@ -211,6 +236,72 @@ static int sk_actuated_pose(const sk_mechanism *m, const sk_actuators *t, const 
     if (drives == NULL || out == NULL) {
         return 3;
     }
+#if defined(SK_ACT_LOADED)
+    if (level == SK_LEVEL_LOADED) {
+        /* the reduced equilibrium at the rigid linkage at the strokes, the surrogates free
+           (docs/physics.md, "Actuators at loaded"): its deviation is the answer's, the
+           surrogates' turn (q's x after the non-input hinges') in the compliant angles and the
+           links' deviations */
+        const sk_level *lv = sk_find_level(m, level);
+        const sk_loaded *l = (const sk_loaded *)m->loaded;
+        double theta[SK_M], delta[SK_K + 1], constants[SK_NQ];
+        const double *q = NULL;
+        if (params == NULL) {
+            params = m->defaults;
+        }
+        s = sk_stroke_rigid(m, t, drives, params, xr, rest);
+        s = s != 0 ? s : sk_pose(m, lv, xr, params, links != NULL, theta, delta, constants, &q);
+        s = s != 0 ? s
+                   : sk_outputs(m, lv, theta, delta, params, q, pr, ar,
+                                links == NULL ? NULL : lr);
+        if (s == 0) {
+            const int v = (int)q[SK_NPAR + 2 * SK_NP];
+            double turned[SK_M];
+            for (j = 0; j < SK_M; ++j) {
+                turned[j] = theta[j];
+            }
+            for (i = 0; i < t->n; ++i) {
+                const int h = l->unknown_index[SK_K + i];
+                const double d =
+                    q[SK_NPAR + 2 * SK_NP + 1 + SK_K + i] * l->variants[v].scale[SK_K + i];
+                ar[SK_M + h] += d;
+                turned[h] += d;
+            }
+#if defined(SK_LINKS)
+            if (links != NULL) {
+                /* each link's rotation at the surrogates' compliant angles less the rigid,
+                   plus the non-input hinges' deviation */
+                double rot[2 * SK_NL + 1], rot0[2 * SK_NL + 1];
+                m->links(turned, delta, rot);
+                m->links(theta, delta, rot0);
+                for (j = 0; j < SK_NL; ++j) {
+                    const double dev = rot[j] - rot0[j] + rot[SK_NL + j];
+                    lr[3 * j + 1] = lr[3 * j] + dev;
+                    lr[3 * j + 2] = dev;
+                }
+            }
+#endif
+        }
+        if (s != 0) {
+            sk_nan(out, 6 * t->n_shown);
+            sk_nan(angles, 2 * SK_M);
+            sk_nan(links, 3 * SK_NL);
+            return s;
+        }
+        for (i = 0; i < t->n_shown; ++i) {
+            for (j = 0; j < 6; ++j) {
+                out[6 * i + j] = pr[6 * t->shown[i] + j];
+            }
+        }
+        for (j = 0; angles != NULL && j < 2 * SK_M; ++j) {
+            angles[j] = ar[j];
+        }
+        for (j = 0; links != NULL && j < 3 * SK_NL; ++j) {
+            links[j] = lr[j];
+        }
+        return 0;
+    }
+#endif
     s = sk_stroke_poses(m, t, drives, params, level, xr, xc, rest);
     s = s != 0 ? s : sk_evaluate_pose(m, xr, params, level, pr, ar, links == NULL ? NULL : lr);
     s = s != 0 ? s : sk_evaluate_pose(m, xc, params, level, pc, ac, links == NULL ? NULL : lc);

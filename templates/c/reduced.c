@@ -41,6 +41,11 @@ typedef struct {
     int max_iter;
     int loads;          /* the load factor t enters the routines (the file has loads) */
     double chord, chord_error;  /* Newton's chord steps (symkin.codegen.loaded.CHORD) */
+#if defined(SK_ACT_LOADED)
+    const int *unknown_index;   /* theta index of the unknowns: the non-input hinges', then the
+                                   actuators' surrogates' (docs/physics.md, "Actuators at
+                                   loaded") */
+#endif
 } sk_loaded;
 
 /* One variant at one configuration. */
@@ -265,7 +270,11 @@ static int sk_red_accept(const sk_red *r, const double *x, const double *theta,
         double angle = theta[i];
         int j;
         for (j = 0; j < r->l->unknowns; ++j) {
+#if defined(SK_ACT_LOADED)
+            if (r->l->unknown_index[j] == i) {
+#else
             if (r->m->unknown_index[j] == i) {
+#endif
                 angle += x[j] * r->v->scale[j];
             }
         }
@@ -433,7 +442,11 @@ static int sk_red_solve(const sk_red *r, const double *inputs, const double *the
                     guess[i] = x[i];
                 }
                 for (i = 0; i < r->l->unknowns; ++i) {
+#if defined(SK_ACT_LOADED)
+                    const int h = r->l->unknown_index[i];
+#else
                     const int h = r->m->unknown_index[i];
+#endif
                     guess[i] = (th_s[h] + x[i] * r->v->scale[i] - th_1[h]) / r->v->scale[i];
                 }
                 good = !sk_red_newton(r, guess, th_1, s1, &st, &first)
@@ -481,7 +494,11 @@ static int sk_reduced_pose(const void *mechanism, const double *inputs, const do
     if (status) {
         return status == 4 ? 1 : status;
     }
+#if defined(SK_ACT_LOADED)
+    for (i = 0; i < SK_K; ++i) { /* the surrogates' turn: in q's x */
+#else
     for (i = 0; i < l->unknowns; ++i) {
+#endif
         delta[i] = x[i] * r.v->scale[i];
     }
     for (i = 0; i < SK_NPAR; ++i) {

@@ -64,6 +64,7 @@ class Backend:
             "shown_points": list(plan.shown_points),
             "drives": list(plan.drives),
             "actuators": list(plan.actuators),
+            "forces": list(plan.forces),
             "actuator_tables": actuator_tables(plan),
             "links": list(plan.reported_links),
             "levels": plan.levels,

@@ -42,6 +42,8 @@ def features(plan: Plan) -> list[str]:
                 plan.loaded is not None
                 and ("loaded_sens1" in plan.routines or "loaded_report1" in plan.routines),
             ),
+            # actuators at loaded: the unknowns' own theta indices (templates/c/reduced.c)
+            ("SK_ACT_LOADED", plan.loaded is not None and bool(plan.actuators)),
             ("SK_LINKS", bool(plan.reported_links)),
             ("SK_SENSITIVITY", plan.sensitivity),
         )

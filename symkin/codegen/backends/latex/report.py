@@ -767,7 +767,9 @@ class Report:
         equilibrium"): the plates' stiffness, the loads, the unknowns and rows, every hinge's
         force in the chord loads and every plate's mid-frame, the solver's thresholds."""
         ld = self.d.loaded
-        if ld is None:
+        if ld is None or self.mech.actuators:
+            # the statement has no actuators yet (their surrogates free, a stroke's force and
+            # row, a force's load: docs/physics.md, "Actuators at loaded")
             return None
         mech, tex = self.mech, self.tex
         unit = TEX_UNITS[mech.units]
@@ -1215,7 +1217,10 @@ def sensitivity_table(
     without parameters or sensitivities."""
     plan = report.plan
     names = list(getattr(numpy_module, "PARAMETERS", {}))
-    with_rates = [lv for lv in plan.levels if lv.sensitivity]
+    # with actuators `loaded` has no sensitivities yet (docs/physics.md, "Actuators at loaded")
+    with_rates = [
+        lv for lv in plan.levels if lv.sensitivity and not (plan.actuators and lv.needs_stiffness)
+    ]
     if not names or not with_rates or not hasattr(numpy_module, "sensitivity_full"):
         return None
     level = with_rates[-1].name

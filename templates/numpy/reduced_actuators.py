@@ -1,0 +1,235 @@
+"""symkin's numpy runtime for the `loaded` level with actuators (docs/physics.md, "Actuators at
+loaded"): what a generated numpy module of a mechanism with actuators and the loaded level runs
+around templates/numpy/reduced.py's driver. Only those modules hold it
+(templates/numpy/module.py.j2), after the reduced-equilibrium runtime.
+"""
+
+import math
+
+import numpy
+from reduced import _Batch, _red_signs  # the module holds both: reduced.py
+from runtime import _points, _prepare, _rigid_angles, _wrap  # the module holds them: runtime.py
+
+# ---- symkin runtime: every generated module with actuators and the loaded level holds this ----
+
+# symkin loaded-actuators runtime (templates/numpy/reduced_actuators.py): the rigid linkage at
+# the strokes (Newton on the surrogate angles), the reduced equilibrium with the surrogates free
+# and the force actuators' forces after the rigid angles, and for a force actuator the rigid
+# linkage at the stroke the force produced, which the deviations are taken against.
+
+
+class _ActuatedBatch(_Batch):
+    """reduced.py's _Batch where theta holds the rigid angles, then the force actuators'
+    forces (its routines' theta argument): the acceptance reads the angles alone, the
+    continuation scales the kinematic inputs and keeps the forces (the load factor t scales
+    them with the file's loads)."""
+
+    def _angles(self, theta):
+        return theta[: len(theta) - self.t.forces]
+
+    def accept(self, x, theta, jac, sign):
+        return super().accept(x, self._angles(theta), jac, sign)
+
+    def continuation(self, k, inputs, theta, p, mech):
+        forces = [float(v[k]) for v in theta[len(theta) - self.t.forces :]]
+        angles = self._angles(theta)
+        tb, n = self.t, self.size
+        th = [float(v[k]) for v in angles]
+        pk = [v[k : k + 1] for v in p]
+        xi = [float(v[k]) for v in inputs]
+
+        def rigid(s):
+            if s == 1.0:
+                return th + forces
+            with numpy.errstate(all="ignore"):
+                found, good = _rigid_angles(
+                    mech,
+                    [numpy.array(v * s) for v in xi],
+                    [float(v[0]) for v in pk],
+                    numpy.array(True),
+                )
+            return [float(v) for v in found] + forces if bool(good) else None
+
+        def column(values):
+            return [numpy.array([v]) for v in values]
+
+        s, ds = 0.0, 0.25
+        th_s = rigid(0.0)
+        if th_s is None:
+            return None
+        x = numpy.zeros((n, 1))
+        sign = _red_signs(self.system(x, column(th_s), pk, 0.0)[1])
+        jac = None
+        while s < 1:
+            if ds < 1e-3:
+                return None
+            s1 = min(1.0, s + ds)
+            th_1 = rigid(s1)
+            okn = th_1 is not None
+            if okn:
+                guess = x.copy()
+                for j, i in enumerate(tb.unknown_index):
+                    guess[j] = (th_s[i] + x[j] * self.scale[j] - th_1[i]) / self.scale[j]
+                xn, conv, last, _ = self.newton(guess, column(th_1), pk, s1)
+                okn = bool(conv[0]) and bool(self.accept(xn, column(th_1), last, sign)[0])
+            if okn:
+                x, s, th_s, jac = xn, s1, th_1, last[0]
+                ds = min(0.5, ds * 1.5)
+            else:
+                ds /= 2
+        return x[:, 0], jac
+
+
+# reduced.py's _reduced_solve and _red_solutions build this module's batches
+_Batch = _ActuatedBatch
+
+
+def _rigid_at(mech, kinematic, params):
+    """The rigid linkage at the kinematic inputs (input hinges and surrogate angles, a dict of
+    arrays): (x, theta, rigid points (2 per point), ok, parameters)."""
+    arrays, p = _prepare(mech, kinematic, "loaded", params)
+    ok = numpy.ones(arrays[0].shape, dtype=bool)
+    for a in arrays:
+        ok &= numpy.isfinite(a) & (numpy.abs(a) <= math.pi)
+    x = [numpy.where(ok, a, 0.0) for a in arrays]
+    with numpy.errstate(all="ignore"):
+        theta, ok = _rigid_angles(mech, x, p, ok)
+        rigid = [numpy.broadcast_to(v, ok.shape) for v in mech.rigid_points(theta, p)]
+    return x, theta, rigid, ok, p
+
+
+def _rigid_strokes(mech, actuators, hinges, strokes, params, start):
+    """The surrogate angles at which the rigid point of action of every actuator has moved by
+    its stroke along its line from its as-fabricated place (docs/levels.md, "Actuators"):
+    Newton's method elementwise, its Jacobian by central differences; (angles, ok)."""
+    surrogates = [a[1] for a in actuators]
+    where = [mech.point_names.index(a[2]) for a in actuators]
+    zero = numpy.zeros_like(start[0])
+    rest = _rigid_at(mech, dict.fromkeys(mech.input_names, zero), params)[2]
+    at = [(rest[2 * i], rest[2 * i + 1]) for i in where]
+    eps = numpy.finfo(mech.dtype).eps
+    scale = max([float(numpy.nanmax(numpy.abs(numpy.stack(x)))) for x in at] + [1e-300])
+    tol = 64 * eps * scale
+    step = numpy.sqrt(eps)
+
+    def residual(theta):
+        rigid = _rigid_at(mech, hinges | dict(zip(surrogates, theta)), params)[2]
+        out = []
+        for (_, _, _, d), i, x0, s in zip(actuators, where, at, strokes):
+            out.append(d[0] * (rigid[2 * i] - x0[0]) + d[1] * (rigid[2 * i + 1] - x0[1]) - s)
+        return out
+
+    theta, k = list(start), len(start)
+    for _ in range(40):
+        r = residual(theta)
+        done = numpy.all([numpy.abs(x) <= tol for x in r], axis=0)
+        if numpy.all(done | numpy.isnan(r[0])):
+            return theta, done
+        jac = numpy.empty(numpy.shape(r[0]) + (k, k), dtype=mech.dtype)
+        for j in range(k):
+            up = residual([t + step * (i == j) for i, t in enumerate(theta)])
+            down = residual([t - step * (i == j) for i, t in enumerate(theta)])
+            for i in range(k):
+                jac[..., i, j] = (up[i] - down[i]) / (2 * step)
+        with numpy.errstate(all="ignore"):
+            rhs = numpy.stack(r, axis=-1)[..., None]
+            move = numpy.linalg.solve(jac, rhs)[..., 0] if k > 1 else rhs[..., 0] / jac[..., 0]
+        theta = [t - numpy.where(done, 0, move[..., j]) for j, t in enumerate(theta)]
+    r = residual(theta)
+    return theta, numpy.all([numpy.abs(x) <= tol for x in r], axis=0)
+
+
+def _actuated_loaded(mech, actuators, forces, drives, shown, inputs, params, links):
+    """The module's evaluate() at level "loaded" for a mechanism with actuators (docs/physics.md,
+    "Actuators at loaded"): the rigid linkage at the strokes (a force actuator's: 0), the
+    reduced equilibrium there with the surrogates free (a stroke's force and a force's stroke
+    solved for); a force actuator's deviations are then taken against the rigid linkage at the
+    stroke the force produced (the compliant pose does not depend on the reference)."""
+    if set(inputs) != set(drives):
+        raise ValueError(f"inputs must be exactly {drives}, got {tuple(sorted(inputs))}")
+    arrays = numpy.broadcast_arrays(*(numpy.asarray(inputs[n], dtype=mech.dtype) for n in drives))
+    given = dict(zip(drives, arrays))
+    names = [a[0] for a in actuators]
+    surrogates = [a[1] for a in actuators]
+    hinges = {n: v for n, v in given.items() if n not in names}
+    shape = arrays[0].shape
+    zero = numpy.zeros(shape, dtype=mech.dtype)
+    strokes = [zero if n in forces else given[n] for n in names]
+    start = [zero for _ in actuators]
+    with numpy.errstate(all="ignore"):
+        angles, ok_s = _rigid_strokes(mech, actuators, hinges, strokes, params, start)
+    x, theta, _, ok, p = _rigid_at(mech, hinges | dict(zip(surrogates, angles)), params)
+    ok = ok & ok_s
+    loads = [numpy.broadcast_to(given[n], shape).astype(float) for n in forces]
+    with numpy.errstate(all="ignore"):
+        delta, q, ok = mech.loaded_solve(mech, x, list(theta) + loads, p, ok)
+    for i, limit in mech.limits:
+        ok = ok & (numpy.abs(theta[i]) <= limit)
+    res = _points(mech, theta, delta, ok, "loaded", p, q, False)
+    ok = res["ok"]
+    # the surrogates' angles beyond the rigid (unknowns after the non-input hinges')
+    tb = mech.loaded
+    first, scales = len(mech.unknown_index), tb.variants[0][6]
+    turned = [
+        numpy.broadcast_to(q.x[first + k] * scales[first + k], shape) for k in range(len(names))
+    ]
+    index = {n: i for i, n in enumerate(mech.hinge_names)}
+    compliant = list(theta)
+    for j, i in enumerate(mech.unknown_index):
+        compliant[i] = theta[i] + delta[j]
+    for s, v in zip(surrogates, turned):
+        compliant[index[s]] = theta[index[s]] + v
+    reference = theta  # the rigid linkage the deviations are taken against
+    points = {n: res["points"][n] for n in shown}
+    if forces:
+        # the stroke each force produced: its point of action's compliant place along d
+        rest = _rigid_at(mech, dict.fromkeys(mech.input_names, zero), params)[2]
+        produced = []
+        for n, (_, _, point, d) in zip(names, actuators):
+            if n not in forces:
+                produced.append(given[n])
+                continue
+            i = mech.point_names.index(point)
+            c = res["points"][point]["compliant"]
+            produced.append(d[0] * (c[0] - rest[2 * i]) + d[1] * (c[1] - rest[2 * i + 1]))
+        with numpy.errstate(all="ignore"):
+            angles, ok_f = _rigid_strokes(mech, actuators, hinges, produced, params, angles)
+        _, reference, rigid, ok_r, _ = _rigid_at(
+            mech, hinges | dict(zip(surrogates, angles)), params
+        )
+        ok = ok & ok_f & ok_r
+        for n in shown:
+            i = mech.point_names.index(n)
+            r = numpy.stack([rigid[2 * i], rigid[2 * i + 1]])
+            c = res["points"][n]["compliant"]
+            points[n] = {"rigid": r, "compliant": c, "deviation": c - r}
+    out = {"points": {}, "ok": ok}
+    for n, table in points.items():
+        out["points"][n] = {key: numpy.where(ok, v, numpy.nan) for key, v in table.items()}
+    out["angles"] = {
+        kind: {
+            h: numpy.where(ok, numpy.broadcast_to(v[i], shape), numpy.nan)
+            for i, h in enumerate(mech.hinge_names)
+        }
+        for kind, v in (("rigid", reference), ("compliant", compliant))
+    }
+    out["links"] = {}  # as the other levels' (empty without `links`)
+    if links and mech.links is not None:
+        # each link's deviation: its rotation at the compliant angles (the surrogates turned)
+        # less the reference's, plus the non-input hinges' deviation (computed directly)
+        turned_theta = list(theta)
+        for s, v in zip(surrogates, turned):
+            turned_theta[index[s]] = theta[index[s]] + v
+        with numpy.errstate(all="ignore"):
+            at_t = mech.links(turned_theta, delta)
+            at_r = mech.links(reference, delta)
+        m = len(mech.link_names)
+        for i, name in enumerate(mech.link_names):
+            dev = at_t[i] - at_r[i] + at_t[m + i]
+            r = _wrap(numpy.broadcast_to(at_r[i], shape))
+            out["links"][name] = {
+                "rigid": numpy.where(ok, r, numpy.nan),
+                "compliant": numpy.where(ok, r + dev, numpy.nan),
+                "deviation": numpy.where(ok, numpy.broadcast_to(dev, shape), numpy.nan),
+            }
+    return out
