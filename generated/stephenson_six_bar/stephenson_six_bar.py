@@ -567,6 +567,8 @@ class _LoadedTables:
     (plates, system, residual, dev) routines, its size, its half plates and its unknowns'
     scales."""
 
+    forces = 0  # the force actuators' forces after the rigid angles in theta (with actuators)
+
     def __init__(self, **fields):
         self.__dict__.update(fields)
 
@@ -753,9 +755,10 @@ class _Batch:
 
     def accept(self, x, theta, jac, sign):
         """Converged x on the branch followed: det J (the last Newton step's) of the sign at the
-        unloaded state, every compliant angle within (-pi, pi)."""
+        unloaded state, every compliant angle within (-pi, pi) (theta's angles: the force
+        actuators' forces follow them)."""
         ok = _red_signs(jac) == sign
-        for i, th in enumerate(theta):
+        for i, th in enumerate(theta[: len(theta) - self.t.forces]):
             angle = th
             for j, h in enumerate(self.t.unknown_index):
                 if h == i:
@@ -794,9 +797,11 @@ class _Batch:
 
     def continuation(self, k, inputs, theta, p, mech):
         """Configuration k by continuation (inputs and loads scaled together by s from the
-        as-fabricated pose): (x, the last Newton step's J), None where it does not converge."""
+        as-fabricated pose; the force actuators' forces at the end of theta are kept, the load
+        factor scales them): (x, the last Newton step's J), None where it does not converge."""
         tb, n = self.t, self.size
         th = [float(v[k]) for v in theta]
+        forces = th[len(th) - tb.forces :]
         pk = [v[k : k + 1] for v in p]
         xi = [float(v[k]) for v in inputs]
 
@@ -810,7 +815,7 @@ class _Batch:
                     [float(v[0]) for v in pk],
                     numpy.array(True),
                 )
-            return [float(v) for v in angles] if bool(good) else None
+            return [float(v) for v in angles] + forces if bool(good) else None
 
         def column(values):
             return [numpy.array([v]) for v in values]

@@ -7,81 +7,15 @@ around templates/numpy/reduced.py's driver. Only those modules hold it
 import math
 
 import numpy
-from reduced import _Batch, _red_signs  # the module holds both: reduced.py
 from runtime import _points, _prepare, _rigid_angles, _wrap  # the module holds them: runtime.py
 
 # ---- symkin runtime: every generated module with actuators and the loaded level holds this ----
 
 # symkin loaded-actuators runtime (templates/numpy/reduced_actuators.py): the rigid linkage at
 # the strokes (Newton on the surrogate angles), the reduced equilibrium with the surrogates free
-# and the force actuators' forces after the rigid angles, and for a force actuator the rigid
-# linkage at the stroke the force produced, which the deviations are taken against.
-
-
-class _ActuatedBatch(_Batch):
-    """reduced.py's _Batch where theta holds the rigid angles, then the force actuators'
-    forces (its routines' theta argument): the acceptance reads the angles alone, the
-    continuation scales the kinematic inputs and keeps the forces (the load factor t scales
-    them with the file's loads)."""
-
-    def _angles(self, theta):
-        return theta[: len(theta) - self.t.forces]
-
-    def accept(self, x, theta, jac, sign):
-        return super().accept(x, self._angles(theta), jac, sign)
-
-    def continuation(self, k, inputs, theta, p, mech):
-        forces = [float(v[k]) for v in theta[len(theta) - self.t.forces :]]
-        angles = self._angles(theta)
-        tb, n = self.t, self.size
-        th = [float(v[k]) for v in angles]
-        pk = [v[k : k + 1] for v in p]
-        xi = [float(v[k]) for v in inputs]
-
-        def rigid(s):
-            if s == 1.0:
-                return th + forces
-            with numpy.errstate(all="ignore"):
-                found, good = _rigid_angles(
-                    mech,
-                    [numpy.array(v * s) for v in xi],
-                    [float(v[0]) for v in pk],
-                    numpy.array(True),
-                )
-            return [float(v) for v in found] + forces if bool(good) else None
-
-        def column(values):
-            return [numpy.array([v]) for v in values]
-
-        s, ds = 0.0, 0.25
-        th_s = rigid(0.0)
-        if th_s is None:
-            return None
-        x = numpy.zeros((n, 1))
-        sign = _red_signs(self.system(x, column(th_s), pk, 0.0)[1])
-        jac = None
-        while s < 1:
-            if ds < 1e-3:
-                return None
-            s1 = min(1.0, s + ds)
-            th_1 = rigid(s1)
-            okn = th_1 is not None
-            if okn:
-                guess = x.copy()
-                for j, i in enumerate(tb.unknown_index):
-                    guess[j] = (th_s[i] + x[j] * self.scale[j] - th_1[i]) / self.scale[j]
-                xn, conv, last, _ = self.newton(guess, column(th_1), pk, s1)
-                okn = bool(conv[0]) and bool(self.accept(xn, column(th_1), last, sign)[0])
-            if okn:
-                x, s, th_s, jac = xn, s1, th_1, last[0]
-                ds = min(0.5, ds * 1.5)
-            else:
-                ds /= 2
-        return x[:, 0], jac
-
-
-# reduced.py's _reduced_solve and _red_solutions build this module's batches
-_Batch = _ActuatedBatch
+# and the force actuators' forces after the rigid angles (reduced.py's _Batch keeps them through
+# its continuation), and for a force actuator the rigid linkage at the stroke the force
+# produced, which the deviations are taken against.
 
 
 def _rigid_at(mech, kinematic, params):
