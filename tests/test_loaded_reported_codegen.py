@@ -10,8 +10,8 @@ the point (the mechanism solved again); the closed forms of a lone plate under a
 (M = E'I θ/l, dM/dθ = E'I/l, σ = E' t θ/(2l)). The numpy module's `evaluate()` and the C
 evaluator's `<name>_loaded_report` alike. Mechanisms unlike each other: the four-bar
 example, a parallelogram stage with a payload load, a five-bar whose input is a chord, the lone
-plate in millimetres with an allowable stress; the piezo amplifier (actuators) has a generated
-`loaded` level without the report yet.
+plate in millimetres with an allowable stress (with actuators:
+tests/test_loaded_actuators_reported_codegen.py).
 """
 
 from __future__ import annotations
@@ -226,9 +226,9 @@ def test_lone_plate_under_a_pure_moment_is_a_circular_arc(lone_plate, backend):
 
 
 def test_what_the_other_levels_and_modules_hold(built):
-    """The report only at `loaded`; a module with actuators has the `loaded` level without the
-    report (not yet: tests/test_loaded_actuators_codegen.py); the C report refuses what its
-    evaluate refuses (a bad input: 3, out NaN)."""
+    """The report only at `loaded`; the C report refuses what its evaluate refuses (a bad
+    input: 3, out NaN); a file with actuators has it in numpy
+    (tests/test_loaded_actuators_reported_codegen.py), not in C yet: its C files leave it out."""
     _, plan, module = built("four_bar")
     assert "inputs" not in module.evaluate({"A0": 0.3}, "exact")
     assert {"loaded_report1", "loaded_report2"} <= set(plan.routines)
@@ -239,8 +239,9 @@ def test_what_the_other_levels_and_modules_hold(built):
     assert all(math.isnan(v) for v in out)
     piezo = symkin.analyze(symkin.load(EXAMPLES / "piezo_amplifier.toml"))
     plan, module = pipeline.build(piezo, "numpy", "test", sensitivity=False)
-    assert "loaded" in module.LEVELS and plan.loaded.report is None
-    assert "inputs" not in module.evaluate({"piezo": 0.02}, "loaded")
+    assert "loaded" in module.LEVELS and plan.loaded.report is not None
+    assert "actuators" in module.evaluate({"piezo": 0.02}, "loaded")
+    assert not any("loaded_report" in t for t in pipeline.emit(plan, "c", "piezo_amplifier.toml"))
 
 
 def test_a_held_input_is_reported_too():

@@ -2,7 +2,7 @@
 Mechanism 'piezo_amplifier': 4 links, 4 hinges, 1 loop(s); inputs piezo (actuators; their strokes fix the angles of RA0 (piezo)).
 Points: B; levels: paper, first_order, exact, loaded.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, loaded_plates1 147, loaded_system1 722, loaded_res1 292, loaded_dev1 104, loaded_plates2 372, loaded_system2 1863, loaded_res2 568, loaded_dev2 189, dev_paper 31, dev_first_order 51, dev_exact 62, links 1, sens_rigid 105, sens_paper 108, sens_first_order 355, sens_exact 449, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40.
+Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, loaded_plates1 147, loaded_system1 722, loaded_res1 292, loaded_dev1 104, loaded_report1 413, loaded_plates2 372, loaded_system2 1863, loaded_res2 568, loaded_dev2 189, loaded_report2 837, dev_paper 31, dev_first_order 51, dev_exact 62, links 1, sens_rigid 105, sens_paper 108, sens_first_order 355, sens_exact 449, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -11,6 +11,17 @@ False in ok. It also holds "angles": {"rigid": {H: a}, "compliant": {H: a}}, eve
 angle (radians, the rotation of links[1] relative to links[0] from the as-fabricated pose), and
 "links": {L: {"rigid": a, "compliant": a, "deviation": a}}, the rotation of every link in LINKS
 from the as-fabricated pose (rigid wrapped to (-pi, pi]; the deviation computed directly).
+
+At level "loaded" it also holds what the level reports beyond the deviations (docs/physics.md,
+"What loaded reports"): "inputs": {H: {"angle", "moment", "stiffness"}} of every input hinge
+(rad, N m, N m/rad), "stiffness": {P: K}, K of shape (3, 3, *broadcast_shape) the point's
+stiffness with every input held (rows and columns x, y, rotation; N/u, N, N u with u the file's
+length unit; NaN where the point is on the frame or its compliance is singular), "plates": {H:
+{"stress", "strain", "safety", "section"}} of every plate (Pa; safety NaN without an allowable
+stress; section where along the plate, 0..1), "actuators": {A: {"stroke", "force", "stiffness"}}
+of every actuator (its stroke in the file's length unit, its force along its line in N, dF/ds
+with the other inputs held in N/u; the points' stiffness holds the strokes and the forces). Not
+the buckling factor (symkin eval's).
 
 sensitivity(inputs, level, params) gives {P: {p: a}}: d(dx, dy)/dp of every point's deviation
 by every parameter p, each a of shape (2, *broadcast_shape); sensitivity_full(...) adds the
@@ -1162,6 +1173,175 @@ def _red_solutions(mech, theta, p, q, shape, good, routines):
         yield where, solver, out, jac, jo, ins, dins, rel
 
 
+#: Sections per plate where the stress is sampled (symkin.physics.reported.SECTIONS), one RK4
+#: step each (against the Python path's Taylor series: 5e-12 of the stress, tests/
+#: test_loaded_reported_codegen.py).
+_STRESS_SECTIONS = 64
+#: A point's scaled compliance this ill-conditioned is singular (reported.SINGULAR): NaN.
+_SINGULAR = 1e12
+
+
+def _evaluate_reported(mech, inputs, level, params, links, report=True):
+    """The module's evaluate() (runtime.py's _evaluate) with, at the loaded level and with
+    `report`, what it reports beyond the deviations: "inputs", "stiffness", "plates"
+    (_reduced_report)."""
+    arrays, p = _prepare(mech, inputs, level, params)
+    return _blocks(_reported_block, arrays, mech, level, p, links, report)
+
+
+def _reported_block(arrays, mech, level, p, links, report):
+    """evaluate() on one block of broadcast input arrays (runtime.py's _evaluate_block), the
+    report added at the loaded level."""
+    theta, delta, ok, q = _pose(mech, arrays, level, p, links)
+    result = _points(mech, theta, delta, ok, level, p, q, links)
+    if report and mech.levels[level].loaded:
+        result.update(_reduced_report(mech, theta, p, q, result["ok"]))
+    return result
+
+
+def _plate_stress(k0, lx, ly, ea, es, slender, modulus, limit, has_limit):
+    """Largest normal stress (Pa), its strain, the safety factor (NaN without an allowable
+    stress) and where along the plate (0..1), per configuration ((b,) arrays): the plate's IVP
+    psi'' = -f_Q (1 + (e_a - e_s) f_N), psi(0) = 0, psi'(0) = k0 (symkin.physics.beams) by
+    fixed-step RK4, the strain |psi'| t/(2l) + |f_N| (t/l)^2/12 at every section and the
+    parabola's vertex through the three samples around an interior maximum
+    (symkin.physics.reported.plate_stress)."""
+    d = ea - es
+
+    def rate(psi, om):
+        c, s = numpy.cos(psi), numpy.sin(psi)
+        return om, -(ly * c - lx * s) * (1 + d * (lx * c + ly * s))
+
+    n = _STRESS_SECTIONS
+    h = 1.0 / n
+    psi, om = numpy.zeros_like(k0), numpy.array(k0, dtype=float)
+    psis, oms = [psi], [om]
+    for _ in range(n):
+        a1, b1 = rate(psi, om)
+        a2, b2 = rate(psi + h / 2 * a1, om + h / 2 * b1)
+        a3, b3 = rate(psi + h / 2 * a2, om + h / 2 * b2)
+        a4, b4 = rate(psi + h * a3, om + h * b3)
+        psi = psi + h / 6 * (a1 + 2 * a2 + 2 * a3 + a4)
+        om = om + h / 6 * (b1 + 2 * b2 + 2 * b3 + b4)
+        psis.append(psi)
+        oms.append(om)
+    psi, om = numpy.array(psis), numpy.array(oms)  # (n + 1, b)
+    normal = lx * numpy.cos(psi) + ly * numpy.sin(psi)
+    strain = numpy.abs(om) * slender / 2 + numpy.abs(normal) * slender**2 / 12
+    b = k0.shape[0]
+    j = numpy.argmax(strain, axis=0)
+    cols = numpy.arange(b)
+    value = strain[j, cols]
+    where = j / n
+    inner = (j > 0) & (j < n)
+    ja, jc = numpy.clip(j - 1, 0, n), numpy.clip(j + 1, 0, n)
+    sa, sc = strain[ja, cols], strain[jc, cols]
+    bend = sa - 2 * value + sc
+    vertex = inner & (bend < 0)
+    with numpy.errstate(all="ignore"):
+        shift = (sa - sc) / (2 * bend)
+        value = numpy.where(vertex, value - (sa - sc) * shift / 4, value)
+        where = numpy.where(vertex, (j + shift) / n, where)
+        stress = modulus * value
+        safety = numpy.where(stress > 0, limit / stress, math.inf)
+    safety = numpy.where(has_limit, safety, numpy.nan)
+    return stress, value, safety, where
+
+
+def _reduced_report(mech, theta, p, q, ok):
+    """What the loaded level reports at its solutions (q: the variant solved and its x,
+    templates/numpy/reduced.py), NaN where not ok: {"inputs": {H: {"angle", "moment",
+    "stiffness"}}, "stiffness": {P: (3, 3, *shape)}, "plates": {H: {"stress", "strain",
+    "safety", "section"}}} (N m, N m/rad; the stiffness in the file's length unit; Pa)."""
+    tb = mech.loaded
+    rep = tb.report
+    shape = ok.shape
+    nin, npt, npl = len(rep.inputs), len(rep.points), len(rep.plates)
+    size = ok.size
+    ys = numpy.full((size, nin + 3 * npt), numpy.nan)
+    rates = numpy.full((size, nin + 3 * npt, nin + 3 * npt), numpy.nan)
+    stress = numpy.full((size, npl, 8), numpy.nan)
+    good = numpy.broadcast_to(ok, shape).reshape(-1)
+    routines = [fn for fn, _ in rep.routines]
+    for where, solver, out, jac, jo, _, dins, rel in _red_solutions(
+        mech, theta, p, q, shape, good, routines
+    ):
+        blocks = rep.routines[solver.count - 1][1]
+        b, n, ns = where.size, solver.size, solver.plates
+        # the plate relation's partials by (theta_c, p, f), block diagonal
+        part = numpy.zeros((b, 3 * ns, 3 * ns))
+        for k in range(ns):
+            for i in range(3):
+                for c in range(3):
+                    part[:, 3 * k + i, 3 * k + c] = rel[k][3 + 3 * i + c]
+        dinx = numpy.zeros((b, 3 * ns, n))
+        if ns and n:
+            dinx = numpy.array([_red_column(v, b) for v in dins]).reshape(3 * ns, n, b)
+            dinx = dinx.transpose(2, 0, 1)
+        dr_v = _red_block(out, blocks["dR_dv"], b)
+        din_v = _red_block(out, blocks["din_dv"], b)
+        dy_o = _red_block(out, blocks["dy_dout"], b)
+        by_o = numpy.matmul(dy_o, part)
+        total = _red_block(out, blocks["dy_dv"], b) + numpy.matmul(by_o, din_v)
+        if n:
+            rhs = dr_v + numpy.matmul(jo, numpy.matmul(part, din_v))
+            try:
+                dx = -numpy.linalg.solve(jac, rhs)
+            except numpy.linalg.LinAlgError:
+                # one singular J stops the stacked solve: each on its own
+                dx = numpy.full(rhs.shape, numpy.nan)
+                for c in range(b):
+                    try:
+                        dx[c] = -numpy.linalg.solve(jac[c], rhs[c])
+                    except numpy.linalg.LinAlgError:
+                        continue  # singular: NaN
+            dy_x = _red_block(out, blocks["dy_dx"], b) + numpy.matmul(by_o, dinx)
+            total = total + numpy.matmul(dy_x, dx)
+        ys[where] = _red_block(out, blocks["y"], b)[:, :, 0]
+        rates[where] = total
+        stress[where] = _red_block(out, blocks["stress"], b)
+    ok_flat = good
+    result = {"inputs": {}, "stiffness": {}, "plates": {}}
+    angles = {name: theta[i] for name, i in zip(mech.hinge_names, range(len(theta)))}
+
+    def shaped(v):
+        return numpy.where(ok_flat, v, numpy.nan).reshape(shape)
+
+    for k, name in enumerate(rep.inputs):
+        result["inputs"][name] = {
+            "angle": numpy.where(ok, numpy.broadcast_to(angles[name], shape), numpy.nan),
+            "moment": shaped(ys[:, k] * rep.unit_scale),
+            "stiffness": shaped(rates[:, k, k] * rep.unit_scale),
+        }
+    big_l, big_f = rep.L, rep.F
+    norm = numpy.array([big_f / big_l, big_f / big_l, big_f])[:, None] * numpy.array(
+        [1, 1, 1 / big_l]
+    )
+    for k, name in enumerate(rep.points):
+        rows = slice(nin + 3 * k, nin + 3 * k + 3)
+        c = rates[:, rows, rows]
+        live = ok_flat & numpy.all(numpy.isfinite(c), axis=(1, 2)) & (not rep.frame[k])
+        stiff = numpy.full((size, 3, 3), numpy.nan)
+        if live.any():
+            cond = numpy.linalg.cond(c[live] * norm)
+            keep = numpy.flatnonzero(live)[cond <= _SINGULAR]
+            if keep.size:
+                stiff[keep] = numpy.linalg.inv(c[keep])
+        result["stiffness"][name] = numpy.moveaxis(stiff, 0, -1).reshape((3, 3) + shape)
+    for k, name in enumerate(rep.plates):
+        row = [stress[:, k, c] for c in range(8)]
+        live = numpy.flatnonzero(ok_flat)
+        values = [numpy.full(size, numpy.nan) for _ in range(4)]
+        if live.size:
+            found = _plate_stress(*(v[live] for v in row), rep.limits[k])
+            for v, f in zip(values, found):
+                v[live] = f
+        result["plates"][name] = {
+            key: shaped(v) for key, v in zip(("stress", "strain", "safety", "section"), values)
+        }
+    return result
+
+
 # symkin loaded-actuators runtime (templates/numpy/reduced_actuators.py): the rigid linkage at
 # the strokes (Newton on the surrogate angles), the reduced equilibrium with the surrogates free
 # and the force actuators' forces after the rigid angles (reduced.py's _Batch keeps them through
@@ -1224,12 +1404,14 @@ def _rigid_strokes(mech, actuators, hinges, strokes, params, start):
     return theta, numpy.all([numpy.abs(x) <= tol for x in r], axis=0)
 
 
-def _actuated_loaded(mech, actuators, forces, drives, shown, inputs, params, links):
+def _actuated_loaded(mech, actuators, forces, drives, shown, inputs, params, links, report=False):
     """The module's evaluate() at level "loaded" for a mechanism with actuators (docs/physics.md,
     "Actuators at loaded"): the rigid linkage at the strokes (a force actuator's: 0), the
     reduced equilibrium there with the surrogates free (a stroke's force and a force's stroke
     solved for); a force actuator's deviations are then taken against the rigid linkage at the
-    stroke the force produced (the compliant pose does not depend on the reference)."""
+    stroke the force produced (the compliant pose does not depend on the reference). With
+    `report` (modules with the level's report), what it reports beyond the deviations
+    (templates/numpy/reduced_report.py's _reduced_report, at the solution found)."""
     if set(inputs) != set(drives):
         raise ValueError(f"inputs must be exactly {drives}, got {tuple(sorted(inputs))}")
     arrays = numpy.broadcast_arrays(*(numpy.asarray(inputs[n], dtype=mech.dtype) for n in drives))
@@ -1298,6 +1480,13 @@ def _actuated_loaded(mech, actuators, forces, drives, shown, inputs, params, lin
         }
         for kind, v in (("rigid", reference), ("compliant", compliant))
     }
+    if report:
+        # at the solution found (the reference only moves the deviations: what the level
+        # reports is the compliant pose's; a force's stroke from the as-fabricated reference)
+        given_values = [given[n] for n in names]
+        out.update(
+            _actuated_report(mech, actuators, forces, list(theta) + loads, p, q, ok, given_values)
+        )
     out["links"] = {}  # as the other levels' (empty without `links`)
     if links and mech.links is not None:
         # each link's deviation: its rotation at the compliant angles (the surrogates turned)
@@ -1317,6 +1506,48 @@ def _actuated_loaded(mech, actuators, forces, drives, shown, inputs, params, lin
                 "compliant": numpy.where(ok, r + dev, numpy.nan),
                 "deviation": numpy.where(ok, numpy.broadcast_to(dev, shape), numpy.nan),
             }
+    return out
+
+
+def _actuated_report(mech, actuators, forces, theta, p, q, ok, given):
+    """What the loaded level reports with actuators (reduced_reported.report): _reduced_report's
+    "inputs", "stiffness" and "plates", and "actuators": {A: {"stroke", "force", "stiffness"}}
+    (file unit, N, N per file unit). The report routines' rows of the actuators (a stroke's
+    force and dF/ds, a force's stroke and ds/dF) follow the input hinges' as the inputs' rows
+    do: _reduced_report reads them as inputs named by their surrogate hinges, unscaled (theta:
+    the rigid angles then the forces; `given`: each actuator's stroke or force as given)."""
+    tb = mech.loaded
+    rep = tb.report
+    surrogates = tuple(a[1] for a in actuators)
+    rows = _LoadedTables(**{**rep.__dict__, "inputs": rep.inputs + surrogates, "unit_scale": 1.0})
+    view = _Mechanism(
+        **{**mech.__dict__, "loaded": _LoadedTables(**{**tb.__dict__, "report": rows})}
+    )
+    out = _reduced_report(view, theta, p, q, ok)
+    found = out["inputs"]
+    scale = rep.unit_scale  # the input hinges' moments in N m, as _reduced_report's
+    out["inputs"] = {
+        h: {
+            "angle": found[h]["angle"],
+            "moment": found[h]["moment"] * scale,
+            "stiffness": found[h]["stiffness"] * scale,
+        }
+        for h in rep.inputs
+    }
+    out["actuators"] = {}
+    for (name, surrogate, _, _), fixed in zip(actuators, given):
+        value, rate = found[surrogate]["moment"], found[surrogate]["stiffness"]
+        fixed = numpy.where(ok, fixed, numpy.nan)
+        if name in forces:
+            with numpy.errstate(divide="ignore"):
+                entry = {
+                    "stroke": value,
+                    "force": fixed,
+                    "stiffness": numpy.where(rate != 0, 1 / rate, math.inf),
+                }
+        else:
+            entry = {"stroke": fixed, "force": value, "stiffness": rate}
+        out["actuators"][name] = entry
     return out
 
 
@@ -2984,6 +3215,344 @@ def _loaded_dev1(x, theta, plates, params):
     ]
 
 
+def _loaded_report1(x, theta, plates, params):
+    """loaded (1 half plate(s) per plate), what it reports: dR/dv, din/dv, y, dy/dx, dy/dv, dy/dout (v: the inputs' angles, the actuators' values and virtual loads at the points, y: the inputs' moments, the actuators' forces or strokes and the points' (dx, dy, dphi)), then per plate (k0, lx, ly, e_a, e_s, t/l, E', allowable) (413 operations)."""
+    x_0, x_1, _, x_3, x_4, x_5, _, x_7, _ = x
+    theta_1, theta_2, theta_3, _ = theta
+    along_1_0, across_1_0, omega_1_0, along_2_0, across_2_0, omega_2_0, along_3_0, across_3_0, omega_3_0, _, _, omega_4_0 = plates
+    p_0, p_1, p_2, p_3, _ = params
+    _tmp0 = 0.039275205738995705*x_3
+    _tmp1 = _tmp0 + theta_1
+    _tmp2 = numpy.cos(_tmp1)
+    _tmp3 = _tmp2*p_2
+    _tmp4 = 0.00122208*p_3
+    _tmp5 = numpy.sin(p_1)
+    _tmp6 = _tmp5*p_0
+    _tmp7 = 0.039275205738995705*x_0
+    _tmp8 = _tmp1 + _tmp7 + theta_2
+    _tmp9 = numpy.cos(_tmp8)
+    _tmp10 = 0.00488832*_tmp9
+    _tmp11 = numpy.cos(p_1)
+    _tmp12 = _tmp11*p_0
+    _tmp13 = numpy.sin(_tmp8)
+    _tmp14 = 0.00488832*_tmp13
+    _tmp15 = _tmp12*_tmp14
+    _tmp16 = 0.019637602869497853*x_0
+    _tmp17 = _tmp16 + 0.5*theta_2
+    _tmp18 = _tmp1 + _tmp17
+    _tmp19 = numpy.sin(_tmp18)
+    _tmp20 = _tmp19*p_3
+    _tmp21 = _tmp20*across_2_0
+    _tmp22 = arck(_tmp17)
+    _tmp23 = along_2_0 + _tmp22*_tmp17**2
+    _tmp24 = numpy.cos(_tmp18)
+    _tmp25 = _tmp24*p_3
+    _tmp26 = _tmp23*_tmp25
+    _tmp27 = numpy.sin(_tmp1)
+    _tmp28 = _tmp27*p_2
+    _tmp29 = _tmp25*across_2_0
+    _tmp30 = _tmp20*_tmp23
+    _tmp31 = _tmp10*_tmp12 + _tmp14*_tmp6
+    _tmp32 = 0.019637602869497853*x_3
+    _tmp33 = _tmp32 + 0.5*theta_1
+    _tmp34 = numpy.sin(_tmp33)
+    _tmp35 = p_3**2
+    _tmp36 = 0.000977664*_tmp35
+    _tmp37 = -_tmp34*_tmp36
+    _tmp38 = numpy.cos(_tmp33)
+    _tmp39 = _tmp36*_tmp38
+    _tmp40 = -_tmp19*_tmp36
+    _tmp41 = _tmp24*_tmp36
+    _tmp42 = 6.427599787083612*x_7
+    _tmp43 = theta_1 + theta_2
+    _tmp44 = numpy.sin(_tmp43)
+    _tmp45 = _tmp0 + _tmp7
+    _tmp46 = numpy.sin(_tmp45)
+    _tmp47 = _tmp16 + _tmp32
+    _tmp48 = numpy.sin(_tmp47)
+    _tmp49 = _tmp48**2
+    _tmp50 = -4*_tmp49*_tmp6 - 2*_tmp12*_tmp46
+    _tmp51 = numpy.cos(_tmp43)
+    _tmp52 = -2*_tmp46*_tmp6 + 4*_tmp11*_tmp49*p_0
+    _tmp53 = numpy.cos(theta_1)
+    _tmp54 = p_2*numpy.sin(_tmp0)
+    _tmp55 = numpy.sin(theta_1)
+    _tmp56 = numpy.sin(_tmp32)
+    _tmp57 = _tmp56**2
+    _tmp58 = _tmp38*p_3
+    _tmp59 = _tmp58*across_1_0
+    _tmp60 = arck(_tmp33)
+    _tmp61 = along_1_0 + _tmp60*_tmp33**2
+    _tmp62 = _tmp34*p_3
+    _tmp63 = _tmp61*_tmp62
+    _tmp64 = _tmp59 + _tmp63
+    _tmp65 = _tmp29 + _tmp30
+    _tmp66 = _tmp53*p_2
+    _tmp67 = _tmp62*across_1_0
+    _tmp68 = _tmp21 + _tmp67 - _tmp23*_tmp24*p_3 - _tmp38*_tmp61*p_3
+    _tmp69 = _tmp22*(0.019637602869497853*theta_2 + 0.0007712708929202206*x_0) + 0.019637602869497853*_tmp17**3*(-3*sinr2(_tmp17) + 3*cosr2(_tmp17) + sinr1(_tmp17))
+    _tmp70 = 0.07855041147799141*numpy.cos(_tmp45)
+    _tmp71 = numpy.cos(_tmp47)
+    _tmp72 = -_tmp12*_tmp70 - 0.15710082295598282*_tmp48*_tmp6*_tmp71
+    _tmp73 = -_tmp6*_tmp70 + 0.15710082295598282*_tmp11*_tmp48*_tmp71*p_0
+    _tmp74 = _tmp44*_tmp72 - _tmp51*_tmp73
+    _tmp75 = _tmp60*(0.019637602869497853*theta_1 + 0.0007712708929202206*x_3) + 0.019637602869497853*_tmp33**3*(-3*sinr2(_tmp33) + 3*cosr2(_tmp33) + sinr1(_tmp33))
+    _tmp76 = _tmp58*_tmp61
+    _tmp77 = 0.039275205738995705*numpy.cos(_tmp0)
+    _tmp78 = numpy.cos(_tmp32)
+    _tmp79 = -_tmp62
+    _tmp80 = -_tmp20
+    _tmp81 = p_3**(-1.0)
+    _tmp82 = 0.5*p_3
+    _tmp83 = 6.427599787083612*x_5
+    _tmp84 = 6.427599787083612*x_4
+    _tmp85 = -_tmp42 - _tmp84
+    _tmp86 = 0.000977664*p_3
+    _tmp87 = 0.006284032918239313*_tmp35
+    _tmp88 = _tmp87*x_5
+    _tmp89 = _tmp35**(-1.0)
+    _tmp90 = 0.005208333333333333*_tmp89
+    _tmp91 = 0.018656716417910446*_tmp89
+    _tmp92 = 0.25/abs(p_3)
+    _tmp93 = 1022.8462948415815*_tmp81
+    _tmp94 = p_2 - _tmp82
+    _tmp95 = _tmp28 + _tmp65
+    _tmp96 = _tmp87*x_4
+    _tmp97 = _tmp5*_tmp82
+    _tmp98 = theta_3 + 0.039275205738995705*x_1
+    _tmp99 = numpy.cos(_tmp98)
+    _tmp100 = numpy.sin(_tmp98)
+    _tmp101 = _tmp11*_tmp82
+    _tmp102 = 0.5*theta_3 + 0.019637602869497853*x_1
+    _tmp103 = _tmp102 + p_1
+    _tmp104 = p_3*numpy.cos(_tmp103)
+    _tmp105 = along_3_0 + _tmp102**2*arck(_tmp102)
+    _tmp106 = p_3*numpy.sin(_tmp103)
+    _tmp107 = _tmp104*across_3_0 + _tmp105*_tmp106
+    _tmp108 = _tmp104*_tmp105 - _tmp106*across_3_0
+    _tmp109 = _tmp12 - 0.5*_tmp11*p_3
+    _tmp110 = _tmp6 - _tmp97
+    _tmp111 = _tmp6 + _tmp97
+    _tmp112 = -_tmp109
+    _tmp113 = _tmp98 + p_1
+    _tmp114 = numpy.cos(_tmp113)
+    _tmp115 = numpy.sin(_tmp113)
+    return [
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp15 + 0.00244416*_tmp26 + 0.00244416*_tmp3 - 0.00244416*_tmp21 + _tmp10*_tmp6 - _tmp2*_tmp4,
+        _tmp31 + 0.00244416*_tmp28 + 0.00244416*_tmp29 + 0.00244416*_tmp30 - _tmp27*_tmp4,
+        -0.00244416,
+        0,
+        -_tmp15 - _tmp4*_tmp9 + 0.00488832*_tmp5*_tmp9*p_0,
+        _tmp31 - _tmp13*_tmp4,
+        -0.00244416,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -0.4,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp37,
+        _tmp39,
+        0,
+        0,
+        -_tmp39,
+        _tmp37,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp40,
+        _tmp41,
+        0,
+        0,
+        -_tmp41,
+        _tmp40,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp42,
+        -_tmp64 - _tmp65 + _tmp51*_tmp52 - _tmp44*_tmp50 - _tmp53*_tmp54 + 2*_tmp55*_tmp57*p_2,
+        -_tmp68 + _tmp44*_tmp52 + _tmp50*_tmp51 - _tmp54*_tmp55 - 2*_tmp57*_tmp66,
+        _tmp45,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        6.427599787083612,
+        -_tmp74 - 0.019637602869497853*_tmp26 - _tmp20*_tmp69 + 0.019637602869497853*_tmp19*across_2_0*p_3,
+        0,
+        0,
+        -_tmp74 - 0.019637602869497853*_tmp76 - 0.039275205738995705*_tmp26 - _tmp62*_tmp75 - _tmp66*_tmp77 + 0.019637602869497853*_tmp34*across_1_0*p_3 + 0.039275205738995705*_tmp19*across_2_0*p_3 + 0.07855041147799141*_tmp55*_tmp56*_tmp78*p_2,
+        0,
+        0,
+        0,
+        0,
+        -0.019637602869497853*_tmp29 - 0.019637602869497853*_tmp30 + _tmp25*_tmp69 + _tmp44*_tmp73 + _tmp51*_tmp72,
+        0,
+        0,
+        -0.019637602869497853*_tmp59 - 0.019637602869497853*_tmp63 - 0.039275205738995705*_tmp29 - 0.039275205738995705*_tmp30 + _tmp44*_tmp73 + _tmp51*_tmp72 + _tmp38*_tmp75*p_3 - _tmp55*_tmp77*p_2 - 0.07855041147799141*_tmp56*_tmp66*_tmp78,
+        0,
+        0,
+        0,
+        0,
+        0.039275205738995705,
+        0,
+        0,
+        0.039275205738995705,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp79,
+        -_tmp58,
+        0,
+        _tmp80,
+        -_tmp25,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp58,
+        _tmp79,
+        0,
+        _tmp25,
+        _tmp80,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp86*(-_tmp83*(-_tmp64 - _tmp27*_tmp82) - _tmp85*(_tmp76 + _tmp82 - _tmp67 + _tmp2*_tmp82) + 1022.8462948415815*_tmp81*omega_1_0),
+        -_tmp88,
+        -_tmp36*_tmp85,
+        _tmp90,
+        _tmp91,
+        _tmp92,
+        78554595443.83347,
+        0,
+        _tmp86*(_tmp84*(_tmp26 + _tmp3 - _tmp21 + _tmp82*_tmp9 - _tmp2*_tmp94) + _tmp93*omega_2_0 - _tmp83*(-_tmp95 + _tmp27*_tmp94 - _tmp13*_tmp82)),
+        _tmp27*_tmp96 - _tmp2*_tmp88,
+        _tmp2*_tmp96 + _tmp27*_tmp88,
+        _tmp90,
+        _tmp91,
+        _tmp92,
+        78554595443.83347,
+        0,
+        _tmp86*(_tmp83*(_tmp101 + _tmp108 + _tmp101*_tmp99 - _tmp100*_tmp97) + _tmp93*omega_3_0 - _tmp84*(_tmp107 + _tmp97 + _tmp100*_tmp101 + _tmp97*_tmp99)),
+        _tmp11*_tmp96 + _tmp5*_tmp88,
+        -_tmp5*_tmp96 + 0.006284032918239313*_tmp11*_tmp35*x_5,
+        _tmp90,
+        _tmp91,
+        _tmp92,
+        78554595443.83347,
+        0,
+        _tmp86*(_tmp83*(-_tmp108 - _tmp64 - _tmp95 + _tmp100*_tmp110 + _tmp112*_tmp9 - _tmp109*_tmp99 - _tmp111*_tmp13 + 2*_tmp11*p_0) + _tmp93*omega_4_0 - _tmp84*(-_tmp107 - _tmp68 - p_2 + _tmp111*_tmp9 + _tmp112*_tmp13 + _tmp2*p_2 - _tmp100*_tmp109 - _tmp110*_tmp99)),
+        _tmp114*_tmp96 + _tmp115*_tmp88,
+        -_tmp115*_tmp96 + 0.006284032918239313*_tmp114*_tmp35*x_5,
+        _tmp90,
+        _tmp91,
+        _tmp92,
+        78554595443.83347,
+        0,
+    ]
+
+
 def _loaded_plates2(x, theta, params):
     """loaded (2 half plate(s) per plate): every half plate's (theta, p, f, e_a, e_s) and d(theta, p, f)/dx (372 operations)."""
     x_0, x_1, x_2, x_3, x_4, x_5, _, x_7, x_8, x_9, x_10, x_11, _ = x
@@ -4547,6 +5116,578 @@ def _loaded_dev2(x, theta, plates, params):
     ]
 
 
+def _loaded_report2(x, theta, plates, params):
+    """loaded (2 half plate(s) per plate), what it reports: dR/dv, din/dv, y, dy/dx, dy/dv, dy/dout (v: the inputs' angles, the actuators' values and virtual loads at the points, y: the inputs' moments, the actuators' forces or strokes and the points' (dx, dy, dphi)), then per plate (k0, lx, ly, e_a, e_s, t/l, E', allowable) (837 operations)."""
+    x_0, x_1, _, x_3, x_4, x_5, _, x_7, x_8, x_9, x_10, _, _ = x
+    theta_1, theta_2, theta_3, _ = theta
+    along_1_0, across_1_0, _, along_1_1, across_1_1, omega_1_1, along_2_0, across_2_0, _, along_2_1, across_2_1, omega_2_1, along_3_0, across_3_0, _, along_3_1, across_3_1, omega_3_1, _, _, _, _, _, omega_4_1 = plates
+    p_0, p_1, p_2, p_3, _ = params
+    _tmp0 = 0.039275205738995705*x_3
+    _tmp1 = _tmp0 + theta_1
+    _tmp2 = numpy.cos(_tmp1)
+    _tmp3 = _tmp2*p_2
+    _tmp4 = 0.00122208*p_3
+    _tmp5 = numpy.sin(p_1)
+    _tmp6 = _tmp5*p_0
+    _tmp7 = 0.039275205738995705*x_0
+    _tmp8 = _tmp1 + _tmp7 + theta_2
+    _tmp9 = numpy.cos(_tmp8)
+    _tmp10 = 0.00488832*_tmp9
+    _tmp11 = numpy.cos(p_1)
+    _tmp12 = _tmp11*p_0
+    _tmp13 = numpy.sin(_tmp8)
+    _tmp14 = 0.00488832*_tmp13
+    _tmp15 = _tmp12*_tmp14
+    _tmp16 = 0.019637602869497853*x_0
+    _tmp17 = _tmp1 + _tmp16 + 0.5*theta_2
+    _tmp18 = numpy.sin(_tmp17)
+    _tmp19 = 1.0*x_9
+    _tmp20 = 0.5*p_3
+    _tmp21 = 0.5*x_9
+    _tmp22 = 0.25*theta_2 + 0.009818801434748926*x_0
+    _tmp23 = _tmp22 - _tmp21
+    _tmp24 = numpy.cos(_tmp23)
+    _tmp25 = _tmp20*across_2_0
+    _tmp26 = _tmp21 + _tmp22
+    _tmp27 = numpy.cos(_tmp26)
+    _tmp28 = _tmp20*_tmp27
+    _tmp29 = numpy.sin(_tmp23)
+    _tmp30 = arck(_tmp26)
+    _tmp31 = along_2_0 + _tmp30*_tmp26**2
+    _tmp32 = _tmp20*_tmp31
+    _tmp33 = arck(_tmp23)
+    _tmp34 = along_2_1 + _tmp33*_tmp23**2
+    _tmp35 = numpy.sin(_tmp26)
+    _tmp36 = _tmp20*_tmp35
+    _tmp37 = _tmp20*numpy.sin(_tmp19) + _tmp24*_tmp25 + _tmp28*across_2_1 + _tmp34*_tmp36 - _tmp29*_tmp32
+    _tmp38 = _tmp18*_tmp37
+    _tmp39 = numpy.cos(_tmp17)
+    _tmp40 = numpy.sin(_tmp21)
+    _tmp41 = numpy.sin(_tmp22)
+    _tmp42 = _tmp20*(-2*_tmp40**2 + 2*_tmp41**2) + _tmp24*_tmp32 + _tmp25*_tmp29 + _tmp28*_tmp34 - _tmp36*across_2_1
+    _tmp43 = _tmp39*_tmp42
+    _tmp44 = _tmp18*_tmp42
+    _tmp45 = _tmp37*_tmp39
+    _tmp46 = numpy.sin(_tmp1)
+    _tmp47 = _tmp46*p_2
+    _tmp48 = _tmp10*_tmp12 + _tmp14*_tmp6
+    _tmp49 = 0.5*x_8
+    _tmp50 = _tmp49 + 0.75*theta_1 + 0.02945640430424678*x_3
+    _tmp51 = numpy.sin(_tmp50)
+    _tmp52 = _tmp4*_tmp51
+    _tmp53 = numpy.cos(_tmp50)
+    _tmp54 = 0.25*theta_1 + 0.009818801434748926*x_3
+    _tmp55 = _tmp54 - _tmp49
+    _tmp56 = along_1_1 + sinr0(_tmp55)
+    _tmp57 = _tmp1 + _tmp21 + 0.75*theta_2 + 0.02945640430424678*x_0
+    _tmp58 = numpy.sin(_tmp57)
+    _tmp59 = _tmp4*_tmp58
+    _tmp60 = along_2_1 + sinr0(_tmp23)
+    _tmp61 = numpy.cos(_tmp57)
+    _tmp62 = _tmp49 + _tmp54
+    _tmp63 = numpy.sin(_tmp62)
+    _tmp64 = p_3**2
+    _tmp65 = 0.000244416*_tmp64
+    _tmp66 = -_tmp63*_tmp65
+    _tmp67 = numpy.cos(_tmp62)
+    _tmp68 = _tmp65*_tmp67
+    _tmp69 = -_tmp51*_tmp65
+    _tmp70 = _tmp53*_tmp65
+    _tmp71 = _tmp1 + _tmp26
+    _tmp72 = -_tmp65*numpy.sin(_tmp71)
+    _tmp73 = _tmp65*numpy.cos(_tmp71)
+    _tmp74 = -_tmp58*_tmp65
+    _tmp75 = _tmp61*_tmp65
+    _tmp76 = 6.427599787083612*x_7
+    _tmp77 = theta_1 + theta_2
+    _tmp78 = numpy.sin(_tmp77)
+    _tmp79 = _tmp0 + _tmp7
+    _tmp80 = numpy.sin(_tmp79)
+    _tmp81 = 0.019637602869497853*x_3
+    _tmp82 = _tmp16 + _tmp81
+    _tmp83 = numpy.sin(_tmp82)
+    _tmp84 = _tmp83**2
+    _tmp85 = -4*_tmp6*_tmp84 - 2*_tmp12*_tmp80
+    _tmp86 = numpy.cos(_tmp77)
+    _tmp87 = -2*_tmp6*_tmp80 + 4*_tmp11*_tmp84*p_0
+    _tmp88 = numpy.cos(theta_1)
+    _tmp89 = p_2*numpy.sin(_tmp0)
+    _tmp90 = numpy.sin(theta_1)
+    _tmp91 = numpy.sin(_tmp81)
+    _tmp92 = _tmp91**2
+    _tmp93 = _tmp81 + 0.5*theta_1
+    _tmp94 = numpy.sin(_tmp93)
+    _tmp95 = numpy.sin(_tmp55)
+    _tmp96 = _tmp20*across_1_0
+    _tmp97 = _tmp20*_tmp63
+    _tmp98 = numpy.sin(_tmp49)
+    _tmp99 = numpy.sin(_tmp54)
+    _tmp100 = numpy.cos(_tmp55)
+    _tmp101 = arck(_tmp62)
+    _tmp102 = along_1_0 + _tmp101*_tmp62**2
+    _tmp103 = _tmp102*_tmp20
+    _tmp104 = arck(_tmp55)
+    _tmp105 = along_1_1 + _tmp104*_tmp55**2
+    _tmp106 = _tmp20*_tmp67
+    _tmp107 = _tmp100*_tmp103 + _tmp105*_tmp106 + _tmp20*(-2*_tmp98**2 + 2*_tmp99**2) + _tmp95*_tmp96 - _tmp97*across_1_1
+    _tmp108 = _tmp107*_tmp94
+    _tmp109 = numpy.cos(_tmp93)
+    _tmp110 = 1.0*x_8
+    _tmp111 = _tmp100*_tmp96 + _tmp105*_tmp97 + _tmp106*across_1_1 + _tmp20*numpy.sin(_tmp110) - _tmp103*_tmp95
+    _tmp112 = _tmp109*_tmp111
+    _tmp113 = _tmp108 + _tmp112
+    _tmp114 = _tmp44 + _tmp45
+    _tmp115 = _tmp88*p_2
+    _tmp116 = _tmp111*_tmp94
+    _tmp117 = _tmp116 + _tmp38 - _tmp107*_tmp109 - _tmp39*_tmp42
+    _tmp118 = 0.004909400717374463*p_3
+    _tmp119 = _tmp118*across_2_0
+    _tmp120 = _tmp118*_tmp35
+    _tmp121 = _tmp118*_tmp31
+    _tmp122 = 0.009818801434748926*x_9
+    _tmp123 = 0.004909400717374463*theta_2 + 0.00019281772323005516*x_0
+    _tmp124 = _tmp23**3*(-3*sinr2(_tmp23) + 3*cosr2(_tmp23) + sinr1(_tmp23))
+    _tmp125 = 0.009818801434748926*_tmp124 + _tmp33*(_tmp123 - _tmp122)
+    _tmp126 = _tmp26**3*(-3*sinr2(_tmp26) + 3*cosr2(_tmp26) + sinr1(_tmp26))
+    _tmp127 = _tmp20*(0.009818801434748926*_tmp126 + _tmp30*(_tmp122 + _tmp123))
+    _tmp128 = -_tmp119*_tmp29 - _tmp120*across_2_1 - _tmp121*_tmp24 - _tmp127*_tmp29 + 0.5*_tmp125*_tmp35*p_3 + 0.004909400717374463*_tmp27*_tmp34*p_3
+    _tmp129 = 0.019637602869497853*p_3
+    _tmp130 = _tmp119*_tmp24 + _tmp125*_tmp28 + _tmp127*_tmp24 - _tmp120*_tmp34 - _tmp121*_tmp29 + _tmp129*_tmp41*numpy.cos(_tmp22) - _tmp118*_tmp27*across_2_1
+    _tmp131 = 0.07855041147799141*numpy.cos(_tmp79)
+    _tmp132 = numpy.cos(_tmp82)
+    _tmp133 = -_tmp12*_tmp131 - 0.15710082295598282*_tmp132*_tmp6*_tmp83
+    _tmp134 = -_tmp131*_tmp6 + 0.15710082295598282*_tmp11*_tmp132*_tmp83*p_0
+    _tmp135 = _tmp133*_tmp78 - _tmp134*_tmp86
+    _tmp136 = _tmp118*across_1_0
+    _tmp137 = _tmp118*_tmp63
+    _tmp138 = _tmp102*_tmp118
+    _tmp139 = 0.009818801434748926*x_8
+    _tmp140 = 0.004909400717374463*theta_1 + 0.00019281772323005516*x_3
+    _tmp141 = _tmp55**3*(-3*sinr2(_tmp55) + 3*cosr2(_tmp55) + sinr1(_tmp55))
+    _tmp142 = 0.009818801434748926*_tmp141 + _tmp104*(_tmp140 - _tmp139)
+    _tmp143 = _tmp62**3*(-3*sinr2(_tmp62) + 3*cosr2(_tmp62) + sinr1(_tmp62))
+    _tmp144 = _tmp20*(0.009818801434748926*_tmp143 + _tmp101*(_tmp139 + _tmp140))
+    _tmp145 = -_tmp100*_tmp138 - _tmp136*_tmp95 - _tmp137*across_1_1 - _tmp144*_tmp95 + 0.5*_tmp142*_tmp63*p_3 + 0.004909400717374463*_tmp105*_tmp67*p_3
+    _tmp146 = _tmp100*_tmp136 + _tmp100*_tmp144 + _tmp106*_tmp142 - _tmp105*_tmp137 - _tmp138*_tmp95 + _tmp129*_tmp99*numpy.cos(_tmp54) - _tmp118*_tmp67*across_1_1
+    _tmp147 = _tmp107*_tmp109
+    _tmp148 = 0.039275205738995705*numpy.cos(_tmp0)
+    _tmp149 = numpy.cos(_tmp81)
+    _tmp150 = 0.25*p_3
+    _tmp151 = _tmp150*_tmp63
+    _tmp152 = _tmp100*_tmp150
+    _tmp153 = _tmp150*_tmp67
+    _tmp154 = -0.5*_tmp141 - _tmp104*_tmp55
+    _tmp155 = 0.5*_tmp143 + _tmp101*_tmp62
+    _tmp156 = _tmp102*_tmp152 + _tmp105*_tmp153 + _tmp154*_tmp97 + _tmp20*numpy.cos(_tmp110) - _tmp151*across_1_1 + _tmp150*_tmp95*across_1_0 - _tmp155*_tmp20*_tmp95
+    _tmp157 = 1.0*p_3
+    _tmp158 = -_tmp105*_tmp151 - _tmp152*across_1_0 - _tmp153*across_1_1 - _tmp157*_tmp98*numpy.cos(_tmp49) + 0.25*_tmp102*_tmp95*p_3 + 0.5*_tmp100*_tmp155*p_3 + 0.5*_tmp154*_tmp67*p_3
+    _tmp159 = _tmp150*_tmp35
+    _tmp160 = _tmp150*_tmp24
+    _tmp161 = _tmp150*_tmp27
+    _tmp162 = -0.5*_tmp124 - _tmp23*_tmp33
+    _tmp163 = 0.5*_tmp126 + _tmp26*_tmp30
+    _tmp164 = _tmp160*_tmp31 + _tmp161*_tmp34 + _tmp162*_tmp36 + _tmp20*numpy.cos(_tmp19) - _tmp159*across_2_1 + _tmp150*_tmp29*across_2_0 - _tmp163*_tmp20*_tmp29
+    _tmp165 = -_tmp159*_tmp34 - _tmp160*across_2_0 - _tmp161*across_2_1 - _tmp157*_tmp40*numpy.cos(_tmp21) + 0.25*_tmp29*_tmp31*p_3 + 0.5*_tmp162*_tmp27*p_3 + 0.5*_tmp163*_tmp24*p_3
+    _tmp166 = _tmp20*_tmp94
+    _tmp167 = -_tmp100*_tmp166 + 0.5*_tmp109*_tmp95*p_3
+    _tmp168 = _tmp166*_tmp95 + _tmp100*_tmp109*_tmp20
+    _tmp169 = -_tmp106*_tmp94 - _tmp109*_tmp97
+    _tmp170 = _tmp94*_tmp97 - _tmp106*_tmp109
+    _tmp171 = _tmp20*_tmp39
+    _tmp172 = _tmp18*_tmp20
+    _tmp173 = _tmp171*_tmp29 - _tmp172*_tmp24
+    _tmp174 = _tmp171*_tmp24 + _tmp172*_tmp29
+    _tmp175 = -_tmp18*_tmp28 - _tmp36*_tmp39
+    _tmp176 = _tmp18*_tmp36 - _tmp28*_tmp39
+    _tmp177 = p_3**(-1.0)
+    _tmp178 = 6.427599787083612*x_5
+    _tmp179 = 6.427599787083612*x_4
+    _tmp180 = -_tmp179 - _tmp76
+    _tmp181 = 0.000977664*p_3
+    _tmp182 = 0.006284032918239313*_tmp64
+    _tmp183 = _tmp182*x_5
+    _tmp184 = _tmp64**(-1.0)
+    _tmp185 = 0.005208333333333333*_tmp184
+    _tmp186 = 0.018656716417910446*_tmp184
+    _tmp187 = 0.25/abs(p_3)
+    _tmp188 = 2045.692589683163*_tmp177
+    _tmp189 = p_2 - _tmp20
+    _tmp190 = _tmp114 + _tmp47
+    _tmp191 = _tmp182*x_4
+    _tmp192 = _tmp20*_tmp5
+    _tmp193 = theta_3 + 0.039275205738995705*x_1
+    _tmp194 = numpy.cos(_tmp193)
+    _tmp195 = numpy.sin(_tmp193)
+    _tmp196 = _tmp11*_tmp20
+    _tmp197 = p_1 + 0.5*theta_3 + 0.019637602869497853*x_1
+    _tmp198 = numpy.sin(_tmp197)
+    _tmp199 = 0.5*x_10
+    _tmp200 = 0.25*theta_3 + 0.009818801434748926*x_1
+    _tmp201 = _tmp200 - _tmp199
+    _tmp202 = numpy.sin(_tmp201)
+    _tmp203 = _tmp20*across_3_0
+    _tmp204 = _tmp199 + _tmp200
+    _tmp205 = _tmp20*numpy.sin(_tmp204)
+    _tmp206 = numpy.cos(_tmp201)
+    _tmp207 = _tmp20*(along_3_0 + _tmp204**2*arck(_tmp204))
+    _tmp208 = along_3_1 + _tmp201**2*arck(_tmp201)
+    _tmp209 = _tmp20*numpy.cos(_tmp204)
+    _tmp210 = _tmp20*(-2*numpy.sin(_tmp199)**2 + 2*numpy.sin(_tmp200)**2) + _tmp202*_tmp203 + _tmp206*_tmp207 + _tmp208*_tmp209 - _tmp205*across_3_1
+    _tmp211 = numpy.cos(_tmp197)
+    _tmp212 = _tmp20*numpy.sin(1.0*x_10) + _tmp203*_tmp206 + _tmp205*_tmp208 + _tmp209*across_3_1 - _tmp202*_tmp207
+    _tmp213 = _tmp198*_tmp210 + _tmp211*_tmp212
+    _tmp214 = _tmp210*_tmp211 - _tmp198*_tmp212
+    _tmp215 = _tmp12 - 0.5*_tmp11*p_3
+    _tmp216 = _tmp6 - _tmp192
+    _tmp217 = _tmp192 + _tmp6
+    _tmp218 = -_tmp215
+    _tmp219 = _tmp193 + p_1
+    _tmp220 = numpy.cos(_tmp219)
+    _tmp221 = numpy.sin(_tmp219)
+    return [
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp15 + 0.00244416*_tmp3 + 0.00244416*_tmp43 - 0.00244416*_tmp38 + _tmp10*_tmp6 - _tmp2*_tmp4,
+        _tmp48 + 0.00244416*_tmp44 + 0.00244416*_tmp45 + 0.00244416*_tmp47 - _tmp4*_tmp46,
+        -0.00244416,
+        0,
+        -_tmp15 - _tmp4*_tmp9 + 0.00488832*_tmp5*_tmp9*p_0,
+        _tmp48 - _tmp13*_tmp4,
+        -0.00244416,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -0.4,
+        0,
+        0,
+        0,
+        0,
+        -_tmp52*across_1_1 + 0.00122208*_tmp53*_tmp56*p_3,
+        _tmp52*_tmp56 + _tmp4*_tmp53*across_1_1,
+        0,
+        0,
+        -_tmp59*across_2_1 + 0.00122208*_tmp60*_tmp61*p_3,
+        _tmp59*_tmp60 + _tmp4*_tmp61*across_2_1,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp66,
+        _tmp68,
+        0,
+        0,
+        -_tmp68,
+        _tmp66,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp69,
+        _tmp70,
+        0,
+        0,
+        -_tmp70,
+        _tmp69,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp72,
+        _tmp73,
+        0,
+        0,
+        -_tmp73,
+        _tmp72,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp74,
+        _tmp75,
+        0,
+        0,
+        -_tmp75,
+        _tmp74,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp76,
+        -_tmp113 - _tmp114 + _tmp86*_tmp87 - _tmp78*_tmp85 - _tmp88*_tmp89 + 2*_tmp90*_tmp92*p_2,
+        -_tmp117 + _tmp78*_tmp87 + _tmp85*_tmp86 - _tmp89*_tmp90 - 2*_tmp115*_tmp92,
+        _tmp79,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        6.427599787083612,
+        0,
+        0,
+        0,
+        0,
+        -_tmp135 - 0.019637602869497853*_tmp43 - _tmp128*_tmp39 - _tmp130*_tmp18 + 0.019637602869497853*_tmp18*_tmp37,
+        0,
+        0,
+        -_tmp135 - 0.019637602869497853*_tmp147 - 0.039275205738995705*_tmp43 - _tmp109*_tmp145 - _tmp115*_tmp148 - _tmp146*_tmp94 + 0.019637602869497853*_tmp111*_tmp94 + 0.039275205738995705*_tmp18*_tmp37 + 0.07855041147799141*_tmp149*_tmp90*_tmp91*p_2,
+        0,
+        0,
+        0,
+        0,
+        -_tmp109*_tmp156 - _tmp158*_tmp94,
+        -_tmp164*_tmp39 - _tmp165*_tmp18,
+        0,
+        0,
+        -0.019637602869497853*_tmp44 - 0.019637602869497853*_tmp45 + _tmp130*_tmp39 + _tmp133*_tmp86 + _tmp134*_tmp78 - _tmp128*_tmp18,
+        0,
+        0,
+        -0.019637602869497853*_tmp108 - 0.019637602869497853*_tmp112 - 0.039275205738995705*_tmp44 - 0.039275205738995705*_tmp45 + _tmp109*_tmp146 + _tmp133*_tmp86 + _tmp134*_tmp78 - _tmp145*_tmp94 - _tmp148*_tmp90*p_2 - 0.07855041147799141*_tmp115*_tmp149*_tmp91,
+        0,
+        0,
+        0,
+        0,
+        _tmp109*_tmp158 - _tmp156*_tmp94,
+        _tmp165*_tmp39 - _tmp164*_tmp18,
+        0,
+        0,
+        0.039275205738995705,
+        0,
+        0,
+        0.039275205738995705,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp167,
+        -_tmp168,
+        0,
+        _tmp169,
+        _tmp170,
+        0,
+        _tmp173,
+        -_tmp174,
+        0,
+        _tmp175,
+        _tmp176,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp168,
+        _tmp167,
+        0,
+        -_tmp170,
+        _tmp169,
+        0,
+        _tmp174,
+        _tmp173,
+        0,
+        -_tmp176,
+        _tmp175,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp181*(-_tmp178*(-_tmp113 - _tmp20*_tmp46) - _tmp180*(_tmp147 + _tmp20 - _tmp116 + _tmp2*_tmp20) + 2045.692589683163*_tmp177*omega_1_1),
+        -_tmp183,
+        -0.000977664*_tmp180*_tmp64,
+        _tmp185,
+        _tmp186,
+        _tmp187,
+        78554595443.83347,
+        0,
+        _tmp181*(_tmp179*(_tmp3 + _tmp43 - _tmp38 + _tmp20*_tmp9 - _tmp189*_tmp2) + _tmp188*omega_2_1 - _tmp178*(-_tmp190 + _tmp189*_tmp46 - _tmp13*_tmp20)),
+        _tmp191*_tmp46 - _tmp183*_tmp2,
+        _tmp183*_tmp46 + _tmp191*_tmp2,
+        _tmp185,
+        _tmp186,
+        _tmp187,
+        78554595443.83347,
+        0,
+        _tmp181*(_tmp178*(_tmp196 + _tmp214 + _tmp194*_tmp196 - _tmp192*_tmp195) + _tmp188*omega_3_1 - _tmp179*(_tmp192 + _tmp213 + _tmp192*_tmp194 + _tmp195*_tmp196)),
+        _tmp11*_tmp191 + _tmp183*_tmp5,
+        -_tmp191*_tmp5 + 0.006284032918239313*_tmp11*_tmp64*x_5,
+        _tmp185,
+        _tmp186,
+        _tmp187,
+        78554595443.83347,
+        0,
+        _tmp181*(_tmp178*(-_tmp113 - _tmp190 - _tmp214 + _tmp195*_tmp216 + _tmp218*_tmp9 - _tmp13*_tmp217 - _tmp194*_tmp215 + 2*_tmp11*p_0) + _tmp188*omega_4_1 - _tmp179*(-_tmp117 - _tmp213 - p_2 + _tmp13*_tmp218 + _tmp2*p_2 + _tmp217*_tmp9 - _tmp194*_tmp216 - _tmp195*_tmp215)),
+        _tmp183*_tmp221 + _tmp191*_tmp220,
+        -_tmp191*_tmp221 + 0.006284032918239313*_tmp220*_tmp64*x_5,
+        _tmp185,
+        _tmp186,
+        _tmp187,
+        78554595443.83347,
+        0,
+    ]
+
+
 def _dev_paper(theta, delta, params):
     """deviation of the points at level paper (31 operations)."""
     theta_1, theta_2, _, _ = theta
@@ -5538,6 +6679,16 @@ _MECHANISM = _Mechanism(
         tol=1e-12, max_iter=12, max_turn=0.2,
         p_limit=0.9, est_factor=3.0, est_limit=0.01,
         loads=False, chord=0.001, chord_error=1e-15,
+        # what the level reports beyond the deviations (templates/numpy/reduced_report.py): per
+        # variant its routine and blocks; the inputs, points (on the frame or not), plates
+        # (with an allowable stress or not), metres per file unit and the scales L, F
+        report=_LoadedTables(
+            routines=((_loaded_report1, {'dR_dv': (0, 8, 4), 'din_dv': (32, 12, 4), 'y': (80, 4, 1), 'dy_dx': (84, 4, 8), 'dy_dv': (116, 4, 4), 'dy_dout': (132, 4, 12), 'stress': (180, 4, 8)}), (_loaded_report2, {'dR_dv': (0, 12, 4), 'din_dv': (48, 24, 4), 'y': (144, 4, 1), 'dy_dx': (148, 4, 12), 'dy_dv': (196, 4, 4), 'dy_dout': (212, 4, 24), 'stress': (308, 4, 8)}), ),
+            inputs=(), points=('B',),
+            frame=(False,), plates=('RA0', 'A', 'O', 'C'),
+            limits=(False, False, False, False), unit_scale=0.001,
+            L=63.65339029956478, F=6.427599787083612,
+        ),
     ),
     loaded_solve=_reduced_solve,
     sens_rigid_blocks={'A': (0, 3, 3), 'dG_dv': (9, 3, 6), 'dR_dtheta': (27, 4, 3), 'dR_dv': (39, 4, 6)},
@@ -5554,11 +6705,14 @@ _MECHANISM = _Mechanism(
 )
 
 
-def evaluate(inputs, level='exact', params=None, links=True):
+def evaluate(inputs, level='exact', params=None, links=True, report=True):
     """Deviation of the points at `level` for broadcast input arrays (see the module docstring);
-    `links=False` leaves out the links' rotations (and any loop solve only they need)."""
+    `links=False` leaves out the links' rotations (and any loop solve only they need),
+    `report=False` what `loaded` reports beyond the deviations."""
     if level == "loaded":
-        return _actuated_loaded(_MECHANISM, ACTUATORS, FORCES, INPUTS, POINTS, inputs, params, links)
+        return _actuated_loaded(
+            _MECHANISM, ACTUATORS, FORCES, INPUTS, POINTS, inputs, params, links, report
+        )
     return _actuated(_MECHANISM, ACTUATORS, INPUTS, POINTS, inputs, level, params, links)
 
 

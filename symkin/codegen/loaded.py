@@ -17,10 +17,13 @@ x holds the scaled unknowns then the load factor t; `plates` the plate relation'
 
     loaded_report<g>  x, theta, plates, params  -> what `loaded` reports beyond the deviations
                                                    (symkin.physics.reduced_reported): with v the
-                                                   inputs' compliant angles beyond the rigid and a
-                                                   virtual load (F_x, F_y, M) at every point of the
-                                                   plan, y every input's moment and every point's
-                                                   (dx, dy, dphi): dR/dv, din/dv, y, dy/dx, dy/dv,
+                                                   inputs' compliant angles beyond the rigid, each
+                                                   actuator's value beyond the given (a stroke, a
+                                                   force) and a virtual load (F_x, F_y, M) at every
+                                                   shown point of the plan, y every input's moment,
+                                                   every actuator's force (stroke) or stroke
+                                                   (force) and every shown point's (dx, dy, dphi):
+                                                   dR/dv, din/dv, y, dy/dx, dy/dv,
                                                    dy/d(plates) at v = 0; then per plate (k0, lx,
                                                    ly, e_a, e_s, t/l, E', allowable stress or 0),
                                                    its end loads in P's plate frame (the stress's)
@@ -105,13 +108,17 @@ class Reported:
     """What the loaded_report<g> routines' outputs are of (symkin.physics.reduced_reported)."""
 
     inputs: tuple[str, ...]  # the input hinges (label order): their moments' rows
-    points: tuple[str, ...]  # the points (the plan's order): each one's 3 rows after them
+    points: tuple[str, ...]  # the shown points (the plan's order): each one's 3 rows after
     frame: tuple[bool, ...]  # per point: on the frame (no stiffness)
     plates: tuple[str, ...]  # the plates (label order): the stress block's rows
     limits: tuple[bool, ...]  # per plate: an allowable stress is given
     unit_scale: float  # metres per file length unit (the moments in N m)
     L: float  # the scales C's conditioning is judged by (reduced_reported.report)
     F: float
+    # the actuators (file order), their rows between the inputs' and the points': a stroke's
+    # force, a force's stroke beyond the rigid reference's; and how each is driven
+    actuators: tuple[str, ...] = ()
+    drives: tuple[str, ...] = ()
 
 
 def loaded_routines(
@@ -215,6 +222,7 @@ def loaded_routines(
 def _reported(r: reduced.Reduced, names: Sequence[str]) -> Reported:
     """The sizes and names of what loaded_report<g> gives."""
     mech = r.kin.mechanism
+    names = _shown(r, names)
     hinge = {h.name: h for h in mech.hinges}
     plates = tuple(r.hinges[a].name for a in sorted(r.plate))
     L = max(r.L, r.lmin)
@@ -234,7 +242,15 @@ def _reported(r: reduced.Reduced, names: Sequence[str]) -> Reported:
         unit_scale=float(mech.unit_scale),
         L=float(L),
         F=float(F),
+        actuators=tuple(act[0] for act in r.acts),
+        drives=tuple(act[4] for act in r.acts),
     )
+
+
+def _shown(r: reduced.Reduced, names: Sequence[str]) -> list[str]:
+    """The plan's points the report covers: the file's (not the actuators' points of action,
+    which the plan computes beside them)."""
+    return [p for p in names if p in r.points]
 
 
 def _report_routine(r: reduced.Reduced, names, x, theta, plates, params, sub) -> Routine:
@@ -244,18 +260,20 @@ def _report_routine(r: reduced.Reduced, names, x, theta, plates, params, sub) ->
     g = r.segments
     se = r._se
     ordered = sorted(r.points)
-    nin = len(r.inputs)
-    virtual = r.extra[nin:]
-    by = list(r.extra[:nin]) + [
+    names = _shown(r, names)
+    # the inputs' and actuators' parameters and values first, then the points'
+    first = len(r.inputs) + len(r.acts)
+    virtual = r.extra[first:]
+    by = list(r.extra[:first]) + [
         v for p in names for v in virtual[3 * ordered.index(p) : 3 * ordered.index(p) + 3]
     ]
     every = r._reported(se)
     ys = sp.Matrix(
-        every[:nin]
+        every[:first]
         + [
             v
             for p in names
-            for v in every[nin + 3 * ordered.index(p) : nin + 3 * ordered.index(p) + 3]
+            for v in every[first + 3 * ordered.index(p) : first + 3 * ordered.index(p) + 3]
         ]
     )
     rows = sp.Matrix(r._rows(se))
@@ -302,15 +320,16 @@ def _report_routine(r: reduced.Reduced, names, x, theta, plates, params, sub) ->
             )
         ]
     shapes = [(name, *m.shape) for name, m in blocks] + [("stress", len(r.plate), 8)]
+    acts = (", the actuators' values", ", the actuators' forces or strokes") if r.acts else ("", "")
     return Routine(
         f"loaded_report{g}",
         (x, theta, plates, params),
         (),
         tuple(exprs),
         f"loaded ({g} half plate(s) per plate), what it reports: dR/dv, din/dv, y, dy/dx, dy/dv, "
-        "dy/dout (v: the inputs' angles and virtual loads at the points, y: the inputs' moments "
-        "and the points' (dx, dy, dphi)), then per plate (k0, lx, ly, e_a, e_s, t/l, E', "
-        "allowable)",
+        f"dy/dout (v: the inputs' angles{acts[0]} and virtual loads at the points, y: the "
+        f"inputs' moments{acts[1]} and the points' (dx, dy, dphi)), then per plate (k0, lx, ly, "
+        "e_a, e_s, t/l, E', allowable)",
         layout(*shapes),
     )
 

@@ -318,9 +318,10 @@ def plan(
     loaded = None
     if any(lv.name in level_table.LOADED for lv in levels):
         # the reduced equilibrium (docs/physics.md, "The Newton level"), one and two half
-        # plates per plate; the runtime's driver writes the points' deviation itself
-        # (with actuators: no report routines yet, the numpy runtime's own driver)
-        found, loaded = loaded_routines(an, names, theta, params, reported and not mech.actuators)
+        # plates per plate; the runtime's driver writes the points' deviation itself (with
+        # actuators the numpy runtime's own driver; the C files of a file with actuators leave
+        # the report out, without_report)
+        found, loaded = loaded_routines(an, names, theta, params, reported)
         routines.update(found)
     for lv in levels:
         if f"dev_{lv.routine}" in routines or lv.name in level_table.LOADED:
@@ -450,6 +451,19 @@ def without_loaded(p: Plan) -> Plan:
         levels=tuple(lv for lv in p.levels if lv.name not in level_table.LOADED),
         loaded=None,
         routines={k: r for k, r in p.routines.items() if not k.startswith(("loaded_", "plate_"))},
+    )
+
+
+def without_report(p: Plan) -> Plan:
+    """`p` without what the `loaded` level reports beyond the deviations (its loaded_report<g>
+    routines and their tables): what the C backend emits for a mechanism with actuators, whose
+    report with the actuators' rows the generated numpy module alone gives."""
+    if p.loaded is None or p.loaded.report is None:
+        return p
+    return dataclasses.replace(
+        p,
+        loaded=dataclasses.replace(p.loaded, report=None),
+        routines={k: r for k, r in p.routines.items() if not k.startswith("loaded_report")},
     )
 
 

@@ -7,7 +7,9 @@ around templates/numpy/reduced.py's driver. Only those modules hold it
 import math
 
 import numpy
-from runtime import _points, _prepare, _rigid_angles, _wrap  # the module holds them: runtime.py
+from reduced import _LoadedTables  # the module holds them all: reduced.py, reduced_report.py
+from reduced_report import _reduced_report
+from runtime import _Mechanism, _points, _prepare, _rigid_angles, _wrap  # and runtime.py
 
 # ---- symkin runtime: every generated module with actuators and the loaded level holds this ----
 
@@ -115,6 +117,7 @@ def _actuated_state(mech, actuators, forces, drives, inputs, params, resolve=Fal
     for s, v in zip(surrogates, turned):
         compliant[index[s]] = theta[index[s]] + v
     state = {
+        "given": given,
         "shape": shape,
         "ok": ok,
         "x": x,
@@ -154,12 +157,22 @@ def _actuated_state(mech, actuators, forces, drives, inputs, params, resolve=Fal
     return state
 
 
-def _actuated_loaded(mech, actuators, forces, drives, shown, inputs, params, links):
+def _actuated_loaded(mech, actuators, forces, drives, shown, inputs, params, links, report=False):
     """The module's evaluate() at level "loaded" for a mechanism with actuators (docs/physics.md,
     "Actuators at loaded"; _actuated_state): the deviations against the rigid linkage at the
-    strokes, a force actuator's at the stroke the force produced."""
+    strokes, a force actuator's at the stroke the force produced. With `report` (modules with
+    the level's report), what it reports beyond the deviations (_actuated_report)."""
     st = _actuated_state(mech, actuators, forces, drives, inputs, params)
-    return _actuated_result(mech, actuators, st, shown, links, st["ok"])
+    out = _actuated_result(mech, actuators, st, shown, links, st["ok"])
+    if report:
+        # at the solution found (the reference only moves the deviations: what the level
+        # reports is the compliant pose's; a force's stroke from the as-fabricated reference)
+        theta = list(st["theta"]) + st["loads"]
+        given = [st["given"][a[0]] for a in actuators]
+        out.update(
+            _actuated_report(mech, actuators, forces, theta, st["p"], st["q"], out["ok"], given)
+        )
+    return out
 
 
 def _actuated_result(mech, actuators, st, shown, links, ok):
@@ -204,4 +217,46 @@ def _actuated_result(mech, actuators, st, shown, links, ok):
                 "compliant": numpy.where(ok, r + dev, numpy.nan),
                 "deviation": numpy.where(ok, numpy.broadcast_to(dev, shape), numpy.nan),
             }
+    return out
+
+
+def _actuated_report(mech, actuators, forces, theta, p, q, ok, given):
+    """What the loaded level reports with actuators (reduced_reported.report): _reduced_report's
+    "inputs", "stiffness" and "plates", and "actuators": {A: {"stroke", "force", "stiffness"}}
+    (file unit, N, N per file unit). The report routines' rows of the actuators (a stroke's
+    force and dF/ds, a force's stroke and ds/dF) follow the input hinges' as the inputs' rows
+    do: _reduced_report reads them as inputs named by their surrogate hinges, unscaled (theta:
+    the rigid angles then the forces; `given`: each actuator's stroke or force as given)."""
+    tb = mech.loaded
+    rep = tb.report
+    surrogates = tuple(a[1] for a in actuators)
+    rows = _LoadedTables(**{**rep.__dict__, "inputs": rep.inputs + surrogates, "unit_scale": 1.0})
+    view = _Mechanism(
+        **{**mech.__dict__, "loaded": _LoadedTables(**{**tb.__dict__, "report": rows})}
+    )
+    out = _reduced_report(view, theta, p, q, ok)
+    found = out["inputs"]
+    scale = rep.unit_scale  # the input hinges' moments in N m, as _reduced_report's
+    out["inputs"] = {
+        h: {
+            "angle": found[h]["angle"],
+            "moment": found[h]["moment"] * scale,
+            "stiffness": found[h]["stiffness"] * scale,
+        }
+        for h in rep.inputs
+    }
+    out["actuators"] = {}
+    for (name, surrogate, _, _), fixed in zip(actuators, given):
+        value, rate = found[surrogate]["moment"], found[surrogate]["stiffness"]
+        fixed = numpy.where(ok, fixed, numpy.nan)
+        if name in forces:
+            with numpy.errstate(divide="ignore"):
+                entry = {
+                    "stroke": value,
+                    "force": fixed,
+                    "stiffness": numpy.where(rate != 0, 1 / rate, math.inf),
+                }
+        else:
+            entry = {"stroke": fixed, "force": value, "stiffness": rate}
+        out["actuators"][name] = entry
     return out
