@@ -468,6 +468,38 @@ def _sensitivity_full(mech, inputs, level, params):
     return _blocks(_sensitivity_block, arrays, mech, level, p)
 
 
+def _rigid_rates(mech, theta, p, ok):
+    """The rigid points' dR/dv (*shape, 2 n_P, n_v) at the hinge angles theta, the non-input
+    hinges' dtheta_u/dv (*shape, k, n_v; None without them) and ok: the implicit-function
+    theorem on the rigid closure, Theta = -A^-1 dG/dv, dR/dv + dR/dtheta_u Theta."""
+    shape, dtype = ok.shape, mech.dtype
+    k, nv = len(mech.unknown_index), mech.n_variables
+    sr = mech.sens_rigid(theta, p)
+    rb = mech.sens_rigid_blocks
+    rig = _block(sr, rb["dR_dv"], shape, dtype)
+    if not k:
+        return rig, None, ok
+    at, size = rb["dG_dv"][0], k * nv
+    a = sr[rb["A"][0] : rb["A"][0] + k * k]
+    th, good = _solve(a, [-numpy.asarray(v) for v in sr[at : at + size]], ok, nv, dtype)
+    th = _matrix(th, k, nv, shape, dtype)
+    rig = rig + numpy.matmul(_block(sr, rb["dR_dtheta"], shape, dtype), th)
+    return rig, th, ok & good
+
+
+def _chained(mech, p, *rates):
+    """The rates (*shape, rows, n_v) by the parameters made totals in place: a parameter's
+    default that reads earlier ones follows them (sens_chain), last first."""
+    if mech.sens_chain is None:
+        return
+    c = mech.sens_chain(p)
+    n = len(mech.parameter_names)
+    for i in range(n - 1, -1, -1):
+        for j in range(i + 1, n):
+            for r in rates:
+                r[..., i] += c[j * n + i] * r[..., j]
+
+
 def _sensitivity_block(arrays, mech, level, p):
     """sensitivity_full() on one block: the implicit-function theorem on the closures."""
     theta, delta, ok, q = _pose(mech, arrays, level, p, True)
@@ -478,20 +510,10 @@ def _sensitivity_block(arrays, mech, level, p):
     lv = mech.levels[level]
     b = lv.blocks
     with numpy.errstate(all="ignore"):
-        sr = mech.sens_rigid(theta, p)
-        rb = mech.sens_rigid_blocks
-        rig = _block(sr, rb["dR_dv"], shape, dtype)
-        if k:
-            # Theta = d theta_u / dv = -A^-1 dG/dv; rigid: dR/dv + dR/dtheta_u Theta
-            at, size = rb["dG_dv"][0], k * nv
-            a = sr[rb["A"][0] : rb["A"][0] + k * k]
-            th, good = _solve(a, [-numpy.asarray(v) for v in sr[at : at + size]], ok, nv, dtype)
-            ok = ok & good
-            th = _matrix(th, k, nv, shape, dtype)
-            rig = rig + numpy.matmul(_block(sr, rb["dR_dtheta"], shape, dtype), th)
+        rig, th, ok = _rigid_rates(mech, theta, p, ok)
         if lv.loaded:
             # the reduced equilibrium's own (templates/numpy/reduced_sens.py)
-            dev = lv.sens(mech, theta, p, q, th if k else None, ok).astype(dtype)
+            dev = lv.sens(mech, theta, p, q, th, ok).astype(dtype)
         else:
             s = lv.sens(theta, delta, p)
             dev = _block(s, b["dD_dv"], shape, dtype)
@@ -511,14 +533,7 @@ def _sensitivity_block(arrays, mech, level, p):
             )
         if k and not lv.loaded:
             dev = dev + numpy.matmul(_block(s, b["dD_dtheta"], shape, dtype), th)
-        if mech.sens_chain is not None:
-            # a parameter's default that reads earlier ones follows them: totals, last first
-            c = mech.sens_chain(p)
-            n = len(mech.parameter_names)
-            for i in range(n - 1, -1, -1):
-                for j in range(i + 1, n):
-                    dev[..., i] += c[j * n + i] * dev[..., j]
-                    rig[..., i] += c[j * n + i] * rig[..., j]
+        _chained(mech, p, dev, rig)
     ok = ok & numpy.isfinite(dev).all(axis=(-1, -2)) & numpy.isfinite(rig).all(axis=(-1, -2))
     if not ok.all():
         for key in result["points"]:

@@ -2,7 +2,7 @@
 Mechanism 'piezo_amplifier': 4 links, 4 hinges, 1 loop(s); inputs piezo (actuators; their strokes fix the angles of RA0 (piezo)).
 Points: B; levels: paper, first_order, exact, loaded.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, loaded_plates1 147, loaded_system1 722, loaded_res1 292, loaded_dev1 104, loaded_report1 413, loaded_plates2 372, loaded_system2 1863, loaded_res2 568, loaded_dev2 189, loaded_report2 837, dev_paper 31, dev_first_order 51, dev_exact 62, links 1, sens_rigid 105, sens_paper 108, sens_first_order 355, sens_exact 449, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40.
+Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, loaded_plates1 147, loaded_system1 722, loaded_res1 292, loaded_dev1 104, loaded_report1 413, loaded_plates2 372, loaded_system2 1863, loaded_res2 568, loaded_dev2 189, loaded_report2 837, dev_paper 31, dev_first_order 51, dev_exact 62, links 1, sens_rigid 105, sens_paper 108, sens_first_order 355, sens_exact 449, loaded_sens1 938, loaded_sens2 1997, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
 
 Use:  evaluate({name: array_like, ...}, level="exact", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -50,7 +50,7 @@ LINKS = ('frame', 'slider', 'coupler', 'crank', )
 POINTS = ('B', )
 LEVELS = ('paper', 'first_order', 'exact', 'loaded', )
 #: The levels with closed-form sensitivities (docs/sensitivity.md).
-SENSITIVITY_LEVELS = ('paper', 'first_order', 'exact', )
+SENSITIVITY_LEVELS = ('paper', 'first_order', 'exact', 'loaded', )
 _DTYPE = numpy.float64
 
 # symkin runtime (templates/numpy/runtime.py, docs/runtime.md; tested on its own by
@@ -487,6 +487,38 @@ def _sensitivity_full(mech, inputs, level, params):
     return _blocks(_sensitivity_block, arrays, mech, level, p)
 
 
+def _rigid_rates(mech, theta, p, ok):
+    """The rigid points' dR/dv (*shape, 2 n_P, n_v) at the hinge angles theta, the non-input
+    hinges' dtheta_u/dv (*shape, k, n_v; None without them) and ok: the implicit-function
+    theorem on the rigid closure, Theta = -A^-1 dG/dv, dR/dv + dR/dtheta_u Theta."""
+    shape, dtype = ok.shape, mech.dtype
+    k, nv = len(mech.unknown_index), mech.n_variables
+    sr = mech.sens_rigid(theta, p)
+    rb = mech.sens_rigid_blocks
+    rig = _block(sr, rb["dR_dv"], shape, dtype)
+    if not k:
+        return rig, None, ok
+    at, size = rb["dG_dv"][0], k * nv
+    a = sr[rb["A"][0] : rb["A"][0] + k * k]
+    th, good = _solve(a, [-numpy.asarray(v) for v in sr[at : at + size]], ok, nv, dtype)
+    th = _matrix(th, k, nv, shape, dtype)
+    rig = rig + numpy.matmul(_block(sr, rb["dR_dtheta"], shape, dtype), th)
+    return rig, th, ok & good
+
+
+def _chained(mech, p, *rates):
+    """The rates (*shape, rows, n_v) by the parameters made totals in place: a parameter's
+    default that reads earlier ones follows them (sens_chain), last first."""
+    if mech.sens_chain is None:
+        return
+    c = mech.sens_chain(p)
+    n = len(mech.parameter_names)
+    for i in range(n - 1, -1, -1):
+        for j in range(i + 1, n):
+            for r in rates:
+                r[..., i] += c[j * n + i] * r[..., j]
+
+
 def _sensitivity_block(arrays, mech, level, p):
     """sensitivity_full() on one block: the implicit-function theorem on the closures."""
     theta, delta, ok, q = _pose(mech, arrays, level, p, True)
@@ -497,20 +529,10 @@ def _sensitivity_block(arrays, mech, level, p):
     lv = mech.levels[level]
     b = lv.blocks
     with numpy.errstate(all="ignore"):
-        sr = mech.sens_rigid(theta, p)
-        rb = mech.sens_rigid_blocks
-        rig = _block(sr, rb["dR_dv"], shape, dtype)
-        if k:
-            # Theta = d theta_u / dv = -A^-1 dG/dv; rigid: dR/dv + dR/dtheta_u Theta
-            at, size = rb["dG_dv"][0], k * nv
-            a = sr[rb["A"][0] : rb["A"][0] + k * k]
-            th, good = _solve(a, [-numpy.asarray(v) for v in sr[at : at + size]], ok, nv, dtype)
-            ok = ok & good
-            th = _matrix(th, k, nv, shape, dtype)
-            rig = rig + numpy.matmul(_block(sr, rb["dR_dtheta"], shape, dtype), th)
+        rig, th, ok = _rigid_rates(mech, theta, p, ok)
         if lv.loaded:
             # the reduced equilibrium's own (templates/numpy/reduced_sens.py)
-            dev = lv.sens(mech, theta, p, q, th if k else None, ok).astype(dtype)
+            dev = lv.sens(mech, theta, p, q, th, ok).astype(dtype)
         else:
             s = lv.sens(theta, delta, p)
             dev = _block(s, b["dD_dv"], shape, dtype)
@@ -530,14 +552,7 @@ def _sensitivity_block(arrays, mech, level, p):
             )
         if k and not lv.loaded:
             dev = dev + numpy.matmul(_block(s, b["dD_dtheta"], shape, dtype), th)
-        if mech.sens_chain is not None:
-            # a parameter's default that reads earlier ones follows them: totals, last first
-            c = mech.sens_chain(p)
-            n = len(mech.parameter_names)
-            for i in range(n - 1, -1, -1):
-                for j in range(i + 1, n):
-                    dev[..., i] += c[j * n + i] * dev[..., j]
-                    rig[..., i] += c[j * n + i] * rig[..., j]
+        _chained(mech, p, dev, rig)
     ok = ok & numpy.isfinite(dev).all(axis=(-1, -2)) & numpy.isfinite(rig).all(axis=(-1, -2))
     if not ok.all():
         for key in result["points"]:
@@ -1173,6 +1188,70 @@ def _red_solutions(mech, theta, p, q, shape, good, routines):
         yield where, solver, out, jac, jo, ins, dins, rel
 
 
+def _reduced_rates(mech, theta, p, q, thu, ok, forces=0):
+    """dev (*shape, 2 n_P, n_v) of the loaded level at its solutions (q: the variant solved and
+    its x, templates/numpy/reduced.py); thu dtheta_u/dv (*shape, k, n_v), None without; with
+    `forces` (the force actuators': theta's last entries) n_v + forces columns, theirs last. J is
+    evaluated once more at the solution, then dx/dv = -J^-1 dR/dv at fixed x and
+    dD/dv = dD/dx dx/dv + dD/dtheta dtheta/dv + dD/dp + dD/dout dout/dv (reduced_sens.c)."""
+    tb = mech.loaded
+    shape = ok.shape
+    npar, nv, m = len(mech.parameter_names), mech.n_variables + forces, mech.n_theta
+    npt = 2 * len(mech.point_names)
+    dev = numpy.full((ok.size, npt, nv), numpy.nan)
+    good = numpy.broadcast_to(ok, shape).reshape(-1)
+    routines = [fn for fn, _ in tb.sens]
+    for where, solver, s, jac, jo, ins, dins, rel in _red_solutions(
+        mech, theta, p, q, shape, good, routines
+    ):
+        blocks = tb.sens[solver.count - 1][1]
+        b, n, ns = where.size, solver.size, solver.plates
+        # dtheta/dv of every hinge: the non-input ones' from the rigid closure, an input's own 1
+        dth = numpy.zeros((b, m + forces, nv))
+        if thu is not None:
+            tu = numpy.broadcast_to(thu, shape + thu.shape[-2:]).reshape(-1, *thu.shape[-2:])
+            for j, i in enumerate(mech.unknown_index):
+                dth[:, i, : mech.n_variables] = tu[where, j]
+        for j, i in enumerate(mech.input_index):
+            dth[:, i, npar + j] = 1.0
+        for j in range(forces):
+            dth[:, m + j, mech.n_variables + j] = 1.0
+        # the relation's partials by (theta_c, p, f, e_a, e_s), 3 x 5 per half plate
+        part = numpy.zeros((b, 3 * ns, 5 * ns))
+        dinx = numpy.zeros((b, 5 * ns, n))
+        d = numpy.array(dins).reshape(3 * ns, n, b) if ns and n else numpy.zeros((3 * ns, n, b))
+        for k in range(ns):
+            eps = [_red_column(v, b) for v in tb.eps4(ins[5 * k : 5 * k + 5])]
+            for i in range(3):
+                for c in range(3):
+                    part[:, 3 * k + i, 5 * k + c] = rel[k][3 + 3 * i + c]
+                part[:, 3 * k + i, 5 * k + 3] = eps[2 * i]
+                part[:, 3 * k + i, 5 * k + 4] = eps[2 * i + 1]
+            dinx[:, 5 * k : 5 * k + 3] = d[3 * k : 3 * k + 3].transpose(2, 0, 1)
+
+        def by_v(theta_block, p_block):
+            out = numpy.matmul(_red_block(s, blocks[theta_block], b), dth)
+            out[:, :, :npar] += _red_block(s, blocks[p_block], b)
+            return out
+
+        din = by_v("din_dtheta", "din_dp")
+        dout = numpy.matmul(part, din)
+        rhs = by_v("dR_dtheta", "dR_dp") + numpy.matmul(jo, dout)
+        dx = numpy.full((b, n, nv), numpy.nan)
+        for c in range(b):
+            try:
+                dx[c] = -numpy.linalg.solve(jac[c], rhs[c]) if n else dx[c]
+            except numpy.linalg.LinAlgError:
+                continue  # singular: NaN
+        dout = dout + numpy.matmul(part, numpy.matmul(dinx, dx))
+        dev[where] = (
+            numpy.matmul(_red_block(s, blocks["dD_dx"], b), dx)
+            + by_v("dD_dtheta", "dD_dp")
+            + numpy.matmul(_red_block(s, blocks["dD_dout"], b), dout)
+        )
+    return dev.reshape(shape + (npt, nv))
+
+
 #: Sections per plate where the stress is sampled (symkin.physics.reported.SECTIONS), one RK4
 #: step each (against the Python path's Taylor series: 5e-12 of the stress, tests/
 #: test_loaded_reported_codegen.py).
@@ -1404,14 +1483,13 @@ def _rigid_strokes(mech, actuators, hinges, strokes, params, start):
     return theta, numpy.all([numpy.abs(x) <= tol for x in r], axis=0)
 
 
-def _actuated_loaded(mech, actuators, forces, drives, shown, inputs, params, links, report=False):
-    """The module's evaluate() at level "loaded" for a mechanism with actuators (docs/physics.md,
-    "Actuators at loaded"): the rigid linkage at the strokes (a force actuator's: 0), the
-    reduced equilibrium there with the surrogates free (a stroke's force and a force's stroke
-    solved for); a force actuator's deviations are then taken against the rigid linkage at the
-    stroke the force produced (the compliant pose does not depend on the reference). With
-    `report` (modules with the level's report), what it reports beyond the deviations
-    (templates/numpy/reduced_report.py's _reduced_report, at the solution found)."""
+def _actuated_state(mech, actuators, forces, drives, inputs, params, resolve=False):
+    """The loaded level with actuators solved (docs/physics.md, "Actuators at loaded"): the rigid
+    linkage at the strokes (a force actuator's: 0), the reduced equilibrium there with the
+    surrogates free (a stroke's force and a force's stroke solved for); a force actuator's
+    reference is then the rigid linkage at the stroke the force produced (the compliant pose
+    does not depend on the reference), with `resolve` the reduced equilibrium solved again
+    against it (the sensitivities read its solution there). A dict of what it found."""
     if set(inputs) != set(drives):
         raise ValueError(f"inputs must be exactly {drives}, got {tuple(sorted(inputs))}")
     arrays = numpy.broadcast_arrays(*(numpy.asarray(inputs[n], dtype=mech.dtype) for n in drives))
@@ -1446,8 +1524,22 @@ def _actuated_loaded(mech, actuators, forces, drives, shown, inputs, params, lin
         compliant[i] = theta[i] + delta[j]
     for s, v in zip(surrogates, turned):
         compliant[index[s]] = theta[index[s]] + v
-    reference = theta  # the rigid linkage the deviations are taken against
-    points = {n: res["points"][n] for n in shown}
+    state = {
+        "given": given,
+        "shape": shape,
+        "ok": ok,
+        "x": x,
+        "theta": theta,
+        "reference": theta,
+        "loads": loads,
+        "p": p,
+        "q": q,
+        "delta": delta,
+        "turned": turned,
+        "compliant": compliant,
+        "res": res,
+        "points": None,
+    }
     if forces:
         # the stroke each force produced: its point of action's compliant place along d
         rest = _rigid_at(mech, dict.fromkeys(mech.input_names, zero), params)[2]
@@ -1461,13 +1553,46 @@ def _actuated_loaded(mech, actuators, forces, drives, shown, inputs, params, lin
             produced.append(d[0] * (c[0] - rest[2 * i]) + d[1] * (c[1] - rest[2 * i + 1]))
         with numpy.errstate(all="ignore"):
             angles, ok_f = _rigid_strokes(mech, actuators, hinges, produced, params, angles)
-        _, reference, rigid, ok_r, _ = _rigid_at(
+        x, reference, rigid, ok_r, _ = _rigid_at(
             mech, hinges | dict(zip(surrogates, angles)), params
         )
         ok = ok & ok_f & ok_r
+        state.update(ok=ok, reference=reference, rigid=rigid)
+        if resolve:
+            with numpy.errstate(all="ignore"):
+                delta, q, ok = mech.loaded_solve(mech, x, list(reference) + loads, p, ok)
+            state.update(ok=ok, x=x, theta=reference, delta=delta, q=q)
+    return state
+
+
+def _actuated_loaded(mech, actuators, forces, drives, shown, inputs, params, links, report=False):
+    """The module's evaluate() at level "loaded" for a mechanism with actuators (docs/physics.md,
+    "Actuators at loaded"; _actuated_state): the deviations against the rigid linkage at the
+    strokes, a force actuator's at the stroke the force produced. With `report` (modules with
+    the level's report), what it reports beyond the deviations (_actuated_report)."""
+    st = _actuated_state(mech, actuators, forces, drives, inputs, params)
+    out = _actuated_result(mech, actuators, st, shown, links, st["ok"])
+    if report:
+        # at the solution found (the reference only moves the deviations: what the level
+        # reports is the compliant pose's; a force's stroke from the as-fabricated reference)
+        theta = list(st["theta"]) + st["loads"]
+        given = [st["given"][a[0]] for a in actuators]
+        out.update(
+            _actuated_report(mech, actuators, forces, theta, st["p"], st["q"], out["ok"], given)
+        )
+    return out
+
+
+def _actuated_result(mech, actuators, st, shown, links, ok):
+    """evaluate()'s dict from _actuated_state's `st`, NaN where not `ok`: the shown points and
+    every hinge's angle (rigid: the reference; compliant) and, with `links`, every link's."""
+    shape, theta, reference = st["shape"], st["theta"], st["reference"]
+    res, delta = st["res"], st["delta"]
+    points = {n: res["points"][n] for n in shown}
+    if "rigid" in st:  # a force actuator's reference: the rigid linkage at its stroke
         for n in shown:
             i = mech.point_names.index(n)
-            r = numpy.stack([rigid[2 * i], rigid[2 * i + 1]])
+            r = numpy.stack([st["rigid"][2 * i], st["rigid"][2 * i + 1]])
             c = res["points"][n]["compliant"]
             points[n] = {"rigid": r, "compliant": c, "deviation": c - r}
     out = {"points": {}, "ok": ok}
@@ -1478,22 +1603,16 @@ def _actuated_loaded(mech, actuators, forces, drives, shown, inputs, params, lin
             h: numpy.where(ok, numpy.broadcast_to(v[i], shape), numpy.nan)
             for i, h in enumerate(mech.hinge_names)
         }
-        for kind, v in (("rigid", reference), ("compliant", compliant))
+        for kind, v in (("rigid", reference), ("compliant", st["compliant"]))
     }
-    if report:
-        # at the solution found (the reference only moves the deviations: what the level
-        # reports is the compliant pose's; a force's stroke from the as-fabricated reference)
-        given_values = [given[n] for n in names]
-        out.update(
-            _actuated_report(mech, actuators, forces, list(theta) + loads, p, q, ok, given_values)
-        )
     out["links"] = {}  # as the other levels' (empty without `links`)
     if links and mech.links is not None:
         # each link's deviation: its rotation at the compliant angles (the surrogates turned)
         # less the reference's, plus the non-input hinges' deviation (computed directly)
+        index = {n: i for i, n in enumerate(mech.hinge_names)}
         turned_theta = list(theta)
-        for s, v in zip(surrogates, turned):
-            turned_theta[index[s]] = theta[index[s]] + v
+        for a, v in zip(actuators, st["turned"]):
+            turned_theta[index[a[1]]] = theta[index[a[1]]] + v
         with numpy.errstate(all="ignore"):
             at_t = mech.links(turned_theta, delta)
             at_r = mech.links(reference, delta)
@@ -1551,6 +1670,87 @@ def _actuated_report(mech, actuators, forces, theta, p, q, ok, given):
     return out
 
 
+def _actuated_loaded_sensitivity(mech, actuators, forces, drives, shown, inputs, params):
+    """The module's sensitivity_full() at level "loaded" with actuators: the reduced
+    equilibrium's rates by the parameters, the kinematic inputs (the surrogate angles among
+    them) and the forces (_reduced_rates), carried to the drives through each surrogate angle
+    theta_v of the reference. A stroke's solves g = d.(X_a(theta) - X_a(0)) - s = 0 (the rigid
+    linkage at the stroke), a force's c = d.dX_a = 0 (the rigid linkage at the stroke the force
+    produced), so dtheta_v/dy = -(d(g, c)/dtheta_v)^-1 d(g, c)/dy for every parameter, input
+    hinge, stroke and force y; then dD/dy = dD/dy + dD/dtheta_v dtheta_v/dy, as the rigid."""
+    st = _actuated_state(mech, actuators, forces, drives, inputs, params, resolve=True)
+    shape, theta, p, dtype = st["shape"], st["theta"], st["p"], mech.dtype
+    ok = numpy.array(st["ok"])
+    npar, nv, nf = len(mech.parameter_names), mech.n_variables, len(forces)
+    names = [a[0] for a in actuators]
+    hinges = [n for n in drives if n not in names]
+    column = {h: npar + i for i, h in enumerate(mech.input_names)} | {
+        f: nv + j for j, f in enumerate(forces)
+    }
+    user = {n: npar + j for j, n in enumerate(drives)}
+    ny = npar + len(drives)
+    zero = numpy.zeros(shape, dtype=dtype)
+    with numpy.errstate(all="ignore"):
+        rig, thu, ok = _rigid_rates(mech, theta, p, ok)
+        # the as-fabricated points of action move with the parameters too
+        rest, _, ok = _rigid_rates(mech, [zero for _ in theta], p, ok)
+        rig = numpy.concatenate([rig, numpy.zeros(rig.shape[:-1] + (nf,), dtype=dtype)], -1)
+        dev = _reduced_rates(mech, list(theta) + st["loads"], p, st["q"], thu, ok, nf)
+        dev = dev.astype(dtype)
+        jac, rhs = [], []
+        for name, _, point, d in actuators:
+            r = 2 * mech.point_names.index(point)
+            stroke = name not in forces
+            table = rig if stroke else dev
+
+            def along(c, table=table, r=r, d=d):
+                return d[0] * table[..., r, c] + d[1] * table[..., r + 1, c]
+
+            jac += [along(column[a[1]]) for a in actuators]
+            row = [zero] * ny
+            for c in range(npar):
+                row[c] = along(c)
+                if stroke:
+                    row[c] = row[c] - d[0] * rest[..., r, c] - d[1] * rest[..., r + 1, c]
+            for h in hinges:
+                row[user[h]] = along(column[h])
+            if stroke:
+                row[user[name]] = zero - 1.0
+            else:
+                for f in forces:
+                    row[user[f]] = along(column[f])
+            rhs += [-v for v in row]
+        rates, good = _solve(jac, rhs, ok, ny, dtype)
+        ok = ok & good
+        totals = []
+        for m in (dev, rig):
+            out = numpy.zeros(m.shape[:-1] + (ny,), dtype=dtype)
+            out[..., :npar] = m[..., :npar]
+            for n in hinges + list(forces):
+                out[..., user[n]] = m[..., column[n]]
+            for b, a in enumerate(actuators):
+                for c in range(ny):
+                    out[..., c] += m[..., column[a[1]]] * rates[b * ny + c][..., None]
+            totals.append(out)
+        dev, rig = totals
+        _chained(mech, p, dev, rig)
+    ok = ok & numpy.isfinite(dev).all(axis=(-1, -2)) & numpy.isfinite(rig).all(axis=(-1, -2))
+    result = _actuated_result(mech, actuators, st, shown, False, ok)
+
+    def table(m, i):
+        rows = numpy.where(ok[..., None, None], m[..., 2 * i : 2 * i + 2, :], numpy.nan)
+        rows = numpy.moveaxis(numpy.moveaxis(rows, -1, 0), -1, 1)  # (variable, 2, *shape)
+        return {
+            "params": {q: rows[c] for c, q in enumerate(mech.parameter_names)},
+            "inputs": {n: rows[user[n]] for n in drives},
+        }
+
+    index = {n: mech.point_names.index(n) for n in shown}
+    result["deviation"] = {n: table(dev, index[n]) for n in shown}
+    result["rigid"] = {n: table(rig, index[n]) for n in shown}
+    return result
+
+
 def arck(x):
     """arck(x) = (sin x - x cos x)/x^3; Taylor series (10 terms, Estrin's form) for |x| < 1.5, else the nested elementary formula (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1567,6 +1767,25 @@ def arck(x):
     b = np.sin(xs) / xs - np.cos(xs)
     b = b / xs2
     return np.where(small, series, b)
+
+
+def bcol_h(x):
+    """h(p) = T(p) = tanh(u)/u, u = sqrt(p)/2 (tan(v)/v, v = sqrt(-p)/2, below 0) for p < 16.0, 1 - tanh(u) from it on: for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out (vectorised)."""
+    x = np.asarray(x, dtype=float)
+    near = (x > -4.0) & (x < 16.0)
+    p = np.where(near, x, 6.0)
+    d = p - 6.0
+    d2 = d * d
+    d4 = d2 * d2
+    d8 = d4 * d4
+    r = 1.0 / (p + 9.869604401089358)
+    value = ((((10.897864068210225 + d * 0.16556156881006512) + (-0.0009157434227891026 + d * 8.365114438681788e-06) * d2) + ((-8.437823084425284e-08 + d * 8.763390715589521e-10) + (-9.191007821271998e-12 + d * 9.672991207222496e-14) * d2) * d4) + (((-1.0193179699964376e-15 + d * 1.0746329406338888e-17) + (-1.1324419365159025e-19 + d * 1.1940538461574364e-21) * d2) + (-1.310325228057343e-23 + d * 1.385670151299953e-25) * d4) * d8) * (r)
+    if near.all():
+        return value
+    high = x >= 16.0
+    e = np.exp(-np.sqrt(np.where(high, x, 16.0)))
+    u = 0.5 * np.sqrt(np.where(near | high, 1.0, np.abs(x)))
+    return np.where(near, value, np.where(high, 2.0 * e / (1.0 + e), np.tan(u) / u))
 
 
 def bcol_a_at(x, h):
@@ -1598,6 +1817,11 @@ def bcol_a_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_a(p):
+    """bcol_a(p) = p w(p)/(3 T^2) (vectorised)."""
+    return bcol_a_at(p, bcol_h(p))
+
+
 def bcol_a_d1_at(x, h):
     """bcol_a_d1(p) = d^1/dp^1 of p w(p)/(3 T^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (13 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1625,6 +1849,11 @@ def bcol_a_d1_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((-8.0) + h * ((4.0) + h * ((4.0 + p * (2.0)) + h * (p * (-1.0))))) / (h * (h * (h * (p * (p * (32.0))))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_a_d1(p):
+    """bcol_a_d1(p) = d^1/dp^1 of p w(p)/(3 T^2) (vectorised)."""
+    return bcol_a_d1_at(p, bcol_h(p))
 
 
 def bcol_e1_at(x, h):
@@ -1657,6 +1886,11 @@ def bcol_e1_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_e1(p):
+    """bcol_e1(p) = (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2) (vectorised)."""
+    return bcol_e1_at(p, bcol_h(p))
+
+
 def bcol_e1_d1_at(x, h):
     """bcol_e1_d1(p) = d^1/dp^1 of (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (15 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1685,6 +1919,11 @@ def bcol_e1_d1_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((192.0) + h * ((96.0) + h * ((-288.0 + p * (-48.0)) + h * ((p * (-16.0)) + h * ((p * (24.0 + p * (4.0))) + h * ((p * (p * (-2.0))) + h * (p * (p * (p * (-1.0)))))))))) / (h * (h * (h * (p * (p * (p * (2048.0)))))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_e1_d1(p):
+    """bcol_e1_d1(p) = d^1/dp^1 of (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2) (vectorised)."""
+    return bcol_e1_d1_at(p, bcol_h(p))
 
 
 def bcol_e1_d2_at(x, h):
@@ -1717,6 +1956,11 @@ def bcol_e1_d2_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_e1_d2(p):
+    """bcol_e1_d2(p) = d^2/dp^2 of (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2) (vectorised)."""
+    return bcol_e1_d2_at(p, bcol_h(p))
+
+
 def bcol_e2_at(x, h):
     """bcol_e2(p) = -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1744,6 +1988,11 @@ def bcol_e2_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((240.0) + h * ((-240.0) + h * ((p * (-24.0)) + h * ((p * (4.0)) + h * (p * (p * (-1.0))))))) / (p * (p * (p * (1024.0))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_e2(p):
+    """bcol_e2(p) = -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3) (vectorised)."""
+    return bcol_e2_at(p, bcol_h(p))
 
 
 def bcol_e2_d1_at(x, h):
@@ -1775,6 +2024,11 @@ def bcol_e2_d1_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_e2_d1(p):
+    """bcol_e2_d1(p) = d^1/dp^1 of -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3) (vectorised)."""
+    return bcol_e2_d1_at(p, bcol_h(p))
+
+
 def bcol_e2_d2_at(x, h):
     """bcol_e2_d2(p) = d^2/dp^2 of -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1802,6 +2056,11 @@ def bcol_e2_d2_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((60480.0 + p * (-192.0)) + h * ((-60480.0 + p * (3072.0)) + h * ((p * (-8928.0 + p * (144.0))) + h * ((p * (1008.0 + p * (-608.0))) + h * ((p * (p * (-12.0 + p * (-4.0)))) + h * ((p * (p * (p * (-40.0)))) + h * (p * (p * (p * (p * (-5.0))))))))))) / (p * (p * (p * (p * (p * (16384.0))))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_e2_d2(p):
+    """bcol_e2_d2(p) = d^2/dp^2 of -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3) (vectorised)."""
+    return bcol_e2_d2_at(p, bcol_h(p))
 
 
 def bcol_e3_at(x, h):
@@ -1833,6 +2092,40 @@ def bcol_e3_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_e3_d1_at(x, h):
+    """bcol_e3_d1(p) = d^1/dp^1 of -(3T^4p^2 + 20T^3p - 24T^2p - 48T + 48)/(3072 T^4 p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
+    x = np.asarray(x, dtype=float)
+    near = (x > -4.0) & (x < 16.0)
+    p = np.where(near, x, 6.0)
+    d = p - 6.0
+    d2 = d * d
+    d4 = d2 * d2
+    d8 = d4 * d4
+    s = 1.0 / (p + 39.47841760435743)
+    value = ((((-62317.1090282084 + d * -2601.803112996573) + (-98.24150073157513 + d * -1.449920896321523) * d2) + ((-0.012275915872263935 + d * -1.1390294659006214e-05) + (-5.8952099340217056e-08 + d * 3.428021782217453e-10) * d2) * d4) + (((2.3149571793056234e-12 + d * -8.658295175739011e-14) + (1.41785207937709e-15 + d * -1.8163666924134298e-17) * d2) + (2.1127919490076908e-19 + d * -2.172980716945177e-21) * d4) * d8) * (s * s * s * s * s)
+    if near.all():
+        return value
+    high = x >= 16.0
+    p = np.where(high, x, 32.0)
+    h0 = h
+    h = np.where(high, h0, 0.01)
+    u = 0.5 * np.sqrt(p)
+    tau = 1.0 - h
+    sigma = h * (2.0 - h)
+    far = (((-32.0) + sigma * ((112.0 + u * (-64.0)) + sigma * (-80.0 + u * (-176.0 + u * (192.0))))) * (1.0 + tau) - sigma * (sigma * ((u * (-64.0)) + sigma * (u * (-176.0))))) / (((u * (98304.0)) + sigma * ((u * (-196608.0)) + sigma * (u * (98304.0)))) * (1.0 + tau) - sigma * ((u * (98304.0)) + sigma * ((u * (-196608.0)) + sigma * (u * (98304.0)))))
+    inside = x > -9.869604401089358
+    low = ~near & ~high & inside
+    p = np.where(low, x, -8.0)
+    h = np.where(low, h0, 0.5)
+    closed = ((192.0) + h * ((-240.0) + h * ((48.0 + p * (-96.0)) + h * ((p * (104.0)) + h * ((p * (-20.0 + p * (12.0))) + h * (p * (p * (-11.0)))))))) / (h * (h * (h * (h * (h * (p * (p * (6144.0))))))))
+    return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_e3_d1(p):
+    """bcol_e3_d1(p) = d^1/dp^1 of -(3T^4p^2 + 20T^3p - 24T^2p - 48T + 48)/(3072 T^4 p) (vectorised)."""
+    return bcol_e3_d1_at(p, bcol_h(p))
+
+
 def bcol_e3c_at(x, h):
     """bcol_e3c(p) = e3'(p) + 1/1920, at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (13 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1860,6 +2153,11 @@ def bcol_e3c_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((960.0) + h * ((-1200.0) + h * ((240.0 + p * (-480.0)) + h * ((p * (520.0)) + h * ((p * (-100.0 + p * (60.0))) + h * (p * (p * (-39.0)))))))) / (h * (h * (h * (h * (h * (p * (p * (30720.0))))))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_e3c(p):
+    """bcol_e3c(p) = e3'(p) + 1/1920 (vectorised)."""
+    return bcol_e3c_at(p, bcol_h(p))
 
 
 def bcol_e3c_d1_at(x, h):
@@ -1891,23 +2189,9 @@ def bcol_e3c_d1_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
-def bcol_h(x):
-    """h(p) = T(p) = tanh(u)/u, u = sqrt(p)/2 (tan(v)/v, v = sqrt(-p)/2, below 0) for p < 16.0, 1 - tanh(u) from it on: for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out (vectorised)."""
-    x = np.asarray(x, dtype=float)
-    near = (x > -4.0) & (x < 16.0)
-    p = np.where(near, x, 6.0)
-    d = p - 6.0
-    d2 = d * d
-    d4 = d2 * d2
-    d8 = d4 * d4
-    r = 1.0 / (p + 9.869604401089358)
-    value = ((((10.897864068210225 + d * 0.16556156881006512) + (-0.0009157434227891026 + d * 8.365114438681788e-06) * d2) + ((-8.437823084425284e-08 + d * 8.763390715589521e-10) + (-9.191007821271998e-12 + d * 9.672991207222496e-14) * d2) * d4) + (((-1.0193179699964376e-15 + d * 1.0746329406338888e-17) + (-1.1324419365159025e-19 + d * 1.1940538461574364e-21) * d2) + (-1.310325228057343e-23 + d * 1.385670151299953e-25) * d4) * d8) * (r)
-    if near.all():
-        return value
-    high = x >= 16.0
-    e = np.exp(-np.sqrt(np.where(high, x, 16.0)))
-    u = 0.5 * np.sqrt(np.where(near | high, 1.0, np.abs(x)))
-    return np.where(near, value, np.where(high, 2.0 * e / (1.0 + e), np.tan(u) / u))
+def bcol_e3c_d1(p):
+    """bcol_e3c_d1(p) = d^1/dp^1 of e3'(p) + 1/1920 (vectorised)."""
+    return bcol_e3c_d1_at(p, bcol_h(p))
 
 
 def bcol_invt_at(x, h):
@@ -1968,6 +2252,11 @@ def bcol_invt_d1_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_invt_d1(p):
+    """bcol_invt_d1(p) = d^1/dp^1 of 1/T(p) (vectorised)."""
+    return bcol_invt_d1_at(p, bcol_h(p))
+
+
 def bcol_s_at(x, h):
     """bcol_s(p) = (1 - T)/p, at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (13 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -1995,6 +2284,45 @@ def bcol_s_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((1.0) + h * (-1.0)) / (p * (1.0))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_s(p):
+    """bcol_s(p) = (1 - T)/p (vectorised)."""
+    return bcol_s_at(p, bcol_h(p))
+
+
+def bcol_s_d1_at(x, h):
+    """bcol_s_d1(p) = d^1/dp^1 of (1 - T)/p, at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
+    x = np.asarray(x, dtype=float)
+    near = (x > -4.0) & (x < 16.0)
+    p = np.where(near, x, 6.0)
+    d = p - 6.0
+    d2 = d * d
+    d4 = d2 * d2
+    d8 = d4 * d4
+    r = 1.0 / (p + 9.869604401089358)
+    value = ((((-0.8132429851307679 + d * -0.00028263927661945) + (-4.62076041242041e-06 + d * 1.2061372014718943e-07) * d2) + ((-2.027158719940083e-09 + d * 2.941018614006343e-11) + (-3.9541483920524393e-13 + d * 5.072415794354741e-15) * d2) * d4) + (((-6.302768016745823e-17 + d * 7.653122930054966e-19) + (-9.124106052786141e-21 + d * 1.0739523739919228e-22) * d2) + (-1.3113722098199768e-24 + d * 1.5174003904817066e-26) * d4) * d8) * (r * r)
+    if near.all():
+        return value
+    high = x >= 16.0
+    p = np.where(high, x, 32.0)
+    h0 = h
+    h = np.where(high, h0, 0.01)
+    u = 0.5 * np.sqrt(p)
+    tau = 1.0 - h
+    sigma = h * (2.0 - h)
+    far = (((12.0 + u * (-8.0)) + sigma * (u * (-4.0))) * (1.0 + tau) - sigma * (12.0)) / ((u * (u * (u * (u * (u * (128.0)))))) * (1.0 + tau))
+    inside = x > -9.869604401089358
+    low = ~near & ~high & inside
+    p = np.where(low, x, -8.0)
+    h = np.where(low, h0, 0.5)
+    closed = ((-12.0) + h * ((12.0) + h * (p * (1.0)))) / (p * (p * (8.0)))
+    return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_s_d1(p):
+    """bcol_s_d1(p) = d^1/dp^1 of (1 - T)/p (vectorised)."""
+    return bcol_s_d1_at(p, bcol_h(p))
 
 
 def bcol_w_at(x, h):
@@ -2026,6 +2354,11 @@ def bcol_w_at(x, h):
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
 
 
+def bcol_w(p):
+    """bcol_w(p) = (12 (1 - T)/p - T^2)/(16 p) (vectorised)."""
+    return bcol_w_at(p, bcol_h(p))
+
+
 def bcol_w_d1_at(x, h):
     """bcol_w_d1(p) = d^1/dp^1 of (12 (1 - T)/p - T^2)/(16 p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p) (vectorised)."""
     x = np.asarray(x, dtype=float)
@@ -2053,6 +2386,11 @@ def bcol_w_d1_at(x, h):
     h = np.where(low, h0, 0.5)
     closed = ((-120.0) + h * ((120.0 + p * (-4.0)) + h * ((p * (14.0)) + h * (p * (p * (1.0)))))) / (p * (p * (p * (64.0))))
     return np.where(near, value, np.where(high, far, np.where(inside, closed, np.nan)))
+
+
+def bcol_w_d1(p):
+    """bcol_w_d1(p) = d^1/dp^1 of (12 (1 - T)/p - T^2)/(16 p) (vectorised)."""
+    return bcol_w_d1_at(p, bcol_h(p))
 
 
 def cosr1(x):
@@ -6422,6 +6760,1789 @@ def _sens_exact(theta, delta, params):
     ]
 
 
+def _loaded_sens1(x, theta, plates, params):
+    """loaded (1 half plate(s) per plate), sensitivities: dR/dtheta, dR/dp, din/dtheta, din/dp, dD/dx, dD/dtheta, dD/dp, dD/dout (938 operations)."""
+    x_0, x_1, x_2, x_3, x_4, x_5, _, x_7, _ = x
+    theta_1, theta_2, theta_3, theta_4 = theta
+    along_1_0, across_1_0, omega_1_0, along_2_0, across_2_0, omega_2_0, along_3_0, across_3_0, omega_3_0, along_4_0, across_4_0, omega_4_0 = plates
+    p_0, p_1, p_2, p_3, p_4 = params
+    _tmp0 = 0.019637602869497853*x_3
+    _tmp1 = _tmp0 + 0.5*theta_1
+    _tmp2 = numpy.cos(_tmp1)
+    _tmp3 = arck(_tmp1)
+    _tmp4 = along_1_0 + _tmp3*_tmp1**2
+    _tmp5 = _tmp2*_tmp4
+    _tmp6 = 0.2*p_3
+    _tmp7 = _tmp5*_tmp6
+    _tmp8 = 0.019637602869497853*x_0
+    _tmp9 = _tmp8 + 0.5*theta_2
+    _tmp10 = 0.039275205738995705*x_3
+    _tmp11 = _tmp10 + theta_1
+    _tmp12 = _tmp11 + _tmp9
+    _tmp13 = numpy.cos(_tmp12)
+    _tmp14 = arck(_tmp9)
+    _tmp15 = along_2_0 + _tmp14*_tmp9**2
+    _tmp16 = _tmp13*_tmp15
+    _tmp17 = _tmp16*p_3
+    _tmp18 = _tmp1**3*(-3*sinr2(_tmp1) + 3*cosr2(_tmp1) + sinr1(_tmp1))
+    _tmp19 = 0.5*_tmp18 + _tmp1*_tmp3
+    _tmp20 = numpy.sin(_tmp1)
+    _tmp21 = _tmp20*p_3
+    _tmp22 = _tmp19*_tmp21
+    _tmp23 = 0.4*_tmp22
+    _tmp24 = _tmp20*across_1_0
+    _tmp25 = _tmp24*_tmp6
+    _tmp26 = numpy.sin(_tmp12)
+    _tmp27 = numpy.sin(theta_1)
+    _tmp28 = numpy.sin(_tmp10)
+    _tmp29 = numpy.cos(theta_1)
+    _tmp30 = numpy.sin(_tmp0)
+    _tmp31 = _tmp30**2
+    _tmp32 = _tmp10 + 0.039275205738995705*x_0
+    _tmp33 = numpy.sin(_tmp32)
+    _tmp34 = numpy.cos(p_1)
+    _tmp35 = _tmp34*p_0
+    _tmp36 = _tmp33*_tmp35
+    _tmp37 = _tmp0 + _tmp8
+    _tmp38 = numpy.sin(_tmp37)
+    _tmp39 = _tmp38**2
+    _tmp40 = numpy.sin(p_1)
+    _tmp41 = _tmp40*p_0
+    _tmp42 = 2*_tmp41
+    _tmp43 = -_tmp36 - _tmp39*_tmp42
+    _tmp44 = theta_1 + theta_2
+    _tmp45 = numpy.cos(_tmp44)
+    _tmp46 = 0.4*_tmp45
+    _tmp47 = _tmp43*_tmp46
+    _tmp48 = _tmp33*_tmp41
+    _tmp49 = _tmp48 - 2*_tmp34*_tmp39*p_0
+    _tmp50 = -_tmp49
+    _tmp51 = numpy.sin(_tmp44)
+    _tmp52 = 0.4*_tmp51
+    _tmp53 = _tmp47 + _tmp50*_tmp52
+    _tmp54 = _tmp9**3*(-3*sinr2(_tmp9) + 3*cosr2(_tmp9) + sinr1(_tmp9))
+    _tmp55 = 0.5*_tmp54 + _tmp14*_tmp9
+    _tmp56 = _tmp26*p_3
+    _tmp57 = _tmp55*_tmp56
+    _tmp58 = numpy.cos(theta_3)
+    _tmp59 = 0.039275205738995705*x_1
+    _tmp60 = numpy.sin(_tmp59)
+    _tmp61 = 0.019637602869497853*x_1
+    _tmp62 = numpy.sin(_tmp61)**2
+    _tmp63 = _tmp42*_tmp62 - _tmp35*_tmp60
+    _tmp64 = 0.4*_tmp63
+    _tmp65 = _tmp61 + 0.5*theta_3
+    _tmp66 = _tmp65 + p_1
+    _tmp67 = numpy.cos(_tmp66)
+    _tmp68 = _tmp67*across_3_0
+    _tmp69 = _tmp68*p_3
+    _tmp70 = numpy.sin(_tmp66)
+    _tmp71 = arck(_tmp65)
+    _tmp72 = along_3_0 + _tmp71*_tmp65**2
+    _tmp73 = _tmp70*_tmp72
+    _tmp74 = _tmp73*p_3
+    _tmp75 = p_3*(_tmp65*_tmp71 + 0.5*_tmp65**3*(-3*sinr2(_tmp65) + 3*cosr2(_tmp65) + sinr1(_tmp65)))
+    _tmp76 = _tmp67*_tmp75
+    _tmp77 = numpy.sin(theta_3)
+    _tmp78 = _tmp41*_tmp60 + 2*_tmp35*_tmp62
+    _tmp79 = 0.4*_tmp78
+    _tmp80 = 0.5*theta_4 + 0.019637602869497853*x_2
+    _tmp81 = _tmp59 + theta_3
+    _tmp82 = _tmp80 + _tmp81 + p_1
+    _tmp83 = numpy.cos(_tmp82)
+    _tmp84 = 0.4*across_4_0
+    _tmp85 = _tmp83*_tmp84
+    _tmp86 = numpy.sin(_tmp82)
+    _tmp87 = arck(_tmp80)
+    _tmp88 = along_4_0 + _tmp87*_tmp80**2
+    _tmp89 = 0.4*_tmp88
+    _tmp90 = _tmp86*_tmp89
+    _tmp91 = _tmp85*p_3 + _tmp90*p_3 - _tmp77*_tmp79
+    _tmp92 = _tmp6*_tmp88
+    _tmp93 = _tmp83*p_3
+    _tmp94 = 0.2*_tmp80**3*(-3*sinr2(_tmp80) + 3*cosr2(_tmp80) + sinr1(_tmp80)) + 0.4*_tmp80*_tmp87
+    _tmp95 = _tmp2*across_1_0
+    _tmp96 = _tmp20*_tmp4
+    _tmp97 = _tmp13*across_2_0
+    _tmp98 = _tmp97*p_3
+    _tmp99 = _tmp15*_tmp26
+    _tmp100 = _tmp99*p_3
+    _tmp101 = _tmp28*_tmp29
+    _tmp102 = 0.4*_tmp101
+    _tmp103 = _tmp43*_tmp52
+    _tmp104 = _tmp103 - 0.4*_tmp45*_tmp50
+    _tmp105 = _tmp67*_tmp72
+    _tmp106 = _tmp105*p_3
+    _tmp107 = _tmp83*_tmp89
+    _tmp108 = _tmp107*p_3
+    _tmp109 = _tmp70*_tmp75
+    _tmp110 = _tmp86*p_3
+    _tmp111 = numpy.sin(_tmp11)
+    _tmp112 = -0.5*_tmp111*p_3
+    _tmp113 = 0.015710082295598282*x_7
+    _tmp114 = _tmp32 + _tmp44
+    _tmp115 = numpy.sin(_tmp114)
+    _tmp116 = 0.5*p_3
+    _tmp117 = _tmp116*_tmp40
+    _tmp118 = _tmp117 + _tmp41
+    _tmp119 = _tmp115*_tmp118
+    _tmp120 = numpy.cos(_tmp114)
+    _tmp121 = -_tmp35 + 0.5*_tmp34*p_3
+    _tmp122 = _tmp119 - _tmp120*_tmp121
+    _tmp123 = _tmp100 + _tmp98
+    _tmp124 = _tmp122 + _tmp123 + _tmp111*p_2
+    _tmp125 = 0.015710082295598282*x_4
+    _tmp126 = numpy.cos(_tmp11)
+    _tmp127 = _tmp115*_tmp121 + _tmp118*_tmp120
+    _tmp128 = _tmp17 - _tmp26*across_2_0*p_3
+    _tmp129 = _tmp127 + _tmp128 + _tmp126*p_2
+    _tmp130 = _tmp116*_tmp97 + _tmp116*_tmp99 - _tmp13*_tmp55*p_3
+    _tmp131 = _tmp57 + _tmp116*_tmp16 - 0.5*_tmp26*across_2_0*p_3
+    _tmp132 = _tmp125*(-_tmp122 - _tmp130) - 0.015710082295598282*x_5*(-_tmp127 - _tmp131)
+    _tmp133 = 0.5*_tmp115
+    _tmp134 = -_tmp125*(-_tmp119 + _tmp120*_tmp121 + _tmp133*p_3) + 0.015710082295598282*x_5*(-_tmp127 + 0.5*_tmp120*p_3)
+    _tmp135 = _tmp116*_tmp95 + _tmp116*_tmp96 - _tmp19*_tmp2*p_3
+    _tmp136 = _tmp116*_tmp5
+    _tmp137 = _tmp136 + _tmp22 - 0.5*_tmp20*across_1_0*p_3
+    _tmp138 = 0.015710082295598282*x_5
+    _tmp139 = numpy.sin(_tmp81)
+    _tmp140 = numpy.cos(_tmp81)
+    _tmp141 = _tmp116*_tmp34
+    _tmp142 = _tmp140*_tmp141
+    _tmp143 = _tmp117*_tmp140 + _tmp139*_tmp141
+    _tmp144 = _tmp27*_tmp28
+    _tmp145 = 0.4*_tmp144
+    _tmp146 = 0.8*_tmp31
+    _tmp147 = _tmp146*_tmp29
+    _tmp148 = _tmp40*_tmp60 + 2*_tmp34*_tmp62
+    _tmp149 = 2*_tmp40
+    _tmp150 = _tmp149*_tmp62 - _tmp34*_tmp60
+    _tmp151 = 0.4*_tmp77
+    _tmp152 = _tmp33*_tmp34
+    _tmp153 = -_tmp152 - _tmp149*_tmp39
+    _tmp154 = _tmp33*_tmp40
+    _tmp155 = -_tmp154 + 2*_tmp34*_tmp39
+    _tmp156 = -_tmp63
+    _tmp157 = 0.4*_tmp58
+    _tmp158 = 0.4*_tmp68
+    _tmp159 = 0.4*_tmp73
+    _tmp160 = -_tmp102 + _tmp146*_tmp27
+    _tmp161 = 0.4*_tmp105
+    _tmp162 = 0.4*_tmp95 + 0.4*_tmp96
+    _tmp163 = _tmp70*across_3_0
+    _tmp164 = _tmp26*across_2_0
+    _tmp165 = _tmp120*_tmp40
+    _tmp166 = _tmp115*_tmp34
+    _tmp167 = _tmp125*(_tmp165 - _tmp166)
+    _tmp168 = _tmp115*_tmp40
+    _tmp169 = _tmp120*_tmp34
+    _tmp170 = _tmp168 + _tmp169
+    _tmp171 = -_tmp167 - 0.015710082295598282*_tmp170*x_5
+    _tmp172 = _tmp41 - _tmp117
+    _tmp173 = _tmp141 + _tmp35
+    _tmp174 = _tmp115*_tmp172 + _tmp120*_tmp173
+    _tmp175 = _tmp120*_tmp172 - _tmp115*_tmp173
+    _tmp176 = -_tmp125*_tmp174 + 0.015710082295598282*_tmp175*x_5
+    _tmp177 = _tmp111*_tmp138
+    _tmp178 = p_3**2
+    _tmp179 = 2.5/_tmp178
+    _tmp180 = 0.5*_tmp165 + 0.5*_tmp166
+    _tmp181 = _tmp97 + _tmp99
+    _tmp182 = 0.5*_tmp168
+    _tmp183 = _tmp182 - 0.5*_tmp120*_tmp34
+    _tmp184 = 0.5*_tmp34
+    _tmp185 = _tmp24 - _tmp2*_tmp4
+    _tmp186 = _tmp164 + _tmp185 - _tmp13*_tmp15
+    _tmp187 = _tmp95 + _tmp96
+    _tmp188 = _tmp181 + _tmp187
+    _tmp189 = _tmp178*_tmp20
+    _tmp190 = 0.0031420164591196564*x_5
+    _tmp191 = _tmp178*_tmp2
+    _tmp192 = -6.427599787083612*x_4 - 6.427599787083612*x_7
+    _tmp193 = 0.000488832*_tmp192
+    _tmp194 = 0.006284032918239313*_tmp178
+    _tmp195 = _tmp13*x_4
+    _tmp196 = _tmp194*x_5
+    _tmp197 = 0.0031420164591196564*_tmp178
+    _tmp198 = _tmp178*_tmp190
+    _tmp199 = _tmp26*x_4
+    _tmp200 = _tmp197*x_4
+    _tmp201 = _tmp194*x_4
+    _tmp202 = -_tmp201*_tmp86 + 0.006284032918239313*_tmp178*_tmp83*x_5
+    _tmp203 = -_tmp196*_tmp86 - _tmp201*_tmp83
+    _tmp204 = _tmp2*p_3
+    _tmp205 = 0.012568065836478626*x_5
+    _tmp206 = 0.001955328*_tmp192
+    _tmp207 = p_3**(-3.0)
+    _tmp208 = -0.010416666666666666*_tmp207
+    _tmp209 = -0.03731343283582089*_tmp207
+    _tmp210 = 0.012568065836478626*x_4
+    _tmp211 = _tmp13*p_3
+    _tmp212 = _tmp70*p_3
+    _tmp213 = 0.019637602869497853*_tmp54 + _tmp14*(0.019637602869497853*theta_2 + 0.0007712708929202206*x_0)
+    _tmp214 = 0.07855041147799141*numpy.cos(_tmp32)
+    _tmp215 = numpy.cos(_tmp37)
+    _tmp216 = -_tmp214*_tmp35 - 0.15710082295598282*_tmp215*_tmp38*_tmp41
+    _tmp217 = -_tmp214*_tmp41 + 0.15710082295598282*_tmp215*_tmp34*_tmp38*p_0
+    _tmp218 = _tmp216*_tmp51 - _tmp217*_tmp45
+    _tmp219 = 0.039275205738995705*numpy.cos(_tmp10)
+    _tmp220 = _tmp29*p_2
+    _tmp221 = numpy.cos(_tmp0)
+    _tmp222 = 0.019637602869497853*_tmp18 + _tmp3*(0.019637602869497853*theta_1 + 0.0007712708929202206*x_3)
+    _tmp223 = 0.019637602869497853*p_3
+    _tmp224 = _tmp21*_tmp222 + _tmp223*_tmp5 - 0.019637602869497853*_tmp20*across_1_0*p_3
+    _tmp225 = _tmp219*_tmp27
+    _tmp226 = 0.07855041147799141*_tmp221*_tmp30
+    _tmp227 = _tmp223*_tmp95 + _tmp223*_tmp96 - _tmp2*_tmp222*p_3
+    _tmp228 = _tmp29*p_4
+    _tmp229 = 4*_tmp39
+    _tmp230 = -2*_tmp36 - _tmp229*_tmp41
+    _tmp231 = _tmp230*_tmp45
+    _tmp232 = 2*_tmp48 - 4*_tmp34*_tmp39*p_0
+    _tmp233 = -_tmp232
+    _tmp234 = _tmp231 + _tmp233*_tmp51
+    _tmp235 = _tmp230*_tmp51
+    _tmp236 = _tmp235 - _tmp233*_tmp45
+    _tmp237 = 2*_tmp31
+    _tmp238 = _tmp237*_tmp29
+    _tmp239 = -2*_tmp152 - _tmp229*_tmp40
+    _tmp240 = -2*_tmp154 + 4*_tmp34*_tmp39
+    _tmp241 = -_tmp101 + _tmp237*_tmp27
+    _tmp242 = -_tmp144 - _tmp238
+    _tmp243 = -_tmp21
+    _tmp244 = -_tmp204
+    _tmp245 = -_tmp56
+    return [
+        0,
+        0,
+        0,
+        0,
+        _tmp25 - _tmp23 - _tmp53 - _tmp7 - 0.4*_tmp17 + 0.4*_tmp26*across_2_0*p_3 + 0.4*_tmp27*_tmp28*p_2 + 0.8*_tmp29*_tmp31*p_2,
+        -_tmp53 - 0.2*_tmp17 - 0.4*_tmp57 + 0.2*_tmp26*across_2_0*p_3,
+        _tmp91 + 0.2*_tmp69 + 0.2*_tmp74 - 0.4*_tmp76 - _tmp58*_tmp64,
+        _tmp86*_tmp92 - _tmp93*_tmp94 + _tmp6*_tmp83*across_4_0,
+        -_tmp104 - 0.4*_tmp100 - 0.4*_tmp98 - _tmp102*p_2 - _tmp6*_tmp95 - _tmp6*_tmp96 + 0.4*_tmp19*_tmp2*p_3 + 0.8*_tmp27*_tmp31*p_2,
+        -_tmp104 - 0.2*_tmp100 - 0.2*_tmp98 + 0.4*_tmp13*_tmp55*p_3,
+        -_tmp108 - 0.2*_tmp106 - 0.4*_tmp109 - _tmp64*_tmp77 + 0.4*_tmp58*_tmp78 + 0.2*_tmp70*across_3_0*p_3 + 0.4*_tmp86*across_4_0*p_3,
+        -_tmp110*_tmp94 - _tmp83*_tmp92 + 0.2*_tmp86*across_4_0*p_3,
+        -_tmp113*(-_tmp112 - _tmp111*p_4) - _tmp125*(-_tmp112 - _tmp124) + 0.015710082295598282*x_5*(-_tmp129 + 0.5*_tmp126*p_3),
+        -_tmp132,
+        0,
+        0,
+        _tmp134,
+        _tmp134,
+        0,
+        0,
+        _tmp125*(-_tmp124 - _tmp135) - _tmp138*(-_tmp129 - _tmp137),
+        _tmp132,
+        _tmp125*(-_tmp109 - _tmp142 - _tmp105*_tmp116 + 0.5*_tmp139*_tmp40*p_3 + 0.5*_tmp70*across_3_0*p_3) - _tmp138*(_tmp143 - _tmp76 + _tmp116*_tmp68 + _tmp116*_tmp73),
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp23 + _tmp7 - _tmp25 - _tmp145*p_4 - _tmp147*p_4,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp150*_tmp151 - _tmp153*_tmp52 + 0.4*_tmp148*_tmp58 + 0.4*_tmp155*_tmp45,
+        _tmp47 + _tmp91 + _tmp156*_tmp157 + _tmp158*p_3 + _tmp159*p_3 - _tmp49*_tmp52,
+        _tmp160,
+        -_tmp107 - _tmp161 - _tmp162 - 0.4*_tmp97 - 0.4*_tmp99 + 0.4*_tmp70*across_3_0 + 0.4*_tmp86*across_4_0,
+        0,
+        _tmp148*_tmp151 + _tmp150*_tmp157 + _tmp153*_tmp46 + _tmp155*_tmp52,
+        _tmp103 - _tmp108 + _tmp151*_tmp156 + _tmp46*_tmp49 + _tmp58*_tmp79 - _tmp161*p_3 + 0.4*_tmp163*p_3 + _tmp84*_tmp86*p_3,
+        -_tmp145 - _tmp147,
+        -_tmp158 - _tmp159 - _tmp85 - _tmp90 - 0.4*_tmp164 - 0.4*_tmp24 + 0.4*_tmp13*_tmp15 + 0.4*_tmp2*_tmp4,
+        0,
+        _tmp171,
+        _tmp176,
+        -_tmp177 - _tmp125*_tmp126,
+        -_tmp125*(_tmp16 + _tmp180 - _tmp164 - 0.5*_tmp126) - _tmp179*omega_1_0 + 0.007855041147799141*_tmp126*x_7 + 0.015710082295598282*x_5*(-_tmp181 - _tmp183 + 0.5*_tmp111),
+        -_tmp113*_tmp126,
+        _tmp171,
+        _tmp176,
+        0,
+        -_tmp125*(_tmp180 - 0.5*_tmp120) - _tmp179*omega_2_0 + 0.015710082295598282*x_5*(_tmp133 - _tmp182 + 0.5*_tmp169),
+        0,
+        _tmp167 - _tmp138*(-_tmp170 + 2*_tmp34),
+        _tmp125*(_tmp174 - _tmp106 - _tmp142 + _tmp117*_tmp139 + _tmp163*p_3) - _tmp138*(_tmp143 + _tmp175 + _tmp69 + _tmp74 - _tmp42),
+        _tmp177 + _tmp125*(-1 + _tmp126),
+        -_tmp138*(-_tmp105 - _tmp183 - _tmp188 + _tmp70*across_3_0 - _tmp140*_tmp184 + 0.5*_tmp139*_tmp40) - _tmp179*omega_3_0 + 0.015710082295598282*x_4*(-_tmp186 - _tmp68 - _tmp73 - _tmp139*_tmp184 + 0.5*_tmp115*_tmp34 + 0.5*_tmp120*_tmp40 - 0.5*_tmp140*_tmp40),
+        0,
+        0,
+        0,
+        0,
+        _tmp179*omega_4_0,
+        0,
+        0,
+        0,
+        0,
+        _tmp162,
+        -_tmp160,
+        1,
+        0,
+        0,
+        0,
+        _tmp189*_tmp190 - _tmp191*_tmp193,
+        0,
+        0,
+        0,
+        _tmp189*_tmp193 + _tmp190*_tmp191,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        _tmp194*_tmp195 + _tmp196*_tmp26,
+        _tmp195*_tmp197 + _tmp198*_tmp26,
+        0,
+        0,
+        -_tmp194*_tmp199 + 0.006284032918239313*_tmp13*_tmp178*x_5,
+        -_tmp197*_tmp199 + 0.0031420164591196564*_tmp13*_tmp178*x_5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        0,
+        -_tmp200*_tmp70 + 0.0031420164591196564*_tmp178*_tmp67*x_5,
+        0,
+        0,
+        0,
+        -_tmp198*_tmp70 - _tmp200*_tmp67,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        1,
+        0,
+        0,
+        _tmp202,
+        -_tmp200*_tmp86 + 0.0031420164591196564*_tmp178*_tmp83*x_5,
+        0,
+        0,
+        _tmp203,
+        -_tmp198*_tmp86 - _tmp200*_tmp83,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp204*_tmp205 - _tmp206*_tmp21,
+        0,
+        0,
+        0,
+        0,
+        _tmp205*_tmp21 - _tmp204*_tmp206,
+        0,
+        0,
+        0,
+        0,
+        _tmp208,
+        0,
+        0,
+        0,
+        0,
+        _tmp209,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp210*_tmp56 - _tmp205*_tmp211,
+        0,
+        0,
+        0,
+        0,
+        _tmp205*_tmp56 + _tmp210*_tmp211,
+        0,
+        0,
+        0,
+        0,
+        _tmp208,
+        0,
+        0,
+        0,
+        0,
+        _tmp209,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp201*_tmp70 + 0.006284032918239313*_tmp178*_tmp67*x_5,
+        0,
+        _tmp205*_tmp212 + _tmp210*_tmp67*p_3,
+        0,
+        0,
+        -_tmp196*_tmp70 - _tmp201*_tmp67,
+        0,
+        -_tmp210*_tmp212 + 0.012568065836478626*_tmp67*p_3*x_5,
+        0,
+        0,
+        0,
+        0,
+        _tmp208,
+        0,
+        0,
+        0,
+        0,
+        _tmp209,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp202,
+        0,
+        _tmp110*_tmp205 + _tmp210*_tmp93,
+        0,
+        0,
+        _tmp203,
+        0,
+        -_tmp110*_tmp210 + 0.012568065836478626*_tmp83*p_3*x_5,
+        0,
+        0,
+        0,
+        0,
+        _tmp208,
+        0,
+        0,
+        0,
+        0,
+        _tmp209,
+        0,
+        -_tmp218 - 0.019637602869497853*_tmp17 - _tmp213*_tmp56 + 0.019637602869497853*_tmp26*across_2_0*p_3,
+        0,
+        0,
+        -_tmp218 - _tmp224 - 0.039275205738995705*_tmp17 - _tmp219*_tmp220 + 0.039275205738995705*_tmp26*across_2_0*p_3 + 0.07855041147799141*_tmp221*_tmp27*_tmp30*p_2,
+        0,
+        0,
+        0,
+        0,
+        -0.019637602869497853*_tmp100 - 0.019637602869497853*_tmp98 + _tmp211*_tmp213 + _tmp216*_tmp45 + _tmp217*_tmp51,
+        0,
+        0,
+        -_tmp227 - 0.039275205738995705*_tmp100 - 0.039275205738995705*_tmp98 + _tmp216*_tmp45 + _tmp217*_tmp51 - _tmp220*_tmp226 - _tmp225*p_2,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp224 - _tmp219*_tmp228 + 0.07855041147799141*_tmp221*_tmp27*_tmp30*p_4,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp227 - _tmp225*p_4 - _tmp226*_tmp228,
+        0,
+        0,
+        0,
+        0,
+        -_tmp128 - _tmp137 - _tmp234 + _tmp27*_tmp28*p_2 + 2*_tmp29*_tmp31*p_2,
+        -_tmp131 - _tmp234,
+        0,
+        0,
+        -_tmp123 - _tmp135 - _tmp236 - _tmp101*p_2 + 2*_tmp27*_tmp31*p_2,
+        -_tmp130 - _tmp236,
+        0,
+        0,
+        -_tmp136 - _tmp22 + _tmp116*_tmp24 + _tmp144*p_4 + _tmp238*p_4,
+        0,
+        0,
+        0,
+        -_tmp135 - _tmp101*p_4 + 2*_tmp27*_tmp31*p_4,
+        0,
+        0,
+        0,
+        _tmp240*_tmp45 - _tmp239*_tmp51,
+        _tmp231 - _tmp232*_tmp51,
+        _tmp241,
+        -_tmp188,
+        0,
+        _tmp239*_tmp45 + _tmp240*_tmp51,
+        _tmp235 + _tmp232*_tmp45,
+        _tmp242,
+        -_tmp186,
+        0,
+        0,
+        0,
+        0,
+        -_tmp187,
+        _tmp241,
+        0,
+        0,
+        0,
+        -_tmp185,
+        _tmp242,
+        _tmp243,
+        _tmp244,
+        0,
+        _tmp245,
+        -_tmp211,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp204,
+        _tmp243,
+        0,
+        _tmp211,
+        _tmp245,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp243,
+        _tmp244,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp204,
+        _tmp243,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+    ]
+
+
+def _loaded_sens2(x, theta, plates, params):
+    """loaded (2 half plate(s) per plate), sensitivities: dR/dtheta, dR/dp, din/dtheta, din/dp, dD/dx, dD/dtheta, dD/dp, dD/dout (1997 operations)."""
+    x_0, x_1, x_2, x_3, x_4, x_5, _, x_7, x_8, x_9, x_10, x_11, _ = x
+    theta_1, theta_2, theta_3, theta_4 = theta
+    along_1_0, across_1_0, omega_1_0, along_1_1, across_1_1, omega_1_1, along_2_0, across_2_0, omega_2_0, along_2_1, across_2_1, omega_2_1, along_3_0, across_3_0, omega_3_0, along_3_1, across_3_1, omega_3_1, along_4_0, across_4_0, omega_4_0, along_4_1, across_4_1, omega_4_1 = plates
+    p_0, p_1, p_2, p_3, p_4 = params
+    _tmp0 = 0.5*x_8
+    _tmp1 = 0.25*theta_1 + 0.009818801434748926*x_3
+    _tmp2 = _tmp1 - _tmp0
+    _tmp3 = numpy.sin(_tmp2)
+    _tmp4 = 0.5*p_3
+    _tmp5 = _tmp4*across_1_0
+    _tmp6 = _tmp0 + _tmp1
+    _tmp7 = numpy.sin(_tmp6)
+    _tmp8 = _tmp4*_tmp7
+    _tmp9 = numpy.sin(_tmp0)
+    _tmp10 = _tmp9**2
+    _tmp11 = numpy.sin(_tmp1)
+    _tmp12 = _tmp11**2
+    _tmp13 = numpy.cos(_tmp2)
+    _tmp14 = arck(_tmp6)
+    _tmp15 = along_1_0 + _tmp14*_tmp6**2
+    _tmp16 = _tmp15*_tmp4
+    _tmp17 = arck(_tmp2)
+    _tmp18 = along_1_1 + _tmp17*_tmp2**2
+    _tmp19 = numpy.cos(_tmp6)
+    _tmp20 = _tmp19*_tmp4
+    _tmp21 = _tmp13*_tmp16 + _tmp18*_tmp20 + _tmp3*_tmp5 + _tmp4*(-2*_tmp10 + 2*_tmp12) - _tmp8*across_1_1
+    _tmp22 = 0.019637602869497853*x_3
+    _tmp23 = _tmp22 + 0.5*theta_1
+    _tmp24 = numpy.cos(_tmp23)
+    _tmp25 = 0.2*_tmp24
+    _tmp26 = _tmp21*_tmp25
+    _tmp27 = 0.019637602869497853*x_0
+    _tmp28 = 0.039275205738995705*x_3
+    _tmp29 = _tmp28 + theta_1
+    _tmp30 = _tmp27 + _tmp29 + 0.5*theta_2
+    _tmp31 = numpy.cos(_tmp30)
+    _tmp32 = 0.5*x_9
+    _tmp33 = 0.25*theta_2 + 0.009818801434748926*x_0
+    _tmp34 = _tmp33 - _tmp32
+    _tmp35 = numpy.sin(_tmp34)
+    _tmp36 = _tmp4*across_2_0
+    _tmp37 = _tmp32 + _tmp33
+    _tmp38 = numpy.sin(_tmp37)
+    _tmp39 = _tmp38*_tmp4
+    _tmp40 = numpy.sin(_tmp32)
+    _tmp41 = _tmp40**2
+    _tmp42 = numpy.sin(_tmp33)
+    _tmp43 = _tmp42**2
+    _tmp44 = numpy.cos(_tmp34)
+    _tmp45 = arck(_tmp37)
+    _tmp46 = along_2_0 + _tmp45*_tmp37**2
+    _tmp47 = _tmp4*_tmp46
+    _tmp48 = arck(_tmp34)
+    _tmp49 = along_2_1 + _tmp48*_tmp34**2
+    _tmp50 = numpy.cos(_tmp37)
+    _tmp51 = _tmp4*_tmp50
+    _tmp52 = _tmp35*_tmp36 + _tmp4*(-2*_tmp41 + 2*_tmp43) + _tmp44*_tmp47 + _tmp49*_tmp51 - _tmp39*across_2_1
+    _tmp53 = _tmp31*_tmp52
+    _tmp54 = 0.125*p_3
+    _tmp55 = _tmp54*across_1_0
+    _tmp56 = _tmp54*_tmp7
+    _tmp57 = _tmp15*_tmp54
+    _tmp58 = 0.25*x_8
+    _tmp59 = 0.125*theta_1 + 0.004909400717374463*x_3
+    _tmp60 = sinr1(_tmp2)
+    _tmp61 = _tmp2**3*(_tmp60 - 3*sinr2(_tmp2) + 3*cosr2(_tmp2))
+    _tmp62 = 0.25*_tmp61 + _tmp17*(_tmp59 - _tmp58)
+    _tmp63 = _tmp6**3*(-3*sinr2(_tmp6) + 3*cosr2(_tmp6) + sinr1(_tmp6))
+    _tmp64 = _tmp4*(0.25*_tmp63 + _tmp14*(_tmp58 + _tmp59))
+    _tmp65 = -_tmp13*_tmp57 - _tmp3*_tmp55 - _tmp3*_tmp64 - _tmp56*across_1_1 + 0.125*_tmp18*_tmp19*p_3 + 0.5*_tmp62*_tmp7*p_3
+    _tmp66 = _tmp24*_tmp65
+    _tmp67 = 0.4*_tmp66
+    _tmp68 = numpy.sin(_tmp23)
+    _tmp69 = _tmp11*numpy.cos(_tmp1)
+    _tmp70 = _tmp13*_tmp55 + _tmp13*_tmp64 + _tmp20*_tmp62 + _tmp4*_tmp69 - _tmp18*_tmp56 - _tmp3*_tmp57 - _tmp19*_tmp54*across_1_1
+    _tmp71 = _tmp68*_tmp70
+    _tmp72 = 0.4*_tmp71
+    _tmp73 = 1.0*x_8
+    _tmp74 = 0.5*numpy.sin(_tmp73)
+    _tmp75 = _tmp13*_tmp5 + _tmp18*_tmp8 + _tmp20*across_1_1 + _tmp74*p_3 - _tmp16*_tmp3
+    _tmp76 = 0.2*_tmp68
+    _tmp77 = _tmp75*_tmp76
+    _tmp78 = numpy.sin(_tmp30)
+    _tmp79 = 1.0*x_9
+    _tmp80 = 0.5*numpy.sin(_tmp79)
+    _tmp81 = _tmp36*_tmp44 + _tmp39*_tmp49 + _tmp51*across_2_1 + _tmp80*p_3 - _tmp35*_tmp47
+    _tmp82 = numpy.sin(theta_1)
+    _tmp83 = numpy.sin(_tmp28)
+    _tmp84 = numpy.cos(theta_1)
+    _tmp85 = numpy.sin(_tmp22)
+    _tmp86 = _tmp85**2
+    _tmp87 = _tmp28 + 0.039275205738995705*x_0
+    _tmp88 = numpy.sin(_tmp87)
+    _tmp89 = numpy.cos(p_1)
+    _tmp90 = _tmp89*p_0
+    _tmp91 = _tmp88*_tmp90
+    _tmp92 = _tmp22 + _tmp27
+    _tmp93 = numpy.sin(_tmp92)
+    _tmp94 = _tmp93**2
+    _tmp95 = numpy.sin(p_1)
+    _tmp96 = _tmp95*p_0
+    _tmp97 = 2*_tmp96
+    _tmp98 = -_tmp91 - _tmp94*_tmp97
+    _tmp99 = theta_1 + theta_2
+    _tmp100 = numpy.cos(_tmp99)
+    _tmp101 = 0.4*_tmp100
+    _tmp102 = _tmp101*_tmp98
+    _tmp103 = _tmp88*_tmp96
+    _tmp104 = _tmp103 - 2*_tmp89*_tmp94*p_0
+    _tmp105 = -_tmp104
+    _tmp106 = numpy.sin(_tmp99)
+    _tmp107 = 0.4*_tmp106
+    _tmp108 = _tmp102 + _tmp105*_tmp107
+    _tmp109 = _tmp54*across_2_0
+    _tmp110 = _tmp38*_tmp54
+    _tmp111 = _tmp46*_tmp54
+    _tmp112 = 0.25*x_9
+    _tmp113 = 0.125*theta_2 + 0.004909400717374463*x_0
+    _tmp114 = sinr1(_tmp34)
+    _tmp115 = _tmp34**3*(_tmp114 - 3*sinr2(_tmp34) + 3*cosr2(_tmp34))
+    _tmp116 = 0.25*_tmp115 + _tmp48*(_tmp113 - _tmp112)
+    _tmp117 = _tmp37**3*(-3*sinr2(_tmp37) + 3*cosr2(_tmp37) + sinr1(_tmp37))
+    _tmp118 = _tmp4*(0.25*_tmp117 + _tmp45*(_tmp112 + _tmp113))
+    _tmp119 = -_tmp109*_tmp35 - _tmp110*across_2_1 - _tmp111*_tmp44 - _tmp118*_tmp35 + 0.125*_tmp49*_tmp50*p_3 + 0.5*_tmp116*_tmp38*p_3
+    _tmp120 = _tmp119*_tmp31
+    _tmp121 = _tmp42*numpy.cos(_tmp33)
+    _tmp122 = _tmp109*_tmp44 + _tmp116*_tmp51 + _tmp118*_tmp44 + _tmp121*_tmp4 - _tmp110*_tmp49 - _tmp111*_tmp35 - _tmp50*_tmp54*across_2_1
+    _tmp123 = _tmp122*_tmp78
+    _tmp124 = 0.019637602869497853*x_1
+    _tmp125 = _tmp124 + p_1 + 0.5*theta_3
+    _tmp126 = numpy.sin(_tmp125)
+    _tmp127 = 0.5*x_10
+    _tmp128 = 0.25*theta_3 + 0.009818801434748926*x_1
+    _tmp129 = _tmp128 - _tmp127
+    _tmp130 = numpy.sin(_tmp129)
+    _tmp131 = _tmp4*across_3_0
+    _tmp132 = _tmp127 + _tmp128
+    _tmp133 = numpy.sin(_tmp132)
+    _tmp134 = _tmp133*_tmp4
+    _tmp135 = numpy.sin(_tmp127)**2
+    _tmp136 = numpy.sin(_tmp128)
+    _tmp137 = _tmp136**2
+    _tmp138 = numpy.cos(_tmp129)
+    _tmp139 = arck(_tmp132)
+    _tmp140 = along_3_0 + _tmp139*_tmp132**2
+    _tmp141 = _tmp140*_tmp4
+    _tmp142 = arck(_tmp129)
+    _tmp143 = along_3_1 + _tmp142*_tmp129**2
+    _tmp144 = numpy.cos(_tmp132)
+    _tmp145 = _tmp144*_tmp4
+    _tmp146 = _tmp130*_tmp131 + _tmp138*_tmp141 + _tmp143*_tmp145 + _tmp4*(-2*_tmp135 + 2*_tmp137) - _tmp134*across_3_1
+    _tmp147 = _tmp126*_tmp146
+    _tmp148 = numpy.cos(_tmp125)
+    _tmp149 = 0.5*numpy.sin(1.0*x_10)
+    _tmp150 = _tmp131*_tmp138 + _tmp134*_tmp143 + _tmp145*across_3_1 + _tmp149*p_3 - _tmp130*_tmp141
+    _tmp151 = _tmp148*_tmp150
+    _tmp152 = _tmp54*across_3_0
+    _tmp153 = _tmp133*_tmp54
+    _tmp154 = _tmp140*_tmp54
+    _tmp155 = 0.25*x_10
+    _tmp156 = 0.125*theta_3 + 0.004909400717374463*x_1
+    _tmp157 = sinr1(_tmp129)
+    _tmp158 = _tmp142*(_tmp156 - _tmp155) + 0.25*_tmp129**3*(_tmp157 - 3*sinr2(_tmp129) + 3*cosr2(_tmp129))
+    _tmp159 = _tmp4*(_tmp139*(_tmp155 + _tmp156) + 0.25*_tmp132**3*(-3*sinr2(_tmp132) + 3*cosr2(_tmp132) + sinr1(_tmp132)))
+    _tmp160 = -_tmp130*_tmp152 - _tmp130*_tmp159 - _tmp138*_tmp154 - _tmp153*across_3_1 + 0.125*_tmp143*_tmp144*p_3 + 0.5*_tmp133*_tmp158*p_3
+    _tmp161 = _tmp126*_tmp160
+    _tmp162 = numpy.cos(theta_3)
+    _tmp163 = 0.039275205738995705*x_1
+    _tmp164 = numpy.sin(_tmp163)
+    _tmp165 = numpy.sin(_tmp124)**2
+    _tmp166 = _tmp165*_tmp97 - _tmp164*_tmp90
+    _tmp167 = 0.4*_tmp166
+    _tmp168 = _tmp138*_tmp152 + _tmp138*_tmp159 + _tmp145*_tmp158 - _tmp130*_tmp154 - _tmp143*_tmp153 + _tmp136*_tmp4*numpy.cos(_tmp128) - _tmp144*_tmp54*across_3_1
+    _tmp169 = _tmp148*_tmp168
+    _tmp170 = 0.5*x_11
+    _tmp171 = 0.25*theta_4 + 0.009818801434748926*x_2
+    _tmp172 = _tmp171 - _tmp170
+    _tmp173 = numpy.sin(_tmp172)
+    _tmp174 = _tmp4*across_4_0
+    _tmp175 = _tmp170 + _tmp171
+    _tmp176 = numpy.sin(_tmp175)
+    _tmp177 = _tmp176*_tmp4
+    _tmp178 = numpy.sin(_tmp170)**2
+    _tmp179 = numpy.sin(_tmp171)
+    _tmp180 = _tmp179**2
+    _tmp181 = numpy.cos(_tmp172)
+    _tmp182 = arck(_tmp175)
+    _tmp183 = along_4_0 + _tmp182*_tmp175**2
+    _tmp184 = _tmp183*_tmp4
+    _tmp185 = arck(_tmp172)
+    _tmp186 = along_4_1 + _tmp185*_tmp172**2
+    _tmp187 = numpy.cos(_tmp175)
+    _tmp188 = _tmp187*_tmp4
+    _tmp189 = _tmp173*_tmp174 + _tmp181*_tmp184 + _tmp186*_tmp188 + _tmp4*(-2*_tmp178 + 2*_tmp180) - _tmp177*across_4_1
+    _tmp190 = _tmp163 + theta_3
+    _tmp191 = _tmp190 + p_1
+    _tmp192 = _tmp191 + 0.5*theta_4 + 0.019637602869497853*x_2
+    _tmp193 = numpy.sin(_tmp192)
+    _tmp194 = _tmp189*_tmp193
+    _tmp195 = 0.5*numpy.sin(1.0*x_11)
+    _tmp196 = _tmp174*_tmp181 + _tmp177*_tmp186 + _tmp188*across_4_1 + _tmp195*p_3 - _tmp173*_tmp184
+    _tmp197 = numpy.cos(_tmp192)
+    _tmp198 = _tmp196*_tmp197
+    _tmp199 = numpy.sin(theta_3)
+    _tmp200 = _tmp164*_tmp96 + 2*_tmp165*_tmp90
+    _tmp201 = 0.4*_tmp200
+    _tmp202 = 0.4*_tmp194 + 0.4*_tmp198 - _tmp199*_tmp201
+    _tmp203 = _tmp54*across_4_0
+    _tmp204 = _tmp176*_tmp54
+    _tmp205 = _tmp183*_tmp54
+    _tmp206 = 0.25*x_11
+    _tmp207 = 0.125*theta_4 + 0.004909400717374463*x_2
+    _tmp208 = sinr1(_tmp172)
+    _tmp209 = _tmp185*(_tmp207 - _tmp206) + 0.25*_tmp172**3*(_tmp208 - 3*sinr2(_tmp172) + 3*cosr2(_tmp172))
+    _tmp210 = _tmp4*(_tmp182*(_tmp206 + _tmp207) + 0.25*_tmp175**3*(-3*sinr2(_tmp175) + 3*cosr2(_tmp175) + sinr1(_tmp175)))
+    _tmp211 = -_tmp173*_tmp203 - _tmp173*_tmp210 - _tmp181*_tmp205 - _tmp204*across_4_1 + 0.125*_tmp186*_tmp187*p_3 + 0.5*_tmp176*_tmp209*p_3
+    _tmp212 = 0.4*_tmp193
+    _tmp213 = _tmp181*_tmp203 + _tmp181*_tmp210 + _tmp188*_tmp209 - _tmp173*_tmp205 - _tmp186*_tmp204 + _tmp179*_tmp4*numpy.cos(_tmp171) - _tmp187*_tmp54*across_4_1
+    _tmp214 = 0.4*_tmp197
+    _tmp215 = _tmp52*_tmp78
+    _tmp216 = _tmp31*_tmp81
+    _tmp217 = _tmp65*_tmp68
+    _tmp218 = _tmp83*_tmp84
+    _tmp219 = 0.4*_tmp218
+    _tmp220 = _tmp107*_tmp98
+    _tmp221 = _tmp220 - 0.4*_tmp100*_tmp105
+    _tmp222 = _tmp119*_tmp78
+    _tmp223 = _tmp146*_tmp148
+    _tmp224 = _tmp189*_tmp214
+    _tmp225 = _tmp148*_tmp160
+    _tmp226 = _tmp126*_tmp168
+    _tmp227 = numpy.sin(_tmp29)
+    _tmp228 = -0.5*_tmp227*p_3
+    _tmp229 = 0.015710082295598282*x_7
+    _tmp230 = _tmp87 + _tmp99
+    _tmp231 = numpy.sin(_tmp230)
+    _tmp232 = _tmp4*_tmp95
+    _tmp233 = _tmp232 + _tmp96
+    _tmp234 = _tmp231*_tmp233
+    _tmp235 = numpy.cos(_tmp230)
+    _tmp236 = -_tmp90 + 0.5*_tmp89*p_3
+    _tmp237 = _tmp234 - _tmp235*_tmp236
+    _tmp238 = _tmp215 + _tmp216
+    _tmp239 = _tmp237 + _tmp238 + _tmp227*p_2
+    _tmp240 = 0.015710082295598282*x_4
+    _tmp241 = numpy.cos(_tmp29)
+    _tmp242 = _tmp231*_tmp236 + _tmp233*_tmp235
+    _tmp243 = _tmp53 - _tmp78*_tmp81
+    _tmp244 = _tmp242 + _tmp243 + _tmp241*p_2
+    _tmp245 = _tmp222 + 0.5*_tmp215 + 0.5*_tmp216 - _tmp122*_tmp31
+    _tmp246 = _tmp120 + _tmp123 + 0.5*_tmp53 - 0.5*_tmp78*_tmp81
+    _tmp247 = _tmp240*(-_tmp237 - _tmp245) - 0.015710082295598282*x_5*(-_tmp242 - _tmp246)
+    _tmp248 = 0.5*_tmp231
+    _tmp249 = -_tmp240*(-_tmp234 + _tmp235*_tmp236 + _tmp248*p_3) + 0.015710082295598282*x_5*(-_tmp242 + 0.5*_tmp235*p_3)
+    _tmp250 = 0.5*_tmp68
+    _tmp251 = 0.5*_tmp24
+    _tmp252 = _tmp217 + _tmp21*_tmp250 + _tmp251*_tmp75 - _tmp24*_tmp70
+    _tmp253 = _tmp21*_tmp251
+    _tmp254 = _tmp253 + _tmp66 + _tmp71 - 0.5*_tmp68*_tmp75
+    _tmp255 = 0.015710082295598282*x_5
+    _tmp257 = numpy.sin(_tmp190)
+    _tmp256 = numpy.cos(_tmp190)
+    _tmp258 = _tmp4*_tmp89
+    _tmp259 = _tmp232*_tmp256 + _tmp257*_tmp258
+    _tmp260 = _tmp256*_tmp258
+    _tmp261 = _tmp82*_tmp83
+    _tmp262 = 0.4*_tmp261
+    _tmp263 = 0.8*_tmp86
+    _tmp264 = _tmp263*_tmp84
+    _tmp265 = _tmp0 + 0.75*theta_1 + 0.02945640430424678*x_3
+    _tmp266 = numpy.sin(_tmp265)
+    _tmp267 = numpy.cos(_tmp265)
+    _tmp269 = 0.375*p_3
+    _tmp268 = along_1_1 + sinr0(_tmp2)
+    _tmp270 = _tmp268*_tmp269
+    _tmp271 = -_tmp60 + cosr1(_tmp2)
+    _tmp272 = -6.427599787083612*x_4 - 6.427599787083612*x_7
+    _tmp273 = 0.00244416*_tmp272
+    _tmp274 = _tmp29 + _tmp32 + 0.75*theta_2 + 0.02945640430424678*x_0
+    _tmp275 = numpy.cos(_tmp274)
+    _tmp276 = _tmp4*across_2_1
+    _tmp277 = numpy.sin(_tmp274)
+    _tmp278 = along_2_1 + sinr0(_tmp34)
+    _tmp279 = _tmp278*_tmp4
+    _tmp280 = _tmp269*_tmp278
+    _tmp281 = -_tmp114 + cosr1(_tmp34)
+    _tmp282 = _tmp127 + p_1 + 0.75*theta_3 + 0.02945640430424678*x_1
+    _tmp283 = numpy.sin(_tmp282)
+    _tmp284 = _tmp269*_tmp283
+    _tmp285 = along_3_1 + sinr0(_tmp129)
+    _tmp286 = numpy.cos(_tmp282)
+    _tmp287 = _tmp269*_tmp286
+    _tmp288 = -_tmp157 + cosr1(_tmp129)
+    _tmp289 = _tmp170 + _tmp191 + 0.75*theta_4 + 0.02945640430424678*x_2
+    _tmp290 = numpy.sin(_tmp289)
+    _tmp291 = _tmp290*_tmp4
+    _tmp292 = along_4_1 + sinr0(_tmp172)
+    _tmp293 = numpy.cos(_tmp289)
+    _tmp294 = _tmp240*(-_tmp291*across_4_1 + 0.5*_tmp292*_tmp293*p_3) - _tmp255*(-_tmp291*_tmp292 - _tmp293*_tmp4*across_4_1)
+    _tmp295 = _tmp269*_tmp290
+    _tmp296 = _tmp269*_tmp293
+    _tmp297 = -_tmp208 + cosr1(_tmp172)
+    _tmp298 = _tmp164*_tmp95 + 2*_tmp165*_tmp89
+    _tmp299 = 2*_tmp95
+    _tmp300 = _tmp165*_tmp299 - _tmp164*_tmp89
+    _tmp301 = 0.4*_tmp199
+    _tmp302 = _tmp88*_tmp89
+    _tmp303 = -_tmp302 - _tmp299*_tmp94
+    _tmp304 = _tmp88*_tmp95
+    _tmp305 = -_tmp304 + 2*_tmp89*_tmp94
+    _tmp306 = -_tmp166
+    _tmp307 = 0.4*_tmp162
+    _tmp308 = -_tmp219 + _tmp263*_tmp82
+    _tmp309 = 0.5*across_2_0
+    _tmp310 = 0.5*_tmp50
+    _tmp311 = 0.5*_tmp46
+    _tmp312 = 0.5*_tmp38
+    _tmp313 = _tmp80 + _tmp309*_tmp44 + _tmp310*across_2_1 + _tmp312*_tmp49 - _tmp311*_tmp35
+    _tmp314 = _tmp31*_tmp313
+    _tmp315 = _tmp43 - _tmp41 + _tmp309*_tmp35 + _tmp310*_tmp49 + _tmp311*_tmp44 - _tmp312*across_2_1
+    _tmp316 = _tmp315*_tmp78
+    _tmp317 = 0.5*across_3_0
+    _tmp318 = 0.5*_tmp133
+    _tmp319 = 0.5*_tmp140
+    _tmp320 = 0.5*_tmp144
+    _tmp321 = _tmp137 - _tmp135 + _tmp130*_tmp317 + _tmp138*_tmp319 + _tmp143*_tmp320 - _tmp318*across_3_1
+    _tmp322 = _tmp148*_tmp321
+    _tmp323 = 0.5*across_4_0
+    _tmp324 = 0.5*_tmp176
+    _tmp325 = 0.5*_tmp183
+    _tmp326 = 0.5*_tmp187
+    _tmp327 = _tmp180 - _tmp178 + _tmp173*_tmp323 + _tmp181*_tmp325 + _tmp186*_tmp326 - _tmp324*across_4_1
+    _tmp328 = _tmp149 + _tmp138*_tmp317 + _tmp143*_tmp318 + _tmp320*across_3_1 - _tmp130*_tmp319
+    _tmp329 = _tmp195 + _tmp181*_tmp323 + _tmp186*_tmp324 + _tmp326*across_4_1 - _tmp173*_tmp325
+    _tmp330 = 0.5*across_1_0
+    _tmp331 = 0.5*_tmp19
+    _tmp332 = 0.5*_tmp15
+    _tmp333 = 0.5*_tmp7
+    _tmp334 = _tmp74 + _tmp13*_tmp330 + _tmp18*_tmp333 + _tmp331*across_1_1 - _tmp3*_tmp332
+    _tmp335 = _tmp24*_tmp334
+    _tmp336 = _tmp12 - _tmp10 + _tmp13*_tmp332 + _tmp18*_tmp331 + _tmp3*_tmp330 - _tmp333*across_1_1
+    _tmp337 = _tmp336*_tmp68
+    _tmp338 = 0.4*_tmp335 + 0.4*_tmp337
+    _tmp339 = _tmp126*_tmp150
+    _tmp340 = _tmp334*_tmp68
+    _tmp341 = _tmp148*_tmp328
+    _tmp342 = _tmp313*_tmp78
+    _tmp343 = _tmp126*_tmp321
+    _tmp344 = _tmp235*_tmp95
+    _tmp345 = _tmp231*_tmp89
+    _tmp346 = _tmp240*(_tmp344 - _tmp345)
+    _tmp347 = _tmp231*_tmp95
+    _tmp348 = _tmp235*_tmp89
+    _tmp349 = _tmp347 + _tmp348
+    _tmp350 = -_tmp346 - 0.015710082295598282*_tmp349*x_5
+    _tmp351 = _tmp96 - _tmp232
+    _tmp352 = _tmp258 + _tmp90
+    _tmp353 = _tmp231*_tmp351 + _tmp235*_tmp352
+    _tmp354 = _tmp235*_tmp351 - _tmp231*_tmp352
+    _tmp355 = -_tmp240*_tmp353 + 0.015710082295598282*_tmp354*x_5
+    _tmp356 = _tmp227*_tmp255
+    _tmp357 = p_3**2
+    _tmp358 = 5.0/_tmp357
+    _tmp359 = _tmp358*omega_1_1
+    _tmp360 = 0.5*_tmp344 + 0.5*_tmp345
+    _tmp361 = _tmp314 + _tmp316
+    _tmp362 = 0.5*_tmp347
+    _tmp363 = _tmp362 - 0.5*_tmp235*_tmp89
+    _tmp364 = _tmp358*omega_2_1
+    _tmp365 = _tmp358*omega_3_1
+    _tmp366 = 0.5*_tmp89
+    _tmp367 = _tmp340 - _tmp24*_tmp336
+    _tmp368 = _tmp342 + _tmp367 - _tmp31*_tmp315
+    _tmp369 = _tmp335 + _tmp337
+    _tmp370 = _tmp361 + _tmp369
+    _tmp371 = _tmp358*omega_4_1
+    _tmp372 = 0.5*_tmp266
+    _tmp373 = 0.5*_tmp277
+    _tmp374 = _tmp283*_tmp4
+    _tmp375 = 0.5*_tmp283
+    _tmp376 = 0.5*_tmp290
+    _tmp377 = _tmp357*_tmp7
+    _tmp378 = 0.00039275205738995705*x_5
+    _tmp379 = _tmp19*_tmp357
+    _tmp380 = 6.1104e-05*_tmp272
+    _tmp381 = _tmp266*_tmp357
+    _tmp382 = 0.0011782561721698712*x_5
+    _tmp383 = _tmp267*_tmp357
+    _tmp384 = 0.000183312*_tmp272
+    _tmp385 = 0.0015710082295598282*_tmp357
+    _tmp386 = _tmp29 + _tmp37
+    _tmp387 = numpy.cos(_tmp386)
+    _tmp388 = _tmp387*x_4
+    _tmp389 = numpy.sin(_tmp386)
+    _tmp390 = _tmp385*x_5
+    _tmp391 = 0.00039275205738995705*_tmp357
+    _tmp392 = _tmp357*_tmp378
+    _tmp393 = _tmp389*x_4
+    _tmp394 = _tmp275*x_4
+    _tmp395 = 0.0011782561721698712*_tmp357
+    _tmp396 = _tmp357*_tmp382
+    _tmp397 = _tmp277*x_4
+    _tmp398 = _tmp132 + p_1
+    _tmp399 = numpy.sin(_tmp398)
+    _tmp400 = _tmp391*x_4
+    _tmp401 = numpy.cos(_tmp398)
+    _tmp402 = _tmp395*x_4
+    _tmp403 = _tmp175 + _tmp191
+    _tmp404 = numpy.sin(_tmp403)
+    _tmp405 = _tmp385*x_4
+    _tmp406 = numpy.cos(_tmp403)
+    _tmp407 = -_tmp404*_tmp405 + 0.0015710082295598282*_tmp357*_tmp406*x_5
+    _tmp408 = -_tmp390*_tmp404 - _tmp405*_tmp406
+    _tmp409 = -_tmp290*_tmp405 + 0.0015710082295598282*_tmp293*_tmp357*x_5
+    _tmp410 = -_tmp290*_tmp390 - _tmp293*_tmp405
+    _tmp411 = _tmp19*p_3
+    _tmp412 = 0.0031420164591196564*x_5
+    _tmp413 = _tmp7*p_3
+    _tmp414 = 0.000488832*_tmp272
+    _tmp415 = p_3**(-3.0)
+    _tmp416 = -0.041666666666666664*_tmp415
+    _tmp417 = -0.14925373134328357*_tmp415
+    _tmp418 = _tmp412*p_3
+    _tmp419 = _tmp414*p_3
+    _tmp420 = 0.0031420164591196564*p_3
+    _tmp421 = _tmp420*x_4
+    _tmp422 = 0.004909400717374463*p_3
+    _tmp423 = _tmp422*across_2_0
+    _tmp424 = _tmp38*_tmp422
+    _tmp425 = _tmp422*_tmp46
+    _tmp426 = 0.009818801434748926*x_9
+    _tmp427 = 0.004909400717374463*theta_2 + 0.00019281772323005516*x_0
+    _tmp428 = 0.009818801434748926*_tmp115 + _tmp48*(_tmp427 - _tmp426)
+    _tmp429 = _tmp4*(0.009818801434748926*_tmp117 + _tmp45*(_tmp426 + _tmp427))
+    _tmp430 = -_tmp35*_tmp423 - _tmp35*_tmp429 - _tmp424*across_2_1 - _tmp425*_tmp44 + 0.5*_tmp38*_tmp428*p_3 + 0.004909400717374463*_tmp49*_tmp50*p_3
+    _tmp431 = 0.019637602869497853*p_3
+    _tmp432 = _tmp121*_tmp431 + _tmp423*_tmp44 + _tmp428*_tmp51 + _tmp429*_tmp44 - _tmp35*_tmp425 - _tmp424*_tmp49 - _tmp422*_tmp50*across_2_1
+    _tmp433 = 0.07855041147799141*numpy.cos(_tmp87)
+    _tmp434 = numpy.cos(_tmp92)
+    _tmp435 = -_tmp433*_tmp90 - 0.15710082295598282*_tmp434*_tmp93*_tmp96
+    _tmp436 = -_tmp433*_tmp96 + 0.15710082295598282*_tmp434*_tmp89*_tmp93*p_0
+    _tmp437 = _tmp106*_tmp435 - _tmp100*_tmp436
+    _tmp438 = 0.039275205738995705*numpy.cos(_tmp28)
+    _tmp439 = _tmp84*p_2
+    _tmp440 = numpy.cos(_tmp22)
+    _tmp441 = _tmp422*across_1_0
+    _tmp442 = 0.004909400717374463*_tmp413
+    _tmp443 = _tmp15*_tmp422
+    _tmp444 = 0.009818801434748926*x_8
+    _tmp445 = 0.004909400717374463*theta_1 + 0.00019281772323005516*x_3
+    _tmp446 = 0.009818801434748926*_tmp61 + _tmp17*(_tmp445 - _tmp444)
+    _tmp447 = _tmp4*(0.009818801434748926*_tmp63 + _tmp14*(_tmp444 + _tmp445))
+    _tmp448 = -_tmp13*_tmp443 - _tmp3*_tmp441 - _tmp3*_tmp447 - _tmp442*across_1_1 + 0.5*_tmp446*_tmp7*p_3 + 0.004909400717374463*_tmp18*_tmp19*p_3
+    _tmp449 = _tmp13*_tmp441 + _tmp13*_tmp447 + _tmp20*_tmp446 + _tmp431*_tmp69 - _tmp18*_tmp442 - _tmp3*_tmp443 - 0.004909400717374463*_tmp411*across_1_1
+    _tmp450 = 0.019637602869497853*_tmp24
+    _tmp451 = _tmp21*_tmp450 + _tmp24*_tmp448 + _tmp449*_tmp68 - 0.019637602869497853*_tmp68*_tmp75
+    _tmp452 = 0.25*p_3
+    _tmp453 = 0.25*_tmp413
+    _tmp454 = _tmp13*_tmp452
+    _tmp455 = 0.25*_tmp411
+    _tmp456 = -0.5*_tmp61 - _tmp17*_tmp2
+    _tmp457 = 0.5*_tmp63 + _tmp14*_tmp6
+    _tmp458 = _tmp15*_tmp454 + _tmp18*_tmp455 + _tmp4*numpy.cos(_tmp73) + _tmp456*_tmp8 - _tmp453*across_1_1 + _tmp3*_tmp452*across_1_0 - _tmp3*_tmp4*_tmp457
+    _tmp459 = 1.0*p_3
+    _tmp460 = -_tmp18*_tmp453 - _tmp454*across_1_0 - _tmp455*across_1_1 - _tmp459*_tmp9*numpy.cos(_tmp0) + 0.25*_tmp15*_tmp3*p_3 + 0.5*_tmp13*_tmp457*p_3 + 0.5*_tmp19*_tmp456*p_3
+    _tmp461 = -_tmp24*_tmp458 - _tmp460*_tmp68
+    _tmp462 = _tmp38*_tmp452
+    _tmp463 = _tmp44*_tmp452
+    _tmp464 = _tmp452*_tmp50
+    _tmp465 = -0.5*_tmp115 - _tmp34*_tmp48
+    _tmp466 = 0.5*_tmp117 + _tmp37*_tmp45
+    _tmp467 = _tmp39*_tmp465 + _tmp4*numpy.cos(_tmp79) + _tmp46*_tmp463 + _tmp464*_tmp49 - _tmp462*across_2_1 + _tmp35*_tmp452*across_2_0 - _tmp35*_tmp4*_tmp466
+    _tmp468 = -_tmp462*_tmp49 - _tmp463*across_2_0 - _tmp464*across_2_1 - _tmp40*_tmp459*numpy.cos(_tmp32) + 0.25*_tmp35*_tmp46*p_3 + 0.5*_tmp44*_tmp466*p_3 + 0.5*_tmp465*_tmp50*p_3
+    _tmp469 = _tmp438*_tmp82
+    _tmp470 = 0.07855041147799141*_tmp440*_tmp85
+    _tmp471 = _tmp448*_tmp68 + _tmp450*_tmp75 - _tmp24*_tmp449 + 0.019637602869497853*_tmp21*_tmp68
+    _tmp472 = _tmp24*_tmp460 - _tmp458*_tmp68
+    _tmp473 = _tmp84*p_4
+    _tmp474 = 4*_tmp94
+    _tmp475 = -2*_tmp91 - _tmp474*_tmp96
+    _tmp476 = _tmp100*_tmp475
+    _tmp477 = 2*_tmp103 - 4*_tmp89*_tmp94*p_0
+    _tmp478 = -_tmp477
+    _tmp479 = _tmp476 + _tmp106*_tmp478
+    _tmp480 = _tmp106*_tmp475
+    _tmp481 = _tmp480 - _tmp100*_tmp478
+    _tmp482 = 2*_tmp86
+    _tmp483 = _tmp482*_tmp84
+    _tmp484 = -2*_tmp302 - _tmp474*_tmp95
+    _tmp485 = -2*_tmp304 + 4*_tmp89*_tmp94
+    _tmp486 = -_tmp218 + _tmp482*_tmp82
+    _tmp487 = -_tmp261 - _tmp483
+    _tmp488 = _tmp4*_tmp68
+    _tmp489 = -_tmp13*_tmp488 + 0.5*_tmp24*_tmp3*p_3
+    _tmp490 = _tmp3*_tmp488 + _tmp13*_tmp24*_tmp4
+    _tmp491 = -_tmp490
+    _tmp492 = -_tmp20*_tmp68 - _tmp24*_tmp8
+    _tmp493 = _tmp68*_tmp8 - _tmp20*_tmp24
+    _tmp494 = _tmp31*_tmp4
+    _tmp495 = _tmp4*_tmp78
+    _tmp496 = _tmp35*_tmp494 - _tmp44*_tmp495
+    _tmp497 = _tmp35*_tmp495 + _tmp44*_tmp494
+    _tmp498 = -_tmp31*_tmp39 - _tmp51*_tmp78
+    _tmp499 = _tmp39*_tmp78 - _tmp31*_tmp51
+    _tmp500 = -_tmp493
+    return [
+        0,
+        0,
+        0,
+        0,
+        _tmp77 - _tmp108 - _tmp26 - _tmp67 - _tmp72 - 0.4*_tmp53 + 0.4*_tmp78*_tmp81 + 0.4*_tmp82*_tmp83*p_2 + 0.8*_tmp84*_tmp86*p_2,
+        -_tmp108 - 0.2*_tmp53 - 0.4*_tmp120 - 0.4*_tmp123 + 0.2*_tmp78*_tmp81,
+        _tmp202 + 0.2*_tmp147 + 0.2*_tmp151 + 0.4*_tmp161 - 0.4*_tmp169 - _tmp162*_tmp167,
+        0.2*_tmp194 + 0.2*_tmp198 + _tmp211*_tmp212 - _tmp213*_tmp214,
+        -_tmp221 - 0.4*_tmp215 - 0.4*_tmp216 - 0.4*_tmp217 - _tmp21*_tmp76 - _tmp219*p_2 - _tmp25*_tmp75 + 0.4*_tmp24*_tmp70 + 0.8*_tmp82*_tmp86*p_2,
+        -_tmp221 - 0.2*_tmp215 - 0.2*_tmp216 - 0.4*_tmp222 + 0.4*_tmp122*_tmp31,
+        -_tmp224 - 0.2*_tmp223 - 0.4*_tmp225 - 0.4*_tmp226 - _tmp167*_tmp199 + 0.2*_tmp126*_tmp150 + 0.4*_tmp162*_tmp200 + 0.4*_tmp193*_tmp196,
+        -_tmp211*_tmp214 - _tmp212*_tmp213 + 0.2*_tmp193*_tmp196 - 0.2*_tmp189*_tmp197,
+        -_tmp229*(-_tmp228 - _tmp227*p_4) - _tmp240*(-_tmp228 - _tmp239) + 0.015710082295598282*x_5*(-_tmp244 + 0.5*_tmp241*p_3),
+        -_tmp247,
+        0,
+        0,
+        _tmp249,
+        _tmp249,
+        0,
+        0,
+        _tmp240*(-_tmp239 - _tmp252) - _tmp255*(-_tmp244 - _tmp254),
+        _tmp247,
+        _tmp240*(-_tmp225 - _tmp226 - _tmp260 - 0.5*_tmp223 + 0.5*_tmp126*_tmp150 + 0.5*_tmp257*_tmp95*p_3) - _tmp255*(_tmp161 + _tmp259 - _tmp169 + 0.5*_tmp147 + 0.5*_tmp151),
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp26 + _tmp67 + _tmp72 - _tmp77 - _tmp262*p_4 - _tmp264*p_4,
+        0,
+        0,
+        0,
+        _tmp255*(-_tmp267*_tmp270 + 0.375*_tmp266*across_1_1*p_3 - _tmp2*_tmp266*_tmp271*_tmp54) + _tmp273*(-_tmp266*_tmp270 - _tmp267*_tmp269*across_1_1 + 0.125*_tmp2*_tmp267*_tmp271*p_3),
+        0,
+        0,
+        0,
+        -_tmp240*(-_tmp275*_tmp276 - _tmp277*_tmp279) + 0.015710082295598282*x_5*(_tmp276*_tmp277 - _tmp275*_tmp279),
+        -_tmp240*(-_tmp277*_tmp280 - _tmp269*_tmp275*across_2_1 + 0.125*_tmp275*_tmp281*_tmp34*p_3) + 0.015710082295598282*x_5*(-_tmp275*_tmp280 + 0.375*_tmp277*across_2_1*p_3 - _tmp277*_tmp281*_tmp34*_tmp54),
+        0,
+        0,
+        0,
+        0,
+        _tmp240*(_tmp285*_tmp287 - _tmp284*across_3_1 + _tmp129*_tmp283*_tmp288*_tmp54) - _tmp255*(-_tmp284*_tmp285 - _tmp287*across_3_1 + 0.125*_tmp129*_tmp286*_tmp288*p_3),
+        0,
+        0,
+        0,
+        _tmp294,
+        _tmp240*(_tmp292*_tmp296 - _tmp295*across_4_1 + _tmp172*_tmp290*_tmp297*_tmp54) - _tmp255*(-_tmp292*_tmp295 - _tmp296*across_4_1 + 0.125*_tmp172*_tmp293*_tmp297*p_3),
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp107*_tmp303 - _tmp300*_tmp301 + 0.4*_tmp100*_tmp305 + 0.4*_tmp162*_tmp298,
+        _tmp102 + _tmp202 + 0.4*_tmp147 + 0.4*_tmp151 + _tmp306*_tmp307 - _tmp104*_tmp107,
+        _tmp308,
+        -_tmp338 - 0.4*_tmp314 - 0.4*_tmp316 - 0.4*_tmp322 - _tmp214*_tmp327 + 0.4*_tmp126*_tmp328 + 0.4*_tmp193*_tmp329,
+        0,
+        _tmp101*_tmp303 + _tmp107*_tmp305 + _tmp298*_tmp301 + _tmp300*_tmp307,
+        _tmp220 - _tmp224 + 0.4*_tmp339 - 0.4*_tmp223 + _tmp101*_tmp104 + _tmp162*_tmp201 + _tmp196*_tmp212 + _tmp301*_tmp306,
+        -_tmp262 - _tmp264,
+        -0.4*_tmp340 - 0.4*_tmp341 - 0.4*_tmp342 - 0.4*_tmp343 - _tmp212*_tmp327 - _tmp214*_tmp329 + 0.4*_tmp24*_tmp336 + 0.4*_tmp31*_tmp315,
+        0,
+        _tmp350,
+        _tmp355,
+        -_tmp356 - _tmp240*_tmp241,
+        -_tmp359 - _tmp240*(_tmp360 - _tmp342 - 0.5*_tmp241 + _tmp31*_tmp315) + 0.007855041147799141*_tmp241*x_7 + 0.015710082295598282*x_5*(-_tmp361 - _tmp363 + 0.5*_tmp227),
+        -_tmp229*_tmp241,
+        _tmp350,
+        _tmp355,
+        0,
+        -_tmp364 - _tmp240*(_tmp360 - 0.5*_tmp235) + 0.015710082295598282*x_5*(_tmp248 - _tmp362 + 0.5*_tmp348),
+        0,
+        _tmp346 - _tmp255*(-_tmp349 + 2*_tmp89),
+        _tmp240*(_tmp339 + _tmp353 - _tmp223 - _tmp260 + _tmp232*_tmp257) - _tmp255*(_tmp147 + _tmp151 + _tmp259 + _tmp354 - _tmp97),
+        _tmp356 + _tmp240*(-1 + _tmp241),
+        -_tmp365 - _tmp255*(-_tmp322 - _tmp363 - _tmp370 + _tmp126*_tmp328 - _tmp256*_tmp366 + 0.5*_tmp257*_tmp95) + 0.015710082295598282*x_4*(-_tmp341 - _tmp343 - _tmp368 - _tmp257*_tmp366 + 0.5*_tmp231*_tmp89 + 0.5*_tmp235*_tmp95 - 0.5*_tmp256*_tmp95),
+        0,
+        0,
+        0,
+        0,
+        _tmp371,
+        0,
+        0,
+        0,
+        0,
+        _tmp338,
+        -_tmp308,
+        0,
+        0,
+        0,
+        _tmp359 + _tmp255*(-_tmp268*_tmp372 - 0.5*_tmp267*across_1_1) + _tmp273*(-_tmp372*across_1_1 + 0.5*_tmp267*_tmp268) - _tmp358*omega_1_0,
+        0,
+        0,
+        0,
+        0,
+        _tmp364 - _tmp240*(-_tmp373*across_2_1 + 0.5*_tmp275*_tmp278) - _tmp358*omega_2_0 + 0.015710082295598282*x_5*(-_tmp278*_tmp373 - 0.5*_tmp275*across_2_1),
+        0,
+        0,
+        _tmp240*(-_tmp374*across_3_1 + 0.5*_tmp285*_tmp286*p_3) - _tmp255*(-_tmp285*_tmp374 - _tmp286*_tmp4*across_3_1),
+        0,
+        _tmp365 + _tmp240*(_tmp285*_tmp375 + 0.5*_tmp286*across_3_1) - _tmp255*(-_tmp375*across_3_1 + 0.5*_tmp285*_tmp286) - _tmp358*omega_3_0,
+        0,
+        0,
+        _tmp294,
+        0,
+        _tmp371 + _tmp240*(_tmp292*_tmp376 + 0.5*_tmp293*across_4_1) - _tmp255*(-_tmp376*across_4_1 + 0.5*_tmp292*_tmp293) - _tmp358*omega_4_0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        _tmp377*_tmp378 - _tmp379*_tmp380,
+        0,
+        0,
+        0,
+        _tmp377*_tmp380 + _tmp378*_tmp379,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        _tmp381*_tmp382 - _tmp383*_tmp384,
+        0,
+        0,
+        0,
+        _tmp381*_tmp384 + _tmp382*_tmp383,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        _tmp385*_tmp388 + _tmp389*_tmp390,
+        _tmp388*_tmp391 + _tmp389*_tmp392,
+        0,
+        0,
+        -_tmp385*_tmp393 + 0.0015710082295598282*_tmp357*_tmp387*x_5,
+        -_tmp391*_tmp393 + 0.00039275205738995705*_tmp357*_tmp387*x_5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        _tmp277*_tmp390 + _tmp385*_tmp394,
+        _tmp277*_tmp396 + _tmp394*_tmp395,
+        0,
+        0,
+        -_tmp385*_tmp397 + 0.0015710082295598282*_tmp275*_tmp357*x_5,
+        -_tmp395*_tmp397 + 0.0011782561721698712*_tmp275*_tmp357*x_5,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        -_tmp399*_tmp400 + 0.00039275205738995705*_tmp357*_tmp401*x_5,
+        0,
+        0,
+        0,
+        -_tmp392*_tmp399 - _tmp400*_tmp401,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        0,
+        -_tmp283*_tmp402 + 0.0011782561721698712*_tmp286*_tmp357*x_5,
+        0,
+        0,
+        0,
+        -_tmp283*_tmp396 - _tmp286*_tmp402,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        _tmp407,
+        -_tmp400*_tmp404 + 0.00039275205738995705*_tmp357*_tmp406*x_5,
+        0,
+        0,
+        _tmp408,
+        -_tmp392*_tmp404 - _tmp400*_tmp406,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0.5,
+        0,
+        0,
+        _tmp409,
+        -_tmp290*_tmp402 + 0.0011782561721698712*_tmp293*_tmp357*x_5,
+        0,
+        0,
+        _tmp410,
+        -_tmp290*_tmp396 - _tmp293*_tmp402,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp411*_tmp412 - _tmp413*_tmp414,
+        0,
+        0,
+        0,
+        0,
+        _tmp412*_tmp413 - _tmp411*_tmp414,
+        0,
+        0,
+        0,
+        0,
+        _tmp416,
+        0,
+        0,
+        0,
+        0,
+        _tmp417,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp266*_tmp419 - _tmp267*_tmp418,
+        0,
+        0,
+        0,
+        0,
+        _tmp266*_tmp418 - _tmp267*_tmp419,
+        0,
+        0,
+        0,
+        0,
+        _tmp416,
+        0,
+        0,
+        0,
+        0,
+        _tmp417,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp393*_tmp420 - _tmp387*_tmp418,
+        0,
+        0,
+        0,
+        0,
+        _tmp388*_tmp420 + _tmp389*_tmp418,
+        0,
+        0,
+        0,
+        0,
+        _tmp416,
+        0,
+        0,
+        0,
+        0,
+        _tmp417,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp397*_tmp420 - _tmp275*_tmp418,
+        0,
+        0,
+        0,
+        0,
+        _tmp277*_tmp418 + _tmp394*_tmp420,
+        0,
+        0,
+        0,
+        0,
+        _tmp416,
+        0,
+        0,
+        0,
+        0,
+        _tmp417,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp399*_tmp405 + 0.0015710082295598282*_tmp357*_tmp401*x_5,
+        0,
+        _tmp399*_tmp418 + _tmp401*_tmp421,
+        0,
+        0,
+        -_tmp390*_tmp399 - _tmp401*_tmp405,
+        0,
+        -_tmp399*_tmp421 + 0.0031420164591196564*_tmp401*p_3*x_5,
+        0,
+        0,
+        0,
+        0,
+        _tmp416,
+        0,
+        0,
+        0,
+        0,
+        _tmp417,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp283*_tmp405 + 0.0015710082295598282*_tmp286*_tmp357*x_5,
+        0,
+        _tmp283*_tmp418 + _tmp286*_tmp421,
+        0,
+        0,
+        -_tmp283*_tmp390 - _tmp286*_tmp405,
+        0,
+        -_tmp283*_tmp421 + 0.0031420164591196564*_tmp286*p_3*x_5,
+        0,
+        0,
+        0,
+        0,
+        _tmp416,
+        0,
+        0,
+        0,
+        0,
+        _tmp417,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp407,
+        0,
+        _tmp404*_tmp418 + _tmp406*_tmp421,
+        0,
+        0,
+        _tmp408,
+        0,
+        -_tmp404*_tmp421 + 0.0031420164591196564*_tmp406*p_3*x_5,
+        0,
+        0,
+        0,
+        0,
+        _tmp416,
+        0,
+        0,
+        0,
+        0,
+        _tmp417,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp409,
+        0,
+        _tmp290*_tmp418 + _tmp293*_tmp421,
+        0,
+        0,
+        _tmp410,
+        0,
+        -_tmp290*_tmp421 + 0.0031420164591196564*_tmp293*p_3*x_5,
+        0,
+        0,
+        0,
+        0,
+        _tmp416,
+        0,
+        0,
+        0,
+        0,
+        _tmp417,
+        0,
+        -_tmp437 - 0.019637602869497853*_tmp53 - _tmp31*_tmp430 - _tmp432*_tmp78 + 0.019637602869497853*_tmp78*_tmp81,
+        0,
+        0,
+        -_tmp437 - _tmp451 - 0.039275205738995705*_tmp53 - _tmp438*_tmp439 + 0.039275205738995705*_tmp78*_tmp81 + 0.07855041147799141*_tmp440*_tmp82*_tmp85*p_2,
+        0,
+        0,
+        0,
+        0,
+        _tmp461,
+        -_tmp31*_tmp467 - _tmp468*_tmp78,
+        0,
+        0,
+        -0.019637602869497853*_tmp215 - 0.019637602869497853*_tmp216 + _tmp100*_tmp435 + _tmp106*_tmp436 + _tmp31*_tmp432 - _tmp430*_tmp78,
+        0,
+        0,
+        -_tmp471 - 0.039275205738995705*_tmp215 - 0.039275205738995705*_tmp216 + _tmp100*_tmp435 + _tmp106*_tmp436 - _tmp439*_tmp470 - _tmp469*p_2,
+        0,
+        0,
+        0,
+        0,
+        _tmp472,
+        _tmp31*_tmp468 - _tmp467*_tmp78,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp451 - _tmp438*_tmp473 + 0.07855041147799141*_tmp440*_tmp82*_tmp85*p_4,
+        0,
+        0,
+        0,
+        0,
+        _tmp461,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        -_tmp471 - _tmp469*p_4 - _tmp470*_tmp473,
+        0,
+        0,
+        0,
+        0,
+        _tmp472,
+        0,
+        0,
+        0,
+        -_tmp243 - _tmp254 - _tmp479 + _tmp82*_tmp83*p_2 + 2*_tmp84*_tmp86*p_2,
+        -_tmp246 - _tmp479,
+        0,
+        0,
+        -_tmp238 - _tmp252 - _tmp481 - _tmp218*p_2 + 2*_tmp82*_tmp86*p_2,
+        -_tmp245 - _tmp481,
+        0,
+        0,
+        -_tmp253 - _tmp66 - _tmp71 + _tmp250*_tmp75 + _tmp261*p_4 + _tmp483*p_4,
+        0,
+        0,
+        0,
+        -_tmp252 - _tmp218*p_4 + 2*_tmp82*_tmp86*p_4,
+        0,
+        0,
+        0,
+        _tmp100*_tmp485 - _tmp106*_tmp484,
+        _tmp476 - _tmp106*_tmp477,
+        _tmp486,
+        -_tmp370,
+        0,
+        _tmp100*_tmp484 + _tmp106*_tmp485,
+        _tmp480 + _tmp100*_tmp477,
+        _tmp487,
+        -_tmp368,
+        0,
+        0,
+        0,
+        0,
+        -_tmp369,
+        _tmp486,
+        0,
+        0,
+        0,
+        -_tmp367,
+        _tmp487,
+        _tmp489,
+        _tmp491,
+        0,
+        _tmp492,
+        _tmp493,
+        0,
+        _tmp496,
+        -_tmp497,
+        0,
+        _tmp498,
+        _tmp499,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp490,
+        _tmp489,
+        0,
+        _tmp500,
+        _tmp492,
+        0,
+        _tmp497,
+        _tmp496,
+        0,
+        -_tmp499,
+        _tmp498,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp489,
+        _tmp491,
+        0,
+        _tmp492,
+        _tmp493,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        _tmp490,
+        _tmp489,
+        0,
+        _tmp500,
+        _tmp492,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+        0,
+    ]
+
+
 def _plate_relation4(plate):
     """one plate's relation at order 4: (along, across, omega) and their partials by (theta, p, f) (312 operations)."""
     theta, p, f, e_a, e_s = plate
@@ -6645,6 +8766,65 @@ def _plate_rest4(plate):
     ]
 
 
+def _plate_eps4(plate):
+    """one plate's relation at order 4: d(along, across, omega)/d(e_a, e_s) (158 operations)."""
+    theta, p, f, e_a, e_s = plate
+    _tmp0 = theta**2
+    _tmp5 = 1 + p*(-2*e_s + 2*e_a)
+    _tmp1 = e_a - e_s
+    _tmp2 = 1 + _tmp1*p
+    _tmp3 = _tmp2*p
+    _tmp4 = 2*p
+    _tmp6 = p**2
+    _tmp7 = _tmp5*_tmp6
+    _tmp8 = -0.08333333333333333*p + _tmp4*bcol_a(_tmp3) + _tmp7*bcol_a_d1(_tmp3)
+    _tmp9 = theta**4
+    _tmp10 = -0.0010416666666666667*p + _tmp4*bcol_e3c(_tmp3) + _tmp7*bcol_e3c_d1(_tmp3)
+    _tmp11 = bcol_s(_tmp3)
+    _tmp12 = _tmp2*f
+    _tmp13 = bcol_e1(_tmp3)
+    _tmp14 = _tmp0*_tmp13
+    _tmp15 = 4*_tmp2**3
+    _tmp16 = f**3
+    _tmp17 = _tmp16*bcol_e2(_tmp3)
+    _tmp18 = -_tmp15*_tmp17 - 2*_tmp12*_tmp14 + _tmp11*_tmp2*f
+    _tmp19 = _tmp18*f
+    _tmp20 = bcol_w(_tmp3)
+    _tmp21 = f**2
+    _tmp22 = _tmp2**2
+    _tmp23 = _tmp21*_tmp22
+    _tmp24 = bcol_e2_d1(_tmp3)
+    _tmp25 = f**4
+    _tmp26 = _tmp25*_tmp2**4
+    _tmp27 = bcol_e1_d1(_tmp3)
+    _tmp28 = _tmp0*_tmp27
+    _tmp29 = _tmp4*(_tmp20*_tmp23 + _tmp23*_tmp28 + _tmp24*_tmp26)
+    _tmp30 = _tmp15*_tmp24
+    _tmp31 = _tmp14*_tmp4*f + _tmp16*_tmp30*_tmp6 - _tmp11*f*p + 2*_tmp12*_tmp28*_tmp6 + 12*_tmp17*_tmp22*p - _tmp2*_tmp6*f*bcol_s_d1(_tmp3)
+    _tmp32 = -_tmp31
+    _tmp33 = _tmp1*f
+    _tmp34 = _tmp21*_tmp3
+    _tmp35 = 2*_tmp34
+    _tmp36 = _tmp23*_tmp6
+    _tmp37 = _tmp20*_tmp35 + _tmp28*_tmp35 + _tmp36*bcol_w_d1(_tmp3) + _tmp0*_tmp36*bcol_e1_d2(_tmp3) + _tmp25*_tmp30*p + _tmp26*_tmp6*bcol_e2_d2(_tmp3)
+    _tmp38 = _tmp19 + p - _tmp29 + _tmp0*_tmp8 + _tmp32*_tmp33 - _tmp10*_tmp9 - _tmp37*_tmp5
+    _tmp39 = _tmp29 - _tmp19 + _tmp10*_tmp9 + _tmp31*_tmp33 + _tmp37*_tmp5 - _tmp0*_tmp8
+    _tmp40 = _tmp18*p
+    _tmp41 = _tmp40 + _tmp2*_tmp32
+    _tmp42 = f - _tmp40 + _tmp2*_tmp31
+    _tmp43 = 0.5*f
+    _tmp44 = _tmp6*theta
+    _tmp45 = _tmp44*bcol_invt_d1(_tmp3) + 2*_tmp23*_tmp27*_tmp44 + 4*_tmp13*_tmp34*theta + 4*_tmp6*theta**3*bcol_e3_d1(_tmp3)
+    return [
+        _tmp38,
+        _tmp39,
+        _tmp41,
+        _tmp42,
+        _tmp45 - _tmp38*_tmp43 + 0.5*_tmp41*p,
+        -_tmp45 - _tmp39*_tmp43 + 0.5*_tmp42*p,
+    ]
+
+
 # piezo_amplifier: its tables for the runtime
 _MECHANISM = _Mechanism(
     input_names=_ANGLES, pruned_inputs=PRUNED_INPUTS, parameter_names=tuple(PARAMETERS),
@@ -6679,6 +8859,9 @@ _MECHANISM = _Mechanism(
         tol=1e-12, max_iter=12, max_turn=0.2,
         p_limit=0.9, est_factor=3.0, est_limit=0.01,
         loads=False, chord=0.001, chord_error=1e-15,
+        # the sensitivities (templates/numpy/reduced_sens.py): per variant its routine and blocks
+        sens=((_loaded_sens1, {'dR_dtheta': (0, 8, 4), 'dR_dp': (32, 8, 5), 'din_dtheta': (72, 20, 4), 'din_dp': (152, 20, 5), 'dD_dx': (252, 4, 8), 'dD_dtheta': (284, 4, 4), 'dD_dp': (300, 4, 5), 'dD_dout': (320, 4, 12)}), (_loaded_sens2, {'dR_dtheta': (0, 12, 4), 'dR_dp': (48, 12, 5), 'din_dtheta': (108, 40, 4), 'din_dp': (268, 40, 5), 'dD_dx': (468, 4, 12), 'dD_dtheta': (516, 4, 4), 'dD_dp': (532, 4, 5), 'dD_dout': (552, 4, 24)}), ),
+        eps4=_plate_eps4,
         # what the level reports beyond the deviations (templates/numpy/reduced_report.py): per
         # variant its routine and blocks; the inputs, points (on the frame or not), plates
         # (with an allowable stress or not), metres per file unit and the scales L, F
@@ -6700,7 +8883,7 @@ _MECHANISM = _Mechanism(
         'paper': _Level(_dev_paper, None, None, 0, _sens_paper, {'dD_dtheta': (0, 4, 3), 'dD_dv': (12, 4, 6)}, None),
         'first_order': _Level(_dev_first_order, _linear, None, 0, _sens_first_order, {'M': (0, 3, 3), 'dE_dtheta': (9, 3, 3), 'dE_dv': (18, 3, 6), 'dD_dtheta': (36, 4, 3), 'dD_ddelta': (48, 4, 3), 'dD_dv': (60, 4, 6)}, None),
         'exact': _Level(_dev_exact, _linear, _newton, 0, _sens_exact, {'M': (0, 3, 3), 'dE_dtheta': (9, 3, 3), 'dE_dv': (18, 3, 6), 'dD_dtheta': (36, 4, 3), 'dD_ddelta': (48, 4, 3), 'dD_dv': (60, 4, 6)}, None),
-        'loaded': _Level(_loaded_deviation, None, None, 1, None, {}, None),
+        'loaded': _Level(_loaded_deviation, None, None, 1, _reduced_rates, {}, None),
     },
 )
 
@@ -6727,4 +8910,8 @@ def sensitivity_full(inputs, level='exact', params=None):
     """evaluate()'s result with "deviation" and "rigid": {P: {"params": {p: a}, "inputs":
     {H: a}}}, the derivatives of every point's deviation and rigid position by every
     parameter and input, each a of shape (2, *broadcast_shape)."""
+    if level == "loaded":
+        return _actuated_loaded_sensitivity(
+            _MECHANISM, ACTUATORS, FORCES, INPUTS, POINTS, inputs, params
+        )
     return _actuated_sensitivity(_MECHANISM, ACTUATORS, INPUTS, POINTS, inputs, level, params)

@@ -476,6 +476,38 @@ def _sensitivity_full(mech, inputs, level, params):
     return _blocks(_sensitivity_block, arrays, mech, level, p)
 
 
+def _rigid_rates(mech, theta, p, ok):
+    """The rigid points' dR/dv (*shape, 2 n_P, n_v) at the hinge angles theta, the non-input
+    hinges' dtheta_u/dv (*shape, k, n_v; None without them) and ok: the implicit-function
+    theorem on the rigid closure, Theta = -A^-1 dG/dv, dR/dv + dR/dtheta_u Theta."""
+    shape, dtype = ok.shape, mech.dtype
+    k, nv = len(mech.unknown_index), mech.n_variables
+    sr = mech.sens_rigid(theta, p)
+    rb = mech.sens_rigid_blocks
+    rig = _block(sr, rb["dR_dv"], shape, dtype)
+    if not k:
+        return rig, None, ok
+    at, size = rb["dG_dv"][0], k * nv
+    a = sr[rb["A"][0] : rb["A"][0] + k * k]
+    th, good = _solve(a, [-numpy.asarray(v) for v in sr[at : at + size]], ok, nv, dtype)
+    th = _matrix(th, k, nv, shape, dtype)
+    rig = rig + numpy.matmul(_block(sr, rb["dR_dtheta"], shape, dtype), th)
+    return rig, th, ok & good
+
+
+def _chained(mech, p, *rates):
+    """The rates (*shape, rows, n_v) by the parameters made totals in place: a parameter's
+    default that reads earlier ones follows them (sens_chain), last first."""
+    if mech.sens_chain is None:
+        return
+    c = mech.sens_chain(p)
+    n = len(mech.parameter_names)
+    for i in range(n - 1, -1, -1):
+        for j in range(i + 1, n):
+            for r in rates:
+                r[..., i] += c[j * n + i] * r[..., j]
+
+
 def _sensitivity_block(arrays, mech, level, p):
     """sensitivity_full() on one block: the implicit-function theorem on the closures."""
     theta, delta, ok, q = _pose(mech, arrays, level, p, True)
@@ -486,20 +518,10 @@ def _sensitivity_block(arrays, mech, level, p):
     lv = mech.levels[level]
     b = lv.blocks
     with numpy.errstate(all="ignore"):
-        sr = mech.sens_rigid(theta, p)
-        rb = mech.sens_rigid_blocks
-        rig = _block(sr, rb["dR_dv"], shape, dtype)
-        if k:
-            # Theta = d theta_u / dv = -A^-1 dG/dv; rigid: dR/dv + dR/dtheta_u Theta
-            at, size = rb["dG_dv"][0], k * nv
-            a = sr[rb["A"][0] : rb["A"][0] + k * k]
-            th, good = _solve(a, [-numpy.asarray(v) for v in sr[at : at + size]], ok, nv, dtype)
-            ok = ok & good
-            th = _matrix(th, k, nv, shape, dtype)
-            rig = rig + numpy.matmul(_block(sr, rb["dR_dtheta"], shape, dtype), th)
+        rig, th, ok = _rigid_rates(mech, theta, p, ok)
         if lv.loaded:
             # the reduced equilibrium's own (templates/numpy/reduced_sens.py)
-            dev = lv.sens(mech, theta, p, q, th if k else None, ok).astype(dtype)
+            dev = lv.sens(mech, theta, p, q, th, ok).astype(dtype)
         else:
             s = lv.sens(theta, delta, p)
             dev = _block(s, b["dD_dv"], shape, dtype)
@@ -519,14 +541,7 @@ def _sensitivity_block(arrays, mech, level, p):
             )
         if k and not lv.loaded:
             dev = dev + numpy.matmul(_block(s, b["dD_dtheta"], shape, dtype), th)
-        if mech.sens_chain is not None:
-            # a parameter's default that reads earlier ones follows them: totals, last first
-            c = mech.sens_chain(p)
-            n = len(mech.parameter_names)
-            for i in range(n - 1, -1, -1):
-                for j in range(i + 1, n):
-                    dev[..., i] += c[j * n + i] * dev[..., j]
-                    rig[..., i] += c[j * n + i] * rig[..., j]
+        _chained(mech, p, dev, rig)
     ok = ok & numpy.isfinite(dev).all(axis=(-1, -2)) & numpy.isfinite(rig).all(axis=(-1, -2))
     if not ok.all():
         for key in result["points"]:
@@ -979,14 +994,15 @@ def _red_solutions(mech, theta, p, q, shape, good, routines):
         yield where, solver, out, jac, jo, ins, dins, rel
 
 
-def _reduced_rates(mech, theta, p, q, thu, ok):
+def _reduced_rates(mech, theta, p, q, thu, ok, forces=0):
     """dev (*shape, 2 n_P, n_v) of the loaded level at its solutions (q: the variant solved and
-    its x, templates/numpy/reduced.py); thu dtheta_u/dv (*shape, k, n_v), None without. J is
+    its x, templates/numpy/reduced.py); thu dtheta_u/dv (*shape, k, n_v), None without; with
+    `forces` (the force actuators': theta's last entries) n_v + forces columns, theirs last. J is
     evaluated once more at the solution, then dx/dv = -J^-1 dR/dv at fixed x and
     dD/dv = dD/dx dx/dv + dD/dtheta dtheta/dv + dD/dp + dD/dout dout/dv (reduced_sens.c)."""
     tb = mech.loaded
     shape = ok.shape
-    npar, nv, m = len(mech.parameter_names), mech.n_variables, mech.n_theta
+    npar, nv, m = len(mech.parameter_names), mech.n_variables + forces, mech.n_theta
     npt = 2 * len(mech.point_names)
     dev = numpy.full((ok.size, npt, nv), numpy.nan)
     good = numpy.broadcast_to(ok, shape).reshape(-1)
@@ -997,13 +1013,15 @@ def _reduced_rates(mech, theta, p, q, thu, ok):
         blocks = tb.sens[solver.count - 1][1]
         b, n, ns = where.size, solver.size, solver.plates
         # dtheta/dv of every hinge: the non-input ones' from the rigid closure, an input's own 1
-        dth = numpy.zeros((b, m, nv))
+        dth = numpy.zeros((b, m + forces, nv))
         if thu is not None:
             tu = numpy.broadcast_to(thu, shape + thu.shape[-2:]).reshape(-1, *thu.shape[-2:])
             for j, i in enumerate(mech.unknown_index):
-                dth[:, i] = tu[where, j]
+                dth[:, i, : mech.n_variables] = tu[where, j]
         for j, i in enumerate(mech.input_index):
             dth[:, i, npar + j] = 1.0
+        for j in range(forces):
+            dth[:, m + j, mech.n_variables + j] = 1.0
         # the relation's partials by (theta_c, p, f, e_a, e_s), 3 x 5 per half plate
         part = numpy.zeros((b, 3 * ns, 5 * ns))
         dinx = numpy.zeros((b, 5 * ns, n))

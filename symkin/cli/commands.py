@@ -175,8 +175,11 @@ def _tolerance(args: argparse.Namespace) -> str:
     vary = variation.parse_vary(args.vary, mech, nominal, kinds=("pm",))
     grid = variation.parse_grid(args.input, mech)
     tolerance.check_level(args.level)  # before compiling anything
-    if mech.actuators and args.level in levels.LOADED:
-        # the generated `loaded` takes them without its sensitivities yet
+    if args.backend is None:
+        # the C's `loaded` has no sensitivities with actuators: the numpy module's then
+        actuated = mech.actuators and args.level in levels.LOADED
+        args.backend = "numpy" if actuated else "c"
+    if mech.actuators:
         check_actuated_level(mech, args.level, args.backend, sensitivity=True)
     result = tolerance.run(_evaluator(args, mech), vary, grid, args.level)
     return json.dumps(result.as_json(), indent=2) + "\n" if args.json else tolerance.text(result)
@@ -366,7 +369,11 @@ def parser() -> argparse.ArgumentParser:
         help="input range (default -0.2:0.2, 25 values)",
     )
     to.add_argument("--level", choices=levels.GENERATED, default=levels.DEFAULT)
-    to.add_argument("--backend", choices=pipeline.BACKENDS, default="c")
+    to.add_argument(
+        "--backend",
+        choices=pipeline.BACKENDS,
+        help="c (default), or numpy; at loaded with actuators: numpy (default)",
+    )
     to.add_argument("--json", action="store_true", help="machine-readable output")
     to.set_defaults(run=_tolerance)
     sw = command("sweep", "Monte Carlo over parameter spreads, on Dask")

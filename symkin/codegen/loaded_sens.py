@@ -31,12 +31,14 @@ def loaded_sens_routines(
     analysis: Analysis, names: Sequence[str], theta: Argument, params: Argument
 ) -> dict[str, Routine]:
     """loaded_sens1 and loaded_sens2 (parameters as symbols, scales at the file's defaults, as
-    symbol.codegen.loaded's routines)."""
+    symbol.codegen.loaded's routines; theta: the force actuators' forces after the angles)."""
     an = analysis
     values = {p.symbol: p.value for p in an.mechanism.parameters}
     out = {}
+    angles = theta
     for g in (1, 2):
         r = reduced.Reduced(an.kin, values, segments=g, symbolic=True)
+        theta = Argument(angles.name, (*angles.symbols, *r.fa))
         s = r._s
         rename = {r.th[a]: an.kin.theta[a] for a in r.hinges}
         outs = tuple(v for a, j, *_ in r.segs for v in s["out"][a, j])

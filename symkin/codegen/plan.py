@@ -519,8 +519,6 @@ def _sensitivity_routines(
         shapes,
     )
     for lv in (lv for lv in levels if lv.sensitivity):
-        if lv.name in level_table.LOADED and an.mechanism.actuators:
-            continue  # no sensitivities at loaded with actuators yet
         if lv.name in level_table.LOADED:
             # the reduced equilibrium's pieces (symkin.codegen.loaded_sens); its driver
             # assembles them

@@ -288,7 +288,7 @@ def actuator_values(mech: Mechanism, inputs: Mapping[str, object]) -> dict[str, 
 def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity: bool) -> None:
     """Refuse (exit 2, naming the actuator) what the actuators do not drive yet: a force at a
     kinematic level (it needs a physical one), force actuators in the generated backends but
-    numpy's at loaded, sensitivities at loaded."""
+    numpy's at loaded, the C's sensitivities at loaded."""
     if not mech.actuators:
         return
     first = mech.actuators[0]
@@ -302,13 +302,13 @@ def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity:
             entry=f"[[actuator]] '{forces[0].name}'",
             hint='ask for --level equilibrium, or make it drive = "stroke"',
         )
-    if level in levels.LOADED and sensitivity and backend != "sympy":
+    if level in levels.LOADED and sensitivity and backend == "c":
         raise InputError(
-            f"the generated {backend} evaluators have no {level} sensitivities with actuators "
+            f"the generated C evaluators have no {level} sensitivities with actuators "
             f"yet (actuator '{first.name}')",
             file=mech.path,
             entry=entry,
-            hint=f"use --backend sympy at --level {level}",
+            hint="use --backend numpy",
         )
     at_loaded = level in levels.LOADED and backend == "numpy"
     if backend not in ("sympy", *pipeline.REGISTRY) or (

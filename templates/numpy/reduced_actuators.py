@@ -75,14 +75,13 @@ def _rigid_strokes(mech, actuators, hinges, strokes, params, start):
     return theta, numpy.all([numpy.abs(x) <= tol for x in r], axis=0)
 
 
-def _actuated_loaded(mech, actuators, forces, drives, shown, inputs, params, links, report=False):
-    """The module's evaluate() at level "loaded" for a mechanism with actuators (docs/physics.md,
-    "Actuators at loaded"): the rigid linkage at the strokes (a force actuator's: 0), the
-    reduced equilibrium there with the surrogates free (a stroke's force and a force's stroke
-    solved for); a force actuator's deviations are then taken against the rigid linkage at the
-    stroke the force produced (the compliant pose does not depend on the reference). With
-    `report` (modules with the level's report), what it reports beyond the deviations
-    (templates/numpy/reduced_report.py's _reduced_report, at the solution found)."""
+def _actuated_state(mech, actuators, forces, drives, inputs, params, resolve=False):
+    """The loaded level with actuators solved (docs/physics.md, "Actuators at loaded"): the rigid
+    linkage at the strokes (a force actuator's: 0), the reduced equilibrium there with the
+    surrogates free (a stroke's force and a force's stroke solved for); a force actuator's
+    reference is then the rigid linkage at the stroke the force produced (the compliant pose
+    does not depend on the reference), with `resolve` the reduced equilibrium solved again
+    against it (the sensitivities read its solution there). A dict of what it found."""
     if set(inputs) != set(drives):
         raise ValueError(f"inputs must be exactly {drives}, got {tuple(sorted(inputs))}")
     arrays = numpy.broadcast_arrays(*(numpy.asarray(inputs[n], dtype=mech.dtype) for n in drives))
@@ -117,8 +116,22 @@ def _actuated_loaded(mech, actuators, forces, drives, shown, inputs, params, lin
         compliant[i] = theta[i] + delta[j]
     for s, v in zip(surrogates, turned):
         compliant[index[s]] = theta[index[s]] + v
-    reference = theta  # the rigid linkage the deviations are taken against
-    points = {n: res["points"][n] for n in shown}
+    state = {
+        "given": given,
+        "shape": shape,
+        "ok": ok,
+        "x": x,
+        "theta": theta,
+        "reference": theta,
+        "loads": loads,
+        "p": p,
+        "q": q,
+        "delta": delta,
+        "turned": turned,
+        "compliant": compliant,
+        "res": res,
+        "points": None,
+    }
     if forces:
         # the stroke each force produced: its point of action's compliant place along d
         rest = _rigid_at(mech, dict.fromkeys(mech.input_names, zero), params)[2]
@@ -132,13 +145,46 @@ def _actuated_loaded(mech, actuators, forces, drives, shown, inputs, params, lin
             produced.append(d[0] * (c[0] - rest[2 * i]) + d[1] * (c[1] - rest[2 * i + 1]))
         with numpy.errstate(all="ignore"):
             angles, ok_f = _rigid_strokes(mech, actuators, hinges, produced, params, angles)
-        _, reference, rigid, ok_r, _ = _rigid_at(
+        x, reference, rigid, ok_r, _ = _rigid_at(
             mech, hinges | dict(zip(surrogates, angles)), params
         )
         ok = ok & ok_f & ok_r
+        state.update(ok=ok, reference=reference, rigid=rigid)
+        if resolve:
+            with numpy.errstate(all="ignore"):
+                delta, q, ok = mech.loaded_solve(mech, x, list(reference) + loads, p, ok)
+            state.update(ok=ok, x=x, theta=reference, delta=delta, q=q)
+    return state
+
+
+def _actuated_loaded(mech, actuators, forces, drives, shown, inputs, params, links, report=False):
+    """The module's evaluate() at level "loaded" for a mechanism with actuators (docs/physics.md,
+    "Actuators at loaded"; _actuated_state): the deviations against the rigid linkage at the
+    strokes, a force actuator's at the stroke the force produced. With `report` (modules with
+    the level's report), what it reports beyond the deviations (_actuated_report)."""
+    st = _actuated_state(mech, actuators, forces, drives, inputs, params)
+    out = _actuated_result(mech, actuators, st, shown, links, st["ok"])
+    if report:
+        # at the solution found (the reference only moves the deviations: what the level
+        # reports is the compliant pose's; a force's stroke from the as-fabricated reference)
+        theta = list(st["theta"]) + st["loads"]
+        given = [st["given"][a[0]] for a in actuators]
+        out.update(
+            _actuated_report(mech, actuators, forces, theta, st["p"], st["q"], out["ok"], given)
+        )
+    return out
+
+
+def _actuated_result(mech, actuators, st, shown, links, ok):
+    """evaluate()'s dict from _actuated_state's `st`, NaN where not `ok`: the shown points and
+    every hinge's angle (rigid: the reference; compliant) and, with `links`, every link's."""
+    shape, theta, reference = st["shape"], st["theta"], st["reference"]
+    res, delta = st["res"], st["delta"]
+    points = {n: res["points"][n] for n in shown}
+    if "rigid" in st:  # a force actuator's reference: the rigid linkage at its stroke
         for n in shown:
             i = mech.point_names.index(n)
-            r = numpy.stack([rigid[2 * i], rigid[2 * i + 1]])
+            r = numpy.stack([st["rigid"][2 * i], st["rigid"][2 * i + 1]])
             c = res["points"][n]["compliant"]
             points[n] = {"rigid": r, "compliant": c, "deviation": c - r}
     out = {"points": {}, "ok": ok}
@@ -149,22 +195,16 @@ def _actuated_loaded(mech, actuators, forces, drives, shown, inputs, params, lin
             h: numpy.where(ok, numpy.broadcast_to(v[i], shape), numpy.nan)
             for i, h in enumerate(mech.hinge_names)
         }
-        for kind, v in (("rigid", reference), ("compliant", compliant))
+        for kind, v in (("rigid", reference), ("compliant", st["compliant"]))
     }
-    if report:
-        # at the solution found (the reference only moves the deviations: what the level
-        # reports is the compliant pose's; a force's stroke from the as-fabricated reference)
-        given_values = [given[n] for n in names]
-        out.update(
-            _actuated_report(mech, actuators, forces, list(theta) + loads, p, q, ok, given_values)
-        )
     out["links"] = {}  # as the other levels' (empty without `links`)
     if links and mech.links is not None:
         # each link's deviation: its rotation at the compliant angles (the surrogates turned)
         # less the reference's, plus the non-input hinges' deviation (computed directly)
+        index = {n: i for i, n in enumerate(mech.hinge_names)}
         turned_theta = list(theta)
-        for s, v in zip(surrogates, turned):
-            turned_theta[index[s]] = theta[index[s]] + v
+        for a, v in zip(actuators, st["turned"]):
+            turned_theta[index[a[1]]] = theta[index[a[1]]] + v
         with numpy.errstate(all="ignore"):
             at_t = mech.links(turned_theta, delta)
             at_r = mech.links(reference, delta)

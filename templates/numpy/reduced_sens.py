@@ -11,14 +11,15 @@ from reduced import _red_block, _red_column, _red_solutions  # the module holds 
 # ---- symkin runtime: every generated module with the loaded level's sensitivities holds it ----
 
 
-def _reduced_rates(mech, theta, p, q, thu, ok):
+def _reduced_rates(mech, theta, p, q, thu, ok, forces=0):
     """dev (*shape, 2 n_P, n_v) of the loaded level at its solutions (q: the variant solved and
-    its x, templates/numpy/reduced.py); thu dtheta_u/dv (*shape, k, n_v), None without. J is
+    its x, templates/numpy/reduced.py); thu dtheta_u/dv (*shape, k, n_v), None without; with
+    `forces` (the force actuators': theta's last entries) n_v + forces columns, theirs last. J is
     evaluated once more at the solution, then dx/dv = -J^-1 dR/dv at fixed x and
     dD/dv = dD/dx dx/dv + dD/dtheta dtheta/dv + dD/dp + dD/dout dout/dv (reduced_sens.c)."""
     tb = mech.loaded
     shape = ok.shape
-    npar, nv, m = len(mech.parameter_names), mech.n_variables, mech.n_theta
+    npar, nv, m = len(mech.parameter_names), mech.n_variables + forces, mech.n_theta
     npt = 2 * len(mech.point_names)
     dev = numpy.full((ok.size, npt, nv), numpy.nan)
     good = numpy.broadcast_to(ok, shape).reshape(-1)
@@ -29,13 +30,15 @@ def _reduced_rates(mech, theta, p, q, thu, ok):
         blocks = tb.sens[solver.count - 1][1]
         b, n, ns = where.size, solver.size, solver.plates
         # dtheta/dv of every hinge: the non-input ones' from the rigid closure, an input's own 1
-        dth = numpy.zeros((b, m, nv))
+        dth = numpy.zeros((b, m + forces, nv))
         if thu is not None:
             tu = numpy.broadcast_to(thu, shape + thu.shape[-2:]).reshape(-1, *thu.shape[-2:])
             for j, i in enumerate(mech.unknown_index):
-                dth[:, i] = tu[where, j]
+                dth[:, i, : mech.n_variables] = tu[where, j]
         for j, i in enumerate(mech.input_index):
             dth[:, i, npar + j] = 1.0
+        for j in range(forces):
+            dth[:, m + j, mech.n_variables + j] = 1.0
         # the relation's partials by (theta_c, p, f, e_a, e_s), 3 x 5 per half plate
         part = numpy.zeros((b, 3 * ns, 5 * ns))
         dinx = numpy.zeros((b, 5 * ns, n))

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 from ....model import special
 from ...plan import Plan, ScenePlan
 from ...routines import Routine
@@ -18,6 +20,16 @@ class CBackend(Backend):
     kernel_source = staticmethod(kernels.source)
     runtime = "c/runtime.c"
     routine_prefix = "sk_"
+
+    def render(self, plan: Plan, source: str, precision: str = "float64") -> list[str]:
+        """The header and source of `plan`; with actuators without the `loaded` level's
+        sensitivity routines, which the numpy runtime alone assembles with the actuators'
+        (templates/numpy/reduced_actuators_sens.py)."""
+        if plan.actuators:
+            unused = {"loaded_sens1", "loaded_sens2", "plate_eps4"}
+            routines = {k: r for k, r in plan.routines.items() if k not in unused}
+            plan = dataclasses.replace(plan, routines=routines)
+        return super().render(plan, source, precision)
 
     def context(self, plan: Plan, source: str, precision: str = "float64") -> dict:
         """The common context and the runtime's sections the evaluator runs."""
