@@ -503,3 +503,21 @@ def test_a_chosen_variant_takes_the_strokes(four_bar, tmp_path):
     res = module.evaluate({"pusher": 1e-4}, "paper")
     ref = symkin.evaluate(analysis_for(mech, variant), {"pusher": "1e-4"}, "paper").points["C"]
     assert list(res["points"]["C"]["deviation"]) == pytest.approx(ref.deviation, rel=1e-10)
+
+
+def test_a_stroke_past_the_toggle_names_the_stroke():
+    """tests/mechanisms/toggle_four_bar.toml pushed along -x at its crank's tip A = (0, r): the
+    rigid tip moves by r sin q, and the coupler-rocker dyad is straight at q* = 0.35 rad, so
+    the rigid linkage reaches strokes up to r sin q* = 68.587 um (hand computation). Just below,
+    the surrogate O1 sits at asin(s/r); just past, no pose reaches the stroke (exit 3 naming it,
+    not the surrogate's trial angle past the toggle that Newton's differences stepped to)."""
+    text = (ROOT / "tests" / "mechanisms" / "toggle_four_bar.toml").read_text()
+    push = '\n[[actuator]]\nname = "push"\nlink = "crank"\nat = [0, "r"]\ndirection = [-1, 0]\n'
+    an = symkin.analyze(symkin.loads(stroke_driven(text, "O1", push), "toggle_stroke.toml"))
+    r, reach = 200.0, 200.0 * math.sin(0.35)
+    below = symkin.evaluate(an, {"push": repr(reach - 0.05)}, "exact")
+    assert below.angles_rigid["O1"] == pytest.approx(math.asin((reach - 0.05) / r), rel=1e-12)
+    with pytest.raises(symkin.SymkinError) as err:
+        symkin.evaluate(an, {"push": repr(reach + 0.05)}, "exact")
+    assert err.value.exit_code == 3
+    assert "push=68.6" in str(err.value) and "no pose of the rigid linkage" in str(err.value)

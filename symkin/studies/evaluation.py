@@ -499,6 +499,31 @@ def _stroke_sensitivity(
     return Sensitivity(split(dev, True), split(dev, False), split(rig, True), split(rig, False))
 
 
+def _stroke_jacobian(residual, angles: dict, r: list, step) -> mpmath.matrix | None:
+    """The strokes' Jacobian by the surrogate angles: central differences, one-sided where a
+    step crosses a toggle (the linkage does not assemble there); None where neither side
+    assembles."""
+    jac = mpmath.matrix(len(r), len(angles))
+    for j, n in enumerate(angles):
+        sides = []
+        for sign in (1, -1):
+            try:
+                sides.append(residual(angles | {n: angles[n] + sign * step}))
+            except AssemblyError:
+                sides.append(None)
+        plus, minus = sides
+        for i in range(len(r)):
+            if plus is not None and minus is not None:
+                jac[i, j] = (plus[i] - minus[i]) / (2 * step)
+            elif plus is not None or minus is not None:
+                jac[i, j] = (
+                    (plus[i] - r[i]) / step if plus is not None else (r[i] - minus[i]) / step
+                )
+            else:
+                return None
+    return jac
+
+
 def _stroke_angles(
     solver: _Mpmath,
     mech: Mechanism,
@@ -515,7 +540,6 @@ def _stroke_angles(
     mechanism at `level`. Newton's method on the k × k system, its Jacobian by central
     differences at `dps` digits (the strokes are smooth in the angles away from a toggle)."""
     names = [a.surrogate for a in mech.actuators]
-    k = len(names)
     with mpmath.workdps(dps + 10):
         target = [mpmath.mpf(sp.N(s, dps + 10)) for s in strokes]
         values = parameter_values(mech, params)
@@ -545,14 +569,9 @@ def _stroke_angles(
             size = max(abs(x) for x in r)
             if size <= tol:
                 return angles
-            jac = mpmath.matrix(k, k)
-            for j, n in enumerate(names):
-                plus = residual(angles | {n: angles[n] + step})
-                minus = residual(angles | {n: angles[n] - step})
-                for i in range(k):
-                    jac[i, j] = (plus[i] - minus[i]) / (2 * step)
+            jac = _stroke_jacobian(residual, angles, r, step)
             try:
-                delta = mpmath.lu_solve(jac, mpmath.matrix(r))
+                delta = None if jac is None else mpmath.lu_solve(jac, mpmath.matrix(r))
             except ZeroDivisionError:
                 delta = None
             if delta is None or not all(mpmath.isfinite(x) for x in delta):
