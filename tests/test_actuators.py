@@ -203,8 +203,9 @@ def test_what_does_not_take_actuators_yet_is_refused(parallelogram, tmp_path):
     force = symkin.loads(
         stroke_driven(PARALLELOGRAM, "F1", PIEZO.replace('"stroke"', '"force"')), "force.toml"
     )
+    # the generated evaluators take a force at loaded alone (tests/test_loaded_actuators_codegen.py)
     with pytest.raises(InputError, match=r"generated c.*force.*piezo"):
-        symkin.evaluate(symkin.analyze(force), {"piezo": 1.0}, "loaded", backend="c")
+        symkin.evaluate(symkin.analyze(force), {"piezo": 1.0}, "equilibrium", backend="c")
     with pytest.raises(InputError, match="no generated evaluator"):
         symkin.evaluate(an, {"piezo": 1e-3}, "equilibrium", backend="numpy")
     with pytest.raises(InputError, match="not an input"):

@@ -7,24 +7,30 @@ References, none of them the code under test: symkin's Python `loaded` level (th
 equilibrium lambdified in mpmath, its rigid references from the mpmath kinematics) and the
 `equilibrium` level (geometrically exact beams, another solver), on the piezo amplifier example
 (a stroke, two strokes in one call) and the parallelogram stage pushed by a stroke and by a
-force under a payload (tests/test_loaded_actuators.py's files). The C evaluator takes stroke
-actuators at loaded (templates/c/actuators.c); with a force actuator it keeps the kinematic
-levels, its `loaded` refused naming the actuator.
+force under a payload (tests/test_loaded_actuators.py's files). The C evaluator
+(templates/c/actuators.c, reduced.c) takes both at loaded: strokes on the same files, forces on
+the force-driven stage under its payload, a five-bar with an input hinge beside a force actuator
+and that five-bar pulled near its toggle, where Newton from the as-fabricated pose fails and
+continuation takes over (against the Python level in mpmath, which tests/test_loaded_actuators.py
+checks against `equilibrium`).
 """
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
 import pytest
 from conftest import EXAMPLES
-from test_loaded_actuators import AGREEMENT, PAYLOAD, driven
+from test_loaded_actuators import AGREEMENT, PAYLOAD, driven, five_bar
 from test_loaded_reported_codegen import compiler_or_fail
 
 import symkin
+from symkin.cli.commands import main
 from symkin.codegen import pipeline
 from symkin.core.errors import InputError
+from symkin.studies.evaluation import reduced_equilibrium
 
 #: name -> (file text, the actuator's values one call takes, the equilibrium tolerance's case)
 CASES = {
@@ -118,18 +124,104 @@ def test_generated_c_loaded_with_a_stroke(runs, name):
             assert abs(got.links[link].deviation - x.deviation) <= 1e-9 * top, link
 
 
-def test_cli_numpy_backend_and_the_c_refusal():
-    """eval --level loaded --backend numpy takes the actuator (the Python level's deviation);
-    the C evaluator does not take a force actuator at loaded yet: bad input naming it."""
+#: The C evaluator with a force actuator: name -> (file text, the configurations one call
+#: takes). The five-bar's pull of 20 N brings crank c2 near its toggle (the rigid linkage
+#: reaches no farther than about 9 mm the other way): Newton from the as-fabricated pose fails,
+#: continuation takes 12 steps.
+FORCES = {
+    "five_bar_hinge_and_force": (
+        lambda: five_bar("force"),
+        {"O1": [0.03, -0.05, 0.03], "piezo": [0.5, 5.0, -20.0]},
+    ),
+}
+
+
+@pytest.fixture(scope="module")
+def c_forces():
+    """By case: the analysis and the C evaluator's `loaded` (symkin.compile, one call for every
+    configuration)."""
+    cache: dict = {}
+
+    def get(name: str, text, inputs: dict[str, list[float]]):
+        if name not in cache:
+            an = symkin.analyze(symkin.loads(text(), f"{name}.toml"))
+            ev = symkin.compile(an, "c", levels=["loaded"], sensitivity=False)
+            arrays = {k: np.array(v) for k, v in inputs.items()}
+            cache[name] = (an, ev.evaluate(arrays, "loaded"))
+        return cache[name]
+
+    return get
+
+
+def test_generated_c_loaded_with_a_force_under_a_payload(runs):
+    """The C evaluator at loaded with a force actuator (the stage driven by 0.5 N and 0.2 N
+    under a 5 N payload; symkin.evaluate --backend c) against the Python level and
+    equilibrium: the deviation, the rigid reference at the stroke the force produced, the
+    compliant and rigid angles, the links' rotations and deviations."""
+    if not compiler_or_fail():
+        return
+    name = "parallelogram_force_payload"
+    an, _, _, refs = runs(name)
+    for v, (python, exact) in zip(CASES[name][1], refs):
+        got = symkin.evaluate(an, {"piezo": v}, "loaded", backend="c")
+        q, p = python.points["P"], got.points["P"]
+        assert math.dist(p.deviation, q.deviation) <= AGAINST_PYTHON * q.norm  # measured 4.2e-13
+        assert math.dist(p.rigid, q.rigid) <= 1e-12 * max(map(abs, q.rigid))
+        e = exact.points["P"]
+        assert math.dist(p.deviation, e.deviation) <= AGREEMENT[name] * e.norm, v
+        for h, a in python.angles_compliant.items():
+            assert abs(got.angles_compliant[h] - a) <= 1e-11, h
+            assert abs(got.angles_rigid[h] - python.angles_rigid[h]) <= 1e-11, h
+        top = max(abs(x.deviation) for x in python.links.values())
+        for link, x in python.links.items():
+            assert abs(got.links[link].deviation - x.deviation) <= 1e-9 * top, link
+            assert abs(got.links[link].rigid - x.rigid) <= 1e-11, link
+
+
+@pytest.mark.parametrize("k", [0, 1, 2])
+def test_generated_c_loaded_five_bar_with_a_hinge_and_a_force(c_forces, k):
+    """The five-bar with its input hinge O1 held and a force actuator on its other crank, in C
+    against the Python level (reduced_equilibrium in mpmath, its rigid reference re-solved at
+    the stroke the force produced): every point's deviation and the hinges' compliant turn. The
+    third configuration, pulled near the toggle, goes through continuation in both."""
+    if not compiler_or_fail():
+        return
+    name = "five_bar_hinge_and_force"
+    text, inputs = FORCES[name]
+    an, got = c_forces(name, text, inputs)
+    given = {n: v[k] for n, v in inputs.items()}
+    python = reduced_equilibrium(an, given, backend="sympy")
+    assert not python.refused and (python.steps > 1) == (k == 2)
+    assert got["ok"][k] and set(got["points"]) == {"Q", "T"}
+    for p, d in python.deviations.items():
+        # measured 3.2e-12 (k = 0) and below 1e-11 through the continuation
+        assert math.dist(got["points"][p]["deviation"][:, k], d) <= AGAINST_PYTHON * math.hypot(*d)
+    angles = got["angles"]
+    for h, v in python.angle_deviations.items():
+        assert abs(angles["compliant"][h][k] - angles["rigid"][h][k] - v) <= 1e-11, h
+
+
+def test_cli_numpy_and_c_backends_with_actuators(tmp_path, capsys):
+    """eval --level loaded --backend numpy takes the stroke (the Python level's deviation);
+    --backend c takes a force (exit 0, the Python level's deviation); a force at a kinematic
+    level is still bad input naming the actuator (exit 2)."""
     an = symkin.analyze(symkin.load(EXAMPLES / "piezo_amplifier.toml"))
     want = symkin.evaluate(an, {"piezo": 0.02}, "loaded").points["B"]
     got = symkin.evaluate(an, {"piezo": 0.02}, "loaded", backend="numpy").points["B"]
     assert math.dist(got.deviation, want.deviation) <= AGAINST_PYTHON * want.norm
-    force = symkin.analyze(symkin.loads(driven("force"), "force.toml"))
-    with pytest.raises(InputError, match=r"generated c.*force.*piezo"):
-        symkin.evaluate(force, {"piezo": 0.5}, "loaded", backend="c")
-    with pytest.raises(InputError, match=r"C evaluator.*force.*loaded.*piezo"):
-        pipeline.emit(pipeline.plan_for(force, sensitivity=False), "c", "force.toml")
+    force = tmp_path / "force.toml"
+    force.write_text(driven("force"))
+    if not compiler_or_fail():
+        return
+    argv = ["eval", str(force), "--input", "piezo=0.5", "--level", "loaded", "--json"]
+    out = {}
+    for backend in ("sympy", "c"):
+        assert main([*argv, "--backend", backend]) == 0, backend
+        out[backend] = json.loads(capsys.readouterr().out)["points"]["P"]["deviation"]
+    assert math.dist(out["c"], out["sympy"]) <= 1e-10 * math.hypot(*out["sympy"])
+    exact = ["eval", str(force), "--input", "piezo=0.5", "--level", "exact", "--backend", "c"]
+    assert main(exact) == 2
+    assert "actuator 'piezo'" in capsys.readouterr().err
 
 
 def test_a_force_without_the_plates_stiffness_has_no_generated_level():

@@ -5613,12 +5613,15 @@ static const sk_loaded sk_loaded_tables = {
 };
 
 /* symkin actuators runtime (templates/c/actuators.c): the strokes to the surrogate hinges'
-   angles, twice (the rigid linkage and the compliant mechanism), then one evaluation at each. */
+   angles, twice (the rigid linkage and the compliant mechanism), then one evaluation at each;
+   at loaded once (the rigid linkage), the reduced equilibrium there with the surrogates free, a
+   force actuator's rigid reference again at the stroke it produced. */
 
 /* The actuators of a mechanism: for every kinematic input (an input angle of sk_evaluate_pose)
    the position of its value among the public inputs, or -1 - a for the surrogate hinge of
    actuator a; per actuator its point (among the SK_NP points), its stroke's position among the
-   public inputs and its direction; the points the public functions report. */
+   public inputs and its direction; the points the public functions report (with force
+   actuators, which drive the loaded level alone, what each one's value is). */
 typedef struct {
     int n;
     const int *drive_of;
@@ -5674,14 +5677,50 @@ static int sk_act_solve(int n, double *a, int m, double *b)
     return 0;
 }
 
+/* The points (out: 6 per point) and angles (2 SK_M, or NULL) at the kinematic inputs x at
+   `level` (sk_evaluate_pose); at level -1 (SK_LEVEL_RIGID of an evaluator whose only level is
+   loaded, as a file with a force actuator's) the rigid linkage alone: each point's rigid x, y
+   (the rest NaN) and the rigid angles (angles' first SK_M entries). Returns a status code. */
+static int sk_stroke_pose(const sk_mechanism *m, const double *x, const double *params, int level,
+                          double *out, double *angles)
+{
+    if (level < 0) {
+        double theta[SK_M], rigid[2 * SK_NP + 1];
+        int i, s;
+        for (i = 0; i < SK_NI; ++i) {
+            if (!isfinite(x[i]) || !(fabs(x[i]) <= 3.141592653589793)) {
+                return 3;
+            }
+        }
+        s = sk_red_rigid(m, x, params == NULL ? m->defaults : params, 1.0, theta);
+        if (s == 0) {
+            m->rigid_points(theta, params == NULL ? m->defaults : params, rigid);
+        }
+        for (i = 0; i < 2 * SK_NP && s == 0; ++i) {
+            s = isfinite(rigid[i]) ? 0 : 2;
+        }
+        sk_nan(out, 6 * SK_NP);
+        sk_nan(angles, SK_M);
+        for (i = 0; i < SK_NP && s == 0; ++i) {
+            out[6 * i] = rigid[2 * i];
+            out[6 * i + 1] = rigid[2 * i + 1];
+        }
+        for (i = 0; angles != NULL && i < SK_M && s == 0; ++i) {
+            angles[i] = theta[i];
+        }
+        return s;
+    }
+    return sk_evaluate_pose(m, x, params, level, out, angles, NULL);
+}
+
 /* Each actuator's stroke residual d.(X - X0) - s at the kinematic inputs x: X the rigid
-   (kind 0) or compliant (kind 1) position of its point. Returns sk_evaluate_pose's status. */
+   (kind 0) or compliant (kind 1) position of its point. Returns sk_stroke_pose's status. */
 static int sk_stroke_residual(const sk_mechanism *m, const sk_actuators *t, const double *x,
                               const double *params, int level, int kind, const double *rest,
                               const double *drives, double *r)
 {
     double out[6 * SK_NP];
-    int a, s = sk_evaluate_pose(m, x, params, level, out, NULL, NULL);
+    int a, s = sk_stroke_pose(m, x, params, level, out, NULL);
     for (a = 0; a < t->n && s == 0; ++a) {
         const double *p = out + 6 * t->point[a] + 2 * kind;
         const double *p0 = rest + 6 * t->point[a];
@@ -5772,6 +5811,38 @@ static int sk_stroke_solve(const sk_mechanism *m, const sk_actuators *t, double 
     return 1;
 }
 
+/* The tolerance of the stroke solves: 64 eps of the largest coordinate of the points of action
+   as fabricated (`rest`, 6 SK_NP). */
+static double sk_stroke_tol(const sk_actuators *t, const double *rest)
+{
+    double scale = 1e-300;
+    int i;
+    for (i = 0; i < t->n; ++i) {
+        const double *p0 = rest + 6 * t->point[i];
+        scale = fabs(p0[0]) > scale ? fabs(p0[0]) : scale;
+        scale = fabs(p0[1]) > scale ? fabs(p0[1]) : scale;
+    }
+    return 64.0 * 2.220446049250313e-16 * scale;
+}
+
+/* The kinematic inputs xr at which the rigid linkage (the rigid positions of `level`) meets the
+   strokes among the public inputs `drives`; `rest` (6 SK_NP) the points as fabricated. Returns
+   0, or the status of what failed. */
+static int sk_stroke_rigid(const sk_mechanism *m, const sk_actuators *t, const double *drives,
+                           const double *params, int level, double *xr, double *rest)
+{
+    double zero[SK_NI + 1];
+    int j, s;
+    for (j = 0; j < SK_NI; ++j) {
+        zero[j] = 0.0;
+        xr[j] = t->drive_of[j] >= 0 ? drives[t->drive_of[j]] : 0.0;
+    }
+    s = sk_stroke_pose(m, zero, params, level, rest, NULL);
+    return s != 0 ? s
+                  : sk_stroke_solve(m, t, xr, params, level, 0, rest, drives,
+                                    sk_stroke_tol(t, rest));
+}
+
 /* The kinematic inputs at which the rigid linkage (xr) and the compliant mechanism at `level`
    (xc) meet the strokes among the public inputs `drives` (docs/levels.md, "Actuators"); `rest`
    (6 SK_NP) the points as fabricated. Returns 0, or the status of what failed. */
@@ -5779,129 +5850,115 @@ static int sk_stroke_poses(const sk_mechanism *m, const sk_actuators *t, const d
                            const double *params, int level, double *xr, double *xc,
                            double *rest)
 {
-    double zero[SK_NI + 1], scale = 1e-300, tol;
-    int i, j, s;
-    for (j = 0; j < SK_NI; ++j) {
-        zero[j] = 0.0;
-        xr[j] = t->drive_of[j] >= 0 ? drives[t->drive_of[j]] : 0.0;
-    }
-    s = sk_evaluate_pose(m, zero, params, level, rest, NULL, NULL);
-    for (i = 0; i < t->n && s == 0; ++i) {
-        const double *p0 = rest + 6 * t->point[i];
-        scale = fabs(p0[0]) > scale ? fabs(p0[0]) : scale;
-        scale = fabs(p0[1]) > scale ? fabs(p0[1]) : scale;
-    }
-    tol = 64.0 * 2.220446049250313e-16 * scale;
-    s = s != 0 ? s : sk_stroke_solve(m, t, xr, params, level, 0, rest, drives, tol);
+    int j, s = sk_stroke_rigid(m, t, drives, params, level, xr, rest);
     for (j = 0; j < SK_NI; ++j) {
         xc[j] = xr[j];
     }
-    return s != 0 ? s : sk_stroke_solve(m, t, xc, params, level, 1, rest, drives, tol);
-}
-
-/* The kinematic inputs xr at which the rigid linkage meets the strokes among the public inputs
-   `drives` (the rigid positions of the evaluator's first level, SK_LEVEL_RIGID); `rest` (6 SK_NP)
-   the points as fabricated. Returns 0, or the status of what failed. */
-static int sk_stroke_rigid(const sk_mechanism *m, const sk_actuators *t, const double *drives,
-                           const double *params, double *xr, double *rest)
-{
-    double zero[SK_NI + 1], scale = 1e-300;
-    int i, j, s;
-    for (j = 0; j < SK_NI; ++j) {
-        zero[j] = 0.0;
-        xr[j] = t->drive_of[j] >= 0 ? drives[t->drive_of[j]] : 0.0;
-    }
-    s = sk_evaluate_pose(m, zero, params, SK_LEVEL_RIGID, rest, NULL, NULL);
-    for (i = 0; i < t->n && s == 0; ++i) {
-        const double *p0 = rest + 6 * t->point[i];
-        scale = fabs(p0[0]) > scale ? fabs(p0[0]) : scale;
-        scale = fabs(p0[1]) > scale ? fabs(p0[1]) : scale;
-    }
     return s != 0 ? s
-                  : sk_stroke_solve(m, t, xr, params, SK_LEVEL_RIGID, 0, rest, drives,
-                                    64.0 * 2.220446049250313e-16 * scale);
+                  : sk_stroke_solve(m, t, xc, params, level, 1, rest, drives,
+                                    sk_stroke_tol(t, rest));
 }
 
-/* <name>_evaluate_pose with actuators: the public inputs (input hinges, then strokes), the
-   reported points only; the rigid linkage at the surrogates' rigid angles, the compliant
-   mechanism at their compliant ones, the deviation the rigid motion between the two plus the
-   level's deviation at the compliant angles (docs/levels.md, "Actuators"). */
+/* The rigid linkage and the compliant mechanism at `level` at the strokes (docs/levels.md,
+   "Actuators"), combined as sk_outputs lays them out (pr: 6 per point, ar: 2 SK_M, lr: 3 SK_NL
+   or NULL): the rigid linkage at the surrogates' rigid angles, the compliant mechanism at their
+   compliant ones, the deviation the rigid motion between the two plus the level's deviation at
+   the compliant angles. Returns 0, or the status of what failed. */
+static int sk_actuated_kinematic(const sk_mechanism *m, const sk_actuators *t,
+                                 const double *drives, const double *params, int level,
+                                 double *pr, double *ar, double *lr)
+{
+    double rest[6 * SK_NP], xr[SK_NI + 1], xc[SK_NI + 1], pc[6 * SK_NP], ac[2 * SK_M];
+    double lc[3 * SK_NL + 1];
+    int i, j, s;
+    s = sk_stroke_poses(m, t, drives, params, level, xr, xc, rest);
+    s = s != 0 ? s : sk_evaluate_pose(m, xr, params, level, pr, ar, lr);
+    s = s != 0 ? s : sk_evaluate_pose(m, xc, params, level, pc, ac, lr == NULL ? NULL : lc);
+    for (i = 0; i < SK_NP && s == 0; ++i) {
+        double *r = pr + 6 * i;
+        const double *c = pc + 6 * i;
+        for (j = 0; j < 2; ++j) {
+            r[2 + j] = c[2 + j];
+            r[4 + j] = c[j] - r[j] + c[4 + j];
+        }
+    }
+    for (j = 0; j < SK_M && s == 0; ++j) {
+        ar[SK_M + j] = ac[SK_M + j];
+    }
+    for (j = 0; lr != NULL && j < SK_NL && s == 0; ++j) {
+        lr[3 * j + 1] = lc[3 * j + 1];
+        lr[3 * j + 2] = lc[3 * j] - lr[3 * j] + lc[3 * j + 2];
+    }
+    return s;
+}
+
+/* The loaded level with actuators, laid out as sk_actuated_kinematic's: the reduced equilibrium
+   at the rigid linkage at the strokes, the surrogates free (docs/physics.md, "Actuators at
+   loaded"); its deviation is the answer's, the surrogates' turn (q's x after the non-input
+   hinges') in the compliant angles and the links' deviations; a force actuator's deviations
+   against the rigid linkage at the stroke it produced. Returns 0, or a status code. */
+static int sk_actuated_loaded(const sk_mechanism *m, const sk_actuators *t, const double *drives,
+                              const double *params, double *pr, double *ar, double *lr)
+{
+    const sk_level *lv = sk_find_level(m, SK_LEVEL_LOADED);
+    const sk_loaded *l = (const sk_loaded *)m->loaded;
+    double rest[6 * SK_NP], xr[SK_NI + 1], delta[SK_K + 1], constants[SK_NQ], turned[SK_M];
+    double theta[SK_M];
+    const double *strokes = drives;
+    const double *q = NULL;
+    int i, j, v, s;
+    if (params == NULL) {
+        params = m->defaults;
+    }
+    s = sk_stroke_rigid(m, t, strokes, params, SK_LEVEL_RIGID, xr, rest);
+    s = s != 0 ? s : sk_pose(m, lv, xr, params, lr != NULL, theta, delta, constants, &q);
+    s = s != 0 ? s : sk_outputs(m, lv, theta, delta, params, q, pr, ar, lr);
+    if (s != 0) {
+        return s;
+    }
+    v = (int)q[SK_NPAR + 2 * SK_NP];
+    for (j = 0; j < SK_M; ++j) {
+        turned[j] = theta[j];
+    }
+    for (i = 0; i < t->n; ++i) {
+        const int h = l->unknown_index[SK_K + i];
+        const double d = q[SK_NPAR + 2 * SK_NP + 1 + SK_K + i] * l->variants[v].scale[SK_K + i];
+        ar[SK_M + h] += d;
+        turned[h] += d;
+    }
+    if (s == 0 && lr != NULL) {
+        /* each link's rotation at the surrogates' compliant angles less the reference's (the
+           rigid angles, ar), plus the non-input hinges' deviation */
+        double rot[2 * SK_NL + 1], rot0[2 * SK_NL + 1];
+        m->links(turned, delta, rot);
+        m->links(ar, delta, rot0);
+        for (j = 0; j < SK_NL; ++j) {
+            const double dev = rot[j] - rot0[j] + rot[SK_NL + j];
+            lr[3 * j] = sk_wrap(rot0[j]);
+            lr[3 * j + 1] = lr[3 * j] + dev;
+            lr[3 * j + 2] = dev;
+        }
+    }
+    return s;
+}
+
+/* <name>_evaluate_pose with actuators: the public inputs (input hinges, then strokes or forces),
+   the reported points only (sk_actuated_kinematic, sk_actuated_loaded). */
 static int sk_actuated_pose(const sk_mechanism *m, const sk_actuators *t, const double *drives,
                             const double *params, int level, double *out, double *angles,
                             double *links)
 {
-    double rest[6 * SK_NP], xr[SK_NI + 1], xc[SK_NI + 1];
-    double pr[6 * SK_NP], pc[6 * SK_NP], ar[2 * SK_M], ac[2 * SK_M];
-    double lr[3 * SK_NL + 1], lc[3 * SK_NL + 1];
+    double pr[6 * SK_NP], ar[2 * SK_M], lr[3 * SK_NL + 1];
     int i, j, s;
     if (drives == NULL || out == NULL) {
         return 3;
     }
     if (level == SK_LEVEL_LOADED) {
-        /* the reduced equilibrium at the rigid linkage at the strokes, the surrogates free
-           (docs/physics.md, "Actuators at loaded"): its deviation is the answer's, the
-           surrogates' turn (q's x after the non-input hinges') in the compliant angles and the
-           links' deviations */
-        const sk_level *lv = sk_find_level(m, level);
-        const sk_loaded *l = (const sk_loaded *)m->loaded;
-        double theta[SK_M], delta[SK_K + 1], constants[SK_NQ];
-        const double *q = NULL;
-        if (params == NULL) {
-            params = m->defaults;
-        }
-        s = sk_stroke_rigid(m, t, drives, params, xr, rest);
-        s = s != 0 ? s : sk_pose(m, lv, xr, params, links != NULL, theta, delta, constants, &q);
-        s = s != 0 ? s
-                   : sk_outputs(m, lv, theta, delta, params, q, pr, ar,
-                                links == NULL ? NULL : lr);
-        if (s == 0) {
-            const int v = (int)q[SK_NPAR + 2 * SK_NP];
-            double turned[SK_M];
-            for (j = 0; j < SK_M; ++j) {
-                turned[j] = theta[j];
-            }
-            for (i = 0; i < t->n; ++i) {
-                const int h = l->unknown_index[SK_K + i];
-                const double d =
-                    q[SK_NPAR + 2 * SK_NP + 1 + SK_K + i] * l->variants[v].scale[SK_K + i];
-                ar[SK_M + h] += d;
-                turned[h] += d;
-            }
-            if (links != NULL) {
-                /* each link's rotation at the surrogates' compliant angles less the rigid,
-                   plus the non-input hinges' deviation */
-                double rot[2 * SK_NL + 1], rot0[2 * SK_NL + 1];
-                m->links(turned, delta, rot);
-                m->links(theta, delta, rot0);
-                for (j = 0; j < SK_NL; ++j) {
-                    const double dev = rot[j] - rot0[j] + rot[SK_NL + j];
-                    lr[3 * j + 1] = lr[3 * j] + dev;
-                    lr[3 * j + 2] = dev;
-                }
-            }
-        }
-        if (s != 0) {
-            sk_nan(out, 6 * t->n_shown);
-            sk_nan(angles, 2 * SK_M);
-            sk_nan(links, 3 * SK_NL);
-            return s;
-        }
-        for (i = 0; i < t->n_shown; ++i) {
-            for (j = 0; j < 6; ++j) {
-                out[6 * i + j] = pr[6 * t->shown[i] + j];
-            }
-        }
-        for (j = 0; angles != NULL && j < 2 * SK_M; ++j) {
-            angles[j] = ar[j];
-        }
-        for (j = 0; links != NULL && j < 3 * SK_NL; ++j) {
-            links[j] = lr[j];
-        }
-        return 0;
+        s = sk_actuated_loaded(m, t, drives, params, pr, ar, links == NULL ? NULL : lr);
+    } else
+    {
+        s = sk_actuated_kinematic(m, t, drives, params, level, pr, ar, links == NULL ? NULL : lr);
     }
-    s = sk_stroke_poses(m, t, drives, params, level, xr, xc, rest);
-    s = s != 0 ? s : sk_evaluate_pose(m, xr, params, level, pr, ar, links == NULL ? NULL : lr);
-    s = s != 0 ? s : sk_evaluate_pose(m, xc, params, level, pc, ac, links == NULL ? NULL : lc);
     if (s != 0) {
         sk_nan(out, 6 * t->n_shown);
         sk_nan(angles, 2 * SK_M);
@@ -5909,25 +5966,15 @@ static int sk_actuated_pose(const sk_mechanism *m, const sk_actuators *t, const 
         return s;
     }
     for (i = 0; i < t->n_shown; ++i) {
-        const double *r = pr + 6 * t->shown[i], *c = pc + 6 * t->shown[i];
-        for (j = 0; j < 2; ++j) {
-            out[6 * i + j] = r[j];
-            out[6 * i + 2 + j] = c[2 + j];
-            out[6 * i + 4 + j] = c[j] - r[j] + c[4 + j];
+        for (j = 0; j < 6; ++j) {
+            out[6 * i + j] = pr[6 * t->shown[i] + j];
         }
     }
-    if (angles != NULL) {
-        for (j = 0; j < SK_M; ++j) {
-            angles[j] = ar[j];
-            angles[SK_M + j] = ac[SK_M + j];
-        }
+    for (j = 0; angles != NULL && j < 2 * SK_M; ++j) {
+        angles[j] = ar[j];
     }
-    if (links != NULL) {
-        for (j = 0; j < SK_NL; ++j) {
-            links[3 * j] = lr[3 * j];
-            links[3 * j + 1] = lc[3 * j + 1];
-            links[3 * j + 2] = lc[3 * j] - lr[3 * j] + lc[3 * j + 2];
-        }
+    for (j = 0; links != NULL && j < 3 * SK_NL; ++j) {
+        links[j] = lr[j];
     }
     return 0;
 }
@@ -6182,7 +6229,6 @@ static const int sk_act_point[1] = {1};
 static const int sk_act_stroke[1] = {0};
 static const double sk_act_direction[2] = {-1.0, 0.0};
 static const int sk_shown[2] = {0};
-
 static const sk_actuators sk_actuator_tables = {
     1, sk_drive_of, sk_act_point, sk_act_stroke, sk_act_direction,
     1, sk_shown

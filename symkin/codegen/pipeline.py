@@ -202,21 +202,11 @@ def _numpy_sensitivity_rows(
 
 def _emit_c(p: Plan, source: str, precision: str) -> tuple[str, ...]:
     from .backends.c import backend
-    from .plan import without_loaded, without_report
+    from .plan import without_report
 
     # with actuators the C runtime's `loaded` reports no more than the deviations (numpy's does)
     if p.actuators:
         p = without_report(p)
-    # with a force actuator the C runtime has the kinematic levels alone (numpy's has `loaded`)
-    if p.forces and p.loaded is not None:
-        p = without_loaded(p)
-        if not p.levels:
-            raise InputError(
-                "the generated C evaluator does not take force actuators at the loaded level "
-                f"yet (actuator '{p.forces[0]}')",
-                entry="[[actuator]]",
-                hint="use the numpy backend (eval --backend numpy) or symkin eval --backend sympy",
-            )
     return backend.emit(p, source)
 
 

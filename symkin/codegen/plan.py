@@ -440,20 +440,6 @@ def plan(
     return with_derivation(result, an) if report else result
 
 
-def without_loaded(p: Plan) -> Plan:
-    """`p` without the `loaded` level (its routines and its driver's tables): what the C backend
-    emits for a mechanism with actuators, whose `loaded` level the generated numpy module alone
-    evaluates (docs/generated-code.md)."""
-    if p.loaded is None:
-        return p
-    return dataclasses.replace(
-        p,
-        levels=tuple(lv for lv in p.levels if lv.name not in level_table.LOADED),
-        loaded=None,
-        routines={k: r for k, r in p.routines.items() if not k.startswith(("loaded_", "plate_"))},
-    )
-
-
 def without_report(p: Plan) -> Plan:
     """`p` without what the `loaded` level reports beyond the deviations (its loaded_report<g>
     routines and their tables): what the C backend emits for a mechanism with actuators, whose

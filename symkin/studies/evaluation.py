@@ -287,8 +287,8 @@ def actuator_values(mech: Mechanism, inputs: Mapping[str, object]) -> dict[str, 
 
 def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity: bool) -> None:
     """Refuse (exit 2, naming the actuator) what the actuators do not drive yet: a force at a
-    kinematic level (it needs a physical one), force actuators in the generated backends but
-    numpy's at loaded, the C's sensitivities at loaded."""
+    kinematic level (it needs a physical one), force actuators in the generated backends but at
+    loaded (numpy and C), the C's sensitivities at loaded."""
     if not mech.actuators:
         return
     first = mech.actuators[0]
@@ -310,9 +310,9 @@ def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity:
             entry=entry,
             hint="use --backend numpy",
         )
-    at_loaded = level in levels.LOADED and backend == "numpy"
+    # the generated evaluators take a force at loaded alone (the physical level they generate)
     if backend not in ("sympy", *pipeline.REGISTRY) or (
-        backend != "sympy" and forces and not at_loaded
+        backend != "sympy" and forces and level not in levels.LOADED
     ):
         raise InputError(
             f"the generated {backend} evaluators do not take "

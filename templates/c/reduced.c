@@ -413,7 +413,17 @@ static int sk_red_solve(const sk_red *r, const double *inputs, const double *the
     ok = ok && sk_red_accept(r, x, theta, &st, sign0);
     if (!ok) {
         /* continuation: inputs and loads scaled together by s from the as-fabricated pose */
+#if defined(SK_ACT_FORCES)
+        /* the force actuators' forces after the rigid angles, kept at every step (t scales
+           them with the loads) */
+        double s = 0.0, ds = 0.25, sign, th_s[SK_M + SK_NF], th_1[SK_M + SK_NF], guess[SK_RN + 1];
+        for (i = SK_M; i < SK_M + SK_NF; ++i) {
+            th_s[i] = theta[i];
+            th_1[i] = theta[i];
+        }
+#else
         double s = 0.0, ds = 0.25, sign, th_s[SK_M], th_1[SK_M], guess[SK_RN + 1];
+#endif
         if (sk_red_rigid(r->m, inputs, r->params, 0.0, th_s)) {
             return 2;
         }

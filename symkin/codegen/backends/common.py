@@ -350,7 +350,8 @@ def actuator_tables(plan: Plan) -> dict | None:
     """The C tables of a mechanism's actuators (templates/c/actuators.c, sk_actuators): per
     kinematic input its public input's position or -1 - a (the surrogate of actuator a), per
     actuator its point's position among the points and its stroke's among the public inputs, its
-    direction, and the positions of the reported points. None without actuators."""
+    direction, the positions of the reported points and each one's force's place (-1: a stroke).
+    None without actuators."""
     if not plan.actuators:
         return None
     drives, names = list(plan.drives), [a[0] for a in plan.actuators]
@@ -361,4 +362,6 @@ def actuator_tables(plan: Plan) -> dict | None:
         "stroke": [drives.index(n) for n in names],
         "direction": [repr(float(c)) for a in plan.actuators for c in a[3]],
         "shown": [plan.points.index(p) for p in plan.shown_points],
+        # per actuator: its force's place among the forces (after theta's angles), or -1
+        "force": [plan.forces.index(n) if n in plan.forces else -1 for n in names],
     }

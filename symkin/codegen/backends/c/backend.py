@@ -56,6 +56,8 @@ def features(plan: Plan) -> list[str]:
             ),
             # actuators at loaded: the unknowns' own theta indices (templates/c/reduced.c)
             ("SK_ACT_LOADED", plan.loaded is not None and bool(plan.actuators)),
+            # force actuators at loaded: their forces after the rigid angles in theta
+            ("SK_ACT_FORCES", plan.loaded is not None and bool(plan.forces)),
             ("SK_LINKS", bool(plan.reported_links)),
             ("SK_SENSITIVITY", plan.sensitivity),
         )
