@@ -13,19 +13,8 @@ setup(
     packages=find_packages(include=["symkin", "symkin.*"]) + ["symkin.templates"],
     package_dir={"symkin.templates": "templates"},
     package_data={
-        "symkin.templates": [
-            "**/*.j2",
-            "*/runtime.c",
-            "*/runtime.py",
-            "*/actuators.c",
-            "*/actuators.py",
-            "*/reduced.c",
-            "*/reduced.py",
-            "*/reduced_sens.c",
-            "*/reduced_sens.py",
-            "*/reduced_report.c",
-            "*/reduced_report.py",
-            "*/reduced_actuators.py",
-        ]
+        # every template and runtime under templates/ (a runtime left out here would only fail
+        # a non-editable install: tests/test_packaging.py checks the wheel holds them all)
+        "symkin.templates": ["**/*.j2", "*/*.c", "*/*.h", "*/*.py"]
     },
 )
