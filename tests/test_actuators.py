@@ -522,3 +522,19 @@ def test_a_stroke_past_the_toggle_names_the_stroke():
         symkin.evaluate(an, {"push": repr(reach + 0.05)}, "exact")
     assert err.value.exit_code == 3
     assert "push=68.6" in str(err.value) and "no pose of the rigid linkage" in str(err.value)
+
+
+def test_check_prints_a_cad_direction_as_its_value():
+    """A direction exported with CAD noise normalises to a long exact form (600000000001 *
+    sqrt(...)/...): `symkin check` prints its value to 12 digits; short forms stay exact."""
+    from symkin.cli.output import check_text
+
+    noisy = stroke_driven(PARALLELOGRAM, "F1", PIEZO).replace(
+        "direction = [1.0, 0.0]", "direction = [0.600000000001, 0.79999999999]"
+    )
+    text = check_text(symkin.analyze(symkin.loads(noisy, "noisy.toml")).structure)
+    norm = math.hypot(0.600000000001, 0.79999999999)
+    want = f"along ({0.600000000001 / norm:.12g}, {0.79999999999 / norm:.12g})"
+    assert want in text and "sqrt" not in text, (want, text)
+    plain = stroke_driven(PARALLELOGRAM, "F1", PIEZO)
+    assert "at (w/2, L) along (1, 0)" in check_text(symkin.analyze(symkin.loads(plain)).structure)

@@ -46,7 +46,17 @@ def check_text(s: Structure, dropped: Sequence[int] = ()) -> str:
         loop_text=loops,
         rank=closure_rank(mech),
         redundant=redundant,
+        short=_short,
     )
+
+
+def _short(expr: object) -> str:
+    """An exact value as the file gives it, unless its exact form is long (a CAD export's
+    digits normalised: 6000...1*sqrt(...)/...): then its value to 12 digits."""
+    text = str(expr)
+    if len(text) <= 24 or not getattr(expr, "is_number", False):
+        return text
+    return f"{float(expr):.12g}"  # type: ignore[arg-type]
 
 
 def matrices_text(s: Structure) -> str:
