@@ -1,6 +1,7 @@
-"""What the generated numpy module's `evaluate()` reports at `loaded` beyond the deviations for
-files with actuators (docs/physics.md, "What loaded reports", "Actuators at loaded";
-templates/numpy/reduced_actuators.py's _actuated_report over reduced_report.py): every
+"""What the generated numpy module's `evaluate()` and the C evaluator's `<name>_loaded_report`
+report at `loaded` beyond the deviations for files with actuators (docs/physics.md, "What loaded
+reports", "Actuators at loaded"; templates/numpy/reduced_actuators.py's _actuated_report over
+reduced_report.py, templates/c/actuators.c's sk_actuated_report over reduced_report.c): every
 actuator's stroke, force and dF/ds with the other inputs held, the input hinges' moments and
 dM/dθ, every shown point's 3×3 stiffness with the inputs and actuators held (a stroke that holds
 the point along its line: NaN), every plate's largest stress.
@@ -12,19 +13,20 @@ by the Taylor-series beam integrator, not RK4), itself tested against `equilibri
 (tests/test_loaded_actuators.py). Mechanisms: the piezo amplifier example (a stroke), the
 parallelogram stage pushed by a stroke (its stage held along the stroke's line: no stiffness), the
 stage driven by a force under a payload, the five-bar with an input hinge beside a force actuator
-(tests/test_loaded_actuators.py's files). The C evaluator reports none of this with actuators yet:
-its files keep no report routines (tests/test_generated.py: the example's C files unchanged).
+(tests/test_loaded_actuators.py's files). The C evaluator is compiled from the numpy module's
+plan, once per case.
 """
 
 from __future__ import annotations
 
+import ctypes
 import math
 import types
 
 import numpy as np
 import pytest
 from test_loaded_actuators import CASES as ACTUATED
-from test_loaded_reported_codegen import relative, rows_close
+from test_loaded_reported_codegen import c_report, compiler_or_fail, relative, rows_close
 
 import symkin
 from symkin.codegen import pipeline
@@ -48,13 +50,13 @@ CASES = {
 #: generated (float64, RK4) against the Python level (mpmath): relative differences of the
 #: moments, dM/dθ, forces, strokes and dF/ds; the point stiffness (of each row's largest entry);
 #: the plates' stress and strain. Measured at most 4.7e-13, 2.8e-11 (the payload's stage) and
-#: 8.2e-13.
+#: 8.2e-13 (numpy); C the same (its RK4 and solves are numpy's).
 VALUES, STIFFNESS, STRESS = 1e-10, 1e-9, 1e-10
 
 
 @pytest.fixture(scope="module")
 def runs():
-    """By case: the numpy module, its evaluate() at both configurations at once, and per
+    """By case: the plan and numpy module, its evaluate() at both configurations at once, and per
     configuration the Python level's report (derived and computed on first use)."""
     cache: dict = {}
 
@@ -63,7 +65,7 @@ def runs():
             text, batch = CASES[name]
             an = symkin.analyze(symkin.loads(text(), f"{name}.toml"))
             # as tests/test_loaded_actuators_codegen.py's: one plan (the run's plan cache)
-            _, module = pipeline.build(an, "numpy", "test", sensitivity=False)
+            plan, module = pipeline.build(an, "numpy", "test", sensitivity=False)
             got = module.evaluate({k: np.array(v) for k, v in batch.items()}, "loaded")
             scale = float(an.mechanism.unit_scale)
             count = len(next(iter(batch.values())))
@@ -74,7 +76,23 @@ def runs():
                 )
                 assert not answer.refused, answer.refused
                 want.append(reduced_reported.report(answer, scale, buckling=False))
-            cache[name] = module, got, want
+            cache[name] = plan, module, got, want
+        return cache[name]
+
+    return get
+
+
+@pytest.fixture(scope="module")
+def c_runs(runs):
+    """By case: the C library compiled from the case's plan and its <name>_loaded_report at the
+    same configurations, shaped as the numpy module's result (on first use)."""
+    cache: dict = {}
+
+    def get(name: str):
+        if name not in cache:
+            plan = runs(name)[0]
+            lib = pipeline.evaluator(plan, "c", "test", links=False).lib
+            cache[name] = lib, c_report(plan, CASES[name][1], lib)
         return cache[name]
 
     return get
@@ -85,9 +103,14 @@ def worst(pairs) -> float:
     return max((relative(g, w) for g, w in pairs), default=0.0)
 
 
+@pytest.mark.parametrize("backend", ["numpy", "c"])
 @pytest.mark.parametrize("name", list(CASES))
-def test_generated_numpy_reports_what_the_python_level_reports(runs, name):
-    _, got, want = runs(name)
+def test_generated_code_reports_what_the_python_level_reports(runs, c_runs, name, backend):
+    if backend == "c" and not compiler_or_fail():
+        return
+    _, _, got, want = runs(name)
+    if backend == "c":
+        got = c_runs(name)[1]
     assert got["ok"].all()
     for c, rep in enumerate(want):
         assert set(got["actuators"]) == set(rep.actuators) == {"piezo"}
@@ -118,7 +141,7 @@ def test_generated_numpy_reports_what_the_python_level_reports(runs, name):
 
 def test_report_false_leaves_the_report_out(runs):
     """evaluate(..., report=False) at loaded: the deviations alone, the same numbers."""
-    module, got, _ = runs("piezo_amplifier")
+    _, module, got, _ = runs("piezo_amplifier")
     bare = module.evaluate(
         {"piezo": np.array(CASES["piezo_amplifier"][1]["piezo"])}, "loaded", report=False
     )
@@ -130,10 +153,52 @@ def test_sweep_reads_the_plates_stress_with_an_actuator(runs):
     """`symkin sweep --level loaded` keeps every plate's largest stress over the grid per
     sample from the module's report (sweep.largest_stress, as for a file without actuators):
     over the piezo amplifier's two strokes, the Python level's largest."""
-    module, _, want = runs("piezo_amplifier")
+    _, module, _, want = runs("piezo_amplifier")
     strokes = np.array(CASES["piezo_amplifier"][1]["piezo"])[:, None]
     evaluator = types.SimpleNamespace(module=module, inputs=module.INPUTS)
     plates = tuple(want[0].plates)
     got = sweep.largest_stress(evaluator, strokes, None, plates)
     for h, value in zip(plates, got):
         assert relative(value, max(rep.plates[h].stress for rep in want)) <= STRESS, h
+
+
+def test_c_report_is_numpy_s(runs, c_runs):
+    """The C report against the numpy module's on every case, to rounding (the same solves and
+    RK4, in another order); a force actuator's dF/ds is 1/(ds/dF) in both."""
+    if not compiler_or_fail():
+        return
+    for name in CASES:
+        _, _, want, _ = runs(name)
+        got = c_runs(name)[1]
+        for a, entry in want["actuators"].items():
+            for key, w in entry.items():
+                assert np.allclose(got["actuators"][a][key], w, rtol=1e-12, atol=0), (name, a)
+        for p, w in want["stiffness"].items():
+            for c in range(w.shape[-1]):
+                if np.isnan(w[..., c]).all():
+                    assert np.isnan(got["stiffness"][p][..., c]).all(), (name, p)
+                else:
+                    assert rows_close(got["stiffness"][p][..., c], w[..., c], STIFFNESS), (name, p)
+        for h, w in want["plates"].items():
+            assert np.allclose(got["plates"][h]["stress"], w["stress"], rtol=1e-12), (name, h)
+
+
+def test_c_report_refuses_what_its_evaluate_refuses(runs, c_runs):
+    """A bad argument (a stroke or a force that is not finite, a NULL input) returns 3 and out
+    all NaN, the actuators' block too, as <name>_evaluate at loaded; the actuators' names."""
+    if not compiler_or_fail():
+        return
+    for name in ("piezo_amplifier", "parallelogram_force_payload"):
+        plan = runs(name)[0]
+        lib = c_runs(name)[0]
+        rep = plan.loaded.report
+        size = 2 * len(rep.inputs) + 9 * len(rep.points) + 4 * len(rep.plates) + 3
+        out = (ctypes.c_double * size)()
+        bad = (ctypes.c_double * 1)(math.nan)
+        assert getattr(lib, f"{plan.name}_loaded_report")(bad, None, out) == 3, name
+        assert all(math.isnan(v) for v in out)
+        assert getattr(lib, f"{plan.name}_loaded_report")(None, None, out) == 3
+        values = (ctypes.c_double * (6 * len(plan.shown_points)))()
+        assert getattr(lib, f"{plan.name}_evaluate")(bad, None, 3, values) == 3, name
+        names = ctypes.c_char_p.in_dll(lib, f"{plan.name}_report_actuator_names")
+        assert names.value == b"piezo"

@@ -64,23 +64,28 @@ def built():
     return get
 
 
-def c_report(plan, inputs: dict[str, list[float]]) -> dict:
+def c_report(plan, inputs: dict[str, list[float]], lib=None) -> dict:
     """The C evaluator's <name>_loaded_report at every configuration, shaped as the numpy
-    module's result entries (the configurations on the last axis)."""
+    module's result entries (the configurations on the last axis); with actuators their block
+    after the plates' (stroke, force, dF/ds each) as "actuators". `lib`: the plan's compiled
+    library (None: built here)."""
     require_compiler()
-    lib = pipeline.evaluator(plan, "c", "test", links=False).lib
+    if lib is None:
+        lib = pipeline.evaluator(plan, "c", "test", links=False).lib
     rep = plan.loaded.report
-    nin, npt, npl = len(rep.inputs), len(rep.points), len(rep.plates)
+    nin, npt, npl, nact = len(rep.inputs), len(rep.points), len(rep.plates), len(rep.actuators)
     fn = getattr(lib, f"{plan.name}_loaded_report")
     count = len(next(iter(inputs.values())))
+    args = plan.drives if plan.actuators else plan.inputs
     rows = []
     for c in range(count):
-        out = (ctypes.c_double * (2 * nin + 9 * npt + 4 * npl))()
-        x = (ctypes.c_double * len(plan.inputs))(*(inputs[h][c] for h in plan.inputs))
+        out = (ctypes.c_double * (2 * nin + 9 * npt + 4 * npl + 3 * nact))()
+        x = (ctypes.c_double * len(args))(*(inputs[h][c] for h in args))
         assert fn(x, None, out) == 0
         rows.append(list(out))
     v = np.array(rows).T
-    plates = v[2 * nin + 9 * npt :]
+    plates = v[2 * nin + 9 * npt : 2 * nin + 9 * npt + 4 * npl]
+    acts = v[2 * nin + 9 * npt + 4 * npl :]
     return {
         "ok": np.ones(count, dtype=bool),
         "inputs": {
@@ -100,6 +105,16 @@ def c_report(plan, inputs: dict[str, list[float]]) -> dict:
             h: dict(zip(("stress", "strain", "safety", "section"), plates[4 * k : 4 * k + 4]))
             for k, h in enumerate(rep.plates)
         },
+        **(
+            {
+                "actuators": {
+                    a: dict(zip(("stroke", "force", "stiffness"), acts[3 * k : 3 * k + 3]))
+                    for k, a in enumerate(rep.actuators)
+                }
+            }
+            if nact
+            else {}
+        ),
     }
 
 
@@ -227,8 +242,8 @@ def test_lone_plate_under_a_pure_moment_is_a_circular_arc(lone_plate, backend):
 
 def test_what_the_other_levels_and_modules_hold(built):
     """The report only at `loaded`; the C report refuses what its evaluate refuses (a bad
-    input: 3, out NaN); a file with actuators has it in numpy
-    (tests/test_loaded_actuators_reported_codegen.py), not in C yet: its C files leave it out."""
+    input: 3, out NaN); a file with actuators has it in numpy and in C, with the actuators'
+    block (tests/test_loaded_actuators_reported_codegen.py)."""
     _, plan, module = built("four_bar")
     assert "inputs" not in module.evaluate({"A0": 0.3}, "exact")
     assert {"loaded_report1", "loaded_report2"} <= set(plan.routines)
@@ -241,7 +256,8 @@ def test_what_the_other_levels_and_modules_hold(built):
     plan, module = pipeline.build(piezo, "numpy", "test", sensitivity=False)
     assert "loaded" in module.LEVELS and plan.loaded.report is not None
     assert "actuators" in module.evaluate({"piezo": 0.02}, "loaded")
-    assert not any("loaded_report" in t for t in pipeline.emit(plan, "c", "piezo_amplifier.toml"))
+    header, code = pipeline.emit(plan, "c", "piezo_amplifier.toml")
+    assert "PIEZO_AMPLIFIER_N_REPORT_ACTUATORS 1" in header and "sk_actuated_report(" in code
 
 
 def test_a_held_input_is_reported_too():

@@ -3,7 +3,7 @@
  * Mechanism 'piezo_amplifier': 4 links, 4 hinges, 1 loop(s); inputs piezo (actuators; their strokes fix the angles of RA0 (piezo)).
  * Points: B; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, loaded_plates1 147, loaded_system1 722, loaded_res1 292, loaded_dev1 104, loaded_plates2 372, loaded_system2 1863, loaded_res2 568, loaded_dev2 189, dev_paper 31, dev_first_order 51, dev_exact 62, links 1, sens_rigid 105, sens_paper 108, sens_first_order 355, sens_exact 449, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40.
+ * Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, loaded_plates1 147, loaded_system1 722, loaded_res1 292, loaded_dev1 104, loaded_report1 413, loaded_plates2 372, loaded_system2 1863, loaded_res2 568, loaded_dev2 189, loaded_report2 837, dev_paper 31, dev_first_order 51, dev_exact 62, links 1, sens_rigid 105, sens_paper 108, sens_first_order 355, sens_exact 449, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40.
  */
 #include "piezo_amplifier.h"
 
@@ -26,6 +26,7 @@ enum {
     /* actuators at loaded: its level code, and the level whose rigid positions meet the strokes */
     SK_LEVEL_LOADED = 3,
     SK_LEVEL_RIGID = 0,
+    SK_RQ = 4 + 1,  /* loaded: the report's variables */
     SK_OUT = 445        /* the largest routine output, and one */
 };
 
@@ -1636,6 +1637,362 @@ static void sk_loaded_dev1(const double *x, const double *theta, const double *p
     out[1] = -_tmp28 + _tmp1*_tmp11 + _tmp10*_tmp9 - _tmp16*across_2_0 - _tmp19*_tmp20 + _tmp14*_tmp15*p_3 - _tmp17*_tmp27*p_2;
     out[2] = -_tmp26 - _tmp17*_tmp29 + 2*_tmp20*_tmp21*p_4;
     out[3] = -_tmp28 - _tmp20*_tmp29 - _tmp17*_tmp27*p_4;
+}
+
+/* loaded (1 half plate(s) per plate), what it reports: dR/dv, din/dv, y, dy/dx, dy/dv, dy/dout (v: the inputs' angles, the actuators' values and virtual loads at the points, y: the inputs' moments, the actuators' forces or strokes and the points' (dx, dy, dphi)), then per plate (k0, lx, ly, e_a, e_s, t/l, E', allowable) (413 operations) */
+static void sk_loaded_report1(const double *x, const double *theta, const double *plates, const double *params, double *out)
+{
+    const double x_0 = x[0];
+    const double x_1 = x[1];
+    const double x_3 = x[3];
+    const double x_4 = x[4];
+    const double x_5 = x[5];
+    const double x_7 = x[7];
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double along_1_0 = plates[0];
+    const double across_1_0 = plates[1];
+    const double omega_1_0 = plates[2];
+    const double along_2_0 = plates[3];
+    const double across_2_0 = plates[4];
+    const double omega_2_0 = plates[5];
+    const double along_3_0 = plates[6];
+    const double across_3_0 = plates[7];
+    const double omega_3_0 = plates[8];
+    const double omega_4_0 = plates[11];
+    const double p_0 = params[0];
+    const double p_1 = params[1];
+    const double p_2 = params[2];
+    const double p_3 = params[3];
+    const double _tmp0 = 0.039275205738995705*x_3;
+    const double _tmp1 = _tmp0 + theta_1;
+    const double _tmp2 = cos(_tmp1);
+    const double _tmp3 = _tmp2*p_2;
+    const double _tmp4 = 0.00122208*p_3;
+    const double _tmp5 = sin(p_1);
+    const double _tmp6 = _tmp5*p_0;
+    const double _tmp7 = 0.039275205738995705*x_0;
+    const double _tmp8 = _tmp1 + _tmp7 + theta_2;
+    const double _tmp9 = cos(_tmp8);
+    const double _tmp10 = 0.00488832*_tmp9;
+    const double _tmp11 = cos(p_1);
+    const double _tmp12 = _tmp11*p_0;
+    const double _tmp13 = sin(_tmp8);
+    const double _tmp14 = 0.00488832*_tmp13;
+    const double _tmp15 = _tmp12*_tmp14;
+    const double _tmp16 = 0.019637602869497853*x_0;
+    const double _tmp17 = _tmp16 + 0.5*theta_2;
+    const double _tmp18 = _tmp1 + _tmp17;
+    const double _tmp19 = sin(_tmp18);
+    const double _tmp20 = _tmp19*p_3;
+    const double _tmp21 = _tmp20*across_2_0;
+    const double _tmp22 = symkin_arck(_tmp17);
+    const double _tmp23 = along_2_0 + _tmp22*pow(_tmp17, 2);
+    const double _tmp24 = cos(_tmp18);
+    const double _tmp25 = _tmp24*p_3;
+    const double _tmp26 = _tmp23*_tmp25;
+    const double _tmp27 = sin(_tmp1);
+    const double _tmp28 = _tmp27*p_2;
+    const double _tmp29 = _tmp25*across_2_0;
+    const double _tmp30 = _tmp20*_tmp23;
+    const double _tmp31 = _tmp10*_tmp12 + _tmp14*_tmp6;
+    const double _tmp32 = 0.019637602869497853*x_3;
+    const double _tmp33 = _tmp32 + 0.5*theta_1;
+    const double _tmp34 = sin(_tmp33);
+    const double _tmp35 = pow(p_3, 2);
+    const double _tmp36 = 0.000977664*_tmp35;
+    const double _tmp37 = -_tmp34*_tmp36;
+    const double _tmp38 = cos(_tmp33);
+    const double _tmp39 = _tmp36*_tmp38;
+    const double _tmp40 = -_tmp19*_tmp36;
+    const double _tmp41 = _tmp24*_tmp36;
+    const double _tmp42 = 6.427599787083612*x_7;
+    const double _tmp43 = theta_1 + theta_2;
+    const double _tmp44 = sin(_tmp43);
+    const double _tmp45 = _tmp0 + _tmp7;
+    const double _tmp46 = sin(_tmp45);
+    const double _tmp47 = _tmp16 + _tmp32;
+    const double _tmp48 = sin(_tmp47);
+    const double _tmp49 = pow(_tmp48, 2);
+    const double _tmp50 = -4*_tmp49*_tmp6 - 2*_tmp12*_tmp46;
+    const double _tmp51 = cos(_tmp43);
+    const double _tmp52 = -2*_tmp46*_tmp6 + 4*_tmp11*_tmp49*p_0;
+    const double _tmp53 = cos(theta_1);
+    const double _tmp54 = p_2*sin(_tmp0);
+    const double _tmp55 = sin(theta_1);
+    const double _tmp56 = sin(_tmp32);
+    const double _tmp57 = pow(_tmp56, 2);
+    const double _tmp58 = _tmp38*p_3;
+    const double _tmp59 = _tmp58*across_1_0;
+    const double _tmp60 = symkin_arck(_tmp33);
+    const double _tmp61 = along_1_0 + _tmp60*pow(_tmp33, 2);
+    const double _tmp62 = _tmp34*p_3;
+    const double _tmp63 = _tmp61*_tmp62;
+    const double _tmp64 = _tmp59 + _tmp63;
+    const double _tmp65 = _tmp29 + _tmp30;
+    const double _tmp66 = _tmp53*p_2;
+    const double _tmp67 = _tmp62*across_1_0;
+    const double _tmp68 = _tmp21 + _tmp67 - _tmp23*_tmp24*p_3 - _tmp38*_tmp61*p_3;
+    const double _tmp69 = _tmp22*(0.019637602869497853*theta_2 + 0.0007712708929202206*x_0) + 0.019637602869497853*(_tmp17*_tmp17*_tmp17)*(-3*symkin_sinr2(_tmp17) + 3*symkin_cosr2(_tmp17) + symkin_sinr1(_tmp17));
+    const double _tmp70 = 0.07855041147799141*cos(_tmp45);
+    const double _tmp71 = cos(_tmp47);
+    const double _tmp72 = -_tmp12*_tmp70 - 0.15710082295598282*_tmp48*_tmp6*_tmp71;
+    const double _tmp73 = -_tmp6*_tmp70 + 0.15710082295598282*_tmp11*_tmp48*_tmp71*p_0;
+    const double _tmp74 = _tmp44*_tmp72 - _tmp51*_tmp73;
+    const double _tmp75 = _tmp60*(0.019637602869497853*theta_1 + 0.0007712708929202206*x_3) + 0.019637602869497853*(_tmp33*_tmp33*_tmp33)*(-3*symkin_sinr2(_tmp33) + 3*symkin_cosr2(_tmp33) + symkin_sinr1(_tmp33));
+    const double _tmp76 = _tmp58*_tmp61;
+    const double _tmp77 = 0.039275205738995705*cos(_tmp0);
+    const double _tmp78 = cos(_tmp32);
+    const double _tmp79 = -_tmp62;
+    const double _tmp80 = -_tmp20;
+    const double _tmp81 = 1.0/p_3;
+    const double _tmp82 = 0.5*p_3;
+    const double _tmp83 = 6.427599787083612*x_5;
+    const double _tmp84 = 6.427599787083612*x_4;
+    const double _tmp85 = -_tmp42 - _tmp84;
+    const double _tmp86 = 0.000977664*p_3;
+    const double _tmp87 = 0.006284032918239313*_tmp35;
+    const double _tmp88 = _tmp87*x_5;
+    const double _tmp89 = 1.0/_tmp35;
+    const double _tmp90 = 0.005208333333333333*_tmp89;
+    const double _tmp91 = 0.018656716417910446*_tmp89;
+    const double _tmp92 = 0.25/fabs(p_3);
+    const double _tmp93 = 1022.8462948415815*_tmp81;
+    const double _tmp94 = p_2 - _tmp82;
+    const double _tmp95 = _tmp28 + _tmp65;
+    const double _tmp96 = _tmp87*x_4;
+    const double _tmp97 = _tmp5*_tmp82;
+    const double _tmp98 = theta_3 + 0.039275205738995705*x_1;
+    const double _tmp99 = cos(_tmp98);
+    const double _tmp100 = sin(_tmp98);
+    const double _tmp101 = _tmp11*_tmp82;
+    const double _tmp102 = 0.5*theta_3 + 0.019637602869497853*x_1;
+    const double _tmp103 = _tmp102 + p_1;
+    const double _tmp104 = p_3*cos(_tmp103);
+    const double _tmp105 = along_3_0 + pow(_tmp102, 2)*symkin_arck(_tmp102);
+    const double _tmp106 = p_3*sin(_tmp103);
+    const double _tmp107 = _tmp104*across_3_0 + _tmp105*_tmp106;
+    const double _tmp108 = _tmp104*_tmp105 - _tmp106*across_3_0;
+    const double _tmp109 = _tmp12 - 0.5*_tmp11*p_3;
+    const double _tmp110 = _tmp6 - _tmp97;
+    const double _tmp111 = _tmp6 + _tmp97;
+    const double _tmp112 = -_tmp109;
+    const double _tmp113 = _tmp98 + p_1;
+    const double _tmp114 = cos(_tmp113);
+    const double _tmp115 = sin(_tmp113);
+    out[0] = 0;
+    out[1] = 0;
+    out[2] = 0;
+    out[3] = 0;
+    out[4] = 0;
+    out[5] = 0;
+    out[6] = 0;
+    out[7] = 0;
+    out[8] = 0;
+    out[9] = 0;
+    out[10] = 0;
+    out[11] = 0;
+    out[12] = 0;
+    out[13] = -_tmp15 + 0.00244416*_tmp26 + 0.00244416*_tmp3 - 0.00244416*_tmp21 + _tmp10*_tmp6 - _tmp2*_tmp4;
+    out[14] = _tmp31 + 0.00244416*_tmp28 + 0.00244416*_tmp29 + 0.00244416*_tmp30 - _tmp27*_tmp4;
+    out[15] = -0.00244416;
+    out[16] = 0;
+    out[17] = -_tmp15 - _tmp4*_tmp9 + 0.00488832*_tmp5*_tmp9*p_0;
+    out[18] = _tmp31 - _tmp13*_tmp4;
+    out[19] = -0.00244416;
+    out[20] = 0;
+    out[21] = 0;
+    out[22] = 0;
+    out[23] = 0;
+    out[24] = 0;
+    out[25] = 0;
+    out[26] = 0;
+    out[27] = 0;
+    out[28] = -0.4;
+    out[29] = 0;
+    out[30] = 0;
+    out[31] = 0;
+    out[32] = 0;
+    out[33] = 0;
+    out[34] = 0;
+    out[35] = 0;
+    out[36] = 0;
+    out[37] = _tmp37;
+    out[38] = _tmp39;
+    out[39] = 0;
+    out[40] = 0;
+    out[41] = -_tmp39;
+    out[42] = _tmp37;
+    out[43] = 0;
+    out[44] = 0;
+    out[45] = 0;
+    out[46] = 0;
+    out[47] = 0;
+    out[48] = 0;
+    out[49] = _tmp40;
+    out[50] = _tmp41;
+    out[51] = 0;
+    out[52] = 0;
+    out[53] = -_tmp41;
+    out[54] = _tmp40;
+    out[55] = 0;
+    out[56] = 0;
+    out[57] = 0;
+    out[58] = 0;
+    out[59] = 0;
+    out[60] = 0;
+    out[61] = 0;
+    out[62] = 0;
+    out[63] = 0;
+    out[64] = 0;
+    out[65] = 0;
+    out[66] = 0;
+    out[67] = 0;
+    out[68] = 0;
+    out[69] = 0;
+    out[70] = 0;
+    out[71] = 0;
+    out[72] = 0;
+    out[73] = 0;
+    out[74] = 0;
+    out[75] = 0;
+    out[76] = 0;
+    out[77] = 0;
+    out[78] = 0;
+    out[79] = 0;
+    out[80] = _tmp42;
+    out[81] = -_tmp64 - _tmp65 + _tmp51*_tmp52 - _tmp44*_tmp50 - _tmp53*_tmp54 + 2*_tmp55*_tmp57*p_2;
+    out[82] = -_tmp68 + _tmp44*_tmp52 + _tmp50*_tmp51 - _tmp54*_tmp55 - 2*_tmp57*_tmp66;
+    out[83] = _tmp45;
+    out[84] = 0;
+    out[85] = 0;
+    out[86] = 0;
+    out[87] = 0;
+    out[88] = 0;
+    out[89] = 0;
+    out[90] = 0;
+    out[91] = 6.427599787083612;
+    out[92] = -_tmp74 - 0.019637602869497853*_tmp26 - _tmp20*_tmp69 + 0.019637602869497853*_tmp19*across_2_0*p_3;
+    out[93] = 0;
+    out[94] = 0;
+    out[95] = -_tmp74 - 0.019637602869497853*_tmp76 - 0.039275205738995705*_tmp26 - _tmp62*_tmp75 - _tmp66*_tmp77 + 0.019637602869497853*_tmp34*across_1_0*p_3 + 0.039275205738995705*_tmp19*across_2_0*p_3 + 0.07855041147799141*_tmp55*_tmp56*_tmp78*p_2;
+    out[96] = 0;
+    out[97] = 0;
+    out[98] = 0;
+    out[99] = 0;
+    out[100] = -0.019637602869497853*_tmp29 - 0.019637602869497853*_tmp30 + _tmp25*_tmp69 + _tmp44*_tmp73 + _tmp51*_tmp72;
+    out[101] = 0;
+    out[102] = 0;
+    out[103] = -0.019637602869497853*_tmp59 - 0.019637602869497853*_tmp63 - 0.039275205738995705*_tmp29 - 0.039275205738995705*_tmp30 + _tmp44*_tmp73 + _tmp51*_tmp72 + _tmp38*_tmp75*p_3 - _tmp55*_tmp77*p_2 - 0.07855041147799141*_tmp56*_tmp66*_tmp78;
+    out[104] = 0;
+    out[105] = 0;
+    out[106] = 0;
+    out[107] = 0;
+    out[108] = 0.039275205738995705;
+    out[109] = 0;
+    out[110] = 0;
+    out[111] = 0.039275205738995705;
+    out[112] = 0;
+    out[113] = 0;
+    out[114] = 0;
+    out[115] = 0;
+    out[116] = 0;
+    out[117] = 0;
+    out[118] = 0;
+    out[119] = 0;
+    out[120] = 0;
+    out[121] = 0;
+    out[122] = 0;
+    out[123] = 0;
+    out[124] = 0;
+    out[125] = 0;
+    out[126] = 0;
+    out[127] = 0;
+    out[128] = 0;
+    out[129] = 0;
+    out[130] = 0;
+    out[131] = 0;
+    out[132] = 0;
+    out[133] = 0;
+    out[134] = 0;
+    out[135] = 0;
+    out[136] = 0;
+    out[137] = 0;
+    out[138] = 0;
+    out[139] = 0;
+    out[140] = 0;
+    out[141] = 0;
+    out[142] = 0;
+    out[143] = 0;
+    out[144] = _tmp79;
+    out[145] = -_tmp58;
+    out[146] = 0;
+    out[147] = _tmp80;
+    out[148] = -_tmp25;
+    out[149] = 0;
+    out[150] = 0;
+    out[151] = 0;
+    out[152] = 0;
+    out[153] = 0;
+    out[154] = 0;
+    out[155] = 0;
+    out[156] = _tmp58;
+    out[157] = _tmp79;
+    out[158] = 0;
+    out[159] = _tmp25;
+    out[160] = _tmp80;
+    out[161] = 0;
+    out[162] = 0;
+    out[163] = 0;
+    out[164] = 0;
+    out[165] = 0;
+    out[166] = 0;
+    out[167] = 0;
+    out[168] = 0;
+    out[169] = 0;
+    out[170] = 0;
+    out[171] = 0;
+    out[172] = 0;
+    out[173] = 0;
+    out[174] = 0;
+    out[175] = 0;
+    out[176] = 0;
+    out[177] = 0;
+    out[178] = 0;
+    out[179] = 0;
+    out[180] = _tmp86*(-_tmp83*(-_tmp64 - _tmp27*_tmp82) - _tmp85*(_tmp76 + _tmp82 - _tmp67 + _tmp2*_tmp82) + 1022.8462948415815*_tmp81*omega_1_0);
+    out[181] = -_tmp88;
+    out[182] = -_tmp36*_tmp85;
+    out[183] = _tmp90;
+    out[184] = _tmp91;
+    out[185] = _tmp92;
+    out[186] = 78554595443.83347;
+    out[187] = 0;
+    out[188] = _tmp86*(_tmp84*(_tmp26 + _tmp3 - _tmp21 + _tmp82*_tmp9 - _tmp2*_tmp94) + _tmp93*omega_2_0 - _tmp83*(-_tmp95 + _tmp27*_tmp94 - _tmp13*_tmp82));
+    out[189] = _tmp27*_tmp96 - _tmp2*_tmp88;
+    out[190] = _tmp2*_tmp96 + _tmp27*_tmp88;
+    out[191] = _tmp90;
+    out[192] = _tmp91;
+    out[193] = _tmp92;
+    out[194] = 78554595443.83347;
+    out[195] = 0;
+    out[196] = _tmp86*(_tmp83*(_tmp101 + _tmp108 + _tmp101*_tmp99 - _tmp100*_tmp97) + _tmp93*omega_3_0 - _tmp84*(_tmp107 + _tmp97 + _tmp100*_tmp101 + _tmp97*_tmp99));
+    out[197] = _tmp11*_tmp96 + _tmp5*_tmp88;
+    out[198] = -_tmp5*_tmp96 + 0.006284032918239313*_tmp11*_tmp35*x_5;
+    out[199] = _tmp90;
+    out[200] = _tmp91;
+    out[201] = _tmp92;
+    out[202] = 78554595443.83347;
+    out[203] = 0;
+    out[204] = _tmp86*(_tmp83*(-_tmp108 - _tmp64 - _tmp95 + _tmp100*_tmp110 + _tmp112*_tmp9 - _tmp109*_tmp99 - _tmp111*_tmp13 + 2*_tmp11*p_0) + _tmp93*omega_4_0 - _tmp84*(-_tmp107 - _tmp68 - p_2 + _tmp111*_tmp9 + _tmp112*_tmp13 + _tmp2*p_2 - _tmp100*_tmp109 - _tmp110*_tmp99));
+    out[205] = _tmp114*_tmp96 + _tmp115*_tmp88;
+    out[206] = -_tmp115*_tmp96 + 0.006284032918239313*_tmp114*_tmp35*x_5;
+    out[207] = _tmp90;
+    out[208] = _tmp91;
+    out[209] = _tmp92;
+    out[210] = 78554595443.83347;
+    out[211] = 0;
 }
 
 /* loaded (2 half plate(s) per plate): every half plate's (theta, p, f, e_a, e_s) and d(theta, p, f)/dx (372 operations) */
@@ -3306,6 +3663,605 @@ static void sk_loaded_dev2(const double *x, const double *theta, const double *p
     out[1] = -_tmp52 + _tmp1*_tmp28 + _tmp24*_tmp25 + _tmp27*_tmp9 - _tmp11*_tmp26 - _tmp31*_tmp32 - _tmp29*_tmp51*p_2;
     out[2] = -_tmp50 - _tmp29*_tmp53 + 2*_tmp32*_tmp33*p_4;
     out[3] = -_tmp52 - _tmp32*_tmp53 - _tmp29*_tmp51*p_4;
+}
+
+/* loaded (2 half plate(s) per plate), what it reports: dR/dv, din/dv, y, dy/dx, dy/dv, dy/dout (v: the inputs' angles, the actuators' values and virtual loads at the points, y: the inputs' moments, the actuators' forces or strokes and the points' (dx, dy, dphi)), then per plate (k0, lx, ly, e_a, e_s, t/l, E', allowable) (837 operations) */
+static void sk_loaded_report2(const double *x, const double *theta, const double *plates, const double *params, double *out)
+{
+    const double x_0 = x[0];
+    const double x_1 = x[1];
+    const double x_3 = x[3];
+    const double x_4 = x[4];
+    const double x_5 = x[5];
+    const double x_7 = x[7];
+    const double x_8 = x[8];
+    const double x_9 = x[9];
+    const double x_10 = x[10];
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double along_1_0 = plates[0];
+    const double across_1_0 = plates[1];
+    const double along_1_1 = plates[3];
+    const double across_1_1 = plates[4];
+    const double omega_1_1 = plates[5];
+    const double along_2_0 = plates[6];
+    const double across_2_0 = plates[7];
+    const double along_2_1 = plates[9];
+    const double across_2_1 = plates[10];
+    const double omega_2_1 = plates[11];
+    const double along_3_0 = plates[12];
+    const double across_3_0 = plates[13];
+    const double along_3_1 = plates[15];
+    const double across_3_1 = plates[16];
+    const double omega_3_1 = plates[17];
+    const double omega_4_1 = plates[23];
+    const double p_0 = params[0];
+    const double p_1 = params[1];
+    const double p_2 = params[2];
+    const double p_3 = params[3];
+    const double _tmp0 = 0.039275205738995705*x_3;
+    const double _tmp1 = _tmp0 + theta_1;
+    const double _tmp2 = cos(_tmp1);
+    const double _tmp3 = _tmp2*p_2;
+    const double _tmp4 = 0.00122208*p_3;
+    const double _tmp5 = sin(p_1);
+    const double _tmp6 = _tmp5*p_0;
+    const double _tmp7 = 0.039275205738995705*x_0;
+    const double _tmp8 = _tmp1 + _tmp7 + theta_2;
+    const double _tmp9 = cos(_tmp8);
+    const double _tmp10 = 0.00488832*_tmp9;
+    const double _tmp11 = cos(p_1);
+    const double _tmp12 = _tmp11*p_0;
+    const double _tmp13 = sin(_tmp8);
+    const double _tmp14 = 0.00488832*_tmp13;
+    const double _tmp15 = _tmp12*_tmp14;
+    const double _tmp16 = 0.019637602869497853*x_0;
+    const double _tmp17 = _tmp1 + _tmp16 + 0.5*theta_2;
+    const double _tmp18 = sin(_tmp17);
+    const double _tmp19 = 1.0*x_9;
+    const double _tmp20 = 0.5*p_3;
+    const double _tmp21 = 0.5*x_9;
+    const double _tmp22 = 0.25*theta_2 + 0.009818801434748926*x_0;
+    const double _tmp23 = _tmp22 - _tmp21;
+    const double _tmp24 = cos(_tmp23);
+    const double _tmp25 = _tmp20*across_2_0;
+    const double _tmp26 = _tmp21 + _tmp22;
+    const double _tmp27 = cos(_tmp26);
+    const double _tmp28 = _tmp20*_tmp27;
+    const double _tmp29 = sin(_tmp23);
+    const double _tmp30 = symkin_arck(_tmp26);
+    const double _tmp31 = along_2_0 + _tmp30*pow(_tmp26, 2);
+    const double _tmp32 = _tmp20*_tmp31;
+    const double _tmp33 = symkin_arck(_tmp23);
+    const double _tmp34 = along_2_1 + _tmp33*pow(_tmp23, 2);
+    const double _tmp35 = sin(_tmp26);
+    const double _tmp36 = _tmp20*_tmp35;
+    const double _tmp37 = _tmp20*sin(_tmp19) + _tmp24*_tmp25 + _tmp28*across_2_1 + _tmp34*_tmp36 - _tmp29*_tmp32;
+    const double _tmp38 = _tmp18*_tmp37;
+    const double _tmp39 = cos(_tmp17);
+    const double _tmp40 = sin(_tmp21);
+    const double _tmp41 = sin(_tmp22);
+    const double _tmp42 = _tmp20*(-2*pow(_tmp40, 2) + 2*pow(_tmp41, 2)) + _tmp24*_tmp32 + _tmp25*_tmp29 + _tmp28*_tmp34 - _tmp36*across_2_1;
+    const double _tmp43 = _tmp39*_tmp42;
+    const double _tmp44 = _tmp18*_tmp42;
+    const double _tmp45 = _tmp37*_tmp39;
+    const double _tmp46 = sin(_tmp1);
+    const double _tmp47 = _tmp46*p_2;
+    const double _tmp48 = _tmp10*_tmp12 + _tmp14*_tmp6;
+    const double _tmp49 = 0.5*x_8;
+    const double _tmp50 = _tmp49 + 0.75*theta_1 + 0.02945640430424678*x_3;
+    const double _tmp51 = sin(_tmp50);
+    const double _tmp52 = _tmp4*_tmp51;
+    const double _tmp53 = cos(_tmp50);
+    const double _tmp54 = 0.25*theta_1 + 0.009818801434748926*x_3;
+    const double _tmp55 = _tmp54 - _tmp49;
+    const double _tmp56 = along_1_1 + symkin_sinr0(_tmp55);
+    const double _tmp57 = _tmp1 + _tmp21 + 0.75*theta_2 + 0.02945640430424678*x_0;
+    const double _tmp58 = sin(_tmp57);
+    const double _tmp59 = _tmp4*_tmp58;
+    const double _tmp60 = along_2_1 + symkin_sinr0(_tmp23);
+    const double _tmp61 = cos(_tmp57);
+    const double _tmp62 = _tmp49 + _tmp54;
+    const double _tmp63 = sin(_tmp62);
+    const double _tmp64 = pow(p_3, 2);
+    const double _tmp65 = 0.000244416*_tmp64;
+    const double _tmp66 = -_tmp63*_tmp65;
+    const double _tmp67 = cos(_tmp62);
+    const double _tmp68 = _tmp65*_tmp67;
+    const double _tmp69 = -_tmp51*_tmp65;
+    const double _tmp70 = _tmp53*_tmp65;
+    const double _tmp71 = _tmp1 + _tmp26;
+    const double _tmp72 = -_tmp65*sin(_tmp71);
+    const double _tmp73 = _tmp65*cos(_tmp71);
+    const double _tmp74 = -_tmp58*_tmp65;
+    const double _tmp75 = _tmp61*_tmp65;
+    const double _tmp76 = 6.427599787083612*x_7;
+    const double _tmp77 = theta_1 + theta_2;
+    const double _tmp78 = sin(_tmp77);
+    const double _tmp79 = _tmp0 + _tmp7;
+    const double _tmp80 = sin(_tmp79);
+    const double _tmp81 = 0.019637602869497853*x_3;
+    const double _tmp82 = _tmp16 + _tmp81;
+    const double _tmp83 = sin(_tmp82);
+    const double _tmp84 = pow(_tmp83, 2);
+    const double _tmp85 = -4*_tmp6*_tmp84 - 2*_tmp12*_tmp80;
+    const double _tmp86 = cos(_tmp77);
+    const double _tmp87 = -2*_tmp6*_tmp80 + 4*_tmp11*_tmp84*p_0;
+    const double _tmp88 = cos(theta_1);
+    const double _tmp89 = p_2*sin(_tmp0);
+    const double _tmp90 = sin(theta_1);
+    const double _tmp91 = sin(_tmp81);
+    const double _tmp92 = pow(_tmp91, 2);
+    const double _tmp93 = _tmp81 + 0.5*theta_1;
+    const double _tmp94 = sin(_tmp93);
+    const double _tmp95 = sin(_tmp55);
+    const double _tmp96 = _tmp20*across_1_0;
+    const double _tmp97 = _tmp20*_tmp63;
+    const double _tmp98 = sin(_tmp49);
+    const double _tmp99 = sin(_tmp54);
+    const double _tmp100 = cos(_tmp55);
+    const double _tmp101 = symkin_arck(_tmp62);
+    const double _tmp102 = along_1_0 + _tmp101*pow(_tmp62, 2);
+    const double _tmp103 = _tmp102*_tmp20;
+    const double _tmp104 = symkin_arck(_tmp55);
+    const double _tmp105 = along_1_1 + _tmp104*pow(_tmp55, 2);
+    const double _tmp106 = _tmp20*_tmp67;
+    const double _tmp107 = _tmp100*_tmp103 + _tmp105*_tmp106 + _tmp20*(-2*pow(_tmp98, 2) + 2*pow(_tmp99, 2)) + _tmp95*_tmp96 - _tmp97*across_1_1;
+    const double _tmp108 = _tmp107*_tmp94;
+    const double _tmp109 = cos(_tmp93);
+    const double _tmp110 = 1.0*x_8;
+    const double _tmp111 = _tmp100*_tmp96 + _tmp105*_tmp97 + _tmp106*across_1_1 + _tmp20*sin(_tmp110) - _tmp103*_tmp95;
+    const double _tmp112 = _tmp109*_tmp111;
+    const double _tmp113 = _tmp108 + _tmp112;
+    const double _tmp114 = _tmp44 + _tmp45;
+    const double _tmp115 = _tmp88*p_2;
+    const double _tmp116 = _tmp111*_tmp94;
+    const double _tmp117 = _tmp116 + _tmp38 - _tmp107*_tmp109 - _tmp39*_tmp42;
+    const double _tmp118 = 0.004909400717374463*p_3;
+    const double _tmp119 = _tmp118*across_2_0;
+    const double _tmp120 = _tmp118*_tmp35;
+    const double _tmp121 = _tmp118*_tmp31;
+    const double _tmp122 = 0.009818801434748926*x_9;
+    const double _tmp123 = 0.004909400717374463*theta_2 + 0.00019281772323005516*x_0;
+    const double _tmp124 = (_tmp23*_tmp23*_tmp23)*(-3*symkin_sinr2(_tmp23) + 3*symkin_cosr2(_tmp23) + symkin_sinr1(_tmp23));
+    const double _tmp125 = 0.009818801434748926*_tmp124 + _tmp33*(_tmp123 - _tmp122);
+    const double _tmp126 = (_tmp26*_tmp26*_tmp26)*(-3*symkin_sinr2(_tmp26) + 3*symkin_cosr2(_tmp26) + symkin_sinr1(_tmp26));
+    const double _tmp127 = _tmp20*(0.009818801434748926*_tmp126 + _tmp30*(_tmp122 + _tmp123));
+    const double _tmp128 = -_tmp119*_tmp29 - _tmp120*across_2_1 - _tmp121*_tmp24 - _tmp127*_tmp29 + 0.5*_tmp125*_tmp35*p_3 + 0.004909400717374463*_tmp27*_tmp34*p_3;
+    const double _tmp129 = 0.019637602869497853*p_3;
+    const double _tmp130 = _tmp119*_tmp24 + _tmp125*_tmp28 + _tmp127*_tmp24 - _tmp120*_tmp34 - _tmp121*_tmp29 + _tmp129*_tmp41*cos(_tmp22) - _tmp118*_tmp27*across_2_1;
+    const double _tmp131 = 0.07855041147799141*cos(_tmp79);
+    const double _tmp132 = cos(_tmp82);
+    const double _tmp133 = -_tmp12*_tmp131 - 0.15710082295598282*_tmp132*_tmp6*_tmp83;
+    const double _tmp134 = -_tmp131*_tmp6 + 0.15710082295598282*_tmp11*_tmp132*_tmp83*p_0;
+    const double _tmp135 = _tmp133*_tmp78 - _tmp134*_tmp86;
+    const double _tmp136 = _tmp118*across_1_0;
+    const double _tmp137 = _tmp118*_tmp63;
+    const double _tmp138 = _tmp102*_tmp118;
+    const double _tmp139 = 0.009818801434748926*x_8;
+    const double _tmp140 = 0.004909400717374463*theta_1 + 0.00019281772323005516*x_3;
+    const double _tmp141 = (_tmp55*_tmp55*_tmp55)*(-3*symkin_sinr2(_tmp55) + 3*symkin_cosr2(_tmp55) + symkin_sinr1(_tmp55));
+    const double _tmp142 = 0.009818801434748926*_tmp141 + _tmp104*(_tmp140 - _tmp139);
+    const double _tmp143 = (_tmp62*_tmp62*_tmp62)*(-3*symkin_sinr2(_tmp62) + 3*symkin_cosr2(_tmp62) + symkin_sinr1(_tmp62));
+    const double _tmp144 = _tmp20*(0.009818801434748926*_tmp143 + _tmp101*(_tmp139 + _tmp140));
+    const double _tmp145 = -_tmp100*_tmp138 - _tmp136*_tmp95 - _tmp137*across_1_1 - _tmp144*_tmp95 + 0.5*_tmp142*_tmp63*p_3 + 0.004909400717374463*_tmp105*_tmp67*p_3;
+    const double _tmp146 = _tmp100*_tmp136 + _tmp100*_tmp144 + _tmp106*_tmp142 - _tmp105*_tmp137 - _tmp138*_tmp95 + _tmp129*_tmp99*cos(_tmp54) - _tmp118*_tmp67*across_1_1;
+    const double _tmp147 = _tmp107*_tmp109;
+    const double _tmp148 = 0.039275205738995705*cos(_tmp0);
+    const double _tmp149 = cos(_tmp81);
+    const double _tmp150 = 0.25*p_3;
+    const double _tmp151 = _tmp150*_tmp63;
+    const double _tmp152 = _tmp100*_tmp150;
+    const double _tmp153 = _tmp150*_tmp67;
+    const double _tmp154 = -0.5*_tmp141 - _tmp104*_tmp55;
+    const double _tmp155 = 0.5*_tmp143 + _tmp101*_tmp62;
+    const double _tmp156 = _tmp102*_tmp152 + _tmp105*_tmp153 + _tmp154*_tmp97 + _tmp20*cos(_tmp110) - _tmp151*across_1_1 + _tmp150*_tmp95*across_1_0 - _tmp155*_tmp20*_tmp95;
+    const double _tmp157 = 1.0*p_3;
+    const double _tmp158 = -_tmp105*_tmp151 - _tmp152*across_1_0 - _tmp153*across_1_1 - _tmp157*_tmp98*cos(_tmp49) + 0.25*_tmp102*_tmp95*p_3 + 0.5*_tmp100*_tmp155*p_3 + 0.5*_tmp154*_tmp67*p_3;
+    const double _tmp159 = _tmp150*_tmp35;
+    const double _tmp160 = _tmp150*_tmp24;
+    const double _tmp161 = _tmp150*_tmp27;
+    const double _tmp162 = -0.5*_tmp124 - _tmp23*_tmp33;
+    const double _tmp163 = 0.5*_tmp126 + _tmp26*_tmp30;
+    const double _tmp164 = _tmp160*_tmp31 + _tmp161*_tmp34 + _tmp162*_tmp36 + _tmp20*cos(_tmp19) - _tmp159*across_2_1 + _tmp150*_tmp29*across_2_0 - _tmp163*_tmp20*_tmp29;
+    const double _tmp165 = -_tmp159*_tmp34 - _tmp160*across_2_0 - _tmp161*across_2_1 - _tmp157*_tmp40*cos(_tmp21) + 0.25*_tmp29*_tmp31*p_3 + 0.5*_tmp162*_tmp27*p_3 + 0.5*_tmp163*_tmp24*p_3;
+    const double _tmp166 = _tmp20*_tmp94;
+    const double _tmp167 = -_tmp100*_tmp166 + 0.5*_tmp109*_tmp95*p_3;
+    const double _tmp168 = _tmp166*_tmp95 + _tmp100*_tmp109*_tmp20;
+    const double _tmp169 = -_tmp106*_tmp94 - _tmp109*_tmp97;
+    const double _tmp170 = _tmp94*_tmp97 - _tmp106*_tmp109;
+    const double _tmp171 = _tmp20*_tmp39;
+    const double _tmp172 = _tmp18*_tmp20;
+    const double _tmp173 = _tmp171*_tmp29 - _tmp172*_tmp24;
+    const double _tmp174 = _tmp171*_tmp24 + _tmp172*_tmp29;
+    const double _tmp175 = -_tmp18*_tmp28 - _tmp36*_tmp39;
+    const double _tmp176 = _tmp18*_tmp36 - _tmp28*_tmp39;
+    const double _tmp177 = 1.0/p_3;
+    const double _tmp178 = 6.427599787083612*x_5;
+    const double _tmp179 = 6.427599787083612*x_4;
+    const double _tmp180 = -_tmp179 - _tmp76;
+    const double _tmp181 = 0.000977664*p_3;
+    const double _tmp182 = 0.006284032918239313*_tmp64;
+    const double _tmp183 = _tmp182*x_5;
+    const double _tmp184 = 1.0/_tmp64;
+    const double _tmp185 = 0.005208333333333333*_tmp184;
+    const double _tmp186 = 0.018656716417910446*_tmp184;
+    const double _tmp187 = 0.25/fabs(p_3);
+    const double _tmp188 = 2045.692589683163*_tmp177;
+    const double _tmp189 = p_2 - _tmp20;
+    const double _tmp190 = _tmp114 + _tmp47;
+    const double _tmp191 = _tmp182*x_4;
+    const double _tmp192 = _tmp20*_tmp5;
+    const double _tmp193 = theta_3 + 0.039275205738995705*x_1;
+    const double _tmp194 = cos(_tmp193);
+    const double _tmp195 = sin(_tmp193);
+    const double _tmp196 = _tmp11*_tmp20;
+    const double _tmp197 = p_1 + 0.5*theta_3 + 0.019637602869497853*x_1;
+    const double _tmp198 = sin(_tmp197);
+    const double _tmp199 = 0.5*x_10;
+    const double _tmp200 = 0.25*theta_3 + 0.009818801434748926*x_1;
+    const double _tmp201 = _tmp200 - _tmp199;
+    const double _tmp202 = sin(_tmp201);
+    const double _tmp203 = _tmp20*across_3_0;
+    const double _tmp204 = _tmp199 + _tmp200;
+    const double _tmp205 = _tmp20*sin(_tmp204);
+    const double _tmp206 = cos(_tmp201);
+    const double _tmp207 = _tmp20*(along_3_0 + pow(_tmp204, 2)*symkin_arck(_tmp204));
+    const double _tmp208 = along_3_1 + pow(_tmp201, 2)*symkin_arck(_tmp201);
+    const double _tmp209 = _tmp20*cos(_tmp204);
+    const double _tmp210 = _tmp20*(-2*pow(sin(_tmp199), 2) + 2*pow(sin(_tmp200), 2)) + _tmp202*_tmp203 + _tmp206*_tmp207 + _tmp208*_tmp209 - _tmp205*across_3_1;
+    const double _tmp211 = cos(_tmp197);
+    const double _tmp212 = _tmp20*sin(1.0*x_10) + _tmp203*_tmp206 + _tmp205*_tmp208 + _tmp209*across_3_1 - _tmp202*_tmp207;
+    const double _tmp213 = _tmp198*_tmp210 + _tmp211*_tmp212;
+    const double _tmp214 = _tmp210*_tmp211 - _tmp198*_tmp212;
+    const double _tmp215 = _tmp12 - 0.5*_tmp11*p_3;
+    const double _tmp216 = _tmp6 - _tmp192;
+    const double _tmp217 = _tmp192 + _tmp6;
+    const double _tmp218 = -_tmp215;
+    const double _tmp219 = _tmp193 + p_1;
+    const double _tmp220 = cos(_tmp219);
+    const double _tmp221 = sin(_tmp219);
+    out[0] = 0;
+    out[1] = 0;
+    out[2] = 0;
+    out[3] = 0;
+    out[4] = 0;
+    out[5] = 0;
+    out[6] = 0;
+    out[7] = 0;
+    out[8] = 0;
+    out[9] = 0;
+    out[10] = 0;
+    out[11] = 0;
+    out[12] = 0;
+    out[13] = -_tmp15 + 0.00244416*_tmp3 + 0.00244416*_tmp43 - 0.00244416*_tmp38 + _tmp10*_tmp6 - _tmp2*_tmp4;
+    out[14] = _tmp48 + 0.00244416*_tmp44 + 0.00244416*_tmp45 + 0.00244416*_tmp47 - _tmp4*_tmp46;
+    out[15] = -0.00244416;
+    out[16] = 0;
+    out[17] = -_tmp15 - _tmp4*_tmp9 + 0.00488832*_tmp5*_tmp9*p_0;
+    out[18] = _tmp48 - _tmp13*_tmp4;
+    out[19] = -0.00244416;
+    out[20] = 0;
+    out[21] = 0;
+    out[22] = 0;
+    out[23] = 0;
+    out[24] = 0;
+    out[25] = 0;
+    out[26] = 0;
+    out[27] = 0;
+    out[28] = -0.4;
+    out[29] = 0;
+    out[30] = 0;
+    out[31] = 0;
+    out[32] = 0;
+    out[33] = -_tmp52*across_1_1 + 0.00122208*_tmp53*_tmp56*p_3;
+    out[34] = _tmp52*_tmp56 + _tmp4*_tmp53*across_1_1;
+    out[35] = 0;
+    out[36] = 0;
+    out[37] = -_tmp59*across_2_1 + 0.00122208*_tmp60*_tmp61*p_3;
+    out[38] = _tmp59*_tmp60 + _tmp4*_tmp61*across_2_1;
+    out[39] = 0;
+    out[40] = 0;
+    out[41] = 0;
+    out[42] = 0;
+    out[43] = 0;
+    out[44] = 0;
+    out[45] = 0;
+    out[46] = 0;
+    out[47] = 0;
+    out[48] = 0;
+    out[49] = 0;
+    out[50] = 0;
+    out[51] = 0;
+    out[52] = 0;
+    out[53] = _tmp66;
+    out[54] = _tmp68;
+    out[55] = 0;
+    out[56] = 0;
+    out[57] = -_tmp68;
+    out[58] = _tmp66;
+    out[59] = 0;
+    out[60] = 0;
+    out[61] = 0;
+    out[62] = 0;
+    out[63] = 0;
+    out[64] = 0;
+    out[65] = _tmp69;
+    out[66] = _tmp70;
+    out[67] = 0;
+    out[68] = 0;
+    out[69] = -_tmp70;
+    out[70] = _tmp69;
+    out[71] = 0;
+    out[72] = 0;
+    out[73] = 0;
+    out[74] = 0;
+    out[75] = 0;
+    out[76] = 0;
+    out[77] = _tmp72;
+    out[78] = _tmp73;
+    out[79] = 0;
+    out[80] = 0;
+    out[81] = -_tmp73;
+    out[82] = _tmp72;
+    out[83] = 0;
+    out[84] = 0;
+    out[85] = 0;
+    out[86] = 0;
+    out[87] = 0;
+    out[88] = 0;
+    out[89] = _tmp74;
+    out[90] = _tmp75;
+    out[91] = 0;
+    out[92] = 0;
+    out[93] = -_tmp75;
+    out[94] = _tmp74;
+    out[95] = 0;
+    out[96] = 0;
+    out[97] = 0;
+    out[98] = 0;
+    out[99] = 0;
+    out[100] = 0;
+    out[101] = 0;
+    out[102] = 0;
+    out[103] = 0;
+    out[104] = 0;
+    out[105] = 0;
+    out[106] = 0;
+    out[107] = 0;
+    out[108] = 0;
+    out[109] = 0;
+    out[110] = 0;
+    out[111] = 0;
+    out[112] = 0;
+    out[113] = 0;
+    out[114] = 0;
+    out[115] = 0;
+    out[116] = 0;
+    out[117] = 0;
+    out[118] = 0;
+    out[119] = 0;
+    out[120] = 0;
+    out[121] = 0;
+    out[122] = 0;
+    out[123] = 0;
+    out[124] = 0;
+    out[125] = 0;
+    out[126] = 0;
+    out[127] = 0;
+    out[128] = 0;
+    out[129] = 0;
+    out[130] = 0;
+    out[131] = 0;
+    out[132] = 0;
+    out[133] = 0;
+    out[134] = 0;
+    out[135] = 0;
+    out[136] = 0;
+    out[137] = 0;
+    out[138] = 0;
+    out[139] = 0;
+    out[140] = 0;
+    out[141] = 0;
+    out[142] = 0;
+    out[143] = 0;
+    out[144] = _tmp76;
+    out[145] = -_tmp113 - _tmp114 + _tmp86*_tmp87 - _tmp78*_tmp85 - _tmp88*_tmp89 + 2*_tmp90*_tmp92*p_2;
+    out[146] = -_tmp117 + _tmp78*_tmp87 + _tmp85*_tmp86 - _tmp89*_tmp90 - 2*_tmp115*_tmp92;
+    out[147] = _tmp79;
+    out[148] = 0;
+    out[149] = 0;
+    out[150] = 0;
+    out[151] = 0;
+    out[152] = 0;
+    out[153] = 0;
+    out[154] = 0;
+    out[155] = 6.427599787083612;
+    out[156] = 0;
+    out[157] = 0;
+    out[158] = 0;
+    out[159] = 0;
+    out[160] = -_tmp135 - 0.019637602869497853*_tmp43 - _tmp128*_tmp39 - _tmp130*_tmp18 + 0.019637602869497853*_tmp18*_tmp37;
+    out[161] = 0;
+    out[162] = 0;
+    out[163] = -_tmp135 - 0.019637602869497853*_tmp147 - 0.039275205738995705*_tmp43 - _tmp109*_tmp145 - _tmp115*_tmp148 - _tmp146*_tmp94 + 0.019637602869497853*_tmp111*_tmp94 + 0.039275205738995705*_tmp18*_tmp37 + 0.07855041147799141*_tmp149*_tmp90*_tmp91*p_2;
+    out[164] = 0;
+    out[165] = 0;
+    out[166] = 0;
+    out[167] = 0;
+    out[168] = -_tmp109*_tmp156 - _tmp158*_tmp94;
+    out[169] = -_tmp164*_tmp39 - _tmp165*_tmp18;
+    out[170] = 0;
+    out[171] = 0;
+    out[172] = -0.019637602869497853*_tmp44 - 0.019637602869497853*_tmp45 + _tmp130*_tmp39 + _tmp133*_tmp86 + _tmp134*_tmp78 - _tmp128*_tmp18;
+    out[173] = 0;
+    out[174] = 0;
+    out[175] = -0.019637602869497853*_tmp108 - 0.019637602869497853*_tmp112 - 0.039275205738995705*_tmp44 - 0.039275205738995705*_tmp45 + _tmp109*_tmp146 + _tmp133*_tmp86 + _tmp134*_tmp78 - _tmp145*_tmp94 - _tmp148*_tmp90*p_2 - 0.07855041147799141*_tmp115*_tmp149*_tmp91;
+    out[176] = 0;
+    out[177] = 0;
+    out[178] = 0;
+    out[179] = 0;
+    out[180] = _tmp109*_tmp158 - _tmp156*_tmp94;
+    out[181] = _tmp165*_tmp39 - _tmp164*_tmp18;
+    out[182] = 0;
+    out[183] = 0;
+    out[184] = 0.039275205738995705;
+    out[185] = 0;
+    out[186] = 0;
+    out[187] = 0.039275205738995705;
+    out[188] = 0;
+    out[189] = 0;
+    out[190] = 0;
+    out[191] = 0;
+    out[192] = 0;
+    out[193] = 0;
+    out[194] = 0;
+    out[195] = 0;
+    out[196] = 0;
+    out[197] = 0;
+    out[198] = 0;
+    out[199] = 0;
+    out[200] = 0;
+    out[201] = 0;
+    out[202] = 0;
+    out[203] = 0;
+    out[204] = 0;
+    out[205] = 0;
+    out[206] = 0;
+    out[207] = 0;
+    out[208] = 0;
+    out[209] = 0;
+    out[210] = 0;
+    out[211] = 0;
+    out[212] = 0;
+    out[213] = 0;
+    out[214] = 0;
+    out[215] = 0;
+    out[216] = 0;
+    out[217] = 0;
+    out[218] = 0;
+    out[219] = 0;
+    out[220] = 0;
+    out[221] = 0;
+    out[222] = 0;
+    out[223] = 0;
+    out[224] = 0;
+    out[225] = 0;
+    out[226] = 0;
+    out[227] = 0;
+    out[228] = 0;
+    out[229] = 0;
+    out[230] = 0;
+    out[231] = 0;
+    out[232] = 0;
+    out[233] = 0;
+    out[234] = 0;
+    out[235] = 0;
+    out[236] = _tmp167;
+    out[237] = -_tmp168;
+    out[238] = 0;
+    out[239] = _tmp169;
+    out[240] = _tmp170;
+    out[241] = 0;
+    out[242] = _tmp173;
+    out[243] = -_tmp174;
+    out[244] = 0;
+    out[245] = _tmp175;
+    out[246] = _tmp176;
+    out[247] = 0;
+    out[248] = 0;
+    out[249] = 0;
+    out[250] = 0;
+    out[251] = 0;
+    out[252] = 0;
+    out[253] = 0;
+    out[254] = 0;
+    out[255] = 0;
+    out[256] = 0;
+    out[257] = 0;
+    out[258] = 0;
+    out[259] = 0;
+    out[260] = _tmp168;
+    out[261] = _tmp167;
+    out[262] = 0;
+    out[263] = -_tmp170;
+    out[264] = _tmp169;
+    out[265] = 0;
+    out[266] = _tmp174;
+    out[267] = _tmp173;
+    out[268] = 0;
+    out[269] = -_tmp176;
+    out[270] = _tmp175;
+    out[271] = 0;
+    out[272] = 0;
+    out[273] = 0;
+    out[274] = 0;
+    out[275] = 0;
+    out[276] = 0;
+    out[277] = 0;
+    out[278] = 0;
+    out[279] = 0;
+    out[280] = 0;
+    out[281] = 0;
+    out[282] = 0;
+    out[283] = 0;
+    out[284] = 0;
+    out[285] = 0;
+    out[286] = 0;
+    out[287] = 0;
+    out[288] = 0;
+    out[289] = 0;
+    out[290] = 0;
+    out[291] = 0;
+    out[292] = 0;
+    out[293] = 0;
+    out[294] = 0;
+    out[295] = 0;
+    out[296] = 0;
+    out[297] = 0;
+    out[298] = 0;
+    out[299] = 0;
+    out[300] = 0;
+    out[301] = 0;
+    out[302] = 0;
+    out[303] = 0;
+    out[304] = 0;
+    out[305] = 0;
+    out[306] = 0;
+    out[307] = 0;
+    out[308] = _tmp181*(-_tmp178*(-_tmp113 - _tmp20*_tmp46) - _tmp180*(_tmp147 + _tmp20 - _tmp116 + _tmp2*_tmp20) + 2045.692589683163*_tmp177*omega_1_1);
+    out[309] = -_tmp183;
+    out[310] = -0.000977664*_tmp180*_tmp64;
+    out[311] = _tmp185;
+    out[312] = _tmp186;
+    out[313] = _tmp187;
+    out[314] = 78554595443.83347;
+    out[315] = 0;
+    out[316] = _tmp181*(_tmp179*(_tmp3 + _tmp43 - _tmp38 + _tmp20*_tmp9 - _tmp189*_tmp2) + _tmp188*omega_2_1 - _tmp178*(-_tmp190 + _tmp189*_tmp46 - _tmp13*_tmp20));
+    out[317] = _tmp191*_tmp46 - _tmp183*_tmp2;
+    out[318] = _tmp183*_tmp46 + _tmp191*_tmp2;
+    out[319] = _tmp185;
+    out[320] = _tmp186;
+    out[321] = _tmp187;
+    out[322] = 78554595443.83347;
+    out[323] = 0;
+    out[324] = _tmp181*(_tmp178*(_tmp196 + _tmp214 + _tmp194*_tmp196 - _tmp192*_tmp195) + _tmp188*omega_3_1 - _tmp179*(_tmp192 + _tmp213 + _tmp192*_tmp194 + _tmp195*_tmp196));
+    out[325] = _tmp11*_tmp191 + _tmp183*_tmp5;
+    out[326] = -_tmp191*_tmp5 + 0.006284032918239313*_tmp11*_tmp64*x_5;
+    out[327] = _tmp185;
+    out[328] = _tmp186;
+    out[329] = _tmp187;
+    out[330] = 78554595443.83347;
+    out[331] = 0;
+    out[332] = _tmp181*(_tmp178*(-_tmp113 - _tmp190 - _tmp214 + _tmp195*_tmp216 + _tmp218*_tmp9 - _tmp13*_tmp217 - _tmp194*_tmp215 + 2*_tmp11*p_0) + _tmp188*omega_4_1 - _tmp179*(-_tmp117 - _tmp213 - p_2 + _tmp13*_tmp218 + _tmp2*p_2 + _tmp217*_tmp9 - _tmp194*_tmp216 - _tmp195*_tmp215));
+    out[333] = _tmp183*_tmp221 + _tmp191*_tmp220;
+    out[334] = -_tmp191*_tmp221 + 0.006284032918239313*_tmp220*_tmp64*x_5;
+    out[335] = _tmp185;
+    out[336] = _tmp186;
+    out[337] = _tmp187;
+    out[338] = 78554595443.83347;
+    out[339] = 0;
 }
 
 /* deviation of the points at level paper (31 operations) */
@@ -5600,6 +6556,41 @@ static void sk_loaded_deviation(const double *theta, const double *delta, const 
         out[i] = q[SK_NPAR + i];
     }
 }
+
+/* The solution q holds (the parameters, the deviation, the variant solved and its x,
+   sk_reduced_pose) evaluated again for the implicit-function theorem (templates/c/
+   reduced_sens.c, reduced_report.c): r its variant at the parameters, st J's LU, the plates'
+   inputs and relation and the system's output there, vals the relation's values per half plate.
+   Returns 0, or 1 where J is singular. */
+static int sk_red_at_solution(const sk_mechanism *m, const double *theta, const double *q,
+                              sk_red *r, sk_red_state *st, double *vals)
+{
+    const sk_loaded *l = (const sk_loaded *)m->loaded;
+    const double *x = q + SK_NPAR + 2 * SK_NP + 1;
+    int n, i, k, c;
+    r->m = m;
+    r->l = l;
+    r->v = l->variants + (int)q[SK_NPAR + 2 * SK_NP];
+    r->params = q;
+    n = r->v->size;
+    if (n > 0 && sk_red_eval(r, x, theta, 1.0, st)) {
+        return 1;
+    }
+    if (n == 0) {
+        double rel[12 * SK_RS];
+        sk_red_inputs(r, x, theta, 1.0, st->xt, st->ins);
+        sk_red_relation(r, st->ins, rel, vals);
+        for (i = 0; i < 12 * r->v->plates_n; ++i) {
+            st->rel[i] = rel[i];
+        }
+    }
+    for (k = 0; k < r->v->plates_n; ++k) {
+        for (c = 0; c < 3; ++c) {
+            vals[3 * k + c] = st->rel[12 * k + c];
+        }
+    }
+    return 0;
+}
 static const double sk_loaded_scale1[9] = {0.039275205738995705, 0.039275205738995705, 0.039275205738995705, 0.039275205738995705, 6.427599787083612, 6.427599787083612, 409.13851793663264, 6.427599787083612};
 static const double sk_loaded_scale2[13] = {0.039275205738995705, 0.039275205738995705, 0.039275205738995705, 0.039275205738995705, 6.427599787083612, 6.427599787083612, 409.13851793663264, 6.427599787083612, 1.0, 1.0, 1.0, 1.0};
 static const int sk_loaded_unknown_index[5] = {1, 2, 3, 0};
@@ -5610,6 +6601,266 @@ static const sk_loaded sk_loaded_tables = {
     4, 1e-12, 0.2, 0.9, 3.0, 0.01,
     12, 0, 0.001, 1e-15,
     sk_loaded_unknown_index
+};
+
+/* One variant's report routine (x, theta, plates, params) and where its blocks start, with q
+   the report's variables (the inputs' compliant angles, a virtual load (Fx, Fy, M) at every
+   point) and k its quantities (the inputs' moments, every point's dx, dy, dphi; as many):
+   dR/dv (n x q), din/dv (3 n_s x q), y (k), dy/dx (k x n), dy/dv (k x q), dy/dout (k x 3 n_s),
+   then per plate (k0, lx, ly, e_a, e_s, t/l, E', allowable stress). */
+typedef struct {
+    sk_fn4 fn;
+    int dR_dv, din_dv, y, dy_dx, dy_dv, dy_dout, stress;
+} sk_red_rep;
+
+/* What the report is of: per variant its routine; the inputs, points (on the frame or not),
+   plates (with an allowable stress or not); metres per file unit; the scales L, F C's
+   conditioning is judged by. */
+typedef struct {
+    sk_red_rep variants[2];
+    int n_inputs, n_points, n_plates;
+    const int *frame, *limits;
+    double unit_scale, L, F;
+} sk_loaded_report;
+
+/* Sections per plate where the stress is sampled (symkin.physics.reported.SECTIONS), one RK4
+   step each; a point's compliance this ill-conditioned (1-norm, scaled) is singular. */
+#define SK_REP_SECTIONS 64
+#define SK_REP_SINGULAR 1e12
+
+/* psi'' of the plate's IVP (symkin.physics.beams): -f_Q (1 + (e_a - e_s) f_N). */
+static double sk_rep_bend(double psi, double lx, double ly, double d)
+{
+    const double c = cos(psi), s = sin(psi);
+    return -(ly * c - lx * s) * (1.0 + d * (lx * c + ly * s));
+}
+
+/* One plate's largest normal stress, its strain, safety factor (NaN without an allowable
+   stress) and where along the plate (0..1) into out[0..3], from row = (k0, lx, ly, e_a, e_s,
+   t/l, E', allowable): psi(0) = 0, psi'(0) = k0 by fixed-step RK4, the strain
+   |psi'| t/(2l) + |f_N| (t/l)^2/12 at every section, the parabola's vertex through the three
+   samples around an interior maximum (symkin.physics.reported.plate_stress). */
+static void sk_rep_plate(const double *row, int has_limit, double *out)
+{
+    const double lx = row[1], ly = row[2], d = row[3] - row[4], t = row[5];
+    const double h = 1.0 / SK_REP_SECTIONS;
+    double strain[SK_REP_SECTIONS + 1], psi = 0.0, om = row[0], value, where, stress;
+    int i, j = 0;
+    for (i = 0; i <= SK_REP_SECTIONS; ++i) {
+        strain[i] = fabs(om) * t / 2.0 + fabs(lx * cos(psi) + ly * sin(psi)) * t * t / 12.0;
+        if (strain[i] > strain[j]) {
+            j = i;                  /* the first largest, as numpy's argmax */
+        }
+        if (i < SK_REP_SECTIONS) {
+            const double a1 = om, b1 = sk_rep_bend(psi, lx, ly, d);
+            const double a2 = om + h / 2 * b1, b2 = sk_rep_bend(psi + h / 2 * a1, lx, ly, d);
+            const double a3 = om + h / 2 * b2, b3 = sk_rep_bend(psi + h / 2 * a2, lx, ly, d);
+            const double a4 = om + h * b3, b4 = sk_rep_bend(psi + h * a3, lx, ly, d);
+            psi += h / 6 * (a1 + 2 * a2 + 2 * a3 + a4);
+            om += h / 6 * (b1 + 2 * b2 + 2 * b3 + b4);
+        }
+    }
+    value = strain[j];
+    where = (double)j / SK_REP_SECTIONS;
+    if (j > 0 && j < SK_REP_SECTIONS) {
+        const double a = strain[j - 1], b = strain[j], c = strain[j + 1];
+        const double bend = a - 2 * b + c;
+        if (bend < 0) {
+            const double shift = (a - c) / (2 * bend);
+            value = b - (a - c) * shift / 4;
+            where = (j + shift) / SK_REP_SECTIONS;
+        }
+    }
+    stress = row[6] * value;
+    out[0] = stress;
+    out[1] = value;
+    out[2] = !has_limit ? NAN : stress > 0 ? row[7] / stress : HUGE_VAL;
+    out[3] = where;
+}
+
+/* The 1-norm of a 3 x 3 matrix. */
+static double sk_rep_norm1(const double *a)
+{
+    double best = 0.0;
+    int c;
+    for (c = 0; c < 3; ++c) {
+        const double s = fabs(a[c]) + fabs(a[3 + c]) + fabs(a[6 + c]);
+        best = s > best ? s : best;
+    }
+    return best;
+}
+
+/* K = C^-1 of a point's compliance C (3 x 3) into k, NaN where C is singular: its 1-norm
+   condition, scaled by L and F as reduced_reported.report scales it (there the 2-norm's),
+   above SK_REP_SINGULAR or not finite. */
+static void sk_rep_stiffness(const sk_loaded_report *rp, const double *c, double *k)
+{
+    const double w[3] = {rp->F / rp->L, rp->F / rp->L, rp->F}, u[3] = {1.0, 1.0, 1.0 / rp->L};
+    double lu[9], scaled[9], inv[9], col[3];
+    int piv[3], i, j;
+    for (i = 0; i < 9; ++i) {
+        lu[i] = c[i];
+        scaled[i] = c[i] * w[i / 3] * u[i % 3];
+        k[i] = NAN;
+    }
+    if (sk_lu(3, lu, piv)) {
+        return;
+    }
+    for (j = 0; j < 3; ++j) {
+        col[0] = col[1] = col[2] = 0.0;
+        col[j] = 1.0;
+        sk_lu_solve(3, lu, piv, col);
+        for (i = 0; i < 3; ++i) {
+            inv[3 * i + j] = col[i];
+        }
+    }
+    {
+        /* the scaled compliance's inverse: inv with rows over u, columns over w */
+        double sinv[9];
+        for (i = 0; i < 9; ++i) {
+            sinv[i] = inv[i] / (u[i / 3] * w[i % 3]);
+        }
+        if (!(sk_rep_norm1(scaled) * sk_rep_norm1(sinv) <= SK_REP_SINGULAR)) {
+            return;
+        }
+    }
+    for (i = 0; i < 9; ++i) {
+        k[i] = inv[i];
+    }
+}
+
+/* What the loaded level reports at its solution (q: the parameters, the deviation, the variant
+   solved and its x, sk_reduced_pose) into out: per input its moment (N m) and dM/dtheta
+   (N m/rad), per point its stiffness K (9, row-major; NaN on the frame or where singular), per
+   plate its stress (Pa), strain, safety factor and section. Returns 0, or 1 where J is
+   singular. */
+static int sk_reduced_report(const sk_mechanism *m, const sk_loaded_report *rp,
+                             const double *theta, const double *q, double *out)
+{
+    const sk_red_rep *rr = rp->variants + (int)q[SK_NPAR + 2 * SK_NP];
+    const int nin = rp->n_inputs, nq = nin + 3 * rp->n_points;
+    double s[SK_OUT], vals[3 * SK_RS], dout[3 * SK_RS], col[SK_RN + 1];
+    double rates[SK_RQ * SK_RQ];
+    sk_red_state st;
+    sk_red r;
+    int n, ns, i, j, k, c, e;
+    if (sk_red_at_solution(m, theta, q, &r, &st, vals)) {
+        return 1;
+    }
+    n = r.v->size;
+    ns = r.v->plates_n;
+    rr->fn(st.xt, theta, vals, q, s);
+    for (c = 0; c < nq; ++c) {
+        /* dout/dv at fixed x: the relation's partials . din/dv */
+        for (k = 0; k < ns; ++k) {
+            for (i = 0; i < 3; ++i) {
+                double sum = 0.0;
+                for (e = 0; e < 3; ++e) {
+                    sum += st.rel[12 * k + 3 + 3 * i + e] * s[rr->din_dv + (3 * k + e) * nq + c];
+                }
+                dout[3 * k + i] = sum;
+            }
+        }
+        /* dx/dv = -J^-1 (dR/dv + dR/dout dout/dv) with J's LU */
+        for (i = 0; i < n; ++i) {
+            const double *jo = st.sys + n + n * n + i * 3 * ns;
+            double sum = s[rr->dR_dv + i * nq + c];
+            for (e = 0; e < 3 * ns; ++e) {
+                sum += jo[e] * dout[e];
+            }
+            col[i] = -sum;
+        }
+        if (n > 0) {
+            sk_lu_solve(n, st.lu, st.piv, col);
+        }
+        /* dout/dv along the solution: + the partials . din/dx dx/dv */
+        for (k = 0; k < ns; ++k) {
+            for (i = 0; i < 3; ++i) {
+                double sum = 0.0;
+                for (e = 0; e < 3; ++e) {
+                    const double *dinx = st.ins + 5 * ns + (3 * k + e) * n;
+                    for (j = 0; j < n; ++j) {
+                        sum += st.rel[12 * k + 3 + 3 * i + e] * dinx[j] * col[j];
+                    }
+                }
+                dout[3 * k + i] += sum;
+            }
+        }
+        for (i = 0; i < nq; ++i) {
+            double sum = s[rr->dy_dv + i * nq + c];
+            for (e = 0; e < n; ++e) {
+                sum += s[rr->dy_dx + i * n + e] * col[e];
+            }
+            for (e = 0; e < 3 * ns; ++e) {
+                sum += s[rr->dy_dout + i * 3 * ns + e] * dout[e];
+            }
+            rates[i * nq + c] = sum;
+        }
+    }
+    for (i = 0; i < nin; ++i) {
+        out[2 * i] = s[rr->y + i] * rp->unit_scale;
+        out[2 * i + 1] = rates[i * nq + i] * rp->unit_scale;
+    }
+    out += 2 * nin;
+    for (k = 0; k < rp->n_points; ++k) {
+        double cm[9];
+        for (i = 0; i < 3; ++i) {
+            for (c = 0; c < 3; ++c) {
+                cm[3 * i + c] = rates[(nin + 3 * k + i) * nq + nin + 3 * k + c];
+            }
+        }
+        sk_rep_stiffness(rp, cm, out + 9 * k);
+        if (rp->frame[k]) {
+            sk_nan(out + 9 * k, 9);
+        }
+    }
+    out += 9 * rp->n_points;
+    for (k = 0; k < rp->n_plates; ++k) {
+        sk_rep_plate(s + rr->stress + 8 * k, rp->limits[k], out + 4 * k);
+    }
+    return 0;
+}
+
+/* <name>_loaded_report (the generated header documents it): the configuration solved at the
+   loaded level `level`, then sk_reduced_report; out NaN on any non-zero return. */
+static int sk_loaded_report_pose(const sk_mechanism *m, const sk_loaded_report *rp, int level,
+                                 const double *inputs, const double *params, double *out)
+{
+    double theta[SK_M], delta[SK_K + 1], constants[SK_NQ];
+    const double *q;
+    const sk_level *lv = sk_find_level(m, level);
+    const int size = 2 * rp->n_inputs + 9 * rp->n_points + 4 * rp->n_plates;
+    int status, i;
+    if (out == NULL) {
+        return 3;
+    }
+    if (params == NULL) {
+        params = m->defaults;
+    }
+    status = inputs == NULL || lv == NULL
+                 ? 3
+                 : sk_pose(m, lv, inputs, params, 0, theta, delta, constants, &q);
+    if (status == 0) {
+        status = sk_reduced_report(m, rp, theta, q, out);
+    }
+    for (i = 0; status == 0 && i < 2 * rp->n_inputs; ++i) {
+        if (!isfinite(out[i])) {
+            status = 2;             /* a non-finite moment is never a success */
+        }
+    }
+    if (status != 0) {
+        sk_nan(out, size);
+    }
+    return status;
+}
+static const int sk_report_frame[2] = {0};
+static const int sk_report_limits[5] = {0, 0, 0, 0};
+/* what the loaded level reports: per variant its routine and where its blocks start; the
+   inputs, points, plates; metres per file unit, the scales L and F */
+static const sk_loaded_report sk_loaded_report_tables = {
+    {{sk_loaded_report1, 0, 32, 80, 84, 116, 132, 180}, {sk_loaded_report2, 0, 48, 144, 148, 196, 212, 308}},
+    0, 1, 4, sk_report_frame, sk_report_limits,
+    0.001, 63.65339029956478, 6.427599787083612
 };
 
 /* symkin actuators runtime (templates/c/actuators.c): the strokes to the surrogate hinges'
@@ -5827,12 +7078,18 @@ static double sk_stroke_tol(const sk_actuators *t, const double *rest)
 
 /* The kinematic inputs xr at which the rigid linkage (the rigid positions of `level`) meets the
    strokes among the public inputs `drives`; `rest` (6 SK_NP) the points as fabricated. Returns
-   0, or the status of what failed. */
+   0, 3 where a public input is not finite (a NaN stroke would pass the stroke solve's test), or
+   the status of what failed. */
 static int sk_stroke_rigid(const sk_mechanism *m, const sk_actuators *t, const double *drives,
                            const double *params, int level, double *xr, double *rest)
 {
     double zero[SK_NI + 1];
     int j, s;
+    for (j = 0; j < SK_NI; ++j) {
+        if (!isfinite(drives[j])) {
+            return 3;
+        }
+    }
     for (j = 0; j < SK_NI; ++j) {
         zero[j] = 0.0;
         xr[j] = t->drive_of[j] >= 0 ? drives[t->drive_of[j]] : 0.0;
@@ -5892,27 +7149,41 @@ static int sk_actuated_kinematic(const sk_mechanism *m, const sk_actuators *t,
     return s;
 }
 
+/* The loaded level's solution with actuators (sk_actuated_loaded): the loaded routines' theta
+   (the rigid angles at the strokes, then the forces) and q, what the level's routines read
+   (the parameters, the deviation, the variant solved and its x; written into `constants`), for
+   what the level reports there (sk_actuated_report). */
+typedef struct {
+    double theta[SK_M];
+    double constants[SK_NQ];
+    const double *q;
+} sk_act_solution;
+
 /* The loaded level with actuators, laid out as sk_actuated_kinematic's: the reduced equilibrium
    at the rigid linkage at the strokes, the surrogates free (docs/physics.md, "Actuators at
    loaded"); its deviation is the answer's, the surrogates' turn (q's x after the non-input
    hinges') in the compliant angles and the links' deviations; a force actuator's deviations
-   against the rigid linkage at the stroke it produced. Returns 0, or a status code. */
+   against the rigid linkage at the stroke it produced; the solution in sol. Returns 0, or a
+   status code. */
 static int sk_actuated_loaded(const sk_mechanism *m, const sk_actuators *t, const double *drives,
-                              const double *params, double *pr, double *ar, double *lr)
+                              const double *params, double *pr, double *ar, double *lr,
+                              sk_act_solution *sol)
 {
     const sk_level *lv = sk_find_level(m, SK_LEVEL_LOADED);
     const sk_loaded *l = (const sk_loaded *)m->loaded;
-    double rest[6 * SK_NP], xr[SK_NI + 1], delta[SK_K + 1], constants[SK_NQ], turned[SK_M];
-    double theta[SK_M];
+    double rest[6 * SK_NP], xr[SK_NI + 1], delta[SK_K + 1], turned[SK_M];
+    double *theta = sol->theta;
     const double *strokes = drives;
     const double *q = NULL;
     int i, j, v, s;
     if (params == NULL) {
         params = m->defaults;
     }
-    s = sk_stroke_rigid(m, t, strokes, params, SK_LEVEL_RIGID, xr, rest);
-    s = s != 0 ? s : sk_pose(m, lv, xr, params, lr != NULL, theta, delta, constants, &q);
+    s = 0;
+    s = s != 0 ? s : sk_stroke_rigid(m, t, strokes, params, SK_LEVEL_RIGID, xr, rest);
+    s = s != 0 ? s : sk_pose(m, lv, xr, params, lr != NULL, theta, delta, sol->constants, &q);
     s = s != 0 ? s : sk_outputs(m, lv, theta, delta, params, q, pr, ar, lr);
+    sol->q = q;
     if (s != 0) {
         return s;
     }
@@ -5954,7 +7225,8 @@ static int sk_actuated_pose(const sk_mechanism *m, const sk_actuators *t, const 
         return 3;
     }
     if (level == SK_LEVEL_LOADED) {
-        s = sk_actuated_loaded(m, t, drives, params, pr, ar, links == NULL ? NULL : lr);
+        sk_act_solution sol;
+        s = sk_actuated_loaded(m, t, drives, params, pr, ar, links == NULL ? NULL : lr, &sol);
     } else
     {
         s = sk_actuated_kinematic(m, t, drives, params, level, pr, ar, links == NULL ? NULL : lr);
@@ -6012,6 +7284,59 @@ static int sk_actuated_grid(const sk_mechanism *m, const sk_actuators *t, int n_
             status == NULL ? NULL : status + (size_t)s * n);
     }
     return failed;
+}
+
+/* <name>_loaded_report with actuators (the generated header documents it): the configuration
+   solved as <name>_evaluate's at loaded (sk_actuated_loaded), then sk_reduced_report at its
+   solution with the actuators' rows read as inputs after the input hinges', unscaled (as numpy's
+   _actuated_report; symkin.codegen.loaded's loaded_report<g>): the input hinges' moments and
+   dM/dtheta in N m, the points' stiffness and the plates' stress as without actuators, then
+   per actuator its stroke, force and dF/ds (a stroke's force and dF/ds; a force's stroke and
+   1/(ds/dF), inf where ds/dF = 0). out NaN on any non-zero return. */
+static int sk_actuated_report(const sk_mechanism *m, const sk_actuators *t,
+                              const sk_loaded_report *rp, const double *drives,
+                              const double *params, double *out)
+{
+    /* sk_reduced_report's answer with the actuators' rows: 2 per row (input hinges, then
+       actuators), 9 per point, 4 per plate (fewer plates than SK_RS) */
+    double raw[3 * SK_RQ + 4 * SK_RS], pr[6 * SK_NP], ar[2 * SK_M], *acts;
+    const int nin = rp->n_inputs, rows = nin + t->n;
+    const int size = 2 * nin + 9 * rp->n_points + 4 * rp->n_plates + 3 * t->n;
+    sk_loaded_report with = *rp;
+    sk_act_solution sol;
+    int i, a, s;
+    (void)sk_loaded_report_pose; /* the runtime's, for input angles: the public one is this */
+    if (out == NULL) {
+        return 3;
+    }
+    acts = out + 2 * nin + 9 * rp->n_points + 4 * rp->n_plates;
+    with.n_inputs = rows;
+    with.unit_scale = 1.0;
+    s = drives == NULL ? 3 : sk_actuated_loaded(m, t, drives, params, pr, ar, NULL, &sol);
+    s = s != 0 ? s : sk_reduced_report(m, &with, sol.theta, sol.q, raw);
+    for (i = 0; s == 0 && i < 2 * rows; ++i) {
+        if (!isfinite(raw[i])) {
+            s = 2;                  /* a non-finite moment, force or stroke is never a success */
+        }
+    }
+    if (s != 0) {
+        sk_nan(out, size);
+        return s;
+    }
+    for (i = 0; i < 2 * nin; ++i) {
+        out[i] = raw[i] * rp->unit_scale;
+    }
+    for (i = 0; i < 9 * rp->n_points + 4 * rp->n_plates; ++i) {
+        out[2 * nin + i] = raw[2 * rows + i];
+    }
+    for (a = 0; a < t->n; ++a) {
+        const double value = raw[2 * (nin + a)], rate = raw[2 * (nin + a) + 1];
+        const double given = drives[t->stroke[a]];
+        acts[3 * a] = given;
+        acts[3 * a + 1] = value;
+        acts[3 * a + 2] = rate;
+    }
+    return 0;
 }
 
 /* The surrogates' rates dv/dy (t->n x SK_NV, row-major) at one pose, from that pose's
@@ -6293,4 +7618,25 @@ int piezo_amplifier_sensitivity_batch(int n, const double *inputs, const double 
 {
     return sk_actuated_sensitivity_rows(&sk_mechanism_tables, &sk_actuator_tables, n, inputs,
                                         params, level, values, deviation, rigid, status);
+}
+
+const char *const piezo_amplifier_report_input_names[PIEZO_AMPLIFIER_N_REPORT_INPUTS > 0 ? PIEZO_AMPLIFIER_N_REPORT_INPUTS : 1] = {
+    ""
+};
+
+const char *const piezo_amplifier_report_plate_names[PIEZO_AMPLIFIER_N_REPORT_PLATES > 0 ? PIEZO_AMPLIFIER_N_REPORT_PLATES : 1] = {
+    "RA0",
+    "A",
+    "O",
+    "C"
+};
+
+const char *const piezo_amplifier_report_actuator_names[PIEZO_AMPLIFIER_N_REPORT_ACTUATORS] = {
+    "piezo"
+};
+
+int piezo_amplifier_loaded_report(const double *inputs, const double *params, double *out)
+{
+    return sk_actuated_report(&sk_mechanism_tables, &sk_actuator_tables, &sk_loaded_report_tables,
+                              inputs, params, out);
 }

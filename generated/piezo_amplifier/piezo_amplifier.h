@@ -3,7 +3,7 @@
  * Mechanism 'piezo_amplifier': 4 links, 4 hinges, 1 loop(s); inputs piezo (actuators; their strokes fix the angles of RA0 (piezo)).
  * Points: B; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, loaded_plates1 147, loaded_system1 722, loaded_res1 292, loaded_dev1 104, loaded_plates2 372, loaded_system2 1863, loaded_res2 568, loaded_dev2 189, dev_paper 31, dev_first_order 51, dev_exact 62, links 1, sens_rigid 105, sens_paper 108, sens_first_order 355, sens_exact 449, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40.
+ * Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, loaded_plates1 147, loaded_system1 722, loaded_res1 292, loaded_dev1 104, loaded_report1 413, loaded_plates2 372, loaded_system2 1863, loaded_res2 568, loaded_dev2 189, loaded_report2 837, dev_paper 31, dev_first_order 51, dev_exact 62, links 1, sens_rigid 105, sens_paper 108, sens_first_order 355, sens_exact 449, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40.
  */
 #ifndef SYMKIN_PIEZO_AMPLIFIER_H
 #define SYMKIN_PIEZO_AMPLIFIER_H
@@ -100,5 +100,30 @@ int piezo_amplifier_sensitivity_full(const double *inputs, const double *params,
 /* piezo_amplifier_sensitivity_full for n rows of inputs (as piezo_amplifier_evaluate_batch). */
 int piezo_amplifier_sensitivity_batch(int n, const double *inputs, const double *params, int level,
                           double *values, double *deviation, double *rigid, int *status);
+
+/*
+ * What the `loaded` level reports beyond the deviations (docs/physics.md, "What loaded
+ * reports"), for one configuration (inputs and params as piezo_amplifier_evaluate's) solved at
+ * `loaded`. out receives PIEZO_AMPLIFIER_N_REPORT doubles: per input hinge in
+ * piezo_amplifier_report_input_names order its moment (N m) and dM/dtheta (N m/rad); per point in
+ * piezo_amplifier_point_names order its 3 x 3 stiffness with every input held (9 doubles, row-major,
+ * rows and columns x, y, rotation, in the file's length unit; NaN where the point is on the frame
+ * or its compliance is singular); per plate in piezo_amplifier_report_plate_names order its largest
+ * normal stress (Pa), strain, safety factor (the allowable stress over the stress; NaN without
+ * one) and where along the plate (0..1) (4 doubles). Not the buckling factor (symkin eval's).
+ * Then per actuator in piezo_amplifier_report_actuator_names order (3 doubles): its stroke (the
+ * file's length unit; a force's from the as-fabricated rigid pose), its force along its line
+ * (N) and its stiffness dF/ds with the other inputs held (N per length unit; a force's
+ * 1/(ds/dF), inf where ds/dF = 0). The point stiffness holds the actuators too.
+ * Same return codes as piezo_amplifier_evaluate at `loaded`; on any non-zero return out is NaN.
+ */
+#define PIEZO_AMPLIFIER_N_REPORT_INPUTS 0
+#define PIEZO_AMPLIFIER_N_REPORT_PLATES 4
+#define PIEZO_AMPLIFIER_N_REPORT_ACTUATORS 1
+#define PIEZO_AMPLIFIER_N_REPORT (2 * PIEZO_AMPLIFIER_N_REPORT_INPUTS + 9 * PIEZO_AMPLIFIER_N_POINTS + 4 * PIEZO_AMPLIFIER_N_REPORT_PLATES + 3 * PIEZO_AMPLIFIER_N_REPORT_ACTUATORS)
+extern const char *const piezo_amplifier_report_input_names[PIEZO_AMPLIFIER_N_REPORT_INPUTS > 0 ? PIEZO_AMPLIFIER_N_REPORT_INPUTS : 1];
+extern const char *const piezo_amplifier_report_plate_names[PIEZO_AMPLIFIER_N_REPORT_PLATES > 0 ? PIEZO_AMPLIFIER_N_REPORT_PLATES : 1];
+extern const char *const piezo_amplifier_report_actuator_names[PIEZO_AMPLIFIER_N_REPORT_ACTUATORS];
+int piezo_amplifier_loaded_report(const double *inputs, const double *params, double *out);
 
 #endif /* SYMKIN_PIEZO_AMPLIFIER_H */

@@ -202,11 +202,7 @@ def _numpy_sensitivity_rows(
 
 def _emit_c(p: Plan, source: str, precision: str) -> tuple[str, ...]:
     from .backends.c import backend
-    from .plan import without_report
 
-    # with actuators the C runtime's `loaded` reports no more than the deviations (numpy's does)
-    if p.actuators:
-        p = without_report(p)
     return backend.emit(p, source)
 
 

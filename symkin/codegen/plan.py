@@ -319,8 +319,7 @@ def plan(
     if any(lv.name in level_table.LOADED for lv in levels):
         # the reduced equilibrium (docs/physics.md, "The Newton level"), one and two half
         # plates per plate; the runtime's driver writes the points' deviation itself (with
-        # actuators the numpy runtime's own driver; the C files of a file with actuators leave
-        # the report out, without_report)
+        # actuators the runtimes' own drivers: templates/*/reduced_actuators.*, actuators.c)
         found, loaded = loaded_routines(an, names, theta, params, reported)
         routines.update(found)
     for lv in levels:
@@ -438,19 +437,6 @@ def plan(
         forces=tuple(a.name for a in mech.actuators if a.drive != "stroke"),
     )
     return with_derivation(result, an) if report else result
-
-
-def without_report(p: Plan) -> Plan:
-    """`p` without what the `loaded` level reports beyond the deviations (its loaded_report<g>
-    routines and their tables): what the C backend emits for a mechanism with actuators, whose
-    report with the actuators' rows the generated numpy module alone gives."""
-    if p.loaded is None or p.loaded.report is None:
-        return p
-    return dataclasses.replace(
-        p,
-        loaded=dataclasses.replace(p.loaded, report=None),
-        routines={k: r for k, r in p.routines.items() if not k.startswith("loaded_report")},
-    )
 
 
 def _actuators(mech, levels) -> tuple[tuple[str, str, str, tuple[float, float]], ...]:

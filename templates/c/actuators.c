@@ -231,12 +231,18 @@ static double sk_stroke_tol(const sk_actuators *t, const double *rest)
 
 /* The kinematic inputs xr at which the rigid linkage (the rigid positions of `level`) meets the
    strokes among the public inputs `drives`; `rest` (6 SK_NP) the points as fabricated. Returns
-   0, or the status of what failed. */
+   0, 3 where a public input is not finite (a NaN stroke would pass the stroke solve's test), or
+   the status of what failed. */
 static int sk_stroke_rigid(const sk_mechanism *m, const sk_actuators *t, const double *drives,
                            const double *params, int level, double *xr, double *rest)
 {
     double zero[SK_NI + 1];
     int j, s;
+    for (j = 0; j < SK_NI; ++j) {
+        if (!isfinite(drives[j])) {
+            return 3;
+        }
+    }
     for (j = 0; j < SK_NI; ++j) {
         zero[j] = 0.0;
         xr[j] = t->drive_of[j] >= 0 ? drives[t->drive_of[j]] : 0.0;
@@ -297,12 +303,26 @@ static int sk_actuated_kinematic(const sk_mechanism *m, const sk_actuators *t,
 }
 
 #if defined(SK_ACT_LOADED)
+/* The loaded level's solution with actuators (sk_actuated_loaded): the loaded routines' theta
+   (the rigid angles at the strokes, then the forces) and q, what the level's routines read
+   (the parameters, the deviation, the variant solved and its x; written into `constants`), for
+   what the level reports there (sk_actuated_report). */
+typedef struct {
+#if defined(SK_ACT_FORCES)
+    double theta[SK_M + SK_NF];
+#else
+    double theta[SK_M];
+#endif
+    double constants[SK_NQ];
+    const double *q;
+} sk_act_solution;
+
 #if defined(SK_ACT_FORCES)
 /* The public inputs of the first solve (strokes: a force actuator's stroke 0, against the
    as-fabricated pose) and the forces after the rigid angles in theta, where the loaded routines
-   read them. */
-static void sk_force_split(const sk_actuators *t, const double *drives, double *strokes,
-                           double *theta)
+   read them. Returns 0, or 3 where a force is not finite. */
+static int sk_force_split(const sk_actuators *t, const double *drives, double *strokes,
+                          double *theta)
 {
     int a, j;
     for (j = 0; j < SK_NI; ++j) {
@@ -312,8 +332,12 @@ static void sk_force_split(const sk_actuators *t, const double *drives, double *
         if (t->force[a] >= 0) {
             theta[SK_M + t->force[a]] = drives[t->stroke[a]];
             strokes[t->stroke[a]] = 0.0;
+            if (!isfinite(drives[t->stroke[a]])) {
+                return 3;
+            }
         }
     }
+    return 0;
 }
 
 /* A force actuator's rigid reference (docs/physics.md, "Actuators at loaded"): xr solved again,
@@ -354,17 +378,19 @@ static int sk_force_reference(const sk_mechanism *m, const sk_actuators *t,
    at the rigid linkage at the strokes, the surrogates free (docs/physics.md, "Actuators at
    loaded"); its deviation is the answer's, the surrogates' turn (q's x after the non-input
    hinges') in the compliant angles and the links' deviations; a force actuator's deviations
-   against the rigid linkage at the stroke it produced. Returns 0, or a status code. */
+   against the rigid linkage at the stroke it produced; the solution in sol. Returns 0, or a
+   status code. */
 static int sk_actuated_loaded(const sk_mechanism *m, const sk_actuators *t, const double *drives,
-                              const double *params, double *pr, double *ar, double *lr)
+                              const double *params, double *pr, double *ar, double *lr,
+                              sk_act_solution *sol)
 {
     const sk_level *lv = sk_find_level(m, SK_LEVEL_LOADED);
     const sk_loaded *l = (const sk_loaded *)m->loaded;
-    double rest[6 * SK_NP], xr[SK_NI + 1], delta[SK_K + 1], constants[SK_NQ], turned[SK_M];
+    double rest[6 * SK_NP], xr[SK_NI + 1], delta[SK_K + 1], turned[SK_M];
+    double *theta = sol->theta;
 #if defined(SK_ACT_FORCES)
-    double theta[SK_M + SK_NF], strokes[SK_NI + 1];
+    double strokes[SK_NI + 1];
 #else
-    double theta[SK_M];
     const double *strokes = drives;
 #endif
     const double *q = NULL;
@@ -372,12 +398,14 @@ static int sk_actuated_loaded(const sk_mechanism *m, const sk_actuators *t, cons
     if (params == NULL) {
         params = m->defaults;
     }
+    s = 0;
 #if defined(SK_ACT_FORCES)
-    sk_force_split(t, drives, strokes, theta);
+    s = sk_force_split(t, drives, strokes, theta);
 #endif
-    s = sk_stroke_rigid(m, t, strokes, params, SK_LEVEL_RIGID, xr, rest);
-    s = s != 0 ? s : sk_pose(m, lv, xr, params, lr != NULL, theta, delta, constants, &q);
+    s = s != 0 ? s : sk_stroke_rigid(m, t, strokes, params, SK_LEVEL_RIGID, xr, rest);
+    s = s != 0 ? s : sk_pose(m, lv, xr, params, lr != NULL, theta, delta, sol->constants, &q);
     s = s != 0 ? s : sk_outputs(m, lv, theta, delta, params, q, pr, ar, lr);
+    sol->q = q;
     if (s != 0) {
         return s;
     }
@@ -426,7 +454,8 @@ static int sk_actuated_pose(const sk_mechanism *m, const sk_actuators *t, const 
     }
 #if defined(SK_ACT_LOADED)
     if (level == SK_LEVEL_LOADED) {
-        s = sk_actuated_loaded(m, t, drives, params, pr, ar, links == NULL ? NULL : lr);
+        sk_act_solution sol;
+        s = sk_actuated_loaded(m, t, drives, params, pr, ar, links == NULL ? NULL : lr, &sol);
     } else
 #endif
     {
@@ -486,6 +515,69 @@ static int sk_actuated_grid(const sk_mechanism *m, const sk_actuators *t, int n_
     }
     return failed;
 }
+#if defined(SK_ACT_REPORT)
+
+/* <name>_loaded_report with actuators (the generated header documents it): the configuration
+   solved as <name>_evaluate's at loaded (sk_actuated_loaded), then sk_reduced_report at its
+   solution with the actuators' rows read as inputs after the input hinges', unscaled (as numpy's
+   _actuated_report; symkin.codegen.loaded's loaded_report<g>): the input hinges' moments and
+   dM/dtheta in N m, the points' stiffness and the plates' stress as without actuators, then
+   per actuator its stroke, force and dF/ds (a stroke's force and dF/ds; a force's stroke and
+   1/(ds/dF), inf where ds/dF = 0). out NaN on any non-zero return. */
+static int sk_actuated_report(const sk_mechanism *m, const sk_actuators *t,
+                              const sk_loaded_report *rp, const double *drives,
+                              const double *params, double *out)
+{
+    /* sk_reduced_report's answer with the actuators' rows: 2 per row (input hinges, then
+       actuators), 9 per point, 4 per plate (fewer plates than SK_RS) */
+    double raw[3 * SK_RQ + 4 * SK_RS], pr[6 * SK_NP], ar[2 * SK_M], *acts;
+    const int nin = rp->n_inputs, rows = nin + t->n;
+    const int size = 2 * nin + 9 * rp->n_points + 4 * rp->n_plates + 3 * t->n;
+    sk_loaded_report with = *rp;
+    sk_act_solution sol;
+    int i, a, s;
+    (void)sk_loaded_report_pose; /* the runtime's, for input angles: the public one is this */
+    if (out == NULL) {
+        return 3;
+    }
+    acts = out + 2 * nin + 9 * rp->n_points + 4 * rp->n_plates;
+    with.n_inputs = rows;
+    with.unit_scale = 1.0;
+    s = drives == NULL ? 3 : sk_actuated_loaded(m, t, drives, params, pr, ar, NULL, &sol);
+    s = s != 0 ? s : sk_reduced_report(m, &with, sol.theta, sol.q, raw);
+    for (i = 0; s == 0 && i < 2 * rows; ++i) {
+        if (!isfinite(raw[i])) {
+            s = 2;                  /* a non-finite moment, force or stroke is never a success */
+        }
+    }
+    if (s != 0) {
+        sk_nan(out, size);
+        return s;
+    }
+    for (i = 0; i < 2 * nin; ++i) {
+        out[i] = raw[i] * rp->unit_scale;
+    }
+    for (i = 0; i < 9 * rp->n_points + 4 * rp->n_plates; ++i) {
+        out[2 * nin + i] = raw[2 * rows + i];
+    }
+    for (a = 0; a < t->n; ++a) {
+        const double value = raw[2 * (nin + a)], rate = raw[2 * (nin + a) + 1];
+        const double given = drives[t->stroke[a]];
+#if defined(SK_ACT_FORCES)
+        if (t->force[a] >= 0) {
+            acts[3 * a] = value;
+            acts[3 * a + 1] = given;
+            acts[3 * a + 2] = rate != 0.0 ? 1.0 / rate : HUGE_VAL;
+            continue;
+        }
+#endif
+        acts[3 * a] = given;
+        acts[3 * a + 1] = value;
+        acts[3 * a + 2] = rate;
+    }
+    return 0;
+}
+#endif
 #if defined(SK_SENSITIVITY)
 
 /* The surrogates' rates dv/dy (t->n x SK_NV, row-major) at one pose, from that pose's

@@ -58,6 +58,14 @@ def features(plan: Plan) -> list[str]:
             ("SK_ACT_LOADED", plan.loaded is not None and bool(plan.actuators)),
             # force actuators at loaded: their forces after the rigid angles in theta
             ("SK_ACT_FORCES", plan.loaded is not None and bool(plan.forces)),
+            # actuators at loaded with the level's report: the actuators' rows
+            # (templates/c/actuators.c's sk_actuated_report)
+            (
+                "SK_ACT_REPORT",
+                plan.loaded is not None
+                and bool(plan.actuators)
+                and "loaded_report1" in plan.routines,
+            ),
             ("SK_LINKS", bool(plan.reported_links)),
             ("SK_SENSITIVITY", plan.sensitivity),
         )
