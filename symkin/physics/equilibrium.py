@@ -480,10 +480,6 @@ def follow(
     deadline = time.monotonic() + seconds
     jac, slope = system.jacobian(u, t, tol)
     sign = np.linalg.slogdet(jac)[0]
-    # two eigenvalues crossing zero together (identical legs buckling at one load) leave det J's
-    # sign: the count of J's real negative eigenvalues, relative to the start's J, sees them
-    start = jac
-    negative = _negative(start, jac)
     dt, accepted = largest, 0
     smallest = [(t, _smallest(jac))] if approach else []
     for _ in range(MAX_STEPS):
@@ -509,7 +505,7 @@ def follow(
             new = None
         if new is not None:
             jac_new, slope_new = system.jacobian(new[0], t1, tol)
-            if np.linalg.slogdet(jac_new)[0] != sign or _negative(start, jac_new) != negative:
+            if np.linalg.slogdet(jac_new)[0] != sign:
                 new = None
         if new is None:
             dt /= 2
@@ -528,18 +524,6 @@ def follow(
 #: J's smallest singular value over its largest below which a falling one that the step control
 #: cannot approach further counts as singular (the sway of the parallelogram stage stops at 1e-11).
 SINGULAR_RATIO = 1e-8
-
-
-def _negative(start: np.ndarray, jac: np.ndarray) -> int:
-    """How many real eigenvalues of start⁻¹ J are negative (0 at the start; scale-free). A real
-    eigenvalue changes sign only through a singular J, and the count changes by two where det J
-    does not (a double root: a symmetric mechanism's identical legs)."""
-    try:
-        mu = np.linalg.eigvals(np.linalg.solve(start, jac))
-    except np.linalg.LinAlgError:
-        return -1
-    real = np.abs(mu.imag) <= 1e-9 * np.maximum(np.abs(mu), 1e-300)
-    return int(np.count_nonzero(real & (mu.real < 0)))
 
 
 def _smallest(jac: np.ndarray) -> float:
