@@ -148,15 +148,24 @@ def test_legs_held_by_a_stroke_buckle_together_at_eulers_load():
     """The stroke-driven stage at zero stroke under a payload W: the actuator holds the stage
     sideways, so each leg buckles by translating sideways between its two plates, both bent as
     clamped-guided columns: W_cr = 2 pi^2 E'I/l^2 (Euler, the leg's load W/2 per plate).
-    `loaded` finds it (a plate at its sway load; measured 0.17 % below Euler: the legs' turn
+    `loaded` finds it (a plate at its sway load; measured 0.18 % below Euler: the legs' turn
     couples in). The two identical legs buckle at one load, two eigenvalues of the tangent
-    stiffness crossing zero together, which leaves det J's sign: `equilibrium`'s search does not
-    see it yet (docs/physics.md, "The buckling factor")."""
+    stiffness crossing zero together, which leaves det J's sign: `equilibrium` finds it by the
+    eigenvalues of J⁻¹J_new between its steps (docs/physics.md, "The buckling factor"); with one
+    leg's plates 0.2 % thicker the two loads part, each leg at its own (measured: equilibrium
+    and loaded within 1e-7 of each other on both)."""
     w = 300.0
-    an = symkin.analyze(symkin.loads(driven("stroke", PAYLOAD.replace("-5.0", f"-{w}")), "w.toml"))
     euler = 2 * math.pi**2 * E_PRIME * WIDTH * THICK**3 / 12 / PLATE**2
-    factor = symkin.evaluate(an, {"piezo": 0.0}, "loaded").buckling
-    assert factor * w == pytest.approx(euler, rel=5e-3)
+    text = driven("stroke", PAYLOAD.replace("-5.0", f"-{w}"))
+    thicker = text.replace('"right"]\n', '"right"]\nthickness = 0.1503e-3\n')
+    thicker = thicker.replace('["right", "stage"]\n', '["right", "stage"]\nthickness = 0.1503e-3\n')
+    assert thicker.count("0.1503e-3") == 2
+    for what in (text, thicker):
+        an = symkin.analyze(symkin.loads(what, "w.toml"))
+        factor = symkin.evaluate(an, {"piezo": 0.0}, "loaded").buckling
+        assert factor * w == pytest.approx(euler, rel=5e-3)
+        exact = symkin.evaluate(an, {"piezo": 0.0}, "equilibrium").buckling
+        assert exact == pytest.approx(factor, rel=1e-6)
 
 
 def test_the_force_a_stroke_needs_reaches_that_stroke(evaluated):

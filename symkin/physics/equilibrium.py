@@ -470,8 +470,9 @@ def follow(
     approach: bool = False,
 ) -> Path:
     """Continuation along `system`'s path from the solution `u` at `t` to `end`: a tangent
-    predictor and Newton in float64, the step halved when Newton fails, det J changes sign or
-    the corrector jumps, down to MIN_STEP; at most `steps` accepted steps, MAX_STEPS attempts
+    predictor and Newton in float64, the step halved when Newton fails, det J changes sign
+    (with `approach`, when any eigenvalue of J crosses zero: _crossed) or the corrector jumps,
+    down to MIN_STEP; at most `steps` accepted steps, MAX_STEPS attempts
     and `seconds` of wall clock; it stops where a plate strains more than `strain`
     (System.strain). With `approach`, no step goes more than half way to where J's smallest
     singular value, extrapolated from the last two steps, vanishes: a singular point is
@@ -505,7 +506,7 @@ def follow(
             new = None
         if new is not None:
             jac_new, slope_new = system.jacobian(new[0], t1, tol)
-            if np.linalg.slogdet(jac_new)[0] != sign:
+            if np.linalg.slogdet(jac_new)[0] != sign or (approach and _crossed(jac, jac_new)):
                 new = None
         if new is None:
             dt /= 2
@@ -530,6 +531,18 @@ def _smallest(jac: np.ndarray) -> float:
     """J's smallest singular value over its largest (scale-free)."""
     sv = np.linalg.svd(jac, compute_uv=False)
     return float(sv[-1] / sv[0]) if sv[0] > 0 else 0.0
+
+
+def _crossed(jac: np.ndarray, jac_new: np.ndarray) -> bool:
+    """Whether eigenvalues of J passed through zero between two steps, an even number of them
+    too (det J then keeps its sign: identical legs buckling at one load): an eigenvalue of
+    J⁻¹J_new in the left half-plane, the ratio of a mode's eigenvalues after and before (free of
+    the unknowns' scaling; near 1 for every mode over a short step that crosses none)."""
+    try:
+        ratios = np.linalg.eigvals(np.linalg.solve(jac, jac_new))
+    except np.linalg.LinAlgError:
+        return True
+    return bool(np.any(ratios.real < 0))
 
 
 def _jumped(u: np.ndarray, guess: np.ndarray, new: np.ndarray) -> bool:
