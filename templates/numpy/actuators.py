@@ -12,6 +12,29 @@ from runtime import _evaluate, _sensitivity_full, _solve  # the module holds bot
 # angles, twice (the rigid linkage and the compliant mechanism), then one evaluate at each.
 
 
+def _stroke_newton(residual, theta, tol, dtype):
+    """Newton's method elementwise on the strokes' residuals (a list of arrays) in the surrogate
+    angles `theta`, its Jacobian by central differences, at most 40 steps: (theta, converged)."""
+    k, step = len(theta), numpy.sqrt(numpy.finfo(dtype).eps)
+    for _ in range(40):
+        r = residual(theta)
+        done = numpy.all([numpy.abs(x) <= tol for x in r], axis=0)
+        if numpy.all(done | numpy.isnan(r[0])):
+            return theta, done
+        jac = numpy.empty(numpy.shape(r[0]) + (k, k), dtype=dtype)
+        for j in range(k):
+            up = residual([t + step * (i == j) for i, t in enumerate(theta)])
+            down = residual([t - step * (i == j) for i, t in enumerate(theta)])
+            for i in range(k):
+                jac[..., i, j] = (up[i] - down[i]) / (2 * step)
+        with numpy.errstate(all="ignore"):
+            rhs = numpy.stack(r, axis=-1)[..., None]
+            move = numpy.linalg.solve(jac, rhs)[..., 0] if k > 1 else rhs[..., 0] / jac[..., 0]
+        theta = [t - numpy.where(done, 0, move[..., j]) for j, t in enumerate(theta)]
+    r = residual(theta)
+    return theta, numpy.all([numpy.abs(x) <= tol for x in r], axis=0)
+
+
 def _stroke_poses(mech, actuators, drives, inputs, level, params):
     """The kinematic inputs at which the rigid linkage and the compliant mechanism meet the
     strokes (docs/levels.md, "Actuators"): (rigid, compliant, ok), each a dict of the input
@@ -36,7 +59,6 @@ def _stroke_poses(mech, actuators, drives, inputs, level, params):
     eps = numpy.finfo(mech.dtype).eps
     scale = max([float(numpy.nanmax(numpy.abs(x))) for x in at] + [1e-300])
     tol = 64 * eps * scale
-    step = numpy.sqrt(eps)
 
     def residual(theta, lv, kind):
         res = _evaluate(mech, hinges | dict(zip(surrogates, theta)), lv, params, False)
@@ -47,24 +69,7 @@ def _stroke_poses(mech, actuators, drives, inputs, level, params):
         return out
 
     def solve(theta, lv, kind):
-        k = len(theta)
-        for _ in range(40):
-            r = residual(theta, lv, kind)
-            done = numpy.all([numpy.abs(x) <= tol for x in r], axis=0)
-            if numpy.all(done | numpy.isnan(r[0])):
-                return theta, done
-            jac = numpy.empty(numpy.shape(r[0]) + (k, k), dtype=mech.dtype)
-            for j in range(k):
-                up = residual([t + step * (i == j) for i, t in enumerate(theta)], lv, kind)
-                down = residual([t - step * (i == j) for i, t in enumerate(theta)], lv, kind)
-                for i in range(k):
-                    jac[..., i, j] = (up[i] - down[i]) / (2 * step)
-            with numpy.errstate(all="ignore"):
-                rhs = numpy.stack(r, axis=-1)[..., None]
-                move = numpy.linalg.solve(jac, rhs)[..., 0] if k > 1 else rhs[..., 0] / jac[..., 0]
-            theta = [t - numpy.where(done, 0, move[..., j]) for j, t in enumerate(theta)]
-        r = residual(theta, lv, kind)
-        return theta, numpy.all([numpy.abs(x) <= tol for x in r], axis=0)
+        return _stroke_newton(lambda th: residual(th, lv, kind), theta, tol, mech.dtype)
 
     start = [zero + numpy.asarray(s) * 0 for s in strokes]
     rigid, ok_r = solve(start, cheap, "rigid")

@@ -7,7 +7,8 @@ around templates/numpy/reduced.py's driver. Only those modules hold it
 import math
 
 import numpy
-from reduced import _LoadedTables  # the module holds them all: reduced.py, reduced_report.py
+from actuators import _stroke_newton  # the module holds them all: actuators.py, reduced.py,
+from reduced import _LoadedTables  # reduced_report.py
 from reduced_report import _reduced_report
 from runtime import _Mechanism, _points, _prepare, _rigid_angles, _wrap  # and runtime.py
 
@@ -37,7 +38,7 @@ def _rigid_at(mech, kinematic, params):
 def _rigid_strokes(mech, actuators, hinges, strokes, params, start):
     """The surrogate angles at which the rigid point of action of every actuator has moved by
     its stroke along its line from its as-fabricated place (docs/levels.md, "Actuators"):
-    Newton's method elementwise, its Jacobian by central differences; (angles, ok)."""
+    actuators.py's _stroke_newton; (angles, ok)."""
     surrogates = [a[1] for a in actuators]
     where = [mech.point_names.index(a[2]) for a in actuators]
     zero = numpy.zeros_like(start[0])
@@ -46,7 +47,6 @@ def _rigid_strokes(mech, actuators, hinges, strokes, params, start):
     eps = numpy.finfo(mech.dtype).eps
     scale = max([float(numpy.nanmax(numpy.abs(numpy.stack(x)))) for x in at] + [1e-300])
     tol = 64 * eps * scale
-    step = numpy.sqrt(eps)
 
     def residual(theta):
         rigid = _rigid_at(mech, hinges | dict(zip(surrogates, theta)), params)[2]
@@ -55,24 +55,7 @@ def _rigid_strokes(mech, actuators, hinges, strokes, params, start):
             out.append(d[0] * (rigid[2 * i] - x0[0]) + d[1] * (rigid[2 * i + 1] - x0[1]) - s)
         return out
 
-    theta, k = list(start), len(start)
-    for _ in range(40):
-        r = residual(theta)
-        done = numpy.all([numpy.abs(x) <= tol for x in r], axis=0)
-        if numpy.all(done | numpy.isnan(r[0])):
-            return theta, done
-        jac = numpy.empty(numpy.shape(r[0]) + (k, k), dtype=mech.dtype)
-        for j in range(k):
-            up = residual([t + step * (i == j) for i, t in enumerate(theta)])
-            down = residual([t - step * (i == j) for i, t in enumerate(theta)])
-            for i in range(k):
-                jac[..., i, j] = (up[i] - down[i]) / (2 * step)
-        with numpy.errstate(all="ignore"):
-            rhs = numpy.stack(r, axis=-1)[..., None]
-            move = numpy.linalg.solve(jac, rhs)[..., 0] if k > 1 else rhs[..., 0] / jac[..., 0]
-        theta = [t - numpy.where(done, 0, move[..., j]) for j, t in enumerate(theta)]
-    r = residual(theta)
-    return theta, numpy.all([numpy.abs(x) <= tol for x in r], axis=0)
+    return _stroke_newton(residual, list(start), tol, mech.dtype)
 
 
 def _actuated_state(mech, actuators, forces, drives, inputs, params, resolve=False):
