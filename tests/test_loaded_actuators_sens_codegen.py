@@ -19,6 +19,7 @@ import sys
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+from evaluators import require_compiler
 from test_loaded_actuators import PAYLOAD, driven, five_bar
 
 import symkin
@@ -67,22 +68,63 @@ def test_generated_sensitivities_are_the_python_levels(name):
                     assert np.linalg.norm(g - np.array(v)) <= AGAINST_PYTHON * scale, (kind, p)
 
 
-def test_tolerance_at_loaded_takes_actuators_through_numpy():
-    """`symkin tolerance --level loaded` on the piezo amplifier: the numpy module's rates (the
-    C has no `loaded` sensitivities with actuators: asked for, it exits 2 naming numpy), its
-    worst-case stack-up the sum of |d|dR|/dp| tolerance at the worst configuration (checked
-    against the Python level's rates there)."""
+@pytest.mark.parametrize("name", ["piezo_amplifier", "stage_stroke"])
+def test_c_takes_the_strokes_sensitivities_at_loaded(name):
+    """The C's `loaded` sensitivities with stroke actuators (templates/c/actuators.c's
+    sk_actuated_loaded_rates) against the numpy module's (checked against the Python level
+    above), row by row over configurations: the values, every parameter's and drive's column of
+    the deviation and the rigid position (measured: 2e-14 of the largest rate)."""
+    text, inputs = (
+        CASES[name] if name in CASES else (lambda: driven(), {"piezo": [1.5e-3, -0.7e-3]})
+    )
+    an = symkin.analyze(symkin.loads(text(), f"{name}.toml"))
+    require_compiler()
+    ev = symkin.compile(an, levels=("loaded",))
+    x = np.array([inputs[h] for h in ev.inputs], dtype=float).T
+    status, values, dev, rig = ev.sensitivity_rows(x, "loaded")
+    assert (status == 0).all()
+    p, module = pipeline.build(an, "numpy", "test", sensitivity=True, levels=("loaded",))
+    shape = pipeline.Shape.of(p, True)
+    n_status, n_values, n_dev, n_rig = pipeline._numpy_sensitivity_rows(
+        module, shape, x, None, "loaded"
+    )
+    assert (n_status == 0).all()
+    np.testing.assert_allclose(values, n_values, rtol=1e-12, atol=1e-15)
+    for got, want in ((dev, n_dev), (rig, n_rig)):
+        scale = np.max(np.abs(want), axis=(2, 3), keepdims=True)
+        assert np.all(np.abs(got - want) <= 1e-10 * scale)
+
+
+def test_tolerance_at_loaded_takes_actuators_through_both_backends(tmp_path):
+    """`symkin tolerance --level loaded` on the piezo amplifier: its worst-case stack-up the sum
+    of |d|dR|/dp| tolerance at the worst configuration (checked against the Python level's rates
+    there), the C's (the default) and the numpy module's alike; a force actuator's file, whose
+    C has no `loaded` sensitivities, asked for them in C exits 2 naming numpy."""
     path = EXAMPLES / "piezo_amplifier.toml"
     args = ["tolerance", str(path), "--level", "loaded", "--input", "piezo=0:0.02:3"]
     args += ["--vary", "a=±0.01", "--vary", "l=±1%", "--json"]
     run = subprocess.run([sys.executable, "-m", "symkin", *args], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
+    by_numpy = subprocess.run(
+        [sys.executable, "-m", "symkin", *args, "--backend", "numpy"],
+        capture_output=True,
+        text=True,
+    )
+    assert by_numpy.returncode == 0, by_numpy.stderr
+    result, other = json.loads(run.stdout), json.loads(by_numpy.stdout)
+    assert result["backend"] == "c" and other["backend"] == "numpy"
+    assert result["points"]["B"]["worst_case"] == pytest.approx(
+        other["points"]["B"]["worst_case"], rel=1e-10
+    )
+    forced = tmp_path / "force.toml"
+    forced.write_text(driven("force", PAYLOAD))
+    args = ["tolerance", str(forced), "--level", "loaded", "--input", "piezo=0:0.5:2"]
+    args += ["--vary", "l=±1%", "--backend", "c"]
     refused = subprocess.run(
-        [sys.executable, "-m", "symkin", *args, "--backend", "c"], capture_output=True, text=True
+        [sys.executable, "-m", "symkin", *args], capture_output=True, text=True
     )
     assert refused.returncode == 2 and "--backend numpy" in refused.stderr
-    result = json.loads(run.stdout)
-    assert result["backend"] == "numpy"
+    assert "force actuators" in refused.stderr
     point = result["points"]["B"]
     an = symkin.analyze(symkin.load(path))
     worst = point["at"]["piezo"]

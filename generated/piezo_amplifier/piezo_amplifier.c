@@ -3,7 +3,7 @@
  * Mechanism 'piezo_amplifier': 4 links, 4 hinges, 1 loop(s); inputs piezo (actuators; their strokes fix the angles of RA0 (piezo)).
  * Points: B; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, loaded_plates1 147, loaded_system1 722, loaded_res1 292, loaded_dev1 104, loaded_report1 413, loaded_plates2 372, loaded_system2 1863, loaded_res2 568, loaded_dev2 189, loaded_report2 837, dev_paper 31, dev_first_order 51, dev_exact 62, links 1, sens_rigid 105, sens_paper 108, sens_first_order 355, sens_exact 449, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40.
+ * Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, loaded_plates1 147, loaded_system1 722, loaded_res1 292, loaded_dev1 104, loaded_report1 413, loaded_plates2 372, loaded_system2 1863, loaded_res2 568, loaded_dev2 189, loaded_report2 837, dev_paper 31, dev_first_order 51, dev_exact 62, links 1, sens_rigid 105, sens_paper 108, sens_first_order 355, sens_exact 449, loaded_sens1 938, loaded_sens2 1997, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
  */
 #include "piezo_amplifier.h"
 
@@ -27,7 +27,7 @@ enum {
     SK_LEVEL_LOADED = 3,
     SK_LEVEL_RIGID = 0,
     SK_RQ = 4 + 1,  /* loaded: the report's variables */
-    SK_OUT = 445        /* the largest routine output, and one */
+    SK_OUT = 649        /* the largest routine output, and one */
 };
 
 const double piezo_amplifier_default_params[PIEZO_AMPLIFIER_N_PARAMS > 0 ? PIEZO_AMPLIFIER_N_PARAMS : 1] = {
@@ -84,6 +84,26 @@ static double symkin_arck(double x)
     return b;
 }
 
+/* h(p) = T(p) = tanh(u)/u, u = sqrt(p)/2 (tan(v)/v, v = sqrt(-p)/2, below 0) for p < 16.0, 1 - tanh(u) from it on: for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out. */
+static double symkin_bcol_h(double p)
+{
+    double u;
+    if (p > -4.0 && p < 16.0) {
+        const double d = p - 6.0;
+        const double d2 = d * d;
+        const double d4 = d2 * d2;
+        const double d8 = d4 * d4;
+        const double r = 1.0 / (p + 9.869604401089358);
+        return ((((10.897864068210225 + d * 0.16556156881006512) + (-0.0009157434227891026 + d * 8.365114438681788e-06) * d2) + ((-8.437823084425284e-08 + d * 8.763390715589521e-10) + (-9.191007821271998e-12 + d * 9.672991207222496e-14) * d2) * d4) + (((-1.0193179699964376e-15 + d * 1.0746329406338888e-17) + (-1.1324419365159025e-19 + d * 1.1940538461574364e-21) * d2) + (-1.310325228057343e-23 + d * 1.385670151299953e-25) * d4) * d8) * (r);
+    }
+    if (p >= 16.0) {
+        const double e = exp(-sqrt(p));
+        return 2.0 * e / (1.0 + e);
+    }
+    u = 0.5 * sqrt(-p);
+    return tan(u) / u;
+}
+
 /* bcol_a(p) = p w(p)/(3 T^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (12 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_a_at(double p, double h)
 {
@@ -105,6 +125,12 @@ static double symkin_bcol_a_at(double p, double h)
     return ((12.0) + h * ((-12.0) + h * (p * (-1.0)))) / (h * (h * (p * (48.0))));
 }
 
+/* bcol_a(p) = p w(p)/(3 T^2). */
+static double symkin_bcol_a(double p)
+{
+    return symkin_bcol_a_at(p, symkin_bcol_h(p));
+}
+
 /* bcol_a_d1(p) = d^1/dp^1 of p w(p)/(3 T^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (13 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_a_d1_at(double p, double h)
 {
@@ -124,6 +150,12 @@ static double symkin_bcol_a_d1_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return ((-8.0) + h * ((4.0) + h * ((4.0 + p * (2.0)) + h * (p * (-1.0))))) / (h * (h * (h * (p * (p * (32.0))))));
+}
+
+/* bcol_a_d1(p) = d^1/dp^1 of p w(p)/(3 T^2). */
+static double symkin_bcol_a_d1(double p)
+{
+    return symkin_bcol_a_d1_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_e1(p) = (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -148,6 +180,12 @@ static double symkin_bcol_e1_at(double p, double h)
     return ((-48.0) + h * ((48.0) + h * ((p * (8.0)) + h * ((p * (-4.0)) + h * (p * (p * (1.0))))))) / (h * (h * (p * (p * (512.0)))));
 }
 
+/* bcol_e1(p) = (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2). */
+static double symkin_bcol_e1(double p)
+{
+    return symkin_bcol_e1_at(p, symkin_bcol_h(p));
+}
+
 /* bcol_e1_d1(p) = d^1/dp^1 of (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (15 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_e1_d1_at(double p, double h)
 {
@@ -168,6 +206,12 @@ static double symkin_bcol_e1_d1_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return ((192.0) + h * ((96.0) + h * ((-288.0 + p * (-48.0)) + h * ((p * (-16.0)) + h * ((p * (24.0 + p * (4.0))) + h * ((p * (p * (-2.0))) + h * (p * (p * (p * (-1.0)))))))))) / (h * (h * (h * (p * (p * (p * (2048.0)))))));
+}
+
+/* bcol_e1_d1(p) = d^1/dp^1 of (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2). */
+static double symkin_bcol_e1_d1(double p)
+{
+    return symkin_bcol_e1_d1_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_e1_d2(p) = d^2/dp^2 of (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (15 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -192,6 +236,12 @@ static double symkin_bcol_e1_d2_at(double p, double h)
     return ((-2304.0) + h * ((-3072.0) + h * ((-384.0 + p * (768.0)) + h * ((5760.0 + p * (768.0)) + h * ((p * (64.0 + p * (-32.0))) + h * ((p * (-480.0 + p * (-64.0))) + h * ((p * (p * (8.0 + p * (-16.0)))) + h * ((p * (p * (p * (16.0)))) + h * (p * (p * (p * (p * (3.0))))))))))))) / (h * (h * (h * (h * (p * (p * (p * (p * (16384.0)))))))));
 }
 
+/* bcol_e1_d2(p) = d^2/dp^2 of (T^4p^2 - 4T^3p + 8T^2p + 48T - 48)/(512 T^2 p^2). */
+static double symkin_bcol_e1_d2(double p)
+{
+    return symkin_bcol_e1_d2_at(p, symkin_bcol_h(p));
+}
+
 /* bcol_e2(p) = -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_e2_at(double p, double h)
 {
@@ -211,6 +261,12 @@ static double symkin_bcol_e2_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return ((240.0) + h * ((-240.0) + h * ((p * (-24.0)) + h * ((p * (4.0)) + h * (p * (p * (-1.0))))))) / (p * (p * (p * (1024.0))));
+}
+
+/* bcol_e2(p) = -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3). */
+static double symkin_bcol_e2(double p)
+{
+    return symkin_bcol_e2_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_e2_d1(p) = d^1/dp^1 of -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -234,6 +290,12 @@ static double symkin_bcol_e2_d1_at(double p, double h)
     return ((-1680.0) + h * ((1680.0 + p * (-48.0)) + h * ((p * (216.0)) + h * ((p * (-28.0 + p * (8.0))) + h * ((p * (p * (3.0))) + h * (p * (p * (p * (1.0))))))))) / (p * (p * (p * (p * (2048.0)))));
 }
 
+/* bcol_e2_d1(p) = d^1/dp^1 of -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3). */
+static double symkin_bcol_e2_d1(double p)
+{
+    return symkin_bcol_e2_d1_at(p, symkin_bcol_h(p));
+}
+
 /* bcol_e2_d2(p) = d^2/dp^2 of -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_e2_d2_at(double p, double h)
 {
@@ -253,6 +315,12 @@ static double symkin_bcol_e2_d2_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return ((60480.0 + p * (-192.0)) + h * ((-60480.0 + p * (3072.0)) + h * ((p * (-8928.0 + p * (144.0))) + h * ((p * (1008.0 + p * (-608.0))) + h * ((p * (p * (-12.0 + p * (-4.0)))) + h * ((p * (p * (p * (-40.0)))) + h * (p * (p * (p * (p * (-5.0))))))))))) / (p * (p * (p * (p * (p * (16384.0))))));
+}
+
+/* bcol_e2_d2(p) = d^2/dp^2 of -(T^4p^2 - 4T^3p + 24T^2p + 240T - 240)/(1024 p^3). */
+static double symkin_bcol_e2_d2(double p)
+{
+    return symkin_bcol_e2_d2_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_e3(p) = -(3T^4p^2 + 20T^3p - 24T^2p - 48T + 48)/(3072 T^4 p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (13 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -276,6 +344,33 @@ static double symkin_bcol_e3_at(double p, double h)
     return ((-48.0) + h * ((48.0) + h * ((p * (24.0)) + h * ((p * (-20.0)) + h * (p * (p * (-3.0))))))) / (h * (h * (h * (h * (p * (3072.0))))));
 }
 
+/* bcol_e3_d1(p) = d^1/dp^1 of -(3T^4p^2 + 20T^3p - 24T^2p - 48T + 48)/(3072 T^4 p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
+static double symkin_bcol_e3_d1_at(double p, double h)
+{
+    const double d = p - 6.0;
+    const double d2 = d * d;
+    const double d4 = d2 * d2;
+    const double d8 = d4 * d4;
+    const double s = 1.0 / (p + 39.47841760435743);
+    if (p > -4.0 && p < 16.0) {
+        return ((((-62317.1090282084 + d * -2601.803112996573) + (-98.24150073157513 + d * -1.449920896321523) * d2) + ((-0.012275915872263935 + d * -1.1390294659006214e-05) + (-5.8952099340217056e-08 + d * 3.428021782217453e-10) * d2) * d4) + (((2.3149571793056234e-12 + d * -8.658295175739011e-14) + (1.41785207937709e-15 + d * -1.8163666924134298e-17) * d2) + (2.1127919490076908e-19 + d * -2.172980716945177e-21) * d4) * d8) * (s * s * s * s * s);
+    }
+    if (p >= 16.0) {
+        const double u = 0.5 * sqrt(p);
+        const double tau = 1.0 - h;
+        const double sigma = h * (2.0 - h);
+        return (((-32.0) + sigma * ((112.0 + u * (-64.0)) + sigma * (-80.0 + u * (-176.0 + u * (192.0))))) * (1.0 + tau) - sigma * (sigma * ((u * (-64.0)) + sigma * (u * (-176.0))))) / (((u * (98304.0)) + sigma * ((u * (-196608.0)) + sigma * (u * (98304.0)))) * (1.0 + tau) - sigma * ((u * (98304.0)) + sigma * ((u * (-196608.0)) + sigma * (u * (98304.0)))));
+    }
+    if (!(p > -9.869604401089358)) return NAN;
+    return ((192.0) + h * ((-240.0) + h * ((48.0 + p * (-96.0)) + h * ((p * (104.0)) + h * ((p * (-20.0 + p * (12.0))) + h * (p * (p * (-11.0)))))))) / (h * (h * (h * (h * (h * (p * (p * (6144.0))))))));
+}
+
+/* bcol_e3_d1(p) = d^1/dp^1 of -(3T^4p^2 + 20T^3p - 24T^2p - 48T + 48)/(3072 T^4 p). */
+static double symkin_bcol_e3_d1(double p)
+{
+    return symkin_bcol_e3_d1_at(p, symkin_bcol_h(p));
+}
+
 /* bcol_e3c(p) = e3'(p) + 1/1920, at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (13 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_e3c_at(double p, double h)
 {
@@ -295,6 +390,12 @@ static double symkin_bcol_e3c_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return ((960.0) + h * ((-1200.0) + h * ((240.0 + p * (-480.0)) + h * ((p * (520.0)) + h * ((p * (-100.0 + p * (60.0))) + h * (p * (p * (-39.0)))))))) / (h * (h * (h * (h * (h * (p * (p * (30720.0))))))));
+}
+
+/* bcol_e3c(p) = e3'(p) + 1/1920. */
+static double symkin_bcol_e3c(double p)
+{
+    return symkin_bcol_e3c_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_e3c_d1(p) = d^1/dp^1 of e3'(p) + 1/1920, at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -318,24 +419,10 @@ static double symkin_bcol_e3c_d1_at(double p, double h)
     return ((-960.0) + h * ((1152.0) + h * ((-144.0 + p * (528.0)) + h * ((-48.0 + p * (-544.0)) + h * ((p * (56.0 + p * (-84.0))) + h * ((p * (20.0 + p * (64.0))) + h * (p * (p * (-5.0 + p * (3.0)))))))))) / (h * (h * (h * (h * (h * (h * (p * (p * (p * (12288.0))))))))));
 }
 
-/* h(p) = T(p) = tanh(u)/u, u = sqrt(p)/2 (tan(v)/v, v = sqrt(-p)/2, below 0) for p < 16.0, 1 - tanh(u) from it on: for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out. */
-static double symkin_bcol_h(double p)
+/* bcol_e3c_d1(p) = d^1/dp^1 of e3'(p) + 1/1920. */
+static double symkin_bcol_e3c_d1(double p)
 {
-    double u;
-    if (p > -4.0 && p < 16.0) {
-        const double d = p - 6.0;
-        const double d2 = d * d;
-        const double d4 = d2 * d2;
-        const double d8 = d4 * d4;
-        const double r = 1.0 / (p + 9.869604401089358);
-        return ((((10.897864068210225 + d * 0.16556156881006512) + (-0.0009157434227891026 + d * 8.365114438681788e-06) * d2) + ((-8.437823084425284e-08 + d * 8.763390715589521e-10) + (-9.191007821271998e-12 + d * 9.672991207222496e-14) * d2) * d4) + (((-1.0193179699964376e-15 + d * 1.0746329406338888e-17) + (-1.1324419365159025e-19 + d * 1.1940538461574364e-21) * d2) + (-1.310325228057343e-23 + d * 1.385670151299953e-25) * d4) * d8) * (r);
-    }
-    if (p >= 16.0) {
-        const double e = exp(-sqrt(p));
-        return 2.0 * e / (1.0 + e);
-    }
-    u = 0.5 * sqrt(-p);
-    return tan(u) / u;
+    return symkin_bcol_e3c_d1_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_invt(p) = 1/T(p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (12 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -380,6 +467,12 @@ static double symkin_bcol_invt_d1_at(double p, double h)
     return ((-4.0) + h * ((4.0) + h * (p * (1.0)))) / (h * (h * (p * (8.0))));
 }
 
+/* bcol_invt_d1(p) = d^1/dp^1 of 1/T(p). */
+static double symkin_bcol_invt_d1(double p)
+{
+    return symkin_bcol_invt_d1_at(p, symkin_bcol_h(p));
+}
+
 /* bcol_s(p) = (1 - T)/p, at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (13 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_s_at(double p, double h)
 {
@@ -399,6 +492,39 @@ static double symkin_bcol_s_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return ((1.0) + h * (-1.0)) / (p * (1.0));
+}
+
+/* bcol_s(p) = (1 - T)/p. */
+static double symkin_bcol_s(double p)
+{
+    return symkin_bcol_s_at(p, symkin_bcol_h(p));
+}
+
+/* bcol_s_d1(p) = d^1/dp^1 of (1 - T)/p, at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
+static double symkin_bcol_s_d1_at(double p, double h)
+{
+    const double d = p - 6.0;
+    const double d2 = d * d;
+    const double d4 = d2 * d2;
+    const double d8 = d4 * d4;
+    const double r = 1.0 / (p + 9.869604401089358);
+    if (p > -4.0 && p < 16.0) {
+        return ((((-0.8132429851307679 + d * -0.00028263927661945) + (-4.62076041242041e-06 + d * 1.2061372014718943e-07) * d2) + ((-2.027158719940083e-09 + d * 2.941018614006343e-11) + (-3.9541483920524393e-13 + d * 5.072415794354741e-15) * d2) * d4) + (((-6.302768016745823e-17 + d * 7.653122930054966e-19) + (-9.124106052786141e-21 + d * 1.0739523739919228e-22) * d2) + (-1.3113722098199768e-24 + d * 1.5174003904817066e-26) * d4) * d8) * (r * r);
+    }
+    if (p >= 16.0) {
+        const double u = 0.5 * sqrt(p);
+        const double tau = 1.0 - h;
+        const double sigma = h * (2.0 - h);
+        return (((12.0 + u * (-8.0)) + sigma * (u * (-4.0))) * (1.0 + tau) - sigma * (12.0)) / ((u * (u * (u * (u * (u * (128.0)))))) * (1.0 + tau));
+    }
+    if (!(p > -9.869604401089358)) return NAN;
+    return ((-12.0) + h * ((12.0) + h * (p * (1.0)))) / (p * (p * (8.0)));
+}
+
+/* bcol_s_d1(p) = d^1/dp^1 of (1 - T)/p. */
+static double symkin_bcol_s_d1(double p)
+{
+    return symkin_bcol_s_d1_at(p, symkin_bcol_h(p));
 }
 
 /* bcol_w(p) = (12 (1 - T)/p - T^2)/(16 p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
@@ -422,6 +548,12 @@ static double symkin_bcol_w_at(double p, double h)
     return ((12.0) + h * ((-12.0) + h * (p * (-1.0)))) / (p * (p * (16.0)));
 }
 
+/* bcol_w(p) = (12 (1 - T)/p - T^2)/(16 p). */
+static double symkin_bcol_w(double p)
+{
+    return symkin_bcol_w_at(p, symkin_bcol_h(p));
+}
+
 /* bcol_w_d1(p) = d^1/dp^1 of (12 (1 - T)/p - T^2)/(16 p), at h = bcol_h(p): for -4.0 < p < 16.0 an economised polynomial (14 terms) with the poles divided out, from there on in u, tanh(u) and sech(u)^2, below in p and t = T(p). */
 static double symkin_bcol_w_d1_at(double p, double h)
 {
@@ -441,6 +573,12 @@ static double symkin_bcol_w_d1_at(double p, double h)
     }
     if (!(p > -9.869604401089358)) return NAN;
     return ((-120.0) + h * ((120.0 + p * (-4.0)) + h * ((p * (14.0)) + h * (p * (p * (1.0)))))) / (p * (p * (p * (64.0))));
+}
+
+/* bcol_w_d1(p) = d^1/dp^1 of (12 (1 - T)/p - T^2)/(16 p). */
+static double symkin_bcol_w_d1(double p)
+{
+    return symkin_bcol_w_d1_at(p, symkin_bcol_h(p));
 }
 
 /* cosr1(x): cosr1(x) = (cos x - sum_(k<1) (-1)^k x^(2k)/(2k)!) / x^2; Taylor series (9 terms, Estrin's form) for |x| < 1.0, else the nested elementary formula. */
@@ -5021,6 +5159,1851 @@ static void sk_sens_exact(const double *theta, const double *delta, const double
     out[83] = _tmp135;
 }
 
+/* loaded (1 half plate(s) per plate), sensitivities: dR/dtheta, dR/dp, din/dtheta, din/dp, dD/dx, dD/dtheta, dD/dp, dD/dout (938 operations) */
+static void sk_loaded_sens1(const double *x, const double *theta, const double *plates, const double *params, double *out)
+{
+    const double x_0 = x[0];
+    const double x_1 = x[1];
+    const double x_2 = x[2];
+    const double x_3 = x[3];
+    const double x_4 = x[4];
+    const double x_5 = x[5];
+    const double x_7 = x[7];
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double along_1_0 = plates[0];
+    const double across_1_0 = plates[1];
+    const double omega_1_0 = plates[2];
+    const double along_2_0 = plates[3];
+    const double across_2_0 = plates[4];
+    const double omega_2_0 = plates[5];
+    const double along_3_0 = plates[6];
+    const double across_3_0 = plates[7];
+    const double omega_3_0 = plates[8];
+    const double along_4_0 = plates[9];
+    const double across_4_0 = plates[10];
+    const double omega_4_0 = plates[11];
+    const double p_0 = params[0];
+    const double p_1 = params[1];
+    const double p_2 = params[2];
+    const double p_3 = params[3];
+    const double p_4 = params[4];
+    const double _tmp0 = 0.019637602869497853*x_3;
+    const double _tmp1 = _tmp0 + 0.5*theta_1;
+    const double _tmp2 = cos(_tmp1);
+    const double _tmp3 = symkin_arck(_tmp1);
+    const double _tmp4 = along_1_0 + _tmp3*pow(_tmp1, 2);
+    const double _tmp5 = _tmp2*_tmp4;
+    const double _tmp6 = 0.2*p_3;
+    const double _tmp7 = _tmp5*_tmp6;
+    const double _tmp8 = 0.019637602869497853*x_0;
+    const double _tmp9 = _tmp8 + 0.5*theta_2;
+    const double _tmp10 = 0.039275205738995705*x_3;
+    const double _tmp11 = _tmp10 + theta_1;
+    const double _tmp12 = _tmp11 + _tmp9;
+    const double _tmp13 = cos(_tmp12);
+    const double _tmp14 = symkin_arck(_tmp9);
+    const double _tmp15 = along_2_0 + _tmp14*pow(_tmp9, 2);
+    const double _tmp16 = _tmp13*_tmp15;
+    const double _tmp17 = _tmp16*p_3;
+    const double _tmp18 = (_tmp1*_tmp1*_tmp1)*(-3*symkin_sinr2(_tmp1) + 3*symkin_cosr2(_tmp1) + symkin_sinr1(_tmp1));
+    const double _tmp19 = 0.5*_tmp18 + _tmp1*_tmp3;
+    const double _tmp20 = sin(_tmp1);
+    const double _tmp21 = _tmp20*p_3;
+    const double _tmp22 = _tmp19*_tmp21;
+    const double _tmp23 = 0.4*_tmp22;
+    const double _tmp24 = _tmp20*across_1_0;
+    const double _tmp25 = _tmp24*_tmp6;
+    const double _tmp26 = sin(_tmp12);
+    const double _tmp27 = sin(theta_1);
+    const double _tmp28 = sin(_tmp10);
+    const double _tmp29 = cos(theta_1);
+    const double _tmp30 = sin(_tmp0);
+    const double _tmp31 = pow(_tmp30, 2);
+    const double _tmp32 = _tmp10 + 0.039275205738995705*x_0;
+    const double _tmp33 = sin(_tmp32);
+    const double _tmp34 = cos(p_1);
+    const double _tmp35 = _tmp34*p_0;
+    const double _tmp36 = _tmp33*_tmp35;
+    const double _tmp37 = _tmp0 + _tmp8;
+    const double _tmp38 = sin(_tmp37);
+    const double _tmp39 = pow(_tmp38, 2);
+    const double _tmp40 = sin(p_1);
+    const double _tmp41 = _tmp40*p_0;
+    const double _tmp42 = 2*_tmp41;
+    const double _tmp43 = -_tmp36 - _tmp39*_tmp42;
+    const double _tmp44 = theta_1 + theta_2;
+    const double _tmp45 = cos(_tmp44);
+    const double _tmp46 = 0.4*_tmp45;
+    const double _tmp47 = _tmp43*_tmp46;
+    const double _tmp48 = _tmp33*_tmp41;
+    const double _tmp49 = _tmp48 - 2*_tmp34*_tmp39*p_0;
+    const double _tmp50 = -_tmp49;
+    const double _tmp51 = sin(_tmp44);
+    const double _tmp52 = 0.4*_tmp51;
+    const double _tmp53 = _tmp47 + _tmp50*_tmp52;
+    const double _tmp54 = (_tmp9*_tmp9*_tmp9)*(-3*symkin_sinr2(_tmp9) + 3*symkin_cosr2(_tmp9) + symkin_sinr1(_tmp9));
+    const double _tmp55 = 0.5*_tmp54 + _tmp14*_tmp9;
+    const double _tmp56 = _tmp26*p_3;
+    const double _tmp57 = _tmp55*_tmp56;
+    const double _tmp58 = cos(theta_3);
+    const double _tmp59 = 0.039275205738995705*x_1;
+    const double _tmp60 = sin(_tmp59);
+    const double _tmp61 = 0.019637602869497853*x_1;
+    const double _tmp62 = pow(sin(_tmp61), 2);
+    const double _tmp63 = _tmp42*_tmp62 - _tmp35*_tmp60;
+    const double _tmp64 = 0.4*_tmp63;
+    const double _tmp65 = _tmp61 + 0.5*theta_3;
+    const double _tmp66 = _tmp65 + p_1;
+    const double _tmp67 = cos(_tmp66);
+    const double _tmp68 = _tmp67*across_3_0;
+    const double _tmp69 = _tmp68*p_3;
+    const double _tmp70 = sin(_tmp66);
+    const double _tmp71 = symkin_arck(_tmp65);
+    const double _tmp72 = along_3_0 + _tmp71*pow(_tmp65, 2);
+    const double _tmp73 = _tmp70*_tmp72;
+    const double _tmp74 = _tmp73*p_3;
+    const double _tmp75 = p_3*(_tmp65*_tmp71 + 0.5*(_tmp65*_tmp65*_tmp65)*(-3*symkin_sinr2(_tmp65) + 3*symkin_cosr2(_tmp65) + symkin_sinr1(_tmp65)));
+    const double _tmp76 = _tmp67*_tmp75;
+    const double _tmp77 = sin(theta_3);
+    const double _tmp78 = _tmp41*_tmp60 + 2*_tmp35*_tmp62;
+    const double _tmp79 = 0.4*_tmp78;
+    const double _tmp80 = 0.5*theta_4 + 0.019637602869497853*x_2;
+    const double _tmp81 = _tmp59 + theta_3;
+    const double _tmp82 = _tmp80 + _tmp81 + p_1;
+    const double _tmp83 = cos(_tmp82);
+    const double _tmp84 = 0.4*across_4_0;
+    const double _tmp85 = _tmp83*_tmp84;
+    const double _tmp86 = sin(_tmp82);
+    const double _tmp87 = symkin_arck(_tmp80);
+    const double _tmp88 = along_4_0 + _tmp87*pow(_tmp80, 2);
+    const double _tmp89 = 0.4*_tmp88;
+    const double _tmp90 = _tmp86*_tmp89;
+    const double _tmp91 = _tmp85*p_3 + _tmp90*p_3 - _tmp77*_tmp79;
+    const double _tmp92 = _tmp6*_tmp88;
+    const double _tmp93 = _tmp83*p_3;
+    const double _tmp94 = 0.2*(_tmp80*_tmp80*_tmp80)*(-3*symkin_sinr2(_tmp80) + 3*symkin_cosr2(_tmp80) + symkin_sinr1(_tmp80)) + 0.4*_tmp80*_tmp87;
+    const double _tmp95 = _tmp2*across_1_0;
+    const double _tmp96 = _tmp20*_tmp4;
+    const double _tmp97 = _tmp13*across_2_0;
+    const double _tmp98 = _tmp97*p_3;
+    const double _tmp99 = _tmp15*_tmp26;
+    const double _tmp100 = _tmp99*p_3;
+    const double _tmp101 = _tmp28*_tmp29;
+    const double _tmp102 = 0.4*_tmp101;
+    const double _tmp103 = _tmp43*_tmp52;
+    const double _tmp104 = _tmp103 - 0.4*_tmp45*_tmp50;
+    const double _tmp105 = _tmp67*_tmp72;
+    const double _tmp106 = _tmp105*p_3;
+    const double _tmp107 = _tmp83*_tmp89;
+    const double _tmp108 = _tmp107*p_3;
+    const double _tmp109 = _tmp70*_tmp75;
+    const double _tmp110 = _tmp86*p_3;
+    const double _tmp111 = sin(_tmp11);
+    const double _tmp112 = -0.5*_tmp111*p_3;
+    const double _tmp113 = 0.015710082295598282*x_7;
+    const double _tmp114 = _tmp32 + _tmp44;
+    const double _tmp115 = sin(_tmp114);
+    const double _tmp116 = 0.5*p_3;
+    const double _tmp117 = _tmp116*_tmp40;
+    const double _tmp118 = _tmp117 + _tmp41;
+    const double _tmp119 = _tmp115*_tmp118;
+    const double _tmp120 = cos(_tmp114);
+    const double _tmp121 = -_tmp35 + 0.5*_tmp34*p_3;
+    const double _tmp122 = _tmp119 - _tmp120*_tmp121;
+    const double _tmp123 = _tmp100 + _tmp98;
+    const double _tmp124 = _tmp122 + _tmp123 + _tmp111*p_2;
+    const double _tmp125 = 0.015710082295598282*x_4;
+    const double _tmp126 = cos(_tmp11);
+    const double _tmp127 = _tmp115*_tmp121 + _tmp118*_tmp120;
+    const double _tmp128 = _tmp17 - _tmp26*across_2_0*p_3;
+    const double _tmp129 = _tmp127 + _tmp128 + _tmp126*p_2;
+    const double _tmp130 = _tmp116*_tmp97 + _tmp116*_tmp99 - _tmp13*_tmp55*p_3;
+    const double _tmp131 = _tmp57 + _tmp116*_tmp16 - 0.5*_tmp26*across_2_0*p_3;
+    const double _tmp132 = _tmp125*(-_tmp122 - _tmp130) - 0.015710082295598282*x_5*(-_tmp127 - _tmp131);
+    const double _tmp133 = 0.5*_tmp115;
+    const double _tmp134 = -_tmp125*(-_tmp119 + _tmp120*_tmp121 + _tmp133*p_3) + 0.015710082295598282*x_5*(-_tmp127 + 0.5*_tmp120*p_3);
+    const double _tmp135 = _tmp116*_tmp95 + _tmp116*_tmp96 - _tmp19*_tmp2*p_3;
+    const double _tmp136 = _tmp116*_tmp5;
+    const double _tmp137 = _tmp136 + _tmp22 - 0.5*_tmp20*across_1_0*p_3;
+    const double _tmp138 = 0.015710082295598282*x_5;
+    const double _tmp139 = sin(_tmp81);
+    const double _tmp140 = cos(_tmp81);
+    const double _tmp141 = _tmp116*_tmp34;
+    const double _tmp142 = _tmp140*_tmp141;
+    const double _tmp143 = _tmp117*_tmp140 + _tmp139*_tmp141;
+    const double _tmp144 = _tmp27*_tmp28;
+    const double _tmp145 = 0.4*_tmp144;
+    const double _tmp146 = 0.8*_tmp31;
+    const double _tmp147 = _tmp146*_tmp29;
+    const double _tmp148 = _tmp40*_tmp60 + 2*_tmp34*_tmp62;
+    const double _tmp149 = 2*_tmp40;
+    const double _tmp150 = _tmp149*_tmp62 - _tmp34*_tmp60;
+    const double _tmp151 = 0.4*_tmp77;
+    const double _tmp152 = _tmp33*_tmp34;
+    const double _tmp153 = -_tmp152 - _tmp149*_tmp39;
+    const double _tmp154 = _tmp33*_tmp40;
+    const double _tmp155 = -_tmp154 + 2*_tmp34*_tmp39;
+    const double _tmp156 = -_tmp63;
+    const double _tmp157 = 0.4*_tmp58;
+    const double _tmp158 = 0.4*_tmp68;
+    const double _tmp159 = 0.4*_tmp73;
+    const double _tmp160 = -_tmp102 + _tmp146*_tmp27;
+    const double _tmp161 = 0.4*_tmp105;
+    const double _tmp162 = 0.4*_tmp95 + 0.4*_tmp96;
+    const double _tmp163 = _tmp70*across_3_0;
+    const double _tmp164 = _tmp26*across_2_0;
+    const double _tmp165 = _tmp120*_tmp40;
+    const double _tmp166 = _tmp115*_tmp34;
+    const double _tmp167 = _tmp125*(_tmp165 - _tmp166);
+    const double _tmp168 = _tmp115*_tmp40;
+    const double _tmp169 = _tmp120*_tmp34;
+    const double _tmp170 = _tmp168 + _tmp169;
+    const double _tmp171 = -_tmp167 - 0.015710082295598282*_tmp170*x_5;
+    const double _tmp172 = _tmp41 - _tmp117;
+    const double _tmp173 = _tmp141 + _tmp35;
+    const double _tmp174 = _tmp115*_tmp172 + _tmp120*_tmp173;
+    const double _tmp175 = _tmp120*_tmp172 - _tmp115*_tmp173;
+    const double _tmp176 = -_tmp125*_tmp174 + 0.015710082295598282*_tmp175*x_5;
+    const double _tmp177 = _tmp111*_tmp138;
+    const double _tmp178 = pow(p_3, 2);
+    const double _tmp179 = 2.5/_tmp178;
+    const double _tmp180 = 0.5*_tmp165 + 0.5*_tmp166;
+    const double _tmp181 = _tmp97 + _tmp99;
+    const double _tmp182 = 0.5*_tmp168;
+    const double _tmp183 = _tmp182 - 0.5*_tmp120*_tmp34;
+    const double _tmp184 = 0.5*_tmp34;
+    const double _tmp185 = _tmp24 - _tmp2*_tmp4;
+    const double _tmp186 = _tmp164 + _tmp185 - _tmp13*_tmp15;
+    const double _tmp187 = _tmp95 + _tmp96;
+    const double _tmp188 = _tmp181 + _tmp187;
+    const double _tmp189 = _tmp178*_tmp20;
+    const double _tmp190 = 0.0031420164591196564*x_5;
+    const double _tmp191 = _tmp178*_tmp2;
+    const double _tmp192 = -6.427599787083612*x_4 - 6.427599787083612*x_7;
+    const double _tmp193 = 0.000488832*_tmp192;
+    const double _tmp194 = 0.006284032918239313*_tmp178;
+    const double _tmp195 = _tmp13*x_4;
+    const double _tmp196 = _tmp194*x_5;
+    const double _tmp197 = 0.0031420164591196564*_tmp178;
+    const double _tmp198 = _tmp178*_tmp190;
+    const double _tmp199 = _tmp26*x_4;
+    const double _tmp200 = _tmp197*x_4;
+    const double _tmp201 = _tmp194*x_4;
+    const double _tmp202 = -_tmp201*_tmp86 + 0.006284032918239313*_tmp178*_tmp83*x_5;
+    const double _tmp203 = -_tmp196*_tmp86 - _tmp201*_tmp83;
+    const double _tmp204 = _tmp2*p_3;
+    const double _tmp205 = 0.012568065836478626*x_5;
+    const double _tmp206 = 0.001955328*_tmp192;
+    const double _tmp207 = pow(p_3, -3);
+    const double _tmp208 = -0.010416666666666666*_tmp207;
+    const double _tmp209 = -0.03731343283582089*_tmp207;
+    const double _tmp210 = 0.012568065836478626*x_4;
+    const double _tmp211 = _tmp13*p_3;
+    const double _tmp212 = _tmp70*p_3;
+    const double _tmp213 = 0.019637602869497853*_tmp54 + _tmp14*(0.019637602869497853*theta_2 + 0.0007712708929202206*x_0);
+    const double _tmp214 = 0.07855041147799141*cos(_tmp32);
+    const double _tmp215 = cos(_tmp37);
+    const double _tmp216 = -_tmp214*_tmp35 - 0.15710082295598282*_tmp215*_tmp38*_tmp41;
+    const double _tmp217 = -_tmp214*_tmp41 + 0.15710082295598282*_tmp215*_tmp34*_tmp38*p_0;
+    const double _tmp218 = _tmp216*_tmp51 - _tmp217*_tmp45;
+    const double _tmp219 = 0.039275205738995705*cos(_tmp10);
+    const double _tmp220 = _tmp29*p_2;
+    const double _tmp221 = cos(_tmp0);
+    const double _tmp222 = 0.019637602869497853*_tmp18 + _tmp3*(0.019637602869497853*theta_1 + 0.0007712708929202206*x_3);
+    const double _tmp223 = 0.019637602869497853*p_3;
+    const double _tmp224 = _tmp21*_tmp222 + _tmp223*_tmp5 - 0.019637602869497853*_tmp20*across_1_0*p_3;
+    const double _tmp225 = _tmp219*_tmp27;
+    const double _tmp226 = 0.07855041147799141*_tmp221*_tmp30;
+    const double _tmp227 = _tmp223*_tmp95 + _tmp223*_tmp96 - _tmp2*_tmp222*p_3;
+    const double _tmp228 = _tmp29*p_4;
+    const double _tmp229 = 4*_tmp39;
+    const double _tmp230 = -2*_tmp36 - _tmp229*_tmp41;
+    const double _tmp231 = _tmp230*_tmp45;
+    const double _tmp232 = 2*_tmp48 - 4*_tmp34*_tmp39*p_0;
+    const double _tmp233 = -_tmp232;
+    const double _tmp234 = _tmp231 + _tmp233*_tmp51;
+    const double _tmp235 = _tmp230*_tmp51;
+    const double _tmp236 = _tmp235 - _tmp233*_tmp45;
+    const double _tmp237 = 2*_tmp31;
+    const double _tmp238 = _tmp237*_tmp29;
+    const double _tmp239 = -2*_tmp152 - _tmp229*_tmp40;
+    const double _tmp240 = -2*_tmp154 + 4*_tmp34*_tmp39;
+    const double _tmp241 = -_tmp101 + _tmp237*_tmp27;
+    const double _tmp242 = -_tmp144 - _tmp238;
+    const double _tmp243 = -_tmp21;
+    const double _tmp244 = -_tmp204;
+    const double _tmp245 = -_tmp56;
+    out[0] = 0;
+    out[1] = 0;
+    out[2] = 0;
+    out[3] = 0;
+    out[4] = _tmp25 - _tmp23 - _tmp53 - _tmp7 - 0.4*_tmp17 + 0.4*_tmp26*across_2_0*p_3 + 0.4*_tmp27*_tmp28*p_2 + 0.8*_tmp29*_tmp31*p_2;
+    out[5] = -_tmp53 - 0.2*_tmp17 - 0.4*_tmp57 + 0.2*_tmp26*across_2_0*p_3;
+    out[6] = _tmp91 + 0.2*_tmp69 + 0.2*_tmp74 - 0.4*_tmp76 - _tmp58*_tmp64;
+    out[7] = _tmp86*_tmp92 - _tmp93*_tmp94 + _tmp6*_tmp83*across_4_0;
+    out[8] = -_tmp104 - 0.4*_tmp100 - 0.4*_tmp98 - _tmp102*p_2 - _tmp6*_tmp95 - _tmp6*_tmp96 + 0.4*_tmp19*_tmp2*p_3 + 0.8*_tmp27*_tmp31*p_2;
+    out[9] = -_tmp104 - 0.2*_tmp100 - 0.2*_tmp98 + 0.4*_tmp13*_tmp55*p_3;
+    out[10] = -_tmp108 - 0.2*_tmp106 - 0.4*_tmp109 - _tmp64*_tmp77 + 0.4*_tmp58*_tmp78 + 0.2*_tmp70*across_3_0*p_3 + 0.4*_tmp86*across_4_0*p_3;
+    out[11] = -_tmp110*_tmp94 - _tmp83*_tmp92 + 0.2*_tmp86*across_4_0*p_3;
+    out[12] = -_tmp113*(-_tmp112 - _tmp111*p_4) - _tmp125*(-_tmp112 - _tmp124) + 0.015710082295598282*x_5*(-_tmp129 + 0.5*_tmp126*p_3);
+    out[13] = -_tmp132;
+    out[14] = 0;
+    out[15] = 0;
+    out[16] = _tmp134;
+    out[17] = _tmp134;
+    out[18] = 0;
+    out[19] = 0;
+    out[20] = _tmp125*(-_tmp124 - _tmp135) - _tmp138*(-_tmp129 - _tmp137);
+    out[21] = _tmp132;
+    out[22] = _tmp125*(-_tmp109 - _tmp142 - _tmp105*_tmp116 + 0.5*_tmp139*_tmp40*p_3 + 0.5*_tmp70*across_3_0*p_3) - _tmp138*(_tmp143 - _tmp76 + _tmp116*_tmp68 + _tmp116*_tmp73);
+    out[23] = 0;
+    out[24] = 0;
+    out[25] = 0;
+    out[26] = 0;
+    out[27] = 0;
+    out[28] = _tmp23 + _tmp7 - _tmp25 - _tmp145*p_4 - _tmp147*p_4;
+    out[29] = 0;
+    out[30] = 0;
+    out[31] = 0;
+    out[32] = 0;
+    out[33] = 0;
+    out[34] = 0;
+    out[35] = 0;
+    out[36] = 0;
+    out[37] = -_tmp150*_tmp151 - _tmp153*_tmp52 + 0.4*_tmp148*_tmp58 + 0.4*_tmp155*_tmp45;
+    out[38] = _tmp47 + _tmp91 + _tmp156*_tmp157 + _tmp158*p_3 + _tmp159*p_3 - _tmp49*_tmp52;
+    out[39] = _tmp160;
+    out[40] = -_tmp107 - _tmp161 - _tmp162 - 0.4*_tmp97 - 0.4*_tmp99 + 0.4*_tmp70*across_3_0 + 0.4*_tmp86*across_4_0;
+    out[41] = 0;
+    out[42] = _tmp148*_tmp151 + _tmp150*_tmp157 + _tmp153*_tmp46 + _tmp155*_tmp52;
+    out[43] = _tmp103 - _tmp108 + _tmp151*_tmp156 + _tmp46*_tmp49 + _tmp58*_tmp79 - _tmp161*p_3 + 0.4*_tmp163*p_3 + _tmp84*_tmp86*p_3;
+    out[44] = -_tmp145 - _tmp147;
+    out[45] = -_tmp158 - _tmp159 - _tmp85 - _tmp90 - 0.4*_tmp164 - 0.4*_tmp24 + 0.4*_tmp13*_tmp15 + 0.4*_tmp2*_tmp4;
+    out[46] = 0;
+    out[47] = _tmp171;
+    out[48] = _tmp176;
+    out[49] = -_tmp177 - _tmp125*_tmp126;
+    out[50] = -_tmp125*(_tmp16 + _tmp180 - _tmp164 - 0.5*_tmp126) - _tmp179*omega_1_0 + 0.007855041147799141*_tmp126*x_7 + 0.015710082295598282*x_5*(-_tmp181 - _tmp183 + 0.5*_tmp111);
+    out[51] = -_tmp113*_tmp126;
+    out[52] = _tmp171;
+    out[53] = _tmp176;
+    out[54] = 0;
+    out[55] = -_tmp125*(_tmp180 - 0.5*_tmp120) - _tmp179*omega_2_0 + 0.015710082295598282*x_5*(_tmp133 - _tmp182 + 0.5*_tmp169);
+    out[56] = 0;
+    out[57] = _tmp167 - _tmp138*(-_tmp170 + 2*_tmp34);
+    out[58] = _tmp125*(_tmp174 - _tmp106 - _tmp142 + _tmp117*_tmp139 + _tmp163*p_3) - _tmp138*(_tmp143 + _tmp175 + _tmp69 + _tmp74 - _tmp42);
+    out[59] = _tmp177 + _tmp125*(-1 + _tmp126);
+    out[60] = -_tmp138*(-_tmp105 - _tmp183 - _tmp188 + _tmp70*across_3_0 - _tmp140*_tmp184 + 0.5*_tmp139*_tmp40) - _tmp179*omega_3_0 + 0.015710082295598282*x_4*(-_tmp186 - _tmp68 - _tmp73 - _tmp139*_tmp184 + 0.5*_tmp115*_tmp34 + 0.5*_tmp120*_tmp40 - 0.5*_tmp140*_tmp40);
+    out[61] = 0;
+    out[62] = 0;
+    out[63] = 0;
+    out[64] = 0;
+    out[65] = _tmp179*omega_4_0;
+    out[66] = 0;
+    out[67] = 0;
+    out[68] = 0;
+    out[69] = 0;
+    out[70] = _tmp162;
+    out[71] = -_tmp160;
+    out[72] = 1;
+    out[73] = 0;
+    out[74] = 0;
+    out[75] = 0;
+    out[76] = _tmp189*_tmp190 - _tmp191*_tmp193;
+    out[77] = 0;
+    out[78] = 0;
+    out[79] = 0;
+    out[80] = _tmp189*_tmp193 + _tmp190*_tmp191;
+    out[81] = 0;
+    out[82] = 0;
+    out[83] = 0;
+    out[84] = 0;
+    out[85] = 0;
+    out[86] = 0;
+    out[87] = 0;
+    out[88] = 0;
+    out[89] = 0;
+    out[90] = 0;
+    out[91] = 0;
+    out[92] = 0;
+    out[93] = 1;
+    out[94] = 0;
+    out[95] = 0;
+    out[96] = _tmp194*_tmp195 + _tmp196*_tmp26;
+    out[97] = _tmp195*_tmp197 + _tmp198*_tmp26;
+    out[98] = 0;
+    out[99] = 0;
+    out[100] = -_tmp194*_tmp199 + 0.006284032918239313*_tmp13*_tmp178*x_5;
+    out[101] = -_tmp197*_tmp199 + 0.0031420164591196564*_tmp13*_tmp178*x_5;
+    out[102] = 0;
+    out[103] = 0;
+    out[104] = 0;
+    out[105] = 0;
+    out[106] = 0;
+    out[107] = 0;
+    out[108] = 0;
+    out[109] = 0;
+    out[110] = 0;
+    out[111] = 0;
+    out[112] = 0;
+    out[113] = 0;
+    out[114] = 1;
+    out[115] = 0;
+    out[116] = 0;
+    out[117] = 0;
+    out[118] = -_tmp200*_tmp70 + 0.0031420164591196564*_tmp178*_tmp67*x_5;
+    out[119] = 0;
+    out[120] = 0;
+    out[121] = 0;
+    out[122] = -_tmp198*_tmp70 - _tmp200*_tmp67;
+    out[123] = 0;
+    out[124] = 0;
+    out[125] = 0;
+    out[126] = 0;
+    out[127] = 0;
+    out[128] = 0;
+    out[129] = 0;
+    out[130] = 0;
+    out[131] = 0;
+    out[132] = 0;
+    out[133] = 0;
+    out[134] = 0;
+    out[135] = 1;
+    out[136] = 0;
+    out[137] = 0;
+    out[138] = _tmp202;
+    out[139] = -_tmp200*_tmp86 + 0.0031420164591196564*_tmp178*_tmp83*x_5;
+    out[140] = 0;
+    out[141] = 0;
+    out[142] = _tmp203;
+    out[143] = -_tmp198*_tmp86 - _tmp200*_tmp83;
+    out[144] = 0;
+    out[145] = 0;
+    out[146] = 0;
+    out[147] = 0;
+    out[148] = 0;
+    out[149] = 0;
+    out[150] = 0;
+    out[151] = 0;
+    out[152] = 0;
+    out[153] = 0;
+    out[154] = 0;
+    out[155] = 0;
+    out[156] = 0;
+    out[157] = 0;
+    out[158] = 0;
+    out[159] = 0;
+    out[160] = -_tmp204*_tmp205 - _tmp206*_tmp21;
+    out[161] = 0;
+    out[162] = 0;
+    out[163] = 0;
+    out[164] = 0;
+    out[165] = _tmp205*_tmp21 - _tmp204*_tmp206;
+    out[166] = 0;
+    out[167] = 0;
+    out[168] = 0;
+    out[169] = 0;
+    out[170] = _tmp208;
+    out[171] = 0;
+    out[172] = 0;
+    out[173] = 0;
+    out[174] = 0;
+    out[175] = _tmp209;
+    out[176] = 0;
+    out[177] = 0;
+    out[178] = 0;
+    out[179] = 0;
+    out[180] = 0;
+    out[181] = 0;
+    out[182] = 0;
+    out[183] = 0;
+    out[184] = 0;
+    out[185] = _tmp210*_tmp56 - _tmp205*_tmp211;
+    out[186] = 0;
+    out[187] = 0;
+    out[188] = 0;
+    out[189] = 0;
+    out[190] = _tmp205*_tmp56 + _tmp210*_tmp211;
+    out[191] = 0;
+    out[192] = 0;
+    out[193] = 0;
+    out[194] = 0;
+    out[195] = _tmp208;
+    out[196] = 0;
+    out[197] = 0;
+    out[198] = 0;
+    out[199] = 0;
+    out[200] = _tmp209;
+    out[201] = 0;
+    out[202] = 0;
+    out[203] = 0;
+    out[204] = 0;
+    out[205] = 0;
+    out[206] = 0;
+    out[207] = 0;
+    out[208] = -_tmp201*_tmp70 + 0.006284032918239313*_tmp178*_tmp67*x_5;
+    out[209] = 0;
+    out[210] = _tmp205*_tmp212 + _tmp210*_tmp67*p_3;
+    out[211] = 0;
+    out[212] = 0;
+    out[213] = -_tmp196*_tmp70 - _tmp201*_tmp67;
+    out[214] = 0;
+    out[215] = -_tmp210*_tmp212 + 0.012568065836478626*_tmp67*p_3*x_5;
+    out[216] = 0;
+    out[217] = 0;
+    out[218] = 0;
+    out[219] = 0;
+    out[220] = _tmp208;
+    out[221] = 0;
+    out[222] = 0;
+    out[223] = 0;
+    out[224] = 0;
+    out[225] = _tmp209;
+    out[226] = 0;
+    out[227] = 0;
+    out[228] = 0;
+    out[229] = 0;
+    out[230] = 0;
+    out[231] = 0;
+    out[232] = 0;
+    out[233] = _tmp202;
+    out[234] = 0;
+    out[235] = _tmp110*_tmp205 + _tmp210*_tmp93;
+    out[236] = 0;
+    out[237] = 0;
+    out[238] = _tmp203;
+    out[239] = 0;
+    out[240] = -_tmp110*_tmp210 + 0.012568065836478626*_tmp83*p_3*x_5;
+    out[241] = 0;
+    out[242] = 0;
+    out[243] = 0;
+    out[244] = 0;
+    out[245] = _tmp208;
+    out[246] = 0;
+    out[247] = 0;
+    out[248] = 0;
+    out[249] = 0;
+    out[250] = _tmp209;
+    out[251] = 0;
+    out[252] = -_tmp218 - 0.019637602869497853*_tmp17 - _tmp213*_tmp56 + 0.019637602869497853*_tmp26*across_2_0*p_3;
+    out[253] = 0;
+    out[254] = 0;
+    out[255] = -_tmp218 - _tmp224 - 0.039275205738995705*_tmp17 - _tmp219*_tmp220 + 0.039275205738995705*_tmp26*across_2_0*p_3 + 0.07855041147799141*_tmp221*_tmp27*_tmp30*p_2;
+    out[256] = 0;
+    out[257] = 0;
+    out[258] = 0;
+    out[259] = 0;
+    out[260] = -0.019637602869497853*_tmp100 - 0.019637602869497853*_tmp98 + _tmp211*_tmp213 + _tmp216*_tmp45 + _tmp217*_tmp51;
+    out[261] = 0;
+    out[262] = 0;
+    out[263] = -_tmp227 - 0.039275205738995705*_tmp100 - 0.039275205738995705*_tmp98 + _tmp216*_tmp45 + _tmp217*_tmp51 - _tmp220*_tmp226 - _tmp225*p_2;
+    out[264] = 0;
+    out[265] = 0;
+    out[266] = 0;
+    out[267] = 0;
+    out[268] = 0;
+    out[269] = 0;
+    out[270] = 0;
+    out[271] = -_tmp224 - _tmp219*_tmp228 + 0.07855041147799141*_tmp221*_tmp27*_tmp30*p_4;
+    out[272] = 0;
+    out[273] = 0;
+    out[274] = 0;
+    out[275] = 0;
+    out[276] = 0;
+    out[277] = 0;
+    out[278] = 0;
+    out[279] = -_tmp227 - _tmp225*p_4 - _tmp226*_tmp228;
+    out[280] = 0;
+    out[281] = 0;
+    out[282] = 0;
+    out[283] = 0;
+    out[284] = -_tmp128 - _tmp137 - _tmp234 + _tmp27*_tmp28*p_2 + 2*_tmp29*_tmp31*p_2;
+    out[285] = -_tmp131 - _tmp234;
+    out[286] = 0;
+    out[287] = 0;
+    out[288] = -_tmp123 - _tmp135 - _tmp236 - _tmp101*p_2 + 2*_tmp27*_tmp31*p_2;
+    out[289] = -_tmp130 - _tmp236;
+    out[290] = 0;
+    out[291] = 0;
+    out[292] = -_tmp136 - _tmp22 + _tmp116*_tmp24 + _tmp144*p_4 + _tmp238*p_4;
+    out[293] = 0;
+    out[294] = 0;
+    out[295] = 0;
+    out[296] = -_tmp135 - _tmp101*p_4 + 2*_tmp27*_tmp31*p_4;
+    out[297] = 0;
+    out[298] = 0;
+    out[299] = 0;
+    out[300] = _tmp240*_tmp45 - _tmp239*_tmp51;
+    out[301] = _tmp231 - _tmp232*_tmp51;
+    out[302] = _tmp241;
+    out[303] = -_tmp188;
+    out[304] = 0;
+    out[305] = _tmp239*_tmp45 + _tmp240*_tmp51;
+    out[306] = _tmp235 + _tmp232*_tmp45;
+    out[307] = _tmp242;
+    out[308] = -_tmp186;
+    out[309] = 0;
+    out[310] = 0;
+    out[311] = 0;
+    out[312] = 0;
+    out[313] = -_tmp187;
+    out[314] = _tmp241;
+    out[315] = 0;
+    out[316] = 0;
+    out[317] = 0;
+    out[318] = -_tmp185;
+    out[319] = _tmp242;
+    out[320] = _tmp243;
+    out[321] = _tmp244;
+    out[322] = 0;
+    out[323] = _tmp245;
+    out[324] = -_tmp211;
+    out[325] = 0;
+    out[326] = 0;
+    out[327] = 0;
+    out[328] = 0;
+    out[329] = 0;
+    out[330] = 0;
+    out[331] = 0;
+    out[332] = _tmp204;
+    out[333] = _tmp243;
+    out[334] = 0;
+    out[335] = _tmp211;
+    out[336] = _tmp245;
+    out[337] = 0;
+    out[338] = 0;
+    out[339] = 0;
+    out[340] = 0;
+    out[341] = 0;
+    out[342] = 0;
+    out[343] = 0;
+    out[344] = _tmp243;
+    out[345] = _tmp244;
+    out[346] = 0;
+    out[347] = 0;
+    out[348] = 0;
+    out[349] = 0;
+    out[350] = 0;
+    out[351] = 0;
+    out[352] = 0;
+    out[353] = 0;
+    out[354] = 0;
+    out[355] = 0;
+    out[356] = _tmp204;
+    out[357] = _tmp243;
+    out[358] = 0;
+    out[359] = 0;
+    out[360] = 0;
+    out[361] = 0;
+    out[362] = 0;
+    out[363] = 0;
+    out[364] = 0;
+    out[365] = 0;
+    out[366] = 0;
+    out[367] = 0;
+}
+
+/* loaded (2 half plate(s) per plate), sensitivities: dR/dtheta, dR/dp, din/dtheta, din/dp, dD/dx, dD/dtheta, dD/dp, dD/dout (1997 operations) */
+static void sk_loaded_sens2(const double *x, const double *theta, const double *plates, const double *params, double *out)
+{
+    const double x_0 = x[0];
+    const double x_1 = x[1];
+    const double x_2 = x[2];
+    const double x_3 = x[3];
+    const double x_4 = x[4];
+    const double x_5 = x[5];
+    const double x_7 = x[7];
+    const double x_8 = x[8];
+    const double x_9 = x[9];
+    const double x_10 = x[10];
+    const double x_11 = x[11];
+    const double theta_1 = theta[0];
+    const double theta_2 = theta[1];
+    const double theta_3 = theta[2];
+    const double theta_4 = theta[3];
+    const double along_1_0 = plates[0];
+    const double across_1_0 = plates[1];
+    const double omega_1_0 = plates[2];
+    const double along_1_1 = plates[3];
+    const double across_1_1 = plates[4];
+    const double omega_1_1 = plates[5];
+    const double along_2_0 = plates[6];
+    const double across_2_0 = plates[7];
+    const double omega_2_0 = plates[8];
+    const double along_2_1 = plates[9];
+    const double across_2_1 = plates[10];
+    const double omega_2_1 = plates[11];
+    const double along_3_0 = plates[12];
+    const double across_3_0 = plates[13];
+    const double omega_3_0 = plates[14];
+    const double along_3_1 = plates[15];
+    const double across_3_1 = plates[16];
+    const double omega_3_1 = plates[17];
+    const double along_4_0 = plates[18];
+    const double across_4_0 = plates[19];
+    const double omega_4_0 = plates[20];
+    const double along_4_1 = plates[21];
+    const double across_4_1 = plates[22];
+    const double omega_4_1 = plates[23];
+    const double p_0 = params[0];
+    const double p_1 = params[1];
+    const double p_2 = params[2];
+    const double p_3 = params[3];
+    const double p_4 = params[4];
+    const double _tmp0 = 0.5*x_8;
+    const double _tmp1 = 0.25*theta_1 + 0.009818801434748926*x_3;
+    const double _tmp2 = _tmp1 - _tmp0;
+    const double _tmp3 = sin(_tmp2);
+    const double _tmp4 = 0.5*p_3;
+    const double _tmp5 = _tmp4*across_1_0;
+    const double _tmp6 = _tmp0 + _tmp1;
+    const double _tmp7 = sin(_tmp6);
+    const double _tmp8 = _tmp4*_tmp7;
+    const double _tmp9 = sin(_tmp0);
+    const double _tmp10 = pow(_tmp9, 2);
+    const double _tmp11 = sin(_tmp1);
+    const double _tmp12 = pow(_tmp11, 2);
+    const double _tmp13 = cos(_tmp2);
+    const double _tmp14 = symkin_arck(_tmp6);
+    const double _tmp15 = along_1_0 + _tmp14*pow(_tmp6, 2);
+    const double _tmp16 = _tmp15*_tmp4;
+    const double _tmp17 = symkin_arck(_tmp2);
+    const double _tmp18 = along_1_1 + _tmp17*pow(_tmp2, 2);
+    const double _tmp19 = cos(_tmp6);
+    const double _tmp20 = _tmp19*_tmp4;
+    const double _tmp21 = _tmp13*_tmp16 + _tmp18*_tmp20 + _tmp3*_tmp5 + _tmp4*(-2*_tmp10 + 2*_tmp12) - _tmp8*across_1_1;
+    const double _tmp22 = 0.019637602869497853*x_3;
+    const double _tmp23 = _tmp22 + 0.5*theta_1;
+    const double _tmp24 = cos(_tmp23);
+    const double _tmp25 = 0.2*_tmp24;
+    const double _tmp26 = _tmp21*_tmp25;
+    const double _tmp27 = 0.019637602869497853*x_0;
+    const double _tmp28 = 0.039275205738995705*x_3;
+    const double _tmp29 = _tmp28 + theta_1;
+    const double _tmp30 = _tmp27 + _tmp29 + 0.5*theta_2;
+    const double _tmp31 = cos(_tmp30);
+    const double _tmp32 = 0.5*x_9;
+    const double _tmp33 = 0.25*theta_2 + 0.009818801434748926*x_0;
+    const double _tmp34 = _tmp33 - _tmp32;
+    const double _tmp35 = sin(_tmp34);
+    const double _tmp36 = _tmp4*across_2_0;
+    const double _tmp37 = _tmp32 + _tmp33;
+    const double _tmp38 = sin(_tmp37);
+    const double _tmp39 = _tmp38*_tmp4;
+    const double _tmp40 = sin(_tmp32);
+    const double _tmp41 = pow(_tmp40, 2);
+    const double _tmp42 = sin(_tmp33);
+    const double _tmp43 = pow(_tmp42, 2);
+    const double _tmp44 = cos(_tmp34);
+    const double _tmp45 = symkin_arck(_tmp37);
+    const double _tmp46 = along_2_0 + _tmp45*pow(_tmp37, 2);
+    const double _tmp47 = _tmp4*_tmp46;
+    const double _tmp48 = symkin_arck(_tmp34);
+    const double _tmp49 = along_2_1 + _tmp48*pow(_tmp34, 2);
+    const double _tmp50 = cos(_tmp37);
+    const double _tmp51 = _tmp4*_tmp50;
+    const double _tmp52 = _tmp35*_tmp36 + _tmp4*(-2*_tmp41 + 2*_tmp43) + _tmp44*_tmp47 + _tmp49*_tmp51 - _tmp39*across_2_1;
+    const double _tmp53 = _tmp31*_tmp52;
+    const double _tmp54 = 0.125*p_3;
+    const double _tmp55 = _tmp54*across_1_0;
+    const double _tmp56 = _tmp54*_tmp7;
+    const double _tmp57 = _tmp15*_tmp54;
+    const double _tmp58 = 0.25*x_8;
+    const double _tmp59 = 0.125*theta_1 + 0.004909400717374463*x_3;
+    const double _tmp60 = symkin_sinr1(_tmp2);
+    const double _tmp61 = (_tmp2*_tmp2*_tmp2)*(_tmp60 - 3*symkin_sinr2(_tmp2) + 3*symkin_cosr2(_tmp2));
+    const double _tmp62 = 0.25*_tmp61 + _tmp17*(_tmp59 - _tmp58);
+    const double _tmp63 = (_tmp6*_tmp6*_tmp6)*(-3*symkin_sinr2(_tmp6) + 3*symkin_cosr2(_tmp6) + symkin_sinr1(_tmp6));
+    const double _tmp64 = _tmp4*(0.25*_tmp63 + _tmp14*(_tmp58 + _tmp59));
+    const double _tmp65 = -_tmp13*_tmp57 - _tmp3*_tmp55 - _tmp3*_tmp64 - _tmp56*across_1_1 + 0.125*_tmp18*_tmp19*p_3 + 0.5*_tmp62*_tmp7*p_3;
+    const double _tmp66 = _tmp24*_tmp65;
+    const double _tmp67 = 0.4*_tmp66;
+    const double _tmp68 = sin(_tmp23);
+    const double _tmp69 = _tmp11*cos(_tmp1);
+    const double _tmp70 = _tmp13*_tmp55 + _tmp13*_tmp64 + _tmp20*_tmp62 + _tmp4*_tmp69 - _tmp18*_tmp56 - _tmp3*_tmp57 - _tmp19*_tmp54*across_1_1;
+    const double _tmp71 = _tmp68*_tmp70;
+    const double _tmp72 = 0.4*_tmp71;
+    const double _tmp73 = 1.0*x_8;
+    const double _tmp74 = 0.5*sin(_tmp73);
+    const double _tmp75 = _tmp13*_tmp5 + _tmp18*_tmp8 + _tmp20*across_1_1 + _tmp74*p_3 - _tmp16*_tmp3;
+    const double _tmp76 = 0.2*_tmp68;
+    const double _tmp77 = _tmp75*_tmp76;
+    const double _tmp78 = sin(_tmp30);
+    const double _tmp79 = 1.0*x_9;
+    const double _tmp80 = 0.5*sin(_tmp79);
+    const double _tmp81 = _tmp36*_tmp44 + _tmp39*_tmp49 + _tmp51*across_2_1 + _tmp80*p_3 - _tmp35*_tmp47;
+    const double _tmp82 = sin(theta_1);
+    const double _tmp83 = sin(_tmp28);
+    const double _tmp84 = cos(theta_1);
+    const double _tmp85 = sin(_tmp22);
+    const double _tmp86 = pow(_tmp85, 2);
+    const double _tmp87 = _tmp28 + 0.039275205738995705*x_0;
+    const double _tmp88 = sin(_tmp87);
+    const double _tmp89 = cos(p_1);
+    const double _tmp90 = _tmp89*p_0;
+    const double _tmp91 = _tmp88*_tmp90;
+    const double _tmp92 = _tmp22 + _tmp27;
+    const double _tmp93 = sin(_tmp92);
+    const double _tmp94 = pow(_tmp93, 2);
+    const double _tmp95 = sin(p_1);
+    const double _tmp96 = _tmp95*p_0;
+    const double _tmp97 = 2*_tmp96;
+    const double _tmp98 = -_tmp91 - _tmp94*_tmp97;
+    const double _tmp99 = theta_1 + theta_2;
+    const double _tmp100 = cos(_tmp99);
+    const double _tmp101 = 0.4*_tmp100;
+    const double _tmp102 = _tmp101*_tmp98;
+    const double _tmp103 = _tmp88*_tmp96;
+    const double _tmp104 = _tmp103 - 2*_tmp89*_tmp94*p_0;
+    const double _tmp105 = -_tmp104;
+    const double _tmp106 = sin(_tmp99);
+    const double _tmp107 = 0.4*_tmp106;
+    const double _tmp108 = _tmp102 + _tmp105*_tmp107;
+    const double _tmp109 = _tmp54*across_2_0;
+    const double _tmp110 = _tmp38*_tmp54;
+    const double _tmp111 = _tmp46*_tmp54;
+    const double _tmp112 = 0.25*x_9;
+    const double _tmp113 = 0.125*theta_2 + 0.004909400717374463*x_0;
+    const double _tmp114 = symkin_sinr1(_tmp34);
+    const double _tmp115 = (_tmp34*_tmp34*_tmp34)*(_tmp114 - 3*symkin_sinr2(_tmp34) + 3*symkin_cosr2(_tmp34));
+    const double _tmp116 = 0.25*_tmp115 + _tmp48*(_tmp113 - _tmp112);
+    const double _tmp117 = (_tmp37*_tmp37*_tmp37)*(-3*symkin_sinr2(_tmp37) + 3*symkin_cosr2(_tmp37) + symkin_sinr1(_tmp37));
+    const double _tmp118 = _tmp4*(0.25*_tmp117 + _tmp45*(_tmp112 + _tmp113));
+    const double _tmp119 = -_tmp109*_tmp35 - _tmp110*across_2_1 - _tmp111*_tmp44 - _tmp118*_tmp35 + 0.125*_tmp49*_tmp50*p_3 + 0.5*_tmp116*_tmp38*p_3;
+    const double _tmp120 = _tmp119*_tmp31;
+    const double _tmp121 = _tmp42*cos(_tmp33);
+    const double _tmp122 = _tmp109*_tmp44 + _tmp116*_tmp51 + _tmp118*_tmp44 + _tmp121*_tmp4 - _tmp110*_tmp49 - _tmp111*_tmp35 - _tmp50*_tmp54*across_2_1;
+    const double _tmp123 = _tmp122*_tmp78;
+    const double _tmp124 = 0.019637602869497853*x_1;
+    const double _tmp125 = _tmp124 + p_1 + 0.5*theta_3;
+    const double _tmp126 = sin(_tmp125);
+    const double _tmp127 = 0.5*x_10;
+    const double _tmp128 = 0.25*theta_3 + 0.009818801434748926*x_1;
+    const double _tmp129 = _tmp128 - _tmp127;
+    const double _tmp130 = sin(_tmp129);
+    const double _tmp131 = _tmp4*across_3_0;
+    const double _tmp132 = _tmp127 + _tmp128;
+    const double _tmp133 = sin(_tmp132);
+    const double _tmp134 = _tmp133*_tmp4;
+    const double _tmp135 = pow(sin(_tmp127), 2);
+    const double _tmp136 = sin(_tmp128);
+    const double _tmp137 = pow(_tmp136, 2);
+    const double _tmp138 = cos(_tmp129);
+    const double _tmp139 = symkin_arck(_tmp132);
+    const double _tmp140 = along_3_0 + _tmp139*pow(_tmp132, 2);
+    const double _tmp141 = _tmp140*_tmp4;
+    const double _tmp142 = symkin_arck(_tmp129);
+    const double _tmp143 = along_3_1 + _tmp142*pow(_tmp129, 2);
+    const double _tmp144 = cos(_tmp132);
+    const double _tmp145 = _tmp144*_tmp4;
+    const double _tmp146 = _tmp130*_tmp131 + _tmp138*_tmp141 + _tmp143*_tmp145 + _tmp4*(-2*_tmp135 + 2*_tmp137) - _tmp134*across_3_1;
+    const double _tmp147 = _tmp126*_tmp146;
+    const double _tmp148 = cos(_tmp125);
+    const double _tmp149 = 0.5*sin(1.0*x_10);
+    const double _tmp150 = _tmp131*_tmp138 + _tmp134*_tmp143 + _tmp145*across_3_1 + _tmp149*p_3 - _tmp130*_tmp141;
+    const double _tmp151 = _tmp148*_tmp150;
+    const double _tmp152 = _tmp54*across_3_0;
+    const double _tmp153 = _tmp133*_tmp54;
+    const double _tmp154 = _tmp140*_tmp54;
+    const double _tmp155 = 0.25*x_10;
+    const double _tmp156 = 0.125*theta_3 + 0.004909400717374463*x_1;
+    const double _tmp157 = symkin_sinr1(_tmp129);
+    const double _tmp158 = _tmp142*(_tmp156 - _tmp155) + 0.25*(_tmp129*_tmp129*_tmp129)*(_tmp157 - 3*symkin_sinr2(_tmp129) + 3*symkin_cosr2(_tmp129));
+    const double _tmp159 = _tmp4*(_tmp139*(_tmp155 + _tmp156) + 0.25*(_tmp132*_tmp132*_tmp132)*(-3*symkin_sinr2(_tmp132) + 3*symkin_cosr2(_tmp132) + symkin_sinr1(_tmp132)));
+    const double _tmp160 = -_tmp130*_tmp152 - _tmp130*_tmp159 - _tmp138*_tmp154 - _tmp153*across_3_1 + 0.125*_tmp143*_tmp144*p_3 + 0.5*_tmp133*_tmp158*p_3;
+    const double _tmp161 = _tmp126*_tmp160;
+    const double _tmp162 = cos(theta_3);
+    const double _tmp163 = 0.039275205738995705*x_1;
+    const double _tmp164 = sin(_tmp163);
+    const double _tmp165 = pow(sin(_tmp124), 2);
+    const double _tmp166 = _tmp165*_tmp97 - _tmp164*_tmp90;
+    const double _tmp167 = 0.4*_tmp166;
+    const double _tmp168 = _tmp138*_tmp152 + _tmp138*_tmp159 + _tmp145*_tmp158 - _tmp130*_tmp154 - _tmp143*_tmp153 + _tmp136*_tmp4*cos(_tmp128) - _tmp144*_tmp54*across_3_1;
+    const double _tmp169 = _tmp148*_tmp168;
+    const double _tmp170 = 0.5*x_11;
+    const double _tmp171 = 0.25*theta_4 + 0.009818801434748926*x_2;
+    const double _tmp172 = _tmp171 - _tmp170;
+    const double _tmp173 = sin(_tmp172);
+    const double _tmp174 = _tmp4*across_4_0;
+    const double _tmp175 = _tmp170 + _tmp171;
+    const double _tmp176 = sin(_tmp175);
+    const double _tmp177 = _tmp176*_tmp4;
+    const double _tmp178 = pow(sin(_tmp170), 2);
+    const double _tmp179 = sin(_tmp171);
+    const double _tmp180 = pow(_tmp179, 2);
+    const double _tmp181 = cos(_tmp172);
+    const double _tmp182 = symkin_arck(_tmp175);
+    const double _tmp183 = along_4_0 + _tmp182*pow(_tmp175, 2);
+    const double _tmp184 = _tmp183*_tmp4;
+    const double _tmp185 = symkin_arck(_tmp172);
+    const double _tmp186 = along_4_1 + _tmp185*pow(_tmp172, 2);
+    const double _tmp187 = cos(_tmp175);
+    const double _tmp188 = _tmp187*_tmp4;
+    const double _tmp189 = _tmp173*_tmp174 + _tmp181*_tmp184 + _tmp186*_tmp188 + _tmp4*(-2*_tmp178 + 2*_tmp180) - _tmp177*across_4_1;
+    const double _tmp190 = _tmp163 + theta_3;
+    const double _tmp191 = _tmp190 + p_1;
+    const double _tmp192 = _tmp191 + 0.5*theta_4 + 0.019637602869497853*x_2;
+    const double _tmp193 = sin(_tmp192);
+    const double _tmp194 = _tmp189*_tmp193;
+    const double _tmp195 = 0.5*sin(1.0*x_11);
+    const double _tmp196 = _tmp174*_tmp181 + _tmp177*_tmp186 + _tmp188*across_4_1 + _tmp195*p_3 - _tmp173*_tmp184;
+    const double _tmp197 = cos(_tmp192);
+    const double _tmp198 = _tmp196*_tmp197;
+    const double _tmp199 = sin(theta_3);
+    const double _tmp200 = _tmp164*_tmp96 + 2*_tmp165*_tmp90;
+    const double _tmp201 = 0.4*_tmp200;
+    const double _tmp202 = 0.4*_tmp194 + 0.4*_tmp198 - _tmp199*_tmp201;
+    const double _tmp203 = _tmp54*across_4_0;
+    const double _tmp204 = _tmp176*_tmp54;
+    const double _tmp205 = _tmp183*_tmp54;
+    const double _tmp206 = 0.25*x_11;
+    const double _tmp207 = 0.125*theta_4 + 0.004909400717374463*x_2;
+    const double _tmp208 = symkin_sinr1(_tmp172);
+    const double _tmp209 = _tmp185*(_tmp207 - _tmp206) + 0.25*(_tmp172*_tmp172*_tmp172)*(_tmp208 - 3*symkin_sinr2(_tmp172) + 3*symkin_cosr2(_tmp172));
+    const double _tmp210 = _tmp4*(_tmp182*(_tmp206 + _tmp207) + 0.25*(_tmp175*_tmp175*_tmp175)*(-3*symkin_sinr2(_tmp175) + 3*symkin_cosr2(_tmp175) + symkin_sinr1(_tmp175)));
+    const double _tmp211 = -_tmp173*_tmp203 - _tmp173*_tmp210 - _tmp181*_tmp205 - _tmp204*across_4_1 + 0.125*_tmp186*_tmp187*p_3 + 0.5*_tmp176*_tmp209*p_3;
+    const double _tmp212 = 0.4*_tmp193;
+    const double _tmp213 = _tmp181*_tmp203 + _tmp181*_tmp210 + _tmp188*_tmp209 - _tmp173*_tmp205 - _tmp186*_tmp204 + _tmp179*_tmp4*cos(_tmp171) - _tmp187*_tmp54*across_4_1;
+    const double _tmp214 = 0.4*_tmp197;
+    const double _tmp215 = _tmp52*_tmp78;
+    const double _tmp216 = _tmp31*_tmp81;
+    const double _tmp217 = _tmp65*_tmp68;
+    const double _tmp218 = _tmp83*_tmp84;
+    const double _tmp219 = 0.4*_tmp218;
+    const double _tmp220 = _tmp107*_tmp98;
+    const double _tmp221 = _tmp220 - 0.4*_tmp100*_tmp105;
+    const double _tmp222 = _tmp119*_tmp78;
+    const double _tmp223 = _tmp146*_tmp148;
+    const double _tmp224 = _tmp189*_tmp214;
+    const double _tmp225 = _tmp148*_tmp160;
+    const double _tmp226 = _tmp126*_tmp168;
+    const double _tmp227 = sin(_tmp29);
+    const double _tmp228 = -0.5*_tmp227*p_3;
+    const double _tmp229 = 0.015710082295598282*x_7;
+    const double _tmp230 = _tmp87 + _tmp99;
+    const double _tmp231 = sin(_tmp230);
+    const double _tmp232 = _tmp4*_tmp95;
+    const double _tmp233 = _tmp232 + _tmp96;
+    const double _tmp234 = _tmp231*_tmp233;
+    const double _tmp235 = cos(_tmp230);
+    const double _tmp236 = -_tmp90 + 0.5*_tmp89*p_3;
+    const double _tmp237 = _tmp234 - _tmp235*_tmp236;
+    const double _tmp238 = _tmp215 + _tmp216;
+    const double _tmp239 = _tmp237 + _tmp238 + _tmp227*p_2;
+    const double _tmp240 = 0.015710082295598282*x_4;
+    const double _tmp241 = cos(_tmp29);
+    const double _tmp242 = _tmp231*_tmp236 + _tmp233*_tmp235;
+    const double _tmp243 = _tmp53 - _tmp78*_tmp81;
+    const double _tmp244 = _tmp242 + _tmp243 + _tmp241*p_2;
+    const double _tmp245 = _tmp222 + 0.5*_tmp215 + 0.5*_tmp216 - _tmp122*_tmp31;
+    const double _tmp246 = _tmp120 + _tmp123 + 0.5*_tmp53 - 0.5*_tmp78*_tmp81;
+    const double _tmp247 = _tmp240*(-_tmp237 - _tmp245) - 0.015710082295598282*x_5*(-_tmp242 - _tmp246);
+    const double _tmp248 = 0.5*_tmp231;
+    const double _tmp249 = -_tmp240*(-_tmp234 + _tmp235*_tmp236 + _tmp248*p_3) + 0.015710082295598282*x_5*(-_tmp242 + 0.5*_tmp235*p_3);
+    const double _tmp250 = 0.5*_tmp68;
+    const double _tmp251 = 0.5*_tmp24;
+    const double _tmp252 = _tmp217 + _tmp21*_tmp250 + _tmp251*_tmp75 - _tmp24*_tmp70;
+    const double _tmp253 = _tmp21*_tmp251;
+    const double _tmp254 = _tmp253 + _tmp66 + _tmp71 - 0.5*_tmp68*_tmp75;
+    const double _tmp255 = 0.015710082295598282*x_5;
+    const double _tmp257 = sin(_tmp190);
+    const double _tmp256 = cos(_tmp190);
+    const double _tmp258 = _tmp4*_tmp89;
+    const double _tmp259 = _tmp232*_tmp256 + _tmp257*_tmp258;
+    const double _tmp260 = _tmp256*_tmp258;
+    const double _tmp261 = _tmp82*_tmp83;
+    const double _tmp262 = 0.4*_tmp261;
+    const double _tmp263 = 0.8*_tmp86;
+    const double _tmp264 = _tmp263*_tmp84;
+    const double _tmp265 = _tmp0 + 0.75*theta_1 + 0.02945640430424678*x_3;
+    const double _tmp266 = sin(_tmp265);
+    const double _tmp267 = cos(_tmp265);
+    const double _tmp269 = 0.375*p_3;
+    const double _tmp268 = along_1_1 + symkin_sinr0(_tmp2);
+    const double _tmp270 = _tmp268*_tmp269;
+    const double _tmp271 = -_tmp60 + symkin_cosr1(_tmp2);
+    const double _tmp272 = -6.427599787083612*x_4 - 6.427599787083612*x_7;
+    const double _tmp273 = 0.00244416*_tmp272;
+    const double _tmp274 = _tmp29 + _tmp32 + 0.75*theta_2 + 0.02945640430424678*x_0;
+    const double _tmp275 = cos(_tmp274);
+    const double _tmp276 = _tmp4*across_2_1;
+    const double _tmp277 = sin(_tmp274);
+    const double _tmp278 = along_2_1 + symkin_sinr0(_tmp34);
+    const double _tmp279 = _tmp278*_tmp4;
+    const double _tmp280 = _tmp269*_tmp278;
+    const double _tmp281 = -_tmp114 + symkin_cosr1(_tmp34);
+    const double _tmp282 = _tmp127 + p_1 + 0.75*theta_3 + 0.02945640430424678*x_1;
+    const double _tmp283 = sin(_tmp282);
+    const double _tmp284 = _tmp269*_tmp283;
+    const double _tmp285 = along_3_1 + symkin_sinr0(_tmp129);
+    const double _tmp286 = cos(_tmp282);
+    const double _tmp287 = _tmp269*_tmp286;
+    const double _tmp288 = -_tmp157 + symkin_cosr1(_tmp129);
+    const double _tmp289 = _tmp170 + _tmp191 + 0.75*theta_4 + 0.02945640430424678*x_2;
+    const double _tmp290 = sin(_tmp289);
+    const double _tmp291 = _tmp290*_tmp4;
+    const double _tmp292 = along_4_1 + symkin_sinr0(_tmp172);
+    const double _tmp293 = cos(_tmp289);
+    const double _tmp294 = _tmp240*(-_tmp291*across_4_1 + 0.5*_tmp292*_tmp293*p_3) - _tmp255*(-_tmp291*_tmp292 - _tmp293*_tmp4*across_4_1);
+    const double _tmp295 = _tmp269*_tmp290;
+    const double _tmp296 = _tmp269*_tmp293;
+    const double _tmp297 = -_tmp208 + symkin_cosr1(_tmp172);
+    const double _tmp298 = _tmp164*_tmp95 + 2*_tmp165*_tmp89;
+    const double _tmp299 = 2*_tmp95;
+    const double _tmp300 = _tmp165*_tmp299 - _tmp164*_tmp89;
+    const double _tmp301 = 0.4*_tmp199;
+    const double _tmp302 = _tmp88*_tmp89;
+    const double _tmp303 = -_tmp302 - _tmp299*_tmp94;
+    const double _tmp304 = _tmp88*_tmp95;
+    const double _tmp305 = -_tmp304 + 2*_tmp89*_tmp94;
+    const double _tmp306 = -_tmp166;
+    const double _tmp307 = 0.4*_tmp162;
+    const double _tmp308 = -_tmp219 + _tmp263*_tmp82;
+    const double _tmp309 = 0.5*across_2_0;
+    const double _tmp310 = 0.5*_tmp50;
+    const double _tmp311 = 0.5*_tmp46;
+    const double _tmp312 = 0.5*_tmp38;
+    const double _tmp313 = _tmp80 + _tmp309*_tmp44 + _tmp310*across_2_1 + _tmp312*_tmp49 - _tmp311*_tmp35;
+    const double _tmp314 = _tmp31*_tmp313;
+    const double _tmp315 = _tmp43 - _tmp41 + _tmp309*_tmp35 + _tmp310*_tmp49 + _tmp311*_tmp44 - _tmp312*across_2_1;
+    const double _tmp316 = _tmp315*_tmp78;
+    const double _tmp317 = 0.5*across_3_0;
+    const double _tmp318 = 0.5*_tmp133;
+    const double _tmp319 = 0.5*_tmp140;
+    const double _tmp320 = 0.5*_tmp144;
+    const double _tmp321 = _tmp137 - _tmp135 + _tmp130*_tmp317 + _tmp138*_tmp319 + _tmp143*_tmp320 - _tmp318*across_3_1;
+    const double _tmp322 = _tmp148*_tmp321;
+    const double _tmp323 = 0.5*across_4_0;
+    const double _tmp324 = 0.5*_tmp176;
+    const double _tmp325 = 0.5*_tmp183;
+    const double _tmp326 = 0.5*_tmp187;
+    const double _tmp327 = _tmp180 - _tmp178 + _tmp173*_tmp323 + _tmp181*_tmp325 + _tmp186*_tmp326 - _tmp324*across_4_1;
+    const double _tmp328 = _tmp149 + _tmp138*_tmp317 + _tmp143*_tmp318 + _tmp320*across_3_1 - _tmp130*_tmp319;
+    const double _tmp329 = _tmp195 + _tmp181*_tmp323 + _tmp186*_tmp324 + _tmp326*across_4_1 - _tmp173*_tmp325;
+    const double _tmp330 = 0.5*across_1_0;
+    const double _tmp331 = 0.5*_tmp19;
+    const double _tmp332 = 0.5*_tmp15;
+    const double _tmp333 = 0.5*_tmp7;
+    const double _tmp334 = _tmp74 + _tmp13*_tmp330 + _tmp18*_tmp333 + _tmp331*across_1_1 - _tmp3*_tmp332;
+    const double _tmp335 = _tmp24*_tmp334;
+    const double _tmp336 = _tmp12 - _tmp10 + _tmp13*_tmp332 + _tmp18*_tmp331 + _tmp3*_tmp330 - _tmp333*across_1_1;
+    const double _tmp337 = _tmp336*_tmp68;
+    const double _tmp338 = 0.4*_tmp335 + 0.4*_tmp337;
+    const double _tmp339 = _tmp126*_tmp150;
+    const double _tmp340 = _tmp334*_tmp68;
+    const double _tmp341 = _tmp148*_tmp328;
+    const double _tmp342 = _tmp313*_tmp78;
+    const double _tmp343 = _tmp126*_tmp321;
+    const double _tmp344 = _tmp235*_tmp95;
+    const double _tmp345 = _tmp231*_tmp89;
+    const double _tmp346 = _tmp240*(_tmp344 - _tmp345);
+    const double _tmp347 = _tmp231*_tmp95;
+    const double _tmp348 = _tmp235*_tmp89;
+    const double _tmp349 = _tmp347 + _tmp348;
+    const double _tmp350 = -_tmp346 - 0.015710082295598282*_tmp349*x_5;
+    const double _tmp351 = _tmp96 - _tmp232;
+    const double _tmp352 = _tmp258 + _tmp90;
+    const double _tmp353 = _tmp231*_tmp351 + _tmp235*_tmp352;
+    const double _tmp354 = _tmp235*_tmp351 - _tmp231*_tmp352;
+    const double _tmp355 = -_tmp240*_tmp353 + 0.015710082295598282*_tmp354*x_5;
+    const double _tmp356 = _tmp227*_tmp255;
+    const double _tmp357 = pow(p_3, 2);
+    const double _tmp358 = 5.0/_tmp357;
+    const double _tmp359 = _tmp358*omega_1_1;
+    const double _tmp360 = 0.5*_tmp344 + 0.5*_tmp345;
+    const double _tmp361 = _tmp314 + _tmp316;
+    const double _tmp362 = 0.5*_tmp347;
+    const double _tmp363 = _tmp362 - 0.5*_tmp235*_tmp89;
+    const double _tmp364 = _tmp358*omega_2_1;
+    const double _tmp365 = _tmp358*omega_3_1;
+    const double _tmp366 = 0.5*_tmp89;
+    const double _tmp367 = _tmp340 - _tmp24*_tmp336;
+    const double _tmp368 = _tmp342 + _tmp367 - _tmp31*_tmp315;
+    const double _tmp369 = _tmp335 + _tmp337;
+    const double _tmp370 = _tmp361 + _tmp369;
+    const double _tmp371 = _tmp358*omega_4_1;
+    const double _tmp372 = 0.5*_tmp266;
+    const double _tmp373 = 0.5*_tmp277;
+    const double _tmp374 = _tmp283*_tmp4;
+    const double _tmp375 = 0.5*_tmp283;
+    const double _tmp376 = 0.5*_tmp290;
+    const double _tmp377 = _tmp357*_tmp7;
+    const double _tmp378 = 0.00039275205738995705*x_5;
+    const double _tmp379 = _tmp19*_tmp357;
+    const double _tmp380 = 6.1104e-05*_tmp272;
+    const double _tmp381 = _tmp266*_tmp357;
+    const double _tmp382 = 0.0011782561721698712*x_5;
+    const double _tmp383 = _tmp267*_tmp357;
+    const double _tmp384 = 0.000183312*_tmp272;
+    const double _tmp385 = 0.0015710082295598282*_tmp357;
+    const double _tmp386 = _tmp29 + _tmp37;
+    const double _tmp387 = cos(_tmp386);
+    const double _tmp388 = _tmp387*x_4;
+    const double _tmp389 = sin(_tmp386);
+    const double _tmp390 = _tmp385*x_5;
+    const double _tmp391 = 0.00039275205738995705*_tmp357;
+    const double _tmp392 = _tmp357*_tmp378;
+    const double _tmp393 = _tmp389*x_4;
+    const double _tmp394 = _tmp275*x_4;
+    const double _tmp395 = 0.0011782561721698712*_tmp357;
+    const double _tmp396 = _tmp357*_tmp382;
+    const double _tmp397 = _tmp277*x_4;
+    const double _tmp398 = _tmp132 + p_1;
+    const double _tmp399 = sin(_tmp398);
+    const double _tmp400 = _tmp391*x_4;
+    const double _tmp401 = cos(_tmp398);
+    const double _tmp402 = _tmp395*x_4;
+    const double _tmp403 = _tmp175 + _tmp191;
+    const double _tmp404 = sin(_tmp403);
+    const double _tmp405 = _tmp385*x_4;
+    const double _tmp406 = cos(_tmp403);
+    const double _tmp407 = -_tmp404*_tmp405 + 0.0015710082295598282*_tmp357*_tmp406*x_5;
+    const double _tmp408 = -_tmp390*_tmp404 - _tmp405*_tmp406;
+    const double _tmp409 = -_tmp290*_tmp405 + 0.0015710082295598282*_tmp293*_tmp357*x_5;
+    const double _tmp410 = -_tmp290*_tmp390 - _tmp293*_tmp405;
+    const double _tmp411 = _tmp19*p_3;
+    const double _tmp412 = 0.0031420164591196564*x_5;
+    const double _tmp413 = _tmp7*p_3;
+    const double _tmp414 = 0.000488832*_tmp272;
+    const double _tmp415 = pow(p_3, -3);
+    const double _tmp416 = -0.041666666666666664*_tmp415;
+    const double _tmp417 = -0.14925373134328357*_tmp415;
+    const double _tmp418 = _tmp412*p_3;
+    const double _tmp419 = _tmp414*p_3;
+    const double _tmp420 = 0.0031420164591196564*p_3;
+    const double _tmp421 = _tmp420*x_4;
+    const double _tmp422 = 0.004909400717374463*p_3;
+    const double _tmp423 = _tmp422*across_2_0;
+    const double _tmp424 = _tmp38*_tmp422;
+    const double _tmp425 = _tmp422*_tmp46;
+    const double _tmp426 = 0.009818801434748926*x_9;
+    const double _tmp427 = 0.004909400717374463*theta_2 + 0.00019281772323005516*x_0;
+    const double _tmp428 = 0.009818801434748926*_tmp115 + _tmp48*(_tmp427 - _tmp426);
+    const double _tmp429 = _tmp4*(0.009818801434748926*_tmp117 + _tmp45*(_tmp426 + _tmp427));
+    const double _tmp430 = -_tmp35*_tmp423 - _tmp35*_tmp429 - _tmp424*across_2_1 - _tmp425*_tmp44 + 0.5*_tmp38*_tmp428*p_3 + 0.004909400717374463*_tmp49*_tmp50*p_3;
+    const double _tmp431 = 0.019637602869497853*p_3;
+    const double _tmp432 = _tmp121*_tmp431 + _tmp423*_tmp44 + _tmp428*_tmp51 + _tmp429*_tmp44 - _tmp35*_tmp425 - _tmp424*_tmp49 - _tmp422*_tmp50*across_2_1;
+    const double _tmp433 = 0.07855041147799141*cos(_tmp87);
+    const double _tmp434 = cos(_tmp92);
+    const double _tmp435 = -_tmp433*_tmp90 - 0.15710082295598282*_tmp434*_tmp93*_tmp96;
+    const double _tmp436 = -_tmp433*_tmp96 + 0.15710082295598282*_tmp434*_tmp89*_tmp93*p_0;
+    const double _tmp437 = _tmp106*_tmp435 - _tmp100*_tmp436;
+    const double _tmp438 = 0.039275205738995705*cos(_tmp28);
+    const double _tmp439 = _tmp84*p_2;
+    const double _tmp440 = cos(_tmp22);
+    const double _tmp441 = _tmp422*across_1_0;
+    const double _tmp442 = 0.004909400717374463*_tmp413;
+    const double _tmp443 = _tmp15*_tmp422;
+    const double _tmp444 = 0.009818801434748926*x_8;
+    const double _tmp445 = 0.004909400717374463*theta_1 + 0.00019281772323005516*x_3;
+    const double _tmp446 = 0.009818801434748926*_tmp61 + _tmp17*(_tmp445 - _tmp444);
+    const double _tmp447 = _tmp4*(0.009818801434748926*_tmp63 + _tmp14*(_tmp444 + _tmp445));
+    const double _tmp448 = -_tmp13*_tmp443 - _tmp3*_tmp441 - _tmp3*_tmp447 - _tmp442*across_1_1 + 0.5*_tmp446*_tmp7*p_3 + 0.004909400717374463*_tmp18*_tmp19*p_3;
+    const double _tmp449 = _tmp13*_tmp441 + _tmp13*_tmp447 + _tmp20*_tmp446 + _tmp431*_tmp69 - _tmp18*_tmp442 - _tmp3*_tmp443 - 0.004909400717374463*_tmp411*across_1_1;
+    const double _tmp450 = 0.019637602869497853*_tmp24;
+    const double _tmp451 = _tmp21*_tmp450 + _tmp24*_tmp448 + _tmp449*_tmp68 - 0.019637602869497853*_tmp68*_tmp75;
+    const double _tmp452 = 0.25*p_3;
+    const double _tmp453 = 0.25*_tmp413;
+    const double _tmp454 = _tmp13*_tmp452;
+    const double _tmp455 = 0.25*_tmp411;
+    const double _tmp456 = -0.5*_tmp61 - _tmp17*_tmp2;
+    const double _tmp457 = 0.5*_tmp63 + _tmp14*_tmp6;
+    const double _tmp458 = _tmp15*_tmp454 + _tmp18*_tmp455 + _tmp4*cos(_tmp73) + _tmp456*_tmp8 - _tmp453*across_1_1 + _tmp3*_tmp452*across_1_0 - _tmp3*_tmp4*_tmp457;
+    const double _tmp459 = 1.0*p_3;
+    const double _tmp460 = -_tmp18*_tmp453 - _tmp454*across_1_0 - _tmp455*across_1_1 - _tmp459*_tmp9*cos(_tmp0) + 0.25*_tmp15*_tmp3*p_3 + 0.5*_tmp13*_tmp457*p_3 + 0.5*_tmp19*_tmp456*p_3;
+    const double _tmp461 = -_tmp24*_tmp458 - _tmp460*_tmp68;
+    const double _tmp462 = _tmp38*_tmp452;
+    const double _tmp463 = _tmp44*_tmp452;
+    const double _tmp464 = _tmp452*_tmp50;
+    const double _tmp465 = -0.5*_tmp115 - _tmp34*_tmp48;
+    const double _tmp466 = 0.5*_tmp117 + _tmp37*_tmp45;
+    const double _tmp467 = _tmp39*_tmp465 + _tmp4*cos(_tmp79) + _tmp46*_tmp463 + _tmp464*_tmp49 - _tmp462*across_2_1 + _tmp35*_tmp452*across_2_0 - _tmp35*_tmp4*_tmp466;
+    const double _tmp468 = -_tmp462*_tmp49 - _tmp463*across_2_0 - _tmp464*across_2_1 - _tmp40*_tmp459*cos(_tmp32) + 0.25*_tmp35*_tmp46*p_3 + 0.5*_tmp44*_tmp466*p_3 + 0.5*_tmp465*_tmp50*p_3;
+    const double _tmp469 = _tmp438*_tmp82;
+    const double _tmp470 = 0.07855041147799141*_tmp440*_tmp85;
+    const double _tmp471 = _tmp448*_tmp68 + _tmp450*_tmp75 - _tmp24*_tmp449 + 0.019637602869497853*_tmp21*_tmp68;
+    const double _tmp472 = _tmp24*_tmp460 - _tmp458*_tmp68;
+    const double _tmp473 = _tmp84*p_4;
+    const double _tmp474 = 4*_tmp94;
+    const double _tmp475 = -2*_tmp91 - _tmp474*_tmp96;
+    const double _tmp476 = _tmp100*_tmp475;
+    const double _tmp477 = 2*_tmp103 - 4*_tmp89*_tmp94*p_0;
+    const double _tmp478 = -_tmp477;
+    const double _tmp479 = _tmp476 + _tmp106*_tmp478;
+    const double _tmp480 = _tmp106*_tmp475;
+    const double _tmp481 = _tmp480 - _tmp100*_tmp478;
+    const double _tmp482 = 2*_tmp86;
+    const double _tmp483 = _tmp482*_tmp84;
+    const double _tmp484 = -2*_tmp302 - _tmp474*_tmp95;
+    const double _tmp485 = -2*_tmp304 + 4*_tmp89*_tmp94;
+    const double _tmp486 = -_tmp218 + _tmp482*_tmp82;
+    const double _tmp487 = -_tmp261 - _tmp483;
+    const double _tmp488 = _tmp4*_tmp68;
+    const double _tmp489 = -_tmp13*_tmp488 + 0.5*_tmp24*_tmp3*p_3;
+    const double _tmp490 = _tmp3*_tmp488 + _tmp13*_tmp24*_tmp4;
+    const double _tmp491 = -_tmp490;
+    const double _tmp492 = -_tmp20*_tmp68 - _tmp24*_tmp8;
+    const double _tmp493 = _tmp68*_tmp8 - _tmp20*_tmp24;
+    const double _tmp494 = _tmp31*_tmp4;
+    const double _tmp495 = _tmp4*_tmp78;
+    const double _tmp496 = _tmp35*_tmp494 - _tmp44*_tmp495;
+    const double _tmp497 = _tmp35*_tmp495 + _tmp44*_tmp494;
+    const double _tmp498 = -_tmp31*_tmp39 - _tmp51*_tmp78;
+    const double _tmp499 = _tmp39*_tmp78 - _tmp31*_tmp51;
+    const double _tmp500 = -_tmp493;
+    out[0] = 0;
+    out[1] = 0;
+    out[2] = 0;
+    out[3] = 0;
+    out[4] = _tmp77 - _tmp108 - _tmp26 - _tmp67 - _tmp72 - 0.4*_tmp53 + 0.4*_tmp78*_tmp81 + 0.4*_tmp82*_tmp83*p_2 + 0.8*_tmp84*_tmp86*p_2;
+    out[5] = -_tmp108 - 0.2*_tmp53 - 0.4*_tmp120 - 0.4*_tmp123 + 0.2*_tmp78*_tmp81;
+    out[6] = _tmp202 + 0.2*_tmp147 + 0.2*_tmp151 + 0.4*_tmp161 - 0.4*_tmp169 - _tmp162*_tmp167;
+    out[7] = 0.2*_tmp194 + 0.2*_tmp198 + _tmp211*_tmp212 - _tmp213*_tmp214;
+    out[8] = -_tmp221 - 0.4*_tmp215 - 0.4*_tmp216 - 0.4*_tmp217 - _tmp21*_tmp76 - _tmp219*p_2 - _tmp25*_tmp75 + 0.4*_tmp24*_tmp70 + 0.8*_tmp82*_tmp86*p_2;
+    out[9] = -_tmp221 - 0.2*_tmp215 - 0.2*_tmp216 - 0.4*_tmp222 + 0.4*_tmp122*_tmp31;
+    out[10] = -_tmp224 - 0.2*_tmp223 - 0.4*_tmp225 - 0.4*_tmp226 - _tmp167*_tmp199 + 0.2*_tmp126*_tmp150 + 0.4*_tmp162*_tmp200 + 0.4*_tmp193*_tmp196;
+    out[11] = -_tmp211*_tmp214 - _tmp212*_tmp213 + 0.2*_tmp193*_tmp196 - 0.2*_tmp189*_tmp197;
+    out[12] = -_tmp229*(-_tmp228 - _tmp227*p_4) - _tmp240*(-_tmp228 - _tmp239) + 0.015710082295598282*x_5*(-_tmp244 + 0.5*_tmp241*p_3);
+    out[13] = -_tmp247;
+    out[14] = 0;
+    out[15] = 0;
+    out[16] = _tmp249;
+    out[17] = _tmp249;
+    out[18] = 0;
+    out[19] = 0;
+    out[20] = _tmp240*(-_tmp239 - _tmp252) - _tmp255*(-_tmp244 - _tmp254);
+    out[21] = _tmp247;
+    out[22] = _tmp240*(-_tmp225 - _tmp226 - _tmp260 - 0.5*_tmp223 + 0.5*_tmp126*_tmp150 + 0.5*_tmp257*_tmp95*p_3) - _tmp255*(_tmp161 + _tmp259 - _tmp169 + 0.5*_tmp147 + 0.5*_tmp151);
+    out[23] = 0;
+    out[24] = 0;
+    out[25] = 0;
+    out[26] = 0;
+    out[27] = 0;
+    out[28] = _tmp26 + _tmp67 + _tmp72 - _tmp77 - _tmp262*p_4 - _tmp264*p_4;
+    out[29] = 0;
+    out[30] = 0;
+    out[31] = 0;
+    out[32] = _tmp255*(-_tmp267*_tmp270 + 0.375*_tmp266*across_1_1*p_3 - _tmp2*_tmp266*_tmp271*_tmp54) + _tmp273*(-_tmp266*_tmp270 - _tmp267*_tmp269*across_1_1 + 0.125*_tmp2*_tmp267*_tmp271*p_3);
+    out[33] = 0;
+    out[34] = 0;
+    out[35] = 0;
+    out[36] = -_tmp240*(-_tmp275*_tmp276 - _tmp277*_tmp279) + 0.015710082295598282*x_5*(_tmp276*_tmp277 - _tmp275*_tmp279);
+    out[37] = -_tmp240*(-_tmp277*_tmp280 - _tmp269*_tmp275*across_2_1 + 0.125*_tmp275*_tmp281*_tmp34*p_3) + 0.015710082295598282*x_5*(-_tmp275*_tmp280 + 0.375*_tmp277*across_2_1*p_3 - _tmp277*_tmp281*_tmp34*_tmp54);
+    out[38] = 0;
+    out[39] = 0;
+    out[40] = 0;
+    out[41] = 0;
+    out[42] = _tmp240*(_tmp285*_tmp287 - _tmp284*across_3_1 + _tmp129*_tmp283*_tmp288*_tmp54) - _tmp255*(-_tmp284*_tmp285 - _tmp287*across_3_1 + 0.125*_tmp129*_tmp286*_tmp288*p_3);
+    out[43] = 0;
+    out[44] = 0;
+    out[45] = 0;
+    out[46] = _tmp294;
+    out[47] = _tmp240*(_tmp292*_tmp296 - _tmp295*across_4_1 + _tmp172*_tmp290*_tmp297*_tmp54) - _tmp255*(-_tmp292*_tmp295 - _tmp296*across_4_1 + 0.125*_tmp172*_tmp293*_tmp297*p_3);
+    out[48] = 0;
+    out[49] = 0;
+    out[50] = 0;
+    out[51] = 0;
+    out[52] = 0;
+    out[53] = -_tmp107*_tmp303 - _tmp300*_tmp301 + 0.4*_tmp100*_tmp305 + 0.4*_tmp162*_tmp298;
+    out[54] = _tmp102 + _tmp202 + 0.4*_tmp147 + 0.4*_tmp151 + _tmp306*_tmp307 - _tmp104*_tmp107;
+    out[55] = _tmp308;
+    out[56] = -_tmp338 - 0.4*_tmp314 - 0.4*_tmp316 - 0.4*_tmp322 - _tmp214*_tmp327 + 0.4*_tmp126*_tmp328 + 0.4*_tmp193*_tmp329;
+    out[57] = 0;
+    out[58] = _tmp101*_tmp303 + _tmp107*_tmp305 + _tmp298*_tmp301 + _tmp300*_tmp307;
+    out[59] = _tmp220 - _tmp224 + 0.4*_tmp339 - 0.4*_tmp223 + _tmp101*_tmp104 + _tmp162*_tmp201 + _tmp196*_tmp212 + _tmp301*_tmp306;
+    out[60] = -_tmp262 - _tmp264;
+    out[61] = -0.4*_tmp340 - 0.4*_tmp341 - 0.4*_tmp342 - 0.4*_tmp343 - _tmp212*_tmp327 - _tmp214*_tmp329 + 0.4*_tmp24*_tmp336 + 0.4*_tmp31*_tmp315;
+    out[62] = 0;
+    out[63] = _tmp350;
+    out[64] = _tmp355;
+    out[65] = -_tmp356 - _tmp240*_tmp241;
+    out[66] = -_tmp359 - _tmp240*(_tmp360 - _tmp342 - 0.5*_tmp241 + _tmp31*_tmp315) + 0.007855041147799141*_tmp241*x_7 + 0.015710082295598282*x_5*(-_tmp361 - _tmp363 + 0.5*_tmp227);
+    out[67] = -_tmp229*_tmp241;
+    out[68] = _tmp350;
+    out[69] = _tmp355;
+    out[70] = 0;
+    out[71] = -_tmp364 - _tmp240*(_tmp360 - 0.5*_tmp235) + 0.015710082295598282*x_5*(_tmp248 - _tmp362 + 0.5*_tmp348);
+    out[72] = 0;
+    out[73] = _tmp346 - _tmp255*(-_tmp349 + 2*_tmp89);
+    out[74] = _tmp240*(_tmp339 + _tmp353 - _tmp223 - _tmp260 + _tmp232*_tmp257) - _tmp255*(_tmp147 + _tmp151 + _tmp259 + _tmp354 - _tmp97);
+    out[75] = _tmp356 + _tmp240*(-1 + _tmp241);
+    out[76] = -_tmp365 - _tmp255*(-_tmp322 - _tmp363 - _tmp370 + _tmp126*_tmp328 - _tmp256*_tmp366 + 0.5*_tmp257*_tmp95) + 0.015710082295598282*x_4*(-_tmp341 - _tmp343 - _tmp368 - _tmp257*_tmp366 + 0.5*_tmp231*_tmp89 + 0.5*_tmp235*_tmp95 - 0.5*_tmp256*_tmp95);
+    out[77] = 0;
+    out[78] = 0;
+    out[79] = 0;
+    out[80] = 0;
+    out[81] = _tmp371;
+    out[82] = 0;
+    out[83] = 0;
+    out[84] = 0;
+    out[85] = 0;
+    out[86] = _tmp338;
+    out[87] = -_tmp308;
+    out[88] = 0;
+    out[89] = 0;
+    out[90] = 0;
+    out[91] = _tmp359 + _tmp255*(-_tmp268*_tmp372 - 0.5*_tmp267*across_1_1) + _tmp273*(-_tmp372*across_1_1 + 0.5*_tmp267*_tmp268) - _tmp358*omega_1_0;
+    out[92] = 0;
+    out[93] = 0;
+    out[94] = 0;
+    out[95] = 0;
+    out[96] = _tmp364 - _tmp240*(-_tmp373*across_2_1 + 0.5*_tmp275*_tmp278) - _tmp358*omega_2_0 + 0.015710082295598282*x_5*(-_tmp278*_tmp373 - 0.5*_tmp275*across_2_1);
+    out[97] = 0;
+    out[98] = 0;
+    out[99] = _tmp240*(-_tmp374*across_3_1 + 0.5*_tmp285*_tmp286*p_3) - _tmp255*(-_tmp285*_tmp374 - _tmp286*_tmp4*across_3_1);
+    out[100] = 0;
+    out[101] = _tmp365 + _tmp240*(_tmp285*_tmp375 + 0.5*_tmp286*across_3_1) - _tmp255*(-_tmp375*across_3_1 + 0.5*_tmp285*_tmp286) - _tmp358*omega_3_0;
+    out[102] = 0;
+    out[103] = 0;
+    out[104] = _tmp294;
+    out[105] = 0;
+    out[106] = _tmp371 + _tmp240*(_tmp292*_tmp376 + 0.5*_tmp293*across_4_1) - _tmp255*(-_tmp376*across_4_1 + 0.5*_tmp292*_tmp293) - _tmp358*omega_4_0;
+    out[107] = 0;
+    out[108] = 0.5;
+    out[109] = 0;
+    out[110] = 0;
+    out[111] = 0;
+    out[112] = _tmp377*_tmp378 - _tmp379*_tmp380;
+    out[113] = 0;
+    out[114] = 0;
+    out[115] = 0;
+    out[116] = _tmp377*_tmp380 + _tmp378*_tmp379;
+    out[117] = 0;
+    out[118] = 0;
+    out[119] = 0;
+    out[120] = 0;
+    out[121] = 0;
+    out[122] = 0;
+    out[123] = 0;
+    out[124] = 0;
+    out[125] = 0;
+    out[126] = 0;
+    out[127] = 0;
+    out[128] = 0.5;
+    out[129] = 0;
+    out[130] = 0;
+    out[131] = 0;
+    out[132] = _tmp381*_tmp382 - _tmp383*_tmp384;
+    out[133] = 0;
+    out[134] = 0;
+    out[135] = 0;
+    out[136] = _tmp381*_tmp384 + _tmp382*_tmp383;
+    out[137] = 0;
+    out[138] = 0;
+    out[139] = 0;
+    out[140] = 0;
+    out[141] = 0;
+    out[142] = 0;
+    out[143] = 0;
+    out[144] = 0;
+    out[145] = 0;
+    out[146] = 0;
+    out[147] = 0;
+    out[148] = 0;
+    out[149] = 0.5;
+    out[150] = 0;
+    out[151] = 0;
+    out[152] = _tmp385*_tmp388 + _tmp389*_tmp390;
+    out[153] = _tmp388*_tmp391 + _tmp389*_tmp392;
+    out[154] = 0;
+    out[155] = 0;
+    out[156] = -_tmp385*_tmp393 + 0.0015710082295598282*_tmp357*_tmp387*x_5;
+    out[157] = -_tmp391*_tmp393 + 0.00039275205738995705*_tmp357*_tmp387*x_5;
+    out[158] = 0;
+    out[159] = 0;
+    out[160] = 0;
+    out[161] = 0;
+    out[162] = 0;
+    out[163] = 0;
+    out[164] = 0;
+    out[165] = 0;
+    out[166] = 0;
+    out[167] = 0;
+    out[168] = 0;
+    out[169] = 0.5;
+    out[170] = 0;
+    out[171] = 0;
+    out[172] = _tmp277*_tmp390 + _tmp385*_tmp394;
+    out[173] = _tmp277*_tmp396 + _tmp394*_tmp395;
+    out[174] = 0;
+    out[175] = 0;
+    out[176] = -_tmp385*_tmp397 + 0.0015710082295598282*_tmp275*_tmp357*x_5;
+    out[177] = -_tmp395*_tmp397 + 0.0011782561721698712*_tmp275*_tmp357*x_5;
+    out[178] = 0;
+    out[179] = 0;
+    out[180] = 0;
+    out[181] = 0;
+    out[182] = 0;
+    out[183] = 0;
+    out[184] = 0;
+    out[185] = 0;
+    out[186] = 0;
+    out[187] = 0;
+    out[188] = 0;
+    out[189] = 0;
+    out[190] = 0.5;
+    out[191] = 0;
+    out[192] = 0;
+    out[193] = 0;
+    out[194] = -_tmp399*_tmp400 + 0.00039275205738995705*_tmp357*_tmp401*x_5;
+    out[195] = 0;
+    out[196] = 0;
+    out[197] = 0;
+    out[198] = -_tmp392*_tmp399 - _tmp400*_tmp401;
+    out[199] = 0;
+    out[200] = 0;
+    out[201] = 0;
+    out[202] = 0;
+    out[203] = 0;
+    out[204] = 0;
+    out[205] = 0;
+    out[206] = 0;
+    out[207] = 0;
+    out[208] = 0;
+    out[209] = 0;
+    out[210] = 0.5;
+    out[211] = 0;
+    out[212] = 0;
+    out[213] = 0;
+    out[214] = -_tmp283*_tmp402 + 0.0011782561721698712*_tmp286*_tmp357*x_5;
+    out[215] = 0;
+    out[216] = 0;
+    out[217] = 0;
+    out[218] = -_tmp283*_tmp396 - _tmp286*_tmp402;
+    out[219] = 0;
+    out[220] = 0;
+    out[221] = 0;
+    out[222] = 0;
+    out[223] = 0;
+    out[224] = 0;
+    out[225] = 0;
+    out[226] = 0;
+    out[227] = 0;
+    out[228] = 0;
+    out[229] = 0;
+    out[230] = 0;
+    out[231] = 0.5;
+    out[232] = 0;
+    out[233] = 0;
+    out[234] = _tmp407;
+    out[235] = -_tmp400*_tmp404 + 0.00039275205738995705*_tmp357*_tmp406*x_5;
+    out[236] = 0;
+    out[237] = 0;
+    out[238] = _tmp408;
+    out[239] = -_tmp392*_tmp404 - _tmp400*_tmp406;
+    out[240] = 0;
+    out[241] = 0;
+    out[242] = 0;
+    out[243] = 0;
+    out[244] = 0;
+    out[245] = 0;
+    out[246] = 0;
+    out[247] = 0;
+    out[248] = 0;
+    out[249] = 0;
+    out[250] = 0;
+    out[251] = 0.5;
+    out[252] = 0;
+    out[253] = 0;
+    out[254] = _tmp409;
+    out[255] = -_tmp290*_tmp402 + 0.0011782561721698712*_tmp293*_tmp357*x_5;
+    out[256] = 0;
+    out[257] = 0;
+    out[258] = _tmp410;
+    out[259] = -_tmp290*_tmp396 - _tmp293*_tmp402;
+    out[260] = 0;
+    out[261] = 0;
+    out[262] = 0;
+    out[263] = 0;
+    out[264] = 0;
+    out[265] = 0;
+    out[266] = 0;
+    out[267] = 0;
+    out[268] = 0;
+    out[269] = 0;
+    out[270] = 0;
+    out[271] = 0;
+    out[272] = 0;
+    out[273] = 0;
+    out[274] = 0;
+    out[275] = 0;
+    out[276] = -_tmp411*_tmp412 - _tmp413*_tmp414;
+    out[277] = 0;
+    out[278] = 0;
+    out[279] = 0;
+    out[280] = 0;
+    out[281] = _tmp412*_tmp413 - _tmp411*_tmp414;
+    out[282] = 0;
+    out[283] = 0;
+    out[284] = 0;
+    out[285] = 0;
+    out[286] = _tmp416;
+    out[287] = 0;
+    out[288] = 0;
+    out[289] = 0;
+    out[290] = 0;
+    out[291] = _tmp417;
+    out[292] = 0;
+    out[293] = 0;
+    out[294] = 0;
+    out[295] = 0;
+    out[296] = 0;
+    out[297] = 0;
+    out[298] = 0;
+    out[299] = 0;
+    out[300] = 0;
+    out[301] = -_tmp266*_tmp419 - _tmp267*_tmp418;
+    out[302] = 0;
+    out[303] = 0;
+    out[304] = 0;
+    out[305] = 0;
+    out[306] = _tmp266*_tmp418 - _tmp267*_tmp419;
+    out[307] = 0;
+    out[308] = 0;
+    out[309] = 0;
+    out[310] = 0;
+    out[311] = _tmp416;
+    out[312] = 0;
+    out[313] = 0;
+    out[314] = 0;
+    out[315] = 0;
+    out[316] = _tmp417;
+    out[317] = 0;
+    out[318] = 0;
+    out[319] = 0;
+    out[320] = 0;
+    out[321] = 0;
+    out[322] = 0;
+    out[323] = 0;
+    out[324] = 0;
+    out[325] = 0;
+    out[326] = _tmp393*_tmp420 - _tmp387*_tmp418;
+    out[327] = 0;
+    out[328] = 0;
+    out[329] = 0;
+    out[330] = 0;
+    out[331] = _tmp388*_tmp420 + _tmp389*_tmp418;
+    out[332] = 0;
+    out[333] = 0;
+    out[334] = 0;
+    out[335] = 0;
+    out[336] = _tmp416;
+    out[337] = 0;
+    out[338] = 0;
+    out[339] = 0;
+    out[340] = 0;
+    out[341] = _tmp417;
+    out[342] = 0;
+    out[343] = 0;
+    out[344] = 0;
+    out[345] = 0;
+    out[346] = 0;
+    out[347] = 0;
+    out[348] = 0;
+    out[349] = 0;
+    out[350] = 0;
+    out[351] = _tmp397*_tmp420 - _tmp275*_tmp418;
+    out[352] = 0;
+    out[353] = 0;
+    out[354] = 0;
+    out[355] = 0;
+    out[356] = _tmp277*_tmp418 + _tmp394*_tmp420;
+    out[357] = 0;
+    out[358] = 0;
+    out[359] = 0;
+    out[360] = 0;
+    out[361] = _tmp416;
+    out[362] = 0;
+    out[363] = 0;
+    out[364] = 0;
+    out[365] = 0;
+    out[366] = _tmp417;
+    out[367] = 0;
+    out[368] = 0;
+    out[369] = 0;
+    out[370] = 0;
+    out[371] = 0;
+    out[372] = 0;
+    out[373] = 0;
+    out[374] = -_tmp399*_tmp405 + 0.0015710082295598282*_tmp357*_tmp401*x_5;
+    out[375] = 0;
+    out[376] = _tmp399*_tmp418 + _tmp401*_tmp421;
+    out[377] = 0;
+    out[378] = 0;
+    out[379] = -_tmp390*_tmp399 - _tmp401*_tmp405;
+    out[380] = 0;
+    out[381] = -_tmp399*_tmp421 + 0.0031420164591196564*_tmp401*p_3*x_5;
+    out[382] = 0;
+    out[383] = 0;
+    out[384] = 0;
+    out[385] = 0;
+    out[386] = _tmp416;
+    out[387] = 0;
+    out[388] = 0;
+    out[389] = 0;
+    out[390] = 0;
+    out[391] = _tmp417;
+    out[392] = 0;
+    out[393] = 0;
+    out[394] = 0;
+    out[395] = 0;
+    out[396] = 0;
+    out[397] = 0;
+    out[398] = 0;
+    out[399] = -_tmp283*_tmp405 + 0.0015710082295598282*_tmp286*_tmp357*x_5;
+    out[400] = 0;
+    out[401] = _tmp283*_tmp418 + _tmp286*_tmp421;
+    out[402] = 0;
+    out[403] = 0;
+    out[404] = -_tmp283*_tmp390 - _tmp286*_tmp405;
+    out[405] = 0;
+    out[406] = -_tmp283*_tmp421 + 0.0031420164591196564*_tmp286*p_3*x_5;
+    out[407] = 0;
+    out[408] = 0;
+    out[409] = 0;
+    out[410] = 0;
+    out[411] = _tmp416;
+    out[412] = 0;
+    out[413] = 0;
+    out[414] = 0;
+    out[415] = 0;
+    out[416] = _tmp417;
+    out[417] = 0;
+    out[418] = 0;
+    out[419] = 0;
+    out[420] = 0;
+    out[421] = 0;
+    out[422] = 0;
+    out[423] = 0;
+    out[424] = _tmp407;
+    out[425] = 0;
+    out[426] = _tmp404*_tmp418 + _tmp406*_tmp421;
+    out[427] = 0;
+    out[428] = 0;
+    out[429] = _tmp408;
+    out[430] = 0;
+    out[431] = -_tmp404*_tmp421 + 0.0031420164591196564*_tmp406*p_3*x_5;
+    out[432] = 0;
+    out[433] = 0;
+    out[434] = 0;
+    out[435] = 0;
+    out[436] = _tmp416;
+    out[437] = 0;
+    out[438] = 0;
+    out[439] = 0;
+    out[440] = 0;
+    out[441] = _tmp417;
+    out[442] = 0;
+    out[443] = 0;
+    out[444] = 0;
+    out[445] = 0;
+    out[446] = 0;
+    out[447] = 0;
+    out[448] = 0;
+    out[449] = _tmp409;
+    out[450] = 0;
+    out[451] = _tmp290*_tmp418 + _tmp293*_tmp421;
+    out[452] = 0;
+    out[453] = 0;
+    out[454] = _tmp410;
+    out[455] = 0;
+    out[456] = -_tmp290*_tmp421 + 0.0031420164591196564*_tmp293*p_3*x_5;
+    out[457] = 0;
+    out[458] = 0;
+    out[459] = 0;
+    out[460] = 0;
+    out[461] = _tmp416;
+    out[462] = 0;
+    out[463] = 0;
+    out[464] = 0;
+    out[465] = 0;
+    out[466] = _tmp417;
+    out[467] = 0;
+    out[468] = -_tmp437 - 0.019637602869497853*_tmp53 - _tmp31*_tmp430 - _tmp432*_tmp78 + 0.019637602869497853*_tmp78*_tmp81;
+    out[469] = 0;
+    out[470] = 0;
+    out[471] = -_tmp437 - _tmp451 - 0.039275205738995705*_tmp53 - _tmp438*_tmp439 + 0.039275205738995705*_tmp78*_tmp81 + 0.07855041147799141*_tmp440*_tmp82*_tmp85*p_2;
+    out[472] = 0;
+    out[473] = 0;
+    out[474] = 0;
+    out[475] = 0;
+    out[476] = _tmp461;
+    out[477] = -_tmp31*_tmp467 - _tmp468*_tmp78;
+    out[478] = 0;
+    out[479] = 0;
+    out[480] = -0.019637602869497853*_tmp215 - 0.019637602869497853*_tmp216 + _tmp100*_tmp435 + _tmp106*_tmp436 + _tmp31*_tmp432 - _tmp430*_tmp78;
+    out[481] = 0;
+    out[482] = 0;
+    out[483] = -_tmp471 - 0.039275205738995705*_tmp215 - 0.039275205738995705*_tmp216 + _tmp100*_tmp435 + _tmp106*_tmp436 - _tmp439*_tmp470 - _tmp469*p_2;
+    out[484] = 0;
+    out[485] = 0;
+    out[486] = 0;
+    out[487] = 0;
+    out[488] = _tmp472;
+    out[489] = _tmp31*_tmp468 - _tmp467*_tmp78;
+    out[490] = 0;
+    out[491] = 0;
+    out[492] = 0;
+    out[493] = 0;
+    out[494] = 0;
+    out[495] = -_tmp451 - _tmp438*_tmp473 + 0.07855041147799141*_tmp440*_tmp82*_tmp85*p_4;
+    out[496] = 0;
+    out[497] = 0;
+    out[498] = 0;
+    out[499] = 0;
+    out[500] = _tmp461;
+    out[501] = 0;
+    out[502] = 0;
+    out[503] = 0;
+    out[504] = 0;
+    out[505] = 0;
+    out[506] = 0;
+    out[507] = -_tmp471 - _tmp469*p_4 - _tmp470*_tmp473;
+    out[508] = 0;
+    out[509] = 0;
+    out[510] = 0;
+    out[511] = 0;
+    out[512] = _tmp472;
+    out[513] = 0;
+    out[514] = 0;
+    out[515] = 0;
+    out[516] = -_tmp243 - _tmp254 - _tmp479 + _tmp82*_tmp83*p_2 + 2*_tmp84*_tmp86*p_2;
+    out[517] = -_tmp246 - _tmp479;
+    out[518] = 0;
+    out[519] = 0;
+    out[520] = -_tmp238 - _tmp252 - _tmp481 - _tmp218*p_2 + 2*_tmp82*_tmp86*p_2;
+    out[521] = -_tmp245 - _tmp481;
+    out[522] = 0;
+    out[523] = 0;
+    out[524] = -_tmp253 - _tmp66 - _tmp71 + _tmp250*_tmp75 + _tmp261*p_4 + _tmp483*p_4;
+    out[525] = 0;
+    out[526] = 0;
+    out[527] = 0;
+    out[528] = -_tmp252 - _tmp218*p_4 + 2*_tmp82*_tmp86*p_4;
+    out[529] = 0;
+    out[530] = 0;
+    out[531] = 0;
+    out[532] = _tmp100*_tmp485 - _tmp106*_tmp484;
+    out[533] = _tmp476 - _tmp106*_tmp477;
+    out[534] = _tmp486;
+    out[535] = -_tmp370;
+    out[536] = 0;
+    out[537] = _tmp100*_tmp484 + _tmp106*_tmp485;
+    out[538] = _tmp480 + _tmp100*_tmp477;
+    out[539] = _tmp487;
+    out[540] = -_tmp368;
+    out[541] = 0;
+    out[542] = 0;
+    out[543] = 0;
+    out[544] = 0;
+    out[545] = -_tmp369;
+    out[546] = _tmp486;
+    out[547] = 0;
+    out[548] = 0;
+    out[549] = 0;
+    out[550] = -_tmp367;
+    out[551] = _tmp487;
+    out[552] = _tmp489;
+    out[553] = _tmp491;
+    out[554] = 0;
+    out[555] = _tmp492;
+    out[556] = _tmp493;
+    out[557] = 0;
+    out[558] = _tmp496;
+    out[559] = -_tmp497;
+    out[560] = 0;
+    out[561] = _tmp498;
+    out[562] = _tmp499;
+    out[563] = 0;
+    out[564] = 0;
+    out[565] = 0;
+    out[566] = 0;
+    out[567] = 0;
+    out[568] = 0;
+    out[569] = 0;
+    out[570] = 0;
+    out[571] = 0;
+    out[572] = 0;
+    out[573] = 0;
+    out[574] = 0;
+    out[575] = 0;
+    out[576] = _tmp490;
+    out[577] = _tmp489;
+    out[578] = 0;
+    out[579] = _tmp500;
+    out[580] = _tmp492;
+    out[581] = 0;
+    out[582] = _tmp497;
+    out[583] = _tmp496;
+    out[584] = 0;
+    out[585] = -_tmp499;
+    out[586] = _tmp498;
+    out[587] = 0;
+    out[588] = 0;
+    out[589] = 0;
+    out[590] = 0;
+    out[591] = 0;
+    out[592] = 0;
+    out[593] = 0;
+    out[594] = 0;
+    out[595] = 0;
+    out[596] = 0;
+    out[597] = 0;
+    out[598] = 0;
+    out[599] = 0;
+    out[600] = _tmp489;
+    out[601] = _tmp491;
+    out[602] = 0;
+    out[603] = _tmp492;
+    out[604] = _tmp493;
+    out[605] = 0;
+    out[606] = 0;
+    out[607] = 0;
+    out[608] = 0;
+    out[609] = 0;
+    out[610] = 0;
+    out[611] = 0;
+    out[612] = 0;
+    out[613] = 0;
+    out[614] = 0;
+    out[615] = 0;
+    out[616] = 0;
+    out[617] = 0;
+    out[618] = 0;
+    out[619] = 0;
+    out[620] = 0;
+    out[621] = 0;
+    out[622] = 0;
+    out[623] = 0;
+    out[624] = _tmp490;
+    out[625] = _tmp489;
+    out[626] = 0;
+    out[627] = _tmp500;
+    out[628] = _tmp492;
+    out[629] = 0;
+    out[630] = 0;
+    out[631] = 0;
+    out[632] = 0;
+    out[633] = 0;
+    out[634] = 0;
+    out[635] = 0;
+    out[636] = 0;
+    out[637] = 0;
+    out[638] = 0;
+    out[639] = 0;
+    out[640] = 0;
+    out[641] = 0;
+    out[642] = 0;
+    out[643] = 0;
+    out[644] = 0;
+    out[645] = 0;
+    out[646] = 0;
+    out[647] = 0;
+}
+
 /* one plate's relation at order 4: (along, across, omega) and their partials by (theta, p, f) (312 operations) */
 static void sk_plate_relation4(const double *plate, double *out)
 {
@@ -5252,6 +7235,68 @@ static void sk_plate_rest4(const double *plate, double *out)
     out[9] = 1;
     out[10] = 0.00026041666666666666*theta*(320 - 8*_tmp0 - 360*_tmp1*symkin_sinr3(_tmp2) + 15*(theta_sq*theta_sq*theta_sq)*(-symkin_cosr4(_tmp2) + 7*symkin_sinr4(_tmp2)));
     out[11] = -0.5*symkin_sinr0(_tmp2);
+}
+
+/* one plate's relation at order 4: d(along, across, omega)/d(e_a, e_s) (158 operations) */
+static void sk_plate_eps4(const double *plate, double *out)
+{
+    const double theta = plate[0];
+    const double p = plate[1];
+    const double f = plate[2];
+    const double e_a = plate[3];
+    const double e_s = plate[4];
+    const double _tmp0 = pow(theta, 2);
+    const double _tmp5 = 1 + p*(-2*e_s + 2*e_a);
+    const double _tmp1 = e_a - e_s;
+    const double _tmp2 = 1 + _tmp1*p;
+    const double _tmp3 = _tmp2*p;
+    const double _tmp4 = 2*p;
+    const double _tmp6 = pow(p, 2);
+    const double _tmp7 = _tmp5*_tmp6;
+    const double _tmp8 = -0.08333333333333333*p + _tmp4*symkin_bcol_a(_tmp3) + _tmp7*symkin_bcol_a_d1(_tmp3);
+    const double _tmp9 = pow(theta, 4);
+    const double _tmp10 = -0.0010416666666666667*p + _tmp4*symkin_bcol_e3c(_tmp3) + _tmp7*symkin_bcol_e3c_d1(_tmp3);
+    const double _tmp11 = symkin_bcol_s(_tmp3);
+    const double _tmp12 = _tmp2*f;
+    const double _tmp13 = symkin_bcol_e1(_tmp3);
+    const double _tmp14 = _tmp0*_tmp13;
+    const double _tmp15 = 4*(_tmp2*_tmp2*_tmp2);
+    const double _tmp16 = (f*f*f);
+    const double _tmp17 = _tmp16*symkin_bcol_e2(_tmp3);
+    const double _tmp18 = -_tmp15*_tmp17 - 2*_tmp12*_tmp14 + _tmp11*_tmp2*f;
+    const double _tmp19 = _tmp18*f;
+    const double _tmp20 = symkin_bcol_w(_tmp3);
+    const double _tmp21 = pow(f, 2);
+    const double _tmp22 = pow(_tmp2, 2);
+    const double _tmp23 = _tmp21*_tmp22;
+    const double _tmp24 = symkin_bcol_e2_d1(_tmp3);
+    const double _tmp25 = pow(f, 4);
+    const double _tmp26 = _tmp25*pow(_tmp2, 4);
+    const double _tmp27 = symkin_bcol_e1_d1(_tmp3);
+    const double _tmp28 = _tmp0*_tmp27;
+    const double _tmp29 = _tmp4*(_tmp20*_tmp23 + _tmp23*_tmp28 + _tmp24*_tmp26);
+    const double _tmp30 = _tmp15*_tmp24;
+    const double _tmp31 = _tmp14*_tmp4*f + _tmp16*_tmp30*_tmp6 - _tmp11*f*p + 2*_tmp12*_tmp28*_tmp6 + 12*_tmp17*_tmp22*p - _tmp2*_tmp6*f*symkin_bcol_s_d1(_tmp3);
+    const double _tmp32 = -_tmp31;
+    const double _tmp33 = _tmp1*f;
+    const double _tmp34 = _tmp21*_tmp3;
+    const double _tmp35 = 2*_tmp34;
+    const double _tmp36 = _tmp23*_tmp6;
+    const double _tmp37 = _tmp20*_tmp35 + _tmp28*_tmp35 + _tmp36*symkin_bcol_w_d1(_tmp3) + _tmp0*_tmp36*symkin_bcol_e1_d2(_tmp3) + _tmp25*_tmp30*p + _tmp26*_tmp6*symkin_bcol_e2_d2(_tmp3);
+    const double _tmp38 = _tmp19 + p - _tmp29 + _tmp0*_tmp8 + _tmp32*_tmp33 - _tmp10*_tmp9 - _tmp37*_tmp5;
+    const double _tmp39 = _tmp29 - _tmp19 + _tmp10*_tmp9 + _tmp31*_tmp33 + _tmp37*_tmp5 - _tmp0*_tmp8;
+    const double _tmp40 = _tmp18*p;
+    const double _tmp41 = _tmp40 + _tmp2*_tmp32;
+    const double _tmp42 = f - _tmp40 + _tmp2*_tmp31;
+    const double _tmp43 = 0.5*f;
+    const double _tmp44 = _tmp6*theta;
+    const double _tmp45 = _tmp44*symkin_bcol_invt_d1(_tmp3) + 2*_tmp23*_tmp27*_tmp44 + 4*_tmp13*_tmp34*theta + 4*_tmp6*(theta*theta*theta)*symkin_bcol_e3_d1(_tmp3);
+    out[0] = _tmp38;
+    out[1] = _tmp39;
+    out[2] = _tmp41;
+    out[3] = _tmp42;
+    out[4] = _tmp45 - _tmp38*_tmp43 + 0.5*_tmp41*p;
+    out[5] = -_tmp45 - _tmp39*_tmp43 + 0.5*_tmp42*p;
 }
 
 /* symkin runtime (templates/c/runtime.c, docs/runtime.md; tested on its own by
@@ -5917,25 +7962,15 @@ static int sk_sensitivity_chain(const sk_mechanism *m, const double *params, dou
     return 0;
 }
 
-/* The total derivatives of the points' deviations (dev) and rigid positions (rig) by every
-   variable, 2 SK_NP x SK_NV row-major (row 2 p + c: component c of point p; columns: the
-   parameters, then the inputs), by the implicit-function theorem on the closures: with
-   Theta = d theta_u / dv = -A^-1 dG/dv and, where the level solves a closure E for delta,
-   Y = -M^-1 (dE/dv + dE/dtheta_u Theta): dD/dv + dD/dtheta_u Theta + dD/ddelta Y. */
-static int sk_sensitivity(const sk_mechanism *m, const sk_level *lv, const double *theta,
-                          const double *delta, const double *params, const double *q,
-                          double *dev, double *rig)
+/* The rigid positions' total derivatives (rig, 2 SK_NP x SK_NV) at theta, before the
+   parameters' chain, and with loops Theta = d theta_u / dv = -A^-1 dG/dv (th, SK_K x SK_NV).
+   Returns 0, or 1 where A is singular. */
+static int sk_rigid_rates(const sk_mechanism *m, const double *theta, const double *params,
+                          double *th, double *rig)
 {
-    double sr[SK_OUT], s[SK_OUT];
-    const sk_sens *b = &lv->sens;
-    const double *thu = NULL;
+    double sr[SK_OUT];
     int i;
-    double th[SK_K * SK_NV + 1], y[SK_K * SK_NV + 1];
-    (void)q;
-    (void)thu;
-    if (b->fn == NULL && !(lv->loaded && m->loaded_rates != NULL)) {
-        return 3;                   /* a level without closed-form sensitivities */
-    }
+    (void)th;
     m->sens_rigid(theta, params, sr);
     for (i = 0; i < SK_K * SK_NV; ++i) {
         th[i] = -sr[m->sr_dG_dv + i];
@@ -5947,6 +7982,32 @@ static int sk_sensitivity(const sk_mechanism *m, const sk_level *lv, const doubl
         rig[i] = sr[m->sr_dR_dv + i];
     }
     sk_gemm(2 * SK_NP, SK_K, SK_NV, sr + m->sr_dR_dtheta, th, rig);
+    return 0;
+}
+
+/* The total derivatives of the points' deviations (dev) and rigid positions (rig) by every
+   variable, 2 SK_NP x SK_NV row-major (row 2 p + c: component c of point p; columns: the
+   parameters, then the inputs), by the implicit-function theorem on the closures: with
+   Theta = d theta_u / dv = -A^-1 dG/dv and, where the level solves a closure E for delta,
+   Y = -M^-1 (dE/dv + dE/dtheta_u Theta): dD/dv + dD/dtheta_u Theta + dD/ddelta Y. */
+static int sk_sensitivity(const sk_mechanism *m, const sk_level *lv, const double *theta,
+                          const double *delta, const double *params, const double *q,
+                          double *dev, double *rig)
+{
+    double s[SK_OUT];
+    const sk_sens *b = &lv->sens;
+    const double *thu = NULL;
+    int i;
+    double th[SK_K * SK_NV + 1];
+    double y[SK_K * SK_NV + 1];
+    (void)q;
+    (void)thu;
+    if (b->fn == NULL && !(lv->loaded && m->loaded_rates != NULL)) {
+        return 3;                   /* a level without closed-form sensitivities */
+    }
+    if (sk_rigid_rates(m, theta, params, th, rig)) {
+        return 1;
+    }
     thu = th;
     if (b->fn == NULL) {
         /* the loaded level: the reduced equilibrium's own (templates/c/reduced_sens.c) */
@@ -6601,6 +8662,145 @@ static const sk_loaded sk_loaded_tables = {
     4, 1e-12, 0.2, 0.9, 3.0, 0.01,
     12, 0, 0.001, 1e-15,
     sk_loaded_unknown_index
+};
+
+/* One variant's sensitivity routine (x, theta, plates, params) and where its blocks start:
+   dR/dtheta (n x m), dR/dp (n x n_p), din/dtheta (5 n_s x m), din/dp (5 n_s x n_p), dD/dx
+   (2 n_P x n), dD/dtheta (2 n_P x m), dD/dp (2 n_P x n_p), dD/dout (2 n_P x 3 n_s). */
+typedef struct {
+    sk_fn4 fn;
+    int dR_dtheta, dR_dp, din_dtheta, din_dp, dD_dx, dD_dtheta, dD_dp, dD_dout;
+} sk_red_sens;
+
+/* The loaded level's sensitivity routines, one per variant of sk_loaded. */
+typedef struct {
+    sk_red_sens variants[2];
+} sk_loaded_sens;
+
+/* dev (2 SK_NP x SK_NV) of the loaded level at its solution: q holds the parameters, the
+   deviation, the variant solved and its x (sk_reduced_pose); thu dtheta_u/dv of the non-input
+   hinges (SK_K x SK_NV, NULL without). J is evaluated once more at the solution (its LU, the
+   plates' inputs and relation there: everything the chain rule reads), then
+   dx/dv = -J^-1 (dR/dtheta dtheta/dv + dR/dp + dR/dout dout/din din/dv) and
+   dD/dv = dD/dx dx/dv + dD/dtheta dtheta/dv + dD/dp + dD/dout dout/din (din/dv + din/dx dx/dv).
+   Returns 0, or 1 where J is singular. */
+static int sk_reduced_rates(const void *mechanism, const double *theta, const double *q,
+                            const double *thu, double *dev)
+{
+    const sk_mechanism *m = (const sk_mechanism *)mechanism;
+    const int v = (int)q[SK_NPAR + 2 * SK_NP];
+    const sk_red_sens *rs = ((const sk_loaded_sens *)m->loaded_sens)->variants + v;
+    double s[SK_OUT], vals[3 * SK_RS], eps[6];
+    double dth[SK_M * SK_NV + 1], din[5 * SK_RS * SK_NV + 1], dout[3 * SK_RS * SK_NV + 1];
+    double dx[SK_RN * SK_NV + 1], col[SK_RN + 1], part[3 * SK_RS * 5 + 1];
+    sk_red_state st;
+    sk_red r;
+    int n, ns, i, j, k, c, e;
+    if (sk_red_at_solution(m, theta, q, &r, &st, vals)) {
+        return 1;
+    }
+    n = r.v->size;
+    ns = r.v->plates_n;
+    rs->fn(st.xt, theta, vals, q, s);
+    /* dtheta/dv of every hinge: the non-input ones' from the rigid closure, an input's own 1 */
+    for (i = 0; i < SK_M * SK_NV; ++i) {
+        dth[i] = 0.0;
+    }
+    for (j = 0; j < SK_K && thu != NULL; ++j) {
+        for (c = 0; c < SK_NV; ++c) {
+            dth[m->unknown_index[j] * SK_NV + c] = thu[j * SK_NV + c];
+        }
+    }
+    for (i = 0; i < SK_NI; ++i) {
+        dth[m->input_index[i] * SK_NV + SK_NPAR + i] = 1.0;
+    }
+    /* the relation's partials by (theta_c, p, f, e_a, e_s), 3 x 5 per half plate */
+    for (k = 0; k < ns; ++k) {
+        sk_plate_eps4(st.ins + 5 * k, eps);
+        for (i = 0; i < 3; ++i) {
+            for (c = 0; c < 3; ++c) {
+                part[15 * k + 5 * i + c] = st.rel[12 * k + 3 + 3 * i + c];
+            }
+            part[15 * k + 5 * i + 3] = eps[2 * i];
+            part[15 * k + 5 * i + 4] = eps[2 * i + 1];
+        }
+    }
+    /* din/dv at fixed x, then dout/dv = dout/din din/dv */
+    for (i = 0; i < 5 * ns; ++i) {
+        for (c = 0; c < SK_NV; ++c) {
+            double sum = c < SK_NPAR ? s[rs->din_dp + i * SK_NPAR + c] : 0.0;
+            for (e = 0; e < SK_M; ++e) {
+                sum += s[rs->din_dtheta + i * SK_M + e] * dth[e * SK_NV + c];
+            }
+            din[i * SK_NV + c] = sum;
+        }
+    }
+    for (k = 0; k < ns; ++k) {
+        for (i = 0; i < 3; ++i) {
+            for (c = 0; c < SK_NV; ++c) {
+                double sum = 0.0;
+                for (e = 0; e < 5; ++e) {
+                    sum += part[15 * k + 5 * i + e] * din[(5 * k + e) * SK_NV + c];
+                }
+                dout[(3 * k + i) * SK_NV + c] = sum;
+            }
+        }
+    }
+    /* dx/dv = -J^-1 dR/dv at fixed x, column by column with J's LU */
+    for (c = 0; c < SK_NV; ++c) {
+        for (i = 0; i < n; ++i) {
+            const double *jo = st.sys + n + n * n + i * 3 * ns;
+            double sum = c < SK_NPAR ? s[rs->dR_dp + i * SK_NPAR + c] : 0.0;
+            for (e = 0; e < SK_M; ++e) {
+                sum += s[rs->dR_dtheta + i * SK_M + e] * dth[e * SK_NV + c];
+            }
+            for (e = 0; e < 3 * ns; ++e) {
+                sum += jo[e] * dout[e * SK_NV + c];
+            }
+            col[i] = -sum;
+        }
+        if (n > 0) {
+            sk_lu_solve(n, st.lu, st.piv, col);
+        }
+        for (i = 0; i < n; ++i) {
+            dx[i * SK_NV + c] = col[i];
+        }
+    }
+    /* dout/dv along the solution: + dout/din din/dx dx/dv (theta_c, p, f move with x) */
+    for (k = 0; k < ns; ++k) {
+        for (i = 0; i < 3; ++i) {
+            for (c = 0; c < SK_NV; ++c) {
+                double sum = 0.0;
+                for (e = 0; e < 3; ++e) {
+                    const double *dinx = st.ins + 5 * ns + (3 * k + e) * n;
+                    for (j = 0; j < n; ++j) {
+                        sum += part[15 * k + 5 * i + e] * dinx[j] * dx[j * SK_NV + c];
+                    }
+                }
+                dout[(3 * k + i) * SK_NV + c] += sum;
+            }
+        }
+    }
+    for (i = 0; i < 2 * SK_NP; ++i) {
+        for (c = 0; c < SK_NV; ++c) {
+            double sum = c < SK_NPAR ? s[rs->dD_dp + i * SK_NPAR + c] : 0.0;
+            for (e = 0; e < n; ++e) {
+                sum += s[rs->dD_dx + i * n + e] * dx[e * SK_NV + c];
+            }
+            for (e = 0; e < SK_M; ++e) {
+                sum += s[rs->dD_dtheta + i * SK_M + e] * dth[e * SK_NV + c];
+            }
+            for (e = 0; e < 3 * ns; ++e) {
+                sum += s[rs->dD_dout + i * 3 * ns + e] * dout[e * SK_NV + c];
+            }
+            dev[i * SK_NV + c] = sum;
+        }
+    }
+    return 0;
+}
+/* the loaded level's sensitivity routines, per variant, and where their blocks start */
+static const sk_loaded_sens sk_loaded_sens_tables = {
+    {{sk_loaded_sens1, 0, 32, 72, 152, 252, 284, 300, 320}, {sk_loaded_sens2, 0, 48, 108, 268, 468, 516, 532, 552}}
 };
 
 /* One variant's report routine (x, theta, plates, params) and where its blocks start, with q
@@ -7383,9 +9583,88 @@ static int sk_stroke_rates(const sk_actuators *t, const int *where, const double
     return sk_act_solve(n, jac, SK_NV, rate);
 }
 
+/* sk_actuated_sensitivity at the loaded level (stroke actuators): the reduced equilibrium's
+   rates at the solution sk_actuated_loaded found (sk_sensitivity: the surrogate angles among
+   the inputs), carried to the public inputs through each surrogate angle of the rigid linkage
+   at the strokes, d.(X(v, y) - X0(y)) - s = 0 (sk_stroke_rates on the rigid rates): dD/dy + dD/dv
+   dv/dy for the deviation and the rigid position alike (numpy's
+   _actuated_loaded_sensitivity). Returns 0, or the status of what failed. */
+static int sk_actuated_loaded_rates(const sk_mechanism *m, const sk_actuators *t,
+                                    const double *drives, const double *params, const int *where,
+                                    const int *direct, double *values, double *deviation,
+                                    double *rigid)
+{
+    enum { NS = 2 * SK_NP * SK_NV + 1 };
+    double pr[6 * SK_NP], ar[2 * SK_M], zero[SK_M];
+    double dev[NS], rig[NS], r0[NS], scratch[NS], th[SK_K * SK_NV + 1];
+    double pub[3][NS], rate[(SK_NI + 1) * SK_NV];
+    double *tables[3] = {dev, rig, r0};
+    sk_act_solution sol;
+    int i, j, c, y, s;
+    if (params == NULL) {
+        params = m->defaults;
+    }
+    for (j = 0; j < SK_M; ++j) {
+        zero[j] = 0.0;
+    }
+    for (i = 0; i < NS; ++i) {
+        scratch[i] = 0.0;
+    }
+    s = sk_actuated_loaded(m, t, drives, params, pr, ar, NULL, &sol);
+    s = s != 0 ? s
+               : sk_sensitivity(m, sk_find_level(m, SK_LEVEL_LOADED), sol.theta, NULL, params,
+                                sol.q, dev, rig);
+    /* the points of action as fabricated (every hinge angle 0) move with the parameters too */
+    s = s != 0 ? s : sk_rigid_rates(m, zero, params, th, r0);
+    s = s != 0 ? s : sk_sensitivity_chain(m, params, scratch, r0);
+    if (s != 0) {
+        return s;
+    }
+    /* in <name>_sensitivity_full's layout, (point, variable, component), as sk_stroke_rates
+       reads them (these are (2 point + component, variable)) */
+    for (j = 0; j < 3; ++j) {
+        for (i = 0; i < 2 * SK_NP * SK_NV; ++i) {
+            pub[j][((i / SK_NV / 2) * SK_NV + i % SK_NV) * 2 + (i / SK_NV) % 2] = tables[j][i];
+        }
+    }
+    s = sk_stroke_rates(t, where, pub[1], NULL, pub[2], rate);
+    if (s != 0) {
+        return s;
+    }
+    for (i = 0; i < t->n_shown; ++i) {
+        const size_t at = (size_t)t->shown[i] * SK_NV;
+        for (c = 0; c < 6 && values != NULL; ++c) {
+            values[6 * i + c] = pr[6 * t->shown[i] + c];
+        }
+        for (c = 0; c < 2; ++c) {
+            for (y = 0; y < SK_NV; ++y) {
+                double r = 0.0, k = 0.0;
+                if (direct[y] >= 0) {
+                    r = pub[1][(at + direct[y]) * 2 + c];
+                    k = pub[0][(at + direct[y]) * 2 + c];
+                }
+                for (j = 0; j < t->n; ++j) {
+                    const size_t v = (at + SK_NPAR + where[j]) * 2 + c;
+                    r += pub[1][v] * rate[j * SK_NV + y];
+                    k += pub[0][v] * rate[j * SK_NV + y];
+                }
+                if (!isfinite(r) || !isfinite(k)) {
+                    return 2; /* a non-finite result is never a success */
+                }
+                deviation[(i * SK_NV + y) * 2 + c] = k;
+                if (rigid != NULL) {
+                    rigid[(i * SK_NV + y) * 2 + c] = r;
+                }
+            }
+        }
+    }
+    return 0;
+}
+
 /* <name>_sensitivity_full with actuators: the shown points' values and the derivatives of their
    deviation and rigid position by the parameters and the public inputs (docs/sensitivity.md,
-   "Actuators"), from sk_sensitivity_full at the rigid and the compliant pose. */
+   "Actuators"), from sk_sensitivity_full at the rigid and the compliant pose; at loaded,
+   sk_actuated_loaded_rates. */
 static int sk_actuated_sensitivity(const sk_mechanism *m, const sk_actuators *t,
                                    const double *drives, const double *params, int level,
                                    double *values, double *deviation, double *rigid)
@@ -7413,6 +9692,16 @@ static int sk_actuated_sensitivity(const sk_mechanism *m, const sk_actuators *t,
         if (t->drive_of[j] >= 0) {
             direct[SK_NPAR + t->drive_of[j]] = SK_NPAR + j;
         }
+    }
+    if (level == SK_LEVEL_LOADED) {
+        s = sk_actuated_loaded_rates(m, t, drives, params, where, direct, values, deviation,
+                                     rigid);
+        if (s != 0) {
+            sk_nan(values, 6 * t->n_shown);
+            sk_nan(deviation, 2 * t->n_shown * SK_NV);
+            sk_nan(rigid, 2 * t->n_shown * SK_NV);
+        }
+        return s;
     }
     s = sk_stroke_poses(m, t, drives, params, level, xr, xc, rest);
     s = s != 0 ? s : sk_sensitivity_full(m, xr, params, level, pr, dr, rr);
@@ -7539,6 +9828,7 @@ static const sk_mechanism sk_mechanism_tables = {
     .links = sk_links,
     .sens_rigid = sk_sens_rigid,
     .loaded_solve = sk_reduced_pose, .loaded = &sk_loaded_tables,
+    .loaded_rates = sk_reduced_rates, .loaded_sens = &sk_loaded_sens_tables,
     .n_dyads = 1,
     .rigid_rule = {30, 1e-10, 0.0, 0.0, 0.0},
     .polish_rule = {1, 0.0, 0.0, 0.0, 0.0},

@@ -12004,25 +12004,15 @@ static int sk_sensitivity_chain(const sk_mechanism *m, const double *params, dou
     return 0;
 }
 
-/* The total derivatives of the points' deviations (dev) and rigid positions (rig) by every
-   variable, 2 SK_NP x SK_NV row-major (row 2 p + c: component c of point p; columns: the
-   parameters, then the inputs), by the implicit-function theorem on the closures: with
-   Theta = d theta_u / dv = -A^-1 dG/dv and, where the level solves a closure E for delta,
-   Y = -M^-1 (dE/dv + dE/dtheta_u Theta): dD/dv + dD/dtheta_u Theta + dD/ddelta Y. */
-static int sk_sensitivity(const sk_mechanism *m, const sk_level *lv, const double *theta,
-                          const double *delta, const double *params, const double *q,
-                          double *dev, double *rig)
+/* The rigid positions' total derivatives (rig, 2 SK_NP x SK_NV) at theta, before the
+   parameters' chain, and with loops Theta = d theta_u / dv = -A^-1 dG/dv (th, SK_K x SK_NV).
+   Returns 0, or 1 where A is singular. */
+static int sk_rigid_rates(const sk_mechanism *m, const double *theta, const double *params,
+                          double *th, double *rig)
 {
-    double sr[SK_OUT], s[SK_OUT];
-    const sk_sens *b = &lv->sens;
-    const double *thu = NULL;
+    double sr[SK_OUT];
     int i;
-    double th[SK_K * SK_NV + 1], y[SK_K * SK_NV + 1];
-    (void)q;
-    (void)thu;
-    if (b->fn == NULL && !(lv->loaded && m->loaded_rates != NULL)) {
-        return 3;                   /* a level without closed-form sensitivities */
-    }
+    (void)th;
     m->sens_rigid(theta, params, sr);
     for (i = 0; i < SK_K * SK_NV; ++i) {
         th[i] = -sr[m->sr_dG_dv + i];
@@ -12034,6 +12024,32 @@ static int sk_sensitivity(const sk_mechanism *m, const sk_level *lv, const doubl
         rig[i] = sr[m->sr_dR_dv + i];
     }
     sk_gemm(2 * SK_NP, SK_K, SK_NV, sr + m->sr_dR_dtheta, th, rig);
+    return 0;
+}
+
+/* The total derivatives of the points' deviations (dev) and rigid positions (rig) by every
+   variable, 2 SK_NP x SK_NV row-major (row 2 p + c: component c of point p; columns: the
+   parameters, then the inputs), by the implicit-function theorem on the closures: with
+   Theta = d theta_u / dv = -A^-1 dG/dv and, where the level solves a closure E for delta,
+   Y = -M^-1 (dE/dv + dE/dtheta_u Theta): dD/dv + dD/dtheta_u Theta + dD/ddelta Y. */
+static int sk_sensitivity(const sk_mechanism *m, const sk_level *lv, const double *theta,
+                          const double *delta, const double *params, const double *q,
+                          double *dev, double *rig)
+{
+    double s[SK_OUT];
+    const sk_sens *b = &lv->sens;
+    const double *thu = NULL;
+    int i;
+    double th[SK_K * SK_NV + 1];
+    double y[SK_K * SK_NV + 1];
+    (void)q;
+    (void)thu;
+    if (b->fn == NULL && !(lv->loaded && m->loaded_rates != NULL)) {
+        return 3;                   /* a level without closed-form sensitivities */
+    }
+    if (sk_rigid_rates(m, theta, params, th, rig)) {
+        return 1;
+    }
     thu = th;
     if (b->fn == NULL) {
         /* the loaded level: the reduced equilibrium's own (templates/c/reduced_sens.c) */

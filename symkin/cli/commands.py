@@ -176,9 +176,9 @@ def _tolerance(args: argparse.Namespace) -> str:
     grid = variation.parse_grid(args.input, mech)
     tolerance.check_level(args.level)  # before compiling anything
     if args.backend is None:
-        # the C's `loaded` has no sensitivities with actuators: the numpy module's then
-        actuated = mech.actuators and args.level in levels.LOADED
-        args.backend = "numpy" if actuated else "c"
+        # the C's `loaded` has no sensitivities with force actuators: the numpy module's then
+        forced = any(a.drive == "force" for a in mech.actuators)
+        args.backend = "numpy" if forced and args.level in levels.LOADED else "c"
     if mech.actuators:
         check_actuated_level(mech, args.level, args.backend, sensitivity=True)
     result = tolerance.run(_evaluator(args, mech), vary, grid, args.level)
@@ -372,7 +372,7 @@ def parser() -> argparse.ArgumentParser:
     to.add_argument(
         "--backend",
         choices=pipeline.BACKENDS,
-        help="c (default), or numpy; at loaded with actuators: numpy (default)",
+        help="c (default), or numpy; at loaded with force actuators: numpy (default)",
     )
     to.add_argument("--json", action="store_true", help="machine-readable output")
     to.set_defaults(run=_tolerance)

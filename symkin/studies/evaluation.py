@@ -288,7 +288,7 @@ def actuator_values(mech: Mechanism, inputs: Mapping[str, object]) -> dict[str, 
 def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity: bool) -> None:
     """Refuse (exit 2, naming the actuator) what the actuators do not drive yet: a force at a
     kinematic level (it needs a physical one), force actuators in the generated backends but at
-    loaded (numpy and C), the C's sensitivities at loaded."""
+    loaded (numpy and C), the C's sensitivities at loaded with force actuators."""
     if not mech.actuators:
         return
     first = mech.actuators[0]
@@ -302,12 +302,12 @@ def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity:
             entry=f"[[actuator]] '{forces[0].name}'",
             hint='ask for --level equilibrium, or make it drive = "stroke"',
         )
-    if level in levels.LOADED and sensitivity and backend == "c":
+    if level in levels.LOADED and sensitivity and backend == "c" and forces:
         raise InputError(
-            f"the generated C evaluators have no {level} sensitivities with actuators "
-            f"yet (actuator '{first.name}')",
+            f"the generated C evaluators have no {level} sensitivities with force actuators "
+            f"yet (actuator '{forces[0].name}')",
             file=mech.path,
-            entry=entry,
+            entry=f"[[actuator]] '{forces[0].name}'",
             hint="use --backend numpy",
         )
     # the generated evaluators take a force at loaded alone (the physical level they generate)

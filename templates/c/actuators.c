@@ -624,9 +624,90 @@ static int sk_stroke_rates(const sk_actuators *t, const int *where, const double
     return sk_act_solve(n, jac, SK_NV, rate);
 }
 
+#if defined(SK_ACT_SENS)
+/* sk_actuated_sensitivity at the loaded level (stroke actuators): the reduced equilibrium's
+   rates at the solution sk_actuated_loaded found (sk_sensitivity: the surrogate angles among
+   the inputs), carried to the public inputs through each surrogate angle of the rigid linkage
+   at the strokes, d.(X(v, y) - X0(y)) - s = 0 (sk_stroke_rates on the rigid rates): dD/dy + dD/dv
+   dv/dy for the deviation and the rigid position alike (numpy's
+   _actuated_loaded_sensitivity). Returns 0, or the status of what failed. */
+static int sk_actuated_loaded_rates(const sk_mechanism *m, const sk_actuators *t,
+                                    const double *drives, const double *params, const int *where,
+                                    const int *direct, double *values, double *deviation,
+                                    double *rigid)
+{
+    enum { NS = 2 * SK_NP * SK_NV + 1 };
+    double pr[6 * SK_NP], ar[2 * SK_M], zero[SK_M];
+    double dev[NS], rig[NS], r0[NS], scratch[NS], th[SK_K * SK_NV + 1];
+    double pub[3][NS], rate[(SK_NI + 1) * SK_NV];
+    double *tables[3] = {dev, rig, r0};
+    sk_act_solution sol;
+    int i, j, c, y, s;
+    if (params == NULL) {
+        params = m->defaults;
+    }
+    for (j = 0; j < SK_M; ++j) {
+        zero[j] = 0.0;
+    }
+    for (i = 0; i < NS; ++i) {
+        scratch[i] = 0.0;
+    }
+    s = sk_actuated_loaded(m, t, drives, params, pr, ar, NULL, &sol);
+    s = s != 0 ? s
+               : sk_sensitivity(m, sk_find_level(m, SK_LEVEL_LOADED), sol.theta, NULL, params,
+                                sol.q, dev, rig);
+    /* the points of action as fabricated (every hinge angle 0) move with the parameters too */
+    s = s != 0 ? s : sk_rigid_rates(m, zero, params, th, r0);
+    s = s != 0 ? s : sk_sensitivity_chain(m, params, scratch, r0);
+    if (s != 0) {
+        return s;
+    }
+    /* in <name>_sensitivity_full's layout, (point, variable, component), as sk_stroke_rates
+       reads them (these are (2 point + component, variable)) */
+    for (j = 0; j < 3; ++j) {
+        for (i = 0; i < 2 * SK_NP * SK_NV; ++i) {
+            pub[j][((i / SK_NV / 2) * SK_NV + i % SK_NV) * 2 + (i / SK_NV) % 2] = tables[j][i];
+        }
+    }
+    s = sk_stroke_rates(t, where, pub[1], NULL, pub[2], rate);
+    if (s != 0) {
+        return s;
+    }
+    for (i = 0; i < t->n_shown; ++i) {
+        const size_t at = (size_t)t->shown[i] * SK_NV;
+        for (c = 0; c < 6 && values != NULL; ++c) {
+            values[6 * i + c] = pr[6 * t->shown[i] + c];
+        }
+        for (c = 0; c < 2; ++c) {
+            for (y = 0; y < SK_NV; ++y) {
+                double r = 0.0, k = 0.0;
+                if (direct[y] >= 0) {
+                    r = pub[1][(at + direct[y]) * 2 + c];
+                    k = pub[0][(at + direct[y]) * 2 + c];
+                }
+                for (j = 0; j < t->n; ++j) {
+                    const size_t v = (at + SK_NPAR + where[j]) * 2 + c;
+                    r += pub[1][v] * rate[j * SK_NV + y];
+                    k += pub[0][v] * rate[j * SK_NV + y];
+                }
+                if (!isfinite(r) || !isfinite(k)) {
+                    return 2; /* a non-finite result is never a success */
+                }
+                deviation[(i * SK_NV + y) * 2 + c] = k;
+                if (rigid != NULL) {
+                    rigid[(i * SK_NV + y) * 2 + c] = r;
+                }
+            }
+        }
+    }
+    return 0;
+}
+
+#endif
 /* <name>_sensitivity_full with actuators: the shown points' values and the derivatives of their
    deviation and rigid position by the parameters and the public inputs (docs/sensitivity.md,
-   "Actuators"), from sk_sensitivity_full at the rigid and the compliant pose. */
+   "Actuators"), from sk_sensitivity_full at the rigid and the compliant pose; at loaded,
+   sk_actuated_loaded_rates. */
 static int sk_actuated_sensitivity(const sk_mechanism *m, const sk_actuators *t,
                                    const double *drives, const double *params, int level,
                                    double *values, double *deviation, double *rigid)
@@ -642,8 +723,8 @@ static int sk_actuated_sensitivity(const sk_mechanism *m, const sk_actuators *t,
     }
 #if defined(SK_ACT_FORCES)
     if (level == SK_LEVEL_LOADED) {
-        /* no sensitivities at loaded with actuators yet (the stroke solves below would read a
-           force as a stroke), and the file has no other level */
+        /* no sensitivities at loaded with force actuators yet (the stroke solves below would
+           read a force as a stroke), and the file has no other level */
         sk_nan(values, 6 * t->n_shown);
         sk_nan(deviation, 2 * t->n_shown * SK_NV);
         sk_nan(rigid, 2 * t->n_shown * SK_NV);
@@ -665,6 +746,18 @@ static int sk_actuated_sensitivity(const sk_mechanism *m, const sk_actuators *t,
             direct[SK_NPAR + t->drive_of[j]] = SK_NPAR + j;
         }
     }
+#if defined(SK_ACT_SENS)
+    if (level == SK_LEVEL_LOADED) {
+        s = sk_actuated_loaded_rates(m, t, drives, params, where, direct, values, deviation,
+                                     rigid);
+        if (s != 0) {
+            sk_nan(values, 6 * t->n_shown);
+            sk_nan(deviation, 2 * t->n_shown * SK_NV);
+            sk_nan(rigid, 2 * t->n_shown * SK_NV);
+        }
+        return s;
+    }
+#endif
     s = sk_stroke_poses(m, t, drives, params, level, xr, xc, rest);
     s = s != 0 ? s : sk_sensitivity_full(m, xr, params, level, pr, dr, rr);
     s = s != 0 ? s : sk_sensitivity_full(m, xc, params, level, pc, dc, rc);

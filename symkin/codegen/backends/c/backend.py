@@ -22,10 +22,10 @@ class CBackend(Backend):
     routine_prefix = "sk_"
 
     def render(self, plan: Plan, source: str, precision: str = "float64") -> list[str]:
-        """The header and source of `plan`; with actuators without the `loaded` level's
-        sensitivity routines, which the numpy runtime alone assembles with the actuators'
-        (templates/numpy/reduced_actuators_sens.py)."""
-        if plan.actuators:
+        """The header and source of `plan`; with force actuators without the `loaded` level's
+        sensitivity routines (their theta holds the forces too), which the numpy runtime alone
+        assembles with the forces' (templates/numpy/reduced_actuators_sens.py)."""
+        if plan.forces:
             unused = {"loaded_sens1", "loaded_sens2", "plate_eps4"}
             routines = {k: r for k, r in plan.routines.items() if k not in unused}
             plan = dataclasses.replace(plan, routines=routines)
@@ -58,6 +58,14 @@ def features(plan: Plan) -> list[str]:
             ("SK_ACT_LOADED", plan.loaded is not None and bool(plan.actuators)),
             # force actuators at loaded: their forces after the rigid angles in theta
             ("SK_ACT_FORCES", plan.loaded is not None and bool(plan.forces)),
+            # stroke actuators at loaded with the level's sensitivities
+            # (templates/c/actuators.c's sk_actuated_loaded_rates)
+            (
+                "SK_ACT_SENS",
+                plan.loaded is not None
+                and bool(plan.actuators)
+                and "loaded_sens1" in plan.routines,
+            ),
             # actuators at loaded with the level's report: the actuators' rows
             # (templates/c/actuators.c's sk_actuated_report)
             (
