@@ -20,8 +20,8 @@ length unit; NaN where the point is on the frame or its compliance is singular),
 {"stress", "strain", "safety", "section"}} of every plate (Pa; safety NaN without an allowable
 stress; section where along the plate, 0..1), "actuators": {A: {"stroke", "force", "stiffness"}}
 of every actuator (its stroke in the file's length unit, its force along its line in N, dF/ds
-with the other inputs held in N/u; the points' stiffness holds the strokes and the forces). Not
-the buckling factor (symkin eval's).
+with the other inputs held in N/u; the points' stiffness holds the strokes and the forces).
+No "buckling": the file has no loads.
 
 sensitivity(inputs, level, params) gives {P: {p: a}}: d(dx, dy)/dp of every point's deviation
 by every parameter p, each a of shape (2, *broadcast_shape); sensitivity_full(...) adds the
@@ -836,9 +836,10 @@ class _Batch:
 
     def _inputs(self, x, theta, p, t):
         """The routines' x argument (x, then t), the half plates' inputs (5 per half plate) and
-        their x-Jacobian (3 per half plate x n), each a (b,) array."""
+        their x-Jacobian (3 per half plate x n), each a (b,) array (t: a number or one per
+        configuration, a (b,) array)."""
         b = x.shape[1]
-        args = [x[i] for i in range(self.size)] + [numpy.full(b, float(t))]
+        args = [x[i] for i in range(self.size)] + [numpy.array(_red_column(t, b))]
         out = [_red_column(v, b) for v in self.plates_fn(args, theta, p)]
         return args, out[: 5 * self.plates], out[5 * self.plates :]
 
@@ -880,7 +881,8 @@ class _Batch:
         return vals
 
     def residual(self, x, theta, p, t):
-        """R (n, b) at order 4 from the relation's values alone (a chord step's)."""
+        """R (n, b) at order 4 from the relation's values alone (a chord step's); t a number or
+        a (b,) array."""
         b = x.shape[1]
         args, ins, _ = self._inputs(x, theta, p, t)
         vals = self._values4(ins)
@@ -895,7 +897,7 @@ class _Batch:
 
     def system(self, x, theta, p, t):
         """R (n, b) and J (b, n, n) at order 4: dR/dx + dR/d(plates) . the plates' partials .
-        d(theta_c, p, f)/dx, summed in reduced.c's order."""
+        d(theta_c, p, f)/dx, summed in reduced.c's order; t a number or a (b,) array."""
         n, ns, b = self.size, self.plates, x.shape[1]
         args, ins, dins = self._inputs(x, theta, p, t)
         rel, vals = self._relation(ins)
@@ -924,9 +926,12 @@ class _Batch:
         (a singular or non-finite J, a step turning a hinge by more than max_turn, a non-finite
         iterate, too many steps), with reduced.c's chord steps (after a step below chord, R
         alone with that step's J while each step shrinks tenfold): (x, converged, each one's
-        last full step's J, det J's sign at the first step)."""
+        last full step's J, det J's sign at the first step); t a number or a (b,) array."""
         tb, n, nu = self.t, self.size, self.t.unknowns
         b = x.shape[1]
+        each = numpy.ndim(t) > 0  # a load factor per configuration: indexed as x is
+        if each:
+            t = numpy.asarray(t, dtype=float)
         x, converged = x.copy(), numpy.zeros(b, dtype=bool)
         last, first = numpy.zeros((b, n, n)), None
         prev = numpy.full(b, math.inf)
@@ -937,8 +942,9 @@ class _Batch:
             step = numpy.zeros((n, act.size))
             full = act[~c]
             if full.size:
+                tf = t[full] if each else t
                 res, jac = self.system(
-                    x[:, full], [v[full] for v in theta], [v[full] for v in p], t
+                    x[:, full], [v[full] for v in theta], [v[full] for v in p], tf
                 )
                 last[full] = jac
                 if first is None:
@@ -946,7 +952,8 @@ class _Batch:
                 step[:, ~c] = _red_solve(jac, res)
             if c.any():
                 k = act[c]
-                res = self.residual(x[:, k], [v[k] for v in theta], [v[k] for v in p], t)
+                tk = t[k] if each else t
+                res = self.residual(x[:, k], [v[k] for v in theta], [v[k] for v in p], tk)
                 step[:, c] = _red_solve(last[k], res)
             turn = numpy.max(numpy.abs(step[:nu]), axis=0) * self.scale[0] if nu else 0.0
             xn = x[:, act] - step
@@ -1263,23 +1270,28 @@ def _reduced_rates(mech, theta, p, q, thu, ok, forces=0):
 _STRESS_SECTIONS = 64
 #: A point's scaled compliance this ill-conditioned is singular (reported.SINGULAR): NaN.
 _SINGULAR = 1e12
+#: The buckling search stops at this factor on the loads (reduced_reported.LIMIT) ...
+_BUCKLING_LIMIT = 10.0
+#: ... and locates a sign change or a limit point to this relative width (reduced_reported.LOCATE).
+_BUCKLING_LOCATE = 1e-10
 
 
-def _evaluate_reported(mech, inputs, level, params, links, report=True):
+def _evaluate_reported(mech, inputs, level, params, links, report=True, buckling=True):
     """The module's evaluate() (runtime.py's _evaluate) with, at the loaded level and with
-    `report`, what it reports beyond the deviations: "inputs", "stiffness", "plates"
-    (_reduced_report)."""
+    `report`, what it reports beyond the deviations: "inputs", "stiffness", "plates" and, with
+    loads and `buckling`, "buckling" (_reduced_report)."""
     arrays, p = _prepare(mech, inputs, level, params)
-    return _blocks(_reported_block, arrays, mech, level, p, links, report)
+    return _blocks(_reported_block, arrays, mech, level, p, links, (report, buckling))
 
 
 def _reported_block(arrays, mech, level, p, links, report):
     """evaluate() on one block of broadcast input arrays (runtime.py's _evaluate_block), the
-    report added at the loaded level."""
+    report added at the loaded level (report: (report, buckling))."""
+    report, buckling = report
     theta, delta, ok, q = _pose(mech, arrays, level, p, links)
     result = _points(mech, theta, delta, ok, level, p, q, links)
     if report and mech.levels[level].loaded:
-        result.update(_reduced_report(mech, theta, p, q, result["ok"]))
+        result.update(_reduced_report(mech, theta, p, q, result["ok"], buckling))
     return result
 
 
@@ -1332,11 +1344,13 @@ def _plate_stress(k0, lx, ly, ea, es, slender, modulus, limit, has_limit):
     return stress, value, safety, where
 
 
-def _reduced_report(mech, theta, p, q, ok):
+def _reduced_report(mech, theta, p, q, ok, buckling=True):
     """What the loaded level reports at its solutions (q: the variant solved and its x,
     templates/numpy/reduced.py), NaN where not ok: {"inputs": {H: {"angle", "moment",
     "stiffness"}}, "stiffness": {P: (3, 3, *shape)}, "plates": {H: {"stress", "strain",
-    "safety", "section"}}} (N m, N m/rad; the stiffness in the file's length unit; Pa)."""
+    "safety", "section"}}} (N m, N m/rad; the stiffness in the file's length unit; Pa) and,
+    when the file has loads (or force actuators) and with `buckling`, "buckling": the factor on
+    them at which the tangent stiffness becomes singular (inf: none up to 10; _red_buckling)."""
     tb = mech.loaded
     rep = tb.report
     shape = ok.shape
@@ -1423,7 +1437,117 @@ def _reduced_report(mech, theta, p, q, ok):
         result["plates"][name] = {
             key: shaped(v) for key, v in zip(("stress", "strain", "safety", "section"), values)
         }
+    if buckling and tb.loads:
+        result["buckling"] = shaped(_red_bucklings(mech, theta, p, q, shape, good))
     return result
+
+
+def _red_bucklings(mech, theta, p, q, shape, good):
+    """The buckling factor (_red_buckling) of every configuration the loaded level solved
+    (good: a flat mask of them), variant by variant on the variant's own solver as
+    _red_solutions groups them; a flat array, NaN elsewhere."""
+    tb = mech.loaded
+    variant = numpy.broadcast_to(q.variant, shape).reshape(-1)
+    out = numpy.full(variant.size, numpy.nan)
+
+    def flat(values, where):
+        return [numpy.broadcast_to(v, shape).reshape(-1)[where].astype(float) for v in values]
+
+    for index, variant_row in enumerate(tb.variants):
+        where = numpy.flatnonzero(good & (variant == index))
+        if not where.size:
+            continue
+        solver = _Batch(tb, variant_row, index + 1)
+        x = numpy.array(flat(q.x[: solver.size], where)).reshape(solver.size, where.size)
+        with numpy.errstate(all="ignore"):
+            out[where] = _red_buckling(solver, x, flat(theta, where), flat(p, where))
+    return out
+
+
+def _red_state(solver, x, theta, p, t):
+    """reduced_reported.buckling_factor's state at load factors t ((k,) array) from the guesses
+    x (n, k): (x, converged, det J's sign at x; 0 where the worst plate's compression reaches
+    its sway buckling load, as _Batch.answer's, which the search takes for a sign change). A
+    non-finite det J is not converged (where the Python path's kernels raise)."""
+    n, k = solver.size, t.shape[0]
+    if n:
+        x, ok, _, _ = solver.newton(x, theta, p, t)
+    else:
+        ok = numpy.ones(k, dtype=bool)
+    sign = numpy.zeros(k)
+    live = numpy.flatnonzero(ok)
+    if not live.size:
+        return x, ok, sign
+    th, pl, tl, xl = [v[live] for v in theta], [v[live] for v in p], t[live], x[:, live]
+    _, ins, _ = solver._inputs(xl, th, pl, tl)
+    worst = numpy.zeros(live.size)
+    for j in range(solver.plates):
+        pk, ea, es = ins[5 * j + 1], ins[5 * j + 3], ins[5 * j + 4]
+        w = -(1 + (ea - es) * pk) * pk * solver.count**2 / math.pi**2
+        worst = numpy.where(w > worst, w, worst)
+    found = _red_signs(solver.system(xl, th, pl, tl)[1]) if n else numpy.ones(live.size)
+    at_sway = worst >= 1  # no J there (past the relation's pole)
+    ok[live] = at_sway | numpy.isfinite(found)
+    sign[live] = numpy.where(at_sway, 0.0, found)
+    return x, ok, sign
+
+
+def _red_buckling(solver, x, theta, p):
+    """reduced_reported.buckling_factor on every configuration at once (x (n, b): each one's
+    solution at load factor 1): the smallest t >= 1, the inputs held, at which det J changes
+    sign, a plate reaches its sway buckling load or Newton cannot go on (a limit point); inf
+    when none below _BUCKLING_LIMIT. Each configuration steps with its own t, step, x and
+    previous point (the same arithmetic, so the same steps as alone); the sign changes found
+    are then bisected together."""
+    limit, locate = _BUCKLING_LIMIT, _BUCKLING_LOCATE
+    b = x.shape[1]
+    out = numpy.full(b, numpy.nan)
+    t = numpy.ones(b)
+    x, ok, sign = _red_state(solver, x, theta, p, t)
+    out[~ok | (sign == 0)] = 1.0
+    act = numpy.flatnonzero(ok & (sign != 0))
+    dt = numpy.full(b, 0.5)
+    # the previous accepted (x, t) of each configuration (none before its first step)
+    x_prev, t_prev, has_prev = numpy.zeros_like(x), numpy.zeros(b), numpy.zeros(b, dtype=bool)
+    lo, hi, x_lo = numpy.zeros(b), numpy.zeros(b), x.copy()
+    bisect = numpy.zeros(b, dtype=bool)
+    while act.size:
+        ta, xa = t[act], x[:, act]
+        t1 = numpy.minimum(limit, ta + dt[act])
+        # the linear extrapolation from the previous accepted point, as the Python path's
+        ahead = xa + (xa - x_prev[:, act]) * (t1 - ta) / (ta - t_prev[act])
+        guess = numpy.where(has_prev[act], ahead, xa)
+        x1, ok1, s1 = _red_state(solver, guess, [v[act] for v in theta], [v[act] for v in p], t1)
+        same = ok1 & (s1 == sign[act])
+        change = ok1 & ~same  # a sign change (or a plate's sway load) in (t, t1): bisected below
+        ends = ~ok1 & (dt[act] <= locate * ta)  # Newton fails this close: a limit point
+        k = act[change]
+        lo[k], hi[k], x_lo[:, k], bisect[k] = t[k], t1[change], x[:, k], True
+        out[act[ends]] = ta[ends]
+        dt[act[~ok1 & ~ends]] /= 2
+        k = act[same]
+        x_prev[:, k], t_prev[k], has_prev[k] = x[:, k], t[k], True
+        x[:, k], t[k] = x1[:, same], t1[same]
+        dt[k] = numpy.minimum(3.0, dt[k] * 2)
+        act = act[same | (~ok1 & ~ends)]
+        past = t[act] >= limit
+        out[act[past]] = math.inf
+        act = act[~past]
+    k = numpy.flatnonzero(bisect)
+    while k.size:
+        wide = hi[k] - lo[k] > locate * hi[k]
+        done = k[~wide]
+        out[done] = (lo[done] + hi[done]) / 2
+        k = k[wide]
+        if not k.size:
+            break
+        mid = (lo[k] + hi[k]) / 2
+        xl = x_lo[:, k]
+        xm, okm, sm = _red_state(solver, xl, [v[k] for v in theta], [v[k] for v in p], mid)
+        good = okm & (sm == sign[k])
+        lo[k[good]], x_lo[:, k[good]] = mid[good], xm[:, good]
+        hi[k[~good]] = mid[~good]
+    return out
 
 
 # symkin loaded-actuators runtime (templates/numpy/reduced_actuators.py): the rigid linkage at
@@ -1552,11 +1676,14 @@ def _actuated_state(mech, actuators, forces, drives, inputs, params, resolve=Fal
     return state
 
 
-def _actuated_loaded(mech, actuators, forces, drives, shown, inputs, params, links, report=False):
+def _actuated_loaded(
+    mech, actuators, forces, drives, shown, inputs, params, links, report=False, buckling=True
+):
     """The module's evaluate() at level "loaded" for a mechanism with actuators (docs/physics.md,
     "Actuators at loaded"; _actuated_state): the deviations against the rigid linkage at the
     strokes, a force actuator's at the stroke the force produced. With `report` (modules with
-    the level's report), what it reports beyond the deviations (_actuated_report)."""
+    the level's report), what it reports beyond the deviations (_actuated_report; with
+    `buckling` its buckling factor too, where the file has loads or force actuators)."""
     st = _actuated_state(mech, actuators, forces, drives, inputs, params)
     out = _actuated_result(mech, actuators, st, shown, links, st["ok"])
     if report:
@@ -1565,7 +1692,9 @@ def _actuated_loaded(mech, actuators, forces, drives, shown, inputs, params, lin
         theta = list(st["theta"]) + st["loads"]
         given = [st["given"][a[0]] for a in actuators]
         out.update(
-            _actuated_report(mech, actuators, forces, theta, st["p"], st["q"], out["ok"], given)
+            _actuated_report(
+                mech, actuators, forces, theta, st["p"], st["q"], out["ok"], given, buckling
+            )
         )
     return out
 
@@ -1615,9 +1744,10 @@ def _actuated_result(mech, actuators, st, shown, links, ok):
     return out
 
 
-def _actuated_report(mech, actuators, forces, theta, p, q, ok, given):
+def _actuated_report(mech, actuators, forces, theta, p, q, ok, given, buckling=True):
     """What the loaded level reports with actuators (reduced_reported.report): _reduced_report's
-    "inputs", "stiffness" and "plates", and "actuators": {A: {"stroke", "force", "stiffness"}}
+    "inputs", "stiffness", "plates" and (with `buckling`, where the file has loads or force
+    actuators) "buckling", and "actuators": {A: {"stroke", "force", "stiffness"}}
     (file unit, N, N per file unit). The report routines' rows of the actuators (a stroke's
     force and dF/ds, a force's stroke and ds/dF) follow the input hinges' as the inputs' rows
     do: _reduced_report reads them as inputs named by their surrogate hinges, unscaled (theta:
@@ -1629,7 +1759,7 @@ def _actuated_report(mech, actuators, forces, theta, p, q, ok, given):
     view = _Mechanism(
         **{**mech.__dict__, "loaded": _LoadedTables(**{**tb.__dict__, "report": rows})}
     )
-    out = _reduced_report(view, theta, p, q, ok)
+    out = _reduced_report(view, theta, p, q, ok, buckling)
     found = out["inputs"]
     scale = rep.unit_scale  # the input hinges' moments in N m, as _reduced_report's
     out["inputs"] = {
@@ -8875,13 +9005,16 @@ _MECHANISM = _Mechanism(
 )
 
 
-def evaluate(inputs, level='exact', params=None, links=True, report=True):
+def evaluate(
+    inputs, level='exact', params=None, links=True, report=True, buckling=True
+):
     """Deviation of the points at `level` for broadcast input arrays (see the module docstring);
     `links=False` leaves out the links' rotations (and any loop solve only they need),
-    `report=False` what `loaded` reports beyond the deviations."""
+    `report=False` what `loaded` reports beyond the deviations, `buckling=False` its
+    "buckling" alone (its search: tens of Newton solves per configuration)."""
     if level == "loaded":
         return _actuated_loaded(
-            _MECHANISM, ACTUATORS, FORCES, INPUTS, POINTS, inputs, params, links, report
+            _MECHANISM, ACTUATORS, FORCES, INPUTS, POINTS, inputs, params, links, report, buckling
         )
     return _actuated(_MECHANISM, ACTUATORS, INPUTS, POINTS, inputs, level, params, links)
 

@@ -22,6 +22,7 @@ process compiles it once).
 
 from __future__ import annotations
 
+import inspect
 import itertools
 import math
 import os
@@ -231,6 +232,14 @@ def run_blocks(task: Task, first: int, last: int) -> tuple[np.ndarray, np.ndarra
     return np.concatenate(worst_all), np.concatenate(flags_all), np.concatenate(stress_all)
 
 
+def _stress_only(module) -> dict:
+    """evaluate()'s keywords that leave out the loads' buckling search (tens of Newton solves
+    per configuration) where the module's evaluate() has it: a sweep reads the stress alone."""
+    return (
+        {"buckling": False} if "buckling" in inspect.signature(module.evaluate).parameters else {}
+    )
+
+
 def largest_stress(
     ev: Compiled, inputs: np.ndarray, params: Sequence[float] | None, plates: Sequence[str]
 ) -> np.ndarray:
@@ -239,7 +248,11 @@ def largest_stress(
     where some configuration failed. `params` every parameter's value (None: defaults)."""
     given = None if params is None else dict(zip(ev.sources.params, map(float, params)))
     res = ev.module.evaluate(
-        {h: inputs[:, j] for j, h in enumerate(ev.inputs)}, "loaded", given, links=False
+        {h: inputs[:, j] for j, h in enumerate(ev.inputs)},
+        "loaded",
+        given,
+        links=False,
+        **_stress_only(ev.module),
     )
     out = np.full(len(plates), np.nan)
     for k, h in enumerate(plates):
@@ -369,7 +382,9 @@ def run(
     if level == "loaded" and "loaded" in evaluator.levels:
         # the plates the generated module reports on (none without the level's report)
         first = {h: grid.rows[:1, j] for j, h in enumerate(evaluator.inputs)}
-        plates = tuple(evaluator.module.evaluate(first, "loaded", links=False).get("plates", ()))
+        module = evaluator.module
+        found = module.evaluate(first, "loaded", links=False, **_stress_only(module))
+        plates = tuple(found.get("plates", ()))
         if plates:
             stress = largest_stress(evaluator, grid.rows, None, plates)
             nominal_stress = {h: float(v) for h, v in zip(plates, stress) if np.isfinite(v)}

@@ -77,9 +77,10 @@ class _Batch:
 
     def _inputs(self, x, theta, p, t):
         """The routines' x argument (x, then t), the half plates' inputs (5 per half plate) and
-        their x-Jacobian (3 per half plate x n), each a (b,) array."""
+        their x-Jacobian (3 per half plate x n), each a (b,) array (t: a number or one per
+        configuration, a (b,) array)."""
         b = x.shape[1]
-        args = [x[i] for i in range(self.size)] + [numpy.full(b, float(t))]
+        args = [x[i] for i in range(self.size)] + [numpy.array(_red_column(t, b))]
         out = [_red_column(v, b) for v in self.plates_fn(args, theta, p)]
         return args, out[: 5 * self.plates], out[5 * self.plates :]
 
@@ -121,7 +122,8 @@ class _Batch:
         return vals
 
     def residual(self, x, theta, p, t):
-        """R (n, b) at order 4 from the relation's values alone (a chord step's)."""
+        """R (n, b) at order 4 from the relation's values alone (a chord step's); t a number or
+        a (b,) array."""
         b = x.shape[1]
         args, ins, _ = self._inputs(x, theta, p, t)
         vals = self._values4(ins)
@@ -136,7 +138,7 @@ class _Batch:
 
     def system(self, x, theta, p, t):
         """R (n, b) and J (b, n, n) at order 4: dR/dx + dR/d(plates) . the plates' partials .
-        d(theta_c, p, f)/dx, summed in reduced.c's order."""
+        d(theta_c, p, f)/dx, summed in reduced.c's order; t a number or a (b,) array."""
         n, ns, b = self.size, self.plates, x.shape[1]
         args, ins, dins = self._inputs(x, theta, p, t)
         rel, vals = self._relation(ins)
@@ -165,9 +167,12 @@ class _Batch:
         (a singular or non-finite J, a step turning a hinge by more than max_turn, a non-finite
         iterate, too many steps), with reduced.c's chord steps (after a step below chord, R
         alone with that step's J while each step shrinks tenfold): (x, converged, each one's
-        last full step's J, det J's sign at the first step)."""
+        last full step's J, det J's sign at the first step); t a number or a (b,) array."""
         tb, n, nu = self.t, self.size, self.t.unknowns
         b = x.shape[1]
+        each = numpy.ndim(t) > 0  # a load factor per configuration: indexed as x is
+        if each:
+            t = numpy.asarray(t, dtype=float)
         x, converged = x.copy(), numpy.zeros(b, dtype=bool)
         last, first = numpy.zeros((b, n, n)), None
         prev = numpy.full(b, math.inf)
@@ -178,8 +183,9 @@ class _Batch:
             step = numpy.zeros((n, act.size))
             full = act[~c]
             if full.size:
+                tf = t[full] if each else t
                 res, jac = self.system(
-                    x[:, full], [v[full] for v in theta], [v[full] for v in p], t
+                    x[:, full], [v[full] for v in theta], [v[full] for v in p], tf
                 )
                 last[full] = jac
                 if first is None:
@@ -187,7 +193,8 @@ class _Batch:
                 step[:, ~c] = _red_solve(jac, res)
             if c.any():
                 k = act[c]
-                res = self.residual(x[:, k], [v[k] for v in theta], [v[k] for v in p], t)
+                tk = t[k] if each else t
+                res = self.residual(x[:, k], [v[k] for v in theta], [v[k] for v in p], tk)
                 step[:, c] = _red_solve(last[k], res)
             turn = numpy.max(numpy.abs(step[:nu]), axis=0) * self.scale[0] if nu else 0.0
             xn = x[:, act] - step

@@ -140,11 +140,14 @@ def _actuated_state(mech, actuators, forces, drives, inputs, params, resolve=Fal
     return state
 
 
-def _actuated_loaded(mech, actuators, forces, drives, shown, inputs, params, links, report=False):
+def _actuated_loaded(
+    mech, actuators, forces, drives, shown, inputs, params, links, report=False, buckling=True
+):
     """The module's evaluate() at level "loaded" for a mechanism with actuators (docs/physics.md,
     "Actuators at loaded"; _actuated_state): the deviations against the rigid linkage at the
     strokes, a force actuator's at the stroke the force produced. With `report` (modules with
-    the level's report), what it reports beyond the deviations (_actuated_report)."""
+    the level's report), what it reports beyond the deviations (_actuated_report; with
+    `buckling` its buckling factor too, where the file has loads or force actuators)."""
     st = _actuated_state(mech, actuators, forces, drives, inputs, params)
     out = _actuated_result(mech, actuators, st, shown, links, st["ok"])
     if report:
@@ -153,7 +156,9 @@ def _actuated_loaded(mech, actuators, forces, drives, shown, inputs, params, lin
         theta = list(st["theta"]) + st["loads"]
         given = [st["given"][a[0]] for a in actuators]
         out.update(
-            _actuated_report(mech, actuators, forces, theta, st["p"], st["q"], out["ok"], given)
+            _actuated_report(
+                mech, actuators, forces, theta, st["p"], st["q"], out["ok"], given, buckling
+            )
         )
     return out
 
@@ -203,9 +208,10 @@ def _actuated_result(mech, actuators, st, shown, links, ok):
     return out
 
 
-def _actuated_report(mech, actuators, forces, theta, p, q, ok, given):
+def _actuated_report(mech, actuators, forces, theta, p, q, ok, given, buckling=True):
     """What the loaded level reports with actuators (reduced_reported.report): _reduced_report's
-    "inputs", "stiffness" and "plates", and "actuators": {A: {"stroke", "force", "stiffness"}}
+    "inputs", "stiffness", "plates" and (with `buckling`, where the file has loads or force
+    actuators) "buckling", and "actuators": {A: {"stroke", "force", "stiffness"}}
     (file unit, N, N per file unit). The report routines' rows of the actuators (a stroke's
     force and dF/ds, a force's stroke and ds/dF) follow the input hinges' as the inputs' rows
     do: _reduced_report reads them as inputs named by their surrogate hinges, unscaled (theta:
@@ -217,7 +223,7 @@ def _actuated_report(mech, actuators, forces, theta, p, q, ok, given):
     view = _Mechanism(
         **{**mech.__dict__, "loaded": _LoadedTables(**{**tb.__dict__, "report": rows})}
     )
-    out = _reduced_report(view, theta, p, q, ok)
+    out = _reduced_report(view, theta, p, q, ok, buckling)
     found = out["inputs"]
     scale = rep.unit_scale  # the input hinges' moments in N m, as _reduced_report's
     out["inputs"] = {
