@@ -139,10 +139,24 @@ def _point_values(res: Mapping[str, Any], shape: Shape, n: int) -> np.ndarray:
     return out
 
 
+def evaluate_options(module: Any, **options: bool) -> dict[str, bool]:
+    """The keywords among `options` that the generated numpy `module`'s evaluate() takes: only
+    a module with the `loaded` level's report has `report` and `buckling` (the loads' buckling
+    search, tens of Newton solves per configuration), which callers reading the deviations or
+    the stress alone turn off."""
+    accepted = inspect.signature(module.evaluate).parameters
+    return {k: v for k, v in options.items() if k in accepted}
+
+
 def _numpy_pose(
     module: Any, shape: Shape, x: Sequence[float], params: Sequence[float] | None, level: str
 ) -> Pose:
-    res = module.evaluate(dict(zip(shape.inputs, x)), level, _named(shape, params))
+    res = module.evaluate(
+        dict(zip(shape.inputs, x)),
+        level,
+        _named(shape, params),
+        **evaluate_options(module, report=False),
+    )
     out = [
         float(v)
         for p in shape.points
@@ -168,7 +182,9 @@ def _numpy_rows(
     level: str,
     angles: bool = False,
 ) -> Rows:
-    res = module.evaluate(_columns(shape, x), level, _named(shape, params))
+    res = module.evaluate(
+        _columns(shape, x), level, _named(shape, params), **evaluate_options(module, report=False)
+    )
     out = _point_values(res, shape, x.shape[0])
     turned = None
     if angles:

@@ -22,7 +22,6 @@ process compiles it once).
 
 from __future__ import annotations
 
-import inspect
 import itertools
 import math
 import os
@@ -35,6 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import sympy as sp
 
+from ..codegen import pipeline
 from ..core import levels
 from ..core.errors import AssemblyError, InputError
 from ..model.hinges import MODELS
@@ -232,14 +232,6 @@ def run_blocks(task: Task, first: int, last: int) -> tuple[np.ndarray, np.ndarra
     return np.concatenate(worst_all), np.concatenate(flags_all), np.concatenate(stress_all)
 
 
-def _stress_only(module) -> dict:
-    """evaluate()'s keywords that leave out the loads' buckling search (tens of Newton solves
-    per configuration) where the module's evaluate() has it: a sweep reads the stress alone."""
-    return (
-        {"buckling": False} if "buckling" in inspect.signature(module.evaluate).parameters else {}
-    )
-
-
 def largest_stress(
     ev: Compiled, inputs: np.ndarray, params: Sequence[float] | None, plates: Sequence[str]
 ) -> np.ndarray:
@@ -252,7 +244,7 @@ def largest_stress(
         "loaded",
         given,
         links=False,
-        **_stress_only(ev.module),
+        **pipeline.evaluate_options(ev.module, buckling=False),
     )
     out = np.full(len(plates), np.nan)
     for k, h in enumerate(plates):
@@ -383,7 +375,9 @@ def run(
         # the plates the generated module reports on (none without the level's report)
         first = {h: grid.rows[:1, j] for j, h in enumerate(evaluator.inputs)}
         module = evaluator.module
-        found = module.evaluate(first, "loaded", links=False, **_stress_only(module))
+        found = module.evaluate(
+            first, "loaded", links=False, **pipeline.evaluate_options(module, buckling=False)
+        )
         plates = tuple(found.get("plates", ()))
         if plates:
             stress = largest_stress(evaluator, grid.rows, None, plates)

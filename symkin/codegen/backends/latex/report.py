@@ -33,7 +33,7 @@ from ....core.errors import SymkinError
 from ....physics import reduced
 from ....physics.equilibrium import BUCKLING_LIMIT
 from ....physics.stiffness import modulus
-from ... import templating
+from ... import pipeline, templating
 from ...plan import Plan
 from ..common import header_lines
 from .figures import (
@@ -981,7 +981,10 @@ def sweep(
         deviation: dict[str, dict[str, np.ndarray]] = {p: {} for p in report.plan.points}
         ok = np.ones(t.shape, dtype=bool)
         for lv in names:
-            result = numpy_module.evaluate(inputs, level=lv)
+            # the deviations alone (the loaded level's report and buckling search are not read)
+            result = numpy_module.evaluate(
+                inputs, level=lv, **pipeline.evaluate_options(numpy_module, report=False)
+            )
             ok &= np.asarray(result["ok"], dtype=bool)
             for p in report.plan.points:
                 deviation[p][lv] = np.asarray(result["points"][p]["deviation"], dtype=float)
