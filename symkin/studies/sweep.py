@@ -115,6 +115,12 @@ class Task:
     checks: tuple[tuple[str, sp.Expr, bool], ...]  # (rule, expression > 0, also <= 1)
     symbols: tuple[sp.Symbol, ...]  # the parameters the checks read
     plates: tuple[str, ...] = ()  # at `loaded`: the plates whose largest stress is kept
+    stiff: tuple[str, ...] = ()  # at `loaded`: the points whose smallest stiffness is kept
+
+
+#: The diagonal entries of a point's 3 x 3 stiffness a sweep keeps (the smallest over the grid):
+#: along x, along y (N per file unit) and in rotation (N file unit per rad).
+STIFFNESS = ("x", "y", "rotation")
 
 
 def geometry_checks(mech: Mechanism) -> tuple[tuple[str, sp.Expr, bool], ...]:
@@ -193,20 +199,24 @@ def sample_block(task: Task, block: int) -> tuple[np.ndarray, np.ndarray]:
     return params, valid
 
 
-def run_blocks(task: Task, first: int, last: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def run_blocks(
+    task: Task, first: int, last: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Blocks first..last-1: (worst |ΔR| per sample and point (n, n_points), NaN where failed;
     flag per sample: 0 evaluated, 1 cannot be assembled (or no convergence) somewhere on the
     grid, 2 parameters that break the file's rules; at `loaded`, every plate's largest stress
-    over the grid per sample (n, n_plates), NaN where failed)."""
+    over the grid per sample (n, n_plates) and the task's points' smallest diagonal stiffness
+    (n, n_stiff, 3), NaN where failed)."""
     ev = task.evaluator
     n_points = len(ev.points)
-    worst_all, flags_all, stress_all = [], [], []
+    worst_all, flags_all, stress_all, stiff_all = [], [], [], []
     buffer = None
     for block in range(first, last):
         params, valid = sample_block(task, block)
         n = len(params)
         worst = np.full((n, n_points), np.nan)
         stress = np.full((n, len(task.plates)), np.nan)
+        stiff = np.full((n, len(task.stiff), len(STIFFNESS)), np.nan)
         flags = np.where(valid, 0, 2).astype(np.int8)
         good = np.flatnonzero(valid)
         if len(good):
@@ -224,12 +234,18 @@ def run_blocks(task: Task, first: int, last: int) -> tuple[np.ndarray, np.ndarra
             values[failed] = np.nan
             worst[good] = values
             flags[good[failed]] = 1
-            for s in good[~failed] if task.plates else ():
-                stress[s] = largest_stress(ev, task.inputs, params[s], task.plates)
+            for s in good[~failed] if task.plates or task.stiff else ():
+                stress[s], stiff[s] = extremes(ev, task.inputs, params[s], task.plates, task.stiff)
         worst_all.append(worst)
         flags_all.append(flags)
         stress_all.append(stress)
-    return np.concatenate(worst_all), np.concatenate(flags_all), np.concatenate(stress_all)
+        stiff_all.append(stiff)
+    return (
+        np.concatenate(worst_all),
+        np.concatenate(flags_all),
+        np.concatenate(stress_all),
+        np.concatenate(stiff_all),
+    )
 
 
 def largest_stress(
@@ -238,6 +254,21 @@ def largest_stress(
     """Every plate's largest stress (Pa) over the configurations `inputs` (n, n_inputs) at
     `loaded`, by the generated numpy module's report (docs/generated-code.md); NaN for a plate
     where some configuration failed. `params` every parameter's value (None: defaults)."""
+    return extremes(ev, inputs, params, plates, ())[0]
+
+
+def extremes(
+    ev: Compiled,
+    inputs: np.ndarray,
+    params: Sequence[float] | None,
+    plates: Sequence[str],
+    points: Sequence[str],
+) -> tuple[np.ndarray, np.ndarray]:
+    """Over the configurations `inputs` (n, n_inputs) at `loaded`, by the generated numpy
+    module's report (docs/generated-code.md): every plate's largest stress (Pa; n_plates) and
+    every point's smallest diagonal stiffness (STIFFNESS; n_points x 3), NaN where some
+    configuration failed or the stiffness is not finite. `params` every parameter's value
+    (None: defaults)."""
     given = None if params is None else dict(zip(ev.sources.params, map(float, params)))
     res = ev.module.evaluate(
         {h: inputs[:, j] for j, h in enumerate(ev.inputs)},
@@ -246,12 +277,18 @@ def largest_stress(
         links=False,
         **pipeline.evaluate_options(ev.module, buckling=False),
     )
-    out = np.full(len(plates), np.nan)
+    stress = np.full(len(plates), np.nan)
     for k, h in enumerate(plates):
         values = np.asarray(res["plates"][h]["stress"], dtype=float)
         if np.isfinite(values).all():
-            out[k] = values.max()
-    return out
+            stress[k] = values.max()
+    stiff = np.full((len(points), len(STIFFNESS)), np.nan)
+    for k, p in enumerate(points):
+        matrix = np.asarray(res["stiffness"][p], dtype=float)  # (3, 3, n)
+        diagonal = np.stack([matrix[i, i] for i in range(len(STIFFNESS))])
+        if np.isfinite(diagonal).all():
+            stiff[k] = diagonal.min(axis=-1)
+    return stress, stiff
 
 
 def _statistics(v: np.ndarray) -> dict[str, float | None]:
@@ -305,6 +342,9 @@ class Sweep:
     plates: tuple[str, ...] = ()  # at `loaded`: the plates whose largest stress is kept
     stress: np.ndarray | None = field(default=None, repr=False)  # (samples, n_plates), Pa
     nominal_stress: dict[str, float] = field(default_factory=dict)  # at nominal values
+    stiff: tuple[str, ...] = ()  # at `loaded`: the points whose smallest stiffness is kept
+    stiffness: np.ndarray | None = field(default=None, repr=False)  # (samples, n_stiff, 3)
+    nominal_stiffness: dict[str, list[float]] = field(default_factory=dict)  # at nominal values
 
     @property
     def failed(self) -> int:
@@ -327,6 +367,17 @@ class Sweep:
         out["nominal"] = self.nominal_stress.get(plate)
         return out
 
+    def stiffness_statistics(self, point: str) -> dict[str, dict[str, float | None]]:
+        """The same statistics of the evaluated samples' smallest stiffness of `point`, per
+        diagonal entry (STIFFNESS)."""
+        assert self.stiffness is not None
+        k = self.stiff.index(point)
+        out = {}
+        for j, key in enumerate(STIFFNESS):
+            out[key] = _statistics(self.stiffness[self.flags == 0, k, j])
+            out[key]["nominal"] = self.nominal_stiffness[point][j]
+        return out
+
     def as_json(self) -> dict:
         return {
             "samples": self.samples,
@@ -346,6 +397,11 @@ class Sweep:
             **(
                 {"plates": {h: self.stress_statistics(h) for h in self.plates}}
                 if self.plates
+                else {}
+            ),
+            **(
+                {"stiffness": {p: self.stiffness_statistics(p) for p in self.stiff}}
+                if self.stiff
                 else {}
             ),
         }
@@ -371,6 +427,8 @@ def run(
     nominal = evaluator.defaults
     plates: tuple[str, ...] = ()
     nominal_stress: dict[str, float] = {}
+    stiff: tuple[str, ...] = ()
+    nominal_stiffness: dict[str, list[float]] = {}
     if level == "loaded" and "loaded" in evaluator.levels:
         # the plates the generated module reports on (none without the level's report)
         first = {h: grid.rows[:1, j] for j, h in enumerate(evaluator.inputs)}
@@ -380,8 +438,15 @@ def run(
         )
         plates = tuple(found.get("plates", ()))
         if plates:
-            stress = largest_stress(evaluator, grid.rows, None, plates)
+            # the points whose stiffness is finite at every configuration (a point a held
+            # stroke pins along its line, or one on the frame, has none)
+            points = tuple(p for p in found.get("stiffness", ()) if p in evaluator.points)
+            stress, stiffness = extremes(evaluator, grid.rows, None, plates, points)
             nominal_stress = {h: float(v) for h, v in zip(plates, stress) if np.isfinite(v)}
+            stiff = tuple(p for p, k in zip(points, stiffness) if np.isfinite(k).all())
+            nominal_stiffness = {
+                p: [float(v) for v in k] for p, k in zip(points, stiffness) if p in stiff
+            }
     task = Task(
         evaluator,
         level,
@@ -392,6 +457,7 @@ def run(
         geometry_checks(mech),
         tuple(p.symbol for p in mech.parameters),
         plates,
+        stiff,
     )
     blocks = math.ceil(samples / BLOCK)
     if client is None and scheduler.kind == "distributed":
@@ -413,6 +479,7 @@ def run(
     values = np.concatenate([p[0] for p in parts])
     flags = np.concatenate([p[1] for p in parts])
     stress = np.concatenate([p[2] for p in parts])
+    stiffness = np.concatenate([p[3] for p in parts])
     status, out = evaluator.evaluate_rows(grid.rows, level)
     nominal_worst = {}
     if (status == 0).all():
@@ -436,6 +503,9 @@ def run(
         plates,
         stress if plates else None,
         nominal_stress,
+        stiff,
+        stiffness if stiff else None,
+        nominal_stiffness,
     )
 
 
@@ -534,6 +604,15 @@ def text(result: Sweep) -> str:
     if result.plates:
         lines += ["", "largest stress over the grid (Pa)", f"  {'plate':<10}" + header]
         lines += [row(h, result.stress_statistics(h)) for h in result.plates]
+    if result.stiff:
+        lines += [
+            "",
+            "smallest stiffness over the grid (x, y: N per file unit; rotation: N file unit/rad)",
+            f"  {'point':<10}" + header,
+        ]
+        for p in result.stiff:
+            stats = result.stiffness_statistics(p)
+            lines += [row(f"{p} {key}", stats[key]) for key in STIFFNESS]
     return "\n".join(lines) + "\n"
 
 
