@@ -86,6 +86,7 @@ EXPECTED: dict[str, tuple] = {
     "allowable_stress_negative": ("allowable_stress", "-2.5e+08", "positive"),
     "width_zero": ("'B0'", "width"),
     "thickness_log_zero": ("'A'", "thickness"),
+    "defaults_thickness_negative": ("<file>:14: [defaults]", "thickness must be positive"),
     "unknown_key_stiffness": ("'A'", "thicknes", "'thickness'"),
     "pin_unknown": ("'A'", "pin", "center"),
     "beam_unknown": ("'A'", "beam", "timoshenko", "reissner", "elastica"),

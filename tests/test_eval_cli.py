@@ -99,6 +99,23 @@ def test_bad_options_exit_2(capsys, argv, fragment):
     assert code == 2
     assert fragment in err and out == ""
     assert "Traceback" not in err
+    # every one names the file and says how to fix it
+    assert "four_bar.toml" in err and "fix:" in err
+
+
+def test_sensitivity_at_a_level_without_them_exits_2(capsys):
+    """--sensitivity at equilibrium (no sensitivities there) names the levels that have them,
+    with actuators too (it was ignored there)."""
+    for path, given in (
+        (EXAMPLES / "four_bar.toml", "A0=0.2"),
+        (EXAMPLES / "piezo_amplifier.toml", "piezo=0.01"),
+    ):
+        code, out, err = run(
+            capsys, "eval", str(path), "--input", given, "--level", "equilibrium", "--sensitivity"
+        )
+        assert code == 2 and out == ""
+        assert "the equilibrium level has no sensitivities" in err
+        assert "exact" in err and "loaded" in err and path.name in err
 
 
 def test_param_override_cannot_build_a_huge_number(tmp_path, capsys):

@@ -50,9 +50,9 @@ def _eval(args: argparse.Namespace) -> str:
     analysis = Analysis(build(load(args.file)))
     result = evaluate(
         analysis,
-        _pairs(args.input, "--input"),
+        _pairs(args.input, "--input", args.file),
         args.level,
-        _pairs(args.param, "--param"),
+        _pairs(args.param, "--param", args.file),
         args.backend,
         sensitivity=args.sensitivity,
     )
@@ -111,7 +111,7 @@ def _derive(args: argparse.Namespace) -> str:
             args.tolerance,
             args.range,
             column,
-            _pairs(args.fix, "--fix"),
+            _pairs(args.fix, "--fix", args.file),
         )
     return "".join(f"{path}\n" for path in written)
 

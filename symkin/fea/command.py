@@ -51,17 +51,27 @@ def register(command: Callable[[str, str], argparse.ArgumentParser]) -> None:
     fe.set_defaults(run=main)
 
 
-def pairs(items: Sequence[str] | None, option: str) -> dict[str, str]:
-    """NAME=VALUE options as a dict; a malformed one is bad input (exit 2)."""
+def pairs(items: Sequence[str] | None, option: str, file: str | None = None) -> dict[str, str]:
+    """NAME=VALUE options as a dict; a malformed one or a name given twice is bad input (exit
+    2, naming `file`, the mechanism they are for)."""
     out: dict[str, str] = {}
     for item in items or ():
         name, sep, value = item.partition("=")
         if not sep or not name.strip() or not value.strip():
             raise InputError(
-                f"'{item}' is not NAME=VALUE", entry=option, hint=f"write e.g. {option} A0=0.2"
+                f"'{item}' is not NAME=VALUE",
+                file=file,
+                entry=option,
+                hint=f"write e.g. {option} A0=0.2",
             )
         if name.strip() in out:
-            raise InputError(f"'{name.strip()}' given twice", entry=option)
+            raise InputError(
+                f"'{name.strip()}' given twice ({option} {name.strip()}={out[name.strip()]} "
+                f"and {item.strip()})",
+                file=file,
+                entry=option,
+                hint=f"give each {option} once",
+            )
         out[name.strip()] = value.strip()
     return out
 
@@ -71,7 +81,9 @@ def main(args: argparse.Namespace) -> str:
     mesh = parse_mesh(args.mesh) if args.mesh else DEFAULT_MESH
     if args.solve:
         executable()  # before any work: exit 2 naming the package
-    setup = prepare(args.file, pairs(args.input, "--input"), pairs(args.param, "--param"))
+    setup = prepare(
+        args.file, pairs(args.input, "--input", args.file), pairs(args.param, "--param", args.file)
+    )
     if not setup.conf.plates:
         raise InputError(
             "the mechanism has no compliant plate (every hinge is rigid)",

@@ -909,18 +909,19 @@ class _Reader:
             )
         at = self.vector(table["at"], entry, "at", line)
         merged = {**defaults, **table}
-        plate_angle = self.expr(merged.get("plate_angle", 0), entry, "plate_angle", line)
-        self.finite(plate_angle, entry, "plate_angle", line)
+        where = self.origin("plate_angle", table, entry, line)
+        plate_angle = self.expr(merged.get("plate_angle", 0), where[0], "plate_angle", where[1])
+        self.finite(plate_angle, where[0], "plate_angle", where[1])
         if "length" not in merged:
             raise self.error(
                 "no plate length", entry, line, "set length in the hinge or in [defaults]"
             )
-        length = self.expr(merged["length"], entry, "length", line)
-        if not self.finite(length, entry, "length", line) > 0:
+        where = self.origin("length", table, entry, line)
+        length = self.expr(merged["length"], where[0], "length", where[1])
+        if not self.finite(length, where[0], "length", where[1]) > 0:
             raise self.error(
                 f"plate length must be positive, got {length}",
-                entry,
-                line,
+                *where,
                 "give the plate a positive length",
             )
         is_input = merged.get("input", False)
@@ -941,7 +942,7 @@ class _Reader:
                 'pin = "midpoint" (the paper\'s rigid pin) or "prbm" (the '
                 "model's pseudo-rigid-body pivot)",
             )
-        stiffness = self.stiffness(merged, entry, line, length)
+        stiffness = self.stiffness(table, merged, entry, line, length)
         beam = merged.get("beam", BEAMS[0])
         if beam not in BEAMS:
             raise self.error(
@@ -967,20 +968,36 @@ class _Reader:
             beam=beam,
         )
 
+    def origin(
+        self, key: str, table: Mapping[str, object], entry: str, line: int | None
+    ) -> tuple[str, int | None]:
+        """Where a hinge's `key` was given: the hinge (`entry`, `line`) or, when the hinge does
+        not give it, [defaults] and the key's line there (the place an error sends the user)."""
+        if key in table:
+            return entry, line
+        return "[defaults]", self.where.key(key, "defaults")
+
     def stiffness(
-        self, merged: Mapping[str, object], entry: str, line: int | None, length: sp.Expr
+        self,
+        table: Mapping[str, object],
+        merged: Mapping[str, object],
+        entry: str,
+        line: int | None,
+        length: sp.Expr,
     ) -> dict[str, sp.Expr]:
-        """E, thickness, width, nu, allowable_stress of a hinge (docs/physics.md), each checked
-        where given: E > 0, 0 < thickness < length, width > 0, 0 <= nu < 0.5, allowable_stress
-        > 0 (with the default parameters)."""
+        """E, thickness, width, nu, allowable_stress of a hinge (docs/physics.md; `table` the
+        hinge's own keys, `merged` with [defaults]), each checked where given: E > 0, 0 <
+        thickness < length, width > 0, 0 <= nu < 0.5, allowable_stress > 0 (with the default
+        parameters)."""
         out: dict[str, sp.Expr] = {}
         for key, (ok, message, hint) in STIFFNESS_RULES.items():
             if key not in merged:
                 continue
-            expr = self.expr(merged[key], entry, key, line)
-            value = self.finite(expr, entry, key, line)
+            where = self.origin(key, table, entry, line)
+            expr = self.expr(merged[key], where[0], key, where[1])
+            value = self.finite(expr, where[0], key, where[1])
             if not ok(value):
-                raise self.error(f"{message}, got {key} = {_short(value)}", entry, line, hint)
+                raise self.error(f"{message}, got {key} = {_short(value)}", *where, hint)
             out[key] = expr
         if "thickness" in out:
             t = self.finite(out["thickness"], entry, "thickness", line)

@@ -223,6 +223,14 @@ def evaluate(
     """Evaluate one configuration at `level` through `backend` (sympy: mpmath at `dps` digits);
     with `sensitivity`, also the derivatives by every parameter and input
     (docs/sensitivity.md)."""
+    if sensitivity and not levels.get(level).sensitivity:
+        having = [lv.name for lv in levels.LEVELS if lv.generated and lv.sensitivity]
+        raise InputError(
+            f"the {level} level has no sensitivities",
+            file=analysis.mechanism.path,
+            entry="--sensitivity",
+            hint="ask for them at " + ", ".join(having) + " (docs/sensitivity.md)",
+        )
     if analysis.mechanism.actuators:
         return _actuated(analysis, inputs, level, params, backend, dps, sensitivity)
     return _evaluate(analysis, inputs, level, params, backend, dps, sensitivity)
@@ -238,12 +246,6 @@ def _evaluate(
     sensitivity: bool,
 ) -> Evaluation:
     """:func:`evaluate` with every input a hinge angle (the actuators' surrogates included)."""
-    if sensitivity and not levels.get(level).sensitivity:
-        raise InputError(
-            f"the {level} level has no sensitivities",
-            entry="--sensitivity",
-            hint="ask for them at level exact (docs/sensitivity.md)",
-        )
     if backend == "sympy":
         if level in levels.LOADED:
             return loaded(analysis, inputs, params, dps, sensitivity)
@@ -300,7 +302,7 @@ def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity:
             f"(the {level} level has no stiffness)",
             file=mech.path,
             entry=f"[[actuator]] '{forces[0].name}'",
-            hint='ask for --level equilibrium, or make it drive = "stroke"',
+            hint='ask for --level loaded or --level equilibrium, or make it drive = "stroke"',
         )
     if level in levels.LOADED and sensitivity and backend == "c" and forces:
         raise InputError(
@@ -742,7 +744,11 @@ def _reported_fields(answer: reduced.Answer, scale: float) -> dict:
         "actuation": rep.inputs,
         "actuators": rep.actuators,
         "stiffness": {n: k for n, k in rep.stiffness.items() if n not in hidden},
-        "plates": rep.plates,
+        "plates": {  # in the file's order, as equilibrium's
+            h.name: rep.plates[h.name]
+            for h in answer.solver.kin.mechanism.hinges
+            if h.name in rep.plates
+        },
         "buckling": rep.buckling,
     }
 
@@ -1585,7 +1591,7 @@ class _Mpmath:
             stiffness={
                 n: k for n, k in res.stiffness.items() if n not in {a.point for a in mech.actuators}
             },
-            plates=res.plates,
+            plates={h.name: res.plates[h.name] for h in mech.hinges if h.name in res.plates},
             buckling=None if buckling is None else buckling.factor,
             buckling_hinge=None if buckling is None else buckling.hinge,
             units=self.mechanism.units,
