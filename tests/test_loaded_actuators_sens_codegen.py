@@ -7,7 +7,9 @@ Reference, not the code under test: the Python level's sensitivities (symkin.eva
 sensitivity=True, the reduced equilibrium lambdified in mpmath and its stroke columns built
 symbolically), themselves checked against central differences of the solver in
 tests/test_loaded_actuators.py. Cases: the piezo amplifier example (a stroke), the parallelogram
-stage pushed by a force under a payload, the five-bar with an input hinge held beside a force.
+stage pushed by a force under a payload and by a stroke, the five-bar with an input hinge held
+beside a force and beside a stroke (a load at T). The C's, with strokes, against the numpy
+module's so checked.
 """
 
 from __future__ import annotations
@@ -32,7 +34,10 @@ CASES = {
         {"piezo": [0.02, 0.004]},
     ),
     "stage_force_payload": (lambda: driven("force", PAYLOAD), {"piezo": [0.5, -0.2]}),
+    "stage_stroke": (lambda: driven(), {"piezo": [1.5e-3, -0.7e-3]}),
     "five_bar_force": (lambda: five_bar("force"), {"O1": [0.03, -0.01], "piezo": [0.5, 0.3]}),
+    # an input hinge beside a stroke, a load at T: the drives' mapping to the kinematic inputs
+    "five_bar_stroke": (lambda: five_bar("stroke"), {"O1": [0.03, -0.01], "piezo": [4e-4, -2e-4]}),
 }
 #: relative to the largest rate of the point (measured: 1.4e-13 at most)
 AGAINST_PYTHON = 1e-10
@@ -68,15 +73,13 @@ def test_generated_sensitivities_are_the_python_levels(name):
                     assert np.linalg.norm(g - np.array(v)) <= AGAINST_PYTHON * scale, (kind, p)
 
 
-@pytest.mark.parametrize("name", ["piezo_amplifier", "stage_stroke"])
+@pytest.mark.parametrize("name", ["piezo_amplifier", "stage_stroke", "five_bar_stroke"])
 def test_c_takes_the_strokes_sensitivities_at_loaded(name):
     """The C's `loaded` sensitivities with stroke actuators (templates/c/actuators.c's
     sk_actuated_loaded_rates) against the numpy module's (checked against the Python level
     above), row by row over configurations: the values, every parameter's and drive's column of
     the deviation and the rigid position (measured: 2e-14 of the largest rate)."""
-    text, inputs = (
-        CASES[name] if name in CASES else (lambda: driven(), {"piezo": [1.5e-3, -0.7e-3]})
-    )
+    text, inputs = CASES[name]
     an = symkin.analyze(symkin.loads(text(), f"{name}.toml"))
     require_compiler()
     ev = symkin.compile(an, levels=("loaded",))

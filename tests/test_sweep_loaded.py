@@ -119,6 +119,9 @@ def test_json_and_text_carry_the_stress(five, capsys):
     assert set(doc["stiffness"]) == set(result.stiff)
     for stats in doc["stiffness"].values():
         assert set(stats) == set(sweep.STIFFNESS)
+        for key in sweep.STIFFNESS:
+            assert {"mean", "std", "p50", "p1", "p01", "min", "nominal"} == set(stats[key])
+            assert stats[key]["min"] <= stats[key]["p1"] <= stats[key]["p50"]
     assert "largest stress over the grid (Pa)" in sweep.text(result)
     assert "smallest stiffness over the grid" in sweep.text(result)
     args = ["sweep", str(FIVE), "--level", "loaded", "--vary", "t=±5e-6", "--samples", "4"]

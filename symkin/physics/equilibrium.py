@@ -536,8 +536,10 @@ def _smallest(jac: np.ndarray) -> float:
 def _crossed(jac: np.ndarray, jac_new: np.ndarray) -> bool:
     """Whether eigenvalues of J passed through zero between two steps, an even number of them
     too (det J then keeps its sign: identical legs buckling at one load): an eigenvalue of
-    J⁻¹J_new in the left half-plane, the ratio of a mode's eigenvalues after and before (free of
-    the unknowns' scaling; near 1 for every mode over a short step that crosses none)."""
+    J⁻¹J_new in the left half-plane. A real negative one μ makes J + s (J_new − J) singular at
+    s = 1/(1 − μ) in (0, 1); the eigenvalues are free of the unknowns' scaling and near 1 over a
+    short step that crosses nothing. A complex pair in the left half-plane (two crossing modes
+    that interact) counts too: at worst a step halved that need not be."""
     try:
         ratios = np.linalg.eigvals(np.linalg.solve(jac, jac_new))
     except np.linalg.LinAlgError:

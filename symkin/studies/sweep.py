@@ -53,6 +53,15 @@ STATISTICS = (
     ("p999", 99.9),
     ("max", 100.0),
 )
+#: The same at the low end, for a smallest stiffness (the soft samples are the ones that matter).
+LOW_STATISTICS = (
+    ("mean", None),
+    ("std", None),
+    ("p50", 50.0),
+    ("p1", 1.0),
+    ("p01", 0.1),
+    ("min", 0.0),
+)
 
 
 @dataclass(frozen=True)
@@ -291,10 +300,12 @@ def extremes(
     return stress, stiff
 
 
-def _statistics(v: np.ndarray) -> dict[str, float | None]:
-    """mean, std (n - 1), p50, p99, p99.9 and max of `v`."""
+def _statistics(v: np.ndarray, which=STATISTICS) -> dict[str, float | None]:
+    """mean, std (n - 1), p50, p99, p99.9 and max of `v` (`which`: LOW_STATISTICS for the low
+    end), its non-finite values left out."""
+    v = v[np.isfinite(v)]
     out: dict[str, float | None] = {}
-    for key, q in STATISTICS:
+    for key, q in which:
         if len(v) == 0 or (key == "std" and len(v) < 2):
             out[key] = None
         elif key == "mean":
@@ -368,13 +379,13 @@ class Sweep:
         return out
 
     def stiffness_statistics(self, point: str) -> dict[str, dict[str, float | None]]:
-        """The same statistics of the evaluated samples' smallest stiffness of `point`, per
-        diagonal entry (STIFFNESS)."""
+        """The low end's statistics (LOW_STATISTICS) of the evaluated samples' smallest
+        stiffness of `point`, per diagonal entry (STIFFNESS)."""
         assert self.stiffness is not None
         k = self.stiff.index(point)
         out = {}
         for j, key in enumerate(STIFFNESS):
-            out[key] = _statistics(self.stiffness[self.flags == 0, k, j])
+            out[key] = _statistics(self.stiffness[self.flags == 0, k, j], LOW_STATISTICS)
             out[key]["nominal"] = self.nominal_stiffness[point][j]
         return out
 
@@ -593,8 +604,8 @@ def text(result: Sweep) -> str:
     ]
     header = "".join(f"{k:>12}" for k in ("nominal", "mean", "std", "p50", "p99", "p99.9", "max"))
 
-    def row(name: str, s: Mapping[str, float | None]) -> str:
-        cells = [s[k] for k in ("nominal", "mean", "std", "p50", "p99", "p999", "max")]
+    def row(name: str, s: Mapping[str, float | None], which=STATISTICS) -> str:
+        cells = [s["nominal"]] + [s[k] for k, _ in which]
         return f"  {name:<10}" + "".join(
             f"{c:>12.4e}" if c is not None else f"{'-':>12}" for c in cells
         )
@@ -605,14 +616,15 @@ def text(result: Sweep) -> str:
         lines += ["", "largest stress over the grid (Pa)", f"  {'plate':<10}" + header]
         lines += [row(h, result.stress_statistics(h)) for h in result.plates]
     if result.stiff:
+        low = "".join(f"{k:>12}" for k in ("nominal", "mean", "std", "p50", "p1", "p0.1", "min"))
         lines += [
             "",
             "smallest stiffness over the grid (x, y: N per file unit; rotation: N file unit/rad)",
-            f"  {'point':<10}" + header,
+            f"  {'point':<10}" + low,
         ]
         for p in result.stiff:
             stats = result.stiffness_statistics(p)
-            lines += [row(f"{p} {key}", stats[key]) for key in STIFFNESS]
+            lines += [row(f"{p} {key}", stats[key], LOW_STATISTICS) for key in STIFFNESS]
     return "\n".join(lines) + "\n"
 
 
