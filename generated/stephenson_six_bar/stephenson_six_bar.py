@@ -869,6 +869,16 @@ class _Batch:
                 ds /= 2
         return x[:, 0], jac
 
+    def compression(self, ins, b):
+        """The worst half plate's compression over its sway buckling load per configuration
+        (b,), from the half plates' inputs alone (no relation: past buckling too)."""
+        worst = numpy.zeros(b)
+        for k in range(self.plates):
+            pk, ea, es = ins[5 * k + 1], ins[5 * k + 3], ins[5 * k + 4]
+            w = -(1 + (ea - es) * pk) * pk * self.count**2 / math.pi**2
+            worst = numpy.where(w > worst, w, worst)
+        return worst
+
     def answer(self, x, theta, p, jac):
         """The deviation at each solution x (n, b) and its status: 0, 1 where a plate is at
         p_limit of its sway buckling load, 4 where the truncation estimate (one order-2 Newton
@@ -877,11 +887,7 @@ class _Batch:
         args, ins, _ = self._inputs(x, theta, p, 1.0)
         _, vals = self._relation(ins)
         dev = numpy.array([_red_column(v, b) for v in self.dev_fn(args, theta, vals, p)])
-        worst = numpy.zeros(b)
-        for k in range(self.plates):
-            pk, ea, es = ins[5 * k + 1], ins[5 * k + 3], ins[5 * k + 4]
-            w = -(1 + (ea - es) * pk) * pk * self.count**2 / math.pi**2
-            worst = numpy.where(w > worst, w, worst)
+        worst = self.compression(ins, b)
         x2 = x
         if n:
             vals2 = self._values2(ins)
@@ -1282,11 +1288,7 @@ def _red_state(solver, x, theta, p, t):
         return x, ok, sign
     th, pl, tl, xl = [v[live] for v in theta], [v[live] for v in p], t[live], x[:, live]
     _, ins, _ = solver._inputs(xl, th, pl, tl)
-    worst = numpy.zeros(live.size)
-    for j in range(solver.plates):
-        pk, ea, es = ins[5 * j + 1], ins[5 * j + 3], ins[5 * j + 4]
-        w = -(1 + (ea - es) * pk) * pk * solver.count**2 / math.pi**2
-        worst = numpy.where(w > worst, w, worst)
+    worst = solver.compression(ins, live.size)
     found = _red_signs(solver.system(xl, th, pl, tl)[1]) if n else numpy.ones(live.size)
     at_sway = worst >= 1  # no J there (past the relation's pole)
     ok[live] = at_sway | numpy.isfinite(found)

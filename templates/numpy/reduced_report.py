@@ -231,11 +231,7 @@ def _red_state(solver, x, theta, p, t):
         return x, ok, sign
     th, pl, tl, xl = [v[live] for v in theta], [v[live] for v in p], t[live], x[:, live]
     _, ins, _ = solver._inputs(xl, th, pl, tl)
-    worst = numpy.zeros(live.size)
-    for j in range(solver.plates):
-        pk, ea, es = ins[5 * j + 1], ins[5 * j + 3], ins[5 * j + 4]
-        w = -(1 + (ea - es) * pk) * pk * solver.count**2 / math.pi**2
-        worst = numpy.where(w > worst, w, worst)
+    worst = solver.compression(ins, live.size)
     found = _red_signs(solver.system(xl, th, pl, tl)[1]) if n else numpy.ones(live.size)
     at_sway = worst >= 1  # no J there (past the relation's pole)
     ok[live] = at_sway | numpy.isfinite(found)
