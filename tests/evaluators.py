@@ -44,6 +44,10 @@ def require_compiler():
         pytest.skip("no C compiler")
 
 
+#: The kinematic levels: the plan `evaluate` derives for one of them leaves the physical ones out.
+KINEMATIC = ("paper", "first_order", "exact")
+
+
 class Generated:
     """A mechanism with its analysis, numpy module and compiled C library."""
 

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from evaluators import KINEMATIC
 
 import symkin
 
@@ -33,7 +34,6 @@ at = [25, "L"]
 direction = [1.0, 0.0]
 drive = "stroke"
 """
-KINEMATIC = ("paper", "first_order", "exact")
 
 
 def stroke_driven(text: str, hinge: str, actuator: str) -> str:

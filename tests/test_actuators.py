@@ -23,6 +23,7 @@ from pathlib import Path
 import mechanisms as M
 import mpmath
 import pytest
+from evaluators import KINEMATIC
 
 import symkin
 from symkin.core.errors import InputError
@@ -33,7 +34,6 @@ from tests.reference_solver import Reference
 ROOT = Path(__file__).resolve().parent.parent
 PARALLELOGRAM = (ROOT / "tests" / "mechanisms" / "parallelogram.toml").read_text()
 FOUR_BAR = (ROOT / "examples" / "four_bar.toml").read_text()
-KINEMATIC = ("paper", "first_order", "exact")
 
 PIEZO = M.PIEZO.format(drive="stroke")
 

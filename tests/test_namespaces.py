@@ -18,7 +18,7 @@ import re
 import mechanisms as M
 import pytest
 from conftest import EXAMPLES
-from evaluators import Generated, generated, rel_err
+from evaluators import KINEMATIC, Generated, generated, rel_err
 from reference_solver import Reference
 
 import symkin
@@ -118,9 +118,10 @@ def test_parameters_named_like_internal_symbols(key):
     hostile = symkin.loads(renamed(text, names, seed=5), "hostile.toml")
     assert len(hostile.parameters) == len(names)
     want = Reference(symkin.loads(text)).deviation(inputs)
-    # without sensitivities: the plan `evaluate` builds too (their ~900 columns, most of the
-    # derivation, are not what this test is about)
-    g = Generated(mech=hostile, sensitivity=False)
+    # the plan `evaluate` builds for a kinematic level: without sensitivities (their ~900
+    # columns) and without the physical levels (the reduced equilibrium's routines), most of
+    # the derivation and not what this test is about
+    g = Generated(mech=hostile, sensitivity=False, levels=list(KINEMATIC))
     an = g.analysis
     for backend in ("sympy", "numpy", "c"):
         if backend == "c":
@@ -136,9 +137,7 @@ def test_parameters_named_like_internal_symbols(key):
     # literal text, never as that symbol. The names checked are the plate lengths', which the
     # report prints at every level; the kinematic levels spare the physical reference of a
     # stiff file (nine 40-digit `equilibrium` solves over ~900 parameters: minutes, not seconds).
-    tex = derive.generate(hostile, ("latex",), levels=("paper", "first_order", "exact"))[
-        f"{hostile.name}.tex"
-    ].decode()
+    tex = derive.generate(hostile, ("latex",), levels=KINEMATIC)[f"{hostile.name}.tex"].decode()
     used = {s.name for h in hostile.hinges for s in h.length.free_symbols}
     for name in used:
         if re.fullmatch(r"(theta|delta)_\d+", name):

@@ -22,7 +22,7 @@ from pathlib import Path
 import mpmath
 import numpy as np
 import pytest
-from evaluators import Generated, require_compiler
+from evaluators import KINEMATIC, Generated, require_compiler
 from reference_solver import Reference, mobility
 
 import symkin
@@ -35,7 +35,6 @@ from symkin.core.settings import SOLVER
 from symkin.studies import evaluation
 
 ZOO = Path(__file__).resolve().parent / "mechanisms"
-KINEMATIC = ("paper", "first_order", "exact")
 TOL = 1e-9
 
 SINGLE = ("0", "1e-9", "1e-6", "0.01", "0.05", "-0.1")

@@ -14,6 +14,7 @@ import sys
 from pathlib import Path
 
 import pytest
+import sympy as sp
 from conftest import ROOT
 
 import symkin
@@ -235,3 +236,35 @@ def test_without_a_usable_lock_folder_the_body_runs_plainly(tmp_path, monkeypatc
         raise ValueError("body")
     assert ran == [True] and err.value.__context__ is None
     assert not (shared / "locks").exists()
+
+
+def test_the_python_loaded_level_is_derived_once_per_file_content():
+    """The loaded level's lambdified solvers (no pickle) are kept in memory by content: a
+    second analysis of the same file finds them and gives the same numbers; another file (one
+    plate thicker) derives its own."""
+    from symkin.studies import evaluation
+
+    text = PARALLELOGRAM.read_text()
+    first = symkin.analyze(symkin.loads(text, "para.toml"))
+    a = evaluation.reduced_equilibrium(first, {"F1": "0.05"})
+    again = symkin.analyze(symkin.loads(text, "para.toml"))
+    b = evaluation.reduced_equilibrium(again, {"F1": "0.05"})
+    assert evaluation._REDUCED[again] is evaluation._REDUCED[first]
+    assert a.deviations == b.deviations
+    thicker = text.replace("thickness = 0.15e-3", "thickness = 0.16e-3", 1)
+    other = symkin.analyze(symkin.loads(thicker, "para.toml"))
+    c = evaluation.reduced_equilibrium(other, {"F1": "0.05"})
+    assert evaluation._REDUCED[other] is not evaluation._REDUCED[first]
+    assert c.deviations != a.deviations
+
+
+def test_parameter_values_are_put_in_as_subs_puts_them():
+    """expressions.substitute passes subs only an expression's own symbols (a file may have
+    hundreds of parameters): the same value as subs with every parameter."""
+    from symkin.model.expressions import substitute
+
+    syms = sp.symbols("p0:400", positive=True)
+    values = {s: sp.Rational(k + 1, 7) for k, s in enumerate(syms)}
+    expr = sp.sqrt(syms[3] ** 2 + syms[250]) / syms[399] + sp.sin(syms[7])
+    assert substitute(expr, values) == expr.subs(values)
+    assert substitute("2", values) == 2

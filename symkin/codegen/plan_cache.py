@@ -222,6 +222,20 @@ def kept(
     return _remember(key, value)
 
 
+def in_memory(
+    analysis: Analysis, options: Mapping[str, Any], make: Callable[[], _T], kind: type[_T]
+) -> _T:
+    """What `make()` gives for `analysis` and `options`, kept by content in this process's
+    memory only: for what cannot be pickled (the Python `loaded` level's lambdified solvers),
+    so the same file analysed again (each test, each command of a session) finds it."""
+    key = _key_of(analysis, options, kind)
+    if key is None:
+        return make()
+    with _LOCK:
+        found = _MEMORY.get(key)
+    return found if isinstance(found, kind) else _remember(key, make())
+
+
 def _read(folder: Path, key: str, kind: type[_T]) -> _T | None:
     target, record = folder / f"{key}.pickle", folder / f"{key}.sha256"
     try:

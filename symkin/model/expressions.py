@@ -294,6 +294,14 @@ _MPMATH = {
 }
 
 
+def substitute(expr: object, values: Mapping[sp.Symbol, object]) -> sp.Expr:
+    """`expr` with the parameter `values` put in, as `subs(values)` gives it, passing subs only
+    the symbols `expr` holds: subs walks the expression once per entry, and a file may have
+    hundreds of parameters."""
+    e = sp.sympify(expr)
+    return e.subs({s: values[s] for s in e.free_symbols if s in values})
+
+
 def numeric(
     expr: sp.Expr, values: Mapping[sp.Symbol, object], dps: int = NUMERIC_DPS
 ) -> mpmath.mpf:

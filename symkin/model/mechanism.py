@@ -261,7 +261,8 @@ class Mechanism:
         piezo stack's stroke is about 1e-3 of its length); --range / --input set another."""
         values = self.defaults
         return {
-            a.name: 1e-3 * float(sp.sqrt(a.at[0] ** 2 + a.at[1] ** 2).subs(values))
+            a.name: 1e-3
+            * float(expressions.substitute(sp.sqrt(a.at[0] ** 2 + a.at[1] ** 2), values))
             for a in self.actuators
             if a.drive == "stroke"
         }
@@ -1743,7 +1744,7 @@ def _rank(rows: list[list[mpmath.mpf]]) -> int:
 
 def _mp(expr: sp.Expr, values: Mapping[sp.Symbol, sp.Expr]) -> mpmath.mpf | None:
     """`expr` at the parameter values, 30 digits; None when it is not a finite real number."""
-    value = sp.N(sp.sympify(expr).subs(values), 30)
+    value = sp.N(expressions.substitute(expr, values), 30)
     if not (value.is_real and value.is_finite):
         return None
     return mpmath.mpf(str(value))
@@ -1806,7 +1807,7 @@ def check_values(
                     )
             for key, (ok, message, hint) in STIFFNESS_RULES.items():
                 raw = getattr(h, key)
-                value = None if raw is None else sp.N(sp.sympify(raw).subs(values), 30)
+                value = None if raw is None else sp.N(expressions.substitute(raw, values), 30)
                 if value is not None and not (value.is_real and value.is_finite and ok(value)):
                     raise fail(f"{message}, got {key} = {_short(value)}", entry, h.line, hint)
             if h.thickness is not None and not _mp(h.thickness, values) < length:

@@ -37,6 +37,7 @@ import numpy as np
 import sympy as sp
 
 from ..core.errors import AssemblyError
+from ..model.expressions import substitute
 from ..model.hinges import pivot_distance
 from ..model.mechanism import Mechanism
 from . import arith, beams, reported
@@ -348,7 +349,7 @@ def build(
     index[mech.ground] = -1
 
     def num(expr):
-        return convert(sp.sympify(expr).subs(values))
+        return convert(substitute(expr, values))
 
     hinges = []
     for h in mech.hinges:
@@ -388,11 +389,12 @@ def build(
     # each actuator's point of action, as the evaluators track it (mechanism.Actuator.point)
     points |= {a.point: (index[a.link], tuple(num(v) for v in a.at)) for a in mech.actuators}
     centres = [
-        (float(sp.N(h.at[0].subs(values))), float(sp.N(h.at[1].subs(values)))) for h in mech.hinges
+        (float(sp.N(substitute(h.at[0], values))), float(sp.N(substitute(h.at[1], values))))
+        for h in mech.hinges
     ]
     span = max(
         [math.dist(a, b) for a in centres for b in centres]
-        + [float(sp.N(sp.sympify(h.length).subs(values))) for h in mech.hinges]
+        + [float(sp.N(substitute(h.length, values))) for h in mech.hinges]
     )
     plates = [h for h in hinges if h.plate]
     force = max([float(h.EI) / (float(h.length) * span) for h in plates], default=1.0)
@@ -429,7 +431,7 @@ def _slender(stiff: PlateStiffness | None, length, values) -> float:
     """t/l of a plate from its stiffness, √(12 EI/(EA l²)); 0 for a pin."""
     if stiff is None:
         return 0.0
-    return math.sqrt(float(sp.N((12 * stiff.EI / (stiff.EA * length**2)).subs(values), 20)))
+    return math.sqrt(float(sp.N(substitute(12 * stiff.EI / (stiff.EA * length**2), values), 20)))
 
 
 @dataclass(frozen=True)
@@ -843,11 +845,11 @@ def solve(
         at = np.array([float(v) for v in solution.u])
         tangent = system.jacobian(at, 1.0, 1e-18)[0]
         hinge = {h.name: h for h in mech.hinges}
-        moduli = {n: _float(modulus(hinge[n]).subs(values)) for n in plates}
+        moduli = {n: _float(substitute(modulus(hinge[n]), values)) for n in plates}
         allowable = {
             n: None
             if hinge[n].allowable_stress is None
-            else _float(sp.sympify(hinge[n].allowable_stress).subs(values))
+            else _float(substitute(hinge[n].allowable_stress, values))
             for n in plates
         }
         return Result(

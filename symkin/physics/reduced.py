@@ -45,6 +45,7 @@ import sympy as sp
 
 from ..core import vectors as V
 from ..kinematics.positions import Kinematics
+from ..model.expressions import substitute
 from ..model.special import arck, mpmath_namespace, sinr
 from .plate_relation import energy, relation
 from .stiffness import plate_stiffness
@@ -120,7 +121,7 @@ class Reduced:
         self._values_subs = dict(values)
 
         def value(e) -> sp.Float:
-            return sp.Float(sp.N(sp.sympify(e).subs(values), 30), 30)
+            return sp.Float(sp.N(substitute(e, values), 30), 30)
 
         def num(e) -> sp.Expr:
             return sp.sympify(e) if symbolic else value(e)
@@ -425,7 +426,7 @@ class Reduced:
             parts = []
             for i, w in lw.items():
                 if not self.symbolic:
-                    w = tuple(sp.Float(sp.N(v.subs(self._values_subs), 30), 30) for v in w)
+                    w = tuple(sp.Float(sp.N(substitute(v, self._values_subs), 30), 30) for v in w)
                 parts.append(V.rot(s["phi"][i], V.rot_minus_identity(s["dphi"][i], w)))
             for b in range(1, self.m + 1):
                 if row[b - 1]:
@@ -473,9 +474,7 @@ class Reduced:
         h = self.hinges[a]
         if self.symbolic:
             return h.clamp(h.P)
-        return tuple(
-            sp.Float(sp.N(sp.sympify(v).subs(self._values_subs), 30), 30) for v in h.clamp(h.P)
-        )
+        return tuple(sp.Float(sp.N(substitute(v, self._values_subs), 30), 30) for v in h.clamp(h.P))
 
     def _reported(self, s: dict) -> list[sp.Expr]:
         """Every input's actuator moment on link M (N·u: a tree hinge's moment balance, an input

@@ -25,6 +25,7 @@ import numpy as np
 import sympy as sp
 
 from ..core import vectors as V
+from ..model.expressions import substitute
 from .reduced import Answer, Reduced
 from .reported import SINGULAR, plate_stress
 from .result import ActuatorLoad, InputLoad, PlateStress
@@ -117,17 +118,17 @@ def plates(answer: Answer) -> dict[str, PlateStress]:
         lx, ly = V.rot(-(turn + float(d["alpha"])), (nx * length**2 / ei, ny * length**2 / ei))
         s = stiff[name]
         reissner = s.stretches
-        slender = math.sqrt(float(sp.N((12 * s.EI / (s.EA * s.length**2)).subs(values), 20)))
+        slender = math.sqrt(float(sp.N(substitute(12 * s.EI / (s.EA * s.length**2), values), 20)))
         h = hinge[name]
         limit = None
         if h.allowable_stress is not None:
-            limit = float(sp.N(sp.sympify(h.allowable_stress).subs(values), 20))
+            limit = float(sp.N(substitute(h.allowable_stress, values), 20))
         out[name] = plate_stress(
             (m_p * length / ei, float(lx), float(ly)),
             float(d["ea"]) if reissner else None,
             float(d["es"]) if reissner else None,
             slender,
-            float(sp.N(modulus(h).subs(values), 20)),
+            float(sp.N(substitute(modulus(h), values), 20)),
             limit,
         )
     return out

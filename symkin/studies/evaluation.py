@@ -24,7 +24,7 @@ import numpy as np
 import sympy as sp
 from sympy.printing.pycode import MpmathPrinter
 
-from ..codegen import pipeline
+from ..codegen import pipeline, plan_cache
 from ..codegen.backends.numpy.kernels import float64_namespace
 from ..core import levels
 from ..core.errors import AssemblyError, InputError, suggest
@@ -628,7 +628,8 @@ def equilibrium(
     return _mpmath_evaluator(analysis).equilibrium(inputs, params, extra_digits)
 
 
-#: The reduced-equilibrium solvers already derived, by (analysis, parameters, backend).
+#: The reduced-equilibrium solvers already derived, by analysis (and by its content,
+#: plan_cache.in_memory), then by (parameters, backend, segments).
 _REDUCED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
@@ -653,7 +654,12 @@ def reduced_equilibrium(
         raise InputError(f"unknown backend '{backend}'", hint="backends: numpy, sympy")
     mech = analysis.mechanism
     exact_params = parameter_values(mech, params)
-    solvers = _REDUCED.setdefault(analysis, {})
+    solvers = _REDUCED.get(analysis)
+    if solvers is None:
+        # an analysis of the same file (mechanism, points, hinge models) shares them
+        solvers = _REDUCED[analysis] = plan_cache.in_memory(
+            analysis, {"for": "reduced_equilibrium"}, dict, dict
+        )
 
     def solver(count: int) -> reduced.Reduced:
         values = tuple(sorted((str(k), str(v)) for k, v in exact_params.items()))

@@ -120,18 +120,22 @@ def _mul(a: list[Fraction], b: list[Fraction], n: int) -> list[Fraction]:
     return out
 
 
+@cache
+def _t_power(k: int, n: int) -> tuple[Fraction, ...]:
+    """n Taylor coefficients of T(p)^k (kept: every kernel's series takes the same powers)."""
+    if k == 0:
+        return (Fraction(1),) + (Fraction(0),) * (n - 1)
+    return tuple(_mul(list(_t_power(k - 1, n)), list(t_series(n)), n))
+
+
 def _poly_series(expr: sp.Expr, n: int) -> list[Fraction]:
     """n Taylor coefficients of a polynomial in (p, T) with T's series put in."""
     poly = sp.Poly(sp.expand(expr), P, TT)
-    t = list(t_series(n))
-    powers = {0: [Fraction(1)] + [Fraction(0)] * (n - 1)}
     out = [Fraction(0)] * n
     for (ip, it), c in poly.terms():
-        for k in range(max(powers) + 1, it + 1):
-            powers[k] = _mul(powers[k - 1], t, n)
         c = sp.Rational(c)
         c = Fraction(int(c.p), int(c.q))
-        for j, v in enumerate(powers[it][: n - ip]):
+        for j, v in enumerate(_t_power(it, n)[: n - ip]):
             out[j + ip] += c * v
     return out
 
@@ -153,6 +157,15 @@ def series_of(expr: sp.Expr, n: int) -> tuple[Fraction, ...]:
         v = a[k] - sum(out[j] * b[k - j] for j in range(max(0, k - len(b) + 1), k))
         out.append(v / b[0])
     return tuple(out)
+
+
+@cache
+def _mp_coefficients(cls: type[AxialKernel], prec: int) -> tuple[mpmath.mpf, ...]:
+    """The Taylor coefficients `_mp_value` sums at `prec` bits, highest power first, as mpf at
+    its working precision (kept per precision: converting them is most of an evaluation)."""
+    n = int(prec / 4.3) + 12 + 4 * cls.order
+    with mpmath.workprec(prec + 20):
+        return tuple(mpmath.mpf(c.numerator) / c.denominator for c in reversed(cls.coefficients(n)))
 
 
 def _mp_t(p):
@@ -235,11 +248,9 @@ class AxialKernel(sp.Function):
             raise DomainError(f"{cls.__name__}({p}): the axial load index must exceed -pi^2")
         if abs(p) <= 0.5:
             with mpmath.workprec(prec + 20):
-                n = int(prec / 4.3) + 12 + 4 * cls.order
-                cs = cls.coefficients(n)
                 total = mpmath.mpf(0)
-                for c in reversed(cs):
-                    total = total * p + mpmath.mpf(c.numerator) / c.denominator
+                for c in _mp_coefficients(cls, prec):
+                    total = total * p + c
                 return +total
         f = _mp_closed(cls.base, cls.order)
         guard = 64
