@@ -346,20 +346,34 @@ def _key(value: object) -> object:
     return value
 
 
+def _options(analysis: Analysis, options: Mapping[str, Any]) -> dict[str, Any]:
+    """`options` of :func:`~.plan.plan` in one form per plan: defaults filled in (plan(an) and
+    plan(an, sensitivity=True) are one plan), sequences as tuples, no fixed inputs as None
+    (derive passes {} and a list of notes where evaluate passes None and ()), so the content
+    digest finds the plan whichever caller derived it."""
+    bound = _PLAN_SIGNATURE.bind(analysis, **options)
+    bound.apply_defaults()
+    out = {k: v for k, v in bound.arguments.items() if k != "analysis"}
+    for k, v in out.items():
+        if isinstance(v, list):
+            out[k] = tuple(v)
+    if not out.get("fixed"):
+        out["fixed"] = None
+    return out
+
+
 def plan_for(analysis: Analysis, **options: Any) -> Plan:
     """:func:`~.plan.plan` of `analysis` with `options`, derived once per analysis and options
     (kept as long as the analysis is), and found by content where the same file was derived
     before (symkin.codegen.plan_cache)."""
-    bound = _PLAN_SIGNATURE.bind(analysis, **options)
-    bound.apply_defaults()  # plan(an) and plan(an, sensitivity=True) are one plan
-    key = tuple((k, _key(v)) for k, v in bound.arguments.items() if k != "analysis")
+    options_ = _options(analysis, options)
+    key = tuple((k, _key(v)) for k, v in options_.items())
     with _PLANS_LOCK:
         plans = _PLANS.setdefault(analysis, {})
         found = plans.get(key)
         if found is None:
-            options_ = {k: v for k, v in bound.arguments.items() if k != "analysis"}
             found = plans[key] = plan_cache.cached(
-                analysis, options_, lambda: plan(analysis, **options)
+                analysis, options_, lambda: plan(analysis, **options_)
             )
         return found
 
@@ -370,9 +384,8 @@ def plan_covering(analysis: Analysis, level: str | None = None, **options: Any) 
     with sensitivities besides, or with more levels than `level`; else the plan with
     sensitivities found by content (symkin.codegen.plan_cache); else plan_for's. For
     evaluating, not for writing files (derive writes what was asked)."""
-    bound = _PLAN_SIGNATURE.bind(analysis, **options)
-    bound.apply_defaults()
-    want = {k: _key(v) for k, v in bound.arguments.items() if k != "analysis"}
+    asked = _options(analysis, options)
+    want = {k: _key(v) for k, v in asked.items()}
 
     def covers(have: dict[str, object], p: Plan) -> bool:
         same = all(have[k] == v for k, v in want.items() if k not in ("sensitivity", "levels"))
@@ -387,7 +400,6 @@ def plan_covering(analysis: Analysis, level: str | None = None, **options: Any) 
     for key, found in derived:
         if covers(dict(key), found):
             return found
-    asked = {k: v for k, v in bound.arguments.items() if k != "analysis"}
     # kept by content: with sensitivities besides, or (for one level) every level
     wider = [{**asked, "sensitivity": True}]
     if level is not None:
