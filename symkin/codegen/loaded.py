@@ -227,11 +227,7 @@ def _reported(r: reduced.Reduced, names: Sequence[str]) -> Reported:
     plates = tuple(r.hinges[a].name for a in sorted(r.plate))
     L = max(r.L, r.lmin)
     F = max(
-        [
-            float(d["EI"].subs(r._values_subs)) / (float(d["l"].subs(r._values_subs)) * L)
-            for d in r.plate.values()
-        ]
-        or [1.0]
+        [float(r.value(d["EI"])) / (float(r.value(d["l"])) * L) for d in r.plate.values()] or [1.0]
     )
     return Reported(
         inputs=tuple(r.hinges[a].name for a in r.inputs),

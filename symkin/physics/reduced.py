@@ -120,8 +120,7 @@ class Reduced:
         self.modules = modules or (lambda: [mpmath_namespace(), "mpmath"])
         self._values_subs = dict(values)
 
-        def value(e) -> sp.Float:
-            return sp.Float(sp.N(substitute(e, values), 30), 30)
+        value = self.value
 
         def num(e) -> sp.Expr:
             return sp.sympify(e) if symbolic else value(e)
@@ -239,6 +238,10 @@ class Reduced:
         self._fns: dict = {}
         # the last Newton step's J (acceptance and truncation estimate, solve)
         self.last_jacobian = np.zeros((0, 0))
+
+    def value(self, e) -> sp.Float:
+        """`e` at the file's parameter values, a 30-digit Float."""
+        return sp.Float(sp.N(substitute(e, self._values_subs), 30), 30)
 
     # -- the equations -------------------------------------------------------------------------
     @cached_property
@@ -426,7 +429,7 @@ class Reduced:
             parts = []
             for i, w in lw.items():
                 if not self.symbolic:
-                    w = tuple(sp.Float(sp.N(substitute(v, self._values_subs), 30), 30) for v in w)
+                    w = tuple(self.value(v) for v in w)
                 parts.append(V.rot(s["phi"][i], V.rot_minus_identity(s["dphi"][i], w)))
             for b in range(1, self.m + 1):
                 if row[b - 1]:
@@ -474,7 +477,7 @@ class Reduced:
         h = self.hinges[a]
         if self.symbolic:
             return h.clamp(h.P)
-        return tuple(sp.Float(sp.N(substitute(v, self._values_subs), 30), 30) for v in h.clamp(h.P))
+        return tuple(self.value(v) for v in h.clamp(h.P))
 
     def _reported(self, s: dict) -> list[sp.Expr]:
         """Every input's actuator moment on link M (N·u: a tree hinge's moment balance, an input
