@@ -33,8 +33,15 @@ def once_per_run(tmp_path_factory, name: str, build: Callable[[Path], None]) -> 
 def pytest_configure(config):
     """One compiled-code and plan cache for the run (docs/cli.md), empty at its start and removed
     at its end: shared by the xdist workers and the CLI subprocesses (they inherit it), never the
-    user's own, so a run measures a fresh machine's cost."""
-    if os.environ.get("PYTEST_XDIST_WORKER") or os.environ.get("SYMKIN_CACHE"):
+    user's own, so a run measures a fresh machine's cost. The generated C is compiled with -O0
+    (SYMKIN_CFLAGS, docs/cli.md): 3-7 times faster to build, the same IEEE arithmetic;
+    tests/test_compile_flags.py builds every example with the users' -O2 too and compares."""
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        return
+    if "SYMKIN_CFLAGS" not in os.environ:
+        os.environ["SYMKIN_CFLAGS"] = "-O0"
+        config._symkin_cflags = True
+    if os.environ.get("SYMKIN_CACHE"):
         return
     folder = tempfile.mkdtemp(prefix="symkin-test-cache-")
     os.environ["SYMKIN_CACHE"] = folder
@@ -42,6 +49,8 @@ def pytest_configure(config):
 
 
 def pytest_unconfigure(config):
+    if getattr(config, "_symkin_cflags", False):
+        os.environ.pop("SYMKIN_CFLAGS", None)
     folder = getattr(config, "_symkin_cache", None)
     if folder:
         shutil.rmtree(folder, ignore_errors=True)

@@ -483,7 +483,7 @@ def load(
     texts = tuple(texts)
     if not transient:
         return b.load(mechanism, texts, shape, False)
-    key = f"{digest(name, mechanism, texts)}{shape!r}"
+    key = f"{digest(name, mechanism, texts)}{shape!r}{toolchain.cflags()!r}"
     found = _LOADED.get(key)
     if found is None:
         with _LOADED_LOCK:

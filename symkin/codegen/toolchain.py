@@ -9,6 +9,7 @@ import ctypes
 import hashlib
 import os
 import re
+import shlex
 import shutil
 import stat
 import subprocess
@@ -32,6 +33,13 @@ _DoublePointer: TypeAlias = "ctypes._Pointer[ctypes.c_double]"
 _IntPointer: TypeAlias = "ctypes._Pointer[ctypes.c_int]"
 
 CFLAGS = ("-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O2", "-fPIC", "-shared")
+
+
+def cflags() -> tuple[str, ...]:
+    """The flags the generated C is compiled with: :data:`CFLAGS`, then $SYMKIN_CFLAGS's (split
+    as a shell would; docs/cli.md): a later -O wins, so `-O0` compiles a large mechanism several
+    times faster for a quick check, `-O3 -march=native` tunes it to this machine."""
+    return CFLAGS + tuple(shlex.split(os.environ.get("SYMKIN_CFLAGS", "")))
 
 
 def compiler() -> str:
@@ -175,12 +183,13 @@ def replace_atomically(
 
 
 def build(
-    name: str, header: str, source: str, flags: tuple[str, ...] = CFLAGS, extra: str = ""
+    name: str, header: str, source: str, flags: tuple[str, ...] | None = None, extra: str = ""
 ) -> Path:
     """Shared library of the generated pair (and an `extra` C file, e.g. a timer), cached by the
     hash of its texts and flags; a cached library is loaded only when verified (see verified)
-    and rebuilt otherwise."""
+    and rebuilt otherwise. `flags` default to :func:`cflags`."""
     cc = compiler()
+    flags = cflags() if flags is None else flags
     full = hashlib.sha256("\0".join((cc, *flags, header, source, extra)).encode()).hexdigest()
     folder = safe_cache_dir()
     target = folder / f"{name}-{full[:20]}.so"
@@ -201,11 +210,12 @@ def build(
 
 
 def load_transient(
-    name: str, header: str, source: str, flags: tuple[str, ...] = CFLAGS
+    name: str, header: str, source: str, flags: tuple[str, ...] | None = None
 ) -> ctypes.CDLL:
     """The generated pair compiled in a temporary folder and loaded; the folder is removed
     before returning (the loaded library stays mapped), so no file is left behind."""
     with tempfile.TemporaryDirectory(prefix="symkin-") as tmp:
+        flags = cflags() if flags is None else flags
         return ctypes.CDLL(str(_compile(compiler(), flags, name, header, source, "", Path(tmp))))
 
 
@@ -224,6 +234,14 @@ def _compile(
         [cc, *flags, *files, "-o", str(built), "-lm"], cwd=folder, capture_output=True, text=True
     )
     if proc.returncode != 0:
+        given = os.environ.get("SYMKIN_CFLAGS")
+        if given:
+            raise InputError(
+                f"the generated C did not compile with SYMKIN_CFLAGS='{given}':\n"
+                + proc.stderr.strip(),
+                entry="SYMKIN_CFLAGS",
+                hint="unset SYMKIN_CFLAGS or give flags the compiler takes",
+            )
         raise RuntimeError(f"the generated C did not compile:\n{proc.stderr}")
     return built
 
@@ -427,7 +445,7 @@ def time_per_evaluation(
     """Seconds per call of the generated evaluator over `n` input rows, timed inside C."""
     mech_name = _evaluate_prefix(header)
     extra = TIMER.replace("UPPER", mech_name.upper()).replace("NAME", mech_name)
-    lib = ctypes.CDLL(str(build(mech_name, header, source, CFLAGS, extra)))
+    lib = ctypes.CDLL(str(build(mech_name, header, source, extra=extra)))
     fn = lib.symkin_time
     fn.restype = ctypes.c_double
     fn.argtypes = [
