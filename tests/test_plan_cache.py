@@ -13,6 +13,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import mechanisms as M
 import pytest
 import sympy as sp
 from conftest import ROOT
@@ -268,3 +269,35 @@ def test_parameter_values_are_put_in_as_subs_puts_them():
     expr = sp.sqrt(syms[3] ** 2 + syms[250]) / syms[399] + sp.sin(syms[7])
     assert substitute(expr, values) == expr.subs(values)
     assert substitute("2", values) == 2
+
+
+def test_notes_and_the_report_dress_one_derivation(monkeypatch):
+    """A plan with notes (tolerance's chosen variant) or a report's statement is the plan
+    without them, dressed: derived once, and what plan() derives with them, text for text."""
+    monkeypatch.setenv("SYMKIN_PLAN_CACHE", "off")
+    calls = []
+    derive = pipeline.plan
+
+    def counted(an, **options):
+        calls.append(options)
+        return derive(an, **options)
+
+    monkeypatch.setattr(pipeline, "plan", counted)
+    an = symkin.analyze(symkin.loads(M.FIVE_BAR))
+    opts = {"levels": ("exact",), "fixed": {"O1": sp.Rational(1, 10)}}
+    noted = pipeline.plan_for(an, notes=("Chosen: exact.",), **opts)
+    reported = pipeline.plan_for(an, report=True, **opts)
+    both = pipeline.plan_for(an, report=True, notes=("Chosen: exact.",), **opts)
+    assert len(calls) == 1 and not calls[0]["notes"] and not calls[0]["report"]
+    for got, options in (
+        (noted, {"notes": ("Chosen: exact.",)}),
+        (reported, {"report": True}),
+        (both, {"report": True, "notes": ("Chosen: exact.",)}),
+    ):
+        want = derive(an, **opts, **options)
+        # the fixed input's note after the asked ones, as plan() writes them
+        assert got.notes == want.notes and len(want.notes) == len(options.get("notes", ())) + 1
+        assert repr(got.derivation) == repr(want.derivation)
+        assert (got.derivation is None) == ("report" not in options)
+        for backend in ("numpy", "c"):
+            assert pipeline.emit(got, backend, "x") == pipeline.emit(want, backend, "x")

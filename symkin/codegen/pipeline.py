@@ -18,6 +18,7 @@ A new backend is a folder under ``backends/`` (printer, kernels, templates, ``em
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import inspect
 import threading
@@ -33,7 +34,7 @@ from ..core import levels
 from ..core.errors import InputError
 from ..kinematics.analysis import Analysis
 from . import plan_cache, toolchain
-from .plan import Plan, ScenePlan, plan
+from .plan import Plan, ScenePlan, plan, with_derivation
 
 
 @dataclass(frozen=True)
@@ -372,10 +373,23 @@ def plan_for(analysis: Analysis, **options: Any) -> Plan:
         plans = _PLANS.setdefault(analysis, {})
         found = plans.get(key)
         if found is None:
-            found = plans[key] = plan_cache.cached(
-                analysis, options_, lambda: plan(analysis, **options_)
-            )
+            if options_["notes"] or options_["report"]:
+                # the headers' notes and the report's statement leave the routines as they are:
+                # the plan without them is derived (or found) once and dressed
+                bare = plan_for(analysis, **{**options_, "notes": (), "report": False})
+                make = lambda: _dressed(bare, analysis, options_)  # noqa: E731
+            else:
+                make = lambda: plan(analysis, **options_)  # noqa: E731
+            found = plans[key] = plan_cache.cached(analysis, options_, make)
         return found
+
+
+def _dressed(bare: Plan, analysis: Analysis, options: Mapping[str, Any]) -> Plan:
+    """What plan(analysis, **options) gives, from `bare`, its plan without notes or report."""
+    dressed = with_derivation(bare, analysis) if options["report"] else bare
+    if options["notes"]:
+        dressed = dataclasses.replace(dressed, notes=tuple(options["notes"]) + bare.notes)
+    return dressed
 
 
 def plan_covering(analysis: Analysis, level: str | None = None, **options: Any) -> Plan:
