@@ -301,3 +301,23 @@ def test_notes_and_the_report_dress_one_derivation(monkeypatch):
         assert (got.derivation is None) == ("report" not in options)
         for backend in ("numpy", "c"):
             assert pipeline.emit(got, backend, "x") == pipeline.emit(want, backend, "x")
+
+
+def test_the_plate_relation_is_lambdified_once_per_process_and_module():
+    """The plate relation and energy hold no mechanism's data: every Reduced shares them."""
+    from symkin.physics import reduced
+    from symkin.physics.plate_relation import relation
+    from symkin.studies.evaluation import parameter_values
+
+    solvers = []
+    for path in (PARALLELOGRAM, ROOT / "examples" / "four_bar.toml"):
+        mech = symkin.load(path)
+        solvers.append(reduced.Reduced(symkin.analyze(mech).kin, parameter_values(mech)))
+    for key in ("plate4", "plate2", "energy"):
+        assert solvers[0]._fn(key) is solvers[1]._fn(key)
+    th, p, f, ea, es = sp.symbols("theta p f e_a e_s", real=True)
+    point = {th: sp.Rational(3, 10), p: sp.Rational(1, 5), f: sp.Rational(-1, 7), ea: 0, es: 0}
+    rel = relation(th, p, f, ea, es, 4)
+    got = solvers[1]._fn("plate4")(*point.values())
+    for g, want in zip(got[:3], (rel.along, rel.across, rel.omega)):
+        assert abs(float(g) - float(want.subs(point).evalf(30))) <= 1e-15 * (1 + abs(float(g)))

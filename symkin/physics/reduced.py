@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import copy
 import math
+import threading
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -89,6 +90,12 @@ class Answer:
     solver: Reduced | None = field(default=None, repr=False, compare=False)
     # by actuator name: the stroke the rigid reference is at (file unit; set by the caller)
     strokes: dict[str, float] = field(default_factory=dict)
+
+
+#: The plate functions of symkin.physics.plate_relation, lambdified, by (key, lambdify's module
+#: names): Reduced._plate_fn.
+_PLATE_FNS: dict[tuple[str, tuple[str, ...]], Callable] = {}
+_PLATE_LOCK = threading.Lock()
 
 
 class Reduced:
@@ -625,21 +632,36 @@ class Reduced:
                     s["phi"][h.P] + s["dphi"][h.P],
                 ]
             fn = self._lambdify(exprs, outs)
-        elif key == "energy":
-            th, p, f, ea, es = sp.symbols("theta p f e_a e_s", real=True)
-            modules = self.modules() if callable(self.modules) else self.modules
-            fn = sp.lambdify([th, p, f, ea, es], energy(th, p, f, ea, es), modules=modules)
-        elif key in ("plate4", "plate2"):
-            th, p, f, ea, es = sp.symbols("theta p f e_a e_s", real=True)
-            rel = relation(th, p, f, ea, es, int(key[-1]))
-            vals = [rel.along, rel.across, rel.omega]
-            parts = [sp.diff(v, w) for v in vals for w in (th, p, f)]
-            modules = self.modules() if callable(self.modules) else self.modules
-            fn = sp.lambdify([th, p, f, ea, es], vals + parts, modules=modules, cse=True)
+        elif key in ("energy", "plate4", "plate2"):
+            fn = self._plate_fn(key)
         else:  # pragma: no cover
             raise KeyError(key)
         self._fns[key] = fn
         return fn
+
+    def _plate_fn(self, key: str):
+        """One plate's "energy" or relation ("plate4", "plate2"), lambdified: no mechanism's
+        data is in them, so each is derived once per process and lambdify's modules (symkin's
+        namespaces are named by the module they complete: "mpmath", "math")."""
+        modules = self.modules() if callable(self.modules) else self.modules
+        tag = (key, tuple(m for m in modules if isinstance(m, str)))
+        with _PLATE_LOCK:
+            fn = _PLATE_FNS.get(tag)
+            if fn is not None:
+                return fn
+            th, p, f, ea, es = sp.symbols("theta p f e_a e_s", real=True)
+            if key == "energy":
+                exprs = energy(th, p, f, ea, es)
+            else:
+                rel = relation(th, p, f, ea, es, int(key[-1]))
+                vals = [rel.along, rel.across, rel.omega]
+                exprs = vals + [sp.diff(v, w) for v in vals for w in (th, p, f)]
+            # taken after the derivation, as _lambdify's: the kernels it created are in them
+            modules = self.modules() if callable(self.modules) else self.modules
+            fn = _PLATE_FNS[tag] = sp.lambdify(
+                [th, p, f, ea, es], exprs, modules=modules, cse=key != "energy"
+            )
+            return fn
 
     def _eval(self, x, theta: Mapping[int, float], t: float, order: int = 4, jac: bool = False):
         """Plate inputs, outputs and (with `jac`) the chain rule's pieces at (x, θ, t)."""
