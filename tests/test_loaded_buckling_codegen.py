@@ -19,6 +19,7 @@ import types
 
 import numpy as np
 import pytest
+from conftest import EXAMPLES
 from test_loaded_actuators import E_PRIME, PAYLOAD, PLATE, THICK, WIDTH, driven
 from test_loaded_reported import ZOO
 from test_loaded_reported_codegen import relative
@@ -140,3 +141,23 @@ def test_without_loads_there_is_no_buckling():
     got = module.evaluate({"piezo": np.array([1.5e-3])}, "loaded")
     assert got["ok"].all() and "plates" in got and "buckling" not in got
     assert symkin.evaluate(an, {"piezo": 1.5e-3}, "loaded").buckling is None
+
+
+def test_compile_leaves_the_report_or_the_buckling_out_when_told(runs):
+    """symkin.compile(...).evaluate takes report=False and buckling=False to the numpy module."""
+    an, _, got = runs("stage_force")
+    ev = symkin.compile(an, backend="numpy", sensitivity=False)
+    forces = {"piezo": np.array(CASES["stage_force"][1]["piezo"])}
+    full = ev.evaluate(forces, "loaded")
+    assert np.array_equal(full["buckling"], got["buckling"], equal_nan=True)
+    bare = ev.evaluate(forces, "loaded", buckling=False)
+    assert "buckling" not in bare and "plates" in bare
+    alone = ev.evaluate(forces, "loaded", report=False)
+    assert "plates" not in alone and "buckling" not in alone
+    assert np.array_equal(alone["points"]["P"]["deviation"], got["points"]["P"]["deviation"])
+    # a module without the loaded level's report takes the flags and has nothing to leave out
+    kin = symkin.compile(EXAMPLES / "four_bar.toml", "numpy", levels=["exact"], sensitivity=False)
+    a0 = {"A0": np.array([0.1, 0.2])}
+    plain, told = kin.evaluate(a0), kin.evaluate(a0, report=False, buckling=False)
+    assert set(told) == set(plain)
+    assert np.array_equal(told["points"]["C"]["deviation"], plain["points"]["C"]["deviation"])

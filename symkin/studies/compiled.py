@@ -17,6 +17,7 @@ generated module's `evaluate` and `<name>_evaluate_pose` have them).
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -169,10 +170,22 @@ class Compiled:
         inputs: Mapping[str, object],
         level: str | None = None,
         params: Mapping[str, float] | None = None,
+        *,
+        report: bool = True,
+        buckling: bool = True,
     ) -> dict[str, Any]:
-        """As the generated module's `evaluate` (docs/generated-code.md), in one C call."""
+        """As the generated module's `evaluate` (docs/generated-code.md), in one C call. The
+        numpy backend adds at `loaded` what the level reports: `report=False` leaves it out,
+        `buckling=False` the buckling factor alone (its search: tens of Newton solves per
+        configuration); the C backend's result holds the deviations and angles alone."""
         if self.backend == "numpy":
-            result: dict[str, Any] = self.module.evaluate(inputs, self.code(level), params)
+            takes = inspect.signature(self.module.evaluate).parameters
+            # a module without the loaded level's report has nothing to leave out
+            asked = (("report", report), ("buckling", buckling))
+            options = {k: False for k, on in asked if not on and k in takes}
+            result: dict[str, Any] = self.module.evaluate(
+                inputs, self.code(level), params, **options
+            )
             return result
         x, shape = self._rows(inputs)
         status, out, angles = self._row.rows(
