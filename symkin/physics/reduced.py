@@ -563,12 +563,17 @@ class Reduced:
         actuators' forces by name (N; `theta` holds both)."""
         return [theta[a] for a in sorted(self.hinges)] + [theta[n] for n in self.forces]
 
+    def _modules(self) -> list:
+        """lambdify's modules, taken now: a callable's namespace holds the kernels derived so
+        far."""
+        return self.modules() if callable(self.modules) else self.modules
+
     def _lambdify(self, exprs: list, extra: list | None = None):
         args = [list(self.x), [self.th[a] for a in sorted(self.hinges)] + self.fa, self.t]
         if extra is not None:
             args.append(extra)
         # a callable gives the modules after the derivation: kernels it created are in them
-        modules = self.modules() if callable(self.modules) else self.modules
+        modules = self._modules()
         return sp.lambdify(args, exprs, modules=modules, cse=True)
 
     def _fn(self, key: str):
@@ -643,7 +648,7 @@ class Reduced:
         """One plate's "energy" or relation ("plate4", "plate2"), lambdified: no mechanism's
         data is in them, so each is derived once per process and lambdify's modules (symkin's
         namespaces are named by the module they complete: "mpmath", "math")."""
-        modules = self.modules() if callable(self.modules) else self.modules
+        modules = self._modules()
         tag = (key, tuple(m for m in modules if isinstance(m, str)))
         with _PLATE_LOCK:
             fn = _PLATE_FNS.get(tag)
@@ -657,7 +662,7 @@ class Reduced:
                 vals = [rel.along, rel.across, rel.omega]
                 exprs = vals + [sp.diff(v, w) for v in vals for w in (th, p, f)]
             # taken after the derivation, as _lambdify's: the kernels it created are in them
-            modules = self.modules() if callable(self.modules) else self.modules
+            modules = self._modules()
             fn = _PLATE_FNS[tag] = sp.lambdify(
                 [th, p, f, ea, es], exprs, modules=modules, cse=key != "energy"
             )
