@@ -48,6 +48,7 @@ import sympy as sp
 
 from ..core import vectors as V
 from ..kinematics.analysis import Analysis
+from ..model.derivatives import jacobian
 from ..physics import reduced
 from ..physics.plate_relation import relation
 from ..physics.stiffness import modulus, plate_stiffness
@@ -158,7 +159,7 @@ def loaded_routines(
             ]
         )
         moving = sp.Matrix([v for a, j, *_ in r.segs for v in s["pf"][a, j]])
-        dins = reduced._jacobian(moving, r.x)
+        dins = jacobian(moving, r.x)
         n, ns = r.size, len(r.segs)
         routines[f"loaded_plates{g}"] = Routine(
             f"loaded_plates{g}",
@@ -170,8 +171,8 @@ def loaded_routines(
             layout(("in", ns, 5), ("din_dx", 3 * ns, n)),
         )
         rows = sp.Matrix(r._rows(s))
-        jx = reduced._jacobian(rows, r.x)
-        jo = reduced._jacobian(rows, outs)
+        jx = jacobian(rows, r.x)
+        jo = jacobian(rows, outs)
         routines[f"loaded_system{g}"] = Routine(
             f"loaded_system{g}",
             (x, theta, plates, params),
@@ -277,12 +278,12 @@ def _report_routine(r: reduced.Reduced, names, x, theta, plates, params, sub) ->
     outs = list(plates.symbols)
     zero = dict.fromkeys(r.extra, sp.S.Zero)
     blocks = [
-        ("dR_dv", reduced._jacobian(rows, by)),
-        ("din_dv", reduced._jacobian(moving, by)),
+        ("dR_dv", jacobian(rows, by)),
+        ("din_dv", jacobian(moving, by)),
         ("y", ys),
-        ("dy_dx", reduced._jacobian(ys, r.x)),
-        ("dy_dv", reduced._jacobian(ys, by)),
-        ("dy_dout", reduced._jacobian(ys, outs)),
+        ("dy_dx", jacobian(ys, r.x)),
+        ("dy_dv", jacobian(ys, by)),
+        ("dy_dout", jacobian(ys, outs)),
     ]
     exprs = [sub(sp.sympify(e).xreplace(zero)) for _, m in blocks for e in flatten(m.tolist())]
     # every plate's end loads at its P clamp, scaled, and its stress formula's numbers

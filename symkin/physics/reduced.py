@@ -46,6 +46,7 @@ import sympy as sp
 
 from ..core import vectors as V
 from ..kinematics.positions import Kinematics
+from ..model.derivatives import jacobian
 from ..model.expressions import substitute
 from ..model.special import arck, mpmath_namespace, sinr
 from .plate_relation import energy, relation
@@ -589,13 +590,13 @@ class Reduced:
         outs = [v for a, j, *_ in self.segs for v in s["out"][a, j]]
         if key == "plates":
             ins = sp.Matrix([v for a, j, *_ in self.segs for v in s["pf"][a, j]])
-            fn = self._lambdify([list(ins), list(_jacobian(ins, self.x))])
+            fn = self._lambdify([list(ins), list(jacobian(ins, self.x))])
         elif key in ("res", "jac"):
             rows = sp.Matrix(self._rows(s))
             if key == "res":
                 fn = self._lambdify(list(rows), outs)
             else:
-                parts = [list(_jacobian(rows, self.x)), list(_jacobian(rows, outs))]
+                parts = [list(jacobian(rows, self.x)), list(jacobian(rows, outs))]
                 fn = self._lambdify(parts, outs)
         elif key == "dev":
             exprs = [
@@ -619,12 +620,12 @@ class Reduced:
             ins = sp.Matrix([v for a, j, *_ in self.segs for v in se["pf"][a, j]])
             ys = sp.Matrix(self._reported(se))
             parts = [
-                list(_jacobian(rows, self.extra)),
-                list(_jacobian(ins, self.extra)),
+                list(jacobian(rows, self.extra)),
+                list(jacobian(ins, self.extra)),
                 list(ys),
-                list(_jacobian(ys, self.x)),
-                list(_jacobian(ys, self.extra)),
-                list(_jacobian(ys, outs)),
+                list(jacobian(ys, self.x)),
+                list(jacobian(ys, self.extra)),
+                list(jacobian(ys, outs)),
             ]
             fn = self._lambdify(parts, outs + self.extra)
         elif key == "clamps":
@@ -898,20 +899,3 @@ def implicit_rates(jac, jo, block, dins_x, dr_by, dins_by, dy_x, dy_o, dy_by) ->
     else:
         dx = np.zeros((0, dy_by.shape[1]))
     return (dy_x + dy_o @ block @ dins_x) @ dx + dy_by + dy_o @ block @ dins_by
-
-
-def _jacobian(rows: sp.Matrix, by) -> sp.Matrix:
-    """rows' Jacobian by the symbols `by` (Matrix.jacobian's entries), each row differentiated
-    only by the symbols it holds: by hundreds of parameters, of which a row reads a few, most
-    entries are zero without a walk of the row per symbol."""
-    by = list(by)
-    out = sp.zeros(len(rows), len(by))
-    if not by or not len(rows):
-        return out
-    column = {s: k for k, s in enumerate(by)}
-    for i, row in enumerate(rows):
-        for s in row.free_symbols:
-            k = column.get(s)
-            if k is not None:
-                out[i, k] = row.diff(s)
-    return out

@@ -27,8 +27,9 @@ import numpy as np
 import sympy as sp
 
 from ..kinematics.analysis import Analysis
+from ..model.derivatives import jacobian
 from .plate_relation import relation
-from .reduced import Reduced, _jacobian, implicit_rates
+from .reduced import Reduced, implicit_rates
 
 
 @dataclass(frozen=True)
@@ -83,14 +84,14 @@ def partials(r: Reduced, params: Sequence[sp.Symbol], points: Sequence[str]) -> 
     dev = sp.Matrix([c for name in points for c in r._deviation(s, *r.located(name))])
     outs = [v for a, j, *_ in r.segs for v in s["out"][a, j]]
     return LoadedPartials(
-        _jacobian(rows, thetas),
-        _jacobian(rows, params),
-        _jacobian(ins, thetas),
-        _jacobian(ins, params),
-        _jacobian(dev, r.x),
-        _jacobian(dev, thetas),
-        _jacobian(dev, params),
-        _jacobian(dev, outs),
+        jacobian(rows, thetas),
+        jacobian(rows, params),
+        jacobian(ins, thetas),
+        jacobian(ins, params),
+        jacobian(dev, r.x),
+        jacobian(dev, thetas),
+        jacobian(dev, params),
+        jacobian(dev, outs),
     )
 
 
@@ -166,9 +167,9 @@ class LoadedSensitivity:
         exprs = [
             [sp.sympify(e).xreplace(rename) for e in m]
             for m in (
-                _jacobian(moving, r.x),
-                _jacobian(rows, r.x),
-                _jacobian(rows, outs),
+                jacobian(moving, r.x),
+                jacobian(rows, r.x),
+                jacobian(rows, outs),
                 *(m for _, m in part.blocks()),
             )
         ]
