@@ -48,6 +48,7 @@ from ..core import vectors as V
 from ..kinematics.positions import Kinematics
 from ..model.derivatives import jacobian
 from ..model.expressions import substitute
+from ..model.lambdified import lambdify
 from ..model.special import arck, mpmath_namespace, sinr
 from .plate_relation import energy, relation
 from .stiffness import plate_stiffness
@@ -575,7 +576,7 @@ class Reduced:
             args.append(extra)
         # a callable gives the modules after the derivation: kernels it created are in them
         modules = self._modules()
-        return sp.lambdify(args, exprs, modules=modules, cse=True)
+        return lambdify(args, exprs, modules)
 
     def _fn(self, key: str):
         """The lambdified function `key`: "plates" (x, th, t) -> (θ_c, p, f) of every plate and

@@ -28,6 +28,7 @@ import sympy as sp
 
 from ..kinematics.analysis import Analysis
 from ..model.derivatives import jacobian
+from ..model.lambdified import lambdify
 from .plate_relation import relation
 from .reduced import Reduced, implicit_rates
 
@@ -173,10 +174,8 @@ class LoadedSensitivity:
                 *(m for _, m in part.blocks()),
             )
         ]
-        fn = sp.lambdify(args, exprs, modules=modules, cse=True)
-        ins_fn = sp.lambdify(
-            args[:3] + args[4:], [e.xreplace(rename) for e in ins], modules=modules, cse=True
-        )
+        fn = lambdify(args, exprs, modules)
+        ins_fn = lambdify(args[:3] + args[4:], [e.xreplace(rename) for e in ins], modules)
         symbols, eps = eps_relation()
         eps_fn = sp.lambdify(symbols, eps, modules=modules)
         found = self._variants[count] = (r, ins_fn, fn, eps_fn)

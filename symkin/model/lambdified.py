@@ -1,0 +1,35 @@
+"""sympy.lambdify for large expressions: CSE and printing take the terms in the order sympy
+stores them (deterministic, sympy's canonical argument order) instead of sorting every sum
+again, which is most of lambdify's time on a mechanism's equilibrium."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import sympy as sp
+from sympy.printing.pycode import MpmathPrinter, PythonCodePrinter
+
+
+def _cse(exprs):
+    return sp.cse(exprs, list=False, order="none")
+
+
+def lambdify(args: Sequence, exprs, modules: list, cse: bool = True) -> Callable:
+    """sympy.lambdify(args, exprs, modules, cse) with its own printer for `modules` (a list of
+    namespace dicts and the module names "mpmath" or "math") set to print terms unsorted."""
+    names = [m for m in modules if isinstance(m, str)]
+    printer_class = MpmathPrinter if "mpmath" in names else PythonCodePrinter
+    if not set(names) <= {"mpmath", "math"}:  # another module: lambdify's own printer
+        return sp.lambdify(args, exprs, modules=modules, cse=_cse if cse else False)
+    # lambdify's settings for its printer (sympy.utilities.lambdify), plus the order
+    user_functions = {k: k for m in modules[::-1] if isinstance(m, dict) for k in m}
+    printer = printer_class(
+        {
+            "fully_qualified_modules": False,
+            "inline": True,
+            "allow_unknown_functions": True,
+            "user_functions": user_functions,
+            "order": "none",
+        }
+    )
+    return sp.lambdify(args, exprs, modules=modules, cse=_cse if cse else False, printer=printer)
