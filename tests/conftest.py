@@ -35,9 +35,15 @@ def pytest_configure(config):
     at its end: shared by the xdist workers and the CLI subprocesses (they inherit it), never the
     user's own, so a run measures a fresh machine's cost. The generated C is compiled with -O0
     (SYMKIN_CFLAGS, docs/cli.md): 3-7 times faster to build, the same IEEE arithmetic;
-    tests/test_compile_flags.py builds every example with the users' -O2 too and compares."""
+    tests/test_compile_flags.py builds every example with the users' -O2 too and compares.
+    sympy's cache keeps 100000 results per function instead of 1000 (SYMPY_CACHE_SIZE, read when
+    sympy is imported: the workers and subprocesses inherit it): the run's derivations revisit
+    the same expressions, ~10 % of the suite's time."""
     if os.environ.get("PYTEST_XDIST_WORKER"):
         return
+    if "SYMPY_CACHE_SIZE" not in os.environ:
+        os.environ["SYMPY_CACHE_SIZE"] = "100000"
+        config._symkin_sympy_cache = True
     if "SYMKIN_CFLAGS" not in os.environ:
         os.environ["SYMKIN_CFLAGS"] = "-O0"
         config._symkin_cflags = True
@@ -51,6 +57,8 @@ def pytest_configure(config):
 def pytest_unconfigure(config):
     if getattr(config, "_symkin_cflags", False):
         os.environ.pop("SYMKIN_CFLAGS", None)
+    if getattr(config, "_symkin_sympy_cache", False):
+        os.environ.pop("SYMPY_CACHE_SIZE", None)
     folder = getattr(config, "_symkin_cache", None)
     if folder:
         shutil.rmtree(folder, ignore_errors=True)
