@@ -41,7 +41,9 @@ def test_every_rule_and_the_fallback_match_diff() -> None:
         arck(x * z) * sinr(3)(y) + cosr(2)(x - y),
         sp.Abs(x - y) + sp.Piecewise((x**2, x > 0), (y, True)),  # other nodes: sympy's diff
         g(x * y) + sp.atan2(y, x) * shared,
-        sp.Integer(7),
+        # a Derivative already in the row (not canonical: y before x): diff canonicalises it
+        x * sp.Derivative(g(x, y), y, x) + sp.sin(x) * sp.Derivative(g(x, y), y, x) ** 2,
+        x * y * sp.exp(z) * sp.Float("1.5", 17),  # a product of several factors, in its order
         x * y * z * shared / (1 + x**2),
     ]
     by = [x, y, z, p]

@@ -15,6 +15,7 @@ from collections.abc import Iterable
 
 import sympy as sp
 from sympy.core.function import ArgumentIndexError
+from sympy.ntheory.multinomial import multinomial_coefficients_iterator
 
 _FUNCTION_RULE = sp.Function._eval_derivative
 
@@ -58,6 +59,8 @@ class _Rules:
             return found
         if s not in self.symbols(e):
             found = sp.S.Zero
+        elif self.unevaluated(e):  # diff canonicalises every Derivative in its result: let it
+            found = e.diff(s)
         elif e.is_Symbol:
             found = sp.S.One  # e is s: it holds s
         elif isinstance(e, sp.Add):  # Add._eval_derivative
@@ -65,9 +68,11 @@ class _Rules:
         elif isinstance(e, sp.Mul):  # Mul._eval_derivative_n_times, n = 1 (Leibniz)
             args = list(e.args)
             terms = []
-            for i in range(len(args)):
+            # its terms in its order (the multinomial coefficients of n = 1: c = 1, one k = 1)
+            for ks, c in multinomial_coefficients_iterator(len(args), 1):
+                i = ks.index(1)
                 d = self.diff(args[i], s)
-                terms.append(1 * sp.Mul(*(args[:i] + [d] + args[i + 1 :])))
+                terms.append(c * sp.Mul(*(args[:i] + [d] + args[i + 1 :])))
             found = sp.Add(*terms)
         elif isinstance(e, sp.Pow):  # Pow._eval_derivative
             dbase, dexp = self.diff(e.base, s), self.diff(e.exp, s)
@@ -84,7 +89,7 @@ class _Rules:
                     df = sp.Function.fdiff(e, i)
                 parts.append(df * da)
             found = sp.Add(*parts)
-            if self.unevaluated(found):  # diff would canonicalise these: let it
+            if self.unevaluated(found):  # fdiff gave a Derivative or Subs: diff canonicalises it
                 found = e.diff(s)
         else:
             found = e.diff(s)

@@ -18,9 +18,10 @@ def lambdify(args: Sequence, exprs, modules: list, cse: bool = True) -> Callable
     """sympy.lambdify(args, exprs, modules, cse) with its own printer for `modules` (a list of
     namespace dicts and the module names "mpmath" or "math") set to print terms unsorted."""
     names = [m for m in modules if isinstance(m, str)]
-    printer_class = MpmathPrinter if "mpmath" in names else PythonCodePrinter
-    if not set(names) <= {"mpmath", "math"}:  # another module: lambdify's own printer
+    known = all(isinstance(m, str | dict) for m in modules) and set(names) <= {"mpmath", "math"}
+    if not known:  # another module, or a module object: lambdify's own printer
         return sp.lambdify(args, exprs, modules=modules, cse=_cse if cse else False)
+    printer_class = MpmathPrinter if "mpmath" in names else PythonCodePrinter
     # lambdify's settings for its printer (sympy.utilities.lambdify), plus the order
     user_functions = {k: k for m in modules[::-1] if isinstance(m, dict) for k in m}
     printer = printer_class(
