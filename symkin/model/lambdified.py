@@ -4,10 +4,23 @@ again, which is most of lambdify's time on a mechanism's equilibrium."""
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 import sympy as sp
 from sympy.printing.pycode import MpmathPrinter, PythonCodePrinter
+
+
+def printer_settings(user_functions: Mapping[str, str]) -> dict:
+    """The settings lambdify gives its printer (sympy.utilities.lambdify), with the terms of
+    every sum printed as sympy stores them: sorting them again is most of the printing's cost
+    on large mechanisms."""
+    return {
+        "fully_qualified_modules": False,
+        "inline": True,
+        "allow_unknown_functions": True,
+        "user_functions": dict(user_functions),
+        "order": "none",
+    }
 
 
 def _cse(exprs):
@@ -22,15 +35,8 @@ def lambdify(args: Sequence, exprs, modules: list, cse: bool = True) -> Callable
     if not known:  # another module, or a module object: lambdify's own printer
         return sp.lambdify(args, exprs, modules=modules, cse=_cse if cse else False)
     printer_class = MpmathPrinter if "mpmath" in names else PythonCodePrinter
-    # lambdify's settings for its printer (sympy.utilities.lambdify), plus the order
-    user_functions = {k: k for m in modules[::-1] if isinstance(m, dict) for k in m}
+    # lambdify's user functions: every name of the namespace dicts
     printer = printer_class(
-        {
-            "fully_qualified_modules": False,
-            "inline": True,
-            "allow_unknown_functions": True,
-            "user_functions": user_functions,
-            "order": "none",
-        }
+        printer_settings({k: k for m in modules[::-1] if isinstance(m, dict) for k in m})
     )
     return sp.lambdify(args, exprs, modules=modules, cse=_cse if cse else False, printer=printer)

@@ -164,7 +164,7 @@ class LoadedSensitivity:
         rename = {q: sp.Symbol(f"p_{k}", real=True) for k, q in enumerate(self.params)}
         thetas = [r.th[a] for a in sorted(r.hinges)] + r.fa
         args = [list(r.x), thetas, r.t, outs, list(rename.values())]
-        modules = self.modules() if callable(self.modules) else self.modules
+        modules = r._modules()  # taken after the derivation, as Reduced's
         exprs = [
             [sp.sympify(e).xreplace(rename) for e in m]
             for m in (

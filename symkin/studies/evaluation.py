@@ -31,6 +31,7 @@ from ..core.errors import AssemblyError, InputError, suggest
 from ..core.settings import SOLVER
 from ..kinematics.analysis import Analysis
 from ..model import expressions, special
+from ..model.lambdified import printer_settings
 from ..model.mechanism import Mechanism, check_values
 from ..physics import equilibrium as physical_equilibrium
 from ..physics import model_error as physical_model_error
@@ -972,17 +973,7 @@ def mpmath_function(args: Sequence[sp.Symbol], exprs) -> Callable:
     so its rounding is what the stopping rule of symkin.core.settings (3b) was measured on."""
     names = {s: f"_a{k}" for k, s in enumerate(args)}
     namespace = {**vars(mpmath), **special.mpmath_namespace()}
-    printer = _ArgumentPrinter(
-        names,
-        {
-            "fully_qualified_modules": False,
-            "inline": True,
-            "allow_unknown_functions": True,
-            # sorting the terms of every sum for printing is most of the cost on large mechanisms
-            "order": "none",
-            "user_functions": {k: k for k in special.mpmath_namespace()},
-        },
-    )
+    printer = _ArgumentPrinter(names, printer_settings({k: k for k in special.mpmath_namespace()}))
 
     def flat(e) -> list:
         return [v for x in e for v in flat(x)] if isinstance(e, list | tuple) else [e]
