@@ -14,11 +14,11 @@ from __future__ import annotations
 
 import json
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_runs import symkin_cli
 from evaluators import KINEMATIC
 
 import symkin
@@ -163,9 +163,7 @@ def test_compiled_rows_take_the_strokes(mixed):
 
 
 def run(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "symkin", *args], capture_output=True, text=True, cwd=ROOT
-    )
+    return symkin_cli(*args, cwd=ROOT)
 
 
 def test_tolerance_and_sweep_take_actuators():

@@ -23,6 +23,7 @@ from pathlib import Path
 import mechanisms as M
 import mpmath
 import pytest
+from cli_runs import symkin_cli
 from evaluators import KINEMATIC
 
 import symkin
@@ -244,15 +245,10 @@ def test_tradeoff_takes_the_strokes(four_bar):
 def test_cli_check_and_eval(tmp_path):
     path = tmp_path / "stage.toml"
     path.write_text(stroke_driven(PARALLELOGRAM, "F1", PIEZO))
-    run = [sys.executable, "-m", "symkin"]
-    check = subprocess.run([*run, "check", str(path)], capture_output=True, text=True)
+    check = symkin_cli("check", str(path))
     assert check.returncode == 0, check.stderr
     assert "inputs: piezo" in check.stdout and "actuator piezo: stroke" in check.stdout
-    out = subprocess.run(
-        [*run, "eval", str(path), "--input", "piezo=2e-3", "--json"],
-        capture_output=True,
-        text=True,
-    )
+    out = symkin_cli("eval", str(path), "--input", "piezo=2e-3", "--json")
     assert out.returncode == 0, out.stderr
     doc = json.loads(out.stdout)
     ref = parallelogram_reference(2e-3, "exact")
@@ -262,17 +258,11 @@ def test_cli_check_and_eval(tmp_path):
     )
     # loaded takes it too (tests/test_loaded_actuators.py), the generated numpy and C too
     # (tests/test_loaded_actuators_codegen.py)
-    loaded = subprocess.run(
-        [*run, "eval", str(path), "--input", "piezo=2e-3", "--level", "loaded"],
-        capture_output=True,
-        text=True,
-    )
+    loaded = symkin_cli("eval", str(path), "--input", "piezo=2e-3", "--level", "loaded")
     assert loaded.returncode == 0, loaded.stderr
     assert "actuators: what each actuator delivers" in loaded.stdout
-    generated = subprocess.run(
-        [*run, "eval", str(path), "--input", "piezo=2e-3", "--level", "loaded", "--backend", "c"],
-        capture_output=True,
-        text=True,
+    generated = symkin_cli(
+        "eval", str(path), "--input", "piezo=2e-3", "--level", "loaded", "--backend", "c"
     )
     assert generated.returncode == 0, generated.stderr
 
@@ -288,14 +278,14 @@ def test_generated_numpy_module_takes_the_strokes(tmp_path):
 
     path = tmp_path / "stage.toml"
     path.write_text(stroke_driven(PARALLELOGRAM, "F1", PIEZO))
-    run = [sys.executable, "-m", "symkin", "derive", str(path), "-o", str(tmp_path / "out")]
-    out = subprocess.run([*run, "--emit", "numpy,c"], capture_output=True, text=True)
+    run = ["derive", str(path), "-o", str(tmp_path / "out")]
+    out = symkin_cli(*run, "--emit", "numpy,c")
     assert out.returncode == 0, out.stderr
     header = (tmp_path / "out" / "parallelogram.h").read_text()
     assert "#define PARALLELOGRAM_N_INPUTS 1" in header and "_N_POINTS 1" in header
     # the sensitivities take the strokes too (tests/test_actuator_sensitivity.py)
     assert "int parallelogram_sensitivity_full(" in header
-    fixed = subprocess.run([*run, "--fix", "piezo=0.01"], capture_output=True, text=True)
+    fixed = symkin_cli(*run, "--fix", "piezo=0.01")
     assert fixed.returncode == 2 and "piezo" in fixed.stderr and "--fix" in fixed.stderr
     spec = importlib.util.spec_from_file_location("stage", tmp_path / "out" / "parallelogram.py")
     module = importlib.util.module_from_spec(spec)
@@ -473,12 +463,7 @@ def test_direction_over_the_parameters_is_normalised_and_checked(tmp_path):
         assert ev.points["B"].deviation[i] == pytest.approx(
             base.points["B"].deviation[i], rel=1e-12
         )
-    run = subprocess.run(
-        [sys.executable, "-m", "symkin", "eval", str(path), "--input", "piezo=0.01"]
-        + ["--param", "z=0"],
-        capture_output=True,
-        text=True,
-    )
+    run = symkin_cli("eval", str(path), "--input", "piezo=0.01", "--param", "z=0")
     assert run.returncode == 2, run.stderr
     assert "[[actuator]] 'piezo'" in run.stderr and "not a finite number" in run.stderr
 

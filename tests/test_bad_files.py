@@ -11,11 +11,11 @@ from __future__ import annotations
 import json
 import shutil
 import subprocess
-import sys
 import time
 from pathlib import Path
 
 import pytest
+from cli_runs import symkin_cli
 
 import symkin
 
@@ -132,13 +132,7 @@ BAD_FILES = sorted(BAD.glob("*.toml"))
 def run_cli(
     *args: str, cwd: Path | None = None, timeout: float = 60
 ) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "symkin", *args],
-        capture_output=True,
-        text=True,
-        cwd=cwd,
-        timeout=timeout,
-    )
+    return symkin_cli(*args, cwd=cwd, timeout=timeout)
 
 
 def test_corpus_is_complete():

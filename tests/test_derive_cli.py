@@ -2,10 +2,8 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
-
 import mechanisms as M
+from cli_runs import symkin_cli
 from conftest import EXAMPLES
 
 import symkin
@@ -59,11 +57,7 @@ def test_failure_leaves_the_previous_output_untouched(tmp_path):
     bad.write_text(
         (EXAMPLES / "four_bar.toml").read_text().replace("at = [0.0, 0.0]", 'at = [0.0, "1/0"]')
     )
-    proc = subprocess.run(
-        [sys.executable, "-m", "symkin", "derive", str(bad), "-o", str(out)],
-        capture_output=True,
-        text=True,
-    )
+    proc = symkin_cli("derive", str(bad), "-o", str(out))
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert (out / "four_bar.py").read_bytes() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["four_bar.toml", "out"]  # no temp

@@ -9,6 +9,7 @@ import sys
 
 import mechanisms as M
 import pytest
+from cli_runs import symkin_cli
 from conftest import EXAMPLES
 
 from symkin.cli.commands import main
@@ -72,12 +73,7 @@ def test_param_override_changes_the_deviation(capsys):
 def test_out_of_assembly_range_exits_3_naming_the_loop(tmp_path, level):
     path = tmp_path / "non_grashof.toml"
     path.write_text(M.NON_GRASHOF)
-    proc = subprocess.run(
-        [sys.executable, "-m", "symkin", "eval", str(path), "--input", "A0=2.5", "--level", level],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    proc = symkin_cli("eval", str(path), "--input", "A0=2.5", "--level", level, timeout=120)
     assert proc.returncode == 3, proc.stderr
     assert "Traceback" not in proc.stderr
     assert "loop of hinge 'B'" in proc.stderr and "non_grashof.toml" in proc.stderr

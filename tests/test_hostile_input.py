@@ -8,12 +8,12 @@ import json
 import os
 import re
 import subprocess
-import sys
 import time
 from pathlib import Path
 
 import mpmath
 import pytest
+from cli_runs import symkin_cli
 from conftest import EXAMPLES
 from evaluators import rel_err
 from reference_solver import Reference
@@ -28,13 +28,7 @@ TABLE_ROWS = "theta,f,g\n" + "".join(
 
 
 def cli(*args: str, cwd: Path = ROOT, timeout: float = 120) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "symkin", *args],
-        capture_output=True,
-        text=True,
-        cwd=cwd,
-        timeout=timeout,
-    )
+    return symkin_cli(*args, cwd=cwd, timeout=timeout)
 
 
 def with_parameters(lines: str) -> str:

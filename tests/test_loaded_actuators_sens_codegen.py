@@ -15,11 +15,10 @@ module's so checked.
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
+from cli_runs import symkin_cli
 from conftest import EXAMPLES
 from evaluators import require_compiler
 from test_loaded_actuators import PAYLOAD, driven, five_bar
@@ -106,13 +105,9 @@ def test_tolerance_at_loaded_takes_actuators_through_both_backends(tmp_path):
     path = EXAMPLES / "piezo_amplifier.toml"
     args = ["tolerance", str(path), "--level", "loaded", "--input", "piezo=0:0.02:3"]
     args += ["--vary", "a=±0.01", "--vary", "l=±1%", "--json"]
-    run = subprocess.run([sys.executable, "-m", "symkin", *args], capture_output=True, text=True)
+    run = symkin_cli(*args)
     assert run.returncode == 0, run.stderr
-    by_numpy = subprocess.run(
-        [sys.executable, "-m", "symkin", *args, "--backend", "numpy"],
-        capture_output=True,
-        text=True,
-    )
+    by_numpy = symkin_cli(*args, "--backend", "numpy")
     assert by_numpy.returncode == 0, by_numpy.stderr
     result, other = json.loads(run.stdout), json.loads(by_numpy.stdout)
     assert result["backend"] == "c" and other["backend"] == "numpy"
@@ -123,9 +118,7 @@ def test_tolerance_at_loaded_takes_actuators_through_both_backends(tmp_path):
     forced.write_text(driven("force", PAYLOAD))
     args = ["tolerance", str(forced), "--level", "loaded", "--input", "piezo=0:0.5:2"]
     args += ["--vary", "l=±1%", "--backend", "c"]
-    refused = subprocess.run(
-        [sys.executable, "-m", "symkin", *args], capture_output=True, text=True
-    )
+    refused = symkin_cli(*args)
     assert refused.returncode == 2 and "--backend numpy" in refused.stderr
     assert "force actuators" in refused.stderr
     point = result["points"]["B"]

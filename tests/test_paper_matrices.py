@@ -5,12 +5,11 @@ entry, typed in from the paper; the examples/ files list links and hinges in the
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_runs import symkin_cli
 
 import symkin
 
@@ -113,12 +112,7 @@ def test_paper_matrices(key: str):
 @pytest.mark.parametrize("key", PAPER)
 def test_matrices_json_prints_the_paper(key: str):
     expected = PAPER[key]
-    result = subprocess.run(
-        [sys.executable, "-m", "symkin", "matrices", "--json", str(EXAMPLES / expected["file"])],
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
+    result = symkin_cli("matrices", "--json", str(EXAMPLES / expected["file"]), timeout=60)
     assert result.returncode == 0, result.stderr
     data = json.loads(result.stdout)
     assert data == {k: v for k, v in expected.items() if k != "file"}
