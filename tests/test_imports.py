@@ -7,6 +7,7 @@ A new module must be placed on a floor here; the test fails until it is.
 from __future__ import annotations
 
 import ast
+import functools
 
 from conftest import ROOT
 
@@ -85,7 +86,9 @@ def _is_package(name: str) -> bool:
     return (ROOT / "symkin" / name.replace(".", "/") / "__init__.py").exists()
 
 
+@functools.cache
 def graph() -> dict[str, set[str]]:
+    """module -> the modules it imports (parsed once per run: every test reads it)."""
     trees = modules()
     return {name: imports(name, tree, set(trees)) for name, tree in trees.items()}
 
