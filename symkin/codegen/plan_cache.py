@@ -21,8 +21,6 @@ import importlib.metadata
 import os
 import pickle
 import sys
-import threading
-from collections import OrderedDict
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from contextvars import ContextVar
@@ -34,6 +32,7 @@ import numpy as np
 import sympy as sp
 
 from ..core.errors import InputError
+from ..core.recent import Recent
 from ..kinematics.analysis import Analysis
 from . import toolchain
 from .plan import Plan
@@ -124,8 +123,7 @@ def digest(analysis: Analysis, options: Mapping[str, Any]) -> str | None:
 _T = TypeVar("_T")
 #: the last MEMORY derivations, most recent last (a long run does not keep every plan alive)
 MEMORY = 64
-_MEMORY: OrderedDict[str, Any] = OrderedDict()
-_LOCK = threading.RLock()
+_MEMORY: Recent[str, Any] = Recent(MEMORY)
 _NO_DISK: ContextVar[bool] = ContextVar("symkin_plan_cache_no_disk", default=False)
 
 
@@ -165,21 +163,14 @@ def cached(analysis: Analysis, options: Mapping[str, Any], derive: Callable[[], 
 
 def _remember(key: str, value: _T) -> _T:
     """`value` kept in memory under `key` (the one already there wins), most recent last."""
-    with _LOCK:
-        value = _MEMORY.setdefault(key, value)
-        _MEMORY.move_to_end(key)
-        while len(_MEMORY) > MEMORY:
-            _MEMORY.popitem(last=False)
-        return value
+    return _MEMORY.keep(key, value)
 
 
 def _lookup(key: str, kind: type[_T], folder: Path | None) -> _T | None:
     """What is kept under `key` in memory, else in `folder` (then remembered), else None."""
-    with _LOCK:
-        found = _MEMORY.get(key)
-        if isinstance(found, kind):
-            _MEMORY.move_to_end(key)
-            return found
+    found = _MEMORY.get(key)
+    if isinstance(found, kind):
+        return found
     value = _read(folder, key, kind) if folder is not None else None
     return None if value is None else _remember(key, value)
 
@@ -231,8 +222,7 @@ def in_memory(
     key = _key_of(analysis, options, kind)
     if key is None:
         return make()
-    with _LOCK:
-        found = _MEMORY.get(key)
+    found = _MEMORY.get(key)
     return found if isinstance(found, kind) else _remember(key, make())
 
 

@@ -11,13 +11,13 @@ computed twice.
 
 from __future__ import annotations
 
-import threading
-from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from functools import cached_property
 
 import sympy as sp
+
+from ..core.recent import Recent
 
 
 @dataclass(frozen=True)
@@ -91,26 +91,16 @@ class Routine:
 #: The last routines optimised, by content (a Routine compares by its fields, its expressions
 #: structurally): plans of one file with other options (levels, points, fixed inputs, a
 #: variant) share most of their routines, and CSE is the slowest step of a derivation.
-_OPTIMIZED: OrderedDict[tuple[Routine, str], Routine] = OrderedDict()
-_OPTIMIZED_SIZE = 128
-_OPTIMIZED_LOCK = threading.Lock()
+_OPTIMIZED: Recent[tuple[Routine, str], Routine] = Recent(128)
 
 
 def optimize(routine: Routine, prefix: str = "_tmp") -> Routine:
     """One CSE pass over the routine; temporaries are scheduled just before their first use.
     The same routine optimised again is the routine found before (the pass is deterministic)."""
     key = (routine, prefix)
-    with _OPTIMIZED_LOCK:
-        found = _OPTIMIZED.get(key)
-        if found is not None:
-            _OPTIMIZED.move_to_end(key)
-            return found
-    found = _optimize(routine, prefix)
-    with _OPTIMIZED_LOCK:
-        found = _OPTIMIZED.setdefault(key, found)
-        _OPTIMIZED.move_to_end(key)
-        while len(_OPTIMIZED) > _OPTIMIZED_SIZE:
-            _OPTIMIZED.popitem(last=False)
+    found = _OPTIMIZED.get(key)
+    if found is None:
+        found = _OPTIMIZED.keep(key, _optimize(routine, prefix))
     return found
 
 
