@@ -214,6 +214,13 @@ def test_kernel_evalf_high_precision(name):
         with mp.workdps(80 + 7 * max(0, -int(math.log10(float(xv))))):  # cancellation
             want = sp.lambdify(X, KERNEL_DEFS[name], "mpmath")(mp.mpf(xv.p) / xv.q)
         assert rel(got, want) < 1e-38, (name, x)
+    # a complex argument takes the series' other branch (mpc)
+    z = sp.Rational(3, 10) + sp.Rational(1, 5) * sp.I
+    with mp.workdps(80):
+        v = cls(z).evalf(40)
+        got = mp.mpc(str(sp.re(v)), str(sp.im(v)))
+        want = sp.lambdify(X, KERNEL_DEFS[name], "mpmath")(mp.mpc("0.3", "0.2"))
+        assert abs(got - want) <= 1e-38 * abs(want), name
     # Float arguments evaluate at their own precision
     assert isinstance(cls(sp.Float("0.25", 30)), sp.Float)
 

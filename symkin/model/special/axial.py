@@ -43,7 +43,7 @@ import mpmath
 import sympy as sp
 from sympy.core.function import ArgumentIndexError
 
-from .kernels import _from_mp, _to_mp, evalf_by_mp
+from .kernels import _from_mp, _to_mp, evalf_by_mp, horner_mp
 from .registry import FUNCTIONS, DomainError, register
 
 #: The symbols of the closed forms: the axial load index and T(p).
@@ -247,11 +247,7 @@ class AxialKernel(sp.Function):
         if not p > -(mpmath.pi**2):
             raise DomainError(f"{cls.__name__}({p}): the axial load index must exceed -pi^2")
         if abs(p) <= 0.5:
-            with mpmath.workprec(prec + 20):
-                total = mpmath.mpf(0)
-                for c in _mp_coefficients(cls, prec):
-                    total = total * p + c
-                return +total
+            return horner_mp(_mp_coefficients(cls, prec), p, prec + 20)
         f = _mp_closed(cls.base, cls.order)
         guard = 64
         while True:

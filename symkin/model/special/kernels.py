@@ -28,6 +28,7 @@ from functools import cache
 
 import mpmath
 import sympy as sp
+from mpmath.libmp import fzero, mpf_add, mpf_mul, round_nearest
 from sympy.core.function import ArgumentIndexError
 
 from .registry import UNIT_ROUNDOFF, register
@@ -53,6 +54,26 @@ def evalf_by_mp(f: sp.Function, prec: int) -> sp.Expr | None:
     except (TypeError, ValueError, AttributeError):
         return None
     return _from_mp(f._mp_value(xv, prec), prec)
+
+
+def horner_mp(coeffs: tuple, x, wp: int, even: bool = False):
+    """sum c_k y^k by Horner's rule at `wp` bits, y = x (x^2 with `even`, rounded at `wp` too),
+    `coeffs` (mpf) highest power first, x mpf or mpc. For a real x on mpmath's raw values
+    (libmp): the roundings of mpf's own operators, without their dispatch, which was most of a
+    kernel's evaluation in the `sympy` backend."""
+    if isinstance(x, mpmath.mpf):
+        v, total = x._mpf_, fzero
+        if even:
+            v = mpf_mul(v, v, wp, round_nearest)
+        for c in coeffs:
+            total = mpf_add(mpf_mul(total, v, wp, round_nearest), c._mpf_, wp, round_nearest)
+        return mpmath.mp.make_mpf(total)
+    with mpmath.workprec(wp):
+        y = x * x if even else x
+        total = mpmath.mpf(0)
+        for c in coeffs:
+            total = total * y + c
+        return +total
 
 
 class StableKernel(sp.Function):
@@ -139,21 +160,7 @@ class StableKernel(sp.Function):
         """Value at `prec` bits, for mpmath argument x (mpf or mpc): series for |x| <= 2, else the
         elementary formula with guard bits (checked by a second evaluation)."""
         if abs(x) <= 2:
-            with mpmath.workprec(prec + 20):
-                x2 = x * x
-                total = mpmath.mpf(0)
-                term_scale = mpmath.mpf(1)
-                k = 0
-                tol = mpmath.ldexp(1, -(prec + 12))
-                while True:
-                    c = cls.coeff(k)
-                    term = mpmath.mpf(c.p) / c.q * term_scale
-                    total += term
-                    if k > 2 and abs(term) <= tol * abs(total):
-                        break
-                    term_scale *= x2
-                    k += 1
-                return +total
+            return horner_mp(_mp_coefficients(cls, prec), x, prec + 20, even=True)
         guard = 40 + 8 * len(cls.float_subtract)
         while True:
             with mpmath.workprec(prec + guard):
@@ -192,6 +199,28 @@ class StableKernel(sp.Function):
 
         impl.__name__ = cls.__name__
         return impl
+
+
+@cache
+def _mp_coefficients(cls, prec: int) -> tuple:
+    """The Taylor coefficients (of x^0, x^2, ...) `_mp_value` sums for |x| <= 2 at `prec` bits,
+    highest power first, as mpf at its working precision (converting them was most of an
+    evaluation): as many as make the tail, sum_(k>=N) |c_k| 4^k, below 2^-(prec+16) times a
+    lower bound of the kernel on [0, 2]."""
+    bound = mpmath.ldexp(_kernel_min_on(cls, 2.0), -(prec + 16))
+    n = 2
+    while _tail(cls, n, 4) > bound:
+        n += 1
+    with mpmath.workprec(prec + 20):
+        return tuple(mpmath.mpf(c.p) / c.q for c in (cls.coeff(k) for k in reversed(range(n))))
+
+
+def _tail(cls, n: int, x2: int) -> mpmath.mpf:
+    """An upper bound of sum_(k>=n) |c_k| x2^k for n >= 2, x2 <= 4: the kernels' factorial
+    coefficients shrink by |c_(k+1)/c_k| <= 1/((2k+2)(2k+3)) (arck's by 2/((2k+2)(2k+5))), so from
+    k = 2 on a term is less than half the one before, and the tail less than twice its first."""
+    c = abs(cls.coeff(n)) * x2**n
+    return mpmath.mpf(2 * c.p) / c.q
 
 
 def _kernel_min_on(cls, T: float) -> float:
