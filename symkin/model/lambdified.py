@@ -4,6 +4,7 @@ again, which is most of lambdify's time on a mechanism's equilibrium."""
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Callable, Mapping, Sequence
 
 import sympy as sp
@@ -23,6 +24,13 @@ def printer_settings(user_functions: Mapping[str, str]) -> dict:
     }
 
 
+#: lambdify's own docstring prints the whole expression with sympy's str printer (a tenth of
+#: a mechanism's lambdify): nobody reads it, so it is left out where sympy lets us (1.13 on).
+NO_DOCSTRING: dict = (
+    {"docstring_limit": 0} if "docstring_limit" in inspect.signature(sp.lambdify).parameters else {}
+)
+
+
 def _cse(exprs):
     return sp.cse(exprs, list=False, order="none")
 
@@ -33,10 +41,12 @@ def lambdify(args: Sequence, exprs, modules: list, cse: bool = True) -> Callable
     names = [m for m in modules if isinstance(m, str)]
     known = all(isinstance(m, str | dict) for m in modules) and set(names) <= {"mpmath", "math"}
     if not known:  # another module, or a module object: lambdify's own printer
-        return sp.lambdify(args, exprs, modules=modules, cse=_cse if cse else False)
+        return sp.lambdify(args, exprs, modules=modules, cse=_cse if cse else False, **NO_DOCSTRING)
     printer_class = MpmathPrinter if "mpmath" in names else PythonCodePrinter
     # lambdify's user functions: every name of the namespace dicts
     printer = printer_class(
         printer_settings({k: k for m in modules[::-1] if isinstance(m, dict) for k in m})
     )
-    return sp.lambdify(args, exprs, modules=modules, cse=_cse if cse else False, printer=printer)
+    return sp.lambdify(
+        args, exprs, modules=modules, cse=_cse if cse else False, printer=printer, **NO_DOCSTRING
+    )

@@ -48,7 +48,7 @@ from ..core import vectors as V
 from ..kinematics.positions import Kinematics
 from ..model.derivatives import jacobian
 from ..model.expressions import substitute
-from ..model.lambdified import lambdify
+from ..model.lambdified import NO_DOCSTRING, lambdify
 from ..model.special import arck, mpmath_namespace, sinr
 from .plate_relation import energy, relation
 from .stiffness import plate_stiffness
@@ -245,6 +245,9 @@ class Reduced:
             ]
         )
         self._fns: dict = {}
+        # the last _eval: (its key, its result); Newton asks the residual and then the Jacobian
+        # at the same point
+        self._evaluated: tuple | None = None
         # the last Newton step's J (acceptance and truncation estimate, solve)
         self.last_jacobian = np.zeros((0, 0))
 
@@ -547,7 +550,7 @@ class Reduced:
         twins = self.__dict__.setdefault("_twins", {})
         if key not in twins:
             other = copy.copy(self)
-            other.modules, other._fns = modules, {}
+            other.modules, other._fns, other._evaluated = modules, {}, None
             other.__dict__.pop("_twins", None)
             twins[key] = other
         return twins[key]
@@ -666,13 +669,18 @@ class Reduced:
             # taken after the derivation, as _lambdify's: the kernels it created are in them
             modules = self._modules()
             fn = _PLATE_FNS[tag] = sp.lambdify(
-                [th, p, f, ea, es], exprs, modules=modules, cse=key != "energy"
+                [th, p, f, ea, es], exprs, modules=modules, cse=key != "energy", **NO_DOCSTRING
             )
             return fn
 
     def _eval(self, x, theta: Mapping[int, float], t: float, order: int = 4, jac: bool = False):
-        """Plate inputs, outputs and (with `jac`) the chain rule's pieces at (x, θ, t)."""
+        """Plate inputs, outputs and (with `jac`) the chain rule's pieces at (x, θ, t); the last
+        point's kept (read only by the callers)."""
         args = (list(map(float, x)), self.angles(theta), t)
+        key = (tuple(args[0]), tuple(args[1]), t, order)
+        last = self._evaluated  # one read: another thread may replace it
+        if last is not None and last[0] == key:
+            return last[1]
         ins, dins = self._fn("plates")(*args)
         plate = self._fn(f"plate{order}")
         outs, parts = [], []
@@ -680,7 +688,9 @@ class Reduced:
             v = plate(*(float(u) for u in ins[3 * k : 3 * k + 3]), float(ea), float(es))
             outs += [float(u) for u in v[:3]]
             parts.append(np.array(v[3:], dtype=float).reshape(3, 3))
-        return args, np.array(ins, dtype=float), np.array(dins, dtype=float), outs, parts
+        result = args, np.array(ins, dtype=float), np.array(dins, dtype=float), outs, parts
+        self._evaluated = key, result
+        return result
 
     def residual(self, x, theta, t, order: int = 4) -> np.ndarray:
         args, _, _, outs, _ = self._eval(x, theta, t, order)
