@@ -10,6 +10,8 @@ from collections.abc import Callable, Mapping, Sequence
 import sympy as sp
 from sympy.printing.pycode import MpmathPrinter, PythonCodePrinter
 
+from .precedence import FastPrecedence
+
 
 def printer_settings(user_functions: Mapping[str, str]) -> dict:
     """The settings lambdify gives its printer (sympy.utilities.lambdify), with the terms of
@@ -31,6 +33,14 @@ NO_DOCSTRING: dict = (
 )
 
 
+class _MpmathPrinter(FastPrecedence, MpmathPrinter):
+    """lambdify's mpmath printer, its precedences found faster (symkin.model.precedence)."""
+
+
+class _PythonPrinter(FastPrecedence, PythonCodePrinter):
+    """lambdify's math printer, its precedences found faster (symkin.model.precedence)."""
+
+
 def _cse(exprs):
     return sp.cse(exprs, list=False, order="none")
 
@@ -42,7 +52,7 @@ def lambdify(args: Sequence, exprs, modules: list, cse: bool = True) -> Callable
     known = all(isinstance(m, str | dict) for m in modules) and set(names) <= {"mpmath", "math"}
     if not known:  # another module, or a module object: lambdify's own printer
         return sp.lambdify(args, exprs, modules=modules, cse=_cse if cse else False, **NO_DOCSTRING)
-    printer_class = MpmathPrinter if "mpmath" in names else PythonCodePrinter
+    printer_class = _MpmathPrinter if "mpmath" in names else _PythonPrinter
     # lambdify's user functions: every name of the namespace dicts
     printer = printer_class(
         printer_settings({k: k for m in modules[::-1] if isinstance(m, dict) for k in m})

@@ -33,6 +33,7 @@ from ..kinematics.analysis import Analysis
 from ..model import expressions, special
 from ..model.lambdified import printer_settings
 from ..model.mechanism import Mechanism, check_values
+from ..model.precedence import FastPrecedence
 from ..physics import equilibrium as physical_equilibrium
 from ..physics import model_error as physical_model_error
 from ..physics import reduced, reduced_reported, reduced_sensitivity
@@ -946,7 +947,7 @@ def check_fabricated_pose(analysis: Analysis) -> None:
 _EVALUATORS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-class _ArgumentPrinter(MpmathPrinter):
+class _ArgumentPrinter(FastPrecedence, MpmathPrinter):
     """lambdify's MpmathPrinter that prints each argument symbol by its position (_a0, _a1, ...).
 
     A parameter may share its name with an internal symbol (a class apart: other assumptions),

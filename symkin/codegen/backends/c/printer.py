@@ -6,9 +6,10 @@ import sympy as sp
 from sympy.printing.c import C99CodePrinter
 
 from ....model import special
+from ....model.precedence import FastPrecedence
 
 
-class CPrinter(C99CodePrinter):
+class CPrinter(FastPrecedence, C99CodePrinter):
     """C99 printer without the non-standard M_PI / M_SQRT2 ... macros (strict -std=c99 has none),
     writing every Float as its shortest round-trip decimal, symkin's special functions as the
     static `symkin_<name>` of backends/c/kernels.py, a Piecewise (the plates' modulus,

@@ -5,9 +5,10 @@ from __future__ import annotations
 from sympy.printing.numpy import NumPyPrinter
 
 from ....model import special
+from ....model.precedence import FastPrecedence
 
 
-class NumpyPrinter(NumPyPrinter):
+class NumpyPrinter(FastPrecedence, NumPyPrinter):
     """NumPyPrinter that writes every Float as its shortest round-trip decimal, calls symkin's
     special functions by their names (defined in the module from backends/numpy) and writes a
     Piecewise (the plates' modulus, docs/physics.md) as nested numpy.where in the module's
