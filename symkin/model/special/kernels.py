@@ -217,7 +217,7 @@ def _mp_coefficients(cls, prec: int) -> tuple:
 
 def _tail(cls, n: int, x2: int) -> mpmath.mpf:
     """An upper bound of sum_(k>=n) |c_k| x2^k for n >= 2, x2 <= 4: the kernels' factorial
-    coefficients shrink by |c_(k+1)/c_k| <= 1/((2k+2)(2k+3)) (arck's by 2/((2k+2)(2k+5))), so from
+    coefficients shrink by |c_(k+1)/c_k| <= 1/((2k+2)(2k+3)) (arck's by 1/((2k+2)(2k+5))), so from
     k = 2 on a term is less than half the one before, and the tail less than twice its first."""
     c = abs(cls.coeff(n)) * x2**n
     return mpmath.mpf(2 * c.p) / c.q
