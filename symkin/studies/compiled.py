@@ -179,10 +179,12 @@ class Compiled:
         `buckling=False` the buckling factor alone (its search: tens of Newton solves per
         configuration); the C backend's result holds the deviations and angles alone."""
         if self.backend == "numpy":
-            takes = inspect.signature(self.module.evaluate).parameters
-            # a module without the loaded level's report has nothing to leave out
-            asked = (("report", report), ("buckling", buckling))
-            options = {k: False for k, on in asked if not on and k in takes}
+            options: dict[str, bool] = {}
+            if not (report and buckling):  # the signature read only when an option is off
+                takes = inspect.signature(self.module.evaluate).parameters
+                # a module without the loaded level's report has nothing to leave out
+                asked = (("report", report), ("buckling", buckling))
+                options = {k: False for k, on in asked if not on and k in takes}
             result: dict[str, Any] = self.module.evaluate(
                 inputs, self.code(level), params, **options
             )
