@@ -22,7 +22,7 @@ ROOT = Path(__file__).resolve().parents[1]
 x, y = sp.symbols("x y", real=True)
 
 
-class low(sp.Function):  # noqa: N801 - sympy's function naming
+class low(sp.Function):
     """A function printed below a product's precedence (sympy's precedence_Mul checks for one)."""
 
     precedence = PRECEDENCE["Add"]
@@ -99,8 +99,9 @@ class _Sympy:
 
 @pytest.mark.parametrize("base", [MpmathPrinter, PythonCodePrinter, NumPyPrinter, C99CodePrinter])
 def test_printers_write_what_sympys_write(base):
-    fast = type("Fast", (FastPrecedence, base), {})({"order": "none", "allow_unknown_functions": True})
-    plain = type("Plain", (_Sympy, base), {})({"order": "none", "allow_unknown_functions": True})
+    settings = {"order": "none", "allow_unknown_functions": True}
+    fast = type("Fast", (FastPrecedence, base), {})(settings)
+    plain = type("Plain", (_Sympy, base), {})(settings)
     exprs = [*SPECIAL[5:], *_loaded_equations()[:40]]
     for e in exprs:
         if e.has(sp.nan, sp.zoo):

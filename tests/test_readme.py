@@ -24,6 +24,17 @@ def test_ci_runs_exactly_readmes_test_command():
     assert test in ci, "the last step of .ci/run must be README's test command, verbatim"
 
 
+def test_ci_stops_at_a_failing_static_check():
+    """Each static check is a command of its own: under `set -e` a failure on the left of `&&`
+    does not stop the script (ruff's findings once went by so)."""
+    lines = [ln.strip() for ln in (ROOT / ".ci" / "run").read_text().splitlines()]
+    assert "set -euo pipefail" in lines
+    for check in ("ruff check .", "ruff format --check .", "mypy"):
+        assert check in lines, check
+    checks = [ln for ln in lines if ln.split(" ", 1)[0] in ("ruff", "mypy")]
+    assert all("&&" not in ln and "||" not in ln for ln in checks), checks
+
+
 def test_ci_builds_a_fresh_venv_before_the_test_command():
     lines = (ROOT / ".ci" / "run").read_text().splitlines()
     _, test = readme_commands()
