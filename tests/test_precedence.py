@@ -4,6 +4,7 @@ the mixin writing the same text as sympy's own."""
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
 import pytest
@@ -71,14 +72,15 @@ def test_special_values_and_products():
         assert precedence_of(item) == precedence(item), sp.srepr(item)
 
 
-def _loaded_equations() -> list[sp.Expr]:
+@functools.cache
+def _loaded_equations() -> tuple[sp.Expr, ...]:
     """The residuals, Jacobian pieces and reported quantities of the parallelogram's loaded
     level with two half plates per plate: large expressions, Floats of both signs everywhere."""
     mech = symkin.load(ROOT / "tests" / "mechanisms" / "parallelogram.toml")
     r = reduced.Reduced(symkin.analyze(mech).kin, parameter_values(mech), segments=2)
     s = r._s
     rows = r._rows(s)
-    return [*rows, *sp.Matrix(rows).jacobian(list(r.x)[:2]), *r._reported(r._se)]
+    return (*rows, *sp.Matrix(rows).jacobian(list(r.x)[:2]), *r._reported(r._se))
 
 
 def test_every_subexpression_of_a_mechanisms_equations():
