@@ -24,15 +24,18 @@ from symkin.codegen import pipeline, plan_cache
 PARALLELOGRAM = ROOT / "tests" / "mechanisms" / "parallelogram.toml"
 
 # derives (or reads) the parallelogram's plan and prints the digest of its C and numpy texts;
-# with "forbid", deriving raises: the plan must come from the cache
+# with "forbid", deriving raises: the plan must come from the cache, its routines' operation
+# counts (the headers print them) with it
 SCRIPT = """
 import hashlib, sys
+import sympy
 import symkin
 from symkin.codegen import pipeline
 if sys.argv[2] == "forbid":
     def boom(*args, **kwargs):
-        raise AssertionError("derived although the plan was kept")
+        raise AssertionError("derived or counted although the plan was kept")
     pipeline.plan = boom
+    sympy.count_ops = boom
 if sys.argv[2] == "count":
     derive = pipeline.plan
     def counted(*args, **kwargs):

@@ -373,6 +373,7 @@ def plan_for(analysis: Analysis, **options: Any) -> Plan:
         plans = _PLANS.setdefault(analysis, {})
         found = plans.get(key)
         if found is None:
+            make: Callable[[], Plan]
             if options_["notes"] or options_["report"]:
                 # the headers' notes and the report's statement leave the routines as they are:
                 # the plan without them is derived (or found) once and dressed
@@ -380,8 +381,17 @@ def plan_for(analysis: Analysis, **options: Any) -> Plan:
                 make = lambda: _dressed(bare, analysis, options_)  # noqa: E731
             else:
                 make = lambda: plan(analysis, **options_)  # noqa: E731
-            found = plans[key] = plan_cache.cached(analysis, options_, make)
+            found = plans[key] = plan_cache.cached(analysis, options_, lambda: _counted(make()))
         return found
+
+
+def _counted(p: Plan) -> Plan:
+    """`p` with its routines' operation counts (the headers print them) counted now, so the plan
+    kept on disk carries them: sympy's count_ops is ~8 % of a derivation, paid once, not again
+    in every process that reads the plan back."""
+    for r in p.routines.values():
+        r.ops  # noqa: B018 (a cached property: counted and kept in the routine)
+    return p
 
 
 def _dressed(bare: Plan, analysis: Analysis, options: Mapping[str, Any]) -> Plan:
