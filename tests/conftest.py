@@ -10,6 +10,8 @@ import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"
 
@@ -66,12 +68,14 @@ def pytest_unconfigure(config):
         os.environ.pop("SYMKIN_CACHE", None)
 
 
+@pytest.hookimpl(trylast=True)
 def pytest_runtest_teardown(item, nextitem):
-    """What survived a test joins the collector's permanent generation (gc.freeze): the
-    workers' heaps grow to millions of objects (sympy's caches, the kept plans and solvers), and
-    each full collection traversed them all again (9-10 % of the loaded-level and report test
-    files' time measured, 0.5 s a collection). Young objects are still collected; cyclic garbage
-    a test left to the full collections stays (+12 % peak memory measured)."""
+    """After the test's fixtures are torn down (trylast), what survived it joins the collector's
+    permanent generation (gc.freeze): the workers' heaps grow to millions of objects (sympy's
+    caches, the kept plans and solvers), and each full collection traversed them all again
+    (9-10 % of the loaded-level and report test files' time measured, 0.5 s a collection).
+    Young objects are still collected; cyclic garbage a test left to the full collections
+    stays (+12 % peak memory measured)."""
     gc.freeze()
 
 
