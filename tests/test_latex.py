@@ -153,6 +153,34 @@ def test_files_header_and_figures(example, reports):
         assert needed in tex, needed
 
 
+def test_a_figure_is_drawn_once_per_inputs():
+    """The figures are kept by their inputs (a report's appendix, another column width): the same
+    inputs give the bytes a fresh drawing gives, without drawing; other inputs draw anew."""
+    from symkin.codegen.backends.latex import figures
+
+    # the four-bar's graph: s0..s3 a chain, arc 4 the loop's chord
+    layout = figures.tree_layout([0, 0, 1, 2], 3)
+    arcs = [(1, 0, 1, False), (2, 1, 2, False), (3, 2, 3, False), (4, 3, 0, True)]
+    first = figures.graph_figure(layout, arcs)
+    fresh = figures.graph_figure.__wrapped__(layout, arcs)
+    assert first.startswith(b"%PDF-") and fresh == first
+    drawn = []
+    draw = figures._render
+
+    def counted(fig):
+        drawn.append(fig)
+        return draw(fig)
+
+    figures._render = counted
+    try:
+        assert figures.graph_figure(dict(layout), list(arcs)) == first
+        assert drawn == []
+        other = figures.graph_figure(layout, [*arcs[:3], (4, 3, 0, False)])
+        assert len(drawn) == 1 and other != first
+    finally:
+        figures._render = draw
+
+
 def test_report_is_generated_by_derive(reports, tmp_path):
     """`symkin derive --emit latex` writes the report these tests read, and nothing else."""
     code = main(
