@@ -8,6 +8,7 @@ import hashlib
 import json
 import os
 import random
+import shutil
 import signal
 import stat
 import subprocess
@@ -277,8 +278,22 @@ def test_killed_derive_leaves_old_or_new_files(tmp_path):
     )
     new = {p.name: p.read_bytes() for p in (tmp_path / "ref").iterdir()}
     assert old.keys() == new.keys() and old != new
+    # the killed runs read the kept plan, as this one does: their kills are spread over its
+    # duration (a kill after the run is over tests nothing)
+    start = time.perf_counter()
+    warm = cli(
+        "derive", str(FOUR_BAR), "-o", str(tmp_path / "warm"), "--emit", "numpy,c", cache=cache
+    )
+    assert warm.returncode == 0
+    duration = time.perf_counter() - start
     env = {**os.environ, "SYMKIN_CACHE": str(cache)}
+    killed = 0
     for _ in range(4):
+        # each run starts from the earlier derivation: a torn write shows as neither old nor new
+        shutil.rmtree(folder)
+        folder.mkdir()
+        for name, content in old.items():
+            (folder / name).write_bytes(content)
         proc = subprocess.Popen(
             [
                 sys.executable,
@@ -297,9 +312,10 @@ def test_killed_derive_leaves_old_or_new_files(tmp_path):
             stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL,
         )
-        time.sleep(rng.uniform(0.5, 6.0))
+        time.sleep(rng.uniform(0.3, 1.1) * duration)
         proc.kill()
-        proc.wait()
+        killed += proc.wait() == -signal.SIGKILL
         complete_interrupted(folder)
         now = {p.name: p.read_bytes() for p in folder.iterdir()}
         assert now in (old, new)
+    assert killed, "every run had ended before its kill: nothing was interrupted"
