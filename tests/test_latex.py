@@ -153,7 +153,7 @@ def test_files_header_and_figures(example, reports):
         assert needed in tex, needed
 
 
-def test_a_figure_is_drawn_once_per_inputs():
+def test_a_figure_is_drawn_once_per_inputs(monkeypatch):
     """The figures are kept by their inputs (a report's appendix, another column width): the same
     inputs give the bytes a fresh drawing gives, without drawing; other inputs draw anew."""
     from symkin.codegen.backends.latex import figures
@@ -171,14 +171,11 @@ def test_a_figure_is_drawn_once_per_inputs():
         drawn.append(fig)
         return draw(fig)
 
-    figures._render = counted
-    try:
-        assert figures.graph_figure(dict(layout), list(arcs)) == first
-        assert drawn == []
-        other = figures.graph_figure(layout, [*arcs[:3], (4, 3, 0, False)])
-        assert len(drawn) == 1 and other != first
-    finally:
-        figures._render = draw
+    monkeypatch.setattr(figures, "_render", counted)
+    assert figures.graph_figure(dict(layout), list(arcs)) == first
+    assert drawn == []
+    other = figures.graph_figure(layout, [*arcs[:3], (4, 3, 0, False)])
+    assert len(drawn) == 1 and other != first
 
 
 def test_report_is_generated_by_derive(reports, tmp_path):
