@@ -140,16 +140,22 @@ def _series(psi0, om0, lx, ly, h, tol: float, compliance):
     shape = np.shape(psi0)
     kind = np.result_type(psi0, om0, lx, ly)
     size = MAX_TERMS + 2
+    reissner = compliance is not None
     p = np.zeros((size + 1, *shape), kind)
     jp = np.zeros((size + 1, *shape), kind)  # j p_j, the coefficients of ψ'
-    S, C = np.zeros((size, *shape), kind), np.zeros((size, *shape), kind)
+    # the trigonometric series in one array, so each term is one product and one sum for all:
+    # W[0] = C (cos ψ), W[1] = S (sin ψ), and for Reissner plates W[2] = C2, W[3] = S2 (2ψ)
+    w = 4 if reissner else 2
+    W = np.zeros((w, size, *shape), kind)
     p[0], p[1], jp[1] = psi0, om0, om0
-    S[0], C[0] = arith.sin(psi0), arith.cos(psi0)
-    reissner = compliance is not None
+    W[0, 0], W[1, 0] = arith.cos(psi0), arith.sin(psi0)
+    # S_k = Σ j p_j C_{k-j} / k, C_k = −Σ j p_j S_{k-j} / k (2ψ: twice): the sums of the
+    # products with W are taken in W's order, so each row comes from its partner's sum
+    partner = [1, 0, 3, 2][:w]
+    factor = np.array([-1, 1, -2, 2][:w], dtype=kind).reshape((w,) + (1,) * len(shape))
     if reissner:
         d = compliance[0]
-        S2, C2 = np.zeros((size, *shape), kind), np.zeros((size, *shape), kind)
-        S2[0], C2[0] = arith.sin(2 * psi0), arith.cos(2 * psi0)
+        W[2, 0], W[3, 0] = arith.cos(2 * psi0), arith.sin(2 * psi0)
         # f_N f_Q = λx λy cos 2ψ + (λy² − λx²)/2 sin 2ψ
         a, b = d * lx * ly, d * (ly * ly - lx * lx) / 2
         # the 2ψ series enter ψ'' and r' times d λ² and d λ: their truncation weighs that much
@@ -158,28 +164,24 @@ def _series(psi0, om0, lx, ly, h, tol: float, compliance):
     small = 0
     for k in range(MAX_TERMS):
         if k:
-            # S_k = Σ_{j=1..k} j p_j C_{k-j} / k, C_k = −Σ j p_j S_{k-j} / k (and 2ψ: 2 j p_j)
-            head = jp[1 : k + 1]
-            S[k] = (head * C[k - 1 :: -1][:k]).sum(axis=0) / k
-            C[k] = -(head * S[k - 1 :: -1][:k]).sum(axis=0) / k
-            if reissner:
-                S2[k] = 2 * (head * C2[k - 1 :: -1][:k]).sum(axis=0) / k
-                C2[k] = -2 * (head * S2[k - 1 :: -1][:k]).sum(axis=0) / k
-        rhs = lx * S[k] - ly * C[k]
+            sums = (jp[1 : k + 1] * W[:, k - 1 :: -1][:, :k]).sum(axis=1)
+            W[:, k] = sums[partner] * factor / k
+        C, S = W[0, k], W[1, k]
+        rhs = lx * S - ly * C
         if reissner:
-            rhs = rhs - a * C2[k] - b * S2[k]
+            rhs = rhs - a * W[2, k] - b * W[3, k]
         p[k + 2] = rhs / ((k + 1) * (k + 2))
         jp[k + 2] = rhs / (k + 1)
         if not small and k % 4 != 3:
             continue  # the terms are measured every fourth until one is small (they cost)
         hk = float(h) ** (k + 1)
-        size = hk * arith.magnitude(np.stack([jp[k + 2], S[k], C[k]]))
+        size = hk * arith.magnitude(np.stack([jp[k + 2], S, C]))
         if reissner:
-            size = max(size, weight * hk * arith.magnitude(np.stack([S2[k], C2[k]])))
+            size = max(size, weight * hk * arith.magnitude(W[2:, k]))
         small = small + 1 if size < tol else 0
         if small == 3:
             n = k + 1
             if reissner:
-                return p[: n + 2], S[:n], C[:n], S2[:n], C2[:n], size
-            return p[: n + 2], S[:n], C[:n], None, None, size
+                return p[: n + 2], W[1, :n], W[0, :n], W[3, :n], W[2, :n], size
+            return p[: n + 2], W[1, :n], W[0, :n], None, None, size
     return None
