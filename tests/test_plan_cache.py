@@ -24,18 +24,31 @@ from symkin.codegen import pipeline, plan_cache
 PARALLELOGRAM = ROOT / "tests" / "mechanisms" / "parallelogram.toml"
 
 # derives (or reads) the parallelogram's plan and prints the digest of its C and numpy texts;
-# with "forbid", deriving raises: the plan must come from the cache, its routines' operation
-# counts (the headers print them) with it
+# with "forbid", deriving or emitting raises: the plan must come from the cache, its routines'
+# operation counts (the headers print them) and its emitted texts with it; with "retemplate"
+# the templates' digest differs: the plan is read, the texts emitted again (tallied)
 SCRIPT = """
 import hashlib, sys
 import sympy
 import symkin
-from symkin.codegen import pipeline
-if sys.argv[2] == "forbid":
-    def boom(*args, **kwargs):
-        raise AssertionError("derived or counted although the plan was kept")
+from symkin.codegen import pipeline, templating
+from symkin.codegen.backends.c import backend as c_backend
+from symkin.codegen.backends.numpy import backend as numpy_backend
+def boom(*args, **kwargs):
+    raise AssertionError("derived, counted or emitted although the plan and texts were kept")
+if sys.argv[2] in ("forbid", "retemplate"):
     pipeline.plan = boom
     sympy.count_ops = boom
+if sys.argv[2] == "forbid":
+    c_backend.emit = numpy_backend.emit = boom
+if sys.argv[2] == "retemplate":
+    templating.digest = lambda: "templates edited"
+    for module in (c_backend, numpy_backend):
+        def tallied(*args, _emit=module.emit, **kwargs):
+            with open(sys.argv[3], "a") as tally:
+                tally.write("emitted\\n")
+            return _emit(*args, **kwargs)
+        module.emit = tallied
 if sys.argv[2] == "count":
     derive = pipeline.plan
     def counted(*args, **kwargs):
@@ -50,9 +63,9 @@ print(hashlib.sha256("\\0".join(texts).encode()).hexdigest())
 """
 
 
-def run(cache: Path, mode: str, **env: str) -> str:
+def run(cache: Path, mode: str, *args: str, **env: str) -> str:
     proc = subprocess.run(
-        [sys.executable, "-c", SCRIPT, str(PARALLELOGRAM), mode],
+        [sys.executable, "-c", SCRIPT, str(PARALLELOGRAM), mode, *args],
         capture_output=True,
         text=True,
         cwd=ROOT,
@@ -72,11 +85,17 @@ def test_a_second_process_reads_the_plan_and_emits_the_same_code(tmp_path):
     cache = tmp_path / "cache"
     first = run(cache, "derive", PYTHONHASHSEED="1")
     kept = plans(cache)
-    assert len(kept) == 2 and kept[0].endswith(".pickle") and kept[1].endswith(".sha256")
+    # the plan, and the C and numpy texts emitted from it: each a pickle and its record
+    assert len(kept) == 6
+    assert {name.rsplit(".", 1)[1] for name in kept} == {"pickle", "sha256"}
     for name in kept:
         assert stat.S_IMODE((cache / "plans" / name).stat().st_mode) == 0o600
-    # another process, another hash seed: nothing derived, the same code
+    # another process, another hash seed: nothing derived or emitted, the same code
     assert run(cache, "forbid", PYTHONHASHSEED="2") == first
+    # edited templates: the plan is read back, its texts are emitted again, once per backend
+    tally = tmp_path / "tally"
+    assert run(cache, "retemplate", str(tally)) == first
+    assert tally.read_text().split() == ["emitted", "emitted"]
     # the kept plan is the one a fresh derivation gives: the same texts without the cache
     assert run(tmp_path / "other", "derive", SYMKIN_PLAN_CACHE="off") == first
     assert plans(tmp_path / "other") == []

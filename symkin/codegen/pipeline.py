@@ -8,9 +8,10 @@ the tests and benchmarks) goes through here; a backend is one row of :data:`REGI
     c        <name>.h, <name>.c           the library, compiled, via ctypes  float64
 
 Each step is cached by content: a plan per Analysis and options (:func:`plan_for`), the texts
-per plan, backend, source and precision (:func:`emit`), the loaded evaluator per digest of its
-texts (:func:`load`); the C library is also cached on disk by :mod:`.toolchain` (or compiled in
-a temporary folder that is removed at once, ``transient=True``, when nothing may be written).
+per plan, backend, source and precision (:func:`emit`; on disk too, beside a plan kept by
+content), the loaded evaluator per digest of its texts (:func:`load`); the C library is also
+cached on disk by :mod:`.toolchain` (or compiled in a temporary folder that is removed at once,
+``transient=True``, when nothing may be written).
 
 A new backend is a folder under ``backends/`` (printer, kernels, templates, ``emit``) and one
 :class:`Backend` row here: its emit adapter and its loader.
@@ -33,7 +34,7 @@ import numpy as np
 from ..core import levels
 from ..core.errors import InputError
 from ..kinematics.analysis import Analysis
-from . import plan_cache, toolchain
+from . import plan_cache, templating, toolchain
 from .plan import Plan, ScenePlan, plan, with_derivation
 
 
@@ -467,7 +468,14 @@ def emit(p: Plan, name: str, source: str, precision: str = "float64") -> tuple[s
         texts = _TEXTS.setdefault(p, {})
         found = texts.get(key)
         if found is None:
-            found = texts[key] = tuple(b.emit(p, source, precision))
+            # kept on disk by the plan's content key: another process (each `symkin eval`,
+            # each test worker) that reads the plan back finds its texts too
+            found = texts[key] = plan_cache.derived_from(
+                p,
+                (name, source, precision, templating.digest()),
+                lambda: tuple(b.emit(p, source, precision)),
+                tuple,
+            )
         return found
 
 

@@ -21,7 +21,8 @@ import importlib.metadata
 import os
 import pickle
 import sys
-from collections.abc import Callable, Iterator, Mapping
+import weakref
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from contextvars import ContextVar
 from pathlib import Path
@@ -161,9 +162,38 @@ def cached(analysis: Analysis, options: Mapping[str, Any], derive: Callable[[], 
     return kept(analysis, options, derive, Plan)
 
 
+#: each plan kept or found in this process -> its content key (what is derived from the plan,
+#: its emitted texts, is kept on disk by it: derived_from)
+_KEYS: weakref.WeakKeyDictionary[Plan, str] = weakref.WeakKeyDictionary()
+
+
 def _remember(key: str, value: _T) -> _T:
     """`value` kept in memory under `key` (the one already there wins), most recent last."""
-    return _MEMORY.keep(key, value)
+    value = _MEMORY.keep(key, value)
+    if isinstance(value, Plan):
+        _KEYS[value] = key
+    return value
+
+
+def derived_from(p: Plan, parts: Sequence[str], make: Callable[[], _T], kind: type[_T]) -> _T:
+    """What `make()` derives from plan `p` and `parts` (a backend's emitted texts: its name, the
+    file, the templates' digest), an instance of `kind`, kept on disk beside the plan: found
+    there when `p` was kept by content (so it is known by its key) and the same parts were
+    derived from it before, by any process; else made and written. Nothing is kept in memory
+    here (the caller keeps it with the plan)."""
+    base = _KEYS.get(p)
+    folder = _folder() if base is not None and _mode() == "disk" else None
+    if base is None or folder is None:
+        return make()
+    key = hashlib.sha256("\x1f".join((base, kind.__qualname__, *parts)).encode()).hexdigest()
+    found = _read(folder, key, kind)
+    if found is None:
+        with toolchain.exclusive(f"plan-{key}"):
+            found = _read(folder, key, kind)
+            if found is None:
+                found = make()
+                _write(folder, key, found)
+    return found
 
 
 def _lookup(key: str, kind: type[_T], folder: Path | None) -> _T | None:

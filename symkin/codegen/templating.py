@@ -3,10 +3,12 @@ runtimes the generated files hold (docs/runtime.md)."""
 
 from __future__ import annotations
 
+import hashlib
 import re
 from collections.abc import Iterable
 from functools import cache
 from importlib import resources
+from importlib.resources.abc import Traversable
 
 import jinja2
 
@@ -40,6 +42,24 @@ def environment(latex: bool = False) -> jinja2.Environment:
     env.filters["cstring"] = c_string
     env.globals["runtime"] = runtime
     return env
+
+
+@cache
+def digest() -> str:
+    """The sha256 of every packaged template and runtime (names and bytes, as on disk when first
+    asked): what an emitted text is made of besides its plan (symkin.codegen.pipeline.emit)."""
+    h = hashlib.sha256()
+
+    def walk(folder: Traversable, prefix: str) -> None:
+        for entry in sorted(folder.iterdir(), key=lambda e: e.name):
+            if entry.is_dir():
+                if entry.name != "__pycache__":
+                    walk(entry, f"{prefix}{entry.name}/")
+            else:
+                h.update(f"{prefix}{entry.name}".encode() + b"\0" + entry.read_bytes() + b"\0")
+
+    walk(resources.files("symkin.templates"), "")
+    return h.hexdigest()
 
 
 #: A runtime file's marker line: what follows it is what every generated file holds.

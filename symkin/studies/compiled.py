@@ -317,7 +317,8 @@ def compile(
     check_fabricated_pose(analysis)
     mech = analysis.mechanism
     held = {k: v for k, v in held.items() if k in analysis.mechanism.inputs}
-    with plan_cache.memory_only():  # nothing written, not even the plan (docs/generated-code.md)
+    # nothing written, not even the plan or its texts (docs/generated-code.md)
+    with plan_cache.memory_only():
         p = pipeline.plan_for(
             analysis,
             points=points,
@@ -327,13 +328,15 @@ def compile(
             fixed=held,
             pruned_inputs=pruned,
         )
-    source = Path(mech.path).name
+        source = Path(mech.path).name
+        texts = () if backend == "numpy" else pipeline.emit(p, backend, source)
+        numpy = pipeline.emit(p, "numpy", source)[0]
     return Compiled(
         Sources(
             name=mech.name,
             backend=backend,
-            texts=() if backend == "numpy" else pipeline.emit(p, backend, source),
-            numpy=pipeline.emit(p, "numpy", source)[0],
+            texts=texts,
+            numpy=numpy,
             inputs=p.drives or p.inputs,
             params=tuple(q.name for q in p.parameters),
             points=p.shown_points,
