@@ -97,11 +97,7 @@ _OPTIMIZED: Recent[tuple[Routine, str], Routine] = Recent(128)
 def optimize(routine: Routine, prefix: str = "_tmp") -> Routine:
     """One CSE pass over the routine; temporaries are scheduled just before their first use.
     The same routine optimised again is the routine found before (the pass is deterministic)."""
-    key = (routine, prefix)
-    found = _OPTIMIZED.get(key)
-    if found is None:
-        found = _OPTIMIZED.keep(key, _optimize(routine, prefix))
-    return found
+    return _OPTIMIZED.get_or_make((routine, prefix), lambda: _optimize(routine, prefix))
 
 
 def _optimize(routine: Routine, prefix: str) -> Routine:

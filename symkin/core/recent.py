@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import threading
 from collections import OrderedDict
-from collections.abc import Hashable
+from collections.abc import Callable, Hashable
 from typing import Generic, TypeVar
 
 _K = TypeVar("_K", bound=Hashable)
@@ -38,3 +38,9 @@ class Recent(Generic[_K, _V]):
             while len(self._items) > self.size:
                 self._items.popitem(last=False)
             return value
+
+    def get_or_make(self, key: _K, make: Callable[[], _V]) -> _V:
+        """The value under `key`, else `make()` kept under it (made outside the lock: two
+        threads may both make it, and share the one kept first)."""
+        found = self.get(key)
+        return found if found is not None else self.keep(key, make())

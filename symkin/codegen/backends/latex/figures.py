@@ -96,8 +96,7 @@ def _kept(draw: Callable[..., bytes]) -> Callable[..., bytes]:
         except Exception:  # e.g. a local function among the inputs
             return draw(*args, **kwargs)
         key = f"{draw.__name__}:{hashlib.sha256(data).hexdigest()}"
-        found = _DRAWN.get(key)
-        return found if found is not None else _DRAWN.keep(key, draw(*args, **kwargs))
+        return _DRAWN.get_or_make(key, lambda: draw(*args, **kwargs))
 
     return kept
 
