@@ -53,3 +53,24 @@ def test_a_module_object_gets_lambdifys_own_printer() -> None:
     fn = lambdify([x], sp.Float("0.1", 30) * x, [mpmath])
     with mpmath.workdps(30):
         assert abs(fn(mpmath.mpf(1)) - mpmath.mpf("0.1")) < mpmath.mpf(10) ** -28
+
+
+def test_the_mpmath_evaluation_prints_each_function_once() -> None:
+    """symkin.studies.evaluation.mpmath_function: the same arguments and expressions (lists or
+    tuples alike) give the function printed before; other expressions or another argument
+    order a new one, whose values are its own (checked against sympy's evaluation)."""
+    from symkin.studies.evaluation import mpmath_function
+
+    args, exprs = _exprs()
+    first = mpmath_function(args, exprs)
+    assert mpmath_function(list(args), [exprs[0], exprs[1], tuple(exprs[2])]) is first
+    swapped = mpmath_function(args[::-1], exprs)
+    other = mpmath_function(args, [exprs[0] + 1])
+    assert swapped is not first and other is not first
+    x, y = args
+    with mpmath.workdps(40):
+        at = {x: sp.Rational(3, 10), y: sp.Rational(-11, 10)}
+        exact = mpmath.mpf(str(sp.N(exprs[0].subs(at), 40)))
+        assert abs(first(mpmath.mpf("0.3"), mpmath.mpf("-1.1"))[0] - exact) < 1e-28
+        assert abs(swapped(mpmath.mpf("-1.1"), mpmath.mpf("0.3"))[0] - exact) < 1e-28
+        assert abs(other(mpmath.mpf("0.3"), mpmath.mpf("-1.1"))[0] - exact - 1) < 1e-28

@@ -28,6 +28,7 @@ from ..codegen import pipeline, plan_cache
 from ..codegen.backends.numpy.kernels import float64_namespace
 from ..core import levels
 from ..core.errors import AssemblyError, InputError, suggest
+from ..core.recent import Recent
 from ..core.settings import SOLVER
 from ..kinematics.analysis import Analysis
 from ..model import expressions, special
@@ -964,7 +965,28 @@ class _ArgumentPrinter(FastPrecedence, MpmathPrinter):
         return name if name is not None else super()._print_Symbol(expr)
 
 
+#: The last mpmath functions printed, by their arguments and expressions: analyses of other
+#: files share many (a mechanism with one plate stiffer has the same kinematics).
+_FUNCTIONS: Recent[tuple, Callable] = Recent(256)
+
+
+def _frozen(exprs) -> object:
+    return tuple(_frozen(e) for e in exprs) if isinstance(exprs, list | tuple) else exprs
+
+
 def mpmath_function(args: Sequence[sp.Symbol], exprs) -> Callable:
+    """`exprs` (an expression or nested lists of them) as a Python function of `args`
+    evaluated with mpmath and symkin's special functions; printed once per arguments and
+    expressions (the last 256 kept)."""
+    key = (tuple(args), _frozen(exprs))
+    try:
+        hash(key)
+    except TypeError:  # e.g. a mutable matrix among them: printed every time
+        return _mpmath_function(args, exprs)
+    return _FUNCTIONS.get_or_make(key, lambda: _mpmath_function(args, exprs))
+
+
+def _mpmath_function(args: Sequence[sp.Symbol], exprs) -> Callable:
     """`exprs` (an expression or nested lists of them) as a Python function of `args`
     evaluated with mpmath and symkin's special functions.
 
