@@ -16,6 +16,7 @@ first-order term in l/L, ``exact`` all orders.
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass
 
 import mpmath
@@ -110,9 +111,12 @@ def truncated(degree: int):
     return provider
 
 
+@functools.lru_cache(maxsize=1024)
 def _taylor(expr: sp.Expr, degree: int) -> sp.Expr:
     """Taylor polynomial of `expr` in θ: symbolic where sympy can, else numeric (mpmath, 40
-    digits) coefficients of the expression with its parameters at their values."""
+    digits) coefficients of the expression with its parameters at their values. Kept per
+    expression and degree: sympy's series is most of a truncated variant's derivation, and the
+    plates of one model (every hinge of a file, every variant chosen again) share it."""
     numeric_only = any(
         type(f).__name__.startswith(("elastica", "carlson")) for f in expr.atoms(sp.Function)
     )
