@@ -80,7 +80,8 @@ def shoot(k0, lx, ly, tol: float, energy: bool = False, stretch=None, shear=None
 
 
 def _steps(k0, lx, ly, steps: int, tol: float, energy: bool, compliance) -> PlateEnd | None:
-    h = mpmath.mpf(1) / steps if arith.is_mp(k0) else 1 / steps
+    exact = arith.is_mp(k0)  # mpmath numbers
+    h = mpmath.mpf(1) / steps if exact else 1 / steps
     zero = k0 * 0
     psi, om, x, y = zero, k0, zero, zero
     work = zero if energy else None
@@ -116,7 +117,8 @@ def _steps(k0, lx, ly, steps: int, tol: float, energy: bool, compliance) -> Plat
             # ∫ψ'² over the step: the square's coefficients by convolution
             for k in range(2 * len(slope) - 1):
                 lo, hi = max(0, k - len(slope) + 1), min(k, len(slope) - 1)
-                square = (slope[lo : hi + 1] * slope[k - hi : k - lo + 1][::-1]).sum(axis=0)
+                left, right = slope[lo : hi + 1], slope[k - hi : k - lo + 1][::-1]
+                square = _dots(left, right[None])[0] if exact else (left * right).sum(axis=0)
                 work = work + square * rise[k]
             if compliance is not None:
                 # ε_a f_N² + γ_a f_Q² = γ_a |λ|² + d f_N², f_N² linear in cos 2ψ and sin 2ψ
@@ -139,6 +141,7 @@ def _series(psi0, om0, lx, ly, h, tol: float, compliance):
     step of length h, until they are below tol: arrays whose first axis is the power of σ."""
     shape = np.shape(psi0)
     kind = np.result_type(psi0, om0, lx, ly)
+    exact = arith.is_mp(psi0)  # mpmath numbers
     size = MAX_TERMS + 2
     reissner = compliance is not None
     p = np.zeros((size + 1, *shape), kind)
@@ -164,7 +167,10 @@ def _series(psi0, om0, lx, ly, h, tol: float, compliance):
     small = 0
     for k in range(MAX_TERMS):
         if k:
-            sums = (jp[1 : k + 1] * W[:, k - 1 :: -1][:, :k]).sum(axis=1)
+            if exact:
+                sums = _dots(jp[1 : k + 1], W[:, k - 1 :: -1][:, :k])
+            else:
+                sums = (jp[1 : k + 1] * W[:, k - 1 :: -1][:, :k]).sum(axis=1)
             W[:, k] = sums[partner] * factor / k
         C, S = W[0, k], W[1, k]
         rhs = lx * S - ly * C
@@ -185,3 +191,16 @@ def _series(psi0, om0, lx, ly, h, tol: float, compliance):
                 return p[: n + 2], W[1, :n], W[0, :n], W[3, :n], W[2, :n], size
             return p[: n + 2], W[1, :n], W[0, :n], None, None, size
     return None
+
+
+def _dots(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Σ_j a[j] b[i, j] for every i and element, of mpmath numbers: mpmath's fdot, which sums
+    the products exactly and rounds once (a third of the time of numpy's products and sum of
+    mpf objects)."""
+    n, rows = a.shape[0], b.shape[0]
+    a2, b2 = a.reshape(n, -1), b.reshape(rows, n, -1)
+    out = np.empty((rows, a2.shape[1]), dtype=object)
+    for i in range(rows):
+        for e in range(a2.shape[1]):
+            out[i, e] = mpmath.fdot(a2[:, e], b2[i, :, e])
+    return out.reshape((rows, *a.shape[1:]))
