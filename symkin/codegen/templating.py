@@ -47,8 +47,9 @@ def environment(latex: bool = False) -> jinja2.Environment:
 @cache
 def digest() -> str:
     """The sha256 of every packaged template and runtime (names and bytes, as on disk when first
-    asked): what an emitted text is made of besides its plan (symkin.codegen.pipeline.emit)."""
-    h = hashlib.sha256()
+    asked) and of Jinja2's version: what an emitted text is made of besides its plan
+    (symkin.codegen.pipeline.emit)."""
+    h = hashlib.sha256(f"jinja2 {jinja2.__version__}\0".encode())
 
     def walk(folder: Traversable, prefix: str) -> None:
         for entry in sorted(folder.iterdir(), key=lambda e: e.name):
