@@ -187,13 +187,18 @@ def derived_from(p: Plan, parts: Sequence[str], make: Callable[[], _T], kind: ty
         return make()
     key = hashlib.sha256("\x1f".join((base, kind.__qualname__, *parts)).encode()).hexdigest()
     found = _read(folder, key, kind)
-    if found is None:
-        with toolchain.exclusive(f"plan-{key}"):
-            found = _read(folder, key, kind)
-            if found is None:
-                found = make()
-                _write(folder, key, found)
-    return found
+    return found if found is not None else _on_disk(folder, key, make, kind)
+
+
+def _on_disk(folder: Path, key: str, derive: Callable[[], _T], kind: type[_T]) -> _T:
+    """What is kept in `folder` under `key`, else `derive()`d and written: one process derives,
+    another that needs it meanwhile waits on the lock and reads it."""
+    with toolchain.exclusive(f"plan-{key}"):
+        value = _read(folder, key, kind)
+        if value is None:
+            value = derive()
+            _write(folder, key, value)
+    return value
 
 
 def _lookup(key: str, kind: type[_T], folder: Path | None) -> _T | None:
@@ -234,12 +239,7 @@ def kept(
     if value is None and folder is None:
         value = derive()
     elif value is None:
-        # one process derives, another that needs it meanwhile waits and reads it
-        with toolchain.exclusive(f"plan-{key}"):
-            value = _read(folder, key, kind)
-            if value is None:
-                value = derive()
-                _write(folder, key, value)
+        value = _on_disk(folder, key, derive, kind)
     return _remember(key, value)
 
 
