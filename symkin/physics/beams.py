@@ -141,7 +141,7 @@ def _series(psi0, om0, lx, ly, h, tol: float, compliance):
     step of length h, until they are below tol: arrays whose first axis is the power of σ."""
     shape = np.shape(psi0)
     kind = np.result_type(psi0, om0, lx, ly)
-    exact = kind == np.dtype(object)  # mpmath numbers
+    exact = arith.is_mp(psi0)  # mpmath numbers (as _steps tells them)
     size = MAX_TERMS + 2
     reissner = compliance is not None
     p = np.zeros((size + 1, *shape), kind)
