@@ -10,6 +10,7 @@ itself.
 from __future__ import annotations
 
 import math
+import os
 import shutil
 import subprocess
 
@@ -17,6 +18,7 @@ import mpmath as mp
 import numpy as np
 import pytest
 import sympy as sp
+from evaluators import require_compiler
 
 from symkin.codegen.backends.c import kernels as c_kernels
 from symkin.codegen.backends.c.printer import CPrinter
@@ -542,8 +544,7 @@ BD_ODE = {
 
 def _shoot(alpha: float):
     """Shooting solution of the elastica ODE in float64 (scipy DOP853, rtol 1e-13)."""
-    integrate = pytest.importorskip("scipy.integrate")
-    optimize = pytest.importorskip("scipy.optimize")
+    from scipy import integrate, optimize  # a test dependency (pyproject's `test` extra)
 
     def rhs(_, u):
         return [u[1], -alpha * math.cos(u[0]), math.cos(u[0]), math.sin(u[0])]
@@ -662,9 +663,8 @@ def test_expr_model():
 
 
 def test_c_snippets_compile_and_agree(tmp_path):
-    cc = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
-    if cc is None:
-        pytest.skip("no C compiler")
+    require_compiler()
+    cc = shutil.which(os.environ.get("CC", "cc"))
     f64 = np_kernels.float64_namespace()
     # the beam-column kernels' `_at(p, t)` forms take two arguments: the one-argument kernels
     # call them (tests/test_beam_column_kernels.py checks those on a dense grid)
@@ -724,9 +724,8 @@ def test_c_snippets_compile_and_agree(tmp_path):
 def test_model_expressions_in_generated_c(tmp_path):
     """The C backend's printing of df, dg and their derivatives (calling symkin_<kernel>(...))
     compiles with the kernels' C source and meets the float64 accuracy bound."""
-    cc = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
-    if cc is None:
-        pytest.skip("no C compiler")
+    require_compiler()
+    cc = shutil.which(os.environ.get("CC", "cc"))
     keys = sorted(MODELS)
     names, funcs = set(), []
     for key in keys:

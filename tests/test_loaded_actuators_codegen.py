@@ -23,8 +23,8 @@ import math
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+from evaluators import require_compiler
 from test_loaded_actuators import AGREEMENT, PAYLOAD, driven, five_bar
-from test_loaded_reported_codegen import compiler_or_fail
 
 import symkin
 from symkin.cli.commands import main
@@ -106,8 +106,7 @@ def test_generated_c_loaded_with_a_stroke(runs, name):
     """The C evaluator (templates/c/actuators.c, reduced.c) at loaded with a stroke actuator:
     symkin.evaluate --backend c, one configuration per call, against the Python level and
     equilibrium; the surrogates' turn in the compliant angles and the links."""
-    if not compiler_or_fail():
-        return
+    require_compiler()
     an, _, _, refs = runs(name)
     tol = AGREEMENT[CASES[name][2]]
     for v, (python, exact) in zip(CASES[name][1], refs):
@@ -158,8 +157,7 @@ def test_generated_c_loaded_with_a_force_under_a_payload(runs):
     under a 5 N payload; symkin.evaluate --backend c) against the Python level and
     equilibrium: the deviation, the rigid reference at the stroke the force produced, the
     compliant and rigid angles, the links' rotations and deviations."""
-    if not compiler_or_fail():
-        return
+    require_compiler()
     name = "parallelogram_force_payload"
     an, _, _, refs = runs(name)
     for v, (python, exact) in zip(CASES[name][1], refs):
@@ -184,8 +182,7 @@ def test_generated_c_loaded_five_bar_with_a_hinge_and_a_force(c_forces, k):
     against the Python level (reduced_equilibrium in mpmath, its rigid reference re-solved at
     the stroke the force produced): every point's deviation and the hinges' compliant turn. The
     third configuration, pulled near the toggle, goes through continuation in both."""
-    if not compiler_or_fail():
-        return
+    require_compiler()
     name = "five_bar_hinge_and_force"
     text, inputs = FORCES[name]
     an, got = c_forces(name, text, inputs)
@@ -211,8 +208,7 @@ def test_cli_numpy_and_c_backends_with_actuators(tmp_path, capsys):
     assert math.dist(got.deviation, want.deviation) <= AGAINST_PYTHON * want.norm
     force = tmp_path / "force.toml"
     force.write_text(driven("force"))
-    if not compiler_or_fail():
-        return
+    require_compiler()
     argv = ["eval", str(force), "--input", "piezo=0.5", "--level", "loaded", "--json"]
     out = {}
     for backend in ("sympy", "c"):

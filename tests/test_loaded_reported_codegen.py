@@ -118,15 +118,6 @@ def c_report(plan, inputs: dict[str, list[float]], lib=None) -> dict:
     }
 
 
-def compiler_or_fail() -> bool:
-    """Whether cc is there (CI=true: it must be, or the test fails)."""
-    try:
-        require_compiler()
-    except pytest.skip.Exception:
-        return False
-    return True
-
-
 def reported(backend: str, plan, module, inputs: dict[str, list[float]]) -> dict:
     if backend == "c":
         return c_report(plan, inputs)
@@ -205,8 +196,8 @@ def test_point_stiffness_by_central_differences_of_the_solver(built, name, point
     _, plan, module = built(name)
     inputs = {k: v[:1] for k, v in BATCH[name].items()}
     want = central_stiffness(name, point, {k: v[0] for k, v in inputs.items()})
-    backends = ["numpy"] + (["c"] if compiler_or_fail() else [])
-    for backend in backends:
+    require_compiler()
+    for backend in ("numpy", "c"):
         got = reported(backend, plan, module, inputs)["stiffness"][point][..., 0]
         # measured: four-bar 9.6e-11, parallelogram 7.5e-10 (of each row's largest entry), both
         assert rows_close(got, want, 1e-8), (backend, got, want)
@@ -268,7 +259,8 @@ def test_a_held_input_is_reported_too():
         an, "numpy", "test", sensitivity=False, fixed={"P": sp.Rational(3, 200)}
     )
     want = python_report(an, {"O1": 0.02, "P": 0.015})
-    for backend in ["numpy"] + (["c"] if compiler_or_fail() else []):
+    require_compiler()
+    for backend in ("numpy", "c"):
         res = reported(backend, plan, module, {"O1": [0.02]})
         assert set(res["inputs"]) == {"O1", "P"}
         for h, w in want.inputs.items():

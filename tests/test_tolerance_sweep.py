@@ -177,7 +177,8 @@ def test_same_seed_same_bits_whatever_the_scheduler_and_chunking():
 
 def test_a_local_distributed_cluster_gives_the_same_statistics():
     """A real distributed.LocalCluster with two worker processes, reached by its address."""
-    distributed = pytest.importorskip("distributed")
+    import distributed  # a dependency of symkin (pyproject)
+
     reference = sweep_values("threads:2", None)
     with distributed.LocalCluster(
         n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None

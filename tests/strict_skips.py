@@ -1,0 +1,27 @@
+"""Under CI=true a skipped test is a failed test: .ci/run installs every tool the suite needs (a
+C compiler, TeX Live, poppler, CalculiX) and every package it imports, so a skip there means a
+missing install step, not a check that may be left out. conftest.py takes the hook from here;
+tests/test_strict_skips.py runs it on a test of its own."""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    """Turn a skip (a `skip` call, `skipif`, `importorskip`) into a failure when CI=true; an
+    expected failure (`xfail`) stays what it is."""
+    outcome = yield
+    report = outcome.get_result()
+    if os.environ.get("CI") != "true" or not report.skipped or hasattr(report, "wasxfail"):
+        return
+    longrepr = report.longrepr
+    reason = longrepr[2] if isinstance(longrepr, tuple) and len(longrepr) == 3 else str(longrepr)
+    report.outcome = "failed"
+    report.longrepr = (
+        f"skipped under CI=true ({reason}): CI runs every test, so .ci/run must install what "
+        "this one needs"
+    )
