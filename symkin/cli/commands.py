@@ -173,7 +173,7 @@ def _tolerance(args: argparse.Namespace) -> str:
     mech = load(args.file)
     nominal = {p.name: float(p.value) for p in mech.parameters}
     vary = variation.parse_vary(args.vary, mech, nominal, kinds=("pm",))
-    grid = variation.parse_grid(args.input, mech)
+    grid = variation.parse_grid(args.input, mech, limit=_max_evaluations(args))
     tolerance.check_level(args.level)  # before compiling anything
     if args.backend is None:
         # the C's `loaded` has no sensitivities with force actuators: the numpy module's then
@@ -185,6 +185,17 @@ def _tolerance(args: argparse.Namespace) -> str:
     return json.dumps(result.as_json(), indent=2) + "\n" if args.json else tolerance.text(result)
 
 
+def _max_evaluations(args: argparse.Namespace) -> int:
+    """--max-evaluations, checked: a positive number of evaluations."""
+    if args.max_evaluations < 1:
+        raise InputError(
+            f"--max-evaluations must be positive, got {args.max_evaluations}",
+            entry="--max-evaluations",
+            hint="e.g. --max-evaluations 1000000000",
+        )
+    return args.max_evaluations
+
+
 def _sweep(args: argparse.Namespace) -> str:
     import json
 
@@ -193,7 +204,13 @@ def _sweep(args: argparse.Namespace) -> str:
     mech = load(args.file)
     nominal = {p.name: float(p.value) for p in mech.parameters}
     vary = variation.parse_vary(args.vary, mech, nominal)
-    grid = variation.parse_grid(args.input, mech, points=variation.DEFAULT_POINTS)
+    grid = variation.parse_grid(
+        args.input,
+        mech,
+        points=variation.DEFAULT_POINTS,
+        limit=_max_evaluations(args),
+        samples=max(1, args.samples),
+    )
     if args.samples < 2:
         raise InputError(
             f"--samples must be at least 2, got {args.samples}",
@@ -239,6 +256,24 @@ def _sweep(args: argparse.Namespace) -> str:
                 hint="choose a path you can write to",
             ) from None
     return json.dumps(result.as_json(), indent=2) + "\n" if args.json else sweep.text(result)
+
+
+def _evaluations_option(command: argparse.ArgumentParser) -> None:
+    """--max-evaluations: the ceiling on a command's evaluations (variation.MAX_EVALUATIONS)."""
+    command.add_argument(
+        "--max-evaluations",
+        type=int,
+        default=variation_limit(),
+        metavar="N",
+        help=f"refuse more than N evaluations, grid x samples ({variation_limit():.0e})",
+    )
+
+
+def variation_limit() -> int:
+    """The default ceiling, read where it is defined."""
+    from ..studies.variation import MAX_EVALUATIONS
+
+    return MAX_EVALUATIONS
 
 
 def parser() -> argparse.ArgumentParser:
@@ -375,6 +410,7 @@ def parser() -> argparse.ArgumentParser:
         help="c (default), or numpy; at loaded with force actuators: numpy (default)",
     )
     to.add_argument("--json", action="store_true", help="machine-readable output")
+    _evaluations_option(to)
     to.set_defaults(run=_tolerance)
     sw = command("sweep", "Monte Carlo over parameter spreads, on Dask")
     sw.add_argument("file", metavar="FILE")
@@ -388,6 +424,7 @@ def parser() -> argparse.ArgumentParser:
         "--input", action="append", metavar="H=LO:HI:N", help="input grid (default -0.2:0.2:25)"
     )
     sw.add_argument("--samples", type=int, default=1000, metavar="S", help="samples (1000)")
+    _evaluations_option(sw)
     sw.add_argument("--seed", type=int, default=0, metavar="K", help="random seed (0)")
     sw.add_argument("--level", choices=levels.GENERATED, default=levels.DEFAULT)
     sw.add_argument("--backend", choices=pipeline.BACKENDS, default="c")

@@ -33,6 +33,10 @@ KINDS = ("pm", "uniform", "normal")
 DEFAULT_POINTS = 25
 #: The input range when an input is not given.
 DEFAULT_RANGE = (-0.2, 0.2)
+#: The most evaluations (grid configurations, times samples in a sweep) one command runs unless
+#: `--max-evaluations` raises it: refused before any work, so one mistyped number cannot take
+#: the machine (1e9 grid values alone are 8 GB of float64; docs/cli.md).
+MAX_EVALUATIONS = 10**8
 _CALL = re.compile(r"^\s*(normal|uniform)\s*\((.*)\)\s*$", re.DOTALL)
 
 
@@ -207,8 +211,51 @@ class Grid:
         mesh = np.meshgrid(*self.values.values(), indexing="ij")
         return np.stack([m.reshape(-1) for m in mesh], axis=1)
 
+    @property
+    def size(self) -> int:
+        """The number of configurations (every combination of the inputs' values)."""
+        return math.prod(len(v) for v in self.values.values())
+
     def as_json(self) -> dict:
         return {k: [float(v[0]), float(v[-1]), len(v)] for k, v in self.values.items()}
+
+
+def check_evaluations(
+    mech: Mechanism,
+    counts: Mapping[str, int],
+    limit: int = MAX_EVALUATIONS,
+    samples: int = 1,
+) -> None:
+    """Refuse (exit 2), before any array is made, a grid of `counts` values per input (times
+    `samples` parameter sets) above `limit` evaluations, naming the option and the memory the
+    inputs and results alone would take (float64 input rows and two coordinates per point)."""
+    total = math.prod(counts.values()) * samples
+    if total <= limit:
+        return
+    width = len(counts) + 2 * max(1, len(mech.points))
+    memory = total * 8 * width
+    entry = "--input" if samples == 1 else "--input, --samples"
+    given = " x ".join(f"{n} ({h})" for h, n in counts.items() if n > 1) or "1"
+    if samples > 1:
+        given += f" x {samples} samples"
+    raise InputError(
+        f"{given} = {total:.3g} evaluations, more than the limit of {limit:.3g} "
+        f"(its inputs and results alone would take at least {_bytes(memory)} of memory)",
+        file=mech.path,
+        entry=entry,
+        hint="use fewer points (H=LO:HI:N) or samples, or raise the limit with "
+        "--max-evaluations N if the machine has the memory",
+    )
+
+
+def _bytes(n: float) -> str:
+    """A byte count in the largest unit that keeps it at least 1 (B, kB, MB, GB, TB, ...)."""
+    units = ("B", "kB", "MB", "GB", "TB", "PB", "EB")
+    k = 0
+    while n >= 1000 and k < len(units) - 1:
+        n /= 1000
+        k += 1
+    return f"{n:.3g} {units[k]}"
 
 
 def parse_grid(
@@ -216,13 +263,17 @@ def parse_grid(
     mech: Mechanism,
     option: str = "--input",
     points: int = DEFAULT_POINTS,
+    limit: int = MAX_EVALUATIONS,
+    samples: int = 1,
 ) -> Grid:
     """H=V, H=LO:HI or H=LO:HI:N options (radians, or a stroke actuator's file unit;
     expressions allowed); an input hinge not given spans DEFAULT_RANGE with `points` values, an
-    actuator ± its default stroke span (Mechanism.stroke_spans)."""
+    actuator ± its default stroke span (Mechanism.stroke_spans). More than `limit` evaluations
+    (the configurations times `samples`) are refused before the grid is made."""
     inputs = mech.drives
     strokes = mech.stroke_spans()
     given: dict[str, np.ndarray] = {}
+    counts: dict[str, int] = {}
     for item in items or ():
         name, sep, span = item.partition("=")
         name = name.strip()
@@ -272,6 +323,14 @@ def parse_grid(
                 hint="an input is its plate's rotation from the as-fabricated "
                 "pose: keep it within -pi..pi",
             )
-        given[name] = np.array(ends[:1]) if len(ends) == 1 else np.linspace(ends[0], ends[1], count)
+        counts[name] = count
+        given[name] = np.array(ends[:2])
+    check_evaluations(mech, {n: counts.get(n, points) for n in inputs}, limit, samples)
     default = {n: (-strokes[n], strokes[n]) if n in strokes else DEFAULT_RANGE for n in inputs}
-    return Grid({n: given.get(n, np.linspace(*default[n], points)) for n in inputs})
+    values = {}
+    for n in inputs:
+        ends = given.get(n, np.array(default[n]))
+        values[n] = (
+            ends[:1] if len(ends) == 1 else np.linspace(ends[0], ends[1], counts.get(n, points))
+        )
+    return Grid(values)

@@ -1,0 +1,99 @@
+"""Work refused before it starts (docs/cli.md, "A ceiling on the work"): a grid or a sweep past
+`--max-evaluations` exits 2 naming the option, within a few seconds and a small memory, checked
+in a separate process under an address-space limit."""
+
+from __future__ import annotations
+
+import os
+import resource
+import subprocess
+import sys
+import time
+
+import pytest
+from cli_runs import symkin_cli
+from conftest import EXAMPLES, ROOT
+
+import symkin
+from symkin.core.errors import InputError
+from symkin.studies import variation
+
+FOUR_BAR = str(EXAMPLES / "four_bar.toml")
+VARY = ["--vary", "l=±0.0001"]
+
+
+@pytest.mark.parametrize(
+    "argv, words",
+    [
+        (
+            ["tolerance", FOUR_BAR, *VARY, "--input", "A0=-0.2:0.2:1000000000"],
+            ["--input", "1e+09 evaluations", "limit of 1e+08", "--max-evaluations"],
+        ),
+        (
+            ["sweep", FOUR_BAR, *VARY, "--input", "A0=-0.2:0.2:1000000", "--samples", "1000"],
+            ["--input, --samples", "1000 samples", "1e+09 evaluations", "--max-evaluations"],
+        ),
+        (
+            [
+                "tolerance",
+                FOUR_BAR,
+                *VARY,
+                "--input",
+                "A0=-0.2:0.2:1001",
+                "--max-evaluations",
+                "1000",
+            ],
+            ["1001 (A0) = 1e+03 evaluations", "limit of 1e+03"],
+        ),
+        (
+            ["tolerance", FOUR_BAR, *VARY, "--max-evaluations", "0"],
+            ["--max-evaluations must be positive"],
+        ),
+    ],
+)
+def test_too_many_evaluations_exit_2_naming_the_option(argv, words):
+    run = symkin_cli(*argv)
+    assert run.returncode == 2, run.stderr
+    assert "four_bar.toml" in run.stderr or "--max-evaluations" in run.stderr
+    for w in words:
+        assert w in run.stderr, run.stderr
+
+
+def test_the_limit_counts_every_combination_and_the_memory():
+    """Two inputs of 2e4 values each are 4e8 configurations: over the default, though neither
+    alone is; the memory named is 8 bytes x (4 inputs + 2 x points) per evaluation."""
+    mech = symkin.load(EXAMPLES / "nine_bar_platform.toml")
+    counts = dict.fromkeys(mech.drives, 1)
+    variation.check_evaluations(mech, {**counts, "O": 10**4}, limit=10**4)  # at the limit
+    with pytest.raises(InputError) as err:
+        variation.check_evaluations(mech, {**counts, "O": 2 * 10**4, "A": 2 * 10**4})
+    text = str(err.value)
+    assert "20000 (O) x 20000 (A) = 4e+08 evaluations" in text, text
+    width = len(mech.drives) + 2 * len(mech.points)
+    assert f"{4e8 * 8 * width / 1e9:.3g} GB" in text, text
+    given = ["O=-0.1:0.1:3", "A=0:0.1:5", "B=0.01", "K=0.02"]
+    grid = variation.parse_grid(given, mech, limit=15)
+    assert grid.size == 15 == len(grid.rows)
+    with pytest.raises(InputError):
+        variation.parse_grid(given, mech, limit=14)
+
+
+def _limited():
+    """1.5 GB of address space: far below what the refused grid would take (24 GB)."""
+    resource.setrlimit(resource.RLIMIT_AS, (1536 * 2**20, 1536 * 2**20))
+
+
+def test_a_refusal_is_quick_and_small_in_its_own_process():
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
+    start = time.monotonic()
+    run = subprocess.run(
+        [sys.executable, "-m", "symkin", "tolerance", FOUR_BAR, *VARY, "--input",
+         "A0=-0.2:0.2:1000000000"],
+        capture_output=True, text=True, cwd=ROOT, env=env, preexec_fn=_limited, timeout=60,
+    )  # fmt: skip
+    took = time.monotonic() - start
+    assert run.returncode == 2, run.stderr
+    assert "more than the limit" in run.stderr
+    assert took < 5 * 4, took  # 5 s on an idle machine; the suite's workers share the cores
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    assert usage.ru_maxrss < 300 * 1024, usage.ru_maxrss  # KB: under 300 MB
