@@ -9,6 +9,7 @@ import resource
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 from cli_runs import symkin_cli
@@ -97,3 +98,30 @@ def test_a_refusal_is_quick_and_small_in_its_own_process():
     assert took < 5 * 4, took  # 5 s on an idle machine; the suite's workers share the cores
     usage = resource.getrusage(resource.RUSAGE_CHILDREN)
     assert usage.ru_maxrss < 300 * 1024, usage.ru_maxrss  # KB: under 300 MB
+
+
+def test_read_input_takes_only_small_regular_files(tmp_path):
+    """core.files.read_input: a FIFO, /dev/zero, a link to it, a folder and a file over the limit
+    are refused before a byte is read (a FIFO would block forever); a file at the limit is read."""
+    from symkin.core.files import Unreadable, read_input
+
+    fifo = tmp_path / "pipe.toml"
+    os.mkfifo(fifo)
+    link = tmp_path / "zero.toml"
+    link.symlink_to("/dev/zero")
+    big = tmp_path / "big.toml"
+    big.write_bytes(b"#" * 1025)
+    ok = tmp_path / "ok.toml"
+    ok.write_bytes(b"#" * 1024)
+    for path, reason in [
+        (fifo, "not a regular file (a device, FIFO or socket)"),
+        (Path("/dev/zero"), "not a regular file (a device, FIFO or socket)"),
+        (link, "not a regular file (a device, FIFO or socket)"),
+        (tmp_path, "not a regular file (a folder)"),
+        (big, "larger than 1024 bytes"),
+        (tmp_path / "missing.toml", "cannot read the file (No such file or directory)"),
+    ]:
+        with pytest.raises(Unreadable) as err:
+            read_input(path, 1024)
+        assert err.value.reason == reason, path
+    assert read_input(ok, 1024) == b"#" * 1024

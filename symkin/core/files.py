@@ -1,5 +1,5 @@
-"""Checks of the paths a user gives (`-o DIR`, `--plot FILE`), made before any long work starts,
-and writing a set of files all or none (`derive`).
+"""Checks of the paths a user gives (`-o DIR`, `--plot FILE`, the files read), made before any
+long work starts, and writing a set of files all or none (`derive`).
 
 A mistake in a path is bad input (exit code 2) with a `fix:` line, never an internal error after
 minutes of derivation.
@@ -11,10 +11,52 @@ import contextlib
 import fcntl
 import os
 import shutil
+import stat
 import tempfile
 from pathlib import Path
 
 from .errors import InputError
+
+
+class Unreadable(Exception):
+    """Why an input file cannot be read (`reason`) and what to do (`hint`): the caller names the
+    file and the entry in its InputError."""
+
+    def __init__(self, reason: str, hint: str) -> None:
+        super().__init__(reason)
+        self.reason = reason
+        self.hint = hint
+
+
+def read_input(path: str | Path, limit: int) -> bytes:
+    """The bytes of a regular file of at most `limit` bytes. Anything else is refused before a
+    byte is read: a FIFO would block the read forever, /dev/zero (or a link to it) never ends,
+    a folder or a device is not a file; a file larger than `limit`, or grown past it since its
+    size was read, is refused too (raises Unreadable)."""
+    try:
+        info = os.stat(path)  # follows links: a link to /dev/zero is a device
+    except OSError as exc:
+        raise Unreadable(
+            f"cannot read the file ({exc.strerror or exc})", "check the path"
+        ) from None
+    if not stat.S_ISREG(info.st_mode):
+        kind = "a folder" if stat.S_ISDIR(info.st_mode) else "a device, FIFO or socket"
+        raise Unreadable(f"not a regular file ({kind})", "give the path of a text file")
+    too_large = Unreadable(
+        f"larger than {limit} bytes", "a mechanism file or table needs a few kB at most"
+    )
+    if info.st_size > limit:
+        raise too_large
+    try:
+        with open(path, "rb") as f:
+            raw = f.read(limit + 1)
+    except OSError as exc:
+        raise Unreadable(
+            f"cannot read the file ({exc.strerror or exc})", "check the path"
+        ) from None
+    if len(raw) > limit:
+        raise too_large
+    return raw
 
 
 def _existing_ancestor(path: Path) -> Path:
