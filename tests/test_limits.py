@@ -125,3 +125,22 @@ def test_read_input_takes_only_small_regular_files(tmp_path):
             read_input(path, 1024)
         assert err.value.reason == reason, path
     assert read_input(ok, 1024) == b"#" * 1024
+
+
+def test_warnings_reach_the_user_as_one_line_without_library_paths(monkeypatch):
+    """A warning raised inside the package (numpy's RuntimeWarning, say) prints as
+    'symkin: warning: ...' with no path into the installed package; --debug keeps Python's."""
+    import warnings
+
+    from symkin.cli import commands
+
+    def warn(args):
+        warnings.warn("overflow encountered in multiply", RuntimeWarning, stacklevel=1)
+        return "done\n"
+
+    monkeypatch.setattr(commands, "_check", warn)
+    run = symkin_cli("check", FOUR_BAR)
+    assert run.returncode == 0 and run.stdout == "done\n"
+    assert run.stderr == "symkin: warning: overflow encountered in multiply (RuntimeWarning)\n"
+    debug = symkin_cli("--debug", "check", FOUR_BAR)
+    assert "test_limits.py" in debug.stderr and "RuntimeWarning" in debug.stderr

@@ -9,6 +9,7 @@ import argparse
 import re
 import sys
 import traceback
+import warnings
 from collections.abc import Sequence
 
 from .. import __version__, load
@@ -485,8 +486,21 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.stdout, sys.stderr = out, err
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """A warning as one line of symkin's own, without the library path and source line Python
+    prints (those name files inside the installed package; --debug shows them)."""
+    print(f"symkin: warning: {message} ({category.__name__})", file=sys.stderr)
+
+
 def _main(argv: Sequence[str] | None = None) -> int:
     args = parser().parse_args(argv)
+    with warnings.catch_warnings():
+        if not args.debug:
+            warnings.showwarning = _show_warning
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     try:
         output = args.run(args)
     except KeyboardInterrupt:
