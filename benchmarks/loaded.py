@@ -1,7 +1,7 @@
-"""What the `loaded` level (the reduced equilibrium, docs/physics.md "The Newton level") costs in
-the generated C against `exact`, and the `equilibrium` level (mpmath, geometrically exact beams)
-beside them, in one run: per configuration, on the four-bar and mechanisms unlike the examples.
-The target (issue 23): `loaded` at most five times `exact` in C.
+"""What the `loaded` level (the reduced equilibrium, docs/physics.md, "`loaded`: Newton on the
+reduced equilibrium") costs in the generated C against `exact`, and the `equilibrium` level (mpmath,
+geometrically exact beams) beside them, in one run: per configuration, on the four-bar and
+mechanisms unlike the examples. The target (issue 23): `loaded` at most five times `exact` in C.
 
 The C figures are timed inside C (benchmarks/symkin_c.py's harness calls `<name>_evaluate` per
 configuration), best of several repeats, the levels interleaved; `equilibrium` is timed on a few

@@ -1,4 +1,4 @@
-"""The README block of the benchmarks and the targets they are held to."""
+"""The docs/benchmarks.md block of the benchmarks and the targets they are held to."""
 
 from __future__ import annotations
 
@@ -26,7 +26,7 @@ def fmt_exp(x):
 
 
 def render(results: dict) -> str:
-    """The README block of one run's results."""
+    """The docs/benchmarks.md block of one run's results."""
     m = results["machine"]
     ev = results["evaluators"]
     ex = list(ev)
@@ -295,12 +295,12 @@ def targets(results: dict) -> list[dict]:
     return out
 
 
-def write_readme(block: str, start: str = START, end: str = END) -> bool:
-    """Rewrite the block between two README markers; False when there are none."""
-    path = ROOT / "README.md"
+def write_page(block: str, start: str = START, end: str = END) -> bool:
+    """Rewrite the block between two markers of docs/benchmarks.md; False when there are none."""
+    path = ROOT / "docs" / "benchmarks.md"
     text = path.read_text()
     if start not in text or end not in text:
-        log(f"README has no {start} ... {end} markers: not written")
+        log(f"docs/benchmarks.md has no {start} ... {end} markers: not written")
         return False
     head, rest = text.split(start, 1)
     _, tail = rest.split(end, 1)

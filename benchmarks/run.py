@@ -1,6 +1,6 @@
 """symkin benchmarks: one command, every number in one run.
 
-    python benchmarks/run.py [--quick | --smoke] [--no-readme] [--budget SECONDS]
+    python benchmarks/run.py [--quick | --smoke] [--no-page] [--budget SECONDS]
 
 Measures, on this machine:
 
@@ -20,9 +20,10 @@ peak
 4. Sweeps and sensitivities (sweeps.py): batch calls against one ctypes call per point, a
    sensitivity evaluation against a deviation evaluation in C, `symkin sweep` throughput on
    this machine's cores against the single-core C rate, Dask's overhead per chunk. Its own
-   README block (`<!-- sweeps:start -->`); `--only sweeps` measures and rewrites only that.
+   block of docs/benchmarks.md (`<!-- sweeps:start -->`); `--only sweeps` measures and rewrites
+   only that.
 
-Writes benchmarks/results.json (raw numbers) and rewrites only the README block between
+Writes benchmarks/results.json (raw numbers) and rewrites only the docs/benchmarks.md block between
 `<!-- benchmarks:start -->` and `<!-- benchmarks:end -->` (report.py; read-modify-write at the
 very end). `--quick` measures less and writes results-quick.json; `--smoke` runs every part once
 at the smallest sizes to check that it works, prints the block and writes nothing.
@@ -42,7 +43,7 @@ import sweeps
 from common import BENCH, FULL, POLICY, QUICK, ROOT, SMOKE, first_line, log, machine
 from derivation import measure
 from evaluators import bench_example
-from report import render, targets, write_readme
+from report import render, targets, write_page
 from symforce_alt import symforce_status
 
 
@@ -55,7 +56,7 @@ def main() -> None:
         action="store_true",
         help="every part once at the smallest sizes; prints, writes nothing",
     )
-    ap.add_argument("--no-readme", action="store_true", help="do not rewrite README.md")
+    ap.add_argument("--no-page", action="store_true", help="do not rewrite docs/benchmarks.md")
     ap.add_argument(
         "--budget",
         type=float,
@@ -63,13 +64,15 @@ def main() -> None:
         help="seconds allowed per derivation case (default 120)",
     )
     ap.add_argument(
-        "--only", choices=("sweeps",), help="measure only this part; rewrites only its README block"
+        "--only",
+        choices=("sweeps",),
+        help="measure only this part; rewrites only its block of docs/benchmarks.md",
     )
     args = ap.parse_args()
     sizes = SMOKE if args.smoke else QUICK if args.quick else FULL
     if args.only == "sweeps":
         run_sweeps(
-            sizes, args.no_readme, {"date": datetime.date.today().isoformat(), "machine": machine()}
+            sizes, args.no_page, {"date": datetime.date.today().isoformat(), "machine": machine()}
         )
         return
     t_start = time.perf_counter()
@@ -108,15 +111,15 @@ def main() -> None:
         return
     out = BENCH / ("results-quick.json" if sizes is QUICK else "results.json")
     out.write_text(json.dumps(results, indent=1, default=str) + "\n")
-    if not args.no_readme:
-        write_readme(block)  # read-modify-write of the marked block only, at the end
+    if not args.no_page:
+        write_page(block)  # read-modify-write of the marked block only, at the end
     log(f"done in {results['total_s'] / 60:.1f} min; raw numbers in {out.relative_to(ROOT)}")
-    run_sweeps(sizes, args.no_readme, {"date": results["date"], "machine": results["machine"]})
+    run_sweeps(sizes, args.no_page, {"date": results["date"], "machine": results["machine"]})
 
 
-def run_sweeps(sizes, no_readme: bool, header: dict) -> None:
-    """Part 4 (sweeps.py): measured, printed, written to results-sweeps.json and its README
-    block (not for --smoke)."""
+def run_sweeps(sizes, no_page: bool, header: dict) -> None:
+    """Part 4 (sweeps.py): measured, printed, written to results-sweeps.json and its block of
+    docs/benchmarks.md (not for --smoke)."""
     t0 = time.perf_counter()
     results = {
         **header,
@@ -147,8 +150,8 @@ def run_sweeps(sizes, no_readme: bool, header: dict) -> None:
     (BENCH / ("results-sweeps-quick.json" if sizes is QUICK else "results-sweeps.json")).write_text(
         json.dumps(results, indent=1, default=str) + "\n"
     )
-    if not no_readme:
-        write_readme(block, "<!-- sweeps:start -->", "<!-- sweeps:end -->")
+    if not no_page:
+        write_page(block, "<!-- sweeps:start -->", "<!-- sweeps:end -->")
 
 
 if __name__ == "__main__":

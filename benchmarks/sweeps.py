@@ -311,7 +311,7 @@ def measure(sizes) -> dict:
 
 
 def render(results: dict) -> list[str]:
-    """The README lines of this part."""
+    """The docs/benchmarks.md lines of this part."""
     s = results["sweeps"]
     b, sw, dk = s["batch"], s["sweep"], s["dask"]
     lines = [

@@ -32,7 +32,8 @@ __version__ = "0.1.0"
 
 
 def analyze(mechanism: Mechanism | str | Path, points: list[str] | None = None) -> Analysis:
-    """The :class:`symkin.analysis.Analysis` of a mechanism (or of the file at that path)."""
+    """The :class:`symkin.kinematics.analysis.Analysis` of a mechanism (or of the file at that
+    path)."""
     from .kinematics.analysis import Analysis
 
     mech = mechanism if isinstance(mechanism, Mechanism) else load(mechanism)
@@ -48,8 +49,8 @@ def evaluate(
     dps: int = 40,
     sensitivity: bool = False,
 ) -> Evaluation:
-    """One configuration of an analysis (:func:`symkin.evaluation.evaluate`): the derivation with
-    mpmath at `dps` digits (backend sympy) or the generated numpy / C evaluators; with
+    """One configuration of an analysis (:func:`symkin.studies.evaluation.evaluate`): the derivation
+    with mpmath at `dps` digits (backend sympy) or the generated numpy / C evaluators; with
     `sensitivity`, the derivatives by every parameter and input too (docs/sensitivity.md)."""
     from .studies.evaluation import evaluate as run
 
@@ -65,7 +66,7 @@ def compile(
     fixed: Mapping[str, object] | None = None,
 ) -> Compiled:
     """The generated evaluator of a mechanism, in memory, no files left behind
-    (:func:`symkin.compiled.compile`): `evaluate`, `sensitivity` and `sensitivity_full` on
+    (:func:`symkin.studies.compiled.compile`): `evaluate`, `sensitivity` and `sensitivity_full` on
     arrays of inputs, one C call each; with `points`, only what moves them (docs/pruning.md);
     `fixed` inputs (name -> angle) are held constant and folded in."""
     from .studies.compiled import compile as build_evaluator

@@ -2,7 +2,7 @@
 
 Grids over the input angle (1e-12 .. 1 rad), the plate ratio l/L (1e-9 .. 0.1) and the approach
 to a toggle position, against the independent solver. float64: <= 1e-9 relative error of the
-deviation everywhere. float32: the error is reported and must stay within the bound README
+deviation everywhere. float32: the error is reported and must stay within the bound docs/numerics.md
 documents (1e-4 relative, about 1000 float32 epsilons).
 """
 

@@ -1,5 +1,6 @@
 """The `loaded` level in the generated numpy and C evaluators: the reduced equilibrium
-(docs/physics.md, "The Newton level"; templates/numpy/reduced.py, templates/c/reduced.c)
+(docs/physics.md, "`loaded`: Newton on the reduced equilibrium";
+templates/numpy/reduced.py, templates/c/reduced.c)
 against the Python solver symkin.physics.reduced (reduced_equilibrium, float64 kernels) to 1e-9
 and against the `equilibrium` level (mpmath, the geometrically exact beams) within the Python
 solver's own bound, 1e-3 (tests/test_loaded_newton.py).

@@ -1,9 +1,14 @@
-"""README opens with the two commands a newcomer runs; CI runs the second one verbatim."""
+"""README opens with the two commands a newcomer runs; CI runs the second one verbatim; its worked
+example and table are what `symkin eval` prints."""
 
 from __future__ import annotations
 
+import json
 import re
+import shlex
 
+import pytest
+from cli_runs import symkin_cli
 from conftest import ROOT
 
 
@@ -16,6 +21,47 @@ def test_readme_opens_with_install_and_test_commands():
     run, test = readme_commands()
     assert run.startswith("pip install . ") and "symkin" in run and "examples/" in run
     assert test.startswith("pip install -e '.[test]'") and "pytest" in test
+
+
+def worked_example() -> tuple[list[str], str]:
+    """README's worked example: the command after `$ ` and the output printed under it."""
+    text = (ROOT / "README.md").read_text()
+    block = next(b for b in re.findall(r"```text\n(.*?)```", text, re.S) if b.startswith("$ "))
+    command, output = block.split("\n", 1)
+    return shlex.split(command[2:]), output
+
+
+def test_the_worked_example_is_what_the_command_prints():
+    argv, output = worked_example()
+    assert argv[0] == "symkin"
+    run = symkin_cli(*argv[1:], cwd=ROOT)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout == output
+
+
+def level_rows() -> dict[str, tuple[str, str]]:
+    """The worked example's table: level -> (deviation, |dR|) as README prints them."""
+    text = (ROOT / "README.md").read_text()
+    rows = re.findall(r"^\| `(\w+)` \| (\([^)]*\)) \| ([0-9.e+-]+) \|$", text, re.M)
+    return {level: (dev, size) for level, dev, size in rows}
+
+
+def test_the_worked_example_table_has_every_level():
+    from symkin.core.levels import NAMES
+
+    assert tuple(level_rows()) == NAMES
+
+
+@pytest.mark.parametrize("level", sorted(level_rows()))
+def test_the_worked_example_table_is_what_eval_prints(level):
+    """Each row is `eval --level L` at the example's input, rounded to four digits."""
+    argv, _ = worked_example()
+    run = symkin_cli(*argv[1:], "--level", level, "--json", cwd=ROOT)
+    assert run.returncode == 0, run.stderr
+    deviation = json.loads(run.stdout)["points"]["C"]["deviation"]
+    dev, size = level_rows()[level]
+    assert dev == "(" + ", ".join(f"{v:.3e}" for v in deviation) + ")"
+    assert size == f"{(deviation[0] ** 2 + deviation[1] ** 2) ** 0.5:.3e}"
 
 
 def test_ci_runs_exactly_readmes_test_command():

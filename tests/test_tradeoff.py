@@ -137,7 +137,7 @@ def test_a_sample_at_zero_deviation_is_measured_not_dropped():
 def test_float32_error_is_reported_and_bounded(table):
     f32 = {v["name"]: v["worst_error"] for v in table["variants"] if v["precision"] == "float32"}
     f64 = {v["name"]: v["worst_error"] for v in table["variants"]}
-    assert 1e-9 < f32["exact/f32"] < 1e-4  # single precision, documented in README
+    assert 1e-9 < f32["exact/f32"] < 1e-4  # single precision, documented in docs/numerics.md
     assert f32["first_order/f32"] == pytest.approx(f64["first_order"], rel=1e-2)
 
 

@@ -1,5 +1,5 @@
 """What a report restates: the derivation of one mechanism as neutral data (sympy expressions,
-labels and names), taken from an :class:`~symkin.analysis.Analysis` once.
+labels and names), taken from an :class:`~symkin.kinematics.analysis.Analysis` once.
 
 The LaTeX report prints these pieces and derives nothing itself: the structure matrices, the
 plate data and Δz of every hinge, J, J* and the positions (4.7), the hinge models' formulas, the

@@ -1,7 +1,7 @@
 """The `loaded` level's routines: the reduced equilibrium of symkin.physics.reduced
-(docs/physics.md, "The Newton level") with the file's parameters kept as symbols, for one and
-for two half plates per plate (the generated runtimes' drivers: templates/numpy/reduced.py,
-templates/c/reduced.c).
+(docs/physics.md, "`loaded`: Newton on the reduced equilibrium") with the file's parameters kept as
+symbols, for one and for two half plates per plate (the generated runtimes' drivers:
+templates/numpy/reduced.py, templates/c/reduced.c).
 
     loaded_plates<g>  x, theta, params          -> per half plate (theta_c, p, f, e_a, e_s), the
                                                    plate relation's `in`; then d(theta_c, p, f)/dx

@@ -22,7 +22,7 @@
     sens_rigid   theta, params         -> A, ∂G/∂v (G the rigid closure), ∂R/∂θ_u, ∂R/∂v
     sens_<level> theta, delta, params  -> M, ∂E/∂θ_u, ∂E/∂v of the closure E the level solves
                                           for δ (where it does), ∂D/∂θ_u, ∂D/∂δ, ∂D/∂v of the
-                                          points' deviations D (symkin.sensitivity)
+                                          points' deviations D (symkin.kinematics.sensitivity)
     sens_chain   params                -> ∂(default of p_j)/∂p_k, when defaults read parameters
     loaded_sens<g>, plate_eps4         -> the `loaded` level's (symkin.codegen.loaded_sens)
     loaded_report<g>                   -> what `loaded` reports beyond the deviations: input
@@ -30,9 +30,9 @@
                                           (symkin.codegen.loaded)
     links        theta, delta          -> rotation φ of every reported link and its deviation δφ
 
-and for the `loaded` level, the reduced equilibrium (docs/physics.md, "The Newton level";
-symkin.codegen.loaded), for g = 1 and 2 half plates per plate; x holds its scaled unknowns, then
-the load factor t, `plates` every half plate's (along, across, omega):
+and for the `loaded` level, the reduced equilibrium (docs/physics.md, "`loaded`: Newton on the
+reduced equilibrium"; symkin.codegen.loaded), for g = 1 and 2 half plates per plate; x holds its
+scaled unknowns, then the load factor t, `plates` every half plate's (along, across, omega):
 
     loaded_plates<g>   x, theta, params         -> every half plate's (theta_c, p, f, e_a, e_s),
                                                    then d(theta_c, p, f)/dx
@@ -317,9 +317,10 @@ def plan(
     )
     loaded = None
     if any(lv.name in level_table.LOADED for lv in levels):
-        # the reduced equilibrium (docs/physics.md, "The Newton level"), one and two half
-        # plates per plate; the runtime's driver writes the points' deviation itself (with
-        # actuators the runtimes' own drivers: templates/*/reduced_actuators.*, actuators.c)
+        # the reduced equilibrium (docs/physics.md, "`loaded`: Newton on the reduced equilibrium"),
+        # one and two half plates per plate; the runtime's driver writes the points' deviation
+        # itself (with actuators the runtimes' own drivers: templates/*/reduced_actuators.*,
+        # actuators.c)
         found, loaded = loaded_routines(an, names, theta, params, reported)
         routines.update(found)
     for lv in levels:

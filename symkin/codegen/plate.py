@@ -1,7 +1,8 @@
-"""The plate relation (symkin.physics.plate_relation) as a routine of generated code: the
-per-plate kernel of the Newton level (docs/physics.md, "The Newton level"), its three outputs
-and their nine partials by (θ, p, f), which the mechanism's Jacobian takes by the chain rule.
-Every beam-column kernel is called as `<kernel>_at(p, h)` with one h = bcol_h(p) for all.
+"""The plate relation (symkin.physics.plate_relation) as a routine of generated code: the per-plate
+kernel of the `loaded` level (docs/physics.md, "`loaded`: Newton on the reduced equilibrium"), its
+three outputs and their nine partials by (θ, p, f), which the mechanism's Jacobian takes by the
+chain rule. Every beam-column kernel is called as `<kernel>_at(p, h)` with one h = bcol_h(p) for
+all.
 
     plate_relation<order>  in = (theta, p, f, e_a, e_s)  ->  values (along, across, omega),
                                                              partials (3 x 3, row-major)

@@ -11,7 +11,8 @@ differences δ and the parameters:
   Σ_i Rot(φ_i)(Rot(δφ_i) - I) V_i + Φ Δz(θ + δ) = 0, which holds no rigid part that could cancel,
   with its closed-form Jacobian; ΔX = Σ_i Rot(φ_i)(Rot(δφ_i) - I) W_i + Σ Δz_b.
 
-Numbers come from :mod:`symkin.evaluation` (mpmath) and the generated code (:mod:`symkin.codegen`).
+Numbers come from :mod:`symkin.studies.evaluation` (mpmath) and the generated code
+(:mod:`symkin.codegen`).
 """
 
 from __future__ import annotations

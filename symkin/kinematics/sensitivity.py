@@ -15,8 +15,8 @@ own Jacobian:
 - a point's deviation D(θ, δ, v) at the level: dD/dv = ∂D/∂v + ∂D/∂θ_u Θ + ∂D/∂δ Y; its rigid
   position: dR/dv = ∂R/∂v + ∂R/∂θ_u Θ; `paper` (4.8) has no δ.
 
-v runs over the parameters (file order), then the input angles. The partial derivatives by the
-hinge angles come from the structure (:meth:`symkin.analysis.Analysis.chain_partials`, free of
+v runs over the parameters (file order), then the input angles. The partial derivatives by the hinge
+angles come from the structure (:meth:`symkin.kinematics.analysis.Analysis.chain_partials`, free of
 cancellation like the quantities themselves); those by the parameters from sympy.
 
 A parameter whose default is an expression over earlier ones (`L2 = "2*l"`) follows it: the

@@ -1,7 +1,8 @@
 """Cheaper variants of a derivation: the speed/accuracy choices a user can trade (docs/levels.md,
 "Variants").
 
-A variant is a level (paper, first_order, exact), a hinge model choice and a precision:
+A variant is a generated level (paper, first_order, exact; with the plates' stiffness also loaded,
+the PHYSICAL levels, in the file's models only), a hinge model choice and a precision:
 
 - model ``file``: the mechanism's own models (the most faithful);
 - ``prbm`` / ``small_deflection``: those models in place of circular_arc and elastica_force;

@@ -6,7 +6,7 @@ A model gives (f(θ), g(θ)), the position of M's clamp in the plate frame fixed
 is what the reader needs to validate a file; :func:`plate_functions` gives a hinge's f, g and
 its deviation from the ideal revolute df = f - f_rigid, dg = g - g_rigid (3.3) as sympy
 expressions in THETA, the deviation written with the cancellation-free kernels of
-:mod:`symkin.special` so that float64 keeps full relative accuracy for tiny θ
+:mod:`symkin.model.special` so that float64 keeps full relative accuracy for tiny θ
 (docs/numerics.md).
 """
 

@@ -178,7 +178,7 @@ class Reduced:
             for ld in mech.loads
         ]
         self.points = {p.name: (label[p.link], tuple(num(v) for v in p.at)) for p in mech.points}
-        # the actuators (docs/physics.md, "Actuators at the physical levels"): a stroke is one
+        # the actuators (docs/physics.md, "Actuators at loaded"): a stroke is one
         # more unknown, its force along d at its point, and one more row, its point's deviation
         # along d zero (the rigid reference meets the stroke); a force is a dead load t F d,
         # F an argument after the rigid angles. Their surrogate hinges are not held.

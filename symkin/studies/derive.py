@@ -87,11 +87,11 @@ def generate(
     sensitivity: bool = True,
 ) -> dict[str, bytes]:
     """File name -> content of every requested artifact (nothing is written). A `variant`
-    (symkin.variants.Variant) derives that cheaper variant instead of the file's models (a
-    float32 one: its numpy module in float32, no C); `column_width` (points) lays the LaTeX
-    report out for that column and `spans` (input -> (lo, hi) rad) sets its deviation plots'
-    ranges; `fixed` (input -> angle, numbers or expressions) holds inputs constant, folded into
-    the evaluators; `sensitivity` False leaves the evaluators' sensitivity functions out
+    (symkin.kinematics.variants.Variant) derives that cheaper variant instead of the file's models
+    (a float32 one: its numpy module in float32, no C); `column_width` (points) lays the LaTeX
+    report out for that column and `spans` (input -> (lo, hi) rad) sets its deviation plots' ranges;
+    `fixed` (input -> angle, numbers or expressions) holds inputs constant, folded into the
+    evaluators; `sensitivity` False leaves the evaluators' sensitivity functions out
     (docs/sensitivity.md: most of a stiff file's derivation)."""
     return generate_plan(
         mech,
@@ -263,7 +263,7 @@ def derive(
 ) -> list[Path]:
     """Load, generate and write; returns the written paths. With a `tolerance`, the cheapest
     variant whose measured worst error over `ranges` meets it is derived instead; `fixed`
-    inputs are held at their angles (a scene file: symkin.scene.derive)."""
+    inputs are held at their angles (a scene file: symkin.studies.scene.derive)."""
     mech = load(path)
     if fixed and tolerance is not None:
         raise InputError(

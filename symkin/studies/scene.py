@@ -2,9 +2,9 @@
 its points, each with a tolerance over its own input range against its own reference, and the
 inputs it holds fixed — and the evaluator that meets it at the least cost.
 
-Every variant (symkin.variants) is measured per point, as `symkin tradeoff` measures them; each
-point takes the cheapest variant that meets its tolerance over its range, the cost being the
-operation count of the routines one evaluation of that point's pruned part runs
+Every variant (symkin.kinematics.variants) is measured per point, as `symkin tradeoff` measures
+them; each point takes the cheapest variant that meets its tolerance over its range, the cost being
+the operation count of the routines one evaluation of that point's pruned part runs
 (docs/pruning.md), a deterministic figure, so the same scene gives the same files. Points whose
 variants share a part are then merged into one evaluator when that costs less than evaluating
 them apart. `symkin derive FILE --scene SCENE` emits one evaluator per chosen variant, each

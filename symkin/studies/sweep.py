@@ -1,6 +1,6 @@
 """`symkin sweep` (docs/cli.md): Monte Carlo over fabrication tolerances, on Dask.
 
-Each sample draws every varied parameter (symkin.variation: its spread, the parameters whose
+Each sample draws every varied parameter (symkin.studies.variation: its spread, the parameters whose
 defaults read it following), checks the sampled geometry by the file's rules (positive plate
 lengths, model parameters in range, plates shorter than the links between them), evaluates the
 mechanism at every configuration of the input grid with the generated evaluator, and keeps per
@@ -136,7 +136,7 @@ def geometry_checks(mech: Mechanism) -> tuple[tuple[str, sp.Expr, bool], ...]:
     """The file's numeric rules that the parameters can break, as expressions that must be
     positive (and at most 1 for fractions): plate lengths, model parameters, and on every link
     the squared distance of two hinge centres against the square of half their plate lengths'
-    sum (the rules of symkin.mechanism.check_values)."""
+    sum (the rules of symkin.model.mechanism.check_values)."""
     out = []
     for h in mech.hinges:
         out.append((f"the plate length of hinge '{h.name}'", sp.sympify(h.length), False))

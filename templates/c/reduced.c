@@ -1,11 +1,11 @@
 /*
- * symkin's C runtime for the `loaded` level (docs/physics.md, "The Newton level"): the reduced
- * equilibrium of symkin.physics.reduced solved by Newton and continuation over the mechanism's
- * loaded_* routines, with the rules of the Python solver. Only evaluators that hold the level
- * hold it (templates/c/source.c.j2), after templates/c/runtime.c, whose sk_lu, sk_lu_solve and
- * sk_rigid_pose it calls; the generated file defines SK_RN (the largest number of unknowns, and
- * one), SK_RS (the most half plates, and one) and SK_RP (the points its deviation
- * routines give: every point of the file, the evaluator's first).
+ * symkin's C runtime for the `loaded` level (docs/physics.md, "`loaded`: Newton on the reduced
+ * equilibrium"): the reduced equilibrium of symkin.physics.reduced solved by Newton and
+ * continuation over the mechanism's loaded_* routines, with the rules of the Python solver. Only
+ * evaluators that hold the level hold it (templates/c/source.c.j2), after templates/c/runtime.c,
+ * whose sk_lu, sk_lu_solve and sk_rigid_pose it calls; the generated file defines SK_RN (the
+ * largest number of unknowns, and one), SK_RS (the most half plates, and one) and SK_RP (the points
+ * its deviation routines give: every point of the file, the evaluator's first).
  */
 #include <math.h>
 #include <stddef.h>

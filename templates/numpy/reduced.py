@@ -1,7 +1,7 @@
-"""symkin's numpy runtime for the `loaded` level (docs/physics.md, "The Newton level"): the
-reduced equilibrium of symkin.physics.reduced solved by Newton and continuation over the
-mechanism's loaded_* routines, with the same rules in the same float64 arithmetic. Only modules
-that hold the level hold it (templates/numpy/module.py.j2), after the runtime.
+"""symkin's numpy runtime for the `loaded` level (docs/physics.md, "`loaded`: Newton on the reduced
+equilibrium"): the reduced equilibrium of symkin.physics.reduced solved by Newton and continuation
+over the mechanism's loaded_* routines, with the same rules in the same float64 arithmetic. Only
+modules that hold the level hold it (templates/numpy/module.py.j2), after the runtime.
 """
 
 import math

@@ -297,7 +297,7 @@ def _sinr(n: int) -> type:
                 sp.Rational((-1) ** k, math.factorial(2 * k + 1)) for k in range(n)
             ),
             "definition": definition,
-            "__doc__": definition + " (an even entire kernel; see symkin.special.kernels).",
+            "__doc__": definition + " (an even entire kernel; see symkin.model.special.kernels).",
             "__module__": __name__,
         },
     )
@@ -346,7 +346,7 @@ def _cosr(n: int) -> type:
                 sp.Rational((-1) ** k, math.factorial(2 * k)) for k in range(1, n)
             ),
             "definition": definition,
-            "__doc__": definition + " (an even entire kernel; see symkin.special.kernels).",
+            "__doc__": definition + " (an even entire kernel; see symkin.model.special.kernels).",
             "__module__": __name__,
         },
     )

@@ -1,4 +1,4 @@
-"""C99 source of symkin's special functions (:mod:`symkin.special`), beside the C backend.
+"""C99 source of symkin's special functions (:mod:`symkin.model.special`), beside the C backend.
 
 Every function is ``static double symkin_<name>(double)`` (the Carlson helpers take three
 arguments, `symkin_elastica_core` fills an array); out of its domain it returns NaN. The

@@ -1,9 +1,9 @@
-"""numpy source of symkin's special functions (:mod:`symkin.special`), beside the numpy backend,
-and its scalar twin (the `math` module only) for ``sympy.lambdify(..., [float64_namespace(),
-"math"])``.
+"""numpy source of symkin's special functions (:mod:`symkin.model.special`), beside the numpy
+backend, and its scalar twin (the `math` module only) for ``sympy.lambdify(...,
+[float64_namespace(), "math"])``.
 
 Vectorised functions return NaN out of their domain; the scalar ones raise
-:class:`symkin.special.DomainError`. Both run the same float algorithm as the C backend's
+:class:`symkin.model.special.DomainError`. Both run the same float algorithm as the C backend's
 source, and :func:`numpy_namespace` / :func:`float64_namespace` execute exactly these texts.
 """
 
