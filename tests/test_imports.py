@@ -144,11 +144,18 @@ def test_the_check_sees_lazy_and_relative_imports():
     assert "model.special.registry" in edges["model.special.kernels"]  # from .registry import
     assert "kinematics.analysis" in edges["codegen.plan"]  # from ..kinematics...
     assert "model.hinges" in edges["model.mechanism"]
+    assert "model.entry_checks" in edges["model.hinge_entries"]  # from .entry_checks import
 
 
 def test_the_backends_read_the_plan_only():
     """The emitters take everything from a Plan: no backend reaches back into the derivation."""
-    derivation = ("model.mechanism", "model.hinges", "graph", "kinematics", "studies")
+    derivation = (
+        *(f"model.{m}" for m in ("entries", "closure", "mechanism", "entry_checks")),
+        *(f"model.{m}" for m in ("hinge_entries", "reader", "hinges")),
+        "graph",
+        "kinematics",
+        "studies",
+    )
     reach = [
         f"{name} imports {target}"
         for name, targets in graph().items()

@@ -19,7 +19,8 @@ from ..core.files import write_atomically
 from ..graph.pruning import for_levels
 from ..graph.structure import build
 from ..kinematics.analysis import Analysis
-from ..model.mechanism import Mechanism, load
+from ..model.mechanism import Mechanism
+from ..model.reader import load
 
 if TYPE_CHECKING:
     from .evaluation import Evaluation

@@ -136,7 +136,7 @@ def geometry_checks(mech: Mechanism) -> tuple[tuple[str, sp.Expr, bool], ...]:
     """The file's numeric rules that the parameters can break, as expressions that must be
     positive (and at most 1 for fractions): plate lengths, model parameters, and on every link
     the squared distance of two hinge centres against the square of half their plate lengths'
-    sum (the rules of symkin.mechanism.check_values)."""
+    sum (the rules of symkin.model.mechanism.check_values)."""
     out = []
     for h in mech.hinges:
         out.append((f"the plate length of hinge '{h.name}'", sp.sympify(h.length), False))
