@@ -20,7 +20,8 @@ FLOORS: tuple[tuple[str, ...], ...] = (
     ("graph",),  # labeling, I, Φ, Ψ; pruning
     ("kinematics",),  # the paper's sections 3-5: positions, dyads, loop equations, deviation
     ("physics",),  # stiffness, loads, the physical levels
-    ("codegen",),  # the plan, the backends (C, numpy, LaTeX), building and loading
+    ("codegen",),  # the plan, the backends (C, numpy), building and loading
+    ("report",),  # the LaTeX report: reads a plan, its numpy module's and equilibrium's results
     ("studies",),  # evaluation, compiled evaluators, derive, tradeoff, tolerance, sweep, scene
     ("",),
     ("fea",),  # the CalculiX model of a mechanism: a client of the public API
@@ -37,7 +38,7 @@ DOC_ONLY = (
     "codegen.backends",
     "codegen.backends.c",
     "codegen.backends.numpy",
-    "codegen.backends.latex",
+    "report",
     "studies",
 )
 
@@ -148,7 +149,8 @@ def test_the_check_sees_lazy_and_relative_imports():
 
 
 def test_the_backends_read_the_plan_only():
-    """The emitters take everything from a Plan: no backend reaches back into the derivation."""
+    """The emitters take everything from a Plan: no backend, nor the report, reaches back into
+    the derivation."""
     derivation = (
         *(f"model.{m}" for m in ("entries", "closure", "mechanism", "entry_checks")),
         *(f"model.{m}" for m in ("hinge_entries", "reader", "hinges")),
@@ -159,7 +161,7 @@ def test_the_backends_read_the_plan_only():
     reach = [
         f"{name} imports {target}"
         for name, targets in graph().items()
-        if name.startswith("codegen.backends")
+        if name.startswith(("codegen.backends", "report"))
         for target in targets
         if target.startswith(derivation)
     ]

@@ -204,7 +204,7 @@ def generate_plan(
             files[file] = text.encode()
     if "latex" in emit:
         say("emitting the LaTeX report")
-        from ..codegen.backends.latex import report
+        from ..report import document as report
 
         # the report's deviation plot runs the generated numpy module
         evaluator = pipeline.evaluator(p, "numpy", source, precision) if p.points else None
