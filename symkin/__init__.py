@@ -21,7 +21,8 @@ from .core.errors import AssemblyError, InputError, SymkinError
 from .core.levels import DEFAULT
 from .graph.structure import Structure
 from .graph.structure import build as structure
-from .model.mechanism import Mechanism, load, loads
+from .model.mechanism import Mechanism
+from .model.reader import load, loads
 
 if TYPE_CHECKING:  # the heavy modules load on first use
     from .kinematics.analysis import Analysis

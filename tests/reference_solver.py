@@ -82,7 +82,8 @@ from fractions import Fraction
 import mpmath
 import sympy as sp
 
-from symkin.model.mechanism import PLATE_LENGTH, THETA, Mechanism
+from symkin.model.hinges import PLATE_LENGTH, THETA
+from symkin.model.mechanism import Mechanism
 
 __all__ = [
     "OVERRIDE_MODELS",
@@ -872,7 +873,7 @@ def load_unchecked(path) -> Mechanism:
     (a redundant closure such as a three-leg stage, which symkin of this time refuses): only the
     mobility rule is lifted, every other rule of the file format still applies."""
     import symkin
-    import symkin.model.mechanism as parser
+    import symkin.model.reader as parser
 
     try:
         return symkin.load(path)

@@ -80,9 +80,9 @@ def test_every_backend_refuses_a_dependent_input_alike(tmp_path, capsys, backend
 def test_numpy_module_on_0d_input_with_a_singular_system(monkeypatch):
     # the reader refuses the file (a dependent input): built past that rule, the generated
     # module still reports the singular loop Jacobian as not ok
-    from symkin.model import mechanism
+    from symkin.model import reader
 
-    monkeypatch.setattr(mechanism._Reader, "check_mobility", lambda self, mech: None)
+    monkeypatch.setattr(reader._Reader, "check_mobility", lambda self, mech: None)
     g = Generated(
         mech=symkin.loads(nine_bar_input_moved_to_d(), "nine_d.toml"),
         sensitivity=False,

@@ -13,7 +13,7 @@ from reference_solver import Reference
 
 import symkin
 from symkin.model.hinges import HINGE_KEYS, MODELS
-from symkin.model.mechanism import LINK_KEYS, POINT_KEYS, TOP_KEYS
+from symkin.model.reader import LINK_KEYS, POINT_KEYS, TOP_KEYS
 
 DOCS = sorted((ROOT / "docs").glob("*.md"))
 FILE_FORMAT = (ROOT / "docs" / "file-format.md").read_text()

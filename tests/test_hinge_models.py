@@ -25,7 +25,8 @@ from symkin.codegen.backends.c.printer import CPrinter
 from symkin.codegen.backends.numpy import kernels as np_kernels
 from symkin.model import hinges as hm
 from symkin.model import special
-from symkin.model.mechanism import PLATE_LENGTH, THETA, Hinge
+from symkin.model.entries import Hinge
+from symkin.model.hinges import PLATE_LENGTH, THETA
 
 DPS = 90  # reference precision (digits)
 F64_TOL = 1e-12  # required float64 relative accuracy of df, dg and derivatives

@@ -20,7 +20,8 @@ FLOORS: tuple[tuple[str, ...], ...] = (
     ("graph",),  # labeling, I, Φ, Ψ; pruning
     ("kinematics",),  # the paper's sections 3-5: positions, dyads, loop equations, deviation
     ("physics",),  # stiffness, loads, the physical levels
-    ("codegen",),  # the plan, the backends (C, numpy, LaTeX), building and loading
+    ("codegen",),  # the plan, the backends (C, numpy), building and loading
+    ("report",),  # the LaTeX report: reads a plan, its numpy module's and equilibrium's results
     ("studies",),  # evaluation, compiled evaluators, derive, tradeoff, tolerance, sweep, scene
     ("",),
     ("fea",),  # the CalculiX model of a mechanism: a client of the public API
@@ -37,7 +38,7 @@ DOC_ONLY = (
     "codegen.backends",
     "codegen.backends.c",
     "codegen.backends.numpy",
-    "codegen.backends.latex",
+    "report",
     "studies",
 )
 
@@ -144,15 +145,23 @@ def test_the_check_sees_lazy_and_relative_imports():
     assert "model.special.registry" in edges["model.special.kernels"]  # from .registry import
     assert "kinematics.analysis" in edges["codegen.plan"]  # from ..kinematics...
     assert "model.hinges" in edges["model.mechanism"]
+    assert "model.entry_checks" in edges["model.hinge_entries"]  # from .entry_checks import
 
 
 def test_the_backends_read_the_plan_only():
-    """The emitters take everything from a Plan: no backend reaches back into the derivation."""
-    derivation = ("model.mechanism", "model.hinges", "graph", "kinematics", "studies")
+    """The emitters take everything from a Plan: no backend, nor the report, reaches back into
+    the derivation."""
+    derivation = (
+        *(f"model.{m}" for m in ("entries", "closure", "mechanism", "entry_checks")),
+        *(f"model.{m}" for m in ("hinge_entries", "reader", "hinges")),
+        "graph",
+        "kinematics",
+        "studies",
+    )
     reach = [
         f"{name} imports {target}"
         for name, targets in graph().items()
-        if name.startswith("codegen.backends")
+        if name.startswith(("codegen.backends", "report"))
         for target in targets
         if target.startswith(derivation)
     ]

@@ -19,7 +19,7 @@ from conftest import EXAMPLES, ROOT, once_per_run
 
 import symkin
 from symkin.cli.commands import main
-from symkin.codegen.backends.latex.text import escape_latex, math_name
+from symkin.report.text import escape_latex, math_name
 from symkin.studies.derive import generate
 
 EXAMPLE_NAMES = sorted(p.stem for p in EXAMPLES.glob("*.toml"))
@@ -156,7 +156,7 @@ def test_files_header_and_figures(example, reports):
 def test_a_figure_is_drawn_once_per_inputs(monkeypatch):
     """The figures are kept by their inputs (a report's appendix, another column width): the same
     inputs give the bytes a fresh drawing gives, without drawing; other inputs draw anew."""
-    from symkin.codegen.backends.latex import figures
+    from symkin.report import figures
 
     # the four-bar's graph: s0..s3 a chain, arc 4 the loop's chord
     layout = figures.tree_layout([0, 0, 1, 2], 3)

@@ -21,8 +21,8 @@ from reference_physics import Equilibrium
 
 import symkin
 from symkin.codegen import pipeline
-from symkin.codegen.backends.latex import report as latex_report
 from symkin.codegen.plan import plan
+from symkin.report import sections, sweeps
 from symkin.studies.derive import generate
 
 E, NU, WIDTH = 210e9, 0.3, 5e-3
@@ -108,13 +108,13 @@ def test_figure_reference_points_are_the_elastica(example):
     mech = symkin.loads(text, f"{example}.toml")
     an = symkin.analyze(mech)
     p, module = pipeline.build(an, "numpy", "x.toml", report=True)
-    rep = latex_report.Report(p, "x.toml")
-    spans = latex_report.sweep_spans(mech.inputs)
-    runs, summary = latex_report.sweep(rep, module, spans, physics_reference(an))
-    assert summary["physics"] and summary["reference_samples"] == latex_report.REFERENCE_SAMPLES
+    rep = sections.Report(p, "x.toml")
+    spans = sweeps.sweep_spans(mech.inputs)
+    runs, summary = sweeps.sweep(rep, module, spans, physics_reference(an))
+    assert summary["physics"] and summary["reference_samples"] == sweeps.REFERENCE_SAMPLES
     h, data, _ = runs[0]
     at, ref = data.reference
-    assert len(at) == latex_report.REFERENCE_SAMPLES
+    assert len(at) == sweeps.REFERENCE_SAMPLES
     reference = Equilibrium(mech, (E / (1 - NU**2), WIDTH, "l/10"))
     point = p.points[0]
     for k in (0, len(at) - 2):

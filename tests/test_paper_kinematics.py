@@ -139,8 +139,8 @@ def test_paper_level_deviation_is_dz1_plus_dz2(name, point):
     # Δz_a (3.3) itself: the plate deviation, rotated by the reference link's angle.
     dz2 = h2.delta_z(kin.theta[2], kin.theta[1])
     local = (
-        h2.df.subs(symkin.model.mechanism.THETA, kin.theta[2]),
-        h2.dg.subs(symkin.model.mechanism.THETA, kin.theta[2]),
+        h2.df.subs(symkin.model.hinges.THETA, kin.theta[2]),
+        h2.dg.subs(symkin.model.hinges.THETA, kin.theta[2]),
     )
     rotated_u = (sp.cos(h2.angle + kin.theta[1]), sp.sin(h2.angle + kin.theta[1]))
     normal = (-rotated_u[1], rotated_u[0])

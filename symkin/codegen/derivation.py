@@ -26,8 +26,8 @@ from ..kinematics.loop_equations import LoopEquations, loop_equations
 from ..kinematics.positions import HingeGeometry, paper_matrices, paper_positions
 from ..model import hinges as hinge_models
 from ..model import special
+from ..model.entries import Load
 from ..model.hinges import PLATE_LENGTH, PRBM_PRESETS, THETA
-from ..model.mechanism import Load
 from ..physics.stiffness import PlateStiffness, plate_stiffness
 
 

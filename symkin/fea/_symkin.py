@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from .. import analyze, evaluate
 from ..core.errors import AssemblyError, InputError
-from ..model.mechanism import Mechanism, Point, load
+from ..model.entries import Point
+from ..model.mechanism import Mechanism
+from ..model.reader import load
 
 __all__ = ["AssemblyError", "InputError", "Mechanism", "Point", "analyze", "evaluate", "load"]

@@ -23,8 +23,8 @@ import sympy as sp
 from ..core import vectors as V
 from ..core.vectors import Vec
 from ..graph.structure import Structure
+from ..model.entries import Hinge
 from ..model.hinges import THETA, plate_functions
-from ..model.mechanism import Hinge
 
 
 @dataclass(frozen=True)

@@ -16,8 +16,9 @@ from dataclasses import dataclass
 import sympy as sp
 
 from ..core.errors import InputError
-from ..model.mechanism import STIFFNESS_REQUIRED as REQUIRED
-from ..model.mechanism import Hinge, Mechanism
+from ..model.entries import STIFFNESS_REQUIRED as REQUIRED
+from ..model.entries import Hinge
+from ..model.mechanism import Mechanism
 
 #: A plate at least this many thicknesses wide bends in plane strain: E' = E/(1 - nu^2).
 WIDE = 5

@@ -31,7 +31,8 @@ from ..core import levels as level_table
 from ..graph.pruning import for_levels
 from ..graph.structure import build
 from ..kinematics.analysis import Analysis
-from ..model.mechanism import Mechanism, load
+from ..model.mechanism import Mechanism
+from ..model.reader import load
 
 
 @dataclass(frozen=True)

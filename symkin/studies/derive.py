@@ -19,7 +19,8 @@ from ..core.files import write_atomically
 from ..graph.pruning import for_levels
 from ..graph.structure import build
 from ..kinematics.analysis import Analysis
-from ..model.mechanism import Mechanism, load
+from ..model.mechanism import Mechanism
+from ..model.reader import load
 
 if TYPE_CHECKING:
     from .evaluation import Evaluation
@@ -203,7 +204,7 @@ def generate_plan(
             files[file] = text.encode()
     if "latex" in emit:
         say("emitting the LaTeX report")
-        from ..codegen.backends.latex import report
+        from ..report import document as report
 
         # the report's deviation plot runs the generated numpy module
         evaluator = pipeline.evaluator(p, "numpy", source, precision) if p.points else None

@@ -27,7 +27,9 @@ from ..codegen import pipeline
 from ..core import levels as level_table
 from ..core.errors import AssemblyError, InputError, suggest
 from ..kinematics.variants import Variant, analysis_for, default_variants
-from ..model.mechanism import MAX_NAME, Mechanism, name_problem, with_points
+from ..model.entry_checks import MAX_NAME, name_problem
+from ..model.mechanism import Mechanism
+from ..model.reader import with_points
 
 FORMAT = 1
 TOP_KEYS = ("format", "name", "reference", "samples", "backend", "ranges", "fix", "point")
@@ -742,7 +744,7 @@ def derive(
 ) -> list[Path]:
     """`symkin derive FILE --scene SCENE`: load both, generate, write every file at once; the
     paths written."""
-    from ..model.mechanism import load as load_mechanism
+    from ..model.reader import load as load_mechanism
     from .derive import write_files
 
     mech = load_mechanism(path)

@@ -1,70 +1,23 @@
-"""LaTeX backend: a report `<name>.tex` (standalone or appendix body) and its figure PDFs.
-
-The report restates the paper's derivation for one mechanism: the labeled graph (i± table, arcs),
-I, Φ, Ψ, the plate data c_ia, α±, l_a, J and J*, the link positions (4.7), the hinge models with
-their cancellation-free Δf, Δg, the loop equations (5.1)/(5.3) with their scalar, squared and
-solved forms, the closed-form rigid solution (dyads, branch signs), the deviation of every point
-at the levels paper and first_order (and the exact closure it approximates) and a plot of |ΔR|
-over an input range evaluated with the generated numpy module. It reads the plan only: every
-expression comes from the plan's :class:`~symkin.codegen.derivation.Derivation`.
-
-Every expression is printed by sympy's LatexPrinter (:class:`.text.Tex`) and long ones are
-broken over lines; every name from the mechanism file passes :func:`escape_latex`. Output is
-deterministic: sorted or file-ordered data only, no timestamps, figures with fixed metadata.
-Packages used: amsmath, amssymb, graphicx, booktabs (and geometry in the standalone document),
-all in TeX Live's latex-recommended set.
+"""The report's sections that restate the derivation (:class:`Report`: the template context of
+one plan): the labeled graph, I, Φ, Ψ, the plate data, J and J*, the link positions (4.7), the
+hinge models with their cancellation-free Δf, Δg, the loop equations (5.1)/(5.3) and their
+solved forms, the closed-form rigid solution, the deviation of every point at the levels and the
+loaded level's equilibrium; :mod:`.document` renders it with the figures and tables.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
-from collections.abc import Callable, Mapping, Sequence
-from functools import cache
-from types import ModuleType
-from typing import Any
 
-import jinja2
-import numpy as np
 import sympy as sp
 
-from ....core import vectors as V
-from ....core.errors import SymkinError
-from ....physics import reduced
-from ....physics.equilibrium import BUCKLING_LIMIT
-from ....physics.stiffness import modulus
-from ... import pipeline, templating
-from ...plan import Plan
-from ..common import header_lines
-from .figures import (
-    FIG_WIDTH,
-    PoseData,
-    Sweep,
-    deviation_figure,
-    differs,
-    graph_figure,
-    moves,
-    plate_scale,
-    pose_figure,
-    pose_size,
-    stress_figure,
-    tree_layout,
-)
-from .text import LINE_WIDTH_EM, Tex, align_lines, escape_latex, math_name, pack, plain_name, width
+from ..codegen.backends.common import header_lines
+from ..codegen.plan import Plan
+from ..core import vectors as V
+from ..physics import reduced
+from ..physics.stiffness import modulus
+from .text import LINE_WIDTH_EM, Tex, align_lines, escape_latex, gnum, math_name, pack, sci, width
 
-__all__ = ["SWEEP_RANGE", "SWEEP_SAMPLES", "emit", "environment", "escape_latex"]
-
-#: Default input range of the deviation plot: every input equal to t, |t| <= SWEEP_RANGE (rad).
-SWEEP_RANGE = 0.3
-SWEEP_SAMPLES = 241
-#: Inputs of each swept range at which the physical reference (`equilibrium`) is solved.
-REFERENCE_SAMPLES = 9
-#: The physical reference of a report: input name -> value  to  the `equilibrium` level's
-#: evaluation there (symkin.studies.evaluation.Evaluation: `points` with their `deviation` and
-#: `model_error`, `plates`, `actuation`, `buckling`, `buckling_hinge`).
-Physics = Callable[[Mapping[str, float]], Any]
-#: Pa per MPa: the report gives stresses in MPa.
-MPA = 1e6
 #: Matrices wider than this many columns are printed in column blocks (at the full width).
 MAX_MATRIX_COLS = 14
 #: The column the report is laid out for, in points: an article's one-column text width at
@@ -76,52 +29,7 @@ TEX_UNITS = {"m": r"\mathrm{m}", "mm": r"\mathrm{mm}", "um": r"\mu\mathrm{m}"}
 UNIT_NAMES = {"m": "metres", "mm": "millimetres", "um": "micrometres"}
 
 
-# -- Jinja environment with LaTeX-friendly delimiters (SymForce style) ----------------------------
-
-
-@cache
-def environment() -> jinja2.Environment:
-    r"""The shared strict environment with the ``\VAR{...}``/``\BLOCK{...}`` delimiters, plus
-    the LaTeX escaping filters."""
-    env = templating.environment(latex=True).overlay()
-    env.filters["tex"] = escape_latex
-    env.filters["mathname"] = math_name
-    return env
-
-
-# -- small formatting helpers
-# -----------------------------------------------------------------------
-
-
-def sci(x: float, digits: int = 3) -> str:
-    r"""A float as LaTeX math text: ``1.23\times 10^{-6}`` (or plain for moderate magnitudes)."""
-    if x is None or not math.isfinite(x):
-        return r"\text{--}"
-    if x == 0:
-        return "0"
-    exponent = math.floor(math.log10(abs(x)))
-    if -2 <= exponent <= 3:
-        return f"{x:.{max(digits - 1 - exponent, 0)}f}"
-    mantissa = x / 10**exponent
-    text = f"{mantissa:.{digits - 1}f}"
-    if text.startswith(("10.", "-10.")):
-        mantissa /= 10
-        exponent += 1
-        text = f"{mantissa:.{digits - 1}f}"
-    return rf"{text}\times 10^{{{exponent}}}"
-
-
-def gnum(x: float) -> str:
-    """A float with up to 6 significant digits as LaTeX math text."""
-    text = f"{x:.6g}"
-    if "e" in text:
-        mantissa, exponent = text.split("e")
-        lead = "" if mantissa == "1" else mantissa + r"\times "
-        return rf"{lead}10^{{{int(exponent)}}}"
-    return text
-
-
-def _num(expr: sp.Expr, defaults: dict) -> float:
+def float_at(expr: sp.Expr, defaults: dict) -> float:
     """`expr` at the parameters' default values (numbers), 30 digits, as a float."""
     expr = sp.sympify(expr)
     # only the parameters it reads: subs tries every pair it is given (~1000 in a large file)
@@ -129,7 +37,7 @@ def _num(expr: sp.Expr, defaults: dict) -> float:
     return float(sp.N(expr.subs(used), 30))
 
 
-def _chunks(items: list, size: int) -> list[list]:
+def chunks(items: list, size: int) -> list[list]:
     return [items[k : k + size] for k in range(0, len(items), size)] or [[]]
 
 
@@ -146,9 +54,6 @@ def _dz_names(m: int) -> dict[sp.Symbol, str]:
 def _dz_sum(signs) -> sp.Expr:
     """Φ_c Δz = Σ Φ_cb Δz_b over the placeholders DZ_b, from a loop's (b, Φ_cb) pairs."""
     return sp.Add(*(coeff * sp.Symbol(f"DZ_{b}") for b, coeff in signs))
-
-
-# -- the report ----------------------------------------------------------------------------------
 
 
 class Report:
@@ -318,7 +223,7 @@ class Report:
     def parameters(self) -> list[dict]:
         rows = []
         for p in self.mech.parameters:
-            value = gnum(_num(p.value, {}))
+            value = gnum(float_at(p.value, {}))
             expr = value if sp.sympify(p.expr).is_number else self.tex(p.expr)
             symbol = self.tex(p.symbol)
             rows.append(
@@ -353,7 +258,7 @@ class Report:
         """Display lines of an integer matrix, in column blocks when it is wide."""
         ncol = len(rows[0]) if rows else 0
         out = []
-        blocks = _chunks(list(range(ncol)), self.max_cols) if ncol else [[]]
+        blocks = chunks(list(range(ncol)), self.max_cols) if ncol else [[]]
         for block in blocks:
             sub_rows = [[r[c] for c in block] for r in rows]
             body = self.tex.matrix(sub_rows) if block else r"\mathbf{0}"
@@ -448,7 +353,7 @@ class Report:
                 [zero if M[i, j] == 0 else M[i, j] for j in range(M.cols)] for i in range(M.rows)
             ]
             tex = self._abstract_names(list(M))
-            blocks = _chunks(list(range(M.cols)), max(3, self.max_cols * 10 // 14))
+            blocks = chunks(list(range(M.cols)), max(3, self.max_cols * 10 // 14))
             lines = []
             for block in blocks:
                 body = tex.matrix([[r[c] for c in block] for r in rows])
@@ -586,8 +491,8 @@ class Report:
                         "vec": tex.table_vector(weights[t.link]),
                         "r": tex.inline(t.r),
                         "beta": tex.inline(t.beta),
-                        "r_num": sci(_num(t.r, self.defaults), 6),
-                        "beta_num": f"{_num(t.beta, self.defaults):.6f}",
+                        "r_num": sci(float_at(t.r, self.defaults), 6),
+                        "beta_num": f"{float_at(t.beta, self.defaults):.6f}",
                         "phi": tex(phis[t.link]),
                     }
                 )
@@ -787,15 +692,15 @@ class Report:
                 {
                     "a": a,
                     "name": self.hinge_name(a),
-                    "length": sci(_num(length, self.defaults)),
-                    "thickness": sci(_num(h.thickness, self.defaults)),
-                    "width": sci(_num(h.width, self.defaults)),
-                    "modulus": sci(_num(modulus(h), self.defaults)),
-                    "EI": sci(_num(EI, self.defaults)),
-                    "k": sci(_num(EI / length, self.defaults)),
+                    "length": sci(float_at(length, self.defaults)),
+                    "thickness": sci(float_at(h.thickness, self.defaults)),
+                    "width": sci(float_at(h.width, self.defaults)),
+                    "modulus": sci(float_at(modulus(h), self.defaults)),
+                    "EI": sci(float_at(EI, self.defaults)),
+                    "k": sci(float_at(EI / length, self.defaults)),
                     # the relation's stretch and shear compliances: none in the elastica
                     "stretch": [
-                        sci(_num(e, self.defaults)) if stiff.stretches else "0" for e in stretch
+                        sci(float_at(e, self.defaults)) if stiff.stretches else "0" for e in stretch
                     ],
                 }
             )
@@ -892,537 +797,3 @@ def _relation_lines(tex: Tex, lhs: sp.Expr, rhs: sp.Expr) -> list[str]:
     out.append(f"&= {right[0]}")
     out += [r"&\quad {}" + ln for ln in right[1:]]
     return out
-
-
-# -- numbers for the figures ---------------------------------------------------------------------
-
-
-def pose_data(report: Report) -> PoseData:
-    d, s, defaults = report.d, report.s, report.defaults
-    num = lambda v: (_num(v[0], defaults), _num(v[1], defaults))  # noqa: E731
-    attachments: dict[int, list[tuple[float, float]]] = {i: [] for i in range(s.n + 1)}
-    plates = []
-    for a in range(1, s.m + 1):
-        h = d.hinges[a]
-        p, m = num(h.clamp(h.P)), num(h.clamp(h.M))
-        attachments[h.P].append(p)
-        attachments[h.M].append(m)
-        plates.append((a, s.hinges[a - 1], p, m, h.is_input))
-    links = tuple((i, s.links[i], tuple(attachments[i])) for i in range(s.n + 1))
-    points = tuple((pt.name, pt.link, num(pt.at)) for pt in d.points)
-    return PoseData(links, 0, tuple(plates), points)
-
-
-def sweep_spans(
-    inputs: Sequence[str],
-    given: Mapping[str, tuple[float, float]] | None = None,
-    strokes: Mapping[str, float] | None = None,
-) -> dict[str, tuple[float, float]]:
-    """Each input's plotted range: the `given` ones (derive --range), else ±SWEEP_RANGE, or for
-    an actuator ±its `strokes` entry (file unit)."""
-    spans = {
-        h: (-(strokes or {})[h], (strokes or {})[h])
-        if h in (strokes or {})
-        else (-SWEEP_RANGE, SWEEP_RANGE)
-        for h in inputs
-    }
-    spans.update({h: (float(lo), float(hi)) for h, (lo, hi) in (given or {}).items()})
-    return spans
-
-
-def reference_points(
-    report: Report,
-    t: np.ndarray,
-    ok: np.ndarray,
-    inputs: Mapping[str, np.ndarray],
-    physics: Physics,
-) -> tuple[np.ndarray, dict[str, np.ndarray], tuple]:
-    """The physical reference (`physics`: inputs -> its evaluation, the `equilibrium` level) at
-    REFERENCE_SAMPLES evenly spaced samples of a sweep: their indices, the point deviations (NaN
-    where it cannot be solved) and the evaluations themselves (None there)."""
-    at = np.unique(np.round(np.linspace(0, len(t) - 1, REFERENCE_SAMPLES)).astype(int))
-    out = {p: np.full((2, len(at)), np.nan) for p in report.plan.points}
-    evaluations: list = [None] * len(at)
-    for k, i in enumerate(at):
-        if not ok[i]:
-            continue
-        try:
-            evaluations[k] = physics({n: float(v[i]) for n, v in inputs.items()})
-        except SymkinError:  # beyond the assembly range, a plate buckling
-            continue
-        for p in report.plan.points:
-            out[p][:, k] = evaluations[k].points[p].deviation
-    return at, out, tuple(evaluations)
-
-
-def sweep(
-    report: Report,
-    numpy_module,
-    spans: Mapping[str, tuple[float, float]],
-    physics: Physics | None = None,
-) -> tuple[list[tuple[str, Sweep, tuple[float, float]]], dict]:
-    """|ΔR| of the points at every level with each input in turn over its span (the others held
-    at the middle of theirs), evaluated with the generated numpy module, and with `physics` the
-    physical reference at a few of the inputs.
-
-    Returns per input its sweep and the plot's clipped x range, and the report's summary (the
-    largest deviation per point and level over all sweeps, where it occurs, the largest
-    distance of each level from the exact one relative to the largest exact deviation and, with
-    `physics`, from the reference relative to the reference's largest deviation)."""
-    names = [lv.name for lv in report.plan.levels]
-    held = {h: 0.5 * (lo + hi) for h, (lo, hi) in spans.items()}
-    single = len(spans) == 1
-    runs: list[tuple[str, Sweep, tuple[float, float]]] = []
-    summary: dict = {"samples": 0, "failed": 0, "spans": [], "rows": []}
-    for h, (lo, hi) in spans.items():
-        t = np.linspace(lo, hi, SWEEP_SAMPLES)
-        inputs = {n: (t if n == h else np.full_like(t, held[n])) for n in numpy_module.INPUTS}
-        magnitude: dict[str, dict[str, np.ndarray]] = {p: {} for p in report.plan.points}
-        deviation: dict[str, dict[str, np.ndarray]] = {p: {} for p in report.plan.points}
-        ok = np.ones(t.shape, dtype=bool)
-        for lv in names:
-            # the deviations alone (the loaded level's report and buckling search are not read)
-            result = numpy_module.evaluate(
-                inputs, level=lv, **pipeline.evaluate_options(numpy_module, report=False)
-            )
-            ok &= np.asarray(result["ok"], dtype=bool)
-            for p in report.plan.points:
-                deviation[p][lv] = np.asarray(result["points"][p]["deviation"], dtype=float)
-        for p in report.plan.points:
-            for lv in names:
-                deviation[p][lv] = np.where(ok, deviation[p][lv], np.nan)
-                magnitude[p][lv] = np.hypot(*deviation[p][lv])
-        # clipped to the assembling samples, with a margin (10 % of the span) showing where
-        # assembly stops
-        margin = 0.1 * (hi - lo)
-        a, b = lo, hi
-        if ok.any():
-            idx = np.flatnonzero(ok)
-            a = lo if idx[0] == 0 else max(lo, t[idx[0]] - margin)
-            b = hi if idx[-1] == len(t) - 1 else min(hi, t[idx[-1]] + margin)
-        reference, reported = None, ()
-        if physics is not None:
-            at_ref, ref, reported = reference_points(report, t, ok, inputs, physics)
-            reference = (at_ref, ref)
-        runs.append((h, Sweep(t, ok, magnitude, deviation, reference, reported), (a, b)))
-        summary["samples"] += len(t)
-        summary["failed"] += int((~ok).sum())
-        stroke = h in {a.name for a in report.mech.actuators}
-        summary["spans"].append(
-            {
-                "input": escape_latex(h),
-                # what is swept: a hinge's angle (rad) or an actuator's stroke (file unit)
-                "what": "stroke" if stroke else r"input $\theta$",
-                "unit": f"${TEX_UNITS[report.mech.units]}$" if stroke else "rad",
-                "lo": f"{lo:g}",
-                "hi": f"{hi:g}",
-                "held": f"{held[h]:g}",
-                "clip": f"[{a:.3f}, {b:.3f}]",
-                "clipped": bool(a > lo or b < hi),
-            }
-        )
-    for p in report.plan.points:
-        for level in report.plan.levels:
-            lv = level.name
-            peak, at, diff, ref = float("nan"), "", float("nan"), float("nan")
-            for h, data, _ in runs:
-                mag = data.magnitude[p][lv]
-                if np.isfinite(mag).any() and not np.nanmax(mag) <= peak:
-                    k = int(np.nanargmax(mag))
-                    peak = float(mag[k])
-                    at = (
-                        f"${data.t[k]:+.3f}$" if single else f"{escape_latex(h)} ${data.t[k]:+.3f}$"
-                    )
-                exact = data.deviation[p].get("exact")
-                if exact is not None and lv != "exact" and np.isfinite(exact).any():
-                    d = np.hypot(*(data.deviation[p][lv] - exact))
-                    diff = np.nanmax([diff, np.nanmax(d)])
-                    ref = np.nanmax([ref, np.nanmax(np.hypot(*exact))])
-            rel = float(diff / ref) if np.isfinite(diff) and ref > 0 else None
-            row = {
-                "point": escape_latex(p),
-                "level": level.title,
-                "peak": sci(peak),
-                "at": at or r"\text{--}",
-                "rel": sci(rel, 2) if rel is not None else r"\text{--}",
-            }
-            if physics is not None:
-                row["physics"] = _physics_distance(runs, p, lv)
-            summary["rows"].append(row)
-    summary["physics"] = physics is not None
-    if physics is not None:  # the configurations where the reference was solved
-        first = report.plan.points[0]
-        summary["reference_samples"] = sum(
-            int(np.isfinite(data.reference[1][first][0]).sum()) for _, data, _ in runs
-        )
-    return runs, summary
-
-
-def _physics_distance(
-    runs: Sequence[tuple[str, Sweep, tuple[float, float]]], point: str, level: str
-) -> str:
-    """max |ΔR_level − ΔR_equilibrium| over the reference's samples of every sweep, relative to
-    the largest |ΔR_equilibrium|, as LaTeX math text."""
-    gap, size = [], []
-    for _, data, _ in runs:
-        at, ref = data.reference[0], data.reference[1][point]
-        gap.append(np.hypot(*(data.deviation[point][level][:, at] - ref)))
-        size.append(np.hypot(*ref))
-    gap_all, size_all = np.concatenate(gap), np.concatenate(size)
-    if not np.isfinite(gap_all).any() or not np.nanmax(size_all) > 0:
-        return r"\text{--}"
-    return sci(float(np.nanmax(gap_all) / np.nanmax(size_all)), 2)
-
-
-def _input_text(values: Mapping[str, float]) -> str:
-    """Inputs as LaTeX text, `A0 = 0.3`, rounded to 1e-9 rad (a swept range's middle is its
-    linspace sample, zero up to rounding)."""
-    return ", ".join(f"{escape_latex(n)}~$= {round(v, 9) + 0.0:g}$" for n, v in values.items())
-
-
-def equilibrium_configurations(
-    runs: Sequence[tuple[str, Sweep, tuple[float, float]]],
-) -> list:
-    """The physical reference's evaluations the report tabulates: the ends and the middle of
-    every swept range (of those it solved), each configuration once, in sweep order."""
-    out, seen = [], set()
-    for _, data, _ in runs:
-        if not data.reported:
-            continue
-        last = len(data.reported) - 1
-        for k in (0, last // 2, last):
-            ev = data.reported[k]
-            if ev is None:
-                continue
-            key = tuple((n, round(v, 9) + 0.0) for n, v in ev.inputs.items())
-            if key not in seen:
-                seen.add(key)
-                out.append(ev)
-    return out
-
-
-#: A reported value at most this fraction of the largest of its kind over the tabulated
-#: configurations is zero up to rounding (the as-fabricated pose: stresses of 1e-23 MPa).
-ROUNDING = 1e-12
-
-
-def _scales(configurations: Sequence) -> dict[tuple[str, str], float]:
-    """The largest plate stress, input moment and |ΔR| of each plate, input and point over the
-    tabulated configurations: what "zero up to rounding" is measured against."""
-    scales: dict[tuple[str, str], float] = {}
-
-    def seen(key: tuple[str, str], value: float) -> None:
-        scales[key] = max(scales.get(key, 0.0), abs(value))
-
-    for ev in configurations:
-        for name, p in ev.plates.items():
-            seen(("plate", name), p.stress)
-        for name, a in ev.actuation.items():
-            seen(("input", name), a.moment)
-        for name, pt in ev.points.items():
-            seen(("point", name), pt.norm)
-    return scales
-
-
-def equilibrium_table(report: Report, ev, scales: Mapping[tuple[str, str], float]) -> dict:
-    """One configuration of the physical reference as the report's table: every plate's largest
-    stress (MPa), strain, where along the plate and safety factor, every input hinge's moment
-    (N·m) and stiffness (N·m/rad), the buckling factor with loads, and every point's deviation
-    (file unit) beside its model error; a value at most ROUNDING of its `scales` entry is 0."""
-
-    def zero(key: tuple[str, str], value: float) -> bool:
-        return abs(value) <= ROUNDING * scales.get(key, 0.0)
-
-    dash = r"\text{--}"
-    plates = []
-    for name, p in ev.plates.items():
-        nil = zero(("plate", name), p.stress)
-        plates.append(
-            {
-                "name": escape_latex(name),
-                "stress": "0" if nil else sci(p.stress / MPA, 4),
-                "strain": "0" if nil else sci(p.strain, 3),
-                "where": dash if nil else f"{p.section:.2f}",
-                "safety": sci(p.safety, 3) if p.safety is not None and not nil else dash,
-                "over": p.overloaded,
-            }
-        )
-    actuation = [
-        {
-            "name": escape_latex(name),
-            "angle": sci(a.angle, 4),
-            "moment": "0" if zero(("input", name), a.moment) else sci(a.moment, 4),
-            "stiffness": sci(a.stiffness, 4),
-        }
-        for name, a in ev.actuation.items()
-    ]
-    points = []
-    for name in report.plan.points:
-        pt = ev.points[name]
-        error = ev.model_error.get(name)
-        if zero(("point", name), pt.norm):
-            row = dict.fromkeys(("dx", "dy", "norm"), "0") | {"error": dash, "spread": dash}
-        else:
-            row = {
-                "dx": sci(pt.deviation[0], 4),
-                "dy": sci(pt.deviation[1], 4),
-                "norm": sci(pt.norm, 4),
-                "error": sci(100 * error, 2) if error is not None else dash,
-                "spread": sci(error * pt.norm, 2) if error is not None else dash,
-            }
-        points.append({"name": escape_latex(name)} | row)
-    buckling = None
-    if ev.buckling is not None:
-        buckling = {
-            "factor": sci(ev.buckling, 4) if math.isfinite(ev.buckling) else None,
-            "limit": f"{BUCKLING_LIMIT:g}",
-            "hinge": escape_latex(ev.buckling_hinge) if ev.buckling_hinge else None,
-        }
-    return {
-        "inputs": _input_text(ev.inputs),
-        "plates": plates,
-        "safety": any(p.safety is not None for p in ev.plates.values()),
-        "over": [row["name"] for row in plates if row["over"]],
-        "actuation": actuation,
-        "points": points,
-        "buckling": buckling,
-    }
-
-
-def allowable_stresses(report: Report) -> dict[str, float]:
-    """Every plate's allowable stress (MPa) where its hinge or `[defaults]` gives one."""
-    return {
-        h.name: _num(h.allowable_stress, report.defaults) / MPA
-        for h in report.mech.hinges
-        if h.allowable_stress is not None
-    }
-
-
-def plate_stresses(data: Sweep) -> dict[str, np.ndarray]:
-    """Each plate's largest stress (MPa) at the physical reference's samples of a sweep, NaN
-    where it was not solved; plates in file order."""
-    solved = [ev for ev in data.reported if ev is not None]
-    if not solved:
-        return {}
-    return {
-        name: np.array(
-            [np.nan if ev is None else ev.plates[name].stress / MPA for ev in data.reported]
-        )
-        for name in solved[0].plates
-    }
-
-
-def sensitivity_table(
-    report: Report, numpy_module, runs: Sequence[tuple[str, Sweep, tuple[float, float]]]
-) -> dict | None:
-    """The parameters ranked by their effect on each point's deviation (docs/sensitivity.md),
-    at the swept input where the point's |ΔR| at the most faithful level is largest; None
-    without parameters or sensitivities."""
-    plan = report.plan
-    names = list(getattr(numpy_module, "PARAMETERS", {}))
-    # with actuators `loaded` has no sensitivities yet (docs/physics.md, "Actuators at loaded")
-    with_rates = [
-        lv for lv in plan.levels if lv.sensitivity and not (plan.actuators and lv.needs_stiffness)
-    ]
-    if not names or not with_rates or not hasattr(numpy_module, "sensitivity_full"):
-        return None
-    level = with_rates[-1].name
-    single = len(runs) == 1
-    held = {h: 0.5 * (data.t[0] + data.t[-1]) for h, data, _ in runs}
-    rows = []
-    for point in plan.points:
-        best = None  # (|ΔR|, swept input, its value)
-        for h, data, _ in runs:
-            mag = data.magnitude[point][level]
-            if (
-                np.isfinite(mag).any()
-                and np.nanmax(mag) > 0
-                and (best is None or np.nanmax(mag) > best[0])
-            ):
-                best = (float(np.nanmax(mag)), h, float(data.t[int(np.nanargmax(mag))]))
-        if best is None:
-            continue
-        _, swept, t = best
-        inputs = {n: (t if n == swept else float(held[n])) for n in numpy_module.INPUTS}
-        at = f"${t:+.3f}$" if single else f"{escape_latex(swept)} ${t:+.3f}$"
-        res = numpy_module.sensitivity_full(inputs, level)
-        d = np.asarray(res["points"][point]["deviation"], dtype=float)
-        norm = float(np.hypot(d[0], d[1]))
-        entries = []
-        for name in names:
-            rate = np.asarray(res["deviation"][point]["params"][name], dtype=float)
-            d_norm = float((d[0] * rate[0] + d[1] * rate[1]) / norm)
-            value = float(numpy_module.PARAMETERS[name])
-            relative = value * d_norm / norm
-            entries.append(
-                (
-                    abs(relative),
-                    {
-                        "point": escape_latex(point),
-                        "name": escape_latex(name),
-                        "value": gnum(value),
-                        "dx": sci(float(rate[0])),
-                        "dy": sci(float(rate[1])),
-                        "norm": sci(d_norm),
-                        "relative": f"{relative:+.3f}" if value else r"\text{--}",
-                        "at": at,
-                    },
-                )
-            )
-        entries.sort(key=lambda e: -e[0])
-        rows += [e[1] for e in entries]
-    if not rows:
-        return None
-    return {
-        "level": with_rates[-1].title,
-        "rows": rows,
-        "single_input": single,
-        "inputs": [escape_latex(n) for n in numpy_module.INPUTS],
-        # the actuators' names: their strokes are held, the surrogate angles follow
-        "strokes": [escape_latex(a.name) for a in report.mech.actuators],
-    }
-
-
-def _equilibrium_section(
-    report: Report, runs: Sequence[tuple[str, Sweep, tuple[float, float]]], files: dict
-) -> dict | None:
-    """The context of the report's section on what `equilibrium` reports (docs/physics.md): a
-    table per configuration of :func:`equilibrium_configurations` and, into `files`, a stress
-    figure per swept input; None when the reference was solved nowhere."""
-    configurations = equilibrium_configurations(runs)
-    if not configurations:
-        return None
-    name = report.mech.name
-    allowable = allowable_stresses(report)
-    single = len(runs) == 1
-    figures = []
-    for h, data, xlim in runs:
-        stress = plate_stresses(data)
-        if not stress:
-            continue
-        fname = f"{name}-stress.pdf" if not figures else f"{name}-stress-{len(figures) + 1}.pdf"
-        files[fname] = stress_figure(
-            data.t[data.reference[0]],
-            stress,
-            {p: v for p, v in allowable.items() if p in stress},
-            plain_name,
-            xlim,
-            f"input θ of {plain_name(h)} (rad)",
-        )
-        figures.append({"file": fname, "input": None if single else escape_latex(h)})
-    scales = _scales(configurations)
-    tables = [equilibrium_table(report, ev, scales) for ev in configurations]
-    return {
-        "tables": tables,
-        "figures": figures,
-        "allowable": bool(allowable),
-        "loads": any(t["buckling"] is not None for t in tables),
-        "over": any(t["over"] for t in tables),
-        "actuation": any(t["actuation"] for t in tables),
-    }
-
-
-# -- emit ----------------------------------------------------------------------------------------
-
-
-def emit(
-    plan: Plan,
-    source: str,
-    appendix: bool = False,
-    evaluator: ModuleType | None = None,
-    column_width: float = COLUMN_WIDTH,
-    spans: Mapping[str, tuple[float, float]] | None = None,
-    physics: Physics | None = None,
-) -> dict[str, bytes]:
-    """`<name>.tex` (standalone, or the body alone with `appendix`) and its figure PDFs, laid out
-    for a column of `column_width` points; the deviation plots are evaluated with `evaluator`,
-    the plan's generated numpy module (needed when the plan has points), over `spans` (input ->
-    (lo, hi) in rad; ±SWEEP_RANGE for inputs not given), with the physical reference's points
-    from `physics` (the `equilibrium` level, when the file has stiffness data)."""
-    if plan.actuators:
-        # the report states and plots the file's points, not the actuators' points of action
-        shown = set(plan.shown_points)
-        derivation = plan.derivation
-        if derivation is not None:
-            derivation = dataclasses.replace(
-                derivation, points=tuple(q for q in derivation.points if q.name in shown)
-            )
-        plan = dataclasses.replace(plan, points=plan.shown_points, derivation=derivation)
-    report = Report(plan, source, column_width)
-    name = report.mech.name
-    ctx = report.context(appendix)
-    files: dict[str, bytes] = {}
-    pose = pose_data(report)
-    unit = PLAIN_UNITS[report.mech.units]
-    files[f"{name}-pose.pdf"] = pose_figure(pose, plain_name, unit)
-    scale = plate_scale(pose)
-    ctx["pose_width"] = f"{min(1.0, pose_size(pose)[0] / FIG_WIDTH):.2f}"
-    plates = "the flexure plates as thick black segments" + (
-        " to scale" if scale == 1 else f", drawn {scale:g} times their length"
-    )
-    ctx["pose_caption"] = (
-        plates + ", the fixed link $s_0$ as ground anchors; characteristic points in red."
-    )
-    arcs = [
-        (a, report.s.i_plus[a - 1], report.s.i_minus[a - 1], a > report.s.n)
-        for a in range(1, report.s.m + 1)
-    ]
-    layout = tree_layout(report.s.parent, report.s.n)
-    files[f"{name}-graph.pdf"] = graph_figure(layout, arcs)
-    depth = max(x for x, _ in layout.values())
-    # a shallow tree beside the hinge table, a deep one (a long chain) above it
-    ctx["graph_beside"] = depth <= 3 and report.width >= LINE_WIDTH_EM
-    ctx["graph_width"] = (
-        f"{0.16 + 0.1 * depth:.2f}" if depth <= 3 else f"{min(0.9, 0.13 * (depth + 1)):.2f}"
-    )
-    ctx["table_width"] = f"{min(0.58, 0.96 - float(ctx['graph_width'])):.2f}"
-    ctx["deviation_figures"] = []
-    ctx["sweep"] = None
-    ctx["sensitivity"] = None
-    ctx["equilibrium"] = None
-    drives = plan.drives or plan.inputs
-    if plan.points and drives:
-        if evaluator is None:
-            raise ValueError("the deviation plot needs the plan's generated numpy module")
-        strokes = report.mech.stroke_spans()
-        runs, summary = sweep(report, evaluator, sweep_spans(drives, spans, strokes), physics)
-        single = len(runs) == 1
-        points = list(plan.points)
-        pruned = False
-        for h, data, xlim in runs:
-            xlabel = (
-                f"stroke of {plain_name(h)} ({unit})"
-                if h in strokes
-                else f"input θ of {plain_name(h)} (rad)"
-            )
-            shown = points
-            if not single:  # (the caption says that the other inputs are held)
-                # only the points this input moves (a fan of four-bars: one point per input)
-                shown = [p for p in points if moves(data, p)] or points
-                pruned = pruned or len(shown) < len(points)
-            for chunk in _chunks(shown, 3):
-                k = len(ctx["deviation_figures"])
-                fname = f"{name}-deviation.pdf" if k == 0 else f"{name}-deviation-{k + 1}.pdf"
-                files[fname] = deviation_figure(
-                    data, chunk, plan.levels, plain_name, xlim, xlabel, unit
-                )
-                ctx["deviation_figures"].append(
-                    {
-                        "file": fname,
-                        "points": [escape_latex(p) for p in chunk],
-                        "input": None if single else escape_latex(h),
-                        "compare": differs(data, chunk, plan.levels),
-                    }
-                )
-        summary["single_input"] = single
-        summary["pruned"] = pruned
-        ctx["sweep"] = summary
-        ctx["equilibrium"] = _equilibrium_section(report, runs, files) if physics else None
-        ctx["sensitivity"] = sensitivity_table(report, evaluator, runs)
-    body = environment().get_template("latex/body.tex.j2").render(**ctx)
-    if appendix:
-        text = body
-    else:
-        text = environment().get_template("latex/report.tex.j2").render(body=body, **ctx)
-    files[f"{name}.tex"] = text.encode()
-    return dict(sorted(files.items()))

@@ -1,4 +1,5 @@
-"""LaTeX text helpers of the report: escaping names, a sympy printer, widths and line breaking.
+"""LaTeX text helpers of the report: escaping names, numbers, a sympy printer, widths and line
+breaking.
 
 Every expression reaches the report through :class:`Tex`, a sympy ``LatexPrinter``; long ones are
 broken over the lines of an ``align*`` by :meth:`Tex.lines` (sums split between terms, products,
@@ -9,6 +10,7 @@ page of :data:`LINE_WIDTH_EM` ems (a one-column article's 345 pt text width at 1
 from __future__ import annotations
 
 import decimal
+import math
 import re
 import unicodedata
 from collections.abc import Iterable, Mapping
@@ -17,8 +19,8 @@ from functools import lru_cache
 import sympy as sp
 from sympy.printing.latex import LatexPrinter
 
-from ....model import special
-from ...literals import fold_numbers
+from ..codegen.literals import fold_numbers
+from ..model import special
 
 #: Width the equations are broken for, in ems of the 10 pt body font (345 pt = article's
 #: one-column \textwidth; the standalone report is wider, an appendix may be this narrow).
@@ -170,6 +172,37 @@ def math_name(text: str) -> str:
 def plain_name(text: str) -> str:
     """A name for matplotlib text drawn without math parsing: control characters replaced."""
     return "".join(ch if ch.isprintable() else "?" for ch in str(text))
+
+
+# -- numbers -------------------------------------------------------------------------------------
+
+
+def sci(x: float, digits: int = 3) -> str:
+    r"""A float as LaTeX math text: ``1.23\times 10^{-6}`` (or plain for moderate magnitudes)."""
+    if x is None or not math.isfinite(x):
+        return r"\text{--}"
+    if x == 0:
+        return "0"
+    exponent = math.floor(math.log10(abs(x)))
+    if -2 <= exponent <= 3:
+        return f"{x:.{max(digits - 1 - exponent, 0)}f}"
+    mantissa = x / 10**exponent
+    text = f"{mantissa:.{digits - 1}f}"
+    if text.startswith(("10.", "-10.")):
+        mantissa /= 10
+        exponent += 1
+        text = f"{mantissa:.{digits - 1}f}"
+    return rf"{text}\times 10^{{{exponent}}}"
+
+
+def gnum(x: float) -> str:
+    """A float with up to 6 significant digits as LaTeX math text."""
+    text = f"{x:.6g}"
+    if "e" in text:
+        mantissa, exponent = text.split("e")
+        lead = "" if mantissa == "1" else mantissa + r"\times "
+        return rf"{lead}10^{{{int(exponent)}}}"
+    return text
 
 
 # -- the printer ---------------------------------------------------------------------------------

@@ -29,8 +29,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ....core.levels import Level
-from ....core.recent import Recent
+from ..core.levels import Level
+from ..core.recent import Recent
 
 _SUB = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
 

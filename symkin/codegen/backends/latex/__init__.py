@@ -1,1 +1,0 @@
-"""LaTeX report: text (escaping, printer, line breaking), figures, report (templates/latex)."""
