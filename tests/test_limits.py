@@ -144,3 +144,30 @@ def test_warnings_reach_the_user_as_one_line_without_library_paths(monkeypatch):
     assert run.stderr == "symkin: warning: overflow encountered in multiply (RuntimeWarning)\n"
     debug = symkin_cli("--debug", "check", FOUR_BAR)
     assert "test_limits.py" in debug.stderr and "RuntimeWarning" in debug.stderr
+
+
+@pytest.mark.parametrize(
+    "make, words",
+    [
+        (lambda p: os.mkfifo(p), "not a regular file (a device, FIFO or socket)"),
+        (lambda p: p.symlink_to("/dev/zero"), "not a regular file (a device, FIFO or socket)"),
+        (lambda p: p.mkdir(), "not a regular file (a folder)"),
+        (lambda p: p.write_bytes(b"# padding\n" * 110000), "larger than 1048576 bytes"),
+    ],
+    ids=["fifo", "link-to-dev-zero", "folder", "over-1-MiB"],
+)
+def test_the_mechanism_file_must_be_a_small_regular_file(tmp_path, make, words):
+    """`check` on a FIFO returns at once (it blocked forever), on /dev/zero or a link to it
+    without reading (4.4 GB in 10 s before), exit 2 naming the file."""
+    path = tmp_path / "m.toml"
+    make(path)
+    start = time.monotonic()
+    run = symkin_cli("check", str(path), timeout=30)
+    assert time.monotonic() - start < 20
+    assert run.returncode == 2, run.stderr
+    assert str(path) in run.stderr and words in run.stderr, run.stderr
+
+
+def test_dev_zero_itself_is_refused_unread():
+    run = symkin_cli("check", "/dev/zero", timeout=30)
+    assert run.returncode == 2 and "/dev/zero: not a regular file" in run.stderr, run.stderr

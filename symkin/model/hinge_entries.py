@@ -9,14 +9,13 @@ from __future__ import annotations
 import csv
 import io
 import math
-import os
-import stat
 from collections.abc import Mapping
 from pathlib import Path
 
 import sympy as sp
 
 from ..core.errors import suggest
+from ..core.files import Unreadable, read_input
 from .entries import STIFFNESS_RULES, Hinge, short
 from .entry_checks import EntryChecks
 from .hinges import (
@@ -418,33 +417,19 @@ class HingeEntries(EntryChecks):
                 hint,
             )
         try:
-            info = os.stat(path)
-        except OSError as exc:
+            raw = read_input(path, MAX_TABLE_BYTES)
+        except Unreadable as exc:
+            why = exc.reason.replace("cannot read the file", "cannot read it")
+            large = why.startswith("larger")
             raise self.error(
-                f"cannot read table file '{name}' ({exc.strerror or exc})", entry, line, hint
-            ) from None
-        if not stat.S_ISREG(info.st_mode):
-            raise self.error(f"table file '{name}' is not a regular file", entry, line, hint)
-        if info.st_size > MAX_TABLE_BYTES:
-            raise self.error(
-                f"table file '{name}' is larger than {MAX_TABLE_BYTES} bytes",
+                f"table file '{name}': {why}",
                 entry,
                 line,
-                "a table needs a few hundred rows at most",
-            )
+                "a table needs a few hundred rows at most" if large else hint,
+            ) from None
         try:
-            with open(path, "rb") as f:
-                raw = f.read(MAX_TABLE_BYTES + 1)
-            if len(raw) > MAX_TABLE_BYTES:
-                raise self.error(
-                    f"table file '{name}' is larger than {MAX_TABLE_BYTES} bytes",
-                    entry,
-                    line,
-                    "a table needs a few hundred rows at most",
-                )
             return raw.decode("utf-8")
-        except (OSError, UnicodeDecodeError) as exc:
-            reason = getattr(exc, "strerror", None) or type(exc).__name__
+        except UnicodeDecodeError as exc:
             raise self.error(
-                f"cannot read table file '{name}' ({reason})", entry, line, hint
+                f"table file '{name}' is not UTF-8 text (byte {exc.start})", entry, line, hint
             ) from None

@@ -19,6 +19,7 @@ from pathlib import Path
 import sympy as sp
 
 from ..core.errors import InputError, suggest
+from ..core.files import Unreadable, read_input
 from . import expressions
 from .closure import surrogate_hinges
 from .entries import DRIVES, Actuator, Hinge, Link, Load, Parameter, Point, short
@@ -48,16 +49,19 @@ LOAD_KEYS = ("point", "link", "at", "force", "moment")
 ACTUATOR_KEYS = ("name", "link", "at", "direction", "drive")
 
 
+#: The largest mechanism file read (a regular file: a FIFO or a device is refused unread).
+MAX_FILE_BYTES = 1 << 20
+
+
 def load(path: str | Path) -> Mechanism:
-    """Read and validate a mechanism file; raise InputError (exit 2) on anything wrong with it."""
+    """Read and validate a mechanism file; raise InputError (exit 2) on anything wrong with it
+    (and on anything that is not a regular file of at most MAX_FILE_BYTES)."""
     path = Path(path)
     shown = str(path)
     try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise InputError(
-            f"cannot read the file ({exc.strerror or exc})", file=shown, hint="check the path"
-        ) from None
+        raw = read_input(path, MAX_FILE_BYTES)
+    except Unreadable as exc:
+        raise InputError(exc.reason, file=shown, hint=exc.hint) from None
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
