@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import ast
 import collections
+import dataclasses
 import io
 import math
 import re
@@ -62,6 +63,39 @@ BEFORE_STROKES = {
     "floor": 1e-300,
     "step": 1.4901161193847656e-08,  # sqrt(eps)
 }
+BEFORE_EQUILIBRIUM = {  # symkin/physics/equilibrium.py's constants and literals
+    "min_step": 1e-7,
+    "max_turn": 0.05,
+    "first_step": 0.25,
+    "step_growth": 1.5,
+    "step_cut": 0.5,  # dt /= 2
+    "approach": 0.5,
+    "singular_ratio": 1e-8,
+    "max_steps": 1000,
+    "time_budget": 20.0,
+    "buckling_budget": 2.0,
+    "rate_growth": 4.0,
+    "rate_margin": 20.0,
+    "jump": 1e-9,
+    "newton_iterations": 12,
+    "newton_tol": 1e-14,
+    "stall_ratio": 0.5,  # previous / 2
+    "stalled": 1e-9,
+    "diverged": 1e3,
+    "series_tol": 1e-18,
+    "base_digits": 24,
+    "max_digits": 400,
+    "polish_iterations": 8,
+    "polish_digits": 6,
+    "polish_guard": 3,
+    "rounding_digits": 8,
+    "tangent_step": 1e-4,
+    "real_eigenvalue": 1e-6,
+    "buckling_limit": 10.0,
+    "strain_limit": 0.1,
+    "probe_steps": 30,
+    "gross_overload": 10.0,
+}
 BEFORE_LOOPS = {  # rigid, converged, stalled, polish, residual, consistent
     "float64": (1e-10, 1e-8, 1e-12, 1, 2e-13, 1e-8),
     "float32": (1e-4, 3e-4, 1e-5, 1, 1e-4, 1e-3),
@@ -85,6 +119,11 @@ def test_the_float64_numbers_are_those_the_runtimes_held():
         tol = SOLVER.tolerances(precision)
         got = (tol.rigid, tol.converged, tol.stalled, tol.polish, tol.residual, tol.consistent)
         assert got == numbers, precision
+    eq = SOLVER.equilibrium
+    named = {f.name.removesuffix("_eps") for f in dataclasses.fields(eq)}
+    assert named == BEFORE_EQUILIBRIUM.keys()
+    for key, value in BEFORE_EQUILIBRIUM.items():
+        assert same(getattr(eq, key), value), key
     # the Python solvers' own copies
     assert reduced._TOL == 1e-12 and reduced._STALLED == 1e-9
     assert reduced.RULES is SOLVER.loaded and reduced_reported.RULES is SOLVER.loaded
@@ -245,6 +284,13 @@ ALLOWED = {
         "17": "digits of a float's exact sympy Float",
     },
     "symkin/physics/reduced_reported.py": {"20": "digits of a sympy evaluation"},
+    "symkin/physics/equilibrium.py": {
+        "1j": "the complex step's imaginary unit (its size: arith.COMPLEX_STEP)",
+        "17": "digits of a float's exact sympy Float",
+        "20": "digits of a sympy evaluation",
+        "10": "mpmath.mpf(10) ** digits: a rule stated in decimal digits",
+        "10.0": "10.0 ** digits: a rule stated in decimal digits",
+    },
 }
 #: The runtime files and their Python twins of the loaded level (symkin.studies.evaluation's
 #: mpmath solvers read SOLVER everywhere: tests/test_solver.py).
@@ -263,6 +309,7 @@ RUNTIMES = [
     "templates/numpy/reduced_actuators_sens.py",
     "symkin/physics/reduced.py",
     "symkin/physics/reduced_reported.py",
+    "symkin/physics/equilibrium.py",  # no generated twin, its rules in the table too
 ]
 #: An iteration counter compared with a number: a cap or a stall test's start (the table's).
 #: (0 and 1 tell the first step from the others.)

@@ -221,6 +221,78 @@ class StrokeSettings:
 
 
 @dataclass(frozen=True)
+class EquilibriumSettings:
+    """The `equilibrium` level's continuation, Newton, polish and buckling search
+    (symkin.physics.equilibrium; Python alone, float64 then mpmath; docs/physics.md)."""
+
+    # continuation along the load factor t (follow, continuation)
+    min_step: float = 1e-7  # the smallest step in t before it gives up
+    max_turn: float = 0.05  # the largest input-angle change per step (rad)
+    first_step: float = 0.25  # the largest step in t when no input turns
+    step_growth: float = 1.5  # an accepted step grows the next by this (up to the largest)
+    step_cut: float = 0.5  # a refused step is retried this much shorter
+    approach: float = 0.5  # at most this fraction of the way to J's extrapolated singularity
+    singular_ratio: float = 1e-8  # J's smallest over largest singular value: singular below
+    # the budget: most steps (accepted or not) and most seconds (wall clock) before it gives up
+    # with exit 3 (a solve takes 0.1–1 s and a few dozen steps); the buckling search has
+    # buckling_budget times the seconds
+    max_steps: int = 1000
+    time_budget: float = 20.0
+    buckling_budget: float = 2.0
+    # a Newton iterate whose plates need loads rate_growth times larger (in the series' rate,
+    # |k0| + √|λ|) than where Newton started, plus rate_margin (a buckling plate stays below
+    # it), is rejected: far off the path, its Taylor series would need ever more steps
+    rate_growth: float = 4.0
+    rate_margin: float = 20.0
+    # the corrector jumped: it moved farther than the predictor's step plus this times
+    # (1 + the largest unknown)
+    jump: float = 1e-9
+    # Newton in float64 (_newton): at most `newton_iterations` steps; converged below
+    # newton_tol_eps·ε times (1 + the largest unknown), or stalled: at least stall_ratio of the
+    # previous step and below stalled_eps·ε (absolute); diverged above `diverged`
+    newton_iterations: int = 12
+    newton_tol_eps: float = 1e-14 / EPS64
+    stall_ratio: float = 0.5
+    stalled_eps: float = 1e-9 / EPS64
+    diverged: float = 1e3
+    # the plates' Taylor series are summed to this (beams.shoot's tol) in float64
+    series_tol: float = 1e-18
+    # polish in mpmath at base_digits + (digits the deviation loses against the positions),
+    # at most max_digits (then the caller's extra): at most polish_iterations steps, stopping
+    # below 10^(polish_digits − dps); the series to 10^(−dps − polish_guard); the error
+    # estimate's rounding term 10^(rounding_digits − dps) of the span (docs/physics.md)
+    base_digits: int = 24
+    max_digits: int = 400
+    polish_iterations: int = 8
+    polish_digits: int = 6
+    polish_guard: int = 3
+    rounding_digits: int = 8
+    # buckling: the linearised estimate's central difference (this over the tangent's largest
+    # entry) and the imaginary part of an eigenvalue taken for rounding (relative); the search
+    # for a singular tangent stiffness stops at buckling_limit on the file's loads. Loads
+    # beyond the estimate are probed: following them stops once a plate strains strain_limit
+    # (bending plus stretch: no elastic flexure survives it, and the beams' linear law no
+    # longer holds) or after probe_steps accepted steps (a deterministic budget); loads
+    # gross_overload times the estimate are refused without a probe: a slip of units (the
+    # estimate is rough: 0.6 of Euler's load for a column, up to twice a snap-through's limit
+    # point, and a load that bends the plates from the start may have none)
+    tangent_step: float = 1e-4
+    real_eigenvalue: float = 1e-6
+    buckling_limit: float = 10.0
+    strain_limit: float = 0.1
+    probe_steps: int = 30
+    gross_overload: float = 10.0
+
+    @property
+    def newton_tol(self) -> float:
+        return self.newton_tol_eps * EPS64
+
+    @property
+    def stalled(self) -> float:
+        return self.stalled_eps * EPS64
+
+
+@dataclass(frozen=True)
 class SolverSettings:
     """Continuation, iteration caps and tolerances of every solver symkin runs: one table that
     the plan hands to the generated evaluators and the Python evaluation reads
@@ -249,6 +321,7 @@ class SolverSettings:
     consistent32: float = 1e-3
     loaded: LoadedSettings = field(default_factory=LoadedSettings)
     strokes: StrokeSettings = field(default_factory=StrokeSettings)
+    equilibrium: EquilibriumSettings = field(default_factory=EquilibriumSettings)
 
     @property
     def float64(self) -> Tolerances:
