@@ -233,14 +233,15 @@ def test_continuation_alike(monkeypatch):
     """Newton's turn limit lowered (3e-4 rad) so that the parallelogram needs continuation: numpy
     and C follow the Python solver's path to its answer (the last Newton step's J at s = 1 is the
     configuration's own)."""
-    monkeypatch.setattr(reduced, "MAX_TURN", 3e-4)
+    rules = dataclasses.replace(reduced.RULES, max_turn=3e-4)
+    monkeypatch.setattr(reduced, "RULES", rules)
     path, inputs = CASES["parallelogram"]
     an = _built(path, "numpy")[0]
     want = reduced_equilibrium(an, inputs)
     assert want.steps > 1 and not want.refused
     p = pipeline.plan_for(an, sensitivity=False)
     assert p.loaded is not None
-    p = dataclasses.replace(p, loaded=dataclasses.replace(p.loaded, max_turn=3e-4))
+    p = dataclasses.replace(p, solver=dataclasses.replace(p.solver, loaded=rules))
     shape = pipeline.Shape.of(p)
     for backend in ("numpy", "c"):
         if backend == "c":

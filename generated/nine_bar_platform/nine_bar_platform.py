@@ -766,10 +766,15 @@ class _Batch:
             left = ~c | (size * size <= tb.chord_error * top * prev[act])
             done = ((size <= tb.tol * top) & left) | (size == 0)
             # stalled at rounding (a full step's: a slow chord step's is its J's, not rounding)
-            done |= ~c & (it > 3) & (size > 0.5 * prev[act]) & (size < 1e-9 * top)
+            done |= (
+                ~c
+                & (it > tb.stall_after)
+                & (size > tb.stall_ratio * prev[act])
+                & (size < tb.stalled * top)
+            )
             x[:, act] = xn
             converged[act[done & ~fail]] = True
-            chord[act] = (size <= tb.chord * top) & (~c | (size <= 0.1 * prev[act]))
+            chord[act] = (size <= tb.chord * top) & (~c | (size <= tb.chord_shrink * prev[act]))
             prev[act] = size
             act = act[~done & ~fail]
             if not act.size:
@@ -843,7 +848,7 @@ class _Batch:
         def column(values):
             return [numpy.array([v]) for v in values]
 
-        s, ds = 0.0, 0.25
+        s, ds = 0.0, tb.first_step
         th_s = rigid(0.0)
         if th_s is None:
             return None
@@ -851,7 +856,7 @@ class _Batch:
         sign = _red_signs(self.system(x, column(th_s), pk, 0.0)[1])
         jac = None
         while s < 1:
-            if ds < 1e-3:
+            if ds < tb.smallest_step:
                 return None
             s1 = min(1.0, s + ds)
             th_1 = rigid(s1)
@@ -864,9 +869,9 @@ class _Batch:
                 okn = bool(conv[0]) and bool(self.accept(xn, column(th_1), last, sign)[0])
             if okn:
                 x, s, th_s, jac = xn, s1, th_1, last[0]
-                ds = min(0.5, ds * 1.5)
+                ds = min(tb.largest_step, ds * tb.step_growth)
             else:
-                ds /= 2
+                ds *= tb.step_cut
         return x[:, 0], jac
 
     def compression(self, ins, b):
@@ -1072,16 +1077,10 @@ def _reduced_rates(mech, theta, p, q, thu, ok, forces=0):
     return dev.reshape(shape + (npt, nv))
 
 
-#: Sections per plate where the stress is sampled (symkin.physics.reported.SECTIONS), one RK4
-#: step each (against the Python path's Taylor series: 5e-12 of the stress, tests/
-#: test_loaded_reported_codegen.py).
-_STRESS_SECTIONS = 64
-#: A point's scaled compliance this ill-conditioned is singular (reported.SINGULAR): NaN.
-_SINGULAR = 1e12
-#: The buckling search stops at this factor on the loads (reduced_reported.LIMIT) ...
-_BUCKLING_LIMIT = 10.0
-#: ... and locates a sign change or a limit point to this relative width (reduced_reported.LOCATE).
-_BUCKLING_LOCATE = 1e-10
+# Its rules (symkin.core.settings.LoadedSettings) are the loaded tables' (mech.loaded): sections,
+# the stress samples per plate, one RK4 step each (against the Python path's Taylor series:
+# 5e-12 of the stress, tests/test_loaded_reported_codegen.py); singular, a point's scaled
+# compliance this ill-conditioned is singular (NaN); buckling_*, the buckling search.
 
 
 def _evaluate_reported(mech, inputs, level, params, links, report=True, buckling=True):
@@ -1103,12 +1102,12 @@ def _reported_block(arrays, mech, level, p, links, report):
     return result
 
 
-def _plate_stress(k0, lx, ly, ea, es, slender, modulus, limit, has_limit):
+def _plate_stress(k0, lx, ly, ea, es, slender, modulus, limit, has_limit, sections):
     """Largest normal stress (Pa), its strain, the safety factor (NaN without an allowable
     stress) and where along the plate (0..1), per configuration ((b,) arrays): the plate's IVP
     psi'' = -f_Q (1 + (e_a - e_s) f_N), psi(0) = 0, psi'(0) = k0 (symkin.physics.beams) by
-    fixed-step RK4, the strain |psi'| t/(2l) + |f_N| (t/l)^2/12 at every section and the
-    parabola's vertex through the three samples around an interior maximum
+    fixed-step RK4 over `sections` sections, the strain |psi'| t/(2l) + |f_N| (t/l)^2/12 at
+    every section and the parabola's vertex through the three samples around an interior maximum
     (symkin.physics.reported.plate_stress)."""
     d = ea - es
 
@@ -1116,7 +1115,7 @@ def _plate_stress(k0, lx, ly, ea, es, slender, modulus, limit, has_limit):
         c, s = numpy.cos(psi), numpy.sin(psi)
         return om, -(ly * c - lx * s) * (1 + d * (lx * c + ly * s))
 
-    n = _STRESS_SECTIONS
+    n = sections
     h = 1.0 / n
     psi, om = numpy.zeros_like(k0), numpy.array(k0, dtype=float)
     psis, oms = [psi], [om]
@@ -1230,7 +1229,7 @@ def _reduced_report(mech, theta, p, q, ok, buckling=True):
         stiff = numpy.full((size, 3, 3), numpy.nan)
         if live.any():
             cond = numpy.linalg.cond(c[live] * norm)
-            keep = numpy.flatnonzero(live)[cond <= _SINGULAR]
+            keep = numpy.flatnonzero(live)[cond <= tb.singular]
             if keep.size:
                 stiff[keep] = numpy.linalg.inv(c[keep])
         result["stiffness"][name] = numpy.moveaxis(stiff, 0, -1).reshape((3, 3) + shape)
@@ -1239,7 +1238,7 @@ def _reduced_report(mech, theta, p, q, ok, buckling=True):
         live = numpy.flatnonzero(ok_flat)
         values = [numpy.full(size, numpy.nan) for _ in range(4)]
         if live.size:
-            found = _plate_stress(*(v[live] for v in row), rep.limits[k])
+            found = _plate_stress(*(v[live] for v in row), rep.limits[k], tb.sections)
             for v, f in zip(values, found):
                 v[live] = f
         result["plates"][name] = {
@@ -1300,17 +1299,18 @@ def _red_buckling(solver, x, theta, p):
     """reduced_reported.buckling_factor on every configuration at once (x (n, b): each one's
     solution at load factor 1): the smallest t >= 1, the inputs held, at which det J changes
     sign, a plate reaches its sway buckling load or Newton cannot go on (a limit point); inf
-    when none below _BUCKLING_LIMIT. Each configuration steps with its own t, step, x and
+    when none below buckling_limit. Each configuration steps with its own t, step, x and
     previous point (the same arithmetic, so the same steps as alone); the sign changes found
     are then bisected together."""
-    limit, locate = _BUCKLING_LIMIT, _BUCKLING_LOCATE
+    tb = solver.t
+    limit, locate = tb.buckling_limit, tb.buckling_locate
     b = x.shape[1]
     out = numpy.full(b, numpy.nan)
     t = numpy.ones(b)
     x, ok, sign = _red_state(solver, x, theta, p, t)
     out[~ok | (sign == 0)] = 1.0
     act = numpy.flatnonzero(ok & (sign != 0))
-    dt = numpy.full(b, 0.5)
+    dt = numpy.full(b, tb.buckling_step)
     # the previous accepted (x, t) of each configuration (none before its first step)
     x_prev, t_prev, has_prev = numpy.zeros_like(x), numpy.zeros(b), numpy.zeros(b, dtype=bool)
     lo, hi, x_lo = numpy.zeros(b), numpy.zeros(b), x.copy()
@@ -1328,11 +1328,11 @@ def _red_buckling(solver, x, theta, p):
         k = act[change]
         lo[k], hi[k], x_lo[:, k], bisect[k] = t[k], t1[change], x[:, k], True
         out[act[ends]] = ta[ends]
-        dt[act[~ok1 & ~ends]] /= 2
+        dt[act[~ok1 & ~ends]] *= tb.buckling_cut
         k = act[same]
         x_prev[:, k], t_prev[k], has_prev[k] = x[:, k], t[k], True
         x[:, k], t[k] = x1[:, same], t1[same]
-        dt[k] = numpy.minimum(3.0, dt[k] * 2)
+        dt[k] = numpy.minimum(tb.buckling_largest, dt[k] * tb.buckling_growth)
         act = act[same | (~ok1 & ~ends)]
         past = t[act] >= limit
         out[act[past]] = math.inf
@@ -16337,9 +16337,33 @@ _MECHANISM = _Mechanism(
         ),
         relation4=_plate_relation4, values4=_plate_values4, values2=_plate_values2, rest4=_plate_rest4,
         unknowns=6, unknown_index=(4, 5, 6, 7, 8, 9, ),
-        tol=1e-12, max_iter=12, max_turn=0.2,
-        p_limit=0.9, est_factor=3.0, est_limit=0.01,
-        loads=False, chord=0.001, chord_error=1e-15,
+        loads=False,
+        # its rules: Newton, continuation, refusals, buckling search (symkin.core.settings.LoadedSettings)
+        tol=1e-12,
+        max_iter=12,
+        max_turn=0.2,
+        stall_after=3,
+        stall_ratio=0.5,
+        stalled=1e-09,
+        chord=0.001,
+        chord_shrink=0.1,
+        chord_error=1e-15,
+        first_step=0.25,
+        step_growth=1.5,
+        largest_step=0.5,
+        step_cut=0.5,
+        smallest_step=0.001,
+        p_limit=0.9,
+        est_factor=3.0,
+        est_limit=0.01,
+        sections=64,
+        singular=1000000000000.0,
+        buckling_limit=10.0,
+        buckling_step=0.5,
+        buckling_growth=2.0,
+        buckling_largest=3.0,
+        buckling_cut=0.5,
+        buckling_locate=1e-10,
         # the sensitivities (templates/numpy/reduced_sens.py): per variant its routine and blocks
         sens=((_loaded_sens1, {'dR_dtheta': (0, 12, 10), 'dR_dp': (120, 12, 1), 'din_dtheta': (132, 50, 10), 'din_dp': (632, 50, 1), 'dD_dx': (682, 2, 12), 'dD_dtheta': (706, 2, 10), 'dD_dp': (726, 2, 1), 'dD_dout': (728, 2, 30)}), (_loaded_sens2, {'dR_dtheta': (0, 22, 10), 'dR_dp': (220, 22, 1), 'din_dtheta': (242, 100, 10), 'din_dp': (1242, 100, 1), 'dD_dx': (1342, 2, 22), 'dD_dtheta': (1386, 2, 10), 'dD_dp': (1406, 2, 1), 'dD_dout': (1408, 2, 60)}), ),
         eps4=_plate_eps4,

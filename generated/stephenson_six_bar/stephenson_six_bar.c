@@ -12164,6 +12164,32 @@ static int sk_sensitivity_rows(const sk_mechanism *m, int n, const double *input
     return failed;
 }
 
+/* the loaded level's rules: Newton, continuation, refusals (symkin.core.settings.LoadedSettings) */
+#define SK_LOADED_TOL 1e-12
+#define SK_LOADED_MAX_ITER 12
+#define SK_LOADED_MAX_TURN 0.2
+#define SK_LOADED_STALL_AFTER 3
+#define SK_LOADED_STALL_RATIO 0.5
+#define SK_LOADED_STALLED 1e-09
+#define SK_LOADED_CHORD 0.001
+#define SK_LOADED_CHORD_SHRINK 0.1
+#define SK_LOADED_CHORD_ERROR 1e-15
+#define SK_LOADED_FIRST_STEP 0.25
+#define SK_LOADED_STEP_GROWTH 1.5
+#define SK_LOADED_LARGEST_STEP 0.5
+#define SK_LOADED_STEP_CUT 0.5
+#define SK_LOADED_SMALLEST_STEP 0.001
+#define SK_LOADED_P_LIMIT 0.9
+#define SK_LOADED_EST_FACTOR 3.0
+#define SK_LOADED_EST_LIMIT 0.01
+#define SK_LOADED_SECTIONS 64
+#define SK_LOADED_SINGULAR 1000000000000.0
+#define SK_LOADED_BUCKLING_LIMIT 10.0
+#define SK_LOADED_BUCKLING_STEP 0.5
+#define SK_LOADED_BUCKLING_GROWTH 2.0
+#define SK_LOADED_BUCKLING_LARGEST 3.0
+#define SK_LOADED_BUCKLING_CUT 0.5
+#define SK_LOADED_BUCKLING_LOCATE 1e-10
 /* symkin reduced-equilibrium runtime (templates/c/reduced.c): Newton from x = 0 at load factor
    1, continuation in the inputs and loads together where Newton fails, the refusals (a plate at
    p_limit of its sway buckling load, the truncation estimate), two half plates per plate where
@@ -12185,14 +12211,12 @@ typedef struct {
     const double *scale;
 } sk_variant;
 
-/* The loaded level's variants (one, two half plates per plate) and rules. */
+/* The loaded level's variants (one, two half plates per plate); its rules are the generated
+   file's SK_LOADED_* (symkin.core.settings.LoadedSettings). */
 typedef struct {
     sk_variant variants[2];
     int unknowns;       /* non-input hinges: x's first entries, delta / scale */
-    double tol, max_turn, p_limit, est_factor, est_limit;
-    int max_iter;
     int loads;          /* the load factor t enters the routines (the file has loads) */
-    double chord, chord_error;  /* Newton's chord steps (symkin.codegen.loaded.CHORD) */
 } sk_loaded;
 
 /* One variant at one configuration. */
@@ -12348,7 +12372,7 @@ static int sk_red_newton(const sk_red *r, double *x, const double *theta, double
     double res[SK_RN + 1], prev = HUGE_VAL;
     int it, i, chord = 0;
     *first = NAN;
-    for (it = 1; it <= r->l->max_iter; ++it) {
+    for (it = 1; it <= SK_LOADED_MAX_ITER; ++it) {
         double turn = 0.0, size = 0.0, top = 0.0;
         if (chord) {
             sk_red_residual(r, x, theta, t, st);
@@ -12371,7 +12395,7 @@ static int sk_red_newton(const sk_red *r, double *x, const double *theta, double
                 turn = fabs(res[i]);
             }
         }
-        if (nu > 0 && turn * r->v->scale[0] > r->l->max_turn) {
+        if (nu > 0 && turn * r->v->scale[0] > SK_LOADED_MAX_TURN) {
             return 1;
         }
         for (i = 0; i < n; ++i) {
@@ -12391,14 +12415,15 @@ static int sk_red_newton(const sk_red *r, double *x, const double *theta, double
         /* a Newton step leaves about its square, below rounding; a chord step its size times
            the contraction (size / prev) */
         if (size == 0.0
-            || (size <= r->l->tol * top
-                && (!chord || size * size <= r->l->chord_error * top * prev))) {
+            || (size <= SK_LOADED_TOL * top
+                && (!chord || size * size <= SK_LOADED_CHORD_ERROR * top * prev))) {
             return 0;
         }
-        if (!chord && it > 3 && size > 0.5 * prev && size < 1e-9 * top) {
+        if (!chord && it > SK_LOADED_STALL_AFTER && size > SK_LOADED_STALL_RATIO * prev
+            && size < SK_LOADED_STALLED * top) {
             return 0;   /* stalled at rounding (a full step's: a chord step's is its J's) */
         }
-        chord = size <= r->l->chord * top && (!chord || size <= 0.1 * prev);
+        chord = size <= SK_LOADED_CHORD * top && (!chord || size <= SK_LOADED_CHORD_SHRINK * prev);
         prev = size;
     }
     return 1;
@@ -12513,10 +12538,10 @@ static int sk_red_answer(const sk_red *r, const double *x, const double *theta,
             }
         }
     }
-    if (worst >= r->l->p_limit) {
+    if (worst >= SK_LOADED_P_LIMIT) {
         return 1;
     }
-    if (r->l->est_factor * e24 * e24 > r->l->est_limit) {
+    if (SK_LOADED_EST_FACTOR * e24 * e24 > SK_LOADED_EST_LIMIT) {
         return 4;
     }
     return 0;
@@ -12551,7 +12576,7 @@ static int sk_red_solve(const sk_red *r, const double *inputs, const double *the
     ok = ok && sk_red_accept(r, x, theta, &st, sign0);
     if (!ok) {
         /* continuation: inputs and loads scaled together by s from the as-fabricated pose */
-        double s = 0.0, ds = 0.25, sign, th_s[SK_M], th_1[SK_M], guess[SK_RN + 1];
+        double s = 0.0, ds = SK_LOADED_FIRST_STEP, sign, th_s[SK_M], th_1[SK_M], guess[SK_RN + 1];
         if (sk_red_rigid(r->m, inputs, r->params, 0.0, th_s)) {
             return 2;
         }
@@ -12563,7 +12588,7 @@ static int sk_red_solve(const sk_red *r, const double *inputs, const double *the
         while (s < 1.0) {
             double s1;
             int good = 1;
-            if (ds < 1e-3) {
+            if (ds < SK_LOADED_SMALLEST_STEP) {
                 return 2;
             }
             s1 = s + ds < 1.0 ? s + ds : 1.0;
@@ -12594,9 +12619,11 @@ static int sk_red_solve(const sk_red *r, const double *inputs, const double *the
                     th_s[i] = th_1[i];
                 }
                 s = s1;
-                ds = ds * 1.5 < 0.5 ? ds * 1.5 : 0.5;
+                ds = ds * SK_LOADED_STEP_GROWTH < SK_LOADED_LARGEST_STEP
+                         ? ds * SK_LOADED_STEP_GROWTH
+                         : SK_LOADED_LARGEST_STEP;
             } else {
-                ds /= 2.0;
+                ds *= SK_LOADED_STEP_CUT;
             }
         }
     }
@@ -12694,11 +12721,10 @@ static int sk_red_at_solution(const sk_mechanism *m, const double *theta, const 
 static const double sk_loaded_scale1[13] = {0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.378698224852071, 0.378698224852071, 0.04923076923076923, 0.378698224852071, 0.378698224852071, 0.04923076923076923};
 static const double sk_loaded_scale2[20] = {0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.006153846153846154, 0.378698224852071, 0.378698224852071, 0.04923076923076923, 0.378698224852071, 0.378698224852071, 0.04923076923076923, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0};
 /* the loaded level: per variant (one, two half plates per plate) its routines, size, half
-   plates and the unknowns' scales; the unknowns; the rules of symkin.physics.reduced */
+   plates and the unknowns' scales; the unknowns; whether the file has loads */
 static const sk_loaded sk_loaded_tables = {
     {{1, sk_loaded_plates1, sk_loaded_system1, sk_loaded_res1, sk_loaded_dev1, 12, 7, sk_loaded_scale1}, {2, sk_loaded_plates2, sk_loaded_system2, sk_loaded_res2, sk_loaded_dev2, 19, 14, sk_loaded_scale2}},
-    6, 1e-12, 0.2, 0.9, 3.0, 0.01,
-    12, 0, 0.001, 1e-15
+    6, 0
 };
 
 /* One variant's sensitivity routine (x, theta, plates, params) and where its blocks start:
@@ -12860,10 +12886,9 @@ typedef struct {
     double unit_scale, L, F;
 } sk_loaded_report;
 
-/* Sections per plate where the stress is sampled (symkin.physics.reported.SECTIONS), one RK4
-   step each; a point's compliance this ill-conditioned (1-norm, scaled) is singular. */
-#define SK_REP_SECTIONS 64
-#define SK_REP_SINGULAR 1e12
+/* SK_LOADED_SECTIONS: sections per plate where the stress is sampled, one RK4 step each;
+   SK_LOADED_SINGULAR: a point's compliance this ill-conditioned (1-norm, scaled) is singular
+   (the generated file's, symkin.core.settings.LoadedSettings). */
 
 /* psi'' of the plate's IVP (symkin.physics.beams): -f_Q (1 + (e_a - e_s) f_N). */
 static double sk_rep_bend(double psi, double lx, double ly, double d)
@@ -12880,15 +12905,15 @@ static double sk_rep_bend(double psi, double lx, double ly, double d)
 static void sk_rep_plate(const double *row, int has_limit, double *out)
 {
     const double lx = row[1], ly = row[2], d = row[3] - row[4], t = row[5];
-    const double h = 1.0 / SK_REP_SECTIONS;
-    double strain[SK_REP_SECTIONS + 1], psi = 0.0, om = row[0], value, where, stress;
+    const double h = 1.0 / SK_LOADED_SECTIONS;
+    double strain[SK_LOADED_SECTIONS + 1], psi = 0.0, om = row[0], value, where, stress;
     int i, j = 0;
-    for (i = 0; i <= SK_REP_SECTIONS; ++i) {
+    for (i = 0; i <= SK_LOADED_SECTIONS; ++i) {
         strain[i] = fabs(om) * t / 2.0 + fabs(lx * cos(psi) + ly * sin(psi)) * t * t / 12.0;
         if (strain[i] > strain[j]) {
             j = i;                  /* the first largest, as numpy's argmax */
         }
-        if (i < SK_REP_SECTIONS) {
+        if (i < SK_LOADED_SECTIONS) {
             const double a1 = om, b1 = sk_rep_bend(psi, lx, ly, d);
             const double a2 = om + h / 2 * b1, b2 = sk_rep_bend(psi + h / 2 * a1, lx, ly, d);
             const double a3 = om + h / 2 * b2, b3 = sk_rep_bend(psi + h / 2 * a2, lx, ly, d);
@@ -12898,14 +12923,14 @@ static void sk_rep_plate(const double *row, int has_limit, double *out)
         }
     }
     value = strain[j];
-    where = (double)j / SK_REP_SECTIONS;
-    if (j > 0 && j < SK_REP_SECTIONS) {
+    where = (double)j / SK_LOADED_SECTIONS;
+    if (j > 0 && j < SK_LOADED_SECTIONS) {
         const double a = strain[j - 1], b = strain[j], c = strain[j + 1];
         const double bend = a - 2 * b + c;
         if (bend < 0) {
             const double shift = (a - c) / (2 * bend);
             value = b - (a - c) * shift / 4;
-            where = (j + shift) / SK_REP_SECTIONS;
+            where = (j + shift) / SK_LOADED_SECTIONS;
         }
     }
     stress = row[6] * value;
@@ -12929,7 +12954,7 @@ static double sk_rep_norm1(const double *a)
 
 /* K = C^-1 of a point's compliance C (3 x 3) into k, NaN where C is singular: its 1-norm
    condition, scaled by L and F as reduced_reported.report scales it (there the 2-norm's),
-   above SK_REP_SINGULAR or not finite. */
+   above SK_LOADED_SINGULAR or not finite. */
 static void sk_rep_stiffness(const sk_loaded_report *rp, const double *c, double *k)
 {
     const double w[3] = {rp->F / rp->L, rp->F / rp->L, rp->F}, u[3] = {1.0, 1.0, 1.0 / rp->L};
@@ -12957,7 +12982,7 @@ static void sk_rep_stiffness(const sk_loaded_report *rp, const double *c, double
         for (i = 0; i < 9; ++i) {
             sinv[i] = inv[i] / (u[i / 3] * w[i % 3]);
         }
-        if (!(sk_rep_norm1(scaled) * sk_rep_norm1(sinv) <= SK_REP_SINGULAR)) {
+        if (!(sk_rep_norm1(scaled) * sk_rep_norm1(sinv) <= SK_LOADED_SINGULAR)) {
             return;
         }
     }

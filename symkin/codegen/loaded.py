@@ -56,14 +56,6 @@ from .literals import float_literals
 from .plate import SYMBOLS, plate_routine, shared_h, squares
 from .routines import Argument, Routine, flatten, layout, optimize
 
-#: The drivers' Newton: after a step below CHORD times the largest unknown, the next steps reuse
-#: its Jacobian (chord steps: R alone) while each shrinks the step tenfold or more.
-CHORD = 1e-3
-#: A chord step below TOL converges where what it leaves, its size times the contraction
-#: (size / previous size), is below CHORD_ERROR times the largest unknown (a Newton step leaves
-#: its square, below rounding; the Python solver's answer agrees to about this).
-CHORD_ERROR = 1e-15
-
 
 @dataclass(frozen=True)
 class Segments:
@@ -77,9 +69,9 @@ class Segments:
 
 @dataclass(frozen=True)
 class LoadedPlan:
-    """How the generated `loaded` level runs the reduced equilibrium (the rules of
-    symkin.physics.reduced, and per variant its sizes); the routines are the plan's
-    loaded_*<g>, plate_relation4, plate_values2 and plate_rest4."""
+    """How the generated `loaded` level runs the reduced equilibrium: per variant its sizes (its
+    rules: the plan's solver settings, symkin.core.settings.LoadedSettings); the routines are
+    the plan's loaded_*<g>, plate_relation4, plate_values2 and plate_rest4."""
 
     variants: tuple[Segments, ...]  # one, then two half plates per plate
     unknowns: int  # non-input hinges (then surrogates): the first unknowns, δ / (l_min / L)
@@ -87,14 +79,6 @@ class LoadedPlan:
     # the load factor t enters the routines (the file has loads); without, det J's sign at the
     # unloaded state is the first Newton step's (x = 0, the same matrix)
     loads: bool = True
-    tol: float = reduced.TOL
-    max_iter: int = reduced.MAX_ITER
-    max_turn: float = reduced.MAX_TURN
-    p_limit: float = reduced.P_LIMIT
-    est_factor: float = reduced.EST_FACTOR
-    est_limit: float = reduced.EST_LIMIT
-    chord: float = CHORD
-    chord_error: float = CHORD_ERROR
     # what the loaded_report<g> routines report (None: not derived, symkin.codegen.loaded)
     report: Reported | None = None
     # the actuators' surrogate hinges (their position in theta): unknowns after the non-input

@@ -1,5 +1,9 @@
 """How symkin solves its loops: one set of settings that the mpmath evaluation, the generated C
-and numpy evaluators and the benchmarks' drivers all read (docs/numerics.md).
+and numpy evaluators and the benchmarks' drivers all read (docs/numerics.md). The `loaded`
+level's Newton, continuation, refusals and buckling search (LoadedSettings) and the stroke
+actuators' solves (StrokeSettings) are in the same table; every rule that depends on the working
+precision is a multiple of its machine epsilon ε (docs/numerics.md, "The solver table"). No
+runtime file holds a solver number of its own (tests/test_solver_settings.py).
 
 The algorithm, in every arithmetic:
 
@@ -68,7 +72,21 @@ The algorithm, in every arithmetic:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields
+
+#: float64's machine epsilon (2⁻⁵²): the precision-dependent rules below are multiples of an
+#: arithmetic's ε, written as their float64 value over EPS64 so that k·EPS64 is that value
+#: exactly (a power of two scales without rounding)
+EPS64 = 2.0**-52
+#: float32's machine epsilon (2⁻²³)
+EPS32 = 2.0**-23
+
+
+def mpmath_eps(dps: int) -> float:
+    """mpmath's ε at `dps` decimal digits: 2^(1 − prec), prec its working bits (mpmath.mp.eps)."""
+    import mpmath.libmp
+
+    return 2.0 ** (1 - mpmath.libmp.dps_to_prec(dps))
 
 
 @dataclass(frozen=True)
@@ -84,22 +102,234 @@ class Tolerances:
 
 
 @dataclass(frozen=True)
+class Ulps:
+    """The precision-dependent stopping rules of the loops in units of the arithmetic's ε
+    (Tolerances' fields of the same names: k·ε)."""
+
+    rigid: float
+    converged: float
+    stalled: float
+    residual: float
+
+    def at(self, eps: float, polish: int, consistent: float) -> Tolerances:
+        """The rules at ε = eps, with the precision's polish steps and redundancy test."""
+        return Tolerances(
+            rigid=self.rigid * eps,
+            converged=self.converged * eps,
+            stalled=self.stalled * eps,
+            polish=polish,
+            residual=self.residual * eps,
+            consistent=consistent,
+        )
+
+
+@dataclass(frozen=True)
+class LoadedSettings:
+    """The `loaded` level's reduced equilibrium (docs/physics.md, "The Newton level"): its
+    Newton, continuation, refusals and buckling search, as symkin.physics.reduced and
+    reduced_reported run them in Python and templates/c/reduced*.c, templates/numpy/reduced*.py
+    in the generated evaluators (which read them from the plan: rules()). Fields ending in
+    `_eps` are multiples of float64's ε (every backend runs this level in float64)."""
+
+    # Newton (sk_red_newton, _Batch.newton, Reduced.newton)
+    tol_eps: float = 1e-12 / EPS64  # a step at most this·ε times the largest unknown: converged
+    max_iter: int = 12  # Newton steps at most per solve
+    max_turn: float = 0.2  # a step turning a hinge by more (rad) hands over to continuation
+    stall_after: int = 3  # the stall test applies after this many steps ...
+    stall_ratio: float = 0.5  # ... to a step at least this fraction of the previous one ...
+    stalled_eps: float = 1e-9 / EPS64  # ... and at most this·ε times the largest unknown
+    # chord steps (the generated drivers): after a step below `chord` times the largest unknown
+    # the next reuse its J while each shrinks the step by `chord_shrink` or more; a chord step
+    # below tol converges where its size times the contraction is below chord_error_eps·ε times
+    # the largest unknown (a Newton step leaves its square, below rounding)
+    chord: float = 1e-3
+    chord_shrink: float = 0.1
+    chord_error_eps: float = 1e-15 / EPS64
+    # continuation in the load factor s (inputs and loads scaled together) where Newton fails
+    first_step: float = 0.25  # the first step in s
+    step_growth: float = 1.5  # an accepted step grows the next by this ...
+    largest_step: float = 0.5  # ... up to this
+    step_cut: float = 0.5  # a refused step is retried this much shorter ...
+    smallest_step: float = 1e-3  # ... until below this: no convergence
+    # refusals
+    p_limit: float = 0.9  # a plate's compression at this fraction of its sway buckling load
+    est_factor: float = 3.0  # the order-4 error is about est_factor·e24² (against equilibrium)
+    est_limit: float = 0.01  # refused above this estimated error
+    # the report (symkin.physics.reported, reduced_reported; reduced_report.c / .py)
+    sections: int = 64  # sections per plate where the stress is sampled (one RK4 step each)
+    singular: float = 1e12  # a point's scaled compliance this ill-conditioned is singular
+    # the buckling search along the load factor (from 1)
+    buckling_limit: float = 10.0  # stops at this factor on the file's loads (as equilibrium's)
+    buckling_step: float = 0.5  # its first step in the factor
+    buckling_growth: float = 2.0  # an accepted step doubles the next ...
+    buckling_largest: float = 3.0  # ... up to this
+    buckling_cut: float = 0.5  # a failed Newton halves the step
+    buckling_locate: float = 1e-10  # a sign change or limit point located to this relative width
+
+    def rules(self, eps: float = EPS64) -> dict[str, float | int]:
+        """Every rule as the runtimes take it (the `_eps` ones times eps, named without it)."""
+        out: dict[str, float | int] = {}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if f.name.endswith("_eps"):
+                out[f.name[: -len("_eps")]] = value * eps
+            else:
+                out[f.name] = value
+        return out
+
+
+@dataclass(frozen=True)
+class StrokeSettings:
+    """The stroke actuators' solves (docs/levels.md, "Actuators"): Newton on the strokes in the
+    surrogate hinges' angles, its Jacobian by central differences of step √ε in the generated
+    evaluators (templates/c/actuators.c, templates/numpy/actuators.py and
+    reduced_actuators.py) and at mpmath in symkin.studies.evaluation."""
+
+    iterations: int = 40  # Newton steps at most (the generated evaluators)
+    halvings: int = 40  # a step halved at most this often while it grows the residual (C, mpmath)
+    cut: float = 0.5  # ... by this factor
+    tolerance_eps: float = 64.0  # strokes met to this·ε of the points of action's largest place
+    floor: float = 1e-300  # that coordinate at least this (a mechanism at the origin)
+    # the 40-digit (mpmath) solve of the sympy backend
+    mpmath_iterations: int = 60  # Newton steps at most
+    mpmath_step_digits: int = 7  # the central differences' step: 10^-this
+    # the strokes are met to 10^(digits_lost − dps) of the mechanism's size, but no closer than
+    # 10^-float_digits: the surrogate angles reach the evaluators as inputs, which hold a double
+    mpmath_digits_lost: int = 5
+    mpmath_float_digits: int = 15
+    # a force actuator's rigid reference (symkin.studies.evaluation, "Actuators at loaded"):
+    # solved again at most this often, until its point moves along its line by at most
+    # reference_eps·ε of the mechanism's size L
+    reference_rounds: int = 3
+    reference_eps: float = 1e-14 / EPS64
+
+    @property
+    def reference(self) -> float:
+        """reference_eps at float64's ε (the loaded level's solver runs in float64)."""
+        return self.reference_eps * EPS64
+
+    def rules(self, eps: float = EPS64) -> dict[str, float | int]:
+        """The generated evaluators' rules at ε = eps (in float64: the C evaluator's)."""
+        return {
+            "iterations": self.iterations,
+            "halvings": self.halvings,
+            "cut": self.cut,
+            "tolerance": self.tolerance_eps * eps,
+            "floor": self.floor,
+            "step": math.sqrt(eps),
+        }
+
+
+@dataclass(frozen=True)
+class EquilibriumSettings:
+    """The `equilibrium` level's continuation, Newton, polish and buckling search
+    (symkin.physics.equilibrium; Python alone, float64 then mpmath; docs/physics.md)."""
+
+    # continuation along the load factor t (follow, continuation)
+    min_step: float = 1e-7  # the smallest step in t before it gives up
+    max_turn: float = 0.05  # the largest input-angle change per step (rad)
+    first_step: float = 0.25  # the largest step in t when no input turns
+    step_growth: float = 1.5  # an accepted step grows the next by this (up to the largest)
+    step_cut: float = 0.5  # a refused step is retried this much shorter
+    approach: float = 0.5  # at most this fraction of the way to J's extrapolated singularity
+    singular_ratio: float = 1e-8  # J's smallest over largest singular value: singular below
+    # the budget: most steps (accepted or not) and most seconds (wall clock) before it gives up
+    # with exit 3 (a solve takes 0.1–1 s and a few dozen steps); the buckling search has
+    # buckling_budget times the seconds
+    max_steps: int = 1000
+    time_budget: float = 20.0
+    buckling_budget: float = 2.0
+    # a Newton iterate whose plates need loads rate_growth times larger (in the series' rate,
+    # |k0| + √|λ|) than where Newton started, plus rate_margin (a buckling plate stays below
+    # it), is rejected: far off the path, its Taylor series would need ever more steps
+    rate_growth: float = 4.0
+    rate_margin: float = 20.0
+    # the corrector jumped: it moved farther than the predictor's step plus this times
+    # (1 + the largest unknown)
+    jump: float = 1e-9
+    # Newton in float64 (_newton): at most `newton_iterations` steps; converged below
+    # newton_tol_eps·ε times (1 + the largest unknown), or stalled: at least stall_ratio of the
+    # previous step and below stalled_eps·ε (absolute); diverged above `diverged`
+    newton_iterations: int = 12
+    newton_tol_eps: float = 1e-14 / EPS64
+    stall_ratio: float = 0.5
+    stalled_eps: float = 1e-9 / EPS64
+    diverged: float = 1e3
+    # the plates' Taylor series are summed to this (beams.shoot's tol) in float64
+    series_tol: float = 1e-18
+    # polish in mpmath at base_digits + (digits the deviation loses against the positions),
+    # at most max_digits (then the caller's extra): at most polish_iterations steps, stopping
+    # below 10^(polish_digits − dps); the series to 10^(−dps − polish_guard); the error
+    # estimate's rounding term 10^(rounding_digits − dps) of the span (docs/physics.md)
+    base_digits: int = 24
+    max_digits: int = 400
+    polish_iterations: int = 8
+    polish_digits: int = 6
+    polish_guard: int = 3
+    rounding_digits: int = 8
+    # buckling: the linearised estimate's central difference (this over the tangent's largest
+    # entry) and the imaginary part of an eigenvalue taken for rounding (relative); the search
+    # for a singular tangent stiffness stops at buckling_limit on the file's loads. Loads
+    # beyond the estimate are probed: following them stops once a plate strains strain_limit
+    # (bending plus stretch: no elastic flexure survives it, and the beams' linear law no
+    # longer holds) or after probe_steps accepted steps (a deterministic budget); loads
+    # gross_overload times the estimate are refused without a probe: a slip of units (the
+    # estimate is rough: 0.6 of Euler's load for a column, up to twice a snap-through's limit
+    # point, and a load that bends the plates from the start may have none)
+    tangent_step: float = 1e-4
+    real_eigenvalue: float = 1e-6
+    buckling_limit: float = 10.0
+    strain_limit: float = 0.1
+    probe_steps: int = 30
+    gross_overload: float = 10.0
+
+    @property
+    def newton_tol(self) -> float:
+        return self.newton_tol_eps * EPS64
+
+    @property
+    def stalled(self) -> float:
+        return self.stalled_eps * EPS64
+
+
+@dataclass(frozen=True)
 class SolverSettings:
-    """Continuation, iteration caps and tolerances of every solver symkin runs."""
+    """Continuation, iteration caps and tolerances of every solver symkin runs: one table that
+    the plan hands to the generated evaluators and the Python evaluation reads
+    (docs/numerics.md, "The solver table")."""
 
     continuation_step: float = 0.05  # largest input change per continuation step (rad)
     rigid_iterations: int = 30  # Newton cap per continuation step
     exact_iterations: int = 40  # Newton cap of the exact level
     stall_ratio: float = 0.5  # a step this fraction of the previous one has stalled
     winding: float = math.pi  # a loop's angle sum this large: a hinge wrapped (no assembly)
-    # residual: about 1000 units of rounding (a plate's kernel and a sum of a few terms round
+    # the loops' stopping rules in units of ε: float64's and mpmath's (at any precision) ...
+    # (residual: about 1000 units of rounding: a plate's kernel and a sum of a few terms round
     # to a few units; the margin covers long loops)
-    float64: Tolerances = Tolerances(
-        rigid=1e-10, converged=1e-8, stalled=1e-12, polish=1, residual=2e-13, consistent=1e-8
+    ulps: Ulps = Ulps(
+        rigid=1e-10 / EPS64, converged=1e-8 / EPS64, stalled=1e-12 / EPS64, residual=2e-13 / EPS64
     )
-    float32: Tolerances = Tolerances(
-        rigid=1e-4, converged=3e-4, stalled=1e-5, polish=1, residual=1e-4, consistent=1e-3
+    # ... and float32's (its ε is coarse: the steps stop further above it)
+    ulps32: Ulps = Ulps(
+        rigid=1e-4 / EPS32, converged=3e-4 / EPS32, stalled=1e-5 / EPS32, residual=1e-4 / EPS32
     )
+    polish: int = 1  # floating point: the dyad formulas lose small angles to cancellation
+    polish_mpmath: int = 0  # mpmath: none lost
+    # a dropped row's test is the same in float64 and mpmath: the sympy backend refuses what
+    # the float64 evaluators refuse
+    consistent: float = 1e-8
+    consistent32: float = 1e-3
+    loaded: LoadedSettings = field(default_factory=LoadedSettings)
+    strokes: StrokeSettings = field(default_factory=StrokeSettings)
+    equilibrium: EquilibriumSettings = field(default_factory=EquilibriumSettings)
+
+    @property
+    def float64(self) -> Tolerances:
+        return self.ulps.at(EPS64, self.polish, self.consistent)
+
+    @property
+    def float32(self) -> Tolerances:
+        return self.ulps32.at(EPS32, self.polish, self.consistent32)
 
     def continuation_steps(self, largest_input: float) -> int:
         """Steps from the as-fabricated pose to inputs whose largest magnitude is given."""
@@ -110,16 +340,8 @@ class SolverSettings:
         return {"float64": self.float64, "float32": self.float32}[precision]
 
     def mpmath(self, dps: int) -> Tolerances:
-        """The rules at `dps` decimal digits: steps near the precision's own rounding floor."""
-        return Tolerances(
-            rigid=10.0 ** (6 - dps),
-            converged=10.0 ** (4 - dps),
-            stalled=10.0 ** (-(dps // 2)),
-            polish=0,
-            residual=10.0 ** (3 - dps),
-            # the float64 evaluators' test: the sympy backend refuses what they refuse
-            consistent=self.float64.consistent,
-        )
+        """The rules at `dps` decimal digits: float64's multiples of ε at mpmath's ε."""
+        return self.ulps.at(mpmath_eps(dps), self.polish_mpmath, self.consistent)
 
 
 #: The settings every solver reads.

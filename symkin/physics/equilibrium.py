@@ -37,6 +37,7 @@ import numpy as np
 import sympy as sp
 
 from ..core.errors import AssemblyError
+from ..core.settings import SOLVER
 from ..model.expressions import substitute
 from ..model.hinges import pivot_distance
 from ..model.mechanism import Mechanism
@@ -44,31 +45,19 @@ from . import arith, beams, reported
 from .result import ActuatorLoad, HingeLoad, InputLoad, PlateStress
 from .stiffness import PlateStiffness, modulus, plate_stiffness
 
-#: Smallest load-factor step before the continuation gives up.
-MIN_STEP = 1e-7
-#: Largest input-angle change per continuation step, rad.
-MAX_TURN = 0.05
-#: The continuation's budget: most steps (accepted or not) and most seconds (wall clock) before
-#: it gives up with exit 3; a solve takes 0.1–1 s and a few dozen steps.
-MAX_STEPS = 1000
-TIME_BUDGET = 20.0
-#: A Newton iterate whose plates need loads this much larger (in the series' rate, |k0| +
-#: √|λ|) than where Newton started, plus a margin a buckling plate stays below, is rejected:
-#: it is far off the path, and the Taylor series would need ever more steps to shoot it.
-RATE_GROWTH, RATE_MARGIN = 4.0, 20.0
-#: `buckling_factor` looks for a singular tangent stiffness up to this factor on the loads.
-BUCKLING_LIMIT = 10.0
-#: Where the loads are beyond the linearised buckling estimate, following them stops once a plate
-#: strains this much (bending plus stretch): no elastic flexure survives it, and the beam
-#: theories' linear constitutive law no longer holds.
-STRAIN_LIMIT = 0.1
-#: ... and after this many accepted continuation steps: a deterministic budget for a path the
-#: estimate already says goes beyond buckling.
-PROBE_STEPS = 30
-#: Loads this many times the linearised estimate are refused without a probe: a slip of units.
-#: (The estimate is rough: 0.6 of Euler's load for a column, up to twice the limit point of a
-#: snap-through, and a load that bends the plates from the start may have none.)
-GROSS_OVERLOAD = 10.0
+#: The level's continuation, Newton, polish and buckling search (symkin.core.settings,
+#: EquilibriumSettings; docs/numerics.md, "The solver table"). The names below are its fields
+#: that other modules and messages read.
+RULES = SOLVER.equilibrium
+MIN_STEP = RULES.min_step
+MAX_TURN = RULES.max_turn
+MAX_STEPS = RULES.max_steps
+TIME_BUDGET = RULES.time_budget
+RATE_GROWTH, RATE_MARGIN = RULES.rate_growth, RULES.rate_margin
+BUCKLING_LIMIT = RULES.buckling_limit
+STRAIN_LIMIT = RULES.strain_limit
+PROBE_STEPS = RULES.probe_steps
+GROSS_OVERLOAD = RULES.gross_overload
 
 
 @dataclass
@@ -468,7 +457,7 @@ def follow(
     seconds: float = TIME_BUDGET,
     strain: float = math.inf,
     steps: int = MAX_STEPS,
-    tol: float = 1e-18,
+    tol: float = RULES.series_tol,
     approach: bool = False,
 ) -> Path:
     """Continuation along `system`'s path from the solution `u` at `t` to `end`: a tangent
@@ -493,7 +482,7 @@ def follow(
         if len(smallest) == 2:
             (t0, s0), (ta, sa) = smallest
             if sa < s0:  # falling: at most half way to its extrapolated zero
-                capped = 0.5 * sa * (ta - t0) / (s0 - sa)
+                capped = RULES.approach * sa * (ta - t0) / (s0 - sa)
                 if capped >= MIN_STEP:
                     dt = min(dt, capped)
                 elif sa < SINGULAR_RATIO:
@@ -511,12 +500,12 @@ def follow(
             if np.linalg.slogdet(jac_new)[0] != sign or (approach and _crossed(jac, jac_new)):
                 new = None
         if new is None:
-            dt /= 2
+            dt *= RULES.step_cut
             if dt < MIN_STEP:
                 return Path(u, t, jac, "singular")
             continue
         u, t, jac, slope = new[0], t1, jac_new, slope_new
-        dt, accepted = min(largest, dt * 1.5), accepted + 1
+        dt, accepted = min(largest, dt * RULES.step_growth), accepted + 1
         if approach:
             smallest = [smallest[-1], (t, _smallest(jac))]
         if strain < math.inf and system.strain(u)[0] > strain:
@@ -526,7 +515,7 @@ def follow(
 
 #: J's smallest singular value over its largest below which a falling one that the step control
 #: cannot approach further counts as singular (the sway of the parallelogram stage stops at 1e-11).
-SINGULAR_RATIO = 1e-8
+SINGULAR_RATIO = RULES.singular_ratio
 
 
 def _smallest(jac: np.ndarray) -> float:
@@ -554,7 +543,9 @@ def _jumped(u: np.ndarray, guess: np.ndarray, new: np.ndarray) -> bool:
     have left the path for another branch (past a limit point, the path folds back and Newton
     can land on a distant equilibrium whose det J has the same sign)."""
     predicted = float(np.max(np.abs(guess - u)))
-    return float(np.max(np.abs(new - guess))) > predicted + 1e-9 * (1 + float(np.max(np.abs(u))))
+    return float(np.max(np.abs(new - guess))) > predicted + RULES.jump * (
+        1 + float(np.max(np.abs(u)))
+    )
 
 
 def continuation(
@@ -576,7 +567,7 @@ def continuation(
         return TIME_BUDGET - (time.monotonic() - started)
 
     turn = max([abs(float(h.theta)) for h in system.hinges if h.theta is not None] + [0.0])
-    largest = min(1.0, MAX_TURN / turn) if turn else 0.25
+    largest = min(1.0, MAX_TURN / turn) if turn else RULES.first_step
     u, driven = np.zeros(system.size), system
     if system.loads:
         first = buckling_estimate(system)
@@ -635,7 +626,7 @@ def _newton(system: System, u: np.ndarray, t: float, tol: float, limit: float = 
     """Newton in float64 from `u`; (u, step) once the step stops shrinking, or None (also when
     an iterate's plate loads exceed `limit` in System.rate)."""
     previous = math.inf
-    for _ in range(12):
+    for _ in range(RULES.newton_iterations):
         jac, _ = system.jacobian(u, t, tol)
         try:
             step = np.linalg.solve(jac, system.residual(u[:, None], np.array([t]), tol)[:, 0])
@@ -643,11 +634,12 @@ def _newton(system: System, u: np.ndarray, t: float, tol: float, limit: float = 
             return None
         u = u - step
         size = float(np.max(np.abs(step)))
-        if size <= 1e-14 * (1 + float(np.max(np.abs(u)))) or (
-            size >= previous / 2 > 0 and size < 1e-9
+        if size <= RULES.newton_tol * (1 + float(np.max(np.abs(u)))) or (
+            size >= previous * RULES.stall_ratio > 0 and size < RULES.stalled
         ):
             return u, size
-        if not np.all(np.isfinite(u)) or size > 1e3 or size > previous or system.rate(u) > limit:
+        diverged = size > RULES.diverged or size > previous
+        if not np.all(np.isfinite(u)) or diverged or system.rate(u) > limit:
             return None  # diverging, or growing: a shorter step will do better
         previous = size
     return None
@@ -663,7 +655,7 @@ class Buckling:
     hinge: str | None
 
 
-def buckling_estimate(system: System, tol: float = 1e-18) -> Buckling:
+def buckling_estimate(system: System, tol: float = RULES.series_tol) -> Buckling:
     """The first buckling factor of the loads, linearised at the unloaded, as-fabricated pose
     (inputs at zero): the smallest λ > 0 with (J0 + λ J1) v = 0, J0 the Jacobian there and J1
     its derivative along the loads' linear path u = λ u', u' = −J0⁻¹ ∂R/∂λ (a central
@@ -676,13 +668,13 @@ def buckling_estimate(system: System, tol: float = 1e-18) -> Buckling:
         tangent = -np.linalg.solve(jac0, slope)
     except np.linalg.LinAlgError:
         return Buckling(0.0, loads.singular_hinge(jac0))
-    h = 1e-4 / max(1.0, float(np.max(np.abs(tangent))))
+    h = RULES.tangent_step / max(1.0, float(np.max(np.abs(tangent))))
     jac1 = (loads.jacobian(h * tangent, h, tol)[0] - loads.jacobian(-h * tangent, -h, tol)[0]) / (
         2 * h
     )
     # (J0 + λ J1) v = 0  <=>  J0⁻¹ J1 v = −v/λ
     mu = np.linalg.eigvals(np.linalg.solve(jac0, jac1))
-    real = mu[(mu.real < 0) & (np.abs(mu.imag) <= 1e-6 * np.abs(mu))].real
+    real = mu[(mu.real < 0) & (np.abs(mu.imag) <= RULES.real_eigenvalue * np.abs(mu))].real
     if real.size == 0:
         return Buckling(math.inf, None)
     factor = float(-1 / real.min())
@@ -694,7 +686,7 @@ def buckling_factor(
     values: Mapping[sp.Symbol, sp.Expr],
     inputs: Mapping[str, sp.Expr],
     limit: float = BUCKLING_LIMIT,
-    seconds: float = 2 * TIME_BUDGET,
+    seconds: float = RULES.buckling_budget * TIME_BUDGET,
 ) -> Buckling:
     """The first buckling factor of `mech`'s loads at the input angles by hinge name, properly:
     continuation to the inputs without loads, then in the load factor λ from 0 to `limit` with
@@ -733,17 +725,17 @@ def buckling_factor(
 def polish(system_mp: System, u: np.ndarray, jac: np.ndarray, dps: int) -> Solution:
     """Newton at `dps` digits from the float64 solution, each step solved with the float64
     Jacobian (its error contracts the correction by about 1e-12 per step)."""
-    tol = float(mpmath.mpf(10) ** (-dps - 3))
+    tol = float(mpmath.mpf(10) ** (-dps - RULES.polish_guard))
     with mpmath.workdps(dps):
         x = arith.mp_array(u)
         one = arith.mp_array([1])
         last = math.inf
-        for _ in range(8):
+        for _ in range(RULES.polish_iterations):
             r = system_mp.residual(x[:, None], one, tol)[:, 0]
             step = np.linalg.solve(jac, np.array([float(v) for v in r]))
             x = x - arith.mp_array(step)
             last = float(np.max(np.abs(step)))
-            if last <= 10.0 ** (6 - dps):
+            if last <= 10.0 ** (RULES.polish_digits - dps):
                 break
         return Solution(system_mp, x, dps, last, tol)
 
@@ -818,7 +810,7 @@ def solve(
         + [span]
     )
     lost = max(0, math.ceil(math.log10(span / smallest))) if smallest > 0 else 0
-    dps = min(400, 24 + lost) + extra_digits
+    dps = min(RULES.max_digits, RULES.base_digits + lost) + extra_digits
     with mpmath.workdps(dps):
         solution = polish(build(mech, values, inputs, stiffness, _mp_converter(dps)), u, jac, dps)
     theta, rigid_points = rigid(dps, _strokes(solution.system, solution.u))
@@ -827,7 +819,7 @@ def solve(
         solution.system.residual(solution.u[:, None], arith.mp_array([1]), solution.tol, report)
         # The last Newton step bounds the solution's error (Newton shrinks it further); the
         # working precision bounds the rounding.
-        bound = (2 * solution.last_step + 10.0 ** (8 - dps)) * span
+        bound = (2 * solution.last_step + 10.0 ** (RULES.rounding_digits - dps)) * span
         points, error = {}, 0.0
         for name, (xr, yr) in rigid_points.items():
             xc, yc = _where(solution.system, solution.u, name)
@@ -843,7 +835,7 @@ def solve(
         plates = {h.name for h in solution.system.hinges if h.plate}
         # the designer's quantities, in float64 at the polished solution (its Jacobian again)
         at = np.array([float(v) for v in solution.u])
-        tangent = system.jacobian(at, 1.0, 1e-18)[0]
+        tangent = system.jacobian(at, 1.0, RULES.series_tol)[0]
         hinge = {h.name: h for h in mech.hinges}
         moduli = {n: _float(substitute(modulus(hinge[n]), values)) for n in plates}
         allowable = {

@@ -27,7 +27,7 @@ or the Jacobian's determinant changes sign, continuation along the inputs and lo
 together from the as-fabricated pose. Refusal (the answer is not given): a plate's compression
 at 90 % of its sway buckling load, or the truncation estimate 3 e24² above 1 % (e24: the
 largest relative change of a point's deviation when the quartic terms are dropped, by one Newton
-step with the Jacobian of the last step that converged, a step below TOL from the solution; its
+step with the Jacobian of the last step that converged, a step below tol from the solution; its
 determinant's sign is also the acceptance's: the generated drivers keep its LU and evaluate
 nothing more at the solution).
 """
@@ -45,6 +45,7 @@ import numpy as np
 import sympy as sp
 
 from ..core import vectors as V
+from ..core.settings import EPS64, SOLVER
 from ..kinematics.positions import Kinematics
 from ..model.derivatives import jacobian
 from ..model.expressions import substitute
@@ -53,17 +54,11 @@ from ..model.special import arck, mpmath_namespace, sinr
 from .plate_relation import energy, relation
 from .stiffness import plate_stiffness
 
-#: Newton: stop when the step is below TOL times the largest unknown (scaled).
-TOL = 1e-12
-MAX_ITER = 12
-#: A Newton step that turns a hinge by more than this (rad) hands over to continuation.
-MAX_TURN = 0.2
-#: Refuse when a plate's compression reaches this fraction of its sway buckling load.
-P_LIMIT = 0.9
-#: The order-4 error is about EST_FACTOR e24² (measured against the equilibrium level).
-EST_FACTOR = 3.0
-#: Refuse when the estimated error exceeds this.
-EST_LIMIT = 0.01
+#: The level's Newton, continuation and refusals (docs/numerics.md, "The solver table"): the
+#: generated drivers' too. float64 (numpy) arithmetic: its ε.
+RULES = SOLVER.loaded
+_TOL = RULES.tol_eps * EPS64
+_STALLED = RULES.stalled_eps * EPS64
 #: How a refusal by the estimate begins (the caller may chain two half plates then).
 TRUNCATION = "truncation estimate"
 
@@ -76,7 +71,7 @@ class Answer:
     x: np.ndarray
     iterations: int
     steps: int  # continuation steps (1: plain Newton)
-    estimate: float  # EST_FACTOR e24²
+    estimate: float  # est_factor e24²
     p_over_pcr: float  # the worst plate's compression over its sway buckling load
     refused: str = ""
     segments: int = 1  # half plates chained per plate (2: one plate relation was not enough)
@@ -730,10 +725,10 @@ class Reduced:
     # -- solving -------------------------------------------------------------------------------
     def newton(self, x, theta, t, damp: bool = False) -> tuple[np.ndarray, int, bool]:
         """Newton from x; (x, iterations, converged). A step that would turn a hinge by more
-        than MAX_TURN fails (continuation takes over) or, with `damp`, is shortened."""
+        than max_turn fails (continuation takes over) or, with `damp`, is shortened."""
         nu = len(self.unknowns)
         prev = math.inf
-        for it in range(1, MAX_ITER + 1):
+        for it in range(1, RULES.max_iter + 1):
             try:
                 r = self.residual(x, theta, t)
                 jac = self.jacobian(x, theta, t)
@@ -745,29 +740,29 @@ class Reduced:
                 # DomainError) by the iterate: not this way
                 return x, it, False
             turn = float(np.max(np.abs(step[:nu]))) * self.scale[0] if nu else 0.0
-            if turn > MAX_TURN:
+            if turn > RULES.max_turn:
                 if not damp:
                     return x, it, False
-                step = step * (MAX_TURN / turn)
+                step = step * (RULES.max_turn / turn)
             x = x - step
             if not np.all(np.isfinite(x)):
                 return x, it, False
             size, top = float(np.max(np.abs(step))), float(np.max(np.abs(x)))
             # x is scaled (l/L, EI/(l L)): the whole vector sets the scale, so a δ that is zero
             # by symmetry cannot block the test
-            if size <= TOL * top or size == 0:
+            if size <= _TOL * top or size == 0:
                 return x, it, True
-            if it > 3 and size > 0.5 * prev and size < 1e-9 * top:
+            if it > RULES.stall_after and size > RULES.stall_ratio * prev and size < _STALLED * top:
                 return x, it, True  # stalled at rounding
             prev = size
-        return x, MAX_ITER, False
+        return x, RULES.max_iter, False
 
     def _sign(self, x, theta, t) -> float:
         return float(np.sign(np.linalg.det(self.jacobian(x, theta, t))))
 
     def _accept(self, x, theta, sign: float) -> bool:
         """A converged x on the branch followed: det J (the last Newton step's, a step below
-        TOL from x) of the same sign as at the unloaded state, every compliant angle within
+        tol from x) of the same sign as at the unloaded state, every compliant angle within
         (-π, π)."""
         try:
             same = float(np.sign(np.linalg.det(self.last_jacobian))) == sign
@@ -799,13 +794,13 @@ class Reduced:
         if not ok:
             # continuation: inputs and loads scaled together by s from the as-fabricated pose
             # (x = 0 exact at s = 0); the predictor keeps the compliant angles and chord loads
-            s, ds, steps = 0.0, 0.25, 0
+            s, ds, steps = 0.0, RULES.first_step, 0
             th_s = rigid(0.0)
             x = zero
             sign = self._sign(x, th_s, 0.0)
             ok = True
             while s < 1:
-                if ds < 1e-3:
+                if ds < RULES.smallest_step:
                     ok = False
                     break
                 s1 = min(1.0, s + ds)
@@ -819,9 +814,9 @@ class Reduced:
                     okn = self._accept(xn, th_1, sign)
                 if okn:
                     x, s, th_s, steps = xn, s1, th_1, steps + 1
-                    ds = min(0.5, ds * 1.5)
+                    ds = min(RULES.largest_step, ds * RULES.step_growth)
                 else:
-                    ds /= 2
+                    ds *= RULES.step_cut
         if not ok:
             return Answer({}, x, total, steps, math.nan, math.nan, "no convergence")
         answer = self._answer(x, theta, total, steps)
@@ -856,11 +851,11 @@ class Reduced:
             size = math.hypot(*d4)
             if size > 0:
                 e24 = max(e24, math.dist(dev2[name], d4) / size)
-        estimate = EST_FACTOR * e24**2
+        estimate = RULES.est_factor * e24**2
         refused = ""
-        if worst_p >= P_LIMIT:
+        if worst_p >= RULES.p_limit:
             refused = f"a plate at {worst_p:.0%} of its sway buckling load"
-        elif estimate > EST_LIMIT:
+        elif estimate > RULES.est_limit:
             refused = f"{TRUNCATION} {estimate:.2%}"
         loads, work = self._loads(x, theta)
         angles = {

@@ -13,7 +13,7 @@ the quantities `equilibrium` reports (symkin.physics.reported), in the same unit
   geometrically exact beam (symkin.physics.reported.plate_stress);
 - the buckling factor: continuation in the load factor t from 1 with the inputs held, until
   det J changes sign, a plate reaches its sway buckling load or Newton cannot go on (a limit
-  point), located by bisection; math.inf when none up to `LIMIT`.
+  point), located by bisection; math.inf when none up to RULES.buckling_limit.
 """
 
 from __future__ import annotations
@@ -25,16 +25,16 @@ import numpy as np
 import sympy as sp
 
 from ..core import vectors as V
+from ..core.settings import SOLVER
 from ..model.expressions import substitute
 from .reduced import Answer, Reduced
-from .reported import SINGULAR, plate_stress
+from .reported import plate_stress
 from .result import ActuatorLoad, InputLoad, PlateStress
 from .stiffness import modulus, plate_stiffness
 
-#: The buckling search stops at this factor on the file's loads (as equilibrium's).
-LIMIT = 10.0
-#: ... and locates a sign change or a limit point to this relative width.
-LOCATE = 1e-10
+#: The buckling search's rules (symkin.core.settings.LoadedSettings: buckling_*): it stops at
+#: buckling_limit on the file's loads and locates to buckling_locate; the generated runtimes'.
+RULES = SOLVER.loaded
 
 
 @dataclass(frozen=True)
@@ -84,7 +84,7 @@ def report(
         rows = slice(first + 3 * k, first + 3 * k + 3)
         compliance = rates[rows, rows]
         scaled = compliance * np.array([F / L, F / L, F])[:, None] * np.array([1, 1, 1 / L])
-        if link == 0 or not np.all(np.isfinite(scaled)) or np.linalg.cond(scaled) > SINGULAR:
+        if link == 0 or not np.all(np.isfinite(scaled)) or np.linalg.cond(scaled) > RULES.singular:
             stiffness[name] = None
         else:
             stiffness[name] = np.linalg.inv(compliance).tolist()
@@ -134,7 +134,9 @@ def plates(answer: Answer) -> dict[str, PlateStress]:
     return out
 
 
-def buckling_factor(answer: Answer, limit: float = LIMIT, solver: Reduced | None = None) -> float:
+def buckling_factor(
+    answer: Answer, limit: float = RULES.buckling_limit, solver: Reduced | None = None
+) -> float:
     """The smallest factor t ≥ 1 on the file's loads, the inputs held, at which det J changes
     sign, a plate reaches its sway buckling load (the plate relation's pole) or the path ends
     in a limit point (Newton fails ever closer to it); math.inf when none up to `limit`.
@@ -164,19 +166,19 @@ def buckling_factor(answer: Answer, limit: float = LIMIT, solver: Reduced | None
     if not ok or sign == 0:
         return t
     previous = None
-    dt = 0.5
+    dt = RULES.buckling_step
     while t < limit:
         t1 = min(limit, t + dt)
         guess = x if previous is None else x + (x - previous[0]) * (t1 - t) / (t - previous[1])
         x1, ok, s1 = state(x, t1, guess)
         if ok and s1 == sign:
             previous, x, t = (x, t), x1, t1
-            dt = min(3.0, dt * 2)
+            dt = min(RULES.buckling_largest, dt * RULES.buckling_growth)
             continue
         if ok:
             # a sign change (or a plate's sway load) in (t, t1): bisect
             lo, hi, xl = t, t1, x
-            while hi - lo > LOCATE * hi:
+            while hi - lo > RULES.buckling_locate * hi:
                 mid = (lo + hi) / 2
                 xm, okm, sm = state(xl, mid, xl)
                 if okm and sm == sign:
@@ -184,7 +186,7 @@ def buckling_factor(answer: Answer, limit: float = LIMIT, solver: Reduced | None
                 else:
                     hi = mid
             return (lo + hi) / 2
-        if dt <= LOCATE * t:
+        if dt <= RULES.buckling_locate * t:
             return t  # a limit point: Newton does not go on
-        dt /= 2
+        dt *= RULES.buckling_cut
     return math.inf

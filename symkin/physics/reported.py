@@ -19,6 +19,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from ..core.settings import SOLVER
 from . import beams
 from .result import ActuatorLoad, InputLoad, PlateStress
 
@@ -38,11 +39,12 @@ class System(Protocol):
 
 
 #: Sections per plate where the stress is sampled (both ends exact; an interior maximum, e.g. of
-#: a buckled plate, is refined by a parabola through the three samples around it).
-SECTIONS = 64
-#: A point's scaled compliance this ill-conditioned is singular: the link is held rigidly in some
-#: direction (a frame point, pins only), and its stiffness is reported as None.
-SINGULAR = 1e12
+#: a buckled plate, is refined by a parabola through the three samples around it), and how
+#: ill-conditioned a point's scaled compliance is singular: the link is held rigidly in some
+#: direction (a frame point, pins only), and its stiffness is reported as None
+#: (symkin.core.settings.LoadedSettings: sections, singular; `loaded`'s reports read them too).
+SECTIONS = SOLVER.loaded.sections
+SINGULAR = SOLVER.loaded.singular
 
 
 def _rows(system: System) -> tuple[dict[str, int], int]:

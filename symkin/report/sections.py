@@ -746,10 +746,10 @@ class Report:
             "related": [str(c) for c in ld.related],
             "offset": ld.offset,
             "unit": unit,
-            "max_turn": gnum(reduced.MAX_TURN),
-            "p_limit": gnum(round(100 * reduced.P_LIMIT)),
-            "est_factor": gnum(reduced.EST_FACTOR),
-            "est_limit": gnum(round(100 * reduced.EST_LIMIT)),
+            "max_turn": gnum(reduced.RULES.max_turn),
+            "p_limit": gnum(round(100 * reduced.RULES.p_limit)),
+            "est_factor": gnum(reduced.RULES.est_factor),
+            "est_limit": gnum(round(100 * reduced.RULES.est_limit)),
         }
 
 

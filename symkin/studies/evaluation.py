@@ -551,12 +551,16 @@ def _stroke_angles(
         at = [
             [mpmath.mpf(sp.N(c.xreplace(values), dps + 10)) for c in a.at] for a in mech.actuators
         ]
-        scale = max([abs(c) for xy in at for c in xy] + [abs(t) for t in target] + [1e-300])
+        scale = max(
+            [abs(c) for xy in at for c in xy] + [abs(t) for t in target] + [SOLVER.strokes.floor]
+        )
         angles = dict(start) if start else dict.fromkeys(names, mpmath.mpf(0))
         # the surrogate angles reach the evaluators as input values, which hold a double's
         # 16 digits: the strokes are met to 1e-15 of the mechanism's size
-        tol = scale * mpmath.mpf(10) ** max(-dps + 5, -15)
-        step = mpmath.mpf(10) ** -7
+        tol = scale * mpmath.mpf(10) ** max(
+            SOLVER.strokes.mpmath_digits_lost - dps, -SOLVER.strokes.mpmath_float_digits
+        )
+        step = mpmath.mpf(10) ** -SOLVER.strokes.mpmath_step_digits
 
         def residual(trial: Mapping[str, mpmath.mpf]) -> list:
             state = dict(hinges) | {n: mpmath.nstr(trial[n], dps + 10) for n in names}
@@ -570,7 +574,7 @@ def _stroke_angles(
             return out
 
         r = residual(angles)
-        for _ in range(60):
+        for _ in range(SOLVER.strokes.mpmath_iterations):
             size = max(abs(x) for x in r)
             if size <= tol:
                 return angles
@@ -583,7 +587,7 @@ def _stroke_angles(
                 break
             # damped: a full step may leave the assembly range (past a dyad's toggle) or
             # grow the residual far from the solution; halve it until it does neither
-            for _ in range(40):
+            for _ in range(SOLVER.strokes.halvings):
                 trial = {n: angles[n] - delta[j] for j, n in enumerate(names)}
                 try:
                     found = residual(trial)
@@ -591,7 +595,7 @@ def _stroke_angles(
                     found = None
                 if found is not None and max(abs(x) for x in found) < size:
                     break
-                delta = delta / 2
+                delta = delta * SOLVER.strokes.cut
             else:
                 break
             angles, r = trial, found
@@ -723,14 +727,14 @@ def reduced_equilibrium(
     # a force actuator: the rigid reference at the stroke the force produced (the compliant
     # mechanism's pose does not depend on the reference; one more solve expresses it against
     # the new one, whose point of action then has no deviation along d)
-    for _ in range(3):
+    for _ in range(SOLVER.strokes.reference_rounds):
         if not forces or answer.refused:
             break
         assert answer.solver is not None
         along = {
             n: v for n, v in answer.solver.along(answer.x, answer.theta).items() if n in forces
         }
-        if max(abs(v) for v in along.values()) <= 1e-14 * answer.solver.L:
+        if max(abs(v) for v in along.values()) <= SOLVER.strokes.reference * answer.solver.L:
             break
         strokes = strokes | {n: answer.strokes[n] + v for n, v in along.items()}
         answer = run(strokes)

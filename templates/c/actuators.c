@@ -143,7 +143,7 @@ static int sk_stroke_solve(const sk_mechanism *m, const sk_actuators *t, double 
 {
     double r[SK_NI + 1], trial[SK_NI + 1], jac[(SK_NI + 1) * (SK_NI + 1)], up[SK_NI + 1];
     double down[SK_NI + 1], move[SK_NI + 1], size, next;
-    const double step = 1.4901161193847656e-08; /* sqrt(eps) */
+    const double step = SK_STROKE_STEP; /* sqrt(eps) */
     int where[SK_NI + 1];
     int i, j, iter, half, s, n = t->n;
     for (j = 0; j < SK_NI; ++j) {
@@ -155,7 +155,7 @@ static int sk_stroke_solve(const sk_mechanism *m, const sk_actuators *t, double 
     if (s != 0) {
         return s;
     }
-    for (iter = 0; iter < 40; ++iter) {
+    for (iter = 0; iter < SK_STROKE_ITERATIONS; ++iter) {
         for (size = 0.0, i = 0; i < n; ++i) {
             size = fabs(r[i]) > size ? fabs(r[i]) : size;
         }
@@ -184,7 +184,7 @@ static int sk_stroke_solve(const sk_mechanism *m, const sk_actuators *t, double 
         if (sk_act_solve(n, jac, 1, move) != 0) {
             return 1;
         }
-        for (half = 0; half < 40; ++half) {
+        for (half = 0; half < SK_STROKE_HALVINGS; ++half) {
             for (i = 0; i < SK_NI; ++i) {
                 trial[i] = x[i];
             }
@@ -199,10 +199,10 @@ static int sk_stroke_solve(const sk_mechanism *m, const sk_actuators *t, double 
                 break;
             }
             for (j = 0; j < n; ++j) {
-                move[j] *= 0.5;
+                move[j] *= SK_STROKE_CUT;
             }
         }
-        if (half == 40) {
+        if (half == SK_STROKE_HALVINGS) {
             return 1;
         }
         for (i = 0; i < SK_NI; ++i) {
@@ -215,18 +215,18 @@ static int sk_stroke_solve(const sk_mechanism *m, const sk_actuators *t, double 
     return 1;
 }
 
-/* The tolerance of the stroke solves: 64 eps of the largest coordinate of the points of action
-   as fabricated (`rest`, 6 SK_NP). */
+/* The tolerance of the stroke solves: SK_STROKE_TOLERANCE (64 eps) times the largest coordinate
+   of the points of action as fabricated (`rest`, 6 SK_NP), that at least SK_STROKE_FLOOR. */
 static double sk_stroke_tol(const sk_actuators *t, const double *rest)
 {
-    double scale = 1e-300;
+    double scale = SK_STROKE_FLOOR;
     int i;
     for (i = 0; i < t->n; ++i) {
         const double *p0 = rest + 6 * t->point[i];
         scale = fabs(p0[0]) > scale ? fabs(p0[0]) : scale;
         scale = fabs(p0[1]) > scale ? fabs(p0[1]) : scale;
     }
-    return 64.0 * 2.220446049250313e-16 * scale;
+    return SK_STROKE_TOLERANCE * scale;
 }
 
 /* The kinematic inputs xr at which the rigid linkage (the rigid positions of `level`) meets the

@@ -33,14 +33,12 @@ typedef struct {
     const double *scale;
 } sk_variant;
 
-/* The loaded level's variants (one, two half plates per plate) and rules. */
+/* The loaded level's variants (one, two half plates per plate); its rules are the generated
+   file's SK_LOADED_* (symkin.core.settings.LoadedSettings). */
 typedef struct {
     sk_variant variants[2];
     int unknowns;       /* non-input hinges: x's first entries, delta / scale */
-    double tol, max_turn, p_limit, est_factor, est_limit;
-    int max_iter;
     int loads;          /* the load factor t enters the routines (the file has loads) */
-    double chord, chord_error;  /* Newton's chord steps (symkin.codegen.loaded.CHORD) */
 #if defined(SK_ACT_LOADED)
     const int *unknown_index;   /* theta index of the unknowns: the non-input hinges', then the
                                    actuators' surrogates' (docs/physics.md, "Actuators at
@@ -201,7 +199,7 @@ static int sk_red_newton(const sk_red *r, double *x, const double *theta, double
     double res[SK_RN + 1], prev = HUGE_VAL;
     int it, i, chord = 0;
     *first = NAN;
-    for (it = 1; it <= r->l->max_iter; ++it) {
+    for (it = 1; it <= SK_LOADED_MAX_ITER; ++it) {
         double turn = 0.0, size = 0.0, top = 0.0;
         if (chord) {
             sk_red_residual(r, x, theta, t, st);
@@ -224,7 +222,7 @@ static int sk_red_newton(const sk_red *r, double *x, const double *theta, double
                 turn = fabs(res[i]);
             }
         }
-        if (nu > 0 && turn * r->v->scale[0] > r->l->max_turn) {
+        if (nu > 0 && turn * r->v->scale[0] > SK_LOADED_MAX_TURN) {
             return 1;
         }
         for (i = 0; i < n; ++i) {
@@ -244,14 +242,15 @@ static int sk_red_newton(const sk_red *r, double *x, const double *theta, double
         /* a Newton step leaves about its square, below rounding; a chord step its size times
            the contraction (size / prev) */
         if (size == 0.0
-            || (size <= r->l->tol * top
-                && (!chord || size * size <= r->l->chord_error * top * prev))) {
+            || (size <= SK_LOADED_TOL * top
+                && (!chord || size * size <= SK_LOADED_CHORD_ERROR * top * prev))) {
             return 0;
         }
-        if (!chord && it > 3 && size > 0.5 * prev && size < 1e-9 * top) {
+        if (!chord && it > SK_LOADED_STALL_AFTER && size > SK_LOADED_STALL_RATIO * prev
+            && size < SK_LOADED_STALLED * top) {
             return 0;   /* stalled at rounding (a full step's: a chord step's is its J's) */
         }
-        chord = size <= r->l->chord * top && (!chord || size <= 0.1 * prev);
+        chord = size <= SK_LOADED_CHORD * top && (!chord || size <= SK_LOADED_CHORD_SHRINK * prev);
         prev = size;
     }
     return 1;
@@ -375,10 +374,10 @@ static int sk_red_answer(const sk_red *r, const double *x, const double *theta,
             }
         }
     }
-    if (worst >= r->l->p_limit) {
+    if (worst >= SK_LOADED_P_LIMIT) {
         return 1;
     }
-    if (r->l->est_factor * e24 * e24 > r->l->est_limit) {
+    if (SK_LOADED_EST_FACTOR * e24 * e24 > SK_LOADED_EST_LIMIT) {
         return 4;
     }
     return 0;
@@ -416,13 +415,13 @@ static int sk_red_solve(const sk_red *r, const double *inputs, const double *the
 #if defined(SK_ACT_FORCES)
         /* the force actuators' forces after the rigid angles, kept at every step (t scales
            them with the loads) */
-        double s = 0.0, ds = 0.25, sign, th_s[SK_M + SK_NF], th_1[SK_M + SK_NF], guess[SK_RN + 1];
+        double s = 0.0, ds = SK_LOADED_FIRST_STEP, sign, th_s[SK_M + SK_NF], th_1[SK_M + SK_NF], guess[SK_RN + 1];
         for (i = SK_M; i < SK_M + SK_NF; ++i) {
             th_s[i] = theta[i];
             th_1[i] = theta[i];
         }
 #else
-        double s = 0.0, ds = 0.25, sign, th_s[SK_M], th_1[SK_M], guess[SK_RN + 1];
+        double s = 0.0, ds = SK_LOADED_FIRST_STEP, sign, th_s[SK_M], th_1[SK_M], guess[SK_RN + 1];
 #endif
         if (sk_red_rigid(r->m, inputs, r->params, 0.0, th_s)) {
             return 2;
@@ -435,7 +434,7 @@ static int sk_red_solve(const sk_red *r, const double *inputs, const double *the
         while (s < 1.0) {
             double s1;
             int good = 1;
-            if (ds < 1e-3) {
+            if (ds < SK_LOADED_SMALLEST_STEP) {
                 return 2;
             }
             s1 = s + ds < 1.0 ? s + ds : 1.0;
@@ -470,9 +469,11 @@ static int sk_red_solve(const sk_red *r, const double *inputs, const double *the
                     th_s[i] = th_1[i];
                 }
                 s = s1;
-                ds = ds * 1.5 < 0.5 ? ds * 1.5 : 0.5;
+                ds = ds * SK_LOADED_STEP_GROWTH < SK_LOADED_LARGEST_STEP
+                         ? ds * SK_LOADED_STEP_GROWTH
+                         : SK_LOADED_LARGEST_STEP;
             } else {
-                ds /= 2.0;
+                ds *= SK_LOADED_STEP_CUT;
             }
         }
     }

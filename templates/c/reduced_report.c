@@ -34,10 +34,9 @@ typedef struct {
     double unit_scale, L, F;
 } sk_loaded_report;
 
-/* Sections per plate where the stress is sampled (symkin.physics.reported.SECTIONS), one RK4
-   step each; a point's compliance this ill-conditioned (1-norm, scaled) is singular. */
-#define SK_REP_SECTIONS 64
-#define SK_REP_SINGULAR 1e12
+/* SK_LOADED_SECTIONS: sections per plate where the stress is sampled, one RK4 step each;
+   SK_LOADED_SINGULAR: a point's compliance this ill-conditioned (1-norm, scaled) is singular
+   (the generated file's, symkin.core.settings.LoadedSettings). */
 
 /* psi'' of the plate's IVP (symkin.physics.beams): -f_Q (1 + (e_a - e_s) f_N). */
 static double sk_rep_bend(double psi, double lx, double ly, double d)
@@ -54,15 +53,15 @@ static double sk_rep_bend(double psi, double lx, double ly, double d)
 static void sk_rep_plate(const double *row, int has_limit, double *out)
 {
     const double lx = row[1], ly = row[2], d = row[3] - row[4], t = row[5];
-    const double h = 1.0 / SK_REP_SECTIONS;
-    double strain[SK_REP_SECTIONS + 1], psi = 0.0, om = row[0], value, where, stress;
+    const double h = 1.0 / SK_LOADED_SECTIONS;
+    double strain[SK_LOADED_SECTIONS + 1], psi = 0.0, om = row[0], value, where, stress;
     int i, j = 0;
-    for (i = 0; i <= SK_REP_SECTIONS; ++i) {
+    for (i = 0; i <= SK_LOADED_SECTIONS; ++i) {
         strain[i] = fabs(om) * t / 2.0 + fabs(lx * cos(psi) + ly * sin(psi)) * t * t / 12.0;
         if (strain[i] > strain[j]) {
             j = i;                  /* the first largest, as numpy's argmax */
         }
-        if (i < SK_REP_SECTIONS) {
+        if (i < SK_LOADED_SECTIONS) {
             const double a1 = om, b1 = sk_rep_bend(psi, lx, ly, d);
             const double a2 = om + h / 2 * b1, b2 = sk_rep_bend(psi + h / 2 * a1, lx, ly, d);
             const double a3 = om + h / 2 * b2, b3 = sk_rep_bend(psi + h / 2 * a2, lx, ly, d);
@@ -72,14 +71,14 @@ static void sk_rep_plate(const double *row, int has_limit, double *out)
         }
     }
     value = strain[j];
-    where = (double)j / SK_REP_SECTIONS;
-    if (j > 0 && j < SK_REP_SECTIONS) {
+    where = (double)j / SK_LOADED_SECTIONS;
+    if (j > 0 && j < SK_LOADED_SECTIONS) {
         const double a = strain[j - 1], b = strain[j], c = strain[j + 1];
         const double bend = a - 2 * b + c;
         if (bend < 0) {
             const double shift = (a - c) / (2 * bend);
             value = b - (a - c) * shift / 4;
-            where = (j + shift) / SK_REP_SECTIONS;
+            where = (j + shift) / SK_LOADED_SECTIONS;
         }
     }
     stress = row[6] * value;
@@ -103,7 +102,7 @@ static double sk_rep_norm1(const double *a)
 
 /* K = C^-1 of a point's compliance C (3 x 3) into k, NaN where C is singular: its 1-norm
    condition, scaled by L and F as reduced_reported.report scales it (there the 2-norm's),
-   above SK_REP_SINGULAR or not finite. */
+   above SK_LOADED_SINGULAR or not finite. */
 static void sk_rep_stiffness(const sk_loaded_report *rp, const double *c, double *k)
 {
     const double w[3] = {rp->F / rp->L, rp->F / rp->L, rp->F}, u[3] = {1.0, 1.0, 1.0 / rp->L};
@@ -131,7 +130,7 @@ static void sk_rep_stiffness(const sk_loaded_report *rp, const double *c, double
         for (i = 0; i < 9; ++i) {
             sinv[i] = inv[i] / (u[i / 3] * w[i % 3]);
         }
-        if (!(sk_rep_norm1(scaled) * sk_rep_norm1(sinv) <= SK_REP_SINGULAR)) {
+        if (!(sk_rep_norm1(scaled) * sk_rep_norm1(sinv) <= SK_LOADED_SINGULAR)) {
             return;
         }
     }

@@ -12,11 +12,12 @@ from runtime import _evaluate, _sensitivity_full, _solve  # the module holds bot
 # angles, twice (the rigid linkage and the compliant mechanism), then one evaluate at each.
 
 
-def _stroke_newton(residual, theta, tol, dtype):
+def _stroke_newton(residual, theta, tol, dtype, iterations):
     """Newton's method elementwise on the strokes' residuals (a list of arrays) in the surrogate
-    angles `theta`, its Jacobian by central differences, at most 40 steps: (theta, converged)."""
+    angles `theta`, its Jacobian by central differences of step sqrt(eps), at most `iterations`
+    steps: (theta, converged)."""
     k, step = len(theta), numpy.sqrt(numpy.finfo(dtype).eps)
-    for _ in range(40):
+    for _ in range(iterations):
         r = residual(theta)
         done = numpy.all([numpy.abs(x) <= tol for x in r], axis=0)
         if numpy.all(done | numpy.isnan(r[0])):
@@ -57,8 +58,8 @@ def _stroke_poses(mech, actuators, drives, inputs, level, params):
     rest = _evaluate(mech, dict.fromkeys(mech.input_names, zero), cheap, params, False)["points"]
     at = [rest[a[2]]["rigid"] for a in actuators]
     eps = numpy.finfo(mech.dtype).eps
-    scale = max([float(numpy.nanmax(numpy.abs(x))) for x in at] + [1e-300])
-    tol = 64 * eps * scale
+    scale = max([float(numpy.nanmax(numpy.abs(x))) for x in at] + [mech.stroke_floor])
+    tol = mech.stroke_tolerance * eps * scale
 
     def residual(theta, lv, kind):
         res = _evaluate(mech, hinges | dict(zip(surrogates, theta)), lv, params, False)
@@ -69,7 +70,9 @@ def _stroke_poses(mech, actuators, drives, inputs, level, params):
         return out
 
     def solve(theta, lv, kind):
-        return _stroke_newton(lambda th: residual(th, lv, kind), theta, tol, mech.dtype)
+        return _stroke_newton(
+            lambda th: residual(th, lv, kind), theta, tol, mech.dtype, mech.stroke_iterations
+        )
 
     start = [zero + numpy.asarray(s) * 0 for s in strokes]
     rigid, ok_r = solve(start, cheap, "rigid")

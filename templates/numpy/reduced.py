@@ -205,10 +205,15 @@ class _Batch:
             left = ~c | (size * size <= tb.chord_error * top * prev[act])
             done = ((size <= tb.tol * top) & left) | (size == 0)
             # stalled at rounding (a full step's: a slow chord step's is its J's, not rounding)
-            done |= ~c & (it > 3) & (size > 0.5 * prev[act]) & (size < 1e-9 * top)
+            done |= (
+                ~c
+                & (it > tb.stall_after)
+                & (size > tb.stall_ratio * prev[act])
+                & (size < tb.stalled * top)
+            )
             x[:, act] = xn
             converged[act[done & ~fail]] = True
-            chord[act] = (size <= tb.chord * top) & (~c | (size <= 0.1 * prev[act]))
+            chord[act] = (size <= tb.chord * top) & (~c | (size <= tb.chord_shrink * prev[act]))
             prev[act] = size
             act = act[~done & ~fail]
             if not act.size:
@@ -282,7 +287,7 @@ class _Batch:
         def column(values):
             return [numpy.array([v]) for v in values]
 
-        s, ds = 0.0, 0.25
+        s, ds = 0.0, tb.first_step
         th_s = rigid(0.0)
         if th_s is None:
             return None
@@ -290,7 +295,7 @@ class _Batch:
         sign = _red_signs(self.system(x, column(th_s), pk, 0.0)[1])
         jac = None
         while s < 1:
-            if ds < 1e-3:
+            if ds < tb.smallest_step:
                 return None
             s1 = min(1.0, s + ds)
             th_1 = rigid(s1)
@@ -303,9 +308,9 @@ class _Batch:
                 okn = bool(conv[0]) and bool(self.accept(xn, column(th_1), last, sign)[0])
             if okn:
                 x, s, th_s, jac = xn, s1, th_1, last[0]
-                ds = min(0.5, ds * 1.5)
+                ds = min(tb.largest_step, ds * tb.step_growth)
             else:
-                ds /= 2
+                ds *= tb.step_cut
         return x[:, 0], jac
 
     def compression(self, ins, b):

@@ -45,8 +45,8 @@ def _rigid_strokes(mech, actuators, hinges, strokes, params, start):
     rest = _rigid_at(mech, dict.fromkeys(mech.input_names, zero), params)[2]
     at = [(rest[2 * i], rest[2 * i + 1]) for i in where]
     eps = numpy.finfo(mech.dtype).eps
-    scale = max([float(numpy.nanmax(numpy.abs(numpy.stack(x)))) for x in at] + [1e-300])
-    tol = 64 * eps * scale
+    scale = max([float(numpy.nanmax(numpy.abs(numpy.stack(x)))) for x in at] + [mech.stroke_floor])
+    tol = mech.stroke_tolerance * eps * scale
 
     def residual(theta):
         rigid = _rigid_at(mech, hinges | dict(zip(surrogates, theta)), params)[2]
@@ -55,7 +55,7 @@ def _rigid_strokes(mech, actuators, hinges, strokes, params, start):
             out.append(d[0] * (rigid[2 * i] - x0[0]) + d[1] * (rigid[2 * i + 1] - x0[1]) - s)
         return out
 
-    return _stroke_newton(residual, list(start), tol, mech.dtype)
+    return _stroke_newton(residual, list(start), tol, mech.dtype, mech.stroke_iterations)
 
 
 def _actuated_state(mech, actuators, forces, drives, inputs, params, resolve=False):

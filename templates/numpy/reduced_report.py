@@ -15,16 +15,10 @@ from runtime import _blocks, _points, _pose, _prepare
 
 # ---- symkin runtime: every generated module with the loaded level's report holds it ----
 
-#: Sections per plate where the stress is sampled (symkin.physics.reported.SECTIONS), one RK4
-#: step each (against the Python path's Taylor series: 5e-12 of the stress, tests/
-#: test_loaded_reported_codegen.py).
-_STRESS_SECTIONS = 64
-#: A point's scaled compliance this ill-conditioned is singular (reported.SINGULAR): NaN.
-_SINGULAR = 1e12
-#: The buckling search stops at this factor on the loads (reduced_reported.LIMIT) ...
-_BUCKLING_LIMIT = 10.0
-#: ... and locates a sign change or a limit point to this relative width (reduced_reported.LOCATE).
-_BUCKLING_LOCATE = 1e-10
+# Its rules (symkin.core.settings.LoadedSettings) are the loaded tables' (mech.loaded): sections,
+# the stress samples per plate, one RK4 step each (against the Python path's Taylor series:
+# 5e-12 of the stress, tests/test_loaded_reported_codegen.py); singular, a point's scaled
+# compliance this ill-conditioned is singular (NaN); buckling_*, the buckling search.
 
 
 def _evaluate_reported(mech, inputs, level, params, links, report=True, buckling=True):
@@ -46,12 +40,12 @@ def _reported_block(arrays, mech, level, p, links, report):
     return result
 
 
-def _plate_stress(k0, lx, ly, ea, es, slender, modulus, limit, has_limit):
+def _plate_stress(k0, lx, ly, ea, es, slender, modulus, limit, has_limit, sections):
     """Largest normal stress (Pa), its strain, the safety factor (NaN without an allowable
     stress) and where along the plate (0..1), per configuration ((b,) arrays): the plate's IVP
     psi'' = -f_Q (1 + (e_a - e_s) f_N), psi(0) = 0, psi'(0) = k0 (symkin.physics.beams) by
-    fixed-step RK4, the strain |psi'| t/(2l) + |f_N| (t/l)^2/12 at every section and the
-    parabola's vertex through the three samples around an interior maximum
+    fixed-step RK4 over `sections` sections, the strain |psi'| t/(2l) + |f_N| (t/l)^2/12 at
+    every section and the parabola's vertex through the three samples around an interior maximum
     (symkin.physics.reported.plate_stress)."""
     d = ea - es
 
@@ -59,7 +53,7 @@ def _plate_stress(k0, lx, ly, ea, es, slender, modulus, limit, has_limit):
         c, s = numpy.cos(psi), numpy.sin(psi)
         return om, -(ly * c - lx * s) * (1 + d * (lx * c + ly * s))
 
-    n = _STRESS_SECTIONS
+    n = sections
     h = 1.0 / n
     psi, om = numpy.zeros_like(k0), numpy.array(k0, dtype=float)
     psis, oms = [psi], [om]
@@ -173,7 +167,7 @@ def _reduced_report(mech, theta, p, q, ok, buckling=True):
         stiff = numpy.full((size, 3, 3), numpy.nan)
         if live.any():
             cond = numpy.linalg.cond(c[live] * norm)
-            keep = numpy.flatnonzero(live)[cond <= _SINGULAR]
+            keep = numpy.flatnonzero(live)[cond <= tb.singular]
             if keep.size:
                 stiff[keep] = numpy.linalg.inv(c[keep])
         result["stiffness"][name] = numpy.moveaxis(stiff, 0, -1).reshape((3, 3) + shape)
@@ -182,7 +176,7 @@ def _reduced_report(mech, theta, p, q, ok, buckling=True):
         live = numpy.flatnonzero(ok_flat)
         values = [numpy.full(size, numpy.nan) for _ in range(4)]
         if live.size:
-            found = _plate_stress(*(v[live] for v in row), rep.limits[k])
+            found = _plate_stress(*(v[live] for v in row), rep.limits[k], tb.sections)
             for v, f in zip(values, found):
                 v[live] = f
         result["plates"][name] = {
@@ -243,17 +237,18 @@ def _red_buckling(solver, x, theta, p):
     """reduced_reported.buckling_factor on every configuration at once (x (n, b): each one's
     solution at load factor 1): the smallest t >= 1, the inputs held, at which det J changes
     sign, a plate reaches its sway buckling load or Newton cannot go on (a limit point); inf
-    when none below _BUCKLING_LIMIT. Each configuration steps with its own t, step, x and
+    when none below buckling_limit. Each configuration steps with its own t, step, x and
     previous point (the same arithmetic, so the same steps as alone); the sign changes found
     are then bisected together."""
-    limit, locate = _BUCKLING_LIMIT, _BUCKLING_LOCATE
+    tb = solver.t
+    limit, locate = tb.buckling_limit, tb.buckling_locate
     b = x.shape[1]
     out = numpy.full(b, numpy.nan)
     t = numpy.ones(b)
     x, ok, sign = _red_state(solver, x, theta, p, t)
     out[~ok | (sign == 0)] = 1.0
     act = numpy.flatnonzero(ok & (sign != 0))
-    dt = numpy.full(b, 0.5)
+    dt = numpy.full(b, tb.buckling_step)
     # the previous accepted (x, t) of each configuration (none before its first step)
     x_prev, t_prev, has_prev = numpy.zeros_like(x), numpy.zeros(b), numpy.zeros(b, dtype=bool)
     lo, hi, x_lo = numpy.zeros(b), numpy.zeros(b), x.copy()
@@ -271,11 +266,11 @@ def _red_buckling(solver, x, theta, p):
         k = act[change]
         lo[k], hi[k], x_lo[:, k], bisect[k] = t[k], t1[change], x[:, k], True
         out[act[ends]] = ta[ends]
-        dt[act[~ok1 & ~ends]] /= 2
+        dt[act[~ok1 & ~ends]] *= tb.buckling_cut
         k = act[same]
         x_prev[:, k], t_prev[k], has_prev[k] = x[:, k], t[k], True
         x[:, k], t[k] = x1[:, same], t1[same]
-        dt[k] = numpy.minimum(3.0, dt[k] * 2)
+        dt[k] = numpy.minimum(tb.buckling_largest, dt[k] * tb.buckling_growth)
         act = act[same | (~ok1 & ~ends)]
         past = t[act] >= limit
         out[act[past]] = math.inf

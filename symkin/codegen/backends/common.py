@@ -99,6 +99,10 @@ class Backend:
             "n_vars": len(plan.parameters) + len(plan.inputs),
             "default_level": default_level(plan),
             "loaded": plan.loaded,
+            # the loaded level's and the stroke solves' rules (symkin.core.settings): the C
+            # evaluator's at float64's epsilon; the numpy module scales `stroke_eps` by its own
+            "loaded_rules": plan.solver.loaded.rules() if plan.loaded else {},
+            "stroke_rules": plan.solver.strokes.rules(),
             "loaded_levels": [lv for lv in plan.levels if lv.name in levels.LOADED],
             # the loaded level's sensitivity routines: per variant the offsets of their blocks
             "loaded_sens": [
