@@ -42,7 +42,7 @@ from ..model.hinges import pivot_distance
 from ..model.mechanism import Mechanism
 from . import arith, beams, reported
 from .result import ActuatorLoad, HingeLoad, InputLoad, PlateStress
-from .stiffness import PlateStiffness, modulus, plate_stiffness
+from .stiffness import PlateStiffness, plate_stiffness
 
 #: Smallest load-factor step before the continuation gives up.
 MIN_STEP = 1e-7
@@ -845,7 +845,7 @@ def solve(
         at = np.array([float(v) for v in solution.u])
         tangent = system.jacobian(at, 1.0, 1e-18)[0]
         hinge = {h.name: h for h in mech.hinges}
-        moduli = {n: _float(substitute(modulus(hinge[n]), values)) for n in plates}
+        moduli = {n: _float(substitute(stiffness[n].section.modulus(), values)) for n in plates}
         allowable = {
             n: None
             if hinge[n].allowable_stress is None

@@ -29,7 +29,7 @@ from ..model.expressions import substitute
 from .reduced import Answer, Reduced
 from .reported import SINGULAR, plate_stress
 from .result import ActuatorLoad, InputLoad, PlateStress
-from .stiffness import modulus, plate_stiffness
+from .stiffness import plate_stiffness
 
 #: The buckling search stops at this factor on the file's loads (as equilibrium's).
 LIMIT = 10.0
@@ -128,7 +128,7 @@ def plates(answer: Answer) -> dict[str, PlateStress]:
             float(d["ea"]) if reissner else None,
             float(d["es"]) if reissner else None,
             slender,
-            float(sp.N(substitute(modulus(h), values), 20)),
+            float(sp.N(substitute(s.section.modulus(), values), 20)),
             limit,
         )
     return out

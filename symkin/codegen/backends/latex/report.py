@@ -32,7 +32,6 @@ from ....core import vectors as V
 from ....core.errors import SymkinError
 from ....physics import reduced
 from ....physics.equilibrium import BUCKLING_LIMIT
-from ....physics.stiffness import modulus
 from ... import pipeline, templating
 from ...plan import Plan
 from ..common import header_lines
@@ -773,14 +772,13 @@ class Report:
             return None
         mech, tex = self.mech, self.tex
         unit = TEX_UNITS[mech.units]
-        hinges = {h.name: h for h in mech.hinges}
         names = {}
         for c, (nx, ny, mu) in ld.chord_loads.items():
             names.update({nx: rf"n_{{{c},x}}", ny: rf"n_{{{c},y}}", mu: rf"\mu_{{{c}}}"})
         ltex = tex.with_names(names)
         plates = []
         for a, stiff in ld.plates:
-            h = hinges[stiff.hinge]
+            sec = stiff.section
             EI, length = stiff.EI, stiff.length
             stretch = (EI / (stiff.EA * length**2), EI / (stiff.kGA * length**2))
             plates.append(
@@ -788,9 +786,9 @@ class Report:
                     "a": a,
                     "name": self.hinge_name(a),
                     "length": sci(_num(length, self.defaults)),
-                    "thickness": sci(_num(h.thickness, self.defaults)),
-                    "width": sci(_num(h.width, self.defaults)),
-                    "modulus": sci(_num(modulus(h), self.defaults)),
+                    "thickness": sci(_num(sec.thickness, self.defaults)),
+                    "width": sci(_num(sec.width, self.defaults)),
+                    "modulus": sci(_num(sec.modulus(), self.defaults)),
                     "EI": sci(_num(EI, self.defaults)),
                     "k": sci(_num(EI / length, self.defaults)),
                     # the relation's stretch and shear compliances: none in the elastica
