@@ -57,6 +57,7 @@ def test_uniform_plate_is_the_closed_forms():
     got = (c.theta_M, c.theta_F, c.y_F, c.x_N, c.y_V)
     assert all(same(a, b) for a, b in zip(got, closed, strict=True))
     assert same(c.guided(), L**3 / (12 * ei)) and same(sec.guided(), L**3 / (12 * ei))
+    assert same(sec.slender_squared(), T**2 / L**2)  # the reported strain's (t/l)²
     generic = sections.Section.compliance(sec)  # the base class's integrals of T(x)
     keys = ("theta_M", "theta_F", "y_F", "x_N", "y_V")
     assert all(same(getattr(generic, k), getattr(c, k)) for k in keys)

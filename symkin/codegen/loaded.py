@@ -311,7 +311,7 @@ def _report_routine(r: reduced.Reduced, names, x, theta, plates, params, sub) ->
                 ly,
                 d["ea"],
                 d["es"],
-                sp.sqrt(12 * st.EI / (st.EA * st.length**2)),
+                sp.sqrt(st.section.slender_squared()),
                 st.section.modulus(),
                 sp.S.Zero if limit is None else sp.sympify(limit),
             )

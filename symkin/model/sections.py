@@ -188,6 +188,11 @@ class Section(ABC):
         """Shear stiffness at x, N."""
         return self._kGA(self.depth(x))
 
+    def slender_squared(self) -> sp.Expr:
+        """(t/l)² = 12 EI/(EA l²) at the nominal thickness: the reported strain's fibre
+        distance, |ψ'| t/(2l) + |f_N| (t/l)²/12 (physics.reported.plate_stress)."""
+        return 12 * self._EI(self.thickness) / (self._EA(self.thickness) * self.length**2)
+
     # -- compliance integrals --------------------------------------------------------------------
 
     def _integrands(self) -> tuple[Callable[[Any, Any], Any], ...]:

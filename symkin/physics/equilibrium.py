@@ -372,7 +372,7 @@ def build(
                 plate,
                 num(inputs[h.name]) if h.input and h.name not in mech.surrogates else None,
                 *_compliances(stiffness.get(h.name) if plate else None, length, num),
-                _slender(stiffness.get(h.name) if plate else None, length, values),
+                _slender(stiffness.get(h.name) if plate else None, values),
             )
         )
     s = mech.unit_scale
@@ -427,11 +427,11 @@ def _compliances(stiff: PlateStiffness | None, length, num) -> tuple:
     return num(stiff.EI / (stiff.EA * length**2)), num(stiff.EI / (stiff.kGA * length**2))
 
 
-def _slender(stiff: PlateStiffness | None, length, values) -> float:
-    """t/l of a plate from its stiffness, √(12 EI/(EA l²)); 0 for a pin."""
+def _slender(stiff: PlateStiffness | None, values) -> float:
+    """t/l of a plate from its section, √(12 EI/(EA l²)); 0 for a pin."""
     if stiff is None:
         return 0.0
-    return math.sqrt(float(sp.N(substitute(12 * stiff.EI / (stiff.EA * length**2), values), 20)))
+    return math.sqrt(float(sp.N(substitute(stiff.section.slender_squared(), values), 20)))
 
 
 @dataclass(frozen=True)

@@ -118,7 +118,7 @@ def plates(answer: Answer) -> dict[str, PlateStress]:
         lx, ly = V.rot(-(turn + float(d["alpha"])), (nx * length**2 / ei, ny * length**2 / ei))
         s = stiff[name]
         reissner = s.stretches
-        slender = math.sqrt(float(sp.N(substitute(12 * s.EI / (s.EA * s.length**2), values), 20)))
+        slender = math.sqrt(float(sp.N(substitute(s.section.slender_squared(), values), 20)))
         h = hinge[name]
         limit = None
         if h.allowable_stress is not None:
