@@ -51,7 +51,7 @@ from ..kinematics.analysis import Analysis
 from ..model.derivatives import jacobian
 from ..physics import reduced
 from ..physics.plate_relation import relation
-from ..physics.stiffness import modulus, plate_stiffness
+from ..physics.stiffness import plate_stiffness
 from .literals import float_literals
 from .plate import SYMBOLS, plate_routine, shared_h, squares
 from .routines import Argument, Routine, flatten, layout, optimize
@@ -295,8 +295,8 @@ def _report_routine(r: reduced.Reduced, names, x, theta, plates, params, sub) ->
                 ly,
                 d["ea"],
                 d["es"],
-                sp.sqrt(12 * st.EI / (st.EA * st.length**2)),
-                modulus(hinge[h.name]),
+                sp.sqrt(st.section.slender_squared()),
+                st.section.modulus(),
                 sp.S.Zero if limit is None else sp.sympify(limit),
             )
         ]

@@ -20,12 +20,12 @@ from __future__ import annotations
 
 import math
 import textwrap
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import sympy as sp
 
-from ._symkin import InputError, Mechanism
+from ._symkin import InputError, Mechanism, section_of
 
 #: Element type of the plates: quadratic brick, reduced integration.
 ELEMENT = "C3D20R"
@@ -108,7 +108,9 @@ Vec = tuple[float, float]
 
 @dataclass(frozen=True)
 class Plate:
-    """A compliant hinge's plate, SI units: from `start` (P's clamp) along `u` for `length`."""
+    """A compliant hinge's plate, SI units: from `start` (P's clamp) along `u` for `length`;
+    `profile` its thickness at a distance from P's clamp (the outline its section gives the
+    mesher, model.sections), None where it is `thickness` throughout."""
 
     hinge: str
     p_link: str
@@ -120,6 +122,11 @@ class Plate:
     width: float
     E: float
     nu: float
+    profile: Callable[[float], float] | None = None
+
+    def depth(self, at: float) -> float:
+        """The plate's thickness (m) at `at` metres from P's clamp."""
+        return self.thickness if self.profile is None else self.profile(at)
 
 
 @dataclass(frozen=True)
@@ -359,6 +366,14 @@ def configuration(
         length = _value(h.length, subs) * scale
         u = (math.cos(angle), math.sin(angle))
         start = (at[0] - length / 2 * u[0], at[1] - length / 2 * u[1])
+        section = section_of(h, mech.unit_scale)
+        profile = None
+        if not section.uniform:
+            outline = section.thickness_function(subs)
+
+            def profile(x: float, outline=outline) -> float:
+                return float(outline(x / scale)) * scale
+
         plates.append(
             Plate(
                 h.name,
@@ -371,6 +386,7 @@ def configuration(
                 _value(h.width, subs) * scale,
                 _value(h.E, subs),
                 _value(h.nu, subs),
+                profile,
             )
         )
     loads = tuple(
@@ -547,7 +563,7 @@ class _Writer:
         for i in range(2 * nl + 1):
             s = pl.length * along[i]
             for j in range(2 * nt + 1):
-                r = pl.thickness * (across[j] - 0.5)
+                r = pl.depth(s) * (across[j] - 0.5)
                 at = (pl.start[0] + s * pl.u[0] + r * n[0], pl.start[1] + s * pl.u[1] + r * n[1])
                 for kz in range(3):
                     if (i % 2 and j % 2) or (kz == 1 and (i % 2 or j % 2)):

@@ -99,6 +99,10 @@ class Hinge:
     beam: str = BEAMS[0]  # the plate's beam theory at the physical levels (hinges.BEAMS)
     # the plate's allowable stress, Pa (None: not given): `safety` at the physical levels
     allowable_stress: sp.Expr | None = None
+    # the plate's profile (model.sections.PROFILES: "uniform", thickness `thickness` throughout)
+    # and its parameters, by name
+    profile: str = "uniform"
+    profile_params: tuple[tuple[str, object], ...] = ()
 
     def param(self, key: str, default: object = None) -> object:
         return dict(self.model_params).get(key, default)

@@ -43,7 +43,7 @@ from ..model.hinges import pivot_distance
 from ..model.mechanism import Mechanism
 from . import arith, beams, reported
 from .result import ActuatorLoad, HingeLoad, InputLoad, PlateStress
-from .stiffness import PlateStiffness, modulus, plate_stiffness
+from .stiffness import PlateStiffness, plate_stiffness
 
 #: The level's continuation, Newton, polish and buckling search (symkin.core.settings,
 #: EquilibriumSettings; docs/numerics.md, "The solver table"). The names below are its fields
@@ -361,7 +361,7 @@ def build(
                 plate,
                 num(inputs[h.name]) if h.input and h.name not in mech.surrogates else None,
                 *_compliances(stiffness.get(h.name) if plate else None, length, num),
-                _slender(stiffness.get(h.name) if plate else None, length, values),
+                _slender(stiffness.get(h.name) if plate else None, values),
             )
         )
     s = mech.unit_scale
@@ -416,11 +416,11 @@ def _compliances(stiff: PlateStiffness | None, length, num) -> tuple:
     return num(stiff.EI / (stiff.EA * length**2)), num(stiff.EI / (stiff.kGA * length**2))
 
 
-def _slender(stiff: PlateStiffness | None, length, values) -> float:
-    """t/l of a plate from its stiffness, √(12 EI/(EA l²)); 0 for a pin."""
+def _slender(stiff: PlateStiffness | None, values) -> float:
+    """t/l of a plate from its section, √(12 EI/(EA l²)); 0 for a pin."""
     if stiff is None:
         return 0.0
-    return math.sqrt(float(sp.N(substitute(12 * stiff.EI / (stiff.EA * length**2), values), 20)))
+    return math.sqrt(float(sp.N(substitute(stiff.section.slender_squared(), values), 20)))
 
 
 @dataclass(frozen=True)
@@ -837,7 +837,7 @@ def solve(
         at = np.array([float(v) for v in solution.u])
         tangent = system.jacobian(at, 1.0, RULES.series_tol)[0]
         hinge = {h.name: h for h in mech.hinges}
-        moduli = {n: _float(substitute(modulus(hinge[n]), values)) for n in plates}
+        moduli = {n: _float(substitute(stiffness[n].section.modulus(), values)) for n in plates}
         allowable = {
             n: None
             if hinge[n].allowable_stress is None

@@ -28,8 +28,9 @@ import sympy as sp
 
 from ..model.hinges import pivot_distance
 from ..model.mechanism import Mechanism
+from ..model.sections import WIDE, SectionNumbers
 from .result import HingeLoad
-from .stiffness import WIDE, plate_stiffness
+from .stiffness import plate_stiffness
 
 #: The clamp faces' effect on a plate, as measured against a plane-strain continuum with rigid
 #: clamp faces (docs/fea.md): on the transverse compliance 0.073 t/l; on a pure-moment arc's
@@ -79,11 +80,9 @@ class _Plate:
     u: tuple[float, float]
     length: float
     t: float
-    EI: float
-    EA: float
-    kGA: float
     nu: float
     uncertain_modulus: float  # relative uncertainty of E' from the width
+    section: SectionNumbers  # its end displacements under loads (model.sections)
 
 
 def _number(expr, values) -> float:
@@ -97,15 +96,14 @@ def _link_index(mech: Mechanism) -> dict[str, int]:
 
 
 def _plates(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr], level: str) -> list[_Plate]:
-    stiff = plate_stiffness(mech, level)
+    stiff = plate_stiffness(mech, level, uniform=False)
     index = _link_index(mech)
     out = []
     for h in mech.hinges:
         if not h.is_plate:
             continue
-        s = stiff[h.name]
-        length, t, b = (_number(x, values) for x in (h.length, h.thickness, h.width))
-        nu = _number(h.nu, values)
+        sec = SectionNumbers.of(stiff[h.name].section, values)
+        length, t, b, nu = sec.length, sec.t, sec.b, sec.nu
         angle = _number(h.plate_angle, values)
         u = (math.cos(angle), math.sin(angle))
         at = (_number(h.at[0], values), _number(h.at[1], values))
@@ -121,9 +119,9 @@ def _plates(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr], level: str) ->
                 u,
                 length,
                 t,
-                *(_number(x, values) for x in (s.EI, s.EA, s.kGA)),
                 nu,
                 uncertain,
+                sec,
             )
         )
     return out
@@ -216,17 +214,16 @@ def estimate(
         load = hinges[p.name]
         force = np.array(load.force)
         normal, transverse = float(force @ chord), float(force @ across)
-        # Curvature at the two clamps (linear moment along the plate): M's from its end moment,
-        # P's from the bend angle θ = l (κ_P + κ_M)/2.
-        kappa_m = load.moment / scale / p.EI
-        kappa_p = 2 * theta / p.length - kappa_m
-        squares = p.length * (kappa_p**2 + kappa_p * kappa_m + kappa_m**2) / 3  # ∫ κ² ds
-        centre[p.name] = -centre_line_coefficient(p.nu) * p.t**2 * squares * chord
+        # −c ∫T²κ² ds with the moment linear along the plate, from its end moment at M and the
+        # bend angle θ = ∫κ ds (a uniform plate: κ_P + κ_M = 2θ/l)
+        sec = p.section
+        shorter = sec.centre_line(centre_line_coefficient(p.nu), theta, load.moment / scale)
+        centre[p.name] = shorter * chord
         left_out = np.zeros(2)
         if not stretches[p.name]:
-            left_out = normal * p.length / p.EA * chord + transverse * p.length / p.kGA * across
+            left_out = sec.stretch(normal) * chord + sec.shear(transverse) * across
         signed[p.name] = centre[p.name] + left_out
-        bending = transverse * p.length**3 / (12 * p.EI)
+        bending = sec.guided(transverse)
         arc = p.length * theta**2 / 12  # the arc's deviation from the pin, along the chord
         ratio = p.t / p.length
         clamp[p.name] = np.stack(
@@ -237,8 +234,8 @@ def estimate(
         )
         compliance = bending * across
         if stretches[p.name]:
-            compliance = compliance + normal * p.length / p.EA * chord
-            compliance = compliance + transverse * p.length / p.kGA * across
+            compliance = compliance + sec.stretch(normal) * chord
+            compliance = compliance + sec.shear(transverse) * across
         width[p.name] = (p.uncertain_modulus - floor) * compliance
     total, parts, shift = {}, {}, {}
     for name, (k, p0) in points.items():

@@ -30,7 +30,7 @@ from ..model.expressions import substitute
 from .reduced import Answer, Reduced
 from .reported import plate_stress
 from .result import ActuatorLoad, InputLoad, PlateStress
-from .stiffness import modulus, plate_stiffness
+from .stiffness import plate_stiffness
 
 #: The buckling search's rules (symkin.core.settings.LoadedSettings: buckling_*): it stops at
 #: buckling_limit on the file's loads and locates to buckling_locate; the generated runtimes'.
@@ -118,7 +118,7 @@ def plates(answer: Answer) -> dict[str, PlateStress]:
         lx, ly = V.rot(-(turn + float(d["alpha"])), (nx * length**2 / ei, ny * length**2 / ei))
         s = stiff[name]
         reissner = s.stretches
-        slender = math.sqrt(float(sp.N(substitute(12 * s.EI / (s.EA * s.length**2), values), 20)))
+        slender = math.sqrt(float(sp.N(substitute(s.section.slender_squared(), values), 20)))
         h = hinge[name]
         limit = None
         if h.allowable_stress is not None:
@@ -128,7 +128,7 @@ def plates(answer: Answer) -> dict[str, PlateStress]:
             float(d["ea"]) if reissner else None,
             float(d["es"]) if reissner else None,
             slender,
-            float(sp.N(substitute(modulus(h), values), 20)),
+            float(sp.N(substitute(s.section.modulus(), values), 20)),
             limit,
         )
     return out

@@ -7,6 +7,11 @@ strain leaves the in-plane shear modulus alone). All are sympy expressions in th
 symbols, written in the file's length unit u (EI in N·u², EA and κGA in N), so the physics runs
 in the file's unit like the kinematics: a length given in mm stays in mm and the unit's size s
 (metres per u) enters only here, EI_u = EI/s², and in the loads' moments, M_u = M/s.
+
+The numbers come from each plate's section (symkin.model.sections, by its profile in
+symkin.model.profiles: the uniform plate by default); the levels here take uniform plates only
+(their beams and the plate relation are uniform beams), and a plate of another profile is
+refused by name.
 """
 
 from __future__ import annotations
@@ -17,19 +22,18 @@ import sympy as sp
 
 from ..core.errors import InputError
 from ..model.entries import STIFFNESS_REQUIRED as REQUIRED
-from ..model.entries import Hinge
 from ..model.mechanism import Mechanism
-
-#: A plate at least this many thicknesses wide bends in plane strain: E' = E/(1 - nu^2).
-WIDE = 5
-#: Timoshenko's shear coefficient of a rectangular section.
-SHEAR_COEFFICIENT = sp.Rational(5, 6)
+from ..model.profiles import section_of
+from ..model.sections import Section
 
 
 @dataclass(frozen=True)
 class PlateStiffness:
     """Bending, axial and shear stiffness of one plate in the file's unit (EI: N·u², EA and
-    κGA: N) and its beam theory (`beam`, model.hinges.BEAMS)."""
+    κGA: N), its beam theory (`beam`, model.hinges.BEAMS) and its section (model.sections).
+    For a uniform plate EI, EA and κGA are its own; for another profile those of the uniform
+    plate with the same end compliances under a moment, a normal force and a shear force:
+    l/∫dx/EI, l/∫dx/EA, l/∫dx/κGA."""
 
     hinge: str
     length: sp.Expr
@@ -37,6 +41,7 @@ class PlateStiffness:
     EA: sp.Expr
     kGA: sp.Expr
     beam: str
+    section: Section
 
     @property
     def stretches(self) -> bool:
@@ -44,18 +49,12 @@ class PlateStiffness:
         return self.beam == "reissner"
 
 
-def modulus(hinge: Hinge) -> sp.Expr:
-    """E' = E/(1 − ν²) when width ≥ WIDE·thickness (plane strain), else E."""
-    return sp.Piecewise(
-        (hinge.E / (1 - hinge.nu**2), hinge.width >= WIDE * hinge.thickness), (hinge.E, True)
-    )
-
-
-def plate_stiffness(mech: Mechanism, level: str) -> dict[str, PlateStiffness]:
-    """EI and EA of every plate (hinges that are not `rigid`), by hinge name; a plate without E,
-    thickness or width is bad input for `level` (exit 2, naming the key and the hinge)."""
+def plate_stiffness(mech: Mechanism, level: str, uniform: bool = True) -> dict[str, PlateStiffness]:
+    """EI, EA and κGA of every plate (hinges that are not `rigid`) and its section, by hinge
+    name; a plate without E, thickness or width is bad input for `level` (exit 2, naming the
+    key and the hinge), and so is a plate whose profile is not uniform when `uniform` (the
+    levels' beams are uniform)."""
     out = {}
-    s2 = mech.unit_scale**2
     for h in mech.hinges:
         if not h.is_plate:
             continue
@@ -69,10 +68,19 @@ def plate_stiffness(mech: Mechanism, level: str) -> dict[str, PlateStiffness]:
                     hint=f"add {key} = ... to the hinge or to [defaults] (docs/physics.md), or "
                     'make the hinge model = "rigid" (a pin)',
                 )
-        e = modulus(h)
-        area = h.width * h.thickness * s2
-        shear = SHEAR_COEFFICIENT * h.E / (2 * (1 + h.nu)) * area
-        out[h.name] = PlateStiffness(
-            h.name, h.length, e * area * h.thickness**2 / 12, e * area, shear, h.beam
-        )
+        sec = section_of(h, mech.unit_scale)
+        if sec.uniform:
+            ei, ea, shear = sec.EI(0), sec.EA(0), sec.kGA(0)
+        elif uniform:
+            raise InputError(
+                f"--level {level} takes uniform plates: the hinge's profile is {sec.profile!r}",
+                file=mech.path,
+                line=h.line,
+                entry=f"[[hinge]] '{h.name}'",
+                hint="docs/architecture.md, 'A new profile', says what a level needs from one",
+            )
+        else:
+            c = sec.compliance()
+            ei, ea, shear = h.length / c.theta_M, h.length / c.x_N, h.length / c.y_V
+        out[h.name] = PlateStiffness(h.name, h.length, ei, ea, shear, h.beam, sec)
     return out

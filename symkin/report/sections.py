@@ -15,7 +15,6 @@ from ..codegen.backends.common import header_lines
 from ..codegen.plan import Plan
 from ..core import vectors as V
 from ..physics import reduced
-from ..physics.stiffness import modulus
 from .text import LINE_WIDTH_EM, Tex, align_lines, escape_latex, gnum, math_name, pack, sci, width
 
 #: Matrices wider than this many columns are printed in column blocks (at the full width).
@@ -678,14 +677,13 @@ class Report:
             return None
         mech, tex = self.mech, self.tex
         unit = TEX_UNITS[mech.units]
-        hinges = {h.name: h for h in mech.hinges}
         names = {}
         for c, (nx, ny, mu) in ld.chord_loads.items():
             names.update({nx: rf"n_{{{c},x}}", ny: rf"n_{{{c},y}}", mu: rf"\mu_{{{c}}}"})
         ltex = tex.with_names(names)
         plates = []
         for a, stiff in ld.plates:
-            h = hinges[stiff.hinge]
+            sec = stiff.section
             EI, length = stiff.EI, stiff.length
             stretch = (EI / (stiff.EA * length**2), EI / (stiff.kGA * length**2))
             plates.append(
@@ -693,9 +691,9 @@ class Report:
                     "a": a,
                     "name": self.hinge_name(a),
                     "length": sci(float_at(length, self.defaults)),
-                    "thickness": sci(float_at(h.thickness, self.defaults)),
-                    "width": sci(float_at(h.width, self.defaults)),
-                    "modulus": sci(float_at(modulus(h), self.defaults)),
+                    "thickness": sci(float_at(sec.thickness, self.defaults)),
+                    "width": sci(float_at(sec.width, self.defaults)),
+                    "modulus": sci(float_at(sec.modulus(), self.defaults)),
                     "EI": sci(float_at(EI, self.defaults)),
                     "k": sci(float_at(EI / length, self.defaults)),
                     # the relation's stretch and shear compliances: none in the elastica
