@@ -37,7 +37,7 @@ from symkin.codegen.plate import SYMBOLS, plate_routine
 from symkin.model import special
 from symkin.physics import equilibrium as equilibrium_physics
 from symkin.physics.plate_relation import energy, relation
-from symkin.studies.evaluation import reduced_equilibrium
+from symkin.studies.physical import reduced_equilibrium
 
 ROOT = Path(__file__).resolve().parent.parent
 ZOO = ROOT / "tests" / "mechanisms"

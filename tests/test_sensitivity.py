@@ -25,7 +25,8 @@ from evaluators import require_compiler
 
 import symkin
 from symkin.cli.commands import main
-from symkin.studies.evaluation import _mpmath_evaluator, evaluate
+from symkin.studies.evaluation import evaluate
+from symkin.studies.mpmath_evaluator import evaluator_of
 
 FOUR_BAR = (EXAMPLES / "four_bar.toml").read_text()
 TINY = FOUR_BAR.replace("l = 1e-3 ", "l = 1e-10 ")  # plates 1e-9 of the link lengths
@@ -64,7 +65,7 @@ def analysis(key: str):
 
 def central(an, inputs: dict, level: str) -> dict:
     """(variable kind, name) -> {point: (d deviation, d rigid)} as mpmath pairs."""
-    ev = _mpmath_evaluator(an)
+    ev = evaluator_of(an)
     out = {}
     with mpmath.workdps(40):
         variables = [
@@ -150,7 +151,7 @@ def test_a_parameter_carries_the_defaults_that_read_it():
     an = analysis("param_four_bar")
     inputs = {"A0": "0.2"}
     sens = evaluate(an, inputs, "exact", sensitivity=True).sensitivity.deviation["C"]
-    ev = _mpmath_evaluator(an)
+    ev = evaluator_of(an)
     with mpmath.workdps(40):
         l0, h = mpmath.mpf("1e-3"), mpmath.mpf("1e-15")
         held = exact(2 * l0)

@@ -22,7 +22,7 @@ from ..kinematics.analysis import Analysis
 from ..model.mechanism import Mechanism, load
 
 if TYPE_CHECKING:
-    from .evaluation import Evaluation
+    from .results import Evaluation
 
 #: What `derive --emit` writes: the LaTeX report and every generated-code backend's files.
 EMITTERS = ("latex", *pipeline.BACKENDS)
@@ -126,7 +126,7 @@ def generate_plan(
 ) -> tuple[dict[str, bytes], object]:
     """:func:`generate`, and the Plan the evaluators were emitted from."""
     from ..codegen.plan import with_derivation
-    from .evaluation import check_fabricated_pose, fixed_angles
+    from .configuration import check_fabricated_pose, fixed_angles
 
     say = progress or (lambda message: None)
     if mech.actuators:
@@ -227,7 +227,8 @@ def physics_reference(
     """The report's physical reference: the `equilibrium` level's evaluation (deviations, plate
     stresses, input moments, model error) at given inputs and the `fixed` ones (the file's own
     plates and loads, whatever variant the report derives)."""
-    from .evaluation import Evaluation, equilibrium
+    from .physical import equilibrium
+    from .results import Evaluation
 
     hidden = {a.point for a in analysis.mechanism.actuators}  # tracked by the levels themselves
     reference = Analysis(
