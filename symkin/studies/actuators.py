@@ -15,7 +15,7 @@ from ..codegen import pipeline
 from ..core import levels
 from ..core.errors import AssemblyError, InputError
 from ..model.mechanism import Mechanism
-from .configuration import parameter_values
+from .configuration import Configuration, parameter_values
 from .mpmath_evaluator import MpmathEvaluator
 from .results import Evaluation, Pair, Sensitivity
 
@@ -61,8 +61,7 @@ def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity:
 
 
 def stroke_sensitivity(
-    mech: Mechanism,
-    params: Mapping[str, object] | None,
+    config: Configuration,
     ev_r: Evaluation,
     ev_c: Evaluation,
     rest: Evaluation,
@@ -73,6 +72,7 @@ def stroke_sensitivity(
     hinge and stroke y; the derivatives at fixed kinematic inputs are the evaluations' own, at
     the rigid pose (ev_r), the compliant one (ev_c) and as fabricated (rest)."""
     assert ev_r.sensitivity and ev_c.sensitivity and rest.sensitivity
+    mech = config.mechanism
     acts = mech.actuators
     names = [p.name for p in mech.parameters]
     hinges = [h for h in mech.drives if h not in {a.name for a in acts}]
@@ -93,7 +93,7 @@ def stroke_sensitivity(
 
     # the lines of action and their rates by the parameters (a direction may read them):
     # central differences of the direction alone at 30 digits, its defaults re-evaluated
-    values = parameter_values(mech, params)
+    values = config.params
 
     def directions(at: Mapping[sp.Symbol, sp.Expr]) -> list[np.ndarray]:
         out = []
@@ -192,23 +192,23 @@ def _stroke_jacobian(residual, angles: dict, r: list, step) -> mpmath.matrix | N
 
 def stroke_angles(
     solver: MpmathEvaluator,
-    mech: Mechanism,
-    hinges: Mapping[str, sp.Expr],
+    config: Configuration,
     strokes: Sequence[sp.Expr],
-    level: str,
-    params: Mapping[str, object] | None,
     dps: int,
     compliant: bool,
     start: Mapping[str, mpmath.mpf] | None = None,
 ) -> dict[str, mpmath.mpf]:
     """The surrogate hinges' angles at which the actuators' points have moved by `strokes`
-    along their lines of action: in the rigid linkage, or (`compliant`) in the compliant
-    mechanism at `level`. Newton's method on the k × k system, its Jacobian by central
-    differences at `dps` digits (the strokes are smooth in the angles away from a toggle)."""
+    along their lines of action, the input hinges beside them at `config`'s angles: in the
+    rigid linkage, or (`compliant`) in the compliant mechanism at `config`'s level. Newton's
+    method on the k × k system, its Jacobian by central differences at `dps` digits (the
+    strokes are smooth in the angles away from a toggle)."""
+    mech = config.mechanism
     names = [a.surrogate for a in mech.actuators]
+    level = config.level if compliant else levels.get("paper")
     with mpmath.workdps(dps + 10):
         target = [mpmath.mpf(sp.N(s, dps + 10)) for s in strokes]
-        values = parameter_values(mech, params)
+        values = config.params
         at = [
             [mpmath.mpf(sp.N(c.xreplace(values), dps + 10)) for c in a.at] for a in mech.actuators
         ]
@@ -220,8 +220,9 @@ def stroke_angles(
         step = mpmath.mpf(10) ** -7
 
         def residual(trial: Mapping[str, mpmath.mpf]) -> list:
-            state = dict(hinges) | {n: mpmath.nstr(trial[n], dps + 10) for n in names}
-            found = solver.values(state, level if compliant else "paper", params, dps + 10)
+            # each angle the double its dps + 10 digits round to, as an input given as text
+            state = config.with_angles({n: float(mpmath.nstr(trial[n], dps + 10)) for n in names})
+            found = solver.values(state, dps + 10, level)
             out = []
             for a, xy, s in zip(mech.actuators, at, target):
                 rig, dev = found[a.point]

@@ -1,16 +1,23 @@
 """Values from the user, as exact numbers: inputs (input hinges and actuators), parameter
 overrides (the others' defaults re-evaluated), held inputs; and the check that the input hinges
 determine the pose. Every backend of `symkin eval` and the studies read their values here, so a
-bad value is the same error (exit 2, naming the option) everywhere (docs/cli.md)."""
+bad value is the same error (exit 2, naming the option) everywhere (docs/cli.md).
+
+A :class:`Configuration` is one configuration as `symkin eval` names it (level, inputs,
+parameters), parsed and validated once by :func:`configure`; the levels and backends take it.
+"""
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
+from dataclasses import dataclass
 
 import mpmath
 import numpy as np
 import sympy as sp
 
+from ..core import levels
 from ..core.errors import AssemblyError, InputError, suggest
 from ..kinematics.analysis import Analysis
 from ..model import expressions
@@ -121,6 +128,13 @@ def input_values(analysis: Analysis, inputs: Mapping[str, object]) -> dict[int, 
             hint="give every input, e.g. --input " + " --input ".join(f"{n}=0.1" for n in missing),
         )
     values = {names[k]: exact_value(v, f"--input {k}", mech.path) for k, v in inputs.items()}
+    _check_half_turns(analysis, values)
+    return values
+
+
+def _check_half_turns(analysis: Analysis, values: Mapping[int, sp.Expr]) -> None:
+    """Refuse (exit 3) an input angle beyond a half turn, naming the same pose within one."""
+    kin, mech = analysis.kin, analysis.mechanism
     for a, value in values.items():
         if (sp.Abs(value) - sp.pi).is_positive:
             name = kin.hinges[a].name
@@ -133,7 +147,6 @@ def input_values(analysis: Analysis, inputs: Mapping[str, object]) -> dict[int, 
                 f"the rotation of its plate from the as-fabricated pose, |angle| <= pi"
                 f"{same}"
             )
-    return values
 
 
 def check_fabricated_pose(analysis: Analysis) -> None:
@@ -216,3 +229,71 @@ def fixed_angles(mech: Mechanism, fixed: Mapping[str, object] | None) -> dict[st
             )
         held[name] = exact_value(value, "--fix", mech.path)
     return held
+
+
+@dataclass(frozen=True)
+class Configuration:
+    """One configuration of an analysis, parsed and validated once (:func:`configure`): the
+    level's row, every parameter's exact value, every input's and the input hinges' angles.
+    With actuators, `angles` holds the input hinges given beside them; the surrogates' angles
+    are solved (symkin.studies.actuators) and added by :meth:`with_angles`."""
+
+    analysis: Analysis
+    level: levels.Level
+    params: Mapping[sp.Symbol, sp.Expr]  # every parameter: the overrides, then the defaults
+    overrides: tuple[str, ...]  # the parameters given (--param), in their order
+    drives: Mapping[str, sp.Expr]  # every input given, by name: input hinges and actuators
+    angles: Mapping[int, sp.Expr]  # input hinge label -> angle (rad)
+
+    @property
+    def mechanism(self) -> Mechanism:
+        return self.analysis.mechanism
+
+    @property
+    def hinges(self) -> dict[str, sp.Expr]:
+        """The input hinges' angles as given, by name (the actuators' strokes and forces left
+        out)."""
+        acts = {a.name for a in self.mechanism.actuators}
+        return {k: v for k, v in self.drives.items() if k not in acts}
+
+    @property
+    def strokes(self) -> dict[str, sp.Expr]:
+        """Every actuator's value as given (a stroke or a force), by name."""
+        return {a.name: self.drives[a.name] for a in self.mechanism.actuators}
+
+    def with_angles(self, angles: Mapping[str, float]) -> Configuration:
+        """This configuration with input hinges' angles (by name) set to doubles the evaluation
+        found (the actuators' surrogates, a continuation's scaled inputs), each the exact number
+        its shortest decimal is, as a given one; every angle checked to be at most a half
+        turn."""
+        kin = self.analysis.kin
+        labels = {kin.hinges[a].name: a for a in kin.inputs}
+        given = {**self.angles, **{labels[n]: expressions.number(v) for n, v in angles.items()}}
+        _check_half_turns(self.analysis, given)
+        return dataclasses.replace(self, angles=given)
+
+
+def configure(
+    analysis: Analysis,
+    inputs: Mapping[str, object],
+    level: str = levels.DEFAULT,
+    params: Mapping[str, object] | None = None,
+) -> Configuration:
+    """`symkin eval`'s configuration, parsed once: the level by name, the inputs (every input
+    hinge, or with actuators every input hinge beside them and every actuator) and the
+    parameter overrides; bad values exit 2 naming the option, inputs beyond a half turn 3."""
+    mech = analysis.mechanism
+    row = levels.get(level)
+    if mech.actuators:
+        drives = actuator_values(mech, inputs)
+        kin = analysis.kin
+        labels = {kin.hinges[a].name: a for a in kin.inputs}
+        acts = {a.name for a in mech.actuators}
+        angles = {labels[n]: v for n, v in drives.items() if n not in acts}
+    else:
+        angles = input_values(analysis, inputs)
+        names = {a: analysis.kin.hinges[a].name for a in angles}
+        drives = {names[a]: v for a, v in angles.items()}
+    return Configuration(
+        analysis, row, parameter_values(mech, params), tuple(params or ()), drives, angles
+    )

@@ -227,6 +227,7 @@ def physics_reference(
     """The report's physical reference: the `equilibrium` level's evaluation (deviations, plate
     stresses, input moments, model error) at given inputs and the `fixed` ones (the file's own
     plates and loads, whatever variant the report derives)."""
+    from .configuration import configure
     from .physical import equilibrium
     from .results import Evaluation
 
@@ -242,7 +243,7 @@ def physics_reference(
         return plan_cache.kept(
             reference,
             {"level": "equilibrium", "inputs": given},
-            lambda: equilibrium(reference, given),
+            lambda: equilibrium(reference, configure(reference, given, "equilibrium")),
             Evaluation,
         )
 

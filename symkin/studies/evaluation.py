@@ -8,6 +8,8 @@ generated evaluators (symkin.studies.generated); when one of them cannot assembl
 configuration, the mpmath evaluation is asked why, so every backend fails with the same exit code
 (3) and the same message naming the loop (docs/cli.md). A mechanism driven by actuators is
 evaluated at the surrogate hinges' angles that reach the strokes (symkin.studies.actuators).
+The level, inputs and parameters are parsed once, at the entry, into a
+:class:`~symkin.studies.configuration.Configuration` that every level and backend takes.
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ from ..core.errors import AssemblyError, InputError
 from ..kinematics.analysis import Analysis
 from . import generated, mpmath_sensitivity
 from .actuators import check_actuated_level, stroke_angles, stroke_sensitivity
-from .configuration import actuator_values, parameter_floats
+from .configuration import Configuration, configure, parameter_floats
 from .mpmath_evaluator import MpmathEvaluator, evaluator_of
 from .physical import equilibrium, loaded
 from .results import Evaluation, LinkResult, PointResult
@@ -46,55 +48,62 @@ def evaluate(
     """Evaluate one configuration at `level` through `backend` (sympy: mpmath at `dps` digits);
     with `sensitivity`, also the derivatives by every parameter and input
     (docs/sensitivity.md)."""
+    mech = analysis.mechanism
     if sensitivity and not levels.get(level).sensitivity:
         having = [lv.name for lv in levels.LEVELS if lv.generated and lv.sensitivity]
         raise InputError(
             f"the {level} level has no sensitivities",
-            file=analysis.mechanism.path,
+            file=mech.path,
             entry="--sensitivity",
             hint="ask for them at " + ", ".join(having) + " (docs/sensitivity.md)",
         )
-    if analysis.mechanism.actuators:
-        return _actuated(analysis, inputs, level, params, backend, dps, sensitivity)
-    return _evaluate(analysis, inputs, level, params, backend, dps, sensitivity)
-
-
-def _evaluate(
-    analysis: Analysis,
-    inputs: Mapping[str, object],
-    level: str,
-    params: Mapping[str, object] | None,
-    backend: str,
-    dps: int,
-    sensitivity: bool,
-) -> Evaluation:
-    """:func:`evaluate` with every input a hinge angle (the actuators' surrogates included)."""
-    if backend == "sympy":
-        if level in levels.LOADED:
-            return loaded(analysis, inputs, params, dps, sensitivity)
-        if level == "equilibrium":
-            return equilibrium(analysis, inputs, params)
-        return _kinematic(evaluator_of(analysis), inputs, level, params, dps, sensitivity)
-    if backend in pipeline.REGISTRY:
-        return _generated(analysis, inputs, level, params, backend, sensitivity)
-    raise InputError(
-        f"unknown backend '{backend}'", entry="--backend", hint="backends: " + ", ".join(BACKENDS)
+    # what the backend cannot do is refused before the values are read
+    if mech.actuators:
+        check_actuated_level(mech, level, backend, sensitivity)
+    elif backend != "sympy" and backend not in pipeline.REGISTRY:
+        raise InputError(
+            f"unknown backend '{backend}'",
+            entry="--backend",
+            hint="backends: " + ", ".join(BACKENDS),
+        )
+    if backend != "sympy":
+        generated.check_level(level)
+    return _dispatch(
+        analysis, configure(analysis, inputs, level, params), backend, dps, sensitivity
     )
 
 
+def _dispatch(
+    analysis: Analysis, config: Configuration, backend: str, dps: int, sensitivity: bool
+) -> Evaluation:
+    """:func:`evaluate` at a configuration parsed once."""
+    if analysis.mechanism.actuators:
+        return _actuated(analysis, config, backend, dps, sensitivity)
+    return _evaluate(analysis, config, backend, dps, sensitivity)
+
+
+def _evaluate(
+    analysis: Analysis, config: Configuration, backend: str, dps: int, sensitivity: bool
+) -> Evaluation:
+    """:func:`evaluate` with every input a hinge angle (the actuators' surrogates included)."""
+    level = config.level.name
+    if backend == "sympy":
+        if level in levels.LOADED:
+            return loaded(analysis, config, dps, sensitivity)
+        if level == "equilibrium":
+            return equilibrium(analysis, config)
+        return _kinematic(evaluator_of(analysis), config, dps, sensitivity)
+    return _generated(analysis, config, backend, sensitivity)
+
+
 def _kinematic(
-    ev: MpmathEvaluator,
-    inputs: Mapping[str, object],
-    level: str,
-    params: Mapping[str, object] | None,
-    dps: int,
-    sensitivity: bool = False,
+    ev: MpmathEvaluator, config: Configuration, dps: int, sensitivity: bool = False
 ) -> Evaluation:
     """A kinematic level in mpmath at `dps` digits (docs/levels.md); with `sensitivity`, the
     derivatives by every parameter and input (docs/sensitivity.md)."""
-    an = ev.an
+    an, level = ev.an, config.level.name
     with mpmath.workdps(dps):
-        state = ev.state(inputs, level, params, dps)
+        state = ev.state(config, dps)
         points = {}
         for name, (rig, dev) in ev.point_values(state).items():
             points[name] = PointResult(
@@ -115,52 +124,43 @@ def _kinematic(
             points=points,
             dyads=tuple(state.dyads),
             params=parameter_floats(ev.mechanism, state.exact_params),
-            overrides=tuple(params or ()),
+            overrides=config.overrides,
             links=links,
             sensitivity=mpmath_sensitivity.of(ev, state) if sensitivity else None,
         )
 
 
 def _actuated(
-    analysis: Analysis,
-    inputs: Mapping[str, object],
-    level: str,
-    params: Mapping[str, object] | None,
-    backend: str,
-    dps: int,
-    sensitivity: bool,
+    analysis: Analysis, config: Configuration, backend: str, dps: int, sensitivity: bool
 ) -> Evaluation:
     """One configuration of a mechanism driven by stroke actuators (docs/levels.md,
     "Actuators"): the rigid linkage and the compliant mechanism each at the strokes. Each
     actuator's surrogate hinge takes the angle at which the rigid point of action has moved by
     the stroke along the line of action, and, separately, the (compliant) angle at which the
     compliant point has; the deviation is compliant - rigid, each taken at its own angle."""
-    mech = analysis.mechanism
-    check_actuated_level(mech, level, backend, sensitivity)
+    mech, level = analysis.mechanism, config.level.name
     if backend != "sympy":  # the generated module solves the strokes itself
-        return _generated(analysis, inputs, level, params, backend, sensitivity)
+        return _generated(analysis, config, backend, sensitivity)
     if level == "equilibrium":
-        return equilibrium(analysis, inputs, params)
+        return equilibrium(analysis, config)
     if level in levels.LOADED:
-        return loaded(analysis, inputs, params, dps, sensitivity)
-    given = actuator_values(mech, inputs)
-    hinges = {k: v for k, v in given.items() if k not in {a.name for a in mech.actuators}}
-    strokes = [given[a.name] for a in mech.actuators]
+        return loaded(analysis, config, dps, sensitivity)
+    given = config.drives
+    strokes = list(config.strokes.values())
     solver = evaluator_of(analysis)
-    rigid = stroke_angles(solver, mech, hinges, strokes, level, params, dps, compliant=False)
-    compliant = stroke_angles(
-        solver, mech, hinges, strokes, level, params, dps, compliant=True, start=rigid
-    )
+    rigid = stroke_angles(solver, config, strokes, dps, compliant=False)
+    compliant = stroke_angles(solver, config, strokes, dps, compliant=True, start=rigid)
 
     def run(angles, with_rates=sensitivity):
-        state = dict(hinges) | {s: mpmath.nstr(v, dps + 10) for s, v in angles.items()}
-        return _evaluate(analysis, state, level, params, backend, dps, with_rates)
+        # each angle the double its dps + 10 digits round to, as an input given as text
+        at = config.with_angles({s: float(mpmath.nstr(v, dps + 10)) for s, v in angles.items()})
+        return _evaluate(analysis, at, backend, dps, with_rates)
 
     ev_r, ev_c = run(rigid), run(compliant)
     rates = None
     if sensitivity:
         rest = run(dict.fromkeys(rigid, mpmath.mpf(0)))
-        rates = stroke_sensitivity(mech, params, ev_r, ev_c, rest)
+        rates = stroke_sensitivity(config, ev_r, ev_c, rest)
     hidden = {a.point for a in mech.actuators}
     points = {}
     for name, c in ev_c.points.items():
@@ -191,25 +191,20 @@ def _actuated(
 
 
 def _generated(
-    analysis: Analysis,
-    inputs: Mapping[str, object],
-    level: str,
-    params: Mapping[str, object] | None,
-    backend: str,
-    sensitivity: bool = False,
+    analysis: Analysis, config: Configuration, backend: str, sensitivity: bool = False
 ) -> Evaluation:
     """One configuration through a generated-code `backend` (symkin.studies.generated); where
     it cannot solve it, the sympy backend's error."""
     try:
-        return generated.evaluate(analysis, inputs, level, params, backend, sensitivity)
+        return generated.evaluate(analysis, config, backend, sensitivity)
     except generated.Unsolved:
         pass
-    _explain(analysis, inputs, level, params, sensitivity)
+    _explain(analysis, config, sensitivity)
 
 
-def _explain(analysis: Analysis, inputs, level, params, sensitivity: bool = False) -> NoReturn:
+def _explain(analysis: Analysis, config: Configuration, sensitivity: bool = False) -> NoReturn:
     """Raise the sympy backend's error for a configuration a generated evaluator refused."""
-    evaluate(analysis, inputs, level, params, sensitivity=sensitivity)
+    _dispatch(analysis, config, "sympy", 40, sensitivity)
     raise AssemblyError(
         f"{analysis.mechanism.path}: the generated evaluator could not solve this "
         "configuration (no convergence in float64), although the 40-digit "

@@ -7,8 +7,6 @@ mpmath evaluation why, so every backend fails with the same exit code and messag
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-
 import numpy as np
 import sympy as sp
 
@@ -16,7 +14,7 @@ from ..codegen import pipeline
 from ..core import levels
 from ..core.errors import InputError
 from ..kinematics.analysis import Analysis
-from .configuration import actuator_values, input_values, parameter_floats, parameter_values
+from .configuration import Configuration, parameter_floats
 from .mpmath_evaluator import evaluator_of
 from .physical import REPORTED, loaded, with_model_error
 from .results import Evaluation, LinkResult, PointResult, Sensitivity
@@ -26,39 +24,38 @@ class Unsolved(Exception):
     """The generated evaluator could not solve a configuration (its status nonzero)."""
 
 
-def evaluate(
-    analysis: Analysis,
-    inputs: Mapping[str, object],
-    level: str,
-    params: Mapping[str, object] | None,
-    backend: str,
-    sensitivity: bool = False,
-) -> Evaluation:
-    """One configuration through a generated-code `backend` (symkin.codegen.pipeline); with
-    `sensitivity`, its generated sensitivity function too; :class:`Unsolved` where it
-    cannot solve the configuration."""
+def check_level(level: str) -> None:
+    """Refuse (exit 2) a level the generated evaluators do not hold."""
     if not levels.get(level).generated:
         raise InputError(
             f"level '{level}' has no generated evaluator",
             entry="--backend",
             hint="evaluate it with --backend sympy",
         )
+
+
+def evaluate(
+    analysis: Analysis, config: Configuration, backend: str, sensitivity: bool = False
+) -> Evaluation:
+    """One configuration (its level one :func:`check_level` accepts) through a generated-code
+    `backend` (symkin.codegen.pipeline); with `sensitivity`, its generated sensitivity function
+    too; :class:`Unsolved` where it cannot solve the configuration."""
     kin, mech = analysis.kin, analysis.mechanism
+    level_row, level = config.level, config.level.name
     if mech.actuators:
-        drives = actuator_values(mech, inputs)
         names = list(mech.drives)
-        x = [float(sp.N(drives[n], 20)) for n in names]
+        x = [float(sp.N(config.drives[n], 20)) for n in names]
     else:
-        given = input_values(analysis, inputs)
+        given = config.angles
         names = [kin.hinges[a].name for a in kin.inputs]
         x = [float(sp.N(given[a], 20)) for a in kin.inputs]
-    pvals = parameter_values(analysis.mechanism, params)
+    pvals = config.params
     pfloat = [float(sp.N(pvals[s], 20)) for s in analysis.params]
     # a plan derived with sensitivities or more levels serves (the same values); else the
     # kinematic levels are derived without the physical ones (the reduced equilibrium's
     # routines are most of a plan's derivation)
     scope = None
-    if not levels.get(level).needs_stiffness:
+    if not level_row.needs_stiffness:
         scope = [lv.name for lv in levels.LEVELS if lv.generated and not lv.needs_stiffness]
     p = pipeline.plan_covering(analysis, level, sensitivity=sensitivity, levels=scope)
     ev = pipeline.evaluator(p, backend, analysis.mechanism.path)
@@ -88,10 +85,10 @@ def evaluate(
     links = {n: LinkResult(*rot[3 * i : 3 * i + 3]) for i, n in enumerate(p.reported_links)}
     order = {kin.hinges[a].name: a for a in kin.hinges}
     extra = {}
-    if levels.get(level).needs_stiffness:
+    if level_row.needs_stiffness:
         # The plates' loads and energy are not in the generated evaluators' output: the
         # derivation gives them, as it gives the dyad states (docs/physics.md).
-        physical = loaded(analysis, inputs, params)
+        physical = loaded(analysis, config)
         extra = {"hinges": physical.hinges, "energy": physical.energy, "units": mech.units}
         extra |= {k: getattr(physical, k) for k in REPORTED}
     result = Evaluation(
@@ -102,14 +99,14 @@ def evaluate(
         angles_compliant={h: compliant[h] for h in sorted(compliant, key=order.get)},
         points=points,
         dyads=evaluator_of(analysis).dyad_states(
-            {n: rigid[n] for n in mech.inputs} if mech.actuators else inputs, params
+            config.with_angles({n: rigid[n] for n in mech.inputs}) if mech.actuators else config
         ),
         params=parameter_floats(analysis.mechanism, pvals),
-        overrides=tuple(params or ()),
+        overrides=config.overrides,
         links=links,
         sensitivity=sens,
         **extra,
     )
-    if levels.get(level).needs_stiffness:
+    if level_row.needs_stiffness:
         return with_model_error(result, analysis.mechanism, pvals)
     return result

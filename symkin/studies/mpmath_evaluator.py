@@ -22,7 +22,7 @@ from ..core.settings import SOLVER
 from ..kinematics.analysis import Analysis
 from ..model.lambdified import mpmath_function
 from ..physics import reduced_sensitivity
-from .configuration import input_values, parameter_values
+from .configuration import Configuration
 from .results import LinkResult
 
 _EVALUATORS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -53,36 +53,28 @@ class MpmathEvaluator:
         return self._lambdas[key]
 
     def values(
-        self,
-        inputs: Mapping[str, object],
-        level: str,
-        params: Mapping[str, object] | None,
-        dps: int,
+        self, config: Configuration, dps: int, level: levels.Level | None = None
     ) -> dict[str, tuple]:
         """Point name -> (rigid (x, y), deviation (dx, dy)) as mpmath numbers at `dps` digits
-        (for references that need more than doubles, e.g. central differences)."""
+        (for references that need more than doubles, e.g. central differences), at `level`
+        (by default the configuration's)."""
         with mpmath.workdps(dps):
-            return self.point_values(self.state(inputs, level, params, dps))
+            return self.point_values(self.state(config, dps, level))
 
-    def state(
-        self,
-        inputs: Mapping[str, object],
-        level: str,
-        params: Mapping[str, object] | None,
-        dps: int,
-    ) -> State:
-        """The solved configuration (call inside mpmath.workdps(dps))."""
+    def state(self, config: Configuration, dps: int, level: levels.Level | None = None) -> State:
+        """The solved configuration at `level`, by default its own (call inside
+        mpmath.workdps(dps))."""
         an = self.an
-        levels.get(level)
-        given = input_values(an, inputs)
-        exact_params = parameter_values(self.mechanism, params)
+        row = config.level if level is None else level
+        given = config.angles
+        exact_params = config.params
         pvals = [mpmath.mpf(sp.N(exact_params[s], dps + 5)) for s in an.params]
         ivals = {a: mpmath.mpf(sp.N(v, dps + 5)) for a, v in given.items()}
         theta, dyads = self.rigid_angles(pvals, ivals)
         self._check_limits(theta, ivals)
-        delta = self._deltas(level, pvals, theta)
+        delta = self._deltas(row, pvals, theta)
         self._check_limits({a: theta[a] + delta.get(a, 0) for a in theta}, ivals)
-        return State(level, exact_params, pvals, ivals, theta, delta, dyads)
+        return State(row.name, exact_params, pvals, ivals, theta, delta, dyads)
 
     def arguments(self, state: State) -> tuple[list, list]:
         """The symbols of the derivation (parameters, θ, δ) and their values in `state`."""
@@ -139,12 +131,9 @@ class MpmathEvaluator:
             out[s.links[i]] = LinkResult(rigid, rigid + dev, dev)
         return out
 
-    def dyad_states(
-        self, inputs: Mapping[str, object], params: Mapping[str, object] | None = None
-    ) -> tuple[dict, ...]:
-        """Branch and toggle margin of every dyad of the rigid solution at these inputs."""
-        given = input_values(self.an, inputs)
-        exact_params = parameter_values(self.mechanism, params)
+    def dyad_states(self, config: Configuration) -> tuple[dict, ...]:
+        """Branch and toggle margin of every dyad of the rigid solution at `config`'s inputs."""
+        given, exact_params = config.angles, config.params
         with mpmath.workdps(30):
             pvals = [mpmath.mpf(sp.N(exact_params[s], 35)) for s in self.an.params]
             ivals = {a: mpmath.mpf(sp.N(v, 35)) for a, v in given.items()}
@@ -351,11 +340,11 @@ class MpmathEvaluator:
                 return {a: x[k] for k, a in enumerate(unknowns)}
         return None
 
-    def _deltas(self, level: str, pvals: list, theta: dict) -> dict:
+    def _deltas(self, level: levels.Level, pvals: list, theta: dict) -> dict:
         """δ of the non-input hinges: zero (paper), linear (first_order) or Newton (exact), by
         the stopping rule of symkin.core.settings (3); redundant loops checked (4)."""
         an = self.an
-        if not levels.get(level).needs_delta or not an.deltas:
+        if not level.needs_delta or not an.deltas:
             return {}
         args = [*an.params, *an.thetas]
         values = [*pvals, *(theta[a] for a in sorted(theta))]
@@ -371,8 +360,8 @@ class MpmathEvaluator:
             ) from None
         unknowns = self.kin.unknowns
         delta = {a: d[k] for k, a in enumerate(unknowns)}
-        if level == "first_order":
-            self._check_consistency("first_order", pvals, theta, delta, level)
+        if level.name == "first_order":
+            self._check_consistency("first_order", pvals, theta, delta, level.name)
             return delta
         scale = self.fn("scale", list(an.closure_scale), args)(*values)
         args_d = [*args, *an.deltas]
@@ -411,7 +400,7 @@ class MpmathEvaluator:
                 )
             ):
                 delta = {a: x[j] for j, a in enumerate(unknowns)}
-                self._check_consistency("exact", pvals, theta, delta, level)
+                self._check_consistency("exact", pvals, theta, delta, level.name)
                 return delta
             previous = change
         last = {a: x[j] for j, a in enumerate(unknowns)}

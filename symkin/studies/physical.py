@@ -26,40 +26,30 @@ from ..physics import reduced, reduced_reported
 from ..physics.result import HingeLoad
 from . import mpmath_sensitivity
 from .actuators import stroke_angles
-from .configuration import actuator_values, input_values, parameter_floats, parameter_values
+from .configuration import Configuration, configure, parameter_floats
 from .mpmath_evaluator import MpmathEvaluator, State, evaluator_of
 from .results import Evaluation, PointResult
 
 
 def loaded(
-    analysis: Analysis,
-    inputs: Mapping[str, object],
-    params: Mapping[str, object] | None = None,
-    dps: int = 40,
-    sensitivity: bool = False,
+    analysis: Analysis, config: Configuration, dps: int = 40, sensitivity: bool = False
 ) -> Evaluation:
-    """The `loaded` level (docs/physics.md): the reduced equilibrium in mpmath, reported on the
-    rigid linkage solved at `dps` digits; with `sensitivity`, its derivatives by every parameter
-    and input (docs/sensitivity.md)."""
-    return _loaded(evaluator_of(analysis), inputs, params, dps, sensitivity)
+    """The `loaded` level (docs/physics.md) at `config` (symkin.studies.configuration): the
+    reduced equilibrium in mpmath, reported on the rigid linkage solved at `dps` digits; with
+    `sensitivity`, its derivatives by every parameter and input (docs/sensitivity.md)."""
+    return _loaded(evaluator_of(analysis), config, dps, sensitivity)
 
 
-def equilibrium(
-    analysis: Analysis,
-    inputs: Mapping[str, object],
-    params: Mapping[str, object] | None = None,
-    extra_digits: int = 0,
-) -> Evaluation:
-    """The `equilibrium` level (docs/physics.md): the plates as geometrically exact beams (each
-    hinge's `beam`), solved numerically to its own error estimate; `extra_digits` raises the
-    working precision (to check it)."""
-    return _equilibrium(evaluator_of(analysis), inputs, params, extra_digits)
+def equilibrium(analysis: Analysis, config: Configuration, extra_digits: int = 0) -> Evaluation:
+    """The `equilibrium` level (docs/physics.md) at `config`: the plates as geometrically exact
+    beams (each hinge's `beam`), solved numerically to its own error estimate; `extra_digits`
+    raises the working precision (to check it)."""
+    return _equilibrium(evaluator_of(analysis), config, extra_digits)
 
 
 def _loaded(
     ev: MpmathEvaluator,
-    inputs: Mapping[str, object],
-    params: Mapping[str, object] | None,
+    config: Configuration,
     dps: int,
     sensitivity: bool = False,
 ) -> Evaluation:
@@ -77,36 +67,31 @@ def _loaded(
             "inextensible elastica, which leave the forces the redundant loops carry along "
             'the plates undetermined; give them beam = "reissner" (docs/levels.md)'
         )
-    answer = reduced_equilibrium(an, inputs, params, backend="sympy")
+    answer = solve_reduced(an, config, backend="sympy")
     if answer.refused:
         raise AssemblyError(
             f"{mech.path}: the loaded level refuses this configuration: {answer.refused} "
             "(docs/physics.md); ask for --level equilibrium"
         )
-    exact_params = parameter_values(mech, params)
+    exact_params = config.params
     names = {a: h.name for a, h in ev.kin.hinges.items()}
     hidden = {a.point for a in mech.actuators}
     acting: dict[str, sp.Expr] = {}
     if mech.actuators:
         # the rigid linkage at the strokes (a force actuator's: the one it produced)
-        drives = actuator_values(mech, inputs)
-        acting = {a.name: drives[a.name] for a in mech.actuators}
-        hinge_inputs = {k: v for k, v in drives.items() if k not in acting}
+        acting = config.strokes
         found = stroke_angles(
             ev,
-            mech,
-            hinge_inputs,
+            config,
             [sp.Float(answer.strokes[a.name], 17) for a in mech.actuators],
-            "paper",
-            params,
             dps,
             compliant=False,
         )
-        given = input_values(
-            an, dict(hinge_inputs) | {n: mpmath.nstr(v, dps + 5) for n, v in found.items()}
-        )
+        # each angle the double its dps + 5 digits round to, as an input given as text
+        at_strokes = {n: float(mpmath.nstr(v, dps + 5)) for n, v in found.items()}
+        given = config.with_angles(at_strokes).angles
     else:
-        given = input_values(an, inputs)
+        given = config.angles
     args = [*an.params, *an.thetas]
     with mpmath.workdps(dps):
         pvals = [mpmath.mpf(sp.N(exact_params[s], dps + 5)) for s in an.params]
@@ -150,7 +135,7 @@ def _loaded(
             points=points,
             dyads=tuple(dyads),
             params=parameter_floats(mech, exact_params),
-            overrides=tuple(params or ()),
+            overrides=config.overrides,
             hinges=hinges,
             energy=float(answer.energy * scale),
             links=links,
@@ -167,8 +152,7 @@ def _loaded(
 
 def _equilibrium(
     ev: MpmathEvaluator,
-    inputs: Mapping[str, object],
-    params: Mapping[str, object] | None,
+    config: Configuration,
     extra_digits: int = 0,
 ) -> Evaluation:
     """The `equilibrium` level (symkin.physics.equilibrium), against this rigid linkage."""
@@ -176,13 +160,9 @@ def _equilibrium(
     names = {a: h.name for a, h in ev.kin.hinges.items()}
     labels = {n: a for a, n in names.items()}
     driven = {a.name for a in mech.actuators}
-    if mech.actuators:
-        drives = actuator_values(mech, inputs)
-        given = {labels[n]: v for n, v in drives.items() if n not in driven}
-        acting = {n: v for n, v in drives.items() if n in driven}
-    else:
-        given, acting = input_values(an, inputs), {}
-    exact_params = parameter_values(ev.mechanism, params)
+    given = config.angles
+    acting = {n: v for n, v in config.drives.items() if n in driven}
+    exact_params = config.params
     args = [*an.params, *an.thetas]
 
     def rigid(dps: int, strokes: Mapping[str, object]) -> tuple[dict, dict]:
@@ -192,11 +172,8 @@ def _equilibrium(
         if mech.actuators:
             found = stroke_angles(
                 ev,
-                mech,
-                {names[a]: v for a, v in given.items()},
+                config,
                 [sp.N(sp.sympify(strokes[a.name]), dps + 5) for a in mech.actuators],
-                "paper",
-                params,
                 dps,
                 compliant=False,
             )
@@ -265,11 +242,12 @@ def _equilibrium(
         },
         # the rigid linkage's dyads: with actuators, at its surrogates' angles
         dyads=ev.dyad_states(
-            {n: res.angles_rigid[n] for n in mech.inputs} if mech.actuators else inputs,
-            params,
+            config.with_angles({n: res.angles_rigid[n] for n in mech.inputs})
+            if mech.actuators
+            else config
         ),
         params=parameter_floats(ev.mechanism, exact_params),
-        overrides=tuple(params or ()),
+        overrides=config.overrides,
         hinges={n: res.hinges[n] for n in order},
         energy=res.energy,
         error_estimate=res.error_estimate,
@@ -311,8 +289,16 @@ def reduced_equilibrium(
     backend and segments."""
     if backend not in ("numpy", "sympy"):
         raise InputError(f"unknown backend '{backend}'", hint="backends: numpy, sympy")
+    return solve_reduced(analysis, configure(analysis, inputs, "loaded", params), backend, segments)
+
+
+def solve_reduced(
+    analysis: Analysis, config: Configuration, backend: str, segments: int | None = None
+) -> reduced.Answer:
+    """:func:`reduced_equilibrium` at a configuration parsed once
+    (symkin.studies.configuration)."""
     mech = analysis.mechanism
-    exact_params = parameter_values(mech, params)
+    exact_params = config.params
     solvers = _REDUCED.get(analysis)
     if solvers is None:
         # an analysis of the same file (mechanism, points, hinge models) shares them
@@ -334,35 +320,32 @@ def reduced_equilibrium(
         return solvers[key]
 
     ev = evaluator_of(analysis)
-    hinges: Mapping[str, object] = inputs
+    hinges = config.hinges
     strokes: dict[str, object] = {}
     forces: dict[str, float] = {}
-    if mech.actuators:
-        drives = actuator_values(mech, inputs)
-        hinges = {k: v for k, v in drives.items() if k not in {a.name for a in mech.actuators}}
-        for a in mech.actuators:
-            if a.drive == "stroke":
-                strokes[a.name] = drives[a.name]
-            else:  # first against the as-fabricated pose, then at the stroke it produced
-                strokes[a.name], forces[a.name] = 0, float(sp.N(drives[a.name], 20))
+    for a in mech.actuators:
+        if a.drive == "stroke":
+            strokes[a.name] = config.drives[a.name]
+        else:  # first against the as-fabricated pose, then at the stroke it produced
+            strokes[a.name], forces[a.name] = 0, float(sp.N(config.drives[a.name], 20))
 
     def run(strokes: Mapping[str, object]) -> reduced.Answer:
         @functools.cache
         def rigid(scale: float) -> dict:
-            given = {k: scale * float(v) for k, v in hinges.items()}
+            scaled = config.with_angles({k: scale * float(v) for k, v in hinges.items()})
             if mech.actuators:
                 found = stroke_angles(
                     ev,
-                    mech,
-                    given,
+                    scaled,
                     [scale * sp.N(sp.sympify(strokes[a.name]), 25) for a in mech.actuators],
-                    "paper",
-                    params,
                     20,
                     compliant=False,
                 )
-                given |= {n: mpmath.nstr(v, 25) for n, v in found.items()}
-            angles = input_values(analysis, given)
+                # each angle the double its 25 digits round to, as an input given as text
+                scaled = scaled.with_angles(
+                    {n: float(mpmath.nstr(v, 25)) for n, v in found.items()}
+                )
+            angles = scaled.angles
             with mpmath.workdps(30):
                 pvals = [mpmath.mpf(sp.N(exact_params[s], 35)) for s in analysis.params]
                 ivals = {a: mpmath.mpf(sp.N(v, 35)) for a, v in angles.items()}
