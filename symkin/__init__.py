@@ -27,7 +27,7 @@ from .model.reader import load, loads
 if TYPE_CHECKING:  # the heavy modules load on first use
     from .kinematics.analysis import Analysis
     from .studies.compiled import Compiled
-    from .studies.evaluation import Evaluation
+    from .studies.results import Evaluation
 
 __version__ = "0.1.0"
 

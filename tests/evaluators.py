@@ -13,7 +13,7 @@ from conftest import EXAMPLES
 import symkin
 from symkin.codegen import pipeline
 from symkin.core import levels
-from symkin.studies.evaluation import parameter_values
+from symkin.studies.configuration import parameter_values
 
 SOURCES = {
     "four_bar": EXAMPLES / "four_bar.toml",

@@ -29,7 +29,7 @@ from reference_physics import ContinuationError, Equilibrium, Load
 import symkin
 from symkin.cli.commands import main
 from symkin.physics import equilibrium
-from symkin.studies.evaluation import parameter_values
+from symkin.studies.configuration import parameter_values
 
 COLUMN_LOAD = '[[load]]\npoint = "T"\nforce = [0, "-F"]\n'
 SCOTT_RUSSELL = ROOT / "tests" / "mechanisms" / "scott_russell.toml"

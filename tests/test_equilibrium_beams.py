@@ -22,7 +22,7 @@ from reference_physics import ContinuationError
 
 import symkin
 from symkin.physics import equilibrium
-from symkin.studies.evaluation import parameter_values
+from symkin.studies.configuration import parameter_values
 
 ZOO = ROOT / "tests" / "mechanisms"
 CASES = [

@@ -56,10 +56,10 @@ def test_a_module_object_gets_lambdifys_own_printer() -> None:
 
 
 def test_the_mpmath_evaluation_prints_each_function_once() -> None:
-    """symkin.studies.evaluation.mpmath_function: the same arguments and expressions (lists or
+    """symkin.model.lambdified.mpmath_function: the same arguments and expressions (lists or
     tuples alike) give the function printed before; other expressions or another argument
     order a new one, whose values are its own (checked against sympy's evaluation)."""
-    from symkin.studies.evaluation import mpmath_function
+    from symkin.model.lambdified import mpmath_function
 
     args, exprs = _exprs()
     first = mpmath_function(args, exprs)

@@ -28,7 +28,7 @@ import symkin
 from symkin.cli.commands import main
 from symkin.core.errors import InputError
 from symkin.physics import reduced_reported
-from symkin.studies.evaluation import reduced_equilibrium
+from symkin.studies.physical import reduced_equilibrium
 
 PAYLOAD = '\n[[load]]\npoint = "P"\nforce = [0.0, -5.0]\n'
 E_PRIME, WIDTH, THICK, PLATE, LEG = 210e9 / (1 - 0.3**2), 10e-3, 0.15e-3, 5e-3, 0.040

@@ -30,7 +30,7 @@ import symkin
 from symkin.cli.commands import main
 from symkin.codegen import pipeline
 from symkin.core.errors import InputError
-from symkin.studies.evaluation import reduced_equilibrium
+from symkin.studies.physical import reduced_equilibrium
 
 #: name -> (file text, the actuator's values one call takes, the equilibrium tolerance's case)
 CASES = {

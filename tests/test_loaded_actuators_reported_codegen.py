@@ -7,7 +7,7 @@ dM/dθ, every shown point's 3×3 stiffness with the inputs and actuators held (a
 the point along its line: NaN), every plate's largest stress.
 
 Reference, not the code under test: symkin's Python `loaded` report
-(symkin.physics.reduced_reported over symkin.studies.evaluation's reduced equilibrium, lambdified
+(symkin.physics.reduced_reported over symkin.studies.physical's reduced equilibrium, lambdified
 in mpmath; a force actuator's reference solved again at the stroke it produced, its plate stress
 by the Taylor-series beam integrator, not RK4), itself tested against `equilibrium`
 (tests/test_loaded_actuators.py). Mechanisms: the piezo amplifier example (a stroke), the
@@ -33,7 +33,7 @@ import symkin
 from symkin.codegen import pipeline
 from symkin.physics import reduced_reported
 from symkin.studies import sweep
-from symkin.studies.evaluation import reduced_equilibrium
+from symkin.studies.physical import reduced_equilibrium
 
 #: name -> (file text, the inputs one call takes: two configurations each)
 CASES = {

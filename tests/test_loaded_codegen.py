@@ -28,7 +28,7 @@ from symkin.codegen import pipeline
 from symkin.codegen.plan import plan
 from symkin.physics import equilibrium as equilibrium_physics
 from symkin.physics import reduced
-from symkin.studies.evaluation import reduced_equilibrium
+from symkin.studies.physical import reduced_equilibrium
 
 ZOO = Path(__file__).resolve().parent / "mechanisms"
 

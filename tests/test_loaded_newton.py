@@ -37,7 +37,7 @@ from symkin.codegen.plate import SYMBOLS, plate_routine
 from symkin.model import special
 from symkin.physics import equilibrium as equilibrium_physics
 from symkin.physics.plate_relation import energy, relation
-from symkin.studies.evaluation import reduced_equilibrium
+from symkin.studies.physical import reduced_equilibrium
 
 ROOT = Path(__file__).resolve().parent.parent
 ZOO = ROOT / "tests" / "mechanisms"
@@ -373,6 +373,19 @@ def test_loaded_level_takes_parameter_overrides():
     longer = symkin.evaluate(an, {"A0": 0.1}, level="loaded", params={"l": "2e-3"})
     assert longer.params["l"] == 2e-3
     assert math.dist(longer.points["C"].deviation, default) > 0.1 * math.hypot(*default)
+
+
+def test_loaded_level_takes_an_input_written_as_an_expression():
+    """An input such as pi/16 is read once, as every level reads it (it was handed to the
+    reduced equilibrium as text, which float() could not read): the same deviation as its
+    double written out, in mpmath and in the numpy module."""
+    an = symkin.analyze(symkin.load(ROOT / "examples/four_bar.toml"))
+    for backend in ("sympy", "numpy"):
+        written = symkin.evaluate(an, {"A0": "pi/16"}, level="loaded", backend=backend)
+        double = symkin.evaluate(an, {"A0": repr(math.pi / 16)}, level="loaded", backend=backend)
+        assert written.inputs["A0"] == math.pi / 16
+        deviation = written.points["C"].deviation
+        assert math.dist(deviation, double.points["C"].deviation) <= 1e-12 * math.hypot(*deviation)
 
 
 def test_loaded_level_closes_a_redundant_loop_elastically(tmp_path):

@@ -28,7 +28,7 @@ from reference_physics import Load
 import symkin
 from symkin.cli.commands import main
 from symkin.physics import reduced_reported
-from symkin.studies.evaluation import reduced_equilibrium
+from symkin.studies.physical import reduced_equilibrium
 
 ZOO = ROOT / "tests" / "mechanisms"
 LOAD = '\n[[load]]\npoint = "P"\nforce = [1.5, -4.0]\nmoment = 0.02\n'

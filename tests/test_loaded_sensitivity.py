@@ -1,6 +1,6 @@
 """The `loaded` level's closed-form sensitivities (docs/sensitivity.md) against an independent
 numeric reference: central differences of the Python reduced-equilibrium solver itself
-(symkin.physics.reduced through evaluation.reduced_equilibrium) re-solved at p ± h, in the
+(symkin.physics.reduced through physical.reduced_equilibrium) re-solved at p ± h, in the
 sympy, numpy and C backends (which agree with each other to rounding); the parameter chain
 (four_bar's thickness = "l/10") and `symkin tolerance --level loaded` against the linear
 estimate from central differences of |ΔR| over the input grid.
@@ -25,7 +25,7 @@ import symkin
 import symkin.core.levels
 from symkin.cli.commands import main
 from symkin.codegen import pipeline
-from symkin.studies.evaluation import reduced_equilibrium
+from symkin.studies.physical import reduced_equilibrium
 
 HERE = Path(__file__).parent / "mechanisms"
 FIVE = HERE / "five_bar_params.toml"

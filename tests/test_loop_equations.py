@@ -538,7 +538,7 @@ def test_squared_form_is_implied_by_the_positional_pair():
 @pytest.mark.parametrize("name", sorted(GENERIC))
 def test_equations_vanish_at_the_rigid_solution(name):
     from symkin.kinematics.analysis import Analysis
-    from symkin.studies.evaluation import parameter_values
+    from symkin.studies.configuration import parameter_values
 
     text, cases = GENERIC[name]
     structure = symkin.structure(symkin.loads(text))

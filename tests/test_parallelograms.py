@@ -32,7 +32,7 @@ from symkin.codegen.plan import plan
 from symkin.codegen.toolchain import import_numpy_module
 from symkin.core import levels
 from symkin.core.settings import SOLVER
-from symkin.studies import evaluation
+from symkin.studies import mpmath_evaluator
 
 ZOO = Path(__file__).resolve().parent / "mechanisms"
 TOL = 1e-9
@@ -165,7 +165,7 @@ def test_the_compliant_angles_equal_the_rigid_ones_and_the_rule_is_what_accepts_
     res = symkin.evaluate(analysis, {"F1": "0.05"}, "exact")
     for hinge, angle in res.angles_rigid.items():
         assert abs(res.angles_compliant[hinge] - angle) <= 1e-30
-    monkeypatch.setattr(evaluation, "SOLVER", _NoFloor())
+    monkeypatch.setattr(mpmath_evaluator, "SOLVER", _NoFloor())
     with pytest.raises(symkin.AssemblyError) as err:
         symkin.evaluate(analysis, {"F1": "0.05"}, "exact")
     message = str(err.value)

@@ -37,7 +37,8 @@ from mechanisms import (
 import symkin
 from symkin.cli.commands import main
 from symkin.physics import arith, beams
-from symkin.studies import evaluation
+from symkin.studies import physical
+from symkin.studies.configuration import configure
 
 DPS = 30
 
@@ -298,8 +299,10 @@ def test_the_error_estimate_is_honest_and_below_1e_10():
     text += '[[load]]\npoint = "C"\nforce = [0.5, -2.0]\nmoment = 0.01\n'
     an = symkin.analyze(symkin.loads(text, "four_bar.toml"))
     for angle in (1e-3, 0.2):
-        plain = evaluation.equilibrium(an, {"A0": angle})
-        finer = evaluation.equilibrium(an, {"A0": angle}, extra_digits=25)
+        plain = physical.equilibrium(an, configure(an, {"A0": angle}, "equilibrium"))
+        finer = physical.equilibrium(
+            an, configure(an, {"A0": angle}, "equilibrium"), extra_digits=25
+        )
         d0, d1 = plain.points["C"].deviation, finer.points["C"].deviation
         gap = math.hypot(d0[0] - d1[0], d0[1] - d1[1]) / math.hypot(*d1)
         assert plain.error_estimate < 1e-10

@@ -265,19 +265,19 @@ def test_the_python_loaded_level_is_derived_once_per_file_content():
     """The loaded level's lambdified solvers (no pickle) are kept in memory by content: a
     second analysis of the same file finds them and gives the same numbers; another file (one
     plate thicker) derives its own."""
-    from symkin.studies import evaluation
+    from symkin.studies import physical
 
     text = PARALLELOGRAM.read_text()
     first = symkin.analyze(symkin.loads(text, "para.toml"))
-    a = evaluation.reduced_equilibrium(first, {"F1": "0.05"})
+    a = physical.reduced_equilibrium(first, {"F1": "0.05"})
     again = symkin.analyze(symkin.loads(text, "para.toml"))
-    b = evaluation.reduced_equilibrium(again, {"F1": "0.05"})
-    assert evaluation._REDUCED[again] is evaluation._REDUCED[first]
+    b = physical.reduced_equilibrium(again, {"F1": "0.05"})
+    assert physical._REDUCED[again] is physical._REDUCED[first]
     assert a.deviations == b.deviations
     thicker = text.replace("thickness = 0.15e-3", "thickness = 0.16e-3", 1)
     other = symkin.analyze(symkin.loads(thicker, "para.toml"))
-    c = evaluation.reduced_equilibrium(other, {"F1": "0.05"})
-    assert evaluation._REDUCED[other] is not evaluation._REDUCED[first]
+    c = physical.reduced_equilibrium(other, {"F1": "0.05"})
+    assert physical._REDUCED[other] is not physical._REDUCED[first]
     assert c.deviations != a.deviations
 
 
@@ -329,7 +329,7 @@ def test_the_plate_relation_is_lambdified_once_per_process_and_module():
     """The plate relation and energy hold no mechanism's data: every Reduced shares them."""
     from symkin.physics import reduced
     from symkin.physics.plate_relation import relation
-    from symkin.studies.evaluation import parameter_values
+    from symkin.studies.configuration import parameter_values
 
     solvers = []
     for path in (PARALLELOGRAM, ROOT / "examples" / "four_bar.toml"):

@@ -17,7 +17,7 @@ from sympy.printing.pycode import MpmathPrinter, PythonCodePrinter
 import symkin
 from symkin.model.precedence import FastPrecedence, precedence_of
 from symkin.physics import reduced
-from symkin.studies.evaluation import parameter_values
+from symkin.studies.configuration import parameter_values
 
 ROOT = Path(__file__).resolve().parents[1]
 x, y = sp.symbols("x y", real=True)

@@ -25,7 +25,9 @@ from evaluators import require_compiler
 
 import symkin
 from symkin.cli.commands import main
-from symkin.studies.evaluation import _mpmath_evaluator, evaluate
+from symkin.studies.configuration import configure
+from symkin.studies.evaluation import evaluate
+from symkin.studies.mpmath_evaluator import evaluator_of
 
 FOUR_BAR = (EXAMPLES / "four_bar.toml").read_text()
 TINY = FOUR_BAR.replace("l = 1e-3 ", "l = 1e-10 ")  # plates 1e-9 of the link lengths
@@ -64,7 +66,7 @@ def analysis(key: str):
 
 def central(an, inputs: dict, level: str) -> dict:
     """(variable kind, name) -> {point: (d deviation, d rigid)} as mpmath pairs."""
-    ev = _mpmath_evaluator(an)
+    ev = evaluator_of(an)
     out = {}
     with mpmath.workdps(40):
         variables = [
@@ -76,9 +78,13 @@ def central(an, inputs: dict, level: str) -> dict:
             values = []
             for step in (h, -h):
                 if kind == "params":
-                    values.append(ev.values(inputs, level, {name: exact(v0 + step)}, 40))
+                    values.append(
+                        ev.values(configure(an, inputs, level, {name: exact(v0 + step)}), 40)
+                    )
                 else:
-                    values.append(ev.values({**inputs, name: exact(v0 + step)}, level, None, 40))
+                    values.append(
+                        ev.values(configure(an, {**inputs, name: exact(v0 + step)}, level), 40)
+                    )
             plus, minus = values
             out[kind, name] = {
                 p: tuple(
@@ -150,12 +156,16 @@ def test_a_parameter_carries_the_defaults_that_read_it():
     an = analysis("param_four_bar")
     inputs = {"A0": "0.2"}
     sens = evaluate(an, inputs, "exact", sensitivity=True).sensitivity.deviation["C"]
-    ev = _mpmath_evaluator(an)
+    ev = evaluator_of(an)
     with mpmath.workdps(40):
         l0, h = mpmath.mpf("1e-3"), mpmath.mpf("1e-15")
         held = exact(2 * l0)
-        plus = ev.values(inputs, "exact", {"l": exact(l0 + h), "L2": held}, 40)["C"][1]
-        minus = ev.values(inputs, "exact", {"l": exact(l0 - h), "L2": held}, 40)["C"][1]
+        plus = ev.values(configure(an, inputs, "exact", {"l": exact(l0 + h), "L2": held}), 40)["C"][
+            1
+        ]
+        minus = ev.values(configure(an, inputs, "exact", {"l": exact(l0 - h), "L2": held}), 40)[
+            "C"
+        ][1]
         partial = [(plus[c] - minus[c]) / (2 * h) for c in range(2)]
         combined = [partial[c] + 2 * mpmath.mpf(sens["L2"][c]) for c in range(2)]
     assert rel(sens["l"], combined) < 1e-12

@@ -13,7 +13,7 @@ from evaluators import require_compiler
 import symkin
 from symkin.codegen import pipeline
 from symkin.core.settings import SOLVER
-from symkin.studies import evaluation
+from symkin.studies import mpmath_evaluator
 
 
 def test_continuation_steps():
@@ -66,6 +66,6 @@ def test_generated_evaluators_follow_the_settings(triad):
 
 def test_mpmath_follows_the_settings(triad, monkeypatch):
     assert symkin.evaluate(triad, {"O1": "0.3"}, "exact").points
-    monkeypatch.setattr(evaluation, "SOLVER", dataclasses.replace(SOLVER, rigid_iterations=1))
+    monkeypatch.setattr(mpmath_evaluator, "SOLVER", dataclasses.replace(SOLVER, rigid_iterations=1))
     with pytest.raises(symkin.AssemblyError, match="cannot close"):
         symkin.evaluate(triad, {"O1": "0.3"}, "exact")

@@ -28,7 +28,7 @@ PLOT_SUFFIXES = (".png", ".pdf", ".svg")
 
 def _check(args: argparse.Namespace) -> str:
     from ..kinematics.analysis import Analysis
-    from ..studies.evaluation import check_fabricated_pose
+    from ..studies.configuration import check_fabricated_pose
 
     structure = build(load(args.file))
     # What evaluation would refuse: a dyad at a toggle position as fabricated (raised while
@@ -169,7 +169,7 @@ def _tolerance(args: argparse.Namespace) -> str:
     import json
 
     from ..studies import tolerance, variation
-    from ..studies.evaluation import check_actuated_level
+    from ..studies.actuators import check_actuated_level
 
     mech = load(args.file)
     nominal = {p.name: float(p.value) for p in mech.parameters}

@@ -8,5 +8,5 @@
   the loads' first buckling factor (`equilibrium.buckling_factor`);
 - `result`: the plate end loads both levels report.
 
-Their evaluation for one configuration is symkin.studies.evaluation's (the `sympy` backend).
+Their evaluation for one configuration (the `sympy` backend) is symkin.studies.physical's.
 """

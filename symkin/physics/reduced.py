@@ -1,6 +1,6 @@
 """The reduced equilibrium of a compliant mechanism: Newton on the compliant-minus-rigid angles of
 the non-input hinges and, per loop, the chord plate's end load (docs/physics.md, "The Newton
-level"). The `loaded` level's solver (symkin.studies.evaluation.loaded runs it in mpmath),
+level"). The `loaded` level's solver (symkin.studies.physical.loaded runs it in mpmath),
 evaluated through sympy's lambdify in float64 (numpy kernels) or mpmath.
 
 Unknowns x (scaled, so every component is O(θ) or O(load/F)): δ_a / (l_min/L) of every

@@ -584,7 +584,7 @@ class Sweep:
     #: NaN where it could not be solved; None without stiffness data
     reference: tuple[np.ndarray, dict[str, np.ndarray]] | None = None
     #: the physical reference's whole evaluation at those samples (plate stresses, input
-    #: moments, model error; symkin.studies.evaluation.Evaluation), None where not solved
+    #: moments, model error; symkin.studies.results.Evaluation), None where not solved
     reported: tuple = ()
 
 

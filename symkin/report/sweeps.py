@@ -23,7 +23,7 @@ SWEEP_SAMPLES = 241
 #: Inputs of each swept range at which the physical reference (`equilibrium`) is solved.
 REFERENCE_SAMPLES = 9
 #: The physical reference of a report: input name -> value  to  the `equilibrium` level's
-#: evaluation there (symkin.studies.evaluation.Evaluation: `points` with their `deviation` and
+#: evaluation there (symkin.studies.results.Evaluation: `points` with their `deviation` and
 #: `model_error`, `plates`, `actuation`, `buckling`, `buckling_hinge`).
 Physics = Callable[[Mapping[str, float]], Any]
 

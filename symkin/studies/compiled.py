@@ -301,7 +301,7 @@ def compile(
     """The generated evaluator of a mechanism (file, Mechanism or Analysis), in memory: the
     requested points and levels (all by default), with its sensitivities unless told not to or
     inputs are `fixed` (input -> angle: held constant, folded into the evaluator)."""
-    from .evaluation import check_fabricated_pose, fixed_angles
+    from .configuration import check_fabricated_pose, fixed_angles
 
     pipeline.backend(backend)  # an unknown one is bad input before any work
     pruned: tuple[str, ...] = ()

@@ -23,7 +23,7 @@ from ..model.mechanism import Mechanism
 from ..model.reader import load
 
 if TYPE_CHECKING:
-    from .evaluation import Evaluation
+    from .results import Evaluation
 
 #: What `derive --emit` writes: the LaTeX report and every generated-code backend's files.
 EMITTERS = ("latex", *pipeline.BACKENDS)
@@ -127,7 +127,7 @@ def generate_plan(
 ) -> tuple[dict[str, bytes], object]:
     """:func:`generate`, and the Plan the evaluators were emitted from."""
     from ..codegen.plan import with_derivation
-    from .evaluation import check_fabricated_pose, fixed_angles
+    from .configuration import check_fabricated_pose, fixed_angles
 
     say = progress or (lambda message: None)
     if mech.actuators:
@@ -228,7 +228,9 @@ def physics_reference(
     """The report's physical reference: the `equilibrium` level's evaluation (deviations, plate
     stresses, input moments, model error) at given inputs and the `fixed` ones (the file's own
     plates and loads, whatever variant the report derives)."""
-    from .evaluation import Evaluation, equilibrium
+    from .configuration import configure
+    from .physical import equilibrium
+    from .results import Evaluation
 
     hidden = {a.point for a in analysis.mechanism.actuators}  # tracked by the levels themselves
     reference = Analysis(
@@ -242,7 +244,7 @@ def physics_reference(
         return plan_cache.kept(
             reference,
             {"level": "equilibrium", "inputs": given},
-            lambda: equilibrium(reference, given),
+            lambda: equilibrium(reference, configure(reference, given, "equilibrium")),
             Evaluation,
         )
 

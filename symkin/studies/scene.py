@@ -188,7 +188,7 @@ class _Reader:
         return value
 
     def angle(self, value: object, entry: str) -> float | sp.Expr:
-        from .evaluation import exact_value
+        from .configuration import exact_value
 
         if isinstance(value, bool) or not isinstance(value, (int, float, str)):
             raise self.error(

@@ -23,7 +23,8 @@ from ..core.errors import AssemblyError, InputError
 from ..kinematics.analysis import Analysis
 from ..kinematics.variants import Variant, analysis_for, default_variants
 from ..model.mechanism import Mechanism
-from .evaluation import evaluate, exact_value
+from .configuration import exact_value
+from .evaluation import evaluate
 
 DEFAULT_RANGE = (-0.2, 0.2)
 TIMING_POINTS = 10_000

@@ -26,7 +26,7 @@ import numpy as np
 
 from ..core.errors import InputError
 from ..model.mechanism import Mechanism
-from .evaluation import exact_value
+from .configuration import exact_value
 
 KINDS = ("pm", "uniform", "normal")
 #: Grid points of an input given as LO:HI (without :N).
