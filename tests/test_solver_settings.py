@@ -23,7 +23,7 @@ from symkin.codegen import pipeline
 from symkin.core import settings
 from symkin.core.settings import SOLVER
 from symkin.physics import reduced, reduced_reported
-from symkin.studies import evaluation
+from symkin.studies import mpmath_evaluator
 
 #: The numbers the runtimes held as literals before the table (templates/c/reduced.c,
 #: templates/numpy/reduced.py, symkin/physics/reduced.py, ...): the table must give them back
@@ -156,7 +156,7 @@ def test_the_40_digit_evaluation_reads_the_scaled_rules(monkeypatch):
             asked.append((dps, super().mpmath(dps)))
             return asked[-1][1]
 
-    monkeypatch.setattr(evaluation, "SOLVER", Recorded())
+    monkeypatch.setattr(mpmath_evaluator, "SOLVER", Recorded())
     an = symkin.analyze(symkin.load(EXAMPLES / "four_bar.toml"))
     symkin.evaluate(an, {"A0": "0.1"}, "exact")
     assert asked
@@ -292,8 +292,16 @@ ALLOWED = {
         "10.0": "10.0 ** digits: a rule stated in decimal digits",
     },
 }
-#: The runtime files and their Python twins of the loaded level (symkin.studies.evaluation's
-#: mpmath solvers read SOLVER everywhere: tests/test_solver.py).
+ALLOWED["symkin/studies/mpmath_evaluator.py"] = {
+    "30": "digits of the parameters' and limits' evaluation",
+    "35": "digits of sympy's evaluation of the parameters and inputs",
+}
+ALLOWED["symkin/studies/actuators.py"] = {
+    "30": "digits of the direction's central differences",
+    "10": "guard digits above the working precision, and mpmath.mpf(10) ** digits",
+}
+#: The runtime files and their Python twins: the loaded level's, the sympy backend's loop
+#: solvers (symkin.studies.mpmath_evaluator) and its stroke solve (symkin.studies.actuators).
 RUNTIMES = [
     "templates/c/runtime.c",
     "templates/c/reduced.c",
@@ -310,6 +318,8 @@ RUNTIMES = [
     "symkin/physics/reduced.py",
     "symkin/physics/reduced_reported.py",
     "symkin/physics/equilibrium.py",  # no generated twin, its rules in the table too
+    "symkin/studies/mpmath_evaluator.py",
+    "symkin/studies/actuators.py",
 ]
 #: An iteration counter compared with a number: a cap or a stall test's start (the table's).
 #: (0 and 1 tell the first step from the others.)
