@@ -8,11 +8,14 @@ documents (1e-4 relative, about 1000 float32 epsilons).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 from evaluators import generated, rel_err
 from reference_solver import Reference
 
+import symkin
 from symkin.codegen import pipeline
 
 ANGLES = ["1e-12", "1e-10", "1e-8", "1e-6", "1e-4", "1e-2", "0.1", "0.3", "0.6", "1.0"]
@@ -94,3 +97,60 @@ def test_float32_error_is_bounded(key):
                 ),
             )
     assert worst <= FLOAT32_BOUND, worst
+
+
+#: Inputs from a double's tiny angles down to where |ΔR| ≈ 2.3e-4 θ² (the four-bar's C; the
+#: six-bar's points alike) is still a normal double (θ ≈ 1e-152): docs/numerics.md, "Tiny angles".
+TINY = ["1e-16", "1e-32", "1e-64", "1e-100", "-1e-120", "1e-150"]
+
+
+def _every_backend(g, inputs: dict, level: str) -> dict[str, dict]:
+    """The deviation of every point from the sympy backend (40 digits), numpy and C."""
+    ev = symkin.evaluate(g.analysis, inputs, level, backend="sympy")
+    sympy_dev = {n: tuple(float(v) for v in p.deviation) for n, p in ev.points.items()}
+    return {"sympy": sympy_dev, "numpy": g.run_numpy(inputs, level), "c": g.run_c(inputs, level)}
+
+
+@pytest.mark.parametrize("key, hinge", [("four_bar", "A0"), ("six_bar", "O_A")])
+def test_tiny_angles_keep_their_relative_accuracy_in_every_backend(key, hinge):
+    """Issue: at A0 = 1e-32 numpy and C were 37x too large and at 1e-100 every backend was
+    wrong: the rigid start (dyads, continuation) leaves each angle an absolute error near the
+    arithmetic's ε, and one polishing step left ε². The polish now runs the relative rule
+    (symkin.core.settings, 2). exact: against the independent reference solver, at digits
+    enough for the positions' cancellation (2 log10(1/θ) + 40); paper and first_order, which
+    the reference does not model: numpy and C against the 40-digit sympy backend, and ΔR/θ²
+    the same number at every input (Δz ∝ θ² to the last digit at these angles)."""
+    g = generated(key)
+    ref = Reference(g.mech)
+    runs = {}
+    for angle in TINY:
+        inputs = {hinge: angle}
+        digits = 40 + 2 * round(-math.log10(abs(float(angle))))
+        want = ref.deviation(inputs, dps=digits)["points"]
+        for backend, got in _every_backend(g, inputs, "exact").items():
+            for name, dev in got.items():
+                err = rel_err(dev, want[name]["deviation"])
+                assert err <= 1e-9, (key, angle, backend, name, err)
+        for level in ("paper", "first_order"):
+            runs[angle, level] = _every_backend(g, inputs, level)
+            for backend, got in runs[angle, level].items():
+                for name, dev in got.items():
+                    err = rel_err(dev, runs[angle, level]["sympy"][name])
+                    assert err <= 1e-9, (key, angle, level, backend, name, err)
+    # ΔR ∝ θ^k at these angles: k = 2 for a midpoint model, 1 for a pivot elsewhere (prbm,
+    # docs/file-format.md "Which pin?"), read off the first two inputs
+    a, b = TINY[0], TINY[1]
+    for level in ("paper", "first_order"):
+        for name, dev in runs[a, level]["sympy"].items():
+            ta, tb = abs(float(a)), abs(float(b))
+            size_b = math.hypot(*runs[b, level]["sympy"][name])
+            k = round(math.log(size_b / math.hypot(*dev)) / math.log(tb / ta))
+            assert k in (1, 2), (level, name, k)
+            first = (dev[0] / ta**k, dev[1] / ta**k)
+            for angle in TINY:
+                t = abs(float(angle))
+                for backend, got in runs[angle, level].items():
+                    ratio = (got[name][0] / t**k, got[name][1] / t**k)
+                    if float(angle) < 0 and k == 1:
+                        ratio = (-ratio[0], -ratio[1])
+                    assert rel_err(ratio, first) <= 1e-9, (key, angle, level, backend, name, k)

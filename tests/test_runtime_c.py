@@ -153,7 +153,8 @@ STALL = "40 0 1e-20 1e-12 0.5"  # a relative test below the stall test's (as at 
         ("30 1e-10 0 0 0", 2e-10, 1.0, 1e-10, 0),  # nor a stall test
         (RULE, 1e-9, 0.2, "inf", 1),  # relative: 1e-9 <= 1e-8 * 0.2
         (RULE, 1e-8, 0.2, "inf", 0),
-        (RULE, 0.5, 0.0, "inf", 1),  # the unknowns all zero
+        (RULE, 0.5, 0.0, "inf", 0),  # a step onto all-zero unknowns: on (a tiny input's polish)
+        (RULE, 0.0, 0.0, "inf", 1),  # a zero step at zero: converged
         (STALL, 1e-13, 1.0, 1e-13, 1),  # stalled at rounding: no smaller than half the last
         (STALL, 1e-13, 1.0, 1e-12, 0),  # still shrinking
         (STALL, 1e-11, 1.0, 1e-11, 0),  # stalled, but not at rounding

@@ -107,7 +107,8 @@ def circle(t):
         ((30, 1e-10), 2e-10, 1.0, 1e-10, False),
         ((40, 0.0, 1e-8, 1e-12, 0.5), 1e-9, 0.2, math.inf, True),
         ((40, 0.0, 1e-8, 1e-12, 0.5), 1e-8, 0.2, math.inf, False),
-        ((40, 0.0, 1e-8, 1e-12, 0.5), 0.5, 0.0, math.inf, True),
+        ((40, 0.0, 1e-8, 1e-12, 0.5), 0.5, 0.0, math.inf, False),  # onto zero: goes on
+        ((40, 0.0, 1e-8, 1e-12, 0.5), 0.0, 0.0, math.inf, True),  # a zero step at zero
         ((40, 0.0, 1e-20, 1e-12, 0.5), 1e-13, 1.0, 1e-13, True),
         ((40, 0.0, 1e-20, 1e-12, 0.5), 1e-13, 1.0, 1e-12, False),
         ((40, 0.0, 1e-20, 1e-12, 0.5), 1e-11, 1.0, 1e-11, False),
@@ -315,7 +316,7 @@ def mechanism(rt, closed: bool, dtype=np.float64):
             "dR_dv": (14, 2, 3),
         },
         rigid_rule=rt._Rule(30, 1e-10),
-        polish_rule=rt._Rule(1),
+        polish_rule=rt._Rule(8, 0.0, 1e-8, 1e-12, 0.5),
         exact_rule=rt._Rule(40, 0.0, 1e-8, 1e-12, 0.5, 2e-13),
         continuation_step=0.05,
         angular=(0,),

@@ -1474,8 +1474,9 @@ static void sk_nan(double *x, int n)
 
 /* When a Newton iteration stops (symkin.core.settings): after `iterations` steps at most, and
    once a step (its largest entry) is at most `tolerance`, or at most `converged` times the
-   largest unknown (with converged > 0: quadratic convergence leaves the unknowns exact; also
-   when they are all zero), or has stalled at rounding: at least `stall_ratio` times the
+   largest unknown (with converged > 0: quadratic convergence leaves the unknowns exact; a
+   step onto all-zero unknowns goes on: at a tiny input the polish passes through zero), or
+   has stalled at rounding: at least `stall_ratio` times the
    previous step and at most `stalled` times the largest unknown. */
 typedef struct {
     int iterations;
@@ -1484,8 +1485,7 @@ typedef struct {
     double stalled;
     double stall_ratio;
     double residual;    /* > 0: also stop once every residual is this small relative to the size
-                           of its terms (a closure's S, symkin.core.settings 3b); unknowns all zero
-                           then stop only so */
+                           of its terms (a closure's S, symkin.core.settings 3b) */
 } sk_rule;
 
 
@@ -1496,8 +1496,7 @@ static int sk_newton_stop(const sk_rule *rule, double change, double size,
                           double previous, int noise)
 {
     return change <= rule->tolerance || noise
-           || (rule->converged > 0.0
-               && (change <= rule->converged * size || (size == 0.0 && rule->residual == 0.0)))
+           || (rule->converged > 0.0 && change <= rule->converged * size)
            || (change >= rule->stall_ratio * previous && change <= rule->stalled * size);
 }
 
@@ -2183,7 +2182,7 @@ static const sk_mechanism sk_mechanism_tables = {
     .sens_chain = sk_sens_chain,
     .n_dyads = 1,
     .rigid_rule = {30, 1e-10, 0.0, 0.0, 0.0},
-    .polish_rule = {1, 0.0, 0.0, 0.0, 0.0},
+    .polish_rule = {8, 0.0, 1e-08, 1e-12, 0.5},
     .exact_rule = {40, 0.0, 1e-08, 1e-12, 0.5, 2e-13},
     .continuation_step = 0.05, .winding = 3.141592653589793,
     .n_levels = 3, .levels = sk_levels,

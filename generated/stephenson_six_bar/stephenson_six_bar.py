@@ -78,7 +78,7 @@ class _Level:
 class _Rule:
     """When a Newton iteration stops (symkin.core.settings): after `iterations` steps at most,
     and once a step is at most `tolerance`, or at most `converged` times the largest unknown
-    (with converged > 0; also when they are all zero unless `residual`), or has stalled at
+    (with converged > 0; a step onto all-zero unknowns goes on), or has stalled at
     rounding: at least `stall_ratio` times the previous step and at most `stalled` times the
     largest unknown; with `residual` > 0, also once every residual is at most `residual` times
     the size of its terms (symkin.core.settings, 3b)."""
@@ -201,8 +201,6 @@ def _newton_stop(rule, change, size, previous, noise=False):
     done = (change <= rule.tolerance) | noise
     if rule.converged > 0.0:
         done = done | (change <= rule.converged * size)
-        if rule.residual == 0.0:
-            done = done | (size == 0)
     # 0 * inf is nan (a rule without the stall test, before the second step): the comparison is
     # then false, as in C, and numpy need not warn about it
     with numpy.errstate(invalid="ignore"):
@@ -12373,7 +12371,7 @@ _MECHANISM = _Mechanism(
     loaded_solve=_reduced_solve,
     sens_rigid_blocks={'A': (0, 6, 6), 'dG_dv': (36, 6, 2), 'dR_dtheta': (48, 2, 6), 'dR_dv': (60, 2, 2)},
     rigid_rule=_Rule(30, 1e-10),  # continuation steps
-    polish_rule=_Rule(1),  # after the rigid start
+    polish_rule=_Rule(8, 0.0, 1e-08, 1e-12, 0.5),  # after the rigid start
     exact_rule=_Rule(40, 0.0, 1e-08, 1e-12, 0.5, 2e-13),
     continuation_step=0.05, winding=3.141592653589793,
     levels={

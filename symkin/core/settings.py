@@ -35,8 +35,14 @@ The algorithm, in every arithmetic:
    1e8 or 1e16 included, are refused before any arithmetic), so no reduction modulo 2π of a
    huge number is ever needed. Known gap: two hinges of one loop wrapping in opposite
    directions at once cancel in the sum and pass, in every backend alike;
-2. ``polish`` Newton steps on that closure: the dyad formulas lose the relative accuracy of
-   small angles to cancellation in floating point (none in mpmath);
+2. the polish: Newton on that closure from the rigid start until a step is at most
+   ``converged`` times the largest unknown angle (a zero step at zero angles included) or
+   stalls (the exact level's rule (3c)), at most ``polish`` steps. The dyad formulas and the
+   continuation's absolute test leave each angle an absolute error of about ε (float64) or
+   10⁻⁴⁰ (40 digits), which is no relative accuracy at all for an input of 1e-32; Newton
+   squares that error at each step (the closure is nearly linear there), so a tiny input takes
+   two or three steps more and an input of ordinary size stops after the first, as before.
+   Every backend runs the same rule (docs/numerics.md, "Tiny angles");
 3. δ: the first-order linear system A δ = −Φ Δz (`first_order`), then for `exact` (and the
    `loaded` closure) Newton on the compliant closure F(δ) = 0 from there, at most
    ``exact_iterations`` steps. **Stopping rule** (every backend, the same test): at the iterate
@@ -96,7 +102,7 @@ class Tolerances:
     rigid: float  # a rigid Newton step at most this (radians) ends a continuation step
     converged: float  # an exact-level step at most this times |δ| ends the iteration
     stalled: float  # a stalled exact-level step at most this times |δ| ends it too
-    polish: int  # Newton steps on the rigid closure after the rigid start
+    polish: int  # at most this many Newton steps polish the rigid start (rule 2)
     residual: float  # a residual within this fraction of its terms' size is rounding noise
     consistent: float  # a redundant (dropped) row must vanish to this fraction of its terms
 
@@ -313,8 +319,9 @@ class SolverSettings:
     ulps32: Ulps = Ulps(
         rigid=1e-4 / EPS32, converged=3e-4 / EPS32, stalled=1e-5 / EPS32, residual=1e-4 / EPS32
     )
-    polish: int = 1  # floating point: the dyad formulas lose small angles to cancellation
-    polish_mpmath: int = 0  # mpmath: none lost
+    # the polish's cap (rule 2): float64 from ε to below 1e-300 relative in 4 steps at most
+    polish: int = 8
+    polish_mpmath: int = 8
     # a dropped row's test is the same in float64 and mpmath: the sympy backend refuses what
     # the float64 evaluators refuse
     consistent: float = 1e-8

@@ -148,6 +148,7 @@ class MpmathEvaluator:
         if not sol.closed_form:
             theta = self._rigid_newton(pvals, ivals)
             self._check_winding(pvals, theta, ivals)
+            theta = self._polish(pvals, theta)
             self._check_consistency("rigid", pvals, theta)
             return theta, dyads
         for symbol, expr in sol.assignments:
@@ -176,8 +177,46 @@ class MpmathEvaluator:
             rest = all(ivals[b] == 0 for b in sol.depends[a])
             theta[a] = mpmath.mpf(0) if rest else wrap(phi[h.M] - phi[h.P])
         self._check_winding(pvals, theta, ivals)
+        theta = self._polish(pvals, theta)
         self._check_consistency("rigid", pvals, theta)
         return theta, dyads
+
+    def _polish(self, pvals: list, theta: dict) -> dict:
+        """Rule 2 of symkin.core.settings, as the generated evaluators run it: Newton on the
+        rigid closure from the rigid start until a step is at most `converged` times the
+        largest unknown angle (or stalls), at most `polish` steps.
+        The closed form's and the continuation's absolute 10^-40 would be no relative accuracy
+        for an input of 1e-100; each step squares the error."""
+        an, unknowns = self.an, self.kin.unknowns
+        tol = SOLVER.mpmath(mpmath.mp.dps)
+        if not unknowns or tol.polish == 0:
+            return theta
+        args = [*an.params, *an.thetas]
+        f = self.fn("rigid_residual", list(an.rigid_residual), args)
+        jac = self.fn("rigid_jacobian", an.linear_system[0].tolist(), args)
+        theta = dict(theta)
+        previous = None
+        for _ in range(tol.polish):
+            values = [*pvals, *(theta[a] for a in sorted(theta))]
+            try:
+                step = mpmath.lu_solve(mpmath.matrix(jac(*values)), mpmath.matrix(f(*values)))
+            except ZeroDivisionError:
+                return theta  # singular at the rigid start: the checks after it refuse
+            for k, a in enumerate(unknowns):
+                theta[a] = theta[a] - step[k]
+            size = max(abs(theta[a]) for a in unknowns)
+            change = mpmath.norm(step, mpmath.inf)
+            if (
+                change <= tol.converged * size
+                or (
+                    previous is not None
+                    and change >= SOLVER.stall_ratio * previous
+                    and change <= tol.stalled * size
+                )
+            ):
+                break
+            previous = change
+        return theta
 
     def _check_winding(self, pvals: list, theta: dict, ivals: dict) -> None:
         """The winding rule of symkin.core.settings: every loop's angle sum below
