@@ -206,13 +206,10 @@ class MpmathEvaluator:
                 theta[a] = theta[a] - step[k]
             size = max(abs(theta[a]) for a in unknowns)
             change = mpmath.norm(step, mpmath.inf)
-            if (
-                change <= tol.converged * size
-                or (
-                    previous is not None
-                    and change >= SOLVER.stall_ratio * previous
-                    and change <= tol.stalled * size
-                )
+            if change <= tol.converged * size or (
+                previous is not None
+                and change >= SOLVER.stall_ratio * previous
+                and change <= tol.stalled * size
             ):
                 break
             previous = change
