@@ -171,3 +171,24 @@ def test_the_mechanism_file_must_be_a_small_regular_file(tmp_path, make, words):
 def test_dev_zero_itself_is_refused_unread():
     run = symkin_cli("check", "/dev/zero", timeout=30)
     assert run.returncode == 2 and "/dev/zero: not a regular file" in run.stderr, run.stderr
+
+
+@pytest.mark.parametrize(
+    "example, old, new, words",
+    [
+        ("four_bar.toml", 'name = "A0"', 'name = "A0=1"', "holds '=' or ','"),
+        ("four_bar.toml", 'name = "A0"', 'name = "-A0"', "begins with '-'"),
+        ("four_bar.toml", 'name = "B0"', 'name = "B0 "', "begins or ends with a blank"),
+        ("four_bar.toml", 'name = "C"', 'name = "C,D"', "--points cannot name it"),
+        ("piezo_amplifier.toml", 'name = "piezo"', 'name = "pie=zo"', "--input cannot name it"),
+    ],
+)
+def test_names_the_command_line_cannot_express_exit_2_at_read_time(example, old, new, words):
+    """An input named 'A0=1' could never be given as --input A0=1=0.1 (the error's own fix
+    could not be followed): the reader refuses it, naming the entry and the fix."""
+    text = (EXAMPLES / example).read_text()
+    assert text.count(old) == 1
+    with pytest.raises(InputError) as err:
+        symkin.loads(text.replace(old, new), example)
+    message = str(err.value)
+    assert words in message and new.split('"')[1] in message and "fix:" in message, message

@@ -206,6 +206,29 @@ class EntryChecks:
             )
         return value
 
+    def option_name(
+        self, table: Mapping[str, object], entry: str, line: int | None, options: str
+    ) -> str:
+        """The `name` of an entry the command line names in `options` (--input H=V, --fix,
+        --points A,B, ...): refused at read time when no option could express it (an '=' or
+        ',' inside, a leading '-', blanks at either end), with the fix."""
+        name = self.text(table, "name", entry, line)
+        problem = None
+        if name != name.strip():
+            problem = "begins or ends with a blank"
+        elif name.startswith("-"):
+            problem = "begins with '-' (the command line reads it as an option)"
+        elif "=" in name or "," in name:
+            problem = "holds '=' or ',' (the command line's NAME=VALUE and A,B separators)"
+        if problem is not None:
+            raise self.error(
+                f"name '{name}' {problem}: {options} cannot name it",
+                entry,
+                line,
+                "use letters, digits and '_' (e.g. A0, piezo_1)",
+            )
+        return name
+
     def array_of_tables(self, data: Mapping[str, object], key: str) -> list[Mapping[str, object]]:
         value = data.get(key, [])
         if not isinstance(value, list) or not all(isinstance(t, dict) for t in value):

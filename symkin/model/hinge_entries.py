@@ -73,7 +73,7 @@ class HingeEntries(EntryChecks):
     ) -> Hinge:
         line = self.where.header("hinge", i)
         entry = f"[[hinge]] #{i + 1}"
-        name = self.text(table, "name", entry, line)
+        name = self.option_name(table, entry, line, "--input, --fix and --range")
         entry = f"[[hinge]] #{i + 1} '{name}'"
         model = table.get("model", defaults.get("model", DEFAULT_MODEL))
         if not isinstance(model, str):

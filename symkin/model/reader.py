@@ -289,7 +289,7 @@ class _Reader(HingeEntries):
             line = self.where.header("point", i)
             entry = entry_name("point", i, table)
             self.check_keys(table, POINT_KEYS, entry, line)
-            name = self.text(table, "name", entry, line)
+            name = self.option_name(table, entry, line, "--points")
             entry = f"[[point]] #{i + 1} '{name}'"
             link = self.text(table, "link", entry, line)
             if link not in link_names:
@@ -396,7 +396,7 @@ class _Reader(HingeEntries):
             line = self.where.header("actuator", i)
             entry = entry_name("actuator", i, table)
             self.check_keys(table, ACTUATOR_KEYS, entry, line)
-            name = self.text(table, "name", entry, line)
+            name = self.option_name(table, entry, line, "--input")
             entry = f"[[actuator]] #{i + 1} '{name}'"
             problem = name_problem(name)
             if problem is not None:
