@@ -12,7 +12,7 @@ from conftest import EXAMPLES
 
 import symkin
 from symkin.codegen import pipeline
-from symkin.core import levels
+from symkin.core import backends, levels
 from symkin.studies.evaluation import parameter_values
 
 SOURCES = {
@@ -35,6 +35,24 @@ INPUTS = {
     "triad": {"O1": "0.1"},
     "non_grashof": {"A0": "0.3"},
 }
+
+
+#: Every backend and the generated-code ones, drawn from the backend table (symkin.core.backends;
+#: tests/test_backends.py pins it): a new backend runs through every test that takes these.
+BACKENDS = backends.NAMES
+GENERATED = backends.GENERATED
+
+
+def backends_with(**wanted: object) -> tuple[str, ...]:
+    """The backends with the capabilities `wanted` (symkin.core.backends.having), e.g.
+    ``backends_with(generated=True, force_sensitivities="loaded")``."""
+    return backends.having(**wanted)
+
+
+def require(backend: str) -> None:
+    """What `backend` needs on this machine: a C compiler where it compiles (require_compiler)."""
+    if backends.get(backend).compiler:
+        require_compiler()
 
 
 def require_compiler():
