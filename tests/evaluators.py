@@ -82,6 +82,31 @@ class Generated:
             self.analysis, "numpy", self.mech.path, sensitivity=sensitivity, levels=levels
         )
         self._lib = None
+        self._evaluators: dict[str, object] = {}
+
+    def evaluator(self, backend):
+        """The plan's evaluator from generated-code `backend` (its registry row loads it)."""
+        require(backend)
+        if backend not in self._evaluators:
+            self._evaluators[backend] = pipeline.evaluator(
+                self.plan, backend, self.mech.path, links=False
+            )
+        return self._evaluators[backend]
+
+    def pose(self, backend, inputs, level, overrides=None):
+        """(status, the points' deviations) through generated-code `backend`: its registry
+        row's pose (pipeline.Backend.pose), the layout every backend answers in."""
+        shape = pipeline.Shape.of(self.plan, links=False)
+        x = [float(inputs[n]) for n in shape.inputs]
+        ev, params = self.evaluator(backend), self.params(overrides)
+        status, out, _, _ = pipeline.backend(backend).pose(ev, shape, x, params, level)
+        return status, {n: (out[6 * i + 4], out[6 * i + 5]) for i, n in enumerate(shape.points)}
+
+    def run(self, backend, inputs, level, overrides=None):
+        """The points' deviations through generated-code `backend` (solved: status 0)."""
+        status, deviations = self.pose(backend, inputs, level, overrides)
+        assert status == 0, backend
+        return deviations
 
     @property
     def lib(self):
