@@ -184,3 +184,37 @@ def test_a_c_evaluators_parameters_are_the_modules(given, shifts):
     got, want = c.evaluate_grid(params, x), numpy.evaluate_grid(params, x)
     np.testing.assert_array_equal(got[0], want[0])
     np.testing.assert_allclose(got[1], want[1], rtol=1e-11, atol=1e-18)
+
+
+@pytest.mark.parametrize("backend", backends.NAMES)
+def test_the_table_is_what_evaluate_does(backend):
+    """Its levels and sensitivities are what symkin.evaluate answers through the backend, and
+    what it refuses (exit 2) the table leaves out: the four-bar example (steel plates) at
+    every level."""
+    b = backends.get(backend)
+    if b.compiler:
+        require_compiler()
+    an = symkin.analyze(symkin.load(EXAMPLES / "four_bar.toml"))
+    for level in levels.NAMES:
+        for sensitivity in (False, True):
+            can = level in (b.sensitivities if sensitivity else b.levels)
+            try:
+                ev = symkin.evaluate(
+                    an, {"A0": "0.1"}, level, backend=backend, sensitivity=sensitivity
+                )
+            except symkin.InputError:
+                assert not can, (level, sensitivity)
+            else:
+                assert can and ev.backend == backend, (level, sensitivity)
+                assert (ev.sensitivity is not None) == sensitivity, level
+
+
+@pytest.mark.parametrize("backend", backends.GENERATED)
+def test_the_precisions_are_what_the_pipeline_emits(backend):
+    p = pipeline.plan_for(symkin.analyze(symkin.load(EXAMPLES / "four_bar.toml")), levels=["exact"])
+    for precision in ("float64", "float32"):
+        if precision in backends.get(backend).precisions:
+            assert pipeline.emit(p, backend, "x.toml", precision)
+        else:
+            with pytest.raises(symkin.InputError, match=f"not {precision}"):
+                pipeline.emit(p, backend, "x.toml", precision)
