@@ -12,7 +12,7 @@ from conftest import EXAMPLES
 
 import symkin
 from symkin.codegen import pipeline
-from symkin.core import levels
+from symkin.core import backends, levels
 from symkin.studies.configuration import parameter_values
 
 SOURCES = {
@@ -35,6 +35,24 @@ INPUTS = {
     "triad": {"O1": "0.1"},
     "non_grashof": {"A0": "0.3"},
 }
+
+
+#: Every backend and the generated-code ones, drawn from the backend table (symkin.core.backends;
+#: tests/test_backends.py pins it): a new backend runs through every test that takes these.
+BACKENDS = backends.NAMES
+GENERATED = backends.GENERATED
+
+
+def backends_with(**wanted: object) -> tuple[str, ...]:
+    """The backends with the capabilities `wanted` (symkin.core.backends.having), e.g.
+    ``backends_with(generated=True, force_sensitivities="loaded")``."""
+    return backends.having(**wanted)
+
+
+def require(backend: str) -> None:
+    """What `backend` needs on this machine: a C compiler where it compiles (require_compiler)."""
+    if backends.get(backend).compiler:
+        require_compiler()
 
 
 def require_compiler():
@@ -64,6 +82,31 @@ class Generated:
             self.analysis, "numpy", self.mech.path, sensitivity=sensitivity, levels=levels
         )
         self._lib = None
+        self._evaluators: dict[str, object] = {}
+
+    def evaluator(self, backend):
+        """The plan's evaluator from generated-code `backend` (its registry row loads it)."""
+        require(backend)
+        if backend not in self._evaluators:
+            self._evaluators[backend] = pipeline.evaluator(
+                self.plan, backend, self.mech.path, links=False
+            )
+        return self._evaluators[backend]
+
+    def pose(self, backend, inputs, level, overrides=None):
+        """(status, the points' deviations) through generated-code `backend`: its registry
+        row's pose (pipeline.Backend.pose), the layout every backend answers in."""
+        shape = pipeline.Shape.of(self.plan, links=False)
+        x = [float(inputs[n]) for n in shape.inputs]
+        ev, params = self.evaluator(backend), self.params(overrides)
+        status, out, _, _ = pipeline.backend(backend).pose(ev, shape, x, params, level)
+        return status, {n: (out[6 * i + 4], out[6 * i + 5]) for i, n in enumerate(shape.points)}
+
+    def run(self, backend, inputs, level, overrides=None):
+        """The points' deviations through generated-code `backend` (solved: status 0)."""
+        status, deviations = self.pose(backend, inputs, level, overrides)
+        assert status == 0, backend
+        return deviations
 
     @property
     def lib(self):

@@ -12,7 +12,7 @@ from decimal import Decimal
 
 import pytest
 from conftest import EXAMPLES
-from evaluators import Generated, rel_err
+from evaluators import GENERATED, Generated, rel_err
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from reference_solver import Reference
@@ -45,13 +45,12 @@ def cad_text(scale_mm: bool = False) -> str:
 
 
 def run_all(mech, inputs: dict[str, str], level: str = "exact") -> dict[str, dict]:
-    """Deviation of every point by every backend: sympy (mpmath), numpy and C."""
+    """Deviation of every point by every backend: sympy (mpmath) and the generated ones."""
     g = Generated(mech=mech, sensitivity=False, levels=[level])
     sympy = symkin.evaluate(g.analysis, inputs, level).points
     return {
         "sympy": {n: p.deviation for n, p in sympy.items()},
-        "numpy": g.run_numpy(inputs, level),
-        "c": g.run_c(inputs, level),
+        **{backend: g.run(backend, inputs, level) for backend in GENERATED},
     }
 
 
@@ -106,6 +105,6 @@ def test_random_decimal_geometry_every_backend_agrees_with_mpmath(offsets, angle
         text = text.replace(f"at = {old}", f"at = [{x}, {y}]")
     mech = symkin.loads(text, "random_four_bar.toml")
     results = run_all(mech, {"A0": angle})
-    for backend in ("numpy", "c"):
+    for backend in GENERATED:
         for name, dev in results[backend].items():
             assert rel_err(dev, results["sympy"][name]) <= 1e-12, (backend, name)

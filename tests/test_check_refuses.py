@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 from conftest import EXAMPLES
-from evaluators import Generated
+from evaluators import BACKENDS, Generated
 
 import symkin
 from symkin.cli.commands import main
@@ -61,7 +61,7 @@ def test_the_examples_pass_the_check(capsys):
         assert code == 0 and "valid" in out.splitlines()[0]
 
 
-@pytest.mark.parametrize("backend", ["sympy", "numpy", "c"])
+@pytest.mark.parametrize("backend", BACKENDS)
 def test_every_backend_refuses_a_dependent_input_alike(tmp_path, capsys, backend):
     """The reader refuses inputs that leave the pose free (the rank of the closure Jacobian,
     docs/levels.md), so every backend exits 2 with the same message."""

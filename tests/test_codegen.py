@@ -15,7 +15,7 @@ import mechanisms as M
 import numpy as np
 import pytest
 from conftest import EXAMPLES, ROOT
-from evaluators import INPUTS, SOURCES, generated, rel_err, require_compiler
+from evaluators import GENERATED, INPUTS, SOURCES, generated, rel_err, require_compiler
 from reference_solver import Reference
 
 import symkin
@@ -23,33 +23,33 @@ from symkin.codegen import pipeline
 
 
 @pytest.mark.parametrize("key", sorted(SOURCES))
-@pytest.mark.parametrize("backend", ["numpy", "c"])
+@pytest.mark.parametrize("backend", GENERATED)
 def test_exact_level_against_independent_solver(key, backend):
     g = generated(key)
     ref = Reference(g.mech).deviation(INPUTS[key])
-    got = (g.run_numpy if backend == "numpy" else g.run_c)(INPUTS[key], "exact")
+    got = g.run(backend, INPUTS[key], "exact")
     for name, dev in got.items():
         assert rel_err(dev, ref["points"][name]["deviation"]) <= 1e-9, name
 
 
 @pytest.mark.parametrize("key", ["four_bar", "six_bar", "nine_bar", "five_bar", "triad"])
-@pytest.mark.parametrize("backend", ["numpy", "c"])
+@pytest.mark.parametrize("backend", GENERATED)
 @pytest.mark.parametrize("level", ["paper", "first_order", "exact"])
 def test_every_level_matches_the_sympy_backend(key, backend, level):
     g = generated(key)
     want = symkin.evaluate(g.analysis, INPUTS[key], level)
-    got = (g.run_numpy if backend == "numpy" else g.run_c)(INPUTS[key], level)
+    got = g.run(backend, INPUTS[key], level)
     for name, dev in got.items():
         assert rel_err(dev, want.points[name].deviation) <= 1e-12, name
 
 
 @pytest.mark.parametrize("key", ["four_bar", "six_bar", "five_bar", "triad"])
-@pytest.mark.parametrize("backend", ["numpy", "c"])
+@pytest.mark.parametrize("backend", GENERATED)
 def test_tiny_plates(key, backend):
     g = generated(key)
     overrides = {"l": "5e-11"}  # l/L about 1e-9
     ref = Reference(g.mech, overrides).deviation(INPUTS[key])
-    got = (g.run_numpy if backend == "numpy" else g.run_c)(INPUTS[key], "exact", overrides)
+    got = g.run(backend, INPUTS[key], "exact", overrides)
     for name, dev in got.items():
         assert rel_err(dev, ref["points"][name]["deviation"]) <= 1e-9
 
@@ -63,11 +63,11 @@ def test_tiny_plates(key, backend):
         ("serial_arm", {"S": "1e-8", "E": "-1e-8"}),
     ],
 )
-@pytest.mark.parametrize("backend", ["numpy", "c"])
+@pytest.mark.parametrize("backend", GENERATED)
 def test_tiny_angles(key, inputs, backend):
     g = generated(key)
     ref = Reference(g.mech).deviation(inputs)
-    got = (g.run_numpy if backend == "numpy" else g.run_c)(inputs, "exact")
+    got = g.run(backend, inputs, "exact")
     for name, dev in got.items():
         assert rel_err(dev, ref["points"][name]["deviation"]) <= 1e-9
 
@@ -86,13 +86,13 @@ def toggle_input(g) -> float:
 
 
 @pytest.mark.parametrize("margin", ["1e-2", "1e-3"])
-@pytest.mark.parametrize("backend", ["numpy", "c"])
+@pytest.mark.parametrize("backend", GENERATED)
 def test_near_a_toggle_position(margin, backend):
     g = generated("non_grashof")
     limit = toggle_input(g)
     inputs = {"A0": repr(limit - float(margin))}
     ref = Reference(g.mech).deviation(inputs)
-    got = (g.run_numpy if backend == "numpy" else g.run_c)(inputs, "exact")
+    got = g.run(backend, inputs, "exact")
     assert rel_err(got["C"], ref["points"]["C"]["deviation"]) <= 1e-9
 
 

@@ -11,6 +11,7 @@ import mechanisms as M
 import pytest
 from cli_runs import symkin_cli
 from conftest import EXAMPLES
+from evaluators import BACKENDS
 
 from symkin.cli.commands import main
 
@@ -133,7 +134,7 @@ def test_param_override_cannot_build_a_huge_number(tmp_path, capsys):
     assert time.perf_counter() - start < 20
 
 
-@pytest.mark.parametrize("backend", ["sympy", "numpy", "c"])
+@pytest.mark.parametrize("backend", BACKENDS)
 def test_model_limit_exits_3_in_every_backend(tmp_path, backend):
     path = tmp_path / "elastica.toml"
     path.write_text(
@@ -164,7 +165,7 @@ def test_model_limit_exits_3_in_every_backend(tmp_path, backend):
 @pytest.mark.parametrize("level", ["paper", "first_order", "exact"])
 def test_all_backends_print_the_same_json(capsys, level):
     outputs = {}
-    for backend in ("sympy", "numpy", "c"):
+    for backend in BACKENDS:
         code, out, err = run(
             capsys,
             "eval",

@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 from conftest import EXAMPLES
-from evaluators import generated, rel_err
+from evaluators import BACKENDS, generated, rel_err
 from reference_solver import Reference
 
 import symkin
@@ -17,7 +17,6 @@ from symkin.cli.commands import main
 from symkin.codegen import pipeline
 
 FOUR_BAR = str(EXAMPLES / "four_bar.toml")
-BACKENDS = ["sympy", "numpy", "c"]
 
 
 def run(args, capsys):

@@ -18,7 +18,7 @@ import mechanisms as M
 import numpy as np
 import pytest
 from conftest import EXAMPLES
-from evaluators import require_compiler
+from evaluators import GENERATED, require
 
 import symkin
 from symkin.studies.evaluation import evaluate
@@ -53,10 +53,9 @@ def _reference(mech, inputs: dict, level: str, points) -> dict:
     return {p: np.array(ev.points[p].deviation) for p in points}
 
 
-def _check(mech, fixed: dict, free: list[dict], levels, backends=("numpy", "c"), tol=1e-13):
+def _check(mech, fixed: dict, free: list[dict], levels, backends=GENERATED, tol=1e-13):
     for backend in backends:
-        if backend == "c":
-            require_compiler()
+        require(backend)
         ev = symkin.compile(mech, backend=backend, fixed=fixed)
         assert set(ev.inputs) == set(mech.inputs) - set(fixed)
         for inputs in free:

@@ -15,6 +15,7 @@ import sys
 
 import pytest
 from conftest import EXAMPLES, ROOT
+from evaluators import BACKENDS
 
 from symkin import load
 from symkin.cli.commands import main
@@ -179,7 +180,7 @@ def test_fuzzed_mechanisms_never_crash(tmp_path, capsys):
             valid.append(path)
     for path in rng.sample(valid, min(EVALUATED, len(valid))):
         text = path.read_text()
-        for backend in ("sympy", "numpy", "c"):
+        for backend in BACKENDS:
             args = ["eval", str(path), "--backend", backend]
             for name in load(path).inputs:
                 args += ["--input", f"{name}=0.1"]
@@ -207,7 +208,7 @@ def test_cad_digit_geometry_evaluates_in_every_backend(tmp_path, capsys):
         assert re.search(r"\d\.\d{14}", path.read_text())
         assert run(capsys, ["check", str(path)])[0] == 0
         norms = []
-        for backend in ("sympy", "numpy", "c"):
+        for backend in BACKENDS:
             args = ["eval", str(path), "--backend", backend, "--json"]
             for name in load(path).inputs:
                 args += ["--input", f"{name}=0.1"]

@@ -15,7 +15,7 @@ import mpmath
 import pytest
 from cli_runs import symkin_cli
 from conftest import EXAMPLES
-from evaluators import rel_err
+from evaluators import BACKENDS, rel_err
 from reference_solver import Reference
 
 import symkin
@@ -85,7 +85,7 @@ def test_a_tiny_plate_angle_is_a_number_like_any_other(tmp_path):
     path = tmp_path / "m.toml"
     path.write_text(FOUR_BAR.replace('plate_angle = "60*deg"', "plate_angle = 1e-320", 1))
     want = Reference(symkin.load(path)).deviation({"A0": "0.2"})["points"]["C"]["deviation"]
-    for backend in ("sympy", "numpy", "c"):
+    for backend in BACKENDS:
         result = cli("eval", str(path), "--input", "A0=0.2", "--backend", backend, "--json")
         assert result.returncode == 0, result.stderr
         got = json.loads(result.stdout)["points"]["C"]["deviation"]

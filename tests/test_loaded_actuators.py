@@ -23,9 +23,11 @@ import mechanisms as M
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+from evaluators import GENERATED, backends_with
 
 import symkin
 from symkin.cli.commands import main
+from symkin.core import backends
 from symkin.core.errors import InputError
 from symkin.physics import reduced_reported
 from symkin.studies.physical import reduced_equilibrium
@@ -325,20 +327,24 @@ def test_cli(tmp_path, capsys):
     assert "@piezo" not in out["points"] and "@piezo" not in out["stiffness"]
     # the generated numpy and C take the stroke (tests/test_loaded_actuators_codegen.py)
     args = ["eval", str(path), "--input", "piezo=0.02", "--level", "loaded", "--json"]
-    for backend in ("numpy", "c"):
+    loaded = backends_with(generated=True, levels="loaded", actuators="loaded")
+    assert loaded == GENERATED
+    for backend in loaded:
         assert main([*args, "--backend", backend]) == 0
         got = json.loads(capsys.readouterr().out)["points"]["B"]["deviation"]
         assert math.dist(got, out["points"]["B"]["deviation"]) <= 1e-9 * math.hypot(*got)
     # the C's loaded sensitivities with a stroke are the numpy module's
     # (test_loaded_actuators_sens_codegen); with a force it has none (below)
     rates = {}
-    for backend in ("numpy", "c"):
+    for backend in loaded:
         assert main([*args, "--backend", backend, "--sensitivity"]) == 0
         rates[backend] = json.loads(capsys.readouterr().out)["sensitivity"]["B"]
-    for q, v in rates["numpy"].items():
-        assert math.dist(rates["c"][q], v) <= 1e-9 * max(
-            math.hypot(*w) for w in rates["numpy"].values()
-        )
+    first = rates[loaded[0]]
+    for backend in loaded[1:]:
+        for q, v in first.items():
+            assert math.dist(rates[backend][q], v) <= 1e-9 * max(
+                math.hypot(*w) for w in first.values()
+            ), backend
     # sensitivities by the drive (tests above), in the JSON too
     force = tmp_path / "force.toml"
     force.write_text(driven("force"))
@@ -347,14 +353,19 @@ def test_cli(tmp_path, capsys):
     out = json.loads(capsys.readouterr().out)
     assert set(out["sensitivity_inputs"]["P"]) == {"piezo"} and "@piezo" not in out["sensitivity"]
     an = symkin.analyze(symkin.load(force))
-    with pytest.raises(InputError, match="piezo"):  # a force needs a physical level
-        symkin.evaluate(an, {"piezo": 0.5}, "exact", backend="c")
+    for backend in GENERATED:
+        with pytest.raises(InputError, match="piezo"):  # a force needs a physical level
+            symkin.evaluate(an, {"piezo": 0.5}, "exact", backend=backend)
     # the commands that evaluate through generated code (an internal error before): tolerance
     # needs the sensitivities, which the C lacks with a force; sweep runs the C, which takes a
     # force at loaded
     vary = ["--level", "loaded", "--vary", "l=±1e-5"]
-    assert main(["tolerance", str(force), "--input", "piezo=0.5", *vary, "--backend", "c"]) == 2
-    assert "actuator 'piezo'" in capsys.readouterr().err
+    lacking = [b for b in GENERATED if "loaded" not in backends.get(b).force_sensitivities]
+    assert lacking  # the C (the table, tests/test_backends.py)
+    for backend in lacking:
+        tolerance = ["tolerance", str(force), "--input", "piezo=0.5", *vary]
+        assert main([*tolerance, "--backend", backend]) == 2
+        assert "actuator 'piezo'" in capsys.readouterr().err
     sweep = ["sweep", str(force), "--input", "piezo=0:0.5:3", "--samples", "2", *vary, "--json"]
     assert main(sweep) == 0
     assert json.loads(capsys.readouterr().out)

@@ -23,12 +23,13 @@ import math
 import numpy as np
 import pytest
 from conftest import EXAMPLES
-from evaluators import require_compiler
+from evaluators import backends_with, require_compiler
 from test_loaded_actuators import AGREEMENT, PAYLOAD, driven, five_bar
 
 import symkin
 from symkin.cli.commands import main
 from symkin.codegen import pipeline
+from symkin.core import backends
 from symkin.core.errors import InputError
 from symkin.studies.physical import reduced_equilibrium
 
@@ -211,13 +212,17 @@ def test_cli_numpy_and_c_backends_with_actuators(tmp_path, capsys):
     require_compiler()
     argv = ["eval", str(force), "--input", "piezo=0.5", "--level", "loaded", "--json"]
     out = {}
-    for backend in ("sympy", "c"):
+    for backend in ("sympy", *backends_with(generated=True, forces="loaded")):
         assert main([*argv, "--backend", backend]) == 0, backend
         out[backend] = json.loads(capsys.readouterr().out)["points"]["P"]["deviation"]
-    assert math.dist(out["c"], out["sympy"]) <= 1e-10 * math.hypot(*out["sympy"])
-    exact = ["eval", str(force), "--input", "piezo=0.5", "--level", "exact", "--backend", "c"]
-    assert main(exact) == 2
-    assert "actuator 'piezo'" in capsys.readouterr().err
+    ref = out.pop("sympy")
+    for backend, got in out.items():
+        assert math.dist(got, ref) <= 1e-10 * math.hypot(*ref), backend
+    for backend in backends_with(generated=True):
+        assert "exact" not in backends.get(backend).forces
+        exact = ["eval", str(force), "--input", "piezo=0.5", "--level", "exact"]
+        assert main([*exact, "--backend", backend]) == 2
+        assert "actuator 'piezo'" in capsys.readouterr().err
 
 
 def test_a_force_without_the_plates_stiffness_has_no_generated_level():

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import EXAMPLES
-from evaluators import require_compiler
+from evaluators import backends_with, require
 
 import symkin
 from symkin.codegen import pipeline
@@ -43,6 +43,8 @@ CASES = {
 }
 
 _BUILT: dict = {}
+#: The generated backends that hold the `loaded` level (the backend table).
+LOADED = backends_with(generated=True, levels="loaded")
 
 
 def _built(path: Path, backend: str):
@@ -51,8 +53,7 @@ def _built(path: Path, backend: str):
     if key not in _BUILT:
         an = _BUILT.get(str(path)) or symkin.analyze(symkin.load(path))
         _BUILT[str(path)] = an
-        if backend == "c":
-            require_compiler()
+        require(backend)
         p, ev = pipeline.build(an, backend, path.name, sensitivity=False)
         _BUILT[key] = (an, p, ev)
     return _BUILT[key]
@@ -86,7 +87,7 @@ def _loaded_parallelogram(tmp: Path, fraction: float) -> Path:
     return path
 
 
-@pytest.mark.parametrize("backend", ["numpy", "c"])
+@pytest.mark.parametrize("backend", LOADED)
 @pytest.mark.parametrize("key", sorted(CASES))
 def test_loaded_is_the_reduced_equilibrium(key, backend):
     """Every point's deviation within 1e-9 of the Python solver's (the same float64 arithmetic
@@ -138,7 +139,7 @@ def test_actuators_get_loaded():
     assert "sk_loaded_unknown_index" in source
 
 
-@pytest.mark.parametrize("backend", ["numpy", "c"])
+@pytest.mark.parametrize("backend", LOADED)
 def test_parameter_overrides(backend):
     """The parameters are read at run time: a thinner plate gives the Python solver's answer
     there (the scales of Newton stay the defaults'), not the defaults'."""
@@ -174,16 +175,20 @@ def test_links_and_angles_agree_between_numpy_and_c():
     """The links' rotations (the `links` routine reads δ of the non-input hinges) and the
     compliant angles: numpy and C alike, and the compliant angles move."""
     path, inputs = CASES["four_bar"]
-    _, p, _ = _built(path, "c")
+    _, p, _ = _built(path, LOADED[0])
     shape = pipeline.Shape.of(p)
     got = {}
-    for backend in ("numpy", "c"):
+    for backend in LOADED:
         ev = _built(path, backend)[2]
         row = pipeline.backend(backend)
         got[backend] = row.pose(ev, shape, [inputs[n] for n in shape.inputs], None, "loaded")
-    (s1, _, a1, l1), (s2, _, a2, l2) = got["numpy"], got["c"]
-    assert s1 == s2 == 0
-    assert np.allclose(a1, a2, rtol=1e-9, atol=1e-15) and np.allclose(l1, l2, rtol=1e-9, atol=1e-15)
+    s1, _, a1, l1 = got[LOADED[0]]
+    assert s1 == 0
+    for backend in LOADED[1:]:
+        s2, _, a2, l2 = got[backend]
+        assert s2 == 0, backend
+        assert np.allclose(a1, a2, rtol=1e-9, atol=1e-15), backend
+        assert np.allclose(l1, l2, rtol=1e-9, atol=1e-15), backend
     m = len(shape.hinges)
     assert max(abs(c - r) for r, c in zip(a1[:m], a1[m:])) > 1e-6
 
@@ -206,7 +211,7 @@ def test_two_half_plates_near_buckling(tmp_path):
     want = reduced_equilibrium(an, inputs)
     assert want.segments == 2 and not want.refused
     reference = symkin.evaluate(an, inputs, level="equilibrium")
-    for backend in ("numpy", "c"):
+    for backend in LOADED:
         status, got = _pose(path, backend, inputs)
         assert status == 0, backend
         for name, dev in got.items():
@@ -222,11 +227,11 @@ def test_past_buckling_is_refused_alike(tmp_path):
     an = _built(path, "numpy")[0]
     assert reduced_equilibrium(an, inputs).refused
     statuses = []
-    for backend in ("numpy", "c"):
+    for backend in LOADED:
         status, got = _pose(path, backend, inputs)
         statuses.append(status)
         assert all(math.isnan(v) for dev in got.values() for v in dev)
-    assert statuses == [1, 1]
+    assert statuses == [1] * len(LOADED)
 
 
 def test_continuation_alike(monkeypatch):
@@ -243,9 +248,8 @@ def test_continuation_alike(monkeypatch):
     assert p.loaded is not None
     p = dataclasses.replace(p, solver=dataclasses.replace(p.solver, loaded=rules))
     shape = pipeline.Shape.of(p)
-    for backend in ("numpy", "c"):
-        if backend == "c":
-            require_compiler()
+    for backend in LOADED:
+        require(backend)
         ev = pipeline.evaluator(p, backend, path.name, "float64", True, False)
         row = pipeline.backend(backend)
         status, out, _, _ = row.pose(ev, shape, [inputs[n] for n in shape.inputs], None, "loaded")

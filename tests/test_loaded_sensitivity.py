@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 from conftest import EXAMPLES
-from evaluators import require_compiler
+from evaluators import backends_with, require, require_compiler
 
 import symkin
 import symkin.core.levels
@@ -84,14 +84,29 @@ def five_sympy(five):
 
 
 @pytest.fixture(scope="module")
-def five_numpy(five):
-    return symkin.evaluate(five, FIVE_AT, level="loaded", backend="numpy", sensitivity=True)
+def five_by(five):
+    """backend -> its `loaded` evaluation with sensitivities, each evaluated once."""
+    found = {}
+
+    def get(backend):
+        if backend not in found:
+            require(backend)
+            found[backend] = symkin.evaluate(
+                five, FIVE_AT, level="loaded", backend=backend, sensitivity=True
+            )
+        return found[backend]
+
+    return get
 
 
 @pytest.fixture(scope="module")
-def five_c(five):
-    require_compiler()
-    return symkin.evaluate(five, FIVE_AT, level="loaded", backend="c", sensitivity=True)
+def five_numpy(five_by):
+    return five_by("numpy")
+
+
+@pytest.fixture(scope="module")
+def five_c(five_by):
+    return five_by("c")
 
 
 @pytest.mark.parametrize("name", FIVE_VARIED)
@@ -117,9 +132,9 @@ def test_the_deviation_is_the_solvers(five, five_sympy):
         close(five_sympy.points[point].deviation, d, 1e-12, point)
 
 
-@pytest.mark.parametrize("backend", ["numpy", "c"])
-def test_backends_agree(request, five_sympy, backend):
-    ev = request.getfixturevalue(f"five_{backend}")
+@pytest.mark.parametrize("backend", backends_with(generated=True, sensitivities="loaded"))
+def test_backends_agree(five_by, five_sympy, backend):
+    ev = five_by(backend)
     ref = five_sympy.sensitivity
     for table, other in (
         (ref.deviation, ev.sensitivity.deviation),

@@ -18,7 +18,7 @@ import re
 import mechanisms as M
 import pytest
 from conftest import EXAMPLES
-from evaluators import KINEMATIC, Generated, generated, rel_err
+from evaluators import BACKENDS, KINEMATIC, Generated, generated, rel_err, require
 from reference_solver import Reference
 
 import symkin
@@ -123,9 +123,8 @@ def test_parameters_named_like_internal_symbols(key):
     # the derivation and not what this test is about
     g = Generated(mech=hostile, sensitivity=False, levels=list(KINEMATIC))
     an = g.analysis
-    for backend in ("sympy", "numpy", "c"):
-        if backend == "c":
-            g.lib  # noqa: B018 - compiles, or skips without cc
+    for backend in BACKENDS:
+        require(backend)
         got = evaluate(an, inputs, "exact", backend=backend)
         for name, point in got.points.items():
             ref = want["points"][name]

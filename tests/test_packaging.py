@@ -16,6 +16,7 @@ import subprocess
 import venv
 
 from conftest import ROOT
+from evaluators import BACKENDS, GENERATED
 from test_readme import readme_commands
 
 from symkin.codegen.templating import _sections
@@ -97,9 +98,9 @@ def test_readme_first_command_in_a_fresh_venv(tmp_path):
         b: json.loads(symkin("eval", example, "--input", "A0=0.2", "--backend", b, "--json"))[
             "points"
         ]["C"]["deviation"]
-        for b in ("sympy", "numpy", "c")
+        for b in BACKENDS
     }
-    for backend in ("numpy", "c"):
+    for backend in GENERATED:
         assert all(
             abs(a - b) <= 1e-15 * abs(b) + 1e-22 for a, b in zip(results[backend], results["sympy"])
         ), backend

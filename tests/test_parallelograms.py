@@ -22,7 +22,7 @@ from pathlib import Path
 import mpmath
 import numpy as np
 import pytest
-from evaluators import KINEMATIC, Generated, require_compiler
+from evaluators import BACKENDS, KINEMATIC, Generated, require, require_compiler
 from reference_solver import Reference, mobility
 
 import symkin
@@ -320,7 +320,7 @@ def test_the_reader_refuses_a_dependent_input(tmp_path, capsys):
         ('at = [50, 0]\nplate_angle = "pi/2"', 'at = [50, 0]\nplate_angle = "pi/2"\ninput = true'),
         ('plate_angle = "-pi/2"\ninput = true', 'plate_angle = "-pi/2"'),
     )
-    for backend in ("sympy", "numpy", "c"):
+    for backend in BACKENDS:
         args = ["eval", path, "--input", "F1=0.1", "--input", "F2=0.1", "--backend", backend]
         code, out, err = run(args, capsys)
         assert code == 2 and out == ""
@@ -334,9 +334,8 @@ def test_the_reader_refuses_a_dependent_input(tmp_path, capsys):
 def refusals(path, inputs, level, capsys) -> set:
     """The (exit code, message) of `eval` through every backend."""
     seen = set()
-    for backend in ("sympy", "numpy", "c"):
-        if backend == "c":
-            require_compiler()
+    for backend in BACKENDS:
+        require(backend)
         args = ["eval", path, "--level", level, "--backend", backend]
         for k, v in inputs.items():
             args += ["--input", f"{k}={v}"]

@@ -17,6 +17,7 @@ import mechanisms as M
 import pytest
 import sympy as sp
 from conftest import ROOT
+from evaluators import GENERATED
 
 import symkin
 from symkin.codegen import pipeline, plan_cache
@@ -208,7 +209,7 @@ def test_an_evaluation_reuses_a_plan_with_sensitivities_and_gives_the_same_numbe
     fresh = symkin.analyze(symkin.load(PARALLELOGRAM))
     narrow = pipeline.plan_for(fresh, sensitivity=False)
     assert pipeline.plan_covering(fresh, sensitivity=False) is narrow  # nothing wider yet
-    want = {b: evaluate(fresh, {"F1": "0.03"}, "exact", backend=b) for b in ("numpy", "c")}
+    want = {b: evaluate(fresh, {"F1": "0.03"}, "exact", backend=b) for b in GENERATED}
     monkeypatch.setenv("SYMKIN_PLAN_CACHE", "memory")
     an = symkin.analyze(symkin.load(PARALLELOGRAM))
     wide = pipeline.plan_for(an, sensitivity=True)
@@ -321,7 +322,7 @@ def test_notes_and_the_report_dress_one_derivation(monkeypatch):
         assert got.notes == want.notes and len(want.notes) == len(options.get("notes", ())) + 1
         assert repr(got.derivation) == repr(want.derivation)
         assert (got.derivation is None) == ("report" not in options)
-        for backend in ("numpy", "c"):
+        for backend in GENERATED:
             assert pipeline.emit(got, backend, "x") == pipeline.emit(want, backend, "x")
 
 

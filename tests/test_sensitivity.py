@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 import sympy as sp
 from conftest import EXAMPLES, ROOT
-from evaluators import require_compiler
+from evaluators import BACKENDS, require_compiler
 
 import symkin
 from symkin.cli.commands import main
@@ -175,7 +175,7 @@ def test_a_parameter_carries_the_defaults_that_read_it():
 def test_eval_sensitivity_json_is_the_same_in_every_backend(capsys):
     require_compiler()
     docs = {}
-    for backend in ("sympy", "numpy", "c"):
+    for backend in BACKENDS:
         code = main(
             [
                 "eval",

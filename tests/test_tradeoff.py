@@ -16,11 +16,13 @@ import mechanisms as M
 import numpy as np
 import pytest
 from conftest import EXAMPLES, once_per_run
+from evaluators import GENERATED
 from reference_solver import Reference
 
 import symkin
 from symkin.cli.commands import main
 from symkin.codegen import pipeline
+from symkin.core import backends
 from symkin.kinematics.variants import analysis_for
 from symkin.studies.tradeoff import (
     Row,
@@ -141,7 +143,7 @@ def test_float32_error_is_reported_and_bounded(table):
     assert f32["first_order/f32"] == pytest.approx(f64["first_order"], rel=1e-2)
 
 
-@pytest.mark.parametrize("backend", ["c", "numpy"])
+@pytest.mark.parametrize("backend", GENERATED)
 def test_pareto_front_of_each_backend_is_non_dominated(table, backend):
     rows = [v for v in table["variants"] if v[f"time_{backend}"] is not None]
     time = f"time_{backend}"
@@ -155,8 +157,10 @@ def test_pareto_front_of_each_backend_is_non_dominated(table, backend):
         )
         assert v[f"pareto_{backend}"] == (not dominated), v["name"]
     assert any(v[f"pareto_{backend}"] for v in rows)
-    if backend == "c":  # float32 variants are timed in numpy only
-        assert not any(v["pareto_c"] for v in table["variants"] if v["precision"] == "float32")
+    if "float32" not in backends.get(backend).precisions:  # then it times no float32 variant
+        assert not any(
+            v[f"pareto_{backend}"] for v in table["variants"] if v["precision"] == "float32"
+        )
 
 
 def crowded_table() -> Tradeoff:

@@ -13,13 +13,11 @@ import warnings
 from collections.abc import Sequence
 
 from .. import __version__, load
-from ..codegen import pipeline
-from ..core import levels
+from ..core import backends, levels
 from ..core.errors import InputError, SymkinError
 from ..core.files import output_dir, output_file
 from ..fea.command import pairs as _pairs
 from ..graph.structure import build
-from ..studies.evaluation import BACKENDS
 from .output import check_text, matrices_json, matrices_text
 
 #: File types `tradeoff --plot` can write (matplotlib picks the format from the suffix).
@@ -158,7 +156,7 @@ def _evaluator(args: argparse.Namespace, mech, sensitivity: bool = True):
             entry="--level",
             hint="choose one of " + ", ".join(levels.GENERATED),
         )
-    if args.backend == "c":  # no compiler: exit 2 before any derivation
+    if backends.get(args.backend).compiler:  # no compiler: exit 2 before any derivation
         from ..codegen.toolchain import compiler
 
         compiler()
@@ -177,9 +175,13 @@ def _tolerance(args: argparse.Namespace) -> str:
     grid = variation.parse_grid(args.input, mech, limit=_max_evaluations(args))
     tolerance.check_level(args.level)  # before compiling anything
     if args.backend is None:
-        # the C's `loaded` has no sensitivities with force actuators: the numpy module's then
-        forced = any(a.drive == "force" for a in mech.actuators)
-        args.backend = "numpy" if forced and args.level in levels.LOADED else "c"
+        # the C, unless force actuators drive and it has no sensitivities with them at the level:
+        # then the first generated backend that has
+        args.backend = "c"
+        if any(a.drive == "force" for a in mech.actuators):
+            able = backends.having(generated=True, force_sensitivities=args.level)
+            if args.level not in backends.get(args.backend).force_sensitivities and able:
+                args.backend = able[0]
     if mech.actuators:
         check_actuated_level(mech, args.level, args.backend, sensitivity=True)
     result = tolerance.run(_evaluator(args, mech), vary, grid, args.level)
@@ -320,8 +322,8 @@ def parser() -> argparse.ArgumentParser:
     )
     ev.add_argument(
         "--backend",
-        choices=BACKENDS,
-        default="sympy",
+        choices=backends.NAMES,
+        default=backends.DEFAULT,
         help="how to evaluate (default: sympy, the derivation in 40-digit mpmath; numpy: "
         "the generated module; c: the generated C, compiled and cached)",
     )
@@ -407,7 +409,7 @@ def parser() -> argparse.ArgumentParser:
     to.add_argument("--level", choices=levels.GENERATED, default=levels.DEFAULT)
     to.add_argument(
         "--backend",
-        choices=pipeline.BACKENDS,
+        choices=backends.GENERATED,
         help="c (default), or numpy; at loaded with force actuators: numpy (default)",
     )
     to.add_argument("--json", action="store_true", help="machine-readable output")
@@ -428,7 +430,7 @@ def parser() -> argparse.ArgumentParser:
     _evaluations_option(sw)
     sw.add_argument("--seed", type=int, default=0, metavar="K", help="random seed (0)")
     sw.add_argument("--level", choices=levels.GENERATED, default=levels.DEFAULT)
-    sw.add_argument("--backend", choices=pipeline.BACKENDS, default="c")
+    sw.add_argument("--backend", choices=backends.GENERATED, default="c")
     sw.add_argument(
         "--scheduler",
         metavar="SPEC",

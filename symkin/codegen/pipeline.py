@@ -13,8 +13,9 @@ content), the loaded evaluator per digest of its texts (:func:`load`); the C lib
 cached on disk by :mod:`.toolchain` (or compiled in a temporary folder that is removed at once,
 ``transient=True``, when nothing may be written).
 
-A new backend is a folder under ``backends/`` (printer, kernels, templates, ``emit``) and one
-:class:`Backend` row here: its emit adapter and its loader.
+A new backend is a folder under ``backends/`` (printer, kernels, templates, ``emit``), one
+:class:`Backend` row here (its emit adapter and its loader) and one row of the backend table,
+:mod:`symkin.core.backends` (what it can do: levels, sensitivities, actuators, reports, ...).
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from ..core import levels
+from ..core import backends, levels
 from ..core.errors import InputError
 from ..kinematics.analysis import Analysis
 from . import plan_cache, templating, toolchain
@@ -66,6 +67,8 @@ class Shape:
 Pose = tuple[int, list[float], list[float], list[float]]
 #: n configurations: status (n,), out (n, 6 points), the hinge angles (n, 2 hinges) when asked.
 Rows = tuple[np.ndarray, np.ndarray, np.ndarray | None]
+#: Parameter sets by configurations: status (n_sets, n), out (n_sets, n, 6 points).
+Grid = tuple[np.ndarray, np.ndarray]
 #: n configurations with sensitivities: status (n,), values (n, 6 points), the deviation's and
 #: the rigid position's derivatives (n, points, parameters then inputs, 2).
 SensitivityRows = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
@@ -74,13 +77,16 @@ SensitivityRows = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 @dataclass(frozen=True)
 class Backend:
     """One row of the registry: how a backend emits a plan, loads what it emitted, and answers
-    in the neutral layouts (:data:`Pose`, :data:`Rows`, :data:`SensitivityRows`)."""
+    in the neutral layouts (:data:`Pose`, :data:`Rows`, :data:`SensitivityRows`, :data:`Grid`);
+    what it can do is its row of the backend table (:attr:`capabilities`)."""
 
     name: str
     language: str  # what its files are written in, for messages
     files: tuple[str, ...]  # the file names it writes, "{name}" the mechanism's identifier
-    precisions: tuple[str, ...]  # the floating-point types its evaluators run in
     loads: str  # what :func:`load` gives, in words
+    #: what it loads is the generated Python module itself, which answers in the documented
+    #: dicts (evaluate, sensitivity_full: docs/generated-code.md); else the neutral layouts alone
+    is_module: bool
     #: (plan, source file name, precision) -> the texts, in the order of `files`
     emit: Callable[[Plan, str, str], tuple[str, ...]]
     #: a scene's plan -> the texts of its scene evaluator (docs/scene.md), in `files` order
@@ -94,6 +100,19 @@ class Backend:
     sensitivity_rows: Callable[
         [Any, Shape, np.ndarray, Sequence[float] | None, str], SensitivityRows
     ]
+    #: (evaluator, shape, parameter sets (n_sets, params), inputs (n, inputs), level, reused
+    #: out or None) -> every parameter set at every configuration (a Monte Carlo sweep)
+    grid: Callable[[Any, Shape, np.ndarray, np.ndarray, str, np.ndarray | None], Grid]
+
+    @property
+    def capabilities(self) -> backends.Capabilities:
+        """What the backend can do: its row of the backend table (symkin.core.backends)."""
+        return backends.get(self.name)
+
+    @property
+    def precisions(self) -> tuple[str, ...]:
+        """The floating-point types its evaluators run in."""
+        return self.capabilities.precisions
 
     def file_names(self, name: str) -> tuple[str, ...]:
         """The files of mechanism `name`."""
@@ -215,6 +234,22 @@ def _numpy_sensitivity_rows(
     return np.where(res["ok"], 0, 1).astype(np.intc), values, dev, rig
 
 
+def _numpy_grid(
+    module: Any,
+    shape: Shape,
+    params: np.ndarray,
+    x: np.ndarray,
+    level: str,
+    out: np.ndarray | None = None,
+) -> Grid:
+    """One vectorized call per parameter set."""
+    out = np.empty((len(params), len(x), 6 * len(shape.points)))
+    status = np.empty((len(params), len(x)), dtype=np.intc)
+    for s, row in enumerate(params):
+        status[s], out[s] = _numpy_rows(module, shape, x, row, level)[:2]
+    return status, out
+
+
 # -- C: the compiled library's batch entry points already use the neutral layouts ---------------
 
 
@@ -273,6 +308,17 @@ def _c_rows(
     return lib.evaluate_rows(x, params, levels.get(level).code, angles)
 
 
+def _c_grid(
+    lib: toolchain.Library,
+    shape: Shape,
+    params: np.ndarray,
+    x: np.ndarray,
+    level: str,
+    out: np.ndarray | None = None,
+) -> Grid:
+    return lib.evaluate_grid(params, x, levels.get(level).code, out)
+
+
 def _c_sensitivity_rows(
     lib: toolchain.Library,
     shape: Shape,
@@ -292,27 +338,29 @@ REGISTRY: dict[str, Backend] = {
             "numpy",
             "numpy",
             ("{name}.py",),
-            ("float64", "float32"),
             "the generated module, executed in memory",
+            True,
             _emit_numpy,
             _emit_numpy_scene,
             _load_numpy,
             _numpy_pose,
             _numpy_rows,
             _numpy_sensitivity_rows,
+            _numpy_grid,
         ),
         Backend(
             "c",
             "C99",
             ("{name}.h", "{name}.c"),
-            ("float64",),
             "the compiled library, called through ctypes (toolchain.Library)",
+            False,
             _emit_c,
             _emit_c_scene,
             _load_c,
             _c_pose,
             _c_rows,
             _c_sensitivity_rows,
+            _c_grid,
         ),
     )
 }

@@ -11,8 +11,7 @@ import mpmath
 import numpy as np
 import sympy as sp
 
-from ..codegen import pipeline
-from ..core import levels
+from ..core import backends, levels
 from ..core.errors import AssemblyError, InputError
 from ..core.settings import SOLVER
 from ..model.mechanism import Mechanism
@@ -38,26 +37,29 @@ def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity:
             entry=f"[[actuator]] '{forces[0].name}'",
             hint='ask for --level loaded or --level equilibrium, or make it drive = "stroke"',
         )
-    if level in levels.LOADED and sensitivity and backend == "c" and forces:
+    caps = backends.get(backend)
+    if level in levels.LOADED and sensitivity and forces and level not in caps.force_sensitivities:
+        others = backends.having(generated=True, force_sensitivities=level)
         raise InputError(
-            f"the generated C evaluators have no {level} sensitivities with force actuators "
-            f"yet (actuator '{forces[0].name}')",
+            f"the generated {backend} evaluators have no {level} sensitivities with force "
+            f"actuators yet (actuator '{forces[0].name}')",
             file=mech.path,
             entry=f"[[actuator]] '{forces[0].name}'",
-            hint="use --backend numpy",
+            hint="use --backend " + " or ".join(others),
         )
     # the generated evaluators take a force at loaded alone (the physical level they generate)
-    if backend not in ("sympy", *pipeline.REGISTRY) or (
-        backend != "sympy" and forces and level not in levels.LOADED
+    # (stroke actuators at a level the backend does not hold: the level's own check refuses)
+    if (forces and level not in caps.forces) or (
+        not forces and level in caps.levels and level not in caps.actuators
     ):
+        others = backends.having(**{"forces" if forces else "actuators": level})
         raise InputError(
             f"the generated {backend} evaluators do not take "
             + ("force actuators" if forces else "actuators")
             + f" yet (actuator '{(forces or [first])[0].name}')",
             file=mech.path,
             entry=entry,
-            hint="use --backend sympy"
-            + (" or numpy" if not forces or level in levels.LOADED else ""),
+            hint="use --backend " + " or ".join(others),
         )
 
 

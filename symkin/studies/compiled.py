@@ -5,10 +5,12 @@
     ev.sensitivity({"A0": 0.2})["C"]["l"]                         # d(dx, dy)/dl
 
 Nothing is written: the C is compiled in a temporary folder that is removed as soon as the
-library is loaded, and the numpy module (which also gives the parameter defaults) is executed
-from its text. An evaluator pickles as its generated texts, never as a loaded library, so Dask
-can ship it to worker processes and to other machines; each process compiles it on first use,
-once (the C needs a compiler there too).
+library is loaded, and the numpy module is executed from its text. A C evaluator never loads the
+numpy module unless asked for it (:attr:`Compiled.module`): the parameters' defaults and values
+come from the module's parameter section alone (templates/numpy/parameters.py.j2). An
+evaluator pickles as its generated texts, never as a loaded library, so Dask can ship it to
+worker processes and to other machines; each process compiles it on first use, once (the C
+needs a compiler there too).
 
 The results have the shapes of the generated numpy module's `evaluate`, `sensitivity` and
 `sensitivity_full`, whichever backend runs them; the links' rotations are left out (the
@@ -21,12 +23,13 @@ import inspect
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from types import ModuleType
+from types import ModuleType, SimpleNamespace
 from typing import Any
 
 import numpy as np
 
 from ..codegen import pipeline, plan_cache, toolchain
+from ..codegen.backends.numpy import backend as numpy_backend
 from ..core import levels as level_table
 from ..graph.pruning import for_levels
 from ..graph.structure import build
@@ -42,7 +45,11 @@ class Sources:
     name: str
     backend: str  # a generated-code backend (symkin.codegen.pipeline.BACKENDS)
     texts: tuple[str, ...]  # what the backend emitted, in the order of its files (() for numpy)
-    numpy: str  # the numpy module (parameter defaults, numpy backend)
+    numpy: str  # the numpy module (the numpy backend's evaluator; else Compiled.module alone)
+    #: the numpy module's parameter section alone (PARAMETERS, parameters()): the parameters'
+    #: values for a backend whose evaluator is not the module
+    parameter_source: str
+    pruned: tuple[str, ...]  # the file's inputs that move none of the points (accepted, ignored)
     inputs: tuple[str, ...]
     params: tuple[str, ...]
     points: tuple[str, ...]
@@ -51,14 +58,20 @@ class Sources:
     sensitivity: bool
 
     @property
+    def files(self) -> dict[str, str]:
+        """File name -> text of what the backend emitted (the numpy backend's: its module)."""
+        texts = self.texts or (self.numpy,)
+        return dict(zip(pipeline.backend(self.backend).file_names(self.name), texts, strict=True))
+
+    @property
     def header(self) -> str:
-        """The C header ("" for another backend)."""
-        return self.texts[0] if self.backend == "c" else ""
+        """The C header ("" for a backend that emits none)."""
+        return self.files.get(f"{self.name}.h", "")
 
     @property
     def source(self) -> str:
-        """The C source ("" for another backend)."""
-        return self.texts[1] if self.backend == "c" else ""
+        """The C source ("" for a backend that emits none)."""
+        return self.files.get(f"{self.name}.c", "")
 
 
 class Compiled:
@@ -72,7 +85,10 @@ class Compiled:
         self.points = sources.points
         self.hinges = sources.hinges
         self.levels = sources.levels
-        self._found: tuple[ModuleType, Any] | None = None  # loaded on first use, never pickled
+        # loaded on first use, never pickled: the evaluator, the numpy module, the parameters
+        self._evaluator: Any = None
+        self._module: ModuleType | None = None
+        self._parameter_section: Any = None
 
     def __reduce__(self) -> tuple[type[Compiled], tuple[Sources]]:
         return Compiled, (self.sources,)
@@ -81,21 +97,26 @@ class Compiled:
         return f"<symkin.compile {self.name!r} ({self.backend}), levels {', '.join(self.levels)}>"
 
     # -- what is loaded --------------------------------------------------------------------------
-    def _loaded(self) -> tuple[ModuleType, Any]:
-        """The numpy module (it gives the parameter defaults) and the backend's evaluator (the
-        same module for numpy): loaded once per process, nothing written (pipeline.load,
-        transient)."""
-        if self._found is None:
+    def _loaded(self) -> Any:
+        """The backend's evaluator (the numpy module for numpy): loaded once per process,
+        nothing written (pipeline.load, transient)."""
+        if self._evaluator is None:
             s = self.sources
-            shape = self.shape
-            module = pipeline.load("numpy", s.name, (s.numpy,), shape, transient=True)
-            evaluator = (
-                module
-                if s.backend == "numpy"
-                else pipeline.load(s.backend, s.name, s.texts, shape, transient=True)
-            )
-            self._found = (module, evaluator)
-        return self._found
+            texts = s.texts if not self._row.is_module else (s.numpy,)
+            self._evaluator = pipeline.load(s.backend, s.name, texts, self.shape, transient=True)
+        return self._evaluator
+
+    @property
+    def _parameters(self) -> Any:
+        """What gives the parameters' defaults and values: the module where it is the evaluator,
+        else its parameter section alone (executed in memory once per process)."""
+        if self._row.is_module:
+            return self.module
+        if self._parameter_section is None:
+            namespace: dict[str, Any] = {"__name__": f"symkin_parameters_{self.name}"}
+            exec(self.sources.parameter_source, namespace)  # generated by symkin, as the module
+            self._parameter_section = SimpleNamespace(**namespace)
+        return self._parameter_section
 
     @property
     def _row(self) -> pipeline.Backend:
@@ -109,22 +130,28 @@ class Compiled:
 
     @property
     def module(self) -> ModuleType:
-        """The generated numpy module (in memory)."""
-        return self._loaded()[0]
+        """The generated numpy module (in memory; loaded on first use, for a C evaluator too)."""
+        if self._module is None:
+            if self._row.is_module:
+                self._module = self._loaded()
+            else:
+                s = self.sources
+                self._module = pipeline.load("numpy", s.name, (s.numpy,), transient=True)
+        return self._module
 
     @property
     def library(self) -> toolchain.Library:
         """The loaded C library (backend c)."""
-        if self.backend != "c":
+        library = self._loaded()
+        if not isinstance(library, toolchain.Library):
             raise ValueError(f"a {self.backend} evaluator has no C library")
-        library: toolchain.Library = self._loaded()[1]
         return library
 
     # -- parameters ------------------------------------------------------------------------------
     @property
     def defaults(self) -> dict[str, float]:
         """Every parameter's default, in file order."""
-        return dict(self.module.PARAMETERS)
+        return dict(self._parameters.PARAMETERS)
 
     def parameters(
         self, given: Mapping[str, float] | None = None, shifts: Mapping[str, float] | None = None
@@ -132,7 +159,15 @@ class Compiled:
         """Parameter values in file order: `given` ones, the others from their defaults; a
         shift is added to a parameter once its value is set, so the parameters whose defaults
         read it follow (the generated module's `parameters`)."""
-        return [float(v) for v in self.module.parameters(given, shifts)]
+        return [float(v) for v in self.parameter_values(given, shifts)]
+
+    def parameter_values(
+        self, given: Mapping[str, object] | None = None, shifts: Mapping[str, object] | None = None
+    ) -> list[Any]:
+        """As :meth:`parameters`, with values and shifts that may be arrays (many parameter sets
+        at once): each value a float or an array."""
+        values: list[Any] = self._parameters.parameters(given, shifts)
+        return values
 
     def code(self, level: str | None, sensitivity: bool = False) -> str:
         """`level` checked against the generated ones (None: `exact` when generated, else the
@@ -153,8 +188,19 @@ class Compiled:
         """x (n, n_inputs) -> (status (n,), out (n, 6 n_points)): per row and point rigid x, y,
         compliant x, y, deviation x, y, as the C evaluator writes them; status 0 where it
         succeeded (NaN rows elsewhere). `params`: every parameter's value (None: defaults)."""
-        ev = self._loaded()[1]
-        return self._row.rows(ev, self.shape, x, params, self.code(level), False)[:2]
+        return self._row.rows(self._loaded(), self.shape, x, params, self.code(level), False)[:2]
+
+    def evaluate_grid(
+        self,
+        params: np.ndarray,
+        x: np.ndarray,
+        level: str | None = None,
+        out: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Every row of params (n_sets, n_params) at every row of x (n, n_inputs): (status
+        (n_sets, n), out (n_sets, n, 6 n_points)) as :meth:`evaluate_rows` writes them; `out`
+        may be given, to reuse (the C's single call fills it)."""
+        return self._row.grid(self._loaded(), self.shape, params, x, self.code(level), out)
 
     def sensitivity_rows(
         self, x: np.ndarray, level: str | None = None, params: Sequence[float] | None = None
@@ -163,7 +209,7 @@ class Compiled:
         derivatives (n, n_points, n_variables, 2)); variables: the parameters, then the
         inputs."""
         level = self.code(level, sensitivity=True)
-        return self._row.sensitivity_rows(self._loaded()[1], self.shape, x, params, level)
+        return self._row.sensitivity_rows(self._loaded(), self.shape, x, params, level)
 
     # -- the generated module's interface ---------------------------------------------------------
     def evaluate(
@@ -179,7 +225,7 @@ class Compiled:
         numpy backend adds at `loaded` what the level reports: `report=False` leaves it out,
         `buckling=False` the buckling factor alone (its search: tens of Newton solves per
         configuration); the C backend's result holds the deviations and angles alone."""
-        if self.backend == "numpy":
+        if self._row.is_module:
             options: dict[str, bool] = {}
             if not (report and buckling):  # the signature read only when an option is off
                 takes = inspect.signature(self.module.evaluate).parameters
@@ -192,7 +238,7 @@ class Compiled:
             return result
         x, shape = self._rows(inputs)
         status, out, angles = self._row.rows(
-            self._loaded()[1], self.shape, x, self.parameters(params), self.code(level), True
+            self._loaded(), self.shape, x, self.parameters(params), self.code(level), True
         )
         assert angles is not None  # asked for (the last argument)
         m = len(self.hinges)
@@ -232,13 +278,13 @@ class Compiled:
         "rigid": {P: {"params": {p: a}, "inputs": {H: a}}}."""
         if not self.sources.sensitivity:
             raise ValueError("this evaluator was compiled without sensitivities")
-        if self.backend == "numpy":
+        if self._row.is_module:
             level = self.code(level, sensitivity=True)
             result: dict[str, Any] = self.module.sensitivity_full(inputs, level, params)
             return result
         x, shape = self._rows(inputs)
         status, values, dev, rig = self._row.sensitivity_rows(
-            self._loaded()[1],
+            self._loaded(),
             self.shape,
             x,
             self.parameters(params),
@@ -269,7 +315,7 @@ class Compiled:
     # -- helpers ---------------------------------------------------------------------------------
     def _rows(self, inputs: Mapping[str, object]) -> tuple[np.ndarray, tuple[int, ...]]:
         # the file's inputs pruning dropped (they move none of the points) are ignored
-        if set(inputs) - set(self.module.PRUNED_INPUTS) != set(self.inputs):
+        if set(inputs) - set(self.sources.pruned) != set(self.inputs):
             raise ValueError(f"inputs must be exactly {self.inputs}, got {tuple(sorted(inputs))}")
         arrays = np.broadcast_arrays(*(np.asarray(inputs[n], dtype=float) for n in self.inputs))
         shape = arrays[0].shape
@@ -330,14 +376,18 @@ def compile(
             pruned_inputs=pruned,
         )
         source = Path(mech.path).name
-        texts = () if backend == "numpy" else pipeline.emit(p, backend, source)
+        row = pipeline.backend(backend)
         numpy = pipeline.emit(p, "numpy", source)[0]
+        texts = () if row.is_module else pipeline.emit(p, backend, source)
+        parameter_source = "" if row.is_module else numpy_backend.emit_parameters(p)
     return Compiled(
         Sources(
             name=mech.name,
             backend=backend,
             texts=texts,
             numpy=numpy,
+            parameter_source=parameter_source,
+            pruned=p.pruned_inputs,
             inputs=p.drives or p.inputs,
             params=tuple(q.name for q in p.parameters),
             points=p.shown_points,

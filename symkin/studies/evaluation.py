@@ -21,8 +21,7 @@ from typing import NoReturn
 import mpmath
 import sympy as sp
 
-from ..codegen import pipeline
-from ..core import levels
+from ..core import backends, levels
 from ..core.errors import AssemblyError, InputError
 from ..kinematics.analysis import Analysis
 from . import generated, mpmath_sensitivity
@@ -32,8 +31,8 @@ from .mpmath_evaluator import MpmathEvaluator, evaluator_of
 from .physical import equilibrium, loaded
 from .results import Evaluation, LinkResult, PointResult
 
-#: The mpmath evaluation of the derivation, then the generated-code backends (their registry).
-BACKENDS = ("sympy", *pipeline.BACKENDS)
+#: The mpmath evaluation of the derivation, then the generated-code backends (the table).
+BACKENDS = backends.NAMES
 
 
 def evaluate(
@@ -49,6 +48,7 @@ def evaluate(
     with `sensitivity`, also the derivatives by every parameter and input
     (docs/sensitivity.md)."""
     mech = analysis.mechanism
+    caps = backends.get(backend)  # an unknown backend: exit 2, naming the choices
     if sensitivity and not levels.get(level).sensitivity:
         having = [lv.name for lv in levels.LEVELS if lv.generated and lv.sensitivity]
         raise InputError(
@@ -60,14 +60,8 @@ def evaluate(
     # what the backend cannot do is refused before the values are read
     if mech.actuators:
         check_actuated_level(mech, level, backend, sensitivity)
-    elif backend != "sympy" and backend not in pipeline.REGISTRY:
-        raise InputError(
-            f"unknown backend '{backend}'",
-            entry="--backend",
-            hint="backends: " + ", ".join(BACKENDS),
-        )
-    if backend != "sympy":
-        generated.check_level(level)
+    if caps.generated:
+        generated.check_level(level, caps)
     return _dispatch(
         analysis, configure(analysis, inputs, level, params), backend, dps, sensitivity
     )
@@ -87,7 +81,7 @@ def _evaluate(
 ) -> Evaluation:
     """:func:`evaluate` with every input a hinge angle (the actuators' surrogates included)."""
     level = config.level.name
-    if backend == "sympy":
+    if not backends.get(backend).generated:
         if level in levels.LOADED:
             return loaded(analysis, config, dps, sensitivity)
         if level == "equilibrium":
@@ -139,7 +133,7 @@ def _actuated(
     the stroke along the line of action, and, separately, the (compliant) angle at which the
     compliant point has; the deviation is compliant - rigid, each taken at its own angle."""
     mech, level = analysis.mechanism, config.level.name
-    if backend != "sympy":  # the generated module solves the strokes itself
+    if backends.get(backend).generated:  # the generated module solves the strokes itself
         return _generated(analysis, config, backend, sensitivity)
     if level == "equilibrium":
         return equilibrium(analysis, config)

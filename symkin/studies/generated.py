@@ -11,7 +11,7 @@ import numpy as np
 import sympy as sp
 
 from ..codegen import pipeline
-from ..core import levels
+from ..core import backends, levels
 from ..core.errors import InputError
 from ..kinematics.analysis import Analysis
 from .configuration import Configuration, parameter_floats
@@ -24,9 +24,9 @@ class Unsolved(Exception):
     """The generated evaluator could not solve a configuration (its status nonzero)."""
 
 
-def check_level(level: str) -> None:
-    """Refuse (exit 2) a level the generated evaluators do not hold."""
-    if not levels.get(level).generated:
+def check_level(level: str, caps: backends.Capabilities) -> None:
+    """Refuse (exit 2) a level the generated backend `caps` does not hold."""
+    if level not in caps.levels:
         raise InputError(
             f"level '{level}' has no generated evaluator",
             entry="--backend",

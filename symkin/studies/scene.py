@@ -24,6 +24,7 @@ import numpy as np
 import sympy as sp
 
 from ..codegen import pipeline
+from ..core import backends
 from ..core import levels as level_table
 from ..core.errors import AssemblyError, InputError, suggest
 from ..kinematics.variants import Variant, analysis_for, default_variants
@@ -45,7 +46,7 @@ POINT_KEYS = (
 )
 REFERENCES = ("exact", "equilibrium")
 #: The backends a scene file may name (its evaluators: the numpy module always, and this one).
-BACKENDS = pipeline.BACKENDS
+BACKENDS = backends.having(scenes=True)
 PRECISIONS = ("float64", "float32")
 DEFAULT_SAMPLES = 25
 #: Newton steps an iterative closure typically takes from its first-order start (the cost of its
@@ -371,11 +372,12 @@ class _Reader:
                     'use reference = "exact", or give the plates\' stiffness (docs/physics.md)',
                 )
             precision = self.choice(table, "precision", PRECISIONS, "float64", entry)
-            if precision == "float32" and backend != "numpy":
+            if precision not in backends.get(backend).precisions:
+                able = backends.having(scenes=True, precisions=precision)
                 raise self.error(
-                    "float32 variants exist in numpy only",
+                    f"{precision} variants exist in {' and '.join(able)} only",
                     entry,
-                    'set backend = "numpy" at the top level, or drop precision',
+                    f'set backend = "{able[0]}" at the top level, or drop precision',
                 )
             spans = dict(scene_ranges)
             spans.update(self.ranges(table.get("ranges", {}), f"{entry} ranges", free))

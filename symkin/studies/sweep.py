@@ -189,7 +189,7 @@ def sample_block(task: Task, block: int) -> tuple[np.ndarray, np.ndarray]:
     n = min(BLOCK, task.samples - first)
     rng = np.random.default_rng([task.seed, block])
     shifts = {name: spread.offsets(rng, n, nominal) for name, spread, nominal in task.vary}
-    values = task.evaluator.module.parameters(None, shifts)
+    values = task.evaluator.parameter_values(None, shifts)
     params = (
         np.stack([np.broadcast_to(np.asarray(v, dtype=float), (n,)) for v in values], axis=1)
         if values
@@ -229,12 +229,8 @@ def run_blocks(
         flags = np.where(valid, 0, 2).astype(np.int8)
         good = np.flatnonzero(valid)
         if len(good):
-            if ev.backend == "c":
-                status, buffer = ev.library.evaluate_grid(
-                    params[good], task.inputs, level_code(task.level), buffer
-                )
-            else:
-                status, buffer = _numpy_grid(ev, params[good], task.inputs, task.level)
+            # one call for the C, one vectorized call per parameter set for numpy
+            status, buffer = ev.evaluate_grid(params[good], task.inputs, task.level, buffer)
             dx = buffer[:, :, 4::6]
             dy = buffer[:, :, 5::6]
             norm = np.sqrt(dx * dx + dy * dy)  # exact IEEE operations only
@@ -315,21 +311,6 @@ def _statistics(v: np.ndarray, which=STATISTICS) -> dict[str, float | None]:
         else:
             out[key] = float(np.percentile(v, q))
     return out
-
-
-def level_code(level: str) -> int:
-    return levels.get(level).code
-
-
-def _numpy_grid(
-    ev: Compiled, params: np.ndarray, inputs: np.ndarray, level: str
-) -> tuple[np.ndarray, np.ndarray]:
-    """The numpy backend's evaluate_grid: one vectorized call per parameter set."""
-    out = np.empty((len(params), len(inputs), 6 * len(ev.points)))
-    status = np.empty((len(params), len(inputs)), dtype=np.intc)
-    for s, row in enumerate(params):
-        status[s], out[s] = ev.evaluate_rows(inputs, level, row)
-    return status, out
 
 
 @dataclass(frozen=True)

@@ -51,7 +51,6 @@ class Backend:
 
     def context(self, plan: Plan, source: str, precision: str = "float64") -> dict:
         """The template variables: the plan's fields, printed, and the solver's settings."""
-        print_ = self.printer.doprint
         return {
             "header": header_lines(plan, source),
             "name": plan.name,
@@ -69,15 +68,7 @@ class Backend:
             "links": list(plan.reported_links),
             "levels": plan.levels,
             "all_levels": levels.LEVELS,
-            "parameters": [
-                {
-                    "name": p.name,
-                    "symbol": p.symbol.name,
-                    "expr": print_(p.default),
-                    "value": repr(p.value),
-                }
-                for p in plan.parameters
-            ],
+            "parameters": parameter_rows(plan, self.printer),
             "limits": [(i, repr(limit)) for i, limit in plan.limits],
             "n_theta": len(plan.hinges),
             "input_index": list(plan.input_index),
@@ -138,6 +129,19 @@ class Backend:
             "dropped": plan.dropped,
             "kernels": [type(self).kernel_source(n) for n in special_functions(plan)],
         }
+
+
+def parameter_rows(plan: Plan, printer: CodePrinter) -> list[dict]:
+    """The plan's parameters as template data: name, symbol, default (printed) and value."""
+    return [
+        {
+            "name": p.name,
+            "symbol": p.symbol.name,
+            "expr": printer.doprint(p.default),
+            "value": repr(p.value),
+        }
+        for p in plan.parameters
+    ]
 
 
 #: The closure each level's loop solver runs: its linear routine (A, r: the first-order delta) and

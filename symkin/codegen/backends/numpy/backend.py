@@ -7,7 +7,7 @@ from typing import ClassVar
 
 from ...plan import Plan, ScenePlan
 from ...templating import render
-from ..common import Backend, scene_context
+from ..common import Backend, parameter_rows, scene_context
 from . import kernels
 from .printer import NumpyPrinter
 
@@ -25,6 +25,18 @@ def emit(plan: Plan, source: str, dtype: str = "float64") -> str:
     """The numpy module's text; `dtype` float32 gives the single-precision variant."""
     (module,) = NumpyBackend().render(plan, source, dtype)
     return module
+
+
+def emit_parameters(plan: Plan, dtype: str = "float64") -> str:
+    """The module's parameters alone (templates/numpy/parameters.py.j2): its PARAMETERS and its
+    `parameters`, from the same template text as the module's, without the routines."""
+    printer = NumpyBackend().printer
+    return render(
+        "numpy/parameters.py.j2",
+        name=plan.name,
+        parameters=parameter_rows(plan, printer),
+        dtype=dtype,
+    )
 
 
 def emit_scene(plan: ScenePlan) -> str:
