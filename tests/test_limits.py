@@ -197,3 +197,53 @@ def test_names_the_command_line_cannot_express_exit_2_at_read_time(example, old,
         symkin.loads(text.replace(old, new), example)
     message = str(err.value)
     assert words in message and new.split('"')[1] in message and "fix:" in message, message
+
+
+ARC_AS_EXPR = 'model = "expr"\nf = "l*sin(theta)/theta"\ng = "l*(1 - cos(theta))/theta"'
+
+
+def _four_bar_with(model: str) -> str:
+    text = (EXAMPLES / "four_bar.toml").read_text()
+    assert text.count('model = "circular_arc"') == 1
+    return text.replace('model = "circular_arc"', model)
+
+
+@pytest.mark.parametrize("angle", ["0", "0.1", "-0.25"])
+def test_an_expr_model_with_a_removable_singularity_is_evaluated_by_its_limit(angle):
+    """docs' own circular arc written as an `expr` (sin θ/θ: 0/0 at θ = 0) crashed with
+    ZeroDivisionError (exit 1) in every backend at the as-fabricated pose, where every hinge is
+    at 0. Now each backend evaluates it there by its Taylor polynomial: 0 at A0 = 0, and the
+    built-in circular_arc's deviation (its cancellation-free kernels: an independent
+    evaluation of the same functions) to 1e-9 elsewhere."""
+    from evaluators import rel_err, require_compiler
+
+    expr = symkin.analyze(symkin.loads(_four_bar_with(ARC_AS_EXPR), "arc_expr.toml"))
+    arc = symkin.analyze(symkin.load(FOUR_BAR))
+    want = symkin.evaluate(arc, {"A0": angle}, "exact").points["C"].deviation
+    require_compiler()
+    for backend in ("sympy", "numpy", "c"):
+        got = symkin.evaluate(expr, {"A0": angle}, "exact", backend=backend).points["C"]
+        if angle == "0":
+            assert got.deviation == (0.0, 0.0), backend
+        else:
+            assert rel_err(got.deviation, want) <= 1e-9, (backend, angle)
+
+
+@pytest.mark.parametrize(
+    "g, words",
+    [
+        ("l/theta", "'g': it has a pole at theta = 0"),
+        ("l*theta**2/(theta - 2)", "'g' has a pole at theta = 2"),
+        ("l*tan(theta)/2", "'g' has a pole at theta = -1.5708"),
+        ("l*sqrt(theta)", "'g' is not a finite real number at theta = -3.14159"),
+        ("l*theta**theta - l", "'g' is not a finite real number at theta = -3.14159"),
+    ],
+)
+def test_an_expr_model_that_cannot_be_evaluated_on_a_half_turn_exits_2(g, words):
+    """A pole at 0, a pole elsewhere on |θ| ≤ π, a complex value: refused when the file is read
+    (θ**θ gave a TypeError, exit 1, at the first evaluation), naming the hinge and the key."""
+    text = _four_bar_with(f'model = "expr"\nf = "l*sin(theta)/theta"\ng = "{g}"')
+    with pytest.raises(InputError) as err:
+        symkin.loads(text, "m.toml")
+    message = str(err.value)
+    assert words in message and "[[hinge]] #1 'A0'" in message and "fix:" in message, message

@@ -7,11 +7,13 @@ each taken from the hinge or from [defaults] and checked where it was given.
 from __future__ import annotations
 
 import csv
+import functools
 import io
 import math
 from collections.abc import Mapping
 from pathlib import Path
 
+import mpmath
 import sympy as sp
 
 from ..core.errors import suggest
@@ -29,11 +31,14 @@ from .hinges import (
     THETA,
     ModelParameter,
     ModelSpec,
+    removable_at_zero,
 )
 
 DEFAULT_KEYS = tuple(k for k in HINGE_KEYS if k not in ("name", "links", "at")) + MODEL_KEYS
 DEFAULT_MODEL = "circular_arc"
 MAX_TABLE_BYTES = 1 << 20
+#: An `expr` model is checked at 2 EXPR_SAMPLES + 1 angles over -π..π when it is read.
+EXPR_SAMPLES = 32
 
 
 def _is_float(text: str) -> bool:
@@ -342,17 +347,39 @@ class HingeEntries(EntryChecks):
     def check_expr_model(
         self, f: sp.Expr, g: sp.Expr, entry: str, line: int | None, length: sp.Expr
     ) -> None:
-        """The plate must be straight at θ = 0: f(0) = l, g(0) = 0 (the as-fabricated pose)."""
+        """The plate must be straight at θ = 0: f(0) = l, g(0) = 0 (the as-fabricated pose),
+        by the limit where the expression is 0/0 there (sin θ/θ: model.hinges.removable_at_zero);
+        a pole at 0, or a value that is not finite anywhere on |θ| ≤ π, is bad input naming the
+        key (every configuration passes through θ = 0, and an input reaches ±π at most)."""
         subs = {**self.defaults, PLATE_LENGTH: length.subs(self.defaults)}
         lval = sp.N(subs[PLATE_LENGTH], 30)
         for key, expr, want in (("f", f, lval), ("g", g, 0)):
-            at0 = sp.N(expr.subs(subs).subs(THETA, sp.Rational(1, 10**12)), 30)
+            fix = f"write {key} so that it is finite at every angle up to a half turn"
+            try:
+                safe = removable_at_zero(expr.subs(subs), THETA)
+            except ValueError as exc:
+                raise self.error(f"'{key}': {exc}", entry, line, fix) from None
+            at0 = sp.N(safe.subs(THETA, 0), 30)
             if not (at0.is_real and at0.is_finite) or abs(at0 - want) > 1e-6 * lval:
                 raise self.error(
                     f"expression model gives {key}(0) = {short(at0)}, expected {short(want)}",
                     entry,
                     line,
                     "at theta = 0 the plate is straight: f(0) = l and g(0) = 0",
+                )
+            for angle in _poles(expr.subs(subs)):
+                raise self.error(
+                    f"'{key}' has a pole at theta = {short(sp.N(angle))}", entry, line, fix
+                )
+            bad = _not_finite_at(safe)
+            if bad is not None:
+                angle, value = bad
+                raise self.error(
+                    f"'{key}' is not a finite real number at theta = {short(angle)} "
+                    f"(it gives {value})",
+                    entry,
+                    line,
+                    fix,
                 )
 
     def table_rows(
@@ -433,3 +460,38 @@ class HingeEntries(EntryChecks):
             raise self.error(
                 f"table file '{name}' is not UTF-8 text (byte {exc.start})", entry, line, hint
             ) from None
+
+
+@functools.lru_cache(maxsize=256)
+def _poles(expr: sp.Expr) -> list[sp.Expr]:
+    """The singular points of `expr` in θ on [-π, π] other than 0 (that one is the removable
+    singularity model.hinges.removable_at_zero handles, or a pole it refuses), as far as
+    sympy's `singularities` finds them (rational and trigonometric expressions); the angle
+    samples of check_expr_model catch what it leaves."""
+    from sympy.calculus.singularities import singularities
+
+    try:
+        found = singularities(expr, THETA, sp.Interval(-sp.pi, sp.pi))
+    except (NotImplementedError, ValueError, TypeError):
+        return []
+    if not isinstance(found, sp.FiniteSet):
+        return []
+    return sorted((a for a in found if a != 0), key=lambda a: float(sp.N(a)))
+
+
+@functools.lru_cache(maxsize=256)
+def _not_finite_at(expr: sp.Expr) -> tuple[float, object] | None:
+    """The first of 2 EXPR_SAMPLES + 1 angles over -π..π where `expr` (in θ alone) is not a
+    finite real number, and its value there; None when it is finite everywhere. Evaluated once
+    per expression (the hinges of a file mostly share theirs) by mpmath at 20 digits."""
+    fn = sp.lambdify(THETA, expr, "mpmath")
+    with mpmath.workdps(20):
+        for k in range(-EXPR_SAMPLES, EXPR_SAMPLES + 1):
+            angle = mpmath.pi * k / EXPR_SAMPLES
+            try:
+                value = fn(angle)
+            except (ZeroDivisionError, ValueError, OverflowError):
+                return float(angle), "no value"
+            if not isinstance(value, mpmath.mpf) or not mpmath.isfinite(value):
+                return float(angle), mpmath.nstr(value, 6)
+    return None

@@ -13,6 +13,7 @@ expressions in THETA, the deviation written with the cancellation-free kernels o
 from __future__ import annotations
 
 import dataclasses as _dc
+import functools as _functools
 import math as _math
 from dataclasses import dataclass
 
@@ -314,9 +315,32 @@ def _midpoint_functions(hinge) -> PlateFunctions:
         return _table_functions(hinge, t, l, f_rigid, g_rigid)
     # "expr": the user's own functions; the deviation is a plain difference
     ell = PLATE_LENGTH
-    f = _sp.sympify(hinge.param("f")).subs(ell, l)
-    g = _sp.sympify(hinge.param("g")).subs(ell, l)
+    f = removable_at_zero(_sp.sympify(hinge.param("f")).subs(ell, l), t)
+    g = removable_at_zero(_sp.sympify(hinge.param("g")).subs(ell, l), t)
     return PlateFunctions(model, l, f, g, f - f_rigid, g - g_rigid, f_rigid, g_rigid, stable=False)
+
+
+#: Below this |θ| an expression with a removable singularity at θ = 0 is its Taylor polynomial
+#: (of degree REMOVABLE_DEGREE: the next term is below 1e-20 of the value there).
+REMOVABLE_BELOW = _sp.Rational(1, 1000)
+REMOVABLE_DEGREE = 8
+
+
+@_functools.lru_cache(maxsize=256)
+def removable_at_zero(expr: _sp.Expr, t: _sp.Symbol) -> _sp.Expr:
+    """`expr`, or, where it cannot be evaluated at θ = 0 itself (sin θ/θ: 0/0), `expr` for
+    |θ| ≥ REMOVABLE_BELOW and its Taylor polynomial at 0 below: every backend evaluates it, and
+    its derivatives, at θ = 0 by the limit (docs/file-format.md, `expr`). A pole at 0 (a negative
+    power in the series) raises ValueError: the reader refuses it, naming the key."""
+    if not _sp.sympify(expr).subs(t, 0).has(_sp.nan, _sp.zoo, _sp.oo, -_sp.oo):
+        return expr
+    poly = _sp.series(expr, t, 0, REMOVABLE_DEGREE + 1).removeO()
+    if any(
+        term.as_coeff_exponent(t)[1] < 0 or term.has(_sp.nan, _sp.zoo, _sp.oo)
+        for term in _sp.Add.make_args(_sp.expand(poly))
+    ):
+        raise ValueError("it has a pole at theta = 0")
+    return _sp.Piecewise((poly, _sp.Abs(t) < REMOVABLE_BELOW), (expr, True))
 
 
 def _table_functions(hinge, t, l, f_rigid, g_rigid) -> PlateFunctions:
