@@ -247,3 +247,30 @@ def test_an_expr_model_that_cannot_be_evaluated_on_a_half_turn_exits_2(g, words)
         symkin.loads(text, "m.toml")
     message = str(err.value)
     assert words in message and "[[hinge]] #1 'A0'" in message and "fix:" in message, message
+
+
+@pytest.mark.parametrize(
+    "old, new, words",
+    [
+        ("at = [0.06, 0.09]", "at = [1e308, 1e308]", "[[point]] 'C': 'at' = 1.0e+308"),
+        ("at = [0.06, 0.09]", "at = [1e151, 0.09]", "[[point]] 'C': 'at' = 1.0e+151"),
+        ("E = 210e9", "E = 1e-300", "'E' = 1.0e-300"),
+        ("E = 210e9", "E = 1e200", "'E' = 1.0e+200"),
+        ('thickness = "l/10"', "thickness = 1e-160", "'thickness' = 1.0e-160"),
+    ],
+)
+def test_magnitudes_whose_squares_leave_float64_exit_2_at_read_time(old, new, words):
+    """A point at [1e308, 1e308] or E = 1e-300: the sympy backend answered while numpy and C
+    refused with a message naming neither file nor entry; now every backend refuses alike, at
+    read time, naming the entry (symkin.model.mechanism.MAGNITUDE)."""
+    text = (EXAMPLES / "four_bar.toml").read_text()
+    assert text.count(old) == 1
+    with pytest.raises(InputError) as err:
+        symkin.loads(text.replace(old, new), "m.toml")
+    assert words in str(err.value) and "fix:" in str(err.value), str(err.value)
+
+
+def test_a_parameter_given_later_is_checked_the_same_way():
+    run = symkin_cli("eval", FOUR_BAR, "--input", "A0=0.1", "--param", "l=1e-200")
+    assert run.returncode == 2
+    assert "--param" in run.stderr and "'length' = 1.0e-200" in run.stderr, run.stderr

@@ -184,6 +184,11 @@ def closure_rank(mech: Mechanism) -> ClosureRank | None:
     return mech.closure_rank
 
 
+#: The largest magnitude of a coordinate, length, load or material value (and, for the positive
+#: ones, 1/MAGNITUDE the smallest): squares and products of two stay normal float64 numbers.
+MAGNITUDE = mpmath.mpf("1e150")
+
+
 def check_values(
     mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr], option: str | None = None
 ) -> None:
@@ -204,12 +209,33 @@ def check_values(
                 hint="choose values that keep the mechanism valid: " + hint,
             )
 
+        def within(
+            value: mpmath.mpf | None, key: str, entry: str, line: int | None, positive: bool
+        ) -> None:
+            # squares and products of two such numbers stay normal float64 numbers, in every
+            # backend alike (beyond them the generated code refused, the 40-digit one did not)
+            if value is None or (value == 0 and not positive):
+                return
+            size = abs(value)
+            if size > MAGNITUDE or (positive and size < 1 / MAGNITUDE):
+                bounds = "1e-150 to 1e150" if positive else "at most 1e150"
+                raise fail(
+                    f"'{key}' = {mpmath.nstr(value, 6)} is outside the magnitudes symkin "
+                    f"computes with ({bounds}: their squares must stay float64 numbers)",
+                    entry,
+                    line,
+                    f"give '{key}' a magnitude of {bounds} (choose the file's units to suit)",
+                )
+
         centres = {}
         for h in mech.hinges:
             entry = f"[[hinge]] '{h.name}'"
             x, y = (mp_at(v, values) for v in h.at)
             angle = mp_at(h.plate_angle, values)
             length = mp_at(h.length, values)
+            for v in (x, y):
+                within(v, "at", entry, h.line, positive=False)
+            within(length, "length", entry, h.line, positive=True)
             if x is None or y is None or angle is None:
                 raise fail(
                     "'at' or 'plate_angle' is not a finite number",
@@ -244,6 +270,8 @@ def check_values(
                 value = None if raw is None else sp.N(expressions.substitute(raw, values), 30)
                 if value is not None and not (value.is_real and value.is_finite and ok(value)):
                     raise fail(f"{message}, got {key} = {short(value)}", entry, h.line, hint)
+                if value is not None and key != "nu":
+                    within(mpmath.mpf(str(value)), key, entry, h.line, positive=True)
             if h.thickness is not None and not mp_at(h.thickness, values) < length:
                 raise fail(
                     f"thickness {mpmath.nstr(mp_at(h.thickness, values), 6)} is not smaller "
@@ -254,6 +282,8 @@ def check_values(
                 )
             centres[h.name] = ((x, y), length)
         for load in mech.loads:
+            for v in (*load.force, load.moment):
+                within(mp_at(v, values), "force", load.label, load.line, positive=False)
             if None in [mp_at(v, values) for v in (*load.force, load.moment)]:
                 raise fail(
                     "'force' or 'moment' is not a finite number",
@@ -262,6 +292,8 @@ def check_values(
                     "keep loads finite",
                 )
         for p in mech.points:
+            for v in p.at:
+                within(mp_at(v, values), "at", f"[[point]] '{p.name}'", p.line, positive=False)
             if None in [mp_at(v, values) for v in p.at]:
                 raise fail(
                     "'at' is not a finite number",
@@ -270,6 +302,8 @@ def check_values(
                     "keep coordinates finite",
                 )
         for act in mech.actuators:
+            for v in act.at:
+                within(mp_at(v, values), "at", f"[[actuator]] '{act.name}'", act.line, False)
             if None in [mp_at(v, values) for v in (*act.at, *act.direction)]:
                 raise fail(
                     "'at' or 'direction' is not a finite number",
