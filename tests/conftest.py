@@ -11,7 +11,10 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from strict_skips import pytest_runtest_makereport  # noqa: F401  (a hook: CI=true fails skips)
+from strict_skips import (  # noqa: F401  (hooks: CI=true fails skips)
+    pytest_make_collect_report,
+    pytest_runtest_makereport,
+)
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"

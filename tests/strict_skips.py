@@ -25,3 +25,20 @@ def pytest_runtest_makereport(item, call):
         f"skipped under CI=true ({reason}): CI runs every test, so .ci/run must install what "
         "this one needs"
     )
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_make_collect_report(collector):
+    """The same at collection: a module-level `importorskip` or `skip(allow_module_level=True)`
+    fails its module under CI=true instead of dropping every test in it."""
+    outcome = yield
+    report = outcome.get_result()
+    if os.environ.get("CI") != "true" or not report.skipped:
+        return
+    longrepr = report.longrepr
+    reason = longrepr[2] if isinstance(longrepr, tuple) and len(longrepr) == 3 else str(longrepr)
+    report.outcome = "failed"
+    report.longrepr = (
+        f"skipped under CI=true ({reason}): CI collects every test module, so .ci/run must "
+        "install what this one needs"
+    )

@@ -22,11 +22,12 @@ from symkin.codegen import pipeline, toolchain
 from symkin.core import backends, levels
 
 #: The whole table, written out, as the code supports it today (docs/generated-code.md,
-#: "Backends"): name -> generated, levels, sensitivities, precisions, actuators (stroke), forces,
-#: force_sensitivities, reports, compiler, batched, scenes.
+#: "Backends"): name -> title, generated, levels, sensitivities, precisions, actuators (stroke),
+#: forces, force_sensitivities, reports, compiler, batched, scenes.
 K = {"paper", "first_order", "exact"}  # the kinematic levels
 EXPECTED = {
     "sympy": {
+        "title": "sympy",
         "generated": False,
         "levels": K | {"loaded", "equilibrium"},
         "sensitivities": K | {"loaded"},
@@ -40,6 +41,7 @@ EXPECTED = {
         "scenes": False,
     },
     "numpy": {
+        "title": "numpy",
         "generated": True,
         "levels": K | {"loaded"},
         "sensitivities": K | {"loaded"},
@@ -53,6 +55,7 @@ EXPECTED = {
         "scenes": True,
     },
     "c": {
+        "title": "C",
         "generated": True,
         "levels": K | {"loaded"},
         "sensitivities": K | {"loaded"},

@@ -424,18 +424,12 @@ def test_hostile_names_compile_to_literal_text(tmp_path):
     assert "(/etc/passwd" not in log  # never \input
     tex = (folder / "hostile.tex").read_text()
     assert r"\input{/etc/passwd}" not in tex
-    if shutil.which("pdftotext"):
-        text = subprocess.run(
-            ["pdftotext", str(folder / "hostile.pdf"), "-"],
-            capture_output=True,
-            text=True,
-            check=True,
-        ).stdout
-        assert r"\input{/etc/passwd}" in text and 'system("true")' in text
-        passwd = Path("/etc/passwd")
-        if passwd.exists():
-            for line in passwd.read_text().splitlines()[:5]:
-                assert line not in text
+    text = _pdf_text((folder / "hostile.pdf").read_bytes())
+    assert r"\input{/etc/passwd}" in text and 'system("true")' in text
+    passwd = Path("/etc/passwd")
+    if passwd.exists():
+        for line in passwd.read_text().splitlines()[:5]:
+            assert line not in text
 
 
 def test_escape_latex_of_every_character_compiles(tmp_path):
@@ -451,23 +445,17 @@ def test_escape_latex_of_every_character_compiles(tmp_path):
     )
     (tmp_path / "chars.tex").write_text(doc)
     compile_tex(tmp_path, "chars.tex")
-    if shutil.which("pdftotext"):
-        text = subprocess.run(
-            ["pdftotext", str(tmp_path / "chars.pdf"), "-"],
-            capture_output=True,
-            text=True,
-            check=True,
-        ).stdout
-        # (OT1 sets ' and ` as typographic quotes and _ as a rule; the rest is literal)
-        for fragment in (
-            '!"#$%&',
-            "()*+,-./0123456789:;<=>?@ABC",
-            "[\\]^",
-            "{|}~",
-            "[U+0007]",
-            "[U+2192]",
-        ):
-            assert fragment in text, fragment
+    text = _pdf_text((tmp_path / "chars.pdf").read_bytes())
+    # (OT1 sets ' and ` as typographic quotes and _ as a rule; the rest is literal)
+    for fragment in (
+        '!"#$%&',
+        "()*+,-./0123456789:;<=>?@ABC",
+        "[\\]^",
+        "{|}~",
+        "[U+0007]",
+        "[U+2192]",
+    ):
+        assert fragment in text, fragment
 
 
 # -- what the report states --------------------------------------------------------------------
@@ -611,12 +599,17 @@ def test_units_on_the_text_tables_and_axes(tmp_path, reports):
         assert b"(mm)" in files[figure] or _pdf_text_has(files[figure], "mm"), figure
 
 
-def _pdf_text_has(pdf: bytes, needle: str) -> bool:
-    """Whether pdftotext finds `needle` in the figure (matplotlib embeds text as glyphs)."""
+def _pdf_text(pdf: bytes) -> str:
+    """The text pdftotext reads in a PDF (a skip without it; under CI=true a failure)."""
     exe = shutil.which("pdftotext")
     if exe is None:
         if os.environ.get("CI") == "true":
             raise AssertionError("pdftotext (poppler-utils) is needed under CI")
         pytest.skip("pdftotext not installed")
     proc = subprocess.run([exe, "-", "-"], input=pdf, capture_output=True, check=True)
-    return needle in proc.stdout.decode("utf-8", "replace")
+    return proc.stdout.decode("utf-8", "replace")
+
+
+def _pdf_text_has(pdf: bytes, needle: str) -> bool:
+    """Whether pdftotext finds `needle` in the figure (matplotlib embeds text as glyphs)."""
+    return needle in _pdf_text(pdf)

@@ -72,3 +72,21 @@ def test_the_suite_uses_the_hook():
     from strict_skips import pytest_runtest_makereport
 
     assert conftest.pytest_runtest_makereport is pytest_runtest_makereport
+
+
+def test_a_module_skipped_at_collection_fails_under_ci(tmp_path):
+    (tmp_path / "test_module.py").write_text(
+        'import pytest\n\npytest.importorskip("a_module_that_is_not_there")\n\n\n'
+        "def test_never():\n    pass\n"
+    )
+    env = {k: v for k, v in os.environ.items() if k not in ("CI", "PYTEST_ADDOPTS")}
+    env["PYTHONPATH"] = os.pathsep.join([str(TESTS), env.get("PYTHONPATH", "")])
+    argv = [sys.executable, "-m", "pytest", "-p", "strict_skips", "-p", "no:cacheprovider"]
+    argv += ["-o", "addopts=", "-q", "test_module.py"]
+    # (pytest exits 5 when a run collects no test: the module skipped whole)
+    for ci, code, words in ((None, 5, "1 skipped"), ("true", 2, "skipped under CI=true")):
+        run = subprocess.run(
+            argv, cwd=tmp_path, env=env | ({"CI": ci} if ci else {}), capture_output=True,
+            text=True, timeout=120,
+        )  # fmt: skip
+        assert run.returncode == code and words in run.stdout, run.stdout

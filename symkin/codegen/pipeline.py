@@ -242,8 +242,10 @@ def _numpy_grid(
     level: str,
     out: np.ndarray | None = None,
 ) -> Grid:
-    """One vectorized call per parameter set."""
-    out = np.empty((len(params), len(x), 6 * len(shape.points)))
+    """One vectorized call per parameter set (into `out` when it is the right size)."""
+    size = (len(params), len(x), 6 * len(shape.points))
+    if out is None or out.shape != size:
+        out = np.empty(size)
     status = np.empty((len(params), len(x)), dtype=np.intc)
     for s, row in enumerate(params):
         status[s], out[s] = _numpy_rows(module, shape, x, row, level)[:2]

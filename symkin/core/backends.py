@@ -19,7 +19,8 @@ from .errors import InputError
 #: What the `loaded` level reports beyond the deviations (docs/physics.md, "What loaded
 #: reports"), by the generated module's keys: the input hinges' moments and stiffness, the
 #: points' stiffness, the plates' stress, the actuators' stroke, force and stiffness, and (with
-#: loads) the buckling factor.
+#: loads) the buckling factor. A backend's `reports` are what its own code computes; `symkin
+#: eval` prints the derivation's report whichever the backend.
 REPORTS: tuple[str, ...] = ("inputs", "stiffness", "plates", "actuators", "buckling")
 
 
@@ -28,6 +29,7 @@ class Capabilities:
     """One row of the backend table: what the backend evaluates, and how."""
 
     name: str  # --backend, symkin.evaluate(backend=...), symkin.compile(backend=...)
+    title: str  # how messages name it ("the generated C evaluators")
     #: emitted from the plan and loaded (symkin.codegen.pipeline); else the derivation, in mpmath
     generated: bool
     levels: frozenset[str]  # the levels it evaluates
@@ -55,6 +57,7 @@ _GENERATED_SENSITIVITIES = frozenset(
 BACKENDS: tuple[Capabilities, ...] = (
     Capabilities(
         "sympy",
+        title="sympy",
         generated=False,
         levels=frozenset(levels.NAMES),
         sensitivities=frozenset(lv.name for lv in levels.LEVELS if lv.sensitivity),
@@ -69,6 +72,7 @@ BACKENDS: tuple[Capabilities, ...] = (
     ),
     Capabilities(
         "numpy",
+        title="numpy",
         generated=True,
         levels=_GENERATED_LEVELS,
         sensitivities=_GENERATED_SENSITIVITIES,
@@ -83,6 +87,7 @@ BACKENDS: tuple[Capabilities, ...] = (
     ),
     Capabilities(
         "c",
+        title="C",
         generated=True,
         levels=_GENERATED_LEVELS,
         sensitivities=_GENERATED_SENSITIVITIES,

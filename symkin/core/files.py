@@ -34,26 +34,30 @@ def read_input(path: str | Path, limit: int) -> bytes:
     a folder or a device is not a file; a file larger than `limit`, or grown past it since its
     size was read, is refused too (raises Unreadable)."""
     try:
-        info = os.stat(path)  # follows links: a link to /dev/zero is a device
+        # opened without blocking (a FIFO swapped in after a stat would block the open), then
+        # judged by what was opened; links followed: a link to /dev/zero is a device
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
     except OSError as exc:
         raise Unreadable(
             f"cannot read the file ({exc.strerror or exc})", "check the path"
         ) from None
-    if not stat.S_ISREG(info.st_mode):
-        kind = "a folder" if stat.S_ISDIR(info.st_mode) else "a device, FIFO or socket"
-        raise Unreadable(f"not a regular file ({kind})", "give the path of a text file")
+    info = os.fstat(fd)
     too_large = Unreadable(
         f"larger than {limit} bytes", "a mechanism file or table needs a few kB at most"
     )
-    if info.st_size > limit:
-        raise too_large
-    try:
-        with open(path, "rb") as f:
+    if not stat.S_ISREG(info.st_mode) or info.st_size > limit:
+        os.close(fd)
+        if info.st_size > limit and stat.S_ISREG(info.st_mode):
+            raise too_large
+        kind = "a folder" if stat.S_ISDIR(info.st_mode) else "a device, FIFO or socket"
+        raise Unreadable(f"not a regular file ({kind})", "give the path of a text file")
+    with os.fdopen(fd, "rb") as f:
+        try:
             raw = f.read(limit + 1)
-    except OSError as exc:
-        raise Unreadable(
-            f"cannot read the file ({exc.strerror or exc})", "check the path"
-        ) from None
+        except OSError as exc:
+            raise Unreadable(
+                f"cannot read the file ({exc.strerror or exc})", "check the path"
+            ) from None
     if len(raw) > limit:
         raise too_large
     return raw

@@ -39,10 +39,14 @@ The algorithm, in every arithmetic:
    ``converged`` times the largest unknown angle (a zero step at zero angles included) or
    stalls (the exact level's rule (3c)), at most ``polish`` steps. The dyad formulas and the
    continuation's absolute test leave each angle an absolute error of about ε (float64) or
-   10⁻⁴⁰ (40 digits), which is no relative accuracy at all for an input of 1e-32; Newton
-   squares that error at each step (the closure is nearly linear there), so a tiny input takes
-   two or three steps more and an input of ordinary size stops after the first, as before.
-   Every backend runs the same rule (docs/numerics.md, "Tiny angles");
+   10⁻⁴⁰ (40 digits), which is no relative accuracy at all for an input of 1e-32; each step
+   shrinks that error by a factor near ε (the closure is nearly linear there, and its residual,
+   written relative to the as-fabricated pose, rounds relative to the angles), so a tiny input
+   takes a few steps more (float64: 3 at 1e-32, 5 at 1e-100) and an input of ordinary size
+   stops after the first, as before. A polish that reaches the cap is accepted as it stands, and
+   a singular Jacobian at a step refuses the configuration in float64 (C, numpy) while the
+   40-digit backend keeps the angles it has (an exact toggle only). Every backend runs the same
+   rule otherwise (docs/numerics.md, "Tiny angles");
 3. δ: the first-order linear system A δ = −Φ Δz (`first_order`), then for `exact` (and the
    `loaded` closure) Newton on the compliant closure F(δ) = 0 from there, at most
    ``exact_iterations`` steps. **Stopping rule** (every backend, the same test): at the iterate
@@ -189,7 +193,7 @@ class StrokeSettings:
     """The stroke actuators' solves (docs/levels.md, "Actuators"): Newton on the strokes in the
     surrogate hinges' angles, its Jacobian by central differences of step √ε in the generated
     evaluators (templates/c/actuators.c, templates/numpy/actuators.py and
-    reduced_actuators.py) and at mpmath in symkin.studies.evaluation."""
+    reduced_actuators.py) and at mpmath in symkin.studies.actuators."""
 
     iterations: int = 40  # Newton steps at most (the generated evaluators)
     halvings: int = 40  # a step halved at most this often while it grows the residual (C, mpmath)
@@ -203,7 +207,7 @@ class StrokeSettings:
     # 10^-float_digits: the surrogate angles reach the evaluators as inputs, which hold a double
     mpmath_digits_lost: int = 5
     mpmath_float_digits: int = 15
-    # a force actuator's rigid reference (symkin.studies.evaluation, "Actuators at loaded"):
+    # a force actuator's rigid reference (symkin.studies.physical, "Actuators at loaded"):
     # solved again at most this often, until its point moves along its line by at most
     # reference_eps·ε of the mechanism's size L
     reference_rounds: int = 3
@@ -319,7 +323,8 @@ class SolverSettings:
     ulps32: Ulps = Ulps(
         rigid=1e-4 / EPS32, converged=3e-4 / EPS32, stalled=1e-5 / EPS32, residual=1e-4 / EPS32
     )
-    # the polish's cap (rule 2): float64 from ε to below 1e-300 relative in 4 steps at most
+    # the polish's cap (rule 2): measured, float64 stops after 1 step at ordinary inputs, 3 at
+    # 1e-32, 5 at 1e-100 to 1e-300; 8 leaves a margin (a polish at the cap is accepted)
     polish: int = 8
     polish_mpmath: int = 8
     # a dropped row's test is the same in float64 and mpmath: the sympy backend refuses what

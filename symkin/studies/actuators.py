@@ -41,7 +41,7 @@ def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity:
     if level in levels.LOADED and sensitivity and forces and level not in caps.force_sensitivities:
         others = backends.having(generated=True, force_sensitivities=level)
         raise InputError(
-            f"the generated {backend} evaluators have no {level} sensitivities with force "
+            f"the generated {caps.title} evaluators have no {level} sensitivities with force "
             f"actuators yet (actuator '{forces[0].name}')",
             file=mech.path,
             entry=f"[[actuator]] '{forces[0].name}'",
@@ -54,7 +54,7 @@ def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity:
     ):
         others = backends.having(**{"forces" if forces else "actuators": level})
         raise InputError(
-            f"the generated {backend} evaluators do not take "
+            f"the generated {caps.title} evaluators do not take "
             + ("force actuators" if forces else "actuators")
             + f" yet (actuator '{(forces or [first])[0].name}')",
             file=mech.path,

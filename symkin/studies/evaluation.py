@@ -1,16 +1,15 @@
 """One configuration evaluated (`symkin eval`): the derivation with mpmath, or the generated code.
 
-The `sympy` backend evaluates the expressions of :class:`~symkin.analysis.Analysis` with mpmath
-at `dps` digits (40 by default), so its float64 results are correctly rounded references for the
-generated evaluators (symkin.studies.mpmath_evaluator: the kinematic levels;
+The `sympy` backend evaluates the expressions of :class:`~symkin.kinematics.analysis.Analysis`
+with mpmath at `dps` digits (40 by default), so its float64 results are correctly rounded
+references for the generated evaluators (symkin.studies.mpmath_evaluator: the kinematic levels;
 symkin.studies.physical: `loaded` and `equilibrium`). The `numpy` and `c` backends run the
 generated evaluators (symkin.studies.generated); when one of them cannot assemble a
-configuration, the mpmath evaluation is asked why, so every backend fails with the same exit code
-(3) and the same message naming the loop (docs/cli.md). A mechanism driven by actuators is
-evaluated at the surrogate hinges' angles that reach the strokes (symkin.studies.actuators).
-The level, inputs and parameters are parsed once, at the entry, into a
-:class:`~symkin.studies.configuration.Configuration` that every level and backend takes.
-"""
+configuration, the mpmath evaluation is asked why, so every backend fails with the same exit
+code (3) and the same message naming the loop (docs/cli.md). A mechanism driven by actuators is
+evaluated at the surrogate hinges' angles that reach the strokes (symkin.studies.actuators). The
+level, inputs and parameters are parsed once, at the entry, into a
+:class:`~symkin.studies.configuration.Configuration` that every level and backend takes."""
 
 from __future__ import annotations
 

@@ -201,7 +201,7 @@ class MpmathEvaluator:
             try:
                 step = mpmath.lu_solve(mpmath.matrix(jac(*values)), mpmath.matrix(f(*values)))
             except ZeroDivisionError:
-                return theta  # singular at the rigid start: the checks after it refuse
+                return theta  # an exact toggle: the angles as they are (settings, rule 2)
             for k, a in enumerate(unknowns):
                 theta[a] = theta[a] - step[k]
             size = max(abs(theta[a]) for a in unknowns)

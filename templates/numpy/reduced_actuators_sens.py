@@ -1,7 +1,7 @@
 """symkin's numpy runtime for the `loaded` level's sensitivities with actuators
-(docs/sensitivity.md, "Actuators"; symkin.studies.evaluation's _stroke_columns): what a generated
-numpy module with actuators, the loaded level and sensitivities runs. Only those modules hold it
-(templates/numpy/module.py.j2), after templates/numpy/reduced_actuators.py.
+(docs/sensitivity.md, "Actuators"; symkin.studies.mpmath_sensitivity's _stroke_columns): what a
+generated numpy module with actuators, the loaded level and sensitivities runs. Only those
+modules hold it (templates/numpy/module.py.j2), after templates/numpy/reduced_actuators.py.
 """
 
 import numpy
