@@ -111,8 +111,10 @@ def test_loaded_reports_what_equilibrium_reports(evaluated, name):
 
 
 def test_the_reported_quantities_in_json_and_text_every_backend(capsys):
-    """`eval --level loaded` prints them in text and JSON, and every backend with the level gives
-    the sympy backend's."""
+    """`eval --level loaded` prints them in text and JSON, the same whichever the backend: eval
+    takes them from the derivation (symkin.studies.generated), so this checks the printing and
+    the dispatch, not the generated code's own report (tests/test_loaded_reported_codegen.py
+    checks that against the Python level)."""
     path = str(EXAMPLES / "four_bar.toml")
     data = {}
     for backend in backends_with(levels="loaded"):
