@@ -26,6 +26,10 @@ class Level:
     needs_stiffness: bool = False  # needs E, thickness and width of every compliant plate
     generated: bool = True  # the generated C and numpy hold it; else mpmath only
     sensitivity: bool = True  # closed-form derivatives by the parameters (docs/sensitivity.md)
+    #: how the 40-digit evaluation solves it (symkin.studies.evaluation's SOLVERS): "kinematic"
+    #: (the loops, the deviation of the paper's sections 3-5), "reduced" (Newton on the reduced
+    #: equilibrium, symkin.physics.reduced) or "beams" (the plates as beams, physics.equilibrium)
+    solver: str = "kinematic"
     shares: str = ""  # the level whose loop solver and deviation routine it runs,
     # with constants of its own
 
@@ -49,7 +53,7 @@ LEVELS: tuple[Level, ...] = (
     # The physical levels (docs/physics.md): the plates' stiffness and the file's loads.
     # Code 5 was `loaded_refined` (a second pass of the old linearised statics), retired when
     # `loaded` became Newton on the reduced equilibrium: it stays reserved, never given again.
-    Level("loaded", 3, "loaded", needs_delta=True, needs_stiffness=True),
+    Level("loaded", 3, "loaded", needs_delta=True, needs_stiffness=True, solver="reduced"),
     Level(
         "equilibrium",
         4,
@@ -58,6 +62,7 @@ LEVELS: tuple[Level, ...] = (
         needs_stiffness=True,
         generated=False,
         sensitivity=False,
+        solver="beams",
     ),
 )
 #: Codes of retired levels, by their old name: never given to a new level.

@@ -14,7 +14,7 @@ level, inputs and parameters are parsed once, at the entry, into a
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import NoReturn
 
 import mpmath
@@ -79,13 +79,8 @@ def _evaluate(
     analysis: Analysis, config: Configuration, backend: str, dps: int, sensitivity: bool
 ) -> Evaluation:
     """:func:`evaluate` with every input a hinge angle (the actuators' surrogates included)."""
-    level = config.level.name
     if not backends.get(backend).generated:
-        if level in levels.LOADED:
-            return loaded(analysis, config, dps, sensitivity)
-        if level == "equilibrium":
-            return equilibrium(analysis, config)
-        return _kinematic(evaluator_of(analysis), config, dps, sensitivity)
+        return SOLVERS[config.level.solver](analysis, config, dps, sensitivity)
     return _generated(analysis, config, backend, sensitivity)
 
 
@@ -131,13 +126,11 @@ def _actuated(
     actuator's surrogate hinge takes the angle at which the rigid point of action has moved by
     the stroke along the line of action, and, separately, the (compliant) angle at which the
     compliant point has; the deviation is compliant - rigid, each taken at its own angle."""
-    mech, level = analysis.mechanism, config.level.name
+    mech = analysis.mechanism
     if backends.get(backend).generated:  # the generated module solves the strokes itself
         return _generated(analysis, config, backend, sensitivity)
-    if level == "equilibrium":
-        return equilibrium(analysis, config)
-    if level in levels.LOADED:
-        return loaded(analysis, config, dps, sensitivity)
+    if config.level.solver != "kinematic":  # the physical levels take the strokes themselves
+        return SOLVERS[config.level.solver](analysis, config, dps, sensitivity)
     given = config.drives
     strokes = list(config.strokes.values())
     solver = evaluator_of(analysis)
@@ -203,3 +196,12 @@ def _explain(analysis: Analysis, config: Configuration, sensitivity: bool = Fals
         "configuration (no convergence in float64), although the 40-digit "
         "derivation can"
     )
+
+
+#: How the 40-digit evaluation solves each kind of level (core/levels, Level.solver): a level
+#: with a solve of its own is a row here and its row in the level table.
+SOLVERS: dict[str, Callable[[Analysis, Configuration, int, bool], Evaluation]] = {
+    "kinematic": lambda an, config, dps, sens: _kinematic(evaluator_of(an), config, dps, sens),
+    "reduced": loaded,
+    "beams": lambda an, config, dps, sens: equilibrium(an, config),
+}
