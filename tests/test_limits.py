@@ -274,3 +274,23 @@ def test_a_parameter_given_later_is_checked_the_same_way():
     run = symkin_cli("eval", FOUR_BAR, "--input", "A0=0.1", "--param", "l=1e-200")
     assert run.returncode == 2
     assert "--param" in run.stderr and "'length' = 1.0e-200" in run.stderr, run.stderr
+
+
+def test_a_table_row_far_beyond_a_plate_length_exits_2(tmp_path):
+    """A row of 1e308 gave a NaN fit that `check` accepted and `eval` blamed on a toggle
+    position: refused when the table is read, naming the file's row."""
+    rows = "".join(f"{t / 10},{1 - (t / 10) ** 2 / 6},{t / 20}\n" for t in range(-5, 6))
+    (tmp_path / "rows.csv").write_text("theta,f,g\n" + rows + "0.55,1e308,0.1\n")
+    text = (
+        (EXAMPLES / "four_bar.toml")
+        .read_text()
+        .replace(
+            'plate_angle = "60*deg"',
+            'plate_angle = "60*deg"\nmodel = "table"\nfile = "rows.csv"',
+            1,
+        )
+    )
+    (tmp_path / "m.toml").write_text(text)
+    run = symkin_cli("check", str(tmp_path / "m.toml"))
+    assert run.returncode == 2, run.stderr
+    assert "rows.csv:13: a value beyond 1000 in magnitude" in run.stderr, run.stderr

@@ -37,6 +37,9 @@ from .hinges import (
 DEFAULT_KEYS = tuple(k for k in HINGE_KEYS if k not in ("name", "links", "at")) + MODEL_KEYS
 DEFAULT_MODEL = "circular_arc"
 MAX_TABLE_BYTES = 1 << 20
+#: The largest magnitude of a table's θ (rad), f/l and g/l: a plate's clamp is about a plate
+#: length from its other one (a row of 1e308 gave a NaN fit that `check` accepted).
+TABLE_MAGNITUDE = 1e3
 #: An `expr` model is checked at 2 EXPR_SAMPLES + 1 angles over -π..π when it is read.
 EXPR_SAMPLES = 32
 
@@ -409,6 +412,15 @@ class HingeEntries(EntryChecks):
                     entry,
                     line,
                     f"correct row {k} of {name}",
+                )
+            if any(abs(v) > TABLE_MAGNITUDE for v in values):
+                raise self.error(
+                    f"{name}:{k}: a value beyond {TABLE_MAGNITUDE:g} in magnitude "
+                    f"({', '.join(f'{v:g}' for v in values)})",
+                    entry,
+                    line,
+                    f"theta is in radians and f/l, g/l in plate lengths, all of order 1: correct "
+                    f"row {k} of {name}",
                 )
             rows.append(tuple(values))
         if len({r[0] for r in rows}) < degree + 1:
