@@ -214,7 +214,7 @@ def check_values(
         ) -> None:
             # squares and products of two such numbers stay normal float64 numbers, in every
             # backend alike (beyond them the generated code refused, the 40-digit one did not)
-            if value is None or (value == 0 and not positive):
+            if value is None or value == 0:  # zero: the sign rules name it
                 return
             size = abs(value)
             if size > MAGNITUDE or (positive and size < 1 / MAGNITUDE):

@@ -428,12 +428,14 @@ class Report:
                         (rf"\Delta f_{{{a}}}(\theta)", h.df),
                         (rf"\Delta g_{{{a}}}(\theta)", h.dg),
                     ):
-                        e = _rounded(e) if model == "table" else e
+                        e = _rounded(e) if model == "table" else _as_written(e)
                         entry["lines"] += self.tex.equation(lhs, e)
                 if model == "expr":
                     entry["note"] = (
                         "The deviation of an \\texttt{expr} model is the plain "
-                        "difference from the ideal revolute (not cancellation-free)."
+                        "difference from the ideal revolute (not cancellation-free). "
+                        "An expression that is $0/0$ at $\\theta = 0$ is evaluated below "
+                        "$|\\theta| = 10^{-3}$ by its Taylor polynomial of degree 8."
                     )
             kernels.update(md.kernels)
             out.append(entry)
@@ -795,3 +797,9 @@ def _relation_lines(tex: Tex, lhs: sp.Expr, rhs: sp.Expr) -> list[str]:
     out.append(f"&= {right[0]}")
     out += [r"&\quad {}" + ln for ln in right[1:]]
     return out
+
+
+def _as_written(e: sp.Expr) -> sp.Expr:
+    """An `expr` model's function as the file writes it: a removable singularity's Taylor
+    branch (model.hinges.removable_at_zero) left out of print, as the report's note says."""
+    return e.replace(lambda x: isinstance(x, sp.Piecewise), lambda x: x.args[-1].expr)
