@@ -179,6 +179,28 @@ def test_mesh_positions_are_graded_and_symmetric():
     )
 
 
+@needs_ccx
+def test_a_run_larger_than_ten_minutes_of_ccx_is_refused_first(tmp_path, capsys):
+    """`--mesh 2000,10` was inside the per-plate cap and still on ccx's first increment after
+    300 s on the nine-bar: a run's mesh is capped in all (plates x NL x NT), refused before any
+    derivation or file, naming --mesh."""
+    import time
+
+    out = tmp_path / "out"
+    argv = ["fea", str(EXAMPLES / "nine_bar_platform.toml"), "--input", "O=0.05"]
+    start = time.monotonic()
+    code = main([*argv, "-o", str(out), "--mesh", "2000,10", "--run"])
+    assert code == 2 and time.monotonic() - start < 5
+    err = capsys.readouterr().err
+    assert "--mesh: 10 plates x 2000 x 10 = 200000 elements" in err, err
+    assert not out.exists()
+    # the largest mesh the cap lets run on the nine-bar (80 x 8: about 10 minutes measured) is
+    # accepted by the check itself
+    from symkin.fea import command
+
+    command.check_run_size(argv[1], fdeck.parse_mesh("80,8"))
+
+
 @pytest.mark.parametrize("mesh", ["0,4", "4", "a,b", "4,4,1", "4,4,-0.1", "1000,100"])
 def test_bad_mesh_is_bad_input(tmp_path, capsys, mesh):
     out = tmp_path / "out"

@@ -12,7 +12,7 @@ from collections.abc import Callable, Sequence
 from . import Comparison, compare, prepare, save, write_deck
 from ._symkin import InputError
 from .ccx import executable
-from .deck import DEFAULT_MESH, parse_mesh
+from .deck import DEFAULT_MESH, Mesh, parse_mesh
 
 
 def register(command: Callable[[str, str], argparse.ArgumentParser]) -> None:
@@ -76,11 +76,38 @@ def pairs(items: Sequence[str] | None, option: str, file: str | None = None) -> 
     return out
 
 
+#: The most elements (plates x NL x NT) one `--run` solves: ccx's time grows a little faster than
+#: the element count (docs/fea.md, "Mesh and run time": the nine-bar platform's 10 plates took
+#: 114 s at the default 40,4 and about 10 minutes at 80,8 on two cores), so a larger mesh is
+#: refused before the run rather than left running for hours.
+MAX_RUN_ELEMENTS = 6_400
+
+
+def check_run_size(file: str, mesh: Mesh) -> None:
+    """Refuse (exit 2, naming --mesh) a run whose mesh exceeds MAX_RUN_ELEMENTS in all, before
+    any derivation: the file is read only to count its plates."""
+    from ._symkin import load
+
+    mech = load(file)
+    plates = sum(1 for h in mech.hinges if h.is_plate)
+    elements = plates * mesh.along * mesh.across
+    if elements > MAX_RUN_ELEMENTS:
+        raise InputError(
+            f"{plates} plates x {mesh.along} x {mesh.across} = {elements} elements is more than "
+            f"one ccx run solves in about 10 minutes ({MAX_RUN_ELEMENTS})",
+            file=mech.path,
+            entry="--mesh",
+            hint=f"use fewer elements per plate (the default {DEFAULT_MESH} converges to about "
+            "0.03 %), or write the deck without --run and run ccx yourself",
+        )
+
+
 def main(args: argparse.Namespace) -> str:
     """Run the subcommand; returns what goes to stdout."""
     mesh = parse_mesh(args.mesh) if args.mesh else DEFAULT_MESH
     if args.solve:
         executable()  # before any work: exit 2 naming the package
+        check_run_size(args.file, mesh)
     setup = prepare(
         args.file, pairs(args.input, "--input", args.file), pairs(args.param, "--param", args.file)
     )
