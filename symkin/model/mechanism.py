@@ -236,6 +236,14 @@ def check_values(
             for v in (x, y):
                 within(v, "at", entry, h.line, positive=False)
             within(length, "length", entry, h.line, positive=True)
+            if angle is not None and abs(angle) > 2 * mpmath.pi * (1 + mpmath.mpf("1e-20")):
+                raise fail(
+                    f"plate_angle = {mpmath.nstr(angle, 6)} rad is beyond a full turn",
+                    entry,
+                    h.line,
+                    f"plate_angle is in radians: if degrees were meant, write "
+                    f'plate_angle = "{mpmath.nstr(angle, 6)}*deg"',
+                )
             if x is None or y is None or angle is None:
                 raise fail(
                     "'at' or 'plate_angle' is not a finite number",

@@ -527,6 +527,17 @@ class _Reader(HingeEntries):
                 f"3n - {rank.rank} = {rank.mobility}"
             )
         dof = mech.grubler if rank is None else rank.mobility
+        doubled = _doubled_pairs(mech)
+        if doubled and (dof < 1 or len(mech.drives) != dof):
+            # the likeliest cause of a mobility that does not match: a hinge on the wrong link
+            a, b, pair = doubled[0]
+            raise self.error(
+                f"two hinges join {pair[0]} and {pair[1]}: '{a}' and '{b}' (the mobility is "
+                f"{dof}, Grübler {formula}, and the inputs number {len(mech.drives)})",
+                f"[[hinge]] '{b}'",
+                None,
+                f"check the links of '{a}' and '{b}': one of them is likely on the wrong link",
+            )
         if dof < 1:
             raise self.error(
                 f"the mechanism cannot move: Grübler mobility {formula}",
@@ -607,3 +618,17 @@ class _Reader(HingeEntries):
             dataclasses.replace(a, surrogate=s) for a, s in zip(mech.actuators, found)
         )
         return dataclasses.replace(mech, hinges=hinges, actuators=actuators)
+
+
+def _doubled_pairs(mech: Mechanism) -> list[tuple[str, str, tuple[str, str]]]:
+    """Hinges joining a pair of links that an earlier hinge already joins: (earlier hinge,
+    hinge, the pair), in file order."""
+    seen: dict[frozenset[str], str] = {}
+    out = []
+    for h in mech.hinges:
+        key = frozenset(h.links)
+        if key in seen:
+            out.append((seen[key], h.name, (h.links[0], h.links[1])))
+        else:
+            seen[key] = h.name
+    return out
