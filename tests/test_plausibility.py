@@ -49,3 +49,32 @@ def test_a_hinge_on_the_wrong_link_is_named():
     message = str(err.value)
     assert "two hinges join frame and crank: 'A0' and 'A'" in message, message
     assert "one of them is likely on the wrong link" in message
+
+
+def test_a_buckling_search_that_cannot_finish_loses_nothing_else(monkeypatch):
+    """A side output fails alone (CONTRACT, "Side outputs never lose the main answer"): the
+    search raising (as it did past its budget on a fixed-guided beam at 0.9 of its buckling
+    load, exit 3) leaves the equilibrium reported, `buckling` null with the reason."""
+    import json
+
+    from symkin.core.errors import AssemblyError
+    from symkin.physics import equilibrium
+
+    lever = str(EXAMPLES.parent / "tests" / "mechanisms" / "lever_amplifier.toml")
+    argv = ["eval", lever, "--level", "equilibrium", "--input", "P0=0.01", "--json"]
+    whole = json.loads(symkin_cli(*argv).stdout)
+    assert whole["buckling"] is None and "buckling_note" not in whole  # none up to its limit
+
+    def gives_up(mech, *args, **kwargs):
+        assert kwargs.get("seconds") == float("inf")  # bounded by its steps, not the clock
+        raise AssemblyError(f"{mech.path}: the buckling search could not follow the load factor")
+
+    monkeypatch.setattr(equilibrium, "buckling_factor", gives_up)
+    run = symkin_cli(*argv)
+    assert run.returncode == 0, run.stderr
+    data = json.loads(run.stdout)
+    assert data["buckling"] is None
+    assert data["buckling_note"] == "the buckling search could not follow the load factor"
+    assert data["points"] == whole["points"]
+    text = symkin_cli(*argv[:-1]).stdout
+    assert "buckling: not found (the buckling search could not follow the load factor)" in text

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import math
 import weakref
 from collections.abc import Mapping
 
@@ -212,11 +213,20 @@ def _equilibrium(
             "are inextensible elastica, which leave the forces the redundant loops carry "
             "along the plates undetermined (a singular system)"
         ) from None
-    buckling = None
+    buckling, buckling_note = None, None
     if ev.mechanism.loads or any(a.drive == "force" for a in mech.actuators):
-        buckling = physical_equilibrium.buckling_factor(
-            ev.mechanism, exact_params, {names[a]: v for a, v in given.items()} | acting
-        )
+        # a side output: when the search cannot finish, the equilibrium is reported all the same,
+        # the factor null with the reason (CONTRACT, "Side outputs never lose the main answer");
+        # bounded by its steps alone, not by the clock, so the same command gives the same bytes
+        try:
+            buckling = physical_equilibrium.buckling_factor(
+                ev.mechanism,
+                exact_params,
+                {names[a]: v for a, v in given.items()} | acting,
+                seconds=math.inf,
+            )
+        except AssemblyError as exc:
+            buckling_note = str(exc).removeprefix(f"{mech.path}: ")
     order = [names[a] for a in sorted(names)]
     with mpmath.workdps(20):
         # The links' rotations: the rigid one from the rigid angles, the deviation from the
@@ -261,6 +271,7 @@ def _equilibrium(
         plates={h.name: res.plates[h.name] for h in mech.hinges if h.name in res.plates},
         buckling=None if buckling is None else buckling.factor,
         buckling_hinge=None if buckling is None else buckling.hinge,
+        buckling_note=buckling_note,
         units=ev.mechanism.units,
     )
     return with_model_error(result, ev.mechanism, exact_params)

@@ -117,6 +117,7 @@ class Evaluation:
     plates: dict[str, PlateStress] = field(default_factory=dict)
     buckling: float | None = None
     buckling_hinge: str | None = None
+    buckling_note: str | None = None  # why the buckling search could not finish (factor None)
     units: str = "m"  # the file's length unit (the stiffness's unit)
     # The physical levels' model error per point (docs/physics.md, "Model error"): relative to
     # |ΔR|, an estimate of the level's beam theory against a continuum, and its parts.
@@ -157,6 +158,9 @@ class Evaluation:
             if self.buckling is not None:
                 # JSON has no infinity: null is "none up to the factor searched"
                 physical["buckling"] = self.buckling if math.isfinite(self.buckling) else None
+            elif self.buckling_note is not None:
+                physical["buckling"] = None
+                physical["buckling_note"] = self.buckling_note
         return {
             "level": self.level,
             "backend": self.backend,
