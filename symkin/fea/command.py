@@ -77,9 +77,9 @@ def pairs(items: Sequence[str] | None, option: str, file: str | None = None) -> 
 
 
 #: The most elements (plates x NL x NT) one `--run` solves: ccx's time grows a little faster than
-#: the element count (docs/fea.md, "Mesh and run time": the nine-bar platform's 10 plates took
-#: 114 s at the default 40,4 and about 10 minutes at 80,8 on two cores), so a larger mesh is
-#: refused before the run rather than left running for hours.
+#: the element count (docs/fea.md, "Limits": the nine-bar platform's 10 plates took 114 s at the
+#: default 40,4 and 781 s at 80,8 on two cores, partly beside the test suite), so a larger mesh
+#: is refused before the run rather than left running for hours.
 MAX_RUN_ELEMENTS = 6_400
 
 
