@@ -154,3 +154,23 @@ def test_tiny_angles_keep_their_relative_accuracy_in_every_backend(key, hinge):
                     if float(angle) < 0 and k == 1:
                         ratio = (-ratio[0], -ratio[1])
                     assert rel_err(ratio, first) <= 1e-9, (key, angle, level, backend, name, k)
+
+
+def test_tiny_angles_at_the_physical_levels():
+    """`equilibrium` chose its digits from the float64 solution's deviation, which at a tiny
+    input is rounding noise: at A0 = 1e-32 it answered a 6.5e-27 floor. Now, from 1e-16 down to
+    1e-100, its deviation and `loaded`'s scale exactly with the input (the plates carry forces:
+    a first-order deviation), the two agree to their 1 %, and `loaded` agrees in every backend."""
+    g = generated("four_bar")
+    first = {}
+    for angle in ("1e-16", "1e-32", "1e-100"):
+        theta = float(angle)
+        eq = symkin.evaluate(g.analysis, {"A0": angle}, "equilibrium").points["C"].deviation
+        runs = _every_backend(g, {"A0": angle}, "loaded")
+        for backend, got in runs.items():
+            assert rel_err(got["C"], runs["sympy"]["C"]) <= 1e-9, (angle, backend)
+        assert rel_err(runs["sympy"]["C"], eq) <= 1e-2, angle
+        for level, dev in (("equilibrium", eq), ("loaded", runs["sympy"]["C"])):
+            ratio = (dev[0] / theta, dev[1] / theta)
+            want = first.setdefault(level, ratio)
+            assert rel_err(ratio, want) <= 1e-9, (level, angle)

@@ -64,6 +64,8 @@ BEFORE_STROKES = {
     "step": 1.4901161193847656e-08,  # sqrt(eps)
 }
 BEFORE_EQUILIBRIUM = {  # symkin/physics/equilibrium.py's constants and literals
+    "tiny_input": 1e-4,  # added with the tiny-input digits (docs/numerics.md, "Tiny angles")
+    "tiny_guard": 8,
     "min_step": 1e-7,
     "max_turn": 0.05,
     "first_step": 0.25,

@@ -273,6 +273,9 @@ class EquilibriumSettings:
     # estimate's rounding term 10^(rounding_digits − dps) of the span (docs/physics.md)
     base_digits: int = 24
     max_digits: int = 400
+    # inputs below tiny_input (rad) raise the digits to 2 log10(1/θ) + tiny_guard lost at least
+    tiny_input: float = 1e-4
+    tiny_guard: int = 8
     polish_iterations: int = 8
     polish_digits: int = 6
     polish_guard: int = 3

@@ -810,6 +810,13 @@ def solve(
         + [span]
     )
     lost = max(0, math.ceil(math.log10(span / smallest))) if smallest > 0 else 0
+    # A tiny input's deviation lies below the float64 solution's rounding, so the estimate above
+    # sees noise (at A0 = 1e-32 the deviation came out as a 6.5e-27 floor): a deviation of order
+    # θ or θ² loses at most about 2 log10(1/θ) digits more than the positions' own
+    turns = [abs(float(sp.N(inputs[n], 20))) for n in mech.inputs if n in inputs]
+    tiny = min([t for t in turns if t > 0], default=1.0)
+    if tiny < RULES.tiny_input:
+        lost = max(lost, 2 * math.ceil(-math.log10(tiny)) + RULES.tiny_guard)
     dps = min(RULES.max_digits, RULES.base_digits + lost) + extra_digits
     with mpmath.workdps(dps):
         solution = polish(build(mech, values, inputs, stiffness, _mp_converter(dps)), u, jac, dps)
