@@ -18,7 +18,7 @@ import sympy as sp
 
 from ..core import levels
 from ..core.errors import AssemblyError
-from ..core.settings import SOLVER
+from ..core.settings import SOLVER, Tolerances
 from ..kinematics.analysis import Analysis
 from ..model.lambdified import mpmath_function
 from ..physics import reduced_sensitivity
@@ -206,11 +206,7 @@ class MpmathEvaluator:
                 theta[a] = theta[a] - step[k]
             size = max(abs(theta[a]) for a in unknowns)
             change = mpmath.norm(step, mpmath.inf)
-            if change <= tol.converged * size or (
-                previous is not None
-                and change >= SOLVER.stall_ratio * previous
-                and change <= tol.stalled * size
-            ):
+            if _stopped(tol, change, size, previous):
                 break
             previous = change
         return theta
@@ -426,15 +422,7 @@ class MpmathEvaluator:
                 ) from None
             x = x - step
             size, change = mpmath.norm(x, mpmath.inf), mpmath.norm(step, mpmath.inf)
-            if (
-                change <= tol.converged * size
-                or floor
-                or (
-                    previous is not None
-                    and change >= SOLVER.stall_ratio * previous
-                    and change <= tol.stalled * size
-                )
-            ):
+            if floor or _stopped(tol, change, size, previous):
                 delta = {a: x[j] for j, a in enumerate(unknowns)}
                 self._check_consistency("exact", pvals, theta, delta, level.name)
                 return delta
@@ -464,3 +452,15 @@ def wrap(angle):
     """Angle wrapped into (-π, π]: hinge angles are rotations from the as-fabricated pose."""
     two_pi = 2 * mpmath.pi
     return angle - two_pi * mpmath.nint(angle / two_pi)
+
+
+def _stopped(tol: Tolerances, change, size, previous) -> bool:
+    """The relative and stall parts of the stopping rule (symkin.core.settings, 3a and 3c), as
+    the runtimes' _newton_stop / sk_newton_stop: a step `change` at most `converged` times the
+    unknowns' size `size`, or stalled (at least stall_ratio times the `previous` step, None
+    before the second, and at most `stalled` times the size)."""
+    return change <= tol.converged * size or (
+        previous is not None
+        and change >= SOLVER.stall_ratio * previous
+        and change <= tol.stalled * size
+    )
