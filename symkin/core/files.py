@@ -41,16 +41,17 @@ def read_input(path: str | Path, limit: int) -> bytes:
         raise Unreadable(
             f"cannot read the file ({exc.strerror or exc})", "check the path"
         ) from None
-    info = os.fstat(fd)
     too_large = Unreadable(
         f"larger than {limit} bytes", "a mechanism file or table needs a few kB at most"
     )
-    if not stat.S_ISREG(info.st_mode) or info.st_size > limit:
+    info = os.fstat(fd)
+    if not stat.S_ISREG(info.st_mode):
         os.close(fd)
-        if info.st_size > limit and stat.S_ISREG(info.st_mode):
-            raise too_large
         kind = "a folder" if stat.S_ISDIR(info.st_mode) else "a device, FIFO or socket"
         raise Unreadable(f"not a regular file ({kind})", "give the path of a text file")
+    if info.st_size > limit:
+        os.close(fd)
+        raise too_large
     with os.fdopen(fd, "rb") as f:
         try:
             raw = f.read(limit + 1)
