@@ -73,7 +73,7 @@ def test_the_limit_counts_every_combination_and_the_memory():
     assert f"{4e8 * 8 * width / 1e9:.3g} GB" in text, text
     given = ["O=-0.1:0.1:3", "A=0:0.1:5", "B=0.01", "K=0.02"]
     grid = variation.parse_grid(given, mech, limit=15)
-    assert grid.size == 15 == len(grid.rows)
+    assert len(grid.rows) == 15
     with pytest.raises(InputError):
         variation.parse_grid(given, mech, limit=14)
 
@@ -298,3 +298,16 @@ def test_a_table_row_far_beyond_a_plate_length_exits_2(tmp_path):
     run = symkin_cli("check", str(tmp_path / "m.toml"))
     assert run.returncode == 2, run.stderr
     assert "rows.csv:13: a value beyond 1000 in magnitude" in run.stderr, run.stderr
+
+
+def test_the_help_states_the_default_ceiling():
+    """The parser does not import the studies (every command builds it): its help states the
+    default in words, which must be the studies' own."""
+    from symkin.cli.commands import parser
+
+    text = parser().format_help() + "".join(
+        action.format_help()
+        for action in parser()._subparsers._group_actions[0].choices.values()
+        if hasattr(action, "format_help")
+    )
+    assert "(default 1e8)" in text and variation.MAX_EVALUATIONS == 10**8

@@ -211,11 +211,6 @@ class Grid:
         mesh = np.meshgrid(*self.values.values(), indexing="ij")
         return np.stack([m.reshape(-1) for m in mesh], axis=1)
 
-    @property
-    def size(self) -> int:
-        """The number of configurations (every combination of the inputs' values)."""
-        return math.prod(len(v) for v in self.values.values())
-
     def as_json(self) -> dict:
         return {k: [float(v[0]), float(v[-1]), len(v)] for k, v in self.values.items()}
 
