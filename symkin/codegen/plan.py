@@ -140,6 +140,9 @@ class Plan:
     actuators: tuple[tuple[str, str, str, tuple[float, float]], ...] = ()
     # the actuators driven by a force (at the `loaded` level alone), in file order
     forces: tuple[str, ...] = ()
+    # the stroke actuators with a series `spring` (their reported stroke at `loaded` is the
+    # actual one, command less force/spring; docs/physics.md), in file order
+    springs: tuple[str, ...] = ()
 
     @property
     def shown_points(self) -> tuple[str, ...]:
@@ -436,6 +439,7 @@ def plan(
         drives=mech.drives if mech.actuators else (),
         actuators=_actuators(mech, levels),
         forces=tuple(a.name for a in mech.actuators if a.drive != "stroke"),
+        springs=tuple(a.name for a in mech.actuators if a.spring is not None),
     )
     return with_derivation(result, an) if report else result
 

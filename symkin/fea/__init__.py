@@ -50,6 +50,17 @@ def prepare(
     numbers or expression strings) and gather the deck's numbers. Bad inputs raise InputError,
     an input the rigid linkage cannot reach AssemblyError."""
     mech = mechanism if isinstance(mechanism, Mechanism) else load(mechanism)
+    sprung = next((a for a in mech.actuators if a.spring is not None), None)
+    if sprung is not None:
+        # the deck prescribes a stroke rigidly: a series spring would need a spring element
+        raise InputError(
+            f"symkin fea does not model an actuator's series spring yet (actuator "
+            f"'{sprung.name}' has spring)",
+            file=mech.path,
+            entry=f"[[actuator]] #{sprung.index + 1} '{sprung.name}'",
+            hint="compare the actual stroke symkin eval --level equilibrium reports: remove "
+            "'spring' and give that stroke as the input",
+        )
     plan = anchors(mech)
     # A force actuator's rigid pose is the rigid linkage's at the stroke the force produces:
     # `equilibrium`'s here (the FE's own stroke corrects it after the run, see `compare`).

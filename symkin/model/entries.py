@@ -147,7 +147,10 @@ class Actuator:
     link's point `at` (as fabricated, file unit) along the unit `direction` (frame axes) by a
     prescribed stroke (file unit) or pushes it with a force (N). `surrogate` is the hinge whose
     angle the stroke fixes (chosen by the reader): the kinematics take that hinge as an input
-    and find its angle from the stroke (docs/levels.md, "Actuators")."""
+    and find its angle from the stroke (docs/levels.md, "Actuators"). `spring` (N per file
+    unit; stroke actuators only, None: ideal) puts a spring in series with the stroke: the
+    input is then the free stroke commanded, and at the physical levels the actual stroke is
+    the command less force/spring (docs/physics.md, "Actuators at loaded")."""
 
     name: str
     index: int
@@ -157,6 +160,7 @@ class Actuator:
     drive: str
     surrogate: str
     line: int | None = None
+    spring: sp.Expr | None = None
 
     @property
     def point(self) -> str:

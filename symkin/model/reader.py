@@ -46,7 +46,7 @@ TOP_KEYS = (
 LINK_KEYS = ("name",)
 POINT_KEYS = ("name", "link", "at")
 LOAD_KEYS = ("point", "link", "at", "force", "moment")
-ACTUATOR_KEYS = ("name", "link", "at", "direction", "drive")
+ACTUATOR_KEYS = ("name", "link", "at", "direction", "drive", "spring")
 
 
 #: The largest mechanism file read (a regular file: a FIFO or a device is refused unread).
@@ -461,8 +461,38 @@ class _Reader(HingeEntries):
                     + 'drive = "stroke" (a displacement, file unit) or "force" (N)',
                 )
             direction = (raw[0] / size, raw[1] / size)
-            out.append(Actuator(name, i, link, at, direction, drive, "", line))
+            spring = self.spring(table, drive, entry, line)
+            out.append(Actuator(name, i, link, at, direction, drive, "", line, spring))
         return tuple(out)
+
+    def spring(
+        self, table: Mapping[str, object], drive: str, entry: str, line: int | None
+    ) -> sp.Expr | None:
+        """An actuator's `spring` (N per file unit, > 0 and finite with the default parameters;
+        a number or an expression over the parameters): a stroke's series stiffness."""
+        if "spring" not in table:
+            return None
+        where = self.where.key("spring", None, line) if line is not None else None
+        if drive != "stroke":
+            raise self.error(
+                "'spring' is the stiffness in series with a stroke; a force actuator "
+                "delivers its force whatever its own stiffness",
+                entry,
+                where or line,
+                "remove 'spring', or make the actuator drive = \"stroke\" (the spring's "
+                "free stroke is then the input)",
+            )
+        expr = self.expr(table["spring"], entry, "spring", where or line)
+        value = self.finite(expr, entry, "spring", where or line)
+        if not value > 0:
+            raise self.error(
+                f"'spring' must be positive, got spring = {short(value)}",
+                entry,
+                where or line,
+                "give the actuator's stiffness in N per file unit, e.g. spring = 2e4 "
+                "(a piezo stack of 20 N/µm in a mm file)",
+            )
+        return expr
 
     def name_list(
         self, data: Mapping[str, object], key: str, known: list[str], kind: str

@@ -96,7 +96,8 @@ class _Load:
 class _Actuator:
     """An actuator (docs/file-format.md, "[[actuator]]"): on link `link` (index into the poses)
     at `at` as fabricated, along the unit `direction`; `value` its stroke (file unit) or force
-    (N) by `drive`."""
+    (N) by `drive`; `spring` a stroke's series stiffness (N per file unit; None: ideal), whose
+    actual stroke is then value − force/spring."""
 
     name: str
     link: int
@@ -104,6 +105,7 @@ class _Actuator:
     direction: tuple
     drive: str
     value: object
+    spring: object = None
 
     @property
     def stroke(self) -> bool:
@@ -264,8 +266,9 @@ class System:
         for a in self.actuators:
             at = self.place(u, a.link, a.at)
             if a.stroke:
-                rows.append((self.stroke(u, a) - drive * a.value) / self.L)
                 f = u[self.index["act:" + a.name]] * self.F
+                lost = 0 if a.spring is None else f / a.spring  # the spring's give, f/k
+                rows.append((self.stroke(u, a) - drive * a.value + lost) / self.L)
             else:
                 f = load * a.value
             apply(a.link, (f * a.direction[0], f * a.direction[1]), at, zero)
@@ -395,6 +398,7 @@ def build(
             tuple(num(v) for v in a.direction),
             a.drive,
             num(inputs[a.name]),
+            None if a.spring is None else num(a.spring),
         )
         for a in mech.actuators
     ]
@@ -879,8 +883,12 @@ def solve(
 
 
 def _strokes(system: System, u: np.ndarray) -> dict:
-    """Every actuator's stroke in the solution u, by name (a stroke actuator's is its input)."""
-    return {a.name: system.stroke(u[:, None], a)[0] for a in system.actuators}
+    """Every actuator's stroke in the solution u, by name (a stroke actuator's is its input;
+    with a spring the command, where the rigid reference sits: docs/physics.md)."""
+    return {
+        a.name: a.value if a.spring is not None else system.stroke(u[:, None], a)[0]
+        for a in system.actuators
+    }
 
 
 def _position(system: System, name: str) -> int:

@@ -188,6 +188,9 @@ class Reduced:
             )
             for act in mech.actuators
         ]
+        # a stroke's series spring k (N per file unit; None: ideal): its row then reads
+        # d·ΔX(a) = −f/k, the compliant point short of the commanded stroke by f/k
+        self.springs = [None if act.spring is None else num(act.spring) for act in mech.actuators]
         surrogates = {hinge_label[act.surrogate] for act in mech.actuators}
         self.strokes = [k for k, act in enumerate(self.acts) if act[4] == "stroke"]
         self.forces = [act[0] for act in self.acts if act[4] == "force"]
@@ -455,7 +458,8 @@ class Reduced:
         for k in self.strokes:
             # the stroke: the point of action's deviation along d is zero (beyond `dact`)
             _, link, at, d, _ = self.acts[k]
-            rows.append((V.dot(d, self._deviation(s, link, at)) - s["dact"][k]) / self.lmin)
+            lost = sp.S.Zero if self.springs[k] is None else s["act_force"][k] / self.springs[k]
+            rows.append((V.dot(d, self._deviation(s, link, at)) - s["dact"][k] + lost) / self.lmin)
         for a in sorted(s["joint"]):
             rows.append(s["joint"][a] / unit)
         return rows

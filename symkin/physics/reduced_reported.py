@@ -69,7 +69,11 @@ def report(
         j = len(red.inputs) + k
         value, rate = float(values[j]), float(rates[j, j])
         reference = answer.strokes.get(name, 0.0)
-        if drive == "stroke":
+        spring = red.springs[k]
+        if drive == "stroke" and spring is not None:  # the command less the spring's give
+            actual = reference - value / float(spring)
+            actuators[name] = ActuatorLoad(actual, value, rate, reference)
+        elif drive == "stroke":
             actuators[name] = ActuatorLoad(reference, value, rate)
         else:  # the stroke beyond the reference's, and its rate by the force
             stiff = 1 / rate if rate != 0 else math.inf

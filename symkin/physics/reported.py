@@ -97,7 +97,10 @@ def actuators(system: System, u: np.ndarray, jac: np.ndarray) -> dict[str, Actua
         if a.stroke:
             force = float(u[system.index["act:" + a.name]]) * float(system.F)
             out[a.name] = ActuatorLoad(
-                stroke, force, float(du[system.index["act:" + a.name]]) * float(system.F)
+                stroke,
+                force,
+                float(du[system.index["act:" + a.name]]) * float(system.F),
+                None if a.spring is None else float(value),
             )
         else:
             out[a.name] = ActuatorLoad(stroke, float(value), 1.0 / rate if rate else float("inf"))

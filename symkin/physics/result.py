@@ -20,11 +20,14 @@ class ActuatorLoad:
     """What an actuator delivers at equilibrium (docs/physics.md): its stroke (file unit), the
     force it exerts on its link along its line (N) and the stiffness dF/ds (N per file unit)
     along the equilibrium path with the other inputs held (a stroke actuator: d(force)/d(stroke);
-    a force actuator: the inverse of d(stroke)/d(force))."""
+    a force actuator: the inverse of d(stroke)/d(force)). An actuator with a `spring` also
+    has its `command`, the free stroke given (file unit): `stroke` is then the actual one,
+    command − force/spring, and dF/ds is by the command."""
 
     stroke: float
     force: float
     stiffness: float
+    command: float | None = None
 
 
 @dataclass(frozen=True)

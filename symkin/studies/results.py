@@ -145,7 +145,8 @@ class Evaluation:
                 }
             if self.actuators:
                 physical["actuators"] = {
-                    name: {"stroke": a.stroke, "force": a.force, "stiffness": a.stiffness}
+                    name: ({} if a.command is None else {"command": a.command})
+                    | {"stroke": a.stroke, "force": a.force, "stiffness": a.stiffness}
                     for name, a in self.actuators.items()
                 }
             if self.stiffness:

@@ -32,6 +32,10 @@ typedef struct {
     const int *force;   /* per actuator: its force's place after the rigid angles in the loaded
                            routines' theta, or -1 (a stroke; docs/physics.md) */
 #endif
+#if defined(SK_ACT_SPRINGS)
+    const int *spring;  /* per actuator: 1 where a series spring makes the reported stroke the
+                           actual one, the command less force/spring (docs/physics.md) */
+#endif
 } sk_actuators;
 
 /* Gaussian elimination with partial pivoting of the n x n row-major a (destroyed) for the
@@ -574,6 +578,14 @@ static int sk_actuated_report(const sk_mechanism *m, const sk_actuators *t,
         acts[3 * a] = given;
         acts[3 * a + 1] = value;
         acts[3 * a + 2] = rate;
+#if defined(SK_ACT_SPRINGS)
+        if (t->spring[a]) {
+            /* the actual stroke: the command plus its point's deviation along d from the rigid
+               linkage at the command (d.dX = -force/spring) */
+            const double *dev = pr + 6 * t->point[a] + 4;
+            acts[3 * a] = given + t->direction[2 * a] * dev[0] + t->direction[2 * a + 1] * dev[1];
+        }
+#endif
     }
     return 0;
 }

@@ -64,6 +64,7 @@ class Backend:
             "drives": list(plan.drives),
             "actuators": list(plan.actuators),
             "forces": list(plan.forces),
+            "springs": list(plan.springs),
             "actuator_tables": actuator_tables(plan),
             "links": list(plan.reported_links),
             "levels": plan.levels,
@@ -372,4 +373,6 @@ def actuator_tables(plan: Plan) -> dict | None:
         "shown": [plan.points.index(p) for p in plan.shown_points],
         # per actuator: its force's place among the forces (after theta's angles), or -1
         "force": [plan.forces.index(n) if n in plan.forces else -1 for n in names],
+        # per actuator: 1 where a series spring makes its stroke at loaded the actual one
+        "spring": [int(n in plan.springs) for n in names],
     }

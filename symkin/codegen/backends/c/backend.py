@@ -74,6 +74,13 @@ def features(plan: Plan) -> list[str]:
                 and bool(plan.actuators)
                 and "loaded_report1" in plan.routines,
             ),
+            # stroke actuators with a series spring and the loaded report: the actual stroke
+            (
+                "SK_ACT_SPRINGS",
+                plan.loaded is not None
+                and bool(plan.springs)
+                and "loaded_report1" in plan.routines,
+            ),
             ("SK_LINKS", bool(plan.reported_links)),
             ("SK_SENSITIVITY", plan.sensitivity),
         )
