@@ -232,8 +232,7 @@ def _actuated_report(mech, actuators, forces, theta, p, q, ok, given, buckling=T
     """What the loaded level reports with actuators (reduced_reported.report): _reduced_report's
     "inputs", "stiffness", "plates" and (with `buckling`, where the file has loads or force
     actuators) "buckling", and "actuators": {A: {"stroke", "force", "stiffness"}}
-    (file unit, N, N per file unit; a spring's actual stroke and "command": _actuated_loaded).
-    The report routines' rows of the actuators (a stroke's
+    (file unit, N, N per file unit). The report routines' rows of the actuators (a stroke's
     force and dF/ds, a force's stroke and ds/dF) follow the input hinges' as the inputs' rows
     do: _reduced_report reads them as inputs named by their surrogate hinges, unscaled (theta:
     the rigid angles then the forces; `given`: each actuator's stroke or force as given)."""
