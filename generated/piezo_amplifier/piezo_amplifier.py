@@ -1680,13 +1680,24 @@ def _actuated_state(mech, actuators, forces, drives, inputs, params, resolve=Fal
 
 
 def _actuated_loaded(
-    mech, actuators, forces, drives, shown, inputs, params, links, report=False, buckling=True
+    mech,
+    actuators,
+    forces,
+    drives,
+    shown,
+    inputs,
+    params,
+    links,
+    report=False,
+    buckling=True,
+    springs=(),
 ):
     """The module's evaluate() at level "loaded" for a mechanism with actuators (docs/physics.md,
     "Actuators at loaded"; _actuated_state): the deviations against the rigid linkage at the
     strokes, a force actuator's at the stroke the force produced. With `report` (modules with
     the level's report), what it reports beyond the deviations (_actuated_report; with
-    `buckling` its buckling factor too, where the file has loads or force actuators)."""
+    `buckling` its buckling factor too, where the file has loads or force actuators; `springs`
+    the stroke actuators with a series spring, whose actual stroke it reports)."""
     st = _actuated_state(mech, actuators, forces, drives, inputs, params)
     out = _actuated_result(mech, actuators, st, shown, links, st["ok"])
     if report:
@@ -1699,6 +1710,15 @@ def _actuated_loaded(
                 mech, actuators, forces, theta, st["p"], st["q"], out["ok"], given, buckling
             )
         )
+        for name, _, point, d in actuators:
+            if name in springs:
+                # the actual stroke: the command plus its point's deviation along d from the
+                # rigid linkage at the command (d.dX = -force/spring)
+                entry = out["actuators"][name]
+                dev = st["res"]["points"][point]["deviation"]
+                fixed = entry["stroke"]
+                entry["stroke"] = fixed + d[0] * dev[0] + d[1] * dev[1]
+                out["actuators"][name] = {"command": fixed} | entry
     return out
 
 
