@@ -122,6 +122,26 @@ def test_a_force_actuator_on_a_structure_is_a_load(level):
     assert pushed.inputs == {"push": 0.02}
 
 
+def test_a_structures_sensitivity_by_its_force_is_its_compliance():
+    """At `loaded`, d(deviation)/d(force) of the force actuator: the linear compliance across,
+    and along, the derivative of Awtar's drop, -(6/5) (y/L) dy/dF."""
+    res = symkin.evaluate(
+        symkin.analyze(symkin.load(LEAF)),
+        {"push": 0.02},
+        level="loaded",
+        params={"F": "0"},
+        sensitivity=True,
+    )
+    assert res.sensitivity is not None
+    rates = res.sensitivity.deviation_inputs["P"]["push"]
+    compliance = stage_compliance()[0, 0]
+    assert rates[0] == pytest.approx(compliance, rel=1e-6)
+    y = res.points["P"].deviation[0]
+    assert rates[1] == pytest.approx(-1.2 * y / L_LEG * compliance, rel=3e-3)
+    # a [[load]] of the same size along the same line has the same rate
+    assert res.sensitivity.deviation["P"]["F"][0] == pytest.approx(rates[0], rel=1e-9)
+
+
 def test_loaded_and_equilibrium_agree_on_a_structure():
     got = {lv: evaluate(LEAF, lv, {"push": 0.3}, F=0.5) for lv in PHYSICAL}
     a, b = (got[lv].points["P"].deviation for lv in PHYSICAL)
