@@ -285,6 +285,64 @@ def test_a_three_leaf_flexure_translates_by_stretch_and_bending(level):
     assert abs(qy) <= 1e-5 * qx and abs(res.links["hub"].deviation) <= 1e-4 * qx / L
 
 
+# -- a clamped beam with a rigid block in its middle ----------------------------------------
+BLOCK = """format = 1
+name = "clamped_block"
+[parameters]
+L = 0.020
+a = 0.005
+F = 0.01
+[defaults]
+length = "L"
+E = 210e9
+nu = 0
+thickness = 0.2e-3
+width = 5e-3
+[[link]]
+name = "frame"
+[[link]]
+name = "block"
+[[hinge]]
+name = "A"
+links = ["frame", "block"]
+at = ["-a - L/2", 0.0]
+[[hinge]]
+name = "B"
+links = ["block", "frame"]
+at = ["a + L/2", 0.0]
+[[point]]
+name = "C"
+link = "block"
+at = [0.0, 0.0]
+[[load]]
+point = "C"
+force = [0.0, "F"]
+"""
+
+
+@pytest.mark.parametrize("level", PHYSICAL)
+@pytest.mark.parametrize("force", [1e-4, 0.01, 0.03])
+def test_a_clamped_beam_with_a_block_stiffens_as_its_plates_stretch(level, force):
+    """Two collinear plates from the frame to a block between them: each a clamped-guided beam
+    (12 EI/L^3 with its shear), which the block's motion y also stretches: each plate's ends
+    draw together by (3/5) y^2/L (Awtar's parasitic term), held by the frame, so a tension
+    N = (3/5) EA y^2/L^2 whose geometric stiffness (6/5) N/L adds to the bending's:
+    F = k y + 2 (6/5)(3/5) EA y^3/L^3. At 0.03 N the cubic term is 3.6e-3 of F."""
+    L = 0.020
+    ei, ea, kga = beam(210e9, 5e-3, 0.2e-3)
+    k = 2 / (L**3 / (12 * ei) + L / kga)
+    roots = np.roots([1.44 * ea / L**3, 0.0, k, -force])
+    y = float(next(r.real for r in roots if abs(r.imag) <= 1e-12 * abs(r)))
+    res = symkin.evaluate(
+        symkin.analyze(symkin.loads(BLOCK)), {}, level=level, params={"F": str(force)}
+    )
+    got = res.points["C"].deviation
+    assert got[1] == pytest.approx(y, rel=2e-6 * (1 + (force / 0.01) ** 2))
+    assert abs(got[0]) <= 1e-12 * got[1] and abs(res.links["block"].deviation) <= 1e-12
+    if force == 0.03:  # the stretch matters: the linear beam is off by 3.6e-3
+        assert abs(got[1] / (force / k) - 1) > 3e-3
+
+
 # -- crossing plates --------------------------------------------------------------------------
 CROSS = """format = 1
 name = "cross_spring"
