@@ -191,12 +191,13 @@ def test_the_generated_evaluators_refuse_a_structure(capsys, backend):
     assert "structure" in err and f"--backend {backend}" in err and "--backend sympy" in err
 
 
-def test_derive_tolerance_and_sweep_refuse_a_structure(tmp_path, capsys):
+def test_derive_tolerance_sweep_and_tradeoff_refuse_a_structure(tmp_path, capsys):
     out_dir = tmp_path / "out"
     for args in (
         ["derive", str(THREE), "-o", str(out_dir), "--quiet"],
         ["tolerance", str(THREE), "--level", "loaded", "--vary", "L=±1e-5"],
         ["sweep", str(THREE), "--level", "loaded", "--vary", "L=normal(0.02,1e-5)"],
+        ["tradeoff", str(THREE)],
     ):
         code, out, err = run(args, capsys)
         assert code == 2 and out == "", args
