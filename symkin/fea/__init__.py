@@ -54,9 +54,8 @@ def prepare(
     # A force actuator's rigid pose is the rigid linkage's at the stroke the force produces:
     # `equilibrium`'s here (the FE's own stroke corrects it after the run, see `compare`).
     kinematic, forces = _as_strokes(mech), {}
-    # a structure's rigid pose is the as-fabricated one whatever loads it, and only the
-    # physical levels evaluate it (docs/levels.md, "Structures")
-    # (its force actuators' strokes measured from it: 0 there)
+    # a structure's rigid pose is the as-fabricated one whatever loads it (its force actuators'
+    # strokes are 0 there), and only the physical levels evaluate it (docs/levels.md)
     rigid_level = "loaded" if mech.is_structure else "paper"
     if mech.is_structure:
         kinematic = mech

@@ -78,10 +78,10 @@ def _loaded(
     exact_params = config.params
     names = {a: h.name for a, h in ev.kin.hinges.items()}
     hidden = {a.point for a in mech.actuators}
-    acting: dict[str, sp.Expr] = config.strokes if mech.actuators else {}
-    if mech.actuators and not mech.is_structure:
-        # the rigid linkage at the strokes (a force actuator's: the one it produced); a
-        # structure's is the as-fabricated pose whatever its force actuators push
+    acting: dict[str, sp.Expr] = {}
+    if mech.actuators:
+        # the rigid linkage at the strokes (a force actuator's: the one it produced)
+        acting = config.strokes
         found = stroke_angles(
             ev,
             config,
@@ -171,7 +171,7 @@ def _equilibrium(
         """Rigid hinge angles and point positions at `dps` digits (exit 3 out of range), the
         actuators at `strokes` (docs/levels.md, "Actuators")."""
         surrogates = {}
-        if mech.actuators and not mech.is_structure:  # a structure's rigid pose is fixed
+        if mech.actuators:
             found = stroke_angles(
                 ev,
                 config,
@@ -345,7 +345,7 @@ def solve_reduced(
         @functools.cache
         def rigid(scale: float) -> dict:
             scaled = config.with_angles({k: scale * float(v) for k, v in hinges.items()})
-            if mech.actuators and not mech.is_structure:  # a structure's rigid pose is fixed
+            if mech.actuators:
                 found = stroke_angles(
                     ev,
                     scaled,
@@ -375,7 +375,7 @@ def solve_reduced(
     # mechanism's pose does not depend on the reference; one more solve expresses it against
     # the new one, whose point of action then has no deviation along d)
     for _ in range(SOLVER.strokes.reference_rounds):
-        if not forces or answer.refused or mech.is_structure:
+        if not forces or answer.refused or mech.is_structure:  # its reference stays put
             break
         assert answer.solver is not None
         along = {
