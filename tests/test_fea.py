@@ -24,6 +24,7 @@ import os
 import shutil
 
 import mechanisms as M
+import numpy as np
 import pytest
 from conftest import EXAMPLES, ROOT
 
@@ -578,3 +579,35 @@ def test_stroke_along_a_slant_direction_on_the_four_bar():
     for name, d in result.fea.items():
         e = eq.points[name].deviation
         assert math.hypot(e[0] - d[0], e[1] - d[1]) < bound[name]
+
+
+@needs_ccx
+def test_a_structure_under_a_force_actuator():
+    """The leaf-spring parallelogram of single plates (a structure, docs/levels.md): its rigid
+    pose is the as-fabricated one, its force actuator a load. The continuum's stage moves by the
+    linear frame of two Timoshenko legs (written out here: clamped-guided bending with shear,
+    the legs' stretch letting the stage turn) to within (t/L)^2, and drops by Awtar's
+    (3/5) y^2/L; the stroke is the push point's displacement, 0 in the rigid pose."""
+    force, span, gap = 0.02, 0.040, 0.025
+    ei, ea = 210e9 * 10e-3 * 0.5e-3**3 / 12, 210e9 * 10e-3 * 0.5e-3
+    kga = 5 / 6 * 105e9 * 10e-3 * 0.5e-3
+    phi = 12 * ei / (kga * span**2)
+    bend = (
+        ei / (span**3 * (1 + phi)) * np.array([[12, -6 * span], [-6 * span, (4 + phi) * span**2]])
+    )
+    stiffness = np.zeros((3, 3))
+    for x in (0.0, gap):
+        across = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+        along = np.array([0.0, 1.0, x - gap / 2])
+        stiffness += across.T @ bend @ across + ea / span * np.outer(along, along)
+    y = np.linalg.solve(stiffness, [force, 0.0, 0.0])[0]
+    setup = fea.prepare(
+        ROOT / "tests" / "mechanisms" / "leaf_parallelogram.toml", {"push": force}, {"F": "0"}
+    )
+    result = fea.compare(setup, fea.write_deck(setup, COARSE))
+    dx, dy = result.fea["P"]
+    assert dx == pytest.approx(y, rel=(0.5e-3 / span) ** 2)
+    assert dy == pytest.approx(-0.6 * dx**2 / span, rel=2e-3)
+    assert result.strokes["push"] == pytest.approx(dx, rel=1e-6)
+    eq = symkin.evaluate(setup.analysis, {"push": force}, level="equilibrium", params={"F": "0"})
+    assert result.level_strokes["push"] == pytest.approx(eq.actuators["push"].stroke, rel=1e-12)

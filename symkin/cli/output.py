@@ -11,7 +11,7 @@ import numpy as np
 
 from ..codegen.templating import render
 from ..graph.structure import Structure
-from ..model.mechanism import closure_rank
+from ..model.mechanism import closure_rank, crossing_plates
 from ..physics.equilibrium import BUCKLING_LIMIT
 
 
@@ -46,6 +46,7 @@ def check_text(s: Structure, dropped: Sequence[int] = ()) -> str:
         loop_text=loops,
         rank=closure_rank(mech),
         redundant=redundant,
+        crossing=crossing_plates(mech),
         short=_short,
     )
 

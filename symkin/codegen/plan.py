@@ -212,6 +212,9 @@ def plan(
     routines of the input moments, point stiffness and plate stress (symkin.codegen.loaded)."""
     an, kin = analysis, analysis.kin
     mech = an.mechanism
+    mech.refuse_structure(
+        what="generated code (derive, tolerance, sweep, tradeoff, symkin.compile)"
+    )
     requested = levels
     forced = any(a.drive != "stroke" for a in mech.actuators)
     hidden = {a.point for a in mech.actuators}  # the actuators' points: always computed

@@ -65,12 +65,17 @@ def prepare(
     # A force actuator's rigid pose is the rigid linkage's at the stroke the force produces:
     # `equilibrium`'s here (the FE's own stroke corrects it after the run, see `compare`).
     kinematic, forces = _as_strokes(mech), {}
+    # a structure's rigid pose is the as-fabricated one whatever loads it (its force actuators'
+    # strokes are 0 there), and only the physical levels evaluate it (docs/levels.md)
+    rigid_level = "loaded" if mech.is_structure else "paper"
+    if mech.is_structure:
+        kinematic = mech
     if any(a.drive == "force" for a in mech.actuators):
         eq = evaluate(analyze(mech), inputs, level="equilibrium", params=params)
         forces = {a.name: float(eq.inputs[a.name]) for a in mech.actuators if a.drive == "force"}
         inputs = {
             **eq.inputs,
-            **{n: float(eq.actuators[n].stroke) for n in forces},
+            **{n: 0.0 if mech.is_structure else float(eq.actuators[n].stroke) for n in forces},
         }
     # The rigid linkage's pose of every link's own reference node: as extra points of the
     # mechanism, evaluated at the `paper` level (its rigid part is every level's).
@@ -85,7 +90,7 @@ def prepare(
             extra.append(Point(name, len(mech.points) + len(extra), link, anchor.at))
             plan[link] = dataclasses.replace(anchor, point=name)
     with_refs = dataclasses.replace(kinematic, points=mech.points + tuple(extra))
-    rigid = evaluate(analyze(with_refs), inputs, level="paper", params=params)
+    rigid = evaluate(analyze(with_refs), inputs, level=rigid_level, params=params)
     conf = configuration(
         mech,
         rigid.inputs,
@@ -185,7 +190,7 @@ def rigid_shift(setup: Setup, produced: Mapping[str, float]) -> dict[str, Vec]:
     (file unit) lies from the deck's rigid pose (at `equilibrium`'s strokes); subtracted from
     a deviation against the deck's pose, it gives the deviation at the produced strokes."""
     forces = {d.name: d for d in setup.conf.drives if d.drive == "force"}
-    if not forces:
+    if not forces or setup.mechanism.is_structure:  # a structure's rigid pose stays put
         return {}
     base = {k: v for k, v in setup.inputs.items() if k not in forces}
     kinematic = analyze(_as_strokes(setup.mechanism))

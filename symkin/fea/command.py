@@ -165,6 +165,7 @@ def text(result: Comparison) -> str:
     inputs = ", ".join(
         f"{h} = {v:.6g} {what.get(drives.get(h, ''), 'rad')}" for h, v in setup.inputs.items()
     )
+    inputs = inputs or "no input (a structure)"
     lines = [
         f"{setup.mechanism.name}: {inputs}; mesh {result.mesh.along} x "
         f"{result.mesh.across} per plate, grading {result.mesh.grading:g} "

@@ -106,6 +106,34 @@ class Mechanism:
                 "exact; a stroke or a force at equilibrium), or derive --emit numpy,c",
             )
 
+    def refuse_structure(self, level: str | None = None, what: str | None = None) -> None:
+        """Bad input (exit 2) where a structure (:attr:`is_structure`) has nothing to give: a
+        kinematic `level` (its rigid linkage has no motion to compare with) or `what`, a
+        generated evaluator (it would take no inputs; docs/levels.md, "Structures")."""
+        if not self.is_structure:
+            return
+        locked = "the mechanism is a structure: its rigid linkage has no motion (mobility 0)"
+        physical = (
+            "ask for --level loaded (or equilibrium): the physical levels load a structure by "
+            'its [[load]] entries and force actuators (docs/levels.md, "Structures")'
+        )
+        if what is not None:
+            raise InputError(
+                f"{locked}, and {what} does not take structures (it would have no inputs)",
+                file=self.path,
+                entry="[[hinge]]",
+                hint="evaluate it with symkin eval --level loaded or --level equilibrium "
+                '(--backend sympy) (docs/levels.md, "Structures")',
+            )
+        if level is not None:
+            raise InputError(
+                f"{locked}, so the {level} level, which moves the rigid linkage by its "
+                "inputs, has nothing to evaluate",
+                file=self.path,
+                entry="--level",
+                hint=physical,
+            )
+
     @cached_property
     def closure_rank(self) -> ClosureRank | None:
         """See :func:`closure_rank`."""
@@ -123,6 +151,17 @@ class Mechanism:
         (docs/levels.md, "Redundant loops")."""
         rank = closure_rank(self)
         return self.grubler if rank is None else rank.mobility
+
+    @property
+    def is_structure(self) -> bool:
+        """The rigid linkage is locked (mobility 0) and nothing prescribes a motion: no input
+        hinge, no stroke actuator. Its loads and force actuators load it; the physical levels
+        solve it, the kinematic levels have nothing to move (docs/levels.md, "Structures")."""
+        return (
+            not any(h.input for h in self.hinges)
+            and all(a.drive == "force" for a in self.actuators)
+            and self.mobility == 0
+        )
 
     @property
     def redundant(self) -> int:
@@ -193,9 +232,8 @@ def check_values(
     mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr], option: str | None = None
 ) -> None:
     """Every numeric rule of the file at these parameter values: finite coordinates and angles,
-    positive plate lengths, model parameters in range, and plates shorter than the links between
-    them (on every link, two hinge centres lie farther apart than half the sum of the plate
-    lengths; plates that cross always break this). `option` names the command-line option that
+    positive plate lengths, model parameters in range (plates may sit closer together than their
+    length, and may cross: :func:`crossing_plates`). `option` names the command-line option that
     set the values (e.g. "--param"); None means the file's own defaults."""
     with mpmath.workdps(30):
 
@@ -227,7 +265,6 @@ def check_values(
                     f"give '{key}' a magnitude of {bounds} (choose the file's units to suit)",
                 )
 
-        centres = {}
         for h in mech.hinges:
             entry = f"[[hinge]] '{h.name}'"
             x, y = (mp_at(v, values) for v in h.at)
@@ -288,7 +325,6 @@ def check_values(
                     h.line,
                     "a flexure plate is thin: make thickness < length",
                 )
-            centres[h.name] = ((x, y), length)
         for load in mech.loads:
             for v in (*load.force, load.moment):
                 within(mp_at(v, values), "force", load.label, load.line, positive=False)
@@ -319,20 +355,57 @@ def check_values(
                     act.line,
                     "keep the point of action and the line of action finite",
                 )
-        for link in mech.links:
-            on_link = [h for h in mech.hinges if link.name in h.links]
-            for i, a in enumerate(on_link):
-                for b in on_link[i + 1 :]:
-                    (pa, la), (pb, lb) = centres[a.name], centres[b.name]
-                    gap = mpmath.hypot(pa[0] - pb[0], pa[1] - pb[1])
-                    if not gap > (la + lb) / 2:
-                        raise fail(
-                            f"its plate and the plate of hinge '{b.name}' reach past each "
-                            f"other on link '{link.name}': their centres are "
-                            f"{mpmath.nstr(gap, 6)} apart, less than half the sum of the "
-                            f"plate lengths, {mpmath.nstr((la + lb) / 2, 6)}",
-                            f"[[hinge]] '{a.name}'",
-                            a.line,
-                            "shorten the plates or move the hinges apart: on every link "
-                            "the plates must be shorter than the link between them",
-                        )
+
+
+def crossing_plates(mech: Mechanism) -> list[tuple[str, str]]:
+    """The pairs of plates (hinges, in file order) whose straight plates cross or overlap in
+    the as-fabricated pose at the file's values: a cross-spring pivot, whose leaves lie in
+    different layers. symkin accepts them (each plate is a beam of its own, with no contact
+    between them); `check` names them (docs/file-format.md, "[[hinge]]")."""
+    values = mech.defaults
+    ends = []
+    with mpmath.workdps(30):
+        for h in mech.hinges:
+            x, y, angle, length = (mp_at(v, values) for v in (*h.at, h.plate_angle, h.length))
+            if None in (x, y, angle, length):
+                return []  # the value checks report it
+            assert x is not None and y is not None and angle is not None and length is not None
+            u = (mpmath.cos(angle) * length / 2, mpmath.sin(angle) * length / 2)
+            ends.append((h.name, (x - u[0], y - u[1]), (x + u[0], y + u[1]), length))
+        out = []
+        for i, (a, p0, p1, la) in enumerate(ends):
+            for b, q0, q1, lb in ends[i + 1 :]:
+                if _segments_meet(p0, p1, q0, q1, mpmath.mpf(10) ** -20 * max(la, lb) ** 2):
+                    out.append((a, b))
+    return out
+
+
+#: A point of the plane, 30-digit numbers.
+_Pt = tuple[mpmath.mpf, mpmath.mpf]
+
+
+def _segments_meet(p0: _Pt, p1: _Pt, q0: _Pt, q1: _Pt, tiny: mpmath.mpf) -> bool:
+    """Whether the segments p0-p1 and q0-q1 share a point (`tiny`: the area below which three
+    points count as collinear)."""
+
+    def cross(o: _Pt, a: _Pt, b: _Pt) -> mpmath.mpf:
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    def within(o: _Pt, a: _Pt, b: _Pt) -> bool:  # b on the segment o-a, given collinear
+        return bool(
+            min(o[0], a[0]) <= b[0] <= max(o[0], a[0])
+            and min(o[1], a[1]) <= b[1] <= max(o[1], a[1])
+        )
+
+    d1, d2 = cross(q0, q1, p0), cross(q0, q1, p1)
+    d3, d4 = cross(p0, p1, q0), cross(p0, p1, q1)
+    if ((d1 > tiny and d2 < -tiny) or (d1 < -tiny and d2 > tiny)) and (
+        (d3 > tiny and d4 < -tiny) or (d3 < -tiny and d4 > tiny)
+    ):
+        return True
+    return (
+        (abs(d1) <= tiny and within(q0, q1, p0))
+        or (abs(d2) <= tiny and within(q0, q1, p1))
+        or (abs(d3) <= tiny and within(p0, p1, q0))
+        or (abs(d4) <= tiny and within(p0, p1, q1))
+    )

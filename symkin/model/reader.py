@@ -557,6 +557,8 @@ class _Reader(HingeEntries):
                 f"3n - {rank.rank} = {rank.mobility}"
             )
         dof = mech.grubler if rank is None else rank.mobility
+        if dof == 0 and mech.is_structure:
+            return  # a structure: loaded by its loads and force actuators, no input
         doubled = _doubled_pairs(mech)
         if doubled and (dof < 1 or len(mech.drives) != dof):
             # the likeliest cause of a mobility that does not match: a hinge on the wrong link
@@ -573,7 +575,14 @@ class _Reader(HingeEntries):
                 f"the mechanism cannot move: Grübler mobility {formula}",
                 "[[hinge]]",
                 None,
-                "remove hinges or add links",
+                "remove hinges or add links"
+                + (
+                    "; or, if it is a structure to be loaded rather than moved, give it no "
+                    "input (no input = true, force actuators only) and evaluate it at --level "
+                    'loaded (docs/levels.md, "Structures")'
+                    if dof == 0
+                    else ""
+                ),
             )
         if len(mech.drives) != dof:
             hinges = [n for n in mech.inputs if n not in mech.surrogates]

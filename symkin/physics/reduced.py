@@ -191,7 +191,8 @@ class Reduced:
         # a stroke's series spring k (N per file unit; None: ideal): its row then reads
         # d·ΔX(a) = −f/k, the compliant point short of the commanded stroke by f/k
         self.springs = [None if act.spring is None else num(act.spring) for act in mech.actuators]
-        surrogates = {hinge_label[act.surrogate] for act in mech.actuators}
+        # (a structure's force actuators have none: docs/levels.md, "Structures")
+        surrogates = {hinge_label[act.surrogate] for act in mech.actuators if act.surrogate}
         self.strokes = [k for k, act in enumerate(self.acts) if act[4] == "stroke"]
         self.forces = [act[0] for act in self.acts if act[4] == "force"]
         self.fa = [sp.Symbol(f"fa_{k}", real=True) for k in range(len(self.forces))]

@@ -207,6 +207,8 @@ def stroke_angles(
     method on the k × k system, its Jacobian by central differences at `dps` digits (the
     strokes are smooth in the angles away from a toggle)."""
     mech = config.mechanism
+    if mech.is_structure:  # its force actuators are loads: no surrogate moves its rigid pose
+        return {}
     names = [a.surrogate for a in mech.actuators]
     level = config.level if compliant else levels.get("paper")
     with mpmath.workdps(dps + 10):

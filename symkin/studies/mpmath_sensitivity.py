@@ -136,6 +136,8 @@ def _stroke_columns(ev: MpmathEvaluator, state: State, total_r, total_d, answer:
         out[column[labels[name]], user[name]] = 1
     for name in red.forces:
         out[column[name], user[name]] = 1
+    if mech.is_structure:  # its rigid reference stays as fabricated: no surrogate angle moves
+        return out
     jac, rhs = mpmath.zeros(k, k), mpmath.zeros(k, n_p + len(drives))
     for i, act in enumerate(acts):
         exprs = [*act.direction, *act.at]

@@ -375,7 +375,7 @@ def solve_reduced(
     # mechanism's pose does not depend on the reference; one more solve expresses it against
     # the new one, whose point of action then has no deviation along d)
     for _ in range(SOLVER.strokes.reference_rounds):
-        if not forces or answer.refused:
+        if not forces or answer.refused or mech.is_structure:  # its reference stays put
             break
         assert answer.solver is not None
         along = {

@@ -2,7 +2,7 @@
 
 Each sample draws every varied parameter (symkin.studies.variation: its spread, the parameters whose
 defaults read it following), checks the sampled geometry by the file's rules (positive plate
-lengths, model parameters in range, plates shorter than the links between them), evaluates the
+lengths, model parameters in range, the other checks of the file), evaluates the
 mechanism at every configuration of the input grid with the generated evaluator, and keeps per
 point the largest |ΔR| over the grid. A sample that breaks a rule, or cannot be assembled (or
 does not converge) somewhere on the grid, is counted as failed (`failed`, of which `invalid`

@@ -300,6 +300,7 @@ def run(
     """The full table for `mech` over `ranges`."""
     from ..graph.structure import build
 
+    mech.refuse_structure(what="tradeoff (its variants are generated evaluators)")
     forces = [a for a in mech.actuators if a.drive == "force"]
     if forces:
         raise InputError(
