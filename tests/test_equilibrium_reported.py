@@ -164,7 +164,7 @@ def test_buckling_factor_of_the_clamped_guided_column(beam):
 
 def test_units_leave_the_reported_quantities_consistent(capsys):
     """The stage in metres and in millimetres: moments in N m, stress in Pa alike; the stiffness
-    in N/unit, N, N·unit."""
+    in N/unit, N, N·unit, the compliance in its inverse units."""
     out = {}
     for name in ("parallelogram", "parallelogram_mm"):
         path = str(ZOO / f"{name}.toml")
@@ -182,6 +182,7 @@ def test_units_leave_the_reported_quantities_consistent(capsys):
         assert mm["plates"][h]["stress"] == pytest.approx(plate["stress"], rel=1e-9)
     unit = np.array([[1e-3, 1e-3, 1], [1e-3, 1e-3, 1], [1, 1, 1e3]])
     assert np.allclose(mm["stiffness"]["P"], np.array(m["stiffness"]["P"]) * unit, rtol=1e-7)
+    assert np.allclose(mm["compliance"]["P"], np.array(m["compliance"]["P"]) / unit, rtol=1e-7)
 
 
 @pytest.mark.parametrize(
@@ -216,6 +217,8 @@ def test_realistic_mechanisms_report_finite_values_and_flag_overstress(
         assert all(math.isfinite(a[k]) for k in ("angle", "moment", "stiffness"))
     for k in data["stiffness"].values():
         assert np.all(np.isfinite(k)) and np.all(np.linalg.eigvalsh(np.array(k)) > 0)
+    for p, c in data["compliance"].items():
+        assert np.allclose(np.array(c) @ np.array(data["stiffness"][p]), np.eye(3), atol=1e-9)
     for h, p in data["plates"].items():
         assert p["stress"] == pytest.approx(stresses[h], rel=1e-12)
         assert p["safety"] == pytest.approx(allowable / p["stress"], rel=1e-12)

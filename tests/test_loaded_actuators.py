@@ -124,6 +124,11 @@ def test_loaded_with_actuators_against_equilibrium(evaluated, name):
         want, got = np.array(k), np.array(ours.stiffness[p])
         scale = np.abs(want).max(axis=1, keepdims=True)
         assert np.all(np.abs(got - want) <= tol * scale), (got, want)
+    assert set(ours.compliance) == set(exact.compliance) == set(exact.stiffness)
+    for p, c in exact.compliance.items():  # a point a stroke holds along its line: C, no K
+        want, got = np.array(c), np.array(ours.compliance[p])
+        scale = np.abs(want).max(axis=1, keepdims=True)
+        assert np.all(np.abs(got - want) <= tol * scale), (p, got, want)
     if exact.buckling is None or math.isinf(exact.buckling):
         assert ours.buckling == exact.buckling
     else:

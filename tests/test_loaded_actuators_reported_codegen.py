@@ -138,6 +138,10 @@ def test_generated_code_reports_what_the_python_level_reports(runs, c_runs, name
                 assert np.isnan(k).all(), p
             else:
                 assert rows_close(k, w, STIFFNESS), (p, c, k, w)
+        assert set(got["compliance"]) == set(rep.compliance) == set(rep.stiffness)
+        for p, w in rep.compliance.items():
+            k = got["compliance"][p][..., c]
+            assert w is not None and rows_close(k, w, STIFFNESS), (p, c, k, w)
         assert set(got["plates"]) == set(rep.plates) != set()
         for h, w in rep.plates.items():
             g = got["plates"][h]
@@ -185,6 +189,9 @@ def test_c_report_is_numpy_s(runs, c_runs):
                     assert np.isnan(got["stiffness"][p][..., c]).all(), (name, p)
                 else:
                     assert rows_close(got["stiffness"][p][..., c], w[..., c], STIFFNESS), (name, p)
+        for p, w in want["compliance"].items():
+            for c in range(w.shape[-1]):
+                assert rows_close(got["compliance"][p][..., c], w[..., c], STIFFNESS), (name, p)
         for h, w in want["plates"].items():
             assert np.allclose(got["plates"][h]["stress"], w["stress"], rtol=1e-12), (name, h)
 
@@ -197,7 +204,7 @@ def test_c_report_refuses_what_its_evaluate_refuses(runs, c_runs):
         plan = runs(name)[0]
         lib = c_runs(name)[0]
         rep = plan.loaded.report
-        size = 2 * len(rep.inputs) + 9 * len(rep.points) + 4 * len(rep.plates) + 3
+        size = 2 * len(rep.inputs) + 18 * len(rep.points) + 4 * len(rep.plates) + 3
         out = (ctypes.c_double * size)()
         bad = (ctypes.c_double * 1)(math.nan)
         assert getattr(lib, f"{plan.name}_loaded_report")(bad, None, out) == 3, name

@@ -55,6 +55,16 @@ AGREEMENT = {
     "lever_amplifier": (2e-7, 1e-6, 3e-6, 3e-6),  # measured 3.8e-8, 2.3e-7, 7.5e-7, 6e-7
     "five_bar_coupler_input": (5e-9, 2e-8, 3e-8, 1e-6),  # measured 1.2e-9, 4.5e-9, 8.5e-9, 3.2e-7
 }
+# The point compliance alike (each row against its largest entry; C = K⁻¹ carries K's
+# differences times its conditioning): measured 1.6e-4, 8.8e-7, 9.6e-5, 5.3e-7, 3.2e-5, 3.2e-6.
+COMPLIANCE = {
+    "four_bar": 5e-4,
+    "parallelogram": 3e-6,
+    "scott_russell": 3e-4,
+    "double_parallelogram": 2e-6,
+    "lever_amplifier": 1e-4,
+    "five_bar_coupler_input": 1e-5,
+}
 
 
 def mechanism(name: str):
@@ -104,6 +114,11 @@ def test_loaded_reports_what_equilibrium_reports(evaluated, name):
         got, want = np.array(k), np.array(exact.stiffness[point])
         scale = np.abs(want).max(axis=1, keepdims=True)
         assert np.all(np.abs(got - want) <= stiffness * scale), (point, got, want)
+    assert set(ours.compliance) == set(exact.compliance) == set(ours.stiffness)
+    for point, c in ours.compliance.items():
+        got, want = np.array(c), np.array(exact.compliance[point])
+        scale = np.abs(want).max(axis=1, keepdims=True)
+        assert np.all(np.abs(got - want) <= COMPLIANCE[name] * scale), (point, got, want)
     if exact.buckling is None:
         assert ours.buckling is None
     elif math.isinf(exact.buckling):
@@ -126,13 +141,18 @@ def test_the_reported_quantities_in_json_and_text_every_backend(capsys):
         data[backend] = json.loads(out)
     assert len(data) > 1
     for backend in data:
-        for key in ("inputs", "stiffness", "plates"):
+        for key in ("inputs", "stiffness", "compliance", "plates"):
             assert data[backend][key] == data["sympy"][key] != {}, (backend, key)
     assert "buckling" not in data["sympy"]  # the file has no loads
     code = main(["eval", path, "--input", "A0=0.3", "--level", "loaded"])
     out, err = capsys.readouterr()
     assert code == 0, err
-    for heading in ("inputs: what each input", "plate stress:", "point stiffness with"):
+    for heading in (
+        "inputs: what each input",
+        "plate stress:",
+        "point stiffness with",
+        "point stiffness along each direction, the other two free",
+    ):
         assert heading in out
 
 

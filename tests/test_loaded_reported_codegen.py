@@ -68,8 +68,8 @@ def built():
 def c_report(plan, inputs: dict[str, list[float]], lib=None) -> dict:
     """The C evaluator's <name>_loaded_report at every configuration, shaped as the numpy
     module's result entries (the configurations on the last axis); with actuators their block
-    after the plates' (stroke, force, dF/ds each) as "actuators". `lib`: the plan's compiled
-    library (None: built here)."""
+    after the plates' (stroke, force, dF/ds each) as "actuators"; the points' compliance last.
+    `lib`: the plan's compiled library (None: built here)."""
     require_compiler()
     if lib is None:
         lib = pipeline.evaluator(plan, "c", "test", links=False).lib
@@ -80,13 +80,14 @@ def c_report(plan, inputs: dict[str, list[float]], lib=None) -> dict:
     args = plan.drives if plan.actuators else plan.inputs
     rows = []
     for c in range(count):
-        out = (ctypes.c_double * (2 * nin + 9 * npt + 4 * npl + 3 * nact))()
+        out = (ctypes.c_double * (2 * nin + 18 * npt + 4 * npl + 3 * nact))()
         x = (ctypes.c_double * len(args))(*(inputs[h][c] for h in args))
         assert fn(x, None, out) == 0
         rows.append(list(out))
     v = np.array(rows).T
     plates = v[2 * nin + 9 * npt : 2 * nin + 9 * npt + 4 * npl]
-    acts = v[2 * nin + 9 * npt + 4 * npl :]
+    acts = v[2 * nin + 9 * npt + 4 * npl : 2 * nin + 9 * npt + 4 * npl + 3 * nact]
+    compliance = v[2 * nin + 9 * npt + 4 * npl + 3 * nact :]  # <NAME>_REPORT_COMPLIANCE
     return {
         "ok": np.ones(count, dtype=bool),
         "inputs": {
@@ -105,6 +106,9 @@ def c_report(plan, inputs: dict[str, list[float]], lib=None) -> dict:
         "plates": {
             h: dict(zip(("stress", "strain", "safety", "section"), plates[4 * k : 4 * k + 4]))
             for k, h in enumerate(rep.plates)
+        },
+        "compliance": {
+            p: compliance[9 * k : 9 * k + 9].reshape(3, 3, count) for k, p in enumerate(rep.points)
         },
         **(
             {
@@ -202,6 +206,10 @@ def test_generated_code_reports_what_the_python_loaded_level_reports(
                 assert np.isnan(got).all(), p
             else:
                 assert rows_close(got, w, STIFFNESS), (p, got, w)
+        assert set(res["compliance"]) == set(want.compliance) == set(want.stiffness)
+        for p, w in want.compliance.items():
+            got = res["compliance"][p][..., c]
+            assert w is not None and rows_close(got, w, STIFFNESS), (p, got, w)
         assert set(res["plates"]) == set(want.plates) != set()
         for h, w in want.plates.items():
             got = res["plates"][h]
@@ -261,7 +269,7 @@ def test_what_the_other_levels_and_modules_hold(built):
     assert {"loaded_report1", "loaded_report2"} <= set(plan.routines)
     require_compiler()
     lib = pipeline.evaluator(plan, "c", "test", links=False).lib
-    out = (ctypes.c_double * (2 + 9 + 16))()
+    out = (ctypes.c_double * (2 + 9 + 16 + 9))()  # the four-bar: 1 input, 1 point, 4 plates
     assert lib.four_bar_loaded_report((ctypes.c_double * 1)(4.0), None, out) == 3
     assert all(math.isnan(v) for v in out)
     piezo = symkin.analyze(symkin.load(EXAMPLES / "piezo_amplifier.toml"))

@@ -344,7 +344,8 @@ def test_eval_json_adds_hinges_and_energy(tmp_path, capsys, level):
     }
     # both report the designer's quantities (tests/test_equilibrium_reported.py,
     # tests/test_loaded_reported.py), "buckling" only with loads; equilibrium its error estimate
-    reported = {"stiffness", "plates"} | ({"error_estimate"} if level == "equilibrium" else set())
+    reported = {"stiffness", "compliance", "plates"}
+    reported |= {"error_estimate"} if level == "equilibrium" else set()
     assert set(data) == keys | reported
     assert data["level"] == level
     assert set(data["hinges"]) == {"A0", "A", "B0", "B"}

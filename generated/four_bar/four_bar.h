@@ -106,16 +106,23 @@ int four_bar_sensitivity_batch(int n, const double *inputs, const double *params
  * reports"), for one configuration (inputs and params as four_bar_evaluate's) solved at
  * `loaded`. out receives FOUR_BAR_N_REPORT doubles: per input hinge in
  * four_bar_report_input_names order its moment (N m) and dM/dtheta (N m/rad); per point in
- * four_bar_point_names order its 3 x 3 stiffness with every input held (9 doubles, row-major,
- * rows and columns x, y, rotation, in the file's length unit; NaN where the point is on the frame
- * or its compliance is singular); per plate in four_bar_report_plate_names order its largest
- * normal stress (Pa), strain, safety factor (the allowable stress over the stress; NaN without
- * one) and where along the plate (0..1) (4 doubles). Not the buckling factor (symkin eval's).
+ * four_bar_point_names order its 3 x 3 stiffness K with every input held (9 doubles, row-major,
+ * rows and columns x, y, rotation, in the file's length unit: N/u, N, N u; NaN where it does not
+ * exist: the point held rigidly in some direction, on the frame or by an input); per plate in
+ * four_bar_report_plate_names order its largest normal stress (Pa), strain, safety factor (the
+ * allowable stress over the stress; NaN without one) and where along the plate (0..1) (4
+ * doubles). Not the buckling factor (symkin eval's).
+ * Last, from out + FOUR_BAR_REPORT_COMPLIANCE, per point in four_bar_point_names order its
+ * 3 x 3 compliance C = K^-1 with every input held (9 doubles, row-major, u/N, 1/N, 1/(N u);
+ * 0 on the frame; NaN where it does not exist, the held mechanism free in some direction; where
+ * K is NaN its entries within rounding of zero are 0): 1/C[4 * i] is the point's stiffness along
+ * direction i with the other two free.
  * Same return codes as four_bar_evaluate at `loaded`; on any non-zero return out is NaN.
  */
 #define FOUR_BAR_N_REPORT_INPUTS 1
 #define FOUR_BAR_N_REPORT_PLATES 4
-#define FOUR_BAR_N_REPORT (2 * FOUR_BAR_N_REPORT_INPUTS + 9 * FOUR_BAR_N_POINTS + 4 * FOUR_BAR_N_REPORT_PLATES)
+#define FOUR_BAR_REPORT_COMPLIANCE (2 * FOUR_BAR_N_REPORT_INPUTS + 9 * FOUR_BAR_N_POINTS + 4 * FOUR_BAR_N_REPORT_PLATES)
+#define FOUR_BAR_N_REPORT (FOUR_BAR_REPORT_COMPLIANCE + 9 * FOUR_BAR_N_POINTS)
 extern const char *const four_bar_report_input_names[FOUR_BAR_N_REPORT_INPUTS > 0 ? FOUR_BAR_N_REPORT_INPUTS : 1];
 extern const char *const four_bar_report_plate_names[FOUR_BAR_N_REPORT_PLATES > 0 ? FOUR_BAR_N_REPORT_PLATES : 1];
 int four_bar_loaded_report(const double *inputs, const double *params, double *out);

@@ -16,7 +16,10 @@ At level "loaded" it also holds what the level reports beyond the deviations (do
 "What loaded reports"): "inputs": {H: {"angle", "moment", "stiffness"}} of every input hinge
 (rad, N m, N m/rad), "stiffness": {P: K}, K of shape (3, 3, *broadcast_shape) the point's
 stiffness with every input held (rows and columns x, y, rotation; N/u, N, N u with u the file's
-length unit; NaN where the point is on the frame or its compliance is singular), "plates": {H:
+length unit; NaN where it does not exist: the point is held rigidly in some direction, on
+the frame or by an input), "compliance": {P: C}, C = K^-1 of the same shape (u/N, 1/N,
+1/(N u); 0 on the frame, NaN where it does not exist: the held mechanism free in some
+direction; where K is NaN, entries within rounding of zero are 0), "plates": {H:
 {"stress", "strain", "safety", "section"}} of every plate (Pa; safety NaN without an allowable
 stress; section where along the plate, 0..1).
 No "buckling": the file has no loads.
@@ -1078,13 +1081,14 @@ def _reduced_rates(mech, theta, p, q, thu, ok, forces=0):
 # Its rules (symkin.core.settings.LoadedSettings) are the loaded tables' (mech.loaded): sections,
 # the stress samples per plate, one RK4 step each (against the Python path's Taylor series:
 # 5e-12 of the stress, tests/test_loaded_reported_codegen.py); singular, a point's scaled
-# compliance this ill-conditioned is singular (NaN); buckling_*, the buckling search.
+# compliance this ill-conditioned is singular (its K or C NaN: _stiffness_compliance);
+# buckling_*, the buckling search.
 
 
 def _evaluate_reported(mech, inputs, level, params, links, report=True, buckling=True):
     """The module's evaluate() (runtime.py's _evaluate) with, at the loaded level and with
-    `report`, what it reports beyond the deviations: "inputs", "stiffness", "plates" and, with
-    loads and `buckling`, "buckling" (_reduced_report)."""
+    `report`, what it reports beyond the deviations: "inputs", "stiffness", "compliance",
+    "plates" and, with loads and `buckling`, "buckling" (_reduced_report)."""
     arrays, p = _prepare(mech, inputs, level, params)
     return _blocks(_reported_block, arrays, mech, level, p, links, (report, buckling))
 
@@ -1152,8 +1156,9 @@ def _plate_stress(k0, lx, ly, ea, es, slender, modulus, limit, has_limit, sectio
 def _reduced_report(mech, theta, p, q, ok, buckling=True):
     """What the loaded level reports at its solutions (q: the variant solved and its x,
     templates/numpy/reduced.py), NaN where not ok: {"inputs": {H: {"angle", "moment",
-    "stiffness"}}, "stiffness": {P: (3, 3, *shape)}, "plates": {H: {"stress", "strain",
-    "safety", "section"}}} (N m, N m/rad; the stiffness in the file's length unit; Pa) and,
+    "stiffness"}}, "stiffness": {P: (3, 3, *shape)}, "compliance": {P: (3, 3, *shape)},
+    "plates": {H: {"stress", "strain", "safety", "section"}}} (N m, N m/rad; the stiffness and
+    compliance in the file's length unit, NaN where they do not exist; Pa) and,
     when the file has loads (or force actuators) and with `buckling`, "buckling": the factor on
     them at which the tangent stiffness becomes singular (inf: none up to 10; _red_buckling)."""
     tb = mech.loaded
@@ -1216,21 +1221,15 @@ def _reduced_report(mech, theta, p, q, ok, buckling=True):
             "moment": shaped(ys[:, k] * rep.unit_scale),
             "stiffness": shaped(rates[:, k, k] * rep.unit_scale),
         }
-    big_l, big_f = rep.L, rep.F
-    norm = numpy.array([big_f / big_l, big_f / big_l, big_f])[:, None] * numpy.array(
-        [1, 1, 1 / big_l]
-    )
+    scales = numpy.array([rep.F / rep.L, rep.F / rep.L, rep.F]), numpy.array([1, 1, 1 / rep.L])
+    result["compliance"] = {}
     for k, name in enumerate(rep.points):
         rows = slice(nin + 3 * k, nin + 3 * k + 3)
-        c = rates[:, rows, rows]
-        live = ok_flat & numpy.all(numpy.isfinite(c), axis=(1, 2)) & (not rep.frame[k])
-        stiff = numpy.full((size, 3, 3), numpy.nan)
-        if live.any():
-            cond = numpy.linalg.cond(c[live] * norm)
-            keep = numpy.flatnonzero(live)[cond <= tb.singular]
-            if keep.size:
-                stiff[keep] = numpy.linalg.inv(c[keep])
+        c = numpy.zeros((size, 3, 3)) if rep.frame[k] else rates[:, rows, rows]
+        stiff, comp = _stiffness_compliance(c, scales, tb.singular)
+        stiff[~ok_flat] = comp[~ok_flat] = numpy.nan
         result["stiffness"][name] = numpy.moveaxis(stiff, 0, -1).reshape((3, 3) + shape)
+        result["compliance"][name] = numpy.moveaxis(comp, 0, -1).reshape((3, 3) + shape)
     for k, name in enumerate(rep.plates):
         row = [stress[:, k, c] for c in range(8)]
         live = numpy.flatnonzero(ok_flat)
@@ -1245,6 +1244,54 @@ def _reduced_report(mech, theta, p, q, ok, buckling=True):
     if buckling and tb.loads:
         result["buckling"] = shaped(_red_bucklings(mech, theta, p, q, shape, good))
     return result
+
+
+def _inverses(a):
+    """The inverse of every matrix of a (b, 3, 3) stack, NaN where one is singular."""
+    try:
+        return numpy.linalg.inv(a)
+    except numpy.linalg.LinAlgError:
+        out = numpy.full(a.shape, numpy.nan)
+        for c in range(a.shape[0]):
+            try:
+                out[c] = numpy.linalg.inv(a[c])
+            except numpy.linalg.LinAlgError:
+                continue  # singular: NaN
+        return out
+
+
+def _stiffness_compliance(c, scales, singular):
+    """(K, C) of every point compliance of a (b, 3, 3) stack, NaN where it does not exist, as
+    symkin.physics.reported.stiffness_and_compliance judges them: S = C scaled by `scales`
+    (its rows', its columns': F/L, F/L, F and 1, 1, 1/L), singular where its 1-norm times its
+    inverse's exceeds `singular` (or no inverse); then K NaN and C's entries within
+    |S|/singular of zero exactly 0 where |S| <= |S^-1| (a direction held rigidly), else C NaN
+    (a direction free); both NaN where C is not finite."""
+    b = c.shape[0]
+    stiff, comp = numpy.full((b, 3, 3), numpy.nan), numpy.full((b, 3, 3), numpy.nan)
+    live = numpy.flatnonzero(numpy.all(numpy.isfinite(c), axis=(1, 2)))
+    if not live.size:
+        return stiff, comp
+    rows, cols = scales
+    cl = c[live]
+    scaled = cl * rows[:, None] * cols
+    size = numpy.abs(scaled).sum(axis=1).max(axis=1)
+    inverse = _inverses(scaled)
+    invertible = numpy.all(numpy.isfinite(inverse), axis=(1, 2))
+    with numpy.errstate(invalid="ignore"):
+        inverse_size = numpy.abs(inverse).sum(axis=1).max(axis=1)
+    regular = invertible & (size * inverse_size <= singular)
+    free = invertible & ~regular & (size > inverse_size)
+    held = ~regular & ~free
+    if regular.any():
+        stiff[live[regular]] = numpy.linalg.inv(cl[regular])
+        comp[live[regular]] = cl[regular]
+    if free.any():
+        stiff[live[free]] = inverse[free] * cols[:, None] * rows  # K = S^-1 scaled back
+    if held.any():
+        small = numpy.abs(scaled[held]) <= size[held][:, None, None] / singular
+        comp[live[held]] = numpy.where(small, 0.0, cl[held])
+    return stiff, comp
 
 
 def _red_bucklings(mech, theta, p, q, shape, good):

@@ -106,21 +106,28 @@ int piezo_amplifier_sensitivity_batch(int n, const double *inputs, const double 
  * reports"), for one configuration (inputs and params as piezo_amplifier_evaluate's) solved at
  * `loaded`. out receives PIEZO_AMPLIFIER_N_REPORT doubles: per input hinge in
  * piezo_amplifier_report_input_names order its moment (N m) and dM/dtheta (N m/rad); per point in
- * piezo_amplifier_point_names order its 3 x 3 stiffness with every input held (9 doubles, row-major,
- * rows and columns x, y, rotation, in the file's length unit; NaN where the point is on the frame
- * or its compliance is singular); per plate in piezo_amplifier_report_plate_names order its largest
- * normal stress (Pa), strain, safety factor (the allowable stress over the stress; NaN without
- * one) and where along the plate (0..1) (4 doubles). Not the buckling factor (symkin eval's).
+ * piezo_amplifier_point_names order its 3 x 3 stiffness K with every input held (9 doubles, row-major,
+ * rows and columns x, y, rotation, in the file's length unit: N/u, N, N u; NaN where it does not
+ * exist: the point held rigidly in some direction, on the frame or by an input); per plate in
+ * piezo_amplifier_report_plate_names order its largest normal stress (Pa), strain, safety factor (the
+ * allowable stress over the stress; NaN without one) and where along the plate (0..1) (4
+ * doubles). Not the buckling factor (symkin eval's).
  * Then per actuator in piezo_amplifier_report_actuator_names order (3 doubles): its stroke (the
  * file's length unit; a force's from the as-fabricated rigid pose), its force along its line
  * (N) and its stiffness dF/ds with the other inputs held (N per length unit; a force's
  * 1/(ds/dF), inf where ds/dF = 0). The point stiffness holds the actuators too.
+ * Last, from out + PIEZO_AMPLIFIER_REPORT_COMPLIANCE, per point in piezo_amplifier_point_names order its
+ * 3 x 3 compliance C = K^-1 with every input held (9 doubles, row-major, u/N, 1/N, 1/(N u);
+ * 0 on the frame; NaN where it does not exist, the held mechanism free in some direction; where
+ * K is NaN its entries within rounding of zero are 0): 1/C[4 * i] is the point's stiffness along
+ * direction i with the other two free.
  * Same return codes as piezo_amplifier_evaluate at `loaded`; on any non-zero return out is NaN.
  */
 #define PIEZO_AMPLIFIER_N_REPORT_INPUTS 0
 #define PIEZO_AMPLIFIER_N_REPORT_PLATES 4
 #define PIEZO_AMPLIFIER_N_REPORT_ACTUATORS 1
-#define PIEZO_AMPLIFIER_N_REPORT (2 * PIEZO_AMPLIFIER_N_REPORT_INPUTS + 9 * PIEZO_AMPLIFIER_N_POINTS + 4 * PIEZO_AMPLIFIER_N_REPORT_PLATES + 3 * PIEZO_AMPLIFIER_N_REPORT_ACTUATORS)
+#define PIEZO_AMPLIFIER_REPORT_COMPLIANCE (2 * PIEZO_AMPLIFIER_N_REPORT_INPUTS + 9 * PIEZO_AMPLIFIER_N_POINTS + 4 * PIEZO_AMPLIFIER_N_REPORT_PLATES + 3 * PIEZO_AMPLIFIER_N_REPORT_ACTUATORS)
+#define PIEZO_AMPLIFIER_N_REPORT (PIEZO_AMPLIFIER_REPORT_COMPLIANCE + 9 * PIEZO_AMPLIFIER_N_POINTS)
 extern const char *const piezo_amplifier_report_input_names[PIEZO_AMPLIFIER_N_REPORT_INPUTS > 0 ? PIEZO_AMPLIFIER_N_REPORT_INPUTS : 1];
 extern const char *const piezo_amplifier_report_plate_names[PIEZO_AMPLIFIER_N_REPORT_PLATES > 0 ? PIEZO_AMPLIFIER_N_REPORT_PLATES : 1];
 extern const char *const piezo_amplifier_report_actuator_names[PIEZO_AMPLIFIER_N_REPORT_ACTUATORS];

@@ -12951,23 +12951,30 @@ static double sk_rep_norm1(const double *a)
     return best;
 }
 
-/* K = C^-1 of a point's compliance C (3 x 3) into k, NaN where C is singular: its 1-norm
-   condition, scaled by L and F as reduced_reported.report scales it (there the 2-norm's),
-   above SK_LOADED_SINGULAR or not finite. */
-static void sk_rep_stiffness(const sk_loaded_report *rp, const double *c, double *k)
+/* K = C^-1 and C of a point's compliance c (3 x 3) into k and cout, NaN where either does not
+   exist, as symkin.physics.reported.stiffness_and_compliance judges them: S = C scaled by L and
+   F, singular where its 1-norm times its inverse's exceeds SK_LOADED_SINGULAR (or C has no
+   inverse); then k NaN and cout's entries within |S|/SK_LOADED_SINGULAR of zero exactly 0 where
+   |S| <= |S^-1| (a direction held rigidly), else cout NaN (a direction free); both NaN where C
+   is not finite. */
+static void sk_rep_stiffness(const sk_loaded_report *rp, const double *c, double *k,
+                             double *cout)
 {
     const double w[3] = {rp->F / rp->L, rp->F / rp->L, rp->F}, u[3] = {1.0, 1.0, 1.0 / rp->L};
-    double lu[9], scaled[9], inv[9], col[3];
-    int piv[3], i, j;
+    double lu[9], scaled[9], inv[9], col[3], size, inverse_size = HUGE_VAL;
+    int piv[3], i, j, finite = 1, invertible;
     for (i = 0; i < 9; ++i) {
         lu[i] = c[i];
         scaled[i] = c[i] * w[i / 3] * u[i % 3];
-        k[i] = NAN;
+        k[i] = cout[i] = NAN;
+        finite = finite && isfinite(c[i]);
     }
-    if (sk_lu(3, lu, piv)) {
+    if (!finite) {
         return;
     }
-    for (j = 0; j < 3; ++j) {
+    size = sk_rep_norm1(scaled);
+    invertible = !sk_lu(3, lu, piv);
+    for (j = 0; invertible && j < 3; ++j) {
         col[0] = col[1] = col[2] = 0.0;
         col[j] = 1.0;
         sk_lu_solve(3, lu, piv, col);
@@ -12975,26 +12982,34 @@ static void sk_rep_stiffness(const sk_loaded_report *rp, const double *c, double
             inv[3 * i + j] = col[i];
         }
     }
-    {
+    if (invertible) {
         /* the scaled compliance's inverse: inv with rows over u, columns over w */
         double sinv[9];
         for (i = 0; i < 9; ++i) {
             sinv[i] = inv[i] / (u[i / 3] * w[i % 3]);
+            invertible = invertible && isfinite(sinv[i]);
         }
-        if (!(sk_rep_norm1(scaled) * sk_rep_norm1(sinv) <= SK_LOADED_SINGULAR)) {
-            return;
+        inverse_size = sk_rep_norm1(sinv);
+    }
+    if (invertible && (size * inverse_size <= SK_LOADED_SINGULAR || size > inverse_size)) {
+        const int regular = size * inverse_size <= SK_LOADED_SINGULAR;
+        for (i = 0; i < 9; ++i) {
+            k[i] = inv[i];
+            cout[i] = regular ? c[i] : NAN;
         }
+        return;
     }
     for (i = 0; i < 9; ++i) {
-        k[i] = inv[i];
+        cout[i] = fabs(scaled[i]) <= size / SK_LOADED_SINGULAR ? 0.0 : c[i];
     }
 }
 
 /* What the loaded level reports at its solution (q: the parameters, the deviation, the variant
    solved and its x, sk_reduced_pose) into out: per input its moment (N m) and dM/dtheta
-   (N m/rad), per point its stiffness K (9, row-major; NaN on the frame or where singular), per
-   plate its stress (Pa), strain, safety factor and section. Returns 0, or 1 where J is
-   singular. */
+   (N m/rad), per point its stiffness K (9, row-major; NaN where it does not exist), per plate
+   its stress (Pa), strain, safety factor and section, then per point its compliance C (9,
+   row-major; 0 on the frame, NaN where it does not exist: sk_rep_stiffness). Returns 0, or 1
+   where J is singular. */
 static int sk_reduced_report(const sk_mechanism *m, const sk_loaded_report *rp,
                              const double *theta, const double *q, double *out)
 {
@@ -13064,16 +13079,15 @@ static int sk_reduced_report(const sk_mechanism *m, const sk_loaded_report *rp,
     }
     out += 2 * nin;
     for (k = 0; k < rp->n_points; ++k) {
-        double cm[9];
+        /* the compliance block after the plates' */
+        double cm[9], *cout = out + 9 * rp->n_points + 4 * rp->n_plates + 9 * k;
         for (i = 0; i < 3; ++i) {
             for (c = 0; c < 3; ++c) {
-                cm[3 * i + c] = rates[(nin + 3 * k + i) * nq + nin + 3 * k + c];
+                const double v = rates[(nin + 3 * k + i) * nq + nin + 3 * k + c];
+                cm[3 * i + c] = rp->frame[k] ? 0.0 : v; /* a point of the frame does not move */
             }
         }
-        sk_rep_stiffness(rp, cm, out + 9 * k);
-        if (rp->frame[k]) {
-            sk_nan(out + 9 * k, 9);
-        }
+        sk_rep_stiffness(rp, cm, out + 9 * k, cout);
     }
     out += 9 * rp->n_points;
     for (k = 0; k < rp->n_plates; ++k) {
@@ -13090,7 +13104,8 @@ static int sk_loaded_report_pose(const sk_mechanism *m, const sk_loaded_report *
     double theta[SK_M], delta[SK_K + 1], constants[SK_NQ];
     const double *q;
     const sk_level *lv = sk_find_level(m, level);
-    const int size = 2 * rp->n_inputs + 9 * rp->n_points + 4 * rp->n_plates;
+    /* the inputs', the stiffness, the plates' and the compliance blocks */
+    const int size = 2 * rp->n_inputs + 9 * rp->n_points + 4 * rp->n_plates + 9 * rp->n_points;
     int status, i;
     if (out == NULL) {
         return 3;

@@ -18,10 +18,10 @@ from .errors import InputError
 
 #: What the `loaded` level reports beyond the deviations (docs/physics.md, "What loaded
 #: reports"), by the generated module's keys: the input hinges' moments and stiffness, the
-#: points' stiffness, the plates' stress, the actuators' stroke, force and stiffness, and (with
-#: loads) the buckling factor. A backend's `reports` are what its own code computes; `symkin
-#: eval` prints the derivation's report whichever the backend.
-REPORTS: tuple[str, ...] = ("inputs", "stiffness", "plates", "actuators", "buckling")
+#: points' stiffness and compliance, the plates' stress, the actuators' stroke, force and
+#: stiffness, and (with loads) the buckling factor. A backend's `reports` are what its own code
+#: computes; `symkin eval` prints the derivation's report whichever the backend.
+REPORTS: tuple[str, ...] = ("inputs", "stiffness", "compliance", "plates", "actuators", "buckling")
 
 
 @dataclass(frozen=True)

@@ -167,7 +167,10 @@ class LoadedSettings:
     est_limit: float = 0.01  # refused above this estimated error
     # the report (symkin.physics.reported, reduced_reported; reduced_report.c / .py)
     sections: int = 64  # sections per plate where the stress is sampled (one RK4 step each)
-    singular: float = 1e12  # a point's scaled compliance this ill-conditioned is singular
+    # a point's compliance C scaled by the plates' L and F this ill-conditioned (1-norm) is
+    # singular: then K = C⁻¹ is null (C's entries within its 1-norm/singular of zero are 0) or C
+    # is, whichever side is the outlier (symkin.physics.reported.stiffness_and_compliance)
+    singular: float = 1e12
     # the buckling search along the load factor (from 1)
     buckling_limit: float = 10.0  # stops at this factor on the file's loads (as equilibrium's)
     buckling_step: float = 0.5  # its first step in the factor

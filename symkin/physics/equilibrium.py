@@ -768,11 +768,12 @@ class Result:
     # of the floats above: it keeps its relative accuracy for tiny plates)
     angle_deviations: dict[str, float] = field(default_factory=dict)
     # what the level reports for the designer (symkin.physics.reported): each input's actuator
-    # moment and stiffness, each point's 3×3 tangent stiffness (None: held rigidly), each
-    # plate's largest stress
+    # moment and stiffness, each point's 3×3 tangent stiffness and compliance (None where it
+    # does not exist: K of a point held rigidly in some direction), each plate's largest stress
     inputs: dict[str, InputLoad] = field(default_factory=dict)
     actuators: dict[str, ActuatorLoad] = field(default_factory=dict)
     stiffness: dict[str, list | None] = field(default_factory=dict)
+    compliance: dict[str, list | None] = field(default_factory=dict)
     plates: dict[str, PlateStress] = field(default_factory=dict)
 
 
@@ -855,6 +856,7 @@ def solve(
             else _float(substitute(hinge[n].allowable_stress, values))
             for n in plates
         }
+        point_k, point_c = reported.point_stiffness(system, at, tangent)
         return Result(
             angles_rigid={h.name: float(theta[h.name]) for h in solution.system.hinges},
             angles_compliant={
@@ -877,7 +879,8 @@ def solve(
             },
             inputs=reported.inputs(system, at, tangent, float(s)),
             actuators=reported.actuators(system, at, tangent),
-            stiffness=reported.point_stiffness(system, at, tangent),
+            stiffness=point_k,
+            compliance=point_c,
             plates=reported.plates(system, at, moduli, allowable),
         )
 

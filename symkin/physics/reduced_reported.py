@@ -6,8 +6,9 @@ the quantities `equilibrium` reports (symkin.physics.reported), in the same unit
   chord's plate moment less its μ) and dM/dθ: the input enters as its compliant angle beyond
   the rigid one, δ_in (zero at the solution; the equations depend on the compliant angles only),
   so dM/dθ = dM/dδ_in along dx = −J⁻¹ ∂R/∂δ_in, the other inputs held;
-- every point's 3×3 stiffness K = C⁻¹, C = d(ΔX, ΔY, Δφ)/d(Fx, Fy, M) of a virtual load at the
-  point (it enters the tree forces and the moment balances), the inputs held;
+- every point's 3×3 compliance C = d(ΔX, ΔY, Δφ)/d(Fx, Fy, M) of a virtual load at the point (it
+  enters the tree forces and the moment balances), the inputs held, and its stiffness K = C⁻¹,
+  either None where it does not exist (symkin.physics.reported.stiffness_and_compliance);
 - every plate's largest normal stress along it: its end loads (the solution's force and moment
   at M's clamp, carried to P's clamp by the plate's moment balance) shot along the plate as a
   geometrically exact beam (symkin.physics.reported.plate_stress);
@@ -28,7 +29,7 @@ from ..core import vectors as V
 from ..core.settings import SOLVER
 from ..model.expressions import substitute
 from .reduced import Answer, Reduced
-from .reported import plate_stress
+from .reported import plate_stress, stiffness_and_compliance
 from .result import ActuatorLoad, InputLoad, PlateStress
 from .stiffness import plate_stiffness
 
@@ -44,6 +45,7 @@ class Report:
     inputs: dict[str, InputLoad]
     actuators: dict[str, ActuatorLoad]
     stiffness: dict[str, list | None]
+    compliance: dict[str, list | None]
     plates: dict[str, PlateStress]
     buckling: float | None  # None: the file has no loads
 
@@ -79,6 +81,7 @@ def report(
             stiff = 1 / rate if rate != 0 else math.inf
             actuators[name] = ActuatorLoad(reference + value, float(theta[name]), stiff)
     stiffness: dict[str, list | None] = {}
+    compliance: dict[str, list | None] = {}
     first = len(red.inputs) + len(red.acts)
     # the scales to judge C's conditioning by (a lone hinge has no distance between hinges)
     L = max(red.L, red.lmin)
@@ -86,17 +89,16 @@ def report(
     for k, name in enumerate(sorted(red.points)):
         link = red.points[name][0]
         rows = slice(first + 3 * k, first + 3 * k + 3)
-        compliance = rates[rows, rows]
-        scaled = compliance * np.array([F / L, F / L, F])[:, None] * np.array([1, 1, 1 / L])
-        if link == 0 or not np.all(np.isfinite(scaled)) or np.linalg.cond(scaled) > RULES.singular:
-            stiffness[name] = None
+        if link == 0:  # a point of the frame does not move
+            stiffness[name], compliance[name] = None, np.zeros((3, 3)).tolist()
         else:
-            stiffness[name] = np.linalg.inv(compliance).tolist()
+            stiffness[name], compliance[name] = stiffness_and_compliance(rates[rows, rows], L, F)
     loaded = red.loads or red.forces  # a force actuator is a load (scaled with the file's)
     return Report(
         inputs,
         actuators,
         stiffness,
+        compliance,
         plates(answer),
         buckling_factor(answer, solver=search) if buckling and loaded else None,
     )

@@ -4,9 +4,10 @@ reports"), from a converged solution u of symkin.physics.equilibrium's System an
 - every input hinge's actuator moment (an unknown of the system) and its stiffness dM/dθ: the
   input's row of R(u) = 0 is φ_M − φ_P − θ = 0, so du/dθ = J⁻¹ e_row and dM/dθ is the moment
   unknown's entry, the other inputs held (their rows stay);
-- every point's 3×3 tangent stiffness K = C⁻¹, C = d(ΔX, ΔY, Δφ)/d(Fx, Fy, M) the compliance
-  under a virtual load at the point (it enters the point's link's balance rows only), the inputs
+- every point's 3×3 compliance C = d(ΔX, ΔY, Δφ)/d(Fx, Fy, M) under a virtual load at the point
+  (it enters the point's link's balance rows only) and its tangent stiffness K = C⁻¹, the inputs
   held: the equilibrium's own Jacobian, with the loads' and the plates' geometric stiffness;
+  either is None where it does not exist (:func:`stiffness_and_compliance`);
 - every plate's largest normal stress along it, |N|/A + |M| t/(2I) = E'(|ψ'| t/(2l) + |f_N| t²/
   (12 l²)) in the plate's scaled loads, the plate shot again (symkin.physics.beams) to sections
   along it (a sub-plate of length σl has loads k0 σ, λ σ² and compliances over σ²).
@@ -40,8 +41,7 @@ class System(Protocol):
 
 #: Sections per plate where the stress is sampled (both ends exact; an interior maximum, e.g. of
 #: a buckled plate, is refined by a parabola through the three samples around it), and how
-#: ill-conditioned a point's scaled compliance is singular: the link is held rigidly in some
-#: direction (a frame point, pins only), and its stiffness is reported as None
+#: ill-conditioned a point's scaled compliance is singular (:func:`stiffness_and_compliance`)
 #: (symkin.core.settings.LoadedSettings: sections, singular; `loaded`'s reports read them too).
 SECTIONS = SOLVER.loaded.sections
 SINGULAR = SOLVER.loaded.singular
@@ -107,15 +107,54 @@ def actuators(system: System, u: np.ndarray, jac: np.ndarray) -> dict[str, Actua
     return out
 
 
-def point_stiffness(system: System, u: np.ndarray, jac: np.ndarray) -> dict[str, list | None]:
-    """The 3×3 tangent stiffness of every point (file unit: N/unit, N, N·unit; rows and columns
-    x, y, rotation), or None where the point's link is held rigidly (a point of the frame)."""
+def stiffness_and_compliance(
+    compliance: np.ndarray, length: float, force: float, singular: float = SINGULAR
+) -> tuple[list | None, list | None]:
+    """(K, C) of a point from its compliance C (3×3 in the file's unit; rows ΔX, ΔY, Δφ, columns
+    Fx, Fy, M), K = C⁻¹, either None where it does not exist (docs/physics.md, "What
+    equilibrium reports"). C is judged in the plates' scales, S = C scaled by `length` L and
+    `force` F to be dimensionless (a plate's bending compliance is of order 1 there): with
+    ‖·‖ the 1-norm, S is singular where ‖S‖ ‖S⁻¹‖ exceeds `singular` (or S⁻¹ does not
+    exist). Then the outlier decides which one does not exist: ‖S‖ ≤ ‖S⁻¹‖, a direction far
+    stiffer than the plates (a point of the frame, of a link the held inputs, pins or a stroke
+    hold rigidly in some direction, e.g. a fixed–guided plate's end whose rotation its input
+    holds): K is None, and C's entries within ‖S‖/`singular` of zero (rounding) are exactly 0;
+    else a direction far softer (the held mechanism free in it, at a buckling point): C is
+    None. A C not finite gives (None, None). The same rule as templates/c/reduced_report.c and
+    templates/numpy/reduced_report.py."""
+    c = np.asarray(compliance, dtype=float)
+    if not np.all(np.isfinite(c)):
+        return None, None
+    rows = np.array([force / length, force / length, force])[:, None]
+    cols = np.array([1.0, 1.0, 1.0 / length])
+    scaled = c * rows * cols
+    size = float(np.abs(scaled).sum(axis=0).max())
+    try:
+        inverse = np.linalg.inv(scaled)
+    except np.linalg.LinAlgError:
+        inverse = None
+    if inverse is not None and np.all(np.isfinite(inverse)):
+        inverse_size = float(np.abs(inverse).sum(axis=0).max())
+        if size * inverse_size <= singular:
+            return np.linalg.inv(c).tolist(), c.tolist()
+        if size > inverse_size:  # far softer than the plates: K singular, no C
+            return (inverse * cols[:, None] * rows[:, 0]).tolist(), None
+    return None, np.where(np.abs(scaled) <= size / singular, 0.0, c).tolist()
+
+
+def point_stiffness(
+    system: System, u: np.ndarray, jac: np.ndarray
+) -> tuple[dict[str, list | None], dict[str, list | None]]:
+    """The 3×3 tangent stiffness and compliance of every point (file unit: K in N/unit, N,
+    N·unit, C in unit/N, 1/N, 1/(N·unit); rows and columns x, y, rotation), each None where
+    it does not exist (:func:`stiffness_and_compliance`); a point of the frame has C = 0."""
     _, balance = _rows(system)
     L, F = float(system.L), float(system.F)
-    out: dict[str, list | None] = {}
+    stiffness: dict[str, list | None] = {}
+    compliances: dict[str, list | None] = {}
     for name, (link, at) in system.points.items():
         if link < 0:
-            out[name] = None
+            stiffness[name], compliances[name] = None, np.zeros((3, 3)).tolist()
             continue
         x, y = (float(v) for v in system.place(u, link, at))
         ox, oy = float(u[3 * link]) * L, float(u[3 * link + 1]) * L  # the link's origin now
@@ -133,13 +172,8 @@ def point_stiffness(system: System, u: np.ndarray, jac: np.ndarray) -> dict[str,
                 dphi,
             ]
         )
-        # dimensionless (lengths over L, forces over F) to judge its conditioning
-        scaled = compliance * np.array([F / L, F / L, F])[:, None] * np.array([1, 1, 1 / L])
-        if np.linalg.cond(scaled) > SINGULAR:
-            out[name] = None
-            continue
-        out[name] = np.linalg.inv(compliance).tolist()
-    return out
+        stiffness[name], compliances[name] = stiffness_and_compliance(compliance, L, F)
+    return stiffness, compliances
 
 
 def plates(

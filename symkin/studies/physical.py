@@ -268,6 +268,9 @@ def _equilibrium(
         stiffness={
             n: k for n, k in res.stiffness.items() if n not in {a.point for a in mech.actuators}
         },
+        compliance={
+            n: c for n, c in res.compliance.items() if n not in {a.point for a in mech.actuators}
+        },
         plates={h.name: res.plates[h.name] for h in mech.hinges if h.name in res.plates},
         buckling=None if buckling is None else buckling.factor,
         buckling_hinge=None if buckling is None else buckling.hinge,
@@ -389,13 +392,13 @@ def solve_reduced(
 
 
 #: The Evaluation fields `loaded` reports beyond the deviations (docs/physics.md).
-REPORTED = ("actuation", "actuators", "stiffness", "plates", "buckling")
+REPORTED = ("actuation", "actuators", "stiffness", "compliance", "plates", "buckling")
 
 
 def _reported_fields(answer: reduced.Answer, scale: float) -> dict:
-    """`loaded`'s input moments and stiffness, point stiffness, plate stress and buckling factor
-    as Evaluation fields (symkin.physics.reduced_reported); the buckling search's solves in
-    float64 (an mpmath one is seconds per solve)."""
+    """`loaded`'s input moments and stiffness, point stiffness and compliance, plate stress and
+    buckling factor as Evaluation fields (symkin.physics.reduced_reported); the buckling
+    search's solves in float64 (an mpmath one is seconds per solve)."""
     assert answer.solver is not None
     search = answer.solver.twin("float64", _float_modules)
     rep = reduced_reported.report(answer, scale, search=search)
@@ -404,6 +407,7 @@ def _reported_fields(answer: reduced.Answer, scale: float) -> dict:
         "actuation": rep.inputs,
         "actuators": rep.actuators,
         "stiffness": {n: k for n, k in rep.stiffness.items() if n not in hidden},
+        "compliance": {n: c for n, c in rep.compliance.items() if n not in hidden},
         "plates": {  # in the file's order, as equilibrium's
             h.name: rep.plates[h.name]
             for h in answer.solver.kin.mechanism.hinges

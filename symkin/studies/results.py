@@ -107,13 +107,16 @@ class Evaluation:
     energy: float | None = None
     error_estimate: float | None = None
     # At `equilibrium` (docs/physics.md, "What equilibrium reports"): every input's actuator
-    # moment and stiffness, every point's 3×3 tangent stiffness with the inputs held (None: held
-    # rigidly), every plate's largest stress, and with loads their first buckling factor
-    # (math.inf: none up to physics.equilibrium.BUCKLING_LIMIT) and the hinge that buckles.
+    # moment and stiffness, every point's 3×3 tangent stiffness and compliance with the inputs
+    # held (None where it does not exist: K of a point held rigidly in some direction, C of one
+    # free in some direction), every plate's largest stress, and with loads their first
+    # buckling factor (math.inf: none up to physics.equilibrium.BUCKLING_LIMIT) and the hinge
+    # that buckles.
     actuation: dict[str, InputLoad] = field(default_factory=dict)
     # every actuator's stroke, force and dF/ds (docs/physics.md)
     actuators: dict[str, ActuatorLoad] = field(default_factory=dict)
     stiffness: dict[str, list | None] = field(default_factory=dict)
+    compliance: dict[str, list | None] = field(default_factory=dict)
     plates: dict[str, PlateStress] = field(default_factory=dict)
     buckling: float | None = None
     buckling_hinge: str | None = None
@@ -123,6 +126,16 @@ class Evaluation:
     # |ΔR|, an estimate of the level's beam theory against a continuum, and its parts.
     model_error: dict[str, float] = field(default_factory=dict)
     model_error_parts: dict[str, dict[str, float]] = field(default_factory=dict)
+
+    def directional(self, point: str) -> list[float | None] | None:
+        """The point's stiffness along x, y and in rotation, each with the other two directions
+        free (no force or moment in them; the inputs held): 1/C_ii (N per file unit, N per file
+        unit, N·unit/rad), None in a direction held rigidly (C_ii = 0); None without a
+        compliance (the held mechanism free in some direction)."""
+        c = self.compliance.get(point)
+        if c is None:
+            return None
+        return [None if c[i][i] == 0 else 1.0 / c[i][i] for i in range(3)]
 
     def as_json(self) -> dict:
         """The `eval --json` document (docs/cli.md; the physical levels' keys: docs/physics.md)."""
@@ -151,6 +164,8 @@ class Evaluation:
                 }
             if self.stiffness:
                 physical["stiffness"] = dict(self.stiffness)
+            if self.compliance:
+                physical["compliance"] = dict(self.compliance)
             if self.plates:
                 physical["plates"] = {
                     name: {"stress": p.stress, "strain": p.strain, "safety": p.safety}

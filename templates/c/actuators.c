@@ -527,16 +527,17 @@ static int sk_actuated_grid(const sk_mechanism *m, const sk_actuators *t, int n_
    _actuated_report; symkin.codegen.loaded's loaded_report<g>): the input hinges' moments and
    dM/dtheta in N m, the points' stiffness and the plates' stress as without actuators, then
    per actuator its stroke, force and dF/ds (a stroke's force and dF/ds; a force's stroke and
-   1/(ds/dF), inf where ds/dF = 0). out NaN on any non-zero return. */
+   1/(ds/dF), inf where ds/dF = 0), then the points' compliance. out NaN on any non-zero
+   return. */
 static int sk_actuated_report(const sk_mechanism *m, const sk_actuators *t,
                               const sk_loaded_report *rp, const double *drives,
                               const double *params, double *out)
 {
     /* sk_reduced_report's answer with the actuators' rows: 2 per row (input hinges, then
-       actuators), 9 per point, 4 per plate (fewer plates than SK_RS) */
-    double raw[3 * SK_RQ + 4 * SK_RS], pr[6 * SK_NP], ar[2 * SK_M], *acts;
+       actuators), 9 per point, 4 per plate (fewer plates than SK_RS), 9 per point */
+    double raw[6 * SK_RQ + 4 * SK_RS], pr[6 * SK_NP], ar[2 * SK_M], *acts;
     const int nin = rp->n_inputs, rows = nin + t->n;
-    const int size = 2 * nin + 9 * rp->n_points + 4 * rp->n_plates + 3 * t->n;
+    const int size = 2 * nin + 9 * rp->n_points + 4 * rp->n_plates + 3 * t->n + 9 * rp->n_points;
     sk_loaded_report with = *rp;
     sk_act_solution sol;
     int i, a, s;
@@ -563,6 +564,10 @@ static int sk_actuated_report(const sk_mechanism *m, const sk_actuators *t,
     }
     for (i = 0; i < 9 * rp->n_points + 4 * rp->n_plates; ++i) {
         out[2 * nin + i] = raw[2 * rows + i];
+    }
+    for (i = 0; i < 9 * rp->n_points; ++i) {
+        /* the compliance block, after the actuators' */
+        acts[3 * t->n + i] = raw[2 * rows + 9 * rp->n_points + 4 * rp->n_plates + i];
     }
     for (a = 0; a < t->n; ++a) {
         const double value = raw[2 * (nin + a)], rate = raw[2 * (nin + a) + 1];
