@@ -16,6 +16,7 @@ response to the mode's inertia loads ω² M q: d = C[:, r] ω² M q.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -24,9 +25,32 @@ import numpy as np
 
 from ..core.errors import AssemblyError
 from ..core.settings import SOLVER
+from ..model.entries import Link, Point
+from ..model.mechanism import Mechanism
 from .reported import System, _rows
 
 RULES = SOLVER.modes
+#: How the hidden point at a link's centre of mass is named (no file name holds a '@').
+CENTRE = "@centre:"
+
+
+def massive_links(mech: Mechanism) -> list[Link]:
+    """The moving links that carry mass, in file order."""
+    return [lk for lk in mech.links if lk.massive and lk.name != mech.ground]
+
+
+def with_centre_points(mech: Mechanism) -> tuple[Mechanism, list[str]]:
+    """`mech` with a hidden point (CENTRE + the link's name) at the centre of mass of every
+    moving link with mass, and their names (none: `mech` itself)."""
+    massive = massive_links(mech)
+    n = len(mech.points)
+    centres = tuple(
+        Point(CENTRE + lk.name, n + k, lk.name, lk.centre, lk.line)  # type: ignore[arg-type]
+        for k, lk in enumerate(massive)
+    )
+    if not centres:
+        return mech, []
+    return dataclasses.replace(mech, points=mech.points + centres), [p.name for p in centres]
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,6 @@ its continuation (symkin.physics.reported's).
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -23,7 +22,6 @@ import sympy as sp
 from ..core.errors import AssemblyError, InputError
 from ..graph.structure import build
 from ..kinematics.analysis import Analysis
-from ..model.entries import Point
 from ..model.expressions import substitute
 from ..model.mechanism import Mechanism
 from ..physics import equilibrium as physical_equilibrium
@@ -35,7 +33,7 @@ from .physical import solve_reduced
 #: The levels whose tangent stiffness the modes take.
 LEVELS = ("loaded", "equilibrium")
 #: How the hidden point at a link's centre of mass is named (no file name holds a '@').
-CENTRE = "@centre:"
+CENTRE = physical_modes.CENTRE
 
 
 @dataclass(frozen=True)
@@ -70,8 +68,7 @@ class ModesResult:
 def with_centres(mech: Mechanism) -> tuple[Mechanism, list[str]]:
     """`mech` with a hidden point at every massive link's centre, and their names; bad input
     (exit 2) when no moving link has a mass."""
-    massive = [lk for lk in mech.links if lk.massive and lk.name != mech.ground]
-    if not massive:
+    if not physical_modes.massive_links(mech):
         raise InputError(
             "no link has a mass: the natural frequencies need the masses that oscillate",
             file=mech.path,
@@ -79,12 +76,7 @@ def with_centres(mech: Mechanism) -> tuple[Mechanism, list[str]]:
             hint="add mass = ... (kg) and centre = [x, y] (file unit) to the moving links "
             "that carry mass, e.g. the stage (docs/file-format.md, '[[link]]')",
         )
-    n = len(mech.points)
-    centres = tuple(
-        Point(CENTRE + lk.name, n + k, lk.name, lk.centre, lk.line)  # type: ignore[arg-type]
-        for k, lk in enumerate(massive)
-    )
-    return dataclasses.replace(mech, points=mech.points + centres), [p.name for p in centres]
+    return physical_modes.with_centre_points(mech)
 
 
 def modes(
