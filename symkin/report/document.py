@@ -42,6 +42,7 @@ from .figures import (
     pose_size,
     tree_layout,
 )
+from .modes import frequency_table
 from .sections import COLUMN_WIDTH, PLAIN_UNITS, Report, chunks
 from .sweeps import Physics, pose_data, sensitivity_table, sweep, sweep_spans
 from .text import LINE_WIDTH_EM, escape_latex, math_name, plain_name
@@ -117,6 +118,7 @@ def emit(
     ctx["sweep"] = None
     ctx["sensitivity"] = None
     ctx["equilibrium"] = None
+    ctx["frequencies"] = None
     drives = plan.drives or plan.inputs
     if plan.points and drives:
         if evaluator is None:
@@ -156,6 +158,7 @@ def emit(
         ctx["sweep"] = summary
         ctx["equilibrium"] = equilibrium_section(report, runs, files) if physics else None
         ctx["sensitivity"] = sensitivity_table(report, evaluator, runs)
+        ctx["frequencies"] = frequency_table(report, evaluator, runs)
     body = environment().get_template("latex/body.tex.j2").render(**ctx)
     if appendix:
         text = body
