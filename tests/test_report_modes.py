@@ -48,3 +48,13 @@ def test_a_file_without_masses_has_no_frequencies():
     mech = symkin.load(ROOT / "tests" / "mechanisms" / "parallelogram_mm.toml")
     files = generate(mech, emit=("latex",))
     assert "Natural frequencies" not in files[f"{mech.name}.tex"].decode()
+
+
+def test_the_pose_caption_names_the_first_mode_drawn(tex):
+    mech, text = tex
+    found = re.search(
+        r"Blue arrows: the first natural mode, \$f_1 = ([0-9.]+)\$~Hz at push = 0", text
+    )
+    assert found, text[:3000]
+    reference = modes(mech, {"push": 0.0}, "loaded", None, 1).frequencies[0]
+    assert float(found[1]) == pytest.approx(reference, rel=6e-4)

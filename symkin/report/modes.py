@@ -6,18 +6,21 @@ mass."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
 
 from ..physics.modes import massive_links
 from .figures import Sweep
-from .sections import TEX_UNITS, Report
+from .sections import TEX_UNITS, Report, float_at
 from .text import escape_latex, sci
 
 #: The frequencies tabulated per configuration, and the configurations per swept input.
 COUNT = 3
 ROWS = 5
+#: The first mode's largest arrow on the pose figure, as a share of the pose's extent.
+ARROW = 0.15
 
 
 def frequency_table(
@@ -72,3 +75,49 @@ def frequency_table(
         "spans": spans,
         "links": [escape_latex(lk.name) for lk in massive_links(report.mech)],
     }
+
+
+def first_mode_arrows(
+    report: Report, numpy_module, runs: Sequence[tuple[str, Sweep, tuple[float, float]]], pose
+) -> tuple[list[tuple[tuple[float, float], tuple[float, float]]], dict] | None:
+    """The first mode at the middle of every swept range (the configuration the plots hold the
+    other inputs at) as arrows on the as-fabricated pose (`pose`: symkin.report.figures's
+    PoseData): from every massive link's centre and every point, its displacement scaled so
+    that the largest is ARROW of the pose's extent; and the caption's numbers (the frequency,
+    the inputs). None without modes() or where that configuration has no first mode."""
+    if not hasattr(numpy_module, "modes") or not runs:
+        return None
+    held = {h: 0.5 * (data.t[0] + data.t[-1]) for h, data, _ in runs}
+    found = numpy_module.modes({n: float(held[n]) for n in numpy_module.INPUTS}, count=1)
+    f1 = float(found["frequencies"][0])
+    if not (bool(found["ok"]) and math.isfinite(f1)):
+        return None
+    mech = report.mech
+    defaults = report.defaults
+    starts, moves = [], []
+    for lk in massive_links(mech):
+        assert lk.centre is not None
+        starts.append(tuple(float_at(v, defaults) for v in lk.centre))
+        moves.append(tuple(float(found["links"][lk.name][0][j]) for j in range(2)))
+    for name, _, at in pose.points:
+        if name in found["points"]:
+            starts.append(at)
+            moves.append(tuple(float(found["points"][name][0][j]) for j in range(2)))
+    every = [p for _, _, att in pose.links for p in att] + [p for _, _, p in pose.points]
+    every += starts
+    extent = max(
+        max(p[0] for p in every) - min(p[0] for p in every),
+        max(p[1] for p in every) - min(p[1] for p in every),
+        1e-12,
+    )
+    largest = max(math.hypot(*d) for d in moves)
+    if not largest > 0:
+        return None
+    scale = ARROW * extent / largest
+    arrows = [
+        ((a[0], a[1]), (d[0] * scale, d[1] * scale))
+        for a, d in zip(starts, moves)
+        if math.hypot(*d) > 1e-3 * largest
+    ]
+    inputs = ", ".join(f"{escape_latex(n)} = {held[n]:.3g}" for n in numpy_module.INPUTS)
+    return arrows, {"frequency": sci(f1, 4), "inputs": inputs}
