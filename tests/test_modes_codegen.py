@@ -7,10 +7,12 @@ chain), a stage preloaded toward buckling, and the lumped parallelogram held at 
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
 import pytest
+from cli_runs import symkin_cli
 from test_modes import EI, PARALLELOGRAM, leaf_stiffness, stacked, stage, sway
 
 import symkin
@@ -122,3 +124,29 @@ def test_an_input_hinge_held_without_actuators(tmp_path_factory):
     assert batch["ok"].all() and batch["frequencies"].shape == (1, 3)
     # the C evaluator of the same file leaves the modes' routines out and still builds
     assert symkin.compile(mech, backend="c").evaluate({"F1": 0.01}, "loaded")["ok"]
+
+
+def test_the_command_with_backend_numpy(tmp_path):
+    path = tmp_path / "stage.toml"
+    path.write_text(stage(inertia=2e-5, load=True))
+    args = ["modes", str(path), "--input", "push=0.3", "--param", "P=3", "--json"]
+    numpy_run = symkin_cli(*args, "--backend", "numpy")
+    sympy_run = symkin_cli(*args)
+    assert numpy_run.returncode == 0 and sympy_run.returncode == 0, numpy_run.stderr
+    got, want = json.loads(numpy_run.stdout), json.loads(sympy_run.stdout)
+    assert got["level"] == want["level"] == "loaded"
+    assert got["frequencies"] == pytest.approx(want["frequencies"], rel=AGREE)
+    for mode, reference in zip(got["modes"], want["modes"]):
+        for kind in ("links", "points"):
+            for name, v in reference[kind].items():
+                assert mode[kind][name] == pytest.approx(v, abs=AGREE)
+    run = symkin_cli(
+        "modes", str(path), "--input", "push=0", "--backend", "numpy", "--level", "equilibrium"
+    )
+    assert run.returncode == 2 and "--level loaded" in run.stderr
+    # beyond the legs' Euler load: no frequencies (exit 3), as the sympy path
+    beyond = f"P={1.2 * 2 * math.pi**2 * EI / 40e-3**2}"
+    run = symkin_cli(
+        "modes", str(path), "--input", "push=0", "--param", beyond, "--backend", "numpy"
+    )
+    assert run.returncode == 3, run.stderr

@@ -39,6 +39,12 @@ def register(command: Callable[[str, str], argparse.ArgumentParser]) -> None:
         metavar="N",
         help=f"the N lowest modes (default {DEFAULT_COUNT})",
     )
+    mo.add_argument(
+        "--backend",
+        choices=("sympy", "numpy"),
+        default="sympy",
+        help="sympy: the derivation (default); numpy: the generated module's modes() (loaded)",
+    )
     mo.add_argument("--json", action="store_true", help="machine-readable output")
     mo.set_defaults(run=run)
 
@@ -52,6 +58,7 @@ def run(args: argparse.Namespace) -> str:
         args.level,
         pairs(args.param, "--param", args.file),
         args.count,
+        args.backend,
     )
     if args.json:
         return json.dumps(result.as_json(), indent=2) + "\n"

@@ -32,6 +32,9 @@ from .physical import solve_reduced
 
 #: The levels whose tangent stiffness the modes take.
 LEVELS = ("loaded", "equilibrium")
+#: Who computes them: the derivation (float64 eigen-solve of its 40-digit compliance), or the
+#: generated numpy module's modes() (docs/generated-code.md).
+BACKENDS = ("sympy", "numpy")
 #: How the hidden point at a link's centre of mass is named (no file name holds a '@').
 CENTRE = physical_modes.CENTRE
 
@@ -85,10 +88,26 @@ def modes(
     level: str = "loaded",
     params: Mapping[str, object] | None = None,
     count: int | None = None,
+    backend: str = "sympy",
 ) -> ModesResult:
     """The `count` lowest natural modes (all when None) of `mech` at `inputs` (every input, as
     `symkin eval` takes them) and `params`, about the equilibrium of `level` (loaded or
-    equilibrium)."""
+    equilibrium); `backend` "numpy": by the generated numpy module's modes() (`loaded` alone,
+    docs/generated-code.md)."""
+    if backend not in BACKENDS:
+        raise InputError(
+            f"--backend {backend}: natural frequencies are computed by " + " or ".join(BACKENDS),
+            file=mech.path,
+            entry="--backend",
+            hint="--backend sympy (default) or numpy",
+        )
+    if backend == "numpy" and level != "loaded":
+        raise InputError(
+            f"the numpy module's modes() are those of the loaded level, not {level}",
+            file=mech.path,
+            entry="--backend",
+            hint="--level loaded with --backend numpy, or --backend sympy",
+        )
     if level not in LEVELS:
         raise InputError(
             f"natural frequencies need a physical level, not '{level}'",
@@ -101,6 +120,8 @@ def modes(
             f"--count {count}: at least one mode", file=mech.path, entry="--count", hint="--count 3"
         )
     augmented, centres = with_centres(mech)
+    if backend == "numpy":
+        return _numpy(mech, inputs, params, count)
     analysis = Analysis(build(augmented))
     config = configure(analysis, inputs, level, params)
     values = config.params
@@ -135,6 +156,49 @@ def modes(
         params=parameter_floats(mech, values),
         units=mech.units,
         frequencies=[m.frequency for m in found],
+        links=links,
+        points=points,
+    )
+
+
+def _numpy(
+    mech: Mechanism, inputs: Mapping[str, object], params: Mapping[str, object] | None, count
+) -> ModesResult:
+    """modes() at `loaded` by the generated numpy module (symkin.codegen.modes), the inputs and
+    parameters parsed and checked as the sympy path's."""
+    from ..codegen import pipeline
+
+    analysis = Analysis(build(mech))
+    config = configure(analysis, inputs, "loaded", params)
+    massive = physical_modes.massive_links(mech)
+    plan = pipeline.plan_covering(analysis, "loaded", levels=["loaded"], sensitivity=False)
+    module = pipeline.evaluator(plan, "numpy", mech.path)
+    given = {p.name: float(sp.N(config.params[p.symbol], 20)) for p in mech.parameters}
+    x = {n: float(sp.N(config.drives[n], 20)) for n in module.INPUTS}
+    found = module.modes(x, params=given, count=count or 3 * len(massive))
+    if not bool(found["ok"]):
+        raise AssemblyError(
+            f"{mech.path}: the numpy module's modes() have no answer at this configuration: "
+            "the loaded level does not solve it, or the tangent stiffness with the inputs held "
+            "is not positive (the loads beyond buckling); --backend sympy says which"
+        )
+    frequencies, links, points = [], [], []
+    for k, f in enumerate(found["frequencies"]):
+        if not np.isfinite(f):
+            continue  # held rigidly: an infinite frequency (the sympy path leaves it out)
+        frequencies.append(float(f))
+        links.append(
+            {lk.name: tuple(float(v) for v in found["links"][lk.name][k]) for lk in massive}
+        )
+        points.append(
+            {name: tuple(float(v) for v in found["points"][name][k]) for name in found["points"]}
+        )
+    return ModesResult(
+        level="loaded",
+        inputs={n: float(sp.N(v, 20)) for n, v in config.drives.items()},
+        params=parameter_floats(mech, config.params),
+        units=mech.units,
+        frequencies=frequencies,
         links=links,
         points=points,
     )
