@@ -325,6 +325,7 @@ RUNTIMES = [
     "templates/numpy/reduced_report.py",
     "templates/numpy/reduced_actuators.py",
     "templates/numpy/reduced_actuators_sens.py",
+    "templates/numpy/modes.py",
     "symkin/physics/reduced.py",
     "symkin/physics/reduced_reported.py",
     "symkin/physics/equilibrium.py",  # no generated twin, its rules in the table too

@@ -442,8 +442,10 @@ def parser() -> argparse.ArgumentParser:
     sw.add_argument("--plot", metavar="FILE.png", help="histograms (.png, .pdf or .svg)")
     sw.set_defaults(run=_sweep)
     from ..fea.command import register as register_fea
+    from .modes import register as register_modes
 
     register_fea(command)
+    register_modes(command)
     return top
 
 

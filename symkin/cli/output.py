@@ -8,9 +8,11 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
+import sympy as sp
 
 from ..codegen.templating import render
 from ..graph.structure import Structure
+from ..model.expressions import substitute
 from ..model.mechanism import closure_rank, crossing_plates
 from ..physics.equilibrium import BUCKLING_LIMIT
 
@@ -48,7 +50,13 @@ def check_text(s: Structure, dropped: Sequence[int] = ()) -> str:
         redundant=redundant,
         crossing=crossing_plates(mech),
         short=_short,
+        value=lambda e: _value(e, mech.defaults),
     )
+
+
+def _value(expr: object, values: dict) -> str:
+    """An expression at the file's parameter values, to 6 digits (a link's mass, say)."""
+    return f"{float(sp.N(substitute(sp.sympify(expr), values), 20)):.6g}"
 
 
 def _short(expr: object) -> str:

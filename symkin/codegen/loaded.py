@@ -40,6 +40,7 @@ x holds the scaled unknowns then the load factor t; `plates` the plate relation'
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from functools import cache
@@ -50,9 +51,11 @@ from ..core import vectors as V
 from ..kinematics.analysis import Analysis
 from ..model.derivatives import jacobian
 from ..physics import reduced
+from ..physics.modes import massive_links, with_centre_points
 from ..physics.plate_relation import relation
 from ..physics.stiffness import plate_stiffness
 from .literals import float_literals
+from .modes import ModesPlan, modes_data, modes_routine
 from .plate import SYMBOLS, plate_routine, shared_h, squares
 from .routines import Argument, Routine, flatten, layout, optimize
 
@@ -86,6 +89,8 @@ class LoadedPlan:
     # rigid angles in the routines' theta argument
     surrogate_index: tuple[int, ...] = ()
     forces: int = 0
+    # the natural frequencies' tables (symkin.codegen.modes; None: no link has a mass)
+    modes: ModesPlan | None = None
 
 
 @dataclass(frozen=True)
@@ -122,8 +127,13 @@ def loaded_routines(
     routines: dict[str, Routine] = {}
     variants = []
     angles = theta
+    # links with mass: the derivation sees their centres as hidden points (symkin.codegen.modes)
+    kin, modes = an.kin, None
+    if reported and massive_links(an.mechanism):
+        kin = copy.copy(an.kin)
+        kin.mechanism = with_centre_points(an.mechanism)[0]
     for g in (1, 2):
-        r = reduced.Reduced(an.kin, values, segments=g, symbolic=True)
+        r = reduced.Reduced(kin, values, segments=g, symbolic=True)
         s = r._s
         # the force actuators' forces after the rigid angles (Reduced.angles)
         theta = Argument(angles.name, (*angles.symbols, *r.fa))
@@ -189,6 +199,10 @@ def loaded_routines(
         )
         if reported:
             routines[f"loaded_report{g}"] = _report_routine(r, names, x, theta, plates, params, sub)
+        if kin is not an.kin:
+            shown = [p for p in names if p in r.points]
+            routines[f"loaded_modes{g}"] = modes_routine(r, shown, x, theta, plates, params, sub)
+            routines["modes_data"], modes = modes_data(an.mechanism, params, shown)
         variants.append(Segments(g, n, ns, tuple(float(v) for v in r.scale)))
     report = _reported(r, names) if reported else None
     surrogates = tuple(a - 1 for a in r.unknowns[len(an.kin.unknowns) :])
@@ -200,6 +214,7 @@ def loaded_routines(
         report=report,
         surrogate_index=surrogates,
         forces=len(r.forces),
+        modes=modes,
     )
     return routines, plan
 

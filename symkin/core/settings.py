@@ -309,6 +309,20 @@ class EquilibriumSettings:
 
 
 @dataclass(frozen=True)
+class ModesSettings:
+    """The natural frequencies (symkin.physics.modes; docs/physics.md, "Natural
+    frequencies"): the eigenproblem of the condensed compliance, in float64."""
+
+    # an eigenvalue of M^½ C M^½ (1/ω²) this small against the largest is a direction the
+    # mechanism holds rigidly (infinite frequency: left out); one this negative, an unstable
+    # equilibrium (a negative tangent stiffness)
+    rigid: float = 1e-12
+    # a mode whose largest centre translation is below this times its largest rotation times
+    # the mechanism's span is a pure rotation (normalised to 1 rad)
+    pure_rotation: float = 1e-9
+
+
+@dataclass(frozen=True)
 class SolverSettings:
     """Continuation, iteration caps and tolerances of every solver symkin runs: one table that
     the plan hands to the generated evaluators and the Python evaluation reads
@@ -340,6 +354,7 @@ class SolverSettings:
     loaded: LoadedSettings = field(default_factory=LoadedSettings)
     strokes: StrokeSettings = field(default_factory=StrokeSettings)
     equilibrium: EquilibriumSettings = field(default_factory=EquilibriumSettings)
+    modes: ModesSettings = field(default_factory=ModesSettings)
 
     @property
     def float64(self) -> Tolerances:

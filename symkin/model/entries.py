@@ -72,9 +72,20 @@ class Parameter:
 
 @dataclass(frozen=True)
 class Link:
+    """A rigid body; `mass` (kg), `inertia` (kg·m², about the centre of mass) and `centre` (the
+    centre of mass as fabricated, file unit) for the natural frequencies (docs/physics.md,
+    "Natural frequencies"): None where the file gives no mass (a massless link)."""
+
     name: str
     index: int  # position among the file's [[link]] entries
     line: int | None = None
+    mass: sp.Expr | None = None
+    inertia: sp.Expr | None = None  # None: 0 (a point mass)
+    centre: tuple[sp.Expr, sp.Expr] | None = None
+
+    @property
+    def massive(self) -> bool:
+        return self.mass is not None
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,7 @@ values of `--param`). :mod:`.reader` builds it from the TOML text.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -355,6 +355,9 @@ def check_values(
                     act.line,
                     "keep the point of action and the line of action finite",
                 )
+        for link in mech.links:
+            if link.mass is not None:
+                _check_mass(link, values, fail, within)
 
 
 def crossing_plates(mech: Mechanism) -> list[tuple[str, str]]:
@@ -409,3 +412,46 @@ def _segments_meet(p0: _Pt, p1: _Pt, q0: _Pt, q1: _Pt, tiny: mpmath.mpf) -> bool
         or (abs(d3) <= tiny and within(p0, p1, q0))
         or (abs(d4) <= tiny and within(p0, p1, q1))
     )
+
+
+def _check_mass(
+    link: Link,
+    values: Mapping[sp.Symbol, sp.Expr],
+    fail: Callable[[str, str, int | None, str], InputError],
+    within: Callable[[mpmath.mpf | None, str, str, int | None, bool], None],
+) -> None:
+    """A link's mass (kg, > 0), inertia (kg·m², ≥ 0) and centre (finite) at these values
+    (docs/file-format.md, "[[link]]"); `fail` and `within` check_values's."""
+    entry = f"[[link]] '{link.name}'"
+    mass = mp_at(link.mass, values)
+    if mass is None or not mass > 0:
+        shown = "not finite" if mass is None else mpmath.nstr(mass, 6)
+        raise fail(
+            f"mass must be positive (kg), got {shown}",
+            entry,
+            link.line,
+            "give the link's mass in kg, e.g. mass = 0.12, or remove it (a massless link)",
+        )
+    within(mass, "mass", entry, link.line, True)
+    if link.inertia is not None:
+        inertia = mp_at(link.inertia, values)
+        if inertia is None or not inertia >= 0:
+            shown = "not finite" if inertia is None else mpmath.nstr(inertia, 6)
+            raise fail(
+                f"inertia must be zero or positive (kg·m², about the centre of mass), got {shown}",
+                entry,
+                link.line,
+                "give the inertia in kg·m² (SI, whatever the file's unit), e.g. inertia = 2e-5",
+            )
+        within(inertia, "inertia", entry, link.line, True)
+    assert link.centre is not None
+    centre = [mp_at(v, values) for v in link.centre]
+    for v in centre:
+        within(v, "centre", entry, link.line, False)
+    if None in centre:
+        raise fail(
+            "'centre' is not a finite number",
+            entry,
+            link.line,
+            "keep the centre of mass finite",
+        )

@@ -43,7 +43,7 @@ TOP_KEYS = (
     "load",
     "actuator",
 )
-LINK_KEYS = ("name",)
+LINK_KEYS = ("name", "mass", "inertia", "centre")
 POINT_KEYS = ("name", "link", "at")
 LOAD_KEYS = ("point", "link", "at", "force", "moment")
 ACTUATOR_KEYS = ("name", "link", "at", "direction", "drive", "spring")
@@ -184,6 +184,14 @@ class _Reader(HingeEntries):
                 self.where.key("ground"),
                 suggest(str(ground), link_names) or "name one of the links",
             )
+        grounded = next(lk for lk in links if lk.name == ground)
+        if grounded.massive:
+            raise self.error(
+                "the ground has a 'mass': it does not move",
+                f"[[link]] #{grounded.index + 1} '{ground}'",
+                grounded.line,
+                "remove mass, inertia and centre from the ground link",
+            )
         units = data.get("units", "m")
         if units not in UNITS:
             raise self.error(
@@ -277,9 +285,42 @@ class _Reader(HingeEntries):
             line = self.where.header("link", i)
             entry = entry_name("link", i, table)
             self.check_keys(table, LINK_KEYS, entry, line)
-            out.append(Link(self.text(table, "name", entry, line), i, line))
+            name = self.text(table, "name", entry, line)
+            out.append(self.link_mass(table, Link(name, i, line), f"[[link]] #{i + 1} '{name}'"))
         self.unique("link", [lk.name for lk in out], [lk.line for lk in out])
         return tuple(out)
+
+    def link_mass(self, table: Mapping[str, object], link: Link, entry: str) -> Link:
+        """`link` with the file's `mass`, `inertia` and `centre` (docs/file-format.md,
+        "[[link]]"): a centre is required with a mass, and neither an inertia nor a centre
+        means anything without one; their values are checked by check_values."""
+        line = link.line
+        if "mass" not in table:
+            for key in ("inertia", "centre"):
+                if key in table:
+                    raise self.error(
+                        f"'{key}' without 'mass': the link is massless",
+                        entry,
+                        line,
+                        "add mass = ... (kg, the link with whatever it carries), or remove "
+                        f"'{key}'",
+                    )
+            return link
+        if "centre" not in table:
+            raise self.error(
+                "'mass' without 'centre'",
+                entry,
+                line,
+                "add centre = [x, y], the link's centre of mass as fabricated (file unit)",
+            )
+        mass = self.expr(table["mass"], entry, "mass", line)
+        self.finite(mass, entry, "mass", line)
+        inertia = None
+        if "inertia" in table:
+            inertia = self.expr(table["inertia"], entry, "inertia", line)
+            self.finite(inertia, entry, "inertia", line)
+        centre = self.vector(table["centre"], entry, "centre", line)
+        return dataclasses.replace(link, mass=mass, inertia=inertia, centre=centre)
 
     def points(
         self, tables: list[Mapping[str, object]], link_names: list[str]

@@ -42,6 +42,7 @@ from .figures import (
     pose_size,
     tree_layout,
 )
+from .modes import first_mode_arrows, frequency_table
 from .sections import COLUMN_WIDTH, PLAIN_UNITS, Report, chunks
 from .sweeps import Physics, pose_data, sensitivity_table, sweep, sweep_spans
 from .text import LINE_WIDTH_EM, escape_latex, math_name, plain_name
@@ -117,6 +118,7 @@ def emit(
     ctx["sweep"] = None
     ctx["sensitivity"] = None
     ctx["equilibrium"] = None
+    ctx["frequencies"] = None
     drives = plan.drives or plan.inputs
     if plan.points and drives:
         if evaluator is None:
@@ -156,6 +158,14 @@ def emit(
         ctx["sweep"] = summary
         ctx["equilibrium"] = equilibrium_section(report, runs, files) if physics else None
         ctx["sensitivity"] = sensitivity_table(report, evaluator, runs)
+        ctx["frequencies"] = frequency_table(report, evaluator, runs)
+        drawn = first_mode_arrows(report, evaluator, runs, pose)
+        if drawn is not None:  # the first mode on the pose (links with mass)
+            files[f"{name}-pose.pdf"] = pose_figure(pose, plain_name, unit, drawn[0])
+            ctx["pose_caption"] += (
+                f" Blue arrows: the first natural mode, $f_1 = {drawn[1]['frequency']}$~Hz at "
+                f"{drawn[1]['inputs']} (level \\emph{{loaded}}, the inputs held), scaled."
+            )
     body = environment().get_template("latex/body.tex.j2").render(**ctx)
     if appendix:
         text = body

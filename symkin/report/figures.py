@@ -300,9 +300,15 @@ def _place_labels(fig, ax, labels: Sequence[_Label], segments, markers) -> None:
 
 
 @_kept
-def pose_figure(data: PoseData, plain, unit: str = "m") -> bytes:
+def pose_figure(
+    data: PoseData,
+    plain,
+    unit: str = "m",
+    mode: Sequence[tuple[tuple[float, float], tuple[float, float]]] = (),
+) -> bytes:
     """PDF of the as-fabricated pose, axes in the file's length `unit`; `plain` makes a name safe
-    for matplotlib text."""
+    for matplotlib text. `mode`: arrows (from, displacement) drawn on it, a natural mode's
+    (symkin.report.modes)."""
     from matplotlib.patches import Polygon
 
     every = [p for _, _, att in data.links for p in att] + [p for _, _, p in data.points]
@@ -453,6 +459,21 @@ def pose_figure(data: PoseData, plain, unit: str = "m") -> bytes:
                     distance=4.0,
                 )
             )
+        for (x, y), (dx, dy) in mode:
+            ax.annotate(
+                "",
+                xy=(x + dx, y + dy),
+                xytext=(x, y),
+                arrowprops={
+                    "arrowstyle": "-|>",
+                    "color": "#1565c0",
+                    "lw": 1.2,
+                    "shrinkA": 0,
+                    "shrinkB": 0,
+                },
+                zorder=8,
+            )
+            segments.append(((x, y), (x + dx, y + dy)))
         pad = 0.18 * span
         ax.set_xlim(min(xs) - 1.4 * pad, max(xs) + 1.4 * pad)
         ax.set_ylim(min(ys) - pad, max(ys) + pad)

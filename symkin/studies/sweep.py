@@ -62,6 +62,8 @@ LOW_STATISTICS = (
     ("p01", 0.1),
     ("min", 0.0),
 )
+#: The statistics of the first natural frequency (its low end: the soft samples matter).
+FREQUENCY_STATISTICS = (("mean", None), ("std", None), ("p1", 1.0), ("min", 0.0))
 
 
 @dataclass(frozen=True)
@@ -125,6 +127,7 @@ class Task:
     symbols: tuple[sp.Symbol, ...]  # the parameters the checks read
     plates: tuple[str, ...] = ()  # at `loaded`: the plates whose largest stress is kept
     stiff: tuple[str, ...] = ()  # at `loaded`: the points whose smallest stiffness is kept
+    modes: bool = False  # at `loaded`, links with mass: the lowest first frequency is kept
 
 
 #: The diagonal entries of a point's 3 x 3 stiffness a sweep keeps (the smallest over the grid):
@@ -215,10 +218,11 @@ def run_blocks(
     flag per sample: 0 evaluated, 1 cannot be assembled (or no convergence) somewhere on the
     grid, 2 parameters that break the file's rules; at `loaded`, every plate's largest stress
     over the grid per sample (n, n_plates) and the task's points' smallest diagonal stiffness
-    (n, n_stiff, 3), NaN where failed)."""
+    (n, n_stiff, 3), NaN where failed; with masses, each sample's lowest first natural frequency
+    over the grid (n,) Hz, NaN where failed or none)."""
     ev = task.evaluator
     n_points = len(ev.points)
-    worst_all, flags_all, stress_all, stiff_all = [], [], [], []
+    worst_all, flags_all, stress_all, stiff_all, first_all = [], [], [], [], []
     buffer = None
     for block in range(first, last):
         params, valid = sample_block(task, block)
@@ -241,15 +245,21 @@ def run_blocks(
             flags[good[failed]] = 1
             for s in good[~failed] if task.plates or task.stiff else ():
                 stress[s], stiff[s] = extremes(ev, task.inputs, params[s], task.plates, task.stiff)
+        first_f = np.full(n, np.nan)
+        if task.modes and len(good):
+            kept = good[~failed]
+            first_f[kept] = lowest_frequency(ev, task.inputs, params[kept])
         worst_all.append(worst)
         flags_all.append(flags)
         stress_all.append(stress)
         stiff_all.append(stiff)
+        first_all.append(first_f)
     return (
         np.concatenate(worst_all),
         np.concatenate(flags_all),
         np.concatenate(stress_all),
         np.concatenate(stiff_all),
+        np.concatenate(first_all),
     )
 
 
@@ -296,6 +306,27 @@ def extremes(
     return stress, stiff
 
 
+def lowest_frequency(ev: Compiled, inputs: np.ndarray, params: np.ndarray | None) -> np.ndarray:
+    """Per parameter set (rows of `params` (k, n_params); None: the defaults, k = 1) the lowest
+    first natural frequency (Hz) over the configurations `inputs` (n, n_inputs) at `loaded`, by
+    the generated numpy module's modes() (docs/generated-code.md, "Natural frequencies in
+    generated code"), every set at every configuration in one call; NaN where some
+    configuration has none (not solved, or beyond buckling)."""
+    rows = np.zeros((1, 0)) if params is None else np.asarray(params, dtype=float)
+    given = (
+        None
+        if params is None
+        else {p: rows[:, [j]] for j, p in enumerate(ev.sources.params)}  # (k, 1)
+    )
+    found = ev.module.modes(
+        {h: inputs[None, :, j] for j, h in enumerate(ev.inputs)}, params=given, count=1
+    )
+    first = np.asarray(found["frequencies"][0], dtype=float)  # (k, n)
+    first = np.where(np.asarray(found["ok"]), first, np.nan)
+    out = first.min(axis=-1)
+    return np.where(np.isnan(first).any(axis=-1), np.nan, out)
+
+
 def _statistics(v: np.ndarray, which=STATISTICS) -> dict[str, float | None]:
     """mean, std (n - 1), p50, p99, p99.9 and max of `v` (`which`: LOW_STATISTICS for the low
     end), its non-finite values left out."""
@@ -337,6 +368,9 @@ class Sweep:
     stiff: tuple[str, ...] = ()  # at `loaded`: the points whose smallest stiffness is kept
     stiffness: np.ndarray | None = field(default=None, repr=False)  # (samples, n_stiff, 3)
     nominal_stiffness: dict[str, list[float]] = field(default_factory=dict)  # at nominal values
+    # links with mass at `loaded`: each sample's lowest first natural frequency over the grid
+    first: np.ndarray | None = field(default=None, repr=False)  # (samples,), Hz
+    nominal_first: float | None = None  # at nominal values
 
     @property
     def failed(self) -> int:
@@ -370,6 +404,11 @@ class Sweep:
             out[key]["nominal"] = self.nominal_stiffness[point][j]
         return out
 
+    def frequency_statistics(self) -> dict[str, float | None]:
+        """mean, std, p1 and min of the evaluated samples' lowest first frequency (Hz)."""
+        assert self.first is not None
+        return _statistics(self.first[self.flags == 0], FREQUENCY_STATISTICS)
+
     def as_json(self) -> dict:
         return {
             "samples": self.samples,
@@ -394,6 +433,11 @@ class Sweep:
             **(
                 {"stiffness": {p: self.stiffness_statistics(p) for p in self.stiff}}
                 if self.stiff
+                else {}
+            ),
+            **(
+                {"frequencies": {"f1": self.frequency_statistics()}}
+                if self.first is not None
                 else {}
             ),
         }
@@ -421,7 +465,14 @@ def run(
     nominal_stress: dict[str, float] = {}
     stiff: tuple[str, ...] = ()
     nominal_stiffness: dict[str, list[float]] = {}
+    modes = False
+    nominal_first = None
     if level == "loaded" and "loaded" in evaluator.levels:
+        # links with mass: the numpy module has modes() (the first frequency's spread)
+        modes = hasattr(evaluator.module, "modes")
+        if modes:
+            found_first = float(lowest_frequency(evaluator, grid.rows, None)[0])
+            nominal_first = found_first if np.isfinite(found_first) else None
         # the plates the generated module reports on (none without the level's report)
         first = {h: grid.rows[:1, j] for j, h in enumerate(evaluator.inputs)}
         module = evaluator.module
@@ -450,6 +501,7 @@ def run(
         tuple(p.symbol for p in mech.parameters),
         plates,
         stiff,
+        modes,
     )
     blocks = math.ceil(samples / BLOCK)
     if client is None and scheduler.kind == "distributed":
@@ -472,6 +524,7 @@ def run(
     flags = np.concatenate([p[1] for p in parts])
     stress = np.concatenate([p[2] for p in parts])
     stiffness = np.concatenate([p[3] for p in parts])
+    first = np.concatenate([p[4] for p in parts])
     status, out = evaluator.evaluate_rows(grid.rows, level)
     nominal_worst = {}
     if (status == 0).all():
@@ -498,6 +551,8 @@ def run(
         stiff,
         stiffness if stiff else None,
         nominal_stiffness,
+        first if modes else None,
+        nominal_first,
     )
 
 
@@ -606,6 +661,16 @@ def text(result: Sweep) -> str:
         for p in result.stiff:
             stats = result.stiffness_statistics(p)
             lines += [row(f"{p} {key}", stats[key], LOW_STATISTICS) for key in STIFFNESS]
+    if result.first is not None:
+        low = "".join(f"{k:>12}" for k in ("nominal", "mean", "std", "p1", "min"))
+        stats = {**result.frequency_statistics(), "nominal": result.nominal_first}
+        lines += [
+            "",
+            "lowest first natural frequency over the grid (Hz; docs/physics.md, 'Natural "
+            "frequencies')",
+            f"  {'':<10}" + low,
+            row("f1", stats, FREQUENCY_STATISTICS),
+        ]
     return "\n".join(lines) + "\n"
 
 

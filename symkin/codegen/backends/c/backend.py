@@ -24,9 +24,13 @@ class CBackend(Backend):
     def render(self, plan: Plan, source: str, precision: str = "float64") -> list[str]:
         """The header and source of `plan`; with force actuators without the `loaded` level's
         sensitivity routines (their theta holds the forces too), which the numpy runtime alone
-        assembles with the forces' (templates/numpy/reduced_actuators_sens.py)."""
+        assembles with the forces' (templates/numpy/reduced_actuators_sens.py); without the
+        natural frequencies' routines, which the numpy module's modes() alone reads
+        (docs/generated-code.md, "Natural frequencies in generated code")."""
+        unused = {"loaded_modes1", "loaded_modes2", "modes_data"}  # numpy's modes() alone
         if plan.forces:
-            unused = {"loaded_sens1", "loaded_sens2", "plate_eps4"}
+            unused |= {"loaded_sens1", "loaded_sens2", "plate_eps4"}
+        if unused & set(plan.routines):
             routines = {k: r for k, r in plan.routines.items() if k not in unused}
             plan = dataclasses.replace(plan, routines=routines)
         return super().render(plan, source, precision)
