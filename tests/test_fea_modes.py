@@ -1,0 +1,246 @@
+"""symkin fea --modes (docs/fea.md, "Natural frequencies"): the frequency step's deck, ccx's
+eigenvalue table, and a ccx frequency run of a leaf-spring parallelogram stage against
+references written here: (1/2π)√(24EI/(L³m)) for its sway, (1/2π)√(2EA/(Lm)) for its axial
+mode, Rayleigh's quotient for what the leaves' own mass (steel) takes off them, and
+`symkin modes` at both levels. The run uses a coarse graded mesh (20 x 2, a second or two);
+without ccx it is skipped, unless CI=true: then it fails (tests/strict_skips.py).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+import shutil
+
+import pytest
+import test_modes as stage_file
+from conftest import ROOT
+
+import symkin
+from symkin import fea
+from symkin.cli.commands import main
+from symkin.fea import ccx, frequency
+
+needs_ccx = pytest.mark.skipif(
+    shutil.which("ccx") is None and os.environ.get("CI") != "true",
+    reason="CalculiX ccx (Debian package calculix-ccx) not installed",
+)
+COARSE = fea.Mesh(20, 2, 0.8)
+LEVER = ROOT / "tests" / "mechanisms" / "lever_amplifier_mass.toml"
+
+
+def nodes(text: str) -> dict[int, tuple[float, float, float]]:
+    """The deck's node coordinates."""
+    block = text.split("*NODE\n", 1)[1].split("*ELEMENT", 1)[0]
+    out = {}
+    for line in block.splitlines():
+        if line[:1].isdigit():
+            n, x, y, z = line.split(",")
+            out[int(n)] = (float(x), float(y), float(z))
+    return out
+
+
+def body_members(text: str, link: str) -> set[int]:
+    """The member nodes of `link`'s rigid body, every *NSET block of its set."""
+    name = re.search(rf"\*\* link '{link}': reference node.*\n\*NSET, NSET=(LINK\d+)", text)
+    assert name is not None
+    members: set[int] = set()
+    for block in re.findall(rf"\*NSET, NSET={name.group(1)}\n((?:[\d, ]+\n)+)", text):
+        members |= {int(v) for v in block.replace("\n", "").split(",") if v.strip()}
+    assert f"*RIGID BODY, NSET={name.group(1)}," in text
+    return members
+
+
+def test_the_deck_carries_the_masses_and_a_last_frequency_step():
+    """The stage of tests/test_modes.py with an inertia: its mass as two halves at the centre
+    -/+ √(I/m) along x (the same mass, centre and inertia), both member nodes of its rigid
+    body; the plates at the negligible density; the frequency step a perturbation step after
+    the static one, last."""
+    m, inertia = 0.1, 2e-5
+    setup = fea.prepare(symkin.loads(stage_file.stage(inertia), "stage.toml"), {"push": 0})
+    modal = frequency.write(setup, COARSE, count=3)
+    text = modal.deck.text
+    halves = re.findall(r"\*ELEMENT, TYPE=MASS, ELSET=(MASS1_\d)\n(\d+), (\d+)\n", text)
+    assert len(halves) == 2
+    where = nodes(text)
+    arm = math.sqrt(inertia / m)
+    centre = (stage_file.SPACING / 2 * 1e-3, stage_file.LEG / 2 * 1e-3)
+    placed = sorted(where[int(node)] for _, _, node in halves)
+    assert placed[0] == pytest.approx((centre[0] - arm, centre[1], 0), abs=1e-15)
+    assert placed[1] == pytest.approx((centre[0] + arm, centre[1], 0), abs=1e-15)
+    masses = []
+    for elset, element, _ in halves:
+        value = re.search(rf"\*MASS, ELSET={elset}\n(\S+)\n", text)
+        assert value is not None
+        masses.append(float(value.group(1)))
+        assert int(element) > modal.deck.elements  # after the plates' elements
+    assert masses == pytest.approx([m / 2, m / 2], rel=1e-14)
+    assert sum(masses) * arm**2 == pytest.approx(inertia, rel=1e-12)  # about the centre
+    assert {int(node) for _, _, node in halves} <= body_members(text, "stage")
+    assert text.count("*DENSITY\n1e-12\n") == len(setup.conf.plates) == 4
+    static, freq = text.split("*STEP, PERTURBATION\n")
+    assert static.count("*END STEP") == 1 and static.index("*STEP, NLGEOM") < static.index(
+        "*END STEP"
+    )
+    assert freq == "*FREQUENCY\n3\n*END STEP\n"
+    # massless plates: ccx is asked for no more modes than the links' massive freedoms (x, y, φ)
+    assert frequency.write(setup, COARSE, count=5).requested == 3
+    point = fea.prepare(symkin.loads(stage_file.stage(), "stage.toml"), {"push": 0})
+    assert "*FREQUENCY\n2\n" in frequency.write(point, COARSE, count=3).deck.text
+    # with the plates' density, as many as asked (their own modes come in)
+    steel = frequency.write(setup, COARSE, count=5, density=7850)
+    assert steel.requested == 5 and text.count("*DENSITY\n7850\n") == 0
+    assert steel.deck.text.count("*DENSITY\n7850\n") == 4
+    # the deck without --modes has neither
+    plain = fea.write_deck(setup, COARSE).text
+    assert "*FREQUENCY" not in plain and "TYPE=MASS" not in plain and "*DENSITY" not in plain
+
+
+def test_a_lever_gets_its_mass_and_the_pusher_its_point_mass():
+    """Two massive links: the lever (with inertia) as two halves, the pusher (none) as one
+    point mass at its centre, each on its own rigid body; the parameters' values in mm."""
+    setup = fea.prepare(symkin.load(LEVER), {"P0": 0.005})
+    text = frequency.write(setup, COARSE, count=3).deck.text
+    where = nodes(text)
+    single = re.search(r"\*ELEMENT, TYPE=MASS, ELSET=MASS1_1\n\d+, (\d+)\n", text)
+    assert single is not None and "MASS1_2" not in text
+    assert where[int(single.group(1))] == pytest.approx((-0.02, -0.02, 0), abs=1e-15)
+    assert int(single.group(1)) in body_members(text, "pusher")
+    assert re.search(r"\*MASS, ELSET=MASS1_1\n0.005\n", text)
+    arm = math.sqrt(0.02 * 0.1**2 / 12 / 0.02)
+    lever = [int(n) for n in re.findall(r"ELSET=MASS2_\d\n\d+, (\d+)\n", text)]
+    assert sorted(where[n][0] for n in lever) == pytest.approx([0.05 - arm, 0.05 + arm], abs=1e-15)
+    assert set(lever) <= body_members(text, "lever")
+
+
+def test_the_eigenvalue_table_and_its_noise():
+    """ccx's .dat eigenvalue table (written here as ccx prints it): the frequencies are √ω²/2π;
+    with massless plates a negative ω² and one far above the lowest (the plates' negligible
+    mass) are left out; with a plate density every positive one counts."""
+    dat = """
+     E I G E N V A L U E   O U T P U T
+
+ MODE NO    EIGENVALUE                       FREQUENCY
+                                     REAL PART            IMAGINARY PART
+                           (RAD/TIME)      (CYCLES/TIME     (RAD/TIME)
+
+      1  -0.4456875E+17   0.0000000E+00   0.0000000E+00   0.2111131E+09
+      2   0.5793306E+04   0.7611377E+02   0.1211388E+02   0.0000000E+00
+      3   0.2309097E+09   0.1519571E+05   0.2418473E+04   0.0000000E+00
+      4   0.1515434E+15   0.1231030E+08   0.1959244E+07   0.0000000E+00
+
+     P A R T I C I P A T I O N   F A C T O R S
+"""
+    assert frequency.eigenvalues(dat) == [-0.4456875e17, 0.5793306e04, 0.2309097e09, 0.1515434e15]
+    deck = fea.write_deck(
+        fea.prepare(symkin.loads(stage_file.stage(), "stage.toml"), {"push": 0}), COARSE
+    )
+    massless = frequency.ModalDeck(deck, (), 5, 5, 0.0)
+    found = frequency.frequencies(massless, dat)
+    assert found == pytest.approx(
+        [math.sqrt(0.5793306e04) / (2 * math.pi), math.sqrt(0.2309097e09) / (2 * math.pi)]
+    )
+    steel = frequency.ModalDeck(deck, (), 2, 5, 7850.0)
+    assert len(frequency.frequencies(steel, dat)) == 2
+    with pytest.raises(symkin.AssemblyError, match="no eigenvalues"):
+        frequency.frequencies(massless, "no table")
+
+
+@pytest.mark.parametrize(
+    "extra, words",
+    [
+        (["--modes", "0"], "--modes"),
+        (["--plate-density", "7850"], "--plate-density"),
+        (["--modes", "3", "--plate-density", "-1"], "--plate-density"),
+    ],
+)
+def test_bad_modal_requests_exit_2(tmp_path, capsys, extra, words):
+    path = tmp_path / "stage.toml"
+    path.write_text(stage_file.stage())
+    out = tmp_path / "out"
+    assert main(["fea", str(path), "--input", "push=0", "-o", str(out), *extra]) == 2
+    err = capsys.readouterr().err
+    assert words in err and "fix:" in err and not out.exists()
+
+
+def test_modes_without_a_mass_exit_2(tmp_path, capsys):
+    out = tmp_path / "out"
+    plain = ROOT / "tests" / "mechanisms" / "parallelogram.toml"
+    assert main(["fea", str(plain), "--input", "F1=0", "-o", str(out), "--modes", "3"]) == 2
+    err = capsys.readouterr().err
+    assert "no link has a mass" in err and "--modes" in err and "parallelogram.toml" in err
+    assert not out.exists()
+
+
+def rayleigh(f: float, share: float, plate_mass: float, mass: float) -> float:
+    """f with `share` of the plates' mass added to the link's (Rayleigh's quotient with the
+    static shape: 13/35 of a fixed-guided leaf swaying, 1/3 of a bar stretching)."""
+    return f / math.sqrt(1 + share * plate_mass / mass)
+
+
+@needs_ccx
+def test_a_parallelogram_stage_in_calculix(tmp_path, capsys):
+    """The leaf-spring stage of tests/test_modes.py (t/L = 0.005, m = 0.1 kg, driven by a
+    force held at zero: it sways freely) through `symkin fea --modes 3 --run --json`. Its sway
+    within 0.1 % of (1/2π)√(24EI/(L³m)) (the continuum's clamp faces stiffen a leaf by
+    0.073 t/l, l = L/2: +0.04 % in frequency; the coarse mesh +0.05 %), its axial mode within
+    0.1 % of (1/2π)√(2EA/(Lm)), and symkin's frequencies (both levels) beside them. With steel
+    plates the leaves' mass lowers both as Rayleigh's quotient says (13/35 and 1/3 of it)."""
+    m = 0.1
+    path = tmp_path / "stage.toml"
+    path.write_text(stage_file.stage())
+    out = tmp_path / "out"
+    argv = ["fea", str(path), "--input", "push=0", "-o", str(out), "--mesh", "20,2,0.8"]
+    assert main([*argv, "--modes", "3", "--run", "--json", "--quiet"]) == 0
+    data = json.loads(capsys.readouterr().out)["modes"]
+    assert data["count"] == 3 and data["plate_density"] == 0
+    sway, axial = data["fea"]  # the stage's rotation has no inertia: two modes
+    assert sway == pytest.approx(stage_file.sway(m), rel=1e-3)
+    assert axial == pytest.approx(stage_file.axial(m), rel=1e-3)
+    for level in ("loaded", "equilibrium"):
+        assert data[level] == pytest.approx([stage_file.sway(m), stage_file.axial(m)], rel=1e-3)
+        for k in range(2):
+            assert data["difference"][level][k] == pytest.approx(
+                data[level][k] / data["fea"][k] - 1, abs=1e-12
+            )
+            assert abs(data["difference"][level][k]) < 1e-3
+    assert (out / "stage.frd").exists() and (out / "stage.dat").exists()
+    # the leaves' own mass: 2 leaves of steel, (L - gap) x t x b each
+    setup = fea.prepare(path, {"push": 0})
+    steel = frequency.write(setup, COARSE, count=6, density=7850)
+    found = frequency.frequencies(steel, ccx.run(steel.deck, "steel").printed)
+    leaves = 2 * (stage_file.LEG - stage_file.GAP) * stage_file.THICK * stage_file.WIDTH * 1e-9
+    plate_mass = leaves * 7850
+    assert found[0] == pytest.approx(rayleigh(sway, 13 / 35, plate_mass, m), rel=1e-4)
+    assert min(found, key=lambda f: abs(f - axial)) == pytest.approx(
+        rayleigh(axial, 1 / 3, plate_mass, m), rel=1e-4
+    )
+    # the leaves' own first bending mode (clamped-clamped, (22.37/2π)√(E'I/(ρA L⁴))) lies
+    # between the two
+    own = (
+        22.37
+        / (2 * math.pi)
+        * math.sqrt(
+            stage_file.EI
+            / (7850 * stage_file.THICK * stage_file.WIDTH * 1e-6 * (stage_file.LEG * 1e-3) ** 4)
+        )
+    )
+    assert found[1] == pytest.approx(own, rel=0.02)
+
+
+@needs_ccx
+def test_the_text_sets_the_frequencies_beside_the_levels(tmp_path, capsys):
+    path = tmp_path / "stage.toml"
+    path.write_text(stage_file.stage())
+    argv = ["fea", str(path), "--input", "push=0", "-o", str(tmp_path), "--mesh", "10,1"]
+    assert main([*argv, "--modes", "1", "--run", "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "natural frequencies, every input held; massless plates" in text
+    row = next(line for line in text.splitlines() if line.startswith("1 ")).split()
+    assert row[4] == row[7] == "%" and len(row) == 8  # equilibrium, then loaded
+    fe, eq, diff = float(row[1]), float(row[2]), float(row[3])
+    assert fe == pytest.approx(stage_file.sway(0.1), rel=3e-3)
+    assert eq == pytest.approx(stage_file.sway(0.1), rel=1e-3)
+    assert diff == pytest.approx(100 * (eq / fe - 1), abs=1e-3)
