@@ -244,3 +244,27 @@ def test_the_text_sets_the_frequencies_beside_the_levels(tmp_path, capsys):
     assert fe == pytest.approx(stage_file.sway(0.1), rel=3e-3)
     assert eq == pytest.approx(stage_file.sway(0.1), rel=1e-3)
     assert diff == pytest.approx(100 * (eq / fe - 1), abs=1e-3)
+
+
+def test_a_loaded_mechanism_gets_the_note_on_rigid_links():
+    """A load on a link (or a force actuator's force) is named in a note: ccx's frequency step
+    leaves out the rigid bodies' geometric stiffness (docs/fea.md); unloaded, no note."""
+    mech = symkin.loads(stage_file.stage(load=True), "stage.toml")
+    loaded = frequency.loaded_note(fea.prepare(mech, {"push": 0}, {"P": 1}))
+    assert len(loaded) == 1 and "geometric stiffness of the rigid links" in loaded[0]
+    assert frequency.loaded_note(fea.prepare(mech, {"push": 0}, {"P": 0})) == ()
+
+
+@needs_ccx
+def test_a_preload_in_the_leaves_softens_calculix_as_symkin():
+    """Half the buckling load 2π²EI/L² on the leaf-spring stage: the softening sits in the
+    leaves' own compression, which ccx's frequency step keeps (the plates' stresses), so the
+    FE's sway falls with symkin's, to the beam-column's P/(L (tan u/u - 1)) (written here)."""
+    critical = 2 * math.pi**2 * stage_file.EI / (stage_file.LEG * 1e-3) ** 2
+    mech = symkin.loads(stage_file.stage(load=True), "stage.toml")
+    setup = fea.prepare(mech, {"push": 0}, {"P": 0.5 * critical})
+    modal = frequency.write(setup, COARSE, count=1)
+    fe = frequency.frequencies(modal, ccx.run(modal.deck, "preload").printed)[0]
+    beam = math.sqrt(2 * stage_file.leaf_stiffness(0.25 * critical) / 0.1) / (2 * math.pi)
+    assert fe == pytest.approx(beam, rel=2e-3)
+    assert fe < 0.75 * stage_file.sway(0.1)

@@ -223,11 +223,14 @@ class ModalComparison:
     levels: dict[str, list[float]]
     failed: dict[str, str]
     modal: ModalDeck
+    notes: tuple[str, ...] = ()
 
     def difference(self, k: int, level: str) -> float | None:
-        """(f_level - f_fea)/f_fea of mode k (from 0); None where either is missing."""
+        """(f_level - f_fea)/f_fea of mode k (from 0); None where either is missing, and with
+        the plates' density, whose own modes come in between (mode k is then not symkin's
+        mode k: compare them by their shapes, in cgx)."""
         values = self.levels.get(level, [])
-        if k >= len(values) or k >= len(self.fea):
+        if self.modal.density or k >= len(values) or k >= len(self.fea):
             return None
         return (values[k] - self.fea[k]) / self.fea[k]
 
@@ -248,6 +251,8 @@ class ModalComparison:
         }
         if self.failed:
             out["failed"] = dict(self.failed)
+        if self.notes:
+            out["notes"] = list(self.notes)
         return out
 
 
@@ -275,7 +280,24 @@ def compare_modes(
     frequencies beside symkin's."""
     static = compare(setup, modal.deck, progress, threads, keep)
     levels, failed = symkin_frequencies(setup, modal.count)
-    return static, ModalComparison(frequencies(modal, static.printed), levels, failed, modal)
+    found = frequencies(modal, static.printed)
+    return static, ModalComparison(found, levels, failed, modal, loaded_note(setup))
+
+
+def loaded_note(setup: Setup) -> tuple[str, ...]:
+    """ccx's frequency step takes the plates' stresses into the stiffness but not the rigid
+    bodies' geometric stiffness (the loads and loop forces the rigid links carry as they turn):
+    a loaded mechanism whose softening sits in its links is not softened there (docs/fea.md)."""
+    conf = setup.conf
+    forces = [ld.label for ld in conf.loads if ld.force != (0.0, 0.0) or ld.moment]
+    forces += [f"actuator '{d.name}'" for d in conf.drives if d.drive == "force" and d.force]
+    if not forces:
+        return ()
+    return (
+        f"loaded ({', '.join(forces)}): ccx's frequency step leaves out the geometric stiffness "
+        "of the rigid links, so a load that softens the mechanism through its links (a "
+        "preloaded stage on rigid legs) does not soften the FE's frequencies (docs/fea.md)",
+    )
 
 
 def text(result: ModalComparison) -> str:
@@ -284,7 +306,8 @@ def text(result: ModalComparison) -> str:
     plates = (
         "massless plates (density 0, as symkin's model)"
         if not modal.density
-        else f"plates of {modal.density:g} kg/m^3 (symkin's are massless)"
+        else f"plates of {modal.density:g} kg/m^3 (symkin's are massless; their own modes "
+        "come in between, so no differences: match the modes by their shapes in the .frd)"
     )
     levels = [level for level in LEVELS if level in result.levels]
     head = f"{'mode':<6} {'fea (Hz)':>14}" + "".join(
@@ -306,4 +329,5 @@ def text(result: ModalComparison) -> str:
         lines.append(line)
     for level, message in result.failed.items():
         lines.append(f"{level}: no frequencies ({message})")
+    lines += [f"note: {n}" for n in result.notes]
     return "\n".join(line.rstrip() for line in lines) + "\n"
