@@ -174,6 +174,30 @@ def test_modes_without_a_mass_exit_2(tmp_path, capsys):
     assert not out.exists()
 
 
+def test_modes_are_paired_by_their_mass_weighted_shapes():
+    """Two FE modes listed in the other order than the level's: each is paired with the mode
+    of its shape, (a'Mb)²/((a'Ma)(b'Mb)) computed here; a shape without mass motion, and one
+    below the MAC threshold, pairs with none."""
+    weights = [2.0, 2.0, 0.5]  # kg, kg, kg m²: one link
+    x, y, turn = [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]
+    fe = [frequency.Mode(1.0, y), frequency.Mode(2.0, x), frequency.Mode(3.0, [0.0, 0.0, 0.0])]
+    level = [frequency.Mode(1.1, [1.0, 0.1, 0.0]), frequency.Mode(2.1, [0.05, -1.0, 0.0])]
+    expected = (2 * 0.05 * 1) ** 2 / ((2 * 1) * (2 * (0.05**2 + 1)))  # x against level 2
+    assert frequency.mac(x, level[1].shape, weights) == pytest.approx(expected)
+    assert frequency.pair(fe, level, weights) == [
+        (1, pytest.approx(1 / (1 + 0.05**2))),
+        (0, pytest.approx(1 / (1 + 0.1**2))),
+        (None, None),
+    ]
+    assert frequency.pair([frequency.Mode(1.0, turn)], level, weights) == [(None, None)]
+    # an FE mode whose mass is mostly the plates' (a leaf's own mode) pairs with none, though
+    # the links move alike; the same shape nearer in frequency is taken first
+    plate = frequency.Mode(1.05, x, share=0.2)
+    assert frequency.pair([plate], level, weights) == [(None, None)]
+    near, far = frequency.Mode(1.0, x, share=0.99), frequency.Mode(5.0, x, share=0.9)
+    assert [j for j, _ in frequency.pair([far, near], level, weights)] == [None, 0]
+
+
 def rayleigh(f: float, share: float, plate_mass: float, mass: float) -> float:
     """f with `share` of the plates' mass added to the link's (Rayleigh's quotient with the
     static shape: 13/35 of a fixed-guided leaf swaying, 1/3 of a bar stretching)."""
@@ -196,11 +220,15 @@ def test_a_parallelogram_stage_in_calculix(tmp_path, capsys):
     assert main([*argv, "--modes", "3", "--run", "--json", "--quiet"]) == 0
     data = json.loads(capsys.readouterr().out)["modes"]
     assert data["count"] == 3 and data["plate_density"] == 0
+    assert data["fea_link_share"] == pytest.approx([1, 1], abs=1e-6)  # massless plates
     sway, axial = data["fea"]  # the stage's rotation has no inertia: two modes
     assert sway == pytest.approx(stage_file.sway(m), rel=1e-3)
     assert axial == pytest.approx(stage_file.axial(m), rel=1e-3)
     for level in ("loaded", "equilibrium"):
         assert data[level] == pytest.approx([stage_file.sway(m), stage_file.axial(m)], rel=1e-3)
+        # paired by their shapes: the sway with the sway, the stretch with the stretch
+        assert [p["mode"] for p in data["pairs"][level]] == [1, 2]
+        assert all(p["mac"] > 0.999 for p in data["pairs"][level])
         for k in range(2):
             assert data["difference"][level][k] == pytest.approx(
                 data[level][k] / data["fea"][k] - 1, abs=1e-12
@@ -210,13 +238,19 @@ def test_a_parallelogram_stage_in_calculix(tmp_path, capsys):
     # the leaves' own mass: 2 leaves of steel, (L - gap) x t x b each
     setup = fea.prepare(path, {"push": 0})
     steel = frequency.write(setup, COARSE, count=6, density=7850)
-    found = frequency.frequencies(steel, ccx.run(steel.deck, "steel").printed)
+    modes = frequency.fe_modes(steel, ccx.run(steel.deck, "steel").printed)
+    found = [mode.frequency for mode in modes]
     leaves = 2 * (stage_file.LEG - stage_file.GAP) * stage_file.THICK * stage_file.WIDTH * 1e-9
     plate_mass = leaves * 7850
     assert found[0] == pytest.approx(rayleigh(sway, 13 / 35, plate_mass, m), rel=1e-4)
-    assert min(found, key=lambda f: abs(f - axial)) == pytest.approx(
-        rayleigh(axial, 1 / 3, plate_mass, m), rel=1e-4
-    )
+    # the leaves' own modes come in between; the stretch is the FE mode of the axial shape
+    levels, _ = frequency.symkin_modes(setup, 2, steel.masses)
+    weights = [m, m, 0.0]
+    pairs = frequency.pair(modes, levels["loaded"], weights)
+    stretch = next(k for k, (j, _) in enumerate(pairs) if j == 1)
+    assert pairs[0][0] == 0 and stretch > 1
+    assert found[stretch] == pytest.approx(rayleigh(axial, 1 / 3, plate_mass, m), rel=1e-4)
+    assert [j for j, _ in pairs[1:stretch]] == [None] * (stretch - 1)  # the leaves' own
     # the leaves' own first bending mode (clamped-clamped, (22.37/2π)√(E'I/(ρA L⁴))) lies
     # between the two
     own = (
@@ -239,8 +273,9 @@ def test_the_text_sets_the_frequencies_beside_the_levels(tmp_path, capsys):
     text = capsys.readouterr().out
     assert "natural frequencies, every input held; massless plates" in text
     row = next(line for line in text.splitlines() if line.startswith("1 ")).split()
-    assert row[4] == row[7] == "%" and len(row) == 8  # equilibrium, then loaded
-    fe, eq, diff = float(row[1]), float(row[2]), float(row[3])
+    assert len(row) == 14 and row[2:4] == ["100.0", "%"]  # the links carry all the mass
+    assert row[4:6] == row[9:11] == ["mode", "1"]  # equilibrium, loaded
+    fe, eq, diff = float(row[1]), float(row[6]), float(row[7])
     assert fe == pytest.approx(stage_file.sway(0.1), rel=3e-3)
     assert eq == pytest.approx(stage_file.sway(0.1), rel=1e-3)
     assert diff == pytest.approx(100 * (eq / fe - 1), abs=1e-3)

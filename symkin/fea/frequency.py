@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -35,8 +35,15 @@ NEGLIGIBLE = 1e-12
 #: of a link's: there is one when the links have fewer free degrees of freedom than ccx is asked
 #: for (a direction held rigidly, say by a stroke).
 SPURIOUS = 1e5
+#: Modes of this mass-weighted MAC or more may be the same mode (pair).
+MATCH = 0.8
+#: An FE mode pairs with one of symkin's only if at least this share of its modal mass is the
+#: links' (with the plates' density, their own modes carry most of theirs).
+SHARE = 0.5
 #: Steel's density (kg/m³), the one docs/fea.md measured the plates' own mass with.
 STEEL = 7850.0
+#: The heading of a mode's printed displacements in ccx's .dat.
+MODE = re.compile(r"E I G E N V A L U E\s+N U M B E R\s+(\d+)")
 #: The eigenvalue table of ccx's .dat: mode, ω², ω, f (Hz), the imaginary part.
 EIGENVALUE = re.compile(
     r"^\s*(\d+)\s+(\S+E[+-]\d+)\s+(\S+E[+-]\d+)\s+(\S+E[+-]\d+)\s+(\S+E[+-]\d+)\s*$"
@@ -202,49 +209,160 @@ def eigenvalues(printed: str) -> list[float]:
     return out
 
 
-def frequencies(modal: ModalDeck, printed: str) -> list[float]:
-    """The FE's natural frequencies (Hz), lowest first, at most `modal.count`: with massless
-    plates the modes of their negligible mass left out (SPURIOUS)."""
+def mode_blocks(printed: str) -> list[dict[int, tuple[float, float, float]]]:
+    """Each mode's printed displacements (the DEVIATION nodes: per link the reference node's
+    and the rotation's), in ccx's order."""
+    start = printed.find("E I G E N V A L U E   O U T P U T")
+    out: list[dict[int, tuple[float, float, float]]] = []
+    for line in printed[max(start, 0) :].splitlines() if start >= 0 else ():
+        if MODE.search(line):
+            out.append({})
+            continue
+        parts = line.split()
+        if out and len(parts) == 4 and parts[0].isdigit():
+            out[-1][int(parts[0])] = (float(parts[1]), float(parts[2]), float(parts[3]))
+    return out
+
+
+def centre_motions(modal: ModalDeck, block: Mapping[int, Sequence[float]]) -> list[float]:
+    """A mode's motion of each massive link's centre and its rotation (dx, dy in m, dφ), from
+    its printed auxiliary nodes: the reference node's translation (a pinned link's: its
+    parent's at the pin) plus the rotation times the centre's arm, turned by the link's rigid
+    angle (linear: the mode is small)."""
+    deck = modal.deck
+    links = {r.link: r for r in deck.links}
+
+    def at(link: str, where: tuple[float, float]) -> tuple[float, float]:
+        if link == deck.ground:
+            return (0.0, 0.0)
+        r = links[link]
+        du, dv, dphi = block[r.node]
+        base = at(r.parent, r.ref_at) if r.parent is not None else (du, dv)
+        ax, ay = where[0] - r.ref_at[0], where[1] - r.ref_at[1]
+        c, sn = math.cos(r.angle), math.sin(r.angle)
+        wx, wy = c * ax - sn * ay, sn * ax + c * ay
+        return (base[0] - dphi * wy, base[1] + dphi * wx)
+
+    out: list[float] = []
+    for lm in modal.masses:
+        out += [*at(lm.link, lm.centre), block[links[lm.link].node][2]]
+    return out
+
+
+@dataclass(frozen=True)
+class Mode:
+    """A natural mode: its frequency (Hz) and its massive links' centre motions [dx, dy (m),
+    dφ] per link, in the order of ModalDeck.masses."""
+
+    frequency: float
+    shape: list[float]
+    share: float | None = None  # FE: the massive links' share of the mode's mass (ccx
+    # normalises a mode to unit modal mass, so this is its shape's M-norm over the links)
+
+
+def fe_modes(modal: ModalDeck, printed: str) -> list[Mode]:
+    """The FE's natural modes, lowest first, at most `modal.count`: with massless plates the
+    modes of their negligible mass left out (SPURIOUS)."""
     values = eigenvalues(printed)
     if not values:
         raise AssemblyError("ccx printed no eigenvalues for the frequency step")
-    found = sorted(math.sqrt(v) / (2 * math.pi) for v in values if v > 0)
+    blocks = mode_blocks(printed)
+    weights = [w for m in modal.masses for w in (m.mass, m.mass, m.inertia)]
+    found = []
+    for k, v in enumerate(values):
+        if v <= 0:
+            continue
+        shape = centre_motions(modal, blocks[k]) if k < len(blocks) else []
+        share = sum(w * x * x for w, x in zip(weights, shape)) if shape else None
+        found.append(Mode(math.sqrt(v) / (2 * math.pi), shape, share))
+    found.sort(key=lambda m: m.frequency)
     if modal.density == 0 and found:
-        found = [f for f in found if f <= SPURIOUS * found[0]]
+        found = [m for m in found if m.frequency <= SPURIOUS * found[0].frequency]
     return found[: modal.count]
+
+
+def frequencies(modal: ModalDeck, printed: str) -> list[float]:
+    """The FE's natural frequencies (Hz), as fe_modes."""
+    return [m.frequency for m in fe_modes(modal, printed)]
+
+
+def mac(a: Sequence[float], b: Sequence[float], weights: Sequence[float]) -> float:
+    """The mass-weighted modal assurance criterion (a'Mb)²/((a'Ma)(b'Mb)), 0 to 1 (1: the same
+    shape); 0 when either shape has no motion with mass."""
+    ab = sum(w * x * y for w, x, y in zip(weights, a, b))
+    aa = sum(w * x * x for w, x in zip(weights, a))
+    bb = sum(w * y * y for w, y in zip(weights, b))
+    return ab * ab / (aa * bb) if aa > 0 and bb > 0 else 0.0
+
+
+def pair(
+    fe: Sequence[Mode], level: Sequence[Mode], weights: Sequence[float]
+) -> list[tuple[int | None, float | None]]:
+    """For each FE mode, the level's mode of the same shape and their MAC, (None, None) where
+    none is. Candidates: a MAC of at least MATCH, and an FE mode whose mass sits mostly in the
+    links (share at least SHARE: not a plate's own mode, in which a massless link may still
+    move alike); each mode paired once, the pairs nearest in frequency first."""
+    candidates = sorted(
+        (abs(math.log(a.frequency / b.frequency)), k, j, score)
+        for k, a in enumerate(fe)
+        for j, b in enumerate(level)
+        if (a.share is None or a.share >= SHARE)
+        and (score := mac(a.shape, b.shape, weights)) >= MATCH
+    )
+    out: list[tuple[int | None, float | None]] = [(None, None)] * len(fe)
+    used: set[int] = set()
+    for _, k, j, score in candidates:
+        if j in used or out[k][0] is not None:
+            continue
+        out[k] = (j, score)
+        used.add(j)
+    return out
 
 
 @dataclass(frozen=True)
 class ModalComparison:
-    """The FE's frequencies (Hz) beside those of `symkin modes` at each physical level (a
-    level that cannot give them holds its message under `failed`)."""
+    """The FE's modes beside those of `symkin modes` at each physical level (a level that
+    cannot give them holds its message under `failed`), each FE mode paired with the level's
+    mode of the same shape."""
 
-    fea: list[float]
-    levels: dict[str, list[float]]
+    fea: list[Mode]
+    levels: dict[str, list[Mode]]
     failed: dict[str, str]
     modal: ModalDeck
     notes: tuple[str, ...] = ()
 
+    def pairs(self, level: str) -> list[tuple[int | None, float | None]]:
+        weights = [w for m in self.modal.masses for w in (m.mass, m.mass, m.inertia)]
+        return pair(self.fea, self.levels.get(level, []), weights)
+
     def difference(self, k: int, level: str) -> float | None:
-        """(f_level - f_fea)/f_fea of mode k (from 0); None where either is missing, and with
-        the plates' density, whose own modes come in between (mode k is then not symkin's
-        mode k: compare them by their shapes, in cgx)."""
-        values = self.levels.get(level, [])
-        if self.modal.density or k >= len(values) or k >= len(self.fea):
+        """(f_level - f_fea)/f_fea of FE mode k (from 0) and the level's mode of its shape;
+        None where the level has none."""
+        j = self.pairs(level)[k][0] if k < len(self.fea) else None
+        if j is None:
             return None
-        return (values[k] - self.fea[k]) / self.fea[k]
+        return (self.levels[level][j].frequency - self.fea[k].frequency) / self.fea[k].frequency
 
     def as_json(self) -> dict:
-        count = max([len(self.fea), *(len(v) for v in self.levels.values())])
         out: dict = {
             "count": self.modal.count,
             "plate_density": self.modal.density,
-            "fea": list(self.fea),
+            "fea": [m.frequency for m in self.fea],
+            "fea_link_share": [m.share for m in self.fea],
         }
         for level in LEVELS:
-            out[level] = list(self.levels[level]) if level in self.levels else None
+            out[level] = [m.frequency for m in self.levels[level]] if level in self.levels else None
+        out["pairs"] = {
+            level: [
+                None if j is None else {"mode": j + 1, "mac": score}
+                for j, score in self.pairs(level)
+            ]
+            if level in self.levels
+            else None
+            for level in LEVELS
+        }
         out["difference"] = {
-            level: [self.difference(k, level) for k in range(count)]
+            level: [self.difference(k, level) for k in range(len(self.fea))]
             if level in self.levels
             else None
             for level in LEVELS
@@ -256,16 +374,34 @@ class ModalComparison:
         return out
 
 
-def symkin_frequencies(setup: Setup, count: int) -> tuple[dict[str, list[float]], dict[str, str]]:
-    """`symkin modes` at both physical levels and the set-up configuration."""
+def symkin_modes(
+    setup: Setup, count: int, masses: Sequence[LinkMass]
+) -> tuple[dict[str, list[Mode]], dict[str, str]]:
+    """`symkin modes` at both physical levels and the set-up configuration, their shapes in
+    the FE's units (m, rad) at the massive links' centres."""
     out, failed = {}, {}
+    scale = setup.conf.scale
     for level in LEVELS:
         try:
             found = natural_modes(setup.mechanism, setup.inputs, level, setup.overrides, count)
         except AssemblyError as exc:
             failed[level] = str(exc)
             continue
-        out[level] = list(found.frequencies)
+        out[level] = [
+            Mode(
+                f,
+                [
+                    v
+                    for m in masses
+                    for v in (
+                        links[m.link][0] * scale,
+                        links[m.link][1] * scale,
+                        links[m.link][2],
+                    )
+                ],
+            )
+            for f, links in zip(found.frequencies, found.links)
+        ]
     return out, failed
 
 
@@ -279,8 +415,8 @@ def compare_modes(
     """Run ccx on the modal deck: the static comparison (symkin.fea.compare) and the
     frequencies beside symkin's."""
     static = compare(setup, modal.deck, progress, threads, keep)
-    levels, failed = symkin_frequencies(setup, modal.count)
-    found = frequencies(modal, static.printed)
+    levels, failed = symkin_modes(setup, modal.count, modal.masses)
+    found = fe_modes(modal, static.printed)
     return static, ModalComparison(found, levels, failed, modal, loaded_note(setup))
 
 
@@ -301,32 +437,47 @@ def loaded_note(setup: Setup) -> tuple[str, ...]:
 
 
 def text(result: ModalComparison) -> str:
-    """The frequencies as a table: per mode the FE's, each level's and its relative difference."""
+    """The frequencies as a table: per FE mode its frequency and, per level, the level's mode of
+    the same shape (its number, frequency and relative difference); then the levels' modes of
+    no FE mode's shape."""
     modal = result.modal
     plates = (
-        "massless plates (density 0, as symkin's model)"
+        "massless plates (as symkin's model)"
         if not modal.density
-        else f"plates of {modal.density:g} kg/m^3 (symkin's are massless; their own modes "
-        "come in between, so no differences: match the modes by their shapes in the .frd)"
+        else f"plates of {modal.density:g} kg/m^3 (symkin's are massless: their own modes have "
+        "no symkin mode)"
     )
     levels = [level for level in LEVELS if level in result.levels]
-    head = f"{'mode':<6} {'fea (Hz)':>14}" + "".join(
-        f" {level + ' (Hz)':>18} {'difference':>11}" for level in levels
+    head = f"{'mode':<6} {'fea (Hz)':>14} {'in links':>9}" + "".join(
+        f" {level + ': mode (Hz)':>31} {'difference':>11}" for level in levels
     )
     lines = [
-        f"natural frequencies, every input held; {plates}; difference = (f - f_fea)/f_fea",
+        f"natural frequencies, every input held; {plates}; each FE mode beside the level's "
+        f"mode of the same shape (mass-weighted MAC >= {MATCH:g}, at least {100 * SHARE:g} % of "
+        "the FE mode's mass in the links: 'in links'); difference = (f - f_fea)/f_fea",
         head,
     ]
-    rows = max([len(result.fea), *(len(result.levels[lv]) for lv in levels)])
-    for k in range(rows):
-        fe = f"{result.fea[k]:.7g}" if k < len(result.fea) else "-"
-        line = f"{k + 1:<6} {fe:>14}"
+    pairs = {level: result.pairs(level) for level in levels}
+    for k, mode in enumerate(result.fea):
+        share = "-" if mode.share is None else f"{100 * mode.share:.1f} %"
+        line = f"{k + 1:<6} {mode.frequency:>14.7g} {share:>9}"
         for level in levels:
-            values = result.levels[level]
-            f = f"{values[k]:.7g}" if k < len(values) else "-"
+            j, _ = pairs[level][k]
+            if j is None:
+                line += f" {'-':>14} {'':>16} {'':>11}"
+                continue
             d = result.difference(k, level)
-            line += f" {f:>18} {'' if d is None else f'{100 * d:+.3f} %':>11}"
+            f = result.levels[level][j].frequency
+            line += f" {'mode ' + str(j + 1):>14} {f:>16.7g} {f'{100 * d:+.3f} %':>11}"
         lines.append(line)
+    for level in levels:
+        matched = {j for j, _ in pairs[level]}
+        for j, mode in enumerate(result.levels[level]):
+            if j not in matched:
+                lines.append(
+                    f"{level} mode {j + 1} ({mode.frequency:.7g} Hz): no FE mode of its shape "
+                    "among those found (ask for more with --modes)"
+                )
     for level, message in result.failed.items():
         lines.append(f"{level}: no frequencies ({message})")
     lines += [f"note: {n}" for n in result.notes]
