@@ -452,9 +452,10 @@ def text(result: ModalComparison) -> str:
         f" {level + ': mode (Hz)':>31} {'difference':>11}" for level in levels
     )
     lines = [
-        f"natural frequencies, every input held; {plates}; each FE mode beside the level's "
-        f"mode of the same shape (mass-weighted MAC >= {MATCH:g}, at least {100 * SHARE:g} % of "
-        "the FE mode's mass in the links: 'in links'); difference = (f - f_fea)/f_fea",
+        f"natural frequencies, every input held; {plates}",
+        f"each FE mode beside the level's mode of its shape (mass-weighted MAC >= {MATCH:g}, "
+        f"'in links' >= {100 * SHARE:g} %: the links' share of the FE mode's modal mass); "
+        "difference = (f - f_fea)/f_fea",
         head,
     ]
     pairs = {level: result.pairs(level) for level in levels}
