@@ -303,3 +303,29 @@ def test_a_preload_in_the_leaves_softens_calculix_as_symkin():
     beam = math.sqrt(2 * stage_file.leaf_stiffness(0.25 * critical) / 0.1) / (2 * math.pi)
     assert fe == pytest.approx(beam, rel=2e-3)
     assert fe < 0.75 * stage_file.sway(0.1)
+
+
+@needs_ccx
+def test_a_two_loop_stage_in_calculix():
+    """tests/mechanisms/double_parallelogram_mass.toml (two bodies with mass and inertia, both
+    swaying freely) on a coarse mesh (10 x 1, about a second of ccx): its first three modes —
+    the sways in phase and opposed (a two-mass chain), then the bodies turning — each paired
+    by its shape with symkin's of the same rank, within the contract's 2 % (docs/fea.md: 0.06 to
+    0.12 % mesh-converged); the FE's own shapes are a chain's (the stage, at the chain's end,
+    moves more than the intermediate body in phase, and against it in the opposed mode)."""
+    path = ROOT / "tests" / "mechanisms" / "double_parallelogram_mass.toml"
+    setup = fea.prepare(path, {"p1": 0, "p2": 0})
+    modal = frequency.write(setup, fea.Mesh(10, 1, 0.8), count=3)
+    run = ccx.run(modal.deck, "double")
+    levels, failed = frequency.symkin_modes(setup, 3, modal.masses)
+    result = frequency.ModalComparison(
+        frequency.fe_modes(modal, run.printed), levels, failed, modal
+    )
+    assert not failed and len(result.fea) == 3
+    for level in ("loaded", "equilibrium"):
+        assert [j for j, _ in result.pairs(level)] == [0, 1, 2]
+        for k in range(3):
+            assert abs(result.difference(k, level)) < 0.02  # type: ignore[arg-type]
+    (mid1, _, _, stage1, _, _), (mid2, _, _, stage2, _, _) = (m.shape for m in result.fea[:2])
+    assert stage1 / mid1 > 1 and stage2 / mid2 < 0  # in phase, then opposed
+    assert all(m.share == pytest.approx(1, abs=1e-6) for m in result.fea)  # massless plates
