@@ -162,7 +162,7 @@ def test_bad_modal_requests_exit_2(tmp_path, capsys, extra, words):
     out = tmp_path / "out"
     assert main(["fea", str(path), "--input", "push=0", "-o", str(out), *extra]) == 2
     err = capsys.readouterr().err
-    assert words in err and "fix:" in err and not out.exists()
+    assert words in err and "fix:" in err and "stage.toml" in err and not out.exists()
 
 
 def test_modes_without_a_mass_exit_2(tmp_path, capsys):

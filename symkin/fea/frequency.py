@@ -5,7 +5,7 @@ static one, and its frequencies beside `symkin modes` at both physical levels.
 A link's mass is a `MASS` element at its centre, a member node of its rigid body. ccx 2.20 has
 no rotary inertia for a rigid body, so a link with an inertia I gets two point masses m/2 at its
 centre ± √(I/m) along x instead of one: the same mass, centre and inertia about the centre.
-The plates have density 0 unless asked otherwise (symkin's plates are massless). The frequency
+The plates are massless (a negligible density, NEGLIGIBLE) unless given one. The frequency
 step is a `*STEP, PERTURBATION` after the NLGEOM static step: about its end, with the static
 step's boundary conditions (every input held, a stroke actuator at its stroke, a force actuator
 at its force) and the plates' stresses (their geometric stiffness). It comes last: a static
@@ -180,10 +180,16 @@ def write(
     leave at most two translations and a rotation (with an inertia) per massive link; ccx is
     asked for no more."""
     if count < 1:
-        raise InputError(f"--modes {count}: at least one mode", entry="--modes", hint="--modes 3")
+        raise InputError(
+            f"--modes {count}: at least one mode",
+            file=setup.mechanism.path,
+            entry="--modes",
+            hint="--modes 3",
+        )
     if not (math.isfinite(density) and density >= 0):
         raise InputError(
             f"--plate-density {density}: a density is finite and at least 0",
+            file=setup.mechanism.path,
             entry="--plate-density",
             hint=f"kg/m^3, e.g. --plate-density {STEEL:g} for steel (0: massless plates)",
         )
@@ -214,7 +220,7 @@ def mode_blocks(printed: str) -> list[dict[int, tuple[float, float, float]]]:
     and the rotation's), in ccx's order."""
     start = printed.find("E I G E N V A L U E   O U T P U T")
     out: list[dict[int, tuple[float, float, float]]] = []
-    for line in printed[max(start, 0) :].splitlines() if start >= 0 else ():
+    for line in printed[start:].splitlines() if start >= 0 else ():
         if MODE.search(line):
             out.append({})
             continue
