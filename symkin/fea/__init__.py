@@ -228,6 +228,7 @@ class Comparison:
     notes: tuple[str, ...] = field(default=())
     strokes: dict[str, float] = field(default_factory=dict)  # per actuator: the FE's stroke
     level_strokes: dict[str, float] = field(default_factory=dict)  # and equilibrium's
+    printed: str = field(default="", repr=False)  # ccx's .dat (a frequency step's eigenvalues)
 
     def difference(self, point: str, level: str) -> float | None:
         """|dR_level - dR_fea| / |dR_fea| (None where the level failed or dR_fea is 0)."""
@@ -333,6 +334,7 @@ def compare(
         plate_notes(setup),
         produced,
         level_strokes(setup) if "equilibrium" in values else {},
+        result.printed,
     )
 
 

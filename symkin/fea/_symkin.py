@@ -14,6 +14,15 @@ from ..model.mechanism import Mechanism
 from ..model.profiles import section_of
 from ..model.reader import load
 
+
+def natural_modes(mechanism: Mechanism, inputs, level, params, count):
+    """`symkin modes` (symkin.studies.modes.modes), imported when first asked for: the
+    command line builds every parser, `fea`'s included, at each start."""
+    from ..studies.modes import modes
+
+    return modes(mechanism, inputs, level, params, count)
+
+
 __all__ = [
     "AssemblyError",
     "InputError",
@@ -22,5 +31,6 @@ __all__ = [
     "analyze",
     "evaluate",
     "load",
+    "natural_modes",
     "section_of",
 ]

@@ -135,10 +135,13 @@ def run(
 
 
 def parse(text: str) -> list[tuple[float, dict[int, tuple[float, float, float]]]]:
-    """The displacement blocks of a .dat file: (time, {node: (u1, u2, u3)}), in order."""
+    """The displacement blocks of a .dat file's static step: (time, {node: (u1, u2, u3)}), in
+    order."""
     out: list[tuple[float, dict[int, tuple[float, float, float]]]] = []
     current: dict[int, tuple[float, float, float]] | None = None
     for line in text.splitlines():
+        if "E I G E N V A L U E" in line:  # a frequency step's modes follow the static step
+            break
         m = BLOCK.search(line)
         if m:
             current = {}

@@ -46,6 +46,21 @@ def register(command: Callable[[str, str], argparse.ArgumentParser]) -> None:
         dest="solve",
         help="run ccx (Debian package calculix-ccx) and compare the deviations",
     )
+    fe.add_argument(
+        "--modes",
+        type=int,
+        metavar="N",
+        help="add a frequency step after the static one, the links' masses on their rigid "
+        "bodies; with --run, the N lowest frequencies beside symkin modes'",
+    )
+    fe.add_argument(
+        "--plate-density",
+        type=float,
+        default=0.0,
+        metavar="RHO",
+        help="with --modes: the plates' density in kg/m^3 (default 0: massless, as symkin's "
+        "model; 7850 for steel shows what their own mass changes)",
+    )
     fe.add_argument("--json", action="store_true", help="machine-readable output")
     fe.add_argument("--quiet", action="store_true", help="no progress messages")
     fe.set_defaults(run=main)
@@ -118,7 +133,21 @@ def main(args: argparse.Namespace) -> str:
             entry="[[hinge]]",
             hint="symkin fea models plates: give a hinge a plate model",
         )
-    deck = write_deck(setup, mesh)
+    modal = None
+    if args.modes is not None:
+        from . import frequency
+
+        modal = frequency.write(setup, mesh, args.modes, args.plate_density)
+        deck = modal.deck
+    elif args.plate_density:
+        raise InputError(
+            "--plate-density is the plates' density in a frequency step",
+            file=setup.mechanism.path,
+            entry="--plate-density",
+            hint="add --modes N, or leave --plate-density out",
+        )
+    else:
+        deck = write_deck(setup, mesh)
     name = setup.mechanism.name
     path = save(deck.text, args.output, name)
     for stale in (".frd", ".dat", ".log"):  # results of an earlier deck would not match it
@@ -145,8 +174,15 @@ def main(args: argparse.Namespace) -> str:
             )
         return f"{path}\n"
     progress(f"wrote {path} ({deck.nodes} nodes, {deck.elements} elements); running ccx")
-    result = compare(setup, deck, progress, keep=args.output)
-    return json.dumps(result.as_json(), indent=2) + "\n" if args.json else text(result)
+    if modal is None:
+        result = compare(setup, deck, progress, keep=args.output)
+        return json.dumps(result.as_json(), indent=2) + "\n" if args.json else text(result)
+    from . import frequency
+
+    result, modes = frequency.compare_modes(setup, modal, progress, keep=args.output)
+    if args.json:
+        return json.dumps({**result.as_json(), "modes": modes.as_json()}, indent=2) + "\n"
+    return text(result) + frequency.text(modes)
 
 
 def _percent(value: float | None) -> str:

@@ -634,15 +634,7 @@ class _Writer:
                 f"** nodes fixed in the frame '{printable(conf.ground)}': clamp faces, pins",
                 *self.nset("FRAME", self.fixed),
             ]
-        for k, pl in enumerate(conf.plates, start=1):
-            out += [
-                f"** plate {k} ('{printable(pl.hinge)}'): E = {number(pl.E)} Pa, "
-                f"nu = {number(pl.nu)}; St. Venant-Kirchhoff under NLGEOM",
-                f"*MATERIAL, NAME=PLATE{k}",
-                "*ELASTIC",
-                f"{number(pl.E)}, {number(pl.nu)}",
-                f"*SOLID SECTION, ELSET=PLATE{k}, MATERIAL=PLATE{k}",
-            ]
+        out += self.materials()
         for k, b in enumerate(bodies, start=1):
             out += [
                 f"** link '{printable(b.ref.link)}': reference node {b.ref_node} "
@@ -679,6 +671,20 @@ class _Writer:
             self.mesh,
             conf.drives,
         )
+
+    def materials(self) -> list[str]:
+        """Each plate's material and section (a subclass adds what a frequency step needs)."""
+        out = []
+        for k, pl in enumerate(self.conf.plates, start=1):
+            out += [
+                f"** plate {k} ('{printable(pl.hinge)}'): E = {number(pl.E)} Pa, "
+                f"nu = {number(pl.nu)}; St. Venant-Kirchhoff under NLGEOM",
+                f"*MATERIAL, NAME=PLATE{k}",
+                "*ELASTIC",
+                f"{number(pl.E)}, {number(pl.nu)}",
+                f"*SOLID SECTION, ELSET=PLATE{k}, MATERIAL=PLATE{k}",
+            ]
+        return out
 
     def header(self) -> list[str]:
         conf = self.conf
