@@ -776,14 +776,16 @@ def solve(
     mech: Mechanism,
     values: Mapping[sp.Symbol, sp.Expr],
     inputs: Mapping[str, sp.Expr],
-    rigid: Callable[[int], tuple[dict, dict]],
+    rigid: Callable[[int, Mapping[str, object]], tuple[dict, dict] | None],
     extra_digits: int = 0,
 ) -> Result:
     """The equilibrium of `mech` (docs/physics.md) at parameter `values` and the input
     angles by hinge name (and the actuators' strokes or forces by name), against the rigid pin
     linkage: `rigid(dps, strokes)` gives its hinge angles and its point positions by name at
     `dps` digits (the kinematic levels' rigid solution, exit 3 out of range), at the actuators'
-    strokes by name (a force actuator's: the stroke its force produced). `extra_digits` raises
+    strokes by name (a force actuator's: the stroke its force produced; None where no pose of
+    the rigid linkage reaches that stroke, and then the rigid angles, positions and deviations
+    are NaN). `extra_digits` raises
     the working precision (to check the error estimate)."""
     stiffness = plate_stiffness(mech, "equilibrium")
     # the rigid linkage first (exit 3 out of its range before any continuation), unless a
@@ -794,7 +796,10 @@ def solve(
     system = build(mech, values, inputs, stiffness, _float)
     u, jac = continuation(system, "the equilibrium", mech.path, mech.units)
     if forces:
-        _, rigid_points = rigid(20, _strokes(system, u))
+        # beyond the rigid reach `rigid` gives None (docs/physics.md, "Beyond the rigid reach"):
+        # the compliant pose stands, without a reference
+        reached = rigid(20, _strokes(system, u))
+        rigid_points = {} if reached is None else reached[1]
     # The digits the deviation loses against the positions decide the working precision.
     span = float(system.L)
     smallest = min(
@@ -820,7 +825,13 @@ def solve(
     dps = min(RULES.max_digits, RULES.base_digits + lost) + extra_digits
     with mpmath.workdps(dps):
         solution = polish(build(mech, values, inputs, stiffness, _mp_converter(dps)), u, jac, dps)
-    theta, rigid_points = rigid(dps, _strokes(solution.system, solution.u))
+    reached = rigid(dps, _strokes(solution.system, solution.u))
+    if reached is None:  # NaN rigid angles and positions: no deviation
+        nan = mpmath.mpf("nan")
+        theta = {h.name: nan for h in solution.system.hinges}
+        rigid_points = dict.fromkeys(solution.system.points, (nan, nan))
+    else:
+        theta, rigid_points = reached
     with mpmath.workdps(dps):
         report: dict = {}
         solution.system.residual(solution.u[:, None], arith.mp_array([1]), solution.tol, report)
@@ -833,6 +844,8 @@ def solve(
             dev = (xc - xr, yc - yr)
             size = float(mpmath.hypot(*dev))
             error = max(error, bound / size if size else 0.0)
+            if reached is None:
+                error = math.nan
             points[name] = (
                 (float(xr), float(yr)),
                 (float(xc), float(yc)),
