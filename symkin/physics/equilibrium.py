@@ -681,6 +681,24 @@ def buckling_estimate(system: System, tol: float = RULES.series_tol) -> Buckling
     return Buckling(factor, loads.singular_hinge(jac0 + factor * jac1))
 
 
+def overload(
+    mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr], inputs: Mapping[str, sp.Expr]
+) -> Buckling:
+    """:func:`buckling_estimate` of `mech` at parameter `values` and the inputs by name (the
+    loads' first buckling factor linearised at the as-fabricated pose; math.inf without loads):
+    what the `loaded` level's refusal names when the loads are beyond it (docs/physics.md)."""
+    system = build(mech, values, inputs, plate_stiffness(mech, "equilibrium"), _float)
+    return buckling_estimate(system) if system.loads else Buckling(math.inf, None)
+
+
+def units_hint(units: str) -> str:
+    """What a load far beyond buckling suggests checking (docs/physics.md)."""
+    return (
+        f'check the file\'s units (units = "{units}": lengths in {units}, forces in N, moments '
+        "in N·m) and the loads' values"
+    )
+
+
 def buckling_factor(
     mech: Mechanism,
     values: Mapping[sp.Symbol, sp.Expr],

@@ -71,9 +71,11 @@ def _loaded(
         )
     answer = solve_reduced(an, config, backend="sympy")
     if answer.refused:
+        # loads far beyond buckling: by what factor, and the units to check (no other level
+        # solves them either); else the level that may
         raise AssemblyError(
             f"{mech.path}: the loaded level refuses this configuration: {answer.refused} "
-            "(docs/physics.md); ask for --level equilibrium"
+            "(docs/physics.md)" + (_overloaded(ev, config) or "; ask for --level equilibrium")
         )
     exact_params = config.params
     names = {a: h.name for a, h in ev.kin.hinges.items()}
@@ -156,6 +158,31 @@ def _loaded(
                 result, sensitivity=mpmath_sensitivity.of(ev, state, answer)
             )
     return with_model_error(result, mech, exact_params)
+
+
+def _overloaded(ev: MpmathEvaluator, config: Configuration) -> str:
+    """Where `loaded` refuses a configuration whose loads (and force actuators) are beyond the
+    plates' first buckling load (its linearised estimate, symkin.physics.equilibrium.overload),
+    by what factor, and the file's units to check (docs/physics.md, "Overloads and buckling");
+    else ""."""
+    mech = ev.mechanism
+    if not mech.loads and not any(a.drive == "force" for a in mech.actuators):
+        return ""
+    names = {a: h.name for a, h in ev.kin.hinges.items()}
+    driven = {a.name for a in mech.actuators}
+    inputs = {names[a]: v for a, v in config.angles.items()}
+    inputs |= {n: v for n, v in config.drives.items() if n in driven}
+    try:
+        first = physical_equilibrium.overload(mech, config.params, inputs)
+    except (AssemblyError, ArithmeticError, ValueError, np.linalg.LinAlgError):
+        return ""
+    if not first.factor < 1:
+        return ""
+    return (
+        f"; the loads are {1 / first.factor:.4g} times the first buckling load of the plates "
+        f"(hinge '{first.hinge}', at the as-fabricated pose: a linearised estimate): "
+        + physical_equilibrium.units_hint(mech.units)
+    )
 
 
 def _equilibrium(
