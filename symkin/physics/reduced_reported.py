@@ -45,7 +45,8 @@ class Report:
     actuators: dict[str, ActuatorLoad]
     stiffness: dict[str, list | None]
     plates: dict[str, PlateStress]
-    buckling: float | None  # None: the file has no loads
+    buckling: float | None  # None: the file has no loads, or the search failed (the note)
+    buckling_note: str | None = None  # why the buckling search could not finish
 
 
 def report(
@@ -89,13 +90,15 @@ def report(
         else:
             stiffness[name] = np.linalg.inv(compliance).tolist()
     loaded = red.loads or red.forces  # a force actuator is a load (scaled with the file's)
-    return Report(
-        inputs,
-        actuators,
-        stiffness,
-        plates(answer),
-        buckling_factor(answer, solver=search) if buckling and loaded else None,
-    )
+    factor, note = None, None
+    if buckling and loaded:
+        # a side output: its failure loses nothing else (CONTRACT, "Side outputs never lose the
+        # main answer"); the search is bounded by its steps, so the same input fails the same
+        try:
+            factor = buckling_factor(answer, solver=search)
+        except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
+            note = f"the buckling search failed ({type(exc).__name__}: {exc})"
+    return Report(inputs, actuators, stiffness, plates(answer), factor, note)
 
 
 def plates(answer: Answer) -> dict[str, PlateStress]:

@@ -455,7 +455,7 @@ def solve_reduced(
 
 
 #: The Evaluation fields `loaded` reports beyond the deviations (docs/physics.md).
-REPORTED = ("actuation", "actuators", "stiffness", "plates", "buckling")
+REPORTED = ("actuation", "actuators", "stiffness", "plates", "buckling", "buckling_note")
 
 
 def _reported_fields(answer: reduced.Answer, scale: float) -> dict:
@@ -476,6 +476,7 @@ def _reported_fields(answer: reduced.Answer, scale: float) -> dict:
             if h.name in rep.plates
         },
         "buckling": rep.buckling,
+        "buckling_note": rep.buckling_note,
     }
 
 
