@@ -66,7 +66,7 @@ SCENE = """format = 1
 name = "{name}"
 reference = "{reference}"
 samples = 5
-backend = "numpy"
+backend = "{backend}"
 {fix}
 [ranges]
 {ranges}
@@ -77,12 +77,13 @@ relative_tolerance = {tol}
 """
 
 
-def _scene(tmp_path: Path, mech: Path, **keys: str) -> tuple[int, str, Path]:
-    text = SCENE.format(**({"fix": "", "reference": "exact", "tol": "0.05"} | keys))
+def _scene(tmp_path: Path, mech: Path, emit: str = "numpy", **keys: str) -> tuple[int, str, Path]:
+    defaults = {"fix": "", "reference": "exact", "tol": "0.05", "backend": "numpy"}
+    text = SCENE.format(**(defaults | keys))
     scene = tmp_path / "scene.toml"
     scene.write_text(text)
     out = tmp_path / "out"
-    run = symkin_cli("derive", str(mech), "--scene", str(scene), "--emit", "numpy", "-o", str(out))
+    run = symkin_cli("derive", str(mech), "--scene", str(scene), "--emit", emit, "-o", str(out))
     return run.returncode, run.stderr, out
 
 
@@ -90,9 +91,15 @@ def test_a_scene_with_a_stroke_actuator(tmp_path):
     """The piezo amplifier's B within 5 % over strokes 0 to 0.05 mm: the scene evaluator takes
     the stroke and meets the tolerance against eval's exact level."""
     code, err, out = _scene(
-        tmp_path, PIEZO, name="amp", ranges="piezo = [0.0, 0.05]", point="B"
+        tmp_path, PIEZO, "numpy,c", name="amp", ranges="piezo = [0.0, 0.05]", point="B",
+        backend="c",
     )  # fmt: skip
     assert code == 0, err
+    # the C header names the stroke's unit, not radians alone
+    assert (
+        "then the actuators' strokes or forces\n *           (piezo in mm)"
+        in (out / "amp.h").read_text()
+    )
     scene = _import(out / "amp.py")
     assert scene.INPUTS == ("piezo",)
     strokes = [0.005, 0.02, 0.045]

@@ -781,6 +781,11 @@ def generate(
         ignored=tuple(h for h in mech.drives if h not in used and h not in fixed),
         groups=tuple(groups),
         notes=tuple(notes(scene, choice)),
+        actuators=tuple(
+            (a.name, "N" if a.drive == "force" else mech.units)
+            for a in mech.actuators
+            if a.name in inputs
+        ),
     )
     for backend, row in pipeline.REGISTRY.items():
         if backend in emit:
