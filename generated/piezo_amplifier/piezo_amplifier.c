@@ -9443,9 +9443,10 @@ static int sk_actuated_loaded(const sk_mechanism *m, const sk_actuators *t, cons
         ar[SK_M + h] += d;
         turned[h] += d;
     }
-    if (s == 0 && lr != NULL) {
+    if ((s == 0 || s == 4) && lr != NULL) {
         /* each link's rotation at the surrogates' compliant angles less the reference's (the
-           rigid angles, ar), plus the non-input hinges' deviation */
+           rigid angles, ar), plus the non-input hinges' deviation; beyond the rigid reach (4)
+           against the first solve's, the rigid rotation and the deviation NaN */
         double rot[2 * SK_NL + 1], rot0[2 * SK_NL + 1];
         m->links(turned, delta, rot);
         m->links(ar, delta, rot0);
@@ -9453,8 +9454,12 @@ static int sk_actuated_loaded(const sk_mechanism *m, const sk_actuators *t, cons
             const double dev = rot[j] - rot0[j] + rot[SK_NL + j];
             lr[3 * j] = sk_wrap(rot0[j]);
             lr[3 * j + 1] = lr[3 * j] + dev;
-            lr[3 * j + 2] = dev;
+            lr[3 * j + 2] = s == 4 ? NAN : dev;
+            lr[3 * j] = s == 4 ? NAN : lr[3 * j];
         }
+    }
+    for (j = 0; s == 4 && j < SK_M; ++j) {
+        ar[j] = NAN;
     }
     return s;
 }
@@ -9477,7 +9482,7 @@ static int sk_actuated_pose(const sk_mechanism *m, const sk_actuators *t, const 
     {
         s = sk_actuated_kinematic(m, t, drives, params, level, pr, ar, links == NULL ? NULL : lr);
     }
-    if (s != 0) {
+    if (s != 0 && s != 4) {
         sk_nan(out, 6 * t->n_shown);
         sk_nan(angles, 2 * SK_M);
         sk_nan(links, 3 * SK_NL);
@@ -9494,10 +9499,11 @@ static int sk_actuated_pose(const sk_mechanism *m, const sk_actuators *t, const 
     for (j = 0; links != NULL && j < 3 * SK_NL; ++j) {
         links[j] = lr[j];
     }
-    return 0;
+    return s; /* 0, or 4: beyond the rigid reach, the rigid values and deviations NaN */
 }
 
-/* <name>_evaluate_angles_batch with actuators: n rows; the number of rows that failed. */
+/* <name>_evaluate_angles_batch with actuators: n rows; the number of rows that failed (a row
+   beyond the rigid reach, status 4, is not a failure). */
 static int sk_actuated_rows(const sk_mechanism *m, const sk_actuators *t, int n,
                             const double *drives, const double *params, int level, double *out,
                             double *angles, int *status)
@@ -9508,7 +9514,7 @@ static int sk_actuated_rows(const sk_mechanism *m, const sk_actuators *t, int n,
             m, t, drives + (size_t)j * SK_NI, params, level,
             out == NULL ? NULL : out + (size_t)j * 6 * t->n_shown,
             angles == NULL ? NULL : angles + (size_t)j * 2 * SK_M, NULL);
-        failed += s != 0;
+        failed += s != 0 && s != 4;
         if (status != NULL) {
             status[j] = s;
         }
@@ -9560,6 +9566,7 @@ static int sk_actuated_report(const sk_mechanism *m, const sk_actuators *t,
     with.n_inputs = rows;
     with.unit_scale = 1.0;
     s = drives == NULL ? 3 : sk_actuated_loaded(m, t, drives, params, pr, ar, NULL, &sol);
+    s = s == 4 ? 0 : s; /* beyond the rigid reach: the report is the compliant pose's */
     s = s != 0 ? s : sk_reduced_report(m, &with, sol.theta, sol.q, raw);
     for (i = 0; s == 0 && i < 2 * rows; ++i) {
         if (!isfinite(raw[i])) {

@@ -33,7 +33,9 @@ extern const char *const piezo_amplifier_link_names[PIEZO_AMPLIFIER_N_LINKS > 0 
  * Returns 0 on success, 1 cannot assemble (or a plate bent past its limit), 2 no convergence
  * (or a non-finite result), 3 bad argument (NULL, a level not generated, an input that is not
  * finite or beyond +-pi, a parameter that is not finite). On any non-zero return every entry of
- * out is NaN.
+ * out is NaN, but for 4 (with force actuators at loaded): beyond the rigid reach, the compliant
+ * mechanism solved where no pose of the rigid linkage reaches the stroke the force produced;
+ * the compliant x, y are filled, the rigid x, y and deviations (and rigid angles) are NaN.
  * Pure function: no allocation, no global state, thread-safe.
  */
 int piezo_amplifier_evaluate(const double *inputs, const double *params, int level, double *out);

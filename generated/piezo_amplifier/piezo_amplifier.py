@@ -1717,12 +1717,18 @@ def _actuated_state(mech, actuators, forces, drives, inputs, params, resolve=Fal
         x, reference, rigid, ok_r, _ = _rigid_at(
             mech, hinges | dict(zip(surrogates, angles)), params
         )
-        ok = ok & ok_f & ok_r
-        state.update(ok=ok, reference=reference, rigid=rigid)
+        # beyond the rigid reach (no rigid pose at the stroke a force produced): the compliant
+        # pose stands, the reference and the deviations are NaN (docs/physics.md, "Beyond the
+        # rigid reach"), "reference" False
+        reach = numpy.broadcast_to(ok_f & ok_r, shape)
+        reference = [numpy.where(reach, v, numpy.nan) for v in reference]
+        rigid = [numpy.where(reach, v, numpy.nan) for v in rigid]
+        state.update(ok=ok, reference=reference, rigid=rigid, reach=reach)
         if resolve:
+            solved = ok
             with numpy.errstate(all="ignore"):
-                delta, q, ok = mech.loaded_solve(mech, x, list(reference) + loads, p, ok)
-            state.update(ok=ok, x=x, theta=reference, delta=delta, q=q)
+                delta, q, ok = mech.loaded_solve(mech, x, list(reference) + loads, p, ok & reach)
+            state.update(ok=ok & reach, x=x, theta=reference, delta=delta, q=q, solved=solved)
     return state
 
 
@@ -1781,7 +1787,10 @@ def _actuated_result(mech, actuators, st, shown, links, ok):
             r = numpy.stack([st["rigid"][2 * i], st["rigid"][2 * i + 1]])
             c = res["points"][n]["compliant"]
             points[n] = {"rigid": r, "compliant": c, "deviation": c - r}
-    out = {"points": {}, "ok": ok}
+    # "reference" False where the compliant pose was solved but no pose of the rigid linkage
+    # reaches the stroke a force produced (docs/generated-code.md)
+    reach = st.get("reach", numpy.ones(shape, dtype=bool))
+    out = {"points": {}, "ok": ok, "reference": ~(st.get("solved", ok) & ~reach)}
     for n, table in points.items():
         out["points"][n] = {key: numpy.where(ok, v, numpy.nan) for key, v in table.items()}
     out["angles"] = {
@@ -1806,9 +1815,11 @@ def _actuated_result(mech, actuators, st, shown, links, ok):
         for i, name in enumerate(mech.link_names):
             dev = at_t[i] - at_r[i] + at_t[m + i]
             r = _wrap(numpy.broadcast_to(at_r[i], shape))
+            # without a reference: the turned rotation itself
+            turned_rot = _wrap(numpy.broadcast_to(at_t[i], shape)) + at_t[m + i]
             out["links"][name] = {
                 "rigid": numpy.where(ok, r, numpy.nan),
-                "compliant": numpy.where(ok, r + dev, numpy.nan),
+                "compliant": numpy.where(ok, numpy.where(reach, r + dev, turned_rot), numpy.nan),
                 "deviation": numpy.where(ok, numpy.broadcast_to(dev, shape), numpy.nan),
             }
     return out

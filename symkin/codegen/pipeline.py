@@ -192,7 +192,16 @@ def _numpy_pose(
         for n in shape.links
         for key in ("rigid", "compliant", "deviation")
     ]
-    return (0 if bool(res["ok"]) else 1), out, angles, links
+    return int(_status(res)), out, angles, links
+
+
+def _status(res: Mapping[str, Any]) -> np.ndarray:
+    """The C evaluator's return codes from a numpy module's result: 0, 1 where not "ok", 4 where
+    the compliant pose has no rigid "reference" (beyond the rigid reach, docs/generated-code.md;
+    its sensitivities are not "ok")."""
+    ok = np.asarray(res["ok"])
+    reference = np.asarray(res.get("reference", True))
+    return np.where(reference, np.where(ok, 0, 1), 4).astype(np.intc)
 
 
 def _numpy_rows(
@@ -213,7 +222,7 @@ def _numpy_rows(
             [res["angles"][kind][h] for kind in ("rigid", "compliant") for h in shape.hinges],
             axis=1,
         )
-    return np.where(res["ok"], 0, 1).astype(np.intc), out, turned
+    return _status(res), out, turned
 
 
 def _numpy_sensitivity_rows(
@@ -231,7 +240,7 @@ def _numpy_sensitivity_rows(
                 out[:, i, v] = table["params"][name].T
             for v, name in enumerate(shape.inputs):
                 out[:, i, len(shape.params) + v] = table["inputs"][name].T
-    return np.where(res["ok"], 0, 1).astype(np.intc), values, dev, rig
+    return _status(res), values, dev, rig
 
 
 def _numpy_grid(

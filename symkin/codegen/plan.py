@@ -184,6 +184,8 @@ class ScenePlan:
     ignored: tuple[str, ...]  # the file's free inputs that move no scene point
     groups: tuple[SceneGroup, ...]
     notes: tuple[str, ...]
+    # the actuators among the inputs and their unit ("mm", "N"): their strokes or forces
+    actuators: tuple[tuple[str, str], ...] = ()
 
 
 def plan(

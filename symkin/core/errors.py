@@ -48,6 +48,11 @@ class InputError(SymkinError):
         return text
 
 
+class PlausibilityWarning(UserWarning):
+    """A result that stands but suggests a mistake in the file (its units, a degree meant as a
+    radian): the command line prints it as one line (docs/cli.md)."""
+
+
 class AssemblyError(SymkinError):
     """The mechanism cannot reach the requested input: out of range or no convergence (exit 3)."""
 

@@ -685,6 +685,24 @@ def buckling_estimate(system: System, tol: float = RULES.series_tol) -> Buckling
     return Buckling(factor, loads.singular_hinge(jac0 + factor * jac1))
 
 
+def overload(
+    mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr], inputs: Mapping[str, sp.Expr]
+) -> Buckling:
+    """:func:`buckling_estimate` of `mech` at parameter `values` and the inputs by name (the
+    loads' first buckling factor linearised at the as-fabricated pose; math.inf without loads):
+    what the `loaded` level's refusal names when the loads are beyond it (docs/physics.md)."""
+    system = build(mech, values, inputs, plate_stiffness(mech, "equilibrium"), _float)
+    return buckling_estimate(system) if system.loads else Buckling(math.inf, None)
+
+
+def units_hint(units: str) -> str:
+    """What a load far beyond buckling suggests checking (docs/physics.md)."""
+    return (
+        f'check the file\'s units (units = "{units}": lengths in {units}, forces in N, moments '
+        "in N·m) and the loads' values"
+    )
+
+
 def buckling_factor(
     mech: Mechanism,
     values: Mapping[sp.Symbol, sp.Expr],
@@ -781,14 +799,16 @@ def solve(
     mech: Mechanism,
     values: Mapping[sp.Symbol, sp.Expr],
     inputs: Mapping[str, sp.Expr],
-    rigid: Callable[[int], tuple[dict, dict]],
+    rigid: Callable[[int, Mapping[str, object]], tuple[dict, dict] | None],
     extra_digits: int = 0,
 ) -> Result:
     """The equilibrium of `mech` (docs/physics.md) at parameter `values` and the input
     angles by hinge name (and the actuators' strokes or forces by name), against the rigid pin
     linkage: `rigid(dps, strokes)` gives its hinge angles and its point positions by name at
     `dps` digits (the kinematic levels' rigid solution, exit 3 out of range), at the actuators'
-    strokes by name (a force actuator's: the stroke its force produced). `extra_digits` raises
+    strokes by name (a force actuator's: the stroke its force produced; None where no pose of
+    the rigid linkage reaches that stroke, and then the rigid angles, positions and deviations
+    are NaN). `extra_digits` raises
     the working precision (to check the error estimate)."""
     stiffness = plate_stiffness(mech, "equilibrium")
     # the rigid linkage first (exit 3 out of its range before any continuation), unless a
@@ -799,7 +819,10 @@ def solve(
     system = build(mech, values, inputs, stiffness, _float)
     u, jac = continuation(system, "the equilibrium", mech.path, mech.units)
     if forces:
-        _, rigid_points = rigid(20, _strokes(system, u))
+        # beyond the rigid reach `rigid` gives None (docs/physics.md, "Beyond the rigid reach"):
+        # the compliant pose stands, without a reference
+        reached = rigid(20, _strokes(system, u))
+        rigid_points = {} if reached is None else reached[1]
     # The digits the deviation loses against the positions decide the working precision.
     span = float(system.L)
     smallest = min(
@@ -825,7 +848,13 @@ def solve(
     dps = min(RULES.max_digits, RULES.base_digits + lost) + extra_digits
     with mpmath.workdps(dps):
         solution = polish(build(mech, values, inputs, stiffness, _mp_converter(dps)), u, jac, dps)
-    theta, rigid_points = rigid(dps, _strokes(solution.system, solution.u))
+    reached = rigid(dps, _strokes(solution.system, solution.u))
+    if reached is None:  # NaN rigid angles and positions: no deviation
+        nan = mpmath.mpf("nan")
+        theta = {h.name: nan for h in solution.system.hinges}
+        rigid_points = dict.fromkeys(solution.system.points, (nan, nan))
+    else:
+        theta, rigid_points = reached
     with mpmath.workdps(dps):
         report: dict = {}
         solution.system.residual(solution.u[:, None], arith.mp_array([1]), solution.tol, report)
@@ -838,6 +867,8 @@ def solve(
             dev = (xc - xr, yc - yr)
             size = float(mpmath.hypot(*dev))
             error = max(error, bound / size if size else 0.0)
+            if reached is None:
+                error = math.nan
             points[name] = (
                 (float(xr), float(yr)),
                 (float(xc), float(yc)),

@@ -87,6 +87,9 @@ class Answer:
     solver: Reduced | None = field(default=None, repr=False, compare=False)
     # by actuator name: the stroke the rigid reference is at (file unit; set by the caller)
     strokes: dict[str, float] = field(default_factory=dict)
+    # why the reference stayed short of the stroke a force actuator produced, which no pose of
+    # the rigid linkage reaches (docs/physics.md, "Beyond the rigid reach"; set by the caller)
+    unreached: str = ""
 
 
 #: The plate functions of symkin.physics.plate_relation, lambdified, by (key, lambdify's module
@@ -200,7 +203,11 @@ class Reduced:
         for a, h in self.hinges.items():
             self.clamp_m[a] = tuple(num(v) for v in h.clamp(h.M)) if a in self.plate else centres[a]
         cs = [tuple(float(value(v)) for v in c) for c in centres.values()]
-        self.L = max([math.dist(a, b) for a in cs for b in cs] + [1e-300])
+        # a lone hinge (a cantilever) has no spacing: its plate's length sets the scale (1e-300
+        # scaled its surrogate's turn by 5e300, past float64 in the generated code)
+        self.L = max([math.dist(a, b) for a in cs for b in cs], default=0.0) or max(
+            [float(value(d["l"])) for d in self.plate.values()] + [1e-300]
+        )
         self.lmin = min([float(value(d["l"])) for d in self.plate.values()], default=self.L)
         self.F = max(
             [float(value(d["EI"] / (d["l"] * self.L))) for d in self.plate.values()] or [1.0]

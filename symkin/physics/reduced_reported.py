@@ -47,7 +47,8 @@ class Report:
     stiffness: dict[str, list | None]
     compliance: dict[str, list | None]
     plates: dict[str, PlateStress]
-    buckling: float | None  # None: the file has no loads
+    buckling: float | None  # None: the file has no loads, or the search failed (the note)
+    buckling_note: str | None = None  # why the buckling search could not finish
 
 
 def report(
@@ -94,14 +95,15 @@ def report(
         else:
             stiffness[name], compliance[name] = stiffness_and_compliance(rates[rows, rows], L, F)
     loaded = red.loads or red.forces  # a force actuator is a load (scaled with the file's)
-    return Report(
-        inputs,
-        actuators,
-        stiffness,
-        compliance,
-        plates(answer),
-        buckling_factor(answer, solver=search) if buckling and loaded else None,
-    )
+    factor, note = None, None
+    if buckling and loaded:
+        # a side output: its failure loses nothing else (CONTRACT, "Side outputs never lose the
+        # main answer"); the search is bounded by its steps, so the same input fails the same
+        try:
+            factor = buckling_factor(answer, solver=search)
+        except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
+            note = f"the buckling search failed ({type(exc).__name__}: {exc})"
+    return Report(inputs, actuators, stiffness, compliance, plates(answer), factor, note)
 
 
 def plates(answer: Answer) -> dict[str, PlateStress]:

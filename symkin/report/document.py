@@ -43,7 +43,7 @@ from .figures import (
     tree_layout,
 )
 from .modes import first_mode_arrows, frequency_table
-from .sections import COLUMN_WIDTH, PLAIN_UNITS, Report, chunks
+from .sections import COLUMN_WIDTH, PLAIN_UNITS, Report, chunks, input_axis
 from .sweeps import Physics, pose_data, sensitivity_table, sweep, sweep_spans
 from .text import LINE_WIDTH_EM, escape_latex, math_name, plain_name
 
@@ -129,11 +129,7 @@ def emit(
         points = list(plan.points)
         pruned = False
         for h, data, xlim in runs:
-            xlabel = (
-                f"stroke of {plain_name(h)} ({unit})"
-                if h in strokes
-                else f"input θ of {plain_name(h)} (rad)"
-            )
+            xlabel = input_axis(report.mech, h, plain_name(h))
             shown = points
             if not single:  # (the caption says that the other inputs are held)
                 # only the points this input moves (a fan of four-bars: one point per input)

@@ -13,17 +13,21 @@ import numpy as np
 
 from ..physics.equilibrium import BUCKLING_LIMIT
 from .figures import Sweep, stress_figure
-from .sections import Report, float_at
+from .sections import Report, float_at, input_axis, input_unit
 from .text import escape_latex, plain_name, sci
 
 #: Pa per MPa: the report gives stresses in MPa.
 MPA = 1e6
 
 
-def _input_text(values: Mapping[str, float]) -> str:
-    """Inputs as LaTeX text, `A0 = 0.3`, rounded to 1e-9 rad (a swept range's middle is its
-    linspace sample, zero up to rounding)."""
-    return ", ".join(f"{escape_latex(n)}~$= {round(v, 9) + 0.0:g}$" for n, v in values.items())
+def _input_text(values: Mapping[str, float], mech=None) -> str:
+    """Inputs as LaTeX text with their unit, `A0 = 0.3 rad`, rounded to 1e-9 (a swept range's
+    middle is its linspace sample, zero up to rounding); input hinges alone: one `rad` at the
+    end, actuators beside them: each its own (a stroke in the file's unit, a force in N)."""
+    text = [f"{escape_latex(n)}~$= {round(v, 9) + 0.0:g}$" for n, v in values.items()]
+    if mech is None or not any(input_unit(mech, n) != "rad" for n in values):
+        return ", ".join(text) + "~rad"
+    return ", ".join(f"{t}~{input_unit(mech, n, tex=True)}" for t, n in zip(text, values))
 
 
 def equilibrium_configurations(
@@ -125,7 +129,7 @@ def equilibrium_table(report: Report, ev, scales: Mapping[tuple[str, str], float
             "hinge": escape_latex(ev.buckling_hinge) if ev.buckling_hinge else None,
         }
     return {
-        "inputs": _input_text(ev.inputs),
+        "inputs": _input_text(ev.inputs, report.mech),
         "plates": plates,
         "safety": any(p.safety is not None for p in ev.plates.values()),
         "over": [row["name"] for row in plates if row["over"]],
@@ -182,7 +186,7 @@ def equilibrium_section(
             {p: v for p, v in allowable.items() if p in stress},
             plain_name,
             xlim,
-            f"input θ of {plain_name(h)} (rad)",
+            input_axis(report.mech, h, plain_name(h)),
         )
         figures.append({"file": fname, "input": None if single else escape_latex(h)})
     scales = _scales(configurations)

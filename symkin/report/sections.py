@@ -25,6 +25,27 @@ COLUMN_WIDTH = 345.0
 #: The file's length unit (`units`) in the figures, the tables and the text.
 PLAIN_UNITS = {"m": "m", "mm": "mm", "um": "µm"}
 TEX_UNITS = {"m": r"\mathrm{m}", "mm": r"\mathrm{mm}", "um": r"\mu\mathrm{m}"}
+
+
+def input_unit(mech, name: str, tex: bool = False) -> str:
+    """The unit of an input: an input hinge's angle in rad, a stroke actuator's stroke in the
+    file's length unit, a force actuator's force in N (CONTRACT 13, "Actuators everywhere")."""
+    act = next((a for a in mech.actuators if a.name == name), None)
+    if act is None:
+        return "rad"
+    if act.drive == "force":
+        return "N"
+    return f"${TEX_UNITS[mech.units]}$" if tex else PLAIN_UNITS[mech.units]
+
+
+def input_axis(mech, name: str, shown: str) -> str:
+    """A plot's axis label for a swept input `shown` (its printable name): its angle, stroke or
+    force and the unit (input_unit)."""
+    act = next((a for a in mech.actuators if a.name == name), None)
+    what = "input θ" if act is None else ("force" if act.drive == "force" else "stroke")
+    return f"{what} of {shown} ({input_unit(mech, name)})"
+
+
 UNIT_NAMES = {"m": "metres", "mm": "millimetres", "um": "micrometres"}
 
 

@@ -14,7 +14,7 @@ import numpy as np
 from ..codegen import pipeline
 from ..core.errors import SymkinError
 from .figures import PoseData, Sweep
-from .sections import TEX_UNITS, Report, float_at
+from .sections import Report, float_at, input_unit
 from .text import escape_latex, gnum, sci
 
 #: Default input range of the deviation plot: every input equal to t, |t| <= SWEEP_RANGE (rad).
@@ -138,13 +138,14 @@ def sweep(
         runs.append((h, Sweep(t, ok, magnitude, deviation, reference, reported), (a, b)))
         summary["samples"] += len(t)
         summary["failed"] += int((~ok).sum())
-        stroke = h in {a.name for a in report.mech.actuators}
+        act = next((a for a in report.mech.actuators if a.name == h), None)
         summary["spans"].append(
             {
                 "input": escape_latex(h),
-                # what is swept: a hinge's angle (rad) or an actuator's stroke (file unit)
-                "what": "stroke" if stroke else r"input $\theta$",
-                "unit": f"${TEX_UNITS[report.mech.units]}$" if stroke else "rad",
+                # what is swept: a hinge's angle (rad), an actuator's stroke (file unit) or
+                # force (N)
+                "what": r"input $\theta$" if act is None else act.drive,
+                "unit": input_unit(report.mech, h, tex=True),
                 "lo": f"{lo:g}",
                 "hi": f"{hi:g}",
                 "held": f"{held[h]:g}",

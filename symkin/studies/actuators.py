@@ -20,6 +20,12 @@ from .mpmath_evaluator import MpmathEvaluator
 from .results import Evaluation, Pair, Sensitivity
 
 
+class ReachError(AssemblyError):
+    """No pose of the rigid linkage (or of the compliant mechanism) reaches the strokes: exit 3,
+    unless a force actuator drove the compliant mechanism there (docs/physics.md, "Beyond the
+    rigid reach"), where the level reports the compliant pose with no deviation."""
+
+
 def check_actuated_level(mech: Mechanism, level: str, backend: str, sensitivity: bool) -> None:
     """Refuse (exit 2, naming the actuator) what the actuators do not drive yet: a force at a
     kinematic level (it needs a physical one), force actuators in the generated backends but at
@@ -266,7 +272,7 @@ def stroke_angles(
             else:
                 break
             angles, r = trial, found
-    raise AssemblyError(
+    raise ReachError(
         f"{mech.path}: no pose of the "
         + ("compliant mechanism" if compliant else "rigid linkage")
         + " reaches the strokes "
@@ -274,4 +280,15 @@ def stroke_angles(
         + " (the surrogate hinges "
         + ", ".join(names)
         + " found no solution: past a toggle or the linkage's reach)"
+    )
+
+
+def reach_note(produced: Mapping[str, float]) -> str:
+    """The `deviation_note` of a point whose rigid reference no pose of the rigid linkage
+    reaches: the strokes the force actuators produced (docs/physics.md, "Beyond the rigid
+    reach")."""
+    strokes = ", ".join(f"{n}={v:.6g}" for n, v in produced.items())
+    return (
+        f"no pose of the rigid linkage reaches the stroke {strokes} the force produced (past a "
+        "toggle or the linkage's reach): the compliant position is reported, no deviation"
     )

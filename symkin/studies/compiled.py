@@ -250,12 +250,15 @@ class Compiled:
                 }
                 for i, p in enumerate(self.points)
             },
-            "ok": (status == 0).reshape(shape),
+            # 4: beyond the rigid reach, solved with NaN deviations (the numpy module's
+            # "reference" False; docs/generated-code.md)
+            "ok": ((status == 0) | (status == 4)).reshape(shape),
             "angles": {
                 kind: {h: angles[:, off + a].reshape(shape) for a, h in enumerate(self.hinges)}
                 for kind, off in (("rigid", 0), ("compliant", m))
             },
             "links": {},
+            "reference": (status != 4).reshape(shape),
         }
 
     def sensitivity(

@@ -14,6 +14,7 @@ level, inputs and parameters are parsed once, at the entry, into a
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from collections.abc import Callable, Mapping
 from typing import NoReturn
 
@@ -21,8 +22,10 @@ import mpmath
 import sympy as sp
 
 from ..core import backends, levels
-from ..core.errors import AssemblyError, InputError
+from ..core.errors import AssemblyError, InputError, PlausibilityWarning
 from ..kinematics.analysis import Analysis
+from ..model.mechanism import Mechanism
+from ..physics.equilibrium import units_hint
 from . import generated, mpmath_sensitivity
 from .actuators import check_actuated_level, stroke_angles, stroke_sensitivity
 from .configuration import Configuration, configure, parameter_floats
@@ -65,8 +68,31 @@ def evaluate(
         check_actuated_level(mech, level, backend, sensitivity)
     if caps.generated:
         generated.check_level(level, caps)
-    return _dispatch(
+    result = _dispatch(
         analysis, configure(analysis, inputs, level, params), backend, dps, sensitivity
+    )
+    _plausible(result, mech)
+    return result
+
+
+#: A buckling factor below this says the loads are far beyond what the plates carry: a warning
+#: naming the factor and the units to check (docs/physics.md, "Overloads and buckling").
+FAR_BEYOND_BUCKLING = 0.1
+
+
+def _plausible(result: Evaluation, mech: Mechanism) -> None:
+    """Warn (one line on the command line) where the loads are far beyond buckling."""
+    factor = result.buckling
+    if factor is None or not factor < FAR_BEYOND_BUCKLING:
+        return
+    times = f"{1 / factor:.4g} times" if factor > 0 else "beyond"
+    warnings.warn(
+        f"{mech.path}: the loads are {times} the first buckling load of the mechanism (its "
+        f"buckling factor {factor:.4g}"
+        + (f", hinge '{result.buckling_hinge}'" if result.buckling_hinge else "")
+        + f"): {units_hint(mech.units)} (docs/physics.md)",
+        PlausibilityWarning,
+        stacklevel=3,
     )
 
 

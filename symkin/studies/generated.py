@@ -65,6 +65,11 @@ def evaluate(
     status, out, angles, rot = row.pose(ev, shape, x, pfloat, level)
     if status == 3:
         raise InputError(f"the {backend} evaluator rejected the arguments", entry="--input")
+    # 4: beyond the rigid reach of a force actuator's stroke (docs/physics.md): the compliant
+    # pose, no deviations
+    beyond = status == 4 and not sensitivity
+    if beyond:
+        status = 0
     if status == 0 and sensitivity:
         rows = row.sensitivity_rows(ev, shape, np.array([x]), pfloat, level)
         status = int(rows[0][0])
@@ -98,7 +103,9 @@ def evaluate(
         angles_rigid={h: rigid[h] for h in sorted(rigid, key=order.get)},
         angles_compliant={h: compliant[h] for h in sorted(compliant, key=order.get)},
         points=points,
-        dyads=evaluator_of(analysis).dyad_states(
+        dyads=()
+        if beyond
+        else evaluator_of(analysis).dyad_states(
             config.with_angles({n: rigid[n] for n in mech.inputs}) if mech.actuators else config
         ),
         params=parameter_floats(analysis.mechanism, pvals),
@@ -107,6 +114,12 @@ def evaluate(
         sensitivity=sens,
         **extra,
     )
+    if beyond:
+        # the note names the stroke the force produced, as the sympy backend's (the same solve)
+        note = physical.deviation_note
+        if note is None:
+            raise Unsolved
+        return result.beyond_reach(note)
     if level_row.needs_stiffness:
         return with_model_error(result, analysis.mechanism, pvals)
     return result

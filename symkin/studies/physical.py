@@ -27,10 +27,10 @@ from ..physics import model_error as physical_model_error
 from ..physics import reduced, reduced_reported
 from ..physics.result import HingeLoad
 from . import mpmath_sensitivity
-from .actuators import stroke_angles
+from .actuators import ReachError, reach_note, stroke_angles
 from .configuration import Configuration, configure, parameter_floats
 from .mpmath_evaluator import MpmathEvaluator, State, evaluator_of
-from .results import Evaluation, PointResult
+from .results import Evaluation, LinkResult, PointResult
 
 
 def loaded(
@@ -71,9 +71,11 @@ def _loaded(
         )
     answer = solve_reduced(an, config, backend="sympy")
     if answer.refused:
+        # loads far beyond buckling: by what factor, and the units to check (no other level
+        # solves them either); else the level that may
         raise AssemblyError(
             f"{mech.path}: the loaded level refuses this configuration: {answer.refused} "
-            "(docs/physics.md); ask for --level equilibrium"
+            "(docs/physics.md)" + (_overloaded(ev, config) or "; ask for --level equilibrium")
         )
     exact_params = config.params
     names = {a: h.name for a, h in ev.kin.hinges.items()}
@@ -144,12 +146,43 @@ def _loaded(
             units=mech.units,
             **_reported_fields(answer, float(scale)),
         )
+        if answer.unreached:
+            if sensitivity:
+                raise AssemblyError(
+                    f"{mech.path}: no deviation to differentiate: {answer.unreached}"
+                )
+            return result.beyond_reach(answer.unreached)
         if sensitivity:
             state = State("loaded", exact_params, pvals, ivals, theta, {}, dyads)
             result = dataclasses.replace(
                 result, sensitivity=mpmath_sensitivity.of(ev, state, answer)
             )
     return with_model_error(result, mech, exact_params)
+
+
+def _overloaded(ev: MpmathEvaluator, config: Configuration) -> str:
+    """Where `loaded` refuses a configuration whose loads (and force actuators) are beyond the
+    plates' first buckling load (its linearised estimate, symkin.physics.equilibrium.overload),
+    by what factor, and the file's units to check (docs/physics.md, "Overloads and buckling");
+    else ""."""
+    mech = ev.mechanism
+    if not mech.loads and not any(a.drive == "force" for a in mech.actuators):
+        return ""
+    names = {a: h.name for a, h in ev.kin.hinges.items()}
+    driven = {a.name for a in mech.actuators}
+    inputs = {names[a]: v for a, v in config.angles.items()}
+    inputs |= {n: v for n, v in config.drives.items() if n in driven}
+    try:
+        first = physical_equilibrium.overload(mech, config.params, inputs)
+    except (AssemblyError, ArithmeticError, ValueError, np.linalg.LinAlgError):
+        return ""
+    if not first.factor < 1:
+        return ""
+    return (
+        f"; the loads are {1 / first.factor:.4g} times the first buckling load of the plates "
+        f"(hinge '{first.hinge}', at the as-fabricated pose: a linearised estimate): "
+        + physical_equilibrium.units_hint(mech.units)
+    )
 
 
 def _equilibrium(
@@ -167,18 +200,30 @@ def _equilibrium(
     exact_params = config.params
     args = [*an.params, *an.thetas]
 
-    def rigid(dps: int, strokes: Mapping[str, object]) -> tuple[dict, dict]:
+    unreached: dict[str, float] = {}  # the strokes forces produced that no rigid pose reaches
+
+    def rigid(dps: int, strokes: Mapping[str, object]) -> tuple[dict, dict] | None:
         """Rigid hinge angles and point positions at `dps` digits (exit 3 out of range), the
-        actuators at `strokes` (docs/levels.md, "Actuators")."""
+        actuators at `strokes` (docs/levels.md, "Actuators"); None beyond the rigid reach of a
+        force actuator's stroke (docs/physics.md, "Beyond the rigid reach")."""
         surrogates = {}
         if mech.actuators:
-            found = stroke_angles(
-                ev,
-                config,
-                [sp.N(sp.sympify(strokes[a.name]), dps + 5) for a in mech.actuators],
-                dps,
-                compliant=False,
-            )
+            try:
+                found = stroke_angles(
+                    ev,
+                    config,
+                    [sp.N(sp.sympify(strokes[a.name]), dps + 5) for a in mech.actuators],
+                    dps,
+                    compliant=False,
+                )
+            except ReachError:
+                if not any(a.drive == "force" for a in mech.actuators):
+                    raise
+                unreached.update(
+                    {a.name: float(sp.N(sp.sympify(strokes[a.name]), 20)) for a in mech.actuators}
+                )
+                return None
+            unreached.clear()
             surrogates = {labels[n]: v for n, v in found.items()}
         with mpmath.workdps(dps):
             pvals = [mpmath.mpf(sp.N(exact_params[s], dps + 5)) for s in an.params]
@@ -236,9 +281,19 @@ def _equilibrium(
             *(mpmath.mpf(res.angles_rigid[names[a]]) for a in sorted(names)),
             *(mpmath.mpf(res.angle_deviations[names[a]]) for a in ev.kin.unknowns),
         ]
+        if unreached:
+            # no reference: the links' compliant rotations as the rigid ones of the compliant
+            # angles (no deviation)
+            values = [
+                *(mpmath.mpf(sp.N(exact_params[s], 25)) for s in an.params),
+                *(mpmath.mpf(res.angles_compliant[names[a]]) for a in sorted(names)),
+                *(mpmath.mpf(0) for _ in ev.kin.unknowns),
+            ]
         links = ev.links(an, "exact", "equilibrium:", [*args, *an.deltas], values)
-        if mech.actuators:
+        if mech.actuators and not unreached:
             links = ev.turned_surrogates(links, res.angle_deviations)
+        if unreached:
+            links = {n: LinkResult(math.nan, r.rigid, math.nan) for n, r in links.items()}
     result = Evaluation(
         level="equilibrium",
         backend="sympy",
@@ -252,7 +307,9 @@ def _equilibrium(
             if n not in {a.point for a in mech.actuators}
         },
         # the rigid linkage's dyads: with actuators, at its surrogates' angles
-        dyads=ev.dyad_states(
+        dyads=()
+        if unreached
+        else ev.dyad_states(
             config.with_angles({n: res.angles_rigid[n] for n in mech.inputs})
             if mech.actuators
             else config
@@ -277,6 +334,9 @@ def _equilibrium(
         buckling_note=buckling_note,
         units=ev.mechanism.units,
     )
+    if unreached:
+        produced = {a.name: unreached[a.name] for a in mech.actuators if a.drive == "force"}
+        return dataclasses.replace(result, error_estimate=None).beyond_reach(reach_note(produced))
     return with_model_error(result, ev.mechanism, exact_params)
 
 
@@ -387,12 +447,26 @@ def solve_reduced(
         if max(abs(v) for v in along.values()) <= SOLVER.strokes.reference * answer.solver.L:
             break
         strokes = strokes | {n: answer.strokes[n] + v for n, v in along.items()}
-        answer = run(strokes)
+        try:
+            answer = run(strokes)
+        except ReachError:
+            # beyond the rigid reach (docs/physics.md, "Beyond the rigid reach"): the compliant
+            # pose stands, against the last reference reached; the deviations have none
+            answer.unreached = reach_note({n: float(strokes[n]) for n in along})
+            break
     return answer
 
 
 #: The Evaluation fields `loaded` reports beyond the deviations (docs/physics.md).
-REPORTED = ("actuation", "actuators", "stiffness", "compliance", "plates", "buckling")
+REPORTED = (
+    "actuation",
+    "actuators",
+    "stiffness",
+    "compliance",
+    "plates",
+    "buckling",
+    "buckling_note",
+)
 
 
 def _reported_fields(answer: reduced.Answer, scale: float) -> dict:
@@ -414,6 +488,7 @@ def _reported_fields(answer: reduced.Answer, scale: float) -> dict:
             if h.name in rep.plates
         },
         "buckling": rep.buckling,
+        "buckling_note": rep.buckling_note,
     }
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from ..core import levels
 from ..physics.result import ActuatorLoad, HingeLoad, InputLoad, PlateStress
@@ -20,8 +20,13 @@ class PointResult:
 
     @property
     def norm(self) -> float:
-        """|ΔR|, the length of the deviation."""
+        """|ΔR|, the length of the deviation (NaN where it has none: beyond the rigid reach)."""
         return math.hypot(*self.deviation)
+
+
+def _finite(value: float) -> float | None:
+    """A JSON number, or null for NaN (no deviation beyond the rigid reach)."""
+    return None if math.isnan(value) else value
 
 
 Pair = tuple[float, float]
@@ -126,6 +131,27 @@ class Evaluation:
     # |ΔR|, an estimate of the level's beam theory against a continuum, and its parts.
     model_error: dict[str, float] = field(default_factory=dict)
     model_error_parts: dict[str, dict[str, float]] = field(default_factory=dict)
+    # Beyond the rigid reach (docs/physics.md): why the points' rigid positions and deviations
+    # (and the rigid angles and links' deviations) are NaN, the compliant ones reported.
+    deviation_note: str | None = None
+
+    def beyond_reach(self, note: str) -> Evaluation:
+        """This evaluation where no pose of the rigid linkage reaches the stroke a force actuator
+        produced (docs/physics.md, "Beyond the rigid reach"): the compliant positions, angles and
+        rotations kept, the rigid ones and the deviations NaN (JSON null) with `note`, no model
+        error (it is relative to the deviation)."""
+        nan = math.nan
+        return replace(
+            self,
+            points={
+                n: PointResult((nan, nan), p.compliant, (nan, nan)) for n, p in self.points.items()
+            },
+            angles_rigid=dict.fromkeys(self.angles_rigid, nan),
+            links={n: LinkResult(nan, r.compliant, nan) for n, r in self.links.items()},
+            model_error={},
+            model_error_parts={},
+            deviation_note=note,
+        )
 
     def directional(self, point: str) -> list[float | None] | None:
         """The point's stiffness along x, y and in rotation, each with the other two directions
@@ -182,21 +208,37 @@ class Evaluation:
             "backend": self.backend,
             "inputs": dict(self.inputs),
             "params": dict(self.params),
-            "angles": {"rigid": dict(self.angles_rigid), "compliant": dict(self.angles_compliant)},
-            "points": {
-                name: {
-                    "rigid": list(p.rigid),
-                    "compliant": list(p.compliant),
-                    "deviation": list(p.deviation),
-                    "norm": p.norm,
-                }
-                | ({"model_error": self.model_error[name]} if name in self.model_error else {})
-                for name, p in self.points.items()
+            "angles": {
+                "rigid": {n: _finite(v) for n, v in self.angles_rigid.items()},
+                "compliant": dict(self.angles_compliant),
             },
+            "points": {name: self._point_json(name, p) for name, p in self.points.items()},
             "links": {
-                name: {"rigid": r.rigid, "compliant": r.compliant, "deviation": r.deviation}
+                name: {
+                    "rigid": _finite(r.rigid),
+                    "compliant": r.compliant,
+                    "deviation": _finite(r.deviation),
+                }
                 for name, r in self.links.items()
             },
             "dyads": [dict(d) for d in self.dyads],
             **extra,
         } | physical
+
+    def _point_json(self, name: str, p: PointResult) -> dict:
+        """One point of `eval --json`: beyond the rigid reach its rigid position, deviation and
+        norm null and its `deviation_note` (docs/physics.md)."""
+        if self.deviation_note is not None:
+            return {
+                "rigid": None,
+                "compliant": list(p.compliant),
+                "deviation": None,
+                "norm": None,
+                "deviation_note": self.deviation_note,
+            }
+        return {
+            "rigid": list(p.rigid),
+            "compliant": list(p.compliant),
+            "deviation": list(p.deviation),
+            "norm": p.norm,
+        } | ({"model_error": self.model_error[name]} if name in self.model_error else {})

@@ -206,6 +206,24 @@ class _Reader:
             )
         return number
 
+    def value(self, name: str, value: object, entry: str) -> float | sp.Expr:
+        """An input's value in a range: an input hinge's angle (rad, within ±π), an actuator's
+        stroke (the file's length unit) or force (N), any finite number."""
+        from .configuration import exact_value
+
+        if not any(a.name == name for a in self.mech.actuators):
+            return self.angle(value, entry)
+        if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+            raise self.error(
+                f"a stroke or force must be a number or an expression, got {value!r}",
+                entry,
+                "write e.g. 0.02 (a stroke, the file's length unit) or 1.5 (a force, N)",
+            )
+        number = exact_value(value, entry, self.file)
+        if not (number.is_real and number.is_finite):
+            raise self.error(f"{value!r} is not a finite number", entry, "give a finite value")
+        return number
+
     def ranges(self, table: object, entry: str, free: Sequence[str]) -> dict:
         if not isinstance(table, dict):
             raise self.error(
@@ -214,13 +232,14 @@ class _Reader:
                 "write e.g. ranges = { O = [-0.2, 0.2] } (radians)",
             )
         out = {}
+        drives = self.mech.drives  # the input hinges and the actuators (not their surrogates)
         for name, span in table.items():
             where = f"{entry} '{name}'"
-            if name not in self.mech.inputs:
+            if name not in drives:
                 raise self.error(
-                    f"'{name}' is not an input hinge",
+                    f"'{name}' is not an input hinge or actuator",
                     where,
-                    suggest(name, self.mech.inputs) or "inputs: " + ", ".join(self.mech.inputs),
+                    suggest(name, drives) or "inputs: " + ", ".join(drives),
                 )
             if name not in free:
                 raise self.error(
@@ -234,7 +253,7 @@ class _Reader:
                     where,
                     f"write {name} = [-0.2, 0.2] (radians)",
                 )
-            lo, hi = (float(sp.N(self.angle(v, where), 17)) for v in span)
+            lo, hi = (float(sp.N(self.value(name, v, where), 17)) for v in span)
             if not lo < hi:
                 raise self.error(f"empty range [{lo:g}, {hi:g}]", where, "give lo < hi")
             out[name] = (lo, hi)
@@ -290,6 +309,15 @@ class _Reader:
                 "[fix]",
                 "write [fix] on a line of its own, then K = 0.0 lines (radians)",
             )
+        if fix and mech.actuators:
+            # the generated runtimes measure a stroke from the pose at zero inputs, which a
+            # folded input would move (as derive --fix)
+            raise self.error(
+                f"a scene of a file with actuators cannot fix inputs yet (actuator "
+                f"'{mech.actuators[0].name}')",
+                "[fix]",
+                "drop [fix] and give the input hinge a narrow range instead",
+            )
         fixed = {}
         for input_name, value in fix.items():
             where = f"[fix] '{input_name}'"
@@ -300,15 +328,28 @@ class _Reader:
                     suggest(input_name, mech.inputs) or "inputs: " + ", ".join(mech.inputs),
                 )
             fixed[input_name] = self.angle(value, where)
-        free = [h for h in mech.inputs if h not in fixed]
+        free = [h for h in mech.drives if h not in fixed]
         if not free:
             raise self.error(
                 "every input is fixed",
                 "[fix]",
                 "leave at least one input free (a pose needs no evaluator)",
             )
-        scene_ranges = dict.fromkeys(free, DEFAULT_RANGE)
+        # a stroke ranges over ± its default span (Mechanism.stroke_spans); a force has no
+        # default (N: the file says nothing of its size)
+        strokes = mech.stroke_spans()
+        scene_ranges = {
+            h: (-strokes[h], strokes[h]) if h in strokes else DEFAULT_RANGE for h in free
+        }
         scene_ranges.update(self.ranges(data.get("ranges", {}), "[ranges]", free))
+        forces = [a.name for a in mech.actuators if a.drive == "force"]
+        if any(f not in data.get("ranges", {}) for f in forces):
+            f = next(f for f in forces if f not in data.get("ranges", {}))
+            raise self.error(
+                f"the force actuator {f} needs a range",
+                "[ranges]",
+                f"write {f} = [lo, hi] in [ranges] (N)",
+            )
         tables = data.get("point", [])
         if not isinstance(tables, list) or not all(isinstance(t, dict) for t in tables):
             raise self.error(
@@ -391,6 +432,15 @@ class _Reader:
                     precision,
                 )
             )
+        force = next((a.name for a in mech.actuators if a.drive == "force"), None)
+        kinematic = next((pt.name for pt in points if pt.reference != "equilibrium"), None)
+        if force is not None and kinematic is not None:
+            raise self.error(
+                f"the force actuator {force} drives the physical levels alone: point "
+                f"{kinematic} cannot measure against a kinematic reference",
+                f"[[point]] '{kinematic}'",
+                'write reference = "equilibrium"',
+            )
         if added:
             mech = with_points(mech, added, self.file, self.text)
         return Scene(
@@ -448,12 +498,15 @@ def measure(
         for name in names:
             samples[name] = kept
             wanted[name] = [(float(d[name][0]), float(d[name][1])) for d in devs]
+    # a force actuator drives the physical levels alone (docs/levels.md, "Actuators")
+    forces = any(a.drive == "force" for a in mech.actuators)
     allowed = [
         v
         for v in default_variants(
             stiffness=any(pt.reference == "equilibrium" for pt in scene.points)
         )
-        if v.precision == "float64" or any(pt.precision == "float32" for pt in scene.points)
+        if (v.precision == "float64" or any(pt.precision == "float32" for pt in scene.points))
+        and (not forces or v.level in level_table.LOADED)
     ]
     out = []
     names = list(scene.point_names)
@@ -706,8 +759,9 @@ def generate(
                 name=name,
                 variant=g.variant.name,
                 level=level_table.get(g.variant.level),
-                inputs=p.inputs,
-                points=p.points,
+                inputs=p.drives or p.inputs,  # with actuators: their strokes, not surrogates
+                # the evaluator's public points (an actuator's point of action is its own)
+                points=tuple(x for x in p.points if x not in {a.point for a in mech.actuators}),
                 parameters=tuple(q.name for q in p.parameters),
                 precision=g.variant.precision,
                 cost=g.cost,
@@ -715,7 +769,7 @@ def generate(
         )
     structure = build(mech)
     used = {h for g in groups for h in g.inputs}
-    inputs = tuple(h for h in structure.hinges if h in used)
+    inputs = tuple(h for h in (mech.drives if mech.actuators else structure.hinges) if h in used)
     scene_plan = ScenePlan(
         name=scene.name,
         source=Path(mech.path).name,
@@ -724,9 +778,14 @@ def generate(
         points=scene.point_names,
         parameters=tuple((p.name, to_double(p.value)) for p in mech.parameters),
         fixed=tuple((h, to_double(v)) for h, v in scene.fixed),
-        ignored=tuple(h for h in mech.inputs if h not in used and h not in fixed),
+        ignored=tuple(h for h in mech.drives if h not in used and h not in fixed),
         groups=tuple(groups),
         notes=tuple(notes(scene, choice)),
+        actuators=tuple(
+            (a.name, "N" if a.drive == "force" else mech.units)
+            for a in mech.actuators
+            if a.name in inputs
+        ),
     )
     for backend, row in pipeline.REGISTRY.items():
         if backend in emit:
@@ -750,6 +809,5 @@ def derive(
     from .derive import write_files
 
     mech = load_mechanism(path)
-    mech.refuse_actuators("a scene (derive --scene)")
     files, _ = generate(load(scene, mech), emit, progress, column_width, appendix)
     return write_files(files, out_dir)

@@ -216,10 +216,11 @@ def run_blocks(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Blocks first..last-1: (worst |ΔR| per sample and point (n, n_points), NaN where failed;
     flag per sample: 0 evaluated, 1 cannot be assembled (or no convergence) somewhere on the
-    grid, 2 parameters that break the file's rules; at `loaded`, every plate's largest stress
-    over the grid per sample (n, n_plates) and the task's points' smallest diagonal stiffness
-    (n, n_stiff, 3), NaN where failed; with masses, each sample's lowest first natural frequency
-    over the grid (n,) Hz, NaN where failed or none)."""
+    grid, 2 parameters that break the file's rules, 3 beyond the rigid reach of a force
+    actuator's stroke somewhere on the grid (solved, no deviation; docs/physics.md); at
+    `loaded`, every plate's largest stress over the grid per sample (n, n_plates) and the
+    task's points' smallest diagonal stiffness (n, n_stiff, 3), NaN where failed; with masses, each sample's lowest first natural
+    frequency over the grid (n,) Hz, NaN where failed or none)."""
     ev = task.evaluator
     n_points = len(ev.points)
     worst_all, flags_all, stress_all, stiff_all, first_all = [], [], [], [], []
@@ -238,11 +239,15 @@ def run_blocks(
             dx = buffer[:, :, 4::6]
             dy = buffer[:, :, 5::6]
             norm = np.sqrt(dx * dx + dy * dy)  # exact IEEE operations only
-            failed = (status != 0).any(axis=1)
+            failed = ((status != 0) & (status != 4)).any(axis=1)
+            # beyond the rigid reach somewhere on the grid (status 4): solved, no worst deviation
+            beyond = (status == 4).any(axis=1) & ~failed
             values = norm.max(axis=1)
-            values[failed] = np.nan
+            values[failed | beyond] = np.nan
             worst[good] = values
             flags[good[failed]] = 1
+            flags[good[beyond]] = 3
+            failed = failed | beyond
             for s in good[~failed] if task.plates or task.stiff else ():
                 stress[s], stiff[s] = extremes(ev, task.inputs, params[s], task.plates, task.stiff)
         first_f = np.full(n, np.nan)
@@ -359,7 +364,8 @@ class Sweep:
     seconds: float  # wall time of the Monte Carlo (compile excluded)
     chunks: int
     values: np.ndarray = field(repr=False)  # (samples, n_points): worst |ΔR|, NaN where failed
-    flags: np.ndarray = field(repr=False)  # (samples,): 0 ok, 1 cannot assemble, 2 invalid
+    # (samples,): 0 ok, 1 cannot assemble, 2 invalid, 3 beyond the rigid reach (not failed)
+    flags: np.ndarray = field(repr=False)
     nominal: dict[str, float] = field(default_factory=dict)  # worst |ΔR| at nominal values
     points: tuple[str, ...] = ()
     plates: tuple[str, ...] = ()  # at `loaded`: the plates whose largest stress is kept
@@ -374,7 +380,13 @@ class Sweep:
 
     @property
     def failed(self) -> int:
-        return int((self.flags != 0).sum())
+        return int(((self.flags != 0) & (self.flags != 3)).sum())
+
+    @property
+    def beyond_reach(self) -> int:
+        """Samples beyond the rigid reach of a force actuator's stroke somewhere on the grid:
+        solved, with no deviation (docs/physics.md, "Beyond the rigid reach")."""
+        return int((self.flags == 3).sum())
 
     @property
     def invalid(self) -> int:
@@ -414,6 +426,7 @@ class Sweep:
             "samples": self.samples,
             "failed": self.failed,
             "invalid": self.invalid,
+            "beyond_reach": self.beyond_reach,
             "seed": self.seed,
             "scheduler": self.scheduler,
             "seconds": self.seconds,
@@ -610,12 +623,13 @@ def _distributed(client, task: Task, spans: Sequence[tuple[int, int]], progress:
 def check_grid(evaluator: Compiled, grid: Grid, level: str) -> None:
     """Refuse (exit 3) a grid the nominal mechanism cannot reach everywhere, before the work."""
     status, _ = evaluator.evaluate_rows(grid.rows, level)
-    if (status != 0).any():
-        k = int(np.flatnonzero(status != 0)[0])
+    bad = (status != 0) & (status != 4)  # 4: beyond the rigid reach, solved (no deviation)
+    if bad.any():
+        k = int(np.flatnonzero(bad)[0])
         at = ", ".join(f"{h}={v:g}" for h, v in zip(evaluator.inputs, grid.rows[k]))
         raise AssemblyError(
             f"{evaluator.name}: with the nominal parameters the mechanism "
-            f"cannot be evaluated at {at} ({int((status != 0).sum())} of "
+            f"cannot be evaluated at {at} ({int(bad.sum())} of "
             f"{len(status)} configurations of the input grid); narrow --input"
         )
 
@@ -635,6 +649,11 @@ def text(result: Sweep) -> str:
         + (
             f" ({result.invalid} with parameters that break the file's rules)"
             if result.invalid
+            else ""
+        )
+        + (
+            f"; beyond the rigid linkage's reach (no deviation): {result.beyond_reach}"
+            if result.beyond_reach
             else ""
         ),
     ]

@@ -89,6 +89,9 @@ class Tolerance:
     configurations: int
     failed: int  # configurations that could not be evaluated
     points: dict[str, PointTolerance]
+    # configurations beyond the rigid reach of a force actuator's stroke (docs/physics.md):
+    # solved, with no deviation to stack up; counted apart from the failures
+    beyond_reach: int = 0
 
     def as_json(self) -> dict:
         return {
@@ -98,6 +101,7 @@ class Tolerance:
             "vary": dict(self.vary),
             "configurations": self.configurations,
             "failed": self.failed,
+            "beyond_reach": self.beyond_reach,
             "points": {p: t.as_json() for p, t in self.points.items()},
         }
 
@@ -123,10 +127,16 @@ def run(
     x = grid.rows
     status, values, dev, _ = evaluator.sensitivity_rows(x, level)
     ok = status == 0
+    beyond = int((status == 4).sum())  # beyond the rigid reach: solved, no deviation
     if not ok.any():
         raise AssemblyError(
             f"{evaluator.name}: the mechanism cannot be evaluated anywhere in "
             f"the input range {grid.as_json()}"
+            + (
+                f" ({beyond} configurations beyond the rigid linkage's reach: no deviation)"
+                if beyond
+                else ""
+            )
         )
     names = list(evaluator.sources.params)
     index = [names.index(p) for p in vary]
@@ -185,8 +195,9 @@ def run(
         grid,
         {p: s.half_width for p, s in vary.items()},
         len(x),
-        int((~ok).sum()),
+        int((~ok).sum()) - beyond,
         points,
+        beyond,
     )
 
 
@@ -197,6 +208,11 @@ def text(result: Tolerance) -> str:
         f"({result.backend}), over {result.configurations} configurations of "
         + ", ".join(f"{k} in [{v[0]:g}, {v[1]:g}]" for k, v in result.grid.as_json().items())
         + (f"; {result.failed} could not be evaluated" if result.failed else "")
+        + (
+            f"; {result.beyond_reach} beyond the rigid linkage's reach (no deviation)"
+            if result.beyond_reach
+            else ""
+        )
     ]
     for point, t in result.points.items():
         w = t.worst

@@ -310,7 +310,8 @@ def parse_grid(
                 entry=f"{option} {name}",
                 hint="give LO < HI",
             )
-        if name not in strokes and any(not abs(v) <= math.pi for v in ends):
+        actuated = name in strokes or any(a.name == name for a in mech.actuators)
+        if not actuated and any(not abs(v) <= math.pi for v in ends):  # a force is in N
             raise InputError(
                 f"'{item}' goes beyond a half turn",
                 file=mech.path,

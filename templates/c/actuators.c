@@ -348,15 +348,21 @@ static int sk_force_split(const sk_actuators *t, const double *drives, double *s
    from the first solve's, for the rigid linkage at the stroke each force produced (its point of
    action's compliant place along d from as fabricated, rest); the points' rigid positions and
    deviations (pr) and the rigid angles (ar) become the reference's, the compliant ones stay (the
-   compliant pose does not depend on the reference). Returns 0, or the status of what failed. */
+   compliant pose does not depend on the reference). Returns 0, or 4 where no pose of the rigid
+   linkage reaches the stroke a force produced (docs/physics.md, "Beyond the rigid reach"): the
+   rigid positions and deviations NaN, the compliant ones kept, ar's rigid angles those of the
+   first solve (the caller makes them NaN). */
 static int sk_force_reference(const sk_mechanism *m, const sk_actuators *t,
                               const double *strokes, const double *params, const double *rest,
                               double *xr, double *pr, double *ar)
 {
-    double produced[SK_NI + 1], ref[6 * SK_NP];
+    double produced[SK_NI + 1], ref[6 * SK_NP], first[SK_M];
     int a, i, j, s;
     for (j = 0; j < SK_NI; ++j) {
         produced[j] = strokes[j];
+    }
+    for (j = 0; j < SK_M; ++j) {
+        first[j] = ar[j];
     }
     for (a = 0; a < t->n; ++a) {
         if (t->force[a] >= 0) {
@@ -368,7 +374,17 @@ static int sk_force_reference(const sk_mechanism *m, const sk_actuators *t,
     s = sk_stroke_solve(m, t, xr, params, SK_LEVEL_RIGID, 0, rest, produced,
                         sk_stroke_tol(t, rest));
     s = s != 0 ? s : sk_stroke_pose(m, xr, params, SK_LEVEL_RIGID, ref, ar);
-    for (i = 0; i < SK_NP && s == 0; ++i) {
+    if (s != 0) {
+        /* beyond the rigid reach: no reference */
+        for (j = 0; j < SK_M; ++j) {
+            ar[j] = first[j];
+        }
+        for (i = 0; i < 6 * SK_NP; ++i) {
+            ref[i] = NAN;
+        }
+        s = 4;
+    }
+    for (i = 0; i < SK_NP; ++i) {
         for (j = 0; j < 2; ++j) {
             pr[6 * i + j] = ref[6 * i + j];
             pr[6 * i + 4 + j] = pr[6 * i + 2 + j] - ref[6 * i + j];
@@ -427,9 +443,10 @@ static int sk_actuated_loaded(const sk_mechanism *m, const sk_actuators *t, cons
     s = sk_force_reference(m, t, strokes, params, rest, xr, pr, ar);
 #endif
 #if defined(SK_LINKS)
-    if (s == 0 && lr != NULL) {
+    if ((s == 0 || s == 4) && lr != NULL) {
         /* each link's rotation at the surrogates' compliant angles less the reference's (the
-           rigid angles, ar), plus the non-input hinges' deviation */
+           rigid angles, ar), plus the non-input hinges' deviation; beyond the rigid reach (4)
+           against the first solve's, the rigid rotation and the deviation NaN */
         double rot[2 * SK_NL + 1], rot0[2 * SK_NL + 1];
         m->links(turned, delta, rot);
         m->links(ar, delta, rot0);
@@ -437,10 +454,14 @@ static int sk_actuated_loaded(const sk_mechanism *m, const sk_actuators *t, cons
             const double dev = rot[j] - rot0[j] + rot[SK_NL + j];
             lr[3 * j] = sk_wrap(rot0[j]);
             lr[3 * j + 1] = lr[3 * j] + dev;
-            lr[3 * j + 2] = dev;
+            lr[3 * j + 2] = s == 4 ? NAN : dev;
+            lr[3 * j] = s == 4 ? NAN : lr[3 * j];
         }
     }
 #endif
+    for (j = 0; s == 4 && j < SK_M; ++j) {
+        ar[j] = NAN;
+    }
     return s;
 }
 
@@ -465,7 +486,7 @@ static int sk_actuated_pose(const sk_mechanism *m, const sk_actuators *t, const 
     {
         s = sk_actuated_kinematic(m, t, drives, params, level, pr, ar, links == NULL ? NULL : lr);
     }
-    if (s != 0) {
+    if (s != 0 && s != 4) {
         sk_nan(out, 6 * t->n_shown);
         sk_nan(angles, 2 * SK_M);
         sk_nan(links, 3 * SK_NL);
@@ -482,10 +503,11 @@ static int sk_actuated_pose(const sk_mechanism *m, const sk_actuators *t, const 
     for (j = 0; links != NULL && j < 3 * SK_NL; ++j) {
         links[j] = lr[j];
     }
-    return 0;
+    return s; /* 0, or 4: beyond the rigid reach, the rigid values and deviations NaN */
 }
 
-/* <name>_evaluate_angles_batch with actuators: n rows; the number of rows that failed. */
+/* <name>_evaluate_angles_batch with actuators: n rows; the number of rows that failed (a row
+   beyond the rigid reach, status 4, is not a failure). */
 static int sk_actuated_rows(const sk_mechanism *m, const sk_actuators *t, int n,
                             const double *drives, const double *params, int level, double *out,
                             double *angles, int *status)
@@ -496,7 +518,7 @@ static int sk_actuated_rows(const sk_mechanism *m, const sk_actuators *t, int n,
             m, t, drives + (size_t)j * SK_NI, params, level,
             out == NULL ? NULL : out + (size_t)j * 6 * t->n_shown,
             angles == NULL ? NULL : angles + (size_t)j * 2 * SK_M, NULL);
-        failed += s != 0;
+        failed += s != 0 && s != 4;
         if (status != NULL) {
             status[j] = s;
         }
@@ -549,6 +571,7 @@ static int sk_actuated_report(const sk_mechanism *m, const sk_actuators *t,
     with.n_inputs = rows;
     with.unit_scale = 1.0;
     s = drives == NULL ? 3 : sk_actuated_loaded(m, t, drives, params, pr, ar, NULL, &sol);
+    s = s == 4 ? 0 : s; /* beyond the rigid reach: the report is the compliant pose's */
     s = s != 0 ? s : sk_reduced_report(m, &with, sol.theta, sol.q, raw);
     for (i = 0; s == 0 && i < 2 * rows; ++i) {
         if (!isfinite(raw[i])) {

@@ -332,6 +332,8 @@ def scene_context(plan: ScenePlan) -> dict:
         "NAME": plan.name.upper(),
         "inputs": inputs,
         "points": points,
+        # with actuators the inputs' text names their units (a stroke, a force)
+        "input_units": ", ".join(f"{n} in {u}" for n, u in plan.actuators),
         "ignored": list(plan.ignored),
         "parameters": [{"name": n, "value": repr(v)} for n, v in plan.parameters],
         "fixed": [(h, repr(v)) for h, v in plan.fixed],
