@@ -219,8 +219,9 @@ def run_blocks(
     grid, 2 parameters that break the file's rules, 3 beyond the rigid reach of a force
     actuator's stroke somewhere on the grid (solved, no deviation; docs/physics.md); at
     `loaded`, every plate's largest stress over the grid per sample (n, n_plates) and the
-    task's points' smallest diagonal stiffness (n, n_stiff, 3), NaN where failed; with masses, each sample's lowest first natural
-    frequency over the grid (n,) Hz, NaN where failed or none)."""
+    task's points' smallest diagonal stiffness (n, n_stiff, 3), NaN where failed; with masses,
+    each sample's lowest first natural frequency over the grid (n,) Hz, NaN where failed or
+    none)."""
     ev = task.evaluator
     n_points = len(ev.points)
     worst_all, flags_all, stress_all, stiff_all, first_all = [], [], [], [], []
