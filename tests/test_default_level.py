@@ -238,3 +238,20 @@ def test_the_c_header_defines_the_default(tmp_path):
         "#define FOUR_BAR_DIMENSIONS_DEFAULT_LEVEL 2\n"
         in (tmp_path / "k" / "four_bar_dimensions.h").read_text()
     )
+
+
+def test_the_reports_sensitivity_table_takes_the_default_level(tmp_path):
+    """The elastica stage's default is exact (loaded refuses it at every input): the report
+    ranks the parameters at exact, where the most faithful level with sensitivities, loaded,
+    gave no table at all."""
+    from symkin.studies.derive import generate
+
+    source = ROOT / "tests" / "mechanisms" / "three_leg_stage.toml"
+    text = source.read_text().replace("[defaults]", '[defaults]\nbeam = "elastica"', 1)
+    mech = symkin.loads(text, "elastica_stage.toml")
+    assert levels.default_for(mech).name == "exact"
+    tex = generate(mech, emit=["latex"])[f"{mech.name}.tex"].decode()
+    assert "deviation (level exact)" in tex and ":sensitivity}" in tex
+    # the committed four-bar's report: its default, loaded
+    committed = (ROOT / "generated" / "four_bar" / "four_bar.tex").read_text()
+    assert "deviation (level loaded)" in committed
