@@ -18,7 +18,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from .core.errors import AssemblyError, InputError, SymkinError
-from .core.levels import DEFAULT
 from .graph.structure import Structure
 from .graph.structure import build as structure
 from .model.mechanism import Mechanism
@@ -44,7 +43,7 @@ def analyze(mechanism: Mechanism | str | Path, points: list[str] | None = None) 
 def evaluate(
     analysis: Analysis,
     inputs: Mapping[str, object],
-    level: str = DEFAULT,
+    level: str | None = None,
     params: Mapping[str, object] | None = None,
     backend: str = "sympy",
     dps: int = 40,
@@ -52,7 +51,9 @@ def evaluate(
 ) -> Evaluation:
     """One configuration of an analysis (:func:`symkin.studies.evaluation.evaluate`): the derivation
     with mpmath at `dps` digits (backend sympy) or the generated numpy / C evaluators; with
-    `sensitivity`, the derivatives by every parameter and input too (docs/sensitivity.md)."""
+    `sensitivity`, the derivatives by every parameter and input too (docs/sensitivity.md).
+    `level` None: the mechanism's default, `loaded` where every plate has E, thickness and
+    width, else `exact` (symkin.core.levels.default_for, docs/levels.md)."""
     from .studies.evaluation import evaluate as run
 
     return run(analysis, inputs, level, params, backend, dps, sensitivity)

@@ -151,6 +151,8 @@ def test_model_limit_exits_3_in_every_backend(tmp_path, backend):
             str(path),
             "--input",
             "A0=1.7",
+            "--level",  # the hinge model's limit: a kinematic level's (loaded bends beams)
+            "exact",
             "--backend",
             backend,
         ],

@@ -47,6 +47,11 @@ def deviation(stdout: str) -> list[float]:
     return json.loads(stdout)["points"]["C"]["deviation"]
 
 
+#: the oracle is the kinematic model's: the file's plates have E, thickness and width, so eval's
+#: default level is loaded (docs/levels.md, "The default level")
+EXACT = ("--level", "exact")
+
+
 def oracle() -> list:
     return Reference(symkin.load(FOUR_BAR)).deviation({"A0": "0.2"})["points"]["C"]["deviation"]
 
@@ -81,7 +86,7 @@ def test_cache_is_created_private(tmp_path):
     require_compiler()
     cache = tmp_path / "new" / "cache"
     result = cli(
-        "eval", str(FOUR_BAR), "--input", "A0=0.2", "--backend", "c", "--json", cache=cache
+        "eval", str(FOUR_BAR), "--input", "A0=0.2", *EXACT, "--backend", "c", "--json", cache=cache
     )
     assert result.returncode == 0, result.stderr
     assert stat.S_IMODE(cache.stat().st_mode) == 0o700
@@ -91,14 +96,24 @@ def test_cache_is_created_private(tmp_path):
 def test_a_planted_or_corrupt_library_is_rebuilt_not_loaded(tmp_path):
     require_compiler()
     cache = tmp_path / "cache"
-    first = cli("eval", str(FOUR_BAR), "--input", "A0=0.2", "--backend", "c", "--json", cache=cache)
+    first = cli(
+        "eval", str(FOUR_BAR), "--input", "A0=0.2", *EXACT, "--backend", "c", "--json", cache=cache
+    )
     assert first.returncode == 0, first.stderr
     [library] = cache.glob("four_bar-*.so")
     marker = tmp_path / "marker"
     for content in (planted_library(tmp_path, marker), library.read_bytes()[:1000], b""):
         library.write_bytes(content)  # same name, planted or truncated
         again = cli(
-            "eval", str(FOUR_BAR), "--input", "A0=0.2", "--backend", "c", "--json", cache=cache
+            "eval",
+            str(FOUR_BAR),
+            "--input",
+            "A0=0.2",
+            *EXACT,
+            "--backend",
+            "c",
+            "--json",
+            cache=cache,
         )
         assert again.returncode == 0, again.stderr
         assert not marker.exists(), "the planted library's constructor ran"
@@ -144,7 +159,15 @@ def test_no_numpy_module_is_read_from_the_cache(tmp_path):
     planted = cache / "numpy" / f"four_bar_{digest}.py"
     planted.write_text(f"open({str(marker)!r}, 'w').write('ran')\n")
     result = cli(
-        "eval", str(FOUR_BAR), "--input", "A0=0.2", "--backend", "numpy", "--json", cache=cache
+        "eval",
+        str(FOUR_BAR),
+        "--input",
+        "A0=0.2",
+        *EXACT,
+        "--backend",
+        "numpy",
+        "--json",
+        cache=cache,
     )
     assert result.returncode == 0, result.stderr
     assert not marker.exists()

@@ -22,7 +22,7 @@ def test_the_table():
         levels.get(n).code for n in ("paper", "first_order", "exact", "loaded", "equilibrium")
     ] == [0, 1, 2, 3, 4]
     assert len(set(levels.NAMES)) == len(levels.NAMES)
-    assert levels.DEFAULT in levels.NAMES
+    assert {levels.PHYSICAL_DEFAULT, levels.KINEMATIC_DEFAULT} <= set(levels.NAMES)
     assert levels.reference().name == "exact"
     assert not levels.get("paper").needs_delta and levels.get("exact").needs_delta
     with pytest.raises(symkin.InputError, match="unknown level 'best'"):
@@ -36,7 +36,8 @@ def test_the_table():
 def test_cli_choices_come_from_the_table():
     ev = parser()._subparsers._group_actions[0].choices["eval"]
     level = next(a for a in ev._actions if a.dest == "level")
-    assert tuple(level.choices) == levels.NAMES and level.default == levels.DEFAULT
+    # no fixed default: the file's (levels.default_for, test_default_level.py)
+    assert tuple(level.choices) == levels.NAMES and level.default is None
 
 
 @pytest.mark.parametrize("wanted", [["paper"], ["first_order", "exact"], ["loaded"], None])
@@ -46,11 +47,12 @@ def test_generated_code_takes_the_plans_levels_and_their_codes(wanted):
     p, module = pipeline.build(an, "numpy", "levels", levels=wanted)
     names = tuple(lv.name for lv in p.levels)
     assert names == module.LEVELS
-    # exact when it is generated, else the most faithful level generated
+    # the file's default (loaded: its plates have E, thickness and width) when it is generated,
+    # else exact when it is generated, else the most faithful level generated
+    expected = next((n for n in ("loaded", "exact") if n in names), names[-1])
+    assert expected == module.DEFAULT_LEVEL
     default = module.evaluate({"A0": np.array([0.2])})
-    given = module.evaluate(
-        {"A0": np.array([0.2])}, levels.DEFAULT if levels.DEFAULT in names else names[-1]
-    )
+    given = module.evaluate({"A0": np.array([0.2])}, expected)
     assert np.array_equal(default["points"]["C"]["deviation"], given["points"]["C"]["deviation"])
     lib = pipeline.evaluator(p, "c", "levels", links=False)
     for lv in levels.LEVELS:

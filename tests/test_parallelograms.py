@@ -388,5 +388,7 @@ def test_eval_help_states_the_defaults(capsys):
     with pytest.raises(SystemExit):
         main(["eval", "--help"])
     out = capsys.readouterr().out
-    assert "default: exact" in " ".join(out.split())
+    assert "default: loaded where every plate has E, thickness and width, else exact" in " ".join(
+        out.split()
+    )
     assert "default: sympy" in " ".join(out.split())

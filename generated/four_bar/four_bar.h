@@ -13,6 +13,8 @@
 #define FOUR_BAR_N_POINTS 1
 #define FOUR_BAR_N_HINGES 4
 #define FOUR_BAR_N_LINKS 4
+/* The `level` to pass when none is chosen: loaded (docs/levels.md, "The default level"). */
+#define FOUR_BAR_DEFAULT_LEVEL 3
 
 /* Default parameter values, in the mechanism file's order. */
 extern const double four_bar_default_params[FOUR_BAR_N_PARAMS > 0 ? FOUR_BAR_N_PARAMS : 1];

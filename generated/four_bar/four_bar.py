@@ -4,7 +4,7 @@ Points: C; levels: paper, first_order, exact, loaded.
 Rigid solution: closed form (dyads).
 Operation counts after CSE: rigid 65, rigid_res 51, linear 114, newton 259, rigid_points 19, loaded_plates1 132, loaded_system1 523, loaded_res1 229, loaded_dev1 60, loaded_report1 560, loaded_plates2 349, loaded_system2 1557, loaded_res2 494, loaded_dev2 143, loaded_report2 1279, dev_paper 38, dev_first_order 52, dev_exact 62, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339, loaded_sens1 581, loaded_sens2 1581, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
 
-Use:  evaluate({name: array_like, ...}, level="exact", params=None)
+Use:  evaluate({name: array_like, ...}, level="loaded", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
 shape (2, *broadcast_shape); entries that cannot be assembled (or do not converge) are NaN and
 False in ok. It also holds "angles": {"rigid": {H: a}, "compliant": {H: a}}, every hinge's
@@ -42,6 +42,8 @@ HINGES = ('A0', 'A', 'B0', 'B', )
 LINKS = ('frame', 'crank', 'coupler', 'rocker', )
 POINTS = ('C', )
 LEVELS = ('paper', 'first_order', 'exact', 'loaded', )
+#: The level evaluate() uses when none is given (docs/levels.md, "The default level").
+DEFAULT_LEVEL = 'loaded'
 #: The levels with closed-form sensitivities (docs/sensitivity.md).
 SENSITIVITY_LEVELS = ('paper', 'first_order', 'exact', 'loaded', )
 _DTYPE = numpy.float64
@@ -7148,7 +7150,7 @@ _MECHANISM = _Mechanism(
 
 
 def evaluate(
-    inputs, level='exact', params=None, links=True, report=True, buckling=True
+    inputs, level=DEFAULT_LEVEL, params=None, links=True, report=True, buckling=True
 ):
     """Deviation of the points at `level` for broadcast input arrays (see the module docstring);
     `links=False` leaves out the links' rotations (and any loop solve only they need),
@@ -7157,14 +7159,14 @@ def evaluate(
     return _evaluate_reported(_MECHANISM, inputs, level, params, links, report, buckling)
 
 
-def sensitivity(inputs, level='exact', params=None):
+def sensitivity(inputs, level=DEFAULT_LEVEL, params=None):
     """{P: {p: a}}: d(dx, dy)/dp of every point's deviation by every parameter, a of shape
     (2, *broadcast_shape); NaN where the configuration cannot be evaluated."""
     full = sensitivity_full(inputs, level, params)
     return {n: full["deviation"][n]["params"] for n in POINTS}
 
 
-def sensitivity_full(inputs, level='exact', params=None):
+def sensitivity_full(inputs, level=DEFAULT_LEVEL, params=None):
     """evaluate()'s result with "deviation" and "rigid": {P: {"params": {p: a}, "inputs":
     {H: a}}}, the derivatives of every point's deviation and rigid position by every
     parameter and input, each a of shape (2, *broadcast_shape)."""

@@ -13,6 +13,8 @@
 #define FOUR_BAR_DIMENSIONS_N_POINTS 1
 #define FOUR_BAR_DIMENSIONS_N_HINGES 4
 #define FOUR_BAR_DIMENSIONS_N_LINKS 4
+/* The `level` to pass when none is chosen: exact (docs/levels.md, "The default level"). */
+#define FOUR_BAR_DIMENSIONS_DEFAULT_LEVEL 2
 
 /* Default parameter values, in the mechanism file's order. */
 extern const double four_bar_dimensions_default_params[FOUR_BAR_DIMENSIONS_N_PARAMS > 0 ? FOUR_BAR_DIMENSIONS_N_PARAMS : 1];

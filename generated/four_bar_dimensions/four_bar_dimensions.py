@@ -30,6 +30,8 @@ HINGES = ('A0', 'A', 'B0', 'B', )
 LINKS = ('frame', 'crank', 'coupler', 'rocker', )
 POINTS = ('C', )
 LEVELS = ('paper', 'first_order', 'exact', )
+#: The level evaluate() uses when none is given (docs/levels.md, "The default level").
+DEFAULT_LEVEL = 'exact'
 #: The levels with closed-form sensitivities (docs/sensitivity.md).
 SENSITIVITY_LEVELS = ('paper', 'first_order', 'exact', )
 _DTYPE = numpy.float64
@@ -1879,20 +1881,20 @@ _MECHANISM = _Mechanism(
 )
 
 
-def evaluate(inputs, level='exact', params=None, links=True):
+def evaluate(inputs, level=DEFAULT_LEVEL, params=None, links=True):
     """Deviation of the points at `level` for broadcast input arrays (see the module docstring);
     `links=False` leaves out the links' rotations (and any loop solve only they need)."""
     return _evaluate(_MECHANISM, inputs, level, params, links)
 
 
-def sensitivity(inputs, level='exact', params=None):
+def sensitivity(inputs, level=DEFAULT_LEVEL, params=None):
     """{P: {p: a}}: d(dx, dy)/dp of every point's deviation by every parameter, a of shape
     (2, *broadcast_shape); NaN where the configuration cannot be evaluated."""
     full = sensitivity_full(inputs, level, params)
     return {n: full["deviation"][n]["params"] for n in POINTS}
 
 
-def sensitivity_full(inputs, level='exact', params=None):
+def sensitivity_full(inputs, level=DEFAULT_LEVEL, params=None):
     """evaluate()'s result with "deviation" and "rigid": {P: {"params": {p: a}, "inputs":
     {H: a}}}, the derivatives of every point's deviation and rigid position by every
     parameter and input, each a of shape (2, *broadcast_shape)."""

@@ -13,6 +13,8 @@
 #define NINE_BAR_PLATFORM_N_POINTS 1
 #define NINE_BAR_PLATFORM_N_HINGES 10
 #define NINE_BAR_PLATFORM_N_LINKS 9
+/* The `level` to pass when none is chosen: loaded (docs/levels.md, "The default level"). */
+#define NINE_BAR_PLATFORM_DEFAULT_LEVEL 3
 
 /* Default parameter values, in the mechanism file's order. */
 extern const double nine_bar_platform_default_params[NINE_BAR_PLATFORM_N_PARAMS > 0 ? NINE_BAR_PLATFORM_N_PARAMS : 1];

@@ -13,6 +13,8 @@
 #define PIEZO_AMPLIFIER_N_POINTS 1
 #define PIEZO_AMPLIFIER_N_HINGES 4
 #define PIEZO_AMPLIFIER_N_LINKS 4
+/* The `level` to pass when none is chosen: loaded (docs/levels.md, "The default level"). */
+#define PIEZO_AMPLIFIER_DEFAULT_LEVEL 3
 
 /* Default parameter values, in the mechanism file's order. */
 extern const double piezo_amplifier_default_params[PIEZO_AMPLIFIER_N_PARAMS > 0 ? PIEZO_AMPLIFIER_N_PARAMS : 1];

@@ -4,7 +4,7 @@ Points: B; levels: paper, first_order, exact, loaded.
 Rigid solution: closed form (dyads).
 Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, loaded_plates1 147, loaded_system1 722, loaded_res1 292, loaded_dev1 104, loaded_report1 413, loaded_plates2 372, loaded_system2 1863, loaded_res2 568, loaded_dev2 189, loaded_report2 837, dev_paper 31, dev_first_order 51, dev_exact 62, links 1, sens_rigid 105, sens_paper 108, sens_first_order 355, sens_exact 449, loaded_sens1 938, loaded_sens2 1997, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
 
-Use:  evaluate({name: array_like, ...}, level="exact", params=None)
+Use:  evaluate({name: array_like, ...}, level="loaded", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
 shape (2, *broadcast_shape); entries that cannot be assembled (or do not converge) are NaN and
 False in ok. It also holds "angles": {"rigid": {H: a}, "compliant": {H: a}}, every hinge's
@@ -52,6 +52,8 @@ HINGES = ('RA0', 'A', 'O', 'C', )
 LINKS = ('frame', 'slider', 'coupler', 'crank', )
 POINTS = ('B', )
 LEVELS = ('paper', 'first_order', 'exact', 'loaded', )
+#: The level evaluate() uses when none is given (docs/levels.md, "The default level").
+DEFAULT_LEVEL = 'loaded'
 #: The levels with closed-form sensitivities (docs/sensitivity.md).
 SENSITIVITY_LEVELS = ('paper', 'first_order', 'exact', 'loaded', )
 _DTYPE = numpy.float64
@@ -9114,7 +9116,7 @@ _MECHANISM = _Mechanism(
 
 
 def evaluate(
-    inputs, level='exact', params=None, links=True, report=True, buckling=True
+    inputs, level=DEFAULT_LEVEL, params=None, links=True, report=True, buckling=True
 ):
     """Deviation of the points at `level` for broadcast input arrays (see the module docstring);
     `links=False` leaves out the links' rotations (and any loop solve only they need),
@@ -9127,14 +9129,14 @@ def evaluate(
     return _actuated(_MECHANISM, ACTUATORS, INPUTS, POINTS, inputs, level, params, links)
 
 
-def sensitivity(inputs, level='exact', params=None):
+def sensitivity(inputs, level=DEFAULT_LEVEL, params=None):
     """{P: {p: a}}: d(dx, dy)/dp of every point's deviation by every parameter, a of shape
     (2, *broadcast_shape); NaN where the configuration cannot be evaluated."""
     full = sensitivity_full(inputs, level, params)
     return {n: full["deviation"][n]["params"] for n in POINTS}
 
 
-def sensitivity_full(inputs, level='exact', params=None):
+def sensitivity_full(inputs, level=DEFAULT_LEVEL, params=None):
     """evaluate()'s result with "deviation" and "rigid": {P: {"params": {p: a}, "inputs":
     {H: a}}}, the derivatives of every point's deviation and rigid position by every
     parameter and input, each a of shape (2, *broadcast_shape)."""

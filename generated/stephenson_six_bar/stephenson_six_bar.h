@@ -13,6 +13,8 @@
 #define STEPHENSON_SIX_BAR_N_POINTS 1
 #define STEPHENSON_SIX_BAR_N_HINGES 7
 #define STEPHENSON_SIX_BAR_N_LINKS 6
+/* The `level` to pass when none is chosen: loaded (docs/levels.md, "The default level"). */
+#define STEPHENSON_SIX_BAR_DEFAULT_LEVEL 3
 
 /* Default parameter values, in the mechanism file's order. */
 extern const double stephenson_six_bar_default_params[STEPHENSON_SIX_BAR_N_PARAMS > 0 ? STEPHENSON_SIX_BAR_N_PARAMS : 1];

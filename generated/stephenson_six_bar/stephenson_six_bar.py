@@ -4,7 +4,7 @@ Points: D; levels: paper, first_order, exact, loaded.
 Rigid solution: closed form (dyads).
 Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_res1 441, loaded_dev1 60, loaded_report1 949, loaded_plates2 623, loaded_system2 3042, loaded_res2 944, loaded_dev2 143, loaded_report2 2161, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, loaded_sens1 1094, loaded_sens2 2741, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
 
-Use:  evaluate({name: array_like, ...}, level="exact", params=None)
+Use:  evaluate({name: array_like, ...}, level="loaded", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
 shape (2, *broadcast_shape); entries that cannot be assembled (or do not converge) are NaN and
 False in ok. It also holds "angles": {"rigid": {H: a}, "compliant": {H: a}}, every hinge's
@@ -42,6 +42,8 @@ HINGES = ('O_A', 'C', 'O_B', 'E', 'B', 'A', 'D', )
 LINKS = ('frame', 'input', 'coupler', 'rocker', 'link_ED', 'link_AB', )
 POINTS = ('D', )
 LEVELS = ('paper', 'first_order', 'exact', 'loaded', )
+#: The level evaluate() uses when none is given (docs/levels.md, "The default level").
+DEFAULT_LEVEL = 'loaded'
 #: The levels with closed-form sensitivities (docs/sensitivity.md).
 SENSITIVITY_LEVELS = ('paper', 'first_order', 'exact', 'loaded', )
 _DTYPE = numpy.float64
@@ -12431,7 +12433,7 @@ _MECHANISM = _Mechanism(
 
 
 def evaluate(
-    inputs, level='exact', params=None, links=True, report=True, buckling=True
+    inputs, level=DEFAULT_LEVEL, params=None, links=True, report=True, buckling=True
 ):
     """Deviation of the points at `level` for broadcast input arrays (see the module docstring);
     `links=False` leaves out the links' rotations (and any loop solve only they need),
@@ -12440,14 +12442,14 @@ def evaluate(
     return _evaluate_reported(_MECHANISM, inputs, level, params, links, report, buckling)
 
 
-def sensitivity(inputs, level='exact', params=None):
+def sensitivity(inputs, level=DEFAULT_LEVEL, params=None):
     """{P: {p: a}}: d(dx, dy)/dp of every point's deviation by every parameter, a of shape
     (2, *broadcast_shape); NaN where the configuration cannot be evaluated."""
     full = sensitivity_full(inputs, level, params)
     return {n: full["deviation"][n]["params"] for n in POINTS}
 
 
-def sensitivity_full(inputs, level='exact', params=None):
+def sensitivity_full(inputs, level=DEFAULT_LEVEL, params=None):
     """evaluate()'s result with "deviation" and "rigid": {P: {"params": {p: a}, "inputs":
     {H: a}}}, the derivatives of every point's deviation and rigid position by every
     parameter and input, each a of shape (2, *broadcast_shape)."""

@@ -20,6 +20,8 @@ from ..fea.command import pairs as _pairs
 from ..graph.structure import build
 from .output import check_text, matrices_json, matrices_text
 
+#: --level's help of tolerance and sweep (eval's names the levels that are not generated too).
+_LEVEL_HELP = "default: loaded where every plate has E, thickness and width, else exact"
 #: File types `tradeoff --plot` can write (matplotlib picks the format from the suffix).
 PLOT_SUFFIXES = (".png", ".pdf", ".svg")
 
@@ -47,15 +49,29 @@ def _eval(args: argparse.Namespace) -> str:
     from .output import evaluation_json, evaluation_text
 
     analysis = Analysis(build(load(args.file)))
+    choice = _level(args, analysis.mechanism)
     result = evaluate(
         analysis,
         _pairs(args.input, "--input", args.file),
-        args.level,
+        choice.name,
         _pairs(args.param, "--param", args.file),
         args.backend,
         sensitivity=args.sensitivity,
     )
-    return evaluation_json(result) if args.json else evaluation_text(result)
+    return evaluation_json(result) if args.json else choice.line + "\n" + evaluation_text(result)
+
+
+def _level(args: argparse.Namespace, mech) -> levels.Choice:
+    """The level of eval, tolerance and sweep (docs/levels.md, "The default level"): --level,
+    or the file's default; args.level is set to it. A kinematic level asked for on a file whose
+    plates all have stiffness data is run, with a one-line warning that it ignores their
+    forces."""
+    choice = levels.choose(mech, args.level)
+    args.level = choice.name
+    ignored = levels.ignores_forces(mech, choice)
+    if ignored:
+        warnings.warn(ignored, levels.LevelWarning, stacklevel=2)
+    return choice
 
 
 def _derive(args: argparse.Namespace) -> str:
@@ -173,6 +189,7 @@ def _tolerance(args: argparse.Namespace) -> str:
     nominal = {p.name: float(p.value) for p in mech.parameters}
     vary = variation.parse_vary(args.vary, mech, nominal, kinds=("pm",))
     grid = variation.parse_grid(args.input, mech, limit=_max_evaluations(args))
+    choice = _level(args, mech)
     tolerance.check_level(args.level)  # before compiling anything
     if args.backend is None:
         # the C, unless force actuators drive and it has no sensitivities with them at the level:
@@ -185,7 +202,9 @@ def _tolerance(args: argparse.Namespace) -> str:
     if mech.actuators:
         check_actuated_level(mech, args.level, args.backend, sensitivity=True)
     result = tolerance.run(_evaluator(args, mech), vary, grid, args.level)
-    return json.dumps(result.as_json(), indent=2) + "\n" if args.json else tolerance.text(result)
+    if args.json:
+        return json.dumps(result.as_json(), indent=2) + "\n"
+    return choice.line + "\n" + tolerance.text(result)
 
 
 def _max_evaluations(args: argparse.Namespace) -> int:
@@ -231,6 +250,7 @@ def _sweep(args: argparse.Namespace) -> str:
     if args.plot:
         output_file(args.plot, "--plot", PLOT_SUFFIXES)
     scheduler = sweep.parse_scheduler(args.scheduler)
+    choice = _level(args, mech)
     client = sweep.connect(scheduler) if scheduler.kind == "distributed" else None
     try:
         evaluator = _evaluator(args, mech, sensitivity=False)
@@ -262,7 +282,9 @@ def _sweep(args: argparse.Namespace) -> str:
                 entry="--plot",
                 hint="choose a path you can write to",
             ) from None
-    return json.dumps(result.as_json(), indent=2) + "\n" if args.json else sweep.text(result)
+    if args.json:
+        return json.dumps(result.as_json(), indent=2) + "\n"
+    return choice.line + "\n" + sweep.text(result)
 
 
 def _evaluations_option(command: argparse.ArgumentParser) -> None:
@@ -314,9 +336,8 @@ def parser() -> argparse.ArgumentParser:
     ev.add_argument(
         "--level",
         choices=levels.NAMES,
-        default=levels.DEFAULT,
-        help=f"deviation level (default: {levels.DEFAULT}; loaded and equilibrium need the "
-        "plates' E, thickness and width: docs/physics.md)",
+        help="deviation level (default: loaded where every plate has E, thickness and width, "
+        "else exact: docs/levels.md)",
     )
     ev.add_argument(
         "--backend",
@@ -404,7 +425,7 @@ def parser() -> argparse.ArgumentParser:
         metavar="H=LO:HI[:N]",
         help="input range (default -0.2:0.2, 25 values)",
     )
-    to.add_argument("--level", choices=levels.GENERATED, default=levels.DEFAULT)
+    to.add_argument("--level", choices=levels.GENERATED, help=_LEVEL_HELP)
     to.add_argument(
         "--backend",
         choices=backends.GENERATED,
@@ -427,7 +448,7 @@ def parser() -> argparse.ArgumentParser:
     sw.add_argument("--samples", type=int, default=1000, metavar="S", help="samples (1000)")
     _evaluations_option(sw)
     sw.add_argument("--seed", type=int, default=0, metavar="K", help="random seed (0)")
-    sw.add_argument("--level", choices=levels.GENERATED, default=levels.DEFAULT)
+    sw.add_argument("--level", choices=levels.GENERATED, help=_LEVEL_HELP)
     sw.add_argument("--backend", choices=backends.GENERATED, default="c")
     sw.add_argument(
         "--scheduler",

@@ -143,6 +143,10 @@ class Plan:
     # the stroke actuators with a series `spring` (their reported stroke at `loaded` is the
     # actual one, command less force/spring; docs/physics.md), in file order
     springs: tuple[str, ...] = ()
+    # the level the evaluators use when none is given (DEFAULT_LEVEL, <NAME>_DEFAULT_LEVEL):
+    # the mechanism's default (core.levels.default_for) when generated, else `exact` when
+    # generated, else the most faithful generated
+    default_level: str = level_table.KINEMATIC_DEFAULT
 
     @property
     def shown_points(self) -> tuple[str, ...]:
@@ -441,12 +445,21 @@ def plan(
         rest=_rest(an, free, held),
         angular=an.angular_rows,
         dropped=len(an.dropped),
+        default_level=_default_level(mech, levels),
         drives=mech.drives if mech.actuators else (),
         actuators=_actuators(mech, levels),
         forces=tuple(a.name for a in mech.actuators if a.drive != "stroke"),
         springs=tuple(a.name for a in mech.actuators if a.spring is not None),
     )
     return with_derivation(result, an) if report else result
+
+
+def _default_level(mech, levels: Sequence[Level]) -> str:
+    """The evaluators' default level: the mechanism's (core.levels.default_for) when generated,
+    else `exact` when generated, else the most faithful generated (docs/generated-code.md)."""
+    names = [lv.name for lv in levels]
+    wanted = (level_table.default_for(mech).name, level_table.KINEMATIC_DEFAULT)
+    return next((n for n in wanted if n in names), names[-1] if names else wanted[1])
 
 
 def _actuators(mech, levels) -> tuple[tuple[str, str, str, tuple[float, float]], ...]:

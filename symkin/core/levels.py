@@ -9,7 +9,9 @@ math (analysis, evaluation) and one block per template.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any, Protocol
 
 from .errors import InputError
 
@@ -74,8 +76,10 @@ LOADED: tuple[str, ...] = ("loaded",)
 NAMES: tuple[str, ...] = tuple(lv.name for lv in LEVELS)
 #: The levels the generated C and numpy evaluators can hold (`derive --levels`).
 GENERATED: tuple[str, ...] = tuple(lv.name for lv in LEVELS if lv.generated)
-#: The level `eval` and the generated `evaluate` use when none is given.
-DEFAULT = "exact"
+#: The default level where the file's data allows forces (:func:`default_for`): the
+#: closed-form physical level; else the kinematic model's own loop closure.
+PHYSICAL_DEFAULT = "loaded"
+KINEMATIC_DEFAULT = "exact"
 
 _BY_NAME = {lv.name: lv for lv in LEVELS}
 
@@ -94,3 +98,87 @@ def get(name: str, entry: str = "--level") -> Level:
 def reference(stiffness: bool = False) -> Level:
     """The most faithful level the data allows: what accuracy is measured against."""
     return [lv for lv in LEVELS if stiffness or not lv.needs_stiffness][-1]
+
+
+class LevelWarning(UserWarning):
+    """A kinematic level asked for on a file whose plates all have stiffness data: it ignores
+    the plates' forces (the command line prints it as one line)."""
+
+
+class _Mechanism(Protocol):
+    """What :func:`default_for` reads of a mechanism (symkin.model.mechanism.Mechanism)."""
+
+    @property
+    def hinges(self) -> Sequence[Any]: ...
+
+    @property
+    def has_stiffness(self) -> bool: ...
+
+    @property
+    def redundant(self) -> int: ...
+
+
+@dataclass(frozen=True)
+class Choice:
+    """The level a command runs and why: `reason` is what the text output prints in
+    parentheses after the level's name (docs/levels.md, "The default level")."""
+
+    name: str
+    reason: str
+    default: bool  # picked by the file's data, not asked for
+
+    @property
+    def line(self) -> str:
+        """The text output's line: 'level: loaded (default: every plate has E, ...)'."""
+        return f"level: {self.name} ({self.reason})"
+
+
+def default_for(mechanism: _Mechanism) -> Choice:
+    """The level `eval`, `tolerance`, `sweep`, `symkin.evaluate`, `symkin.compile` and the
+    generated evaluators use when none is given (docs/levels.md, "The default level"): `loaded`
+    where every plate (every hinge that is not `rigid`) has E, thickness and width, else
+    `exact`; and `exact` where the loaded level refuses the file as a whole (a redundant
+    mechanism whose plates are all inextensible elastica: the forces its redundant loops carry
+    are undetermined, docs/physics.md), so that a default run never fails for the level's
+    sake."""
+    plates = [h for h in mechanism.hinges if h.is_plate]
+    if not mechanism.has_stiffness:
+        keys = ("E", "thickness", "width")
+        h, key = next((h, k) for h in plates for k in keys if getattr(h, k) is None)
+        return Choice(
+            KINEMATIC_DEFAULT,
+            f"default: not every plate has E, thickness and width (hinge '{h.name}' has no "
+            f"{key}), so no forces",
+            default=True,
+        )
+    if mechanism.redundant and not any(h.beam == "reissner" for h in plates):
+        return Choice(
+            KINEMATIC_DEFAULT,
+            "default: the loaded level cannot solve a redundant mechanism whose plates are all "
+            'inextensible (beam = "elastica")',
+            default=True,
+        )
+    if not plates:  # nothing bends: the physical level, as the rule says, at no extra cost
+        return Choice(PHYSICAL_DEFAULT, "default: every hinge is a rigid pin, no plate", True)
+    return Choice(PHYSICAL_DEFAULT, "default: every plate has E, thickness and width", True)
+
+
+def choose(mechanism: _Mechanism, level: str | None) -> Choice:
+    """The level `level` names (asked for; an unknown name is bad input, exit 2), or the
+    mechanism's default (:func:`default_for`) when it is None."""
+    if level is None:
+        return default_for(mechanism)
+    return Choice(get(level).name, "asked for", default=False)
+
+
+def ignores_forces(mechanism: _Mechanism, choice: Choice) -> str:
+    """The warning for a kinematic level asked for on a file whose plates all have stiffness
+    data (the default would be physical): it ignores the plates' forces; "" otherwise."""
+    if choice.default or get(choice.name).needs_stiffness:
+        return ""
+    if default_for(mechanism).name != PHYSICAL_DEFAULT:
+        return ""
+    return (
+        f"--level {choice.name} ignores the plates' forces (every plate has E, thickness and "
+        "width); --level loaded includes them"
+    )

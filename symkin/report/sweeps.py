@@ -210,8 +210,9 @@ def sensitivity_table(
     report: Report, numpy_module, runs: Sequence[tuple[str, Sweep, tuple[float, float]]]
 ) -> dict | None:
     """The parameters ranked by their effect on each point's deviation (docs/sensitivity.md),
-    at the swept input where the point's |ΔR| at the most faithful level is largest; None
-    without parameters or sensitivities."""
+    at the evaluators' default level (else the most faithful with sensitivities), at the swept
+    input where the point's |ΔR| at that level is largest; None without parameters or
+    sensitivities."""
     plan = report.plan
     names = list(getattr(numpy_module, "PARAMETERS", {}))
     # with actuators `loaded` has no sensitivities yet (docs/physics.md, "Actuators at loaded")
@@ -220,7 +221,9 @@ def sensitivity_table(
     ]
     if not names or not with_rates or not hasattr(numpy_module, "sensitivity_full"):
         return None
-    level = with_rates[-1].name
+    # the evaluators' default level (docs/levels.md, "The default level") where it has them
+    chosen = next((lv for lv in with_rates if lv.name == plan.default_level), with_rates[-1])
+    level = chosen.name
     single = len(runs) == 1
     held = {h: 0.5 * (data.t[0] + data.t[-1]) for h, data, _ in runs}
     rows = []
@@ -268,7 +271,7 @@ def sensitivity_table(
     if not rows:
         return None
     return {
-        "level": with_rates[-1].title,
+        "level": chosen.title,
         "rows": rows,
         "single_input": single,
         "inputs": [escape_latex(n) for n in numpy_module.INPUTS],

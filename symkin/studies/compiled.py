@@ -56,6 +56,8 @@ class Sources:
     hinges: tuple[str, ...]
     levels: tuple[str, ...]
     sensitivity: bool
+    #: the level used when none is given: the module's DEFAULT_LEVEL (levels.default_for)
+    default_level: str = level_table.KINEMATIC_DEFAULT
 
     @property
     def files(self) -> dict[str, str]:
@@ -170,13 +172,18 @@ class Compiled:
         return values
 
     def code(self, level: str | None, sensitivity: bool = False) -> str:
-        """`level` checked against the generated ones (None: `exact` when generated, else the
-        most faithful; with `sensitivity`, among the levels that have sensitivities)."""
+        """`level` checked against the generated ones (None: the generated module's
+        DEFAULT_LEVEL, docs/levels.md "The default level"; with `sensitivity`, that level when
+        it has sensitivities, else `exact` when generated, else the most faithful that has)."""
         if level is None:
             names = [
                 n for n in self.levels if not sensitivity or level_table.get(n).sensitivity
             ] or list(self.levels)
-            level = level_table.DEFAULT if level_table.DEFAULT in names else names[-1]
+            level = next(
+                n
+                for n in (self.sources.default_level, level_table.KINEMATIC_DEFAULT, names[-1])
+                if n in names
+            )
         if level not in self.levels:
             raise ValueError(f"level must be one of {self.levels}, got {level!r}")
         return level
@@ -397,5 +404,6 @@ def compile(
             hinges=p.hinges,
             levels=tuple(lv.name for lv in p.levels),
             sensitivity=p.sensitivity,
+            default_level=p.default_level,
         )
     )

@@ -276,14 +276,15 @@ class Configuration:
 def configure(
     analysis: Analysis,
     inputs: Mapping[str, object],
-    level: str = levels.DEFAULT,
+    level: str | None = None,
     params: Mapping[str, object] | None = None,
 ) -> Configuration:
     """`symkin eval`'s configuration, parsed once: the level by name, the inputs (every input
     hinge, or with actuators every input hinge beside them and every actuator) and the
-    parameter overrides; bad values exit 2 naming the option, inputs beyond a half turn 3."""
+    parameter overrides; bad values exit 2 naming the option, inputs beyond a half turn 3;
+    `level` None: the mechanism's default (levels.default_for)."""
     mech = analysis.mechanism
-    row = levels.get(level)
+    row = levels.get(levels.choose(mech, level).name)
     if mech.actuators:
         drives = actuator_values(mech, inputs)
         kin = analysis.kin

@@ -40,7 +40,7 @@ BACKENDS = backends.NAMES
 def evaluate(
     analysis: Analysis,
     inputs: Mapping[str, object],
-    level: str = levels.DEFAULT,
+    level: str | None = None,
     params: Mapping[str, object] | None = None,
     backend: str = "sympy",
     dps: int = 40,
@@ -48,8 +48,9 @@ def evaluate(
 ) -> Evaluation:
     """Evaluate one configuration at `level` through `backend` (sympy: mpmath at `dps` digits);
     with `sensitivity`, also the derivatives by every parameter and input
-    (docs/sensitivity.md)."""
+    (docs/sensitivity.md); `level` None: the mechanism's default (levels.default_for)."""
     mech = analysis.mechanism
+    level = levels.choose(mech, level).name
     caps = backends.get(backend)  # an unknown backend: exit 2, naming the choices
     if sensitivity and not levels.get(level).sensitivity:
         having = [lv.name for lv in levels.LEVELS if lv.generated and lv.sensitivity]

@@ -35,7 +35,6 @@ import numpy as np
 import sympy as sp
 
 from ..codegen import pipeline
-from ..core import levels
 from ..core.errors import AssemblyError, InputError
 from ..model.hinges import MODELS
 from ..model.mechanism import Mechanism
@@ -465,14 +464,15 @@ def run(
     samples: int,
     seed: int = 0,
     scheduler: Scheduler | None = None,
-    level: str = levels.DEFAULT,
+    level: str | None = None,
     chunks: int | None = None,
     progress: bool = False,
     client=None,
 ) -> Sweep:
     """The Monte Carlo sweep (see the module docstring); `chunks` Dask tasks (default: about
     four per worker, whole blocks each). A distributed `client` (see `connect`) may be given;
-    it is closed at the end."""
+    it is closed at the end. `level` None: the evaluator's default (Compiled.code)."""
+    level = evaluator.code(level)
     scheduler = scheduler or parse_scheduler(None)
     nominal = evaluator.defaults
     plates: tuple[str, ...] = ()

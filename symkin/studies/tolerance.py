@@ -120,9 +120,11 @@ def check_level(level: str) -> None:
 
 
 def run(
-    evaluator: Compiled, vary: Mapping[str, Spread], grid: Grid, level: str = levels.DEFAULT
+    evaluator: Compiled, vary: Mapping[str, Spread], grid: Grid, level: str | None = None
 ) -> Tolerance:
-    """The stack-up of the ±a spreads `vary` over the configurations of `grid`."""
+    """The stack-up of the ±a spreads `vary` over the configurations of `grid`, at `level`
+    (None: the evaluator's default, Compiled.code)."""
+    level = evaluator.code(level, sensitivity=True)
     check_level(level)
     x = grid.rows
     status, values, dev, _ = evaluator.sensitivity_rows(x, level)

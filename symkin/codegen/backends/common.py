@@ -90,6 +90,8 @@ class Backend:
             "n_params": len(plan.parameters),
             "n_vars": len(plan.parameters) + len(plan.inputs),
             "default_level": default_level(plan),
+            "default_code": levels.get(default_level(plan)).code,
+            "default_sensitivity_level": default_sensitivity_level(plan),
             "loaded": plan.loaded,
             # the loaded level's and the stroke solves' rules (symkin.core.settings): the C
             # evaluator's at float64's epsilon; the numpy module scales `stroke_eps` by its own
@@ -229,10 +231,18 @@ def defined_names(text: str) -> set[str]:
 
 
 def default_level(plan: Plan) -> str:
-    """The level a generated evaluator uses when none is given: `exact` (docs/cli.md) when it is
-    generated, else the most faithful one generated."""
-    names = [lv.name for lv in plan.levels]
-    return levels.DEFAULT if levels.DEFAULT in names else names[-1]
+    """The level a generated evaluator uses when none is given (DEFAULT_LEVEL,
+    <NAME>_DEFAULT_LEVEL): the plan's, the mechanism's default when generated
+    (docs/generated-code.md)."""
+    return plan.default_level
+
+
+def default_sensitivity_level(plan: Plan) -> str:
+    """The level `sensitivity` and `sensitivity_full` use when none is given: the default level
+    where it has sensitivities, else `exact` where it has, else the most faithful that has."""
+    having = [row["name"] for row in level_rows(plan) if row["sens"] or row["rates"]]
+    wanted = (plan.default_level, levels.KINEMATIC_DEFAULT)
+    return next((n for n in wanted if n in having), having[-1] if having else plan.default_level)
 
 
 def routine_data(routine: Routine, printer: CodePrinter) -> dict:
