@@ -20,6 +20,7 @@ import sympy as sp
 from conftest import ROOT
 
 from symkin.model import notch_correction as nc
+from symkin.model.sections import Compliance
 
 RESULTS = json.loads((ROOT / "benchmarks" / "results-notch.json").read_text())
 E, NU, B = 210e3, 0.3, 1.0  # the runs' MPa, ν, mm
@@ -162,3 +163,53 @@ def test_an_elliptical_notch_follows_the_circle_at_its_neck_radius():
             # deep ellipses (a < c) at τ = 0.2-0.25 are the farthest: 0.45 % in θ, 1.0 % in y_F
             tol = 1.1e-2 if name == "y_F" else 5e-3
             assert got == pytest.approx(fe[name], rel=tol), (q, name)
+
+
+def test_corrected_compliances_are_the_fe_ones(factors):
+    """A Compliance of the beam at t/R = 0.1 (bending y_F and shear y_V apart, as the sections
+    give them) times the correction is the converged FE within the fit's residual."""
+    with mpmath.workdps(40):
+        t = mpmath.mpf("0.1")
+        depth = lambda x: t + 2 * (1 - mpmath.sqrt(1 - (x - 1) ** 2))  # noqa: E731
+        e1 = mpmath.mpf(E) / (1 - mpmath.mpf(NU) ** 2)
+        g = mpmath.mpf(E) / (2 * (1 + mpmath.mpf(NU)))
+        pts = [0, "0.5", "0.9", 1, "1.1", "1.5", 2]
+        pts = [mpmath.mpf(p) for p in pts]
+        q = lambda f: float(mpmath.quad(f, pts))  # noqa: E731
+        plain = Compliance(
+            theta_M=q(lambda x: 12 / (e1 * B * depth(x) ** 3)),
+            theta_F=q(lambda x: 12 * (2 - x) / (e1 * B * depth(x) ** 3)),
+            y_F=q(lambda x: 12 * (2 - x) ** 2 / (e1 * B * depth(x) ** 3)),
+            x_N=q(lambda x: 1 / (e1 * B * depth(x))),
+            y_V=q(lambda x: 6 / (5 * g * B * depth(x))),
+        )
+    got = nc.corrected(plain, nc.continuum_correction("circular", 0.1))
+    fe = converged(0.1)
+    assert got.theta_M == pytest.approx(fe["theta_M"], rel=nc.RESIDUAL["theta_M"])
+    assert got.y_M == pytest.approx(fe["y_M"], rel=nc.RESIDUAL["theta_F"])
+    assert got.y_F + got.y_V == pytest.approx(fe["y_F"], rel=nc.RESIDUAL["y_F"])
+    assert got.x_N == plain.x_N
+
+
+def test_the_recorded_centre_drift_and_stress_concentration():
+    """docs/physics.md's records from the committed runs: the notch centre under a pure moment
+    moves across by 0.0650 R θ at t/R = 0.1, the beam's ∫₀^R (R − x)/EI / (R ∫ 1/EI) within 1 %
+    of it up to t/R = 0.2 and 9 % at 0.5; K_t within 0.1 % of (1 + t/2R)^0.40, below
+    Lobontiu's (1 + t/2R)^(9/20)."""
+    for tau in RATIOS:
+        fe = converged(tau)
+        k_fe = fe["centre_M"][1] / fe["theta_M"]  # R = 1
+        with mpmath.workdps(40):
+            t = mpmath.mpf(tau)
+            inv = lambda x, t=t: 1 / (t + 2 * (1 - mpmath.sqrt(1 - (x - 1) ** 2))) ** 3  # noqa: E731
+            w = mpmath.sqrt(t)
+            half = sorted({max(mpmath.mpf(0), 1 - 5 * w), mpmath.mpf(0), 1 - w, mpmath.mpf(1)})
+            k_beam = float(
+                mpmath.quad(lambda x: (1 - x) * inv(x), half) / (2 * mpmath.quad(inv, half))
+            )
+        if tau == 0.1:
+            assert k_fe == pytest.approx(0.0650, abs=5e-5)
+        assert abs(k_beam / k_fe - 1) < (0.01 if tau <= 0.2 else 0.09)
+        kt = max(abs(s) for s in fe["neck_stress_M"]) * B * tau**2 / 6  # M = 1 N mm, R = 1 mm
+        assert kt == pytest.approx((1 + tau / 2) ** 0.40, rel=1e-3)
+        assert kt < (1 + tau / 2) ** 0.45

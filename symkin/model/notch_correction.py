@@ -26,8 +26,10 @@ beam (the fillets' roots; t/l = 0.025–0.05, r/l = 0.05–0.25), not a function
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
+
+from .sections import Compliance
 
 #: Fitted coefficients (c1, c2) of factor = 1 + c1 τ + c2 τ², τ = t/R, per compliance of a
 #: right-circular notch: least squares on the six mesh-converged CalculiX runs of
@@ -98,3 +100,16 @@ def neck_ratio(profile: str, thickness: Any, **keys: Any) -> Any:
     if profile == "elliptical":
         return thickness * keys["depth"] / keys["semi_axis"] ** 2
     raise ValueError(f"profile {profile!r} has no neck radius (known: {', '.join(NOTCHES)})")
+
+
+def corrected(compliance: Compliance, correction: Correction) -> Compliance:
+    """A section's beam compliances (model.sections.Compliance) times the correction: θ_M and
+    θ_F by theirs, the bending y_F and the shear y_V both by y_F's (its factor is on their sum,
+    the Timoshenko deflection); the stretch x_N as it is (not measured)."""
+    return replace(
+        compliance,
+        theta_M=compliance.theta_M * correction.theta_M,
+        theta_F=compliance.theta_F * correction.theta_F,
+        y_F=compliance.y_F * correction.y_F,
+        y_V=compliance.y_V * correction.y_F,
+    )
