@@ -21,7 +21,7 @@ import mpmath
 import pytest
 from conftest import ROOT
 
-from symkin.fea import notch_mesh
+from symkin.fea import notch_mesh, profile_columns
 
 needs_ccx = pytest.mark.skipif(
     shutil.which("ccx") is None and os.environ.get("CI") != "true",
@@ -41,7 +41,7 @@ def test_columns_follow_the_local_thickness(t):
     width over the thickness at its middle is the same within the profile's curvature."""
     depth = circular(t, 1.0)
     count = 40
-    xs = notch_mesh.columns(depth, 2.0, count)
+    xs = profile_columns.columns(depth, 2.0, count)
     assert len(xs) == 2 * count + 1 and xs[0] == 0.0 and xs[-1] == 2.0
     corners = xs[::2]
     assert all(b > a for a, b in itertools.pairwise(corners))
@@ -99,7 +99,7 @@ def test_the_deck_is_the_notch_as_cut():
     deck = notch_mesh.single_notch(depth, 2.0, 1.0, 210e3, 0.3, notch_mesh.NotchMesh(across))
     nodes = _nodes(deck.text)
     elements = _elements(deck.text)
-    count = notch_mesh.column_count(depth, 2.0, across)
+    count = profile_columns.column_count(depth, 2.0, across)
     # ∫ dx/T of the circular notch times `across`, rounded up (the columns about T/across long)
     mpmath.mp.dps = 30
     total = mpmath.quad(
@@ -163,3 +163,45 @@ def test_a_coarse_circular_notch_against_the_converged_continuum():
         [0, 0.5, 1, 1.5, 2],
     )
     assert 1.0 < got.theta_M / float(theta) < 1.05
+
+
+@needs_ccx
+def test_symkin_fea_meshes_a_notch_plate_as_cut():
+    """The mechanism's deck (fea.deck) meshes a plate whose profile is not uniform with the
+    thickness-following columns: the single plate of tests/fea/single_plate.toml given a circular
+    notch's T(x) (R = 5 mm, t = 0.5 mm, b = 10 mm), H held at 0 and a 1 N transverse force on
+    the arm: clamped-guided, the arm moves by V (y_F − θ_F²/θ_M). The reference is the committed
+    single-notch continuum at t/R = 0.1 (n = 32, R = 1 mm, E b = 210000 N/mm), scaled by its
+    E b (the compliances times E b are invariant under a change of size)."""
+    import dataclasses
+
+    from symkin import fea
+    from symkin.fea import ccx
+
+    setup = fea.prepare(
+        ROOT / "tests" / "fea" / "single_plate.toml",
+        {"H": 0.0},
+        {"l": 0.01, "t": 0.0005, "V": 1.0},
+    )
+    r, t = 0.005, 0.0005
+    (plate,) = setup.conf.plates
+    notch = dataclasses.replace(plate, profile=circular(t, r))
+    conf = dataclasses.replace(setup.conf, plates=(notch,))
+    setup = dataclasses.replace(setup, conf=conf)
+    deck = fea.write_deck(setup, fea.Mesh(40, 4, 0.8))
+    # the columns follow the thickness: the plate's corner positions along x are columns()'s
+    xs = sorted(
+        {
+            float(line.split(",")[1])
+            for line in deck.text.splitlines()
+            if line[:1].isdigit() and line.count(",") == 3
+        }
+    )
+    expected = [x - r for x in profile_columns.columns(circular(t, r), 2 * r, 40)]
+    assert all(any(abs(x - e) < 1e-12 for x in xs) for e in expected)
+    got = fea.deviations(deck, ccx.run(deck, "notch_plate"))["T"]
+    fine = json.loads(RESULTS.read_text())["runs"]["circular t=0.1 R=1 n=32"]
+    guided = (fine["y_F"] - fine["theta_F"] ** 2 / fine["theta_M"]) * 210e3 / (200e3 * 10) * 1e-3
+    assert abs(got[0]) < 1e-3 * abs(got[1])
+    # measured 0.13 % apart (the guided deflection cancels 97 % of y_F: its errors grow 30-fold)
+    assert got[1] == pytest.approx(guided, rel=5e-3)

@@ -7,7 +7,8 @@ neck coarse. Here the element columns are spaced in proportion to the local thic
 corners sit at equal steps of s(x) = ∫ dx/T, so every element has about the same aspect ratio
 and the neck gets as many elements per thickness as the ends.
 
-:func:`columns` gives those positions for any T(x); :func:`single_notch` writes the deck of one
+:func:`fea.profile_columns.columns` gives those positions for any T(x) (the mechanism's deck uses
+them too, for a plate whose profile is not uniform); :func:`single_notch` writes the deck of one
 notch in the plane of its axis — P's end face clamped, M's end face a rigid section (linear
 `*EQUATION`s on a reference node at its centre and a rotation node), one step under a transverse
 force on the reference node and one under a pure moment on the rotation node, small deflections
@@ -20,84 +21,21 @@ of a thin neck in metres ("nonpositive jacobian"), its tolerances being absolute
 
 from __future__ import annotations
 
-import itertools
 import math
 import os
 import re
 import subprocess
 import tempfile
 import time
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 from .ccx import ERROR, executable
+from .profile_columns import Depth, column_count, columns
 
 #: Element type: quadratic brick, reduced integration, one layer through the width with u_z = 0
 #: on every node (plane strain without the MPCs ccx adds to CPE8 elements; docs/fea.md).
 ELEMENT = "C3D20R"
-#: Fine steps per local thickness of the quadrature of s(x) = ∫ dx/T that places the columns.
-STEPS_PER_THICKNESS = 64
-
-Depth = Callable[[float], float]
-
-
-def _stretch(depth: Depth, span: float) -> tuple[list[float], list[float]]:
-    """Samples (x_k, s_k) of s(x) = ∫_0^x dx/T(x) over [0, span] (Simpson's rule on 1/T): steps
-    of T(x)/STEPS_PER_THICKNESS, shrinking geometrically towards both ends."""
-    xs, ss = [0.0], [0.0]
-    x, s = 0.0, 0.0
-    tiny = 1e-12 * span
-    while x < span:
-        # steps shrink geometrically into both ends, where T(x) may have a vertical tangent (a
-        # circular notch's ends): Simpson's rule then stays accurate on every step
-        rest = span - x
-        h = (
-            rest
-            if rest <= tiny
-            else min(depth(x) / STEPS_PER_THICKNESS, 0.2 * max(x, tiny), 0.2 * rest)
-        )
-        s += _simpson(depth, x, x + h)
-        x = span if h == rest else x + h
-        xs.append(x)
-        ss.append(s)
-    return xs, ss
-
-
-def _simpson(depth: Depth, a: float, b: float) -> float:
-    """∫_a^b dx/T by Simpson's rule (b − a at most a fine step)."""
-    return (b - a) * (1 / depth(a) + 4 / depth((a + b) / 2) + 1 / depth(b)) / 6
-
-
-def column_count(depth: Depth, span: float, across: int, aspect: float = 1.0) -> int:
-    """Columns of elements over the span so that an element is about `aspect` times as long as
-    it is thick (T(x)/across): across/aspect · ∫ dx/T, rounded up."""
-    _, ss = _stretch(depth, span)
-    return max(1, math.ceil(across / aspect * ss[-1] - 1e-9))
-
-
-def columns(depth: Depth, span: float, count: int) -> list[float]:
-    """The 2 count + 1 node positions along [0, span] of `count` quadratic element columns whose
-    widths are proportional to the local thickness: corners at equal steps of s(x) = ∫ dx/T,
-    midside nodes halfway between them."""
-    xs, ss = _stretch(depth, span)
-    total = ss[-1]
-    corners = [0.0]
-    k = 0
-    for n in range(1, count):
-        target = total * n / count
-        while ss[k + 1] < target:
-            k += 1
-        f = (target - ss[k]) / (ss[k + 1] - ss[k])
-        x = xs[k] + f * (xs[k + 1] - xs[k])
-        for _ in range(3):  # Newton on s(x) = target, s'(x) = 1/T(x)
-            x += (target - ss[k] - _simpson(depth, xs[k], x)) * depth(x)
-        corners.append(x)
-    corners.append(span)
-    out: list[float] = []
-    for a, b in itertools.pairwise(corners):
-        out += [a, (a + b) / 2]
-    return out + [span]
 
 
 def across_positions(count: int, grading: float = 0.0) -> list[float]:
