@@ -2,6 +2,7 @@
 (docs/physics.md, "Notch hinges: the continuum correction"; docs/fea.md, "One notch").
 
     python benchmarks/notch_continuum.py [--only study|points] [--out benchmarks/results-notch.json]
+                                         [--decks DIR]
 
 Every run is one notch (symkin.fea.notch_mesh): P's end face clamped, M's end face rigid, a
 transverse force and then a pure moment at the centre of M's end section, small deflections,
@@ -40,8 +41,10 @@ RADIUS = 1.0
 RATIOS = (0.02, 0.05, 0.1, 0.2, 0.3, 0.5)
 #: The mesh study: elements across the thickness (columns about one thickness/across long).
 STUDY = (4, 8, 16, 32)
-#: The mesh the other profiles are run at (the study's converged one, docs/physics.md).
+#: The mesh the other profiles are run at (docs/physics.md), and the finer one that checks it on
+#: a deep ellipse and a corner-filleted plate (the fillets' roots).
 POINT_MESH = 16
+CHECK_MESH = 32
 DIGITS = 40
 
 
@@ -141,12 +144,18 @@ def shape(kind: str, p: dict) -> tuple[float, object]:
     return corner_filleted(p["t"], p["l"], p["r"])
 
 
+DECKS: Path | None = None  # --decks DIR: every deck written there too
+
+
 def run(cache: dict, kind: str, p: dict, across: int, out: Path) -> dict:
     k = key(kind, p, across)
-    if k in cache["runs"]:
-        return cache["runs"][k]
     span, depth = shape(kind, p)
     deck = notch_mesh.single_notch(depth, span, WIDTH, E, NU, notch_mesh.NotchMesh(across))
+    if DECKS is not None:
+        DECKS.mkdir(parents=True, exist_ok=True)
+        (DECKS / (k.replace(" ", "_") + ".inp")).write_text(deck.text)
+    if k in cache["runs"]:
+        return cache["runs"][k]
     r = notch_mesh.solve(deck)
     row = {
         "profile": kind,
@@ -212,7 +221,10 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--only", choices=("study", "points"))
     ap.add_argument("--out", type=Path, default=OUT)
+    ap.add_argument("--decks", type=Path, help="write every deck (.inp) into this folder too")
     args = ap.parse_args()
+    global DECKS
+    DECKS = args.decks
     cache = json.loads(args.out.read_text()) if args.out.exists() else {}
     cache.setdefault("runs", {})
     cache["machine"] = {"python": platform.python_version(), "E": E, "nu": NU, "width": WIDTH}
@@ -292,6 +304,17 @@ def main() -> None:
                 f"{q['y_F_timoshenko']:.4f} | {guess:.4f} |"
             )
         cache["points"] = points
+        print()
+        print(f"| profile | θ_M n={CHECK_MESH} vs n={POINT_MESH} | y_F | K_t |")
+        print("|---|---|---|---|")
+        for kind, p in (cases[2], cases[5]):
+            a = run(cache, kind, p, POINT_MESH, args.out)
+            b = run(cache, kind, p, CHECK_MESH, args.out)
+            sa, sb = (max(abs(v) for v in r["neck_stress_M"]) for r in (a, b))
+            print(
+                f"| {kind} {p} | {(b['theta_M'] / a['theta_M'] - 1) * 100:+.4f} % | "
+                f"{(b['y_F'] / a['y_F'] - 1) * 100:+.4f} % | {(sb / sa - 1) * 100:+.4f} % |"
+            )
     args.out.write_text(json.dumps(cache, indent=1, sort_keys=True) + "\n")
 
 

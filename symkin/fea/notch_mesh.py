@@ -30,7 +30,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from .ccx import ERROR, executable
+from .ccx import ERROR, Failed, executable
 from .profile_columns import Depth, column_count, columns
 
 #: Element type: quadratic brick, reduced integration, one layer through the width with u_z = 0
@@ -270,7 +270,8 @@ def frd_stresses(text: str) -> list[dict[int, tuple[float, ...]]]:
 
 
 def solve(deck: NotchDeck, name: str = "notch") -> NotchResult:
-    """Run ccx (one thread) on a single notch's deck and read its compliances."""
+    """Run ccx (one thread) on a single notch's deck and read its compliances; ccx stopping
+    with an error raises ccx.Failed (its output in `log`)."""
     with tempfile.TemporaryDirectory(prefix="symkin-notch-") as tmp:
         folder = Path(tmp)
         (folder / f"{name}.inp").write_text(deck.text, encoding="ascii")
@@ -293,7 +294,7 @@ def solve(deck: NotchDeck, name: str = "notch") -> NotchResult:
     found = blocks(text)
     if proc.returncode != 0 or errors or len(found) != 2 or len(stresses) != 2:
         quote = " / ".join(e.strip() for e in errors) or proc.stdout.strip()[-300:]
-        raise RuntimeError(f"ccx failed on the notch deck (exit {proc.returncode}): {quote}")
+        raise Failed(f"ccx failed on the notch deck (exit {proc.returncode}): {quote}", proc.stdout)
     (_, _, u_f), (_, _, u_m) = found
     s_m = stresses[1]
     lo, hi = deck.neck
