@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 import sympy as sp
 
 from ._symkin import InputError, Mechanism, section_of
+from .profile_columns import columns
 
 #: Element type of the plates: quadratic brick, reduced integration.
 ELEMENT = "C3D20R"
@@ -560,6 +561,8 @@ class _Writer:
         )
         ids: dict[tuple[int, int, int], int] = {}
         along, across = self.mesh.positions(nl), self.mesh.positions(nt)
+        if pl.profile is not None:  # a notch: columns as long as a share of the local thickness
+            along = [x / pl.length for x in columns(pl.depth, pl.length, nl)]
         for i in range(2 * nl + 1):
             s = pl.length * along[i]
             for j in range(2 * nt + 1):
