@@ -92,7 +92,7 @@ def test_eval_says_which_level_and_why():
     plain = symkin_cli("eval", DIMENSIONS, "--input", "A0=0.2")
     assert plain.returncode == 0 and plain.stderr == ""
     assert plain.stdout.startswith("level: exact (default: not every plate has E, thickness ")
-    assert plain.stdout.splitlines()[1].startswith("level exact, backend sympy")
+    assert plain.stdout.splitlines()[1].startswith("backend sympy; inputs: A0 = 0.2")
 
 
 def test_eval_json_names_the_default_level():
