@@ -122,7 +122,7 @@ def test_an_input_hinge_held_without_actuators(tmp_path_factory):
     agree(module, mech, {"F1": 0.05}, None, 2)
     batch = module.modes({"F1": np.linspace(-0.05, 0.05, 3)}, count=1)
     assert batch["ok"].all() and batch["frequencies"].shape == (1, 3)
-    # the C evaluator of the same file leaves the modes' routines out and still builds
+    # the C evaluator of the same file builds with them (its <name>_modes: tests/test_modes_c.py)
     assert symkin.compile(mech, backend="c").evaluate({"F1": 0.01}, "loaded")["ok"]
 
 

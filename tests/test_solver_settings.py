@@ -285,6 +285,7 @@ ALLOWED = {
     "templates/c/actuators.c": {PI: "the drives' bound |x| <= pi"},
     "templates/c/reduced.c": {PI: "a compliant angle within (-pi, pi); the Euler load's pi^2"},
     "templates/c/reduced_report.c": {"7": "the stress row's allowable", "12.0": "t^2 / 12"},
+    "templates/c/modes.c": {"0.5": "the Jacobi rotation's t = 1/(2 theta) for a huge theta"},
     "templates/numpy/runtime.py": {
         "8192": "_CHUNK: elements per block (memory, not arithmetic)",
     },
@@ -317,6 +318,7 @@ RUNTIMES = [
     "templates/c/reduced.c",
     "templates/c/reduced_sens.c",
     "templates/c/reduced_report.c",
+    "templates/c/modes.c",
     "templates/c/actuators.c",
     "templates/numpy/runtime.py",
     "templates/numpy/actuators.py",

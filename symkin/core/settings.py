@@ -320,6 +320,15 @@ class ModesSettings:
     # a mode whose largest centre translation is below this times its largest rotation times
     # the mechanism's span is a pure rotation (normalised to 1 rad)
     pure_rotation: float = 1e-9
+    # the C evaluator's eigen-solve (templates/c/modes.c, cyclic Jacobi): at most this many
+    # sweeps; an off-diagonal entry at most jacobi_eps ε times the geometric mean of its two
+    # diagonal entries is zero (each eigenvalue to its own relative accuracy)
+    jacobi_sweeps: int = 30
+    jacobi_eps: float = 1.0
+
+    def c_rules(self, eps: float = EPS64) -> dict[str, float | int]:
+        """The C evaluator's Jacobi rules at ε = eps: SK_MODES_SWEEPS, SK_MODES_TOL."""
+        return {"sweeps": self.jacobi_sweeps, "tol": self.jacobi_eps * eps}
 
 
 @dataclass(frozen=True)

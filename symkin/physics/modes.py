@@ -11,7 +11,9 @@ here because no mass sits on what is condensed. The eigenproblem is solved in th
 form, C_r M q = q/ω², symmetric as A = M^½ C_r M^½ v = v/ω² (q = M^-½ v, M-orthonormal), so a
 direction the mechanism holds rigidly (no compliance at all) is an infinite frequency, left out,
 and nothing is inverted. Every displacement of the mode, massless parts included, is the
-response to the mode's inertia loads ω² M q: d = C[:, r] ω² M q.
+response to the mode's inertia loads ω² M q: d = C[:, r] ω² M q. A stroke actuator with a
+`spring` holds its command, the spring acting (docs/physics.md, "A stroke actuator with a
+spring"): the levels' compliance has it.
 """
 
 from __future__ import annotations

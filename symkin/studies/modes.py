@@ -2,10 +2,12 @@
 about the equilibrium of a physical level at one configuration (docs/physics.md, "Natural
 frequencies"; the eigenproblem is symkin.physics.modes).
 
-Every input is held: an input hinge at its angle, a stroke actuator at its stroke, a force
-actuator at its force. The level gives the compliance of virtual loads at the links' centres of
-mass (hidden points added to the mechanism, `CENTRE` + the link's name) and at the file's
-points: `loaded` through its reported rates (symkin.physics.reduced_reported's point
+Every input is held: an input hinge at its angle, a stroke actuator at its stroke (one with a
+`spring` at its command: the spring's give is in the stroke's row of the level's equations, so
+their Jacobian's compliance has the spring acting, docs/physics.md "A stroke actuator with a
+spring"), a force actuator at its force. The level gives the compliance of virtual loads at the
+links' centres of mass (hidden points added to the mechanism, `CENTRE` + the link's name) and at
+the file's points: `loaded` through its reported rates (symkin.physics.reduced_reported's point
 stiffness, every pair of points), `equilibrium` through its Jacobian at the float64 solution of
 its continuation (symkin.physics.reported's).
 """

@@ -24,10 +24,12 @@ class CBackend(Backend):
     def render(self, plan: Plan, source: str, precision: str = "float64") -> list[str]:
         """The header and source of `plan`; with force actuators without the `loaded` level's
         sensitivity routines (their theta holds the forces too), which the numpy runtime alone
-        assembles with the forces' (templates/numpy/reduced_actuators_sens.py); without the
-        natural frequencies' routines, which the numpy module's modes() alone reads
+        assembles with the forces' (templates/numpy/reduced_actuators_sens.py); the natural
+        frequencies' routines only with the `loaded` report, whose pieces <name>_modes shares
         (docs/generated-code.md, "Natural frequencies in generated code")."""
-        unused = {"loaded_modes1", "loaded_modes2", "modes_data"}  # numpy's modes() alone
+        unused: set[str] = set()
+        if plan.loaded is None or plan.loaded.modes is None or plan.loaded.report is None:
+            unused |= {"loaded_modes1", "loaded_modes2", "modes_data"}  # no <name>_modes
         if plan.forces:
             unused |= {"loaded_sens1", "loaded_sens2", "plate_eps4"}
         if unused & set(plan.routines):
