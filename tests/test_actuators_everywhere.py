@@ -1,6 +1,7 @@
 """Actuators everywhere (CONTRACT 13; docs/scene.md, docs/cli.md): `derive --points` and scene
 files take files with actuators (a stroke, a force), their evaluators taking the strokes and
-forces; `derive --fix` and a scene's [fix] refuse them (exit 2, naming the actuator); the
+forces; `derive --fix` and a scene's [fix] hold input hinges only, not an actuator or the
+hinge its stroke sets (exit 2; the fixed inputs beside actuators: tests/test_fix_actuators.py); the
 report labels a stroke in the file's length unit and a force in N. The numbers against `symkin
 eval`'s sympy backend (mpmath), which tests/test_loaded_actuators.py and tests/test_actuators.py
 check against independent references."""
@@ -56,10 +57,10 @@ def test_derive_points_takes_a_stroke_actuator(tmp_path):
             assert math.dist(dev, want["deviation"]) <= 1e-9 * want["norm"], (level, s)
 
 
-def test_derive_fix_names_the_actuator(tmp_path):
+def test_derive_fix_refuses_the_actuator_itself(tmp_path):
     run = symkin_cli("derive", str(PIEZO), "--fix", "piezo=0.01", "-o", str(tmp_path))
     assert run.returncode == 2
-    assert "derive --fix" in run.stderr and "piezo" in run.stderr, run.stderr
+    assert "'piezo' is an actuator" in run.stderr and "--fix" in run.stderr, run.stderr
 
 
 SCENE = """format = 1
@@ -114,7 +115,7 @@ def test_a_scene_with_a_stroke_actuator(tmp_path):
 def test_a_scene_with_a_force_actuator(tmp_path):
     """The cantilever's tip within 1 % against `equilibrium` over forces 0 to 3 N (α up to 1.8):
     the force actuator takes the `loaded` variant; a kinematic reference, a missing force range
-    and a [fix] are refused naming the entry."""
+    and a [fix] of the hinge the piezo's stroke sets are refused naming the entry."""
     mech = tmp_path / "cantilever_force.toml"
     mech.write_text(CANTILEVER)
     keys = {"name": "tip", "reference": "equilibrium", "point": "T", "tol": "0.01"}
@@ -136,7 +137,7 @@ def test_a_scene_with_a_force_actuator(tmp_path):
     code, err, _ = _scene(tmp_path, mech, ranges="", **keys)
     assert code == 2 and "the force actuator push needs a range" in err, err
     code, err, _ = _scene(tmp_path, PIEZO, name="amp", ranges="", point="B", fix="[fix]\nRA0 = 0.0")
-    assert code == 2 and "cannot fix inputs yet (actuator 'piezo')" in err, err
+    assert code == 2 and "the actuator 'piezo' sets (its surrogate)" in err, err
 
 
 def test_the_report_labels_strokes_and_forces_in_their_units(tmp_path):

@@ -3,7 +3,7 @@
  * Mechanism 'piezo_amplifier': 4 links, 4 hinges, 1 loop(s); inputs piezo (actuators; their strokes fix the angles of RA0 (piezo)).
  * Points: B; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, loaded_plates1 147, loaded_system1 722, loaded_res1 292, loaded_dev1 104, loaded_report1 413, loaded_plates2 372, loaded_system2 1863, loaded_res2 568, loaded_dev2 189, loaded_report2 837, dev_paper 31, dev_first_order 51, dev_exact 62, links 1, sens_rigid 105, sens_paper 108, sens_first_order 355, sens_exact 449, loaded_sens1 938, loaded_sens2 1997, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
+ * Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, action_at 4, loaded_plates1 147, loaded_system1 722, loaded_res1 292, loaded_dev1 104, loaded_report1 413, loaded_plates2 372, loaded_system2 1863, loaded_res2 568, loaded_dev2 189, loaded_report2 837, dev_paper 31, dev_first_order 51, dev_exact 62, links 1, sens_rigid 105, sens_paper 108, sens_first_order 355, sens_exact 449, loaded_sens1 938, loaded_sens2 1997, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
  */
 #include "piezo_amplifier.h"
 
@@ -1046,6 +1046,17 @@ static void sk_rigid_points(const double *theta, const double *params, double *o
     out[1] = -p_2 + _tmp5*_tmp6 + _tmp8*p_2 - _tmp3*_tmp7;
     out[2] = _tmp7 - _tmp0*p_4;
     out[3] = -p_2 + _tmp8*p_4;
+}
+
+/* the actuators' points of action as fabricated (4 operations) */
+static void sk_action_at(const double *params, double *out)
+{
+    const double p_0 = params[0];
+    const double p_1 = params[1];
+    const double p_2 = params[2];
+    const double p_4 = params[4];
+    out[0] = 2*p_0*cos(p_1);
+    out[1] = p_4 - p_2;
 }
 
 /* loaded (1 half plate(s) per plate): every half plate's (theta, p, f, e_a, e_s) and d(theta, p, f)/dx (147 operations) */
@@ -9125,6 +9136,9 @@ typedef struct {
     const int *point;
     const int *stroke;
     const double *direction;
+    /* the points of action as fabricated from the parameters (2 per actuator): where each
+       stroke is measured from, whatever inputs the evaluator holds fixed (derive --fix) */
+    void (*action_at)(const double *params, double *out);
     int n_shown;
     const int *shown;
 } sk_actuators;
@@ -9220,7 +9234,7 @@ static int sk_stroke_residual(const sk_mechanism *m, const sk_actuators *t, cons
     int a, s = sk_stroke_pose(m, x, params, level, out, NULL);
     for (a = 0; a < t->n && s == 0; ++a) {
         const double *p = out + 6 * t->point[a] + 2 * kind;
-        const double *p0 = rest + 6 * t->point[a];
+        const double *p0 = rest + 2 * a;
         r[a] = t->direction[2 * a] * (p[0] - p0[0]) + t->direction[2 * a + 1] * (p[1] - p0[1])
                - drives[t->stroke[a]];
     }
@@ -9309,13 +9323,14 @@ static int sk_stroke_solve(const sk_mechanism *m, const sk_actuators *t, double 
 }
 
 /* The tolerance of the stroke solves: SK_STROKE_TOLERANCE (64 eps) times the largest coordinate
-   of the points of action as fabricated (`rest`, 6 SK_NP), that at least SK_STROKE_FLOOR. */
+   of the points of action as fabricated (`rest`, 2 per actuator), that at least
+   SK_STROKE_FLOOR. */
 static double sk_stroke_tol(const sk_actuators *t, const double *rest)
 {
     double scale = SK_STROKE_FLOOR;
     int i;
     for (i = 0; i < t->n; ++i) {
-        const double *p0 = rest + 6 * t->point[i];
+        const double *p0 = rest + 2 * i;
         scale = fabs(p0[0]) > scale ? fabs(p0[0]) : scale;
         scale = fabs(p0[1]) > scale ? fabs(p0[1]) : scale;
     }
@@ -9323,32 +9338,34 @@ static double sk_stroke_tol(const sk_actuators *t, const double *rest)
 }
 
 /* The kinematic inputs xr at which the rigid linkage (the rigid positions of `level`) meets the
-   strokes among the public inputs `drives`; `rest` (6 SK_NP) the points as fabricated. Returns
-   0, 3 where a public input is not finite (a NaN stroke would pass the stroke solve's test), or
-   the status of what failed. */
+   strokes among the public inputs `drives`; `rest` (2 per actuator) gets the points of action
+   as fabricated (t->action_at: from the parameters, not the pose at zero inputs, which a fixed
+   input would move). Returns 0, 3 where a public input or a point of action is not finite (a
+   NaN stroke would pass the stroke solve's test), or the status of what failed. */
 static int sk_stroke_rigid(const sk_mechanism *m, const sk_actuators *t, const double *drives,
                            const double *params, int level, double *xr, double *rest)
 {
-    double zero[SK_NI + 1];
-    int j, s;
+    int j;
     for (j = 0; j < SK_NI; ++j) {
         if (!isfinite(drives[j])) {
             return 3;
         }
     }
+    t->action_at(params == NULL ? m->defaults : params, rest);
+    for (j = 0; j < 2 * t->n; ++j) {
+        if (!isfinite(rest[j])) {
+            return 3;
+        }
+    }
     for (j = 0; j < SK_NI; ++j) {
-        zero[j] = 0.0;
         xr[j] = t->drive_of[j] >= 0 ? drives[t->drive_of[j]] : 0.0;
     }
-    s = sk_stroke_pose(m, zero, params, level, rest, NULL);
-    return s != 0 ? s
-                  : sk_stroke_solve(m, t, xr, params, level, 0, rest, drives,
-                                    sk_stroke_tol(t, rest));
+    return sk_stroke_solve(m, t, xr, params, level, 0, rest, drives, sk_stroke_tol(t, rest));
 }
 
 /* The kinematic inputs at which the rigid linkage (xr) and the compliant mechanism at `level`
    (xc) meet the strokes among the public inputs `drives` (docs/levels.md, "Actuators"); `rest`
-   (6 SK_NP) the points as fabricated. Returns 0, or the status of what failed. */
+   (2 per actuator) the points of action as fabricated. Returns 0, or the status of what failed. */
 static int sk_stroke_poses(const sk_mechanism *m, const sk_actuators *t, const double *drives,
                            const double *params, int level, double *xr, double *xc,
                            double *rest)
@@ -9371,7 +9388,7 @@ static int sk_actuated_kinematic(const sk_mechanism *m, const sk_actuators *t,
                                  const double *drives, const double *params, int level,
                                  double *pr, double *ar, double *lr)
 {
-    double rest[6 * SK_NP], xr[SK_NI + 1], xc[SK_NI + 1], pc[6 * SK_NP], ac[2 * SK_M];
+    double rest[2 * SK_NI], xr[SK_NI + 1], xc[SK_NI + 1], pc[6 * SK_NP], ac[2 * SK_M];
     double lc[3 * SK_NL + 1];
     int i, j, s;
     s = sk_stroke_poses(m, t, drives, params, level, xr, xc, rest);
@@ -9417,7 +9434,7 @@ static int sk_actuated_loaded(const sk_mechanism *m, const sk_actuators *t, cons
 {
     const sk_level *lv = sk_find_level(m, SK_LEVEL_LOADED);
     const sk_loaded *l = (const sk_loaded *)m->loaded;
-    double rest[6 * SK_NP], xr[SK_NI + 1], delta[SK_K + 1], turned[SK_M];
+    double rest[2 * SK_NI], xr[SK_NI + 1], delta[SK_K + 1], turned[SK_M];
     double *theta = sol->theta;
     const double *strokes = drives;
     const double *q = NULL;
@@ -9728,7 +9745,7 @@ static int sk_actuated_sensitivity(const sk_mechanism *m, const sk_actuators *t,
                                    double *values, double *deviation, double *rigid)
 {
     enum { NS = 2 * SK_NP * SK_NV + 1 };
-    double rest[6 * SK_NP], xr[SK_NI + 1], xc[SK_NI + 1], zero[SK_NI + 1];
+    double rest[2 * SK_NI], xr[SK_NI + 1], xc[SK_NI + 1], zero[SK_NI + 1];
     double pr[6 * SK_NP], pc[6 * SK_NP], dr[NS], rr[NS], dc[NS], rc[NS], r0[NS], d0[NS];
     double rate_r[(SK_NI + 1) * SK_NV], rate_c[(SK_NI + 1) * SK_NV];
     int where[SK_NI + 1], direct[SK_NV];
@@ -9903,7 +9920,7 @@ static const int sk_act_stroke[1] = {0};
 static const double sk_act_direction[2] = {-1.0, 0.0};
 static const int sk_shown[2] = {0};
 static const sk_actuators sk_actuator_tables = {
-    1, sk_drive_of, sk_act_point, sk_act_stroke, sk_act_direction,
+    1, sk_drive_of, sk_act_point, sk_act_stroke, sk_act_direction, sk_action_at,
     1, sk_shown
 };
 

@@ -2,7 +2,7 @@
 Mechanism 'piezo_amplifier': 4 links, 4 hinges, 1 loop(s); inputs piezo (actuators; their strokes fix the angles of RA0 (piezo)).
 Points: B; levels: paper, first_order, exact, loaded.
 Rigid solution: closed form (dyads).
-Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, loaded_plates1 147, loaded_system1 722, loaded_res1 292, loaded_dev1 104, loaded_report1 413, loaded_plates2 372, loaded_system2 1863, loaded_res2 568, loaded_dev2 189, loaded_report2 837, dev_paper 31, dev_first_order 51, dev_exact 62, links 1, sens_rigid 105, sens_paper 108, sens_first_order 355, sens_exact 449, loaded_sens1 938, loaded_sens2 1997, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
+Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, action_at 4, loaded_plates1 147, loaded_system1 722, loaded_res1 292, loaded_dev1 104, loaded_report1 413, loaded_plates2 372, loaded_system2 1863, loaded_res2 568, loaded_dev2 189, loaded_report2 837, dev_paper 31, dev_first_order 51, dev_exact 62, links 1, sens_rigid 105, sens_paper 108, sens_first_order 355, sens_exact 449, loaded_sens1 938, loaded_sens2 1997, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
 
 Use:  evaluate({name: array_like, ...}, level="loaded", params=None)
 returns {"points": {P: {"rigid": a, "compliant": a, "deviation": a}}, "ok": mask}, each a of
@@ -613,6 +613,21 @@ def _stroke_newton(residual, theta, tol, dtype, iterations):
     return theta, numpy.all([numpy.abs(x) <= tol for x in r], axis=0)
 
 
+def _action_places(mech, params):
+    """Each actuator's point of action as fabricated, (x, y), from the parameters alone (the
+    module's action_at): where its stroke is measured from. Not the pose at zero inputs, which
+    an input folded into the routines (derive --fix) would move."""
+    flat = mech.action_at([mech.dtype(v) for v in mech.parameters(params)])
+    return [(flat[2 * i], flat[2 * i + 1]) for i in range(len(flat) // 2)]
+
+
+def _action_scale(mech, at):
+    """The stroke solves' scale: the largest coordinate of the points of action as fabricated,
+    that at least the module's floor."""
+    sizes = [float(numpy.nanmax(numpy.abs(numpy.asarray(c, dtype=float)))) for xy in at for c in xy]
+    return max(sizes + [mech.stroke_floor])
+
+
 def _stroke_poses(mech, actuators, drives, inputs, level, params):
     """The kinematic inputs at which the rigid linkage and the compliant mechanism meet the
     strokes (docs/levels.md, "Actuators"): (rigid, compliant, ok), each a dict of the input
@@ -632,11 +647,8 @@ def _stroke_poses(mech, actuators, drives, inputs, level, params):
     zero = numpy.zeros_like(arrays[0]) if arrays else mech.dtype(0)
     # the rigid positions: at the cheapest level the module holds (every level gives them)
     cheap = "paper" if "paper" in mech.levels else level
-    rest = _evaluate(mech, dict.fromkeys(mech.input_names, zero), cheap, params, False)["points"]
-    at = [rest[a[2]]["rigid"] for a in actuators]
-    eps = numpy.finfo(mech.dtype).eps
-    scale = max([float(numpy.nanmax(numpy.abs(x))) for x in at] + [mech.stroke_floor])
-    tol = mech.stroke_tolerance * eps * scale
+    at = _action_places(mech, params)
+    tol = mech.stroke_tolerance * numpy.finfo(mech.dtype).eps * _action_scale(mech, at)
 
     def residual(theta, lv, kind):
         res = _evaluate(mech, hinges | dict(zip(surrogates, theta)), lv, params, False)
@@ -1629,12 +1641,8 @@ def _rigid_strokes(mech, actuators, hinges, strokes, params, start):
     actuators.py's _stroke_newton; (angles, ok)."""
     surrogates = [a[1] for a in actuators]
     where = [mech.point_names.index(a[2]) for a in actuators]
-    zero = numpy.zeros_like(start[0])
-    rest = _rigid_at(mech, dict.fromkeys(mech.input_names, zero), params)[2]
-    at = [(rest[2 * i], rest[2 * i + 1]) for i in where]
-    eps = numpy.finfo(mech.dtype).eps
-    scale = max([float(numpy.nanmax(numpy.abs(numpy.stack(x)))) for x in at] + [mech.stroke_floor])
-    tol = mech.stroke_tolerance * eps * scale
+    at = _action_places(mech, params)
+    tol = mech.stroke_tolerance * numpy.finfo(mech.dtype).eps * _action_scale(mech, at)
 
     def residual(theta):
         rigid = _rigid_at(mech, hinges | dict(zip(surrogates, theta)), params)[2]
@@ -1705,15 +1713,13 @@ def _actuated_state(mech, actuators, forces, drives, inputs, params, resolve=Fal
     }
     if forces:
         # the stroke each force produced: its point of action's compliant place along d
-        rest = _rigid_at(mech, dict.fromkeys(mech.input_names, zero), params)[2]
         produced = []
-        for n, (_, _, point, d) in zip(names, actuators):
+        for n, (_, _, point, d), x0 in zip(names, actuators, _action_places(mech, params)):
             if n not in forces:
                 produced.append(given[n])
                 continue
-            i = mech.point_names.index(point)
             c = res["points"][point]["compliant"]
-            produced.append(d[0] * (c[0] - rest[2 * i]) + d[1] * (c[1] - rest[2 * i + 1]))
+            produced.append(d[0] * (c[0] - x0[0]) + d[1] * (c[1] - x0[1]))
         with numpy.errstate(all="ignore"):
             angles, ok_f = _rigid_strokes(mech, actuators, hinges, produced, params, angles)
         x, reference, rigid, ok_r, _ = _rigid_at(
@@ -3086,6 +3092,15 @@ def _rigid_points(theta, params):
         -p_2 + _tmp5*_tmp6 + _tmp8*p_2 - _tmp3*_tmp7,
         _tmp7 - _tmp0*p_4,
         -p_2 + _tmp8*p_4,
+    ]
+
+
+def _action_at(params):
+    """the actuators' points of action as fabricated (4 operations)."""
+    p_0, p_1, p_2, _, p_4 = params
+    return [
+        2*p_0*numpy.cos(p_1),
+        p_4 - p_2,
     ]
 
 
@@ -9032,6 +9047,7 @@ _MECHANISM = _Mechanism(
     # the stroke solves (symkin.core.settings.StrokeSettings): steps, tolerance in units of
     # the dtype's epsilon times the points of action's largest coordinate, that at least floor
     stroke_iterations=40, stroke_tolerance=64.0, stroke_floor=1e-300,
+    action_at=_action_at,  # where each stroke is measured from: its point of action as fabricated
     dtype=_DTYPE, n_theta=4, n_variables=6, n_dyads=1,
     input_index=(0, ),
     unknown_index=(1, 2, 3, ),

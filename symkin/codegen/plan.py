@@ -327,6 +327,18 @@ def plan(
         "rigid positions of the points",
         layout(("points", np2, 1)),
     )
+    if mech.actuators:
+        # where each stroke is measured from: its point of action as fabricated, from the
+        # parameters alone (a fixed input folded into the routines moves the pose at zero
+        # inputs; docs/levels.md, "Actuators")
+        routines["action_at"] = Routine(
+            "action_at",
+            (params,),
+            (),
+            tuple(sp.sympify(c) for a in mech.actuators for c in a.at),
+            "the actuators' points of action as fabricated",
+            layout(("at", 2 * len(mech.actuators), 1)),
+        )
     loaded = None
     if any(lv.name in level_table.LOADED for lv in levels):
         # the reduced equilibrium (docs/physics.md, "`loaded`: Newton on the reduced equilibrium"),
@@ -446,7 +458,10 @@ def plan(
         angular=an.angular_rows,
         dropped=len(an.dropped),
         default_level=_default_level(mech, levels),
-        drives=mech.drives if mech.actuators else (),
+        # the public inputs: the input hinges not held (a held one is folded), the actuators
+        drives=tuple(n for n in mech.drives if n not in {kin.hinges[a].name for a in held})
+        if mech.actuators
+        else (),
         actuators=_actuators(mech, levels),
         forces=tuple(a.name for a in mech.actuators if a.drive != "stroke"),
         springs=tuple(a.name for a in mech.actuators if a.spring is not None),

@@ -93,19 +93,6 @@ class Mechanism:
             if a.drive == "stroke"
         }
 
-    def refuse_actuators(self, what: str) -> None:
-        """Bad input (exit 2, naming the first actuator) where `what` does not take actuators
-        yet; `symkin eval` at the kinematic levels does (docs/levels.md, "Actuators")."""
-        if self.actuators:
-            a = self.actuators[0]
-            raise InputError(
-                f"{what} does not take actuators yet (actuator '{a.name}')",
-                file=self.path,
-                entry=f"[[actuator]] #{a.index + 1} '{a.name}'",
-                hint="evaluate it with symkin eval (a stroke at --level paper, first_order or "
-                "exact; a stroke or a force at equilibrium), or derive --emit numpy,c",
-            )
-
     def refuse_structure(self, level: str | None = None, what: str | None = None) -> None:
         """Bad input (exit 2) where a structure (:attr:`is_structure`) has nothing to give: a
         kinematic `level` (its rigid linkage has no motion to compare with) or `what`, a

@@ -184,9 +184,10 @@ def estimate(
     matrix = np.array(rows) if rows else np.zeros((0, 3 * n))
     # Each point's response to a unit displacement at each hinge: R = C · pinv(matrix) · E.
     pinv = np.linalg.pinv(matrix) if n else np.zeros((0, 0))
-    points = {
+    points = {  # those the level evaluated (a scene's reference asks for its own alone)
         p.name: (index[p.link], (_number(p.at[0], values), _number(p.at[1], values)))
         for p in mech.points
+        if p.name in deviations
     }
 
     def response(k: int, p0) -> np.ndarray:

@@ -220,15 +220,35 @@ def fixed_angles(mech: Mechanism, fixed: Mapping[str, object] | None) -> dict[st
     'pi/8'); names that are not inputs are bad input (exit 2)."""
     held = {}
     for name, value in (fixed or {}).items():
-        if name not in mech.inputs:
-            raise InputError(
-                f"'{name}' is not an input hinge",
-                file=mech.path,
-                entry="--fix",
-                hint="inputs: " + ", ".join(mech.inputs),
-            )
+        refused = unfixable(mech, name)
+        if refused is not None:
+            raise InputError(refused[0], file=mech.path, entry="--fix", hint=refused[1])
         held[name] = exact_value(value, "--fix", mech.path)
     return held
+
+
+def unfixable(mech: Mechanism, name: str) -> tuple[str, str] | None:
+    """(why, hint) where `name` cannot be held by derive --fix or a scene's [fix]: an actuator
+    (its stroke or force stays an input of the evaluators), the hinge an actuator's stroke sets
+    (its surrogate), or no input at all; None for an input hinge."""
+    hinges = [h for h in mech.inputs if h not in mech.surrogates]
+    listed = "input hinges: " + (", ".join(hinges) or "none")
+    act = next((a for a in mech.actuators if name in (a.name, a.surrogate)), None)
+    if act is not None and name == act.name:
+        return (
+            f"'{name}' is an actuator: only input hinges can be fixed, its "
+            f"{act.drive} stays an input of the evaluators",
+            f"give {name} at evaluation, or fix one of the {listed}",
+        )
+    if act is not None:
+        return (
+            f"'{name}' is the hinge whose angle the actuator '{act.name}' sets (its surrogate): "
+            "only input hinges can be fixed",
+            f"fix one of the {listed}",
+        )
+    if name not in mech.inputs:
+        return f"'{name}' is not an input hinge", listed
+    return None
 
 
 @dataclass(frozen=True)

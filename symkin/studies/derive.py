@@ -130,10 +130,6 @@ def generate_plan(
     from .configuration import check_fabricated_pose, fixed_angles
 
     say = progress or (lambda message: None)
-    if mech.actuators and fixed:
-        # the generated runtimes measure a stroke from the pose at zero inputs, which a folded
-        # input would move (docs/levels.md, "Actuators"); --points takes actuators
-        mech.refuse_actuators("derive --fix")
     source = Path(mech.path).name
     precision = variant.precision if variant is not None else "float64"
     held = fixed_angles(mech, fixed)

@@ -309,24 +309,18 @@ class _Reader:
                 "[fix]",
                 "write [fix] on a line of its own, then K = 0.0 lines (radians)",
             )
-        if fix and mech.actuators:
-            # the generated runtimes measure a stroke from the pose at zero inputs, which a
-            # folded input would move (as derive --fix)
-            raise self.error(
-                f"a scene of a file with actuators cannot fix inputs yet (actuator "
-                f"'{mech.actuators[0].name}')",
-                "[fix]",
-                "drop [fix] and give the input hinge a narrow range instead",
-            )
+        from .configuration import unfixable
+
         fixed = {}
         for input_name, value in fix.items():
             where = f"[fix] '{input_name}'"
-            if input_name not in mech.inputs:
-                raise self.error(
-                    f"'{input_name}' is not an input hinge",
-                    where,
-                    suggest(input_name, mech.inputs) or "inputs: " + ", ".join(mech.inputs),
-                )
+            refused = unfixable(mech, input_name)
+            if refused is not None:
+                hint = refused[1]
+                if input_name not in mech.inputs + mech.drives:  # a misspelt name
+                    hinges = [h for h in mech.inputs if h not in mech.surrogates]
+                    hint = suggest(input_name, hinges) or hint
+                raise self.error(refused[0], where, hint)
             fixed[input_name] = self.angle(value, where)
         free = [h for h in mech.drives if h not in fixed]
         if not free:

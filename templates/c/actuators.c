@@ -26,6 +26,9 @@ typedef struct {
     const int *point;
     const int *stroke;
     const double *direction;
+    /* the points of action as fabricated from the parameters (2 per actuator): where each
+       stroke is measured from, whatever inputs the evaluator holds fixed (derive --fix) */
+    void (*action_at)(const double *params, double *out);
     int n_shown;
     const int *shown;
 #if defined(SK_ACT_FORCES)
@@ -131,7 +134,7 @@ static int sk_stroke_residual(const sk_mechanism *m, const sk_actuators *t, cons
     int a, s = sk_stroke_pose(m, x, params, level, out, NULL);
     for (a = 0; a < t->n && s == 0; ++a) {
         const double *p = out + 6 * t->point[a] + 2 * kind;
-        const double *p0 = rest + 6 * t->point[a];
+        const double *p0 = rest + 2 * a;
         r[a] = t->direction[2 * a] * (p[0] - p0[0]) + t->direction[2 * a + 1] * (p[1] - p0[1])
                - drives[t->stroke[a]];
     }
@@ -220,13 +223,14 @@ static int sk_stroke_solve(const sk_mechanism *m, const sk_actuators *t, double 
 }
 
 /* The tolerance of the stroke solves: SK_STROKE_TOLERANCE (64 eps) times the largest coordinate
-   of the points of action as fabricated (`rest`, 6 SK_NP), that at least SK_STROKE_FLOOR. */
+   of the points of action as fabricated (`rest`, 2 per actuator), that at least
+   SK_STROKE_FLOOR. */
 static double sk_stroke_tol(const sk_actuators *t, const double *rest)
 {
     double scale = SK_STROKE_FLOOR;
     int i;
     for (i = 0; i < t->n; ++i) {
-        const double *p0 = rest + 6 * t->point[i];
+        const double *p0 = rest + 2 * i;
         scale = fabs(p0[0]) > scale ? fabs(p0[0]) : scale;
         scale = fabs(p0[1]) > scale ? fabs(p0[1]) : scale;
     }
@@ -234,32 +238,34 @@ static double sk_stroke_tol(const sk_actuators *t, const double *rest)
 }
 
 /* The kinematic inputs xr at which the rigid linkage (the rigid positions of `level`) meets the
-   strokes among the public inputs `drives`; `rest` (6 SK_NP) the points as fabricated. Returns
-   0, 3 where a public input is not finite (a NaN stroke would pass the stroke solve's test), or
-   the status of what failed. */
+   strokes among the public inputs `drives`; `rest` (2 per actuator) gets the points of action
+   as fabricated (t->action_at: from the parameters, not the pose at zero inputs, which a fixed
+   input would move). Returns 0, 3 where a public input or a point of action is not finite (a
+   NaN stroke would pass the stroke solve's test), or the status of what failed. */
 static int sk_stroke_rigid(const sk_mechanism *m, const sk_actuators *t, const double *drives,
                            const double *params, int level, double *xr, double *rest)
 {
-    double zero[SK_NI + 1];
-    int j, s;
+    int j;
     for (j = 0; j < SK_NI; ++j) {
         if (!isfinite(drives[j])) {
             return 3;
         }
     }
+    t->action_at(params == NULL ? m->defaults : params, rest);
+    for (j = 0; j < 2 * t->n; ++j) {
+        if (!isfinite(rest[j])) {
+            return 3;
+        }
+    }
     for (j = 0; j < SK_NI; ++j) {
-        zero[j] = 0.0;
         xr[j] = t->drive_of[j] >= 0 ? drives[t->drive_of[j]] : 0.0;
     }
-    s = sk_stroke_pose(m, zero, params, level, rest, NULL);
-    return s != 0 ? s
-                  : sk_stroke_solve(m, t, xr, params, level, 0, rest, drives,
-                                    sk_stroke_tol(t, rest));
+    return sk_stroke_solve(m, t, xr, params, level, 0, rest, drives, sk_stroke_tol(t, rest));
 }
 
 /* The kinematic inputs at which the rigid linkage (xr) and the compliant mechanism at `level`
    (xc) meet the strokes among the public inputs `drives` (docs/levels.md, "Actuators"); `rest`
-   (6 SK_NP) the points as fabricated. Returns 0, or the status of what failed. */
+   (2 per actuator) the points of action as fabricated. Returns 0, or the status of what failed. */
 static int sk_stroke_poses(const sk_mechanism *m, const sk_actuators *t, const double *drives,
                            const double *params, int level, double *xr, double *xc,
                            double *rest)
@@ -282,7 +288,7 @@ static int sk_actuated_kinematic(const sk_mechanism *m, const sk_actuators *t,
                                  const double *drives, const double *params, int level,
                                  double *pr, double *ar, double *lr)
 {
-    double rest[6 * SK_NP], xr[SK_NI + 1], xc[SK_NI + 1], pc[6 * SK_NP], ac[2 * SK_M];
+    double rest[2 * SK_NI], xr[SK_NI + 1], xc[SK_NI + 1], pc[6 * SK_NP], ac[2 * SK_M];
     double lc[3 * SK_NL + 1];
     int i, j, s;
     s = sk_stroke_poses(m, t, drives, params, level, xr, xc, rest);
@@ -366,7 +372,7 @@ static int sk_force_reference(const sk_mechanism *m, const sk_actuators *t,
     }
     for (a = 0; a < t->n; ++a) {
         if (t->force[a] >= 0) {
-            const double *c = pr + 6 * t->point[a] + 2, *p0 = rest + 6 * t->point[a];
+            const double *c = pr + 6 * t->point[a] + 2, *p0 = rest + 2 * a;
             produced[t->stroke[a]] = t->direction[2 * a] * (c[0] - p0[0])
                                      + t->direction[2 * a + 1] * (c[1] - p0[1]);
         }
@@ -406,7 +412,7 @@ static int sk_actuated_loaded(const sk_mechanism *m, const sk_actuators *t, cons
 {
     const sk_level *lv = sk_find_level(m, SK_LEVEL_LOADED);
     const sk_loaded *l = (const sk_loaded *)m->loaded;
-    double rest[6 * SK_NP], xr[SK_NI + 1], delta[SK_K + 1], turned[SK_M];
+    double rest[2 * SK_NI], xr[SK_NI + 1], delta[SK_K + 1], turned[SK_M];
     double *theta = sol->theta;
 #if defined(SK_ACT_FORCES)
     double strokes[SK_NI + 1];
@@ -753,7 +759,7 @@ static int sk_actuated_sensitivity(const sk_mechanism *m, const sk_actuators *t,
                                    double *values, double *deviation, double *rigid)
 {
     enum { NS = 2 * SK_NP * SK_NV + 1 };
-    double rest[6 * SK_NP], xr[SK_NI + 1], xc[SK_NI + 1], zero[SK_NI + 1];
+    double rest[2 * SK_NI], xr[SK_NI + 1], xc[SK_NI + 1], zero[SK_NI + 1];
     double pr[6 * SK_NP], pc[6 * SK_NP], dr[NS], rr[NS], dc[NS], rc[NS], r0[NS], d0[NS];
     double rate_r[(SK_NI + 1) * SK_NV], rate_c[(SK_NI + 1) * SK_NV];
     int where[SK_NI + 1], direct[SK_NV];

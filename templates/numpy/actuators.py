@@ -36,6 +36,21 @@ def _stroke_newton(residual, theta, tol, dtype, iterations):
     return theta, numpy.all([numpy.abs(x) <= tol for x in r], axis=0)
 
 
+def _action_places(mech, params):
+    """Each actuator's point of action as fabricated, (x, y), from the parameters alone (the
+    module's action_at): where its stroke is measured from. Not the pose at zero inputs, which
+    an input folded into the routines (derive --fix) would move."""
+    flat = mech.action_at([mech.dtype(v) for v in mech.parameters(params)])
+    return [(flat[2 * i], flat[2 * i + 1]) for i in range(len(flat) // 2)]
+
+
+def _action_scale(mech, at):
+    """The stroke solves' scale: the largest coordinate of the points of action as fabricated,
+    that at least the module's floor."""
+    sizes = [float(numpy.nanmax(numpy.abs(numpy.asarray(c, dtype=float)))) for xy in at for c in xy]
+    return max(sizes + [mech.stroke_floor])
+
+
 def _stroke_poses(mech, actuators, drives, inputs, level, params):
     """The kinematic inputs at which the rigid linkage and the compliant mechanism meet the
     strokes (docs/levels.md, "Actuators"): (rigid, compliant, ok), each a dict of the input
@@ -55,11 +70,8 @@ def _stroke_poses(mech, actuators, drives, inputs, level, params):
     zero = numpy.zeros_like(arrays[0]) if arrays else mech.dtype(0)
     # the rigid positions: at the cheapest level the module holds (every level gives them)
     cheap = "paper" if "paper" in mech.levels else level
-    rest = _evaluate(mech, dict.fromkeys(mech.input_names, zero), cheap, params, False)["points"]
-    at = [rest[a[2]]["rigid"] for a in actuators]
-    eps = numpy.finfo(mech.dtype).eps
-    scale = max([float(numpy.nanmax(numpy.abs(x))) for x in at] + [mech.stroke_floor])
-    tol = mech.stroke_tolerance * eps * scale
+    at = _action_places(mech, params)
+    tol = mech.stroke_tolerance * numpy.finfo(mech.dtype).eps * _action_scale(mech, at)
 
     def residual(theta, lv, kind):
         res = _evaluate(mech, hinges | dict(zip(surrogates, theta)), lv, params, False)

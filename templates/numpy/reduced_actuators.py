@@ -7,8 +7,8 @@ around templates/numpy/reduced.py's driver. Only those modules hold it
 import math
 
 import numpy
-from actuators import _stroke_newton  # the module holds them all: actuators.py, reduced.py,
-from reduced import _LoadedTables  # reduced_report.py
+from actuators import _action_places, _action_scale, _stroke_newton  # the module holds them all:
+from reduced import _LoadedTables  # actuators.py, reduced.py, reduced_report.py
 from reduced_report import _reduced_report
 from runtime import _Mechanism, _points, _prepare, _rigid_angles, _wrap  # and runtime.py
 
@@ -41,12 +41,8 @@ def _rigid_strokes(mech, actuators, hinges, strokes, params, start):
     actuators.py's _stroke_newton; (angles, ok)."""
     surrogates = [a[1] for a in actuators]
     where = [mech.point_names.index(a[2]) for a in actuators]
-    zero = numpy.zeros_like(start[0])
-    rest = _rigid_at(mech, dict.fromkeys(mech.input_names, zero), params)[2]
-    at = [(rest[2 * i], rest[2 * i + 1]) for i in where]
-    eps = numpy.finfo(mech.dtype).eps
-    scale = max([float(numpy.nanmax(numpy.abs(numpy.stack(x)))) for x in at] + [mech.stroke_floor])
-    tol = mech.stroke_tolerance * eps * scale
+    at = _action_places(mech, params)
+    tol = mech.stroke_tolerance * numpy.finfo(mech.dtype).eps * _action_scale(mech, at)
 
     def residual(theta):
         rigid = _rigid_at(mech, hinges | dict(zip(surrogates, theta)), params)[2]
@@ -117,15 +113,13 @@ def _actuated_state(mech, actuators, forces, drives, inputs, params, resolve=Fal
     }
     if forces:
         # the stroke each force produced: its point of action's compliant place along d
-        rest = _rigid_at(mech, dict.fromkeys(mech.input_names, zero), params)[2]
         produced = []
-        for n, (_, _, point, d) in zip(names, actuators):
+        for n, (_, _, point, d), x0 in zip(names, actuators, _action_places(mech, params)):
             if n not in forces:
                 produced.append(given[n])
                 continue
-            i = mech.point_names.index(point)
             c = res["points"][point]["compliant"]
-            produced.append(d[0] * (c[0] - rest[2 * i]) + d[1] * (c[1] - rest[2 * i + 1]))
+            produced.append(d[0] * (c[0] - x0[0]) + d[1] * (c[1] - x0[1]))
         with numpy.errstate(all="ignore"):
             angles, ok_f = _rigid_strokes(mech, actuators, hinges, produced, params, angles)
         x, reference, rigid, ok_r, _ = _rigid_at(
