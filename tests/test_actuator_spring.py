@@ -199,6 +199,11 @@ def test_cli_json_and_text(tmp_path, capsys):
         (sprung(300.0, "force"), ["'spring'", "force actuator", 'drive = "stroke"']),
         (sprung(-1.0), ["'spring' must be positive", "spring = -1"]),
         (sprung("1/(kp - 300)"), ["'spring'"]),
+        (
+            sprung(300.0).replace("spring = 300.0\n", "spring = 300.0\nstiffness = 300.0\n"),
+            ["'spring' and 'stiffness'", "keep one"],
+        ),
+        (sprung(-2.0).replace("spring = ", "stiffness = "), ["'stiffness' must be positive"]),
     ],
 )
 def test_bad_springs_exit_2(tmp_path, capsys, text, words):
@@ -217,3 +222,17 @@ def test_fea_refuses_a_spring(tmp_path, capsys):
     assert main(["fea", str(path), "--input", "piezo=1e-3"]) == 2
     err = capsys.readouterr().err
     assert "series spring" in err and "'piezo'" in err and str(path) in err
+
+
+def test_stiffness_is_the_spring_under_another_name():
+    """`stiffness = k` (the name natural frequencies use) gives what `spring = k` gives."""
+    named = {
+        key: symkin.evaluate(
+            symkin.analyze(symkin.loads(sprung(300.0).replace("spring = ", key), "k.toml")),
+            {"piezo": 1e-4},
+            "loaded",
+        ).actuators["piezo"]
+        for key in ("spring = ", "stiffness = ")
+    }
+    assert named["spring = "].stroke == named["stiffness = "].stroke
+    assert named["spring = "].force == named["stiffness = "].force

@@ -46,7 +46,7 @@ TOP_KEYS = (
 LINK_KEYS = ("name", "mass", "inertia", "centre")
 POINT_KEYS = ("name", "link", "at")
 LOAD_KEYS = ("point", "link", "at", "force", "moment")
-ACTUATOR_KEYS = ("name", "link", "at", "direction", "drive", "spring")
+ACTUATOR_KEYS = ("name", "link", "at", "direction", "drive", "spring", "stiffness")
 
 
 #: The largest mechanism file read (a regular file: a FIFO or a device is refused unread).
@@ -510,27 +510,37 @@ class _Reader(HingeEntries):
         self, table: Mapping[str, object], drive: str, entry: str, line: int | None
     ) -> sp.Expr | None:
         """An actuator's `spring` (N per file unit, > 0 and finite with the default parameters;
-        a number or an expression over the parameters): a stroke's series stiffness."""
-        if "spring" not in table:
+        a number or an expression over the parameters): a stroke's series stiffness. `stiffness`
+        is the same key under the name natural frequencies use (docs/file-format.md)."""
+        given = [k for k in ("spring", "stiffness") if k in table]
+        if not given:
             return None
-        where = self.where.key("spring", None, line) if line is not None else None
+        key = given[0]
+        where = self.where.key(key, None, line) if line is not None else None
+        if len(given) > 1:
+            raise self.error(
+                "'spring' and 'stiffness' are one key under two names",
+                entry,
+                where or line,
+                "keep one of them (spring = k, N per file unit)",
+            )
         if drive != "stroke":
             raise self.error(
-                "'spring' is the stiffness in series with a stroke; a force actuator "
+                f"'{key}' is the stiffness in series with a stroke; a force actuator "
                 "delivers its force whatever its own stiffness",
                 entry,
                 where or line,
-                "remove 'spring', or make the actuator drive = \"stroke\" (the spring's "
+                f"remove '{key}', or make the actuator drive = \"stroke\" (the spring's "
                 "free stroke is then the input)",
             )
-        expr = self.expr(table["spring"], entry, "spring", where or line)
-        value = self.finite(expr, entry, "spring", where or line)
+        expr = self.expr(table[key], entry, key, where or line)
+        value = self.finite(expr, entry, key, where or line)
         if not value > 0:
             raise self.error(
-                f"'spring' must be positive, got spring = {short(value)}",
+                f"'{key}' must be positive, got {key} = {short(value)}",
                 entry,
                 where or line,
-                "give the actuator's stiffness in N per file unit, e.g. spring = 2e4 "
+                f"give the actuator's stiffness in N per file unit, e.g. {key} = 2e4 "
                 "(a piezo stack of 20 N/µm in a mm file)",
             )
         return expr
