@@ -411,3 +411,14 @@ def test_the_json_of_a_structure(capsys):
     assert data["points"]["Q"]["deviation"][1] == pytest.approx(
         LEAF3["r"] * 1e-6 / hub_stiffness(), rel=1e-7
     )
+
+
+def test_the_eval_header_of_a_structure_says_it_has_no_input(capsys):
+    """As `check` says it: "inputs: none (a structure)"; its force actuators, given, are named."""
+    code, out, err = run(["eval", str(THREE), "--level", "loaded", "--param", "M=1e-6"], capsys)
+    assert code == 0 and err == ""
+    assert out.splitlines()[0].endswith("; inputs: none (a structure)")
+    code, out, err = run(
+        ["eval", str(LEAF), "--level", "loaded", "--input", "push=0.01", "--param", "F=0"], capsys
+    )
+    assert code == 0 and out.splitlines()[0].endswith("; inputs: push = 0.01")
