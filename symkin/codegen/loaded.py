@@ -86,6 +86,9 @@ class LoadedPlan:
     # rigid angles in the routines' theta argument
     surrogate_index: tuple[int, ...] = ()
     forces: int = 0
+    # the mechanism's size max(L, l_min) at the file's defaults: the truncation estimate's floor
+    # is est_size times it (symkin.physics.reduced.Reduced.estimate_floor)
+    length: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -200,6 +203,7 @@ def loaded_routines(
         report=report,
         surrogate_index=surrogates,
         forces=len(r.forces),
+        length=float(r.length),
     )
     return routines, plan
 
