@@ -291,7 +291,7 @@ static int sk_red_accept(const sk_red *r, const double *x, const double *theta,
 static int sk_red_rigid(const sk_mechanism *m, const double *inputs, const double *params,
                         double s, double *theta)
 {
-    double scaled[SK_NI + 1];
+    double scaled[SK_NI + 1] = {0.0};
     int i;
     for (i = 0; i < SK_M; ++i) {
         theta[i] = 0.0;
