@@ -46,6 +46,9 @@ BEFORE_LOADED = {
     "p_limit": 0.9,
     "est_factor": 3.0,
     "est_limit": 0.01,
+    # new with the table's floor under a point's deviation (not literals before it)
+    "est_share": 0.1,
+    "est_size": 1e-13,
     "sections": 64,
     "singular": 1e12,
     "buckling_limit": 10.0,

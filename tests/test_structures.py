@@ -183,29 +183,30 @@ def test_the_kinematic_levels_refuse_a_structure(capsys, level):
 
 
 @pytest.mark.parametrize("backend", ["numpy", "c"])
-def test_the_generated_evaluators_refuse_a_structure(capsys, backend):
+def test_the_generated_evaluators_refuse_a_structures_force_actuators(capsys, backend):
+    """A structure's generated evaluators take no inputs (tests/test_structure_codegen.py); its
+    force actuators would be their inputs, and are refused, naming the [[load]] way."""
     code, out, err = run(
         ["eval", str(LEAF), "--level", "loaded", "--backend", backend, "--input", "push=0"], capsys
     )
     assert code == 2 and out == ""
-    assert "structure" in err and f"--backend {backend}" in err and "--backend sympy" in err
+    assert "structure's force actuators" in err and "--backend sympy" in err
 
 
-def test_derive_tolerance_sweep_and_tradeoff_refuse_a_structure(tmp_path, capsys):
+def test_derive_writes_a_structures_evaluators_and_tradeoff_refuses_it(tmp_path, capsys):
+    """derive, tolerance and sweep take a structure at `loaded` (its evaluators hold that level
+    alone); tradeoff, which compares variants over the inputs' range, refuses it."""
     out_dir = tmp_path / "out"
-    for args in (
-        ["derive", str(THREE), "-o", str(out_dir), "--quiet"],
-        ["tolerance", str(THREE), "--level", "loaded", "--vary", "L=±1e-5"],
-        ["sweep", str(THREE), "--level", "loaded", "--vary", "L=normal(0.02,1e-5)"],
-        ["tradeoff", str(THREE)],
-    ):
-        code, out, err = run(args, capsys)
-        assert code == 2 and out == "", args
-        assert "structure" in err and "does not take structures" in err, args
-        assert "fix: evaluate it with symkin eval --level loaded" in err, args
-    assert not out_dir.exists()
-    with pytest.raises(symkin.InputError, match="structure"):
-        symkin.compile(symkin.load(THREE), backend="numpy")
+    code, out, err = run(
+        ["derive", str(THREE), "-o", str(out_dir), "--quiet", "--emit", "numpy"], capsys
+    )
+    assert code == 0 and err == ""
+    module = (out_dir / "three_leaf.py").read_text()
+    assert "levels: loaded." in module and "inputs none (a structure)." in module
+    code, out, err = run(["tradeoff", str(THREE)], capsys)
+    assert code == 2 and out == ""
+    assert "structure" in err and "tradeoff" in err and "does not take structures" in err
+    assert "fix: evaluate it with symkin eval --level loaded" in err
 
 
 def test_a_locked_linkage_with_an_input_is_still_refused(tmp_path, capsys):
@@ -411,3 +412,14 @@ def test_the_json_of_a_structure(capsys):
     assert data["points"]["Q"]["deviation"][1] == pytest.approx(
         LEAF3["r"] * 1e-6 / hub_stiffness(), rel=1e-7
     )
+
+
+def test_the_eval_header_of_a_structure_says_it_has_no_input(capsys):
+    """As `check` says it: "inputs: none (a structure)"; its force actuators, given, are named."""
+    code, out, err = run(["eval", str(THREE), "--level", "loaded", "--param", "M=1e-6"], capsys)
+    assert code == 0 and err == ""
+    assert out.splitlines()[0].endswith("; inputs: none (a structure)")
+    code, out, err = run(
+        ["eval", str(LEAF), "--level", "loaded", "--input", "push=0.01", "--param", "F=0"], capsys
+    )
+    assert code == 0 and out.splitlines()[0].endswith("; inputs: push = 0.01")

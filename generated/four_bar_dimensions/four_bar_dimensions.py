@@ -421,6 +421,13 @@ def _prepare(mech, inputs, level, params):
         raise ValueError(
             f"inputs must be exactly {mech.input_names}{ignored}, got {tuple(sorted(inputs))}"
         )
+    if not mech.input_names:
+        # a structure (docs/levels.md, "Structures"): no inputs, the batch is its parameters'
+        # arrays broadcast, carried by one zero array of their shape that no routine reads
+        values = [numpy.asarray(v, dtype=mech.dtype) for v in mech.parameters(params)]
+        shape = numpy.broadcast_shapes(*(v.shape for v in values))
+        p = [numpy.broadcast_to(v, shape) if v.shape else mech.dtype(v) for v in values]
+        return [numpy.zeros(shape, dtype=mech.dtype)], p
     arrays = numpy.broadcast_arrays(
         *(numpy.asarray(inputs[n], dtype=mech.dtype) for n in mech.input_names)
     )
@@ -429,13 +436,23 @@ def _prepare(mech, inputs, level, params):
 
 def _blocks(run, arrays, *args):
     """run(arrays, *args) over cache-sized blocks of the flattened inputs, its nested dict of
-    arrays (elements on the last axis) joined and shaped like the inputs."""
+    arrays (elements on the last axis) joined and shaped like the inputs; parameter values
+    shaped like the inputs (a structure's batch, _prepare) are cut alike."""
     shape = arrays[0].shape
     size = arrays[0].size
     if size <= _CHUNK:
         return run(arrays, *args)
     flat = [a.reshape(-1) for a in arrays]
-    parts = [run([a[k : k + _CHUNK] for a in flat], *args) for k in range(0, size, _CHUNK)]
+
+    def cut(arg, k):
+        if isinstance(arg, list) and any(numpy.shape(v) == shape for v in arg):
+            return [v.reshape(-1)[k : k + _CHUNK] if numpy.shape(v) == shape else v for v in arg]
+        return arg
+
+    parts = [
+        run([a[k : k + _CHUNK] for a in flat], *(cut(g, k) for g in args))
+        for k in range(0, size, _CHUNK)
+    ]
 
     def join(items):
         if isinstance(items[0], dict):

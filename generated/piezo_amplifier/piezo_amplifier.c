@@ -8150,6 +8150,8 @@ static int sk_sensitivity_rows(const sk_mechanism *m, int n, const double *input
 #define SK_LOADED_P_LIMIT 0.9
 #define SK_LOADED_EST_FACTOR 3.0
 #define SK_LOADED_EST_LIMIT 0.01
+#define SK_LOADED_EST_SHARE 0.1
+#define SK_LOADED_EST_SIZE 1e-13
 #define SK_LOADED_SECTIONS 64
 #define SK_LOADED_SINGULAR 1000000000000.0
 #define SK_LOADED_BUCKLING_LIMIT 10.0
@@ -8185,6 +8187,8 @@ typedef struct {
     sk_variant variants[2];
     int unknowns;       /* non-input hinges: x's first entries, delta / scale */
     int loads;          /* the load factor t enters the routines (the file has loads) */
+    double length;      /* the mechanism's size: the truncation estimate's floor is est_size
+                           times it */
     const int *unknown_index;   /* theta index of the unknowns: the non-input hinges', then the
                                    actuators' surrogates' (docs/physics.md, "Actuators at
                                    loaded") */
@@ -8429,7 +8433,7 @@ static int sk_red_accept(const sk_red *r, const double *x, const double *theta,
 static int sk_red_rigid(const sk_mechanism *m, const double *inputs, const double *params,
                         double s, double *theta)
 {
-    double scaled[SK_NI + 1];
+    double scaled[SK_NI + 1] = {0.0};
     int i;
     for (i = 0; i < SK_M; ++i) {
         theta[i] = 0.0;
@@ -8454,7 +8458,7 @@ static int sk_red_answer(const sk_red *r, const double *x, const double *theta,
     const int n = r->v->size, ns = r->v->plates_n;
     double xt[SK_RN + 1], ins[SK_OUT], rel[12 * SK_RS], vals[3 * SK_RS], sys[SK_OUT];
     double x2[SK_RN + 1], res[SK_RN + 1], dev2[2 * SK_RP + 1];
-    double worst = 0.0, e24 = 0.0;
+    double worst = 0.0, e24 = 0.0, least = 0.0;
     const double count = r->v->count;
     int i, j;
     sk_red_inputs(r, x, theta, 1.0, xt, ins);
@@ -8500,8 +8504,20 @@ static int sk_red_answer(const sk_red *r, const double *x, const double *theta,
     sk_red_inputs(r, x2, theta, 1.0, xt, ins);
     sk_red_values2(r, ins, vals);
     r->v->dev(xt, theta, vals, r->params, dev2);
+    /* each point's change against its deviation, at least est_share of the largest one and
+       est_size times the mechanism's size (symkin.physics.reduced.Reduced.estimate_floor) */
     for (i = 0; i < SK_RP; ++i) {
         const double size = hypot(dev[2 * i], dev[2 * i + 1]);
+        if (size > least) {
+            least = size;
+        }
+    }
+    least *= SK_LOADED_EST_SHARE;
+    if (SK_LOADED_EST_SIZE * r->l->length > least) {
+        least = SK_LOADED_EST_SIZE * r->l->length;
+    }
+    for (i = 0; i < SK_RP; ++i) {
+        const double own = hypot(dev[2 * i], dev[2 * i + 1]), size = own > least ? own : least;
         if (size > 0.0) {
             const double e = hypot(dev2[2 * i] - dev[2 * i], dev2[2 * i + 1] - dev[2 * i + 1]) / size;
             if (e > e24) {
@@ -8693,10 +8709,10 @@ static const double sk_loaded_scale1[9] = {0.039275205738995705, 0.0392752057389
 static const double sk_loaded_scale2[13] = {0.039275205738995705, 0.039275205738995705, 0.039275205738995705, 0.039275205738995705, 6.427599787083612, 6.427599787083612, 409.13851793663264, 6.427599787083612, 1.0, 1.0, 1.0, 1.0};
 static const int sk_loaded_unknown_index[5] = {1, 2, 3, 0};
 /* the loaded level: per variant (one, two half plates per plate) its routines, size, half
-   plates and the unknowns' scales; the unknowns; whether the file has loads */
+   plates and the unknowns' scales; the unknowns; whether the file has loads; its size */
 static const sk_loaded sk_loaded_tables = {
     {{1, sk_loaded_plates1, sk_loaded_system1, sk_loaded_res1, sk_loaded_dev1, 8, 4, sk_loaded_scale1}, {2, sk_loaded_plates2, sk_loaded_system2, sk_loaded_res2, sk_loaded_dev2, 12, 8, sk_loaded_scale2}},
-    4, 0,
+    4, 0, 63.65339029956478,
     sk_loaded_unknown_index
 };
 

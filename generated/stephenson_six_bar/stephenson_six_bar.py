@@ -433,6 +433,13 @@ def _prepare(mech, inputs, level, params):
         raise ValueError(
             f"inputs must be exactly {mech.input_names}{ignored}, got {tuple(sorted(inputs))}"
         )
+    if not mech.input_names:
+        # a structure (docs/levels.md, "Structures"): no inputs, the batch is its parameters'
+        # arrays broadcast, carried by one zero array of their shape that no routine reads
+        values = [numpy.asarray(v, dtype=mech.dtype) for v in mech.parameters(params)]
+        shape = numpy.broadcast_shapes(*(v.shape for v in values))
+        p = [numpy.broadcast_to(v, shape) if v.shape else mech.dtype(v) for v in values]
+        return [numpy.zeros(shape, dtype=mech.dtype)], p
     arrays = numpy.broadcast_arrays(
         *(numpy.asarray(inputs[n], dtype=mech.dtype) for n in mech.input_names)
     )
@@ -441,13 +448,23 @@ def _prepare(mech, inputs, level, params):
 
 def _blocks(run, arrays, *args):
     """run(arrays, *args) over cache-sized blocks of the flattened inputs, its nested dict of
-    arrays (elements on the last axis) joined and shaped like the inputs."""
+    arrays (elements on the last axis) joined and shaped like the inputs; parameter values
+    shaped like the inputs (a structure's batch, _prepare) are cut alike."""
     shape = arrays[0].shape
     size = arrays[0].size
     if size <= _CHUNK:
         return run(arrays, *args)
     flat = [a.reshape(-1) for a in arrays]
-    parts = [run([a[k : k + _CHUNK] for a in flat], *args) for k in range(0, size, _CHUNK)]
+
+    def cut(arg, k):
+        if isinstance(arg, list) and any(numpy.shape(v) == shape for v in arg):
+            return [v.reshape(-1)[k : k + _CHUNK] if numpy.shape(v) == shape else v for v in arg]
+        return arg
+
+    parts = [
+        run([a[k : k + _CHUNK] for a in flat], *(cut(g, k) for g in args))
+        for k in range(0, size, _CHUNK)
+    ]
 
     def join(items):
         if isinstance(items[0], dict):
@@ -906,8 +923,13 @@ class _Batch:
         vals2 = self._values2(ins2)
         dev2 = numpy.array([_red_column(v, b) for v in self.dev_fn(args2, theta, vals2, p)])
         e24 = numpy.zeros(b)
-        for k in range(len(dev) // 2):
-            size = numpy.hypot(dev[2 * k], dev[2 * k + 1])
+        # each point's change against its deviation, at least est_share of the largest one and
+        # est_size times the mechanism's size (reduced.py's Reduced.estimate_floor)
+        sizes = [numpy.hypot(dev[2 * k], dev[2 * k + 1]) for k in range(len(dev) // 2)]
+        largest = numpy.max(sizes, axis=0) if sizes else numpy.zeros(b)
+        least = numpy.maximum(tb.est_share * largest, tb.est_size * tb.length)
+        for k, size in enumerate(sizes):
+            size = numpy.maximum(size, least)
             e = numpy.hypot(dev2[2 * k] - dev[2 * k], dev2[2 * k + 1] - dev[2 * k + 1]) / size
             e24 = numpy.where((size > 0) & (e > e24), e, e24)
         estimate = tb.est_factor * e24**2
@@ -12377,6 +12399,7 @@ _MECHANISM = _Mechanism(
         relation4=_plate_relation4, values4=_plate_values4, values2=_plate_values2, rest4=_plate_rest4,
         unknowns=6, unknown_index=(1, 2, 3, 4, 5, 6, ),
         loads=False,
+        length=0.13,  # the mechanism's size: the truncation estimate's floor
         # its rules: Newton, continuation, refusals, buckling search (symkin.core.settings.LoadedSettings)
         tol=1e-12,
         max_iter=12,
@@ -12395,6 +12418,8 @@ _MECHANISM = _Mechanism(
         p_limit=0.9,
         est_factor=3.0,
         est_limit=0.01,
+        est_share=0.1,
+        est_size=1e-13,
         sections=64,
         singular=1000000000000.0,
         buckling_limit=10.0,

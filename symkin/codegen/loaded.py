@@ -91,6 +91,9 @@ class LoadedPlan:
     forces: int = 0
     # the natural frequencies' tables (symkin.codegen.modes; None: no link has a mass)
     modes: ModesPlan | None = None
+    # the mechanism's size max(L, l_min) at the file's defaults: the truncation estimate's floor
+    # is est_size times it (symkin.physics.reduced.Reduced.estimate_floor)
+    length: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -215,6 +218,7 @@ def loaded_routines(
         surrogate_index=surrogates,
         forces=len(r.forces),
         modes=modes,
+        length=float(r.length),
     )
     return routines, plan
 

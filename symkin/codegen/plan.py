@@ -218,9 +218,6 @@ def plan(
     routines of the input moments, point stiffness and plate stress (symkin.codegen.loaded)."""
     an, kin = analysis, analysis.kin
     mech = an.mechanism
-    mech.refuse_structure(
-        what="generated code (derive, tolerance, sweep, tradeoff, symkin.compile)"
-    )
     requested = levels
     forced = any(a.drive != "stroke" for a in mech.actuators)
     hidden = {a.point for a in mech.actuators}  # the actuators' points: always computed
@@ -235,7 +232,11 @@ def plan(
         and (lv.name in levels if levels is not None else stiff or not lv.needs_stiffness)
         # a force actuator drives the `loaded` level alone (the kinematic levels take strokes)
         and not (forced and lv.name not in level_table.LOADED)
+        # a structure has no rigid motion: the physical level alone (docs/levels.md)
+        and not (mech.is_structure and lv.name not in level_table.LOADED)
     )
+    if mech.is_structure:
+        _structure_levels(mech, requested, levels)
     if mech.actuators and not levels and (requested is not None or forced):
         act = next((a for a in mech.actuators if a.drive != "stroke"), mech.actuators[0])
         asked = ", ".join(requested) if requested is not None else "kinematic"
@@ -610,6 +611,27 @@ def _rest(
             continue
         out.append((j, tuple(free.index(b) for b in sorted(depends[a]) if b in free)))
     return tuple(out)
+
+
+def _structure_levels(mech, requested: Sequence[str] | None, levels: tuple) -> None:
+    """A structure's evaluators hold `loaded` alone and take no inputs (docs/levels.md,
+    "Structures"): a kinematic level asked for (none left) is refused as `symkin eval` refuses
+    it, and so is a structure with force actuators (their forces are not yet arguments of the
+    generated evaluators)."""
+    if not levels:
+        asked = [lv for lv in requested or () if lv not in level_table.LOADED]
+        mech.refuse_structure(level=asked[0] if asked else level_table.DEFAULT)
+    if mech.actuators:
+        act = mech.actuators[0]
+        raise InputError(
+            "the generated evaluators do not take a structure's force actuators yet (actuator "
+            f"'{act.name}': its force would be their input; a structure's evaluators take none)",
+            file=mech.path,
+            entry=f"[[actuator]] #{act.index + 1} '{act.name}'",
+            hint="load the structure by a [[load]] whose force is a parameter (--param, "
+            "tolerance --vary and sweep --vary then set it), or evaluate it with symkin eval "
+            '--level loaded --backend sympy (docs/levels.md, "Structures")',
+        )
 
 
 def _fixed_angles(an: Analysis, fixed: Mapping[str, sp.Expr]) -> dict[int, sp.Expr]:

@@ -165,6 +165,12 @@ class LoadedSettings:
     p_limit: float = 0.9  # a plate's compression at this fraction of its sway buckling load
     est_factor: float = 3.0  # the order-4 error is about est_factor·e24² (against equilibrium)
     est_limit: float = 0.01  # refused above this estimated error
+    # e24 measures each point's change against its own deviation, but at least est_share of the
+    # largest point deviation (a point near the centre of a link's rotation barely moves: its
+    # own deviation says nothing of the plates' truncation) and est_size_eps·ε times the
+    # mechanism's size L (every point at rest but for rounding, e.g. alone at a hub's centre)
+    est_share: float = 0.1
+    est_size_eps: float = 1e-13 / EPS64
     # the report (symkin.physics.reported, reduced_reported; reduced_report.c / .py)
     sections: int = 64  # sections per plate where the stress is sampled (one RK4 step each)
     # a point's compliance C scaled by the plates' L and F this ill-conditioned (1-norm) is

@@ -95,8 +95,8 @@ class Mechanism:
 
     def refuse_structure(self, level: str | None = None, what: str | None = None) -> None:
         """Bad input (exit 2) where a structure (:attr:`is_structure`) has nothing to give: a
-        kinematic `level` (its rigid linkage has no motion to compare with) or `what`, a
-        generated evaluator (it would take no inputs; docs/levels.md, "Structures")."""
+        kinematic `level` (its rigid linkage has no motion to compare with) or `what`, tradeoff
+        (its variants are compared over the inputs' range; docs/levels.md, "Structures")."""
         if not self.is_structure:
             return
         locked = "the mechanism is a structure: its rigid linkage has no motion (mobility 0)"
@@ -106,7 +106,8 @@ class Mechanism:
         )
         if what is not None:
             raise InputError(
-                f"{locked}, and {what} does not take structures (it would have no inputs)",
+                f"{locked}, and {what} does not take structures (it compares variants over "
+                "the inputs' range, and a structure has no inputs)",
                 file=self.path,
                 entry="[[hinge]]",
                 hint="evaluate it with symkin eval --level loaded or --level equilibrium "

@@ -26,7 +26,8 @@ Solve: Newton from x = 0 at load factor 1; where a step would turn a hinge by mo
 or the Jacobian's determinant changes sign, continuation along the inputs and loads scaled
 together from the as-fabricated pose. Refusal (the answer is not given): a plate's compression
 at 90 % of its sway buckling load, or the truncation estimate 3 e24² above 1 % (e24: the
-largest relative change of a point's deviation when the quartic terms are dropped, by one Newton
+largest relative change of a point's deviation when the quartic terms are dropped, relative to
+the point's deviation but at least a tenth of the largest one and 1e-13 L, by one Newton
 step with the Jacobian of the last step that converged, a step below tol from the solution; its
 determinant's sign is also the acceptance's: the generated drivers keep its LU and evaluate
 nothing more at the solution).
@@ -859,8 +860,9 @@ class Reduced:
             x2 = x - np.linalg.solve(self.last_jacobian, self.residual(x, theta, 1.0, 2))
         dev2 = self.deviations(x2, theta, 2)
         e24 = 0.0
+        floor = self.estimate_floor(dev.values())
         for name, d4 in dev.items():
-            size = math.hypot(*d4)
+            size = max(math.hypot(*d4), floor)
             if size > 0:
                 e24 = max(e24, math.dist(dev2[name], d4) / size)
         estimate = RULES.est_factor * e24**2
@@ -886,6 +888,20 @@ class Reduced:
             energy=work,
             angle_deviations={h.name: angles.get(h.name, 0.0) for h in self.hinges.values()},
         )
+
+    def estimate_floor(self, deviations) -> float:
+        """The least deviation the truncation estimate measures a point's change against:
+        est_share of the largest point deviation and est_size times the mechanism's size
+        max(L, l_min) (a point near the centre of a link's rotation, or every point at rest but
+        for rounding, is judged against the motion's scale, not its own)."""
+        largest = max((math.hypot(*d) for d in deviations), default=0.0)
+        return max(RULES.est_share * largest, RULES.est_size_eps * EPS64 * self.length)
+
+    @property
+    def length(self) -> float:
+        """The mechanism's size: the largest distance between hinge centres, at least the
+        shortest plate (a cross-spring pivot's hinges share their centre)."""
+        return max(self.L, self.lmin)
 
     def _loads(self, x, theta) -> tuple[dict[str, tuple[float, float, float]], float]:
         """Every hinge's end load at the solution x (tree hinges: statics of the loads and the

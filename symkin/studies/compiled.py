@@ -327,6 +327,8 @@ class Compiled:
         # the file's inputs pruning dropped (they move none of the points) are ignored
         if set(inputs) - set(self.sources.pruned) != set(self.inputs):
             raise ValueError(f"inputs must be exactly {self.inputs}, got {tuple(sorted(inputs))}")
+        if not self.inputs:  # a structure: one configuration per call (its parameters')
+            return np.zeros((1, 0)), ()
         arrays = np.broadcast_arrays(*(np.asarray(inputs[n], dtype=float) for n in self.inputs))
         shape = arrays[0].shape
         return np.stack([a.reshape(-1) for a in arrays], axis=1), shape

@@ -63,8 +63,6 @@ def evaluate(
     # what the backend cannot do is refused before the values are read
     if not levels.get(level).needs_stiffness:
         mech.refuse_structure(level=level)
-    if caps.generated:
-        mech.refuse_structure(what=f"the generated {caps.title} evaluator (--backend {backend})")
     if mech.actuators:
         check_actuated_level(mech, level, backend, sensitivity)
     if caps.generated:

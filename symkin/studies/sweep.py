@@ -136,9 +136,8 @@ STIFFNESS = ("x", "y", "rotation")
 
 def geometry_checks(mech: Mechanism) -> tuple[tuple[str, sp.Expr, bool], ...]:
     """The file's numeric rules that the parameters can break, as expressions that must be
-    positive (and at most 1 for fractions): plate lengths, model parameters, and on every link
-    the squared distance of two hinge centres against the square of half their plate lengths'
-    sum (the rules of symkin.model.mechanism.check_values)."""
+    positive (and at most 1 for fractions): plate lengths and model parameters (the rules of
+    symkin.model.mechanism.check_values; plates may sit closer together than their length)."""
     out = []
     for h in mech.hinges:
         out.append((f"the plate length of hinge '{h.name}'", sp.sympify(h.length), False))
@@ -147,18 +146,6 @@ def geometry_checks(mech: Mechanism) -> tuple[tuple[str, sp.Expr, bool], ...]:
             if spec is not None and spec.kind in ("number", "fraction"):
                 out.append(
                     (f"'{key}' of hinge '{h.name}'", sp.sympify(raw), spec.kind == "fraction")
-                )
-    for link in mech.links:
-        on_link = [h for h in mech.hinges if link.name in h.links]
-        for i, a in enumerate(on_link):
-            for b in on_link[i + 1 :]:
-                gap2 = (a.at[0] - b.at[0]) ** 2 + (a.at[1] - b.at[1]) ** 2
-                out.append(
-                    (
-                        f"the plates of '{a.name}' and '{b.name}' on link '{link.name}'",
-                        gap2 - ((a.length + b.length) / 2) ** 2,
-                        False,
-                    )
                 )
     symbols = {p.symbol for p in mech.parameters}
     return tuple((rule, e, frac) for rule, e, frac in out if e.free_symbols & symbols)
@@ -637,8 +624,9 @@ def check_grid(evaluator: Compiled, grid: Grid, level: str) -> None:
 
 def text(result: Sweep) -> str:
     """The summary of `symkin sweep`."""
-    ranges = ", ".join(
-        f"{k} in [{v[0]:g}, {v[1]:g}] ({v[2]})" for k, v in result.grid.as_json().items()
+    ranges = (
+        ", ".join(f"{k} in [{v[0]:g}, {v[1]:g}] ({v[2]})" for k, v in result.grid.as_json().items())
+        or "its one configuration (a structure: no inputs)"
     )
     lines = [
         f"{result.name}: {result.samples} samples of "

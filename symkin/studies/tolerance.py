@@ -205,10 +205,16 @@ def run(
 
 def text(result: Tolerance) -> str:
     """The ranked tables of `symkin tolerance`."""
+    grid = result.grid.as_json()
+    over = (
+        f"over {result.configurations} configurations of "
+        + ", ".join(f"{k} in [{v[0]:g}, {v[1]:g}]" for k, v in grid.items())
+        if grid
+        else "at its one configuration (a structure: no inputs)"
+    )
     lines = [
         f"{result.name}: linear stack-up of the tolerances at level {result.level} "
-        f"({result.backend}), over {result.configurations} configurations of "
-        + ", ".join(f"{k} in [{v[0]:g}, {v[1]:g}]" for k, v in result.grid.as_json().items())
+        f"({result.backend}), {over}"
         + (f"; {result.failed} could not be evaluated" if result.failed else "")
         + (
             f"; {result.beyond_reach} beyond the rigid linkage's reach (no deviation)"
@@ -216,9 +222,13 @@ def text(result: Tolerance) -> str:
             else ""
         )
     ]
+
+    def where(at: Mapping[str, float]) -> str:
+        return ", ".join(f"{k}={v:.4g}" for k, v in at.items()) or "the structure's pose"
+
     for point, t in result.points.items():
         w = t.worst
-        at = ", ".join(f"{k}={v:.4g}" for k, v in w.at.items())
+        at = where(w.at)
         lines += [
             "",
             f"point {point}: |dR| changes by at most {w.worst_case:.4g} (worst case) "
@@ -233,7 +243,7 @@ def text(result: Tolerance) -> str:
                 f"{result.vary[p] * abs(w.rates[p]):>13.4e} {100 * share:>6.1f}%"
             )
         pk = t.peak
-        pat = ", ".join(f"{k}={v:.4g}" for k, v in pk.at.items())
+        pat = where(pk.at)
         lines.append(
             f"  largest |dR| over the range: {pk.nominal:.4g} at {pat}, "
             f"± {pk.worst_case:.4g} (worst case), ± {pk.rss:.4g} (RSS)"
@@ -241,7 +251,7 @@ def text(result: Tolerance) -> str:
         for key, s in t.components.items():
             lines.append(
                 f"  {key}: changes by at most {s.worst_case:.4g} (worst case; RSS "
-                f"{s.rss:.4g}) at " + ", ".join(f"{k}={v:.4g}" for k, v in s.at.items())
+                f"{s.rss:.4g}) at " + where(s.at)
             )
     return "\n".join(lines) + "\n"
 

@@ -207,7 +207,10 @@ class Grid:
 
     @property
     def rows(self) -> np.ndarray:
-        """(n, n_inputs): every combination, the last input varying fastest."""
+        """(n, n_inputs): every combination, the last input varying fastest; without inputs
+        (a structure) one configuration, (1, 0)."""
+        if not self.values:
+            return np.zeros((1, 0))
         mesh = np.meshgrid(*self.values.values(), indexing="ij")
         return np.stack([m.reshape(-1) for m in mesh], axis=1)
 

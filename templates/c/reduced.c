@@ -39,6 +39,8 @@ typedef struct {
     sk_variant variants[2];
     int unknowns;       /* non-input hinges: x's first entries, delta / scale */
     int loads;          /* the load factor t enters the routines (the file has loads) */
+    double length;      /* the mechanism's size: the truncation estimate's floor is est_size
+                           times it */
 #if defined(SK_ACT_LOADED)
     const int *unknown_index;   /* theta index of the unknowns: the non-input hinges', then the
                                    actuators' surrogates' (docs/physics.md, "Actuators at
@@ -289,7 +291,7 @@ static int sk_red_accept(const sk_red *r, const double *x, const double *theta,
 static int sk_red_rigid(const sk_mechanism *m, const double *inputs, const double *params,
                         double s, double *theta)
 {
-    double scaled[SK_NI + 1];
+    double scaled[SK_NI + 1] = {0.0};
     int i;
     for (i = 0; i < SK_M; ++i) {
         theta[i] = 0.0;
@@ -319,7 +321,7 @@ static int sk_red_answer(const sk_red *r, const double *x, const double *theta,
     const int n = r->v->size, ns = r->v->plates_n;
     double xt[SK_RN + 1], ins[SK_OUT], rel[12 * SK_RS], vals[3 * SK_RS], sys[SK_OUT];
     double x2[SK_RN + 1], res[SK_RN + 1], dev2[2 * SK_RP + 1];
-    double worst = 0.0, e24 = 0.0;
+    double worst = 0.0, e24 = 0.0, least = 0.0;
     const double count = r->v->count;
     int i, j;
     sk_red_inputs(r, x, theta, 1.0, xt, ins);
@@ -365,8 +367,20 @@ static int sk_red_answer(const sk_red *r, const double *x, const double *theta,
     sk_red_inputs(r, x2, theta, 1.0, xt, ins);
     sk_red_values2(r, ins, vals);
     r->v->dev(xt, theta, vals, r->params, dev2);
+    /* each point's change against its deviation, at least est_share of the largest one and
+       est_size times the mechanism's size (symkin.physics.reduced.Reduced.estimate_floor) */
     for (i = 0; i < SK_RP; ++i) {
         const double size = hypot(dev[2 * i], dev[2 * i + 1]);
+        if (size > least) {
+            least = size;
+        }
+    }
+    least *= SK_LOADED_EST_SHARE;
+    if (SK_LOADED_EST_SIZE * r->l->length > least) {
+        least = SK_LOADED_EST_SIZE * r->l->length;
+    }
+    for (i = 0; i < SK_RP; ++i) {
+        const double own = hypot(dev[2 * i], dev[2 * i + 1]), size = own > least ? own : least;
         if (size > 0.0) {
             const double e = hypot(dev2[2 * i] - dev[2 * i], dev2[2 * i + 1] - dev[2 * i + 1]) / size;
             if (e > e24) {

@@ -342,8 +342,13 @@ class _Batch:
         vals2 = self._values2(ins2)
         dev2 = numpy.array([_red_column(v, b) for v in self.dev_fn(args2, theta, vals2, p)])
         e24 = numpy.zeros(b)
-        for k in range(len(dev) // 2):
-            size = numpy.hypot(dev[2 * k], dev[2 * k + 1])
+        # each point's change against its deviation, at least est_share of the largest one and
+        # est_size times the mechanism's size (reduced.py's Reduced.estimate_floor)
+        sizes = [numpy.hypot(dev[2 * k], dev[2 * k + 1]) for k in range(len(dev) // 2)]
+        largest = numpy.max(sizes, axis=0) if sizes else numpy.zeros(b)
+        least = numpy.maximum(tb.est_share * largest, tb.est_size * tb.length)
+        for k, size in enumerate(sizes):
+            size = numpy.maximum(size, least)
             e = numpy.hypot(dev2[2 * k] - dev[2 * k], dev2[2 * k + 1] - dev[2 * k + 1]) / size
             e24 = numpy.where((size > 0) & (e > e24), e, e24)
         estimate = tb.est_factor * e24**2
