@@ -195,3 +195,30 @@ def test_loaded_refuses_a_notch_naming_it():
     with pytest.raises(InputError, match="circular") as err:
         symkin.evaluate(symkin.analyze(mech), {"A0": "0.05"}, level="loaded")
     assert err.value.exit_code == 2 and "A0" in str(err.value) and "equilibrium" in str(err.value)
+
+
+def test_a_notch_file_derives_its_kinematic_levels():
+    """A file with notches and their stiffness derives the kinematic levels (the generated
+    `loaded` takes uniform plates); asked for `loaded`, the derivation refuses, naming the
+    hinge."""
+    from symkin.codegen import pipeline
+
+    mech = four_bar()
+    an = symkin.analyze(mech)
+    plan, _ = pipeline.build(an, "numpy", mech.path, sensitivity=False)
+    assert [lv.name for lv in plan.levels] == ["paper", "first_order", "exact"]
+    with pytest.raises(InputError, match="circular"):
+        pipeline.build(an, "numpy", mech.path, sensitivity=False, levels=("loaded",))
+
+
+def test_notch_parallelogram_at_equilibrium_translates():
+    """Four circular notches (t/R = 0.1) in a parallelogram at 0.05 rad: the stage turns by
+    less than 1e-4 of the input (its legs are equal), and it rises by the kinematic deviation
+    within 10 % (the legs' loop forces add a sideways shift the kinematic level leaves out)."""
+    from test_notches import parallelogram
+
+    an = symkin.analyze(parallelogram())
+    ev = symkin.evaluate(an, {"F1": "0.05"}, level="equilibrium")
+    ex = symkin.evaluate(an, {"F1": "0.05"}, level="exact")
+    assert abs(ev.links["coupler"].deviation) < 1e-4 * 0.05
+    assert ev.points["P"].deviation[1] == pytest.approx(ex.points["P"].deviation[1], rel=0.1)
