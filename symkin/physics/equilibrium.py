@@ -868,6 +868,12 @@ def solve(
         # The last Newton step bounds the solution's error (Newton shrinks it further); the
         # working precision bounds the rounding.
         bound = (2 * solution.last_step + 10.0 ** (RULES.rounding_digits - dps)) * span
+        # a notch's shot is as accurate as its grid, whatever the digits (physics.section_beams)
+        bound += sum(
+            section_beams.SHOT_ERROR * float(h.length)
+            for h in solution.system.hinges
+            if h.grid is not None
+        )
         points, error = {}, 0.0
         for name, (xr, yr) in rigid_points.items():
             xc, yc = _where(solution.system, solution.u, name)
