@@ -34,6 +34,10 @@ def check_text(s: Structure, dropped: Sequence[int] = ()) -> str:
     angular, x, y) the solvers leave out as redundant and check at the solution."""
     mech = s.mechanism
     models = [mech.hinge(name).model for name in s.hinges]
+    profiles = [
+        f"profile {h.profile}, span {_short(h.length)}"
+        for h in (mech.hinge(name) for name in s.hinges)
+    ]
     loops = {c: s.loop_text(c) for c in range(s.n + 1, s.m + 1)}
     redundant = [
         f"the {('angular', 'x', 'y')[r % 3]} closure of the loop of u{s.n + 1 + r // 3} "
@@ -45,6 +49,7 @@ def check_text(s: Structure, dropped: Sequence[int] = ()) -> str:
         mech=mech,
         s=s,
         models=models,
+        profiles=profiles,
         loop_text=loops,
         rank=closure_rank(mech),
         redundant=redundant,

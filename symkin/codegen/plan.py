@@ -224,7 +224,9 @@ def plan(
     names = tuple(
         p.name for p in an.points if points is None or p.name in points or p.name in hidden
     )
-    stiff = mech.has_stiffness
+    # a notch (model.notches) is solved by `equilibrium` alone: the generated `loaded` takes
+    # uniform plates, so a file with one derives the kinematic levels unless asked for more
+    stiff = mech.has_stiffness and all(h.profile == "uniform" for h in mech.hinges if h.is_plate)
     levels = tuple(
         lv
         for lv in level_table.LEVELS

@@ -29,13 +29,22 @@ from .hinges import (
     PLATE_LENGTH,
     PRBM_PRESETS,
     THETA,
+    UNIFORM_MODELS,
     ModelParameter,
     ModelSpec,
     removable_at_zero,
 )
+from .notches import NOTCHES, _normalised, profile_keys
 
-DEFAULT_KEYS = tuple(k for k in HINGE_KEYS if k not in ("name", "links", "at")) + MODEL_KEYS
+#: The keys of the hinge profiles (docs/file-format.md, "Notch hinges"): `profile` and what the
+#: notch profiles take besides `thickness` (a uniform plate takes `length`).
+PROFILE_KEYS = ("profile", *sorted({k for c in NOTCHES for k in c.keys if k != "length"}))
+DEFAULT_KEYS = (
+    tuple(k for k in HINGE_KEYS if k not in ("name", "links", "at")) + MODEL_KEYS + PROFILE_KEYS
+)
 DEFAULT_MODEL = "circular_arc"
+#: The default model of a hinge whose profile is not uniform.
+NOTCH_MODEL = "pure_moment"
 MAX_TABLE_BYTES = 1 << 20
 #: The largest magnitude of a table's θ (rad), f/l and g/l: a plate's clamp is about a plate
 #: length from its other one (a row of 1e308 gave a NaN fit that `check` accepted).
@@ -83,7 +92,12 @@ class HingeEntries(EntryChecks):
         entry = f"[[hinge]] #{i + 1}"
         name = self.option_name(table, entry, line, "--input, --fix and --range")
         entry = f"[[hinge]] #{i + 1} '{name}'"
-        model = table.get("model", defaults.get("model", DEFAULT_MODEL))
+        profile = self.profile_name(table, defaults, entry, line)
+        notch = profile != "uniform"
+        fallback = defaults.get("model", DEFAULT_MODEL)
+        if notch and (fallback in UNIFORM_MODELS or "model" not in defaults):
+            fallback = NOTCH_MODEL  # [defaults]' plate model serves the file's uniform plates
+        model = table.get("model", fallback)
         if not isinstance(model, str):
             raise self.error(
                 f"'model' must be a model name string, got {model!r}"[:200],
@@ -98,8 +112,25 @@ class HingeEntries(EntryChecks):
                 line,
                 suggest(str(model), MODELS) or "models: " + ", ".join(MODELS),
             )
+        if notch and model in UNIFORM_MODELS:
+            raise self.error(
+                f"model '{model}' is a uniform plate's; the hinge's profile is {profile!r}",
+                entry,
+                line,
+                f'remove model (a notch bends as model = "{NOTCH_MODEL}"), or use rigid, table '
+                "or expr",
+            )
         spec = MODELS[model]
-        allowed = HINGE_KEYS + tuple(p.name for p in spec.parameters)
+        own_keys = ("thickness", *profile_keys(profile))
+        for key in table:
+            if key in ("length", *PROFILE_KEYS[1:]) and key not in own_keys:
+                raise self.error(
+                    f"'{key}' does not belong to the {profile} profile",
+                    entry,
+                    line,
+                    self.profile_fix(key, profile),
+                )
+        allowed = HINGE_KEYS + ("profile", *own_keys) + tuple(p.name for p in spec.parameters)
         for key in table:
             if key not in allowed and key in MODEL_KEYS:
                 raise self.error(
@@ -148,18 +179,24 @@ class HingeEntries(EntryChecks):
         where = self.origin("plate_angle", table, entry, line)
         plate_angle = self.expr(merged.get("plate_angle", 0), where[0], "plate_angle", where[1])
         self.finite(plate_angle, where[0], "plate_angle", where[1])
-        if "length" not in merged:
-            raise self.error(
-                "no plate length", entry, line, "set length in the hinge or in [defaults]"
-            )
-        where = self.origin("length", table, entry, line)
-        length = self.expr(merged["length"], where[0], "length", where[1])
-        if not self.finite(length, where[0], "length", where[1]) > 0:
-            raise self.error(
-                f"plate length must be positive, got {length}",
-                *where,
-                "give the plate a positive length",
-            )
+        profile_params: dict[str, sp.Expr] = {}
+        if notch:
+            profile_params = self.profile_values(profile, table, merged, entry, line)
+            length = self.notch_span(profile, profile_params, merged, model, entry, line)
+            profile_params.pop("length", None)
+        else:
+            if "length" not in merged:
+                raise self.error(
+                    "no plate length", entry, line, "set length in the hinge or in [defaults]"
+                )
+            where = self.origin("length", table, entry, line)
+            length = self.expr(merged["length"], where[0], "length", where[1])
+            if not self.finite(length, where[0], "length", where[1]) > 0:
+                raise self.error(
+                    f"plate length must be positive, got {length}",
+                    *where,
+                    "give the plate a positive length",
+                )
         is_input = merged.get("input", False)
         if not isinstance(is_input, bool):
             raise self.error(
@@ -202,7 +239,123 @@ class HingeEntries(EntryChecks):
             pin,
             **stiffness,
             beam=beam,
+            profile=profile,
+            profile_params=tuple(sorted(profile_params.items())),
         )
+
+    # -- profiles (docs/file-format.md, "Notch hinges") --------------------------------------------
+
+    def profile_name(
+        self,
+        table: Mapping[str, object],
+        defaults: Mapping[str, object],
+        entry: str,
+        line: int | None,
+    ) -> str:
+        """The hinge's `profile` (its own, else [defaults]', else "uniform"), a known one."""
+        from .profiles import PROFILES
+
+        profile = table.get("profile", defaults.get("profile", "uniform"))
+        where = self.origin("profile", table, entry, line)
+        if not isinstance(profile, str) or profile not in PROFILES:
+            raise self.error(
+                f"unknown profile {profile!r}"[:200],
+                *where,
+                (suggest(str(profile), PROFILES) if isinstance(profile, str) else None)
+                or "profiles: " + ", ".join(PROFILES),
+            )
+        return profile
+
+    @staticmethod
+    def profile_fix(key: str, profile: str) -> str:
+        """How to fix a profile key written on a hinge whose profile does not take it."""
+        if key == "length":
+            span = next(c.span_text for c in NOTCHES if c.profile == profile)
+            return f"remove length: the span of a {profile} notch is {span}"
+        owners = [c.profile for c in NOTCHES if key in c.keys]
+        return (
+            f'remove {key}, or write profile = "{owners[0]}" (the profile that takes it)'
+            if owners
+            else f"remove {key}"
+        )
+
+    def profile_values(
+        self,
+        profile: str,
+        table: Mapping[str, object],
+        merged: Mapping[str, object],
+        entry: str,
+        line: int | None,
+    ) -> dict[str, sp.Expr]:
+        """A notch's own keys (from the hinge or [defaults]), each a positive finite number, and
+        its thickness, which the shape needs at every level."""
+        out: dict[str, sp.Expr] = {}
+        for key in (*profile_keys(profile), "thickness"):
+            if key not in merged:
+                raise self.error(
+                    f"the {profile} profile needs '{key}'",
+                    entry,
+                    line,
+                    f"add {key} = ... (file unit) to the hinge or to [defaults] "
+                    "(docs/file-format.md, 'Notch hinges')",
+                )
+            where = self.origin(key, table, entry, line)
+            expr = self.expr(merged[key], where[0], key, where[1])
+            value = self.finite(expr, where[0], key, where[1])
+            if not value > 0:
+                raise self.error(
+                    f"'{key}' of the {profile} profile must be positive, got {short(value)}"
+                    + (" (the notch's thickness T(x) would not be positive)")
+                    * (key == "thickness"),
+                    *where,
+                    f"give {key} a positive length in the file's unit",
+                )
+            if key != "thickness":
+                out[key] = expr
+        return out
+
+    def notch_span(
+        self,
+        profile: str,
+        params: Mapping[str, sp.Expr],
+        merged: Mapping[str, object],
+        model: str,
+        entry: str,
+        line: int | None,
+    ) -> sp.Expr:
+        """The span of a notch (its hinge's length), checked: fillets that fit the length,
+        the shape's ratios numbers (the pure-moment series takes them as numbers)."""
+        from .profiles import PROFILES
+
+        cls = PROFILES[profile]
+        span = cls.span(params)  # type: ignore[attr-defined]
+        if profile == "corner_filleted":
+            fillet, length = (self.finite(params[k], entry, k, line) for k in ("fillet", "length"))
+            if not 2 * fillet <= length:
+                raise self.error(
+                    f"two fillets of radius {short(fillet)} do not fit the length {short(length)}",
+                    entry,
+                    line,
+                    "make fillet at most length/2",
+                )
+        if model == NOTCH_MODEL:
+            stand_in = Hinge(
+                "?", 0, ("", ""), (0, 0), 0, span, NOTCH_MODEL,
+                thickness=self.expr(merged["thickness"], entry, "thickness", line),
+                profile=profile,
+                profile_params=tuple(params.items()),
+            )  # fmt: skip
+            try:
+                _normalised(cls.from_hinge(stand_in, 1))  # type: ignore[arg-type]
+            except ValueError as exc:
+                raise self.error(
+                    str(exc),
+                    entry,
+                    line,
+                    "give the notch's keys as numbers, or as expressions of one parameter "
+                    "that scales them all (a notch's shape ratios enter its series as numbers)",
+                ) from None
+        return span
 
     def origin(
         self, key: str, table: Mapping[str, object], entry: str, line: int | None

@@ -63,6 +63,12 @@ MODELS: dict[str, ModelSpec] = {
         ModelSpec("rigid", (), "ideal revolute joint at the plate's midpoint (eq. 3.1)"),
         ModelSpec("circular_arc", (), "plate bent into a circular arc by a pure end moment"),
         ModelSpec(
+            "pure_moment",
+            (),
+            "hinge bent by a pure end moment, curvature along it proportional to 1/I(x): the "
+            "circular arc of a uniform plate, a series in theta for a notch (model.notches)",
+        ),
+        ModelSpec(
             "prbm",
             (
                 ModelParameter("gamma", "fraction", default=PRBM_PRESETS["force"]["gamma"]),
@@ -124,6 +130,9 @@ BEAMS = ("reissner", "elastica")
 #: Values of the `pin` key: the rigid reference pin at the plate midpoint (the paper's R_a), or at
 #: the pivot of the model's pseudo-rigid-body equivalent (see :func:`pivot_distance`).
 PINS = ("midpoint", "prbm")
+#: The models of a uniform plate only: a hinge of another profile refuses them (its default is
+#: `pure_moment`; `rigid`, `table` and `expr` take any profile, their l the span).
+UNIFORM_MODELS = ("circular_arc", "prbm", "small_deflection", "elastica_force")
 #: Every key a model may take, over all models (allowed in [defaults]).
 MODEL_KEYS = tuple(sorted({p.name for spec in MODELS.values() for p in spec.parameters}))
 
@@ -197,7 +206,12 @@ def pivot_distance(hinge) -> _sp.Expr:
     elsewhere the model carries an O(l θ) deviation (docs/physics.md)."""
     l = hinge.length
     pin = getattr(hinge, "pin", "midpoint")  # stand-in hinges of the reports have none
-    if pin == "midpoint" or hinge.model in ("rigid", "circular_arc", "small_deflection"):
+    if pin == "midpoint" or hinge.model in (
+        "rigid",
+        "circular_arc",
+        "small_deflection",
+        "pure_moment",
+    ):
         return l / 2
     if hinge.model == "prbm":
         gamma, c = _prbm_constants(hinge)
@@ -260,7 +274,16 @@ def _midpoint_functions(hinge) -> PlateFunctions:
     sinr, cosr = _special.sinr, _special.cosr
     if model == "rigid":
         return PlateFunctions(model, l, f_rigid, g_rigid, _sp.S.Zero, _sp.S.Zero, f_rigid, g_rigid)
-    if model == "circular_arc":
+    if model == "pure_moment" and getattr(hinge, "profile", "uniform") != "uniform":
+        # a notch: the rigid pin at its centre plus D(θ)(cos θ/2, sin θ/2), D a series in θ²
+        from .notches import deviation_series
+        from .profiles import section_of
+
+        u = t / 2
+        dev = l * deviation_series(section_of(hinge, 1), t)
+        df, dg = _sp.cos(u) * dev, _sp.sin(u) * dev
+        return PlateFunctions(model, l, f_rigid + df, g_rigid + dg, df, dg, f_rigid, g_rigid)
+    if model in ("circular_arc", "pure_moment"):
         # f = l sin θ/θ, g = l (1 - cos θ)/θ; deviation l u^2 K(u) (cos u, sin u), u = θ/2
         u = t / 2
         f = l * sinr(0)(t)

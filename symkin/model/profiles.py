@@ -5,10 +5,11 @@ from __future__ import annotations
 
 from typing import Any
 
+from .notches import NOTCHES
 from .sections import Section, UniformPlate
 
 #: The profiles by name: one row per profile (:func:`register` adds one at run time).
-PROFILES: dict[str, type[Section]] = {cls.profile: cls for cls in (UniformPlate,)}
+PROFILES: dict[str, type[Section]] = {cls.profile: cls for cls in (UniformPlate, *NOTCHES)}
 
 
 def register(cls: type[Section]) -> type[Section]:

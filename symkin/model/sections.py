@@ -37,7 +37,7 @@ from typing import Any, ClassVar
 import mpmath
 import sympy as sp
 
-from . import hinges as _hinges
+from . import special as _special
 
 #: A plate at least this many thicknesses wide bends in plane strain: E' = E/(1 − ν²).
 WIDE = 5
@@ -340,15 +340,6 @@ class Section(ABC):
 
 
 @dataclass(frozen=True)
-class _Arc:
-    """The stand-in hinge model.hinges reads for the circular arc of a uniform plate."""
-
-    length: sp.Expr
-    model: str = "circular_arc"
-    pin: str = "midpoint"
-
-
-@dataclass(frozen=True)
 class UniformPlate(Section):
     """A plate of one thickness t: EI = E'·b·t³/12 (times s²), the closed-form compliances
     l/EI, l²/(2EI), l³/(3EI), l/EA, l/κGA, the circular arc under a pure moment (model.hinges)
@@ -387,9 +378,9 @@ class UniformPlate(Section):
         )
 
     def shape(self, theta: Any) -> tuple[sp.Expr, sp.Expr]:
-        """The circular arc of model.hinges: f = l sin θ/θ, g = l (1 − cos θ)/θ."""
-        arc = _hinges.plate_functions(_Arc(self.length))
-        return arc.f.xreplace({_hinges.THETA: theta}), arc.g.xreplace({_hinges.THETA: theta})
+        """The circular arc, written as model.hinges writes it: f = l sin θ/θ, g = l (1 − cos θ)/θ
+        through the kernels sinr(0), cosr(1) (exact at θ = 0)."""
+        return self.length * _special.sinr(0)(theta), -self.length * theta * _special.cosr(1)(theta)
 
     def largest_stress(
         self,

@@ -41,7 +41,8 @@ from ..core.settings import SOLVER
 from ..model.expressions import substitute
 from ..model.hinges import pivot_distance
 from ..model.mechanism import Mechanism
-from . import arith, beams, reported
+from ..model.notches import Notch
+from . import arith, beams, reported, section_beams
 from .result import ActuatorLoad, HingeLoad, InputLoad, PlateStress
 from .stiffness import PlateStiffness, plate_stiffness
 
@@ -82,6 +83,10 @@ class _Hinge:
     shear: object = None
     # thickness over length, t/l = √(12 EI/(EA l²)), for the plate's strain (System.strain)
     slender: float = 0.0
+    # a notch (model.notches): its section sampled for the shot (physics.section_beams) and its
+    # stress-concentration factor; None and 1 for a uniform plate
+    grid: object = None
+    kt: float = 1.0
 
 
 @dataclass
@@ -197,7 +202,17 @@ class System:
                 fy[i] = fy[i] + f[1]
                 mz[i] = mz[i] + at[0] * f[1] - at[1] * f[0] + m
 
-        plates = [h for h in self.hinges if h.plate]
+        plates = [h for h in self.hinges if h.plate and h.grid is None]
+        cut = [h for h in self.hinges if h.grid is not None]
+        notches = {}
+        if cut:
+            rows3 = np.array([u[self.index[h.name] + j] for h in cut for j in range(3)])
+            rows3 = rows3.reshape(len(cut), 3, *u.shape[1:])
+            shot = section_beams.shoot_profiles(
+                rows3[:, 0], rows3[:, 1], rows3[:, 2], [h.grid for h in cut], report is not None
+            )
+            notches = {h.name: k for k, h in enumerate(cut)}
+        end = None
         if plates:
             loads = np.array([u[self.index[h.name] + j] for h in plates for j in range(3)])
             loads = loads.reshape(len(plates), 3, *u.shape[1:])
@@ -224,26 +239,27 @@ class System:
             _, _, phi_m = self.pose(u, h.M)
             base = self.index[h.name]
             if h.plate:
-                k = ends[h.name]
+                k = notches[h.name] if h.name in notches else ends[h.name]
+                ends_of = shot if h.name in notches else end
                 xp, yp = self.place(u, h.P, h.clamp_p)
                 xm, ym = self.place(u, h.M, h.clamp_m)
                 cb = arith.cos(phi_p) * h.cos_a - arith.sin(phi_p) * h.sin_a  # plate frame
                 sb = arith.sin(phi_p) * h.cos_a + arith.cos(phi_p) * h.sin_a
                 dx, dy = xm - xp, ym - yp
                 rows += [
-                    (cb * dx + sb * dy) / h.length - end.x[k],
-                    (-sb * dx + cb * dy) / h.length - end.y[k],
-                    phi_m - phi_p - end.psi[k],
+                    (cb * dx + sb * dy) / h.length - ends_of.x[k],
+                    (-sb * dx + cb * dy) / h.length - ends_of.y[k],
+                    phi_m - phi_p - ends_of.psi[k],
                 ]
                 scale = h.EI / h.length**2
                 lx, ly = u[base + 1] * scale, u[base + 2] * scale
                 force = (cb * lx - sb * ly, sb * lx + cb * ly)  # by M on the plate
                 m_p = u[base] * h.EI / h.length  # on P at its clamp
-                m_m = end.omega[k] * h.EI / h.length  # by M on the plate
+                m_m = ends_of.omega[k] * h.EI / h.length  # by M on the plate
                 apply(h.P, force, (xp, yp), m_p)
                 apply(h.M, (-force[0], -force[1]), (xm, ym), -m_m)
                 if report is not None:
-                    report[h.name] = (force, m_m, end.energy[k] * h.EI / (2 * h.length))
+                    report[h.name] = (force, m_m, ends_of.energy[k] * h.EI / (2 * h.length))
             else:
                 xp, yp = self.place(u, h.P, h.pin)
                 xm, ym = self.place(u, h.M, h.pin)
@@ -349,6 +365,10 @@ def build(
         u = (sp.cos(h.plate_angle), sp.sin(h.plate_angle))
         d = pivot_distance(h)
         plate = h.is_plate
+        section = stiffness[h.name].section if plate else None
+        grid = None
+        if isinstance(section, Notch):
+            grid = section_beams.grid_of(section, values, stiffness[h.name].stretches)
         hinges.append(
             _Hinge(
                 h.name,
@@ -360,11 +380,15 @@ def build(
                 num(u[0]),
                 num(u[1]),
                 num(length),
-                num(stiffness[h.name].EI) if plate else None,
+                None if not plate else _reference(grid, num) if grid else num(stiffness[h.name].EI),
                 plate,
                 num(inputs[h.name]) if h.input and h.name not in mech.surrogates else None,
-                *_compliances(stiffness.get(h.name) if plate else None, length, num),
-                _slender(stiffness.get(h.name) if plate else None, values),
+                *_compliances(
+                    stiffness.get(h.name) if plate and grid is None else None, length, num
+                ),
+                _slender(stiffness.get(h.name) if plate else None, values, grid),
+                grid,
+                1.0 if grid is None else _float(substitute(section.stress_factor(), values)),
             )
         )
     s = mech.unit_scale
@@ -413,6 +437,13 @@ def build(
     )
 
 
+def _reference(grid: section_beams.SectionGrid, num):
+    """A notch's reference EI₀ as `num` converts numbers (its grid's digits: the shot and
+    the loads use the same value, so its digits beyond do not matter)."""
+    digits = section_beams.GRID_DIGITS
+    return num(sp.Float(mpmath.nstr(grid.EI0, digits), digits))
+
+
 def _compliances(stiff: PlateStiffness | None, length, num) -> tuple:
     """(EI/(EA l²), EI/(κGA l²)) of a Reissner plate, (None, None) for an elastica or a pin."""
     if stiff is None or not stiff.stretches:
@@ -420,11 +451,17 @@ def _compliances(stiff: PlateStiffness | None, length, num) -> tuple:
     return num(stiff.EI / (stiff.EA * length**2)), num(stiff.EI / (stiff.kGA * length**2))
 
 
-def _slender(stiff: PlateStiffness | None, values) -> float:
-    """t/l of a plate from its section, √(12 EI/(EA l²)); 0 for a pin."""
+def _slender(stiff: PlateStiffness | None, values, grid=None) -> float:
+    """t/l of a plate from its section, √(12 EI/(EA l²)); 0 for a pin. A notch's is its
+    thinnest section's t/l times the largest EI₀/EI(x), so that |ψ'(0 or 1)| t/(2l) of
+    System.strain bounds the neck's bending strain (the moment along it lies between its ends'
+    for a hinge with no load along it)."""
     if stiff is None:
         return 0.0
-    return math.sqrt(float(sp.N(substitute(stiff.section.slender_squared(), values), 20)))
+    ratio = math.sqrt(float(sp.N(substitute(stiff.section.slender_squared(), values), 20)))
+    if grid is not None:
+        ratio *= max(float(v) for v in grid.samples["a"])
+    return ratio
 
 
 @dataclass(frozen=True)
@@ -716,7 +753,7 @@ def buckling_factor(
     step halving to MIN_STEP). math.inf when none is met up to `limit` (or the file has no
     loads); AssemblyError (exit 3) when the inputs cannot be reached or the search runs out of
     its budget. Cost: a few solves (a second or two on the examples)."""
-    system = build(mech, values, inputs, plate_stiffness(mech, "equilibrium"), _float)
+    system = build(mech, values, inputs, plate_stiffness(mech, "equilibrium", notches=True), _float)
     if not system.loads:
         return Buckling(math.inf, None)
     started = time.monotonic()
@@ -810,7 +847,7 @@ def solve(
     the rigid linkage reaches that stroke, and then the rigid angles, positions and deviations
     are NaN). `extra_digits` raises
     the working precision (to check the error estimate)."""
-    stiffness = plate_stiffness(mech, "equilibrium")
+    stiffness = plate_stiffness(mech, "equilibrium", notches=True)
     # the rigid linkage first (exit 3 out of its range before any continuation), unless a
     # force actuator's stroke is only known from the equilibrium
     forces = any(a.drive == "force" for a in mech.actuators)
@@ -861,6 +898,12 @@ def solve(
         # The last Newton step bounds the solution's error (Newton shrinks it further); the
         # working precision bounds the rounding.
         bound = (2 * solution.last_step + 10.0 ** (RULES.rounding_digits - dps)) * span
+        # a notch's shot is as accurate as its grid, whatever the digits (physics.section_beams)
+        bound += sum(
+            section_beams.SHOT_ERROR * float(h.length)
+            for h in solution.system.hinges
+            if h.grid is not None
+        )
         points, error = {}, 0.0
         for name, (xr, yr) in rigid_points.items():
             xc, yc = _where(solution.system, solution.u, name)

@@ -21,7 +21,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from ..core.settings import SOLVER
-from . import beams
+from . import beams, section_beams
 from .result import ActuatorLoad, InputLoad, PlateStress
 
 
@@ -191,6 +191,9 @@ def plates(
             continue
         k = system.index[h.name]
         k0, lx, ly = (float(u[k + j]) for j in range(3))
+        if h.grid is not None:
+            out[h.name] = notch_stress((k0, lx, ly), h, moduli[h.name], allowable.get(h.name))
+            continue
         out[h.name] = plate_stress(
             (k0, lx, ly),
             h.stretch,
@@ -201,6 +204,21 @@ def plates(
             sections,
         )
     return out
+
+
+def notch_stress(
+    loads: tuple[float, float, float], hinge, modulus: float, limit: float | None
+) -> PlateStress:
+    """A notch's largest normal stress (Pa): E' times its largest strain along the hinge,
+    |ψ'| T/(2l) + |N|/EA at the nodes of its shot (physics.section_beams), times its
+    stress-concentration factor K_t (model.notches.Notch.stress_factor, docs/physics.md)."""
+    k0, lx, ly = loads
+    end = section_beams.shoot_profile(
+        np.array([k0]), np.array([lx]), np.array([ly]), hinge.grid, strain=True
+    )
+    stress = modulus * end.bend * hinge.kt
+    safety = None if limit is None else (limit / stress if stress > 0 else float("inf"))
+    return PlateStress(stress, end.bend * hinge.kt, safety, end.where)
 
 
 def plate_stress(

@@ -23,6 +23,7 @@ import sympy as sp
 from ..core.errors import InputError
 from ..model.entries import STIFFNESS_REQUIRED as REQUIRED
 from ..model.mechanism import Mechanism
+from ..model.notches import Notch
 from ..model.profiles import section_of
 from ..model.sections import Section
 
@@ -49,11 +50,14 @@ class PlateStiffness:
         return self.beam == "reissner"
 
 
-def plate_stiffness(mech: Mechanism, level: str, uniform: bool = True) -> dict[str, PlateStiffness]:
+def plate_stiffness(
+    mech: Mechanism, level: str, uniform: bool = True, notches: bool = False
+) -> dict[str, PlateStiffness]:
     """EI, EA and κGA of every plate (hinges that are not `rigid`) and its section, by hinge
     name; a plate without E, thickness or width is bad input for `level` (exit 2, naming the
     key and the hinge), and so is a plate whose profile is not uniform when `uniform` (the
-    levels' beams are uniform)."""
+    levels' beams are uniform) unless `notches` and it is a notch (model.notches: `equilibrium`
+    shoots those along their section, physics.section_beams)."""
     out = {}
     for h in mech.hinges:
         if not h.is_plate:
@@ -71,13 +75,16 @@ def plate_stiffness(mech: Mechanism, level: str, uniform: bool = True) -> dict[s
         sec = section_of(h, mech.unit_scale)
         if sec.uniform:
             ei, ea, shear = sec.EI(0), sec.EA(0), sec.kGA(0)
-        elif uniform:
+        elif uniform and not (notches and isinstance(sec, Notch)):
             raise InputError(
                 f"--level {level} takes uniform plates: the hinge's profile is {sec.profile!r}",
                 file=mech.path,
                 line=h.line,
                 entry=f"[[hinge]] '{h.name}'",
-                hint="docs/architecture.md, 'A new profile', says what a level needs from one",
+                hint="ask for --level equilibrium, which shoots a notch along its section "
+                "(docs/physics.md, 'Notch hinges')"
+                if isinstance(sec, Notch)
+                else "docs/architecture.md, 'A new profile', says what a level needs from one",
             )
         else:
             c = sec.compliance()
