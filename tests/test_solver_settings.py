@@ -278,6 +278,17 @@ def test_the_numpy_module_holds_the_tables_numbers(emitted):
 #: central differences and averages, not step cuts: those are the table's).
 COMMON = {"0", "1", "2", "3", "4", "5", "6", "8", "9", "12", "15", "0.0", "1.0", "2.0"}
 PI = "3.141592653589793"
+#: cos d and sin d of an RK4 stage's small turn by their Taylor series (the stress integration
+#: of templates/*/reduced_report.*): the factorials, and the range where the terms left out are
+#: below 2e-18 of them (the series' own, libm beyond it), no solver rule.
+TURN_SERIES = {
+    "0.03": "the turn series' range (|d| <= 0.03: the terms left out below 2e-18)",
+    "24": "4!",
+    "120": "5!",
+    "720": "6!",
+    "5040": "7!",
+    "40320": "8!",
+}
 #: What else a file may hold, and why (none of it a solver rule).
 ALLOWED = {
     "templates/c/runtime.c": {
@@ -287,7 +298,12 @@ ALLOWED = {
     },
     "templates/c/actuators.c": {PI: "the drives' bound |x| <= pi"},
     "templates/c/reduced.c": {PI: "a compliant angle within (-pi, pi); the Euler load's pi^2"},
-    "templates/c/reduced_report.c": {"7": "the stress row's allowable", "12.0": "t^2 / 12"},
+    "templates/c/reduced_report.c": {
+        "7": "the stress row's allowable",
+        "12.0": "t^2 / 12",
+        **TURN_SERIES,
+    },
+    "templates/numpy/reduced_report.py": TURN_SERIES,
     "templates/c/modes.c": {"0.5": "the Jacobi rotation's t = 1/(2 theta) for a huge theta"},
     "templates/numpy/runtime.py": {
         "8192": "_CHUNK: elements per block (memory, not arithmetic)",

@@ -17045,54 +17045,101 @@ typedef struct {
    SK_LOADED_SINGULAR: a point's compliance this ill-conditioned (1-norm, scaled) is singular
    (the generated file's, symkin.core.settings.LoadedSettings). */
 
-/* psi'' of the plate's IVP (symkin.physics.beams): -f_Q (1 + (e_a - e_s) f_N). */
-static double sk_rep_bend(double psi, double lx, double ly, double d)
+/* The end load's components along and across the plate (fn, fq = f_N, f_Q of the plate's IVP,
+   symkin.physics.beams: lx cos psi + ly sin psi, ly cos psi - lx sin psi) once it turns on by
+   d, by the angle-sum rule: cos d and sin d by their Taylor series where |d| <= 0.03 (the terms
+   left out below 2e-18 of them; an RK4 stage turns psi by h times its rate), libm's otherwise.
+   As templates/numpy/reduced_report.py's _turn. */
+static inline void sk_rep_turn(double *fn, double *fq, double d)
 {
-    const double c = cos(psi), s = sin(psi);
-    return -(ly * c - lx * s) * (1.0 + d * (lx * c + ly * s));
+    double cd, sd;
+    const double n0 = *fn, q0 = *fq;
+    if (fabs(d) <= 0.03) {
+        const double d2 = d * d, d4 = d2 * d2;
+        cd = (1 - d2 * (1.0 / 2)) + d4 * ((1.0 / 24 - d2 * (1.0 / 720)) + d4 * (1.0 / 40320));
+        sd = d * ((1 - d2 * (1.0 / 6)) + d4 * (1.0 / 120 - d2 * (1.0 / 5040)));
+    } else {
+        cd = cos(d);
+        sd = sin(d);
+    }
+    *fn = n0 * cd + q0 * sd;
+    *fq = q0 * cd - n0 * sd;
 }
 
-/* One plate's largest normal stress, its strain, safety factor (NaN without an allowable
-   stress) and where along the plate (0..1) into out[0..3], from row = (k0, lx, ly, e_a, e_s,
-   t/l, E', allowable): psi(0) = 0, psi'(0) = k0 by fixed-step RK4, the strain
-   |psi'| t/(2l) + |f_N| (t/l)^2/12 at every section, the parabola's vertex through the three
-   samples around an interior maximum (symkin.physics.reported.plate_stress). */
-static void sk_rep_plate(const double *row, int has_limit, double *out)
+/* psi'' of the plate's IVP (symkin.physics.beams) at psi + turn: -f_Q (1 + (e_a - e_s) f_N). */
+static inline double sk_rep_bend(double fn, double fq, double turn, double d)
 {
-    const double lx = row[1], ly = row[2], d = row[3] - row[4], t = row[5];
+    sk_rep_turn(&fn, &fq, turn);
+    return -fq * (1.0 + d * fn);
+}
+
+/* Plates integrated side by side (their steps interleaved: independent chains of dependent
+   operations), each with its own arithmetic, as alone. */
+#define SK_REP_LANES 4
+
+/* The plates' largest normal stress, its strain, safety factor (NaN without an allowable
+   stress) and where along the plate (0..1) into out[4 k .. 4 k + 3], from rows[8 k ..] = (k0,
+   lx, ly, e_a, e_s, t/l, E', allowable) of each of the n plates: psi(0) = 0, psi'(0) = k0 by
+   fixed-step RK4, the load's components carried from stage to stage by the angle-sum rule
+   (sk_rep_turn: no libm call where the turns are small), the strain |psi'| t/(2l) +
+   |f_N| (t/l)^2/12 at every section, the parabola's vertex through the three samples around an
+   interior maximum (symkin.physics.reported.plate_stress). */
+static void sk_rep_plates(const double *rows, const int *limits, int n, double *out)
+{
     const double h = 1.0 / SK_LOADED_SECTIONS;
-    double strain[SK_LOADED_SECTIONS + 1], psi = 0.0, om = row[0], value, where, stress;
-    int i, j = 0;
-    for (i = 0; i <= SK_LOADED_SECTIONS; ++i) {
-        strain[i] = fabs(om) * t / 2.0 + fabs(lx * cos(psi) + ly * sin(psi)) * t * t / 12.0;
-        if (strain[i] > strain[j]) {
-            j = i;                  /* the first largest, as numpy's argmax */
+    double strain[SK_REP_LANES][SK_LOADED_SECTIONS + 1];
+    double fn[SK_REP_LANES], fq[SK_REP_LANES], om[SK_REP_LANES], d[SK_REP_LANES];
+    double t[SK_REP_LANES];
+    int first, lanes, l, i, j[SK_REP_LANES];
+    for (first = 0; first < n; first += SK_REP_LANES) {
+        lanes = n - first < SK_REP_LANES ? n - first : SK_REP_LANES;
+        for (l = 0; l < SK_REP_LANES; ++l) {
+            /* a lane past the last plate integrates zeros, unread */
+            const double *row = rows + 8 * (first + (l < lanes ? l : 0));
+            om[l] = l < lanes ? row[0] : 0.0;
+            fn[l] = l < lanes ? row[1] : 0.0;
+            fq[l] = l < lanes ? row[2] : 0.0;
+            d[l] = l < lanes ? row[3] - row[4] : 0.0;
+            t[l] = l < lanes ? row[5] : 0.0;
+            j[l] = 0;
         }
-        if (i < SK_LOADED_SECTIONS) {
-            const double a1 = om, b1 = sk_rep_bend(psi, lx, ly, d);
-            const double a2 = om + h / 2 * b1, b2 = sk_rep_bend(psi + h / 2 * a1, lx, ly, d);
-            const double a3 = om + h / 2 * b2, b3 = sk_rep_bend(psi + h / 2 * a2, lx, ly, d);
-            const double a4 = om + h * b3, b4 = sk_rep_bend(psi + h * a3, lx, ly, d);
-            psi += h / 6 * (a1 + 2 * a2 + 2 * a3 + a4);
-            om += h / 6 * (b1 + 2 * b2 + 2 * b3 + b4);
+        for (i = 0; i <= SK_LOADED_SECTIONS; ++i) {
+            for (l = 0; l < SK_REP_LANES; ++l) {
+                strain[l][i] = fabs(om[l]) * t[l] / 2.0 + fabs(fn[l]) * t[l] * t[l] / 12.0;
+                if (strain[l][i] > strain[l][j[l]]) {
+                    j[l] = i;       /* the first largest, as numpy's argmax */
+                }
+                if (i < SK_LOADED_SECTIONS) {
+                    const double w = om[l], b1 = -fq[l] * (1.0 + d[l] * fn[l]);
+                    const double b2 = sk_rep_bend(fn[l], fq[l], h / 2 * w, d[l]);
+                    const double a2 = w + h / 2 * b1, a3 = w + h / 2 * b2;
+                    const double b3 = sk_rep_bend(fn[l], fq[l], h / 2 * a2, d[l]);
+                    const double a4 = w + h * b3, b4 = sk_rep_bend(fn[l], fq[l], h * a3, d[l]);
+                    sk_rep_turn(fn + l, fq + l, h / 6 * (w + 2 * a2 + 2 * a3 + a4));
+                    om[l] = w + h / 6 * (b1 + 2 * b2 + 2 * b3 + b4);
+                }
+            }
+        }
+        for (l = 0; l < lanes; ++l) {
+            const double *row = rows + 8 * (first + l), *e = strain[l];
+            double value = e[j[l]], where = (double)j[l] / SK_LOADED_SECTIONS, stress;
+            double *o = out + 4 * (first + l);
+            if (j[l] > 0 && j[l] < SK_LOADED_SECTIONS) {
+                const double a = e[j[l] - 1], b = e[j[l]], c = e[j[l] + 1];
+                const double bend = a - 2 * b + c;
+                if (bend < 0) {
+                    const double shift = (a - c) / (2 * bend);
+                    value = b - (a - c) * shift / 4;
+                    where = (j[l] + shift) / SK_LOADED_SECTIONS;
+                }
+            }
+            stress = row[6] * value;
+            o[0] = stress;
+            o[1] = value;
+            o[2] = !limits[first + l] ? NAN : stress > 0 ? row[7] / stress : HUGE_VAL;
+            o[3] = where;
         }
     }
-    value = strain[j];
-    where = (double)j / SK_LOADED_SECTIONS;
-    if (j > 0 && j < SK_LOADED_SECTIONS) {
-        const double a = strain[j - 1], b = strain[j], c = strain[j + 1];
-        const double bend = a - 2 * b + c;
-        if (bend < 0) {
-            const double shift = (a - c) / (2 * bend);
-            value = b - (a - c) * shift / 4;
-            where = (j + shift) / SK_LOADED_SECTIONS;
-        }
-    }
-    stress = row[6] * value;
-    out[0] = stress;
-    out[1] = value;
-    out[2] = !has_limit ? NAN : stress > 0 ? row[7] / stress : HUGE_VAL;
-    out[3] = where;
 }
 
 /* The 1-norm of a 3 x 3 matrix. */
@@ -17246,9 +17293,7 @@ static int sk_reduced_report(const sk_mechanism *m, const sk_loaded_report *rp,
         sk_rep_stiffness(rp, cm, out + 9 * k, cout);
     }
     out += 9 * rp->n_points;
-    for (k = 0; k < rp->n_plates; ++k) {
-        sk_rep_plate(s + rr->stress + 8 * k, rp->limits[k], out + 4 * k);
-    }
+    sk_rep_plates(s + rr->stress, rp->limits, rp->n_plates, out);
     return 0;
 }
 
