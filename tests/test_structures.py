@@ -418,8 +418,9 @@ def test_the_eval_header_of_a_structure_says_it_has_no_input(capsys):
     """As `check` says it: "inputs: none (a structure)"; its force actuators, given, are named."""
     code, out, err = run(["eval", str(THREE), "--level", "loaded", "--param", "M=1e-6"], capsys)
     assert code == 0 and err == ""
-    assert out.splitlines()[0].endswith("; inputs: none (a structure)")
+    assert out.splitlines()[0] == "level: loaded (asked for)"
+    assert out.splitlines()[1] == "backend sympy; inputs: none (a structure)"
     code, out, err = run(
         ["eval", str(LEAF), "--level", "loaded", "--input", "push=0.01", "--param", "F=0"], capsys
     )
-    assert code == 0 and out.splitlines()[0].endswith("; inputs: push = 0.01")
+    assert code == 0 and out.splitlines()[1] == "backend sympy; inputs: push = 0.01"
