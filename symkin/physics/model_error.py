@@ -29,6 +29,7 @@ import sympy as sp
 from ..model import notch_correction
 from ..model.hinges import pivot_distance
 from ..model.mechanism import Mechanism
+from ..model.notches import Notch
 from ..model.sections import WIDE, SectionNumbers
 from .result import HingeLoad
 from .stiffness import plate_stiffness
@@ -140,7 +141,7 @@ def _notch_error(hinge, section, values: Mapping[sp.Symbol, sp.Expr]) -> tuple[f
     error of its centre's drift under a moment, |k_beam − k_FE| R θ per radian θ, R k the beam's
     ∫₀^R (R − x)dx/EI / ∫dx/EI."""
     profile = getattr(section, "profile", "uniform")
-    if profile == "uniform":
+    if not isinstance(section, Notch):  # a plate, or a profile registered elsewhere
         return 0.0, 0.0
     at = section.at(values)
     tau = 0.0
