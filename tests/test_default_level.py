@@ -28,13 +28,15 @@ STIFF_LINE = "level: loaded (default: every plate has E, thickness and width)"
 
 def has_stiffness_by_hand(path) -> bool:
     """The rule read off the TOML itself: every hinge that is not `rigid` has E, thickness and
-    width, its own or [defaults]'."""
+    width, its own or [defaults]', and is a uniform plate (loaded refuses notches)."""
     data = tomllib.loads(path.read_text())
     defaults = data.get("defaults", {})
     for hinge in data["hinge"]:
         merged = {**defaults, **hinge}
         if merged.get("model") == "rigid":
             continue
+        if merged.get("profile", "uniform") != "uniform":  # loaded takes no notch yet
+            return False
         if not all(key in merged for key in ("E", "thickness", "width")):
             return False
     return True
@@ -255,3 +257,20 @@ def test_the_reports_sensitivity_table_takes_the_default_level(tmp_path):
     # the committed four-bar's report: its default, loaded
     committed = (ROOT / "generated" / "four_bar" / "four_bar.tex").read_text()
     assert "deviation (level loaded)" in committed
+
+
+def test_a_file_with_notches_falls_back_to_exact():
+    """loaded refuses notch hinges (exit 2 when asked): a notch file's default is exact, with the
+    reason naming the hinge and pointing to equilibrium, and `eval` without --level runs."""
+    path = ROOT / "examples" / "notch_lever.toml"
+    mech = symkin.load(path)
+    assert mech.has_stiffness
+    choice = levels.default_for(mech)
+    assert choice.name == "exact" and choice.default
+    assert "notch" in choice.reason and "'O'" in choice.reason
+    assert "--level equilibrium" in choice.reason
+    asked = symkin_cli("eval", path, "--input", "piezo=0.02", "--level", "loaded")
+    assert asked.returncode == 2 and "circular" in asked.stderr
+    run = symkin_cli("eval", path, "--input", "piezo=0.02")
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.splitlines()[0] == choice.line and run.stderr == ""

@@ -139,8 +139,8 @@ def default_for(mechanism: _Mechanism) -> Choice:
     where every plate (every hinge that is not `rigid`) has E, thickness and width, else
     `exact`; and `exact` where the loaded level refuses the file as a whole (a redundant
     mechanism whose plates are all inextensible elastica: the forces its redundant loops carry
-    are undetermined, docs/physics.md), so that a default run never fails for the level's
-    sake."""
+    are undetermined, docs/physics.md) or does not take (a notch hinge: `equilibrium` does), so
+    that a default run never fails for the level's sake."""
     plates = [h for h in mechanism.hinges if h.is_plate]
     if not mechanism.has_stiffness:
         keys = ("E", "thickness", "width")
@@ -156,6 +156,14 @@ def default_for(mechanism: _Mechanism) -> Choice:
             KINEMATIC_DEFAULT,
             "default: the loaded level cannot solve a redundant mechanism whose plates are all "
             'inextensible (beam = "elastica")',
+            default=True,
+        )
+    notch = next((h for h in plates if getattr(h, "profile", "uniform") != "uniform"), None)
+    if notch is not None:
+        return Choice(
+            KINEMATIC_DEFAULT,
+            f"default: loaded does not take notch hinges yet (hinge '{notch.name}' is "
+            f"{notch.profile}); --level equilibrium does",
             default=True,
         )
     if not plates:  # nothing bends: the physical level, as the rule says, at no extra cost

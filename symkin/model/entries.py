@@ -114,6 +114,8 @@ class Hinge:
     # and its parameters, by name
     profile: str = "uniform"
     profile_params: tuple[tuple[str, object], ...] = ()
+    # whether a notch's beam carries the continuum correction (model.notch_correction)
+    continuum_correction: bool = True
 
     def param(self, key: str, default: object = None) -> object:
         return dict(self.model_params).get(key, default)

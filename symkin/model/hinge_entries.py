@@ -39,8 +39,13 @@ from .notches import NOTCHES, _normalised, profile_keys
 #: The keys of the hinge profiles (docs/file-format.md, "Notch hinges"): `profile` and what the
 #: notch profiles take besides `thickness` (a uniform plate takes `length`).
 PROFILE_KEYS = ("profile", *sorted({k for c in NOTCHES for k in c.keys if k != "length"}))
+#: The notch-only key that switches the continuum correction off (docs/file-format.md).
+CORRECTION_KEY = "continuum_correction"
 DEFAULT_KEYS = (
-    tuple(k for k in HINGE_KEYS if k not in ("name", "links", "at")) + MODEL_KEYS + PROFILE_KEYS
+    tuple(k for k in HINGE_KEYS if k not in ("name", "links", "at"))
+    + MODEL_KEYS
+    + PROFILE_KEYS
+    + (CORRECTION_KEY,)
 )
 DEFAULT_MODEL = "circular_arc"
 #: The default model of a hinge whose profile is not uniform.
@@ -130,7 +135,18 @@ class HingeEntries(EntryChecks):
                     line,
                     self.profile_fix(key, profile),
                 )
-        allowed = HINGE_KEYS + ("profile", *own_keys) + tuple(p.name for p in spec.parameters)
+        if CORRECTION_KEY in table and not notch:
+            raise self.error(
+                f"'{CORRECTION_KEY}' applies to notch hinges only; this one is a uniform plate",
+                entry,
+                line,
+                f"remove {CORRECTION_KEY} (a uniform plate's beam takes no correction)",
+            )
+        allowed = (
+            HINGE_KEYS
+            + ("profile", *own_keys, CORRECTION_KEY)
+            + tuple(p.name for p in spec.parameters)
+        )
         for key in table:
             if key not in allowed and key in MODEL_KEYS:
                 raise self.error(
@@ -180,6 +196,15 @@ class HingeEntries(EntryChecks):
         plate_angle = self.expr(merged.get("plate_angle", 0), where[0], "plate_angle", where[1])
         self.finite(plate_angle, where[0], "plate_angle", where[1])
         profile_params: dict[str, sp.Expr] = {}
+        continuum = merged.get(CORRECTION_KEY, True)
+        if not isinstance(continuum, bool):
+            where = self.origin(CORRECTION_KEY, table, entry, line)
+            raise self.error(
+                f"'{CORRECTION_KEY}' must be true or false, got {continuum!r}"[:200],
+                *where,
+                f"write {CORRECTION_KEY} = false for the plain beam, or remove it (the fitted "
+                "correction, docs/physics.md)",
+            )
         if notch:
             profile_params = self.profile_values(profile, table, merged, entry, line)
             length = self.notch_span(profile, profile_params, merged, model, entry, line)
@@ -241,6 +266,7 @@ class HingeEntries(EntryChecks):
             beam=beam,
             profile=profile,
             profile_params=tuple(sorted(profile_params.items())),
+            continuum_correction=continuum or not notch,
         )
 
     # -- profiles (docs/file-format.md, "Notch hinges") --------------------------------------------

@@ -26,6 +26,7 @@ beam (the fillets' roots; t/l = 0.025–0.05, r/l = 0.05–0.25), not a function
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -113,3 +114,40 @@ def corrected(compliance: Compliance, correction: Correction) -> Compliance:
         y_F=compliance.y_F * correction.y_F,
         y_V=compliance.y_V * correction.y_F,
     )
+
+
+#: What remains of a notch's beam against the continuum, relative, per profile: the fit's
+#: residual for a corrected circular notch (y_F's, the larger), the elliptical notches' spread
+#: about the circle's fit (1.0 % in y_F), the corner-filleted plates' uncorrected 0.5–1.4 % in
+#: θ_M and up to 1.7 % in y_F (docs/physics.md, "Notch hinges: the continuum correction").
+REMAINING = {"circular": RESIDUAL["y_F"], "elliptical": 0.010, "corner_filleted": 0.017}
+#: The beam's drift of a circular notch's centre under a pure moment, k = y_c/(R θ), against the
+#: FE's, relative: (t/R, |beam − FE|/FE) of docs/physics.md's table, the gap linear between rows
+#: and beyond the last.
+CENTRE_GAP = ((0.0, 0.003), (0.05, 0.005), (0.2, 0.008), (0.3, 0.030), (0.5, 0.089))
+
+
+def remaining(profile: str, t_over_R: float, correct: bool) -> float:
+    """The relative error of a notch's beam compliances against a plane-strain continuum after
+    the correction (`correct`) or without it: the fit's residual inside RANGE, the factor's
+    distance from 1 without it (the uncorrected beam's own error) or beyond RANGE (an
+    extrapolation: taken as large as the correction itself)."""
+    if profile == "uniform":
+        return 0.0
+    if profile not in NOTCHES:
+        return REMAINING[profile]
+    gap = abs(float(continuum_correction(profile, t_over_R).y_F) - 1)
+    gap = max(gap, abs(float(continuum_correction(profile, t_over_R).theta_M) - 1))
+    if not correct or t_over_R > RANGE[1]:  # below RANGE the factor tends to 1: the fit holds
+        return gap
+    return REMAINING[profile]
+
+
+def centre_gap(t_over_R: float) -> float:
+    """|k_beam − k_FE|/k_FE of the notch's centre drift (CENTRE_GAP, interpolated)."""
+    rows = CENTRE_GAP
+    for (x0, y0), (x1, y1) in itertools.pairwise(rows):
+        if t_over_R <= x1:
+            return y0 + (y1 - y0) * (max(t_over_R, x0) - x0) / (x1 - x0)
+    (x0, y0), (x1, y1) = rows[-2], rows[-1]
+    return y1 + (y1 - y0) * (t_over_R - x1) / (x1 - x0)

@@ -28,12 +28,13 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import mpmath
 import sympy as sp
 
+from . import notch_correction
 from .sections import DIGITS, Compliance, Section, X
 
 #: Terms of the pure-moment series (θ² to θ^{2K}); see the module's docstring for the bound.
@@ -64,6 +65,10 @@ class Notch(Section):
     span_text: ClassVar[str] = ""
     #: Every profile here is symmetric about its centre (the pure-moment series needs it).
     symmetric: ClassVar[bool] = True
+    #: The section's field of each key :func:`notch_correction.neck_ratio` takes.
+    correction_keys: ClassVar[dict[str, str]] = {}
+    #: Whether the beam carries the continuum correction (hinge key `continuum_correction`).
+    continuum: bool = field(default=True, kw_only=True)
 
     @classmethod
     def span(cls, params: Mapping[str, sp.Expr]) -> sp.Expr:
@@ -81,17 +86,68 @@ class Notch(Section):
             sp.nan if getattr(hinge, k) is None else sp.sympify(getattr(hinge, k))
             for k in ("length", "thickness", "width", "E", "nu")
         ]
-        return cls(hinge.name, *base, sp.sympify(scale), **cls.own(hinge))  # type: ignore[call-arg]
+        return cls(  # type: ignore[call-arg]
+            hinge.name,
+            *base,
+            sp.sympify(scale),
+            **cls.own(hinge),
+            continuum=bool(getattr(hinge, "continuum_correction", True)),
+        )
 
-    def correction(self) -> sp.Expr:
-        """The continuum correction of the beam's bending stiffness: EI(x) is divided by it
-        (beam theory is 2–13 % too stiff on circular notches at t/R = 0.05–0.5 against a
-        plane-strain continuum, docs/physics.md). 1 until the fit to CalculiX runs lands: the
-        plain beam."""
-        return sp.S.One
+    def correction(self) -> notch_correction.Correction:
+        """The continuum correction of the beam's compliances (docs/physics.md, "Notch hinges:
+        the continuum correction"): beam theory is 2–13 % too stiff on circular notches at
+        t/R = 0.05–0.5 against a plane-strain continuum. The fit of
+        :func:`~symkin.model.notch_correction.continuum_correction` at the profile's neck ratio,
+        or the identity with `continuum_correction = false` (the plain beam)."""
+        if not self.continuum or self.profile not in notch_correction.NOTCHES:
+            return notch_correction.IDENTITY
+        keys = {k: getattr(self, f) for k, f in self.correction_keys.items()}
+        tau = notch_correction.neck_ratio(self.profile, self.thickness, **keys)
+        return notch_correction.continuum_correction(self.profile, tau)
 
     def _EI(self, t: Any) -> sp.Expr:
-        return super()._EI(t) / self.correction()
+        """E'I divided by the correction's θ_M factor: θ_M = ∫dx/EI and θ_F = y_M = ∫(l−x)dx/EI
+        take the fit's factor (θ_F's is θ_M's), and the bending part of y_F with them."""
+        return super()._EI(t) / self.correction().theta_M
+
+    def _kGA(self, t: Any) -> sp.Expr:
+        """κGA divided by the shear factor that makes the Timoshenko deflection
+        ∫(l−x)²dx/EI + ∫dx/κGA take the fit's y_F factor, the bending part having θ_M's."""
+        return super()._kGA(t) / self.shear_factor()
+
+    def shear_factor(self) -> Any:
+        """s with f_θ·B + s·S = f_y·(B + S), B = ∫(l−x)²dx/E'I and S = ∫dx/κGA of the plain
+        beam: s = f_y + (f_y − f_θ)·B/S. 1 without a correction; a float once the section's
+        parameters are numbers (B and S by quadrature), else an expression of their integrals."""
+        fix = self.correction()
+        if fix is notch_correction.IDENTITY:
+            return sp.S.One
+        l = self.length
+        plain = (
+            lambda x, t: (l - x) ** 2 / Section._EI(self, t),
+            lambda x, t: 1 / Section._kGA(self, t),
+        )
+        free = set().union(*(sp.sympify(p).free_symbols for p in self.pieces())) - {X}
+        free |= sp.sympify(l).free_symbols | sp.sympify(self.modulus()).free_symbols
+        if free:
+            bend, shear = (
+                sp.Add(*(sp.Integral(f(X, t), (X, a, b)) for a, b, t in self.pieces()))
+                for f in plain
+            )
+        else:
+            key = sp.srepr((self.pieces(), l, self.width, self.E, self.nu, self.scale))
+            if key not in _SHEAR:
+                _SHEAR[key] = tuple(float(self.quad(f, {})) for f in plain)
+            bend, shear = _SHEAR[key]
+        return fix.y_F + (fix.y_F - fix.theta_M) * bend / shear
+
+    def compliance_numbers(self, values: Mapping[sp.Symbol, sp.Expr]) -> Compliance:
+        """The compliance integrals at `values`, on the section at those values (its shear
+        factor then a number, not an expression of integrals)."""
+        if values:
+            return self.at(values).compliance_numbers({})
+        return super().compliance_numbers(values)
 
     def root_radius(self) -> sp.Expr:
         """The radius of curvature of the cut where the hinge is thinnest (K_t's ρ)."""
@@ -153,6 +209,7 @@ class CircularNotch(Notch):
     radius: sp.Expr
     profile: ClassVar[str] = "circular"
     keys: ClassVar[tuple[str, ...]] = ("radius",)
+    correction_keys: ClassVar[dict[str, str]] = {"radius": "radius"}
     span_text: ClassVar[str] = "2·radius"
 
     @classmethod
@@ -175,6 +232,7 @@ class EllipticalNotch(Notch):
     depth_c: sp.Expr
     profile: ClassVar[str] = "elliptical"
     keys: ClassVar[tuple[str, ...]] = ("semi_axis", "depth")
+    correction_keys: ClassVar[dict[str, str]] = {"semi_axis": "semi_axis", "depth": "depth_c"}
     span_text: ClassVar[str] = "2·semi_axis"
 
     @classmethod
@@ -320,6 +378,9 @@ def coefficients(section: Notch) -> tuple[sp.Float, ...]:
         _CACHE[key] = _coefficients(_normalised(section))
     return _CACHE[key]
 
+
+#: The plain beam's ∫(l−x)²dx/E'I and ∫dx/κGA by section values (Notch.shear_factor).
+_SHEAR: dict[str, tuple[float, float]] = {}
 
 #: The coefficients by profile, span and pieces (they cost a few seconds at 45 digits).
 _CACHE: dict[str, tuple[sp.Float, ...]] = {}

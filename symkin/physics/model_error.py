@@ -26,8 +26,10 @@ from dataclasses import dataclass
 import numpy as np
 import sympy as sp
 
+from ..model import notch_correction
 from ..model.hinges import pivot_distance
 from ..model.mechanism import Mechanism
+from ..model.notches import Notch
 from ..model.sections import WIDE, SectionNumbers
 from .result import HingeLoad
 from .stiffness import plate_stiffness
@@ -64,7 +66,7 @@ def level_stretches(mech: Mechanism, level: str) -> dict[str, bool]:
 class ModelError:
     """Per point: the estimate (relative to |ΔR|) and its parts, each relative to |ΔR|:
     `centre_line`, `stretch_shear` (0 for a level whose plates stretch and shear), `clamp`,
-    `width`."""
+    `width`, `notch` (what a notch's corrected beam leaves, 0 for a plate)."""
 
     total: dict[str, float]
     parts: dict[str, dict[str, float]]
@@ -83,6 +85,8 @@ class _Plate:
     nu: float
     uncertain_modulus: float  # relative uncertainty of E' from the width
     section: SectionNumbers  # its end displacements under loads (model.sections)
+    notch: float = 0.0  # a notch's beam against the continuum, relative (notch_correction)
+    drift: float = 0.0  # the error of a circular notch's centre drift per radian (file unit)
 
 
 def _number(expr, values) -> float:
@@ -110,6 +114,7 @@ def _plates(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr], level: str) ->
         d = length / 2 - _number(pivot_distance(h), values)
         # a narrow plate (E' = E) lies between plane stress and plane strain: ν² either way
         uncertain = nu**2 * min(1.0, length / (WIDTH_SHARE * b)) if b >= WIDE * t else nu**2
+        notch, drift = _notch_error(h, stiff[h.name].section, values)
         out.append(
             _Plate(
                 h.name,
@@ -122,9 +127,34 @@ def _plates(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr], level: str) ->
                 nu,
                 uncertain,
                 sec,
+                notch,
+                drift,
             )
         )
     return out
+
+
+def _notch_error(hinge, section, values: Mapping[sp.Symbol, sp.Expr]) -> tuple[float, float]:
+    """What a notch's beam leaves against a plane-strain continuum (docs/physics.md, "Model
+    error"): the relative error of its compliances after the continuum correction (or without
+    it: `continuum_correction = false`, a corner-filleted plate), and for a circular notch the
+    error of its centre's drift under a moment, |k_beam − k_FE| R θ per radian θ, R k the beam's
+    ∫₀^R (R − x)dx/EI / ∫dx/EI."""
+    profile = getattr(section, "profile", "uniform")
+    if not isinstance(section, Notch):  # a plate, or a profile registered elsewhere
+        return 0.0, 0.0
+    at = section.at(values)
+    tau = 0.0
+    if profile in notch_correction.NOTCHES:
+        keys = {k: getattr(at, f) for k, f in at.correction_keys.items()}
+        tau = float(notch_correction.neck_ratio(profile, at.thickness, **keys))
+    relative = notch_correction.remaining(profile, tau, bool(at.continuum))
+    if profile != "circular":
+        return relative, 0.0
+    half = at.length / 2
+    turn = float(at.quad(lambda x, t: sp.Max(half - x, 0) / at._EI(t), {}))
+    whole = float(at.quad(lambda x, t: 1 / at._EI(t), {}))
+    return relative, notch_correction.centre_gap(tau) * turn / whole
 
 
 def _rotate(phi: float, v: tuple[float, float]) -> np.ndarray:
@@ -204,6 +234,7 @@ def estimate(
     centre: dict[str, np.ndarray] = {}
     clamp: dict[str, np.ndarray] = {}
     width: dict[str, np.ndarray] = {}
+    notch: dict[str, np.ndarray] = {}  # a notch's compliance and centre drift (unsigned)
     # Without loads a uniform change of E' changes nothing (the loop forces scale with the
     # stiffness, the compliances inversely): only the plates' differences count.
     loaded = any(_number(v, values) != 0 for ld in mech.loads for v in (*ld.force, ld.moment))
@@ -238,6 +269,7 @@ def estimate(
             compliance = compliance + sec.stretch(normal) * chord
             compliance = compliance + sec.shear(transverse) * across
         width[p.name] = (p.uncertain_modulus - floor) * compliance
+        notch[p.name] = np.stack([p.notch * compliance, p.drift * abs(theta) * across])
     total, parts, shift = {}, {}, {}
     for name, (k, p0) in points.items():
         resp = response(k, p0)
@@ -251,7 +283,9 @@ def estimate(
         norm = math.hypot(*deviations[name])
         if norm == 0:  # the as-fabricated pose: nothing to be relative to
             total[name] = 0.0
-            parts[name] = dict.fromkeys(("centre_line", "stretch_shear", "clamp", "width"), 0.0)
+            parts[name] = dict.fromkeys(
+                ("centre_line", "stretch_shear", "clamp", "width", "notch"), 0.0
+            )
             continue
         sum_centre = sum((effect(centre[p.name], p.name) for p in plates), np.zeros(2))
         clamps = sum(
@@ -262,12 +296,18 @@ def estimate(
         widths = float(
             np.linalg.norm(sum((effect(width[p.name], p.name) for p in plates), np.zeros(2)))
         )
+        notches = sum(
+            float(np.linalg.norm(effect(notch[p.name][i], p.name)))
+            for p in plates
+            for i in range(2)
+        )
         signed_norm = float(np.linalg.norm(sum_signed))
-        total[name] = (signed_norm + clamps + widths) / norm
+        total[name] = (signed_norm + clamps + widths + notches) / norm
         parts[name] = {
             "centre_line": float(np.linalg.norm(sum_centre)) / norm,
             "stretch_shear": float(np.linalg.norm(sum_signed - sum_centre)) / norm,
             "clamp": clamps / norm,
             "width": widths / norm,
+            "notch": notches / norm,
         }
     return ModelError(total, parts, shift)

@@ -280,8 +280,11 @@ def _fraction(q: sp.Expr) -> bool:
 
 
 def _readable(c: sp.Expr) -> bool:
-    """A constant the report prints as it is."""
-    if c.is_Integer or c.is_Float:
+    """A constant the report prints as it is: not a Float carried at more than double
+    precision (a notch's 45-digit pure-moment coefficients: rounded like any other constant)."""
+    if c.is_Float:
+        return c._prec <= 53
+    if c.is_Integer:
         return True
     if c.is_Rational:
         return _fraction(c)
