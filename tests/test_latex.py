@@ -573,9 +573,9 @@ def test_mechanism_specific_sentences(reports):
     for example, (standalone, _) in reports.items():
         tex = standalone[f"{example}.tex"].decode()
         assert "graph traversal" not in tex
-        # the four-bar's sentence for the four-bars: the paper's and the piezo amplifier (a
-        # Scott-Russell linkage is a four-bar with its slider a rocker)
-        four_bar = example.startswith("four_bar") or example == "piezo_amplifier"
+        # the four-bar's sentence for the four-bars: the paper's, the piezo amplifier (a
+        # Scott-Russell linkage is a four-bar with its slider a rocker) and the notch lever
+        four_bar = example.startswith("four_bar") or example in ("piezo_amplifier", "notch_lever")
         assert ("for the four-bar's" in tex) == four_bar, example
 
 

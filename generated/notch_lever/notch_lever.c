@@ -1995,14 +1995,43 @@ static int sk_stroke_pose(const sk_mechanism *m, const double *x, const double *
     return sk_evaluate_pose(m, x, params, level, out, angles, NULL);
 }
 
+/* The rigid linkage alone at the kinematic inputs x (each point's rigid x, y into out, 6 per
+   point, the rest unset): sk_pose without a level's closure (its checks, the rigid pose, the
+   hinges' limits on it), then the rigid points, so the same numbers as sk_evaluate_pose's rigid
+   ones at any kinematic level without solving the loops for delta. Returns a status code. */
+static int sk_stroke_rigid_points(const sk_mechanism *m, const double *x, const double *params,
+                                  double *out)
+{
+    static const sk_level rigid_only = {0, NULL, NULL, NULL, 0, {NULL, 0, 0, 0, 0, 0, 0, 0},
+                                        NULL};
+    double theta[SK_M], delta[SK_K + 1], constants[SK_NQ], rigid[2 * SK_NP + 1];
+    const double *q;
+    int i, s;
+    if (params == NULL) {
+        params = m->defaults;
+    }
+    s = sk_pose(m, &rigid_only, x, params, 0, theta, delta, constants, &q);
+    if (s == 0) {
+        m->rigid_points(theta, params, rigid);
+    }
+    for (i = 0; i < SK_NP && s == 0; ++i) {
+        s = isfinite(rigid[2 * i]) && isfinite(rigid[2 * i + 1]) ? 0 : 2;
+        out[6 * i] = rigid[2 * i];
+        out[6 * i + 1] = rigid[2 * i + 1];
+    }
+    return s;
+}
+
 /* Each actuator's stroke residual d.(X - X0) - s at the kinematic inputs x: X the rigid
-   (kind 0) or compliant (kind 1) position of its point. Returns sk_stroke_pose's status. */
+   (kind 0: the rigid linkage alone at a kinematic level, sk_stroke_rigid_points) or compliant
+   (kind 1) position of its point. Returns sk_stroke_pose's status. */
 static int sk_stroke_residual(const sk_mechanism *m, const sk_actuators *t, const double *x,
                               const double *params, int level, int kind, const double *rest,
                               const double *drives, double *r)
 {
     double out[6 * SK_NP];
-    int a, s = sk_stroke_pose(m, x, params, level, out, NULL);
+    int a, s = kind == 0 && level >= 0 ? sk_stroke_rigid_points(m, x, params, out)
+                                       : sk_stroke_pose(m, x, params, level, out, NULL);
     for (a = 0; a < t->n && s == 0; ++a) {
         const double *p = out + 6 * t->point[a] + 2 * kind;
         const double *p0 = rest + 2 * a;
