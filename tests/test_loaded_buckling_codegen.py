@@ -65,7 +65,9 @@ def runs():
             text, batch = CASES[name]
             an = symkin.analyze(symkin.loads(text(), f"{name}.toml"))
             _, module = pipeline.build(an, "numpy", "test", sensitivity=False)
-            got = module.evaluate({k: np.array(v) for k, v in batch.items()}, "loaded")
+            got = module.evaluate(
+                {k: np.array(v) for k, v in batch.items()}, "loaded", buckling=True
+            )
             cache[name] = an, module, got
         return cache[name]
 
@@ -97,24 +99,31 @@ def test_configurations_at_once_are_each_alone(runs):
     the factor it gets alone, bit for bit: each has its own steps; NaN where not ok."""
     _, module, got = runs("stage_force")
     forces = CASES["stage_force"][1]["piezo"]
-    many = module.evaluate({"piezo": np.array([[forces[1]], [math.nan]])}, "loaded")
+    many = module.evaluate({"piezo": np.array([[forces[1]], [math.nan]])}, "loaded", buckling=True)
     assert many["buckling"].shape == (2, 1)
     assert many["ok"].tolist() == [[True], [False]] and math.isnan(many["buckling"][1, 0])
     assert many["buckling"][0, 0] == got["buckling"][1]
     for c, force in enumerate(forces):
-        alone = module.evaluate({"piezo": np.array([force])}, "loaded")
+        alone = module.evaluate({"piezo": np.array([force])}, "loaded", buckling=True)
         assert alone["buckling"][0] == got["buckling"][c]
 
 
-def test_buckling_false_leaves_it_out(runs):
-    """evaluate(..., buckling=False): the rest of the report, the same numbers."""
+def test_buckling_only_when_asked(runs, monkeypatch):
+    """The default call leaves the buckling factor out (CONTRACT §9: only with buckling=True)
+    and runs no search; buckling=False says so too: the rest of the report, the same numbers."""
     _, module, got = runs("stage_force")
-    bare = module.evaluate(
-        {"piezo": np.array(CASES["stage_force"][1]["piezo"])}, "loaded", buckling=False
-    )
-    assert "buckling" not in bare and "plates" in bare
-    for h, plate in got["plates"].items():
-        assert np.array_equal(bare["plates"][h]["stress"], plate["stress"]), h
+    forces = {"piezo": np.array(CASES["stage_force"][1]["piezo"])}
+    bare = module.evaluate(forces, "loaded", buckling=False)
+
+    def searched(*args):
+        raise AssertionError("the buckling search ran")
+
+    monkeypatch.setattr(module, "_red_buckling", searched)
+    default = module.evaluate(forces, "loaded")
+    for result in (bare, default):
+        assert "buckling" not in result and "plates" in result
+        for h, plate in got["plates"].items():
+            assert np.array_equal(result["plates"][h]["stress"], plate["stress"]), h
 
 
 def test_sweep_reads_the_stress_without_the_search(runs, monkeypatch):
@@ -128,7 +137,7 @@ def test_sweep_reads_the_stress_without_the_search(runs, monkeypatch):
     monkeypatch.setattr(module, "_red_buckling", searched)
     forces = np.array(CASES["stage_force"][1]["piezo"])[:, None]
     with pytest.raises(AssertionError, match="search ran"):  # the stand-in is the one called
-        module.evaluate({"piezo": forces[:, 0]}, "loaded")
+        module.evaluate({"piezo": forces[:, 0]}, "loaded", buckling=True)
     evaluator = types.SimpleNamespace(module=module, inputs=module.INPUTS)
     plates = tuple(got["plates"])
     for h, value in zip(plates, sweep.largest_stress(evaluator, forces, None, plates)):
@@ -138,26 +147,27 @@ def test_sweep_reads_the_stress_without_the_search(runs, monkeypatch):
 def test_without_loads_there_is_no_buckling():
     an = symkin.analyze(symkin.loads(driven("stroke"), "unloaded.toml"))
     _, module = pipeline.build(an, "numpy", "test", sensitivity=False)
-    got = module.evaluate({"piezo": np.array([1.5e-3])}, "loaded")
+    got = module.evaluate({"piezo": np.array([1.5e-3])}, "loaded", buckling=True)
     assert got["ok"].all() and "plates" in got and "buckling" not in got
     assert symkin.evaluate(an, {"piezo": 1.5e-3}, "loaded").buckling is None
 
 
 def test_compile_leaves_the_report_or_the_buckling_out_when_told(runs):
-    """symkin.compile(...).evaluate takes report=False and buckling=False to the numpy module."""
+    """symkin.compile(...).evaluate takes report=False and buckling=True/False to the numpy
+    module; its default leaves the search out, as the module's does."""
     an, _, got = runs("stage_force")
     ev = symkin.compile(an, backend="numpy", sensitivity=False)
     forces = {"piezo": np.array(CASES["stage_force"][1]["piezo"])}
-    full = ev.evaluate(forces, "loaded")
+    full = ev.evaluate(forces, "loaded", buckling=True)
     assert np.array_equal(full["buckling"], got["buckling"], equal_nan=True)
-    bare = ev.evaluate(forces, "loaded", buckling=False)
-    assert "buckling" not in bare and "plates" in bare
+    for bare in (ev.evaluate(forces, "loaded", buckling=False), ev.evaluate(forces, "loaded")):
+        assert "buckling" not in bare and "plates" in bare
     alone = ev.evaluate(forces, "loaded", report=False)
     assert "plates" not in alone and "buckling" not in alone
     assert np.array_equal(alone["points"]["P"]["deviation"], got["points"]["P"]["deviation"])
     # a module without the loaded level's report takes the flags and has nothing to leave out
     kin = symkin.compile(EXAMPLES / "four_bar.toml", "numpy", levels=["exact"], sensitivity=False)
     a0 = {"A0": np.array([0.1, 0.2])}
-    plain, told = kin.evaluate(a0), kin.evaluate(a0, report=False, buckling=False)
+    plain, told = kin.evaluate(a0), kin.evaluate(a0, report=False, buckling=True)
     assert set(told) == set(plain)
     assert np.array_equal(told["points"]["C"]["deviation"], plain["points"]["C"]["deviation"])

@@ -226,19 +226,20 @@ class Compiled:
         params: Mapping[str, float] | None = None,
         *,
         report: bool = True,
-        buckling: bool = True,
+        buckling: bool = False,
     ) -> dict[str, Any]:
         """As the generated module's `evaluate` (docs/generated-code.md), in one C call. The
         numpy backend adds at `loaded` what the level reports: `report=False` leaves it out,
-        `buckling=False` the buckling factor alone (its search: tens of Newton solves per
-        configuration); the C backend's result holds the deviations and angles alone."""
+        `buckling=True` adds the buckling factor (its search: tens of Newton solves per
+        configuration, so only when asked: CONTRACT §9); the C backend's result holds the
+        deviations and angles alone."""
         if self._row.is_module:
             options: dict[str, bool] = {}
-            if not (report and buckling):  # the signature read only when an option is off
+            if buckling or not report:  # the signature read only off the module's defaults
                 takes = inspect.signature(self.module.evaluate).parameters
-                # a module without the loaded level's report has nothing to leave out
+                # a module without the loaded level's report has nothing to add or leave out
                 asked = (("report", report), ("buckling", buckling))
-                options = {k: False for k, on in asked if not on and k in takes}
+                options = {k: on for k, on in asked if k in takes}
             result: dict[str, Any] = self.module.evaluate(
                 inputs, self.code(level), params, **options
             )
