@@ -222,13 +222,6 @@ def test_a_locked_linkage_with_an_input_is_still_refused(tmp_path, capsys):
     assert "two hinges join frame and stage" in err
 
 
-def test_a_stroke_actuator_cannot_drive_a_structure(tmp_path, capsys):
-    path = tmp_path / "leaf.toml"
-    path.write_text(LEAF.read_text().replace('drive = "force"', 'drive = "stroke"'))
-    code, out, err = run(["check", str(path)], capsys)
-    assert code == 2 and out == "" and "mobility is 0" in err
-
-
 # -- check ------------------------------------------------------------------------------------
 def test_check_prints_a_structure(capsys):
     code, out, err = run(["check", str(LEAF)], capsys)

@@ -618,22 +618,33 @@ def _rest(
 def _structure_levels(mech, requested: Sequence[str] | None, levels: tuple) -> None:
     """A structure's evaluators hold `loaded` alone and take no inputs (docs/levels.md,
     "Structures"): a kinematic level asked for (none left) is refused as `symkin eval` refuses
-    it, and so is a structure with force actuators (their forces are not yet arguments of the
-    generated evaluators)."""
+    it, and so is a structure with actuators (their forces and strokes are not yet arguments of
+    the generated evaluators)."""
     if not levels:
         asked = [lv for lv in requested or () if lv not in level_table.LOADED]
         mech.refuse_structure(level=asked[0] if asked else level_table.DEFAULT)
-    if mech.actuators:
-        act = mech.actuators[0]
+    if not mech.actuators:
+        return
+    act = mech.actuators[0]
+    entry = f"[[actuator]] #{act.index + 1} '{act.name}'"
+    if act.drive == "force":
         raise InputError(
             "the generated evaluators do not take a structure's force actuators yet (actuator "
             f"'{act.name}': its force would be their input; a structure's evaluators take none)",
             file=mech.path,
-            entry=f"[[actuator]] #{act.index + 1} '{act.name}'",
+            entry=entry,
             hint="load the structure by a [[load]] whose force is a parameter (--param, "
             "tolerance --vary and sweep --vary then set it), or evaluate it with symkin eval "
             '--level loaded --backend sympy (docs/levels.md, "Structures")',
         )
+    raise InputError(
+        "the generated evaluators do not take a structure's stroke actuators yet (actuator "
+        f"'{act.name}': its stroke would be their input; a structure's evaluators take none)",
+        file=mech.path,
+        entry=entry,
+        hint="evaluate it with symkin eval --level loaded (or equilibrium) --backend sympy "
+        '(docs/levels.md, "Structures")',
+    )
 
 
 def _fixed_angles(an: Analysis, fixed: Mapping[str, sp.Expr]) -> dict[int, sp.Expr]:

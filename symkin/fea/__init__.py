@@ -181,7 +181,8 @@ def strokes(deck: Deck, run: ccx.Run) -> dict[str, float]:
     out = {}
     for d in deck.drives:
         du, dv, _ = run.displacements[links[d.link].node]
-        out[d.name] = (d.stroke + d.direction[0] * du + d.direction[1] * dv) / deck.scale
+        rigid = d.stroke if d.rigid is None else d.rigid
+        out[d.name] = (rigid + d.direction[0] * du + d.direction[1] * dv) / deck.scale
     return out
 
 

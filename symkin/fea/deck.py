@@ -165,7 +165,8 @@ class Drive:
     """An actuator of the file (SI units): it moves the point `at` of `link` (the link's
     reference node) along the unit `direction`, by the prescribed `stroke` (drive "stroke") or
     pushed by `force` N (drive "force"); `stroke` is then the stroke the deck's rigid pose is
-    taken at."""
+    taken at. `rigid` the stroke of the deck's rigid pose where it is not `stroke`: a
+    structure's, as fabricated whatever the stroke (docs/levels.md, "Structures")."""
 
     name: str
     link: str
@@ -174,6 +175,7 @@ class Drive:
     drive: str
     stroke: float
     force: float = 0.0
+    rigid: float | None = None
 
 
 @dataclass(frozen=True)
@@ -429,6 +431,7 @@ def configuration(
             a.drive,
             float(inputs[a.name]) * scale,
             float((forces or {}).get(a.name, 0.0)),
+            0.0 if mech.is_structure else None,
         )
         for a in mech.actuators
     )

@@ -102,12 +102,13 @@ class Mechanism:
         locked = "the mechanism is a structure: its rigid linkage has no motion (mobility 0)"
         physical = (
             "ask for --level loaded (or equilibrium): the physical levels load a structure by "
-            'its [[load]] entries and force actuators (docs/levels.md, "Structures")'
+            "its [[load]] entries and force actuators and move it by its stroke actuators "
+            '(docs/levels.md, "Structures")'
         )
         if what is not None:
             raise InputError(
                 f"{locked}, and {what} does not take structures (it compares variants over "
-                "the inputs' range, and a structure has no inputs)",
+                "the inputs' range, and a structure's rigid linkage does not move)",
                 file=self.path,
                 entry="[[hinge]]",
                 hint="evaluate it with symkin eval --level loaded or --level equilibrium "
@@ -142,14 +143,11 @@ class Mechanism:
 
     @property
     def is_structure(self) -> bool:
-        """The rigid linkage is locked (mobility 0) and nothing prescribes a motion: no input
-        hinge, no stroke actuator. Its loads and force actuators load it; the physical levels
-        solve it, the kinematic levels have nothing to move (docs/levels.md, "Structures")."""
-        return (
-            not any(h.input for h in self.hinges)
-            and all(a.drive == "force" for a in self.actuators)
-            and self.mobility == 0
-        )
+        """The rigid linkage is locked (mobility 0) and no input hinge turns it. Its loads and
+        force actuators load it, its stroke actuators move their points elastically from the
+        as-fabricated pose; the physical levels solve it, the kinematic levels have nothing to
+        move (docs/levels.md, "Structures")."""
+        return not any(h.input for h in self.hinges) and self.mobility == 0
 
     @property
     def redundant(self) -> int:

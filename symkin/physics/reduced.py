@@ -200,6 +200,11 @@ class Reduced:
         self.strokes = [k for k, act in enumerate(self.acts) if act[4] == "stroke"]
         self.forces = [act[0] for act in self.acts if act[4] == "force"]
         self.fa = [sp.Symbol(f"fa_{k}", real=True) for k in range(len(self.forces))]
+        # a structure's strokes (docs/levels.md, "Structures"): its rigid reference stays as
+        # fabricated, so the row holds the point's deviation along d at the commanded stroke,
+        # an argument after the forces (the continuation scales it with the inputs)
+        self.placed = [act[0] for act in self.acts if act[4] == "stroke" and mech.is_structure]
+        self.sa = [sp.Symbol(f"sa_{k}", real=True) for k in range(len(self.placed))]
         self.clamp_m = {}
         for a, h in self.hinges.items():
             self.clamp_m[a] = tuple(num(v) for v in h.clamp(h.M)) if a in self.plate else centres[a]
@@ -465,9 +470,11 @@ class Reduced:
             if c not in self.held:
                 rows.append((mu - s["mom"][c]) / unit)
         for k in self.strokes:
-            # the stroke: the point of action's deviation along d is zero (beyond `dact`)
-            _, link, at, d, _ = self.acts[k]
+            # the stroke: the point of action's deviation along d is zero (beyond `dact`); a
+            # structure's, the commanded stroke (its reference as fabricated)
+            name, link, at, d, _ = self.acts[k]
             lost = sp.S.Zero if self.springs[k] is None else s["act_force"][k] / self.springs[k]
+            lost -= self.sa[self.placed.index(name)] if name in self.placed else sp.S.Zero
             rows.append((V.dot(d, self._deviation(s, link, at)) - s["dact"][k] + lost) / self.lmin)
         for a in sorted(s["joint"]):
             rows.append(s["joint"][a] / unit)
@@ -571,10 +578,21 @@ class Reduced:
         return link, at
 
     # -- numbers -------------------------------------------------------------------------------
+    @property
+    def given(self) -> list[str]:
+        """The actuators whose values the functions take after the rigid angles, by name: the
+        force actuators' forces (N), then a structure's strokes (file unit)."""
+        return self.forces + self.placed
+
+    @property
+    def given_symbols(self) -> list[sp.Symbol]:
+        """:attr:`given`'s symbols."""
+        return self.fa + self.sa
+
     def angles(self, theta: Mapping) -> list:
-        """The functions' second argument: the rigid hinge angles by label, then the force
-        actuators' forces by name (N; `theta` holds both)."""
-        return [theta[a] for a in sorted(self.hinges)] + [theta[n] for n in self.forces]
+        """The functions' second argument: the rigid hinge angles by label, then the values of
+        :attr:`given` by name (`theta` holds both)."""
+        return [theta[a] for a in sorted(self.hinges)] + [theta[n] for n in self.given]
 
     def _modules(self) -> list:
         """lambdify's modules, taken now: a callable's namespace holds the kernels derived so
@@ -582,7 +600,8 @@ class Reduced:
         return self.modules() if callable(self.modules) else self.modules
 
     def _lambdify(self, exprs: list, extra: list | None = None):
-        args = [list(self.x), [self.th[a] for a in sorted(self.hinges)] + self.fa, self.t]
+        thetas = [self.th[a] for a in sorted(self.hinges)] + self.given_symbols
+        args = [list(self.x), thetas, self.t]
         if extra is not None:
             args.append(extra)
         # a callable gives the modules after the derivation: kernels it created are in them

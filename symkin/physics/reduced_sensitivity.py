@@ -79,7 +79,8 @@ def partials(r: Reduced, params: Sequence[sp.Symbol], points: Sequence[str]) -> 
     """The pieces of the module docstring for the symbolic reduced equilibrium `r` (built with
     symbolic=True), by the parameters `params`, for the deviations of `points`."""
     s = r._s
-    thetas = [r.th[a] for a in sorted(r.hinges)] + r.fa  # the force actuators' forces too
+    # the force actuators' forces and a structure's strokes too
+    thetas = [r.th[a] for a in sorted(r.hinges)] + r.given_symbols
     rows = sp.Matrix(r._rows(s))
     ins = plate_inputs(r)
     dev = sp.Matrix([c for name in points for c in r._deviation(s, *r.located(name))])
@@ -162,7 +163,7 @@ class LoadedSensitivity:
         # the parameters renamed p_0, p_1, ... (as in generated code): a file's parameter may
         # be called like the equilibrium's own symbols (t, x_0, ...)
         rename = {q: sp.Symbol(f"p_{k}", real=True) for k, q in enumerate(self.params)}
-        thetas = [r.th[a] for a in sorted(r.hinges)] + r.fa
+        thetas = [r.th[a] for a in sorted(r.hinges)] + r.given_symbols
         args = [list(r.x), thetas, r.t, outs, list(rename.values())]
         modules = r._modules()  # taken after the derivation, as Reduced's
         exprs = [

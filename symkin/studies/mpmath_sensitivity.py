@@ -75,8 +75,8 @@ def of(ev: MpmathEvaluator, state: State, answer: reduced.Answer | None = None) 
         # by the strokes instead of the surrogates' angles (at `loaded`; the kinematic
         # levels' are carried over by _stroke_sensitivity, which reads the surrogates')
         assert answer is not None
-        forces = len(answer.solver.forces) if answer.solver else 0
-        if forces:  # the rigid positions do not read the forces
+        forces = len(answer.solver.given) if answer.solver else 0
+        if forces:  # the rigid positions do not read the forces (nor a structure's strokes)
             total_r = total_r.T.tolist() + [[0] * total_r.rows for _ in range(forces)]
             total_r = mpmath.matrix(total_r).T
         to_drives = _stroke_columns(ev, state, total_r, total_d, answer)
@@ -124,17 +124,17 @@ def _stroke_columns(ev: MpmathEvaluator, state: State, total_r, total_d, answer:
     user = {name: n_p + j for j, name in enumerate(drives)}
     row = {p.name: 2 * i for i, p in enumerate(an.points)}
     column = {a: n_p + j for j, a in enumerate(kin.inputs)}
-    column |= {name: n_p + n_in + j for j, name in enumerate(red.forces)}
+    column |= {name: n_p + n_in + j for j, name in enumerate(red.given)}
     params = list(an.params)
     args = [*an.params, *an.thetas]
     at = [*state.pvals, *(state.theta[a] for a in sorted(state.theta))]
     acted = red.acted(answer.x, answer.theta)
-    out = mpmath.zeros(n_p + n_in + len(red.forces), n_p + len(drives))
+    out = mpmath.zeros(n_p + n_in + len(red.given), n_p + len(drives))
     for c in range(n_p):
         out[c, c] = 1
     for name in hinges:
         out[column[labels[name]], user[name]] = 1
-    for name in red.forces:
+    for name in red.given:
         out[column[name], user[name]] = 1
     if mech.is_structure:  # its rigid reference stays as fabricated: no surrogate angle moves
         return out
@@ -209,8 +209,8 @@ def _loaded_rates(ev: MpmathEvaluator, state: State, answer: reduced.Answer, the
     npar = len(an.params)
     theta_u = np.array(theta_v.tolist(), dtype=float).reshape(len(kin.unknowns), -1)
     rates = reduced_sensitivity.theta_rates(an, theta_u, npar, kin.inputs)
-    if red.forces:  # the force actuators' forces: arguments beside θ, a column each
-        m, nv, nf = rates.shape[0], rates.shape[1], len(red.forces)
+    if red.given:  # the force actuators' forces (a structure's strokes): beside θ, a column each
+        m, nv, nf = rates.shape[0], rates.shape[1], len(red.given)
         wider = np.zeros((m + nf, nv + nf))
         wider[:m, :nv], wider[m:, nv:] = rates, np.eye(nf)
         rates = wider

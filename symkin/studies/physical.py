@@ -425,7 +425,13 @@ def solve_reduced(
                 pvals = [mpmath.mpf(sp.N(exact_params[s], 35)) for s in analysis.params]
                 ivals = {a: mpmath.mpf(sp.N(v, 35)) for a, v in angles.items()}
                 theta, _ = ev.rigid_angles(pvals, ivals)
-            return {a: float(v) for a, v in theta.items()} | forces
+            # a structure's strokes: arguments beside the angles, scaled as the inputs are
+            placed = {
+                a.name: scale * float(sp.N(sp.sympify(strokes[a.name]), 20))
+                for a in mech.actuators
+                if a.drive == "stroke" and mech.is_structure
+            }
+            return {a: float(v) for a, v in theta.items()} | forces | placed
 
         answer = solver(segments or 1).solve(rigid)
         if segments is None and answer.refused.startswith(reduced.TRUNCATION):
