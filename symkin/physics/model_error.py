@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 import sympy as sp
 
+from ..core.settings import EPS64, SOLVER
 from ..model import notch_correction
 from ..model.hinges import pivot_distance
 from ..model.mechanism import Mechanism
@@ -91,6 +92,28 @@ class _Plate:
 
 def _number(expr, values) -> float:
     return float(sp.N(sp.sympify(expr).xreplace(values), 20))
+
+
+def size(mech: Mechanism, values: Mapping[sp.Symbol, sp.Expr]) -> float:
+    """The mechanism's size as the loaded level's truncation estimate takes it
+    (physics.reduced.Reduced.length): the largest distance between hinge centres, at least the
+    shortest plate (a lone hinge: its plate)."""
+    centres = [(_number(h.at[0], values), _number(h.at[1], values)) for h in mech.hinges]
+    lengths = [_number(h.length, values) for h in mech.hinges if h.is_plate]
+    spread = max([math.dist(a, b) for a in centres for b in centres], default=0.0)
+    spread = spread or max(lengths, default=0.0)
+    return max(spread, min(lengths, default=spread))
+
+
+def least_deviation(deviations: Mapping[str, tuple[float, float]], length: float) -> float:
+    """The least |ΔR| a point's model error is relative to: est_share of the largest point
+    deviation and est_size times the mechanism's size (`length`), as the loaded level's
+    truncation estimate (docs/physics.md, "Model error"): a point at or near the centre of a
+    link's rotation (a three-leaf flexure's hub) barely moves, and its own deviation, rounding,
+    would make any error look infinite."""
+    largest = max((math.hypot(*d) for d in deviations.values()), default=0.0)
+    rules = SOLVER.loaded
+    return max(rules.est_share * largest, rules.est_size_eps * EPS64 * length)
 
 
 def _link_index(mech: Mechanism) -> dict[str, int]:
@@ -271,6 +294,8 @@ def estimate(
         width[p.name] = (p.uncertain_modulus - floor) * compliance
         notch[p.name] = np.stack([p.notch * compliance, p.drift * abs(theta) * across])
     total, parts, shift = {}, {}, {}
+    least = least_deviation(deviations, size(mech, values))
+    moving = any(math.hypot(*d) > 0 for d in deviations.values())
     for name, (k, p0) in points.items():
         resp = response(k, p0)
 
@@ -280,8 +305,10 @@ def estimate(
 
         sum_signed = sum((effect(signed[p.name], p.name) for p in plates), np.zeros(2))
         shift[name] = (float(sum_signed[0]), float(sum_signed[1]))
-        norm = math.hypot(*deviations[name])
-        if norm == 0:  # the as-fabricated pose: nothing to be relative to
+        # relative to |ΔR|, at least the floor; every point at rest (the as-fabricated pose):
+        # nothing to be relative to
+        norm = max(math.hypot(*deviations[name]), least) if moving else 0.0
+        if norm == 0:
             total[name] = 0.0
             parts[name] = dict.fromkeys(
                 ("centre_line", "stretch_shear", "clamp", "width", "notch"), 0.0

@@ -43,6 +43,8 @@ from .figures import (
     tree_layout,
 )
 from .modes import first_mode_arrows, frequency_table
+from .profiles import caption as notch_caption
+from .profiles import notch_scale, profile_rows
 from .sections import COLUMN_WIDTH, PLAIN_UNITS, Report, chunks, input_axis
 from .sweeps import Physics, pose_data, sensitivity_table, sweep, sweep_spans
 from .text import LINE_WIDTH_EM, escape_latex, math_name, plain_name
@@ -98,6 +100,10 @@ def emit(
     plates = "the flexure plates as thick black segments" + (
         " to scale" if scale == 1 else f", drawn {scale:g} times their length"
     )
+    if pose.notches:  # a notch is drawn as cut, not as a plate
+        cut = notch_caption(*notch_scale(pose))
+        whole = len(pose.notches) == len(pose.plates)
+        plates = cut if whole else f"{plates}, {cut}"
     ctx["pose_caption"] = (
         plates + ", the fixed link $s_0$ as ground anchors; characteristic points in red."
     )
@@ -114,6 +120,7 @@ def emit(
         f"{0.16 + 0.1 * depth:.2f}" if depth <= 3 else f"{min(0.9, 0.13 * (depth + 1)):.2f}"
     )
     ctx["table_width"] = f"{min(0.58, 0.96 - float(ctx['graph_width'])):.2f}"
+    ctx["profiles"] = profile_rows(report)
     ctx["deviation_figures"] = []
     ctx["sweep"] = None
     ctx["sensitivity"] = None

@@ -11,6 +11,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from ..physics import model_error
 from ..physics.equilibrium import BUCKLING_LIMIT
 from .figures import Sweep, stress_figure
 from .sections import Report, float_at, input_axis, input_unit
@@ -107,6 +108,12 @@ def equilibrium_table(report: Report, ev, scales: Mapping[tuple[str, str], float
         for name, a in ev.actuation.items()
     ]
     points = []
+    # a model error is relative to the point's |ΔR| but at least the floor (docs/physics.md,
+    # "Model error"): the spread is the error times what it is relative to
+    least = model_error.least_deviation(
+        {n: p.deviation for n, p in ev.points.items()},
+        model_error.size(report.mech, report.defaults),
+    )
     for name in report.plan.points:
         pt = ev.points[name]
         error = ev.model_error.get(name)
@@ -118,8 +125,11 @@ def equilibrium_table(report: Report, ev, scales: Mapping[tuple[str, str], float
                 "dy": sci(pt.deviation[1], 4),
                 "norm": sci(pt.norm, 4),
                 "error": sci(100 * error, 2) if error is not None else dash,
-                "spread": sci(error * pt.norm, 2) if error is not None else dash,
+                "spread": sci(error * max(pt.norm, least), 2) if error is not None else dash,
             }
+        row["floored"] = (
+            error is not None and pt.norm < least and not zero(("point", name), pt.norm)
+        )
         points.append({"name": escape_latex(name)} | row)
     buckling = None
     if ev.buckling is not None:
@@ -198,4 +208,5 @@ def equilibrium_section(
         "loads": any(t["buckling"] is not None for t in tables),
         "over": any(t["over"] for t in tables),
         "actuation": any(t["actuation"] for t in tables),
+        "floored": any(row["floored"] for t in tables for row in t["points"]),
     }

@@ -2,7 +2,8 @@
 
 - :func:`pose_figure`: the mechanism as fabricated: links between their hinge clamps (a link with
   three or more attachments as a filled polygon), plates as short thick segments along the plate
-  (magnified by :func:`plate_scale` when they would be invisible), the ground as hatched anchors,
+  (magnified by :func:`plate_scale` when they would be invisible), notch hinges as cut (their
+  flanks, magnified by :func:`~symkin.report.profiles.notch_scale`), the ground as hatched anchors,
   the characteristic points, every name labelled; labels are placed greedily where they overlap
   no other label, marker or line (:func:`_place_labels`).
 - :func:`graph_figure`: the oriented graph, vertices s_i, arcs u_a from i+(a) to i-(a).
@@ -31,6 +32,7 @@ import numpy as np
 
 from ..core.levels import Level
 from ..core.recent import Recent
+from .profiles import notch_polygon, notch_scale
 
 _SUB = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
 
@@ -133,6 +135,9 @@ class PoseData:
     ground: int
     plates: tuple[tuple[int, str, tuple[float, float], tuple[float, float], bool], ...]
     points: tuple[tuple[str, int, tuple[float, float]], ...]  # name, link, position
+    #: the notch hinges' profiles: (a, ((x, T(x)), ...)), x along the axis from the hinge
+    #: centre (symkin.report.profiles.notch_outlines); drawn as cut, not as plates
+    notches: tuple[tuple[int, tuple[tuple[float, float], ...]], ...] = ()
 
 
 def _hull(pts: Sequence[tuple[float, float]]) -> list[tuple[float, float]]:
@@ -164,7 +169,11 @@ def plate_scale(data: PoseData) -> float:
     xs = [p[0] for p in every] or [0.0]
     ys = [p[1] for p in every] or [0.0]
     span = max(max(xs) - min(xs), max(ys) - min(ys), 1e-12)
-    longest = max([math.hypot(m[0] - p[0], m[1] - p[1]) for _, _, p, m, _ in data.plates] + [0])
+    cut = {a for a, _ in data.notches}
+    longest = max(
+        [math.hypot(m[0] - p[0], m[1] - p[1]) for a, _, p, m, _ in data.plates if a not in cut]
+        + [0]
+    )
     if longest <= 0:
         return 1.0
     want = 0.04 * span / longest
@@ -431,17 +440,30 @@ def pose_figure(
                 )
             elif hull:
                 link_labels.append(_Label([hull[0]], text, style, away(*hull[0])))
+        notches = dict(data.notches)
+        along, across = notch_scale(data)
         for a, name, p, m, is_input in data.plates:
             hx, hy = (p[0] + m[0]) / 2, (p[1] + m[1]) / 2
             ux, uy = (m[0] - p[0]) / 2 * scale, (m[1] - p[1]) / 2 * scale
-            ax.plot(
-                [hx - ux, hx + ux],
-                [hy - uy, hy + uy],
-                color="black",
-                lw=3.0,
-                solid_capstyle="butt",
-                zorder=5,
-            )
+            if a in notches:  # the notch as cut: its material between the two flanks
+                outline = notch_polygon((hx, hy), (ux, uy), notches[a], along, across)
+                ax.add_patch(
+                    Polygon(
+                        outline, closed=True, facecolor="0.35", edgecolor="black", lw=0.5, zorder=5
+                    )
+                )
+                half = len(outline) // 2  # each flank, coarsely, for the labels to avoid
+                for flank in (outline[:half], outline[half:]):
+                    segments += list(itertools.pairwise([*flank[::16], flank[-1]]))
+            else:
+                ax.plot(
+                    [hx - ux, hx + ux],
+                    [hy - uy, hy + uy],
+                    color="black",
+                    lw=3.0,
+                    solid_capstyle="butt",
+                    zorder=5,
+                )
             markers.append((hx, hy))
             text = f"{plain(name)} (u{sub(a)}" + (", input)" if is_input else ")")
             labels.append(

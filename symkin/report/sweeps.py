@@ -14,6 +14,7 @@ import numpy as np
 from ..codegen import pipeline
 from ..core.errors import SymkinError
 from .figures import PoseData, Sweep
+from .profiles import notch_outlines
 from .sections import Report, float_at, input_unit
 from .text import escape_latex, gnum, sci
 
@@ -41,7 +42,7 @@ def pose_data(report: Report) -> PoseData:
         plates.append((a, s.hinges[a - 1], p, m, h.is_input))
     links = tuple((i, s.links[i], tuple(attachments[i])) for i in range(s.n + 1))
     points = tuple((pt.name, pt.link, num(pt.at)) for pt in d.points)
-    return PoseData(links, 0, tuple(plates), points)
+    return PoseData(links, 0, tuple(plates), points, notch_outlines(report))
 
 
 def sweep_spans(

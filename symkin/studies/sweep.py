@@ -22,9 +22,11 @@ process compiles it once).
 
 from __future__ import annotations
 
+import ctypes
 import itertools
 import math
 import os
+import re
 import sys
 import threading
 import time
@@ -298,12 +300,62 @@ def extremes(
     return stress, stiff
 
 
+def frequency_backend(ev: Compiled) -> str:
+    """Who computes a sweep's natural frequencies: the C evaluator's <name>_modes where the
+    evaluator is C and has it ("c"), else the generated numpy module's modes() ("numpy")."""
+    return "c" if ev.backend == "c" and _modes_sizes(ev) is not None else "numpy"
+
+
+def _modes_sizes(ev: Compiled) -> tuple[int, int] | None:
+    """(massive links, points) of the C evaluator's <name>_modes, from its header; None where
+    it has none (docs/generated-code.md, "Natural frequencies in generated code")."""
+    header = ev.sources.header
+    if f"int {ev.name}_modes(" not in header:
+        return None
+    prefix = ev.name.upper()
+    sizes = [
+        re.search(rf"#define {prefix}_N_MODES_{what} (\d+)", header) for what in ("LINKS", "POINTS")
+    ]
+    if sizes[0] is None or sizes[1] is None:
+        return None
+    return int(sizes[0][1]), int(sizes[1][1])
+
+
+def _lowest_frequency_c(ev: Compiled, inputs: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """lowest_frequency by the C evaluator's <name>_modes: one call per parameter set and
+    configuration (its first frequency, NaN where it returns non-zero)."""
+    sizes = _modes_sizes(ev)
+    assert sizes is not None
+    links, points = sizes
+    count = 3 * links
+    dptr = ctypes.POINTER(ctypes.c_double)
+    fn = getattr(ev.library.lib, f"{ev.name}_modes")
+    fn.restype, fn.argtypes = ctypes.c_int, [dptr, dptr, dptr]
+    out = np.empty(count * (1 + 3 * links + 2 * points) or 1)
+    x = np.ascontiguousarray(inputs, dtype=float).reshape(len(inputs), -1)
+    found = np.full((len(rows), len(x)), np.nan)
+    for k, values in enumerate(rows):
+        p = np.ascontiguousarray(values, dtype=float)
+        if not p.size:
+            p = np.zeros(1)
+        for j, row in enumerate(x):
+            args = np.ascontiguousarray(row) if row.size else np.zeros(1)
+            rc = fn(args.ctypes.data_as(dptr), p.ctypes.data_as(dptr), out.ctypes.data_as(dptr))
+            if rc == 0:
+                found[k, j] = out[0]
+    return np.where(np.isnan(found).any(axis=-1), np.nan, found.min(axis=-1))
+
+
 def lowest_frequency(ev: Compiled, inputs: np.ndarray, params: np.ndarray | None) -> np.ndarray:
     """Per parameter set (rows of `params` (k, n_params); None: the defaults, k = 1) the lowest
     first natural frequency (Hz) over the configurations `inputs` (n, n_inputs) at `loaded`, by
-    the generated numpy module's modes() (docs/generated-code.md, "Natural frequencies in
-    generated code"), every set at every configuration in one call; NaN where some
-    configuration has none (not solved, or beyond buckling)."""
+    the backend :func:`frequency_backend` names: the C evaluator's <name>_modes (one call per
+    set and configuration), else the generated numpy module's modes() (docs/generated-code.md,
+    "Natural frequencies in generated code"), every set at every configuration in one call; NaN
+    where some configuration has none (not solved, or beyond buckling)."""
+    if frequency_backend(ev) == "c":
+        given = [ev.parameters()] if params is None else np.asarray(params, dtype=float)
+        return _lowest_frequency_c(ev, inputs, np.asarray(given, dtype=float))
     rows = np.zeros((1, 0)) if params is None else np.asarray(params, dtype=float)
     given = (
         None
@@ -364,6 +416,7 @@ class Sweep:
     # links with mass at `loaded`: each sample's lowest first natural frequency over the grid
     first: np.ndarray | None = field(default=None, repr=False)  # (samples,), Hz
     nominal_first: float | None = None  # at nominal values
+    first_backend: str | None = None  # who computed them (frequency_backend): "c" or "numpy"
 
     @property
     def failed(self) -> int:
@@ -436,7 +489,10 @@ class Sweep:
                 else {}
             ),
             **(
-                {"frequencies": {"f1": self.frequency_statistics()}}
+                {
+                    "frequencies": {"f1": self.frequency_statistics()},
+                    "frequencies_backend": self.first_backend,
+                }
                 if self.first is not None
                 else {}
             ),
@@ -554,6 +610,7 @@ def run(
         nominal_stiffness,
         first if modes else None,
         nominal_first,
+        frequency_backend(evaluator) if modes else None,
     )
 
 
@@ -672,10 +729,15 @@ def text(result: Sweep) -> str:
     if result.first is not None:
         low = "".join(f"{k:>12}" for k in ("nominal", "mean", "std", "p1", "min"))
         stats = {**result.frequency_statistics(), "nominal": result.nominal_first}
+        by = (
+            f"the C evaluator's {result.name}_modes"
+            if result.first_backend == "c"
+            else "the generated numpy module's modes()"
+        )
         lines += [
             "",
-            "lowest first natural frequency over the grid (Hz; docs/physics.md, 'Natural "
-            "frequencies')",
+            f"lowest first natural frequency over the grid (Hz, by {by}; docs/physics.md, "
+            "'Natural frequencies')",
             f"  {'':<10}" + low,
             row("f1", stats, FREQUENCY_STATISTICS),
         ]
