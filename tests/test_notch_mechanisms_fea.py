@@ -20,10 +20,11 @@ import mpmath
 import pytest
 from conftest import ROOT
 
-import symkin  # noqa: F401  (the equilibrium test below)
+import symkin
 from symkin import fea
 from symkin.cli.commands import main
 from symkin.fea import ccx
+from symkin.physics import model_error
 
 needs_ccx = pytest.mark.skipif(
     shutil.which("ccx") is None and os.environ.get("CI") != "true",
@@ -97,3 +98,32 @@ def test_both_laws_share_the_small_strain_response():
     span = mpmath.quad(lambda x: 1 / (t + 2 * (r - mpmath.sqrt(r * r - x * x))), [-r, 0, r])
     beam = 2 * 0.5 * float(span) / (E / (1 - NU**2) * B) * 1e3  # two notches, mm
     assert -sink["svk"] / beam == pytest.approx(1.07, abs=0.03)
+
+
+@needs_ccx
+def test_equilibrium_within_3_percent_of_calculix_on_the_notch_four_bar():
+    """The notch four-bar at A0 = 0.02 rad under 1 N on its coupler point, 20 × 2 elements per
+    notch (a few seconds of ccx; the 80 × 8 run is 0.48 % from it, benchmarks/
+    notch_mechanisms.py): `equilibrium` within the issue's 3 % of the St. Venant–Kirchhoff FE,
+    its model_error covering its difference from either law, and the two laws' deviations apart
+    by the few percent the issue reports (4–10 %)."""
+    file = MECHANISMS / "notch_four_bar.toml"
+    setup = fea.prepare(file, {"A0": 0.02}, {"P": 1.0})
+    fe = {}
+    for law in fea.LAWS:
+        deck = fea.write_deck(setup, fea.Mesh(20, 2, 0.8), law=law)
+        fe[law] = fea.deviations(deck, ccx.run(deck, "notch_four_bar"))["C"]
+    ev = symkin.evaluate(setup.analysis, setup.inputs, level="equilibrium", params=setup.overrides)
+    eq = ev.points["C"].deviation
+
+    def diff(a, b) -> float:
+        return math.hypot(a[0] - b[0], a[1] - b[1]) / norm(b)
+
+    assert diff(eq, fe["svk"]) < 0.03
+    spread = diff(fe["neo-hookean"], fe["svk"])
+    assert 0.04 < spread < 0.10
+    assert ev.model_error["C"] > max(diff(eq, fe[law]) for law in fea.LAWS)
+    # every hinge a notch: the law's part is LAW_SPREAD times the whole centre-line part
+    parts = ev.model_error_parts["C"]
+    assert parts["law"] == pytest.approx(model_error.LAW_SPREAD * parts["centre_line"], rel=1e-9)
+    assert spread < parts["law"] < 2 * spread  # it covers the laws' distance, not grossly
