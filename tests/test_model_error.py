@@ -81,6 +81,7 @@ def test_single_plate_centre_line_is_the_arcs():
         parts = r.model_error_parts["T"]
         assert parts["centre_line"] == pytest.approx(expected, rel=1e-6)
         assert parts["stretch_shear"] == 0 and parts["width"] == 0
+        assert parts["law"] == 0  # the finite-strain law's part is a notch's only
         # the clamp faces: 0.045 t/l of the arc's deviation, along the chord
         assert parts["clamp"] == pytest.approx(
             0.045 * t / length * theta**2 / 12 * length / math.hypot(*arc), rel=1e-6

@@ -13,6 +13,7 @@ from . import Comparison, compare, prepare, save, write_deck
 from ._symkin import InputError
 from .ccx import executable
 from .deck import DEFAULT_MESH, Mesh, parse_mesh
+from .material import DEFAULT_LAW, NAMES, parse_law
 
 
 def register(command: Callable[[str, str], argparse.ArgumentParser]) -> None:
@@ -39,6 +40,12 @@ def register(command: Callable[[str, str], argparse.ArgumentParser]) -> None:
         help=f"elements per plate along it and through its thickness, and their "
         f"grading towards the clamps and faces, 0 to 1 (default {DEFAULT_MESH}"
         f": the deviation converged to about 0.03 %%)",
+    )
+    fe.add_argument(
+        "--law",
+        metavar="LAW",
+        help="the plates' finite-strain law: svk (St. Venant-Kirchhoff, *ELASTIC; the default) "
+        "or neo-hookean (*HYPERELASTIC, NEO HOOKE with the same E and nu at small strain)",
     )
     fe.add_argument(
         "--run",
@@ -120,6 +127,15 @@ def check_run_size(file: str, mesh: Mesh) -> None:
 def main(args: argparse.Namespace) -> str:
     """Run the subcommand; returns what goes to stdout."""
     mesh = parse_mesh(args.mesh) if args.mesh else DEFAULT_MESH
+    law = parse_law(args.law, file=args.file) if args.law is not None else DEFAULT_LAW
+    if law != DEFAULT_LAW and args.modes is not None:
+        raise InputError(
+            f"--law {law} with --modes: the frequency step is written for the default law only",
+            file=args.file,
+            entry="--law",
+            hint="leave --law out with --modes (the frequencies are small-strain: the law does "
+            "not change them to first order)",
+        )
     if args.solve:
         executable()  # before any work: exit 2 naming the package
         check_run_size(args.file, mesh)
@@ -147,7 +163,7 @@ def main(args: argparse.Namespace) -> str:
             hint="add --modes N, or leave --plate-density out",
         )
     else:
-        deck = write_deck(setup, mesh)
+        deck = write_deck(setup, mesh, law=law)
     name = setup.mechanism.name
     path = save(deck.text, args.output, name)
     for stale in (".frd", ".dat", ".log"):  # results of an earlier deck would not match it
@@ -165,6 +181,7 @@ def main(args: argparse.Namespace) -> str:
                         "deck": str(path),
                         "mesh": [mesh.along, mesh.across],
                         "grading": mesh.grading,
+                        "law": law,
                         "nodes": deck.nodes,
                         "elements": deck.elements,
                     },
@@ -204,7 +221,8 @@ def text(result: Comparison) -> str:
     inputs = inputs or "no input (a structure)"
     lines = [
         f"{setup.mechanism.name}: {inputs}; mesh {result.mesh.along} x "
-        f"{result.mesh.across} per plate, grading {result.mesh.grading:g} "
+        f"{result.mesh.across} per plate, grading {result.mesh.grading:g}, "
+        f"{NAMES[result.deck.law]} "
         f"({result.deck.elements} elements); ccx {result.ccx_seconds:.1f} s "
         f"({result.ccx_cpu_seconds:.1f} s processor time)",
         f"deviation from the rigid linkage ({unit}); difference = |dR - dR_fea| / |dR_fea|",

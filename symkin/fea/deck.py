@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 import sympy as sp
 
 from ._symkin import InputError, Mechanism, section_of
+from .material import DEFAULT_LAW, FORCE_UNIT, NAMES, cards
 from .profile_columns import columns
 
 #: Element type of the plates: quadratic brick, reduced integration.
@@ -518,14 +519,19 @@ class Deck:
     scale: float
     mesh: Mesh
     drives: tuple[Drive, ...] = ()
+    law: str = DEFAULT_LAW  # the plates' finite-strain law (fea.material)
 
 
 class _Writer:
     """Builds the deck's sections from a Configuration (one pass, deterministic numbering)."""
 
-    def __init__(self, conf: Configuration, mesh: Mesh, released: frozenset[str]) -> None:
+    def __init__(
+        self, conf: Configuration, mesh: Mesh, released: frozenset[str], law: str = DEFAULT_LAW
+    ) -> None:
         self.conf = conf
         self.mesh = mesh
+        self.law = law
+        self.unit = FORCE_UNIT[law]  # newtons per force unit of the deck
         self.released = released
         self.count = 0
         self.node_lines: list[str] = []
@@ -676,6 +682,7 @@ class _Writer:
             conf.scale,
             self.mesh,
             conf.drives,
+            self.law,
         )
 
     def materials(self) -> list[str]:
@@ -684,10 +691,9 @@ class _Writer:
         for k, pl in enumerate(self.conf.plates, start=1):
             out += [
                 f"** plate {k} ('{printable(pl.hinge)}'): E = {number(pl.E)} Pa, "
-                f"nu = {number(pl.nu)}; St. Venant-Kirchhoff under NLGEOM",
+                f"nu = {number(pl.nu)}; {NAMES[self.law]} under NLGEOM",
                 f"*MATERIAL, NAME=PLATE{k}",
-                "*ELASTIC",
-                f"{number(pl.E)}, {number(pl.nu)}",
+                *cards(pl.E / self.unit, pl.nu, self.law, number),
                 f"*SOLID SECTION, ELSET=PLATE{k}, MATERIAL=PLATE{k}",
             ]
         return out
@@ -702,7 +708,8 @@ class _Writer:
             f"** mechanism '{printable(conf.name)}'; inputs {inputs}"
             + (f" (released: {released})" if released else "")
             + f"; parameters {params}",
-            f"** units: metres (the file's lengths times {number(conf.scale)}), newtons, pascals",
+            f"** units: metres (the file's lengths times {number(conf.scale)}), "
+            + ("newtons, pascals" if self.unit == 1 else "meganewtons, megapascals (fea.material)"),
             f"** plates: {self.mesh.along} x {self.mesh.across} {ELEMENT} elements each (along "
             f"x through the thickness, grading {self.mesh.grading:g}: the elements at the "
             "clamps and the faces smaller), one layer through the width, u_z = 0: plane strain",
@@ -738,7 +745,7 @@ class _Writer:
                     f"along ({number(d.direction[0])}, {number(d.direction[1])})"
                 )
                 load += [
-                    f"{ref}, {dof}, {number(d.force * c)}"
+                    f"{ref}, {dof}, {number(d.force * c / self.unit)}"
                     for dof, c in ((1, d.direction[0]), (2, d.direction[1]))
                     if c
                 ]
@@ -812,12 +819,12 @@ class _Writer:
                 node = self.node(ld.at, comment=f"{printable(ld.label)}: where it acts")
                 body.members.append(node)
                 lines += [
-                    f"{node}, {dof}, {number(v)}"
+                    f"{node}, {dof}, {number(v / self.unit)}"
                     for dof, v in ((1, ld.force[0]), (2, ld.force[1]))
                     if v
                 ]
             if ld.moment:
-                lines.append(f"{body.rot}, 3, {number(ld.moment)}")
+                lines.append(f"{body.rot}, 3, {number(ld.moment / self.unit)}")
         return lines
 
     def deviation_nodes(self) -> None:
@@ -914,11 +921,16 @@ class _Writer:
         return out
 
 
-def write(conf: Configuration, mesh: Mesh = DEFAULT_MESH, released: Sequence[str] = ()) -> Deck:
-    """The deck of `conf` with `mesh` elements per plate; the input hinges in `released` are
-    left free (no actuator: a cantilever under a load, say), the rigid linkage's pose still
-    taken at their given angles."""
+def write(
+    conf: Configuration,
+    mesh: Mesh = DEFAULT_MESH,
+    released: Sequence[str] = (),
+    law: str = DEFAULT_LAW,
+) -> Deck:
+    """The deck of `conf` with `mesh` elements per plate of the finite-strain `law`
+    (fea.material); the input hinges in `released` are left free (no actuator: a cantilever under
+    a load, say), the rigid linkage's pose still taken at their given angles."""
     unknown = [h for h in released if h not in {i[0] for i in conf.inputs}]
     if unknown:
         raise InputError(f"'{unknown[0]}' is not an input hinge", entry="released")
-    return _Writer(conf, mesh, frozenset(released)).write()
+    return _Writer(conf, mesh, frozenset(released), law).write()
