@@ -279,7 +279,8 @@ def test_single_notch_linear_compliances(kind, tmp_path):
 # -- mechanisms against equilibrium ---------------------------------------------------------------
 
 #: (file, inputs, parameters): the contract's cases; every point's deviation within 1 % of
-#: equilibrium's (measured in docs/physics.md, "Notch hinges at `loaded`").
+#: equilibrium's, the contract's bar (measured in docs/physics.md, "Notch hinges at `loaded`":
+#: 1.5e-8 to 7.7e-5, so the test asks 0.1 %).
 CASES = [
     (ROOT / "examples" / "notch_lever.toml", {"piezo": 0.02}, {}),
     (ZOO / "notch_four_bar.toml", {"A0": 0.02}, {}),
@@ -306,7 +307,8 @@ def test_loaded_within_one_percent_of_equilibrium(path, inputs, params):
     for name, point in reference.points.items():
         size = math.hypot(*point.deviation)
         assert size > 0
-        assert math.dist(answer.deviations[name], point.deviation) < 0.01 * size, name
+        # the contract's bar is 1 %; measured 1.5e-8 to 7.7e-5 (docs/physics.md)
+        assert math.dist(answer.deviations[name], point.deviation) < 1e-3 * size, name
 
 
 def test_the_level_reports_a_notchs_stress_and_loads_as_equilibrium_does():
