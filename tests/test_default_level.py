@@ -28,15 +28,13 @@ STIFF_LINE = "level: loaded (default: every plate has E, thickness and width)"
 
 def has_stiffness_by_hand(path) -> bool:
     """The rule read off the TOML itself: every hinge that is not `rigid` has E, thickness and
-    width, its own or [defaults]', and is a uniform plate (loaded refuses notches)."""
+    width, its own or [defaults]' (a notch hinge too: loaded takes it)."""
     data = tomllib.loads(path.read_text())
     defaults = data.get("defaults", {})
     for hinge in data["hinge"]:
         merged = {**defaults, **hinge}
         if merged.get("model") == "rigid":
             continue
-        if merged.get("profile", "uniform") != "uniform":  # loaded takes no notch yet
-            return False
         if not all(key in merged for key in ("E", "thickness", "width")):
             return False
     return True
@@ -259,18 +257,18 @@ def test_the_reports_sensitivity_table_takes_the_default_level(tmp_path):
     assert "deviation (level loaded)" in committed
 
 
-def test_a_file_with_notches_falls_back_to_exact():
-    """loaded refuses notch hinges (exit 2 when asked): a notch file's default is exact, with the
-    reason naming the hinge and pointing to equilibrium, and `eval` without --level runs."""
+def test_a_file_with_notches_defaults_to_loaded_but_not_in_generated_code():
+    """loaded takes notch hinges: a notch file's default is loaded, and `eval` without --level
+    runs it; for the generated evaluators (tolerance, sweep), whose loaded takes uniform plates,
+    it is exact, with the reason naming the hinge and its profile."""
     path = ROOT / "examples" / "notch_lever.toml"
     mech = symkin.load(path)
     assert mech.has_stiffness
     choice = levels.default_for(mech)
-    assert choice.name == "exact" and choice.default
-    assert "notch" in choice.reason and "'O'" in choice.reason
-    assert "--level equilibrium" in choice.reason
-    asked = symkin_cli("eval", path, "--input", "piezo=0.02", "--level", "loaded")
-    assert asked.returncode == 2 and "circular" in asked.stderr
+    assert choice.name == "loaded" and choice.default
+    generated = levels.default_for(mech, generated=True)
+    assert generated.name == "exact" and generated.default
+    assert "circular" in generated.reason and "'O'" in generated.reason
     run = symkin_cli("eval", path, "--input", "piezo=0.02")
     assert run.returncode == 0, run.stderr
     assert run.stdout.splitlines()[0] == choice.line and run.stderr == ""

@@ -2,7 +2,8 @@
 the shot against an independent scipy shooting of the same variable-section Reissner beam, the
 linear compliances against mpmath quadrature of the Euler–Bernoulli integrals at 40 digits, the
 thin-notch limit of Paros & Weisbord, a single notch held at an angle (a pure moment: the
-`pure_moment` shape), the stress with its K_t, and `loaded` refusing a notch."""
+`pure_moment` shape), the stress with its K_t, and the generated `loaded` refusing a notch
+(`loaded` itself takes notches: tests/test_notch_loaded.py)."""
 
 from __future__ import annotations
 
@@ -199,13 +200,6 @@ def test_notch_four_bar_at_equilibrium_and_its_stress():
     angle = abs(ev.angles_compliant["A0"])
     neck = angle / (EP * B * t**3 / 12 * float(theta_m)) * t / 2
     assert ev.plates["A0"].strain / kt == pytest.approx(neck, rel=0.05)
-
-
-def test_loaded_refuses_a_notch_naming_it():
-    mech = four_bar()
-    with pytest.raises(InputError, match="circular") as err:
-        symkin.evaluate(symkin.analyze(mech), {"A0": "0.05"}, level="loaded")
-    assert err.value.exit_code == 2 and "A0" in str(err.value) and "equilibrium" in str(err.value)
 
 
 def test_a_notch_file_derives_its_kinematic_levels():

@@ -61,12 +61,13 @@ def _eval(args: argparse.Namespace) -> str:
     return evaluation_json(result) if args.json else choice.line + "\n" + evaluation_text(result)
 
 
-def _level(args: argparse.Namespace, mech) -> levels.Choice:
+def _level(args: argparse.Namespace, mech, generated: bool = False) -> levels.Choice:
     """The level of eval, tolerance and sweep (docs/levels.md, "The default level"): --level,
-    or the file's default; args.level is set to it. A kinematic level asked for on a file whose
+    or the file's default (for the `generated` evaluators: tolerance and sweep); args.level is
+    set to it. A kinematic level asked for on a file whose
     plates all have stiffness data is run, with a one-line warning that it ignores their
     forces."""
-    choice = levels.choose(mech, args.level)
+    choice = levels.choose(mech, args.level, generated)
     args.level = choice.name
     ignored = levels.ignores_forces(mech, choice)
     if ignored:
@@ -189,7 +190,7 @@ def _tolerance(args: argparse.Namespace) -> str:
     nominal = {p.name: float(p.value) for p in mech.parameters}
     vary = variation.parse_vary(args.vary, mech, nominal, kinds=("pm",))
     grid = variation.parse_grid(args.input, mech, limit=_max_evaluations(args))
-    choice = _level(args, mech)
+    choice = _level(args, mech, generated=True)
     tolerance.check_level(args.level)  # before compiling anything
     if args.backend is None:
         # the C, unless force actuators drive and it has no sensitivities with them at the level:
@@ -250,7 +251,7 @@ def _sweep(args: argparse.Namespace) -> str:
     if args.plot:
         output_file(args.plot, "--plot", PLOT_SUFFIXES)
     scheduler = sweep.parse_scheduler(args.scheduler)
-    choice = _level(args, mech)
+    choice = _level(args, mech, generated=True)
     client = sweep.connect(scheduler) if scheduler.kind == "distributed" else None
     try:
         evaluator = _evaluator(args, mech, sensitivity=False)

@@ -133,14 +133,16 @@ class Choice:
         return f"level: {self.name} ({self.reason})"
 
 
-def default_for(mechanism: _Mechanism) -> Choice:
+def default_for(mechanism: _Mechanism, generated: bool = False) -> Choice:
     """The level `eval`, `tolerance`, `sweep`, `symkin.evaluate`, `symkin.compile` and the
     generated evaluators use when none is given (docs/levels.md, "The default level"): `loaded`
     where every plate (every hinge that is not `rigid`) has E, thickness and width, else
     `exact`; and `exact` where the loaded level refuses the file as a whole (a redundant
     mechanism whose plates are all inextensible elastica: the forces its redundant loops carry
-    are undetermined, docs/physics.md) or does not take (a notch hinge: `equilibrium` does), so
-    that a default run never fails for the level's sake."""
+    are undetermined, docs/physics.md), so that a default run never fails for the level's sake.
+    Notch hinges take `loaded` like plates (docs/physics.md, "Notch hinges at `loaded`"), but
+    for `generated` (tolerance and sweep, which run the generated evaluators, whose `loaded`
+    takes uniform plates): `exact` there."""
     plates = [h for h in mechanism.hinges if h.is_plate]
     if not mechanism.has_stiffness:
         keys = ("E", "thickness", "width")
@@ -159,11 +161,11 @@ def default_for(mechanism: _Mechanism) -> Choice:
             default=True,
         )
     notch = next((h for h in plates if getattr(h, "profile", "uniform") != "uniform"), None)
-    if notch is not None:
+    if generated and notch is not None:
         return Choice(
             KINEMATIC_DEFAULT,
-            f"default: loaded does not take notch hinges yet (hinge '{notch.name}' is "
-            f"{notch.profile}); --level equilibrium does",
+            f"default: the generated evaluators' loaded takes uniform plates (hinge "
+            f"'{notch.name}' is {notch.profile}); symkin eval --level loaded takes it",
             default=True,
         )
     if not plates:  # nothing bends: the physical level, as the rule says, at no extra cost
@@ -171,11 +173,11 @@ def default_for(mechanism: _Mechanism) -> Choice:
     return Choice(PHYSICAL_DEFAULT, "default: every plate has E, thickness and width", True)
 
 
-def choose(mechanism: _Mechanism, level: str | None) -> Choice:
+def choose(mechanism: _Mechanism, level: str | None, generated: bool = False) -> Choice:
     """The level `level` names (asked for; an unknown name is bad input, exit 2), or the
-    mechanism's default (:func:`default_for`) when it is None."""
+    mechanism's default (:func:`default_for`, for the `generated` evaluators) when it is None."""
     if level is None:
-        return default_for(mechanism)
+        return default_for(mechanism, generated)
     return Choice(get(level).name, "asked for", default=False)
 
 

@@ -32,10 +32,11 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import mpmath
+import numpy as np
 import sympy as sp
 
 from . import notch_correction
-from .sections import DIGITS, Compliance, Section, X
+from .sections import DIGITS, Compliance, RelationTerms, Section, X
 
 #: Terms of the pure-moment series (θ² to θ^{2K}); see the module's docstring for the bound.
 SERIES_TERMS = 17
@@ -45,6 +46,8 @@ COEFFICIENT_DIGITS = 45
 #: halving towards the clamps (END_GRADING levels: T has a square-root branch point there) and
 #: towards the hinge centre (CENTRE_GRADING levels: the neck, about √(t/R) of the span wide).
 GAUSS_DEGREE = 4
+#: Working digits of the section's moments `loaded` takes (:func:`moments`: float results).
+MOMENT_DIGITS = 25
 END_GRADING = 30
 CENTRE_GRADING = 16
 
@@ -178,7 +181,9 @@ class Notch(Section):
                 f = sp.lambdify(X, integrand(X, t).xreplace(values), "mpmath")
                 lo, hi = (mpmath.mpf(sp.N(e, DIGITS + 5)) for e in (a, b))
                 inner = sorted({c for c in [*cuts, centre] if lo < c < hi})
-                total += mpmath.quad(f, [lo, *inner, hi])
+                # the real part: at a node that rounds onto a fillet's end, r² − u² is a
+                # rounding below zero and its root imaginary (T is real there, t + 2r)
+                total += mpmath.quad(lambda x, f=f: mpmath.re(f(x)), [lo, *inner, hi])
         return total
 
     def compliance(self) -> Compliance:
@@ -191,6 +196,23 @@ class Notch(Section):
                 for f in self._integrands()
             )
         )
+
+    def relation_terms(self, values: Mapping[sp.Symbol, sp.Expr]) -> RelationTerms:
+        """`loaded`'s terms of the notch at `values` (model.sections.RelationTerms): numbers of
+        its shape ratios by quadrature (:func:`moments`), the continuum correction included (it
+        divides EI by one factor along the hinge: a(ξ) and the shape are the plain beam's)."""
+        at = self.at(values)
+        m2, cy, s1, q, r2 = moments(at)
+        c = coefficients(at)
+        terms = tuple(
+            sp.Float((-1) ** k * c[k - 1] / sp.factorial(2 * k), COEFFICIENT_DIGITS)
+            for k in range(1, SERIES_TERMS + 1)
+        )
+        alpha, beta = 12 * m2, 10 * s1 / cy
+        # the kernels' own p² terms, −(α p)²/720 and 17 (β p)²/20160 per 12 c_y, weighted to q, r₂
+        rotation = 720 * q / alpha**2
+        lateral = 20160 * r2 / (17 * 12 * cy * beta**2)
+        return RelationTerms(alpha, beta, (12 * cy) ** 0.5, terms, rotation, lateral)
 
     def shape(self, theta: Any) -> tuple[sp.Expr, sp.Expr]:
         """(f, g) under a pure moment: the rigid pin at the centre plus the series deviation."""
@@ -371,6 +393,109 @@ def _coefficients(pieces: Any) -> tuple[sp.Float, ...]:
         return tuple(sp.Float(mpmath.nstr(s, COEFFICIENT_DIGITS), COEFFICIENT_DIGITS) for s in sums)
 
 
+def _moments(pieces: Any) -> tuple[float, float, float]:
+    """(m₂, c_y, s₁) of a normalised profile (model.sections.RelationTerms): ∫Ψ̃² dξ,
+    ∫(ξ − 1/2)² a dξ and ∫φ² dξ, φ(ξ) = ∫₀^ξ a (1/2 − η) dη, a = T⁻³/∫T⁻³ dξ, by the graded
+    Gauss–Legendre rule of the series coefficients at MOMENT_DIGITS digits."""
+    with mpmath.workdps(MOMENT_DIGITS):
+        gauss = mpmath.calculus.quadrature.GaussLegendre(mpmath.mp)
+        rule = gauss.calc_nodes(GAUSS_DEGREE, mpmath.mp.prec)
+        half = mpmath.mpf(1) / 2
+        intervals = []
+        for a, b, depth in pieces:
+            cuts = _graded(mpmath.mpf(sp.N(a, 40)), mpmath.mpf(sp.N(b, 40)))
+            intervals += [(lo, hi, depth) for lo, hi in itertools.pairwise(cuts)]
+
+        def integral(depth: Any, lo: Any, hi: Any, lever: bool) -> Any:
+            mid, rad = (lo + hi) / 2, (hi - lo) / 2
+            return rad * mpmath.fsum(
+                w * (half - (mid + rad * n) if lever else 1) / depth(mid + rad * n) ** 3
+                for n, w in rule
+            )
+
+        parts = [integral(d, lo, hi, False) for lo, hi, d in intervals]
+        levers = [integral(d, lo, hi, True) for lo, hi, d in intervals]
+        total = mpmath.fsum(parts)
+        m2 = cy = s1 = mpmath.mpf(0)
+        before = lever_before = mpmath.mpf(0)
+        for (lo, hi, depth), part, lev in zip(intervals, parts, levers, strict=True):
+            mid, rad = (lo + hi) / 2, (hi - lo) / 2
+            for n, w in rule:
+                x = mid + rad * n
+                psi = (before + integral(depth, lo, x, False)) / total - half
+                phi = (lever_before + integral(depth, lo, x, True)) / total
+                m2 += rad * w * psi**2
+                cy += rad * w * (x - half) ** 2 / depth(x) ** 3 / total
+                s1 += rad * w * phi**2
+            before += part
+            lever_before += lev
+        return float(m2), float(cy), float(s1)
+
+
+def _second_order(pieces: Any) -> tuple[float, float]:
+    """(q, r₂) of a normalised profile (model.sections.RelationTerms): the p² coefficients of
+    the rotation stiffness 1 + m₂ p − q p² and the lateral compliance c_y − s₁ p + r₂ p²,
+
+        q = ∫a (g + C)²,  g(ξ) = ∫₀^ξ Ψ̃,   C = −∫a g;
+        r₂ = ∫a (G + C₂)², G(ξ) = ∫₀^ξ φ,   C₂ = −∫a G
+
+    (the first-order corrections of the two modes' slopes under p, from −(χ'/a)' + φ₀ = 0 with
+    χ(0) = χ(1) = 0; a uniform plate's are 1/720 and 17/20160). float64 on the graded intervals
+    of the series, each interval's cumulative integrals by the Gauss–Legendre nodes' spectral
+    integration matrix (exact for polynomials of the rule's degree)."""
+    with mpmath.workdps(MOMENT_DIGITS):
+        gauss = mpmath.calculus.quadrature.GaussLegendre(mpmath.mp)
+        rule = gauss.calc_nodes(GAUSS_DEGREE, mpmath.mp.prec)
+        nodes = np.array([float(n) for n, _ in rule])
+        weights = np.array([float(w) for _, w in rule])
+        cells, values = [], []
+        for a, b, depth in pieces:
+            cuts = _graded(mpmath.mpf(sp.N(a, 40)), mpmath.mpf(sp.N(b, 40)))
+            for lo, hi in itertools.pairwise(cuts):
+                mid, rad = (lo + hi) / 2, (hi - lo) / 2
+                cells.append((float(mid), float(rad)))
+                values.append([float(1 / depth(mid + rad * n) ** 3) for n, _ in rule])
+    # S[i, j] = ∫_{-1}^{x_i} ℓ_j: the Lagrange basis through Legendre polynomials
+    size = len(nodes)
+    basis = np.linalg.inv(np.polynomial.legendre.legvander(nodes, size - 1))  # c[k, j]
+    primitive = np.zeros((size, size))
+    for k in range(size):
+        unit = np.zeros(size)
+        unit[k] = 1.0
+        anti = np.polynomial.legendre.legint(unit, lbnd=-1)
+        primitive[:, k] = np.polynomial.legendre.legval(nodes, anti)
+    matrix = primitive @ basis
+    mids = np.array([c[0] for c in cells])[:, None]
+    rads = np.array([c[1] for c in cells])[:, None]
+    x = mids + rads * nodes[None, :]
+    w = rads * weights[None, :]
+    a = np.array(values)
+    a = a / np.sum(w * a)
+
+    def cumulative(f: np.ndarray) -> np.ndarray:
+        inner = rads * (f @ matrix.T)
+        before = np.concatenate([[0.0], np.cumsum(np.sum(w * f, axis=1))[:-1]])
+        return before[:, None] + inner
+
+    psi = cumulative(a) - 0.5
+    g = cumulative(psi)
+    q = np.sum(w * a * (g - np.sum(w * a * g)) ** 2)
+    phi = cumulative(a * (0.5 - x))
+    big = cumulative(phi)
+    r2 = np.sum(w * a * (big - np.sum(w * a * big)) ** 2)
+    return float(q), float(r2)
+
+
+def moments(section: Notch) -> tuple[float, float, float, float, float]:
+    """The section's (m₂, c_y, s₁) (:func:`_moments`) and (q, r₂) (:func:`_second_order`),
+    cached like its coefficients."""
+    key = sp.srepr((section.profile, section.length, section.pieces()))
+    if key not in _MOMENTS:
+        pieces = _normalised(section)
+        _MOMENTS[key] = _moments(pieces) + _second_order(pieces)
+    return _MOMENTS[key]
+
+
 def coefficients(section: Notch) -> tuple[sp.Float, ...]:
     """The section's series coefficients ĉ_1..ĉ_K (numbers of its shape ratios)."""
     key = sp.srepr((section.profile, section.length, section.pieces()))
@@ -381,6 +506,9 @@ def coefficients(section: Notch) -> tuple[sp.Float, ...]:
 
 #: The plain beam's ∫(l−x)²dx/E'I and ∫dx/κGA by section values (Notch.shear_factor).
 _SHEAR: dict[str, tuple[float, float]] = {}
+
+#: (m₂, c_y, s₁) by profile, span and pieces (:func:`moments`).
+_MOMENTS: dict[str, tuple[float, ...]] = {}
 
 #: The coefficients by profile, span and pieces (they cost a few seconds at 45 digits).
 _CACHE: dict[str, tuple[sp.Float, ...]] = {}

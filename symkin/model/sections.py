@@ -89,6 +89,47 @@ class Compliance:
 
 
 @dataclass(frozen=True)
+class RelationTerms:
+    """How a plate's mixed potential at `loaded` departs from the uniform plate's
+    (physics.plate_relation.notch_relation; docs/physics.md, "Notch hinges at `loaded`"), in
+    units of the span l and EI₀ = l/∫dx/EI (the uniform plate of the same rotation compliance),
+    ξ = x/l, a(ξ) = EI₀/EI normalised to ∫a dξ = 1 and Ψ̃(ξ) = ∫₀^ξ a − 1/2:
+
+    - `alpha` = 12 m₂, m₂ = ∫Ψ̃² dξ: the bending angle's chord shortening per θ² (1/12 for a
+      uniform plate), so the rotation stiffness's first change with the axial load index p is
+      exact (U's θ²/(2T(α p)));
+    - `lam` = √(12 c_y), c_y = ∫(ξ − 1/2)² a dξ: the deflection across per lateral load index
+      with the end rotation held (1/12 uniform), U's lateral terms taking f·lam;
+    - `beta` = 10 s₁/c_y, s₁ = ∫φ² dξ, φ(ξ) = ∫₀^ξ a(η)(1/2 − η) dη: the lateral shape's chord
+      shortening per f² (1/120 uniform), so the lateral compliance's first change with p is exact
+      (U's S(β p)) and its pole, p = −π²/β, is Rayleigh's sway buckling load of the profile;
+    - `series`: the pure-moment chord's terms (−1)^k ĉ_k/(2k)!, k = 1..K (model.notches: its
+      deviation from the centre pin's path is D(θ)/l = Σ_k (−1)^k θ^{2k} ĉ_k/(2k)!);
+    - `rotation`, `lateral`: the weights of the kernels' terms beyond their first order in p
+      (T's and S's), so that the rotation stiffness 1 + m₂ p − q p² and the lateral compliance
+      c_y − s₁ p + r₂ p² are the profile's to second order (model.notches._second_order): 0 for
+      a pin with rigid arms, whose stiffness is linear in p.
+
+    All are 1 for a uniform plate, whose section gives no terms (its relation is the uniform
+    one, exact in p)."""
+
+    alpha: float
+    beta: float
+    lam: float
+    series: tuple[sp.Float, ...]
+    rotation: float = 1.0
+    lateral: float = 1.0
+
+    def deviation(self, theta: Any) -> sp.Expr:
+        """D(θ)/l: the pure-moment chord beyond the centre pin's path, in Horner form in θ²."""
+        square = theta**2
+        acc: sp.Expr = self.series[-1]
+        for term in reversed(self.series[:-1]):
+            acc = term + square * acc
+        return square * acc
+
+
+@dataclass(frozen=True)
 class Section(ABC):
     """One hinge's plate: its profile T(x) over the width and its material. Fields are sympy
     expressions in the file's parameters (length, thickness, width in the file unit, E in Pa);
@@ -229,6 +270,16 @@ class Section(ABC):
     def compliance_numbers(self, values: Mapping[sp.Symbol, sp.Expr]) -> Compliance:
         """The compliance integrals at parameter `values`, as floats (quadrature)."""
         return Compliance(*(float(self.quad(f, values)) for f in self._integrands()))
+
+    def relation_terms(self, values: Mapping[sp.Symbol, sp.Expr]) -> RelationTerms | None:
+        """What `loaded`'s plate relation needs beyond EI, l, ε_a and ε_s at parameter `values`
+        (:class:`RelationTerms`); None: the uniform plate's relation (exact in p) serves."""
+        if self.uniform:
+            return None
+        raise ValueError(
+            f"profile {self.profile!r}: --level loaded needs its relation terms "
+            "(docs/architecture.md, 'A new profile')"
+        )
 
     # -- the kinematic shape under a pure moment -------------------------------------------------
 

@@ -14,7 +14,9 @@ fourth order in the bending angle and the lateral load; D6(θ) = sinc(θ/2) - (1
 θ⁴/1920) the arc's chord beyond its θ⁴ term; ε_a = EI/(EA l²), ε_s = EI/(κGA l²) the Reissner
 plate's stretch and shear, zero for the elastica, entering through Haringx's g). By the envelope
 theorem X = -∂U/∂p, Y = -∂U/∂f and ω = ∂U/∂θ - X f/2 + Y p/2 (turning θ turns the mid-frame in
-which (p, f) are held). U is the stationary value of the elastic energy less the end force's work
+which (p, f) are held). A notch (:func:`notch_relation`) takes the same potential with its own
+pure-moment chord and its section's moments in the kernels' arguments (docs/physics.md, "Notch
+hinges at `loaded`"). U is the stationary value of the elastic energy less the end force's work
 p X + f Y at fixed θ, so the plate's elastic energy is U + p X + f Y (:func:`energy`). The kernels
 are symkin.model.special.axial's.
 """
@@ -25,7 +27,8 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from ..model.special import sinr
+from ..model.sections import RelationTerms
+from ..model.special import arck, sinr
 from ..model.special.axial import kernel
 
 
@@ -104,4 +107,106 @@ def energy(
     u = -ea * p**2 / 2 - es * f**2 / 2 + t2 * kernel("invt")(pt) / 2 - ft**2 * kernel("s")(pt) / 2
     if order == 4:
         u += t2 * ft**2 * kernel("e1")(pt) + ft**4 * kernel("e2")(pt) + t2**2 * kernel("e3")(pt)
+    return work + u
+
+
+def _notch_parts(
+    theta: sp.Expr, p: sp.Expr, f: sp.Expr, ea: sp.Expr, es: sp.Expr, terms: RelationTerms, order
+) -> tuple[sp.Expr, ...]:
+    """The notch's kernels and the pieces its outputs and energy share (:func:`notch_relation`)."""
+    if order not in (2, 4):
+        raise ValueError("order must be 2 or 4")
+    de = ea - es
+    g = 1 + de * p
+    g1 = 1 + 2 * de * p
+    pa, pb = terms.alpha * g * p, terms.beta * g * p  # the rotation's and the lateral mode's
+    load = terms.lam * g * f  # F = λ f̃: the lateral load of the uniform plate of its compliance
+    e1 = e2 = sp.S.Zero
+    if order == 4:
+        e1, e2 = kernel("e1")(pb), kernel("e2")(pb)
+    t2 = theta**2
+    inner = load * _lateral(pb, terms) - 2 * t2 * load * e1 - 4 * load**3 * e2
+    return de, g, g1, pa, pb, load, e1, e2, t2, inner
+
+
+def _rotation(pa: sp.Expr, terms: RelationTerms) -> sp.Expr:
+    """K = (1 − w)(1 + α p̃/12) + w/T(α p̃), w = terms.rotation: the rotation stiffness over
+    EI₀/l, 1 + m₂ p̃ − q p̃² + ... (pa = α p̃)."""
+    w = terms.rotation
+    return (1 - w) * (1 + pa / 12) + w * kernel("invt")(pa)
+
+
+def _lateral(pb: sp.Expr, terms: RelationTerms) -> sp.Expr:
+    """Ŝ = (1 − w)(1/12 − β p̃/120) + w S(β p̃), w = terms.lateral: the lateral compliance over
+    c_y l³/EI₀ times 1/12, to second order in p̃ the profile's (pb = β p̃)."""
+    w = terms.lateral
+    return (1 - w) * (sp.Rational(1, 12) - pb / 120) + w * kernel("s")(pb)
+
+
+def notch_relation(
+    theta: sp.Expr,
+    p: sp.Expr,
+    f: sp.Expr,
+    ea: sp.Expr,
+    es: sp.Expr,
+    terms: RelationTerms,
+    order: int = 4,
+) -> PlateRelation:
+    """A notch's relation (units: its span l and EI₀ = l/∫dx/EI; `terms` its section's,
+    model.sections.RelationTerms), M's clamp again beyond the circular arc of the span. From
+
+        U = -p (C(θ) + α θ²/24) - ε_a p²/2 - ε_s f²/2 + θ² K(p̃)/2 - F² Ŝ(p̃)/2
+            + θ² F² E1(β p̃) + F⁴ E2(β p̃),        F = λ f̃,
+
+    K = (1 − w_r)(1 + α p̃/12) + w_r/T(α p̃), Ŝ = (1 − w_l)(1/12 − β p̃/120) + w_l S(β p̃),
+
+    C(θ) = cos(θ/2) + D(θ)/l the notch's chord under a pure moment (exact at p = f = 0: the
+    energy of a pure moment is θ²/2 for any profile), α, β, λ, w_r, w_l the section's moments:
+    the linear compliances are the section's integrals and each one's change with p is exact to
+    second order; the higher orders in p and the quartic terms are the equivalent uniform
+    plate's. With all terms 1 and the arc's chord it is :func:`relation` without its θ⁴ E3
+    term."""
+    de, g, g1, pa, pb, load, e1, _, t2, inner = _notch_parts(theta, p, f, ea, es, terms, order)
+    e1p = e2p = sp.S.Zero
+    if order == 4:
+        e1p, e2p = kernel("e1", 1)(pb), kernel("e2", 1)(pb)
+    half = theta / 2
+    # the notch's chord beyond the arc's: D(θ)/l - (sinc(θ/2) - cos(θ/2))
+    kinematic = terms.deviation(theta) - half**2 * arck(half)
+    across = es * f + g * terms.lam * inner
+    wr, wl = terms.rotation, terms.lateral
+    shortening = wl * kernel("w")(pb) + (1 - wl) / 240  # −Ŝ'/(2β)
+    along = (
+        kinematic
+        + ea * p
+        + terms.alpha * t2 * (wr * g1 * kernel("a")(pa) - 2 * de * p / 24)
+        - terms.beta * g1 * (load**2 * shortening + t2 * load**2 * e1p + load**4 * e2p)
+        + de * f * terms.lam * inner
+    )
+    chord_rate = -sp.sin(half) / 2 + sp.diff(terms.deviation(theta), theta)  # dC/dθ
+    dudt = -p * (chord_rate + terms.alpha * theta / 12) + theta * _rotation(pa, terms)
+    dudt += 2 * theta * load**2 * e1
+    chord = sinr(0)(half) + along
+    omega = dudt - chord * f / 2 + across * p / 2
+    return PlateRelation(along, across, omega)
+
+
+def notch_energy(
+    theta: sp.Expr,
+    p: sp.Expr,
+    f: sp.Expr,
+    ea: sp.Expr,
+    es: sp.Expr,
+    terms: RelationTerms,
+    order: int = 4,
+) -> sp.Expr:
+    """A notch's elastic energy (units EI₀/l) at its relation's state: U + p X + f Y, the
+    chord C(θ) + α θ²/24 taken out of p X by hand (:func:`energy`'s)."""
+    rel = notch_relation(theta, p, f, ea, es, terms, order)
+    _, _, _, pa, pb, load, e1, e2, t2, _ = _notch_parts(theta, p, f, ea, es, terms, order)
+    half = theta / 2
+    kinematic = terms.deviation(theta) - half**2 * arck(half)
+    work = p * (rel.along - kinematic - terms.alpha * t2 / 24) + f * rel.across
+    u = -ea * p**2 / 2 - es * f**2 / 2 + t2 * _rotation(pa, terms) / 2
+    u += -(load**2) * _lateral(pb, terms) / 2 + t2 * load**2 * e1 + load**4 * e2
     return work + u

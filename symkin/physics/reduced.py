@@ -51,8 +51,9 @@ from ..kinematics.positions import Kinematics
 from ..model.derivatives import jacobian
 from ..model.expressions import substitute
 from ..model.lambdified import NO_DOCSTRING, lambdify
+from ..model.sections import RelationTerms
 from ..model.special import arck, mpmath_namespace, sinr
-from .plate_relation import energy, relation
+from .plate_relation import energy, notch_energy, notch_relation, relation
 from .stiffness import plate_stiffness
 
 #: The level's Newton, continuation and refusals (docs/numerics.md, "The solver table"): the
@@ -95,7 +96,7 @@ class Answer:
 
 #: The plate functions of symkin.physics.plate_relation, lambdified, by (key, lambdify's module
 #: names): Reduced._plate_fn.
-_PLATE_FNS: dict[tuple[str, tuple[str, ...]], Callable] = {}
+_PLATE_FNS: dict[tuple, Callable] = {}
 _PLATE_LOCK = threading.Lock()
 
 
@@ -135,7 +136,9 @@ class Reduced:
 
         self.symbolic = symbolic
 
-        stiff = plate_stiffness(mech, "loaded")
+        # a notch's plate: EI₀ = l/∫dx/EI, EA and κGA of the same end compliances, and its
+        # relation's terms (model.sections.RelationTerms); generated code takes uniform plates
+        stiff = plate_stiffness(mech, "loaded", notches=not symbolic)
         self.n, self.m = st.n, st.m
         self.hinges = kin.hinges
         self.paths = {i: st.tree_path(i) for i in range(st.n + 1)}
@@ -154,15 +157,22 @@ class Reduced:
                 if h.midpoint is not None:
                     offset = num(2 * V.dot(V.sub(h.centre, h.midpoint), h.u))
                 s = stiff[h.name]
-                EI, length = num(s.EI), num(h.length)
+                terms = s.section.relation_terms(self._values_subs)
+                if terms is None:
+                    EI, EA, kGA = num(s.EI), num(s.EA), num(s.kGA)
+                else:  # the section's integrals by quadrature, the correction in them
+                    c = s.section.compliance_numbers(self._values_subs)
+                    EI, EA, kGA = (value(s.length / v) for v in (c.theta_M, c.x_N, c.y_V))
+                length = num(h.length)
                 reissner = s.stretches
                 self.plate[a] = {
                     "EI": EI,
                     "l": length,
-                    "ea": EI / (num(s.EA) * length**2) if reissner else sp.S.Zero,
-                    "es": EI / (num(s.kGA) * length**2) if reissner else sp.S.Zero,
+                    "ea": EI / (EA * length**2) if reissner else sp.S.Zero,
+                    "es": EI / (kGA * length**2) if reissner else sp.S.Zero,
                     "alpha": num(h.angle),
                     "offset": offset,
+                    "terms": terms,
                 }
         self.centres = centres
         label = {name: i for i, name in enumerate(st.links)}
@@ -226,6 +236,11 @@ class Reduced:
             for a, d in sorted(self.plate.items())
             for j in range(segments)
         ]
+        # each segment's relation terms (None: the uniform plate's relation)
+        self.terms = [self.plate[a]["terms"] for a, *_ in self.segs]
+        self.notched = any(t is not None for t in self.terms)
+        if self.notched and segments == 2:
+            raise ValueError("a notch is not chained from two half plates (its halves differ)")
         joints = len(self.plate) if segments == 2 else 0
         self.size = nu + 3 * len(self.chords) + len(self.strokes) + joints
         self.scale = np.concatenate(
@@ -676,21 +691,37 @@ class Reduced:
         self._fns[key] = fn
         return fn
 
-    def _plate_fn(self, key: str):
+    def plate_fn(self, key: str, k: int):
+        """Segment k's "energy" or relation ("plate4", "plate2"): the uniform plate's, shared
+        (:meth:`_fn`), or its notch's (:meth:`_plate_fn` with its terms)."""
+        terms = self.terms[k]
+        return self._fn(key) if terms is None else self._plate_fn(key, terms)
+
+    def _plate_fn(self, key: str, terms: RelationTerms | None = None):
         """One plate's "energy" or relation ("plate4", "plate2"), lambdified: no mechanism's
-        data is in them, so each is derived once per process and lambdify's modules (symkin's
-        namespaces are named by the module they complete: "mpmath", "math")."""
+        data is in them (a notch's: its section's terms), so each is derived once per process
+        and lambdify's modules (symkin's namespaces are named by the module they complete:
+        "mpmath", "math")."""
         modules = self._modules()
-        tag = (key, tuple(m for m in modules if isinstance(m, str)))
+        tag = (key, tuple(m for m in modules if isinstance(m, str)), terms)
         with _PLATE_LOCK:
             fn = _PLATE_FNS.get(tag)
             if fn is not None:
                 return fn
             th, p, f, ea, es = sp.symbols("theta p f e_a e_s", real=True)
             if key == "energy":
-                exprs = energy(th, p, f, ea, es)
+                exprs = (
+                    energy(th, p, f, ea, es)
+                    if terms is None
+                    else notch_energy(th, p, f, ea, es, terms)
+                )
             else:
-                rel = relation(th, p, f, ea, es, int(key[-1]))
+                order = int(key[-1])
+                rel = (
+                    relation(th, p, f, ea, es, order)
+                    if terms is None
+                    else notch_relation(th, p, f, ea, es, terms, order)
+                )
                 vals = [rel.along, rel.across, rel.omega]
                 exprs = vals + [sp.diff(v, w) for v in vals for w in (th, p, f)]
             # taken after the derivation, as _lambdify's: the kernels it created are in them
@@ -709,9 +740,9 @@ class Reduced:
         if last is not None and last[0] == key:
             return last[1]
         ins, dins = self._fn("plates")(*args)
-        plate = self._fn(f"plate{order}")
         outs, parts = [], []
         for k, (_, _, _, _, ea, es) in enumerate(self.segs):
+            plate = self.plate_fn(f"plate{order}", k)
             v = plate(*(float(u) for u in ins[3 * k : 3 * k + 3]), float(ea), float(es))
             outs += [float(u) for u in v[:3]]
             parts.append(np.array(v[3:], dtype=float).reshape(3, 3))
@@ -864,7 +895,10 @@ class Reduced:
         for k, (_, _, _, _, ea, es) in enumerate(self.segs):
             p = float(ins[3 * k + 1])  # a half plate's: the plate's over segments²
             g = 1 + float(ea - es) * p
-            worst = max(worst, -g * p * self.segments**2 / math.pi**2)
+            # a notch's relation has its poles at α p̃ and β p̃ = −π² (model.sections)
+            terms = self.terms[k]
+            factor = 1.0 if terms is None else max(terms.alpha, terms.beta)
+            worst = max(worst, -g * p * factor * self.segments**2 / math.pi**2)
         return worst
 
     def _answer(self, x, theta, total: int, steps: int) -> Answer:
@@ -932,9 +966,12 @@ class Reduced:
             self.hinges[a].name: (v[3 * k], v[3 * k + 1], v[3 * k + 2])
             for k, a in enumerate(sorted(self.hinges))
         }
-        plate = self._fn("energy")
         work = math.fsum(
-            float(plate(*(float(u) for u in ins[3 * k : 3 * k + 3]), float(ea), float(es)))
+            float(
+                self.plate_fn("energy", k)(
+                    *(float(u) for u in ins[3 * k : 3 * k + 3]), float(ea), float(es)
+                )
+            )
             * float(ei / length)
             for k, (_, _, ei, length, ea, es) in enumerate(self.segs)
         )

@@ -28,8 +28,9 @@ import sympy as sp
 from ..core import vectors as V
 from ..core.settings import SOLVER
 from ..model.expressions import substitute
+from . import section_beams
 from .reduced import Answer, Reduced
-from .reported import plate_stress, stiffness_and_compliance
+from .reported import plate_stress, section_stress, stiffness_and_compliance
 from .result import ActuatorLoad, InputLoad, PlateStress
 from .stiffness import plate_stiffness
 
@@ -112,7 +113,7 @@ def plates(answer: Answer) -> dict[str, PlateStress]:
     assert red is not None
     mech = red.kin.mechanism
     values = red._values_subs
-    stiff = plate_stiffness(mech, "loaded")
+    stiff = plate_stiffness(mech, "loaded", notches=True)
     hinge = {h.name: h for h in mech.hinges}
     clamps = red.clamps(answer.x, answer.theta)
     out = {}
@@ -131,6 +132,19 @@ def plates(answer: Answer) -> dict[str, PlateStress]:
         limit = None
         if h.allowable_stress is not None:
             limit = float(sp.N(substitute(h.allowable_stress, values), 20))
+        if d["terms"] is not None:  # a notch: the shot of equilibrium's stress, K_t
+            # (docs/physics.md, "Notch hinges at `equilibrium`") under the same end loads
+            grid = section_beams.grid_of(s.section, values, reissner)
+            ratio = ei / float(grid.EI0)  # the loads in units of the grid's EI₀
+            kt = float(sp.N(substitute(s.section.stress_factor(), values), 20))
+            out[name] = section_stress(
+                (m_p * length / float(grid.EI0), float(lx) * ratio, float(ly) * ratio),
+                grid,
+                kt,
+                float(sp.N(substitute(s.section.modulus(), values), 20)),
+                limit,
+            )
+            continue
         out[name] = plate_stress(
             (m_p * length / ei, float(lx), float(ly)),
             float(d["ea"]) if reissner else None,

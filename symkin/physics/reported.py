@@ -212,13 +212,25 @@ def notch_stress(
     """A notch's largest normal stress (Pa): E' times its largest strain along the hinge,
     |ψ'| T/(2l) + |N|/EA at the nodes of its shot (physics.section_beams), times its
     stress-concentration factor K_t (model.notches.Notch.stress_factor, docs/physics.md)."""
+    return section_stress(loads, hinge.grid, hinge.kt, modulus, limit)
+
+
+def section_stress(
+    loads: tuple[float, float, float],
+    grid: section_beams.SectionGrid,
+    kt: float,
+    modulus: float,
+    limit: float | None,
+) -> PlateStress:
+    """:func:`notch_stress` of a section's `grid` (physics.section_beams) and K_t: the loads
+    (k0, λx, λy) = (m_P l/EI₀, n l²/EI₀ in P's plate frame), EI₀ the grid's."""
     k0, lx, ly = loads
     end = section_beams.shoot_profile(
-        np.array([k0]), np.array([lx]), np.array([ly]), hinge.grid, strain=True
+        np.array([k0]), np.array([lx]), np.array([ly]), grid, strain=True
     )
-    stress = modulus * end.bend * hinge.kt
+    stress = modulus * end.bend * kt
     safety = None if limit is None else (limit / stress if stress > 0 else float("inf"))
-    return PlateStress(stress, end.bend * hinge.kt, safety, end.where)
+    return PlateStress(stress, end.bend * kt, safety, end.where)
 
 
 def plate_stress(

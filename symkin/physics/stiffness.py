@@ -9,9 +9,10 @@ in the file's unit like the kinematics: a length given in mm stays in mm and the
 (metres per u) enters only here, EI_u = EI/s², and in the loads' moments, M_u = M/s.
 
 The numbers come from each plate's section (symkin.model.sections, by its profile in
-symkin.model.profiles: the uniform plate by default); the levels here take uniform plates only
-(their beams and the plate relation are uniform beams), and a plate of another profile is
-refused by name.
+symkin.model.profiles: the uniform plate by default); a level whose beams are uniform refuses a
+plate of another profile by name, unless it takes notches (`equilibrium` shoots them along
+their section, `loaded`'s Python level takes their relation terms; the generated `loaded`
+takes uniform plates).
 """
 
 from __future__ import annotations
@@ -76,12 +77,21 @@ def plate_stiffness(
         if sec.uniform:
             ei, ea, shear = sec.EI(0), sec.EA(0), sec.kGA(0)
         elif uniform and not (notches and isinstance(sec, Notch)):
+            generated = level == "loaded" and isinstance(sec, Notch)
             raise InputError(
-                f"--level {level} takes uniform plates: the hinge's profile is {sec.profile!r}",
+                (
+                    "--level loaded's generated code and sensitivities take uniform plates"
+                    if generated
+                    else f"--level {level} takes uniform plates"
+                )
+                + f": the hinge's profile is {sec.profile!r}",
                 file=mech.path,
                 line=h.line,
                 entry=f"[[hinge]] '{h.name}'",
-                hint="ask for --level equilibrium, which shoots a notch along its section "
+                hint="evaluate it with symkin eval --level loaded (the Python level takes "
+                "notches: docs/physics.md, 'Notch hinges at `loaded`') or --level equilibrium"
+                if generated
+                else "ask for --level equilibrium, which shoots a notch along its section "
                 "(docs/physics.md, 'Notch hinges')"
                 if isinstance(sec, Notch)
                 else "docs/architecture.md, 'A new profile', says what a level needs from one",

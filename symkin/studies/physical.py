@@ -434,7 +434,9 @@ def solve_reduced(
             return {a: float(v) for a, v in theta.items()} | forces | placed
 
         answer = solver(segments or 1).solve(rigid)
-        if segments is None and answer.refused.startswith(reduced.TRUNCATION):
+        # a notch is not chained from half plates: its refusal stands
+        notched = solver(1).notched if segments in (None, 1) else False
+        if segments is None and answer.refused.startswith(reduced.TRUNCATION) and not notched:
             answer = solver(2).solve(rigid)
         answer.strokes = {n: float(sp.N(sp.sympify(v), 20)) for n, v in strokes.items()}
         return answer
