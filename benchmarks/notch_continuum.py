@@ -48,7 +48,8 @@ CHECK_MESH = 32
 DIGITS = 40
 
 
-# -- profiles: T(x) over [0, span], x from P's end (CONTRACT §11's formulas, the centre at span/2)
+# -- profiles: T(x) over [0, span], x from P's end (docs/file-format.md's formulas, the centre
+# at span/2)
 
 
 def circular(t: float, r: float) -> tuple[float, object]:

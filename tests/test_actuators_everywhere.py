@@ -1,4 +1,4 @@
-"""Actuators everywhere (CONTRACT 13; docs/scene.md, docs/cli.md): `derive --points` and scene
+"""Actuators everywhere (docs/scene.md, docs/cli.md): `derive --points` and scene
 files take files with actuators (a stroke, a force), their evaluators taking the strokes and
 forces; `derive --fix` and a scene's [fix] hold input hinges only, not an actuator or the
 hinge its stroke sets (exit 2; the fixed inputs beside actuators: tests/test_fix_actuators.py); the

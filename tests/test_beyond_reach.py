@@ -214,8 +214,8 @@ def test_tolerance_and_sweep_count_them_apart_from_failures(cantilever):
 
 
 def test_the_same_command_gives_the_same_bytes(cantilever):
-    """Beyond the reach the answer is deterministic (CONTRACT 13, "Side outputs never lose the
-    main answer"): the same eval twice, at both physical levels, gives the same bytes."""
+    """Beyond the reach the answer is deterministic (docs/physics.md: side outputs never lose the
+    main answer): the same eval twice, at both physical levels, gives the same bytes."""
     for level in ("loaded", "equilibrium"):
         argv = ["eval", str(cantilever), "--level", level, "--input", f"push={FORCE!r}", "--json"]
         first, second = symkin_cli(*argv), symkin_cli(*argv)

@@ -1,4 +1,4 @@
-"""Fixed inputs beside actuators (CONTRACT 13, "Actuators everywhere"; docs/cli.md `--fix`,
+"""Fixed inputs beside actuators (docs/cli.md `--fix`,
 docs/scene.md "Actuators"): `derive --points P --fix H=V` and a scene's [fix] on a file with an
 actuator and an input hinge. The generated runtimes measure a stroke from the point of action as
 fabricated (the actuator's `at`), not from the pose at zero inputs, which the folded input moves.

@@ -109,8 +109,9 @@ def test_configurations_at_once_are_each_alone(runs):
 
 
 def test_buckling_only_when_asked(runs, monkeypatch):
-    """The default call leaves the buckling factor out (CONTRACT §9: only with buckling=True)
-    and runs no search; buckling=False says so too: the rest of the report, the same numbers."""
+    """The default call leaves the buckling factor out (docs/generated-code.md: only with
+    buckling=True) and runs no search; buckling=False says so too: the rest of the report, the
+    same numbers."""
     _, module, got = runs("stage_force")
     forces = {"piezo": np.array(CASES["stage_force"][1]["piezo"])}
     bare = module.evaluate(forces, "loaded", buckling=False)

@@ -93,8 +93,8 @@ def test_the_coefficients_are_the_least_squares_fit_of_the_committed_runs(factor
 
 
 def test_beam_theory_is_too_stiff_in_rotation_by_what_design_measured(factors):
-    """DESIGN.md, "Notch hinges": 0.8 % at t/R = 0.02, 2.0 % at 0.05, 3.8 % at 0.1, 7.0 % at 0.2,
-    12.7 % at 0.5 (to the quoted digit)."""
+    """docs/physics.md, "Notch hinges: the continuum correction": 0.8 % at t/R = 0.02, 2.0 % at
+    0.05, 3.8 % at 0.1, 7.0 % at 0.2, 12.7 % at 0.5 (to the quoted digit)."""
     quoted = {0.02: 0.8, 0.05: 2.0, 0.1: 3.8, 0.2: 7.0, 0.5: 12.7}
     for tau, percent in quoted.items():
         got = (factors["theta_M"][RATIOS.index(tau)] - 1) * 100

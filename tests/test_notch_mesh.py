@@ -3,10 +3,10 @@ thickness, the deck's outline, and one coarse ccx run of a circular notch agains
 mesh-converged continuum (benchmarks/results-notch.json).
 
 References, none taken from the code under test: ∫ dx/T between columns by mpmath quadrature, the
-circular notch's T(x) written here from CONTRACT's formula, the deck's nodes read back from its
-text, and the converged FE compliances of benchmarks/notch_continuum.py's mesh study with the
-coarse mesh's measured error from the same study. Without ccx the run is skipped, unless
-CI=true: then it fails.
+circular notch's T(x) written here from docs/file-format.md's formula, the deck's nodes read
+back from its text, and the converged FE compliances of benchmarks/notch_continuum.py's mesh
+study with the coarse mesh's measured error from the same study. Without ccx the run is
+skipped, unless CI=true: then it fails.
 """
 
 from __future__ import annotations
@@ -31,7 +31,8 @@ RESULTS = ROOT / "benchmarks" / "results-notch.json"
 
 
 def circular(t: float, r: float):
-    """T(x) = t + 2(R − √(R² − (x − R)²)) over [0, 2R] (CONTRACT §11, x from P's end)."""
+    """T(x) = t + 2(R − √(R² − (x − R)²)) over [0, 2R] (docs/file-format.md, "Notch hinges"; x
+    from P's end)."""
     return lambda x: t + 2 * (r - math.sqrt(max(r * r - (x - r) ** 2, 0.0)))
 
 

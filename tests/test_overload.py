@@ -1,4 +1,4 @@
-"""Loads far beyond buckling (docs/physics.md, "Overloads and buckling"; CONTRACT's designer
+"""Loads far beyond buckling (docs/physics.md, "Overloads and buckling"; the designer's
 defaults, "Plausibility"): a load a hundred times what the plates carry (a slipped unit) says by
 what factor and to check the file's units, at `loaded` (whose refusal said only "no
 convergence") as at `equilibrium`; a solved equilibrium whose buckling factor is far below 1

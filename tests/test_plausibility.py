@@ -1,4 +1,4 @@
-"""Plausibility of a mechanism file (CONTRACT's designer defaults, "Plausibility"): mistakes a
+"""Plausibility of a mechanism file (docs/physics.md, "Overloads and buckling"): mistakes a
 designer makes that the file's grammar accepts, each refused with exit 2 naming what is wrong and
 the likely fix."""
 
@@ -52,7 +52,7 @@ def test_a_hinge_on_the_wrong_link_is_named():
 
 
 def test_a_buckling_search_that_cannot_finish_loses_nothing_else(monkeypatch):
-    """A side output fails alone (CONTRACT, "Side outputs never lose the main answer"): the
+    """A side output fails alone (docs/physics.md: side outputs never lose the main answer): the
     search raising (as it did past its budget on a fixed-guided beam at 0.9 of its buckling
     load, exit 3) leaves the equilibrium reported, `buckling` null with the reason."""
     import json

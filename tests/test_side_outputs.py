@@ -1,6 +1,7 @@
-"""Side outputs never lose the main answer (CONTRACT 13): at `loaded` as at `equilibrium`, a
-buckling search that fails leaves the equilibrium reported with `"buckling": null` and a
-`"buckling_note"`, exit 0, the deviations as without the failure, the same bytes every run."""
+"""Side outputs never lose the main answer (docs/physics.md, "Overloads and buckling"): at
+`loaded` as at `equilibrium`, a buckling search that fails leaves the equilibrium reported with
+`"buckling": null` and a `"buckling_note"`, exit 0, the deviations as without the failure, the
+same bytes every run."""
 
 from __future__ import annotations
 

@@ -98,8 +98,9 @@ def report(
     loaded = red.loads or red.forces  # a force actuator is a load (scaled with the file's)
     factor, note = None, None
     if buckling and loaded:
-        # a side output: its failure loses nothing else (CONTRACT, "Side outputs never lose the
-        # main answer"); the search is bounded by its steps, so the same input fails the same
+        # a side output: its failure loses nothing else (docs/physics.md, "Overloads and
+        # buckling": side outputs never lose the main answer); the search is bounded by its
+        # steps, so the same input fails the same
         try:
             factor = buckling_factor(answer, solver=search)
         except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:

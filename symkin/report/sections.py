@@ -29,7 +29,7 @@ TEX_UNITS = {"m": r"\mathrm{m}", "mm": r"\mathrm{mm}", "um": r"\mu\mathrm{m}"}
 
 def input_unit(mech, name: str, tex: bool = False) -> str:
     """The unit of an input: an input hinge's angle in rad, a stroke actuator's stroke in the
-    file's length unit, a force actuator's force in N (CONTRACT 13, "Actuators everywhere")."""
+    file's length unit, a force actuator's force in N (docs/levels.md, "Actuators")."""
     act = next((a for a in mech.actuators if a.name == name), None)
     if act is None:
         return "rad"

@@ -231,7 +231,7 @@ class Compiled:
         """As the generated module's `evaluate` (docs/generated-code.md), in one C call. The
         numpy backend adds at `loaded` what the level reports: `report=False` leaves it out,
         `buckling=True` adds the buckling factor (its search: tens of Newton solves per
-        configuration, so only when asked: CONTRACT §9); the C backend's result holds the
+        configuration, so only when asked: docs/generated-code.md); the C backend's result holds the
         deviations and angles alone."""
         if self._row.is_module:
             options: dict[str, bool] = {}

@@ -261,7 +261,8 @@ def _equilibrium(
     buckling, buckling_note = None, None
     if ev.mechanism.loads or any(a.drive == "force" for a in mech.actuators):
         # a side output: when the search cannot finish, the equilibrium is reported all the same,
-        # the factor null with the reason (CONTRACT, "Side outputs never lose the main answer");
+        # the factor null with the reason (docs/physics.md, "Overloads and buckling": a side
+        # output fails alone);
         # bounded by its steps alone, not by the clock, so the same command gives the same bytes
         try:
             buckling = physical_equilibrium.buckling_factor(
