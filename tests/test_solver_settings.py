@@ -65,6 +65,8 @@ BEFORE_STROKES = {
     "tolerance": 64.0 * 2.220446049250313e-16,
     "floor": 1e-300,
     "step": 1.4901161193847656e-08,  # sqrt(eps)
+    "polish": 2.220446049250313e-16,  # added with the C solves' secant steps (one more step)
+    "secant": 0.5,  # added with them: a secant step kept where it halves the residual
 }
 BEFORE_EQUILIBRIUM = {  # symkin/physics/equilibrium.py's constants and literals
     "tiny_input": 1e-4,  # added with the tiny-input digits (docs/numerics.md, "Tiny angles")

@@ -9181,10 +9181,12 @@ static const sk_loaded_report sk_loaded_report_tables = {
 #define SK_STROKE_TOLERANCE 1.4210854715202004e-14
 #define SK_STROKE_FLOOR 1e-300
 #define SK_STROKE_STEP 1.4901161193847656e-08
+#define SK_STROKE_POLISH 2.220446049250313e-16
+#define SK_STROKE_SECANT 0.5
 /* symkin actuators runtime (templates/c/actuators.c): the strokes to the surrogate hinges'
-   angles, twice (the rigid linkage and the compliant mechanism), then one evaluation at each;
-   at loaded once (the rigid linkage), the reduced equilibrium there with the surrogates free, a
-   force actuator's rigid reference again at the stroke it produced. */
+   angles, twice (the rigid linkage, then the compliant mechanism from there), the answer the
+   solves' last evaluations; at loaded once (the rigid linkage), the reduced equilibrium there,
+   the surrogates free, a force actuator's rigid reference again at the stroke it produced. */
 
 /* The actuators of a mechanism: for every kinematic input (an input angle of sk_evaluate_pose)
    the position of its value among the public inputs, or -1 - a for the surrogate hinge of
@@ -9286,15 +9288,15 @@ static int sk_stroke_pose(const sk_mechanism *m, const double *x, const double *
 }
 
 /* The rigid linkage alone at the kinematic inputs x (each point's rigid x, y into out, 6 per
-   point, the rest unset): sk_pose without a level's closure (its checks, the rigid pose, the
-   hinges' limits on it), then the rigid points, so the same numbers as sk_evaluate_pose's rigid
-   ones at any kinematic level without solving the loops for delta. Returns a status code. */
+   point, the rest unset; the rigid angles into theta): sk_pose without a level's closure, then
+   the rigid points, so the same numbers as sk_evaluate_pose's rigid ones at any kinematic level
+   without solving the loops for delta. Returns a status code. */
 static int sk_stroke_rigid_points(const sk_mechanism *m, const double *x, const double *params,
-                                  double *out)
+                                  double *out, double *theta)
 {
     static const sk_level rigid_only = {0, NULL, NULL, NULL, 0, {NULL, 0, 0, 0, 0, 0, 0, 0},
                                         NULL};
-    double theta[SK_M], delta[SK_K + 1], constants[SK_NQ], rigid[2 * SK_NP + 1];
+    double delta[SK_K + 1], constants[SK_NQ], rigid[2 * SK_NP + 1];
     const double *q;
     int i, s;
     if (params == NULL) {
@@ -9312,18 +9314,30 @@ static int sk_stroke_rigid_points(const sk_mechanism *m, const double *x, const 
     return s;
 }
 
+/* One evaluation of a stroke solve, kept for the answer: points (kind 0: rigid x, y alone),
+   angles (kind 0: the rigid ones) and, kind 1 when asked, links, laid out as sk_outputs'. */
+typedef struct {
+    double out[6 * SK_NP];
+    double angles[2 * SK_M];
+    double links[3 * SK_NL + 1];
+} sk_stroke_at;
+
 /* Each actuator's stroke residual d.(X - X0) - s at the kinematic inputs x: X the rigid
    (kind 0: the rigid linkage alone at a kinematic level, sk_stroke_rigid_points) or compliant
-   (kind 1) position of its point. Returns sk_stroke_pose's status. */
+   (kind 1, the links too with want_links) position of its point; what it evaluated into at.
+   Returns the evaluation's status. */
 static int sk_stroke_residual(const sk_mechanism *m, const sk_actuators *t, const double *x,
-                              const double *params, int level, int kind, const double *rest,
-                              const double *drives, double *r)
+                              const double *params, int level, int kind, int want_links,
+                              const double *rest, const double *drives, double *r,
+                              sk_stroke_at *at)
 {
-    double out[6 * SK_NP];
-    int a, s = kind == 0 && level >= 0 ? sk_stroke_rigid_points(m, x, params, out)
-                                       : sk_stroke_pose(m, x, params, level, out, NULL);
+    int a, s = kind == 0 && level >= 0
+                   ? sk_stroke_rigid_points(m, x, params, at->out, at->angles)
+               : kind == 0 ? sk_stroke_pose(m, x, params, level, at->out, at->angles)
+                           : sk_evaluate_pose(m, x, params, level, at->out, at->angles,
+                                              want_links ? at->links : NULL);
     for (a = 0; a < t->n && s == 0; ++a) {
-        const double *p = out + 6 * t->point[a] + 2 * kind;
+        const double *p = at->out + 6 * t->point[a] + 2 * kind;
         const double *p0 = rest + 2 * a;
         r[a] = t->direction[2 * a] * (p[0] - p0[0]) + t->direction[2 * a + 1] * (p[1] - p0[1])
                - drives[t->stroke[a]];
@@ -9331,85 +9345,129 @@ static int sk_stroke_residual(const sk_mechanism *m, const sk_actuators *t, cons
     return s;
 }
 
-/* Newton's method on the strokes in the surrogates' angles of x (in place), the Jacobian by
-   central differences, the step halved while it leaves the assembly range or grows the
-   residual. Returns 0 when every stroke is met to `tol`, else 1 (or the evaluator's status). */
+/* A stroke solve's Jacobian (n x n, row-major) for the next, and whether it holds one. */
+typedef struct {
+    double jac[(SK_NI + 1) * (SK_NI + 1)];
+    int have;
+} sk_stroke_jac;
+
+/* Newton's method on the strokes in the surrogates' angles of x (in place), its Jacobian j the
+   same point's earlier solve's (the rigid linkage's for the compliant mechanism's: they differ
+   by the compliance alone) or by forward differences at x, then Broyden (secant) updates: a step
+   costs one evaluation. A fresh Jacobian where an updated one is singular or its step does not
+   shrink the residual to SK_STROKE_SECANT of it; a fresh one's step halved while it leaves the
+   assembly range or grows the residual; once met, one more step while above SK_STROKE_POLISH.
+   No state outside the point. Returns 0 when every stroke is met to `tol`, the last evaluation
+   in `keep` (at x), else 1 (or the evaluator's status). */
 static int sk_stroke_solve(const sk_mechanism *m, const sk_actuators *t, double *x,
-                           const double *params, int level, int kind, const double *rest,
-                           const double *drives, double tol)
+                           const double *params, int level, int kind, int want_links,
+                           const double *rest, const double *drives, double tol,
+                           sk_stroke_jac *j, sk_stroke_at *keep)
 {
-    double r[SK_NI + 1], trial[SK_NI + 1], jac[(SK_NI + 1) * (SK_NI + 1)], up[SK_NI + 1];
-    double down[SK_NI + 1], move[SK_NI + 1], size, next;
-    const double step = SK_STROKE_STEP; /* sqrt(eps) */
+    double r[SK_NI + 1], trial[SK_NI + 1], lu[(SK_NI + 1) * (SK_NI + 1)], up[SK_NI + 1];
+    double move[SK_NI + 1], size = 0.0, next = 0.0, dd;
+    const double fine = tol * (SK_STROKE_POLISH / SK_STROKE_TOLERANCE);
+    sk_stroke_at spare, *cur = keep, *other = &spare, *swap;
     int where[SK_NI + 1];
-    int i, j, iter, half, s, n = t->n;
-    for (j = 0; j < SK_NI; ++j) {
-        if (t->drive_of[j] < 0) {
-            where[-1 - t->drive_of[j]] = j;
+    int i, k, iter, half, s, fresh, met, ok, n = t->n;
+    for (k = 0; k < SK_NI; ++k) {
+        if (t->drive_of[k] < 0) {
+            where[-1 - t->drive_of[k]] = k;
         }
     }
-    s = sk_stroke_residual(m, t, x, params, level, kind, rest, drives, r);
-    if (s != 0) {
-        return s;
-    }
-    for (iter = 0; iter < SK_STROKE_ITERATIONS; ++iter) {
+    s = sk_stroke_residual(m, t, x, params, level, kind, want_links, rest, drives, r, cur);
+    for (iter = 0; s == 0 && iter < SK_STROKE_ITERATIONS; ++iter) {
         for (size = 0.0, i = 0; i < n; ++i) {
             size = fabs(r[i]) > size ? fabs(r[i]) : size;
         }
-        if (!(size > tol)) {
-            return isfinite(size) ? 0 : 1;
+        /* met: one more step while above the rounding (a secant's last step leaves more than
+           Newton's), kept where it shrinks the residual */
+        met = !(size > tol);
+        if (met && !(size > fine && j->have)) {
+            break;
         }
-        for (j = 0; j < n; ++j) {
+        fresh = !j->have;
+        for (k = 0; fresh && s == 0 && k < n; ++k) {
             for (i = 0; i < SK_NI; ++i) {
                 trial[i] = x[i];
             }
-            trial[where[j]] = x[where[j]] + step;
-            s = sk_stroke_residual(m, t, trial, params, level, kind, rest, drives, up);
-            trial[where[j]] = x[where[j]] - step;
-            s = s != 0 ? s : sk_stroke_residual(m, t, trial, params, level, kind, rest, drives,
-                                                down);
-            if (s != 0) {
-                return s;
+            trial[where[k]] = x[where[k]] + SK_STROKE_STEP; /* sqrt(eps) */
+            s = sk_stroke_residual(m, t, trial, params, level, kind, want_links, rest, drives,
+                                   up, other);
+            for (i = 0; i < n && s == 0; ++i) {
+                j->jac[i * n + k] = (up[i] - r[i]) / SK_STROKE_STEP;
             }
-            for (i = 0; i < n; ++i) {
-                jac[i * n + j] = (up[i] - down[i]) / (2.0 * step);
-            }
+        }
+        if (s != 0) {
+            break;
+        }
+        for (i = 0; i < n * n; ++i) {
+            lu[i] = j->jac[i];
         }
         for (i = 0; i < n; ++i) {
             move[i] = r[i];
         }
-        if (sk_act_solve(n, jac, 1, move) != 0) {
-            return 1;
-        }
-        for (half = 0; half < SK_STROKE_HALVINGS; ++half) {
+        j->have = sk_act_solve(n, lu, 1, move) == 0;
+        for (half = 0, ok = 0; j->have && half < SK_STROKE_HALVINGS; ++half) {
             for (i = 0; i < SK_NI; ++i) {
                 trial[i] = x[i];
             }
-            for (j = 0; j < n; ++j) {
-                trial[where[j]] -= move[j];
+            for (k = 0; k < n; ++k) {
+                trial[where[k]] -= move[k];
             }
-            s = sk_stroke_residual(m, t, trial, params, level, kind, rest, drives, up);
+            s = sk_stroke_residual(m, t, trial, params, level, kind, want_links, rest, drives,
+                                   up, other);
             for (next = 0.0, i = 0; i < n && s == 0; ++i) {
                 next = fabs(up[i]) > next ? fabs(up[i]) : next;
             }
-            if (s == 0 && next < size) {
-                break;
+            ok = s == 0 && (fresh || met ? next < size : next <= SK_STROKE_SECANT * size);
+            if (ok || !fresh || met) {
+                break; /* an updated Jacobian's step is not halved: a fresh one instead */
             }
-            for (j = 0; j < n; ++j) {
-                move[j] *= SK_STROKE_CUT;
+            for (k = 0; k < n; ++k) {
+                move[k] *= SK_STROKE_CUT;
             }
         }
-        if (half == SK_STROKE_HALVINGS) {
-            return 1;
+        s = 0;
+        if (met || (!ok && fresh)) {
+            for (i = 0; met && ok && i < SK_NI; ++i) {
+                x[i] = trial[i];
+            }
+            cur = met && ok ? other : cur;
+            s = met ? 0 : 1;
+            break;
         }
-        for (i = 0; i < SK_NI; ++i) {
-            x[i] = trial[i];
+        if (!ok) {
+            j->have = 0;
+            continue;
+        }
+        /* Broyden: J += (dr - J dx) dx' / (dx' dx), dx = -move, dr = up - r */
+        for (dd = 0.0, k = 0; k < n; ++k) {
+            dd += move[k] * move[k];
+        }
+        for (i = 0; i < n && dd > 0.0; ++i) {
+            double miss = up[i] - r[i];
+            for (k = 0; k < n; ++k) {
+                miss += j->jac[i * n + k] * move[k];
+            }
+            for (k = 0; k < n; ++k) {
+                j->jac[i * n + k] -= miss * move[k] / dd;
+            }
         }
         for (i = 0; i < n; ++i) {
             r[i] = up[i];
         }
+        swap = cur;
+        cur = other;
+        other = swap;
+        for (i = 0; i < SK_NI; ++i) {
+            x[i] = trial[i];
+        }
     }
-    return 1;
+    if (s == 0 && cur != keep) {
+        *keep = *cur;
+    }
+    return s != 0 ? s : iter == SK_STROKE_ITERATIONS || !isfinite(size) ? 1 : 0;
 }
 
 /* The tolerance of the stroke solves: SK_STROKE_TOLERANCE (64 eps) times the largest coordinate
@@ -9430,78 +9488,95 @@ static double sk_stroke_tol(const sk_actuators *t, const double *rest)
 /* The kinematic inputs xr at which the rigid linkage (the rigid positions of `level`) meets the
    strokes among the public inputs `drives`; `rest` (2 per actuator) gets the points of action
    as fabricated (t->action_at: from the parameters, not the pose at zero inputs, which a fixed
-   input would move). Returns 0, 3 where a public input or a point of action is not finite (a
-   NaN stroke would pass the stroke solve's test), or the status of what failed. */
+   input would move); j the solve's last Jacobian, er its rigid points and angles at xr. Returns
+   0, 3 where a public input or a point of action is not finite (a NaN stroke would pass the
+   stroke solve's test), or the status of what failed. */
 static int sk_stroke_rigid(const sk_mechanism *m, const sk_actuators *t, const double *drives,
-                           const double *params, int level, double *xr, double *rest)
+                           const double *params, int level, double *xr, double *rest,
+                           sk_stroke_jac *j, sk_stroke_at *er)
 {
-    int j;
-    for (j = 0; j < SK_NI; ++j) {
-        if (!isfinite(drives[j])) {
+    int k;
+    for (k = 0; k < SK_NI; ++k) {
+        if (!isfinite(drives[k])) {
             return 3;
         }
     }
     t->action_at(params == NULL ? m->defaults : params, rest);
-    for (j = 0; j < 2 * t->n; ++j) {
-        if (!isfinite(rest[j])) {
+    for (k = 0; k < 2 * t->n; ++k) {
+        if (!isfinite(rest[k])) {
             return 3;
         }
     }
-    for (j = 0; j < SK_NI; ++j) {
-        xr[j] = t->drive_of[j] >= 0 ? drives[t->drive_of[j]] : 0.0;
+    for (k = 0; k < SK_NI; ++k) {
+        xr[k] = t->drive_of[k] >= 0 ? drives[t->drive_of[k]] : 0.0;
     }
-    return sk_stroke_solve(m, t, xr, params, level, 0, rest, drives, sk_stroke_tol(t, rest));
+    j->have = 0;
+    return sk_stroke_solve(m, t, xr, params, level, 0, 0, rest, drives, sk_stroke_tol(t, rest), j,
+                           er);
 }
 
 /* The kinematic inputs at which the rigid linkage (xr) and the compliant mechanism at `level`
    (xc) meet the strokes among the public inputs `drives` (docs/levels.md, "Actuators"); `rest`
-   (2 per actuator) the points of action as fabricated. Returns 0, or the status of what failed. */
+   (2 per actuator) the points of action as fabricated; er the rigid points and angles at xr, ec
+   the evaluation at xc (its links with want_links). The compliant solve starts from the rigid
+   one's pose and Jacobian. Returns 0, or the status of what failed. */
 static int sk_stroke_poses(const sk_mechanism *m, const sk_actuators *t, const double *drives,
                            const double *params, int level, double *xr, double *xc,
-                           double *rest)
+                           double *rest, sk_stroke_at *er, sk_stroke_at *ec, int want_links)
 {
-    int j, s = sk_stroke_rigid(m, t, drives, params, level, xr, rest);
-    for (j = 0; j < SK_NI; ++j) {
-        xc[j] = xr[j];
+    sk_stroke_jac jac;
+    int k, s = sk_stroke_rigid(m, t, drives, params, level, xr, rest, &jac, er);
+    for (k = 0; k < SK_NI; ++k) {
+        xc[k] = xr[k];
     }
     return s != 0 ? s
-                  : sk_stroke_solve(m, t, xc, params, level, 1, rest, drives,
-                                    sk_stroke_tol(t, rest));
+                  : sk_stroke_solve(m, t, xc, params, level, 1, want_links, rest, drives,
+                                    sk_stroke_tol(t, rest), &jac, ec);
 }
 
 /* The rigid linkage and the compliant mechanism at `level` at the strokes (docs/levels.md,
    "Actuators"), combined as sk_outputs lays them out (pr: 6 per point, ar: 2 SK_M, lr: 3 SK_NL
    or NULL): the rigid linkage at the surrogates' rigid angles, the compliant mechanism at their
    compliant ones, the deviation the rigid motion between the two plus the level's deviation at
-   the compliant angles. Returns 0, or the status of what failed. */
+   the compliant angles. The solves' last evaluations are the answer's: nothing is evaluated
+   twice. Returns 0, or the status of what failed. */
 static int sk_actuated_kinematic(const sk_mechanism *m, const sk_actuators *t,
                                  const double *drives, const double *params, int level,
                                  double *pr, double *ar, double *lr)
 {
-    double rest[2 * SK_NI], xr[SK_NI + 1], xc[SK_NI + 1], pc[6 * SK_NP], ac[2 * SK_M];
-    double lc[3 * SK_NL + 1];
+    double rest[2 * SK_NI], xr[SK_NI + 1], xc[SK_NI + 1];
+    sk_stroke_at er, ec;
     int i, j, s;
-    s = sk_stroke_poses(m, t, drives, params, level, xr, xc, rest);
-    s = s != 0 ? s : sk_evaluate_pose(m, xr, params, level, pr, ar, lr);
-    s = s != 0 ? s : sk_evaluate_pose(m, xc, params, level, pc, ac, lr == NULL ? NULL : lc);
+    s = sk_stroke_poses(m, t, drives, params, level, xr, xc, rest, &er, &ec, lr != NULL);
     for (i = 0; i < SK_NP && s == 0; ++i) {
         double *r = pr + 6 * i;
-        const double *c = pc + 6 * i;
+        const double *c = ec.out + 6 * i;
+        r[0] = er.out[6 * i];
+        r[1] = er.out[6 * i + 1];
         for (j = 0; j < 2; ++j) {
             r[2 + j] = c[2 + j];
             r[4 + j] = c[j] - r[j] + c[4 + j];
         }
     }
     for (j = 0; j < SK_M && s == 0; ++j) {
-        ar[SK_M + j] = ac[SK_M + j];
+        ar[j] = er.angles[j];
+        ar[SK_M + j] = ec.angles[SK_M + j];
     }
-    for (j = 0; lr != NULL && j < SK_NL && s == 0; ++j) {
-        lr[3 * j + 1] = lc[3 * j + 1];
-        lr[3 * j + 2] = lc[3 * j] - lr[3 * j] + lc[3 * j + 2];
+    if (lr != NULL && s == 0) { /* the rigid rotations at the rigid angles: no delta read */
+        double rot[2 * SK_NL + 1], zero[SK_K + 1];
+        for (j = 0; j < SK_K + 1; ++j) {
+            zero[j] = 0.0;
+        }
+        m->links(er.angles, zero, rot);
+        for (j = 0; j < SK_NL && s == 0; ++j) {
+            s = isfinite(rot[j]) ? 0 : 2;
+            lr[3 * j] = sk_wrap(rot[j]);
+            lr[3 * j + 1] = ec.links[3 * j + 1];
+            lr[3 * j + 2] = ec.links[3 * j] - lr[3 * j] + ec.links[3 * j + 2];
+        }
     }
     return s;
 }
-
 /* The loaded level's solution with actuators (sk_actuated_loaded): the loaded routines' theta
    (the rigid angles at the strokes, then the forces) and q, what the level's routines read
    (the parameters, the deviation, the variant solved and its x; written into `constants`), for
@@ -9526,6 +9601,8 @@ static int sk_actuated_loaded(const sk_mechanism *m, const sk_actuators *t, cons
     const sk_loaded *l = (const sk_loaded *)m->loaded;
     double rest[2 * SK_NI], xr[SK_NI + 1], delta[SK_K + 1], turned[SK_M];
     double *theta = sol->theta;
+    sk_stroke_jac jac;
+    sk_stroke_at er;
     const double *strokes = drives;
     const double *q = NULL;
     int i, j, v, s;
@@ -9533,7 +9610,7 @@ static int sk_actuated_loaded(const sk_mechanism *m, const sk_actuators *t, cons
         params = m->defaults;
     }
     s = 0;
-    s = s != 0 ? s : sk_stroke_rigid(m, t, strokes, params, SK_LEVEL_RIGID, xr, rest);
+    s = s != 0 ? s : sk_stroke_rigid(m, t, strokes, params, SK_LEVEL_RIGID, xr, rest, &jac, &er);
     s = s != 0 ? s : sk_pose(m, lv, xr, params, lr != NULL, theta, delta, sol->constants, &q);
     s = s != 0 ? s : sk_outputs(m, lv, theta, delta, params, q, pr, ar, lr);
     sol->q = q;
@@ -9839,6 +9916,7 @@ static int sk_actuated_sensitivity(const sk_mechanism *m, const sk_actuators *t,
     double pr[6 * SK_NP], pc[6 * SK_NP], dr[NS], rr[NS], dc[NS], rc[NS], r0[NS], d0[NS];
     double rate_r[(SK_NI + 1) * SK_NV], rate_c[(SK_NI + 1) * SK_NV];
     int where[SK_NI + 1], direct[SK_NV];
+    sk_stroke_at er, ec;
     int i, j, c, y, s;
     if (drives == NULL || deviation == NULL) {
         return 3;
@@ -9868,7 +9946,7 @@ static int sk_actuated_sensitivity(const sk_mechanism *m, const sk_actuators *t,
         }
         return s;
     }
-    s = sk_stroke_poses(m, t, drives, params, level, xr, xc, rest);
+    s = sk_stroke_poses(m, t, drives, params, level, xr, xc, rest, &er, &ec, 0);
     s = s != 0 ? s : sk_sensitivity_full(m, xr, params, level, pr, dr, rr);
     s = s != 0 ? s : sk_sensitivity_full(m, xc, params, level, pc, dc, rc);
     s = s != 0 ? s : sk_sensitivity_full(m, zero, params, level, NULL, d0, r0);

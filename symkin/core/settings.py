@@ -200,15 +200,23 @@ class LoadedSettings:
 @dataclass(frozen=True)
 class StrokeSettings:
     """The stroke actuators' solves (docs/levels.md, "Actuators"): Newton on the strokes in the
-    surrogate hinges' angles, its Jacobian by central differences of step √ε in the generated
-    evaluators (templates/c/actuators.c, templates/numpy/actuators.py and
-    reduced_actuators.py) and at mpmath in symkin.studies.actuators."""
+    surrogate hinges' angles, its Jacobian by central differences of step √ε in the numpy
+    evaluators (templates/numpy/actuators.py and reduced_actuators.py) and at mpmath in
+    symkin.studies.actuators; in C (templates/c/actuators.c) by forward differences of step √ε
+    once, then secant (Broyden) updates, the compliant solve from the rigid one's Jacobian."""
 
     iterations: int = 40  # Newton steps at most (the generated evaluators)
     halvings: int = 40  # a step halved at most this often while it grows the residual (C, mpmath)
     cut: float = 0.5  # ... by this factor
     tolerance_eps: float = 64.0  # strokes met to this·ε of the points of action's largest place
     floor: float = 1e-300  # that coordinate at least this (a mechanism at the origin)
+    # a met stroke whose residual is above this·ε of that coordinate takes one more step (kept
+    # where it shrinks the residual): the secant steps of the generated evaluators' solves
+    # (templates/c/actuators.c) stop nearer the rounding, as Newton's quadratic last step did
+    polish_eps: float = 1.0
+    # ... and a step from an updated (secant) Jacobian is kept where it shrinks the residual to
+    # this fraction of it; else the Jacobian is made afresh by differences (C)
+    secant: float = 0.5
     # the 40-digit (mpmath) solve of the sympy backend
     mpmath_iterations: int = 60  # Newton steps at most
     mpmath_step_digits: int = 7  # the central differences' step: 10^-this
@@ -236,6 +244,8 @@ class StrokeSettings:
             "tolerance": self.tolerance_eps * eps,
             "floor": self.floor,
             "step": math.sqrt(eps),
+            "polish": self.polish_eps * eps,
+            "secant": self.secant,
         }
 
 
