@@ -141,7 +141,7 @@ class LoadedSettings:
     in the generated evaluators (which read them from the plan: rules()). Fields ending in
     `_eps` are multiples of float64's ε (every backend runs this level in float64)."""
 
-    # Newton (sk_red_newton, _Batch.newton, Reduced.newton)
+    # Newton (sk_red_newton; symkin.physics.reduced_solver's _red_newton, Python's and numpy's)
     tol_eps: float = 1e-12 / EPS64  # a step at most this·ε times the largest unknown: converged
     max_iter: int = 12  # Newton steps at most per solve
     max_turn: float = 0.2  # a step turning a hinge by more (rad) hands over to continuation
