@@ -148,7 +148,7 @@ class LoadedSettings:
     stall_after: int = 3  # the stall test applies after this many steps ...
     stall_ratio: float = 0.5  # ... to a step at least this fraction of the previous one ...
     stalled_eps: float = 1e-9 / EPS64  # ... and at most this·ε times the largest unknown
-    # chord steps (the generated drivers): after a step below `chord` times the largest unknown
+    # chord steps (every backend): after a step below `chord` times the largest unknown
     # the next reuse its J while each shrinks the step by `chord_shrink` or more; a chord step
     # below tol converges where its size times the contraction is below chord_error_eps·ε times
     # the largest unknown (a Newton step leaves its square, below rounding)

@@ -558,7 +558,6 @@ class Reduced:
             other = copy.copy(self)
             other.modules, other._fns, other._evaluated = modules, {}, None
             other.__dict__.pop("_twins", None)
-            other.__dict__.pop("system", None)
             twins[key] = other
         return twins[key]
 
@@ -738,9 +737,10 @@ class Reduced:
         return {act[0]: tuple(v[3 * k : 3 * k + 3]) for k, act in enumerate(self.acts)}
 
     # -- solving: symkin.physics.reduced_solver, the generated numpy modules' solver too ---------
-    @cached_property
+    @property
     def system(self) -> System:
-        """This equilibrium as the shared solver's system (float64 arithmetic, its ε)."""
+        """This equilibrium as the shared solver's system (float64 arithmetic, its ε), with the
+        rules RULES holds now."""
         return System(self)
 
     def solve(self, rigid: Callable[[float], Mapping[int, float]]) -> Answer:
