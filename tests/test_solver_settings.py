@@ -367,6 +367,7 @@ RUNTIMES = [
     "templates/numpy/modes.py",
     "symkin/physics/reduced.py",
     "symkin/physics/reduced_solver.py",  # the loaded level's solver: Python's and numpy's
+    "symkin/physics/stiffness_rule.py",  # the report's stiffness rule: Python's and numpy's
     "symkin/physics/reduced_reported.py",
     "symkin/physics/equilibrium.py",  # no generated twin, its rules in the table too
     "symkin/studies/mpmath_evaluator.py",
