@@ -1280,10 +1280,59 @@ def _reduced_rates(mech, theta, p, q, thu, ok, forces=0):
     return dev.reshape(shape + (npt, nv))
 
 
+# symkin stiffness rule (symkin/physics/stiffness_rule.py, shared with the Python path): K = C^-1
+# where C is regular in the plates' scales, else the outlier side does not exist.
+
+
+def _inverses(a):
+    """The inverse of every matrix of a (b, 3, 3) stack, NaN where one is singular."""
+    try:
+        return numpy.linalg.inv(a)
+    except numpy.linalg.LinAlgError:
+        out = numpy.full(a.shape, numpy.nan)
+        for c in range(a.shape[0]):
+            try:
+                out[c] = numpy.linalg.inv(a[c])
+            except numpy.linalg.LinAlgError:
+                continue  # singular: NaN
+        return out
+
+
+def _stiffness_compliance(c, scales, singular):
+    """(K, C) of every point compliance of a (b, 3, 3) stack, NaN where it does not exist: S =
+    C scaled by `scales` (its rows', its columns': F/L, F/L, F and 1, 1, 1/L), singular where
+    its 1-norm times its inverse's exceeds `singular` (or no inverse); then K NaN and C's
+    entries within |S|/singular of zero exactly 0 where |S| <= |S^-1| (a direction held
+    rigidly), else C NaN (a direction free); both NaN where C is not finite."""
+    b = c.shape[0]
+    stiff, comp = numpy.full((b, 3, 3), numpy.nan), numpy.full((b, 3, 3), numpy.nan)
+    live = numpy.flatnonzero(numpy.all(numpy.isfinite(c), axis=(1, 2)))
+    if not live.size:
+        return stiff, comp
+    rows, cols = scales
+    cl = c[live]
+    scaled = cl * rows[:, None] * cols
+    size = numpy.abs(scaled).sum(axis=1).max(axis=1)
+    inverse = _inverses(scaled)
+    invertible = numpy.all(numpy.isfinite(inverse), axis=(1, 2))
+    with numpy.errstate(invalid="ignore"):
+        inverse_size = numpy.abs(inverse).sum(axis=1).max(axis=1)
+    regular = invertible & (size * inverse_size <= singular)
+    free = invertible & ~regular & (size > inverse_size)
+    held = ~regular & ~free
+    if regular.any():
+        stiff[live[regular]] = numpy.linalg.inv(cl[regular])
+        comp[live[regular]] = cl[regular]
+    if free.any():
+        stiff[live[free]] = inverse[free] * cols[:, None] * rows  # K = S^-1 scaled back
+    if held.any():
+        small = numpy.abs(scaled[held]) <= size[held][:, None, None] / singular
+        comp[live[held]] = numpy.where(small, 0.0, cl[held])
+    return stiff, comp
 # Its rules (symkin.core.settings.LoadedSettings) are the loaded tables' (mech.loaded): sections,
 # the stress samples per plate, one RK4 step each (against the Python path's Taylor series:
 # 5e-12 of the stress, tests/test_loaded_reported_codegen.py); singular, a point's scaled
-# compliance this ill-conditioned is singular (its K or C NaN: _stiffness_compliance);
+# compliance this ill-conditioned is singular (its K or C NaN: stiffness_rule.py's rule);
 # buckling_*, the buckling search (reduced_solver.py's _red_buckling).
 
 
@@ -1436,54 +1485,6 @@ def _reduced_report(mech, theta, p, q, ok, buckling=True):
     if buckling and tb.loads:
         result["buckling"] = shaped(_red_bucklings(mech, theta, p, q, shape, good))
     return result
-
-
-def _inverses(a):
-    """The inverse of every matrix of a (b, 3, 3) stack, NaN where one is singular."""
-    try:
-        return numpy.linalg.inv(a)
-    except numpy.linalg.LinAlgError:
-        out = numpy.full(a.shape, numpy.nan)
-        for c in range(a.shape[0]):
-            try:
-                out[c] = numpy.linalg.inv(a[c])
-            except numpy.linalg.LinAlgError:
-                continue  # singular: NaN
-        return out
-
-
-def _stiffness_compliance(c, scales, singular):
-    """(K, C) of every point compliance of a (b, 3, 3) stack, NaN where it does not exist, as
-    symkin.physics.reported.stiffness_and_compliance judges them: S = C scaled by `scales`
-    (its rows', its columns': F/L, F/L, F and 1, 1, 1/L), singular where its 1-norm times its
-    inverse's exceeds `singular` (or no inverse); then K NaN and C's entries within
-    |S|/singular of zero exactly 0 where |S| <= |S^-1| (a direction held rigidly), else C NaN
-    (a direction free); both NaN where C is not finite."""
-    b = c.shape[0]
-    stiff, comp = numpy.full((b, 3, 3), numpy.nan), numpy.full((b, 3, 3), numpy.nan)
-    live = numpy.flatnonzero(numpy.all(numpy.isfinite(c), axis=(1, 2)))
-    if not live.size:
-        return stiff, comp
-    rows, cols = scales
-    cl = c[live]
-    scaled = cl * rows[:, None] * cols
-    size = numpy.abs(scaled).sum(axis=1).max(axis=1)
-    inverse = _inverses(scaled)
-    invertible = numpy.all(numpy.isfinite(inverse), axis=(1, 2))
-    with numpy.errstate(invalid="ignore"):
-        inverse_size = numpy.abs(inverse).sum(axis=1).max(axis=1)
-    regular = invertible & (size * inverse_size <= singular)
-    free = invertible & ~regular & (size > inverse_size)
-    held = ~regular & ~free
-    if regular.any():
-        stiff[live[regular]] = numpy.linalg.inv(cl[regular])
-        comp[live[regular]] = cl[regular]
-    if free.any():
-        stiff[live[free]] = inverse[free] * cols[:, None] * rows  # K = S^-1 scaled back
-    if held.any():
-        small = numpy.abs(scaled[held]) <= size[held][:, None, None] / singular
-        comp[live[held]] = numpy.where(small, 0.0, cl[held])
-    return stiff, comp
 
 
 def _red_bucklings(mech, theta, p, q, shape, good):
