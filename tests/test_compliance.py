@@ -226,7 +226,8 @@ def scaled_back(s: np.ndarray) -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def runtime():
-    """The numpy runtime's rule (templates/numpy/reduced_report.py), from a generated module."""
+    """The numpy runtime's rule (symkin/physics/stiffness_rule.py, held by the module), from a
+    generated module."""
     an = symkin.analyze(symkin.loads(M.lone_plate(), "lone_plate.toml"))
     _, module = pipeline.build(an, "numpy", "test", sensitivity=False)
     length, force = SCALES

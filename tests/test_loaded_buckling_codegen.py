@@ -49,7 +49,7 @@ CASES = {
     ),
 }
 #: generated against the Python level (relative): both bisect to 1e-10 of t, from solutions
-#: that differ in their last digits (the Python level's in mpmath, Newton without chord steps).
+#: that differ in their last digits (the Python level's kernels in mpmath).
 #: Measured 3.3e-9 (the stage, its input held), 0 (force-driven), 2.1e-9 (stroke-held).
 AGREEMENT = 1e-7
 

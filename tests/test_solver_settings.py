@@ -19,7 +19,7 @@ import pytest
 from conftest import EXAMPLES, ROOT
 
 import symkin
-from symkin.codegen import pipeline
+from symkin.codegen import pipeline, templating
 from symkin.core import settings
 from symkin.core.settings import SOLVER
 from symkin.physics import reduced, reduced_reported
@@ -133,10 +133,19 @@ def test_the_float64_numbers_are_those_the_runtimes_held():
     assert named == BEFORE_EQUILIBRIUM.keys()
     for key, value in BEFORE_EQUILIBRIUM.items():
         assert same(getattr(eq, key), value), key
-    # the Python solvers' own copies
-    assert reduced._TOL == 1e-12 and reduced._STALLED == 1e-9
+    # the Python solvers' own copies (the loaded level's shared solver takes float64's rules)
     assert reduced.RULES is SOLVER.loaded and reduced_reported.RULES is SOLVER.loaded
     assert SOLVER.strokes.reference == 1e-14
+
+
+def test_the_python_loaded_solver_takes_the_table_at_float64():
+    """symkin.physics.reduced's system hands the shared solver the table at float64's ε."""
+    an = symkin.analyze(symkin.load(EXAMPLES / "four_bar.toml"))
+    values = {p.symbol: p.value for p in an.mechanism.parameters}
+    rules = reduced.Reduced(an.kin, values).system.t
+    for key, value in SOLVER.loaded.rules(settings.EPS64).items():
+        assert getattr(rules, key) == value, key
+    assert rules.tol == 1e-12 and rules.stalled == 1e-9 and rules.max_iter == 12
 
 
 @pytest.mark.parametrize("dps", [15, 40, 60])
@@ -272,6 +281,15 @@ def test_the_numpy_module_holds_the_tables_numbers(emitted):
     assert ast.literal_eval(fields["consistent"]) == tol.consistent
 
 
+def test_the_numpy_module_holds_the_python_solver_verbatim(emitted):
+    """The loaded level's solver is written once for Python: the module holds its text."""
+    _, py = emitted
+    text = templating.shared("symkin.physics.reduced_solver")
+    assert "def _red_newton(" in text and "import" not in text.split("\n", 1)[0]
+    assert text in py
+    assert py.count("def _red_newton(") == 1
+
+
 # -- no solver literal left in a runtime file ------------------------------------------------------
 
 #: Numbers every runtime file may hold: index and layout arithmetic (3 rows per point, 5 inputs
@@ -350,6 +368,8 @@ RUNTIMES = [
     "templates/numpy/reduced_actuators_sens.py",
     "templates/numpy/modes.py",
     "symkin/physics/reduced.py",
+    "symkin/physics/reduced_solver.py",  # the loaded level's solver: Python's and numpy's
+    "symkin/physics/stiffness_rule.py",  # the report's stiffness rule: Python's and numpy's
     "symkin/physics/reduced_reported.py",
     "symkin/physics/equilibrium.py",  # no generated twin, its rules in the table too
     "symkin/studies/mpmath_evaluator.py",

@@ -592,10 +592,292 @@ def _sensitivity_block(arrays, mech, level, p):
     return result
 
 
-# symkin reduced-equilibrium runtime (templates/numpy/reduced.py): Newton from x = 0 at load
-# factor 1, continuation in the inputs and loads together where Newton fails, the refusals (a
-# plate at P_LIMIT of its sway buckling load, the truncation estimate), two half plates per plate
-# where one relation is refused by its estimate; all configurations at once, each on its own.
+# symkin reduced-equilibrium solver (symkin/physics/reduced_solver.py, shared with the Python
+# path): Newton from x = 0 at load factor 1, continuation in the inputs and loads together where
+# Newton fails, the refusals (a plate at p_limit of its sway buckling load, the truncation
+# estimate) and the buckling search; all configurations at once, each on its own.
+
+
+def _red_signs(jac):
+    """det J's sign per configuration (jac: (b, n, n)): 1, -1, 0 or NaN."""
+    return numpy.sign(numpy.linalg.det(jac))
+
+
+def _red_solve(jac, res):
+    """J^-1 R per configuration (jac (b, n, n), res (n, b)) -> (n, b); NaN where J is singular."""
+    try:
+        return numpy.linalg.solve(jac, res.T[:, :, None])[:, :, 0].T
+    except numpy.linalg.LinAlgError:
+        # one singular J stops the stacked solve: each on its own (LAPACK's, as stacked)
+        out = numpy.full(res.shape, numpy.nan)
+        for k in range(res.shape[1]):
+            try:
+                out[:, k] = numpy.linalg.solve(jac[k], res[:, k])
+            except numpy.linalg.LinAlgError:
+                continue  # singular: NaN
+        return out
+
+
+def _red_sway(p, ea, es, count):
+    """A half plate's compression over the plate's sway buckling load (its p over -pi^2; p its
+    load index, the plate's over count^2): from the inputs alone, past buckling too."""
+    return -(1 + (ea - es) * p) * p * count**2 / math.pi**2
+
+
+def _red_newton(sy, x, theta, p, t):
+    """Newton from x (n, b) at (theta, t), each configuration until it converges or fails (a
+    singular or non-finite J, a step turning a hinge by more than max_turn, a non-finite
+    iterate, too many steps), with chord steps (after a step below chord, R alone with that
+    step's J while each step shrinks tenfold): (x, converged, each one's last full step's J,
+    det J's sign at the first step, Newton steps taken)."""
+    tb, n, nu = sy.t, sy.size, sy.t.unknowns
+    b = x.shape[1]
+    each = numpy.ndim(t) > 0  # a load factor per configuration: indexed as x is
+    if each:
+        t = numpy.asarray(t, dtype=float)
+    x, converged = x.copy(), numpy.zeros(b, dtype=bool)
+    last, first = numpy.zeros((b, n, n)), None
+    prev = numpy.full(b, math.inf)
+    chord = numpy.zeros(b, dtype=bool)
+    steps = numpy.zeros(b, dtype=int)
+    act = numpy.arange(b)
+    for it in range(1, tb.max_iter + 1):
+        c = chord[act]
+        step = numpy.zeros((n, act.size))
+        full = act[~c]
+        if full.size:
+            tf = t[full] if each else t
+            res, jac = sy.system(x[:, full], [v[full] for v in theta], [v[full] for v in p], tf)
+            last[full] = jac
+            if first is None:
+                first = _red_signs(jac)  # the first step: every configuration's full
+            step[:, ~c] = _red_solve(jac, res)
+        if c.any():
+            k = act[c]
+            tk = t[k] if each else t
+            res = sy.residual(x[:, k], [v[k] for v in theta], [v[k] for v in p], tk)
+            step[:, c] = _red_solve(last[k], res)
+        turn = numpy.max(numpy.abs(step[:nu]), axis=0) * sy.scale[0] if nu else 0.0
+        xn = x[:, act] - step
+        fail = ~(turn <= tb.max_turn) | ~numpy.all(numpy.isfinite(xn), axis=0)
+        size = numpy.max(numpy.abs(step), axis=0)
+        top = numpy.max(numpy.abs(xn), axis=0)
+        # a Newton step leaves about its square; a chord step its size times the contraction
+        left = ~c | (size * size <= tb.chord_error * top * prev[act])
+        # x is scaled (l/L, EI/(l L)): the whole vector sets the scale, so a delta that is zero
+        # by symmetry cannot block the test
+        done = ((size <= tb.tol * top) & left) | (size == 0)
+        # stalled at rounding (a full step's: a slow chord step's is its J's, not rounding)
+        done |= (
+            ~c
+            & (it > tb.stall_after)
+            & (size > tb.stall_ratio * prev[act])
+            & (size < tb.stalled * top)
+        )
+        x[:, act] = xn
+        steps[act] = it
+        converged[act[done & ~fail]] = True
+        chord[act] = (size <= tb.chord * top) & (~c | (size <= tb.chord_shrink * prev[act]))
+        prev[act] = size
+        act = act[~done & ~fail]
+        if not act.size:
+            break
+    return x, converged, last, first, steps
+
+
+def _red_accept(sy, x, theta, jac, sign):
+    """Converged x on the branch followed: det J (the last Newton step's, a step below tol from
+    x) of the sign at the unloaded state, every compliant angle within (-pi, pi) (theta's
+    angles: the force actuators' forces follow them)."""
+    ok = _red_signs(jac) == sign
+    for i, th in enumerate(theta[: len(theta) - sy.t.forces]):
+        angle = th
+        for j, h in enumerate(sy.t.unknown_index):
+            if h == i:
+                angle = angle + x[j] * sy.scale[j]
+        ok &= numpy.abs(angle) < math.pi
+    return ok
+
+
+def _red_one(values):
+    """One configuration's theta (numbers) as the solver's list of (1,) arrays."""
+    return [numpy.array([v]) for v in values]
+
+
+def _red_continuation(sy, rigid, p):
+    """One configuration by continuation: inputs and loads scaled together by s from the
+    as-fabricated pose (x = 0 exact at s = 0), the predictor keeping the compliant angles and
+    the chord loads; rigid(s) its theta (numbers; the force actuators' forces at the end kept,
+    the load factor scales them) or None where the rigid linkage has no pose, p its parameters
+    ((1,) arrays): (x (n,), the last Newton step's J, steps, Newton steps), None where it does
+    not converge."""
+    tb, n = sy.t, sy.size
+    s, ds, steps, total = 0.0, tb.first_step, 0, 0
+    th_s = rigid(0.0)
+    if th_s is None:
+        return None
+    x = numpy.zeros((n, 1))
+    sign = _red_signs(sy.system(x, _red_one(th_s), p, 0.0)[1])
+    jac = None
+    while s < 1:
+        if ds < tb.smallest_step:
+            return None
+        s1 = min(1.0, s + ds)
+        th_1 = rigid(s1)
+        okn = th_1 is not None
+        if okn:
+            guess = x.copy()
+            for j, i in enumerate(tb.unknown_index):
+                guess[j] = (th_s[i] + x[j] * sy.scale[j] - th_1[i]) / sy.scale[j]
+            xn, conv, last, _, its = _red_newton(sy, guess, _red_one(th_1), p, s1)
+            total += int(its[0])
+            okn = bool(conv[0]) and bool(_red_accept(sy, xn, _red_one(th_1), last, sign)[0])
+        if okn:
+            x, s, th_s, jac, steps = xn, s1, th_1, last[0], steps + 1
+            ds = min(tb.largest_step, ds * tb.step_growth)
+        else:
+            ds *= tb.step_cut
+    return x[:, 0], jac, steps, total
+
+
+def _red_equilibrium(sy, theta, p, rigid):
+    """Every configuration solved: Newton from x = 0 at load factor 1 on all, continuation one
+    by one where it fails or leaves the branch (rigid(k): configuration k's rigid(s) for
+    _red_continuation): (x (n, b), the last Newton step's J (b, n, n), converged (b,),
+    continuation steps (b,; 1: plain Newton), Newton steps (b,))."""
+    tb, n, b = sy.t, sy.size, theta[0].shape[0]
+    x, jac = numpy.zeros((n, b)), numpy.zeros((b, n, n))
+    ok = numpy.ones(b, dtype=bool)
+    steps, total = numpy.ones(b, dtype=int), numpy.zeros(b, dtype=int)
+    if n:
+        sign0 = None
+        if tb.loads:
+            sign0 = _red_signs(sy.system(x, theta, p, 0.0)[1])
+        xn, converged, jac, first, total = _red_newton(sy, x, theta, p, 1.0)
+        # without loads t enters nowhere: the first step's J is the unloaded state's
+        good = converged & _red_accept(sy, xn, theta, jac, first if sign0 is None else sign0)
+        x[:, good] = xn[:, good]
+        for k in numpy.flatnonzero(~good):
+            found = _red_continuation(sy, rigid(k), [v[k : k + 1] for v in p])
+            if found is None:
+                ok[k] = False
+            else:
+                x[:, k], jac[k], steps[k], more = found
+                total[k] += more
+    return x, jac, ok, steps, total
+
+
+def _red_verdict(sy, x, theta, p, jac):
+    """The deviation at each solution x (n, b), the worst plate's compression, the truncation
+    estimate est_factor e24^2 (e24: each point's change when the quartic terms are dropped, by
+    one order-2 Newton step with jac, the last Newton step's J, against the point's deviation,
+    at least est_share of the largest one and est_size times the mechanism's size) and the
+    status: 0, 1 where a plate is at p_limit of its sway buckling load or the deviation is not
+    finite, 4 where the estimate is above est_limit."""
+    tb, n, b = sy.t, sy.size, x.shape[1]
+    dev, worst, res = sy.measure(x, theta, p)
+    x2 = x
+    if n:
+        x2 = x - _red_solve(jac, res)
+    dev2 = sy.deviation2(x2, theta, p)
+    e24 = numpy.zeros(b)
+    sizes = [numpy.hypot(dev[2 * k], dev[2 * k + 1]) for k in range(len(dev) // 2)]
+    largest = numpy.max(sizes, axis=0) if sizes else numpy.zeros(b)
+    least = numpy.maximum(tb.est_share * largest, tb.est_size * tb.length)
+    for k, size in enumerate(sizes):
+        size = numpy.maximum(size, least)
+        e = numpy.hypot(dev2[2 * k] - dev[2 * k], dev2[2 * k + 1] - dev[2 * k + 1]) / size
+        e24 = numpy.where((size > 0) & (e > e24), e, e24)
+    estimate = tb.est_factor * e24**2
+    status = numpy.where(~(estimate <= tb.est_limit), 4, 0)
+    refused = ~numpy.all(numpy.isfinite(dev), axis=0) | ~(worst < tb.p_limit)
+    return dev, worst, estimate, numpy.where(refused, 1, status)
+
+
+def _red_state(sy, x, theta, p, t):
+    """The buckling search's state at load factors t ((k,) array) from the guesses x (n, k):
+    (x, converged, det J's sign at x; 0 where the worst plate's compression reaches its sway
+    buckling load, which the search takes for a sign change). A non-finite det J is not
+    converged."""
+    n, k = sy.size, t.shape[0]
+    if n:
+        x, ok, _, _, _ = _red_newton(sy, x, theta, p, t)
+    else:
+        ok = numpy.ones(k, dtype=bool)
+    sign = numpy.zeros(k)
+    live = numpy.flatnonzero(ok)
+    if not live.size:
+        return x, ok, sign
+    th, pl, tl, xl = [v[live] for v in theta], [v[live] for v in p], t[live], x[:, live]
+    worst = sy.compression(xl, th, pl, tl)
+    found = _red_signs(sy.system(xl, th, pl, tl)[1]) if n else numpy.ones(live.size)
+    at_sway = worst >= 1  # no J there (past the relation's pole)
+    ok[live] = at_sway | numpy.isfinite(found)
+    sign[live] = numpy.where(at_sway, 0.0, found)
+    return x, ok, sign
+
+
+def _red_buckling(sy, x, theta, p):
+    """The buckling factor of every configuration at once (x (n, b): each one's solution at load
+    factor 1): the smallest t >= 1, the inputs held, at which det J changes sign, a plate
+    reaches its sway buckling load or Newton cannot go on (a limit point); inf when none below
+    buckling_limit. Each configuration steps with its own t, step, x and previous point (the
+    same arithmetic, so the same steps as alone); the sign changes found are then bisected
+    together."""
+    tb = sy.t
+    limit, locate = tb.buckling_limit, tb.buckling_locate
+    b = x.shape[1]
+    out = numpy.full(b, numpy.nan)
+    t = numpy.ones(b)
+    x, ok, sign = _red_state(sy, x, theta, p, t)
+    out[~ok | (sign == 0)] = 1.0
+    act = numpy.flatnonzero(ok & (sign != 0))
+    dt = numpy.full(b, tb.buckling_step)
+    # the previous accepted (x, t) of each configuration (none before its first step)
+    x_prev, t_prev, has_prev = numpy.zeros_like(x), numpy.zeros(b), numpy.zeros(b, dtype=bool)
+    lo, hi, x_lo = numpy.zeros(b), numpy.zeros(b), x.copy()
+    bisect = numpy.zeros(b, dtype=bool)
+    while act.size:
+        ta, xa = t[act], x[:, act]
+        t1 = numpy.minimum(limit, ta + dt[act])
+        # the linear extrapolation from the previous accepted point
+        ahead = xa + (xa - x_prev[:, act]) * (t1 - ta) / (ta - t_prev[act])
+        guess = numpy.where(has_prev[act], ahead, xa)
+        x1, ok1, s1 = _red_state(sy, guess, [v[act] for v in theta], [v[act] for v in p], t1)
+        same = ok1 & (s1 == sign[act])
+        change = ok1 & ~same  # a sign change (or a plate's sway load) in (t, t1): bisected below
+        ends = ~ok1 & (dt[act] <= locate * ta)  # Newton fails this close: a limit point
+        k = act[change]
+        lo[k], hi[k], x_lo[:, k], bisect[k] = t[k], t1[change], x[:, k], True
+        out[act[ends]] = ta[ends]
+        dt[act[~ok1 & ~ends]] *= tb.buckling_cut
+        k = act[same]
+        x_prev[:, k], t_prev[k], has_prev[k] = x[:, k], t[k], True
+        x[:, k], t[k] = x1[:, same], t1[same]
+        dt[k] = numpy.minimum(tb.buckling_largest, dt[k] * tb.buckling_growth)
+        act = act[same | (~ok1 & ~ends)]
+        past = t[act] >= limit
+        out[act[past]] = math.inf
+        act = act[~past]
+    k = numpy.flatnonzero(bisect)
+    while k.size:
+        wide = hi[k] - lo[k] > locate * hi[k]
+        done = k[~wide]
+        out[done] = (lo[done] + hi[done]) / 2
+        k = k[wide]
+        if not k.size:
+            break
+        mid = (lo[k] + hi[k]) / 2
+        xl = x_lo[:, k]
+        xm, okm, sm = _red_state(sy, xl, [v[k] for v in theta], [v[k] for v in p], mid)
+        good = okm & (sm == sign[k])
+        lo[k[good]], x_lo[:, k[good]] = mid[good], xm[:, good]
+        hi[k[~good]] = mid[~good]
+    return out
+# symkin reduced-equilibrium runtime (templates/numpy/reduced.py): the system the solver above
+# (reduced_solver.py's _red_equilibrium, _red_verdict) runs on, over the generated routines, and
+# the driver: two half plates per plate where one relation is refused by its estimate; all
+# configurations at once, each on its own.
 
 
 class _LoadedTables:
@@ -623,30 +905,11 @@ def _red_column(v, b):
     return numpy.broadcast_to(numpy.asarray(v, dtype=float), (b,))
 
 
-def _red_signs(jac):
-    """det J's sign per configuration (jac: (b, n, n)): 1, -1, 0 or NaN."""
-    return numpy.sign(numpy.linalg.det(jac))
-
-
-def _red_solve(jac, res):
-    """J^-1 R per configuration (jac (b, n, n), res (n, b)) -> (n, b); NaN where J is singular."""
-    try:
-        return numpy.linalg.solve(jac, res.T[:, :, None])[:, :, 0].T
-    except numpy.linalg.LinAlgError:
-        # one singular J stops the stacked solve: each on its own (LAPACK's, as stacked)
-        out = numpy.full(res.shape, numpy.nan)
-        for k in range(res.shape[1]):
-            try:
-                out[:, k] = numpy.linalg.solve(jac[k], res[:, k])
-            except numpy.linalg.LinAlgError:
-                continue  # singular: NaN
-        return out
-
-
 class _Batch:
-    """One variant of the reduced equilibrium over b configurations at once: Newton on all of
-    them with a mask each, stacked solves; every step elementwise, so a configuration's answer
-    does not depend on the others in its batch."""
+    """One variant of the reduced equilibrium over b configurations at once, as the solver
+    (reduced_solver.py) takes a system: R and J by stacked routines, the compression, the
+    deviations; every step elementwise, so a configuration's answer does not depend on the
+    others in its batch."""
 
     def __init__(self, tables, variant, count):
         self.t, self.count = tables, count  # count: half plates per plate
@@ -743,114 +1006,64 @@ class _Batch:
             )
         return res, numpy.ascontiguousarray(jac.transpose(2, 0, 1))
 
-    def newton(self, x, theta, p, t):
-        """Newton from x (n, b) at (theta, t), each configuration until it converges or fails
-        (a singular or non-finite J, a step turning a hinge by more than max_turn, a non-finite
-        iterate, too many steps), with reduced.c's chord steps (after a step below chord, R
-        alone with that step's J while each step shrinks tenfold): (x, converged, each one's
-        last full step's J, det J's sign at the first step); t a number or a (b,) array."""
-        tb, n, nu = self.t, self.size, self.t.unknowns
-        b = x.shape[1]
-        each = numpy.ndim(t) > 0  # a load factor per configuration: indexed as x is
-        if each:
-            t = numpy.asarray(t, dtype=float)
-        x, converged = x.copy(), numpy.zeros(b, dtype=bool)
-        last, first = numpy.zeros((b, n, n)), None
-        prev = numpy.full(b, math.inf)
-        chord = numpy.zeros(b, dtype=bool)
-        act = numpy.arange(b)
-        for it in range(1, tb.max_iter + 1):
-            c = chord[act]
-            step = numpy.zeros((n, act.size))
-            full = act[~c]
-            if full.size:
-                tf = t[full] if each else t
-                res, jac = self.system(
-                    x[:, full], [v[full] for v in theta], [v[full] for v in p], tf
-                )
-                last[full] = jac
-                if first is None:
-                    first = _red_signs(jac)  # the first step: every configuration's full
-                step[:, ~c] = _red_solve(jac, res)
-            if c.any():
-                k = act[c]
-                tk = t[k] if each else t
-                res = self.residual(x[:, k], [v[k] for v in theta], [v[k] for v in p], tk)
-                step[:, c] = _red_solve(last[k], res)
-            turn = numpy.max(numpy.abs(step[:nu]), axis=0) * self.scale[0] if nu else 0.0
-            xn = x[:, act] - step
-            fail = ~(turn <= tb.max_turn) | ~numpy.all(numpy.isfinite(xn), axis=0)
-            size = numpy.max(numpy.abs(step), axis=0)
-            top = numpy.max(numpy.abs(xn), axis=0)
-            # a Newton step leaves about its square; a chord step its size times the contraction
-            left = ~c | (size * size <= tb.chord_error * top * prev[act])
-            done = ((size <= tb.tol * top) & left) | (size == 0)
-            # stalled at rounding (a full step's: a slow chord step's is its J's, not rounding)
-            done |= (
-                ~c
-                & (it > tb.stall_after)
-                & (size > tb.stall_ratio * prev[act])
-                & (size < tb.stalled * top)
-            )
-            x[:, act] = xn
-            converged[act[done & ~fail]] = True
-            chord[act] = (size <= tb.chord * top) & (~c | (size <= tb.chord_shrink * prev[act]))
-            prev[act] = size
-            act = act[~done & ~fail]
-            if not act.size:
-                break
-        return x, converged, last, first
+    def compression(self, x, theta, p, t):
+        """The worst half plate's compression over its sway buckling load per configuration
+        (b,), from the half plates' inputs alone (no relation: past buckling too)."""
+        _, ins, _ = self._inputs(x, theta, p, t)
+        return self._worst(ins, x.shape[1])
 
-    def accept(self, x, theta, jac, sign):
-        """Converged x on the branch followed: det J (the last Newton step's) of the sign at the
-        unloaded state, every compliant angle within (-pi, pi) (theta's angles: the force
-        actuators' forces follow them)."""
-        ok = _red_signs(jac) == sign
-        for i, th in enumerate(theta[: len(theta) - self.t.forces]):
-            angle = th
-            for j, h in enumerate(self.t.unknown_index):
-                if h == i:
-                    angle = angle + x[j] * self.scale[j]
-            ok &= numpy.abs(angle) < math.pi
-        return ok
+    def _worst(self, ins, b):
+        worst = numpy.zeros(b)
+        for k in range(self.plates):
+            w = _red_sway(ins[5 * k + 1], ins[5 * k + 3], ins[5 * k + 4], self.count)
+            worst = numpy.where(w > worst, w, worst)
+        return worst
+
+    def measure(self, x, theta, p):
+        """At load factor 1: the deviation (2 per point, b) at order 4, the worst compression
+        (b,) and R (n, b) at order 2 (the truncation estimate's step)."""
+        b = x.shape[1]
+        args, ins, _ = self._inputs(x, theta, p, 1.0)
+        _, vals = self._relation(ins)
+        dev = numpy.array([_red_column(v, b) for v in self.dev_fn(args, theta, vals, p)])
+        res = None
+        if self.size:
+            sys = self.res_fn(args, theta, self._values2(ins), p)
+            res = numpy.array([_red_column(v, b) for v in sys])
+        return dev, self._worst(ins, b), res
+
+    def deviation2(self, x, theta, p):
+        """The deviation (2 per point, b) at order 2 (the truncation estimate's)."""
+        args, ins, _ = self._inputs(x, theta, p, 1.0)
+        vals = self._values2(ins)
+        return numpy.array([_red_column(v, x.shape[1]) for v in self.dev_fn(args, theta, vals, p)])
 
     def solve(self, inputs, theta, p, mech):
         """Every configuration (inputs, theta, p: lists of (b,) arrays): x (n, b), the deviation
         (2 per point, b) and a status each: 0, 1 refused or no convergence, 4 refused by the
-        truncation estimate. Newton from x = 0 on all; continuation one by one where it fails."""
-        tb, n, b = self.t, self.size, theta[0].shape[0]
-        x, jac = numpy.zeros((n, b)), numpy.zeros((b, n, n))
-        status = numpy.zeros(b, dtype=int)
-        if n:
-            sign0 = None
-            if tb.loads:
-                sign0 = _red_signs(self.system(x, theta, p, 0.0)[1])
-            xn, converged, jac, first = self.newton(x, theta, p, 1.0)
-            # without loads t enters nowhere: the first step's J is the unloaded state's
-            good = converged & self.accept(xn, theta, jac, first if sign0 is None else sign0)
-            x[:, good] = xn[:, good]
-            for k in numpy.flatnonzero(~good):
-                found = self.continuation(k, inputs, theta, p, mech)
-                if found is None:
-                    status[k] = 1
-                else:
-                    x[:, k], jac[k] = found
+        truncation estimate (reduced_solver.py's _red_equilibrium and _red_verdict)."""
+        b = theta[0].shape[0]
+
+        def rigid(k):
+            return self._rigid(k, inputs, theta, p, mech)
+
+        x, jac, ok, _, _ = _red_equilibrium(self, theta, p, rigid)
+        status = numpy.where(ok, 0, 1)
         dev = numpy.full((2 * len(mech.point_names), b), numpy.nan)
-        live = numpy.flatnonzero(status == 0)
+        live = numpy.flatnonzero(ok)
         if live.size:
-            dev[:, live], status[live] = self.answer(
-                x[:, live], [v[live] for v in theta], [v[live] for v in p], jac[live]
-            )
+            th, pl = [v[live] for v in theta], [v[live] for v in p]
+            dev[:, live], _, _, status[live] = _red_verdict(self, x[:, live], th, pl, jac[live])
         return x, dev, status
 
-    def continuation(self, k, inputs, theta, p, mech):
-        """Configuration k by continuation (inputs and loads scaled together by s from the
-        as-fabricated pose; the force actuators' forces at the end of theta are kept, the load
-        factor scales them): (x, the last Newton step's J), None where it does not converge."""
-        tb, n = self.t, self.size
+    def _rigid(self, k, inputs, theta, p, mech):
+        """Configuration k's rigid(s) for the continuation: theta (numbers) at its inputs scaled
+        by s, the force actuators' forces at its end kept (the load factor scales them); None
+        where the rigid linkage has no pose."""
+        tb = self.t
         th = [float(v[k]) for v in theta]
         forces = th[len(th) - tb.forces :]
-        pk = [v[k : k + 1] for v in p]
+        pk = [float(v[k]) for v in p]
         xi = [float(v[k]) for v in inputs]
 
         def rigid(s):
@@ -858,84 +1071,11 @@ class _Batch:
                 return th
             with numpy.errstate(all="ignore"):
                 angles, good = _rigid_angles(
-                    mech,
-                    [numpy.array(v * s) for v in xi],
-                    [float(v[0]) for v in pk],
-                    numpy.array(True),
+                    mech, [numpy.array(v * s) for v in xi], pk, numpy.array(True)
                 )
             return [float(v) for v in angles] + forces if bool(good) else None
 
-        def column(values):
-            return [numpy.array([v]) for v in values]
-
-        s, ds = 0.0, tb.first_step
-        th_s = rigid(0.0)
-        if th_s is None:
-            return None
-        x = numpy.zeros((n, 1))
-        sign = _red_signs(self.system(x, column(th_s), pk, 0.0)[1])
-        jac = None
-        while s < 1:
-            if ds < tb.smallest_step:
-                return None
-            s1 = min(1.0, s + ds)
-            th_1 = rigid(s1)
-            okn = th_1 is not None
-            if okn:
-                guess = x.copy()
-                for j, i in enumerate(tb.unknown_index):
-                    guess[j] = (th_s[i] + x[j] * self.scale[j] - th_1[i]) / self.scale[j]
-                xn, conv, last, _ = self.newton(guess, column(th_1), pk, s1)
-                okn = bool(conv[0]) and bool(self.accept(xn, column(th_1), last, sign)[0])
-            if okn:
-                x, s, th_s, jac = xn, s1, th_1, last[0]
-                ds = min(tb.largest_step, ds * tb.step_growth)
-            else:
-                ds *= tb.step_cut
-        return x[:, 0], jac
-
-    def compression(self, ins, b):
-        """The worst half plate's compression over its sway buckling load per configuration
-        (b,), from the half plates' inputs alone (no relation: past buckling too)."""
-        worst = numpy.zeros(b)
-        for k in range(self.plates):
-            pk, ea, es = ins[5 * k + 1], ins[5 * k + 3], ins[5 * k + 4]
-            w = -(1 + (ea - es) * pk) * pk * self.count**2 / math.pi**2
-            worst = numpy.where(w > worst, w, worst)
-        return worst
-
-    def answer(self, x, theta, p, jac):
-        """The deviation at each solution x (n, b) and its status: 0, 1 where a plate is at
-        p_limit of its sway buckling load, 4 where the truncation estimate (one order-2 Newton
-        step with jac, the last Newton step's J) is above est_limit."""
-        tb, n, b = self.t, self.size, x.shape[1]
-        args, ins, _ = self._inputs(x, theta, p, 1.0)
-        _, vals = self._relation(ins)
-        dev = numpy.array([_red_column(v, b) for v in self.dev_fn(args, theta, vals, p)])
-        worst = self.compression(ins, b)
-        x2 = x
-        if n:
-            vals2 = self._values2(ins)
-            sys = self.res_fn(args, theta, vals2, p)
-            res = numpy.array([_red_column(v, b) for v in sys])
-            x2 = x - _red_solve(jac, res)
-        args2, ins2, _ = self._inputs(x2, theta, p, 1.0)
-        vals2 = self._values2(ins2)
-        dev2 = numpy.array([_red_column(v, b) for v in self.dev_fn(args2, theta, vals2, p)])
-        e24 = numpy.zeros(b)
-        # each point's change against its deviation, at least est_share of the largest one and
-        # est_size times the mechanism's size (reduced.py's Reduced.estimate_floor)
-        sizes = [numpy.hypot(dev[2 * k], dev[2 * k + 1]) for k in range(len(dev) // 2)]
-        largest = numpy.max(sizes, axis=0) if sizes else numpy.zeros(b)
-        least = numpy.maximum(tb.est_share * largest, tb.est_size * tb.length)
-        for k, size in enumerate(sizes):
-            size = numpy.maximum(size, least)
-            e = numpy.hypot(dev2[2 * k] - dev[2 * k], dev2[2 * k + 1] - dev[2 * k + 1]) / size
-            e24 = numpy.where((size > 0) & (e > e24), e, e24)
-        estimate = tb.est_factor * e24**2
-        status = numpy.where(~(estimate <= tb.est_limit), 4, 0)
-        refused = ~numpy.all(numpy.isfinite(dev), axis=0) | ~(worst < tb.p_limit)
-        return dev, numpy.where(refused, 1, status)
+        return rigid
 
 
 def _reduced_solve(mech, x, theta, p, ok):
@@ -1038,6 +1178,44 @@ def _red_solutions(mech, theta, p, q, shape, good, routines):
         yield where, solver, out, jac, jo, ins, dins, rel
 
 
+def _red_rates(solver, out, blocks, jac, jo, dins, rel, b):
+    """dy/dv (b, rows, cols) at the solutions of a variant (_red_solutions' solver, routine
+    output, J, dR/d(plates), the half plates' x-Jacobian and relation), from a routine's blocks
+    (dR_dv, din_dv, dy_dx, dy_dv, dy_dout) by the implicit-function theorem: dx/dv = -J^-1 (dR/dv
+    + dR/dout dout/dv), dy/dv = dy/dv + dy/dout dout/dv + (dy/dx + dy/dout dout/dx) dx/dv, dout
+    the relation's partials times the inputs' (reduced_report.py's rates, modes.py's compliance)."""
+    n, ns = solver.size, solver.plates
+    # the plate relation's partials by (theta_c, p, f), block diagonal
+    part = numpy.zeros((b, 3 * ns, 3 * ns))
+    for k in range(ns):
+        for i in range(3):
+            for c in range(3):
+                part[:, 3 * k + i, 3 * k + c] = rel[k][3 + 3 * i + c]
+    dinx = numpy.zeros((b, 3 * ns, n))
+    if ns and n:
+        dinx = numpy.array([_red_column(v, b) for v in dins]).reshape(3 * ns, n, b)
+        dinx = dinx.transpose(2, 0, 1)
+    dr_v = _red_block(out, blocks["dR_dv"], b)
+    din_v = _red_block(out, blocks["din_dv"], b)
+    by_o = numpy.matmul(_red_block(out, blocks["dy_dout"], b), part)
+    total = _red_block(out, blocks["dy_dv"], b) + numpy.matmul(by_o, din_v)
+    if n:
+        rhs = dr_v + numpy.matmul(jo, numpy.matmul(part, din_v))
+        try:
+            dx = -numpy.linalg.solve(jac, rhs)
+        except numpy.linalg.LinAlgError:
+            # one singular J stops the stacked solve: each on its own
+            dx = numpy.full(rhs.shape, numpy.nan)
+            for c in range(b):
+                try:
+                    dx[c] = -numpy.linalg.solve(jac[c], rhs[c])
+                except numpy.linalg.LinAlgError:
+                    continue  # singular: NaN
+        dy_x = _red_block(out, blocks["dy_dx"], b) + numpy.matmul(by_o, dinx)
+        total = total + numpy.matmul(dy_x, dx)
+    return total
+
+
 def _reduced_rates(mech, theta, p, q, thu, ok, forces=0):
     """dev (*shape, 2 n_P, n_v) of the loaded level at its solutions (q: the variant solved and
     its x, templates/numpy/reduced.py); thu dtheta_u/dv (*shape, k, n_v), None without; with
@@ -1102,11 +1280,60 @@ def _reduced_rates(mech, theta, p, q, thu, ok, forces=0):
     return dev.reshape(shape + (npt, nv))
 
 
+# symkin stiffness rule (symkin/physics/stiffness_rule.py, shared with the Python path): K = C^-1
+# where C is regular in the plates' scales, else the outlier side does not exist.
+
+
+def _inverses(a):
+    """The inverse of every matrix of a (b, 3, 3) stack, NaN where one is singular."""
+    try:
+        return numpy.linalg.inv(a)
+    except numpy.linalg.LinAlgError:
+        out = numpy.full(a.shape, numpy.nan)
+        for c in range(a.shape[0]):
+            try:
+                out[c] = numpy.linalg.inv(a[c])
+            except numpy.linalg.LinAlgError:
+                continue  # singular: NaN
+        return out
+
+
+def _stiffness_compliance(c, scales, singular):
+    """(K, C) of every point compliance of a (b, 3, 3) stack, NaN where it does not exist: S =
+    C scaled by `scales` (its rows', its columns': F/L, F/L, F and 1, 1, 1/L), singular where
+    its 1-norm times its inverse's exceeds `singular` (or no inverse); then K NaN and C's
+    entries within |S|/singular of zero exactly 0 where |S| <= |S^-1| (a direction held
+    rigidly), else C NaN (a direction free); both NaN where C is not finite."""
+    b = c.shape[0]
+    stiff, comp = numpy.full((b, 3, 3), numpy.nan), numpy.full((b, 3, 3), numpy.nan)
+    live = numpy.flatnonzero(numpy.all(numpy.isfinite(c), axis=(1, 2)))
+    if not live.size:
+        return stiff, comp
+    rows, cols = scales
+    cl = c[live]
+    scaled = cl * rows[:, None] * cols
+    size = numpy.abs(scaled).sum(axis=1).max(axis=1)
+    inverse = _inverses(scaled)
+    invertible = numpy.all(numpy.isfinite(inverse), axis=(1, 2))
+    with numpy.errstate(invalid="ignore"):
+        inverse_size = numpy.abs(inverse).sum(axis=1).max(axis=1)
+    regular = invertible & (size * inverse_size <= singular)
+    free = invertible & ~regular & (size > inverse_size)
+    held = ~regular & ~free
+    if regular.any():
+        stiff[live[regular]] = numpy.linalg.inv(cl[regular])
+        comp[live[regular]] = cl[regular]
+    if free.any():
+        stiff[live[free]] = inverse[free] * cols[:, None] * rows  # K = S^-1 scaled back
+    if held.any():
+        small = numpy.abs(scaled[held]) <= size[held][:, None, None] / singular
+        comp[live[held]] = numpy.where(small, 0.0, cl[held])
+    return stiff, comp
 # Its rules (symkin.core.settings.LoadedSettings) are the loaded tables' (mech.loaded): sections,
 # the stress samples per plate, one RK4 step each (against the Python path's Taylor series:
 # 5e-12 of the stress, tests/test_loaded_reported_codegen.py); singular, a point's scaled
-# compliance this ill-conditioned is singular (its K or C NaN: _stiffness_compliance);
-# buckling_*, the buckling search.
+# compliance this ill-conditioned is singular (its K or C NaN: stiffness_rule.py's rule);
+# buckling_*, the buckling search (reduced_solver.py's _red_buckling).
 
 
 def _evaluate_reported(mech, inputs, level, params, links, report=True, buckling=True):
@@ -1218,38 +1445,9 @@ def _reduced_report(mech, theta, p, q, ok, buckling=True):
         mech, theta, p, q, shape, good, routines
     ):
         blocks = rep.routines[solver.count - 1][1]
-        b, n, ns = where.size, solver.size, solver.plates
-        # the plate relation's partials by (theta_c, p, f), block diagonal
-        part = numpy.zeros((b, 3 * ns, 3 * ns))
-        for k in range(ns):
-            for i in range(3):
-                for c in range(3):
-                    part[:, 3 * k + i, 3 * k + c] = rel[k][3 + 3 * i + c]
-        dinx = numpy.zeros((b, 3 * ns, n))
-        if ns and n:
-            dinx = numpy.array([_red_column(v, b) for v in dins]).reshape(3 * ns, n, b)
-            dinx = dinx.transpose(2, 0, 1)
-        dr_v = _red_block(out, blocks["dR_dv"], b)
-        din_v = _red_block(out, blocks["din_dv"], b)
-        dy_o = _red_block(out, blocks["dy_dout"], b)
-        by_o = numpy.matmul(dy_o, part)
-        total = _red_block(out, blocks["dy_dv"], b) + numpy.matmul(by_o, din_v)
-        if n:
-            rhs = dr_v + numpy.matmul(jo, numpy.matmul(part, din_v))
-            try:
-                dx = -numpy.linalg.solve(jac, rhs)
-            except numpy.linalg.LinAlgError:
-                # one singular J stops the stacked solve: each on its own
-                dx = numpy.full(rhs.shape, numpy.nan)
-                for c in range(b):
-                    try:
-                        dx[c] = -numpy.linalg.solve(jac[c], rhs[c])
-                    except numpy.linalg.LinAlgError:
-                        continue  # singular: NaN
-            dy_x = _red_block(out, blocks["dy_dx"], b) + numpy.matmul(by_o, dinx)
-            total = total + numpy.matmul(dy_x, dx)
+        b = where.size
+        rates[where] = _red_rates(solver, out, blocks, jac, jo, dins, rel, b)
         ys[where] = _red_block(out, blocks["y"], b)[:, :, 0]
-        rates[where] = total
         stress[where] = _red_block(out, blocks["stress"], b)
     ok_flat = good
     result = {"inputs": {}, "stiffness": {}, "plates": {}}
@@ -1289,54 +1487,6 @@ def _reduced_report(mech, theta, p, q, ok, buckling=True):
     return result
 
 
-def _inverses(a):
-    """The inverse of every matrix of a (b, 3, 3) stack, NaN where one is singular."""
-    try:
-        return numpy.linalg.inv(a)
-    except numpy.linalg.LinAlgError:
-        out = numpy.full(a.shape, numpy.nan)
-        for c in range(a.shape[0]):
-            try:
-                out[c] = numpy.linalg.inv(a[c])
-            except numpy.linalg.LinAlgError:
-                continue  # singular: NaN
-        return out
-
-
-def _stiffness_compliance(c, scales, singular):
-    """(K, C) of every point compliance of a (b, 3, 3) stack, NaN where it does not exist, as
-    symkin.physics.reported.stiffness_and_compliance judges them: S = C scaled by `scales`
-    (its rows', its columns': F/L, F/L, F and 1, 1, 1/L), singular where its 1-norm times its
-    inverse's exceeds `singular` (or no inverse); then K NaN and C's entries within
-    |S|/singular of zero exactly 0 where |S| <= |S^-1| (a direction held rigidly), else C NaN
-    (a direction free); both NaN where C is not finite."""
-    b = c.shape[0]
-    stiff, comp = numpy.full((b, 3, 3), numpy.nan), numpy.full((b, 3, 3), numpy.nan)
-    live = numpy.flatnonzero(numpy.all(numpy.isfinite(c), axis=(1, 2)))
-    if not live.size:
-        return stiff, comp
-    rows, cols = scales
-    cl = c[live]
-    scaled = cl * rows[:, None] * cols
-    size = numpy.abs(scaled).sum(axis=1).max(axis=1)
-    inverse = _inverses(scaled)
-    invertible = numpy.all(numpy.isfinite(inverse), axis=(1, 2))
-    with numpy.errstate(invalid="ignore"):
-        inverse_size = numpy.abs(inverse).sum(axis=1).max(axis=1)
-    regular = invertible & (size * inverse_size <= singular)
-    free = invertible & ~regular & (size > inverse_size)
-    held = ~regular & ~free
-    if regular.any():
-        stiff[live[regular]] = numpy.linalg.inv(cl[regular])
-        comp[live[regular]] = cl[regular]
-    if free.any():
-        stiff[live[free]] = inverse[free] * cols[:, None] * rows  # K = S^-1 scaled back
-    if held.any():
-        small = numpy.abs(scaled[held]) <= size[held][:, None, None] / singular
-        comp[live[held]] = numpy.where(small, 0.0, cl[held])
-    return stiff, comp
-
-
 def _red_bucklings(mech, theta, p, q, shape, good):
     """The buckling factor (_red_buckling) of every configuration the loaded level solved
     (good: a flat mask of them), variant by variant on the variant's own solver as
@@ -1356,89 +1506,6 @@ def _red_bucklings(mech, theta, p, q, shape, good):
         x = numpy.array(flat(q.x[: solver.size], where)).reshape(solver.size, where.size)
         with numpy.errstate(all="ignore"):
             out[where] = _red_buckling(solver, x, flat(theta, where), flat(p, where))
-    return out
-
-
-def _red_state(solver, x, theta, p, t):
-    """reduced_reported.buckling_factor's state at load factors t ((k,) array) from the guesses
-    x (n, k): (x, converged, det J's sign at x; 0 where the worst plate's compression reaches
-    its sway buckling load, as _Batch.answer's, which the search takes for a sign change). A
-    non-finite det J is not converged (where the Python path's kernels raise)."""
-    n, k = solver.size, t.shape[0]
-    if n:
-        x, ok, _, _ = solver.newton(x, theta, p, t)
-    else:
-        ok = numpy.ones(k, dtype=bool)
-    sign = numpy.zeros(k)
-    live = numpy.flatnonzero(ok)
-    if not live.size:
-        return x, ok, sign
-    th, pl, tl, xl = [v[live] for v in theta], [v[live] for v in p], t[live], x[:, live]
-    _, ins, _ = solver._inputs(xl, th, pl, tl)
-    worst = solver.compression(ins, live.size)
-    found = _red_signs(solver.system(xl, th, pl, tl)[1]) if n else numpy.ones(live.size)
-    at_sway = worst >= 1  # no J there (past the relation's pole)
-    ok[live] = at_sway | numpy.isfinite(found)
-    sign[live] = numpy.where(at_sway, 0.0, found)
-    return x, ok, sign
-
-
-def _red_buckling(solver, x, theta, p):
-    """reduced_reported.buckling_factor on every configuration at once (x (n, b): each one's
-    solution at load factor 1): the smallest t >= 1, the inputs held, at which det J changes
-    sign, a plate reaches its sway buckling load or Newton cannot go on (a limit point); inf
-    when none below buckling_limit. Each configuration steps with its own t, step, x and
-    previous point (the same arithmetic, so the same steps as alone); the sign changes found
-    are then bisected together."""
-    tb = solver.t
-    limit, locate = tb.buckling_limit, tb.buckling_locate
-    b = x.shape[1]
-    out = numpy.full(b, numpy.nan)
-    t = numpy.ones(b)
-    x, ok, sign = _red_state(solver, x, theta, p, t)
-    out[~ok | (sign == 0)] = 1.0
-    act = numpy.flatnonzero(ok & (sign != 0))
-    dt = numpy.full(b, tb.buckling_step)
-    # the previous accepted (x, t) of each configuration (none before its first step)
-    x_prev, t_prev, has_prev = numpy.zeros_like(x), numpy.zeros(b), numpy.zeros(b, dtype=bool)
-    lo, hi, x_lo = numpy.zeros(b), numpy.zeros(b), x.copy()
-    bisect = numpy.zeros(b, dtype=bool)
-    while act.size:
-        ta, xa = t[act], x[:, act]
-        t1 = numpy.minimum(limit, ta + dt[act])
-        # the linear extrapolation from the previous accepted point, as the Python path's
-        ahead = xa + (xa - x_prev[:, act]) * (t1 - ta) / (ta - t_prev[act])
-        guess = numpy.where(has_prev[act], ahead, xa)
-        x1, ok1, s1 = _red_state(solver, guess, [v[act] for v in theta], [v[act] for v in p], t1)
-        same = ok1 & (s1 == sign[act])
-        change = ok1 & ~same  # a sign change (or a plate's sway load) in (t, t1): bisected below
-        ends = ~ok1 & (dt[act] <= locate * ta)  # Newton fails this close: a limit point
-        k = act[change]
-        lo[k], hi[k], x_lo[:, k], bisect[k] = t[k], t1[change], x[:, k], True
-        out[act[ends]] = ta[ends]
-        dt[act[~ok1 & ~ends]] *= tb.buckling_cut
-        k = act[same]
-        x_prev[:, k], t_prev[k], has_prev[k] = x[:, k], t[k], True
-        x[:, k], t[k] = x1[:, same], t1[same]
-        dt[k] = numpy.minimum(tb.buckling_largest, dt[k] * tb.buckling_growth)
-        act = act[same | (~ok1 & ~ends)]
-        past = t[act] >= limit
-        out[act[past]] = math.inf
-        act = act[~past]
-    k = numpy.flatnonzero(bisect)
-    while k.size:
-        wide = hi[k] - lo[k] > locate * hi[k]
-        done = k[~wide]
-        out[done] = (lo[done] + hi[done]) / 2
-        k = k[wide]
-        if not k.size:
-            break
-        mid = (lo[k] + hi[k]) / 2
-        xl = x_lo[:, k]
-        xm, okm, sm = _red_state(solver, xl, [v[k] for v in theta], [v[k] for v in p], mid)
-        good = okm & (sm == sign[k])
-        lo[k[good]], x_lo[:, k[good]] = mid[good], xm[:, good]
-        hi[k[~good]] = mid[~good]
     return out
 
 

@@ -12533,7 +12533,7 @@ static int sk_red_answer(const sk_red *r, const double *x, const double *theta,
     sk_red_values2(r, ins, vals);
     r->v->dev(xt, theta, vals, r->params, dev2);
     /* each point's change against its deviation, at least est_share of the largest one and
-       est_size times the mechanism's size (symkin.physics.reduced.Reduced.estimate_floor) */
+       est_size times the mechanism's size (symkin.physics.reduced_solver's _red_verdict) */
     for (i = 0; i < SK_RP; ++i) {
         const double size = hypot(dev[2 * i], dev[2 * i + 1]);
         if (size > least) {
@@ -12562,8 +12562,8 @@ static int sk_red_answer(const sk_red *r, const double *x, const double *theta,
     return 0;
 }
 
-/* One variant's solve (symkin.physics.reduced.Reduced.solve) into x and dev: 0, 1 refused, 2 no
-   convergence, 4 refused by the truncation estimate. */
+/* One variant's solve (symkin.physics.reduced_solver's _red_equilibrium) into x and dev: 0, 1
+   refused, 2 no convergence, 4 refused by the truncation estimate. */
 static int sk_red_solve(const sk_red *r, const double *inputs, const double *theta, double *x,
                         double *dev)
 {
@@ -13067,6 +13067,65 @@ static void sk_rep_stiffness(const sk_loaded_report *rp, const double *c, double
     }
 }
 
+/* dy/dv (ny x nv, row-major) into rates at the solution st (n unknowns, ns half plates) from a
+   routine's output s whose blocks start at dR_dv (n x nv), din_dv (3 ns x nv), dy_dx (ny x n),
+   dy_dv (ny x nv), dy_dout (ny x 3 ns), by the implicit-function theorem with J's LU: the
+   report's rates (sk_reduced_report), the modes' compliance (templates/c/modes.c). */
+static void sk_red_rates(const sk_red_state *st, int n, int ns, const double *s, int dR_dv,
+                         int din_dv, int dy_dx, int dy_dv, int dy_dout, int ny, int nv,
+                         double *rates)
+{
+    double dout[3 * SK_RS], col[SK_RN + 1];
+    int i, j, k, c, e;
+    for (c = 0; c < nv; ++c) {
+        /* dout/dv at fixed x: the relation's partials . din/dv */
+        for (k = 0; k < ns; ++k) {
+            for (i = 0; i < 3; ++i) {
+                double sum = 0.0;
+                for (e = 0; e < 3; ++e) {
+                    sum += st->rel[12 * k + 3 + 3 * i + e] * s[din_dv + (3 * k + e) * nv + c];
+                }
+                dout[3 * k + i] = sum;
+            }
+        }
+        /* dx/dv = -J^-1 (dR/dv + dR/dout dout/dv) with J's LU */
+        for (i = 0; i < n; ++i) {
+            const double *jo = st->sys + n + n * n + i * 3 * ns;
+            double sum = s[dR_dv + i * nv + c];
+            for (e = 0; e < 3 * ns; ++e) {
+                sum += jo[e] * dout[e];
+            }
+            col[i] = -sum;
+        }
+        if (n > 0) {
+            sk_lu_solve(n, st->lu, st->piv, col);
+        }
+        /* dout/dv along the solution: + the partials . din/dx dx/dv */
+        for (k = 0; k < ns; ++k) {
+            for (i = 0; i < 3; ++i) {
+                double sum = 0.0;
+                for (e = 0; e < 3; ++e) {
+                    const double *dinx = st->ins + 5 * ns + (3 * k + e) * n;
+                    for (j = 0; j < n; ++j) {
+                        sum += st->rel[12 * k + 3 + 3 * i + e] * dinx[j] * col[j];
+                    }
+                }
+                dout[3 * k + i] += sum;
+            }
+        }
+        for (i = 0; i < ny; ++i) {
+            double sum = s[dy_dv + i * nv + c];
+            for (e = 0; e < n; ++e) {
+                sum += s[dy_dx + i * n + e] * col[e];
+            }
+            for (e = 0; e < 3 * ns; ++e) {
+                sum += s[dy_dout + i * 3 * ns + e] * dout[e];
+            }
+            rates[i * nv + c] = sum;
+        }
+    }
+}
+
 /* What the loaded level reports at its solution (q: the parameters, the deviation, the variant
    solved and its x, sk_reduced_pose) into out: per input its moment (N m) and dM/dtheta
    (N m/rad), per point its stiffness K (9, row-major; NaN where it does not exist), per plate
@@ -13078,64 +13137,17 @@ static int sk_reduced_report(const sk_mechanism *m, const sk_loaded_report *rp,
 {
     const sk_red_rep *rr = rp->variants + (int)q[SK_NPAR + 2 * SK_NP];
     const int nin = rp->n_inputs, nq = nin + 3 * rp->n_points;
-    double s[SK_OUT], vals[3 * SK_RS], dout[3 * SK_RS], col[SK_RN + 1];
+    double s[SK_OUT], vals[3 * SK_RS];
     double rates[SK_RQ * SK_RQ];
     sk_red_state st;
     sk_red r;
-    int n, ns, i, j, k, c, e;
+    int i, k, c;
     if (sk_red_at_solution(m, theta, q, &r, &st, vals)) {
         return 1;
     }
-    n = r.v->size;
-    ns = r.v->plates_n;
     rr->fn(st.xt, theta, vals, q, s);
-    for (c = 0; c < nq; ++c) {
-        /* dout/dv at fixed x: the relation's partials . din/dv */
-        for (k = 0; k < ns; ++k) {
-            for (i = 0; i < 3; ++i) {
-                double sum = 0.0;
-                for (e = 0; e < 3; ++e) {
-                    sum += st.rel[12 * k + 3 + 3 * i + e] * s[rr->din_dv + (3 * k + e) * nq + c];
-                }
-                dout[3 * k + i] = sum;
-            }
-        }
-        /* dx/dv = -J^-1 (dR/dv + dR/dout dout/dv) with J's LU */
-        for (i = 0; i < n; ++i) {
-            const double *jo = st.sys + n + n * n + i * 3 * ns;
-            double sum = s[rr->dR_dv + i * nq + c];
-            for (e = 0; e < 3 * ns; ++e) {
-                sum += jo[e] * dout[e];
-            }
-            col[i] = -sum;
-        }
-        if (n > 0) {
-            sk_lu_solve(n, st.lu, st.piv, col);
-        }
-        /* dout/dv along the solution: + the partials . din/dx dx/dv */
-        for (k = 0; k < ns; ++k) {
-            for (i = 0; i < 3; ++i) {
-                double sum = 0.0;
-                for (e = 0; e < 3; ++e) {
-                    const double *dinx = st.ins + 5 * ns + (3 * k + e) * n;
-                    for (j = 0; j < n; ++j) {
-                        sum += st.rel[12 * k + 3 + 3 * i + e] * dinx[j] * col[j];
-                    }
-                }
-                dout[3 * k + i] += sum;
-            }
-        }
-        for (i = 0; i < nq; ++i) {
-            double sum = s[rr->dy_dv + i * nq + c];
-            for (e = 0; e < n; ++e) {
-                sum += s[rr->dy_dx + i * n + e] * col[e];
-            }
-            for (e = 0; e < 3 * ns; ++e) {
-                sum += s[rr->dy_dout + i * 3 * ns + e] * dout[e];
-            }
-            rates[i * nq + c] = sum;
-        }
-    }
+    sk_red_rates(&st, r.v->size, r.v->plates_n, s, rr->dR_dv, rr->din_dv, rr->dy_dx, rr->dy_dv,
+                 rr->dy_dout, nq, nq, rates);
     for (i = 0; i < nin; ++i) {
         out[2 * i] = s[rr->y + i] * rp->unit_scale;
         out[2 * i + 1] = rates[i * nq + i] * rp->unit_scale;

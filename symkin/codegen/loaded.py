@@ -92,7 +92,7 @@ class LoadedPlan:
     # the natural frequencies' tables (symkin.codegen.modes; None: no link has a mass)
     modes: ModesPlan | None = None
     # the mechanism's size max(L, l_min) at the file's defaults: the truncation estimate's floor
-    # is est_size times it (symkin.physics.reduced.Reduced.estimate_floor)
+    # is est_size times it (symkin.physics.reduced_solver's _red_verdict)
     length: float = 1.0
 
 

@@ -41,6 +41,7 @@ def environment(latex: bool = False) -> jinja2.Environment:
     env.filters["pyrepr"] = repr
     env.filters["cstring"] = c_string
     env.globals["runtime"] = runtime
+    env.globals["shared"] = shared
     return env
 
 
@@ -60,6 +61,8 @@ def digest() -> str:
                 h.update(f"{prefix}{entry.name}".encode() + b"\0" + entry.read_bytes() + b"\0")
 
     walk(resources.files("symkin.templates"), "")
+    for module in SHARED:
+        h.update(f"{module}\0".encode() + _shared_file(module).read_bytes() + b"\0")
     return h.hexdigest()
 
 
@@ -86,6 +89,33 @@ def _runtime(path: str, features: frozenset[str] | None) -> str:
         raise ValueError(f"templates/{path} has no line '{RUNTIME_MARKER} ...'")
     body = body.partition("\n")[2].lstrip("\n")
     return body if features is None or not path.endswith(".c") else _sections(body, features)
+
+
+#: The package's modules whose text the generated numpy modules hold below their marker line:
+#: the algorithms the Python path runs too, written once (docs/runtime.md).
+SHARED = ("symkin.physics.reduced_solver", "symkin.physics.stiffness_rule")
+
+
+def _shared_file(module: str) -> Traversable:
+    package, _, name = module.rpartition(".")
+    return resources.files(package).joinpath(f"{name}.py")
+
+
+def shared(module: str) -> str:
+    """The text a generated numpy module holds of the package's module `module` (one of
+    SHARED): everything after its marker line, verbatim, as `runtime` gives a runtime's."""
+    if module not in SHARED:
+        raise ValueError(f"{module} is not one of the shared modules {SHARED}")
+    return _shared(module)
+
+
+@cache
+def _shared(module: str) -> str:
+    text = _shared_file(module).read_text()
+    _, marker, body = text.partition(RUNTIME_MARKER)
+    if not marker:
+        raise ValueError(f"{module} has no line '{RUNTIME_MARKER} ...'")
+    return body.partition("\n")[2].lstrip("\n")
 
 
 def _sections(text: str, features: frozenset[str]) -> str:

@@ -141,14 +141,14 @@ class LoadedSettings:
     in the generated evaluators (which read them from the plan: rules()). Fields ending in
     `_eps` are multiples of float64's ε (every backend runs this level in float64)."""
 
-    # Newton (sk_red_newton, _Batch.newton, Reduced.newton)
+    # Newton (sk_red_newton; symkin.physics.reduced_solver's _red_newton, Python's and numpy's)
     tol_eps: float = 1e-12 / EPS64  # a step at most this·ε times the largest unknown: converged
     max_iter: int = 12  # Newton steps at most per solve
     max_turn: float = 0.2  # a step turning a hinge by more (rad) hands over to continuation
     stall_after: int = 3  # the stall test applies after this many steps ...
     stall_ratio: float = 0.5  # ... to a step at least this fraction of the previous one ...
     stalled_eps: float = 1e-9 / EPS64  # ... and at most this·ε times the largest unknown
-    # chord steps (the generated drivers): after a step below `chord` times the largest unknown
+    # chord steps (every backend): after a step below `chord` times the largest unknown
     # the next reuse its J while each shrinks the step by `chord_shrink` or more; a chord step
     # below tol converges where its size times the contraction is below chord_error_eps·ε times
     # the largest unknown (a Newton step leaves its square, below rounding)

@@ -39,6 +39,7 @@ import copy
 import math
 import threading
 from collections.abc import Callable, Mapping
+from contextlib import suppress
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -54,13 +55,12 @@ from ..model.lambdified import NO_DOCSTRING, lambdify
 from ..model.sections import RelationTerms
 from ..model.special import arck, mpmath_namespace, sinr
 from .plate_relation import energy, notch_energy, notch_relation, relation
+from .reduced_solver import _red_equilibrium, _red_sway, _red_verdict
 from .stiffness import plate_stiffness
 
 #: The level's Newton, continuation and refusals (docs/numerics.md, "The solver table"): the
-#: generated drivers' too. float64 (numpy) arithmetic: its ε.
+#: generated drivers' too; the shared solver takes them at float64's ε (System).
 RULES = SOLVER.loaded
-_TOL = RULES.tol_eps * EPS64
-_STALLED = RULES.stalled_eps * EPS64
 #: How a refusal by the estimate begins (the caller may chain two half plates then).
 TRUNCATION = "truncation estimate"
 
@@ -275,8 +275,6 @@ class Reduced:
         # the last _eval: (its key, its result); Newton asks the residual and then the Jacobian
         # at the same point
         self._evaluated: tuple | None = None
-        # the last Newton step's J (acceptance and truncation estimate, solve)
-        self.last_jacobian = np.zeros((0, 0))
 
     def value(self, e) -> sp.Float:
         """`e` at the file's parameter values, a 30-digit Float."""
@@ -609,6 +607,11 @@ class Reduced:
         :attr:`given` by name (`theta` holds both)."""
         return [theta[a] for a in sorted(self.hinges)] + [theta[n] for n in self.given]
 
+    def _angles(self, theta) -> list:
+        """`angles(theta)`, or theta itself where it is that list already (the shared solver's
+        configurations, System)."""
+        return theta if isinstance(theta, list) else self.angles(theta)
+
     def _modules(self) -> list:
         """lambdify's modules, taken now: a callable's namespace holds the kernels derived so
         far."""
@@ -626,7 +629,7 @@ class Reduced:
     def _fn(self, key: str):
         """The lambdified function `key`: "plates" (x, th, t) -> (θ_c, p, f) of every plate and
         their x-derivatives; "res", "jac" (x, th, t, outputs) -> residual, ∂/∂x at fixed plate
-        outputs and ∂/∂outputs; "dev" -> the points' deviations; "angles" -> compliant angles;
+        outputs and ∂/∂outputs; "dev" -> the points' deviations;
         "loads" -> every hinge's (n_x, n_y, moment) at its M end; "energy" (θ, p, f, ε_a, ε_s)
         -> one plate's elastic energy (EI/l); "plate4", "plate2" (θ, p, f, ε_a, ε_s) -> the
         plate relation and its 9 partials."""
@@ -655,8 +658,6 @@ class Reduced:
                 dev = self._deviation(s, link, at)
                 exprs += [V.dot(d, dev), *dev]
             fn = self._lambdify(exprs, outs)
-        elif key == "angles":
-            fn = self._lambdify([self.th[a] + s["delta"][a] for a in sorted(self.hinges)])
         elif key == "loads":
             exprs = [v for a in sorted(self.hinges) for v in (*s["n"][a], s["mom"][a])]
             fn = self._lambdify(exprs, outs)
@@ -734,7 +735,7 @@ class Reduced:
     def _eval(self, x, theta: Mapping[int, float], t: float, order: int = 4, jac: bool = False):
         """Plate inputs, outputs and (with `jac`) the chain rule's pieces at (x, θ, t); the last
         point's kept (read only by the callers)."""
-        args = (list(map(float, x)), self.angles(theta), t)
+        args = (list(map(float, x)), self._angles(theta), t)
         key = (tuple(args[0]), tuple(args[1]), t, order)
         last = self._evaluated  # one read: another thread may replace it
         if last is not None and last[0] == key:
@@ -785,151 +786,71 @@ class Reduced:
         v = [float(u) for u in self._fn("dev")(*args, outs)[2 * len(self.points) :]]
         return {act[0]: tuple(v[3 * k : 3 * k + 3]) for k, act in enumerate(self.acts)}
 
-    # -- solving -------------------------------------------------------------------------------
-    def newton(self, x, theta, t, damp: bool = False) -> tuple[np.ndarray, int, bool]:
-        """Newton from x; (x, iterations, converged). A step that would turn a hinge by more
-        than max_turn fails (continuation takes over) or, with `damp`, is shortened."""
-        nu = len(self.unknowns)
-        prev = math.inf
-        for it in range(1, RULES.max_iter + 1):
-            try:
-                r = self.residual(x, theta, t)
-                jac = self.jacobian(x, theta, t)
-                # kept: the acceptance's sign and the truncation estimate's step read it
-                self.last_jacobian = jac
-                step = np.linalg.solve(jac, r)
-            except (np.linalg.LinAlgError, ValueError, ZeroDivisionError, OverflowError):
-                # a singular Jacobian, or a plate pushed past its buckling load (the kernels'
-                # DomainError) by the iterate: not this way
-                return x, it, False
-            turn = float(np.max(np.abs(step[:nu]))) * self.scale[0] if nu else 0.0
-            if turn > RULES.max_turn:
-                if not damp:
-                    return x, it, False
-                step = step * (RULES.max_turn / turn)
-            x = x - step
-            if not np.all(np.isfinite(x)):
-                return x, it, False
-            size, top = float(np.max(np.abs(step))), float(np.max(np.abs(x)))
-            # x is scaled (l/L, EI/(l L)): the whole vector sets the scale, so a δ that is zero
-            # by symmetry cannot block the test
-            if size <= _TOL * top or size == 0:
-                return x, it, True
-            if it > RULES.stall_after and size > RULES.stall_ratio * prev and size < _STALLED * top:
-                return x, it, True  # stalled at rounding
-            prev = size
-        return x, RULES.max_iter, False
-
-    def _sign(self, x, theta, t) -> float:
-        return float(np.sign(np.linalg.det(self.jacobian(x, theta, t))))
-
-    def _accept(self, x, theta, sign: float) -> bool:
-        """A converged x on the branch followed: det J (the last Newton step's, a step below
-        tol from x) of the same sign as at the unloaded state, every compliant angle within
-        (-π, π)."""
-        try:
-            same = float(np.sign(np.linalg.det(self.last_jacobian))) == sign
-            return same and self._plausible(x, theta)
-        except (ValueError, ZeroDivisionError, OverflowError):
-            return False
-
-    def _plausible(self, x, theta) -> bool:
-        """Every compliant hinge angle within (-π, π)."""
-        args = (list(map(float, x)), self.angles(theta), 1.0)
-        angles = np.array(self._fn("angles")(*args), dtype=float)
-        return bool(np.all(np.abs(angles) < math.pi))
+    # -- solving: symkin.physics.reduced_solver, the generated numpy modules' solver too ---------
+    @property
+    def system(self) -> System:
+        """This equilibrium as the shared solver's system (float64 arithmetic, its ε), with the
+        rules RULES holds now."""
+        return System(self)
 
     def solve(self, rigid: Callable[[float], Mapping[int, float]]) -> Answer:
         """The equilibrium at the inputs; `rigid(s)` gives the rigid hinge angles (by label) at
-        the inputs scaled by s (1: the configuration asked for, 0: as fabricated)."""
+        the inputs scaled by s (1: the configuration asked for, 0: as fabricated). Newton from
+        x = 0 at load factor 1, continuation where it fails, the refusals: the shared solver's
+        (symkin.physics.reduced_solver: _red_equilibrium, _red_verdict)."""
         theta = rigid(1.0)
-        zero = np.zeros(self.size)
-        if not self.size:
-            # every hinge an input of an open chain: the plates' loads follow from statics
-            answer = self._answer(zero, theta, 0, 1)
-            answer.theta, answer.solver = dict(theta), self
-            return answer
-        sign0 = self._sign(zero, theta, 0.0)
-        x, total, ok = self.newton(zero, theta, 1.0)
-        steps = 1
-        if ok:
-            ok = self._accept(x, theta, sign0)
-        if not ok:
-            # continuation: inputs and loads scaled together by s from the as-fabricated pose
-            # (x = 0 exact at s = 0); the predictor keeps the compliant angles and chord loads
-            s, ds, steps = 0.0, RULES.first_step, 0
-            th_s = rigid(0.0)
-            x = zero
-            sign = self._sign(x, th_s, 0.0)
-            ok = True
-            while s < 1:
-                if ds < RULES.smallest_step:
-                    ok = False
-                    break
-                s1 = min(1.0, s + ds)
-                th_1 = rigid(s1)
-                guess = x.copy()
-                for j, a in enumerate(self.unknowns):
-                    guess[j] = (th_s[a] + x[j] * self.scale[j] - th_1[a]) / self.scale[j]
-                xn, it, okn = self.newton(guess, th_1, s1)
-                total += it
-                if okn:
-                    okn = self._accept(xn, th_1, sign)
-                if okn:
-                    x, s, th_s, steps = xn, s1, th_1, steps + 1
-                    ds = min(RULES.largest_step, ds * RULES.step_growth)
-                else:
-                    ds *= RULES.step_cut
-        if not ok:
-            return Answer({}, x, total, steps, math.nan, math.nan, "no convergence")
-        answer = self._answer(x, theta, total, steps)
+        sy = self.system
+        with np.errstate(all="ignore"):  # NaN where an evaluation failed: a failed step
+            x, jac, ok, steps, total = _red_equilibrium(
+                sy, sy.column(theta), [], lambda k: lambda s: self.angles(rigid(s))
+            )
+        if not ok[0]:
+            return Answer(
+                {}, x[:, 0], int(total[0]), int(steps[0]), math.nan, math.nan, "no convergence"
+            )
+        answer = self._answer(x, theta, jac, int(total[0]), int(steps[0]))
         answer.theta, answer.solver = dict(theta), self
         return answer
 
     def compression(self, x, theta, t: float) -> float:
         """The worst plate's compression over its sway buckling load (its p̃ over −π²) at
         (x, θ, t), from the plates' inputs alone (no relation: past buckling too)."""
-        args = (list(map(float, x)), self.angles(theta), t)
+        args = (list(map(float, x)), self._angles(theta), t)
         ins = self._fn("plates")(*args)[0]
         worst = 0.0
         for k, (_, _, _, _, ea, es) in enumerate(self.segs):
-            p = float(ins[3 * k + 1])  # a half plate's: the plate's over segments²
-            g = 1 + float(ea - es) * p
-            # a notch's relation has its poles at α p̃ and β p̃ = −π² (model.sections)
+            # a half plate's p: the plate's over segments²; ε_a − ε_s in sympy, as before; a
+            # notch's relation has its poles at α p̃ and β p̃ = −π² (model.sections)
             terms = self.terms[k]
             factor = 1.0 if terms is None else max(terms.alpha, terms.beta)
-            worst = max(worst, -g * p * factor * self.segments**2 / math.pi**2)
+            w = _red_sway(float(ins[3 * k + 1]), float(ea - es), 0.0, self.segments) * factor
+            worst = max(worst, w)
         return worst
 
-    def _answer(self, x, theta, total: int, steps: int) -> Answer:
-        """The deviations at the solution x, the worst plate's compression and the truncation
-        estimate, refused where either is too large."""
-        dev = self.deviations(x, theta)
-        worst_p = self.compression(x, theta, 1.0)
-        # truncation estimate: one Newton step of the order-2 equations from the solution, with
-        # the last Newton step's J (at s = 1: the configuration's own θ)
-        x2 = x
-        if self.size:
-            x2 = x - np.linalg.solve(self.last_jacobian, self.residual(x, theta, 1.0, 2))
-        dev2 = self.deviations(x2, theta, 2)
-        e24 = 0.0
-        floor = self.estimate_floor(dev.values())
-        for name, d4 in dev.items():
-            size = max(math.hypot(*d4), floor)
-            if size > 0:
-                e24 = max(e24, math.dist(dev2[name], d4) / size)
-        estimate = RULES.est_factor * e24**2
+    def _answer(self, x, theta, jac, total: int, steps: int) -> Answer:
+        """The deviations at the solution x ((n, 1)) with jac its last Newton step's J ((1, n,
+        n)), the worst plate's compression and the truncation estimate, refused where either is
+        too large (_red_verdict)."""
+        sy = self.system
+        with np.errstate(all="ignore"):
+            dev, worst, estimate, status = _red_verdict(sy, x, sy.column(theta), [], jac)
+        worst_p, estimate = float(worst[0]), float(estimate[0])
         refused = ""
-        if worst_p >= RULES.p_limit:
+        if status[0] == 1:
             refused = f"a plate at {worst_p:.0%} of its sway buckling load"
-        elif estimate > RULES.est_limit:
+            if worst_p < RULES.p_limit:
+                refused = "a deviation that is not finite"
+        elif status[0] == 4:
             refused = f"{TRUNCATION} {estimate:.2%}"
+        x = x[:, 0]
+        names = sorted(self.points)
+        deviations = {name: (dev[2 * k, 0], dev[2 * k + 1, 0]) for k, name in enumerate(names)}
         loads, work = self._loads(x, theta)
         angles = {
             self.hinges[a].name: float(x[k] * self.scale[k]) for k, a in enumerate(self.unknowns)
         }
         return Answer(
-            dev,
+            deviations,
             x,
             total,
             steps,
@@ -941,14 +862,6 @@ class Reduced:
             energy=work,
             angle_deviations={h.name: angles.get(h.name, 0.0) for h in self.hinges.values()},
         )
-
-    def estimate_floor(self, deviations) -> float:
-        """The least deviation the truncation estimate measures a point's change against:
-        est_share of the largest point deviation and est_size times the mechanism's size
-        max(L, l_min) (a point near the centre of a link's rotation, or every point at rest but
-        for rounding, is judged against the motion's scale, not its own)."""
-        largest = max((math.hypot(*d) for d in deviations), default=0.0)
-        return max(RULES.est_share * largest, RULES.est_size_eps * EPS64 * self.length)
 
     @property
     def length(self) -> float:
@@ -976,6 +889,88 @@ class Reduced:
             for k, (_, _, ei, length, ea, es) in enumerate(self.segs)
         )
         return loads, work
+
+
+#: What a lambdified evaluation raises where the shared solver reads NaN: a singular matrix, a
+#: plate past its buckling load (the kernels' DomainError), an overflow.
+_FAILURES = (np.linalg.LinAlgError, ValueError, ZeroDivisionError, OverflowError)
+
+
+class System:
+    """A Reduced as symkin.physics.reduced_solver's system: each configuration of a batch (x's
+    columns, theta a list of (b,) arrays of `Reduced.angles`) evaluated alone by the lambdified
+    functions, in float64 (the rules at its ε); NaN where an evaluation raises."""
+
+    def __init__(self, red: Reduced) -> None:
+        self.red = red
+        self.size, self.scale, self.count = red.size, red.scale, red.segments
+        labels = sorted(red.hinges)
+        self.t = _Rules(
+            RULES.rules(EPS64),
+            unknowns=len(red.unknowns),
+            unknown_index=[labels.index(a) for a in red.unknowns],
+            forces=len(red.forces),
+            loads=bool(red.loads or red.forces),  # t enters the equations
+            length=red.length,
+        )
+
+    def column(self, theta: Mapping) -> list[np.ndarray]:
+        """One configuration's theta (by label, and the forces by name) as the solver's."""
+        return [np.array([v]) for v in self.red.angles(theta)]
+
+    def _each(self, x, theta, t):
+        for k in range(x.shape[1]):
+            yield k, x[:, k], [float(v[k]) for v in theta], float(t[k] if np.ndim(t) else t)
+
+    def system(self, x, theta, p, t) -> tuple[np.ndarray, np.ndarray]:
+        n, b = self.size, x.shape[1]
+        res, jac = np.full((n, b), np.nan), np.full((b, n, n), np.nan)
+        for k, xk, angles, tk in self._each(x, theta, t):
+            try:
+                r, j = self.red.residual(xk, angles, tk), self.red.jacobian(xk, angles, tk)
+            except _FAILURES:
+                continue
+            res[:, k], jac[k] = r, j
+        return res, jac
+
+    def residual(self, x, theta, p, t) -> np.ndarray:
+        res = np.full((self.size, x.shape[1]), np.nan)
+        for k, xk, angles, tk in self._each(x, theta, t):
+            with suppress(*_FAILURES):
+                res[:, k] = self.red.residual(xk, angles, tk)
+        return res
+
+    def compression(self, x, theta, p, t) -> np.ndarray:
+        worst = np.full(x.shape[1], np.nan)
+        for k, xk, angles, tk in self._each(x, theta, t):
+            with suppress(*_FAILURES):
+                worst[k] = self.red.compression(xk, angles, tk)
+        return worst
+
+    def _deviation(self, x, theta, order: int) -> np.ndarray:
+        dev = np.full((2 * len(self.red.points), x.shape[1]), np.nan)
+        for k, xk, angles, _ in self._each(x, theta, 1.0):
+            with suppress(*_FAILURES):
+                found = self.red.deviations(xk, angles, order)
+                dev[:, k] = [c for name in sorted(found) for c in found[name]]
+        return dev
+
+    def measure(self, x, theta, p) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        res = np.full((self.size, x.shape[1]), np.nan)
+        for k, xk, angles, _ in self._each(x, theta, 1.0):
+            with suppress(*_FAILURES):
+                res[:, k] = self.red.residual(xk, angles, 1.0, 2)
+        return self._deviation(x, theta, 4), self.compression(x, theta, p, 1.0), res
+
+    def deviation2(self, x, theta, p) -> np.ndarray:
+        return self._deviation(x, theta, 2)
+
+
+class _Rules:
+    """The solver's rules (SOLVER.loaded.rules at an ε) and the system's sizes, as attributes."""
+
+    def __init__(self, rules: Mapping[str, float | int], **more) -> None:
+        self.__dict__.update(rules, **more)
 
 
 def implicit_rates(jac, jo, block, dins_x, dr_by, dins_by, dy_x, dy_o, dy_by) -> np.ndarray:

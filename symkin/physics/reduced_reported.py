@@ -30,6 +30,7 @@ from ..core.settings import SOLVER
 from ..model.expressions import substitute
 from . import section_beams
 from .reduced import Answer, Reduced
+from .reduced_solver import _red_buckling
 from .reported import plate_stress, section_stress, stiffness_and_compliance
 from .result import ActuatorLoad, InputLoad, PlateStress
 from .stiffness import plate_stiffness
@@ -157,59 +158,16 @@ def plates(answer: Answer) -> dict[str, PlateStress]:
     return out
 
 
-def buckling_factor(
-    answer: Answer, limit: float = RULES.buckling_limit, solver: Reduced | None = None
-) -> float:
+def buckling_factor(answer: Answer, solver: Reduced | None = None) -> float:
     """The smallest factor t ≥ 1 on the file's loads, the inputs held, at which det J changes
     sign, a plate reaches its sway buckling load (the plate relation's pole) or the path ends
-    in a limit point (Newton fails ever closer to it); math.inf when none up to `limit`.
-    `solver`: the answer's derivation in other kernels (float64: tens of solves)."""
+    in a limit point (Newton fails ever closer to it); math.inf when none up to
+    RULES.buckling_limit: the shared solver's search (symkin.physics.reduced_solver's
+    _red_buckling, the generated numpy modules' too) on a batch of one. `solver`: the answer's
+    derivation in other kernels (float64: tens of solves)."""
     red = solver or answer.solver
     assert red is not None
-    theta = answer.theta
-
-    def state(x, t: float, guess) -> tuple[np.ndarray, bool, float]:
-        """(x, converged, det J's sign) at load factor t from `guess`."""
-        if red.size:
-            x, _, ok = red.newton(guess, theta, t)
-        else:
-            x, ok = guess, True
-        if not ok:
-            return x, False, 0.0
-        try:
-            if red.compression(x, theta, t) >= 1:
-                return x, True, 0.0  # a plate at its sway buckling load: as a sign change
-            sign = red._sign(x, theta, t) if red.size else 1.0
-        except (ValueError, ZeroDivisionError, OverflowError, np.linalg.LinAlgError):
-            return x, False, 0.0
-        return x, True, sign
-
-    x, t = answer.x, 1.0
-    x, ok, sign = state(x, t, x)
-    if not ok or sign == 0:
-        return t
-    previous = None
-    dt = RULES.buckling_step
-    while t < limit:
-        t1 = min(limit, t + dt)
-        guess = x if previous is None else x + (x - previous[0]) * (t1 - t) / (t - previous[1])
-        x1, ok, s1 = state(x, t1, guess)
-        if ok and s1 == sign:
-            previous, x, t = (x, t), x1, t1
-            dt = min(RULES.buckling_largest, dt * RULES.buckling_growth)
-            continue
-        if ok:
-            # a sign change (or a plate's sway load) in (t, t1): bisect
-            lo, hi, xl = t, t1, x
-            while hi - lo > RULES.buckling_locate * hi:
-                mid = (lo + hi) / 2
-                xm, okm, sm = state(xl, mid, xl)
-                if okm and sm == sign:
-                    lo, xl = mid, xm
-                else:
-                    hi = mid
-            return (lo + hi) / 2
-        if dt <= RULES.buckling_locate * t:
-            return t  # a limit point: Newton does not go on
-        dt *= RULES.buckling_cut
-    return math.inf
+    sy = red.system
+    x = np.asarray(answer.x, dtype=float)[:, None]
+    with np.errstate(all="ignore"):  # NaN where an evaluation failed: a failed step
+        return float(_red_buckling(sy, x, sy.column(answer.theta), [])[0])

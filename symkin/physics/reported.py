@@ -23,6 +23,7 @@ import numpy as np
 from ..core.settings import SOLVER
 from . import beams, section_beams
 from .result import ActuatorLoad, InputLoad, PlateStress
+from .stiffness_rule import _stiffness_compliance
 
 
 class System(Protocol):
@@ -120,26 +121,14 @@ def stiffness_and_compliance(
     hold rigidly in some direction, e.g. a fixed–guided plate's end whose rotation its input
     holds): K is None, and C's entries within ‖S‖/`singular` of zero (rounding) are exactly 0;
     else a direction far softer (the held mechanism free in it, at a buckling point): C is
-    None. A C not finite gives (None, None). The same rule as templates/c/reduced_report.c and
-    templates/numpy/reduced_report.py."""
+    None. A C not finite gives (None, None). The rule is symkin.physics.stiffness_rule's, which
+    the generated numpy modules hold too; templates/c/reduced_report.c's is its C twin."""
     c = np.asarray(compliance, dtype=float)
-    if not np.all(np.isfinite(c)):
-        return None, None
-    rows = np.array([force / length, force / length, force])[:, None]
+    rows = np.array([force / length, force / length, force])
     cols = np.array([1.0, 1.0, 1.0 / length])
-    scaled = c * rows * cols
-    size = float(np.abs(scaled).sum(axis=0).max())
-    try:
-        inverse = np.linalg.inv(scaled)
-    except np.linalg.LinAlgError:
-        inverse = None
-    if inverse is not None and np.all(np.isfinite(inverse)):
-        inverse_size = float(np.abs(inverse).sum(axis=0).max())
-        if size * inverse_size <= singular:
-            return np.linalg.inv(c).tolist(), c.tolist()
-        if size > inverse_size:  # far softer than the plates: K singular, no C
-            return (inverse * cols[:, None] * rows[:, 0]).tolist(), None
-    return None, np.where(np.abs(scaled) <= size / singular, 0.0, c).tolist()
+    stiff, comp = _stiffness_compliance(c[None], (rows, cols), singular)
+    k = None if np.isnan(stiff[0]).all() else stiff[0].tolist()
+    return k, None if np.isnan(comp[0]).all() else comp[0].tolist()
 
 
 def point_stiffness(

@@ -36,67 +36,22 @@ typedef struct {
     double unit_scale, rigid, pure_rotation;
 } sk_modes_tables;
 
-/* The compliance cmp (SK_MR x SK_MC, row-major, file units) at the solution q of theta, as
-   sk_reduced_report's rates. Returns 0, or 1 where J is singular. */
+/* The compliance cmp (SK_MR x SK_MC, row-major, file units) at the solution q of theta:
+   templates/c/reduced_report.c's sk_red_rates, as sk_reduced_report's rates. Returns 0, or 1
+   where J is singular. */
 static int sk_modes_compliance(const sk_mechanism *m, const sk_modes_tables *mt,
                                const double *theta, const double *q, double *cmp)
 {
     const sk_modes_variant *mv = mt->variants + (int)q[SK_NPAR + 2 * SK_NP];
-    const int nv = SK_MC, ny = SK_MR;
-    double s[SK_OUT], vals[3 * SK_RS], dout[3 * SK_RS], col[SK_RN + 1];
     sk_red_state st;
     sk_red r;
-    int n, ns, i, j, k, c, e;
+    double s[SK_OUT], vals[3 * SK_RS];
     if (sk_red_at_solution(m, theta, q, &r, &st, vals)) {
         return 1;
     }
-    n = r.v->size;
-    ns = r.v->plates_n;
     mv->fn(st.xt, theta, vals, q, s);
-    for (c = 0; c < nv; ++c) {
-        for (k = 0; k < ns; ++k) {
-            for (i = 0; i < 3; ++i) {
-                double sum = 0.0;
-                for (e = 0; e < 3; ++e) {
-                    sum += st.rel[12 * k + 3 + 3 * i + e] * s[mv->din_dv + (3 * k + e) * nv + c];
-                }
-                dout[3 * k + i] = sum;
-            }
-        }
-        for (i = 0; i < n; ++i) {
-            const double *jo = st.sys + n + n * n + i * 3 * ns;
-            double sum = s[mv->dR_dv + i * nv + c];
-            for (e = 0; e < 3 * ns; ++e) {
-                sum += jo[e] * dout[e];
-            }
-            col[i] = -sum;
-        }
-        if (n > 0) {
-            sk_lu_solve(n, st.lu, st.piv, col);
-        }
-        for (k = 0; k < ns; ++k) {
-            for (i = 0; i < 3; ++i) {
-                double sum = 0.0;
-                for (e = 0; e < 3; ++e) {
-                    const double *dinx = st.ins + 5 * ns + (3 * k + e) * n;
-                    for (j = 0; j < n; ++j) {
-                        sum += st.rel[12 * k + 3 + 3 * i + e] * dinx[j] * col[j];
-                    }
-                }
-                dout[3 * k + i] += sum;
-            }
-        }
-        for (i = 0; i < ny; ++i) {
-            double sum = s[mv->dy_dv + i * nv + c];
-            for (e = 0; e < n; ++e) {
-                sum += s[mv->dy_dx + i * n + e] * col[e];
-            }
-            for (e = 0; e < 3 * ns; ++e) {
-                sum += s[mv->dy_dout + i * 3 * ns + e] * dout[e];
-            }
-            cmp[i * nv + c] = sum;
-        }
-    }
+    sk_red_rates(&st, r.v->size, r.v->plates_n, s, mv->dR_dv, mv->din_dv, mv->dy_dx, mv->dy_dv,
+                 mv->dy_dout, SK_MR, SK_MC, cmp);
     return 0;
 }
 

@@ -368,7 +368,7 @@ static int sk_red_answer(const sk_red *r, const double *x, const double *theta,
     sk_red_values2(r, ins, vals);
     r->v->dev(xt, theta, vals, r->params, dev2);
     /* each point's change against its deviation, at least est_share of the largest one and
-       est_size times the mechanism's size (symkin.physics.reduced.Reduced.estimate_floor) */
+       est_size times the mechanism's size (symkin.physics.reduced_solver's _red_verdict) */
     for (i = 0; i < SK_RP; ++i) {
         const double size = hypot(dev[2 * i], dev[2 * i + 1]);
         if (size > least) {
@@ -397,8 +397,8 @@ static int sk_red_answer(const sk_red *r, const double *x, const double *theta,
     return 0;
 }
 
-/* One variant's solve (symkin.physics.reduced.Reduced.solve) into x and dev: 0, 1 refused, 2 no
-   convergence, 4 refused by the truncation estimate. */
+/* One variant's solve (symkin.physics.reduced_solver's _red_equilibrium) into x and dev: 0, 1
+   refused, 2 no convergence, 4 refused by the truncation estimate. */
 static int sk_red_solve(const sk_red *r, const double *inputs, const double *theta, double *x,
                         double *dev)
 {

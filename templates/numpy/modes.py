@@ -12,7 +12,7 @@ templates/numpy/reduced.py (and reduced_actuators.py with actuators).
 import math
 
 import numpy
-from reduced import _red_block, _red_column, _red_solutions  # the module holds them all
+from reduced import _red_rates, _red_solutions  # the module holds them all
 from reduced_actuators import _actuated_state
 from runtime import _blocks, _points, _pose, _prepare
 
@@ -63,7 +63,7 @@ def _modes_compliance(mech, theta, p, q, shape, good):
     """The compliance (size, 3 (C + P), 3 C) of the solved configurations (good: a flat mask),
     NaN elsewhere: rows the C centres' then the P shown points' (dx, dy, dphi) (file unit, rad),
     columns a virtual (F_x, F_y, M) at each centre (N, N u): dy/dv by the implicit-function
-    theorem on the reduced equilibrium (as reduced_report.py's rates)."""
+    theorem on the reduced equilibrium (reduced.py's _red_rates, as the report's rates)."""
     md = mech.modes
     nc, npt = len(md.links), len(md.points)
     out_c = numpy.full((good.size, 3 * (nc + npt), 3 * nc), numpy.nan)
@@ -72,31 +72,7 @@ def _modes_compliance(mech, theta, p, q, shape, good):
         mech, theta, p, q, shape, good, routines
     ):
         blocks = md.routines[solver.count - 1][1]
-        b, n, ns = where.size, solver.size, solver.plates
-        part = numpy.zeros((b, 3 * ns, 3 * ns))
-        for k in range(ns):
-            for i in range(3):
-                for c in range(3):
-                    part[:, 3 * k + i, 3 * k + c] = rel[k][3 + 3 * i + c]
-        dinx = numpy.zeros((b, 3 * ns, n))
-        if ns and n:
-            dinx = numpy.array([_red_column(v, b) for v in dins]).reshape(3 * ns, n, b)
-            dinx = dinx.transpose(2, 0, 1)
-        dr_v = _red_block(out, blocks["dR_dv"], b)
-        din_v = _red_block(out, blocks["din_dv"], b)
-        by_o = numpy.matmul(_red_block(out, blocks["dy_dout"], b), part)
-        total = _red_block(out, blocks["dy_dv"], b) + numpy.matmul(by_o, din_v)
-        if n:
-            rhs = dr_v + numpy.matmul(jo, numpy.matmul(part, din_v))
-            dx = numpy.full(rhs.shape, numpy.nan)
-            for c in range(b):  # one at a time: a singular J is that configuration's NaN
-                try:
-                    dx[c] = -numpy.linalg.solve(jac[c], rhs[c])
-                except numpy.linalg.LinAlgError:
-                    continue
-            dy_x = _red_block(out, blocks["dy_dx"], b) + numpy.matmul(by_o, dinx)
-            total = total + numpy.matmul(dy_x, dx)
-        out_c[where] = total
+        out_c[where] = _red_rates(solver, out, blocks, jac, jo, dins, rel, where.size)
     return out_c
 
 

@@ -1,20 +1,22 @@
 """symkin's numpy runtime for the `loaded` level (docs/physics.md, "`loaded`: Newton on the reduced
-equilibrium"): the reduced equilibrium of symkin.physics.reduced solved by Newton and continuation
-over the mechanism's loaded_* routines, with the same rules in the same float64 arithmetic. Only
-modules that hold the level hold it (templates/numpy/module.py.j2), after the runtime.
+equilibrium"): the reduced equilibrium of symkin.physics.reduced over the mechanism's loaded_*
+routines, solved by the solver the Python path runs (symkin/physics/reduced_solver.py: Newton,
+continuation, refusals, buckling search), which the module holds before this text; here its
+system (_Batch) and the driver over the variants. Only modules that hold the level hold it
+(templates/numpy/module.py.j2), after the runtime.
 """
 
-import math
-
 import numpy
-from runtime import _rigid_angles  # the module holds both: runtime.py
+from runtime import _rigid_angles  # the module holds them all: runtime.py and the solver
+
+from symkin.physics.reduced_solver import _red_equilibrium, _red_sway, _red_verdict
 
 # ---- symkin runtime: every generated module with the loaded level holds what follows ----
 
-# symkin reduced-equilibrium runtime (templates/numpy/reduced.py): Newton from x = 0 at load
-# factor 1, continuation in the inputs and loads together where Newton fails, the refusals (a
-# plate at P_LIMIT of its sway buckling load, the truncation estimate), two half plates per plate
-# where one relation is refused by its estimate; all configurations at once, each on its own.
+# symkin reduced-equilibrium runtime (templates/numpy/reduced.py): the system the solver above
+# (reduced_solver.py's _red_equilibrium, _red_verdict) runs on, over the generated routines, and
+# the driver: two half plates per plate where one relation is refused by its estimate; all
+# configurations at once, each on its own.
 
 
 class _LoadedTables:
@@ -42,30 +44,11 @@ def _red_column(v, b):
     return numpy.broadcast_to(numpy.asarray(v, dtype=float), (b,))
 
 
-def _red_signs(jac):
-    """det J's sign per configuration (jac: (b, n, n)): 1, -1, 0 or NaN."""
-    return numpy.sign(numpy.linalg.det(jac))
-
-
-def _red_solve(jac, res):
-    """J^-1 R per configuration (jac (b, n, n), res (n, b)) -> (n, b); NaN where J is singular."""
-    try:
-        return numpy.linalg.solve(jac, res.T[:, :, None])[:, :, 0].T
-    except numpy.linalg.LinAlgError:
-        # one singular J stops the stacked solve: each on its own (LAPACK's, as stacked)
-        out = numpy.full(res.shape, numpy.nan)
-        for k in range(res.shape[1]):
-            try:
-                out[:, k] = numpy.linalg.solve(jac[k], res[:, k])
-            except numpy.linalg.LinAlgError:
-                continue  # singular: NaN
-        return out
-
-
 class _Batch:
-    """One variant of the reduced equilibrium over b configurations at once: Newton on all of
-    them with a mask each, stacked solves; every step elementwise, so a configuration's answer
-    does not depend on the others in its batch."""
+    """One variant of the reduced equilibrium over b configurations at once, as the solver
+    (reduced_solver.py) takes a system: R and J by stacked routines, the compression, the
+    deviations; every step elementwise, so a configuration's answer does not depend on the
+    others in its batch."""
 
     def __init__(self, tables, variant, count):
         self.t, self.count = tables, count  # count: half plates per plate
@@ -162,114 +145,64 @@ class _Batch:
             )
         return res, numpy.ascontiguousarray(jac.transpose(2, 0, 1))
 
-    def newton(self, x, theta, p, t):
-        """Newton from x (n, b) at (theta, t), each configuration until it converges or fails
-        (a singular or non-finite J, a step turning a hinge by more than max_turn, a non-finite
-        iterate, too many steps), with reduced.c's chord steps (after a step below chord, R
-        alone with that step's J while each step shrinks tenfold): (x, converged, each one's
-        last full step's J, det J's sign at the first step); t a number or a (b,) array."""
-        tb, n, nu = self.t, self.size, self.t.unknowns
-        b = x.shape[1]
-        each = numpy.ndim(t) > 0  # a load factor per configuration: indexed as x is
-        if each:
-            t = numpy.asarray(t, dtype=float)
-        x, converged = x.copy(), numpy.zeros(b, dtype=bool)
-        last, first = numpy.zeros((b, n, n)), None
-        prev = numpy.full(b, math.inf)
-        chord = numpy.zeros(b, dtype=bool)
-        act = numpy.arange(b)
-        for it in range(1, tb.max_iter + 1):
-            c = chord[act]
-            step = numpy.zeros((n, act.size))
-            full = act[~c]
-            if full.size:
-                tf = t[full] if each else t
-                res, jac = self.system(
-                    x[:, full], [v[full] for v in theta], [v[full] for v in p], tf
-                )
-                last[full] = jac
-                if first is None:
-                    first = _red_signs(jac)  # the first step: every configuration's full
-                step[:, ~c] = _red_solve(jac, res)
-            if c.any():
-                k = act[c]
-                tk = t[k] if each else t
-                res = self.residual(x[:, k], [v[k] for v in theta], [v[k] for v in p], tk)
-                step[:, c] = _red_solve(last[k], res)
-            turn = numpy.max(numpy.abs(step[:nu]), axis=0) * self.scale[0] if nu else 0.0
-            xn = x[:, act] - step
-            fail = ~(turn <= tb.max_turn) | ~numpy.all(numpy.isfinite(xn), axis=0)
-            size = numpy.max(numpy.abs(step), axis=0)
-            top = numpy.max(numpy.abs(xn), axis=0)
-            # a Newton step leaves about its square; a chord step its size times the contraction
-            left = ~c | (size * size <= tb.chord_error * top * prev[act])
-            done = ((size <= tb.tol * top) & left) | (size == 0)
-            # stalled at rounding (a full step's: a slow chord step's is its J's, not rounding)
-            done |= (
-                ~c
-                & (it > tb.stall_after)
-                & (size > tb.stall_ratio * prev[act])
-                & (size < tb.stalled * top)
-            )
-            x[:, act] = xn
-            converged[act[done & ~fail]] = True
-            chord[act] = (size <= tb.chord * top) & (~c | (size <= tb.chord_shrink * prev[act]))
-            prev[act] = size
-            act = act[~done & ~fail]
-            if not act.size:
-                break
-        return x, converged, last, first
+    def compression(self, x, theta, p, t):
+        """The worst half plate's compression over its sway buckling load per configuration
+        (b,), from the half plates' inputs alone (no relation: past buckling too)."""
+        _, ins, _ = self._inputs(x, theta, p, t)
+        return self._worst(ins, x.shape[1])
 
-    def accept(self, x, theta, jac, sign):
-        """Converged x on the branch followed: det J (the last Newton step's) of the sign at the
-        unloaded state, every compliant angle within (-pi, pi) (theta's angles: the force
-        actuators' forces follow them)."""
-        ok = _red_signs(jac) == sign
-        for i, th in enumerate(theta[: len(theta) - self.t.forces]):
-            angle = th
-            for j, h in enumerate(self.t.unknown_index):
-                if h == i:
-                    angle = angle + x[j] * self.scale[j]
-            ok &= numpy.abs(angle) < math.pi
-        return ok
+    def _worst(self, ins, b):
+        worst = numpy.zeros(b)
+        for k in range(self.plates):
+            w = _red_sway(ins[5 * k + 1], ins[5 * k + 3], ins[5 * k + 4], self.count)
+            worst = numpy.where(w > worst, w, worst)
+        return worst
+
+    def measure(self, x, theta, p):
+        """At load factor 1: the deviation (2 per point, b) at order 4, the worst compression
+        (b,) and R (n, b) at order 2 (the truncation estimate's step)."""
+        b = x.shape[1]
+        args, ins, _ = self._inputs(x, theta, p, 1.0)
+        _, vals = self._relation(ins)
+        dev = numpy.array([_red_column(v, b) for v in self.dev_fn(args, theta, vals, p)])
+        res = None
+        if self.size:
+            sys = self.res_fn(args, theta, self._values2(ins), p)
+            res = numpy.array([_red_column(v, b) for v in sys])
+        return dev, self._worst(ins, b), res
+
+    def deviation2(self, x, theta, p):
+        """The deviation (2 per point, b) at order 2 (the truncation estimate's)."""
+        args, ins, _ = self._inputs(x, theta, p, 1.0)
+        vals = self._values2(ins)
+        return numpy.array([_red_column(v, x.shape[1]) for v in self.dev_fn(args, theta, vals, p)])
 
     def solve(self, inputs, theta, p, mech):
         """Every configuration (inputs, theta, p: lists of (b,) arrays): x (n, b), the deviation
         (2 per point, b) and a status each: 0, 1 refused or no convergence, 4 refused by the
-        truncation estimate. Newton from x = 0 on all; continuation one by one where it fails."""
-        tb, n, b = self.t, self.size, theta[0].shape[0]
-        x, jac = numpy.zeros((n, b)), numpy.zeros((b, n, n))
-        status = numpy.zeros(b, dtype=int)
-        if n:
-            sign0 = None
-            if tb.loads:
-                sign0 = _red_signs(self.system(x, theta, p, 0.0)[1])
-            xn, converged, jac, first = self.newton(x, theta, p, 1.0)
-            # without loads t enters nowhere: the first step's J is the unloaded state's
-            good = converged & self.accept(xn, theta, jac, first if sign0 is None else sign0)
-            x[:, good] = xn[:, good]
-            for k in numpy.flatnonzero(~good):
-                found = self.continuation(k, inputs, theta, p, mech)
-                if found is None:
-                    status[k] = 1
-                else:
-                    x[:, k], jac[k] = found
+        truncation estimate (reduced_solver.py's _red_equilibrium and _red_verdict)."""
+        b = theta[0].shape[0]
+
+        def rigid(k):
+            return self._rigid(k, inputs, theta, p, mech)
+
+        x, jac, ok, _, _ = _red_equilibrium(self, theta, p, rigid)
+        status = numpy.where(ok, 0, 1)
         dev = numpy.full((2 * len(mech.point_names), b), numpy.nan)
-        live = numpy.flatnonzero(status == 0)
+        live = numpy.flatnonzero(ok)
         if live.size:
-            dev[:, live], status[live] = self.answer(
-                x[:, live], [v[live] for v in theta], [v[live] for v in p], jac[live]
-            )
+            th, pl = [v[live] for v in theta], [v[live] for v in p]
+            dev[:, live], _, _, status[live] = _red_verdict(self, x[:, live], th, pl, jac[live])
         return x, dev, status
 
-    def continuation(self, k, inputs, theta, p, mech):
-        """Configuration k by continuation (inputs and loads scaled together by s from the
-        as-fabricated pose; the force actuators' forces at the end of theta are kept, the load
-        factor scales them): (x, the last Newton step's J), None where it does not converge."""
-        tb, n = self.t, self.size
+    def _rigid(self, k, inputs, theta, p, mech):
+        """Configuration k's rigid(s) for the continuation: theta (numbers) at its inputs scaled
+        by s, the force actuators' forces at its end kept (the load factor scales them); None
+        where the rigid linkage has no pose."""
+        tb = self.t
         th = [float(v[k]) for v in theta]
         forces = th[len(th) - tb.forces :]
-        pk = [v[k : k + 1] for v in p]
+        pk = [float(v[k]) for v in p]
         xi = [float(v[k]) for v in inputs]
 
         def rigid(s):
@@ -277,84 +210,11 @@ class _Batch:
                 return th
             with numpy.errstate(all="ignore"):
                 angles, good = _rigid_angles(
-                    mech,
-                    [numpy.array(v * s) for v in xi],
-                    [float(v[0]) for v in pk],
-                    numpy.array(True),
+                    mech, [numpy.array(v * s) for v in xi], pk, numpy.array(True)
                 )
             return [float(v) for v in angles] + forces if bool(good) else None
 
-        def column(values):
-            return [numpy.array([v]) for v in values]
-
-        s, ds = 0.0, tb.first_step
-        th_s = rigid(0.0)
-        if th_s is None:
-            return None
-        x = numpy.zeros((n, 1))
-        sign = _red_signs(self.system(x, column(th_s), pk, 0.0)[1])
-        jac = None
-        while s < 1:
-            if ds < tb.smallest_step:
-                return None
-            s1 = min(1.0, s + ds)
-            th_1 = rigid(s1)
-            okn = th_1 is not None
-            if okn:
-                guess = x.copy()
-                for j, i in enumerate(tb.unknown_index):
-                    guess[j] = (th_s[i] + x[j] * self.scale[j] - th_1[i]) / self.scale[j]
-                xn, conv, last, _ = self.newton(guess, column(th_1), pk, s1)
-                okn = bool(conv[0]) and bool(self.accept(xn, column(th_1), last, sign)[0])
-            if okn:
-                x, s, th_s, jac = xn, s1, th_1, last[0]
-                ds = min(tb.largest_step, ds * tb.step_growth)
-            else:
-                ds *= tb.step_cut
-        return x[:, 0], jac
-
-    def compression(self, ins, b):
-        """The worst half plate's compression over its sway buckling load per configuration
-        (b,), from the half plates' inputs alone (no relation: past buckling too)."""
-        worst = numpy.zeros(b)
-        for k in range(self.plates):
-            pk, ea, es = ins[5 * k + 1], ins[5 * k + 3], ins[5 * k + 4]
-            w = -(1 + (ea - es) * pk) * pk * self.count**2 / math.pi**2
-            worst = numpy.where(w > worst, w, worst)
-        return worst
-
-    def answer(self, x, theta, p, jac):
-        """The deviation at each solution x (n, b) and its status: 0, 1 where a plate is at
-        p_limit of its sway buckling load, 4 where the truncation estimate (one order-2 Newton
-        step with jac, the last Newton step's J) is above est_limit."""
-        tb, n, b = self.t, self.size, x.shape[1]
-        args, ins, _ = self._inputs(x, theta, p, 1.0)
-        _, vals = self._relation(ins)
-        dev = numpy.array([_red_column(v, b) for v in self.dev_fn(args, theta, vals, p)])
-        worst = self.compression(ins, b)
-        x2 = x
-        if n:
-            vals2 = self._values2(ins)
-            sys = self.res_fn(args, theta, vals2, p)
-            res = numpy.array([_red_column(v, b) for v in sys])
-            x2 = x - _red_solve(jac, res)
-        args2, ins2, _ = self._inputs(x2, theta, p, 1.0)
-        vals2 = self._values2(ins2)
-        dev2 = numpy.array([_red_column(v, b) for v in self.dev_fn(args2, theta, vals2, p)])
-        e24 = numpy.zeros(b)
-        # each point's change against its deviation, at least est_share of the largest one and
-        # est_size times the mechanism's size (reduced.py's Reduced.estimate_floor)
-        sizes = [numpy.hypot(dev[2 * k], dev[2 * k + 1]) for k in range(len(dev) // 2)]
-        largest = numpy.max(sizes, axis=0) if sizes else numpy.zeros(b)
-        least = numpy.maximum(tb.est_share * largest, tb.est_size * tb.length)
-        for k, size in enumerate(sizes):
-            size = numpy.maximum(size, least)
-            e = numpy.hypot(dev2[2 * k] - dev[2 * k], dev2[2 * k + 1] - dev[2 * k + 1]) / size
-            e24 = numpy.where((size > 0) & (e > e24), e, e24)
-        estimate = tb.est_factor * e24**2
-        status = numpy.where(~(estimate <= tb.est_limit), 4, 0)
-        refused = ~numpy.all(numpy.isfinite(dev), axis=0) | ~(worst < tb.p_limit)
-        return dev, numpy.where(refused, 1, status)
+        return rigid
 
 
 def _reduced_solve(mech, x, theta, p, ok):
@@ -455,3 +315,41 @@ def _red_solutions(mech, theta, p, q, shape, good, routines):
             out = fn(args, th, vals, pb)
         jo = _red_block(sys, (n + n * n, n, 3 * ns), b)
         yield where, solver, out, jac, jo, ins, dins, rel
+
+
+def _red_rates(solver, out, blocks, jac, jo, dins, rel, b):
+    """dy/dv (b, rows, cols) at the solutions of a variant (_red_solutions' solver, routine
+    output, J, dR/d(plates), the half plates' x-Jacobian and relation), from a routine's blocks
+    (dR_dv, din_dv, dy_dx, dy_dv, dy_dout) by the implicit-function theorem: dx/dv = -J^-1 (dR/dv
+    + dR/dout dout/dv), dy/dv = dy/dv + dy/dout dout/dv + (dy/dx + dy/dout dout/dx) dx/dv, dout
+    the relation's partials times the inputs' (reduced_report.py's rates, modes.py's compliance)."""
+    n, ns = solver.size, solver.plates
+    # the plate relation's partials by (theta_c, p, f), block diagonal
+    part = numpy.zeros((b, 3 * ns, 3 * ns))
+    for k in range(ns):
+        for i in range(3):
+            for c in range(3):
+                part[:, 3 * k + i, 3 * k + c] = rel[k][3 + 3 * i + c]
+    dinx = numpy.zeros((b, 3 * ns, n))
+    if ns and n:
+        dinx = numpy.array([_red_column(v, b) for v in dins]).reshape(3 * ns, n, b)
+        dinx = dinx.transpose(2, 0, 1)
+    dr_v = _red_block(out, blocks["dR_dv"], b)
+    din_v = _red_block(out, blocks["din_dv"], b)
+    by_o = numpy.matmul(_red_block(out, blocks["dy_dout"], b), part)
+    total = _red_block(out, blocks["dy_dv"], b) + numpy.matmul(by_o, din_v)
+    if n:
+        rhs = dr_v + numpy.matmul(jo, numpy.matmul(part, din_v))
+        try:
+            dx = -numpy.linalg.solve(jac, rhs)
+        except numpy.linalg.LinAlgError:
+            # one singular J stops the stacked solve: each on its own
+            dx = numpy.full(rhs.shape, numpy.nan)
+            for c in range(b):
+                try:
+                    dx[c] = -numpy.linalg.solve(jac[c], rhs[c])
+                except numpy.linalg.LinAlgError:
+                    continue  # singular: NaN
+        dy_x = _red_block(out, blocks["dy_dx"], b) + numpy.matmul(by_o, dinx)
+        total = total + numpy.matmul(dy_x, dx)
+    return total

@@ -10,16 +10,19 @@ its end loads with RK4. Only modules with the level's loaded_report<g> routines 
 import math
 
 import numpy
-from reduced import _Batch, _red_block, _red_column, _red_signs, _red_solutions  # it holds them
+from reduced import _Batch, _red_block, _red_rates, _red_solutions  # the module holds them all
 from runtime import _blocks, _points, _pose, _prepare
+
+from symkin.physics.reduced_solver import _red_buckling
+from symkin.physics.stiffness_rule import _stiffness_compliance
 
 # ---- symkin runtime: every generated module with the loaded level's report holds it ----
 
 # Its rules (symkin.core.settings.LoadedSettings) are the loaded tables' (mech.loaded): sections,
 # the stress samples per plate, one RK4 step each (against the Python path's Taylor series:
 # 5e-12 of the stress, tests/test_loaded_reported_codegen.py); singular, a point's scaled
-# compliance this ill-conditioned is singular (its K or C NaN: _stiffness_compliance);
-# buckling_*, the buckling search.
+# compliance this ill-conditioned is singular (its K or C NaN: stiffness_rule.py's rule);
+# buckling_*, the buckling search (reduced_solver.py's _red_buckling).
 
 
 def _evaluate_reported(mech, inputs, level, params, links, report=True, buckling=True):
@@ -131,38 +134,9 @@ def _reduced_report(mech, theta, p, q, ok, buckling=True):
         mech, theta, p, q, shape, good, routines
     ):
         blocks = rep.routines[solver.count - 1][1]
-        b, n, ns = where.size, solver.size, solver.plates
-        # the plate relation's partials by (theta_c, p, f), block diagonal
-        part = numpy.zeros((b, 3 * ns, 3 * ns))
-        for k in range(ns):
-            for i in range(3):
-                for c in range(3):
-                    part[:, 3 * k + i, 3 * k + c] = rel[k][3 + 3 * i + c]
-        dinx = numpy.zeros((b, 3 * ns, n))
-        if ns and n:
-            dinx = numpy.array([_red_column(v, b) for v in dins]).reshape(3 * ns, n, b)
-            dinx = dinx.transpose(2, 0, 1)
-        dr_v = _red_block(out, blocks["dR_dv"], b)
-        din_v = _red_block(out, blocks["din_dv"], b)
-        dy_o = _red_block(out, blocks["dy_dout"], b)
-        by_o = numpy.matmul(dy_o, part)
-        total = _red_block(out, blocks["dy_dv"], b) + numpy.matmul(by_o, din_v)
-        if n:
-            rhs = dr_v + numpy.matmul(jo, numpy.matmul(part, din_v))
-            try:
-                dx = -numpy.linalg.solve(jac, rhs)
-            except numpy.linalg.LinAlgError:
-                # one singular J stops the stacked solve: each on its own
-                dx = numpy.full(rhs.shape, numpy.nan)
-                for c in range(b):
-                    try:
-                        dx[c] = -numpy.linalg.solve(jac[c], rhs[c])
-                    except numpy.linalg.LinAlgError:
-                        continue  # singular: NaN
-            dy_x = _red_block(out, blocks["dy_dx"], b) + numpy.matmul(by_o, dinx)
-            total = total + numpy.matmul(dy_x, dx)
+        b = where.size
+        rates[where] = _red_rates(solver, out, blocks, jac, jo, dins, rel, b)
         ys[where] = _red_block(out, blocks["y"], b)[:, :, 0]
-        rates[where] = total
         stress[where] = _red_block(out, blocks["stress"], b)
     ok_flat = good
     result = {"inputs": {}, "stiffness": {}, "plates": {}}
@@ -202,54 +176,6 @@ def _reduced_report(mech, theta, p, q, ok, buckling=True):
     return result
 
 
-def _inverses(a):
-    """The inverse of every matrix of a (b, 3, 3) stack, NaN where one is singular."""
-    try:
-        return numpy.linalg.inv(a)
-    except numpy.linalg.LinAlgError:
-        out = numpy.full(a.shape, numpy.nan)
-        for c in range(a.shape[0]):
-            try:
-                out[c] = numpy.linalg.inv(a[c])
-            except numpy.linalg.LinAlgError:
-                continue  # singular: NaN
-        return out
-
-
-def _stiffness_compliance(c, scales, singular):
-    """(K, C) of every point compliance of a (b, 3, 3) stack, NaN where it does not exist, as
-    symkin.physics.reported.stiffness_and_compliance judges them: S = C scaled by `scales`
-    (its rows', its columns': F/L, F/L, F and 1, 1, 1/L), singular where its 1-norm times its
-    inverse's exceeds `singular` (or no inverse); then K NaN and C's entries within
-    |S|/singular of zero exactly 0 where |S| <= |S^-1| (a direction held rigidly), else C NaN
-    (a direction free); both NaN where C is not finite."""
-    b = c.shape[0]
-    stiff, comp = numpy.full((b, 3, 3), numpy.nan), numpy.full((b, 3, 3), numpy.nan)
-    live = numpy.flatnonzero(numpy.all(numpy.isfinite(c), axis=(1, 2)))
-    if not live.size:
-        return stiff, comp
-    rows, cols = scales
-    cl = c[live]
-    scaled = cl * rows[:, None] * cols
-    size = numpy.abs(scaled).sum(axis=1).max(axis=1)
-    inverse = _inverses(scaled)
-    invertible = numpy.all(numpy.isfinite(inverse), axis=(1, 2))
-    with numpy.errstate(invalid="ignore"):
-        inverse_size = numpy.abs(inverse).sum(axis=1).max(axis=1)
-    regular = invertible & (size * inverse_size <= singular)
-    free = invertible & ~regular & (size > inverse_size)
-    held = ~regular & ~free
-    if regular.any():
-        stiff[live[regular]] = numpy.linalg.inv(cl[regular])
-        comp[live[regular]] = cl[regular]
-    if free.any():
-        stiff[live[free]] = inverse[free] * cols[:, None] * rows  # K = S^-1 scaled back
-    if held.any():
-        small = numpy.abs(scaled[held]) <= size[held][:, None, None] / singular
-        comp[live[held]] = numpy.where(small, 0.0, cl[held])
-    return stiff, comp
-
-
 def _red_bucklings(mech, theta, p, q, shape, good):
     """The buckling factor (_red_buckling) of every configuration the loaded level solved
     (good: a flat mask of them), variant by variant on the variant's own solver as
@@ -269,87 +195,4 @@ def _red_bucklings(mech, theta, p, q, shape, good):
         x = numpy.array(flat(q.x[: solver.size], where)).reshape(solver.size, where.size)
         with numpy.errstate(all="ignore"):
             out[where] = _red_buckling(solver, x, flat(theta, where), flat(p, where))
-    return out
-
-
-def _red_state(solver, x, theta, p, t):
-    """reduced_reported.buckling_factor's state at load factors t ((k,) array) from the guesses
-    x (n, k): (x, converged, det J's sign at x; 0 where the worst plate's compression reaches
-    its sway buckling load, as _Batch.answer's, which the search takes for a sign change). A
-    non-finite det J is not converged (where the Python path's kernels raise)."""
-    n, k = solver.size, t.shape[0]
-    if n:
-        x, ok, _, _ = solver.newton(x, theta, p, t)
-    else:
-        ok = numpy.ones(k, dtype=bool)
-    sign = numpy.zeros(k)
-    live = numpy.flatnonzero(ok)
-    if not live.size:
-        return x, ok, sign
-    th, pl, tl, xl = [v[live] for v in theta], [v[live] for v in p], t[live], x[:, live]
-    _, ins, _ = solver._inputs(xl, th, pl, tl)
-    worst = solver.compression(ins, live.size)
-    found = _red_signs(solver.system(xl, th, pl, tl)[1]) if n else numpy.ones(live.size)
-    at_sway = worst >= 1  # no J there (past the relation's pole)
-    ok[live] = at_sway | numpy.isfinite(found)
-    sign[live] = numpy.where(at_sway, 0.0, found)
-    return x, ok, sign
-
-
-def _red_buckling(solver, x, theta, p):
-    """reduced_reported.buckling_factor on every configuration at once (x (n, b): each one's
-    solution at load factor 1): the smallest t >= 1, the inputs held, at which det J changes
-    sign, a plate reaches its sway buckling load or Newton cannot go on (a limit point); inf
-    when none below buckling_limit. Each configuration steps with its own t, step, x and
-    previous point (the same arithmetic, so the same steps as alone); the sign changes found
-    are then bisected together."""
-    tb = solver.t
-    limit, locate = tb.buckling_limit, tb.buckling_locate
-    b = x.shape[1]
-    out = numpy.full(b, numpy.nan)
-    t = numpy.ones(b)
-    x, ok, sign = _red_state(solver, x, theta, p, t)
-    out[~ok | (sign == 0)] = 1.0
-    act = numpy.flatnonzero(ok & (sign != 0))
-    dt = numpy.full(b, tb.buckling_step)
-    # the previous accepted (x, t) of each configuration (none before its first step)
-    x_prev, t_prev, has_prev = numpy.zeros_like(x), numpy.zeros(b), numpy.zeros(b, dtype=bool)
-    lo, hi, x_lo = numpy.zeros(b), numpy.zeros(b), x.copy()
-    bisect = numpy.zeros(b, dtype=bool)
-    while act.size:
-        ta, xa = t[act], x[:, act]
-        t1 = numpy.minimum(limit, ta + dt[act])
-        # the linear extrapolation from the previous accepted point, as the Python path's
-        ahead = xa + (xa - x_prev[:, act]) * (t1 - ta) / (ta - t_prev[act])
-        guess = numpy.where(has_prev[act], ahead, xa)
-        x1, ok1, s1 = _red_state(solver, guess, [v[act] for v in theta], [v[act] for v in p], t1)
-        same = ok1 & (s1 == sign[act])
-        change = ok1 & ~same  # a sign change (or a plate's sway load) in (t, t1): bisected below
-        ends = ~ok1 & (dt[act] <= locate * ta)  # Newton fails this close: a limit point
-        k = act[change]
-        lo[k], hi[k], x_lo[:, k], bisect[k] = t[k], t1[change], x[:, k], True
-        out[act[ends]] = ta[ends]
-        dt[act[~ok1 & ~ends]] *= tb.buckling_cut
-        k = act[same]
-        x_prev[:, k], t_prev[k], has_prev[k] = x[:, k], t[k], True
-        x[:, k], t[k] = x1[:, same], t1[same]
-        dt[k] = numpy.minimum(tb.buckling_largest, dt[k] * tb.buckling_growth)
-        act = act[same | (~ok1 & ~ends)]
-        past = t[act] >= limit
-        out[act[past]] = math.inf
-        act = act[~past]
-    k = numpy.flatnonzero(bisect)
-    while k.size:
-        wide = hi[k] - lo[k] > locate * hi[k]
-        done = k[~wide]
-        out[done] = (lo[done] + hi[done]) / 2
-        k = k[wide]
-        if not k.size:
-            break
-        mid = (lo[k] + hi[k]) / 2
-        xl = x_lo[:, k]
-        xm, okm, sm = _red_state(solver, xl, [v[k] for v in theta], [v[k] for v in p], mid)
-        good = okm & (sm == sign[k])
-        lo[k[good]], x_lo[:, k[good]] = mid[good], xm[:, good]
-        hi[k[~good]] = mid[~good]
     return out
