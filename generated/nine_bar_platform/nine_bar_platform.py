@@ -16552,12 +16552,12 @@ _MECHANISM = _Mechanism(
 
 
 def evaluate(
-    inputs, level=DEFAULT_LEVEL, params=None, links=True, report=True, buckling=True
+    inputs, level=DEFAULT_LEVEL, params=None, links=True, report=True, buckling=False
 ):
     """Deviation of the points at `level` for broadcast input arrays (see the module docstring);
     `links=False` leaves out the links' rotations (and any loop solve only they need),
-    `report=False` what `loaded` reports beyond the deviations, `buckling=False` its
-    "buckling" alone (its search: tens of Newton solves per configuration)."""
+    `report=False` what `loaded` reports beyond the deviations, `buckling=True` adds its
+    "buckling" (its search: tens of Newton solves per configuration)."""
     return _evaluate_reported(_MECHANISM, inputs, level, params, links, report, buckling)
 
 
