@@ -356,3 +356,21 @@ def test_eval_cli_at_loaded_on_a_notch():
     run = symkin_cli("eval", str(ROOT / "examples" / "notch_lever.toml"), "--input", "piezo=0.02")
     assert run.returncode == 0, run.stderr
     assert run.stdout.splitlines()[0].startswith("level: loaded (default")
+
+
+@pytest.mark.parametrize("backend", ["numpy", "c"])
+def test_eval_with_a_generated_backend_on_a_notch(backend):
+    """`eval --backend numpy|c` runs the generated evaluators, whose `loaded` takes uniform
+    plates: with no --level a notch file runs at `exact` and says why (as tolerance and sweep
+    do); asked for `loaded` it exits 2 naming the hinge (it was an internal error)."""
+    file = str(ROOT / "examples" / "notch_lever.toml")
+    run = symkin_cli("eval", file, "--input", "piezo=0.02", "--backend", backend)
+    assert run.returncode == 0, run.stderr
+    first = run.stdout.splitlines()[0]
+    assert first.startswith("level: exact (default") and "'O' is circular" in first, first
+    asked = symkin_cli(
+        "eval", file, "--input", "piezo=0.02", "--backend", backend, "--level", "loaded"
+    )
+    assert asked.returncode == 2, asked.stderr
+    assert "[[hinge]] 'O'" in asked.stderr and "internal error" not in asked.stderr
+    assert "uniform plates" in asked.stderr

@@ -49,7 +49,7 @@ def _eval(args: argparse.Namespace) -> str:
     from .output import evaluation_json, evaluation_text
 
     analysis = Analysis(build(load(args.file)))
-    choice = _level(args, analysis.mechanism)
+    choice = _level(args, analysis.mechanism, backends.get(args.backend).generated)
     result = evaluate(
         analysis,
         _pairs(args.input, "--input", args.file),
@@ -63,10 +63,9 @@ def _eval(args: argparse.Namespace) -> str:
 
 def _level(args: argparse.Namespace, mech, generated: bool = False) -> levels.Choice:
     """The level of eval, tolerance and sweep (docs/levels.md, "The default level"): --level,
-    or the file's default (for the `generated` evaluators: tolerance and sweep); args.level is
-    set to it. A kinematic level asked for on a file whose
-    plates all have stiffness data is run, with a one-line warning that it ignores their
-    forces."""
+    or the file's default (for the `generated` evaluators: tolerance, sweep, eval's numpy and
+    c backends); args.level is set to it. A kinematic level asked for on a file whose plates
+    all have stiffness data is run, with a one-line warning that it ignores their forces."""
     choice = levels.choose(mech, args.level, generated)
     args.level = choice.name
     ignored = levels.ignores_forces(mech, choice)

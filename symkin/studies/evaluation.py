@@ -26,6 +26,7 @@ from ..core.errors import AssemblyError, InputError, PlausibilityWarning
 from ..kinematics.analysis import Analysis
 from ..model.mechanism import Mechanism
 from ..physics.equilibrium import units_hint
+from ..physics.stiffness import plate_stiffness
 from . import generated, mpmath_sensitivity
 from .actuators import check_actuated_level, stroke_angles, stroke_sensitivity
 from .configuration import Configuration, configure, parameter_floats
@@ -50,8 +51,8 @@ def evaluate(
     with `sensitivity`, also the derivatives by every parameter and input
     (docs/sensitivity.md); `level` None: the mechanism's default (levels.default_for)."""
     mech = analysis.mechanism
-    level = levels.choose(mech, level).name
     caps = backends.get(backend)  # an unknown backend: exit 2, naming the choices
+    level = levels.choose(mech, level, caps.generated).name
     if sensitivity and not levels.get(level).sensitivity:
         having = [lv.name for lv in levels.LEVELS if lv.generated and lv.sensitivity]
         raise InputError(
@@ -67,6 +68,10 @@ def evaluate(
         check_actuated_level(mech, level, backend, sensitivity)
     if caps.generated:
         generated.check_level(level, caps)
+        if levels.get(level).needs_stiffness:
+            # the generated `loaded` takes uniform plates: a notch is refused here (exit 2,
+            # naming the hinge), not left to a plan derived without the level
+            plate_stiffness(mech, level)
     result = _dispatch(
         analysis, configure(analysis, inputs, level, params), backend, dps, sensitivity
     )
