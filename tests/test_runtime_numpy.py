@@ -12,7 +12,8 @@ import pytest
 from conftest import ROOT
 from runtime_toy import close, eliminate, toy, toy_partials
 
-from symkin.codegen.templating import runtime
+from symkin.codegen.templating import runtime, shared
+from symkin.kinematics.loop_newton import _newton_stop, _Rule
 
 PATH = ROOT / "templates" / "numpy" / "runtime.py"
 
@@ -117,17 +118,17 @@ def circle(t):
 )
 def test_newton_stop(rt, rule, change, size, previous, stop):
     with np.errstate(all="ignore"):
-        got = rt._newton_stop(rt._Rule(*rule), np.array(change), np.array(size), previous)
+        got = _newton_stop(_Rule(*rule), np.array(change), np.array(size), previous)
     assert bool(got) is stop
 
 
 def test_newton_per_element(rt):
-    rule = rt._Rule(40, 0.0, 1e-8, 1e-12, 0.5)
+    rule = _Rule(40, 0.0, 1e-8, 1e-12, 0.5)
     start = [np.array([1.0, 0.0, 30.0, 1.2]), np.array([1.5, 0.0, -7.0, 1.4])]
     ok = np.array([True, True, True, False])
     with np.errstate(all="ignore"):
         x, good, stopped = rt._newton_solve(
-            circle(1.0), [v.copy() for v in start], [0, 1], ok, rule, np.float64
+            rt._Arith(np.float64), circle(1.0), [v.copy() for v in start], [0, 1], ok, rule
         )
     root = math.sqrt(2.0)
     # element 1 starts where J is singular; element 3 is not ok to begin with
@@ -145,19 +146,19 @@ def test_newton_per_element(rt):
 
     with np.errstate(all="ignore"):
         y, good2, stopped2 = rt._newton_solve(
-            mapped, longer, [3, 1], ok, rule, np.float64, mapped(longer)
+            rt._Arith(np.float64), mapped, longer, [3, 1], ok, rule, mapped(longer)
         )
     assert good2.tolist() == good.tolist() and stopped2.tolist() == stopped.tolist()
     assert np.array_equal(y[3], x[0], equal_nan=True) and np.array_equal(y[1], x[1], equal_nan=True)
     assert all((y[i] == 100.0 + i).all() for i in (0, 2, 4))
     with np.errstate(all="ignore"):
         _, _, stopped = rt._newton_solve(
+            rt._Arith(np.float64),
             circle(1.0),
             [v.copy() for v in start],
             [0, 1],
             ok,
-            rt._Rule(1, 0.0, 1e-8, 1e-12, 0.5),
-            np.float64,
+            _Rule(1, 0.0, 1e-8, 1e-12, 0.5),
         )
     assert not stopped[[0, 2]].any()  # one step from there is not enough
 
@@ -174,12 +175,12 @@ def test_newton_stops_at_a_residual_at_rounding(rt):
             return [x[0] - (1e-17 if len(calls) % 2 else -1e-17), np.ones_like(x[0])]
 
         _, good, stopped = rt._newton_solve(
+            rt._Arith(np.float64),
             noisy,
             [np.zeros(1)],
             [0],
             np.ones(1, dtype=bool),
-            rt._Rule(40, 0.0, 1e-8, 1e-12, 0.5, residual),
-            np.float64,
+            _Rule(40, 0.0, 1e-8, 1e-12, 0.5, residual),
             scale=[1.0],
         )
         assert good.all() and bool(stopped[0]) is stops and len(calls) == evaluations
@@ -198,8 +199,17 @@ def test_continuation(rt, steps):
         return circle(state["t"])(x)
 
     x = [np.array([2.0, 2.0]), np.array([0.0, 0.0])]
+    # `steps` stages: the largest input `steps`, at most 1 per stage
     x, ok = rt._continuation(
-        stage, system, x, [0, 1], np.ones(2, dtype=bool), rt._Rule(30, 1e-10), steps, np.float64
+        rt._Arith(np.float64),
+        stage,
+        system,
+        x,
+        [0, 1],
+        np.ones(2, dtype=bool),
+        _Rule(30, 1e-10),
+        float(steps),
+        1.0,
     )
     assert stages == [s / steps for s in range(1, steps + 1)] and ok.all()
     assert np.abs(np.array(x) - math.sqrt(2.0)).max() < 1e-15
@@ -315,9 +325,9 @@ def mechanism(rt, closed: bool, dtype=np.float64):
             "dR_dtheta": (10, 2, 2),
             "dR_dv": (14, 2, 3),
         },
-        rigid_rule=rt._Rule(30, 1e-10),
-        polish_rule=rt._Rule(8, 0.0, 1e-8, 1e-12, 0.5),
-        exact_rule=rt._Rule(40, 0.0, 1e-8, 1e-12, 0.5, 2e-13),
+        rigid_rule=_Rule(30, 1e-10),
+        polish_rule=_Rule(8, 0.0, 1e-8, 1e-12, 0.5),
+        exact_rule=_Rule(40, 0.0, 1e-8, 1e-12, 0.5, 2e-13),
         continuation_step=0.05,
         angular=(0,),
         rest=(),
@@ -444,3 +454,7 @@ def test_generated_module_holds_the_runtime_verbatim():
     module = numpy_backend.emit(generated("four_bar").plan, "test")
     assert text in module and text in PATH.read_text()
     assert "\nimport" not in text  # the generated module's own imports serve it
+    # the Newton and continuation it runs: the Python path's own text, held once
+    newton = shared("symkin.kinematics.loop_newton")
+    assert newton in module and module.count("def _newton_solve(") == 1
+    assert "\nimport" not in newton and "\nfrom" not in newton

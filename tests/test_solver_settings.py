@@ -23,7 +23,7 @@ from symkin.codegen import pipeline, templating
 from symkin.core import settings
 from symkin.core.settings import SOLVER
 from symkin.physics import reduced, reduced_reported
-from symkin.studies import mpmath_evaluator
+from symkin.studies import configuration, mpmath_evaluator
 
 #: The numbers the runtimes held as literals before the table (templates/c/reduced.c,
 #: templates/numpy/reduced.py, symkin/physics/reduced.py, ...): the table must give them back
@@ -288,6 +288,52 @@ def test_the_numpy_module_holds_the_python_solver_verbatim(emitted):
     assert "def _red_newton(" in text and "import" not in text.split("\n", 1)[0]
     assert text in py
     assert py.count("def _red_newton(") == 1
+    # and the kinematic levels' Newton, the 40-digit evaluation's too
+    text = templating.shared("symkin.kinematics.loop_newton")
+    assert "def _newton_solve(" in text and text in py
+    assert py.count("def _newton_solve(") == 1 and py.count("class _Rule:") == 1
+
+
+def test_the_numpy_rules_are_the_tables_loop_rules(emitted):
+    """The module's three _Rule calls are SOLVER.loop_rules at float64, the arguments the
+    40-digit path hands the same Newton at its own ε."""
+    _, py = emitted
+    rules = SOLVER.loop_rules(SOLVER.float64)
+    for name in ("rigid", "polish", "exact"):
+        call = re.search(rf"^    {name}_rule=_Rule(\(.*?\)),", py, re.M)
+        assert call and ast.literal_eval(call[1]) == rules[name], name
+
+
+@pytest.mark.parametrize("dps", [40, 60])
+def test_the_40_digit_newton_runs_the_rules_at_its_epsilon(monkeypatch, dps):
+    """symkin.studies.mpmath_evaluator hands the shared Newton (symkin.kinematics.loop_newton)
+    the rules in units of its own ε: the exact level's and the polish's at `dps` digits."""
+    seen = []
+    solve = mpmath_evaluator._newton_solve
+
+    def recorded(ar, system, x, index, ok, rule, *args, **kwargs):
+        seen.append(rule)
+        return solve(ar, system, x, index, ok, rule, *args, **kwargs)
+
+    monkeypatch.setattr(mpmath_evaluator, "_newton_solve", recorded)
+    an = symkin.analyze(symkin.load(EXAMPLES / "four_bar.toml"))
+    with mpmath.workdps(dps):
+        eps = float(mpmath.mp.eps)
+    config = configuration.configure(an, {"A0": "0.1"}, "exact")
+    mpmath_evaluator.evaluator_of(an).values(config, dps)
+    polish, exact = seen  # the closed-form start polished, then the exact level's Newton
+    assert (polish.iterations, polish.converged, polish.stalled) == (
+        SOLVER.polish_mpmath,
+        SOLVER.ulps.converged * eps,
+        SOLVER.ulps.stalled * eps,
+    )
+    assert exact.iterations == SOLVER.exact_iterations
+    assert (exact.converged, exact.stalled, exact.residual) == (
+        SOLVER.ulps.converged * eps,
+        SOLVER.ulps.stalled * eps,
+        SOLVER.ulps.residual * eps,
+    )
+    assert exact.stall_ratio == polish.stall_ratio == SOLVER.stall_ratio
 
 
 # -- no solver literal left in a runtime file ------------------------------------------------------
@@ -369,6 +415,7 @@ RUNTIMES = [
     "templates/numpy/modes.py",
     "symkin/physics/reduced.py",
     "symkin/physics/reduced_solver.py",  # the loaded level's solver: Python's and numpy's
+    "symkin/kinematics/loop_newton.py",  # the kinematic levels' Newton: mpmath's and numpy's
     "symkin/physics/stiffness_rule.py",  # the report's stiffness rule: Python's and numpy's
     "symkin/physics/reduced_reported.py",
     "symkin/physics/equilibrium.py",  # no generated twin, its rules in the table too

@@ -401,6 +401,25 @@ class SolverSettings:
         """The rules at `dps` decimal digits: float64's multiples of ε at mpmath's ε."""
         return self.ulps.at(mpmath_eps(dps), self.polish_mpmath, self.consistent)
 
+    def loop_rules(self, tol: Tolerances) -> dict[str, tuple[int | float, ...]]:
+        """The loops' three Newton rules at the arithmetic's `tol`, as the arguments of the
+        shared Newton's _Rule (symkin.kinematics.loop_newton: iterations, tolerance, converged,
+        stalled, stall_ratio, residual): the rigid continuation's (rule 1: an absolute step),
+        the polish's (rule 2) and the exact level's (rule 3). The generated numpy modules and the
+        40-digit evaluation both take them from here."""
+        return {
+            "rigid": (self.rigid_iterations, tol.rigid),
+            "polish": (tol.polish, 0.0, tol.converged, tol.stalled, self.stall_ratio),
+            "exact": (
+                self.exact_iterations,
+                0.0,
+                tol.converged,
+                tol.stalled,
+                self.stall_ratio,
+                tol.residual,
+            ),
+        }
+
 
 #: The settings every solver reads.
 SOLVER = SolverSettings()

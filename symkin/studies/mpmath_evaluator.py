@@ -1,7 +1,9 @@
 """The `sympy` backend's solver: the derivation of one Analysis evaluated with mpmath at any
 working precision (docs/levels.md). The rigid angles from the closed-form dyads (or Newton with
 continuation from the as-fabricated pose), δ from the linear system A δ = −Φ Δz
-(`first_order`) or Newton on the exact closure from there (`exact`), then the point positions,
+(`first_order`) or Newton on the exact closure from there (`exact`) — the Newton, its stopping
+rule and the continuation are symkin.kinematics.loop_newton's, which the generated numpy modules
+run too, here in mpmath numbers (MPMATH) — then the point positions,
 deviations and link rotations; every configuration checked against the winding rule, the
 plates' limits and the redundant loops (symkin.core.settings). Its sensitivities are
 symkin.studies.mpmath_sensitivity's, its physical levels symkin.studies.physical's."""
@@ -10,16 +12,18 @@ from __future__ import annotations
 
 import math
 import weakref
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import mpmath
+import numpy
 import sympy as sp
 
 from ..core import levels
 from ..core.errors import AssemblyError
-from ..core.settings import SOLVER, Tolerances
+from ..core.settings import SOLVER
 from ..kinematics.analysis import Analysis
+from ..kinematics.loop_newton import _continuation, _newton_solve, _Rule
 from ..model.lambdified import mpmath_function
 from ..physics import reduced_sensitivity
 from .configuration import Configuration
@@ -182,34 +186,40 @@ class MpmathEvaluator:
         return theta, dyads
 
     def _polish(self, pvals: list, theta: dict) -> dict:
-        """Rule 2 of symkin.core.settings, as the generated evaluators run it: Newton on the
-        rigid closure from the rigid start until a step is at most `converged` times the
-        largest unknown angle (or stalls), at most `polish` steps.
-        The closed form's and the continuation's absolute 10^-40 would be no relative accuracy
-        for an input of 1e-100; each step squares the error."""
-        an, unknowns = self.an, self.kin.unknowns
+        """Rule 2 of symkin.core.settings, as the generated evaluators run it (the shared Newton,
+        symkin.kinematics.loop_newton): Newton on the rigid closure from the rigid start until a
+        step is at most `converged` times the largest unknown angle (or stalls), at most
+        `polish` steps. The closed form's and the continuation's absolute 10^-40 would be no
+        relative accuracy for an input of 1e-100; each step squares the error. A singular step
+        (an exact toggle) keeps the angles as they are (settings, rule 2)."""
+        unknowns = self.kin.unknowns
         tol = SOLVER.mpmath(mpmath.mp.dps)
         if not unknowns or tol.polish == 0:
             return theta
+        labels = sorted(theta)
+        x, _, _ = _newton_solve(
+            MPMATH,
+            self._rigid_system(pvals),
+            [theta[a] for a in labels],
+            [labels.index(a) for a in unknowns],
+            numpy.True_,
+            _Rule(*SOLVER.loop_rules(tol)["polish"]),
+        )
+        return dict(zip(labels, x))
+
+    def _rigid_system(self, pvals: list):
+        """The rigid closure at the parameters `pvals` as the shared Newton's system: the hinge
+        angles (label order) -> the residual, then ∂/∂θ of the unknowns row-major (A of the
+        first-order system: the same structure)."""
+        an = self.an
         args = [*an.params, *an.thetas]
         f = self.fn("rigid_residual", list(an.rigid_residual), args)
         jac = self.fn("rigid_jacobian", an.linear_system[0].tolist(), args)
-        theta = dict(theta)
-        previous = None
-        for _ in range(tol.polish):
-            values = [*pvals, *(theta[a] for a in sorted(theta))]
-            try:
-                step = mpmath.lu_solve(mpmath.matrix(jac(*values)), mpmath.matrix(f(*values)))
-            except ZeroDivisionError:
-                return theta  # an exact toggle: the angles as they are (settings, rule 2)
-            for k, a in enumerate(unknowns):
-                theta[a] = theta[a] - step[k]
-            size = max(abs(theta[a]) for a in unknowns)
-            change = mpmath.norm(step, mpmath.inf)
-            if _stopped(tol, change, size, previous):
-                break
-            previous = change
-        return theta
+
+        def system(theta: list) -> list:
+            return [*f(*pvals, *theta), *(v for row in jac(*pvals, *theta) for v in row)]
+
+        return system
 
     def _check_winding(self, pvals: list, theta: dict, ivals: dict) -> None:
         """The winding rule of symkin.core.settings: every loop's angle sum below
@@ -331,46 +341,42 @@ class MpmathEvaluator:
 
     def _rigid_newton(self, pvals: list, ivals: dict) -> dict:
         """Rigid angles by Newton with continuation from the as-fabricated pose (no closed
-        form: a group is not a dyad)."""
-        an, kin = self.an, self.kin
-        args = [*an.params, *an.thetas]
-        f = self.fn("rigid_residual", list(an.rigid_residual), args)
-        # ∂/∂θ of the rigid closure is A of the first-order system (the same structure).
-        jac = self.fn("rigid_jacobian", an.linear_system[0].tolist(), args)
-        steps = SOLVER.continuation_steps(max([abs(v) for v in ivals.values()] + [0]))
-        x = {a: mpmath.mpf(0) for a in kin.unknowns}
-        for step in range(1, steps + 1):
-            t = mpmath.mpf(step) / steps
-            theta = {**{a: v * t for a, v in ivals.items()}, **x}
-            x = self._newton(f, jac, pvals, theta, kin.unknowns)
-            if x is None:
-                at = ", ".join(
-                    f"{kin.hinges[a].name}={float(v * t):g}" for a, v in sorted(ivals.items())
-                )
-                raise AssemblyError(
-                    f"{self.mechanism.path}: the rigid loops cannot close at {at}: "
-                    f"{self._worst_loop('rigid', pvals, theta)} does not converge in "
-                    f"{SOLVER.rigid_iterations} Newton steps (outside the assembly range or "
-                    "at a toggle position)"
-                )
-        return {**ivals, **x}  # tracked continuously: the limits see |theta| > pi
+        form: a group is not a dyad), the shared Newton's (symkin.kinematics.loop_newton)."""
+        kin = self.kin
+        labels = sorted({*ivals, *kin.unknowns})
+        theta = [ivals.get(a, mpmath.mpf(0)) for a in labels]
+        inputs = [(labels.index(a), v) for a, v in ivals.items()]
+        staged: list = []
 
-    def _newton(self, f, jac, pvals: list, theta: dict, unknowns: Sequence[int]) -> dict | None:
-        """Newton iteration on the θ of `unknowns`; None when it does not converge."""
-        x = mpmath.matrix([theta[a] for a in unknowns])
-        tol = SOLVER.mpmath(mpmath.mp.dps).rigid
-        for _ in range(SOLVER.rigid_iterations):
-            values = [*pvals, *(theta[a] for a in sorted(theta))]
-            try:
-                step = mpmath.lu_solve(mpmath.matrix(jac(*values)), mpmath.matrix(f(*values)))
-            except ZeroDivisionError:
-                return None
-            x = x - step
-            for k, a in enumerate(unknowns):
-                theta[a] = x[k]
-            if mpmath.norm(step, mpmath.inf) <= tol:
-                return {a: x[k] for k, a in enumerate(unknowns)}
-        return None
+        def stage(t: float) -> None:
+            staged.append(mpmath.mpf(t))
+            for i, v in inputs:
+                theta[i] = v * staged[-1]
+
+        theta, ok = _continuation(
+            MPMATH,
+            stage,
+            self._rigid_system(pvals),
+            theta,
+            [labels.index(a) for a in kin.unknowns],
+            numpy.True_,
+            _Rule(*SOLVER.loop_rules(SOLVER.mpmath(mpmath.mp.dps))["rigid"]),
+            float(max([abs(v) for v in ivals.values()] + [0])),
+            SOLVER.continuation_step,
+        )
+        if not ok:
+            t = staged[-1]
+            at = ", ".join(
+                f"{kin.hinges[a].name}={float(v * t):g}" for a, v in sorted(ivals.items())
+            )
+            where = dict(zip(labels, theta))
+            raise AssemblyError(
+                f"{self.mechanism.path}: the rigid loops cannot close at {at}: "
+                f"{self._worst_loop('rigid', pvals, where)} does not converge in "
+                f"{SOLVER.rigid_iterations} Newton steps (outside the assembly range or "
+                "at a toggle position)"
+            )
+        return dict(zip(labels, theta))  # tracked continuously: the limits see |theta| > pi
 
     def _deltas(self, level: levels.Level, pvals: list, theta: dict) -> dict:
         """δ of the non-input hinges: zero (paper), linear (first_order) or Newton (exact), by
@@ -399,40 +405,33 @@ class MpmathEvaluator:
         args_d = [*args, *an.deltas]
         f = self.fn("residual", list(an.residual), args_d)
         jac = self.fn("jacobian", an.jacobian.tolist(), args_d)
-        x = mpmath.matrix([delta[a] for a in unknowns])
-        tol = SOLVER.mpmath(mpmath.mp.dps)
-        k = len(unknowns)
-        previous = None
-        for _ in range(SOLVER.exact_iterations):
-            vals = [*values, *x]
-            res, jm = mpmath.matrix(f(*vals)), mpmath.matrix(jac(*vals))
-            # (3b): the residual at the rounding level of its terms
-            floor = all(
-                abs(res[i])
-                <= tol.residual
-                * (scale[i] + mpmath.fsum(abs(jm[i, j]) * abs(x[j]) for j in range(k)))
-                for i in range(k)
-            )
-            try:
-                step = mpmath.lu_solve(jm, res)
-            except ZeroDivisionError:
-                raise AssemblyError(
-                    f"{self.mechanism.path}: singular compliant loop Jacobian "
-                    "(toggle position) for these inputs"
-                ) from None
-            x = x - step
-            size, change = mpmath.norm(x, mpmath.inf), mpmath.norm(step, mpmath.inf)
-            if floor or _stopped(tol, change, size, previous):
-                delta = {a: x[j] for j, a in enumerate(unknowns)}
-                self._check_consistency("exact", pvals, theta, delta, level.name)
-                return delta
-            previous = change
-        last = {a: x[j] for j, a in enumerate(unknowns)}
-        raise AssemblyError(
-            f"{self.mechanism.path}: at {self._at(theta)} the compliant closure did not "
-            f"converge in {SOLVER.exact_iterations} Newton steps: "
-            f"{self._worst_loop('exact', pvals, theta, last)} stays furthest from closing"
+
+        def system(x: list) -> list:
+            return [*f(*values, *x), *(v for row in jac(*values, *x) for v in row)]
+
+        x, ok, stopped = _newton_solve(
+            MPMATH,
+            system,
+            [delta[a] for a in unknowns],
+            range(len(unknowns)),
+            numpy.True_,
+            _Rule(*SOLVER.loop_rules(SOLVER.mpmath(mpmath.mp.dps))["exact"]),
+            scale=scale,
         )
+        delta = dict(zip(unknowns, x))
+        if not ok:
+            raise AssemblyError(
+                f"{self.mechanism.path}: singular compliant loop Jacobian "
+                "(toggle position) for these inputs"
+            )
+        if not stopped:
+            raise AssemblyError(
+                f"{self.mechanism.path}: at {self._at(theta)} the compliant closure did not "
+                f"converge in {SOLVER.exact_iterations} Newton steps: "
+                f"{self._worst_loop('exact', pvals, theta, delta)} stays furthest from closing"
+            )
+        self._check_consistency("exact", pvals, theta, delta, level.name)
+        return delta
 
 
 @dataclass(frozen=True)
@@ -454,13 +453,37 @@ def wrap(angle):
     return angle - two_pi * mpmath.nint(angle / two_pi)
 
 
-def _stopped(tol: Tolerances, change, size, previous) -> bool:
-    """The relative and stall parts of the stopping rule (symkin.core.settings, 3a and 3c), as
-    the runtimes' _newton_stop / sk_newton_stop: a step `change` at most `converged` times the
-    unknowns' size `size`, or stalled (at least stall_ratio times the `previous` step, None
-    before the second, and at most `stalled` times the size)."""
-    return change <= tol.converged * size or (
-        previous is not None
-        and change >= SOLVER.stall_ratio * previous
-        and change <= tol.stalled * size
-    )
+class _Mpmath:
+    """The arithmetic of the shared Newton (symkin.kinematics.loop_newton) for one
+    configuration in mpmath numbers at the working precision: mpmath's LU solve, masks
+    numpy.bool_."""
+
+    @staticmethod
+    def solve(a: list, b: list, ok) -> tuple[list, object]:
+        k = len(b)
+        if not ok:
+            return [mpmath.mpf(0)] * k, numpy.False_
+        try:
+            x = mpmath.lu_solve(
+                mpmath.matrix([a[i * k : i * k + k] for i in range(k)]), mpmath.matrix(b)
+            )
+        except ZeroDivisionError:  # singular
+            return [mpmath.mpf(0)] * k, numpy.False_
+        out = [x[i] for i in range(k)]
+        return out, numpy.bool_(all(mpmath.isfinite(v) for v in out))
+
+    @staticmethod
+    def where(mask, a, b):
+        return a if mask else b
+
+    @staticmethod
+    def largest(values: list):
+        sizes = [abs(v) for v in values]
+        return mpmath.nan if any(mpmath.isnan(v) for v in sizes) else max(sizes)
+
+    @staticmethod
+    def full(ok, value):
+        return mpmath.mpf(value)
+
+
+MPMATH = _Mpmath()
