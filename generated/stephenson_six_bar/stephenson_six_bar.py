@@ -48,10 +48,103 @@ DEFAULT_LEVEL = 'loaded'
 SENSITIVITY_LEVELS = ('paper', 'first_order', 'exact', 'loaded', )
 _DTYPE = numpy.float64
 
+# symkin loop Newton (symkin/kinematics/loop_newton.py, shared with the Python path): the
+# Newton driver with its stopping rule and the continuation of the kinematic levels, over an
+# arithmetic (_Arith: element arrays of the module's dtype).
+
+
+class _Rule:
+    """When a Newton iteration stops (symkin.core.settings): after `iterations` steps at most,
+    and once a step is at most `tolerance`, or at most `converged` times the largest unknown
+    (with converged > 0; a step onto all-zero unknowns goes on), or has stalled at
+    rounding: at least `stall_ratio` times the previous step and at most `stalled` times the
+    largest unknown; with `residual` > 0, also once every residual is at most `residual` times
+    the size of its terms (symkin.core.settings, 3b). The numbers: SOLVER.loop_rules."""
+
+    def __init__(
+        self, iterations, tolerance=0.0, converged=0.0, stalled=0.0, stall_ratio=0.0, residual=0.0
+    ):
+        self.iterations, self.tolerance, self.converged = iterations, tolerance, converged
+        self.stalled, self.stall_ratio, self.residual = stalled, stall_ratio, residual
+
+
+def _newton_stop(rule, change, size, previous, noise=False):
+    """Where Newton stops after a step `change` (largest entry), the unknowns now at most `size`
+    in magnitude, the previous step `previous` (inf before the second), `noise` where the
+    residuals were at rounding (_residual_noise): the one stopping test of every Newton
+    iteration."""
+    done = numpy.logical_or(change <= rule.tolerance, noise)
+    if rule.converged > 0.0:
+        done = done | (change <= rule.converged * size)
+    # 0 * inf is nan (a rule without the stall test, before the second step): the comparison is
+    # then false, as in C, and numpy need not warn about it
+    with numpy.errstate(invalid="ignore"):
+        stalled = (change >= rule.stall_ratio * previous) & (change <= rule.stalled * size)
+    return done | stalled
+
+
+def _residual_noise(out, x, scale, residual):
+    """Where every residual out[r] of a system (f, then its row-major Jacobian J) at x is at the
+    rounding level of its terms: |f_r| <= residual (scale_r + sum_j |J_rj x_j|)."""
+    k = len(x)
+    noise = True
+    for r in range(k):
+        terms = abs(scale[r]) + sum(abs(out[k + r * k + j] * x[j]) for j in range(k))
+        noise = noise & (abs(out[r]) <= residual * terms)
+    return noise
+
+
+def _newton_solve(ar, system, x, index, ok, rule, evaluated=None, scale=None):
+    """Newton on `system` (x -> its residual f, then its row-major Jacobian, as one list) from
+    the list x, stepping the unknowns x[i] for i in `index`, each configuration until `rule`
+    stops it; `evaluated`: the system at x, when it is known; `scale` (with rule.residual > 0,
+    index covering x): the size of each residual's constant terms. Returns x, ok (False where a
+    step is singular or not finite: the refusal) and where Newton stopped (not stopped within
+    rule.iterations steps: the other refusal)."""
+    k = len(index)
+    active = ok.copy()
+    previous = ar.full(ok, math.inf)
+    out = evaluated
+    for _ in range(rule.iterations):
+        if out is None:
+            out = system(x)
+        noise = False
+        if rule.residual > 0.0:
+            noise = _residual_noise(out, [x[i] for i in index], scale, rule.residual)
+        step, good = ar.solve(out[k:], out[:k], active)
+        out = None
+        ok = ok & (good | ~active)
+        active = active & good
+        for j, i in enumerate(index):
+            x[i] = ar.where(active, x[i] - step[j], x[i])
+        size = ar.largest([x[i] for i in index])
+        change = ar.largest(step)
+        done = _newton_stop(rule, change, size, previous, noise)
+        previous = ar.where(active, change, previous)
+        active = active & ~done
+        if not active.any():
+            break
+    return x, ok, ~active
+
+
+def _continuation(ar, stage, system, x, index, ok, rule, top, largest_step):
+    """Continuation from the as-fabricated pose: stage(t) at t = 1/steps, ..., 1, steps the
+    fewest that move no input by more than `largest_step` (`top`: the largest input's
+    magnitude), each followed by Newton on `system` from the previous stage's unknowns (as
+    _newton_solve); where one does not stop, not ok, and once none is ok it ends (the last
+    stage staged is where the last configuration failed)."""
+    steps = max(1, math.ceil(top / largest_step))
+    for s in range(1, steps + 1):
+        stage(s / steps)
+        x, ok, converged = _newton_solve(ar, system, x, index, ok, rule)
+        ok = ok & converged
+        if not ok.any():
+            break
+    return x, ok
 # symkin runtime (templates/numpy/runtime.py, docs/runtime.md; tested on its own by
-# tests/test_runtime_numpy.py): dense linear algebra over element arrays, the Newton and
-# continuation drivers, the evaluation at every level, the sensitivities and the blockwise
-# evaluation, all driven by the tables of one _Mechanism.
+# tests/test_runtime_numpy.py): dense linear algebra over element arrays, the arithmetic the
+# shared Newton and continuation run on (_Arith), the evaluation at every level, the
+# sensitivities and the blockwise evaluation, all driven by the tables of one _Mechanism.
 
 _TWO_PI = 2.0 * math.pi
 _GAUSS_MAX = 12  # systems up to this size: elementwise elimination, as the C evaluator does
@@ -78,21 +171,6 @@ class _Level:
     ):
         self.dev, self.linear, self.newton, self.loaded = dev, linear, newton, loaded
         self.sens, self.blocks, self.consistency = sens, blocks or {}, consistency
-
-
-class _Rule:
-    """When a Newton iteration stops (symkin.core.settings): after `iterations` steps at most,
-    and once a step is at most `tolerance`, or at most `converged` times the largest unknown
-    (with converged > 0; a step onto all-zero unknowns goes on), or has stalled at
-    rounding: at least `stall_ratio` times the previous step and at most `stalled` times the
-    largest unknown; with `residual` > 0, also once every residual is at most `residual` times
-    the size of its terms (symkin.core.settings, 3b)."""
-
-    def __init__(
-        self, iterations, tolerance=0.0, converged=0.0, stalled=0.0, stall_ratio=0.0, residual=0.0
-    ):
-        self.iterations, self.tolerance, self.converged = iterations, tolerance, converged
-        self.stalled, self.stall_ratio, self.residual = stalled, stall_ratio, residual
 
 
 def _value(v, dtype):
@@ -198,72 +276,25 @@ def _gauss(a, b, ok, k, m, dtype):
     return x, good
 
 
-def _newton_stop(rule, change, size, previous, noise=False):
-    """Where Newton stops after a step `change` (largest entry), the unknowns now at most `size`
-    in magnitude, the previous step `previous` (inf before the second), `noise` where the
-    residuals were at rounding (_residual_noise): the one stopping test of every Newton
-    iteration."""
-    done = (change <= rule.tolerance) | noise
-    if rule.converged > 0.0:
-        done = done | (change <= rule.converged * size)
-    # 0 * inf is nan (a rule without the stall test, before the second step): the comparison is
-    # then false, as in C, and numpy need not warn about it
-    with numpy.errstate(invalid="ignore"):
-        stalled = (change >= rule.stall_ratio * previous) & (change <= rule.stalled * size)
-    return done | stalled
+class _Arith:
+    """The arithmetic of the shared Newton (symkin/kinematics/loop_newton.py) over element
+    arrays of `dtype`: the solve is _solve's elimination, step for step the C evaluator's."""
 
+    def __init__(self, dtype):
+        self.dtype = dtype
 
-def _residual_noise(out, x, scale, residual):
-    """Where every residual out[r] of a system (f, then its row-major Jacobian J) at x is at the
-    rounding level of its terms: |f_r| <= residual (scale_r + sum_j |J_rj x_j|)."""
-    k = len(x)
-    noise = True
-    for r in range(k):
-        terms = numpy.abs(scale[r]) + sum(numpy.abs(out[k + r * k + j] * x[j]) for j in range(k))
-        noise = noise & (numpy.abs(out[r]) <= residual * terms)
-    return noise
+    def solve(self, a, b, ok):
+        return _solve(a, b, ok, 1, self.dtype)
 
+    where = staticmethod(numpy.where)
 
-def _newton_solve(system, x, index, ok, rule, dtype, evaluated=None, scale=None):
-    """Newton on `system` (x -> its residual f, then its row-major Jacobian, as one list) from
-    the list of arrays x, stepping the unknowns x[i] for i in `index`, each element until
-    `rule` stops it; `evaluated`: the system at x, when it is known; `scale` (with
-    rule.residual > 0, index covering x): the size of each residual's constant terms. Returns
-    x, ok (False where a Jacobian is singular or not finite) and where Newton stopped."""
-    k = len(index)
-    active = ok.copy()
-    previous = numpy.full(ok.shape, numpy.inf)
-    out = evaluated
-    for _ in range(rule.iterations):
-        if out is None:
-            out = system(x)
-        noise = False
-        if rule.residual > 0.0:
-            noise = _residual_noise(out, [x[i] for i in index], scale, rule.residual)
-        step, good = _solve(out[k:], out[:k], active, 1, dtype)
-        out = None
-        ok = ok & (good | ~active)
-        active = active & good
-        for j, i in enumerate(index):
-            x[i] = numpy.where(active, x[i] - step[j], x[i])
-        size = numpy.max(numpy.abs(numpy.array([x[i] for i in index])), axis=0)
-        change = numpy.max(numpy.abs(numpy.array(step)), axis=0)
-        done = _newton_stop(rule, change, size, previous, noise)
-        previous = numpy.where(active, change, previous)
-        active = active & ~done
-        if not active.any():
-            break
-    return x, ok, ~active
+    @staticmethod
+    def largest(values):
+        return numpy.max(numpy.abs(numpy.array(values)), axis=0)
 
-
-def _continuation(stage, system, x, index, ok, rule, steps, dtype):
-    """Continuation: stage(t) at t = 1/steps, ..., 1, each followed by Newton on `system` from
-    the previous stage's unknowns (as _newton_solve); where one does not stop, not ok."""
-    for s in range(1, steps + 1):
-        stage(s / steps)
-        x, ok, converged = _newton_solve(system, x, index, ok, rule, dtype)
-        ok = ok & converged
-    return x, ok
+    @staticmethod
+    def full(ok, value):
+        return numpy.full(ok.shape, value)
 
 
 def _rigid_angles(mech, x, params, ok):
@@ -279,6 +310,7 @@ def _rigid_angles(mech, x, params, ok):
     if not mech.unknown_index:
         return theta, ok
     k = len(mech.unknown_index)
+    ar = _Arith(dtype)
 
     def system(theta):
         # the residual, then A (rigid_res holds both)
@@ -310,16 +342,21 @@ def _rigid_angles(mech, x, params, ok):
             for i, value in mech.fixed:
                 theta[i] = numpy.full(shape, value * t, dtype=dtype)
 
-        steps = max(1, math.ceil(top / mech.continuation_step))
         theta, ok = _continuation(
-            stage, system, theta, mech.unknown_index, ok, mech.rigid_rule, steps, dtype
+            ar,
+            stage,
+            system,
+            theta,
+            mech.unknown_index,
+            ok,
+            mech.rigid_rule,
+            top,
+            mech.continuation_step,
         )
     out = system(theta)
     for n in mech.angular:
         ok = ok & (numpy.abs(out[n]) < mech.winding)
-    theta, ok, _ = _newton_solve(
-        system, theta, mech.unknown_index, ok, mech.polish_rule, dtype, out
-    )
+    theta, ok, _ = _newton_solve(ar, system, theta, mech.unknown_index, ok, mech.polish_rule, out)
     if mech.consistency_rigid is not None:
         ok = _consistent(mech, mech.consistency_rigid(theta, params), ok)
     return theta, ok
@@ -345,12 +382,12 @@ def _solve_closure(mech, linear, newton, theta, q, ok):
     if newton is None:
         return delta, ok
     delta, ok, converged = _newton_solve(
+        _Arith(mech.dtype),
         lambda delta: newton(theta, delta, q),
         delta,
         range(k),
         ok,
         mech.exact_rule,
-        mech.dtype,
         scale=lin[k * k + k :],
     )
     return delta, ok & converged
