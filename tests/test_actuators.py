@@ -529,14 +529,16 @@ def test_check_prints_a_cad_direction_as_its_value():
     assert "at (w/2, L) along (1, 0)" in check_text(symkin.analyze(symkin.loads(plain)).structure)
 
 
-def test_c_stroke_solves_meet_the_40_digit_path_alone_or_in_a_batch():
-    """The C evaluator's stroke solves (forward differences once, then secant steps, the
-    compliant solve from the rigid one's Jacobian, one more step once met; templates/c/
-    actuators.c) give the piezo amplifier's rigid and compliant B and its deviation within
-    3e-13 mm of the 40-digit path (B's coordinates are 7-8 mm) from 1e-4 to 0.05 mm of stroke,
-    and each row the same bits alone as in a batch: no warm start from a neighbour."""
+@pytest.mark.parametrize("backend", ["c", "numpy"])
+def test_stroke_solves_meet_the_40_digit_path_alone_or_in_a_batch(backend):
+    """The generated evaluators' stroke solves (forward differences once, then secant steps,
+    the compliant solve from the rigid one's Jacobian, one more step once met; templates/c/
+    actuators.c, and symkin/studies/stroke_solver.py in numpy) give the piezo amplifier's rigid
+    and compliant B and its deviation within 3e-13 mm of the 40-digit path (B's coordinates are
+    7-8 mm) from 1e-4 to 0.05 mm of stroke, and each row the same bits alone as in a batch: no
+    warm start from a neighbour."""
     an = symkin.analyze(symkin.load(ROOT / "examples" / "piezo_amplifier.toml"))
-    c = symkin.compile(an, "c", levels=["exact"], sensitivity=False)
+    c = symkin.compile(an, backend, levels=["exact"], sensitivity=False)
     strokes = [1e-4, 0.001, 0.013, 0.03, 0.05]
     batch = c.evaluate({"piezo": np.array(strokes)}, "exact")
     for k, s in enumerate(strokes):

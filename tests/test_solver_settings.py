@@ -23,7 +23,7 @@ from symkin.codegen import pipeline, templating
 from symkin.core import settings
 from symkin.core.settings import SOLVER
 from symkin.physics import reduced, reduced_reported
-from symkin.studies import configuration, mpmath_evaluator
+from symkin.studies import actuators, configuration, mpmath_evaluator, stroke_solver
 
 #: The numbers the runtimes held as literals before the table (templates/c/reduced.c,
 #: templates/numpy/reduced.py, symkin/physics/reduced.py, ...): the table must give them back
@@ -258,10 +258,10 @@ def test_the_numpy_module_holds_the_tables_numbers(emitted):
     rules = SOLVER.loaded.rules()
     for key, value in rules.items():
         assert same(ast.literal_eval(loaded[key]), value), key
-    strokes = SOLVER.strokes
-    assert same(ast.literal_eval(fields["stroke_iterations"]), strokes.iterations)
-    assert same(ast.literal_eval(fields["stroke_tolerance"]), strokes.tolerance_eps)
-    assert same(ast.literal_eval(fields["stroke_floor"]), strokes.floor)
+    strokes = ast.literal_eval(fields["stroke_rules"])
+    assert strokes.keys() == SOLVER.strokes.rules().keys()
+    for key, value in SOLVER.strokes.rules().items():
+        assert same(strokes[key], value), key
     tol = SOLVER.float64
     rigid = [ast.literal_eval(a) for a in fields["rigid_rule"].args]
     assert rigid == [SOLVER.rigid_iterations, tol.rigid]
@@ -334,6 +334,16 @@ def test_the_40_digit_newton_runs_the_rules_at_its_epsilon(monkeypatch, dps):
         SOLVER.ulps.residual * eps,
     )
     assert exact.stall_ratio == polish.stall_ratio == SOLVER.stall_ratio
+
+
+def test_the_numpy_module_holds_the_stroke_solve_verbatim(emitted):
+    """The stroke actuators' solve is written once for Python: the module holds its text, and
+    the sympy backend's solve (symkin.studies.actuators) calls the same function."""
+    _, py = emitted
+    text = templating.shared("symkin.studies.stroke_solver")
+    assert "def _stroke_solve(" in text and text in py
+    assert py.count("def _stroke_solve(") == 1
+    assert actuators._stroke_solve is stroke_solver._stroke_solve
 
 
 # -- no solver literal left in a runtime file ------------------------------------------------------
@@ -421,6 +431,7 @@ RUNTIMES = [
     "symkin/physics/equilibrium.py",  # no generated twin, its rules in the table too
     "symkin/studies/mpmath_evaluator.py",
     "symkin/studies/actuators.py",
+    "symkin/studies/stroke_solver.py",  # the stroke solve: Python's and numpy's
 ]
 #: An iteration counter compared with a number: a cap or a stall test's start (the table's).
 #: (0 and 1 tell the first step from the others.)

@@ -639,32 +639,136 @@ def _sensitivity_block(arrays, mech, level, p):
     return result
 
 
+# symkin stroke solve (symkin/studies/stroke_solver.py, shared with the Python path): Newton's
+# method on the strokes, one Jacobian by forward differences then secant (Broyden) updates;
+# all configurations at once, each on its own.
+
+
+def _stroke_size(r):
+    """The largest |r_i| per configuration, and whether every r_i is finite (a residual that
+    could not be evaluated is NaN)."""
+    size = numpy.abs(r[0])
+    finite = size < math.inf
+    for x in r[1:]:
+        a = numpy.abs(x)
+        size = numpy.where(a > size, a, size)
+        finite = finite & (a < math.inf)
+    return size, finite
+
+
+def _stroke_linear(jac, r):
+    """J^-1 r per configuration (jac: k lists of k arrays, r: k arrays) by Gaussian elimination
+    with partial pivoting, as the C runtime's sk_act_solve: (the solution, solvable), not
+    solvable where a pivot is zero or not finite."""
+    k = len(r)
+    rows = [list(row) + [x] for row, x in zip(jac, r)]
+    good = numpy.abs(r[0]) == numpy.abs(r[0])  # True (NaN: False)
+    for c in range(k):
+        for i in range(c + 1, k):
+            swap = numpy.abs(rows[i][c]) > numpy.abs(rows[c][c])
+            upper = [numpy.where(swap, u, v) for u, v in zip(rows[i], rows[c])]
+            rows[i] = [numpy.where(swap, v, u) for u, v in zip(rows[i], rows[c])]
+            rows[c] = upper
+        pivot = rows[c][c]
+        good = good & (numpy.abs(pivot) > 0) & (numpy.abs(pivot) < math.inf)
+        rows[c][c] = numpy.where(good, pivot, 1)
+        for i in range(c + 1, k):
+            f = rows[i][c] / rows[c][c]
+            rows[i] = [u - f * v for u, v in zip(rows[i], rows[c])]
+    out = [r[0]] * k
+    for c in reversed(range(k)):
+        v = rows[c][k]
+        for i in range(c + 1, k):
+            v = v - rows[c][i] * out[i]
+        out[c] = v / rows[c][c]
+    for v in out:
+        good = good & (numpy.abs(v) < math.inf)
+    return out, good
+
+
+def _stroke_solve(residual, theta, t, scale, jac=None, keep=None, first=None, fresh_polish=False):
+    """The surrogate angles `theta` (k arrays) at which residual(theta) vanishes (module
+    docstring): residual(theta) -> (r, found), r the k strokes' residuals d.(X - X0) - s (NaN
+    where the mechanism could not be evaluated), found what the caller keeps of the evaluation
+    (any value: with `keep`, keep(mask, new, old) merges two of them elementwise, and the
+    evaluation at the answer is returned). `t`: StrokeSettings.rules(ε); `scale`: the size the
+    tolerances are relative to; `jac`: (J, have) a Jacobian to start from where `have`;
+    `first`: residual(theta) when the caller has it; `fresh_polish`: the polish step from a
+    fresh Jacobian where none is at hand (else a start already met is the answer, as in C).
+    Returns (theta, met, (J, have), found): met where every stroke was met to the tolerance."""
+    k = len(theta)
+    tol, fine, step = t["tolerance"] * scale, t["polish"] * scale, t["step"]
+    r, found = residual(theta) if first is None else first
+    size, live = _stroke_size(r)
+    met = live & ~live
+    if jac is None:
+        jac = ([[r[0] * 0 for _ in range(k)] for _ in range(k)], met)
+    jac, have = [list(row) for row in jac[0]], jac[1] & live
+    for _ in range(t["iterations"]):
+        done = size <= tol
+        stop = live & done & ~((size > fine) & (have | fresh_polish))
+        met, live = met | stop, live & ~stop
+        if not numpy.any(live):
+            break
+        fresh = live & ~have
+        if numpy.any(fresh):
+            # forward differences at theta (backward where a forward step does not assemble)
+            for j in range(k):
+                up, _ = residual([v + step if i == j else v for i, v in enumerate(theta)])
+                _, ahead = _stroke_size(up)
+                if numpy.any(fresh & ~ahead):
+                    down, _ = residual([v - step if i == j else v for i, v in enumerate(theta)])
+                    up = [numpy.where(ahead, u, 2 * x - w) for u, x, w in zip(up, r, down)]
+                for i in range(k):
+                    jac[i][j] = numpy.where(fresh, (up[i] - r[i]) / step, jac[i][j])
+        move, solvable = _stroke_linear(jac, r)
+        have = numpy.where(live, solvable, have)
+        # the step, halved while a fresh Jacobian's grows the residual or leaves the assembly
+        # range (an updated one's is not halved: a fresh Jacobian instead)
+        pending, ok = live & have, live & ~live
+        new_theta, new_r, new_size, new_found = theta, r, size, found
+        for _ in range(t["halvings"]):
+            if not numpy.any(pending):
+                break
+            trial = [v - numpy.where(pending, m, 0) for v, m in zip(theta, move)]
+            got, got_found = residual(trial)
+            got_size, finite = _stroke_size(got)
+            shrinks = numpy.where(fresh | done, got_size < size, got_size <= t["secant"] * size)
+            good = pending & finite & shrinks
+            ok = ok | good
+            new_theta = [numpy.where(good, u, v) for u, v in zip(trial, new_theta)]
+            new_r = [numpy.where(good, u, v) for u, v in zip(got, new_r)]
+            new_size = numpy.where(good, got_size, new_size)
+            if keep is not None:
+                new_found = keep(good, got_found, new_found)
+            pending = pending & ~good & fresh & ~done
+            move = [numpy.where(pending, m * t["cut"], m) for m in move]
+        # met (the polish step kept or not), or a fresh Jacobian's step refused: finished
+        finish = live & (done | (fresh & ~ok))
+        met, live = met | (finish & done), live & ~finish
+        have = numpy.where(live & ~ok, False, have)  # an updated Jacobian's step refused
+        # Broyden: J += (dr - J dx) dx' / (dx' dx), dx = -move, dr = new r - r
+        moved = live & ok
+        dx = [u - v for u, v in zip(new_theta, theta)]
+        dd = dx[0] * dx[0]
+        for v in dx[1:]:
+            dd = dd + v * v
+        dd = numpy.where(moved & (dd > 0), dd, 1)
+        for i in range(k):
+            miss = new_r[i] - r[i]
+            for j in range(k):
+                miss = miss - jac[i][j] * dx[j]
+            for j in range(k):
+                jac[i][j] = numpy.where(moved, jac[i][j] + miss * dx[j] / dd, jac[i][j])
+        accept = ok & (moved | met)
+        theta = [numpy.where(accept, u, v) for u, v in zip(new_theta, theta)]
+        r = [numpy.where(accept, u, v) for u, v in zip(new_r, r)]
+        size = numpy.where(accept, new_size, size)
+        found = new_found  # it holds the trial's evaluation exactly where one was accepted
+    return theta, met, (jac, have), found
 # symkin actuators runtime (templates/numpy/actuators.py): the strokes to the surrogate hinges'
-# angles, twice (the rigid linkage and the compliant mechanism), then one evaluate at each.
-
-
-def _stroke_newton(residual, theta, tol, dtype, iterations):
-    """Newton's method elementwise on the strokes' residuals (a list of arrays) in the surrogate
-    angles `theta`, its Jacobian by central differences of step sqrt(eps), at most `iterations`
-    steps: (theta, converged)."""
-    k, step = len(theta), numpy.sqrt(numpy.finfo(dtype).eps)
-    for _ in range(iterations):
-        r = residual(theta)
-        done = numpy.all([numpy.abs(x) <= tol for x in r], axis=0)
-        if numpy.all(done | numpy.isnan(r[0])):
-            return theta, done
-        jac = numpy.empty(numpy.shape(r[0]) + (k, k), dtype=dtype)
-        for j in range(k):
-            up = residual([t + step * (i == j) for i, t in enumerate(theta)])
-            down = residual([t - step * (i == j) for i, t in enumerate(theta)])
-            for i in range(k):
-                jac[..., i, j] = (up[i] - down[i]) / (2 * step)
-        with numpy.errstate(all="ignore"):
-            rhs = numpy.stack(r, axis=-1)[..., None]
-            move = numpy.linalg.solve(jac, rhs)[..., 0] if k > 1 else rhs[..., 0] / jac[..., 0]
-        theta = [t - numpy.where(done, 0, move[..., j]) for j, t in enumerate(theta)]
-    r = residual(theta)
-    return theta, numpy.all([numpy.abs(x) <= tol for x in r], axis=0)
+# angles, twice (the rigid linkage and the compliant mechanism) by the stroke solve above
+# (symkin/studies/stroke_solver.py's _stroke_solve), its evaluations the answer's.
 
 
 def _action_places(mech, params):
@@ -679,14 +783,24 @@ def _action_scale(mech, at):
     """The stroke solves' scale: the largest coordinate of the points of action as fabricated,
     that at least the module's floor."""
     sizes = [float(numpy.nanmax(numpy.abs(numpy.asarray(c, dtype=float)))) for xy in at for c in xy]
-    return max(sizes + [mech.stroke_floor])
+    return max(sizes + [mech.stroke_rules["floor"]])
 
 
-def _stroke_poses(mech, actuators, drives, inputs, level, params):
+def _stroke_keep(mask, new, old):
+    """The evaluation `new` where `mask`, else `old` (evaluate()'s nested dicts of arrays)."""
+    if isinstance(new, dict):
+        return {key: _stroke_keep(mask, v, old[key]) for key, v in new.items()}
+    return numpy.where(mask, new, old)
+
+
+def _stroke_poses(mech, actuators, drives, inputs, level, params, links=False):
     """The kinematic inputs at which the rigid linkage and the compliant mechanism meet the
-    strokes (docs/levels.md, "Actuators"): (rigid, compliant, ok), each a dict of the input
-    hinges and the surrogate hinges' angles. Newton's method on the strokes elementwise over the
-    input arrays, its Jacobian by central differences."""
+    strokes (docs/levels.md, "Actuators"): (rigid, compliant, ok, ev_r, ev_c), rigid and
+    compliant each a dict of the input hinges and the surrogate hinges' angles, ev_r and ev_c
+    evaluate() at `level` there (with `links`). The shared stroke solve (stroke_solver.py's
+    _stroke_solve) elementwise over the input arrays: the rigid linkage's from the
+    as-fabricated pose, then the compliant mechanism's from the rigid one's angles and
+    Jacobian; its first and last evaluations are the answer's, nothing is evaluated twice."""
     kinematic = tuple(n for n in mech.levels if n in ("paper", "first_order", "exact"))
     if level not in kinematic:
         raise ValueError(f"with actuators, level must be one of {kinematic}, got {level!r}")
@@ -699,31 +813,48 @@ def _stroke_poses(mech, actuators, drives, inputs, level, params):
     strokes = [given[n] for n in names]
     surrogates = [a[1] for a in actuators]
     zero = numpy.zeros_like(arrays[0]) if arrays else mech.dtype(0)
-    # the rigid positions: at the cheapest level the module holds (every level gives them)
-    cheap = "paper" if "paper" in mech.levels else level
     at = _action_places(mech, params)
-    tol = mech.stroke_tolerance * numpy.finfo(mech.dtype).eps * _action_scale(mech, at)
+    scale = _action_scale(mech, at)
+    where = [mech.point_names.index(a[2]) for a in actuators]
 
-    def residual(theta, lv, kind):
-        res = _evaluate(mech, hinges | dict(zip(surrogates, theta)), lv, params, False)
+    def rigid_residual(theta):
+        # the rigid linkage alone (every level's rigid positions), as _pose solves it
+        arrays, p = _prepare(mech, hinges | dict(zip(surrogates, theta)), level, params)
+        ok = numpy.ones(arrays[0].shape, dtype=bool)
+        for a in arrays:
+            ok &= numpy.isfinite(a) & (numpy.abs(a) <= math.pi)
+        angles, ok = _rigid_angles(mech, [numpy.where(ok, a, 0.0) for a in arrays], p, ok)
+        for i, limit in mech.limits:
+            ok = ok & (numpy.abs(angles[i]) <= limit)
+        xy = mech.rigid_points(angles, p)
+        out = []
+        for (_, _, _, d), i, x0, s in zip(actuators, where, at, strokes):
+            r = d[0] * (xy[2 * i] - x0[0]) + d[1] * (xy[2 * i + 1] - x0[1]) - s
+            out.append(numpy.where(ok, r, numpy.nan))  # NaN: the linkage does not assemble
+        return out, None
+
+    def residual(theta):
+        res = _evaluate(mech, hinges | dict(zip(surrogates, theta)), level, params, links)
         out = []
         for (_, _, point, d), x0, s in zip(actuators, at, strokes):
-            r = res["points"][point][kind]
+            r = res["points"][point]["compliant"]
             out.append(d[0] * (r[0] - x0[0]) + d[1] * (r[1] - x0[1]) - s)
-        return out
-
-    def solve(theta, lv, kind):
-        return _stroke_newton(
-            lambda th: residual(th, lv, kind), theta, tol, mech.dtype, mech.stroke_iterations
-        )
+        return out, res
 
     start = [zero + numpy.asarray(s) * 0 for s in strokes]
-    rigid, ok_r = solve(start, cheap, "rigid")
-    compliant, ok_c = solve(rigid, level, "compliant")
+    t = mech.stroke_rules
+    with numpy.errstate(all="ignore"):
+        rigid, ok_r, jac, _ = _stroke_solve(rigid_residual, start, t, scale)
+        first = residual(rigid)
+        compliant, ok_c, _, ev_c = _stroke_solve(
+            residual, rigid, t, scale, jac=jac, keep=_stroke_keep, first=first
+        )
     return (
         hinges | dict(zip(surrogates, rigid)),
         hinges | dict(zip(surrogates, compliant)),
         ok_r & ok_c,
+        first[1],
+        ev_c,
     )
 
 
@@ -731,12 +862,9 @@ def _actuated(mech, actuators, drives, shown, inputs, level, params, links):
     """The module's evaluate() for a mechanism driven by stroke actuators (docs/levels.md,
     "Actuators"): each actuator's surrogate hinge takes the angle at which the rigid point of
     action has moved by the stroke along its line, and separately the angle at which the
-    compliant point has (Newton's method, its Jacobian by central differences); the deviation
-    is compliant - rigid, each at its own angles: the rigid motion between them plus the
-    level's deviation at the compliant ones."""
-    rigid, compliant, ok = _stroke_poses(mech, actuators, drives, inputs, level, params)
-    ev_r = _evaluate(mech, rigid, level, params, links)
-    ev_c = _evaluate(mech, compliant, level, params, links)
+    compliant point has (_stroke_poses); the deviation is compliant - rigid, each at its own
+    angles: the rigid motion between them plus the level's deviation at the compliant ones."""
+    _, _, ok, ev_r, ev_c = _stroke_poses(mech, actuators, drives, inputs, level, params, links)
     ok = ev_r["ok"] & ev_c["ok"] & ok
     out = {"points": {}, "ok": ok}
     for n in shown:
@@ -768,7 +896,7 @@ def _actuated_sensitivity(mech, actuators, drives, shown, inputs, level, params)
     - X0(y)) - s = 0, X the point of action (rigid, or rigid + deviation), X0 its as-fabricated
     place, so dv/dy = -(dg/dv)^-1 dg/dy for every parameter, input hinge and stroke y; the
     derivatives at fixed kinematic inputs come from sensitivity_full at the two poses."""
-    rigid, compliant, ok = _stroke_poses(mech, actuators, drives, inputs, level, params)
+    rigid, compliant, ok, _, _ = _stroke_poses(mech, actuators, drives, inputs, level, params)
     names = [a[0] for a in actuators]
     surrogates = [a[1] for a in actuators]
     k = len(actuators)
@@ -1760,10 +1888,10 @@ def _red_bucklings(mech, theta, p, q, shape, good):
 
 
 # symkin loaded-actuators runtime (templates/numpy/reduced_actuators.py): the rigid linkage at
-# the strokes (Newton on the surrogate angles), the reduced equilibrium with the surrogates free
-# and the force actuators' forces after the rigid angles (reduced.py's _Batch keeps them through
-# its continuation), and for a force actuator the rigid linkage at the stroke the force
-# produced, which the deviations are taken against.
+# the strokes (the shared stroke solve on the surrogate angles), the reduced equilibrium with
+# the surrogates free and the force actuators' forces after the rigid angles (reduced.py's
+# _Batch keeps them through its continuation), and for a force actuator the rigid linkage at
+# the stroke the force produced, which the deviations are taken against.
 
 
 def _rigid_at(mech, kinematic, params):
@@ -1782,21 +1910,23 @@ def _rigid_at(mech, kinematic, params):
 
 def _rigid_strokes(mech, actuators, hinges, strokes, params, start):
     """The surrogate angles at which the rigid point of action of every actuator has moved by
-    its stroke along its line from its as-fabricated place (docs/levels.md, "Actuators"):
-    actuators.py's _stroke_newton; (angles, ok)."""
+    its stroke along its line from its as-fabricated place (docs/levels.md, "Actuators"): the
+    shared stroke solve (stroke_solver.py's _stroke_solve) from `start`; (angles, ok)."""
     surrogates = [a[1] for a in actuators]
     where = [mech.point_names.index(a[2]) for a in actuators]
     at = _action_places(mech, params)
-    tol = mech.stroke_tolerance * numpy.finfo(mech.dtype).eps * _action_scale(mech, at)
 
     def residual(theta):
-        rigid = _rigid_at(mech, hinges | dict(zip(surrogates, theta)), params)[2]
+        _, _, rigid, ok, _ = _rigid_at(mech, hinges | dict(zip(surrogates, theta)), params)
         out = []
         for (_, _, _, d), i, x0, s in zip(actuators, where, at, strokes):
-            out.append(d[0] * (rigid[2 * i] - x0[0]) + d[1] * (rigid[2 * i + 1] - x0[1]) - s)
-        return out
+            r = d[0] * (rigid[2 * i] - x0[0]) + d[1] * (rigid[2 * i + 1] - x0[1]) - s
+            out.append(numpy.where(ok, r, numpy.nan))  # NaN: the linkage does not assemble
+        return out, None
 
-    return _stroke_newton(residual, list(start), tol, mech.dtype, mech.stroke_iterations)
+    t, scale = mech.stroke_rules, _action_scale(mech, at)
+    angles, ok, _, _ = _stroke_solve(residual, list(start), t, scale)
+    return angles, ok
 
 
 def _actuated_state(mech, actuators, forces, drives, inputs, params, resolve=False):
@@ -9189,9 +9319,9 @@ def _plate_eps4(plate):
 _MECHANISM = _Mechanism(
     input_names=_ANGLES, pruned_inputs=PRUNED_INPUTS, parameter_names=tuple(PARAMETERS),
     hinge_names=HINGES, link_names=LINKS, point_names=_POINTS, parameters=parameters,
-    # the stroke solves (symkin.core.settings.StrokeSettings): steps, tolerance in units of
-    # the dtype's epsilon times the points of action's largest coordinate, that at least floor
-    stroke_iterations=40, stroke_tolerance=64.0, stroke_floor=1e-300,
+    # the stroke solves' rules (symkin.core.settings.StrokeSettings.rules at the dtype's ε): the
+    # tolerances times the points of action's largest coordinate as fabricated, at least floor
+    stroke_rules={'iterations': 40, 'halvings': 40, 'cut': 0.5, 'tolerance': 1.4210854715202004e-14, 'floor': 1e-300, 'step': 1.4901161193847656e-08, 'polish': 2.220446049250313e-16, 'secant': 0.5},
     action_at=_action_at,  # where each stroke is measured from: its point of action as fabricated
     dtype=_DTYPE, n_theta=4, n_variables=6, n_dyads=1,
     input_index=(0, ),

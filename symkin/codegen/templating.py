@@ -97,6 +97,7 @@ SHARED = (
     "symkin.kinematics.loop_newton",
     "symkin.physics.reduced_solver",
     "symkin.physics.stiffness_rule",
+    "symkin.studies.stroke_solver",
 )
 
 

@@ -199,31 +199,25 @@ class LoadedSettings:
 
 @dataclass(frozen=True)
 class StrokeSettings:
-    """The stroke actuators' solves (docs/levels.md, "Actuators"): Newton on the strokes in the
-    surrogate hinges' angles, its Jacobian by central differences of step √ε in the numpy
-    evaluators (templates/numpy/actuators.py and reduced_actuators.py) and at mpmath in
-    symkin.studies.actuators; in C (templates/c/actuators.c) by forward differences of step √ε
-    once, then secant (Broyden) updates, the compliant solve from the rigid one's Jacobian."""
+    """The stroke actuators' solves (docs/levels.md, "Actuators"), written once for Python
+    (symkin.studies.stroke_solver: the sympy backend's solve in mpmath and the generated numpy
+    modules') and once in C (templates/c/actuators.c): Newton on the strokes in the surrogate
+    hinges' angles, its Jacobian by forward differences of step √ε once, then secant (Broyden)
+    updates, the compliant solve from the rigid one's Jacobian (numpy and C)."""
 
-    iterations: int = 40  # Newton steps at most (the generated evaluators)
-    halvings: int = 40  # a step halved at most this often while it grows the residual (C, mpmath)
+    iterations: int = 40  # Newton steps at most
+    # a fresh Jacobian's step halved at most this often while it grows the residual ...
+    halvings: int = 40
     cut: float = 0.5  # ... by this factor
     tolerance_eps: float = 64.0  # strokes met to this·ε of the points of action's largest place
     floor: float = 1e-300  # that coordinate at least this (a mechanism at the origin)
     # a met stroke whose residual is above this·ε of that coordinate takes one more step (kept
-    # where it shrinks the residual): the secant steps of the generated evaluators' solves
-    # (templates/c/actuators.c) stop nearer the rounding, as Newton's quadratic last step did
+    # where it shrinks the residual): the secant steps stop nearer the rounding, as Newton's
+    # quadratic last step did
     polish_eps: float = 1.0
     # ... and a step from an updated (secant) Jacobian is kept where it shrinks the residual to
-    # this fraction of it; else the Jacobian is made afresh by differences (C)
+    # this fraction of it; else the Jacobian is made afresh by differences
     secant: float = 0.5
-    # the 40-digit (mpmath) solve of the sympy backend
-    mpmath_iterations: int = 60  # Newton steps at most
-    mpmath_step_digits: int = 7  # the central differences' step: 10^-this
-    # the strokes are met to 10^(digits_lost − dps) of the mechanism's size, but no closer than
-    # 10^-float_digits: the surrogate angles reach the evaluators as inputs, which hold a double
-    mpmath_digits_lost: int = 5
-    mpmath_float_digits: int = 15
     # a force actuator's rigid reference (symkin.studies.physical, "Actuators at loaded"):
     # solved again at most this often, until its point moves along its line by at most
     # reference_eps·ε of the mechanism's size L
@@ -247,6 +241,16 @@ class StrokeSettings:
             "polish": self.polish_eps * eps,
             "secant": self.secant,
         }
+
+    def precision_rules(self, precision: str) -> dict[str, float | int]:
+        """The rules of a generated numpy module of `precision` ('float64' or 'float32')."""
+        return self.rules({"float64": EPS64, "float32": EPS32}[precision])
+
+    def mpmath_rules(self, dps: int) -> dict[str, float | int]:
+        """The rules of the sympy backend's solve at `dps` digits (symkin.studies.actuators):
+        at mpmath's ε there, but no finer than float64's, since the surrogate angles reach the
+        evaluation as inputs, which hold a double."""
+        return self.rules(max(EPS64, mpmath_eps(dps)))
 
 
 @dataclass(frozen=True)

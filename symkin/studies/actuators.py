@@ -1,5 +1,6 @@
 """Actuators (docs/levels.md, "Actuators"): what they drive at which level and backend, the
-surrogate hinges' angles that reach their strokes, and the derivatives by the strokes
+surrogate hinges' angles that reach their strokes (the shared stroke solve,
+symkin.studies.stroke_solver, in mpmath), and the derivatives by the strokes
 (docs/sensitivity.md, "Actuators"). The physical levels' actuators are
 symkin.studies.physical's; the dispatch over a driven mechanism is symkin.studies.evaluation's."""
 
@@ -18,6 +19,7 @@ from ..model.mechanism import Mechanism
 from .configuration import Configuration, parameter_values
 from .mpmath_evaluator import MpmathEvaluator
 from .results import Evaluation, Pair, Sensitivity
+from .stroke_solver import _stroke_solve
 
 
 class ReachError(AssemblyError):
@@ -174,31 +176,6 @@ def stroke_sensitivity(
     return Sensitivity(split(dev, True), split(dev, False), split(rig, True), split(rig, False))
 
 
-def _stroke_jacobian(residual, angles: dict, r: list, step) -> mpmath.matrix | None:
-    """The strokes' Jacobian by the surrogate angles: central differences, one-sided where a
-    step crosses a toggle (the linkage does not assemble there); None where neither side
-    assembles."""
-    jac = mpmath.matrix(len(r), len(angles))
-    for j, n in enumerate(angles):
-        sides = []
-        for sign in (1, -1):
-            try:
-                sides.append(residual(angles | {n: angles[n] + sign * step}))
-            except AssemblyError:
-                sides.append(None)
-        plus, minus = sides
-        for i in range(len(r)):
-            if plus is not None and minus is not None:
-                jac[i, j] = (plus[i] - minus[i]) / (2 * step)
-            elif plus is not None or minus is not None:
-                jac[i, j] = (
-                    (plus[i] - r[i]) / step if plus is not None else (r[i] - minus[i]) / step
-                )
-            else:
-                return None
-    return jac
-
-
 def stroke_angles(
     solver: MpmathEvaluator,
     config: Configuration,
@@ -209,9 +186,9 @@ def stroke_angles(
 ) -> dict[str, mpmath.mpf]:
     """The surrogate hinges' angles at which the actuators' points have moved by `strokes`
     along their lines of action, the input hinges beside them at `config`'s angles: in the
-    rigid linkage, or (`compliant`) in the compliant mechanism at `config`'s level. Newton's
-    method on the k × k system, its Jacobian by central differences at `dps` digits (the
-    strokes are smooth in the angles away from a toggle)."""
+    rigid linkage, or (`compliant`) in the compliant mechanism at `config`'s level. The shared
+    stroke solve (symkin.studies.stroke_solver) on a batch of one configuration at `dps` + 10
+    digits, its rules at `dps` digits' ε (SOLVER.strokes.mpmath_rules)."""
     mech = config.mechanism
     if mech.is_structure:  # its force actuators are loads: no surrogate moves its rigid pose
         return {}
@@ -223,55 +200,35 @@ def stroke_angles(
         at = [
             [mpmath.mpf(sp.N(c.xreplace(values), dps + 10)) for c in a.at] for a in mech.actuators
         ]
-        scale = max(
-            [abs(c) for xy in at for c in xy] + [abs(t) for t in target] + [SOLVER.strokes.floor]
-        )
-        angles = dict(start) if start else dict.fromkeys(names, mpmath.mpf(0))
-        # the surrogate angles reach the evaluators as input values, which hold a double's
-        # 16 digits: the strokes are met to 1e-15 of the mechanism's size
-        tol = scale * mpmath.mpf(10) ** max(
-            SOLVER.strokes.mpmath_digits_lost - dps, -SOLVER.strokes.mpmath_float_digits
-        )
-        step = mpmath.mpf(10) ** -SOLVER.strokes.mpmath_step_digits
+        lines = [
+            [mpmath.mpf(sp.N(c.xreplace(values), dps + 10)) for c in a.direction]
+            for a in mech.actuators
+        ]
+        rules = SOLVER.strokes.mpmath_rules(dps)
+        scale = max([abs(c) for xy in at for c in xy] + [abs(t) for t in target] + [rules["floor"]])
+        first = dict(start) if start else dict.fromkeys(names, mpmath.mpf(0))
 
-        def residual(trial: Mapping[str, mpmath.mpf]) -> list:
+        def residual(trial: list[np.ndarray]) -> tuple[list[np.ndarray], None]:
             # each angle the double its dps + 10 digits round to, as an input given as text
-            state = config.with_angles({n: float(mpmath.nstr(trial[n], dps + 10)) for n in names})
-            found = solver.values(state, dps + 10, level)
+            angles = {n: float(mpmath.nstr(v[0], dps + 10)) for n, v in zip(names, trial)}
+            try:
+                found = solver.values(config.with_angles(angles), dps + 10, level)
+            except AssemblyError:  # past a toggle: the shared solve halves its step
+                return [np.array([mpmath.nan], dtype=object) for _ in names], None
             out = []
-            for a, xy, s in zip(mech.actuators, at, target):
+            for a, xy, d, s in zip(mech.actuators, at, lines, target):
                 rig, dev = found[a.point]
                 pos = [rig[i] + (dev[i] if compliant else 0) for i in range(2)]
-                d = [mpmath.mpf(sp.N(c.xreplace(values), dps + 10)) for c in a.direction]
-                out.append(d[0] * (pos[0] - xy[0]) + d[1] * (pos[1] - xy[1]) - s)
-            return out
+                r = d[0] * (pos[0] - xy[0]) + d[1] * (pos[1] - xy[1]) - s
+                out.append(np.array([r], dtype=object))
+            return out, None
 
-        r = residual(angles)
-        for _ in range(SOLVER.strokes.mpmath_iterations):
-            size = max(abs(x) for x in r)
-            if size <= tol:
-                return angles
-            jac = _stroke_jacobian(residual, angles, r, step)
-            try:
-                delta = None if jac is None else mpmath.lu_solve(jac, mpmath.matrix(r))
-            except ZeroDivisionError:
-                delta = None
-            if delta is None or not all(mpmath.isfinite(x) for x in delta):
-                break
-            # damped: a full step may leave the assembly range (past a dyad's toggle) or
-            # grow the residual far from the solution; halve it until it does neither
-            for _ in range(SOLVER.strokes.halvings):
-                trial = {n: angles[n] - delta[j] for j, n in enumerate(names)}
-                try:
-                    found = residual(trial)
-                except AssemblyError:
-                    found = None
-                if found is not None and max(abs(x) for x in found) < size:
-                    break
-                delta = delta * SOLVER.strokes.cut
-            else:
-                break
-            angles, r = trial, found
+        theta = [np.array([mpmath.mpf(first[n])], dtype=object) for n in names]
+        # a start already met is polished too (the compliant solve starts at the rigid one's
+        # angles without its Jacobian): as close to the strokes as the doubles allow
+        solved, met, _, _ = _stroke_solve(residual, theta, rules, scale, fresh_polish=True)
+        if bool(met[0]):
+            return {n: v[0] for n, v in zip(names, solved)}
     raise ReachError(
         f"{mech.path}: no pose of the "
         + ("compliant mechanism" if compliant else "rigid linkage")

@@ -3,37 +3,18 @@ module of a mechanism with stroke actuators runs around templates/numpy/runtime.
 Only those modules hold it (templates/numpy/module.py.j2), after the runtime.
 """
 
+import math
+
 import numpy
-from runtime import _evaluate, _sensitivity_full, _solve  # the module holds both: runtime.py
+from runtime import _evaluate, _prepare, _rigid_angles, _sensitivity_full, _solve  # runtime.py
+
+from symkin.studies.stroke_solver import _stroke_solve  # and the stroke solve (shared)
 
 # ---- symkin runtime: every generated module holds what follows ----
 
 # symkin actuators runtime (templates/numpy/actuators.py): the strokes to the surrogate hinges'
-# angles, twice (the rigid linkage and the compliant mechanism), then one evaluate at each.
-
-
-def _stroke_newton(residual, theta, tol, dtype, iterations):
-    """Newton's method elementwise on the strokes' residuals (a list of arrays) in the surrogate
-    angles `theta`, its Jacobian by central differences of step sqrt(eps), at most `iterations`
-    steps: (theta, converged)."""
-    k, step = len(theta), numpy.sqrt(numpy.finfo(dtype).eps)
-    for _ in range(iterations):
-        r = residual(theta)
-        done = numpy.all([numpy.abs(x) <= tol for x in r], axis=0)
-        if numpy.all(done | numpy.isnan(r[0])):
-            return theta, done
-        jac = numpy.empty(numpy.shape(r[0]) + (k, k), dtype=dtype)
-        for j in range(k):
-            up = residual([t + step * (i == j) for i, t in enumerate(theta)])
-            down = residual([t - step * (i == j) for i, t in enumerate(theta)])
-            for i in range(k):
-                jac[..., i, j] = (up[i] - down[i]) / (2 * step)
-        with numpy.errstate(all="ignore"):
-            rhs = numpy.stack(r, axis=-1)[..., None]
-            move = numpy.linalg.solve(jac, rhs)[..., 0] if k > 1 else rhs[..., 0] / jac[..., 0]
-        theta = [t - numpy.where(done, 0, move[..., j]) for j, t in enumerate(theta)]
-    r = residual(theta)
-    return theta, numpy.all([numpy.abs(x) <= tol for x in r], axis=0)
+# angles, twice (the rigid linkage and the compliant mechanism) by the stroke solve above
+# (symkin/studies/stroke_solver.py's _stroke_solve), its evaluations the answer's.
 
 
 def _action_places(mech, params):
@@ -48,14 +29,24 @@ def _action_scale(mech, at):
     """The stroke solves' scale: the largest coordinate of the points of action as fabricated,
     that at least the module's floor."""
     sizes = [float(numpy.nanmax(numpy.abs(numpy.asarray(c, dtype=float)))) for xy in at for c in xy]
-    return max(sizes + [mech.stroke_floor])
+    return max(sizes + [mech.stroke_rules["floor"]])
 
 
-def _stroke_poses(mech, actuators, drives, inputs, level, params):
+def _stroke_keep(mask, new, old):
+    """The evaluation `new` where `mask`, else `old` (evaluate()'s nested dicts of arrays)."""
+    if isinstance(new, dict):
+        return {key: _stroke_keep(mask, v, old[key]) for key, v in new.items()}
+    return numpy.where(mask, new, old)
+
+
+def _stroke_poses(mech, actuators, drives, inputs, level, params, links=False):
     """The kinematic inputs at which the rigid linkage and the compliant mechanism meet the
-    strokes (docs/levels.md, "Actuators"): (rigid, compliant, ok), each a dict of the input
-    hinges and the surrogate hinges' angles. Newton's method on the strokes elementwise over the
-    input arrays, its Jacobian by central differences."""
+    strokes (docs/levels.md, "Actuators"): (rigid, compliant, ok, ev_r, ev_c), rigid and
+    compliant each a dict of the input hinges and the surrogate hinges' angles, ev_r and ev_c
+    evaluate() at `level` there (with `links`). The shared stroke solve (stroke_solver.py's
+    _stroke_solve) elementwise over the input arrays: the rigid linkage's from the
+    as-fabricated pose, then the compliant mechanism's from the rigid one's angles and
+    Jacobian; its first and last evaluations are the answer's, nothing is evaluated twice."""
     kinematic = tuple(n for n in mech.levels if n in ("paper", "first_order", "exact"))
     if level not in kinematic:
         raise ValueError(f"with actuators, level must be one of {kinematic}, got {level!r}")
@@ -68,31 +59,48 @@ def _stroke_poses(mech, actuators, drives, inputs, level, params):
     strokes = [given[n] for n in names]
     surrogates = [a[1] for a in actuators]
     zero = numpy.zeros_like(arrays[0]) if arrays else mech.dtype(0)
-    # the rigid positions: at the cheapest level the module holds (every level gives them)
-    cheap = "paper" if "paper" in mech.levels else level
     at = _action_places(mech, params)
-    tol = mech.stroke_tolerance * numpy.finfo(mech.dtype).eps * _action_scale(mech, at)
+    scale = _action_scale(mech, at)
+    where = [mech.point_names.index(a[2]) for a in actuators]
 
-    def residual(theta, lv, kind):
-        res = _evaluate(mech, hinges | dict(zip(surrogates, theta)), lv, params, False)
+    def rigid_residual(theta):
+        # the rigid linkage alone (every level's rigid positions), as _pose solves it
+        arrays, p = _prepare(mech, hinges | dict(zip(surrogates, theta)), level, params)
+        ok = numpy.ones(arrays[0].shape, dtype=bool)
+        for a in arrays:
+            ok &= numpy.isfinite(a) & (numpy.abs(a) <= math.pi)
+        angles, ok = _rigid_angles(mech, [numpy.where(ok, a, 0.0) for a in arrays], p, ok)
+        for i, limit in mech.limits:
+            ok = ok & (numpy.abs(angles[i]) <= limit)
+        xy = mech.rigid_points(angles, p)
+        out = []
+        for (_, _, _, d), i, x0, s in zip(actuators, where, at, strokes):
+            r = d[0] * (xy[2 * i] - x0[0]) + d[1] * (xy[2 * i + 1] - x0[1]) - s
+            out.append(numpy.where(ok, r, numpy.nan))  # NaN: the linkage does not assemble
+        return out, None
+
+    def residual(theta):
+        res = _evaluate(mech, hinges | dict(zip(surrogates, theta)), level, params, links)
         out = []
         for (_, _, point, d), x0, s in zip(actuators, at, strokes):
-            r = res["points"][point][kind]
+            r = res["points"][point]["compliant"]
             out.append(d[0] * (r[0] - x0[0]) + d[1] * (r[1] - x0[1]) - s)
-        return out
-
-    def solve(theta, lv, kind):
-        return _stroke_newton(
-            lambda th: residual(th, lv, kind), theta, tol, mech.dtype, mech.stroke_iterations
-        )
+        return out, res
 
     start = [zero + numpy.asarray(s) * 0 for s in strokes]
-    rigid, ok_r = solve(start, cheap, "rigid")
-    compliant, ok_c = solve(rigid, level, "compliant")
+    t = mech.stroke_rules
+    with numpy.errstate(all="ignore"):
+        rigid, ok_r, jac, _ = _stroke_solve(rigid_residual, start, t, scale)
+        first = residual(rigid)
+        compliant, ok_c, _, ev_c = _stroke_solve(
+            residual, rigid, t, scale, jac=jac, keep=_stroke_keep, first=first
+        )
     return (
         hinges | dict(zip(surrogates, rigid)),
         hinges | dict(zip(surrogates, compliant)),
         ok_r & ok_c,
+        first[1],
+        ev_c,
     )
 
 
@@ -100,12 +108,9 @@ def _actuated(mech, actuators, drives, shown, inputs, level, params, links):
     """The module's evaluate() for a mechanism driven by stroke actuators (docs/levels.md,
     "Actuators"): each actuator's surrogate hinge takes the angle at which the rigid point of
     action has moved by the stroke along its line, and separately the angle at which the
-    compliant point has (Newton's method, its Jacobian by central differences); the deviation
-    is compliant - rigid, each at its own angles: the rigid motion between them plus the
-    level's deviation at the compliant ones."""
-    rigid, compliant, ok = _stroke_poses(mech, actuators, drives, inputs, level, params)
-    ev_r = _evaluate(mech, rigid, level, params, links)
-    ev_c = _evaluate(mech, compliant, level, params, links)
+    compliant point has (_stroke_poses); the deviation is compliant - rigid, each at its own
+    angles: the rigid motion between them plus the level's deviation at the compliant ones."""
+    _, _, ok, ev_r, ev_c = _stroke_poses(mech, actuators, drives, inputs, level, params, links)
     ok = ev_r["ok"] & ev_c["ok"] & ok
     out = {"points": {}, "ok": ok}
     for n in shown:
@@ -137,7 +142,7 @@ def _actuated_sensitivity(mech, actuators, drives, shown, inputs, level, params)
     - X0(y)) - s = 0, X the point of action (rigid, or rigid + deviation), X0 its as-fabricated
     place, so dv/dy = -(dg/dv)^-1 dg/dy for every parameter, input hinge and stroke y; the
     derivatives at fixed kinematic inputs come from sensitivity_full at the two poses."""
-    rigid, compliant, ok = _stroke_poses(mech, actuators, drives, inputs, level, params)
+    rigid, compliant, ok, _, _ = _stroke_poses(mech, actuators, drives, inputs, level, params)
     names = [a[0] for a in actuators]
     surrogates = [a[1] for a in actuators]
     k = len(actuators)

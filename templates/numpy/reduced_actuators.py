@@ -7,18 +7,20 @@ around templates/numpy/reduced.py's driver. Only those modules hold it
 import math
 
 import numpy
-from actuators import _action_places, _action_scale, _stroke_newton  # the module holds them all:
-from reduced import _LoadedTables  # actuators.py, reduced.py, reduced_report.py
+from actuators import _action_places, _action_scale  # the module holds them all: actuators.py,
+from reduced import _LoadedTables  # reduced.py, reduced_report.py, runtime.py and the shared
 from reduced_report import _reduced_report
-from runtime import _Mechanism, _points, _prepare, _rigid_angles, _wrap  # and runtime.py
+from runtime import _Mechanism, _points, _prepare, _rigid_angles, _wrap  # stroke solve
+
+from symkin.studies.stroke_solver import _stroke_solve
 
 # ---- symkin runtime: every generated module with actuators and the loaded level holds this ----
 
 # symkin loaded-actuators runtime (templates/numpy/reduced_actuators.py): the rigid linkage at
-# the strokes (Newton on the surrogate angles), the reduced equilibrium with the surrogates free
-# and the force actuators' forces after the rigid angles (reduced.py's _Batch keeps them through
-# its continuation), and for a force actuator the rigid linkage at the stroke the force
-# produced, which the deviations are taken against.
+# the strokes (the shared stroke solve on the surrogate angles), the reduced equilibrium with
+# the surrogates free and the force actuators' forces after the rigid angles (reduced.py's
+# _Batch keeps them through its continuation), and for a force actuator the rigid linkage at
+# the stroke the force produced, which the deviations are taken against.
 
 
 def _rigid_at(mech, kinematic, params):
@@ -37,21 +39,23 @@ def _rigid_at(mech, kinematic, params):
 
 def _rigid_strokes(mech, actuators, hinges, strokes, params, start):
     """The surrogate angles at which the rigid point of action of every actuator has moved by
-    its stroke along its line from its as-fabricated place (docs/levels.md, "Actuators"):
-    actuators.py's _stroke_newton; (angles, ok)."""
+    its stroke along its line from its as-fabricated place (docs/levels.md, "Actuators"): the
+    shared stroke solve (stroke_solver.py's _stroke_solve) from `start`; (angles, ok)."""
     surrogates = [a[1] for a in actuators]
     where = [mech.point_names.index(a[2]) for a in actuators]
     at = _action_places(mech, params)
-    tol = mech.stroke_tolerance * numpy.finfo(mech.dtype).eps * _action_scale(mech, at)
 
     def residual(theta):
-        rigid = _rigid_at(mech, hinges | dict(zip(surrogates, theta)), params)[2]
+        _, _, rigid, ok, _ = _rigid_at(mech, hinges | dict(zip(surrogates, theta)), params)
         out = []
         for (_, _, _, d), i, x0, s in zip(actuators, where, at, strokes):
-            out.append(d[0] * (rigid[2 * i] - x0[0]) + d[1] * (rigid[2 * i + 1] - x0[1]) - s)
-        return out
+            r = d[0] * (rigid[2 * i] - x0[0]) + d[1] * (rigid[2 * i + 1] - x0[1]) - s
+            out.append(numpy.where(ok, r, numpy.nan))  # NaN: the linkage does not assemble
+        return out, None
 
-    return _stroke_newton(residual, list(start), tol, mech.dtype, mech.stroke_iterations)
+    t, scale = mech.stroke_rules, _action_scale(mech, at)
+    angles, ok, _, _ = _stroke_solve(residual, list(start), t, scale)
+    return angles, ok
 
 
 def _actuated_state(mech, actuators, forces, drives, inputs, params, resolve=False):
