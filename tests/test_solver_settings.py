@@ -290,6 +290,16 @@ def test_the_numpy_module_holds_the_python_solver_verbatim(emitted):
     assert py.count("def _red_newton(") == 1
 
 
+def test_the_numpy_module_holds_the_python_rates_verbatim(emitted):
+    """The loaded level's implicit-function theorem (its reported rates and sensitivities) is
+    written once for Python too: the module holds its text, and no other copy of it."""
+    _, py = emitted
+    text = templating.shared("symkin.physics.reduced_rates")
+    assert "def _red_implicit(" in text and "def _red_sensitivity(" in text
+    assert text in py
+    assert py.count("def _red_implicit(") == 1 and py.count("numpy.linalg.solve(jac, rhs)") == 1
+
+
 # -- no solver literal left in a runtime file ------------------------------------------------------
 
 #: Numbers every runtime file may hold: index and layout arithmetic (3 rows per point, 5 inputs
@@ -369,6 +379,7 @@ RUNTIMES = [
     "templates/numpy/modes.py",
     "symkin/physics/reduced.py",
     "symkin/physics/reduced_solver.py",  # the loaded level's solver: Python's and numpy's
+    "symkin/physics/reduced_rates.py",  # the loaded level's rates: Python's and numpy's
     "symkin/physics/stiffness_rule.py",  # the report's stiffness rule: Python's and numpy's
     "symkin/physics/reduced_reported.py",
     "symkin/physics/equilibrium.py",  # no generated twin, its rules in the table too

@@ -93,7 +93,11 @@ def _runtime(path: str, features: frozenset[str] | None) -> str:
 
 #: The package's modules whose text the generated numpy modules hold below their marker line:
 #: the algorithms the Python path runs too, written once (docs/runtime.md).
-SHARED = ("symkin.physics.reduced_solver", "symkin.physics.stiffness_rule")
+SHARED = (
+    "symkin.physics.reduced_solver",
+    "symkin.physics.reduced_rates",
+    "symkin.physics.stiffness_rule",
+)
 
 
 def _shared_file(module: str) -> Traversable:
