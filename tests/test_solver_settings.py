@@ -297,7 +297,9 @@ def test_the_numpy_module_holds_the_python_rates_verbatim(emitted):
     text = templating.shared("symkin.physics.reduced_rates")
     assert "def _red_implicit(" in text and "def _red_sensitivity(" in text
     assert text in py
-    assert py.count("def _red_implicit(") == 1 and py.count("numpy.linalg.solve(jac, rhs)") == 1
+    assert py.count("def _red_implicit(") == 1
+    solve = "-numpy.linalg.solve(jac"  # dx = -J^-1 ...: the theorem's solves, the shared ones only
+    assert py.count(solve) == text.count(solve) > 0
 
 
 # -- no solver literal left in a runtime file ------------------------------------------------------
