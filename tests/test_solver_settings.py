@@ -346,6 +346,18 @@ def test_the_numpy_module_holds_the_stroke_solve_verbatim(emitted):
     assert actuators._stroke_solve is stroke_solver._stroke_solve
 
 
+def test_the_numpy_module_holds_the_python_rates_verbatim(emitted):
+    """The loaded level's implicit-function theorem (its reported rates and sensitivities) is
+    written once for Python too: the module holds its text, and no other copy of it."""
+    _, py = emitted
+    text = templating.shared("symkin.physics.reduced_rates")
+    assert "def _red_implicit(" in text and "def _red_sensitivity(" in text
+    assert text in py
+    assert py.count("def _red_implicit(") == 1
+    solve = "-numpy.linalg.solve(jac"  # dx = -J^-1 ...: the theorem's solves, the shared ones only
+    assert py.count(solve) == text.count(solve) > 0
+
+
 # -- no solver literal left in a runtime file ------------------------------------------------------
 
 #: Numbers every runtime file may hold: index and layout arithmetic (3 rows per point, 5 inputs
@@ -426,6 +438,7 @@ RUNTIMES = [
     "symkin/physics/reduced.py",
     "symkin/physics/reduced_solver.py",  # the loaded level's solver: Python's and numpy's
     "symkin/kinematics/loop_newton.py",  # the kinematic levels' Newton: mpmath's and numpy's
+    "symkin/physics/reduced_rates.py",  # the loaded level's rates: Python's and numpy's
     "symkin/physics/stiffness_rule.py",  # the report's stiffness rule: Python's and numpy's
     "symkin/physics/reduced_reported.py",
     "symkin/physics/equilibrium.py",  # no generated twin, its rules in the table too

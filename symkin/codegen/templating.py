@@ -95,6 +95,7 @@ def _runtime(path: str, features: frozenset[str] | None) -> str:
 #: the algorithms the Python path runs too, written once (docs/runtime.md).
 SHARED = (
     "symkin.kinematics.loop_newton",
+    "symkin.physics.reduced_rates",
     "symkin.physics.reduced_solver",
     "symkin.physics.stiffness_rule",
     "symkin.studies.stroke_solver",

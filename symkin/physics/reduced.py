@@ -55,6 +55,7 @@ from ..model.lambdified import NO_DOCSTRING, lambdify
 from ..model.sections import RelationTerms
 from ..model.special import arck, mpmath_namespace, sinr
 from .plate_relation import energy, notch_energy, notch_relation, relation
+from .reduced_rates import _red_implicit, _red_inputs_x, _red_relation
 from .reduced_solver import _red_equilibrium, _red_sway, _red_verdict
 from .stiffness import plate_stiffness
 
@@ -555,16 +556,17 @@ class Reduced:
         dy_x = np.array(dy_x, dtype=float).reshape(k, n)
         dy_p = np.array(dy_p, dtype=float).reshape(k, q)
         dy_o = np.array(dy_o, dtype=float).reshape(k, o)
-        block = np.zeros((o, o))
-        for j, d in enumerate(parts):
-            block[3 * j : 3 * j + 3, 3 * j : 3 * j + 3] = d
-        dins_x = dins.reshape(o, n) if o else np.zeros((0, n))
         jac, jo = np.zeros((0, 0)), np.zeros((0, o))
         if n:
             _, jo = self._fn("jac")(*args, outs)
             jo = np.array(jo, dtype=float).reshape(n, o)
             jac = self.jacobian(x, theta, t)
-        return ys, implicit_rates(jac, jo, block, dins_x, dr, dins_p, dy_x, dy_o, dy_p)
+        # a batch of one (symkin.physics.reduced_rates); a singular J raises
+        block = _red_relation([d.ravel() for d in parts], None, 1)
+        dins_x = _red_inputs_x(dins, n, len(parts), 1, 3)
+        one = [m[None] for m in (jac, jo)]
+        rest = [m[None] for m in (dr, dins_p, dy_x, dy_o, dy_p)]
+        return ys, _red_implicit(*one, block, dins_x, *rest, each=False)[0]
 
     def clamps(self, x, theta, t: float = 1.0) -> dict[int, tuple[float, ...]]:
         """Every plate's P clamp (x, y), M clamp (x, y) and link P's rotation, compliant."""
@@ -971,16 +973,3 @@ class _Rules:
 
     def __init__(self, rules: Mapping[str, float | int], **more) -> None:
         self.__dict__.update(rules, **more)
-
-
-def implicit_rates(jac, jo, block, dins_x, dr_by, dins_by, dy_x, dy_o, dy_by) -> np.ndarray:
-    """The total derivatives of quantities y(x, o, v) by variables v at a solution x of R = 0,
-    the plate relation's outputs o = rel(i(x, v)) through the chain rule: dx/dv = −J⁻¹ (∂R/∂v +
-    ∂R/∂o ∂rel/∂i ∂i/∂v), dy/dv = (∂y/∂x + ∂y/∂o ∂rel/∂i ∂i/∂x) dx/dv + ∂y/∂v + ∂y/∂o ∂rel/∂i
-    ∂i/∂v. `jac` J (n × n), `jo` ∂R/∂o, `block` ∂rel/∂i, `dins_x` ∂i/∂x; the `_by` arguments
-    the partial derivatives by v (x and o held), `dy_x`, `dy_o` y's by x and o."""
-    if len(jac):
-        dx = -np.linalg.solve(jac, dr_by + jo @ block @ dins_by)
-    else:
-        dx = np.zeros((0, dy_by.shape[1]))
-    return (dy_x + dy_o @ block @ dins_x) @ dx + dy_by + dy_o @ block @ dins_by

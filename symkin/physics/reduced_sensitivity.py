@@ -11,7 +11,8 @@ relation outputs o = rel(i) of their inputs i = (θ_c, p, f, ε_a, ε_s)(x, θ, 
     dx/dv    = −J⁻¹ dR/dv|_x                          (J the Newton Jacobian, plate relation in)
     dD/dv    = (∂D/∂x + ∂D/∂o ∂rel/∂i ∂i/∂x) dx/dv + ∂D/∂θ dθ/dv + ∂D/∂p + ∂D/∂o ∂rel/∂i di/dv|_x
 
-(:func:`symkin.physics.reduced.implicit_rates`, which `loaded`'s reported quantities use too).
+(symkin.physics.reduced_rates, which `loaded`'s reported quantities and the generated numpy
+modules run too).
 The parameters are those of the file, the scales of x numbers (they only condition Newton).
 :func:`partials` states the symbolic pieces for the generated code (symkin.codegen.plan's
 loaded_sens<g>) and for :class:`LoadedSensitivity`, the sympy backend's evaluation.
@@ -30,7 +31,8 @@ from ..kinematics.analysis import Analysis
 from ..model.derivatives import jacobian
 from ..model.lambdified import lambdify
 from .plate_relation import relation
-from .reduced import Reduced, implicit_rates
+from .reduced import Reduced
+from .reduced_rates import _red_inputs_x, _red_relation, _red_sensitivity, _red_theta_v
 
 
 @dataclass(frozen=True)
@@ -108,32 +110,25 @@ def eps_relation() -> tuple[tuple[sp.Symbol, ...], list[sp.Expr]]:
     ]
 
 
-def relation_block(parts: Sequence[np.ndarray], eps: Sequence[np.ndarray]) -> np.ndarray:
-    """∂o/∂i, block diagonal (3 n_s × 5 n_s): per half plate its relation's 3 × 3 partials by
-    (θ_c, p, f) beside its 3 × 2 by (ε_a, ε_s)."""
-    ns = len(parts)
-    out = np.zeros((3 * ns, 5 * ns))
-    for k in range(ns):
-        out[3 * k : 3 * k + 3, 5 * k : 5 * k + 3] = parts[k]
-        out[3 * k : 3 * k + 3, 5 * k + 3 : 5 * k + 5] = eps[k]
-    return out
-
-
 def theta_rates(
-    analysis: Analysis, theta_u: np.ndarray, n_params: int, inputs: Sequence[int]
+    analysis: Analysis, theta_u: np.ndarray, n_params: int, inputs: Sequence[int], forces: int = 0
 ) -> np.ndarray:
-    """dθ/dv of every hinge (label order) × (parameters, then `inputs`): the non-input hinges'
-    rows from the rigid closure (`theta_u`, k × n_v), an input's own angle moving by 1, a held
-    one by nothing."""
+    """dθ/dv of every hinge (label order) then of the `forces` force actuators' forces ×
+    (parameters, then `inputs`, then the forces): the non-input hinges' rows from the rigid
+    closure (`theta_u`, k × n_v), an input's own angle moving by 1, a held one by nothing, a
+    force by 1 (symkin.physics.reduced_rates' _red_theta_v on a batch of one)."""
     kin = analysis.kin
-    nv = n_params + len(inputs)
-    out = np.zeros((len(kin.hinges), nv))
-    for row, a in enumerate(sorted(kin.hinges)):
-        if a in kin.unknowns:
-            out[row] = theta_u[kin.unknowns.index(a)]
-        elif a in inputs:
-            out[row, n_params + list(inputs).index(a)] = 1.0
-    return out
+    labels = sorted(kin.hinges)
+    return _red_theta_v(
+        np.asarray(theta_u, dtype=float)[None],
+        1,
+        len(labels),
+        n_params + len(inputs),
+        n_params,
+        [labels.index(a) for a in kin.unknowns],
+        [labels.index(a) for a in inputs],
+        forces,
+    )[0]
 
 
 class LoadedSensitivity:
@@ -179,7 +174,8 @@ class LoadedSensitivity:
         ins_fn = lambdify(args[:3] + args[4:], [e.xreplace(rename) for e in ins], modules)
         symbols, eps = eps_relation()
         eps_fn = sp.lambdify(symbols, eps, modules=modules)
-        found = self._variants[count] = (r, ins_fn, fn, eps_fn)
+        shapes = [(name, m.shape) for name, m in part.blocks()]
+        found = self._variants[count] = (r, ins_fn, fn, eps_fn, shapes)
         return found
 
     def rates(
@@ -195,7 +191,7 @@ class LoadedSensitivity:
         (scaled by `scale`, the solver's) of the variant with `count` half plates per plate, the
         rigid angles `theta`, parameter values `values` and dθ/dv `theta_v`
         (:func:`theta_rates`)."""
-        r, ins_fn, fn, eps_fn = self._variant(count)
+        r, ins_fn, fn, eps_fn, shapes = self._variant(count)
         n, ns, npar = r.size, len(r.segs), len(self.params)
         xs = [float(v) for v in np.asarray(x, dtype=float) * scale / r.scale] if n else []
         th = [float(v) for v in r.angles(theta)]
@@ -207,37 +203,16 @@ class LoadedSensitivity:
             i = [float(u) for u in ins[5 * k : 5 * k + 5]]
             v = plate(*i)
             outs += [float(u) for u in v[:3]]
-            parts.append(np.array(v[3:], dtype=float).reshape(3, 3))
-            eps.append(np.array(eps_fn(*i), dtype=float).reshape(3, 2))
+            parts.append([float(u) for u in v[3:]])
+            eps.append([float(u) for u in eps_fn(*i)])
         got = fn(xs, th, 1.0, outs, list(values))
-        dins_x, jx, jo, r_t, r_p, i_t, i_p, d_x, d_t, d_p, d_o = (
-            np.array(g, dtype=float) for g in got
-        )
-        m, npt, nv = len(th), 2 * len(self.points), theta_v.shape[1]
-        block = relation_block(parts, eps)
-        # ∂i/∂x: (θ_c, p, f) move with x, ε_a and ε_s do not
-        di_x = np.zeros((5 * ns, n))
-        for k in range(ns):
-            di_x[5 * k : 5 * k + 3] = dins_x.reshape(3 * ns, n)[3 * k : 3 * k + 3]
-        jac = jx.reshape(n, n) + jo.reshape(n, 3 * ns) @ block @ di_x if n else np.zeros((0, 0))
-
-        def by_v(d_theta: np.ndarray, d_p: np.ndarray, rows: int) -> np.ndarray:
-            out = d_theta.reshape(rows, m) @ theta_v
-            out[:, :npar] += d_p.reshape(rows, npar)
-            return out
-
-        return (
-            implicit_rates(
-                jac,
-                jo.reshape(n, 3 * ns),
-                block,
-                di_x,
-                by_v(r_t, r_p, n),
-                by_v(i_t, i_p, 5 * ns),
-                d_x.reshape(npt, n),
-                d_o.reshape(npt, 3 * ns),
-                by_v(d_t, d_p, npt),
-            )
-            if nv
-            else np.zeros((npt, 0))
-        )
+        dins_x, jx, jo, *pieces = (np.array(g, dtype=float) for g in got)
+        # the routine's blocks as a batch of one (symkin.physics.reduced_rates)
+        blocks = {k: g.reshape(1, *shape) for (k, shape), g in zip(shapes, pieces)}
+        jo = jo.reshape(1, n, 3 * ns)
+        # J with the relation: ∂R/∂x + ∂R/∂o ∂rel/∂i ∂i/∂x
+        di_x = _red_inputs_x(dins_x, n, ns, 1, 3)
+        jac = jx.reshape(1, n, n) + jo @ _red_relation(parts, None, 1) @ di_x
+        theta_v = np.asarray(theta_v, dtype=float)[None]
+        rates = _red_sensitivity(jac, jo, parts, eps, dins_x, theta_v, npar, blocks, each=False)
+        return rates[0]

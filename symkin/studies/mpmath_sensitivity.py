@@ -208,12 +208,8 @@ def _loaded_rates(ev: MpmathEvaluator, state: State, answer: reduced.Answer, the
     assert red is not None
     npar = len(an.params)
     theta_u = np.array(theta_v.tolist(), dtype=float).reshape(len(kin.unknowns), -1)
-    rates = reduced_sensitivity.theta_rates(an, theta_u, npar, kin.inputs)
-    if red.given:  # the force actuators' forces (a structure's strokes): beside θ, a column each
-        m, nv, nf = rates.shape[0], rates.shape[1], len(red.given)
-        wider = np.zeros((m + nf, nv + nf))
-        wider[:m, :nv], wider[m:, nv:] = rates, np.eye(nf)
-        rates = wider
+    # the force actuators' forces (a structure's strokes): beside θ, a column each
+    rates = reduced_sensitivity.theta_rates(an, theta_u, npar, kin.inputs, len(red.given))
     return ev.loaded_terms.rates(
         answer.x,
         red.scale,

@@ -9,6 +9,7 @@ system (_Batch) and the driver over the variants. Only modules that hold the lev
 import numpy
 from runtime import _rigid_angles  # the module holds them all: runtime.py and the solver
 
+from symkin.physics.reduced_rates import _red_implicit, _red_inputs_x, _red_relation
 from symkin.physics.reduced_solver import _red_equilibrium, _red_sway, _red_verdict
 
 # ---- symkin runtime: every generated module with the loaded level holds what follows ----
@@ -319,37 +320,10 @@ def _red_solutions(mech, theta, p, q, shape, good, routines):
 
 def _red_rates(solver, out, blocks, jac, jo, dins, rel, b):
     """dy/dv (b, rows, cols) at the solutions of a variant (_red_solutions' solver, routine
-    output, J, dR/d(plates), the half plates' x-Jacobian and relation), from a routine's blocks
-    (dR_dv, din_dv, dy_dx, dy_dv, dy_dout) by the implicit-function theorem: dx/dv = -J^-1 (dR/dv
-    + dR/dout dout/dv), dy/dv = dy/dv + dy/dout dout/dv + (dy/dx + dy/dout dout/dx) dx/dv, dout
-    the relation's partials times the inputs' (reduced_report.py's rates, modes.py's compliance)."""
+    output, J, dR/d(plates), the half plates' x-Jacobian and relation) from a routine's blocks
+    (dR_dv, din_dv, dy_dx, dy_dv, dy_dout), by the shared implicit-function theorem
+    (reduced_rates.py's _red_implicit; reduced_report.py's rates, modes.py's compliance)."""
     n, ns = solver.size, solver.plates
-    # the plate relation's partials by (theta_c, p, f), block diagonal
-    part = numpy.zeros((b, 3 * ns, 3 * ns))
-    for k in range(ns):
-        for i in range(3):
-            for c in range(3):
-                part[:, 3 * k + i, 3 * k + c] = rel[k][3 + 3 * i + c]
-    dinx = numpy.zeros((b, 3 * ns, n))
-    if ns and n:
-        dinx = numpy.array([_red_column(v, b) for v in dins]).reshape(3 * ns, n, b)
-        dinx = dinx.transpose(2, 0, 1)
-    dr_v = _red_block(out, blocks["dR_dv"], b)
-    din_v = _red_block(out, blocks["din_dv"], b)
-    by_o = numpy.matmul(_red_block(out, blocks["dy_dout"], b), part)
-    total = _red_block(out, blocks["dy_dv"], b) + numpy.matmul(by_o, din_v)
-    if n:
-        rhs = dr_v + numpy.matmul(jo, numpy.matmul(part, din_v))
-        try:
-            dx = -numpy.linalg.solve(jac, rhs)
-        except numpy.linalg.LinAlgError:
-            # one singular J stops the stacked solve: each on its own
-            dx = numpy.full(rhs.shape, numpy.nan)
-            for c in range(b):
-                try:
-                    dx[c] = -numpy.linalg.solve(jac[c], rhs[c])
-                except numpy.linalg.LinAlgError:
-                    continue  # singular: NaN
-        dy_x = _red_block(out, blocks["dy_dx"], b) + numpy.matmul(by_o, dinx)
-        total = total + numpy.matmul(dy_x, dx)
-    return total
+    by = [_red_block(out, blocks[k], b) for k in ("dR_dv", "din_dv", "dy_dx", "dy_dout", "dy_dv")]
+    part = _red_relation([r[3:] for r in rel], None, b)
+    return _red_implicit(jac, jo, part, _red_inputs_x(dins, n, ns, b, 3), *by)
