@@ -170,10 +170,12 @@ def test_the_c_loaded_refuses_a_notch_naming_it():
 
 
 def test_a_notch_read_from_a_parameter_is_refused_by_the_generated_loaded(tmp_path):
-    """The generated `loaded` folds a notch's section in as numbers: a notch whose radius is a
-    parameter exits 2 naming the hinge and the parameter."""
+    """The generated `loaded` folds a notch's section in as numbers: a notch whose radius and
+    thickness are a parameter's expressions (its shape ratios numbers, as the file format asks)
+    exits 2 naming the hinge and the parameter."""
     text = (ZOO / "notch_four_bar_si.toml").read_text()
     text = text.replace("F = 0\n", "F = 0\nR = 1e-3\n").replace("radius = 1e-3", 'radius = "R"')
+    text = text.replace("thickness = 1e-4", 'thickness = "R/10"')
     path = tmp_path / "notch_radius.toml"
     path.write_text(text)
     an = symkin.analyze(symkin.load(path))
@@ -192,7 +194,9 @@ def test_the_default_level_of_a_notch_file_in_generated_code():
     assert "'O' is circular" in c.reason and "numpy" in c.reason
 
 
-def test_eval_and_sweep_default_levels_on_a_notch_file():
+def test_eval_tolerance_and_sweep_default_levels_on_a_notch_file():
+    """numpy's `loaded` is the default of `eval --backend numpy`, `tolerance` (which runs numpy on
+    a notch file) and `sweep --backend numpy`; the C backend's is `exact`."""
     file = str(EXAMPLES / "notch_lever.toml")
     run = symkin_cli("eval", file, "--input", "piezo=0.02", "--backend", "numpy")
     assert run.returncode == 0, run.stderr
@@ -200,7 +204,13 @@ def test_eval_and_sweep_default_levels_on_a_notch_file():
     run = symkin_cli("eval", file, "--input", "piezo=0.02", "--backend", "c")
     assert run.returncode == 0, run.stderr
     assert run.stdout.splitlines()[0].startswith("level: exact (default"), run.stdout
-    sweep = ("--input", "piezo=0.01:0.02:2", "--backend", "numpy")
-    run = symkin_cli("sweep", file, *sweep)
+    run = symkin_cli("tolerance", file, "--vary", "k=±1%", "--input", "piezo=0.02")
     assert run.returncode == 0, run.stderr
     assert run.stdout.splitlines()[0].startswith("level: loaded (default"), run.stdout
+    assert "(numpy)" in run.stdout, run.stdout
+    sweep = ("--vary", "k=±1%", "--input", "piezo=0.01:0.02:2", "--samples", "4")
+    sweep += ("--scheduler", "sync")
+    for backend, level in (("numpy", "loaded"), ("c", "exact")):
+        run = symkin_cli("sweep", file, *sweep, "--backend", backend)
+        assert run.returncode == 0, run.stderr
+        assert run.stdout.splitlines()[0].startswith(f"level: {level} (default"), run.stdout
