@@ -214,3 +214,15 @@ def test_eval_tolerance_and_sweep_default_levels_on_a_notch_file():
         run = symkin_cli("sweep", file, *sweep, "--backend", backend)
         assert run.returncode == 0, run.stderr
         assert run.stdout.splitlines()[0].startswith(f"level: {level} (default"), run.stdout
+
+
+def test_numpy_buckling_factor_on_notches_against_the_python_level(built):
+    """A load the notches cannot carry ten times (the parallelogram's stage pushed by 300 N): the
+    generated search's buckling factor against the sympy backend's `loaded` (the same search,
+    located to its buckling_locate: asked 1e-6 relative; measured 6.7674 in both)."""
+    an, module = built("notch_parallelogram_si")
+    inputs, params = {"F1": 0.03}, {"F": 300.0}
+    ref = symkin.evaluate(an, inputs, level="loaded", params=params, backend="sympy")
+    assert ref.buckling is not None and 1 < ref.buckling < 10
+    got = module.evaluate({"F1": np.array([0.03])}, "loaded", params=params, buckling=True)
+    assert float(got["buckling"][0]) == pytest.approx(ref.buckling, rel=1e-6)
