@@ -257,18 +257,21 @@ def test_the_reports_sensitivity_table_takes_the_default_level(tmp_path):
     assert "deviation (level loaded)" in committed
 
 
-def test_a_file_with_notches_defaults_to_loaded_but_not_in_generated_code():
+def test_a_file_with_notches_defaults_to_loaded_but_not_in_generated_c_code():
     """loaded takes notch hinges: a notch file's default is loaded, and `eval` without --level
-    runs it; for the generated evaluators (tolerance, sweep), whose loaded takes uniform plates,
-    it is exact, with the reason naming the hinge and its profile."""
+    runs it, in the generated numpy evaluator too; for the generated C evaluator (or a generated
+    backend not named), whose loaded takes uniform plates, it is exact, with the reason naming
+    the hinge and its profile."""
     path = ROOT / "examples" / "notch_lever.toml"
     mech = symkin.load(path)
     assert mech.has_stiffness
     choice = levels.default_for(mech)
     assert choice.name == "loaded" and choice.default
-    generated = levels.default_for(mech, generated=True)
-    assert generated.name == "exact" and generated.default
-    assert "circular" in generated.reason and "'O'" in generated.reason
+    assert levels.default_for(mech, generated="numpy") == choice
+    for backend in ("c", True):
+        generated = levels.default_for(mech, generated=backend)
+        assert generated.name == "exact" and generated.default
+        assert "circular" in generated.reason and "'O'" in generated.reason
     run = symkin_cli("eval", path, "--input", "piezo=0.02")
     assert run.returncode == 0, run.stderr
     assert run.stdout.splitlines()[0] == choice.line and run.stderr == ""

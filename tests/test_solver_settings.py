@@ -392,6 +392,7 @@ ALLOWED = {
         **TURN_SERIES,
     },
     "templates/numpy/reduced_report.py": TURN_SERIES,
+    "templates/numpy/reduced_notch_report.py": {"7": "the stress row's allowable"},
     "templates/c/modes.c": {"0.5": "the Jacobi rotation's t = 1/(2 theta) for a huge theta"},
     "templates/numpy/runtime.py": {
         "8192": "_CHUNK: elements per block (memory, not arithmetic)",
@@ -434,6 +435,8 @@ RUNTIMES = [
     "templates/numpy/reduced_report.py",
     "templates/numpy/reduced_actuators.py",
     "templates/numpy/reduced_actuators_sens.py",
+    "templates/numpy/reduced_notch.py",
+    "templates/numpy/reduced_notch_report.py",
     "templates/numpy/modes.py",
     "symkin/physics/reduced.py",
     "symkin/physics/reduced_solver.py",  # the loaded level's solver: Python's and numpy's

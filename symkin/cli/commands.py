@@ -49,7 +49,7 @@ def _eval(args: argparse.Namespace) -> str:
     from .output import evaluation_json, evaluation_text
 
     analysis = Analysis(build(load(args.file)))
-    choice = _level(args, analysis.mechanism, backends.get(args.backend).generated)
+    choice = _level(args, analysis.mechanism, backends.get(args.backend).generated and args.backend)
     result = evaluate(
         analysis,
         _pairs(args.input, "--input", args.file),
@@ -61,11 +61,12 @@ def _eval(args: argparse.Namespace) -> str:
     return evaluation_json(result) if args.json else choice.line + "\n" + evaluation_text(result)
 
 
-def _level(args: argparse.Namespace, mech, generated: bool = False) -> levels.Choice:
+def _level(args: argparse.Namespace, mech, generated: bool | str = False) -> levels.Choice:
     """The level of eval, tolerance and sweep (docs/levels.md, "The default level"): --level,
     or the file's default (for the `generated` evaluators: tolerance, sweep, eval's numpy and
-    c backends); args.level is set to it. A kinematic level asked for on a file whose plates
-    all have stiffness data is run, with a one-line warning that it ignores their forces."""
+    c backends; a backend's name, or True); args.level is set to it. A kinematic level asked
+    for on a file whose plates all have stiffness data is run, with a one-line warning that it
+    ignores their forces."""
     choice = levels.choose(mech, args.level, generated)
     args.level = choice.name
     ignored = levels.ignores_forces(mech, choice)
@@ -189,7 +190,9 @@ def _tolerance(args: argparse.Namespace) -> str:
     nominal = {p.name: float(p.value) for p in mech.parameters}
     vary = variation.parse_vary(args.vary, mech, nominal, kinds=("pm",))
     grid = variation.parse_grid(args.input, mech, limit=_max_evaluations(args))
-    choice = _level(args, mech, generated=True)
+    if args.backend is None and args.level in (None, "loaded") and _notched(mech):
+        args.backend = "numpy"  # the generated loaded that takes notches (core.levels)
+    choice = _level(args, mech, generated=args.backend or True)
     tolerance.check_level(args.level)  # before compiling anything
     if args.backend is None:
         # the C, unless force actuators drive and it has no sensitivities with them at the level:
@@ -205,6 +208,11 @@ def _tolerance(args: argparse.Namespace) -> str:
     if args.json:
         return json.dumps(result.as_json(), indent=2) + "\n"
     return choice.line + "\n" + tolerance.text(result)
+
+
+def _notched(mech) -> bool:
+    """Whether a plate of the file is a notch (its generated loaded: numpy's, core.levels)."""
+    return any(h.profile != "uniform" for h in mech.hinges if h.is_plate)
 
 
 def _max_evaluations(args: argparse.Namespace) -> int:
@@ -250,7 +258,7 @@ def _sweep(args: argparse.Namespace) -> str:
     if args.plot:
         output_file(args.plot, "--plot", PLOT_SUFFIXES)
     scheduler = sweep.parse_scheduler(args.scheduler)
-    choice = _level(args, mech, generated=True)
+    choice = _level(args, mech, generated=args.backend)
     client = sweep.connect(scheduler) if scheduler.kind == "distributed" else None
     try:
         evaluator = _evaluator(args, mech, sensitivity=False)

@@ -36,6 +36,17 @@ x holds the scaled unknowns then the load factor t; `plates` the plate relation'
     plate_rest4       in = (theta, p, f, e_a, e_s)  -> plate_relation4's outputs where p = f = 0
                                                    (a plate that carries no force: x = 0 in a
                                                    file without loads, the unloaded state)
+
+A notch (docs/physics.md, "Notch hinges at `loaded`") is one plate, never two halves (g = 1
+alone), with its own relation (physics.plate_relation.notch_relation), its section's terms
+folded in as numbers (the notch's keys must be numbers: :func:`fixed_notches`):
+
+    notch_relation4_<k>, notch_values4_<k>, notch_values2_<k>  in -> plate_relation4's,
+                                                   plate_values4's and plate_values2's outputs
+                                                   of half plate k's notch
+
+and its stress from the shot of its section (physics.section_beams) under the same end loads,
+times its K_t, from the tables of :class:`NotchPlate`.
 """
 
 from __future__ import annotations
@@ -48,15 +59,19 @@ from functools import cache
 import sympy as sp
 
 from ..core import vectors as V
+from ..core.errors import InputError
+from ..core.levels import NOTCH_BACKENDS
 from ..kinematics.analysis import Analysis
 from ..model.derivatives import jacobian
-from ..physics import reduced
+from ..model.notches import Notch
+from ..model.sections import RelationTerms
+from ..physics import reduced, section_beams
 from ..physics.modes import massive_links, with_centre_points
-from ..physics.plate_relation import relation
+from ..physics.plate_relation import notch_relation, relation
 from ..physics.stiffness import plate_stiffness
 from .literals import float_literals
 from .modes import ModesPlan, modes_data, modes_routine
-from .plate import SYMBOLS, plate_routine, shared_h, squares
+from .plate import SYMBOLS, _identities, plate_routine, shared_h, squares
 from .routines import Argument, Routine, flatten, layout, optimize
 
 
@@ -91,9 +106,134 @@ class LoadedPlan:
     forces: int = 0
     # the natural frequencies' tables (symkin.codegen.modes; None: no link has a mass)
     modes: ModesPlan | None = None
+    # per half plate of the one variant a file with notches has: its notch (None: a uniform
+    # plate, plate_relation4's); empty without notches
+    notches: tuple[NotchPlate | None, ...] = ()
     # the mechanism's size max(L, l_min) at the file's defaults: the truncation estimate's floor
     # is est_size times it (symkin.physics.reduced_solver's _red_verdict)
     length: float = 1.0
+
+
+@dataclass(frozen=True)
+class NotchPlate:
+    """A notch's half plate in the generated `loaded` (its routines notch_*_<index>): the sway
+    factor max(α, β) of its relation's poles (symkin.physics.reduced.Reduced.compression), and
+    for its stress (symkin.physics.reduced_reported.plates) K_t, EI/EI₀ (the loads' units: the
+    relation's EI against the shot's EI₀) and its grid's float samples (section_beams)."""
+
+    index: int  # the half plate's place (the routines' suffix)
+    hinge: str
+    factor: float
+    kt: float
+    ratio: float
+    grid: tuple[tuple[str, tuple[float, ...]], ...]  # (key, samples) of SectionGrid.floats
+    length: float  # the grid's span (file unit)
+
+
+def notched(mechanism) -> bool:
+    """Whether a plate of the file is a notch (model.notches)."""
+    return any(h.profile != "uniform" for h in mechanism.hinges if h.is_plate)
+
+
+def fixed_notches(mechanism) -> None:
+    """The generated `loaded` folds a notch's relation terms, EI₀, EA, κGA, K_t and stress grid
+    in as numbers: a notch whose keys read the file's parameters is bad input there (exit 2,
+    naming the hinge and the parameters)."""
+    free = {p.symbol for p in mechanism.parameters}
+    for h in mechanism.hinges:
+        if not h.is_plate or h.profile == "uniform":
+            continue
+        keys = {k: getattr(h, k) for k in ("length", "thickness", "width", "E", "nu")}
+        keys.update(dict(h.profile_params))
+        for key, value in keys.items():
+            found = sp.sympify(value).free_symbols & free if value is not None else set()
+            if found:
+                raise InputError(
+                    "the generated evaluators' loaded level folds a notch's section in as "
+                    f"numbers: its {key} reads the parameter(s) "
+                    f"{', '.join(sorted(map(str, found)))}",
+                    file=mechanism.path,
+                    line=h.line,
+                    entry=f"[[hinge]] '{h.name}'",
+                    hint="give the notch's keys as numbers, or evaluate it with symkin eval "
+                    "--level loaded --backend sympy (docs/levels.md)",
+                )
+
+
+def generated_notches(mechanism, backend: str) -> None:
+    """A notch file at the generated `loaded` of `backend`: bad input (exit 2, naming the hinge)
+    where the backend's takes uniform plates alone or a notch's keys read parameters
+    (:func:`fixed_notches`)."""
+    if not notched(mechanism):
+        return
+    if backend not in NOTCH_BACKENDS:  # (core.levels)
+        h = next(h for h in mechanism.hinges if h.is_plate and h.profile != "uniform")
+        raise InputError(
+            f"the generated {backend} evaluators' loaded level takes uniform plates: the "
+            f"hinge's profile is {h.profile!r}",
+            file=mechanism.path,
+            line=h.line,
+            entry=f"[[hinge]] '{h.name}'",
+            hint="use --backend numpy (its loaded takes notches) or --backend sympy "
+            "(docs/levels.md)",
+        )
+    fixed_notches(mechanism)
+
+
+def _notch_plates(r: reduced.Reduced) -> tuple[NotchPlate | None, ...]:
+    """Per half plate of `r` (one per plate: a notch is not split), its NotchPlate or None."""
+    mech = r.kin.mechanism
+    stiff = plate_stiffness(mech, "loaded", notches=True)
+    values = r._values_subs
+    out: list[NotchPlate | None] = []
+    for k, (a, *_) in enumerate(r.segs):
+        terms = r.terms[k]
+        if terms is None:
+            out.append(None)
+            continue
+        h = r.hinges[a]
+        st = stiff[h.name]
+        section = st.section
+        assert isinstance(section, Notch)
+        grid = section_beams.grid_of(section, values, st.stretches)
+        kt = float(sp.N(section.stress_factor().xreplace(values), 20))
+        ratio = float(r.plate[a]["EI"]) / float(grid.EI0)
+        floats = grid.floats
+        keys = ("a", "eps", "gam", "depth", "axial", "ds", "nodes")
+        table = tuple((key, tuple(float(v) for v in floats[key])) for key in keys)
+        factor = float(max(terms.alpha, terms.beta))
+        out.append(NotchPlate(k, h.name, factor, kt, ratio, table, float(grid.length)))
+    return tuple(out)
+
+
+def notch_routines(index: int, terms: RelationTerms) -> tuple[Routine, ...]:
+    """Half plate `index`'s notch relation at order 4 (values and partials), its values alone,
+    and at order 2 (values alone), as plate_relation4, plate_values4 and plate_values2."""
+    th, p, f, ea, es = SYMBOLS
+    out = []
+    for order, partial, name in (
+        (4, True, "relation4"),
+        (4, False, "values4"),
+        (2, False, "values2"),
+    ):
+        rel = notch_relation(th, p, f, ea, es, terms, order)
+        values = [rel.along, rel.across, rel.omega]
+        exprs = values + ([sp.diff(v, w) for v in values for w in (th, p, f)] if partial else [])
+        exprs = [e.xreplace(_identities(sp.Tuple(*exprs))) for e in exprs]
+        memo: dict = {}
+        outputs = tuple(float_literals(e, memo) for e in shared_h(exprs))
+        blocks = [("values", 3, 1)] + ([("partials", 3, 3)] if partial else [])
+        routine = Routine(
+            f"notch_{name}_{index}",
+            (Argument("in", SYMBOLS),),
+            (),
+            outputs,
+            f"half plate {index}'s notch relation at order {order}: (along, across, omega)"
+            + (" and their partials by (theta, p, f)" if partial else ", values alone"),
+            layout(*blocks),
+        )
+        out.append(squares(optimize(routine)))
+    return tuple(out)
 
 
 @dataclass(frozen=True)
@@ -135,7 +275,10 @@ def loaded_routines(
     if reported and massive_links(an.mechanism):
         kin = copy.copy(an.kin)
         kin.mechanism = with_centre_points(an.mechanism)[0]
-    for g in (1, 2):
+    has_notches = notched(an.mechanism)
+    if has_notches:
+        fixed_notches(an.mechanism)
+    for g in (1,) if has_notches else (1, 2):
         r = reduced.Reduced(kin, values, segments=g, symbolic=True)
         s = r._s
         # the force actuators' forces after the rigid angles (Reduced.angles)
@@ -207,6 +350,10 @@ def loaded_routines(
             routines[f"loaded_modes{g}"] = modes_routine(r, shown, x, theta, plates, params, sub)
             routines["modes_data"], modes = modes_data(an.mechanism, params, shown)
         variants.append(Segments(g, n, ns, tuple(float(v) for v in r.scale)))
+        for k, terms in enumerate(r.terms):
+            if terms is not None:
+                for routine in notch_routines(k, terms):
+                    routines[routine.name] = routine
     report = _reported(r, names) if reported else None
     surrogates = tuple(a - 1 for a in r.unknowns[len(an.kin.unknowns) :])
     plan = LoadedPlan(
@@ -218,6 +365,7 @@ def loaded_routines(
         surrogate_index=surrogates,
         forces=len(r.forces),
         modes=modes,
+        notches=_notch_plates(r) if has_notches else (),
         length=float(r.length),
     )
     return routines, plan
@@ -292,7 +440,7 @@ def _report_routine(r: reduced.Reduced, names, x, theta, plates, params, sub) ->
     # every plate's end loads at its P clamp, scaled, and its stress formula's numbers
     s = r._s
     mech = r.kin.mechanism
-    stiff = plate_stiffness(mech, "loaded")
+    stiff = plate_stiffness(mech, "loaded", notches=True)
     hinge = {h.name: h for h in mech.hinges}
     for a in sorted(r.plate):
         h = r.hinges[a]

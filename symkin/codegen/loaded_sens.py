@@ -23,6 +23,7 @@ from ..kinematics.analysis import Analysis
 from ..physics import reduced
 from ..physics.reduced_sensitivity import eps_relation, partials
 from .literals import float_literals
+from .loaded import notched
 from .plate import SYMBOLS
 from .routines import Argument, Routine, flatten, layout, optimize
 
@@ -36,7 +37,7 @@ def loaded_sens_routines(
     values = {p.symbol: p.value for p in an.mechanism.parameters}
     out = {}
     angles = theta
-    for g in (1, 2):
+    for g in (1,) if notched(an.mechanism) else (1, 2):
         r = reduced.Reduced(an.kin, values, segments=g, symbolic=True)
         theta = Argument(angles.name, (*angles.symbols, *r.fa))
         s = r._s

@@ -267,7 +267,38 @@ def _numpy_grid(
 def _emit_c(p: Plan, source: str, precision: str) -> tuple[str, ...]:
     from .backends.c import backend
 
-    return backend.emit(p, source)
+    return backend.emit(backend_plan(p, "c"), source)
+
+
+def backend_plan(p: Plan, name: str) -> Plan:
+    """The plan backend `name` emits: the C runtime's `loaded` takes uniform plates (core.levels
+    NOTCH_BACKENDS), so for it a plan whose `loaded` has notches is the plan without the level
+    (the C evaluators refuse it: symkin.codegen.loaded.generated_notches); a plan of that level
+    alone is bad input there (exit 2)."""
+    if name in levels.NOTCH_BACKENDS or p.loaded is None or not p.loaded.notches:
+        return p
+    kept = tuple(lv for lv in p.levels if lv.name not in levels.LOADED)
+    if not kept:
+        hinge = next(n.hinge for n in p.loaded.notches if n is not None)
+        raise InputError(
+            f"the generated {name} evaluators' loaded level takes uniform plates: hinge "
+            f"'{hinge}' is a notch",
+            entry=f"[[hinge]] '{hinge}'",
+            hint="use --backend numpy (its loaded takes notches) or ask for a kinematic level",
+        )
+    routines = {
+        k: r
+        for k, r in p.routines.items()
+        if not k.startswith(("loaded_", "plate_", "notch_", "modes_data"))
+    }
+    default = p.default_level if any(lv.name == p.default_level for lv in kept) else None
+    return dataclasses.replace(
+        p,
+        levels=kept,
+        routines=routines,
+        loaded=None,
+        default_level=default or levels.KINEMATIC_DEFAULT,
+    )
 
 
 def _emit_c_scene(p: ScenePlan) -> tuple[str, ...]:

@@ -224,9 +224,8 @@ def plan(
     names = tuple(
         p.name for p in an.points if points is None or p.name in points or p.name in hidden
     )
-    # a notch (model.notches) is solved by `equilibrium` alone: the generated `loaded` takes
-    # uniform plates, so a file with one derives the kinematic levels unless asked for more
-    stiff = mech.has_stiffness and all(h.profile == "uniform" for h in mech.hinges if h.is_plate)
+    # a notch (model.notches) at `loaded`: its own relation routines (symkin.codegen.loaded)
+    stiff = mech.has_stiffness
     levels = tuple(
         lv
         for lv in level_table.LEVELS
@@ -342,13 +341,15 @@ def plan(
             "the actuators' points of action as fabricated",
             layout(("at", 2 * len(mech.actuators), 1)),
         )
-    loaded = None
+    loaded, notch_relations = None, {}
     if any(lv.name in level_table.LOADED for lv in levels):
         # the reduced equilibrium (docs/physics.md, "`loaded`: Newton on the reduced equilibrium"),
         # one and two half plates per plate; the runtime's driver writes the points' deviation
         # itself (with actuators the runtimes' own drivers: templates/*/reduced_actuators.*,
         # actuators.c)
         found, loaded = loaded_routines(an, names, theta, params, reported)
+        # a notch's relations are the plate relation's kind: numbers only, optimised there
+        notch_relations = {k: found.pop(k) for k in [k for k in found if k.startswith("notch_")]}
         routines.update(found)
     for lv in levels:
         if f"dev_{lv.routine}" in routines or lv.name in level_table.LOADED:
@@ -407,7 +408,7 @@ def plan(
     if loaded is not None:
         extra = (eps_routine(),) if "loaded_sens1" in routines else ()
         relations = (plate_routine(4), values4_routine(), values2_routine(), rest_routine())
-        for relation in (*relations, *extra):
+        for relation in (*relations, *extra, *notch_relations.values()):
             # its array argument renamed: `in` is a Python keyword
             routines[relation.name] = dataclasses.replace(
                 relation, arguments=(Argument("plate", relation.arguments[0].symbols),)
@@ -577,8 +578,9 @@ def _flat(
 
 def with_derivation(plan: Plan, analysis: Analysis) -> Plan:
     """`plan` with the statement of its derivation, for a report (the plan's points; the
-    `loaded` level's reduced equilibrium when the plan holds it)."""
-    loaded = plan.loaded is not None
+    `loaded` level's reduced equilibrium when the plan holds it on uniform plates: the report
+    states the uniform plate's relation, not a notch's)."""
+    loaded = plan.loaded is not None and not plan.loaded.notches
     return dataclasses.replace(
         plan,
         derivation=derivation(analysis, plan.points, moved_points(analysis, plan.points), loaded),

@@ -40,6 +40,7 @@ def environment(latex: bool = False) -> jinja2.Environment:
     # Names from a mechanism file reach generated code only through these escaping filters.
     env.filters["pyrepr"] = repr
     env.filters["cstring"] = c_string
+    env.filters["notch_grid"] = notch_grid
     env.globals["runtime"] = runtime
     env.globals["shared"] = shared
     return env
@@ -159,6 +160,16 @@ def c_string(text: str) -> str:
         else:
             out.append(f"\\{byte:03o}")
     return '"' + "".join(out) + '"'
+
+
+def notch_grid(table: Iterable[tuple[str, Iterable[float]]]) -> str:
+    """A notch's stress grid (symkin.codegen.loaded.NotchPlate.grid) as a numpy module's dict of
+    float arrays: every sample by repr, so the module shoots the Python level's float grid."""
+    items = ", ".join(
+        f"{key!r}: numpy.array([{', '.join(repr(float(v)) for v in values)}])"
+        for key, values in table
+    )
+    return "{" + items + "}"
 
 
 def render(template: str, **context: object) -> str:

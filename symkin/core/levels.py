@@ -133,16 +133,22 @@ class Choice:
         return f"level: {self.name} ({self.reason})"
 
 
-def default_for(mechanism: _Mechanism, generated: bool = False) -> Choice:
+#: The generated backends whose `loaded` takes notch hinges (docs/levels.md; the C's takes
+#: uniform plates).
+NOTCH_BACKENDS = ("numpy",)
+
+
+def default_for(mechanism: _Mechanism, generated: bool | str = False) -> Choice:
     """The level `eval`, `tolerance`, `sweep`, `symkin.evaluate`, `symkin.compile` and the
     generated evaluators use when none is given (docs/levels.md, "The default level"): `loaded`
     where every plate (every hinge that is not `rigid`) has E, thickness and width, else
     `exact`; and `exact` where the loaded level refuses the file as a whole (a redundant
     mechanism whose plates are all inextensible elastica: the forces its redundant loops carry
     are undetermined, docs/physics.md), so that a default run never fails for the level's sake.
-    Notch hinges take `loaded` like plates (docs/physics.md, "Notch hinges at `loaded`"), but
-    for `generated` (tolerance and sweep, which run the generated evaluators, whose `loaded`
-    takes uniform plates): `exact` there."""
+    Notch hinges take `loaded` like plates (docs/physics.md, "Notch hinges at `loaded`"), in
+    the generated evaluators too where `generated` names a backend of NOTCH_BACKENDS (numpy);
+    `exact` for another generated backend (the C's `loaded` takes uniform plates) or True (a
+    generated backend not named)."""
     plates = [h for h in mechanism.hinges if h.is_plate]
     if not mechanism.has_stiffness:
         keys = ("E", "thickness", "width")
@@ -161,11 +167,12 @@ def default_for(mechanism: _Mechanism, generated: bool = False) -> Choice:
             default=True,
         )
     notch = next((h for h in plates if getattr(h, "profile", "uniform") != "uniform"), None)
-    if generated and notch is not None:
+    if generated and generated not in NOTCH_BACKENDS and notch is not None:
+        which = f"{generated} " if isinstance(generated, str) else ""
         return Choice(
             KINEMATIC_DEFAULT,
-            f"default: the generated evaluators' loaded takes uniform plates (hinge "
-            f"'{notch.name}' is {notch.profile}); symkin eval --level loaded takes it",
+            f"default: the generated {which}evaluators' loaded takes uniform plates (hinge "
+            f"'{notch.name}' is {notch.profile}); --backend numpy or sympy takes it",
             default=True,
         )
     if not plates:  # nothing bends: the physical level, as the rule says, at no extra cost
@@ -173,7 +180,7 @@ def default_for(mechanism: _Mechanism, generated: bool = False) -> Choice:
     return Choice(PHYSICAL_DEFAULT, "default: every plate has E, thickness and width", True)
 
 
-def choose(mechanism: _Mechanism, level: str | None, generated: bool = False) -> Choice:
+def choose(mechanism: _Mechanism, level: str | None, generated: bool | str = False) -> Choice:
     """The level `level` names (asked for; an unknown name is bad input, exit 2), or the
     mechanism's default (:func:`default_for`, for the `generated` evaluators) when it is None."""
     if level is None:

@@ -138,8 +138,8 @@ class Reduced:
         self.symbolic = symbolic
 
         # a notch's plate: EI₀ = l/∫dx/EI, EA and κGA of the same end compliances, and its
-        # relation's terms (model.sections.RelationTerms); generated code takes uniform plates
-        stiff = plate_stiffness(mech, "loaded", notches=not symbolic)
+        # relation's terms (model.sections.RelationTerms): numbers, in generated code too
+        stiff = plate_stiffness(mech, "loaded", notches=True)
         self.n, self.m = st.n, st.m
         self.hinges = kin.hinges
         self.paths = {i: st.tree_path(i) for i in range(st.n + 1)}

@@ -392,6 +392,8 @@ def compile(
         row = pipeline.backend(backend)
         numpy = pipeline.emit(p, "numpy", source)[0]
         texts = () if row.is_module else pipeline.emit(p, backend, source)
+        # the levels the backend's code holds (the C's `loaded` takes uniform plates)
+        held_levels = pipeline.backend_plan(p, backend)
         parameter_source = "" if row.is_module else numpy_backend.emit_parameters(p)
     return Compiled(
         Sources(
@@ -405,8 +407,8 @@ def compile(
             params=tuple(q.name for q in p.parameters),
             points=p.shown_points,
             hinges=p.hinges,
-            levels=tuple(lv.name for lv in p.levels),
+            levels=tuple(lv.name for lv in held_levels.levels),
             sensitivity=p.sensitivity,
-            default_level=p.default_level,
+            default_level=held_levels.default_level,
         )
     )

@@ -52,7 +52,7 @@ def evaluate(
     (docs/sensitivity.md); `level` None: the mechanism's default (levels.default_for)."""
     mech = analysis.mechanism
     caps = backends.get(backend)  # an unknown backend: exit 2, naming the choices
-    level = levels.choose(mech, level, caps.generated).name
+    level = levels.choose(mech, level, caps.generated and backend).name
     if sensitivity and not levels.get(level).sensitivity:
         having = [lv.name for lv in levels.LEVELS if lv.generated and lv.sensitivity]
         raise InputError(
@@ -69,9 +69,13 @@ def evaluate(
     if caps.generated:
         generated.check_level(level, caps)
         if levels.get(level).needs_stiffness:
-            # the generated `loaded` takes uniform plates: a notch is refused here (exit 2,
-            # naming the hinge), not left to a plan derived without the level
-            plate_stiffness(mech, level)
+            # the generated `loaded` takes notches whose keys are numbers, in numpy (the C's
+            # takes uniform plates): refused here (exit 2, naming the hinge), not left to a plan
+            # derived without the level
+            from ..codegen.loaded import generated_notches
+
+            generated_notches(mech, backend)
+            plate_stiffness(mech, level, notches=True)
     result = _dispatch(
         analysis, configure(analysis, inputs, level, params), backend, dps, sensitivity
     )
