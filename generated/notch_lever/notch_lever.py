@@ -1258,6 +1258,114 @@ def _red_buckling(sy, x, theta, p):
         lo[k[good]], x_lo[:, k[good]] = mid[good], xm[:, good]
         hi[k[~good]] = mid[~good]
     return out
+# symkin loaded-level rates (symkin/physics/reduced_rates.py, shared with the Python path): the
+# implicit-function theorem at the reduced equilibrium's solutions; all configurations at once,
+# each on its own.
+
+
+def _red_relation(parts, eps, b):
+    """∂rel/∂i, block diagonal: per half plate its relation's partials by (θ_c, p, f) (parts[k]:
+    9 entries, row-major), (b, 3 n_s, 3 n_s); with eps (eps[k]: the partials by (ε_a, ε_s), 3 × 2
+    row-major) beside them, (b, 3 n_s, 5 n_s)."""
+    ns, width = len(parts), 3 if eps is None else 5
+    out = numpy.zeros((b, 3 * ns, width * ns))
+    for k in range(ns):
+        for i in range(3):
+            for c in range(3):
+                out[:, 3 * k + i, width * k + c] = parts[k][3 * i + c]
+            if eps is not None:
+                out[:, 3 * k + i, width * k + 3] = eps[k][2 * i]
+                out[:, 3 * k + i, width * k + 4] = eps[k][2 * i + 1]
+    return out
+
+
+def _red_inputs_x(dins, n, ns, b, width):
+    """∂i/∂x (b, width n_s, n) from the half plates' (θ_c, p, f) by x (dins: 3 n_s × n entries,
+    row-major); with width 5 the rows of (ε_a, ε_s) are zero: they do not move with x."""
+    out = numpy.zeros((b, width * ns, n))
+    if ns and n:
+        rows = [numpy.broadcast_to(numpy.asarray(v, dtype=float), (b,)) for v in dins]
+        d = numpy.array(rows).reshape(3 * ns, n, b).transpose(2, 0, 1)
+        for k in range(ns):
+            out[:, width * k : width * k + 3] = d[:, 3 * k : 3 * k + 3]
+    return out
+
+
+def _red_dx(jac, rhs, each):
+    """−J⁻¹ rhs per configuration (jac (b, n, n), rhs (b, n, k)); with `each` NaN where J is
+    singular, else numpy's LinAlgError."""
+    try:
+        return -numpy.linalg.solve(jac, rhs)
+    except numpy.linalg.LinAlgError:
+        if not each:
+            raise
+        # one singular J stops the stacked solve: each on its own
+        out = numpy.full(rhs.shape, numpy.nan)
+        for c in range(rhs.shape[0]):
+            try:
+                out[c] = -numpy.linalg.solve(jac[c], rhs[c])
+            except numpy.linalg.LinAlgError:
+                continue  # singular: NaN
+        return out
+
+
+def _red_implicit(jac, jo, block, dins_x, dr_by, dins_by, dy_x, dy_o, dy_by, each=True):
+    """dy/dv (b, rows, n_v) by the module docstring's formulas: `jac` J (b, n, n), `jo` ∂R/∂o,
+    `block` ∂rel/∂i (_red_relation), `dins_x` ∂i/∂x (_red_inputs_x); the `_by` arguments the
+    partial derivatives by v (x and o held), `dy_x`, `dy_o` y's by x and o. `each`: see _red_dx."""
+    by_o = numpy.matmul(dy_o, block)
+    total = dy_by + numpy.matmul(by_o, dins_by)
+    if jac.shape[-1]:
+        rhs = dr_by + numpy.matmul(jo, numpy.matmul(block, dins_by))
+        dx = _red_dx(jac, rhs, each)
+        total = total + numpy.matmul(dy_x + numpy.matmul(by_o, dins_x), dx)
+    return total
+
+
+def _red_theta_v(thu, b, m, nv, npar, unknown_index, input_index, forces):
+    """dθ/dv (b, m + forces, nv + forces) of every hinge's rigid angle (label order; then the
+    force actuators' forces) by the parameters and the inputs (nv of them, the parameters first),
+    then the forces: the non-input hinges' rows (unknown_index) from the rigid closure (thu
+    (b, k, nv); None: none), an input's own angle (input_index) moving by 1, a held one's by
+    nothing, a force by 1."""
+    out = numpy.zeros((b, m + forces, nv + forces))
+    if thu is not None:
+        for j, i in enumerate(unknown_index):
+            out[:, i, :nv] = thu[:, j]
+    for j, i in enumerate(input_index):
+        out[:, i, npar + j] = 1.0
+    for j in range(forces):
+        out[:, m + j, nv + j] = 1.0
+    return out
+
+
+def _red_by_v(d_theta, d_p, theta_v, npar):
+    """A block's partial derivative by v at fixed x and o: ∂/∂θ dθ/dv plus ∂/∂p in the
+    parameters' columns."""
+    out = numpy.matmul(d_theta, theta_v)
+    out[:, :, :npar] += d_p
+    return out
+
+
+def _red_sensitivity(jac, jo, parts, eps, dins, theta_v, npar, blocks, each=True):
+    """dD/dv (b, 2 n_P, n_v) of the points' deviations at the solutions (docs/sensitivity.md):
+    `jac` J, `jo` ∂R/∂o, the half plates' relation partials (parts, eps: _red_relation's) and
+    (θ_c, p, f) by x (dins: _red_inputs_x's), dθ/dv (_red_theta_v), and the loaded_sens
+    routine's blocks by name (b, rows, cols): dR_dtheta, dR_dp, din_dtheta, din_dp, dD_dx,
+    dD_dtheta, dD_dp, dD_dout. `each`: see _red_dx."""
+    b, n = jac.shape[0], jac.shape[-1]
+    return _red_implicit(
+        jac,
+        jo,
+        _red_relation(parts, eps, b),
+        _red_inputs_x(dins, n, len(parts), b, 5),
+        _red_by_v(blocks["dR_dtheta"], blocks["dR_dp"], theta_v, npar),
+        _red_by_v(blocks["din_dtheta"], blocks["din_dp"], theta_v, npar),
+        blocks["dD_dx"],
+        blocks["dD_dout"],
+        _red_by_v(blocks["dD_dtheta"], blocks["dD_dp"], theta_v, npar),
+        each,
+    )
 # symkin reduced-equilibrium runtime (templates/numpy/reduced.py): the system the solver above
 # (reduced_solver.py's _red_equilibrium, _red_verdict) runs on, over the generated routines, and
 # the driver: two half plates per plate where one relation is refused by its estimate; all
@@ -1564,104 +1672,51 @@ def _red_solutions(mech, theta, p, q, shape, good, routines):
 
 def _red_rates(solver, out, blocks, jac, jo, dins, rel, b):
     """dy/dv (b, rows, cols) at the solutions of a variant (_red_solutions' solver, routine
-    output, J, dR/d(plates), the half plates' x-Jacobian and relation), from a routine's blocks
-    (dR_dv, din_dv, dy_dx, dy_dv, dy_dout) by the implicit-function theorem: dx/dv = -J^-1 (dR/dv
-    + dR/dout dout/dv), dy/dv = dy/dv + dy/dout dout/dv + (dy/dx + dy/dout dout/dx) dx/dv, dout
-    the relation's partials times the inputs' (reduced_report.py's rates, modes.py's compliance)."""
+    output, J, dR/d(plates), the half plates' x-Jacobian and relation) from a routine's blocks
+    (dR_dv, din_dv, dy_dx, dy_dv, dy_dout), by the shared implicit-function theorem
+    (reduced_rates.py's _red_implicit; reduced_report.py's rates, modes.py's compliance)."""
     n, ns = solver.size, solver.plates
-    # the plate relation's partials by (theta_c, p, f), block diagonal
-    part = numpy.zeros((b, 3 * ns, 3 * ns))
-    for k in range(ns):
-        for i in range(3):
-            for c in range(3):
-                part[:, 3 * k + i, 3 * k + c] = rel[k][3 + 3 * i + c]
-    dinx = numpy.zeros((b, 3 * ns, n))
-    if ns and n:
-        dinx = numpy.array([_red_column(v, b) for v in dins]).reshape(3 * ns, n, b)
-        dinx = dinx.transpose(2, 0, 1)
-    dr_v = _red_block(out, blocks["dR_dv"], b)
-    din_v = _red_block(out, blocks["din_dv"], b)
-    by_o = numpy.matmul(_red_block(out, blocks["dy_dout"], b), part)
-    total = _red_block(out, blocks["dy_dv"], b) + numpy.matmul(by_o, din_v)
-    if n:
-        rhs = dr_v + numpy.matmul(jo, numpy.matmul(part, din_v))
-        try:
-            dx = -numpy.linalg.solve(jac, rhs)
-        except numpy.linalg.LinAlgError:
-            # one singular J stops the stacked solve: each on its own
-            dx = numpy.full(rhs.shape, numpy.nan)
-            for c in range(b):
-                try:
-                    dx[c] = -numpy.linalg.solve(jac[c], rhs[c])
-                except numpy.linalg.LinAlgError:
-                    continue  # singular: NaN
-        dy_x = _red_block(out, blocks["dy_dx"], b) + numpy.matmul(by_o, dinx)
-        total = total + numpy.matmul(dy_x, dx)
-    return total
+    by = [_red_block(out, blocks[k], b) for k in ("dR_dv", "din_dv", "dy_dx", "dy_dout", "dy_dv")]
+    part = _red_relation([r[3:] for r in rel], None, b)
+    return _red_implicit(jac, jo, part, _red_inputs_x(dins, n, ns, b, 3), *by)
 
 
 def _reduced_rates(mech, theta, p, q, thu, ok, forces=0):
     """dev (*shape, 2 n_P, n_v) of the loaded level at its solutions (q: the variant solved and
     its x, templates/numpy/reduced.py); thu dtheta_u/dv (*shape, k, n_v), None without; with
     `forces` (the force actuators': theta's last entries) n_v + forces columns, theirs last. J is
-    evaluated once more at the solution, then dx/dv = -J^-1 dR/dv at fixed x and
-    dD/dv = dD/dx dx/dv + dD/dtheta dtheta/dv + dD/dp + dD/dout dout/dv (reduced_sens.c)."""
+    evaluated once more at the solution, then the shared implicit-function theorem
+    (reduced_rates.py's _red_sensitivity; reduced_sens.c)."""
     tb = mech.loaded
     shape = ok.shape
-    npar, nv, m = len(mech.parameter_names), mech.n_variables + forces, mech.n_theta
+    npar, nv = len(mech.parameter_names), mech.n_variables
     npt = 2 * len(mech.point_names)
-    dev = numpy.full((ok.size, npt, nv), numpy.nan)
+    dev = numpy.full((ok.size, npt, nv + forces), numpy.nan)
     good = numpy.broadcast_to(ok, shape).reshape(-1)
+    tu = None
+    if thu is not None:
+        tu = numpy.broadcast_to(thu, shape + thu.shape[-2:]).reshape(-1, *thu.shape[-2:])
     routines = [fn for fn, _ in tb.sens]
     for where, solver, s, jac, jo, ins, dins, rel in _red_solutions(
         mech, theta, p, q, shape, good, routines
     ):
-        blocks = tb.sens[solver.count - 1][1]
-        b, n, ns = where.size, solver.size, solver.plates
+        b = where.size
+        blocks = {k: _red_block(s, v, b) for k, v in tb.sens[solver.count - 1][1].items()}
         # dtheta/dv of every hinge: the non-input ones' from the rigid closure, an input's own 1
-        dth = numpy.zeros((b, m + forces, nv))
-        if thu is not None:
-            tu = numpy.broadcast_to(thu, shape + thu.shape[-2:]).reshape(-1, *thu.shape[-2:])
-            for j, i in enumerate(mech.unknown_index):
-                dth[:, i, : mech.n_variables] = tu[where, j]
-        for j, i in enumerate(mech.input_index):
-            dth[:, i, npar + j] = 1.0
-        for j in range(forces):
-            dth[:, m + j, mech.n_variables + j] = 1.0
-        # the relation's partials by (theta_c, p, f, e_a, e_s), 3 x 5 per half plate
-        part = numpy.zeros((b, 3 * ns, 5 * ns))
-        dinx = numpy.zeros((b, 5 * ns, n))
-        d = numpy.array(dins).reshape(3 * ns, n, b) if ns and n else numpy.zeros((3 * ns, n, b))
-        for k in range(ns):
-            eps = [_red_column(v, b) for v in tb.eps4(ins[5 * k : 5 * k + 5])]
-            for i in range(3):
-                for c in range(3):
-                    part[:, 3 * k + i, 5 * k + c] = rel[k][3 + 3 * i + c]
-                part[:, 3 * k + i, 5 * k + 3] = eps[2 * i]
-                part[:, 3 * k + i, 5 * k + 4] = eps[2 * i + 1]
-            dinx[:, 5 * k : 5 * k + 3] = d[3 * k : 3 * k + 3].transpose(2, 0, 1)
-
-        def by_v(theta_block, p_block):
-            out = numpy.matmul(_red_block(s, blocks[theta_block], b), dth)
-            out[:, :, :npar] += _red_block(s, blocks[p_block], b)
-            return out
-
-        din = by_v("din_dtheta", "din_dp")
-        dout = numpy.matmul(part, din)
-        rhs = by_v("dR_dtheta", "dR_dp") + numpy.matmul(jo, dout)
-        dx = numpy.full((b, n, nv), numpy.nan)
-        for c in range(b):
-            try:
-                dx[c] = -numpy.linalg.solve(jac[c], rhs[c]) if n else dx[c]
-            except numpy.linalg.LinAlgError:
-                continue  # singular: NaN
-        dout = dout + numpy.matmul(part, numpy.matmul(dinx, dx))
-        dev[where] = (
-            numpy.matmul(_red_block(s, blocks["dD_dx"], b), dx)
-            + by_v("dD_dtheta", "dD_dp")
-            + numpy.matmul(_red_block(s, blocks["dD_dout"], b), dout)
+        dth = _red_theta_v(
+            None if tu is None else tu[where],
+            b,
+            mech.n_theta,
+            nv,
+            npar,
+            mech.unknown_index,
+            mech.input_index,
+            forces,
         )
-    return dev.reshape(shape + (npt, nv))
+        parts = [r[3:] for r in rel]
+        eps = [tb.eps4(ins[5 * k : 5 * k + 5]) for k in range(solver.plates)]
+        dev[where] = _red_sensitivity(jac, jo, parts, eps, dins, dth, npar, blocks)
+    return dev.reshape(shape + (npt, nv + forces))
 
 
 # symkin stiffness rule (symkin/physics/stiffness_rule.py, shared with the Python path): K = C^-1
@@ -1894,10 +1949,10 @@ def _red_bucklings(mech, theta, p, q, shape, good):
 
 
 # symkin loaded-actuators runtime (templates/numpy/reduced_actuators.py): the rigid linkage at
-# the strokes (Newton on the surrogate angles), the reduced equilibrium with the surrogates free
-# and the force actuators' forces after the rigid angles (reduced.py's _Batch keeps them through
-# its continuation), and for a force actuator the rigid linkage at the stroke the force
-# produced, which the deviations are taken against.
+# the strokes (the shared stroke solve on the surrogate angles), the reduced equilibrium with
+# the surrogates free and the force actuators' forces after the rigid angles (reduced.py's
+# _Batch keeps them through its continuation), and for a force actuator the rigid linkage at
+# the stroke the force produced, which the deviations are taken against.
 
 
 def _rigid_at(mech, kinematic, params):
@@ -1916,21 +1971,23 @@ def _rigid_at(mech, kinematic, params):
 
 def _rigid_strokes(mech, actuators, hinges, strokes, params, start):
     """The surrogate angles at which the rigid point of action of every actuator has moved by
-    its stroke along its line from its as-fabricated place (docs/levels.md, "Actuators"):
-    actuators.py's _stroke_newton; (angles, ok)."""
+    its stroke along its line from its as-fabricated place (docs/levels.md, "Actuators"): the
+    shared stroke solve (stroke_solver.py's _stroke_solve) from `start`; (angles, ok)."""
     surrogates = [a[1] for a in actuators]
     where = [mech.point_names.index(a[2]) for a in actuators]
     at = _action_places(mech, params)
-    tol = mech.stroke_tolerance * numpy.finfo(mech.dtype).eps * _action_scale(mech, at)
 
     def residual(theta):
-        rigid = _rigid_at(mech, hinges | dict(zip(surrogates, theta)), params)[2]
+        _, _, rigid, ok, _ = _rigid_at(mech, hinges | dict(zip(surrogates, theta)), params)
         out = []
         for (_, _, _, d), i, x0, s in zip(actuators, where, at, strokes):
-            out.append(d[0] * (rigid[2 * i] - x0[0]) + d[1] * (rigid[2 * i + 1] - x0[1]) - s)
-        return out
+            r = d[0] * (rigid[2 * i] - x0[0]) + d[1] * (rigid[2 * i + 1] - x0[1]) - s
+            out.append(numpy.where(ok, r, numpy.nan))  # NaN: the linkage does not assemble
+        return out, None
 
-    return _stroke_newton(residual, list(start), tol, mech.dtype, mech.stroke_iterations)
+    t, scale = mech.stroke_rules, _action_scale(mech, at)
+    angles, ok, _, _ = _stroke_solve(residual, list(start), t, scale)
+    return angles, ok
 
 
 def _actuated_state(mech, actuators, forces, drives, inputs, params, resolve=False):
