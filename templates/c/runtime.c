@@ -319,6 +319,8 @@ typedef struct {
     sk_sens sens;       /* its sensitivities (fn NULL: none) */
     sk_fn3 consistency; /* redundant loops: its closure's dropped rows, then their terms' size
                            (theta, delta, q); NULL: none */
+    sk_fn2 prepare;     /* the closure's terms without delta (theta, q), once per solve: what
+                           `closure` reads in place of theta; NULL: it reads theta */
 } sk_level;
 
 /* One mechanism: its tables, routines and solver settings. Routines a mechanism lacks are
@@ -521,11 +523,13 @@ static void sk_closure_system(const void *ctx, const double *delta, double *fj)
 }
 
 /* delta of a closure: A delta = -r (its first-order delta), then with `closure` (F,
-   dF/ddelta) Newton from there. Returns a status. */
+   dF/ddelta) Newton from there; with `prepare` the closure reads its terms without delta,
+   computed once here, in place of theta. Returns a status. */
 static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure,
-                            const double *theta, const double *q, double *delta)
+                            sk_fn2 prepare, const double *theta, const double *q, double *delta)
 {
     double lin[SK_K * SK_K + 2 * SK_K + 1], fj[SK_K + SK_K * SK_K + 1], scale[SK_K + 1];
+    double pre[SK_OUT];
     sk_closure_ctx c;
     int i;
     linear(theta, q, lin);
@@ -542,6 +546,10 @@ static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure
     c.closure = closure;
     c.theta = theta;
     c.q = q;
+    if (prepare != NULL) {
+        prepare(theta, q, pre);
+        c.theta = pre;
+    }
     return sk_newton_solve(sk_closure_system, &c, SK_K, NULL, &m->exact_rule, scale, delta, fj,
                            0);
 }
@@ -599,7 +607,8 @@ static int sk_pose(const sk_mechanism *m, const sk_level *lv, const double *inpu
 #endif
 #if defined(SK_LOOPS)
     if (lv->linear != NULL && (m->needs_loops || (m->loops_for_links && want_links))) {
-        const int status = sk_solve_closure(m, lv->linear, lv->closure, theta, *q, delta);
+        const int status = sk_solve_closure(m, lv->linear, lv->closure, lv->prepare, theta, *q,
+                                              delta);
         if (status) {
             return status;
         }
