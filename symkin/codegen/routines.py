@@ -151,7 +151,8 @@ def hoist(routine: Routine, varying: str, prefix: str = "_fix") -> tuple[Routine
     def lift(expr: sp.Expr) -> sp.Expr:
         if not expr.args:
             return expr
-        if not expr.free_symbols & moving:
+        if isinstance(expr, sp.Expr) and not expr.free_symbols & moving:
+            # (a condition of a Piecewise stays where it is: only numbers move)
             if expr not in lifted:
                 lifted[expr] = next(names)
             return lifted[expr]
