@@ -202,10 +202,10 @@ static const double t_limit[1] = {2.0};
 static const int t_angular[1] = {0};
 
 static const sk_level t_levels[] = {
-    {0, t_dev_paper, NULL, NULL, 0, {t_sens_paper, 0, 0, 0, 0, 0, 0, 4}, NULL},
-    {1, t_dev, t_linear, NULL, 0, {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL},
-    {2, t_dev, t_linear, t_newton, 0, {t_sens_exact, 1, 0, 4, 8, 14, 18, 22}, NULL},
-    {3, t_loaded_dev, NULL, NULL, 1, {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL}
+    {0, t_dev_paper, NULL, NULL, 0, {t_sens_paper, 0, 0, 0, 0, 0, 0, 4}, NULL, NULL},
+    {1, t_dev, t_linear, NULL, 0, {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL, NULL},
+    {2, t_dev, t_linear, t_newton, 0, {t_sens_exact, 1, 0, 4, 8, 14, 18, 22}, NULL, NULL},
+    {3, t_loaded_dev, NULL, NULL, 1, {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL, NULL}
 };
 
 static sk_mechanism t_mechanism(int closed_form)

@@ -74,3 +74,44 @@ def test_a_routine_that_differs_anywhere_gets_its_own_pass():
         assert got is not base
         assert got == routines._optimize(r, "_tmp")
     assert optimize(_routine(), prefix="_t") != base
+
+
+def test_hoisted_routine_computes_the_routine_and_keeps_fixed_terms_out_of_the_loop():
+    """routines.hoist (the C exact closure's Newton loop, docs/generated-code.md): the fixed
+    arguments' terms once in <name>_pre, the loop reading them from `pre`; together they compute
+    what the routine states, and the loop calls no function of the fixed symbols alone."""
+    t = sp.symbols("t0:2", real=True)
+    d = sp.symbols("d0:2", real=True)
+    p = sp.Symbol("p0", real=True)
+    a = sp.Symbol("a", real=True)
+    r = Routine(
+        name="closure",
+        arguments=(Argument("theta", t), Argument("delta", d), Argument("params", (p,))),
+        assignments=((a, sp.sin(t[0] + d[0]) * p),),
+        outputs=(
+            a + sp.cos(t[1]) * sp.sin(d[1]) + p * sp.exp(t[0]),
+            a * sp.cos(t[0] + t[1]) - d[0] ** 2,
+        ),
+        blocks=layout(("F", 2, 1)),
+    )
+    opt = optimize(r)
+    pre, loop = routines.hoist(opt, "delta")
+    assert pre.name == "closure_pre" and loop.name == "closure"
+    assert [x.name for x in loop.arguments] == ["pre", "delta", "params"]
+    assert loop.arguments[2].symbols == ()  # read through `pre` alone
+    carried = set(loop.arguments[0].symbols)
+    for _, e in loop.assignments:
+        for f in e.atoms(sp.Function):
+            assert f.free_symbols & set(d) or f.free_symbols & {s for s, _ in loop.assignments}
+    rng = random.Random(7)
+    for _ in range(5):
+        values = {s: rng.uniform(-1, 1) for s in (*t, *d, p)}
+        want = [float(e.subs({a: sp.sin(t[0] + d[0]) * p}).subs(values)) for e in r.outputs]
+        carried_values = dict(zip(pre.arguments[0].symbols, [values[s] for s in t]))
+        carried_values[p] = values[p]
+        pre_out = _run(pre, carried_values)
+        env = dict(zip(loop.arguments[0].symbols, pre_out))
+        env.update({s: values[s] for s in d})
+        got = _run(loop, env)
+        assert carried <= set(env)
+        assert all(math.isclose(x, y, rel_tol=1e-13, abs_tol=1e-15) for x, y in zip(got, want))

@@ -3,7 +3,7 @@
  * Mechanism 'four_bar': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 65, rigid_res 51, linear 114, newton 259, rigid_points 19, loaded_plates1 132, loaded_system1 523, loaded_res1 229, loaded_dev1 60, loaded_report1 560, loaded_plates2 349, loaded_system2 1557, loaded_res2 494, loaded_dev2 143, loaded_report2 1279, dev_paper 38, dev_first_order 52, dev_exact 62, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339, loaded_sens1 581, loaded_sens2 1581, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
+ * Operation counts after CSE: rigid 65, rigid_res 51, linear 114, newton_pre 22, newton 238, rigid_points 19, loaded_plates1 132, loaded_system1 523, loaded_res1 229, loaded_dev1 60, loaded_report1 560, loaded_plates2 349, loaded_system2 1557, loaded_res2 494, loaded_dev2 143, loaded_report2 1279, dev_paper 38, dev_first_order 52, dev_exact 62, links 1, sens_rigid 44, sens_paper 129, sens_first_order 278, sens_exact 339, loaded_sens1 581, loaded_sens2 1581, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
  */
 #include "four_bar.h"
 
@@ -871,41 +871,86 @@ static void sk_linear(const double *theta, const double *params, double *out)
     out[14] = _tmp37;
 }
 
-/* exact compliant closure F(delta) and dF/ddelta (259 operations) */
-static void sk_newton(const double *theta, const double *delta, const double *params, double *out)
+/* exact compliant closure F(delta) and dF/ddelta: its terms without delta, once per solve (22 operations) */
+static void sk_newton_pre(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
     const double theta_2 = theta[1];
     const double theta_3 = theta[2];
     const double theta_4 = theta[3];
-    const double delta_2 = delta[0];
-    const double delta_3 = delta[1];
-    const double delta_4 = delta[2];
     const double p_0 = params[0];
     const double _tmp0 = 0.5*theta_1;
     const double _tmp1 = 0.25*p_0;
     const double _tmp2 = _tmp1*pow(theta_1, 2)*symkin_arck(_tmp0);
     const double _tmp3 = sin(theta_3);
+    const double _tmp8 = cos(theta_3);
+    const double _tmp10 = theta_1 + theta_2;
+    const double _tmp11 = sin(_tmp10);
+    const double _tmp16 = cos(_tmp10);
+    const double _tmp36 = sin(theta_1);
+    const double _tmp47 = cos(theta_1);
+    const double _tmp67 = 0.125*p_0;
+    out[0] = 0.5*theta_3;
+    out[1] = 0.5*theta_4;
+    out[2] = 0.5*theta_2;
+    out[3] = -_tmp2*sin(_tmp0);
+    out[4] = _tmp2*cos(_tmp0);
+    out[5] = p_0;
+    out[6] = _tmp1;
+    out[7] = theta_2;
+    out[8] = _tmp3;
+    out[9] = theta_3;
+    out[10] = theta_4;
+    out[11] = _tmp8;
+    out[12] = _tmp10;
+    out[13] = _tmp11;
+    out[14] = _tmp16;
+    out[15] = _tmp36;
+    out[16] = _tmp47;
+    out[17] = _tmp67;
+}
+
+/* exact compliant closure F(delta) and dF/ddelta (238 operations) */
+static void sk_newton(const double *pre, const double *delta, const double *params, double *out)
+{
+    (void)params;
+    const double _fix0 = pre[0];
+    const double _fix1 = pre[1];
+    const double _fix2 = pre[2];
+    const double _fix3 = pre[3];
+    const double _fix4 = pre[4];
+    const double p_0 = pre[5];
+    const double _tmp1 = pre[6];
+    const double theta_2 = pre[7];
+    const double _tmp3 = pre[8];
+    const double theta_3 = pre[9];
+    const double theta_4 = pre[10];
+    const double _tmp8 = pre[11];
+    const double _tmp10 = pre[12];
+    const double _tmp11 = pre[13];
+    const double _tmp16 = pre[14];
+    const double _tmp36 = pre[15];
+    const double _tmp47 = pre[16];
+    const double _tmp67 = pre[17];
+    const double delta_2 = delta[0];
+    const double delta_3 = delta[1];
+    const double delta_4 = delta[2];
     const double _tmp4 = sin(delta_3);
     const double _tmp5 = 0.5*delta_3;
     const double _tmp6 = pow(sin(_tmp5), 2);
     const double _tmp7 = 0.015*_tmp4 + 0.136*_tmp6;
-    const double _tmp8 = cos(theta_3);
     const double _tmp9 = 0.068*_tmp4 - 0.03*_tmp6;
-    const double _tmp10 = theta_1 + theta_2;
-    const double _tmp11 = sin(_tmp10);
     const double _tmp12 = sin(delta_2);
     const double _tmp13 = 0.5*delta_2;
     const double _tmp14 = pow(sin(_tmp13), 2);
     const double _tmp15 = 0.07*_tmp12 - 0.084*_tmp14;
-    const double _tmp16 = cos(_tmp10);
     const double _tmp17 = -0.14*_tmp14 - 0.042*_tmp12;
     const double _tmp18 = delta_3 + theta_3;
     const double _tmp19 = pow(_tmp18, 2);
-    const double _tmp20 = _tmp5 + 0.5*theta_3;
+    const double _tmp20 = _fix0 + _tmp5;
     const double _tmp21 = sin(_tmp20);
     const double _tmp22 = symkin_arck(_tmp20);
-    const double _tmp25 = 0.5*delta_4 + 0.5*theta_4;
+    const double _tmp25 = _fix1 + 0.5*delta_4;
     const double _tmp27 = symkin_arck(_tmp25);
     const double _tmp28 = delta_4 + theta_4;
     const double _tmp29 = pow(_tmp28, 2);
@@ -918,10 +963,9 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp33 = _tmp24*_tmp32;
     const double _tmp34 = cos(_tmp23);
     const double _tmp35 = cos(_tmp25);
-    const double _tmp36 = sin(theta_1);
     const double _tmp37 = delta_2 + theta_2;
     const double _tmp38 = pow(_tmp37, 2);
-    const double _tmp39 = _tmp13 + 0.5*theta_2;
+    const double _tmp39 = _fix2 + _tmp13;
     const double _tmp40 = symkin_arck(_tmp39);
     const double _tmp41 = _tmp38*_tmp40;
     const double _tmp42 = p_0*sin(_tmp39);
@@ -929,7 +973,6 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp44 = _tmp43*p_0;
     const double _tmp45 = 0.21650635094610965*_tmp41;
     const double _tmp46 = _tmp44*_tmp45 + 0.125*_tmp41*_tmp42;
-    const double _tmp47 = cos(theta_1);
     const double _tmp48 = -_tmp42*_tmp45 + 0.125*_tmp38*_tmp40*_tmp43*p_0;
     const double _tmp49 = cos(_tmp20);
     const double _tmp50 = _tmp19*_tmp22;
@@ -949,7 +992,6 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp64 = cos(_tmp18);
     const double _tmp65 = _tmp21*p_0;
     const double _tmp66 = 0.5*_tmp18*_tmp22;
-    const double _tmp67 = 0.125*p_0;
     const double _tmp68 = 0.0625*(_tmp18*_tmp18*_tmp18)*(-3*symkin_sinr2(_tmp20) + 3*symkin_cosr2(_tmp20) + symkin_sinr1(_tmp20));
     const double _tmp69 = 0.5*_tmp27*_tmp28;
     const double _tmp70 = _tmp26*p_0;
@@ -960,8 +1002,8 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp75 = _tmp69*_tmp74 + _tmp72*_tmp74 - _tmp26*_tmp71;
     const double _tmp76 = _tmp49*p_0;
     out[0] = delta_2 + delta_4 - delta_3;
-    out[1] = -_tmp33 + _tmp16*_tmp17 + _tmp47*_tmp48 + _tmp8*_tmp9 - _tmp11*_tmp15 - _tmp2*sin(_tmp0) - _tmp3*_tmp7 - _tmp36*_tmp46 + 0.25*_tmp19*_tmp21*_tmp22*p_0 + 0.25*_tmp27*_tmp29*_tmp34*_tmp35*p_0;
-    out[2] = _tmp52 + _tmp11*_tmp17 + _tmp15*_tmp16 + _tmp2*cos(_tmp0) + _tmp3*_tmp9 + _tmp36*_tmp48 + _tmp46*_tmp47 + _tmp7*_tmp8 - _tmp1*_tmp49*_tmp50;
+    out[1] = _fix3 - _tmp33 + _tmp16*_tmp17 + _tmp47*_tmp48 + _tmp8*_tmp9 - _tmp11*_tmp15 - _tmp3*_tmp7 - _tmp36*_tmp46 + 0.25*_tmp19*_tmp21*_tmp22*p_0 + 0.25*_tmp27*_tmp29*_tmp34*_tmp35*p_0;
+    out[2] = _fix4 + _tmp52 + _tmp11*_tmp17 + _tmp15*_tmp16 + _tmp3*_tmp9 + _tmp36*_tmp48 + _tmp46*_tmp47 + _tmp7*_tmp8 - _tmp1*_tmp49*_tmp50;
     out[3] = 1;
     out[4] = -1;
     out[5] = 1;
@@ -5835,9 +5877,14 @@ typedef void (*sk_fn3)(const double *a, const double *b, const double *c, double
 /* Gaussian elimination with partial pivoting (the first largest pivot) of the n x n row-major
    a, in place, for the n x m row-major right-hand sides b, which become the solution. Returns 0,
    or 1 when a pivot is zero or not finite. */
+static int sk_solve_k(double *a, double *b);
+
 static int sk_solve(int n, double *a, int m, double *b)
 {
     int i, j, c, p, r;
+    if (n == SK_K && m == 1) {
+        return sk_solve_k(a, b);
+    }
     for (c = 0; c < n; ++c) {
         double best = fabs(a[c * n + c]);
         p = c;
@@ -5881,6 +5928,53 @@ static int sk_solve(int n, double *a, int m, double *b)
             }
             b[i * m + r] = s / a[i * n + i];
         }
+    }
+    return 0;
+}
+
+/* sk_solve for the loops' SK_K unknowns and one right-hand side (every Newton step of the rigid
+   and exact closures, the first-order delta): the same operations in the same order, the same
+   bits, with the sizes constants (a third fewer instructions, docs/benchmarks.md). */
+static int sk_solve_k(double *a, double *b)
+{
+    int i, j, c, p;
+    for (c = 0; c < SK_K; ++c) {
+        double best = fabs(a[c * SK_K + c]);
+        p = c;
+        for (i = c + 1; i < SK_K; ++i) {
+            if (fabs(a[i * SK_K + c]) > best) {
+                best = fabs(a[i * SK_K + c]);
+                p = i;
+            }
+        }
+        if (!(best > 0.0) || !isfinite(best)) {
+            return 1;
+        }
+        if (p != c) {
+            double t;
+            for (j = c; j < SK_K; ++j) {
+                t = a[c * SK_K + j];
+                a[c * SK_K + j] = a[p * SK_K + j];
+                a[p * SK_K + j] = t;
+            }
+            t = b[c];
+            b[c] = b[p];
+            b[p] = t;
+        }
+        for (i = c + 1; i < SK_K; ++i) {
+            const double f = a[i * SK_K + c] / a[c * SK_K + c];
+            for (j = c + 1; j < SK_K; ++j) {
+                a[i * SK_K + j] -= f * a[c * SK_K + j];
+            }
+            b[i] -= f * b[c];
+        }
+    }
+    for (i = SK_K - 1; i >= 0; --i) {
+        double s = b[i];
+        for (j = i + 1; j < SK_K; ++j) {
+            s -= a[i * SK_K + j] * b[j];
+        }
+        b[i] = s / a[i * SK_K + i];
     }
     return 0;
 }
@@ -6074,6 +6168,8 @@ typedef struct {
     sk_sens sens;       /* its sensitivities (fn NULL: none) */
     sk_fn3 consistency; /* redundant loops: its closure's dropped rows, then their terms' size
                            (theta, delta, q); NULL: none */
+    sk_fn2 prepare;     /* the closure's terms without delta (theta, q), once per solve: what
+                           `closure` reads in place of theta; NULL: it reads theta */
 } sk_level;
 
 /* One mechanism: its tables, routines and solver settings. Routines a mechanism lacks are
@@ -6236,11 +6332,13 @@ static void sk_closure_system(const void *ctx, const double *delta, double *fj)
 }
 
 /* delta of a closure: A delta = -r (its first-order delta), then with `closure` (F,
-   dF/ddelta) Newton from there. Returns a status. */
+   dF/ddelta) Newton from there; with `prepare` the closure reads its terms without delta,
+   computed once here, in place of theta. Returns a status. */
 static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure,
-                            const double *theta, const double *q, double *delta)
+                            sk_fn2 prepare, const double *theta, const double *q, double *delta)
 {
     double lin[SK_K * SK_K + 2 * SK_K + 1], fj[SK_K + SK_K * SK_K + 1], scale[SK_K + 1];
+    double pre[SK_OUT];
     sk_closure_ctx c;
     int i;
     linear(theta, q, lin);
@@ -6257,6 +6355,10 @@ static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure
     c.closure = closure;
     c.theta = theta;
     c.q = q;
+    if (prepare != NULL) {
+        prepare(theta, q, pre);
+        c.theta = pre;
+    }
     return sk_newton_solve(sk_closure_system, &c, SK_K, NULL, &m->exact_rule, scale, delta, fj,
                            0);
 }
@@ -6308,7 +6410,8 @@ static int sk_pose(const sk_mechanism *m, const sk_level *lv, const double *inpu
         *q = constants;
     }
     if (lv->linear != NULL && (m->needs_loops || (m->loops_for_links && want_links))) {
-        const int status = sk_solve_closure(m, lv->linear, lv->closure, theta, *q, delta);
+        const int status = sk_solve_closure(m, lv->linear, lv->closure, lv->prepare, theta, *q,
+                                              delta);
         if (status) {
             return status;
         }
@@ -7705,13 +7808,17 @@ static const int sk_rest[10] = {1, 1, 0, 2, 1, 0, 3, 1, 0};
    the dropped rows of its closure (redundant loops) */
 static const sk_level sk_levels[] = {
     {0, sk_dev_paper, NULL, NULL, 0,  /* paper */
-     {sk_sens_paper, 0, 0, 0, 0, 0, 0, 6}, NULL},
+     {sk_sens_paper, 0, 0, 0, 0, 0, 0, 6}, NULL,
+     NULL},
     {1, sk_dev_first_order, sk_linear, NULL, 0,  /* first_order */
-     {sk_sens_first_order, 1, 0, 9, 18, 24, 30, 36}, NULL},
+     {sk_sens_first_order, 1, 0, 9, 18, 24, 30, 36}, NULL,
+     NULL},
     {2, sk_dev_exact, sk_linear, sk_newton, 0,  /* exact */
-     {sk_sens_exact, 1, 0, 9, 18, 24, 30, 36}, NULL},
+     {sk_sens_exact, 1, 0, 9, 18, 24, 30, 36}, NULL,
+     sk_newton_pre},
     {3, sk_loaded_deviation, NULL, NULL, 1,  /* loaded */
-     {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL}
+     {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL,
+     NULL}
 };
 
 static const sk_mechanism sk_mechanism_tables = {

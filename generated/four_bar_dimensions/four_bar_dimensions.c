@@ -3,7 +3,7 @@
  * Mechanism 'four_bar_dimensions': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 85, rigid_res 60, linear 118, newton 265, rigid_points 21, dev_paper 38, dev_first_order 53, dev_exact 65, links 1, sens_rigid 71, sens_paper 128, sens_first_order 297, sens_exact 360, sens_chain 0.
+ * Operation counts after CSE: rigid 85, rigid_res 60, linear 118, newton_pre 27, newton 239, rigid_points 21, dev_paper 38, dev_first_order 53, dev_exact 65, links 1, sens_rigid 71, sens_paper 128, sens_first_order 297, sens_exact 360, sens_chain 0.
  */
 #include "four_bar_dimensions.h"
 
@@ -308,16 +308,13 @@ static void sk_linear(const double *theta, const double *params, double *out)
     out[14] = _tmp41;
 }
 
-/* exact compliant closure F(delta) and dF/ddelta (265 operations) */
-static void sk_newton(const double *theta, const double *delta, const double *params, double *out)
+/* exact compliant closure F(delta) and dF/ddelta: its terms without delta, once per solve (27 operations) */
+static void sk_newton_pre(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
     const double theta_2 = theta[1];
     const double theta_3 = theta[2];
     const double theta_4 = theta[3];
-    const double delta_2 = delta[0];
-    const double delta_3 = delta[1];
-    const double delta_4 = delta[2];
     const double p_1 = params[1];
     const double p_2 = params[2];
     const double p_3 = params[3];
@@ -330,29 +327,87 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp0 = 0.5*theta_1;
     const double _tmp1 = 0.25*p_1*pow(theta_1, 2)*symkin_arck(_tmp0);
     const double _tmp2 = sin(theta_3);
-    const double _tmp3 = sin(delta_3);
     const double _tmp4 = -p_8;
     const double _tmp5 = _tmp4 + p_7;
-    const double _tmp6 = 0.5*delta_3;
-    const double _tmp7 = 2*pow(sin(_tmp6), 2);
-    const double _tmp8 = _tmp3*_tmp5 + _tmp7*p_9;
     const double _tmp9 = cos(theta_3);
-    const double _tmp10 = _tmp3*p_9 - _tmp5*_tmp7;
-    const double _tmp11 = delta_3 + theta_3;
-    const double _tmp12 = pow(_tmp11, 2);
-    const double _tmp13 = _tmp6 + 0.5*theta_3;
-    const double _tmp14 = sin(_tmp13);
-    const double _tmp15 = symkin_arck(_tmp13);
     const double _tmp16 = theta_1 + theta_2;
     const double _tmp17 = sin(_tmp16);
-    const double _tmp18 = sin(delta_2);
     const double _tmp19 = -_tmp4 - p_5;
     const double _tmp20 = p_6 - p_9;
     const double _tmp21 = -_tmp20;
+    const double _tmp38 = cos(_tmp16);
+    const double _tmp40 = sin(theta_1);
+    const double _tmp51 = cos(theta_1);
+    out[0] = 0.5*theta_3;
+    out[1] = 0.5*theta_4;
+    out[2] = 0.5*theta_2;
+    out[3] = -_tmp1*sin(_tmp0);
+    out[4] = _tmp1*cos(_tmp0);
+    out[5] = _tmp2;
+    out[6] = p_2;
+    out[7] = theta_2;
+    out[8] = p_3;
+    out[9] = theta_3;
+    out[10] = p_4;
+    out[11] = theta_4;
+    out[12] = _tmp5;
+    out[13] = _tmp9;
+    out[14] = p_9;
+    out[15] = _tmp16;
+    out[16] = _tmp17;
+    out[17] = _tmp19;
+    out[18] = _tmp20;
+    out[19] = _tmp21;
+    out[20] = _tmp38;
+    out[21] = _tmp40;
+    out[22] = _tmp51;
+}
+
+/* exact compliant closure F(delta) and dF/ddelta (239 operations) */
+static void sk_newton(const double *pre, const double *delta, const double *params, double *out)
+{
+    (void)params;
+    const double _fix0 = pre[0];
+    const double _fix1 = pre[1];
+    const double _fix2 = pre[2];
+    const double _fix3 = pre[3];
+    const double _fix4 = pre[4];
+    const double _tmp2 = pre[5];
+    const double p_2 = pre[6];
+    const double theta_2 = pre[7];
+    const double p_3 = pre[8];
+    const double theta_3 = pre[9];
+    const double p_4 = pre[10];
+    const double theta_4 = pre[11];
+    const double _tmp5 = pre[12];
+    const double _tmp9 = pre[13];
+    const double p_9 = pre[14];
+    const double _tmp16 = pre[15];
+    const double _tmp17 = pre[16];
+    const double _tmp19 = pre[17];
+    const double _tmp20 = pre[18];
+    const double _tmp21 = pre[19];
+    const double _tmp38 = pre[20];
+    const double _tmp40 = pre[21];
+    const double _tmp51 = pre[22];
+    const double delta_2 = delta[0];
+    const double delta_3 = delta[1];
+    const double delta_4 = delta[2];
+    const double _tmp3 = sin(delta_3);
+    const double _tmp6 = 0.5*delta_3;
+    const double _tmp7 = 2*pow(sin(_tmp6), 2);
+    const double _tmp8 = _tmp3*_tmp5 + _tmp7*p_9;
+    const double _tmp10 = _tmp3*p_9 - _tmp5*_tmp7;
+    const double _tmp11 = delta_3 + theta_3;
+    const double _tmp12 = pow(_tmp11, 2);
+    const double _tmp13 = _fix0 + _tmp6;
+    const double _tmp14 = sin(_tmp13);
+    const double _tmp15 = symkin_arck(_tmp13);
+    const double _tmp18 = sin(delta_2);
     const double _tmp22 = 0.5*delta_2;
     const double _tmp23 = 2*pow(sin(_tmp22), 2);
     const double _tmp24 = _tmp18*_tmp19 - _tmp21*_tmp23;
-    const double _tmp27 = 0.5*delta_4 + 0.5*theta_4;
+    const double _tmp27 = _fix1 + 0.5*delta_4;
     const double _tmp28 = symkin_arck(_tmp27);
     const double _tmp31 = delta_4 + theta_4;
     const double _tmp32 = pow(_tmp31, 2);
@@ -365,12 +420,10 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp35 = _tmp26*_tmp34;
     const double _tmp36 = cos(_tmp25);
     const double _tmp37 = cos(_tmp27);
-    const double _tmp38 = cos(_tmp16);
     const double _tmp39 = -_tmp18*_tmp21 - _tmp19*_tmp23;
-    const double _tmp40 = sin(theta_1);
     const double _tmp41 = delta_2 + theta_2;
     const double _tmp42 = pow(_tmp41, 2);
-    const double _tmp43 = _tmp22 + 0.5*theta_2;
+    const double _tmp43 = _fix2 + _tmp22;
     const double _tmp44 = symkin_arck(_tmp43);
     const double _tmp45 = _tmp42*_tmp44;
     const double _tmp46 = p_2*sin(_tmp43);
@@ -378,7 +431,6 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp48 = _tmp47*p_2;
     const double _tmp49 = 0.21650635094610965*_tmp45;
     const double _tmp50 = _tmp48*_tmp49 + 0.125*_tmp45*_tmp46;
-    const double _tmp51 = cos(theta_1);
     const double _tmp52 = -_tmp46*_tmp49 + 0.125*_tmp42*_tmp44*_tmp47*p_2;
     const double _tmp53 = _tmp12*_tmp15;
     const double _tmp54 = p_3*cos(_tmp13);
@@ -408,8 +460,8 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp78 = _tmp29*_tmp77 + _tmp30*_tmp75 + _tmp56*_tmp76;
     const double _tmp79 = _tmp55*_tmp77 + _tmp56*_tmp75 - _tmp30*_tmp76;
     out[0] = delta_2 + delta_4 - delta_3;
-    out[1] = -_tmp35 + _tmp10*_tmp9 + _tmp38*_tmp39 + _tmp51*_tmp52 - _tmp1*sin(_tmp0) - _tmp17*_tmp24 - _tmp2*_tmp8 - _tmp40*_tmp50 + 0.25*_tmp12*_tmp14*_tmp15*p_3 + 0.25*_tmp28*_tmp32*_tmp36*_tmp37*p_4;
-    out[2] = _tmp58 + _tmp1*cos(_tmp0) + _tmp10*_tmp2 + _tmp17*_tmp39 + _tmp24*_tmp38 + _tmp40*_tmp52 + _tmp50*_tmp51 + _tmp8*_tmp9 - 0.25*_tmp53*_tmp54;
+    out[1] = _fix3 - _tmp35 + _tmp10*_tmp9 + _tmp38*_tmp39 + _tmp51*_tmp52 - _tmp17*_tmp24 - _tmp2*_tmp8 - _tmp40*_tmp50 + 0.25*_tmp12*_tmp14*_tmp15*p_3 + 0.25*_tmp28*_tmp32*_tmp36*_tmp37*p_4;
+    out[2] = _fix4 + _tmp58 + _tmp10*_tmp2 + _tmp17*_tmp39 + _tmp24*_tmp38 + _tmp40*_tmp52 + _tmp50*_tmp51 + _tmp8*_tmp9 - 0.25*_tmp53*_tmp54;
     out[3] = 1;
     out[4] = -1;
     out[5] = 1;
@@ -1403,9 +1455,14 @@ typedef void (*sk_fn3)(const double *a, const double *b, const double *c, double
 /* Gaussian elimination with partial pivoting (the first largest pivot) of the n x n row-major
    a, in place, for the n x m row-major right-hand sides b, which become the solution. Returns 0,
    or 1 when a pivot is zero or not finite. */
+static int sk_solve_k(double *a, double *b);
+
 static int sk_solve(int n, double *a, int m, double *b)
 {
     int i, j, c, p, r;
+    if (n == SK_K && m == 1) {
+        return sk_solve_k(a, b);
+    }
     for (c = 0; c < n; ++c) {
         double best = fabs(a[c * n + c]);
         p = c;
@@ -1449,6 +1506,53 @@ static int sk_solve(int n, double *a, int m, double *b)
             }
             b[i * m + r] = s / a[i * n + i];
         }
+    }
+    return 0;
+}
+
+/* sk_solve for the loops' SK_K unknowns and one right-hand side (every Newton step of the rigid
+   and exact closures, the first-order delta): the same operations in the same order, the same
+   bits, with the sizes constants (a third fewer instructions, docs/benchmarks.md). */
+static int sk_solve_k(double *a, double *b)
+{
+    int i, j, c, p;
+    for (c = 0; c < SK_K; ++c) {
+        double best = fabs(a[c * SK_K + c]);
+        p = c;
+        for (i = c + 1; i < SK_K; ++i) {
+            if (fabs(a[i * SK_K + c]) > best) {
+                best = fabs(a[i * SK_K + c]);
+                p = i;
+            }
+        }
+        if (!(best > 0.0) || !isfinite(best)) {
+            return 1;
+        }
+        if (p != c) {
+            double t;
+            for (j = c; j < SK_K; ++j) {
+                t = a[c * SK_K + j];
+                a[c * SK_K + j] = a[p * SK_K + j];
+                a[p * SK_K + j] = t;
+            }
+            t = b[c];
+            b[c] = b[p];
+            b[p] = t;
+        }
+        for (i = c + 1; i < SK_K; ++i) {
+            const double f = a[i * SK_K + c] / a[c * SK_K + c];
+            for (j = c + 1; j < SK_K; ++j) {
+                a[i * SK_K + j] -= f * a[c * SK_K + j];
+            }
+            b[i] -= f * b[c];
+        }
+    }
+    for (i = SK_K - 1; i >= 0; --i) {
+        double s = b[i];
+        for (j = i + 1; j < SK_K; ++j) {
+            s -= a[i * SK_K + j] * b[j];
+        }
+        b[i] = s / a[i * SK_K + i];
     }
     return 0;
 }
@@ -1584,6 +1688,8 @@ typedef struct {
     sk_sens sens;       /* its sensitivities (fn NULL: none) */
     sk_fn3 consistency; /* redundant loops: its closure's dropped rows, then their terms' size
                            (theta, delta, q); NULL: none */
+    sk_fn2 prepare;     /* the closure's terms without delta (theta, q), once per solve: what
+                           `closure` reads in place of theta; NULL: it reads theta */
 } sk_level;
 
 /* One mechanism: its tables, routines and solver settings. Routines a mechanism lacks are
@@ -1746,11 +1852,13 @@ static void sk_closure_system(const void *ctx, const double *delta, double *fj)
 }
 
 /* delta of a closure: A delta = -r (its first-order delta), then with `closure` (F,
-   dF/ddelta) Newton from there. Returns a status. */
+   dF/ddelta) Newton from there; with `prepare` the closure reads its terms without delta,
+   computed once here, in place of theta. Returns a status. */
 static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure,
-                            const double *theta, const double *q, double *delta)
+                            sk_fn2 prepare, const double *theta, const double *q, double *delta)
 {
     double lin[SK_K * SK_K + 2 * SK_K + 1], fj[SK_K + SK_K * SK_K + 1], scale[SK_K + 1];
+    double pre[SK_OUT];
     sk_closure_ctx c;
     int i;
     linear(theta, q, lin);
@@ -1767,6 +1875,10 @@ static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure
     c.closure = closure;
     c.theta = theta;
     c.q = q;
+    if (prepare != NULL) {
+        prepare(theta, q, pre);
+        c.theta = pre;
+    }
     return sk_newton_solve(sk_closure_system, &c, SK_K, NULL, &m->exact_rule, scale, delta, fj,
                            0);
 }
@@ -1810,7 +1922,8 @@ static int sk_pose(const sk_mechanism *m, const sk_level *lv, const double *inpu
         }
     }
     if (lv->linear != NULL && (m->needs_loops || (m->loops_for_links && want_links))) {
-        const int status = sk_solve_closure(m, lv->linear, lv->closure, theta, *q, delta);
+        const int status = sk_solve_closure(m, lv->linear, lv->closure, lv->prepare, theta, *q,
+                                              delta);
         if (status) {
             return status;
         }
@@ -2158,11 +2271,14 @@ static const int sk_rest[10] = {1, 1, 0, 2, 1, 0, 3, 1, 0};
    the dropped rows of its closure (redundant loops) */
 static const sk_level sk_levels[] = {
     {0, sk_dev_paper, NULL, NULL, 0,  /* paper */
-     {sk_sens_paper, 0, 0, 0, 0, 0, 0, 6}, NULL},
+     {sk_sens_paper, 0, 0, 0, 0, 0, 0, 6}, NULL,
+     NULL},
     {1, sk_dev_first_order, sk_linear, NULL, 0,  /* first_order */
-     {sk_sens_first_order, 1, 0, 9, 18, 57, 63, 69}, NULL},
+     {sk_sens_first_order, 1, 0, 9, 18, 57, 63, 69}, NULL,
+     NULL},
     {2, sk_dev_exact, sk_linear, sk_newton, 0,  /* exact */
-     {sk_sens_exact, 1, 0, 9, 18, 57, 63, 69}, NULL}
+     {sk_sens_exact, 1, 0, 9, 18, 57, 63, 69}, NULL,
+     sk_newton_pre}
 };
 
 static const sk_mechanism sk_mechanism_tables = {

@@ -3,7 +3,7 @@
  * Mechanism 'notch_lever': 4 links, 4 hinges, 1 loop(s); inputs piezo (actuators; their strokes fix the angles of O (piezo)).
  * Points: out; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 55, rigid_res 40, linear 221, newton 456, rigid_points 13, action_at 0, dev_paper 92, dev_first_order 106, dev_exact 119, links 3, sens_rigid 49, sens_paper 227, sens_first_order 492, sens_exact 544.
+ * Operation counts after CSE: rigid 55, rigid_res 40, linear 221, newton_pre 53, newton 404, rigid_points 13, action_at 0, dev_paper 92, dev_first_order 106, dev_exact 119, links 3, sens_rigid 49, sens_paper 227, sens_first_order 492, sens_exact 544.
  */
 #include "notch_lever.h"
 
@@ -188,35 +188,82 @@ static void sk_linear(const double *theta, const double *params, double *out)
     out[14] = _tmp36;
 }
 
-/* exact compliant closure F(delta) and dF/ddelta (456 operations) */
-static void sk_newton(const double *theta, const double *delta, const double *params, double *out)
+/* exact compliant closure F(delta) and dF/ddelta: its terms without delta, once per solve (53 operations) */
+static void sk_newton_pre(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
     const double theta_2 = theta[1];
     const double theta_3 = theta[2];
     const double theta_4 = theta[3];
-    const double delta_2 = delta[0];
-    const double delta_3 = delta[1];
-    const double delta_4 = delta[2];
     const double p_2 = params[2];
     const double p_3 = params[3];
-    const double _tmp0 = delta_2 + delta_3;
     const double _tmp1 = theta_1 + theta_2;
     const double _tmp2 = cos(_tmp1);
-    const double _tmp3 = sin(delta_2);
     const double _tmp4 = _tmp1 + theta_3;
     const double _tmp5 = sin(_tmp4);
-    const double _tmp6 = p_3*sin(_tmp0);
     const double _tmp7 = sin(_tmp1);
-    const double _tmp8 = 0.5*delta_2;
-    const double _tmp9 = pow(sin(_tmp8), 2);
     const double _tmp10 = cos(_tmp4);
-    const double _tmp11 = 0.5*delta_3;
-    const double _tmp12 = pow(sin(_tmp11 + _tmp8), 2);
     const double _tmp13 = 0.5*theta_1;
     const double _tmp14 = pow(theta_1, 2);
     const double _tmp15 = 2*_tmp14*(0.023447796702774592 + _tmp14*(-0.0006553744487314233 + _tmp14*(6.30911898346519e-06 + _tmp14*(-3.0899703014305824e-08 + _tmp14*(9.17911286604366e-11 + _tmp14*(-1.831446768841015e-13 + _tmp14*(2.624407563487824e-16 + _tmp14*(-2.8323393743326456e-19 + _tmp14*(2.38535083551906e-22 + _tmp14*(-1.6114505537608705e-25 + _tmp14*(8.926886755664317e-29 + _tmp14*(-4.1287515800328766e-32 + _tmp14*(1.61839927572794e-35 + _tmp14*(-5.445162367126521e-39 + _tmp14*(1.589707620329454e-42 + _tmp14*(-4.065356848040195e-46 + 9.182008020749439e-50*_tmp14))))))))))))))));
-    const double _tmp16 = 0.5*delta_4 + 0.5*theta_4;
+    const double _tmp60 = sin(theta_1);
+    const double _tmp63 = cos(theta_1);
+    const double _tmp64 = 2*_tmp63;
+    out[0] = 0.5*theta_4;
+    out[1] = 0.5*theta_2;
+    out[2] = 0.5*theta_3;
+    out[3] = _tmp15*sin(_tmp13);
+    out[4] = -_tmp15*cos(_tmp13);
+    out[5] = _tmp1;
+    out[6] = _tmp2;
+    out[7] = p_2;
+    out[8] = theta_2;
+    out[9] = p_3;
+    out[10] = theta_3;
+    out[11] = _tmp4;
+    out[12] = theta_4;
+    out[13] = _tmp5;
+    out[14] = _tmp7;
+    out[15] = _tmp10;
+    out[16] = _tmp60;
+    out[17] = _tmp63;
+    out[18] = _tmp64;
+}
+
+/* exact compliant closure F(delta) and dF/ddelta (404 operations) */
+static void sk_newton(const double *pre, const double *delta, const double *params, double *out)
+{
+    (void)params;
+    const double _fix0 = pre[0];
+    const double _fix1 = pre[1];
+    const double _fix2 = pre[2];
+    const double _fix3 = pre[3];
+    const double _fix4 = pre[4];
+    const double _tmp1 = pre[5];
+    const double _tmp2 = pre[6];
+    const double p_2 = pre[7];
+    const double theta_2 = pre[8];
+    const double p_3 = pre[9];
+    const double theta_3 = pre[10];
+    const double _tmp4 = pre[11];
+    const double theta_4 = pre[12];
+    const double _tmp5 = pre[13];
+    const double _tmp7 = pre[14];
+    const double _tmp10 = pre[15];
+    const double _tmp60 = pre[16];
+    const double _tmp63 = pre[17];
+    const double _tmp64 = pre[18];
+    const double delta_2 = delta[0];
+    const double delta_3 = delta[1];
+    const double delta_4 = delta[2];
+    const double _tmp0 = delta_2 + delta_3;
+    const double _tmp3 = sin(delta_2);
+    const double _tmp6 = p_3*sin(_tmp0);
+    const double _tmp8 = 0.5*delta_2;
+    const double _tmp9 = pow(sin(_tmp8), 2);
+    const double _tmp11 = 0.5*delta_3;
+    const double _tmp12 = pow(sin(_tmp11 + _tmp8), 2);
+    const double _tmp16 = _fix0 + 0.5*delta_4;
     const double _tmp17 = cos(_tmp16);
     const double _tmp18 = delta_4 + theta_4;
     const double _tmp19 = pow(_tmp18, 2);
@@ -238,7 +285,7 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp35 = 0.023447796702774592 + _tmp19*_tmp34;
     const double _tmp36 = _tmp19*_tmp35;
     const double _tmp37 = _tmp17*_tmp36;
-    const double _tmp38 = _tmp8 + 0.5*theta_2;
+    const double _tmp38 = _fix1 + _tmp8;
     const double _tmp39 = cos(_tmp38);
     const double _tmp40 = delta_2 + theta_2;
     const double _tmp41 = pow(_tmp40, 2);
@@ -260,14 +307,11 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp57 = 0.023447796702774592 + _tmp41*_tmp56;
     const double _tmp58 = _tmp41*_tmp57;
     const double _tmp59 = _tmp39*_tmp58;
-    const double _tmp60 = sin(theta_1);
     const double _tmp61 = sin(_tmp38);
     const double _tmp62 = _tmp58*_tmp61;
-    const double _tmp63 = cos(theta_1);
-    const double _tmp64 = 2*_tmp63;
     const double _tmp65 = _tmp1 + delta_2;
     const double _tmp66 = sin(_tmp65);
-    const double _tmp67 = _tmp11 + 0.5*theta_3;
+    const double _tmp67 = _fix2 + _tmp11;
     const double _tmp68 = sin(_tmp67);
     const double _tmp69 = delta_3 + theta_3;
     const double _tmp70 = pow(_tmp69, 2);
@@ -314,8 +358,8 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp111 = 2*_tmp19*(_tmp110*_tmp34 + _tmp19*(_tmp110*_tmp33 + _tmp19*(_tmp110*_tmp32 + _tmp19*(_tmp110*_tmp31 + _tmp19*(_tmp110*_tmp30 + _tmp19*(_tmp110*_tmp29 + _tmp19*(_tmp110*_tmp28 + _tmp19*(_tmp110*_tmp27 + _tmp19*(_tmp110*_tmp26 + _tmp19*(_tmp110*_tmp25 + _tmp19*(_tmp110*_tmp24 + _tmp19*(_tmp110*_tmp23 + _tmp19*(_tmp110*_tmp22 + _tmp19*(_tmp110*_tmp21 + _tmp19*(1.8364016041498878e-49*(_tmp18*_tmp18*_tmp18) + _tmp110*_tmp20)))))))))))))));
     const double _tmp112 = p_3*cos(_tmp97);
     out[0] = delta_4 - _tmp0;
-    out[1] = -_tmp94 - 2*_tmp37 + _tmp15*sin(_tmp13) + _tmp5*_tmp6 + _tmp62*_tmp64 + _tmp66*_tmp89 + 2*_tmp59*_tmp60 + _tmp2*_tmp3*p_2 - 2*_tmp7*_tmp9*p_2 + 2*_tmp10*_tmp12*p_3;
-    out[2] = -_tmp96 - _tmp10*_tmp6 - _tmp15*cos(_tmp13) - _tmp59*_tmp64 - 2*_tmp36*_tmp95 + _tmp3*_tmp7*p_2 + 2*_tmp12*_tmp5*p_3 + 2*_tmp2*_tmp9*p_2 + 2*_tmp41*_tmp57*_tmp60*_tmp61;
+    out[1] = _fix3 - _tmp94 - 2*_tmp37 + _tmp5*_tmp6 + _tmp62*_tmp64 + _tmp66*_tmp89 + 2*_tmp59*_tmp60 + _tmp2*_tmp3*p_2 - 2*_tmp7*_tmp9*p_2 + 2*_tmp10*_tmp12*p_3;
+    out[2] = _fix4 - _tmp96 - _tmp10*_tmp6 - _tmp59*_tmp64 - 2*_tmp36*_tmp95 + _tmp3*_tmp7*p_2 + 2*_tmp12*_tmp5*p_3 + 2*_tmp2*_tmp9*p_2 + 2*_tmp41*_tmp57*_tmp60*_tmp61;
     out[3] = -1;
     out[4] = -1;
     out[5] = 1;
@@ -1171,9 +1215,14 @@ typedef void (*sk_fn3)(const double *a, const double *b, const double *c, double
 /* Gaussian elimination with partial pivoting (the first largest pivot) of the n x n row-major
    a, in place, for the n x m row-major right-hand sides b, which become the solution. Returns 0,
    or 1 when a pivot is zero or not finite. */
+static int sk_solve_k(double *a, double *b);
+
 static int sk_solve(int n, double *a, int m, double *b)
 {
     int i, j, c, p, r;
+    if (n == SK_K && m == 1) {
+        return sk_solve_k(a, b);
+    }
     for (c = 0; c < n; ++c) {
         double best = fabs(a[c * n + c]);
         p = c;
@@ -1217,6 +1266,53 @@ static int sk_solve(int n, double *a, int m, double *b)
             }
             b[i * m + r] = s / a[i * n + i];
         }
+    }
+    return 0;
+}
+
+/* sk_solve for the loops' SK_K unknowns and one right-hand side (every Newton step of the rigid
+   and exact closures, the first-order delta): the same operations in the same order, the same
+   bits, with the sizes constants (a third fewer instructions, docs/benchmarks.md). */
+static int sk_solve_k(double *a, double *b)
+{
+    int i, j, c, p;
+    for (c = 0; c < SK_K; ++c) {
+        double best = fabs(a[c * SK_K + c]);
+        p = c;
+        for (i = c + 1; i < SK_K; ++i) {
+            if (fabs(a[i * SK_K + c]) > best) {
+                best = fabs(a[i * SK_K + c]);
+                p = i;
+            }
+        }
+        if (!(best > 0.0) || !isfinite(best)) {
+            return 1;
+        }
+        if (p != c) {
+            double t;
+            for (j = c; j < SK_K; ++j) {
+                t = a[c * SK_K + j];
+                a[c * SK_K + j] = a[p * SK_K + j];
+                a[p * SK_K + j] = t;
+            }
+            t = b[c];
+            b[c] = b[p];
+            b[p] = t;
+        }
+        for (i = c + 1; i < SK_K; ++i) {
+            const double f = a[i * SK_K + c] / a[c * SK_K + c];
+            for (j = c + 1; j < SK_K; ++j) {
+                a[i * SK_K + j] -= f * a[c * SK_K + j];
+            }
+            b[i] -= f * b[c];
+        }
+    }
+    for (i = SK_K - 1; i >= 0; --i) {
+        double s = b[i];
+        for (j = i + 1; j < SK_K; ++j) {
+            s -= a[i * SK_K + j] * b[j];
+        }
+        b[i] = s / a[i * SK_K + i];
     }
     return 0;
 }
@@ -1352,6 +1448,8 @@ typedef struct {
     sk_sens sens;       /* its sensitivities (fn NULL: none) */
     sk_fn3 consistency; /* redundant loops: its closure's dropped rows, then their terms' size
                            (theta, delta, q); NULL: none */
+    sk_fn2 prepare;     /* the closure's terms without delta (theta, q), once per solve: what
+                           `closure` reads in place of theta; NULL: it reads theta */
 } sk_level;
 
 /* One mechanism: its tables, routines and solver settings. Routines a mechanism lacks are
@@ -1514,11 +1612,13 @@ static void sk_closure_system(const void *ctx, const double *delta, double *fj)
 }
 
 /* delta of a closure: A delta = -r (its first-order delta), then with `closure` (F,
-   dF/ddelta) Newton from there. Returns a status. */
+   dF/ddelta) Newton from there; with `prepare` the closure reads its terms without delta,
+   computed once here, in place of theta. Returns a status. */
 static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure,
-                            const double *theta, const double *q, double *delta)
+                            sk_fn2 prepare, const double *theta, const double *q, double *delta)
 {
     double lin[SK_K * SK_K + 2 * SK_K + 1], fj[SK_K + SK_K * SK_K + 1], scale[SK_K + 1];
+    double pre[SK_OUT];
     sk_closure_ctx c;
     int i;
     linear(theta, q, lin);
@@ -1535,6 +1635,10 @@ static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure
     c.closure = closure;
     c.theta = theta;
     c.q = q;
+    if (prepare != NULL) {
+        prepare(theta, q, pre);
+        c.theta = pre;
+    }
     return sk_newton_solve(sk_closure_system, &c, SK_K, NULL, &m->exact_rule, scale, delta, fj,
                            0);
 }
@@ -1578,7 +1682,8 @@ static int sk_pose(const sk_mechanism *m, const sk_level *lv, const double *inpu
         }
     }
     if (lv->linear != NULL && (m->needs_loops || (m->loops_for_links && want_links))) {
-        const int status = sk_solve_closure(m, lv->linear, lv->closure, theta, *q, delta);
+        const int status = sk_solve_closure(m, lv->linear, lv->closure, lv->prepare, theta, *q,
+                                              delta);
         if (status) {
             return status;
         }
@@ -2005,7 +2110,7 @@ static int sk_stroke_rigid_points(const sk_mechanism *m, const double *x, const 
                                   double *out, double *theta)
 {
     static const sk_level rigid_only = {0, NULL, NULL, NULL, 0, {NULL, 0, 0, 0, 0, 0, 0, 0},
-                                        NULL};
+                                        NULL, NULL};
     double delta[SK_K + 1], constants[SK_NQ], rigid[2 * SK_NP + 1];
     const double *q;
     int i, s;
@@ -2535,11 +2640,14 @@ static const int sk_rest[10] = {1, 1, 0, 2, 1, 0, 3, 1, 0};
    the dropped rows of its closure (redundant loops) */
 static const sk_level sk_levels[] = {
     {0, sk_dev_paper, NULL, NULL, 0,  /* paper */
-     {sk_sens_paper, 0, 0, 0, 0, 0, 0, 12}, NULL},
+     {sk_sens_paper, 0, 0, 0, 0, 0, 0, 12}, NULL,
+     NULL},
     {1, sk_dev_first_order, sk_linear, NULL, 0,  /* first_order */
-     {sk_sens_first_order, 1, 0, 9, 18, 36, 48, 60}, NULL},
+     {sk_sens_first_order, 1, 0, 9, 18, 36, 48, 60}, NULL,
+     NULL},
     {2, sk_dev_exact, sk_linear, sk_newton, 0,  /* exact */
-     {sk_sens_exact, 1, 0, 9, 18, 36, 48, 60}, NULL}
+     {sk_sens_exact, 1, 0, 9, 18, 36, 48, 60}, NULL,
+     sk_newton_pre}
 };
 
 static const sk_mechanism sk_mechanism_tables = {

@@ -3,7 +3,7 @@
  * Mechanism 'piezo_amplifier': 4 links, 4 hinges, 1 loop(s); inputs piezo (actuators; their strokes fix the angles of RA0 (piezo)).
  * Points: B; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, action_at 4, loaded_plates1 147, loaded_system1 722, loaded_res1 292, loaded_dev1 104, loaded_report1 413, loaded_plates2 372, loaded_system2 1863, loaded_res2 568, loaded_dev2 189, loaded_report2 837, dev_paper 31, dev_first_order 51, dev_exact 62, links 1, sens_rigid 105, sens_paper 108, sens_first_order 355, sens_exact 449, loaded_sens1 938, loaded_sens2 1997, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
+ * Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton_pre 28, newton 239, rigid_points 28, action_at 4, loaded_plates1 147, loaded_system1 722, loaded_res1 292, loaded_dev1 104, loaded_report1 413, loaded_plates2 372, loaded_system2 1863, loaded_res2 568, loaded_dev2 189, loaded_report2 837, dev_paper 31, dev_first_order 51, dev_exact 62, links 1, sens_rigid 105, sens_paper 108, sens_first_order 355, sens_exact 449, loaded_sens1 938, loaded_sens2 1997, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
  */
 #include "piezo_amplifier.h"
 
@@ -910,65 +910,121 @@ static void sk_linear(const double *theta, const double *params, double *out)
     out[14] = _tmp47;
 }
 
-/* exact compliant closure F(delta) and dF/ddelta (266 operations) */
-static void sk_newton(const double *theta, const double *delta, const double *params, double *out)
+/* exact compliant closure F(delta) and dF/ddelta: its terms without delta, once per solve (28 operations) */
+static void sk_newton_pre(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
     const double theta_2 = theta[1];
     const double theta_3 = theta[2];
     const double theta_4 = theta[3];
-    const double delta_2 = delta[0];
-    const double delta_3 = delta[1];
-    const double delta_4 = delta[2];
     const double p_0 = params[0];
     const double p_1 = params[1];
     const double p_3 = params[3];
     const double _tmp0 = theta_1 + theta_2;
     const double _tmp1 = sin(_tmp0);
     const double _tmp7 = sin(p_1);
-    const double _tmp2 = sin(delta_2);
     const double _tmp3 = cos(p_1);
     const double _tmp4 = _tmp3*p_0;
-    const double _tmp5 = 0.5*delta_2;
-    const double _tmp6 = pow(sin(_tmp5), 2);
     const double _tmp8 = _tmp7*p_0;
     const double _tmp9 = 2*_tmp8;
-    const double _tmp10 = -_tmp2*_tmp4 - _tmp6*_tmp9;
     const double _tmp11 = sin(theta_3);
+    const double _tmp16 = cos(theta_3);
+    const double _tmp18 = cos(_tmp0);
+    const double _tmp20 = 0.5*theta_1;
+    const double _tmp21 = 0.25*p_3;
+    const double _tmp22 = _tmp21*pow(theta_1, 2)*symkin_arck(_tmp20);
+    const double _tmp25 = cos(theta_1);
+    const double _tmp32 = sin(theta_1);
+    const double _tmp40 = _tmp21*_tmp3;
+    const double _tmp44 = _tmp21*_tmp7;
+    out[0] = 0.5*theta_2;
+    out[1] = 0.5*theta_3;
+    out[2] = 0.5*theta_4;
+    out[3] = -_tmp22*sin(_tmp20);
+    out[4] = _tmp22*cos(_tmp20);
+    out[5] = _tmp0;
+    out[6] = p_0;
+    out[7] = _tmp1;
+    out[8] = theta_2;
+    out[9] = _tmp3;
+    out[10] = p_3;
+    out[11] = theta_3;
+    out[12] = _tmp4;
+    out[13] = theta_4;
+    out[14] = _tmp7;
+    out[15] = _tmp8;
+    out[16] = _tmp9;
+    out[17] = _tmp11;
+    out[18] = _tmp16;
+    out[19] = _tmp18;
+    out[20] = _tmp21;
+    out[21] = _tmp25;
+    out[22] = _tmp32;
+    out[23] = _tmp40;
+    out[24] = _tmp44;
+}
+
+/* exact compliant closure F(delta) and dF/ddelta (239 operations) */
+static void sk_newton(const double *pre, const double *delta, const double *params, double *out)
+{
+    (void)params;
+    const double _fix0 = pre[0];
+    const double _fix1 = pre[1];
+    const double _fix2 = pre[2];
+    const double _fix3 = pre[3];
+    const double _fix4 = pre[4];
+    const double _tmp0 = pre[5];
+    const double p_0 = pre[6];
+    const double _tmp1 = pre[7];
+    const double theta_2 = pre[8];
+    const double _tmp3 = pre[9];
+    const double p_3 = pre[10];
+    const double theta_3 = pre[11];
+    const double _tmp4 = pre[12];
+    const double theta_4 = pre[13];
+    const double _tmp7 = pre[14];
+    const double _tmp8 = pre[15];
+    const double _tmp9 = pre[16];
+    const double _tmp11 = pre[17];
+    const double _tmp16 = pre[18];
+    const double _tmp18 = pre[19];
+    const double _tmp21 = pre[20];
+    const double _tmp25 = pre[21];
+    const double _tmp32 = pre[22];
+    const double _tmp40 = pre[23];
+    const double _tmp44 = pre[24];
+    const double delta_2 = delta[0];
+    const double delta_3 = delta[1];
+    const double delta_4 = delta[2];
+    const double _tmp2 = sin(delta_2);
+    const double _tmp5 = 0.5*delta_2;
+    const double _tmp6 = pow(sin(_tmp5), 2);
+    const double _tmp10 = -_tmp2*_tmp4 - _tmp6*_tmp9;
     const double _tmp12 = sin(delta_3);
     const double _tmp13 = 0.5*delta_3;
     const double _tmp14 = pow(sin(_tmp13), 2);
     const double _tmp15 = _tmp14*_tmp9 - _tmp12*_tmp4;
-    const double _tmp16 = cos(theta_3);
     const double _tmp17 = _tmp12*_tmp8 + 2*_tmp14*_tmp4;
-    const double _tmp18 = cos(_tmp0);
     const double _tmp19 = -_tmp2*_tmp8 + 2*_tmp3*_tmp6*p_0;
-    const double _tmp20 = 0.5*theta_1;
-    const double _tmp21 = 0.25*p_3;
-    const double _tmp22 = _tmp21*pow(theta_1, 2)*symkin_arck(_tmp20);
-    const double _tmp23 = _tmp5 + 0.5*theta_2;
+    const double _tmp23 = _fix0 + _tmp5;
     const double _tmp24 = sin(_tmp23);
-    const double _tmp25 = cos(theta_1);
     const double _tmp26 = delta_2 + theta_2;
     const double _tmp27 = symkin_arck(_tmp23);
     const double _tmp28 = _tmp27*pow(_tmp26, 2);
     const double _tmp29 = _tmp21*_tmp28;
     const double _tmp30 = _tmp25*_tmp29;
     const double _tmp31 = cos(_tmp23);
-    const double _tmp32 = sin(theta_1);
     const double _tmp33 = _tmp29*_tmp32;
-    const double _tmp34 = _tmp13 + 0.5*theta_3;
+    const double _tmp34 = _fix1 + _tmp13;
     const double _tmp35 = cos(_tmp34);
     const double _tmp36 = delta_3 + theta_3;
     const double _tmp37 = pow(_tmp36, 2);
     const double _tmp38 = symkin_arck(_tmp34);
     const double _tmp39 = _tmp37*_tmp38;
-    const double _tmp40 = _tmp21*_tmp3;
     const double _tmp41 = _tmp39*_tmp40;
     const double _tmp42 = sin(_tmp34);
     const double _tmp43 = cos(_tmp36);
-    const double _tmp44 = _tmp21*_tmp7;
-    const double _tmp45 = 0.5*delta_4 + 0.5*theta_4;
+    const double _tmp45 = _fix2 + 0.5*delta_4;
     const double _tmp47 = symkin_arck(_tmp45);
     const double _tmp48 = delta_4 + theta_4;
     const double _tmp49 = pow(_tmp48, 2);
@@ -1011,8 +1067,8 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp85 = _tmp3*_tmp84 - _tmp7*_tmp83;
     const double _tmp86 = _tmp3*_tmp83 + _tmp7*_tmp84;
     out[0] = delta_2 - delta_3 - delta_4;
-    out[1] = -_tmp56 + _tmp16*_tmp17 + _tmp18*_tmp19 - _tmp1*_tmp10 - _tmp11*_tmp15 - _tmp22*sin(_tmp20) - _tmp24*_tmp30 - _tmp31*_tmp33 - _tmp35*_tmp41 + 0.25*_tmp37*_tmp38*_tmp42*_tmp7*p_3;
-    out[2] = -_tmp57 - _tmp58 + _tmp1*_tmp19 + _tmp10*_tmp18 + _tmp11*_tmp17 + _tmp15*_tmp16 + _tmp22*cos(_tmp20) + _tmp30*_tmp31 - _tmp24*_tmp33 - _tmp41*_tmp42 - _tmp35*_tmp39*_tmp44;
+    out[1] = _fix3 - _tmp56 + _tmp16*_tmp17 + _tmp18*_tmp19 - _tmp1*_tmp10 - _tmp11*_tmp15 - _tmp24*_tmp30 - _tmp31*_tmp33 - _tmp35*_tmp41 + 0.25*_tmp37*_tmp38*_tmp42*_tmp7*p_3;
+    out[2] = _fix4 - _tmp57 - _tmp58 + _tmp1*_tmp19 + _tmp10*_tmp18 + _tmp11*_tmp17 + _tmp15*_tmp16 + _tmp30*_tmp31 - _tmp24*_tmp33 - _tmp41*_tmp42 - _tmp35*_tmp39*_tmp44;
     out[3] = 1;
     out[4] = -1;
     out[5] = -1;
@@ -7327,9 +7383,14 @@ typedef void (*sk_fn3)(const double *a, const double *b, const double *c, double
 /* Gaussian elimination with partial pivoting (the first largest pivot) of the n x n row-major
    a, in place, for the n x m row-major right-hand sides b, which become the solution. Returns 0,
    or 1 when a pivot is zero or not finite. */
+static int sk_solve_k(double *a, double *b);
+
 static int sk_solve(int n, double *a, int m, double *b)
 {
     int i, j, c, p, r;
+    if (n == SK_K && m == 1) {
+        return sk_solve_k(a, b);
+    }
     for (c = 0; c < n; ++c) {
         double best = fabs(a[c * n + c]);
         p = c;
@@ -7373,6 +7434,53 @@ static int sk_solve(int n, double *a, int m, double *b)
             }
             b[i * m + r] = s / a[i * n + i];
         }
+    }
+    return 0;
+}
+
+/* sk_solve for the loops' SK_K unknowns and one right-hand side (every Newton step of the rigid
+   and exact closures, the first-order delta): the same operations in the same order, the same
+   bits, with the sizes constants (a third fewer instructions, docs/benchmarks.md). */
+static int sk_solve_k(double *a, double *b)
+{
+    int i, j, c, p;
+    for (c = 0; c < SK_K; ++c) {
+        double best = fabs(a[c * SK_K + c]);
+        p = c;
+        for (i = c + 1; i < SK_K; ++i) {
+            if (fabs(a[i * SK_K + c]) > best) {
+                best = fabs(a[i * SK_K + c]);
+                p = i;
+            }
+        }
+        if (!(best > 0.0) || !isfinite(best)) {
+            return 1;
+        }
+        if (p != c) {
+            double t;
+            for (j = c; j < SK_K; ++j) {
+                t = a[c * SK_K + j];
+                a[c * SK_K + j] = a[p * SK_K + j];
+                a[p * SK_K + j] = t;
+            }
+            t = b[c];
+            b[c] = b[p];
+            b[p] = t;
+        }
+        for (i = c + 1; i < SK_K; ++i) {
+            const double f = a[i * SK_K + c] / a[c * SK_K + c];
+            for (j = c + 1; j < SK_K; ++j) {
+                a[i * SK_K + j] -= f * a[c * SK_K + j];
+            }
+            b[i] -= f * b[c];
+        }
+    }
+    for (i = SK_K - 1; i >= 0; --i) {
+        double s = b[i];
+        for (j = i + 1; j < SK_K; ++j) {
+            s -= a[i * SK_K + j] * b[j];
+        }
+        b[i] = s / a[i * SK_K + i];
     }
     return 0;
 }
@@ -7566,6 +7674,8 @@ typedef struct {
     sk_sens sens;       /* its sensitivities (fn NULL: none) */
     sk_fn3 consistency; /* redundant loops: its closure's dropped rows, then their terms' size
                            (theta, delta, q); NULL: none */
+    sk_fn2 prepare;     /* the closure's terms without delta (theta, q), once per solve: what
+                           `closure` reads in place of theta; NULL: it reads theta */
 } sk_level;
 
 /* One mechanism: its tables, routines and solver settings. Routines a mechanism lacks are
@@ -7728,11 +7838,13 @@ static void sk_closure_system(const void *ctx, const double *delta, double *fj)
 }
 
 /* delta of a closure: A delta = -r (its first-order delta), then with `closure` (F,
-   dF/ddelta) Newton from there. Returns a status. */
+   dF/ddelta) Newton from there; with `prepare` the closure reads its terms without delta,
+   computed once here, in place of theta. Returns a status. */
 static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure,
-                            const double *theta, const double *q, double *delta)
+                            sk_fn2 prepare, const double *theta, const double *q, double *delta)
 {
     double lin[SK_K * SK_K + 2 * SK_K + 1], fj[SK_K + SK_K * SK_K + 1], scale[SK_K + 1];
+    double pre[SK_OUT];
     sk_closure_ctx c;
     int i;
     linear(theta, q, lin);
@@ -7749,6 +7861,10 @@ static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure
     c.closure = closure;
     c.theta = theta;
     c.q = q;
+    if (prepare != NULL) {
+        prepare(theta, q, pre);
+        c.theta = pre;
+    }
     return sk_newton_solve(sk_closure_system, &c, SK_K, NULL, &m->exact_rule, scale, delta, fj,
                            0);
 }
@@ -7800,7 +7916,8 @@ static int sk_pose(const sk_mechanism *m, const sk_level *lv, const double *inpu
         *q = constants;
     }
     if (lv->linear != NULL && (m->needs_loops || (m->loops_for_links && want_links))) {
-        const int status = sk_solve_closure(m, lv->linear, lv->closure, theta, *q, delta);
+        const int status = sk_solve_closure(m, lv->linear, lv->closure, lv->prepare, theta, *q,
+                                              delta);
         if (status) {
             return status;
         }
@@ -9307,7 +9424,7 @@ static int sk_stroke_rigid_points(const sk_mechanism *m, const double *x, const 
                                   double *out, double *theta)
 {
     static const sk_level rigid_only = {0, NULL, NULL, NULL, 0, {NULL, 0, 0, 0, 0, 0, 0, 0},
-                                        NULL};
+                                        NULL, NULL};
     double delta[SK_K + 1], constants[SK_NQ], rigid[2 * SK_NP + 1];
     const double *q;
     int i, s;
@@ -10059,13 +10176,17 @@ static const int sk_rest[10] = {1, 1, 0, 2, 1, 0, 3, 1, 0};
    the dropped rows of its closure (redundant loops) */
 static const sk_level sk_levels[] = {
     {0, sk_dev_paper, NULL, NULL, 0,  /* paper */
-     {sk_sens_paper, 0, 0, 0, 0, 0, 0, 12}, NULL},
+     {sk_sens_paper, 0, 0, 0, 0, 0, 0, 12}, NULL,
+     NULL},
     {1, sk_dev_first_order, sk_linear, NULL, 0,  /* first_order */
-     {sk_sens_first_order, 1, 0, 9, 18, 36, 48, 60}, NULL},
+     {sk_sens_first_order, 1, 0, 9, 18, 36, 48, 60}, NULL,
+     NULL},
     {2, sk_dev_exact, sk_linear, sk_newton, 0,  /* exact */
-     {sk_sens_exact, 1, 0, 9, 18, 36, 48, 60}, NULL},
+     {sk_sens_exact, 1, 0, 9, 18, 36, 48, 60}, NULL,
+     sk_newton_pre},
     {3, sk_loaded_deviation, NULL, NULL, 1,  /* loaded */
-     {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL}
+     {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL,
+     NULL}
 };
 
 static const sk_mechanism sk_mechanism_tables = {

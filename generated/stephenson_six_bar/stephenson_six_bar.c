@@ -3,7 +3,7 @@
  * Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
  * Points: D; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_res1 441, loaded_dev1 60, loaded_report1 949, loaded_plates2 623, loaded_system2 3042, loaded_res2 944, loaded_dev2 143, loaded_report2 2161, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, loaded_sens1 1094, loaded_sens2 2741, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
+ * Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton_pre 34, newton 522, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_res1 441, loaded_dev1 60, loaded_report1 949, loaded_plates2 623, loaded_system2 3042, loaded_res2 944, loaded_dev2 143, loaded_report2 2161, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, loaded_sens1 1094, loaded_sens2 2741, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
  */
 #include "stephenson_six_bar.h"
 
@@ -1041,8 +1041,8 @@ static void sk_linear(const double *theta, const double *params, double *out)
     out[47] = _tmp87;
 }
 
-/* exact compliant closure F(delta) and dF/ddelta (556 operations) */
-static void sk_newton(const double *theta, const double *delta, const double *params, double *out)
+/* exact compliant closure F(delta) and dF/ddelta: its terms without delta, once per solve (34 operations) */
+static void sk_newton_pre(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
     const double theta_2 = theta[1];
@@ -1051,55 +1051,138 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double theta_5 = theta[4];
     const double theta_6 = theta[5];
     const double theta_7 = theta[6];
+    const double p_0 = params[0];
+    const double _tmp1 = sin(theta_3);
+    const double _tmp7 = theta_3 + theta_5;
+    const double _tmp8 = sin(_tmp7);
+    const double _tmp13 = cos(theta_3);
+    const double _tmp16 = cos(_tmp7);
+    const double _tmp29 = cos(theta_1);
+    const double _tmp32 = 0.25*p_0;
+    const double _tmp37 = sin(theta_1);
+    const double _tmp51 = 0.5*theta_1;
+    const double _tmp52 = _tmp32*pow(theta_1, 2)*symkin_arck(_tmp51);
+    const double _tmp65 = theta_3 + theta_4;
+    const double _tmp66 = sin(_tmp65);
+    const double _tmp72 = theta_1 + theta_2;
+    const double _tmp73 = sin(_tmp72);
+    const double _tmp91 = cos(_tmp65);
+    const double _tmp93 = cos(_tmp72);
+    const double _tmp132 = 0.0625*p_0;
+    const double _tmp134 = 0.125*p_0;
+    const double _tmp137 = 0.5*p_0;
+    out[0] = 0.6594566077552098*theta_5;
+    out[1] = 0.5*theta_6;
+    out[2] = 0.3297283038776049*theta_5;
+    out[3] = 0.5*theta_5;
+    out[4] = 0.5*theta_3;
+    out[5] = _tmp52*sin(_tmp51);
+    out[6] = _tmp52*cos(_tmp51);
+    out[7] = 0.5*theta_2;
+    out[8] = 0.5*theta_4;
+    out[9] = 0.5*theta_7;
+    out[10] = p_0;
+    out[11] = _tmp1;
+    out[12] = theta_2;
+    out[13] = theta_3;
+    out[14] = theta_4;
+    out[15] = theta_5;
+    out[16] = theta_6;
+    out[17] = _tmp7;
+    out[18] = theta_7;
+    out[19] = _tmp8;
+    out[20] = _tmp13;
+    out[21] = _tmp16;
+    out[22] = _tmp29;
+    out[23] = _tmp32;
+    out[24] = _tmp37;
+    out[25] = _tmp66;
+    out[26] = _tmp72;
+    out[27] = _tmp73;
+    out[28] = _tmp91;
+    out[29] = _tmp93;
+    out[30] = _tmp132;
+    out[31] = _tmp134;
+    out[32] = _tmp137;
+}
+
+/* exact compliant closure F(delta) and dF/ddelta (522 operations) */
+static void sk_newton(const double *pre, const double *delta, const double *params, double *out)
+{
+    (void)params;
+    const double _fix0 = pre[0];
+    const double _fix1 = pre[1];
+    const double _fix2 = pre[2];
+    const double _fix3 = pre[3];
+    const double _fix4 = pre[4];
+    const double _fix5 = pre[5];
+    const double _fix6 = pre[6];
+    const double _fix7 = pre[7];
+    const double _fix8 = pre[8];
+    const double _fix9 = pre[9];
+    const double p_0 = pre[10];
+    const double _tmp1 = pre[11];
+    const double theta_2 = pre[12];
+    const double theta_3 = pre[13];
+    const double theta_4 = pre[14];
+    const double theta_5 = pre[15];
+    const double theta_6 = pre[16];
+    const double _tmp7 = pre[17];
+    const double theta_7 = pre[18];
+    const double _tmp8 = pre[19];
+    const double _tmp13 = pre[20];
+    const double _tmp16 = pre[21];
+    const double _tmp29 = pre[22];
+    const double _tmp32 = pre[23];
+    const double _tmp37 = pre[24];
+    const double _tmp66 = pre[25];
+    const double _tmp72 = pre[26];
+    const double _tmp73 = pre[27];
+    const double _tmp91 = pre[28];
+    const double _tmp93 = pre[29];
+    const double _tmp132 = pre[30];
+    const double _tmp134 = pre[31];
+    const double _tmp137 = pre[32];
     const double delta_2 = delta[0];
     const double delta_3 = delta[1];
     const double delta_4 = delta[2];
     const double delta_5 = delta[3];
     const double delta_6 = delta[4];
     const double delta_7 = delta[5];
-    const double p_0 = params[0];
     const double _tmp0 = delta_3 + delta_5;
-    const double _tmp1 = sin(theta_3);
     const double _tmp2 = sin(delta_3);
     const double _tmp3 = 0.02*_tmp2;
     const double _tmp4 = 0.5*delta_3;
     const double _tmp5 = pow(sin(_tmp4), 2);
     const double _tmp6 = _tmp3 + 0.12*_tmp5;
-    const double _tmp7 = theta_3 + theta_5;
-    const double _tmp8 = sin(_tmp7);
     const double _tmp9 = sin(_tmp0);
     const double _tmp10 = 0.5*delta_5;
     const double _tmp11 = pow(sin(_tmp10 + _tmp4), 2);
     const double _tmp12 = 0.072*_tmp9 - 0.06*_tmp11;
-    const double _tmp13 = cos(theta_3);
     const double _tmp14 = 0.04*_tmp5;
     const double _tmp15 = -_tmp14 + 0.06*_tmp2;
-    const double _tmp16 = cos(_tmp7);
     const double _tmp17 = -0.03*_tmp9 - 0.144*_tmp11;
     const double _tmp18 = delta_5 + theta_5;
     const double _tmp19 = delta_3 + theta_3;
     const double _tmp20 = sin(_tmp19);
     const double _tmp21 = pow(_tmp18, 2);
-    const double _tmp22 = 0.6594566077552098*delta_5 + 0.6594566077552098*theta_5;
+    const double _tmp22 = _fix0 + 0.6594566077552098*delta_5;
     const double _tmp23 = 0.21067334783983213*symkin_sinr1(_tmp22) - 0.5*symkin_sinr1(_tmp18);
     const double _tmp24 = -0.01556317594302295 + _tmp21*_tmp23;
-    const double _tmp25 = 0.5*delta_6 + 0.5*theta_6;
+    const double _tmp25 = _fix1 + 0.5*delta_6;
     const double _tmp26 = sin(_tmp25);
     const double _tmp27 = symkin_arck(_tmp25);
     const double _tmp28 = _tmp26*_tmp27;
-    const double _tmp29 = cos(theta_1);
     const double _tmp30 = delta_6 + theta_6;
     const double _tmp31 = pow(_tmp30, 2);
-    const double _tmp32 = 0.25*p_0;
     const double _tmp33 = _tmp31*_tmp32;
     const double _tmp34 = _tmp29*_tmp33;
     const double _tmp35 = cos(_tmp25);
     const double _tmp36 = _tmp27*_tmp35;
-    const double _tmp37 = sin(theta_1);
     const double _tmp38 = _tmp33*_tmp37;
     const double _tmp39 = cos(_tmp19);
-    const double _tmp40 = 0.3297283038776049*delta_5 + 0.3297283038776049*theta_5;
-    const double _tmp41 = _tmp10 + 0.5*theta_5;
+    const double _tmp40 = _fix2 + 0.3297283038776049*delta_5;
+    const double _tmp41 = _fix3 + _tmp10;
     const double _tmp42 = -0.347615499514091*symkin_sinr1(_tmp40) + symkin_sinr1(_tmp41);
     const double _tmp43 = 0.25*_tmp21;
     const double _tmp44 = 0.20066894885245268 + _tmp42*_tmp43;
@@ -1109,29 +1192,23 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp48 = _tmp47*p_0;
     const double _tmp49 = _tmp46*_tmp48;
     const double _tmp50 = _tmp39*_tmp49;
-    const double _tmp51 = 0.5*theta_1;
-    const double _tmp52 = _tmp32*pow(theta_1, 2)*symkin_arck(_tmp51);
     const double _tmp53 = pow(_tmp19, 2);
-    const double _tmp54 = _tmp4 + 0.5*theta_3;
+    const double _tmp54 = _fix4 + _tmp4;
     const double _tmp55 = sin(_tmp54);
     const double _tmp56 = symkin_arck(_tmp54);
-    const double _tmp57 = _tmp52*sin(_tmp51) - 0.25*_tmp53*_tmp55*_tmp56*p_0;
+    const double _tmp57 = _fix5 - 0.25*_tmp53*_tmp55*_tmp56*p_0;
     const double _tmp58 = _tmp24*p_0;
     const double _tmp59 = _tmp18*_tmp58;
     const double _tmp60 = _tmp39*_tmp59;
     const double _tmp61 = _tmp20*_tmp49;
     const double _tmp62 = cos(_tmp54);
     const double _tmp63 = _tmp56*_tmp62;
-    const double _tmp64 = _tmp52*cos(_tmp51) - _tmp32*_tmp53*_tmp63;
-    const double _tmp65 = theta_3 + theta_4;
-    const double _tmp66 = sin(_tmp65);
+    const double _tmp64 = _fix6 - _tmp32*_tmp53*_tmp63;
     const double _tmp67 = sin(delta_3 + delta_4);
     const double _tmp68 = 0.5*delta_4;
     const double _tmp69 = pow(sin(_tmp4 + _tmp68), 2);
     const double _tmp70 = 0.05*_tmp67 + 0.08*_tmp69;
     const double _tmp71 = -_tmp3 + 0.1*_tmp5;
-    const double _tmp72 = theta_1 + theta_2;
-    const double _tmp73 = sin(_tmp72);
     const double _tmp74 = sin(delta_2);
     const double _tmp75 = 0.5*delta_2;
     const double _tmp76 = pow(sin(_tmp75), 2);
@@ -1139,7 +1216,7 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp78 = delta_2 + theta_2;
     const double _tmp79 = pow(_tmp78, 2);
     const double _tmp80 = 0.1767766952966369*_tmp79;
-    const double _tmp81 = _tmp75 + 0.5*theta_2;
+    const double _tmp81 = _fix7 + _tmp75;
     const double _tmp82 = symkin_arck(_tmp81);
     const double _tmp83 = p_0*sin(_tmp81);
     const double _tmp84 = _tmp82*_tmp83;
@@ -1149,12 +1226,10 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp88 = _tmp82*_tmp87;
     const double _tmp89 = _tmp85 + _tmp80*_tmp88;
     const double _tmp90 = _tmp14 + 0.05*_tmp2;
-    const double _tmp91 = cos(_tmp65);
     const double _tmp92 = 0.04*_tmp67 - 0.1*_tmp69;
-    const double _tmp93 = cos(_tmp72);
     const double _tmp94 = -0.07*_tmp74 - 0.08*_tmp76;
     const double _tmp95 = -_tmp85 + 0.1767766952966369*_tmp79*_tmp82*_tmp86*p_0;
-    const double _tmp96 = _tmp68 + 0.5*theta_4;
+    const double _tmp96 = _fix8 + _tmp68;
     const double _tmp97 = symkin_arck(_tmp96);
     const double _tmp100 = delta_4 + theta_4;
     const double _tmp101 = pow(_tmp100, 2);
@@ -1163,7 +1238,7 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp102 = _tmp101*_tmp32;
     const double _tmp103 = _tmp102*_tmp99;
     const double _tmp104 = _tmp103*_tmp39;
-    const double _tmp107 = 0.5*delta_7 + 0.5*theta_7;
+    const double _tmp107 = _fix9 + 0.5*delta_7;
     const double _tmp108 = symkin_arck(_tmp107);
     const double _tmp111 = delta_7 + theta_7;
     const double _tmp112 = pow(_tmp111, 2);
@@ -1190,12 +1265,9 @@ static void sk_newton(const double *theta, const double *delta, const double *pa
     const double _tmp129 = sin(_tmp126);
     const double _tmp130 = 0.072*_tmp129;
     const double _tmp131 = 0.02*_tmp20;
-    const double _tmp132 = 0.0625*p_0;
     const double _tmp133 = _tmp132*(_tmp19*_tmp19*_tmp19)*(-3*symkin_sinr2(_tmp54) + 3*symkin_cosr2(_tmp54) + symkin_sinr1(_tmp54));
-    const double _tmp134 = 0.125*p_0;
     const double _tmp135 = _tmp134*_tmp53;
     const double _tmp136 = _tmp55*_tmp56;
-    const double _tmp137 = 0.5*p_0;
     const double _tmp138 = _tmp137*_tmp19;
     const double _tmp139 = _tmp133*_tmp55 + _tmp135*_tmp63 + _tmp136*_tmp138;
     const double _tmp140 = _tmp58 + _tmp18*p_0*(_tmp21*(-_tmp47*(-3*symkin_sinr2(_tmp18) + symkin_cosr2(_tmp18)) + 0.09161826121794318*_tmp18*(-3*symkin_sinr2(_tmp22) + symkin_cosr2(_tmp22))) + 2*_tmp18*_tmp23);
@@ -11358,9 +11430,14 @@ typedef void (*sk_fn3)(const double *a, const double *b, const double *c, double
 /* Gaussian elimination with partial pivoting (the first largest pivot) of the n x n row-major
    a, in place, for the n x m row-major right-hand sides b, which become the solution. Returns 0,
    or 1 when a pivot is zero or not finite. */
+static int sk_solve_k(double *a, double *b);
+
 static int sk_solve(int n, double *a, int m, double *b)
 {
     int i, j, c, p, r;
+    if (n == SK_K && m == 1) {
+        return sk_solve_k(a, b);
+    }
     for (c = 0; c < n; ++c) {
         double best = fabs(a[c * n + c]);
         p = c;
@@ -11404,6 +11481,53 @@ static int sk_solve(int n, double *a, int m, double *b)
             }
             b[i * m + r] = s / a[i * n + i];
         }
+    }
+    return 0;
+}
+
+/* sk_solve for the loops' SK_K unknowns and one right-hand side (every Newton step of the rigid
+   and exact closures, the first-order delta): the same operations in the same order, the same
+   bits, with the sizes constants (a third fewer instructions, docs/benchmarks.md). */
+static int sk_solve_k(double *a, double *b)
+{
+    int i, j, c, p;
+    for (c = 0; c < SK_K; ++c) {
+        double best = fabs(a[c * SK_K + c]);
+        p = c;
+        for (i = c + 1; i < SK_K; ++i) {
+            if (fabs(a[i * SK_K + c]) > best) {
+                best = fabs(a[i * SK_K + c]);
+                p = i;
+            }
+        }
+        if (!(best > 0.0) || !isfinite(best)) {
+            return 1;
+        }
+        if (p != c) {
+            double t;
+            for (j = c; j < SK_K; ++j) {
+                t = a[c * SK_K + j];
+                a[c * SK_K + j] = a[p * SK_K + j];
+                a[p * SK_K + j] = t;
+            }
+            t = b[c];
+            b[c] = b[p];
+            b[p] = t;
+        }
+        for (i = c + 1; i < SK_K; ++i) {
+            const double f = a[i * SK_K + c] / a[c * SK_K + c];
+            for (j = c + 1; j < SK_K; ++j) {
+                a[i * SK_K + j] -= f * a[c * SK_K + j];
+            }
+            b[i] -= f * b[c];
+        }
+    }
+    for (i = SK_K - 1; i >= 0; --i) {
+        double s = b[i];
+        for (j = i + 1; j < SK_K; ++j) {
+            s -= a[i * SK_K + j] * b[j];
+        }
+        b[i] = s / a[i * SK_K + i];
     }
     return 0;
 }
@@ -11597,6 +11721,8 @@ typedef struct {
     sk_sens sens;       /* its sensitivities (fn NULL: none) */
     sk_fn3 consistency; /* redundant loops: its closure's dropped rows, then their terms' size
                            (theta, delta, q); NULL: none */
+    sk_fn2 prepare;     /* the closure's terms without delta (theta, q), once per solve: what
+                           `closure` reads in place of theta; NULL: it reads theta */
 } sk_level;
 
 /* One mechanism: its tables, routines and solver settings. Routines a mechanism lacks are
@@ -11759,11 +11885,13 @@ static void sk_closure_system(const void *ctx, const double *delta, double *fj)
 }
 
 /* delta of a closure: A delta = -r (its first-order delta), then with `closure` (F,
-   dF/ddelta) Newton from there. Returns a status. */
+   dF/ddelta) Newton from there; with `prepare` the closure reads its terms without delta,
+   computed once here, in place of theta. Returns a status. */
 static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure,
-                            const double *theta, const double *q, double *delta)
+                            sk_fn2 prepare, const double *theta, const double *q, double *delta)
 {
     double lin[SK_K * SK_K + 2 * SK_K + 1], fj[SK_K + SK_K * SK_K + 1], scale[SK_K + 1];
+    double pre[SK_OUT];
     sk_closure_ctx c;
     int i;
     linear(theta, q, lin);
@@ -11780,6 +11908,10 @@ static int sk_solve_closure(const sk_mechanism *m, sk_fn2 linear, sk_fn3 closure
     c.closure = closure;
     c.theta = theta;
     c.q = q;
+    if (prepare != NULL) {
+        prepare(theta, q, pre);
+        c.theta = pre;
+    }
     return sk_newton_solve(sk_closure_system, &c, SK_K, NULL, &m->exact_rule, scale, delta, fj,
                            0);
 }
@@ -11831,7 +11963,8 @@ static int sk_pose(const sk_mechanism *m, const sk_level *lv, const double *inpu
         *q = constants;
     }
     if (lv->linear != NULL && (m->needs_loops || (m->loops_for_links && want_links))) {
-        const int status = sk_solve_closure(m, lv->linear, lv->closure, theta, *q, delta);
+        const int status = sk_solve_closure(m, lv->linear, lv->closure, lv->prepare, theta, *q,
+                                              delta);
         if (status) {
             return status;
         }
@@ -13228,13 +13361,17 @@ static const int sk_rest[19] = {1, 1, 0, 2, 1, 0, 3, 1, 0, 4, 1, 0, 5, 1, 0, 6, 
    the dropped rows of its closure (redundant loops) */
 static const sk_level sk_levels[] = {
     {0, sk_dev_paper, NULL, NULL, 0,  /* paper */
-     {sk_sens_paper, 0, 0, 0, 0, 0, 0, 12}, NULL},
+     {sk_sens_paper, 0, 0, 0, 0, 0, 0, 12}, NULL,
+     NULL},
     {1, sk_dev_first_order, sk_linear, NULL, 0,  /* first_order */
-     {sk_sens_first_order, 1, 0, 36, 72, 84, 96, 108}, NULL},
+     {sk_sens_first_order, 1, 0, 36, 72, 84, 96, 108}, NULL,
+     NULL},
     {2, sk_dev_exact, sk_linear, sk_newton, 0,  /* exact */
-     {sk_sens_exact, 1, 0, 36, 72, 84, 96, 108}, NULL},
+     {sk_sens_exact, 1, 0, 36, 72, 84, 96, 108}, NULL,
+     sk_newton_pre},
     {3, sk_loaded_deviation, NULL, NULL, 1,  /* loaded */
-     {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL}
+     {NULL, 0, 0, 0, 0, 0, 0, 0}, NULL,
+     NULL}
 };
 
 static const sk_mechanism sk_mechanism_tables = {

@@ -133,3 +133,64 @@ def _index(symbol: sp.Symbol) -> tuple[int, str]:
 def flatten(rows: Sequence[Sequence[sp.Expr]]) -> tuple[sp.Expr, ...]:
     """Row-major flattening of a matrix given as rows."""
     return tuple(e for row in rows for e in row)
+
+
+def hoist(routine: Routine, varying: str, prefix: str = "_fix") -> tuple[Routine, Routine]:
+    """`routine` split for a loop that calls it again and again with only the argument named
+    `varying` changed (a Newton iteration's delta): `<name>_pre`, what depends on the other
+    arguments alone, once, and `<name>`, reading those values from the argument `pre` instead
+    of its first argument (the same arguments otherwise, the same outputs). Every assignment
+    and every largest subexpression without the varying symbols moves into `<name>_pre`, so
+    the loop computes no trigonometry of the fixed angles twice (docs/generated-code.md)."""
+    moving = set(next(a for a in routine.arguments if a.name == varying).symbols)
+    fixed_lines: list[tuple[sp.Symbol, sp.Expr]] = []
+    lines: list[tuple[sp.Symbol, sp.Expr]] = []
+    lifted: dict[sp.Expr, sp.Symbol] = {}
+    names = sp.numbered_symbols(prefix, real=True)
+
+    def lift(expr: sp.Expr) -> sp.Expr:
+        if not expr.args:
+            return expr
+        if isinstance(expr, sp.Expr) and not expr.free_symbols & moving:
+            # (a condition of a Piecewise stays where it is: only numbers move)
+            if expr not in lifted:
+                lifted[expr] = next(names)
+            return lifted[expr]
+        return expr.func(*(lift(a) for a in expr.args))
+
+    for symbol, expr in routine.assignments:
+        if expr.free_symbols & moving:
+            moving.add(symbol)
+            lines.append((symbol, lift(expr)))
+        else:
+            fixed_lines.append((symbol, expr))
+    outputs = tuple(lift(sp.sympify(e)) for e in routine.outputs)
+    # what the loop reads of the fixed side: the lifted subexpressions, then fixed names
+    read: set[sp.Symbol] = set()
+    for e in [e for _, e in lines] + list(outputs):
+        read |= e.free_symbols
+    carried = list(lifted.values()) + sorted(
+        (s for s in read - moving - set(lifted.values())), key=_index
+    )
+    values = {s: e for e, s in lifted.items()}
+    pre_args = tuple(a for a in routine.arguments if a.name != varying)
+    pre = Routine(
+        routine.name + "_pre",
+        pre_args,
+        tuple(fixed_lines),
+        tuple(values.get(s, s) for s in carried),
+        f"{routine.doc}: its terms without {varying}, once per solve",
+        layout(("pre", len(carried), 1)),
+    )
+    first = routine.arguments[0]
+    if first.name == varying:
+        raise ValueError(f"routine {routine.name}: its first argument is the varying one")
+    loop = replace(
+        routine,
+        # the other fixed arguments stay in the signature, read through `pre` alone
+        arguments=(Argument("pre", tuple(carried)),)
+        + tuple(a if a.name == varying else Argument(a.name, ()) for a in routine.arguments[1:]),
+        assignments=tuple(lines),
+        outputs=outputs,
+    )
+    return pre, loop

@@ -35,11 +35,37 @@ _IntPointer: TypeAlias = "ctypes._Pointer[ctypes.c_int]"
 CFLAGS = ("-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O2", "-fPIC", "-shared")
 
 
+#: GCC's passes that take a fifth of the build of a large mechanism's C (the bridge amplifier's
+#: 0.8 MB: the alias walks of dead-store elimination, the second scheduling pass over its long
+#: straight-line routines) and change neither a bit of its results nor its speed measurably
+#: (docs/benchmarks.md); added for GCC only (other compilers may not take them).
+GCC_CFLAGS = ("-fno-tree-dse", "-fno-schedule-insns2")
+
+
 def cflags() -> tuple[str, ...]:
-    """The flags the generated C is compiled with: :data:`CFLAGS`, then $SYMKIN_CFLAGS's (split
-    as a shell would; docs/cli.md): a later -O wins, so `-O0` compiles a large mechanism several
-    times faster for a quick check, `-O3 -march=native` tunes it to this machine."""
-    return CFLAGS + tuple(shlex.split(os.environ.get("SYMKIN_CFLAGS", "")))
+    """The flags the generated C is compiled with: :data:`CFLAGS` (with GCC also
+    :data:`GCC_CFLAGS`), then $SYMKIN_CFLAGS's (split as a shell would; docs/cli.md): a later -O
+    wins, so `-O0` compiles a large mechanism several times faster for a quick check, `-O3
+    -march=native` tunes it to this machine."""
+    extra = GCC_CFLAGS if _is_gcc(os.environ.get("CC", "cc")) else ()
+    return CFLAGS + extra + tuple(shlex.split(os.environ.get("SYMKIN_CFLAGS", "")))
+
+
+_GCC: dict[str, bool] = {}
+
+
+def _is_gcc(cc: str) -> bool:
+    """Whether the compiler `cc` is GCC (its --version names the FSF, not clang); asked once per
+    process and name."""
+    if cc not in _GCC:
+        try:
+            text = subprocess.run(
+                [cc, "--version"], capture_output=True, text=True, timeout=30
+            ).stdout
+        except (OSError, subprocess.SubprocessError):
+            text = ""
+        _GCC[cc] = "Free Software Foundation" in text and "clang" not in text.lower()
+    return _GCC[cc]
 
 
 def compiler() -> str:

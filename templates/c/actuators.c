@@ -132,7 +132,7 @@ static int sk_stroke_rigid_points(const sk_mechanism *m, const double *x, const 
                                   double *out, double *theta)
 {
     static const sk_level rigid_only = {0, NULL, NULL, NULL, 0, {NULL, 0, 0, 0, 0, 0, 0, 0},
-                                        NULL};
+                                        NULL, NULL};
     double delta[SK_K + 1], constants[SK_NQ], rigid[2 * SK_NP + 1];
     const double *q;
     int i, s;

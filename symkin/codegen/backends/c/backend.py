@@ -7,7 +7,7 @@ import dataclasses
 
 from ....model import special
 from ...plan import Plan, ScenePlan
-from ...routines import Routine
+from ...routines import Routine, hoist
 from ...templating import render
 from ..common import Backend, routine_data, scene_context
 from . import kernels
@@ -32,8 +32,17 @@ class CBackend(Backend):
             unused |= {"loaded_modes1", "loaded_modes2", "modes_data"}  # no <name>_modes
         if plan.forces:
             unused |= {"loaded_sens1", "loaded_sens2", "plate_eps4"}
-        if unused & set(plan.routines):
-            routines = {k: r for k, r in plan.routines.items() if k not in unused}
+        if unused & set(plan.routines) or "newton" in plan.routines:
+            routines = {}
+            for k, r in plan.routines.items():
+                if k == "newton":
+                    # the exact closure's Newton loop: its terms of theta and the parameters
+                    # alone once per solve (<name>_pre), only delta's in the loop
+                    pre, loop = hoist(r, "delta")
+                    routines[pre.name] = pre
+                    routines[k] = loop
+                elif k not in unused:
+                    routines[k] = r
             plan = dataclasses.replace(plan, routines=routines)
         return super().render(plan, source, precision)
 
