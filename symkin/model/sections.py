@@ -60,7 +60,7 @@ def number(expr: Any, values: Mapping[sp.Symbol, sp.Expr]) -> float:
     text (_INTEGRALS): sympy evaluates each by its own quadrature, tens of seconds, and alike
     hinges ask for the same."""
     at = sp.sympify(expr).xreplace(values)
-    if not at.has(sp.Integral):
+    if not (isinstance(at, sp.Basic) and at.has(sp.Integral)):  # values may map to Python numbers
         return float(sp.N(at, DIGITS))
     key = sp.srepr(at)
     if key not in _INTEGRALS:
