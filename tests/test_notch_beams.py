@@ -360,3 +360,23 @@ def test_a_notch_model_error_says_what_the_corrected_beam_leaves():
     want = 0.006 * theta * float(drift) / math.hypot(*ev.points["P"].deviation)
     assert ev.model_error_parts["P"]["notch"] == pytest.approx(want, rel=0.02)
     assert ev.model_error["P"] >= want
+
+
+def test_alike_notches_share_their_integrals_and_grids_only():
+    """Notch.quad and section_beams.grid_of keep their work by the section's geometry and
+    material, not its hinge: two hinges alike share it (each grid named by its own hinge), a
+    notch one micrometre thicker does not."""
+    import dataclasses
+
+    from symkin.physics import section_beams
+
+    one = circular(1e-3, 1e-4)
+    twin = dataclasses.replace(one, hinge="M")
+    thicker = circular(1e-3, 1.01e-4)
+    got = [s.quad(lambda x, t, s=s: 1 / s._EI(t), {}) for s in (one, twin, thicker)]
+    assert got[1] is got[0]
+    assert float(got[0]) == pytest.approx(float(eb_integrals("1e-3", "1e-4")[0]), rel=1e-14)
+    assert float(got[2]) == pytest.approx(float(eb_integrals("1e-3", "1.01e-4")[0]), rel=1e-14)
+    grids = [section_beams.grid_of(s, {}, False) for s in (one, twin)]
+    assert [g.hinge for g in grids] == ["N", "M"]
+    assert grids[1].samples is grids[0].samples

@@ -167,9 +167,15 @@ class Notch(Section):
     ) -> mpmath.mpf:
         """Section.quad with each piece cut at points halving towards the hinge centre: the
         neck is about √(t R) wide, too narrow for a quadrature over the whole span to see at
-        small t/R (18 % off at t/R = 1e-4 without the cuts)."""
-        total = mpmath.mpf(0)
+        small t/R (18 % off at t/R = 1e-4 without the cuts). Kept by span and integrands
+        (_QUADS): a mechanism's notches are often alike, and its levels and reports ask for the
+        same integrals again (1-2 s each at DIGITS)."""
         at = self.at(values)
+        pieces = tuple((a, b, integrand(X, t).xreplace(values)) for a, b, t in at.pieces())
+        key = sp.srepr((at.length, pieces))
+        if key in _QUADS:
+            return _QUADS[key]
+        total = mpmath.mpf(0)
         with mpmath.workdps(DIGITS + 5):
             centre = mpmath.mpf(sp.N(at.length / 2, DIGITS + 5))
             cuts = [
@@ -177,13 +183,16 @@ class Notch(Section):
                 for j in range(1, 40)
                 for side in (-1, 1)
             ]
-            for a, b, t in at.pieces():
-                f = sp.lambdify(X, integrand(X, t).xreplace(values), "mpmath")
+            for a, b, expr in pieces:
+                f = sp.lambdify(X, expr, "mpmath")
                 lo, hi = (mpmath.mpf(sp.N(e, DIGITS + 5)) for e in (a, b))
                 inner = sorted({c for c in [*cuts, centre] if lo < c < hi})
                 # the real part: at a node that rounds onto a fillet's end, r² − u² is a
                 # rounding below zero and its root imaginary (T is real there, t + 2r)
                 total += mpmath.quad(lambda x, f=f: mpmath.re(f(x)), [lo, *inner, hi])
+        if len(_QUADS) >= QUADS_KEPT:
+            del _QUADS[next(iter(_QUADS))]  # the oldest
+        _QUADS[key] = total
         return total
 
     def compliance(self) -> Compliance:
@@ -506,6 +515,10 @@ def coefficients(section: Notch) -> tuple[sp.Float, ...]:
 
 #: The plain beam's ∫(l−x)²dx/E'I and ∫dx/κGA by section values (Notch.shear_factor).
 _SHEAR: dict[str, tuple[float, float]] = {}
+
+#: Notch.quad's integrals by span and integrands (an mpf each), the QUADS_KEPT latest.
+_QUADS: dict[str, mpmath.mpf] = {}
+QUADS_KEPT = 4096
 
 #: (m₂, c_y, s₁) by profile, span and pieces (:func:`moments`).
 _MOMENTS: dict[str, tuple[float, ...]] = {}

@@ -55,8 +55,24 @@ X = sp.Symbol("x", real=True)
 
 
 def number(expr: Any, values: Mapping[sp.Symbol, sp.Expr]) -> float:
-    """A sympy expression at parameter `values`, evaluated at DIGITS digits, as a float."""
-    return float(sp.N(sp.sympify(expr).xreplace(values), DIGITS))
+    """A sympy expression at parameter `values`, evaluated at DIGITS digits, as a float. One with
+    integrals in it (a notch's shear factor while its parameters are symbols) is kept by its
+    text (_INTEGRALS): sympy evaluates each by its own quadrature, tens of seconds, and alike
+    hinges ask for the same."""
+    at = sp.sympify(expr).xreplace(values)
+    if not (isinstance(at, sp.Basic) and at.has(sp.Integral)):  # values may map to Python numbers
+        return float(sp.N(at, DIGITS))
+    key = sp.srepr(at)
+    if key not in _INTEGRALS:
+        if len(_INTEGRALS) >= INTEGRALS_KEPT:
+            del _INTEGRALS[next(iter(_INTEGRALS))]  # the oldest
+        _INTEGRALS[key] = float(sp.N(at, DIGITS))
+    return _INTEGRALS[key]
+
+
+#: number()'s values of expressions with integrals, by their text: the INTEGRALS_KEPT latest.
+_INTEGRALS: dict[str, float] = {}
+INTEGRALS_KEPT = 1024
 
 
 @dataclass(frozen=True)

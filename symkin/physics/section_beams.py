@@ -224,7 +224,10 @@ def shoot_profiles(k0, lx, ly, grids: list[SectionGrid], energy: bool = False) -
 
 
 def _integrate(k0, lx, ly, get, exact: bool, energy: bool, node, nodes) -> ProfileEnd:
-    """Fourth-order Runge–Kutta in the grid's variable v: the rates times ds/dv."""
+    """Fourth-order Runge–Kutta in the grid's variable v: the rates times ds/dv. Every product
+    takes the array first: an mpf scalar first tries, and fails, to convert the object array
+    (mpmath formats the array for its error: a fifth of an `equilibrium` solve measured), while
+    the array's product calls the same mpf multiplication element by element."""
     a, eps, gam, ds = get["a"], get["eps"], get["gam"], get["ds"]
     zero = k0 * 0
     steps = (len(ds) - 1) // 2
@@ -235,10 +238,10 @@ def _integrate(k0, lx, ly, get, exact: bool, energy: bool, node, nodes) -> Profi
         fn = lx * c + ly * s
         fq = ly * c - lx * s
         d = eps[k] - gam[k]
-        along = 1 + d * fn
-        out = [a[k] * mu, -fq * along, c * along + gam[k] * lx, s * along + gam[k] * ly]
+        along = 1 + fn * d
+        out = [mu * a[k], -fq * along, c * along + lx * gam[k], s * along + ly * gam[k]]
         if energy:
-            out.append(a[k] * mu * mu + eps[k] * fn * fn + gam[k] * fq * fq)
+            out.append(mu * a[k] * mu + fn * eps[k] * fn + fq * gam[k] * fq)
         return [r * ds[k] for r in out]
 
     state = [zero, k0 + zero, zero, zero] + ([zero] if energy else [])
@@ -247,14 +250,14 @@ def _integrate(k0, lx, ly, get, exact: bool, energy: bool, node, nodes) -> Profi
     for j in range(steps):
         k = 2 * j
         r1 = rates(state[0], state[1], k)
-        s2 = [v + h / 2 * r for v, r in zip(state, r1, strict=True)]
+        s2 = [v + r * (h / 2) for v, r in zip(state, r1, strict=True)]
         r2 = rates(s2[0], s2[1], k + 1)
-        s3 = [v + h / 2 * r for v, r in zip(state, r2, strict=True)]
+        s3 = [v + r * (h / 2) for v, r in zip(state, r2, strict=True)]
         r3 = rates(s3[0], s3[1], k + 1)
-        s4 = [v + h * r for v, r in zip(state, r3, strict=True)]
+        s4 = [v + r * h for v, r in zip(state, r3, strict=True)]
         r4 = rates(s4[0], s4[1], k + 2)
         state = [
-            v + h / 6 * (p + 2 * q + 2 * r + w)
+            v + (p + 2 * q + 2 * r + w) * (h / 6)
             for v, p, q, r, w in zip(state, r1, r2, r3, r4, strict=True)
         ]
         if node is not None:
@@ -269,8 +272,13 @@ _GRIDS: dict[tuple, SectionGrid] = {}
 
 
 def grid_of(section: Section, values: Mapping[sp.Symbol, sp.Expr], stretches: bool) -> SectionGrid:
-    """SectionGrid.of, once per section, parameter values and beam theory."""
-    key = (section, tuple(sorted((str(k), sp.srepr(v)) for k, v in values.items())), stretches)
+    """SectionGrid.of, once per section, parameter values and beam theory: alike hinges of a
+    mechanism (or of another file) share the samples, each grid named by its own hinge."""
+    at = tuple(sorted((str(k), sp.srepr(v)) for k, v in values.items()))
+    key = (section, at, stretches)
     if key not in _GRIDS:
-        _GRIDS[key] = SectionGrid.of(section, values, stretches)
+        alike = (dataclasses.replace(section, hinge=""), at, stretches)
+        if alike not in _GRIDS:
+            _GRIDS[alike] = SectionGrid.of(section, values, stretches)
+        _GRIDS[key] = dataclasses.replace(_GRIDS[alike], hinge=section.hinge)
     return _GRIDS[key]
