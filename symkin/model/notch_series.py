@@ -18,8 +18,8 @@ poles s = ±i both sit on its edges) over 0 ≤ w ≤ asinh(1/σ), so NODES fixe
 nodes in w converge geometrically at every τ. Each ĉ_k is then an explicit expression of the
 ratios (sinh, atan, square roots): measured against 40-digit nested quadrature
 (tests/test_notch_parameters.py) within 3e-15 relative for k ≤ 8 and 2e-12 for k = 17 at
-t/R ≥ 0.005; at t/R = 1e-3 ĉ_1..ĉ_3 to double precision, k ≤ 8 within 2e-13 and k = 17 within
-5e-12; double precision for every k beyond t/R = 0.02. The deviation, ĉ_1's at small θ and
+t/R ≥ 0.005; at t/R = 1e-3 ĉ_1..ĉ_3 to double precision, k ≤ 8 within 2e-13 and k > 8 within
+6e-11; double precision for every k beyond t/R = 0.02. The deviation, ĉ_1's at small θ and
 (θ^{2k}/(2k)!)-weighted beyond, keeps 1e-14 relative at t/R ≥ 1e-3 over |θ| ≤ π.
 Where the ratios are numbers the 45-digit graded quadrature of model.notches stays in use.
 """
