@@ -5,118 +5,698 @@ a parameter, so that the generated C and numpy take R and t as parameters and `t
 
 Every profile's flank is a circular arc in an angle φ: x = R sin φ with T = t + 2R(1 − cos φ)
 (circular), x = a sin φ with T = t + 2c(1 − cos φ) (elliptical, R → c) and a fillet of radius r
-beyond a uniform middle (corner-filleted). With τ = t/R, σ = √(τ/(τ + 4)) and s = tan(φ/2) =
-σ tan β, the angle turned up to φ is elementary,
+beyond a uniform middle (corner-filleted). With τ = t/R (radius 1), F(ξ) = ∫₀^ξ dx/T³ over the
+flank, ξ = sin φ, and W = F(1), the flank's moments
 
-    ∫₀^φ R cos φ' dφ'/T³ = 2 P(β)/(R² τ^{5/2} √(τ + 4)),
-    P(β) = 3/8 (1 − σ⁴) β + (1 + σ⁴) sin 2β/4 + (1 − σ⁴) sin 4β/32,
+    ν_j(τ) = ∫₀¹ (1 − (F/W)^j) dξ ≥ 0
 
-so Ψ̃ = Ψ − 1/2 is a closed form of β. The outer integral ĉ_k = ∫₀¹ (Ψ̃^{2k} − 4^{−k}) dξ runs
-over d(sin φ) in w with s = σ sinh w (β = atan(sinh w)): the neck, √(Rt) wide, is a unit
-of w, and the integrand is analytic in the strip |Im w| < π/2 (its branch points s = ±iσ and
-poles s = ±i both sit on its edges) over 0 ≤ w ≤ asinh(1/σ), so NODES fixed Gauss–Legendre
-nodes in w converge geometrically at every τ. Each ĉ_k is then an explicit expression of the
-ratios (sinh, atan, square roots): measured against 40-digit nested quadrature
-(tests/test_notch_parameters.py) within 3e-15 relative for k ≤ 8 and 2e-12 for k = 17 at
-t/R ≥ 0.005; at t/R = 1e-3 ĉ_1..ĉ_3 to double precision, k ≤ 8 within 2e-13 and k > 8 within
-6e-11; double precision for every k beyond t/R = 0.02. The deviation, ĉ_1's at small θ and
-(θ^{2k}/(2k)!)-weighted beyond, keeps 1e-14 relative at t/R ≥ 1e-3 over |θ| ≤ π.
-Where the ratios are numbers the 45-digit graded quadrature of model.notches stays in use.
+give every ĉ_k without cancellation: a circular notch's ĉ_k = −4^{−k} ν_{2k}; a corner-filleted
+one, with a uniform middle of m fillet radii (Ψ̃ linear there, up to a = M/H, M = m/τ³,
+H = 2(M + W), b = W/H = 1/2 − a), ĉ_k = [m (a^{2k}/(2k + 1) − 4^{−k})
+− Σ_j C(2k, j) a^{2k−j} b^j ν_j]/(m + 1), all terms of one sign. ν_j/√τ is smooth in log τ, and
+FIT holds its Chebyshev coefficients in x = (2 log τ − log(LOW·HIGH))/log(HIGH/LOW) on
+LOW ≤ τ ≤ HIGH, fitted at 64 points to ν_j at 50 digits (Gauss–Legendre in w, s = tan(φ/2)
+= σ sinh w, σ = √(τ/(τ + 4)), F a closed form of s: :func:`flank_moments`), each row cut where
+the rest is below 1e-17 of the deviation's first term at |θ| = π. The series keeps TERMS terms
+(the next is below 1e-17 of the first at |θ| = π). Evaluated as Σ a_n cos(n acos x): measured
+against 40-digit nested quadrature (tests/test_notch_parameters.py) ĉ_1..ĉ_3 within 1e-14
+relative at RANGE's ends and inside. Ratios outside RANGE (LOW < RANGE < HIGH keeps acos off its
+ends) give NaN in the generated code and exit 2 in symkin (:func:`check_ratio`). Where the ratios
+are numbers the 45-digit graded quadrature of model.notches stays in use.
 """
 
 from __future__ import annotations
 
+import math
+from fractions import Fraction
 from functools import cache
 from typing import Any
 
+import mpmath
 import sympy as sp
 
-#: Gauss–Legendre nodes in w of the outer integral (see the module's docstring for the error).
-NODES = 40
-#: Digits of the nodes and weights (the sympy backend evaluates at 40).
-NODE_DIGITS = 45
+#: The fitted range of τ (t/R, t/c or t/r) and the range accepted (inside it).
+LOW, HIGH = 0.004, 2.5
+RANGE = (0.005, 2.0)
+#: Terms of the parametric series (θ² to θ^{2·TERMS}).
+TERMS = 10
+
+
+def flank_moments(tau: Any, jmax: int, degree: int = 6, dps: int = 50) -> list[Any]:
+    """ν_1..ν_jmax of a circular flank of neck ratio τ, radius 1, by 3·2^(degree−1)
+    Gauss–Legendre nodes in w at `dps` digits (how FIT was made)."""
+    with mpmath.workdps(dps + 10):
+        tau = mpmath.mpf(tau)
+        sigma = mpmath.sqrt(tau / (tau + 4))
+        q = sigma**4
+
+        def turned(S: Any) -> Any:
+            C2 = 1 + S**2
+            return (
+                mpmath.mpf(3) / 8 * (1 - q) * mpmath.atan(S)
+                + (1 + q) * S / (2 * C2)
+                + (1 - q) * S * (1 - S**2) / (8 * C2**2)
+            )
+
+        whole, end = turned(1 / sigma), mpmath.asinh(1 / sigma)
+        gauss = mpmath.calculus.quadrature.GaussLegendre(mpmath.mp)
+        out = [mpmath.mpf(0)] * jmax
+        for n, w in gauss.calc_nodes(degree, mpmath.mp.prec):
+            at = end * (1 + n) / 2
+            S = mpmath.sinh(at)
+            s = sigma * S
+            weight = end * w * (1 - s**2) / (1 + s**2) ** 2 * sigma * mpmath.cosh(at)
+            ratio, power = turned(S) / whole, mpmath.mpf(1)
+            for j in range(jmax):
+                power *= ratio
+                out[j] += weight * (1 - power)
+        return out
+
+
+#: Chebyshev coefficients of ν_j/√τ, j = 1..2·TERMS, in x (see the module's docstring).
+FIT: tuple[tuple[float, ...], ...] = (
+    (
+        0.373688712358935,
+        -0.0776429141276467,
+        -0.0359718583661882,
+        -0.00897334886286222,
+        0.00018925172879309,
+        0.00109480562358703,
+        0.000394690538998914,
+        1.85758156951472e-05,
+        -4.03397226643306e-05,
+        -1.72933994857431e-05,
+        -1.54872784163149e-06,
+        1.53411089427541e-06,
+        7.62972602863746e-07,
+        9.64266172743068e-08,
+        -5.81221407028537e-08,
+        -3.37233231794757e-08,
+        -5.44182896784321e-09,
+        2.14834905206974e-09,
+        1.48546193531609e-09,
+        2.9122645317118e-10,
+        -7.57377902279404e-11,
+        -6.49536294800675e-11,
+        -1.50367985895507e-11,
+        2.45289628205266e-12,
+        2.81065950443533e-12,
+        7.55372508625289e-13,
+        -6.66803925651397e-14,
+        -1.2002040657704e-13,
+        -3.7092086448845e-14,
+        1.01316441788157e-15,
+        5.04278411461466e-15,
+        1.7854322152197e-15,
+        4.38255127877084e-17,
+        -2.07751513324452e-16,
+        -8.43939374455242e-17,
+        -5.93877392840889e-18,
+        8.35378931847308e-18,
+    ),
+    (
+        0.536875989786532,
+        -0.124401581916777,
+        -0.0557600479471556,
+        -0.0125029642696449,
+        0.00118976114911053,
+        0.00190878175525298,
+        0.000558803788756055,
+        -2.99991930146927e-05,
+        -7.98369151857399e-05,
+        -2.51202255539869e-05,
+        9.15232250894732e-07,
+        3.49548428193774e-06,
+        1.15357665047852e-06,
+        -2.3967856636158e-08,
+        -1.55696008239016e-07,
+        -5.38870722396981e-08,
+        1.75149548225905e-10,
+        6.97581195812349e-09,
+        2.54614793634256e-09,
+        4.20294980664052e-11,
+        -3.12413351341907e-10,
+        -1.21124581110204e-10,
+        -4.62082870316823e-12,
+        1.39255786971617e-11,
+        5.78001639859737e-12,
+        3.53829228717324e-13,
+        -6.15615611608267e-13,
+        -2.75861332869307e-13,
+        -2.35373370976562e-14,
+        2.68995347012239e-14,
+        1.3136532994812e-14,
+        1.44790286973753e-15,
+        -1.15746290868101e-15,
+        -6.22945115987049e-16,
+        -8.45911332985803e-17,
+        4.8822835328973e-17,
+        2.93688562020926e-17,
+        4.75941546585787e-18,
+    ),
+    (
+        0.638749702323841,
+        -0.159809270725349,
+        -0.0698477206241164,
+        -0.0143206733314287,
+        0.00231029016984202,
+        0.00255682997416073,
+        0.000633450710219083,
+        -9.46538667713537e-05,
+        -0.000113595754427613,
+        -2.81511093013209e-05,
+        4.59291339739378e-06,
+        5.26734563786456e-06,
+        1.28535232156019e-06,
+        -2.2470409743887e-07,
+        -2.48489049257744e-07,
+        -6.02400164926162e-08,
+        1.07690673718059e-08,
+        1.18166616453154e-08,
+        2.88526912584917e-09,
+        -5.02167333451439e-10,
+        -5.63801912272538e-10,
+        -1.40571763555819e-10,
+        2.26999413250786e-11,
+        2.69120461937248e-11,
+        6.93527012291805e-12,
+        -9.89533316425151e-13,
+        -1.28247153823068e-12,
+        -3.45062637565335e-13,
+        4.12023735343142e-14,
+        6.0911811725798e-14,
+        1.72525528374446e-14,
+        -1.60873863483253e-15,
+        -2.87925583559158e-15,
+        -8.6424703595257e-16,
+        5.65823914828649e-17,
+        1.35272624075795e-16,
+        4.32717909145016e-17,
+    ),
+    (
+        0.712314041121164,
+        -0.188960890090323,
+        -0.080899676802389,
+        -0.0153160575952386,
+        0.00342536696624203,
+        0.00309092197574613,
+        0.000659214520581888,
+        -0.000163766553978836,
+        -0.000141959888927432,
+        -2.81943919458582e-05,
+        8.71783049079453e-06,
+        6.769493110406e-06,
+        1.23491179232161e-06,
+        -4.6012004861676e-07,
+        -3.27740100572121e-07,
+        -5.56975591232782e-08,
+        2.37784087743311e-08,
+        1.59933461719828e-08,
+        2.58912993673768e-09,
+        -1.20435715242935e-09,
+        -7.8403113746023e-10,
+        -1.23912692140833e-10,
+        5.99181535564455e-11,
+        3.85339394933495e-11,
+        6.08763664552833e-12,
+        -2.93290114732652e-12,
+        -1.89597425439009e-12,
+        -3.05680104368652e-13,
+        1.41358210649956e-13,
+        9.32768472418675e-14,
+        1.56092712852876e-14,
+        -6.70883193888946e-15,
+        -4.58360496802163e-15,
+        -8.0650598974888e-16,
+        3.1331226355168e-16,
+        2.24759759584912e-16,
+        4.19730745849333e-17,
+        -1.43772186817398e-17,
+    ),
+    (
+        0.769757438047143,
+        -0.214030568167067,
+        -0.0900266846336263,
+        -0.0158373312785369,
+        0.004501500733913,
+        0.00354083589838258,
+        0.000654366574861989,
+        -0.00023321426356269,
+        -0.000165714032815291,
+        -2.62173769172516e-05,
+        1.29721363357747e-05,
+        8.00632594088076e-06,
+        1.05273480362701e-06,
+        -7.08533206342894e-07,
+        -3.91643817184893e-07,
+        -4.27966175813223e-08,
+        3.78199663531653e-08,
+        1.92942606206594e-08,
+        1.77796493211732e-09,
+        -1.98043883803103e-09,
+        -9.55359626099423e-10,
+        -7.6362473179259e-11,
+        1.02117789283089e-10,
+        4.74936184292446e-11,
+        3.43081547756937e-12,
+        -5.19880673851792e-12,
+        -2.36845625333284e-12,
+        -1.62550895024891e-13,
+        2.61778516996135e-13,
+        1.18388064938309e-13,
+        8.12803483970467e-15,
+        -1.30516708890675e-14,
+        -5.92669581514548e-15,
+        -4.25865734345618e-16,
+        6.4470622783723e-16,
+        2.96912815340172e-16,
+    ),
+    (
+        0.816841822267044,
+        -0.236178848512955,
+        -0.0978095161178986,
+        -0.0160560790543311,
+        0.00552972033901803,
+        0.00392564151534733,
+        0.000628895662797885,
+        -0.000301256773530457,
+        -0.000185575157004135,
+        -2.28118072489496e-05,
+        1.72005881903648e-05,
+        9.00092677491314e-06,
+        7.73545823416679e-07,
+        -9.58183463604552e-07,
+        -4.40492993228821e-07,
+        -2.35207353109798e-08,
+        5.20737484382349e-08,
+        2.16749316663748e-08,
+        5.6118680502614e-10,
+        -2.77630761731653e-09,
+        -1.07164681334612e-09,
+        -3.71864575610301e-12,
+        1.45875688527223e-10,
+        5.32352170312575e-11,
+        -7.42024025560743e-13,
+        -7.5780244986947e-12,
+        -2.6569175532835e-12,
+        7.03387085448244e-14,
+        3.9005263652765e-13,
+        1.33197477167738e-13,
+        -4.57593910322185e-15,
+        -1.99206974374708e-14,
+        -6.70469417247525e-15,
+        2.54028851076122e-16,
+        1.01041864887334e-15,
+        3.38674899279287e-16,
+    ),
+    (
+        0.856725893625573,
+        -0.256110265895479,
+        -0.104594312724893,
+        -0.0160689947982108,
+        0.00650912317172184,
+        0.00425843338013467,
+        0.000588893751933343,
+        -0.000367113970449637,
+        -0.000202135408165214,
+        -1.83686027260452e-05,
+        2.13214876778728e-05,
+        9.77941401456453e-06,
+        4.22154243383017e-07,
+        -1.20227954237552e-06,
+        -4.75292669096851e-07,
+        5.9537874390832e-10,
+        6.60313784942754e-08,
+        2.31605918425918e-08,
+        -9.6901144420748e-10,
+        -3.55629797904543e-09,
+        -1.13225389749554e-09,
+        8.86418440667017e-11,
+        1.88803702362609e-10,
+        5.55927523609173e-11,
+        -6.12635241374803e-12,
+        -9.91638774466415e-12,
+        -2.74412115261213e-12,
+        3.76247913483366e-13,
+        5.16525816862595e-13,
+        1.36272649582777e-13,
+        -2.16108970248695e-14,
+        -2.672690271879e-14,
+        -6.81080746418545e-15,
+    ),
+    (
+        0.891321764435014,
+        -0.274289863497126,
+        -0.110605795427527,
+        -0.0159355880242652,
+        0.00744167637361666,
+        0.00454865521963639,
+        0.000538348452539887,
+        -0.00043044772170365,
+        -0.000215875546593296,
+        -1.31595089825323e-05,
+        2.52907934643705e-05,
+        1.0366546501587e-05,
+        1.68215664970838e-08,
+        -1.43679566065172e-06,
+        -4.97265290587408e-07,
+        2.83567175884638e-08,
+        7.93716302512789e-08,
+        2.38065569152583e-08,
+        -2.73659846432546e-09,
+        -4.29668877008326e-09,
+        -1.13929121639157e-09,
+        1.96008228597511e-10,
+        2.29240153118406e-10,
+        5.4615081706375e-11,
+        -1.24374019399506e-11,
+        -1.2102036413331e-11,
+        -2.62819689168169e-12,
+        7.38356598130673e-13,
+        6.33905002265964e-13,
+        1.27215964004028e-13,
+        -4.200519678192e-14,
+        -3.30073876446335e-14,
+        -6.20480821986466e-15,
+    ),
+    (
+        0.921872259665605,
+        -0.291043241760784,
+        -0.115998939548677,
+        -0.0156948395713702,
+        0.00833031552664113,
+        0.00480337286993374,
+        0.000480002947995636,
+        -0.000491140147415269,
+        -0.000227187014264836,
+        -7.38046125259629e-06,
+        2.90852960107201e-05,
+        1.07845521860433e-05,
+        -4.28693245881801e-07,
+        -1.65935111018293e-06,
+        -5.0765432011535e-07,
+        5.88239573694005e-08,
+        9.1891765964361e-08,
+        2.36801215277355e-08,
+        -4.67924181706346e-09,
+        -4.98178292113138e-09,
+        -1.09623451208491e-09,
+        3.1434999386103e-10,
+        2.66041619764142e-10,
+        5.04704670867189e-11,
+        -1.94205738520183e-11,
+        -1.40552808939308e-11,
+        -2.31651444234874e-12,
+        1.14092166184109e-12,
+        7.36824524089943e-13,
+    ),
+    (
+        0.949229607690634,
+        -0.306608590584434,
+        -0.120885543204151,
+        -0.0153734974915248,
+        0.00917819175222087,
+        0.00502802708718146,
+        0.00041581531531991,
+        -0.00054918811284088,
+        -0.000236391236978905,
+        -1.17668031006288e-06,
+        3.26939044200213e-05,
+        1.10529926916586e-05,
+        -9.03830636274072e-07,
+        -1.86858839763864e-06,
+        -5.07644157947754e-07,
+        9.12519450912061e-08,
+        1.03466828787861e-07,
+        2.28517560281572e-08,
+        -6.74587444396195e-09,
+        -5.60141654568893e-09,
+        -1.00718404447259e-09,
+        4.40257941349309e-10,
+        2.98439676774349e-10,
+        4.33915722625513e-11,
+        -2.68535208511544e-11,
+        -1.57208807702828e-11,
+        -1.82191177529053e-12,
+        1.56974319744457e-12,
+        8.21461236194278e-13,
+    ),
+    (
+        0.974003112806144,
+        -0.321166175145087,
+        -0.125349122955457,
+        -0.0149905875999473,
+        0.00998836628071828,
+        0.00522690534235461,
+        0.000347223608171777,
+        -0.000604649202449676,
+        -0.000243754740646255,
+        5.34186756793362e-06,
+        3.61128075063136e-05,
+        1.11889634622474e-05,
+        -1.40036619553668e-06,
+        -2.06380609150015e-06,
+        -4.98329661887271e-07,
+        1.25044802412835e-07,
+        1.14024230273688e-07,
+        2.13907224488792e-08,
+        -8.89461461201032e-09,
+        -6.14931377210067e-09,
+        -8.76453490109048e-10,
+        5.70866560274652e-10,
+        3.25940255888139e-10,
+        3.36426553196484e-11,
+        -3.45447955432155e-11,
+        -1.70622112071102e-11,
+    ),
+    (
+        0.996643227426731,
+        -0.334856172603068,
+        -0.129453834570582,
+        -0.0145600356636633,
+        0.0107636924776771,
+        0.00540345131456195,
+        0.000275308086477948,
+        -0.000657612592246089,
+        -0.000249500669666193,
+        1.20904796960413e-05,
+        3.934264518993e-05,
+        1.12073845511199e-05,
+        -1.91181800419575e-06,
+        -2.2447318833893e-06,
+        -4.80707863722051e-07,
+        1.59722837387894e-07,
+        1.23527258531558e-07,
+        1.93629247495915e-08,
+        -1.10910665670431e-08,
+        -6.62196692573211e-09,
+        -7.0833854029867e-10,
+        7.03777186312631e-10,
+        3.48251612288698e-10,
+        2.14996210007374e-11,
+        -4.23311647123991e-11,
+        -1.80568455954845e-11,
+    ),
+    (
+        1.01749222759092,
+        -0.347790031378666,
+        -0.133250100733987,
+        -0.0140922745394598,
+        0.0115067796547071,
+        0.00556047557680297,
+        0.000200895190286915,
+        -0.000708182780417938,
+        -0.000253817541082035,
+        1.90030099821679e-05,
+        4.23867902979883e-05,
+        1.11212939766397e-05,
+        -2.43302868367343e-06,
+        -2.41137731487108e-06,
+        -4.55679722053941e-07,
+        1.94897835063023e-07,
+        1.31964048774478e-07,
+        1.68299345244319e-08,
+        -1.3306952752432e-08,
+        -7.01785583509238e-09,
+        -5.06987638029289e-10,
+        8.36988575584178e-10,
+    ),
+    (
+        1.03681621282607,
+        -0.360058012599971,
+        -0.136778314018647,
+        -0.0135952723030642,
+        0.0122199928390827,
+        0.00570030349398316,
+        0.000124626712664698,
+        -0.00075647029955483,
+        -0.000256865940043914,
+        2.60272243416515e-05,
+        4.52502742257412e-05,
+        1.09421137085103e-05,
+        -2.95986359017542e-06,
+        -2.56394221428018e-06,
+        -4.24056232788761e-07,
+        2.30254352554763e-07,
+        1.39340029698726e-07,
+        1.38486485764825e-08,
+        -1.55190163840508e-08,
+        -7.33689297109885e-09,
+        -2.76332481784028e-10,
+        9.68836555878618e-10,
+    ),
+    (
+        1.05482610947456,
+        -0.371734372030286,
+        -0.140071359759479,
+        -0.0130752137060544,
+        0.0129054677391648,
+        0.00582488177323513,
+        4.70072632301493e-05,
+        -0.000802586368425513,
+        -0.000258783690076109,
+        3.31214999235777e-05,
+        4.79391006340365e-05,
+        1.06798806521042e-05,
+        -3.48898841737921e-06,
+        -2.70275048241445e-06,
+        -3.86566167418719e-07,
+        2.65535374917253e-07,
+        1.4567265151103e-07,
+    ),
+    (
+        1.07169191384148,
+        -0.382881025173012,
+        -0.143156386039561,
+        -0.0125369655339814,
+        0.0135651312683441,
+        0.00593585695052027,
+        -3.15623066931039e-05,
+        -0.00084663983292643,
+        -0.000259689888102451,
+        4.02524272845147e-05,
+        5.04598004015452e-05,
+        1.03434434463137e-05,
+        -4.01770242268805e-06,
+        -2.82820622795215e-06,
+        -3.43864118343341e-07,
+        3.00531182786566e-07,
+        1.50987650616829e-07,
+    ),
+    (
+        1.08755262468052,
+        -0.393550204308747,
+        -0.146056076935612,
+        -0.0119844025908739,
+        0.0142007231464209,
+        0.00603463432916093,
+        -0.000110760836812874,
+        -0.000888735466123101,
+        -0.000259688087098587,
+        4.73930353550555e-05,
+        5.28191404157471e-05,
+        9.94062878609428e-06,
+    ),
+    (
+        1.10252333919878,
+        -0.403786426225001,
+        -0.148789588454869,
+        -0.0114206411312572,
+        0.0148138165588336,
+        0.00612242299161347,
+        -0.000190329192973989,
+        -0.000928973086790156,
+        -0.000258868832183717,
+        5.45214557545766e-05,
+        5.50239324971153e-05,
+        9.47838163734389e-06,
+    ),
+    (
+        1.11670043094181,
+        -0.413627976829066,
+        -0.151373249639623,
+        -0.0108482092564155,
+        0.0154058370480538,
+        0.00620027069113495,
+    ),
+    (
+        1.13016539914219,
+        -0.423108049765804,
+        -0.153821096573254,
+        -0.0102691734163377,
+        0.015978079390266,
+        0.00626909125965781,
+    ),
+)
 
 
 @cache
-def _rule() -> tuple[tuple[sp.Float, sp.Float], ...]:
-    """The NODES Gauss–Legendre nodes on [0, 1] and their weights, at NODE_DIGITS digits, half of
-    them: the other half mirrors them (w = W(1 ± x)/2)."""
-    from sympy.integrals.quadrature import gauss_legendre
+def _monomials() -> tuple[tuple[float, ...], ...]:
+    """FIT's rows in powers of x (exact in rationals, then rounded): a flat sum of powers (no
+    deep nesting for the printers), its rounding within 4.5 times the value's (Σ|c_m x^m| ≤
+    4.41 |ν_j/√τ| on [−1, 1], measured)."""
+    rows = []
+    for row in FIT:
+        cheb = [[1], [0, 1]]  # T_n in powers of x, integers
+        while len(cheb) < len(row):
+            prev, last = cheb[-2], cheb[-1]
+            cheb.append([2 * c for c in [0, *last]])
+            for m, c in enumerate(prev):
+                cheb[-1][m] -= c
+        total = [Fraction(0)] * len(row)
+        for n, a in enumerate(row):
+            for m, c in enumerate(cheb[n]):
+                total[m] += Fraction(a) * c
+        rows.append(tuple(float(c) for c in total))
+    return tuple(rows)
 
-    x, w = gauss_legendre(NODES, NODE_DIGITS + 5)
-    return tuple(
-        (sp.Float((1 + xi) / 2, NODE_DIGITS), sp.Float(wi / 2, NODE_DIGITS))
-        for xi, wi in zip(x, w, strict=True)
-    )
 
-
-def _flank(tau: sp.Expr) -> tuple[sp.Expr, list[tuple[sp.Expr, sp.Expr]]]:
-    """One circular flank of neck ratio τ = t/R, radius 1: its whole ∫dx/T³ from the neck to
-    its end and, at the nodes, (weight in x = sin φ, ∫dx/T³ from the neck up to the node)."""
-    sigma = sp.sqrt(tau / (tau + 4))
-    scale = 2 / (tau ** sp.Rational(5, 2) * sp.sqrt(tau + 4))
-    q = sigma**4
-
-    def angle(S: sp.Expr) -> sp.Expr:
-        C2 = 1 + S**2
-        p = (
-            sp.Rational(3, 8) * (1 - q) * sp.atan(S)
-            + (1 + q) * S / (2 * C2)
-            + (1 - q) * S * (1 - S**2) / (8 * C2**2)
-        )
-        return scale * p
-
-    end = sp.asinh(1 / sigma)
-    nodes = []
-    for x, w in _rule():
-        at = end * x
-        S = sp.sinh(at)
-        s = sigma * S
-        weight = end * w * 2 * (1 - s**2) / (1 + s**2) ** 2 * sigma * sp.cosh(at)
-        nodes.append((weight, angle(S)))
-    return angle(1 / sigma), nodes
+def _moments(tau: sp.Expr, wanted: range) -> dict[int, sp.Expr]:
+    """ν_j, j in `wanted`, as expressions of τ (FIT, in powers of x)."""
+    lo, hi = math.log(LOW), math.log(HIGH)
+    x = (2 * sp.log(tau) - sp.Float(lo + hi, 17)) / sp.Float(hi - lo, 17)
+    # outside LOW..HIGH: the square root of a negative number, NaN in the generated code
+    above, below = tau - sp.Float(LOW, 17), sp.Float(HIGH, 17) - tau
+    inside = sp.sqrt(above * below) / (sp.sqrt(above) * sp.sqrt(below))
+    root = sp.sqrt(tau)
+    out = {}
+    for j in wanted:
+        acc = sp.Add(*(sp.Float(c, 17) * x**m for m, c in enumerate(_monomials()[j - 1])))
+        out[j] = root * acc * inside  # inside: 1 on LOW..HIGH
+    return out
 
 
 def _series(middle: sp.Expr, tau: sp.Expr, terms: int) -> tuple[sp.Expr, ...]:
-    """ĉ_1..ĉ_terms of a half notch: a uniform middle of length `middle` (in fillet radii, 0 for
-    a circular or elliptical notch) and a circular flank of ratio τ beyond it, radius 1."""
-    whole, nodes = _flank(tau)
-    middle_turn = middle / tau**3  # ∫dx/T³ over the middle
-    half = 2 * (middle_turn + whole)  # Ψ̃ = (∫₀ˣ dx/T³)/(2 × the half's) about the centre
-    psi_m = middle_turn / half
-    psis = [((middle_turn + turn) / half, weight) for weight, turn in nodes]
-    out = []
-    for k in range(1, terms + 1):
-        quarter = sp.Rational(1, 4**k)
-        flank = sp.Add(*(weight * (psi ** (2 * k) - quarter) for psi, weight in psis))
-        mid = middle * (psi_m ** (2 * k) / (2 * k + 1) - quarter) if middle != 0 else 0
-        out.append((mid + flank) / (middle + 1))
-    return tuple(out)
-
-
-def _deviation(middle: sp.Expr, tau: sp.Expr, theta: Any, terms: int) -> sp.Expr:
-    """D(θ)/l of a half notch as in :func:`_series`: the flank's ∫(cos θΨ̃ − cos θ/2) on the
-    nodes, each term 2 sin(θ(1/2 + Ψ̃)/2) sin(θ(1/2 − Ψ̃)/2) ≥ 0 (no cancellation at small θ),
-    the uniform middle (Ψ̃ linear) by its series in θ² of `terms` terms."""
-    whole, nodes = _flank(tau)
-    middle_turn = middle / tau**3
-    half = 2 * (middle_turn + whole)
-    flank = sp.Add(
-        *(
-            2 * weight
-            * sp.sin(theta * (middle_turn + turn + half / 2) / (2 * half))
-            * sp.sin(theta * (whole - turn) / (2 * half))
-            for weight, turn in nodes
+    """ĉ_1..ĉ_terms (at most TERMS) of a half notch: a uniform middle of `middle` fillet radii
+    (0 for a circular or elliptical notch) and a circular flank of ratio τ beyond it."""
+    count = min(terms, TERMS)
+    out: list[sp.Expr] = []
+    if middle == 0:  # the even moments only
+        nu = _moments(tau, range(2, 2 * count + 1, 2))
+        return tuple(-nu[2 * k] / 4**k for k in range(1, count + 1))
+    nu = _moments(tau, range(1, 2 * count + 1))
+    sigma = sp.sqrt(tau / (tau + 4))
+    q = sigma**4
+    S = 1 / sigma
+    whole = (
+        (
+            sp.Rational(3, 8) * (1 - q) * sp.atan(S)
+            + (1 + q) * S / (2 * (1 + S**2))
+            + (1 - q) * S * (1 - S**2) / (8 * (1 + S**2) ** 2)
         )
-    )  # fmt: skip
-    if middle == 0:
-        return flank
-    psi_m, square = middle_turn / half, theta**2
-    acc: sp.Expr = sp.S.Zero
-    for k in range(terms, 0, -1):
-        c = psi_m ** (2 * k) / (2 * k + 1) - sp.Rational(1, 4**k)
-        acc = sp.Rational((-1) ** k, sp.factorial(2 * k)) * c + square * acc
-    return (middle * square * acc + flank) / (middle + 1)
+        * 2
+        / (tau ** sp.Rational(5, 2) * sp.sqrt(tau + 4))
+    )
+    middle_turn = middle / tau**3
+    a = middle_turn / (2 * (middle_turn + whole))
+    b = whole / (2 * (middle_turn + whole))
+    for k in range(1, count + 1):
+        flank = sp.Add(
+            *(math.comb(2 * k, j) * a ** (2 * k - j) * b**j * nu[j] for j in range(1, 2 * k + 1))
+        )
+        mid = middle * (a ** (2 * k) / (2 * k + 1) - sp.Rational(1, 4**k))
+        out.append((mid - flank) / (middle + 1))
+    return tuple(out)
 
 
 def _ratios(section: Any) -> tuple[sp.Expr, sp.Expr]:
@@ -132,13 +712,40 @@ def _ratios(section: Any) -> tuple[sp.Expr, sp.Expr]:
     raise ValueError(f"profile {section.profile!r}: no closed-form series")
 
 
-def deviation_expression(section: Any, theta: Any, terms: int) -> sp.Expr:
-    """D(θ)/l of a notch section as an expression of its keys and θ: the same quadrature as
-    :func:`coefficient_expressions`, summed over k in closed form (Σ_k of the series is
-    cos θΨ̃ − cos θ/2 at each node), so 40 terms instead of 17 × 40."""
-    return _deviation(*_ratios(section), theta, terms)
+def notch_ratio(section: Any) -> sp.Expr:
+    """The section's τ (t/R, t/c or t/r) as an expression of its keys."""
+    return _ratios(section)[1]
+
+
+def ratio_name(section: Any) -> str:
+    """How the section's τ is written (t/R, t/c or t/r)."""
+    return {"circular": "thickness/radius", "elliptical": "thickness/depth"}.get(
+        section.profile, "thickness/fillet"
+    )
+
+
+def check_ratio(section: Any, values: dict) -> str | None:
+    """Why the section's τ at `values` (symbols to numbers) is outside RANGE, or None."""
+    tau = float(_ratios(section)[1].xreplace(values))
+    if RANGE[0] <= tau <= RANGE[1]:
+        return None
+    return (
+        f"{ratio_name(section)} = {tau:g} is outside {RANGE[0]:g}..{RANGE[1]:g}, the range of the "
+        "fitted series a notch with its keys as parameters uses; give the keys as numbers"
+    )
 
 
 def coefficient_expressions(section: Any, terms: int) -> tuple[sp.Expr, ...]:
-    """ĉ_1..ĉ_terms of a notch section (model.notches) as expressions of its keys."""
+    """ĉ_1..ĉ_min(terms, TERMS) of a notch section (model.notches) as expressions of its keys."""
     return _series(*_ratios(section), terms)
+
+
+def deviation_expression(section: Any, theta: Any, terms: int) -> sp.Expr:
+    """D(θ)/l of a notch section as an expression of its keys and θ: Σ_k (−1)^k θ^{2k}/(2k)! ĉ_k
+    over the fitted ĉ_k, in Horner form in θ²."""
+    c = coefficient_expressions(section, terms)
+    square = theta**2
+    acc: sp.Expr = sp.S.Zero
+    for k in range(len(c), 0, -1):
+        acc = sp.Rational((-1) ** k, math.factorial(2 * k)) * c[k - 1] + square * acc
+    return square * acc
