@@ -206,8 +206,6 @@ def test_reader_refusals_name_file_hinge_key_and_fix():
     # fillets that do not fit, an unknown profile
     refused(base, 'profile = "corner_filleted"\nfillet = 6e-4', ("fillet", "length/2"))
     refused(base, 'profile = "circlar"', ("circlar", "circular"))
-    # a notch whose shape ratio depends on a parameter
-    refused(base, 'profile = "circular"\nradius = "R"\nthickness = 1e-4', ("ratios",))
 
 
 def test_defaults_serve_the_profiles_that_take_them():

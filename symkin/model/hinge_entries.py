@@ -34,7 +34,7 @@ from .hinges import (
     ModelSpec,
     removable_at_zero,
 )
-from .notches import NOTCHES, _normalised, profile_keys
+from .notches import NOTCHES, profile_keys
 
 #: The keys of the hinge profiles (docs/file-format.md, "Notch hinges"): `profile` and what the
 #: notch profiles take besides `thickness` (a uniform plate takes `length`).
@@ -207,7 +207,7 @@ class HingeEntries(EntryChecks):
             )
         if notch:
             profile_params = self.profile_values(profile, table, merged, entry, line)
-            length = self.notch_span(profile, profile_params, merged, model, entry, line)
+            length = self.notch_span(profile, profile_params, entry, line)
             profile_params.pop("length", None)
         else:
             if "length" not in merged:
@@ -344,13 +344,12 @@ class HingeEntries(EntryChecks):
         self,
         profile: str,
         params: Mapping[str, sp.Expr],
-        merged: Mapping[str, object],
-        model: str,
         entry: str,
         line: int | None,
     ) -> sp.Expr:
-        """The span of a notch (its hinge's length), checked: fillets that fit the length,
-        the shape's ratios numbers (the pure-moment series takes them as numbers)."""
+        """The span of a notch (its hinge's length), checked: fillets that fit the length. The
+        shape's ratios may depend on parameters (the pure-moment series then takes them as
+        expressions, model.notch_series)."""
         from .profiles import PROFILES
 
         cls = PROFILES[profile]
@@ -364,23 +363,6 @@ class HingeEntries(EntryChecks):
                     line,
                     "make fillet at most length/2",
                 )
-        if model == NOTCH_MODEL:
-            stand_in = Hinge(
-                "?", 0, ("", ""), (0, 0), 0, span, NOTCH_MODEL,
-                thickness=self.expr(merged["thickness"], entry, "thickness", line),
-                profile=profile,
-                profile_params=tuple(params.items()),
-            )  # fmt: skip
-            try:
-                _normalised(cls.from_hinge(stand_in, 1))  # type: ignore[arg-type]
-            except ValueError as exc:
-                raise self.error(
-                    str(exc),
-                    entry,
-                    line,
-                    "give the notch's keys as numbers, or as expressions of one parameter "
-                    "that scales them all (a notch's shape ratios enter its series as numbers)",
-                ) from None
         return span
 
     def origin(

@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Any
 
 import mpmath
 import sympy as sp
@@ -311,6 +312,9 @@ def check_values(
                     h.line,
                     "a flexure plate is thin: make thickness < length",
                 )
+            notch_fault = _notch_fault(h, values)
+            if notch_fault is not None:
+                raise fail(notch_fault[0], entry, h.line, notch_fault[1])
         for load in mech.loads:
             for v in (*load.force, load.moment):
                 within(mp_at(v, values), "force", load.label, load.line, positive=False)
@@ -441,3 +445,28 @@ def _check_mass(
             link.line,
             "keep the centre of mass finite",
         )
+
+
+def _notch_fault(hinge: Any, values: Mapping[sp.Symbol, sp.Expr]) -> tuple[str, str] | None:
+    """(message, hint) when a notch whose keys are parameters (model.notch_series) has, at these
+    values, a key that is not positive or a ratio outside its fitted series' range; else None."""
+    params = dict(getattr(hinge, "profile_params", ()) or ())
+    if not params or hinge.model != "pure_moment":
+        return None
+    keys = {"thickness": hinge.thickness, **params}
+    if not any(sp.sympify(v).free_symbols for v in keys.values() if v is not None):
+        return None
+    for key, raw in keys.items():
+        value = None if raw is None else mp_at(raw, values)
+        if raw is not None and (value is None or not value > 0):
+            shown = "not finite" if value is None else mpmath.nstr(value, 6)
+            return f"notch key '{key}' must be positive, got {shown}", f"keep '{key}' positive"
+    from . import notch_series
+    from .profiles import section_of
+
+    reason = notch_series.check_ratio(section_of(hinge, 1), dict(values))
+    if reason is None:
+        return None
+    return reason, f"keep {notch_series.ratio_name(section_of(hinge, 1))} within " + (
+        f"{notch_series.RANGE[0]:g}..{notch_series.RANGE[1]:g}"
+    )

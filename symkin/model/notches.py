@@ -20,8 +20,10 @@ cancellation-free, as the circular arc is). |Ψ̃| ≤ 1/2 bounds |ĉ_k| by 4^{�
 terms leave a remainder below l (θ/2)^{2K+2}/(2K+2)!: under 1e-34 l at |θ| = π, the bound of
 every plate (kinematics.positions.plate_limit); the series is double precision over the whole
 range a plate may turn (docs/levels.md). The ĉ_k depend on the profile's shape ratios only (t/R,
-t/c, r/l and t/l): they are computed by graded Gauss–Legendre quadrature at COEFFICIENT_DIGITS
-digits and enter the derivation as numbers, while the span l stays the file's expression.
+t/c, r/l and t/l): where those are numbers they are computed by graded Gauss–Legendre quadrature
+at COEFFICIENT_DIGITS digits and enter the derivation as numbers, while the span l stays the
+file's expression; where a ratio depends on a parameter, D(θ) is an expression of the keys
+(model.notch_series).
 """
 
 from __future__ import annotations
@@ -35,7 +37,7 @@ import mpmath
 import numpy as np
 import sympy as sp
 
-from . import notch_correction
+from . import notch_correction, notch_series
 from .sections import DIGITS, Compliance, RelationTerms, Section, X
 
 #: Terms of the pure-moment series (θ² to θ^{2K}); see the module's docstring for the bound.
@@ -505,11 +507,17 @@ def moments(section: Notch) -> tuple[float, float, float, float, float]:
     return _MOMENTS[key]
 
 
-def coefficients(section: Notch) -> tuple[sp.Float, ...]:
-    """The section's series coefficients ĉ_1..ĉ_K (numbers of its shape ratios)."""
+def coefficients(section: Notch) -> tuple[sp.Expr, ...]:
+    """The section's series coefficients ĉ_1..ĉ_K: numbers at COEFFICIENT_DIGITS when its shape
+    ratios are numbers, else expressions of its keys (model.notch_series)."""
     key = sp.srepr((section.profile, section.length, section.pieces()))
     if key not in _CACHE:
-        _CACHE[key] = _coefficients(_normalised(section))
+        try:
+            pieces = _normalised(section)
+        except ValueError:  # a ratio depends on a parameter: ĉ_k as expressions of the keys
+            _CACHE[key] = notch_series.coefficient_expressions(section, SERIES_TERMS)
+        else:
+            _CACHE[key] = _coefficients(pieces)
     return _CACHE[key]
 
 
@@ -524,14 +532,18 @@ QUADS_KEPT = 4096
 _MOMENTS: dict[str, tuple[float, ...]] = {}
 
 #: The coefficients by profile, span and pieces (they cost a few seconds at 45 digits).
-_CACHE: dict[str, tuple[sp.Float, ...]] = {}
+_CACHE: dict[str, tuple[sp.Expr, ...]] = {}
 
 
 def deviation_series(section: Section, theta: Any) -> sp.Expr:
-    """D(θ)/l = Σ_k (−1)^k θ^{2k}/(2k)! ĉ_k, in Horner form in θ² (θ² times a polynomial)."""
+    """D(θ)/l = Σ_k (−1)^k θ^{2k}/(2k)! ĉ_k, in Horner form in θ² (θ² times a polynomial); where
+    a shape ratio depends on a parameter, the same sum in closed form over the nodes of
+    model.notch_series (an expression of the keys and θ)."""
     if not isinstance(section, Notch) or not section.symmetric:
         raise ValueError(f"profile {section.profile!r}: the pure-moment series needs a notch")
     c = coefficients(section)
+    if not all(ck.is_Number for ck in c):  # ratios of parameters: the lighter closed form
+        return notch_series.deviation_expression(section, theta, SERIES_TERMS)
     square = theta**2
     terms = [
         sp.Float((-1) ** k * c[k - 1] / sp.factorial(2 * k), COEFFICIENT_DIGITS)

@@ -32,6 +32,7 @@ import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import sympy as sp
@@ -149,8 +150,34 @@ def geometry_checks(mech: Mechanism) -> tuple[tuple[str, sp.Expr, bool], ...]:
                 out.append(
                     (f"'{key}' of hinge '{h.name}'", sp.sympify(raw), spec.kind == "fraction")
                 )
+        out += notch_checks(h)
     symbols = {p.symbol for p in mech.parameters}
     return tuple((rule, e, frac) for rule, e, frac in out if e.free_symbols & symbols)
+
+
+def notch_checks(hinge: Any) -> list[tuple[str, sp.Expr, bool]]:
+    """A notch's keys positive and its ratio inside the fitted series' range, where its keys
+    are parameters (symkin.model.notch_series; check_values' rule)."""
+    params = dict(getattr(hinge, "profile_params", ()) or ())
+    if not params or hinge.model != "pure_moment":
+        return []
+    from ..model import notch_series
+    from ..model.profiles import section_of
+
+    keys = {"thickness": hinge.thickness, **params}
+    out = [
+        (f"'{key}' of hinge '{hinge.name}'", sp.sympify(raw), False)
+        for key, raw in keys.items()
+        if raw is not None
+    ]
+    tau = notch_series.notch_ratio(section_of(hinge, 1))
+    name = f"{notch_series.ratio_name(section_of(hinge, 1))} of hinge '{hinge.name}'"
+    low, high = notch_series.RANGE
+    return [
+        *out,
+        (f"{name} above {low:g}", tau - low, False),
+        (f"{name} below {high:g}", high - tau, False),
+    ]
 
 
 _CHECKS: dict[tuple, Callable] = {}
