@@ -203,17 +203,22 @@ def test_notch_four_bar_at_equilibrium_and_its_stress():
 
 
 def test_a_notch_file_derives_its_kinematic_levels():
-    """A file with notches and their stiffness derives the kinematic levels (the generated
-    `loaded` takes uniform plates); asked for `loaded`, the derivation refuses, naming the
-    hinge."""
+    """A file whose notches read a parameter (R) derives the kinematic levels: the generated
+    `loaded` folds a notch's section in as numbers. Its default level there is `exact`, saying
+    why; asked for `loaded`, the derivation refuses, naming the hinge and the parameter."""
     from symkin.codegen import pipeline
+    from symkin.core import levels
 
     mech = four_bar()
     an = symkin.analyze(mech)
     plan, _ = pipeline.build(an, "numpy", mech.path, sensitivity=False)
     assert [lv.name for lv in plan.levels] == ["paper", "first_order", "exact"]
-    with pytest.raises(InputError, match="circular"):
+    choice = levels.default_for(mech, "numpy")
+    assert choice.name == "exact" and "reads R" in choice.reason
+    assert levels.default_for(mech).name == "loaded"  # the sympy backend takes it
+    with pytest.raises(InputError, match="reads the parameter\\(s\\) R") as raised:
         pipeline.build(an, "numpy", mech.path, sensitivity=False, levels=("loaded",))
+    assert "A0" in str(raised.value)
 
 
 def test_notch_parallelogram_at_equilibrium_translates():

@@ -60,7 +60,7 @@ import sympy as sp
 
 from ..core import vectors as V
 from ..core.errors import InputError
-from ..core.levels import NOTCH_BACKENDS
+from ..core.levels import NOTCH_BACKENDS, parametric_notch
 from ..kinematics.analysis import Analysis
 from ..model.derivatives import jacobian
 from ..model.notches import Notch
@@ -139,25 +139,19 @@ def fixed_notches(mechanism) -> None:
     """The generated `loaded` folds a notch's relation terms, EI₀, EA, κGA, K_t and stress grid
     in as numbers: a notch whose keys read the file's parameters is bad input there (exit 2,
     naming the hinge and the parameters)."""
-    free = {p.symbol for p in mechanism.parameters}
-    for h in mechanism.hinges:
-        if not h.is_plate or h.profile == "uniform":
-            continue
-        keys = {k: getattr(h, k) for k in ("length", "thickness", "width", "E", "nu")}
-        keys.update(dict(h.profile_params))
-        for key, value in keys.items():
-            found = sp.sympify(value).free_symbols & free if value is not None else set()
-            if found:
-                raise InputError(
-                    "the generated evaluators' loaded level folds a notch's section in as "
-                    f"numbers: its {key} reads the parameter(s) "
-                    f"{', '.join(sorted(map(str, found)))}",
-                    file=mechanism.path,
-                    line=h.line,
-                    entry=f"[[hinge]] '{h.name}'",
-                    hint="give the notch's keys as numbers, or evaluate it with symkin eval "
-                    "--level loaded --backend sympy (docs/levels.md)",
-                )
+    reads = parametric_notch(mechanism)
+    if reads is None:
+        return
+    h, key, names = reads
+    raise InputError(
+        "the generated evaluators' loaded level folds a notch's section in as numbers: its "
+        f"{key} reads the parameter(s) {', '.join(names)}",
+        file=mechanism.path,
+        line=h.line,
+        entry=f"[[hinge]] '{h.name}'",
+        hint="give the notch's keys as numbers, or evaluate it with symkin eval --level loaded "
+        "--backend sympy (docs/levels.md)",
+    )
 
 
 def generated_notches(mechanism, backend: str) -> None:

@@ -225,7 +225,8 @@ def plan(
         p.name for p in an.points if points is None or p.name in points or p.name in hidden
     )
     # a notch (model.notches) at `loaded`: its own relation routines (symkin.codegen.loaded)
-    stiff = mech.has_stiffness
+    # a notch whose keys read parameters leaves `loaded` to the sympy backend (unless asked)
+    stiff = mech.has_stiffness and level_table.parametric_notch(mech) is None
     levels = tuple(
         lv
         for lv in level_table.LEVELS

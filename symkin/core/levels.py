@@ -138,6 +138,25 @@ class Choice:
 NOTCH_BACKENDS = ("numpy",)
 
 
+def parametric_notch(mechanism: Any) -> tuple[Any, str, tuple[str, ...]] | None:
+    """The first notch hinge whose keys read the file's parameters, with that key and the
+    parameters' names, or None: the generated `loaded` folds a notch's section in as numbers
+    (docs/levels.md), so such a notch leaves that level to the sympy backend."""
+    import sympy as sp  # the level table is read before any expression is: import it late
+
+    free = {p.symbol for p in getattr(mechanism, "parameters", ())}
+    for h in mechanism.hinges:
+        if not h.is_plate or getattr(h, "profile", "uniform") == "uniform":
+            continue
+        keys = {k: getattr(h, k) for k in ("length", "thickness", "width", "E", "nu")}
+        keys.update(dict(h.profile_params))
+        for key, value in keys.items():
+            found = sp.sympify(value).free_symbols & free if value is not None else set()
+            if found:
+                return h, key, tuple(sorted(map(str, found)))
+    return None
+
+
 def default_for(mechanism: _Mechanism, generated: bool | str = False) -> Choice:
     """The level `eval`, `tolerance`, `sweep`, `symkin.evaluate`, `symkin.compile` and the
     generated evaluators use when none is given (docs/levels.md, "The default level"): `loaded`
@@ -173,6 +192,15 @@ def default_for(mechanism: _Mechanism, generated: bool | str = False) -> Choice:
             KINEMATIC_DEFAULT,
             f"default: the generated {which}evaluators' loaded takes uniform plates (hinge "
             f"'{notch.name}' is {notch.profile}); --backend numpy or sympy takes it",
+            default=True,
+        )
+    reads = parametric_notch(mechanism) if generated and notch is not None else None
+    if reads is not None:
+        h, key, names = reads
+        return Choice(
+            KINEMATIC_DEFAULT,
+            f"default: the generated evaluators' loaded takes a notch's keys as numbers (hinge "
+            f"'{h.name}': its {key} reads {', '.join(names)}); --backend sympy takes it",
             default=True,
         )
     if not plates:  # nothing bends: the physical level, as the rule says, at no extra cost
