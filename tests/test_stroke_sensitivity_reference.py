@@ -22,6 +22,7 @@ from conftest import EXAMPLES
 from evaluators import BACKENDS, require
 
 import symkin
+from symkin.cli.commands import main
 from symkin.codegen.loaded import notched
 from symkin.core import backends
 from symkin.core.levels import NOTCH_BACKENDS
@@ -90,3 +91,18 @@ def test_against_40_digit_central_differences(example, level, name, backend):
     scale = float(np.max(np.abs(expected)))
     assert scale > 0
     assert float(np.max(np.abs(found - expected))) <= 1e-7 * scale, (found, expected)
+
+
+def test_loaded_refuses_a_notch_read_from_parameters(capsys):
+    """At `loaded` a notch's section is numbers: derivatives by its keys would be zero, so the
+    sympy backend refuses them (exit 2, naming the hinge and the parameter), as the generated
+    ones do."""
+    lever = EXAMPLES.parent / "tests" / "mechanisms" / "notch_lever_params.toml"
+    args = ["eval", str(lever), "--input", "piezo=0.02", "--level", "loaded", "--sensitivity"]
+    for backend in BACKENDS:
+        assert main([*args, "--backend", backend]) == 2
+        err = capsys.readouterr().err
+        assert "[[hinge]] 'O'" in err, (backend, err)
+        # (a generated backend outside NOTCH_BACKENDS refuses the notch itself first)
+        if not backends.get(backend).generated or backend in NOTCH_BACKENDS:
+            assert "parameter(s) R" in err, (backend, err)
