@@ -30,7 +30,8 @@ import sympy as sp
 from ..kinematics.analysis import Analysis
 from ..model.derivatives import jacobian
 from ..model.lambdified import lambdify
-from .plate_relation import relation
+from ..model.sections import RelationTerms
+from .plate_relation import notch_relation, relation
 from .reduced import Reduced
 from .reduced_rates import _red_inputs_x, _red_relation, _red_sensitivity, _red_theta_v
 
@@ -100,11 +101,18 @@ def partials(r: Reduced, params: Sequence[sp.Symbol], points: Sequence[str]) -> 
 
 
 @cache
-def eps_relation() -> tuple[tuple[sp.Symbol, ...], list[sp.Expr]]:
+def eps_relation(
+    terms: RelationTerms | None = None,
+) -> tuple[tuple[sp.Symbol, ...], list[sp.Expr]]:
     """The plate relation's (order 4) partials by ε_a and ε_s: ∂(along, across, omega)/∂(ε_a,
-    ε_s), row-major (3 × 2), over the symbols (θ, p, f, ε_a, ε_s)."""
+    ε_s), row-major (3 × 2), over the symbols (θ, p, f, ε_a, ε_s); with `terms`, a notch's
+    relation's (symkin.physics.plate_relation.notch_relation)."""
     th, p, f, ea, es = sp.symbols("theta p f e_a e_s", real=True)
-    rel = relation(th, p, f, ea, es, 4)
+    rel = (
+        relation(th, p, f, ea, es, 4)
+        if terms is None
+        else notch_relation(th, p, f, ea, es, terms, 4)
+    )
     return (th, p, f, ea, es), [
         sp.diff(v, w) for v in (rel.along, rel.across, rel.omega) for w in (ea, es)
     ]
@@ -172,8 +180,11 @@ class LoadedSensitivity:
         ]
         fn = lambdify(args, exprs, modules)
         ins_fn = lambdify(args[:3] + args[4:], [e.xreplace(rename) for e in ins], modules)
-        symbols, eps = eps_relation()
-        eps_fn = sp.lambdify(symbols, eps, modules=modules)
+        # per half plate: a notch's relation is its own (Reduced.plate_fn), so are its ε partials
+        eps_fn = []
+        for terms in r.terms:
+            symbols, eps = eps_relation(terms)
+            eps_fn.append(sp.lambdify(symbols, eps, modules=modules))
         shapes = [(name, m.shape) for name, m in part.blocks()]
         found = self._variants[count] = (r, ins_fn, fn, eps_fn, shapes)
         return found
@@ -197,14 +208,13 @@ class LoadedSensitivity:
         th = [float(v) for v in r.angles(theta)]
         # the plates' inputs first (the relation's outputs are arguments of the rest)
         ins = np.array(ins_fn(xs, th, 1.0, list(values)), dtype=float)
-        plate = r._fn("plate4")
         outs, parts, eps = [], [], []
         for k in range(ns):
             i = [float(u) for u in ins[5 * k : 5 * k + 5]]
-            v = plate(*i)
+            v = r.plate_fn("plate4", k)(*i)  # a notch's own relation, else the uniform plate's
             outs += [float(u) for u in v[:3]]
             parts.append([float(u) for u in v[3:]])
-            eps.append([float(u) for u in eps_fn(*i)])
+            eps.append([float(u) for u in eps_fn[k](*i)])
         got = fn(xs, th, 1.0, outs, list(values))
         dins_x, jx, jo, *pieces = (np.array(g, dtype=float) for g in got)
         # the routine's blocks as a batch of one (symkin.physics.reduced_rates)

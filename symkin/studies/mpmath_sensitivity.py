@@ -12,7 +12,7 @@ import sympy as sp
 
 from ..codegen.backends.numpy.kernels import float64_namespace
 from ..core import levels
-from ..core.errors import AssemblyError
+from ..core.errors import AssemblyError, InputError
 from ..physics import reduced, reduced_sensitivity
 from .mpmath_evaluator import MpmathEvaluator, State
 from .results import Sensitivity
@@ -199,6 +199,7 @@ def _level_rates(ev: MpmathEvaluator, state: State, terms, matrix, solve, theta_
 def _loaded_rates(ev: MpmathEvaluator, state: State, answer: reduced.Answer, theta_v) -> np.ndarray:
     """dΔR/dv at `loaded` from its solution (symkin.physics.reduced_sensitivity)."""
     an, kin = ev.an, ev.kin
+    _fixed_notches(ev)
     if ev.loaded_terms is None:
         # float64 kernels: the solution is float64 (as the solver's, symkin.physics.reduced)
         ev.loaded_terms = reduced_sensitivity.LoadedSensitivity(
@@ -218,3 +219,29 @@ def _loaded_rates(ev: MpmathEvaluator, state: State, answer: reduced.Answer, the
         [float(v) for v in state.pvals],
         rates,
     )
+
+
+def _fixed_notches(ev: MpmathEvaluator) -> None:
+    """`loaded`'s reduced equilibrium takes a notch's EI₀, EA, κGA and relation terms as numbers
+    at the file's values (symkin.physics.reduced): its derivatives by a parameter that a
+    notch's key reads would miss that key's share, so they are refused (exit 2, naming the
+    hinge and the parameters; docs/sensitivity.md)."""
+    mech = ev.mechanism
+    free = {p.symbol for p in mech.parameters}
+    for h in mech.hinges:
+        if not h.is_plate or h.profile == "uniform":
+            continue
+        keys = {k: getattr(h, k) for k in ("length", "thickness", "width", "E", "nu")}
+        keys.update(dict(h.profile_params))
+        for key, value in keys.items():
+            found = sp.sympify(value).free_symbols & free if value is not None else set()
+            if found:
+                raise InputError(
+                    "the loaded level's sensitivities take a notch's section as numbers: its "
+                    f"{key} reads the parameter(s) {', '.join(sorted(map(str, found)))}",
+                    file=mech.path,
+                    line=h.line,
+                    entry=f"[[hinge]] '{h.name}'",
+                    hint="give the notch's keys as numbers, or ask for the sensitivities at "
+                    "--level exact (docs/sensitivity.md)",
+                )
