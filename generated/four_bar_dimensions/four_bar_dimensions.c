@@ -3,7 +3,7 @@
  * Mechanism 'four_bar_dimensions': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 85, rigid_res 60, linear 118, newton_pre 27, newton 239, rigid_points 21, dev_paper 38, dev_first_order 53, dev_exact 65, links 1, sens_rigid 71, sens_paper 128, sens_first_order 297, sens_exact 360, sens_chain 0.
+ * Operation counts after CSE: rigid 85, rigid_res 60, linear 118, newton 265, rigid_points 21, dev_paper 38, dev_first_order 53, dev_exact 65, links 1, sens_rigid 71, sens_paper 128, sens_first_order 297, sens_exact 360, sens_chain 0.
  */
 #include "four_bar_dimensions.h"
 
@@ -308,7 +308,7 @@ static void sk_linear(const double *theta, const double *params, double *out)
     out[14] = _tmp41;
 }
 
-/* exact compliant closure F(delta) and dF/ddelta: its terms without delta, once per solve (27 operations) */
+/* exact compliant closure F(delta) and dF/ddelta: its terms without delta, once per solve */
 static void sk_newton_pre(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -363,7 +363,7 @@ static void sk_newton_pre(const double *theta, const double *params, double *out
     out[22] = _tmp51;
 }
 
-/* exact compliant closure F(delta) and dF/ddelta (239 operations) */
+/* exact compliant closure F(delta) and dF/ddelta */
 static void sk_newton(const double *pre, const double *delta, const double *params, double *out)
 {
     (void)params;

@@ -3,7 +3,7 @@
  * Mechanism 'four_bar_dimensions': 4 links, 4 hinges, 1 loop(s); inputs A0.
  * Points: C; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 85, rigid_res 60, linear 118, newton_pre 27, newton 239, rigid_points 21, dev_paper 38, dev_first_order 53, dev_exact 65, links 1, sens_rigid 71, sens_paper 128, sens_first_order 297, sens_exact 360, sens_chain 0.
+ * Operation counts after CSE: rigid 85, rigid_res 60, linear 118, newton 265, rigid_points 21, dev_paper 38, dev_first_order 53, dev_exact 65, links 1, sens_rigid 71, sens_paper 128, sens_first_order 297, sens_exact 360, sens_chain 0.
  */
 #ifndef SYMKIN_FOUR_BAR_DIMENSIONS_H
 #define SYMKIN_FOUR_BAR_DIMENSIONS_H

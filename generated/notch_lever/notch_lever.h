@@ -3,7 +3,7 @@
  * Mechanism 'notch_lever': 4 links, 4 hinges, 1 loop(s); inputs piezo (actuators; their strokes fix the angles of O (piezo)).
  * Points: out; levels: paper, first_order, exact.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 55, rigid_res 40, linear 221, newton_pre 53, newton 404, rigid_points 13, action_at 0, dev_paper 92, dev_first_order 106, dev_exact 119, links 3, sens_rigid 49, sens_paper 227, sens_first_order 492, sens_exact 544.
+ * Operation counts after CSE: rigid 55, rigid_res 40, linear 221, newton 456, rigid_points 13, action_at 0, dev_paper 92, dev_first_order 106, dev_exact 119, links 3, sens_rigid 49, sens_paper 227, sens_first_order 492, sens_exact 544.
  */
 #ifndef SYMKIN_NOTCH_LEVER_H
 #define SYMKIN_NOTCH_LEVER_H

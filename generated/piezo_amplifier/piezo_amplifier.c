@@ -3,7 +3,7 @@
  * Mechanism 'piezo_amplifier': 4 links, 4 hinges, 1 loop(s); inputs piezo (actuators; their strokes fix the angles of RA0 (piezo)).
  * Points: B; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton_pre 28, newton 239, rigid_points 28, action_at 4, loaded_plates1 147, loaded_system1 722, loaded_res1 292, loaded_dev1 104, loaded_report1 413, loaded_plates2 372, loaded_system2 1863, loaded_res2 568, loaded_dev2 189, loaded_report2 837, dev_paper 31, dev_first_order 51, dev_exact 62, links 1, sens_rigid 105, sens_paper 108, sens_first_order 355, sens_exact 449, loaded_sens1 938, loaded_sens2 1997, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
+ * Operation counts after CSE: rigid 66, rigid_res 56, linear 126, newton 266, rigid_points 28, action_at 4, loaded_plates1 147, loaded_system1 722, loaded_res1 292, loaded_dev1 104, loaded_report1 413, loaded_plates2 372, loaded_system2 1863, loaded_res2 568, loaded_dev2 189, loaded_report2 837, dev_paper 31, dev_first_order 51, dev_exact 62, links 1, sens_rigid 105, sens_paper 108, sens_first_order 355, sens_exact 449, loaded_sens1 938, loaded_sens2 1997, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
  */
 #include "piezo_amplifier.h"
 
@@ -910,7 +910,7 @@ static void sk_linear(const double *theta, const double *params, double *out)
     out[14] = _tmp47;
 }
 
-/* exact compliant closure F(delta) and dF/ddelta: its terms without delta, once per solve (28 operations) */
+/* exact compliant closure F(delta) and dF/ddelta: its terms without delta, once per solve */
 static void sk_newton_pre(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -964,7 +964,7 @@ static void sk_newton_pre(const double *theta, const double *params, double *out
     out[24] = _tmp44;
 }
 
-/* exact compliant closure F(delta) and dF/ddelta (239 operations) */
+/* exact compliant closure F(delta) and dF/ddelta */
 static void sk_newton(const double *pre, const double *delta, const double *params, double *out)
 {
     (void)params;

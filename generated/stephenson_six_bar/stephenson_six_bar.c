@@ -3,7 +3,7 @@
  * Mechanism 'stephenson_six_bar': 6 links, 7 hinges, 2 loop(s); inputs O_A.
  * Points: D; levels: paper, first_order, exact, loaded.
  * Rigid solution: closed form (dyads).
- * Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton_pre 34, newton 522, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_res1 441, loaded_dev1 60, loaded_report1 949, loaded_plates2 623, loaded_system2 3042, loaded_res2 944, loaded_dev2 143, loaded_report2 2161, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, loaded_sens1 1094, loaded_sens2 2741, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
+ * Operation counts after CSE: rigid 142, rigid_res 121, linear 251, newton 556, rigid_points 19, loaded_plates1 237, loaded_system1 1069, loaded_res1 441, loaded_dev1 60, loaded_report1 949, loaded_plates2 623, loaded_system2 3042, loaded_res2 944, loaded_dev2 143, loaded_report2 2161, dev_paper 36, dev_first_order 50, dev_exact 60, links 5, sens_rigid 70, sens_paper 118, sens_first_order 564, sens_exact 661, loaded_sens1 1094, loaded_sens2 2741, plate_relation4 312, plate_values4 114, plate_values2 66, plate_rest4 40, plate_eps4 158.
  */
 #include "stephenson_six_bar.h"
 
@@ -1041,7 +1041,7 @@ static void sk_linear(const double *theta, const double *params, double *out)
     out[47] = _tmp87;
 }
 
-/* exact compliant closure F(delta) and dF/ddelta: its terms without delta, once per solve (34 operations) */
+/* exact compliant closure F(delta) and dF/ddelta: its terms without delta, once per solve */
 static void sk_newton_pre(const double *theta, const double *params, double *out)
 {
     const double theta_1 = theta[0];
@@ -1106,7 +1106,7 @@ static void sk_newton_pre(const double *theta, const double *params, double *out
     out[32] = _tmp137;
 }
 
-/* exact compliant closure F(delta) and dF/ddelta (522 operations) */
+/* exact compliant closure F(delta) and dF/ddelta */
 static void sk_newton(const double *pre, const double *delta, const double *params, double *out)
 {
     (void)params;

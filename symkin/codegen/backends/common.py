@@ -49,10 +49,16 @@ class Backend:
         context = self.context(plan, source, precision)
         return [render(template, **context) for template in self.templates]
 
+    def counted(self, plan: Plan) -> Plan:
+        """The plan whose routines' operation counts the header prints: the derived ones, whose
+        counts a kept plan holds (a backend that rewrites routines to emit them says so)."""
+        return plan
+
     def context(self, plan: Plan, source: str, precision: str = "float64") -> dict:
         """The template variables: the plan's fields, printed, and the solver's settings."""
+        derived = self.counted(plan).routines.values()
         return {
-            "header": header_lines(plan, source),
+            "header": header_lines(self.counted(plan), source),
             "name": plan.name,
             "NAME": plan.name.upper(),
             "inputs": list(plan.inputs),
@@ -110,7 +116,12 @@ class Backend:
                 for g in (1, 2)
                 if f"loaded_report{g}" in plan.routines
             ],
-            "routines": [routine_data(r, self.printer) for r in plan.routines.values()],
+            # a routine the backend rewrote (not the derived one) prints no count: counting
+            # it would undo what a kept plan saves (codegen/plan_cache.py)
+            "routines": [
+                routine_data(r, self.printer, counted=any(r is d for d in derived))
+                for r in plan.routines.values()
+            ],
             "have": set(plan.routines),
             "blocks": {
                 name: {b.name: (b.offset, b.rows, b.cols) for b in r.blocks}
@@ -245,9 +256,10 @@ def default_sensitivity_level(plan: Plan) -> str:
     return next((n for n in wanted if n in having), having[-1] if having else plan.default_level)
 
 
-def routine_data(routine: Routine, printer: CodePrinter) -> dict:
+def routine_data(routine: Routine, printer: CodePrinter, counted: bool = True) -> dict:
     """Template data of one routine: its arguments (and whether it reads them), the entries it
-    unpacks ('_' for unread ones), its assignments and outputs, printed."""
+    unpacks ('_' for unread ones), its assignments and outputs, printed; its operation count
+    where `counted` (None otherwise)."""
     free: set[sp.Symbol] = set()
     for e in [e for _, e in routine.assignments] + list(routine.outputs):
         free |= sp.sympify(e).free_symbols
@@ -255,7 +267,7 @@ def routine_data(routine: Routine, printer: CodePrinter) -> dict:
     return {
         "name": routine.name,
         "doc": routine.doc,
-        "ops": routine.ops,
+        "ops": routine.ops if counted else None,
         "args": [(a.name, u) for a, u in zip(routine.arguments, used)],
         "unpack": [
             (a.name, [s.name if s in free else "_" for s in a.symbols])

@@ -43,12 +43,20 @@ class CBackend(Backend):
                     routines[k] = loop
                 elif k not in unused:
                     routines[k] = r
+            # the header's operation counts are the derived routines', counted with the plan
+            # (a kept plan is emitted again without counting: codegen/plan_cache.py)
+            self._counted = plan
             plan = dataclasses.replace(plan, routines=routines)
         return super().render(plan, source, precision)
 
     def context(self, plan: Plan, source: str, precision: str = "float64") -> dict:
         """The common context and the runtime's sections the evaluator runs."""
         return {**super().context(plan, source, precision), "features": features(plan)}
+
+    def counted(self, plan: Plan) -> Plan:
+        """The plan as derived, before render's rewriting (the hoisted Newton: its counts are
+        the derived routine's, kept with the plan)."""
+        return getattr(self, "_counted", plan)
 
 
 def features(plan: Plan) -> list[str]:
