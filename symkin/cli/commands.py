@@ -190,7 +190,11 @@ def _tolerance(args: argparse.Namespace) -> str:
     nominal = {p.name: float(p.value) for p in mech.parameters}
     vary = variation.parse_vary(args.vary, mech, nominal, kinds=("pm",))
     grid = variation.parse_grid(args.input, mech, limit=_max_evaluations(args))
-    if args.backend is None and args.level in (None, "loaded") and _notched(mech):
+    if (
+        args.backend is None
+        and args.level in (None, "loaded")
+        and levels.first_notch(mech) is not None
+    ):
         args.backend = "numpy"  # the generated loaded that takes notches (core.levels)
     choice = _level(args, mech, generated=args.backend or True)
     tolerance.check_level(args.level)  # before compiling anything
@@ -208,11 +212,6 @@ def _tolerance(args: argparse.Namespace) -> str:
     if args.json:
         return json.dumps(result.as_json(), indent=2) + "\n"
     return choice.line + "\n" + tolerance.text(result)
-
-
-def _notched(mech) -> bool:
-    """Whether a plate of the file is a notch (its generated loaded: numpy's, core.levels)."""
-    return any(h.profile != "uniform" for h in mech.hinges if h.is_plate)
 
 
 def _max_evaluations(args: argparse.Namespace) -> int:

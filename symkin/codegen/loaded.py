@@ -60,7 +60,7 @@ import sympy as sp
 
 from ..core import vectors as V
 from ..core.errors import InputError
-from ..core.levels import NOTCH_BACKENDS, parametric_notch
+from ..core.levels import NOTCH_BACKENDS, first_notch, parametric_notch
 from ..kinematics.analysis import Analysis
 from ..model.derivatives import jacobian
 from ..model.notches import Notch
@@ -132,7 +132,7 @@ class NotchPlate:
 
 def notched(mechanism) -> bool:
     """Whether a plate of the file is a notch (model.notches)."""
-    return any(h.profile != "uniform" for h in mechanism.hinges if h.is_plate)
+    return first_notch(mechanism) is not None
 
 
 def fixed_notches(mechanism) -> None:
@@ -158,10 +158,10 @@ def generated_notches(mechanism, backend: str) -> None:
     """A notch file at the generated `loaded` of `backend`: bad input (exit 2, naming the hinge)
     where the backend's takes uniform plates alone or a notch's keys read parameters
     (:func:`fixed_notches`)."""
-    if not notched(mechanism):
+    h = first_notch(mechanism)
+    if h is None:
         return
     if backend not in NOTCH_BACKENDS:  # (core.levels)
-        h = next(h for h in mechanism.hinges if h.is_plate and h.profile != "uniform")
         raise InputError(
             f"the generated {backend} evaluators' loaded level takes uniform plates: the "
             f"hinge's profile is {h.profile!r}",

@@ -224,9 +224,9 @@ def plan(
     names = tuple(
         p.name for p in an.points if points is None or p.name in points or p.name in hidden
     )
-    # a notch (model.notches) at `loaded`: its own relation routines (symkin.codegen.loaded)
+    # a notch (model.notches) at `loaded`: its own relation routines (symkin.codegen.loaded);
     # a notch whose keys read parameters leaves `loaded` to the sympy backend (unless asked)
-    stiff = mech.has_stiffness and level_table.parametric_notch(mech) is None
+    stiff = level_table.loaded_by_default(mech)
     levels = tuple(
         lv
         for lv in level_table.LEVELS

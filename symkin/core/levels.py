@@ -138,6 +138,19 @@ class Choice:
 NOTCH_BACKENDS = ("numpy",)
 
 
+def first_notch(mechanism: Any) -> Any | None:
+    """The file's first notch hinge (a plate whose `profile` is not uniform), or None."""
+    plates = (h for h in mechanism.hinges if h.is_plate)
+    return next((h for h in plates if getattr(h, "profile", "uniform") != "uniform"), None)
+
+
+def loaded_by_default(mechanism: Any) -> bool:
+    """Whether the generated evaluators' derivation holds `loaded` when no level is named
+    (symkin.codegen.plan, and graph.pruning's force paths with it): every plate has its
+    stiffness, and no notch reads the file's parameters (:func:`parametric_notch`)."""
+    return bool(mechanism.has_stiffness) and parametric_notch(mechanism) is None
+
+
 def parametric_notch(mechanism: Any) -> tuple[Any, str, tuple[str, ...]] | None:
     """The first notch hinge whose keys read the file's parameters, with that key and the
     parameters' names, or None: the generated `loaded` folds a notch's section in as numbers
@@ -185,7 +198,7 @@ def default_for(mechanism: _Mechanism, generated: bool | str = False) -> Choice:
             'inextensible (beam = "elastica")',
             default=True,
         )
-    notch = next((h for h in plates if getattr(h, "profile", "uniform") != "uniform"), None)
+    notch = first_notch(mechanism)
     if generated and generated not in NOTCH_BACKENDS and notch is not None:
         which = f"{generated} " if isinstance(generated, str) else ""
         return Choice(

@@ -21,7 +21,7 @@ import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from ..core.levels import LOADED
+from ..core.levels import LOADED, loaded_by_default
 from ..model.mechanism import Mechanism
 from .structure import Structure, build
 
@@ -76,10 +76,7 @@ def for_levels(
     """:func:`prune` for a derivation of `levels` (None: every generated level the file's data
     allows): force paths are followed when it holds a physical level, the file's direct paths
     kept when it holds `paper`."""
-    uniform = all(h.profile == "uniform" for h in mech.hinges if h.is_plate)  # as codegen.plan
-    physical = (
-        mech.has_stiffness and uniform if levels is None else any(lv in LOADED for lv in levels)
-    )
+    physical = loaded_by_default(mech) if levels is None else any(lv in LOADED for lv in levels)
     return prune(mech, points, physical, paths=levels is None or "paper" in levels)
 
 
